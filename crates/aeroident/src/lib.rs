@@ -1,0 +1,7 @@
+//! # aeroident
+//!
+//! The application crate: experiments (trim → fly → sense → estimate), reports, figures and
+//! the `aeroident` command-line interface. `main.rs` only parses arguments; every command is a
+//! function here so tests can call it directly.
+
+pub mod cli;

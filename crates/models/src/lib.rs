@@ -1,0 +1,48 @@
+//! # aeroident-models
+//!
+//! Continuous-time simulation models `ẋ = f(t, x, u)` and the tools that act on them: a fixed-step
+//! RK4 integrator, trim and linearization. A model has one job: give state derivatives.
+//!
+//! Sources: Stevens, Lewis & Johnson, *Aircraft Control and Simulation*, 3rd ed., Wiley 2015
+//! (SLJ) §3.5–3.8 for the F-16; Gurbacki 2010 thesis §2.1 for the proof-of-concept systems.
+
+use nalgebra::SVector;
+
+pub mod integrate;
+
+/// Errors a model evaluation can return.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ModelError {
+    /// A state or input was not finite, or left the model's domain (e.g. vt ≤ 0).
+    #[error("invalid `{field}` = {value}: {reason}")]
+    InvalidValue {
+        /// Name of the state or input.
+        field: &'static str,
+        /// The value received.
+        value: f64,
+        /// Why it is invalid.
+        reason: &'static str,
+    },
+    /// An iterative procedure (trim, implicit solve) did not converge.
+    #[error("{what} did not converge: {detail}")]
+    NoConvergence {
+        /// What did not converge.
+        what: &'static str,
+        /// Residual or other detail.
+        detail: String,
+    },
+}
+
+/// A continuous-time model `ẋ = f(t, x, u)` with `N` states.
+///
+/// One job: give the state derivative. No integration and no I/O.
+pub trait Dynamics<const N: usize> {
+    /// The input held over an integration step (zero-order hold), e.g. control deflections.
+    type Input;
+    /// The state derivative at time `t_s` (s) for state `x` and input `u`.
+    ///
+    /// # Errors
+    /// [`ModelError::InvalidValue`] when `x` or `u` is outside the model's domain.
+    fn derivatives(&self, t_s: f64, x: &SVector<f64, N>, u: &Self::Input)
+    -> Result<SVector<f64, N>, ModelError>;
+}

@@ -10,3 +10,6 @@ pub trait InputSignal {
     /// Value at time `t_s` (s).
     fn value(&self, t_s: f64) -> f64;
 }
+
+/// Causal numerical differentiation (least-squares slope, linear phase, stated lag).
+pub mod differentiate;

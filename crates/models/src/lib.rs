@@ -8,6 +8,10 @@
 
 use nalgebra::SVector;
 
+/// The textbook air-data computer of the F-16 model (SLJ §3.5, ADC).
+pub mod atmosphere;
+/// The Stevens–Lewis nonlinear F-16 (SLJ §3.5, App. A; NASA TP-1538).
+pub mod f16;
 pub mod integrate;
 
 /// Errors a model evaluation can return.
@@ -43,6 +47,10 @@ pub trait Dynamics<const N: usize> {
     ///
     /// # Errors
     /// [`ModelError::InvalidValue`] when `x` or `u` is outside the model's domain.
-    fn derivatives(&self, t_s: f64, x: &SVector<f64, N>, u: &Self::Input)
-    -> Result<SVector<f64, N>, ModelError>;
+    fn derivatives(
+        &self,
+        t_s: f64,
+        x: &SVector<f64, N>,
+        u: &Self::Input,
+    ) -> Result<SVector<f64, N>, ModelError>;
 }

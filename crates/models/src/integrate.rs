@@ -34,7 +34,12 @@ mod tests {
     }
     impl Dynamics<1> for Decay {
         type Input = ();
-        fn derivatives(&self, _t: f64, x: &SVector<f64, 1>, _u: &()) -> Result<SVector<f64, 1>, ModelError> {
+        fn derivatives(
+            &self,
+            _t: f64,
+            x: &SVector<f64, 1>,
+            _u: &(),
+        ) -> Result<SVector<f64, 1>, ModelError> {
             Ok(SVector::<f64, 1>::new(-self.a * x[0] + self.b))
         }
     }

@@ -43,6 +43,10 @@ pub trait Dynamics<const N: usize> {
     ///
     /// # Errors
     /// [`ModelError::InvalidValue`] when `x` or `u` is outside the model's domain.
-    fn derivatives(&self, t_s: f64, x: &SVector<f64, N>, u: &Self::Input)
-    -> Result<SVector<f64, N>, ModelError>;
+    fn derivatives(
+        &self,
+        t_s: f64,
+        x: &SVector<f64, N>,
+        u: &Self::Input,
+    ) -> Result<SVector<f64, N>, ModelError>;
 }

@@ -5,3 +5,7 @@
 //! function here so tests can call it directly.
 
 pub mod cli;
+/// Convergence-time and error metrics of estimate histories.
+pub mod metrics;
+/// Stacked time-series panels rendered to PNG.
+pub mod plot;

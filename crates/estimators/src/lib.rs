@@ -12,6 +12,10 @@
 
 use nalgebra::{SMatrix, SVector};
 
+pub mod kalman;
+pub mod regressors;
+pub mod rls;
+
 /// A parameter estimate at one time.
 ///
 /// `theta` holds `P` parameters in the order of [`Estimator::param_names`]; `covariance` is the

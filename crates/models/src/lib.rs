@@ -8,6 +8,10 @@
 
 use nalgebra::SVector;
 
+/// The textbook air-data computer of the F-16 model (SLJ §3.5, ADC).
+pub mod atmosphere;
+/// The Stevens–Lewis nonlinear F-16 (SLJ §3.5, App. A; NASA TP-1538).
+pub mod f16;
 pub mod integrate;
 
 /// Errors a model evaluation can return.

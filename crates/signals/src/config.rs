@@ -11,7 +11,8 @@
 //! # TOML shapes
 //! ```toml
 //! [input]                    # any table the scenario schema puts an InputConfig in
-//! kind = "doublet"           # step | pulse | doublet | sine | band_limited_white_noise | sum
+//! kind = "doublet"           # step | pulse | doublet | three_two_one_one | sine | sweep |
+//!                            # multisine | recorded | band_limited_white_noise | sum
 //! amplitude_deg = -0.05      # or: amplitude = -8.7e-4 (radians / caller's units)
 //! start_s = 1.0              # default 0
 //! pulse_width_s = 0.5        # width of EACH half
@@ -20,6 +21,10 @@
 //! kind = "step";  amplitude = 3.0; start_s = 0.0
 //! kind = "pulse"; amplitude_deg = 1.0; start_s = 1.0; width_s = 0.5
 //! kind = "sine";  amplitude_deg = 0.05; frequency_hz = 1.0; phase_deg = 0.0; start_s = 0.0; duration_s = 20.0
+//! kind = "three_two_one_one"; amplitude_deg = 1.0; start_s = 1.0; dt_s = 0.3
+//! kind = "sweep"; amplitude_deg = 0.5; start_frequency_hz = 0.1; end_frequency_hz = 3.0; duration_s = 30.0; law = "logarithmic"; taper_s = 1.0
+//! kind = "multisine"; amplitude_deg = 0.2; base_period_s = 10.0; harmonics = [1, 2, 3, 4, 5, 6, 7]
+//! kind = "recorded"; path = "stick.csv"; time_column = "t_s"; value_column = "de_deg"; unit = "deg"
 //! kind = "band_limited_white_noise"; noise_power = 1e-4; sample_time_s = 0.01; seed = 7
 //! kind = "sum";   parts = [ { kind = "step", amplitude = 1.0 }, { kind = "sine", amplitude = 0.1, frequency_rad_s = 0.7 } ]
 //! ```
@@ -32,8 +37,13 @@
 use serde::Deserialize;
 
 use crate::error::SignalError;
-use crate::inputs::{Doublet, Input, Pulse, Sine, Step, Sum};
+use std::path::{Path, PathBuf};
+
+use crate::inputs::{
+    Doublet, Input, Multisine, Pulse, Sine, Step, Sum, Sweep, SweepLaw, ThreeTwoOneOne,
+};
 use crate::noise::BandLimitedWhiteNoise;
+use crate::recorded::{RecordedInput, ValueUnit};
 
 /// One input as written in a scenario file; build it with [`InputConfig::build`].
 /// See the module docs for the TOML shapes and the unit rules.
@@ -96,6 +106,80 @@ pub enum InputConfig {
         /// Duration (s); absent = until the end of the run.
         duration_s: Option<f64>,
     },
+    /// [`ThreeTwoOneOne`]: `amplitude` | `amplitude_deg`, `start_s` (default 0), `dt_s` (the
+    /// time unit Δt). TOML kind `three_two_one_one` (alias `3211`).
+    #[serde(alias = "3211")]
+    ThreeTwoOneOne {
+        /// Height of the first (3Δt) pulse in the caller's units.
+        amplitude: Option<f64>,
+        /// Height of the first pulse in degrees.
+        amplitude_deg: Option<f64>,
+        /// Start (s).
+        #[serde(default)]
+        start_s: f64,
+        /// Time unit Δt (s), > 0.
+        dt_s: f64,
+    },
+    /// [`Sweep`]: `amplitude` | `amplitude_deg`, `start_frequency_hz` | `start_frequency_rad_s`,
+    /// `end_frequency_hz` | `end_frequency_rad_s`, `duration_s`, `law` (`linear` |
+    /// `logarithmic`), `start_s` (default 0), `taper_s` (default 0 = no taper).
+    Sweep {
+        /// Amplitude in the caller's units.
+        amplitude: Option<f64>,
+        /// Amplitude in degrees.
+        amplitude_deg: Option<f64>,
+        /// Start frequency (rad/s).
+        start_frequency_rad_s: Option<f64>,
+        /// Start frequency (Hz).
+        start_frequency_hz: Option<f64>,
+        /// End frequency (rad/s).
+        end_frequency_rad_s: Option<f64>,
+        /// End frequency (Hz).
+        end_frequency_hz: Option<f64>,
+        /// Sweep duration (s).
+        duration_s: f64,
+        /// Frequency law.
+        law: SweepLaw,
+        /// Start (s).
+        #[serde(default)]
+        start_s: f64,
+        /// Raised-cosine fade-in/out length at each end (s).
+        #[serde(default)]
+        taper_s: f64,
+    },
+    /// [`Multisine`] with Schroeder phases: `amplitude` | `amplitude_deg` (per component),
+    /// `base_period_s`, `harmonics` (e.g. `[1, 2, 3, 4, 5]`), `start_s` (default 0), optional
+    /// `duration_s`.
+    Multisine {
+        /// Amplitude of each component in the caller's units.
+        amplitude: Option<f64>,
+        /// Amplitude of each component in degrees.
+        amplitude_deg: Option<f64>,
+        /// Base period T (s); component i has frequency kᵢ·2π/T.
+        base_period_s: f64,
+        /// Harmonic numbers kᵢ (distinct, ≥ 1).
+        harmonics: Vec<u32>,
+        /// Start (s).
+        #[serde(default)]
+        start_s: f64,
+        /// Duration (s); absent = until the end of the run.
+        duration_s: Option<f64>,
+    },
+    /// [`RecordedInput`] from a CSV file: `path` (relative paths are resolved against the
+    /// directory given to [`InputConfig::build_in`], e.g. the scenario file's), optional
+    /// `time_column` / `value_column` header names (default: first / second column), `unit`
+    /// (`as_is` default | `deg`).
+    Recorded {
+        /// CSV file.
+        path: PathBuf,
+        /// Header name of the time column (s).
+        time_column: Option<String>,
+        /// Header name of the value column.
+        value_column: Option<String>,
+        /// Unit of the values.
+        #[serde(default)]
+        unit: ValueUnit,
+    },
     /// [`BandLimitedWhiteNoise`]: `noise_power` (units²·s) | `noise_power_deg2_s` (deg²·s,
     /// converted to rad²·s), `sample_time_s`, `seed`.
     BandLimitedWhiteNoise {
@@ -149,12 +233,83 @@ fn amplitude(a: Option<f64>, a_deg: Option<f64>) -> Result<f64, SignalError> {
 
 impl InputConfig {
     /// Builds the signal, converting every `_deg`/`_hz` value to radians / rad/s exactly once.
+    /// Relative recorded-input paths are resolved against the current directory; use
+    /// [`InputConfig::build_in`] to resolve them against the scenario file's directory.
     ///
     /// # Errors
     /// [`SignalError::UnitChoice`] when both or neither unit alternative is given, and the
     /// constructor errors of the signal types (naming the field and value).
     pub fn build(&self) -> Result<Input, SignalError> {
+        self.build_in(Path::new(""))
+    }
+
+    /// As [`InputConfig::build`], resolving a relative recorded-input `path` against `base_dir`.
+    ///
+    /// # Errors
+    /// As [`InputConfig::build`], plus the file errors of [`RecordedInput::from_csv_path`].
+    pub fn build_in(&self, base_dir: &Path) -> Result<Input, SignalError> {
+        let hz = |f: f64| core::f64::consts::TAU * f;
         Ok(match *self {
+            InputConfig::ThreeTwoOneOne { amplitude: a, amplitude_deg, start_s, dt_s } => {
+                ThreeTwoOneOne::new(amplitude(a, amplitude_deg)?, start_s, dt_s)?.into()
+            }
+            InputConfig::Sweep {
+                amplitude: a,
+                amplitude_deg,
+                start_frequency_rad_s,
+                start_frequency_hz,
+                end_frequency_rad_s,
+                end_frequency_hz,
+                duration_s,
+                law,
+                start_s,
+                taper_s,
+            } => Sweep::new(
+                amplitude(a, amplitude_deg)?,
+                one_of(
+                    "start_frequency_rad_s",
+                    start_frequency_rad_s,
+                    "start_frequency_hz",
+                    start_frequency_hz,
+                    hz,
+                )?,
+                one_of(
+                    "end_frequency_rad_s",
+                    end_frequency_rad_s,
+                    "end_frequency_hz",
+                    end_frequency_hz,
+                    hz,
+                )?,
+                start_s,
+                duration_s,
+                law,
+                taper_s,
+            )?
+            .into(),
+            InputConfig::Multisine {
+                amplitude: a,
+                amplitude_deg,
+                base_period_s,
+                ref harmonics,
+                start_s,
+                duration_s,
+            } => Multisine::schroeder(
+                amplitude(a, amplitude_deg)?,
+                base_period_s,
+                harmonics,
+                start_s,
+                duration_s,
+            )?
+            .into(),
+            InputConfig::Recorded { ref path, ref time_column, ref value_column, unit } => {
+                RecordedInput::from_csv_path(
+                    &base_dir.join(path),
+                    time_column.as_deref(),
+                    value_column.as_deref(),
+                    unit,
+                )?
+                .into()
+            }
             InputConfig::Step { amplitude: a, amplitude_deg, start_s } => {
                 Step::new(amplitude(a, amplitude_deg)?, start_s)?.into()
             }
@@ -319,6 +474,56 @@ parts = [
             "channel = \"elevator\"\nkind = \"step\"\namplitude_deg = 1.0\nstrat_s = 2.0\n",
         );
         assert!(bad.is_err());
+    }
+
+    #[test]
+    fn analytic_step2_kinds_build_from_toml() {
+        let m = parse("kind = \"3211\"\namplitude_deg = 1.0\nstart_s = 1.0\ndt_s = 0.5\n")
+            .unwrap()
+            .build()
+            .unwrap();
+        let a = 1f64.to_radians();
+        assert_eq!(m.value(1.1), a);
+        assert_eq!(m.value(2.6), -a);
+        assert_eq!(m.value(3.6), a);
+        assert_eq!(m.value(4.1), -a);
+        let s = parse(
+            "kind = \"sweep\"\namplitude = 1.0\nstart_frequency_hz = 1.0\nend_frequency_rad_s = 1.0\nduration_s = 10.0\nlaw = \"linear\"\n",
+        )
+        .unwrap()
+        .build()
+        .unwrap();
+        let Input::Sweep(sw) = s else { panic!("not a sweep") };
+        assert!((sw.instantaneous_frequency_rad_s(0.0) - 2.0 * PI).abs() < 1e-12);
+        assert!((sw.instantaneous_frequency_rad_s(10.0) - 1.0).abs() < 1e-12);
+        let ms = parse(
+            "kind = \"multisine\"\namplitude = 1.0\nbase_period_s = 2.0\nharmonics = [1, 3]\n",
+        )
+        .unwrap()
+        .build()
+        .unwrap();
+        // phases 0 and -pi*2*1/2 = -pi: cos(pi t) + cos(3 pi t - pi) at t = 0 is 1 - 1 = 0.
+        assert!(ms.value(0.0).abs() < 1e-15);
+        let e = parse(
+            "kind = \"multisine\"\namplitude = 1.0\nbase_period_s = 2.0\nharmonics = [1, 1]\n",
+        )
+        .unwrap()
+        .build()
+        .unwrap_err();
+        assert!(e.to_string().contains("harmonics"), "{e}");
+    }
+
+    #[test]
+    fn analytic_recorded_from_toml_resolves_relative_to_base_dir() {
+        let dir = std::env::temp_dir().join(format!("aeroident-signals-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("stick.csv"), "t_s,de_deg\n0,0\n2,1\n").unwrap();
+        let c = parse("kind = \"recorded\"\npath = \"stick.csv\"\nunit = \"deg\"\n").unwrap();
+        let r = c.build_in(&dir).unwrap();
+        assert!((r.value(1.0) - 0.5f64.to_radians()).abs() < 1e-15);
+        let e = c.build_in(Path::new("/nonexistent")).unwrap_err();
+        assert!(e.to_string().contains("stick.csv"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]

@@ -28,14 +28,21 @@ impl<S: InputSignal + ?Sized> InputSignal for Box<S> {
 
 /// Serde configuration of inputs (TOML shapes, unit conversion in one place).
 pub mod config;
+/// Causal numerical differentiation (least-squares slope, linear phase, stated lag).
+pub mod differentiate;
 /// Error type of the crate.
 pub mod error;
-/// Deterministic pilot inputs: step, pulse, doublet, sine, sum.
+/// Deterministic pilot inputs: step, pulse, doublet, 3-2-1-1, sine, sweeps, multisine, sum.
 pub mod inputs;
 /// Simulink-style band-limited white noise.
 pub mod noise;
+/// Recorded input replayed from a CSV file (time, value).
+pub mod recorded;
 
 pub use config::InputConfig;
 pub use error::SignalError;
-pub use inputs::{Doublet, Input, Pulse, Sine, Step, Sum};
+pub use inputs::{
+    Doublet, Input, Multisine, Pulse, Sine, Step, Sum, Sweep, SweepLaw, ThreeTwoOneOne,
+};
 pub use noise::BandLimitedWhiteNoise;
+pub use recorded::{RecordedInput, ValueUnit};

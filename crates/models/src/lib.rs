@@ -8,6 +8,10 @@
 
 use nalgebra::SVector;
 
+/// The textbook air-data computer of the F-16 model (SLJ §3.5, ADC).
+pub mod atmosphere;
+/// The Stevens–Lewis nonlinear F-16 (SLJ §3.5, App. A; NASA TP-1538).
+pub mod f16;
 pub mod integrate;
 
 /// Errors a model evaluation can return.
@@ -50,3 +54,7 @@ pub trait Dynamics<const N: usize> {
         u: &Self::Input,
     ) -> Result<SVector<f64, N>, ModelError>;
 }
+/// Models whose parameters can be replaced (truth and estimated model share equations).
+pub mod parametric;
+/// The thesis's four proof-of-concept systems (2.1)–(2.4).
+pub mod small;

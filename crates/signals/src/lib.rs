@@ -61,6 +61,8 @@ impl<A: WindField, B: WindField> WindField for (A, B) {
 
 /// Serde configuration of inputs and winds (TOML shapes, unit conversion in one place).
 pub mod config;
+/// Causal numerical differentiation (least-squares slope, linear phase, stated lag).
+pub mod differentiate;
 /// Error type of the crate.
 pub mod error;
 /// The thesis's 1-cos gust per body axis (eq. 2.32).

@@ -12,6 +12,10 @@
 
 use nalgebra::{SMatrix, SVector};
 
+pub mod kalman;
+pub mod regressors;
+pub mod rls;
+
 /// A parameter estimate at one time.
 ///
 /// `theta` holds `P` parameters in the order of [`Estimator::param_names`]; `covariance` is the
@@ -89,3 +93,6 @@ pub trait Estimator<const P: usize> {
     /// The current estimate.
     fn estimate(&self) -> &Estimate<P>;
 }
+
+/// Sliding-mode parameter estimators (thesis §3.2–§3.4): published and corrected.
+pub mod smpe;

@@ -1,0 +1,180 @@
+//! Causal numerical differentiation for real-time use (e.g. `q̇` from a recorded `q` when the
+//! record has no angular accelerations).
+//!
+//! Method: least-squares slope of a straight line fitted to the last `N` uniformly spaced
+//! samples (a first-order Savitzky–Golay differentiator; Savitzky & Golay, *Anal. Chem.* 36,
+//! 1964; Klein & Morelli 2006, §11.2 on smoothed numerical differentiation):
+//!
+//! ```text
+//! ẋ̂(t_c) = Σ_k w_k x_k,   w_k = (k − c) / (dt · Σ_j (j − c)²),   c = (N−1)/2,   k = 0 … N−1
+//! ```
+//!
+//! The weights are antisymmetric about the window centre, so the filter has **linear phase**:
+//! its output is the derivative estimate at the window centre, i.e. it **lags by exactly
+//! `(N−1)·dt/2`** at every frequency. It is exact for ramps (and for quadratics, whose
+//! second-order term the antisymmetric weights cancel); for a sinusoid of angular frequency ω
+//! the gain relative to the true derivative is `G(ω) = Σ_k w_k sin(ω(k−c)dt) / ω` (→ 1 as
+//! `ω·N·dt → 0`). Callers that combine the derivative with other signals should delay those by
+//! the same lag (whole samples when `N` is odd) to keep them aligned.
+//!
+//! No allocation after construction; the window restarts after [`CausalDifferentiator::reset`]
+//! (e.g. across a data gap).
+
+/// Errors from constructing a [`CausalDifferentiator`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DifferentiateError {
+    /// The window length is below 2.
+    #[error("differentiator window must be at least 2 samples, got {window}")]
+    Window {
+        /// The window length given.
+        window: usize,
+    },
+    /// The sample interval is not finite and positive.
+    #[error("differentiator dt_s must be finite and > 0, got {dt_s}")]
+    Interval {
+        /// The interval given, s.
+        dt_s: f64,
+    },
+}
+
+/// Least-squares-slope differentiator over the last `window` samples, for samples spaced
+/// `dt_s` apart. Output units: input units per second.
+#[derive(Debug, Clone)]
+pub struct CausalDifferentiator {
+    weights: Vec<f64>,
+    buf: Vec<f64>,
+    head: usize,
+    filled: usize,
+    dt_s: f64,
+}
+
+impl CausalDifferentiator {
+    /// A differentiator over `window ≥ 2` samples spaced `dt_s > 0` apart.
+    ///
+    /// # Errors
+    /// [`DifferentiateError`] for `window < 2` or a non-positive `dt_s`.
+    pub fn new(window: usize, dt_s: f64) -> Result<Self, DifferentiateError> {
+        if window < 2 {
+            return Err(DifferentiateError::Window { window });
+        }
+        if !(dt_s.is_finite() && dt_s > 0.0) {
+            return Err(DifferentiateError::Interval { dt_s });
+        }
+        let c = (window as f64 - 1.0) / 2.0;
+        let denom: f64 = (0..window).map(|k| (k as f64 - c).powi(2)).sum::<f64>() * dt_s;
+        let weights = (0..window).map(|k| (k as f64 - c) / denom).collect();
+        Ok(Self { weights, buf: vec![0.0; window], head: 0, filled: 0, dt_s })
+    }
+
+    /// The lag of the output behind the newest input, s: `(N−1)·dt/2`.
+    pub fn lag_s(&self) -> f64 {
+        (self.weights.len() as f64 - 1.0) * self.dt_s / 2.0
+    }
+
+    /// The window length `N`.
+    pub fn window(&self) -> usize {
+        self.weights.len()
+    }
+
+    /// Forgets all samples (the next `N−1` calls return `None`).
+    pub fn reset(&mut self) {
+        self.head = 0;
+        self.filled = 0;
+    }
+
+    /// Pushes the newest sample `x` and returns the derivative estimate at the window centre
+    /// (time of the newest sample minus [`Self::lag_s`]), or `None` until `N` samples were seen.
+    pub fn update(&mut self, x: f64) -> Option<f64> {
+        let n = self.weights.len();
+        self.buf[self.head] = x;
+        self.head = (self.head + 1) % n;
+        self.filled = (self.filled + 1).min(n);
+        if self.filled < n {
+            return None;
+        }
+        // Oldest sample is at `head` (after the increment).
+        let mut acc = 0.0;
+        for (k, w) in self.weights.iter().enumerate() {
+            acc += w * self.buf[(self.head + k) % n];
+        }
+        Some(acc)
+    }
+
+    /// The gain `G(ω)` of the estimate relative to the true derivative for a sinusoid of angular
+    /// frequency `omega_rad_s` (phase is the pure lag [`Self::lag_s`]).
+    pub fn gain(&self, omega_rad_s: f64) -> f64 {
+        let c = (self.weights.len() as f64 - 1.0) / 2.0;
+        let s: f64 = self
+            .weights
+            .iter()
+            .enumerate()
+            .map(|(k, w)| w * (omega_rad_s * (k as f64 - c) * self.dt_s).sin())
+            .sum();
+        s / omega_rad_s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn analytic_ramp_and_quadratic_exact_with_stated_lag() {
+        let dt = 0.02;
+        for n in [2usize, 3, 5, 8] {
+            let mut d = CausalDifferentiator::new(n, dt).unwrap();
+            for k in 0..40 {
+                let t = k as f64 * dt;
+                // x = 3 + 2 t + 5 t²  →  ẋ(t − lag) = 2 + 10 (t − lag)
+                let out = d.update(3.0 + 2.0 * t + 5.0 * t * t);
+                if k + 1 < n {
+                    assert!(out.is_none());
+                } else {
+                    let expect = 2.0 + 10.0 * (t - d.lag_s());
+                    assert!((out.unwrap() - expect).abs() < 1e-9, "n={n} k={k}");
+                }
+            }
+            assert!((d.lag_s() - (n as f64 - 1.0) * dt / 2.0).abs() < 1e-15);
+        }
+    }
+
+    #[test]
+    fn analytic_sinusoid_pure_lag_and_gain() {
+        let dt = 0.02;
+        let w = 2.0 * std::f64::consts::PI * 1.5; // 1.5 Hz
+        let mut d = CausalDifferentiator::new(5, dt).unwrap();
+        // Closed form of the gain for N = 5: Σ w_k sin(ω(k−c)dt) = 2(sin ωdt + 2 sin 2ωdt)/(10 dt).
+        let g_closed = 2.0 * ((w * dt).sin() + 2.0 * (2.0 * w * dt).sin()) / (10.0 * dt) / w;
+        assert!((d.gain(w) - g_closed).abs() < 1e-12);
+        assert!(g_closed < 1.0 && g_closed > 0.95);
+        for k in 0..200 {
+            let t = k as f64 * dt;
+            if let Some(v) = d.update((w * t).sin()) {
+                let expect = g_closed * w * (w * (t - d.lag_s())).cos();
+                assert!((v - expect).abs() < 1e-9, "k={k}: {v} vs {expect}");
+            }
+        }
+    }
+
+    #[test]
+    fn errors_bad_window_and_interval() {
+        assert_eq!(
+            CausalDifferentiator::new(1, 0.1).unwrap_err(),
+            DifferentiateError::Window { window: 1 }
+        );
+        assert!(CausalDifferentiator::new(3, 0.0).is_err());
+        assert!(CausalDifferentiator::new(3, f64::NAN).is_err());
+    }
+
+    #[test]
+    fn reset_restarts_window() {
+        let mut d = CausalDifferentiator::new(3, 0.1).unwrap();
+        for k in 0..5 {
+            d.update(k as f64);
+        }
+        d.reset();
+        assert!(d.update(100.0).is_none());
+        assert!(d.update(101.0).is_none());
+        assert!((d.update(102.0).unwrap() - 10.0).abs() < 1e-12);
+    }
+}

@@ -239,7 +239,7 @@ impl SensorModel {
 
     /// Reading at `t_s` using this channel's own seeded generator (see the module docs).
     pub fn measure(&mut self, t_s: f64, truth: f64) -> f64 {
-        // Temporarily move the rng out to satisfy the borrow checker without allocation.
+        // Copy the 16-byte generator out and back so the closure does not borrow `self`.
         let mut rng = self.rng.clone();
         let out = self.measure_inner(t_s, truth, || rng.sample(StandardNormal));
         self.rng = rng;
@@ -543,5 +543,31 @@ mod tests {
         let a = s.measure(1.0, 2.0);
         assert_eq!(s.measure(0.5, 3.0), a);
         assert_eq!(s.measure(f64::NAN, 3.0), a);
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn prop_sensor_output_finite_for_finite_inputs(
+            sigma in 0.0f64..10.0, bias in -10.0f64..10.0, gm in 0.0f64..5.0,
+            tau in 1e-3f64..100.0, fs in 0.1f64..2000.0, delay in 0usize..20,
+            lsb in 1e-6f64..1.0, lag in 1e-4f64..10.0, seed in 0u64..1000,
+            truth in -1e6f64..1e6, dt in 1e-4f64..1.0,
+        ) {
+            let p = SensorParameters {
+                white_sigma: sigma,
+                bias,
+                gauss_markov: Some((gm, tau)),
+                sample_rate_hz: fs,
+                delay_samples: delay,
+                lag_tau_s: Some(lag),
+                quantum: Some(lsb),
+            };
+            let mut s = SensorModel::new(p, seed).unwrap();
+            for i in 0..50 {
+                let y = s.measure(i as f64 * dt, truth);
+                proptest::prop_assert!(y.is_finite());
+            }
+            proptest::prop_assert!(s.noise_variance().is_finite());
+        }
     }
 }

@@ -265,7 +265,11 @@ impl Sensor for SensorModel {
 
 /// One `[[sensor]]` entry of a scenario file; values in the channel's units.
 ///
-/// ```toml
+/// ```
+/// # use aeroident_signals::{Sensor, SensorConfig};
+/// # #[derive(serde::Deserialize)]
+/// # struct Scenario { sensor: Vec<SensorConfig> }
+/// let text = r#"
 /// [[sensor]]
 /// channel = "alpha_rad"        # the measured quantity, named with its unit
 /// white_sigma = 0.001          # default 0
@@ -277,6 +281,12 @@ impl Sensor for SensorModel {
 /// gauss_markov_tau_s = 30.0
 /// lag_tau_s = 0.01             # optional first-order lag
 /// seed = 7                     # optional; default: derived from the run seed and the channel
+/// "#;
+/// let sc: Scenario = toml::from_str(text).unwrap();
+/// let mut alpha = sc.sensor[0].build(1).unwrap();
+/// let reading = alpha.measure(0.0, 0.05);
+/// assert!((reading - 0.05).abs() < 0.01);
+/// assert!((alpha.noise_variance() - (1e-6 + 2.5e-7 + 1e-8 / 12.0)).abs() < 1e-15);
 /// ```
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -65,6 +65,8 @@ pub mod config;
 pub mod differentiate;
 /// Error type of the crate.
 pub mod error;
+/// Small causal ZOH-exact filters (first- and second-order low-pass).
+pub mod filters;
 /// The thesis's 1-cos gust per body axis (eq. 2.32).
 pub mod gust;
 /// Deterministic pilot inputs: step, pulse, doublet, 3-2-1-1, sine, sweeps, multisine, sum.
@@ -73,6 +75,8 @@ pub mod inputs;
 pub mod noise;
 /// Recorded input replayed from a CSV file (time, value).
 pub mod recorded;
+/// Per-channel sensor models: ZOH sampling, lag, bias, Gauss–Markov, noise, quantisation, delay.
+pub mod sensors;
 /// Continuous Dryden turbulence (MIL-F-8785C), exactly discretised, seeded.
 pub mod turbulence;
 
@@ -84,4 +88,5 @@ pub use inputs::{
 };
 pub use noise::BandLimitedWhiteNoise;
 pub use recorded::{RecordedInput, ValueUnit};
+pub use sensors::{Sensor, SensorConfig, SensorModel, SensorParameters};
 pub use turbulence::{DrydenGenerator, DrydenParameters, DrydenTurbulence, TurbulenceSeverity};

@@ -638,4 +638,23 @@ mod tests {
         assert!(e.to_string().contains("L_w_ft"), "{e}");
         assert!(DrydenTurbulence::generate(&p, 600.0, 1e-6, 1e3, 1).is_err());
     }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+        #[test]
+        fn prop_dryden_finite_for_valid_parameters(
+            h in 0.0f64..90_000.0, sev in 0usize..3, vt in 1.0f64..3000.0,
+            dt in 1e-4f64..1.0, seed in 0u64..1000, t in -10.0f64..100.0,
+        ) {
+            let sev = [
+                TurbulenceSeverity::Light,
+                TurbulenceSeverity::Moderate,
+                TurbulenceSeverity::Severe,
+            ][sev];
+            let p = DrydenParameters::mil_f_8785c(h, sev).unwrap();
+            let d = DrydenTurbulence::generate(&p, vt, dt, 2.0, seed).unwrap();
+            let w = d.wind_body_fps(t);
+            proptest::prop_assert!(w.iter().all(|c| c.is_finite()));
+        }
+    }
 }

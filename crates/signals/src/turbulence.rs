@@ -11,7 +11,7 @@
 //! ```
 //!
 //! (MIL-F-8785C eqs. for the Dryden form, spatial frequency Ω = ω / V; the temporal PSD is the
-//! spatial one divided by V.) [`dryden_psd_one_sided`] evaluates them.
+//! spatial one divided by V.) [`crate::turbulence::dryden_psd_one_sided`] evaluates them.
 //!
 //! # Shaping filters and their discretisation
 //! Each component is the output of a shaping filter driven by unit-intensity continuous white

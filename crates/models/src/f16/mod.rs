@@ -233,12 +233,14 @@ pub fn pdot(e: &data::EngineConstants, pow: f64, cpow: f64) -> f64 {
 pub fn thrust_lbf(d: &F16Data, pow: f64, alt_ft: f64, mach: f64) -> f64 {
     let x = Extrapolation::Linear;
     let mil = d.engine.mil_power_percent;
-    let tmil = d.thrust_mil.lookup(alt_ft, mach, x);
+    let (sh, sm) =
+        (table::segment(&d.thrust_mil.r, alt_ft, x), table::segment(&d.thrust_mil.c, mach, x));
+    let tmil = d.thrust_mil.at(sh, sm);
     if pow < mil {
-        let tidl = d.thrust_idle.lookup(alt_ft, mach, x);
+        let tidl = d.thrust_idle.at(sh, sm);
         tidl + (tmil - tidl) * pow / mil
     } else {
-        let tmax = d.thrust_max.lookup(alt_ft, mach, x);
+        let tmax = d.thrust_max.at(sh, sm);
         tmil + (tmax - tmil) * (pow - mil) / mil
     }
 }
@@ -408,9 +410,10 @@ impl F16 {
 
         // Inertial body velocity.
         let cbta = beta.cos();
-        let u_b = vt * alpha.cos() * cbta;
+        let (salp, calp) = alpha.sin_cos();
+        let u_b = vt * calp * cbta;
         let v_b = vt * beta.sin();
-        let w_b = vt * alpha.sin() * cbta;
+        let w_b = vt * salp * cbta;
 
         // Direction cosines body←NED (rows: body x, y, z).
         let t1 = sph * cpsi;
@@ -462,20 +465,23 @@ impl F16 {
         let sign_b = if b_deg < 0.0 { -1.0 } else { 1.0 };
         let abs_b = b_deg.abs();
 
-        let mut cxt = d.cx.lookup(a_deg, el, lin);
+        // Locate each argument once on its (shared, checked at load) axis.
+        let sa_ = table::segment(&d.cx.r, a_deg, lin);
+        let se_ = table::segment(&d.cx.c, el, lin);
+        let sab_ = table::segment(&d.cl.c, abs_b, lin);
+        let sb_ = table::segment(&d.dlda.c, b_deg, lin);
+        let mut cxt = d.cx.at(sa_, se_);
         let mut cyt = d.cy.beta_coefficient_per_deg * b_deg
             + d.cy.aileron_coefficient * (ail / d.cy.aileron_scale_deg)
             + d.cy.rudder_coefficient * (rdr / d.cy.rudder_scale_deg);
         let bs = b_deg / d.cz.beta_scale_deg;
-        let mut czt = d.cz.table.lookup(a_deg, lin) * (1.0 - bs * bs)
+        let mut czt = d.cz.table.at(sa_) * (1.0 - bs * bs)
             + d.cz.elevator_coefficient * (el / d.cz.elevator_scale_deg);
-        let mut clt = sign_b * d.cl.lookup(a_deg, abs_b, lin)
-            + d.dlda.lookup(a_deg, b_deg, lin) * dail
-            + d.dldr.lookup(a_deg, b_deg, lin) * drdr;
-        let mut cmt = d.cm.lookup(a_deg, el, lin);
-        let mut cnt = sign_b * d.cn.lookup(a_deg, abs_b, lin)
-            + d.dnda.lookup(a_deg, b_deg, lin) * dail
-            + d.dndr.lookup(a_deg, b_deg, lin) * drdr;
+        let mut clt =
+            sign_b * d.cl.at(sa_, sab_) + d.dlda.at(sa_, sb_) * dail + d.dldr.at(sa_, sb_) * drdr;
+        let mut cmt = d.cm.at(sa_, se_);
+        let mut cnt =
+            sign_b * d.cn.at(sa_, sab_) + d.dnda.at(sa_, sb_) * dail + d.dndr.at(sa_, sb_) * drdr;
 
         let g = &d.geometry;
         let tvt = 0.5 / vta;
@@ -483,7 +489,7 @@ impl F16 {
         let cq = g.cbar_ft * q * tvt;
         let mut dmp = [0.0; 9];
         for (k, t) in d.damping.iter().enumerate() {
-            dmp[k] = t.lookup(a_deg, lin);
+            dmp[k] = t.at(sa_);
         }
         cxt += cq * dmp[0];
         cyt += b2v * (dmp[1] * r + dmp[2] * p);
@@ -492,7 +498,7 @@ impl F16 {
         cmt += cq * dmp[6] + czt * (g.xcgr - self.xcg);
         cnt += b2v * (dmp[7] * r + dmp[8] * p) - cyt * (g.xcgr - self.xcg) * g.cbar_ft / g.span_ft;
 
-        let (sa, ca) = alpha_a.sin_cos();
+        let (sa, ca) = if u.wind_ned_fps == [0.0; 3] { (salp, calp) } else { alpha_a.sin_cos() };
         if !inc.is_zero() {
             let dc = inc.deltas(
                 &IncrementInputs {

@@ -25,10 +25,11 @@ use aeroident_estimators::smpe::{
 use aeroident_estimators::{Estimator, EstimatorError};
 use aeroident_models::f16::{self, F16, F16Controls, F16State, IncrementReference, N_STATES};
 use aeroident_models::integrate::rk4_step;
-use aeroident_signals::{Input, InputSignal};
+use aeroident_models::trim::{F16Trim, TrimCondition, trim};
+use aeroident_signals::{Input, InputSignal, WindField, config::build_wind};
 
-use super::model::{F16IncrementModel, Increment, LevelTrim, thesis_increments, trim_level};
-use super::scenario::{Axis, Channel, EstimatorSpec, EstimatorWind, ReadingSpec, Scenario, WindSpec};
+use super::model::{F16IncrementModel, Increment, thesis_increments};
+use super::scenario::{Channel, EstimatorSpec, EstimatorWind, ReadingSpec, Scenario};
 use super::sensors::{SensorNoise, derivative_sigma};
 
 /// Errors of an experiment run.
@@ -66,9 +67,11 @@ pub enum ExperimentError {
 pub type TrackedStates = [f64; 6];
 
 /// Names of [`TrackedStates`] (CSV suffixes).
-pub const TRACKED_NAMES: [&str; 6] = ["vt_fps", "alpha_rad", "beta_rad", "p_rad_s", "q_rad_s", "r_rad_s"];
+pub const TRACKED_NAMES: [&str; 6] =
+    ["vt_fps", "alpha_rad", "beta_rad", "p_rad_s", "q_rad_s", "r_rad_s"];
 
-fn tracked(x: &F16State) -> TrackedStates {
+/// The sliding states `[V_T, α, β, p, q, r]` of a full F-16 state.
+pub fn tracked(x: &F16State) -> TrackedStates {
     [x[f16::VT], x[f16::ALPHA], x[f16::BETA], x[f16::P], x[f16::Q], x[f16::R]]
 }
 
@@ -94,8 +97,8 @@ pub struct ChannelLog {
     /// Estimates `[ΔCm_α, ΔCm_q, ΔCL_α, ΔCD_α]` per sample (non-estimated entries are the
     /// estimated aircraft's fixed values, zero).
     pub estimates: Vec<[f64; 4]>,
-    /// Estimated aircraft's sliding states per sample.
-    pub states: Vec<TrackedStates>,
+    /// Estimated aircraft's full state per sample (sliding states: [`tracked`]).
+    pub states: Vec<F16State>,
     /// Published groups only: per sample, one entry per group (C_m, C_L, C_D order).
     pub diagnostics: Vec<Vec<PublishedDiagnostics>>,
     /// First estimator or estimated-aircraft error, with its time; estimates are held from
@@ -111,15 +114,15 @@ pub struct RunOutput {
     /// The scenario that ran.
     pub scenario: Scenario,
     /// Trim point of both aircraft.
-    pub trim: LevelTrim,
+    pub trim: F16Trim,
     /// Sample times, s.
     pub t_s: Vec<f64>,
     /// Pilot controls `[throttle, elevator_rad, aileron_rad, rudder_rad]` per sample.
     pub controls: Vec<[f64; 4]>,
     /// Wind on the reference aircraft, NED, ft/s, per sample.
     pub wind_ned_fps: Vec<[f64; 3]>,
-    /// Reference aircraft's sliding states per sample.
-    pub reference: Vec<TrackedStates>,
+    /// Reference aircraft's full state per sample (true, before the sensors).
+    pub reference: Vec<F16State>,
     /// True increments per sample.
     pub truth: Vec<[f64; 4]>,
     /// One log per estimator.
@@ -387,8 +390,11 @@ fn build_channel(
                 ReadingSpec::Implicit => Reading::Implicit,
                 ReadingSpec::Explicit => Reading::Explicit,
             };
-            let cm: Vec<Increment> =
-                incs.iter().copied().filter(|i| matches!(i, Increment::CmAlpha | Increment::CmQ)).collect();
+            let cm: Vec<Increment> = incs
+                .iter()
+                .copied()
+                .filter(|i| matches!(i, Increment::CmAlpha | Increment::CmQ))
+                .collect();
             match cm.len() {
                 1 => engines.push(ctx.published::<1>(incs_array(&cm), reading)?),
                 2 => engines.push(ctx.published::<2>(incs_array(&cm), reading)?),
@@ -438,30 +444,6 @@ fn build_channel(
     })
 }
 
-/// The wind on the reference aircraft, body axes, ft/s, at `t_s`.
-fn wind_body_fps(winds: &[WindSpec], t_s: f64) -> [f64; 3] {
-    let mut w = [0.0; 3];
-    for spec in winds {
-        if let WindSpec::OneMinusCosine { axis, amplitude_fps, rise_time_s, delay_s } = *spec {
-            let tp = t_s - delay_s;
-            let v = if tp < 0.0 {
-                0.0
-            } else if tp <= rise_time_s {
-                0.5 * amplitude_fps * (1.0 - (core::f64::consts::PI * tp / rise_time_s).cos())
-            } else {
-                amplitude_fps
-            };
-            let k = match axis {
-                Axis::X => 0,
-                Axis::Y => 1,
-                Axis::Z => 2,
-            };
-            w[k] += v;
-        }
-    }
-    w
-}
-
 /// Body → NED rotation of a body-axis vector at the attitude of `x` (SLJ (1.3-20)).
 fn body_to_ned(x: &F16State, v: [f64; 3]) -> [f64; 3] {
     let (sph, cph) = x[f16::PHI].sin_cos();
@@ -481,13 +463,15 @@ fn body_to_ned(x: &F16State, v: [f64; 3]) -> [f64; 3] {
 /// reference aircraft leaves the model's domain. Estimator failures are not errors: they are
 /// logged in [`ChannelLog::failure`] and that channel's estimates are held.
 pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
-    if sc.wind.iter().any(|w| matches!(w, WindSpec::Dryden { .. })) {
-        return Err(setup_err("wind", "Dryden turbulence is not available in this build"));
-    }
-    let f16 = F16::new(sc.trim.xcg)
-        .map_err(|e| ExperimentError::Trim { vt_fps: sc.trim.vt_fps, alt_ft: sc.trim.alt_ft, source: e })?;
-    let trim = trim_level(&f16, sc.trim.vt_fps, sc.trim.alt_ft)
-        .map_err(|e| ExperimentError::Trim { vt_fps: sc.trim.vt_fps, alt_ft: sc.trim.alt_ft, source: e })?;
+    let wind = build_wind(&sc.wind).map_err(|e| setup_err("wind", e))?;
+    let f16 = F16::new(sc.trim.xcg).map_err(|e| ExperimentError::Trim {
+        vt_fps: sc.trim.vt_fps,
+        alt_ft: sc.trim.alt_ft,
+        source: e,
+    })?;
+    let trim = trim(&f16, &TrimCondition::level(sc.trim.alt_ft, sc.trim.vt_fps)).map_err(|e| {
+        ExperimentError::Trim { vt_fps: sc.trim.vt_fps, alt_ft: sc.trim.alt_ft, source: e }
+    })?;
     let reference = IncrementReference {
         alpha_rad: trim.state[f16::ALPHA],
         elevator_rad: trim.controls.elevator_rad,
@@ -521,7 +505,7 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
     let n = (sc.duration_s / sc.dt_s).round() as usize;
     let mut out = RunOutput {
         scenario: sc.clone(),
-        trim,
+        trim: trim.clone(),
         t_s: Vec::with_capacity(n + 1),
         controls: Vec::with_capacity(n + 1),
         wind_ned_fps: Vec::with_capacity(n + 1),
@@ -541,7 +525,8 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
             uv[slot] += sigs.iter().map(|s| s.value(t)).sum::<f64>();
         }
         let mut u = trim.controls.with_vector(&uv);
-        let wind_ned = body_to_ned(&x_ref, wind_body_fps(&sc.wind, t));
+        let wb = wind.wind_body_fps(t);
+        let wind_ned = body_to_ned(&x_ref, [wb[0], wb[1], wb[2]]);
         let u_est = match sc.estimator_wind {
             EstimatorWind::Known => F16Controls { wind_ned_fps: wind_ned, ..u },
             EstimatorWind::Unknown => u,
@@ -583,12 +568,12 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
                 }
             }
             ch.log.estimates.push(ch.current.get());
-            ch.log.states.push(tracked(&ch.x));
+            ch.log.states.push(ch.x);
         }
         out.t_s.push(t);
         out.controls.push([uv[0], uv[1], uv[2], uv[3]]);
         out.wind_ned_fps.push(wind_ned);
-        out.reference.push(tracked(&x_ref));
+        out.reference.push(x_ref);
         out.truth.push(truth);
         if k == n {
             break;
@@ -611,7 +596,13 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
     out.channels = channels
         .into_iter()
         .map(|mut ch| {
-            ch.log.stats = ch.engines.iter().map(|e| e.stats()).filter(|s| !s.is_empty()).collect::<Vec<_>>().join("; ");
+            ch.log.stats = ch
+                .engines
+                .iter()
+                .map(|e| e.stats())
+                .filter(|s| !s.is_empty())
+                .collect::<Vec<_>>()
+                .join("; ");
             ch.log
         })
         .collect();

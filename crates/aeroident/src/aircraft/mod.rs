@@ -13,5 +13,5 @@ pub mod scenario;
 pub mod sensors;
 
 pub use experiment::{ChannelLog, ExperimentError, RunOutput, run};
-pub use model::{F16IncrementModel, Increment, LevelTrim, trim_level};
+pub use model::{F16IncrementModel, Increment};
 pub use scenario::{Scenario, ScenarioError};

@@ -1,6 +1,6 @@
 //! The F-16 as the estimators' model: the four thesis increments (3.100)–(3.101), an adapter
 //! implementing the generic engine's [`ParametricModel`] on top of the Stevens–Lewis F-16, the
-//! analytic parameter sensitivity, and a wings-level trim.
+//! analytic parameter sensitivity and the inverse inertia of (3.114).
 
 use std::cell::Cell;
 use std::rc::Rc;
@@ -11,7 +11,7 @@ use aeroident_models::ModelError;
 use aeroident_models::f16::{
     self, AeroIncrements, F16, F16Controls, F16State, IncrementReference, N_STATES,
 };
-use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
+use nalgebra::{Matrix3, SMatrix, SVector};
 
 /// The thesis's four unknown increments (3.100), all **per radian**: ΔCm_α per rad of Δα,
 /// ΔCm_q per unit of `(c̄/2V_T)Δq`, ΔCL_α and ΔCD_α per rad of Δα.
@@ -198,79 +198,4 @@ pub fn inverse_inertia(f16: &F16) -> Matrix3<f64> {
     );
     // The inertia tensor of a real aircraft is positive definite, so the inverse exists.
     i.try_inverse().unwrap_or_else(Matrix3::zeros)
-}
-
-/// A wings-level, straight and level trim (γ = 0, θ = α, β = φ = 0, p = q = r = 0) at
-/// `vt_fps` and `alt_ft`: Newton iterations on throttle, elevator and α that zero
-/// `V̇, α̇, q̇` (the longitudinal part of the thesis's trim index (2.31); the lateral part is
-/// zero by symmetry), with the engine power at its commanded value.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LevelTrim {
-    /// Trimmed state.
-    pub state: F16State,
-    /// Trimmed controls (no wind).
-    pub controls: F16Controls,
-    /// Final `√(V̇² + α̇² + q̇²)` (mixed units, ft/s² and rad/s, rad/s²).
-    pub residual: f64,
-}
-
-/// Trims `f16` (increments ignored: the trim is of the nominal aircraft, the point Δ(·) is
-/// taken about) per [`LevelTrim`].
-///
-/// # Errors
-/// [`ModelError::NoConvergence`] when the residual stays above `1e-9` after 60 iterations;
-/// model errors for an impossible flight condition.
-pub fn trim_level(f16: &F16, vt_fps: f64, alt_ft: f64) -> Result<LevelTrim, ModelError> {
-    let zero = AeroIncrements::zero();
-    let build = |v: &Vector3<f64>| {
-        let mut x = F16State::zeros();
-        x[f16::VT] = vt_fps;
-        x[f16::ALPHA] = v[2];
-        x[f16::THETA] = v[2];
-        x[f16::ALT] = alt_ft;
-        x[f16::POW] = f16::tgear(&f16.data().engine, v[0]);
-        (x, F16Controls::new(v[0], v[1], 0.0, 0.0))
-    };
-    let resid = |v: &Vector3<f64>| -> Result<Vector3<f64>, ModelError> {
-        let (x, u) = build(v);
-        let xd = f16.derivatives_with_increments(&x, &u, &zero)?;
-        Ok(Vector3::new(xd[f16::VT], xd[f16::ALPHA], xd[f16::Q]))
-    };
-    let mut v = Vector3::new(0.3, (-2.0f64).to_radians(), 3.0f64.to_radians());
-    let mut r = resid(&v)?;
-    for _ in 0..60 {
-        if r.norm() < 1e-12 {
-            break;
-        }
-        let mut jac = Matrix3::zeros();
-        for k in 0..3 {
-            let h = 1e-7;
-            let mut vp = v;
-            vp[k] += h;
-            jac.set_column(k, &((resid(&vp)? - r) / h));
-        }
-        let step = jac.lu().solve(&(-r)).ok_or(ModelError::NoConvergence {
-            what: "level trim",
-            detail: "singular Jacobian".into(),
-        })?;
-        let mut t = 1.0;
-        loop {
-            let cand = v + step * t;
-            let rc = resid(&cand)?;
-            if rc.norm() < r.norm() || t < 1e-4 {
-                v = cand;
-                r = rc;
-                break;
-            }
-            t *= 0.5;
-        }
-    }
-    if !(r.norm() < 1e-9) {
-        return Err(ModelError::NoConvergence {
-            what: "level trim",
-            detail: format!("residual {:e} at vt = {vt_fps} ft/s, alt = {alt_ft} ft", r.norm()),
-        });
-    }
-    let (state, controls) = build(&v);
-    Ok(LevelTrim { state, controls, residual: r.norm() })
 }

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use super::experiment::{RunOutput, TRACKED_NAMES};
+use super::experiment::{RunOutput, TRACKED_NAMES, tracked};
 use super::model::Increment;
 use crate::metrics::{self, CONVERGENCE_TOL_REL};
 use crate::plot::{LineKind, Panel, Series, render_panels_png};
@@ -59,6 +59,8 @@ pub struct ParamSummary {
     /// First time after which the estimate stays within ±5 % of the truth (before any step),
     /// s; `null` if it never settles.
     pub convergence_time_s: Option<f64>,
+    /// First time the estimate enters the ±5 % band (it may leave it again), s.
+    pub first_within_s: Option<f64>,
     /// The thesis's reported time, s, where legible.
     pub thesis_convergence_time_s: Option<f64>,
     /// The thesis's claim verbatim.
@@ -116,17 +118,30 @@ pub fn summarize(out: &RunOutput) -> Result<Summary, ReportError> {
             )?;
             let reconv = match step {
                 Some(t0) => {
-                    let r = metrics::reconvergence_time_s(&out.t_s, &est, &truth, CONVERGENCE_TOL_REL, t0)?;
-                    worst_reconv = Some(match (worst_reconv.flatten(), r, worst_reconv.is_some()) {
-                        (_, None, _) => None,
-                        (Some(w), Some(r), _) => Some(w.max(r)),
-                        (None, Some(_), true) => None,
-                        (None, Some(r), false) => Some(r),
-                    });
+                    let r = metrics::reconvergence_time_s(
+                        &out.t_s,
+                        &est,
+                        &truth,
+                        CONVERGENCE_TOL_REL,
+                        t0,
+                    )?;
+                    worst_reconv =
+                        Some(match (worst_reconv.flatten(), r, worst_reconv.is_some()) {
+                            (_, None, _) => None,
+                            (Some(w), Some(r), _) => Some(w.max(r)),
+                            (None, Some(_), true) => None,
+                            (None, Some(r), false) => Some(r),
+                        });
                     r
                 }
                 None => None,
             };
+            let first_within_s = (0..pre)
+                .find(|&k| {
+                    (est[k] - truth[k]).abs()
+                        <= metrics::band_half_width(truth[k], CONVERGENCE_TOL_REL)
+                })
+                .map(|k| out.t_s[k]);
             let fin = est.last().copied().unwrap_or(f64::NAN);
             let tru = truth.last().copied().unwrap_or(f64::NAN);
             parameters.push(ParamSummary {
@@ -136,6 +151,7 @@ pub fn summarize(out: &RunOutput) -> Result<Summary, ReportError> {
                 r#final: fin,
                 rel_error: metrics::rel_error(fin, tru),
                 convergence_time_s: conv,
+                first_within_s,
                 thesis_convergence_time_s: entry.and_then(|p| p.thesis_convergence_time_s),
                 thesis_note: entry.and_then(|p| p.thesis_note.clone()),
                 reconvergence_time_s: reconv,
@@ -168,7 +184,9 @@ pub fn summarize(out: &RunOutput) -> Result<Summary, ReportError> {
 pub fn write_timeseries(out: &RunOutput, path: &Path) -> Result<(), ReportError> {
     let f = std::fs::File::create(path).map_err(io_err(path))?;
     let mut w = std::io::BufWriter::new(f);
-    let mut header = String::from("t_s,throttle,elevator_rad,aileron_rad,rudder_rad,wind_north_fps,wind_east_fps,wind_down_fps");
+    let mut header = String::from(
+        "t_s,throttle,elevator_rad,aileron_rad,rudder_rad,wind_north_fps,wind_east_fps,wind_down_fps",
+    );
     for n in TRACKED_NAMES {
         write!(header, ",ref_{n}").ok();
     }
@@ -197,8 +215,13 @@ pub fn write_timeseries(out: &RunOutput, path: &Path) -> Result<(), ReportError>
         line.clear();
         let c = out.controls[k];
         let wd = out.wind_ned_fps[k];
-        write!(line, "{},{},{},{},{},{},{},{}", out.t_s[k], c[0], c[1], c[2], c[3], wd[0], wd[1], wd[2]).ok();
-        for v in out.reference[k] {
+        write!(
+            line,
+            "{},{},{},{},{},{},{},{}",
+            out.t_s[k], c[0], c[1], c[2], c[3], wd[0], wd[1], wd[2]
+        )
+        .ok();
+        for v in tracked(&out.reference[k]) {
             write!(line, ",{v}").ok();
         }
         for v in out.truth[k] {
@@ -208,7 +231,7 @@ pub fn write_timeseries(out: &RunOutput, path: &Path) -> Result<(), ReportError>
             for inc in &ch.params {
                 write!(line, ",{}", ch.estimates[k][inc.index()]).ok();
             }
-            for v in ch.states[k] {
+            for v in tracked(&ch.states[k]) {
                 write!(line, ",{v}").ok();
             }
             for g in 0..ng {
@@ -253,12 +276,22 @@ pub fn write_figures(out: &RunOutput, dir: &Path) -> Result<(), ReportError> {
         Panel {
             title: "elevator".into(),
             y_label: "δe (deg)".into(),
-            series: vec![series("elevator", t, out.controls.iter().map(|c| deg(c[1])).collect(), LineKind::Solid)],
+            series: vec![series(
+                "elevator",
+                t,
+                out.controls.iter().map(|c| deg(c[1])).collect(),
+                LineKind::Solid,
+            )],
         },
         Panel {
             title: "throttle".into(),
             y_label: "throttle (0–1)".into(),
-            series: vec![series("throttle", t, out.controls.iter().map(|c| c[0]).collect(), LineKind::Solid)],
+            series: vec![series(
+                "throttle",
+                t,
+                out.controls.iter().map(|c| c[0]).collect(),
+                LineKind::Solid,
+            )],
         },
         Panel {
             title: "wind (NED)".into(),
@@ -266,11 +299,19 @@ pub fn write_figures(out: &RunOutput, dir: &Path) -> Result<(), ReportError> {
             series: ["north", "east", "down"]
                 .iter()
                 .enumerate()
-                .map(|(k, n)| series(n, t, out.wind_ned_fps.iter().map(|w| w[k]).collect(), LineKind::Solid))
+                .map(|(k, n)| {
+                    series(n, t, out.wind_ned_fps.iter().map(|w| w[k]).collect(), LineKind::Solid)
+                })
                 .collect(),
         },
     ];
-    render_panels_png(&dir.join("controls.png"), &format!("{name}: control commands"), &controls, 1000, 220)?;
+    render_panels_png(
+        &dir.join("controls.png"),
+        &format!("{name}: control commands"),
+        &controls,
+        1000,
+        220,
+    )?;
 
     let mut conv = Vec::new();
     for inc in Increment::ALL {
@@ -278,36 +319,89 @@ pub fn write_figures(out: &RunOutput, dir: &Path) -> Result<(), ReportError> {
         if chans.is_empty() {
             continue;
         }
-        let mut s = vec![series("truth", t, out.truth.iter().map(|v| v[inc.index()]).collect(), LineKind::Dashed)];
+        let mut s = vec![series(
+            "truth",
+            t,
+            out.truth.iter().map(|v| v[inc.index()]).collect(),
+            LineKind::Dashed,
+        )];
         for c in chans {
-            s.push(series(&c.label, t, c.estimates.iter().map(|v| v[inc.index()]).collect(), LineKind::Solid));
+            s.push(series(
+                &c.label,
+                t,
+                c.estimates.iter().map(|v| v[inc.index()]).collect(),
+                LineKind::Solid,
+            ));
         }
-        conv.push(Panel { title: inc.name().into(), y_label: format!("{} (1/rad)", inc.name()), series: s });
+        conv.push(Panel {
+            title: inc.name().into(),
+            y_label: format!("{} (1/rad)", inc.name()),
+            series: s,
+        });
     }
-    render_panels_png(&dir.join("convergence.png"), &format!("{name}: parameter convergence"), &conv, 1000, 240)?;
+    render_panels_png(
+        &dir.join("convergence.png"),
+        &format!("{name}: parameter convergence"),
+        &conv,
+        1000,
+        240,
+    )?;
 
-    let scale = [1.0, 57.29577951308232, 57.29577951308232, 57.29577951308232, 57.29577951308232, 57.29577951308232];
+    let scale = [
+        1.0,
+        57.29577951308232,
+        57.29577951308232,
+        57.29577951308232,
+        57.29577951308232,
+        57.29577951308232,
+    ];
     let units = ["V_T (ft/s)", "α (deg)", "β (deg)", "p (deg/s)", "q (deg/s)", "r (deg/s)"];
     let mut track = Vec::new();
     for (k, unit) in units.iter().enumerate() {
         if k == 2 || k == 3 || k == 5 {
             continue; // lateral states stay at zero in the longitudinal runs
         }
-        let mut s = vec![series("reference", t, out.reference.iter().map(|x| x[k] * scale[k]).collect(), LineKind::Dashed)];
+        let mut s = vec![series(
+            "reference",
+            t,
+            out.reference.iter().map(|x| tracked(x)[k] * scale[k]).collect(),
+            LineKind::Dashed,
+        )];
         for c in &out.channels {
-            s.push(series(&format!("{} aircraft", c.label), t, c.states.iter().map(|x| x[k] * scale[k]).collect(), LineKind::Solid));
+            s.push(series(
+                &format!("{} aircraft", c.label),
+                t,
+                c.states.iter().map(|x| tracked(x)[k] * scale[k]).collect(),
+                LineKind::Solid,
+            ));
         }
         track.push(Panel { title: TRACKED_NAMES[k].into(), y_label: (*unit).into(), series: s });
     }
-    render_panels_png(&dir.join("tracking.png"), &format!("{name}: reference vs estimated aircraft"), &track, 1000, 220)?;
+    render_panels_png(
+        &dir.join("tracking.png"),
+        &format!("{name}: reference vs estimated aircraft"),
+        &track,
+        1000,
+        220,
+    )?;
     Ok(())
 }
 
 /// A short terminal table of a summary.
 pub fn table(summary: &Summary) -> String {
     let mut s = String::new();
-    writeln!(s, "scenario {}  (realtime factor {:.0}×, {})", summary.scenario, summary.realtime_factor, summary.solver).ok();
-    writeln!(s, "{:<22} {:<10} {:>11} {:>11} {:>9} {:>9} {:>9}", "estimator", "param", "truth", "final", "rel.err", "t_conv", "thesis").ok();
+    writeln!(
+        s,
+        "scenario {}  (realtime factor {:.0}×, {})",
+        summary.scenario, summary.realtime_factor, summary.solver
+    )
+    .ok();
+    writeln!(
+        s,
+        "{:<22} {:<10} {:>11} {:>11} {:>9} {:>9} {:>9}",
+        "estimator", "param", "truth", "final", "rel.err", "t_conv", "thesis"
+    )
+    .ok();
     for p in &summary.parameters {
         let opt = |v: Option<f64>| v.map_or("—".to_string(), |x| format!("{x:.2} s"));
         writeln!(
@@ -363,8 +457,18 @@ pub fn markdown(results: &[(super::Scenario, Summary)]) -> String {
                 p.r#final,
                 100.0 * p.rel_error,
                 opt(p.convergence_time_s),
-                p.thesis_note.clone().unwrap_or_else(|| p.thesis_convergence_time_s.map_or("—".into(), |x| format!("{x} s"))),
-                if sc.param(Increment::from_name(&p.name).unwrap_or(Increment::CmAlpha)).and_then(|e| e.step_at_s).is_some() { opt(p.reconvergence_time_s) } else { "—".into() },
+                p.thesis_note.clone().unwrap_or_else(|| p
+                    .thesis_convergence_time_s
+                    .map_or("—".into(), |x| format!("{x} s"))),
+                if sc
+                    .param(Increment::from_name(&p.name).unwrap_or(Increment::CmAlpha))
+                    .and_then(|e| e.step_at_s)
+                    .is_some()
+                {
+                    opt(p.reconvergence_time_s)
+                } else {
+                    "—".into()
+                },
                 sm.realtime_factor,
             )
             .ok();

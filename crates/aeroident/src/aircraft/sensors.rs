@@ -73,11 +73,7 @@ impl SensorNoise {
     ///
     /// # Errors
     /// The signal crate's error for a non-finite level or interval.
-    pub fn new(
-        scale: f64,
-        dt_s: f64,
-        seed: u64,
-    ) -> Result<Self, aeroident_signals::SignalError> {
+    pub fn new(scale: f64, dt_s: f64, seed: u64) -> Result<Self, aeroident_signals::SignalError> {
         let make = |sig: F16State, offset: u64| {
             (0..N_STATES)
                 .map(|i| {
@@ -95,7 +91,10 @@ impl SensorNoise {
                 })
                 .collect::<Result<Vec<_>, _>>()
         };
-        Ok(Self { states: make(state_sigma(), 0)?, derivatives: make(derivative_sigma(dt_s), 100)? })
+        Ok(Self {
+            states: make(state_sigma(), 0)?,
+            derivatives: make(derivative_sigma(dt_s), 100)?,
+        })
     }
 
     /// Measured states and derivatives at `t_s` from the true ones.

@@ -9,6 +9,7 @@
 //! - `aeroident run --all <dir> [--out DIR]` — every `*.toml` in `<dir>` in parallel, one
 //!   sub-directory each, plus `DIR/report.md` (thesis versus ours).
 
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
@@ -53,8 +54,9 @@ pub fn execute(args: RunArgs) -> anyhow::Result<()> {
     if let Some(dir) = &args.all {
         let out = args.out.clone().unwrap_or_else(|| PathBuf::from("aeroident-out"));
         let md = run_all(dir, &out, !args.no_figures)?;
-        println!("{md}");
-        println!("wrote {}", out.join("report.md").display());
+        // A closed pipe (e.g. `| head`) is not an error of the run.
+        let _ =
+            writeln!(std::io::stdout().lock(), "{md}\nwrote {}", out.join("report.md").display());
         return Ok(());
     }
     let (sc, default_dir) = match &args.scenario {
@@ -63,12 +65,15 @@ pub fn execute(args: RunArgs) -> anyhow::Result<()> {
             let d = PathBuf::from("aeroident-out").join(&sc.name);
             (sc, d)
         }
-        None => (Scenario::from_toml(DEFAULT_SCENARIO, "<embedded scenarios/default.toml>")?, PathBuf::from("aeroident-out")),
+        None => (
+            Scenario::from_toml(DEFAULT_SCENARIO, "<embedded scenarios/default.toml>")?,
+            PathBuf::from("aeroident-out"),
+        ),
     };
     let dir = args.out.unwrap_or(default_dir);
     let summary = run_one(&sc, &dir, !args.no_figures)?;
-    print!("{}", report::table(&summary));
-    println!("wrote {}", dir.display());
+    let _ =
+        writeln!(std::io::stdout().lock(), "{}wrote {}", report::table(&summary), dir.display());
     Ok(())
 }
 
@@ -95,6 +100,7 @@ pub fn run_all(scenarios_dir: &Path, out: &Path, figures: bool) -> anyhow::Resul
         .collect::<anyhow::Result<_>>()?;
     let md = report::markdown(&results);
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    std::fs::write(out.join("report.md"), &md).with_context(|| format!("writing {}", out.join("report.md").display()))?;
+    std::fs::write(out.join("report.md"), &md)
+        .with_context(|| format!("writing {}", out.join("report.md").display()))?;
     Ok(md)
 }

@@ -832,6 +832,9 @@ mod tests {
                     .unwrap()
                     .into(),
                 Multisine::schroeder(a, width, &[1, 2, 7], t0, None).unwrap().into(),
+                BandLimitedWhiteNoise::new(a.abs(), width, a.to_bits()).unwrap().into(),
+                RecordedInput::new(vec![t0, t0 + width], vec![a, -a]).unwrap().into(),
+                Input::Sum(Sum::new(vec![])),
             ];
             let s = Sum::new(parts);
             prop_assert!(s.value(t).is_finite());

@@ -90,3 +90,16 @@ pub use noise::BandLimitedWhiteNoise;
 pub use recorded::{RecordedInput, ValueUnit};
 pub use sensors::{Sensor, SensorConfig, SensorModel, SensorParameters};
 pub use turbulence::{DrydenGenerator, DrydenParameters, DrydenTurbulence, TurbulenceSeverity};
+
+#[cfg(test)]
+mod tests {
+    /// Everything a scenario builds can be moved to and shared between threads (rayon runs).
+    #[test]
+    fn built_types_are_send_and_sync() {
+        fn assert_send_sync<T: Send + Sync>() {}
+        assert_send_sync::<crate::Input>();
+        assert_send_sync::<crate::Wind>();
+        assert_send_sync::<crate::SensorModel>();
+        assert_send_sync::<crate::turbulence::DrydenGenerator>();
+    }
+}

@@ -11,3 +11,5 @@ pub mod cli;
 pub mod metrics;
 /// Stacked time-series panels rendered to PNG.
 pub mod plot;
+/// Proof-of-concept experiments (thesis §4.1): scenarios, simulation loop, outputs, report.
+pub mod poc;

@@ -9,3 +9,5 @@ pub mod cli;
 pub mod metrics;
 /// Stacked time-series panels rendered to PNG.
 pub mod plot;
+/// Open-loop F-16 simulation: trim → inputs, gusts, turbulence → sensors → CSV and figures.
+pub mod sim;

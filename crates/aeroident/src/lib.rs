@@ -11,3 +11,5 @@ pub mod metrics;
 pub mod plot;
 /// Open-loop F-16 simulation: trim → inputs, gusts, turbulence → sensors → CSV and figures.
 pub mod sim;
+/// Proof-of-concept experiments (thesis §4.1): scenarios, simulation loop, outputs, report.
+pub mod poc;

@@ -93,3 +93,6 @@ pub trait Estimator<const P: usize> {
     /// The current estimate.
     fn estimate(&self) -> &Estimate<P>;
 }
+
+/// Sliding-mode parameter estimators (thesis §3.2–§3.4): published and corrected.
+pub mod smpe;

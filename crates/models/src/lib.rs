@@ -54,3 +54,7 @@ pub trait Dynamics<const N: usize> {
         u: &Self::Input,
     ) -> Result<SVector<f64, N>, ModelError>;
 }
+/// Models whose parameters can be replaced (truth and estimated model share equations).
+pub mod parametric;
+/// The thesis's four proof-of-concept systems (2.1)–(2.4).
+pub mod small;

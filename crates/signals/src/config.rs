@@ -1,4 +1,4 @@
-//! Serde configuration of inputs: the ONE place where scenario-file values (with their declared
+//! Serde configuration of inputs and disturbances: the ONE place where scenario-file values (with their declared
 //! units) become signals in API units (radians, seconds).
 //!
 //! Each quantity that can come in two units has two optional keys and exactly one must be given:
@@ -36,7 +36,12 @@
 
 use serde::Deserialize;
 
+use nalgebra::Vector3;
+
+use crate::WindField;
 use crate::error::SignalError;
+use crate::gust::{BodyAxis, BodyAxisGust, OneMinusCosineGust};
+use crate::turbulence::{DrydenParameters, DrydenTurbulence, TurbulenceSeverity};
 use std::path::{Path, PathBuf};
 
 use crate::inputs::{
@@ -535,5 +540,224 @@ parts = [
         let s = build_sum(&list).unwrap();
         assert_eq!(s.value(0.5), 1.0);
         assert_eq!(s.value(1.5), 3.0);
+    }
+}
+
+/// One disturbance as written in a scenario file; build a list with [`build_wind`].
+///
+/// ```toml
+/// [[wind]]                      # thesis eq. 2.32 example: 20 ft/s, 6 s rise, 2 s delay
+/// kind = "one_minus_cosine"
+/// axis = "x"                    # body axis: x | y | z
+/// amplitude_fps = 20.0
+/// rise_time_s = 6.0
+/// delay_s = 2.0
+///
+/// [[wind]]                      # MIL-F-8785C presets at the trim altitude and airspeed
+/// kind = "dryden"
+/// severity = "moderate"         # light | moderate | severe; OR give all six
+/// altitude_ft = 20000.0         #   sigma_u_fps, sigma_v_fps, sigma_w_fps, L_u_ft, L_v_ft, L_w_ft
+/// vt_fps = 675.0
+/// sample_time_s = 0.01
+/// duration_s = 60.0             # >= run length (the last sample is held after it)
+/// seed = 11
+/// ```
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum WindConfig {
+    /// [`OneMinusCosineGust`] on one body axis.
+    OneMinusCosine {
+        /// Body axis.
+        axis: BodyAxis,
+        /// Final gust magnitude U_wind (ft/s).
+        amplitude_fps: f64,
+        /// Rise time d (s).
+        rise_time_s: f64,
+        /// Onset delay T_delay (s).
+        #[serde(default)]
+        delay_s: f64,
+    },
+    /// [`DrydenTurbulence`]: either `severity` + `altitude_ft` (MIL-F-8785C presets) or all six
+    /// explicit intensities and scale lengths.
+    Dryden {
+        /// Severity preset (needs `altitude_ft`).
+        severity: Option<TurbulenceSeverity>,
+        /// Height above ground for the preset (ft).
+        altitude_ft: Option<f64>,
+        /// Explicit σ_u (ft/s).
+        sigma_u_fps: Option<f64>,
+        /// Explicit σ_v (ft/s).
+        sigma_v_fps: Option<f64>,
+        /// Explicit σ_w (ft/s).
+        sigma_w_fps: Option<f64>,
+        /// Explicit L_u (ft).
+        L_u_ft: Option<f64>,
+        /// Explicit L_v (ft).
+        L_v_ft: Option<f64>,
+        /// Explicit L_w (ft).
+        L_w_ft: Option<f64>,
+        /// Airspeed the turbulence is frozen at (ft/s).
+        vt_fps: f64,
+        /// Sample time (s).
+        sample_time_s: f64,
+        /// Generated length (s).
+        duration_s: f64,
+        /// Generator seed.
+        seed: u64,
+    },
+}
+
+/// A built wind field (static dispatch); sums of several are [`Wind::Sum`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum Wind {
+    /// 1-cos gusts per body axis.
+    Gust(BodyAxisGust),
+    /// Dryden turbulence.
+    Dryden(DrydenTurbulence),
+    /// Vector sum of the parts (empty = calm).
+    Sum(Vec<Wind>),
+}
+
+impl WindField for Wind {
+    fn wind_body_fps(&self, t_s: f64) -> Vector3<f64> {
+        match self {
+            Wind::Gust(g) => g.wind_body_fps(t_s),
+            Wind::Dryden(d) => d.wind_body_fps(t_s),
+            Wind::Sum(parts) => {
+                parts.iter().fold(Vector3::zeros(), |acc, p| acc + p.wind_body_fps(t_s))
+            }
+        }
+    }
+}
+
+impl WindConfig {
+    /// Builds the wind field.
+    ///
+    /// # Errors
+    /// Constructor errors naming the field and value; [`SignalError::InvalidList`] for a Dryden
+    /// entry that mixes or omits the preset and the explicit parameters.
+    pub fn build(&self) -> Result<Wind, SignalError> {
+        Ok(match *self {
+            WindConfig::OneMinusCosine { axis, amplitude_fps, rise_time_s, delay_s } => Wind::Gust(
+                BodyAxisGust::calm()
+                    .with(axis, OneMinusCosineGust::new(amplitude_fps, rise_time_s, delay_s)?),
+            ),
+            WindConfig::Dryden {
+                severity,
+                altitude_ft,
+                sigma_u_fps,
+                sigma_v_fps,
+                sigma_w_fps,
+                L_u_ft,
+                L_v_ft,
+                L_w_ft,
+                vt_fps,
+                sample_time_s,
+                duration_s,
+                seed,
+            } => {
+                let explicit = [sigma_u_fps, sigma_v_fps, sigma_w_fps, L_u_ft, L_v_ft, L_w_ft];
+                let params = match (severity, altitude_ft, explicit) {
+                    (Some(sev), Some(h), [None, None, None, None, None, None]) => {
+                        DrydenParameters::mil_f_8785c(h, sev)?
+                    }
+                    (None, None, [Some(su), Some(sv), Some(sw), Some(lu), Some(lv), Some(lw)]) => {
+                        DrydenParameters {
+                            sigma_u_fps: su,
+                            sigma_v_fps: sv,
+                            sigma_w_fps: sw,
+                            L_u_ft: lu,
+                            L_v_ft: lv,
+                            L_w_ft: lw,
+                        }
+                    }
+                    _ => {
+                        return Err(SignalError::InvalidList {
+                            field: "dryden",
+                            reason: "give either `severity` and `altitude_ft`, or all of \
+                                     sigma_u_fps, sigma_v_fps, sigma_w_fps, L_u_ft, L_v_ft, L_w_ft"
+                                .into(),
+                        });
+                    }
+                };
+                Wind::Dryden(DrydenTurbulence::generate(
+                    &params,
+                    vt_fps,
+                    sample_time_s,
+                    duration_s,
+                    seed,
+                )?)
+            }
+        })
+    }
+}
+
+/// Builds the vector sum of a list of disturbances (an empty list is calm air).
+///
+/// # Errors
+/// The first error of [`WindConfig::build`].
+pub fn build_wind(configs: &[WindConfig]) -> Result<Wind, SignalError> {
+    Ok(Wind::Sum(configs.iter().map(WindConfig::build).collect::<Result<Vec<_>, _>>()?))
+}
+
+#[cfg(test)]
+mod wind_tests {
+    use super::*;
+
+    #[derive(Debug, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Scenario {
+        wind: Vec<WindConfig>,
+    }
+
+    #[test]
+    fn analytic_gust_plus_dryden_from_toml() {
+        let s: Scenario = toml::from_str(
+            r#"
+[[wind]]
+kind = "one_minus_cosine"
+axis = "x"
+amplitude_fps = 20.0
+rise_time_s = 6.0
+delay_s = 2.0
+
+[[wind]]
+kind = "dryden"
+severity = "moderate"
+altitude_ft = 20000.0
+vt_fps = 675.0
+sample_time_s = 0.01
+duration_s = 10.0
+seed = 11
+"#,
+        )
+        .unwrap();
+        let w = build_wind(&s.wind).unwrap();
+        let p = DrydenParameters::mil_f_8785c(20000.0, TurbulenceSeverity::Moderate).unwrap();
+        let d = DrydenTurbulence::generate(&p, 675.0, 0.01, 10.0, 11).unwrap();
+        let v = w.wind_body_fps(5.0);
+        let expect = d.wind_body_fps(5.0) + Vector3::new(10.0, 0.0, 0.0);
+        assert!((v - expect).norm() < 1e-12);
+        assert_eq!(build_wind(&[]).unwrap().wind_body_fps(1.0), Vector3::zeros());
+    }
+
+    #[test]
+    fn errors_for_mixed_dryden_and_bad_axis() {
+        let s: Result<Scenario, _> = toml::from_str(
+            "[[wind]]\nkind = \"one_minus_cosine\"\naxis = \"q\"\namplitude_fps = 1.0\nrise_time_s = 1.0\n",
+        );
+        assert!(s.unwrap_err().to_string().contains('q'));
+        let s: Scenario = toml::from_str(
+            "[[wind]]\nkind = \"dryden\"\nseverity = \"light\"\naltitude_ft = 100.0\nsigma_u_fps = 1.0\nvt_fps = 500.0\nsample_time_s = 0.01\nduration_s = 1.0\nseed = 1\n",
+        )
+        .unwrap();
+        let e = build_wind(&s.wind).unwrap_err();
+        assert!(e.to_string().contains("severity"), "{e}");
+        let s: Scenario = toml::from_str(
+            "[[wind]]\nkind = \"one_minus_cosine\"\naxis = \"z\"\namplitude_fps = 1.0\nrise_time_s = -1.0\n",
+        )
+        .unwrap();
+        let e = build_wind(&s.wind).unwrap_err();
+        assert!(e.to_string().contains("rise_time_s"), "{e}");
     }
 }

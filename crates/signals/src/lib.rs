@@ -26,23 +26,62 @@ impl<S: InputSignal + ?Sized> InputSignal for Box<S> {
     }
 }
 
-/// Serde configuration of inputs (TOML shapes, unit conversion in one place).
+/// A wind field: the velocity of the air mass relative to the earth, resolved in BODY axes
+/// (x forward, y right wing, z down), in ft/s, as a function of time.
+///
+/// Frame choice: the thesis applies its 1-cos gust per body axis (eq. 2.32, figure 2.2 "Wind-Gust
+/// Along x_b") and MIL-F-8785C defines Dryden turbulence components u_g, v_g, w_g along the
+/// aircraft axes, so both disturbances are body-axis quantities and no attitude is needed to
+/// evaluate them. Sign: the aircraft's air-relative velocity is `v_body − wind_body`, so a
+/// positive x component is a tailwind (it reduces airspeed) and a positive z component is a
+/// downdraft. A model that wants NED wind rotates with its own DCM.
+pub trait WindField {
+    /// Air-mass velocity in body axes (ft/s) at time `t_s` (s).
+    fn wind_body_fps(&self, t_s: f64) -> nalgebra::Vector3<f64>;
+}
+
+impl<W: WindField + ?Sized> WindField for &W {
+    fn wind_body_fps(&self, t_s: f64) -> nalgebra::Vector3<f64> {
+        (**self).wind_body_fps(t_s)
+    }
+}
+
+impl<W: WindField + ?Sized> WindField for Box<W> {
+    fn wind_body_fps(&self, t_s: f64) -> nalgebra::Vector3<f64> {
+        (**self).wind_body_fps(t_s)
+    }
+}
+
+/// Two wind fields superpose by vector addition (e.g. a gust plus turbulence).
+impl<A: WindField, B: WindField> WindField for (A, B) {
+    fn wind_body_fps(&self, t_s: f64) -> nalgebra::Vector3<f64> {
+        self.0.wind_body_fps(t_s) + self.1.wind_body_fps(t_s)
+    }
+}
+
+/// Serde configuration of inputs and winds (TOML shapes, unit conversion in one place).
 pub mod config;
 /// Causal numerical differentiation (least-squares slope, linear phase, stated lag).
 pub mod differentiate;
 /// Error type of the crate.
 pub mod error;
+/// The thesis's 1-cos gust per body axis (eq. 2.32).
+pub mod gust;
 /// Deterministic pilot inputs: step, pulse, doublet, 3-2-1-1, sine, sweeps, multisine, sum.
 pub mod inputs;
 /// Simulink-style band-limited white noise.
 pub mod noise;
 /// Recorded input replayed from a CSV file (time, value).
 pub mod recorded;
+/// Continuous Dryden turbulence (MIL-F-8785C), exactly discretised, seeded.
+pub mod turbulence;
 
-pub use config::InputConfig;
+pub use config::{InputConfig, Wind, WindConfig};
 pub use error::SignalError;
+pub use gust::{BodyAxis, BodyAxisGust, OneMinusCosineGust};
 pub use inputs::{
     Doublet, Input, Multisine, Pulse, Sine, Step, Sum, Sweep, SweepLaw, ThreeTwoOneOne,
 };
 pub use noise::BandLimitedWhiteNoise;
 pub use recorded::{RecordedInput, ValueUnit};
+pub use turbulence::{DrydenGenerator, DrydenParameters, DrydenTurbulence, TurbulenceSeverity};

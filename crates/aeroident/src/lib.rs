@@ -9,3 +9,5 @@ pub mod cli;
 pub mod metrics;
 /// Stacked time-series panels rendered to PNG.
 pub mod plot;
+/// Replay of recorded flight data through online estimators (issue 5).
+pub mod replay;

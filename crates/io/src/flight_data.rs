@@ -142,20 +142,30 @@ impl<R: Read> FlightDataReader<R> {
     /// [`FlightDataError::Csv`] if the header cannot be read, [`FlightDataError::MissingColumn`]
     /// for a mapped column not in the header.
     pub fn new(source: R, file: &str, mapping: &Mapping) -> Result<Self, FlightDataError> {
-        let mut csv = csv::ReaderBuilder::new().has_headers(true).flexible(true).trim(csv::Trim::All).from_reader(source);
+        let mut csv = csv::ReaderBuilder::new()
+            .has_headers(true)
+            .flexible(true)
+            .trim(csv::Trim::All)
+            .from_reader(source);
         let headers = csv
             .headers()
-            .map_err(|e| FlightDataError::Csv { file: file.to_string(), row: 1, message: e.to_string() })?
+            .map_err(|e| FlightDataError::Csv {
+                file: file.to_string(),
+                row: 1,
+                message: e.to_string(),
+            })?
             .clone();
         let header_len = headers.len();
         let resolve = |key: &str, m: &ChannelMap| -> Result<Option<Resolved>, FlightDataError> {
             let Source::Columns(names) = &m.source else { return Ok(None) };
             let mut columns = Vec::with_capacity(names.len());
             for n in names {
-                let idx = headers.iter().position(|h| h == n).ok_or_else(|| FlightDataError::MissingColumn {
-                    file: file.to_string(),
-                    channel: key.to_string(),
-                    column: n.clone(),
+                let idx = headers.iter().position(|h| h == n).ok_or_else(|| {
+                    FlightDataError::MissingColumn {
+                        file: file.to_string(),
+                        channel: key.to_string(),
+                        column: n.clone(),
+                    }
                 })?;
                 columns.push(idx);
             }
@@ -206,7 +216,10 @@ impl<R: Read> FlightDataReader<R> {
             if text.is_empty() {
                 return Err(RowProblem::Blank { column: name.clone() });
             }
-            let v: f64 = text.parse().map_err(|_| RowProblem::NotANumber { column: name.clone(), text: text.to_string() })?;
+            let v: f64 = text.parse().map_err(|_| RowProblem::NotANumber {
+                column: name.clone(),
+                text: text.to_string(),
+            })?;
             if !v.is_finite() {
                 return Err(RowProblem::NonFinite { column: name.clone(), text: text.to_string() });
             }
@@ -239,7 +252,10 @@ impl<R: Read> FlightDataReader<R> {
 
     fn parse_row(&self) -> Result<FlightSample, RowProblem> {
         if self.record.len() != self.header_len {
-            return Err(RowProblem::FieldCount { expected: self.header_len, found: self.record.len() });
+            return Err(RowProblem::FieldCount {
+                expected: self.header_len,
+                found: self.record.len(),
+            });
         }
         let t_s = self.field(&self.time)?;
         if let Some(prev) = self.last_t {
@@ -314,7 +330,11 @@ impl<R: Read> Iterator for FlightDataReader<R> {
             Err(e) => {
                 self.done = true;
                 let row = e.position().map(|p| p.line()).unwrap_or(row);
-                Some(Err(FlightDataError::Csv { file: self.file.clone(), row, message: e.to_string() }))
+                Some(Err(FlightDataError::Csv {
+                    file: self.file.clone(),
+                    row,
+                    message: e.to_string(),
+                }))
             }
             Ok(false) => {
                 self.done = true;

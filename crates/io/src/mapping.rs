@@ -302,7 +302,8 @@ impl Mapping {
     /// unknown channels or units, wrong dimensions, or missing required channels.
     pub fn from_path(path: &Path) -> Result<Self, FlightDataError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| FlightDataError::Io { file: file.clone(), source })?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| FlightDataError::Io { file: file.clone(), source })?;
         Self::from_toml_str(&text, &file)
     }
 
@@ -311,8 +312,9 @@ impl Mapping {
     /// # Errors
     /// As [`Mapping::from_path`].
     pub fn from_toml_str(text: &str, file: &str) -> Result<Self, FlightDataError> {
-        let raw: MappingFile = toml::from_str(text)
-            .map_err(|e| FlightDataError::MappingSyntax { file: file.to_string(), message: e.to_string() })?;
+        let raw: MappingFile = toml::from_str(text).map_err(|e| {
+            FlightDataError::MappingSyntax { file: file.to_string(), message: e.to_string() }
+        })?;
         let time = resolve(file, "time", &raw.time, Dimension::Time)?;
         if matches!(time.source, Source::Constant(_)) {
             return Err(FlightDataError::BadSpec {
@@ -334,11 +336,17 @@ impl Mapping {
         }
         for ch in Channel::REQUIRED {
             if !channels.contains_key(&ch) {
-                return Err(FlightDataError::MissingChannel { file: file.to_string(), channel: ch.key().into() });
+                return Err(FlightDataError::MissingChannel {
+                    file: file.to_string(),
+                    channel: ch.key().into(),
+                });
             }
         }
         if !channels.contains_key(&Channel::Qbar) && !channels.contains_key(&Channel::Rho) {
-            return Err(FlightDataError::MissingChannel { file: file.to_string(), channel: "qbar or rho".into() });
+            return Err(FlightDataError::MissingChannel {
+                file: file.to_string(),
+                channel: "qbar or rho".into(),
+            });
         }
         if let Some(dt) = raw.nominal_dt_s
             && !(dt.is_finite() && dt > 0.0)
@@ -360,8 +368,17 @@ impl Mapping {
     }
 }
 
-fn resolve(file: &str, key: &str, spec: &ChannelSpec, dim: Dimension) -> Result<ChannelMap, FlightDataError> {
-    let bad = |reason: String| FlightDataError::BadSpec { file: file.to_string(), channel: key.to_string(), reason };
+fn resolve(
+    file: &str,
+    key: &str,
+    spec: &ChannelSpec,
+    dim: Dimension,
+) -> Result<ChannelMap, FlightDataError> {
+    let bad = |reason: String| FlightDataError::BadSpec {
+        file: file.to_string(),
+        channel: key.to_string(),
+        reason,
+    };
     let unit = Unit::parse(&spec.unit).map_err(|e| FlightDataError::Unit {
         file: file.to_string(),
         channel: key.to_string(),
@@ -381,9 +398,21 @@ fn resolve(file: &str, key: &str, spec: &ChannelSpec, dim: Dimension) -> Result<
     let source = match (&spec.column, &spec.columns, spec.value) {
         (Some(c), None, None) => Source::Columns(vec![c.clone()]),
         (None, Some(cs), None) if !cs.is_empty() => Source::Columns(cs.clone()),
-        (None, None, Some(v)) if v.is_finite() => Source::Constant((v * spec.scale + spec.offset) * unit.to_si),
+        (None, None, Some(v)) if v.is_finite() => {
+            Source::Constant((v * spec.scale + spec.offset) * unit.to_si)
+        }
         (None, None, Some(v)) => return Err(bad(format!("value {v} is not finite"))),
-        _ => return Err(bad("give exactly one of `column`, `columns` (non-empty) or `value`".into())),
+        _ => {
+            return Err(bad(
+                "give exactly one of `column`, `columns` (non-empty) or `value`".into()
+            ));
+        }
     };
-    Ok(ChannelMap { source, to_si: unit.to_si, scale: spec.scale, offset: spec.offset, unit: spec.unit.clone() })
+    Ok(ChannelMap {
+        source,
+        to_si: unit.to_si,
+        scale: spec.scale,
+        offset: spec.offset,
+        unit: spec.unit.clone(),
+    })
 }

@@ -36,7 +36,8 @@ pub struct ReplaySummary {
     /// Every rejected row and every gap (gap entries reject nothing; their reason starts with
     /// `gap`).
     pub rejections: Vec<Rejection>,
-    /// Samples processed per second of wall time (read + convert + estimate), one core.
+    /// Samples per second through the estimation stage (measured coefficients + estimator
+    /// update; CSV parsing, pacing and output excluded), one core.
     pub throughput_samples_per_s: f64,
     /// Final parameter estimates.
     pub parameters: Vec<ParameterSummary>,
@@ -71,7 +72,12 @@ pub fn write_estimates_header<W: Write>(w: &mut W, names: &[&str]) -> std::io::R
 ///
 /// # Errors
 /// I/O errors of `w`.
-pub fn write_estimates_row<W: Write>(w: &mut W, t_s: f64, values: &[f64], sigmas: &[Option<f64>]) -> std::io::Result<()> {
+pub fn write_estimates_row<W: Write>(
+    w: &mut W,
+    t_s: f64,
+    values: &[f64],
+    sigmas: &[Option<f64>],
+) -> std::io::Result<()> {
     write!(w, "{t_s}")?;
     for v in values {
         write!(w, ",{v}")?;

@@ -84,7 +84,9 @@ pub struct Unit {
 
 /// Error: a unit string that is not recognised.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("unit `{0}` is not recognised (e.g. rad, deg, deg/s, rad/s2, m, ft, m/s, ft/s, kt, m/s2, g, Pa, psf, N, lbf, kg, slug, kg*m2, slug*ft2, m2, ft2, kg/m3, slug/ft3, N*m, lbf*ft, 1)")]
+#[error(
+    "unit `{0}` is not recognised (e.g. rad, deg, deg/s, rad/s2, m, ft, m/s, ft/s, kt, m/s2, g, Pa, psf, N, lbf, kg, slug, kg*m2, slug*ft2, m2, ft2, kg/m3, slug/ft3, N*m, lbf*ft, 1)"
+)]
 pub struct UnknownUnit(pub String);
 
 impl Unit {

@@ -9,5 +9,7 @@ pub mod cli;
 pub mod metrics;
 /// Stacked time-series panels rendered to PNG.
 pub mod plot;
+/// Proof-of-concept experiments (thesis §4.1): scenarios, simulation loop, outputs, report.
+pub mod poc;
 /// Replay of recorded flight data through online estimators (issue 5).
 pub mod replay;

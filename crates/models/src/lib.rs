@@ -8,11 +8,17 @@
 
 use nalgebra::SVector;
 
+/// Rate- and position-limited first-order surface actuators; the F-16 with actuators (16 states).
+pub mod actuator;
 /// The textbook air-data computer of the F-16 model (SLJ §3.5, ADC).
 pub mod atmosphere;
 /// The Stevens–Lewis nonlinear F-16 (SLJ §3.5, App. A; NASA TP-1538).
 pub mod f16;
 pub mod integrate;
+/// Central-difference linearization, eigenvalues and F-16 mode identification (SLJ §3.7–3.8).
+pub mod linearize;
+/// Trim of the F-16: wings-level, coordinated turn, pull-up (SLJ §3.6; thesis index 2.31).
+pub mod trim;
 
 /// Errors a model evaluation can return.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

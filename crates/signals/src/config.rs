@@ -1,5 +1,5 @@
-//! Serde configuration of inputs and disturbances: the ONE place where scenario-file values (with their declared
-//! units) become signals in API units (radians, seconds).
+//! Serde configuration of inputs and disturbances: the ONE place where scenario-file values
+//! (with their declared units) become signals in API units (radians, seconds).
 //!
 //! Each quantity that can come in two units has two optional keys and exactly one must be given:
 //! `amplitude` (the caller's units, e.g. the raw input of a thesis proof-of-concept system, or
@@ -17,18 +17,35 @@
 //! start_s = 1.0              # default 0
 //! pulse_width_s = 0.5        # width of EACH half
 //! ```
-//! ```toml
-//! kind = "step";  amplitude = 3.0; start_s = 0.0
-//! kind = "pulse"; amplitude_deg = 1.0; start_s = 1.0; width_s = 0.5
-//! kind = "sine";  amplitude_deg = 0.05; frequency_hz = 1.0; phase_deg = 0.0; start_s = 0.0; duration_s = 20.0
-//! kind = "three_two_one_one"; amplitude_deg = 1.0; start_s = 1.0; dt_s = 0.3
-//! kind = "sweep"; amplitude_deg = 0.5; start_frequency_hz = 0.1; end_frequency_hz = 3.0; duration_s = 30.0; law = "logarithmic"; taper_s = 1.0
-//! kind = "multisine"; amplitude_deg = 0.2; base_period_s = 10.0; harmonics = [1, 2, 3, 4, 5, 6, 7]
-//! kind = "recorded"; path = "stick.csv"; time_column = "t_s"; value_column = "de_deg"; unit = "deg"
-//! kind = "band_limited_white_noise"; noise_power = 1e-4; sample_time_s = 0.01; seed = 7
-//! kind = "sum";   parts = [ { kind = "step", amplitude = 1.0 }, { kind = "sine", amplitude = 0.1, frequency_rad_s = 0.7 } ]
+//! Every kind, as inline tables (this example is compiled and run as a doctest):
 //! ```
-//! (one line per alternative above; `;` is not TOML, write one key per line.)
+//! # use aeroident_signals::{InputConfig, InputSignal};
+//! # #[derive(serde::Deserialize)]
+//! # struct Examples { input: Vec<InputConfig> }
+//! let text = r#"
+//! input = [
+//!   { kind = "step", amplitude = 3.0, start_s = 0.0 },
+//!   { kind = "pulse", amplitude_deg = 1.0, start_s = 1.0, width_s = 0.5 },
+//!   { kind = "doublet", amplitude_deg = -0.05, start_s = 1.0, pulse_width_s = 0.5 },
+//!   { kind = "three_two_one_one", amplitude_deg = 1.0, start_s = 1.0, dt_s = 0.3 },
+//!   { kind = "sine", amplitude_deg = 0.05, frequency_hz = 1.0, phase_deg = 0.0,
+//!     start_s = 0.0, duration_s = 20.0 },
+//!   { kind = "sweep", amplitude_deg = 0.5, start_frequency_hz = 0.1,
+//!     end_frequency_hz = 3.0, duration_s = 30.0, law = "logarithmic", taper_s = 1.0 },
+//!   { kind = "multisine", amplitude_deg = 0.2, base_period_s = 10.0,
+//!     harmonics = [1, 2, 3, 4, 5, 6, 7] },
+//!   { kind = "band_limited_white_noise", noise_power = 1e-4, sample_time_s = 0.01, seed = 7 },
+//!   { kind = "sum", parts = [ { kind = "step", amplitude = 1.0 },
+//!                             { kind = "sine", amplitude = 0.1, frequency_rad_s = 0.7 } ] },
+//! ]
+//! "#;
+//! // (also: { kind = "recorded", path = "stick.csv", time_column = "t_s",
+//! //          value_column = "de_deg", unit = "deg" }, resolved by `build_in(dir)`.)
+//! let ex: Examples = toml::from_str(text).unwrap();
+//! for c in &ex.input {
+//!     assert!(c.build().unwrap().value(1.2).is_finite());
+//! }
+//! ```
 //!
 //! A scenario schema that adds a channel can flatten this enum:
 //! `struct Maneuver { channel: Channel, #[serde(flatten)] input: InputConfig }` — unknown keys are

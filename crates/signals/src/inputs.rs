@@ -79,8 +79,8 @@ impl InputSignal for Pulse {
 /// next `pulse_width_s`, then 0. Total length `2·pulse_width_s`.
 ///
 /// `pulse_width_s` is the width of EACH of the two half-pulses (the usual flight-test
-/// definition, e.g. Klein & Morelli, *Aircraft System Identification*, 2006, §9.2). A negative
-/// amplitude flips the doublet: the thesis's "Doublet, Mag = −0.05 deg" (tables 4.7–4.10) is
+/// definition, e.g. Klein & Morelli, *Aircraft System Identification*, 2006, ch. 9 on experiment
+/// design). A negative amplitude flips the doublet: the thesis's "Doublet, Mag = −0.05 deg" (tables 4.7–4.10) is
 /// `amplitude = −0.05°`, i.e. −0.05° for the first half and +0.05° for the second.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Doublet {
@@ -173,7 +173,7 @@ impl InputSignal for Sine {
 /// `start_s`, first pulse `+amplitude` (standard form: +, −, +, −), total length 7Δt, then 0.
 ///
 /// Source: Koehler's 3-2-1-1 input (DLR, 1977), as described in Jategaonkar, *Flight Vehicle
-/// System Identification*, 2nd ed. 2015, §2.5, and Klein & Morelli 2006, §9.2. Its pulses
+/// System Identification*, 2nd ed. 2015, ch. 2, and Klein & Morelli 2006, ch. 9. Its pulses
 /// of 1Δt to 3Δt spread the energy over a wider band than a doublet; choose Δt so that this
 /// band covers the mode to be excited. A negative amplitude flips every pulse.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -224,8 +224,8 @@ pub enum SweepLaw {
     Linear,
     /// `ω(τ) = ω₀·(ω₁/ω₀)^(τ/T)` (equal time per octave); phase
     /// `θ(τ) = ω₀T/ln(ω₁/ω₀)·((ω₁/ω₀)^(τ/T) − 1)`. Spends more time at low frequency, where
-    /// aircraft modes usually are (Klein & Morelli 2006, §9.3; Tischler & Remple, *Aircraft and
-    /// Rotorcraft System Identification*, 2nd ed., §5.6).
+    /// aircraft modes usually are (Klein & Morelli 2006, ch. 9; Tischler & Remple, *Aircraft and
+    /// Rotorcraft System Identification*, 2nd ed., on frequency sweeps).
     Logarithmic,
 }
 
@@ -359,8 +359,8 @@ impl InputSignal for Sweep {
 /// Equal power in each of the N chosen harmonics `kᵢ` (so every component has the same
 /// `amplitude`, and the RMS of the sum is `amplitude·√(N/2)`), with Schroeder's low-peak-factor
 /// phases for a flat power spectrum (M. R. Schroeder, "Synthesis of low-peak-factor signals and
-/// binary sequences with low autocorrelation", IEEE Trans. Inf. Theory 16(1), 1970, eq. 11 with
-/// pᵢ = 1/N):
+/// binary sequences with low autocorrelation", IEEE Trans. Inf. Theory 16(1), 1970; his phase
+/// rule with equal relative powers pᵢ = 1/N):
 ///
 /// ```text
 ///     φᵢ = −π·i·(i − 1) / N,   i = 1 … N   (components in the order given)
@@ -368,7 +368,7 @@ impl InputSignal for Sweep {
 ///
 /// Over whole base periods the spectrum holds energy at the chosen harmonics only. Compared
 /// with random phases the relative peak factor RPF = (max − min) / (2√2·RMS) (Klein & Morelli
-/// 2006, eq. 9.15) is much lower (1.18 versus a mean of 1.63 over 20 random-phase draws for
+/// 2006, ch. 9) is much lower (1.18 versus a mean of 1.63 over 20 random-phase draws for
 /// harmonics 1–12, measured by `analytic_schroeder_peak_factor_below_random_phases`), so
 /// more energy fits inside a given deflection limit.
 #[derive(Debug, Clone, PartialEq)]
@@ -742,7 +742,7 @@ mod tests {
         assert!(Sweep::new(1.0, 1.0, 2.0, 0.0, 0.0, SweepLaw::Linear, 0.0).is_err());
     }
 
-    /// Relative peak factor (Klein & Morelli 2006, eq. 9.15) over one base period.
+    /// Relative peak factor (Klein & Morelli 2006, ch. 9) over one base period.
     fn rpf(m: &Multisine, period: f64) -> f64 {
         let n = 20_000;
         let xs: Vec<f64> = (0..n).map(|i| m.value(i as f64 * period / n as f64)).collect();
@@ -803,7 +803,7 @@ mod tests {
 
     #[test]
     fn analytic_schroeder_phase_formula() {
-        // Schroeder 1970, eq. 11 with p = 1/N: phi_i = -pi i (i-1) / N.
+        // Schroeder 1970 phase rule with equal powers p = 1/N: phi_i = -pi i (i-1) / N.
         let m = Multisine::schroeder(1.0, 1.0, &[1, 2, 3, 4], 0.0, None).unwrap();
         let expect = [0.0, -PI * 2.0 / 4.0, -PI * 6.0 / 4.0, -PI * 12.0 / 4.0];
         for (c, e) in m.components().iter().zip(expect) {
@@ -832,6 +832,9 @@ mod tests {
                     .unwrap()
                     .into(),
                 Multisine::schroeder(a, width, &[1, 2, 7], t0, None).unwrap().into(),
+                BandLimitedWhiteNoise::new(a.abs(), width, a.to_bits()).unwrap().into(),
+                RecordedInput::new(vec![t0, t0 + width], vec![a, -a]).unwrap().into(),
+                Input::Sum(Sum::new(vec![])),
             ];
             let s = Sum::new(parts);
             prop_assert!(s.value(t).is_finite());

@@ -65,6 +65,8 @@ pub mod config;
 pub mod differentiate;
 /// Error type of the crate.
 pub mod error;
+/// Small causal ZOH-exact filters (first- and second-order low-pass).
+pub mod filters;
 /// The thesis's 1-cos gust per body axis (eq. 2.32).
 pub mod gust;
 /// Deterministic pilot inputs: step, pulse, doublet, 3-2-1-1, sine, sweeps, multisine, sum.
@@ -73,6 +75,8 @@ pub mod inputs;
 pub mod noise;
 /// Recorded input replayed from a CSV file (time, value).
 pub mod recorded;
+/// Per-channel sensor models: ZOH sampling, lag, bias, Gauss–Markov, noise, quantisation, delay.
+pub mod sensors;
 /// Continuous Dryden turbulence (MIL-F-8785C), exactly discretised, seeded.
 pub mod turbulence;
 
@@ -84,4 +88,18 @@ pub use inputs::{
 };
 pub use noise::BandLimitedWhiteNoise;
 pub use recorded::{RecordedInput, ValueUnit};
+pub use sensors::{Sensor, SensorConfig, SensorModel, SensorParameters};
 pub use turbulence::{DrydenGenerator, DrydenParameters, DrydenTurbulence, TurbulenceSeverity};
+
+#[cfg(test)]
+mod tests {
+    /// Everything a scenario builds can be moved to and shared between threads (rayon runs).
+    #[test]
+    fn built_types_are_send_and_sync() {
+        fn assert_send_sync<T: Send + Sync>() {}
+        assert_send_sync::<crate::Input>();
+        assert_send_sync::<crate::Wind>();
+        assert_send_sync::<crate::SensorModel>();
+        assert_send_sync::<crate::turbulence::DrydenGenerator>();
+    }
+}

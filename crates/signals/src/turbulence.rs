@@ -11,7 +11,7 @@
 //! ```
 //!
 //! (MIL-F-8785C eqs. for the Dryden form, spatial frequency Ω = ω / V; the temporal PSD is the
-//! spatial one divided by V.) [`dryden_psd_one_sided`] evaluates them.
+//! spatial one divided by V.) [`crate::turbulence::dryden_psd_one_sided`] evaluates them.
 //!
 //! # Shaping filters and their discretisation
 //! Each component is the output of a shaping filter driven by unit-intensity continuous white
@@ -268,8 +268,8 @@ impl<const N: usize> DiscreteShapingFilter<N> {
         rng: &mut Pcg64Mcg,
     ) -> Result<Self, SignalError> {
         let (phi, qd) = van_loan(&a, &b, dt_s);
-        let q_chol = cholesky_or_err(qd)?;
-        let p_chol = cholesky_or_err(p_inf)?;
+        let q_chol = cholesky_or_err(qd, dt_s)?;
+        let p_chol = cholesky_or_err(p_inf, dt_s)?;
         let x = p_chol * SVector::<f64, N>::from_fn(|_, _| rng.sample(StandardNormal));
         Ok(Self { phi, q_chol, c, x })
     }
@@ -284,14 +284,18 @@ impl<const N: usize> DiscreteShapingFilter<N> {
     }
 }
 
+/// Lower Cholesky factor of a covariance; fails (naming the sample time) only when the
+/// sample time is so small or large relative to L/V that the covariance is numerically singular.
 fn cholesky_or_err<const N: usize>(
     m: SMatrix<f64, N, N>,
+    dt_s: f64,
 ) -> Result<SMatrix<f64, N, N>, SignalError> {
     let sym = (m + m.transpose()) * 0.5;
     Cholesky::new(sym).map(|c| c.l()).ok_or(SignalError::InvalidParameter {
         field: "sample_time_s",
-        value: f64::NAN,
-        reason: "turbulence covariance not positive definite for this sample time/airspeed",
+        value: dt_s,
+        reason: "turbulence covariance is numerically singular for this sample time, \
+                     airspeed and scale length",
     })
 }
 
@@ -637,5 +641,24 @@ mod tests {
         let e = DrydenGenerator::new(&bad, 600.0, 0.01, 1).unwrap_err();
         assert!(e.to_string().contains("L_w_ft"), "{e}");
         assert!(DrydenTurbulence::generate(&p, 600.0, 1e-6, 1e3, 1).is_err());
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+        #[test]
+        fn prop_dryden_finite_for_valid_parameters(
+            h in 0.0f64..90_000.0, sev in 0usize..3, vt in 1.0f64..3000.0,
+            dt in 1e-4f64..1.0, seed in 0u64..1000, t in -10.0f64..100.0,
+        ) {
+            let sev = [
+                TurbulenceSeverity::Light,
+                TurbulenceSeverity::Moderate,
+                TurbulenceSeverity::Severe,
+            ][sev];
+            let p = DrydenParameters::mil_f_8785c(h, sev).unwrap();
+            let d = DrydenTurbulence::generate(&p, vt, dt, 2.0, seed).unwrap();
+            let w = d.wind_body_fps(t);
+            proptest::prop_assert!(w.iter().all(|c| c.is_finite()));
+        }
     }
 }

@@ -1,13 +1,129 @@
-//! `aeroident poc`: placeholder until its issue lands.
+//! `aeroident poc`: the thesis's proof-of-concept cases (issue 2).
+//!
+//! - `aeroident poc <scenario.toml> --out <dir> [--estimator published|corrected]
+//!   [--solver implicit|explicit]` writes `timeseries.csv`, `summary.json`, `estimates.png`,
+//!   `states.png` into `<dir>`.
+//! - `aeroident poc --all --out <dir> [--scenarios <dir>]` runs every scenario under
+//!   `scenarios/poc/` with the published estimator (both readings) and the corrected one, in
+//!   parallel, writes each run under `<dir>/<case>/<estimator>[-<solver>]/` and `<dir>/report.md`.
+
+use crate::poc::report::{CaseResult, render};
+use crate::poc::{EstimatorKind, PocScenario, SolverReading, output, run};
+use anyhow::{Context, bail};
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 /// Arguments of `aeroident poc`.
 #[derive(Debug, clap::Args)]
-pub struct PocArgs {}
+pub struct PocArgs {
+    /// Scenario file (TOML, see `scenarios/poc/`). Not with `--all`.
+    #[arg(required_unless_present = "all", conflicts_with = "all")]
+    pub scenario: Option<PathBuf>,
+    /// Run every `*.toml` under `--scenarios` and write `report.md`.
+    #[arg(long)]
+    pub all: bool,
+    /// Directory of scenario files for `--all`.
+    #[arg(long, default_value = "scenarios/poc")]
+    pub scenarios: PathBuf,
+    /// Output directory (created if needed).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Estimator: the thesis's (`published`) or the corrected one.
+    #[arg(long, value_enum, default_value_t = EstimatorKind::Published)]
+    pub estimator: EstimatorKind,
+    /// Reading of the published estimator's implicit equation (ignored by `corrected`).
+    #[arg(long, value_enum, default_value_t = SolverReading::Implicit)]
+    pub solver: SolverReading,
+}
 
 /// Runs `aeroident poc`.
 ///
 /// # Errors
-/// Always, until the command is built.
-pub fn execute(_args: PocArgs) -> anyhow::Result<()> {
-    anyhow::bail!("`aeroident poc` is not built yet")
+/// Bad scenario files (file, line/key, reason), estimator or model failures, output errors.
+pub fn execute(args: PocArgs) -> anyhow::Result<()> {
+    if args.all {
+        let (results, wall_s) = run_all(&args.scenarios, &args.out)?;
+        let report = render(&results, wall_s);
+        let path = args.out.join("report.md");
+        std::fs::write(&path, report).with_context(|| format!("writing {}", path.display()))?;
+        println!(
+            "{} scenarios, {} runs in {wall_s:.2} s wall; report: {}",
+            results.len(),
+            3 * results.len(),
+            path.display()
+        );
+        return Ok(());
+    }
+    let Some(path) = args.scenario else { bail!("give a scenario file or --all") };
+    let sc = PocScenario::from_path(&path)?;
+    let out = run(&sc, args.estimator, args.solver)?;
+    let summary = output::write_run(&args.out, &sc, &out)?;
+    println!("{}", serde_json::to_string_pretty(&summary)?);
+    if let Some(s) = &out.stopped_early {
+        println!("note: {s}");
+    }
+    Ok(())
+}
+
+/// Lists the `*.toml` files of `dir`, sorted.
+///
+/// # Errors
+/// When the directory cannot be read or holds no scenario.
+pub fn scenario_files(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("reading scenario directory {}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        bail!("no *.toml scenario in {}", dir.display());
+    }
+    Ok(files)
+}
+
+/// Runs every scenario of `scenarios_dir` three ways (published implicit, published
+/// explicit, corrected) in parallel, writing each run's files under `out`. Returns the
+/// results and the wall time, s.
+///
+/// # Errors
+/// The first failing scenario's error, naming it.
+pub fn run_all(scenarios_dir: &Path, out: &Path) -> anyhow::Result<(Vec<CaseResult>, f64)> {
+    let start = Instant::now();
+    let files = scenario_files(scenarios_dir)?;
+    let scenarios: Vec<PocScenario> =
+        files.iter().map(|f| PocScenario::from_path(f)).collect::<Result<_, _>>()?;
+    let jobs: Vec<(usize, EstimatorKind, SolverReading)> = (0..scenarios.len())
+        .flat_map(|i| {
+            [
+                (i, EstimatorKind::Published, SolverReading::Implicit),
+                (i, EstimatorKind::Published, SolverReading::Explicit),
+                (i, EstimatorKind::Corrected, SolverReading::Implicit),
+            ]
+        })
+        .collect();
+    let runs: Vec<_> = jobs
+        .par_iter()
+        .map(|&(i, est, solver)| -> anyhow::Result<_> {
+            let sc = &scenarios[i];
+            let r = run(sc, est, solver)?;
+            let sub = match est {
+                EstimatorKind::Published => format!("published-{solver:?}").to_lowercase(),
+                EstimatorKind::Corrected => "corrected".to_string(),
+            };
+            let summary = output::write_run(&out.join(&sc.case.name).join(sub), sc, &r)?;
+            Ok((summary, r))
+        })
+        .collect::<anyhow::Result<_>>()?;
+    let mut it = runs.into_iter();
+    let mut results = Vec::new();
+    for sc in scenarios {
+        let (Some(implicit), Some(explicit), Some(corrected)) = (it.next(), it.next(), it.next())
+        else {
+            bail!("internal: run count mismatch");
+        };
+        results.push(CaseResult { scenario: sc, implicit, explicit, corrected });
+    }
+    Ok((results, start.elapsed().as_secs_f64()))
 }

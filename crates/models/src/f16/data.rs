@@ -492,6 +492,63 @@ impl F16Data {
         let damping: [Table1<12>; 9] =
             rows.try_into().map_err(|_| invalid("damping", "values", "expected 9 rows"))?;
 
+        // All aerodynamic tables share one alpha axis (SLJ App. A: −10…45° by 5°); the model
+        // locates alpha once per evaluation, so insist on it here.
+        let alpha_axis = cx.r;
+        for (name, ax) in [
+            ("cm", &cm.r),
+            ("cl", &cl.r),
+            ("cn", &cn.r),
+            ("dlda", &dlda.r),
+            ("dldr", &dldr.r),
+            ("dnda", &dnda.r),
+            ("dndr", &dndr.r),
+            ("cz", &cz.table.x),
+            ("damping", &alpha),
+        ] {
+            if *ax != alpha_axis {
+                return Err(invalid(
+                    name,
+                    "alpha_deg",
+                    "must equal the alpha axis of cx (shared axis)",
+                ));
+            }
+        }
+        if cm.c != cx.c {
+            return Err(invalid(
+                "cm",
+                "elevator_deg",
+                "must equal the elevator axis of cx (shared axis)",
+            ));
+        }
+        if cn.c != cl.c {
+            return Err(invalid(
+                "cn",
+                "abs_beta_deg",
+                "must equal the |beta| axis of cl (shared axis)",
+            ));
+        }
+        for (name, ax) in [("dldr", &dldr.c), ("dnda", &dnda.c), ("dndr", &dndr.c)] {
+            if *ax != dlda.c {
+                return Err(invalid(
+                    name,
+                    "beta_deg",
+                    "must equal the beta axis of dlda (shared axis)",
+                ));
+            }
+        }
+        if thrust_mil.r != thrust_idle.r
+            || thrust_max.r != thrust_idle.r
+            || thrust_mil.c != thrust_idle.c
+            || thrust_max.c != thrust_idle.c
+        {
+            return Err(invalid(
+                "thrust_mil",
+                "altitude_ft",
+                "thrust tables must share the altitude and Mach axes of thrust_idle",
+            ));
+        }
+
         let positive = |table: &'static str, field: &'static str, v: f64| {
             if v.is_finite() && v > 0.0 {
                 Ok(v)

@@ -13,7 +13,7 @@
 //! textbook signs: positive deflection gives a negative moment (README §3). Plus the wind.
 //!
 //! # Wind
-//! Wind enters only the aerodynamics: the body-axis wind `C_body←NED · w_NED` is subtracted
+//! Wind enters only the aerodynamics: the body-axis wind `C_body←NED · w_NED + w_body` is subtracted
 //! from the body velocity before air-relative `vt, α, β`, Mach and q̄ are computed; gravity,
 //! kinematics and navigation use the inertial velocity. Wind gradients (rotational
 //! turbulence) are not modelled. With zero wind the model is the textbook's exactly.
@@ -106,12 +106,23 @@ pub struct F16Controls {
     pub rudder_rad: f64,
     /// Wind velocity in the NED frame, ft/s (air moving towards north/east/down).
     pub wind_ned_fps: [f64; 3],
+    /// Wind velocity in body axes, ft/s (x forward: a positive value is a tailwind; z down: a
+    /// downdraft), the frame of the thesis's 1-cos gust (2.32) and of MIL-F-8785C Dryden
+    /// components (`aeroident_signals::WindField`). Adds to `wind_ned_fps`.
+    pub wind_body_fps: [f64; 3],
 }
 
 impl F16Controls {
     /// Controls in still air. Surfaces in radians.
     pub fn new(throttle: f64, elevator_rad: f64, aileron_rad: f64, rudder_rad: f64) -> Self {
-        Self { throttle, elevator_rad, aileron_rad, rudder_rad, wind_ned_fps: [0.0; 3] }
+        Self {
+            throttle,
+            elevator_rad,
+            aileron_rad,
+            rudder_rad,
+            wind_ned_fps: [0.0; 3],
+            wind_body_fps: [0.0; 3],
+        }
     }
     /// `[throttle, elevator_rad, aileron_rad, rudder_rad]`.
     pub fn to_vector(&self) -> SVector<f64, N_CONTROLS> {
@@ -122,7 +133,7 @@ impl F16Controls {
             self.rudder_rad,
         )
     }
-    /// The inverse of [`Self::to_vector`], keeping `wind_ned_fps` of `self`.
+    /// The inverse of [`Self::to_vector`], keeping the winds of `self`.
     pub fn with_vector(&self, u: &SVector<f64, N_CONTROLS>) -> Self {
         Self {
             throttle: u[0],
@@ -130,6 +141,7 @@ impl F16Controls {
             aileron_rad: u[2],
             rudder_rad: u[3],
             wind_ned_fps: self.wind_ned_fps,
+            wind_body_fps: self.wind_body_fps,
         }
     }
 }
@@ -233,12 +245,14 @@ pub fn pdot(e: &data::EngineConstants, pow: f64, cpow: f64) -> f64 {
 pub fn thrust_lbf(d: &F16Data, pow: f64, alt_ft: f64, mach: f64) -> f64 {
     let x = Extrapolation::Linear;
     let mil = d.engine.mil_power_percent;
-    let tmil = d.thrust_mil.lookup(alt_ft, mach, x);
+    let (sh, sm) =
+        (table::segment(&d.thrust_mil.r, alt_ft, x), table::segment(&d.thrust_mil.c, mach, x));
+    let tmil = d.thrust_mil.at(sh, sm);
     if pow < mil {
-        let tidl = d.thrust_idle.lookup(alt_ft, mach, x);
+        let tidl = d.thrust_idle.at(sh, sm);
         tidl + (tmil - tidl) * pow / mil
     } else {
-        let tmax = d.thrust_max.lookup(alt_ft, mach, x);
+        let tmax = d.thrust_max.at(sh, sm);
         tmil + (tmax - tmil) * (pow - mil) / mil
     }
 }
@@ -363,8 +377,11 @@ impl F16 {
             u.wind_ned_fps[0],
             u.wind_ned_fps[1],
             u.wind_ned_fps[2],
+            u.wind_body_fps[0],
+            u.wind_body_fps[1],
+            u.wind_body_fps[2],
         ];
-        const CTL: [&str; 7] = [
+        const CTL: [&str; 10] = [
             "throttle",
             "elevator_rad",
             "aileron_rad",
@@ -372,6 +389,9 @@ impl F16 {
             "wind_north_fps",
             "wind_east_fps",
             "wind_down_fps",
+            "wind_body_x_fps",
+            "wind_body_y_fps",
+            "wind_body_z_fps",
         ];
         for (k, v) in ctl.iter().enumerate() {
             if !v.is_finite() {
@@ -408,9 +428,10 @@ impl F16 {
 
         // Inertial body velocity.
         let cbta = beta.cos();
-        let u_b = vt * alpha.cos() * cbta;
+        let (salp, calp) = alpha.sin_cos();
+        let u_b = vt * calp * cbta;
         let v_b = vt * beta.sin();
-        let w_b = vt * alpha.sin() * cbta;
+        let w_b = vt * salp * cbta;
 
         // Direction cosines body←NED (rows: body x, y, z).
         let t1 = sph * cpsi;
@@ -426,13 +447,15 @@ impl F16 {
         let s8 = cph * cth;
 
         // Air-relative velocity.
-        let (vta, alpha_a, beta_a) = if u.wind_ned_fps == [0.0; 3] {
+        let still_air = u.wind_ned_fps == [0.0; 3] && u.wind_body_fps == [0.0; 3];
+        let (vta, alpha_a, beta_a) = if still_air {
             (vt, alpha, beta)
         } else {
             let [wn, we, wd] = u.wind_ned_fps;
-            let ua = u_b - (s1 * wn + s2 * we - sth * wd);
-            let va = v_b - (s3 * wn + s4 * we + s5 * wd);
-            let wa = w_b - (s6 * wn + s7 * we + s8 * wd);
+            let [wx, wy, wz] = u.wind_body_fps;
+            let ua = u_b - (s1 * wn + s2 * we - sth * wd) - wx;
+            let va = v_b - (s3 * wn + s4 * we + s5 * wd) - wy;
+            let wa = w_b - (s6 * wn + s7 * we + s8 * wd) - wz;
             let vta = (ua * ua + va * va + wa * wa).sqrt();
             if vta <= 0.0 {
                 return Err(ModelError::InvalidValue {
@@ -462,20 +485,23 @@ impl F16 {
         let sign_b = if b_deg < 0.0 { -1.0 } else { 1.0 };
         let abs_b = b_deg.abs();
 
-        let mut cxt = d.cx.lookup(a_deg, el, lin);
+        // Locate each argument once on its (shared, checked at load) axis.
+        let sa_ = table::segment(&d.cx.r, a_deg, lin);
+        let se_ = table::segment(&d.cx.c, el, lin);
+        let sab_ = table::segment(&d.cl.c, abs_b, lin);
+        let sb_ = table::segment(&d.dlda.c, b_deg, lin);
+        let mut cxt = d.cx.at(sa_, se_);
         let mut cyt = d.cy.beta_coefficient_per_deg * b_deg
             + d.cy.aileron_coefficient * (ail / d.cy.aileron_scale_deg)
             + d.cy.rudder_coefficient * (rdr / d.cy.rudder_scale_deg);
         let bs = b_deg / d.cz.beta_scale_deg;
-        let mut czt = d.cz.table.lookup(a_deg, lin) * (1.0 - bs * bs)
+        let mut czt = d.cz.table.at(sa_) * (1.0 - bs * bs)
             + d.cz.elevator_coefficient * (el / d.cz.elevator_scale_deg);
-        let mut clt = sign_b * d.cl.lookup(a_deg, abs_b, lin)
-            + d.dlda.lookup(a_deg, b_deg, lin) * dail
-            + d.dldr.lookup(a_deg, b_deg, lin) * drdr;
-        let mut cmt = d.cm.lookup(a_deg, el, lin);
-        let mut cnt = sign_b * d.cn.lookup(a_deg, abs_b, lin)
-            + d.dnda.lookup(a_deg, b_deg, lin) * dail
-            + d.dndr.lookup(a_deg, b_deg, lin) * drdr;
+        let mut clt =
+            sign_b * d.cl.at(sa_, sab_) + d.dlda.at(sa_, sb_) * dail + d.dldr.at(sa_, sb_) * drdr;
+        let mut cmt = d.cm.at(sa_, se_);
+        let mut cnt =
+            sign_b * d.cn.at(sa_, sab_) + d.dnda.at(sa_, sb_) * dail + d.dndr.at(sa_, sb_) * drdr;
 
         let g = &d.geometry;
         let tvt = 0.5 / vta;
@@ -483,7 +509,7 @@ impl F16 {
         let cq = g.cbar_ft * q * tvt;
         let mut dmp = [0.0; 9];
         for (k, t) in d.damping.iter().enumerate() {
-            dmp[k] = t.lookup(a_deg, lin);
+            dmp[k] = t.at(sa_);
         }
         cxt += cq * dmp[0];
         cyt += b2v * (dmp[1] * r + dmp[2] * p);
@@ -492,7 +518,7 @@ impl F16 {
         cmt += cq * dmp[6] + czt * (g.xcgr - self.xcg);
         cnt += b2v * (dmp[7] * r + dmp[8] * p) - cyt * (g.xcgr - self.xcg) * g.cbar_ft / g.span_ft;
 
-        let (sa, ca) = alpha_a.sin_cos();
+        let (sa, ca) = if still_air { (salp, calp) } else { alpha_a.sin_cos() };
         if !inc.is_zero() {
             let dc = inc.deltas(
                 &IncrementInputs {
@@ -691,6 +717,39 @@ mod tests {
         let vta = ((ub + 50.0).powi(2) + wb * wb).sqrt();
         assert!((o.vt_air_fps - vta).abs() < 1e-9);
         assert!((o.alpha_air_rad - wb.atan2(ub + 50.0)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn analytic_uniform_steady_wind_is_galilean() {
+        // Trimmed flight relative to the air, then the same air-relative motion seen from the
+        // ground with a uniform steady wind: the inertial velocity is v_air + w. Every derivative
+        // except the position rates must vanish (the aircraft flies the same relative to the air),
+        // and the position rates must include the wind.
+        use crate::trim::{TrimCondition, trim};
+        let f = F16::new(0.30).unwrap();
+        let t = trim(&f, &TrimCondition::level(10_000.0, 600.0)).unwrap();
+        let a = t.state[ALPHA];
+        let w_body = [-30.0, 10.0, 5.0]; // body-axis wind (theta = alpha here, psi = phi = 0)
+        let (ua, wa) = (600.0 * a.cos(), 600.0 * a.sin());
+        let (ui, vi, wi) = (ua + w_body[0], w_body[1], wa + w_body[2]);
+        let vt_i = (ui * ui + vi * vi + wi * wi).sqrt();
+        let mut x = t.state;
+        x[VT] = vt_i;
+        x[ALPHA] = wi.atan2(ui);
+        x[BETA] = (vi / vt_i).asin();
+        let mut u = t.controls;
+        u.wind_body_fps = w_body;
+        let xd = f.derivatives(0.0, &x, &u).unwrap();
+        for k in [VT, ALPHA, BETA, PHI, THETA, PSI, P, Q, R] {
+            assert!(xd[k].abs() < 1e-9, "{}: {}", STATE_NAMES[k], xd[k]);
+        }
+        // The same wind given in NED (theta = alpha, level heading north) gives the same result.
+        let (st, ct) = t.state[THETA].sin_cos();
+        let mut u2 = t.controls;
+        u2.wind_ned_fps =
+            [ct * w_body[0] + st * w_body[2], w_body[1], -st * w_body[0] + ct * w_body[2]];
+        let xd2 = f.derivatives(0.0, &x, &u2).unwrap();
+        assert!((xd - xd2).amax() < 1e-9);
     }
 
     #[test]

@@ -16,10 +16,13 @@ pub enum Extrapolation {
     Clamp,
 }
 
+/// A located point on an axis: segment index and fractional position (see [`segment`]).
+pub type Segment = (usize, f64);
+
 /// Segment index `i` (so that the point lies on `[x[i], x[i+1]]` or beyond an end) and the
 /// fractional position `t` in that segment (`t` < 0 or > 1 only when extrapolating linearly).
 #[inline]
-fn segment<const N: usize>(x: &[f64; N], v: f64, policy: Extrapolation) -> (usize, f64) {
+pub fn segment<const N: usize>(x: &[f64; N], v: f64, policy: Extrapolation) -> (usize, f64) {
     // N is small (≤ 12): a linear scan is faster than bisection here.
     let mut i = 0;
     while i + 2 < N && v >= x[i + 1] {
@@ -60,7 +63,13 @@ impl<const N: usize> Table1<N> {
     /// Piecewise-linear value at `v` with the given out-of-range `policy`.
     #[inline]
     pub fn lookup(&self, v: f64, policy: Extrapolation) -> f64 {
-        let (i, t) = segment(&self.x, v, policy);
+        self.at(segment(&self.x, v, policy))
+    }
+
+    /// Value at a point already located on this table's axis with [`segment`] (lets tables that
+    /// share an axis locate the point once).
+    #[inline]
+    pub fn at(&self, (i, t): Segment) -> f64 {
         self.y[i] + t * (self.y[i + 1] - self.y[i])
     }
 }
@@ -81,8 +90,12 @@ impl<const R: usize, const C: usize> Table2<R, C> {
     /// Bilinear value at `(rv, cv)`, the same `policy` on both axes.
     #[inline]
     pub fn lookup(&self, rv: f64, cv: f64, policy: Extrapolation) -> f64 {
-        let (i, s) = segment(&self.r, rv, policy);
-        let (j, t) = segment(&self.c, cv, policy);
+        self.at(segment(&self.r, rv, policy), segment(&self.c, cv, policy))
+    }
+
+    /// Value at points already located on the row and column axes with [`segment`].
+    #[inline]
+    pub fn at(&self, (i, s): Segment, (j, t): Segment) -> f64 {
         let a = self.z[i][j] + t * (self.z[i][j + 1] - self.z[i][j]);
         let b = self.z[i + 1][j] + t * (self.z[i + 1][j + 1] - self.z[i + 1][j]);
         a + s * (b - a)

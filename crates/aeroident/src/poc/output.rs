@@ -1,0 +1,191 @@
+//! Outputs of one run: `timeseries.csv`, `summary.json`, `estimates.png`, `states.png`.
+
+use super::run::{EstimatorKind, RunOutput, SolverReading};
+use super::scenario::PocScenario;
+use crate::metrics::{CONVERGENCE_TOL_REL, convergence_time_s, rel_error};
+use crate::plot::{LineKind, Panel, Series, render_panels_png};
+use anyhow::Context;
+use serde::Serialize;
+use std::path::Path;
+
+/// Per-parameter entry of `summary.json` (keys fixed by issue 2).
+#[derive(Debug, Clone, Serialize)]
+pub struct ParamSummary {
+    /// Parameter name.
+    pub name: String,
+    /// True value.
+    pub truth: f64,
+    /// Estimate at the last sample.
+    #[serde(rename = "final")]
+    pub final_value: f64,
+    /// `(final − truth)/|truth|`.
+    pub rel_error: f64,
+    /// First time after which the estimate stays within ±5 % of truth, s; `null` if never.
+    pub convergence_time_s: Option<f64>,
+    /// The thesis's reported convergence time, s; `null` where it gives none.
+    pub thesis_convergence_time_s: Option<f64>,
+}
+
+/// `summary.json` (keys fixed by issue 2).
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    /// Scenario name.
+    pub scenario: String,
+    /// `published` or `corrected`.
+    pub estimator: EstimatorKind,
+    /// `implicit`, `explicit`, or `null` for the corrected estimator (no implicit equation).
+    pub solver: Option<SolverReading>,
+    /// Simulated seconds per wall second of the simulation loop.
+    pub realtime_factor: f64,
+    /// One entry per parameter.
+    pub parameters: Vec<ParamSummary>,
+}
+
+/// Builds the summary of a run.
+///
+/// # Errors
+/// When the metric inputs are inconsistent (a bug), with context.
+pub fn summarize(sc: &PocScenario, out: &RunOutput) -> anyhow::Result<Summary> {
+    let mut parameters = Vec::new();
+    for (j, name) in out.param_names.iter().enumerate() {
+        let est = &out.estimates[j];
+        let truth = out.truth[j];
+        let final_value = *est.last().context("empty run")?;
+        // Over the simulated record; a run that stopped early says so in its notes.
+        let tc = convergence_time_s(&out.t_s, est, truth, CONVERGENCE_TOL_REL)?;
+        parameters.push(ParamSummary {
+            name: (*name).to_string(),
+            truth,
+            final_value,
+            rel_error: rel_error(final_value, truth),
+            convergence_time_s: tc,
+            thesis_convergence_time_s: sc.parameters[j].thesis_convergence_time_s,
+        });
+    }
+    Ok(Summary {
+        scenario: out.scenario.clone(),
+        estimator: out.estimator,
+        solver: out.solver,
+        realtime_factor: out.simulated_s / out.wall_s.max(1e-9),
+        parameters,
+    })
+}
+
+/// Writes `timeseries.csv`: `t_s`, then `<state>_true`, `<state>_est` per state, then
+/// `<param>_true`, `<param>_est` per parameter.
+///
+/// # Errors
+/// File creation or write failures, naming the file.
+pub fn write_timeseries_csv(path: &Path, out: &RunOutput) -> anyhow::Result<()> {
+    let mut w =
+        csv::Writer::from_path(path).with_context(|| format!("creating {}", path.display()))?;
+    let mut header = vec!["t_s".to_string()];
+    for s in &out.state_names {
+        header.push(format!("{s}_true"));
+        header.push(format!("{s}_est"));
+    }
+    for p in &out.param_names {
+        header.push(format!("{p}_true"));
+        header.push(format!("{p}_est"));
+    }
+    w.write_record(&header).with_context(|| format!("writing {}", path.display()))?;
+    let mut row = Vec::with_capacity(header.len());
+    for k in 0..out.t_s.len() {
+        row.clear();
+        row.push(format!("{}", out.t_s[k]));
+        for i in 0..out.state_names.len() {
+            row.push(format!("{:e}", out.states_true[i][k]));
+            row.push(format!("{:e}", out.states_est[i][k]));
+        }
+        for j in 0..out.param_names.len() {
+            row.push(format!("{}", out.truth[j]));
+            row.push(format!("{:e}", out.estimates[j][k]));
+        }
+        w.write_record(&row).with_context(|| format!("writing {}", path.display()))?;
+    }
+    w.flush().with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}
+
+fn label(out: &RunOutput) -> String {
+    match out.solver {
+        Some(s) => format!("{} ({:?}, {:?})", out.scenario, out.estimator, s).to_lowercase(),
+        None => format!("{} ({:?})", out.scenario, out.estimator).to_lowercase(),
+    }
+}
+
+/// Writes the thesis-style figures `estimates.png` (one panel per parameter: truth dashed,
+/// estimate solid) and `states.png` (one panel per state: reference dashed, estimated model
+/// solid).
+///
+/// # Errors
+/// Rendering or file errors, naming the file.
+pub fn write_figures(dir: &Path, out: &RunOutput) -> anyhow::Result<()> {
+    let t = &out.t_s;
+    let est_panels: Vec<Panel> = out
+        .param_names
+        .iter()
+        .enumerate()
+        .map(|(j, p)| Panel {
+            title: format!("parameter {p}"),
+            y_label: (*p).to_string(),
+            series: vec![
+                Series {
+                    label: format!("{p} true"),
+                    t_s: t.clone(),
+                    values: vec![out.truth[j]; t.len()],
+                    kind: LineKind::Dashed,
+                },
+                Series {
+                    label: format!("{p} estimate"),
+                    t_s: t.clone(),
+                    values: out.estimates[j].clone(),
+                    kind: LineKind::Solid,
+                },
+            ],
+        })
+        .collect();
+    let title = label(out);
+    render_panels_png(&dir.join("estimates.png"), &title, &est_panels, 900, 260)?;
+    let state_panels: Vec<Panel> = out
+        .state_names
+        .iter()
+        .enumerate()
+        .map(|(i, s)| Panel {
+            title: format!("state {s}"),
+            y_label: (*s).to_string(),
+            series: vec![
+                Series {
+                    label: format!("{s} reference"),
+                    t_s: t.clone(),
+                    values: out.states_true[i].clone(),
+                    kind: LineKind::Dashed,
+                },
+                Series {
+                    label: format!("{s} estimated model"),
+                    t_s: t.clone(),
+                    values: out.states_est[i].clone(),
+                    kind: LineKind::Solid,
+                },
+            ],
+        })
+        .collect();
+    render_panels_png(&dir.join("states.png"), &title, &state_panels, 900, 260)?;
+    Ok(())
+}
+
+/// Writes all four output files of one run into `dir` (created if needed) and returns the
+/// summary.
+///
+/// # Errors
+/// Directory, file or rendering errors, naming the path.
+pub fn write_run(dir: &Path, sc: &PocScenario, out: &RunOutput) -> anyhow::Result<Summary> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    write_timeseries_csv(&dir.join("timeseries.csv"), out)?;
+    let summary = summarize(sc, out)?;
+    let json = serde_json::to_string_pretty(&summary)?;
+    std::fs::write(dir.join("summary.json"), json + "\n")
+        .with_context(|| format!("writing {}", dir.join("summary.json").display()))?;
+    write_figures(dir, out)?;
+    Ok(summary)
+}

@@ -1,10 +1,12 @@
-//! `aeroident f16`: the Stevens–Lewis F-16 (issue 3): state derivatives, trim and linearization.
+//! `aeroident f16`: the Stevens–Lewis F-16 (issue 3): state derivatives, trim, linearization
+//! and open-loop simulation ([`crate::sim`]).
 //!
 //! ```text
 //! aeroident f16 xdot --state 500,0.5,-0.2,-1,1,-1,0.7,-0.8,0.9,1000,900,10000,90 \
 //!                    --controls 0.9,20,-15,-20 --xcg 0.4 [--json]
 //! aeroident f16 trim --alt-ft 20000 --vt-fps 675 [--xcg 0.35] [--gamma-deg 0] [--json]
 //! aeroident f16 linearize --alt-ft 20000 --vt-fps 675 [--xcg 0.35] [--json]
+//! aeroident f16 sim scenarios/sim/elevator_doublet.toml --out out/sim
 //! ```
 //! `xdot` takes the state in the textbook's units (ft/s, rad, rad/s, ft, percent) and the controls
 //! as throttle 0–1 and surfaces in **degrees**, exactly as SLJ Table 3.5-2 gives them.
@@ -35,6 +37,8 @@ pub enum F16Command {
     Trim(TrimArgs),
     /// Trim, then print A, B, eigenvalues and modes (SLJ §3.7–3.8).
     Linearize(TrimArgs),
+    /// Open-loop simulation of a scenario from trim (format: `aeroident::sim::scenario`).
+    Sim(crate::sim::SimArgs),
 }
 
 /// Arguments of `aeroident f16 xdot`.
@@ -84,6 +88,7 @@ pub fn execute(args: F16Args) -> anyhow::Result<()> {
         F16Command::Xdot(a) => println!("{}", xdot(&a)?),
         F16Command::Trim(a) => println!("{}", trim_report(&a)?),
         F16Command::Linearize(a) => println!("{}", linearize_report(&a)?),
+        F16Command::Sim(a) => crate::sim::execute(a)?,
     }
     Ok(())
 }

@@ -9,7 +9,7 @@ pub mod cli;
 pub mod metrics;
 /// Stacked time-series panels rendered to PNG.
 pub mod plot;
-/// Open-loop F-16 simulation: trim → inputs, gusts, turbulence → sensors → CSV and figures.
-pub mod sim;
 /// Proof-of-concept experiments (thesis §4.1): scenarios, simulation loop, outputs, report.
 pub mod poc;
+/// Open-loop F-16 simulation: trim → inputs, gusts, turbulence → sensors → CSV and figures.
+pub mod sim;

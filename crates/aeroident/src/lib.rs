@@ -11,5 +11,7 @@ pub mod metrics;
 pub mod plot;
 /// Proof-of-concept experiments (thesis §4.1): scenarios, simulation loop, outputs, report.
 pub mod poc;
+/// Replay of recorded flight data through online estimators (issue 5).
+pub mod replay;
 /// Open-loop F-16 simulation: trim → inputs, gusts, turbulence → sensors → CSV and figures.
 pub mod sim;

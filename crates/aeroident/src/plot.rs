@@ -189,7 +189,9 @@ pub fn render_panels_png(
                 .filter(|(t, v)| t.is_finite() && v.is_finite())
                 .map(|(&t, &v)| (t, v.clamp(y_lo, y_hi)))
                 .collect();
-            let style = ShapeStyle::from(&color).stroke_width(2);
+            // 1 px: plotters joins thick polylines with miters, which spike far outside the
+            // chart where a signal reverses sharply (chattering estimates).
+            let style = ShapeStyle::from(&color).stroke_width(1);
             let anno = match s.kind {
                 LineKind::Solid => chart.draw_series(LineSeries::new(pts, style)),
                 LineKind::Dashed => chart.draw_series(DashedLineSeries::new(pts, 8, 5, style)),

@@ -6,6 +6,7 @@
 use aeroident_estimators::Estimator;
 use aeroident_estimators::kalman::{
     EkfConfig, LongitudinalConstants, LongitudinalEkf, LongitudinalSample, N_PARAMS,
+    SigmaCorrection,
 };
 use aeroident_estimators::regressors::{CoefficientSample, LinearCoefficient};
 use aeroident_estimators::rls::{Rls, RlsConfig};
@@ -75,6 +76,7 @@ fn bench_ekf(c: &mut Criterion) {
         q_states: [0.0; 4],
         q_params: 0.0,
         r: [0.01, 1e-6, 1e-6, 1e-6, 3e-5, 4e-4, 0.02],
+        sigma: SigmaCorrection::ColouredResiduals,
     };
     let data: Vec<LongitudinalSample> = (0..N)
         .map(|k| {

@@ -111,6 +111,20 @@ pub struct EkfConfig {
     pub q_params: f64,
     /// Measurement-noise variances of the seven outputs (units²).
     pub r: [f64; N_OUT],
+    /// How the reported parameter covariance is formed from the filter's `P`.
+    pub sigma: SigmaCorrection,
+}
+
+/// How [`Estimate::covariance`] is formed from the filter covariance `P`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SigmaCorrection {
+    /// The parameter block of `P` as is (a Cramér–Rao-like bound if the model and `R` are right).
+    Filter,
+    /// `P` scaled by `(1 + ρ̄)/(1 − ρ̄)`, ρ̄ the mean lag-1 autocorrelation of the innovations
+    /// (clamped to [0, 0.95]): the AR(1) effective-sample-size correction for coloured
+    /// residuals (Bayley & Hammersley 1946; cf. Morelli & Klein's coloured-residual correction,
+    /// Klein & Morelli 2006 ch. 5–6). On real data the filter `P` alone is overconfident.
+    ColouredResiduals,
 }
 
 /// The augmented-state EKF. No allocation per update.
@@ -122,6 +136,10 @@ pub struct LongitudinalEkf {
     last: Option<LongitudinalSample>,
     est: Estimate<N_PARAMS>,
     innovations: [f64; N_OUT],
+    /// Σe², Σe_k e_{k−1} of the innovations per output, for the coloured-residual factor.
+    innov_s0: [f64; N_OUT],
+    innov_s1: [f64; N_OUT],
+    innov_prev: [Option<f64>; N_OUT],
 }
 
 type Aug = SVector<f64, N_AUG>;
@@ -195,7 +213,39 @@ impl LongitudinalEkf {
         }
         let mut est = Estimate::new(0.0, SVector::from(cfg.theta0));
         est.covariance = Some(p.fixed_view::<N_PARAMS, N_PARAMS>(N_STATES, N_STATES).into_owned());
-        Ok(Self { cfg, x, p, last: None, est, innovations: [0.0; N_OUT] })
+        Ok(Self {
+            cfg,
+            x,
+            p,
+            last: None,
+            est,
+            innovations: [0.0; N_OUT],
+            innov_s0: [0.0; N_OUT],
+            innov_s1: [0.0; N_OUT],
+            innov_prev: [None; N_OUT],
+        })
+    }
+
+    /// The coloured-residual variance factor `(1 + ρ̄)/(1 − ρ̄)` (1 until innovations exist).
+    pub fn coloured_residual_factor(&self) -> f64 {
+        let mut sum = 0.0;
+        let mut n = 0;
+        for i in 0..N_OUT {
+            if self.innov_s0[i] > 0.0 {
+                sum += (self.innov_s1[i] / self.innov_s0[i]).clamp(0.0, 0.95);
+                n += 1;
+            }
+        }
+        if n == 0 {
+            return 1.0;
+        }
+        let rho = sum / n as f64;
+        (1.0 + rho) / (1.0 - rho)
+    }
+
+    /// The parameter block of the filter covariance `P`, uncorrected.
+    pub fn filter_covariance(&self) -> SMatrix<f64, N_PARAMS, N_PARAMS> {
+        self.p.fixed_view::<N_PARAMS, N_PARAMS>(N_STATES, N_STATES).into_owned()
     }
 
     /// Current state estimate `(V m/s, α rad, θ rad, q rad/s)`.
@@ -297,15 +347,28 @@ impl LongitudinalEkf {
         x.map(|v| 1e-6 * v.abs().max(1e-2))
     }
 
-    fn rk4(&self, x: &Aug, u: &LongitudinalSample, dt: f64) -> Aug {
-        let k1 = self.f(x, u);
-        let k2 = self.f(&(x + k1 * (0.5 * dt)), u);
-        let k3 = self.f(&(x + k2 * (0.5 * dt)), u);
-        let k4 = self.f(&(x + k3 * dt), u);
+    /// RK4 over one sample interval with the inputs interpolated linearly between the two
+    /// samples (as Jategaonkar's `ruku4_aug.m`): start, midpoint and end values.
+    fn rk4(&self, x: &Aug, u0: &LongitudinalSample, u1: &LongitudinalSample, dt: f64) -> Aug {
+        let um = LongitudinalSample {
+            de_rad: 0.5 * (u0.de_rad + u1.de_rad),
+            thrust_n: 0.5 * (u0.thrust_n + u1.thrust_n),
+            rho_kgpm3: 0.5 * (u0.rho_kgpm3 + u1.rho_kgpm3),
+            ..*u0
+        };
+        let k1 = self.f(x, u0);
+        let k2 = self.f(&(x + k1 * (0.5 * dt)), &um);
+        let k3 = self.f(&(x + k2 * (0.5 * dt)), &um);
+        let k4 = self.f(&(x + k3 * dt), u1);
         x + (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (dt / 6.0)
     }
 
-    fn predict(&self, u: &LongitudinalSample, dt: f64) -> (Aug, SMatrix<f64, N_AUG, N_AUG>) {
+    fn predict(
+        &self,
+        u: &LongitudinalSample,
+        u_next: &LongitudinalSample,
+        dt: f64,
+    ) -> (Aug, SMatrix<f64, N_AUG, N_AUG>) {
         let x = &self.x;
         let h = Self::step(x);
         // A = ∂f/∂x has non-zero rows only for the N_STATES dynamic states, so
@@ -347,7 +410,7 @@ impl LongitudinalEkf {
         for j in N_STATES..N_AUG {
             p[(j, j)] += self.cfg.q_params * dt;
         }
-        (self.rk4(x, u, dt), p)
+        (self.rk4(x, u, u_next, dt), p)
     }
 
     fn check_input(s: &LongitudinalSample) -> Result<(), EstimatorError> {
@@ -414,8 +477,8 @@ impl Estimator<N_PARAMS> for LongitudinalEkf {
         if dt.is_nan() || dt <= 0.0 {
             return Err(EstimatorError::NonFiniteInput { field: "dt_s", value: dt, t_s: s.t_s });
         }
-        // Inputs held over the interval at their values of the interval start (zero-order hold).
-        let (mut x, mut p) = self.predict(&prev, dt);
+        // Inputs interpolated linearly over the interval (RK4 in `predict`).
+        let (mut x, mut p) = self.predict(&prev, s, dt);
         // Measurement update, component by component, linearised at the predicted state.
         let hx = self.h(&x, s);
         let step = Self::step(&x);
@@ -462,11 +525,25 @@ impl Estimator<N_PARAMS> for LongitudinalEkf {
         self.x = x;
         self.p = p;
         self.innovations = innov;
+        for (i, e) in innov.iter().copied().enumerate() {
+            if s.y[i].is_some() {
+                self.innov_s0[i] += e * e;
+                if let Some(prev) = self.innov_prev[i] {
+                    self.innov_s1[i] += e * prev;
+                }
+                self.innov_prev[i] = Some(e);
+            } else {
+                self.innov_prev[i] = None;
+            }
+        }
         self.last = Some(*s);
         self.est.t_s = s.t_s;
         self.est.theta = x.fixed_rows::<N_PARAMS>(N_STATES).into_owned();
-        self.est.covariance =
-            Some(p.fixed_view::<N_PARAMS, N_PARAMS>(N_STATES, N_STATES).into_owned());
+        let factor = match self.cfg.sigma {
+            SigmaCorrection::Filter => 1.0,
+            SigmaCorrection::ColouredResiduals => self.coloured_residual_factor(),
+        };
+        self.est.covariance = Some(self.filter_covariance() * factor);
         Ok(&self.est)
     }
 
@@ -498,6 +575,7 @@ mod tests {
             q_states: [0.0; 4],
             q_params: 0.0,
             r: [1.0; N_OUT],
+            sigma: SigmaCorrection::Filter,
         };
         let ekf = LongitudinalEkf::new(cfg).unwrap();
         let mut x = ekf.x;

@@ -154,6 +154,19 @@ impl LinearCoefficient<4> {
     };
 }
 
+impl LinearCoefficient<4> {
+    /// `CL = CL_0 + CL_alpha α + CL_q q̂ + CL_de δe` (Klein & Morelli 2006, ch. 5).
+    pub const LIFT_FULL: Self = Self {
+        coefficient: Coefficient::CL,
+        terms: [Term::Bias, Term::Alpha, Term::Qhat, Term::De],
+    };
+    /// `CD = CD_0 + CD_alpha α + CD_q q̂ + CD_de δe`.
+    pub const DRAG_FULL: Self = Self {
+        coefficient: Coefficient::CD,
+        terms: [Term::Bias, Term::Alpha, Term::Qhat, Term::De],
+    };
+}
+
 impl LinearCoefficient<5> {
     /// `Cm = Cm_0 + Cm_alpha α + Cm_q q̂ + Cm_de δe + Cm_V V/V0` (Jategaonkar 2015, eq. 5.87,
     /// HFB-320 model).

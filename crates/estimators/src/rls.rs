@@ -1,8 +1,8 @@
 //! Recursive least squares (equation error) with exponential forgetting and standard errors.
 //!
-//! Source: Klein & Morelli, *Aircraft System Identification*, AIAA 2006, §5.1 (ordinary least
-//! squares, `cov θ̂ = σ̂² (XᵀX)⁻¹`, `σ̂² = RSS/(N − p)`) and §7.2 (recursive least squares with
-//! forgetting); Jategaonkar 2015, §7.2 (`RLSff.m`).
+//! Source: Klein & Morelli, *Aircraft System Identification*, AIAA 2006, ch. 5 (ordinary least
+//! squares, `cov θ̂ = σ̂² (XᵀX)⁻¹`, `σ̂² = RSS/(N − p)`) and its chapter on real-time estimation
+//! (recursive least squares with forgetting); Jategaonkar 2015, ch. 7 (`RLSff.m`).
 //!
 //! With forgetting factor `λ ∈ (0, 1]` the estimate minimises `J_n = Σ_k λ^{n−k} (y_k − φ_kᵀθ)²`:
 //!
@@ -17,15 +17,15 @@
 //! ```
 //!
 //! **Exact initialisation** (no prior): the first samples are accumulated in information form
-//! `A = Σ λ^{n−k} φφᵀ`, `b = Σ λ^{n−k} φ y` until `A` is positive definite and at least
-//! `init_samples` samples were seen; then `θ = A⁻¹b`, `P = A⁻¹`. From then on the recursion
+//! `A = Σ λ^{n−k} φφᵀ`, `b = Σ λ^{n−k} φ y` until `A` is well conditioned (see
+//! [`INIT_MIN_SCALED_PIVOT`]) and at least `init_samples` samples were seen; then `θ = A⁻¹b`, `P = A⁻¹`. From then on the recursion
 //! above is algebraically identical to batch least squares on all samples so far (weighted by
 //! `λ^{n−k}`), so with `λ = 1` RLS equals the batch solution to rounding.
 //!
 //! **WARNING:** the standard errors assume white equation errors. On real flight data the
-//! residuals are coloured and the σ are optimistic (Klein & Morelli §5.1.3 / Morelli's
-//! residual-spectrum correction are not applied here). Equation error is also biased when the
-//! regressors are noisy (Klein & Morelli §5.1.2).
+//! residuals are coloured and the σ are optimistic (Morelli's residual-spectrum
+//! correction, Klein & Morelli ch. 5, is not applied here). Equation error is also biased when
+//! the regressors are noisy (errors-in-variables, Klein & Morelli ch. 5).
 
 use crate::regressors::{Regressor, Timed};
 use crate::{Estimate, Estimator, EstimatorError};
@@ -111,6 +111,32 @@ impl<R: Regressor<P>, const P: usize> Rls<R, P> {
     }
 }
 
+/// Smallest admissible pivot of the unit-diagonal-scaled information matrix at initialisation:
+/// every regressor must carry at least this fraction of its energy independently of the
+/// others (a reciprocal-condition guard; with fewer informative samples the exact solution
+/// would be dominated by rounding).
+pub const INIT_MIN_SCALED_PIVOT: f64 = 1e-8;
+
+/// Whether `A` is positive definite with Cholesky pivots of `D^{-1/2} A D^{-1/2}` (unit
+/// diagonal) all at least [`INIT_MIN_SCALED_PIVOT`].
+fn well_conditioned<const P: usize>(a: &SMatrix<f64, P, P>) -> bool {
+    let mut d = SVector::<f64, P>::zeros();
+    for i in 0..P {
+        if !a[(i, i)].is_finite() || a[(i, i)] <= 0.0 {
+            return false;
+        }
+        d[i] = 1.0 / libm::sqrt(a[(i, i)]);
+    }
+    let scaled = SMatrix::<f64, P, P>::from_fn(|i, j| a[(i, j)] * d[i] * d[j]);
+    match scaled.cholesky() {
+        Some(c) => (0..P).all(|i| {
+            let l = c.l_dirty()[(i, i)];
+            l * l >= INIT_MIN_SCALED_PIVOT
+        }),
+        None => false,
+    }
+}
+
 impl<R: Regressor<P>, const P: usize> Estimator<P> for Rls<R, P>
 where
     R::Sample: Timed,
@@ -138,6 +164,7 @@ where
             self.n_eff = self.n_eff * lambda + 1.0;
             self.count += 1;
             if self.count >= self.init_samples
+                && well_conditioned(&self.info)
                 && let Some(chol) = self.info.cholesky()
             {
                 let theta = chol.solve(&self.info_b);

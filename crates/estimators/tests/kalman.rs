@@ -5,7 +5,7 @@
 use aeroident_estimators::Estimator;
 use aeroident_estimators::kalman::{
     EkfConfig, G0_MPS2, LongitudinalConstants, LongitudinalEkf, LongitudinalSample, N_PARAMS,
-    PARAM_NAMES,
+    PARAM_NAMES, SigmaCorrection,
 };
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -87,6 +87,7 @@ fn val_known_truth_ekf_recovers_parameters_within_3_sigma() {
         q_states: [0.0; 4],
         q_params: 0.0,
         r: sig.map(|s| s * s),
+        sigma: SigmaCorrection::Filter,
     };
     let mut ekf = LongitudinalEkf::new(cfg).unwrap();
     // Trim-like initial state.
@@ -103,15 +104,20 @@ fn val_known_truth_ekf_recovers_parameters_within_3_sigma() {
         }
         let s = LongitudinalSample { t_s: t, de_rad: de, thrust_n: thrust, rho_kgpm3: rho, y };
         ekf.update(&s).unwrap();
-        // Propagate the truth to the next sample with the input held (zero-order hold).
-        for _ in 0..10 {
-            let k1 = deriv(&c, x, de, thrust, rho);
+        // Propagate the truth to the next sample. The sampled elevator is a ramp between
+        // samples (a rate-limited actuator), which the filter's linear input interpolation
+        // (Jategaonkar's `ruku4_aug.m`) represents exactly.
+        let de_next = elevator(t + 0.1);
+        let de_at = |tau: f64| de + (de_next - de) * tau / 0.1;
+        for j in 0..10 {
+            let tau = j as f64 * h;
             let add = |x: [f64; 4], k: [f64; 4], f: f64| {
                 [x[0] + f * k[0], x[1] + f * k[1], x[2] + f * k[2], x[3] + f * k[3]]
             };
-            let k2 = deriv(&c, add(x, k1, h / 2.0), de, thrust, rho);
-            let k3 = deriv(&c, add(x, k2, h / 2.0), de, thrust, rho);
-            let k4 = deriv(&c, add(x, k3, h), de, thrust, rho);
+            let k1 = deriv(&c, x, de_at(tau), thrust, rho);
+            let k2 = deriv(&c, add(x, k1, h / 2.0), de_at(tau + h / 2.0), thrust, rho);
+            let k3 = deriv(&c, add(x, k2, h / 2.0), de_at(tau + h / 2.0), thrust, rho);
+            let k4 = deriv(&c, add(x, k3, h), de_at(tau + h), thrust, rho);
             for i in 0..4 {
                 x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
             }
@@ -148,6 +154,7 @@ fn errors_bad_config_and_input() {
         q_states: [0.0; 4],
         q_params: 0.0,
         r: [1.0; 7],
+        sigma: SigmaCorrection::Filter,
     };
     cfg.constants.mass_kg = -1.0;
     assert!(LongitudinalEkf::new(cfg).is_err());

@@ -3,7 +3,7 @@
 //!
 //! Method: least-squares slope of a straight line fitted to the last `N` uniformly spaced
 //! samples (a first-order Savitzky–Golay differentiator; Savitzky & Golay, *Anal. Chem.* 36,
-//! 1964; Klein & Morelli 2006, §11.2 on smoothed numerical differentiation):
+//! 1964; Klein & Morelli 2006, ch. 11 on smoothing and numerical differentiation):
 //!
 //! ```text
 //! ẋ̂(t_c) = Σ_k w_k x_k,   w_k = (k − c) / (dt · Σ_j (j − c)²),   c = (N−1)/2,   k = 0 … N−1

@@ -39,7 +39,7 @@ pub struct CorrectedConfig<const N: usize, const P: usize> {
 /// ```text
 /// ṡ   = −λ s + Φ θ̃                         (θ̃ = θ̂ − θ; exact for models affine in θ)
 /// dθ̂/dt = −Γ Φᵀ (κ e + γ s),   dΓ⁻¹/dt = κ ΦᵀΦ − ρ Γ⁻¹,   θ̂ projected onto the bounds
-/// V   = ½ sᵀs/γ + ½ θ̃ᵀ Γ⁻¹ θ̃,  V̇ = −λ sᵀs/γ − ½ κ |Φθ̃|² − ½ ρ θ̃ᵀΓ⁻¹θ̃ ≤ 0
+/// V   = (γ/2) sᵀs + ½ θ̃ᵀ Γ⁻¹ θ̃,  V̇ = −γλ sᵀs − ½ κ |Φθ̃|² − ½ ρ θ̃ᵀΓ⁻¹θ̃ ≤ 0
 /// ```
 ///
 /// Discretisation per sample (`dt` = time since the previous sample): the surface is advanced

@@ -1,0 +1,172 @@
+//! Errors of flight-data reading. Every variant names the file, and where it applies the row
+//! (line number in the file, header = line 1), the column and the channel.
+
+/// A flight-data or mapping error.
+#[derive(Debug, thiserror::Error)]
+pub enum FlightDataError {
+    /// The file could not be opened or read.
+    #[error("{file}: {source}")]
+    Io {
+        /// File path (or `-` for stdin).
+        file: String,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The mapping TOML did not parse (the message carries line and column).
+    #[error("{file}: mapping syntax: {message}")]
+    MappingSyntax {
+        /// Mapping file.
+        file: String,
+        /// Parser message with the TOML line and column.
+        message: String,
+    },
+    /// A `[channels]` key is not a known channel.
+    #[error("{file}: unknown channel `{channel}` (valid: {valid})")]
+    UnknownChannel {
+        /// Mapping file.
+        file: String,
+        /// The key.
+        channel: String,
+        /// Valid keys.
+        valid: String,
+    },
+    /// A unit string did not parse.
+    #[error("{file}: channel `{channel}`: {message}")]
+    Unit {
+        /// Mapping file.
+        file: String,
+        /// Channel key.
+        channel: String,
+        /// What was wrong.
+        message: String,
+    },
+    /// A unit has the wrong dimension for its channel.
+    #[error("{file}: channel `{channel}`: unit `{unit}` is not a {expected} unit")]
+    WrongDimension {
+        /// Mapping file.
+        file: String,
+        /// Channel key.
+        channel: String,
+        /// The unit given.
+        unit: String,
+        /// The dimension expected.
+        expected: String,
+    },
+    /// A channel entry is malformed (no source, two sources, non-finite value…).
+    #[error("{file}: channel `{channel}`: {reason}")]
+    BadSpec {
+        /// Mapping file.
+        file: String,
+        /// Channel key.
+        channel: String,
+        /// What was wrong.
+        reason: String,
+    },
+    /// A required channel is not mapped.
+    #[error("{file}: required channel `{channel}` is not mapped")]
+    MissingChannel {
+        /// Mapping file.
+        file: String,
+        /// Channel key.
+        channel: String,
+    },
+    /// A mapped column is not in the data file's header.
+    #[error("{file}: row 1 (header): column `{column}` for channel `{channel}` is missing")]
+    MissingColumn {
+        /// Data file.
+        file: String,
+        /// Channel key.
+        channel: String,
+        /// Column name.
+        column: String,
+    },
+    /// The CSV itself could not be read (header or framing).
+    #[error("{file}: row {row}: {message}")]
+    Csv {
+        /// Data file.
+        file: String,
+        /// Line number.
+        row: u64,
+        /// Parser message.
+        message: String,
+    },
+    /// A data row was rejected (strict mode turns rejections into errors).
+    #[error("{file}: row {row}: {problem}")]
+    Row {
+        /// Data file.
+        file: String,
+        /// Line number.
+        row: u64,
+        /// What was wrong, naming the column.
+        problem: RowProblem,
+    },
+    /// The record has no usable samples.
+    #[error("{file}: no usable samples ({rejected} rows rejected)")]
+    NoSamples {
+        /// Data file.
+        file: String,
+        /// Rows rejected.
+        rejected: usize,
+    },
+}
+
+/// Why a data row was rejected. Each names the column.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RowProblem {
+    /// An empty field.
+    #[error("column `{column}`: blank value")]
+    Blank {
+        /// Column name.
+        column: String,
+    },
+    /// A field that is not a number.
+    #[error("column `{column}`: `{text}` is not a number")]
+    NotANumber {
+        /// Column name.
+        column: String,
+        /// The field text.
+        text: String,
+    },
+    /// NaN or infinity.
+    #[error("column `{column}`: non-finite value `{text}`")]
+    NonFinite {
+        /// Column name.
+        column: String,
+        /// The field text.
+        text: String,
+    },
+    /// Time equal to the previous accepted sample's.
+    #[error("column `{column}`: repeated time {t_s} s")]
+    RepeatedTime {
+        /// Time column name.
+        column: String,
+        /// The time, s.
+        t_s: f64,
+    },
+    /// Time earlier than the previous accepted sample's.
+    #[error("column `{column}`: time {t_s} s goes backwards (previous {prev_t_s} s)")]
+    NonMonotonicTime {
+        /// Time column name.
+        column: String,
+        /// The time, s.
+        t_s: f64,
+        /// Previous accepted time, s.
+        prev_t_s: f64,
+    },
+    /// Wrong number of fields.
+    #[error("{found} fields, header has {expected}")]
+    FieldCount {
+        /// Fields in the header.
+        expected: usize,
+        /// Fields in this row.
+        found: usize,
+    },
+    /// A value outside the physical domain (e.g. V ≤ 0, mass ≤ 0).
+    #[error("column `{column}`: {reason}")]
+    Domain {
+        /// Column name.
+        column: String,
+        /// What is wrong.
+        reason: String,
+    },
+}

@@ -13,7 +13,7 @@
 //! (SI-free: ft/s², rad/s, rad/s²). It is minimised with argmin's Nelder–Mead simplex (a
 //! derivative-free, well-kept optimiser that tolerates the tables' kinks), then polished with
 //! damped Newton steps on the 6 residuals (central-difference Jacobian; the system is square),
-//! which drives the residual to round-off. The reported [`F16Trim::cost`] is `J` at the
+//! which drives the residual to round-off. The reported [`crate::trim::F16Trim::cost`] is `J` at the
 //! returned point.
 
 use crate::ModelError;

@@ -4,6 +4,8 @@
 //! the `aeroident` command-line interface. `main.rs` only parses arguments; every command is a
 //! function here so tests can call it directly.
 
+/// Aircraft estimation experiments: two F-16s, sensors, estimators (issue 4).
+pub mod aircraft;
 pub mod cli;
 /// Convergence-time and error metrics of estimate histories.
 pub mod metrics;

@@ -13,6 +13,8 @@
 use nalgebra::{SMatrix, SVector};
 
 pub mod kalman;
+/// Model-reference gradient estimator of thesis (3.3), the comparison of thesis §4.2.5.
+pub mod mrac;
 pub mod regressors;
 pub mod rls;
 

@@ -7,7 +7,7 @@
 //! A position that starts inside the limits stays inside (the lag drives it toward a clamped
 //! command). Throttle has no actuator here: it acts through the engine power lag of the model.
 //!
-//! Values ([`SurfaceActuators::f16`]): lag 20.2 rad/s (time constant 0.0495 s) on all three
+//! Values ([`crate::actuator::SurfaceActuators::f16`]): lag 20.2 rad/s (time constant 0.0495 s) on all three
 //! surfaces; elevator ±25°, 60°/s; aileron ±21.5°, 80°/s; rudder ±30°, 120°/s. These are the
 //! F-16 actuator values of NASA TP-1538 (Nguyen et al. 1979) as tabulated by L. Sonneveldt,
 //! *Nonlinear F-16 Model Description*, TU Delft, 2010, and used by SLJ's later chapters; the

@@ -13,7 +13,7 @@
 //! (SI-free: ft/s², rad/s, rad/s²). It is minimised with argmin's Nelder–Mead simplex (a
 //! derivative-free, well-kept optimiser that tolerates the tables' kinks), then polished with
 //! damped Newton steps on the 6 residuals (central-difference Jacobian; the system is square),
-//! which drives the residual to round-off. The reported [`F16Trim::cost`] is `J` at the
+//! which drives the residual to round-off. The reported [`crate::trim::F16Trim::cost`] is `J` at the
 //! returned point.
 
 use crate::ModelError;
@@ -76,6 +76,9 @@ pub struct F16Trim {
     pub nelder_mead_iterations: u64,
     /// Newton polishing iterations used.
     pub newton_iterations: usize,
+    /// Trim quantities outside the ranges the data are meant for (data `[ranges]`; the tables
+    /// extrapolate there), e.g. `"alpha_deg = 45.6 outside [-10, 45]"`. Empty when all inside.
+    pub out_of_range: Vec<String>,
 }
 
 impl F16Trim {
@@ -220,12 +223,18 @@ fn newton_polish(pb: &Problem<'_>, z0: [f64; 6]) -> Result<([f64; 6], usize), Mo
     Ok((z, it))
 }
 
-/// Trims `model` (its increments included) for `cond`. Throttle is not clamped to 0–1: a
-/// result outside it means the condition needs more (or less) than the engine has.
+/// Trims `model` (its increments included) for `cond`.
+///
+/// A trim is **feasible** when the throttle is within 0–1 and each surface within its
+/// position range (data `[ranges]`: ±25°, ±21.5°, ±30°); the search prefers feasible
+/// solutions and an infeasible best one is an error. Other quantities outside the data's
+/// ranges (α beyond −10…45°, Mach > 1, altitude > 50 000 ft) are listed in
+/// [`F16Trim::out_of_range`] (the published 130 ft/s trim has α = 45.6°).
 ///
 /// # Errors
 /// [`ModelError::InvalidValue`] for a non-finite or non-positive airspeed or non-finite
-/// altitude / γ; [`ModelError::NoConvergence`] when no start reaches a residual below 1e-8.
+/// altitude / γ; [`ModelError::NoConvergence`] when no start reaches a residual below 1e-8, or
+/// the only trims found need throttle or surfaces beyond their ranges (the detail says which).
 pub fn trim(model: &F16, cond: &TrimCondition) -> Result<F16Trim, ModelError> {
     if !(cond.vt_fps.is_finite() && cond.vt_fps > 0.0) {
         return Err(ModelError::InvalidValue {
@@ -240,7 +249,7 @@ pub fn trim(model: &F16, cond: &TrimCondition) -> Result<F16Trim, ModelError> {
         }
     }
     let pb = Problem { model, cond: *cond };
-    let mut best: Option<F16Trim> = None;
+    let mut best: Option<(F16Trim, Vec<String>)> = None;
     // Starts: low, medium and high angle of attack (the textbook's range is −10…45°).
     for &(alpha0, thtl0) in &[(0.05, 0.2), (0.25, 0.4), (0.6, 0.8)] {
         let x0 = vec![thtl0, -0.02, alpha0, 0.0, 0.0, 0.0];
@@ -265,6 +274,7 @@ pub fn trim(model: &F16, cond: &TrimCondition) -> Result<F16Trim, ModelError> {
         let Ok((z, newton_it)) = newton_polish(&pb, z_nm) else { continue };
         let Ok(r) = pb.residual(&z) else { continue };
         let (state, controls) = pb.state_controls(&z);
+        let (infeasible, out_of_range) = range_check(model, &state, &controls);
         let cand = F16Trim {
             state,
             controls,
@@ -272,18 +282,33 @@ pub fn trim(model: &F16, cond: &TrimCondition) -> Result<F16Trim, ModelError> {
             residual: [r[0], r[1], r[2], r[3], r[4], r[5]],
             nelder_mead_iterations: nm_iters,
             newton_iterations: newton_it,
+            out_of_range,
         };
-        let done = cand.max_abs_residual() < 1e-10 && (0.0..=1.0).contains(&cand.controls.throttle);
-        if best.as_ref().is_none_or(|b| cand.cost < b.cost) {
-            best = Some(cand);
+        // Prefer: converged, then feasible, then lower cost.
+        let rank =
+            |c: &F16Trim, inf: &[String]| (c.max_abs_residual() >= 1e-8, !inf.is_empty(), c.cost);
+        let better = match &best {
+            None => true,
+            Some((b, binf)) => {
+                rank(&cand, &infeasible).partial_cmp(&rank(b, binf))
+                    == Some(std::cmp::Ordering::Less)
+            }
+        };
+        let done = cand.max_abs_residual() < 1e-10 && infeasible.is_empty();
+        if better {
+            best = Some((cand, infeasible));
         }
         if done {
             break;
         }
     }
     match best {
-        Some(b) if b.max_abs_residual() < 1e-8 => Ok(b),
-        Some(b) => Err(ModelError::NoConvergence {
+        Some((b, inf)) if b.max_abs_residual() < 1e-8 && inf.is_empty() => Ok(b),
+        Some((b, inf)) if b.max_abs_residual() < 1e-8 => Err(ModelError::NoConvergence {
+            what: "trim",
+            detail: format!("infeasible: {}", inf.join("; ")),
+        }),
+        Some((b, _)) => Err(ModelError::NoConvergence {
             what: "trim",
             detail: format!("best residual {:e} (cost {:e})", b.max_abs_residual(), b.cost),
         }),
@@ -293,9 +318,60 @@ pub fn trim(model: &F16, cond: &TrimCondition) -> Result<F16Trim, ModelError> {
     }
 }
 
+/// (infeasible controls, other out-of-range quantities) of a candidate trim.
+fn range_check(model: &F16, x: &F16State, u: &F16Controls) -> (Vec<String>, Vec<String>) {
+    let rg = &model.data().ranges;
+    let fmt =
+        |name: &str, v: f64, r: [f64; 2]| format!("{name} = {v:.4} outside [{}, {}]", r[0], r[1]);
+    let outside = |v: f64, r: [f64; 2]| !(r[0]..=r[1]).contains(&v);
+    let mut infeasible = vec![];
+    for (name, v, r) in [
+        ("throttle", u.throttle, rg.throttle),
+        ("elevator_deg", u.elevator_rad.to_degrees(), rg.elevator_deg),
+        ("aileron_deg", u.aileron_rad.to_degrees(), rg.aileron_deg),
+        ("rudder_deg", u.rudder_rad.to_degrees(), rg.rudder_deg),
+    ] {
+        if outside(v, r) {
+            infeasible.push(fmt(name, v, r));
+        }
+    }
+    let mut flagged = vec![];
+    let mach = crate::atmosphere::air_data(&model.data().atmosphere, x[VT], x[ALT])
+        .map(|a| a.mach)
+        .unwrap_or(f64::NAN);
+    for (name, v, r) in [
+        ("alpha_deg", x[ALPHA].to_degrees(), rg.alpha_deg),
+        ("beta_deg", x[BETA].to_degrees(), rg.beta_deg),
+        ("altitude_ft", x[ALT], rg.altitude_ft),
+        ("mach", mach, rg.mach),
+    ] {
+        if outside(v, r) {
+            flagged.push(fmt(name, v, r));
+        }
+    }
+    (infeasible, flagged)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn infeasible_trims_are_errors_naming_the_control() {
+        let f16 = F16::new(0.35).unwrap();
+        // 60 000 ft at 600 ft/s needs negative throttle in this model; 100 ft/s needs > 25° elevator.
+        for (alt, vt, what) in [(60_000.0, 600.0, "throttle"), (0.0, 100.0, "elevator_deg")] {
+            match trim(&f16, &TrimCondition::level(alt, vt)) {
+                Err(ModelError::NoConvergence { detail, .. }) => {
+                    assert!(detail.contains(what), "{detail}")
+                }
+                other => panic!("expected infeasible trim at {alt} ft {vt} ft/s, got {other:?}"),
+            }
+        }
+        // The published 130 ft/s trim (SLJ Table 3.6-2) is feasible but has alpha > 45 deg: flagged.
+        let t = trim(&f16, &TrimCondition::level(0.0, 130.0)).unwrap();
+        assert!(t.out_of_range.iter().any(|s| s.starts_with("alpha_deg")), "{:?}", t.out_of_range);
+    }
 
     #[test]
     fn analytic_constraints_reduce_to_simple_cases() {

@@ -33,7 +33,8 @@ pub struct F16Args {
 pub enum F16Command {
     /// Print the 13 state derivatives at a state and controls (SLJ §3.5).
     Xdot(XdotArgs),
-    /// Trim in steady wings-level flight (SLJ §3.6; thesis trim index 2.31).
+    /// Trim in steady wings-level flight, or a coordinated turn / pull-up (SLJ §3.6; thesis trim
+    /// index 2.31).
     Trim(TrimArgs),
     /// Trim, then print A, B, eigenvalues and modes (SLJ §3.7–3.8).
     Linearize(TrimArgs),
@@ -74,6 +75,13 @@ pub struct TrimArgs {
     /// Flight-path angle, deg.
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub gamma_deg: f64,
+    /// Steady coordinated turn at this turn rate, deg/s (SLJ §3.6 turn constraint) instead of
+    /// wings-level flight.
+    #[arg(long, allow_hyphen_values = true, conflicts_with = "pull_up_deg_s")]
+    pub turn_rate_deg_s: Option<f64>,
+    /// Steady pull-up at this pitch rate, deg/s (SLJ §3.6) instead of wings-level flight.
+    #[arg(long, allow_hyphen_values = true)]
+    pub pull_up_deg_s: Option<f64>,
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
@@ -134,14 +142,24 @@ pub fn xdot(a: &XdotArgs) -> anyhow::Result<String> {
 
 fn do_trim(a: &TrimArgs) -> anyhow::Result<(F16, aeroident_models::trim::F16Trim)> {
     let f16 = F16::new(a.xcg)?;
+    let maneuver = match (a.turn_rate_deg_s, a.pull_up_deg_s) {
+        (Some(w), _) => TrimManeuver::CoordinatedTurn { turn_rate_rad_s: w.to_radians() },
+        (None, Some(q)) => TrimManeuver::PullUp { pitch_rate_rad_s: q.to_radians() },
+        (None, None) => TrimManeuver::WingsLevel,
+    };
     let cond = TrimCondition {
         alt_ft: a.alt_ft,
         vt_fps: a.vt_fps,
         gamma_rad: a.gamma_deg.to_radians(),
-        maneuver: TrimManeuver::WingsLevel,
+        maneuver,
     };
     let t = trim(&f16, &cond)
         .with_context(|| format!("trim at {} ft, {} ft/s, xcg {}", a.alt_ft, a.vt_fps, a.xcg))?;
+    for w in &t.out_of_range {
+        eprintln!(
+            "warning: trim has {w}: outside the range the F-16 data are meant for (the tables extrapolate)"
+        );
+    }
     Ok((f16, t))
 }
 
@@ -292,7 +310,15 @@ mod tests {
 
     #[test]
     fn trim_and_linearize_json_keys() {
-        let a = TrimArgs { alt_ft: 0.0, vt_fps: 502.0, xcg: 0.30, gamma_deg: 0.0, json: true };
+        let a = TrimArgs {
+            alt_ft: 0.0,
+            vt_fps: 502.0,
+            xcg: 0.30,
+            gamma_deg: 0.0,
+            turn_rate_deg_s: None,
+            pull_up_deg_s: None,
+            json: true,
+        };
         let v: serde_json::Value = serde_json::from_str(&trim_report(&a).unwrap()).unwrap();
         for k in [
             "throttle",

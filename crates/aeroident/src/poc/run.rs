@@ -2,12 +2,12 @@
 //! estimated model integrated side by side with fixed-step RK4, the estimator in between.
 //!
 //! Per step `k` (t = k·dt): `u = input(t)`; measured `z_m = z_true + n_z(t)`,
-//! `ż_m = f(t, z_true, u; θ) + n_ż(t)` (noise only in table 4.6 cases); the estimator consumes
+//! `ż_m = f(t, z_true, u; θ) + n_ż(t)` (noise only in table 4.6 cases; `n_ż` optional); the estimator consumes
 //! `(t, z_est, z_m, ż_m, u)` and returns θ̂; then both systems advance one RK4 step with `u`
 //! held (zero-order hold), the estimated model with θ̂ held.
 
 use super::adapter::ModelAdapter;
-use super::scenario::{GainConfig, PocScenario, SystemConfig};
+use super::scenario::{GainConfig, NoiseTarget, PocScenario, SystemConfig};
 use aeroident_estimators::Estimator;
 use aeroident_estimators::smpe::{
     CorrectedConfig, CorrectedSmpe, GainForm, ParamSpec, PublishedSmpe, Reading, SlidingSurface,
@@ -315,10 +315,12 @@ where
         let u = input.value(t);
         let xdot = truth.derivatives(t, &x, &u).map_err(|e| model_err(t, e))?;
         let (mut z_m, mut zdot_m) = (x, xdot);
-        if let Some(ch) = &noise {
+        if let (Some(ch), Some(cfg)) = (&noise, &sc.noise) {
             for i in 0..N {
                 z_m[i] += ch[i].value(t);
-                zdot_m[i] += ch[N + i].value(t);
+                if cfg.apply_to == NoiseTarget::StatesAndDerivatives {
+                    zdot_m[i] += ch[N + i].value(t);
+                }
             }
         }
         let sample = SmpeSample { t_s: t, z, z_m, zdot_m, u };

@@ -40,6 +40,7 @@
 //! # [noise]                      (table 4.6) band-limited white noise on every measured
 //! # noise_power = 3.2e-7         state and state derivative; sample time default dt_s;
 //! # seed = 1                     channel k uses seed + k.
+//! # apply_to = "states_and_derivatives"   (default) | "states" (ż_m exact)
 //! ```
 //! Unknown keys are errors. Parse errors name the file, line and column (from the `toml`
 //! crate's spans); semantic errors name the file, the key path and the reason.
@@ -272,6 +273,20 @@ pub struct NoiseConfig {
     pub sample_time_s: Option<f64>,
     /// Seed of the first channel.
     pub seed: u64,
+    /// Which measurements are noisy (default: states and their derivatives).
+    #[serde(default)]
+    pub apply_to: NoiseTarget,
+}
+
+/// Which measured signals get the noise of `[noise]`.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum NoiseTarget {
+    /// `z_m` and `ż_m` (every signal the estimators read from the reference system).
+    #[default]
+    StatesAndDerivatives,
+    /// `z_m` only; `ż_m` exact.
+    States,
 }
 
 fn line_col(text: &str, offset: usize) -> (usize, usize) {

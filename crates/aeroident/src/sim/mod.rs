@@ -2,7 +2,7 @@
 //! sense → `timeseries.csv` and figures.
 //!
 //! Run: `aeroident f16 sim scenarios/sim/elevator_doublet.toml --out out/sim`. The scenario
-//! format is documented in [`scenario`].
+//! format is documented in [`crate::sim::scenario`].
 //!
 //! # What is simulated
 //! * The Stevens–Lewis F-16 (`aeroident_models::f16`), trimmed wings-level at the scenario's
@@ -15,7 +15,7 @@
 //! * Sensors sample the true channels (ZOH at their rate, noise, bias, delay, quantisation).
 //!
 //! # Output
-//! `timeseries.csv`: one row per step, columns [`SimRun::columns`] (units in the names), the
+//! `timeseries.csv`: one row per step, columns [`crate::sim::SimRun::columns`] (units in the names), the
 //! sensed channels as `meas_<channel>`; `states.png` and `controls_wind.png`.
 
 pub mod scenario;

@@ -56,6 +56,7 @@ struct RawFile {
     mass: MassProperties,
     geometry: Geometry,
     moment_constants: MomentConstants,
+    ranges: DataRanges,
 }
 
 #[derive(Deserialize)]
@@ -227,6 +228,32 @@ pub struct MomentConstants {
     pub c9: f64,
 }
 
+/// The ranges the data are meant for (SLJ subroutine headers; `[ranges]` of the data file),
+/// each `[min, max]`. Outside them the lookups extrapolate (README §4): results are flagged,
+/// not physics. Angles in degrees as in the file.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DataRanges {
+    /// α, deg.
+    pub alpha_deg: [f64; 2],
+    /// β, deg.
+    pub beta_deg: [f64; 2],
+    /// Elevator, deg.
+    pub elevator_deg: [f64; 2],
+    /// Aileron, deg.
+    pub aileron_deg: [f64; 2],
+    /// Rudder, deg.
+    pub rudder_deg: [f64; 2],
+    /// Throttle, 0–1.
+    pub throttle: [f64; 2],
+    /// Engine power, percent.
+    pub power_percent: [f64; 2],
+    /// Altitude, ft.
+    pub altitude_ft: [f64; 2],
+    /// Mach.
+    pub mach: [f64; 2],
+}
+
 /// CY linear formula constants (SLJ App. A, FUNCTION CY): CY = kβ·β° + ka·(δa°/sa) + kr·(δr°/sr).
 #[derive(Debug, Clone, PartialEq)]
 pub struct CyFormula {
@@ -303,6 +330,8 @@ pub struct F16Data {
     pub geometry: Geometry,
     /// Moment constants c1..c9.
     pub moment: MomentConstants,
+    /// Intended ranges of the data.
+    pub ranges: DataRanges,
 }
 
 fn invalid(table: &'static str, field: &'static str, reason: impl Into<String>) -> DataError {
@@ -572,6 +601,26 @@ impl F16Data {
         positive("atmosphere", "t_above_tropopause_rankine", a.t_above_tropopause_rankine)?;
         positive("buildup", "aileron_scale_deg", raw.buildup.aileron_scale_deg)?;
         positive("buildup", "rudder_scale_deg", raw.buildup.rudder_scale_deg)?;
+        let rg = &raw.ranges;
+        for (field, r) in [
+            ("alpha_deg", rg.alpha_deg),
+            ("beta_deg", rg.beta_deg),
+            ("elevator_deg", rg.elevator_deg),
+            ("aileron_deg", rg.aileron_deg),
+            ("rudder_deg", rg.rudder_deg),
+            ("throttle", rg.throttle),
+            ("power_percent", rg.power_percent),
+            ("altitude_ft", rg.altitude_ft),
+            ("mach", rg.mach),
+        ] {
+            if !(r[0].is_finite() && r[1].is_finite() && r[0] < r[1]) {
+                return Err(invalid(
+                    "ranges",
+                    field,
+                    format!("must be [min, max] with min < max, got {r:?}"),
+                ));
+            }
+        }
 
         Ok(Self {
             rad_to_deg,
@@ -596,6 +645,7 @@ impl F16Data {
             mass: raw.mass,
             geometry: raw.geometry,
             moment: raw.moment_constants,
+            ranges: raw.ranges,
         })
     }
 

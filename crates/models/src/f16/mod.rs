@@ -1,14 +1,14 @@
 //! The Stevens–Lewis nonlinear F-16 (SLJ 3rd ed. §3.5, subroutine F; data of NASA TP-1538):
 //! 13 states, flat earth, the textbook's air-data computer, engine power lag, gyroscopic engine
 //! momentum, and table aerodynamics with the textbook's linear extrapolation (README §4 of the
-//! data set; [`table::Extrapolation::Linear`]).
+//! data set; [`crate::f16::table::Extrapolation::Linear`]).
 //!
-//! # States (index, name, unit) — [`STATE_NAMES`]
+//! # States (index, name, unit) — [`crate::f16::STATE_NAMES`]
 //! `0 vt_fps, 1 alpha_rad, 2 beta_rad, 3 phi_rad, 4 theta_rad, 5 psi_rad, 6 p_rad_s, 7 q_rad_s,
 //! 8 r_rad_s, 9 north_ft, 10 east_ft, 11 alt_ft (up), 12 pow_pct` (engine power, 0 idle, 50 MIL,
 //! 100 MAX). `vt, alpha, beta` describe the **inertial** (ground-relative) velocity in body axes.
 //!
-//! # Controls — [`F16Controls`]
+//! # Controls — [`crate::f16::F16Controls`]
 //! Throttle 0–1, elevator/aileron/rudder in **radians** (the tables take degrees internally),
 //! textbook signs: positive deflection gives a negative moment (README §3). Plus the wind.
 //!

@@ -438,40 +438,98 @@ pub fn write_all(out: &RunOutput, dir: &Path, figures: bool) -> Result<Summary, 
     Ok(summary)
 }
 
-/// The thesis-versus-ours table of several runs (markdown), grouped by thesis table.
+fn opt_s(v: Option<f64>) -> String {
+    v.map_or("never".to_string(), |x| format!("{x:.2} s"))
+}
+
+/// Verdict on a thesis time claim, from our settling time.
+fn verdict(p: &ParamSummary) -> &'static str {
+    match (p.convergence_time_s, p.thesis_convergence_time_s, p.thesis_note.as_deref()) {
+        (None, _, _) => "never settles",
+        (Some(t), Some(th), _) if t <= th => "settles, ≤ thesis",
+        (Some(_), Some(_), _) => "settles, slower than thesis",
+        (Some(t), None, Some(n)) if n.starts_with('>') => {
+            if t < n
+                .trim_start_matches('>')
+                .trim_end_matches(" s")
+                .trim()
+                .parse::<f64>()
+                .unwrap_or(0.0)
+            {
+                "settles, faster than thesis"
+            } else {
+                "settles, as slow as thesis"
+            }
+        }
+        (Some(_), _, _) => "settles",
+    }
+}
+
+/// The thesis-versus-ours tables of several runs (markdown), one section per thesis table
+/// (scenarios grouped by the prefix of `thesis_table`), plus a realtime-factor column.
 pub fn markdown(results: &[(super::Scenario, Summary)]) -> String {
     let mut s = String::new();
-    writeln!(s, "| scenario | thesis | estimator | param | truth (1/rad) | final | rel. err | ours t_conv (±5 %) | thesis | re-conv. | rt factor |").ok();
-    writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|").ok();
-    for (sc, sm) in results {
-        for p in &sm.parameters {
-            let opt = |v: Option<f64>| v.map_or("never".to_string(), |x| format!("{x:.2} s"));
-            writeln!(
-                s,
-                "| {} | {} | {} | {} | {:.4e} | {:.4e} | {:.1} % | {} | {} | {} | {:.0}× |",
-                sc.name,
-                sc.thesis_table.clone().unwrap_or_else(|| "—".into()),
-                p.estimator,
-                p.name,
-                p.truth,
-                p.r#final,
-                100.0 * p.rel_error,
-                opt(p.convergence_time_s),
-                p.thesis_note.clone().unwrap_or_else(|| p
-                    .thesis_convergence_time_s
-                    .map_or("—".into(), |x| format!("{x} s"))),
-                if sc
-                    .param(Increment::from_name(&p.name).unwrap_or(Increment::CmAlpha))
-                    .and_then(|e| e.step_at_s)
-                    .is_some()
-                {
-                    opt(p.reconvergence_time_s)
-                } else {
-                    "—".into()
-                },
-                sm.realtime_factor,
-            )
-            .ok();
+    let mut groups: Vec<String> = Vec::new();
+    for (sc, _) in results {
+        let g = sc
+            .thesis_table
+            .clone()
+            .map(|t| {
+                t.split(" case").next().unwrap_or(&t).split(" (").next().unwrap_or(&t).to_string()
+            })
+            .unwrap_or_else(|| "other".into());
+        if !groups.contains(&g) {
+            groups.push(g);
+        }
+    }
+    const ORDER: [&str; 7] = ["4.7", "4.8", "4.9", "4.10", "combined", "4.2.5", "beyond"];
+    groups.sort_by_key(|g| ORDER.iter().position(|o| o == g).unwrap_or(ORDER.len()));
+    for g in groups {
+        let title = match g.as_str() {
+            "4.7" => "Table 4.7 — ΔCm_α alone".to_string(),
+            "4.8" => "Table 4.8 — ΔCm_q alone".to_string(),
+            "4.9" => "Table 4.9 — ΔCL_α alone".to_string(),
+            "4.10" => "Table 4.10 — ΔCD_α alone".to_string(),
+            "combined" => {
+                "Combined run (all four at once; thesis Figs 4.59–4.61, pages not in our copy)"
+                    .to_string()
+            }
+            "4.2.5" => {
+                "Model-reference gradient (3.3) vs SMPE (thesis §4.2.5, pages not in our copy)"
+                    .to_string()
+            }
+            "beyond" => "Beyond the thesis".to_string(),
+            other => other.to_string(),
+        };
+        writeln!(s, "\n### {title}\n").ok();
+        writeln!(s, "| scenario | estimator | param | truth (1/rad) | final | rel. err | first in ±5 % | settled in ±5 % | thesis | verdict | re-conv. after step | RT factor |").ok();
+        writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|---|").ok();
+        for (sc, sm) in results.iter().filter(|(sc, _)| {
+            sc.thesis_table.as_deref().is_some_and(|t| t.starts_with(&g))
+                || (g == "other" && sc.thesis_table.is_none())
+        }) {
+            for p in &sm.parameters {
+                let step = Increment::from_name(&p.name)
+                    .and_then(|i| sc.param(i))
+                    .and_then(|e| e.step_at_s);
+                writeln!(
+                    s,
+                    "| {} | {} | {} | {:.4e} | {:.4e} | {:.1} % | {} | {} | {} | {} | {} | {:.0}× |",
+                    sc.name,
+                    p.estimator,
+                    p.name,
+                    p.truth,
+                    p.r#final,
+                    100.0 * p.rel_error,
+                    opt_s(p.first_within_s),
+                    opt_s(p.convergence_time_s),
+                    p.thesis_note.clone().unwrap_or_else(|| "—".into()),
+                    if p.failure.is_some() { "estimator failed" } else { verdict(p) },
+                    if step.is_some() { opt_s(p.reconvergence_time_s) } else { "—".into() },
+                    sm.realtime_factor,
+                )
+                .ok();
+            }
         }
     }
     s

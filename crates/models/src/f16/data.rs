@@ -188,6 +188,48 @@ pub struct MassProperties {
     pub hx_slug_ft2_per_s: f64,
 }
 
+impl MassProperties {
+    /// Mass, slug (1 / `inverse_mass_per_slug`).
+    pub fn mass_slug(&self) -> f64 {
+        1.0 / self.inverse_mass_per_slug
+    }
+
+    /// The body-axis inertia tensor `I = [[Ixx, 0, −Jxz], [0, Iyy, 0], [−Jxz, 0, Izz]]`,
+    /// slug·ft² (SLJ §1.3 / §3.5 sign convention: Jxz enters with a minus sign).
+    pub fn inertia_slug_ft2(&self) -> nalgebra::Matrix3<f64> {
+        nalgebra::Matrix3::new(
+            self.ixx_slug_ft2,
+            0.0,
+            -self.ixz_slug_ft2,
+            0.0,
+            self.iyy_slug_ft2,
+            0.0,
+            -self.ixz_slug_ft2,
+            0.0,
+            self.izz_slug_ft2,
+        )
+    }
+
+    /// `I⁻¹ = [a_ij]`, 1/(slug·ft²), the matrix of the thesis's moment equations (2.15) and of
+    /// its pitch-rate sensitivities C_p, C_q, C_r = (a₁₂, a₂₂, a₃₂)·q̄Sc̄ (3.117). Closed form
+    /// with Γ = Ixx·Izz − Jxz²: `a11 = Izz/Γ, a13 = a31 = Jxz/Γ, a22 = 1/Iyy, a33 = Ixx/Γ`
+    /// (the exact values of SLJ's c3, c4, c7, c9).
+    pub fn inverse_inertia(&self) -> nalgebra::Matrix3<f64> {
+        let gamma = self.ixx_slug_ft2 * self.izz_slug_ft2 - self.ixz_slug_ft2 * self.ixz_slug_ft2;
+        nalgebra::Matrix3::new(
+            self.izz_slug_ft2 / gamma,
+            0.0,
+            self.ixz_slug_ft2 / gamma,
+            0.0,
+            1.0 / self.iyy_slug_ft2,
+            0.0,
+            self.ixz_slug_ft2 / gamma,
+            0.0,
+            self.ixx_slug_ft2 / gamma,
+        )
+    }
+}
+
 /// Geometry (SLJ §3.5).
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -675,6 +717,24 @@ mod tests {
         assert_eq!(d.damping[6].y[1], -0.540);
         assert_eq!(d.thrust_idle.z[1][3], -710.0);
         assert_eq!(d.moment.c1, -0.770);
+    }
+
+    #[test]
+    fn analytic_inverse_inertia_matches_slj_moment_constants() {
+        let d = F16Data::parse(EMBEDDED_TOML).unwrap();
+        let m = &d.mass;
+        let inv = m.inverse_inertia();
+        assert!((m.inertia_slug_ft2() * inv - nalgebra::Matrix3::identity()).amax() < 1e-15);
+        // SLJ's rounded c3, c4, c7, c9 (data file) agree with the exact a_ij to their rounding.
+        for (exact, rounded) in [
+            (inv[(0, 0)], d.moment.c3),
+            (inv[(0, 2)], d.moment.c4),
+            (inv[(1, 1)], d.moment.c7),
+            (inv[(2, 2)], d.moment.c9),
+        ] {
+            assert!(((exact - rounded) / exact).abs() < 2e-3, "{exact} vs {rounded}");
+        }
+        assert!((m.mass_slug() * m.g_ft_per_s2 - m.weight_lbf).abs() < 1e-3);
     }
 
     fn expect_invalid(text: &str, table: &str, field: &str) {

@@ -20,6 +20,31 @@
 //!
 //! # Units and signs
 //! ft, s, slug, lbf, rad. Body axes x forward, y right, z down; altitude up (ḣ = −ż_NED).
+//!
+//! # Example: reference aircraft with "damage" and an estimator's candidate model
+//! ```
+//! use aeroident_models::Dynamics;
+//! use aeroident_models::f16::{AeroIncrements, F16, IncrementReference, IncrementSchedule, ALPHA, Q};
+//! use aeroident_models::trim::{trim, TrimCondition};
+//! let nominal = F16::new(0.30)?; // xcg 0.30: open-loop stable
+//! let t = trim(&nominal, &TrimCondition::level(20_000.0, 675.0))?; // thesis condition
+//! let reference = IncrementReference {
+//!     alpha_rad: t.state[ALPHA],
+//!     q_rad_s: t.state[Q],
+//!     elevator_rad: t.controls.elevator_rad,
+//!     ..Default::default()
+//! };
+//! // Truth: ΔCm_α, ΔCm_q, ΔCL_α, ΔCD_α (per rad) switched on at t = 1 s.
+//! let truth = AeroIncrements::thesis(reference, 0.0015, 0.01, 0.01, 0.001);
+//! let aircraft = nominal.clone().with_increments(truth, IncrementSchedule::StepAt { t0_s: 1.0 });
+//! let xdot_true = aircraft.derivatives(2.0, &t.state, &t.controls)?;
+//! // Estimator: ẋ for a candidate θ̂ at the same state, without building a new model.
+//! let candidate = AeroIncrements::thesis(reference, 0.001, 0.0, 0.0, 0.0);
+//! let xdot_hat = nominal.derivatives_with_increments(&t.state, &t.controls, &candidate)?;
+//! // At the trim point Δα = Δq = 0, so every increment contributes nothing.
+//! assert!((xdot_true - xdot_hat).amax() < 1e-12);
+//! # Ok::<(), aeroident_models::ModelError>(())
+//! ```
 
 #![allow(clippy::excessive_precision)]
 

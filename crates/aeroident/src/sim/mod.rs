@@ -318,12 +318,21 @@ pub fn write_outputs(run: &SimRun, out_dir: &Path) -> anyhow::Result<()> {
     w.flush().with_context(|| format!("writing `{}`", csv_path.display()))?;
 
     let t = run.data[0].clone();
+    let d = 180.0 / std::f64::consts::PI;
+    // Legend names say the plotted unit: radian channels are drawn in degrees.
+    let shown = |name: &str, scale: f64| -> String {
+        if scale == d {
+            name.replace("_rad_s", "_deg_s").replace("_rad", "_deg")
+        } else {
+            name.to_string()
+        }
+    };
     let panel = |title: &str, y_label: &str, chans: &[(&str, f64)]| -> Panel {
         let mut series = vec![];
         for &(ch, scale) in chans {
             if let Some(v) = run.column(ch) {
                 series.push(Series {
-                    label: ch.to_string(),
+                    label: shown(ch, scale),
                     t_s: t.clone(),
                     values: v.iter().map(|x| x * scale).collect(),
                     kind: LineKind::Solid,
@@ -332,7 +341,7 @@ pub fn write_outputs(run: &SimRun, out_dir: &Path) -> anyhow::Result<()> {
             let m = format!("meas_{ch}");
             if let Some(v) = run.column(&m) {
                 series.push(Series {
-                    label: m.clone(),
+                    label: shown(&m, scale),
                     t_s: t.clone(),
                     values: v.iter().map(|x| x * scale).collect(),
                     kind: LineKind::Dashed,
@@ -341,7 +350,6 @@ pub fn write_outputs(run: &SimRun, out_dir: &Path) -> anyhow::Result<()> {
         }
         Panel { title: title.to_string(), y_label: y_label.to_string(), series }
     };
-    let d = 180.0 / std::f64::consts::PI;
     let states = [
         panel("true airspeed", "vt (ft/s)", &[("vt_fps", 1.0)]),
         panel("angle of attack and sideslip", "deg", &[("alpha_rad", d), ("beta_rad", d)]),

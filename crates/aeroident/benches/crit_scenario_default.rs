@@ -1,0 +1,38 @@
+//! Criterion benchmark: the full closed loop of the default scenario (`scenarios/default.toml`:
+//! reference and estimated F-16, sensor noise, the corrected estimator of all four increments)
+//! for 1 s of flight at 100 Hz, and the same with every estimator of the combined run
+//! (`scenarios/f16/combined.toml`: published implicit and explicit, corrected; four aircraft).
+//! Target (issue 4): ≥ 500× real time, i.e. ≤ 2 ms per simulated second, excluding the trim
+//! (benchmarked separately as `trim_only`).
+
+#![allow(missing_docs)] // criterion_group! generates an undocumented pub fn.
+
+use aeroident::aircraft::{Scenario, run};
+use criterion::{Criterion, criterion_group, criterion_main};
+use std::hint::black_box;
+
+fn bench(c: &mut Criterion) {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let mut default =
+        Scenario::from_path(&root.join("scenarios/default.toml")).expect("default scenario");
+    default.duration_s = 1.0;
+    let mut combined =
+        Scenario::from_path(&root.join("scenarios/f16/combined.toml")).expect("combined");
+    combined.duration_s = 1.0;
+    c.bench_function("closed_loop_default_1s_100hz", |b| {
+        b.iter(|| run(black_box(&default)).expect("runs"))
+    });
+    // The trim alone, to subtract from the two runs above (the summary's realtime_factor
+    // excludes it).
+    let f16 = aeroident_models::f16::F16::new(0.30).expect("finite xcg");
+    let cond = aeroident_models::trim::TrimCondition::level(20_000.0, 675.0);
+    c.bench_function("trim_only", |b| {
+        b.iter(|| aeroident_models::trim::trim(black_box(&f16), &cond).expect("trims"))
+    });
+    c.bench_function("closed_loop_combined_all_estimators_1s_100hz", |b| {
+        b.iter(|| run(black_box(&combined)).expect("runs"))
+    });
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -185,3 +185,35 @@ fn val_differentiated_qdot_reproduces_record_qdot_regression() {
     let (cmde, _) = param(&o, "Cm_de");
     assert!((cmde - -0.5315).abs() < 0.05 * 0.5315, "Cm_de {cmde}");
 }
+
+/// Every estimator runs on every shipped mapping's record without rejecting a sample, and every
+/// final estimate is finite (never NaN in output).
+#[test]
+fn val_all_estimators_run_on_all_records() {
+    let records = [
+        ("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv", "hfb320.toml"),
+        ("jategaonkar_hfb320_attas/csv/fAttasElv1.csv", "attas.toml"),
+        ("sidpac_twin_otter/csv/totter_lon_020213f1_017.csv", "twin_otter.toml"),
+        ("jsbsim_f16_sample/f16_doublet_20s_120Hz.csv", "jsbsim.toml"),
+    ];
+    for (rel, map) in records {
+        let Some(data) = shared(rel) else { return };
+        for estimator in [
+            EstimatorKind::Rls,
+            EstimatorKind::Ekf,
+            EstimatorKind::Smpe,
+            EstimatorKind::SmpeCorrected,
+        ] {
+            let o = run(&data, map, ReplayOptions { estimator, ..Default::default() });
+            assert_eq!(
+                o.summary.samples_rejected,
+                0,
+                "{rel} {estimator:?}: {:?}",
+                o.summary.rejections.first()
+            );
+            for p in &o.summary.parameters {
+                assert!(p.estimate.is_finite(), "{rel} {estimator:?} {}", p.name);
+            }
+        }
+    }
+}

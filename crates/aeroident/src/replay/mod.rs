@@ -17,6 +17,7 @@
 
 pub mod coefficients;
 pub mod online;
+pub mod smpe;
 
 use aeroident_estimators::EstimatorError;
 use aeroident_estimators::regressors::CoefficientSample;
@@ -433,12 +434,9 @@ fn build_estimator(
     Ok(match opts.estimator {
         EstimatorKind::Rls => Box::new(RlsSet::new(opts.terms, opts.forgetting)?),
         EstimatorKind::Ekf => Box::new(EkfReplay::new(first, v0_mps, &mapping.ekf)?),
-        EstimatorKind::Smpe | EstimatorKind::SmpeCorrected => {
-            return Err(EstimatorError::InvalidConfig {
-                field: "estimator",
-                value: f64::NAN,
-                reason: "the sliding-mode estimators are not available for recorded data in this build",
-            });
+        EstimatorKind::Smpe => Box::new(smpe::SmpeReplay::new(smpe::SmpeVariant::Published)?),
+        EstimatorKind::SmpeCorrected => {
+            Box::new(smpe::SmpeReplay::new(smpe::SmpeVariant::Corrected)?)
         }
     })
 }

@@ -20,7 +20,7 @@
 //! towards or away from the truth depends on the sign of the states and of the sensitivity,
 //! not only on λ.
 
-use crate::smpe::{ParamSpec, ParametricModel, SmpeSample};
+use crate::smpe::{ParamSpec, ParametricModel, SmpeSample, sample_interval_s};
 use crate::{Estimate, Estimator, EstimatorError};
 use nalgebra::SVector;
 
@@ -136,16 +136,7 @@ where
 
     fn update(&mut self, s: &Self::Sample) -> Result<&Estimate<P>, EstimatorError> {
         s.check_finite()?;
-        let dt = match self.last_t_s {
-            None => 0.0,
-            Some(t0) if s.t_s >= t0 => s.t_s - t0,
-            Some(_) => {
-                return Err(EstimatorError::Numerical {
-                    what: "sample time decreased",
-                    t_s: s.t_s,
-                });
-            }
-        };
+        let dt = sample_interval_s(self.last_t_s, s.t_s)?;
         let rate = self.cost_rate(s)?;
         let mut theta = self.estimate.theta;
         let mut clamped = 0;

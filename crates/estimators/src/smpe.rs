@@ -271,6 +271,18 @@ impl ParamSpec {
 }
 
 /// Energy-error rates `Ė_i = z_i ż_i − z_m,i ż_m,i` and errors `E_i = ½(z_i² − z_m,i²)`.
+/// Time since the previous sample, s: 0 for the first sample (`last_t_s = None`).
+///
+/// # Errors
+/// [`EstimatorError::Numerical`] when `t_s` is earlier than the previous sample's time.
+pub(crate) fn sample_interval_s(last_t_s: Option<f64>, t_s: f64) -> Result<f64, EstimatorError> {
+    match last_t_s {
+        None => Ok(0.0),
+        Some(t0) if t_s >= t0 => Ok(t_s - t0),
+        Some(_) => Err(EstimatorError::Numerical { what: "sample time decreased", t_s }),
+    }
+}
+
 pub(crate) fn energy_terms<const N: usize>(
     z: &SVector<f64, N>,
     zdot: &SVector<f64, N>,

@@ -6,7 +6,7 @@
 //! law instead of the instantaneous solution of one scalar equation, so that information from
 //! different instants accumulates and several parameters sharing one surface are identifiable.
 
-use super::{ParamSpec, ParametricModel, SmpeSample};
+use super::{ParamSpec, ParametricModel, SmpeSample, sample_interval_s};
 use crate::{Estimate, Estimator, EstimatorError};
 use nalgebra::{SMatrix, SVector};
 
@@ -141,16 +141,7 @@ where
 
     fn update(&mut self, s: &Self::Sample) -> Result<&Estimate<P>, EstimatorError> {
         s.check_finite()?;
-        let dt = match self.last_t_s {
-            None => 0.0,
-            Some(t0) if s.t_s >= t0 => s.t_s - t0,
-            Some(_) => {
-                return Err(EstimatorError::Numerical {
-                    what: "sample time decreased",
-                    t_s: s.t_s,
-                });
-            }
-        };
+        let dt = sample_interval_s(self.last_t_s, s.t_s)?;
         let theta0 = self.estimate.theta;
         let zdot = self.model.derivatives(s.t_s, &s.z_m, &s.u, &theta0)?;
         let sens = self.model.sensitivity(s.t_s, &s.z_m, &s.u, &theta0)?;

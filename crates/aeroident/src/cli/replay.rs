@@ -103,8 +103,10 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     match &args.out {
         Some(dir) => {
             std::fs::write(dir.join("summary.json"), &summary_text)?;
-            let title =
-                format!("{} — {} ({})", mapping.description, args.estimator.name(), args.data);
+            let name = Path::new(&args.data)
+                .file_name()
+                .map_or(args.data.clone(), |n| n.to_string_lossy().into_owned());
+            let title = format!("{name} — {}", args.estimator.name());
             plot_estimates(&dir.join("estimates.png"), &title, &outcome.history)?;
             eprintln!(
                 "{}: {} samples read, {} rejected, {:.0} samples/s; wrote {}",

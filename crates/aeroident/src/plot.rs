@@ -1,6 +1,6 @@
 //! Figures: stacked panels of time series rendered to a PNG with `plotters`.
 //!
-//! One generic helper, [`render_panels_png`], draws any number of panels that share the time
+//! One generic helper, [`render_panels_png`](crate::plot::render_panels_png), draws any number of panels that share the time
 //! axis (state tracking, parameter convergence, control commands). Text uses the DejaVu Sans
 //! font embedded by the `dejavu` crate and registered with plotters' `ab_glyph` backend, so no
 //! system font is needed.

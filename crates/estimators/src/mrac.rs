@@ -19,6 +19,9 @@
 //! `dJ/dt ≈ Σ z_i (∂ż_i/∂θ) θ̃` has the sign of `z_i ∂ż_i/∂θ`, so whether the estimate moves
 //! towards or away from the truth depends on the sign of the states and of the sensitivity,
 //! not only on λ.
+//!
+//! [`ParamSpec`]: crate::smpe::ParamSpec
+//! [`GradientStats::clamped`]: crate::mrac::GradientStats::clamped
 
 use crate::smpe::{ParamSpec, ParametricModel, SmpeSample, sample_interval_s};
 use crate::{Estimate, Estimator, EstimatorError};

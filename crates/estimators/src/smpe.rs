@@ -18,6 +18,17 @@
 //! 2. a [`SlidingSurface<N>`] saying which states slide (e.g. `p, q, r`:
 //!    [`SlidingSurface::first_order`] with those three indices), and
 //! 3. one [`ParamSpec`] per parameter (name, bounds, λ, initial guess).
+//!
+//! [`PublishedSmpe`]: crate::smpe::PublishedSmpe
+//! [`Reading`]: crate::smpe::Reading
+//! [`CorrectedSmpe`]: crate::smpe::CorrectedSmpe
+//! [`ParametricModel`]: crate::smpe::ParametricModel
+//! [`ParametricModel<N, P>`]: crate::smpe::ParametricModel
+//! [`ParametricModel::sensitivity`]: crate::smpe::ParametricModel::sensitivity
+//! [`SmpeSample::z`]: crate::smpe::SmpeSample::z
+//! [`SlidingSurface<N>`]: crate::smpe::SlidingSurface
+//! [`SlidingSurface::first_order`]: crate::smpe::SlidingSurface::first_order
+//! [`ParamSpec`]: crate::smpe::ParamSpec
 
 use crate::EstimatorError;
 use nalgebra::{SMatrix, SVector};

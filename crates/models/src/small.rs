@@ -1,7 +1,7 @@
 //! The thesis's four proof-of-concept systems (Gurbacki 2010 §2.1, (2.1)–(2.4); signs as
 //! reconstructed in `spec/thesis-method.md` §2). Time in s; states and input dimensionless.
 //!
-//! Each implements [`Dynamics`] (the truth model) and [`Parameterized`] (so the same equations
+//! Each implements [`Dynamics`] (the truth model) and [`Parameterized`](crate::parametric::Parameterized) (so the same equations
 //! serve as the estimated model with θ̂). The input is the scalar command `u` held over a step.
 
 use crate::parametric::Parameterized;

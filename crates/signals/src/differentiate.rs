@@ -17,7 +17,7 @@
 //! `ω·N·dt → 0`). Callers that combine the derivative with other signals should delay those by
 //! the same lag (whole samples when `N` is odd) to keep them aligned.
 //!
-//! No allocation after construction; the window restarts after [`CausalDifferentiator::reset`]
+//! No allocation after construction; the window restarts after [`CausalDifferentiator::reset`](crate::differentiate::CausalDifferentiator::reset)
 //! (e.g. across a data gap).
 
 /// Errors from constructing a [`CausalDifferentiator`].

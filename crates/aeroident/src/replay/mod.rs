@@ -3,7 +3,7 @@
 //! Pipeline per row: [`aeroident_io::FlightDataReader`] (CSV → SI sample, or a counted
 //! rejection) → `q̇` (the record's, or the causal differentiator of
 //! [`aeroident_signals::differentiate`] with the other channels delayed by its lag so the
-//! regression stays aligned) → measured coefficients ([`coefficients`]) → estimator update →
+//! regression stays aligned) → measured coefficients ([`coefficients`](crate::replay::coefficients)) → estimator update →
 //! one estimates line (to `estimates.csv`, and to stdout in live mode).
 //!
 //! Nothing is dropped silently: every rejected row, every gap, every sample the differentiator

@@ -4,7 +4,7 @@
 #![allow(missing_docs)] // criterion_group! generates an undocumented pub fn.
 
 use aeroident::poc::ModelAdapter;
-use aeroident_estimators::Estimator;
+use aeroident_estimators::ParametricEstimator;
 use aeroident_estimators::smpe::{
     CorrectedConfig, CorrectedSmpe, GainForm, ParamSpec, PublishedSmpe, Reading, SlidingSurface,
     SmpeConfig, SmpeSample,

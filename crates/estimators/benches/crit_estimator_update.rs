@@ -3,13 +3,13 @@
 //! Criterion reports the time per update and, via `Throughput::Elements`, samples per second.
 #![allow(missing_docs)] // criterion_group! generates an undocumented `pub fn`.
 
-use aeroident_estimators::Estimator;
-use aeroident_estimators::kalman::{
+use aeroident_estimators::ParametricEstimator;
+use aeroident_estimators::legacy_kalman::{
     EkfConfig, LongitudinalConstants, LongitudinalEkf, LongitudinalSample, N_PARAMS,
     SigmaCorrection,
 };
+use aeroident_estimators::legacy_rls::{Rls, RlsConfig};
 use aeroident_estimators::regressors::{CoefficientSample, LinearCoefficient};
-use aeroident_estimators::rls::{Rls, RlsConfig};
 use criterion::{Criterion, Throughput, black_box, criterion_group, criterion_main};
 
 const N: usize = 1000;

@@ -1,9 +1,23 @@
 //! # aeroident-estimators
 //!
-//! Real-time parameter estimators for aerodynamic identification. Every estimator consumes one
-//! sample at a time through [`Estimator::update`] and returns its current [`Estimate`]. The crate
-//! is `no_std` (build with `--no-default-features`): fixed-size `nalgebra` types, no allocation
-//! and no I/O in a per-sample update, so the same code can run on a flight computer.
+//! Real-time parameter estimators for aerodynamic identification, over one vocabulary:
+//!
+//! - one sample, [`AirDataSample`] (every channel a six-axis identification uses, absent
+//!   channels `None`), with its [`AircraftConstants`] and measured coefficients
+//!   ([`AirDataSample::measured_coefficients`]);
+//! - one model vocabulary, [`vocabulary`]: coefficient × term, parameters named
+//!   `<coefficient>_<term>` (`Cm_alpha`, `Cl_p`, `Cn_beta` …), structures declared freely or by
+//!   preset ([`ModelStructure`]);
+//! - one estimator interface, [`Estimator`]: consume a sample, give [`Estimates`] (value, σ,
+//!   whether identified) of the structure's parameters. Estimators that need a model state carry
+//!   and integrate it themselves, so each is usable from samples alone.
+//!
+//! The crate is `no_std` (build with `--no-default-features`): fixed-capacity arrays, no
+//! allocation and no I/O in a per-sample update, so the same code can run on a flight computer.
+//!
+//! The generic sliding-mode and gradient engines over any [`smpe::ParametricModel`] (the
+//! thesis's proof-of-concept systems and its F-16 increments) keep their own const-generic
+//! interface, [`ParametricEstimator`].
 //!
 //! Sources: P. M. Gurbacki, M.S. thesis, RIT 2010 (equation numbers as in
 //! `spec/thesis-method.md`); Klein & Morelli, *Aircraft System Identification*, AIAA 2006;
@@ -12,15 +26,26 @@
 
 use nalgebra::{SMatrix, SVector};
 
-pub mod kalman;
+pub mod estimator;
+pub mod legacy_kalman;
+pub mod linalg;
+pub mod prior;
+pub mod rls;
+pub mod sample;
+pub mod vocabulary;
+
+pub use estimator::{Estimates, Estimator, Status};
+pub use prior::{ParamPrior, Priors};
+pub use sample::{AirDataSample, AircraftConstants, CoefficientValues};
+pub use vocabulary::{Coefficient, MAX_PARAMS, ModelStructure, Param, Term};
+pub mod legacy_rls;
 /// Model-reference gradient estimator of thesis (3.3), the comparison of thesis §4.2.5.
 pub mod mrac;
 pub mod regressors;
-pub mod rls;
 
 /// A parameter estimate at one time.
 ///
-/// `theta` holds `P` parameters in the order of [`Estimator::param_names`]; `covariance` is the
+/// `theta` holds `P` parameters in the order of [`ParametricEstimator::param_names`]; `covariance` is the
 /// `P × P` estimation-error covariance where the method provides one (RLS, Kalman filters) and
 /// `None` where it does not (sliding-mode, gradient): never a made-up number.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -78,10 +103,12 @@ pub enum EstimatorError {
     },
 }
 
-/// An online estimator: consumes one sample, gives the current estimate of `P` parameters.
+/// The engine-level interface of the generic sliding-mode and gradient estimators over a
+/// [`smpe::ParametricModel`] with `P` parameters (any ODE, not only aircraft): consumes one
+/// sample, gives the current estimate. Aircraft estimation goes through [`Estimator`].
 ///
-/// Implementations must not allocate or do I/O in [`Estimator::update`].
-pub trait Estimator<const P: usize> {
+/// Implementations must not allocate or do I/O in [`ParametricEstimator::update`].
+pub trait ParametricEstimator<const P: usize> {
     /// One measurement sample (a plain struct of named, unit-suffixed fields).
     type Sample;
     /// Parameter names, the same strings as CSV headers (e.g. `"Cm_alpha"`, `"dCm_q"`).

@@ -24,7 +24,7 @@
 //! [`GradientStats::clamped`]: crate::mrac::GradientStats::clamped
 
 use crate::smpe::{ParamSpec, ParametricModel, SmpeSample, sample_interval_s};
-use crate::{Estimate, Estimator, EstimatorError};
+use crate::{Estimate, EstimatorError, ParametricEstimator};
 use nalgebra::SVector;
 
 /// Configuration of [`ModelReferenceGradient`].
@@ -127,7 +127,7 @@ where
     }
 }
 
-impl<M, const N: usize, const P: usize> Estimator<P> for ModelReferenceGradient<M, N, P>
+impl<M, const N: usize, const P: usize> ParametricEstimator<P> for ModelReferenceGradient<M, N, P>
 where
     M: ParametricModel<N, P>,
 {

@@ -1,10 +1,11 @@
-//! Recursive least squares (equation error) with exponential forgetting and standard errors.
+//! Recursive least squares (equation error) over any [`ModelStructure`]: one fit per modelled
+//! coefficient, each `C_k = Σ_j C_k_j ξ_j`, with exponential forgetting and standard errors.
 //!
 //! Source: Klein & Morelli, *Aircraft System Identification*, AIAA 2006, ch. 5 (ordinary least
-//! squares, `cov θ̂ = σ̂² (XᵀX)⁻¹`, `σ̂² = RSS/(N − p)`) and its chapter on real-time estimation
-//! (recursive least squares with forgetting); Jategaonkar 2015, ch. 7 (`RLSff.m`).
+//! squares, `cov θ̂ = σ̂² (XᵀX)⁻¹`, `σ̂² = RSS/(N − p)`) and §7.2 (recursive least squares with
+//! forgetting); Jategaonkar 2015, ch. 7 (`RLSff.m`).
 //!
-//! With forgetting factor `λ ∈ (0, 1]` the estimate minimises `J_n = Σ_k λ^{n−k} (y_k − φ_kᵀθ)²`:
+//! With forgetting factor `λ ∈ (0, 1]` each fit minimises `J_n = Σ_k λ^{n−k} (y_k − φ_kᵀθ)²`:
 //!
 //! ```text
 //! e_n = y_n − φ_nᵀ θ_{n−1}                      (a-priori residual)
@@ -17,27 +18,32 @@
 //! ```
 //!
 //! **Exact initialisation** (no prior): the first samples are accumulated in information form
-//! `A = Σ λ^{n−k} φφᵀ`, `b = Σ λ^{n−k} φ y` until `A` is well conditioned (see
-//! [`INIT_MIN_SCALED_PIVOT`]) and at least `init_samples` samples were seen; then `θ = A⁻¹b`, `P = A⁻¹`. From then on the recursion
-//! above is algebraically identical to batch least squares on all samples so far (weighted by
-//! `λ^{n−k}`), so with `λ = 1` RLS equals the batch solution to rounding.
+//! `A = Σ λ^{n−k} φφᵀ`, `b = Σ λ^{n−k} φ y` until `A` is well conditioned (every regressor
+//! carries at least [`INIT_MIN_SCALED_PIVOT`] of its energy independently of the others) and at
+//! least `init_samples` samples were seen; then `θ = A⁻¹b`, `P = A⁻¹`. From then on the
+//! recursion is algebraically identical to batch least squares on all samples so far, so with
+//! `λ = 1` RLS equals the batch solution to rounding. Until then the coefficient's parameters
+//! are **not identified** (`null`), never 0.
 //!
-//! **WARNING:** the standard errors assume white equation errors. On real flight data the
-//! residuals are coloured and the σ are optimistic (Morelli's residual-spectrum
-//! correction, Klein & Morelli ch. 5, is not applied here). Equation error is also biased when
-//! the regressors are noisy (errors-in-variables, Klein & Morelli ch. 5).
+//! A sample is used only if every modelled coefficient and every term is available (all or
+//! nothing, so the fits stay on the same samples); otherwise it is refused and nothing changes.
+//!
+//! **WARNING:** the standard errors assume white equation errors; on real data residuals are
+//! coloured and the σ optimistic. Equation error is biased when the regressors are noisy.
 
-use crate::regressors::{Regressor, Timed};
-use crate::{Estimate, Estimator, EstimatorError};
-use nalgebra::{SMatrix, SVector};
+use crate::EstimatorError;
+use crate::estimator::{Estimates, Estimator, Status, check_finite};
+use crate::linalg::{Square, cholesky, cholesky_inverse, cholesky_solve};
+use crate::sample::AirDataSample;
+use crate::vocabulary::{Coefficient, ModelStructure, N_TERMS, Term};
 
 /// Configuration of [`Rls`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RlsConfig {
-    /// Forgetting factor `λ ∈ (0, 1]`; 1 is ordinary least squares. Data `n` samples old weighs
-    /// `λⁿ` (memory ≈ `1/(1−λ)` samples).
+    /// Forgetting factor `λ ∈ (0, 1]`; 1 is ordinary least squares. Memory ≈ `1/(1−λ)`
+    /// samples.
     pub forgetting: f64,
-    /// Minimum number of samples before the exact initialisation (at least `P`).
+    /// Minimum number of samples before the exact initialisation (at least the number of terms).
     pub init_samples: usize,
 }
 
@@ -47,31 +53,182 @@ impl Default for RlsConfig {
     }
 }
 
-/// Recursive least squares on the regression `R` with `P` parameters. No allocation.
-#[derive(Debug, Clone)]
-pub struct Rls<R: Regressor<P>, const P: usize> {
-    regressor: R,
-    lambda: f64,
-    init_samples: usize,
-    /// Information matrix accumulated before initialisation.
-    info: SMatrix<f64, P, P>,
-    info_b: SVector<f64, P>,
+/// Smallest admissible pivot of the unit-diagonal-scaled information matrix at initialisation.
+pub const INIT_MIN_SCALED_PIVOT: f64 = 1e-8;
+
+/// One coefficient's fit.
+#[derive(Debug, Clone, Copy)]
+struct Fit {
+    coefficient: Coefficient,
+    n: usize,
+    first: usize,
+    terms: [Term; N_TERMS],
+    info: Square<N_TERMS>,
+    info_b: [f64; N_TERMS],
     info_yy: f64,
-    /// `P_n` after initialisation (unscaled covariance).
-    p: SMatrix<f64, P, P>,
+    p: Square<N_TERMS>,
+    theta: [f64; N_TERMS],
     initialised: bool,
     count: usize,
     n_eff: f64,
     rss: f64,
-    est: Estimate<P>,
 }
 
-impl<R: Regressor<P>, const P: usize> Rls<R, P> {
-    /// A new estimator; the estimate is zero with no covariance until initialised.
+impl Fit {
+    fn new(structure: &ModelStructure, c: Coefficient) -> Self {
+        let mut terms = [Term::Bias; N_TERMS];
+        let mut n = 0;
+        for (k, t) in structure.terms_of(c).enumerate() {
+            terms[k] = t;
+            n = k + 1;
+        }
+        Self {
+            coefficient: c,
+            n,
+            first: structure.first_index(c),
+            terms,
+            info: [[0.0; N_TERMS]; N_TERMS],
+            info_b: [0.0; N_TERMS],
+            info_yy: 0.0,
+            p: [[0.0; N_TERMS]; N_TERMS],
+            theta: [0.0; N_TERMS],
+            initialised: false,
+            count: 0,
+            n_eff: 0.0,
+            rss: 0.0,
+        }
+    }
+
+    fn regressors(&self, s: &AirDataSample) -> Option<[f64; N_TERMS]> {
+        let mut phi = [0.0; N_TERMS];
+        for k in 0..self.n {
+            phi[k] = self.terms[k].value(s)?;
+        }
+        Some(phi)
+    }
+
+    fn well_conditioned(&self) -> bool {
+        let n = self.n;
+        let mut scaled = [[0.0; N_TERMS]; N_TERMS];
+        for i in 0..n {
+            let d = self.info[i][i];
+            if !(d > 0.0 && d.is_finite()) {
+                return false;
+            }
+        }
+        for i in 0..n {
+            for j in 0..n {
+                scaled[i][j] = self.info[i][j] / libm::sqrt(self.info[i][i] * self.info[j][j]);
+            }
+        }
+        let mut l = [[0.0; N_TERMS]; N_TERMS];
+        cholesky(&scaled, n, &mut l) && (0..n).all(|i| l[i][i] * l[i][i] >= INIT_MIN_SCALED_PIVOT)
+    }
+
+    /// One update; returns `Err` (state unchanged) on a numerical failure.
+    fn update(
+        &mut self,
+        phi: &[f64; N_TERMS],
+        y: f64,
+        lambda: f64,
+        init_samples: usize,
+        t_s: f64,
+    ) -> Result<(), EstimatorError> {
+        let n = self.n;
+        if !self.initialised {
+            for i in 0..n {
+                for j in 0..n {
+                    self.info[i][j] = self.info[i][j] * lambda + phi[i] * phi[j];
+                }
+                self.info_b[i] = self.info_b[i] * lambda + phi[i] * y;
+            }
+            self.info_yy = self.info_yy * lambda + y * y;
+            self.n_eff = self.n_eff * lambda + 1.0;
+            self.count += 1;
+            if self.count >= init_samples.max(n) && self.well_conditioned() {
+                let mut l = [[0.0; N_TERMS]; N_TERMS];
+                if cholesky(&self.info, n, &mut l) {
+                    let mut theta = self.info_b;
+                    cholesky_solve(&l, n, &mut theta);
+                    let mut p = [[0.0; N_TERMS]; N_TERMS];
+                    cholesky_inverse(&l, n, &mut p);
+                    let finite = theta[..n].iter().all(|v| v.is_finite())
+                        && p[..n].iter().all(|r| r[..n].iter().all(|v| v.is_finite()));
+                    if finite {
+                        let bt: f64 = (0..n).map(|i| self.info_b[i] * theta[i]).sum();
+                        self.theta = theta;
+                        self.p = p;
+                        self.rss = (self.info_yy - bt).max(0.0);
+                        self.initialised = true;
+                    }
+                }
+            }
+            return Ok(());
+        }
+        let mut e = y;
+        let mut p_phi = [0.0; N_TERMS];
+        for i in 0..n {
+            e -= phi[i] * self.theta[i];
+            for j in 0..n {
+                p_phi[i] += self.p[i][j] * phi[j];
+            }
+        }
+        let denom = lambda + (0..n).map(|i| phi[i] * p_phi[i]).sum::<f64>();
+        if !(denom.is_finite() && denom > 0.0) {
+            return Err(EstimatorError::Numerical { what: "RLS gain denominator", t_s });
+        }
+        let mut p_new = self.p;
+        let mut theta_new = self.theta;
+        for i in 0..n {
+            let k = p_phi[i] / denom;
+            theta_new[i] += k * e;
+            for j in 0..n {
+                p_new[i][j] = (self.p[i][j] - k * p_phi[j]) / lambda;
+            }
+        }
+        for i in 0..n {
+            for j in 0..i {
+                let m = 0.5 * (p_new[i][j] + p_new[j][i]);
+                p_new[i][j] = m;
+                p_new[j][i] = m;
+            }
+        }
+        let finite = theta_new[..n].iter().all(|v| v.is_finite())
+            && p_new[..n].iter().all(|r| r[..n].iter().all(|v| v.is_finite()));
+        if !finite {
+            return Err(EstimatorError::Numerical { what: "RLS update", t_s });
+        }
+        self.theta = theta_new;
+        self.p = p_new;
+        self.rss = lambda * self.rss + lambda * e * e / denom;
+        self.n_eff = lambda * self.n_eff + 1.0;
+        self.count += 1;
+        Ok(())
+    }
+
+    fn residual_variance(&self) -> Option<f64> {
+        (self.initialised && self.n_eff > self.n as f64)
+            .then(|| self.rss / (self.n_eff - self.n as f64))
+    }
+}
+
+/// Recursive least squares on every coefficient of a structure. No allocation per update.
+#[derive(Debug, Clone)]
+pub struct Rls {
+    structure: ModelStructure,
+    fits: [Option<Fit>; 8],
+    lambda: f64,
+    init_samples: usize,
+    est: Estimates,
+}
+
+impl Rls {
+    /// A new estimator; nothing is identified until each fit's exact initialisation.
     ///
     /// # Errors
-    /// [`EstimatorError::InvalidConfig`] if `forgetting ∉ (0, 1]`.
-    pub fn new(regressor: R, config: RlsConfig) -> Result<Self, EstimatorError> {
+    /// [`EstimatorError::InvalidConfig`] if `forgetting ∉ (0, 1]` or the structure is invalid
+    /// (empty, over capacity, CX/CZ mixed with CL/CD).
+    pub fn new(structure: ModelStructure, config: RlsConfig) -> Result<Self, EstimatorError> {
         if !(config.forgetting > 0.0 && config.forgetting <= 1.0) {
             return Err(EstimatorError::InvalidConfig {
                 field: "forgetting",
@@ -79,129 +236,196 @@ impl<R: Regressor<P>, const P: usize> Rls<R, P> {
                 reason: "must be in (0, 1]",
             });
         }
+        let structure = structure.validated().map_err(|_| EstimatorError::InvalidConfig {
+            field: "model structure",
+            value: structure.n_params() as f64,
+            reason: "empty, over capacity, or mixes CX/CZ with CL/CD",
+        })?;
+        let mut fits = [None; 8];
+        for c in structure.coefficients() {
+            fits[c.index()] = Some(Fit::new(&structure, c));
+        }
         Ok(Self {
-            regressor,
+            structure,
+            fits,
             lambda: config.forgetting,
-            init_samples: config.init_samples.max(P),
-            info: SMatrix::zeros(),
-            info_b: SVector::zeros(),
-            info_yy: 0.0,
-            p: SMatrix::zeros(),
-            initialised: false,
-            count: 0,
-            n_eff: 0.0,
-            rss: 0.0,
-            est: Estimate::new(0.0, SVector::zeros()),
+            init_samples: config.init_samples,
+            est: Estimates::new(structure.n_params()),
         })
     }
 
-    /// The regression this estimator fits.
-    pub fn regressor(&self) -> &R {
-        &self.regressor
+    /// Residual variance `σ̂²` of coefficient `c`'s fit, once defined.
+    pub fn residual_variance(&self, c: Coefficient) -> Option<f64> {
+        self.fits[c.index()].as_ref().and_then(Fit::residual_variance)
     }
 
-    /// Residual variance estimate `σ̂² = J_n/(N_n − p)`, once defined.
-    pub fn residual_variance(&self) -> Option<f64> {
-        (self.initialised && self.n_eff > P as f64).then(|| self.rss / (self.n_eff - P as f64))
+    /// Scaled condition number of coefficient `c`'s information matrix (of its regressors'
+    /// correlation matrix), once initialised; large values (> 10³) flag nearly collinear terms.
+    pub fn condition_number(&self, c: Coefficient) -> Option<f64> {
+        let f = self.fits[c.index()].as_ref()?;
+        if !f.initialised {
+            return None;
+        }
+        crate::linalg::scaled_condition_number(&f.p, f.n)
     }
 
     fn publish(&mut self, t_s: f64) {
         self.est.t_s = t_s;
-        self.est.covariance = self.residual_variance().map(|s2| self.p * s2);
-    }
-}
-
-/// Smallest admissible pivot of the unit-diagonal-scaled information matrix at initialisation:
-/// every regressor must carry at least this fraction of its energy independently of the
-/// others (a reciprocal-condition guard; with fewer informative samples the exact solution
-/// would be dominated by rounding).
-pub const INIT_MIN_SCALED_PIVOT: f64 = 1e-8;
-
-/// Whether `A` is positive definite with Cholesky pivots of `D^{-1/2} A D^{-1/2}` (unit
-/// diagonal) all at least [`INIT_MIN_SCALED_PIVOT`].
-fn well_conditioned<const P: usize>(a: &SMatrix<f64, P, P>) -> bool {
-    let mut d = SVector::<f64, P>::zeros();
-    for i in 0..P {
-        if !a[(i, i)].is_finite() || a[(i, i)] <= 0.0 {
-            return false;
-        }
-        d[i] = 1.0 / libm::sqrt(a[(i, i)]);
-    }
-    let scaled = SMatrix::<f64, P, P>::from_fn(|i, j| a[(i, j)] * d[i] * d[j]);
-    match scaled.cholesky() {
-        Some(c) => (0..P).all(|i| {
-            let l = c.l_dirty()[(i, i)];
-            l * l >= INIT_MIN_SCALED_PIVOT
-        }),
-        None => false,
-    }
-}
-
-impl<R: Regressor<P>, const P: usize> Estimator<P> for Rls<R, P>
-where
-    R::Sample: Timed,
-{
-    type Sample = R::Sample;
-
-    fn param_names(&self) -> [&'static str; P] {
-        self.regressor.names()
-    }
-
-    fn update(&mut self, sample: &Self::Sample) -> Result<&Estimate<P>, EstimatorError> {
-        let t_s = sample.t_s();
-        let (phi, y) = self.regressor.regress(sample);
-        if !y.is_finite() {
-            return Err(EstimatorError::NonFiniteInput { field: "y", value: y, t_s });
-        }
-        if let Some(v) = phi.iter().find(|v| !v.is_finite()) {
-            return Err(EstimatorError::NonFiniteInput { field: "phi", value: *v, t_s });
-        }
-        let lambda = self.lambda;
-        if !self.initialised {
-            self.info = self.info * lambda + phi * phi.transpose();
-            self.info_b = self.info_b * lambda + phi * y;
-            self.info_yy = self.info_yy * lambda + y * y;
-            self.n_eff = self.n_eff * lambda + 1.0;
-            self.count += 1;
-            if self.count >= self.init_samples
-                && well_conditioned(&self.info)
-                && let Some(chol) = self.info.cholesky()
-            {
-                let theta = chol.solve(&self.info_b);
-                let p = chol.inverse();
-                if theta.iter().chain(p.iter()).all(|v| v.is_finite()) {
-                    self.est.theta = theta;
-                    self.p = p;
-                    self.rss = (self.info_yy - self.info_b.dot(&theta)).max(0.0);
-                    self.initialised = true;
-                }
+        let mut all = true;
+        for f in self.fits.iter().flatten() {
+            let s2 = f.residual_variance();
+            for k in 0..f.n {
+                let sigma = s2.map(|s2| libm::sqrt((s2 * f.p[k][k]).max(0.0)));
+                self.est.set(f.first + k, f.theta[k], sigma, f.initialised);
             }
-            self.publish(t_s);
-            return Ok(&self.est);
+            all &= f.initialised;
         }
-        let e = y - phi.dot(&self.est.theta);
-        let p_phi = self.p * phi;
-        let denom = lambda + phi.dot(&p_phi);
-        if !(denom.is_finite() && denom > 0.0) {
-            return Err(EstimatorError::Numerical { what: "RLS gain denominator", t_s });
+        self.est.status = if all { Status::Running } else { Status::Initialising };
+    }
+}
+
+impl Estimator for Rls {
+    fn method(&self) -> &'static str {
+        "rls"
+    }
+
+    fn structure(&self) -> &ModelStructure {
+        &self.structure
+    }
+
+    fn update(&mut self, s: &AirDataSample) -> Result<&Estimates, EstimatorError> {
+        check_finite(s)?;
+        let measured = s.measured_coefficients();
+        // All or nothing: form every (φ, y) before touching any fit.
+        let mut rows = [([0.0; N_TERMS], 0.0); 8];
+        for f in self.fits.iter().flatten() {
+            let c = f.coefficient;
+            let y = measured[c.index()].ok_or(EstimatorError::NonFiniteInput {
+                field: c.name(),
+                value: f64::NAN,
+                t_s: s.t_s,
+            })?;
+            let phi = f.regressors(s).ok_or(EstimatorError::NonFiniteInput {
+                field: "regressor (a term's channel is absent)",
+                value: f64::NAN,
+                t_s: s.t_s,
+            })?;
+            rows[c.index()] = (phi, y);
         }
-        let k = p_phi / denom;
-        let mut p_new = (self.p - k * p_phi.transpose()) / lambda;
-        p_new = (p_new + p_new.transpose()) * 0.5;
-        let theta_new = self.est.theta + k * e;
-        if !theta_new.iter().chain(p_new.iter()).all(|v| v.is_finite()) {
-            return Err(EstimatorError::Numerical { what: "RLS update", t_s });
+        let backup = self.fits;
+        for f in self.fits.iter_mut().flatten() {
+            let (phi, y) = rows[f.coefficient.index()];
+            if let Err(e) = f.update(&phi, y, self.lambda, self.init_samples, s.t_s) {
+                self.fits = backup;
+                return Err(e);
+            }
         }
-        self.est.theta = theta_new;
-        self.p = p_new;
-        self.rss = lambda * self.rss + lambda * e * e / denom;
-        self.n_eff = lambda * self.n_eff + 1.0;
-        self.count += 1;
-        self.publish(t_s);
+        self.publish(s.t_s);
         Ok(&self.est)
     }
 
-    fn estimate(&self) -> &Estimate<P> {
+    fn estimates(&self) -> &Estimates {
         &self.est
+    }
+
+    fn covariance(&self, i: usize, j: usize) -> Option<f64> {
+        let pi = self.structure.param(i)?;
+        let pj = self.structure.param(j)?;
+        if pi.coefficient != pj.coefficient {
+            return None;
+        }
+        let f = self.fits[pi.coefficient.index()].as_ref()?;
+        let s2 = f.residual_variance()?;
+        Some(s2 * f.p[i - f.first][j - f.first])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sample::AircraftConstants;
+
+    /// Synthetic samples whose measured Cm and Cl follow known derivatives exactly: RLS must
+    /// recover them to rounding, and nothing is identified before the fit is determined.
+    #[test]
+    fn analytic_recovers_exact_linear_model() {
+        let st = ModelStructure::empty()
+            .with(Coefficient::Cm, &[Term::Bias, Term::Alpha, Term::Q, Term::De])
+            .with(Coefficient::Cl, &[Term::Beta, Term::P, Term::Da]);
+        let k = AircraftConstants {
+            mass_kg: 1000.0,
+            S_m2: 10.0,
+            cbar_m: Some(1.5),
+            b_m: Some(10.0),
+            Ixx_kgm2: Some(1000.0),
+            Iyy_kgm2: Some(2000.0),
+            Izz_kgm2: Some(2800.0),
+            Ixz_kgm2: Some(0.0),
+            ..Default::default()
+        };
+        let (cm0, cma, cmq, cmde) = (0.02, -0.8, -12.0, -1.1);
+        let (clb, clp, clda) = (-0.09, -0.45, 0.12);
+        let mut rls = Rls::new(st, RlsConfig::default()).unwrap();
+        let qbar = 3000.0;
+        let v = 60.0;
+        for i in 0..200 {
+            let t = i as f64 * 0.02;
+            let alpha = 0.05 + 0.02 * (1.3 * t).sin();
+            let q = 0.1 * (2.1 * t).cos();
+            let de = 0.03 * (0.7 * t + 0.4).sin();
+            let beta = 0.01 * (1.7 * t).sin();
+            let p = 0.2 * (0.9 * t).cos();
+            let da = 0.05 * (2.9 * t).sin();
+            let qhat = q * 1.5 / (2.0 * v);
+            let phat = p * 10.0 / (2.0 * v);
+            let cm = cm0 + cma * alpha + cmq * qhat + cmde * de;
+            let cl = clb * beta + clp * phat + clda * da;
+            // With r = 0 and Ixz = 0: Cm = Iyy q̇/(q̄Sc̄) − (Izz−Ixx) p·0 …, Cl = Ixx ṗ/(q̄Sb).
+            let qdot = cm * qbar * 10.0 * 1.5 / 2000.0;
+            let pdot = cl * qbar * 10.0 * 10.0 / 1000.0;
+            let s = AirDataSample {
+                t_s: t,
+                vt_mps: v,
+                alpha_rad: alpha,
+                qbar_pa: qbar,
+                beta_rad: Some(beta),
+                p_rad_s: Some(p),
+                q_rad_s: Some(q),
+                r_rad_s: Some(0.0),
+                pdot_rad_s2: Some(pdot),
+                qdot_rad_s2: Some(qdot),
+                rdot_rad_s2: Some(0.0),
+                de_rad: Some(de),
+                da_rad: Some(da),
+                constants: k,
+                ..Default::default()
+            };
+            let e = rls.update(&s).unwrap();
+            if i == 0 {
+                assert!(e.value(0).is_none(), "identified from one sample");
+                assert_eq!(e.status, Status::Initialising);
+            }
+        }
+        let e = rls.estimates();
+        assert_eq!(e.status, Status::Running);
+        let want = [cm0, cma, cmq, cmde, clb, clp, clda];
+        // Parameter order: Cl before Cm.
+        let order = [4, 5, 6, 0, 1, 2, 3];
+        for (i, w) in order.iter().enumerate() {
+            let got = e.value(i).unwrap();
+            assert!((got - want[*w]).abs() < 1e-9 * (1.0 + want[*w].abs()), "{i}: {got}");
+        }
+        assert!(rls.covariance(0, 1).is_some() && rls.covariance(0, 4).is_none());
+    }
+
+    #[test]
+    fn refuses_sample_missing_a_channel_without_changing_state() {
+        let st = ModelStructure::lateral();
+        let mut rls = Rls::new(st, RlsConfig::default()).unwrap();
+        let s = AirDataSample { vt_mps: 50.0, qbar_pa: 1000.0, ..Default::default() };
+        let before = *rls.estimates();
+        assert!(rls.update(&s).is_err());
+        assert_eq!(*rls.estimates(), before);
+        assert!(Rls::new(st, RlsConfig { forgetting: 0.0, init_samples: 0 }).is_err());
     }
 }

@@ -2,8 +2,8 @@
 //! the Jategaonkar 2015 eq. 5.86–5.89 model, finer step than the filter) with known parameters
 //! and white measurement noise.
 
-use aeroident_estimators::Estimator;
-use aeroident_estimators::kalman::{
+use aeroident_estimators::ParametricEstimator;
+use aeroident_estimators::legacy_kalman::{
     EkfConfig, G0_MPS2, LongitudinalConstants, LongitudinalEkf, LongitudinalSample, N_PARAMS,
     PARAM_NAMES, SigmaCorrection,
 };

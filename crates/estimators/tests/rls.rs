@@ -1,9 +1,9 @@
 //! Recursive least squares against independent truths: a batch QR solve of the same regression
 //! (nalgebra, dynamic matrices), known coefficients under white noise, and Monte Carlo scatter.
 
-use aeroident_estimators::Estimator;
+use aeroident_estimators::ParametricEstimator;
+use aeroident_estimators::legacy_rls::{Rls, RlsConfig};
 use aeroident_estimators::regressors::{CoefficientSample, LinearCoefficient};
-use aeroident_estimators::rls::{Rls, RlsConfig};
 use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};

@@ -22,7 +22,7 @@ use aeroident_estimators::smpe::{
     CorrectedConfig, CorrectedSmpe, GainForm, ParamSpec, ParametricModel, PublishedSmpe, Reading,
     SlidingSurface, SmpeConfig, SmpeSample,
 };
-use aeroident_estimators::{Estimator, EstimatorError};
+use aeroident_estimators::{EstimatorError, ParametricEstimator};
 use aeroident_models::f16::{self, F16, F16Controls, F16State, IncrementReference, N_STATES};
 use aeroident_models::integrate::rk4_step;
 use aeroident_models::trim::{F16Trim, TrimCondition, trim};
@@ -219,7 +219,7 @@ struct Generic<E, const P: usize> {
     incs: [Increment; P],
 }
 
-impl<E: Estimator<P, Sample = Sample>, const P: usize> Engine for Generic<E, P> {
+impl<E: ParametricEstimator<P, Sample = Sample>, const P: usize> Engine for Generic<E, P> {
     fn update(&mut self, s: &Sample) -> Result<(), EstimatorError> {
         self.est.update(s).map(|_| ())
     }

@@ -8,7 +8,7 @@
 
 use super::adapter::ModelAdapter;
 use super::scenario::{GainConfig, NoiseTarget, PocScenario, SystemConfig};
-use aeroident_estimators::Estimator;
+use aeroident_estimators::ParametricEstimator;
 use aeroident_estimators::smpe::{
     CorrectedConfig, CorrectedSmpe, GainForm, ParamSpec, PublishedSmpe, Reading, SlidingSurface,
     SmpeConfig, SmpeSample, SolveStats,
@@ -265,7 +265,7 @@ fn simulate<D, E, const N: usize, const P: usize>(
 ) -> Result<(RunOutput, E), RunError>
 where
     D: Dynamics<N, Input = f64> + Parameterized<P> + Clone,
-    E: Estimator<P, Sample = SmpeSample<N, f64>>,
+    E: ParametricEstimator<P, Sample = SmpeSample<N, f64>>,
 {
     let name = sc.case.name.clone();
     let sig_err = |source| RunError::Signal { scenario: name.clone(), source };

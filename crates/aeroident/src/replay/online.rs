@@ -2,12 +2,13 @@
 //! drive any of them sample by sample.
 
 use super::Prepared;
-use aeroident_estimators::kalman::{
-    self, EkfConfig, LongitudinalConstants, LongitudinalEkf, LongitudinalSample, SigmaCorrection,
+use aeroident_estimators::legacy_kalman::{
+    self as kalman, EkfConfig, LongitudinalConstants, LongitudinalEkf, LongitudinalSample,
+    SigmaCorrection,
 };
+use aeroident_estimators::legacy_rls::{Rls, RlsConfig};
 use aeroident_estimators::regressors::LinearCoefficient;
-use aeroident_estimators::rls::{Rls, RlsConfig};
-use aeroident_estimators::{Estimator, EstimatorError};
+use aeroident_estimators::{EstimatorError, ParametricEstimator};
 use aeroident_io::mapping::EkfNoise;
 
 /// A sample-by-sample estimator of named parameters with optional standard errors.
@@ -42,7 +43,7 @@ impl<const P: usize> CoefficientFit for Rls<LinearCoefficient<P>, P> {
             value: f64::NAN,
             t_s: s.flight.t_s,
         })?;
-        Estimator::update(self, &c).map(|_| ())
+        ParametricEstimator::update(self, &c).map(|_| ())
     }
     fn current(&self, values: &mut [f64], sigmas: &mut [Option<f64>]) {
         let e = self.estimate();

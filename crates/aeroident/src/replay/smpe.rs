@@ -28,7 +28,7 @@ use aeroident_estimators::smpe::{
     CorrectedConfig, CorrectedSmpe, GainForm, ParamSpec, ParametricModel, PublishedSmpe, Reading,
     SlidingSurface, SmpeConfig, SmpeSample,
 };
-use aeroident_estimators::{Estimator, EstimatorError};
+use aeroident_estimators::{EstimatorError, ParametricEstimator};
 use nalgebra::{SMatrix, SVector};
 
 /// Input of the pitch increment model at one sample.

@@ -7,7 +7,7 @@
 //! different instants accumulates and several parameters sharing one surface are identifiable.
 
 use super::{ParamSpec, ParametricModel, SmpeSample, sample_interval_s};
-use crate::{Estimate, Estimator, EstimatorError};
+use crate::{Estimate, EstimatorError, ParametricEstimator};
 use nalgebra::{SMatrix, SVector};
 
 /// Configuration of [`CorrectedSmpe`].
@@ -129,7 +129,7 @@ where
     }
 }
 
-impl<M, const N: usize, const P: usize> Estimator<P> for CorrectedSmpe<M, N, P>
+impl<M, const N: usize, const P: usize> ParametricEstimator<P> for CorrectedSmpe<M, N, P>
 where
     M: ParametricModel<N, P>,
 {

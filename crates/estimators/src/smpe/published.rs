@@ -2,7 +2,7 @@
 //! (3.58)–(3.72), (3.91)–(3.99), (3.128)).
 
 use super::{ParamSpec, ParametricModel, SlidingSurface, SmpeSample, energy_terms, weighted};
-use crate::{Estimate, Estimator, EstimatorError};
+use crate::{Estimate, EstimatorError, ParametricEstimator};
 use nalgebra::{SMatrix, SVector};
 
 /// Which reading of the implicit estimator equation to use (spec §1).
@@ -358,7 +358,7 @@ where
     }
 }
 
-impl<M, const N: usize, const P: usize> Estimator<P> for PublishedSmpe<M, N, P>
+impl<M, const N: usize, const P: usize> ParametricEstimator<P> for PublishedSmpe<M, N, P>
 where
     M: ParametricModel<N, P>,
 {

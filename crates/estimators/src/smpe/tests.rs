@@ -1,7 +1,7 @@
 //! Tests of the SMPE engine against hand computations and properties.
 
 use super::*;
-use crate::Estimator;
+use crate::ParametricEstimator;
 use nalgebra::SVector;
 use proptest::prelude::*;
 

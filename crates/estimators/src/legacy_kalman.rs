@@ -35,7 +35,7 @@
 //! parameter process noise the parameter σ shrink like Cramér–Rao bounds of output error and
 //! are optimistic on real data with unmodelled dynamics and coloured residuals.
 
-use crate::{Estimate, Estimator, EstimatorError};
+use crate::{Estimate, EstimatorError, ParametricEstimator};
 use nalgebra::{SMatrix, SVector};
 
 /// Number of aerodynamic parameters estimated.
@@ -458,7 +458,7 @@ impl LongitudinalEkf {
     }
 }
 
-impl Estimator<N_PARAMS> for LongitudinalEkf {
+impl ParametricEstimator<N_PARAMS> for LongitudinalEkf {
     type Sample = LongitudinalSample;
 
     fn param_names(&self) -> [&'static str; N_PARAMS] {

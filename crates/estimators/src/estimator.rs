@@ -1,0 +1,146 @@
+//! The one aircraft estimator interface: consume an [`AirDataSample`], give [`Estimates`] of
+//! the parameters of a [`ModelStructure`].
+//!
+//! Every aircraft estimator (recursive least squares, the Kalman filters, the sliding-mode and
+//! gradient estimators) implements [`Estimator`]; the replay pipeline, the closed-loop
+//! experiment and the bindings drive them through it and nothing else. An estimator that needs
+//! a model state (the EKF, the sliding-mode and gradient estimators) carries and integrates it
+//! itself from the samples' inputs, so it can be embedded in a flight computer fed only with
+//! samples.
+
+use crate::EstimatorError;
+use crate::sample::AirDataSample;
+use crate::vocabulary::{MAX_PARAMS, ModelStructure};
+
+/// What state an estimator is in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Status {
+    /// Not every parameter is identified yet (too few or too little informative samples).
+    Initialising,
+    /// Running; the identified parameters are usable.
+    Running,
+    /// The estimator diverged (non-finite or runaway state); its numbers are not a result.
+    Diverged,
+}
+
+impl Status {
+    /// `initialising`, `running` or `diverged` (the string in summaries).
+    pub fn name(self) -> &'static str {
+        match self {
+            Status::Initialising => "initialising",
+            Status::Running => "running",
+            Status::Diverged => "diverged",
+        }
+    }
+}
+
+/// The current estimates of a structure's parameters: value and standard error of each, and
+/// whether it is identified. Fixed capacity, parameter order of the structure.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Estimates {
+    /// Time of the last sample used, s.
+    pub t_s: f64,
+    /// Number of parameters (`structure.n_params()`).
+    pub n: usize,
+    /// Estimator state.
+    pub status: Status,
+    value: [f64; MAX_PARAMS],
+    sigma: [Option<f64>; MAX_PARAMS],
+    identified: [bool; MAX_PARAMS],
+}
+
+impl Estimates {
+    /// `n` parameters, none identified.
+    pub fn new(n: usize) -> Self {
+        Self {
+            t_s: 0.0,
+            n: n.min(MAX_PARAMS),
+            status: Status::Initialising,
+            value: [0.0; MAX_PARAMS],
+            sigma: [None; MAX_PARAMS],
+            identified: [false; MAX_PARAMS],
+        }
+    }
+
+    /// Value of parameter `i`: `None` until it is identified (never a placeholder 0).
+    pub fn value(&self, i: usize) -> Option<f64> {
+        (i < self.n && self.identified[i]).then(|| self.value[i])
+    }
+
+    /// Standard error of parameter `i`, where the method gives one and the value is identified.
+    pub fn sigma(&self, i: usize) -> Option<f64> {
+        if i < self.n && self.identified[i] { self.sigma[i] } else { None }
+    }
+
+    /// Whether parameter `i` is identified.
+    pub fn is_identified(&self, i: usize) -> bool {
+        i < self.n && self.identified[i]
+    }
+
+    /// The estimator's internal value of parameter `i` even before identification (its prior
+    /// or running value), for diagnostics only.
+    pub fn raw_value(&self, i: usize) -> f64 {
+        self.value[i.min(MAX_PARAMS - 1)]
+    }
+
+    /// Sets parameter `i` (value, σ, identified). Out-of-range `i` is ignored.
+    pub fn set(&mut self, i: usize, value: f64, sigma: Option<f64>, identified: bool) {
+        if i < self.n {
+            self.value[i] = value;
+            self.sigma[i] = sigma;
+            self.identified[i] = identified;
+        }
+    }
+
+    /// Whether all parameters are identified.
+    pub fn all_identified(&self) -> bool {
+        self.identified[..self.n].iter().all(|b| *b)
+    }
+}
+
+/// An online aircraft estimator over one [`ModelStructure`]: consumes one [`AirDataSample`] at
+/// a time and gives the current [`Estimates`]. Object-safe (`Box<dyn Estimator>`).
+///
+/// Implementations must not allocate or do I/O in [`Estimator::update`], and must leave their
+/// state unchanged when they refuse a sample (returning an error).
+pub trait Estimator {
+    /// The method's name as used on the command line and in summaries (`rls`, `ekf` …).
+    fn method(&self) -> &'static str;
+
+    /// The model structure whose parameters are estimated.
+    fn structure(&self) -> &ModelStructure;
+
+    /// Consumes one sample.
+    ///
+    /// # Errors
+    /// [`EstimatorError::NonFiniteInput`] for a non-finite or missing channel the structure
+    /// needs, [`EstimatorError::Numerical`] when the update fails; the state is unchanged.
+    fn update(&mut self, sample: &AirDataSample) -> Result<&Estimates, EstimatorError>;
+
+    /// The current estimates.
+    fn estimates(&self) -> &Estimates;
+
+    /// Estimation-error covariance of parameters `i` and `j` where the method gives one (units
+    /// of the parameters' product); `None` where it does not (e.g. between independently
+    /// fitted coefficients, or for sliding-mode estimators).
+    fn covariance(&self, _i: usize, _j: usize) -> Option<f64> {
+        None
+    }
+
+    /// A new manoeuvre starts with the next sample (a gap in the record, a second run):
+    /// re-initialise the model state from the next sample and keep the parameters, as
+    /// multi-run estimation does. Estimators without a model state ignore it.
+    fn new_manoeuvre(&mut self) {}
+}
+
+/// Checks a sample's finite values and returns [`EstimatorError::NonFiniteInput`] naming the
+/// first non-finite field.
+///
+/// # Errors
+/// As described.
+pub fn check_finite(s: &AirDataSample) -> Result<(), EstimatorError> {
+    match s.first_non_finite() {
+        Some((field, value)) => Err(EstimatorError::NonFiniteInput { field, value, t_s: s.t_s }),
+        None => Ok(()),
+    }
+}

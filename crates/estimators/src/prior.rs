@@ -1,0 +1,96 @@
+//! Prior values and standard deviations of the vocabulary's parameters, for the estimators that
+//! start from a prior (Kalman filters, sliding-mode and gradient estimators).
+//!
+//! The generic prior is deliberately weak: a value of the right sign and order for a
+//! conventional subsonic aircraft (signs from static stability and damping: Cm_alpha < 0,
+//! Cn_beta > 0, Cl_beta < 0, Cm_q, Cl_p, Cn_r < 0) and a σ several times larger than the
+//! magnitude. It is not taken from any record or reference result. A model file can override
+//! every entry.
+
+use crate::vocabulary::{Coefficient as C, MAX_PARAMS, ModelStructure, Param, Term as T};
+
+/// Prior of one parameter: mean and standard deviation (units of the parameter).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ParamPrior {
+    /// Prior mean.
+    pub value: f64,
+    /// Prior standard deviation (> 0).
+    pub sigma: f64,
+}
+
+/// The generic prior of parameter `p` (module doc).
+pub fn generic_prior(p: Param) -> ParamPrior {
+    let (value, sigma) = match (p.coefficient, p.term) {
+        (C::CL, T::Bias) => (0.2, 1.0),
+        (C::CL, T::Alpha) => (4.5, 5.0),
+        (C::CL, T::Q) => (5.0, 30.0),
+        (C::CL, T::Alphadot) => (0.0, 10.0),
+        (C::CL, T::De) => (0.3, 2.0),
+        (C::CZ, T::Bias) => (-0.2, 1.0),
+        (C::CZ, T::Alpha) => (-4.5, 5.0),
+        (C::CZ, T::Q) => (-5.0, 30.0),
+        (C::CZ, T::Alphadot) => (0.0, 10.0),
+        (C::CZ, T::De) => (-0.3, 2.0),
+        (C::CD | C::CX, T::Bias) => (if p.coefficient == C::CD { 0.03 } else { -0.03 }, 0.3),
+        (C::CD, T::Alpha) => (0.3, 2.0),
+        (C::CX, T::Alpha) => (0.1, 2.0),
+        (C::CD | C::CX, T::Q) => (0.0, 10.0),
+        (C::CD | C::CX, T::De) => (0.0, 1.0),
+        (C::Cm, T::Bias) => (0.0, 0.5),
+        (C::Cm, T::Alpha) => (-0.5, 2.0),
+        (C::Cm, T::Q) => (-15.0, 30.0),
+        (C::Cm, T::Alphadot) => (-5.0, 15.0),
+        (C::Cm, T::De) => (-1.0, 2.0),
+        (C::CY, T::Bias) => (0.0, 0.1),
+        (C::CY, T::Beta) => (-0.5, 2.0),
+        (C::CY, T::P) => (0.0, 1.0),
+        (C::CY, T::R) => (0.3, 2.0),
+        (C::CY, T::Da) => (0.0, 0.5),
+        (C::CY, T::Dr) => (0.1, 0.5),
+        (C::Cl, T::Bias) => (0.0, 0.05),
+        (C::Cl, T::Beta) => (-0.1, 0.5),
+        (C::Cl, T::P) => (-0.4, 1.0),
+        (C::Cl, T::R) => (0.1, 0.5),
+        (C::Cl, T::Da) => (0.1, 0.5),
+        (C::Cl, T::Dr) => (0.01, 0.1),
+        (C::Cn, T::Bias) => (0.0, 0.05),
+        (C::Cn, T::Beta) => (0.1, 0.5),
+        (C::Cn, T::P) => (0.0, 0.5),
+        (C::Cn, T::R) => (-0.2, 1.0),
+        (C::Cn, T::Da) => (0.0, 0.1),
+        (C::Cn, T::Dr) => (-0.05, 0.2),
+        (_, T::V) => (0.0, 0.5),
+        (_, T::Alpha2 | T::AlphaDe | T::AlphaBeta) => (0.0, 10.0),
+        _ => (0.0, 1.0),
+    };
+    ParamPrior { value, sigma }
+}
+
+/// Priors of every parameter of a structure, in parameter order.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Priors {
+    /// Number of parameters.
+    pub n: usize,
+    /// The priors, first `n` used.
+    pub prior: [ParamPrior; MAX_PARAMS],
+}
+
+impl Priors {
+    /// The generic prior of every parameter of `structure`.
+    pub fn generic(structure: &ModelStructure) -> Self {
+        let mut prior = [ParamPrior { value: 0.0, sigma: 1.0 }; MAX_PARAMS];
+        let mut n = 0;
+        for (i, p) in structure.params().enumerate().take(MAX_PARAMS) {
+            prior[i] = generic_prior(p);
+            n = i + 1;
+        }
+        Self { n, prior }
+    }
+
+    /// Overrides the prior of parameter index `i`.
+    pub fn set(&mut self, i: usize, prior: ParamPrior) {
+        if i < self.n {
+            self.prior[i] = prior;
+        }
+    }
+}

@@ -1,0 +1,324 @@
+//! The one air-data sample every aircraft estimator, log reader and the simulator share, the
+//! aircraft constants it carries, and the measured non-dimensional coefficients it implies.
+//!
+//! Axes and signs (Stevens & Lewis, *Aircraft Control and Simulation*, 3rd ed., §1.4, §2.5):
+//! body axes x forward, y right, z down; `p, q, r` body rates; `α`, `β` air-relative flow angles
+//! at the CG; accelerometers give the **specific force** at the CG (non-gravitational force ÷
+//! mass, so `az ≈ −g` in level flight); elevator, aileron and rudder as recorded with the usual
+//! signs (δe > 0 trailing edge down, δa > 0 right wing down, δr > 0 trailing edge left, giving
+//! Cn < 0). Products of inertia in the Stevens & Lewis convention: the inertia tensor is
+//! `[[Jx, 0, −Jxz], [0, Jy, 0], [−Jxz, 0, Jz]]`, so `Ixz` here is `Jxz` (≈ +1060 slug·ft² for the
+//! F-16; JSBSim logs the tensor element, i.e. `−Jxz`).
+//!
+//! Measured coefficients (Klein & Morelli, *Aircraft System Identification*, AIAA 2006, eqs.
+//! 3.1–3.6 and §5.1, "equation-error data preparation"; Jategaonkar 2015 eq. 5.86–5.89 for the
+//! thrust terms, thrust inclined by `σT` to body x):
+//!
+//! ```text
+//! CX = (m ax − T cos σT) / (q̄ S)          CY = m ay / (q̄ S)          CZ = (m az + T sin σT) / (q̄ S)
+//! CL = −CZ cos α + CX sin α               CD = −CX cos α − CZ sin α   (stability axes)
+//! L  = Ixx ṗ − Ixz (ṙ + p q) + (Izz − Iyy) q r
+//! M  = Iyy q̇ + (Ixx − Izz) p r + Ixz (p² − r²) − M_T,    M_T = measured, else l_T · T
+//! N  = Izz ṙ − Ixz (ṗ − q r) + (Iyy − Ixx) p q
+//! Cl = L / (q̄ S b)        Cm = M / (q̄ S c̄)        Cn = N / (q̄ S b)
+//! ```
+//!
+//! (the moment equations are Stevens & Lewis eq. 2.5-24 solved for the applied moment, with
+//! `Jxy = Jyz = 0`). A coefficient whose channels the sample lacks is `None`, never 0.
+
+/// Aircraft constants of one sample, SI. Optional values are `None` when the record does not
+/// give them; anything that needs them is then unavailable (never computed with a made-up 0).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct AircraftConstants {
+    /// Mass, kg.
+    pub mass_kg: f64,
+    /// Wing reference area, m².
+    pub S_m2: f64,
+    /// Mean aerodynamic chord, m (needed by `Cm` and by `q̂`, `α̇`-hat).
+    pub cbar_m: Option<f64>,
+    /// Wing span, m (needed by `Cl`, `Cn` and by `p̂`, `r̂`).
+    pub b_m: Option<f64>,
+    /// Roll moment of inertia `Jx`, kg·m².
+    pub Ixx_kgm2: Option<f64>,
+    /// Pitch moment of inertia `Jy`, kg·m².
+    pub Iyy_kgm2: Option<f64>,
+    /// Yaw moment of inertia `Jz`, kg·m².
+    pub Izz_kgm2: Option<f64>,
+    /// Product of inertia `Jxz` (Stevens & Lewis sign, see the module doc), kg·m².
+    pub Ixz_kgm2: Option<f64>,
+    /// Thrust pitching-moment arm, m: `M_T = arm · T`, positive nose-up (0 = thrust line
+    /// through the CG).
+    pub thrust_arm_m: f64,
+    /// Thrust inclination to body x, rad, positive nose-up (0 = along body x).
+    pub thrust_incidence_rad: f64,
+    /// Reference speed of the `V/V0` terms, m/s.
+    pub v0_mps: Option<f64>,
+}
+
+/// One air-data sample: every channel a six-axis identification uses, SI units, at the CG.
+/// Channels a record lacks are `None`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct AirDataSample {
+    /// Time, s.
+    pub t_s: f64,
+    /// True airspeed `V`, m/s (> 0).
+    pub vt_mps: f64,
+    /// Angle of attack at the CG, rad.
+    pub alpha_rad: f64,
+    /// Dynamic pressure `q̄`, Pa (> 0): measured, or `½ρV²` formed by the reader.
+    pub qbar_pa: f64,
+    /// Sideslip at the CG, rad.
+    pub beta_rad: Option<f64>,
+    /// Body roll rate, rad/s.
+    pub p_rad_s: Option<f64>,
+    /// Body pitch rate, rad/s.
+    pub q_rad_s: Option<f64>,
+    /// Body yaw rate, rad/s.
+    pub r_rad_s: Option<f64>,
+    /// Roll acceleration, rad/s² (recorded or from a causal differentiator).
+    pub pdot_rad_s2: Option<f64>,
+    /// Pitch acceleration, rad/s².
+    pub qdot_rad_s2: Option<f64>,
+    /// Yaw acceleration, rad/s².
+    pub rdot_rad_s2: Option<f64>,
+    /// Angle-of-attack rate `α̇`, rad/s.
+    pub alphadot_rad_s: Option<f64>,
+    /// Bank angle, rad.
+    pub phi_rad: Option<f64>,
+    /// Pitch attitude, rad.
+    pub theta_rad: Option<f64>,
+    /// Heading, rad.
+    pub psi_rad: Option<f64>,
+    /// Body x specific force at the CG, m/s².
+    pub ax_mps2: Option<f64>,
+    /// Body y specific force at the CG, m/s².
+    pub ay_mps2: Option<f64>,
+    /// Body z specific force at the CG, m/s² (≈ −g level).
+    pub az_mps2: Option<f64>,
+    /// Elevator, rad (trailing edge down positive).
+    pub de_rad: Option<f64>,
+    /// Aileron, rad (right wing down positive).
+    pub da_rad: Option<f64>,
+    /// Rudder, rad (trailing edge left positive).
+    pub dr_rad: Option<f64>,
+    /// Total thrust, N.
+    pub thrust_n: Option<f64>,
+    /// Throttle, – (0–1), when logged.
+    pub throttle: Option<f64>,
+    /// Thrust pitching moment about the CG, N·m (positive nose-up), when logged.
+    pub thrust_moment_nm: Option<f64>,
+    /// Air density, kg/m³.
+    pub rho_kgpm3: Option<f64>,
+    /// Aircraft constants at this sample.
+    pub constants: AircraftConstants,
+}
+
+/// The eight non-dimensional aerodynamic coefficients, in the order of
+/// [`Coefficient::ALL`](crate::vocabulary::Coefficient::ALL): `CX CY CZ CL CD Cl Cm Cn`.
+pub type CoefficientValues = [Option<f64>; 8];
+
+impl AirDataSample {
+    /// Thrust, N: the recorded one, else 0 (a record without a thrust channel is taken as a
+    /// glider or as thrust-in-trim; the mappings state which).
+    pub fn thrust_or_zero(&self) -> f64 {
+        self.thrust_n.unwrap_or(0.0)
+    }
+
+    /// Air density, kg/m³: the recorded one, else `2 q̄ / V²`.
+    pub fn rho(&self) -> f64 {
+        self.rho_kgpm3.unwrap_or(2.0 * self.qbar_pa / (self.vt_mps * self.vt_mps))
+    }
+
+    /// Names of the fields that are not finite (`None` fields are not checked), for a clear
+    /// refusal. Returns the first offending field and its value.
+    pub fn first_non_finite(&self) -> Option<(&'static str, f64)> {
+        let c = &self.constants;
+        let req = [
+            ("t_s", self.t_s),
+            ("vt_mps", self.vt_mps),
+            ("alpha_rad", self.alpha_rad),
+            ("qbar_pa", self.qbar_pa),
+            ("mass_kg", c.mass_kg),
+            ("S_m2", c.S_m2),
+            ("thrust_arm_m", c.thrust_arm_m),
+            ("thrust_incidence_rad", c.thrust_incidence_rad),
+        ];
+        if let Some(f) = req.iter().find(|(_, v)| !v.is_finite()) {
+            return Some(*f);
+        }
+        let opt = [
+            ("beta_rad", self.beta_rad),
+            ("p_rad_s", self.p_rad_s),
+            ("q_rad_s", self.q_rad_s),
+            ("r_rad_s", self.r_rad_s),
+            ("pdot_rad_s2", self.pdot_rad_s2),
+            ("qdot_rad_s2", self.qdot_rad_s2),
+            ("rdot_rad_s2", self.rdot_rad_s2),
+            ("alphadot_rad_s", self.alphadot_rad_s),
+            ("phi_rad", self.phi_rad),
+            ("theta_rad", self.theta_rad),
+            ("psi_rad", self.psi_rad),
+            ("ax_mps2", self.ax_mps2),
+            ("ay_mps2", self.ay_mps2),
+            ("az_mps2", self.az_mps2),
+            ("de_rad", self.de_rad),
+            ("da_rad", self.da_rad),
+            ("dr_rad", self.dr_rad),
+            ("thrust_n", self.thrust_n),
+            ("throttle", self.throttle),
+            ("thrust_moment_nm", self.thrust_moment_nm),
+            ("rho_kgpm3", self.rho_kgpm3),
+            ("cbar_m", c.cbar_m),
+            ("b_m", c.b_m),
+            ("Ixx_kgm2", c.Ixx_kgm2),
+            ("Iyy_kgm2", c.Iyy_kgm2),
+            ("Izz_kgm2", c.Izz_kgm2),
+            ("Ixz_kgm2", c.Ixz_kgm2),
+            ("v0_mps", c.v0_mps),
+        ];
+        opt.iter().find_map(|(n, v)| v.filter(|x| !x.is_finite()).map(|x| (*n, x)))
+    }
+
+    /// The measured coefficients `CX CY CZ CL CD Cl Cm Cn` of this sample (module doc), each
+    /// `None` when a channel or constant it needs is absent or `q̄ S ≤ 0`.
+    pub fn measured_coefficients(&self) -> CoefficientValues {
+        let c = &self.constants;
+        let qs = self.qbar_pa * c.S_m2;
+        if !(qs > 0.0 && qs.is_finite()) {
+            return [None; 8];
+        }
+        let t = self.thrust_or_zero();
+        let (ss, cs) = (libm::sin(c.thrust_incidence_rad), libm::cos(c.thrust_incidence_rad));
+        let m = c.mass_kg;
+        let cx = self.ax_mps2.map(|ax| (m * ax - t * cs) / qs);
+        let cy = self.ay_mps2.map(|ay| m * ay / qs);
+        let cz = self.az_mps2.map(|az| (m * az + t * ss) / qs);
+        let (sa, ca) = (libm::sin(self.alpha_rad), libm::cos(self.alpha_rad));
+        let (cl, cd) = match (cx, cz) {
+            (Some(x), Some(z)) => (Some(-z * ca + x * sa), Some(-x * ca - z * sa)),
+            _ => (None, None),
+        };
+        let p = self.p_rad_s;
+        let q = self.q_rad_s;
+        let r = self.r_rad_s;
+        // Pitch: a record without p or r (a purely longitudinal log) has no inertial coupling
+        // term (symmetric flight assumed, Klein & Morelli §5.1); with p and r the coupling
+        // needs Ixx, Izz and Ixz, and Cm is unavailable without them.
+        let cm = (|| {
+            let qd = self.qdot_rad_s2?;
+            let iyy = c.Iyy_kgm2?;
+            let cbar = c.cbar_m?;
+            let coupling = match (p, r) {
+                (Some(pv), Some(rv)) => {
+                    (c.Ixx_kgm2? - c.Izz_kgm2?) * pv * rv + c.Ixz_kgm2? * (pv * pv - rv * rv)
+                }
+                _ => 0.0,
+            };
+            let m_t = self.thrust_moment_nm.unwrap_or(c.thrust_arm_m * t);
+            Some((iyy * qd + coupling - m_t) / (qs * cbar))
+        })();
+        let (cl_roll, cn) = (|| {
+            let (ixx, iyy, izz, ixz) = (c.Ixx_kgm2?, c.Iyy_kgm2?, c.Izz_kgm2?, c.Ixz_kgm2?);
+            let b = c.b_m?;
+            let (pv, qv, rv) = (p?, q?, r?);
+            let (pd, rd) = (self.pdot_rad_s2?, self.rdot_rad_s2?);
+            let l = ixx * pd - ixz * (rd + pv * qv) + (izz - iyy) * qv * rv;
+            let n = izz * rd - ixz * (pd - qv * rv) + (iyy - ixx) * pv * qv;
+            Some((Some(l / (qs * b)), Some(n / (qs * b))))
+        })()
+        .unwrap_or((None, None));
+        [cx, cy, cz, cl, cd, cl_roll, cm, cn]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn level() -> AirDataSample {
+        let g = 9.80665;
+        let alpha: f64 = 0.05;
+        AirDataSample {
+            t_s: 0.0,
+            vt_mps: 100.0,
+            alpha_rad: alpha,
+            qbar_pa: 4000.0,
+            beta_rad: Some(0.0),
+            p_rad_s: Some(0.0),
+            q_rad_s: Some(0.0),
+            r_rad_s: Some(0.0),
+            pdot_rad_s2: Some(0.0),
+            qdot_rad_s2: Some(0.0),
+            rdot_rad_s2: Some(0.0),
+            ax_mps2: Some(g * alpha.sin()),
+            ay_mps2: Some(0.0),
+            az_mps2: Some(-g * alpha.cos()),
+            constants: AircraftConstants {
+                mass_kg: 7000.0,
+                S_m2: 30.0,
+                cbar_m: Some(2.0),
+                b_m: Some(15.0),
+                Ixx_kgm2: Some(3e4),
+                Iyy_kgm2: Some(1e5),
+                Izz_kgm2: Some(1.2e5),
+                Ixz_kgm2: Some(2e3),
+                ..Default::default()
+            },
+            ..Default::default()
+        }
+    }
+
+    /// Level, unaccelerated flight: lift balances weight, no drag without thrust, no moments.
+    #[test]
+    fn analytic_level_flight_balances() {
+        let s = level();
+        let c = s.measured_coefficients();
+        let w_over_qs = 7000.0 * 9.80665 / (4000.0 * 30.0);
+        assert!((c[3].unwrap() - w_over_qs).abs() < 1e-12, "CL");
+        assert!(c[4].unwrap().abs() < 1e-12, "CD");
+        for (i, v) in c.iter().enumerate().skip(5) {
+            assert!(v.unwrap().abs() < 1e-15, "moment {i}");
+        }
+        assert!(c[1].unwrap().abs() < 1e-15);
+    }
+
+    /// Roll and yaw moments against an independent solve of S&L eq. 2.5-24: pick the applied
+    /// moments, solve the 2×2 inertia block for ṗ, ṙ by Cramer's rule, and recover them.
+    #[test]
+    fn analytic_lateral_moments_invert_the_euler_equations() {
+        let mut s = level();
+        let (p, q, r) = (0.3, -0.1, 0.2);
+        let (ixx, iyy, izz, ixz) = (3e4, 1e5, 1.2e5, 2e3);
+        let (l_app, n_app) = (5.0e4, -2.0e4);
+        // Jx ṗ − Jxz ṙ = L + Jxz p q − (Jz − Jy) q r;  Jz ṙ − Jxz ṗ = N − (Jy − Jx) p q − Jxz q r
+        let rhs1 = l_app + ixz * p * q - (izz - iyy) * q * r;
+        let rhs2 = n_app - (iyy - ixx) * p * q - ixz * q * r;
+        let det = ixx * izz - ixz * ixz;
+        let pd = (rhs1 * izz + ixz * rhs2) / det;
+        let rd = (ixx * rhs2 + ixz * rhs1) / det;
+        s.p_rad_s = Some(p);
+        s.q_rad_s = Some(q);
+        s.r_rad_s = Some(r);
+        s.pdot_rad_s2 = Some(pd);
+        s.rdot_rad_s2 = Some(rd);
+        let c = s.measured_coefficients();
+        let qsb = 4000.0 * 30.0 * 15.0;
+        assert!((c[5].unwrap() - l_app / qsb).abs() < 1e-12, "Cl {}", c[5].unwrap());
+        assert!((c[7].unwrap() - n_app / qsb).abs() < 1e-12, "Cn {}", c[7].unwrap());
+        // Pitch: Jy q̇ = M + (Jz − Jx) p r − Jxz (p² − r²) with M = 0 → Cm = 0.
+        s.qdot_rad_s2 = Some(((izz - ixx) * p * r - ixz * (p * p - r * r)) / iyy);
+        assert!(s.measured_coefficients()[6].unwrap().abs() < 1e-15);
+    }
+
+    #[test]
+    fn absent_channels_give_absent_coefficients() {
+        let mut s = level();
+        s.ay_mps2 = None;
+        s.constants.b_m = None;
+        let c = s.measured_coefficients();
+        assert!(c[1].is_none() && c[5].is_none() && c[7].is_none());
+        assert!(c[0].is_some() && c[6].is_some());
+        s.qbar_pa = 0.0;
+        assert!(s.measured_coefficients().iter().all(Option::is_none));
+    }
+}

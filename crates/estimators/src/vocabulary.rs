@@ -1,0 +1,511 @@
+//! The one aerodynamic model vocabulary: coefficient × term, parameter names
+//! `<coefficient>_<term>`, model structures and their presets.
+//!
+//! A model structure declares, for each of the eight coefficients, which terms explain it
+//! (linear in the parameters, Klein & Morelli, *Aircraft System Identification*, AIAA 2006,
+//! §5.1 and ch. 12 "model structure determination"):
+//!
+//! ```text
+//! C_k = Σ_j  C_k_j · ξ_j(sample)        e.g.  Cm = Cm_0 + Cm_alpha α + Cm_q q̂ + Cm_de δe
+//! ```
+//!
+//! Terms ξ (all dimensionless or per rad; [`Term::value`]):
+//!
+//! | term | name | ξ |
+//! |---|---|---|
+//! | bias | `0` | 1 |
+//! | α | `alpha` | α, rad |
+//! | β | `beta` | β, rad |
+//! | p̂ | `p` | p b / (2V) |
+//! | q̂ | `q` | q c̄ / (2V) |
+//! | r̂ | `r` | r b / (2V) |
+//! | α̇-hat | `alphadot` | α̇ c̄ / (2V) |
+//! | δe, δa, δr | `de`, `da`, `dr` | rad |
+//! | V/V0 | `V` | V / V0 (Jategaonkar 2015 eq. 5.86) |
+//! | α² | `alpha2` | α², rad² |
+//! | α·δe | `alpha_de` | α δe, rad² |
+//! | α·β | `alpha_beta` | α β, rad² |
+//!
+//! Parameter names follow the field: `Cm_alpha`, `Cm_q`, `Cm_alphadot`, `CL_alpha`, `CY_beta`,
+//! `Cl_p`, `Cn_r`, `Cn_dr`, `Cm_V`, `Cm_alpha2`, `CD_0` … Parameters are ordered coefficient by
+//! coefficient (order of [`Coefficient::ALL`]) and, within one, term by term (order of
+//! [`Term::ALL`]).
+
+use crate::sample::AirDataSample;
+
+/// Most parameters one structure may hold (fixed capacity: estimators stay allocation-free).
+pub const MAX_PARAMS: usize = 48;
+
+/// The eight non-dimensional aerodynamic coefficients.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Coefficient {
+    /// Body-axis axial force `X / (q̄ S)`.
+    CX,
+    /// Body-axis side force `Y / (q̄ S)`.
+    CY,
+    /// Body-axis normal force `Z / (q̄ S)`.
+    CZ,
+    /// Lift, stability axes: `−CZ cos α + CX sin α`.
+    CL,
+    /// Drag, stability axes: `−CX cos α − CZ sin α`.
+    CD,
+    /// Rolling moment about the CG, body axes, `L / (q̄ S b)`.
+    Cl,
+    /// Pitching moment about the CG, `M / (q̄ S c̄)`.
+    Cm,
+    /// Yawing moment about the CG, body axes, `N / (q̄ S b)`.
+    Cn,
+}
+
+impl Coefficient {
+    /// All eight, in parameter order (and the order of
+    /// [`CoefficientValues`](crate::sample::CoefficientValues)).
+    pub const ALL: [Coefficient; 8] = [
+        Coefficient::CX,
+        Coefficient::CY,
+        Coefficient::CZ,
+        Coefficient::CL,
+        Coefficient::CD,
+        Coefficient::Cl,
+        Coefficient::Cm,
+        Coefficient::Cn,
+    ];
+
+    /// Index in [`Coefficient::ALL`].
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    /// The name as written in parameter names: `CX`, `CY`, `CZ`, `CL`, `CD`, `Cl`, `Cm`, `Cn`.
+    pub fn name(self) -> &'static str {
+        COEFFICIENT_NAMES[self.index()]
+    }
+
+    /// Parses a [`Coefficient::name`] (case-sensitive: `CL` is lift, `Cl` rolling moment).
+    pub fn from_name(s: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|c| c.name() == s)
+    }
+}
+
+const COEFFICIENT_NAMES: [&str; 8] = ["CX", "CY", "CZ", "CL", "CD", "Cl", "Cm", "Cn"];
+
+/// Number of terms in the vocabulary.
+pub const N_TERMS: usize = 14;
+
+/// One regressor of a linear coefficient model (table in the module doc).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Term {
+    /// Constant 1 (the `_0` parameter).
+    Bias,
+    /// `α`, rad.
+    Alpha,
+    /// `β`, rad.
+    Beta,
+    /// `p̂ = p b / (2V)`.
+    P,
+    /// `q̂ = q c̄ / (2V)`.
+    Q,
+    /// `r̂ = r b / (2V)`.
+    R,
+    /// `α̇ c̄ / (2V)`.
+    Alphadot,
+    /// `δe`, rad.
+    De,
+    /// `δa`, rad.
+    Da,
+    /// `δr`, rad.
+    Dr,
+    /// `V / V0`.
+    V,
+    /// `α²`, rad².
+    Alpha2,
+    /// `α δe`, rad².
+    AlphaDe,
+    /// `α β`, rad².
+    AlphaBeta,
+}
+
+const TERM_NAMES: [&str; N_TERMS] = [
+    "0",
+    "alpha",
+    "beta",
+    "p",
+    "q",
+    "r",
+    "alphadot",
+    "de",
+    "da",
+    "dr",
+    "V",
+    "alpha2",
+    "alpha_de",
+    "alpha_beta",
+];
+
+macro_rules! param_names {
+    ($($c:literal),*) => {
+        [$([
+            concat!($c, "_0"), concat!($c, "_alpha"), concat!($c, "_beta"), concat!($c, "_p"),
+            concat!($c, "_q"), concat!($c, "_r"), concat!($c, "_alphadot"), concat!($c, "_de"),
+            concat!($c, "_da"), concat!($c, "_dr"), concat!($c, "_V"), concat!($c, "_alpha2"),
+            concat!($c, "_alpha_de"), concat!($c, "_alpha_beta"),
+        ]),*]
+    };
+}
+
+/// Every parameter name, `[coefficient][term]`.
+const PARAM_NAMES: [[&str; N_TERMS]; 8] =
+    param_names!("CX", "CY", "CZ", "CL", "CD", "Cl", "Cm", "Cn");
+
+impl Term {
+    /// All terms, in parameter order.
+    pub const ALL: [Term; N_TERMS] = [
+        Term::Bias,
+        Term::Alpha,
+        Term::Beta,
+        Term::P,
+        Term::Q,
+        Term::R,
+        Term::Alphadot,
+        Term::De,
+        Term::Da,
+        Term::Dr,
+        Term::V,
+        Term::Alpha2,
+        Term::AlphaDe,
+        Term::AlphaBeta,
+    ];
+
+    /// Index in [`Term::ALL`].
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    /// The name as written after the underscore of a parameter name (`alpha`, `q`, `0` …).
+    pub fn name(self) -> &'static str {
+        TERM_NAMES[self.index()]
+    }
+
+    /// Parses a [`Term::name`].
+    pub fn from_name(s: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|t| t.name() == s)
+    }
+
+    /// The regressor value `ξ` of this term at sample `s` (module doc), `None` when a channel
+    /// or constant it needs is absent (e.g. `p̂` without `p` or the span).
+    pub fn value(self, s: &AirDataSample) -> Option<f64> {
+        let two_v = 2.0 * s.vt_mps;
+        let c = &s.constants;
+        Some(match self {
+            Term::Bias => 1.0,
+            Term::Alpha => s.alpha_rad,
+            Term::Beta => s.beta_rad?,
+            Term::P => s.p_rad_s? * c.b_m? / two_v,
+            Term::Q => s.q_rad_s? * c.cbar_m? / two_v,
+            Term::R => s.r_rad_s? * c.b_m? / two_v,
+            Term::Alphadot => s.alphadot_rad_s? * c.cbar_m? / two_v,
+            Term::De => s.de_rad?,
+            Term::Da => s.da_rad?,
+            Term::Dr => s.dr_rad?,
+            Term::V => s.vt_mps / c.v0_mps?,
+            Term::Alpha2 => s.alpha_rad * s.alpha_rad,
+            Term::AlphaDe => s.alpha_rad * s.de_rad?,
+            Term::AlphaBeta => s.alpha_rad * s.beta_rad?,
+        })
+    }
+}
+
+/// One parameter: a coefficient and a term, named `<coefficient>_<term>`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Param {
+    /// The coefficient it belongs to.
+    pub coefficient: Coefficient,
+    /// The term it multiplies.
+    pub term: Term,
+}
+
+impl Param {
+    /// A parameter.
+    pub const fn new(coefficient: Coefficient, term: Term) -> Self {
+        Self { coefficient, term }
+    }
+
+    /// `<coefficient>_<term>`, e.g. `Cm_alpha`, `Cl_p`, `CD_0`.
+    pub fn name(self) -> &'static str {
+        PARAM_NAMES[self.coefficient.index()][self.term.index()]
+    }
+
+    /// Parses a [`Param::name`]. The coefficient is the part before the first `_`.
+    pub fn from_name(s: &str) -> Option<Self> {
+        let (c, t) = s.split_once('_')?;
+        Some(Self { coefficient: Coefficient::from_name(c)?, term: Term::from_name(t)? })
+    }
+}
+
+/// Why a structure could not be built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum StructureError {
+    /// More than [`MAX_PARAMS`] parameters.
+    #[error("model structure has {0} parameters; at most {MAX_PARAMS} are supported")]
+    TooManyParams(usize),
+    /// A structure with no parameter.
+    #[error("model structure declares no parameter")]
+    Empty,
+    /// Forces declared both in body axes (CX/CZ) and stability axes (CL/CD).
+    #[error(
+        "model structure declares `{0}` and `{1}`: choose body axes (CX, CZ) or stability axes (CL, CD) for the longitudinal forces"
+    )]
+    MixedAxes(&'static str, &'static str),
+}
+
+/// A model structure: for each coefficient the set of its terms (a bit set over
+/// [`Term::ALL`]). Copy, fixed size, `no_std`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct ModelStructure {
+    terms: [u16; 8],
+}
+
+impl ModelStructure {
+    /// The empty structure (build one with [`ModelStructure::with`]).
+    pub const fn empty() -> Self {
+        Self { terms: [0; 8] }
+    }
+
+    /// This structure with `coefficient` explained by `terms` (added to any it had).
+    pub fn with(mut self, coefficient: Coefficient, terms: &[Term]) -> Self {
+        for t in terms {
+            self.terms[coefficient.index()] |= 1 << t.index();
+        }
+        self
+    }
+
+    /// Adds one parameter.
+    pub fn insert(&mut self, p: Param) {
+        self.terms[p.coefficient.index()] |= 1 << p.term.index();
+    }
+
+    /// Whether the structure has parameter `p`.
+    pub fn contains(&self, p: Param) -> bool {
+        self.terms[p.coefficient.index()] & (1 << p.term.index()) != 0
+    }
+
+    /// Checks the capacity, non-emptiness and that CX/CZ and CL/CD are not mixed.
+    ///
+    /// # Errors
+    /// [`StructureError`].
+    pub fn validated(self) -> Result<Self, StructureError> {
+        let n = self.n_params();
+        if n == 0 {
+            return Err(StructureError::Empty);
+        }
+        if n > MAX_PARAMS {
+            return Err(StructureError::TooManyParams(n));
+        }
+        let has = |c: Coefficient| self.terms[c.index()] != 0;
+        for body in [Coefficient::CX, Coefficient::CZ] {
+            for stab in [Coefficient::CL, Coefficient::CD] {
+                if has(body) && has(stab) {
+                    return Err(StructureError::MixedAxes(body.name(), stab.name()));
+                }
+            }
+        }
+        Ok(self)
+    }
+
+    /// Number of parameters.
+    pub fn n_params(&self) -> usize {
+        self.terms.iter().map(|t| t.count_ones() as usize).sum()
+    }
+
+    /// Whether coefficient `c` is modelled.
+    pub fn has(&self, c: Coefficient) -> bool {
+        self.terms[c.index()] != 0
+    }
+
+    /// The modelled coefficients, in order.
+    pub fn coefficients(&self) -> impl Iterator<Item = Coefficient> + '_ {
+        Coefficient::ALL.into_iter().filter(|c| self.has(*c))
+    }
+
+    /// The terms of coefficient `c`, in order.
+    pub fn terms_of(&self, c: Coefficient) -> impl Iterator<Item = Term> + '_ {
+        let mask = self.terms[c.index()];
+        Term::ALL.into_iter().filter(move |t| mask & (1 << t.index()) != 0)
+    }
+
+    /// Number of terms of coefficient `c`.
+    pub fn n_terms(&self, c: Coefficient) -> usize {
+        self.terms[c.index()].count_ones() as usize
+    }
+
+    /// All parameters, in parameter order.
+    pub fn params(&self) -> impl Iterator<Item = Param> + '_ {
+        self.coefficients().flat_map(move |c| self.terms_of(c).map(move |t| Param::new(c, t)))
+    }
+
+    /// The `i`-th parameter.
+    pub fn param(&self, i: usize) -> Option<Param> {
+        self.params().nth(i)
+    }
+
+    /// Index of parameter `p`, if present.
+    pub fn index_of(&self, p: Param) -> Option<usize> {
+        self.params().position(|q| q == p)
+    }
+
+    /// Index of the first parameter of coefficient `c` (its parameters are contiguous).
+    pub fn first_index(&self, c: Coefficient) -> usize {
+        Coefficient::ALL[..c.index()].iter().map(|k| self.n_terms(*k)).sum()
+    }
+
+    /// Whether every term and every modelled coefficient can be formed from sample `s`
+    /// (its channels and constants are present). `measured` are the sample's measured
+    /// coefficients, [`AirDataSample::measured_coefficients`].
+    pub fn supported_by(&self, s: &AirDataSample, measured: &[Option<f64>; 8]) -> bool {
+        self.params().all(|p| p.term.value(s).is_some())
+            && self.coefficients().all(|c| measured[c.index()].is_some())
+    }
+
+    /// The names of the parameters, in order (for headers).
+    pub fn names(&self) -> impl Iterator<Item = &'static str> + '_ {
+        self.params().map(Param::name)
+    }
+
+    /// Longitudinal preset: `CL`, `CD`, `Cm` each with `_0, _alpha, _q, _de` (12 parameters;
+    /// Klein & Morelli 2006 eq. 5.1–5.3 form).
+    pub fn longitudinal() -> Self {
+        const T: [Term; 4] = [Term::Bias, Term::Alpha, Term::Q, Term::De];
+        Self::empty().with(Coefficient::CL, &T).with(Coefficient::CD, &T).with(Coefficient::Cm, &T)
+    }
+
+    /// Lateral-directional preset: `CY`, `Cl`, `Cn` each with `_0, _beta, _p, _r, _da, _dr`
+    /// (18 parameters; Klein & Morelli 2006 eq. 5.4–5.6 form).
+    pub fn lateral() -> Self {
+        const T: [Term; 6] = [Term::Bias, Term::Beta, Term::P, Term::R, Term::Da, Term::Dr];
+        Self::empty().with(Coefficient::CY, &T).with(Coefficient::Cl, &T).with(Coefficient::Cn, &T)
+    }
+
+    /// Both presets (30 parameters).
+    pub fn six_axis() -> Self {
+        let lon = Self::longitudinal();
+        let lat = Self::lateral();
+        let mut s = Self::empty();
+        for i in 0..8 {
+            s.terms[i] = lon.terms[i] | lat.terms[i];
+        }
+        s
+    }
+
+    /// A preset by name: `longitudinal`, `lateral` or `six-axis`.
+    pub fn preset(name: &str) -> Option<Self> {
+        match name {
+            "longitudinal" => Some(Self::longitudinal()),
+            "lateral" => Some(Self::lateral()),
+            "six-axis" => Some(Self::six_axis()),
+            _ => None,
+        }
+    }
+
+    /// The preset names, richest first.
+    pub const PRESETS: [&'static str; 3] = ["six-axis", "longitudinal", "lateral"];
+}
+
+/// A coefficient model value: `Σ θ_j ξ_j` for coefficient `c` of `structure` with parameter
+/// vector `theta` (length ≥ `structure.n_params()`), or `None` if a term is unavailable.
+pub fn coefficient_value(
+    structure: &ModelStructure,
+    theta: &[f64],
+    c: Coefficient,
+    s: &AirDataSample,
+) -> Option<f64> {
+    let first = structure.first_index(c);
+    let mut sum = 0.0;
+    for (k, t) in structure.terms_of(c).enumerate() {
+        sum += theta[first + k] * t.value(s)?;
+    }
+    Some(sum)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip_and_follow_the_field() {
+        for c in Coefficient::ALL {
+            for t in Term::ALL {
+                let p = Param::new(c, t);
+                assert_eq!(Param::from_name(p.name()), Some(p), "{}", p.name());
+                assert_eq!(p.name(), format!("{}_{}", c.name(), t.name()));
+            }
+        }
+        assert_eq!(Param::new(Coefficient::Cm, Term::Alphadot).name(), "Cm_alphadot");
+        assert_eq!(Param::new(Coefficient::Cl, Term::P).name(), "Cl_p");
+        assert_eq!(Param::new(Coefficient::CD, Term::Bias).name(), "CD_0");
+        assert_eq!(Param::new(Coefficient::Cm, Term::Alpha2).name(), "Cm_alpha2");
+        assert_eq!(Param::from_name("CL_q").unwrap().coefficient, Coefficient::CL);
+        assert_eq!(Param::from_name("Cl_q").unwrap().coefficient, Coefficient::Cl);
+        assert!(Param::from_name("Cm_alphadotx").is_none());
+        assert!(Param::from_name("Cx_alpha").is_none());
+    }
+
+    #[test]
+    fn presets_have_the_documented_parameters_in_order() {
+        let lon = ModelStructure::longitudinal();
+        let names: std::vec::Vec<_> = lon.names().collect();
+        assert_eq!(
+            names,
+            [
+                "CL_0", "CL_alpha", "CL_q", "CL_de", "CD_0", "CD_alpha", "CD_q", "CD_de", "Cm_0",
+                "Cm_alpha", "Cm_q", "Cm_de"
+            ]
+        );
+        let lat = ModelStructure::lateral();
+        assert_eq!(lat.n_params(), 18);
+        assert_eq!(lat.param(7).unwrap().name(), "Cl_beta");
+        assert_eq!(ModelStructure::six_axis().n_params(), 30);
+        assert_eq!(
+            ModelStructure::six_axis().index_of(Param::from_name("Cn_dr").unwrap()),
+            Some(29)
+        );
+        assert_eq!(lon.first_index(Coefficient::Cm), 8);
+        assert!(ModelStructure::six_axis().validated().is_ok());
+        let mixed = lon.with(Coefficient::CX, &[Term::Alpha]);
+        assert!(matches!(mixed.validated(), Err(StructureError::MixedAxes("CX", "CL"))));
+        assert_eq!(ModelStructure::empty().validated(), Err(StructureError::Empty));
+    }
+
+    #[test]
+    fn analytic_term_values() {
+        let s = AirDataSample {
+            vt_mps: 100.0,
+            alpha_rad: 0.1,
+            beta_rad: Some(0.02),
+            p_rad_s: Some(0.4),
+            q_rad_s: Some(0.05),
+            r_rad_s: Some(-0.1),
+            alphadot_rad_s: Some(0.2),
+            de_rad: Some(-0.03),
+            constants: crate::sample::AircraftConstants {
+                cbar_m: Some(3.0),
+                b_m: Some(10.0),
+                v0_mps: Some(80.0),
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let v = |t: Term| t.value(&s).unwrap();
+        assert_eq!(v(Term::Bias), 1.0);
+        assert!((v(Term::P) - 0.4 * 10.0 / 200.0).abs() < 1e-15);
+        assert!((v(Term::Q) - 0.05 * 3.0 / 200.0).abs() < 1e-15);
+        assert!((v(Term::R) + 0.1 * 10.0 / 200.0).abs() < 1e-15);
+        assert!((v(Term::Alphadot) - 0.2 * 3.0 / 200.0).abs() < 1e-15);
+        assert!((v(Term::V) - 1.25).abs() < 1e-15);
+        assert!((v(Term::AlphaDe) + 0.003).abs() < 1e-15);
+        assert!((v(Term::AlphaBeta) - 0.002).abs() < 1e-15);
+        assert!(Term::Da.value(&s).is_none());
+        let st = ModelStructure::empty().with(Coefficient::Cm, &[Term::Bias, Term::Alpha, Term::Q]);
+        let cm = coefficient_value(&st, &[0.1, -1.0, -20.0], Coefficient::Cm, &s).unwrap();
+        assert!((cm - (0.1 - 0.1 - 20.0 * 0.05 * 3.0 / 200.0)).abs() < 1e-15);
+    }
+}

@@ -23,10 +23,13 @@
 //! `spec/thesis-method.md`); Klein & Morelli, *Aircraft System Identification*, AIAA 2006;
 //! Jategaonkar, *Flight Vehicle System Identification*, AIAA 2015.
 #![cfg_attr(not(feature = "std"), no_std)]
+// Numerical kernels index several arrays with one loop variable, as the equations do.
+#![allow(clippy::needless_range_loop)]
 
 use nalgebra::{SMatrix, SVector};
 
 pub mod estimator;
+pub mod ftr;
 pub mod legacy_kalman;
 pub mod linalg;
 pub mod prior;

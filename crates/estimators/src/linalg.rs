@@ -65,6 +65,32 @@ pub fn cholesky_inverse<const C: usize>(l: &Square<C>, n: usize, inv: &mut Squar
     }
 }
 
+/// Smallest admissible pivot of a unit-diagonal-scaled information matrix in
+/// [`well_conditioned`]: every regressor must carry at least this fraction of its energy
+/// independently of the others.
+pub const MIN_SCALED_PIVOT: f64 = 1e-8;
+
+/// Whether the leading `n × n` block of the information matrix `a` is positive definite with
+/// every Cholesky pivot of `D^{-1/2} A D^{-1/2}` (unit diagonal) at least
+/// [`MIN_SCALED_PIVOT`]: a reciprocal-condition guard before a least-squares solve, shared by
+/// the estimators that decide when a parameter is identified.
+pub fn well_conditioned<const C: usize>(a: &Square<C>, n: usize) -> bool {
+    let mut scaled = [[0.0; C]; C];
+    for i in 0..n {
+        let d = a[i][i];
+        if !(d > 0.0 && d.is_finite()) {
+            return false;
+        }
+    }
+    for i in 0..n {
+        for j in 0..n {
+            scaled[i][j] = a[i][j] / libm::sqrt(a[i][i] * a[j][j]);
+        }
+    }
+    let mut l = [[0.0; C]; C];
+    cholesky(&scaled, n, &mut l) && (0..n).all(|i| l[i][i] * l[i][i] >= MIN_SCALED_PIVOT)
+}
+
 /// 2-norm condition number of the leading `n × n` block of a symmetric positive semi-definite
 /// matrix scaled to unit diagonal (i.e. of the correlation matrix), by Jacobi eigenvalue
 /// iteration; `None` if a diagonal entry is not positive or the matrix is singular.

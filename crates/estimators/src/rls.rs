@@ -33,7 +33,7 @@
 
 use crate::EstimatorError;
 use crate::estimator::{Estimates, Estimator, Status, check_finite};
-use crate::linalg::{Square, cholesky, cholesky_inverse, cholesky_solve};
+use crate::linalg::{Square, cholesky, cholesky_inverse, cholesky_solve, well_conditioned};
 use crate::sample::AirDataSample;
 use crate::vocabulary::{Coefficient, ModelStructure, N_TERMS, Term};
 
@@ -54,7 +54,7 @@ impl Default for RlsConfig {
 }
 
 /// Smallest admissible pivot of the unit-diagonal-scaled information matrix at initialisation.
-pub const INIT_MIN_SCALED_PIVOT: f64 = 1e-8;
+pub const INIT_MIN_SCALED_PIVOT: f64 = crate::linalg::MIN_SCALED_PIVOT;
 
 /// One coefficient's fit.
 #[derive(Debug, Clone, Copy)]
@@ -107,24 +107,6 @@ impl Fit {
         Some(phi)
     }
 
-    fn well_conditioned(&self) -> bool {
-        let n = self.n;
-        let mut scaled = [[0.0; N_TERMS]; N_TERMS];
-        for i in 0..n {
-            let d = self.info[i][i];
-            if !(d > 0.0 && d.is_finite()) {
-                return false;
-            }
-        }
-        for i in 0..n {
-            for j in 0..n {
-                scaled[i][j] = self.info[i][j] / libm::sqrt(self.info[i][i] * self.info[j][j]);
-            }
-        }
-        let mut l = [[0.0; N_TERMS]; N_TERMS];
-        cholesky(&scaled, n, &mut l) && (0..n).all(|i| l[i][i] * l[i][i] >= INIT_MIN_SCALED_PIVOT)
-    }
-
     /// One update; returns `Err` (state unchanged) on a numerical failure.
     fn update(
         &mut self,
@@ -145,7 +127,7 @@ impl Fit {
             self.info_yy = self.info_yy * lambda + y * y;
             self.n_eff = self.n_eff * lambda + 1.0;
             self.count += 1;
-            if self.count >= init_samples.max(n) && self.well_conditioned() {
+            if self.count >= init_samples.max(n) && well_conditioned(&self.info, n) {
                 let mut l = [[0.0; N_TERMS]; N_TERMS];
                 if cholesky(&self.info, n, &mut l) {
                     let mut theta = self.info_b;

@@ -97,7 +97,7 @@ pub fn well_conditioned<const C: usize>(a: &Square<C>, n: usize) -> bool {
 pub fn scaled_condition_number<const C: usize>(a: &Square<C>, n: usize) -> Option<f64> {
     let mut m = [[0.0; C]; C];
     for i in 0..n {
-        if !(a[i][i] > 0.0) {
+        if a[i][i].is_nan() || a[i][i] <= 0.0 {
             return None;
         }
     }

@@ -9,6 +9,8 @@ pub mod aircraft;
 pub mod cli;
 /// Convergence-time and error metrics of estimate histories.
 pub mod metrics;
+/// Locked output directories with atomic files and no stale outputs.
+pub mod outdir;
 /// Stacked time-series panels rendered to PNG.
 pub mod plot;
 /// Proof-of-concept experiments (thesis §4.1): scenarios, simulation loop, outputs, report.

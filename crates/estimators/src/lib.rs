@@ -26,7 +26,9 @@
 
 use nalgebra::{SMatrix, SVector};
 
+pub mod dual;
 pub mod estimator;
+pub mod flight_model;
 pub mod legacy_kalman;
 pub mod linalg;
 pub mod prior;
@@ -34,7 +36,9 @@ pub mod rls;
 pub mod sample;
 pub mod vocabulary;
 
+pub use dual::{Dual, Scalar};
 pub use estimator::{Estimates, Estimator, Status};
+pub use flight_model::{FlightModel, Output, StateSet};
 pub use prior::{ParamPrior, Priors};
 pub use sample::{AirDataSample, AircraftConstants, CoefficientValues};
 pub use vocabulary::{Coefficient, MAX_PARAMS, ModelStructure, Param, Term};

@@ -27,6 +27,7 @@
 use nalgebra::{SMatrix, SVector};
 
 pub mod dual;
+pub mod ekf;
 pub mod estimator;
 pub mod flight_model;
 pub mod legacy_kalman;
@@ -37,6 +38,7 @@ pub mod sample;
 pub mod vocabulary;
 
 pub use dual::{Dual, Scalar};
+pub use ekf::{Ekf, EkfConfig, SigmaOption};
 pub use estimator::{Estimates, Estimator, Status};
 pub use flight_model::{FlightModel, Output, StateSet};
 pub use prior::{ParamPrior, Priors};

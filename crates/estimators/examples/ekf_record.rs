@@ -3,7 +3,8 @@
 //!
 //! `cargo run --release -p aeroident-estimators --example ekf_record -- RECORD.csv TRUTH.json
 //! longitudinal|lateral|six-axis [--angular-accelerations] [--t0 S] [--t1 S] [--coloured]
-//! [--qscale F]` (`--qscale` multiplies the default state process noise)
+//! [--qscale F] [--alphadot]` (`--qscale` multiplies the default state process noise;
+//! `--alphadot` adds `CL_alphadot` and `Cm_alphadot` to the preset)
 #![allow(missing_docs)]
 
 #[path = "../tests/common/jsbsim.rs"]
@@ -18,8 +19,14 @@ fn main() -> Result<(), String> {
     if args.len() < 3 {
         return Err("usage: ekf_record RECORD.csv TRUTH.json PRESET [options]".into());
     }
-    let structure = ModelStructure::preset(&args[2]).ok_or("unknown preset")?;
+    let mut structure = ModelStructure::preset(&args[2]).ok_or("unknown preset")?;
     let flag = |f: &str| args.iter().any(|a| a == f);
+    if flag("--alphadot") {
+        use aeroident_estimators::vocabulary::{Coefficient, Term};
+        structure = structure
+            .with(Coefficient::CL, &[Term::Alphadot])
+            .with(Coefficient::Cm, &[Term::Alphadot]);
+    }
     let val = |f: &str| {
         args.iter().position(|a| a == f).and_then(|i| args.get(i + 1)).map(|v| v.parse::<f64>())
     };

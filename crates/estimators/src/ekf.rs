@@ -219,7 +219,7 @@ impl Ekf {
         for o in model.state_set().outputs() {
             positive("measurement_sigma", cfg.measurement_sigma[o.index()])?;
         }
-        if !(cfg.gate_sigmas > 0.0) {
+        if cfg.gate_sigmas.is_nan() || cfg.gate_sigmas <= 0.0 {
             return Err(EstimatorError::InvalidConfig {
                 field: "gate_sigmas",
                 value: cfg.gate_sigmas,
@@ -276,9 +276,7 @@ impl Ekf {
     /// The current estimate of full-state index `i` ([`state`]) if it is integrated and the
     /// filter has been initialised.
     pub fn state(&self, i: usize) -> Option<f64> {
-        if self.last.is_none() {
-            return None;
-        }
+        self.last?;
         let k = self.model.state_set().states().iter().position(|&j| j == i)?;
         Some(self.z[k])
     }
@@ -403,20 +401,20 @@ impl Ekf {
         let mut f = [[0.0; N_STATES]; N_STATES];
         let mut g = [[0.0; MAX_PARAMS]; N_STATES];
         for i in 0..nx {
-            for j in 0..nx {
+            for (j, fij) in f[i].iter_mut().enumerate().take(nx) {
                 let mut a2 = 0.0;
                 for k in 0..nx {
                     a2 += lin.dfdx[i][k] * lin.dfdx[k][j];
                 }
-                f[i][j] = lin.dfdx[i][j] * dt + 0.5 * a2 * dt * dt;
+                *fij = lin.dfdx[i][j] * dt + 0.5 * a2 * dt * dt;
             }
             f[i][i] += 1.0;
-            for j in 0..np {
+            for (j, gij) in g[i].iter_mut().enumerate().take(np) {
                 let mut ab = 0.0;
                 for k in 0..nx {
                     ab += lin.dfdx[i][k] * lin.dfdtheta[k][j];
                 }
-                g[i][j] = lin.dfdtheta[i][j] * dt + 0.5 * ab * dt * dt;
+                *gij = lin.dfdtheta[i][j] * dt + 0.5 * ab * dt * dt;
             }
         }
         let p = &self.p;
@@ -514,7 +512,7 @@ impl Estimator for Ekf {
             }
         };
         let dt = s.t_s - u0.t_s;
-        if !(dt > 0.0) {
+        if dt.is_nan() || dt <= 0.0 {
             return Err(EstimatorError::NonFiniteInput { field: "dt_s", value: dt, t_s: s.t_s });
         }
         let (nx, np) = (self.nx, self.np);
@@ -579,7 +577,7 @@ impl Estimator for Ekf {
                 return Err(self.diverge("EKF innovation variance not positive", s.t_s));
             }
             let e = y - yhat;
-            if !(libm::fabs(e) <= self.cfg.gate_sigmas * libm::sqrt(sv)) {
+            if e.is_nan() || libm::fabs(e) > self.cfg.gate_sigmas * libm::sqrt(sv) {
                 rejections[oi] += 1;
                 consecutive[oi] += 1;
                 if consecutive[oi] >= self.cfg.max_consecutive_rejections {
@@ -614,9 +612,9 @@ impl Estimator for Ekf {
                 .all(|i| self.work[i][i] > 0.0 && self.work[i][..n].iter().all(|v| v.is_finite()));
         let ss = self.model.state_set();
         let get = |i: usize| states.iter().position(|&j| j == i).map(|k| z[k]);
-        let bad_v = ss.lon() && !(get(state::V).unwrap_or(1.0) > 0.0);
-        let bad_a = get(state::ALPHA).is_some_and(|a| !(libm::fabs(a) <= 1.5));
-        let bad_b = get(state::BETA).is_some_and(|b| !(libm::fabs(b) <= 1.5));
+        let bad_v = ss.lon() && get(state::V).is_some_and(|v| v.is_nan() || v <= 0.0);
+        let bad_a = get(state::ALPHA).is_some_and(|a| a.is_nan() || libm::fabs(a) > 1.5);
+        let bad_b = get(state::BETA).is_some_and(|b| b.is_nan() || libm::fabs(b) > 1.5);
         if !finite || bad_v || bad_a || bad_b {
             return Err(self.diverge(
                 "EKF diverged (non-finite state or covariance, V ≤ 0, or |alpha|, |beta| > 1.5 rad)",

@@ -541,7 +541,7 @@ impl FlightModel {
             }
         };
         let c = &s.constants;
-        if !(s.vt_mps > 0.0) {
+        if s.vt_mps.is_nan() || s.vt_mps <= 0.0 {
             return Err(EstimatorError::NonFiniteInput { field: "vt_mps", value: s.vt_mps, t_s });
         }
         let mass_kg = konst(Some(c.mass_kg), "mass_kg")?;
@@ -601,7 +601,7 @@ impl FlightModel {
             ))?;
             if set.lat() {
                 inertia[1] = konst(c.Iyy_kgm2, "Iyy_kgm2")?;
-                if !(inertia[0] * inertia[2] - inertia[3] * inertia[3] > 0.0) {
+                if inertia[0] * inertia[2] - inertia[3] * inertia[3] <= 0.0 {
                     return Err(invalid("Ixz_kgm2", inertia[3], "Ixx·Izz − Ixz² must be > 0"));
                 }
             }
@@ -632,8 +632,8 @@ impl FlightModel {
     /// (filter order, [`StateSet::states`]) and the others from the inputs' measurements.
     pub fn full_state<T: Scalar>(&self, active: &[T], u: &ModelInputs) -> [T; N_STATES] {
         let mut x = [T::cst(0.0); N_STATES];
-        for i in 0..N_STATES {
-            x[i] = T::cst(u.x_meas[i]);
+        for (xi, m) in x.iter_mut().zip(u.x_meas.iter()) {
+            *xi = T::cst(*m);
         }
         for (k, &i) in self.set.states().iter().enumerate() {
             x[i] = active[k];
@@ -744,7 +744,7 @@ impl FlightModel {
             let uw2 = uu * uu + ww * ww;
             let num = (uu * wdot0 - ww * udot0) / uw2;
             let den = -((uu * az1 - ww * ax1) / uw2) + 1.0;
-            if !(den.re() > 0.0) {
+            if den.re().is_nan() || den.re() <= 0.0 {
                 return Err(EstimatorError::Numerical {
                     what: "implicit alpha-dot equation singular (CL_alphadot too negative)",
                     t_s: u.t_s,
@@ -754,7 +754,7 @@ impl FlightModel {
         } else {
             T::cst(u.alphadot_meas)
         };
-        if let Some(xi) = xi.as_deref_mut() {
+        if let Some(xi) = xi {
             for m in self.coefs.iter().flatten() {
                 if let Some(i) = m.alphadot {
                     xi[i] = (alphadot * chat).re();

@@ -116,8 +116,8 @@ fn check_partials(st: ModelStructure) {
     };
     let base = fh(&theta[..np], &active[..nx]);
     // Values agree with the plain evaluation.
-    for k in 0..nx {
-        assert!((lin.f[k] - base[k]).abs() <= 1e-13 * (1.0 + base[k].abs()), "f{k}");
+    for (k, b) in base.iter().enumerate().take(nx) {
+        assert!((lin.f[k] - b).abs() <= 1e-13 * (1.0 + b.abs()), "f{k}");
     }
     let close = |a: f64, b: f64| (a - b).abs() <= 2e-6 * (1.0 + a.abs().max(b.abs()));
     let outs = model.state_set().outputs();

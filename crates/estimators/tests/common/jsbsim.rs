@@ -92,7 +92,7 @@ pub fn read_samples(csv_path: &Path, opt: ReadOptions) -> Result<Vec<AirDataSamp
             da_rad: Some(g(c_da)?),
             dr_rad: Some(g(c_dr)?),
             thrust_n: Some(thrust),
-            thrust_moment_nm: c_mprop.map(|c| g(c)).transpose()?.map(|m| m * LBFFT),
+            thrust_moment_nm: c_mprop.map(&g).transpose()?.map(|m| m * LBFFT),
             rho_kgpm3: Some(g(c_rho)? * SLUGFT3),
             constants: AircraftConstants {
                 mass_kg: mass_slug * SLUG,
@@ -156,7 +156,8 @@ pub struct Row {
 impl Row {
     /// Relative error, %.
     pub fn error_pct(&self) -> Option<f64> {
-        Some(100.0 * (self.value? - self.truth?) / self.truth?.abs())
+        let t = self.truth.filter(|t| t.abs() >= 1e-6)?;
+        Some(100.0 * (self.value? - t) / t.abs())
     }
 }
 

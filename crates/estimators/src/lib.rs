@@ -28,7 +28,10 @@
 
 use nalgebra::{SMatrix, SVector};
 
+pub mod dual;
+pub mod ekf;
 pub mod estimator;
+pub mod flight_model;
 pub mod ftr;
 pub mod legacy_kalman;
 pub mod linalg;
@@ -37,7 +40,11 @@ pub mod rls;
 pub mod sample;
 pub mod vocabulary;
 
+pub use dual::{Dual, Scalar};
+pub use ekf::{Ekf, EkfConfig, SigmaOption};
 pub use estimator::{Estimates, Estimator, Status};
+pub use flight_model::{FlightModel, Output, StateSet};
+pub use ftr::{Ftr, FtrConfig};
 pub use prior::{ParamPrior, Priors};
 pub use sample::{AirDataSample, AircraftConstants, CoefficientValues};
 pub use vocabulary::{Coefficient, MAX_PARAMS, ModelStructure, Param, Term};

@@ -27,6 +27,8 @@
 //!
 //! A sample is used only if every modelled coefficient and every term is available (all or
 //! nothing, so the fits stay on the same samples); otherwise it is refused and nothing changes.
+//! A numerical failure on finite inputs (overflow) marks the estimator [`Status::Diverged`];
+//! it refuses every later sample.
 //!
 //! **WARNING:** the standard errors assume white equation errors; on real data residuals are
 //! coloured and the σ optimistic. Equation error is biased when the regressors are noisy.
@@ -276,6 +278,9 @@ impl Estimator for Rls {
     }
 
     fn update(&mut self, s: &AirDataSample) -> Result<&Estimates, EstimatorError> {
+        if self.est.status == Status::Diverged {
+            return Err(EstimatorError::Numerical { what: "RLS has diverged", t_s: s.t_s });
+        }
         check_finite(s)?;
         let measured = s.measured_coefficients();
         // All or nothing: form every (φ, y) before touching any fit.
@@ -294,11 +299,13 @@ impl Estimator for Rls {
             })?;
             rows[c.index()] = (phi, y);
         }
-        let backup = self.fits;
+        // Each fit's update is atomic (computed, checked, then committed). A numerical failure
+        // after finite inputs means overflow: the estimator has diverged and says so, rather
+        // than carrying a copy of every fit to roll back.
         for f in self.fits.iter_mut().flatten() {
             let (phi, y) = rows[f.coefficient.index()];
             if let Err(e) = f.update(&phi, y, self.lambda, self.init_samples, s.t_s) {
-                self.fits = backup;
+                self.est.status = Status::Diverged;
                 return Err(e);
             }
         }

@@ -161,29 +161,25 @@ impl Fit {
         if !(denom.is_finite() && denom > 0.0) {
             return Err(EstimatorError::Numerical { what: "RLS gain denominator", t_s });
         }
-        let mut p_new = self.p;
-        let mut theta_new = self.theta;
+        // In place: P ← (P − P φ φᵀ P / denom) / λ is symmetric by construction, so the upper
+        // triangle is formed and mirrored. A non-finite result (overflow on finite inputs) is a
+        // divergence, which the caller reports; the running sum detects it without a pass.
+        let inv_lambda = 1.0 / lambda;
+        let mut check = 0.0;
         for i in 0..n {
-            let k = p_phi[i] / denom;
-            theta_new[i] += k * e;
-            for j in 0..n {
-                p_new[i][j] = (self.p[i][j] - k * p_phi[j]) / lambda;
+            let ki = p_phi[i] / denom;
+            self.theta[i] += ki * e;
+            check += self.theta[i];
+            for j in i..n {
+                let v = (self.p[i][j] - ki * p_phi[j]) * inv_lambda;
+                self.p[i][j] = v;
+                self.p[j][i] = v;
+                check += v;
             }
         }
-        for i in 0..n {
-            for j in 0..i {
-                let m = 0.5 * (p_new[i][j] + p_new[j][i]);
-                p_new[i][j] = m;
-                p_new[j][i] = m;
-            }
-        }
-        let finite = theta_new[..n].iter().all(|v| v.is_finite())
-            && p_new[..n].iter().all(|r| r[..n].iter().all(|v| v.is_finite()));
-        if !finite {
+        if !check.is_finite() {
             return Err(EstimatorError::Numerical { what: "RLS update", t_s });
         }
-        self.theta = theta_new;
-        self.p = p_new;
         self.rss = lambda * self.rss + lambda * e * e / denom;
         self.n_eff = lambda * self.n_eff + 1.0;
         self.count += 1;

@@ -65,6 +65,29 @@ pub fn cholesky_inverse<const C: usize>(l: &Square<C>, n: usize, inv: &mut Squar
     }
 }
 
+/// Whether the leading `n × n` block of a symmetric positive semi-definite information matrix
+/// `A = Σ φφᵀ` is well conditioned: scaled to unit diagonal (the regressors' correlation
+/// matrix), its Cholesky factor exists and every squared pivot is at least `min_pivot`, i.e.
+/// every regressor carries at least that fraction of its energy independently of the others
+/// (persistent excitation over the samples accumulated so far). `false` if a diagonal entry is
+/// not positive and finite.
+pub fn well_conditioned<const C: usize>(a: &Square<C>, n: usize, min_pivot: f64) -> bool {
+    let mut scaled = [[0.0; C]; C];
+    for i in 0..n {
+        let d = a[i][i];
+        if !(d > 0.0 && d.is_finite()) {
+            return false;
+        }
+    }
+    for i in 0..n {
+        for j in 0..n {
+            scaled[i][j] = a[i][j] / libm::sqrt(a[i][i] * a[j][j]);
+        }
+    }
+    let mut l = [[0.0; C]; C];
+    cholesky(&scaled, n, &mut l) && (0..n).all(|i| l[i][i] * l[i][i] >= min_pivot)
+}
+
 /// 2-norm condition number of the leading `n × n` block of a symmetric positive semi-definite
 /// matrix scaled to unit diagonal (i.e. of the correlation matrix), by Jacobi eigenvalue
 /// iteration; `None` if a diagonal entry is not positive or the matrix is singular.
@@ -155,6 +178,16 @@ mod tests {
         }
         a[2][2] = -1.0;
         assert!(!cholesky(&a, 3, &mut l));
+    }
+
+    #[test]
+    fn analytic_well_conditioned_threshold_on_a_2x2_correlation() {
+        // Correlation ρ: scaled Cholesky pivots 1 and 1 − ρ²; ρ = 0.99 → 0.0199.
+        let rho: f64 = 0.99;
+        let a = [[4.0, rho * 6.0], [rho * 6.0, 9.0]];
+        assert!(well_conditioned(&a, 2, 0.019));
+        assert!(!well_conditioned(&a, 2, 0.0200));
+        assert!(!well_conditioned(&[[0.0, 0.0], [0.0, 1.0]], 2, 1e-8));
     }
 
     #[test]

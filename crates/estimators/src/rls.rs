@@ -108,21 +108,7 @@ impl Fit {
     }
 
     fn well_conditioned(&self) -> bool {
-        let n = self.n;
-        let mut scaled = [[0.0; N_TERMS]; N_TERMS];
-        for i in 0..n {
-            let d = self.info[i][i];
-            if !(d > 0.0 && d.is_finite()) {
-                return false;
-            }
-        }
-        for i in 0..n {
-            for j in 0..n {
-                scaled[i][j] = self.info[i][j] / libm::sqrt(self.info[i][i] * self.info[j][j]);
-            }
-        }
-        let mut l = [[0.0; N_TERMS]; N_TERMS];
-        cholesky(&scaled, n, &mut l) && (0..n).all(|i| l[i][i] * l[i][i] >= INIT_MIN_SCALED_PIVOT)
+        crate::linalg::well_conditioned(&self.info, self.n, INIT_MIN_SCALED_PIVOT)
     }
 
     /// One update; returns `Err` (state unchanged) on a numerical failure.

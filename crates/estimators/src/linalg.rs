@@ -5,6 +5,10 @@
 //! Source: Golub & Van Loan, *Matrix Computations*, 4th ed., Algorithm 4.2.1 (Cholesky,
 //! gaxpy form).
 
+// Index loops follow the textbook algorithms line by line, and `!(x > 0.0)` is meant to be
+// true for NaN as well.
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+
 /// A `C × C` array of which the leading `n × n` block is used.
 pub type Square<const C: usize> = [[f64; C]; C];
 

@@ -274,8 +274,8 @@ impl<L: CoefficientLaw> Channel<L> {
         let rate = state_rate(self.coefficient, s).map_err(missing)?;
         let c_m = measured[self.coefficient.index()].ok_or(missing(self.coefficient.name()))?;
         let mut phi = [0.0; N_TERMS];
-        for k in 0..self.n {
-            phi[k] = self.terms[k].value(s).ok_or(missing(term_channel(self.terms[k], s)))?;
+        for (x, t) in phi.iter_mut().zip(&self.terms[..self.n]) {
+            *x = t.value(s).ok_or(missing(term_channel(*t, s)))?;
         }
         Ok(RateInput { rate, c_m, phi, lambda_per_s })
     }
@@ -468,7 +468,7 @@ impl<L: CoefficientLaw> Estimator for ModelReference<L> {
                 t_s: s.t_s,
             });
         }
-        if !(s.qbar_pa > 0.0) {
+        if s.qbar_pa.is_nan() || s.qbar_pa <= 0.0 {
             return Err(EstimatorError::NonFiniteInput {
                 field: "qbar_pa",
                 value: s.qbar_pa,
@@ -478,7 +478,7 @@ impl<L: CoefficientLaw> Estimator for ModelReference<L> {
         let dt = match self.last_t_s {
             Some(t0) if !self.restart => {
                 let dt = s.t_s - t0;
-                if !(dt > 0.0) {
+                if dt.is_nan() || dt <= 0.0 {
                     return Err(EstimatorError::Numerical {
                         what: "sample time not after the previous sample's",
                         t_s: s.t_s,
@@ -506,7 +506,7 @@ impl<L: CoefficientLaw> Estimator for ModelReference<L> {
                 _ => input.rate.z_m,
             };
             let gap = libm::fabs(z - input.rate.z_m);
-            if !(gap <= ch.state.runaway_bound(s.vt_mps)) {
+            if gap.is_nan() || gap > ch.state.runaway_bound(s.vt_mps) {
                 return Err(self.diverge("estimated model ran away from the measured state", s.t_s));
             }
             let sample = SmpeSample {

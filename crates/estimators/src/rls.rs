@@ -31,6 +31,9 @@
 //! **WARNING:** the standard errors assume white equation errors; on real data residuals are
 //! coloured and the σ optimistic. Equation error is biased when the regressors are noisy.
 
+// Index loops follow the recursion's equations line by line.
+#![allow(clippy::needless_range_loop)]
+
 use crate::EstimatorError;
 use crate::estimator::{Estimates, Estimator, Status, check_finite};
 use crate::linalg::{Square, cholesky, cholesky_inverse, cholesky_solve};

@@ -70,7 +70,7 @@ pub struct CorrectedLawConfig {
 
 impl Default for CorrectedLawConfig {
     fn default() -> Self {
-        Self { information_per_s: 1e6, tracking_ratio: 1.0, forgetting_per_s: 0.0 }
+        Self { information_per_s: 1e6, tracking_ratio: 0.0, forgetting_per_s: 0.0 }
     }
 }
 
@@ -159,19 +159,24 @@ pub const SPEED_REF_FRACTION: f64 = 0.01;
 /// Configuration of [`GradientLaw`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GradientLawConfig {
-    /// Adaptation time constant τ, s, at the reference amplitudes (default 2 s: a few periods
-    /// of the short-period and roll modes, 1–5 rad/s, and 100+ samples at 60 Hz). The gain of
-    /// parameter `j` is `λ_j = 1/(τ |k₀| z_ref φ_ref,j)` with `k₀ = ∂ż/∂C` at the first sample,
-    /// `z_ref` the sliding state's and `φ_ref,j` the regressor's reference amplitude
-    /// ([`ANGLE_REF_RAD`], [`RATE_REF_RAD_S`], [`SPEED_REF_FRACTION`]): a parameter error of
-    /// one unit, seen through its own regressor at those amplitudes, decays in τ where (3.3)
-    /// is a descent direction.
-    pub adaptation_time_s: f64,
+    /// Loop gain G > 0 of (3.3) at the reference amplitudes (default 10). Because the bracket
+    /// of (3.3) is the time derivative of `E = ½(z² − z_m²)` along the estimated model,
+    /// (3.3) integrates to `θ̂_j(t) = θ̂_j(0) − λ_j [E(t) − E(0)]`: a static map of the current
+    /// energy error. For one parameter under a held input, `E ≈ z s` with the surface
+    /// `s = k φ θ̃ / λ` (filter gain λ), so the parameter error settles at
+    /// `θ̃∞ = θ̃₀ / (1 + G)`, `G = λ_j z k φ / λ`. The gain of parameter `j` is therefore
+    /// `λ_j = G λ / (|k₀| z_ref φ_ref,j)`, with `k₀ = ∂ż/∂C` at the first sample, `z_ref` the
+    /// sliding state's magnitude at the first sample plus its reference amplitude, and
+    /// `φ_ref,j` the regressor's reference amplitude ([`ANGLE_REF_RAD`], [`RATE_REF_RAD_S`],
+    /// [`SPEED_REF_FRACTION`]). G = 10 leaves 1/11 of the initial error of a damping derivative
+    /// at the reference amplitudes; a larger G lowers that bias and amplifies noise in
+    /// proportion (θ̂ follows `E` instantaneously).
+    pub loop_gain: f64,
 }
 
 impl Default for GradientLawConfig {
     fn default() -> Self {
-        Self { adaptation_time_s: 2.0 }
+        Self { loop_gain: 10.0 }
     }
 }
 
@@ -181,8 +186,12 @@ impl Default for GradientLawConfig {
 /// **WARNING:** (3.3) moves every parameter of a coefficient by the same scalar
 /// `z ż_est − z_m ż_m` times its gain, so `θ̂(t) − θ̂(0)` stays on the line through `θ̂(0)` along
 /// `(λ_1, …, λ_n)` (until a bound is hit): with two or more parameters per coefficient it
-/// cannot reach the truth, except by coincidence. With one parameter it converges only where
-/// `z ∂ż/∂θ > 0` on average (a damping derivative: `Cm_q` with `q`, `Cl_p` with `p`).
+/// cannot reach the truth, except by coincidence. And it has no memory: `θ̂_j(t) − θ̂_j(0) =
+/// −λ_j [E(t) − E(0)]` ([`GradientLawConfig::loop_gain`]), so under periodic excitation it
+/// oscillates about its start, and under a held input it settles with a bias `1/(1 + G)` of
+/// the initial error, and only where `z ∂ż/∂θ > 0` (a damping derivative: `Cm_q` with `q`,
+/// `Cl_p` with `p`); where `z ∂ż/∂θ < 0` (e.g. `CL_0` with `α > 0`, since `∂α̇/∂CL < 0`) it
+/// moves away from the truth.
 #[derive(Debug, Clone)]
 pub struct GradientLaw {
     engine: ModelReferenceGradient<CoefficientRate, 1, N_TERMS>,
@@ -190,7 +199,8 @@ pub struct GradientLaw {
     terms: [Term; N_TERMS],
     n: usize,
     state: SlidingState,
-    tau_s: f64,
+    loop_gain: f64,
+    filter_per_s: f64,
 }
 
 impl GradientLaw {
@@ -213,13 +223,17 @@ fn regressor_reference(t: Term, s: &AirDataSample) -> f64 {
     }
 }
 
-fn state_reference(state: SlidingState, vt_mps: f64) -> f64 {
-    match state {
-        SlidingState::P | SlidingState::Q | SlidingState::R => RATE_REF_RAD_S,
-        SlidingState::Alpha | SlidingState::Beta => ANGLE_REF_RAD,
-        SlidingState::V | SlidingState::U => SPEED_REF_FRACTION * vt_mps,
-        SlidingState::W => ANGLE_REF_RAD * vt_mps,
-    }
+/// Reference magnitude of the sliding state in (3.3)'s energy rate `z ż`: the state's own
+/// magnitude at the first sample (V ≈ V₀, α ≈ α_trim: (3.3) multiplies by `z`, not by its
+/// perturbation) plus the perturbation reference.
+fn state_reference(state: SlidingState, z0: f64, vt_mps: f64) -> f64 {
+    libm::fabs(z0)
+        + match state {
+            SlidingState::P | SlidingState::Q | SlidingState::R => RATE_REF_RAD_S,
+            SlidingState::Alpha | SlidingState::Beta => ANGLE_REF_RAD,
+            SlidingState::V | SlidingState::U => SPEED_REF_FRACTION * vt_mps,
+            SlidingState::W => ANGLE_REF_RAD * vt_mps,
+        }
 }
 
 impl CoefficientLaw for GradientLaw {
@@ -227,8 +241,8 @@ impl CoefficientLaw for GradientLaw {
     type Config = GradientLawConfig;
 
     fn new(spec: &CoefficientSpec<'_>, c: &GradientLawConfig) -> Result<Self, EstimatorError> {
-        if !(c.adaptation_time_s.is_finite() && c.adaptation_time_s > 0.0) {
-            return Err(bad("adaptation_time_s", c.adaptation_time_s, "must be finite and > 0"));
+        if !(c.loop_gain.is_finite() && c.loop_gain > 0.0) {
+            return Err(bad("loop_gain", c.loop_gain, "must be finite and > 0"));
         }
         let mut terms = [Term::Bias; N_TERMS];
         terms[..spec.terms.len()].copy_from_slice(spec.terms);
@@ -241,12 +255,14 @@ impl CoefficientLaw for GradientLaw {
             terms,
             n: spec.terms.len(),
             state: SlidingState::of(spec.coefficient),
-            tau_s: c.adaptation_time_s,
+            loop_gain: c.loop_gain,
+            filter_per_s: spec.lambda_per_s,
         })
     }
 
     fn start(&mut self, first: &RateInput, s: &AirDataSample) -> Result<(), EstimatorError> {
-        let zk = self.tau_s * libm::fabs(first.rate.k) * state_reference(self.state, s.vt_mps);
+        let z_ref = state_reference(self.state, first.rate.z_m, s.vt_mps);
+        let zk = libm::fabs(first.rate.k) * z_ref / (self.loop_gain * self.filter_per_s);
         for j in 0..self.n {
             let lambda = 1.0 / (zk * regressor_reference(self.terms[j], s));
             if !(lambda.is_finite() && lambda > 0.0) {

@@ -143,7 +143,7 @@ pub fn state_rate(c: Coefficient, s: &AirDataSample) -> Result<StateRate, &'stat
             let izz = positive(k.Izz_kgm2, "Izz_kgm2")?;
             let ixz = k.Ixz_kgm2.ok_or("Ixz_kgm2")?;
             let det = ixx * izz - ixz * ixz;
-            if !(det > 0.0) {
+            if det.is_nan() || det <= 0.0 {
                 return Err("Ixz_kgm2");
             }
             let qsb = qs * k.b_m.ok_or("b_m")?;
@@ -181,7 +181,7 @@ struct BodyKinematics {
 
 fn body_kinematics(s: &AirDataSample) -> Result<BodyKinematics, &'static str> {
     let vt = s.vt_mps;
-    if !(vt > 0.0) {
+    if vt.is_nan() || vt <= 0.0 {
         return Err("vt_mps");
     }
     let beta = s.beta_rad.unwrap_or(0.0);
@@ -216,7 +216,7 @@ fn body_kinematics(s: &AirDataSample) -> Result<BodyKinematics, &'static str> {
 
 fn force_state(state: SlidingState, s: &AirDataSample, qs: f64) -> Result<StateRate, &'static str> {
     let m = s.constants.mass_kg;
-    if !(m > 0.0) {
+    if m.is_nan() || m <= 0.0 {
         return Err("mass_kg");
     }
     let b = body_kinematics(s)?;

@@ -54,8 +54,9 @@ fn priors_with(structure: &ModelStructure, value: f64, sigma: f64) -> Priors {
 }
 
 /// (a) One step of the corrected law on `Cm = Cm_alpha α`, computed by hand (outside the code,
-/// numbers below): prior −0.5 ± 2 → bounds [−6.5, 5.5], Γ₀ = 12² = 144; k = 10, so the engine's
-/// κ = 10⁶/k² = 10⁴ and γ = κλ = 10⁴. Sample 1 (t = 0, α = 0.1, Cm_m = −0.1): no time step, no
+/// numbers below), with both terms of the composite law (tracking ratio 1): prior −0.5 ± 2 →
+/// bounds [−6.5, 5.5], Γ₀ = 12² = 144; k = 10, so the engine's κ = 10⁶/k² = 10⁴ and
+/// γ = κλ = 10⁴. Sample 1 (t = 0, α = 0.1, Cm_m = −0.1): no time step, no
 /// change. Sample 2 (t = 0.01, α = 0.12, Cm_m = −0.12, truth Cm_alpha = −1):
 /// e = k(θ̂φ − C_m) = 0.6; s = (1 − e^{−0.01}) e = 0.0059700997504991; Φ = kφ = 1.2, weight κΔt =
 /// 100, K = ΓΦ/(1/100 + Φ²Γ) → θ̂ = −0.9999758885084631, Γ = 0.00694410956262459; surface term
@@ -66,7 +67,9 @@ fn priors_with(structure: &ModelStructure, value: f64, sigma: f64) -> Priors {
 fn hand_single_step_of_the_corrected_law() {
     let st = cm_structure(&[Term::Alpha]);
     let priors = priors_with(&st, -0.5, 2.0);
-    let mut e = CorrectedSmpeEstimator::new(st, &priors, ModelReferenceConfig::default()).unwrap();
+    let law = CorrectedLawConfig { tracking_ratio: 1.0, ..Default::default() };
+    let cfg = ModelReferenceConfig { law, ..Default::default() };
+    let mut e = CorrectedSmpeEstimator::new(st, &priors, cfg).unwrap();
     let k = 10.0;
     e.update(&pitch_sample(0.0, 0.1, 0.0, k * -0.1)).unwrap();
     assert_eq!(e.estimates().raw_value(0), -0.5, "first sample: no time step, no change");
@@ -355,14 +358,14 @@ fn runaway_is_diverged_until_a_new_manoeuvre() {
 fn bad_configuration_is_an_error() {
     let st = cm_structure(&[Term::Alpha]);
     let priors = Priors::generic(&st);
-    let mut cfg = ModelReferenceConfig::<CorrectedLawConfig>::default();
-    cfg.lambda_per_s = 0.0;
+    let cfg =
+        ModelReferenceConfig::<CorrectedLawConfig> { lambda_per_s: 0.0, ..Default::default() };
     assert!(matches!(
         CorrectedSmpeEstimator::new(st, &priors, cfg),
         Err(EstimatorError::InvalidConfig { field: "lambda_per_s", .. })
     ));
-    let mut cfg = ModelReferenceConfig::<CorrectedLawConfig>::default();
-    cfg.law.information_per_s = -1.0;
+    let law = CorrectedLawConfig { information_per_s: -1.0, ..Default::default() };
+    let cfg = ModelReferenceConfig { law, ..Default::default() };
     assert!(CorrectedSmpeEstimator::new(st, &priors, cfg).is_err());
     let wrong = Priors::generic(&ModelStructure::longitudinal());
     assert!(GradientEstimator::new(st, &wrong, ModelReferenceConfig::default()).is_err());

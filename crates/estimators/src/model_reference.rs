@@ -75,7 +75,7 @@
 //! A coefficient's parameters are identified once its regressors have been persistently
 //! exciting: the accumulated information `Σ φφᵀ` passes the same test as recursive least
 //! squares' exact initialisation ([`crate::linalg::well_conditioned`] with
-//! [`INIT_MIN_SCALED_PIVOT`](crate::rls::INIT_MIN_SCALED_PIVOT), at least `n` samples). Before
+//! [`INIT_MIN_SCALED_PIVOT`], at least `n` samples). Before
 //! that `value(i)` is `None`. These methods give no standard errors: `sigma` and
 //! [`Estimator::covariance`] are `None`. A non-finite estimate or state, or an estimated state
 //! further than [`SlidingState::runaway_bound`] from the measured one, is a divergence: the
@@ -96,8 +96,8 @@ mod laws;
 pub mod rigid_body;
 
 pub use laws::{
-    CorrectedLaw, CorrectedLawConfig, GradientLaw, GradientLawConfig, PublishedLaw,
-    PublishedLawConfig,
+    ANGLE_REF_RAD, CorrectedLaw, CorrectedLawConfig, GradientLaw, GradientLawConfig, PublishedLaw,
+    PublishedLawConfig, RATE_REF_RAD_S, SPEED_REF_FRACTION,
 };
 pub use rigid_body::{SlidingState, StateRate, state_rate};
 

@@ -110,6 +110,7 @@ pub struct Ftr {
     first_terms: [f64; N_TERMS],
     first_coefs: [f64; 8],
     last_t: Option<f64>,
+    t0: f64,
     next_solve_t: f64,
     pending: u8,
     solutions: [Solution; 8],
@@ -175,6 +176,7 @@ impl Ftr {
             first_terms: [0.0; N_TERMS],
             first_coefs: [0.0; 8],
             last_t: None,
+            t0: 0.0,
             next_solve_t: f64::NEG_INFINITY,
             pending: 0,
             solutions: [Solution {
@@ -259,7 +261,10 @@ impl Ftr {
             }
             b[i] = s;
         }
-        if !well_conditioned(&a, p) {
+        // Weight for the size floor: a transform over the elapsed time T carries ~ (x T)² per
+        // frequency, so the floor is m T² · MIN_REGRESSOR_RMS².
+        let span = self.last_t.unwrap_or(0.0) - self.t0;
+        if !well_conditioned(&a, p, m as f64 * span * span, crate::linalg::MIN_SCALED_PIVOT) {
             return;
         }
         let mut l = [[0.0; N_TERMS]; N_TERMS];
@@ -352,6 +357,7 @@ impl Estimator for Ftr {
             None => {
                 self.first_terms = term_values;
                 self.first_coefs = coef_values;
+                self.t0 = s.t_s;
                 None
             }
             Some(t0) => {

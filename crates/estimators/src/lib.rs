@@ -10,7 +10,9 @@
 //!   preset ([`ModelStructure`]);
 //! - one estimator interface, [`Estimator`]: consume a sample, give [`Estimates`] (value, σ,
 //!   whether identified) of the structure's parameters. Estimators that need a model state carry
-//!   and integrate it themselves, so each is usable from samples alone.
+//!   and integrate it themselves, so each is usable from samples alone: [`rls::Rls`], and the
+//!   model-reference estimators of [`model_reference`] (the thesis's sliding-mode estimator as
+//!   published, the corrected one, and the gradient law (3.3)).
 //!
 //! The crate is `no_std` (build with `--no-default-features`): fixed-capacity arrays, no
 //! allocation and no I/O in a per-sample update, so the same code can run on a flight computer.
@@ -35,6 +37,7 @@ pub mod flight_model;
 pub mod ftr;
 pub mod legacy_kalman;
 pub mod linalg;
+pub mod model_reference;
 pub mod prior;
 pub mod rls;
 pub mod sample;

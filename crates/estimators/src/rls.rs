@@ -33,6 +33,9 @@
 //! **WARNING:** the standard errors assume white equation errors; on real data residuals are
 //! coloured and the σ optimistic. Equation error is biased when the regressors are noisy.
 
+// Index loops follow the recursion's equations line by line.
+#![allow(clippy::needless_range_loop)]
+
 use crate::EstimatorError;
 use crate::estimator::{Estimates, Estimator, Status, check_finite};
 use crate::linalg::{Square, cholesky, cholesky_inverse, cholesky_solve, well_conditioned};
@@ -129,7 +132,9 @@ impl Fit {
             self.info_yy = self.info_yy * lambda + y * y;
             self.n_eff = self.n_eff * lambda + 1.0;
             self.count += 1;
-            if self.count >= init_samples.max(n) && well_conditioned(&self.info, n) {
+            if self.count >= init_samples.max(n)
+                && well_conditioned(&self.info, n, self.n_eff, INIT_MIN_SCALED_PIVOT)
+            {
                 let mut l = [[0.0; N_TERMS]; N_TERMS];
                 if cholesky(&self.info, n, &mut l) {
                     let mut theta = self.info_b;

@@ -135,14 +135,31 @@ pub trait Estimator {
     fn new_manoeuvre(&mut self) {}
 }
 
-/// Checks a sample's finite values and returns [`EstimatorError::NonFiniteInput`] naming the
-/// first non-finite field.
+/// Checks a sample before any estimator uses it: every present value finite
+/// ([`EstimatorError::NonFiniteInput`] naming the first that is not) and within the physical
+/// limits of [`crate::sample::PLAUSIBILITY`] ([`EstimatorError::ImplausibleInput`]).
 ///
 /// # Errors
 /// As described.
 pub fn check_finite(s: &AirDataSample) -> Result<(), EstimatorError> {
-    match s.first_non_finite() {
-        Some((field, value)) => Err(EstimatorError::NonFiniteInput { field, value, t_s: s.t_s }),
-        None => Ok(()),
+    if let Some((field, value)) = s.first_non_finite() {
+        return Err(EstimatorError::NonFiniteInput { field, value, t_s: s.t_s });
+    }
+    if let Some((field, value, limit)) = s.first_implausible() {
+        return Err(EstimatorError::ImplausibleInput { field, value, t_s: s.t_s, limit });
+    }
+    Ok(())
+}
+
+/// A measured coefficient checked against [`crate::sample::PLAUSIBILITY`]`.coefficient`.
+///
+/// # Errors
+/// [`EstimatorError::ImplausibleInput`] naming the coefficient.
+pub fn check_coefficient(field: &'static str, value: f64, t_s: f64) -> Result<f64, EstimatorError> {
+    let limit = crate::sample::PLAUSIBILITY.coefficient;
+    if value.is_finite() && value.abs() <= limit {
+        Ok(value)
+    } else {
+        Err(EstimatorError::ImplausibleInput { field, value, t_s, limit })
     }
 }

@@ -32,7 +32,7 @@
 //! a solve is spread over the samples rather than landing on one.
 
 use crate::EstimatorError;
-use crate::estimator::{Estimates, Estimator, Status, check_finite};
+use crate::estimator::{Estimates, Estimator, Status, check_coefficient, check_finite};
 use crate::linalg::{Square, cholesky, cholesky_inverse, cholesky_solve, well_conditioned};
 use crate::sample::AirDataSample;
 use crate::vocabulary::{Coefficient, ModelStructure, N_TERMS, Term};
@@ -347,11 +347,12 @@ impl Estimator for Ftr {
         }
         let mut coef_values = [0.0; 8];
         for c in self.structure.coefficients() {
-            coef_values[c.index()] = measured[c.index()].ok_or(EstimatorError::NonFiniteInput {
+            let y = measured[c.index()].ok_or(EstimatorError::NonFiniteInput {
                 field: c.name(),
                 value: f64::NAN,
                 t_s: s.t_s,
             })?;
+            coef_values[c.index()] = check_coefficient(c.name(), y, s.t_s)?;
         }
         let dt = match self.last_t {
             None => {

@@ -96,6 +96,19 @@ pub enum EstimatorError {
         /// Sample time, s.
         t_s: f64,
     },
+    /// An input value is finite but outside what any aircraft can produce (e.g. V = 1e308 m/s,
+    /// |α| > 10 rad, a measured coefficient of 1e300): a corrupt record, never a data point.
+    #[error("implausible input `{field}` = {value} at t = {t_s} s (limit {limit})")]
+    ImplausibleInput {
+        /// Name of the offending sample field.
+        field: &'static str,
+        /// The value received.
+        value: f64,
+        /// Sample time, s.
+        t_s: f64,
+        /// The physical limit it exceeds, in the field's unit.
+        limit: f64,
+    },
     /// A configuration value was out of its valid range.
     #[error("invalid configuration `{field}` = {value}: {reason}")]
     InvalidConfig {

@@ -37,7 +37,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::EstimatorError;
-use crate::estimator::{Estimates, Estimator, Status, check_finite};
+use crate::estimator::{Estimates, Estimator, Status, check_coefficient, check_finite};
 use crate::linalg::{Square, cholesky, cholesky_inverse, cholesky_solve, well_conditioned};
 use crate::sample::AirDataSample;
 use crate::vocabulary::{Coefficient, ModelStructure, N_TERMS, Term};
@@ -293,6 +293,7 @@ impl Estimator for Rls {
                 value: f64::NAN,
                 t_s: s.t_s,
             })?;
+            let y = check_coefficient(c.name(), y, s.t_s)?;
             let phi = f.regressors(s).ok_or(EstimatorError::NonFiniteInput {
                 field: "regressor (a term's channel is absent)",
                 value: f64::NAN,

@@ -113,6 +113,59 @@ pub struct AirDataSample {
     pub constants: AircraftConstants,
 }
 
+/// Limits no aircraft sample can exceed (SI). They are sanity limits against corrupt records,
+/// not tuning: anything beyond them is refused as implausible by every estimator.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Plausibility {
+    /// Largest true airspeed, m/s (Mach ≈ 15 at sea level).
+    pub vt_mps: f64,
+    /// Smallest dynamic pressure, Pa (≈ 1.3 m/s at sea level: below it no coefficient is
+    /// measurable).
+    pub qbar_min_pa: f64,
+    /// Largest dynamic pressure, Pa.
+    pub qbar_max_pa: f64,
+    /// Largest |α|, |β|, |φ|, |θ|, rad.
+    pub angle_rad: f64,
+    /// Largest |p|, |q|, |r|, |α̇|, rad/s.
+    pub rate_rad_s: f64,
+    /// Largest angular acceleration, rad/s².
+    pub accel_rad_s2: f64,
+    /// Largest |specific force|, m/s² (≈ 100 g).
+    pub specific_force_mps2: f64,
+    /// Largest |surface deflection|, rad (90°).
+    pub surface_rad: f64,
+    /// Largest |thrust|, N.
+    pub thrust_n: f64,
+    /// Largest air density, kg/m³.
+    pub rho_kgpm3: f64,
+    /// Largest mass, kg.
+    pub mass_kg: f64,
+    /// Largest reference length, m.
+    pub length_m: f64,
+    /// Largest moment of inertia, kg·m².
+    pub inertia_kgm2: f64,
+    /// Largest |measured coefficient| (aerodynamic coefficients are O(1)).
+    pub coefficient: f64,
+}
+
+/// The limits every estimator applies ([`AirDataSample::first_implausible`]).
+pub const PLAUSIBILITY: Plausibility = Plausibility {
+    vt_mps: 5000.0,
+    qbar_min_pa: 1.0,
+    qbar_max_pa: 1e7,
+    angle_rad: 10.0,
+    rate_rad_s: 50.0,
+    accel_rad_s2: 1000.0,
+    specific_force_mps2: 1000.0,
+    surface_rad: core::f64::consts::FRAC_PI_2,
+    thrust_n: 1e8,
+    rho_kgpm3: 10.0,
+    mass_kg: 1e7,
+    length_m: 1000.0,
+    inertia_kgm2: 1e12,
+    coefficient: 1000.0,
+};
+
 /// The eight non-dimensional aerodynamic coefficients, in the order of
 /// [`Coefficient::ALL`](crate::vocabulary::Coefficient::ALL): `CX CY CZ CL CD Cl Cm Cn`.
 pub type CoefficientValues = [Option<f64>; 8];
@@ -177,6 +230,51 @@ impl AirDataSample {
             ("v0_mps", c.v0_mps),
         ];
         opt.iter().find_map(|(n, v)| v.filter(|x| !x.is_finite()).map(|x| (*n, x)))
+    }
+
+    /// The first field outside the limits of [`PLAUSIBILITY`] (`None` fields are not
+    /// checked): `(field, value, limit)`. Finite but impossible values come from corrupt
+    /// records (a 1e308 in a column) and would otherwise overflow the estimators.
+    pub fn first_implausible(&self) -> Option<(&'static str, f64, f64)> {
+        let c = &self.constants;
+        let l = &PLAUSIBILITY;
+        let within = |v: f64, lo: f64, hi: f64| v >= lo && v <= hi;
+        let checks: [(&'static str, Option<f64>, f64, f64); 30] = [
+            ("vt_mps", Some(self.vt_mps), f64::MIN_POSITIVE, l.vt_mps),
+            ("qbar_pa", Some(self.qbar_pa), l.qbar_min_pa, l.qbar_max_pa),
+            ("alpha_rad", Some(self.alpha_rad), -l.angle_rad, l.angle_rad),
+            ("beta_rad", self.beta_rad, -l.angle_rad, l.angle_rad),
+            ("phi_rad", self.phi_rad, -l.angle_rad, l.angle_rad),
+            ("theta_rad", self.theta_rad, -l.angle_rad, l.angle_rad),
+            ("p_rad_s", self.p_rad_s, -l.rate_rad_s, l.rate_rad_s),
+            ("q_rad_s", self.q_rad_s, -l.rate_rad_s, l.rate_rad_s),
+            ("r_rad_s", self.r_rad_s, -l.rate_rad_s, l.rate_rad_s),
+            ("pdot_rad_s2", self.pdot_rad_s2, -l.accel_rad_s2, l.accel_rad_s2),
+            ("qdot_rad_s2", self.qdot_rad_s2, -l.accel_rad_s2, l.accel_rad_s2),
+            ("rdot_rad_s2", self.rdot_rad_s2, -l.accel_rad_s2, l.accel_rad_s2),
+            ("alphadot_rad_s", self.alphadot_rad_s, -l.rate_rad_s, l.rate_rad_s),
+            ("ax_mps2", self.ax_mps2, -l.specific_force_mps2, l.specific_force_mps2),
+            ("ay_mps2", self.ay_mps2, -l.specific_force_mps2, l.specific_force_mps2),
+            ("az_mps2", self.az_mps2, -l.specific_force_mps2, l.specific_force_mps2),
+            ("de_rad", self.de_rad, -l.surface_rad, l.surface_rad),
+            ("da_rad", self.da_rad, -l.surface_rad, l.surface_rad),
+            ("dr_rad", self.dr_rad, -l.surface_rad, l.surface_rad),
+            ("thrust_n", self.thrust_n, -l.thrust_n, l.thrust_n),
+            ("thrust_moment_nm", self.thrust_moment_nm, -l.thrust_n * 100.0, l.thrust_n * 100.0),
+            ("rho_kgpm3", self.rho_kgpm3, f64::MIN_POSITIVE, l.rho_kgpm3),
+            ("mass_kg", Some(c.mass_kg), f64::MIN_POSITIVE, l.mass_kg),
+            ("S_m2", Some(c.S_m2), f64::MIN_POSITIVE, l.length_m * l.length_m),
+            ("cbar_m", c.cbar_m, f64::MIN_POSITIVE, l.length_m),
+            ("b_m", c.b_m, f64::MIN_POSITIVE, l.length_m),
+            ("Ixx_kgm2", c.Ixx_kgm2, f64::MIN_POSITIVE, l.inertia_kgm2),
+            ("Iyy_kgm2", c.Iyy_kgm2, f64::MIN_POSITIVE, l.inertia_kgm2),
+            ("Izz_kgm2", c.Izz_kgm2, f64::MIN_POSITIVE, l.inertia_kgm2),
+            ("Ixz_kgm2", c.Ixz_kgm2, -l.inertia_kgm2, l.inertia_kgm2),
+        ];
+        checks.iter().find_map(|(name, v, lo, hi)| {
+            let v = (*v)?;
+            (!within(v, *lo, *hi)).then_some((*name, v, if v < *lo { *lo } else { *hi }))
+        })
     }
 
     /// The measured coefficients `CX CY CZ CL CD Cl Cm Cn` of this sample (module doc), each

@@ -488,7 +488,10 @@ mod tests {
                 im -= (alpha(t) - a0) * (w * t).sin() * dt;
             }
             let got = ftr.x.terms[Term::Alpha.index()][m];
-            assert!((got.0 - re).abs() < 1e-10 && (got.1 - im).abs() < 1e-10, "m={m} {got:?} {re} {im}");
+            assert!(
+                (got.0 - re).abs() < 1e-10 && (got.1 - im).abs() < 1e-10,
+                "m={m} {got:?} {re} {im}"
+            );
         }
     }
 

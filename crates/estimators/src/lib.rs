@@ -35,6 +35,8 @@ pub mod flight_model;
 pub mod ftr;
 pub mod legacy_kalman;
 pub mod linalg;
+#[cfg(feature = "std")]
+pub mod output_error;
 pub mod prior;
 pub mod rls;
 pub mod sample;

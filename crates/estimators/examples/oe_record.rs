@@ -7,7 +7,10 @@
 //! `q c̄/2V`), `twin-otter` (017+018+019 as three manoeuvres, longitudinal), `attas-lon`
 //! (fAttasElv1 + fAttasElv2), `attas-lat` (fAttasAilRud1), `attas-lat2` (fAttasAilRud1 +
 //! fAttasAilRud2); every record is split into manoeuvres at its time gaps (each AilRud
-//! record holds an aileron and a rudder manoeuvre). `--x0` estimates the initial states; `--biases` estimates output biases on
+//! record holds an aileron and a rudder manoeuvre). `--x0` estimates the initial states; `--book-start` (hfb320) starts from the book's
+//! starting values; `--start-priors` from the generic priors; `--relaxation` uses Jategaonkar's
+//! relaxation step; `--t1 S` keeps the first S seconds of each record; `--max-lag K` caps the
+//! coloured-residual lag; `--biases` estimates output biases on
 //! the rates, angular accelerations and specific forces.
 #![allow(missing_docs)]
 
@@ -82,6 +85,14 @@ fn main() -> Result<(), String> {
     }
     if flag("--relaxation") {
         cfg.step = aeroident_estimators::output_error::StepKind::Relaxation;
+    }
+    if flag("--book-start") {
+        // The book's starting values (mDefCase04.m), structure order CL(0, α, V), CD(0, α, V),
+        // Cm(0, α, δe, V, q0): they fit the data badly (README).
+        cfg.start = aeroident_estimators::output_error::Start::Given(vec![
+            -0.318267, 5.37576, 0.260317, 0.00567516, 0.674256, 0.00772612, 0.0498218, -0.498586,
+            -0.990687, 0.0189182, -25.8439,
+        ]);
     }
     if flag("--start-priors") {
         cfg.start = aeroident_estimators::output_error::Start::Priors;

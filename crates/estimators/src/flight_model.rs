@@ -47,7 +47,7 @@
 //! `q̄ = ½ ρ V²` with the model's `V`. The aerodynamic coefficients are the structure's
 //! linear-in-parameters model `C_k = Σ_j θ_kj ξ_j`; a term's regressor `ξ_j` is formed from the
 //! **model** states where it depends on a state (`α`, `β`, `p̂ = p b/2V`, `q̂ = q c̄/2V`,
-//! `r̂ = r b/2V`, `V/V0`, `α²`, `α β`, `α δe`) and from the sample for the controls.
+//! `r̂ = r b/2V`, `V/V0`, `α²`, `α β`, `α δe`, `q c̄/2V0`) and from the sample for the controls.
 //! Lift and drag (stability axes) are rotated into body axes through `α` (the inverse of the
 //! relation in [`crate::sample`]): `CX = CL sin α − CD cos α`, `CZ = −CL cos α − CD sin α`; or
 //! `CX`, `CZ` are used directly. Thrust `T` acts along the thrust line inclined by `σT`
@@ -482,6 +482,10 @@ impl FlightModel {
                     Term::Q => needs.cbar = true,
                     Term::P | Term::R => needs.b = true,
                     Term::V => needs.v0 = true,
+                    Term::Q0 => {
+                        needs.cbar = true;
+                        needs.v0 = true;
+                    }
                     Term::Alphadot => {
                         needs.cbar = true;
                         needs.alphadot = true;
@@ -683,6 +687,7 @@ impl FlightModel {
                 Term::Alpha2 => al * al,
                 Term::AlphaDe => al * u.de_rad,
                 Term::AlphaBeta => al * be,
+                Term::Q0 => q * (u.cbar_m / (2.0 * u.v0_mps)),
             }
         };
         // C0_k (without α̇ term) and D_k = ∂C_k/∂(α̇ c̄/2V).

@@ -38,6 +38,8 @@ pub mod ftr;
 pub mod legacy_kalman;
 pub mod linalg;
 pub mod model_reference;
+#[cfg(feature = "std")]
+pub mod output_error;
 pub mod prior;
 pub mod rls;
 pub mod sample;

@@ -25,6 +25,7 @@
 //! | α² | `alpha2` | α², rad² |
 //! | α·δe | `alpha_de` | α δe, rad² |
 //! | α·β | `alpha_beta` | α β, rad² |
+//! | q̂0 | `q0` | q c̄ / (2 V0): the pitch rate normalised with the reference speed, as Jategaonkar 2015 eq. 5.86 (HFB-320 test case 4) writes `Cm_q` |
 //!
 //! Parameter names follow the field: `Cm_alpha`, `Cm_q`, `Cm_alphadot`, `CL_alpha`, `CY_beta`,
 //! `Cl_p`, `Cn_r`, `Cn_dr`, `Cm_V`, `Cm_alpha2`, `CD_0` … Parameters are ordered coefficient by
@@ -90,7 +91,7 @@ impl Coefficient {
 const COEFFICIENT_NAMES: [&str; 8] = ["CX", "CY", "CZ", "CL", "CD", "Cl", "Cm", "Cn"];
 
 /// Number of terms in the vocabulary.
-pub const N_TERMS: usize = 14;
+pub const N_TERMS: usize = 15;
 
 /// One regressor of a linear coefficient model (table in the module doc).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -123,6 +124,9 @@ pub enum Term {
     AlphaDe,
     /// `α β`, rad².
     AlphaBeta,
+    /// `q c̄ / (2 V0)`: pitch rate normalised with the constant reference speed `V0`
+    /// (Jategaonkar 2015 eq. 5.86, the HFB-320 model of test case 4), not with `V` as [`Term::Q`].
+    Q0,
 }
 
 const TERM_NAMES: [&str; N_TERMS] = [
@@ -140,6 +144,7 @@ const TERM_NAMES: [&str; N_TERMS] = [
     "alpha2",
     "alpha_de",
     "alpha_beta",
+    "q0",
 ];
 
 macro_rules! param_names {
@@ -148,7 +153,7 @@ macro_rules! param_names {
             concat!($c, "_0"), concat!($c, "_alpha"), concat!($c, "_beta"), concat!($c, "_p"),
             concat!($c, "_q"), concat!($c, "_r"), concat!($c, "_alphadot"), concat!($c, "_de"),
             concat!($c, "_da"), concat!($c, "_dr"), concat!($c, "_V"), concat!($c, "_alpha2"),
-            concat!($c, "_alpha_de"), concat!($c, "_alpha_beta"),
+            concat!($c, "_alpha_de"), concat!($c, "_alpha_beta"), concat!($c, "_q0"),
         ]),*]
     };
 }
@@ -174,6 +179,7 @@ impl Term {
         Term::Alpha2,
         Term::AlphaDe,
         Term::AlphaBeta,
+        Term::Q0,
     ];
 
     /// Index in [`Term::ALL`].
@@ -211,6 +217,7 @@ impl Term {
             Term::Alpha2 => s.alpha_rad * s.alpha_rad,
             Term::AlphaDe => s.alpha_rad * s.de_rad?,
             Term::AlphaBeta => s.alpha_rad * s.beta_rad?,
+            Term::Q0 => s.q_rad_s? * c.cbar_m? / (2.0 * c.v0_mps?),
         })
     }
 }
@@ -503,6 +510,8 @@ mod tests {
         assert!((v(Term::V) - 1.25).abs() < 1e-15);
         assert!((v(Term::AlphaDe) + 0.003).abs() < 1e-15);
         assert!((v(Term::AlphaBeta) - 0.002).abs() < 1e-15);
+        assert!((v(Term::Q0) - 0.05 * 3.0 / 160.0).abs() < 1e-15);
+        assert_eq!(Param::from_name("Cm_q0"), Some(Param::new(Coefficient::Cm, Term::Q0)));
         assert!(Term::Da.value(&s).is_none());
         let st = ModelStructure::empty().with(Coefficient::Cm, &[Term::Bias, Term::Alpha, Term::Q]);
         let cm = coefficient_value(&st, &[0.1, -1.0, -20.0], Coefficient::Cm, &s).unwrap();

@@ -78,7 +78,7 @@ fn rich_lon() -> ModelStructure {
     ModelStructure::longitudinal()
         .with(C::CD, &[T::Alpha2, T::V])
         .with(C::CL, &[T::AlphaDe])
-        .with(C::Cm, &[T::V, T::Alpha2])
+        .with(C::Cm, &[T::V, T::Alpha2, T::Q0])
 }
 
 fn body_lon() -> ModelStructure {

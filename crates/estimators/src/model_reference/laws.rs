@@ -222,6 +222,9 @@ fn regressor_reference(t: Term, s: &AirDataSample) -> f64 {
         Term::Alpha | Term::Beta | Term::De | Term::Da | Term::Dr => ANGLE_REF_RAD,
         Term::P | Term::R => RATE_REF_RAD_S * k.b_m.unwrap_or(f64::NAN) / two_v,
         Term::Q | Term::Alphadot => RATE_REF_RAD_S * k.cbar_m.unwrap_or(f64::NAN) / two_v,
+        Term::Q0 => {
+            RATE_REF_RAD_S * k.cbar_m.unwrap_or(f64::NAN) / (2.0 * k.v0_mps.unwrap_or(f64::NAN))
+        }
         Term::V => SPEED_REF_FRACTION,
         Term::Alpha2 | Term::AlphaDe | Term::AlphaBeta => ANGLE_REF_RAD * ANGLE_REF_RAD,
     }

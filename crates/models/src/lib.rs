@@ -17,6 +17,9 @@ pub mod f16;
 pub mod integrate;
 /// Central-difference linearization, eigenvalues and F-16 mode identification (SLJ §3.7–3.8).
 pub mod linearize;
+/// Flat-earth 6-DOF rigid-body equations shared by the aircraft models (SLJ §2.5, §3.5): one
+/// rotation matrix, one wind convention.
+pub mod rigid_body;
 /// Trim of the F-16: wings-level, coordinated turn, pull-up (SLJ §3.6; thesis index 2.31).
 pub mod trim;
 

@@ -12,11 +12,18 @@
 //! Throttle 0–1, elevator/aileron/rudder in **radians** (the tables take degrees internally),
 //! textbook signs: positive deflection gives a negative moment (README §3). Plus the wind.
 //!
+//! # Structure
+//! [`F16::evaluate`](crate::f16::F16::evaluate) is the F-16's own part of subroutine F (air
+//! data, engine, table aerodynamics, increments, loads) on top of the aircraft-independent
+//! flat-earth rigid body of [`crate::rigid_body`] (force, kinematic, moment and navigation
+//! equations; states 0–11).
+//!
 //! # Wind
-//! Wind enters only the aerodynamics: the body-axis wind `C_body←NED · w_NED + w_body` is subtracted
-//! from the body velocity before air-relative `vt, α, β`, Mach and q̄ are computed; gravity,
-//! kinematics and navigation use the inertial velocity. Wind gradients (rotational
-//! turbulence) are not modelled. With zero wind the model is the textbook's exactly.
+//! The convention of [`crate::rigid_body`]: wind is the air's velocity over the ground, and
+//! the air-relative velocity is the inertial velocity minus the body-axis wind
+//! `C_body←NED · w_NED + w_body`. Wind enters only the aerodynamics (air-relative `vt, α, β`,
+//! Mach, q̄); gravity, kinematics and navigation use the inertial velocity. Wind gradients
+//! (rotational turbulence) are not modelled. With zero wind the model is the textbook's exactly.
 //!
 //! # Units and signs
 //! ft, s, slug, lbf, rad. Body axes x forward, y right, z down; altitude up (ḣ = −ż_NED).
@@ -59,8 +66,11 @@ pub use increments::{
 };
 
 use crate::atmosphere::air_data;
+use crate::rigid_body::{
+    self, BodyLoads, InertiaConstants, Kinematics, RigidBody, VelocityAngles, Wind,
+};
 use crate::{Dynamics, ModelError};
-use nalgebra::SVector;
+use nalgebra::{SVector, Vector3};
 use table::Extrapolation;
 
 /// Number of states.
@@ -69,31 +79,31 @@ pub const N_STATES: usize = 13;
 pub const N_CONTROLS: usize = 4;
 
 /// State index: true airspeed, ft/s.
-pub const VT: usize = 0;
+pub const VT: usize = rigid_body::VT;
 /// State index: angle of attack, rad.
-pub const ALPHA: usize = 1;
+pub const ALPHA: usize = rigid_body::ALPHA;
 /// State index: sideslip, rad.
-pub const BETA: usize = 2;
+pub const BETA: usize = rigid_body::BETA;
 /// State index: roll angle φ, rad.
-pub const PHI: usize = 3;
+pub const PHI: usize = rigid_body::PHI;
 /// State index: pitch angle θ, rad.
-pub const THETA: usize = 4;
+pub const THETA: usize = rigid_body::THETA;
 /// State index: heading ψ, rad.
-pub const PSI: usize = 5;
+pub const PSI: usize = rigid_body::PSI;
 /// State index: body roll rate p, rad/s.
-pub const P: usize = 6;
+pub const P: usize = rigid_body::P;
 /// State index: body pitch rate q, rad/s.
-pub const Q: usize = 7;
+pub const Q: usize = rigid_body::Q;
 /// State index: body yaw rate r, rad/s.
-pub const R: usize = 8;
+pub const R: usize = rigid_body::R;
 /// State index: north position, ft.
-pub const NORTH: usize = 9;
+pub const NORTH: usize = rigid_body::NORTH;
 /// State index: east position, ft.
-pub const EAST: usize = 10;
+pub const EAST: usize = rigid_body::EAST;
 /// State index: altitude (up), ft.
-pub const ALT: usize = 11;
+pub const ALT: usize = rigid_body::ALT;
 /// State index: engine power, percent.
-pub const POW: usize = 12;
+pub const POW: usize = rigid_body::N_STATES;
 
 /// State names with units, in state order (also CSV column names).
 pub const STATE_NAMES: [&str; N_STATES] = [
@@ -373,7 +383,9 @@ impl F16 {
         self.evaluate(x, u, &self.increments_at(t_s)).map(|(_, o)| o)
     }
 
-    /// State derivatives and outputs together, with explicit increments.
+    /// State derivatives and outputs together, with explicit increments: SLJ §3.5 subroutine F,
+    /// split into the F-16's own parts (air data, engine, aerodynamic build-up, loads) and the
+    /// shared flat-earth rigid body ([`crate::rigid_body`]).
     ///
     /// # Errors
     /// [`ModelError::InvalidValue`] when a state or control is not finite, `vt` (inertial or
@@ -385,174 +397,93 @@ impl F16 {
         u: &F16Controls,
         inc: &AeroIncrements,
     ) -> Result<(F16State, F16Outputs), ModelError> {
-        for (k, v) in x.iter().enumerate() {
-            if !v.is_finite() {
-                return Err(ModelError::InvalidValue {
-                    field: STATE_NAMES[k],
-                    value: *v,
-                    reason: "not finite",
-                });
-            }
-        }
-        let ctl = [
-            u.throttle,
-            u.elevator_rad,
-            u.aileron_rad,
-            u.rudder_rad,
-            u.wind_ned_fps[0],
-            u.wind_ned_fps[1],
-            u.wind_ned_fps[2],
-            u.wind_body_fps[0],
-            u.wind_body_fps[1],
-            u.wind_body_fps[2],
-        ];
-        const CTL: [&str; 10] = [
-            "throttle",
-            "elevator_rad",
-            "aileron_rad",
-            "rudder_rad",
-            "wind_north_fps",
-            "wind_east_fps",
-            "wind_down_fps",
-            "wind_body_x_fps",
-            "wind_body_y_fps",
-            "wind_body_z_fps",
-        ];
-        for (k, v) in ctl.iter().enumerate() {
-            if !v.is_finite() {
-                return Err(ModelError::InvalidValue {
-                    field: CTL[k],
-                    value: *v,
-                    reason: "not finite",
-                });
-            }
-        }
-        let d = self.data;
-        let vt = x[VT];
-        if vt <= 0.0 {
-            return Err(ModelError::InvalidValue {
-                field: "vt_fps",
-                value: vt,
-                reason: "must be > 0",
-            });
-        }
-        let (alpha, beta, phi, theta, psi) = (x[ALPHA], x[BETA], x[PHI], x[THETA], x[PSI]);
-        let (p, q, r) = (x[P], x[Q], x[R]);
-        let alt = x[ALT];
-        let pow = x[POW];
-        let (sth, cth) = theta.sin_cos();
-        if cth == 0.0 {
-            return Err(ModelError::InvalidValue {
-                field: "theta_rad",
-                value: theta,
-                reason: "Euler-angle singularity at |theta| = 90 deg",
-            });
-        }
-        let (sph, cph) = phi.sin_cos();
-        let (spsi, cpsi) = psi.sin_cos();
+        check_finite(x, u)?;
+        let kin = Kinematics::new(&x.fixed_rows::<{ rigid_body::N_STATES }>(0).into_owned())?;
+        let air = kin.air_relative(&Wind {
+            ned_fps: u.wind_ned_fps.into(),
+            body_fps: u.wind_body_fps.into(),
+        })?;
+        let ad = air_data(&self.data.atmosphere, air.vt_fps, x[ALT])?;
+        let (thrust, pow_dot) = self.engine(x[POW], u.throttle, x[ALT], ad.mach);
+        let coefficients = self.aero_coefficients(&air, [x[P], x[Q], x[R]], u, inc);
+        let loads = self.forces_and_moments(&coefficients, ad.qbar_psf, thrust);
+        let rb = self.rigid_body().derivatives(&kin, &loads)?;
 
-        // Inertial body velocity.
-        let cbta = beta.cos();
-        let (salp, calp) = alpha.sin_cos();
-        let u_b = vt * calp * cbta;
-        let v_b = vt * beta.sin();
-        let w_b = vt * salp * cbta;
-
-        // Direction cosines body←NED (rows: body x, y, z).
-        let t1 = sph * cpsi;
-        let t2 = cph * sth;
-        let t3 = sph * spsi;
-        let s1 = cth * cpsi;
-        let s2 = cth * spsi;
-        let s3 = t1 * sth - cph * spsi;
-        let s4 = t3 * sth + cph * cpsi;
-        let s5 = sph * cth;
-        let s6 = t2 * cpsi + t3;
-        let s7 = t2 * spsi - t1;
-        let s8 = cph * cth;
-
-        // Air-relative velocity.
-        let still_air = u.wind_ned_fps == [0.0; 3] && u.wind_body_fps == [0.0; 3];
-        let (vta, alpha_a, beta_a) = if still_air {
-            (vt, alpha, beta)
-        } else {
-            let [wn, we, wd] = u.wind_ned_fps;
-            let [wx, wy, wz] = u.wind_body_fps;
-            let ua = u_b - (s1 * wn + s2 * we - sth * wd) - wx;
-            let va = v_b - (s3 * wn + s4 * we + s5 * wd) - wy;
-            let wa = w_b - (s6 * wn + s7 * we + s8 * wd) - wz;
-            let vta = (ua * ua + va * va + wa * wa).sqrt();
-            if vta <= 0.0 {
-                return Err(ModelError::InvalidValue {
-                    field: "vt_air_fps",
-                    value: vta,
-                    reason: "air-relative speed must be > 0",
-                });
-            }
-            (vta, wa.atan2(ua), (va / vta).clamp(-1.0, 1.0).asin())
+        let mut xd = F16State::zeros();
+        xd.fixed_rows_mut::<{ rigid_body::N_STATES }>(0).copy_from(&rb.xdot);
+        xd[POW] = pow_dot;
+        let out = F16Outputs {
+            nx_g: rb.nx_g,
+            ny_g: rb.ny_g,
+            nz_g: rb.nz_g,
+            qbar_psf: ad.qbar_psf,
+            mach: ad.mach,
+            vt_air_fps: air.vt_fps,
+            alpha_air_rad: air.alpha_rad,
+            beta_air_rad: air.beta_rad,
+            thrust_lbf: thrust,
+            coefficients,
         };
+        Ok((xd, out))
+    }
 
-        let ad = air_data(&d.atmosphere, vta, alt)?;
-        let cpow = tgear(&d.engine, u.throttle);
-        let pow_dot = pdot(&d.engine, pow, cpow);
-        let thrust = thrust_lbf(d, pow, alt, ad.mach);
-
-        // Aerodynamic build-up (SLJ §3.5; README §5). Tables in degrees.
-        let lin = Extrapolation::Linear;
-        let rtod = d.rad_to_deg;
-        let a_deg = alpha_a * rtod;
-        let b_deg = beta_a * rtod;
-        let el = u.elevator_rad.to_degrees();
-        let ail = u.aileron_rad.to_degrees();
-        let rdr = u.rudder_rad.to_degrees();
-        let dail = ail / d.aileron_scale_deg;
-        let drdr = rdr / d.rudder_scale_deg;
-        let sign_b = if b_deg < 0.0 { -1.0 } else { 1.0 };
-        let abs_b = b_deg.abs();
-
-        // Locate each argument once on its (shared, checked at load) axis.
-        let sa_ = table::segment(&d.cx.r, a_deg, lin);
-        let se_ = table::segment(&d.cx.c, el, lin);
-        let sab_ = table::segment(&d.cl.c, abs_b, lin);
-        let sb_ = table::segment(&d.dlda.c, b_deg, lin);
-        let mut cxt = d.cx.at(sa_, se_);
-        let mut cyt = d.cy.beta_coefficient_per_deg * b_deg
-            + d.cy.aileron_coefficient * (ail / d.cy.aileron_scale_deg)
-            + d.cy.rudder_coefficient * (rdr / d.cy.rudder_scale_deg);
-        let bs = b_deg / d.cz.beta_scale_deg;
-        let mut czt = d.cz.table.at(sa_) * (1.0 - bs * bs)
-            + d.cz.elevator_coefficient * (el / d.cz.elevator_scale_deg);
-        let mut clt =
-            sign_b * d.cl.at(sa_, sab_) + d.dlda.at(sa_, sb_) * dail + d.dldr.at(sa_, sb_) * drdr;
-        let mut cmt = d.cm.at(sa_, se_);
-        let mut cnt =
-            sign_b * d.cn.at(sa_, sab_) + d.dnda.at(sa_, sb_) * dail + d.dndr.at(sa_, sb_) * drdr;
-
-        let g = &d.geometry;
-        let tvt = 0.5 / vta;
-        let b2v = g.span_ft * tvt;
-        let cq = g.cbar_ft * q * tvt;
-        let mut dmp = [0.0; 9];
-        for (k, t) in d.damping.iter().enumerate() {
-            dmp[k] = t.at(sa_);
+    /// The F-16 as a rigid body (SLJ §3.5): mass `1/RM`, the textbook's rounded moment
+    /// constants c1…c9 (not recomputed from the inertias, so the check case of Table 3.5-2 is
+    /// reproduced) and the model's g = 32.17 ft/s².
+    pub fn rigid_body(&self) -> RigidBody {
+        let (m, c) = (&self.data.mass, &self.data.moment);
+        RigidBody {
+            mass_slug: m.mass_slug(),
+            inertia: InertiaConstants {
+                c1: c.c1,
+                c2: c.c2,
+                c3: c.c3,
+                c4: c.c4,
+                c5: c.c5,
+                c6: c.c6,
+                c7: c.c7,
+                c8: c.c8,
+                c9: c.c9,
+            },
+            g_fps2: m.g_ft_per_s2,
         }
-        cxt += cq * dmp[0];
-        cyt += b2v * (dmp[1] * r + dmp[2] * p);
-        czt += cq * dmp[3];
-        clt += b2v * (dmp[4] * r + dmp[5] * p);
-        cmt += cq * dmp[6] + czt * (g.xcgr - self.xcg);
-        cnt += b2v * (dmp[7] * r + dmp[8] * p) - cyt * (g.xcgr - self.xcg) * g.cbar_ft / g.span_ft;
+    }
 
-        let (sa, ca) = if still_air { (salp, calp) } else { alpha_a.sin_cos() };
+    /// Engine (SLJ §3.5 TGEAR, PDOT, THRUST): thrust (lbf) and power rate (percent/s) at power
+    /// `pow` (percent), `throttle` (0–1), altitude `alt_ft` and `mach`.
+    fn engine(&self, pow: f64, throttle: f64, alt_ft: f64, mach: f64) -> (f64, f64) {
+        let d = self.data;
+        let cpow = tgear(&d.engine, throttle);
+        (thrust_lbf(d, pow, alt_ft, mach), pdot(&d.engine, pow, cpow))
+    }
+
+    /// Total coefficients at the cg (SLJ §3.5; data README §5): table build-up, rate damping and
+    /// cg shift, then the increments `inc`, at the air-relative `air` and body rates
+    /// `[p, q, r]` (rad/s).
+    fn aero_coefficients(
+        &self,
+        air: &VelocityAngles,
+        pqr: [f64; 3],
+        u: &F16Controls,
+        inc: &AeroIncrements,
+    ) -> AeroCoefficients {
+        let d = self.data;
+        // α is located once on the shared α axis of every table (checked at load).
+        let a_deg = air.alpha_rad * d.rad_to_deg;
+        let sa = table::segment(&d.cx.r, a_deg, Extrapolation::Linear);
+        let mut c = self.static_coefficients(sa, air.beta_rad * d.rad_to_deg, u);
+        self.add_damping_and_cg(&mut c, sa, air.vt_fps, pqr);
+        let (s_alpha, c_alpha) = air.alpha_rad.sin_cos();
         if !inc.is_zero() {
+            let g = &d.geometry;
             let dc = inc.deltas(
                 &IncrementInputs {
-                    vt_fps: vta,
-                    alpha_rad: alpha_a,
-                    beta_rad: beta_a,
-                    p_rad_s: p,
-                    q_rad_s: q,
-                    r_rad_s: r,
+                    vt_fps: air.vt_fps,
+                    alpha_rad: air.alpha_rad,
+                    beta_rad: air.beta_rad,
+                    p_rad_s: pqr[0],
+                    q_rad_s: pqr[1],
+                    r_rad_s: pqr[2],
                     elevator_rad: u.elevator_rad,
                     aileron_rad: u.aileron_rad,
                     rudder_rad: u.rudder_rad,
@@ -560,88 +491,150 @@ impl F16 {
                 g.span_ft,
                 g.cbar_ft,
             );
+            // ΔCL, ΔCD are stability-axis: rotate into body x, z by the air-relative α.
             let (dcl, dcd) = (dc[AeroCoefficient::CL as usize], dc[AeroCoefficient::CD as usize]);
-            cxt += dcl * sa - dcd * ca;
-            czt += -dcl * ca - dcd * sa;
-            cyt += dc[AeroCoefficient::CY as usize];
-            clt += dc[AeroCoefficient::Cl as usize];
-            cmt += dc[AeroCoefficient::Cm as usize];
-            cnt += dc[AeroCoefficient::Cn as usize];
+            c.CX += dcl * s_alpha - dcd * c_alpha;
+            c.CZ += -dcl * c_alpha - dcd * s_alpha;
+            c.CY += dc[AeroCoefficient::CY as usize];
+            c.Cl += dc[AeroCoefficient::Cl as usize];
+            c.Cm += dc[AeroCoefficient::Cm as usize];
+            c.Cn += dc[AeroCoefficient::Cn as usize];
         }
+        c.CL = c.CX * s_alpha - c.CZ * c_alpha;
+        c.CD = -c.CX * c_alpha - c.CZ * s_alpha;
+        c
+    }
 
-        // Forces (inertial velocity; aero from air-relative q̄).
-        let m = &d.mass;
-        let gd = m.g_ft_per_s2;
-        let rm = m.inverse_mass_per_slug;
-        let qs = ad.qbar_psf * g.wing_area_ft2;
+    /// Static and control coefficients from the tables (SLJ App. A: CX, CY, CZ, CL, DLDA, DLDR,
+    /// CM, CN, DNDA, DNDR; degrees) at the located α segment `sa`, sideslip `b_deg` and the
+    /// surfaces of `u`. CL and CD are left zero.
+    fn static_coefficients(
+        &self,
+        sa: table::Segment,
+        b_deg: f64,
+        u: &F16Controls,
+    ) -> AeroCoefficients {
+        let d = self.data;
+        let lin = Extrapolation::Linear;
+        let el = u.elevator_rad.to_degrees();
+        let ail = u.aileron_rad.to_degrees();
+        let rdr = u.rudder_rad.to_degrees();
+        let dail = ail / d.aileron_scale_deg;
+        let drdr = rdr / d.rudder_scale_deg;
+        let sign_b = if b_deg < 0.0 { -1.0 } else { 1.0 };
+        let se = table::segment(&d.cx.c, el, lin);
+        let sab = table::segment(&d.cl.c, b_deg.abs(), lin);
+        let sb = table::segment(&d.dlda.c, b_deg, lin);
+        let bs = b_deg / d.cz.beta_scale_deg;
+        AeroCoefficients {
+            CX: d.cx.at(sa, se),
+            CY: d.cy.beta_coefficient_per_deg * b_deg
+                + d.cy.aileron_coefficient * (ail / d.cy.aileron_scale_deg)
+                + d.cy.rudder_coefficient * (rdr / d.cy.rudder_scale_deg),
+            CZ: d.cz.table.at(sa) * (1.0 - bs * bs)
+                + d.cz.elevator_coefficient * (el / d.cz.elevator_scale_deg),
+            Cl: sign_b * d.cl.at(sa, sab) + d.dlda.at(sa, sb) * dail + d.dldr.at(sa, sb) * drdr,
+            Cm: d.cm.at(sa, se),
+            Cn: sign_b * d.cn.at(sa, sab) + d.dnda.at(sa, sb) * dail + d.dndr.at(sa, sb) * drdr,
+            CL: 0.0,
+            CD: 0.0,
+        }
+    }
+
+    /// Adds the rate damping (SLJ App. A DAMP, at the located α segment `sa`; rates made
+    /// dimensionless with the air-relative `vt_fps`) and the moment transfer from the tables'
+    /// reference cg `xcgr` to `self.xcg`.
+    fn add_damping_and_cg(
+        &self,
+        c: &mut AeroCoefficients,
+        sa: table::Segment,
+        vt_fps: f64,
+        [p, q, r]: [f64; 3],
+    ) {
+        let d = self.data;
+        let g = &d.geometry;
+        let tvt = 0.5 / vt_fps;
+        let b2v = g.span_ft * tvt;
+        let cq = g.cbar_ft * q * tvt;
+        let mut dmp = [0.0; 9];
+        for (k, t) in d.damping.iter().enumerate() {
+            dmp[k] = t.at(sa);
+        }
+        c.CX += cq * dmp[0];
+        c.CY += b2v * (dmp[1] * r + dmp[2] * p);
+        c.CZ += cq * dmp[3];
+        c.Cl += b2v * (dmp[4] * r + dmp[5] * p);
+        c.Cm += cq * dmp[6] + c.CZ * (g.xcgr - self.xcg);
+        c.Cn +=
+            b2v * (dmp[7] * r + dmp[8] * p) - c.CY * (g.xcgr - self.xcg) * g.cbar_ft / g.span_ft;
+    }
+
+    /// Body-axis loads at the cg from the coefficients `c`, dynamic pressure `qbar_psf` and
+    /// `thrust_lbf` (SLJ §3.5: thrust along body +x through the cg; engine angular momentum
+    /// `heng` along +x).
+    fn forces_and_moments(
+        &self,
+        c: &AeroCoefficients,
+        qbar_psf: f64,
+        thrust_lbf: f64,
+    ) -> BodyLoads {
+        let g = &self.data.geometry;
+        let qs = qbar_psf * g.wing_area_ft2;
         let qsb = qs * g.span_ft;
-        let rmqs = rm * qs;
-        let gcth = gd * cth;
-        let qsph = q * sph;
-        let ax = rm * (qs * cxt + thrust);
-        let ay = rmqs * cyt;
-        let az = rmqs * czt;
-        let udot = r * v_b - q * w_b - gd * sth + ax;
-        let vdot = p * w_b - r * u_b + gcth * sph + ay;
-        let wdot = q * u_b - p * v_b + gcth * cph + az;
-        let dum = u_b * u_b + w_b * w_b;
-        if dum <= 0.0 {
+        BodyLoads {
+            force_lbf: Vector3::new(qs * c.CX + thrust_lbf, qs * c.CY, qs * c.CZ),
+            moment_ft_lbf: Vector3::new(qsb * c.Cl, qs * g.cbar_ft * c.Cm, qsb * c.Cn),
+            heng_slug_ft2_per_s: self.data.mass.hx_slug_ft2_per_s,
+        }
+    }
+}
+
+/// Checks that every state and control (winds included) is finite; the error names the first
+/// offending one.
+fn check_finite(x: &F16State, u: &F16Controls) -> Result<(), ModelError> {
+    const CTL: [&str; 10] = [
+        "throttle",
+        "elevator_rad",
+        "aileron_rad",
+        "rudder_rad",
+        "wind_north_fps",
+        "wind_east_fps",
+        "wind_down_fps",
+        "wind_body_x_fps",
+        "wind_body_y_fps",
+        "wind_body_z_fps",
+    ];
+    let ctl = [
+        u.throttle,
+        u.elevator_rad,
+        u.aileron_rad,
+        u.rudder_rad,
+        u.wind_ned_fps[0],
+        u.wind_ned_fps[1],
+        u.wind_ned_fps[2],
+        u.wind_body_fps[0],
+        u.wind_body_fps[1],
+        u.wind_body_fps[2],
+    ];
+    for (k, v) in x.as_slice().iter().enumerate() {
+        if !v.is_finite() {
             return Err(ModelError::InvalidValue {
-                field: "beta_rad",
-                value: beta,
-                reason: "|beta| = 90 deg: alpha undefined",
+                field: STATE_NAMES[k],
+                value: *v,
+                reason: "not finite",
             });
         }
-
-        let mut xd = F16State::zeros();
-        xd[VT] = (u_b * udot + v_b * vdot + w_b * wdot) / vt;
-        xd[ALPHA] = (u_b * wdot - w_b * udot) / dum;
-        xd[BETA] = (vt * vdot - v_b * xd[VT]) * cbta / dum;
-
-        // Kinematics.
-        xd[PHI] = p + (sth / cth) * (qsph + r * cph);
-        xd[THETA] = q * cph - r * sph;
-        xd[PSI] = (qsph + r * cph) / cth;
-
-        // Moments.
-        let mc = &d.moment;
-        let hx = m.hx_slug_ft2_per_s;
-        let roll = qsb * clt;
-        let pitch = qs * g.cbar_ft * cmt;
-        let yaw = qsb * cnt;
-        xd[P] = (mc.c2 * p + mc.c1 * r + mc.c4 * hx) * q + mc.c3 * roll + mc.c4 * yaw;
-        xd[Q] = (mc.c5 * p - mc.c7 * hx) * r + mc.c6 * (r * r - p * p) + mc.c7 * pitch;
-        xd[R] = (mc.c8 * p - mc.c2 * r + mc.c9 * hx) * q + mc.c4 * roll + mc.c9 * yaw;
-
-        // Navigation.
-        xd[NORTH] = u_b * s1 + v_b * s3 + w_b * s6;
-        xd[EAST] = u_b * s2 + v_b * s4 + w_b * s7;
-        xd[ALT] = u_b * sth - v_b * s5 - w_b * s8;
-        xd[POW] = pow_dot;
-
-        let out = F16Outputs {
-            nx_g: ax / gd,
-            ny_g: ay / gd,
-            nz_g: -az / gd,
-            qbar_psf: ad.qbar_psf,
-            mach: ad.mach,
-            vt_air_fps: vta,
-            alpha_air_rad: alpha_a,
-            beta_air_rad: beta_a,
-            thrust_lbf: thrust,
-            coefficients: AeroCoefficients {
-                CX: cxt,
-                CY: cyt,
-                CZ: czt,
-                Cl: clt,
-                Cm: cmt,
-                Cn: cnt,
-                CL: cxt * sa - czt * ca,
-                CD: -cxt * ca - czt * sa,
-            },
-        };
-        Ok((xd, out))
     }
+    for (k, v) in ctl.iter().enumerate() {
+        if !v.is_finite() {
+            return Err(ModelError::InvalidValue {
+                field: CTL[k],
+                value: *v,
+                reason: "not finite",
+            });
+        }
+    }
+    Ok(())
 }
 
 impl Dynamics<N_STATES> for F16 {
@@ -798,6 +791,15 @@ mod tests {
             g.derivatives(1.0, &x, &u).unwrap(),
             f.derivatives_with_increments(&x, &u, &inc).unwrap()
         );
+    }
+
+    #[test]
+    fn rigid_body_states_are_the_first_twelve() {
+        assert_eq!(STATE_NAMES[..rigid_body::N_STATES], rigid_body::STATE_NAMES);
+        assert_eq!((POW, N_STATES), (rigid_body::N_STATES, rigid_body::N_STATES + 1));
+        let rb = F16::new(0.35).unwrap().rigid_body();
+        assert_eq!(rb.mass_slug, 1.0 / 1.57e-3);
+        assert_eq!((rb.inertia.c1, rb.inertia.c9, rb.g_fps2), (-0.770, 1.587e-5, 32.17));
     }
 
     #[test]

@@ -10,11 +10,11 @@ pub mod cli;
 pub mod estimators;
 /// Convergence-time and error metrics of estimate histories.
 pub mod metrics;
+pub mod outdir;
 /// Stacked time-series panels rendered to PNG.
 pub mod plot;
 /// Proof-of-concept experiments (thesis §4.1): scenarios, simulation loop, outputs, report.
 pub mod poc;
-/// Replay of recorded flight data through any estimator, sample by sample.
 pub mod replay;
 /// Open-loop F-16 simulation: trim → inputs, gusts, turbulence → sensors → CSV and figures.
 pub mod sim;

@@ -323,6 +323,9 @@ fn val_c172x_cm_q_absorbs_cm_alphadot_and_the_summary_flags_it() {
     assert!((q + 0.97 * a - lumped).abs() < 0.1 * lumped.abs(), "{q} + 0.97·{a}");
 }
 
+/// A stored coefficient column: index in `measured_coefficients()`, column name, tolerance.
+type Stored = (usize, &'static str, f64);
+
 /// Our measured coefficients (the core's, from the reader's samples) equal the ones SIDPAC
 /// (Twin Otter) and JSBSim store in the files — including Cl and Cn, which check the
 /// product-of-inertia sign (SIDPAC: Jxz; JSBSim's ixz = −Jxz, mapped with scale = −1).
@@ -334,7 +337,7 @@ fn val_stored_coefficients_sidpac_and_jsbsim() {
         std::fs::read_to_string(workspace().join("mappings/twin_otter.toml")).unwrap()
     );
     let totter = Mapping::from_toml_str(&totter_lateral, "twin_otter + lateral").unwrap();
-    let cases: [(&str, Mapping, &[(usize, &str, f64)]); 3] = [
+    let cases: [(&str, Mapping, &[Stored]); 3] = [
         (
             "sidpac_twin_otter/csv/totter_lon_020213f1_018.csv",
             totter,
@@ -428,19 +431,26 @@ fn val_differentiated_qdot_reproduces_record_qdot_regression() {
 /// estimators not in this build are refused with a clear error.
 #[test]
 fn val_rls_runs_on_all_records_and_absent_estimators_are_named() {
+    // The F-16 elevator doublet is purely longitudinal: its default (six-axis) model would
+    // leave the lateral fits uninitialised (never excited), so the longitudinal preset is used.
     let records = [
-        ("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv", "hfb320.toml", 0),
-        ("jategaonkar_hfb320_attas/csv/fAttasElv1.csv", "attas.toml", 0),
-        ("jategaonkar_hfb320_attas/csv/fAttasAil1.csv", "attas_lateral.toml", 0),
-        ("jategaonkar_hfb320_attas/csv/fAttasRud1.csv", "attas_lateral.toml", 0),
-        ("sidpac_twin_otter/csv/totter_lon_020213f1_017.csv", "twin_otter.toml", 0),
-        ("jsbsim_f16_sample/f16_doublet_20s_120Hz.csv", "jsbsim_clean.toml", 0),
-        ("jsbsim_samples/f16_ail_rud_doublets_20s_60Hz.csv", "jsbsim.toml", 4),
-        ("jsbsim_samples/c172x_elevator_3211_15s_60Hz.csv", "jsbsim.toml", 4),
+        ("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv", "hfb320.toml", 0, None),
+        ("jategaonkar_hfb320_attas/csv/fAttasElv1.csv", "attas.toml", 0, None),
+        ("jategaonkar_hfb320_attas/csv/fAttasAil1.csv", "attas_lateral.toml", 0, None),
+        ("jategaonkar_hfb320_attas/csv/fAttasRud1.csv", "attas_lateral.toml", 0, None),
+        ("sidpac_twin_otter/csv/totter_lon_020213f1_017.csv", "twin_otter.toml", 0, None),
+        (
+            "jsbsim_f16_sample/f16_doublet_20s_120Hz.csv",
+            "jsbsim_clean.toml",
+            0,
+            model("longitudinal"),
+        ),
+        ("jsbsim_samples/f16_ail_rud_doublets_20s_60Hz.csv", "jsbsim.toml", 4, None),
+        ("jsbsim_samples/c172x_elevator_3211_15s_60Hz.csv", "jsbsim.toml", 4, None),
     ];
-    for (rel, map, differentiator_edges) in records {
+    for (rel, map, differentiator_edges, model) in records {
         let Some(data) = shared(rel) else { return };
-        let o = run(&data, map, ReplayOptions::default());
+        let o = run(&data, map, ReplayOptions { model, ..Default::default() });
         assert_eq!(
             o.summary.samples_rejected,
             differentiator_edges,

@@ -102,7 +102,9 @@ impl Estimates {
 /// a time and gives the current [`Estimates`]. Object-safe (`Box<dyn Estimator>`).
 ///
 /// Implementations must not allocate or do I/O in [`Estimator::update`], and must leave their
-/// state unchanged when they refuse a sample (returning an error).
+/// state unchanged when they refuse a sample (an input error: a missing or non-finite channel,
+/// time not increasing). A numerical failure on valid input is a divergence: the estimator sets
+/// [`Status::Diverged`], returns the error, and its numbers are no longer a result.
 pub trait Estimator {
     /// The method's name as used on the command line and in summaries (`rls`, `ekf` …).
     fn method(&self) -> &'static str;

@@ -10,7 +10,9 @@
 //!   preset ([`ModelStructure`]);
 //! - one estimator interface, [`Estimator`]: consume a sample, give [`Estimates`] (value, σ,
 //!   whether identified) of the structure's parameters. Estimators that need a model state carry
-//!   and integrate it themselves, so each is usable from samples alone.
+//!   and integrate it themselves, so each is usable from samples alone: [`rls::Rls`], and the
+//!   model-reference estimators of [`model_reference`] (the thesis's sliding-mode estimator as
+//!   published, the corrected one, and the gradient law (3.3)).
 //!
 //! The crate is `no_std` (build with `--no-default-features`): fixed-capacity arrays, no
 //! allocation and no I/O in a per-sample update, so the same code can run on a flight computer.
@@ -23,18 +25,29 @@
 //! `spec/thesis-method.md`); Klein & Morelli, *Aircraft System Identification*, AIAA 2006;
 //! Jategaonkar, *Flight Vehicle System Identification*, AIAA 2015.
 #![cfg_attr(not(feature = "std"), no_std)]
+// Numerical kernels index several arrays with one loop variable, as the equations do.
+#![allow(clippy::needless_range_loop)]
 
 use nalgebra::{SMatrix, SVector};
 
+pub mod dual;
+pub mod ekf;
 pub mod estimator;
+pub mod flight_model;
+pub mod ftr;
 pub mod legacy_kalman;
 pub mod linalg;
+pub mod model_reference;
 pub mod prior;
 pub mod rls;
 pub mod sample;
 pub mod vocabulary;
 
+pub use dual::{Dual, Scalar};
+pub use ekf::{Ekf, EkfConfig, SigmaOption};
 pub use estimator::{Estimates, Estimator, Status};
+pub use flight_model::{FlightModel, Output, StateSet};
+pub use ftr::{Ftr, FtrConfig};
 pub use prior::{ParamPrior, Priors};
 pub use sample::{AirDataSample, AircraftConstants, CoefficientValues};
 pub use vocabulary::{Coefficient, MAX_PARAMS, ModelStructure, Param, Term};

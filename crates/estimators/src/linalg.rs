@@ -5,6 +5,10 @@
 //! Source: Golub & Van Loan, *Matrix Computations*, 4th ed., Algorithm 4.2.1 (Cholesky,
 //! gaxpy form).
 
+// Index loops follow the textbook algorithms line by line, and `!(x > 0.0)` is meant to be
+// true for NaN as well.
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+
 /// A `C × C` array of which the leading `n × n` block is used.
 pub type Square<const C: usize> = [[f64; C]; C];
 
@@ -65,13 +69,59 @@ pub fn cholesky_inverse<const C: usize>(l: &Square<C>, n: usize, inv: &mut Squar
     }
 }
 
+/// Smallest admissible squared pivot of a unit-diagonal-scaled information matrix in
+/// [`well_conditioned`]: every regressor must carry at least this fraction of its energy
+/// independently of the others.
+pub const MIN_SCALED_PIVOT: f64 = 1e-8;
+
+/// Smallest root-mean-square value a regressor must have (in its own unit: rad, or the
+/// non-dimensional rates) before it can identify anything: `1e-6`, far below any sensor's noise
+/// but far above rounding, so a simulated record whose β or p̂ sit at 1e-10 before the input
+/// starts is not taken as "excited" (the scaled test alone is blind to size).
+pub const MIN_REGRESSOR_RMS: f64 = 1e-6;
+
+/// Whether the leading `n × n` block of a symmetric positive semi-definite information matrix
+/// `A = Σ w φφᵀ` (total weight `weight`, e.g. the effective sample count) is well conditioned:
+/// every regressor's mean square `A_ii / weight` is at least [`MIN_REGRESSOR_RMS`]², and,
+/// scaled to unit diagonal (the regressors' correlation matrix), its Cholesky factor exists
+/// with every squared pivot at least `min_pivot`, i.e. every regressor carries at least that
+/// fraction of its energy independently of the others (persistent excitation over the samples
+/// so far). `false` if a diagonal entry is not positive and finite.
+pub fn well_conditioned<const C: usize>(
+    a: &Square<C>,
+    n: usize,
+    weight: f64,
+    min_pivot: f64,
+) -> bool {
+    let floor = weight * MIN_REGRESSOR_RMS * MIN_REGRESSOR_RMS;
+    for i in 0..n {
+        if !(a[i][i] >= floor) {
+            return false;
+        }
+    }
+    let mut scaled = [[0.0; C]; C];
+    for i in 0..n {
+        let d = a[i][i];
+        if !(d > 0.0 && d.is_finite()) {
+            return false;
+        }
+    }
+    for i in 0..n {
+        for j in 0..n {
+            scaled[i][j] = a[i][j] / libm::sqrt(a[i][i] * a[j][j]);
+        }
+    }
+    let mut l = [[0.0; C]; C];
+    cholesky(&scaled, n, &mut l) && (0..n).all(|i| l[i][i] * l[i][i] >= min_pivot)
+}
+
 /// 2-norm condition number of the leading `n × n` block of a symmetric positive semi-definite
 /// matrix scaled to unit diagonal (i.e. of the correlation matrix), by Jacobi eigenvalue
 /// iteration; `None` if a diagonal entry is not positive or the matrix is singular.
 pub fn scaled_condition_number<const C: usize>(a: &Square<C>, n: usize) -> Option<f64> {
     let mut m = [[0.0; C]; C];
     for i in 0..n {
-        if !(a[i][i] > 0.0) {
+        if a[i][i].is_nan() || a[i][i] <= 0.0 {
             return None;
         }
     }
@@ -155,6 +205,22 @@ mod tests {
         }
         a[2][2] = -1.0;
         assert!(!cholesky(&a, 3, &mut l));
+    }
+
+    #[test]
+    fn analytic_well_conditioned_threshold_on_a_2x2_correlation() {
+        // Correlation ρ: scaled Cholesky pivots 1 and 1 − ρ²; ρ = 0.99 → 0.0199.
+        let rho: f64 = 0.99;
+        let a = [[4.0, rho * 6.0], [rho * 6.0, 9.0]];
+        assert!(well_conditioned(&a, 2, 1.0, 0.019));
+        assert!(!well_conditioned(&a, 2, 1.0, 0.0200));
+        assert!(!well_conditioned(&[[0.0, 0.0], [0.0, 1.0]], 2, 1.0, 1e-8));
+        // Size floor: regressors at 1e-10 (rounding-level excitation) are refused even though
+        // their correlation matrix is perfect; at 1e-5 RMS over 100 samples they pass.
+        let tiny = [[1e-20 * 100.0, 0.0], [0.0, 1e-20 * 100.0]];
+        assert!(!well_conditioned(&tiny, 2, 100.0, 1e-8));
+        let small = [[1e-10 * 100.0, 0.0], [0.0, 1e-10 * 100.0]];
+        assert!(well_conditioned(&small, 2, 100.0, 1e-8));
     }
 
     #[test]

@@ -109,6 +109,12 @@ where
         self.stats
     }
 
+    /// A new manoeuvre starts with the next sample (a gap in the record): the next sample is
+    /// treated as a first one (no time step); θ̂ is kept.
+    pub fn new_manoeuvre(&mut self) {
+        self.last_t_s = None;
+    }
+
     /// The bracket of (3.3) for each parameter, `Σ_i w_ji (z_i ż_i(θ̂) − z_m,i ż_m,i)`, at
     /// the current estimate (`dJ/dt` of (3.2) restricted to the parameter's states).
     ///

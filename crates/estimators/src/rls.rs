@@ -25,24 +25,20 @@
 //! `λ = 1` RLS equals the batch solution to rounding. Until then the coefficient's parameters
 //! are **not identified** (`null`), never 0.
 //!
-//! **Recovery.** The information form is kept up to date on every sample. When a P-form update
-//! is not numerically sound (gain denominator below `λ`, i.e. `φᵀPφ < 0`; a non-positive
-//! diagonal of P; a non-finite value) — rank-one downdates of a badly conditioned `P` cancel
-//! catastrophically, e.g. right after an initialisation on weakly excited regressors — the fit
-//! is re-solved exactly from the information form (`θ = A⁻¹b`, `P = A⁻¹`, Cholesky) instead of
-//! refusing every later sample. Should even the information form stop being positive definite,
-//! the fit is broken and the estimator reports [`Status::Diverged`] (sticky) — its numbers are
-//! then not a result.
-//!
 //! A sample is used only if every modelled coefficient and every term is available (all or
 //! nothing, so the fits stay on the same samples); otherwise it is refused and nothing changes.
+//! A numerical failure on finite inputs (overflow) marks the estimator [`Status::Diverged`];
+//! it refuses every later sample.
 //!
 //! **WARNING:** the standard errors assume white equation errors; on real data residuals are
 //! coloured and the σ optimistic. Equation error is biased when the regressors are noisy.
 
+// Index loops follow the recursion's equations line by line.
+#![allow(clippy::needless_range_loop)]
+
 use crate::EstimatorError;
 use crate::estimator::{Estimates, Estimator, Status, check_finite};
-use crate::linalg::{Square, cholesky, cholesky_inverse, cholesky_solve};
+use crate::linalg::{Square, cholesky, cholesky_inverse, cholesky_solve, well_conditioned};
 use crate::sample::AirDataSample;
 use crate::vocabulary::{Coefficient, ModelStructure, N_TERMS, Term};
 
@@ -63,7 +59,7 @@ impl Default for RlsConfig {
 }
 
 /// Smallest admissible pivot of the unit-diagonal-scaled information matrix at initialisation.
-pub const INIT_MIN_SCALED_PIVOT: f64 = 1e-8;
+pub const INIT_MIN_SCALED_PIVOT: f64 = crate::linalg::MIN_SCALED_PIVOT;
 
 /// One coefficient's fit.
 #[derive(Debug, Clone, Copy)]
@@ -116,26 +112,7 @@ impl Fit {
         Some(phi)
     }
 
-    fn well_conditioned(&self) -> bool {
-        let n = self.n;
-        let mut scaled = [[0.0; N_TERMS]; N_TERMS];
-        for i in 0..n {
-            let d = self.info[i][i];
-            if !(d > 0.0 && d.is_finite()) {
-                return false;
-            }
-        }
-        for i in 0..n {
-            for j in 0..n {
-                scaled[i][j] = self.info[i][j] / libm::sqrt(self.info[i][i] * self.info[j][j]);
-            }
-        }
-        let mut l = [[0.0; N_TERMS]; N_TERMS];
-        cholesky(&scaled, n, &mut l) && (0..n).all(|i| l[i][i] * l[i][i] >= INIT_MIN_SCALED_PIVOT)
-    }
-
-    /// One update. `Err` means the fit is numerically broken (even the information form is no
-    /// longer positive definite): the caller reports the estimator as diverged.
+    /// One update; returns `Err` (state unchanged) on a numerical failure.
     fn update(
         &mut self,
         phi: &[f64; N_TERMS],
@@ -145,64 +122,38 @@ impl Fit {
         t_s: f64,
     ) -> Result<(), EstimatorError> {
         let n = self.n;
-        // The information form is accumulated on every sample (also after initialisation): it
-        // initialises the fit, and it recovers it exactly when the P form fails numerically.
-        for i in 0..n {
-            for j in 0..n {
-                self.info[i][j] = self.info[i][j] * lambda + phi[i] * phi[j];
-            }
-            self.info_b[i] = self.info_b[i] * lambda + phi[i] * y;
-        }
-        self.info_yy = self.info_yy * lambda + y * y;
-        self.n_eff = self.n_eff * lambda + 1.0;
-        self.count += 1;
         if !self.initialised {
-            if self.count >= init_samples.max(n) && self.well_conditioned() {
-                // On failure the fit stays uninitialised and keeps accumulating.
-                let _ = self.solve_information_form();
+            for i in 0..n {
+                for j in 0..n {
+                    self.info[i][j] = self.info[i][j] * lambda + phi[i] * phi[j];
+                }
+                self.info_b[i] = self.info_b[i] * lambda + phi[i] * y;
+            }
+            self.info_yy = self.info_yy * lambda + y * y;
+            self.n_eff = self.n_eff * lambda + 1.0;
+            self.count += 1;
+            if self.count >= init_samples.max(n)
+                && well_conditioned(&self.info, n, self.n_eff, INIT_MIN_SCALED_PIVOT)
+            {
+                let mut l = [[0.0; N_TERMS]; N_TERMS];
+                if cholesky(&self.info, n, &mut l) {
+                    let mut theta = self.info_b;
+                    cholesky_solve(&l, n, &mut theta);
+                    let mut p = [[0.0; N_TERMS]; N_TERMS];
+                    cholesky_inverse(&l, n, &mut p);
+                    let finite = theta[..n].iter().all(|v| v.is_finite())
+                        && p[..n].iter().all(|r| r[..n].iter().all(|v| v.is_finite()));
+                    if finite {
+                        let bt: f64 = (0..n).map(|i| self.info_b[i] * theta[i]).sum();
+                        self.theta = theta;
+                        self.p = p;
+                        self.rss = (self.info_yy - bt).max(0.0);
+                        self.initialised = true;
+                    }
+                }
             }
             return Ok(());
         }
-        // The P form lost positive definiteness (rank-one downdates of a badly conditioned P
-        // cancel catastrophically, e.g. just after an initialisation on weakly excited
-        // regressors): recover the exact least-squares solution from the information form.
-        if !self.p_form_step(phi, y, lambda) && !self.solve_information_form() {
-            return Err(EstimatorError::Numerical { what: "RLS update", t_s });
-        }
-        Ok(())
-    }
-
-    /// `θ = A⁻¹ b`, `P = A⁻¹`, `RSS = y·y − bᵀθ` from the information form (batch least
-    /// squares on every sample so far, weighted by the forgetting). Returns whether it
-    /// succeeded (`A` positive definite, results finite); on failure nothing changes.
-    fn solve_information_form(&mut self) -> bool {
-        let n = self.n;
-        let mut l = [[0.0; N_TERMS]; N_TERMS];
-        if !cholesky(&self.info, n, &mut l) {
-            return false;
-        }
-        let mut theta = self.info_b;
-        cholesky_solve(&l, n, &mut theta);
-        let mut p = [[0.0; N_TERMS]; N_TERMS];
-        cholesky_inverse(&l, n, &mut p);
-        let finite = theta[..n].iter().all(|v| v.is_finite())
-            && p[..n].iter().all(|r| r[..n].iter().all(|v| v.is_finite()));
-        if !finite {
-            return false;
-        }
-        let bt: f64 = (0..n).map(|i| self.info_b[i] * theta[i]).sum();
-        self.theta = theta;
-        self.p = p;
-        self.rss = (self.info_yy - bt).max(0.0);
-        self.initialised = true;
-        true
-    }
-
-    /// One P-form (covariance form) update in place. Returns `false` when it is not
-    /// numerically sound (gain denominator below `λ`, i.e. `φᵀPφ < 0`; a diagonal of P not
-    /// positive; a non-finite result) — `θ` and `P` are then to be re-solved.
-    fn p_form_step(&mut self, phi: &[f64; N_TERMS], y: f64, lambda: f64) -> bool {
-        let n = self.n;
         let mut e = y;
         let mut p_phi = [0.0; N_TERMS];
         for i in 0..n {
@@ -212,29 +163,32 @@ impl Fit {
             }
         }
         let denom = lambda + (0..n).map(|i| phi[i] * p_phi[i]).sum::<f64>();
-        // φᵀPφ ≥ 0 for a positive semi-definite P: anything less is rounding damage.
-        if !(denom.is_finite() && denom >= lambda) {
-            return false;
+        if !(denom.is_finite() && denom > 0.0) {
+            return Err(EstimatorError::Numerical { what: "RLS gain denominator", t_s });
         }
+        // In place: P ← (P − P φ φᵀ P / denom) / λ is symmetric by construction, so the upper
+        // triangle is formed and mirrored. A non-finite result (overflow on finite inputs) is a
+        // divergence, which the caller reports; the running sum detects it without a pass.
+        let inv_lambda = 1.0 / lambda;
+        let mut check = 0.0;
         for i in 0..n {
-            let k = p_phi[i] / denom;
-            self.theta[i] += k * e;
-            for j in 0..n {
-                self.p[i][j] = (self.p[i][j] - k * p_phi[j]) / lambda;
+            let ki = p_phi[i] / denom;
+            self.theta[i] += ki * e;
+            check += self.theta[i];
+            for j in i..n {
+                let v = (self.p[i][j] - ki * p_phi[j]) * inv_lambda;
+                self.p[i][j] = v;
+                self.p[j][i] = v;
+                check += v;
             }
         }
-        let mut sound = true;
-        for i in 0..n {
-            for j in 0..i {
-                let m = 0.5 * (self.p[i][j] + self.p[j][i]);
-                self.p[i][j] = m;
-                self.p[j][i] = m;
-                sound &= m.is_finite();
-            }
-            sound &= self.p[i][i] > 0.0 && self.p[i][i].is_finite() && self.theta[i].is_finite();
+        if !check.is_finite() {
+            return Err(EstimatorError::Numerical { what: "RLS update", t_s });
         }
         self.rss = lambda * self.rss + lambda * e * e / denom;
-        sound
+        self.n_eff = lambda * self.n_eff + 1.0;
+        self.count += 1;
+        Ok(())
     }
 
     fn residual_variance(&self) -> Option<f64> {
@@ -251,7 +205,6 @@ pub struct Rls {
     lambda: f64,
     init_samples: usize,
     est: Estimates,
-    diverged: bool,
 }
 
 impl Rls {
@@ -283,7 +236,6 @@ impl Rls {
             lambda: config.forgetting,
             init_samples: config.init_samples,
             est: Estimates::new(structure.n_params()),
-            diverged: false,
         })
     }
 
@@ -313,13 +265,7 @@ impl Rls {
             }
             all &= f.initialised;
         }
-        self.est.status = if self.diverged {
-            Status::Diverged
-        } else if all {
-            Status::Running
-        } else {
-            Status::Initialising
-        };
+        self.est.status = if all { Status::Running } else { Status::Initialising };
     }
 }
 
@@ -333,6 +279,9 @@ impl Estimator for Rls {
     }
 
     fn update(&mut self, s: &AirDataSample) -> Result<&Estimates, EstimatorError> {
+        if self.est.status == Status::Diverged {
+            return Err(EstimatorError::Numerical { what: "RLS has diverged", t_s: s.t_s });
+        }
         check_finite(s)?;
         let measured = s.measured_coefficients();
         // All or nothing: form every (φ, y) before touching any fit.
@@ -351,13 +300,14 @@ impl Estimator for Rls {
             })?;
             rows[c.index()] = (phi, y);
         }
-        if self.diverged {
-            return Ok(&self.est);
-        }
+        // Each fit's update is atomic (computed, checked, then committed). A numerical failure
+        // after finite inputs means overflow: the estimator has diverged and says so, rather
+        // than carrying a copy of every fit to roll back.
         for f in self.fits.iter_mut().flatten() {
             let (phi, y) = rows[f.coefficient.index()];
-            if f.update(&phi, y, self.lambda, self.init_samples, s.t_s).is_err() {
-                self.diverged = true;
+            if let Err(e) = f.update(&phi, y, self.lambda, self.init_samples, s.t_s) {
+                self.est.status = Status::Diverged;
+                return Err(e);
             }
         }
         self.publish(s.t_s);
@@ -456,151 +406,6 @@ mod tests {
             assert!((got - want[*w]).abs() < 1e-9 * (1.0 + want[*w].abs()), "{i}: {got}");
         }
         assert!(rls.covariance(0, 1).is_some() && rls.covariance(0, 4).is_none());
-    }
-
-    /// A trimmed aircraft (the JSBSim F-16 aileron-rudder sample's situation): before the
-    /// input the lateral regressors only drift at 1e-10 (trim residue), so the fit initialises
-    /// on the first sample with aileron, on a nearly singular information matrix with entries
-    /// from 1 to 1e-24 (P up to ~1e28). On the JSBSim record itself the P form then lost
-    /// positive definiteness and every later sample was refused (1074 of 1200, test
-    /// `val_jsbsim_f16_lateral_rls_within_5pct_of_truth`); whether this synthetic copy trips
-    /// the P form depends on rounding, so the recovery itself is tested below. Here: no sample
-    /// refused, exact model identified.
-    #[test]
-    fn analytic_recovers_after_initialising_on_trim_residue() {
-        let st = ModelStructure::empty()
-            .with(Coefficient::Cl, &[Term::Bias, Term::Beta, Term::P, Term::R, Term::Da, Term::Dr]);
-        let k = AircraftConstants {
-            mass_kg: 1000.0,
-            S_m2: 10.0,
-            b_m: Some(30.0),
-            Ixx_kgm2: Some(1000.0),
-            Iyy_kgm2: Some(2000.0),
-            Izz_kgm2: Some(2800.0),
-            Ixz_kgm2: Some(0.0),
-            ..Default::default()
-        };
-        let want = [0.001, -0.09, -0.45, 0.1, 0.05, 0.016];
-        let (qbar, v, dt) = (3000.0, 1350.0, 1.0 / 60.0);
-        let mut rls = Rls::new(st, RlsConfig::default()).unwrap();
-        // Lateral motion after an aileron doublet at 2 s and a rudder doublet at 8 s: a toy
-        // roll/yaw/sideslip model with a yaw damper (δr = −2 r + pedal), Euler-integrated.
-        let (mut p, mut r, mut beta) = (0.0, 0.0, 0.0);
-        for i in 0..1200 {
-            let t = (i + 1) as f64 * dt;
-            // Trim residue: smooth drifts (β, p̂, r̂, δr).
-            let drift = [
-                -1e-10 * (t + 0.3 * t * t),
-                1e-12 * (t - 0.2 * t * t + 0.01 * t * t * t),
-                -1e-12 * (t + 0.5 * t * t * t),
-                -4e-10 * (t + t * t + 0.1 * t * t * t * t),
-            ];
-            let tau = t - 2.0;
-            let da = if (0.0..0.5).contains(&tau) {
-                0.05
-            } else if (0.5..1.0).contains(&tau) {
-                -0.05
-            } else {
-                0.0
-            };
-            let pedal = if (6.0..6.75).contains(&tau) {
-                0.1
-            } else if (6.75..7.5).contains(&tau) {
-                -0.1
-            } else {
-                0.0
-            };
-            let dr = -2.0 * r + pedal;
-            let phi = [
-                1.0,
-                beta + drift[0],
-                p * 30.0 / (2.0 * v) + drift[1],
-                r * 30.0 / (2.0 * v) + drift[2],
-                da,
-                dr + drift[3],
-            ];
-            let cl: f64 = phi.iter().zip(want).map(|(x, w)| x * w).sum();
-            let s = AirDataSample {
-                t_s: t,
-                vt_mps: v,
-                alpha_rad: 0.05,
-                qbar_pa: qbar,
-                beta_rad: Some(phi[1]),
-                p_rad_s: Some(phi[2] * 2.0 * v / 30.0),
-                q_rad_s: Some(0.0),
-                r_rad_s: Some(phi[3] * 2.0 * v / 30.0),
-                pdot_rad_s2: Some(cl * qbar * 10.0 * 30.0 / 1000.0),
-                rdot_rad_s2: Some(0.0),
-                da_rad: Some(phi[4]),
-                dr_rad: Some(phi[5]),
-                constants: k,
-                ..Default::default()
-            };
-            rls.update(&s).unwrap_or_else(|e| panic!("sample {i} (t = {t:.3} s) refused: {e}"));
-            let (pd, rd, bd) = (
-                -3.0 * p + 40.0 * da - 5.0 * beta,
-                -r + 2.0 * beta - 0.5 * dr + 0.1 * p,
-                -0.5 * beta - r + 0.05 * p,
-            );
-            p += dt * pd;
-            r += dt * rd;
-            beta += dt * bd;
-        }
-        let e = rls.estimates();
-        assert_eq!(e.status, Status::Running);
-        for (i, w) in want.iter().enumerate() {
-            let got = e.value(i).unwrap();
-            assert!((got - w).abs() < 1e-6 * (1.0 + w.abs()), "{i}: {got} vs {w}");
-        }
-    }
-
-    /// The recovery path: a P damaged by rounding (made indefinite) is detected at the next
-    /// update and the fit is re-solved exactly from the information form; with the information
-    /// form damaged as well, the estimator is diverged.
-    #[test]
-    fn analytic_damaged_p_is_recovered_from_the_information_form() {
-        let st = ModelStructure::empty().with(Coefficient::Cm, &[Term::Bias, Term::Alpha]);
-        let k = AircraftConstants {
-            mass_kg: 1000.0,
-            S_m2: 10.0,
-            cbar_m: Some(1.0),
-            Iyy_kgm2: Some(1000.0),
-            ..Default::default()
-        };
-        let (cm0, cma) = (0.02, -0.8);
-        let sample = |i: usize| {
-            let alpha = 0.05 + 0.01 * (i as f64 * 0.7).sin();
-            AirDataSample {
-                t_s: i as f64,
-                vt_mps: 50.0,
-                alpha_rad: alpha,
-                qbar_pa: 1000.0,
-                q_rad_s: Some(0.0),
-                // Cm = Iyy q̇ / (q̄ S c̄) with Iyy = q̄ S c̄ = 1e4 / 10: q̇ = 10 Cm.
-                qdot_rad_s2: Some((cm0 + cma * alpha) * 1000.0 * 10.0 / 1000.0),
-                constants: k,
-                ..Default::default()
-            }
-        };
-        let mut rls = Rls::new(st, RlsConfig::default()).unwrap();
-        for i in 0..20 {
-            rls.update(&sample(i)).unwrap();
-        }
-        let f = rls.fits[Coefficient::Cm.index()].as_mut().unwrap();
-        assert!(f.initialised);
-        f.p[1][1] = -f.p[1][1];
-        f.theta = [0.0; N_TERMS];
-        let e = *rls.update(&sample(20)).unwrap();
-        assert!((e.value(0).unwrap() - cm0).abs() < 1e-9, "{:?}", e.value(0));
-        assert!((e.value(1).unwrap() - cma).abs() < 1e-9, "{:?}", e.value(1));
-        assert!(rls.covariance(1, 1).unwrap() >= 0.0);
-        // Damage the information form too: the fit cannot recover; the estimator reports
-        // itself diverged (sticky), not a result.
-        let f = rls.fits[Coefficient::Cm.index()].as_mut().unwrap();
-        f.p[1][1] = -f.p[1][1];
-        f.info[1][1] = -f.info[1][1];
-        assert_eq!(rls.update(&sample(21)).unwrap().status, Status::Diverged);
-        assert_eq!(rls.update(&sample(22)).unwrap().status, Status::Diverged);
     }
 
     #[test]

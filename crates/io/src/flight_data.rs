@@ -58,6 +58,9 @@ pub struct Rejection {
 }
 
 /// What one data row produced.
+// The sample variant is large; events are consumed one at a time, so it is not boxed (no
+// allocation per row for it).
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq)]
 pub enum RecordEvent {
     /// A good sample.
@@ -224,7 +227,7 @@ impl<R: Read> FlightDataReader<R> {
                 None => return Ok(None),
             }
         };
-        if Channel::POSITIVE.contains(&ch) && !(v > 0.0) {
+        if Channel::POSITIVE.contains(&ch) && (v.is_nan() || v <= 0.0) {
             let column = match self.channels.get(&ch) {
                 Some(r) => r.names.join("+"),
                 None => format!("{} (constant)", ch.key()),

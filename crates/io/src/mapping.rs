@@ -345,7 +345,7 @@ impl Mapping {
             let m = resolve(file, ch.key(), spec, ch.dimension())?;
             if Channel::POSITIVE.contains(&ch)
                 && let Some(v) = m.constant()
-                && !(v > 0.0)
+                && (v.is_nan() || v <= 0.0)
             {
                 return Err(FlightDataError::BadSpec {
                     file: file.to_string(),

@@ -67,15 +67,15 @@ pub fn measure_f16_rk4() -> anyhow::Result<F16Bench> {
 pub fn execute(args: BenchArgs) -> anyhow::Result<()> {
     let b = measure_f16_rk4()?;
     if args.json {
-        println!(
-            "{}",
-            json!({ "f16_rk4_step_ns": b.rk4_step_ns, "f16_realtime_factor_100hz": b.realtime_factor_100hz })
-        );
+        super::print_stdout(
+            &json!({ "f16_rk4_step_ns": b.rk4_step_ns, "f16_realtime_factor_100hz": b.realtime_factor_100hz })
+                .to_string(),
+        )?;
     } else {
-        println!(
+        super::print_stdout(&format!(
             "F-16 RK4 step (13 states, 4 derivative evaluations), median of {BATCHES} x {STEPS_PER_BATCH} steps: {:.0} ns\nreal-time factor at 100 Hz on one core: {:.0}x (target >= 5000x)",
             b.rk4_step_ns, b.realtime_factor_100hz
-        );
+        ))?;
     }
     Ok(())
 }

@@ -93,9 +93,9 @@ pub struct TrimArgs {
 /// Malformed numbers, a model evaluation outside its domain, or a trim that does not converge.
 pub fn execute(args: F16Args) -> anyhow::Result<()> {
     match args.command {
-        F16Command::Xdot(a) => println!("{}", xdot(&a)?),
-        F16Command::Trim(a) => println!("{}", trim_report(&a)?),
-        F16Command::Linearize(a) => println!("{}", linearize_report(&a)?),
+        F16Command::Xdot(a) => super::print_stdout(&xdot(&a)?)?,
+        F16Command::Trim(a) => super::print_stdout(&trim_report(&a)?)?,
+        F16Command::Linearize(a) => super::print_stdout(&linearize_report(&a)?)?,
         F16Command::Sim(a) => crate::sim::execute(a)?,
     }
     Ok(())
@@ -130,6 +130,13 @@ pub fn xdot(a: &XdotArgs) -> anyhow::Result<String> {
     let x = F16State::from_row_slice(&s);
     let u = F16Controls::new(c[0], c[1].to_radians(), c[2].to_radians(), c[3].to_radians());
     let xd = F16::new(a.xcg)?.derivatives(0.0, &x, &u)?;
+    if let Some(k) = xd.iter().position(|v| !v.is_finite()) {
+        bail!(
+            "--state: the derivative of `{}` is not finite ({}): the state is outside the range the model can evaluate",
+            STATE_NAMES[k],
+            xd[k]
+        );
+    }
     if a.json {
         return Ok(json!({ "xdot": xd.iter().copied().collect::<Vec<f64>>() }).to_string());
     }

@@ -47,3 +47,26 @@ impl Cli {
         }
     }
 }
+
+/// Writes `text` and a newline to standard output, returning the write error instead of
+/// panicking as `println!` does on a closed pipe (`aeroident f16 trim | head -1`); `main`
+/// ends quietly on a broken pipe.
+///
+/// # Errors
+/// The I/O error of the write or flush.
+pub fn print_stdout(text: &str) -> std::io::Result<()> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_bytes())?;
+    out.write_all(b"\n")?;
+    out.flush()
+}
+
+/// Whether an error (or any of its causes) is a closed output pipe: the reader went away, which
+/// is not a failure of the run (`aeroident … | head`).
+pub fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}

@@ -47,21 +47,21 @@ pub fn execute(args: PocArgs) -> anyhow::Result<()> {
         let report = render(&results, wall_s);
         let path = args.out.join("report.md");
         std::fs::write(&path, report).with_context(|| format!("writing {}", path.display()))?;
-        println!(
+        super::print_stdout(&format!(
             "{} scenarios, {} runs in {wall_s:.2} s wall; report: {}",
             results.len(),
             3 * results.len(),
             path.display()
-        );
+        ))?;
         return Ok(());
     }
     let Some(path) = args.scenario else { bail!("give a scenario file or --all") };
     let sc = PocScenario::from_path(&path)?;
     let out = run(&sc, args.estimator, args.solver)?;
     let summary = output::write_run(&args.out, &sc, &out)?;
-    println!("{}", serde_json::to_string_pretty(&summary)?);
+    super::print_stdout(&serde_json::to_string_pretty(&summary)?)?;
     if let Some(s) = &out.stopped_early {
-        println!("note: {s}");
+        super::print_stdout(&format!("note: {s}"))?;
     }
     Ok(())
 }

@@ -16,7 +16,7 @@ pub const CORRELATION_THRESHOLD: f64 = 0.9;
 /// not positive definite.
 pub fn scaled_condition_number(c: &DMatrix<f64>) -> Option<f64> {
     let n = c.nrows();
-    if n == 0 || (0..n).any(|i| !(c[(i, i)] > 0.0)) {
+    if n == 0 || (0..n).any(|i| c[(i, i)].is_nan() || c[(i, i)] <= 0.0) {
         return None;
     }
     let r = DMatrix::from_fn(n, n, |i, j| c[(i, j)] / (c[(i, i)] * c[(j, j)]).sqrt());

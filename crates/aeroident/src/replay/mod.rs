@@ -393,8 +393,23 @@ pub fn replay_with<R: Read>(
         let Some(r) = run.as_mut() else { continue };
         for (row, s) in ready.drain(..) {
             let t_in = Instant::now();
-            let result = r.est.update(&s).map(|e| *e);
+            let result = r.est.update(&s).copied().map_err(|e| e.to_string());
             busy += t_in.elapsed();
+            // A numerical failure on valid input is a divergence (the estimator's status says
+            // so, with or without an error); any other error refuses this sample only.
+            if r.est.estimates().status == Status::Diverged {
+                let why = result.err().map_or(String::new(), |e| format!(" ({e})"));
+                rejections.push(Rejection {
+                    row,
+                    reason: format!(
+                        "estimator `{}` diverged at t = {} s{why}; replay stopped",
+                        r.est.method(),
+                        s.t_s
+                    ),
+                });
+                diverged = true;
+                break;
+            }
             let e = match result {
                 Ok(e) => e,
                 Err(err) => {
@@ -406,18 +421,6 @@ pub fn replay_with<R: Read>(
                     continue;
                 }
             };
-            if e.status == Status::Diverged {
-                rejections.push(Rejection {
-                    row,
-                    reason: format!(
-                        "estimator `{}` diverged at t = {} s; replay stopped",
-                        r.est.method(),
-                        s.t_s
-                    ),
-                });
-                diverged = true;
-                break;
-            }
             let n = history.names.len();
             let values: Vec<Option<f64>> = (0..n).map(|i| e.value(i)).collect();
             let sigmas: Vec<Option<f64>> = (0..n).map(|i| e.sigma(i)).collect();

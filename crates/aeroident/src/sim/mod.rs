@@ -394,7 +394,7 @@ pub fn execute(args: SimArgs) -> anyhow::Result<()> {
     let base = args.scenario.parent().unwrap_or(Path::new("."));
     let r = run(&sc, base)?;
     write_outputs(&r, &args.out)?;
-    println!(
+    crate::cli::print_stdout(&format!(
         "simulated {:.2} s ({} rows, {} columns) from trim: throttle {:.4}, elevator {:.4} deg, alpha {:.4} deg (trim cost {:.1e})\nwrote {}/timeseries.csv, states.png, controls_wind.png",
         r.data[0].last().copied().unwrap_or(0.0),
         r.data[0].len(),
@@ -404,7 +404,7 @@ pub fn execute(args: SimArgs) -> anyhow::Result<()> {
         r.trim.state[ALPHA].to_degrees(),
         r.trim.cost,
         args.out.display()
-    );
+    ))?;
     Ok(())
 }
 

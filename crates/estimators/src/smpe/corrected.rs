@@ -127,6 +127,14 @@ where
     pub fn gain(&self) -> &SMatrix<f64, P, P> {
         &self.gamma
     }
+
+    /// A new manoeuvre starts with the next sample (a gap in the record): the surface is reset
+    /// to zero (the estimated model restarts on the measured state) and the next sample is
+    /// treated as a first one (no time step); θ̂ and Γ are kept.
+    pub fn new_manoeuvre(&mut self) {
+        self.surface = SVector::zeros();
+        self.last_t_s = None;
+    }
 }
 
 impl<M, const N: usize, const P: usize> ParametricEstimator<P> for CorrectedSmpe<M, N, P>

@@ -90,6 +90,50 @@ pub fn strong_correlations(est: &dyn Estimator) -> Vec<Correlation> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use aeroident_estimators::rls::{Rls, RlsConfig};
+    use aeroident_estimators::{AirDataSample, AircraftConstants, ModelStructure, Term};
+
+    /// The condition number from the estimator's covariance (nalgebra eigenvalues) equals the
+    /// RLS's own (Jacobi iteration on its P), and a nearly collinear pair is listed: two
+    /// independent computations.
+    #[test]
+    fn analytic_rls_condition_number_and_collinear_pair() {
+        let st = ModelStructure::empty()
+            .with(Coefficient::Cm, &[Term::Bias, Term::Alpha, Term::Q, Term::Alphadot, Term::De]);
+        let k = AircraftConstants {
+            mass_kg: 1000.0,
+            S_m2: 10.0,
+            cbar_m: Some(2.0),
+            Iyy_kgm2: Some(2000.0),
+            ..Default::default()
+        };
+        let mut rls = Rls::new(st, RlsConfig::default()).unwrap();
+        for i in 0..400 {
+            let t = i as f64 * 0.02;
+            let q = 0.1 * (2.1 * t).sin();
+            // α̇ follows q closely (a short period), with a small independent part.
+            let alphadot = 0.95 * q + 0.004 * (5.3 * t).cos();
+            let s = AirDataSample {
+                t_s: t,
+                vt_mps: 50.0,
+                alpha_rad: 0.05 + 0.02 * (1.3 * t).sin(),
+                qbar_pa: 1500.0,
+                q_rad_s: Some(q),
+                qdot_rad_s2: Some(0.3 * (0.9 * t).sin() + 0.01 * (7.7 * t).sin()),
+                alphadot_rad_s: Some(alphadot),
+                de_rad: Some(0.02 * (0.7 * t + 0.4).sin()),
+                constants: k,
+                ..Default::default()
+            };
+            rls.update(&s).unwrap();
+        }
+        let ours = coefficient_conditions(&rls)[0].condition_number.unwrap();
+        let theirs = rls.condition_number(Coefficient::Cm).unwrap();
+        assert!((ours - theirs).abs() < 1e-6 * theirs, "{ours} vs {theirs}");
+        assert!(ours > 100.0, "{ours}");
+        let pairs = strong_correlations(&rls);
+        assert!(pairs.iter().any(|c| c.a == "Cm_q" && c.b == "Cm_alphadot" && c.rho < -0.9));
+    }
 
     #[test]
     fn analytic_condition_number_of_a_2x2_covariance() {

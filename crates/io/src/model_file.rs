@@ -59,6 +59,16 @@ pub enum ModelFileError {
         /// The I/O error.
         source: std::io::Error,
     },
+    /// `--model` named neither a preset nor a readable file.
+    #[error(
+        "{arg}: not a preset (longitudinal, lateral, six-axis) and not a readable model file: {source}"
+    )]
+    NotFound {
+        /// The argument.
+        arg: String,
+        /// The I/O error of reading it as a file.
+        source: std::io::Error,
+    },
     /// TOML syntax or an unknown key (the parser's message carries line and column).
     #[error("{file}: model syntax: {message}")]
     Syntax {
@@ -173,7 +183,12 @@ impl ModelSpec {
     pub fn from_arg(arg: &str) -> Result<Self, ModelFileError> {
         match Self::preset(arg) {
             Some(m) => Ok(m),
-            None => Self::from_path(Path::new(arg)),
+            None => Self::from_path(Path::new(arg)).map_err(|e| match e {
+                ModelFileError::Io { source, .. } => {
+                    ModelFileError::NotFound { arg: arg.to_string(), source }
+                }
+                e => e,
+            }),
         }
     }
 
@@ -351,6 +366,6 @@ sigma = 1.5
         let e = err("[coefficients]\n");
         assert!(e.contains("declares no parameter"), "{e}");
         let e = ModelSpec::from_arg("no/such/model.toml").unwrap_err().to_string();
-        assert!(e.starts_with("no/such/model.toml: "), "{e}");
+        assert!(e.starts_with("no/such/model.toml: not a preset (longitudinal"), "{e}");
     }
 }

@@ -7,15 +7,14 @@
 /// Aircraft estimation experiments: two F-16s, sensors, estimators (issue 4).
 pub mod aircraft;
 pub mod cli;
+pub mod estimators;
 /// Convergence-time and error metrics of estimate histories.
 pub mod metrics;
-/// Locked output directories with atomic files and no stale outputs.
 pub mod outdir;
 /// Stacked time-series panels rendered to PNG.
 pub mod plot;
 /// Proof-of-concept experiments (thesis §4.1): scenarios, simulation loop, outputs, report.
 pub mod poc;
-/// Replay of recorded flight data through online estimators (issue 5).
 pub mod replay;
 /// Open-loop F-16 simulation: trim → inputs, gusts, turbulence → sensors → CSV and figures.
 pub mod sim;

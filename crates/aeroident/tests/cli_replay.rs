@@ -21,51 +21,79 @@ fn tmp(name: &str) -> PathBuf {
 }
 
 /// The bad-input corpus through the CLI: the run succeeds, every rejected row and gap is in
-/// `summary.json` with its row, and the summary has exactly the keys.
+/// `summary.json` with its row, and the summary has exactly the documented keys. Four good
+/// samples of nearly the same state cannot determine any 4-term fit: every estimate is `null`
+/// (never a placeholder 0 or NaN) and the status is `initialising`.
 #[test]
 fn errors_bad_corpus_counted_in_summary_with_exact_keys() {
     let out = tmp("bad");
     let io_data = workspace().join("crates/io/tests/data");
-    let st = bin()
+    let o = bin()
         .args(["replay"])
         .arg(io_data.join("bad_values.csv"))
         .arg("--map")
         .arg(io_data.join("min.toml"))
         .arg("--out")
         .arg(&out)
-        .status()
+        .output()
         .unwrap();
-    assert!(st.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("model: longitudinal (default"), "the model is printed: {err}");
+    assert!(err.contains("status `initialising`"), "{err}");
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let keys: Vec<&str> = v.as_object().unwrap().keys().map(|k| k.as_str()).collect();
     let mut expect = [
         "estimator",
+        "model",
+        "status",
         "samples_read",
         "samples_rejected",
         "rejections",
         "throughput_samples_per_s",
         "parameters",
+        "coefficients",
+        "correlations",
     ];
     let mut got = keys.clone();
     got.sort_unstable();
     expect.sort_unstable();
     assert_eq!(got, expect);
+    assert_eq!(v["estimator"], "rls");
+    assert_eq!(v["model"], "longitudinal");
+    assert_eq!(v["status"], "initialising");
     assert_eq!(v["samples_read"], 12);
     assert_eq!(v["samples_rejected"], 8);
     let rows: Vec<u64> =
         v["rejections"].as_array().unwrap().iter().map(|r| r["row"].as_u64().unwrap()).collect();
     assert_eq!(rows, vec![3, 4, 5, 6, 7, 8, 9, 10, 11, 12]);
-    for p in v["parameters"].as_array().unwrap() {
-        let keys: Vec<&str> = p.as_object().unwrap().keys().map(|k| k.as_str()).collect();
-        assert_eq!(keys.len(), 4);
-        assert!(p["estimate"].as_f64().unwrap().is_finite());
+    let params = v["parameters"].as_array().unwrap();
+    assert_eq!(params.len(), 12);
+    for p in params {
+        let mut keys: Vec<&str> = p.as_object().unwrap().keys().map(|k| k.as_str()).collect();
+        keys.sort_unstable();
+        assert_eq!(keys, ["estimate", "name", "settle_time_s", "std_error"]);
+        assert!(p["estimate"].is_null() && p["std_error"].is_null(), "{p}");
     }
+    let coefs = v["coefficients"].as_array().unwrap();
+    let names: Vec<&str> = coefs.iter().map(|c| c["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["CL", "CD", "Cm"]);
+    for c in coefs {
+        let mut keys: Vec<&str> = c.as_object().unwrap().keys().map(|k| k.as_str()).collect();
+        keys.sort_unstable();
+        assert_eq!(keys, ["condition_number", "name"]);
+        assert!(c["condition_number"].is_null());
+    }
+    assert_eq!(v["correlations"].as_array().unwrap().len(), 0);
     let csv = std::fs::read_to_string(out.join("estimates.csv")).unwrap();
     assert!(
-        csv.starts_with("t_s,Cm_0,Cm_alpha,Cm_q,Cm_de,CL_0,CL_alpha,CD_0,CD_alpha,sigma_Cm_0,")
+        csv.starts_with("t_s,CL_0,CL_alpha,CL_q,CL_de,CD_0,CD_alpha,CD_q,CD_de,Cm_0,"),
+        "{csv}"
     );
     assert!(!csv.to_lowercase().contains("nan"));
+    // Not identified: empty fields, not numbers.
+    assert!(csv.lines().nth(1).unwrap().ends_with(",,,,"), "{csv}");
     assert!(out.join("estimates.png").exists());
 }
 
@@ -83,7 +111,52 @@ fn errors_missing_channel_mapping_fails_with_file_and_channel() {
         .unwrap();
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("missing_channel.toml") && err.contains("required channel `q`"), "{err}");
+    assert!(
+        err.contains("missing_channel.toml") && err.contains("required channel `mass`"),
+        "{err}"
+    );
+}
+
+fn replay_good(extra: &[&str], name: &str) -> (bool, String) {
+    let io_data = workspace().join("crates/io/tests/data");
+    let o = bin()
+        .args(["replay"])
+        .arg(io_data.join("good.csv"))
+        .arg("--map")
+        .arg(io_data.join("min.toml"))
+        .arg("--out")
+        .arg(tmp(name))
+        .args(extra)
+        .output()
+        .unwrap();
+    (o.status.success(), String::from_utf8_lossy(&o.stderr).into_owned())
+}
+
+/// Estimators not in this build, unsupported models and bad model files are clear errors.
+#[test]
+fn errors_estimator_model_and_model_file_problems_are_named() {
+    let (ok, err) = replay_good(&["--estimator", "ekf"], "ekf");
+    assert!(!ok && err.contains("estimator `ekf` is not available in this build"), "{err}");
+    let (ok, err) = replay_good(&["--model", "lateral"], "lat");
+    assert!(!ok, "{err}");
+    assert!(
+        err.contains("model `lateral` is not supported by") && err.contains("min.toml"),
+        "{err}"
+    );
+    assert!(
+        err.contains("term `beta` (needs beta)") && err.contains("coefficient `CY` (needs ay)"),
+        "{err}"
+    );
+    let dir = tmp("modelfile");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("bad_model.toml");
+    std::fs::write(&file, "[coefficients]\nCm = [\"0\", \"alpha\"]\nCn = [\"beta\", \"yaw\"]\n")
+        .unwrap();
+    let (ok, err) = replay_good(&["--model", file.to_str().unwrap()], "modelfile-run");
+    assert!(!ok, "{err}");
+    assert!(err.contains("bad_model.toml: line 3: coefficient `Cn`: unknown term `yaw`"), "{err}");
+    let (ok, err) = replay_good(&["--forgetting", "1.5"], "forget");
+    assert!(!ok && err.contains("invalid configuration `forgetting`"), "{err}");
 }
 
 /// Live mode: the HFB-320 record on stdin gives one estimates line per sample on stdout.
@@ -99,7 +172,7 @@ fn val_live_stdin_one_line_per_sample() {
         return;
     }
     let mut child = bin()
-        .args(["replay", "-", "--estimator", "ekf", "--map"])
+        .args(["replay", "-", "--estimator", "rls", "--map"])
         .arg(workspace().join("mappings/hfb320.toml"))
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
@@ -117,9 +190,10 @@ fn val_live_stdin_one_line_per_sample() {
     let text = String::from_utf8(o.stdout).unwrap();
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines.len(), 1 + 601);
-    assert!(lines[0].starts_with("t_s,CD_0,"));
+    assert!(lines[0].starts_with("t_s,CL_0,"));
     assert!(lines[601].starts_with("60.0000"), "{}", lines[601]);
     // Without --out the summary goes to stderr as JSON.
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("\"samples_read\": 601"), "{err}");
+    assert!(err.contains("\"status\": \"running\""), "{err}");
 }

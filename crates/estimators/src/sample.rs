@@ -24,7 +24,9 @@
 //! ```
 //!
 //! (the moment equations are Stevens & Lewis eq. 2.5-24 solved for the applied moment, with
-//! `Jxy = Jyz = 0`). A coefficient whose channels the sample lacks is `None`, never 0.
+//! `Jxy = Jyz = 0`). A coefficient whose channels the sample lacks is `None`, never 0; the one
+//! exception is the pitch coupling term `(Ixx − Izz) p r + Ixz (p² − r²)`, neglected when p, r
+//! or the roll/yaw inertias are absent (a longitudinal record; symmetric flight assumed).
 
 /// Aircraft constants of one sample, SI. Optional values are `None` when the record does not
 /// give them; anything that needs them is then unavailable (never computed with a made-up 0).
@@ -299,16 +301,17 @@ impl AirDataSample {
         let p = self.p_rad_s;
         let q = self.q_rad_s;
         let r = self.r_rad_s;
-        // Pitch: a record without p or r (a purely longitudinal log) has no inertial coupling
-        // term (symmetric flight assumed, Klein & Morelli §5.1); with p and r the coupling
-        // needs Ixx, Izz and Ixz, and Cm is unavailable without them.
+        // Pitch: the inertial coupling term needs p, r, Ixx, Izz and Ixz. A record without
+        // any of them is a longitudinal record (e.g. the HFB-320, whose roll and yaw inertias
+        // are not published): the term is neglected, symmetric flight assumed (Klein & Morelli
+        // §5.1) — it is second order in the lateral rates.
         let cm = (|| {
             let qd = self.qdot_rad_s2?;
             let iyy = c.Iyy_kgm2?;
             let cbar = c.cbar_m?;
-            let coupling = match (p, r) {
-                (Some(pv), Some(rv)) => {
-                    (c.Ixx_kgm2? - c.Izz_kgm2?) * pv * rv + c.Ixz_kgm2? * (pv * pv - rv * rv)
+            let coupling = match (p, r, c.Ixx_kgm2, c.Izz_kgm2, c.Ixz_kgm2) {
+                (Some(pv), Some(rv), Some(ixx), Some(izz), Some(ixz)) => {
+                    (ixx - izz) * pv * rv + ixz * (pv * pv - rv * rv)
                 }
                 _ => 0.0,
             };
@@ -416,6 +419,13 @@ mod tests {
         let c = s.measured_coefficients();
         assert!(c[1].is_none() && c[5].is_none() && c[7].is_none());
         assert!(c[0].is_some() && c[6].is_some());
+        // Rates without the roll/yaw inertias (a longitudinal record): coupling neglected.
+        s.p_rad_s = Some(0.3);
+        s.r_rad_s = Some(0.2);
+        s.qdot_rad_s2 = Some(0.1);
+        s.constants.Ixx_kgm2 = None;
+        let cm = s.measured_coefficients()[6].unwrap();
+        assert!((cm - 1e5 * 0.1 / (4000.0 * 30.0 * 2.0)).abs() < 1e-15, "{cm}");
         s.qbar_pa = 0.0;
         assert!(s.measured_coefficients().iter().all(Option::is_none));
     }

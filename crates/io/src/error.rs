@@ -21,10 +21,12 @@ pub enum FlightDataError {
         message: String,
     },
     /// A `[channels]` key is not a known channel.
-    #[error("{file}: unknown channel `{channel}` (valid: {valid})")]
+    #[error("{file}: line {line}: unknown channel `{channel}` (valid: {valid})")]
     UnknownChannel {
         /// Mapping file.
         file: String,
+        /// Line of the key in the mapping file.
+        line: usize,
         /// The key.
         channel: String,
         /// Valid keys.
@@ -134,6 +136,18 @@ pub enum RowProblem {
         column: String,
         /// The field text.
         text: String,
+    },
+    /// A finite raw value that is not finite after the unit conversion (overflow).
+    #[error("column `{column}`: `{text}` is not finite in SI (`{channel}` = {value})")]
+    NonFiniteSi {
+        /// Column name(s).
+        column: String,
+        /// Channel key.
+        channel: String,
+        /// The field text (the first column's).
+        text: String,
+        /// The converted value.
+        value: f64,
     },
     /// Time equal to the previous accepted sample's.
     #[error("column `{column}`: repeated time {t_s} s")]

@@ -1,79 +1,52 @@
-//! Streaming reader of recorded flight data: a CSV with one header row, mapped to standard
-//! channels by a [`Mapping`], converted to SI, one row at a time (works on stdin; the whole file
-//! is never loaded).
+//! Streaming reader of recorded flight data: a CSV with one header row, mapped to the channels
+//! of an [`AirDataSample`] by a [`Mapping`], converted to SI, one row at a time (works on stdin;
+//! the whole file is never loaded).
 //!
 //! Every row yields exactly one [`RecordEvent`]: a sample, or a rejection naming the row (line
 //! number in the file, header = line 1), the column and the reason. Rows are rejected for a
-//! blank, non-numeric or non-finite value in a mapped column, a wrong field count, a repeated
-//! or backward time, and a non-positive airspeed, mass, inertia, area or chord (or density /
-//! dynamic pressure). A gap — an interval longer than 1.5 × the nominal interval — is reported
-//! as a [`RecordEvent::Gap`] *before* the sample that follows it; it is never bridged silently.
+//! blank, non-numeric or non-finite value in a mapped column, a value that is not finite after
+//! the unit conversion, a wrong field count, a repeated or backward time, and a non-positive
+//! airspeed, mass, area, chord, span, moment of inertia, density or dynamic pressure. A gap —
+//! an interval longer than [`GAP_FACTOR`] × the nominal interval — is reported as a
+//! [`RecordEvent::Gap`] *before* the sample that follows it; it is never bridged silently.
 //! Nothing is dropped without an event.
+//!
+//! # What a sample holds
+//!
+//! Channels and units as in [`crate::mapping`] (full reference: `docs/mapping.md`). A channel
+//! the mapping does not map is `None` in the sample, never 0. Derived here:
+//!
+//! - `q̄ = ½ ρ V²` when only `rho` is mapped, `ρ = 2 q̄ / V²` when only `qbar` is (both are
+//!   then present in every sample);
+//! - the flow angles at the CG from those at the vanes. A vane at body position
+//!   `r_v = (x, y, z)` from the CG moves with `v_v = v_cg + ω × r_v` (rigid-body velocity
+//!   transport, `ω = (p, q, r)`), i.e. `u_v = u + q z − r y`,
+//!   `v_v = v + r x − p z`, `w_v = w + p y − q x` — the transport Jategaonkar 2015 applies to
+//!   the ATTAS noseboom (book code `chapter04/umr_reg_attas.m`; Klein & Morelli 2006 ch. 10,
+//!   instrument position corrections). With `α ≈ w/u`, `β ≈ v/V` and `u ≈ V`, to first order
+//!   in the rates and with `y = 0`:
+//!
+//!   ```text
+//!   α_cg = α_vane + x_α q / V                    (vane x_α ahead of the CG)
+//!   β_cg = β_vane − x_β r / V + z_β p / V        (vane x_β ahead of, z_β below the CG)
+//!   ```
+//!
+//!   (a yaw rate to the right moves a nose vane to the right, so it sees more sideslip than
+//!   the CG). The neglected terms are products of two small quantities (e.g. `α · z q / V`):
+//!   ≈ 10⁻⁵ rad for the ATTAS noseboom. The airspeed is not corrected (its change is second
+//!   order).
+//!
+//! Finiteness is checked on the raw text and again after the unit conversion (a finite raw
+//! value can overflow), and the finished sample is checked field by field.
 
 use crate::error::{FlightDataError, RowProblem};
 use crate::mapping::{Channel, ChannelMap, Mapping, Source};
+use aeroident_estimators::{AirDataSample, AircraftConstants};
 use std::collections::BTreeMap;
 use std::io::Read;
 
 /// Gap threshold: an interval longer than this multiple of the nominal interval is a gap.
 pub const GAP_FACTOR: f64 = 1.5;
-
-/// One sample in SI units. Optional channels are `None` when not mapped.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct FlightSample {
-    /// Time, s.
-    pub t_s: f64,
-    /// True airspeed, m/s.
-    pub vt_mps: f64,
-    /// Angle of attack as measured (vane), rad.
-    pub alpha_rad: f64,
-    /// Pitch attitude, rad.
-    pub theta_rad: Option<f64>,
-    /// Pitch rate, rad/s.
-    pub q_rad_s: f64,
-    /// Pitch acceleration, rad/s².
-    pub qdot_rad_s2: Option<f64>,
-    /// Body x specific force at the CG, m/s².
-    pub ax_mps2: f64,
-    /// Body z specific force at the CG, m/s² (≈ −g level).
-    pub az_mps2: f64,
-    /// Elevator, rad.
-    pub de_rad: f64,
-    /// Total thrust, N (0 when not mapped).
-    pub thrust_n: f64,
-    /// Thrust pitching moment, N·m, when mapped.
-    pub thrust_moment_nm: Option<f64>,
-    /// Dynamic pressure, Pa, when mapped.
-    pub qbar_pa: Option<f64>,
-    /// Air density, kg/m³, when mapped.
-    pub rho_kgpm3: Option<f64>,
-    /// Roll rate, rad/s (0 when not mapped).
-    pub p_rad_s: f64,
-    /// Yaw rate, rad/s (0 when not mapped).
-    pub r_rad_s: f64,
-    /// Mass, kg.
-    pub mass_kg: f64,
-    /// Roll inertia, kg·m² (0 when not mapped).
-    pub Ixx_kgm2: f64,
-    /// Pitch inertia, kg·m².
-    pub Iyy_kgm2: f64,
-    /// Yaw inertia, kg·m² (0 when not mapped).
-    pub Izz_kgm2: f64,
-    /// Product of inertia, kg·m² (0 when not mapped).
-    pub Ixz_kgm2: f64,
-    /// Reference area, m².
-    pub S_m2: f64,
-    /// Mean aerodynamic chord, m.
-    pub cbar_m: f64,
-    /// Thrust moment arm, m (0 when not mapped).
-    pub thrust_arm_m: f64,
-    /// Thrust inclination, rad (0 when not mapped).
-    pub thrust_incidence_rad: f64,
-    /// Reference speed, m/s, when mapped.
-    pub v0_mps: Option<f64>,
-    /// α-vane distance ahead of the CG, m (0 when not mapped).
-    pub alpha_vane_x_m: f64,
-}
 
 /// A rejected row: its line number and the reason (naming the column).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -85,14 +58,17 @@ pub struct Rejection {
 }
 
 /// What one data row produced.
+// The sample variant is large; events are consumed one at a time, so it is not boxed (no
+// allocation per row for it).
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq)]
 pub enum RecordEvent {
     /// A good sample.
     Sample {
         /// Line number.
         row: u64,
-        /// The sample, SI.
-        sample: FlightSample,
+        /// The sample, SI, at the CG.
+        sample: AirDataSample,
     },
     /// The row was rejected.
     Rejected {
@@ -116,6 +92,7 @@ pub enum RecordEvent {
 struct Resolved {
     columns: Vec<usize>,
     names: Vec<String>,
+    weights: Vec<f64>,
     map: ChannelMap,
 }
 
@@ -157,9 +134,11 @@ impl<R: Read> FlightDataReader<R> {
             .clone();
         let header_len = headers.len();
         let resolve = |key: &str, m: &ChannelMap| -> Result<Option<Resolved>, FlightDataError> {
-            let Source::Columns(names) = &m.source else { return Ok(None) };
+            let Source::Columns(cols) = &m.source else { return Ok(None) };
+            let names: Vec<String> = cols.iter().map(|(n, _)| n.clone()).collect();
+            let weights: Vec<f64> = cols.iter().map(|(_, w)| *w).collect();
             let mut columns = Vec::with_capacity(names.len());
-            for n in names {
+            for n in &names {
                 let idx = headers.iter().position(|h| h == n).ok_or_else(|| {
                     FlightDataError::MissingColumn {
                         file: file.to_string(),
@@ -169,7 +148,7 @@ impl<R: Read> FlightDataReader<R> {
                 })?;
                 columns.push(idx);
             }
-            Ok(Some(Resolved { columns, names: names.clone(), map: m.clone() }))
+            Ok(Some(Resolved { columns, names, weights, map: m.clone() }))
         };
         let time = resolve("time", &mapping.time)?.ok_or_else(|| FlightDataError::BadSpec {
             file: mapping.file.clone(),
@@ -209,9 +188,9 @@ impl<R: Read> FlightDataReader<R> {
         &self.file
     }
 
-    fn field(&self, r: &Resolved) -> Result<f64, RowProblem> {
+    fn field(&self, ch: &str, r: &Resolved) -> Result<f64, RowProblem> {
         let mut sum = 0.0;
-        for (idx, name) in r.columns.iter().zip(r.names.iter()) {
+        for ((idx, name), w) in r.columns.iter().zip(r.names.iter()).zip(r.weights.iter()) {
             let text = self.record.get(*idx).unwrap_or("");
             if text.is_empty() {
                 return Err(RowProblem::Blank { column: name.clone() });
@@ -223,41 +202,60 @@ impl<R: Read> FlightDataReader<R> {
             if !v.is_finite() {
                 return Err(RowProblem::NonFinite { column: name.clone(), text: text.to_string() });
             }
-            sum += v;
+            sum += w * v;
         }
-        Ok(r.map.to_si(sum))
+        let si = r.map.to_si(sum);
+        if !si.is_finite() {
+            return Err(RowProblem::NonFiniteSi {
+                column: r.names.join("+"),
+                channel: ch.to_string(),
+                text: self.record.get(r.columns[0]).unwrap_or("").to_string(),
+                value: si,
+            });
+        }
+        Ok(si)
     }
 
+    /// The SI value of `ch` in the current row (`None` when not mapped); mapped channels of
+    /// [`Channel::POSITIVE`] must be > 0.
     fn get(&self, ch: Channel) -> Result<Option<f64>, RowProblem> {
-        if let Some(v) = self.constants.get(&ch) {
-            return Ok(Some(*v));
-        }
-        match self.channels.get(&ch) {
-            Some(r) => self.field(r).map(Some),
-            None => Ok(None),
-        }
-    }
-
-    fn positive(&self, ch: Channel, v: f64) -> Result<f64, RowProblem> {
-        if v > 0.0 {
-            Ok(v)
+        let v = if let Some(v) = self.constants.get(&ch) {
+            *v
         } else {
+            match self.channels.get(&ch) {
+                Some(r) => self.field(ch.key(), r)?,
+                None => return Ok(None),
+            }
+        };
+        if Channel::POSITIVE.contains(&ch) && (v.is_nan() || v <= 0.0) {
             let column = match self.channels.get(&ch) {
                 Some(r) => r.names.join("+"),
                 None => format!("{} (constant)", ch.key()),
             };
-            Err(RowProblem::Domain { column, reason: format!("{} must be > 0, got {v}", ch.key()) })
+            return Err(RowProblem::Domain {
+                column,
+                reason: format!("{} must be > 0, got {v}", ch.key()),
+            });
         }
+        Ok(Some(v))
     }
 
-    fn parse_row(&self) -> Result<FlightSample, RowProblem> {
+    /// A channel the mapping guarantees ([`Channel::REQUIRED`]).
+    fn required(&self, ch: Channel) -> Result<f64, RowProblem> {
+        self.get(ch)?.ok_or_else(|| RowProblem::Domain {
+            column: ch.key().to_string(),
+            reason: "required channel not mapped".into(),
+        })
+    }
+
+    fn parse_row(&self) -> Result<AirDataSample, RowProblem> {
         if self.record.len() != self.header_len {
             return Err(RowProblem::FieldCount {
                 expected: self.header_len,
                 found: self.record.len(),
             });
         }
-        let t_s = self.field(&self.time)?;
+        let t_s = self.field("time", &self.time)?;
         if let Some(prev) = self.last_t {
             let column = self.time.names[0].clone();
             if t_s == prev {
@@ -267,46 +265,87 @@ impl<R: Read> FlightDataReader<R> {
                 return Err(RowProblem::NonMonotonicTime { column, t_s, prev_t_s: prev });
             }
         }
-        // Required channels are guaranteed mapped by `Mapping` validation.
-        let req = |ch: Channel| -> Result<f64, RowProblem> { Ok(self.get(ch)?.unwrap_or(0.0)) };
-        let mut s = FlightSample {
-            t_s,
-            vt_mps: req(Channel::Vt)?,
-            alpha_rad: req(Channel::Alpha)?,
-            theta_rad: self.get(Channel::Theta)?,
-            q_rad_s: req(Channel::Q)?,
-            qdot_rad_s2: self.get(Channel::Qdot)?,
-            ax_mps2: req(Channel::Ax)?,
-            az_mps2: req(Channel::Az)?,
-            de_rad: req(Channel::De)?,
-            thrust_n: req(Channel::Thrust)?,
-            thrust_moment_nm: self.get(Channel::ThrustMoment)?,
-            qbar_pa: self.get(Channel::Qbar)?,
-            rho_kgpm3: self.get(Channel::Rho)?,
-            p_rad_s: req(Channel::P)?,
-            r_rad_s: req(Channel::R)?,
-            mass_kg: req(Channel::Mass)?,
-            Ixx_kgm2: req(Channel::Ixx)?,
-            Iyy_kgm2: req(Channel::Iyy)?,
-            Izz_kgm2: req(Channel::Izz)?,
-            Ixz_kgm2: req(Channel::Ixz)?,
-            S_m2: req(Channel::S)?,
-            cbar_m: req(Channel::Cbar)?,
-            thrust_arm_m: req(Channel::ThrustArm)?,
-            thrust_incidence_rad: req(Channel::ThrustIncidence)?,
-            v0_mps: self.get(Channel::V0)?,
-            alpha_vane_x_m: req(Channel::AlphaVaneX)?,
+        let g = |ch: Channel| self.get(ch);
+        let vt_mps = self.required(Channel::Vt)?;
+        let alpha_vane = self.required(Channel::Alpha)?;
+        let (p, q, r) = (g(Channel::P)?, g(Channel::Q)?, g(Channel::R)?);
+        let beta_vane = g(Channel::Beta)?;
+        // Vane → CG (module doc). Mapping validation guarantees the rates a correction needs.
+        let alpha_rad = match (g(Channel::AlphaVaneX)?, q) {
+            (Some(x), Some(q)) => alpha_vane + x * q / vt_mps,
+            _ => alpha_vane,
         };
-        s.vt_mps = self.positive(Channel::Vt, s.vt_mps)?;
-        s.mass_kg = self.positive(Channel::Mass, s.mass_kg)?;
-        s.Iyy_kgm2 = self.positive(Channel::Iyy, s.Iyy_kgm2)?;
-        s.S_m2 = self.positive(Channel::S, s.S_m2)?;
-        s.cbar_m = self.positive(Channel::Cbar, s.cbar_m)?;
-        if let Some(v) = s.qbar_pa {
-            self.positive(Channel::Qbar, v)?;
-        }
-        if let Some(v) = s.rho_kgpm3 {
-            self.positive(Channel::Rho, v)?;
+        let (bx, bz) = (g(Channel::BetaVaneX)?, g(Channel::BetaVaneZ)?);
+        let beta_rad = beta_vane.map(|b| {
+            let dx = match (bx, r) {
+                (Some(x), Some(r)) => -x * r / vt_mps,
+                _ => 0.0,
+            };
+            let dz = match (bz, p) {
+                (Some(z), Some(p)) => z * p / vt_mps,
+                _ => 0.0,
+            };
+            b + dx + dz
+        });
+        let (qbar, rho) = (g(Channel::Qbar)?, g(Channel::Rho)?);
+        let v2 = vt_mps * vt_mps;
+        let qbar_pa = match (qbar, rho) {
+            (Some(q), _) => q,
+            (None, Some(rho)) => 0.5 * rho * v2,
+            (None, None) => {
+                return Err(RowProblem::Domain {
+                    column: "qbar/rho".into(),
+                    reason: "neither dynamic pressure nor density mapped".into(),
+                });
+            }
+        };
+        let constants = AircraftConstants {
+            mass_kg: self.required(Channel::Mass)?,
+            S_m2: self.required(Channel::S)?,
+            cbar_m: g(Channel::Cbar)?,
+            b_m: g(Channel::B)?,
+            Ixx_kgm2: g(Channel::Ixx)?,
+            Iyy_kgm2: g(Channel::Iyy)?,
+            Izz_kgm2: g(Channel::Izz)?,
+            Ixz_kgm2: g(Channel::Ixz)?,
+            thrust_arm_m: g(Channel::ThrustArm)?.unwrap_or(0.0),
+            thrust_incidence_rad: g(Channel::ThrustIncidence)?.unwrap_or(0.0),
+            v0_mps: g(Channel::V0)?,
+        };
+        let s = AirDataSample {
+            t_s,
+            vt_mps,
+            alpha_rad,
+            qbar_pa,
+            beta_rad,
+            p_rad_s: p,
+            q_rad_s: q,
+            r_rad_s: r,
+            pdot_rad_s2: g(Channel::Pdot)?,
+            qdot_rad_s2: g(Channel::Qdot)?,
+            rdot_rad_s2: g(Channel::Rdot)?,
+            alphadot_rad_s: g(Channel::Alphadot)?,
+            phi_rad: g(Channel::Phi)?,
+            theta_rad: g(Channel::Theta)?,
+            psi_rad: g(Channel::Psi)?,
+            ax_mps2: g(Channel::Ax)?,
+            ay_mps2: g(Channel::Ay)?,
+            az_mps2: g(Channel::Az)?,
+            de_rad: g(Channel::De)?,
+            da_rad: g(Channel::Da)?,
+            dr_rad: g(Channel::Dr)?,
+            thrust_n: g(Channel::Thrust)?,
+            throttle: g(Channel::Throttle)?,
+            thrust_moment_nm: g(Channel::ThrustMoment)?,
+            rho_kgpm3: Some(rho.unwrap_or(2.0 * qbar_pa / v2)),
+            constants,
+        };
+        // Derived values (vane corrections, q̄ from ρ) can still overflow.
+        if let Some((field, value)) = s.first_non_finite() {
+            return Err(RowProblem::Domain {
+                column: field.to_string(),
+                reason: format!("derived value {value} is not finite"),
+            });
         }
         Ok(s)
     }

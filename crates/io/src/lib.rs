@@ -1,15 +1,18 @@
 //! # aeroident-io
 //!
-//! Reading and writing: scenario files (TOML), recorded flight data (CSV with a TOML channel
-//! mapping), and result writers (CSV time series, JSON summaries). Every reader error names the
-//! file, the line or row, and the field.
+//! Reading and writing: recorded flight data (CSV with a TOML channel mapping, read into the
+//! one [`AirDataSample`](aeroident_estimators::AirDataSample)), model files (structure and
+//! priors over the one vocabulary), and result writers (CSV time series, JSON summaries).
+//! Every reader error names the file, the line or row, and the field.
 
 pub mod error;
 pub mod flight_data;
 pub mod mapping;
+pub mod model_file;
 pub mod replay_output;
 pub mod units;
 
 pub use error::{FlightDataError, RowProblem};
-pub use flight_data::{FlightDataReader, FlightSample, RecordEvent, Rejection};
+pub use flight_data::{FlightDataReader, RecordEvent, Rejection};
 pub use mapping::{Channel, Mapping};
+pub use model_file::{ModelFileError, ModelSpec};

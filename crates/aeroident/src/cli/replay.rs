@@ -1,19 +1,21 @@
 //! `aeroident replay`: feed a recorded flight to an online estimator sample by sample.
 //!
 //! ```text
-//! aeroident replay <data.csv|-> --map <map.toml> [--out <dir>] [--estimator rls|ekf|smpe|smpe-corrected]
-//!                  [--terms basic|with-speed] [--forgetting λ] [--qdot auto|differentiate]
-//!                  [--diff-window N] [--realtime]
+//! aeroident replay <data.csv|-> --map <map.toml> [--out <dir>]
+//!                  [--model longitudinal|lateral|six-axis|FILE]
+//!                  [--estimator rls|ekf|smpe|smpe-corrected|gradient] [--forgetting λ]
+//!                  [--derivatives auto|differentiate] [--diff-window N] [--realtime]
 //! ```
 //! Writes `<dir>/estimates.csv`, `<dir>/summary.json` and `<dir>/estimates.png` (estimates with
 //! ±2σ). With `-` the record is read from stdin and one CSV line of estimates per sample is
 //! written to stdout as it is produced (a live feed); the summary then goes to stderr unless
-//! `--out` is given.
+//! `--out` is given. The model used is printed on stderr. A diverged estimator is an error
+//! (non-zero exit) after the summary is written.
 
+use crate::estimators::EstimatorKind;
 use crate::plot::{LineKind, Panel, Series, render_panels_png};
-use crate::replay::online::ModelTerms;
-use crate::replay::{EstimatorKind, History, Pacing, QdotSource, ReplayOptions, replay};
-use aeroident_io::{FlightDataReader, Mapping};
+use crate::replay::{DerivativeSource, History, Pacing, ReplayOptions, ReplayOutcome, replay};
+use aeroident_io::{FlightDataReader, Mapping, ModelSpec};
 use anyhow::Context;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -23,24 +25,26 @@ use std::path::{Path, PathBuf};
 pub struct ReplayArgs {
     /// Recorded flight data: a CSV with one header row, or `-` for stdin (live mode).
     pub data: String,
-    /// Channel mapping TOML (see `mappings/*.toml`).
+    /// Channel mapping TOML (see `mappings/*.toml` and `docs/mapping.md`).
     #[arg(long)]
     pub map: PathBuf,
     /// Output directory for estimates.csv, summary.json and estimates.png.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Model: a preset (`longitudinal`, `lateral`, `six-axis`) or a model file (TOML, see
+    /// `models/`). Default: the richest preset the record's first sample supports.
+    #[arg(long)]
+    pub model: Option<String>,
     /// The estimator.
     #[arg(long, value_enum, default_value_t = EstimatorKind::Rls)]
     pub estimator: EstimatorKind,
-    /// Equation-error model structure (RLS): with or without the V/V0 terms.
-    #[arg(long, value_enum, default_value_t = ModelTerms::Basic)]
-    pub terms: ModelTerms,
     /// RLS forgetting factor in (0, 1]; 1 = ordinary least squares.
     #[arg(long, default_value_t = 1.0)]
     pub forgetting: f64,
-    /// Source of q̇: the record's channel (else the differentiator), or always differentiate q.
-    #[arg(long, value_enum, default_value_t = QdotSource::Auto)]
-    pub qdot: QdotSource,
+    /// Source of ṗ, q̇, ṙ and α̇: the record's channels where mapped (else the causal
+    /// differentiator), or always differentiate p, q, r and α.
+    #[arg(long, alias = "qdot", value_enum, default_value_t = DerivativeSource::Auto)]
+    pub derivatives: DerivativeSource,
     /// Causal differentiator window, samples (odd ≥ 3; lag = (N−1)/2 samples).
     #[arg(long, default_value_t = 5)]
     pub diff_window: usize,
@@ -49,20 +53,26 @@ pub struct ReplayArgs {
     pub realtime: bool,
 }
 
+fn announce(line: &str) {
+    eprintln!("{line}");
+}
+
 /// Runs `aeroident replay`.
 ///
 /// # Errors
-/// Mapping or data errors (naming file, row and column), estimator configuration errors, and
-/// output I/O errors.
+/// Mapping, model-file or data errors (naming file, row or line, and column or key),
+/// estimator errors (not available, bad option, diverged), and output I/O errors.
 pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     let mapping = Mapping::from_path(&args.map)?;
+    let model = args.model.as_deref().map(ModelSpec::from_arg).transpose()?;
     let opts = ReplayOptions {
         estimator: args.estimator,
-        terms: args.terms,
+        model,
         forgetting: args.forgetting,
-        qdot: args.qdot,
+        derivatives: args.derivatives,
         diff_window: args.diff_window,
         pacing: if args.realtime { Pacing::Realtime } else { Pacing::Unpaced },
+        on_model: Some(announce),
     };
     let live = args.data == "-";
     if !live && args.out.is_none() {
@@ -106,20 +116,57 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
             let name = Path::new(&args.data)
                 .file_name()
                 .map_or(args.data.clone(), |n| n.to_string_lossy().into_owned());
-            let title = format!("{name} — {}", args.estimator.name());
+            let title = format!("{name} — {} — {}", args.estimator.name(), outcome.model.name);
             plot_estimates(&dir.join("estimates.png"), &title, &outcome.history)?;
             eprintln!(
-                "{}: {} samples read, {} rejected, {:.0} samples/s; wrote {}",
+                "{}: {} samples read, {} rejected, {:.0} samples/s, status {}; wrote {}",
                 args.data,
                 outcome.summary.samples_read,
                 outcome.summary.samples_rejected,
                 outcome.summary.throughput_samples_per_s,
+                outcome.summary.status,
                 dir.display()
             );
         }
         None => eprintln!("{summary_text}"),
     }
+    if !outcome.summary.correlations.is_empty() {
+        let pairs: Vec<String> = outcome
+            .summary
+            .correlations
+            .iter()
+            .map(|c| format!("{}/{} ({:+.3})", c.a, c.b, c.rho))
+            .collect();
+        eprintln!(
+            "warning: strongly correlated estimates (|ρ| > 0.9; the data do not separate them): {}",
+            pairs.join(", ")
+        );
+    }
+    if let Some(e) = diverged_error(&outcome, args.estimator.name()) {
+        anyhow::bail!(e);
+    }
+    if outcome.summary.status != "running" {
+        eprintln!(
+            "warning: estimator status `{}`: not every parameter was identified (null in the summary)",
+            outcome.summary.status
+        );
+    }
     Ok(())
+}
+
+/// The error message for a diverged estimator (`None` if it did not diverge).
+pub fn diverged_error(outcome: &ReplayOutcome, estimator: &str) -> Option<String> {
+    if !outcome.diverged() {
+        return None;
+    }
+    let at = outcome
+        .summary
+        .rejections
+        .last()
+        .map_or(String::new(), |r| format!(" (row {}: {})", r.row, r.reason));
+    Some(format!(
+        "estimator `{estimator}` diverged{at}; its estimates are not a result (summary written with status `diverged`)"
+    ))
 }
 
 /// Figure: one panel per parameter, the estimate (solid) and ±2σ (dashed) where known.
@@ -132,7 +179,7 @@ pub fn plot_estimates(path: &Path, title: &str, h: &History) -> anyhow::Result<(
         .iter()
         .enumerate()
         .map(|(i, name)| {
-            let v: Vec<f64> = h.values.iter().map(|v| v[i]).collect();
+            let v: Vec<f64> = h.values.iter().map(|v| v[i].unwrap_or(f64::NAN)).collect();
             let mut series = vec![Series {
                 label: (*name).to_string(),
                 t_s: h.t_s.clone(),

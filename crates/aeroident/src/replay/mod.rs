@@ -1,66 +1,51 @@
 //! Replay of a recorded flight through an online estimator, sample by sample, causally.
 //!
-//! Pipeline per row: [`aeroident_io::FlightDataReader`] (CSV → SI sample, or a counted
-//! rejection) → `q̇` (the record's, or the causal differentiator of
-//! [`aeroident_signals::differentiate`] with the other channels delayed by its lag so the
-//! regression stays aligned) → measured coefficients ([`coefficients`](crate::replay::coefficients)) → estimator update →
-//! one estimates line (to `estimates.csv`, and to stdout in live mode).
+//! Pipeline per row: [`aeroident_io::FlightDataReader`] (CSV → SI [`AirDataSample`] at the CG,
+//! or a counted rejection) → [derivative stage](derivatives) (the `ṗ, q̇, ṙ, α̇` the model needs
+//! and the record lacks, from a causal differentiator, every channel delayed by its lag) →
+//! `Box<dyn Estimator>` from [`crate::estimators::build`] (measured coefficients are the core's
+//! [`AirDataSample::measured_coefficients`]) → one estimates line (to `estimates.csv`, and to
+//! stdout in live mode).
+//!
+//! **Model.** The one given (`--model`), else the richest preset (`six-axis`, `longitudinal`,
+//! `lateral`) the first sample supports: every term formed from its channels and constants,
+//! and, for estimators on measured coefficients, every modelled coefficient measurable
+//! (derivatives the stage will supply count as present). A `V/V0` term without a mapped `v0`
+//! uses the first sample's V as V0.
+//!
+//! **Gaps.** At a [`RecordEvent::Gap`] the differentiator restarts and the estimator is told
+//! that a new manoeuvre starts ([`Estimator::new_manoeuvre`]: model states re-initialised,
+//! parameters kept); nothing is bridged.
 //!
 //! Nothing is dropped silently: every rejected row, every gap, every sample the differentiator
 //! could not centre (its first and last `(N−1)/2` samples and those around a gap) and every
 //! sample an estimator refused is listed in the summary's `rejections` and counted in
-//! `samples_rejected` (gap entries are listed but count no sample).
+//! `samples_rejected` (gap entries are listed but count no sample). A diverged estimator stops
+//! the replay (its row is listed) and the summary's `status` is `diverged`, with every estimate
+//! `null`.
 //!
 //! **settle_time_s** (summary): the first sample time after which the estimate stays, to the
 //! end of the record, within `max(5 % of |final|, 2 σ_final)` of its final value (σ_final = 0
-//! where the method gives none); `null` if the estimate is never defined.
+//! where the method gives none); `null` if the final estimate is not identified.
 
-pub mod coefficients;
-pub mod online;
-pub mod smpe;
+pub mod derivatives;
+pub mod diagnostics;
 
-use aeroident_estimators::EstimatorError;
-use aeroident_estimators::regressors::CoefficientSample;
-use aeroident_io::mapping::Mapping;
+use crate::estimators::{BuildError, EstimatorKind, EstimatorOptions, build};
+use aeroident_estimators::{AirDataSample, Coefficient, Estimator, ModelStructure, Status, Term};
+use aeroident_io::mapping::{Channel, Mapping};
 use aeroident_io::replay_output::{ParameterSummary, ReplaySummary};
-use aeroident_io::{FlightDataError, FlightDataReader, FlightSample, RecordEvent, Rejection};
-use aeroident_signals::differentiate::CausalDifferentiator;
-use online::{EkfReplay, ModelTerms, OnlineEstimator, RlsSet};
-use std::collections::VecDeque;
+use aeroident_io::{FlightDataError, FlightDataReader, ModelSpec, RecordEvent, Rejection};
+use derivatives::{Derivative, DerivativeStage};
 use std::io::{Read, Write};
 use std::time::{Duration, Instant};
 
-/// The estimator to run.
+/// Where the derivatives `ṗ, q̇, ṙ, α̇` come from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum EstimatorKind {
-    /// Recursive least squares, equation error, for Cm, CL and CD.
-    Rls,
-    /// Augmented-state extended Kalman filter (states and parameters; recursive output error).
-    Ekf,
-    /// The thesis's sliding-mode estimator on the pitch equation.
-    Smpe,
-    /// The corrected sliding-mode estimator on the pitch equation.
-    SmpeCorrected,
-}
-
-impl EstimatorKind {
-    /// The name used on the command line and in `summary.json`.
-    pub fn name(self) -> &'static str {
-        match self {
-            EstimatorKind::Rls => "rls",
-            EstimatorKind::Ekf => "ekf",
-            EstimatorKind::Smpe => "smpe",
-            EstimatorKind::SmpeCorrected => "smpe-corrected",
-        }
-    }
-}
-
-/// Where `q̇` comes from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum QdotSource {
-    /// The record's `qdot` channel if mapped, else the causal differentiator.
+pub enum DerivativeSource {
+    /// The record's channel where mapped, else the causal differentiator.
     Auto,
-    /// Always the causal differentiator of `q` (ignores a recorded `qdot`).
+    /// Always the causal differentiator (ignores recorded derivatives).
     Differentiate,
 }
 
@@ -74,31 +59,34 @@ pub enum Pacing {
 }
 
 /// Options of one replay.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct ReplayOptions {
     /// Estimator.
     pub estimator: EstimatorKind,
-    /// Equation-error model structure (RLS, SMPE).
-    pub terms: ModelTerms,
+    /// Model structure and priors; `None`: the richest preset the first sample supports.
+    pub model: Option<ModelSpec>,
     /// RLS forgetting factor, (0, 1].
     pub forgetting: f64,
-    /// `q̇` source.
-    pub qdot: QdotSource,
+    /// Source of the derivatives.
+    pub derivatives: DerivativeSource,
     /// Differentiator window, samples (odd, ≥ 3).
     pub diff_window: usize,
     /// Pacing.
     pub pacing: Pacing,
+    /// Called once with a line naming the model when the first sample has chosen it.
+    pub on_model: Option<fn(&str)>,
 }
 
 impl Default for ReplayOptions {
     fn default() -> Self {
         Self {
             estimator: EstimatorKind::Rls,
-            terms: ModelTerms::Basic,
+            model: None,
             forgetting: 1.0,
-            qdot: QdotSource::Auto,
+            derivatives: DerivativeSource::Auto,
             diff_window: 5,
             pacing: Pacing::Unpaced,
+            on_model: None,
         }
     }
 }
@@ -109,14 +97,12 @@ pub enum ReplayError {
     /// Reading the record failed fatally.
     #[error(transparent)]
     Data(#[from] FlightDataError),
-    /// The estimator could not be configured.
-    #[error("estimator `{estimator}`: {source}")]
-    Estimator {
-        /// Estimator name.
-        estimator: &'static str,
-        /// The error.
-        source: EstimatorError,
-    },
+    /// The estimator could not be built.
+    #[error(transparent)]
+    Build(#[from] BuildError),
+    /// The model does not fit the record.
+    #[error("{0}")]
+    Model(String),
     /// An option is invalid.
     #[error("option `{option}`: {reason}")]
     Option {
@@ -130,23 +116,6 @@ pub enum ReplayError {
     Output(#[from] std::io::Error),
 }
 
-/// One sample ready for an estimator: the SI flight sample plus derived quantities.
-#[derive(Debug, Clone, Copy)]
-pub struct Prepared {
-    /// The (possibly delayed) flight sample.
-    pub flight: FlightSample,
-    /// Line number of the sample in the file.
-    pub row: u64,
-    /// `q̇`, rad/s² (record or differentiator), when available.
-    pub qdot_rad_s2: Option<f64>,
-    /// Air density used by model-based estimators, kg/m³.
-    pub rho_kgpm3: f64,
-    /// α at the CG, rad.
-    pub alpha_cg_rad: f64,
-    /// Measured coefficients (needs `q̇`).
-    pub coefficients: Option<CoefficientSample>,
-}
-
 /// The history of estimates over the record.
 #[derive(Debug, Clone, Default)]
 pub struct History {
@@ -154,8 +123,8 @@ pub struct History {
     pub names: Vec<&'static str>,
     /// Times, s.
     pub t_s: Vec<f64>,
-    /// `values[k][i]`: parameter `i` at time `k`.
-    pub values: Vec<Vec<f64>>,
+    /// `values[k][i]`: parameter `i` at time `k` (`None` until identified).
+    pub values: Vec<Vec<Option<f64>>>,
     /// `sigmas[k][i]`.
     pub sigmas: Vec<Vec<Option<f64>>>,
 }
@@ -163,95 +132,169 @@ pub struct History {
 /// Result of a replay.
 #[derive(Debug, Clone)]
 pub struct ReplayOutcome {
+    /// The model identified.
+    pub model: ModelSpec,
+    /// Whether the model was chosen by default (richest supported preset).
+    pub model_defaulted: bool,
+    /// The derivatives the differentiator supplied.
+    pub differentiated: Vec<Derivative>,
     /// Estimates over time.
     pub history: History,
     /// The summary document.
     pub summary: ReplaySummary,
 }
 
-/// The causal `q̇` stage: passes the record's `q̇` through, or differentiates `q` and delays
-/// the sample by the differentiator's lag. The sample interval is the mapping's
-/// `nominal_dt_s`, else the first interval of the record.
-struct QdotStage {
-    differentiate: bool,
-    window: usize,
-    dt_s: Option<f64>,
-    diff: Option<CausalDifferentiator>,
-    delay: VecDeque<(u64, FlightSample)>,
+impl ReplayOutcome {
+    /// Whether the estimator diverged.
+    pub fn diverged(&self) -> bool {
+        self.summary.status == Status::Diverged.name()
+    }
 }
 
-impl QdotStage {
-    /// Pushes a sample; appends the samples ready now to `ready` and the rows that can never
-    /// get a centred `q̇` (warm-up) to `unused`.
-    fn push(
-        &mut self,
-        row: u64,
-        s: FlightSample,
-        ready: &mut Vec<(u64, FlightSample, Option<f64>)>,
-        unused: &mut Vec<u64>,
-    ) -> Result<(), ReplayError> {
-        if !self.differentiate {
-            ready.push((row, s, s.qdot_rad_s2));
-            return Ok(());
+/// What the model needs that sample `s` lacks, as readable items (empty: supported). Terms
+/// are checked for every estimator, measured coefficients for those that use them.
+/// Derivatives in `supplied` count as present.
+pub fn unsupported(
+    structure: &ModelStructure,
+    s: &AirDataSample,
+    uses_measured: bool,
+    supplied: &[Derivative],
+) -> Vec<String> {
+    let mut probe = *s;
+    for d in supplied {
+        if d.source(&probe).is_some() {
+            d.set(&mut probe, Some(0.0));
         }
-        if self.diff.is_none() {
-            // Until the interval is known, hold the first sample.
-            let dt = match (self.dt_s, self.delay.front()) {
-                (Some(dt), _) => dt,
-                (None, Some((_, first))) => s.t_s - first.t_s,
-                (None, None) => {
-                    self.delay.push_back((row, s));
-                    return Ok(());
-                }
-            };
-            let mut d = CausalDifferentiator::new(self.window, dt).map_err(|e| {
-                ReplayError::Option { option: "diff-window", reason: e.to_string() }
-            })?;
-            for (_, held) in &self.delay {
-                d.update(held.q_rad_s);
-            }
-            self.diff = Some(d);
-        }
-        let half = self.window / 2;
-        let Some(diff) = self.diff.as_mut() else { return Ok(()) };
-        self.delay.push_back((row, s));
-        let d = diff.update(s.q_rad_s);
-        if self.delay.len() > half + 1 {
-            // Only during warm-up can the delay line overflow: these never get a centred q̇.
-            if let Some((r, _)) = self.delay.pop_front() {
-                unused.push(r);
-            }
-        }
-        if let Some(d) = d
-            && let Some((r, c)) = self.delay.pop_front()
-        {
-            ready.push((r, FlightSample { qdot_rad_s2: Some(d), ..c }, Some(d)));
-        }
-        Ok(())
     }
+    let mut out = Vec::new();
+    for t in Term::ALL {
+        if structure.params().any(|p| p.term == t) && t.value(&probe).is_none() {
+            out.push(format!("term `{}` ({})", t.name(), term_needs(t)));
+        }
+    }
+    if uses_measured {
+        let m = probe.measured_coefficients();
+        for c in structure.coefficients() {
+            if m[c.index()].is_none() {
+                out.push(format!("coefficient `{}` ({})", c.name(), coefficient_needs(c)));
+            }
+        }
+    }
+    out
+}
 
-    /// Restarts after a gap (or at the end): the delayed samples are unused.
-    fn flush(&mut self, unused: &mut Vec<u64>) {
-        if let Some(d) = self.diff.as_mut() {
-            d.reset();
-        }
-        unused.extend(self.delay.drain(..).map(|(r, _)| r));
+fn term_needs(t: Term) -> &'static str {
+    match t {
+        Term::Beta | Term::AlphaBeta => "needs beta",
+        Term::P => "needs p and the span b",
+        Term::Q => "needs q and cbar",
+        Term::R => "needs r and the span b",
+        Term::Alphadot => "needs alphadot or alpha to differentiate, and cbar",
+        Term::De | Term::AlphaDe => "needs de",
+        Term::Da => "needs da",
+        Term::Dr => "needs dr",
+        Term::V => "needs v0",
+        Term::Bias | Term::Alpha | Term::Alpha2 => "always available",
     }
+}
+
+fn coefficient_needs(c: Coefficient) -> &'static str {
+    match c {
+        Coefficient::CX | Coefficient::CZ | Coefficient::CL | Coefficient::CD => "needs ax and az",
+        Coefficient::CY => "needs ay",
+        Coefficient::Cm => "needs q (or qdot), Iyy and cbar",
+        Coefficient::Cl | Coefficient::Cn => {
+            "needs p, q, r (or their derivatives), Ixx, Iyy, Izz, Ixz and the span b"
+        }
+    }
+}
+
+/// The derivatives the stage must supply for `structure` with estimator `kind`, given what the
+/// mapping records and the source option.
+fn derivatives_to_supply(
+    structure: &ModelStructure,
+    kind: EstimatorKind,
+    mapping: &Mapping,
+    source: DerivativeSource,
+) -> Vec<Derivative> {
+    let measured = kind.uses_measured_coefficients();
+    let has = |c| structure.has(c);
+    let needed = |d: Derivative| match d {
+        Derivative::Alphadot => structure.params().any(|p| p.term == Term::Alphadot),
+        Derivative::Qdot => measured && has(Coefficient::Cm),
+        Derivative::Pdot | Derivative::Rdot => {
+            measured && (has(Coefficient::Cl) || has(Coefficient::Cn))
+        }
+    };
+    let recorded = |d: Derivative| {
+        mapping.has(match d {
+            Derivative::Pdot => Channel::Pdot,
+            Derivative::Qdot => Channel::Qdot,
+            Derivative::Rdot => Channel::Rdot,
+            Derivative::Alphadot => Channel::Alphadot,
+        })
+    };
+    let source_mapped = |d: Derivative| {
+        mapping.has(match d {
+            Derivative::Pdot => Channel::P,
+            Derivative::Qdot => Channel::Q,
+            Derivative::Rdot => Channel::R,
+            Derivative::Alphadot => Channel::Alpha,
+        })
+    };
+    Derivative::ALL
+        .into_iter()
+        .filter(|d| {
+            needed(*d)
+                && source_mapped(*d)
+                && (source == DerivativeSource::Differentiate || !recorded(*d))
+        })
+        .collect()
+}
+
+/// The running state once the first sample has fixed the model.
+struct Running {
+    est: Box<dyn Estimator>,
+    stage: DerivativeStage,
+    v0_mps: f64,
 }
 
 /// Replays a record through the chosen estimator.
 ///
-/// `live`: when given, one CSV line of estimates is written (and flushed) per sample as it is
-/// produced, after a header line. `estimates`: the same lines to a second sink (the
-/// `estimates.csv` file). Each line: `t_s, <names>, sigma_<names>`.
+/// `sinks`: each gets a header line and one CSV line of estimates per sample as it is
+/// produced (flushed), e.g. the `estimates.csv` file and stdout in live mode. Each line:
+/// `t_s, <names>, sigma_<names>`; empty fields where not identified or no σ.
 ///
 /// # Errors
 /// [`ReplayError`] for fatal data errors (missing column, unreadable CSV), invalid options, an
-/// estimator that cannot be configured, no usable sample, or a failed write.
+/// estimator that cannot be built, a model the record cannot support, no usable sample, or a
+/// failed write.
 pub fn replay<R: Read>(
     reader: FlightDataReader<R>,
     mapping: &Mapping,
     opts: &ReplayOptions,
+    sinks: Vec<&mut dyn Write>,
+) -> Result<ReplayOutcome, ReplayError> {
+    let make = |model: &ModelSpec| {
+        let o = EstimatorOptions {
+            forgetting: opts.forgetting,
+            sample_interval_s: mapping.nominal_dt_s,
+        };
+        build(opts.estimator, model.structure, model.priors, &o)
+    };
+    replay_with(reader, mapping, opts, make, sinks)
+}
+
+/// [`replay`] with the estimator made by `make` (for tests that need an estimator of their
+/// own; the CLI uses [`replay`]).
+///
+/// # Errors
+/// As [`replay`].
+pub fn replay_with<R: Read>(
+    reader: FlightDataReader<R>,
+    mapping: &Mapping,
+    opts: &ReplayOptions,
+    make: impl Fn(&ModelSpec) -> Result<Box<dyn Estimator>, BuildError>,
     mut sinks: Vec<&mut dyn Write>,
 ) -> Result<ReplayOutcome, ReplayError> {
     if opts.diff_window < 3 || opts.diff_window.is_multiple_of(2) {
@@ -261,20 +304,19 @@ pub fn replay<R: Read>(
         });
     }
     let file = reader.file().to_string();
+    let uses_measured = opts.estimator.uses_measured_coefficients();
+    let mapped_v0 = mapping.channels.get(&Channel::V0).and_then(|m| m.constant());
     let mut rejections: Vec<Rejection> = Vec::new();
     let mut samples_read = 0usize;
     let mut samples_rejected = 0usize;
-    let mut estimator: Option<Box<dyn OnlineEstimator>> = None;
-    let mut qdot_stage: Option<QdotStage> = None;
-    let mut v0: Option<f64> = mapping_v0(mapping);
+    let mut run: Option<Running> = None;
+    let mut model: Option<(ModelSpec, bool)> = None;
     let mut history = History::default();
     let mut busy = Duration::ZERO;
     let mut ready = Vec::new();
     let mut unused = Vec::new();
-    let mut values = Vec::new();
-    let mut sigmas = Vec::new();
     let mut clock: Option<(Instant, f64)> = None;
-    let has_record_qdot = mapping.channels.contains_key(&aeroident_io::Channel::Qdot);
+    let mut diverged = false;
     for item in reader {
         let event = item?;
         ready.clear();
@@ -288,39 +330,55 @@ pub fn replay<R: Read>(
             RecordEvent::Gap { row, dt_s, nominal_dt_s } => {
                 rejections.push(Rejection {
                     row,
-                    reason: format!("gap: {dt_s} s before this row (nominal {nominal_dt_s} s); not bridged, differentiator restarted"),
+                    reason: format!(
+                        "gap: {dt_s} s before this row (nominal {nominal_dt_s} s); not bridged: differentiator restarted, new manoeuvre for the estimator"
+                    ),
                 });
-                if let Some(q) = &mut qdot_stage {
-                    q.flush(&mut unused);
+                if let Some(r) = &mut run {
+                    r.stage.flush(&mut unused);
+                    r.est.new_manoeuvre();
                 }
             }
             RecordEvent::Sample { row, sample } => {
                 samples_read += 1;
-                if estimator.is_none() {
-                    let v0_mps = *v0.get_or_insert(sample.vt_mps);
-                    let first = prepare(row, sample, sample.qdot_rad_s2, v0_mps);
-                    let est = build_estimator(opts, &first, v0_mps, mapping).map_err(|source| {
-                        ReplayError::Estimator { estimator: opts.estimator.name(), source }
-                    })?;
-                    let differentiate = est.needs_coefficients()
-                        && (opts.qdot == QdotSource::Differentiate || !has_record_qdot);
-                    qdot_stage = Some(QdotStage {
-                        differentiate,
-                        window: opts.diff_window,
-                        dt_s: mapping.nominal_dt_s,
-                        diff: None,
-                        delay: VecDeque::with_capacity(opts.diff_window),
-                    });
-                    history.names = est.names();
-                    values = vec![0.0; history.names.len()];
-                    sigmas = vec![None; history.names.len()];
+                if run.is_none() {
+                    let (spec, defaulted) = choose_model(opts, mapping, &sample, uses_measured)?;
+                    let supply = derivatives_to_supply(
+                        &spec.structure,
+                        opts.estimator,
+                        mapping,
+                        opts.derivatives,
+                    );
+                    let missing = unsupported(&spec.structure, &sample, uses_measured, &supply);
+                    if !missing.is_empty() {
+                        return Err(ReplayError::Model(format!(
+                            "model `{}` is not supported by {file} with {}: {}",
+                            spec.name,
+                            mapping.file,
+                            missing.join("; ")
+                        )));
+                    }
+                    let est = make(&spec)?;
+                    if let Some(f) = opts.on_model {
+                        f(&model_line(&spec, defaulted, &supply, opts.diff_window));
+                    }
+                    history.names = spec.structure.names().collect();
                     for s in sinks.iter_mut() {
                         aeroident_io::replay_output::write_estimates_header(s, &history.names)?;
                     }
-                    estimator = Some(est);
+                    run = Some(Running {
+                        est,
+                        stage: DerivativeStage::new(supply, opts.diff_window, mapping.nominal_dt_s),
+                        v0_mps: mapped_v0.unwrap_or(sample.vt_mps),
+                    });
+                    model = Some((spec, defaulted));
                 }
-                if let Some(q) = &mut qdot_stage {
-                    q.push(row, sample, &mut ready, &mut unused)?;
+                if let Some(r) = &mut run {
+                    let mut s = sample;
+                    s.constants.v0_mps.get_or_insert(r.v0_mps);
+                    r.stage.push(row, s, &mut ready, &mut unused).map_err(|e| {
+                        ReplayError::Option { option: "diff-window", reason: e.to_string() }
+                    })?;
                 }
             }
         }
@@ -328,24 +386,44 @@ pub fn replay<R: Read>(
             samples_rejected += 1;
             rejections.push(Rejection {
                 row: r,
-                reason: "not estimated: no centred q̇ (differentiator warm-up or gap)".into(),
+                reason: "not estimated: no centred derivative (differentiator warm-up or gap)"
+                    .into(),
             });
         }
-        let (Some(est), Some(v0_mps)) = (estimator.as_mut(), v0) else {
-            continue;
-        };
-        for (row, s, qdot) in ready.drain(..) {
+        let Some(r) = run.as_mut() else { continue };
+        for (row, s) in ready.drain(..) {
             let t_in = Instant::now();
-            let p = prepare(row, s, qdot, v0_mps);
-            let result = est.update(&p);
+            let result = r.est.update(&s).copied().map_err(|e| e.to_string());
             busy += t_in.elapsed();
-            if let Err(e) = result {
-                samples_rejected += 1;
-                rejections
-                    .push(Rejection { row, reason: format!("estimator refused sample: {e}") });
-                continue;
+            // A numerical failure on valid input is a divergence (the estimator's status says
+            // so, with or without an error); any other error refuses this sample only.
+            if r.est.estimates().status == Status::Diverged {
+                let why = result.err().map_or(String::new(), |e| format!(" ({e})"));
+                rejections.push(Rejection {
+                    row,
+                    reason: format!(
+                        "estimator `{}` diverged at t = {} s{why}; replay stopped",
+                        r.est.method(),
+                        s.t_s
+                    ),
+                });
+                diverged = true;
+                break;
             }
-            est.current(&mut values, &mut sigmas);
+            let e = match result {
+                Ok(e) => e,
+                Err(err) => {
+                    samples_rejected += 1;
+                    rejections.push(Rejection {
+                        row,
+                        reason: format!("estimator refused sample: {err}"),
+                    });
+                    continue;
+                }
+            };
+            let n = history.names.len();
+            let values: Vec<Option<f64>> = (0..n).map(|i| e.value(i)).collect();
+            let sigmas: Vec<Option<f64>> = (0..n).map(|i| e.sigma(i)).collect();
             if opts.pacing == Pacing::Realtime {
                 let (start, t_first) = *clock.get_or_insert((Instant::now(), s.t_s));
                 let due = start + Duration::from_secs_f64((s.t_s - t_first).max(0.0));
@@ -359,101 +437,309 @@ pub fn replay<R: Read>(
                 sink.flush()?;
             }
             history.t_s.push(s.t_s);
-            history.values.push(values.clone());
-            history.sigmas.push(sigmas.clone());
+            history.values.push(values);
+            history.sigmas.push(sigmas);
+        }
+        if diverged {
+            break;
         }
     }
-    if let Some(q) = &mut qdot_stage {
-        q.flush(&mut unused);
-        for r in unused.drain(..) {
+    if let Some(r) = &mut run
+        && !diverged
+    {
+        r.stage.flush(&mut unused);
+        for row in unused.drain(..) {
             samples_rejected += 1;
             rejections.push(Rejection {
-                row: r,
-                reason: "not estimated: no centred q̇ (end of record within the differentiator lag)"
+                row,
+                reason: "not estimated: no centred derivative (end of record within the differentiator lag)"
                     .into(),
             });
         }
     }
-    if history.t_s.is_empty() {
+    let (Some(r), Some((spec, defaulted))) = (run, model) else {
+        return Err(FlightDataError::NoSamples { file, rejected: samples_rejected }.into());
+    };
+    if history.t_s.is_empty() && !diverged {
         return Err(FlightDataError::NoSamples { file, rejected: samples_rejected }.into());
     }
-    // Throughput of the estimation stage: coefficient preparation and estimator update per
-    // sample (CSV parsing, pacing and output are excluded).
-    let secs = busy.as_secs_f64().max(1e-9);
+    let status = if diverged { Status::Diverged } else { r.est.estimates().status };
     let parameters = history
         .names
         .iter()
         .enumerate()
         .map(|(i, name)| {
-            let last = history.values.len() - 1;
+            let last = history.values.last();
+            let (estimate, std_error) = match (diverged, last) {
+                (false, Some(v)) => (v[i], history.sigmas.last().and_then(|s| s[i])),
+                _ => (None, None),
+            };
             ParameterSummary {
                 name: (*name).to_string(),
-                estimate: history.values[last][i],
-                std_error: history.sigmas[last][i],
-                settle_time_s: settle_time_s(&history, i),
+                estimate,
+                std_error,
+                settle_time_s: if diverged { None } else { settle_time_s(&history, i) },
             }
         })
         .collect();
+    let (coefficients, correlations) = if diverged {
+        let none = r
+            .est
+            .structure()
+            .coefficients()
+            .map(|c| aeroident_io::replay_output::CoefficientSummary {
+                name: c.name().into(),
+                condition_number: None,
+            })
+            .collect();
+        (none, Vec::new())
+    } else {
+        (
+            diagnostics::coefficient_conditions(r.est.as_ref()),
+            diagnostics::strong_correlations(r.est.as_ref()),
+        )
+    };
+    // Throughput of the estimation stage: the estimator update per sample (CSV parsing,
+    // differentiation, pacing and output are excluded).
+    let secs = busy.as_secs_f64().max(1e-9);
     let summary = ReplaySummary {
-        estimator: opts.estimator.name().to_string(),
+        estimator: r.est.method().to_string(),
+        model: spec.name.clone(),
+        status: status.name().to_string(),
         samples_read,
         samples_rejected,
         rejections,
         throughput_samples_per_s: history.t_s.len() as f64 / secs,
         parameters,
+        coefficients,
+        correlations,
     };
-    Ok(ReplayOutcome { history, summary })
+    let differentiated = r.stage.supplies().to_vec();
+    Ok(ReplayOutcome { model: spec, model_defaulted: defaulted, differentiated, history, summary })
 }
 
-fn mapping_v0(mapping: &Mapping) -> Option<f64> {
-    match mapping.channels.get(&aeroident_io::Channel::V0).map(|m| &m.source) {
-        Some(aeroident_io::mapping::Source::Constant(v)) => Some(*v),
-        _ => None,
-    }
-}
-
-fn prepare(row: u64, s: FlightSample, qdot: Option<f64>, v0_mps: f64) -> Prepared {
-    let rho = coefficients::rho_kgpm3(&s).unwrap_or(f64::NAN);
-    Prepared {
-        flight: s,
-        row,
-        qdot_rad_s2: qdot,
-        rho_kgpm3: rho,
-        alpha_cg_rad: coefficients::alpha_cg_rad(&s),
-        coefficients: qdot
-            .and_then(|qd| coefficients::coefficient_sample(&s, qd, s.v0_mps.unwrap_or(v0_mps))),
-    }
-}
-
-fn build_estimator(
+/// The given model, or the richest preset the first sample supports.
+fn choose_model(
     opts: &ReplayOptions,
-    first: &Prepared,
-    v0_mps: f64,
     mapping: &Mapping,
-) -> Result<Box<dyn OnlineEstimator>, EstimatorError> {
-    Ok(match opts.estimator {
-        EstimatorKind::Rls => Box::new(RlsSet::new(opts.terms, opts.forgetting)?),
-        EstimatorKind::Ekf => Box::new(EkfReplay::new(first, v0_mps, &mapping.ekf)?),
-        EstimatorKind::Smpe => Box::new(smpe::SmpeReplay::new(smpe::SmpeVariant::Published)?),
-        EstimatorKind::SmpeCorrected => {
-            Box::new(smpe::SmpeReplay::new(smpe::SmpeVariant::Corrected)?)
+    first: &AirDataSample,
+    uses_measured: bool,
+) -> Result<(ModelSpec, bool), ReplayError> {
+    if let Some(m) = &opts.model {
+        return Ok((m.clone(), false));
+    }
+    let mut why = Vec::new();
+    for name in ModelStructure::PRESETS {
+        let Some(spec) = ModelSpec::preset(name) else { continue };
+        let supply =
+            derivatives_to_supply(&spec.structure, opts.estimator, mapping, opts.derivatives);
+        let missing = unsupported(&spec.structure, first, uses_measured, &supply);
+        if missing.is_empty() {
+            return Ok((spec, true));
         }
-    })
+        why.push(format!("`{name}`: {}", missing.join("; ")));
+    }
+    Err(ReplayError::Model(format!(
+        "no preset model is supported by the channels of {} ({}); map the missing channels or give --model FILE",
+        mapping.file,
+        why.join(" | ")
+    )))
+}
+
+fn model_line(spec: &ModelSpec, defaulted: bool, supply: &[Derivative], window: usize) -> String {
+    let how = if defaulted { " (default: the richest preset the record supports)" } else { "" };
+    let diff = if supply.is_empty() {
+        String::new()
+    } else {
+        let names: Vec<&str> = supply.iter().map(|d| d.name()).collect();
+        format!(
+            "; differentiated: {} (window {window}, lag {} samples)",
+            names.join(", "),
+            window / 2
+        )
+    };
+    format!(
+        "model: {}{how}: {} parameters ({}){diff}",
+        spec.name,
+        spec.structure.n_params(),
+        spec.structure.names().collect::<Vec<_>>().join(", ")
+    )
 }
 
 /// Settling time of parameter `i`, s (definition in the module doc).
 pub fn settle_time_s(h: &History, i: usize) -> Option<f64> {
-    let last = h.values.last()?;
-    let fin = last[i];
+    let fin = h.values.last()?[i]?;
     let sigma = h.sigmas.last().and_then(|s| s[i]).unwrap_or(0.0);
     let band = (0.05 * fin.abs()).max(2.0 * sigma);
     let mut first_in = None;
     for (k, v) in h.values.iter().enumerate().rev() {
-        if (v[i] - fin).abs() <= band {
-            first_in = Some(h.t_s[k]);
-        } else {
-            break;
+        match v[i] {
+            Some(v) if (v - fin).abs() <= band => first_in = Some(h.t_s[k]),
+            _ => break,
         }
     }
     first_in
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use aeroident_estimators::{Estimates, EstimatorError};
+    use std::cell::RefCell;
+    use std::rc::Rc;
+
+    /// What a test estimator saw: sample times and `new_manoeuvre` calls, in order.
+    #[derive(Debug, Clone, PartialEq)]
+    enum Seen {
+        Sample(f64),
+        NewManoeuvre,
+    }
+
+    /// A test double of the estimator interface: records what it is fed; reports
+    /// `Diverged` from sample `diverge_at` on.
+    struct Probe {
+        structure: ModelStructure,
+        est: Estimates,
+        seen: Rc<RefCell<Vec<Seen>>>,
+        diverge_at: usize,
+    }
+
+    impl Estimator for Probe {
+        fn method(&self) -> &'static str {
+            "probe"
+        }
+        fn structure(&self) -> &ModelStructure {
+            &self.structure
+        }
+        fn update(&mut self, s: &AirDataSample) -> Result<&Estimates, EstimatorError> {
+            self.seen.borrow_mut().push(Seen::Sample(s.t_s));
+            let n = self.seen.borrow().iter().filter(|x| matches!(x, Seen::Sample(_))).count();
+            for i in 0..self.est.n {
+                self.est.set(i, s.qdot_rad_s2.unwrap_or(f64::NAN), None, true);
+            }
+            self.est.status = if n >= self.diverge_at { Status::Diverged } else { Status::Running };
+            Ok(&self.est)
+        }
+        fn estimates(&self) -> &Estimates {
+            &self.est
+        }
+        fn new_manoeuvre(&mut self) {
+            self.seen.borrow_mut().push(Seen::NewManoeuvre);
+        }
+    }
+
+    const MAP: &str = "nominal_dt_s = 0.1\n[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"V\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nq = { column = \"q\", unit = \"rad/s\" }\nax = { column = \"ax\", unit = \"m/s2\" }\naz = { column = \"az\", unit = \"m/s2\" }\nde = { column = \"de\", unit = \"rad\" }\nrho = { value = 1.0, unit = \"kg/m3\" }\nmass = { value = 1000.0, unit = \"kg\" }\nS = { value = 10.0, unit = \"m2\" }\ncbar = { value = 1.5, unit = \"m\" }\nIyy = { value = 2000.0, unit = \"kg*m2\" }\n";
+
+    /// q = 2t (so q̇ = 2 exactly), 10 samples, a gap of 1 s after the sixth.
+    fn record() -> String {
+        let mut csv = String::from("t,V,a,q,ax,az,de\n");
+        for k in 0..10 {
+            let t = if k < 6 { k as f64 * 0.1 } else { 1.5 + (k - 6) as f64 * 0.1 };
+            csv.push_str(&format!("{t:.1},50,0.05,{:.1},0.1,-9.8,0.01\n", 2.0 * t));
+        }
+        csv
+    }
+
+    fn probe_run(diverge_at: usize) -> (Result<ReplayOutcome, ReplayError>, Vec<Seen>) {
+        let m = Mapping::from_toml_str(MAP, "probe.toml").unwrap();
+        let csv = record();
+        let reader = FlightDataReader::new(csv.as_bytes(), "probe.csv", &m).unwrap();
+        let seen = Rc::new(RefCell::new(Vec::new()));
+        let s2 = seen.clone();
+        let make = move |spec: &ModelSpec| -> Result<Box<dyn Estimator>, BuildError> {
+            Ok(Box::new(Probe {
+                structure: spec.structure,
+                est: Estimates::new(spec.structure.n_params()),
+                seen: s2.clone(),
+                diverge_at,
+            }))
+        };
+        let opts = ReplayOptions { diff_window: 3, ..Default::default() };
+        let out = replay_with(reader, &m, &opts, make, Vec::new());
+        let seen = seen.borrow().clone();
+        (out, seen)
+    }
+
+    /// At a gap the estimator is told a new manoeuvre starts — after the last sample before
+    /// the gap and before the first after it — and the differentiator restarts: the samples
+    /// it cannot centre on either side are listed, and every q̇ fed is the exact one.
+    #[test]
+    fn gap_starts_a_new_manoeuvre_and_restarts_the_differentiator() {
+        let (out, seen) = probe_run(usize::MAX);
+        let o = out.unwrap();
+        let r = |t: f64| Seen::Sample(t);
+        assert_eq!(
+            seen,
+            vec![r(0.1), r(0.2), r(0.3), r(0.4), Seen::NewManoeuvre, r(1.6), r(1.7)],
+            "{seen:?}"
+        );
+        assert_eq!(o.differentiated, vec![Derivative::Qdot]);
+        // Rows (header = 1): 2…7 before the gap, 8…11 after; N = 3 loses one each side.
+        let rows: Vec<u64> = o.summary.rejections.iter().map(|r| r.row).collect();
+        assert_eq!(rows, vec![2, 8, 7, 8, 11]);
+        assert!(o.summary.rejections[1].reason.starts_with("gap: "));
+        assert_eq!(o.summary.samples_rejected, 4);
+        for p in &o.summary.parameters {
+            assert!((p.estimate.unwrap() - 2.0).abs() < 1e-9, "q̇ = 2: {p:?}");
+        }
+        assert_eq!((o.model.name.as_str(), o.model_defaulted), ("longitudinal", true));
+    }
+
+    /// A diverged estimator stops the replay: its row is listed, the status is `diverged` and
+    /// no estimate is reported as a result.
+    #[test]
+    fn diverged_estimator_stops_and_reports_no_result() {
+        let (out, seen) = probe_run(3);
+        let o = out.unwrap();
+        assert!(o.diverged());
+        assert_eq!(o.summary.status, "diverged");
+        assert_eq!(seen.iter().filter(|s| matches!(s, Seen::Sample(_))).count(), 3);
+        let last = o.summary.rejections.last().unwrap();
+        assert_eq!(last.row, 5);
+        assert!(last.reason.contains("diverged at t = 0.3 s"), "{}", last.reason);
+        assert!(o.summary.parameters.iter().all(|p| p.estimate.is_none() && p.std_error.is_none()));
+        assert!(o.summary.coefficients.iter().all(|c| c.condition_number.is_none()));
+        let e = crate::cli::replay::diverged_error(&o, "probe").unwrap();
+        assert!(e.contains("estimator `probe` diverged (row 5"), "{e}");
+    }
+
+    /// The default model is the richest preset the first sample supports, counting the
+    /// derivatives the differentiator will supply; a model the record cannot support names
+    /// what is missing.
+    #[test]
+    fn default_model_is_the_richest_supported_preset() {
+        let lon = Mapping::from_toml_str(MAP, "lon.toml").unwrap();
+        let s = AirDataSample {
+            vt_mps: 50.0,
+            alpha_rad: 0.05,
+            qbar_pa: 1250.0,
+            q_rad_s: Some(0.1),
+            ax_mps2: Some(0.1),
+            az_mps2: Some(-9.8),
+            de_rad: Some(0.0),
+            constants: aeroident_estimators::AircraftConstants {
+                mass_kg: 1000.0,
+                S_m2: 10.0,
+                cbar_m: Some(1.5),
+                Iyy_kgm2: Some(2000.0),
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let opts = ReplayOptions::default();
+        let (m, defaulted) = choose_model(&opts, &lon, &s, true).unwrap();
+        assert_eq!((m.name.as_str(), defaulted), ("longitudinal", true));
+        let lat = ModelStructure::lateral();
+        let missing = unsupported(&lat, &s, true, &[Derivative::Pdot, Derivative::Rdot]);
+        assert!(missing.iter().any(|m| m == "term `beta` (needs beta)"), "{missing:?}");
+        assert!(missing.iter().any(|m| m.starts_with("coefficient `Cl`")), "{missing:?}");
+        // Without q̇ recorded or supplied, Cm is not measurable.
+        assert!(
+            unsupported(&ModelStructure::longitudinal(), &s, true, &[])
+                .iter()
+                .any(|m| m.starts_with("coefficient `Cm`"))
+        );
+        // …but an estimator that does not use measured coefficients needs only the terms.
+        assert!(unsupported(&ModelStructure::longitudinal(), &s, false, &[]).is_empty());
+    }
 }

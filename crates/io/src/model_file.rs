@@ -1,0 +1,371 @@
+//! Model files: the aerodynamic model structure to identify and the priors of its parameters,
+//! declared in TOML over the one vocabulary of [`aeroident_estimators::vocabulary`]
+//! (coefficient × term, parameters `<coefficient>_<term>`), or a preset by name.
+//!
+//! ```toml
+//! description = "short period with alpha-dot"
+//!
+//! [coefficients]                      # coefficient = [terms]; linear in the parameters
+//! Cm = ["0", "alpha", "q", "alphadot", "de"]
+//! CL = ["0", "alpha", "q", "de"]
+//!
+//! [prior.Cm_alpha]                    # optional, per parameter (units of the parameter)
+//! value = -0.5
+//! sigma = 2.0
+//! ```
+//!
+//! - Coefficients: `CX CY CZ CL CD Cl Cm Cn` (case-sensitive: `CL` lift, `Cl` rolling moment).
+//! - Terms: `0` (bias), `alpha`, `beta`, `p`, `q`, `r` (p̂ = pb/2V, q̂ = qc̄/2V, r̂ = rb/2V),
+//!   `alphadot` (α̇c̄/2V), `de`, `da`, `dr`, `V` (V/V0), `alpha2`, `alpha_de`, `alpha_beta`.
+//! - Priors not given are the generic weak priors of [`Priors::generic`]; a prior is used only
+//!   by estimators that start from one (Kalman filters, sliding-mode and gradient estimators),
+//!   RLS ignores it.
+//!
+//! Presets (no file): `longitudinal` (CL, CD, Cm × 0, alpha, q, de), `lateral` (CY, Cl, Cn ×
+//! 0, beta, p, r, da, dr), `six-axis` (both); see [`ModelStructure::preset`].
+//!
+//! Every key is checked (`deny_unknown_fields`): errors name the file, the line and the key,
+//! and an unknown coefficient or term lists the valid names.
+
+use crate::mapping::line_of;
+use aeroident_estimators::vocabulary::{Coefficient, StructureError, Term};
+use aeroident_estimators::{ModelStructure, Param, ParamPrior, Priors};
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::Path;
+use toml::Spanned;
+
+/// A model to identify: its structure, the priors of its parameters, and where it came from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelSpec {
+    /// The preset name, or the model file's path.
+    pub name: String,
+    /// Free-text description (the file's `description`, or the preset's).
+    pub description: String,
+    /// The structure (validated: non-empty, within capacity, CX/CZ not mixed with CL/CD).
+    pub structure: ModelStructure,
+    /// One prior per parameter, in parameter order.
+    pub priors: Priors,
+}
+
+/// Errors of reading a model file. Each names the file (and line and key where they apply).
+#[derive(Debug, thiserror::Error)]
+pub enum ModelFileError {
+    /// The file could not be read.
+    #[error("{file}: {source}")]
+    Io {
+        /// File path.
+        file: String,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// `--model` named neither a preset nor a readable file.
+    #[error(
+        "{arg}: not a preset (longitudinal, lateral, six-axis) and not a readable model file: {source}"
+    )]
+    NotFound {
+        /// The argument.
+        arg: String,
+        /// The I/O error of reading it as a file.
+        source: std::io::Error,
+    },
+    /// TOML syntax or an unknown key (the parser's message carries line and column).
+    #[error("{file}: model syntax: {message}")]
+    Syntax {
+        /// File path.
+        file: String,
+        /// Parser message.
+        message: String,
+    },
+    /// A `[coefficients]` key that is not a coefficient.
+    #[error("{file}: line {line}: unknown coefficient `{name}` (valid: {valid})")]
+    UnknownCoefficient {
+        /// File path.
+        file: String,
+        /// Line of the key.
+        line: usize,
+        /// The key.
+        name: String,
+        /// The valid names.
+        valid: String,
+    },
+    /// A term that is not in the vocabulary.
+    #[error(
+        "{file}: line {line}: coefficient `{coefficient}`: unknown term `{term}` (valid: {valid})"
+    )]
+    UnknownTerm {
+        /// File path.
+        file: String,
+        /// Line of the term.
+        line: usize,
+        /// The coefficient.
+        coefficient: String,
+        /// The term as written.
+        term: String,
+        /// The valid names.
+        valid: String,
+    },
+    /// A term listed twice for one coefficient.
+    #[error("{file}: line {line}: coefficient `{coefficient}`: term `{term}` is listed twice")]
+    DuplicateTerm {
+        /// File path.
+        file: String,
+        /// Line of the repeated term.
+        line: usize,
+        /// The coefficient.
+        coefficient: String,
+        /// The term.
+        term: String,
+    },
+    /// A `[prior.X]` for a parameter that is not a vocabulary name or not in the structure.
+    #[error("{file}: line {line}: prior `{name}`: {reason}")]
+    BadPrior {
+        /// File path.
+        file: String,
+        /// Line of the key.
+        line: usize,
+        /// The key.
+        name: String,
+        /// Why.
+        reason: String,
+    },
+    /// The declared structure is not valid.
+    #[error("{file}: {source}")]
+    Structure {
+        /// File path.
+        file: String,
+        /// Why.
+        source: StructureError,
+    },
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ModelFile {
+    description: Option<String>,
+    coefficients: BTreeMap<Spanned<String>, Vec<Spanned<String>>>,
+    #[serde(default)]
+    prior: BTreeMap<Spanned<String>, PriorEntry>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PriorEntry {
+    value: f64,
+    sigma: f64,
+}
+
+fn coefficient_names() -> String {
+    Coefficient::ALL.iter().map(|c| c.name()).collect::<Vec<_>>().join(", ")
+}
+
+fn term_names() -> String {
+    Term::ALL.iter().map(|t| format!("\"{}\"", t.name())).collect::<Vec<_>>().join(", ")
+}
+
+impl ModelSpec {
+    /// A preset by name (`longitudinal`, `lateral`, `six-axis`) with generic priors, or `None`.
+    pub fn preset(name: &str) -> Option<Self> {
+        let structure = ModelStructure::preset(name)?;
+        Some(Self {
+            name: name.to_string(),
+            description: format!("preset `{name}`"),
+            structure,
+            priors: Priors::generic(&structure),
+        })
+    }
+
+    /// A preset name or a model file path (a preset name wins; write `./longitudinal` for a
+    /// file of that name).
+    ///
+    /// # Errors
+    /// [`ModelFileError`] for a file that cannot be read or is not valid.
+    pub fn from_arg(arg: &str) -> Result<Self, ModelFileError> {
+        match Self::preset(arg) {
+            Some(m) => Ok(m),
+            None => Self::from_path(Path::new(arg)).map_err(|e| match e {
+                ModelFileError::Io { source, .. } => {
+                    ModelFileError::NotFound { arg: arg.to_string(), source }
+                }
+                e => e,
+            }),
+        }
+    }
+
+    /// Reads a model file.
+    ///
+    /// # Errors
+    /// [`ModelFileError`] naming the file, line and key.
+    pub fn from_path(path: &Path) -> Result<Self, ModelFileError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| ModelFileError::Io { file: file.clone(), source })?;
+        Self::from_toml_str(&text, &file)
+    }
+
+    /// Parses model-file TOML; `file` names it in errors.
+    ///
+    /// # Errors
+    /// As [`ModelSpec::from_path`].
+    pub fn from_toml_str(text: &str, file: &str) -> Result<Self, ModelFileError> {
+        let raw: ModelFile = toml::from_str(text).map_err(|e| ModelFileError::Syntax {
+            file: file.to_string(),
+            message: e.to_string(),
+        })?;
+        let mut structure = ModelStructure::empty();
+        for (key, terms) in &raw.coefficients {
+            let Some(c) = Coefficient::from_name(key.get_ref()) else {
+                return Err(ModelFileError::UnknownCoefficient {
+                    file: file.to_string(),
+                    line: line_of(text, key.span().start),
+                    name: key.get_ref().clone(),
+                    valid: coefficient_names(),
+                });
+            };
+            for t in terms {
+                let line = line_of(text, t.span().start);
+                let Some(term) = Term::from_name(t.get_ref()) else {
+                    return Err(ModelFileError::UnknownTerm {
+                        file: file.to_string(),
+                        line,
+                        coefficient: c.name().into(),
+                        term: t.get_ref().clone(),
+                        valid: term_names(),
+                    });
+                };
+                let p = Param::new(c, term);
+                if structure.contains(p) {
+                    return Err(ModelFileError::DuplicateTerm {
+                        file: file.to_string(),
+                        line,
+                        coefficient: c.name().into(),
+                        term: term.name().into(),
+                    });
+                }
+                structure.insert(p);
+            }
+        }
+        let structure = structure
+            .validated()
+            .map_err(|source| ModelFileError::Structure { file: file.to_string(), source })?;
+        let mut priors = Priors::generic(&structure);
+        for (key, entry) in &raw.prior {
+            let bad = |reason: String| ModelFileError::BadPrior {
+                file: file.to_string(),
+                line: line_of(text, key.span().start),
+                name: key.get_ref().clone(),
+                reason,
+            };
+            let p = Param::from_name(key.get_ref()).ok_or_else(|| {
+                bad("not a parameter name `<coefficient>_<term>` of the vocabulary".into())
+            })?;
+            let i = structure.index_of(p).ok_or_else(|| {
+                bad(format!(
+                    "`{}` is not in the model (parameters: {})",
+                    p.name(),
+                    structure.names().collect::<Vec<_>>().join(", ")
+                ))
+            })?;
+            if !entry.value.is_finite() {
+                return Err(bad(format!("value {} is not finite", entry.value)));
+            }
+            if !(entry.sigma.is_finite() && entry.sigma > 0.0) {
+                return Err(bad(format!("sigma must be finite and > 0, got {}", entry.sigma)));
+            }
+            priors.set(i, ParamPrior { value: entry.value, sigma: entry.sigma });
+        }
+        Ok(Self {
+            name: file.to_string(),
+            description: raw.description.unwrap_or_default(),
+            structure,
+            priors,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use aeroident_estimators::prior::generic_prior;
+
+    const GOOD: &str = r#"description = "short period with alpha-dot"
+[coefficients]
+Cm = ["0", "alpha", "q", "alphadot", "de"]
+CL = ["0", "alpha", "q", "de"]
+
+[prior.Cm_alpha]
+value = -0.7
+sigma = 1.5
+"#;
+
+    #[test]
+    fn analytic_good_file_gives_structure_in_vocabulary_order_and_priors() {
+        let m = ModelSpec::from_toml_str(GOOD, "sp.toml").unwrap();
+        let names: Vec<_> = m.structure.names().collect();
+        assert_eq!(
+            names,
+            [
+                "CL_0",
+                "CL_alpha",
+                "CL_q",
+                "CL_de",
+                "Cm_0",
+                "Cm_alpha",
+                "Cm_q",
+                "Cm_alphadot",
+                "Cm_de"
+            ]
+        );
+        assert_eq!(m.description, "short period with alpha-dot");
+        assert_eq!(m.priors.n, 9);
+        assert_eq!(m.priors.prior[5], ParamPrior { value: -0.7, sigma: 1.5 });
+        // Parameters without a [prior.X] keep the generic prior.
+        let cmq = Param::from_name("Cm_q").unwrap();
+        assert_eq!(m.priors.prior[6], generic_prior(cmq));
+    }
+
+    #[test]
+    fn presets_by_name() {
+        for (name, n) in [("longitudinal", 12), ("lateral", 18), ("six-axis", 30)] {
+            let m = ModelSpec::from_arg(name).unwrap();
+            assert_eq!(m.structure.n_params(), n, "{name}");
+            assert_eq!(m.priors.n, n);
+        }
+    }
+
+    fn err(text: &str) -> String {
+        ModelSpec::from_toml_str(text, "m.toml").unwrap_err().to_string()
+    }
+
+    #[test]
+    fn errors_name_file_line_and_key() {
+        let e = err("[coefficients]\nCm = [\"0\"]\nCM = [\"alpha\"]\n");
+        assert!(e.starts_with("m.toml: line 3: unknown coefficient `CM`"), "{e}");
+        assert!(e.contains("CX, CY, CZ, CL, CD, Cl, Cm, Cn"), "{e}");
+        let e = err("[coefficients]\nCm = [\"0\",\n  \"alfa\"]\n");
+        assert!(e.starts_with("m.toml: line 3: coefficient `Cm`: unknown term `alfa`"), "{e}");
+        assert!(e.contains("\"alphadot\"") && e.contains("\"alpha_beta\""), "{e}");
+        let e = err("[coefficients]\nCm = [\"q\", \"q\"]\n");
+        assert!(e.contains("line 2: coefficient `Cm`: term `q` is listed twice"), "{e}");
+        let e = err("[coefficients]\nCm = [\"q\"]\n[prior.Cm_alpha]\nvalue = 1.0\nsigma = 1.0\n");
+        assert!(e.contains("line 3: prior `Cm_alpha`: `Cm_alpha` is not in the model"), "{e}");
+        let e = err("[coefficients]\nCm = [\"q\"]\n[prior.Cm_qq]\nvalue = 1.0\nsigma = 1.0\n");
+        assert!(e.contains("prior `Cm_qq`: not a parameter name"), "{e}");
+        let e = err("[coefficients]\nCm = [\"q\"]\n[prior.Cm_q]\nvalue = 1.0\nsigma = 0.0\n");
+        assert!(e.contains("sigma must be finite and > 0"), "{e}");
+        let e =
+            err("[coefficients]\nCm = [\"q\"]\n[prior.Cm_q]\nvalue = 1.0\nsigma = 1.0\nmean = 2\n");
+        assert!(
+            e.contains("m.toml: model syntax") && e.contains("mean") && e.contains("line 6"),
+            "{e}"
+        );
+        let e = err("terms = 3\n[coefficients]\nCm = [\"q\"]\n");
+        assert!(e.contains("terms") && e.contains("line 1"), "{e}");
+        let e = err("[coefficients]\nCX = [\"alpha\"]\nCL = [\"alpha\"]\n");
+        assert!(e.contains("m.toml") && e.contains("choose body axes"), "{e}");
+        let e = err("[coefficients]\n");
+        assert!(e.contains("declares no parameter"), "{e}");
+        let e = ModelSpec::from_arg("no/such/model.toml").unwrap_err().to_string();
+        assert!(e.starts_with("no/such/model.toml: not a preset (longitudinal"), "{e}");
+    }
+}

@@ -5,6 +5,11 @@
 //! Adding an estimator: implement [`aeroident_estimators::Estimator`] in the core, add a
 //! variant to [`EstimatorKind`] and an arm to [`build`].
 
+use aeroident_estimators::ekf::{Ekf, EkfConfig};
+use aeroident_estimators::ftr::{Ftr, FtrConfig};
+use aeroident_estimators::model_reference::{
+    CorrectedSmpeEstimator, GradientEstimator, ModelReferenceConfig, PublishedSmpeEstimator,
+};
 use aeroident_estimators::rls::{Rls, RlsConfig};
 use aeroident_estimators::{Estimator, EstimatorError, ModelStructure, Priors};
 
@@ -13,6 +18,9 @@ use aeroident_estimators::{Estimator, EstimatorError, ModelStructure, Priors};
 pub enum EstimatorKind {
     /// Recursive least squares (equation error) on every modelled coefficient.
     Rls,
+    /// Real-time Fourier-transform regression (equation error in the frequency domain,
+    /// Morelli 2000): biases drop out.
+    Ftr,
     /// Extended Kalman filter (states and parameters; recursive output error).
     Ekf,
     /// The thesis's sliding-mode parameter estimator.
@@ -28,6 +36,7 @@ impl EstimatorKind {
     pub fn name(self) -> &'static str {
         match self {
             EstimatorKind::Rls => "rls",
+            EstimatorKind::Ftr => "ftr",
             EstimatorKind::Ekf => "ekf",
             EstimatorKind::Smpe => "smpe",
             EstimatorKind::SmpeCorrected => "smpe-corrected",
@@ -49,7 +58,8 @@ impl EstimatorKind {
 /// Options of the estimators (each uses the ones that apply to it).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EstimatorOptions {
-    /// RLS forgetting factor `λ ∈ (0, 1]` (1 = ordinary least squares).
+    /// Forgetting factor `λ ∈ (0, 1]` per sample of RLS and of FTR's recursive transform
+    /// (1 = none).
     pub forgetting: f64,
     /// Nominal sample interval of the data, s, when known (the record's `nominal_dt_s`).
     pub sample_interval_s: Option<f64>,
@@ -64,9 +74,6 @@ impl Default for EstimatorOptions {
 /// Why an estimator could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum BuildError {
-    /// The estimator is not part of this build.
-    #[error("estimator `{0}` is not available in this build")]
-    NotAvailable(&'static str),
     /// The estimator rejected its configuration.
     #[error("estimator `{estimator}`: {source}")]
     Config {
@@ -81,9 +88,8 @@ pub enum BuildError {
 /// order; used by the estimators that start from a prior) and `options`.
 ///
 /// # Errors
-/// [`BuildError::NotAvailable`] for an estimator not in this build; [`BuildError::Config`]
-/// when the estimator rejects the structure or an option (e.g. a forgetting factor outside
-/// (0, 1]).
+/// [`BuildError::Config`] when the estimator rejects the structure or an option (e.g. a
+/// forgetting factor outside (0, 1], or a structure the EKF's flight model cannot integrate).
 pub fn build(
     kind: EstimatorKind,
     structure: ModelStructure,
@@ -91,18 +97,32 @@ pub fn build(
     options: &EstimatorOptions,
 ) -> Result<Box<dyn Estimator>, BuildError> {
     let config = |source| BuildError::Config { estimator: kind.name(), source };
-    // RLS starts without a prior (exact initialisation).
-    let _ = priors;
-    match kind {
+    Ok(match kind {
+        // RLS and FTR start without a prior (exact initialisation / frequency-domain solve).
         EstimatorKind::Rls => {
             let cfg = RlsConfig { forgetting: options.forgetting, init_samples: 0 };
-            Ok(Box::new(Rls::new(structure, cfg).map_err(config)?))
+            Box::new(Rls::new(structure, cfg).map_err(config)?)
         }
-        EstimatorKind::Ekf
-        | EstimatorKind::Smpe
-        | EstimatorKind::SmpeCorrected
-        | EstimatorKind::Gradient => Err(BuildError::NotAvailable(kind.name())),
-    }
+        EstimatorKind::Ftr => {
+            let cfg = FtrConfig { forgetting: options.forgetting, ..FtrConfig::default() };
+            Box::new(Ftr::new(structure, cfg).map_err(config)?)
+        }
+        EstimatorKind::Ekf => {
+            Box::new(Ekf::new(EkfConfig { priors, ..EkfConfig::new(structure) }).map_err(config)?)
+        }
+        EstimatorKind::Smpe => Box::new(
+            PublishedSmpeEstimator::new(structure, &priors, ModelReferenceConfig::default())
+                .map_err(config)?,
+        ),
+        EstimatorKind::SmpeCorrected => Box::new(
+            CorrectedSmpeEstimator::new(structure, &priors, ModelReferenceConfig::default())
+                .map_err(config)?,
+        ),
+        EstimatorKind::Gradient => Box::new(
+            GradientEstimator::new(structure, &priors, ModelReferenceConfig::default())
+                .map_err(config)?,
+        ),
+    })
 }
 
 #[cfg(test)]
@@ -110,26 +130,32 @@ mod tests {
     use super::*;
 
     #[test]
-    fn builds_rls_and_names_the_missing_ones() {
+    fn builds_every_estimator_over_the_same_structure() {
         let st = ModelStructure::longitudinal();
         let pr = Priors::generic(&st);
-        let e = build(EstimatorKind::Rls, st, pr, &EstimatorOptions::default()).unwrap();
-        assert_eq!(e.method(), "rls");
-        assert_eq!(e.structure().n_params(), 12);
         for k in [
+            EstimatorKind::Rls,
+            EstimatorKind::Ftr,
             EstimatorKind::Ekf,
             EstimatorKind::Smpe,
             EstimatorKind::SmpeCorrected,
             EstimatorKind::Gradient,
         ] {
-            let err = build(k, st, pr, &EstimatorOptions::default()).err().unwrap();
-            assert_eq!(
-                err.to_string(),
-                format!("estimator `{}` is not available in this build", k.name())
-            );
+            let e = build(k, st, pr, &EstimatorOptions::default()).unwrap();
+            assert_eq!(e.method(), k.name());
+            assert_eq!(e.structure().n_params(), 12);
+            assert!(e.estimates().value(0).is_none(), "{}: identified before data", k.name());
         }
         let bad = EstimatorOptions { forgetting: 1.5, ..Default::default() };
         let err = build(EstimatorKind::Rls, st, pr, &bad).err().unwrap().to_string();
         assert!(err.starts_with("estimator `rls`: invalid configuration `forgetting`"), "{err}");
+        // The EKF's flight model needs a state set: Cm alone does not determine one.
+        let cm = ModelStructure::empty()
+            .with(aeroident_estimators::Coefficient::Cm, &[aeroident_estimators::Term::Alpha]);
+        let err = build(EstimatorKind::Ekf, cm, Priors::generic(&cm), &EstimatorOptions::default())
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(err.starts_with("estimator `ekf`:"), "{err}");
     }
 }

@@ -132,11 +132,11 @@ fn replay_good(extra: &[&str], name: &str) -> (bool, String) {
     (o.status.success(), String::from_utf8_lossy(&o.stderr).into_owned())
 }
 
-/// Estimators not in this build, unsupported models and bad model files are clear errors.
+/// Unknown estimators, unsupported models and bad model files are clear errors.
 #[test]
 fn errors_estimator_model_and_model_file_problems_are_named() {
-    let (ok, err) = replay_good(&["--estimator", "ekf"], "ekf");
-    assert!(!ok && err.contains("estimator `ekf` is not available in this build"), "{err}");
+    let (ok, err) = replay_good(&["--estimator", "kalman"], "kalman");
+    assert!(!ok && err.contains("invalid value 'kalman'") && err.contains("ekf"), "{err}");
     let (ok, err) = replay_good(&["--model", "lateral"], "lat");
     assert!(!ok, "{err}");
     assert!(

@@ -188,6 +188,7 @@ fn term_needs(t: Term) -> &'static str {
         Term::Beta | Term::AlphaBeta => "needs beta",
         Term::P => "needs p and the span b",
         Term::Q => "needs q and cbar",
+        Term::Q0 => "needs q, cbar and v0",
         Term::R => "needs r and the span b",
         Term::Alphadot => "needs alphadot or alpha to differentiate, and cbar",
         Term::De | Term::AlphaDe => "needs de",

@@ -373,6 +373,54 @@ fn fd_analytic_sensitivity_of_lateral_and_control_increments() {
     }
 }
 
+/// Order-of-magnitude and sign cross-check of the truth derivatives against JSBSim's F-16 at
+/// the same condition (20,000 ft, 675 ft/s; `../shared/flightdata/jsbsim_samples/
+/// f16_ail_rud_doublets_truth.json`, the same NASA TP-1538 data but JSBSim's cg, trim and
+/// surface conventions — not an oracle). Terms whose definition is convention-free must agree
+/// in sign and within a factor 1.5. Skipped with a message when the data set is absent.
+#[test]
+fn val_truth_derivatives_same_sign_and_order_as_jsbsim_f16() {
+    let path = workspace().join("../shared/flightdata/jsbsim_samples/f16_ail_rud_doublets_truth.json");
+    let Ok(text) = std::fs::read_to_string(&path) else {
+        eprintln!("skipped: {} not found", path.display());
+        return;
+    };
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let d = &json["derivatives"];
+    let f = F16::new(0.30).unwrap();
+    let t = aeroident_models::trim::trim(
+        &f,
+        &aeroident_models::trim::TrimCondition::level(20_000.0, 675.0),
+    )
+    .unwrap();
+    let ld = aeroident::aircraft::truth::local_derivatives(
+        &f,
+        &t.state,
+        &t.controls,
+        &AeroIncrements::zero(),
+    )
+    .unwrap();
+    // (ours, JSBSim key): hats named phat/qhat/rhat there.
+    for (ours, theirs) in [
+        ("CL_alpha", "CL_alpha"),
+        ("CL_q", "CL_qhat"),
+        ("CY_beta", "CY_beta"),
+        ("CY_r", "CY_rhat"),
+        ("Cl_beta", "Cl_beta"),
+        ("Cl_p", "Cl_phat"),
+        ("Cl_r", "Cl_rhat"),
+        ("Cm_q", "Cm_qhat"),
+        ("Cm_de", "Cm_de"),
+        ("Cn_beta", "Cn_beta"),
+        ("Cn_r", "Cn_rhat"),
+    ] {
+        let a = ld.derivative(p(ours)).unwrap();
+        let b = d[theirs].as_f64().unwrap();
+        let ratio = a / b;
+        assert!((1.0 / 1.5..=1.5).contains(&ratio), "{ours}: ours {a}, JSBSim {b}");
+    }
+}
+
 fn scenario_files() -> Vec<PathBuf> {
     let mut v: Vec<PathBuf> = std::fs::read_dir(workspace().join("scenarios/f16"))
         .unwrap()

@@ -380,7 +380,8 @@ fn fd_analytic_sensitivity_of_lateral_and_control_increments() {
 /// in sign and within a factor 1.5. Skipped with a message when the data set is absent.
 #[test]
 fn val_truth_derivatives_same_sign_and_order_as_jsbsim_f16() {
-    let path = workspace().join("../shared/flightdata/jsbsim_samples/f16_ail_rud_doublets_truth.json");
+    let path =
+        workspace().join("../shared/flightdata/jsbsim_samples/f16_ail_rud_doublets_truth.json");
     let Ok(text) = std::fs::read_to_string(&path) else {
         eprintln!("skipped: {} not found", path.display());
         return;

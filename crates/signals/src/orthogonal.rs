@@ -75,14 +75,60 @@ pub fn orthogonal_harmonics(
     Ok(mine)
 }
 
-/// `Σ_m cos(k_m ω₀ t_i + φ_m)` on the grid `t_i = i T/n` (unit amplitude per component).
-fn sample_period(harmonics: &[u32], phases: &[f64], n: usize) -> Vec<f64> {
-    (0..n)
-        .map(|i| {
-            let x = core::f64::consts::TAU * i as f64 / n as f64;
-            harmonics.iter().zip(phases).map(|(&k, &p)| (k as f64 * x + p).cos()).sum()
-        })
-        .collect()
+/// `cos(2π m/n)`, `sin(2π m/n)` for `m = 0 … n−1`: every grid value of every harmonic is a
+/// lookup, `k·i mod n`.
+struct Grid {
+    cos: Vec<f64>,
+    sin: Vec<f64>,
+}
+
+impl Grid {
+    fn new(n: usize) -> Self {
+        let (sin, cos) =
+            (0..n).map(|m| (core::f64::consts::TAU * m as f64 / n as f64).sin_cos()).unzip();
+        Self { cos, sin }
+    }
+
+    fn n(&self) -> usize {
+        self.cos.len()
+    }
+
+    /// `Σ_m cos(k_m ω₀ t_i + φ_m)` on the grid `t_i = i T/n` (unit amplitude per component).
+    fn sample(&self, harmonics: &[u32], phases: &[f64]) -> Vec<f64> {
+        let n = self.n();
+        let cs: Vec<(f64, f64)> = phases.iter().map(|p| p.sin_cos()).collect();
+        (0..n)
+            .map(|i| {
+                harmonics
+                    .iter()
+                    .zip(&cs)
+                    .map(|(&k, &(sp, cp))| {
+                        let m = (k as usize * i) % n;
+                        // cos(a + φ) = cos a cos φ − sin a sin φ
+                        self.cos[m] * cp - self.sin[m] * sp
+                    })
+                    .sum()
+            })
+            .collect()
+    }
+
+    /// Phases of `u`'s components at `harmonics` (direct DFT at those bins).
+    fn phases_of(&self, u: &[f64], harmonics: &[u32]) -> Vec<f64> {
+        let n = self.n();
+        harmonics
+            .iter()
+            .map(|&k| {
+                let (mut re, mut im) = (0.0, 0.0);
+                for (i, v) in u.iter().enumerate() {
+                    let m = (k as usize * i) % n;
+                    re += v * self.cos[m];
+                    im -= v * self.sin[m];
+                }
+                // u ≈ Σ cos(k x + φ) has DFT bin (N/2)·e^{iφ}.
+                im.atan2(re)
+            })
+            .collect()
+    }
 }
 
 /// Relative peak factor `(max − min)/(2√2 rms)` of a sampled period.
@@ -91,24 +137,6 @@ fn rpf(u: &[f64]) -> f64 {
         u.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
     let rms = (u.iter().map(|v| v * v).sum::<f64>() / u.len() as f64).sqrt();
     (hi - lo) / (2.0 * core::f64::consts::SQRT_2 * rms)
-}
-
-/// Phases of the clipped signal's components at `harmonics` (direct DFT at those bins).
-fn phases_of(u: &[f64], harmonics: &[u32]) -> Vec<f64> {
-    let n = u.len() as f64;
-    harmonics
-        .iter()
-        .map(|&k| {
-            let (mut re, mut im) = (0.0, 0.0);
-            for (i, v) in u.iter().enumerate() {
-                let x = core::f64::consts::TAU * k as f64 * i as f64 / n;
-                re += v * x.cos();
-                im -= v * x.sin();
-            }
-            // u ≈ Σ cos(k x + φ) has DFT bin (N/2)·e^{iφ}.
-            im.atan2(re)
-        })
-        .collect()
 }
 
 /// Step 3 of the module doc: phases of minimum RPF found by the clipping iteration, starting
@@ -120,17 +148,17 @@ fn optimised_phases(harmonics: &[u32]) -> Vec<f64> {
     if n_h == 1 {
         return phases;
     }
-    let n = grid_points(*harmonics.iter().max().unwrap_or(&1));
+    let grid = Grid::new(grid_points(*harmonics.iter().max().unwrap_or(&1)));
     let mut best = phases.clone();
-    let mut best_rpf = rpf(&sample_period(harmonics, &phases, n));
+    let mut best_rpf = rpf(&grid.sample(harmonics, &phases));
     for it in 0..CLIPPING_ITERATIONS {
-        let u = sample_period(harmonics, &phases, n);
+        let u = grid.sample(harmonics, &phases);
         let peak = u.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         // Clip progressively less hard as the iteration proceeds (0.8 → 0.95 of the peak).
         let level = peak * (0.8 + 0.15 * it as f64 / CLIPPING_ITERATIONS as f64);
         let clipped: Vec<f64> = u.iter().map(|v| v.clamp(-level, level)).collect();
-        phases = phases_of(&clipped, harmonics);
-        let r = rpf(&sample_period(harmonics, &phases, n));
+        phases = grid.phases_of(&clipped, harmonics);
+        let r = rpf(&grid.sample(harmonics, &phases));
         if r < best_rpf {
             best_rpf = r;
             best = phases.clone();
@@ -203,9 +231,8 @@ pub fn orthogonal_multisine(
     }
     let harmonics = orthogonal_harmonics(pool, inputs, index)?;
     let phases = zero_start(&harmonics, &optimised_phases(&harmonics));
-    let n = grid_points(*harmonics.iter().max().unwrap_or(&1));
-    let unit_peak =
-        sample_period(&harmonics, &phases, n).iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let grid = Grid::new(grid_points(*harmonics.iter().max().unwrap_or(&1)));
+    let unit_peak = grid.sample(&harmonics, &phases).iter().fold(0.0f64, |a, v| a.max(v.abs()));
     // unit_peak ≥ 1 for any non-empty set (the mean square is N/2 > 0), so the division is safe.
     Multisine::with_phases(
         peak_amplitude / unit_peak,
@@ -283,11 +310,11 @@ mod tests {
     #[test]
     fn optimised_phases_no_worse_than_schroeder() {
         let h: Vec<u32> = vec![2, 5, 8, 11, 14];
-        let n = grid_points(14);
+        let grid = Grid::new(grid_points(14));
         let sch: Vec<f64> =
             (1..=5).map(|m| -core::f64::consts::PI * (m * (m - 1)) as f64 / 5.0).collect();
-        let r0 = rpf(&sample_period(&h, &sch, n));
-        let r1 = rpf(&sample_period(&h, &optimised_phases(&h), n));
+        let r0 = rpf(&grid.sample(&h, &sch));
+        let r1 = rpf(&grid.sample(&h, &optimised_phases(&h)));
         eprintln!("RPF Schroeder {r0:.3}, optimised {r1:.3}");
         assert!(r1 <= r0, "optimised {r1} vs Schroeder {r0}");
     }

@@ -12,7 +12,8 @@
 //! ```toml
 //! [input]                    # any table the scenario schema puts an InputConfig in
 //! kind = "doublet"           # step | pulse | doublet | three_two_one_one | sine | sweep |
-//!                            # multisine | recorded | band_limited_white_noise | sum
+//!                            # multisine | orthogonal_multisine | recorded |
+//!                            # band_limited_white_noise | sum
 //! amplitude_deg = -0.05      # or: amplitude = -8.7e-4 (radians / caller's units)
 //! start_s = 1.0              # default 0
 //! pulse_width_s = 0.5        # width of EACH half
@@ -34,6 +35,8 @@
 //!     end_frequency_hz = 3.0, duration_s = 30.0, law = "logarithmic", taper_s = 1.0 },
 //!   { kind = "multisine", amplitude_deg = 0.2, base_period_s = 10.0,
 //!     harmonics = [1, 2, 3, 4, 5, 6, 7] },
+//!   { kind = "orthogonal_multisine", amplitude_deg = 1.0, base_period_s = 10.0,
+//!     harmonics = [2, 3, 4, 5, 6, 7, 8, 9, 10], inputs = 3, index = 0 },
 //!   { kind = "band_limited_white_noise", noise_power = 1e-4, sample_time_s = 0.01, seed = 7 },
 //!   { kind = "sum", parts = [ { kind = "step", amplitude = 1.0 },
 //!                             { kind = "sine", amplitude = 0.1, frequency_rad_s = 0.7 } ] },
@@ -187,6 +190,31 @@ pub enum InputConfig {
         /// Duration (s); absent = until the end of the run.
         duration_s: Option<f64>,
     },
+    /// One member of an orthogonal phase-optimised multisine set
+    /// ([`crate::orthogonal::orthogonal_multisine`], Morelli 2003): `amplitude` |
+    /// `amplitude_deg` (the **peak** deflection of this input), `base_period_s`, `harmonics`
+    /// (the pool shared by the whole set), `inputs` (members in the set), `index` (this member,
+    /// 0-based), `start_s` (default 0), optional `duration_s`. The members of one set must share
+    /// `base_period_s`, `harmonics`, `inputs` and `start_s` to stay orthogonal.
+    OrthogonalMultisine {
+        /// Peak of this member in the caller's units.
+        amplitude: Option<f64>,
+        /// Peak of this member in degrees.
+        amplitude_deg: Option<f64>,
+        /// Base period T (s).
+        base_period_s: f64,
+        /// The harmonic pool of the set (distinct, ≥ 1), dealt out in turn to the members.
+        harmonics: Vec<u32>,
+        /// Number of members of the set.
+        inputs: usize,
+        /// This member, 0-based.
+        index: usize,
+        /// Start (s).
+        #[serde(default)]
+        start_s: f64,
+        /// Duration (s); absent = until the end of the run.
+        duration_s: Option<f64>,
+    },
     /// [`RecordedInput`] from a CSV file: `path` (relative paths are resolved against the
     /// directory given to [`InputConfig::build_in`], e.g. the scenario file's), optional
     /// `time_column` / `value_column` header names (default: first / second column), `unit`
@@ -319,6 +347,25 @@ impl InputConfig {
                 amplitude(a, amplitude_deg)?,
                 base_period_s,
                 harmonics,
+                start_s,
+                duration_s,
+            )?
+            .into(),
+            InputConfig::OrthogonalMultisine {
+                amplitude: a,
+                amplitude_deg,
+                base_period_s,
+                ref harmonics,
+                inputs,
+                index,
+                start_s,
+                duration_s,
+            } => crate::orthogonal::orthogonal_multisine(
+                amplitude(a, amplitude_deg)?,
+                base_period_s,
+                harmonics,
+                inputs,
+                index,
                 start_s,
                 duration_s,
             )?

@@ -73,6 +73,8 @@ pub mod gust;
 pub mod inputs;
 /// Simulink-style band-limited white noise.
 pub mod noise;
+/// Orthogonal phase-optimised multisines for simultaneous multi-surface excitation (Morelli).
+pub mod orthogonal;
 /// Recorded input replayed from a CSV file (time, value).
 pub mod recorded;
 /// Per-channel sensor models: ZOH sampling, lag, bias, Gauss–Markov, noise, quantisation, delay.
@@ -87,6 +89,7 @@ pub use inputs::{
     Doublet, Input, Multisine, Pulse, Sine, Step, Sum, Sweep, SweepLaw, ThreeTwoOneOne,
 };
 pub use noise::BandLimitedWhiteNoise;
+pub use orthogonal::{orthogonal_harmonics, orthogonal_multisine};
 pub use recorded::{RecordedInput, ValueUnit};
 pub use sensors::{Sensor, SensorConfig, SensorModel, SensorParameters};
 pub use turbulence::{DrydenGenerator, DrydenParameters, DrydenTurbulence, TurbulenceSeverity};

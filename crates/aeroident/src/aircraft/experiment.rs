@@ -1,36 +1,42 @@
-//! The two-aircraft estimation experiment of thesis Figure 3.2.
+//! The estimation experiment of thesis Figure 3.2, for any increments and any estimator.
 //!
 //! Per sample `k` (interval `dt`, RK4 with the inputs held over the step):
 //! 1. the pilot command (trim + inputs) and the wind at `t_k`;
-//! 2. the **reference aircraft** (true increments, the wind) gives `x_ref`, `ẋ_ref`;
-//! 3. the **sensor model** turns them into `z_m`, `ż_m` — the only thing estimators see;
-//! 4. each estimator channel updates from `(z_est, z_m, ż_m, u)`, where `z_est` is the state of
-//!    its own **estimated aircraft** (same trim, same pilot command, the current estimates,
-//!    still air unless `estimator_wind = "known"`);
-//! 5. both aircraft advance one RK4 step.
+//! 2. the **reference aircraft** (the F-16 plus the true increments of the scenario, the wind)
+//!    gives `x_ref`, `ẋ_ref` and its outputs;
+//! 3. the **sensor models** turn them into what the estimators see:
+//!    - two-aircraft estimators: the measured state and derivative `z_m`, `ż_m`
+//!      ([`super::sensors`]); each updates from `(z_est, z_m, ż_m, u)`, where `z_est` is the
+//!      state of its own **estimated aircraft** ([`super::two_aircraft`]);
+//!    - sample-driven estimators: ONE [`AirDataSample`] per step ([`super::air_data`]: SI units,
+//!      noise, differentiated angular accelerations, all channels delayed by the
+//!      differentiator's lag), passed to each `Box<dyn Estimator>`;
+//! 4. both aircraft advance one RK4 step.
 //!
-//! In a combined published run the three coefficient groups (C_m: p, q, r; C_L and C_D:
-//! α, V_T, β) are three engines that share one estimated aircraft; within a sample each sees
-//! the other groups' estimates of the previous sample.
+//! Truth: the two-aircraft estimators estimate **increments** (their truth is the scenario's
+//! increment); the sample-driven estimators estimate the reference aircraft's **total local
+//! derivatives** (their truth is [`super::truth::local_derivatives`] at the trim point, before
+//! and after each sudden change of an increment).
 
-use std::cell::Cell;
-use std::rc::Rc;
 use std::time::Instant;
 
-use aeroident_estimators::mrac::{GradientConfig, ModelReferenceGradient};
-use aeroident_estimators::smpe::{
-    CorrectedConfig, CorrectedSmpe, GainForm, ParamSpec, ParametricModel, PublishedSmpe, Reading,
-    SlidingSurface, SmpeConfig, SmpeSample,
-};
-use aeroident_estimators::{EstimatorError, ParametricEstimator};
-use aeroident_models::f16::{self, F16, F16Controls, F16State, IncrementReference, N_STATES};
+use aeroident_estimators::rls::{Rls, RlsConfig};
+use aeroident_estimators::sample::AirDataSample;
+use aeroident_estimators::smpe::SmpeSample;
+use aeroident_estimators::vocabulary::{ModelStructure, Param};
+use aeroident_estimators::{Estimator, Status};
+use aeroident_models::f16::{self, AeroIncrements, F16, F16Controls, F16State, IncrementReference};
 use aeroident_models::integrate::rk4_step;
 use aeroident_models::trim::{F16Trim, TrimCondition, trim};
 use aeroident_signals::{Input, InputSignal, WindField, config::build_wind};
 
-use super::model::{F16IncrementModel, Increment, thesis_increments};
-use super::scenario::{Channel, EstimatorSpec, EstimatorWind, ReadingSpec, Scenario};
-use super::sensors::{SensorNoise, derivative_sigma};
+use super::air_data::{AirDataSampler, M_PER_FT};
+use super::increments::increment_matrix;
+use super::scenario::{Channel, EstimatorSpec, EstimatorWind, SampleEstimatorSpec, Scenario};
+use super::sensors::SensorNoise;
+use super::truth::{LocalDerivatives, local_derivatives};
+pub use super::two_aircraft::PublishedDiagnostics;
+use super::two_aircraft::{self, TwoAircraft};
 
 /// Errors of an experiment run.
 #[derive(Debug, thiserror::Error)]
@@ -75,37 +81,101 @@ pub fn tracked(x: &F16State) -> TrackedStates {
     [x[f16::VT], x[f16::ALPHA], x[f16::BETA], x[f16::P], x[f16::Q], x[f16::R]]
 }
 
-/// Diagnostics of one published-SMPE group at one sample (after its update).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct PublishedDiagnostics {
-    /// Lyapunov gain K (3.128)/(3.153)/(3.159) at the new estimate.
-    pub K: f64,
-    /// Sliding-surface derivative ṡ of the group's first parameter, (3.106)/(3.134), at the
-    /// new estimate.
-    pub sdot: f64,
+/// What an estimator's numbers stand for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Quantity {
+    /// An increment over the F-16 (two-aircraft estimators): truth = the scenario's increment.
+    Increment,
+    /// The reference aircraft's total local derivative (sample-driven estimators).
+    Derivative,
+}
+
+impl Quantity {
+    /// `increment` or `derivative` (the string in summaries).
+    pub fn name(self) -> &'static str {
+        match self {
+            Quantity::Increment => "increment",
+            Quantity::Derivative => "derivative",
+        }
+    }
+}
+
+/// One parameter's history in one channel.
+#[derive(Debug, Clone)]
+pub struct ParamLog {
+    /// The parameter.
+    pub param: Param,
+    /// Estimate per sample (`None` while not identified, or after a divergence).
+    pub estimate: Vec<Option<f64>>,
+    /// Standard error per sample, where the method gives one.
+    pub sigma: Vec<Option<f64>>,
+    /// Truth per sample (`None` where no single true value exists).
+    pub truth: Vec<Option<f64>>,
+    /// Truth in each of [`RunOutput::epochs`] (known even for an epoch after the run's end).
+    pub truth_epochs: Vec<Option<f64>>,
 }
 
 /// What one estimator channel logged.
 #[derive(Debug, Clone)]
 pub struct ChannelLog {
-    /// Label (`published-implicit`, `corrected`, …).
+    /// Label (`published-implicit`, `corrected`, `rls` …).
     pub label: String,
-    /// Kind: `published`, `corrected` or `gradient`.
+    /// Kind: `published`, `corrected`, `mr-gradient` or the sample-driven method (`rls` …).
     pub kind: &'static str,
-    /// The increments it estimates.
-    pub params: Vec<Increment>,
-    /// Estimates `[ΔCm_α, ΔCm_q, ΔCL_α, ΔCD_α]` per sample (non-estimated entries are the
-    /// estimated aircraft's fixed values, zero).
-    pub estimates: Vec<[f64; 4]>,
-    /// Estimated aircraft's full state per sample (sliding states: [`tracked`]).
+    /// Increments (two-aircraft) or total derivatives (sample-driven).
+    pub quantity: Quantity,
+    /// Per parameter, in the channel's order.
+    pub params: Vec<ParamLog>,
+    /// Estimated aircraft's full state per sample (two-aircraft channels; empty otherwise).
     pub states: Vec<F16State>,
-    /// Published groups only: per sample, one entry per group (C_m, C_L, C_D order).
+    /// Published groups only: per sample, one entry per group (moments, then each force).
     pub diagnostics: Vec<Vec<PublishedDiagnostics>>,
-    /// First estimator or estimated-aircraft error, with its time; estimates are held from
-    /// then on (never NaN).
+    /// First estimator or estimated-aircraft error (or divergence), with its time; estimates
+    /// are held from then on (a diverged estimator's are dropped), never NaN.
     pub failure: Option<(f64, String)>,
-    /// Solver counters, human-readable.
+    /// Solver counters or the sample estimator's final status, human-readable.
     pub stats: String,
+    /// Sample-driven estimators: the final [`Status`] name.
+    pub status: Option<&'static str>,
+}
+
+impl ChannelLog {
+    /// The log of parameter `p`, if the channel estimates it.
+    pub fn param(&self, p: Param) -> Option<&ParamLog> {
+        self.params.iter().find(|l| l.param == p)
+    }
+}
+
+/// One true increment with its schedule, resolved (a `step_to_fraction` turned into a value).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ResolvedIncrement {
+    /// The parameter.
+    pub param: Param,
+    /// Value before any change.
+    pub truth: f64,
+    /// `(t0_s, value)`: the sudden change, if any.
+    pub step: Option<(f64, f64)>,
+}
+
+impl ResolvedIncrement {
+    /// The increment at `t_s`.
+    pub fn at(&self, t_s: f64) -> f64 {
+        match self.step {
+            Some((t0, v)) if t_s >= t0 => v,
+            _ => self.truth,
+        }
+    }
+}
+
+/// The reference aircraft's truth over one interval of constant increments.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TruthEpoch {
+    /// Start of the interval, s (0 for the first).
+    pub from_s: f64,
+    /// The increments acting.
+    pub increments: AeroIncrements,
+    /// Local derivatives at the trim point with those increments.
+    pub derivatives: LocalDerivatives,
 }
 
 /// Everything a run produced.
@@ -123,8 +193,15 @@ pub struct RunOutput {
     pub wind_ned_fps: Vec<[f64; 3]>,
     /// Reference aircraft's full state per sample (true, before the sensors).
     pub reference: Vec<F16State>,
-    /// True increments per sample.
-    pub truth: Vec<[f64; 4]>,
+    /// The true increments and their schedules.
+    pub increments: Vec<ResolvedIncrement>,
+    /// The reference's truth per interval of constant increments (first from t = 0).
+    pub epochs: Vec<TruthEpoch>,
+    /// First time a pilot command differs from trim, s (`None`: no pilot input).
+    pub excitation_start_s: Option<f64>,
+    /// Delay of the air-data samples behind the truth (differentiator lag), s; `None` without
+    /// sample-driven estimators.
+    pub sample_lag_s: Option<f64>,
     /// One log per estimator.
     pub channels: Vec<ChannelLog>,
     /// Wall-clock time of the simulation loop (no I/O), s.
@@ -136,97 +213,11 @@ impl RunOutput {
     pub fn realtime_factor(&self) -> f64 {
         self.scenario.duration_s / self.wall_s.max(1e-12)
     }
-}
 
-type Sample = SmpeSample<N_STATES, F16Controls>;
-
-/// One estimation engine over some of the increments.
-trait Engine {
-    fn update(&mut self, s: &Sample) -> Result<(), EstimatorError>;
-    fn write(&self, out: &mut [f64; 4]);
-    fn diagnostics(&self, _s: &Sample) -> Option<PublishedDiagnostics> {
-        None
-    }
-    fn stats(&self) -> String {
-        String::new()
-    }
-}
-
-struct Published<const P: usize> {
-    est: PublishedSmpe<F16IncrementModel<P>, N_STATES, P>,
-    model: F16IncrementModel<P>,
-}
-
-impl<const P: usize> Engine for Published<P> {
-    fn update(&mut self, s: &Sample) -> Result<(), EstimatorError> {
-        self.est.update(s).map(|_| ())
-    }
-    fn write(&self, out: &mut [f64; 4]) {
-        for (j, inc) in self.model.estimated().iter().enumerate() {
-            out[inc.index()] = self.est.estimate().theta[j];
-        }
-    }
-    fn diagnostics(&self, s: &Sample) -> Option<PublishedDiagnostics> {
-        published_diagnostics(&self.model, self.est.config(), &self.est.estimate().theta, s).ok()
-    }
-    fn stats(&self) -> String {
-        let st = self.est.stats();
-        format!(
-            "{:?}: samples {}, no_root {}, clamped {}, guarded {}",
-            self.model.estimated().map(|i| i.name()),
-            st.samples,
-            st.no_root,
-            st.clamped,
-            st.guarded
-        )
-    }
-}
-
-/// K and ṡ of a published-SMPE group at `theta` for sample `s`, computed from the engine's
-/// definitions (3.36)/(3.128) and (3.106): `φ_j = Σ_i rate_i z_i ∂ż_i/∂θ_j`,
-/// `K = |Σ_j θ_j (μ_j⁻¹ − 1) φ_j| − η`, `ṡ = Σ_i rate_i (z_i ż_i − z_m,i ż_m,i) + λ_0 Σ_i
-/// ½ w_i (z_i² − z_m,i²)` (first-order surface).
-///
-/// # Errors
-/// The model's errors.
-pub fn published_diagnostics<M: ParametricModel<N_STATES, P>, const P: usize>(
-    model: &M,
-    cfg: &SmpeConfig<N_STATES, P>,
-    theta: &nalgebra::SVector<f64, P>,
-    s: &SmpeSample<N_STATES, M::Input>,
-) -> Result<PublishedDiagnostics, EstimatorError> {
-    let zdot = model.derivatives(s.t_s, &s.z, &s.u, theta)?;
-    let sens = model.sensitivity(s.t_s, &s.z, &s.u, theta)?;
-    let sf = &cfg.surface;
-    let mut k_sum = 0.0;
-    for j in 0..P {
-        let phi: f64 = (0..N_STATES).map(|i| sf.rate[i] * s.z[i] * sens[(i, j)]).sum();
-        let mu = cfg.params[j].gain_margin().unwrap_or(1.0);
-        k_sum += theta[j] * (1.0 / mu - 1.0) * phi;
-    }
-    let mut sdot = 0.0;
-    for i in 0..N_STATES {
-        let e_dot = s.z[i] * zdot[i] - s.z_m[i] * s.zdot_m[i];
-        let e = 0.5 * (s.z[i] * s.z[i] - s.z_m[i] * s.z_m[i]);
-        sdot += sf.rate[i] * e_dot
-            + cfg.params[0].lambda * (sf.lambda_energy[i] * e_dot + sf.lambda_integral[i] * e);
-    }
-    Ok(PublishedDiagnostics { K: k_sum.abs() - cfg.eta, sdot })
-}
-
-struct Generic<E, const P: usize> {
-    est: E,
-    incs: [Increment; P],
-}
-
-impl<E: ParametricEstimator<P, Sample = Sample>, const P: usize> Engine for Generic<E, P> {
-    fn update(&mut self, s: &Sample) -> Result<(), EstimatorError> {
-        self.est.update(s).map(|_| ())
-    }
-    fn write(&self, out: &mut [f64; 4]) {
-        for (j, inc) in self.incs.iter().enumerate() {
-            out[inc.index()] = self.est.estimate().theta[j];
-        }
+    /// The epoch whose interval contains `t_s`.
+    pub fn epoch_at(&self, t_s: f64) -> &TruthEpoch {
+        let k = self.epochs.iter().rposition(|e| t_s >= e.from_s).unwrap_or(0);
+        &self.epochs[k]
     }
 }
 
@@ -234,214 +225,64 @@ fn setup_err(what: &str, e: impl std::fmt::Display) -> ExperimentError {
     ExperimentError::Setup { what: what.into(), reason: e.to_string() }
 }
 
-struct Ctx<'a> {
-    sc: &'a Scenario,
-    f16: F16,
-    reference: IncrementReference,
-    current: Rc<Cell<[f64; 4]>>,
-}
-
-impl Ctx<'_> {
-    fn spec(&self, inc: Increment) -> ParamSpec {
-        // Validated: every estimated increment has a [params] table.
-        let p = self.sc.param(inc).cloned().unwrap_or(super::scenario::ParamEntry {
-            truth: 0.0,
-            lower: -1.0,
-            upper: 1.0,
-            lambda_per_s: 1.0,
-            eta: 1e-9,
-            gradient_gain: None,
-            initial: None,
-            step_to: None,
-            step_at_s: None,
-            thesis_convergence_time_s: None,
-            thesis_note: None,
-        });
-        ParamSpec {
-            name: inc.name(),
-            lower: p.lower,
-            upper: p.upper,
-            lambda: p.lambda_per_s,
-            initial: p.initial_estimate(),
-        }
-    }
-
-    fn model<const P: usize>(&self, incs: [Increment; P]) -> F16IncrementModel<P> {
-        F16IncrementModel::new(self.f16.clone(), self.reference, incs, self.current.clone())
-    }
-
-    fn published<const P: usize>(
-        &self,
-        incs: [Increment; P],
-        reading: Reading,
-    ) -> Result<Box<dyn Engine>, ExperimentError> {
-        let surface = SlidingSurface::first_order(&incs[0].sliding_states())
-            .map_err(|e| setup_err("published surface", e))?;
-        let eta = incs
-            .iter()
-            .filter_map(|i| self.sc.param(*i).map(|p| p.eta))
-            .fold(f64::INFINITY, f64::min);
-        let cfg = SmpeConfig {
-            params: incs.map(|i| self.spec(i)),
-            eta,
-            surface,
-            gain: GainForm::Shared,
-            reading,
-        };
-        let model = self.model(incs);
-        let est = PublishedSmpe::new(model.clone(), cfg)
-            .map_err(|e| setup_err(&format!("published SMPE {:?}", incs.map(|i| i.name())), e))?;
-        Ok(Box::new(Published { est, model }))
-    }
-
-    fn corrected<const P: usize>(
-        &self,
-        incs: [Increment; P],
-        spec: &EstimatorSpec,
-    ) -> Result<Box<dyn Engine>, ExperimentError> {
-        let EstimatorSpec::Corrected {
-            lambda_per_s,
-            information_per_s,
-            tracking_weight,
-            forgetting_per_s,
-            ..
-        } = *spec
-        else {
-            return Err(setup_err("corrected", "not a corrected spec"));
-        };
-        // Rows weighted by 1/σ² of the nominal derivative noise (unit-free information).
-        let sig = derivative_sigma(self.sc.dt_s);
-        let mut sliding = [0.0; N_STATES];
-        for inc in incs {
-            for i in inc.sliding_states() {
-                sliding[i] = 1.0 / (sig[i] * sig[i]);
-            }
-        }
-        let cfg = CorrectedConfig {
-            params: incs.map(|i| self.spec(i)),
-            sliding,
-            lambda_per_s,
-            information_per_s,
-            tracking_weight,
-            forgetting_per_s,
-        };
-        let est = CorrectedSmpe::new(self.model(incs), cfg)
-            .map_err(|e| setup_err("corrected SMPE", e))?;
-        Ok(Box::new(Generic { est, incs }))
-    }
-
-    fn gradient<const P: usize>(
-        &self,
-        incs: [Increment; P],
-    ) -> Result<Box<dyn Engine>, ExperimentError> {
-        let mut params = incs.map(|i| self.spec(i));
-        for (p, inc) in params.iter_mut().zip(incs) {
-            p.lambda = self.sc.param(inc).and_then(|e| e.gradient_gain).unwrap_or(1.0);
-        }
-        let states = incs.map(|inc| {
-            let mut w = [0.0; N_STATES];
-            for i in inc.sliding_states() {
-                w[i] = 1.0;
-            }
-            w
-        });
-        let est = ModelReferenceGradient::new(self.model(incs), GradientConfig { params, states })
-            .map_err(|e| setup_err("gradient estimator", e))?;
-        Ok(Box::new(Generic { est, incs }))
-    }
-}
-
-fn incs_array<const P: usize>(v: &[Increment]) -> [Increment; P] {
-    core::array::from_fn(|j| v[j])
-}
-
-/// One estimator channel: its engines and its estimated aircraft.
-struct ChannelRun {
-    log: ChannelLog,
-    engines: Vec<Box<dyn Engine>>,
-    current: Rc<Cell<[f64; 4]>>,
-    x: F16State,
-    f16: F16,
-}
-
-fn build_channel(
-    sc: &Scenario,
-    spec: &EstimatorSpec,
-    f16: &F16,
-    reference: IncrementReference,
-    x0: &F16State,
-) -> Result<ChannelRun, ExperimentError> {
-    let mut incs: Vec<Increment> =
-        spec.param_names().iter().filter_map(|n| Increment::from_name(n)).collect();
-    incs.sort();
-    let current = Rc::new(Cell::new([0.0; 4]));
-    let ctx = Ctx { sc, f16: f16.clone(), reference, current: current.clone() };
-    let mut init = [0.0; 4];
-    for inc in &incs {
-        init[inc.index()] = ctx.spec(*inc).initial;
-    }
-    current.set(init);
-    let mut engines: Vec<Box<dyn Engine>> = Vec::new();
-    let kind;
-    match spec {
-        EstimatorSpec::Published { reading, .. } => {
-            kind = "published";
-            let reading = match reading {
-                ReadingSpec::Implicit => Reading::Implicit,
-                ReadingSpec::Explicit => Reading::Explicit,
-            };
-            let cm: Vec<Increment> = incs
-                .iter()
-                .copied()
-                .filter(|i| matches!(i, Increment::CmAlpha | Increment::CmQ))
-                .collect();
-            match cm.len() {
-                1 => engines.push(ctx.published::<1>(incs_array(&cm), reading)?),
-                2 => engines.push(ctx.published::<2>(incs_array(&cm), reading)?),
-                _ => {}
-            }
-            for inc in [Increment::CLAlpha, Increment::CDAlpha] {
-                if incs.contains(&inc) {
-                    engines.push(ctx.published::<1>([inc], reading)?);
+/// The sample-driven estimator of `spec`. Supported here: `rls` (options `forgetting`,
+/// `init_samples`). The other kinds of [`super::scenario::SAMPLE_KINDS`] are refused with "not
+/// available in this build" (their factory lives with the estimators on another branch).
+///
+/// # Errors
+/// A message naming the kind, the unknown or bad option, or the configuration error.
+pub(super) fn build_sample_estimator(
+    spec: &SampleEstimatorSpec,
+) -> Result<Box<dyn Estimator>, String> {
+    match spec.kind.as_str() {
+        "rls" => {
+            let mut cfg = RlsConfig::default();
+            for (key, v) in &spec.options {
+                match key.as_str() {
+                    "forgetting" => {
+                        cfg.forgetting =
+                            v.as_float().or_else(|| v.as_integer().map(|i| i as f64)).ok_or_else(
+                                || format!("rls: `forgetting` must be a number, got {v}"),
+                            )?;
+                    }
+                    "init_samples" => {
+                        cfg.init_samples =
+                            v.as_integer().and_then(|i| usize::try_from(i).ok()).ok_or_else(
+                                || format!("rls: `init_samples` must be a count ≥ 0, got {v}"),
+                            )?;
+                    }
+                    other => {
+                        return Err(format!(
+                            "rls: unknown option `{other}` (options: forgetting, init_samples)"
+                        ));
+                    }
                 }
             }
+            Rls::new(spec.model, cfg)
+                .map(|r| Box::new(r) as Box<dyn Estimator>)
+                .map_err(|e| format!("rls: {e}"))
         }
-        EstimatorSpec::Corrected { .. } => {
-            kind = "corrected";
-            engines.push(match incs.len() {
-                1 => ctx.corrected::<1>(incs_array(&incs), spec)?,
-                2 => ctx.corrected::<2>(incs_array(&incs), spec)?,
-                3 => ctx.corrected::<3>(incs_array(&incs), spec)?,
-                _ => ctx.corrected::<4>(incs_array(&incs), spec)?,
-            });
-        }
-        EstimatorSpec::Gradient { .. } => {
-            kind = "gradient";
-            engines.push(match incs.len() {
-                1 => ctx.gradient::<1>(incs_array(&incs))?,
-                2 => ctx.gradient::<2>(incs_array(&incs))?,
-                3 => ctx.gradient::<3>(incs_array(&incs))?,
-                _ => ctx.gradient::<4>(incs_array(&incs))?,
-            });
-        }
+        k @ ("ekf" | "smpe" | "smpe-corrected" | "gradient" | "ftr") => Err(format!(
+            "sample-driven estimator `{k}` is not available in this build (only `rls`); its factory is added with the estimators"
+        )),
+        k => Err(format!("unknown sample-driven estimator `{k}`")),
     }
-    let n = (sc.duration_s / sc.dt_s).round() as usize + 1;
-    Ok(ChannelRun {
-        log: ChannelLog {
-            label: spec.label(),
-            kind,
-            params: incs,
-            estimates: Vec::with_capacity(n),
-            states: Vec::with_capacity(n),
-            diagnostics: Vec::new(),
-            failure: None,
-            stats: String::new(),
-        },
-        engines,
-        current,
-        x: *x0,
-        f16: f16.clone(),
-    })
+}
+
+/// A sample-driven channel.
+struct SampleChannel {
+    est: Box<dyn Estimator>,
+    structure: ModelStructure,
+}
+
+enum Channelled {
+    Two(Box<TwoAircraft>),
+    Sample(SampleChannel),
+}
+
+struct ChannelRun {
+    log: ChannelLog,
+    ch: Channelled,
 }
 
 /// Body → NED rotation of a body-axis vector at the attitude of `x` (SLJ (1.3-20)).
@@ -456,7 +297,33 @@ fn body_to_ned(x: &F16State, v: [f64; 3]) -> [f64; 3] {
     [0, 1, 2].map(|k| r1[k] * v[0] + r2[k] * v[1] + r3[k] * v[2])
 }
 
-/// Runs a scenario: trim, fly both aircraft, sense, estimate, log.
+/// Resolves the scenario's increments (a `step_to_fraction` × the nominal derivative).
+fn resolve_increments(
+    sc: &Scenario,
+    nominal: &LocalDerivatives,
+) -> Result<Vec<ResolvedIncrement>, ExperimentError> {
+    sc.increments
+        .iter()
+        .map(|(p, e)| {
+            let step = match (e.step_at_s, e.step_to, e.step_to_fraction) {
+                (Some(t0), Some(v), _) => Some((t0, v)),
+                (Some(t0), None, Some(f)) => {
+                    let d = nominal.derivative(*p).ok_or_else(|| {
+                        setup_err(
+                            &format!("increments.{}.step_to_fraction", p.name()),
+                            "no single local derivative for this term; give step_to",
+                        )
+                    })?;
+                    Some((t0, f * d))
+                }
+                _ => None,
+            };
+            Ok(ResolvedIncrement { param: *p, truth: e.truth, step })
+        })
+        .collect()
+}
+
+/// Runs a scenario: trim, fly the aircraft, sense, estimate, log.
 ///
 /// # Errors
 /// [`ExperimentError`] when the trim fails, a signal/estimator cannot be built, or the
@@ -477,6 +344,25 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
         elevator_rad: trim.controls.elevator_rad,
         ..Default::default()
     };
+    let truth_at = |inc: &AeroIncrements| {
+        local_derivatives(&f16, &trim.state, &trim.controls, inc)
+            .map_err(|e| setup_err("truth derivatives at trim", e))
+    };
+    let nominal = truth_at(&AeroIncrements::zero())?;
+    let increments = resolve_increments(sc, &nominal)?;
+    let values_at =
+        |t: f64| -> Vec<(Param, f64)> { increments.iter().map(|r| (r.param, r.at(t))).collect() };
+    let mut starts: Vec<f64> = increments.iter().filter_map(|r| r.step.map(|s| s.0)).collect();
+    starts.push(0.0);
+    starts.sort_by(f64::total_cmp);
+    starts.dedup();
+    let mut epochs = Vec::new();
+    for &from_s in &starts {
+        let inc = increment_matrix(reference, &values_at(from_s));
+        epochs.push(TruthEpoch { from_s, increments: inc, derivatives: truth_at(&inc)? });
+    }
+    let epoch_index = |t: f64| starts.iter().rposition(|&s| t >= s).unwrap_or(0);
+
     let mut inputs: [Vec<Input>; 4] = Default::default();
     for (k, i) in sc.input.iter().enumerate() {
         let sig = i.signal.build().map_err(|e| setup_err(&format!("input[{k}]"), e))?;
@@ -496,13 +382,102 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
     } else {
         None
     };
-    let mut channels = sc
-        .estimator
-        .iter()
-        .map(|e| build_channel(sc, e, &f16, reference, &trim.state))
-        .collect::<Result<Vec<_>, _>>()?;
-
     let n = (sc.duration_s / sc.dt_s).round() as usize;
+    let mut channels = Vec::new();
+    for (k, spec) in sc.estimator.iter().enumerate() {
+        let what = format!("estimator[{k}] `{}`", spec.label());
+        let (ch, kind, quantity, params, status) = match spec {
+            EstimatorSpec::Sample(s) => {
+                let est = build_sample_estimator(s).map_err(|e| setup_err(&what, e))?;
+                let structure = *est.structure();
+                let params: Vec<Param> = structure.params().collect();
+                let kind = est.method();
+                (
+                    Channelled::Sample(SampleChannel { est, structure }),
+                    kind,
+                    Quantity::Derivative,
+                    params,
+                    Some("initialising"),
+                )
+            }
+            _ => {
+                let two = two_aircraft::build(sc, spec, &f16, reference, &trim.state)
+                    .map_err(|e| setup_err(&what, e))?;
+                let (kind, params) = (two.kind, two.params.clone());
+                (Channelled::Two(Box::new(two)), kind, Quantity::Increment, params, None)
+            }
+        };
+        let logs = params
+            .iter()
+            .map(|p| ParamLog {
+                param: *p,
+                estimate: Vec::with_capacity(n + 1),
+                sigma: Vec::with_capacity(n + 1),
+                truth: Vec::with_capacity(n + 1),
+                truth_epochs: Vec::new(),
+            })
+            .collect();
+        let is_two = matches!(ch, Channelled::Two(_));
+        channels.push(ChannelRun {
+            log: ChannelLog {
+                label: spec.label(),
+                kind,
+                quantity,
+                params: logs,
+                states: Vec::with_capacity(if is_two { n + 1 } else { 0 }),
+                diagnostics: Vec::new(),
+                failure: None,
+                stats: String::new(),
+                status,
+            },
+            ch,
+        });
+    }
+    // Per channel and parameter, the truth in each epoch.
+    let truths: Vec<Vec<Vec<Option<f64>>>> = channels
+        .iter()
+        .map(|c| {
+            c.log
+                .params
+                .iter()
+                .map(|l| {
+                    epochs
+                        .iter()
+                        .map(|e| match &c.ch {
+                            Channelled::Two(_) => {
+                                Some(super::increments::get(&e.increments, l.param))
+                            }
+                            Channelled::Sample(s) => e.derivatives.truth(&s.structure, l.param),
+                        })
+                        .collect()
+                })
+                .collect()
+        })
+        .collect();
+    for (c, tr) in channels.iter_mut().zip(&truths) {
+        for (l, t) in c.log.params.iter_mut().zip(tr) {
+            l.truth_epochs = t.clone();
+        }
+    }
+    let has_sample = channels.iter().any(|c| matches!(c.ch, Channelled::Sample(_)));
+    let mut sampler = if has_sample {
+        Some(
+            AirDataSampler::new(
+                &f16,
+                sc.trim.vt_fps * M_PER_FT,
+                sc.dt_s,
+                sc.sensors.noise,
+                sc.sensors.scale,
+                sc.sensors.seed,
+                sc.sensors.differentiator_window,
+                sc.sensors.alignment == super::scenario::Alignment::Matched,
+            )
+            .map_err(|e| setup_err("air-data sensors", e))?,
+        )
+    } else {
+        None
+    };
+
     let mut out = RunOutput {
         scenario: sc.clone(),
         trim: trim.clone(),
@@ -510,7 +485,10 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
         controls: Vec::with_capacity(n + 1),
         wind_ned_fps: Vec::with_capacity(n + 1),
         reference: Vec::with_capacity(n + 1),
-        truth: Vec::with_capacity(n + 1),
+        increments: increments.clone(),
+        epochs: epochs.clone(),
+        excitation_start_s: None,
+        sample_lag_s: sampler.as_ref().map(AirDataSampler::lag_s),
         channels: Vec::new(),
         wall_s: 0.0,
     };
@@ -524,6 +502,9 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
         for (slot, sigs) in inputs.iter().enumerate() {
             uv[slot] += sigs.iter().map(|s| s.value(t)).sum::<f64>();
         }
+        if out.excitation_start_s.is_none() && uv != u0 {
+            out.excitation_start_s = Some(t);
+        }
         let mut u = trim.controls.with_vector(&uv);
         let wb = wind.wind_body_fps(t);
         let wind_ned = body_to_ned(&x_ref, [wb[0], wb[1], wb[2]]);
@@ -532,61 +513,39 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
             EstimatorWind::Unknown => u,
         };
         u.wind_ned_fps = wind_ned;
-        let truth = sc.truth_at(t);
-        f16_ref.increments = thesis_increments(reference, &truth);
-        let xdot_ref = f16_ref
-            .derivatives_with_increments(&x_ref, &u, &f16_ref.increments)
+        let ep = epoch_index(t);
+        f16_ref.increments = epochs[ep].increments;
+        let (xdot_ref, outputs) = f16_ref
+            .evaluate(&x_ref, &u, &f16_ref.increments)
             .map_err(|e| ExperimentError::Reference { t_s: t, source: e })?;
         let (z_m, zdot_m) = match &noise {
             Some(nz) => nz.measure(t, &x_ref, &xdot_ref),
             None => (x_ref, xdot_ref),
         };
-        for ch in &mut channels {
-            let sample = SmpeSample { t_s: t, z: ch.x, z_m, zdot_m, u: u_est };
-            if ch.log.failure.is_none() {
-                let mut next = ch.current.get();
-                let mut diag = Vec::new();
-                for e in &mut ch.engines {
-                    match e.update(&sample) {
-                        Ok(()) => {
-                            e.write(&mut next);
-                            if let Some(d) = e.diagnostics(&sample) {
-                                diag.push(d);
-                            }
-                        }
-                        Err(err) => {
-                            ch.log.failure = Some((t, err.to_string()));
-                            break;
-                        }
-                    }
-                }
-                if ch.log.failure.is_none() {
-                    ch.current.set(next);
-                }
-                if !diag.is_empty() {
-                    ch.log.diagnostics.push(diag);
-                }
+        let air = sampler.as_mut().and_then(|s| s.push(t, &x_ref, &outputs, &u));
+        for (c, truth) in channels.iter_mut().zip(&truths) {
+            step_channel(c, t, &z_m, &zdot_m, &u_est, air.as_ref());
+            for (l, tr) in c.log.params.iter_mut().zip(truth) {
+                l.truth.push(tr[ep]);
             }
-            ch.log.estimates.push(ch.current.get());
-            ch.log.states.push(ch.x);
         }
         out.t_s.push(t);
         out.controls.push([uv[0], uv[1], uv[2], uv[3]]);
         out.wind_ned_fps.push(wind_ned);
         out.reference.push(x_ref);
-        out.truth.push(truth);
         if k == n {
             break;
         }
         x_ref = rk4_step(&f16_ref, t, &x_ref, &u, sc.dt_s)
             .map_err(|e| ExperimentError::Reference { t_s: t, source: e })?;
-        for ch in &mut channels {
-            ch.f16.increments = thesis_increments(reference, &ch.current.get());
-            match rk4_step(&ch.f16, t, &ch.x, &u_est, sc.dt_s) {
-                Ok(x) => ch.x = x,
+        for c in &mut channels {
+            let Channelled::Two(two) = &mut c.ch else { continue };
+            two.f16.increments = two.current.get();
+            match rk4_step(&two.f16, t, &two.x, &u_est, sc.dt_s) {
+                Ok(x) => two.x = x,
                 Err(e) => {
-                    if ch.log.failure.is_none() {
-                        ch.log.failure = Some((t, format!("estimated aircraft: {e}")));
+                    if c.log.failure.is_none() {
+                        c.log.failure = Some((t, format!("estimated aircraft: {e}")));
                     }
                 }
             }
@@ -595,16 +554,85 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
     out.wall_s = start.elapsed().as_secs_f64();
     out.channels = channels
         .into_iter()
-        .map(|mut ch| {
-            ch.log.stats = ch
-                .engines
-                .iter()
-                .map(|e| e.stats())
-                .filter(|s| !s.is_empty())
-                .collect::<Vec<_>>()
-                .join("; ");
-            ch.log
+        .map(|mut c| {
+            c.log.stats = match &c.ch {
+                Channelled::Two(two) => two
+                    .engines
+                    .iter()
+                    .map(|e| e.stats())
+                    .filter(|s| !s.is_empty())
+                    .collect::<Vec<_>>()
+                    .join("; "),
+                Channelled::Sample(s) => format!("status {}", s.est.estimates().status.name()),
+            };
+            c.log
         })
         .collect();
     Ok(out)
+}
+
+/// One channel's update and log at time `t` (module doc, step 3).
+fn step_channel(
+    c: &mut ChannelRun,
+    t: f64,
+    z_m: &F16State,
+    zdot_m: &F16State,
+    u_est: &F16Controls,
+    air: Option<&AirDataSample>,
+) {
+    match &mut c.ch {
+        Channelled::Two(two) => {
+            let sample = SmpeSample { t_s: t, z: two.x, z_m: *z_m, zdot_m: *zdot_m, u: *u_est };
+            if c.log.failure.is_none() {
+                let mut next = two.current.get();
+                let mut diag = Vec::new();
+                for e in &mut two.engines {
+                    match e.update(&sample) {
+                        Ok(()) => {
+                            e.write(&mut next);
+                            if let Some(d) = e.diagnostics(&sample) {
+                                diag.push(d);
+                            }
+                        }
+                        Err(err) => {
+                            c.log.failure = Some((t, err.to_string()));
+                            break;
+                        }
+                    }
+                }
+                if c.log.failure.is_none() {
+                    two.current.set(next);
+                }
+                if !diag.is_empty() {
+                    c.log.diagnostics.push(diag);
+                }
+            }
+            let cur = two.current.get();
+            for l in &mut c.log.params {
+                l.estimate.push(Some(super::increments::get(&cur, l.param)));
+                l.sigma.push(None);
+            }
+            c.log.states.push(two.x);
+        }
+        Channelled::Sample(s) => {
+            if c.log.failure.is_none()
+                && let Some(sample) = air
+            {
+                match s.est.update(sample) {
+                    Ok(e) if e.status == Status::Diverged => {
+                        c.log.failure = Some((t, "estimator diverged".into()));
+                    }
+                    Ok(_) => {}
+                    Err(err) => c.log.failure = Some((t, err.to_string())),
+                }
+            }
+            let e = s.est.estimates();
+            let diverged = e.status == Status::Diverged;
+            c.log.status = Some(e.status.name());
+            for (i, l) in c.log.params.iter_mut().enumerate() {
+                l.estimate.push(if diverged { None } else { e.value(i) });
+                l.sigma.push(if diverged { None } else { e.sigma(i) });
+            }
+        }
+    }
 }

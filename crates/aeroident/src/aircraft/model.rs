@@ -1,72 +1,21 @@
-//! The F-16 as the estimators' model: the four thesis increments (3.100)–(3.101), an adapter
-//! implementing the generic engine's [`ParametricModel`] on top of the Stevens–Lewis F-16, the
-//! analytic parameter sensitivity and the inverse inertia of (3.114).
+//! The F-16 as the two-aircraft estimators' model: increments over the vocabulary (thesis
+//! (3.100)–(3.101) generalised, [`super::increments`]), an adapter implementing the generic
+//! engine's [`ParametricModel`] on top of the Stevens–Lewis F-16, the analytic parameter
+//! sensitivity and the inverse inertia of (3.114).
 
 use std::cell::Cell;
 use std::rc::Rc;
 
 use aeroident_estimators::EstimatorError;
 use aeroident_estimators::smpe::ParametricModel;
+use aeroident_estimators::vocabulary::{Coefficient, Param, Term};
 use aeroident_models::ModelError;
 use aeroident_models::f16::{
     self, AeroIncrements, F16, F16Controls, F16State, IncrementReference, N_STATES,
 };
+
+use super::increments;
 use nalgebra::{Matrix3, SMatrix, SVector};
-
-/// The thesis's four unknown increments (3.100), all **per radian**: ΔCm_α per rad of Δα,
-/// ΔCm_q per unit of `(c̄/2V_T)Δq`, ΔCL_α and ΔCD_α per rad of Δα.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum Increment {
-    /// ΔCm_α, pitching moment per rad of Δα.
-    CmAlpha,
-    /// ΔCm_q, pitching moment per unit `(c̄/2V_T)·Δq`.
-    CmQ,
-    /// ΔCL_α, lift per rad of Δα.
-    CLAlpha,
-    /// ΔCD_α, drag per rad of Δα.
-    CDAlpha,
-}
-
-impl Increment {
-    /// All four, in the order of the thesis and of [`Increment::index`].
-    pub const ALL: [Increment; 4] =
-        [Increment::CmAlpha, Increment::CmQ, Increment::CLAlpha, Increment::CDAlpha];
-
-    /// Name used in scenario files, CSV headers and `summary.json`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Increment::CmAlpha => "dCm_alpha",
-            Increment::CmQ => "dCm_q",
-            Increment::CLAlpha => "dCL_alpha",
-            Increment::CDAlpha => "dCD_alpha",
-        }
-    }
-
-    /// Position in [`Increment::ALL`] and in the `[f64; 4]` increment vectors.
-    pub fn index(self) -> usize {
-        self as usize
-    }
-
-    /// Parses a [`Increment::name`].
-    pub fn from_name(s: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|i| i.name() == s)
-    }
-
-    /// The thesis's sliding states of this increment's estimator: `p, q, r` for the pitching
-    /// moment (3.105), `α, V_T, β` for lift and drag (3.133), as F-16 state indices.
-    pub fn sliding_states(self) -> [usize; 3] {
-        match self {
-            Increment::CmAlpha | Increment::CmQ => [f16::P, f16::Q, f16::R],
-            Increment::CLAlpha | Increment::CDAlpha => [f16::ALPHA, f16::VT, f16::BETA],
-        }
-    }
-}
-
-/// The four increments `[ΔCm_α, ΔCm_q, ΔCL_α, ΔCD_α]` about `reference` as the F-16 model's
-/// increment matrix.
-pub fn thesis_increments(reference: IncrementReference, values: &[f64; 4]) -> AeroIncrements {
-    AeroIncrements::thesis(reference, values[0], values[1], values[2], values[3])
-}
 
 /// Converts a model error into the estimator crate's error type (the estimator crate does not
 /// know the model crate).
@@ -79,50 +28,52 @@ fn model_err(e: ModelError) -> EstimatorError {
     }
 }
 
-/// The F-16 seen by an estimator of `P` of the four increments (thesis Figure 3.2: the
-/// estimated model has the reference's structure and differs only in the increments).
+/// The F-16 seen by an estimator of `P` increments (thesis Figure 3.2: the estimated model has
+/// the reference's structure and differs only in the increments).
 ///
-/// `θ` holds the estimated increments in the order of [`F16IncrementModel::estimated`]; the
-/// others take the values shared in `current` (the estimated aircraft's increments, written by
-/// the other estimators of a combined run; zero when nobody estimates them). The input is the
-/// F-16 control vector including the wind the estimator is told about.
+/// `θ` holds the estimated increments in the order of [`F16IncrementModel::estimated`]; every
+/// other cell of the increment matrix takes its value from `current` (the estimated aircraft's
+/// increments, written by the other estimators of a combined run; zero when nobody estimates
+/// them). The input is the F-16 control vector including the wind the estimator is told about.
 #[derive(Debug, Clone)]
 pub struct F16IncrementModel<const P: usize> {
     f16: F16,
     reference: IncrementReference,
-    estimated: [Increment; P],
-    current: Rc<Cell<[f64; 4]>>,
+    estimated: [Param; P],
+    current: Rc<Cell<AeroIncrements>>,
 }
 
 impl<const P: usize> F16IncrementModel<P> {
-    /// The adapter for the increments `estimated` about `reference` (the trim point).
+    /// The adapter for the increments `estimated` (each expressible, see
+    /// [`increments::parse_increment`]) about `reference` (the trim point).
     pub fn new(
         f16: F16,
         reference: IncrementReference,
-        estimated: [Increment; P],
-        current: Rc<Cell<[f64; 4]>>,
+        estimated: [Param; P],
+        current: Rc<Cell<AeroIncrements>>,
     ) -> Self {
         Self { f16, reference, estimated, current }
     }
 
     /// The increments this model's parameters stand for.
-    pub fn estimated(&self) -> &[Increment; P] {
+    pub fn estimated(&self) -> &[Param; P] {
         &self.estimated
     }
 
     fn increments(&self, theta: &SVector<f64, P>) -> AeroIncrements {
-        let mut v = self.current.get();
-        for (j, inc) in self.estimated.iter().enumerate() {
-            v[inc.index()] = theta[j];
+        let mut inc = self.current.get();
+        inc.reference = self.reference;
+        for (j, p) in self.estimated.iter().enumerate() {
+            increments::set(&mut inc, *p, theta[j]);
         }
-        thesis_increments(self.reference, &v)
+        inc
     }
 }
 
 impl<const P: usize> ParametricModel<N_STATES, P> for F16IncrementModel<P> {
     type Input = F16Controls;
 
-    /// SLJ §3.5 state derivatives with the increments (3.100) set to `theta`.
+    /// SLJ §3.5 state derivatives with the estimated increments (3.100) set to `theta`.
     fn derivatives(
         &self,
         _t_s: f64,
@@ -133,13 +84,16 @@ impl<const P: usize> ParametricModel<N_STATES, P> for F16IncrementModel<P> {
         self.f16.derivatives_with_increments(z, u, &self.increments(theta)).map_err(model_err)
     }
 
-    /// Analytic `∂ż/∂θ` (the model is affine in the increments, so this is exact):
-    /// - ΔCm_α, ΔCm_q: `∂q̇/∂ΔCm = c₇ q̄ S c̄ · ξ` (SLJ §3.5 moment equations, `c₇ = 1/I_yy`),
-    ///   `ξ = Δα` or `(c̄/2V)Δq`; `ṗ`, `ṙ` do not depend on C_m because `I_xy = I_yz = 0`
-    ///   (so `C_p = C_r = 0` in (3.117)).
-    /// - ΔCL_α, ΔCD_α: the stability-axis increment rotated into `ΔC_X, ΔC_Z` (as the model
-    ///   does), `Δu̇ = q̄S ΔC_X/m`, `Δẇ = q̄S ΔC_Z/m`, then `V̇ = (u u̇ + v v̇ + w ẇ)/V`,
-    ///   `α̇ = (u ẇ − w u̇)/(u² + w²)`, `β̇ = (V v̇ − v V̇) cos β/(u² + w²)` differentiated.
+    /// Analytic `∂ż/∂θ` (the model is affine in the increments, so this is exact), with `ξ`
+    /// the increment's regressor at `z` ([`AeroIncrements`]: Δα, (c̄/2V)Δq, … air-relative):
+    /// - moments (SLJ §3.5 moment equations): `∂q̇/∂ΔCm = c₇ q̄ S c̄ ξ`; `∂ṗ/∂ΔCl = c₃ q̄ S b ξ`,
+    ///   `∂ṙ/∂ΔCl = c₄ q̄ S b ξ`; `∂ṗ/∂ΔCn = c₄ q̄ S b ξ`, `∂ṙ/∂ΔCn = c₉ q̄ S b ξ`. Because
+    ///   `I_xy = I_yz = 0`, C_m does not reach `ṗ, ṙ` nor Cl, Cn `q̇` (so `C_p = C_r = 0` in
+    ///   (3.117)).
+    /// - forces: the stability-axis ΔCL, ΔCD rotated into `ΔC_X, ΔC_Z` (as the model does), ΔCY
+    ///   along body y; `Δu̇ = q̄S ΔC_X/m`, `Δv̇ = q̄S ΔC_Y/m`, `Δẇ = q̄S ΔC_Z/m`, then
+    ///   `V̇ = (u u̇ + v v̇ + w ẇ)/V`, `α̇ = (u ẇ − w u̇)/(u² + w²)`,
+    ///   `β̇ = (V v̇ − v V̇) cos β/(u² + w²)` differentiated.
     fn sensitivity(
         &self,
         _t_s: f64,
@@ -150,31 +104,57 @@ impl<const P: usize> ParametricModel<N_STATES, P> for F16IncrementModel<P> {
         let (_, out) = self.f16.evaluate(z, u, &self.increments(theta)).map_err(model_err)?;
         let d = self.f16.data();
         let g = &d.geometry;
+        let r = &self.reference;
         let qs = out.qbar_psf * g.wing_area_ft2;
-        let d_alpha = out.alpha_air_rad - self.reference.alpha_rad;
-        let q_hat = g.cbar_ft * 0.5 / out.vt_air_fps * (z[f16::Q] - self.reference.q_rad_s);
+        let qsb = qs * g.span_ft;
+        let b2v = g.span_ft * (0.5 / out.vt_air_fps);
         let (sa, ca) = out.alpha_air_rad.sin_cos();
         let (vt, alpha, beta) = (z[f16::VT], z[f16::ALPHA], z[f16::BETA]);
         let cb = beta.cos();
         let (ub, vb, wb) = (vt * alpha.cos() * cb, vt * beta.sin(), vt * alpha.sin() * cb);
         let dum = ub * ub + wb * wb;
         let rmqs = d.mass.inverse_mass_per_slug * qs;
+        let mc = &d.moment;
         let mut s = SMatrix::<f64, N_STATES, P>::zeros();
-        for (j, inc) in self.estimated.iter().enumerate() {
-            let (dcx, dcz) = match inc {
-                Increment::CmAlpha | Increment::CmQ => {
-                    let xi = if *inc == Increment::CmAlpha { d_alpha } else { q_hat };
-                    s[(f16::Q, j)] = d.moment.c7 * qs * g.cbar_ft * xi;
+        for (j, p) in self.estimated.iter().enumerate() {
+            let xi = match p.term {
+                Term::Bias => 1.0,
+                Term::Alpha => out.alpha_air_rad - r.alpha_rad,
+                Term::Beta => out.beta_air_rad - r.beta_rad,
+                Term::P => b2v * (z[f16::P] - r.p_rad_s),
+                Term::Q => g.cbar_ft * 0.5 / out.vt_air_fps * (z[f16::Q] - r.q_rad_s),
+                Term::R => b2v * (z[f16::R] - r.r_rad_s),
+                Term::De => u.elevator_rad - r.elevator_rad,
+                Term::Da => u.aileron_rad - r.aileron_rad,
+                Term::Dr => u.rudder_rad - r.rudder_rad,
+                // Not expressible (rejected when the scenario is read): no effect on ż.
+                _ => continue,
+            };
+            let (dcx, dcy, dcz) = match p.coefficient {
+                Coefficient::Cm => {
+                    s[(f16::Q, j)] = mc.c7 * qs * g.cbar_ft * xi;
                     continue;
                 }
-                Increment::CLAlpha => (sa * d_alpha, -ca * d_alpha),
-                Increment::CDAlpha => (-ca * d_alpha, -sa * d_alpha),
+                Coefficient::Cl => {
+                    s[(f16::P, j)] = mc.c3 * qsb * xi;
+                    s[(f16::R, j)] = mc.c4 * qsb * xi;
+                    continue;
+                }
+                Coefficient::Cn => {
+                    s[(f16::P, j)] = mc.c4 * qsb * xi;
+                    s[(f16::R, j)] = mc.c9 * qsb * xi;
+                    continue;
+                }
+                Coefficient::CL => (sa * xi, 0.0, -ca * xi),
+                Coefficient::CD => (-ca * xi, 0.0, -sa * xi),
+                Coefficient::CY => (0.0, xi, 0.0),
+                Coefficient::CX | Coefficient::CZ => continue,
             };
-            let (dud, dwd) = (rmqs * dcx, rmqs * dcz);
-            let dvt = (ub * dud + wb * dwd) / vt;
+            let (dud, dvd, dwd) = (rmqs * dcx, rmqs * dcy, rmqs * dcz);
+            let dvt = (ub * dud + vb * dvd + wb * dwd) / vt;
             s[(f16::VT, j)] = dvt;
             s[(f16::ALPHA, j)] = (ub * dwd - wb * dud) / dum;
-            s[(f16::BETA, j)] = -vb * dvt * cb / dum;
+            s[(f16::BETA, j)] = (vt * dvd - vb * dvt) * cb / dum;
         }
         Ok(s)
     }

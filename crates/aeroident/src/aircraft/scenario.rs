@@ -21,37 +21,53 @@
 //! noise = true
 //! seed = 1
 //! scale = 1.0                           # multiplies every σ of the default sensor table
+//! differentiator_window = 11            # sample-driven estimators: ṗ q̇ ṙ α̇ differentiator
+//! alignment = "matched"                 # other channels: "matched" smoother | "delay"
 //!
-//! [params.dCm_alpha]                    # one table per increment, per radian
-//! truth = 0.0015
-//! lower = 0.001                         # bounds (3.121) → prior √(lower·upper) (3.122)
-//! upper = 0.002
-//! lambda_per_s = 1e-7                   # surface gain λ of the published SMPE
-//! eta = 1e-9                            # η of the published SMPE
-//! gradient_gain = 1e3                   # λ of the gradient law (3.3), if used
-//! initial = 0.0014                      # optional, default the prior (3.122)
-//! step_to = 0.003                       # optional sudden damage: truth becomes step_to ...
-//! step_at_s = 10.0                      # ... at step_at_s
+//! [increments.Cm_alpha]                 # one table per TRUE increment of the reference F-16,
+//! truth = 0.0015                        # named with the vocabulary (super::increments);
+//! lower = 0.001                         # per rad / per unit hat-rate about the trim point.
+//! upper = 0.002                         # bounds (3.121) → prior √(lower·upper) (3.122), for
+//! lambda_per_s = 1e-7                   # the two-aircraft estimators: surface gain λ and
+//! eta = 1e-9                            # η of the published SMPE,
+//! gradient_gain = 1e3                   # λ of the model-reference gradient law (3.3),
+//! initial = 0.0014                      # optional initial estimate (default the prior)
+//! step_to = 0.003                       # optional sudden damage: the increment becomes
+//! step_at_s = 10.0                      # step_to at step_at_s (or: step_to_fraction = -0.3,
+//!                                       # i.e. −0.3 × the F-16's own local derivative)
 //! thesis_convergence_time_s = 0.4       # optional, for the report
 //! thesis_note = "≈0.4 s"                # optional, verbatim claim
 //!
-//! [[estimator]]
-//! kind = "published"                    # published | corrected | gradient
-//! reading = "implicit"                  # published: implicit | explicit
-//! params = ["dCm_alpha"]
+//! [[estimator]]                         # two-aircraft (thesis Fig. 3.2) estimators, each
+//! kind = "published"                    # with its own estimated F-16:
+//! reading = "implicit"                  # published | corrected | mr-gradient
+//! params = ["Cm_alpha"]                 # increments it estimates (1–4)
+//!
+//! [[estimator]]                         # sample-driven estimators (aeroident_estimators::
+//! kind = "rls"                          # Estimator) fed one AirDataSample per step:
+//! model = "six-axis"                    # preset name or a list of parameter names
+//! forgetting = 0.995                    # method options
 //! ```
 //! Corrected estimator keys: `lambda_per_s`, `information_per_s`, `tracking_weight`,
 //! `forgetting_per_s` (see [`aeroident_estimators::smpe::CorrectedConfig`]). Optional
 //! `label` on every estimator. Winds: `[[wind]]` entries ([`WindConfig`]) and
-//! `estimator_wind = "unknown" | "known"`.
+//! `estimator_wind = "unknown" | "known"` (for the two-aircraft estimators' model).
+//!
+//! Sample-driven kinds: `rls` (options `forgetting` ∈ (0, 1], default 1, and `init_samples`);
+//! `ekf`, `smpe`, `smpe-corrected`, `gradient`, `ftr` are recognised and refused with "not
+//! available in this build" until their factory arms exist.
+//!
+//! The old syntax (`[params.dCm_alpha]`, `params = ["dCm_alpha"]`, `kind = "gradient"` for the
+//! two-aircraft gradient law) is refused with a message saying what to write instead.
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use aeroident_estimators::vocabulary::{ModelStructure, Param};
 use aeroident_signals::{InputConfig, WindConfig};
 use serde::Deserialize;
 
-use super::model::Increment;
+use super::increments::{self, parse_increment};
 
 /// Errors reading or validating a scenario. Each names the file and the field.
 #[derive(Debug, thiserror::Error)]
@@ -153,40 +169,76 @@ pub struct SensorSpec {
     /// Factor on every σ of the default table (1 = the cited levels).
     #[serde(default = "one")]
     pub scale: f64,
+    /// Sample-driven estimators: window of the causal differentiator that forms ṗ q̇ ṙ α̇
+    /// from the noisy gyros and vane, samples (odd, ≥ 3; default 11).
+    #[serde(default = "default_window")]
+    pub differentiator_window: usize,
+    /// Sample-driven estimators: how the other channels are aligned with the differentiated
+    /// ones ([`super::air_data`]).
+    #[serde(default)]
+    pub alignment: Alignment,
+}
+
+/// How the air-data channels are aligned with the differentiated angular accelerations.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Alignment {
+    /// Every other channel passes the smoother matched to the differentiator (same weighting,
+    /// same lag): the regression stays consistent at all frequencies.
+    #[default]
+    Matched,
+    /// Every other channel is only delayed by the differentiator's lag.
+    Delay,
 }
 
 fn one() -> f64 {
     1.0
 }
 
+fn default_window() -> usize {
+    super::sensors::DIFFERENTIATOR_WINDOW
+}
+
 impl Default for SensorSpec {
     fn default() -> Self {
-        Self { noise: false, seed: 0, scale: 1.0 }
+        Self {
+            noise: false,
+            seed: 0,
+            scale: 1.0,
+            differentiator_window: default_window(),
+            alignment: Alignment::Matched,
+        }
     }
 }
 
-/// One increment's truth and estimator settings (TOML `[params.<name>]`), per radian.
+/// One true increment of the reference aircraft and the two-aircraft estimators' settings for
+/// it (TOML `[increments.<name>]`), per rad / per unit hat-rate, about the trim point.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct ParamEntry {
-    /// True value of the reference aircraft.
+pub struct IncrementEntry {
+    /// True value of the reference aircraft's increment (default 0: the nominal F-16).
+    #[serde(default)]
     pub truth: f64,
-    /// Lower bound (3.121).
-    pub lower: f64,
+    /// Lower bound (3.121); needed when a two-aircraft estimator estimates it.
+    pub lower: Option<f64>,
     /// Upper bound (3.121).
-    pub upper: f64,
+    pub upper: Option<f64>,
     /// Surface gain λ of the published SMPE, 1/s.
     #[serde(default = "one")]
     pub lambda_per_s: f64,
     /// η of the published SMPE.
     #[serde(default = "default_eta")]
     pub eta: f64,
-    /// Gain λ of the gradient law (3.3).
+    /// Gain λ of the model-reference gradient law (3.3).
     pub gradient_gain: Option<f64>,
     /// Initial estimate (default: the prior (3.122), the geometric mean of the bounds).
     pub initial: Option<f64>,
-    /// Truth after a sudden change (damage).
+    /// Increment after a sudden change (damage).
     pub step_to: Option<f64>,
+    /// Increment after the change as a fraction of the nominal F-16's own local derivative of
+    /// this parameter at the trim point (e.g. `-0.3` on `Cm_alpha`: 30 % of the pitch
+    /// stiffness lost). Alternative to `step_to`.
+    pub step_to_fraction: Option<f64>,
     /// Time of the change, s.
     pub step_at_s: Option<f64>,
     /// The thesis's reported convergence time, s (report only).
@@ -199,22 +251,20 @@ fn default_eta() -> f64 {
     1e-9
 }
 
-impl ParamEntry {
-    /// The initial estimate: `initial`, else the thesis prior (3.122) `±√(lower·upper)`, else
-    /// (bounds straddling zero) the middle of the bounds.
-    pub fn initial_estimate(&self) -> f64 {
-        self.initial.unwrap_or_else(|| {
-            aeroident_estimators::smpe::ParamSpec::geometric_mean(self.lower, self.upper)
-                .unwrap_or(0.5 * (self.lower + self.upper))
-        })
+impl IncrementEntry {
+    /// `(lower, upper)` when both are given.
+    pub fn bounds(&self) -> Option<(f64, f64)> {
+        self.lower.zip(self.upper)
     }
 
-    /// The true value at `t_s`.
-    pub fn truth_at(&self, t_s: f64) -> f64 {
-        match (self.step_to, self.step_at_s) {
-            (Some(v), Some(t0)) if t_s >= t0 => v,
-            _ => self.truth,
-        }
+    /// The initial estimate: `initial`, else the thesis prior (3.122) `±√(lower·upper)`, else
+    /// (bounds straddling zero) the middle of the bounds; 0 without bounds.
+    pub fn initial_estimate(&self) -> f64 {
+        self.initial.unwrap_or_else(|| match self.bounds() {
+            Some((lo, up)) => aeroident_estimators::smpe::ParamSpec::geometric_mean(lo, up)
+                .unwrap_or(0.5 * (lo + up)),
+            None => 0.0,
+        })
     }
 }
 
@@ -228,43 +278,88 @@ pub enum ReadingSpec {
     Explicit,
 }
 
+/// A sample-driven estimator (TOML `[[estimator]]` with a sample-driven `kind`): an
+/// [`aeroident_estimators::Estimator`] over a model structure of the vocabulary, fed one
+/// air-data sample per step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SampleEstimatorSpec {
+    /// Method: one of [`SAMPLE_KINDS`].
+    pub kind: String,
+    /// The model structure (preset or list).
+    pub model: ModelStructure,
+    /// How the structure was given (preset name, or `custom`).
+    pub model_name: String,
+    /// Label in outputs (default: the kind).
+    pub label: Option<String>,
+    /// Method options (every other key of the entry), checked by the estimator factory.
+    pub options: toml::Table,
+}
+
+/// The sample-driven estimator kinds.
+pub const SAMPLE_KINDS: [&str; 6] = ["rls", "ekf", "smpe", "smpe-corrected", "gradient", "ftr"];
+
 /// One estimator (TOML `[[estimator]]`).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum EstimatorSpec {
-    /// The thesis's SMPE as published (3.163)–(3.175), one engine per coefficient group.
+    /// The thesis's SMPE as published (3.163)–(3.175): one engine for the moment increments
+    /// (sliding states p, q, r) and one per force increment (α, V_T, β).
     Published {
         /// Implicit or explicit reading.
         reading: ReadingSpec,
         /// Increments to estimate.
-        params: Vec<String>,
+        params: Vec<Param>,
         /// Label in outputs (default `published-<reading>`).
         label: Option<String>,
     },
     /// The corrected SMPE of the proof-of-concept work, one engine for all its increments.
     Corrected {
         /// Increments to estimate.
-        params: Vec<String>,
+        params: Vec<Param>,
         /// Surface gain λ, 1/s.
-        #[serde(default = "default_corr_lambda")]
         lambda_per_s: f64,
         /// Information weight κ, 1/s.
-        #[serde(default = "default_information")]
         information_per_s: f64,
         /// Weight of the surface term.
-        #[serde(default)]
         tracking_weight: f64,
         /// Forgetting rate, 1/s.
-        #[serde(default)]
         forgetting_per_s: f64,
         /// Label in outputs (default `corrected`).
         label: Option<String>,
     },
-    /// The model-reference gradient law (3.3).
-    Gradient {
+    /// The thesis's model-reference gradient law (3.3), TOML `kind = "mr-gradient"`.
+    MrGradient {
         /// Increments to estimate.
+        params: Vec<Param>,
+        /// Label in outputs (default `mr-gradient`).
+        label: Option<String>,
+    },
+    /// A sample-driven estimator.
+    Sample(SampleEstimatorSpec),
+}
+
+/// The TOML shape of the two-aircraft estimators (names as written).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+enum RawTwoAircraft {
+    Published {
+        reading: ReadingSpec,
         params: Vec<String>,
-        /// Label in outputs (default `gradient`).
+        label: Option<String>,
+    },
+    Corrected {
+        params: Vec<String>,
+        #[serde(default = "default_corr_lambda")]
+        lambda_per_s: f64,
+        #[serde(default = "default_information")]
+        information_per_s: f64,
+        #[serde(default)]
+        tracking_weight: f64,
+        #[serde(default)]
+        forgetting_per_s: f64,
+        label: Option<String>,
+    },
+    MrGradient {
+        params: Vec<String>,
         label: Option<String>,
     },
 }
@@ -277,13 +372,19 @@ fn default_information() -> f64 {
 }
 
 impl EstimatorSpec {
-    /// The increment names it estimates.
-    pub fn param_names(&self) -> &[String] {
+    /// The increments a two-aircraft estimator estimates (empty for a sample-driven one).
+    pub fn param_names(&self) -> &[Param] {
         match self {
             EstimatorSpec::Published { params, .. }
             | EstimatorSpec::Corrected { params, .. }
-            | EstimatorSpec::Gradient { params, .. } => params,
+            | EstimatorSpec::MrGradient { params, .. } => params,
+            EstimatorSpec::Sample(_) => &[],
         }
+    }
+
+    /// Whether it is a two-aircraft (estimated-F-16) estimator.
+    pub fn is_two_aircraft(&self) -> bool {
+        !matches!(self, EstimatorSpec::Sample(_))
     }
 
     /// Output label.
@@ -299,9 +400,10 @@ impl EstimatorSpec {
             EstimatorSpec::Corrected { label, .. } => {
                 label.clone().unwrap_or_else(|| "corrected".into())
             }
-            EstimatorSpec::Gradient { label, .. } => {
-                label.clone().unwrap_or_else(|| "gradient".into())
+            EstimatorSpec::MrGradient { label, .. } => {
+                label.clone().unwrap_or_else(|| "mr-gradient".into())
             }
+            EstimatorSpec::Sample(s) => s.label.clone().unwrap_or_else(|| s.kind.clone()),
         }
     }
 }
@@ -317,42 +419,63 @@ pub enum EstimatorWind {
     Known,
 }
 
-/// A parsed scenario. Build with [`Scenario::from_toml`] / [`Scenario::from_path`], which
-/// validate it.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+/// The TOML shape (names as written); [`Scenario::from_toml`] turns it into a [`Scenario`].
+#[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
+struct RawScenario {
+    name: String,
+    #[serde(default)]
+    description: String,
+    #[serde(default)]
+    thesis_table: Option<String>,
+    duration_s: f64,
+    #[serde(default = "default_dt")]
+    dt_s: f64,
+    #[serde(default)]
+    trim: TrimSpec,
+    #[serde(default)]
+    input: Vec<InputSpec>,
+    #[serde(default)]
+    wind: Vec<WindConfig>,
+    #[serde(default)]
+    estimator_wind: EstimatorWind,
+    #[serde(default)]
+    sensors: SensorSpec,
+    /// The old `[params.<dName>]` tables: refused with a message.
+    #[serde(default)]
+    params: Option<toml::Table>,
+    #[serde(default)]
+    increments: BTreeMap<String, IncrementEntry>,
+    #[serde(default)]
+    estimator: Vec<toml::Table>,
+}
+
+/// A parsed, validated scenario. Build with [`Scenario::from_toml`] / [`Scenario::from_path`].
+#[derive(Debug, Clone, PartialEq)]
 pub struct Scenario {
     /// Name used in reports.
     pub name: String,
     /// One line on what it reproduces.
-    #[serde(default)]
     pub description: String,
     /// Thesis table and case this reproduces, e.g. `"4.7"` / `1` (report grouping).
-    #[serde(default)]
     pub thesis_table: Option<String>,
     /// Simulated time, s.
     pub duration_s: f64,
     /// Step and sample interval, s.
-    #[serde(default = "default_dt")]
     pub dt_s: f64,
     /// Trim point.
-    #[serde(default)]
     pub trim: TrimSpec,
     /// Pilot inputs.
-    #[serde(default)]
     pub input: Vec<InputSpec>,
     /// Winds on the reference aircraft (body axes; `aeroident_signals::WindConfig`, e.g. the
     /// thesis's 1-cos gust (2.32) or Dryden turbulence).
-    #[serde(default)]
     pub wind: Vec<WindConfig>,
-    /// Whether the estimated model knows the wind.
-    #[serde(default)]
+    /// Whether the two-aircraft estimators' model knows the wind.
     pub estimator_wind: EstimatorWind,
     /// Sensors.
-    #[serde(default)]
     pub sensors: SensorSpec,
-    /// Truth and settings per increment.
-    pub params: BTreeMap<String, ParamEntry>,
+    /// True increments of the reference aircraft and their estimator settings, by parameter.
+    pub increments: BTreeMap<Param, IncrementEntry>,
     /// Estimators.
     pub estimator: Vec<EstimatorSpec>,
 }
@@ -361,15 +484,183 @@ fn default_dt() -> f64 {
     0.01
 }
 
+/// Parses a list of increment names of `estimator[k].params`.
+fn parse_params(names: &[String], field: &str) -> Result<Vec<Param>, (String, String)> {
+    names
+        .iter()
+        .map(|n| parse_increment(n).map_err(|e| (field.to_string(), e.to_string())))
+        .collect()
+}
+
+/// Parses one `[[estimator]]` table.
+fn parse_estimator(k: usize, t: &toml::Table) -> Result<EstimatorSpec, (String, String)> {
+    let field = format!("estimator[{k}]");
+    let kind = t
+        .get("kind")
+        .and_then(toml::Value::as_str)
+        .ok_or_else(|| (format!("{field}.kind"), "missing or not a string".to_string()))?;
+    if ["published", "corrected", "mr-gradient"].contains(&kind) {
+        let raw: RawTwoAircraft = toml::Value::Table(t.clone())
+            .try_into()
+            .map_err(|e: toml::de::Error| (field.clone(), e.message().to_string()))?;
+        let pf = format!("{field}.params");
+        return Ok(match raw {
+            RawTwoAircraft::Published { reading, params, label } => {
+                EstimatorSpec::Published { reading, params: parse_params(&params, &pf)?, label }
+            }
+            RawTwoAircraft::Corrected {
+                params,
+                lambda_per_s,
+                information_per_s,
+                tracking_weight,
+                forgetting_per_s,
+                label,
+            } => EstimatorSpec::Corrected {
+                params: parse_params(&params, &pf)?,
+                lambda_per_s,
+                information_per_s,
+                tracking_weight,
+                forgetting_per_s,
+                label,
+            },
+            RawTwoAircraft::MrGradient { params, label } => {
+                EstimatorSpec::MrGradient { params: parse_params(&params, &pf)?, label }
+            }
+        });
+    }
+    if !SAMPLE_KINDS.contains(&kind) {
+        return Err((
+            format!("{field}.kind"),
+            format!(
+                "unknown kind `{kind}`: two-aircraft estimators published | corrected | mr-gradient, sample-driven {}",
+                SAMPLE_KINDS.join(" | ")
+            ),
+        ));
+    }
+    if t.contains_key("params") {
+        let hint = if kind == "gradient" {
+            "the thesis's two-aircraft gradient law (3.3) is now `kind = \"mr-gradient\"`; `kind = \"gradient\"` is the sample-driven gradient estimator, which takes `model = ...`"
+        } else {
+            "a sample-driven estimator takes `model = \"<preset>\"` or `model = [\"Cm_alpha\", ...]`, not `params`"
+        };
+        return Err((format!("{field}.params"), hint.into()));
+    }
+    let (model, model_name) = match t.get("model") {
+        Some(toml::Value::String(name)) => (
+            ModelStructure::preset(name).ok_or_else(|| {
+                (
+                    format!("{field}.model"),
+                    format!(
+                        "unknown preset `{name}` (presets: {}; or a list of parameter names)",
+                        ModelStructure::PRESETS.join(", ")
+                    ),
+                )
+            })?,
+            name.clone(),
+        ),
+        Some(toml::Value::Array(list)) => {
+            let mut st = ModelStructure::empty();
+            for v in list {
+                let name = v.as_str().ok_or_else(|| {
+                    (format!("{field}.model"), format!("`{v}` is not a parameter name"))
+                })?;
+                let p = Param::from_name(name).ok_or_else(|| {
+                    (
+                        format!("{field}.model"),
+                        format!("`{name}` is not a parameter name (`<coefficient>_<term>`)"),
+                    )
+                })?;
+                st.insert(p);
+            }
+            (st, "custom".into())
+        }
+        Some(_) => {
+            return Err((
+                format!("{field}.model"),
+                "a preset name or a list of parameter names".into(),
+            ));
+        }
+        None => {
+            return Err((format!("{field}.model"), "missing (e.g. `model = \"six-axis\"`)".into()));
+        }
+    };
+    let model = model.validated().map_err(|e| (format!("{field}.model"), e.to_string()))?;
+    let label = match t.get("label") {
+        None => None,
+        Some(toml::Value::String(s)) => Some(s.clone()),
+        Some(_) => return Err((format!("{field}.label"), "must be a string".into())),
+    };
+    let mut options = t.clone();
+    for key in ["kind", "model", "label"] {
+        options.remove(key);
+    }
+    Ok(EstimatorSpec::Sample(SampleEstimatorSpec {
+        kind: kind.into(),
+        model,
+        model_name,
+        label,
+        options,
+    }))
+}
+
 impl Scenario {
     /// Parses and validates TOML text; `path` names the source in errors.
     ///
     /// # Errors
     /// [`ScenarioError::Parse`] with the line for syntax/schema errors,
-    /// [`ScenarioError::Invalid`] naming the field for out-of-range values.
+    /// [`ScenarioError::Invalid`] naming the field for out-of-range values, old names and
+    /// unavailable estimators.
     pub fn from_toml(text: &str, path: &str) -> Result<Self, ScenarioError> {
-        let s: Scenario = toml::from_str(text)
+        let raw: RawScenario = toml::from_str(text)
             .map_err(|e| ScenarioError::Parse { path: path.into(), message: e.to_string() })?;
+        let bad = |field: String, reason: String| ScenarioError::Invalid {
+            path: path.into(),
+            field,
+            reason,
+        };
+        if let Some(old) = &raw.params {
+            let first = old.keys().next().cloned().unwrap_or_default();
+            let new = parse_increment(&first)
+                .map(|p| p.name().to_string())
+                .or_else(|e| match e {
+                    increments::IncrementError::OldName { new, .. } => Ok(new),
+                    e => Err(e),
+                })
+                .unwrap_or_else(|_| "<vocabulary name>".into());
+            return Err(bad(
+                format!("params.{first}"),
+                format!(
+                    "`[params.*]` is the old syntax: write `[increments.{new}]` (increments are named with the vocabulary: dCm_alpha → Cm_alpha, dCm_q → Cm_q, dCL_alpha → CL_alpha, dCD_alpha → CD_alpha)"
+                ),
+            ));
+        }
+        let mut incs = BTreeMap::new();
+        for (name, e) in raw.increments {
+            let p = parse_increment(&name)
+                .map_err(|e| bad(format!("increments.{name}"), e.to_string()))?;
+            incs.insert(p, e);
+        }
+        let estimator = raw
+            .estimator
+            .iter()
+            .enumerate()
+            .map(|(k, t)| parse_estimator(k, t))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|(f, r)| bad(f, r))?;
+        let s = Scenario {
+            name: raw.name,
+            description: raw.description,
+            thesis_table: raw.thesis_table,
+            duration_s: raw.duration_s,
+            dt_s: raw.dt_s,
+            trim: raw.trim,
+            input: raw.input,
+            wind: raw.wind,
+            estimator_wind: raw.estimator_wind,
+            sensors: raw.sensors,
+            increments: incs,
+            estimator,
+        };
         s.validate(path)?;
         Ok(s)
     }
@@ -386,13 +677,13 @@ impl Scenario {
     }
 
     /// The settings of an increment.
-    pub fn param(&self, inc: Increment) -> Option<&ParamEntry> {
-        self.params.get(inc.name())
+    pub fn increment(&self, p: Param) -> Option<&IncrementEntry> {
+        self.increments.get(&p)
     }
 
-    /// The true increments `[ΔCm_α, ΔCm_q, ΔCL_α, ΔCD_α]` at `t_s` (zero where not given).
-    pub fn truth_at(&self, t_s: f64) -> [f64; 4] {
-        Increment::ALL.map(|i| self.param(i).map_or(0.0, |p| p.truth_at(t_s)))
+    /// The earliest sudden change of any increment, s (the damage time), if any.
+    pub fn damage_at_s(&self) -> Option<f64> {
+        self.increments.values().filter_map(|e| e.step_at_s).reduce(f64::min)
     }
 
     fn validate(&self, path: &str) -> Result<(), ScenarioError> {
@@ -423,62 +714,101 @@ impl Scenario {
         if !(self.sensors.scale.is_finite() && self.sensors.scale >= 0.0) {
             return Err(bad("sensors.scale", format!("must be ≥ 0, got {}", self.sensors.scale)));
         }
-        for (name, p) in &self.params {
-            let f = |k: &str| format!("params.{name}.{k}");
-            if Increment::from_name(name).is_none() {
-                return Err(bad(
-                    &format!("params.{name}"),
-                    "unknown increment; use dCm_alpha, dCm_q, dCL_alpha or dCD_alpha".into(),
-                ));
-            }
-            for (k, v) in [("truth", p.truth), ("lower", p.lower), ("upper", p.upper)] {
+        let w = self.sensors.differentiator_window;
+        if w < 3 || w.is_multiple_of(2) {
+            return Err(bad(
+                "sensors.differentiator_window",
+                format!("must be odd and ≥ 3 (a whole-sample lag), got {w}"),
+            ));
+        }
+        for (p, e) in &self.increments {
+            let name = p.name();
+            let f = |k: &str| format!("increments.{name}.{k}");
+            let mut finite = vec![("truth", e.truth)];
+            finite.extend(e.lower.map(|v| ("lower", v)));
+            finite.extend(e.upper.map(|v| ("upper", v)));
+            finite.extend(e.step_to.map(|v| ("step_to", v)));
+            finite.extend(e.step_to_fraction.map(|v| ("step_to_fraction", v)));
+            finite.extend(e.initial.map(|v| ("initial", v)));
+            for (k, v) in finite {
                 if !v.is_finite() {
                     return Err(bad(&f(k), format!("must be finite, got {v}")));
                 }
             }
-            if p.lower >= p.upper {
-                return Err(bad(&f("lower"), format!("must be below upper ({})", p.upper)));
+            match (e.lower, e.upper) {
+                (Some(lo), Some(up)) if lo >= up => {
+                    return Err(bad(&f("lower"), format!("must be below upper ({up})")));
+                }
+                (Some(_), None) | (None, Some(_)) => {
+                    return Err(bad(&f("lower"), "lower and upper go together".into()));
+                }
+                _ => {}
             }
-            pos(&f("lambda_per_s"), p.lambda_per_s)?;
-            pos(&f("eta"), p.eta)?;
-            if let Some(g) = p.gradient_gain {
+            pos(&f("lambda_per_s"), e.lambda_per_s)?;
+            pos(&f("eta"), e.eta)?;
+            if let Some(g) = e.gradient_gain {
                 pos(&f("gradient_gain"), g)?;
             }
-            let init = p.initial_estimate();
-            if !(p.lower..=p.upper).contains(&init) {
-                return Err(bad(&f("initial"), format!("{init} outside [lower, upper]")));
+            if let Some((lo, up)) = e.bounds() {
+                let init = e.initial_estimate();
+                if !(lo..=up).contains(&init) {
+                    return Err(bad(&f("initial"), format!("{init} outside [lower, upper]")));
+                }
             }
-            if p.step_to.is_some() != p.step_at_s.is_some() {
-                return Err(bad(&f("step_to"), "step_to and step_at_s go together".into()));
+            if e.step_to.is_some() && e.step_to_fraction.is_some() {
+                return Err(bad(
+                    &f("step_to"),
+                    "give step_to or step_to_fraction, not both".into(),
+                ));
+            }
+            if (e.step_to.is_some() || e.step_to_fraction.is_some()) != e.step_at_s.is_some() {
+                return Err(bad(
+                    &f("step_at_s"),
+                    "step_at_s goes with step_to or step_to_fraction".into(),
+                ));
+            }
+            if let Some(t0) = e.step_at_s
+                && !(t0.is_finite() && t0 >= 0.0)
+            {
+                return Err(bad(&f("step_at_s"), format!("must be finite and ≥ 0, got {t0}")));
             }
         }
         if self.estimator.is_empty() {
             return Err(bad("estimator", "at least one [[estimator]] is needed".into()));
         }
         for (k, e) in self.estimator.iter().enumerate() {
+            if let EstimatorSpec::Sample(s) = e {
+                super::experiment::build_sample_estimator(s)
+                    .map_err(|r| bad(&format!("estimator[{k}]"), r))?;
+                continue;
+            }
             let names = e.param_names();
             if names.is_empty() || names.len() > 4 {
                 return Err(bad(&format!("estimator[{k}].params"), "1 to 4 increments".into()));
             }
-            for n in names {
-                let Some(inc) = Increment::from_name(n) else {
-                    return Err(bad(&format!("estimator[{k}].params"), format!("unknown `{n}`")));
-                };
-                let Some(p) = self.param(inc) else {
+            for p in names {
+                let n = p.name();
+                let Some(entry) = self.increment(*p) else {
                     return Err(bad(
                         &format!("estimator[{k}].params"),
-                        format!("`{n}` has no [params.{n}] table"),
+                        format!("`{n}` has no [increments.{n}] table"),
                     ));
                 };
-                if matches!(e, EstimatorSpec::Gradient { .. }) && p.gradient_gain.is_none() {
+                let Some((lo, up)) = entry.bounds() else {
                     return Err(bad(
-                        &format!("params.{n}.gradient_gain"),
-                        "needed by the gradient estimator".into(),
+                        &format!("increments.{n}.lower"),
+                        "a two-aircraft estimator needs the bounds lower and upper".into(),
+                    ));
+                };
+                if matches!(e, EstimatorSpec::MrGradient { .. }) && entry.gradient_gain.is_none() {
+                    return Err(bad(
+                        &format!("increments.{n}.gradient_gain"),
+                        "needed by the model-reference gradient estimator".into(),
                     ));
                 }
-                if matches!(e, EstimatorSpec::Published { .. }) && p.lower * p.upper <= 0.0 {
+                if matches!(e, EstimatorSpec::Published { .. }) && lo * up <= 0.0 {
                     return Err(bad(
-                        &format!("params.{n}.lower"),
+                        &format!("increments.{n}.lower"),
                         "the published SMPE needs same-signed bounds (gain margin (3.124))".into(),
                     ));
                 }
@@ -496,8 +826,43 @@ impl Scenario {
         for (k, i) in self.input.iter().enumerate() {
             i.signal.build().map_err(|e| bad(&format!("input[{k}]"), e.to_string()))?;
         }
+        self.validate_orthogonal_sets().map_err(|(k, r)| bad(&format!("input[{k}]"), r))?;
         for (k, w) in self.wind.iter().enumerate() {
             w.build().map_err(|e| bad(&format!("wind[{k}]"), e.to_string()))?;
+        }
+        Ok(())
+    }
+
+    /// Members of one orthogonal multisine set must share period, pool, size and start, and
+    /// take distinct indices (otherwise they are not orthogonal).
+    fn validate_orthogonal_sets(&self) -> Result<(), (usize, String)> {
+        let mut first: Option<(f64, &Vec<u32>, usize, f64)> = None;
+        let mut seen = std::collections::BTreeSet::new();
+        for (k, i) in self.input.iter().enumerate() {
+            if let InputConfig::OrthogonalMultisine {
+                base_period_s,
+                harmonics,
+                inputs,
+                index,
+                start_s,
+                ..
+            } = &i.signal
+            {
+                let this = (*base_period_s, harmonics, *inputs, *start_s);
+                match first {
+                    None => first = Some(this),
+                    Some(f) if f != this => {
+                        return Err((
+                            k,
+                            "members of an orthogonal multisine set must share base_period_s, harmonics, inputs and start_s".into(),
+                        ));
+                    }
+                    Some(_) => {}
+                }
+                if !seen.insert(*index) {
+                    return Err((k, format!("orthogonal multisine index {index} used twice")));
+                }
+            }
         }
         Ok(())
     }

@@ -1,7 +1,8 @@
-//! The sensor model between the reference aircraft and the estimators: additive, zero-mean,
-//! white Gaussian noise per measured state and per measured state derivative, seeded and
-//! reproducible (Simulink-style band-limited white noise of `aeroident_signals`, held for one
-//! sample).
+//! The sensor model between the reference aircraft and the two-aircraft estimators: additive,
+//! zero-mean, white Gaussian noise per measured state and per measured state derivative, seeded
+//! and reproducible (Simulink-style band-limited white noise of `aeroident_signals`, held for one
+//! sample). The sample-driven estimators' sensors ([`super::air_data`]) use the same levels but
+//! differentiate the noisy rates themselves.
 //!
 //! # Levels (σ at `scale = 1`) and their source
 //! States, from "Designing Stipulated Gains of Aircraft Stability and Control Augmentation

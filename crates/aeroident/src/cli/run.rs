@@ -1,7 +1,8 @@
 //! `aeroident run`: aircraft estimation scenarios (issue 4).
 //!
 //! - `aeroident run` — the built-in default scenario (`scenarios/default.toml`, embedded):
-//!   combined estimation, 1 Hz 0.05° elevator sine, sensor noise on; prints a table and
+//!   six-axis RLS on the F-16 at the thesis condition, orthogonal multisines on elevator,
+//!   aileron and rudder, sensor noise, light turbulence, damage at 20 s; prints a table and
 //!   writes `./aeroident-out/`.
 //! - `aeroident run <scenario.toml> [--out DIR]` — one scenario: `timeseries.csv`,
 //!   `summary.json`, `controls.png`, `convergence.png`, `tracking.png` in `DIR`
@@ -119,20 +120,20 @@ pub fn evidence(scenarios: &[Scenario]) -> anyhow::Result<String> {
     let mut variants: Vec<(Scenario, &str, &str, f64)> = Vec::new();
     if let Some(sc) = base("t4_7_case4") {
         for v in [1e-7, 1e7] {
-            variants.push((sc.clone(), "dCm_alpha", "lambda_per_s", v));
+            variants.push((sc.clone(), "Cm_alpha", "lambda_per_s", v));
         }
         for v in [1e-12, 1e-10, 1e-8, 1e-6] {
-            variants.push((sc.clone(), "dCm_alpha", "eta", v));
+            variants.push((sc.clone(), "Cm_alpha", "eta", v));
         }
     }
     if let Some(sc) = base("t4_8_case1") {
         for v in [2e-4, 0.0625, 2e4] {
-            variants.push((sc.clone(), "dCm_q", "lambda_per_s", v));
+            variants.push((sc.clone(), "Cm_q", "lambda_per_s", v));
         }
     }
     if let Some(sc) = base("t4_10_case1") {
         for v in [1e-12, 1e-10, 1e-8, 1e-6] {
-            variants.push((sc.clone(), "dCD_alpha", "eta", v));
+            variants.push((sc.clone(), "CD_alpha", "eta", v));
         }
     }
     if variants.is_empty() {
@@ -141,7 +142,8 @@ pub fn evidence(scenarios: &[Scenario]) -> anyhow::Result<String> {
     let rows: Vec<String> = variants
         .into_par_iter()
         .map(|(mut sc, param, field, v)| {
-            if let Some(p) = sc.params.get_mut(param) {
+            let key = aeroident_estimators::vocabulary::Param::from_name(param);
+            if let Some(p) = key.and_then(|k| sc.increments.get_mut(&k)) {
                 match field {
                     "eta" => p.eta = v,
                     _ => p.lambda_per_s = v,
@@ -156,12 +158,12 @@ pub fn evidence(scenarios: &[Scenario]) -> anyhow::Result<String> {
             for p in &sm.parameters {
                 let _ = writeln!(
                     row,
-                    "| {} | {} | {field} = {v:e} | {} | {:.4e} | {:.1} % | {} | {} |",
+                    "| {} | {} | {field} = {v:e} | {} | {} | {} | {} | {} |",
                     sc.name,
                     param,
                     p.estimator,
-                    p.r#final,
-                    100.0 * p.rel_error,
+                    p.r#final.map_or("null".into(), |x| format!("{x:.4e}")),
+                    p.rel_error.map_or("—".into(), |e| format!("{:.1} %", 100.0 * e)),
                     p.first_within_s.map_or("never".into(), |t| format!("{t:.2} s")),
                     p.convergence_time_s.map_or("never".into(), |t| format!("{t:.2} s")),
                 );

@@ -1,0 +1,476 @@
+//! From the reference F-16's truth to the ONE air-data sample per step that the sample-driven
+//! estimators see: unit conversion (the F-16 is in ft, slug, lbf; the sample is SI), the sensor
+//! noise of [`super::sensors`], and angular accelerations as a real system forms them.
+//!
+//! # Channels (truth → sample)
+//! - `vt_mps`, `alpha_rad`, `beta_rad`: **air-relative** airspeed and flow angles (pitot and
+//!   vanes measure the air, so turbulence is seen by them), + noise (11 ft/s, 0.1°, 0.1°).
+//! - `qbar_pa`: from the measured airspeed with the known density, `q̄_m = q̄ (V_m/V)²` (so its
+//!   relative noise is twice the airspeed's).
+//! - `p q r`: body rates + gyro noise (0.14°/s). `φ θ ψ`: attitude + 0.573°.
+//! - `ax ay az`: specific force at the CG from the model's load factors (`nx`, `ny`, −`nz`) ×
+//!   the model's g, + accelerometer noise (0.98 ft/s²); level flight reads `az ≈ −g`.
+//! - `de da dr`: the surface positions (the model has no actuators; no surface sensor noise is
+//!   cited, none is added). `thrust_n`: the engine model's thrust (as the thesis experiment,
+//!   thrust is known from the engine model; F-16 thrust acts along body x through the CG).
+//! - **`ṗ q̇ ṙ` and `α̇`: the causal least-squares differentiator**
+//!   ([`aeroident_signals::differentiate::CausalDifferentiator`], `N` =
+//!   `[sensors] differentiator_window` points, default 11) **applied to the noisy gyro and vane
+//!   signals**, exactly as a flight computer would. Its output is the derivative at the window
+//!   centre, `(N−1)·dt/2` old (0.05 s at 11 points and 100 Hz), so every other channel is
+//!   brought to the same instant and the sample is emitted with that older time stamp:
+//!   - `alignment = "matched"` (default): every other channel passes the smoother matched to the
+//!     differentiator ([`aeroident_signals::differentiate::MatchedSmoother`]: the same parabolic
+//!     weighting and lag), so both sides of the equation-error regression see the same filter.
+//!     Without it the differentiator's smoothing (a sinusoid's derivative is attenuated by
+//!     `G(ω)`, 0.988 at 1 Hz for 11 points at 100 Hz) faces unfiltered regressors, and
+//!     turbulence content above the differentiator's band acts like regressor noise: the
+//!     estimates of the β and rate derivatives are biased towards zero.
+//!   - `alignment = "delay"`: every other channel is only delayed by the lag.
+//!
+//! Constants: mass, S, c̄, b and the inertias of the F-16 data converted to SI, `Ixz` = the
+//! data's `Jxz` (Stevens & Lewis sign, as [`AirDataSample`] wants), no thrust arm or
+//! inclination, `v0_mps` the trim airspeed. Two small model mismatches remain in the measured
+//! moment coefficients: the F-16's moment equations use SLJ's rounded constants `c₁ … c₉` (e.g.
+//! `c₇ = 1.792e-5` against `1/Iyy = 1.7917e-5`, +0.02 % on Cm) and its engine angular momentum
+//! `h_x` (a gyroscopic moment `q h_x`, `−r h_x` of order 1e-5 in Cn, Cm), which the sample's
+//! rigid-body equations do not carry.
+
+use std::collections::VecDeque;
+
+use aeroident_estimators::sample::{AirDataSample, AircraftConstants};
+use aeroident_models::f16::{self, F16, F16Controls, F16Outputs, F16State};
+use aeroident_signals::differentiate::{CausalDifferentiator, MatchedSmoother};
+use aeroident_signals::{BandLimitedWhiteNoise, InputSignal};
+
+use super::sensors::state_sigma;
+
+/// Metres per foot.
+pub const M_PER_FT: f64 = 0.3048;
+/// Kilograms per slug.
+pub const KG_PER_SLUG: f64 = 14.593_902_937_206_364;
+/// Newtons per pound-force.
+pub const N_PER_LBF: f64 = 4.448_221_615_260_5;
+/// Pascals per lbf/ft².
+pub const PA_PER_PSF: f64 = N_PER_LBF / (M_PER_FT * M_PER_FT);
+/// kg·m² per slug·ft².
+pub const KGM2_PER_SLUGFT2: f64 = KG_PER_SLUG * M_PER_FT * M_PER_FT;
+/// σ of the accelerometers, ft/s² (ISRN 2014 Table 3, as [`super::sensors`]).
+pub const ACCEL_SIGMA_FPS2: f64 = 0.98;
+
+/// The F-16's constants in the sample's SI form; `v0_mps` the reference airspeed of `V/V0`.
+pub fn f16_constants(f16: &F16, v0_mps: f64) -> AircraftConstants {
+    let d = f16.data();
+    let (m, g) = (&d.mass, &d.geometry);
+    AircraftConstants {
+        mass_kg: KG_PER_SLUG / m.inverse_mass_per_slug,
+        S_m2: g.wing_area_ft2 * M_PER_FT * M_PER_FT,
+        cbar_m: Some(g.cbar_ft * M_PER_FT),
+        b_m: Some(g.span_ft * M_PER_FT),
+        Ixx_kgm2: Some(m.ixx_slug_ft2 * KGM2_PER_SLUGFT2),
+        Iyy_kgm2: Some(m.iyy_slug_ft2 * KGM2_PER_SLUGFT2),
+        Izz_kgm2: Some(m.izz_slug_ft2 * KGM2_PER_SLUGFT2),
+        Ixz_kgm2: Some(m.ixz_slug_ft2 * KGM2_PER_SLUGFT2),
+        thrust_arm_m: 0.0,
+        thrust_incidence_rad: 0.0,
+        v0_mps: Some(v0_mps),
+    }
+}
+
+/// The exact (noise-free, undelayed) sample of the F-16 at `t_s`: state `x`, its derivative
+/// `xdot` (for `ṗ q̇ ṙ α̇`), the evaluation's outputs `out` and the controls `u`. The
+/// reference of the conversion tests; the closed loop uses [`AirDataSampler`].
+pub fn exact_sample(
+    f16: &F16,
+    constants: AircraftConstants,
+    t_s: f64,
+    x: &F16State,
+    xdot: &F16State,
+    out: &F16Outputs,
+    u: &F16Controls,
+) -> AirDataSample {
+    let mut s = measured_channels(f16, constants, t_s, x, out, u, None);
+    s.pdot_rad_s2 = Some(xdot[f16::P]);
+    s.qdot_rad_s2 = Some(xdot[f16::Q]);
+    s.rdot_rad_s2 = Some(xdot[f16::R]);
+    s.alphadot_rad_s = Some(xdot[f16::ALPHA]);
+    s
+}
+
+/// Noise added to one sample, channel units (SI, rad).
+#[derive(Debug, Clone, Copy, Default)]
+struct ChannelNoise {
+    vt_mps: f64,
+    alpha: f64,
+    beta: f64,
+    p: f64,
+    q: f64,
+    r: f64,
+    phi: f64,
+    theta: f64,
+    psi: f64,
+    ax: f64,
+    ay: f64,
+    az: f64,
+}
+
+/// All channels except the angular accelerations and α̇ (set by the caller).
+fn measured_channels(
+    f16: &F16,
+    constants: AircraftConstants,
+    t_s: f64,
+    x: &F16State,
+    out: &F16Outputs,
+    u: &F16Controls,
+    noise: Option<ChannelNoise>,
+) -> AirDataSample {
+    let n = noise.unwrap_or_default();
+    let g_fps2 = f16.data().mass.g_ft_per_s2;
+    let vt_true = out.vt_air_fps * M_PER_FT;
+    let vt_m = vt_true + n.vt_mps;
+    let qbar = out.qbar_psf * PA_PER_PSF * (vt_m / vt_true).powi(2);
+    AirDataSample {
+        t_s,
+        vt_mps: vt_m,
+        alpha_rad: out.alpha_air_rad + n.alpha,
+        qbar_pa: qbar,
+        beta_rad: Some(out.beta_air_rad + n.beta),
+        p_rad_s: Some(x[f16::P] + n.p),
+        q_rad_s: Some(x[f16::Q] + n.q),
+        r_rad_s: Some(x[f16::R] + n.r),
+        pdot_rad_s2: None,
+        qdot_rad_s2: None,
+        rdot_rad_s2: None,
+        alphadot_rad_s: None,
+        phi_rad: Some(x[f16::PHI] + n.phi),
+        theta_rad: Some(x[f16::THETA] + n.theta),
+        psi_rad: Some(x[f16::PSI] + n.psi),
+        ax_mps2: Some(out.nx_g * g_fps2 * M_PER_FT + n.ax),
+        ay_mps2: Some(out.ny_g * g_fps2 * M_PER_FT + n.ay),
+        az_mps2: Some(-out.nz_g * g_fps2 * M_PER_FT + n.az),
+        de_rad: Some(u.elevator_rad),
+        da_rad: Some(u.aileron_rad),
+        dr_rad: Some(u.rudder_rad),
+        thrust_n: Some(out.thrust_lbf * N_PER_LBF),
+        throttle: Some(u.throttle),
+        thrust_moment_nm: None,
+        rho_kgpm3: None,
+        constants,
+    }
+}
+
+/// The channels of a sample that the alignment filters, in a fixed order ([`to_vector`]).
+const N_FILTERED: usize = 18;
+/// Indices of the held commands (δe, δa, δr, throttle) in [`to_vector`]'s order.
+const HELD: core::ops::Range<usize> = 13..17;
+
+fn to_vector(s: &AirDataSample) -> [f64; N_FILTERED] {
+    let o = |v: Option<f64>| v.unwrap_or(0.0);
+    [
+        s.vt_mps,
+        s.alpha_rad,
+        s.qbar_pa,
+        o(s.beta_rad),
+        o(s.p_rad_s),
+        o(s.q_rad_s),
+        o(s.r_rad_s),
+        o(s.phi_rad),
+        o(s.theta_rad),
+        o(s.psi_rad),
+        o(s.ax_mps2),
+        o(s.ay_mps2),
+        o(s.az_mps2),
+        o(s.de_rad),
+        o(s.da_rad),
+        o(s.dr_rad),
+        o(s.throttle),
+        o(s.thrust_n),
+    ]
+}
+
+fn set_vector(s: &mut AirDataSample, v: &[f64; N_FILTERED]) {
+    s.vt_mps = v[0];
+    s.alpha_rad = v[1];
+    s.qbar_pa = v[2];
+    s.beta_rad = Some(v[3]);
+    s.p_rad_s = Some(v[4]);
+    s.q_rad_s = Some(v[5]);
+    s.r_rad_s = Some(v[6]);
+    s.phi_rad = Some(v[7]);
+    s.theta_rad = Some(v[8]);
+    s.psi_rad = Some(v[9]);
+    s.ax_mps2 = Some(v[10]);
+    s.ay_mps2 = Some(v[11]);
+    s.az_mps2 = Some(v[12]);
+    s.de_rad = Some(v[13]);
+    s.da_rad = Some(v[14]);
+    s.dr_rad = Some(v[15]);
+    s.throttle = Some(v[16]);
+    s.thrust_n = Some(v[17]);
+}
+
+/// The sensor chain of the sample-driven estimators (module doc): noise, the causal
+/// differentiator and the matching alignment. One per run; feed it every step.
+#[derive(Debug, Clone)]
+pub struct AirDataSampler {
+    f16: F16,
+    constants: AircraftConstants,
+    /// Noise generators in the order of [`ChannelNoise`]; `None` = noise-free.
+    noise: Option<Box<[BandLimitedWhiteNoise; 12]>>,
+    /// Differentiators of p, q, r, α.
+    diff: [CausalDifferentiator; 4],
+    /// Weights of the other channels over the window, oldest first: the matched smoother's,
+    /// or a unit weight at the window centre (pure delay).
+    weights: Vec<f64>,
+    /// Weights of the held channels (surfaces, throttle: applied with a zero-order hold over
+    /// the step): the matched smoother's held weights, or the centre (pure delay).
+    held: Vec<f64>,
+    /// The last `window` raw samples, oldest first.
+    window: VecDeque<AirDataSample>,
+}
+
+impl AirDataSampler {
+    /// A sampler for the F-16 `f16` at step `dt_s`, `v0_mps` the reference airspeed: noise at
+    /// `scale` × the cited levels from `seed` (`noise = false`: exact channels), a differentiator
+    /// of `window` samples (odd) and the other channels `matched` to it (smoothed with the same
+    /// weighting) or only delayed.
+    ///
+    /// # Errors
+    /// A message naming the sensor setting for a bad window, level or interval.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        f16: &F16,
+        v0_mps: f64,
+        dt_s: f64,
+        noise: bool,
+        scale: f64,
+        seed: u64,
+        window: usize,
+        matched: bool,
+    ) -> Result<Self, String> {
+        if window < 3 || window.is_multiple_of(2) {
+            return Err(format!("sensors.differentiator_window must be odd and ≥ 3, got {window}"));
+        }
+        let mk_diff = || CausalDifferentiator::new(window, dt_s).map_err(|e| e.to_string());
+        let diff = [mk_diff()?, mk_diff()?, mk_diff()?, mk_diff()?];
+        let (weights, held) = if matched {
+            let m = MatchedSmoother::new(window, dt_s).map_err(|e| e.to_string())?;
+            (m.weights().to_vec(), m.held_weights().to_vec())
+        } else {
+            let mut w = vec![0.0; window];
+            w[(window - 1) / 2] = 1.0;
+            (w.clone(), w)
+        };
+        let noise = if noise && scale > 0.0 {
+            let s = state_sigma();
+            let sig = [
+                s[f16::VT] * M_PER_FT,
+                s[f16::ALPHA],
+                s[f16::BETA],
+                s[f16::P],
+                s[f16::Q],
+                s[f16::R],
+                s[f16::PHI],
+                s[f16::THETA],
+                s[f16::PSI],
+                ACCEL_SIGMA_FPS2 * M_PER_FT,
+                ACCEL_SIGMA_FPS2 * M_PER_FT,
+                ACCEL_SIGMA_FPS2 * M_PER_FT,
+            ];
+            let gens = sig
+                .iter()
+                .enumerate()
+                .map(|(i, &sg)| {
+                    let sg = sg * scale;
+                    BandLimitedWhiteNoise::new(
+                        sg * sg * dt_s,
+                        dt_s,
+                        seed.wrapping_mul(1_000).wrapping_add(200 + i as u64),
+                    )
+                })
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|e| format!("sensors: {e}"))?;
+            let gens: Box<[BandLimitedWhiteNoise; 12]> = gens
+                .into_boxed_slice()
+                .try_into()
+                .map_err(|_| "sensors: twelve noise channels expected".to_string())?;
+            Some(gens)
+        } else {
+            None
+        };
+        Ok(Self {
+            f16: f16.clone(),
+            constants: f16_constants(f16, v0_mps),
+            noise,
+            diff,
+            weights,
+            held,
+            window: VecDeque::with_capacity(window + 1),
+        })
+    }
+
+    /// The delay of every emitted sample behind the newest truth, s.
+    pub fn lag_s(&self) -> f64 {
+        self.diff[0].lag_s()
+    }
+
+    /// Feeds the truth at `t_s` (state, evaluation outputs, controls) and returns the sample of
+    /// `t_s − lag` once the window is filled (`None` before).
+    pub fn push(
+        &mut self,
+        t_s: f64,
+        x: &F16State,
+        out: &F16Outputs,
+        u: &F16Controls,
+    ) -> Option<AirDataSample> {
+        let n = self.noise.as_ref().map(|g| {
+            let v: [f64; 12] = core::array::from_fn(|i| g[i].value(t_s));
+            ChannelNoise {
+                vt_mps: v[0],
+                alpha: v[1],
+                beta: v[2],
+                p: v[3],
+                q: v[4],
+                r: v[5],
+                phi: v[6],
+                theta: v[7],
+                psi: v[8],
+                ax: v[9],
+                ay: v[10],
+                az: v[11],
+            }
+        });
+        let s = measured_channels(&self.f16, self.constants, t_s, x, out, u, n);
+        let measured = [
+            s.p_rad_s.unwrap_or(0.0),
+            s.q_rad_s.unwrap_or(0.0),
+            s.r_rad_s.unwrap_or(0.0),
+            s.alpha_rad,
+        ];
+        let mut d = [None; 4];
+        for (k, v) in measured.iter().enumerate() {
+            d[k] = self.diff[k].update(*v);
+        }
+        self.window.push_back(s);
+        while self.window.len() > self.weights.len() {
+            self.window.pop_front();
+        }
+        let [Some(pd), Some(qd), Some(rd), Some(ad)] = d else {
+            return None;
+        };
+        let centre = (self.weights.len() - 1) / 2;
+        let mut out = *self.window.get(centre)?;
+        let mut acc = [0.0; N_FILTERED];
+        for ((w, h), smp) in self.weights.iter().zip(&self.held).zip(&self.window) {
+            let v = to_vector(smp);
+            for (k, (a, x)) in acc.iter_mut().zip(v).enumerate() {
+                *a += if HELD.contains(&k) { h * x } else { w * x };
+            }
+        }
+        set_vector(&mut out, &acc);
+        out.pdot_rad_s2 = Some(pd);
+        out.qdot_rad_s2 = Some(qd);
+        out.rdot_rad_s2 = Some(rd);
+        out.alphadot_rad_s = Some(ad);
+        Some(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use aeroident_models::f16::AeroIncrements;
+    use aeroident_models::trim::{TrimCondition, trim};
+
+    /// Level trim: the accelerometer reads the specific force −g along the normal (az ≈ −g cos θ,
+    /// ax ≈ g sin θ), and the sample's measured coefficients equal the F-16's own (CL to 1e-6;
+    /// moments zero at trim).
+    #[test]
+    fn analytic_level_trim_sample_units_and_signs() {
+        let f = F16::new(0.30).unwrap();
+        let t = trim(&f, &TrimCondition::level(20_000.0, 675.0)).unwrap();
+        let (xd, o) = f.evaluate(&t.state, &t.controls, &AeroIncrements::zero()).unwrap();
+        let k = f16_constants(&f, 675.0 * M_PER_FT);
+        let s = exact_sample(&f, k, 0.0, &t.state, &xd, &o, &t.controls);
+        let g = f.data().mass.g_ft_per_s2 * M_PER_FT;
+        let th = t.state[f16::THETA];
+        assert!((s.az_mps2.unwrap() + g * th.cos()).abs() < 1e-6 * g, "az {}", s.az_mps2.unwrap());
+        assert!((s.ax_mps2.unwrap() - g * th.sin()).abs() < 1e-6 * g, "ax {}", s.ax_mps2.unwrap());
+        assert!((s.vt_mps - 675.0 * 0.3048).abs() < 1e-9);
+        let c = s.measured_coefficients();
+        let want = o.coefficients;
+        assert!((c[3].unwrap() - want.CL).abs() < 1e-6, "CL {} vs {}", c[3].unwrap(), want.CL);
+        assert!((c[4].unwrap() - want.CD).abs() < 1e-6, "CD {} vs {}", c[4].unwrap(), want.CD);
+        assert!((c[0].unwrap() - want.CX).abs() < 1e-6 && (c[2].unwrap() - want.CZ).abs() < 1e-6);
+        for i in [5, 6, 7] {
+            assert!(c[i].unwrap().abs() < 1e-9, "moment {i}: {}", c[i].unwrap());
+        }
+    }
+
+    /// In motion (rates, sideslip, accelerations): forces to 1e-6, moments to the model's own
+    /// rounding of its inertia constants (module doc: 2e-4 relative + the gyroscopic 1e-5).
+    #[test]
+    fn analytic_manoeuvring_sample_matches_model_coefficients() {
+        let f = F16::new(0.30).unwrap();
+        let t = trim(&f, &TrimCondition::level(20_000.0, 675.0)).unwrap();
+        let mut x = t.state;
+        x[f16::BETA] = 0.03;
+        x[f16::P] = 0.4;
+        x[f16::Q] = 0.1;
+        x[f16::R] = -0.08;
+        x[f16::ALPHA] += 0.02;
+        let mut u = t.controls;
+        u.aileron_rad = 0.02;
+        u.rudder_rad = -0.03;
+        let (xd, o) = f.evaluate(&x, &u, &AeroIncrements::zero()).unwrap();
+        let s = exact_sample(&f, f16_constants(&f, 205.74), 0.0, &x, &xd, &o, &u);
+        let c = s.measured_coefficients();
+        let want = crate::aircraft::truth::coefficient_vector(&o.coefficients);
+        for i in 0..5 {
+            assert!(
+                (c[i].unwrap() - want[i]).abs() < 1e-6,
+                "force {i}: {} vs {}",
+                c[i].unwrap(),
+                want[i]
+            );
+        }
+        for i in 5..8 {
+            let tol = 3e-4 * want[i].abs() + 3e-5;
+            assert!(
+                (c[i].unwrap() - want[i]).abs() < tol,
+                "moment {i}: {} vs {}",
+                c[i].unwrap(),
+                want[i]
+            );
+        }
+    }
+
+    /// The sampler delays every channel by the differentiator's lag and stamps the sample with
+    /// that older time: on a ramp in q the derivative is exact and the rates are the old ones.
+    #[test]
+    fn analytic_sampler_aligns_derivatives_with_delayed_channels() {
+        let f = F16::new(0.30).unwrap();
+        let t = trim(&f, &TrimCondition::level(20_000.0, 675.0)).unwrap();
+        let dt = 0.01;
+        let mut smp = AirDataSampler::new(&f, 205.74, dt, false, 1.0, 0, 11, false).unwrap();
+        let lag = 5;
+        assert!((smp.lag_s() - lag as f64 * dt).abs() < 1e-15);
+        let mut got = Vec::new();
+        for k in 0..40 {
+            let tk = k as f64 * dt;
+            let mut x = t.state;
+            x[f16::Q] = 0.3 * tk; // ramp: q̇ = 0.3 exactly
+            let (_, o) = f.evaluate(&x, &t.controls, &AeroIncrements::zero()).unwrap();
+            if let Some(s) = smp.push(tk, &x, &o, &t.controls) {
+                got.push((k, s));
+            }
+        }
+        assert_eq!(got.first().unwrap().0, 10);
+        for (k, s) in got {
+            let t_old = (k - lag) as f64 * dt;
+            assert!((s.t_s - t_old).abs() < 1e-12);
+            assert!((s.q_rad_s.unwrap() - 0.3 * t_old).abs() < 1e-12);
+            assert!((s.qdot_rad_s2.unwrap() - 0.3).abs() < 1e-9, "{}", s.qdot_rad_s2.unwrap());
+        }
+    }
+}

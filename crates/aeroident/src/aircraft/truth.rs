@@ -1,0 +1,282 @@
+//! The reference aircraft's **true local derivatives** at a point (the trim), in the units and
+//! axes of the vocabulary, as the oracle the sample-driven estimators are scored against.
+//!
+//! Method: central finite differences of the F-16's total aerodynamic coefficients
+//! (`F16::evaluate` → `CX CY CZ CL CD Cl Cm Cn`, increments included) with respect to one
+//! regressor at a time, every other held:
+//!
+//! | term | perturbed | step |
+//! |---|---|---|
+//! | `alpha`, `beta` | state α, β (still air: air-relative = state) | `1e-6` rad |
+//! | `p`, `q`, `r` | body rate, by `h · 2V/b` (`2V/c̄` for q) so that p̂, q̂, r̂ move by `h` | `h = 1e-6` |
+//! | `de`, `da`, `dr` | surface deflection | `1e-6` rad |
+//! | `V` | airspeed, by `h · V0` (`V0` = the point's airspeed), α, β and the hat-rates held | `h = 1e-6` |
+//!
+//! The F-16's tables are piecewise linear (5° in α and β, 12° in δe), so inside a segment the
+//! central difference is the table slope to rounding (≈ 1e-10). `alphadot` is 0 exactly: the
+//! model's coefficients do not depend on α̇. Second-order terms (`alpha2`, `alpha_de`,
+//! `alpha_beta`) have no single local value and are `None`.
+//!
+//! Units and axes (as [`aeroident_estimators::vocabulary`]): forces `CX CY CZ` body axes,
+//! `CL CD` stability axes with the air-relative α; moments `Cl Cm Cn` body axes about the actual
+//! CG (the model's cg transfer included); per rad, per unit p̂ = pb/2V, q̂ = qc̄/2V, r̂ = rb/2V.
+//! The bias `C_0` of a structure is the intercept of the tangent plane through the point:
+//! `C_0 = C(x₀) − Σ_{j ≠ 0} C_j ξ_j(x₀)` over the structure's terms of that coefficient.
+
+use aeroident_estimators::vocabulary::{ModelStructure, N_TERMS, Param, Term};
+use aeroident_models::ModelError;
+use aeroident_models::f16::{self, AeroCoefficients, AeroIncrements, F16, F16Controls, F16State};
+
+/// Finite-difference step (rad, or per unit hat-rate / V/V0).
+pub const FD_STEP: f64 = 1e-6;
+
+/// The total coefficients of one evaluation in vocabulary order `CX CY CZ CL CD Cl Cm Cn`.
+pub fn coefficient_vector(c: &AeroCoefficients) -> [f64; 8] {
+    [c.CX, c.CY, c.CZ, c.CL, c.CD, c.Cl, c.Cm, c.Cn]
+}
+
+/// Local derivatives of every coefficient w.r.t. every first-order term at one point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LocalDerivatives {
+    /// Coefficients at the point, vocabulary order.
+    pub value: [f64; 8],
+    /// Regressor values `ξ_j` at the point (vocabulary units: α, β rad; hats; δ rad; V/V0 = 1).
+    pub regressor: [Option<f64>; N_TERMS],
+    /// `∂C_k/∂ξ_j`, `[coefficient][term]`; `None` for the bias and second-order terms.
+    pub d: [[Option<f64>; N_TERMS]; 8],
+}
+
+impl LocalDerivatives {
+    /// `∂C/∂ξ` of parameter `p` (`None` for a bias or a second-order term).
+    pub fn derivative(&self, p: Param) -> Option<f64> {
+        self.d[p.coefficient.index()][p.term.index()]
+    }
+
+    /// The true value of parameter `p` within `structure`: the local derivative, or for the
+    /// bias the intercept of the tangent plane over the structure's other terms of that
+    /// coefficient (module doc). `None` where no single true value exists.
+    pub fn truth(&self, structure: &ModelStructure, p: Param) -> Option<f64> {
+        if p.term != Term::Bias {
+            return self.derivative(p);
+        }
+        let c = p.coefficient;
+        let mut v = self.value[c.index()];
+        for t in structure.terms_of(c).filter(|t| *t != Term::Bias) {
+            v -= self.d[c.index()][t.index()]? * self.regressor[t.index()]?;
+        }
+        Some(v)
+    }
+}
+
+/// The true local derivatives of `f16` with increments `inc` at state `x` and controls `u`
+/// (module doc), in still air.
+///
+/// # Errors
+/// The model's errors at the point or a perturbed point.
+pub fn local_derivatives(
+    f16: &F16,
+    x: &F16State,
+    u: &F16Controls,
+    inc: &AeroIncrements,
+) -> Result<LocalDerivatives, ModelError> {
+    let u = F16Controls { wind_ned_fps: [0.0; 3], wind_body_fps: [0.0; 3], ..*u };
+    let g = &f16.data().geometry;
+    let coeffs = |x: &F16State, u: &F16Controls| -> Result<[f64; 8], ModelError> {
+        f16.evaluate(x, u, inc).map(|(_, o)| coefficient_vector(&o.coefficients))
+    };
+    let value = coeffs(x, &u)?;
+    let vt = x[f16::VT];
+    let h = FD_STEP;
+    let mut d = [[None; N_TERMS]; 8];
+    let mut put = |term: Term, plus: [f64; 8], minus: [f64; 8], step: f64| {
+        for k in 0..8 {
+            d[k][term.index()] = Some((plus[k] - minus[k]) / (2.0 * step));
+        }
+    };
+    // State perturbations: (term, state index, state step per unit regressor step).
+    let state_terms = [
+        (Term::Alpha, f16::ALPHA, 1.0),
+        (Term::Beta, f16::BETA, 1.0),
+        (Term::P, f16::P, 2.0 * vt / g.span_ft),
+        (Term::Q, f16::Q, 2.0 * vt / g.cbar_ft),
+        (Term::R, f16::R, 2.0 * vt / g.span_ft),
+    ];
+    for (term, i, scale) in state_terms {
+        let (mut xp, mut xm) = (*x, *x);
+        xp[i] += h * scale;
+        xm[i] -= h * scale;
+        put(term, coeffs(&xp, &u)?, coeffs(&xm, &u)?, h);
+    }
+    // Airspeed with the hat-rates held: the body rates scale with V.
+    {
+        let (mut xp, mut xm) = (*x, *x);
+        for (xs, f) in [(&mut xp, 1.0 + h), (&mut xm, 1.0 - h)] {
+            xs[f16::VT] = vt * f;
+            for i in [f16::P, f16::Q, f16::R] {
+                xs[i] = x[i] * f;
+            }
+        }
+        put(Term::V, coeffs(&xp, &u)?, coeffs(&xm, &u)?, h);
+    }
+    type Field = fn(&mut F16Controls) -> &mut f64;
+    let surfaces: [(Term, Field); 3] = [
+        (Term::De, |c| &mut c.elevator_rad),
+        (Term::Da, |c| &mut c.aileron_rad),
+        (Term::Dr, |c| &mut c.rudder_rad),
+    ];
+    for (term, field) in surfaces {
+        let (mut up, mut um) = (u, u);
+        *field(&mut up) += h;
+        *field(&mut um) -= h;
+        put(term, coeffs(x, &up)?, coeffs(x, &um)?, h);
+    }
+    for row in &mut d {
+        row[Term::Alphadot.index()] = Some(0.0);
+    }
+    let two_v = 2.0 * vt;
+    let mut regressor = [None; N_TERMS];
+    regressor[Term::Bias.index()] = Some(1.0);
+    regressor[Term::Alpha.index()] = Some(x[f16::ALPHA]);
+    regressor[Term::Beta.index()] = Some(x[f16::BETA]);
+    regressor[Term::P.index()] = Some(x[f16::P] * g.span_ft / two_v);
+    regressor[Term::Q.index()] = Some(x[f16::Q] * g.cbar_ft / two_v);
+    regressor[Term::R.index()] = Some(x[f16::R] * g.span_ft / two_v);
+    regressor[Term::Alphadot.index()] = Some(0.0);
+    regressor[Term::De.index()] = Some(u.elevator_rad);
+    regressor[Term::Da.index()] = Some(u.aileron_rad);
+    regressor[Term::Dr.index()] = Some(u.rudder_rad);
+    regressor[Term::V.index()] = Some(1.0);
+    Ok(LocalDerivatives { value, regressor, d })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::aircraft::increments::increment_matrix;
+    use aeroident_estimators::vocabulary::Coefficient;
+    use aeroident_models::f16::IncrementReference;
+    use aeroident_models::linearize::linearize_f16;
+    use aeroident_models::trim::{TrimCondition, trim};
+
+    fn p(n: &str) -> Param {
+        Param::from_name(n).unwrap()
+    }
+
+    fn thesis_trim() -> (F16, aeroident_models::trim::F16Trim) {
+        let f = F16::new(0.30).unwrap();
+        let t = trim(&f, &TrimCondition::level(20_000.0, 675.0)).unwrap();
+        (f, t)
+    }
+
+    /// Against the F-16's linearisation (an independent central difference of the state
+    /// derivatives, `aeroident_models::linearize`): at wings-level trim (p = r = 0) the pitch
+    /// equation gives `∂q̇/∂α = c₇ q̄ S c̄ Cm_α`, `∂q̇/∂q = c₇ q̄ S c̄ (c̄/2V) Cm_q`,
+    /// `∂q̇/∂δe = c₇ q̄ S c̄ Cm_δe`, and the roll/yaw pair gives Cl and Cn through c₃ c₄ c₉:
+    /// `∂ṗ/∂β = q̄Sb (c₃ Cl_β + c₄ Cn_β)`, `∂ṙ/∂β = q̄Sb (c₄ Cl_β + c₉ Cn_β)`.
+    #[test]
+    fn val_truth_derivatives_match_the_linearisation() {
+        let (f, t) = thesis_trim();
+        let ld = local_derivatives(&f, &t.state, &t.controls, &AeroIncrements::zero()).unwrap();
+        let lin = linearize_f16(&f, &t.state, &t.controls).unwrap();
+        let d = f.data();
+        let (g, m) = (&d.geometry, &d.moment);
+        let o = f.outputs(0.0, &t.state, &t.controls).unwrap();
+        let qs = o.qbar_psf * g.wing_area_ft2;
+        let (qsc, qsb) = (qs * g.cbar_ft, qs * g.span_ft);
+        let vt = t.state[f16::VT];
+        let rel = |a: f64, b: f64| (a - b).abs() / b.abs();
+        let cm_a = lin.a[(f16::Q, f16::ALPHA)] / (m.c7 * qsc);
+        let cm_q = lin.a[(f16::Q, f16::Q)] / (m.c7 * qsc * g.cbar_ft / (2.0 * vt));
+        let cm_de = lin.b[(f16::Q, 1)] / (m.c7 * qsc);
+        assert!(rel(ld.derivative(p("Cm_alpha")).unwrap(), cm_a) < 1e-5, "{cm_a}");
+        assert!(rel(ld.derivative(p("Cm_q")).unwrap(), cm_q) < 1e-5, "{cm_q}");
+        assert!(rel(ld.derivative(p("Cm_de")).unwrap(), cm_de) < 1e-5, "{cm_de}");
+        // Roll/yaw: solve the 2×2 system of the linearisation for Cl_β, Cn_β (and the p̂, δa, δr
+        // columns). ṗ also carries (c₂ p + c₁ r + c₄ h) q terms, zero at q = 0.
+        let det = m.c3 * m.c9 - m.c4 * m.c4;
+        for (col_p, col_r, scale, cl, cn) in [
+            (lin.a[(f16::P, f16::BETA)], lin.a[(f16::R, f16::BETA)], 1.0, "Cl_beta", "Cn_beta"),
+            (
+                lin.a[(f16::P, f16::P)],
+                lin.a[(f16::R, f16::P)],
+                g.span_ft / (2.0 * vt),
+                "Cl_p",
+                "Cn_p",
+            ),
+            (
+                lin.a[(f16::P, f16::R)],
+                lin.a[(f16::R, f16::R)],
+                g.span_ft / (2.0 * vt),
+                "Cl_r",
+                "Cn_r",
+            ),
+            (lin.b[(f16::P, 2)], lin.b[(f16::R, 2)], 1.0, "Cl_da", "Cn_da"),
+            (lin.b[(f16::P, 3)], lin.b[(f16::R, 3)], 1.0, "Cl_dr", "Cn_dr"),
+        ] {
+            let (a, b) = (col_p / (qsb * scale), col_r / (qsb * scale));
+            let want_cl = (m.c9 * a - m.c4 * b) / det;
+            let want_cn = (m.c3 * b - m.c4 * a) / det;
+            let got_cl = ld.derivative(p(cl)).unwrap();
+            let got_cn = ld.derivative(p(cn)).unwrap();
+            assert!(
+                (got_cl - want_cl).abs() < 1e-5 * want_cl.abs().max(1e-3),
+                "{cl}: {got_cl} vs {want_cl}"
+            );
+            assert!(
+                (got_cn - want_cn).abs() < 1e-5 * want_cn.abs().max(1e-3),
+                "{cn}: {got_cn} vs {want_cn}"
+            );
+        }
+        // Sign sanity (a statically stable, roll-damped, weathercock-stable aircraft).
+        assert!(ld.derivative(p("Cm_alpha")).unwrap() < 0.0);
+        assert!(ld.derivative(p("Cl_p")).unwrap() < 0.0);
+        assert!(ld.derivative(p("Cn_beta")).unwrap() > 0.0);
+        assert!(ld.derivative(p("Cn_r")).unwrap() < 0.0);
+    }
+
+    /// Against hand-computed table values: CY_β = −0.02/deg (SLJ's CY formula, no α
+    /// dependence); Cl_p = the damping table `Clp(α)` interpolated at the trim α by hand; the
+    /// increments add exactly their value to the matching derivative.
+    #[test]
+    fn analytic_table_slopes_and_increments() {
+        let (f, t) = thesis_trim();
+        let ld = local_derivatives(&f, &t.state, &t.controls, &AeroIncrements::zero()).unwrap();
+        let cy_b = ld.derivative(p("CY_beta")).unwrap();
+        assert!((cy_b - (-0.02 * 180.0 / core::f64::consts::PI)).abs() < 1e-8, "{cy_b}");
+        // Clp row (index 5) of the damping table, α breakpoints −10, −5, 0, 5 … deg.
+        let clp = &f.data().damping[5];
+        let a_deg = t.state[f16::ALPHA].to_degrees();
+        let i = clp.x.iter().rposition(|&x| x <= a_deg).unwrap();
+        let w = (a_deg - clp.x[i]) / (clp.x[i + 1] - clp.x[i]);
+        let hand = clp.y[i] + w * (clp.y[i + 1] - clp.y[i]);
+        assert!((ld.derivative(p("Cl_p")).unwrap() - hand).abs() < 1e-8, "Cl_p vs {hand}");
+        // Increments: ΔCl_p = −0.1, ΔCm_alpha = +0.04 change exactly those derivatives.
+        let reference = IncrementReference {
+            alpha_rad: t.state[f16::ALPHA],
+            elevator_rad: t.controls.elevator_rad,
+            ..Default::default()
+        };
+        let inc = increment_matrix(reference, &[(p("Cl_p"), -0.1), (p("Cm_alpha"), 0.04)]);
+        let ld2 = local_derivatives(&f, &t.state, &t.controls, &inc).unwrap();
+        for name in ["Cl_p", "Cm_alpha", "Cn_r", "CL_alpha"] {
+            let want = match name {
+                "Cl_p" => -0.1,
+                "Cm_alpha" => 0.04,
+                _ => 0.0,
+            };
+            let diff = ld2.derivative(p(name)).unwrap() - ld.derivative(p(name)).unwrap();
+            assert!((diff - want).abs() < 1e-8, "{name}: Δ = {diff}");
+        }
+        // The bias is the intercept: at the point, Σ truth·ξ over a structure reproduces C.
+        let st = ModelStructure::longitudinal();
+        for c in [Coefficient::CL, Coefficient::Cm] {
+            let v: f64 = st
+                .terms_of(c)
+                .map(|t| {
+                    ld.truth(&st, Param::new(c, t)).unwrap() * ld.regressor[t.index()].unwrap()
+                })
+                .sum();
+            assert!((v - ld.value[c.index()]).abs() < 1e-12, "{c:?}");
+        }
+    }
+}

@@ -61,13 +61,17 @@ pub struct EstimatorOptions {
     /// Forgetting factor `λ ∈ (0, 1]` per sample of RLS and of FTR's recursive transform
     /// (1 = none).
     pub forgetting: f64,
+    /// EKF parameter random walk, as a fraction of each parameter's prior σ per √s (0 =
+    /// constant parameters): lets the filter follow a sudden change (damage) instead of gating
+    /// it out. With 0.01 the σ of a parameter can grow by 1 % of its prior σ in 1 s.
+    pub parameter_walk_per_sqrt_s: f64,
     /// Nominal sample interval of the data, s, when known (the record's `nominal_dt_s`).
     pub sample_interval_s: Option<f64>,
 }
 
 impl Default for EstimatorOptions {
     fn default() -> Self {
-        Self { forgetting: 1.0, sample_interval_s: None }
+        Self { forgetting: 1.0, parameter_walk_per_sqrt_s: 0.0, sample_interval_s: None }
     }
 }
 
@@ -108,7 +112,19 @@ pub fn build(
             Box::new(Ftr::new(structure, cfg).map_err(config)?)
         }
         EstimatorKind::Ekf => {
-            Box::new(Ekf::new(EkfConfig { priors, ..EkfConfig::new(structure) }).map_err(config)?)
+            let mut cfg = EkfConfig { priors, ..EkfConfig::new(structure) };
+            let f = options.parameter_walk_per_sqrt_s;
+            if !(f >= 0.0 && f.is_finite()) {
+                return Err(config(EstimatorError::InvalidConfig {
+                    field: "parameter_walk_per_sqrt_s",
+                    value: f,
+                    reason: "must be finite and >= 0",
+                }));
+            }
+            for i in 0..priors.n {
+                cfg.param_process_noise[i] = f * priors.prior[i].sigma;
+            }
+            Box::new(Ekf::new(cfg).map_err(config)?)
         }
         EstimatorKind::Smpe => Box::new(
             PublishedSmpeEstimator::new(structure, &priors, ModelReferenceConfig::default())

@@ -31,6 +31,14 @@
 //!   `max_consecutive_rejections` times in a row (default 50) means the model no longer
 //!   explains it: the filter reports divergence (error, [`Status::Diverged`]); nothing is
 //!   reset silently.
+//! - **Measurement noise from the record** (`adaptive_r_window > 0`, the default): the
+//!   configured σ only start the filter; each output's `R` is then estimated from its own
+//!   accepted innovations by covariance matching (Mehra 1970; Myers & Tapley 1976:
+//!   `E[e²] = h P hᵀ + R`), `R ← R + a (max(e² − h P hᵀ, R_min) − R)` with
+//!   `a = 1/min(k + 20, W)` (a running mean in which the configured `R` counts as 20
+//!   innovations, then an exponential window of `W` samples) and `R_min` = (configured σ /
+//!   10)². Only gated-in innovations update it, so one
+//!   outlier cannot inflate it. No noise level is taken from any reference fit.
 //! - **Identified.** A parameter is reported (`identified = true`, [`Estimates::value`] not
 //!   `None`) once its filter posterior σ is below **half its prior σ**: the data, not the
 //!   prior, then determine it. Once identified it stays identified. Until every parameter is
@@ -104,6 +112,10 @@ pub const DEFAULT_STATE_SIGMA0: [f64; N_STATES] =
 pub const DEFAULT_STATE_PROCESS_NOISE: [f64; N_STATES] =
     [0.015, 0.0003, 0.0003, 0.0006, 0.0006, 0.0006, 0.00015, 0.00015];
 
+/// How many innovations the configured measurement noise is worth in the running estimate of
+/// `R` (module doc).
+pub const ADAPTIVE_R_PRIOR_SAMPLES: u32 = 20;
+
 /// Configuration of [`Ekf`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EkfConfig {
@@ -126,6 +138,9 @@ pub struct EkfConfig {
     pub max_consecutive_rejections: u32,
     /// How the reported σ is formed.
     pub sigma: SigmaOption,
+    /// Window `W` (samples) of the measurement-noise estimate from the innovations (module
+    /// doc); 0 keeps `R` at `measurement_sigma²`.
+    pub adaptive_r_window: u32,
 }
 
 impl EkfConfig {
@@ -143,6 +158,7 @@ impl EkfConfig {
             gate_sigmas: 5.0,
             max_consecutive_rejections: 50,
             sigma: SigmaOption::Filter,
+            adaptive_r_window: 200,
         }
     }
 }
@@ -170,6 +186,9 @@ pub struct Ekf {
     innov_s0: [f64; N_OUTPUTS],
     innov_s1: [f64; N_OUTPUTS],
     innov_prev: [Option<f64>; N_OUTPUTS],
+    /// Current measurement-noise variance per output and its count of updates.
+    r_var: [f64; N_OUTPUTS],
+    r_count: [u32; N_OUTPUTS],
 }
 
 fn positive(field: &'static str, v: f64) -> Result<(), EstimatorError> {
@@ -271,6 +290,8 @@ impl Ekf {
             innov_s0: [0.0; N_OUTPUTS],
             innov_s1: [0.0; N_OUTPUTS],
             innov_prev: [None; N_OUTPUTS],
+            r_var: cfg.measurement_sigma.map(|s| s * s),
+            r_count: [0; N_OUTPUTS],
         })
     }
 
@@ -291,6 +312,12 @@ impl Ekf {
     /// measured or rejected.
     pub fn innovation(&self, o: Output) -> Option<f64> {
         self.innovation[o.index()]
+    }
+
+    /// The current measurement-noise σ of output `o` (configured, or estimated from the
+    /// innovations when `adaptive_r_window > 0`), in the output's unit.
+    pub fn measurement_sigma(&self, o: Output) -> f64 {
+        libm::sqrt(self.r_var[o.index()])
     }
 
     /// How many times output `o` was rejected by the innovation gate.
@@ -548,6 +575,8 @@ impl Estimator for Ekf {
         let mut innovation = [None; N_OUTPUTS];
         let mut consecutive = self.consecutive;
         let mut rejections = self.rejections;
+        let mut r_var = self.r_var;
+        let mut r_count = self.r_count;
         let states = self.model.state_set().states();
         let mut h = [0.0; MAX_AUG];
         let mut ph = [0.0; MAX_AUG];
@@ -579,8 +608,7 @@ impl Estimator for Ekf {
                 Some(k) => ph[k],
                 None => (0..n).map(|j| h[j] * ph[j]).sum::<f64>(),
             };
-            let r = self.cfg.measurement_sigma[oi];
-            let sv = hph + r * r;
+            let sv = hph + r_var[oi];
             if !(sv > 0.0 && sv.is_finite()) {
                 return Err(self.diverge("EKF innovation variance not positive", s.t_s));
             }
@@ -600,6 +628,16 @@ impl Estimator for Ekf {
             }
             consecutive[oi] = 0;
             innovation[oi] = Some(e);
+            if self.cfg.adaptive_r_window > 0 {
+                r_count[oi] = r_count[oi].saturating_add(1);
+                // The configured R counts as `ADAPTIVE_R_PRIOR_SAMPLES` innovations, so the
+                // first few cannot collapse it (and with it the gate).
+                let k = r_count[oi].saturating_add(ADAPTIVE_R_PRIOR_SAMPLES);
+                let a = 1.0 / f64::from(k.min(self.cfg.adaptive_r_window.max(1)));
+                let r0 = self.cfg.measurement_sigma[oi];
+                let r_min = 0.01 * r0 * r0;
+                r_var[oi] += a * ((e * e - hph).max(r_min) - r_var[oi]);
+            }
             let inv = 1.0 / sv;
             for i in 0..n {
                 z[i] += ph[i] * inv * e;
@@ -636,6 +674,8 @@ impl Estimator for Ekf {
         }
         self.consecutive = consecutive;
         self.rejections = rejections;
+        self.r_var = r_var;
+        self.r_count = r_count;
         for (oi, e) in innovation.iter().enumerate() {
             if let Some(e) = *e {
                 self.innov_s0[oi] += e * e;

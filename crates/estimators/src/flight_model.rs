@@ -591,7 +591,16 @@ impl FlightModel {
         let b_m = if n.b { konst(c.b_m, "b_m")? } else { 0.0 };
         let v0_mps = if n.v0 { konst(c.v0_mps, "v0_mps")? } else { 0.0 };
         let mut inertia = [0.0; 4];
-        let coupling = set.lat() || (s.p_rad_s.is_some() && s.r_rad_s.is_some());
+        // The longitudinal set keeps the inertial pitch coupling when p, r and the roll/yaw
+        // inertias are all known, and neglects it otherwise (a longitudinal record such as the
+        // HFB-320 maps p and r but publishes no Ixx/Izz/Ixz), as the measured Cm does
+        // (`AirDataSample::measured_coefficients`). The lateral set always needs them.
+        let coupling = set.lat()
+            || (s.p_rad_s.is_some()
+                && s.r_rad_s.is_some()
+                && c.Ixx_kgm2.is_some()
+                && c.Izz_kgm2.is_some()
+                && c.Ixz_kgm2.is_some());
         if set.lon() {
             inertia[1] = konst(c.Iyy_kgm2, "Iyy_kgm2")?;
         }

@@ -26,7 +26,13 @@ fn shared() -> PathBuf {
         .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared"))
 }
 
-fn run(csv: &Path, truth: &Path, structure: ModelStructure, within_10pct: &[&str]) {
+fn run(
+    csv: &Path,
+    truth: &Path,
+    structure: ModelStructure,
+    adaptive_r: bool,
+    within_10pct: &[&str],
+) {
     if !csv.exists() || !truth.exists() {
         eprintln!(
             "SKIPPED: {} not found (set AEROIDENT_SHARED to the shared folder)",
@@ -36,7 +42,11 @@ fn run(csv: &Path, truth: &Path, structure: ModelStructure, within_10pct: &[&str
     }
     let samples = jsbsim::read_samples(csv, jsbsim::ReadOptions::default()).unwrap();
     let truth = jsbsim::read_truth(truth).unwrap();
-    let mut ekf = Ekf::new(EkfConfig::new(structure)).unwrap();
+    let mut cfg = EkfConfig::new(structure);
+    if !adaptive_r {
+        cfg.adaptive_r_window = 0;
+    }
+    let mut ekf = Ekf::new(cfg).unwrap();
     for s in &samples {
         ekf.update(s).unwrap_or_else(|e| panic!("t = {}: {e}", s.t_s));
     }
@@ -57,6 +67,7 @@ fn f16_lateral_doublets_sample() {
         &d.join("f16_ail_rud_doublets_20s_60Hz.csv"),
         &d.join("f16_ail_rud_doublets_truth.json"),
         ModelStructure::lateral(),
+        true,
         &["CY_beta", "CY_dr", "Cl_beta", "Cl_da", "Cl_dr", "Cn_beta", "Cn_da", "Cn_dr"],
     );
 }
@@ -68,6 +79,22 @@ fn f16_longitudinal_doublet_sample() {
         &d.join("f16_doublet_20s_120Hz.csv"),
         &d.join("f16_true_derivatives_trim.json"),
         ModelStructure::longitudinal(),
+        false,
         &["CL_alpha", "CL_q", "CL_de", "Cm_q", "Cm_de"],
+    );
+}
+
+/// The same noise-free record with R estimated from the innovations (the default): there is
+/// no sensor noise to estimate, R falls to its floor (σ/10), and the tables' non-linearity
+/// is then the dominant error: Cm_q ends +12.8 % (measured), so it is not in the list.
+#[test]
+fn f16_longitudinal_doublet_sample_adaptive_r() {
+    let d = shared().join("flightdata/jsbsim_f16_sample");
+    run(
+        &d.join("f16_doublet_20s_120Hz.csv"),
+        &d.join("f16_true_derivatives_trim.json"),
+        ModelStructure::longitudinal(),
+        true,
+        &["CL_alpha", "CL_q", "CL_de", "Cm_de"],
     );
 }

@@ -20,7 +20,6 @@
 
 use std::time::Instant;
 
-use aeroident_estimators::rls::{Rls, RlsConfig};
 use aeroident_estimators::sample::AirDataSample;
 use aeroident_estimators::smpe::SmpeSample;
 use aeroident_estimators::vocabulary::{ModelStructure, Param};
@@ -225,48 +224,48 @@ fn setup_err(what: &str, e: impl std::fmt::Display) -> ExperimentError {
     ExperimentError::Setup { what: what.into(), reason: e.to_string() }
 }
 
-/// The sample-driven estimator of `spec`. Supported here: `rls` (options `forgetting`,
-/// `init_samples`). The other kinds of [`super::scenario::SAMPLE_KINDS`] are refused with "not
-/// available in this build" (their factory lives with the estimators on another branch).
+/// The sample-driven estimator of `spec`, built by the shared factory
+/// ([`crate::estimators::build`]) with the generic priors. Options: `forgetting` (RLS, FTR).
 ///
 /// # Errors
 /// A message naming the kind, the unknown or bad option, or the configuration error.
 pub(super) fn build_sample_estimator(
     spec: &SampleEstimatorSpec,
 ) -> Result<Box<dyn Estimator>, String> {
-    match spec.kind.as_str() {
-        "rls" => {
-            let mut cfg = RlsConfig::default();
-            for (key, v) in &spec.options {
-                match key.as_str() {
-                    "forgetting" => {
-                        cfg.forgetting =
-                            v.as_float().or_else(|| v.as_integer().map(|i| i as f64)).ok_or_else(
-                                || format!("rls: `forgetting` must be a number, got {v}"),
-                            )?;
-                    }
-                    "init_samples" => {
-                        cfg.init_samples =
-                            v.as_integer().and_then(|i| usize::try_from(i).ok()).ok_or_else(
-                                || format!("rls: `init_samples` must be a count ≥ 0, got {v}"),
-                            )?;
-                    }
-                    other => {
-                        return Err(format!(
-                            "rls: unknown option `{other}` (options: forgetting, init_samples)"
-                        ));
-                    }
-                }
+    use crate::estimators::{EstimatorKind, EstimatorOptions, build};
+    use clap::ValueEnum;
+    let kind = EstimatorKind::from_str(&spec.kind, false).map_err(|_| {
+        format!(
+            "unknown sample-driven estimator `{}` ({})",
+            spec.kind,
+            super::scenario::SAMPLE_KINDS.join(" | ")
+        )
+    })?;
+    let mut options = EstimatorOptions::default();
+    for (key, v) in &spec.options {
+        match (key.as_str(), kind) {
+            ("forgetting", EstimatorKind::Rls | EstimatorKind::Ftr) => {
+                options.forgetting =
+                    v.as_float().or_else(|| v.as_integer().map(|i| i as f64)).ok_or_else(|| {
+                        format!("{}: `forgetting` must be a number, got {v}", spec.kind)
+                    })?;
             }
-            Rls::new(spec.model, cfg)
-                .map(|r| Box::new(r) as Box<dyn Estimator>)
-                .map_err(|e| format!("rls: {e}"))
+            ("parameter_walk_per_sqrt_s", EstimatorKind::Ekf) => {
+                options.parameter_walk_per_sqrt_s =
+                    v.as_float().or_else(|| v.as_integer().map(|i| i as f64)).ok_or_else(|| {
+                        format!("ekf: `parameter_walk_per_sqrt_s` must be a number, got {v}")
+                    })?;
+            }
+            (other, _) => {
+                return Err(format!(
+                    "{}: unknown option `{other}` (rls and ftr take `forgetting`, ekf `parameter_walk_per_sqrt_s`; the others take none)",
+                    spec.kind
+                ));
+            }
         }
-        k @ ("ekf" | "smpe" | "smpe-corrected" | "gradient" | "ftr") => Err(format!(
-            "sample-driven estimator `{k}` is not available in this build (only `rls`); its factory is added with the estimators"
-        )),
-        k => Err(format!("unknown sample-driven estimator `{k}`")),
     }
+    build(kind, spec.model, aeroident_estimators::Priors::generic(&spec.model), &options)
+        .map_err(|e| e.to_string())
 }
 
 /// A sample-driven channel.
@@ -285,16 +284,12 @@ struct ChannelRun {
     ch: Channelled,
 }
 
-/// Body → NED rotation of a body-axis vector at the attitude of `x` (SLJ (1.3-20)).
+/// Body → NED rotation of a body-axis vector at the attitude of `x`: the transpose of the one
+/// rotation matrix of the rigid body ([`aeroident_models::rigid_body::body_from_ned`]).
 fn body_to_ned(x: &F16State, v: [f64; 3]) -> [f64; 3] {
-    let (sph, cph) = x[f16::PHI].sin_cos();
-    let (sth, cth) = x[f16::THETA].sin_cos();
-    let (sps, cps) = x[f16::PSI].sin_cos();
-    // Rows of C_body←NED; C_NED←body is its transpose.
-    let r1 = [cth * cps, cth * sps, -sth];
-    let r2 = [sph * sth * cps - cph * sps, sph * sth * sps + cph * cps, sph * cth];
-    let r3 = [cph * sth * cps + sph * sps, cph * sth * sps - sph * cps, cph * cth];
-    [0, 1, 2].map(|k| r1[k] * v[0] + r2[k] * v[1] + r3[k] * v[2])
+    let c = aeroident_models::rigid_body::body_from_ned(x[f16::PHI], x[f16::THETA], x[f16::PSI]);
+    let w = c.transpose() * nalgebra::Vector3::new(v[0], v[1], v[2]);
+    [w[0], w[1], w[2]]
 }
 
 /// Resolves the scenario's increments (a `step_to_fraction` × the nominal derivative).

@@ -53,9 +53,9 @@
 //! `label` on every estimator. Winds: `[[wind]]` entries ([`WindConfig`]) and
 //! `estimator_wind = "unknown" | "known"` (for the two-aircraft estimators' model).
 //!
-//! Sample-driven kinds: `rls` (options `forgetting` ∈ (0, 1], default 1, and `init_samples`);
-//! `ekf`, `smpe`, `smpe-corrected`, `gradient`, `ftr` are recognised and refused with "not
-//! available in this build" until their factory arms exist.
+//! Sample-driven kinds (built by the shared factory, `crate::estimators::build`): `rls` and
+//! `ftr` (option `forgetting` ∈ (0, 1] per sample, default 1), `ekf`, `smpe`, `smpe-corrected`,
+//! `gradient`.
 //!
 //! The old syntax (`[params.dCm_alpha]`, `params = ["dCm_alpha"]`, `kind = "gradient"` for the
 //! two-aircraft gradient law) is refused with a message saying what to write instead.

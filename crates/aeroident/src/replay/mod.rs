@@ -280,6 +280,7 @@ pub fn replay<R: Read>(
         let o = EstimatorOptions {
             forgetting: opts.forgetting,
             sample_interval_s: mapping.nominal_dt_s,
+            ..EstimatorOptions::default()
         };
         build(opts.estimator, model.structure, model.priors, &o)
     };

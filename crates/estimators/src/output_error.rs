@@ -11,6 +11,9 @@
 //! Batch: it reads whole manoeuvres and allocates (it is not an [`crate::Estimator`]); it is
 //! built only with the crate's `std` feature.
 //!
+//! Before flight, [`design::predict_crb`] predicts the Cramér–Rao σ a planned input will give,
+//! from this module's simulation and sensitivities.
+//!
 //! # Model
 //!
 //! The structure's [`FlightModel`] (its state set, longitudinal, lateral or coupled, follows
@@ -94,6 +97,7 @@
 //! information matrix is singular at the estimate.
 
 mod coloured;
+pub mod design;
 mod simulation;
 
 use crate::EstimatorError;
@@ -726,6 +730,28 @@ fn check_identifiable(
     Ok(())
 }
 
+/// Names of the unknowns `β` in order ([`OeResult::names`]): the structure's parameters,
+/// `bias_<output>`, `x0_m<k>_<state>`.
+fn unknown_names(p: &Problem, structure: &ModelStructure) -> Vec<String> {
+    let mut names: Vec<String> = structure.names().map(String::from).collect();
+    // Biases in β order (declaration order).
+    let mut bias_names: Vec<(usize, String)> = p
+        .bias_of
+        .iter()
+        .enumerate()
+        .filter_map(|(j, b)| b.map(|b| (b, format!("bias_{}", p.outputs[j].name()))))
+        .collect();
+    bias_names.sort();
+    names.extend(bias_names.into_iter().map(|(_, n)| n));
+    let states = p.model.state_set().states();
+    for m in 0..p.man.len() {
+        for &k in &p.x0_free {
+            names.push(format!("x0_m{}_{}", m + 1, STATE_NAMES[states[k]]));
+        }
+    }
+    names
+}
+
 #[allow(clippy::too_many_arguments)]
 fn finish(
     p: &Problem,
@@ -762,22 +788,7 @@ fn finish(
     let col = coloured::covariance(&s, e, &w, &lengths, &minv, max_lag);
     let sigma_coloured =
         col.covariance.map(|c| (0..nb).map(|i| c[(i, i)].sqrt()).collect::<Vec<_>>());
-    let mut names: Vec<String> = structure.names().map(String::from).collect();
-    // Biases in β order (declaration order).
-    let mut bias_names: Vec<(usize, String)> = p
-        .bias_of
-        .iter()
-        .enumerate()
-        .filter_map(|(j, b)| b.map(|b| (b, format!("bias_{}", p.outputs[j].name()))))
-        .collect();
-    bias_names.sort();
-    names.extend(bias_names.into_iter().map(|(_, n)| n));
-    let states = p.model.state_set().states();
-    for m in 0..p.man.len() {
-        for &k in &p.x0_free {
-            names.push(format!("x0_m{}_{}", m + 1, STATE_NAMES[states[k]]));
-        }
-    }
+    let names = unknown_names(p, structure);
     let n = p.n_samples as f64;
     let residual_mean: Vec<f64> =
         (0..ny).map(|j| e.iter().skip(j).step_by(ny).sum::<f64>() / n).collect();

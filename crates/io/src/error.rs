@@ -103,13 +103,23 @@ pub enum FlightDataError {
         problem: RowProblem,
     },
     /// The record has no usable samples.
-    #[error("{file}: no usable samples ({rejected} rows rejected)")]
+    #[error("{file}: no usable samples ({rejected} rows rejected{})", first_reasons(.first))]
     NoSamples {
         /// Data file.
         file: String,
         /// Rows rejected.
         rejected: usize,
+        /// The first rejections (row and reason), so the cause is visible.
+        first: Vec<(u64, String)>,
     },
+}
+
+fn first_reasons(first: &[(u64, String)]) -> String {
+    if first.is_empty() {
+        return String::new();
+    }
+    let list: Vec<String> = first.iter().map(|(row, r)| format!("row {row}: {r}")).collect();
+    format!("; first: {}", list.join("; "))
 }
 
 /// Why a data row was rejected. Each names the column.

@@ -460,10 +460,20 @@ pub fn replay_with<R: Read>(
         }
     }
     let (Some(r), Some((spec, defaulted))) = (run, model) else {
-        return Err(FlightDataError::NoSamples { file, rejected: samples_rejected }.into());
+        return Err(FlightDataError::NoSamples {
+            file,
+            rejected: samples_rejected,
+            first: rejections.iter().take(3).map(|r| (r.row, r.reason.clone())).collect(),
+        }
+        .into());
     };
     if history.t_s.is_empty() && !diverged {
-        return Err(FlightDataError::NoSamples { file, rejected: samples_rejected }.into());
+        return Err(FlightDataError::NoSamples {
+            file,
+            rejected: samples_rejected,
+            first: rejections.iter().take(3).map(|r| (r.row, r.reason.clone())).collect(),
+        }
+        .into());
     }
     let status = if diverged { Status::Diverged } else { r.est.estimates().status };
     let parameters = history

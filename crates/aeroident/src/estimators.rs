@@ -29,6 +29,9 @@ pub enum EstimatorKind {
     SmpeCorrected,
     /// The model-reference gradient estimator.
     Gradient,
+    /// Batch maximum-likelihood output error (not real time: `replay` reads the whole record
+    /// and fits it, [`crate::replay::batch`]).
+    Oe,
 }
 
 impl EstimatorKind {
@@ -41,6 +44,7 @@ impl EstimatorKind {
             EstimatorKind::Smpe => "smpe",
             EstimatorKind::SmpeCorrected => "smpe-corrected",
             EstimatorKind::Gradient => "gradient",
+            EstimatorKind::Oe => "oe",
         }
     }
 
@@ -51,7 +55,7 @@ impl EstimatorKind {
     /// their own model (Kalman filters) do not: a differentiated rate is not an independent
     /// measurement, so they are not given one.
     pub fn uses_measured_coefficients(self) -> bool {
-        !matches!(self, EstimatorKind::Ekf)
+        !matches!(self, EstimatorKind::Ekf | EstimatorKind::Oe)
     }
 }
 
@@ -78,6 +82,11 @@ impl Default for EstimatorOptions {
 /// Why an estimator could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum BuildError {
+    /// A batch method has no per-sample estimator.
+    #[error(
+        "estimator `{0}` is a batch method (it reads the whole record): run it with `aeroident replay --estimator {0}`"
+    )]
+    Batch(&'static str),
     /// The estimator rejected its configuration.
     #[error("estimator `{estimator}`: {source}")]
     Config {
@@ -92,7 +101,8 @@ pub enum BuildError {
 /// order; used by the estimators that start from a prior) and `options`.
 ///
 /// # Errors
-/// [`BuildError::Config`] when the estimator rejects the structure or an option (e.g. a
+/// [`BuildError::Batch`] for the batch output-error method; [`BuildError::Config`] when the
+/// estimator rejects the structure or an option (e.g. a
 /// forgetting factor outside (0, 1], or a structure the EKF's flight model cannot integrate).
 pub fn build(
     kind: EstimatorKind,
@@ -138,6 +148,7 @@ pub fn build(
             GradientEstimator::new(structure, &priors, ModelReferenceConfig::default())
                 .map_err(config)?,
         ),
+        EstimatorKind::Oe => return Err(BuildError::Batch(kind.name())),
     })
 }
 

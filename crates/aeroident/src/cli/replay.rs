@@ -3,14 +3,16 @@
 //! ```text
 //! aeroident replay <data.csv|-> --map <map.toml> [--out <dir>]
 //!                  [--model longitudinal|lateral|six-axis|FILE]
-//!                  [--estimator rls|ekf|smpe|smpe-corrected|gradient] [--forgetting λ]
+//!                  [--estimator rls|ftr|ekf|smpe|smpe-corrected|gradient|oe] [--forgetting λ]
 //!                  [--derivatives auto|differentiate] [--diff-window N] [--realtime]
 //! ```
 //! Writes `<dir>/estimates.csv`, `<dir>/summary.json` and `<dir>/estimates.png` (estimates with
 //! ±2σ). With `-` the record is read from stdin and one CSV line of estimates per sample is
 //! written to stdout as it is produced (a live feed); the summary then goes to stderr unless
 //! `--out` is given. The model used is printed on stderr. A diverged estimator is an error
-//! (non-zero exit) after the summary is written.
+//! (non-zero exit) after the summary is written. `--estimator oe` is the batch output-error
+//! fit: it reads the whole record first (it says so), prints its iterations and writes
+//! `summary.json` (estimates, coloured-residual and Cramér–Rao σ, residual RMS).
 
 use crate::estimators::EstimatorKind;
 use crate::plot::{LineKind, Panel, Series, render_panels_png};
@@ -75,6 +77,9 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         on_model: Some(announce),
     };
     let live = args.data == "-";
+    if args.estimator == EstimatorKind::Oe {
+        return execute_batch(&args, &mapping, opts.model);
+    }
     if !live && args.out.is_none() {
         anyhow::bail!("give --out <dir> (or read `-` from stdin for a live feed on stdout)");
     }
@@ -206,5 +211,46 @@ pub fn plot_estimates(path: &Path, title: &str, h: &History) -> anyhow::Result<(
         })
         .collect();
     render_panels_png(path, title, &panels, 1000, 180)?;
+    Ok(())
+}
+
+/// `--estimator oe`: the batch output-error fit of the whole record.
+fn execute_batch(
+    args: &ReplayArgs,
+    mapping: &Mapping,
+    model: Option<ModelSpec>,
+) -> anyhow::Result<()> {
+    eprintln!(
+        "output error is a batch method: reading the whole record before fitting (not real time)"
+    );
+    let outcome = if args.data == "-" {
+        let reader = FlightDataReader::new(std::io::stdin().lock(), "-", mapping)?;
+        crate::replay::batch::fit_record(reader, mapping, model)?
+    } else {
+        let file =
+            std::fs::File::open(&args.data).with_context(|| format!("opening {}", args.data))?;
+        let reader = FlightDataReader::new(std::io::BufReader::new(file), &args.data, mapping)?;
+        crate::replay::batch::fit_record(reader, mapping, model)?
+    };
+    eprintln!("model: {}", outcome.model.name);
+    crate::cli::print_stdout(&outcome.result.to_string())?;
+    let text = serde_json::to_string_pretty(&outcome.summary)?;
+    match &args.out {
+        Some(dir) => {
+            let mut out = crate::outdir::OutputDir::open(dir)?;
+            out.write_bytes("summary.json", text.as_bytes())?;
+            eprintln!(
+                "{}: {} samples in {} manoeuvre(s), {} rejected, {} iterations in {:.3} s; wrote {}",
+                args.data,
+                outcome.summary.samples_read,
+                outcome.summary.manoeuvres,
+                outcome.summary.samples_rejected,
+                outcome.summary.iterations.len().saturating_sub(1),
+                outcome.summary.fit_wall_s,
+                dir.display()
+            );
+        }
+        None => eprintln!("{text}"),
+    }
     Ok(())
 }

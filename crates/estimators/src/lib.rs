@@ -35,7 +35,6 @@ pub mod ekf;
 pub mod estimator;
 pub mod flight_model;
 pub mod ftr;
-pub mod legacy_kalman;
 pub mod linalg;
 pub mod model_reference;
 #[cfg(feature = "std")]
@@ -53,10 +52,8 @@ pub use ftr::{Ftr, FtrConfig};
 pub use prior::{ParamPrior, Priors};
 pub use sample::{AirDataSample, AircraftConstants, CoefficientValues};
 pub use vocabulary::{Coefficient, MAX_PARAMS, ModelStructure, Param, Term};
-pub mod legacy_rls;
 /// Model-reference gradient estimator of thesis (3.3), the comparison of thesis §4.2.5.
 pub mod mrac;
-pub mod regressors;
 
 /// A parameter estimate at one time.
 ///

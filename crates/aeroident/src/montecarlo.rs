@@ -126,10 +126,8 @@ pub struct RunResult {
     pub outcome: Result<Vec<EstimatorRun>, String>,
 }
 
-/// The final results of one finished experiment.
-///
-/// # Errors
-/// A message when the summary cannot be formed (inconsistent logs: a bug).
+/// The final results of one finished experiment (`outcome` is `Err` with a message when the
+/// summary cannot be formed: inconsistent logs, a bug).
 pub fn run_result(index: u64, sensor_seed: u64, out: &RunOutput) -> RunResult {
     let outcome = report::summarize(out).map_err(|e| e.to_string()).map(|sm| {
         let mut ests: Vec<EstimatorRun> = Vec::new();
@@ -388,7 +386,7 @@ pub fn crb_sigmas(sc: &Scenario) -> Result<CrbTable, String> {
     let mut clean = sc.clone();
     clean.estimator.clear();
     let out = run(&clean).map_err(|e| format!("noise-free flight for the CRB: {e}"))?;
-    let mut done: Vec<(ModelStructure, Result<BTreeMap<String, f64>, String>)> = Vec::new();
+    let mut done: Vec<(ModelStructure, Result<CrbOfStructure, String>)> = Vec::new();
     for spec in &sc.estimator {
         let EstimatorSpec::Sample(s) = spec else {
             table.notes.push(format!(
@@ -414,6 +412,9 @@ pub fn crb_sigmas(sc: &Scenario) -> Result<CrbTable, String> {
     }
     Ok(table)
 }
+
+/// Cramér–Rao σ of one structure by parameter name.
+type CrbOfStructure = BTreeMap<String, f64>;
 
 fn crb_for(
     sc: &Scenario,

@@ -422,7 +422,7 @@ pub fn render_grouped_bars_png(
         .label_font((FONT, 12))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
-        .position(SeriesLabelPosition::LowerRight)
+        .position(SeriesLabelPosition::UpperLeft)
         .draw()
         .map_err(|e| backend_err(&e))?;
     root.present().map_err(|e| backend_err(&e))?;

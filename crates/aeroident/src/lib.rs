@@ -10,6 +10,7 @@ pub mod cli;
 pub mod estimators;
 /// Convergence-time and error metrics of estimate histories.
 pub mod metrics;
+pub mod montecarlo;
 pub mod outdir;
 /// Stacked time-series panels rendered to PNG.
 pub mod plot;

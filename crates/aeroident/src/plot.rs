@@ -214,6 +214,221 @@ pub fn render_panels_png(
     Ok(())
 }
 
+/// One histogram panel: the values binned into `bins` equal bins over their range (widened to
+/// include `line`), with a vertical dashed line at `line` (e.g. the truth).
+#[derive(Debug, Clone, PartialEq)]
+pub struct HistogramPanel {
+    /// Panel caption.
+    pub title: String,
+    /// X-axis label with unit.
+    pub x_label: String,
+    /// The values (non-finite ones are skipped).
+    pub values: Vec<f64>,
+    /// Number of bins (≥ 1).
+    pub bins: usize,
+    /// Position of the vertical line, if any.
+    pub line: Option<f64>,
+}
+
+/// Renders histogram panels in a grid of `columns` into a PNG at `path`, each cell
+/// `cell_px` = (width, height).
+///
+/// # Errors
+/// [`PlotError::InvalidFigure`] when there is no panel, a panel has 0 bins or `columns` = 0;
+/// [`PlotError::Backend`] when drawing or writing fails.
+pub fn render_histograms_png(
+    path: &Path,
+    title: &str,
+    panels: &[HistogramPanel],
+    columns: usize,
+    cell_px: (u32, u32),
+) -> Result<(), PlotError> {
+    register_fonts();
+    let invalid = |reason: String| PlotError::InvalidFigure { path: path.to_path_buf(), reason };
+    if panels.is_empty() || columns == 0 {
+        return Err(invalid("no panel to draw (or 0 columns)".into()));
+    }
+    if let Some(p) = panels.iter().find(|p| p.bins == 0) {
+        return Err(invalid(format!("panel `{}` has 0 bins", p.title)));
+    }
+    let backend_err = |e: &dyn std::fmt::Display| PlotError::Backend {
+        path: path.to_path_buf(),
+        detail: e.to_string(),
+    };
+    let rows = panels.len().div_ceil(columns);
+    let size = (cell_px.0 * columns as u32, 40 + cell_px.1 * rows as u32);
+    let root = BitMapBackend::new(path, size).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| backend_err(&e))?;
+    let root = root
+        .titled(title, (FONT, 22).into_font().style(FontStyle::Bold))
+        .map_err(|e| backend_err(&e))?;
+    let areas = root.split_evenly((rows, columns));
+    for (area, p) in areas.iter().zip(panels) {
+        let vals: Vec<f64> = p.values.iter().copied().filter(|v| v.is_finite()).collect();
+        let mut lo = vals.iter().copied().fold(f64::INFINITY, f64::min);
+        let mut hi = vals.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        if let Some(l) = p.line.filter(|l| l.is_finite()) {
+            lo = lo.min(l);
+            hi = hi.max(l);
+        }
+        if !lo.is_finite() {
+            (lo, hi) = (-1.0, 1.0);
+        }
+        let span = if hi - lo > 1e-12 * (hi.abs() + lo.abs()).max(1e-300) {
+            hi - lo
+        } else {
+            hi.abs().max(1.0) * 1e-3
+        };
+        let (lo, hi) = (lo - 0.05 * span, hi + 0.05 * span);
+        let w = (hi - lo) / p.bins as f64;
+        let mut counts = vec![0u32; p.bins];
+        for v in &vals {
+            let k = (((v - lo) / w) as usize).min(p.bins - 1);
+            counts[k] += 1;
+        }
+        let top = f64::from(counts.iter().copied().max().unwrap_or(0).max(1)) * 1.1;
+        let mut chart = ChartBuilder::on(area)
+            .caption(&p.title, (FONT, 15))
+            .margin(8)
+            .x_label_area_size(30)
+            .y_label_area_size(40)
+            .build_cartesian_2d(lo..hi, 0.0..top)
+            .map_err(|e| backend_err(&e))?;
+        chart
+            .configure_mesh()
+            .x_desc(p.x_label.as_str())
+            .y_desc("runs")
+            .x_labels(5)
+            .label_style((FONT, 11))
+            .axis_desc_style((FONT, 12))
+            .light_line_style(RGBColor(235, 235, 235))
+            .draw()
+            .map_err(|e| backend_err(&e))?;
+        chart
+            .draw_series(counts.iter().enumerate().map(|(k, &c)| {
+                let x0 = lo + k as f64 * w;
+                Rectangle::new([(x0, 0.0), (x0 + w, f64::from(c))], PALETTE[2].mix(0.7).filled())
+            }))
+            .map_err(|e| backend_err(&e))?;
+        if let Some(l) = p.line.filter(|l| l.is_finite()) {
+            chart
+                .draw_series(DashedLineSeries::new(
+                    vec![(l, 0.0), (l, top)],
+                    6,
+                    4,
+                    ShapeStyle::from(&PALETTE[1]).stroke_width(2),
+                ))
+                .map_err(|e| backend_err(&e))?;
+        }
+    }
+    root.present().map_err(|e| backend_err(&e))?;
+    Ok(())
+}
+
+/// Grouped bar chart: one group per category, one bar per series (`(label, values)`, one
+/// value per category, `None` = no bar), values on a fixed y range, with an optional
+/// horizontal dashed reference line (e.g. a 0.95 coverage target).
+///
+/// # Errors
+/// [`PlotError::InvalidFigure`] when there is no category or series, or a series's length
+/// differs from the categories'; [`PlotError::Backend`] when drawing or writing fails.
+#[allow(clippy::too_many_arguments)]
+pub fn render_grouped_bars_png(
+    path: &Path,
+    title: &str,
+    y_label: &str,
+    categories: &[String],
+    series: &[(String, Vec<Option<f64>>)],
+    y_range: (f64, f64),
+    reference: Option<f64>,
+    size_px: (u32, u32),
+) -> Result<(), PlotError> {
+    register_fonts();
+    let invalid = |reason: String| PlotError::InvalidFigure { path: path.to_path_buf(), reason };
+    if categories.is_empty() || series.is_empty() {
+        return Err(invalid("no category or no series".into()));
+    }
+    if let Some((l, v)) = series.iter().find(|(_, v)| v.len() != categories.len()) {
+        return Err(invalid(format!(
+            "series `{l}` has {} values for {} categories",
+            v.len(),
+            categories.len()
+        )));
+    }
+    let backend_err = |e: &dyn std::fmt::Display| PlotError::Backend {
+        path: path.to_path_buf(),
+        detail: e.to_string(),
+    };
+    let root = BitMapBackend::new(path, size_px).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| backend_err(&e))?;
+    let nc = categories.len() as f64;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, (FONT, 20))
+        .margin(10)
+        .x_label_area_size(60)
+        .y_label_area_size(50)
+        .build_cartesian_2d(0.0..nc, y_range.0..y_range.1)
+        .map_err(|e| backend_err(&e))?;
+    let cats = categories.to_vec();
+    chart
+        .configure_mesh()
+        .x_labels(categories.len() * 2 + 1)
+        .x_label_formatter(&move |x: &f64| {
+            let k = x.floor() as usize;
+            if (x - x.floor() - 0.5).abs() < 1e-6 && k < cats.len() {
+                cats[k].clone()
+            } else {
+                String::new()
+            }
+        })
+        .disable_x_mesh()
+        .y_desc(y_label)
+        .label_style((FONT, 12))
+        .axis_desc_style((FONT, 13))
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(|e| backend_err(&e))?;
+    let ns = series.len() as f64;
+    let bw = 0.8 / ns;
+    for (j, (label, vals)) in series.iter().enumerate() {
+        let color = PALETTE[(j + 1) % PALETTE.len()];
+        let lo = y_range.0;
+        chart
+            .draw_series(vals.iter().enumerate().filter_map(|(k, v)| {
+                v.map(|v| {
+                    let x0 = k as f64 + 0.1 + j as f64 * bw;
+                    Rectangle::new(
+                        [(x0, lo), (x0 + bw, v.clamp(y_range.0, y_range.1))],
+                        color.filled(),
+                    )
+                })
+            }))
+            .map_err(|e| backend_err(&e))?
+            .label(label.as_str())
+            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 12, y + 5)], color.filled()));
+    }
+    if let Some(r) = reference {
+        chart
+            .draw_series(DashedLineSeries::new(
+                vec![(0.0, r), (nc, r)],
+                8,
+                5,
+                ShapeStyle::from(&BLACK).stroke_width(1),
+            ))
+            .map_err(|e| backend_err(&e))?;
+    }
+    chart
+        .configure_series_labels()
+        .label_font((FONT, 12))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperLeft)
+        .draw()
+        .map_err(|e| backend_err(&e))?;
+    root.present().map_err(|e| backend_err(&e))?;
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -4,6 +4,7 @@ use clap::{Parser, Subcommand};
 
 pub mod bench;
 pub mod f16;
+pub mod montecarlo;
 pub mod poc;
 pub mod replay;
 pub mod run;
@@ -26,6 +27,8 @@ pub enum Command {
     F16(f16::F16Args),
     /// Run an aircraft estimation scenario (no argument: the built-in default).
     Run(run::RunArgs),
+    /// Monte Carlo campaign: N seeded noisy flights of a scenario, statistics per estimator.
+    Montecarlo(montecarlo::MonteCarloArgs),
     /// Replay a recorded flight through an estimator, sample by sample.
     Replay(replay::ReplayArgs),
     /// Measure simulation speed (one F-16 RK4 step, real-time factor).
@@ -42,6 +45,7 @@ impl Cli {
             Command::Poc(a) => poc::execute(a),
             Command::F16(a) => f16::execute(a),
             Command::Run(a) => run::execute(a),
+            Command::Montecarlo(a) => montecarlo::execute(a),
             Command::Replay(a) => replay::execute(a),
             Command::Bench(a) => bench::execute(a),
         }

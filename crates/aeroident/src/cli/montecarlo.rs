@@ -1,0 +1,212 @@
+//! `aeroident montecarlo [scenario.toml] --runs N [--out DIR] [--json] [--seed S]`: N seeded
+//! noisy closed-loop flights of the `run` experiment in parallel and their statistics per
+//! estimator and parameter ([`crate::montecarlo`]; the seed rule is there).
+//!
+//! - default: a table on stdout, `DIR/montecarlo.json` (statistics, failed runs, CRB notes),
+//!   `DIR/runs.json` (every run's final results), `DIR/histograms_<estimator>.png` (final
+//!   estimates of each primary derivative with the truth line) and `DIR/coverage.png`;
+//!   `DIR` defaults to `./aeroident-out/montecarlo`.
+//! - `--json`: only the summary document of [`crate::montecarlo::json_summary`] on stdout (no
+//!   files); failed runs are listed on stderr.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context as _;
+
+use super::run::DEFAULT_SCENARIO;
+use crate::aircraft::Scenario;
+use crate::montecarlo::{Campaign, campaign, json_summary};
+use crate::plot::{HistogramPanel, render_grouped_bars_png, render_histograms_png};
+
+/// Arguments of `aeroident montecarlo`.
+#[derive(Debug, clap::Args)]
+pub struct MonteCarloArgs {
+    /// Scenario file (TOML). Without it, the built-in default scenario (`aeroident run`'s).
+    pub scenario: Option<PathBuf>,
+    /// Number of runs.
+    #[arg(long, default_value_t = 100)]
+    pub runs: u64,
+    /// Output directory (default `./aeroident-out/montecarlo`).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Print only the JSON summary on stdout (no files).
+    #[arg(long)]
+    pub json: bool,
+    /// Campaign seed (every run's seeds derive from it and the run index).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Skip the PNG figures.
+    #[arg(long)]
+    pub no_figures: bool,
+}
+
+fn opt(v: Option<f64>, prec: usize) -> String {
+    v.map_or("—".into(), |x| format!("{x:.prec$e}"))
+}
+
+/// The readable table of a campaign.
+pub fn table(c: &Campaign) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "Monte Carlo `{}`: {} runs, seed {}, {:.1} s wall on {} threads",
+        c.scenario, c.runs, c.seed, c.wall_s, c.threads
+    );
+    let _ = writeln!(
+        s,
+        "{:<15} {:<10} {:>11} {:>10} {:>9} {:>9} {:>9} {:>6} {:>9} {:>8}",
+        "estimator",
+        "param",
+        "truth",
+        "bias",
+        "scatter",
+        "mean σ",
+        "σ_CRB",
+        "cov2σ",
+        "scat/CRB",
+        "t10 med"
+    );
+    for e in &c.estimators {
+        for p in &e.parameters {
+            let _ = writeln!(
+                s,
+                "{:<15} {:<10} {:>11} {:>10} {:>9} {:>9} {:>9} {:>6} {:>9} {:>8}",
+                e.name,
+                format!("{}{}", p.name, if p.primary { "*" } else { "" }),
+                opt(p.truth, 3),
+                opt(p.bias, 2),
+                opt(p.scatter, 2),
+                opt(p.mean_sigma, 2),
+                opt(p.crb_sigma, 2),
+                p.coverage_2sigma.map_or("—".into(), |x| format!("{:.0} %", 100.0 * x)),
+                p.scatter.zip(p.crb_sigma).map_or("—".into(), |(a, b)| format!("{:.1}", a / b)),
+                p.median_time_to_10pct_s.map_or("never".into(), |t| format!("{t:.2} s")),
+            );
+        }
+        let _ = writeln!(s, "{}: {} runs used, {} failed", e.name, e.runs_ok, e.failed_runs.len());
+        for f in &e.failed_runs {
+            let _ = writeln!(s, "  run {} failed: {}", f.run, f.reason);
+        }
+    }
+    for n in &c.crb_notes {
+        let _ = writeln!(s, "note: {n}");
+    }
+    let _ = writeln!(
+        s,
+        "* = primary derivative; t10 med = median time to stay within ±10 % (never: ≥ half the runs never do)"
+    );
+    s
+}
+
+/// Writes `montecarlo.json`, `runs.json` and (unless `figures` is false) the figures into `dir`.
+///
+/// # Errors
+/// Unwritable files or figures, named.
+pub fn write_outputs(c: &Campaign, dir: &Path, figures: bool) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let path = dir.join("montecarlo.json");
+    std::fs::write(&path, serde_json::to_string_pretty(c)?)
+        .with_context(|| format!("writing {}", path.display()))?;
+    let path = dir.join("runs.json");
+    std::fs::write(&path, serde_json::to_string(&c.results)?)
+        .with_context(|| format!("writing {}", path.display()))?;
+    if !figures {
+        return Ok(());
+    }
+    let mut categories: Vec<String> = Vec::new();
+    let mut coverage: Vec<(String, Vec<Option<f64>>)> = Vec::new();
+    for e in &c.estimators {
+        let primaries: Vec<_> = e.parameters.iter().filter(|p| p.primary).collect();
+        for p in &primaries {
+            if !categories.contains(&p.name) {
+                categories.push(p.name.clone());
+            }
+        }
+        let k = c.estimators.iter().position(|x| x.name == e.name).unwrap_or(0);
+        let panels: Vec<HistogramPanel> = primaries
+            .iter()
+            .map(|p| {
+                let j = e.parameters.iter().position(|q| q.name == p.name).unwrap_or(0);
+                let values = c
+                    .results
+                    .iter()
+                    .filter_map(|r| r.outcome.as_ref().ok())
+                    .filter_map(|ests| ests.iter().find(|x| x.name == e.name))
+                    .filter(|x| x.failure.is_none())
+                    .filter_map(|x| x.params.get(j).and_then(|q| q.r#final))
+                    .collect();
+                HistogramPanel {
+                    title: format!("{} (truth dashed)", p.name),
+                    x_label: p.name.clone(),
+                    values,
+                    bins: 20,
+                    line: p.truth,
+                }
+            })
+            .collect();
+        if !panels.is_empty() {
+            let safe: String = e
+                .name
+                .chars()
+                .map(|ch| if ch.is_ascii_alphanumeric() { ch } else { '_' })
+                .collect();
+            render_histograms_png(
+                &dir.join(format!("histograms_{k}_{safe}.png")),
+                &format!("{}: final estimates over {} runs", e.name, e.runs_ok),
+                &panels,
+                4,
+                (360, 260),
+            )?;
+        }
+    }
+    for e in &c.estimators {
+        if e.parameters.iter().all(|p| p.coverage_2sigma.is_none()) {
+            continue;
+        }
+        let vals = categories
+            .iter()
+            .map(|n| e.parameters.iter().find(|p| &p.name == n).and_then(|p| p.coverage_2sigma))
+            .collect();
+        coverage.push((e.name.clone(), vals));
+    }
+    if !categories.is_empty() && !coverage.is_empty() {
+        render_grouped_bars_png(
+            &dir.join("coverage.png"),
+            &format!("±2σ coverage of the truth over {} runs (dashed: 0.95)", c.runs),
+            "fraction of runs",
+            &categories,
+            &coverage,
+            (0.0, 1.05),
+            Some(0.95),
+            (1200, 500),
+        )?;
+    }
+    Ok(())
+}
+
+/// Runs `aeroident montecarlo`.
+///
+/// # Errors
+/// An unreadable or invalid scenario, `--runs 0`, unwritable outputs.
+pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
+    let sc = match &args.scenario {
+        Some(p) => Scenario::from_path(p)?,
+        None => Scenario::from_toml(DEFAULT_SCENARIO, "<embedded scenarios/default.toml>")?,
+    };
+    anyhow::ensure!(args.runs >= 1, "--runs must be at least 1");
+    let c = campaign(&sc, args.runs, args.seed).map_err(anyhow::Error::msg)?;
+    if args.json {
+        for e in &c.estimators {
+            for f in &e.failed_runs {
+                eprintln!("{}: run {} failed: {}", e.name, f.run, f.reason);
+            }
+        }
+        return super::print_stdout(&serde_json::to_string_pretty(&json_summary(&c))?)
+            .map_err(Into::into);
+    }
+    let dir = args.out.unwrap_or_else(|| PathBuf::from("aeroident-out").join("montecarlo"));
+    write_outputs(&c, &dir, !args.no_figures)?;
+    super::print_stdout(&format!("{}wrote {}", table(&c), dir.display()))?;
+    Ok(())
+}

@@ -1,0 +1,570 @@
+//! Monte Carlo campaigns of the closed-loop `run` experiment (issue 9 item 5): `N` seeded noisy
+//! flights of one scenario in parallel (rayon), and per estimator and parameter the statistics
+//! of the final estimates: bias, scatter, mean reported σ, ±2σ coverage, the predicted
+//! Cramér–Rao σ of the flight's inputs, and the median time to within ±10 %.
+//!
+//! # Seed rule
+//!
+//! Run `i` (0-based) of a campaign with seed `S` flies the scenario with its sensor-noise seed
+//! and each seeded wind's (Dryden turbulence) seed replaced by
+//! `seed(S, i, stream) = splitmix64(S + 0x9E37_79B9_7F4A_7C15 · (1 + 64 i + stream))`
+//! (wrapping arithmetic; [`run_seed`]), stream 0 for the sensors and stream `1 + j` for the
+//! `j`-th `[[wind]]` entry. Everything else (trim, pilot inputs, damage, estimators) is the
+//! scenario's own. A run depends only on `(S, i)`, so its result is bit-identical whatever the
+//! number of threads or the order in which the runs finish.
+//!
+//! # Statistics (per estimator and parameter; [`statistics`])
+//!
+//! Over the runs in which the estimator neither failed nor diverged (`runs_ok`; a failed run of
+//! the whole experiment or of one estimator is counted and listed, never averaged in):
+//! - `truth`: the reference's true value at the end (after the damage, if any);
+//! - `bias`: mean of the final estimates − `truth`;
+//! - `scatter`: sample standard deviation (`n − 1`) of the final estimates;
+//! - `mean_sigma`: mean of the final reported σ (`null` when the method reports none);
+//! - `coverage_2sigma`: fraction of `runs_ok` whose final `|estimate − truth| ≤ 2σ` (a run with
+//!   no estimate or no σ for the parameter does not cover); `null` for methods without σ;
+//! - `median_time_to_10pct_s`: median over `runs_ok` of the time from the start of the
+//!   excitation until the estimate stays within ±10 % of the truth up to the damage (or the end)
+//!   ([`crate::aircraft::report`]); a run that never settles counts as +∞, and the median is
+//!   `null` when at least half never settle;
+//! - `crb_sigma`: [`crb_sigmas`], the Cramér–Rao σ predicted by
+//!   [`aeroident_estimators::output_error::design::predict_crb`] for the data since the last
+//!   change of the truth (module doc there; Klein & Morelli 2006 ch. 6).
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use aeroident_estimators::flight_model::Output;
+use aeroident_estimators::output_error::design::{
+    DesignPlan, FlightCondition, PlannedInputs, Sensor, predict_crb, trim_biases,
+};
+use aeroident_estimators::vocabulary::ModelStructure;
+use aeroident_models::f16::{self, AeroIncrements, F16};
+use aeroident_signals::config::WindConfig;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::aircraft::air_data::{ACCEL_SIGMA_FPS2, M_PER_FT, PA_PER_PSF, f16_constants};
+use crate::aircraft::report::{self, PRIMARY_DERIVATIVES};
+use crate::aircraft::scenario::EstimatorSpec;
+use crate::aircraft::{RunOutput, Scenario, run};
+
+/// The golden-ratio increment of SplitMix64 (Steele, Lea & Flood, OOPSLA 2014).
+const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
+
+/// Seed streams per run: 0 = sensors, `1 + j` = the `j`-th wind entry (at most 63 winds).
+pub const STREAMS_PER_RUN: u64 = 64;
+
+/// SplitMix64's output function (Steele, Lea & Flood 2014): a bijective 64-bit mixer.
+pub fn splitmix64(x: u64) -> u64 {
+    let mut z = x;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// The seed of `stream` in run `run` of a campaign with seed `campaign_seed` (module doc).
+pub fn run_seed(campaign_seed: u64, run: u64, stream: u64) -> u64 {
+    let k = 1u64.wrapping_add(run.wrapping_mul(STREAMS_PER_RUN)).wrapping_add(stream);
+    splitmix64(campaign_seed.wrapping_add(GOLDEN.wrapping_mul(k)))
+}
+
+/// The scenario of run `run`: `sc` with the sensor and wind seeds of the seed rule.
+pub fn seeded_scenario(sc: &Scenario, campaign_seed: u64, run: u64) -> Scenario {
+    let mut s = sc.clone();
+    s.sensors.seed = run_seed(campaign_seed, run, 0);
+    for (j, w) in s.wind.iter_mut().enumerate() {
+        if let WindConfig::Dryden { seed, .. } = w {
+            *seed = run_seed(campaign_seed, run, 1 + j as u64);
+        }
+    }
+    s
+}
+
+/// One parameter's final result in one run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ParamRun {
+    /// Vocabulary name.
+    pub name: String,
+    /// Whether it is one of [`PRIMARY_DERIVATIVES`].
+    pub primary: bool,
+    /// True value at the end of the run.
+    pub truth: Option<f64>,
+    /// True value before the damage.
+    pub truth_before: Option<f64>,
+    /// True value after the damage.
+    pub truth_after: Option<f64>,
+    /// Final estimate (`None`: not identified).
+    pub r#final: Option<f64>,
+    /// Final reported σ.
+    pub sigma: Option<f64>,
+    /// Time from the excitation until within ±10 % to the damage (or the end), s.
+    pub time_to_10pct_s: Option<f64>,
+    /// Time from the damage until within ±10 % of the new truth to the end, s.
+    pub reconvergence_10pct_s: Option<f64>,
+}
+
+/// One estimator's result in one run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EstimatorRun {
+    /// Estimator label.
+    pub name: String,
+    /// Failure or divergence (time and message); its estimates are not used.
+    pub failure: Option<String>,
+    /// Per parameter, in the structure's order.
+    pub params: Vec<ParamRun>,
+}
+
+/// One run of a campaign.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RunResult {
+    /// Run index.
+    pub index: u64,
+    /// Sensor-noise seed (stream 0).
+    pub sensor_seed: u64,
+    /// Per estimator; `Err`: the whole experiment failed (message).
+    pub outcome: Result<Vec<EstimatorRun>, String>,
+}
+
+/// The final results of one finished experiment (`outcome` is `Err` with a message when the
+/// summary cannot be formed: inconsistent logs, a bug).
+pub fn run_result(index: u64, sensor_seed: u64, out: &RunOutput) -> RunResult {
+    let outcome = report::summarize(out).map_err(|e| e.to_string()).map(|sm| {
+        let mut ests: Vec<EstimatorRun> = Vec::new();
+        for p in &sm.parameters {
+            if ests.last().is_none_or(|e| e.name != p.estimator) {
+                let diverged = p.status == Some("diverged");
+                let failure = p.failure.clone().or_else(|| diverged.then(|| "diverged".into()));
+                ests.push(EstimatorRun { name: p.estimator.clone(), failure, params: Vec::new() });
+            }
+            let e = ests.last_mut().expect("pushed above");
+            if let Some(f) = p.r#final.filter(|f| !f.is_finite()) {
+                e.failure
+                    .get_or_insert_with(|| format!("{}: non-finite final estimate {f}", p.name));
+            }
+            e.params.push(ParamRun {
+                name: p.name.clone(),
+                primary: PRIMARY_DERIVATIVES.contains(&p.name.as_str())
+                    && p.quantity == "derivative",
+                truth: p.truth,
+                truth_before: p.truth_before,
+                truth_after: p.truth_after,
+                r#final: p.r#final,
+                sigma: p.sigma,
+                time_to_10pct_s: p.time_to_10pct_s,
+                reconvergence_10pct_s: p.reconvergence_10pct_s,
+            });
+        }
+        ests
+    });
+    RunResult { index, sensor_seed, outcome }
+}
+
+/// Runs `runs` seeded flights of `sc` on the current rayon pool; results in run order.
+pub fn run_all(sc: &Scenario, runs: u64, campaign_seed: u64) -> Vec<RunResult> {
+    (0..runs)
+        .into_par_iter()
+        .map(|i| {
+            let s = seeded_scenario(sc, campaign_seed, i);
+            match run(&s) {
+                Ok(out) => run_result(i, s.sensors.seed, &out),
+                Err(e) => {
+                    RunResult { index: i, sensor_seed: s.sensors.seed, outcome: Err(e.to_string()) }
+                }
+            }
+        })
+        .collect()
+}
+
+/// A failed run of one estimator (or of the whole experiment).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FailedRun {
+    /// Run index.
+    pub run: u64,
+    /// Why.
+    pub reason: String,
+}
+
+/// Statistics of one parameter over a campaign (module doc).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ParamStats {
+    /// Vocabulary name.
+    pub name: String,
+    /// Whether it is one of [`PRIMARY_DERIVATIVES`].
+    pub primary: bool,
+    /// True value at the end.
+    pub truth: Option<f64>,
+    /// True value before the damage.
+    pub truth_before: Option<f64>,
+    /// True value after the damage.
+    pub truth_after: Option<f64>,
+    /// Runs with a final estimate.
+    pub n_estimates: usize,
+    /// Mean final estimate − truth.
+    pub bias: Option<f64>,
+    /// Sample standard deviation of the final estimates.
+    pub scatter: Option<f64>,
+    /// Mean final reported σ.
+    pub mean_sigma: Option<f64>,
+    /// Fraction of the estimator's good runs whose ±2σ covers the truth.
+    pub coverage_2sigma: Option<f64>,
+    /// Predicted Cramér–Rao σ ([`crb_sigmas`]).
+    pub crb_sigma: Option<f64>,
+    /// Median time to within ±10 %, s (module doc).
+    pub median_time_to_10pct_s: Option<f64>,
+    /// Median time from the damage to within ±10 % of the new truth, s.
+    pub median_reconvergence_10pct_s: Option<f64>,
+}
+
+/// Statistics of one estimator over a campaign.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EstimatorStats {
+    /// Estimator label.
+    pub name: String,
+    /// Runs in which it neither failed nor diverged (the statistics' sample).
+    pub runs_ok: usize,
+    /// Runs excluded from the statistics, with the reason.
+    pub failed_runs: Vec<FailedRun>,
+    /// Per parameter.
+    pub parameters: Vec<ParamStats>,
+}
+
+/// The Cramér–Rao σ per estimator label and parameter name, or why there is none.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct CrbTable {
+    /// `label → (parameter name → σ)`; absent entries are `null`.
+    pub sigma: BTreeMap<String, BTreeMap<String, f64>>,
+    /// Notes on estimators or parameters without a bound.
+    pub notes: Vec<String>,
+}
+
+fn mean(v: &[f64]) -> Option<f64> {
+    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+}
+
+fn sample_std(v: &[f64]) -> Option<f64> {
+    let m = mean(v)?;
+    (v.len() >= 2)
+        .then(|| (v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (v.len() - 1) as f64).sqrt())
+}
+
+/// Median with `None` as +∞; `None` when the median itself is +∞ or there is no value.
+pub fn median_with_never(v: &[Option<f64>]) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    let mut s: Vec<f64> = v.iter().map(|x| x.unwrap_or(f64::INFINITY)).collect();
+    s.sort_by(f64::total_cmp);
+    let n = s.len();
+    let m = if n % 2 == 1 { s[n / 2] } else { 0.5 * (s[n / 2 - 1] + s[n / 2]) };
+    m.is_finite().then_some(m)
+}
+
+/// The campaign statistics of `runs` (module doc), with the estimators in `names` order.
+pub fn statistics(runs: &[RunResult], names: &[String], crb: &CrbTable) -> Vec<EstimatorStats> {
+    names
+        .iter()
+        .map(|name| {
+            let mut failed = Vec::new();
+            let mut ok: Vec<&EstimatorRun> = Vec::new();
+            for r in runs {
+                match &r.outcome {
+                    Err(e) => failed.push(FailedRun { run: r.index, reason: e.clone() }),
+                    Ok(ests) => match ests.iter().find(|e| &e.name == name) {
+                        None => failed
+                            .push(FailedRun { run: r.index, reason: "estimator absent".into() }),
+                        Some(e) => match &e.failure {
+                            Some(f) => failed.push(FailedRun { run: r.index, reason: f.clone() }),
+                            None => ok.push(e),
+                        },
+                    },
+                }
+            }
+            let parameters = ok
+                .first()
+                .map(|first| {
+                    first
+                        .params
+                        .iter()
+                        .enumerate()
+                        .map(|(k, p0)| {
+                            let ps: Vec<&ParamRun> =
+                                ok.iter().filter_map(|e| e.params.get(k)).collect();
+                            param_stats(
+                                p0,
+                                &ps,
+                                crb.sigma.get(name).and_then(|m| m.get(&p0.name)).copied(),
+                            )
+                        })
+                        .collect()
+                })
+                .unwrap_or_default();
+            EstimatorStats {
+                name: name.clone(),
+                runs_ok: ok.len(),
+                failed_runs: failed,
+                parameters,
+            }
+        })
+        .collect()
+}
+
+fn param_stats(p0: &ParamRun, ps: &[&ParamRun], crb: Option<f64>) -> ParamStats {
+    let finals: Vec<f64> = ps.iter().filter_map(|p| p.r#final).collect();
+    let sigmas: Vec<f64> = ps.iter().filter_map(|p| p.sigma).collect();
+    let truth = p0.truth;
+    let coverage = (!sigmas.is_empty() && truth.is_some()).then(|| {
+        let covered = ps
+            .iter()
+            .filter(|p| match (p.r#final, p.sigma, p.truth) {
+                (Some(f), Some(s), Some(t)) => (f - t).abs() <= 2.0 * s,
+                _ => false,
+            })
+            .count();
+        covered as f64 / ps.len() as f64
+    });
+    let times: Vec<Option<f64>> = ps.iter().map(|p| p.time_to_10pct_s).collect();
+    let reconv: Vec<Option<f64>> = ps.iter().map(|p| p.reconvergence_10pct_s).collect();
+    let changes = p0.truth_before != p0.truth_after;
+    ParamStats {
+        name: p0.name.clone(),
+        primary: p0.primary,
+        truth,
+        truth_before: p0.truth_before,
+        truth_after: p0.truth_after,
+        n_estimates: finals.len(),
+        bias: mean(&finals).zip(truth).map(|(m, t)| m - t),
+        scatter: sample_std(&finals),
+        mean_sigma: mean(&sigmas),
+        coverage_2sigma: coverage,
+        crb_sigma: crb,
+        median_time_to_10pct_s: median_with_never(&times),
+        median_reconvergence_10pct_s: if changes { median_with_never(&reconv) } else { None },
+    }
+}
+
+/// Outputs of the Cramér–Rao prediction and their white-noise σ at the scenario's sensor
+/// scale: the raw sensor levels of [`crate::aircraft::sensors`] (airspeed 11 ft/s, vanes
+/// 0.1°, gyros 0.14°/s, attitude 0.573°, accelerometers 0.98 ft/s²) before the matched
+/// smoother, which cannot add information.
+pub fn crb_sensors(scale: f64) -> Vec<Sensor> {
+    let d = f64::to_radians;
+    let a = ACCEL_SIGMA_FPS2 * M_PER_FT;
+    [
+        (Output::Vt, 11.0 * M_PER_FT),
+        (Output::Alpha, d(0.1)),
+        (Output::Beta, d(0.1)),
+        (Output::P, d(0.14)),
+        (Output::Q, d(0.14)),
+        (Output::R, d(0.14)),
+        (Output::Phi, d(0.573)),
+        (Output::Theta, d(0.573)),
+        (Output::Ax, a),
+        (Output::Ay, a),
+        (Output::Az, a),
+    ]
+    .into_iter()
+    .map(|(output, s)| Sensor { output, sigma: s * scale })
+    .collect()
+}
+
+/// The predicted Cramér–Rao σ of every sample-driven estimator's parameters for the scenario's
+/// flight: an output-error fit of the estimator's structure ([`predict_crb`]) to the data from
+/// the last change of the truth (the damage) to the end, starting from the trim condition, with
+/// `θ` = the reference's true local derivatives in that interval (biases re-trimmed for the
+/// estimators' flight model, [`trim_biases`]), the flown control perturbations about trim, and
+/// white sensor noise of [`crb_sensors`] on the outputs the structure predicts. It ignores the
+/// turbulence (process noise) and the F-16's nonlinearity beyond the local derivatives, so it
+/// is the bound of an ideal output-error estimator on that interval. Two-aircraft estimators
+/// (increments) get no bound (a note).
+///
+/// # Errors
+/// A message when the noise-free flight fails; per-structure failures of the prediction are
+/// notes and leave the σ `null`.
+pub fn crb_sigmas(sc: &Scenario) -> Result<CrbTable, String> {
+    let mut table = CrbTable::default();
+    let mut clean = sc.clone();
+    clean.estimator.clear();
+    let out = run(&clean).map_err(|e| format!("noise-free flight for the CRB: {e}"))?;
+    let mut done: Vec<(ModelStructure, Result<CrbOfStructure, String>)> = Vec::new();
+    for spec in &sc.estimator {
+        let EstimatorSpec::Sample(s) = spec else {
+            table.notes.push(format!(
+                "{}: two-aircraft estimator (increments), no Cramér–Rao bound",
+                spec.label()
+            ));
+            continue;
+        };
+        let r = match done.iter().find(|(st, _)| *st == s.model) {
+            Some((_, r)) => r.clone(),
+            None => {
+                let r = crb_for(sc, &out, &s.model);
+                done.push((s.model, r.clone()));
+                r
+            }
+        };
+        match r {
+            Ok(m) => {
+                table.sigma.insert(spec.label(), m);
+            }
+            Err(e) => table.notes.push(format!("{}: no Cramér–Rao bound: {e}", spec.label())),
+        }
+    }
+    Ok(table)
+}
+
+/// Cramér–Rao σ of one structure by parameter name.
+type CrbOfStructure = BTreeMap<String, f64>;
+
+fn crb_for(
+    sc: &Scenario,
+    out: &RunOutput,
+    structure: &ModelStructure,
+) -> Result<BTreeMap<String, f64>, String> {
+    let f16m = F16::new(sc.trim.xcg).map_err(|e| e.to_string())?;
+    let x0 = out.trim.state;
+    let u0 = out.trim.controls;
+    let (_, outs) = f16m.evaluate(&x0, &u0, &AeroIncrements::zero()).map_err(|e| e.to_string())?;
+    let vt = x0[f16::VT] * M_PER_FT;
+    let rho = 2.0 * outs.qbar_psf * PA_PER_PSF / (vt * vt);
+    let condition = FlightCondition {
+        vt_mps: vt,
+        alpha_rad: x0[f16::ALPHA],
+        theta_rad: x0[f16::THETA],
+        rho_kgpm3: rho,
+        thrust_n: outs.thrust_lbf * crate::aircraft::air_data::N_PER_LBF,
+        de_rad: u0.elevator_rad,
+        da_rad: u0.aileron_rad,
+        dr_rad: u0.rudder_rad,
+    };
+    let last = out.epochs.last().ok_or("no truth epoch")?;
+    let theta: Vec<f64> = structure
+        .params()
+        .map(|p| {
+            last.derivatives
+                .truth(structure, p)
+                .ok_or(format!("no single true value of {}", p.name()))
+        })
+        .collect::<Result<_, _>>()?;
+    let constants = f16_constants(&f16m, sc.trim.vt_fps * M_PER_FT);
+    let theta =
+        trim_biases(structure, &theta, &constants, &condition).map_err(|e| e.to_string())?;
+    let k0 = out.t_s.partition_point(|&t| t < last.from_s);
+    let c = &out.controls[k0..];
+    let u0v = [u0.elevator_rad, u0.aileron_rad, u0.rudder_rad];
+    let col = |j: usize| c.iter().map(|u| u[1 + j] - u0v[j]).collect::<Vec<f64>>();
+    let inputs = PlannedInputs { dt_s: sc.dt_s, de_rad: col(0), da_rad: col(1), dr_rad: col(2) };
+    // Only the outputs the structure's flight model predicts.
+    let lon = structure.params().any(|p| {
+        use aeroident_estimators::vocabulary::Coefficient as C;
+        matches!(p.coefficient, C::CL | C::CD | C::Cm | C::CX | C::CZ)
+    });
+    let lat = structure.params().any(|p| {
+        use aeroident_estimators::vocabulary::Coefficient as C;
+        matches!(p.coefficient, C::CY | C::Cl | C::Cn)
+    });
+    let sensors: Vec<Sensor> = crb_sensors(sc.sensors.scale)
+        .into_iter()
+        .filter(|s| match s.output {
+            Output::Vt | Output::Alpha | Output::Q | Output::Theta | Output::Ax | Output::Az => lon,
+            Output::Beta | Output::P | Output::R | Output::Phi | Output::Ay => lat,
+            _ => false,
+        })
+        .collect();
+    let plan = DesignPlan::new(*structure, theta, constants, condition, vec![inputs], sensors);
+    let r = predict_crb(&plan).map_err(|e| e.to_string())?;
+    Ok(r.names
+        .iter()
+        .take(r.n_params)
+        .zip(&r.sigma)
+        .filter_map(|(n, s)| s.map(|s| (n.clone(), s)))
+        .collect())
+}
+
+/// A finished campaign.
+#[derive(Debug, Clone, Serialize)]
+pub struct Campaign {
+    /// Scenario name.
+    pub scenario: String,
+    /// Number of runs.
+    pub runs: u64,
+    /// Campaign seed.
+    pub seed: u64,
+    /// The seed rule, in words.
+    pub seed_rule: &'static str,
+    /// Runs whose whole experiment failed.
+    pub failed_runs: Vec<FailedRun>,
+    /// Per estimator.
+    pub estimators: Vec<EstimatorStats>,
+    /// Why some `crb_sigma` are `null`.
+    pub crb_notes: Vec<String>,
+    /// Wall-clock time of the runs (parallel), s.
+    pub wall_s: f64,
+    /// Threads of the rayon pool.
+    pub threads: usize,
+    /// Per-run results.
+    #[serde(skip)]
+    pub results: Vec<RunResult>,
+}
+
+/// The seed rule of the module doc, in words (written into `montecarlo.json`).
+pub const SEED_RULE: &str = "run i, stream s (0 = sensors, 1 + j = wind j): splitmix64(seed + 0x9E3779B97F4A7C15 * (1 + 64 i + s)), wrapping";
+
+/// Runs a campaign: the Cramér–Rao prediction, `runs` seeded flights in parallel, statistics.
+///
+/// # Errors
+/// `runs` = 0.
+pub fn campaign(sc: &Scenario, runs: u64, seed: u64) -> Result<Campaign, String> {
+    if runs == 0 {
+        return Err("runs must be at least 1".into());
+    }
+    let crb = crb_sigmas(sc).unwrap_or_else(|e| CrbTable { notes: vec![e], ..Default::default() });
+    let start = Instant::now();
+    let results = run_all(sc, runs, seed);
+    let wall_s = start.elapsed().as_secs_f64();
+    let names: Vec<String> = sc.estimator.iter().map(EstimatorSpec::label).collect();
+    let estimators = statistics(&results, &names, &crb);
+    let failed_runs = results
+        .iter()
+        .filter_map(|r| {
+            r.outcome.as_ref().err().map(|e| FailedRun { run: r.index, reason: e.clone() })
+        })
+        .collect();
+    Ok(Campaign {
+        scenario: sc.name.clone(),
+        runs,
+        seed,
+        seed_rule: SEED_RULE,
+        failed_runs,
+        estimators,
+        crb_notes: crb.notes,
+        wall_s,
+        threads: rayon::current_num_threads(),
+        results,
+    })
+}
+
+/// The `--json` document: exactly `{"runs", "estimators": [{"name", "parameters": [{"name",
+/// "truth", "bias", "scatter", "mean_sigma", "coverage_2sigma", "crb_sigma",
+/// "median_time_to_10pct_s"}]}]}`.
+pub fn json_summary(c: &Campaign) -> serde_json::Value {
+    serde_json::json!({
+        "runs": c.runs,
+        "estimators": c.estimators.iter().map(|e| serde_json::json!({
+            "name": e.name,
+            "parameters": e.parameters.iter().map(|p| serde_json::json!({
+                "name": p.name,
+                "truth": p.truth,
+                "bias": p.bias,
+                "scatter": p.scatter,
+                "mean_sigma": p.mean_sigma,
+                "coverage_2sigma": p.coverage_2sigma,
+                "crb_sigma": p.crb_sigma,
+                "median_time_to_10pct_s": p.median_time_to_10pct_s,
+            })).collect::<Vec<_>>(),
+        })).collect::<Vec<_>>(),
+    })
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,198 @@
+use super::*;
+
+fn prun(
+    name: &str,
+    truth: f64,
+    fin: Option<f64>,
+    sigma: Option<f64>,
+    t10: Option<f64>,
+) -> ParamRun {
+    ParamRun {
+        name: name.into(),
+        primary: true,
+        truth: Some(truth),
+        truth_before: Some(truth),
+        truth_after: Some(truth),
+        r#final: fin,
+        sigma,
+        time_to_10pct_s: t10,
+        reconvergence_10pct_s: None,
+    }
+}
+
+fn result(
+    index: u64,
+    fin: Option<f64>,
+    sigma: Option<f64>,
+    t10: Option<f64>,
+    fail: Option<&str>,
+) -> RunResult {
+    RunResult {
+        index,
+        sensor_seed: index,
+        outcome: Ok(vec![EstimatorRun {
+            name: "rls".into(),
+            failure: fail.map(Into::into),
+            params: vec![prun("Cm_alpha", -1.0, fin, sigma, t10)],
+        }]),
+    }
+}
+
+/// Bias, scatter, mean σ, coverage and median worked by hand: finals −0.9, −1.1, −1.3, −0.5
+/// (truth −1), σ 0.1, 0.1, 0.1, 0.2 → mean −0.95, bias 0.05; deviations 0.05, −0.15, −0.35,
+/// 0.45 → Σd² = 0.0025 + 0.0225 + 0.1225 + 0.2025 = 0.35, scatter √(0.35/3); |err| ≤ 2σ for
+/// 0.1 ≤ 0.2 yes, 0.1 yes, 0.3 no, 0.5 no (0.4) → 2/4. One diverged run (value 100) and one
+/// failed experiment are listed and not averaged in. Times 1, 2, never, 3 → median of
+/// {1, 2, 3, ∞} = 2.5.
+#[test]
+fn statistics_by_hand() {
+    let runs = vec![
+        result(0, Some(-0.9), Some(0.1), Some(1.0), None),
+        result(1, Some(-1.1), Some(0.1), Some(2.0), None),
+        result(2, Some(100.0), Some(0.1), None, Some("t = 3 s: estimator diverged")),
+        result(3, Some(-1.3), Some(0.1), None, None),
+        RunResult { index: 4, sensor_seed: 4, outcome: Err("trim failed".into()) },
+        result(5, Some(-0.5), Some(0.2), Some(3.0), None),
+    ];
+    let mut crb = CrbTable::default();
+    crb.sigma.entry("rls".into()).or_default().insert("Cm_alpha".into(), 0.07);
+    let st = statistics(&runs, &["rls".into()], &crb);
+    let e = &st[0];
+    assert_eq!(e.runs_ok, 4);
+    assert_eq!(e.failed_runs.iter().map(|f| f.run).collect::<Vec<_>>(), vec![2, 4]);
+    let p = &e.parameters[0];
+    assert!((p.bias.unwrap() - 0.05).abs() < 1e-12);
+    assert!((p.scatter.unwrap() - (0.35f64 / 3.0).sqrt()).abs() < 1e-12);
+    assert!((p.mean_sigma.unwrap() - 0.125).abs() < 1e-12);
+    assert_eq!(p.coverage_2sigma, Some(0.5));
+    assert_eq!(p.crb_sigma, Some(0.07));
+    assert_eq!(p.median_time_to_10pct_s, Some(2.5));
+    assert_eq!(p.n_estimates, 4);
+}
+
+/// Without σ the coverage is null; a run without an estimate does not cover; a median that
+/// falls on "never" is null.
+#[test]
+fn statistics_nulls() {
+    let runs =
+        vec![result(0, Some(-1.0), None, None, None), result(1, Some(-1.2), None, Some(1.0), None)];
+    let st = statistics(&runs, &["rls".into()], &CrbTable::default());
+    let p = &st[0].parameters[0];
+    assert_eq!(p.coverage_2sigma, None);
+    assert_eq!(p.mean_sigma, None);
+    assert_eq!(p.crb_sigma, None);
+    assert_eq!(p.median_time_to_10pct_s, None);
+    let runs =
+        vec![result(0, Some(-1.0), Some(0.1), None, None), result(1, None, None, None, None)];
+    let st = statistics(&runs, &["rls".into()], &CrbTable::default());
+    assert_eq!(st[0].parameters[0].coverage_2sigma, Some(0.5));
+    assert_eq!(st[0].parameters[0].n_estimates, 1);
+    // All runs failed: no parameters, every run listed.
+    let runs = vec![RunResult { index: 0, sensor_seed: 0, outcome: Err("x".into()) }];
+    let st = statistics(&runs, &["rls".into()], &CrbTable::default());
+    assert!(st[0].parameters.is_empty());
+    assert_eq!(st[0].failed_runs.len(), 1);
+}
+
+/// SplitMix64's published first outputs for state 0 (the generator adds the golden ratio before
+/// mixing): 0xE220A8397B1DCDAF, 0x6E789E6AA1B965F4 (reference C implementation, Vigna).
+#[test]
+fn splitmix_reference_values() {
+    assert_eq!(splitmix64(GOLDEN), 0xE220_A839_7B1D_CDAF);
+    assert_eq!(splitmix64(GOLDEN.wrapping_mul(2)), 0x6E78_9E6A_A1B9_65F4);
+}
+
+/// Seeds differ between runs, streams and campaigns, and follow the stated rule.
+#[test]
+fn seed_rule() {
+    let mut seen = std::collections::BTreeSet::new();
+    for s in [0u64, 1, 42] {
+        for i in 0..50 {
+            for stream in 0..3 {
+                assert!(seen.insert(run_seed(s, i, stream)));
+            }
+        }
+    }
+    assert_eq!(
+        run_seed(7, 3, 2),
+        splitmix64(7u64.wrapping_add(GOLDEN.wrapping_mul(1 + 64 * 3 + 2)))
+    );
+}
+
+fn short_scenario() -> Scenario {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/montecarlo/short.toml");
+    Scenario::from_path(std::path::Path::new(path)).unwrap()
+}
+
+/// The seeded scenario sets the sensor and the turbulence seeds of the rule and nothing else.
+#[test]
+fn seeded_scenario_sets_seeds() {
+    let sc = short_scenario();
+    let s = seeded_scenario(&sc, 9, 4);
+    assert_eq!(s.sensors.seed, run_seed(9, 4, 0));
+    match &s.wind[0] {
+        WindConfig::Dryden { seed, .. } => assert_eq!(*seed, run_seed(9, 4, 1)),
+        other => panic!("expected Dryden, got {other:?}"),
+    }
+    let mut back = s.clone();
+    back.sensors.seed = sc.sensors.seed;
+    back.wind = sc.wind.clone();
+    assert_eq!(back, sc);
+}
+
+/// Per-run results are bit-identical on 1 and 2 threads, and differ between runs (the noise
+/// is really reseeded).
+#[test]
+fn runs_identical_across_thread_counts() {
+    let sc = short_scenario();
+    let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
+    let a = pool(1).install(|| run_all(&sc, 3, 11));
+    let b = pool(2).install(|| run_all(&sc, 3, 11));
+    assert_eq!(a, b);
+    let fin = |r: &RunResult| -> Vec<Option<u64>> {
+        r.outcome.as_ref().unwrap()[0].params.iter().map(|p| p.r#final.map(f64::to_bits)).collect()
+    };
+    assert!(fin(&a[0]).iter().any(Option::is_some));
+    assert_ne!(fin(&a[0]), fin(&a[1]));
+}
+
+/// The `--json` document has exactly the keys of the issue.
+#[test]
+fn json_keys_exact() {
+    let runs = vec![result(0, Some(-0.9), Some(0.1), Some(1.0), None)];
+    let c = Campaign {
+        scenario: "x".into(),
+        runs: 1,
+        seed: 1,
+        seed_rule: SEED_RULE,
+        failed_runs: vec![],
+        estimators: statistics(&runs, &["rls".into()], &CrbTable::default()),
+        crb_notes: vec![],
+        wall_s: 0.0,
+        threads: 1,
+        results: runs,
+    };
+    let v = json_summary(&c);
+    let keys = |v: &serde_json::Value| {
+        let mut k = v.as_object().unwrap().keys().cloned().collect::<Vec<_>>();
+        k.sort_unstable();
+        k
+    };
+    assert_eq!(keys(&v), ["estimators", "runs"]);
+    let e = &v["estimators"][0];
+    assert_eq!(keys(e), ["name", "parameters"]);
+    let mut want = vec![
+        "name",
+        "truth",
+        "bias",
+        "scatter",
+        "mean_sigma",
+        "coverage_2sigma",
+        "crb_sigma",
+        "median_time_to_10pct_s",
+    ];
+    want.sort_unstable();
+    assert_eq!(keys(&e["parameters"][0]), want);
+    assert_eq!(v["runs"], 1);
+    assert!(e["parameters"][0]["crb_sigma"].is_null());
+}

@@ -1,0 +1,67 @@
+//! `aeroident montecarlo` end to end through the binary on the short noisy scenario.
+
+use std::process::Command;
+
+fn scenario() -> String {
+    concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/montecarlo/short.toml").into()
+}
+
+/// `--json` prints exactly the document: 4 runs, both estimators, every six-axis
+/// parameter, the truth of Cm_alpha equal to the one in the file output, σ coverage a fraction
+/// for the methods that report σ, and a finite positive Cramér–Rao σ for the primary
+/// derivatives; the default mode writes `montecarlo.json`, `runs.json` and PNG figures.
+#[test]
+fn montecarlo_four_runs_end_to_end() {
+    let out = Command::new(env!("CARGO_BIN_EXE_aeroident"))
+        .args(["montecarlo", &scenario(), "--runs", "4", "--json", "--seed", "3"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "stderr: {}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["runs"], 4);
+    let ests = v["estimators"].as_array().unwrap();
+    assert_eq!(
+        ests.iter().map(|e| e["name"].as_str().unwrap()).collect::<Vec<_>>(),
+        ["rls", "ekf"]
+    );
+    for e in ests {
+        let ps = e["parameters"].as_array().unwrap();
+        assert_eq!(ps.len(), 30, "six-axis parameters of {}", e["name"]);
+        let cm = ps.iter().find(|p| p["name"] == "Cm_alpha").unwrap();
+        let cov = cm["coverage_2sigma"].as_f64().unwrap();
+        assert!((0.0..=1.0).contains(&cov));
+        let crb = cm["crb_sigma"].as_f64().unwrap();
+        assert!(crb.is_finite() && crb > 0.0);
+        assert!(cm["scatter"].as_f64().unwrap() > 0.0);
+    }
+    let dir = std::env::temp_dir().join(format!("aeroident_mc_{}", std::process::id()));
+    let out = Command::new(env!("CARGO_BIN_EXE_aeroident"))
+        .args(["montecarlo", &scenario(), "--runs", "4", "--seed", "3", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "stderr: {}", String::from_utf8_lossy(&out.stderr));
+    let file: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("montecarlo.json")).unwrap())
+            .unwrap();
+    assert_eq!(file["estimators"][0]["runs_ok"], 4);
+    assert_eq!(
+        file["estimators"][0]["parameters"][0]["bias"], v["estimators"][0]["parameters"][0]["bias"],
+        "the same seed gives the same statistics"
+    );
+    for f in ["runs.json", "coverage.png", "histograms_0_rls.png", "histograms_1_ekf.png"] {
+        assert!(dir.join(f).is_file(), "{f} missing");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `--runs 0` is refused with a message naming the option.
+#[test]
+fn montecarlo_zero_runs_is_an_error() {
+    let out = Command::new(env!("CARGO_BIN_EXE_aeroident"))
+        .args(["montecarlo", &scenario(), "--runs", "0", "--json"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--runs"));
+}

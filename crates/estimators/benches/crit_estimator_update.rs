@@ -4,12 +4,16 @@
 //! Criterion reports the time per update and, via `Throughput::Elements`, samples per second.
 #![allow(missing_docs)] // criterion_group! generates an undocumented `pub fn`.
 
-use aeroident_estimators::flight_model::{FlightModel, G0_MPS2, ModelInputs};
+#[path = "../src/test_aircraft.rs"]
+mod test_aircraft;
+
+use aeroident_estimators::flight_model::{FlightModel, ModelInputs};
 use aeroident_estimators::ftr::{Ftr, FtrConfig};
 use aeroident_estimators::rls::{Rls as StructureRls, RlsConfig as StructureRlsConfig};
 use aeroident_estimators::vocabulary::{Coefficient as C, ModelStructure, Param, Term as T};
 use aeroident_estimators::{AirDataSample, AircraftConstants, Ekf, Estimator, Priors};
 use criterion::{Criterion, Throughput, black_box, criterion_group, criterion_main};
+use test_aircraft::{ALPHA0, RHO, THRUST, V0};
 
 const N: usize = 1000;
 
@@ -21,36 +25,14 @@ fn six_axis_samples() -> Vec<AirDataSample> {
     let model = FlightModel::new(st).unwrap();
     let pri = Priors::generic(&st);
     let mut th: Vec<f64> = (0..st.n_params()).map(|i| pri.prior[i].value).collect();
-    let k = AircraftConstants {
-        mass_kg: 9300.0,
-        S_m2: 27.87,
-        cbar_m: Some(3.45),
-        b_m: Some(9.14),
-        Ixx_kgm2: Some(16_660.0),
-        Iyy_kgm2: Some(77_430.0),
-        Izz_kgm2: Some(90_940.0),
-        Ixz_kgm2: Some(1_437.0),
-        ..Default::default()
-    };
-    let (v0, a0, rho, thrust) = (180.0, 0.06_f64, 0.75, 18_000.0);
-    let qs = 0.5 * rho * v0 * v0 * k.S_m2;
+    let k = AircraftConstants { v0_mps: None, ..test_aircraft::constants() };
+    let (v0, a0, rho, thrust) = (V0, ALPHA0, RHO, THRUST);
+    test_aircraft::set_level_trim_biases(&st, &mut th, &k);
     let i = |c, t| st.index_of(Param::new(c, t)).unwrap();
-    th[i(C::CL, T::Bias)] =
-        (k.mass_kg * G0_MPS2 - thrust * a0.sin()) / qs - th[i(C::CL, T::Alpha)] * a0;
-    th[i(C::CD, T::Bias)] = thrust * a0.cos() / qs - th[i(C::CD, T::Alpha)] * a0;
-    th[i(C::Cm, T::Bias)] = -th[i(C::Cm, T::Alpha)] * a0;
     for c in [C::CY, C::Cl, C::Cn] {
         th[i(c, T::Bias)] = 0.0;
     }
-    let doublet = |t: f64, t0: f64, a: f64| {
-        if t >= t0 && t < t0 + 0.5 {
-            a
-        } else if t >= t0 + 0.5 && t < t0 + 1.0 {
-            -a
-        } else {
-            0.0
-        }
-    };
+    let doublet = |t: f64, t0: f64, a: f64| test_aircraft::doublet(t, t0, 0.5, a);
     let mut x = [v0, a0, 0.0, 0.0, 0.0, 0.0, 0.0, a0];
     let dt = 0.02;
     let z8 = [0.0; 8];

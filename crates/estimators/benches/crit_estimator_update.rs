@@ -13,7 +13,7 @@ use aeroident_estimators::rls::{Rls as StructureRls, RlsConfig as StructureRlsCo
 use aeroident_estimators::vocabulary::{Coefficient as C, ModelStructure, Param, Term as T};
 use aeroident_estimators::{AirDataSample, AircraftConstants, Ekf, Estimator, Priors};
 use criterion::{Criterion, Throughput, black_box, criterion_group, criterion_main};
-use test_aircraft::{ALPHA0, RHO, THRUST, V0};
+use test_aircraft::{ALPHA0, V0};
 
 const N: usize = 1000;
 
@@ -26,38 +26,20 @@ fn six_axis_samples() -> Vec<AirDataSample> {
     let pri = Priors::generic(&st);
     let mut th: Vec<f64> = (0..st.n_params()).map(|i| pri.prior[i].value).collect();
     let k = AircraftConstants { v0_mps: None, ..test_aircraft::constants() };
-    let (v0, a0, rho, thrust) = (V0, ALPHA0, RHO, THRUST);
     test_aircraft::set_level_trim_biases(&st, &mut th, &k);
     let i = |c, t| st.index_of(Param::new(c, t)).unwrap();
     for c in [C::CY, C::Cl, C::Cn] {
         th[i(c, T::Bias)] = 0.0;
     }
     let doublet = |t: f64, t0: f64, a: f64| test_aircraft::doublet(t, t0, 0.5, a);
-    let mut x = [v0, a0, 0.0, 0.0, 0.0, 0.0, 0.0, a0];
+    let mut x = [V0, ALPHA0, 0.0, 0.0, 0.0, 0.0, 0.0, ALPHA0];
     let dt = 0.02;
     let z8 = [0.0; 8];
     let mut out = Vec::with_capacity(N);
     for step in 0..N {
         let t = step as f64 * dt;
-        let mut s = AirDataSample {
-            t_s: t,
-            vt_mps: x[0],
-            alpha_rad: x[1],
-            qbar_pa: 0.5 * rho * x[0] * x[0],
-            beta_rad: Some(x[2]),
-            p_rad_s: Some(x[3]),
-            q_rad_s: Some(x[4]),
-            r_rad_s: Some(x[5]),
-            phi_rad: Some(x[6]),
-            theta_rad: Some(x[7]),
-            de_rad: Some(doublet(t, 1.0, 0.03)),
-            da_rad: Some(doublet(t, 6.0, 0.04)),
-            dr_rad: Some(doublet(t, 12.0, 0.05)),
-            thrust_n: Some(thrust),
-            rho_kgpm3: Some(rho),
-            constants: k,
-            ..Default::default()
-        };
+        let surfaces = (doublet(t, 1.0, 0.03), doublet(t, 6.0, 0.04), doublet(t, 12.0, 0.05));
+        let mut s = test_aircraft::sample(t, &x, surfaces, k);
         let u: ModelInputs = model.inputs(&s).unwrap();
         let d = model.eval(&th, &u, &x, &z8, &z8, None).unwrap();
         s.ax_mps2 = Some(d.accel[0]);

@@ -8,8 +8,8 @@
 //! names the crate `aeroident_estimators` (the library aliases itself so under `cfg(test)`).
 #![allow(dead_code)]
 
-use aeroident_estimators::flight_model::G0_MPS2;
-use aeroident_estimators::sample::AircraftConstants;
+use aeroident_estimators::flight_model::{G0_MPS2, N_STATES, Output, state};
+use aeroident_estimators::sample::{AirDataSample, AircraftConstants};
 use aeroident_estimators::vocabulary::{Coefficient as C, ModelStructure, Param, Term as T};
 use std::vec::Vec;
 
@@ -141,4 +141,54 @@ pub fn three_two_one_one(
             })
         })
         .collect()
+}
+
+/// A sample of the test aircraft at `t_s` in the full flight-model state `x` (`V, α, β, p, q,
+/// r, φ, θ`, SI) with surfaces `(δe, δa, δr)` rad, `THRUST`, `RHO` (q̄ from them) and the
+/// constants `k`; no specific forces or angular accelerations (the caller adds those it has).
+pub fn sample(
+    t_s: f64,
+    x: &[f64; N_STATES],
+    (de, da, dr): (f64, f64, f64),
+    k: AircraftConstants,
+) -> AirDataSample {
+    AirDataSample {
+        t_s,
+        vt_mps: x[state::V],
+        alpha_rad: x[state::ALPHA],
+        qbar_pa: 0.5 * RHO * x[state::V] * x[state::V],
+        beta_rad: Some(x[state::BETA]),
+        p_rad_s: Some(x[state::P]),
+        q_rad_s: Some(x[state::Q]),
+        r_rad_s: Some(x[state::R]),
+        phi_rad: Some(x[state::PHI]),
+        theta_rad: Some(x[state::THETA]),
+        de_rad: Some(de),
+        da_rad: Some(da),
+        dr_rad: Some(dr),
+        thrust_n: Some(THRUST),
+        rho_kgpm3: Some(RHO),
+        constants: k,
+        ..Default::default()
+    }
+}
+
+/// Sets the channel of output `o` in `s` to `v`.
+pub fn set_output(s: &mut AirDataSample, o: Output, v: f64) {
+    match o {
+        Output::Vt => s.vt_mps = v,
+        Output::Alpha => s.alpha_rad = v,
+        Output::Beta => s.beta_rad = Some(v),
+        Output::P => s.p_rad_s = Some(v),
+        Output::Q => s.q_rad_s = Some(v),
+        Output::R => s.r_rad_s = Some(v),
+        Output::Phi => s.phi_rad = Some(v),
+        Output::Theta => s.theta_rad = Some(v),
+        Output::Ax => s.ax_mps2 = Some(v),
+        Output::Ay => s.ay_mps2 = Some(v),
+        Output::Az => s.az_mps2 = Some(v),
+        Output::Pdot => s.pdot_rad_s2 = Some(v),
+        Output::Qdot => s.qdot_rad_s2 = Some(v),
+        Output::Rdot => s.rdot_rad_s2 = Some(v),
+    }
 }

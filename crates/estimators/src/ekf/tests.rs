@@ -1,6 +1,6 @@
 use super::*;
 use crate::sample::AircraftConstants;
-use crate::test_aircraft::{self, ALPHA0, RHO, THRUST, V0, doublet};
+use crate::test_aircraft::{self, ALPHA0, V0, doublet};
 use crate::vocabulary::{Coefficient as C, Param, Term as T};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -41,28 +41,7 @@ fn simulate(rate: f64, duration: f64, seed: u64) -> Vec<AirDataSample> {
             doublet(t, 11.0, 1.0, 0.08) + doublet(t, 21.0, 0.8, -0.08),
         )
     };
-    let base = |t: f64, x: &[f64; 8]| {
-        let (de, da, dr) = controls(t);
-        AirDataSample {
-            t_s: t,
-            vt_mps: x[0],
-            alpha_rad: x[1],
-            qbar_pa: 0.5 * RHO * x[0] * x[0],
-            beta_rad: Some(x[2]),
-            p_rad_s: Some(x[3]),
-            q_rad_s: Some(x[4]),
-            r_rad_s: Some(x[5]),
-            phi_rad: Some(x[6]),
-            theta_rad: Some(x[7]),
-            de_rad: Some(de),
-            da_rad: Some(da),
-            dr_rad: Some(dr),
-            thrust_n: Some(THRUST),
-            rho_kgpm3: Some(RHO),
-            constants: k,
-            ..Default::default()
-        }
-    };
+    let base = |t: f64, x: &[f64; 8]| test_aircraft::sample(t, x, controls(t), k);
     let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
     let n01 = Normal::new(0.0, 1.0).unwrap();
     let mut x = [V0, ALPHA0, 0.0, 0.0, 0.0, 0.0, 0.0, ALPHA0];
@@ -87,14 +66,7 @@ fn simulate(rate: f64, duration: f64, seed: u64) -> Vec<AirDataSample> {
             (Output::Theta, 7),
         ] {
             let v = noisy(x[i], o);
-            match o {
-                Output::Beta => s.beta_rad = Some(v),
-                Output::P => s.p_rad_s = Some(v),
-                Output::Q => s.q_rad_s = Some(v),
-                Output::R => s.r_rad_s = Some(v),
-                Output::Phi => s.phi_rad = Some(v),
-                _ => s.theta_rad = Some(v),
-            }
+            test_aircraft::set_output(&mut s, o, v);
         }
         s.ax_mps2 = Some(noisy(d.accel[0], Output::Ax));
         s.ay_mps2 = Some(noisy(d.accel[1], Output::Ay));

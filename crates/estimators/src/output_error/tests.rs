@@ -1,6 +1,6 @@
 use super::*;
 use crate::flight_model::{G0_MPS2, ModelInputs, N_OUTPUTS, state};
-use crate::test_aircraft::{ALPHA0, RHO, THRUST, V0, constants, doublet, trimmed_truth};
+use crate::test_aircraft::{ALPHA0, V0, constants, doublet, sample, set_output, trimmed_truth};
 use crate::vocabulary::{Coefficient as C, Term as T};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -35,30 +35,11 @@ fn simulate(
             doublet(t, 5.0, 1.0, 0.08) + doublet(t, 13.0, 0.8, -0.08),
         )
     };
-    let base = |t: f64, x: &[f64; N_STATES]| {
-        let (de, da, dr) = controls(t);
-        AirDataSample {
-            t_s: t,
-            vt_mps: x[state::V],
-            alpha_rad: x[state::ALPHA],
-            qbar_pa: 0.5 * RHO * x[0] * x[0],
-            beta_rad: Some(x[state::BETA]),
-            p_rad_s: Some(x[state::P]),
-            q_rad_s: Some(x[state::Q]),
-            r_rad_s: Some(x[state::R]),
-            phi_rad: Some(x[state::PHI]),
-            theta_rad: Some(x[state::THETA]),
-            // Inputs of the lateral set: steady level flight at the trim.
-            ax_mps2: Some(G0_MPS2 * ALPHA0.sin()),
-            az_mps2: Some(-G0_MPS2 * ALPHA0.cos()),
-            de_rad: Some(de),
-            da_rad: Some(da),
-            dr_rad: Some(dr),
-            thrust_n: Some(THRUST),
-            rho_kgpm3: Some(RHO),
-            constants: k,
-            ..Default::default()
-        }
+    let base = |t: f64, x: &[f64; N_STATES]| AirDataSample {
+        // Inputs of the lateral set: steady level flight at the trim.
+        ax_mps2: Some(G0_MPS2 * ALPHA0.sin()),
+        az_mps2: Some(-G0_MPS2 * ALPHA0.cos()),
+        ..sample(t, x, controls(t), k)
     };
     let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
     let n01 = Normal::new(0.0, 1.0).unwrap();
@@ -86,22 +67,7 @@ fn simulate(
         let mut s = s0;
         for o in set.outputs() {
             let v = d.output(*o, &xf) + noise_scale * NOISE[o.index()] * n01.sample(&mut rng);
-            match o {
-                Output::Vt => s.vt_mps = v,
-                Output::Alpha => s.alpha_rad = v,
-                Output::Beta => s.beta_rad = Some(v),
-                Output::P => s.p_rad_s = Some(v),
-                Output::Q => s.q_rad_s = Some(v),
-                Output::R => s.r_rad_s = Some(v),
-                Output::Phi => s.phi_rad = Some(v),
-                Output::Theta => s.theta_rad = Some(v),
-                Output::Ax => s.ax_mps2 = Some(v),
-                Output::Ay => s.ay_mps2 = Some(v),
-                Output::Az => s.az_mps2 = Some(v),
-                Output::Pdot => s.pdot_rad_s2 = Some(v),
-                Output::Qdot => s.qdot_rad_s2 = Some(v),
-                Output::Rdot => s.rdot_rad_s2 = Some(v),
-            }
+            set_output(&mut s, *o, v);
         }
         out.push(s);
         // The next sample's time exactly as it will be recorded (input edges must agree).

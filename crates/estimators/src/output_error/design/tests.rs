@@ -1,6 +1,8 @@
 use super::*;
 use crate::output_error::{OeConfig, Start, fit};
-use crate::test_aircraft::{ALPHA0, RHO, THRUST, V0, constants, derivatives, three_two_one_one};
+use crate::test_aircraft::{
+    ALPHA0, RHO, THRUST, V0, constants, derivatives, set_output, three_two_one_one,
+};
 use crate::vocabulary::{Coefficient as C, Term as T};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -268,26 +270,6 @@ fn trim_biases_balance_level_flight_and_the_plan_starts_in_trim() {
         .with(C::Cm, &[T::Alpha]);
     let err = trim_biases(&no_cm0, &[0.0; 4], &k, &c).unwrap_err();
     assert!(matches!(err, EstimatorError::InvalidConfig { field: "Cm_0", .. }), "{err:?}");
-}
-
-/// Sets output `o` of a sample.
-fn set_output(s: &mut AirDataSample, o: Output, v: f64) {
-    match o {
-        Output::Vt => s.vt_mps = v,
-        Output::Alpha => s.alpha_rad = v,
-        Output::Beta => s.beta_rad = Some(v),
-        Output::P => s.p_rad_s = Some(v),
-        Output::Q => s.q_rad_s = Some(v),
-        Output::R => s.r_rad_s = Some(v),
-        Output::Phi => s.phi_rad = Some(v),
-        Output::Theta => s.theta_rad = Some(v),
-        Output::Ax => s.ax_mps2 = Some(v),
-        Output::Ay => s.ay_mps2 = Some(v),
-        Output::Az => s.az_mps2 = Some(v),
-        Output::Pdot => s.pdot_rad_s2 = Some(v),
-        Output::Qdot => s.qdot_rad_s2 = Some(v),
-        Output::Rdot => s.rdot_rad_s2 = Some(v),
-    }
 }
 
 /// Monte Carlo check of the prediction: the plan simulated with the assumed θ (the same

@@ -4,12 +4,16 @@
 //! Criterion reports the time per update and, via `Throughput::Elements`, samples per second.
 #![allow(missing_docs)] // criterion_group! generates an undocumented `pub fn`.
 
-use aeroident_estimators::flight_model::{FlightModel, G0_MPS2, ModelInputs};
+#[path = "../src/test_aircraft.rs"]
+mod test_aircraft;
+
+use aeroident_estimators::flight_model::{FlightModel, ModelInputs};
 use aeroident_estimators::ftr::{Ftr, FtrConfig};
 use aeroident_estimators::rls::{Rls as StructureRls, RlsConfig as StructureRlsConfig};
 use aeroident_estimators::vocabulary::{Coefficient as C, ModelStructure, Param, Term as T};
 use aeroident_estimators::{AirDataSample, AircraftConstants, Ekf, Estimator, Priors};
 use criterion::{Criterion, Throughput, black_box, criterion_group, criterion_main};
+use test_aircraft::{ALPHA0, V0};
 
 const N: usize = 1000;
 
@@ -21,61 +25,21 @@ fn six_axis_samples() -> Vec<AirDataSample> {
     let model = FlightModel::new(st).unwrap();
     let pri = Priors::generic(&st);
     let mut th: Vec<f64> = (0..st.n_params()).map(|i| pri.prior[i].value).collect();
-    let k = AircraftConstants {
-        mass_kg: 9300.0,
-        S_m2: 27.87,
-        cbar_m: Some(3.45),
-        b_m: Some(9.14),
-        Ixx_kgm2: Some(16_660.0),
-        Iyy_kgm2: Some(77_430.0),
-        Izz_kgm2: Some(90_940.0),
-        Ixz_kgm2: Some(1_437.0),
-        ..Default::default()
-    };
-    let (v0, a0, rho, thrust) = (180.0, 0.06_f64, 0.75, 18_000.0);
-    let qs = 0.5 * rho * v0 * v0 * k.S_m2;
+    let k = AircraftConstants { v0_mps: None, ..test_aircraft::constants() };
+    test_aircraft::set_level_trim_biases(&st, &mut th, &k);
     let i = |c, t| st.index_of(Param::new(c, t)).unwrap();
-    th[i(C::CL, T::Bias)] =
-        (k.mass_kg * G0_MPS2 - thrust * a0.sin()) / qs - th[i(C::CL, T::Alpha)] * a0;
-    th[i(C::CD, T::Bias)] = thrust * a0.cos() / qs - th[i(C::CD, T::Alpha)] * a0;
-    th[i(C::Cm, T::Bias)] = -th[i(C::Cm, T::Alpha)] * a0;
     for c in [C::CY, C::Cl, C::Cn] {
         th[i(c, T::Bias)] = 0.0;
     }
-    let doublet = |t: f64, t0: f64, a: f64| {
-        if t >= t0 && t < t0 + 0.5 {
-            a
-        } else if t >= t0 + 0.5 && t < t0 + 1.0 {
-            -a
-        } else {
-            0.0
-        }
-    };
-    let mut x = [v0, a0, 0.0, 0.0, 0.0, 0.0, 0.0, a0];
+    let doublet = |t: f64, t0: f64, a: f64| test_aircraft::doublet(t, t0, 0.5, a);
+    let mut x = [V0, ALPHA0, 0.0, 0.0, 0.0, 0.0, 0.0, ALPHA0];
     let dt = 0.02;
     let z8 = [0.0; 8];
     let mut out = Vec::with_capacity(N);
     for step in 0..N {
         let t = step as f64 * dt;
-        let mut s = AirDataSample {
-            t_s: t,
-            vt_mps: x[0],
-            alpha_rad: x[1],
-            qbar_pa: 0.5 * rho * x[0] * x[0],
-            beta_rad: Some(x[2]),
-            p_rad_s: Some(x[3]),
-            q_rad_s: Some(x[4]),
-            r_rad_s: Some(x[5]),
-            phi_rad: Some(x[6]),
-            theta_rad: Some(x[7]),
-            de_rad: Some(doublet(t, 1.0, 0.03)),
-            da_rad: Some(doublet(t, 6.0, 0.04)),
-            dr_rad: Some(doublet(t, 12.0, 0.05)),
-            thrust_n: Some(thrust),
-            rho_kgpm3: Some(rho),
-            constants: k,
-            ..Default::default()
-        };
+        let surfaces = (doublet(t, 1.0, 0.03), doublet(t, 6.0, 0.04), doublet(t, 12.0, 0.05));
+        let mut s = test_aircraft::sample(t, &x, surfaces, k);
         let u: ModelInputs = model.inputs(&s).unwrap();
         let d = model.eval(&th, &u, &x, &z8, &z8, None).unwrap();
         s.ax_mps2 = Some(d.accel[0]);

@@ -8,69 +8,30 @@
 //!
 //! `cargo run --release -p aeroident-estimators --example design_plan`
 //!
-//! The 3-2-1-1 is built here; an application would take it from `aeroident_signals`.
+//! The aircraft and the 3-2-1-1 are the unit tests' (`src/test_aircraft.rs`); an application
+//! would take the 3-2-1-1 from `aeroident_signals`.
 #![allow(missing_docs)]
 
+#[path = "../src/test_aircraft.rs"]
+mod test_aircraft;
+
+use aeroident_estimators::EstimatorError;
 use aeroident_estimators::flight_model::{N_STATES, Output};
 use aeroident_estimators::output_error::InitialStates;
 use aeroident_estimators::output_error::design::{
     DesignPlan, DesignResult, FlightCondition, PlannedInputs, Sensor, predict_crb, trim_biases,
 };
-use aeroident_estimators::vocabulary::{Coefficient as C, ModelStructure, Param, Term as T};
-use aeroident_estimators::{AircraftConstants, EstimatorError};
+use aeroident_estimators::vocabulary::ModelStructure;
+use test_aircraft::{ALPHA0, RHO, THRUST, V0, three_two_one_one};
 
 const DT: f64 = 0.02;
 const DEG: f64 = std::f64::consts::PI / 180.0;
 
-fn three_two_one_one(starts_s: &[f64], unit_s: f64, amp: f64, duration_s: f64) -> Vec<f64> {
-    let n = (duration_s / DT).round() as usize + 1;
-    (0..n)
-        .map(|i| {
-            starts_s
-                .iter()
-                .map(|t0| match (i as f64 * DT - t0) / unit_s {
-                    u if (0.0..3.0).contains(&u) => amp,
-                    u if (3.0..5.0).contains(&u) => -amp,
-                    u if (5.0..6.0).contains(&u) => amp,
-                    u if (6.0..7.0).contains(&u) => -amp,
-                    _ => 0.0,
-                })
-                .sum()
-        })
-        .collect()
-}
-
 fn main() -> Result<(), EstimatorError> {
-    let constants = AircraftConstants {
-        mass_kg: 9300.0,
-        S_m2: 27.87,
-        cbar_m: Some(3.45),
-        b_m: Some(9.14),
-        Ixx_kgm2: Some(16_660.0),
-        Iyy_kgm2: Some(77_430.0),
-        Izz_kgm2: Some(90_940.0),
-        Ixz_kgm2: Some(1_437.0),
-        thrust_arm_m: 0.0,
-        thrust_incidence_rad: 0.0,
-        v0_mps: Some(180.0),
-    };
-    let condition = FlightCondition::level(180.0, 0.06, 0.75, 18_000.0);
+    let constants = test_aircraft::constants();
+    let condition = FlightCondition::level(V0, ALPHA0, RHO, THRUST);
     let st = ModelStructure::longitudinal();
-    let mut theta = vec![0.0; st.n_params()];
-    for (c, t, v) in [
-        (C::CL, T::Alpha, 4.2),
-        (C::CL, T::Q, 6.0),
-        (C::CL, T::De, 0.45),
-        (C::CD, T::Alpha, 0.35),
-        (C::CD, T::De, 0.06),
-        (C::Cm, T::Alpha, -0.7),
-        (C::Cm, T::Q, -14.0),
-        (C::Cm, T::De, -0.9),
-    ] {
-        if let Some(i) = st.index_of(Param::new(c, t)) {
-            theta[i] = v;
-        }
-    }
+    let theta = test_aircraft::derivatives(&st);
     let theta = trim_biases(&st, &theta, &constants, &condition)?;
     let sensors = [
         (Output::Vt, 0.3),
@@ -100,7 +61,7 @@ fn main() -> Result<(), EstimatorError> {
             condition,
             vec![PlannedInputs {
                 dt_s: DT,
-                de_rad: three_two_one_one(starts, 0.4, amp_deg * DEG, duration_s),
+                de_rad: three_two_one_one(starts, 0.4, amp_deg * DEG, duration_s, DT),
                 ..Default::default()
             }],
             sensors.clone(),

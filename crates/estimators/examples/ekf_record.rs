@@ -7,8 +7,8 @@
 //! `--alphadot` adds `CL_alphadot` and `Cm_alphadot` to the preset)
 #![allow(missing_docs)]
 
-#[path = "../tests/common/jsbsim.rs"]
-mod jsbsim;
+#[path = "../tests/common/records.rs"]
+mod records;
 
 use aeroident_estimators::vocabulary::ModelStructure;
 use aeroident_estimators::{Ekf, EkfConfig, Estimator, SigmaOption};
@@ -30,9 +30,12 @@ fn main() -> Result<(), String> {
     let val = |f: &str| {
         args.iter().position(|a| a == f).and_then(|i| args.get(i + 1)).map(|v| v.parse::<f64>())
     };
-    let opt = jsbsim::ReadOptions { angular_accelerations: flag("--angular-accelerations") };
-    let samples = jsbsim::read_samples(Path::new(&args[0]), opt)?;
-    let truth = jsbsim::read_truth(Path::new(&args[1]))?;
+    let channels = records::JsbsimChannels {
+        noisy: true,
+        angular_accelerations: flag("--angular-accelerations"),
+    };
+    let samples = records::jsbsim(Path::new(&args[0]), channels)?.samples;
+    let truth = records::read_truth(Path::new(&args[1]))?;
     let t0 = val("--t0").transpose().map_err(|e| e.to_string())?.unwrap_or(f64::NEG_INFINITY);
     let t1 = val("--t1").transpose().map_err(|e| e.to_string())?.unwrap_or(f64::INFINITY);
     let mut cfg = EkfConfig::new(structure);
@@ -52,8 +55,8 @@ fn main() -> Result<(), String> {
         n += 1;
     }
     let el = start.elapsed();
-    let rows = jsbsim::rows(&structure, ekf.estimates(), &truth);
-    println!("{}", jsbsim::table(&rows));
+    let rows = records::rows(&structure, ekf.estimates(), &truth);
+    println!("{}", records::table(&rows));
     println!(
         "{n} samples in {:.1} ms ({:.0} samples/s); status {}; coloured-residual factor {:.2}",
         el.as_secs_f64() * 1e3,

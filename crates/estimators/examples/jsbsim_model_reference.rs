@@ -10,8 +10,8 @@
 //! F-16 elevator doublet (longitudinal preset) of `../shared/flightdata`. Default gains (none
 //! tuned to these records: `aeroident_estimators::model_reference` documents each choice).
 
-#[path = "../tests/common/jsbsim_mr.rs"]
-mod jsbsim;
+#[path = "../tests/common/records.rs"]
+mod records;
 
 use aeroident_estimators::model_reference::{
     CorrectedSmpeEstimator, GradientEstimator, ModelReferenceConfig, PublishedSmpeEstimator,
@@ -62,14 +62,14 @@ fn main() -> Result<(), String> {
     let jobs: Vec<(PathBuf, PathBuf, ModelStructure)> = if args.is_empty() {
         let mut v = Vec::new();
         if let (Some(c), Some(t)) = (
-            jsbsim::shared_record("jsbsim_samples/f16_ail_rud_doublets_20s_60Hz.csv"),
-            jsbsim::shared_record("jsbsim_samples/f16_ail_rud_doublets_truth.json"),
+            records::shared_record("jsbsim_samples/f16_ail_rud_doublets_20s_60Hz.csv"),
+            records::shared_record("jsbsim_samples/f16_ail_rud_doublets_truth.json"),
         ) {
             v.push((c, t, ModelStructure::lateral()));
         }
         if let (Some(c), Some(t)) = (
-            jsbsim::shared_record("jsbsim_f16_sample/f16_doublet_20s_120Hz.csv"),
-            jsbsim::shared_record("jsbsim_f16_sample/f16_true_derivatives_trim.json"),
+            records::shared_record("jsbsim_f16_sample/f16_doublet_20s_120Hz.csv"),
+            records::shared_record("jsbsim_f16_sample/f16_true_derivatives_trim.json"),
         ) {
             v.push((c, t, ModelStructure::longitudinal()));
         }
@@ -86,12 +86,13 @@ fn main() -> Result<(), String> {
     for (csv, truth_path, st, noisy) in
         jobs.into_iter().flat_map(|(c, t, s)| [(c.clone(), t.clone(), s, true), (c, t, s, false)])
     {
-        let rec = jsbsim::read_csv(&csv, noisy)?;
-        let has_noisy = jsbsim::read_csv(&csv, !noisy)?.samples != rec.samples;
+        let channels = |noisy| records::JsbsimChannels { noisy, angular_accelerations: true };
+        let rec = records::jsbsim(&csv, channels(noisy))?;
+        let has_noisy = records::jsbsim(&csv, channels(!noisy))?.samples != rec.samples;
         if !noisy && !has_noisy {
             continue; // no noisy channels: the one run was already printed
         }
-        let truth = jsbsim::read_truth(&truth_path)?;
+        let truth = records::read_truth(&truth_path)?;
         // Cross-check: measured coefficients (from the possibly noisy channels) vs JSBSim's.
         let mut worst = [0.0f64; 8];
         for (s, l) in rec.samples.iter().zip(&rec.logged) {

@@ -44,6 +44,13 @@ pub mod rls;
 pub mod sample;
 pub mod vocabulary;
 
+// The test-support aircraft names the crate `aeroident_estimators` so that the bench and the
+// examples can include the same file.
+#[cfg(test)]
+extern crate self as aeroident_estimators;
+#[cfg(test)]
+pub(crate) mod test_aircraft;
+
 pub use dual::{Dual, Scalar};
 pub use ekf::{Ekf, EkfConfig, SigmaOption};
 pub use estimator::{Estimates, Estimator, Status};

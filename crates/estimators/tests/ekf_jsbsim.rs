@@ -13,18 +13,13 @@
 //! - longitudinal record: `CD_alpha`, `CD_q`, `CD_de`: their effect on ax is ≈ 0.05 m/s²; the
 //!   tabulated CD(α, δe) is non-linear across the δe = 0 breakpoint this record crosses.
 
-#[path = "common/jsbsim.rs"]
-mod jsbsim;
+#[path = "common/records.rs"]
+mod records;
 
 use aeroident_estimators::vocabulary::ModelStructure;
 use aeroident_estimators::{Ekf, EkfConfig, Estimator, Status};
-use std::path::{Path, PathBuf};
-
-fn shared() -> PathBuf {
-    std::env::var_os("AEROIDENT_SHARED")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared"))
-}
+use records::{JsbsimChannels, shared};
+use std::path::Path;
 
 fn run(
     csv: &Path,
@@ -40,8 +35,9 @@ fn run(
         );
         return;
     }
-    let samples = jsbsim::read_samples(csv, jsbsim::ReadOptions::default()).unwrap();
-    let truth = jsbsim::read_truth(truth).unwrap();
+    let channels = JsbsimChannels { noisy: true, angular_accelerations: false };
+    let samples = records::jsbsim(csv, channels).unwrap().samples;
+    let truth = records::read_truth(truth).unwrap();
     let mut cfg = EkfConfig::new(structure);
     if !adaptive_r {
         cfg.adaptive_r_window = 0;
@@ -51,8 +47,8 @@ fn run(
         ekf.update(s).unwrap_or_else(|e| panic!("t = {}: {e}", s.t_s));
     }
     assert_eq!(ekf.estimates().status, Status::Running);
-    let rows = jsbsim::rows(&structure, ekf.estimates(), &truth);
-    println!("{}", jsbsim::table(&rows));
+    let rows = records::rows(&structure, ekf.estimates(), &truth);
+    println!("{}", records::table(&rows));
     for name in within_10pct {
         let r = rows.iter().find(|r| r.name == *name).unwrap();
         let e = r.error_pct().unwrap_or(f64::INFINITY);

@@ -3,14 +3,15 @@
 //! own, the corrected SMPE against an independent batch computation of the same estimate, and
 //! the derivatives the manoeuvres excite directly against the records' true values.
 
-mod common;
+#[path = "common/records.rs"]
+mod records;
 
 use aeroident_estimators::model_reference::{
     CorrectedSmpeEstimator, ModelReferenceConfig, state_rate,
 };
 use aeroident_estimators::{AirDataSample, Estimator, ModelStructure, Priors};
-use common::jsbsim_mr as jsbsim;
 use nalgebra::{DMatrix, DVector};
+use records::JsbsimChannels;
 
 const LATERAL: (&str, &str) = (
     "jsbsim_samples/f16_ail_rud_doublets_20s_60Hz.csv",
@@ -21,8 +22,9 @@ const LONGITUDINAL: (&str, &str) = (
     "jsbsim_f16_sample/f16_true_derivatives_trim.json",
 );
 
-fn record(rel: &str, noisy: bool) -> Option<jsbsim::Record> {
-    Some(jsbsim::read_csv(&jsbsim::shared_record(rel)?, noisy).unwrap())
+fn record(rel: &str, noisy: bool) -> Option<records::JsbsimRecord> {
+    let channels = JsbsimChannels { noisy, angular_accelerations: true };
+    Some(records::jsbsim(&records::shared_record(rel)?, channels).unwrap())
 }
 
 /// The reader's units and conventions (ft → m, slug, JSBSim `ixz = −Jxz`, thrust moment): the
@@ -124,8 +126,8 @@ fn corrected_smpe_recovers_the_excited_derivatives_from_clean_channels() {
         (LONGITUDINAL, ModelStructure::longitudinal(), &["CL_alpha", "CL_q", "Cm_q", "Cm_de"][..]),
     ] {
         let Some(rec) = record(rel, false) else { return };
-        let Some(truth_path) = jsbsim::shared_record(truth_rel) else { return };
-        let truth = jsbsim::read_truth(&truth_path).unwrap();
+        let Some(truth_path) = records::shared_record(truth_rel) else { return };
+        let truth = records::read_truth(&truth_path).unwrap();
         let mut e =
             CorrectedSmpeEstimator::new(st, &Priors::generic(&st), ModelReferenceConfig::default())
                 .unwrap();

@@ -1,65 +1,21 @@
 use super::*;
-use crate::flight_model::G0_MPS2;
 use crate::sample::AircraftConstants;
+use crate::test_aircraft::{self, ALPHA0, V0, doublet};
 use crate::vocabulary::{Coefficient as C, Param, Term as T};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 use std::vec::Vec;
 
-/// F-16-like mass, geometry and inertia (SI), a stable airframe.
+/// The F-16-like test aircraft ([`crate::test_aircraft`]) without a reference airspeed.
 fn constants() -> AircraftConstants {
-    AircraftConstants {
-        mass_kg: 9300.0,
-        S_m2: 27.87,
-        cbar_m: Some(3.45),
-        b_m: Some(9.14),
-        Ixx_kgm2: Some(16_660.0),
-        Iyy_kgm2: Some(77_430.0),
-        Izz_kgm2: Some(90_940.0),
-        Ixz_kgm2: Some(1_437.0),
-        thrust_arm_m: 0.0,
-        thrust_incidence_rad: 0.0,
-        v0_mps: None,
-    }
+    AircraftConstants { v0_mps: None, ..test_aircraft::constants() }
 }
 
-const V0: f64 = 180.0;
-const ALPHA0: f64 = 0.06;
-const RHO: f64 = 0.75;
-const THRUST: f64 = 18_000.0;
-
-/// True six-axis derivatives of the synthetic aircraft (biases set by the trim).
+/// True six-axis derivatives of the synthetic aircraft (biases set by the level trim).
 fn truth() -> (ModelStructure, [f64; MAX_PARAMS]) {
     let st = ModelStructure::six_axis();
     let mut th = [0.0; MAX_PARAMS];
-    let set = |th: &mut [f64; MAX_PARAMS], c, t, v| th[st.index_of(Param::new(c, t)).unwrap()] = v;
-    for (c, vals) in [
-        (C::CL, [(T::Alpha, 4.2), (T::Q, 6.0), (T::De, 0.45)]),
-        (C::CD, [(T::Alpha, 0.35), (T::Q, 0.0), (T::De, 0.06)]),
-        (C::Cm, [(T::Alpha, -0.7), (T::Q, -14.0), (T::De, -0.9)]),
-    ] {
-        for (t, v) in vals {
-            set(&mut th, c, t, v);
-        }
-    }
-    for (c, vals) in [
-        (C::CY, [(T::Beta, -0.9), (T::P, 0.0), (T::R, 0.5), (T::Da, 0.0), (T::Dr, 0.15)]),
-        (C::Cl, [(T::Beta, -0.09), (T::P, -0.45), (T::R, 0.1), (T::Da, 0.07), (T::Dr, 0.015)]),
-        (C::Cn, [(T::Beta, 0.13), (T::P, -0.02), (T::R, -0.35), (T::Da, 0.01), (T::Dr, -0.07)]),
-    ] {
-        for (t, v) in vals {
-            set(&mut th, c, t, v);
-        }
-    }
-    // Level trim at (V0, α0), δe = 0: CL and CD balance weight and thrust (wind axes).
-    let k = constants();
-    let qs = 0.5 * RHO * V0 * V0 * k.S_m2;
-    let cl = (k.mass_kg * G0_MPS2 - THRUST * ALPHA0.sin()) / qs;
-    let cd = THRUST * ALPHA0.cos() / qs;
-    let i = |c, t| st.index_of(Param::new(c, t)).unwrap();
-    th[i(C::CL, T::Bias)] = cl - th[i(C::CL, T::Alpha)] * ALPHA0;
-    th[i(C::CD, T::Bias)] = cd - th[i(C::CD, T::Alpha)] * ALPHA0;
-    th[i(C::Cm, T::Bias)] = -th[i(C::Cm, T::Alpha)] * ALPHA0;
+    th[..st.n_params()].copy_from_slice(&test_aircraft::trimmed_truth(&st));
     (st, th)
 }
 
@@ -68,16 +24,6 @@ const NOISE: [f64; N_OUTPUTS] = [
     0.15, 0.0017, 0.0017, 0.0017, 0.0017, 0.0017, 0.0017, 0.0017, 0.05, 0.05, 0.05, 0.05, 0.05,
     0.05,
 ];
-
-fn doublet(t: f64, t0: f64, width: f64, amp: f64) -> f64 {
-    if t >= t0 && t < t0 + width {
-        amp
-    } else if t >= t0 + width && t < t0 + 2.0 * width {
-        -amp
-    } else {
-        0.0
-    }
-}
 
 /// Simulates the coupled six-axis model with the true parameters from trim, with doublets on
 /// δe (1 s), δa (7 s) and δr (12 s), at `rate` Hz for `duration` s (RK4, 4 substeps, inputs
@@ -95,28 +41,7 @@ fn simulate(rate: f64, duration: f64, seed: u64) -> Vec<AirDataSample> {
             doublet(t, 11.0, 1.0, 0.08) + doublet(t, 21.0, 0.8, -0.08),
         )
     };
-    let base = |t: f64, x: &[f64; 8]| {
-        let (de, da, dr) = controls(t);
-        AirDataSample {
-            t_s: t,
-            vt_mps: x[0],
-            alpha_rad: x[1],
-            qbar_pa: 0.5 * RHO * x[0] * x[0],
-            beta_rad: Some(x[2]),
-            p_rad_s: Some(x[3]),
-            q_rad_s: Some(x[4]),
-            r_rad_s: Some(x[5]),
-            phi_rad: Some(x[6]),
-            theta_rad: Some(x[7]),
-            de_rad: Some(de),
-            da_rad: Some(da),
-            dr_rad: Some(dr),
-            thrust_n: Some(THRUST),
-            rho_kgpm3: Some(RHO),
-            constants: k,
-            ..Default::default()
-        }
-    };
+    let base = |t: f64, x: &[f64; 8]| test_aircraft::sample(t, x, controls(t), k);
     let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
     let n01 = Normal::new(0.0, 1.0).unwrap();
     let mut x = [V0, ALPHA0, 0.0, 0.0, 0.0, 0.0, 0.0, ALPHA0];
@@ -141,14 +66,7 @@ fn simulate(rate: f64, duration: f64, seed: u64) -> Vec<AirDataSample> {
             (Output::Theta, 7),
         ] {
             let v = noisy(x[i], o);
-            match o {
-                Output::Beta => s.beta_rad = Some(v),
-                Output::P => s.p_rad_s = Some(v),
-                Output::Q => s.q_rad_s = Some(v),
-                Output::R => s.r_rad_s = Some(v),
-                Output::Phi => s.phi_rad = Some(v),
-                _ => s.theta_rad = Some(v),
-            }
+            test_aircraft::set_output(&mut s, o, v);
         }
         s.ax_mps2 = Some(noisy(d.accel[0], Output::Ax));
         s.ay_mps2 = Some(noisy(d.accel[1], Output::Ay));

@@ -3,20 +3,14 @@ use crate::prior::Priors;
 use crate::sample::AircraftConstants;
 use crate::vocabulary::{Coefficient as C, Param, Term as T};
 
-/// F-16-like constants (magnitudes of the JSBSim F-16 sample record, SI).
+/// The F-16-like test aircraft ([`crate::test_aircraft`]) with an offset, inclined thrust line
+/// and another reference airspeed, so that every term of the model is exercised.
 fn constants() -> AircraftConstants {
     AircraftConstants {
-        mass_kg: 9300.0,
-        S_m2: 27.87,
-        cbar_m: Some(3.45),
-        b_m: Some(9.14),
-        Ixx_kgm2: Some(16_660.0),
-        Iyy_kgm2: Some(77_430.0),
-        Izz_kgm2: Some(90_940.0),
-        Ixz_kgm2: Some(1_437.0),
         thrust_arm_m: 0.12,
         thrust_incidence_rad: 0.02,
         v0_mps: Some(200.0),
+        ..crate::test_aircraft::constants()
     }
 }
 

@@ -1,96 +1,14 @@
 use super::*;
 use crate::flight_model::{G0_MPS2, ModelInputs, N_OUTPUTS, state};
-use crate::sample::AircraftConstants;
-use crate::vocabulary::{Coefficient as C, Param, Term as T};
+use crate::test_aircraft::{ALPHA0, V0, constants, doublet, sample, set_output, trimmed_truth};
+use crate::vocabulary::{Coefficient as C, Term as T};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 use std::println;
 
-/// F-16-like mass, geometry and inertia (SI), a stable airframe (as the EKF tests).
-fn constants() -> AircraftConstants {
-    AircraftConstants {
-        mass_kg: 9300.0,
-        S_m2: 27.87,
-        cbar_m: Some(3.45),
-        b_m: Some(9.14),
-        Ixx_kgm2: Some(16_660.0),
-        Iyy_kgm2: Some(77_430.0),
-        Izz_kgm2: Some(90_940.0),
-        Ixz_kgm2: Some(1_437.0),
-        thrust_arm_m: 0.0,
-        thrust_incidence_rad: 0.0,
-        v0_mps: Some(180.0),
-    }
-}
-
-const V0: f64 = 180.0;
-const ALPHA0: f64 = 0.06;
-const RHO: f64 = 0.75;
-const THRUST: f64 = 18_000.0;
-
 /// Known white sensor noise σ of the synthetic records, per output index.
 const NOISE: [f64; N_OUTPUTS] =
     [0.3, 0.002, 0.002, 0.003, 0.003, 0.003, 0.003, 0.003, 0.08, 0.08, 0.08, 0.05, 0.05, 0.05];
-
-/// True parameters of `st` (a subset of the six-axis F-16-like truth, biases set by the level
-/// trim at (V0, α0), δ = 0).
-fn truth(st: &ModelStructure) -> Vec<f64> {
-    let mut th = vec![0.0; st.n_params()];
-    let values = [
-        (C::CL, T::Alpha, 4.2),
-        (C::CL, T::Q, 6.0),
-        (C::CL, T::De, 0.45),
-        (C::CD, T::Alpha, 0.35),
-        (C::CD, T::De, 0.06),
-        (C::Cm, T::Alpha, -0.7),
-        (C::Cm, T::Q, -14.0),
-        (C::Cm, T::De, -0.9),
-        (C::CY, T::Beta, -0.9),
-        (C::CY, T::R, 0.5),
-        (C::CY, T::Dr, 0.15),
-        (C::Cl, T::Beta, -0.09),
-        (C::Cl, T::P, -0.45),
-        (C::Cl, T::R, 0.1),
-        (C::Cl, T::Da, 0.07),
-        (C::Cl, T::Dr, 0.015),
-        (C::Cn, T::Beta, 0.13),
-        (C::Cn, T::P, -0.02),
-        (C::Cn, T::R, -0.35),
-        (C::Cn, T::Da, 0.01),
-        (C::Cn, T::Dr, -0.07),
-    ];
-    for (c, t, v) in values {
-        if let Some(i) = st.index_of(Param::new(c, t)) {
-            th[i] = v;
-        }
-    }
-    let k = constants();
-    let qs = 0.5 * RHO * V0 * V0 * k.S_m2;
-    let get = |th: &[f64], c, t| st.index_of(Param::new(c, t)).map_or(0.0, |i| th[i]);
-    let cl = (k.mass_kg * G0_MPS2 - THRUST * ALPHA0.sin()) / qs;
-    let cd = THRUST * ALPHA0.cos() / qs;
-    let biases = [
-        (C::CL, cl - get(&th, C::CL, T::Alpha) * ALPHA0),
-        (C::CD, cd - get(&th, C::CD, T::Alpha) * ALPHA0),
-        (C::Cm, -get(&th, C::Cm, T::Alpha) * ALPHA0),
-    ];
-    for (c, v) in biases {
-        if let Some(i) = st.index_of(Param::new(c, T::Bias)) {
-            th[i] = v;
-        }
-    }
-    th
-}
-
-fn doublet(t: f64, t0: f64, width: f64, amp: f64) -> f64 {
-    if t >= t0 && t < t0 + width {
-        amp
-    } else if t >= t0 + width && t < t0 + 2.0 * width {
-        -amp
-    } else {
-        0.0
-    }
-}
 
 /// Simulates the structure's own flight model from level trim with doublets on δe (1 s, 9 s),
 /// δa (3 s, 11 s) and δr (5 s, 13 s), RK4 with 4 substeps and inputs linear between samples,
@@ -117,30 +35,11 @@ fn simulate(
             doublet(t, 5.0, 1.0, 0.08) + doublet(t, 13.0, 0.8, -0.08),
         )
     };
-    let base = |t: f64, x: &[f64; N_STATES]| {
-        let (de, da, dr) = controls(t);
-        AirDataSample {
-            t_s: t,
-            vt_mps: x[state::V],
-            alpha_rad: x[state::ALPHA],
-            qbar_pa: 0.5 * RHO * x[0] * x[0],
-            beta_rad: Some(x[state::BETA]),
-            p_rad_s: Some(x[state::P]),
-            q_rad_s: Some(x[state::Q]),
-            r_rad_s: Some(x[state::R]),
-            phi_rad: Some(x[state::PHI]),
-            theta_rad: Some(x[state::THETA]),
-            // Inputs of the lateral set: steady level flight at the trim.
-            ax_mps2: Some(G0_MPS2 * ALPHA0.sin()),
-            az_mps2: Some(-G0_MPS2 * ALPHA0.cos()),
-            de_rad: Some(de),
-            da_rad: Some(da),
-            dr_rad: Some(dr),
-            thrust_n: Some(THRUST),
-            rho_kgpm3: Some(RHO),
-            constants: k,
-            ..Default::default()
-        }
+    let base = |t: f64, x: &[f64; N_STATES]| AirDataSample {
+        // Inputs of the lateral set: steady level flight at the trim.
+        ax_mps2: Some(G0_MPS2 * ALPHA0.sin()),
+        az_mps2: Some(-G0_MPS2 * ALPHA0.cos()),
+        ..sample(t, x, controls(t), k)
     };
     let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
     let n01 = Normal::new(0.0, 1.0).unwrap();
@@ -168,22 +67,7 @@ fn simulate(
         let mut s = s0;
         for o in set.outputs() {
             let v = d.output(*o, &xf) + noise_scale * NOISE[o.index()] * n01.sample(&mut rng);
-            match o {
-                Output::Vt => s.vt_mps = v,
-                Output::Alpha => s.alpha_rad = v,
-                Output::Beta => s.beta_rad = Some(v),
-                Output::P => s.p_rad_s = Some(v),
-                Output::Q => s.q_rad_s = Some(v),
-                Output::R => s.r_rad_s = Some(v),
-                Output::Phi => s.phi_rad = Some(v),
-                Output::Theta => s.theta_rad = Some(v),
-                Output::Ax => s.ax_mps2 = Some(v),
-                Output::Ay => s.ay_mps2 = Some(v),
-                Output::Az => s.az_mps2 = Some(v),
-                Output::Pdot => s.pdot_rad_s2 = Some(v),
-                Output::Qdot => s.qdot_rad_s2 = Some(v),
-                Output::Rdot => s.rdot_rad_s2 = Some(v),
-            }
+            set_output(&mut s, *o, v);
         }
         out.push(s);
         // The next sample's time exactly as it will be recorded (input edges must agree).
@@ -222,7 +106,7 @@ fn lon() -> ModelStructure {
 /// Central differences of the simulated outputs vs the exact sensitivities, every unknown
 /// (parameters, biases, free initial states), two manoeuvres.
 fn check_sensitivities(st: ModelStructure, biases: &[Output]) {
-    let th = truth(&st);
+    let th = trimmed_truth(&st);
     let a = simulate(&st, &th, 20.0, 6.0, 1.0, 1, [0.0; N_STATES]);
     let b = simulate(&st, &th, 20.0, 6.0, 1.0, 2, [0.0; N_STATES]);
     let model = FlightModel::new(st).unwrap();
@@ -349,7 +233,7 @@ fn with_x0(st: ModelStructure) -> OeConfig {
 /// seeds consistent with σ (ratio within [0.5, 1.6] for 8 seeds: the 95 % range of a sample
 /// standard deviation of 8 draws is about [0.55, 1.45]); the noise variances recovered.
 fn recovery(st: ModelStructure, rate: f64, duration: f64, primary: &[&str]) {
-    let th = truth(&st);
+    let th = trimmed_truth(&st);
     let crb = analytic_crb(&st, &th, rate, duration);
     let seeds = 8;
     let mut est = Vec::new();
@@ -416,7 +300,7 @@ fn synthetic_recovery_lateral_matches_crb_and_scatter() {
 #[test]
 fn both_step_kinds_reach_the_same_estimate_and_estimated_initial_states_are_recovered() {
     let st = lon();
-    let th = truth(&st);
+    let th = trimmed_truth(&st);
     let mut off = [0.0; N_STATES];
     off[state::ALPHA] = 0.01;
     off[state::Q] = 0.02;
@@ -452,7 +336,7 @@ fn both_step_kinds_reach_the_same_estimate_and_estimated_initial_states_are_reco
 #[test]
 fn a_fit_that_does_not_converge_is_an_error_with_the_last_iterate() {
     let st = lon();
-    let th = truth(&st);
+    let th = trimmed_truth(&st);
     let data = simulate(&st, &th, 20.0, 12.0, 1.0, 9, [0.0; N_STATES]);
     let mut cfg = OeConfig::new(st);
     cfg.start = Start::Priors;
@@ -471,7 +355,7 @@ fn a_fit_that_does_not_converge_is_an_error_with_the_last_iterate() {
 #[test]
 fn bad_configurations_and_data_are_named() {
     let st = lon();
-    let th = truth(&st);
+    let th = trimmed_truth(&st);
     let data = simulate(&st, &th, 20.0, 6.0, 1.0, 3, [0.0; N_STATES]);
     let err = |cfg: &OeConfig, m: &[&[AirDataSample]]| match fit(m, cfg) {
         Err(OeError::Estimator(e)) => e,
@@ -600,7 +484,7 @@ fn coloured_covariance_equals_the_direct_double_sum() {
 #[test]
 fn coloured_sigma_is_close_to_crb_for_white_noise() {
     let st = lon();
-    let th = truth(&st);
+    let th = trimmed_truth(&st);
     let data = simulate(&st, &th, 20.0, 16.0, 1.0, 21, [0.0; N_STATES]);
     let res = fit(&[&data], &with_x0(st)).unwrap();
     let sc = res.sigma_coloured.as_ref().unwrap();

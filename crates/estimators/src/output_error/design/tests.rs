@@ -1,91 +1,21 @@
 use super::*;
 use crate::output_error::{OeConfig, Start, fit};
+use crate::test_aircraft::{
+    ALPHA0, RHO, THRUST, V0, constants, derivatives, set_output, three_two_one_one,
+};
 use crate::vocabulary::{Coefficient as C, Term as T};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 use std::println;
 
-/// F-16-like mass, geometry and inertia (SI), as the output-error and EKF tests.
-fn constants() -> AircraftConstants {
-    AircraftConstants {
-        mass_kg: 9300.0,
-        S_m2: 27.87,
-        cbar_m: Some(3.45),
-        b_m: Some(9.14),
-        Ixx_kgm2: Some(16_660.0),
-        Iyy_kgm2: Some(77_430.0),
-        Izz_kgm2: Some(90_940.0),
-        Ixz_kgm2: Some(1_437.0),
-        thrust_arm_m: 0.0,
-        thrust_incidence_rad: 0.0,
-        v0_mps: Some(180.0),
-    }
-}
-
-const V0: f64 = 180.0;
-const ALPHA0: f64 = 0.06;
-const RHO: f64 = 0.75;
-const THRUST: f64 = 18_000.0;
 const DT: f64 = 0.02;
 
 fn condition() -> FlightCondition {
     FlightCondition::level(V0, ALPHA0, RHO, THRUST)
 }
 
-/// The F-16-like derivatives of the output-error tests (biases 0).
-fn derivatives(st: &ModelStructure) -> Vec<f64> {
-    let mut th = vec![0.0; st.n_params()];
-    let values = [
-        (C::CL, T::Alpha, 4.2),
-        (C::CL, T::Q, 6.0),
-        (C::CL, T::De, 0.45),
-        (C::CD, T::Alpha, 0.35),
-        (C::CD, T::De, 0.06),
-        (C::Cm, T::Alpha, -0.7),
-        (C::Cm, T::Q, -14.0),
-        (C::Cm, T::De, -0.9),
-        (C::CY, T::Beta, -0.9),
-        (C::CY, T::R, 0.5),
-        (C::CY, T::Dr, 0.15),
-        (C::Cl, T::Beta, -0.09),
-        (C::Cl, T::P, -0.45),
-        (C::Cl, T::R, 0.1),
-        (C::Cl, T::Da, 0.07),
-        (C::Cl, T::Dr, 0.015),
-        (C::Cn, T::Beta, 0.13),
-        (C::Cn, T::P, -0.02),
-        (C::Cn, T::R, -0.35),
-        (C::Cn, T::Da, 0.01),
-        (C::Cn, T::Dr, -0.07),
-    ];
-    for (c, t, v) in values {
-        if let Some(i) = st.index_of(Param::new(c, t)) {
-            th[i] = v;
-        }
-    }
-    th
-}
-
 fn trimmed(st: &ModelStructure) -> Vec<f64> {
     trim_biases(st, &derivatives(st), &constants(), &condition()).unwrap()
-}
-
-/// 3-2-1-1 of unit `unit_s` starting at `t0_s`, amplitude `amp`, sampled at `DT` over
-/// `duration_s`.
-fn three_two_one_one(t0_s: f64, unit_s: f64, amp: f64, duration_s: f64) -> Vec<f64> {
-    let n = (duration_s / DT).round() as usize + 1;
-    (0..n)
-        .map(|i| {
-            let u = (i as f64 * DT - t0_s) / unit_s;
-            match u {
-                u if (0.0..3.0).contains(&u) => amp,
-                u if (3.0..5.0).contains(&u) => -amp,
-                u if (5.0..6.0).contains(&u) => amp,
-                u if (6.0..7.0).contains(&u) => -amp,
-                _ => 0.0,
-            }
-        })
-        .collect()
 }
 
 fn doublet(t0_s: f64, half_s: f64, amp: f64, duration_s: f64) -> Vec<f64> {
@@ -246,15 +176,15 @@ fn scaling_laws_amplitude_noise_repeats_duration() {
     // Amplitude: the sensitivity of a derivative is proportional to the excursion of its
     // regressor, so σ ∝ 1/amplitude for the linearised model (the biases' sensitivities do
     // not scale; their σ are not checked). Small amplitudes keep the nonlinearity small.
-    let a1 = predict_crb(&lon_plan(three_two_one_one(1.0, 0.4, 0.5 * DEG, 10.0))).unwrap();
-    let a2 = predict_crb(&lon_plan(three_two_one_one(1.0, 0.4, 1.0 * DEG, 10.0))).unwrap();
+    let a1 = predict_crb(&lon_plan(three_two_one_one(&[1.0], 0.4, 0.5 * DEG, 10.0, DT))).unwrap();
+    let a2 = predict_crb(&lon_plan(three_two_one_one(&[1.0], 0.4, 1.0 * DEG, 10.0, DT))).unwrap();
     for name in derivative_names(&st) {
         let r = a2.sigma_of(name).unwrap() / a1.sigma_of(name).unwrap();
         println!("amplitude ×2: {name:>9} σ ratio {r:.4}");
         assert!((r - 0.5).abs() < 0.005, "{name}: amplitude ×2 gives σ ratio {r}");
     }
     // Sensor noise halved: every σ halves exactly (M scales by 4).
-    let mut plan = lon_plan(three_two_one_one(1.0, 0.4, 1.0 * DEG, 10.0));
+    let mut plan = lon_plan(three_two_one_one(&[1.0], 0.4, 1.0 * DEG, 10.0, DT));
     plan.sensors.iter_mut().for_each(|s| s.sigma *= 0.5);
     let h = predict_crb(&plan).unwrap();
     for i in 0..a2.n() {
@@ -262,7 +192,7 @@ fn scaling_laws_amplitude_noise_repeats_duration() {
         assert!((r - 0.5).abs() < 1e-9, "{}: noise ×½ gives σ ratio {r}", a2.names[i]);
     }
     // Two identical repeats: every σ × 1/√2 exactly.
-    let mut plan = lon_plan(three_two_one_one(1.0, 0.4, 1.0 * DEG, 10.0));
+    let mut plan = lon_plan(three_two_one_one(&[1.0], 0.4, 1.0 * DEG, 10.0, DT));
     plan.repeats = 2;
     let rep = predict_crb(&plan).unwrap();
     for i in 0..a2.n() {
@@ -314,12 +244,12 @@ fn trim_biases_balance_level_flight_and_the_plan_starts_in_trim() {
     assert!((get(C::CL, T::Bias) - (cl - 4.2 * ALPHA0)).abs() < 1e-10);
     assert!((get(C::CD, T::Bias) - (cd - 0.35 * ALPHA0)).abs() < 1e-10);
     assert!((get(C::Cm, T::Bias) - 0.7 * ALPHA0).abs() < 1e-12);
-    let r = predict_crb(&lon_plan(three_two_one_one(1.0, 0.4, DEG, 10.0))).unwrap();
+    let r = predict_crb(&lon_plan(three_two_one_one(&[1.0], 0.4, DEG, 10.0, DT))).unwrap();
     for (name, rate) in &r.trim_rates {
         assert!(rate.abs() < 1e-9, "{name} rate {rate} at trim");
     }
     // Untrimmed θ (biases 0) is visible in the rates.
-    let mut plan = lon_plan(three_two_one_one(1.0, 0.4, DEG, 10.0));
+    let mut plan = lon_plan(three_two_one_one(&[1.0], 0.4, DEG, 10.0, DT));
     plan.theta = derivatives(&st);
     let r = predict_crb(&plan).unwrap();
     assert!(r.trim_rates.iter().any(|(_, v)| v.abs() > 0.1));
@@ -340,26 +270,6 @@ fn trim_biases_balance_level_flight_and_the_plan_starts_in_trim() {
         .with(C::Cm, &[T::Alpha]);
     let err = trim_biases(&no_cm0, &[0.0; 4], &k, &c).unwrap_err();
     assert!(matches!(err, EstimatorError::InvalidConfig { field: "Cm_0", .. }), "{err:?}");
-}
-
-/// Sets output `o` of a sample.
-fn set_output(s: &mut AirDataSample, o: Output, v: f64) {
-    match o {
-        Output::Vt => s.vt_mps = v,
-        Output::Alpha => s.alpha_rad = v,
-        Output::Beta => s.beta_rad = Some(v),
-        Output::P => s.p_rad_s = Some(v),
-        Output::Q => s.q_rad_s = Some(v),
-        Output::R => s.r_rad_s = Some(v),
-        Output::Phi => s.phi_rad = Some(v),
-        Output::Theta => s.theta_rad = Some(v),
-        Output::Ax => s.ax_mps2 = Some(v),
-        Output::Ay => s.ay_mps2 = Some(v),
-        Output::Az => s.az_mps2 = Some(v),
-        Output::Pdot => s.pdot_rad_s2 = Some(v),
-        Output::Qdot => s.qdot_rad_s2 = Some(v),
-        Output::Rdot => s.rdot_rad_s2 = Some(v),
-    }
 }
 
 /// Monte Carlo check of the prediction: the plan simulated with the assumed θ (the same
@@ -415,7 +325,7 @@ fn monte_carlo(plan: &DesignPlan, seeds: u64, check: &[&str]) {
 
 #[test]
 fn monte_carlo_scatter_matches_prediction_longitudinal_3211() {
-    let mut plan = lon_plan(three_two_one_one(1.0, 0.4, 2.0 * DEG, 8.0));
+    let mut plan = lon_plan(three_two_one_one(&[1.0], 0.4, 2.0 * DEG, 8.0, DT));
     plan.initial_states = InitialStates::Estimate([true; N_STATES]);
     let st = plan.structure;
     monte_carlo(&plan, 100, &derivative_names(&st));
@@ -435,7 +345,7 @@ fn bad_plans_are_named() {
         Err(EstimatorError::InvalidConfig { field, .. }) => field,
         other => panic!("expected InvalidConfig, got {other:?}"),
     };
-    let good = lon_plan(three_two_one_one(1.0, 0.4, DEG, 4.0));
+    let good = lon_plan(three_two_one_one(&[1.0], 0.4, DEG, 4.0, DT));
     assert!(predict_crb(&good).is_ok());
     let mut p = good.clone();
     p.theta.pop();
@@ -477,6 +387,6 @@ fn bad_plans_are_named() {
     p.manoeuvres[0].de_rad[10] = f64::INFINITY;
     assert!(matches!(predict_crb(&p), Err(EstimatorError::NonFiniteInput { field: "de_rad", .. })));
     // An input far too large for the model: the simulated response leaves the domain.
-    let big = lon_plan(three_two_one_one(1.0, 2.0, 60.0 * DEG, 20.0));
+    let big = lon_plan(three_two_one_one(&[1.0], 2.0, 60.0 * DEG, 20.0, DT));
     assert!(matches!(predict_crb(&big), Err(EstimatorError::Numerical { .. })));
 }

@@ -1,3 +1,0 @@
-//! Support shared by the integration tests.
-
-pub mod jsbsim_mr;

@@ -20,6 +20,7 @@
 
 pub mod scenario;
 
+use crate::outdir::OutputDir;
 use crate::plot::{LineKind, Panel, Series, render_panels_png};
 use aeroident_models::actuator::{F16WithActuators, SurfaceActuators};
 use aeroident_models::f16::AeroIncrements;
@@ -299,16 +300,15 @@ pub fn run(sc: &SimScenario, base_dir: &Path) -> anyhow::Result<SimRun> {
     Ok(SimRun { columns, data, trim: t0 })
 }
 
-/// Writes `timeseries.csv`, `states.png` and `controls_wind.png` into `out_dir`.
+/// Writes `timeseries.csv`, `states.png` and `controls_wind.png` into the locked output
+/// directory `od`, each atomically.
 ///
 /// # Errors
 /// I/O, CSV or plotting errors naming the file.
-pub fn write_outputs(run: &SimRun, out_dir: &Path) -> anyhow::Result<()> {
-    std::fs::create_dir_all(out_dir)
-        .with_context(|| format!("creating `{}`", out_dir.display()))?;
-    let csv_path = out_dir.join("timeseries.csv");
-    let mut w = csv::Writer::from_path(&csv_path)
-        .with_context(|| format!("creating `{}`", csv_path.display()))?;
+pub fn write_outputs(run: &SimRun, od: &mut OutputDir) -> anyhow::Result<()> {
+    let mut file = od.create("timeseries.csv")?;
+    let csv_path = file.path().to_path_buf();
+    let mut w = csv::Writer::from_writer(&mut file);
     w.write_record(&run.columns).with_context(|| format!("writing `{}`", csv_path.display()))?;
     let n = run.data[0].len();
     for k in 0..n {
@@ -316,6 +316,8 @@ pub fn write_outputs(run: &SimRun, out_dir: &Path) -> anyhow::Result<()> {
             .with_context(|| format!("writing `{}`", csv_path.display()))?;
     }
     w.flush().with_context(|| format!("writing `{}`", csv_path.display()))?;
+    drop(w);
+    file.commit()?;
 
     let t = run.data[0].clone();
     let d = 180.0 / std::f64::consts::PI;
@@ -358,9 +360,9 @@ pub fn write_outputs(run: &SimRun, out_dir: &Path) -> anyhow::Result<()> {
         panel("load factors", "g", &[("nz_g", 1.0), ("ny_g", 1.0), ("nx_g", 1.0)]),
         panel("altitude", "alt (ft)", &[("alt_ft", 1.0)]),
     ];
-    let p = out_dir.join("states.png");
-    render_panels_png(&p, "F-16 open-loop response", &states, 1000, 230)
-        .with_context(|| format!("plot `{}`", p.display()))?;
+    od.write_path("states.png", |p| {
+        render_panels_png(p, "F-16 open-loop response", &states, 1000, 230)
+    })?;
     let controls = [
         panel("elevator", "deg", &[("elevator_cmd_rad", d), ("elevator_rad", d)]),
         panel(
@@ -379,9 +381,9 @@ pub fn write_outputs(run: &SimRun, out_dir: &Path) -> anyhow::Result<()> {
             &[("wind_body_x_fps", 1.0), ("wind_body_y_fps", 1.0), ("wind_body_z_fps", 1.0)],
         ),
     ];
-    let p = out_dir.join("controls_wind.png");
-    render_panels_png(&p, "F-16 controls and wind", &controls, 1000, 230)
-        .with_context(|| format!("plot `{}`", p.display()))?;
+    od.write_path("controls_wind.png", |p| {
+        render_panels_png(p, "F-16 controls and wind", &controls, 1000, 230)
+    })?;
     Ok(())
 }
 
@@ -392,8 +394,10 @@ pub fn write_outputs(run: &SimRun, out_dir: &Path) -> anyhow::Result<()> {
 pub fn execute(args: SimArgs) -> anyhow::Result<()> {
     let sc = load_scenario(&args.scenario)?;
     let base = args.scenario.parent().unwrap_or(Path::new("."));
+    // Lock and clear the directory first, so a failing run leaves no old outputs.
+    let mut od = OutputDir::open(&args.out)?;
     let r = run(&sc, base)?;
-    write_outputs(&r, &args.out)?;
+    write_outputs(&r, &mut od)?;
     crate::cli::print_stdout(&format!(
         "simulated {:.2} s ({} rows, {} columns) from trim: throttle {:.4}, elevator {:.4} deg, alpha {:.4} deg (trim cost {:.1e})\nwrote {}/timeseries.csv, states.png, controls_wind.png",
         r.data[0].last().copied().unwrap_or(0.0),
@@ -507,7 +511,7 @@ mod tests {
             if n == 1 {
                 let out =
                     std::env::temp_dir().join(format!("aeroident_sim_test_{}", std::process::id()));
-                write_outputs(&r, &out).unwrap();
+                write_outputs(&r, &mut OutputDir::open(&out).unwrap()).unwrap();
                 let csv = std::fs::read_to_string(out.join("timeseries.csv")).unwrap();
                 assert_eq!(csv.lines().count(), r.data[0].len() + 1);
                 assert!(out.join("states.png").exists() && out.join("controls_wind.png").exists());

@@ -5,7 +5,8 @@
 //! Every row yields exactly one [`RecordEvent`]: a sample, or a rejection naming the row (line
 //! number in the file, header = line 1), the column and the reason. Rows are rejected for a
 //! blank, non-numeric or non-finite value in a mapped column, a value that is not finite after
-//! the unit conversion, a wrong field count, a repeated or backward time, and a non-positive
+//! the unit conversion, a wrong field count, a repeated or backward time, a time implausibly far
+//! ahead ([`IMPLAUSIBLE_JUMP_FACTOR`] × the nominal interval; the last good time is kept), and a non-positive
 //! airspeed, mass, area, chord, span, moment of inertia, density or dynamic pressure. A gap —
 //! an interval longer than [`GAP_FACTOR`] × the nominal interval — is reported as a
 //! [`RecordEvent::Gap`] *before* the sample that follows it; it is never bridged silently.
@@ -47,6 +48,11 @@ use std::io::Read;
 
 /// Gap threshold: an interval longer than this multiple of the nominal interval is a gap.
 pub const GAP_FACTOR: f64 = 1.5;
+
+/// A time more than this multiple of the nominal interval ahead of the previous accepted
+/// sample is implausible (a corrupt value such as 1e308): the row is rejected and the previous
+/// time kept. Smaller jumps are gaps ([`GAP_FACTOR`]).
+pub const IMPLAUSIBLE_JUMP_FACTOR: f64 = 1e6;
 
 /// A rejected row: its line number and the reason (naming the column).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -133,6 +139,29 @@ impl<R: Read> FlightDataReader<R> {
             })?
             .clone();
         let header_len = headers.len();
+        for (i, h) in headers.iter().enumerate() {
+            if let Some(j) = headers.iter().take(i).position(|g| g == h && !g.is_empty()) {
+                return Err(FlightDataError::DuplicateColumn {
+                    file: file.to_string(),
+                    column: h.to_string(),
+                    first: j + 1,
+                    second: i + 1,
+                });
+            }
+        }
+        let hint = match headers.iter().collect::<Vec<_>>().as_slice() {
+            [one] if one.contains(';') => {
+                "; the header is one field containing `;`: the file looks semicolon-delimited, \
+                 but only comma-separated files are read"
+                    .to_string()
+            }
+            [one] if one.contains('\t') => {
+                "; the header is one field containing a tab: the file looks tab-delimited, \
+                 but only comma-separated files are read"
+                    .to_string()
+            }
+            _ => String::new(),
+        };
         let resolve = |key: &str, m: &ChannelMap| -> Result<Option<Resolved>, FlightDataError> {
             let Source::Columns(cols) = &m.source else { return Ok(None) };
             let names: Vec<String> = cols.iter().map(|(n, _)| n.clone()).collect();
@@ -144,6 +173,7 @@ impl<R: Read> FlightDataReader<R> {
                         file: file.to_string(),
                         channel: key.to_string(),
                         column: n.clone(),
+                        hint: hint.clone(),
                     }
                 })?;
                 columns.push(idx);
@@ -263,6 +293,17 @@ impl<R: Read> FlightDataReader<R> {
             }
             if t_s < prev {
                 return Err(RowProblem::NonMonotonicTime { column, t_s, prev_t_s: prev });
+            }
+            if let Some(nom) = self.nominal_dt
+                && t_s - prev > IMPLAUSIBLE_JUMP_FACTOR * nom
+            {
+                return Err(RowProblem::ImplausibleTimeJump {
+                    column,
+                    t_s,
+                    prev_t_s: prev,
+                    nominal_dt_s: nom,
+                    factor: IMPLAUSIBLE_JUMP_FACTOR,
+                });
             }
         }
         let g = |ch: Channel| self.get(ch);

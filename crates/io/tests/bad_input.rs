@@ -229,3 +229,62 @@ fn analytic_vane_corrections_match_rigid_body_transport() {
         assert!((beta_v - beta).abs() > 20.0 * eb.abs(), "{beta_v} vs {beta}: err {eb}");
     }
 }
+
+fn events_str(csv: &str) -> Vec<RecordEvent> {
+    let m = mapping();
+    FlightDataReader::new(csv.as_bytes(), "inline.csv", &m).unwrap().map(|e| e.unwrap()).collect()
+}
+
+const HEADER: &str = "t,V,a,q,ax,az,de,qbar,qd\n";
+
+fn row(t: &str) -> String {
+    format!("{t},200,2.0,0.5,0.01,-1.0,1.0,100,0.1\n")
+}
+
+/// Issue 10 #7: one absurd time mid-record rejects only its own row; later rows continue from
+/// the last good time.
+#[test]
+fn errors_one_absurd_time_rejects_only_its_row() {
+    let mut csv = HEADER.to_string();
+    for t in ["0.0", "0.1", "1e308", "0.2", "0.3"] {
+        csv.push_str(&row(t));
+    }
+    let ev = events_str(&csv);
+    assert_eq!(ev.len(), 5, "{ev:?}");
+    let RecordEvent::Rejected { row, problem } = &ev[2] else { panic!("{:?}", ev[2]) };
+    assert_eq!(*row, 4);
+    assert!(matches!(problem, RowProblem::ImplausibleTimeJump { .. }), "{problem}");
+    assert!(problem.to_string().contains("column `t`"), "{problem}");
+    for (k, t) in [(3, 0.2), (4, 0.3)] {
+        let RecordEvent::Sample { sample, .. } = &ev[k] else { panic!("{:?}", ev[k]) };
+        assert_eq!(sample.t_s, t);
+    }
+}
+
+/// A semicolon- or tab-delimited file: the missing-column error says so.
+#[test]
+fn errors_semicolon_or_tab_file_gets_a_delimiter_hint() {
+    let m = mapping();
+    for (sep, word) in [(";", "semicolon"), ("\t", "tab")] {
+        let csv = format!("{}\n0{sep}200\n", HEADER.trim_end().replace(',', sep));
+        let err = FlightDataReader::new(csv.as_bytes(), "x.csv", &m).err().unwrap().to_string();
+        assert!(err.contains("missing") && err.contains(word), "{err}");
+    }
+    // A plain missing column has no such hint.
+    let err = FlightDataReader::new("t,V\n".as_bytes(), "x.csv", &m).err().unwrap().to_string();
+    assert!(err.contains("missing") && !err.contains("delimited"), "{err}");
+}
+
+/// Two header fields with one name are an error naming the column.
+#[test]
+fn errors_duplicate_column_names_are_refused() {
+    let m = mapping();
+    let csv = format!("{},a\n", HEADER.trim_end());
+    let err = FlightDataReader::new(csv.as_bytes(), "x.csv", &m).err().unwrap();
+    assert!(matches!(err, FlightDataError::DuplicateColumn { .. }), "{err}");
+    let msg = err.to_string();
+    assert!(
+        msg.contains("`a`") && msg.contains("x.csv") && msg.contains("3") && msg.contains("10"),
+        "{msg}"
+    );
+}

@@ -117,6 +117,48 @@ pub enum ReplayError {
     Output(#[from] std::io::Error),
 }
 
+/// Largest differentiator window, samples (a lag of 500 samples: 5 s at 100 Hz).
+pub const MAX_DIFF_WINDOW: usize = 1001;
+
+/// In real-time pacing, a time step longer than this multiple of the interval is a jump that
+/// is not slept across (the wall clock restarts at the next sample, and the summary says so).
+pub const REALTIME_JUMP_FACTOR: f64 = 10.0;
+
+/// Real-time pacing: the wall clock follows the record's time, except across jumps.
+#[derive(Debug, Default)]
+struct Pacer {
+    /// Wall-clock start and the record time it corresponds to.
+    clock: Option<(Instant, f64)>,
+    /// Previous sample time, s.
+    prev_t_s: Option<f64>,
+}
+
+impl Pacer {
+    /// How long to wait before emitting the sample at `t_s`, given the interval `dt_s` (`None`:
+    /// unknown yet); a jump longer than [`REALTIME_JUMP_FACTOR`] × `dt_s` is not slept across:
+    /// the clock restarts and the returned note says so. No single wait exceeds
+    /// `REALTIME_JUMP_FACTOR` × `dt_s` (nor 1 s while the interval is unknown).
+    fn wait(&mut self, t_s: f64, dt_s: Option<f64>, now: Instant) -> (Duration, Option<String>) {
+        let cap_s = dt_s.map_or(1.0, |dt| REALTIME_JUMP_FACTOR * dt);
+        let mut note = None;
+        if let (Some(prev), Some(_)) = (self.prev_t_s, self.clock)
+            && t_s - prev > cap_s
+        {
+            note = Some(format!(
+                "real-time pacing: time jumps {} s (from {prev} s to {t_s} s), more than {REALTIME_JUMP_FACTOR} × the interval; not slept across",
+                t_s - prev
+            ));
+            self.clock = None;
+        }
+        self.prev_t_s = Some(t_s);
+        let (start, t0) = *self.clock.get_or_insert((now, t_s));
+        let ahead_s = (t_s - t0).clamp(0.0, f64::MAX);
+        let due = start.checked_add(Duration::try_from_secs_f64(ahead_s).unwrap_or(Duration::MAX));
+        let wait = due.map_or(Duration::ZERO, |d| d.saturating_duration_since(now));
+        (wait.min(Duration::from_secs_f64(cap_s.clamp(0.0, 1e6))), note)
+    }
+}
+
 /// The history of estimates over the record.
 #[derive(Debug, Clone, Default)]
 pub struct History {
@@ -306,6 +348,16 @@ pub fn replay_with<R: Read>(
             reason: format!("must be odd and ≥ 3 (a whole-sample lag), got {}", opts.diff_window),
         });
     }
+    if opts.diff_window > MAX_DIFF_WINDOW {
+        return Err(ReplayError::Option {
+            option: "diff-window",
+            reason: format!(
+                "must be ≤ {MAX_DIFF_WINDOW} samples (a lag of {} samples), got {}",
+                MAX_DIFF_WINDOW / 2,
+                opts.diff_window
+            ),
+        });
+    }
     let file = reader.file().to_string();
     let uses_measured = opts.estimator.uses_measured_coefficients();
     let mapped_v0 = mapping.channels.get(&Channel::V0).and_then(|m| m.constant());
@@ -318,7 +370,8 @@ pub fn replay_with<R: Read>(
     let mut busy = Duration::ZERO;
     let mut ready = Vec::new();
     let mut unused = Vec::new();
-    let mut clock: Option<(Instant, f64)> = None;
+    let mut pacer = Pacer::default();
+    let mut warnings: Vec<String> = Vec::new();
     let mut diverged = false;
     for item in reader {
         let event = item?;
@@ -382,6 +435,10 @@ pub fn replay_with<R: Read>(
                     r.stage.push(row, s, &mut ready, &mut unused).map_err(|e| {
                         ReplayError::Option { option: "diff-window", reason: e.to_string() }
                     })?;
+                    if let Some(w) = r.stage.take_warning() {
+                        eprintln!("warning: {w}");
+                        warnings.push(w);
+                    }
                 }
             }
         }
@@ -428,11 +485,14 @@ pub fn replay_with<R: Read>(
             let values: Vec<Option<f64>> = (0..n).map(|i| e.value(i)).collect();
             let sigmas: Vec<Option<f64>> = (0..n).map(|i| e.sigma(i)).collect();
             if opts.pacing == Pacing::Realtime {
-                let (start, t_first) = *clock.get_or_insert((Instant::now(), s.t_s));
-                let due = start + Duration::from_secs_f64((s.t_s - t_first).max(0.0));
-                let now = Instant::now();
-                if due > now {
-                    std::thread::sleep(due - now);
+                let dt = r.stage.dt_s().or(mapping.nominal_dt_s);
+                let (wait, note) = pacer.wait(s.t_s, dt, Instant::now());
+                if let Some(n) = note {
+                    eprintln!("warning: {n}");
+                    warnings.push(n);
+                }
+                if !wait.is_zero() {
+                    std::thread::sleep(wait);
                 }
             }
             for sink in sinks.iter_mut() {
@@ -526,6 +586,7 @@ pub fn replay_with<R: Read>(
         parameters,
         coefficients,
         correlations,
+        warnings,
     };
     let differentiated = r.stage.supplies().to_vec();
     Ok(ReplayOutcome { model: spec, model_defaulted: defaulted, differentiated, history, summary })
@@ -754,5 +815,43 @@ mod tests {
         );
         // …but an estimator that does not use measured coefficients needs only the terms.
         assert!(unsupported(&ModelStructure::longitudinal(), &s, false, &[]).is_empty());
+    }
+
+    /// Issue 10 #1: in real-time pacing a huge time jump (1e308 s, 1e10 s) neither panics nor
+    /// sleeps across: the wait is capped at 10 intervals and the jump is reported; ordinary
+    /// steps wait their interval.
+    #[test]
+    fn errors_realtime_time_jump_is_not_slept_across() {
+        let now = Instant::now();
+        let mut p = Pacer::default();
+        assert_eq!(p.wait(0.0, Some(0.1), now), (Duration::ZERO, None));
+        let (w, n) = p.wait(0.1, Some(0.1), now);
+        assert!((w.as_secs_f64() - 0.1).abs() < 1e-9 && n.is_none(), "{w:?}");
+        for jump in [1e10, 1e308] {
+            let (w, n) = p.wait(jump, Some(0.1), now);
+            assert!(w <= Duration::from_secs(1), "{w:?}");
+            assert!(n.as_deref().is_some_and(|n| n.contains("not slept")), "{n:?}");
+        }
+        // After the jump the clock restarts: the next ordinary step waits one interval.
+        let (w, n) = p.wait(1e308 + 1e292, Some(1e292), now);
+        assert!(n.is_none() && w <= Duration::from_secs_f64(1e6), "{w:?}");
+        let mut p = Pacer::default();
+        p.wait(0.0, None, now);
+        let (w, _) = p.wait(0.5, None, now);
+        assert!((w.as_secs_f64() - 0.5).abs() < 1e-9);
+    }
+
+    /// Issue 10 #2: an absurd differentiator window is a clear option error, not an allocation
+    /// abort.
+    #[test]
+    fn errors_diff_window_has_an_upper_bound() {
+        let m = Mapping::from_toml_str(MAP, "m.toml").unwrap();
+        let csv = "t,V,a,q,ax,az,de\n0,50,0.1,0,0,-9.8,0\n";
+        for w in [1003, usize::MAX] {
+            let r = FlightDataReader::new(csv.as_bytes(), "d.csv", &m).unwrap();
+            let opts = ReplayOptions { diff_window: w, ..Default::default() };
+            let e = replay(r, &m, &opts, Vec::new()).unwrap_err().to_string();
+            assert!(e.contains("diff-window") && e.contains("1001"), "{e}");
+        }
     }
 }

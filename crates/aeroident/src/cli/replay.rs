@@ -8,7 +8,8 @@
 //! ```
 //! Writes `<dir>/estimates.csv`, `<dir>/summary.json` and `<dir>/estimates.png` (estimates with
 //! ±2σ). With `-` the record is read from stdin and one CSV line of estimates per sample is
-//! written to stdout as it is produced (a live feed); the summary then goes to stderr unless
+//! written to stdout (a live feed: buffered, flushed per line with `--realtime`; the history
+//! kept for the figure and the settling times is bounded, see `History`); the summary then goes to stderr unless
 //! `--out` is given. The model used is printed on stderr. A diverged estimator is an error
 //! (non-zero exit) after the summary is written. `--estimator oe` is the batch output-error
 //! fit: it reads the whole record first (it says so), prints its iterations and writes
@@ -89,8 +90,9 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         Some(o) => Some(o.create("estimates.csv")?),
         None => None,
     };
-    let stdout = std::io::stdout();
-    let mut stdout_lock = stdout.lock();
+    // Buffered: one write per 64 KiB, not per sample (the replay flushes per line only when
+    // paced in real time).
+    let mut stdout_lock = std::io::BufWriter::with_capacity(1 << 16, std::io::stdout().lock());
     let mut sinks: Vec<&mut dyn Write> = Vec::new();
     if let Some(f) = csv_file.as_mut() {
         sinks.push(f);

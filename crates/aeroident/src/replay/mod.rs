@@ -159,8 +159,13 @@ impl Pacer {
     }
 }
 
-/// The history of estimates over the record.
-#[derive(Debug, Clone, Default)]
+/// The history of estimates over the record, bounded: at most [`History::MAX_POINTS`] points
+/// (plus the last sample) are kept, so a 24 h live feed holds constant memory. Beyond that the
+/// history is decimated: every `stride`-th sample is kept (the stride doubles each time the
+/// limit is reached), and [`History::finish`] appends the last sample, so the final estimate and
+/// the settling time's reference are exact; the settling time then has the resolution of the
+/// stride.
+#[derive(Debug, Clone)]
 pub struct History {
     /// Parameter names.
     pub names: Vec<&'static str>,
@@ -170,6 +175,72 @@ pub struct History {
     pub values: Vec<Vec<Option<f64>>>,
     /// `sigmas[k][i]`.
     pub sigmas: Vec<Vec<Option<f64>>>,
+    /// Samples per kept point (1: every sample kept).
+    pub stride: usize,
+    /// Samples pushed.
+    pub samples: usize,
+    limit: usize,
+    last: Option<Point>,
+}
+
+/// One sample's time, estimates and σ.
+type Point = (f64, Vec<Option<f64>>, Vec<Option<f64>>);
+
+impl Default for History {
+    fn default() -> Self {
+        Self::with_limit(Self::MAX_POINTS)
+    }
+}
+
+impl History {
+    /// Default bound on the points kept (≈ 20 MB for 32 parameters with σ).
+    pub const MAX_POINTS: usize = 20_000;
+
+    /// An empty history keeping at most `limit` (≥ 2) points before decimating.
+    pub fn with_limit(limit: usize) -> Self {
+        Self {
+            names: Vec::new(),
+            t_s: Vec::new(),
+            values: Vec::new(),
+            sigmas: Vec::new(),
+            stride: 1,
+            samples: 0,
+            limit: limit.max(2),
+            last: None,
+        }
+    }
+
+    /// Adds one sample's estimates (decimating as described on the type).
+    pub fn push(&mut self, t_s: f64, values: Vec<Option<f64>>, sigmas: Vec<Option<f64>>) {
+        if self.samples.is_multiple_of(self.stride) {
+            self.t_s.push(t_s);
+            self.values.push(values.clone());
+            self.sigmas.push(sigmas.clone());
+            if self.t_s.len() > self.limit {
+                let keep = |k: usize| k.is_multiple_of(2);
+                let mut k = 0;
+                self.t_s.retain(|_| (keep(k), k += 1).0);
+                k = 0;
+                self.values.retain(|_| (keep(k), k += 1).0);
+                k = 0;
+                self.sigmas.retain(|_| (keep(k), k += 1).0);
+                self.stride *= 2;
+            }
+        }
+        self.samples += 1;
+        self.last = Some((t_s, values, sigmas));
+    }
+
+    /// Appends the last sample if decimation skipped it (call once, after the last push).
+    pub fn finish(&mut self) {
+        if let Some((t, v, s)) = self.last.take()
+            && self.t_s.last() != Some(&t)
+        {
+            self.t_s.push(t);
+            self.values.push(v);
+            self.sigmas.push(s);
+        }
+    }
 }
 
 /// Result of a replay.
@@ -306,7 +377,7 @@ struct Running {
 /// Replays a record through the chosen estimator.
 ///
 /// `sinks`: each gets a header line and one CSV line of estimates per sample as it is
-/// produced (flushed), e.g. the `estimates.csv` file and stdout in live mode. Each line:
+/// produced (flushed per line with [`Pacing::Realtime`], else at the end), e.g. the `estimates.csv` file and stdout in live mode. Each line:
 /// `t_s, <names>, sigma_<names>`; empty fields where not identified or no σ.
 ///
 /// # Errors
@@ -497,15 +568,21 @@ pub fn replay_with<R: Read>(
             }
             for sink in sinks.iter_mut() {
                 aeroident_io::replay_output::write_estimates_row(sink, s.t_s, &values, &sigmas)?;
-                sink.flush()?;
+                // Paced output is a live feed: each line goes out at its time. Otherwise the
+                // sinks stay buffered (flushed at the end).
+                if opts.pacing == Pacing::Realtime {
+                    sink.flush()?;
+                }
             }
-            history.t_s.push(s.t_s);
-            history.values.push(values);
-            history.sigmas.push(sigmas);
+            history.push(s.t_s, values, sigmas);
         }
         if diverged {
             break;
         }
+    }
+    history.finish();
+    for sink in sinks.iter_mut() {
+        sink.flush()?;
     }
     if let Some(r) = &mut run
         && !diverged
@@ -582,7 +659,7 @@ pub fn replay_with<R: Read>(
         samples_read,
         samples_rejected,
         rejections,
-        throughput_samples_per_s: history.t_s.len() as f64 / secs,
+        throughput_samples_per_s: history.samples as f64 / secs,
         parameters,
         coefficients,
         correlations,
@@ -853,5 +930,36 @@ mod tests {
             let e = replay(r, &m, &opts, Vec::new()).unwrap_err().to_string();
             assert!(e.contains("diff-window") && e.contains("1001"), "{e}");
         }
+    }
+
+    /// Issue 10 #15: the history stays bounded (decimated by a doubling stride) and keeps the
+    /// first and the last sample exactly.
+    #[test]
+    fn analytic_history_is_decimated_and_bounded() {
+        let mut h = History::with_limit(100);
+        let n = 200_000usize;
+        for k in 0..n {
+            h.push(k as f64, vec![Some(k as f64)], vec![None]);
+            assert!(h.t_s.len() <= 100, "{k}: {}", h.t_s.len());
+        }
+        h.finish();
+        assert_eq!(h.samples, n);
+        assert!(h.stride >= n / 100 && h.stride <= 2 * n / 100 * 2, "stride {}", h.stride);
+        assert_eq!(h.t_s[0], 0.0);
+        assert_eq!(*h.t_s.last().unwrap(), (n - 1) as f64);
+        assert_eq!(h.values.last().unwrap()[0], Some((n - 1) as f64));
+        // Every kept point but the appended last one lies on the stride grid, in order.
+        for w in h.t_s[..h.t_s.len() - 1].windows(2) {
+            assert_eq!(w[1] - w[0], h.stride as f64);
+        }
+        assert_eq!(h.t_s.len(), h.values.len());
+        assert_eq!(h.t_s.len(), h.sigmas.len());
+        // Below the limit nothing is dropped.
+        let mut h = History::with_limit(100);
+        for k in 0..50 {
+            h.push(k as f64, vec![None], vec![None]);
+        }
+        h.finish();
+        assert_eq!(h.t_s, (0..50).map(f64::from).collect::<Vec<_>>());
     }
 }

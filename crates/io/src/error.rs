@@ -212,6 +212,12 @@ pub enum RowProblem {
         /// The factor.
         factor: f64,
     },
+    /// The last line of a live feed (`-`) has no terminating newline: it may have been cut off
+    /// inside a value, so it is not used.
+    #[error(
+        "last line has no terminating newline: possibly truncated (a live feed cut inside a value), not used"
+    )]
+    Truncated,
     /// Wrong number of fields.
     #[error("{found} fields, header has {expected}")]
     FieldCount {

@@ -288,3 +288,47 @@ fn errors_duplicate_column_names_are_refused() {
         "{msg}"
     );
 }
+
+/// Issue 10 #6: an unbalanced quote that would swallow the rest of the file is a fatal error
+/// naming the row, the column and the lines it spans; the rows before it are read.
+#[test]
+fn errors_unbalanced_quote_is_reported_not_swallowed() {
+    let m = mapping();
+    let mut csv = HEADER.to_string();
+    csv.push_str(&row("0.0"));
+    csv.push_str("0.1,200,\"2.0,0.5,0.01,-1.0,1.0,100,0.1\n");
+    for t in ["0.2", "0.3", "0.4"] {
+        csv.push_str(&row(t));
+    }
+    let items: Vec<_> = FlightDataReader::new(csv.as_bytes(), "q.csv", &m).unwrap().collect();
+    assert_eq!(items.len(), 2, "{items:?}");
+    assert!(matches!(items[0], Ok(RecordEvent::Sample { row: 2, .. })));
+    let msg = items[1].as_ref().unwrap_err().to_string();
+    assert!(msg.contains("q.csv") && msg.contains("row 3") && msg.contains("column `a`"), "{msg}");
+    assert!(msg.contains("quote") && msg.contains("3–6"), "{msg}");
+}
+
+/// Issue 10 #8: a live feed (`-`) cut inside its last field: the last line is rejected as
+/// possibly truncated (counted as a rejection); a file keeps its unterminated last line, and a
+/// terminated live feed keeps every row.
+#[test]
+fn errors_live_feed_cut_in_last_line_is_rejected() {
+    let m = mapping();
+    let mut csv = HEADER.to_string();
+    csv.push_str(&row("0.0"));
+    csv.push_str(&row("0.1"));
+    let cut = format!("{csv}0.2,200,2.0,0.5,0.01,-1.0,1.0,100,0.0");
+    let ev: Vec<RecordEvent> =
+        FlightDataReader::new(cut.as_bytes(), "-", &m).unwrap().map(|e| e.unwrap()).collect();
+    assert_eq!(ev.len(), 3, "{ev:?}");
+    assert!(matches!(&ev[2], RecordEvent::Rejected { row: 4, problem: RowProblem::Truncated }));
+    let ev: Vec<RecordEvent> =
+        FlightDataReader::new(cut.as_bytes(), "f.csv", &m).unwrap().map(|e| e.unwrap()).collect();
+    assert!(matches!(&ev[2], RecordEvent::Sample { row: 4, .. }), "{:?}", ev[2]);
+    for whole in [csv.clone(), csv.replace('\n', "\r\n")] {
+        let ev: Vec<RecordEvent> =
+            FlightDataReader::new(whole.as_bytes(), "-", &m).unwrap().map(|e| e.unwrap()).collect();
+        assert_eq!(ev.len(), 2);
+        assert!(ev.iter().all(|e| matches!(e, RecordEvent::Sample { .. })), "{ev:?}");
+    }
+}

@@ -168,8 +168,10 @@ pub fn run(sc: &SimScenario, base_dir: &Path) -> anyhow::Result<SimRun> {
         bail!("[run] duration_s = {} must be finite and > 0", r.duration_s);
     }
     let n_steps = (r.duration_s / r.dt_s).round() as usize;
-    if n_steps > 50_000_000 {
-        bail!("[run] duration_s / dt_s = {n_steps} steps is too many (max 5e7)");
+    if n_steps > MAX_STEPS {
+        bail!(
+            "[run] duration_s / dt_s = {n_steps} steps is too many (max {MAX_STEPS}: the run is held in memory for the figures, 8 bytes per column per step); shorten duration_s or raise dt_s"
+        );
     }
 
     let mut f16 = F16::new(sc.aircraft.xcg).context("[aircraft] xcg")?;
@@ -299,6 +301,11 @@ pub fn run(sc: &SimScenario, base_dir: &Path) -> anyhow::Result<SimRun> {
     }
     Ok(SimRun { columns, data, trim: t0 })
 }
+
+/// Most RK4 steps of one simulation: the run is held in memory for the figures (8 bytes per
+/// column per step, so some hundred MB at the limit); longer runs are refused before any
+/// allocation.
+pub const MAX_STEPS: usize = 1_000_000;
 
 /// Writes `timeseries.csv`, `states.png` and `controls_wind.png` into the locked output
 /// directory `od`, each atomically.
@@ -519,5 +526,17 @@ mod tests {
             }
         }
         assert!(n >= 3);
+    }
+
+    /// Issue 10: an absurd step count (5e7) is refused before anything is allocated, with an
+    /// error naming the fields and the limit.
+    #[test]
+    fn errors_too_many_steps_are_refused_clearly() {
+        let s = scenario("", "f16", 5e5);
+        let e = format!("{:#}", run(&s, Path::new(".")).unwrap_err());
+        assert!(
+            e.contains("duration_s / dt_s") && e.contains("50000000") && e.contains("1000000"),
+            "{e}"
+        );
     }
 }

@@ -962,4 +962,46 @@ mod tests {
         h.finish();
         assert_eq!(h.t_s, (0..50).map(f64::from).collect::<Vec<_>>());
     }
+
+    /// Issue 10 #17: when every row is rejected, the error gives the first reasons (row and
+    /// column), not only a count.
+    #[test]
+    fn errors_no_usable_samples_names_the_first_reasons() {
+        let m = Mapping::from_toml_str(MAP, "m.toml").unwrap();
+        let csv = record().replace(",0.05,", ",,");
+        let r = FlightDataReader::new(csv.as_bytes(), "d.csv", &m).unwrap();
+        let e = replay(r, &m, &ReplayOptions::default(), Vec::new()).unwrap_err().to_string();
+        assert!(e.contains("d.csv") && e.contains("no usable samples"), "{e}");
+        assert!(e.contains("row 2: column `a`: blank value"), "{e}");
+    }
+
+    /// Issue 10 #10: a forgetting factor so small that nothing is ever identified reports every
+    /// estimate as `None` (null), never 0.0, and the status says so.
+    #[test]
+    fn errors_never_identified_parameters_are_null_not_zero() {
+        let m = Mapping::from_toml_str(MAP, "m.toml").unwrap();
+        // Independent excitation of α, q, δe and the accelerations: identifiable with λ = 1.
+        let mut csv = String::from("t,V,a,q,ax,az,de\n");
+        for k in 0..200 {
+            let t = k as f64 * 0.1;
+            let (a, q, de) =
+                (0.05 + 0.02 * (1.3 * t).sin(), 0.1 * (0.7 * t).cos(), 0.03 * (2.9 * t).sin());
+            let (ax, az) = (0.1 + 0.5 * a + 0.2 * de, -9.8 - 30.0 * a - 4.0 * de + q);
+            csv.push_str(&format!("{t:.1},50,{a},{q},{ax},{az},{de}\n"));
+        }
+        let run = |forgetting: f64| {
+            let r = FlightDataReader::new(csv.as_bytes(), "d.csv", &m).unwrap();
+            let opts = ReplayOptions { forgetting, diff_window: 3, ..Default::default() };
+            replay(r, &m, &opts, Vec::new()).unwrap()
+        };
+        let ok = run(1.0);
+        assert!(ok.summary.parameters.iter().all(|p| p.estimate.is_some()), "{:?}", ok.summary);
+        let out = run(1e-300);
+        assert_ne!(out.summary.status, "running");
+        assert!(!out.summary.parameters.is_empty());
+        for p in &out.summary.parameters {
+            assert_eq!(p.estimate, None, "{}", p.name);
+            assert_eq!(p.std_error, None, "{}", p.name);
+        }
+    }
 }

@@ -146,22 +146,51 @@ impl OutputDir {
     where
         F: FnOnce(&mut dyn Write) -> io::Result<()>,
     {
+        let mut f = self.create(name)?;
+        if let Err(e) = fill(&mut f) {
+            return Err(io_err("writing", &f.target)(e));
+        }
+        f.commit()
+    }
+
+    /// Opens file `name` for streaming: the data go to a temporary file in the directory that
+    /// [`AtomicFile::commit`] renames into place; dropping it uncommitted removes it. Write
+    /// errors name the file.
+    ///
+    /// # Errors
+    /// [`OutputError::UnsafeName`]; [`OutputError::Io`] if the temporary file or the manifest
+    /// cannot be created.
+    pub fn create(&mut self, name: &str) -> Result<AtomicFile, OutputError> {
         let name = safe_component(name)?.to_string();
         let target = self.dir.join(&name);
         let tmp = self.dir.join(format!(".{name}.tmp"));
         // Record first, so a crash after the rename still lets the next run clear it.
-        self.written.insert(name.clone());
+        self.written.insert(name);
         self.save_manifest()?;
-        let result = (|| {
-            let f = File::create(&tmp)?;
-            let mut w = BufWriter::new(f);
-            fill(&mut w)?;
-            let f = w.into_inner().map_err(io::IntoInnerError::into_error)?;
-            f.sync_all()
-        })();
-        if let Err(e) = result {
+        let f = File::create(&tmp).map_err(io_err("creating", &target))?;
+        Ok(AtomicFile { tmp, target, w: Some(BufWriter::new(f)) })
+    }
+
+    /// Writes file `name` atomically through code that takes a path (e.g. a figure renderer):
+    /// `fill` writes the temporary path `DIR/.tmp-NAME` (same extension, so format detection by
+    /// extension works), which is then renamed to `DIR/NAME`.
+    ///
+    /// # Errors
+    /// [`OutputError::UnsafeName`]; [`OutputError::Io`] naming the file when `fill` or the
+    /// rename fails (the temporary file is removed).
+    pub fn write_path<F, E>(&mut self, name: &str, fill: F) -> Result<PathBuf, OutputError>
+    where
+        F: FnOnce(&Path) -> Result<(), E>,
+        E: std::fmt::Display,
+    {
+        let name = safe_component(name)?.to_string();
+        let target = self.dir.join(&name);
+        let tmp = self.dir.join(format!(".tmp-{name}"));
+        self.written.insert(name);
+        self.save_manifest()?;
+        if let Err(e) = fill(&tmp) {
             let _ = fs::remove_file(&tmp);
-            return Err(io_err("writing", &target)(e));
+            return Err(io_err("writing", &target)(io::Error::other(e.to_string())));
         }
         fs::rename(&tmp, &target).map_err(io_err("renaming into place", &target))?;
         Ok(target)
@@ -191,6 +220,69 @@ impl OutputDir {
         let manifest = self.dir.join(MANIFEST);
         let text: String = self.written.iter().map(|n| format!("{n}\n")).collect();
         fs::write(&manifest, text).map_err(io_err("writing", &manifest))
+    }
+}
+
+/// A file being written into an [`OutputDir`] (see [`OutputDir::create`]).
+#[derive(Debug)]
+pub struct AtomicFile {
+    tmp: PathBuf,
+    target: PathBuf,
+    w: Option<BufWriter<File>>,
+}
+
+impl AtomicFile {
+    /// The final path of the file.
+    pub fn path(&self) -> &Path {
+        &self.target
+    }
+
+    fn named(&self, e: io::Error) -> io::Error {
+        io::Error::new(e.kind(), format!("writing `{}`: {e}", self.target.display()))
+    }
+
+    /// Flushes, syncs and renames the file into place; returns its path.
+    ///
+    /// # Errors
+    /// [`OutputError::Io`] naming the file (the temporary file is removed).
+    pub fn commit(mut self) -> Result<PathBuf, OutputError> {
+        let Some(w) = self.w.take() else {
+            return Err(io_err("writing", &self.target)(io::Error::other("already closed")));
+        };
+        let result =
+            w.into_inner().map_err(io::IntoInnerError::into_error).and_then(|f| f.sync_all());
+        if let Err(e) = result {
+            let _ = fs::remove_file(&self.tmp);
+            return Err(io_err("writing", &self.target)(e));
+        }
+        fs::rename(&self.tmp, &self.target).map_err(io_err("renaming into place", &self.target))?;
+        Ok(self.target.clone())
+    }
+}
+
+impl Write for AtomicFile {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        let r = match self.w.as_mut() {
+            Some(w) => w.write(buf),
+            None => Err(io::Error::other("already closed")),
+        };
+        r.map_err(|e| self.named(e))
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        let r = match self.w.as_mut() {
+            Some(w) => w.flush(),
+            None => Ok(()),
+        };
+        r.map_err(|e| self.named(e))
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if self.w.take().is_some() {
+            let _ = fs::remove_file(&self.tmp);
+        }
     }
 }
 
@@ -261,6 +353,34 @@ mod tests {
         let mut o = OutputDir::open(&d).unwrap();
         assert!(o.write_bytes("../escape.json", b"x").is_err());
         assert!(!d.parent().unwrap().join("escape.json").exists());
+        let _ = fs::remove_dir_all(&d);
+    }
+
+    #[test]
+    fn uncommitted_stream_leaves_nothing_and_path_writer_renames() {
+        let d = scratch("stream");
+        let mut o = OutputDir::open(&d).unwrap();
+        {
+            let mut f = o.create("estimates.csv").unwrap();
+            f.write_all(b"t_s\n1\n").unwrap();
+        }
+        assert!(!d.join("estimates.csv").exists() && !d.join(".estimates.csv.tmp").exists());
+        let mut f = o.create("estimates.csv").unwrap();
+        f.write_all(b"t_s\n").unwrap();
+        assert!(!d.join("estimates.csv").exists(), "visible before commit");
+        f.commit().unwrap();
+        assert_eq!(fs::read_to_string(d.join("estimates.csv")).unwrap(), "t_s\n");
+        let seen = std::cell::RefCell::new(PathBuf::new());
+        o.write_path("fig.png", |p: &Path| {
+            *seen.borrow_mut() = p.to_path_buf();
+            fs::write(p, b"png")
+        })
+        .unwrap();
+        assert!(seen.borrow().to_string_lossy().ends_with(".png"));
+        assert_eq!(fs::read(d.join("fig.png")).unwrap(), b"png");
+        let err = o.write_path("bad.png", |_: &Path| Err("No space left on device")).unwrap_err();
+        assert!(err.to_string().contains("bad.png") && err.to_string().contains("No space"));
+        assert!(!d.join("bad.png").exists());
         let _ = fs::remove_dir_all(&d);
     }
 }

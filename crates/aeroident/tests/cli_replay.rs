@@ -55,6 +55,7 @@ fn errors_bad_corpus_counted_in_summary_with_exact_keys() {
         "parameters",
         "coefficients",
         "correlations",
+        "warnings",
     ];
     let mut got = keys.clone();
     got.sort_unstable();

@@ -72,8 +72,9 @@ pub enum FlightDataError {
         /// Channel key.
         channel: String,
     },
-    /// A mapped column is not in the data file's header.
-    #[error("{file}: row 1 (header): column `{column}` for channel `{channel}` is missing")]
+    /// A mapped column is not in the data file's header. `hint` is empty or a sentence that
+    /// starts with "; " (e.g. the header looks delimited by `;` or a tab, not a comma).
+    #[error("{file}: row 1 (header): column `{column}` for channel `{channel}` is missing{hint}")]
     MissingColumn {
         /// Data file.
         file: String,
@@ -81,6 +82,22 @@ pub enum FlightDataError {
         channel: String,
         /// Column name.
         column: String,
+        /// Extra hint (empty, or starting with "; ").
+        hint: String,
+    },
+    /// Two header fields have the same name: which one a mapping means is ambiguous.
+    #[error(
+        "{file}: row 1 (header): column `{column}` appears twice (fields {first} and {second})"
+    )]
+    DuplicateColumn {
+        /// Data file.
+        file: String,
+        /// Column name.
+        column: String,
+        /// First field, 1-based.
+        first: usize,
+        /// Second field, 1-based.
+        second: usize,
     },
     /// The CSV itself could not be read (header or framing).
     #[error("{file}: row {row}: {message}")]
@@ -177,6 +194,30 @@ pub enum RowProblem {
         /// Previous accepted time, s.
         prev_t_s: f64,
     },
+    /// A time that jumps implausibly far ahead of the previous accepted sample (more than
+    /// [`crate::flight_data::IMPLAUSIBLE_JUMP_FACTOR`] × the nominal interval): the row is
+    /// rejected and the previous time kept, so one corrupt time does not reject every later row.
+    #[error(
+        "column `{column}`: time {t_s} s jumps implausibly far ahead of the previous {prev_t_s} s (more than {factor:e} × the nominal interval {nominal_dt_s} s)"
+    )]
+    ImplausibleTimeJump {
+        /// Time column name.
+        column: String,
+        /// The time, s.
+        t_s: f64,
+        /// Previous accepted time, s.
+        prev_t_s: f64,
+        /// Nominal interval, s.
+        nominal_dt_s: f64,
+        /// The factor.
+        factor: f64,
+    },
+    /// The last line of a live feed (`-`) has no terminating newline: it may have been cut off
+    /// inside a value, so it is not used.
+    #[error(
+        "last line has no terminating newline: possibly truncated (a live feed cut inside a value), not used"
+    )]
+    Truncated,
     /// Wrong number of fields.
     #[error("{found} fields, header has {expected}")]
     FieldCount {

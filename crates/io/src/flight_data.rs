@@ -5,7 +5,8 @@
 //! Every row yields exactly one [`RecordEvent`]: a sample, or a rejection naming the row (line
 //! number in the file, header = line 1), the column and the reason. Rows are rejected for a
 //! blank, non-numeric or non-finite value in a mapped column, a value that is not finite after
-//! the unit conversion, a wrong field count, a repeated or backward time, and a non-positive
+//! the unit conversion, a wrong field count, a repeated or backward time, a time implausibly far
+//! ahead ([`IMPLAUSIBLE_JUMP_FACTOR`] × the nominal interval; the last good time is kept), and a non-positive
 //! airspeed, mass, area, chord, span, moment of inertia, density or dynamic pressure. A gap —
 //! an interval longer than [`GAP_FACTOR`] × the nominal interval — is reported as a
 //! [`RecordEvent::Gap`] *before* the sample that follows it; it is never bridged silently.
@@ -47,6 +48,11 @@ use std::io::Read;
 
 /// Gap threshold: an interval longer than this multiple of the nominal interval is a gap.
 pub const GAP_FACTOR: f64 = 1.5;
+
+/// A time more than this multiple of the nominal interval ahead of the previous accepted
+/// sample is implausible (a corrupt value such as 1e308): the row is rejected and the previous
+/// time kept. Smaller jumps are gaps ([`GAP_FACTOR`]).
+pub const IMPLAUSIBLE_JUMP_FACTOR: f64 = 1e6;
 
 /// A rejected row: its line number and the reason (naming the column).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -96,10 +102,36 @@ struct Resolved {
     map: ChannelMap,
 }
 
+/// The source under the CSV parser, remembering whether it reached its end and its last byte
+/// (to tell a last line cut off without its newline).
+struct Tail<R> {
+    inner: R,
+    eof: bool,
+    last_byte: Option<u8>,
+}
+
+impl<R: Read> Read for Tail<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        if n == 0 && !buf.is_empty() {
+            self.eof = true;
+        } else if n > 0 {
+            self.last_byte = Some(buf[n - 1]);
+        }
+        Ok(n)
+    }
+}
+
 /// The streaming reader. Iterate it for [`RecordEvent`]s; fatal problems are `Err` items.
+///
+/// Two framing problems are caught: a quote that is never closed (the CSV parser would take
+/// the rest of the file as one field) is a fatal error naming the row, the column and the lines
+/// it spans; and in a live feed (file name `-`) a last line without a terminating newline is
+/// rejected as possibly truncated ([`RowProblem::Truncated`]). Files keep their last line.
 pub struct FlightDataReader<R: Read> {
     file: String,
-    csv: csv::Reader<R>,
+    csv: csv::Reader<Tail<R>>,
+    csv_headers: Vec<String>,
     header_len: usize,
     time: Resolved,
     channels: BTreeMap<Channel, Resolved>,
@@ -123,7 +155,7 @@ impl<R: Read> FlightDataReader<R> {
             .has_headers(true)
             .flexible(true)
             .trim(csv::Trim::All)
-            .from_reader(source);
+            .from_reader(Tail { inner: source, eof: false, last_byte: None });
         let headers = csv
             .headers()
             .map_err(|e| FlightDataError::Csv {
@@ -133,6 +165,29 @@ impl<R: Read> FlightDataReader<R> {
             })?
             .clone();
         let header_len = headers.len();
+        for (i, h) in headers.iter().enumerate() {
+            if let Some(j) = headers.iter().take(i).position(|g| g == h && !g.is_empty()) {
+                return Err(FlightDataError::DuplicateColumn {
+                    file: file.to_string(),
+                    column: h.to_string(),
+                    first: j + 1,
+                    second: i + 1,
+                });
+            }
+        }
+        let hint = match headers.iter().collect::<Vec<_>>().as_slice() {
+            [one] if one.contains(';') => {
+                "; the header is one field containing `;`: the file looks semicolon-delimited, \
+                 but only comma-separated files are read"
+                    .to_string()
+            }
+            [one] if one.contains('\t') => {
+                "; the header is one field containing a tab: the file looks tab-delimited, \
+                 but only comma-separated files are read"
+                    .to_string()
+            }
+            _ => String::new(),
+        };
         let resolve = |key: &str, m: &ChannelMap| -> Result<Option<Resolved>, FlightDataError> {
             let Source::Columns(cols) = &m.source else { return Ok(None) };
             let names: Vec<String> = cols.iter().map(|(n, _)| n.clone()).collect();
@@ -144,6 +199,7 @@ impl<R: Read> FlightDataReader<R> {
                         file: file.to_string(),
                         channel: key.to_string(),
                         column: n.clone(),
+                        hint: hint.clone(),
                     }
                 })?;
                 columns.push(idx);
@@ -171,6 +227,7 @@ impl<R: Read> FlightDataReader<R> {
         Ok(Self {
             file: file.to_string(),
             csv,
+            csv_headers: headers.iter().map(str::to_string).collect(),
             header_len,
             time,
             channels,
@@ -263,6 +320,17 @@ impl<R: Read> FlightDataReader<R> {
             }
             if t_s < prev {
                 return Err(RowProblem::NonMonotonicTime { column, t_s, prev_t_s: prev });
+            }
+            if let Some(nom) = self.nominal_dt
+                && t_s - prev > IMPLAUSIBLE_JUMP_FACTOR * nom
+            {
+                return Err(RowProblem::ImplausibleTimeJump {
+                    column,
+                    t_s,
+                    prev_t_s: prev,
+                    nominal_dt_s: nom,
+                    factor: IMPLAUSIBLE_JUMP_FACTOR,
+                });
             }
         }
         let g = |ch: Channel| self.get(ch);
@@ -379,26 +447,60 @@ impl<R: Read> Iterator for FlightDataReader<R> {
                 self.done = true;
                 None
             }
-            Ok(true) => match self.parse_row() {
-                Err(problem) => Some(Ok(RecordEvent::Rejected { row, problem })),
-                Ok(sample) => {
-                    let ev = RecordEvent::Sample { row, sample };
-                    let mut out = ev.clone();
-                    if let Some(prev) = self.last_t {
-                        let dt = sample.t_s - prev;
-                        match self.nominal_dt {
-                            None => self.nominal_dt = Some(dt),
-                            Some(nom) if dt > GAP_FACTOR * nom => {
-                                self.pending = Some(ev);
-                                out = RecordEvent::Gap { row, dt_s: dt, nominal_dt_s: nom };
-                            }
-                            Some(_) => {}
-                        }
-                    }
-                    self.last_t = Some(sample.t_s);
-                    Some(Ok(out))
+            Ok(true) => {
+                if let Some(i) = self.record.iter().position(|f| f.contains(['\n', '\r'])) {
+                    self.done = true;
+                    let column = self.header_name(i);
+                    let tail = self.csv.get_ref();
+                    // After a final newline the position is on the (empty) next line.
+                    let ended_on_newline = tail.eof && tail.last_byte == Some(b'\n');
+                    let end =
+                        self.csv.position().line().saturating_sub(u64::from(ended_on_newline));
+                    return Some(Err(FlightDataError::Csv {
+                        file: self.file.clone(),
+                        row,
+                        message: format!(
+                            "field {} (column `{column}`) contains a line break: a quote opened here is never closed and runs over lines {row}–{end} (the rest of the file would be read as one field)",
+                            i + 1
+                        ),
+                    }));
                 }
-            },
+                let tail = self.csv.get_ref();
+                if self.file == "-" && tail.eof && tail.last_byte != Some(b'\n') {
+                    self.done = true;
+                    return Some(Ok(RecordEvent::Rejected { row, problem: RowProblem::Truncated }));
+                }
+                self.event(row)
+            }
+        }
+    }
+}
+
+impl<R: Read> FlightDataReader<R> {
+    fn header_name(&self, i: usize) -> String {
+        self.csv_headers.get(i).cloned().unwrap_or_else(|| format!("#{}", i + 1))
+    }
+
+    fn event(&mut self, row: u64) -> Option<Result<RecordEvent, FlightDataError>> {
+        match self.parse_row() {
+            Err(problem) => Some(Ok(RecordEvent::Rejected { row, problem })),
+            Ok(sample) => {
+                let ev = RecordEvent::Sample { row, sample };
+                let mut out = ev.clone();
+                if let Some(prev) = self.last_t {
+                    let dt = sample.t_s - prev;
+                    match self.nominal_dt {
+                        None => self.nominal_dt = Some(dt),
+                        Some(nom) if dt > GAP_FACTOR * nom => {
+                            self.pending = Some(ev);
+                            out = RecordEvent::Gap { row, dt_s: dt, nominal_dt_s: nom };
+                        }
+                        Some(_) => {}
+                    }
+                }
+                self.last_t = Some(sample.t_s);
+                Some(Ok(out))
+            }
         }
     }
 }

@@ -74,6 +74,9 @@ pub struct ReplaySummary {
     pub coefficients: Vec<CoefficientSummary>,
     /// Every pair of parameters with |ρ| > 0.9 (where the estimator gives covariances).
     pub correlations: Vec<Correlation>,
+    /// Warnings about the record or the run (e.g. the mapping's `nominal_dt_s` disagrees with
+    /// the measured interval; a time jump not slept across in real-time pacing).
+    pub warnings: Vec<String>,
 }
 
 impl ReplaySummary {

@@ -229,3 +229,106 @@ fn analytic_vane_corrections_match_rigid_body_transport() {
         assert!((beta_v - beta).abs() > 20.0 * eb.abs(), "{beta_v} vs {beta}: err {eb}");
     }
 }
+
+fn events_str(csv: &str) -> Vec<RecordEvent> {
+    let m = mapping();
+    FlightDataReader::new(csv.as_bytes(), "inline.csv", &m).unwrap().map(|e| e.unwrap()).collect()
+}
+
+const HEADER: &str = "t,V,a,q,ax,az,de,qbar,qd\n";
+
+fn row(t: &str) -> String {
+    format!("{t},200,2.0,0.5,0.01,-1.0,1.0,100,0.1\n")
+}
+
+/// Issue 10 #7: one absurd time mid-record rejects only its own row; later rows continue from
+/// the last good time.
+#[test]
+fn errors_one_absurd_time_rejects_only_its_row() {
+    let mut csv = HEADER.to_string();
+    for t in ["0.0", "0.1", "1e308", "0.2", "0.3"] {
+        csv.push_str(&row(t));
+    }
+    let ev = events_str(&csv);
+    assert_eq!(ev.len(), 5, "{ev:?}");
+    let RecordEvent::Rejected { row, problem } = &ev[2] else { panic!("{:?}", ev[2]) };
+    assert_eq!(*row, 4);
+    assert!(matches!(problem, RowProblem::ImplausibleTimeJump { .. }), "{problem}");
+    assert!(problem.to_string().contains("column `t`"), "{problem}");
+    for (k, t) in [(3, 0.2), (4, 0.3)] {
+        let RecordEvent::Sample { sample, .. } = &ev[k] else { panic!("{:?}", ev[k]) };
+        assert_eq!(sample.t_s, t);
+    }
+}
+
+/// A semicolon- or tab-delimited file: the missing-column error says so.
+#[test]
+fn errors_semicolon_or_tab_file_gets_a_delimiter_hint() {
+    let m = mapping();
+    for (sep, word) in [(";", "semicolon"), ("\t", "tab")] {
+        let csv = format!("{}\n0{sep}200\n", HEADER.trim_end().replace(',', sep));
+        let err = FlightDataReader::new(csv.as_bytes(), "x.csv", &m).err().unwrap().to_string();
+        assert!(err.contains("missing") && err.contains(word), "{err}");
+    }
+    // A plain missing column has no such hint.
+    let err = FlightDataReader::new("t,V\n".as_bytes(), "x.csv", &m).err().unwrap().to_string();
+    assert!(err.contains("missing") && !err.contains("delimited"), "{err}");
+}
+
+/// Two header fields with one name are an error naming the column.
+#[test]
+fn errors_duplicate_column_names_are_refused() {
+    let m = mapping();
+    let csv = format!("{},a\n", HEADER.trim_end());
+    let err = FlightDataReader::new(csv.as_bytes(), "x.csv", &m).err().unwrap();
+    assert!(matches!(err, FlightDataError::DuplicateColumn { .. }), "{err}");
+    let msg = err.to_string();
+    assert!(
+        msg.contains("`a`") && msg.contains("x.csv") && msg.contains("3") && msg.contains("10"),
+        "{msg}"
+    );
+}
+
+/// Issue 10 #6: an unbalanced quote that would swallow the rest of the file is a fatal error
+/// naming the row, the column and the lines it spans; the rows before it are read.
+#[test]
+fn errors_unbalanced_quote_is_reported_not_swallowed() {
+    let m = mapping();
+    let mut csv = HEADER.to_string();
+    csv.push_str(&row("0.0"));
+    csv.push_str("0.1,200,\"2.0,0.5,0.01,-1.0,1.0,100,0.1\n");
+    for t in ["0.2", "0.3", "0.4"] {
+        csv.push_str(&row(t));
+    }
+    let items: Vec<_> = FlightDataReader::new(csv.as_bytes(), "q.csv", &m).unwrap().collect();
+    assert_eq!(items.len(), 2, "{items:?}");
+    assert!(matches!(items[0], Ok(RecordEvent::Sample { row: 2, .. })));
+    let msg = items[1].as_ref().unwrap_err().to_string();
+    assert!(msg.contains("q.csv") && msg.contains("row 3") && msg.contains("column `a`"), "{msg}");
+    assert!(msg.contains("quote") && msg.contains("3–6"), "{msg}");
+}
+
+/// Issue 10 #8: a live feed (`-`) cut inside its last field: the last line is rejected as
+/// possibly truncated (counted as a rejection); a file keeps its unterminated last line, and a
+/// terminated live feed keeps every row.
+#[test]
+fn errors_live_feed_cut_in_last_line_is_rejected() {
+    let m = mapping();
+    let mut csv = HEADER.to_string();
+    csv.push_str(&row("0.0"));
+    csv.push_str(&row("0.1"));
+    let cut = format!("{csv}0.2,200,2.0,0.5,0.01,-1.0,1.0,100,0.0");
+    let ev: Vec<RecordEvent> =
+        FlightDataReader::new(cut.as_bytes(), "-", &m).unwrap().map(|e| e.unwrap()).collect();
+    assert_eq!(ev.len(), 3, "{ev:?}");
+    assert!(matches!(&ev[2], RecordEvent::Rejected { row: 4, problem: RowProblem::Truncated }));
+    let ev: Vec<RecordEvent> =
+        FlightDataReader::new(cut.as_bytes(), "f.csv", &m).unwrap().map(|e| e.unwrap()).collect();
+    assert!(matches!(&ev[2], RecordEvent::Sample { row: 4, .. }), "{:?}", ev[2]);
+    for whole in [csv.clone(), csv.replace('\n', "\r\n")] {
+        let ev: Vec<RecordEvent> =
+            FlightDataReader::new(whole.as_bytes(), "-", &m).unwrap().map(|e| e.unwrap()).collect();
+        assert_eq!(ev.len(), 2);
+        assert!(ev.iter().all(|e| matches!(e, RecordEvent::Sample { .. })), "{ev:?}");
+    }
+}

@@ -2,7 +2,7 @@
 //! Fig. 4.23), `convergence.png` (estimates vs truth, Fig. 4.24; sample-driven estimators with
 //! their ±2σ band) and `tracking.png` (reference vs estimated aircraft states, Fig. 4.25).
 
-use std::path::Path;
+use crate::outdir::OutputDir;
 
 use aeroident_estimators::vocabulary::Param;
 
@@ -60,11 +60,11 @@ fn clip_to_truth_band(s: &mut [Series]) {
     }
 }
 
-/// Writes `controls.png`, `convergence.png` and `tracking.png` into `dir`.
+/// Writes `controls.png`, `convergence.png` and `tracking.png` into `od` (each atomically).
 ///
 /// # Errors
-/// [`ReportError::Plot`] naming the file.
-pub fn write_figures(out: &RunOutput, dir: &Path) -> Result<(), ReportError> {
+/// [`ReportError::Output`] naming the file.
+pub fn write_figures(out: &RunOutput, od: &mut OutputDir) -> Result<(), ReportError> {
     let t = &out.t_s;
     let name = &out.scenario.name;
     let deg = |v: f64| v.to_degrees();
@@ -101,13 +101,9 @@ pub fn write_figures(out: &RunOutput, dir: &Path) -> Result<(), ReportError> {
             })
             .collect(),
     });
-    render_panels_png(
-        &dir.join("controls.png"),
-        &format!("{name}: control commands"),
-        &controls,
-        1000,
-        220,
-    )?;
+    od.write_path("controls.png", |p| {
+        render_panels_png(p, &format!("{name}: control commands"), &controls, 1000, 220)
+    })?;
 
     let mut conv = Vec::new();
     for (p, q) in plotted(out) {
@@ -146,13 +142,9 @@ pub fn write_figures(out: &RunOutput, dir: &Path) -> Result<(), ReportError> {
         conv.push(Panel { title: title.clone(), y_label: format!("{title} (per rad)"), series: s });
     }
     if !conv.is_empty() {
-        render_panels_png(
-            &dir.join("convergence.png"),
-            &format!("{name}: parameter convergence"),
-            &conv,
-            1000,
-            240,
-        )?;
+        od.write_path("convergence.png", |p| {
+            render_panels_png(p, &format!("{name}: parameter convergence"), &conv, 1000, 240)
+        })?;
     }
 
     let scale = [
@@ -186,12 +178,8 @@ pub fn write_figures(out: &RunOutput, dir: &Path) -> Result<(), ReportError> {
         }
         track.push(Panel { title: TRACKED_NAMES[k].into(), y_label: (*unit).into(), series: s });
     }
-    render_panels_png(
-        &dir.join("tracking.png"),
-        &format!("{name}: reference vs estimated aircraft"),
-        &track,
-        1000,
-        220,
-    )?;
+    od.write_path("tracking.png", |p| {
+        render_panels_png(p, &format!("{name}: reference vs estimated aircraft"), &track, 1000, 220)
+    })?;
     Ok(())
 }

@@ -14,13 +14,13 @@
 //! out of the band moves the time to after it.
 
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::Path;
 
 use serde::Serialize;
 
 use super::experiment::{ChannelLog, ParamLog, Quantity, RunOutput, TRACKED_NAMES, tracked};
 use crate::metrics::{self, CONVERGENCE_TOL_REL};
+use crate::outdir::OutputDir;
 
 /// Tolerance of the issue-8 targets: ±10 % of the truth.
 pub const TARGET_TOL_REL: f64 = 0.10;
@@ -50,6 +50,9 @@ pub enum ReportError {
     /// Figure error.
     #[error(transparent)]
     Plot(#[from] crate::plot::PlotError),
+    /// Output directory error (lock, atomic write), naming the path.
+    #[error(transparent)]
+    Output(#[from] crate::outdir::OutputError),
     /// Metric error (a bug: lengths are built equal).
     #[error(transparent)]
     Metrics(#[from] metrics::MetricsError),
@@ -375,7 +378,18 @@ fn cell(v: Option<f64>) -> String {
 /// [`ReportError::Io`] naming the file.
 pub fn write_timeseries(out: &RunOutput, path: &Path) -> Result<(), ReportError> {
     let f = std::fs::File::create(path).map_err(io_err(path))?;
-    let mut w = std::io::BufWriter::new(f);
+    write_timeseries_to(out, &mut std::io::BufWriter::new(f), path)
+}
+
+/// [`write_timeseries`] into any writer; `path` names the file in errors.
+///
+/// # Errors
+/// [`ReportError::Io`] naming the file.
+pub fn write_timeseries_to(
+    out: &RunOutput,
+    w: &mut dyn std::io::Write,
+    path: &Path,
+) -> Result<(), ReportError> {
     let mut header = String::from(
         "t_s,throttle,elevator_rad,aileron_rad,rudder_rad,wind_north_fps,wind_east_fps,wind_down_fps",
     );
@@ -574,17 +588,28 @@ pub fn table(summary: &Summary) -> String {
     s
 }
 
-/// Writes all outputs of one run into `dir` (created if needed) and returns the summary.
+/// Writes all outputs of one run into the locked output directory `od` (each file atomically)
+/// and returns the summary.
 ///
 /// # Errors
 /// [`ReportError`] naming the file.
-pub fn write_all(out: &RunOutput, dir: &Path, figures: bool) -> Result<Summary, ReportError> {
-    std::fs::create_dir_all(dir).map_err(io_err(dir))?;
+pub fn write_all(
+    out: &RunOutput,
+    od: &mut OutputDir,
+    figures: bool,
+) -> Result<Summary, ReportError> {
     let summary = summarize(out)?;
-    write_timeseries(out, &dir.join("timeseries.csv"))?;
-    write_summary(&summary, &dir.join("summary.json"))?;
+    let mut f = od.create("timeseries.csv")?;
+    let path = f.path().to_path_buf();
+    write_timeseries_to(out, &mut f, &path)?;
+    f.commit()?;
+    let text = serde_json::to_string_pretty(&summary).map_err(|e| ReportError::Encode {
+        path: od.path().join("summary.json").display().to_string(),
+        reason: e.to_string(),
+    })?;
+    od.write_bytes("summary.json", (text + "\n").as_bytes())?;
     if figures {
-        super::figures::write_figures(out, dir)?;
+        super::figures::write_figures(out, od)?;
     }
     Ok(summary)
 }

@@ -43,10 +43,10 @@ pub struct PocArgs {
 /// Bad scenario files (file, line/key, reason), estimator or model failures, output errors.
 pub fn execute(args: PocArgs) -> anyhow::Result<()> {
     if args.all {
+        let mut top = crate::outdir::OutputDir::open(&args.out)?;
         let (results, wall_s) = run_all(&args.scenarios, &args.out)?;
         let report = render(&results, wall_s);
-        let path = args.out.join("report.md");
-        std::fs::write(&path, report).with_context(|| format!("writing {}", path.display()))?;
+        let path = top.write_bytes("report.md", report.as_bytes())?;
         super::print_stdout(&format!(
             "{} scenarios, {} runs in {wall_s:.2} s wall; report: {}",
             results.len(),
@@ -57,8 +57,9 @@ pub fn execute(args: PocArgs) -> anyhow::Result<()> {
     }
     let Some(path) = args.scenario else { bail!("give a scenario file or --all") };
     let sc = PocScenario::from_path(&path)?;
+    let mut od = crate::outdir::OutputDir::open(&args.out)?;
     let out = run(&sc, args.estimator, args.solver)?;
-    let summary = output::write_run(&args.out, &sc, &out)?;
+    let summary = output::write_run(&mut od, &sc, &out)?;
     super::print_stdout(&serde_json::to_string_pretty(&summary)?)?;
     if let Some(s) = &out.stopped_early {
         super::print_stdout(&format!("note: {s}"))?;
@@ -94,6 +95,9 @@ pub fn run_all(scenarios_dir: &Path, out: &Path) -> anyhow::Result<(Vec<CaseResu
     let files = scenario_files(scenarios_dir)?;
     let scenarios: Vec<PocScenario> =
         files.iter().map(|f| PocScenario::from_path(f)).collect::<Result<_, _>>()?;
+    super::run::check_names(
+        scenarios.iter().zip(&files).map(|(s, f)| (s.case.name.as_str(), f.as_path())),
+    )?;
     let jobs: Vec<(usize, EstimatorKind, SolverReading)> = (0..scenarios.len())
         .flat_map(|i| {
             [
@@ -107,12 +111,13 @@ pub fn run_all(scenarios_dir: &Path, out: &Path) -> anyhow::Result<(Vec<CaseResu
         .par_iter()
         .map(|&(i, est, solver)| -> anyhow::Result<_> {
             let sc = &scenarios[i];
-            let r = run(sc, est, solver)?;
             let sub = match est {
                 EstimatorKind::Published => format!("published-{solver:?}").to_lowercase(),
                 EstimatorKind::Corrected => "corrected".to_string(),
             };
-            let summary = output::write_run(&out.join(&sc.case.name).join(sub), sc, &r)?;
+            let mut od = crate::outdir::OutputDir::open(&out.join(&sc.case.name).join(sub))?;
+            let r = run(sc, est, solver)?;
+            let summary = output::write_run(&mut od, sc, &r)?;
             Ok((summary, r))
         })
         .collect::<anyhow::Result<_>>()?;

@@ -8,7 +8,8 @@
 //! ```
 //! Writes `<dir>/estimates.csv`, `<dir>/summary.json` and `<dir>/estimates.png` (estimates with
 //! ±2σ). With `-` the record is read from stdin and one CSV line of estimates per sample is
-//! written to stdout as it is produced (a live feed); the summary then goes to stderr unless
+//! written to stdout (a live feed: buffered, flushed per line with `--realtime`; the history
+//! kept for the figure and the settling times is bounded, see `History`); the summary then goes to stderr unless
 //! `--out` is given. The model used is printed on stderr. A diverged estimator is an error
 //! (non-zero exit) after the summary is written. `--estimator oe` is the batch output-error
 //! fit: it reads the whole record first (it says so), prints its iterations and writes
@@ -83,18 +84,15 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     if !live && args.out.is_none() {
         anyhow::bail!("give --out <dir> (or read `-` from stdin for a live feed on stdout)");
     }
-    let mut csv_file = match &args.out {
-        Some(dir) => {
-            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-            let p = dir.join("estimates.csv");
-            Some(std::io::BufWriter::new(
-                std::fs::File::create(&p).with_context(|| format!("creating {}", p.display()))?,
-            ))
-        }
+    // Lock the directory and clear the previous run's files before reading anything.
+    let mut out_dir = args.out.as_deref().map(crate::outdir::OutputDir::open).transpose()?;
+    let mut csv_file = match out_dir.as_mut() {
+        Some(o) => Some(o.create("estimates.csv")?),
         None => None,
     };
-    let stdout = std::io::stdout();
-    let mut stdout_lock = stdout.lock();
+    // Buffered: one write per 64 KiB, not per sample (the replay flushes per line only when
+    // paced in real time).
+    let mut stdout_lock = std::io::BufWriter::with_capacity(1 << 16, std::io::stdout().lock());
     let mut sinks: Vec<&mut dyn Write> = Vec::new();
     if let Some(f) = csv_file.as_mut() {
         sinks.push(f);
@@ -111,18 +109,19 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         let reader = FlightDataReader::new(std::io::BufReader::new(file), &args.data, &mapping)?;
         replay(reader, &mapping, &opts, sinks)?
     };
-    if let Some(mut f) = csv_file {
-        f.flush()?;
+    if let Some(f) = csv_file {
+        f.commit()?;
     }
     let summary_text = serde_json::to_string_pretty(&outcome.summary)?;
     match &args.out {
         Some(dir) => {
-            std::fs::write(dir.join("summary.json"), &summary_text)?;
+            let o = out_dir.as_mut().context("internal: output directory not open")?;
+            o.write_bytes("summary.json", summary_text.as_bytes())?;
             let name = Path::new(&args.data)
                 .file_name()
                 .map_or(args.data.clone(), |n| n.to_string_lossy().into_owned());
             let title = format!("{name} — {} — {}", args.estimator.name(), outcome.model.name);
-            plot_estimates(&dir.join("estimates.png"), &title, &outcome.history)?;
+            o.write_path("estimates.png", |p| plot_estimates(p, &title, &outcome.history))?;
             eprintln!(
                 "{}: {} samples read, {} rejected, {:.0} samples/s, status {}; wrote {}",
                 args.data,

@@ -18,6 +18,7 @@ use rayon::prelude::*;
 
 use crate::aircraft::report::{self, Summary};
 use crate::aircraft::{Scenario, run};
+use crate::outdir::{OutputDir, safe_component};
 
 /// The default scenario, embedded so `aeroident run` works from any directory.
 pub const DEFAULT_SCENARIO: &str = include_str!("../../../../scenarios/default.toml");
@@ -43,8 +44,30 @@ pub struct RunArgs {
 /// # Errors
 /// Experiment or output errors, with the scenario name.
 pub fn run_one(sc: &Scenario, dir: &Path, figures: bool) -> anyhow::Result<Summary> {
+    // Lock and clear the directory before the run, so a failing run leaves no old outputs.
+    let mut od = OutputDir::open(dir)?;
     let out = run(sc).with_context(|| format!("scenario `{}`", sc.name))?;
-    report::write_all(&out, dir, figures).with_context(|| format!("outputs of `{}`", sc.name))
+    report::write_all(&out, &mut od, figures).with_context(|| format!("outputs of `{}`", sc.name))
+}
+
+/// Checks that every scenario name is a safe directory name ([`safe_component`]) and that no two
+/// files use the same name.
+///
+/// # Errors
+/// An unsafe name (naming the file) or a duplicate (naming both files).
+pub fn check_names<'a>(named: impl IntoIterator<Item = (&'a str, &'a Path)>) -> anyhow::Result<()> {
+    let mut seen: std::collections::BTreeMap<&str, &Path> = std::collections::BTreeMap::new();
+    for (name, file) in named {
+        safe_component(name).with_context(|| format!("scenario {}", file.display()))?;
+        if let Some(first) = seen.insert(name, file) {
+            anyhow::bail!(
+                "scenario name `{name}` is used by both {} and {}: their outputs would overwrite each other",
+                first.display(),
+                file.display()
+            );
+        }
+    }
+    Ok(())
 }
 
 /// Runs `aeroident run`.
@@ -92,6 +115,8 @@ pub fn run_all(scenarios_dir: &Path, out: &Path, figures: bool) -> anyhow::Resul
     files.sort();
     anyhow::ensure!(!files.is_empty(), "no *.toml scenario in {}", scenarios_dir.display());
     let scenarios = files.iter().map(|f| Scenario::from_path(f)).collect::<Result<Vec<_>, _>>()?;
+    check_names(scenarios.iter().zip(&files).map(|(s, f)| (s.name.as_str(), f.as_path())))?;
+    let mut top = OutputDir::open(out)?;
     let results: Vec<(Scenario, Summary)> = scenarios
         .into_par_iter()
         .map(|sc| {
@@ -101,9 +126,7 @@ pub fn run_all(scenarios_dir: &Path, out: &Path, figures: bool) -> anyhow::Resul
         .collect::<anyhow::Result<_>>()?;
     let mut md = report::markdown(&results);
     md.push_str(&evidence(&results.iter().map(|(sc, _)| sc.clone()).collect::<Vec<_>>())?);
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    std::fs::write(out.join("report.md"), &md)
-        .with_context(|| format!("writing {}", out.join("report.md").display()))?;
+    top.write_bytes("report.md", md.as_bytes())?;
     Ok(md)
 }
 

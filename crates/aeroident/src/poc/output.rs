@@ -120,7 +120,7 @@ fn label(out: &RunOutput) -> String {
 ///
 /// # Errors
 /// Rendering or file errors, naming the file.
-pub fn write_figures(dir: &Path, out: &RunOutput) -> anyhow::Result<()> {
+pub fn write_figures(od: &mut crate::outdir::OutputDir, out: &RunOutput) -> anyhow::Result<()> {
     let t = &out.t_s;
     let est_panels: Vec<Panel> = out
         .param_names
@@ -146,7 +146,7 @@ pub fn write_figures(dir: &Path, out: &RunOutput) -> anyhow::Result<()> {
         })
         .collect();
     let title = label(out);
-    render_panels_png(&dir.join("estimates.png"), &title, &est_panels, 900, 260)?;
+    od.write_path("estimates.png", |p| render_panels_png(p, &title, &est_panels, 900, 260))?;
     let state_panels: Vec<Panel> = out
         .state_names
         .iter()
@@ -170,22 +170,24 @@ pub fn write_figures(dir: &Path, out: &RunOutput) -> anyhow::Result<()> {
             ],
         })
         .collect();
-    render_panels_png(&dir.join("states.png"), &title, &state_panels, 900, 260)?;
+    od.write_path("states.png", |p| render_panels_png(p, &title, &state_panels, 900, 260))?;
     Ok(())
 }
 
-/// Writes all four output files of one run into `dir` (created if needed) and returns the
-/// summary.
+/// Writes all four output files of one run into the locked output directory `od` (each file
+/// written atomically; open it before the run so a failing run leaves no old outputs) and returns the summary.
 ///
 /// # Errors
 /// Directory, file or rendering errors, naming the path.
-pub fn write_run(dir: &Path, sc: &PocScenario, out: &RunOutput) -> anyhow::Result<Summary> {
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    write_timeseries_csv(&dir.join("timeseries.csv"), out)?;
+pub fn write_run(
+    od: &mut crate::outdir::OutputDir,
+    sc: &PocScenario,
+    out: &RunOutput,
+) -> anyhow::Result<Summary> {
+    od.write_path("timeseries.csv", |p| write_timeseries_csv(p, out))?;
     let summary = summarize(sc, out)?;
     let json = serde_json::to_string_pretty(&summary)?;
-    std::fs::write(dir.join("summary.json"), json + "\n")
-        .with_context(|| format!("writing {}", dir.join("summary.json").display()))?;
-    write_figures(dir, out)?;
+    od.write_bytes("summary.json", (json + "\n").as_bytes())?;
+    write_figures(od, out)?;
     Ok(summary)
 }

@@ -80,13 +80,37 @@ pub struct DerivativeStage {
     dt_s: Option<f64>,
     diffs: Vec<CausalDifferentiator>,
     delay: VecDeque<(u64, AirDataSample)>,
+    warning: Option<String>,
 }
+
+/// Largest relative disagreement between the nominal and the measured interval that is accepted
+/// without a warning; beyond it the measured interval is used.
+pub const DT_TOLERANCE: f64 = 0.01;
 
 impl DerivativeStage {
     /// A stage that differentiates `which` (empty: a pass-through) over `window` samples
-    /// spaced `dt_s` (the record's nominal interval; `None`: the first interval seen).
+    /// spaced `dt_s` (the record's nominal interval; `None`: the first interval seen). The first
+    /// interval is always measured: if it differs from `dt_s` by more than [`DT_TOLERANCE`]
+    /// (relative), the measured interval is used and [`DerivativeStage::take_warning`] says so.
     pub fn new(which: Vec<Derivative>, window: usize, dt_s: Option<f64>) -> Self {
-        Self { which, window, dt_s, diffs: Vec::new(), delay: VecDeque::with_capacity(window + 1) }
+        Self {
+            which,
+            window,
+            dt_s,
+            diffs: Vec::new(),
+            delay: VecDeque::with_capacity(window + 1),
+            warning: None,
+        }
+    }
+
+    /// The interval the differentiators use, s, once known.
+    pub fn dt_s(&self) -> Option<f64> {
+        if self.diffs.is_empty() { None } else { self.dt_s }
+    }
+
+    /// A warning raised since the last call (nominal and measured interval disagree).
+    pub fn take_warning(&mut self) -> Option<String> {
+        self.warning.take()
     }
 
     /// The derivatives this stage supplies.
@@ -112,13 +136,23 @@ impl DerivativeStage {
         }
         if self.diffs.is_empty() {
             // Until the interval is known, hold the first sample.
-            let dt = match (self.dt_s, self.delay.front()) {
-                (Some(dt), _) => dt,
-                (None, Some((_, first))) => s.t_s - first.t_s,
-                (None, None) => {
+            let measured = match self.delay.back() {
+                Some((_, prev)) => s.t_s - prev.t_s,
+                None => {
                     self.delay.push_back((row, s));
                     return Ok(());
                 }
+            };
+            let dt = match self.dt_s {
+                Some(nom) if (measured - nom).abs() > DT_TOLERANCE * nom.abs() => {
+                    self.warning = Some(format!(
+                        "the mapping's nominal_dt_s = {nom} s differs from the record's measured interval {measured} s by more than {:.0} %: the differentiator uses the measured interval",
+                        100.0 * DT_TOLERANCE
+                    ));
+                    measured
+                }
+                Some(nom) => nom,
+                None => measured,
             };
             self.dt_s = Some(dt);
             for _ in &self.which {
@@ -169,6 +203,36 @@ mod tests {
     /// Quadratic rates and α: the least-squares slope is exact for quadratics, so every
     /// supplied derivative equals the analytic one at the (delayed) sample's own time, and
     /// the other channels come from the same sample (alignment).
+    /// Issue 10 #9: a wrong nominal interval (2 × the real one) is detected on the first
+    /// interval; the measured one is used, so the derivative of q = 0.3 t is 0.3 (the nominal
+    /// would give 0.15), and a warning names both intervals.
+    #[test]
+    fn analytic_wrong_nominal_interval_uses_the_measured_one_and_warns() {
+        let dt = 0.02;
+        let mut st = DerivativeStage::new(vec![Derivative::Qdot], 5, Some(2.0 * dt));
+        let (mut ready, mut unused) = (Vec::new(), Vec::new());
+        for k in 0..20u64 {
+            let t = k as f64 * dt;
+            let s = AirDataSample { t_s: t, q_rad_s: Some(0.3 * t), ..Default::default() };
+            st.push(k, s, &mut ready, &mut unused).unwrap();
+        }
+        let w = st.take_warning().expect("warning");
+        assert!(w.contains("0.04") && w.contains("0.02"), "{w}");
+        assert_eq!(st.dt_s(), Some(dt));
+        assert!(ready.len() > 10);
+        for (_, s) in &ready {
+            assert!((s.qdot_rad_s2.unwrap() - 0.3).abs() < 1e-9, "{:?}", s.qdot_rad_s2);
+        }
+        // A nominal within 1 % is kept without warning.
+        let mut st = DerivativeStage::new(vec![Derivative::Qdot], 5, Some(dt * 1.005));
+        for k in 0..3u64 {
+            let s = AirDataSample { t_s: k as f64 * dt, ..Default::default() };
+            st.push(k, s, &mut ready, &mut unused).unwrap();
+        }
+        assert!(st.take_warning().is_none());
+        assert_eq!(st.dt_s(), Some(dt * 1.005));
+    }
+
     #[test]
     fn analytic_quadratic_signals_are_differentiated_exactly_and_stay_aligned() {
         let dt = 0.02;

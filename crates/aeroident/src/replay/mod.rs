@@ -117,8 +117,55 @@ pub enum ReplayError {
     Output(#[from] std::io::Error),
 }
 
-/// The history of estimates over the record.
-#[derive(Debug, Clone, Default)]
+/// Largest differentiator window, samples (a lag of 500 samples: 5 s at 100 Hz).
+pub const MAX_DIFF_WINDOW: usize = 1001;
+
+/// In real-time pacing, a time step longer than this multiple of the interval is a jump that
+/// is not slept across (the wall clock restarts at the next sample, and the summary says so).
+pub const REALTIME_JUMP_FACTOR: f64 = 10.0;
+
+/// Real-time pacing: the wall clock follows the record's time, except across jumps.
+#[derive(Debug, Default)]
+struct Pacer {
+    /// Wall-clock start and the record time it corresponds to.
+    clock: Option<(Instant, f64)>,
+    /// Previous sample time, s.
+    prev_t_s: Option<f64>,
+}
+
+impl Pacer {
+    /// How long to wait before emitting the sample at `t_s`, given the interval `dt_s` (`None`:
+    /// unknown yet); a jump longer than [`REALTIME_JUMP_FACTOR`] × `dt_s` is not slept across:
+    /// the clock restarts and the returned note says so. No single wait exceeds
+    /// `REALTIME_JUMP_FACTOR` × `dt_s` (nor 1 s while the interval is unknown).
+    fn wait(&mut self, t_s: f64, dt_s: Option<f64>, now: Instant) -> (Duration, Option<String>) {
+        let cap_s = dt_s.map_or(1.0, |dt| REALTIME_JUMP_FACTOR * dt);
+        let mut note = None;
+        if let (Some(prev), Some(_)) = (self.prev_t_s, self.clock)
+            && t_s - prev > cap_s
+        {
+            note = Some(format!(
+                "real-time pacing: time jumps {} s (from {prev} s to {t_s} s), more than {REALTIME_JUMP_FACTOR} × the interval; not slept across",
+                t_s - prev
+            ));
+            self.clock = None;
+        }
+        self.prev_t_s = Some(t_s);
+        let (start, t0) = *self.clock.get_or_insert((now, t_s));
+        let ahead_s = (t_s - t0).clamp(0.0, f64::MAX);
+        let due = start.checked_add(Duration::try_from_secs_f64(ahead_s).unwrap_or(Duration::MAX));
+        let wait = due.map_or(Duration::ZERO, |d| d.saturating_duration_since(now));
+        (wait.min(Duration::from_secs_f64(cap_s.clamp(0.0, 1e6))), note)
+    }
+}
+
+/// The history of estimates over the record, bounded: at most [`History::MAX_POINTS`] points
+/// (plus the last sample) are kept, so a 24 h live feed holds constant memory. Beyond that the
+/// history is decimated: every `stride`-th sample is kept (the stride doubles each time the
+/// limit is reached), and [`History::finish`] appends the last sample, so the final estimate and
+/// the settling time's reference are exact; the settling time then has the resolution of the
+/// stride.
+#[derive(Debug, Clone)]
 pub struct History {
     /// Parameter names.
     pub names: Vec<&'static str>,
@@ -128,6 +175,72 @@ pub struct History {
     pub values: Vec<Vec<Option<f64>>>,
     /// `sigmas[k][i]`.
     pub sigmas: Vec<Vec<Option<f64>>>,
+    /// Samples per kept point (1: every sample kept).
+    pub stride: usize,
+    /// Samples pushed.
+    pub samples: usize,
+    limit: usize,
+    last: Option<Point>,
+}
+
+/// One sample's time, estimates and σ.
+type Point = (f64, Vec<Option<f64>>, Vec<Option<f64>>);
+
+impl Default for History {
+    fn default() -> Self {
+        Self::with_limit(Self::MAX_POINTS)
+    }
+}
+
+impl History {
+    /// Default bound on the points kept (≈ 20 MB for 32 parameters with σ).
+    pub const MAX_POINTS: usize = 20_000;
+
+    /// An empty history keeping at most `limit` (≥ 2) points before decimating.
+    pub fn with_limit(limit: usize) -> Self {
+        Self {
+            names: Vec::new(),
+            t_s: Vec::new(),
+            values: Vec::new(),
+            sigmas: Vec::new(),
+            stride: 1,
+            samples: 0,
+            limit: limit.max(2),
+            last: None,
+        }
+    }
+
+    /// Adds one sample's estimates (decimating as described on the type).
+    pub fn push(&mut self, t_s: f64, values: Vec<Option<f64>>, sigmas: Vec<Option<f64>>) {
+        if self.samples.is_multiple_of(self.stride) {
+            self.t_s.push(t_s);
+            self.values.push(values.clone());
+            self.sigmas.push(sigmas.clone());
+            if self.t_s.len() > self.limit {
+                let keep = |k: usize| k.is_multiple_of(2);
+                let mut k = 0;
+                self.t_s.retain(|_| (keep(k), k += 1).0);
+                k = 0;
+                self.values.retain(|_| (keep(k), k += 1).0);
+                k = 0;
+                self.sigmas.retain(|_| (keep(k), k += 1).0);
+                self.stride *= 2;
+            }
+        }
+        self.samples += 1;
+        self.last = Some((t_s, values, sigmas));
+    }
+
+    /// Appends the last sample if decimation skipped it (call once, after the last push).
+    pub fn finish(&mut self) {
+        if let Some((t, v, s)) = self.last.take()
+            && self.t_s.last() != Some(&t)
+        {
+            self.t_s.push(t);
+            self.values.push(v);
+            self.sigmas.push(s);
+        }
+    }
 }
 
 /// Result of a replay.
@@ -264,7 +377,7 @@ struct Running {
 /// Replays a record through the chosen estimator.
 ///
 /// `sinks`: each gets a header line and one CSV line of estimates per sample as it is
-/// produced (flushed), e.g. the `estimates.csv` file and stdout in live mode. Each line:
+/// produced (flushed per line with [`Pacing::Realtime`], else at the end), e.g. the `estimates.csv` file and stdout in live mode. Each line:
 /// `t_s, <names>, sigma_<names>`; empty fields where not identified or no σ.
 ///
 /// # Errors
@@ -306,6 +419,16 @@ pub fn replay_with<R: Read>(
             reason: format!("must be odd and ≥ 3 (a whole-sample lag), got {}", opts.diff_window),
         });
     }
+    if opts.diff_window > MAX_DIFF_WINDOW {
+        return Err(ReplayError::Option {
+            option: "diff-window",
+            reason: format!(
+                "must be ≤ {MAX_DIFF_WINDOW} samples (a lag of {} samples), got {}",
+                MAX_DIFF_WINDOW / 2,
+                opts.diff_window
+            ),
+        });
+    }
     let file = reader.file().to_string();
     let uses_measured = opts.estimator.uses_measured_coefficients();
     let mapped_v0 = mapping.channels.get(&Channel::V0).and_then(|m| m.constant());
@@ -318,7 +441,8 @@ pub fn replay_with<R: Read>(
     let mut busy = Duration::ZERO;
     let mut ready = Vec::new();
     let mut unused = Vec::new();
-    let mut clock: Option<(Instant, f64)> = None;
+    let mut pacer = Pacer::default();
+    let mut warnings: Vec<String> = Vec::new();
     let mut diverged = false;
     for item in reader {
         let event = item?;
@@ -382,6 +506,10 @@ pub fn replay_with<R: Read>(
                     r.stage.push(row, s, &mut ready, &mut unused).map_err(|e| {
                         ReplayError::Option { option: "diff-window", reason: e.to_string() }
                     })?;
+                    if let Some(w) = r.stage.take_warning() {
+                        eprintln!("warning: {w}");
+                        warnings.push(w);
+                    }
                 }
             }
         }
@@ -428,24 +556,33 @@ pub fn replay_with<R: Read>(
             let values: Vec<Option<f64>> = (0..n).map(|i| e.value(i)).collect();
             let sigmas: Vec<Option<f64>> = (0..n).map(|i| e.sigma(i)).collect();
             if opts.pacing == Pacing::Realtime {
-                let (start, t_first) = *clock.get_or_insert((Instant::now(), s.t_s));
-                let due = start + Duration::from_secs_f64((s.t_s - t_first).max(0.0));
-                let now = Instant::now();
-                if due > now {
-                    std::thread::sleep(due - now);
+                let dt = r.stage.dt_s().or(mapping.nominal_dt_s);
+                let (wait, note) = pacer.wait(s.t_s, dt, Instant::now());
+                if let Some(n) = note {
+                    eprintln!("warning: {n}");
+                    warnings.push(n);
+                }
+                if !wait.is_zero() {
+                    std::thread::sleep(wait);
                 }
             }
             for sink in sinks.iter_mut() {
                 aeroident_io::replay_output::write_estimates_row(sink, s.t_s, &values, &sigmas)?;
-                sink.flush()?;
+                // Paced output is a live feed: each line goes out at its time. Otherwise the
+                // sinks stay buffered (flushed at the end).
+                if opts.pacing == Pacing::Realtime {
+                    sink.flush()?;
+                }
             }
-            history.t_s.push(s.t_s);
-            history.values.push(values);
-            history.sigmas.push(sigmas);
+            history.push(s.t_s, values, sigmas);
         }
         if diverged {
             break;
         }
+    }
+    history.finish();
+    for sink in sinks.iter_mut() {
+        sink.flush()?;
     }
     if let Some(r) = &mut run
         && !diverged
@@ -522,10 +659,11 @@ pub fn replay_with<R: Read>(
         samples_read,
         samples_rejected,
         rejections,
-        throughput_samples_per_s: history.t_s.len() as f64 / secs,
+        throughput_samples_per_s: history.samples as f64 / secs,
         parameters,
         coefficients,
         correlations,
+        warnings,
     };
     let differentiated = r.stage.supplies().to_vec();
     Ok(ReplayOutcome { model: spec, model_defaulted: defaulted, differentiated, history, summary })
@@ -754,5 +892,116 @@ mod tests {
         );
         // …but an estimator that does not use measured coefficients needs only the terms.
         assert!(unsupported(&ModelStructure::longitudinal(), &s, false, &[]).is_empty());
+    }
+
+    /// Issue 10 #1: in real-time pacing a huge time jump (1e308 s, 1e10 s) neither panics nor
+    /// sleeps across: the wait is capped at 10 intervals and the jump is reported; ordinary
+    /// steps wait their interval.
+    #[test]
+    fn errors_realtime_time_jump_is_not_slept_across() {
+        let now = Instant::now();
+        let mut p = Pacer::default();
+        assert_eq!(p.wait(0.0, Some(0.1), now), (Duration::ZERO, None));
+        let (w, n) = p.wait(0.1, Some(0.1), now);
+        assert!((w.as_secs_f64() - 0.1).abs() < 1e-9 && n.is_none(), "{w:?}");
+        for jump in [1e10, 1e308] {
+            let (w, n) = p.wait(jump, Some(0.1), now);
+            assert!(w <= Duration::from_secs(1), "{w:?}");
+            assert!(n.as_deref().is_some_and(|n| n.contains("not slept")), "{n:?}");
+        }
+        // After the jump the clock restarts: the next ordinary step waits one interval.
+        let (w, n) = p.wait(1e308 + 1e292, Some(1e292), now);
+        assert!(n.is_none() && w <= Duration::from_secs_f64(1e6), "{w:?}");
+        let mut p = Pacer::default();
+        p.wait(0.0, None, now);
+        let (w, _) = p.wait(0.5, None, now);
+        assert!((w.as_secs_f64() - 0.5).abs() < 1e-9);
+    }
+
+    /// Issue 10 #2: an absurd differentiator window is a clear option error, not an allocation
+    /// abort.
+    #[test]
+    fn errors_diff_window_has_an_upper_bound() {
+        let m = Mapping::from_toml_str(MAP, "m.toml").unwrap();
+        let csv = "t,V,a,q,ax,az,de\n0,50,0.1,0,0,-9.8,0\n";
+        for w in [1003, usize::MAX] {
+            let r = FlightDataReader::new(csv.as_bytes(), "d.csv", &m).unwrap();
+            let opts = ReplayOptions { diff_window: w, ..Default::default() };
+            let e = replay(r, &m, &opts, Vec::new()).unwrap_err().to_string();
+            assert!(e.contains("diff-window") && e.contains("1001"), "{e}");
+        }
+    }
+
+    /// Issue 10 #15: the history stays bounded (decimated by a doubling stride) and keeps the
+    /// first and the last sample exactly.
+    #[test]
+    fn analytic_history_is_decimated_and_bounded() {
+        let mut h = History::with_limit(100);
+        let n = 200_000usize;
+        for k in 0..n {
+            h.push(k as f64, vec![Some(k as f64)], vec![None]);
+            assert!(h.t_s.len() <= 100, "{k}: {}", h.t_s.len());
+        }
+        h.finish();
+        assert_eq!(h.samples, n);
+        assert!(h.stride >= n / 100 && h.stride <= 2 * n / 100 * 2, "stride {}", h.stride);
+        assert_eq!(h.t_s[0], 0.0);
+        assert_eq!(*h.t_s.last().unwrap(), (n - 1) as f64);
+        assert_eq!(h.values.last().unwrap()[0], Some((n - 1) as f64));
+        // Every kept point but the appended last one lies on the stride grid, in order.
+        for w in h.t_s[..h.t_s.len() - 1].windows(2) {
+            assert_eq!(w[1] - w[0], h.stride as f64);
+        }
+        assert_eq!(h.t_s.len(), h.values.len());
+        assert_eq!(h.t_s.len(), h.sigmas.len());
+        // Below the limit nothing is dropped.
+        let mut h = History::with_limit(100);
+        for k in 0..50 {
+            h.push(k as f64, vec![None], vec![None]);
+        }
+        h.finish();
+        assert_eq!(h.t_s, (0..50).map(f64::from).collect::<Vec<_>>());
+    }
+
+    /// Issue 10 #17: when every row is rejected, the error gives the first reasons (row and
+    /// column), not only a count.
+    #[test]
+    fn errors_no_usable_samples_names_the_first_reasons() {
+        let m = Mapping::from_toml_str(MAP, "m.toml").unwrap();
+        let csv = record().replace(",0.05,", ",,");
+        let r = FlightDataReader::new(csv.as_bytes(), "d.csv", &m).unwrap();
+        let e = replay(r, &m, &ReplayOptions::default(), Vec::new()).unwrap_err().to_string();
+        assert!(e.contains("d.csv") && e.contains("no usable samples"), "{e}");
+        assert!(e.contains("row 2: column `a`: blank value"), "{e}");
+    }
+
+    /// Issue 10 #10: a forgetting factor so small that nothing is ever identified reports every
+    /// estimate as `None` (null), never 0.0, and the status says so.
+    #[test]
+    fn errors_never_identified_parameters_are_null_not_zero() {
+        let m = Mapping::from_toml_str(MAP, "m.toml").unwrap();
+        // Independent excitation of α, q, δe and the accelerations: identifiable with λ = 1.
+        let mut csv = String::from("t,V,a,q,ax,az,de\n");
+        for k in 0..200 {
+            let t = k as f64 * 0.1;
+            let (a, q, de) =
+                (0.05 + 0.02 * (1.3 * t).sin(), 0.1 * (0.7 * t).cos(), 0.03 * (2.9 * t).sin());
+            let (ax, az) = (0.1 + 0.5 * a + 0.2 * de, -9.8 - 30.0 * a - 4.0 * de + q);
+            csv.push_str(&format!("{t:.1},50,{a},{q},{ax},{az},{de}\n"));
+        }
+        let run = |forgetting: f64| {
+            let r = FlightDataReader::new(csv.as_bytes(), "d.csv", &m).unwrap();
+            let opts = ReplayOptions { forgetting, diff_window: 3, ..Default::default() };
+            replay(r, &m, &opts, Vec::new()).unwrap()
+        };
+        let ok = run(1.0);
+        assert!(ok.summary.parameters.iter().all(|p| p.estimate.is_some()), "{:?}", ok.summary);
+        let out = run(1e-300);
+        assert_ne!(out.summary.status, "running");
+        assert!(!out.summary.parameters.is_empty());
+        for p in &out.summary.parameters {
+            assert_eq!(p.estimate, None, "{}", p.name);
+            assert_eq!(p.std_error, None, "{}", p.name);
+        }
     }
 }

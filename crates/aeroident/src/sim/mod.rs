@@ -20,6 +20,7 @@
 
 pub mod scenario;
 
+use crate::outdir::OutputDir;
 use crate::plot::{LineKind, Panel, Series, render_panels_png};
 use aeroident_models::actuator::{F16WithActuators, SurfaceActuators};
 use aeroident_models::f16::AeroIncrements;
@@ -167,8 +168,10 @@ pub fn run(sc: &SimScenario, base_dir: &Path) -> anyhow::Result<SimRun> {
         bail!("[run] duration_s = {} must be finite and > 0", r.duration_s);
     }
     let n_steps = (r.duration_s / r.dt_s).round() as usize;
-    if n_steps > 50_000_000 {
-        bail!("[run] duration_s / dt_s = {n_steps} steps is too many (max 5e7)");
+    if n_steps > MAX_STEPS {
+        bail!(
+            "[run] duration_s / dt_s = {n_steps} steps is too many (max {MAX_STEPS}: the run is held in memory for the figures, 8 bytes per column per step); shorten duration_s or raise dt_s"
+        );
     }
 
     let mut f16 = F16::new(sc.aircraft.xcg).context("[aircraft] xcg")?;
@@ -299,16 +302,20 @@ pub fn run(sc: &SimScenario, base_dir: &Path) -> anyhow::Result<SimRun> {
     Ok(SimRun { columns, data, trim: t0 })
 }
 
-/// Writes `timeseries.csv`, `states.png` and `controls_wind.png` into `out_dir`.
+/// Most RK4 steps of one simulation: the run is held in memory for the figures (8 bytes per
+/// column per step, so some hundred MB at the limit); longer runs are refused before any
+/// allocation.
+pub const MAX_STEPS: usize = 1_000_000;
+
+/// Writes `timeseries.csv`, `states.png` and `controls_wind.png` into the locked output
+/// directory `od`, each atomically.
 ///
 /// # Errors
 /// I/O, CSV or plotting errors naming the file.
-pub fn write_outputs(run: &SimRun, out_dir: &Path) -> anyhow::Result<()> {
-    std::fs::create_dir_all(out_dir)
-        .with_context(|| format!("creating `{}`", out_dir.display()))?;
-    let csv_path = out_dir.join("timeseries.csv");
-    let mut w = csv::Writer::from_path(&csv_path)
-        .with_context(|| format!("creating `{}`", csv_path.display()))?;
+pub fn write_outputs(run: &SimRun, od: &mut OutputDir) -> anyhow::Result<()> {
+    let mut file = od.create("timeseries.csv")?;
+    let csv_path = file.path().to_path_buf();
+    let mut w = csv::Writer::from_writer(&mut file);
     w.write_record(&run.columns).with_context(|| format!("writing `{}`", csv_path.display()))?;
     let n = run.data[0].len();
     for k in 0..n {
@@ -316,6 +323,8 @@ pub fn write_outputs(run: &SimRun, out_dir: &Path) -> anyhow::Result<()> {
             .with_context(|| format!("writing `{}`", csv_path.display()))?;
     }
     w.flush().with_context(|| format!("writing `{}`", csv_path.display()))?;
+    drop(w);
+    file.commit()?;
 
     let t = run.data[0].clone();
     let d = 180.0 / std::f64::consts::PI;
@@ -358,9 +367,9 @@ pub fn write_outputs(run: &SimRun, out_dir: &Path) -> anyhow::Result<()> {
         panel("load factors", "g", &[("nz_g", 1.0), ("ny_g", 1.0), ("nx_g", 1.0)]),
         panel("altitude", "alt (ft)", &[("alt_ft", 1.0)]),
     ];
-    let p = out_dir.join("states.png");
-    render_panels_png(&p, "F-16 open-loop response", &states, 1000, 230)
-        .with_context(|| format!("plot `{}`", p.display()))?;
+    od.write_path("states.png", |p| {
+        render_panels_png(p, "F-16 open-loop response", &states, 1000, 230)
+    })?;
     let controls = [
         panel("elevator", "deg", &[("elevator_cmd_rad", d), ("elevator_rad", d)]),
         panel(
@@ -379,9 +388,9 @@ pub fn write_outputs(run: &SimRun, out_dir: &Path) -> anyhow::Result<()> {
             &[("wind_body_x_fps", 1.0), ("wind_body_y_fps", 1.0), ("wind_body_z_fps", 1.0)],
         ),
     ];
-    let p = out_dir.join("controls_wind.png");
-    render_panels_png(&p, "F-16 controls and wind", &controls, 1000, 230)
-        .with_context(|| format!("plot `{}`", p.display()))?;
+    od.write_path("controls_wind.png", |p| {
+        render_panels_png(p, "F-16 controls and wind", &controls, 1000, 230)
+    })?;
     Ok(())
 }
 
@@ -392,8 +401,10 @@ pub fn write_outputs(run: &SimRun, out_dir: &Path) -> anyhow::Result<()> {
 pub fn execute(args: SimArgs) -> anyhow::Result<()> {
     let sc = load_scenario(&args.scenario)?;
     let base = args.scenario.parent().unwrap_or(Path::new("."));
+    // Lock and clear the directory first, so a failing run leaves no old outputs.
+    let mut od = OutputDir::open(&args.out)?;
     let r = run(&sc, base)?;
-    write_outputs(&r, &args.out)?;
+    write_outputs(&r, &mut od)?;
     crate::cli::print_stdout(&format!(
         "simulated {:.2} s ({} rows, {} columns) from trim: throttle {:.4}, elevator {:.4} deg, alpha {:.4} deg (trim cost {:.1e})\nwrote {}/timeseries.csv, states.png, controls_wind.png",
         r.data[0].last().copied().unwrap_or(0.0),
@@ -507,7 +518,7 @@ mod tests {
             if n == 1 {
                 let out =
                     std::env::temp_dir().join(format!("aeroident_sim_test_{}", std::process::id()));
-                write_outputs(&r, &out).unwrap();
+                write_outputs(&r, &mut OutputDir::open(&out).unwrap()).unwrap();
                 let csv = std::fs::read_to_string(out.join("timeseries.csv")).unwrap();
                 assert_eq!(csv.lines().count(), r.data[0].len() + 1);
                 assert!(out.join("states.png").exists() && out.join("controls_wind.png").exists());
@@ -515,5 +526,17 @@ mod tests {
             }
         }
         assert!(n >= 3);
+    }
+
+    /// Issue 10: an absurd step count (5e7) is refused before anything is allocated, with an
+    /// error naming the fields and the limit.
+    #[test]
+    fn errors_too_many_steps_are_refused_clearly() {
+        let s = scenario("", "f16", 5e5);
+        let e = format!("{:#}", run(&s, Path::new(".")).unwrap_err());
+        assert!(
+            e.contains("duration_s / dt_s") && e.contains("50000000") && e.contains("1000000"),
+            "{e}"
+        );
     }
 }

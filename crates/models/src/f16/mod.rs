@@ -305,11 +305,21 @@ pub struct F16 {
     pub schedule: IncrementSchedule,
 }
 
+/// The cg range the model accepts, fraction of c̄: `[XCG_MIN, XCG_MAX]`. The Stevens & Lewis
+/// data (and this repo's data file) state no cg range; they are used at 0.30–0.40 (trim tables
+/// 0.30/0.35/0.38, check case 0.40) about the reference cg 0.35. The moment transfer
+/// `CZ·(xcgr − xcg)` is exact for any cg, but far outside these values the aircraft is no
+/// longer the F-16 the tables describe (e.g. trims at −0.5), so 0.1–0.5 is accepted.
+pub const XCG_MIN: f64 = 0.1;
+/// Upper end of the accepted cg range, fraction of c̄ (see [`XCG_MIN`]).
+pub const XCG_MAX: f64 = 0.5;
+
 impl F16 {
     /// The textbook aircraft (embedded data, no increments) with cg `xcg` (fraction of c̄).
     ///
     /// # Errors
-    /// [`ModelError::InvalidValue`] if `xcg` is not finite.
+    /// [`ModelError::InvalidValue`] if `xcg` is not finite or outside
+    /// [`XCG_MIN`]–[`XCG_MAX`].
     pub fn new(xcg: f64) -> Result<Self, ModelError> {
         Self::with_data(F16Data::embedded(), xcg)
     }
@@ -317,13 +327,21 @@ impl F16 {
     /// The model on other data (e.g. a variant table set parsed with [`F16Data::parse`]).
     ///
     /// # Errors
-    /// [`ModelError::InvalidValue`] if `xcg` is not finite.
+    /// [`ModelError::InvalidValue`] if `xcg` is not finite or outside
+    /// [`XCG_MIN`]–[`XCG_MAX`].
     pub fn with_data(data: &'static F16Data, xcg: f64) -> Result<Self, ModelError> {
         if !xcg.is_finite() {
             return Err(ModelError::InvalidValue {
                 field: "xcg",
                 value: xcg,
                 reason: "not finite",
+            });
+        }
+        if !(XCG_MIN..=XCG_MAX).contains(&xcg) {
+            return Err(ModelError::InvalidValue {
+                field: "xcg",
+                value: xcg,
+                reason: "outside the accepted cg range 0.1–0.5 (fraction of cbar; the data are used at 0.30–0.40)",
             });
         }
         Ok(Self {
@@ -652,6 +670,22 @@ impl Dynamics<N_STATES> for F16 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 10: a cg outside 0.1–0.5 c̄ (e.g. −0.5, which trimmed) is an error naming xcg and
+    /// the range; the ends and the textbook values are accepted.
+    #[test]
+    fn errors_xcg_outside_range_is_refused() {
+        for bad in [-0.5, 0.0, 0.099, 0.501, 2.0, f64::NAN] {
+            let e = F16::new(bad).unwrap_err().to_string();
+            assert!(e.contains("xcg"), "{e}");
+            if bad.is_finite() {
+                assert!(e.contains("0.1–0.5"), "{e}");
+            }
+        }
+        for ok in [XCG_MIN, 0.30, 0.35, 0.40, XCG_MAX] {
+            assert_eq!(F16::new(ok).unwrap().xcg, ok);
+        }
+    }
 
     /// SLJ 3rd ed. Table 3.5-2 (p. 185): state, controls (surfaces in deg), xcg = 0.40 and the 13
     /// published derivatives, as transcribed in jgoppert/casadi_f16 test_f16.py::test_table_3_5_2

@@ -1,0 +1,128 @@
+//! Output directories end to end (issue 10, #11–#14): a failing run leaves no old outputs beside
+//! it, scenario names cannot escape `--out`, and two scenarios with one name are an error naming
+//! both files.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_aeroident"))
+}
+
+fn scratch(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("aeroident-cli-out-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn repo(p: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(p)
+}
+
+const SIM: &str = "[aircraft]\nxcg = 0.30\nactuators = \"f16\"\n[trim]\nalt_ft = 20000.0\nvt_fps = 675.0\n[run]\nduration_s = 0.5\ndt_s = 0.01\nseed = 1\n";
+
+/// #11: a second `f16 sim` into the same `--out` that fails must not leave the first run's
+/// `timeseries.csv` and figures beside its error.
+#[test]
+fn outputs_failing_run_removes_the_previous_runs_files() {
+    let d = scratch("stale");
+    let good = d.join("good.toml");
+    std::fs::write(&good, SIM).unwrap();
+    let out = d.join("out");
+    let o = bin().args(["f16", "sim"]).arg(&good).arg("--out").arg(&out).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.join("timeseries.csv").exists() && out.join("states.png").exists());
+    // A sensor on a channel the simulator does not have fails in the run, after the outputs
+    // were opened.
+    let bad = d.join("bad.toml");
+    std::fs::write(
+        &bad,
+        format!("{SIM}[[sensor]]\nchannel = \"alpha_deg\"\nsample_rate_hz = 50.0\n"),
+    )
+    .unwrap();
+    let o = bin().args(["f16", "sim"]).arg(&bad).arg("--out").arg(&out).output().unwrap();
+    assert!(!o.status.success());
+    for f in ["timeseries.csv", "states.png", "controls_wind.png"] {
+        assert!(!out.join(f).exists(), "stale {f} left beside a failed run");
+    }
+    let left: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".tmp") || n.starts_with(".tmp-"))
+        .collect();
+    assert!(left.is_empty(), "temporary files left: {left:?}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+fn poc_with_name(dir: &Path, file: &str, name: &str) {
+    let text = std::fs::read_to_string(repo("scenarios/poc/t4_1_case1.toml")).unwrap();
+    let text = text.replacen("name = \"t4_1_case1\"", &format!("name = {name:?}"), 1);
+    assert!(text.contains(&format!("name = {name:?}")));
+    std::fs::write(dir.join(file), text).unwrap();
+}
+
+/// #13: a scenario named `../../x` is refused (nothing written outside `--out`), for `poc --all`
+/// and `run --all`.
+#[test]
+fn outputs_scenario_name_cannot_escape_out() {
+    let d = scratch("escape");
+    let sc = d.join("sc");
+    std::fs::create_dir_all(&sc).unwrap();
+    poc_with_name(&sc, "a.toml", "../../escaped_poc");
+    let out = d.join("a/b/out");
+    let o = bin()
+        .args(["poc", "--all", "--scenarios"])
+        .arg(&sc)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("../../escaped_poc") && err.contains("a.toml"), "{err}");
+    assert!(!d.join("a/escaped_poc").exists() && !d.join("escaped_poc").exists());
+
+    let rsc = d.join("rsc");
+    std::fs::create_dir_all(&rsc).unwrap();
+    let text = std::fs::read_to_string(repo("scenarios/f16/t4_7_case1.toml")).unwrap();
+    std::fs::write(
+        rsc.join("r.toml"),
+        text.replacen("name = \"t4_7_case1\"", "name = \"../../escaped_run\"", 1),
+    )
+    .unwrap();
+    let o = bin()
+        .args(["run", "--no-figures", "--all"])
+        .arg(&rsc)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("../../escaped_run") && err.contains("r.toml"), "{err}");
+    assert!(!d.join("a/escaped_run").exists());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// #13: two scenario files with the same name are an error naming both files.
+#[test]
+fn outputs_duplicate_scenario_names_name_both_files() {
+    let d = scratch("dup");
+    let sc = d.join("sc");
+    std::fs::create_dir_all(&sc).unwrap();
+    poc_with_name(&sc, "one.toml", "same");
+    poc_with_name(&sc, "two.toml", "same");
+    let o = bin()
+        .args(["poc", "--all", "--scenarios"])
+        .arg(&sc)
+        .arg("--out")
+        .arg(d.join("out"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("one.toml") && err.contains("two.toml") && err.contains("same"), "{err}");
+    assert!(!d.join("out/same").exists(), "ran despite the duplicate");
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -507,3 +507,31 @@ fn val_rls_runs_on_all_records_and_absent_estimators_are_named() {
         }
     }
 }
+
+/// End-of-run diagnostics on real records: fAttasRud1 alone gives RLS a positive Cn_r, which
+/// the summary must flag as a physically implausible sign; the EKF reports its normalised
+/// innovation squared, and with the measurement noise estimated from the record it is
+/// consistent on the ATTAS aileron-rudder record (mean e²/S within 0.5–2).
+#[test]
+fn val_sign_warning_and_ekf_consistency_are_reported() {
+    let Some(rud) = shared("jategaonkar_hfb320_attas/csv/fAttasRud1.csv") else { return };
+    let o = run(&rud, "attas_lateral.toml", ReplayOptions::default());
+    assert!(
+        o.summary.warnings.iter().any(|w| w.starts_with("Cn_r = +") && w.contains("expected < 0")),
+        "{:?}",
+        o.summary.warnings
+    );
+    let Some(ar) = shared("jategaonkar_hfb320_attas/csv/fAttasAilRud1.csv") else { return };
+    let opts = ReplayOptions { estimator: EstimatorKind::Ekf, ..Default::default() };
+    let o = run(&ar, "attas_lateral.toml", opts);
+    let nis = o
+        .summary
+        .warnings
+        .iter()
+        .find_map(|w| w.strip_prefix("normalised innovation squared (mean e²/S) = "))
+        .and_then(|w| w.split_whitespace().next())
+        .and_then(|v| v.parse::<f64>().ok())
+        .expect("the EKF reports its NIS");
+    assert!((0.5..2.0).contains(&nis), "NIS {nis}");
+    assert!(!o.summary.warnings.iter().any(|w| w.contains("sign a conventional")));
+}

@@ -189,6 +189,9 @@ pub struct Ekf {
     /// Current measurement-noise variance per output and its count of updates.
     r_var: [f64; N_OUTPUTS],
     r_count: [u32; N_OUTPUTS],
+    /// Σ e²/S over accepted innovations and their count (NIS).
+    nis_sum: f64,
+    nis_count: u64,
 }
 
 fn positive(field: &'static str, v: f64) -> Result<(), EstimatorError> {
@@ -292,6 +295,8 @@ impl Ekf {
             innov_prev: [None; N_OUTPUTS],
             r_var: cfg.measurement_sigma.map(|s| s * s),
             r_count: [0; N_OUTPUTS],
+            nis_sum: 0.0,
+            nis_count: 0,
         })
     }
 
@@ -577,6 +582,7 @@ impl Estimator for Ekf {
         let mut rejections = self.rejections;
         let mut r_var = self.r_var;
         let mut r_count = self.r_count;
+        let (mut nis_sum, mut nis_count) = (self.nis_sum, self.nis_count);
         let states = self.model.state_set().states();
         let mut h = [0.0; MAX_AUG];
         let mut ph = [0.0; MAX_AUG];
@@ -628,6 +634,8 @@ impl Estimator for Ekf {
             }
             consecutive[oi] = 0;
             innovation[oi] = Some(e);
+            nis_sum += e * e / sv;
+            nis_count += 1;
             if self.cfg.adaptive_r_window > 0 {
                 r_count[oi] = r_count[oi].saturating_add(1);
                 // The configured R counts as `ADAPTIVE_R_PRIOR_SAMPLES` innovations, so the
@@ -676,6 +684,8 @@ impl Estimator for Ekf {
         self.rejections = rejections;
         self.r_var = r_var;
         self.r_count = r_count;
+        self.nis_sum = nis_sum;
+        self.nis_count = nis_count;
         for (oi, e) in innovation.iter().enumerate() {
             if let Some(e) = *e {
                 self.innov_s0[oi] += e * e;
@@ -693,6 +703,10 @@ impl Estimator for Ekf {
 
     fn estimates(&self) -> &Estimates {
         &self.est
+    }
+
+    fn nis(&self) -> Option<f64> {
+        (self.nis_count > 0).then(|| self.nis_sum / self.nis_count as f64)
     }
 
     fn covariance(&self, i: usize, j: usize) -> Option<f64> {

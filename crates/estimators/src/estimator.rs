@@ -129,6 +129,13 @@ pub trait Estimator {
         None
     }
 
+    /// Mean normalised innovation squared `e²/S` over every accepted scalar innovation so far
+    /// (Bar-Shalom, Li & Kirubarajan 2001, §5.4: 1 for a consistent filter, > 1 when its
+    /// covariance is optimistic); `None` for methods without innovations.
+    fn nis(&self) -> Option<f64> {
+        None
+    }
+
     /// A new manoeuvre starts with the next sample (a gap in the record, a second run):
     /// re-initialise the model state from the next sample and keep the parameters, as
     /// multi-run estimation does. Estimators without a model state ignore it.

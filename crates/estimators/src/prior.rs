@@ -94,3 +94,19 @@ impl Priors {
         }
     }
 }
+
+/// The sign a conventional, statically stable aircraft has for parameter `p`, where physics
+/// fixes it: damping derivatives negative (`Cm_q`, `Cl_p`, `Cn_r`), static stability
+/// (`Cm_alpha` < 0, `Cn_beta` > 0, `Cl_beta` < 0 for dihedral effect), lift-curve slope
+/// positive (`CL_alpha` > 0, `CZ_alpha` < 0), side-force slope `CY_beta` < 0. `None` where the
+/// sign depends on the design (control derivatives, cross derivatives, biases). A violated
+/// sign is a warning, not an error: an unstable airframe or a sign convention of the record
+/// can explain it (Klein & Morelli 2006 ch. 3; Stevens & Lewis §2.3).
+pub fn expected_sign(p: Param) -> Option<f64> {
+    Some(match (p.coefficient, p.term) {
+        (C::Cm, T::Q) | (C::Cl, T::P) | (C::Cn, T::R) => -1.0,
+        (C::Cm, T::Alpha) | (C::Cl, T::Beta) | (C::CY, T::Beta) | (C::CZ, T::Alpha) => -1.0,
+        (C::Cn, T::Beta) | (C::CL, T::Alpha) => 1.0,
+        _ => return None,
+    })
+}

@@ -146,6 +146,16 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
             pairs.join(", ")
         );
     }
+    // The end-of-run diagnostics (sign plausibility, filter consistency); the record warnings
+    // were printed as they arose.
+    for w in outcome
+        .summary
+        .warnings
+        .iter()
+        .filter(|w| w.contains("sign a conventional") || w.starts_with("normalised innovation"))
+    {
+        eprintln!("warning: {w}");
+    }
     if let Some(e) = diverged_error(&outcome, args.estimator.name()) {
         anyhow::bail!(e);
     }

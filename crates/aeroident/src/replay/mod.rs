@@ -614,7 +614,7 @@ pub fn replay_with<R: Read>(
         .into());
     }
     let status = if diverged { Status::Diverged } else { r.est.estimates().status };
-    let parameters = history
+    let parameters: Vec<ParameterSummary> = history
         .names
         .iter()
         .enumerate()
@@ -649,6 +649,27 @@ pub fn replay_with<R: Read>(
             diagnostics::strong_correlations(r.est.as_ref()),
         )
     };
+    // Physically implausible signs and the filter's consistency, as warnings.
+    if !diverged {
+        let st = *r.est.structure();
+        for (i, p) in parameters.iter().enumerate() {
+            let (Some(v), Some(param)) = (p.estimate, st.param(i)) else { continue };
+            if let Some(sign) = aeroident_estimators::prior::expected_sign(param)
+                && v * sign < 0.0
+            {
+                warnings.push(format!(
+                    "{} = {v:+.4} has the sign a conventional stable aircraft does not have (expected {}): check the record's sign conventions, the excitation and the correlations",
+                    p.name,
+                    if sign > 0.0 { "> 0" } else { "< 0" }
+                ));
+            }
+        }
+        if let Some(nis) = r.est.nis() {
+            warnings.push(format!(
+                "normalised innovation squared (mean e²/S) = {nis:.2} (1 for a consistent filter; > 2 means its σ are optimistic, < 0.5 pessimistic)"
+            ));
+        }
+    }
     // Throughput of the estimation stage: the estimator update per sample (CSV parsing,
     // differentiation, pacing and output are excluded).
     let secs = busy.as_secs_f64().max(1e-9);

@@ -226,6 +226,18 @@ pub enum RowProblem {
         /// Fields in this row.
         found: usize,
     },
+    /// A finite value outside the plausibility limits every estimator applies
+    /// (`aeroident_estimators::sample::PLAUSIBILITY`, e.g. V > 5000 m/s, |α| > 10 rad): a
+    /// corrupt record, rejected here so that no sample the reader yields is refused later.
+    #[error("`{field}` = {value} is implausible (limit {limit})")]
+    Implausible {
+        /// Sample field (SI name, e.g. `vt_mps`).
+        field: String,
+        /// The SI value.
+        value: f64,
+        /// The limit it exceeds, SI.
+        limit: f64,
+    },
     /// A value outside the physical domain (e.g. V ≤ 0, mass ≤ 0).
     #[error("column `{column}`: {reason}")]
     Domain {

@@ -155,6 +155,10 @@ impl<R: Read> FlightDataReader<R> {
             .has_headers(true)
             .flexible(true)
             .trim(csv::Trim::All)
+            // Lines end at `\n` only: with the default (`\r` also ends a record) the parser
+            // reports every row of a CRLF file one line early; the `\r` before the `\n` is
+            // trimmed as whitespace.
+            .terminator(csv::Terminator::Any(b'\n'))
             .from_reader(Tail { inner: source, eof: false, last_byte: None });
         let headers = csv
             .headers()
@@ -414,6 +418,9 @@ impl<R: Read> FlightDataReader<R> {
                 column: field.to_string(),
                 reason: format!("derived value {value} is not finite"),
             });
+        }
+        if let Some((field, value, limit)) = s.first_implausible() {
+            return Err(RowProblem::Implausible { field: field.to_string(), value, limit });
         }
         Ok(s)
     }

@@ -145,7 +145,15 @@ impl SimRun {
 pub fn load_scenario(path: &Path) -> anyhow::Result<SimScenario> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("reading scenario `{}`", path.display()))?;
-    toml::from_str(&text).with_context(|| format!("scenario `{}`", path.display()))
+    parse_scenario(&text, path)
+}
+
+/// Parses scenario text; `path` names it in errors.
+///
+/// # Errors
+/// TOML errors (with line and column) naming the file.
+pub fn parse_scenario(text: &str, path: &Path) -> anyhow::Result<SimScenario> {
+    toml::from_str(text).with_context(|| format!("scenario `{}`", path.display()))
 }
 
 enum Plant {

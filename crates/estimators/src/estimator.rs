@@ -158,6 +158,38 @@ pub fn check_finite(s: &AirDataSample) -> Result<(), EstimatorError> {
     Ok(())
 }
 
+/// The measured value of coefficient `c` from `measured` (the sample's
+/// [`AirDataSample::measured_coefficients`]), present and plausible: the dependent variable of
+/// the equation-error estimators (RLS, FTR).
+///
+/// # Errors
+/// [`EstimatorError::NonFiniteInput`] naming the coefficient when a channel it needs is absent;
+/// [`EstimatorError::ImplausibleInput`] beyond the coefficient limit.
+pub fn measured_coefficient(
+    measured: &crate::sample::CoefficientValues,
+    c: crate::vocabulary::Coefficient,
+    t_s: f64,
+) -> Result<f64, EstimatorError> {
+    let y = measured[c.index()].ok_or(EstimatorError::NonFiniteInput {
+        field: c.name(),
+        value: f64::NAN,
+        t_s,
+    })?;
+    check_coefficient(c.name(), y, t_s)
+}
+
+/// The regressor of term `t` at sample `s` ([`crate::vocabulary::Term::value`]), present.
+///
+/// # Errors
+/// [`EstimatorError::NonFiniteInput`] when a channel or constant the term needs is absent.
+pub fn regressor(t: crate::vocabulary::Term, s: &AirDataSample) -> Result<f64, EstimatorError> {
+    t.value(s).ok_or(EstimatorError::NonFiniteInput {
+        field: "regressor (a term's channel is absent)",
+        value: f64::NAN,
+        t_s: s.t_s,
+    })
+}
+
 /// A measured coefficient checked against [`crate::sample::PLAUSIBILITY`]`.coefficient`.
 ///
 /// # Errors

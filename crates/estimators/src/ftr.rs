@@ -32,7 +32,9 @@
 //! a solve is spread over the samples rather than landing on one.
 
 use crate::EstimatorError;
-use crate::estimator::{Estimates, Estimator, Status, check_coefficient, check_finite};
+use crate::estimator::{
+    Estimates, Estimator, Status, check_finite, measured_coefficient, regressor,
+};
 use crate::linalg::{Square, cholesky, cholesky_inverse, cholesky_solve, well_conditioned};
 use crate::sample::AirDataSample;
 use crate::vocabulary::{Coefficient, ModelStructure, N_TERMS, Term};
@@ -338,21 +340,12 @@ impl Estimator for Ftr {
         let mut term_values = [0.0; N_TERMS];
         for t in Term::ALL {
             if self.used_terms & (1 << t.index()) != 0 {
-                term_values[t.index()] = t.value(s).ok_or(EstimatorError::NonFiniteInput {
-                    field: "regressor (a term's channel is absent)",
-                    value: f64::NAN,
-                    t_s: s.t_s,
-                })?;
+                term_values[t.index()] = regressor(t, s)?;
             }
         }
         let mut coef_values = [0.0; 8];
         for c in self.structure.coefficients() {
-            let y = measured[c.index()].ok_or(EstimatorError::NonFiniteInput {
-                field: c.name(),
-                value: f64::NAN,
-                t_s: s.t_s,
-            })?;
-            coef_values[c.index()] = check_coefficient(c.name(), y, s.t_s)?;
+            coef_values[c.index()] = measured_coefficient(&measured, c, s.t_s)?;
         }
         let dt = match self.last_t {
             None => {

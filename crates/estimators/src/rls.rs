@@ -37,7 +37,9 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::EstimatorError;
-use crate::estimator::{Estimates, Estimator, Status, check_coefficient, check_finite};
+use crate::estimator::{
+    Estimates, Estimator, Status, check_finite, measured_coefficient, regressor,
+};
 use crate::linalg::{Square, cholesky, cholesky_inverse, cholesky_solve, well_conditioned};
 use crate::sample::AirDataSample;
 use crate::vocabulary::{Coefficient, ModelStructure, N_TERMS, Term};
@@ -104,12 +106,12 @@ impl Fit {
         }
     }
 
-    fn regressors(&self, s: &AirDataSample) -> Option<[f64; N_TERMS]> {
+    fn regressors(&self, s: &AirDataSample) -> Result<[f64; N_TERMS], EstimatorError> {
         let mut phi = [0.0; N_TERMS];
         for k in 0..self.n {
-            phi[k] = self.terms[k].value(s)?;
+            phi[k] = regressor(self.terms[k], s)?;
         }
-        Some(phi)
+        Ok(phi)
     }
 
     /// One update; returns `Err` (state unchanged) on a numerical failure.
@@ -288,18 +290,8 @@ impl Estimator for Rls {
         let mut rows = [([0.0; N_TERMS], 0.0); 8];
         for f in self.fits.iter().flatten() {
             let c = f.coefficient;
-            let y = measured[c.index()].ok_or(EstimatorError::NonFiniteInput {
-                field: c.name(),
-                value: f64::NAN,
-                t_s: s.t_s,
-            })?;
-            let y = check_coefficient(c.name(), y, s.t_s)?;
-            let phi = f.regressors(s).ok_or(EstimatorError::NonFiniteInput {
-                field: "regressor (a term's channel is absent)",
-                value: f64::NAN,
-                t_s: s.t_s,
-            })?;
-            rows[c.index()] = (phi, y);
+            let y = measured_coefficient(&measured, c, s.t_s)?;
+            rows[c.index()] = (f.regressors(s)?, y);
         }
         // Each fit's update is atomic (computed, checked, then committed). A numerical failure
         // after finite inputs means overflow: the estimator has diverged and says so, rather

@@ -21,57 +21,15 @@
 mod test_aircraft;
 
 use aeroident::estimators::{EstimatorKind, EstimatorOptions, build};
-use aeroident_estimators::flight_model::{FlightModel, ModelInputs};
-use aeroident_estimators::vocabulary::{Coefficient as C, ModelStructure, Param, Term as T};
-use aeroident_estimators::{AirDataSample, AircraftConstants, Priors};
+use aeroident_estimators::Priors;
+use aeroident_estimators::vocabulary::ModelStructure;
 use std::hint::black_box;
 use std::time::Instant;
-use test_aircraft::{ALPHA0, V0};
 
 /// Samples discarded before timing (caches, branch predictors, estimator start-up).
 const WARMUP: usize = 2000;
 /// Replays of the stream (module doc).
 const REPEATS: usize = 5;
-
-fn stream(n: usize) -> Vec<AirDataSample> {
-    let st = ModelStructure::six_axis();
-    let model = FlightModel::new(st).unwrap();
-    let pri = Priors::generic(&st);
-    let mut th: Vec<f64> = (0..st.n_params()).map(|i| pri.prior[i].value).collect();
-    let k = AircraftConstants { v0_mps: None, ..test_aircraft::constants() };
-    test_aircraft::set_level_trim_biases(&st, &mut th, &k);
-    let i = |c, t| st.index_of(Param::new(c, t)).unwrap();
-    for c in [C::CY, C::Cl, C::Cn] {
-        th[i(c, T::Bias)] = 0.0;
-    }
-    let doublet = |t: f64, t0: f64, a: f64| test_aircraft::doublet(t, t0, 0.5, a);
-    let mut x = [V0, ALPHA0, 0.0, 0.0, 0.0, 0.0, 0.0, ALPHA0];
-    let dt = 0.02;
-    let z8 = [0.0; 8];
-    let mut out = Vec::with_capacity(n);
-    for step in 0..n {
-        let t = step as f64 * dt;
-        let tc = t % 20.0;
-        let surfaces = (doublet(tc, 1.0, 0.03), doublet(tc, 6.0, 0.04), doublet(tc, 12.0, 0.05));
-        let mut s = test_aircraft::sample(t, &x, surfaces, k);
-        let u: ModelInputs = model.inputs(&s).unwrap();
-        let d = model.eval(&th, &u, &x, &z8, &z8, None).unwrap();
-        s.ax_mps2 = Some(d.accel[0]);
-        s.ay_mps2 = Some(d.accel[1]);
-        s.az_mps2 = Some(d.accel[2]);
-        s.pdot_rad_s2 = Some(d.xdot[3]);
-        s.qdot_rad_s2 = Some(d.xdot[4]);
-        s.rdot_rad_s2 = Some(d.xdot[5]);
-        out.push(s);
-        for _ in 0..4 {
-            let f = model.eval(&th, &u, &x, &z8, &z8, None).unwrap().xdot;
-            for j in 0..8 {
-                x[j] += 0.25 * dt * f[j];
-            }
-        }
-    }
-    out
-}
 
 fn pct(sorted: &[u64], p: f64) -> u64 {
     sorted[((p * (sorted.len() - 1) as f64).round() as usize).min(sorted.len() - 1)]
@@ -79,7 +37,7 @@ fn pct(sorted: &[u64], p: f64) -> u64 {
 
 fn main() {
     let n: usize = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(60_000);
-    let data = stream(n.max(WARMUP + 1));
+    let data = test_aircraft::six_axis_stream(n.max(WARMUP + 1), 0.02, 20.0);
     println!(
         "{} samples at 50 Hz, {} timed after {WARMUP} warm-up",
         data.len(),

@@ -192,3 +192,50 @@ pub fn set_output(s: &mut AirDataSample, o: Output, v: f64) {
         Output::Rdot => s.rdot_rad_s2 = Some(v),
     }
 }
+
+/// `n` samples (interval `dt_s`) of the six-axis flight model flown from level trim with the
+/// generic priors as its aerodynamics (lateral biases zero), elevator, aileron and rudder
+/// doublets at 1, 6 and 12 s of every `period_s`, every channel present (specific forces and
+/// angular accelerations from the model; four Euler substeps of dt/4): the stream the update
+/// bench and the update-time example replay through every estimator.
+#[allow(dead_code)] // used by the bench and the example, not by every unit test
+pub fn six_axis_stream(n: usize, dt_s: f64, period_s: f64) -> Vec<AirDataSample> {
+    use aeroident_estimators::flight_model::{FlightModel, ModelInputs};
+    use aeroident_estimators::prior::Priors;
+    let st = ModelStructure::six_axis();
+    let model = FlightModel::new(st).unwrap();
+    let pri = Priors::generic(&st);
+    let mut th: Vec<f64> = (0..st.n_params()).map(|i| pri.prior[i].value).collect();
+    let k = AircraftConstants { v0_mps: None, ..constants() };
+    set_level_trim_biases(&st, &mut th, &k);
+    let i = |c, t| st.index_of(Param::new(c, t)).unwrap();
+    for c in [C::CY, C::Cl, C::Cn] {
+        th[i(c, T::Bias)] = 0.0;
+    }
+    let db = |t: f64, t0: f64, a: f64| doublet(t, t0, 0.5, a);
+    let mut x = [V0, ALPHA0, 0.0, 0.0, 0.0, 0.0, 0.0, ALPHA0];
+    let z8 = [0.0; 8];
+    let mut out = Vec::with_capacity(n);
+    for step in 0..n {
+        let t = step as f64 * dt_s;
+        let tc = t % period_s;
+        let surfaces = (db(tc, 1.0, 0.03), db(tc, 6.0, 0.04), db(tc, 12.0, 0.05));
+        let mut s = sample(t, &x, surfaces, k);
+        let u: ModelInputs = model.inputs(&s).unwrap();
+        let d = model.eval(&th, &u, &x, &z8, &z8, None).unwrap();
+        s.ax_mps2 = Some(d.accel[0]);
+        s.ay_mps2 = Some(d.accel[1]);
+        s.az_mps2 = Some(d.accel[2]);
+        s.pdot_rad_s2 = Some(d.xdot[3]);
+        s.qdot_rad_s2 = Some(d.xdot[4]);
+        s.rdot_rad_s2 = Some(d.xdot[5]);
+        out.push(s);
+        for _ in 0..4 {
+            let f = model.eval(&th, &u, &x, &z8, &z8, None).unwrap().xdot;
+            for j in 0..8 {
+                x[j] += 0.25 * dt_s * f[j];
+            }
+        }
+    }
+    out
+}

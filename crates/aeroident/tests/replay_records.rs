@@ -438,7 +438,7 @@ fn val_differentiated_qdot_reproduces_record_qdot_regression() {
 /// could centre, identifies every parameter of the default model with a finite value, and the
 /// estimators not in this build are refused with a clear error.
 #[test]
-fn val_rls_runs_on_all_records_and_absent_estimators_are_named() {
+fn val_every_estimator_runs_on_every_record() {
     // The F-16 elevator doublet is purely longitudinal: its default (six-axis) model would
     // leave the lateral fits uninitialised (never excited), so the longitudinal preset is used.
     let records = [

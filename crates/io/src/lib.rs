@@ -10,6 +10,7 @@ pub mod flight_data;
 pub mod mapping;
 pub mod model_file;
 pub mod replay_output;
+pub mod table;
 pub mod units;
 
 pub use error::{FlightDataError, RowProblem};

@@ -11,6 +11,7 @@ pub mod mapping;
 pub mod model_file;
 pub mod replay_output;
 pub mod table;
+pub mod ulog;
 pub mod units;
 
 pub use error::{FlightDataError, RowProblem};

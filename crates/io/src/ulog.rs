@@ -47,6 +47,30 @@ pub struct LogContents {
     pub dropped: BTreeMap<String, usize>,
     /// Byte offset of a message the file ends inside (that partial message is not used).
     pub truncated_at: Option<u64>,
+    /// Corrupt stretches skipped to find the next message: `(byte offset, length)`
+    /// (DataFlash resynchronises on the message header as pymavlink does; ULog never skips).
+    pub skipped: Vec<(u64, u64)>,
+}
+
+impl LogContents {
+    /// One line per thing left out of the topics (non-increasing samples, a truncated last
+    /// message, skipped bytes), for the caller to print; empty when nothing was.
+    pub fn notes(&self, file: &str) -> Vec<String> {
+        let mut v: Vec<String> = self
+            .dropped
+            .iter()
+            .map(|(t, n)| {
+                format!("{file}: topic `{t}`: {n} samples left out (timestamp did not increase)")
+            })
+            .collect();
+        if let Some(at) = self.truncated_at {
+            v.push(format!("{file}: byte {at}: the file ends inside this message (not used)"));
+        }
+        for (at, len) in &self.skipped {
+            v.push(format!("{file}: byte {at}: {len} corrupt bytes skipped"));
+        }
+        v
+    }
 }
 
 /// One topic being collected: timestamps in µs and the flattened fields.

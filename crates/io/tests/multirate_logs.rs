@@ -6,6 +6,7 @@
 //!
 //! Skips with a message when `../shared` is absent; fails under `CI=true`.
 
+use aeroident_io::dataflash::read_dataflash_contents;
 use aeroident_io::table::Topic;
 use aeroident_io::ulog::read_ulog_contents;
 use std::collections::BTreeMap;
@@ -136,4 +137,48 @@ fn ulog_vtol_every_topic_count_matches_and_early_timestamps_do_not_wrap() {
     }
     assert!(topics.contains_key("actuator_outputs[1]"));
     assert!((topics["vehicle_angular_velocity"].t_s.len() as f64 / 6.5) > 250.0);
+}
+
+#[test]
+fn dataflash_arduplane_every_message_count_and_field_matches_the_inventory() {
+    let Some(path) = shared("pyflightcoach_center_0003.bin") else { return };
+    let c = read_dataflash_contents(&path).unwrap();
+    assert_eq!(c.skipped, vec![], "no corrupt bytes in this log");
+    let inv = inventory("inventory/pyflightcoach_center_0003.bin.txt");
+    let mut counts: BTreeMap<String, usize> = BTreeMap::new();
+    for t in &c.topics {
+        let base = t.name.split('[').next().unwrap().to_string();
+        *counts.entry(base).or_default() += t.t_s.len() + c.dropped.get(&t.name).copied().unwrap_or(0);
+    }
+    let topics = by_name(&c.topics);
+    for e in &inv {
+        if !e.fields.iter().any(|f| f == "TimeUS") {
+            assert!(!counts.contains_key(&e.name), "{} has no time and is no topic", e.name);
+            continue;
+        }
+        assert_eq!(counts.get(&e.name).copied(), Some(e.samples), "{}", e.name);
+        // An instance-split type (`STAK[11]`, `ORGN[1]`): any of its topics has the fields.
+        let t = c.topics.iter().find(|t| t.name.split('[').next() == Some(&e.name)).unwrap();
+        let names: Vec<&str> = t.fields.iter().map(|(n, _)| n.as_str()).collect();
+        // Text fields (`n`, `N`, `Z`) are not numeric and are not fields of a topic.
+        assert!(names.iter().all(|n| e.fields.iter().any(|f| f == n)), "{}: {names:?}", e.name);
+    }
+    // Ranges the README states: 48.9 s, pitch within −14…10°, roll within −4…8°.
+    let att = topics["ATT"];
+    let span = att.t_s.last().unwrap() - att.t_s[0];
+    assert!((48.0..49.0).contains(&span), "{span}");
+    let field = |t: &Topic, f: &str| t.fields.iter().find(|(n, _)| n == f).unwrap().1.clone();
+    let pitch = field(att, "Pitch");
+    let roll = field(att, "Roll");
+    let (pmin, pmax) = pitch.iter().fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(*v), b.max(*v)));
+    let (rmin, rmax) = roll.iter().fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(*v), b.max(*v)));
+    assert!(pmin > -15.0 && pmin < -13.0 && pmax > 9.0 && pmax < 11.0, "{pmin} {pmax}");
+    assert!(rmin > -5.0 && rmin < -3.0 && rmax > 7.0 && rmax < 9.0, "{rmin} {rmax}");
+    // Parameters the README names.
+    assert_eq!(c.parameters["SERVO2_FUNCTION"], 19.0);
+    assert_eq!(c.parameters["SCHED_LOOP_RATE"], 50.0);
+    assert_eq!(c.parameters["LOG_BITMASK"], 1029.0);
+    // Lat/Lon (`L`) scaled to degrees like pymavlink.
+    let lat = field(topics["POS"], "Lat");
+    assert!(lat.iter().all(|v| v.abs() <= 90.0 && v.abs() > 1.0), "{}", lat[0]);
 }

@@ -175,7 +175,10 @@ fn parse_fmt(p: &[u8]) -> Result<(u8, Format), String> {
     let mut at = 0;
     for (c, col) in chars.bytes().zip(&columns) {
         let k = kind(c).ok_or_else(|| {
-            format!("FMT of `{name}` (type {id}): field `{col}`: unknown format character `{}`", c as char)
+            format!(
+                "FMT of `{name}` (type {id}): field `{col}`: unknown format character `{}`",
+                c as char
+            )
         })?;
         fields.push((col.to_string(), k, at));
         at += size(k);
@@ -237,7 +240,9 @@ pub fn parse_dataflash(bytes: &[u8], file: &str) -> Result<LogContents, FlightDa
     let mut at = 0usize;
     while at < bytes.len() {
         let ty = match bytes.get(at..at + 3) {
-            Some([a, b, t]) if [*a, *b] == HEAD && (*t == FMT_TYPE || formats.contains_key(t)) => *t,
+            Some([a, b, t]) if [*a, *b] == HEAD && (*t == FMT_TYPE || formats.contains_key(t)) => {
+                *t
+            }
             Some(_) => {
                 skip_start.get_or_insert(at);
                 at += 1;
@@ -353,7 +358,10 @@ pub fn parse_dataflash(bytes: &[u8], file: &str) -> Result<LogContents, FlightDa
         out.skipped.push((s as u64, (bytes.len() - s) as u64));
     }
     if messages == 0 {
-        return Err(err(0, "no DataFlash message found (no `A3 95` header with a known type)".into()));
+        return Err(err(
+            0,
+            "no DataFlash message found (no `A3 95` header with a known type)".into(),
+        ));
     }
     for b in builders {
         if b.dropped > 0 {

@@ -5,6 +5,7 @@
 //! priors over the one vocabulary), and result writers (CSV time series, JSON summaries).
 //! Every reader error names the file, the line or row, and the field.
 
+pub mod align;
 pub mod dataflash;
 pub mod error;
 pub mod flight_data;

@@ -232,8 +232,7 @@ struct Compiled {
 }
 
 fn parse_format(text: &str) -> Result<(String, Vec<FieldDef>), String> {
-    let (name, rest) =
-        text.split_once(':').ok_or_else(|| format!("format `{text}` has no `:`"))?;
+    let (name, rest) = text.split_once(':').ok_or_else(|| format!("format `{text}` has no `:`"))?;
     let mut fields = Vec::new();
     for f in rest.split(';').map(str::trim).filter(|f| !f.is_empty()) {
         let (ty, fname) =
@@ -299,7 +298,10 @@ fn compile(
     Ok(at)
 }
 
-fn compile_topic(formats: &BTreeMap<String, Vec<FieldDef>>, name: &str) -> Result<Compiled, String> {
+fn compile_topic(
+    formats: &BTreeMap<String, Vec<FieldDef>>,
+    name: &str,
+) -> Result<Compiled, String> {
     let mut leaves = Vec::new();
     compile(formats, name, "", 0, 0, &mut leaves)?;
     let ts = leaves
@@ -376,7 +378,9 @@ pub fn parse_ulog(bytes: &[u8], file: &str) -> Result<LogContents, FlightDataErr
                 if incompat[0] & !1 != 0 || incompat[1..].iter().any(|b| *b != 0) {
                     return Err(err(
                         at,
-                        format!("unknown incompatible flags {incompat:?}: this ULog version is not supported"),
+                        format!(
+                            "unknown incompatible flags {incompat:?}: this ULog version is not supported"
+                        ),
                     ));
                 }
                 if incompat[0] & 1 == 1 {
@@ -409,12 +413,17 @@ pub fn parse_ulog(bytes: &[u8], file: &str) -> Result<LogContents, FlightDataErr
                     .split_once(' ')
                     .ok_or_else(|| err(at, format!("parameter key `{key}` has no type")))?;
                 let v = match (ty, value) {
-                    ("int32_t", [a, b, c, d, ..]) => f64::from(i32::from_le_bytes([*a, *b, *c, *d])),
+                    ("int32_t", [a, b, c, d, ..]) => {
+                        f64::from(i32::from_le_bytes([*a, *b, *c, *d]))
+                    }
                     ("float", [a, b, c, d, ..]) => f64::from(f32::from_le_bytes([*a, *b, *c, *d])),
                     _ => {
                         return Err(err(
                             at,
-                            format!("parameter `{name}`: type `{ty}` with {} value bytes", value.len()),
+                            format!(
+                                "parameter `{name}`: type `{ty}` with {} value bytes",
+                                value.len()
+                            ),
                         ));
                     }
                 };
@@ -448,13 +457,16 @@ pub fn parse_ulog(bytes: &[u8], file: &str) -> Result<LogContents, FlightDataErr
                 }
                 let id = u16::from_le_bytes([payload[0], payload[1]]);
                 let data = &payload[2..];
-                let sub = subs
-                    .get(&id)
-                    .ok_or_else(|| err(at, format!("data message for unknown subscription {id}")))?;
+                let sub = subs.get(&id).ok_or_else(|| {
+                    err(at, format!("data message for unknown subscription {id}"))
+                })?;
                 let b = &mut builders[sub.topic];
                 let field = |l: &Leaf| data.get(l.offset..l.offset + l.kind.size());
                 let Some(ts) = data.get(sub.compiled.timestamp..sub.compiled.timestamp + 8) else {
-                    return Err(err(at, format!("topic `{}`: data message too short for `timestamp`", b.name)));
+                    return Err(err(
+                        at,
+                        format!("topic `{}`: data message too short for `timestamp`", b.name),
+                    ));
                 };
                 let t_us = u64::from_le_bytes(ts.try_into().unwrap_or([0; 8]));
                 row.clear();

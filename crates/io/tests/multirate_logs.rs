@@ -24,7 +24,10 @@ fn shared(rel: &str) -> Option<PathBuf> {
             "{} is absent under CI",
             p.display()
         );
-        eprintln!("SKIPPED: {} is absent (CI provides ../shared beside the repository)", p.display());
+        eprintln!(
+            "SKIPPED: {} is absent (CI provides ../shared beside the repository)",
+            p.display()
+        );
         None
     }
 }
@@ -148,7 +151,8 @@ fn dataflash_arduplane_every_message_count_and_field_matches_the_inventory() {
     let mut counts: BTreeMap<String, usize> = BTreeMap::new();
     for t in &c.topics {
         let base = t.name.split('[').next().unwrap().to_string();
-        *counts.entry(base).or_default() += t.t_s.len() + c.dropped.get(&t.name).copied().unwrap_or(0);
+        *counts.entry(base).or_default() +=
+            t.t_s.len() + c.dropped.get(&t.name).copied().unwrap_or(0);
     }
     let topics = by_name(&c.topics);
     for e in &inv {

@@ -11,6 +11,7 @@ pub mod error;
 pub mod flight_data;
 pub mod mapping;
 pub mod model_file;
+pub mod multirate;
 pub mod replay_output;
 pub mod table;
 pub mod ulog;

@@ -396,22 +396,29 @@ mod tests {
     #[test]
     fn errors_name_the_problem() {
         let a = topic("a", grid(0.0, 0.1, 10), |t| t);
-        let e = align(&[a.clone()], &Clock::RateHz(0.0), Interpolation::Linear, "log.ulg")
-            .unwrap_err()
-            .to_string();
+        let e =
+            align(std::slice::from_ref(&a), &Clock::RateHz(0.0), Interpolation::Linear, "log.ulg")
+                .unwrap_err()
+                .to_string();
         assert!(e.starts_with("log.ulg: alignment: rate 0 Hz"), "{e}");
-        let e = align(&[a.clone()], &Clock::Topic("imu".into()), Interpolation::Linear, "log.ulg")
-            .unwrap_err()
-            .to_string();
+        let e = align(
+            std::slice::from_ref(&a),
+            &Clock::Topic("imu".into()),
+            Interpolation::Linear,
+            "log.ulg",
+        )
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("`imu` for the alignment clock") && e.contains("(a)"), "{e}");
         let b = topic("b", grid(5.0, 0.1, 10), |t| t);
         let e = align(&[a.clone(), b], &Clock::RateHz(10.0), Interpolation::Linear, "log.ulg")
             .unwrap_err()
             .to_string();
         assert!(e.contains("do not overlap") && e.contains("`b` starts at 5"), "{e}");
-        let e = select(&[a.clone()], &[("a.y".into(), "channel `q`".into())], "log.ulg")
-            .unwrap_err()
-            .to_string();
+        let e =
+            select(std::slice::from_ref(&a), &[("a.y".into(), "channel `q`".into())], "log.ulg")
+                .unwrap_err()
+                .to_string();
         assert_eq!(e, "log.ulg: `a.y` for channel `q`: topic `a` has no field `y` (it has: x)");
         let e = select(&[a], &[("ATT.Roll".into(), "channel `phi`".into())], "log.bin")
             .unwrap_err()

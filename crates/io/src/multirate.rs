@@ -348,8 +348,8 @@ rho = { value = 1.225, unit = "kg/m3" }
             fields: (0..4).map(|k| (format!("q[{k}]"), vec![q[k], -q[k], q[k]])).collect(),
         };
         continuous_quaternion(&mut t, &["q[0]", "q[1]", "q[2]", "q[3]"]);
-        for k in 0..4 {
-            assert_eq!(t.fields[k].1, vec![q[k]; 3]);
+        for (f, qk) in t.fields.iter().zip(q) {
+            assert_eq!(f.1, vec![qk; 3]);
         }
     }
 }

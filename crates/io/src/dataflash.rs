@@ -34,6 +34,11 @@
 //! (length under 3, unknown format character, sizes that do not add up to the length) is a
 //! [`FlightDataError::LogDecode`] naming the byte offset and the message name: every later
 //! message of that type would be misread.
+//!
+//! Why not a crate: `ardupilot-binlog` 0.2.0 (its source) computes the payload length as
+//! `msg_len as usize - 3`, which underflows for a corrupt `FMT` with a length under 3, stops
+//! without a word after 256 consecutive bad headers (the rest of the file is silently lost),
+//! and reports no byte offsets.
 
 use crate::FlightDataError;
 use crate::table::Topic;

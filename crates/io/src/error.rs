@@ -129,6 +129,37 @@ pub enum FlightDataError {
         /// The first rejections (row and reason), so the cause is visible.
         first: Vec<(u64, String)>,
     },
+    /// A binary log (PX4 ULog, ArduPilot DataFlash) could not be decoded at this byte offset.
+    #[error("{file}: byte {offset}: {message}")]
+    LogDecode {
+        /// Log file.
+        file: String,
+        /// Byte offset in the file where the problem was found (for a streaming decoder: at or
+        /// before this offset).
+        offset: u64,
+        /// What was wrong, naming the message and field where known.
+        message: String,
+    },
+    /// A topic, message or field a mapping or alignment needs is not in the log.
+    #[error("{file}: `{column}` for {needed_by}: {reason}")]
+    MissingTopic {
+        /// Log file.
+        file: String,
+        /// The `<topic>.<field>` column asked for.
+        column: String,
+        /// What needs it (a channel, the clock, …).
+        needed_by: String,
+        /// Why it is missing (no such topic / no such field / no samples), listing what exists.
+        reason: String,
+    },
+    /// Multi-rate alignment could not produce a table (bad rate, no overlap, every row dropped).
+    #[error("{file}: alignment: {reason}")]
+    Align {
+        /// Log file.
+        file: String,
+        /// What was wrong.
+        reason: String,
+    },
 }
 
 fn first_reasons(first: &[(u64, String)]) -> String {

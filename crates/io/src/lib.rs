@@ -5,12 +5,16 @@
 //! priors over the one vocabulary), and result writers (CSV time series, JSON summaries).
 //! Every reader error names the file, the line or row, and the field.
 
+pub mod align;
+pub mod dataflash;
 pub mod error;
 pub mod flight_data;
 pub mod mapping;
 pub mod model_file;
+pub mod multirate;
 pub mod replay_output;
 pub mod table;
+pub mod ulog;
 pub mod units;
 
 pub use error::{FlightDataError, RowProblem};

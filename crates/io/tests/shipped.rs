@@ -25,6 +25,8 @@ fn shipped_mappings_parse_and_map_what_their_records_are_for() {
         "jsbsim.toml",
         "jsbsim_clean.toml",
         "twin_otter.toml",
+        "px4-fixedwing.toml",
+        "arduplane.toml",
     ] {
         assert!(maps.iter().any(|p| p.ends_with(want)), "{want} missing: {maps:?}");
     }
@@ -34,7 +36,8 @@ fn shipped_mappings_parse_and_map_what_their_records_are_for() {
         let lateral = [Channel::Beta, Channel::Ay, Channel::Da, Channel::Dr, Channel::B];
         let has_lateral = lateral.iter().all(|c| m.has(*c));
         match name {
-            "attas_lateral.toml" | "jsbsim.toml" | "jsbsim_clean.toml" => {
+            "attas_lateral.toml" | "jsbsim.toml" | "jsbsim_clean.toml" | "px4-fixedwing.toml"
+            | "arduplane.toml" => {
                 assert!(has_lateral, "{name}")
             }
             // Longitudinal records: the lateral preset must not be the default there.

@@ -7,6 +7,7 @@
 
 pub mod error;
 pub mod flight_data;
+pub mod log;
 pub mod mapping;
 pub mod model_file;
 pub mod replay_output;
@@ -15,5 +16,6 @@ pub mod units;
 
 pub use error::{FlightDataError, RowProblem};
 pub use flight_data::{FlightDataReader, RecordEvent, Rejection};
+pub use log::{LogFormat, LogReader, open_log};
 pub use mapping::{Channel, Mapping};
 pub use model_file::{ModelFileError, ModelSpec};

@@ -188,14 +188,26 @@ pub fn asc_reader<R: BufRead + 'static>(
         }
         text.lines.push(raw);
     }
+    // A first line that is not numbers is most likely a text header (FVSysID's
+    // `*_withHeader.asc`): say so, since every column would be off.
+    let text_hint = |line: usize| {
+        let raw = String::from_utf8_lossy(&text.lines[line - 1]);
+        match raw.split_whitespace().find(|t| t.parse::<f64>().is_err()) {
+            Some(t) => format!(
+                " (its `{t}` is text: a header line? .asc files are read without one; remove it or replay a CSV copy)"
+            ),
+            None => String::new(),
+        }
+    };
     let names = match (&mapping.column_names, first) {
         (Some(names), Some((line, fields))) if fields != names.len() => {
             return Err(FlightDataError::Format {
                 file: file.to_string(),
                 message: format!(
-                    "line {line}: {fields} fields, but the mapping {} names {} columns in `[columns] names`",
+                    "line {line}: {fields} fields, but the mapping {} names {} columns in `[columns] names`{}",
                     mapping.file,
-                    names.len()
+                    names.len(),
+                    text_hint(line)
                 ),
             });
         }

@@ -1,4 +1,4 @@
-//! Open-loop F-16 simulation (issue 3): trim → fly with pilot inputs, gusts and turbulence →
+//! Open-loop F-16 simulation: trim → fly with pilot inputs, gusts and turbulence →
 //! sense → `timeseries.csv` and figures.
 //!
 //! Run: `aeroident f16 sim scenarios/sim/elevator_doublet.toml --out out/sim`. The scenario

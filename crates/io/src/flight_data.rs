@@ -489,7 +489,15 @@ impl<R: Read> Iterator for FlightDataReader<R> {
                     }));
                 }
                 let tail = self.csv.get_ref();
-                if self.file == "-" && tail.eof && tail.last_byte != Some(b'\n') {
+                // The csv crate numbers a record from where its reading began, so a record
+                // after blank lines would be numbered at the first blank line. The line it ends
+                // on is exact: the record's line is the one before the position after it (the
+                // parser stops right after the newline), or that position itself for a last line
+                // without a newline (the source ended while the record was read).
+                let unterminated = tail.eof && tail.last_byte != Some(b'\n');
+                let row =
+                    self.csv.position().line().saturating_sub(u64::from(!unterminated) + shift);
+                if self.file == "-" && unterminated {
                     self.done = true;
                     return Some(Ok(RecordEvent::Rejected { row, problem: RowProblem::Truncated }));
                 }

@@ -6,7 +6,7 @@
 //! | format | extension | column names | row numbers in events |
 //! |---|---|---|---|
 //! | CSV ([`LogFormat::Csv`]) | `.csv`, anything else | the header row | line in the file (header = 1) |
-//! | whitespace text ([`LogFormat::Asc`]) | `.asc`, `.txt`, `.dat` | the mapping's `[columns] names`, else `"1"`, `"2"`, … by position | line in the file |
+//! | whitespace text ([`LogFormat::Asc`]) | `.asc` (other text: `--format asc`) | the mapping's `[columns] names`, else `"1"`, `"2"`, … by position | line in the file |
 //! | MATLAB v5 ([`LogFormat::Mat`]) | `.mat` | one matrix: as `.asc`; several variables: each vector is a column named by its variable | row of the record (1-based) |
 //! | PX4 ULog ([`LogFormat::Ulog`]) | `.ulg` | `<topic>.<field>` after alignment ([`crate::table`]) | row of the aligned table |
 //! | ArduPilot DataFlash ([`LogFormat::Dataflash`]) | `.bin` | `<message>.<field>` after alignment | row of the aligned table |
@@ -70,14 +70,14 @@ impl LogFormat {
         }
     }
 
-    /// The format a file's extension names (case-insensitive): `.asc`/`.txt`/`.dat` whitespace
+    /// The format a file's extension names (case-insensitive): `.asc` whitespace
     /// text, `.mat`, `.ulg`, `.bin` DataFlash; `None` for any other (read as CSV by
     /// [`open_log`]).
     pub fn from_extension(path: &Path) -> Option<Self> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
         match ext.as_str() {
             "csv" => Some(LogFormat::Csv),
-            "asc" | "txt" | "dat" => Some(LogFormat::Asc),
+            "asc" => Some(LogFormat::Asc),
             "mat" => Some(LogFormat::Mat),
             "ulg" | "ulog" => Some(LogFormat::Ulog),
             "bin" => Some(LogFormat::Dataflash),
@@ -758,6 +758,8 @@ mod tests {
         assert_eq!(F::from_extension(Path::new("log.ulg")), Some(F::Ulog));
         assert_eq!(F::from_extension(Path::new("00000012.BIN")), Some(F::Dataflash));
         assert_eq!(F::from_extension(Path::new("data")), None);
+        // A .txt or .dat may be a CSV: only `--format asc` reads it as whitespace text.
+        assert_eq!(F::from_extension(Path::new("x.txt")), None);
         for f in F::ALL {
             assert_eq!(f.name().parse::<F>(), Ok(f));
         }

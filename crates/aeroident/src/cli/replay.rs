@@ -37,7 +37,7 @@ pub struct ReplayArgs {
     #[arg(long)]
     pub map: PathBuf,
     /// Log format (csv, asc, mat, ulog, dataflash); default: by the file's extension
-    /// (`.asc`/`.txt`/`.dat`, `.mat`, `.ulg`, `.bin`), else CSV.
+    /// (`.asc`, `.mat`, `.ulg`, `.bin`), else CSV.
     #[arg(long)]
     pub format: Option<LogFormat>,
     /// Output directory for estimates.csv, summary.json and estimates.png.

@@ -99,6 +99,28 @@ pub enum FlightDataError {
         /// Second field, 1-based.
         second: usize,
     },
+    /// A mapped column is not among the columns of a file without a CSV header (an `.asc`
+    /// file, a `.mat` record or an aligned log), whose names come from the file or from the
+    /// mapping's `[columns] names`.
+    #[error("{file}: column `{column}` for channel `{channel}` is not in the record ({available})")]
+    NoSuchColumn {
+        /// Data file.
+        file: String,
+        /// Channel key.
+        channel: String,
+        /// Column name.
+        column: String,
+        /// The columns the record has (a short list or a count, and where names come from).
+        available: String,
+    },
+    /// A log file that is not of its format, or a format that cannot be read (yet).
+    #[error("{file}: {message}")]
+    Format {
+        /// Data file.
+        file: String,
+        /// What is wrong, naming the format (and the line or variable where it applies).
+        message: String,
+    },
     /// The CSV itself could not be read (header or framing).
     #[error("{file}: row {row}: {message}")]
     Csv {

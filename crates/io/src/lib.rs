@@ -9,6 +9,7 @@ pub mod align;
 pub mod dataflash;
 pub mod error;
 pub mod flight_data;
+pub mod log;
 pub mod mapping;
 pub mod model_file;
 pub mod multirate;
@@ -19,5 +20,6 @@ pub mod units;
 
 pub use error::{FlightDataError, RowProblem};
 pub use flight_data::{FlightDataReader, RecordEvent, Rejection};
+pub use log::{LogFormat, LogReader, open_log, open_log_with_notes};
 pub use mapping::{Channel, Mapping};
 pub use model_file::{ModelFileError, ModelSpec};

@@ -19,6 +19,9 @@
 //! da    = { columns = ["ail_left_deg", "ail_right_deg"], weights = [0.5, -0.5], unit = "deg" }
 //! Ixz   = { column = "ixz", unit = "slug*ft2", scale = -1.0 }      # JSBSim logs −Jxz
 //! mass  = { value = 7472.0, unit = "kg" }                             # a constant
+//!
+//! [columns]       # optional: names of the columns of a file without a header row
+//! names = ["time_s", "elevator_rad", "qbar_Pa"]   # (.asc, a .mat matrix); default "1", "2", …
 //! ```
 //!
 //! Each entry converts as `SI = ((Σ wᵢ rawᵢ) · scale + offset) · factor(unit)`; `weights`
@@ -277,6 +280,7 @@ struct MappingFile {
     nominal_dt_s: Option<f64>,
     time: ChannelSpec,
     channels: BTreeMap<Spanned<String>, ChannelSpec>,
+    columns: Option<ColumnsSpec>,
     align: Option<AlignFile>,
     attitude: Option<AttitudeFile>,
     air_data: Option<AirDataFile>,
@@ -336,6 +340,13 @@ pub struct AirDataSpec {
     pub wind_ne: Option<[String; 2]>,
     /// Airspeed below which α, β are undefined (NaN), m/s.
     pub min_vt_mps: f64,
+}
+
+/// The `[columns]` table: names for the columns of a file without a header row.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ColumnsSpec {
+    names: Vec<String>,
 }
 
 /// Where a resolved channel's value comes from.
@@ -418,6 +429,10 @@ pub struct Mapping {
     pub quaternion: Option<[String; 4]>,
     /// `[air_data]`.
     pub air_data: Option<AirDataSpec>,
+    /// `[columns] names`: the name of each column, in order, of a file without a header row
+    /// (a whitespace `.asc`, a `.mat` matrix); `None` names them `"1"`, `"2"`, … (see
+    /// [`crate::log`]). A CSV has its own header and ignores this list.
+    pub column_names: Option<Vec<String>>,
 }
 
 /// 1-based line of byte offset `at` in `text`.
@@ -520,6 +535,10 @@ impl Mapping {
             });
         }
         let (align, quaternion, air_data) = resolve_log_tables(file, &raw, &channels)?;
+        let column_names = raw.columns.map(|c| c.names);
+        if let Some(names) = &column_names {
+            check_column_names(file, names)?;
+        }
         Ok(Self {
             file: file.to_string(),
             description: raw.description.unwrap_or_default(),
@@ -529,6 +548,7 @@ impl Mapping {
             align,
             quaternion,
             air_data,
+            column_names,
         })
     }
 
@@ -629,6 +649,31 @@ fn resolve_log_tables(
         }
     }
     Ok((align, quaternion, air_data))
+}
+
+/// `[columns] names` must be non-empty, unique, and free of line breaks and surrounding
+/// spaces (a header field is trimmed, so such a name could never match).
+fn check_column_names(file: &str, names: &[String]) -> Result<(), FlightDataError> {
+    let bad = |reason: String| FlightDataError::BadSpec {
+        file: file.to_string(),
+        channel: "columns.names".into(),
+        reason,
+    };
+    if names.is_empty() {
+        return Err(bad("the list is empty".into()));
+    }
+    for (i, n) in names.iter().enumerate() {
+        if n.is_empty() || n.trim() != n || n.contains(['\n', '\r']) {
+            return Err(bad(format!(
+                "name {} `{n}` is empty, has surrounding spaces or a line break",
+                i + 1
+            )));
+        }
+        if let Some(j) = names[..i].iter().position(|m| m == n) {
+            return Err(bad(format!("`{n}` is given twice (columns {} and {})", j + 1, i + 1)));
+        }
+    }
+    Ok(())
 }
 
 fn resolve(
@@ -815,6 +860,20 @@ mod tests {
         let text = format!("{HEAD}[air_data]\nned_velocity = [\"p.vx\", \"p.vy\", \"p.vz\"]\n");
         let e = Mapping::from_toml_str(&text, "m.toml").unwrap_err().to_string();
         assert!(e.contains("needs [attitude] quaternion"), "{e}");
+    }
+
+    #[test]
+    fn column_names_for_headerless_files_are_checked() {
+        let text = format!("{HEAD}[columns]\nnames = [\"t\", \"V\", \"a\"]\n");
+        let m = Mapping::from_toml_str(&text, "m.toml").unwrap();
+        assert_eq!(m.column_names, Some(vec!["t".into(), "V".into(), "a".into()]));
+        assert_eq!(Mapping::from_toml_str(HEAD, "m.toml").unwrap().column_names, None);
+        let text = format!("{HEAD}[columns]\nnames = [\"t\", \"V\", \"t\"]\n");
+        let e = Mapping::from_toml_str(&text, "m.toml").unwrap_err().to_string();
+        assert!(e.contains("`columns.names`: `t` is given twice (columns 1 and 3)"), "{e}");
+        let text = format!("{HEAD}[columns]\nnames = [\"t\", \" V\"]\n");
+        let e = Mapping::from_toml_str(&text, "m.toml").unwrap_err().to_string();
+        assert!(e.contains("name 2 ` V`"), "{e}");
     }
 
     #[test]

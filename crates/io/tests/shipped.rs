@@ -19,6 +19,7 @@ fn dir(name: &str) -> Vec<PathBuf> {
 fn shipped_mappings_parse_and_map_what_their_records_are_for() {
     let maps = dir("mappings");
     for want in [
+        "aeroident-sim.toml",
         "attas.toml",
         "attas_lateral.toml",
         "hfb320.toml",
@@ -36,8 +37,8 @@ fn shipped_mappings_parse_and_map_what_their_records_are_for() {
         let lateral = [Channel::Beta, Channel::Ay, Channel::Da, Channel::Dr, Channel::B];
         let has_lateral = lateral.iter().all(|c| m.has(*c));
         match name {
-            "attas_lateral.toml" | "jsbsim.toml" | "jsbsim_clean.toml" | "px4-fixedwing.toml"
-            | "arduplane.toml" => {
+            "aeroident-sim.toml" | "attas_lateral.toml" | "jsbsim.toml" | "jsbsim_clean.toml"
+            | "px4-fixedwing.toml" | "arduplane.toml" => {
                 assert!(has_lateral, "{name}")
             }
             // Longitudinal records: the lateral preset must not be the default there.

@@ -1,7 +1,8 @@
 //! `aeroident replay`: feed a recorded flight to an online estimator sample by sample.
 //!
 //! ```text
-//! aeroident replay <data.csv|-> --map <map.toml> [--out <dir>]
+//! aeroident replay <data.csv|.asc|.mat|-> --map <map.toml> [--format csv|asc|mat|ulog|dataflash]
+//!                  [--out <dir>]
 //!                  [--model longitudinal|lateral|six-axis|FILE]
 //!                  [--estimator rls|ftr|ekf|smpe|smpe-corrected|gradient|oe] [--forgetting λ]
 //!                  [--derivatives auto|differentiate] [--diff-window N] [--realtime]
@@ -14,11 +15,14 @@
 //! (non-zero exit) after the summary is written. `--estimator oe` is the batch output-error
 //! fit: it reads the whole record first (it says so), prints its iterations and writes
 //! `summary.json` (estimates, coloured-residual and Cramér–Rao σ, residual RMS).
+//!
+//! The log format is `--format`, else the file's extension, else CSV
+//! ([`aeroident_io::log`]; `docs/mapping.md` tells how columns are named in each).
 
 use crate::estimators::EstimatorKind;
 use crate::plot::{LineKind, Panel, Series, render_panels_png};
 use crate::replay::{DerivativeSource, History, Pacing, ReplayOptions, ReplayOutcome, replay};
-use aeroident_io::{FlightDataReader, Mapping, ModelSpec};
+use aeroident_io::{LogFormat, Mapping, ModelSpec, open_log_with_notes};
 use anyhow::Context;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -26,11 +30,16 @@ use std::path::{Path, PathBuf};
 /// Arguments of `aeroident replay`.
 #[derive(Debug, clap::Args)]
 pub struct ReplayArgs {
-    /// Recorded flight data: a CSV with one header row, or `-` for stdin (live mode).
+    /// Recorded flight data: a CSV with one header row, a whitespace `.asc`, a MATLAB `.mat`,
+    /// or `-` for stdin (live mode: CSV, or whitespace text with `--format asc`).
     pub data: String,
     /// Channel mapping TOML (see `mappings/*.toml` and `docs/mapping.md`).
     #[arg(long)]
     pub map: PathBuf,
+    /// Log format (csv, asc, mat, ulog, dataflash); default: by the file's extension
+    /// (`.asc`, `.mat`, `.ulg`, `.bin`), else CSV.
+    #[arg(long)]
+    pub format: Option<LogFormat>,
     /// Output directory for estimates.csv, summary.json and estimates.png.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -100,15 +109,11 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     if live {
         sinks.push(&mut stdout_lock);
     }
-    let outcome = if live {
-        let reader = FlightDataReader::new(std::io::stdin().lock(), "-", &mapping)?;
-        replay(reader, &mapping, &opts, sinks)?
-    } else {
-        let file =
-            std::fs::File::open(&args.data).with_context(|| format!("opening {}", args.data))?;
-        let reader = FlightDataReader::new(std::io::BufReader::new(file), &args.data, &mapping)?;
-        replay(reader, &mapping, &opts, sinks)?
-    };
+    let (reader, notes) = open_log_with_notes(&args.data, args.format, &mapping)?;
+    for n in &notes {
+        eprintln!("note: {n}");
+    }
+    let outcome = replay(reader, &mapping, &opts, sinks)?;
     if let Some(f) = csv_file {
         f.commit()?;
     }
@@ -232,15 +237,11 @@ fn execute_batch(
     eprintln!(
         "output error is a batch method: reading the whole record before fitting (not real time)"
     );
-    let outcome = if args.data == "-" {
-        let reader = FlightDataReader::new(std::io::stdin().lock(), "-", mapping)?;
-        crate::replay::batch::fit_record(reader, mapping, model)?
-    } else {
-        let file =
-            std::fs::File::open(&args.data).with_context(|| format!("opening {}", args.data))?;
-        let reader = FlightDataReader::new(std::io::BufReader::new(file), &args.data, mapping)?;
-        crate::replay::batch::fit_record(reader, mapping, model)?
-    };
+    let (reader, notes) = open_log_with_notes(&args.data, args.format, mapping)?;
+    for n in &notes {
+        eprintln!("note: {n}");
+    }
+    let outcome = crate::replay::batch::fit_record(reader, mapping, model)?;
     eprintln!("model: {}", outcome.model.name);
     crate::cli::print_stdout(&outcome.result.to_string())?;
     let text = serde_json::to_string_pretty(&outcome.summary)?;

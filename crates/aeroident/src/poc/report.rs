@@ -153,8 +153,8 @@ pub fn overview(results: &[CaseResult], wall_s: f64) -> String {
         by_table.entry(r.scenario.case.thesis_table.as_str()).or_default().push(r);
     }
     let mut s = format!(
-        "{:<8} {:>6} {:>22} {:>19}\n",
-        "table", "cases", "corrected on target", "worst final error"
+        "{:<8} {:>6} {:>32} {:>19}\n",
+        "table", "cases", "corrected: parameters on target", "worst final error"
     );
     let (mut met, mut total) = (0usize, 0usize);
     for (table, rows) in &by_table {
@@ -172,7 +172,7 @@ pub fn overview(results: &[CaseResult], wall_s: f64) -> String {
         }
         let _ = writeln!(
             s,
-            "{:<8} {:>6} {:>22} {:>18.2}%",
+            "{:<8} {:>6} {:>32} {:>18.2}%",
             table,
             rows.len(),
             format!("{m}/{n}"),

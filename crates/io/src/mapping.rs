@@ -462,6 +462,13 @@ impl Mapping {
         let raw: MappingFile = toml::from_str(text).map_err(|e| {
             FlightDataError::MappingSyntax { file: file.to_string(), message: e.to_string() }
         })?;
+        if raw.time.scale == 0.0 {
+            return Err(FlightDataError::BadSpec {
+                file: file.to_string(),
+                channel: "time".into(),
+                reason: "[time]: `scale = 0`: scale must be non-zero (every row would have the same time)".into(),
+            });
+        }
         let time = resolve(file, "time", &raw.time, Dimension::Time)?;
         if matches!(time.source, Source::Constant(_)) {
             return Err(FlightDataError::BadSpec {
@@ -480,6 +487,20 @@ impl Mapping {
                     valid: Channel::ALL.iter().map(|c| c.key()).collect::<Vec<_>>().join(", "),
                 });
             };
+            if spec.scale == 0.0 {
+                // A zero scale makes the channel identically its offset: every regressor built
+                // on it is 0 and the parameters it feeds are never identified (issue 10 #10).
+                return Err(FlightDataError::BadSpec {
+                    file: file.to_string(),
+                    channel: ch.key().into(),
+                    reason: format!(
+                        "line {}: `scale = 0`: scale must be non-zero (it would make the channel the constant {} {}; map a constant with `value`)",
+                        line_of(text, key.span().start),
+                        spec.offset,
+                        spec.unit
+                    ),
+                });
+            }
             let m = resolve(file, ch.key(), spec, ch.dimension())?;
             if Channel::POSITIVE.contains(&ch)
                 && let Some(v) = m.constant()
@@ -772,6 +793,22 @@ mod tests {
     use super::*;
 
     const HEAD: &str = "[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"V\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nmass = { value = 1.0, unit = \"kg\" }\nS = { value = 1.0, unit = \"m2\" }\nrho = { value = 1.0, unit = \"kg/m3\" }\n";
+
+    /// Issue 10 #10: a channel with `scale = 0` is identically its offset, so the parameters it
+    /// feeds could never be identified; the mapping is refused, naming file, line and key.
+    #[test]
+    fn errors_zero_scale_names_file_line_and_key() {
+        let text = format!("{HEAD}q = {{ column = \"q\", unit = \"deg/s\", scale = 0.0 }}\n");
+        let e = Mapping::from_toml_str(&text, "m.toml").unwrap_err().to_string();
+        assert!(e.starts_with("m.toml: channel `q`: line 10: `scale = 0`"), "{e}");
+        assert!(e.contains("scale must be non-zero"), "{e}");
+        let text = HEAD.replace("unit = \"s\"", "unit = \"s\"\nscale = -0.0");
+        let e = Mapping::from_toml_str(&text, "m.toml").unwrap_err().to_string();
+        assert!(e.contains("m.toml: channel `time`") && e.contains("non-zero"), "{e}");
+        // Any non-zero scale (a sign flip) is still accepted.
+        let text = format!("{HEAD}q = {{ column = \"q\", unit = \"deg/s\", scale = -1e-300 }}\n");
+        assert!(Mapping::from_toml_str(&text, "m.toml").is_ok());
+    }
 
     #[test]
     fn errors_unknown_channel_names_file_line_and_key() {

@@ -193,8 +193,12 @@ impl Default for History {
 }
 
 impl History {
-    /// Default bound on the points kept (≈ 20 MB for 32 parameters with σ).
-    pub const MAX_POINTS: usize = 20_000;
+    /// Default bound on the points kept: 4,000, the most a figure draws per series
+    /// (`plot.rs`), ≈ 4 MB for 32 parameters with σ. The figure's copies of the history are of
+    /// the same size, so the whole live run stays well under 64 MB (measured over 24 h at
+    /// 100 Hz: docs/reliability.md); the settling time's resolution is then the stride, e.g.
+    /// 2,048 samples (20 s at 100 Hz) after 24 h.
+    pub const MAX_POINTS: usize = 4_000;
 
     /// An empty history keeping at most `limit` (≥ 2) points before decimating.
     pub fn with_limit(limit: usize) -> Self {

@@ -182,6 +182,8 @@ pub fn load_scenario(path: &Path) -> anyhow::Result<SimScenario> {
 /// # Errors
 /// TOML errors (with line and column) naming the file.
 pub fn parse_scenario(text: &str, path: &Path) -> anyhow::Result<SimScenario> {
+    let file = path.display().to_string();
+    crate::scenario_kind::check(text, &file, crate::scenario_kind::ScenarioKind::Sim)?;
     toml::from_str(text).with_context(|| format!("scenario `{}`", path.display()))
 }
 
@@ -469,7 +471,7 @@ mod tests {
 
     fn scenario(extra: &str, actuators: &str, duration_s: f64) -> SimScenario {
         let text = format!(
-            "[aircraft]\nxcg = 0.30\nactuators = \"{actuators}\"\n[trim]\nalt_ft = 20000.0\nvt_fps = 675.0\n[run]\nduration_s = {duration_s}\ndt_s = 0.01\nseed = 1\n{extra}"
+            "kind = \"sim\"\n[aircraft]\nxcg = 0.30\nactuators = \"{actuators}\"\n[trim]\nalt_ft = 20000.0\nvt_fps = 675.0\n[run]\nduration_s = {duration_s}\ndt_s = 0.01\nseed = 1\n{extra}"
         );
         toml::from_str(&text).unwrap()
     }

@@ -17,7 +17,7 @@
 //! | `theil_u` | `sqrt(mean e²) / (sqrt(mean y²) + sqrt(mean ŷ²))` (Theil's inequality coefficient U1; 0 perfect, 1 worst; Jategaonkar ch. 10 takes < 0.3 as adequate) |
 //! | `ljung_box` | `Q = N (N+2) Σ_{k=1}^{h} ρ_k² / (N − k)`, `p = P(χ²_h > Q)`; `h = min(20, ⌊N/4⌋)` lags (Ljung & Box, Biometrika 65, 1978; Box & Jenkins). `white` = `p ≥ 0.05` |
 //! | `input_correlation` | per input `u`: `max_{|k|≤L} |ρ_eu(k)|`, `ρ_eu(k) = Σ_t (e_t−ē)(u_{t+k}−ū) / sqrt(Σ(e−ē)² Σ(u−ū)²)`, `L = min(20, ⌊N/4⌋)`, against the 95 % white-noise band `1.96/√N`; `within_band` when below it |
-//! | `prediction_interval` | `ŷ_t ± 2 sqrt(x_tᵀ P x_t + s²)` (parameter covariance `P` and residual variance `s²`; Klein & Morelli §5.5); `fraction_inside` of the samples (≈ 0.954 for a correct model with Gaussian white residuals) |
+//! | `prediction_interval` | `ŷ_t ± 2 sqrt(x_tᵀ P x_t + s²)` (parameter covariance `P` and residual variance `s²` — on a second record the fitted record's mean square residual; Klein & Morelli §5.5); `fraction_inside` of the samples (≈ 0.954 for a correct model with Gaussian white residuals) |
 //!
 //! Lagged sums (`ρ_k`, `ρ_eu`) never cross a segment boundary (a gap between manoeuvres).
 
@@ -119,6 +119,9 @@ pub struct OutputData<'a> {
     /// `None` when the method gives no covariance (the interval then has the residual
     /// variance only).
     pub y_hat_var: Option<&'a [f64]>,
+    /// The residual variance the interval uses: the fit's own (mean square residual of the
+    /// fitted record) when validating on a second record; `None`: this record's `s²`.
+    pub residual_var: Option<f64>,
     /// Segment lengths (sum `N`); lagged sums stay within a segment. Empty: one segment.
     pub segments: &'a [usize],
     /// Inputs `(name, u)`, each length `N`.
@@ -410,11 +413,12 @@ pub fn validate(d: &OutputData<'_>) -> Result<OutputValidation, ValidationError>
         .iter()
         .filter_map(|(u_name, u)| input_correlation(u_name, &e, u, d.segments, h))
         .collect();
-    let prediction_interval = (s2 > 0.0).then(|| {
+    let s2_interval = d.residual_var.filter(|v| v.is_finite() && *v >= 0.0).unwrap_or(s2);
+    let prediction_interval = (s2_interval > 0.0).then(|| {
         let var_p = |t: usize| d.y_hat_var.map_or(0.0, |v| v[t].max(0.0));
         let (mut inside, mut width, mut share) = (0usize, 0.0, 0.0);
         for (t, et) in e.iter().enumerate() {
-            let var = var_p(t) + s2;
+            let var = var_p(t) + s2_interval;
             let hw = 2.0 * var.sqrt();
             inside += usize::from(et.abs() <= hw);
             width += hw;
@@ -467,6 +471,7 @@ mod tests {
             y,
             y_hat,
             y_hat_var: None,
+            residual_var: None,
             segments: &[],
             inputs: &[],
         }

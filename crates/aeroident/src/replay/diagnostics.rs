@@ -318,6 +318,7 @@ mod tests {
             ..Default::default()
         };
         let mut rls = Rls::new(st, RlsConfig::default()).unwrap();
+        let mut rec = Recorder::default();
         for i in 0..400 {
             let t = i as f64 * 0.02;
             let q = 0.1 * (2.1 * t).sin();
@@ -336,6 +337,7 @@ mod tests {
                 ..Default::default()
             };
             rls.update(&s).unwrap();
+            rec.push(&s);
         }
         let ours = coefficient_conditions(&rls)[0].condition_number.unwrap();
         let theirs = rls.condition_number(Coefficient::Cm).unwrap();
@@ -343,6 +345,24 @@ mod tests {
         assert!(ours > 100.0, "{ours}");
         let pairs = strong_correlations(&rls);
         assert!(pairs.iter().any(|c| c.a == "Cm_q" && c.b == "Cm_alphadot" && c.rho < -0.9));
+        // The record's own measures: the information matrix XᵀX of the same samples gives
+        // the same condition number as the RLS covariance (its prior is negligible), and the
+        // regressors q̂ and α̇̂ are collinear (r ≈ +0.99); the matrix's ρ equals the pair's.
+        let e = rls.estimates();
+        let values: Vec<Option<f64>> = (0..e.n).map(|i| e.value(i)).collect();
+        let id = identifiability(&st, &|i, j| rls.covariance(i, j), &rec, &values);
+        let data = id.coefficients[0].data_condition_number.unwrap();
+        assert!((data - theirs).abs() < 0.02 * theirs, "{data} vs {theirs}");
+        assert!(
+            id.collinear_regressors.iter().any(|c| c.a == "Cm_q" && c.b == "Cm_alphadot" && c.rho > 0.9),
+            "{:?}",
+            id.collinear_regressors
+        );
+        let rho = id.correlation_matrix.rho[2][3].unwrap();
+        let pair = pairs.iter().find(|c| c.a == "Cm_q" && c.b == "Cm_alphadot").unwrap();
+        assert!((rho - pair.rho).abs() < 1e-12);
+        assert!(id.not_identified.is_empty());
+        assert_eq!(id.excitation[0].regressor_std, 0.0, "the bias regressor is constant");
     }
 
     #[test]

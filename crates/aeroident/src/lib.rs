@@ -17,7 +17,7 @@ pub mod plot;
 /// Proof-of-concept experiments (thesis §4.1): scenarios, simulation loop, outputs, report.
 pub mod poc;
 pub mod replay;
-/// Model validation metrics: fit, residual whiteness, input correlation, prediction intervals.
-pub mod validation;
 /// Open-loop F-16 simulation: trim → inputs, gusts, turbulence → sensors → CSV and figures.
 pub mod sim;
+/// Model validation metrics: fit, residual whiteness, input correlation, prediction intervals.
+pub mod validation;

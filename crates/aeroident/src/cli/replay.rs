@@ -125,8 +125,8 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     }
     let validation_on = match (&args.validate_on, outcome.diverged()) {
         (Some(path), false) => {
-            let file = std::fs::File::open(path)
-                .with_context(|| format!("opening {}", path.display()))?;
+            let file =
+                std::fs::File::open(path).with_context(|| format!("opening {}", path.display()))?;
             let name = path.display().to_string();
             let reader = FlightDataReader::new(std::io::BufReader::new(file), &name, &mapping)?;
             Some(crate::replay::validate_on(reader, &mapping, &opts, &outcome)?)
@@ -172,16 +172,11 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     }
     // The end-of-run diagnostics (sign plausibility, filter consistency, collinear
     // regressors); the record warnings were printed as they arose.
-    for w in outcome
-        .summary
-        .warnings
-        .iter()
-        .filter(|w| {
-            w.contains("sign a conventional")
-                || w.starts_with("normalised innovation")
-                || w.starts_with("collinear regressors")
-        })
-    {
+    for w in outcome.summary.warnings.iter().filter(|w| {
+        w.contains("sign a conventional")
+            || w.starts_with("normalised innovation")
+            || w.starts_with("collinear regressors")
+    }) {
         eprintln!("warning: {w}");
     }
     if let Some(e) = diverged_error(&outcome, args.estimator.name()) {
@@ -211,12 +206,20 @@ pub fn validation_block(v: &crate::replay::prediction::ValidationReport) -> Stri
     let opt = |x: Option<f64>, p: usize| x.map_or("—".to_string(), |x| format!("{x:.p$}"));
     for o in &v.outputs {
         let lb = o.ljung_box.as_ref().map_or("—".into(), |l| {
-            format!("Q({})={:.0} p={:.2}{}", l.lags, l.q, l.p_value, if l.white { "" } else { " (coloured)" })
+            format!(
+                "Q({})={:.0} p={:.2}{}",
+                l.lags,
+                l.q,
+                l.p_value,
+                if l.white { "" } else { " (coloured)" }
+            )
         });
         let xc: Vec<String> = o
             .input_correlation
             .iter()
-            .map(|c| format!("{} {:.2}{}", c.input, c.max_abs_rho, if c.within_band { "" } else { "*" }))
+            .map(|c| {
+                format!("{} {:.2}{}", c.input, c.max_abs_rho, if c.within_band { "" } else { "*" })
+            })
             .collect();
         let pi = o
             .prediction_interval
@@ -322,8 +325,7 @@ fn execute_batch(
             std::fs::File::open(path).with_context(|| format!("opening {}", path.display()))?;
         let name = path.display().to_string();
         let reader = FlightDataReader::new(std::io::BufReader::new(file), &name, mapping)?;
-        outcome.summary.validation_on =
-            Some(crate::replay::batch::validate_on(reader, &outcome)?);
+        outcome.summary.validation_on = Some(crate::replay::batch::validate_on(reader, &outcome)?);
     }
     eprintln!("model: {}", outcome.model.name);
     crate::cli::print_stdout(&outcome.result.to_string())?;

@@ -354,7 +354,9 @@ mod tests {
         let data = id.coefficients[0].data_condition_number.unwrap();
         assert!((data - theirs).abs() < 0.02 * theirs, "{data} vs {theirs}");
         assert!(
-            id.collinear_regressors.iter().any(|c| c.a == "Cm_q" && c.b == "Cm_alphadot" && c.rho > 0.9),
+            id.collinear_regressors
+                .iter()
+                .any(|c| c.a == "Cm_q" && c.b == "Cm_alphadot" && c.rho > 0.9),
             "{:?}",
             id.collinear_regressors
         );

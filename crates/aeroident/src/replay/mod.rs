@@ -293,7 +293,10 @@ pub struct SummaryDocument<'a> {
 
 impl ReplayOutcome {
     /// The `summary.json` document, with the validation on a second record if given.
-    pub fn document<'a>(&'a self, validation_on: Option<&'a ValidationReport>) -> SummaryDocument<'a> {
+    pub fn document<'a>(
+        &'a self,
+        validation_on: Option<&'a ValidationReport>,
+    ) -> SummaryDocument<'a> {
         SummaryDocument {
             summary: &self.summary,
             identifiability: self.identifiability.as_ref(),

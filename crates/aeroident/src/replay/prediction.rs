@@ -382,7 +382,8 @@ mod tests {
     /// lowers the fit to the value computed by hand.
     #[test]
     fn analytic_equation_error_prediction() {
-        let st = ModelStructure::empty().with(Coefficient::Cm, &[Term::Bias, Term::Alpha, Term::De]);
+        let st =
+            ModelStructure::empty().with(Coefficient::Cm, &[Term::Bias, Term::Alpha, Term::De]);
         let mut rec = Recorder::default();
         let truth = |s: &AirDataSample| 0.1 - 0.8 * s.alpha_rad - 1.2 * s.de_rad.unwrap();
         let mut ys = Vec::new();
@@ -398,7 +399,10 @@ mod tests {
             &rec,
             &st,
             &[Some(0.1), Some(-0.8), Some(-1.2)],
-            &none, "x", None);
+            &none,
+            "x",
+            None,
+        );
         let fit = r.outputs[0].fit_percent.unwrap();
         assert!((fit - 100.0).abs() < 1e-6, "{fit}");
         assert_eq!(r.outputs[0].input_correlation[0].input, "de");
@@ -408,8 +412,14 @@ mod tests {
         let r = validate_coefficients(&rec, &st, &[Some(0.1), None, Some(-1.2)], &none, "x", None);
         assert!(r.outputs.is_empty() && r.notes[0].contains("Cm_alpha not identified"));
         // Cm_alpha off by 0.1: residual e = −0.1 α' (α' = α … the prediction uses −0.9 α).
-        let r =
-            validate_coefficients(&rec, &st, &[Some(0.1), Some(-0.9), Some(-1.2)], &none, "x", None);
+        let r = validate_coefficients(
+            &rec,
+            &st,
+            &[Some(0.1), Some(-0.9), Some(-1.2)],
+            &none,
+            "x",
+            None,
+        );
         let y: Vec<f64> = ys.iter().map(|v| v.0).collect();
         let e: Vec<f64> = ys.iter().map(|v| 0.1 * v.1).collect();
         let ym = y.iter().sum::<f64>() / y.len() as f64;

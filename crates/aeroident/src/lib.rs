@@ -20,3 +20,5 @@ pub mod replay;
 pub mod scenario_kind;
 /// Open-loop F-16 simulation: trim → inputs, gusts, turbulence → sensors → CSV and figures.
 pub mod sim;
+/// Model validation metrics: fit, residual whiteness, input correlation, prediction intervals.
+pub mod validation;

@@ -56,12 +56,17 @@ fn errors_bad_corpus_counted_in_summary_with_exact_keys() {
         "coefficients",
         "correlations",
         "warnings",
+        "identifiability",
+        "validation",
+        "validation_on",
     ];
     let mut got = keys.clone();
     got.sort_unstable();
     expect.sort_unstable();
     assert_eq!(got, expect);
     assert_eq!(v["estimator"], "rls");
+    assert!(v["validation_on"].is_null(), "no --validate-on");
+    assert_eq!(v["validation"]["used_for_fit"], true);
     assert_eq!(v["model"], "longitudinal");
     assert_eq!(v["status"], "initialising");
     assert_eq!(v["samples_read"], 12);

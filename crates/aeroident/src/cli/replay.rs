@@ -6,6 +6,7 @@
 //!                  [--model longitudinal|lateral|six-axis|FILE]
 //!                  [--estimator rls|ftr|ekf|smpe|smpe-corrected|gradient|oe] [--forgetting λ]
 //!                  [--derivatives auto|differentiate] [--diff-window N] [--realtime]
+//!                  [--validate-on <data2.csv>]
 //! ```
 //! Writes `<dir>/estimates.csv`, `<dir>/summary.json` and `<dir>/estimates.png` (estimates with
 //! ±2σ). With `-` the record is read from stdin and one CSV line of estimates per sample is
@@ -18,6 +19,12 @@
 //!
 //! The log format is `--format`, else the file's extension, else CSV
 //! ([`aeroident_io::log`]; `docs/mapping.md` tells how columns are named in each).
+//!
+//! Every summary has `identifiability` and `validation` (the model's fit to the record:
+//! RMSE, bias with 95 % interval, fit %, R², Theil's U, Ljung–Box, residual–input correlation,
+//! ±2σ prediction intervals; `docs/validation.md`), printed as a short block on stderr.
+//! `--validate-on FILE2` applies the final estimates to a second record (same mapping) and
+//! reports the same metrics there under `validation_on`.
 
 use crate::estimators::EstimatorKind;
 use crate::plot::{LineKind, Panel, Series, render_panels_png};
@@ -63,6 +70,10 @@ pub struct ReplayArgs {
     /// Pace the replay at the record's own sample rate.
     #[arg(long)]
     pub realtime: bool,
+    /// A second record (same mapping) not used for the fit: the final estimates are applied
+    /// to it and the validation metrics reported under `validation_on` in the summary.
+    #[arg(long, value_name = "FILE2")]
+    pub validate_on: Option<PathBuf>,
 }
 
 fn announce(line: &str) {
@@ -117,7 +128,18 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     if let Some(f) = csv_file {
         f.commit()?;
     }
-    let summary_text = serde_json::to_string_pretty(&outcome.summary)?;
+    let validation_on = match (&args.validate_on, outcome.diverged()) {
+        (Some(path), false) => {
+            let name = path.display().to_string();
+            let (reader, notes) = open_log_with_notes(&name, None, &mapping)?;
+            for n in &notes {
+                eprintln!("note: {n}");
+            }
+            Some(crate::replay::validate_on(reader, &mapping, &opts, &outcome)?)
+        }
+        _ => None,
+    };
+    let summary_text = serde_json::to_string_pretty(&outcome.document(validation_on.as_ref()))?;
     match &args.out {
         Some(dir) => {
             let o = out_dir.as_mut().context("internal: output directory not open")?;
@@ -151,14 +173,16 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
             pairs.join(", ")
         );
     }
-    // The end-of-run diagnostics (sign plausibility, filter consistency); the record warnings
-    // were printed as they arose.
-    for w in outcome
-        .summary
-        .warnings
-        .iter()
-        .filter(|w| w.contains("sign a conventional") || w.starts_with("normalised innovation"))
-    {
+    for v in outcome.validation.iter().chain(validation_on.iter()) {
+        eprint!("{}", validation_block(v));
+    }
+    // The end-of-run diagnostics (sign plausibility, filter consistency, collinear
+    // regressors); the record warnings were printed as they arose.
+    for w in outcome.summary.warnings.iter().filter(|w| {
+        w.contains("sign a conventional")
+            || w.starts_with("normalised innovation")
+            || w.starts_with("collinear regressors")
+    }) {
         eprintln!("warning: {w}");
     }
     if let Some(e) = diverged_error(&outcome, args.estimator.name()) {
@@ -171,6 +195,62 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// The console block of a validation report: one line per output.
+pub fn validation_block(v: &crate::replay::prediction::ValidationReport) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let what = if v.used_for_fit { "validation on the fitted record" } else { "validation on" };
+    let _ = writeln!(
+        s,
+        "{what} {} ({}; {} samples):",
+        v.data,
+        v.outputs.first().map_or("-", |o| o.prediction.as_str()),
+        v.samples
+    );
+    let opt = |x: Option<f64>, p: usize| x.map_or("—".to_string(), |x| format!("{x:.p$}"));
+    for o in &v.outputs {
+        let lb = o.ljung_box.as_ref().map_or("—".into(), |l| {
+            format!(
+                "Q({})={:.0} p={:.2}{}",
+                l.lags,
+                l.q,
+                l.p_value,
+                if l.white { "" } else { " (coloured)" }
+            )
+        });
+        let xc: Vec<String> = o
+            .input_correlation
+            .iter()
+            .map(|c| {
+                format!("{} {:.2}{}", c.input, c.max_abs_rho, if c.within_band { "" } else { "*" })
+            })
+            .collect();
+        let pi = o
+            .prediction_interval
+            .as_ref()
+            .map_or("—".into(), |p| format!("{:.0} %", 100.0 * p.fraction_inside));
+        let _ = writeln!(
+            s,
+            "  {:<11} fit {:>6} %  R² {:>6}  rmse {:.3e}  bias {:+.2e} [{:+.2e}, {:+.2e}]  U {}  {}  ρ(e,u) {}  in ±2σ {}",
+            o.name,
+            opt(o.fit_percent, 1),
+            opt(o.r_squared, 3),
+            o.rmse,
+            o.bias,
+            o.bias_ci95[0],
+            o.bias_ci95[1],
+            opt(o.theil_u, 3),
+            lb,
+            if xc.is_empty() { "—".into() } else { xc.join(", ") },
+            pi
+        );
+    }
+    for n in &v.notes {
+        let _ = writeln!(s, "  note: {n}");
+    }
+    s
 }
 
 /// The error message for a diverged estimator (`None` if it did not diverge).
@@ -241,9 +321,24 @@ fn execute_batch(
     for n in &notes {
         eprintln!("note: {n}");
     }
-    let outcome = crate::replay::batch::fit_record(reader, mapping, model)?;
+    let mut outcome = crate::replay::batch::fit_record(reader, mapping, model)?;
+    if let Some(path) = &args.validate_on {
+        let name = path.display().to_string();
+        let (reader, notes) = open_log_with_notes(&name, None, mapping)?;
+        for n in &notes {
+            eprintln!("note: {n}");
+        }
+        outcome.summary.validation_on = Some(crate::replay::batch::validate_on(reader, &outcome)?);
+    }
     eprintln!("model: {}", outcome.model.name);
     crate::cli::print_stdout(&outcome.result.to_string())?;
+    let s = &outcome.summary;
+    for v in std::iter::once(&s.validation).chain(s.validation_on.iter()) {
+        eprint!("{}", validation_block(v));
+    }
+    for w in &s.warnings {
+        eprintln!("warning: {w}");
+    }
     let text = serde_json::to_string_pretty(&outcome.summary)?;
     match &args.out {
         Some(dir) => {

@@ -28,6 +28,7 @@
 //! end of the record, within `max(5 % of |final|, 2 σ_final)` of its final value (σ_final = 0
 //! where the method gives none); `null` if the final estimate is not identified.
 
+pub mod arrays;
 pub mod batch;
 pub mod derivatives;
 pub mod diagnostics;

@@ -1,14 +1,15 @@
 //! Conversions between Python objects and the library's types: the sample's channels by name,
 //! and JSON documents (`serde_json::Value`) as Python dicts/lists.
 
-use aeroident_estimators::{AircraftConstants, AirDataSample};
+use aeroident_estimators::{AirDataSample, AircraftConstants};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use crate::err;
 
 /// A getter and a setter of one optional channel of [`AirDataSample`].
-type OptField = (&'static str, fn(&AirDataSample) -> Option<f64>, fn(&mut AirDataSample, Option<f64>));
+type OptField =
+    (&'static str, fn(&AirDataSample) -> Option<f64>, fn(&mut AirDataSample, Option<f64>));
 
 /// The required channels of a sample (SI): time, airspeed, angle of attack, dynamic pressure.
 pub const REQUIRED: [&str; 4] = ["t_s", "vt_mps", "alpha_rad", "qbar_pa"];
@@ -22,9 +23,27 @@ macro_rules! opt_fields {
     };
 }
 opt_fields!(
-    beta_rad, p_rad_s, q_rad_s, r_rad_s, pdot_rad_s2, qdot_rad_s2, rdot_rad_s2, alphadot_rad_s,
-    phi_rad, theta_rad, psi_rad, ax_mps2, ay_mps2, az_mps2, de_rad, da_rad, dr_rad, thrust_n,
-    throttle, thrust_moment_nm, rho_kgpm3,
+    beta_rad,
+    p_rad_s,
+    q_rad_s,
+    r_rad_s,
+    pdot_rad_s2,
+    qdot_rad_s2,
+    rdot_rad_s2,
+    alphadot_rad_s,
+    phi_rad,
+    theta_rad,
+    psi_rad,
+    ax_mps2,
+    ay_mps2,
+    az_mps2,
+    de_rad,
+    da_rad,
+    dr_rad,
+    thrust_n,
+    throttle,
+    thrust_moment_nm,
+    rho_kgpm3,
 );
 
 /// A getter and a setter of one constant of [`AircraftConstants`] (`None` = absent).
@@ -72,14 +91,13 @@ pub trait Source {
     fn get(&self, key: &str) -> PyResult<Option<f64>>;
 }
 
-/// Builds one sample from `src`, taking absent constants from `constants`.
+/// Builds one sample from `src`, taking the constants it lacks from `constants`.
 ///
 /// # Errors
 /// A missing required channel or constant (`mass_kg`, `S_m2`), named.
 pub fn sample_from(
     src: &impl Source,
     constants: &AircraftConstants,
-    constants_given: bool,
     what: &dyn Fn() -> String,
 ) -> PyResult<AirDataSample> {
     let req = |k: &str| -> PyResult<f64> {
@@ -96,15 +114,14 @@ pub fn sample_from(
     for (k, _, set) in OPTIONAL {
         set(&mut s, src.get(k)?);
     }
-    for (k, get, set) in CONSTANTS {
+    // The sample's own constants win over the estimator's (`constants`, already copied).
+    for (k, _, set) in CONSTANTS {
         if let Some(v) = src.get(k)? {
             set(&mut s.constants, Some(v));
-        } else if !constants_given || get(constants).is_none() {
-            set(&mut s.constants, get(constants));
         }
     }
     for k in ["mass_kg", "S_m2"] {
-        let v = CONSTANTS.iter().find(|f| f.0 == k).map(|f| (f.1)(&s.constants)).flatten();
+        let v = CONSTANTS.iter().find(|f| f.0 == k).and_then(|f| (f.1)(&s.constants));
         if !v.is_some_and(f64::is_finite) {
             return Err(err(format!(
                 "{}: constant `{k}` is missing (give it in the sample or in constants=)",
@@ -124,7 +141,10 @@ impl Source for DictSource<'_, '_> {
             None => Ok(None),
             Some(v) if v.is_none() => Ok(None),
             Some(v) => Ok(present(v.extract::<f64>().map_err(|_| {
-                err(format!("sample key `{key}`: expected a number, got {}", v.repr().map_or_else(|_| "?".into(), |r| r.to_string())))
+                err(format!(
+                    "sample key `{key}`: expected a number, got {}",
+                    v.repr().map_or_else(|_| "?".into(), |r| r.to_string())
+                ))
             })?)),
         }
     }
@@ -134,9 +154,9 @@ impl Source for DictSource<'_, '_> {
 ///
 /// # Errors
 /// An unknown key (listing the known ones) or a non-number.
-pub fn constants_from(d: Option<&Bound<'_, PyDict>>) -> PyResult<(AircraftConstants, bool)> {
+pub fn constants_from(d: Option<&Bound<'_, PyDict>>) -> PyResult<AircraftConstants> {
     let mut c = AircraftConstants { mass_kg: f64::NAN, S_m2: f64::NAN, ..Default::default() };
-    let Some(d) = d else { return Ok((c, false)) };
+    let Some(d) = d else { return Ok(c) };
     for (k, v) in d.iter() {
         let k: String = k.extract()?;
         let Some(f) = CONSTANTS.iter().find(|f| f.0 == k) else {
@@ -146,7 +166,7 @@ pub fn constants_from(d: Option<&Bound<'_, PyDict>>) -> PyResult<(AircraftConsta
         let v: Option<f64> = if v.is_none() { None } else { present(v.extract()?) };
         (f.2)(&mut c, v);
     }
-    Ok((c, true))
+    Ok(c)
 }
 
 /// A JSON document as Python objects (numbers stay `f64`/`int` exactly; no text round trip).

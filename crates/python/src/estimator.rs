@@ -23,7 +23,6 @@ pub struct Estimator {
     kind: EstimatorKind,
     model: String,
     constants: AircraftConstants,
-    constants_given: bool,
     samples: usize,
 }
 
@@ -41,10 +40,10 @@ impl Estimator {
     ) -> PyResult<Self> {
         let k = estimator_kind(kind)?;
         let spec = model_spec(model)?;
-        let (constants, constants_given) = convert::constants_from(constants)?;
+        let constants = convert::constants_from(constants)?;
         let opts = EstimatorOptions { forgetting, sample_interval_s, parameter_walk_per_sqrt_s };
         let est = build(k, spec.structure, spec.priors, &opts).map_err(|e| err(e.to_string()))?;
-        Ok(Self { est, kind: k, model: spec.name, constants, constants_given, samples: 0 })
+        Ok(Self { est, kind: k, model: spec.name, constants, samples: 0 })
     }
 
     /// The method's name (`rls`, `ftr`, `ekf` …).
@@ -74,9 +73,8 @@ impl Estimator {
     /// Consumes one sample (a dict of SI channels; see `sample_keys()`).
     fn update(&mut self, sample: &Bound<'_, PyDict>) -> PyResult<()> {
         let n = self.samples;
-        let s = convert::sample_from(&DictSource(sample), &self.constants, self.constants_given, &|| {
-            format!("sample {n}")
-        })?;
+        let s =
+            convert::sample_from(&DictSource(sample), &self.constants, &|| format!("sample {n}"))?;
         let r = self.est.update(&s).map(|_| ());
         match r {
             Ok(_) => {

@@ -114,7 +114,8 @@ fn linearize<'py>(
     let a = Array2::from_shape_fn((N_STATES, N_STATES), |(i, j)| lin.a[(i, j)]);
     let b = Array2::from_shape_fn((N_STATES, 4), |(i, j)| lin.b[(i, j)]);
     let ev = eigenvalues(&lin.a);
-    let ev = Array2::from_shape_fn((ev.len(), 2), |(i, j)| if j == 0 { ev[i].re } else { ev[i].im });
+    let ev =
+        Array2::from_shape_fn((ev.len(), 2), |(i, j)| if j == 0 { ev[i].re } else { ev[i].im });
     let d = PyDict::new(py);
     d.set_item("a", a.into_pyarray(py))?;
     d.set_item("b", b.into_pyarray(py))?;

@@ -121,20 +121,18 @@ fn montecarlo_runs<'py>(
 
 /// Runs `start..stop` exactly as `aeroident::montecarlo::run_all` runs each index.
 fn chunk(sc: &Scenario, seed: u64, start: u64, stop: u64) -> Vec<RunResult> {
-        (start..stop)
-            .into_par_iter()
-            .map(|i| {
-                let s = seeded_scenario(sc, seed, i);
-                match aeroident::aircraft::run(&s) {
-                    Ok(out) => run_result(i, s.sensors.seed, &out),
-                    Err(e) => RunResult {
-                        index: i,
-                        sensor_seed: s.sensors.seed,
-                        outcome: Err(e.to_string()),
-                    },
+    (start..stop)
+        .into_par_iter()
+        .map(|i| {
+            let s = seeded_scenario(sc, seed, i);
+            match aeroident::aircraft::run(&s) {
+                Ok(out) => run_result(i, s.sensors.seed, &out),
+                Err(e) => {
+                    RunResult { index: i, sensor_seed: s.sensors.seed, outcome: Err(e.to_string()) }
                 }
-            })
-            .collect()
+            }
+        })
+        .collect()
 }
 
 /// The statistics of `aeroident montecarlo --json` from every run's result (any order, each
@@ -201,7 +199,10 @@ fn field<'a>(v: &'a Value, k: &str) -> PyResult<&'a Value> {
 fn opt_f64(v: &Value, k: &str) -> PyResult<Option<f64>> {
     match field(v, k)? {
         Value::Null => Ok(None),
-        x => x.as_f64().map(Some).ok_or_else(|| err(format!("per-run result: `{k}` is not a number"))),
+        x => x
+            .as_f64()
+            .map(Some)
+            .ok_or_else(|| err(format!("per-run result: `{k}` is not a number"))),
     }
 }
 

@@ -230,7 +230,7 @@ fn replay_arrays_py<'py>(
     sample_interval_s: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let kind = estimator_kind(estimator)?;
-    let (consts, given) = convert::constants_from(constants)?;
+    let consts = convert::constants_from(constants)?;
     let keys = convert::all_keys();
     let mut views: Vec<(String, PyReadonlyArray1<'py, f64>)> = Vec::new();
     for (k, v) in arrays.iter() {
@@ -238,9 +238,9 @@ fn replay_arrays_py<'py>(
         if !keys.contains(&k.as_str()) {
             continue; // row numbers, rejections and the like
         }
-        let a: PyReadonlyArray1<'py, f64> = v.extract().map_err(|_| {
-            err(format!("arrays[`{k}`]: expected a 1-D float64 numpy array"))
-        })?;
+        let a: PyReadonlyArray1<'py, f64> = v
+            .extract()
+            .map_err(|_| err(format!("arrays[`{k}`]: expected a 1-D float64 numpy array")))?;
         views.push((k, a));
     }
     for r in REQUIRED {
@@ -265,7 +265,7 @@ fn replay_arrays_py<'py>(
     let mut samples = Vec::with_capacity(n);
     for k in 0..n {
         let src = RowSource { cols: &slices, k };
-        samples.push(convert::sample_from(&src, &consts, given, &|| format!("arrays row {k}"))?);
+        samples.push(convert::sample_from(&src, &consts, &|| format!("arrays row {k}"))?);
     }
     let Some(first) = samples.first() else {
         return Err(err("arrays: no samples"));
@@ -293,9 +293,7 @@ fn replay_arrays_py<'py>(
     });
     let (arrays, refused, diverged) = result.map_err(err)?;
     if let Some(msg) = diverged {
-        return Err(err(format!(
-            "{msg}; its estimates are not a result"
-        )));
+        return Err(err(format!("{msg}; its estimates are not a result")));
     }
     let d = arrays_dict(py, arrays)?;
     d.set_item("model", model_name)?;

@@ -74,9 +74,7 @@ impl Estimator for Recorder {
         self.inner.structure()
     }
     fn update(&mut self, sample: &AirDataSample) -> Result<&Estimates, EstimatorError> {
-        if let Err(err) = self.inner.update(sample) {
-            return Err(err);
-        }
+        self.inner.update(sample)?;
         let e = self.inner.estimates();
         if e.status != Status::Diverged {
             self.out.borrow_mut().record(sample.t_s, e);
@@ -142,7 +140,8 @@ pub fn replay_samples(
         let r = rec.update(&s).map(|_| ()).map_err(|e| e.to_string());
         if rec.estimates().status == Status::Diverged {
             let why = r.err().map_or(String::new(), |e| format!(" ({e})"));
-            diverged = Some(format!("estimator `{}` diverged at t = {} s{why}", rec.method(), s.t_s));
+            diverged =
+                Some(format!("estimator `{}` diverged at t = {} s{why}", rec.method(), s.t_s));
             break;
         }
         if r.is_err() {
@@ -211,8 +210,9 @@ mod tests {
     #[test]
     fn replay_samples_records_every_accepted_sample_and_recovers_the_truth() {
         let spec = ModelSpec::preset("longitudinal").expect("preset");
-        let est = build(EstimatorKind::Rls, spec.structure, spec.priors, &EstimatorOptions::default())
-            .expect("rls");
+        let est =
+            build(EstimatorKind::Rls, spec.structure, spec.priors, &EstimatorOptions::default())
+                .expect("rls");
         let (a, refused, diverged) = replay_samples(est, samples());
         assert_eq!((refused, diverged), (0, None));
         let n = a.names.len();

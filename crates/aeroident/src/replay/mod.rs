@@ -35,6 +35,7 @@
 //! [`validate_on`] does the same on a second record not used for the fit. The record's
 //! identifiability measures are [`diagnostics::identifiability`].
 
+pub mod arrays;
 pub mod batch;
 pub mod derivatives;
 pub mod diagnostics;

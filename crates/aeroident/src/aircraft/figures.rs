@@ -77,6 +77,7 @@ pub fn write_figures(out: &RunOutput, od: &mut OutputDir) -> Result<(), ReportEr
                 title: surface.into(),
                 y_label: format!("{sym} (deg)"),
                 series: vec![series(surface, t, v, LineKind::Solid)],
+                ..Default::default()
             });
         }
     }
@@ -89,6 +90,7 @@ pub fn write_figures(out: &RunOutput, od: &mut OutputDir) -> Result<(), ReportEr
             out.controls.iter().map(|c| c[0]).collect(),
             LineKind::Solid,
         )],
+        ..Default::default()
     });
     controls.push(Panel {
         title: "wind (NED)".into(),
@@ -100,6 +102,7 @@ pub fn write_figures(out: &RunOutput, od: &mut OutputDir) -> Result<(), ReportEr
                 series(n, t, out.wind_ned_fps.iter().map(|w| w[k]).collect(), LineKind::Solid)
             })
             .collect(),
+        ..Default::default()
     });
     od.write_path("controls.png", |p| {
         render_panels_png(p, &format!("{name}: control commands"), &controls, 1000, 220)
@@ -139,7 +142,12 @@ pub fn write_figures(out: &RunOutput, od: &mut OutputDir) -> Result<(), ReportEr
             Quantity::Increment => format!("Δ{}", p.name()),
             Quantity::Derivative => p.name().to_string(),
         };
-        conv.push(Panel { title: title.clone(), y_label: format!("{title} (per rad)"), series: s });
+        conv.push(Panel {
+            title: title.clone(),
+            y_label: format!("{title} (per rad)"),
+            series: s,
+            ..Default::default()
+        });
     }
     if !conv.is_empty() {
         od.write_path("convergence.png", |p| {
@@ -176,7 +184,12 @@ pub fn write_figures(out: &RunOutput, od: &mut OutputDir) -> Result<(), ReportEr
                 LineKind::Solid,
             ));
         }
-        track.push(Panel { title: TRACKED_NAMES[k].into(), y_label: (*unit).into(), series: s });
+        track.push(Panel {
+            title: TRACKED_NAMES[k].into(),
+            y_label: (*unit).into(),
+            series: s,
+            ..Default::default()
+        });
     }
     od.write_path("tracking.png", |p| {
         render_panels_png(p, &format!("{name}: reference vs estimated aircraft"), &track, 1000, 220)

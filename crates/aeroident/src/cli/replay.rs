@@ -216,7 +216,12 @@ pub fn plot_estimates(path: &Path, title: &str, h: &History) -> anyhow::Result<(
                     });
                 }
             }
-            Panel { title: (*name).to_string(), y_label: (*name).to_string(), series }
+            Panel {
+                title: (*name).to_string(),
+                y_label: (*name).to_string(),
+                series,
+                ..Default::default()
+            }
         })
         .collect();
     render_panels_png(path, title, &panels, 1000, 180)?;

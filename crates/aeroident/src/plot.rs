@@ -13,6 +13,7 @@
 //!   over the last [`CONVERGED_FRACTION`] of the time axis, plus each series's last value and
 //!   every reference line, with a 12 % margin. A start-up transient outside that range is
 //!   clipped at the frame (the line leaves and re-enters the panel), it never sets the scale.
+//!   Panels of signals ([`Panel::signals`]) use the 0.2–99.8 % quantiles of the whole record.
 //! - **gaps**: a non-finite value (an estimate that does not exist yet, `None`) breaks the
 //!   line; nothing is drawn as 0.
 //! - **bands** ([`Band`]): shaded areas, e.g. ±2σ around an estimate, in the colour of their
@@ -122,6 +123,9 @@ pub struct Panel {
     pub bands: Vec<Band>,
     /// Horizontal reference lines.
     pub hlines: Vec<HLine>,
+    /// The panel shows signals over the whole record (measured vs model, residuals), not
+    /// converging estimates: the y-range covers the whole time axis and lines are 1 px.
+    pub signals: bool,
 }
 
 /// Most points drawn per series; longer series are decimated by a fixed stride.
@@ -185,7 +189,11 @@ pub fn y_range(panel: &Panel, t_range: (f64, f64)) -> (f64, f64) {
     if is_noise_panel(panel) {
         return (-1.0, 1.0);
     }
-    let t_from = t_range.0 + (1.0 - CONVERGED_FRACTION) * (t_range.1 - t_range.0);
+    let t_from = if panel.signals {
+        f64::NEG_INFINITY
+    } else {
+        t_range.0 + (1.0 - CONVERGED_FRACTION) * (t_range.1 - t_range.0)
+    };
     let window = |t: &[f64], v: &[f64], out: &mut Vec<f64>| {
         out.extend(
             t.iter().zip(v).filter(|(t, v)| **t >= t_from && v.is_finite()).map(|(_, v)| *v),
@@ -211,7 +219,8 @@ pub fn y_range(panel: &Panel, t_range: (f64, f64)) -> (f64, f64) {
     let (mut lo, mut hi) = if vals.is_empty() {
         (f64::INFINITY, f64::NEG_INFINITY)
     } else {
-        (quantile(&vals, 0.01), quantile(&vals, 0.99))
+        let q = if panel.signals { 0.002 } else { 0.01 };
+        (quantile(&vals, q), quantile(&vals, 1.0 - q))
     };
     for v in must {
         lo = lo.min(v);
@@ -460,7 +469,7 @@ fn draw_panels<DB: DrawingBackend>(
             let stride = b.t_s.len().div_ceil(MAX_POINTS).max(1);
             for poly in band_polygons(b, y_lo, y_hi, stride) {
                 chart
-                    .draw_series(std::iter::once(Polygon::new(poly, color.mix(0.18).filled())))
+                    .draw_series(std::iter::once(Polygon::new(poly, color.mix(0.14).filled())))
                     .map_err(|x| e(&x))?;
             }
         }
@@ -486,13 +495,10 @@ fn draw_panels<DB: DrawingBackend>(
             } else {
                 s.values.clone()
             };
-            // 1.5 px solid; plotters joins thick polylines with miters, which spike where a
-            // signal reverses sharply (chattering estimates), so no thicker.
-            let style = ShapeStyle::from(&color).stroke_width(if s.kind == LineKind::Solid {
-                2
-            } else {
-                1
-            });
+            // Estimates 2 px, signals and dashed lines 1 px; plotters joins thick polylines
+            // with miters, which spike where a signal reverses sharply, so no thicker.
+            let width = if s.kind == LineKind::Solid && !panel.signals { 2 } else { 1 };
+            let style = ShapeStyle::from(&color).stroke_width(width);
             for line in clip_polylines(&s.t_s, &values, y_lo, y_hi, stride) {
                 match s.kind {
                     LineKind::Solid => chart.draw_series(LineSeries::new(line, style)),

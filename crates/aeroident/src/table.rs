@@ -36,12 +36,13 @@ pub fn fmt_estimate(est: Option<f64>, sigma: Option<f64>) -> String {
     }
 }
 
-fn table_with(header: &[&str]) -> Table {
+/// A table with `header`; columns `1..numeric_to` right-aligned (numbers), the rest left.
+fn table_with(header: &[&str], numeric_to: usize) -> Table {
     let mut t = Table::new();
     t.load_preset(UTF8_FULL_CONDENSED).set_header(header.to_vec());
     // A fixed layout (no terminal probing): the same text on a terminal, a pipe and in CI.
     t.set_content_arrangement(comfy_table::ContentArrangement::Disabled);
-    for i in 1..header.len() {
+    for i in 1..numeric_to.min(header.len()) {
         if let Some(c) = t.column_mut(i) {
             c.set_cell_alignment(CellAlignment::Right);
         }
@@ -55,7 +56,8 @@ fn table_with(header: &[&str]) -> Table {
 /// The parameter table and (if any) the fit-quality table of `r`, with the title above and
 /// the notes below, as text for the console.
 pub fn render(r: &Results) -> String {
-    let mut t = table_with(&["parameter", "estimate ± σ", &r.reference_label, "error %", "status"]);
+    let mut t =
+        table_with(&["parameter", "estimate ± σ", &r.reference_label, "error %", "status"], 4);
     for row in &r.rows {
         t.add_row(vec![
             row.name.clone(),
@@ -67,7 +69,7 @@ pub fn render(r: &Results) -> String {
     }
     let mut s = format!("{}\n{t}\n", r.title);
     if !r.fit.is_empty() {
-        let mut f = table_with(&["coefficient", "samples", "residual RMS", "R²", "Theil's U"]);
+        let mut f = table_with(&["coefficient", "samples", "residual RMS", "R²", "Theil's U"], 5);
         for q in &r.fit {
             f.add_row(vec![
                 q.coefficient.clone(),

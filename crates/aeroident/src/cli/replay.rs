@@ -6,8 +6,9 @@
 //!                  [--estimator rls|ftr|ekf|smpe|smpe-corrected|gradient|oe] [--forgetting λ]
 //!                  [--derivatives auto|differentiate] [--diff-window N] [--realtime]
 //! ```
-//! Writes `<dir>/estimates.csv`, `<dir>/summary.json` and `<dir>/estimates.png` (estimates with
-//! ±2σ). With `-` the record is read from stdin and one CSV line of estimates per sample is
+//! Writes `<dir>/estimates.csv`, `<dir>/summary.json`, `<dir>/estimates.{png,svg}` (estimates
+//! with shaded ±2σ), `<dir>/fit.{png,svg}` (model vs measured) and `<dir>/report.html`
+//! ([`crate::report::replay`]), and prints the results table ([`crate::table`]) on stdout. With `-` the record is read from stdin and one CSV line of estimates per sample is
 //! written to stdout (a live feed: buffered, flushed per line with `--realtime`; the history
 //! kept for the figure and the settling times is bounded, see `History`); the summary then goes to stderr unless
 //! `--out` is given. The model used is printed on stderr. A diverged estimator is an error
@@ -16,8 +17,7 @@
 //! `summary.json` (estimates, coloured-residual and Cramér–Rao σ, residual RMS).
 
 use crate::estimators::EstimatorKind;
-use crate::plot::{LineKind, Panel, Series, render_panels_png};
-use crate::replay::{DerivativeSource, History, Pacing, ReplayOptions, ReplayOutcome, replay};
+use crate::replay::{DerivativeSource, Pacing, ReplayOptions, ReplayOutcome, replay};
 use aeroident_io::{FlightDataReader, Mapping, ModelSpec};
 use anyhow::Context;
 use std::io::Write;
@@ -121,7 +121,8 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
                 .file_name()
                 .map_or(args.data.clone(), |n| n.to_string_lossy().into_owned());
             let title = format!("{name} — {} — {}", args.estimator.name(), outcome.model.name);
-            o.write_path("estimates.png", |p| plot_estimates(p, &title, &outcome.history))?;
+            let results = crate::report::replay::write(&args, &outcome, &title, &[], o)?;
+            crate::cli::print_stdout(&crate::table::render(&results))?;
             eprintln!(
                 "{}: {} samples read, {} rejected, {:.0} samples/s, status {}; wrote {}",
                 args.data,
@@ -181,51 +182,6 @@ pub fn diverged_error(outcome: &ReplayOutcome, estimator: &str) -> Option<String
     Some(format!(
         "estimator `{estimator}` diverged{at}; its estimates are not a result (summary written with status `diverged`)"
     ))
-}
-
-/// Figure: one panel per parameter, the estimate (solid) and ±2σ (dashed) where known.
-///
-/// # Errors
-/// Plot errors naming the file.
-pub fn plot_estimates(path: &Path, title: &str, h: &History) -> anyhow::Result<()> {
-    let panels: Vec<Panel> = h
-        .names
-        .iter()
-        .enumerate()
-        .map(|(i, name)| {
-            let v: Vec<f64> = h.values.iter().map(|v| v[i].unwrap_or(f64::NAN)).collect();
-            let mut series = vec![Series {
-                label: (*name).to_string(),
-                t_s: h.t_s.clone(),
-                values: v.clone(),
-                kind: LineKind::Solid,
-            }];
-            if h.sigmas.iter().any(|s| s[i].is_some()) {
-                for (label, sign) in [("+2σ", 1.0), ("−2σ", -1.0)] {
-                    let band = h
-                        .sigmas
-                        .iter()
-                        .zip(v.iter())
-                        .map(|(s, v)| s[i].map_or(f64::NAN, |s| v + sign * 2.0 * s))
-                        .collect();
-                    series.push(Series {
-                        label: label.into(),
-                        t_s: h.t_s.clone(),
-                        values: band,
-                        kind: LineKind::Dashed,
-                    });
-                }
-            }
-            Panel {
-                title: (*name).to_string(),
-                y_label: (*name).to_string(),
-                series,
-                ..Default::default()
-            }
-        })
-        .collect();
-    render_panels_png(path, title, &panels, 1000, 180)?;
-    Ok(())
 }
 
 /// `--estimator oe`: the batch output-error fit of the whole record.

@@ -256,6 +256,9 @@ pub struct ReplayOutcome {
     pub history: History,
     /// The summary document.
     pub summary: ReplaySummary,
+    /// The samples fed to the estimator (bounded), for the fit quality and the
+    /// model-vs-measured figure.
+    pub samples: crate::results::SampleLog,
 }
 
 impl ReplayOutcome {
@@ -438,6 +441,7 @@ pub fn replay_with<R: Read>(
     let mut run: Option<Running> = None;
     let mut model: Option<(ModelSpec, bool)> = None;
     let mut history = History::default();
+    let mut fed = crate::results::SampleLog::default();
     let mut busy = Duration::ZERO;
     let mut ready = Vec::new();
     let mut unused = Vec::new();
@@ -575,6 +579,7 @@ pub fn replay_with<R: Read>(
                 }
             }
             history.push(s.t_s, values, sigmas);
+            fed.push(&s);
         }
         if diverged {
             break;
@@ -687,7 +692,14 @@ pub fn replay_with<R: Read>(
         warnings,
     };
     let differentiated = r.stage.supplies().to_vec();
-    Ok(ReplayOutcome { model: spec, model_defaulted: defaulted, differentiated, history, summary })
+    Ok(ReplayOutcome {
+        model: spec,
+        model_defaulted: defaulted,
+        differentiated,
+        history,
+        summary,
+        samples: fed,
+    })
 }
 
 /// The given model, or the richest preset the first sample supports.

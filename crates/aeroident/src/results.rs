@@ -50,6 +50,16 @@ impl ParameterRow {
             },
         };
         Self { name: name.into(), estimate, sigma, reference, status }
+            .with_reference_noise_as_zero()
+    }
+
+    /// A reference of magnitude below [`crate::plot::ZERO_THRESHOLD`] is round-off of an exact
+    /// 0 (e.g. a simulator's 1e-44 truth): it is 0, and no error % is formed against it.
+    fn with_reference_noise_as_zero(mut self) -> Self {
+        if self.reference.is_some_and(|r| r.abs() < crate::plot::ZERO_THRESHOLD) {
+            self.reference = Some(0.0);
+        }
+        self
     }
 
     /// `100 (estimate − reference) / |reference|`, %; `None` without both or for a zero
@@ -258,6 +268,8 @@ mod tests {
         let r = ParameterRow::new("Cm_q", None, None, Some(-20.0), None);
         assert_eq!((r.status.as_str(), r.error_pct()), ("not identified", None));
         assert_eq!(ParameterRow::new("x", Some(1.0), None, Some(0.0), None).error_pct(), None);
+        let r = ParameterRow::new("Cl_0", Some(6e-5), None, Some(3.4e-44), None);
+        assert_eq!((r.reference, r.error_pct()), (Some(0.0), None));
         assert_eq!(
             ParameterRow::new("x", Some(1.0), None, None, Some("diverged")).status,
             "diverged"

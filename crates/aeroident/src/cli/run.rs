@@ -96,9 +96,34 @@ pub fn execute(args: RunArgs) -> anyhow::Result<()> {
     };
     let dir = args.out.unwrap_or(default_dir);
     let summary = run_one(&sc, &dir, !args.no_figures)?;
-    let _ =
-        writeln!(std::io::stdout().lock(), "{}wrote {}", report::table(&summary), dir.display());
+    let _ = writeln!(std::io::stdout().lock(), "{}wrote {}", results_text(&summary), dir.display());
     Ok(())
+}
+
+/// The console text of one run: the header line and target lines of [`report::table`] around
+/// one [`crate::table`] per estimator.
+fn results_text(summary: &Summary) -> String {
+    let mut s = format!(
+        "scenario {}  (realtime factor {:.0}×, {})\n",
+        summary.scenario, summary.realtime_factor, summary.solver
+    );
+    for r in crate::report::run::results(summary) {
+        s.push_str(&crate::table::render(&r));
+    }
+    for t in &summary.targets {
+        s.push_str(&format!(
+            "{}: {}/{} primary derivatives meet the targets{}\n",
+            t.estimator,
+            t.met,
+            t.total,
+            if t.missed.is_empty() {
+                String::new()
+            } else {
+                format!(" (missed: {})", t.missed.join(", "))
+            }
+        ));
+    }
+    s
 }
 
 /// Runs every scenario in `scenarios_dir` (in parallel) into `out/<name>/` and writes

@@ -8,8 +8,10 @@
 //! closed-loop `run` experiment.
 
 pub mod replay;
+pub mod run;
 
 use crate::outdir::{OutputDir, OutputError};
+use crate::plot::{Panel, PlotError, render_panels_png, render_panels_svg};
 use crate::results::Results;
 use crate::table::{fmt_estimate, fmt_sig};
 use std::fmt::Write as _;
@@ -38,6 +40,26 @@ pub struct Report {
     pub figures: Vec<Figure>,
     /// Warnings of the run.
     pub warnings: Vec<String>,
+}
+
+/// Renders `panels` (see [`crate::plot`]) to `<stem>.png` and `<stem>.svg` in `od` and returns
+/// the SVG as a report [`Figure`] with `caption`.
+///
+/// # Errors
+/// Figure or output errors, naming the file.
+pub fn write_figure<E: From<PlotError> + From<OutputError>>(
+    od: &mut OutputDir,
+    stem: &str,
+    title: &str,
+    caption: &str,
+    panels: &[Panel],
+    size_px: (u32, u32),
+) -> Result<Figure, E> {
+    let (w, ph) = size_px;
+    od.write_path(&format!("{stem}.png"), |p| render_panels_png(p, title, panels, w, ph))?;
+    let svg = render_panels_svg(&format!("{stem}.svg"), title, panels, w, ph)?;
+    od.write_bytes(&format!("{stem}.svg"), svg.as_bytes())?;
+    Ok(Figure { caption: caption.to_string(), svg })
 }
 
 /// The settings every report carries: the command line as given and the tool's version.

@@ -4,10 +4,10 @@
 //! reference lines) and `fit.{png,svg}` (measured coefficient vs the model's prediction from
 //! the final estimates, and the residual).
 
-use super::{Figure, Report, common_settings};
+use super::{Report, common_settings, write_figure};
 use crate::cli::replay::ReplayArgs;
 use crate::outdir::OutputDir;
-use crate::plot::{Band, HLine, LineKind, Panel, Series, render_panels_png, render_panels_svg};
+use crate::plot::{Band, HLine, LineKind, Panel, Series};
 use crate::replay::{History, ReplayOutcome};
 use crate::results::{CoefficientFit, ParameterRow, Results, coefficient_fits};
 
@@ -213,25 +213,25 @@ pub fn write(
     let mut figures = Vec::new();
     let est = estimate_panels(&outcome.history, references);
     if !est.is_empty() {
-        let t = format!("{title}: estimates");
-        od.write_path("estimates.png", |p| render_panels_png(p, &t, &est, 1000, 180))?;
-        let svg = render_panels_svg("estimates.svg", &t, &est, 1000, 180)?;
-        od.write_bytes("estimates.svg", svg.as_bytes())?;
-        figures.push(Figure {
-            caption: "Estimates over the record: a gap until identified, shaded ±2σ, dashed reference where the model file gives one; y-range from the converged part.".into(),
-            svg,
-        });
+        figures.push(write_figure::<anyhow::Error>(
+            od,
+            "estimates",
+            &format!("{title}: estimates"),
+            "Estimates over the record: a gap until identified, shaded ±2σ, dashed reference where the model file gives one; y-range from the converged part.",
+            &est,
+            (1000, 180),
+        )?);
     }
     let fit = if outcome.diverged() { Vec::new() } else { fit_panels(&fits(outcome)) };
     if !fit.is_empty() {
-        let t = format!("{title}: model vs measured");
-        od.write_path("fit.png", |p| render_panels_png(p, &t, &fit, 1000, 200))?;
-        let svg = render_panels_svg("fit.svg", &t, &fit, 1000, 200)?;
-        od.write_bytes("fit.svg", svg.as_bytes())?;
-        figures.push(Figure {
-            caption: "Measured coefficient against the model's prediction from the final estimates, and the residual.".into(),
-            svg,
-        });
+        figures.push(write_figure::<anyhow::Error>(
+            od,
+            "fit",
+            &format!("{title}: model vs measured"),
+            "Measured coefficient against the model's prediction from the final estimates, and the residual.",
+            &fit,
+            (1000, 200),
+        )?);
     }
     let report = Report {
         title: format!("aeroident replay — {title}"),

@@ -16,6 +16,7 @@ pub mod outdir;
 pub mod plot;
 /// Proof-of-concept experiments (thesis §4.1): scenarios, simulation loop, outputs, report.
 pub mod poc;
+pub mod progress;
 pub mod replay;
 pub mod report;
 pub mod results;

@@ -195,7 +195,13 @@ pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
         None => Scenario::from_toml(DEFAULT_SCENARIO, "<embedded scenarios/default.toml>")?,
     };
     anyhow::ensure!(args.runs >= 1, "--runs must be at least 1");
-    let c = campaign(&sc, args.runs, args.seed).map_err(anyhow::Error::msg)?;
+    let spin = crate::progress::spinner(&format!(
+        "Monte Carlo `{}`: {} runs in parallel",
+        sc.name, args.runs
+    ));
+    let c = campaign(&sc, args.runs, args.seed);
+    spin.finish_and_clear();
+    let c = c.map_err(anyhow::Error::msg)?;
     if args.json {
         for e in &c.estimators {
             for f in &e.failed_runs {

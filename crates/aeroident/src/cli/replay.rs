@@ -93,6 +93,18 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     // Buffered: one write per 64 KiB, not per sample (the replay flushes per line only when
     // paced in real time).
     let mut stdout_lock = std::io::BufWriter::with_capacity(1 << 16, std::io::stdout().lock());
+    // Progress on stderr when it is a terminal: bytes of the file, and a status line with the
+    // samples, the record time and the first estimates (the live view of `--realtime`).
+    let bar = match std::fs::metadata(&args.data) {
+        Ok(m) if !live => crate::progress::bytes_bar(
+            m.len(),
+            &Path::new(&args.data)
+                .file_name()
+                .map_or(args.data.clone(), |n| n.to_string_lossy().into()),
+        ),
+        _ => crate::progress::spinner("replay (live)"),
+    };
+    let mut status = crate::progress::StatusSink::new(bar.clone());
     let mut sinks: Vec<&mut dyn Write> = Vec::new();
     if let Some(f) = csv_file.as_mut() {
         sinks.push(f);
@@ -100,15 +112,24 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     if live {
         sinks.push(&mut stdout_lock);
     }
+    if crate::progress::enabled() {
+        sinks.push(&mut status);
+    }
     let outcome = if live {
         let reader = FlightDataReader::new(std::io::stdin().lock(), "-", &mapping)?;
-        replay(reader, &mapping, &opts, sinks)?
+        replay(reader, &mapping, &opts, sinks)
     } else {
         let file =
             std::fs::File::open(&args.data).with_context(|| format!("opening {}", args.data))?;
-        let reader = FlightDataReader::new(std::io::BufReader::new(file), &args.data, &mapping)?;
-        replay(reader, &mapping, &opts, sinks)?
+        let reader = FlightDataReader::new(
+            std::io::BufReader::new(bar.wrap_read(file)),
+            &args.data,
+            &mapping,
+        )?;
+        replay(reader, &mapping, &opts, sinks)
     };
+    bar.finish_and_clear();
+    let outcome = outcome?;
     if let Some(f) = csv_file {
         f.commit()?;
     }

@@ -95,7 +95,11 @@ pub fn execute(args: RunArgs) -> anyhow::Result<()> {
         ),
     };
     let dir = args.out.unwrap_or(default_dir);
-    let summary = run_one(&sc, &dir, !args.no_figures)?;
+    let spin =
+        crate::progress::spinner(&format!("run `{}` ({} s simulated)", sc.name, sc.duration_s));
+    let summary = run_one(&sc, &dir, !args.no_figures);
+    spin.finish_and_clear();
+    let summary = summary?;
     let _ = writeln!(std::io::stdout().lock(), "{}wrote {}", results_text(&summary), dir.display());
     Ok(())
 }
@@ -142,13 +146,17 @@ pub fn run_all(scenarios_dir: &Path, out: &Path, figures: bool) -> anyhow::Resul
     let scenarios = files.iter().map(|f| Scenario::from_path(f)).collect::<Result<Vec<_>, _>>()?;
     check_names(scenarios.iter().zip(&files).map(|(s, f)| (s.name.as_str(), f.as_path())))?;
     let mut top = OutputDir::open(out)?;
-    let results: Vec<(Scenario, Summary)> = scenarios
+    let bar = crate::progress::count_bar(scenarios.len() as u64, "scenarios");
+    let results: anyhow::Result<Vec<(Scenario, Summary)>> = scenarios
         .into_par_iter()
         .map(|sc| {
             let s = run_one(&sc, &out.join(&sc.name), figures)?;
+            bar.inc(1);
             Ok((sc, s))
         })
-        .collect::<anyhow::Result<_>>()?;
+        .collect();
+    bar.finish_and_clear();
+    let results = results?;
     let mut md = report::markdown(&results);
     md.push_str(&evidence(&results.iter().map(|(sc, _)| sc.clone()).collect::<Vec<_>>())?);
     top.write_bytes("report.md", md.as_bytes())?;

@@ -41,49 +41,64 @@ pub struct MonteCarloArgs {
     pub no_figures: bool,
 }
 
-fn opt(v: Option<f64>, prec: usize) -> String {
-    v.map_or("—".into(), |x| format!("{x:.prec$e}"))
-}
-
-/// The readable table of a campaign.
+/// The readable table of a campaign (`comfy-table`): per estimator and parameter the truth,
+/// the mean estimate's bias and error %, the scatter against the mean σ and the Cramér–Rao
+/// bound, the ±2σ coverage and the median time to ±10 %.
 pub fn table(c: &Campaign) -> String {
+    use crate::table::fmt_sig;
     let mut s = String::new();
     let _ = writeln!(
         s,
         "Monte Carlo `{}`: {} runs, seed {}, {:.1} s wall on {} threads",
         c.scenario, c.runs, c.seed, c.wall_s, c.threads
     );
-    let _ = writeln!(
-        s,
-        "{:<15} {:<10} {:>11} {:>10} {:>9} {:>9} {:>9} {:>6} {:>9} {:>8}",
+    let mut t = comfy_table::Table::new();
+    t.load_preset(comfy_table::presets::UTF8_FULL_CONDENSED).set_header(vec![
         "estimator",
         "param",
         "truth",
         "bias",
+        "error %",
         "scatter",
         "mean σ",
         "σ_CRB",
         "cov2σ",
         "scat/CRB",
-        "t10 med"
-    );
+        "t10 med",
+    ]);
+    for i in 2..11 {
+        if let Some(col) = t.column_mut(i) {
+            col.set_cell_alignment(comfy_table::CellAlignment::Right);
+        }
+    }
     for e in &c.estimators {
         for p in &e.parameters {
-            let _ = writeln!(
-                s,
-                "{:<15} {:<10} {:>11} {:>10} {:>9} {:>9} {:>9} {:>6} {:>9} {:>8}",
-                e.name,
+            let err = match (p.bias, p.truth) {
+                (Some(b), Some(tr)) if tr.abs() > crate::plot::ZERO_THRESHOLD => {
+                    format!("{:+.1}", 100.0 * b / tr.abs())
+                }
+                _ => "—".into(),
+            };
+            t.add_row(vec![
+                e.name.clone(),
                 format!("{}{}", p.name, if p.primary { "*" } else { "" }),
-                opt(p.truth, 3),
-                opt(p.bias, 2),
-                opt(p.scatter, 2),
-                opt(p.mean_sigma, 2),
-                opt(p.crb_sigma, 2),
+                fmt_sig(
+                    p.truth.map(|x| if x.abs() < crate::plot::ZERO_THRESHOLD { 0.0 } else { x }),
+                    4,
+                ),
+                fmt_sig(p.bias, 2),
+                err,
+                fmt_sig(p.scatter, 2),
+                fmt_sig(p.mean_sigma, 2),
+                fmt_sig(p.crb_sigma, 2),
                 p.coverage_2sigma.map_or("—".into(), |x| format!("{:.0} %", 100.0 * x)),
                 p.scatter.zip(p.crb_sigma).map_or("—".into(), |(a, b)| format!("{:.1}", a / b)),
                 p.median_time_to_10pct_s.map_or("never".into(), |t| format!("{t:.2} s")),
-            );
+            ]);
         }
+    }
+    let _ = writeln!(s, "{t}");
+    for e in &c.estimators {
         let _ = writeln!(s, "{}: {} runs used, {} failed", e.name, e.runs_ok, e.failed_runs.len());
         for f in &e.failed_runs {
             let _ = writeln!(s, "  run {} failed: {}", f.run, f.reason);
@@ -94,7 +109,7 @@ pub fn table(c: &Campaign) -> String {
     }
     let _ = writeln!(
         s,
-        "* = primary derivative; t10 med = median time to stay within ±10 % (never: ≥ half the runs never do)"
+        "* = primary derivative; error % = bias of the mean estimate / |truth|; t10 med = median time to stay within ±10 % (never: ≥ half the runs never do)"
     );
     s
 }

@@ -16,4 +16,4 @@ pub mod units;
 pub use error::{FlightDataError, RowProblem};
 pub use flight_data::{FlightDataReader, RecordEvent, Rejection};
 pub use mapping::{Channel, Mapping};
-pub use model_file::{ModelFileError, ModelSpec};
+pub use model_file::{ModelFileError, ModelSpec, ParamReference};

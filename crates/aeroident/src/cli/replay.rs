@@ -142,7 +142,13 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
                 .file_name()
                 .map_or(args.data.clone(), |n| n.to_string_lossy().into_owned());
             let title = format!("{name} — {} — {}", args.estimator.name(), outcome.model.name);
-            let results = crate::report::replay::write(&args, &outcome, &title, &[], o)?;
+            let results = crate::report::replay::write(
+                &args,
+                &outcome,
+                &title,
+                &crate::report::replay::model_references(&outcome),
+                o,
+            )?;
             crate::cli::print_stdout(&crate::table::render(&results))?;
             eprintln!(
                 "{}: {} samples read, {} rejected, {:.0} samples/s, status {}; wrote {}",

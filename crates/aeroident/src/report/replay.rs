@@ -11,7 +11,7 @@ use crate::plot::{Band, HLine, LineKind, Panel, Series};
 use crate::replay::{History, ReplayOutcome};
 use crate::results::{CoefficientFit, ParameterRow, Results, coefficient_fits};
 
-/// A published reference value of a parameter.
+/// A published reference value of a parameter (from the model file's `[reference.X]`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Reference {
     /// Parameter name, e.g. `Cm_alpha`.
@@ -20,6 +20,20 @@ pub struct Reference {
     pub value: f64,
     /// Where it comes from.
     pub source: String,
+}
+
+/// The references of the model `outcome` identified.
+pub fn model_references(outcome: &ReplayOutcome) -> Vec<Reference> {
+    outcome
+        .model
+        .references
+        .iter()
+        .map(|r| Reference {
+            name: r.param.name().to_string(),
+            value: r.value,
+            source: r.source.clone(),
+        })
+        .collect()
 }
 
 /// The results of `outcome`: one row per parameter and the fit quality per coefficient.
@@ -46,8 +60,12 @@ pub fn results(outcome: &ReplayOutcome, title: &str, references: &[Reference]) -
         fits(outcome).iter().filter_map(CoefficientFit::quality).collect()
     };
     let mut notes = Vec::new();
-    let mut sources: Vec<&str> = references.iter().map(|r| r.source.as_str()).collect();
-    sources.dedup();
+    let mut sources: Vec<&str> = Vec::new();
+    for r in references {
+        if !sources.contains(&r.source.as_str()) {
+            sources.push(&r.source);
+        }
+    }
     for s in sources {
         notes.push(format!("reference: {s}"));
     }

@@ -12,7 +12,7 @@ pub mod estimators;
 pub mod metrics;
 pub mod montecarlo;
 pub mod outdir;
-/// Stacked time-series panels rendered to PNG.
+/// Stacked time-series panels rendered to PNG and SVG.
 pub mod plot;
 /// Proof-of-concept experiments (thesis §4.1): scenarios, simulation loop, outputs, report.
 pub mod poc;

@@ -10,20 +10,20 @@
 //!
 //! What each panel shows, so a converged estimate is readable:
 //! - **y-range from the converged part**: the 1–99 % quantiles of every series, band and line
-//!   over the last [`CONVERGED_FRACTION`] of the time axis, plus each series's last value and
+//!   over the last [`CONVERGED_FRACTION`](crate::plot::CONVERGED_FRACTION) of the time axis, plus each series's last value and
 //!   every reference line, with a 12 % margin. A start-up transient outside that range is
 //!   clipped at the frame (the line leaves and re-enters the panel), it never sets the scale.
-//!   Panels of signals ([`Panel::signals`]) use the 0.2–99.8 % quantiles of the whole record.
+//!   Panels of signals ([`Panel::signals`](crate::plot::Panel::signals)) use the 0.2–99.8 % quantiles of the whole record.
 //! - **gaps**: a non-finite value (an estimate that does not exist yet, `None`) breaks the
 //!   line; nothing is drawn as 0.
-//! - **bands** ([`Band`]): shaded areas, e.g. ±2σ around an estimate, in the colour of their
+//! - **bands** ([`Band`](crate::plot::Band)): shaded areas, e.g. ±2σ around an estimate, in the colour of their
 //!   series.
-//! - **reference lines** ([`HLine`]): horizontal lines across the panel (published value,
+//! - **reference lines** ([`HLine`](crate::plot::HLine)): horizontal lines across the panel (published value,
 //!   truth).
 //! - **legend outside the data**: in a column to the right of each panel.
 //! - **ticks**: labels with as many decimals as the tick step needs, never `-0`; the label
 //!   area is as wide as the longest label.
-//! - **numerical noise**: a panel whose every value is below [`ZERO_THRESHOLD`] in magnitude
+//! - **numerical noise**: a panel whose every value is below [`ZERO_THRESHOLD`](crate::plot::ZERO_THRESHOLD) in magnitude
 //!   (e.g. 1e-27 round-off of a parameter that is exactly 0) is drawn as a flat line at 0 on
 //!   ±1, and its caption says so.
 
@@ -244,7 +244,7 @@ pub fn tick_label(x: f64, span: f64, magnitude: f64) -> String {
     }
     // Values within a millionth of a step of 0 are 0 (no "-0.000", no "1e-17").
     let x = if x.abs() < 1e-6 * step { 0.0 } else { x };
-    if magnitude >= 1e5 || magnitude < 1e-3 {
+    if !(1e-3..1e5).contains(&magnitude) {
         let digits = ((magnitude / step).log10().ceil().max(0.0) as usize + 1).min(6);
         if x == 0.0 {
             return "0".into();
@@ -271,7 +271,7 @@ fn clip_polylines(t: &[f64], v: &[f64], lo: f64, hi: f64, stride: usize) -> Vec<
     let n = t.len().min(v.len());
     let idx = (0..n)
         .step_by(stride.max(1))
-        .chain((n > 0 && (n - 1) % stride.max(1) != 0).then_some(n - 1));
+        .chain((n > 0 && !(n - 1).is_multiple_of(stride.max(1))).then_some(n - 1));
     for k in idx {
         let p = (t[k], v[k]);
         if !(p.0.is_finite() && p.1.is_finite()) {
@@ -333,7 +333,7 @@ fn band_polygons(b: &Band, lo: f64, hi: f64, stride: usize) -> Vec<Vec<(f64, f64
     };
     let idx = (0..n)
         .step_by(stride.max(1))
-        .chain((n > 0 && (n - 1) % stride.max(1) != 0).then_some(n - 1));
+        .chain((n > 0 && !(n - 1).is_multiple_of(stride.max(1))).then_some(n - 1));
     for k in idx {
         let (t, l, h) = (b.t_s[k], b.lo[k], b.hi[k]);
         if t.is_finite() && l.is_finite() && h.is_finite() {
@@ -862,6 +862,10 @@ mod tests {
         let (lo, hi) = y_range(&p, (0.0, 9.99));
         assert!(lo > 1.9 && lo < 1.99, "{lo}");
         assert!(hi > 2.05 && hi < 2.1, "{hi}");
+        // The same as signals (measured data): the whole record sets the range.
+        let p = Panel { signals: true, ..p };
+        let (lo, hi) = y_range(&p, (0.0, 9.99));
+        assert!(lo < -5e5 && hi > 5e5, "{lo} {hi}");
         // Round-off noise is a flat 0 on ±1.
         let p = Panel {
             series: vec![series(&t, t.iter().map(|t| 1e-27 * t.sin()).collect())],
@@ -930,6 +934,7 @@ mod tests {
                 hi: t.iter().map(|t| -0.9 + 0.1 / (1.0 + t)).collect(),
             }],
             hlines: vec![HLine { label: "reference".into(), value: -1.0 }],
+            signals: false,
         };
         let svg = render_panels_svg("fig.svg", "a title", &[p], 800, 250).unwrap();
         assert!(

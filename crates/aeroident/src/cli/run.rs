@@ -5,8 +5,9 @@
 //!   aileron and rudder, sensor noise, light turbulence, damage at 20 s; prints a table and
 //!   writes `./aeroident-out/`.
 //! - `aeroident run <scenario.toml> [--out DIR]` — one scenario: `timeseries.csv`,
-//!   `summary.json`, `controls.png`, `convergence.png`, `tracking.png` in `DIR`
-//!   (default `./aeroident-out/<name>`).
+//!   `summary.json`, `controls`, `convergence`, `tracking` (`.png` and `.svg`) and
+//!   `report.html` ([`crate::report::run`]) in `DIR` (default `./aeroident-out/<name>`); the
+//!   results table per estimator (estimate ± σ, truth, error %, status) on stdout.
 //! - `aeroident run --all <dir> [--out DIR]` — every `*.toml` in `<dir>` in parallel, one
 //!   sub-directory each, plus `DIR/report.md` (thesis versus ours).
 

@@ -1,7 +1,7 @@
 //! `report.html`: one self-contained page per run — the run's settings (command, files,
 //! mapping, estimator, structure, options, version), the results tables of
 //! [`crate::results`] and the figures inlined as SVG — written through
-//! [`OutputDir`](crate::outdir::OutputDir) like every other output. No script, no external
+//! [`OutputDir`] like every other output. No script, no external
 //! file, font or style sheet: the page opens offline in any browser.
 //!
 //! [`replay`] builds the results, figures and report of a `replay`; [`run`] those of the

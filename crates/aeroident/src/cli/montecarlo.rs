@@ -4,7 +4,8 @@
 //!
 //! - default: a table on stdout, `DIR/montecarlo.json` (statistics, failed runs, CRB notes),
 //!   `DIR/runs.json` (every run's final results), `DIR/histograms_<estimator>.png` (final
-//!   estimates of each primary derivative with the truth line) and `DIR/coverage.png`;
+//!   estimates of each primary derivative with the truth line), `DIR/coverage.png` and
+//!   `DIR/report.html` ([`crate::report::montecarlo`]);
 //!   `DIR` defaults to `./aeroident-out/montecarlo`.
 //! - `--json`: only the summary document of [`crate::montecarlo::json_summary`] on stdout (no
 //!   files); failed runs are listed on stderr.
@@ -228,6 +229,7 @@ pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
     }
     let dir = args.out.unwrap_or_else(|| PathBuf::from("aeroident-out").join("montecarlo"));
     write_outputs(&c, &dir, !args.no_figures)?;
+    crate::report::montecarlo::write(&c, &dir)?;
     super::print_stdout(&format!("{}wrote {}", table(&c), dir.display()))?;
     Ok(())
 }

@@ -7,6 +7,7 @@
 //! [`replay`] builds the results, figures and report of a `replay`; [`run`] those of the
 //! closed-loop `run` experiment.
 
+pub mod montecarlo;
 pub mod replay;
 pub mod run;
 
@@ -17,13 +18,45 @@ use crate::table::{fmt_estimate, fmt_sig};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
+/// Standard base64 (RFC 4648, with padding) of `bytes`, for PNG figures inlined as data URIs.
+pub fn base64(bytes: &[u8]) -> String {
+    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut o = String::with_capacity(bytes.len().div_ceil(3) * 4);
+    for c in bytes.chunks(3) {
+        let n = (u32::from(c[0]) << 16)
+            | (u32::from(*c.get(1).unwrap_or(&0)) << 8)
+            | u32::from(*c.get(2).unwrap_or(&0));
+        for k in 0..4 {
+            if k <= c.len() {
+                o.push(char::from(A[((n >> (18 - 6 * k)) & 63) as usize]));
+            } else {
+                o.push('=');
+            }
+        }
+    }
+    o
+}
+
+/// A PNG as an inline `<img>` (a data URI), usable as a [`Figure`]'s `svg` field: the page
+/// stays self-contained.
+pub fn png_figure(png: &[u8], alt: &str, caption: &str) -> Figure {
+    Figure {
+        caption: caption.to_string(),
+        svg: format!(
+            "<img alt=\"{}\" style=\"max-width:100%\" src=\"data:image/png;base64,{}\">",
+            escape(alt),
+            base64(png)
+        ),
+    }
+}
+
 /// One figure of the report: its SVG text (from [`crate::plot::render_panels_svg`]) and a
 /// caption.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Figure {
     /// Caption under the figure.
     pub caption: String,
-    /// The SVG document.
+    /// The SVG document (or an inline `<img>` from [`png_figure`]).
     pub svg: String,
 }
 
@@ -234,6 +267,22 @@ mod tests {
         assert!(h.contains("<figure><svg xmlns") && !h.contains("<?xml"));
         for external in ["<script", "src=", "href=", "@import", "url("] {
             assert!(!h.contains(external), "{external}");
+        }
+    }
+
+    /// RFC 4648 test vectors.
+    #[test]
+    fn base64_rfc4648_vectors() {
+        for (i, o) in [
+            ("", ""),
+            ("f", "Zg=="),
+            ("fo", "Zm8="),
+            ("foo", "Zm9v"),
+            ("foob", "Zm9vYg=="),
+            ("fooba", "Zm9vYmE="),
+            ("foobar", "Zm9vYmFy"),
+        ] {
+            assert_eq!(base64(i.as_bytes()), o);
         }
     }
 }

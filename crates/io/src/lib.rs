@@ -22,4 +22,4 @@ pub use error::{FlightDataError, RowProblem};
 pub use flight_data::{FlightDataReader, RecordEvent, Rejection};
 pub use log::{LogFormat, LogReader, open_log, open_log_with_notes};
 pub use mapping::{Channel, Mapping};
-pub use model_file::{ModelFileError, ModelSpec};
+pub use model_file::{ModelFileError, ModelSpec, ParamReference};

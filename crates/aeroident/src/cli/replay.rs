@@ -8,8 +8,9 @@
 //!                  [--derivatives auto|differentiate] [--diff-window N] [--realtime]
 //!                  [--validate-on <data2.csv>]
 //! ```
-//! Writes `<dir>/estimates.csv`, `<dir>/summary.json` and `<dir>/estimates.png` (estimates with
-//! ±2σ). With `-` the record is read from stdin and one CSV line of estimates per sample is
+//! Writes `<dir>/estimates.csv`, `<dir>/summary.json`, `<dir>/estimates.{png,svg}` (estimates
+//! with shaded ±2σ), `<dir>/fit.{png,svg}` (model vs measured) and `<dir>/report.html`
+//! ([`crate::report::replay`]), and prints the results table ([`crate::table`]) on stdout. With `-` the record is read from stdin and one CSV line of estimates per sample is
 //! written to stdout (a live feed: buffered, flushed per line with `--realtime`; the history
 //! kept for the figure and the settling times is bounded, see `History`); the summary then goes to stderr unless
 //! `--out` is given. The model used is printed on stderr. A diverged estimator is an error
@@ -27,9 +28,8 @@
 //! reports the same metrics there under `validation_on`.
 
 use crate::estimators::EstimatorKind;
-use crate::plot::{LineKind, Panel, Series, render_panels_png};
-use crate::replay::{DerivativeSource, History, Pacing, ReplayOptions, ReplayOutcome, replay};
-use aeroident_io::{LogFormat, Mapping, ModelSpec, open_log_with_notes};
+use crate::replay::{DerivativeSource, Pacing, ReplayOptions, ReplayOutcome, replay};
+use aeroident_io::{FlightDataReader, LogFormat, Mapping, ModelSpec, open_log_with_notes};
 use anyhow::Context;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -113,6 +113,18 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     // Buffered: one write per 64 KiB, not per sample (the replay flushes per line only when
     // paced in real time).
     let mut stdout_lock = std::io::BufWriter::with_capacity(1 << 16, std::io::stdout().lock());
+    // Progress on stderr when it is a terminal: bytes of the file, and a status line with the
+    // samples, the record time and the first estimates (the live view of `--realtime`).
+    let bar = match std::fs::metadata(&args.data) {
+        Ok(m) if !live => crate::progress::bytes_bar(
+            m.len(),
+            &Path::new(&args.data)
+                .file_name()
+                .map_or(args.data.clone(), |n| n.to_string_lossy().into()),
+        ),
+        _ => crate::progress::spinner("replay (live)"),
+    };
+    let mut status = crate::progress::StatusSink::new(bar.clone());
     let mut sinks: Vec<&mut dyn Write> = Vec::new();
     if let Some(f) = csv_file.as_mut() {
         sinks.push(f);
@@ -120,11 +132,32 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     if live {
         sinks.push(&mut stdout_lock);
     }
-    let (reader, notes) = open_log_with_notes(&args.data, args.format, &mapping)?;
-    for n in &notes {
-        eprintln!("note: {n}");
+    if crate::progress::enabled() {
+        sinks.push(&mut status);
     }
-    let outcome = replay(reader, &mapping, &opts, sinks)?;
+    let format = args
+        .format
+        .or_else(|| LogFormat::from_extension(Path::new(&args.data)))
+        .unwrap_or(LogFormat::Csv);
+    let outcome = if !live && format == LogFormat::Csv {
+        // The CSV file itself, read through the progress bar (what `open_log` opens for CSV).
+        let file =
+            std::fs::File::open(&args.data).with_context(|| format!("opening {}", args.data))?;
+        let reader = FlightDataReader::new(
+            std::io::BufReader::new(bar.wrap_read(file)),
+            &args.data,
+            &mapping,
+        )?;
+        replay(reader, &mapping, &opts, sinks)
+    } else {
+        let (reader, notes) = open_log_with_notes(&args.data, Some(format), &mapping)?;
+        for n in &notes {
+            eprintln!("note: {n}");
+        }
+        replay(reader, &mapping, &opts, sinks)
+    };
+    bar.finish_and_clear();
+    let outcome = outcome?;
     if let Some(f) = csv_file {
         f.commit()?;
     }
@@ -148,7 +181,14 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
                 .file_name()
                 .map_or(args.data.clone(), |n| n.to_string_lossy().into_owned());
             let title = format!("{name} — {} — {}", args.estimator.name(), outcome.model.name);
-            o.write_path("estimates.png", |p| plot_estimates(p, &title, &outcome.history))?;
+            let results = crate::report::replay::write(
+                &args,
+                &outcome,
+                &title,
+                &crate::report::replay::model_references(&outcome),
+                o,
+            )?;
+            crate::cli::print_stdout(&crate::table::render(&results))?;
             eprintln!(
                 "{}: {} samples read, {} rejected, {:.0} samples/s, status {}; wrote {}",
                 args.data,
@@ -266,46 +306,6 @@ pub fn diverged_error(outcome: &ReplayOutcome, estimator: &str) -> Option<String
     Some(format!(
         "estimator `{estimator}` diverged{at}; its estimates are not a result (summary written with status `diverged`)"
     ))
-}
-
-/// Figure: one panel per parameter, the estimate (solid) and ±2σ (dashed) where known.
-///
-/// # Errors
-/// Plot errors naming the file.
-pub fn plot_estimates(path: &Path, title: &str, h: &History) -> anyhow::Result<()> {
-    let panels: Vec<Panel> = h
-        .names
-        .iter()
-        .enumerate()
-        .map(|(i, name)| {
-            let v: Vec<f64> = h.values.iter().map(|v| v[i].unwrap_or(f64::NAN)).collect();
-            let mut series = vec![Series {
-                label: (*name).to_string(),
-                t_s: h.t_s.clone(),
-                values: v.clone(),
-                kind: LineKind::Solid,
-            }];
-            if h.sigmas.iter().any(|s| s[i].is_some()) {
-                for (label, sign) in [("+2σ", 1.0), ("−2σ", -1.0)] {
-                    let band = h
-                        .sigmas
-                        .iter()
-                        .zip(v.iter())
-                        .map(|(s, v)| s[i].map_or(f64::NAN, |s| v + sign * 2.0 * s))
-                        .collect();
-                    series.push(Series {
-                        label: label.into(),
-                        t_s: h.t_s.clone(),
-                        values: band,
-                        kind: LineKind::Dashed,
-                    });
-                }
-            }
-            Panel { title: (*name).to_string(), y_label: (*name).to_string(), series }
-        })
-        .collect();
-    render_panels_png(path, title, &panels, 1000, 180)?;
-    Ok(())
 }
 
 /// `--estimator oe`: the batch output-error fit of the whole record.

@@ -5,8 +5,9 @@
 //!   aileron and rudder, sensor noise, light turbulence, damage at 20 s; prints a table and
 //!   writes `./aeroident-out/`.
 //! - `aeroident run <scenario.toml> [--out DIR]` — one scenario: `timeseries.csv`,
-//!   `summary.json`, `controls.png`, `convergence.png`, `tracking.png` in `DIR`
-//!   (default `./aeroident-out/<name>`).
+//!   `summary.json`, `controls`, `convergence`, `tracking` (`.png` and `.svg`) and
+//!   `report.html` ([`crate::report::run`]) in `DIR` (default `./aeroident-out/<name>`); the
+//!   results table per estimator (estimate ± σ, truth, error %, status) on stdout.
 //! - `aeroident run --all [<dir>] [--out DIR]` — every `*.toml` in `<dir>` (default: the
 //!   shipped `scenarios/f16/`, found from any working directory) in parallel, one
 //!   sub-directory each, plus `DIR/report.md` (thesis versus ours); prints a one-screen
@@ -105,10 +106,39 @@ pub fn execute(args: RunArgs) -> anyhow::Result<()> {
         ),
     };
     let dir = args.out.unwrap_or(default_dir);
-    let summary = run_one(&sc, &dir, !args.no_figures)?;
-    let _ =
-        writeln!(std::io::stdout().lock(), "{}wrote {}", report::table(&summary), dir.display());
+    let spin =
+        crate::progress::spinner(&format!("run `{}` ({} s simulated)", sc.name, sc.duration_s));
+    let summary = run_one(&sc, &dir, !args.no_figures);
+    spin.finish_and_clear();
+    let summary = summary?;
+    let _ = writeln!(std::io::stdout().lock(), "{}wrote {}", results_text(&summary), dir.display());
     Ok(())
+}
+
+/// The console text of one run: the header line and target lines of [`report::table`] around
+/// one [`crate::table`] per estimator.
+fn results_text(summary: &Summary) -> String {
+    let mut s = format!(
+        "scenario {}  (realtime factor {:.0}×, {})\n",
+        summary.scenario, summary.realtime_factor, summary.solver
+    );
+    for r in crate::report::run::results(summary) {
+        s.push_str(&crate::table::render(&r));
+    }
+    for t in &summary.targets {
+        s.push_str(&format!(
+            "{}: {}/{} primary derivatives meet the targets{}\n",
+            t.estimator,
+            t.met,
+            t.total,
+            if t.missed.is_empty() {
+                String::new()
+            } else {
+                format!(" (missed: {})", t.missed.join(", "))
+            }
+        ));
+    }
+    s
 }
 
 /// Runs every scenario in `scenarios_dir` (in parallel) into `out/<name>/` and writes
@@ -131,13 +161,17 @@ pub fn run_all(
     let scenarios = files.iter().map(|f| Scenario::from_path(f)).collect::<Result<Vec<_>, _>>()?;
     check_names(scenarios.iter().zip(&files).map(|(s, f)| (s.name.as_str(), f.as_path())))?;
     let mut top = OutputDir::open(out)?;
-    let results: Vec<(Scenario, Summary)> = scenarios
+    let bar = crate::progress::count_bar(scenarios.len() as u64, "scenarios");
+    let results: anyhow::Result<Vec<(Scenario, Summary)>> = scenarios
         .into_par_iter()
         .map(|sc| {
             let s = run_one(&sc, &out.join(&sc.name), figures)?;
+            bar.inc(1);
             Ok((sc, s))
         })
-        .collect::<anyhow::Result<_>>()?;
+        .collect();
+    bar.finish_and_clear();
+    let results = results?;
     let mut md = report::markdown(&results);
     md.push_str(&evidence(&results.iter().map(|(sc, _)| sc.clone()).collect::<Vec<_>>())?);
     top.write_bytes("report.md", md.as_bytes())?;

@@ -279,6 +279,9 @@ pub struct ReplayOutcome {
     pub final_covariance: Vec<Option<f64>>,
     /// The samples fed to the estimator, as regressors and measured coefficients.
     pub recorder: Recorder,
+    /// The samples fed to the estimator (bounded), for the fit quality and the
+    /// model-vs-measured figure.
+    pub samples: crate::results::SampleLog,
 }
 
 /// `summary.json`: the [`ReplaySummary`] keys, then `identifiability`, `validation` and
@@ -489,6 +492,7 @@ pub fn replay_with<R: Read>(
     let mut run: Option<Running> = None;
     let mut model: Option<(ModelSpec, bool)> = None;
     let mut history = History::default();
+    let mut fed = crate::results::SampleLog::default();
     let mut busy = Duration::ZERO;
     let mut ready = Vec::new();
     let mut unused = Vec::new();
@@ -629,6 +633,7 @@ pub fn replay_with<R: Read>(
             }
             recorder.push(&s);
             history.push(s.t_s, values, sigmas);
+            fed.push(&s);
         }
         if diverged {
             break;
@@ -758,6 +763,7 @@ pub fn replay_with<R: Read>(
         identifiability,
         final_covariance,
         recorder,
+        samples: fed,
     })
 }
 

@@ -52,7 +52,7 @@ fn nan(v: Option<f64>) -> f64 {
 
 impl Recorder {
     /// Most samples kept (≈ 200 bytes each).
-    pub const MAX_SAMPLES: usize = 200_000;
+    pub const MAX_SAMPLES: usize = 100_000;
 
     /// Keeps sample `s` (fed to the estimator).
     pub fn push(&mut self, s: &AirDataSample) {

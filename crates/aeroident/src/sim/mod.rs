@@ -402,7 +402,12 @@ pub fn write_outputs(run: &SimRun, od: &mut OutputDir) -> anyhow::Result<()> {
                 });
             }
         }
-        Panel { title: title.to_string(), y_label: y_label.to_string(), series }
+        Panel {
+            title: title.to_string(),
+            y_label: y_label.to_string(),
+            series,
+            ..Default::default()
+        }
     };
     let states = [
         panel("true airspeed", "vt (ft/s)", &[("vt_fps", 1.0)]),

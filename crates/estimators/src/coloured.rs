@@ -52,21 +52,106 @@ pub fn white_band(n: f64) -> f64 {
     2.0 / libm::sqrt(n.max(1.0))
 }
 
+/// Running autocorrelation of one residual sequence up to [`MAX_LAG`], with the truncation lag
+/// of the module doc. No allocation.
+#[derive(Debug, Clone, Copy)]
+pub struct Autocorrelation {
+    residuals: [f64; MAX_LAG],
+    head: usize,
+    filled: usize,
+    /// `c(k) = Σ_i λ^{n−i} v_i v_{i−k}`, `k = 0..=MAX_LAG`.
+    c: [f64; MAX_LAG + 1],
+    /// λ-weighted number of residuals in `c(0)`.
+    n_res: f64,
+    lag: usize,
+}
+
+impl Default for Autocorrelation {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Autocorrelation {
+    /// No residual yet.
+    pub const fn new() -> Self {
+        Self {
+            residuals: [0.0; MAX_LAG],
+            head: 0,
+            filled: 0,
+            c: [0.0; MAX_LAG + 1],
+            n_res: 0.0,
+            lag: 0,
+        }
+    }
+
+    /// Adds residual `v` with forgetting `λ` and updates the truncation lag `K`: the last lag
+    /// before the first whose `|ρ̂(k)|` falls inside the white band `2/√N`.
+    pub fn add(&mut self, v: f64, lambda: f64) {
+        let avail = self.filled.min(MAX_LAG);
+        self.c[0] = lambda * self.c[0] + v * v;
+        for k in 1..=avail {
+            let idx = (self.head + MAX_LAG - k) % MAX_LAG;
+            self.c[k] = lambda * self.c[k] + v * self.residuals[idx];
+        }
+        self.n_res = lambda * self.n_res + 1.0;
+        let band = white_band(self.n_res);
+        let mut k_max = 0;
+        if self.c[0] > 0.0 {
+            for k in 1..=avail {
+                if libm::fabs(self.c[k] / self.c[0]) < band {
+                    break;
+                }
+                k_max = k;
+            }
+        }
+        self.lag = k_max;
+        self.push(v);
+    }
+
+    /// Starts a new sequence (a new manoeuvre): lags never span the break; the sums are kept.
+    pub fn restart(&mut self) {
+        self.filled = 0;
+    }
+
+    /// Stores `v` as the latest residual without counting it (a row without residual).
+    fn push(&mut self, v: f64) {
+        self.residuals[self.head] = v;
+        self.head = (self.head + 1) % MAX_LAG;
+        self.filled += 1;
+    }
+
+    /// The truncation lag `K` after the last residual.
+    pub fn lag(&self) -> usize {
+        self.lag
+    }
+
+    /// `ρ̂(k) = c(k)/c(0)`, `None` before any non-zero residual or beyond [`MAX_LAG`].
+    pub fn rho(&self, k: usize) -> Option<f64> {
+        (k <= MAX_LAG && self.c[0] > 0.0).then(|| self.c[k] / self.c[0])
+    }
+
+    /// The variance factor `1 + 2 Σ_{k=1..K} ρ̂(k)` of a mean of the residuals (the
+    /// effective-sample-size correction, Bayley & Hammersley 1946): the coloured-residual
+    /// correction for regressors that vary slowly over `K` samples. 1 before any residual.
+    pub fn variance_factor(&self) -> f64 {
+        let mut f = 1.0;
+        for k in 1..=self.lag {
+            f += 2.0 * self.rho(k).unwrap_or(0.0);
+        }
+        f
+    }
+}
+
 /// Recursive coloured-residual covariance of one least-squares fit with up to `C` regressors
 /// (module doc). No allocation.
 #[derive(Debug, Clone, Copy)]
 pub struct ColouredCovariance<const C: usize> {
     n: usize,
     rows: [[f64; C]; MAX_LAG],
-    residuals: [f64; MAX_LAG],
     head: usize,
-    filled: usize,
-    /// `c(k)`, `k = 0..=MAX_LAG`.
-    c: [f64; MAX_LAG + 1],
-    /// λ-weighted number of residuals in `c(0)`.
-    n_res: f64,
+    acf: Autocorrelation,
     m: Square<C>,
-    lag: usize,
 }
 
 impl<const C: usize> ColouredCovariance<C> {
@@ -75,13 +160,9 @@ impl<const C: usize> ColouredCovariance<C> {
         Self {
             n: n.min(C),
             rows: [[0.0; C]; MAX_LAG],
-            residuals: [0.0; MAX_LAG],
             head: 0,
-            filled: 0,
-            c: [0.0; MAX_LAG + 1],
-            n_res: 0.0,
+            acf: Autocorrelation::new(),
             m: [[0.0; C]; C],
-            lag: 0,
         }
     }
 
@@ -89,33 +170,23 @@ impl<const C: usize> ColouredCovariance<C> {
     /// is not yet initialised: the row enters `M` as white) and forgetting factor `λ`.
     pub fn add(&mut self, x: &[f64; C], v: Option<f64>, lambda: f64) {
         let n = self.n;
-        let mut k_max = 0;
-        if let Some(v) = v {
-            let avail = self.filled.min(MAX_LAG);
-            self.c[0] = lambda * self.c[0] + v * v;
-            for k in 1..=avail {
-                let idx = (self.head + MAX_LAG - k) % MAX_LAG;
-                self.c[k] = lambda * self.c[k] + v * self.residuals[idx];
+        let k_max = match v {
+            Some(v) => {
+                self.acf.add(v, lambda);
+                self.acf.lag()
             }
-            self.n_res = lambda * self.n_res + 1.0;
-            let band = white_band(self.n_res);
-            if self.c[0] > 0.0 {
-                for k in 1..=avail {
-                    if libm::fabs(self.c[k] / self.c[0]) < band {
-                        break;
-                    }
-                    k_max = k;
-                }
+            None => {
+                self.acf.push(0.0);
+                0
             }
-            self.lag = k_max;
-        }
+        };
         // g = x + Σ ρ(k) λ^k x_{n−k}
         let mut g = [0.0; C];
         g[..n].copy_from_slice(&x[..n]);
         let mut lk = 1.0;
         for k in 1..=k_max {
             lk *= lambda;
-            let w = self.c[k] / self.c[0] * lk;
+            let w = self.acf.rho(k).unwrap_or(0.0) * lk;
             let row = &self.rows[(self.head + MAX_LAG - k) % MAX_LAG];
             for a in 0..n {
                 g[a] += w * row[a];
@@ -130,19 +201,17 @@ impl<const C: usize> ColouredCovariance<C> {
             }
         }
         self.rows[self.head] = *x;
-        self.residuals[self.head] = v.unwrap_or(0.0);
         self.head = (self.head + 1) % MAX_LAG;
-        self.filled += 1;
     }
 
     /// The lag `K` at which the last update truncated the sum.
     pub fn lag(&self) -> usize {
-        self.lag
+        self.acf.lag()
     }
 
     /// The normalised residual autocorrelation `ρ̂(k)` (`None` before any residual).
     pub fn autocorrelation(&self, k: usize) -> Option<f64> {
-        (k <= MAX_LAG && self.c[0] > 0.0).then(|| self.c[k] / self.c[0])
+        self.acf.rho(k)
     }
 
     /// Entry `(i, j)` of `σ̂² P M P` (module doc) for the fit's `P` (leading `n × n` block).
@@ -157,5 +226,40 @@ impl<const C: usize> ColouredCovariance<C> {
             s += p[i][a] * row;
         }
         s2 * s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+
+    /// The variance factor of AR(1) residuals is `(1 + a)/(1 − a)` (the sum `1 + 2 Σ aᵏ`),
+    /// minus the tail beyond the truncation lag; of MA(1) residuals `v_i = w_i + b w_{i−1}` it
+    /// is `(1 + b)²/(1 + b²)`; of white residuals 1.
+    #[test]
+    fn analytic_variance_factor_of_ar1_ma1_and_white() {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
+        let n01 = Normal::new(0.0, 1.0).unwrap();
+        let (a, b) = (0.6, 0.8);
+        let (mut ar, mut ma, mut white) =
+            (Autocorrelation::new(), Autocorrelation::new(), Autocorrelation::new());
+        let (mut v, mut w_prev) = (0.0, 0.0);
+        for _ in 0..100_000 {
+            let w = n01.sample(&mut rng);
+            v = a * v + w;
+            ar.add(v, 1.0);
+            ma.add(w + b * w_prev, 1.0);
+            white.add(w, 1.0);
+            w_prev = w;
+        }
+        let f_ar = ar.variance_factor();
+        let f_ma = ma.variance_factor();
+        let f_w = white.variance_factor();
+        assert!((f_ar / ((1.0 + a) / (1.0 - a)) - 1.0).abs() < 0.05, "AR(1): {f_ar}");
+        assert!((f_ma / ((1.0 + b) * (1.0 + b) / (1.0 + b * b)) - 1.0).abs() < 0.05, "MA: {f_ma}");
+        assert_eq!(ma.lag(), 1, "MA(1) has one significant lag");
+        assert!((f_w - 1.0).abs() < 0.05, "white: {f_w}");
     }
 }

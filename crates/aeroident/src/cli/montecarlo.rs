@@ -84,7 +84,11 @@ pub fn table(c: &Campaign) -> String {
                 p.median_time_to_10pct_s.map_or("never".into(), |t| format!("{t:.2} s")),
             );
         }
-        let _ = writeln!(s, "{}: {} runs used, {} failed", e.name, e.runs_ok, e.failed_runs.len());
+        let _ = write!(s, "{}: {} runs used, {} failed", e.name, e.runs_ok, e.failed_runs.len());
+        let _ = match e.mean_nis {
+            Some(nis) => writeln!(s, "; mean NIS {nis:.2}"),
+            None => writeln!(s),
+        };
         for f in &e.failed_runs {
             let _ = writeln!(s, "  run {} failed: {}", f.run, f.reason);
         }

@@ -38,6 +38,9 @@
 //! coloured by turbulence, smoothing and model error, and for the `λ²` weighting of the noise
 //! in an exponentially weighted estimate. With `λ = 1` and white residuals it is `σ̂² P_n`.
 //! Should the truncated sum give a non-positive variance, the white `σ̂² P_n` is reported.
+//! [`Estimator::covariance`] gives these variances with the correlation matrix of `P_n` (the
+//! identifiability diagnostics read correlations and condition numbers of the information
+//! matrix from it).
 //!
 //! **WARNING:** equation error is biased when the regressors are noisy; σ describes scatter,
 //! not that bias.
@@ -208,16 +211,18 @@ impl Fit {
         Ok(())
     }
 
-    /// Covariance entry `(i, j)` (fit-local indices) with the coloured-residual sandwich, or
-    /// `σ̂² P` when the truncated sum gives a non-positive variance (module doc).
+    /// Covariance entry `(i, j)` (fit-local indices): the coloured-residual variances of the
+    /// sandwich on the diagonal, with the correlation of `P` (module doc), i.e.
+    /// `σ̂² P_ij √(f_i f_j)`, `f_i` = sandwich variance / `σ̂² P_ii`. Falls back to `σ̂² P` when
+    /// the truncated sum gives a non-positive variance.
     fn cov(&self, s2: f64, i: usize, j: usize) -> f64 {
-        let ci = self.coloured.covariance(&self.p, s2, i, i);
-        let cj = self.coloured.covariance(&self.p, s2, j, j);
-        if ci > 0.0 && cj > 0.0 && ci.is_finite() && cj.is_finite() {
-            if i == j { ci } else { self.coloured.covariance(&self.p, s2, i, j) }
-        } else {
-            s2 * self.p[i][j]
-        }
+        let white = |k: usize| s2 * self.p[k][k];
+        let factor = |k: usize| {
+            let c = self.coloured.covariance(&self.p, s2, k, k);
+            let w = white(k);
+            if c > 0.0 && c.is_finite() && w > 0.0 { c / w } else { 1.0 }
+        };
+        s2 * self.p[i][j] * libm::sqrt(factor(i) * factor(j))
     }
 
     fn residual_variance(&self) -> Option<f64> {

@@ -364,7 +364,7 @@ impl Ftr {
     ) -> Option<Square<N_TERMS>> {
         let m = self.n_freq;
         let w0 = self.w_diff[0].0;
-        if !(w0 > 0.0) {
+        if w0.is_nan() || w0 <= 0.0 {
             return None;
         }
         // Residual spectral level per frequency, Daniell-smoothed over ±SPECTRUM_HALF_WIDTH.

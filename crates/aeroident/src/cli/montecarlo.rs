@@ -100,7 +100,11 @@ pub fn table(c: &Campaign) -> String {
     }
     let _ = writeln!(s, "{t}");
     for e in &c.estimators {
-        let _ = writeln!(s, "{}: {} runs used, {} failed", e.name, e.runs_ok, e.failed_runs.len());
+        let _ = write!(s, "{}: {} runs used, {} failed", e.name, e.runs_ok, e.failed_runs.len());
+        let _ = match e.mean_nis {
+            Some(nis) => writeln!(s, "; mean NIS {nis:.2}"),
+            None => writeln!(s),
+        };
         for f in &e.failed_runs {
             let _ = writeln!(s, "  run {} failed: {}", f.run, f.reason);
         }

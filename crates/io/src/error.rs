@@ -300,3 +300,24 @@ pub enum RowProblem {
         reason: String,
     },
 }
+
+impl RowProblem {
+    /// A short fixed label of the problem's kind, without the column or value (e.g.
+    /// `blank value`, `time goes backwards`): what [`crate::rejection_log::RejectionLog`] counts
+    /// rejections by once it stops listing them.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Self::Blank { .. } => "blank value",
+            Self::NotANumber { .. } => "not a number",
+            Self::NonFinite { .. } => "non-finite value",
+            Self::NonFiniteSi { .. } => "not finite in SI",
+            Self::RepeatedTime { .. } => "repeated time",
+            Self::NonMonotonicTime { .. } => "time goes backwards",
+            Self::ImplausibleTimeJump { .. } => "implausible time jump",
+            Self::Truncated => "truncated last line",
+            Self::FieldCount { .. } => "wrong field count",
+            Self::Implausible { .. } => "implausible value",
+            Self::Domain { .. } => "value outside its domain",
+        }
+    }
+}

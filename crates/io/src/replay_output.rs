@@ -62,8 +62,9 @@ pub struct ReplaySummary {
     pub samples_read: usize,
     /// Rows rejected.
     pub samples_rejected: usize,
-    /// Every rejected row and every gap (gap entries reject nothing; their reason starts with
-    /// `gap`).
+    /// The rejected rows and gaps (gap entries reject nothing; their reason starts with
+    /// `gap`): the first [`crate::RejectionLog::DEFAULT_LIMIT`] and always the last; the
+    /// others are counted per kind in `warnings` ([`crate::RejectionLog`]).
     pub rejections: Vec<Rejection>,
     /// Samples per second through the estimation stage (estimator update; CSV parsing,
     /// differentiation, pacing and output excluded), one core.

@@ -21,7 +21,7 @@ use aeroident_estimators::flight_model::FlightModel;
 use aeroident_estimators::output_error::Start;
 use aeroident_estimators::output_error::{OeConfig, OeError, OeResult, fit};
 use aeroident_estimators::{AirDataSample, ModelStructure};
-use aeroident_io::{FlightDataReader, Mapping, ModelSpec, RecordEvent, Rejection};
+use aeroident_io::{FlightDataReader, Mapping, ModelSpec, RecordEvent, Rejection, RejectionLog};
 use serde::Serialize;
 use std::io::Read;
 
@@ -75,7 +75,8 @@ pub struct BatchSummary {
     pub samples_read: usize,
     /// Rows rejected (listed in `rejections`).
     pub samples_rejected: usize,
-    /// Every rejected row and gap.
+    /// The rejected rows and gaps: the first [`RejectionLog::DEFAULT_LIMIT`] and the last; the
+    /// others are counted per kind in `warnings`.
     pub rejections: Vec<Rejection>,
     /// Manoeuvres (separate initial conditions), split at the record's gaps.
     pub manoeuvres: usize,
@@ -122,7 +123,7 @@ fn default_model(first: &AirDataSample, mapping: &Mapping) -> Result<ModelSpec, 
 /// A record read whole and split at its gaps.
 struct Manoeuvres {
     manoeuvres: Vec<Vec<AirDataSample>>,
-    rejections: Vec<Rejection>,
+    rejections: RejectionLog,
     read: usize,
     rejected: usize,
 }
@@ -134,7 +135,7 @@ struct Manoeuvres {
 fn read_manoeuvres<R: Read>(reader: FlightDataReader<R>) -> Result<Manoeuvres, ReplayError> {
     let file = reader.file().to_string();
     let mut manoeuvres: Vec<Vec<AirDataSample>> = vec![Vec::new()];
-    let mut rejections = Vec::new();
+    let mut rejections = RejectionLog::default();
     let (mut read, mut rejected) = (0usize, 0usize);
     for event in reader {
         match event? {
@@ -147,10 +148,10 @@ fn read_manoeuvres<R: Read>(reader: FlightDataReader<R>) -> Result<Manoeuvres, R
             RecordEvent::Rejected { row, problem } => {
                 read += 1;
                 rejected += 1;
-                rejections.push(Rejection { row, reason: problem.to_string() });
+                rejections.push_row(row, &problem);
             }
             RecordEvent::Gap { row, dt_s, nominal_dt_s } => {
-                rejections.push(Rejection {
+                rejections.push("gap", Rejection {
                     row,
                     reason: format!(
                         "gap: {dt_s} s before this row (nominal {nominal_dt_s} s); a new manoeuvre with its own initial state"
@@ -167,7 +168,7 @@ fn read_manoeuvres<R: Read>(reader: FlightDataReader<R>) -> Result<Manoeuvres, R
         return Err(aeroident_io::FlightDataError::NoSamples {
             file,
             rejected,
-            first: rejections.iter().take(3).map(|r| (r.row, r.reason.clone())).collect(),
+            first: rejections.first(3),
         }
         .into());
     }
@@ -229,7 +230,9 @@ pub fn fit_record<R: Read>(
         m.iter().for_each(|s| recorder.push(s));
     }
     let identifiability = diagnostics::identifiability(&st, &cov, &recorder, &values);
+    let (rejections, unlisted) = rejections.finish();
     let mut warnings = diagnostics::sign_warnings(&st, &values);
+    warnings.extend(unlisted);
     for c in &identifiability.collinear_regressors {
         warnings.push(format!(
             "collinear regressors {} and {} (sample correlation {:+.3}): the record cannot separate these terms whatever the method",

@@ -20,7 +20,9 @@
 //! Nothing is dropped silently: every rejected row, every gap, every sample the differentiator
 //! could not centre (its first and last `(N−1)/2` samples and those around a gap) and every
 //! sample an estimator refused is listed in the summary's `rejections` and counted in
-//! `samples_rejected` (gap entries are listed but count no sample). A diverged estimator stops
+//! `samples_rejected` (gap entries are listed but count no sample). The list is bounded
+//! ([`RejectionLog`]): the first 1,000 entries and always the last; the others are counted per
+//! kind in a warning (`N further rejections not listed: …`). A diverged estimator stops
 //! the replay (its row is listed) and the summary's `status` is `diverged`, with every estimate
 //! `null`.
 //!
@@ -45,7 +47,9 @@ use crate::estimators::{BuildError, EstimatorKind, EstimatorOptions, build};
 use aeroident_estimators::{AirDataSample, Coefficient, Estimator, ModelStructure, Status, Term};
 use aeroident_io::mapping::{Channel, Mapping};
 use aeroident_io::replay_output::{ParameterSummary, ReplaySummary};
-use aeroident_io::{FlightDataError, FlightDataReader, ModelSpec, RecordEvent, Rejection};
+use aeroident_io::{
+    FlightDataError, FlightDataReader, ModelSpec, RecordEvent, Rejection, RejectionLog,
+};
 use derivatives::{Derivative, DerivativeStage};
 use prediction::{Frozen, Recorder, ValidationReport, validate_coefficients};
 use std::io::{Read, Write};
@@ -126,6 +130,9 @@ pub enum ReplayError {
     #[error("writing estimates: {0}")]
     Output(#[from] std::io::Error),
 }
+
+/// Kind of the rejections of samples the differentiator could not centre (warm-up, gaps, end).
+const KIND_NOT_CENTRED: &str = "not estimated: no centred derivative";
 
 /// Largest differentiator window, samples (a lag of 500 samples: 5 s at 100 Hz).
 pub const MAX_DIFF_WINDOW: usize = 1001;
@@ -486,7 +493,7 @@ pub fn replay_with<R: Read>(
     let file = reader.file().to_string();
     let uses_measured = opts.estimator.uses_measured_coefficients();
     let mapped_v0 = mapping.channels.get(&Channel::V0).and_then(|m| m.constant());
-    let mut rejections: Vec<Rejection> = Vec::new();
+    let mut rejections = RejectionLog::default();
     let mut samples_read = 0usize;
     let mut samples_rejected = 0usize;
     let mut run: Option<Running> = None;
@@ -508,10 +515,10 @@ pub fn replay_with<R: Read>(
             RecordEvent::Rejected { row, problem } => {
                 samples_read += 1;
                 samples_rejected += 1;
-                rejections.push(Rejection { row, reason: problem.to_string() });
+                rejections.push_row(row, &problem);
             }
             RecordEvent::Gap { row, dt_s, nominal_dt_s } => {
-                rejections.push(Rejection {
+                rejections.push("gap", Rejection {
                     row,
                     reason: format!(
                         "gap: {dt_s} s before this row (nominal {nominal_dt_s} s); not bridged: differentiator restarted, new manoeuvre for the estimator"
@@ -572,11 +579,14 @@ pub fn replay_with<R: Read>(
         }
         for r in unused.drain(..) {
             samples_rejected += 1;
-            rejections.push(Rejection {
-                row: r,
-                reason: "not estimated: no centred derivative (differentiator warm-up or gap)"
-                    .into(),
-            });
+            rejections.push(
+                KIND_NOT_CENTRED,
+                Rejection {
+                    row: r,
+                    reason: "not estimated: no centred derivative (differentiator warm-up or gap)"
+                        .into(),
+                },
+            );
         }
         let Some(r) = run.as_mut() else { continue };
         for (row, s) in ready.drain(..) {
@@ -587,14 +597,17 @@ pub fn replay_with<R: Read>(
             // so, with or without an error); any other error refuses this sample only.
             if r.est.estimates().status == Status::Diverged {
                 let why = result.err().map_or(String::new(), |e| format!(" ({e})"));
-                rejections.push(Rejection {
-                    row,
-                    reason: format!(
-                        "estimator `{}` diverged at t = {} s{why}; replay stopped",
-                        r.est.method(),
-                        s.t_s
-                    ),
-                });
+                rejections.push(
+                    "estimator diverged",
+                    Rejection {
+                        row,
+                        reason: format!(
+                            "estimator `{}` diverged at t = {} s{why}; replay stopped",
+                            r.est.method(),
+                            s.t_s
+                        ),
+                    },
+                );
                 diverged = true;
                 break;
             }
@@ -602,10 +615,10 @@ pub fn replay_with<R: Read>(
                 Ok(e) => e,
                 Err(err) => {
                     samples_rejected += 1;
-                    rejections.push(Rejection {
-                        row,
-                        reason: format!("estimator refused sample: {err}"),
-                    });
+                    rejections.push(
+                        "estimator refused sample",
+                        Rejection { row, reason: format!("estimator refused sample: {err}") },
+                    );
                     continue;
                 }
             };
@@ -649,7 +662,7 @@ pub fn replay_with<R: Read>(
         r.stage.flush(&mut unused);
         for row in unused.drain(..) {
             samples_rejected += 1;
-            rejections.push(Rejection {
+            rejections.push(KIND_NOT_CENTRED, Rejection {
                 row,
                 reason: "not estimated: no centred derivative (end of record within the differentiator lag)"
                     .into(),
@@ -660,7 +673,7 @@ pub fn replay_with<R: Read>(
         return Err(FlightDataError::NoSamples {
             file,
             rejected: samples_rejected,
-            first: rejections.iter().take(3).map(|r| (r.row, r.reason.clone())).collect(),
+            first: rejections.first(3),
         }
         .into());
     };
@@ -668,7 +681,7 @@ pub fn replay_with<R: Read>(
         return Err(FlightDataError::NoSamples {
             file,
             rejected: samples_rejected,
-            first: rejections.iter().take(3).map(|r| (r.row, r.reason.clone())).collect(),
+            first: rejections.first(3),
         }
         .into());
     }
@@ -721,6 +734,8 @@ pub fn replay_with<R: Read>(
     // Throughput of the estimation stage: the estimator update per sample (CSV parsing,
     // differentiation, pacing and output are excluded).
     let secs = busy.as_secs_f64().max(1e-9);
+    let (rejections, unlisted) = rejections.finish();
+    warnings.extend(unlisted);
     let mut summary = ReplaySummary {
         estimator: r.est.method().to_string(),
         model: spec.name.clone(),

@@ -1,0 +1,56 @@
+//! The replay summary's `rejections` list is bounded (issue 10: it grew by ≈ 100 bytes per
+//! rejected row, without bound in a 24 h live feed): the first
+//! [`RejectionLog::DEFAULT_LIMIT`] entries and the last are listed, the rest counted per kind
+//! in a warning, and `samples_rejected` still counts every rejected row.
+
+use aeroident::replay::{ReplayOptions, replay};
+use aeroident_io::{FlightDataReader, Mapping, RejectionLog};
+
+/// Longitudinal channels; the record's interval is 0.1 s but every other row is rejected, so
+/// the accepted samples are 0.2 s apart: the nominal interval (no gaps).
+const MAP: &str = "nominal_dt_s = 0.2\n[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"V\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nq = { column = \"q\", unit = \"rad/s\" }\nax = { column = \"ax\", unit = \"m/s2\" }\naz = { column = \"az\", unit = \"m/s2\" }\nde = { column = \"de\", unit = \"rad\" }\nrho = { value = 1.0, unit = \"kg/m3\" }\nmass = { value = 1000.0, unit = \"kg\" }\nS = { value = 10.0, unit = \"m2\" }\ncbar = { value = 1.5, unit = \"m\" }\nIyy = { value = 2000.0, unit = \"kg*m2\" }\n";
+
+/// 3,000 rows (file rows 2…3001), the odd-numbered ones (rows 3, 5, …, 3001: 1,500) with a
+/// blank `de`; the differentiator (window 3, lag 1) cannot centre the first and the last
+/// accepted sample: 1,502 rejected samples, 1,502 entries, of which 1,001 are listed.
+#[test]
+fn errors_many_rejected_rows_give_a_bounded_list_a_full_count_and_a_warning() {
+    const ROWS: usize = 3_000;
+    let mut csv = String::from("t,V,a,q,ax,az,de\n");
+    for k in 0..ROWS {
+        let t = k as f64 * 0.1;
+        let (a, q, de) = (0.05 + 0.01 * (0.7 * t).sin(), 0.1 * t.sin(), 0.02 * (1.3 * t).cos());
+        let az = -9.8 - 2.0 * a;
+        if k % 2 == 1 {
+            csv.push_str(&format!("{t:.1},50,{a},{q},0.1,{az},\n"));
+        } else {
+            csv.push_str(&format!("{t:.1},50,{a},{q},0.1,{az},{de}\n"));
+        }
+    }
+    let m = Mapping::from_toml_str(MAP, "many.toml").unwrap();
+    let reader = FlightDataReader::new(csv.as_bytes(), "many.csv", &m).unwrap();
+    let opts = ReplayOptions { diff_window: 3, ..Default::default() };
+    let o = replay(reader, &m, &opts, Vec::new()).unwrap();
+    let s = &o.summary;
+    assert_eq!(s.samples_read, ROWS);
+    assert_eq!(s.samples_rejected, ROWS / 2 + 2, "every rejected row counted");
+    // Bounded: the first 1,000 entries and the last.
+    assert_eq!(s.rejections.len(), RejectionLog::DEFAULT_LIMIT + 1);
+    let blanks: Vec<u64> =
+        s.rejections.iter().filter(|r| r.reason.contains("blank value")).map(|r| r.row).collect();
+    assert_eq!(blanks[0], 3);
+    assert!(blanks.windows(2).all(|w| w[1] == w[0] + 2), "the first ones, in order");
+    // The last entry is the last event: the end-of-record sample the differentiator could not
+    // centre (row 3000, the last accepted row).
+    let last = s.rejections.last().unwrap();
+    assert_eq!(last.row, ROWS as u64);
+    assert!(last.reason.contains("end of record"), "{}", last.reason);
+    // The other 501 entries (all blank `de`: rows 2003…3001) are counted in one warning.
+    let w: Vec<&String> = s.warnings.iter().filter(|w| w.contains("not listed")).collect();
+    assert_eq!(w.len(), 1, "{:?}", s.warnings);
+    assert!(w[0].starts_with("501 further rejections not listed"), "{}", w[0]);
+    assert!(w[0].contains("501 × blank value"), "{}", w[0]);
+    // ≈ 100 bytes per listed entry: the JSON list stays small whatever the record's length.
+    let json = serde_json::to_string(&s.rejections).unwrap();
+    assert!(json.len() < 150 * (RejectionLog::DEFAULT_LIMIT + 1), "{} bytes", json.len());
+}

@@ -137,6 +137,53 @@ macro_rules! channels {
     };
 }
 
+impl Channel {
+    /// The channel that fills a field of `aeroident_estimators::AirDataSample` or
+    /// `AircraftConstants` (the names estimators use in their errors: `r_rad_s` → `r`,
+    /// `Iyy_kgm2` → `Iyy`, `rho_kgpm3` → `rho`); `None` for other names.
+    pub fn of_sample_field(field: &str) -> Option<Channel> {
+        use Channel as C;
+        Some(match field {
+            "vt_mps" => C::Vt,
+            "alpha_rad" => C::Alpha,
+            "beta_rad" => C::Beta,
+            "p_rad_s" => C::P,
+            "q_rad_s" => C::Q,
+            "r_rad_s" => C::R,
+            "pdot_rad_s2" => C::Pdot,
+            "qdot_rad_s2" => C::Qdot,
+            "rdot_rad_s2" => C::Rdot,
+            "alphadot_rad_s" => C::Alphadot,
+            "phi_rad" => C::Phi,
+            "theta_rad" => C::Theta,
+            "psi_rad" => C::Psi,
+            "ax_mps2" => C::Ax,
+            "ay_mps2" => C::Ay,
+            "az_mps2" => C::Az,
+            "de_rad" => C::De,
+            "da_rad" => C::Da,
+            "dr_rad" => C::Dr,
+            "thrust_n" => C::Thrust,
+            "throttle" => C::Throttle,
+            "thrust_moment_nm" => C::ThrustMoment,
+            "qbar_pa" => C::Qbar,
+            "rho_kgpm3" => C::Rho,
+            "mass_kg" => C::Mass,
+            "Ixx_kgm2" => C::Ixx,
+            "Iyy_kgm2" => C::Iyy,
+            "Izz_kgm2" => C::Izz,
+            "Ixz_kgm2" => C::Ixz,
+            "S_m2" => C::S,
+            "cbar_m" => C::Cbar,
+            "b_m" => C::B,
+            "thrust_arm_m" => C::ThrustArm,
+            "thrust_incidence_rad" => C::ThrustIncidence,
+            "v0_mps" => C::V0,
+            _ => return None,
+        })
+    }
+}
+
 channels! {
     /// True airspeed.
     Vt = "vt": Speed,
@@ -576,6 +623,29 @@ impl Mapping {
     /// Whether channel `ch` is mapped (to a column or a constant).
     pub fn has(&self, ch: Channel) -> bool {
         self.channels.contains_key(&ch)
+    }
+
+    /// A sample field an estimator names in an error (`r_rad_s`, `Iyy_kgm2`, …; the
+    /// `AirDataSample` / `AircraftConstants` field) in the user's terms: the mapping channel,
+    /// and where this mapping takes it from, e.g. ``channel `r` (column `R_dps` of FILE)``,
+    /// ``channel `Iyy` (a constant in FILE)`` or ``channel `r` (not mapped in FILE)``. `None` for
+    /// a name that is no sample field (the estimator's own configuration).
+    pub fn describe_field(&self, field: &str) -> Option<String> {
+        let ch = Channel::of_sample_field(field)?;
+        let file = &self.file;
+        let key = ch.key();
+        Some(match self.channels.get(&ch).map(|m| &m.source) {
+            Some(Source::Columns(cols)) => {
+                let names: Vec<String> = cols.iter().map(|(c, _)| format!("`{c}`")).collect();
+                let what = if names.len() == 1 { "column" } else { "columns" };
+                format!("channel `{key}` ({what} {} of {file})", names.join(", "))
+            }
+            Some(Source::Constant(_)) => format!("channel `{key}` (a constant in {file})"),
+            None if ch == Channel::Rho => {
+                format!("channel `rho` (not mapped in {file}; derived from qbar and vt)")
+            }
+            None => format!("channel `{key}` (not mapped in {file})"),
+        })
     }
 }
 

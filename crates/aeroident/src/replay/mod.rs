@@ -41,6 +41,7 @@ pub mod arrays;
 pub mod batch;
 pub mod derivatives;
 pub mod diagnostics;
+pub mod explain;
 pub mod prediction;
 
 use crate::estimators::{BuildError, EstimatorKind, EstimatorOptions, build};
@@ -591,7 +592,8 @@ pub fn replay_with<R: Read>(
         let Some(r) = run.as_mut() else { continue };
         for (row, s) in ready.drain(..) {
             let t_in = Instant::now();
-            let result = r.est.update(&s).copied().map_err(|e| e.to_string());
+            let result =
+                r.est.update(&s).copied().map_err(|e| explain::estimator_error(&e, mapping));
             busy += t_in.elapsed();
             // A numerical failure on valid input is a divergence (the estimator's status says
             // so, with or without an error); any other error refuses this sample only.

@@ -192,8 +192,9 @@ impl Default for SampleLog {
 }
 
 impl SampleLog {
-    /// Default bound (≈ 10 MB of samples).
-    pub const MAX_SAMPLES: usize = 20_000;
+    /// Default bound: 16,384 samples (≈ 10 MB; a power of two, so the vector's capacity never
+    /// exceeds it: the log decimates before it would grow past the bound).
+    pub const MAX_SAMPLES: usize = 16_384;
 
     /// An empty log keeping at most `limit` (≥ 2) samples.
     pub fn with_limit(limit: usize) -> Self {
@@ -202,13 +203,13 @@ impl SampleLog {
 
     /// Adds one sample (decimating as described on the type).
     pub fn push(&mut self, s: &AirDataSample) {
+        if self.pushed.is_multiple_of(self.stride) && self.samples.len() >= self.limit {
+            let mut k = 0;
+            self.samples.retain(|_| (k % 2 == 0, k += 1).0);
+            self.stride *= 2;
+        }
         if self.pushed.is_multiple_of(self.stride) {
             self.samples.push(*s);
-            if self.samples.len() > self.limit {
-                let mut k = 0;
-                self.samples.retain(|_| (k % 2 == 0, k += 1).0);
-                self.stride *= 2;
-            }
         }
         self.pushed += 1;
     }
@@ -331,6 +332,12 @@ mod tests {
         );
         for (k, s) in log.samples.iter().enumerate() {
             assert_eq!(s.t_s, (k * log.stride) as f64);
+        }
+        // A power-of-two bound is never exceeded by the allocation either.
+        let mut log = SampleLog::with_limit(16);
+        for k in 0..1000 {
+            log.push(&AirDataSample { t_s: k as f64, ..Default::default() });
+            assert!(log.samples.capacity() <= 16, "{}", log.samples.capacity());
         }
     }
 }

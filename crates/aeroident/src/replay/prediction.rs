@@ -5,8 +5,13 @@
 //! [`Recorder`] keeps, for every sample fed to the estimator, the measured coefficients
 //! ([`AirDataSample::measured_coefficients`]), every term's regressor ([`Term::value`]) and the
 //! control inputs `δe, δa, δr`, with the manoeuvre (segment) it belongs to. At most
-//! [`Recorder::MAX_SAMPLES`] samples are kept (a live feed stays bounded); the report says
-//! when later samples were not kept.
+//! [`Recorder::MAX_SAMPLES`] samples are kept (a live feed stays bounded), in whole blocks of
+//! [`Recorder::BLOCK`] consecutive samples: when the limit is reached every second kept block
+//! is dropped and from then on only every `stride`-th block is kept (the stride doubles each
+//! time), so the validation covers the whole record, not only its beginning, and each kept
+//! block keeps its sample-to-sample structure (the residuals' autocorrelation and lagged
+//! input correlations need consecutive samples; a kept block is its own segment, lagged sums
+//! do not cross from one to the next). The report says when samples were not kept.
 //!
 //! [`validate_coefficients`] predicts each modelled coefficient from the regressors with given
 //! parameter values, `Ĉ_t = Σ_j θ_j ξ_j(t)`, its variance from the parameter covariance
@@ -42,8 +47,12 @@ struct Row {
 pub struct Recorder {
     rows: Vec<Row>,
     segment: usize,
-    /// Samples offered after [`Recorder::MAX_SAMPLES`] (not kept).
+    /// Samples offered and not kept (blocks dropped by the decimation).
     pub dropped: usize,
+    /// Samples offered.
+    pushed: usize,
+    /// Blocks per kept block (0 until the first push: 1).
+    stride: usize,
 }
 
 fn nan(v: Option<f64>) -> f64 {
@@ -51,14 +60,34 @@ fn nan(v: Option<f64>) -> f64 {
 }
 
 impl Recorder {
-    /// Most samples kept (≈ 200 bytes each).
-    pub const MAX_SAMPLES: usize = 100_000;
+    /// Most samples kept: 65,536 (216 bytes each, 14 MB; a power of two, so the vector's
+    /// capacity never exceeds it): 11 min at 100 Hz before the first decimation.
+    pub const MAX_SAMPLES: usize = 65_536;
 
-    /// Keeps sample `s` (fed to the estimator).
+    /// Consecutive samples per kept block: 1,024 (10 s at 100 Hz, ≫ the 20 lags of the
+    /// residual tests).
+    pub const BLOCK: usize = 1_024;
+
+    /// Keeps sample `s` (fed to the estimator), decimating by blocks (module doc).
     pub fn push(&mut self, s: &AirDataSample) {
-        if self.rows.len() >= Self::MAX_SAMPLES {
+        let stride = self.stride.max(1);
+        let block = self.pushed / Self::BLOCK;
+        let block_start = self.pushed.is_multiple_of(Self::BLOCK);
+        self.pushed += 1;
+        if !block.is_multiple_of(stride) {
             self.dropped += 1;
             return;
+        }
+        if self.rows.len() >= Self::MAX_SAMPLES {
+            self.decimate();
+            if !block.is_multiple_of(self.stride) {
+                self.dropped += 1;
+                return;
+            }
+        }
+        // A kept block after skipped ones is not contiguous with the previous kept sample.
+        if block_start && self.stride > 1 {
+            self.new_segment();
         }
         let m = s.measured_coefficients();
         self.rows.push(Row {
@@ -67,6 +96,37 @@ impl Recorder {
             terms: Term::ALL.map(|t| nan(t.value(s))),
             inputs: [nan(s.de_rad), nan(s.da_rad), nan(s.dr_rad)],
         });
+    }
+
+    /// Drops every second kept block (all kept blocks are whole: the vector is full) and doubles
+    /// the stride; the blocks left, no longer adjacent, become separate segments.
+    fn decimate(&mut self) {
+        let b = Self::BLOCK;
+        let mut kept = Vec::with_capacity(self.rows.len());
+        kept.extend(
+            self.rows
+                .iter()
+                .enumerate()
+                .filter(|(k, _)| (k / b).is_multiple_of(2))
+                .map(|(_, r)| *r),
+        );
+        let removed = self.rows.len() - kept.len();
+        // Renumber: a new segment wherever the old segment or the block changes.
+        let mut seg = 0;
+        let mut prev: Option<(usize, usize)> = None;
+        for (k, r) in kept.iter_mut().enumerate() {
+            let key = (r.segment, k / b);
+            if prev.is_some_and(|p| p != key) {
+                seg += 1;
+            }
+            prev = Some(key);
+            r.segment = seg;
+        }
+        self.rows.clear();
+        self.rows.extend(kept);
+        self.segment = seg;
+        self.dropped += removed;
+        self.stride = self.stride.max(1) * 2;
     }
 
     /// A new manoeuvre starts (a gap): lagged sums will not cross it.
@@ -244,8 +304,9 @@ pub fn validate_coefficients(
     let mut notes = Vec::new();
     if rec.dropped > 0 {
         notes.push(format!(
-            "only the first {} samples were kept for validation ({} later samples not compared)",
+            "{} samples kept for validation, in blocks of {} consecutive samples spread over the record ({} samples not compared)",
             rec.len(),
+            Recorder::BLOCK,
             rec.dropped
         ));
     }
@@ -440,5 +501,43 @@ mod tests {
             / ys.len() as f64;
         let pi = r.outputs[0].prediction_interval.as_ref().unwrap();
         assert!((pi.parameter_share - share).abs() < 1e-9, "{} vs {share}", pi.parameter_share);
+    }
+
+    /// A long feed is decimated by whole blocks spread over the record: at most MAX_SAMPLES
+    /// kept, every sample counted (kept + dropped), the kept samples are the blocks whose index
+    /// is a multiple of the final stride (so the end of the record is covered), each kept
+    /// block is consecutive samples and its own segment.
+    #[test]
+    fn analytic_recorder_keeps_spread_whole_blocks_within_its_bound() {
+        let b = Recorder::BLOCK;
+        // 320 whole blocks and 17 samples: ends inside block 320, a kept one at stride 8.
+        let n = 5 * Recorder::MAX_SAMPLES + 17;
+        let mut rec = Recorder::default();
+        for k in 0..n {
+            let mut s = sample(k as f64 * 0.01, 0.0);
+            s.alpha_rad = k as f64 * 1e-6; // the sample index, read back from the regressor
+            rec.push(&s);
+        }
+        assert!(rec.len() <= Recorder::MAX_SAMPLES);
+        assert_eq!(rec.len() + rec.dropped, n);
+        let all: Vec<usize> = (0..rec.len()).collect();
+        let idx: Vec<usize> =
+            rec.term_series(Term::Alpha, &all).iter().map(|a| (a * 1e6).round() as usize).collect();
+        // Decimations at blocks 64, 128 and 256: stride 8.
+        let stride = 8;
+        let expected: Vec<usize> = (0..n).filter(|k| (k / b) % stride == 0).collect();
+        assert_eq!(idx, expected);
+        assert_eq!(*idx.last().unwrap(), n - 1, "the end of the record is covered");
+        let segs = rec.segments(&all);
+        let mut lens = vec![b; expected.len() / b];
+        lens.extend((expected.len() % b > 0).then_some(expected.len() % b));
+        assert_eq!(segs, lens, "one segment per kept block");
+        // Short records are untouched: every sample kept, one segment.
+        let mut short = Recorder::default();
+        for k in 0..3 * b {
+            short.push(&sample(k as f64 * 0.01, 0.0));
+        }
+        assert_eq!((short.len(), short.dropped), (3 * b, 0));
+        assert_eq!(short.segments(&(0..3 * b).collect::<Vec<_>>()), vec![3 * b]);
     }
 }

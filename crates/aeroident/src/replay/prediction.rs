@@ -525,12 +525,12 @@ mod tests {
             rec.term_series(Term::Alpha, &all).iter().map(|a| (a * 1e6).round() as usize).collect();
         // Decimations at blocks 64, 128 and 256: stride 8.
         let stride = 8;
-        let expected: Vec<usize> = (0..n).filter(|k| (k / b) % stride == 0).collect();
+        let expected: Vec<usize> = (0..n).filter(|k| (k / b).is_multiple_of(stride)).collect();
         assert_eq!(idx, expected);
         assert_eq!(*idx.last().unwrap(), n - 1, "the end of the record is covered");
         let segs = rec.segments(&all);
         let mut lens = vec![b; expected.len() / b];
-        lens.extend((expected.len() % b > 0).then_some(expected.len() % b));
+        lens.extend((!expected.len().is_multiple_of(b)).then_some(expected.len() % b));
         assert_eq!(segs, lens, "one segment per kept block");
         // Short records are untouched: every sample kept, one segment.
         let mut short = Recorder::default();

@@ -8,6 +8,7 @@
 pub mod error;
 pub mod flight_data;
 pub mod mapping;
+pub mod mavlink;
 pub mod model_file;
 pub mod replay_output;
 pub mod table;

@@ -26,7 +26,8 @@ use std::path::{Path, PathBuf};
 /// Arguments of `aeroident replay`.
 #[derive(Debug, clap::Args)]
 pub struct ReplayArgs {
-    /// Recorded flight data: a CSV with one header row, or `-` for stdin (live mode).
+    /// Recorded flight data: a CSV with one header row, `-` for stdin (live mode), or a live
+    /// MAVLink feed `mavlink:udp:<host>:<port>[?timeout_s=<s>]` (docs/mavlink.md).
     pub data: String,
     /// Channel mapping TOML (see `mappings/*.toml` and `docs/mapping.md`).
     #[arg(long)]
@@ -77,7 +78,13 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         pacing: if args.realtime { Pacing::Realtime } else { Pacing::Unpaced },
         on_model: Some(announce),
     };
-    let live = args.data == "-";
+    let mavlink = crate::live::is_mavlink(&args.data);
+    let live = args.data == "-" || mavlink;
+    if args.estimator == EstimatorKind::Oe && mavlink {
+        anyhow::bail!(
+            "--estimator oe is a batch fit of a whole record, not for a live MAVLink feed"
+        );
+    }
     if args.estimator == EstimatorKind::Oe {
         return execute_batch(&args, &mapping, opts.model);
     }
@@ -92,15 +99,25 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     };
     // Buffered: one write per 64 KiB, not per sample (the replay flushes per line only when
     // paced in real time).
-    let mut stdout_lock = std::io::BufWriter::with_capacity(1 << 16, std::io::stdout().lock());
+    let mut stdout_lock: Box<dyn Write> = if mavlink {
+        // A live feed: each line of estimates out as its message arrives.
+        Box::new(std::io::LineWriter::new(std::io::stdout().lock()))
+    } else {
+        Box::new(std::io::BufWriter::with_capacity(1 << 16, std::io::stdout().lock()))
+    };
     let mut sinks: Vec<&mut dyn Write> = Vec::new();
     if let Some(f) = csv_file.as_mut() {
         sinks.push(f);
     }
     if live {
-        sinks.push(&mut stdout_lock);
+        sinks.push(&mut *stdout_lock);
     }
-    let outcome = if live {
+    let outcome = if mavlink {
+        let (reader, stats) = crate::live::open_mavlink(&args.data, &mapping)?;
+        let mut outcome = replay(reader, &mapping, &opts, sinks)?;
+        crate::live::finish(&mut outcome.summary, &stats);
+        outcome
+    } else if live {
         let reader = FlightDataReader::new(std::io::stdin().lock(), "-", &mapping)?;
         replay(reader, &mapping, &opts, sinks)?
     } else {

@@ -52,13 +52,16 @@ fn flight() -> Option<Vec<AirDataSample>> {
     Some(samples)
 }
 
+/// One as-sent column: its value from a sample.
+type Column<'a> = Box<dyn Fn(&AirDataSample) -> f64 + 'a>;
+
 /// The values as the messages carry them (each `f32`, exactly as `f64`), under the shipped
 /// mapping's column names: written by this test from the samples, independently of the
 /// receiver's row builder.
 fn as_sent_csv(samples: &[AirDataSample]) -> String {
     let f = |x: f64| f64::from(x as f32);
     let o = |x: Option<f64>| f(x.unwrap());
-    let mut cols: Vec<(&str, Box<dyn Fn(&AirDataSample) -> f64>)> = vec![
+    let mut cols: Vec<(&str, Column<'_>)> = vec![
         ("ATTITUDE.time_boot_ms", Box::new(|s| (s.t_s * 1000.0).round())),
         ("VFR_HUD.airspeed", Box::new(move |s| f(s.vt_mps))),
         ("AOA_SSA.AOA", Box::new(move |s| f(s.alpha_rad.to_degrees()))),

@@ -119,12 +119,23 @@ fn pool(duration_s: f64, band_hz: (f64, f64)) -> Vec<u32> {
     (lo..=hi).collect()
 }
 
+/// Sampled members of an orthogonal multisine set.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Multisines {
+    /// Sample times, s (0 … duration, both ends).
+    pub t_s: Vec<f64>,
+    /// One perturbation per surface, rad.
+    pub inputs: Vec<Vec<f64>>,
+    /// Harmonic numbers per surface.
+    pub harmonics: Vec<Vec<u32>>,
+}
+
 /// The orthogonal multisine samples: times and one perturbation per surface (rad).
 ///
 /// # Errors
 /// Non-positive or non-finite amplitude, duration or rate; no surface or a repeated one; a band
 /// with fewer harmonics than surfaces.
-pub fn multisine(spec: &DesignSpec) -> anyhow::Result<(Vec<f64>, Vec<Vec<f64>>, Vec<Vec<u32>>)> {
+pub fn multisine(spec: &DesignSpec) -> anyhow::Result<Multisines> {
     for (what, v) in [
         ("--amplitude-deg", spec.amplitude_rad),
         ("--duration-s", spec.duration_s),
@@ -163,7 +174,7 @@ pub fn multisine(spec: &DesignSpec) -> anyhow::Result<(Vec<f64>, Vec<Vec<f64>>, 
         inputs.push(t_s.iter().map(|&t| m.value(t)).collect());
         harmonics.push(aeroident_signals::orthogonal::orthogonal_harmonics(&pool, n, i)?);
     }
-    Ok((t_s, inputs, harmonics))
+    Ok(Multisines { t_s, inputs, harmonics })
 }
 
 /// The structure predicted for: longitudinal for the elevator alone, lateral without it,
@@ -184,7 +195,7 @@ pub fn structure_for(surfaces: &[Surface]) -> ModelStructure {
 /// As [`multisine`]; a trim that does not converge; a prediction error (e.g. the response
 /// leaves the model's domain: the amplitude is too large).
 pub fn design(spec: &DesignSpec) -> anyhow::Result<Design> {
-    let (t_s, inputs, harmonics) = multisine(spec)?;
+    let Multisines { t_s, inputs, harmonics } = multisine(spec)?;
     let f16m = F16::new(spec.xcg)?;
     let cond = TrimCondition {
         alt_ft: spec.alt_ft,
@@ -285,7 +296,8 @@ mod tests {
 
     #[test]
     fn members_are_orthogonal_over_the_record_and_peak_at_the_amplitude() {
-        let (t, u, h) = multisine(&spec(vec![Surface::De, Surface::Da, Surface::Dr])).unwrap();
+        let Multisines { t_s: t, inputs: u, harmonics: h } =
+            multisine(&spec(vec![Surface::De, Surface::Da, Surface::Dr])).unwrap();
         assert_eq!(t.len(), 501);
         assert_eq!(h, vec![vec![1, 4, 7, 10, 13], vec![2, 5, 8, 11, 14], vec![3, 6, 9, 12, 15]]);
         let n = t.len() - 1; // one period: the last sample repeats the first

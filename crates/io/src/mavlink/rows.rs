@@ -33,8 +33,11 @@ pub struct RowBuilder {
     rows: u64,
 }
 
-/// Splits `MSG[inst].field[i]` into (message, instance, field, index).
-fn split_column(c: &str) -> Result<(&str, Option<&str>, &str, Option<usize>), String> {
+/// The parts of a column name `MSG[inst].field[i]`: message, instance, field, index.
+type ColumnParts<'a> = (&'a str, Option<&'a str>, &'a str, Option<usize>);
+
+/// Splits `MSG[inst].field[i]` into its parts.
+fn split_column(c: &str) -> Result<ColumnParts<'_>, String> {
     let form =
         "expected `<MESSAGE>.<field>`, `<MESSAGE>.<field>[<i>]` or `<MESSAGE>[<name>].<field>`";
     let (message, instance, rest) = match (c.find('['), c.find('.')) {

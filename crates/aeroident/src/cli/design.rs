@@ -174,3 +174,51 @@ fn json(a: &DesignArgs, d: &Design) -> serde_json::Value {
         })).collect::<Vec<_>>(),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn writes_the_tables_and_the_prediction() {
+        let dir = std::env::temp_dir().join(format!("aeroident-design-cli-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let args = DesignArgs {
+            surfaces: vec![Surface::De, Surface::Da],
+            amplitude_deg: 1.0,
+            duration_s: 8.0,
+            rate_hz: 25.0,
+            band_hz: vec![0.1, 1.5],
+            alt_ft: 20000.0,
+            vt_fps: 675.0,
+            xcg: 0.3,
+            out: Some(dir.clone()),
+        };
+        execute(args).unwrap();
+        let input = std::fs::read_to_string(dir.join("input.csv")).unwrap();
+        let inj = std::fs::read_to_string(dir.join("injection.csv")).unwrap();
+        let lines: Vec<&str> = input.lines().collect();
+        assert_eq!(lines[0], "t_s,de_rad,de_deg,da_rad,da_deg");
+        assert_eq!(lines.len(), 1 + 201);
+        let inj_lines: Vec<&str> = inj.lines().collect();
+        assert_eq!(inj_lines[0], "t_ms,de_cdeg,da_cdeg");
+        // The injection table is the input table in ms and rounded centidegrees.
+        for (a, b) in lines.iter().zip(&inj_lines).skip(1) {
+            let x: Vec<f64> = a.split(',').map(|v| v.parse().unwrap()).collect();
+            let y: Vec<i64> = b.split(',').map(|v| v.parse().unwrap()).collect();
+            assert_eq!(y[0], (x[0] * 1000.0).round() as i64);
+            assert_eq!(y[1], (x[2] * 100.0).round() as i64);
+            assert_eq!(y[2], (x[4] * 100.0).round() as i64);
+            assert!((x[2] - x[1].to_degrees()).abs() < 1e-12);
+        }
+        let json: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("design.json")).unwrap()).unwrap();
+        assert_eq!(json["model"], "six-axis");
+        let params = json["parameters"].as_array().unwrap();
+        let six = aeroident_estimators::vocabulary::ModelStructure::six_axis().n_params();
+        assert_eq!(params.len(), six);
+        let cm_q = params.iter().find(|p| p["name"] == "Cm_q").unwrap();
+        assert!(cm_q["crb_sigma"].as_f64().unwrap() > 0.0);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

@@ -24,6 +24,7 @@ fn shipped_mappings_parse_and_map_what_their_records_are_for() {
         "hfb320.toml",
         "jsbsim.toml",
         "jsbsim_clean.toml",
+        "mavlink-aeroident.toml",
         "twin_otter.toml",
     ] {
         assert!(maps.iter().any(|p| p.ends_with(want)), "{want} missing: {maps:?}");
@@ -34,7 +35,11 @@ fn shipped_mappings_parse_and_map_what_their_records_are_for() {
         let lateral = [Channel::Beta, Channel::Ay, Channel::Da, Channel::Dr, Channel::B];
         let has_lateral = lateral.iter().all(|c| m.has(*c));
         match name {
-            "attas_lateral.toml" | "jsbsim.toml" | "jsbsim_clean.toml" => {
+            // The MAVLink feed carries every channel (six-axis aircraft).
+            "attas_lateral.toml"
+            | "jsbsim.toml"
+            | "jsbsim_clean.toml"
+            | "mavlink-aeroident.toml" => {
                 assert!(has_lateral, "{name}")
             }
             // Longitudinal records: the lateral preset must not be the default there.

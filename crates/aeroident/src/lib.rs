@@ -14,10 +14,17 @@ pub mod live;
 pub mod metrics;
 pub mod montecarlo;
 pub mod outdir;
-/// Stacked time-series panels rendered to PNG.
+/// Stacked time-series panels rendered to PNG and SVG.
 pub mod plot;
 /// Proof-of-concept experiments (thesis §4.1): scenarios, simulation loop, outputs, report.
 pub mod poc;
+pub mod progress;
 pub mod replay;
+pub mod report;
+pub mod results;
+pub mod scenario_kind;
 /// Open-loop F-16 simulation: trim → inputs, gusts, turbulence → sensors → CSV and figures.
 pub mod sim;
+pub mod table;
+/// Model validation metrics: fit, residual whiteness, input correlation, prediction intervals.
+pub mod validation;

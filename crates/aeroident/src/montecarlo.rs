@@ -111,6 +111,8 @@ pub struct EstimatorRun {
     pub name: String,
     /// Failure or divergence (time and message); its estimates are not used.
     pub failure: Option<String>,
+    /// Final mean normalised innovation squared (filters only; ≈ 1 when consistent).
+    pub nis: Option<f64>,
     /// Per parameter, in the structure's order.
     pub params: Vec<ParamRun>,
 }
@@ -135,7 +137,18 @@ pub fn run_result(index: u64, sensor_seed: u64, out: &RunOutput) -> RunResult {
             if ests.last().is_none_or(|e| e.name != p.estimator) {
                 let diverged = p.status == Some("diverged");
                 let failure = p.failure.clone().or_else(|| diverged.then(|| "diverged".into()));
-                ests.push(EstimatorRun { name: p.estimator.clone(), failure, params: Vec::new() });
+                let nis = out
+                    .channels
+                    .iter()
+                    .find(|c| c.label == p.estimator)
+                    .and_then(|c| c.nis)
+                    .filter(|v| v.is_finite());
+                ests.push(EstimatorRun {
+                    name: p.estimator.clone(),
+                    failure,
+                    nis,
+                    params: Vec::new(),
+                });
             }
             let e = ests.last_mut().expect("pushed above");
             if let Some(f) = p.r#final.filter(|f| !f.is_finite()) {
@@ -225,6 +238,9 @@ pub struct EstimatorStats {
     pub runs_ok: usize,
     /// Runs excluded from the statistics, with the reason.
     pub failed_runs: Vec<FailedRun>,
+    /// Mean over `runs_ok` of the final normalised innovation squared (`null` for methods
+    /// without innovations); ≈ 1 for a consistent filter.
+    pub mean_nis: Option<f64>,
     /// Per parameter.
     pub parameters: Vec<ParamStats>,
 }
@@ -299,9 +315,11 @@ pub fn statistics(runs: &[RunResult], names: &[String], crb: &CrbTable) -> Vec<E
                         .collect()
                 })
                 .unwrap_or_default();
+            let nis: Vec<f64> = ok.iter().filter_map(|e| e.nis).collect();
             EstimatorStats {
                 name: name.clone(),
                 runs_ok: ok.len(),
+                mean_nis: mean(&nis),
                 failed_runs: failed,
                 parameters,
             }

@@ -1,10 +1,33 @@
-//! Figures: stacked panels of time series rendered to a PNG with `plotters`.
+//! Figures: stacked panels of time series rendered with `plotters`, to PNG and to SVG.
 //!
-//! One generic helper, [`render_panels_png`](crate::plot::render_panels_png), draws any number of panels that share the time
-//! axis (state tracking, parameter convergence, control commands). Text uses the DejaVu Sans
+//! One generic helper draws any number of panels that share the time axis (state tracking,
+//! parameter convergence, control commands, model versus measured):
+//! [`render_panels_png`](crate::plot::render_panels_png) writes a PNG,
+//! [`render_panels_svg`](crate::plot::render_panels_svg) returns the same figure as SVG text
+//! (for a file beside the PNG and for inlining in `report.html`). Text uses the DejaVu Sans
 //! font embedded by the `dejavu` crate and registered with plotters' `ab_glyph` backend, so no
 //! system font is needed.
+//!
+//! What each panel shows, so a converged estimate is readable:
+//! - **y-range from the converged part**: the 1–99 % quantiles of every series, band and line
+//!   over the last [`CONVERGED_FRACTION`](crate::plot::CONVERGED_FRACTION) of the time axis, plus each series's last value and
+//!   every reference line, with a 12 % margin. A start-up transient outside that range is
+//!   clipped at the frame (the line leaves and re-enters the panel), it never sets the scale.
+//!   Panels of signals ([`Panel::signals`](crate::plot::Panel::signals)) use the 0.2–99.8 % quantiles of the whole record.
+//! - **gaps**: a non-finite value (an estimate that does not exist yet, `None`) breaks the
+//!   line; nothing is drawn as 0.
+//! - **bands** ([`Band`](crate::plot::Band)): shaded areas, e.g. ±2σ around an estimate, in the colour of their
+//!   series.
+//! - **reference lines** ([`HLine`](crate::plot::HLine)): horizontal lines across the panel (published value,
+//!   truth).
+//! - **legend outside the data**: in a column to the right of each panel.
+//! - **ticks**: labels with as many decimals as the tick step needs, never `-0`; the label
+//!   area is as wide as the longest label.
+//! - **numerical noise**: a panel whose every value is below [`ZERO_THRESHOLD`](crate::plot::ZERO_THRESHOLD) in magnitude
+//!   (e.g. 1e-27 round-off of a parameter that is exactly 0) is drawn as a flat line at 0 on
+//!   ±1, and its caption says so.
 
+use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::{FontStyle, register_font};
 use std::path::{Path, PathBuf};
@@ -12,6 +35,12 @@ use std::sync::Once;
 
 /// Font family name under which DejaVu Sans is registered.
 const FONT: &str = "sans-serif";
+
+/// The fraction of the time axis, at its end, whose values set a panel's y-range.
+pub const CONVERGED_FRACTION: f64 = 0.6;
+
+/// Values of magnitude below this everywhere in a panel are numerical noise around 0.
+pub const ZERO_THRESHOLD: f64 = 1e-12;
 
 /// Errors of figure rendering. Each names the output file.
 #[derive(Debug, thiserror::Error)]
@@ -43,7 +72,7 @@ pub enum LineKind {
     Dashed,
 }
 
-/// One time series: `values[k]` at `t_s[k]` (s). Non-finite points are skipped, not drawn.
+/// One time series: `values[k]` at `t_s[k]` (s). Non-finite values are gaps, not drawn.
 #[derive(Debug, Clone)]
 pub struct Series {
     /// Legend label.
@@ -56,8 +85,33 @@ pub struct Series {
     pub kind: LineKind,
 }
 
-/// One panel (a chart) of a figure: a y-axis label and its series.
-#[derive(Debug, Clone)]
+/// A shaded band `lo[k]…hi[k]` at `t_s[k]` (e.g. estimate ± 2σ), drawn in the colour of series
+/// `series` of its panel; non-finite bounds are gaps.
+#[derive(Debug, Clone, Default)]
+pub struct Band {
+    /// Legend label (e.g. `±2σ`).
+    pub label: String,
+    /// Index of the series whose colour the band takes.
+    pub series: usize,
+    /// Times, s.
+    pub t_s: Vec<f64>,
+    /// Lower bound.
+    pub lo: Vec<f64>,
+    /// Upper bound.
+    pub hi: Vec<f64>,
+}
+
+/// A horizontal reference line across the panel (a published value, a constant truth).
+#[derive(Debug, Clone, PartialEq)]
+pub struct HLine {
+    /// Legend label.
+    pub label: String,
+    /// Its value, units of the panel.
+    pub value: f64,
+}
+
+/// One panel (a chart) of a figure: a y-axis label, its series, bands and reference lines.
+#[derive(Debug, Clone, Default)]
 pub struct Panel {
     /// Panel caption.
     pub title: String,
@@ -65,6 +119,13 @@ pub struct Panel {
     pub y_label: String,
     /// Series drawn in this panel.
     pub series: Vec<Series>,
+    /// Shaded bands, drawn under the series.
+    pub bands: Vec<Band>,
+    /// Horizontal reference lines.
+    pub hlines: Vec<HLine>,
+    /// The panel shows signals over the whole record (measured vs model, residuals), not
+    /// converging estimates: the y-range covers the whole time axis and lines are 1 px.
+    pub signals: bool,
 }
 
 /// Most points drawn per series; longer series are decimated by a fixed stride.
@@ -90,41 +151,219 @@ const PALETTE: [RGBColor; 6] = [
     RGBColor(255, 127, 14),
 ];
 
-fn y_range(panel: &Panel) -> (f64, f64) {
-    let mut lo = f64::INFINITY;
-    let mut hi = f64::NEG_INFINITY;
-    for s in &panel.series {
-        for &v in s.values.iter().filter(|v| v.is_finite()) {
-            lo = lo.min(v);
-            hi = hi.max(v);
-        }
-    }
-    if !lo.is_finite() {
-        return (-1.0, 1.0);
-    }
-    let span = hi - lo;
-    let pad = if span > 1e-12 * (hi.abs() + lo.abs()).max(1e-300) {
-        0.06 * span
-    } else {
-        0.5 * hi.abs().max(1.0)
-    };
-    (lo - pad, hi + pad)
+/// Colours of reference lines (distinct from the series palette's first entries).
+const LINE_PALETTE: [RGBColor; 3] =
+    [RGBColor(0, 140, 70), RGBColor(200, 120, 0), RGBColor(120, 120, 120)];
+
+/// Series colour `i` of a panel (black, red, blue, green, purple, orange, repeating).
+fn series_color(i: usize) -> RGBColor {
+    PALETTE[i % PALETTE.len()]
 }
 
-/// Renders `panels` stacked vertically into a PNG at `path`, `width_px` wide and
-/// `panel_height_px` per panel, with a figure `title` and a shared x label (time, s).
-///
-/// # Errors
-/// [`PlotError::InvalidFigure`] when there is no panel, or a series's `t_s` and `values`
-/// differ in length; [`PlotError::Backend`] when drawing or writing the file fails.
-pub fn render_panels_png(
-    path: &Path,
-    title: &str,
-    panels: &[Panel],
-    width_px: u32,
-    panel_height_px: u32,
-) -> Result<(), PlotError> {
-    register_fonts();
+/// The `q`-quantile (0…1) of sorted `v` (nearest rank).
+fn quantile(v: &[f64], q: f64) -> f64 {
+    let k = ((v.len() - 1) as f64 * q).round() as usize;
+    v[k.min(v.len() - 1)]
+}
+
+/// Whether every finite value of the panel is numerical noise around 0 (module doc); `false`
+/// for a panel without any finite value.
+pub fn is_noise_panel(panel: &Panel) -> bool {
+    let mut any = false;
+    let all_small = panel
+        .series
+        .iter()
+        .flat_map(|s| s.values.iter())
+        .chain(panel.bands.iter().flat_map(|b| b.lo.iter().chain(b.hi.iter())))
+        .chain(panel.hlines.iter().map(|h| &h.value))
+        .filter(|v| v.is_finite())
+        .all(|v| {
+            any = true;
+            v.abs() < ZERO_THRESHOLD
+        });
+    any && all_small
+}
+
+/// The y-range of a panel over the time axis `t_range` (module doc).
+pub fn y_range(panel: &Panel, t_range: (f64, f64)) -> (f64, f64) {
+    if is_noise_panel(panel) {
+        return (-1.0, 1.0);
+    }
+    let t_from = if panel.signals {
+        f64::NEG_INFINITY
+    } else {
+        t_range.0 + (1.0 - CONVERGED_FRACTION) * (t_range.1 - t_range.0)
+    };
+    let window = |t: &[f64], v: &[f64], out: &mut Vec<f64>| {
+        out.extend(
+            t.iter().zip(v).filter(|(t, v)| **t >= t_from && v.is_finite()).map(|(_, v)| *v),
+        );
+    };
+    let mut vals = Vec::new();
+    for s in &panel.series {
+        window(&s.t_s, &s.values, &mut vals);
+    }
+    for b in &panel.bands {
+        window(&b.t_s, &b.lo, &mut vals);
+        window(&b.t_s, &b.hi, &mut vals);
+    }
+    if vals.is_empty() {
+        // Nothing in the converged part: every finite value counts.
+        vals.extend(panel.series.iter().flat_map(|s| s.values.iter().copied()));
+        vals.retain(|v| v.is_finite());
+    }
+    let mut must: Vec<f64> =
+        panel.hlines.iter().map(|h| h.value).filter(|v| v.is_finite()).collect();
+    must.extend(panel.series.iter().filter_map(|s| s.values.iter().rev().find(|v| v.is_finite())));
+    vals.sort_by(f64::total_cmp);
+    let (mut lo, mut hi) = if vals.is_empty() {
+        (f64::INFINITY, f64::NEG_INFINITY)
+    } else {
+        let q = if panel.signals { 0.002 } else { 0.01 };
+        (quantile(&vals, q), quantile(&vals, 1.0 - q))
+    };
+    for v in must {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !(lo.is_finite() && hi.is_finite()) {
+        return (-1.0, 1.0);
+    }
+    let mid = 0.5 * (lo + hi);
+    let span = (hi - lo).max(0.02 * mid.abs()).max(ZERO_THRESHOLD);
+    let (lo, hi) = (mid - 0.5 * span, mid + 0.5 * span);
+    (lo - 0.12 * span, hi + 0.12 * span)
+}
+
+/// Tick label of `x` on an axis spanning `span`: decimals as the tick step (≈ span/5) needs,
+/// e-notation for very large or very small magnitudes, never `-0`.
+pub fn tick_label(x: f64, span: f64, magnitude: f64) -> String {
+    let step = (span / 5.0).abs();
+    if !(step > 0.0 && step.is_finite()) {
+        return format!("{}", x + 0.0);
+    }
+    // Values within a millionth of a step of 0 are 0 (no "-0.000", no "1e-17").
+    let x = if x.abs() < 1e-6 * step { 0.0 } else { x };
+    if !(1e-3..1e5).contains(&magnitude) {
+        let digits = ((magnitude / step).log10().ceil().max(0.0) as usize + 1).min(6);
+        if x == 0.0 {
+            return "0".into();
+        }
+        return format!("{x:.digits$e}", digits = digits.saturating_sub(1).max(1));
+    }
+    let decimals = (-step.log10().floor()).clamp(0.0, 9.0) as usize;
+    let s = format!("{x:.decimals$}");
+    if s.trim_start_matches('-').chars().all(|c| c == '0' || c == '.') { "0".into() } else { s }
+}
+
+/// Splits the points into polylines: a non-finite value ends one, and the parts outside
+/// `lo…hi` are cut at the boundary (linear interpolation), so nothing is drawn outside the
+/// frame and nothing is invented.
+fn clip_polylines(t: &[f64], v: &[f64], lo: f64, hi: f64, stride: usize) -> Vec<Vec<(f64, f64)>> {
+    let mut out: Vec<Vec<(f64, f64)>> = Vec::new();
+    let mut cur: Vec<(f64, f64)> = Vec::new();
+    let mut prev: Option<(f64, f64)> = None;
+    let inside = |y: f64| (lo..=hi).contains(&y);
+    let cross = |a: (f64, f64), b: (f64, f64), y: f64| {
+        let f = (y - a.1) / (b.1 - a.1);
+        (a.0 + f * (b.0 - a.0), y)
+    };
+    let n = t.len().min(v.len());
+    let idx = (0..n)
+        .step_by(stride.max(1))
+        .chain((n > 0 && !(n - 1).is_multiple_of(stride.max(1))).then_some(n - 1));
+    for k in idx {
+        let p = (t[k], v[k]);
+        if !(p.0.is_finite() && p.1.is_finite()) {
+            if cur.len() > 1 {
+                out.push(std::mem::take(&mut cur));
+            }
+            cur.clear();
+            prev = None;
+            continue;
+        }
+        match prev {
+            None => {
+                if inside(p.1) {
+                    cur.push(p);
+                }
+            }
+            Some(a) => {
+                let (ia, ib) = (inside(a.1), inside(p.1));
+                if ia && ib {
+                    cur.push(p);
+                } else if ia && !ib {
+                    cur.push(cross(a, p, if p.1 > hi { hi } else { lo }));
+                    if cur.len() > 1 {
+                        out.push(std::mem::take(&mut cur));
+                    }
+                    cur.clear();
+                } else if !ia && ib {
+                    cur.push(cross(a, p, if a.1 > hi { hi } else { lo }));
+                    cur.push(p);
+                } else if (a.1 > hi && p.1 < lo) || (a.1 < lo && p.1 > hi) {
+                    // Passes straight through the frame.
+                    let (e, x) = if a.1 > hi { (hi, lo) } else { (lo, hi) };
+                    out.push(vec![cross(a, p, e), cross(a, p, x)]);
+                }
+            }
+        }
+        prev = Some(p);
+    }
+    if cur.len() > 1 {
+        out.push(cur);
+    }
+    out
+}
+
+/// The closed outline of each stretch where both bounds are finite, clamped to `lo…hi`.
+fn band_polygons(b: &Band, lo: f64, hi: f64, stride: usize) -> Vec<Vec<(f64, f64)>> {
+    let mut out = Vec::new();
+    let mut upper: Vec<(f64, f64)> = Vec::new();
+    let mut lower: Vec<(f64, f64)> = Vec::new();
+    let n = b.t_s.len().min(b.lo.len()).min(b.hi.len());
+    let mut flush = |upper: &mut Vec<(f64, f64)>, lower: &mut Vec<(f64, f64)>| {
+        if upper.len() > 1 {
+            let mut poly = std::mem::take(upper);
+            poly.extend(lower.drain(..).rev());
+            out.push(poly);
+        }
+        upper.clear();
+        lower.clear();
+    };
+    let idx = (0..n)
+        .step_by(stride.max(1))
+        .chain((n > 0 && !(n - 1).is_multiple_of(stride.max(1))).then_some(n - 1));
+    for k in idx {
+        let (t, l, h) = (b.t_s[k], b.lo[k], b.hi[k]);
+        if t.is_finite() && l.is_finite() && h.is_finite() {
+            upper.push((t, h.clamp(lo, hi)));
+            lower.push((t, l.clamp(lo, hi)));
+        } else {
+            flush(&mut upper, &mut lower);
+        }
+    }
+    flush(&mut upper, &mut lower);
+    out
+}
+
+/// Legend entries of a panel: (label, colour, kind) with kind 0 = solid line, 1 = dashed line,
+/// 2 = band.
+fn legend_entries(panel: &Panel) -> Vec<(String, RGBColor, u8)> {
+    let mut v = Vec::new();
+    for (i, s) in panel.series.iter().enumerate() {
+        v.push((s.label.clone(), series_color(i), u8::from(s.kind == LineKind::Dashed)));
+    }
+    for b in &panel.bands {
+        v.push((b.label.clone(), series_color(b.series), 2));
+    }
+    for (i, h) in panel.hlines.iter().enumerate() {
+        v.push((h.label.clone(), LINE_PALETTE[i % LINE_PALETTE.len()], 1));
+    }
+    v
+}
+
+fn validate(path: &Path, panels: &[Panel]) -> Result<(), PlotError> {
     let invalid = |reason: String| PlotError::InvalidFigure { path: path.to_path_buf(), reason };
     if panels.is_empty() {
         return Err(invalid("no panel to draw".into()));
@@ -141,77 +380,210 @@ pub fn render_panels_png(
                 )));
             }
         }
+        for b in &p.bands {
+            if b.t_s.len() != b.lo.len() || b.t_s.len() != b.hi.len() {
+                return Err(invalid(format!(
+                    "band `{}` in panel `{}` has {} times but {}/{} bounds",
+                    b.label,
+                    p.title,
+                    b.t_s.len(),
+                    b.lo.len(),
+                    b.hi.len()
+                )));
+            }
+        }
     }
-    let backend_err = |e: &dyn std::fmt::Display| PlotError::Backend {
-        path: path.to_path_buf(),
-        detail: e.to_string(),
-    };
-    let height = 40 + panel_height_px * panels.len() as u32;
-    let root = BitMapBackend::new(path, (width_px, height)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| backend_err(&e))?;
-    let root = root
-        .titled(title, (FONT, 22).into_font().style(FontStyle::Bold))
-        .map_err(|e| backend_err(&e))?;
+    Ok(())
+}
+
+/// Draws the panels on `root` (any plotters backend).
+fn draw_panels<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    panels: &[Panel],
+) -> Result<(), String> {
+    let e = |e: &dyn std::fmt::Display| e.to_string();
+    root.fill(&WHITE).map_err(|x| e(&x))?;
+    let root =
+        root.titled(title, (FONT, 22).into_font().style(FontStyle::Bold)).map_err(|x| e(&x))?;
     let areas = root.split_evenly((panels.len(), 1));
     let (t_min, t_max) = panels
         .iter()
-        .flat_map(|p| p.series.iter())
-        .flat_map(|s| s.t_s.iter().copied())
+        .flat_map(|p| p.series.iter().map(|s| &s.t_s).chain(p.bands.iter().map(|b| &b.t_s)))
+        .flat_map(|t| t.iter().copied())
         .filter(|t| t.is_finite())
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| (a.min(t), b.max(t)));
     let (t_min, t_max) = if t_min < t_max { (t_min, t_max) } else { (0.0, 1.0) };
+    let legend_chars = panels
+        .iter()
+        .flat_map(legend_entries)
+        .map(|(l, _, _)| l.chars().count())
+        .max()
+        .unwrap_or(0);
+    let legend_w = (34 + 8 * legend_chars as u32).clamp(90, 260);
     for (area, panel) in areas.iter().zip(panels) {
-        let (y_lo, y_hi) = y_range(panel);
-        let mut chart = ChartBuilder::on(area)
-            .caption(&panel.title, (FONT, 16))
+        let noise = is_noise_panel(panel);
+        let (y_lo, y_hi) = y_range(panel, (t_min, t_max));
+        let (w, _) = area.dim_in_pixel();
+        let (chart_area, legend_area) = area.split_horizontally(w.saturating_sub(legend_w));
+        let y_span = y_hi - y_lo;
+        let y_mag = y_lo.abs().max(y_hi.abs());
+        let y_fmt = move |y: &f64| tick_label(*y, y_span, y_mag);
+        let x_span = t_max - t_min;
+        let x_mag = t_min.abs().max(t_max.abs());
+        let x_fmt = move |x: &f64| tick_label(*x, x_span, x_mag);
+        let widest = [y_lo, y_hi, 0.5 * (y_lo + y_hi)]
+            .iter()
+            .map(|y| y_fmt(y).chars().count())
+            .max()
+            .unwrap_or(4) as u32;
+        let caption = if noise {
+            format!("{}  (|values| < {ZERO_THRESHOLD:e} everywhere: drawn as 0)", panel.title)
+        } else {
+            panel.title.clone()
+        };
+        let mut chart = ChartBuilder::on(&chart_area)
+            .caption(caption, (FONT, 16))
             .margin(8)
-            .x_label_area_size(32)
-            .y_label_area_size(70)
+            .margin_right(16)
+            .x_label_area_size(36)
+            .y_label_area_size(30 + 8 * widest)
             .build_cartesian_2d(t_min..t_max, y_lo..y_hi)
-            .map_err(|e| backend_err(&e))?;
+            .map_err(|x| e(&x))?;
         chart
             .configure_mesh()
             .x_desc("t (s)")
             .y_desc(panel.y_label.as_str())
+            .x_labels(10)
+            .y_labels(6)
+            .x_label_formatter(&x_fmt)
+            .y_label_formatter(&y_fmt)
             .label_style((FONT, 13))
             .axis_desc_style((FONT, 14))
-            .light_line_style(RGBColor(235, 235, 235))
+            .light_line_style(RGBColor(238, 238, 238))
+            .bold_line_style(RGBColor(215, 215, 215))
             .draw()
-            .map_err(|e| backend_err(&e))?;
-        for (i, s) in panel.series.iter().enumerate() {
-            let color = PALETTE[i % PALETTE.len()];
-            let stride = s.t_s.len().div_ceil(MAX_POINTS).max(1);
-            let pts: Vec<(f64, f64)> = s
-                .t_s
-                .iter()
-                .zip(&s.values)
-                .step_by(stride)
-                .filter(|(t, v)| t.is_finite() && v.is_finite())
-                .map(|(&t, &v)| (t, v.clamp(y_lo, y_hi)))
-                .collect();
-            // 1 px: plotters joins thick polylines with miters, which spike far outside the
-            // chart where a signal reverses sharply (chattering estimates).
-            let style = ShapeStyle::from(&color).stroke_width(1);
-            let anno = match s.kind {
-                LineKind::Solid => chart.draw_series(LineSeries::new(pts, style)),
-                LineKind::Dashed => chart.draw_series(DashedLineSeries::new(pts, 8, 5, style)),
+            .map_err(|x| e(&x))?;
+        for b in &panel.bands {
+            let color = series_color(b.series);
+            let stride = b.t_s.len().div_ceil(MAX_POINTS).max(1);
+            for poly in band_polygons(b, y_lo, y_hi, stride) {
+                chart
+                    .draw_series(std::iter::once(Polygon::new(poly, color.mix(0.14).filled())))
+                    .map_err(|x| e(&x))?;
             }
-            .map_err(|e| backend_err(&e))?;
-            anno.label(s.label.as_str()).legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-            });
         }
-        chart
-            .configure_series_labels()
-            .label_font((FONT, 13))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(|e| backend_err(&e))?;
+        for (i, h) in panel.hlines.iter().enumerate() {
+            let color = LINE_PALETTE[i % LINE_PALETTE.len()];
+            let v = if noise { 0.0 } else { h.value };
+            if (y_lo..=y_hi).contains(&v) {
+                chart
+                    .draw_series(DashedLineSeries::new(
+                        vec![(t_min, v), (t_max, v)],
+                        10,
+                        6,
+                        ShapeStyle::from(&color).stroke_width(2),
+                    ))
+                    .map_err(|x| e(&x))?;
+            }
+        }
+        for (i, s) in panel.series.iter().enumerate() {
+            let color = series_color(i);
+            let stride = s.t_s.len().div_ceil(MAX_POINTS).max(1);
+            let values: Vec<f64> = if noise {
+                s.values.iter().map(|v| if v.is_finite() { 0.0 } else { f64::NAN }).collect()
+            } else {
+                s.values.clone()
+            };
+            // Estimates 2 px, signals and dashed lines 1 px; plotters joins thick polylines
+            // with miters, which spike where a signal reverses sharply, so no thicker.
+            let width = if s.kind == LineKind::Solid && !panel.signals { 2 } else { 1 };
+            let style = ShapeStyle::from(&color).stroke_width(width);
+            for line in clip_polylines(&s.t_s, &values, y_lo, y_hi, stride) {
+                match s.kind {
+                    LineKind::Solid => chart.draw_series(LineSeries::new(line, style)),
+                    LineKind::Dashed => chart.draw_series(DashedLineSeries::new(line, 8, 5, style)),
+                }
+                .map_err(|x| e(&x))?;
+            }
+        }
+        // The legend, in its own column right of the chart.
+        let font = (FONT, 13).into_font().color(&BLACK);
+        for (k, (label, color, kind)) in legend_entries(panel).iter().enumerate() {
+            let y = 34 + 20 * k as i32;
+            let x = 6;
+            match kind {
+                2 => legend_area
+                    .draw(&Rectangle::new([(x, y - 6), (x + 22, y + 6)], color.mix(0.25).filled()))
+                    .map_err(|x| e(&x))?,
+                1 => {
+                    for seg in [(x, x + 6), (x + 9, x + 15), (x + 18, x + 22)] {
+                        legend_area
+                            .draw(&PathElement::new(
+                                vec![(seg.0, y), (seg.1, y)],
+                                color.stroke_width(2),
+                            ))
+                            .map_err(|x| e(&x))?;
+                    }
+                }
+                _ => legend_area
+                    .draw(&PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(2)))
+                    .map_err(|x| e(&x))?,
+            }
+            legend_area
+                .draw(&Text::new(label.clone(), (x + 28, y - 8), font.clone()))
+                .map_err(|x| e(&x))?;
+        }
     }
-    root.present().map_err(|e| backend_err(&e))?;
+    root.present().map_err(|x| e(&x))?;
     Ok(())
+}
+
+/// Renders `panels` stacked vertically into a PNG at `path`, `width_px` wide and
+/// `panel_height_px` per panel, with a figure `title` and a shared x label (time, s); what
+/// each panel shows is in the module doc.
+///
+/// # Errors
+/// [`PlotError::InvalidFigure`] when there is no panel, or a series's or band's lengths
+/// differ; [`PlotError::Backend`] when drawing or writing the file fails.
+pub fn render_panels_png(
+    path: &Path,
+    title: &str,
+    panels: &[Panel],
+    width_px: u32,
+    panel_height_px: u32,
+) -> Result<(), PlotError> {
+    register_fonts();
+    validate(path, panels)?;
+    let height = 40 + panel_height_px * panels.len() as u32;
+    let root = BitMapBackend::new(path, (width_px, height)).into_drawing_area();
+    draw_panels(&root, title, panels)
+        .map_err(|detail| PlotError::Backend { path: path.to_path_buf(), detail })
+}
+
+/// [`render_panels_png`] as SVG text (the same layout); `name` only names the figure in
+/// errors.
+///
+/// # Errors
+/// As [`render_panels_png`].
+pub fn render_panels_svg(
+    name: &str,
+    title: &str,
+    panels: &[Panel],
+    width_px: u32,
+    panel_height_px: u32,
+) -> Result<String, PlotError> {
+    register_fonts();
+    let path = Path::new(name);
+    validate(path, panels)?;
+    let height = 40 + panel_height_px * panels.len() as u32;
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (width_px, height)).into_drawing_area();
+        draw_panels(&root, title, panels)
+            .map_err(|detail| PlotError::Backend { path: path.to_path_buf(), detail })?;
+    }
+    Ok(svg)
 }
 
 /// One histogram panel: the values binned into `bins` equal bins over their range (widened to
@@ -458,6 +830,7 @@ mod tests {
                     kind: LineKind::Solid,
                 },
             ],
+            ..Default::default()
         };
         render_panels_png(&path, "test", &[panel("a"), panel("b")], 640, 200).unwrap();
         let bytes = std::fs::read(&path).unwrap();
@@ -466,6 +839,115 @@ mod tests {
         let h = u32::from_be_bytes(bytes[20..24].try_into().unwrap());
         assert_eq!((w, h), (640, 40 + 2 * 200));
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    fn series(t: &[f64], v: Vec<f64>) -> Series {
+        Series { label: "s".into(), t_s: t.to_vec(), values: v, kind: LineKind::Solid }
+    }
+
+    /// A start-up transient of ±1e6 in the first 10 % does not set the range: the range is
+    /// that of the converged value 2.0 ± 0.01 (with margin) and includes the reference line.
+    #[test]
+    fn y_range_is_set_by_the_converged_part_not_the_transient() {
+        let t: Vec<f64> = (0..1000).map(|k| k as f64 * 0.01).collect();
+        let v: Vec<f64> = t
+            .iter()
+            .map(|&t| if t < 1.0 { 1e6 * (40.0 * t).sin() } else { 2.0 + 0.01 * (3.0 * t).sin() })
+            .collect();
+        let p = Panel {
+            series: vec![series(&t, v)],
+            hlines: vec![HLine { label: "ref".into(), value: 2.05 }],
+            ..Default::default()
+        };
+        let (lo, hi) = y_range(&p, (0.0, 9.99));
+        assert!(lo > 1.9 && lo < 1.99, "{lo}");
+        assert!(hi > 2.05 && hi < 2.1, "{hi}");
+        // The same as signals (measured data): the whole record sets the range.
+        let p = Panel { signals: true, ..p };
+        let (lo, hi) = y_range(&p, (0.0, 9.99));
+        assert!(lo < -5e5 && hi > 5e5, "{lo} {hi}");
+        // Round-off noise is a flat 0 on ±1.
+        let p = Panel {
+            series: vec![series(&t, t.iter().map(|t| 1e-27 * t.sin()).collect())],
+            ..Default::default()
+        };
+        assert!(is_noise_panel(&p));
+        assert_eq!(y_range(&p, (0.0, 9.99)), (-1.0, 1.0));
+        // All gaps: not noise, a default range.
+        let p = Panel { series: vec![series(&t, vec![f64::NAN; t.len()])], ..Default::default() };
+        assert!(!is_noise_panel(&p));
+        assert_eq!(y_range(&p, (0.0, 9.99)), (-1.0, 1.0));
+    }
+
+    #[test]
+    fn tick_labels_have_no_negative_zero_and_enough_decimals() {
+        assert_eq!(tick_label(-1e-17, 0.5, 1.0), "0");
+        assert_eq!(tick_label(-0.0, 10.0, 10.0), "0");
+        assert_eq!(tick_label(-0.02, 0.1, 1.0), "-0.02");
+        assert_eq!(tick_label(10.0, 30.0, 30.0), "10");
+        assert_eq!(tick_label(2.5, 4.0, 5.0), "2.5");
+        assert_eq!(tick_label(-27.25, 2.0, 30.0), "-27.2");
+        assert!(tick_label(2e-5, 1e-4, 1e-4).contains('e'));
+    }
+
+    /// A `None` (NaN) breaks the line; points outside the range are cut at the boundary by
+    /// linear interpolation.
+    #[test]
+    fn polylines_break_at_gaps_and_clip_at_the_frame() {
+        let t = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0];
+        let v = [f64::NAN, 0.0, 0.5, f64::NAN, 0.0, 4.0];
+        let lines = clip_polylines(&t, &v, -1.0, 1.0, 1);
+        assert_eq!(lines, vec![vec![(1.0, 0.0), (2.0, 0.5)], vec![(4.0, 0.0), (4.25, 1.0)]]);
+        // Straight through the frame from above to below.
+        let lines = clip_polylines(&[0.0, 1.0], &[3.0, -3.0], -1.0, 1.0, 1);
+        assert_eq!(lines.len(), 1);
+        assert!((lines[0][0].0 - 1.0 / 3.0).abs() < 1e-12 && lines[0][0].1 == 1.0);
+        assert!((lines[0][1].0 - 2.0 / 3.0).abs() < 1e-12 && lines[0][1].1 == -1.0);
+        // A band stops where σ does not exist.
+        let b = Band {
+            label: "±2σ".into(),
+            series: 0,
+            t_s: t.to_vec(),
+            lo: vec![f64::NAN, -1.0, -1.0, -1.0, f64::NAN, f64::NAN],
+            hi: vec![f64::NAN, 1.0, 2.0, 1.0, f64::NAN, f64::NAN],
+        };
+        let polys = band_polygons(&b, -5.0, 1.5, 1);
+        assert_eq!(
+            polys,
+            vec![vec![(1.0, 1.0), (2.0, 1.5), (3.0, 1.0), (3.0, -1.0), (2.0, -1.0), (1.0, -1.0)]]
+        );
+    }
+
+    /// The SVG has the requested size, the title, the legend labels and a filled band.
+    #[test]
+    fn svg_has_title_legend_and_band() {
+        let t: Vec<f64> = (0..200).map(|k| k as f64 * 0.05).collect();
+        let p = Panel {
+            title: "Cm_alpha".into(),
+            y_label: "Cm_alpha (1/rad)".into(),
+            series: vec![series(&t, t.iter().map(|t| -1.0 + 0.1 / (1.0 + t)).collect())],
+            bands: vec![Band {
+                label: "±2σ".into(),
+                series: 0,
+                t_s: t.clone(),
+                lo: t.iter().map(|t| -1.1 + 0.1 / (1.0 + t)).collect(),
+                hi: t.iter().map(|t| -0.9 + 0.1 / (1.0 + t)).collect(),
+            }],
+            hlines: vec![HLine { label: "reference".into(), value: -1.0 }],
+            signals: false,
+        };
+        let svg = render_panels_svg("fig.svg", "a title", &[p], 800, 250).unwrap();
+        assert!(
+            svg.starts_with("<svg")
+                && svg.contains("width=\"800\"")
+                && svg.contains("height=\"290\""),
+            "{}",
+            &svg[..200]
+        );
+        for want in ["a title", "±2σ", "reference", "<polygon"] {
+            assert!(svg.contains(want), "{want}");
+        }
+        assert!(!svg.contains(">-0<") && !svg.contains(">-0.0<"));
     }
 
     #[test]

@@ -97,7 +97,7 @@ fn four(ta: f64, tq: f64, tl: f64, td: f64) -> String {
 #[test]
 fn analytic_zero_truth_no_excitation_estimators_hold_and_aircraft_identical() {
     let text = format!(
-        "name = \"hold\"\nduration_s = 2.0\n{}{}",
+        "kind = \"run\"\nname = \"hold\"\nduration_s = 2.0\n{}{}",
         four(0.0, 0.0, 0.0, 0.0),
         ALL_ESTIMATORS
     );
@@ -183,7 +183,7 @@ fn logged_sample(out: &RunOutput, ch: usize, k: usize) -> (F16State, F16State, F
 #[test]
 fn hand_gain_3_128_and_surface_derivative_3_106_at_a_logged_sample() {
     let text = format!(
-        "name = \"k\"\nduration_s = 1.0\n[[input]]\nchannel = \"elevator\"\nkind = \"sine\"\namplitude_deg = 0.05\nfrequency_hz = 1.0\n{}{}",
+        "kind = \"run\"\nname = \"k\"\nduration_s = 1.0\n[[input]]\nchannel = \"elevator\"\nkind = \"sine\"\namplitude_deg = 0.05\nfrequency_hz = 1.0\n{}{}",
         four(0.0015, 0.01, 0.01, 0.001),
         "[[estimator]]\nkind = \"published\"\nreading = \"implicit\"\nparams = [\"Cm_alpha\", \"Cm_q\", \"CL_alpha\", \"CD_alpha\"]\n"
     );
@@ -565,7 +565,7 @@ fn default_scenario_writes_outputs_with_exact_summary_keys() {
 /// of the reference F-16's true local derivative (finite differences of its tables at trim).
 #[test]
 fn val_rls_closed_loop_noise_free_recovers_true_derivatives() {
-    let mut text = String::from("name = \"rls-clean\"\nduration_s = 10.0\n");
+    let mut text = String::from("kind = \"run\"\nname = \"rls-clean\"\nduration_s = 10.0\n");
     for (k, (ch, a)) in [("elevator", 0.1), ("aileron", 0.15), ("rudder", 0.15)].iter().enumerate()
     {
         text += &format!(
@@ -616,32 +616,32 @@ fn val_corrected_settles_every_thesis_table_case() {
 /// The old syntax and impossible increments are refused with a message saying what to write.
 #[test]
 fn old_syntax_and_inexpressible_increments_are_clear_errors() {
-    let old = "name = \"o\"\nduration_s = 1.0\n[params.dCm_alpha]\ntruth = 0.0015\nlower = 0.001\nupper = 0.002\n[[estimator]]\nkind = \"corrected\"\nparams = [\"dCm_alpha\"]\n";
+    let old = "kind = \"run\"\nname = \"o\"\nduration_s = 1.0\n[params.dCm_alpha]\ntruth = 0.0015\nlower = 0.001\nupper = 0.002\n[[estimator]]\nkind = \"corrected\"\nparams = [\"dCm_alpha\"]\n";
     let e = Scenario::from_toml(old, "o.toml").unwrap_err().to_string();
     assert!(e.contains("[increments.Cm_alpha]") && e.contains("old syntax"), "{e}");
-    let list = "name = \"o\"\nduration_s = 1.0\n[increments.Cm_alpha]\nlower = 0.001\nupper = 0.002\n[[estimator]]\nkind = \"corrected\"\nparams = [\"dCm_alpha\"]\n";
+    let list = "kind = \"run\"\nname = \"o\"\nduration_s = 1.0\n[increments.Cm_alpha]\nlower = 0.001\nupper = 0.002\n[[estimator]]\nkind = \"corrected\"\nparams = [\"dCm_alpha\"]\n";
     let e = Scenario::from_toml(list, "o.toml").unwrap_err().to_string();
     assert!(e.contains("estimator[0].params") && e.contains("write `Cm_alpha`"), "{e}");
-    let grad = "name = \"o\"\nduration_s = 1.0\n[increments.Cm_q]\nlower = 0.005\nupper = 0.05\ngradient_gain = 1e8\n[[estimator]]\nkind = \"gradient\"\nparams = [\"Cm_q\"]\n";
+    let grad = "kind = \"run\"\nname = \"o\"\nduration_s = 1.0\n[increments.Cm_q]\nlower = 0.005\nupper = 0.05\ngradient_gain = 1e8\n[[estimator]]\nkind = \"gradient\"\nparams = [\"Cm_q\"]\n";
     let e = Scenario::from_toml(grad, "o.toml").unwrap_err().to_string();
     assert!(e.contains("mr-gradient"), "{e}");
-    let dot = "name = \"o\"\nduration_s = 1.0\n[increments.Cm_alphadot]\ntruth = -1.0\n[[estimator]]\nkind = \"rls\"\nmodel = \"longitudinal\"\n";
+    let dot = "kind = \"run\"\nname = \"o\"\nduration_s = 1.0\n[increments.Cm_alphadot]\ntruth = -1.0\n[[estimator]]\nkind = \"rls\"\nmodel = \"longitudinal\"\n";
     let e = Scenario::from_toml(dot, "o.toml").unwrap_err().to_string();
     assert!(e.contains("increments.Cm_alphadot") && e.contains("alphadot"), "{e}");
     // Every factory kind is accepted; an option a kind does not take is named.
     for kind in ["rls", "ftr", "ekf", "smpe", "smpe-corrected", "gradient"] {
         let t = format!(
-            "name = \"o\"\nduration_s = 1.0\n[[estimator]]\nkind = \"{kind}\"\nmodel = \"six-axis\"\n"
+            "kind = \"run\"\nname = \"o\"\nduration_s = 1.0\n[[estimator]]\nkind = \"{kind}\"\nmodel = \"six-axis\"\n"
         );
         Scenario::from_toml(&t, "o.toml").unwrap();
     }
-    let t = "name = \"o\"\nduration_s = 1.0\n[[estimator]]\nkind = \"ekf\"\nmodel = \"six-axis\"\nforgetting = 0.99\n";
+    let t = "kind = \"run\"\nname = \"o\"\nduration_s = 1.0\n[[estimator]]\nkind = \"ekf\"\nmodel = \"six-axis\"\nforgetting = 0.99\n";
     let e = Scenario::from_toml(t, "o.toml").unwrap_err().to_string();
     assert!(e.contains("estimator[0]") && e.contains("unknown option `forgetting`"), "{e}");
-    let typo = "name = \"o\"\nduration_s = 1.0\n[[estimator]]\nkind = \"rls\"\nmodel = \"six-axis\"\nforgeting = 0.99\n";
+    let typo = "kind = \"run\"\nname = \"o\"\nduration_s = 1.0\n[[estimator]]\nkind = \"rls\"\nmodel = \"six-axis\"\nforgeting = 0.99\n";
     let e = Scenario::from_toml(typo, "o.toml").unwrap_err().to_string();
     assert!(e.contains("forgeting"), "{e}");
-    let model = "name = \"o\"\nduration_s = 1.0\n[[estimator]]\nkind = \"rls\"\nmodel = [\"Cm_alpha\", \"Cm_qq\"]\n";
+    let model = "kind = \"run\"\nname = \"o\"\nduration_s = 1.0\n[[estimator]]\nkind = \"rls\"\nmodel = [\"Cm_alpha\", \"Cm_qq\"]\n";
     let e = Scenario::from_toml(model, "o.toml").unwrap_err().to_string();
     assert!(e.contains("estimator[0].model") && e.contains("Cm_qq"), "{e}");
 }
@@ -650,7 +650,7 @@ fn old_syntax_and_inexpressible_increments_are_clear_errors() {
 /// on lateral terms, and the sample-driven estimator sees the change in its truth.
 #[test]
 fn lateral_damage_changes_the_rls_truth_by_the_increment() {
-    let text = "name = \"lat\"\nduration_s = 1.0\n[increments.Cn_beta]\ntruth = -0.05\nstep_to = 0.02\nstep_at_s = 0.5\n[[estimator]]\nkind = \"rls\"\nmodel = \"lateral\"\n";
+    let text = "kind = \"run\"\nname = \"lat\"\nduration_s = 1.0\n[increments.Cn_beta]\ntruth = -0.05\nstep_to = 0.02\nstep_at_s = 0.5\n[[estimator]]\nkind = \"rls\"\nmodel = \"lateral\"\n";
     let out = run(&scenario(text)).unwrap();
     let l = out.channels[0].param(p("Cn_beta")).unwrap();
     let (before, after) = (l.truth[0].unwrap(), l.truth.last().unwrap().unwrap());
@@ -671,14 +671,20 @@ fn lateral_damage_changes_the_rls_truth_by_the_increment() {
 
 #[test]
 fn bad_scenario_names_the_field() {
-    let text =
-        format!("name = \"bad\"\nduration_s = 1.0\n{}{}", four(0.0, 0.0, 0.0, 0.0), ALL_ESTIMATORS)
-            .replace("lower = 0.001", "lower = 0.003");
+    let text = format!(
+        "kind = \"run\"\nname = \"bad\"\nduration_s = 1.0\n{}{}",
+        four(0.0, 0.0, 0.0, 0.0),
+        ALL_ESTIMATORS
+    )
+    .replace("lower = 0.001", "lower = 0.003");
     let err = Scenario::from_toml(&text, "x.toml").unwrap_err().to_string();
     assert!(err.contains("x.toml") && err.contains("increments.Cm_alpha.lower"), "{err}");
-    let err = Scenario::from_toml("name = \"x\"\nduration_s = 1.0\nbogus = 1\n", "y.toml")
-        .unwrap_err()
-        .to_string();
+    let err = Scenario::from_toml(
+        "kind = \"run\"\nname = \"x\"\nduration_s = 1.0\nbogus = 1\n",
+        "y.toml",
+    )
+    .unwrap_err()
+    .to_string();
     assert!(err.contains("y.toml") && err.contains("bogus"), "{err}");
 }
 
@@ -690,7 +696,7 @@ proptest! {
         amp_deg in -1.0f64..1.0, freq_hz in 0.1f64..3.0, seed in 0u64..1000, noise in any::<bool>(),
     ) {
         let text = format!(
-            "name = \"p\"\nduration_s = 0.6\n[[input]]\nchannel = \"elevator\"\nkind = \"sine\"\namplitude_deg = {amp_deg}\nfrequency_hz = {freq_hz}\n[sensors]\nnoise = {noise}\nseed = {seed}\n{}{}",
+            "kind = \"run\"\nname = \"p\"\nduration_s = 0.6\n[[input]]\nchannel = \"elevator\"\nkind = \"sine\"\namplitude_deg = {amp_deg}\nfrequency_hz = {freq_hz}\n[sensors]\nnoise = {noise}\nseed = {seed}\n{}{}",
             four(ta, tq, tl, td), ALL_ESTIMATORS
         );
         let out = run(&scenario(&text)).unwrap();

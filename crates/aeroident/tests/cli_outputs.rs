@@ -20,7 +20,7 @@ fn repo(p: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(p)
 }
 
-const SIM: &str = "[aircraft]\nxcg = 0.30\nactuators = \"f16\"\n[trim]\nalt_ft = 20000.0\nvt_fps = 675.0\n[run]\nduration_s = 0.5\ndt_s = 0.01\nseed = 1\n";
+const SIM: &str = "kind = \"sim\"\n[aircraft]\nxcg = 0.30\nactuators = \"f16\"\n[trim]\nalt_ft = 20000.0\nvt_fps = 675.0\n[run]\nduration_s = 0.5\ndt_s = 0.01\nseed = 1\n";
 
 /// #11: a second `f16 sim` into the same `--out` that fails must not leave the first run's
 /// `timeseries.csv` and figures beside its error.
@@ -71,13 +71,7 @@ fn outputs_scenario_name_cannot_escape_out() {
     std::fs::create_dir_all(&sc).unwrap();
     poc_with_name(&sc, "a.toml", "../../escaped_poc");
     let out = d.join("a/b/out");
-    let o = bin()
-        .args(["poc", "--all", "--scenarios"])
-        .arg(&sc)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o = bin().args(["poc", "--all"]).arg(&sc).arg("--out").arg(&out).output().unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success(), "{err}");
     assert!(err.contains("../../escaped_poc") && err.contains("a.toml"), "{err}");
@@ -113,13 +107,7 @@ fn outputs_duplicate_scenario_names_name_both_files() {
     std::fs::create_dir_all(&sc).unwrap();
     poc_with_name(&sc, "one.toml", "same");
     poc_with_name(&sc, "two.toml", "same");
-    let o = bin()
-        .args(["poc", "--all", "--scenarios"])
-        .arg(&sc)
-        .arg("--out")
-        .arg(d.join("out"))
-        .output()
-        .unwrap();
+    let o = bin().args(["poc", "--all"]).arg(&sc).arg("--out").arg(d.join("out")).output().unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success(), "{err}");
     assert!(err.contains("one.toml") && err.contains("two.toml") && err.contains("same"), "{err}");

@@ -56,12 +56,17 @@ fn errors_bad_corpus_counted_in_summary_with_exact_keys() {
         "coefficients",
         "correlations",
         "warnings",
+        "identifiability",
+        "validation",
+        "validation_on",
     ];
     let mut got = keys.clone();
     got.sort_unstable();
     expect.sort_unstable();
     assert_eq!(got, expect);
     assert_eq!(v["estimator"], "rls");
+    assert!(v["validation_on"].is_null(), "no --validate-on");
+    assert_eq!(v["validation"]["used_for_fit"], true);
     assert_eq!(v["model"], "longitudinal");
     assert_eq!(v["status"], "initialising");
     assert_eq!(v["samples_read"], 12);
@@ -249,5 +254,160 @@ fn val_output_error_reproduces_the_hfb320_reference_through_the_cli() {
         assert!(((est - value) / value).abs() < 0.01, "{name}: {est} vs {value}");
         assert!((s / sigma - 1.0).abs() < 0.2, "{name}: σ {s} vs {sigma}");
     }
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// `f16 sim` then `replay` of its `timeseries.csv` with the shipped `aeroident-sim.toml`, as a
+/// user types them: no rejected row, nothing differentiated, every parameter identified
+/// (the accuracy against the model's truth is `tests/sim_replay.rs`).
+#[test]
+fn val_f16_sim_output_replays_through_the_cli_with_the_shipped_mapping() {
+    let out = tmp("sim6");
+    let o = bin()
+        .args(["f16", "sim"])
+        .arg(workspace().join("scenarios/sim/six_axis_excitation.toml"))
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = bin()
+        .arg("replay")
+        .arg(out.join("timeseries.csv"))
+        .arg("--map")
+        .arg(workspace().join("mappings/aeroident-sim.toml"))
+        .arg("--out")
+        .arg(out.join("replay"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("model: six-axis (default"), "six-axis by default: {err}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("replay/summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(v["samples_rejected"], 0);
+    assert_eq!(v["status"], "running");
+    let params = v["parameters"].as_array().unwrap();
+    assert_eq!(params.len(), 30);
+    assert!(params.iter().all(|p| p["estimate"].is_f64()), "all identified");
+    let cl_da = params.iter().find(|p| p["name"] == "Cl_da").unwrap()["estimate"].as_f64();
+    assert!(cl_da.unwrap() > 0.0, "this format's aileron sign: {cl_da:?}");
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// `--format` overrides the extension and gives the CSV's estimates from the same numbers as
+/// whitespace text; a bad name lists the valid ones; a format without a reader says so.
+#[test]
+fn formats_by_flag_and_extension_through_the_cli() {
+    let out = tmp("fmt");
+    std::fs::create_dir_all(&out).unwrap();
+    let io_data = workspace().join("crates/io/tests/data");
+    // 60 rows of min.toml's columns, each a different sinusoid so the fit is determined.
+    let header = "t,V,a,q,ax,az,de,qbar,qd";
+    let rows: Vec<String> = (0..60)
+        .map(|k| {
+            let t = f64::from(k) * 0.1;
+            let w = |f: f64, a: f64, c: f64| c + a * (f * t).sin();
+            format!(
+                "{t},{},{},{},{},{},{},{},{}",
+                w(0.3, 5.0, 200.0),
+                w(1.1, 1.0, 2.0),
+                w(1.7, 2.0, 0.0),
+                w(0.7, 0.02, 0.01),
+                w(2.3, 0.1, -1.0),
+                w(2.9, 1.0, 1.0),
+                w(0.5, 3.0, 100.0),
+                w(3.7, 1.0, 0.0)
+            )
+        })
+        .collect();
+    let csv_file = out.join("rec.csv");
+    std::fs::write(&csv_file, format!("{header}\n{}\n", rows.join("\n"))).unwrap();
+    // The same rows, whitespace-separated, without the header, in a file whose extension
+    // names no format.
+    let data = out.join("rec.log");
+    let text: String = rows.iter().map(|l| format!("  {}\n", l.replace(',', "   "))).collect();
+    std::fs::write(&data, text).unwrap();
+    let names: Vec<String> = header.split(',').map(|n| format!("\"{n}\"")).collect();
+    let map = out.join("m.toml");
+    let min = std::fs::read_to_string(io_data.join("min.toml")).unwrap();
+    std::fs::write(&map, format!("{min}[columns]\nnames = [{}]\n", names.join(", "))).unwrap();
+    let replay = |format: Option<&str>, file: &std::path::Path, dir: &str| {
+        let mut c = bin();
+        c.arg("replay").arg(file).arg("--map").arg(&map).arg("--out").arg(out.join(dir));
+        if let Some(fm) = format {
+            c.args(["--format", fm]);
+        }
+        c.output().unwrap()
+    };
+    let o = replay(Some("asc"), &data, "asc");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = replay(None, &csv_file, "csv");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary = |dir: &str| -> serde_json::Value {
+        let text = std::fs::read_to_string(out.join(dir).join("summary.json")).unwrap();
+        serde_json::from_str(&text).unwrap()
+    };
+    let (a, c) = (summary("asc"), summary("csv"));
+    assert_eq!(a["samples_read"], 60, "{a}");
+    assert_eq!(a["status"], "running", "identified: {a}");
+    for key in ["samples_read", "samples_rejected", "status", "parameters"] {
+        assert_eq!(a[key], c[key], "{key}");
+    }
+    // Read as CSV (the extension names no format), the first row is a header without `t`.
+    let o = replay(None, &data, "x");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("column `t` for channel `time` is missing"),
+        "{err}"
+    );
+    let o = replay(Some("xls"), &data, "x");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("csv, asc, mat, ulog, dataflash"), "{err}");
+    let o = replay(None, &out.join("flight.ulg"), "x");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("flight.ulg"), "{err}");
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// The real PX4 ULog (`../shared/flightdata/px4_ardupilot/`, a scaled F-16 RC jet) replays end
+/// to end through the CLI with the shipped `mappings/px4-fixedwing.toml`: the format is taken
+/// from the `.ulg` extension, the airborne part gives samples (the io crate's
+/// `multirate_logs` test checks the same 453 samples against the independent pyulog
+/// inventory), the taxi rows are rejected with a reason, and the run ends with a summary.
+/// Skips without `../shared`; fails under CI if the log is missing.
+#[test]
+fn val_real_px4_ulog_replays_through_the_cli_with_the_shipped_mapping() {
+    let data = workspace()
+        .join("../shared/flightdata/px4_ardupilot/f16capstone_log_52_2021-5-22-12-42-56.ulg");
+    if !data.exists() {
+        assert!(
+            std::env::var("CI").map_or(true, |v| v != "true"),
+            "{} absent under CI",
+            data.display()
+        );
+        eprintln!("SKIPPED: {} is absent", data.display());
+        return;
+    }
+    let out = tmp("ulog_f16");
+    let o = bin()
+        .args(["replay"])
+        .arg(&data)
+        .arg("--map")
+        .arg(workspace().join("mappings/px4-fixedwing.toml"))
+        .args(["--estimator", "rls", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    // 2999 aligned rows at 50 Hz; 2546 taxi rows without a defined α/β, and 4 rows at the
+    // ends of the airborne part inside the rate differentiator's window.
+    assert_eq!(v["samples_read"], 2999, "{}", v["samples_read"]);
+    assert_eq!(v["samples_rejected"], 2550, "{}", v["samples_rejected"]);
+    assert_ne!(v["status"], "diverged");
     let _ = std::fs::remove_dir_all(&out);
 }

@@ -44,11 +44,19 @@
 //!   prior, then determine it. Once identified it stays identified. Until every parameter is
 //!   identified the status is [`Status::Initialising`], then [`Status::Running`].
 //! - **σ.** [`SigmaOption::Filter`]: the square root of the parameter block of `P`, a
-//!   Cramér–Rao-like bound if the model, `Q` and `R` are right. [`SigmaOption::ColouredResiduals`]:
-//!   `P` scaled by `(1 + ρ̄)/(1 − ρ̄)`, `ρ̄` the mean lag-1 autocorrelation of the accepted
-//!   innovations over the outputs (clamped to `[0, 0.95]`): the AR(1) effective-sample-size
-//!   correction (Bayley & Hammersley 1946; cf. the coloured-residual correction of Klein & Morelli 2006
-//!   ch. 5–6).
+//!   Cramér–Rao-like bound if the model, `Q` and `R` are right, i.e. if the innovations are
+//!   white. They are not when turbulence (process noise the filter does not model) or model
+//!   error drives an output: the filter then counts correlated innovations as independent
+//!   information. [`SigmaOption::ColouredResiduals`] (the default) corrects each parameter's
+//!   variance by `f_i = Σ_o I_oi F_o / Σ_o I_oi`: `F_o = 1 + 2 Σ_{k=1..K_o} ρ̂_o(k)` is the
+//!   variance factor of output `o`'s normalised innovations `e/√S`, with the autocorrelation
+//!   `ρ̂_o` summed to the first lag inside the white band `±2/√N` (at most
+//!   [`crate::coloured::MAX_LAG`]; floored at [`MIN_COLOURED_FACTOR`]), and
+//!   `I_oi = Σ (P hᵀ)_i² / S` the information output `o` gave parameter `i` (the decrease of
+//!   its variance by that output's updates). This is the coloured-residual correction of
+//!   Klein & Morelli 2006 §5.2 / ch. 6 (Morelli & Klein 1997) in the form that holds when the
+//!   gains vary slowly over the correlation time (Bayley & Hammersley 1946), output by output:
+//!   the full truncated autocorrelation, not only lag 1. With white innovations `f_i ≈ 1`.
 //! - **Initialisation.** The integrated states from the first sample's measurements (each must
 //!   be present, else an error naming it), `P0 = diag(state σ0², prior σ²)`, `θ0` the prior
 //!   values. [`Estimator::new_manoeuvre`] re-initialises the states (and their covariance
@@ -71,6 +79,7 @@
 //! error; the defaults were chosen on synthetic data, not on any record.
 
 use crate::EstimatorError;
+use crate::coloured::Autocorrelation;
 use crate::estimator::{Estimates, Estimator, Status, check_finite};
 use crate::flight_model::{
     FlightModel, Linearisation, ModelInputs, N_OUTPUTS, N_STATES, Output, STATE_NAMES, StateSet,
@@ -111,6 +120,9 @@ pub const DEFAULT_STATE_SIGMA0: [f64; N_STATES] =
 /// rad/√s for angles, rad/s/√s for rates.
 pub const DEFAULT_STATE_PROCESS_NOISE: [f64; N_STATES] =
     [0.015, 0.0003, 0.0003, 0.0006, 0.0006, 0.0006, 0.00015, 0.00015];
+
+/// Floor of an output's coloured-innovation variance factor (module doc).
+pub const MIN_COLOURED_FACTOR: f64 = 0.25;
 
 /// How many innovations the configured measurement noise is worth in the running estimate of
 /// `R` (module doc).
@@ -157,7 +169,7 @@ impl EkfConfig {
             measurement_sigma: DEFAULT_MEASUREMENT_SIGMA,
             gate_sigmas: 5.0,
             max_consecutive_rejections: 50,
-            sigma: SigmaOption::Filter,
+            sigma: SigmaOption::ColouredResiduals,
             adaptive_r_window: 200,
         }
     }
@@ -183,9 +195,11 @@ pub struct Ekf {
     innovation: [Option<f64>; N_OUTPUTS],
     rejections: [u32; N_OUTPUTS],
     consecutive: [u32; N_OUTPUTS],
-    innov_s0: [f64; N_OUTPUTS],
-    innov_s1: [f64; N_OUTPUTS],
-    innov_prev: [Option<f64>; N_OUTPUTS],
+    /// Autocorrelation of each output's normalised innovations `e/√S`.
+    innov_acf: [Autocorrelation; N_OUTPUTS],
+    /// `Σ (P hᵀ)_θ² / S` per output and parameter: the information each output gave each
+    /// parameter (the decrease of `P_θθ`'s diagonal by its updates).
+    innov_info: [[f64; MAX_PARAMS]; N_OUTPUTS],
     /// Current measurement-noise variance per output and its count of updates.
     r_var: [f64; N_OUTPUTS],
     r_count: [u32; N_OUTPUTS],
@@ -290,9 +304,8 @@ impl Ekf {
             innovation: [None; N_OUTPUTS],
             rejections: [0; N_OUTPUTS],
             consecutive: [0; N_OUTPUTS],
-            innov_s0: [0.0; N_OUTPUTS],
-            innov_s1: [0.0; N_OUTPUTS],
-            innov_prev: [None; N_OUTPUTS],
+            innov_acf: [Autocorrelation::new(); N_OUTPUTS],
+            innov_info: [[0.0; MAX_PARAMS]; N_OUTPUTS],
             r_var: cfg.measurement_sigma.map(|s| s * s),
             r_count: [0; N_OUTPUTS],
             nis_sum: 0.0,
@@ -336,27 +349,46 @@ impl Ekf {
         (i < self.np).then(|| libm::sqrt(self.p[self.nx + i][self.nx + i].max(0.0)))
     }
 
-    /// The coloured-residual variance factor `(1 + ρ̄)/(1 − ρ̄)` (1 until innovations exist).
-    pub fn coloured_residual_factor(&self) -> f64 {
-        let mut sum = 0.0;
-        let mut n = 0;
-        for i in 0..N_OUTPUTS {
-            if self.innov_s0[i] > 0.0 {
-                sum += (self.innov_s1[i] / self.innov_s0[i]).clamp(0.0, 0.95);
-                n += 1;
-            }
-        }
-        if n == 0 {
-            return 1.0;
-        }
-        let rho = sum / n as f64;
-        (1.0 + rho) / (1.0 - rho)
+    /// The coloured-innovation variance factor of each output, `1 + 2 Σ_{k≤K} ρ̂_o(k)` of its
+    /// normalised innovations ([`Autocorrelation::variance_factor`]), floored at
+    /// [`MIN_COLOURED_FACTOR`] (a truncated sum need not be positive).
+    fn output_factor(&self, o: usize) -> f64 {
+        self.innov_acf[o].variance_factor().max(MIN_COLOURED_FACTOR)
     }
 
-    fn sigma_factor(&self) -> f64 {
+    /// The coloured-residual variance factor of parameter `i` (module doc): the output factors
+    /// weighted by the information each output gave the parameter; 1 until innovations exist.
+    pub fn coloured_factor(&self, i: usize) -> f64 {
+        let (mut num, mut den) = (0.0, 0.0);
+        for o in 0..N_OUTPUTS {
+            let w = self.innov_info[o][i];
+            if w > 0.0 {
+                num += w * self.output_factor(o);
+                den += w;
+            }
+        }
+        if den > 0.0 { num / den } else { 1.0 }
+    }
+
+    /// The information-weighted mean of [`Ekf::coloured_factor`] over the parameters.
+    pub fn coloured_residual_factor(&self) -> f64 {
+        let (mut num, mut den) = (0.0, 0.0);
+        for o in 0..N_OUTPUTS {
+            for i in 0..self.np {
+                let w = self.innov_info[o][i];
+                if w > 0.0 {
+                    num += w * self.output_factor(o);
+                    den += w;
+                }
+            }
+        }
+        if den > 0.0 { num / den } else { 1.0 }
+    }
+
+    fn sigma_factor(&self, i: usize) -> f64 {
         match self.cfg.sigma {
             SigmaOption::Filter => 1.0,
-            SigmaOption::ColouredResiduals => self.coloured_residual_factor(),
+            SigmaOption::ColouredResiduals => self.coloured_factor(i),
         }
     }
 
@@ -393,7 +425,9 @@ impl Ekf {
         }
         self.last = Some(u);
         self.pending_init = false;
-        self.innov_prev = [None; N_OUTPUTS];
+        for a in &mut self.innov_acf {
+            a.restart();
+        }
         self.innovation = [None; N_OUTPUTS];
         Ok(())
     }
@@ -506,10 +540,10 @@ impl Ekf {
     }
 
     fn publish(&mut self, t_s: f64) {
-        let factor = self.sigma_factor();
         let nx = self.nx;
         let mut all = true;
         for i in 0..self.np {
+            let factor = self.sigma_factor(i);
             let var = self.p[nx + i][nx + i].max(0.0);
             let sf = libm::sqrt(var);
             if sf < 0.5 * self.cfg.priors.prior[i].sigma {
@@ -578,6 +612,8 @@ impl Estimator for Ekf {
         }
         let z_pred = z;
         let mut innovation = [None; N_OUTPUTS];
+        let mut normalised = [None; N_OUTPUTS];
+        let mut info = [[0.0; MAX_PARAMS]; N_OUTPUTS];
         let mut consecutive = self.consecutive;
         let mut rejections = self.rejections;
         let mut r_var = self.r_var;
@@ -634,6 +670,11 @@ impl Estimator for Ekf {
             }
             consecutive[oi] = 0;
             innovation[oi] = Some(e);
+            let inv = 1.0 / sv;
+            normalised[oi] = Some(e * libm::sqrt(inv));
+            for i in 0..np {
+                info[oi][i] = ph[nx + i] * ph[nx + i] * inv;
+            }
             nis_sum += e * e / sv;
             nis_count += 1;
             if self.cfg.adaptive_r_window > 0 {
@@ -646,7 +687,6 @@ impl Estimator for Ekf {
                 let r_min = 0.01 * r0 * r0;
                 r_var[oi] += a * ((e * e - hph).max(r_min) - r_var[oi]);
             }
-            let inv = 1.0 / sv;
             for i in 0..n {
                 z[i] += ph[i] * inv * e;
             }
@@ -686,14 +726,13 @@ impl Estimator for Ekf {
         self.r_count = r_count;
         self.nis_sum = nis_sum;
         self.nis_count = nis_count;
-        for (oi, e) in innovation.iter().enumerate() {
-            if let Some(e) = *e {
-                self.innov_s0[oi] += e * e;
-                if let Some(prev) = self.innov_prev[oi] {
-                    self.innov_s1[oi] += e * prev;
+        for (oi, v) in normalised.iter().enumerate() {
+            if let Some(v) = *v {
+                self.innov_acf[oi].add(v, 1.0);
+                for i in 0..np {
+                    self.innov_info[oi][i] += info[oi][i];
                 }
             }
-            self.innov_prev[oi] = *e;
         }
         self.innovation = innovation;
         self.last = Some(u1);
@@ -710,7 +749,10 @@ impl Estimator for Ekf {
     }
 
     fn covariance(&self, i: usize, j: usize) -> Option<f64> {
-        (i < self.np && j < self.np).then(|| self.p[self.nx + i][self.nx + j] * self.sigma_factor())
+        (i < self.np && j < self.np).then(|| {
+            self.p[self.nx + i][self.nx + j]
+                * libm::sqrt(self.sigma_factor(i) * self.sigma_factor(j))
+        })
     }
 
     fn new_manoeuvre(&mut self) {

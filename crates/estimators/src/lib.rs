@@ -30,6 +30,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
+pub mod coloured;
 pub mod dual;
 pub mod ekf;
 pub mod estimator;

@@ -96,7 +96,7 @@
 //! [`EstimatorError::Numerical`] when the model diverges at every starting point tried or the
 //! information matrix is singular at the estimate.
 
-mod coloured;
+use crate::coloured::batch as coloured;
 pub mod design;
 mod simulation;
 

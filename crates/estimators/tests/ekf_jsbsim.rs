@@ -28,11 +28,7 @@ fn run(
     adaptive_r: bool,
     within_10pct: &[&str],
 ) {
-    if !csv.exists() || !truth.exists() {
-        eprintln!(
-            "SKIPPED: {} not found (set AEROIDENT_SHARED to the shared folder)",
-            csv.display()
-        );
+    if !records::present(csv) || !records::present(truth) {
         return;
     }
     let channels = JsbsimChannels { noisy: true, angular_accelerations: false };

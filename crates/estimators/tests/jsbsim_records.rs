@@ -32,7 +32,7 @@ fn record(rel: &str, noisy: bool) -> Option<records::JsbsimRecord> {
 #[test]
 fn measured_coefficients_equal_the_logged_ones() {
     for (rel, _) in [LATERAL, LONGITUDINAL] {
-        let Some(rec) = record(rel, false) else { return };
+        let Some(rec) = record(rel, false) else { continue };
         for (s, logged) in rec.samples.iter().zip(&rec.logged) {
             for (k, m) in s.measured_coefficients().iter().enumerate() {
                 let m = m.unwrap();
@@ -61,7 +61,7 @@ fn corrected_smpe_equals_the_batch_regularised_least_squares() {
         [(LATERAL, ModelStructure::lateral()), (LONGITUDINAL, ModelStructure::longitudinal())]
     {
         for noisy in [true, false] {
-            let Some(rec) = record(rel, noisy) else { return };
+            let Some(rec) = record(rel, noisy) else { continue };
             let priors = Priors::generic(&st);
             let config = ModelReferenceConfig { prior_sigmas: 30.0, ..Default::default() };
             let mut e = CorrectedSmpeEstimator::new(st, &priors, config).unwrap();
@@ -125,8 +125,8 @@ fn corrected_smpe_recovers_the_excited_derivatives_from_clean_channels() {
         ),
         (LONGITUDINAL, ModelStructure::longitudinal(), &["CL_alpha", "CL_q", "Cm_q", "Cm_de"][..]),
     ] {
-        let Some(rec) = record(rel, false) else { return };
-        let Some(truth_path) = records::shared_record(truth_rel) else { return };
+        let Some(rec) = record(rel, false) else { continue };
+        let Some(truth_path) = records::shared_record(truth_rel) else { continue };
         let truth = records::read_truth(&truth_path).unwrap();
         let mut e =
             CorrectedSmpeEstimator::new(st, &Priors::generic(&st), ModelReferenceConfig::default())

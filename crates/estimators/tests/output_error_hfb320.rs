@@ -32,11 +32,7 @@ const TARGETS: [&str; 4] = ["Cm_alpha", "Cm_q0", "Cm_de", "CL_alpha"];
 
 fn run(step: StepKind) -> Option<(OeResult, f64)> {
     let path = records::hfb320_path();
-    if !path.exists() {
-        eprintln!(
-            "SKIPPED: {} not found (set AEROIDENT_SHARED to the shared folder)",
-            path.display()
-        );
+    if !records::present(&path) {
         return None;
     }
     let samples = records::hfb320(&path).unwrap();

@@ -99,6 +99,28 @@ pub enum FlightDataError {
         /// Second field, 1-based.
         second: usize,
     },
+    /// A mapped column is not among the columns of a file without a CSV header (an `.asc`
+    /// file, a `.mat` record or an aligned log), whose names come from the file or from the
+    /// mapping's `[columns] names`.
+    #[error("{file}: column `{column}` for channel `{channel}` is not in the record ({available})")]
+    NoSuchColumn {
+        /// Data file.
+        file: String,
+        /// Channel key.
+        channel: String,
+        /// Column name.
+        column: String,
+        /// The columns the record has (a short list or a count, and where names come from).
+        available: String,
+    },
+    /// A log file that is not of its format, or a format that cannot be read (yet).
+    #[error("{file}: {message}")]
+    Format {
+        /// Data file.
+        file: String,
+        /// What is wrong, naming the format (and the line or variable where it applies).
+        message: String,
+    },
     /// The CSV itself could not be read (header or framing).
     #[error("{file}: row {row}: {message}")]
     Csv {
@@ -128,6 +150,37 @@ pub enum FlightDataError {
         rejected: usize,
         /// The first rejections (row and reason), so the cause is visible.
         first: Vec<(u64, String)>,
+    },
+    /// A binary log (PX4 ULog, ArduPilot DataFlash) could not be decoded at this byte offset.
+    #[error("{file}: byte {offset}: {message}")]
+    LogDecode {
+        /// Log file.
+        file: String,
+        /// Byte offset in the file where the problem was found (for a streaming decoder: at or
+        /// before this offset).
+        offset: u64,
+        /// What was wrong, naming the message and field where known.
+        message: String,
+    },
+    /// A topic, message or field a mapping or alignment needs is not in the log.
+    #[error("{file}: `{column}` for {needed_by}: {reason}")]
+    MissingTopic {
+        /// Log file.
+        file: String,
+        /// The `<topic>.<field>` column asked for.
+        column: String,
+        /// What needs it (a channel, the clock, …).
+        needed_by: String,
+        /// Why it is missing (no such topic / no such field / no samples), listing what exists.
+        reason: String,
+    },
+    /// Multi-rate alignment could not produce a table (bad rate, no overlap, every row dropped).
+    #[error("{file}: alignment: {reason}")]
+    Align {
+        /// Log file.
+        file: String,
+        /// What was wrong.
+        reason: String,
     },
 }
 

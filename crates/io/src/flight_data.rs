@@ -141,6 +141,9 @@ pub struct FlightDataReader<R: Read> {
     nominal_dt: Option<f64>,
     pending: Option<RecordEvent>,
     done: bool,
+    /// Lines of the CSV text that are not lines of the file the user gave (a header
+    /// [`crate::log`] writes for a file without one): subtracted from every row number.
+    synthetic_lines: u64,
 }
 
 impl<R: Read> FlightDataReader<R> {
@@ -241,7 +244,16 @@ impl<R: Read> FlightDataReader<R> {
             nominal_dt: mapping.nominal_dt_s,
             pending: None,
             done: false,
+            synthetic_lines: 0,
         })
+    }
+
+    /// Row numbers of the events count `n` fewer lines: for CSV text rendered from another
+    /// format with a header line of its own ([`crate::log`]), so that rows name the line of an
+    /// `.asc` file or the row of a table (1-based), not the line of the rendering.
+    pub(crate) fn with_synthetic_lines(mut self, n: u64) -> Self {
+        self.synthetic_lines = n;
+        self
     }
 
     /// The data file's name as used in messages.
@@ -438,12 +450,13 @@ impl<R: Read> Iterator for FlightDataReader<R> {
         }
         let mut record = std::mem::take(&mut self.record);
         let more = self.csv.read_record(&mut record);
-        let row = record.position().map(|p| p.line()).unwrap_or(0);
+        let shift = self.synthetic_lines;
+        let row = record.position().map(|p| p.line()).unwrap_or(0).saturating_sub(shift);
         self.record = record;
         match more {
             Err(e) => {
                 self.done = true;
-                let row = e.position().map(|p| p.line()).unwrap_or(row);
+                let row = e.position().map(|p| p.line().saturating_sub(shift)).unwrap_or(row);
                 Some(Err(FlightDataError::Csv {
                     file: self.file.clone(),
                     row,
@@ -461,8 +474,11 @@ impl<R: Read> Iterator for FlightDataReader<R> {
                     let tail = self.csv.get_ref();
                     // After a final newline the position is on the (empty) next line.
                     let ended_on_newline = tail.eof && tail.last_byte == Some(b'\n');
-                    let end =
-                        self.csv.position().line().saturating_sub(u64::from(ended_on_newline));
+                    let end = self
+                        .csv
+                        .position()
+                        .line()
+                        .saturating_sub(u64::from(ended_on_newline) + shift);
                     return Some(Err(FlightDataError::Csv {
                         file: self.file.clone(),
                         row,
@@ -473,7 +489,15 @@ impl<R: Read> Iterator for FlightDataReader<R> {
                     }));
                 }
                 let tail = self.csv.get_ref();
-                if self.file == "-" && tail.eof && tail.last_byte != Some(b'\n') {
+                // The csv crate numbers a record from where its reading began, so a record
+                // after blank lines would be numbered at the first blank line. The line it ends
+                // on is exact: the record's line is the one before the position after it (the
+                // parser stops right after the newline), or that position itself for a last line
+                // without a newline (the source ended while the record was read).
+                let unterminated = tail.eof && tail.last_byte != Some(b'\n');
+                let row =
+                    self.csv.position().line().saturating_sub(u64::from(!unterminated) + shift);
+                if self.file == "-" && unterminated {
                     self.done = true;
                     return Some(Ok(RecordEvent::Rejected { row, problem: RowProblem::Truncated }));
                 }

@@ -5,16 +5,22 @@
 //! priors over the one vocabulary), and result writers (CSV time series, JSON summaries).
 //! Every reader error names the file, the line or row, and the field.
 
+pub mod align;
+pub mod dataflash;
 pub mod error;
 pub mod flight_data;
+pub mod log;
 pub mod mapping;
 pub mod mavlink;
 pub mod model_file;
+pub mod multirate;
 pub mod replay_output;
 pub mod table;
+pub mod ulog;
 pub mod units;
 
 pub use error::{FlightDataError, RowProblem};
 pub use flight_data::{FlightDataReader, RecordEvent, Rejection};
+pub use log::{LogFormat, LogReader, open_log, open_log_with_notes};
 pub use mapping::{Channel, Mapping};
-pub use model_file::{ModelFileError, ModelSpec};
+pub use model_file::{ModelFileError, ModelSpec, ParamReference};

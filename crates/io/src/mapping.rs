@@ -19,6 +19,9 @@
 //! da    = { columns = ["ail_left_deg", "ail_right_deg"], weights = [0.5, -0.5], unit = "deg" }
 //! Ixz   = { column = "ixz", unit = "slug*ft2", scale = -1.0 }      # JSBSim logs −Jxz
 //! mass  = { value = 7472.0, unit = "kg" }                             # a constant
+//!
+//! [columns]       # optional: names of the columns of a file without a header row
+//! names = ["time_s", "elevator_rad", "qbar_Pa"]   # (.asc, a .mat matrix); default "1", "2", …
 //! ```
 //!
 //! Each entry converts as `SI = ((Σ wᵢ rawᵢ) · scale + offset) · factor(unit)`; `weights`
@@ -64,8 +67,41 @@
 //! `α_cg = α_vane + x_α q / V`, `β_cg = β_vane − x_β r / V + z_β p / V`.
 //!
 //! A channel that is not mapped is absent (`None`) in every sample — never 0.
+//!
+//! # Multi-rate logs (PX4 ULog, ArduPilot DataFlash)
+//!
+//! A log's topics are first aligned onto one time base ([`crate::align`]); columns are then
+//! named `<topic>.<field>` (`sensor_combined.gyro_rad[1]`, `ATT.Roll`) and the time column is
+//! `time_s` (seconds). Three tables say how ([`crate::multirate::log_table`] applies them):
+//!
+//! ```toml
+//! [align]
+//! rate_hz = 50.0            # or: clock = "sensor_combined" (that topic's timestamps)
+//! method = "linear"         # or "zoh" (zero-order hold)
+//!
+//! [attitude]                # quaternion (w, x, y, z), body → NED: adds columns
+//! quaternion = ["vehicle_attitude.q[0]", "vehicle_attitude.q[1]",      # euler.phi,
+//!               "vehicle_attitude.q[2]", "vehicle_attitude.q[3]"]      # euler.theta, euler.psi (rad)
+//!
+//! [air_data]                # needs [attitude]: adds air.vt (m/s), air.alpha, air.beta (rad)
+//! ned_velocity = ["vehicle_local_position.vx", "vehicle_local_position.vy", "vehicle_local_position.vz"]
+//! wind_ne = ["wind_estimate.windspeed_north", "wind_estimate.windspeed_east"]   # optional
+//! min_vt_mps = 3.0          # below it the flow angles are undefined (default 1)
+//!
+//! [channels]
+//! phi = { column = "euler.phi", unit = "rad" }
+//! de  = { column = "actuator_outputs.output[1]", calibration = [[1000, -25.0], [1500, 0.0], [2000, 25.0]], unit = "deg" }
+//! ```
+//!
+//! `calibration` (any channel): a table of `[raw, value]` points, raw strictly increasing, at
+//! least two; the weighted raw sum is mapped piecewise-linearly to a value in `unit`, then
+//! `scale` and `offset` apply: `SI = (cal(Σ wᵢ rawᵢ) · scale + offset) · factor(unit)`. A raw
+//! value outside the table is not extrapolated: it converts to NaN, and the row is rejected
+//! as not finite (naming the column). Servo PWM → surface deflection is the intended use.
 
 use crate::FlightDataError;
+use crate::align::Clock;
+use crate::table::Interpolation;
 use crate::units::{Dimension, Unit};
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -226,6 +262,9 @@ pub struct ChannelSpec {
     /// Added after `scale`, in the channel's unit (default 0), e.g. a bias correction.
     #[serde(default)]
     pub offset: f64,
+    /// Piecewise-linear calibration `[[raw, value], …]` (raw strictly increasing, ≥ 2 points),
+    /// applied to the weighted raw sum before `scale` and `offset` (e.g. servo PWM → degrees).
+    pub calibration: Option<Vec<[f64; 2]>>,
     /// Free-text provenance note (ignored by the reader).
     pub note: Option<String>,
 }
@@ -241,6 +280,73 @@ struct MappingFile {
     nominal_dt_s: Option<f64>,
     time: ChannelSpec,
     channels: BTreeMap<Spanned<String>, ChannelSpec>,
+    columns: Option<ColumnsSpec>,
+    align: Option<AlignFile>,
+    attitude: Option<AttitudeFile>,
+    air_data: Option<AirDataFile>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AlignFile {
+    rate_hz: Option<f64>,
+    clock: Option<String>,
+    method: String,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AttitudeFile {
+    quaternion: Vec<String>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AirDataFile {
+    ned_velocity: Vec<String>,
+    wind_ne: Option<Vec<String>>,
+    min_vt_mps: Option<f64>,
+}
+
+/// Derived column: bank angle φ from `[attitude]`, rad.
+pub const EULER_PHI: &str = "euler.phi";
+/// Derived column: pitch attitude θ from `[attitude]`, rad.
+pub const EULER_THETA: &str = "euler.theta";
+/// Derived column: heading ψ from `[attitude]`, rad.
+pub const EULER_PSI: &str = "euler.psi";
+/// Derived column: true airspeed from `[air_data]`, m/s.
+pub const AIR_VT: &str = "air.vt";
+/// Derived column: angle of attack from `[air_data]`, rad.
+pub const AIR_ALPHA: &str = "air.alpha";
+/// Derived column: sideslip from `[air_data]`, rad.
+pub const AIR_BETA: &str = "air.beta";
+
+/// `[align]`: the time base a multi-rate log is aligned to and the interpolation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AlignSpec {
+    /// Rate grid or clock topic.
+    pub clock: Clock,
+    /// Zero-order hold or linear.
+    pub method: Interpolation,
+}
+
+/// `[air_data]`: flow angles and airspeed from the inertial velocity, the wind and the
+/// attitude (see [`crate::multirate`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct AirDataSpec {
+    /// North, east, down velocity columns, m/s.
+    pub ned_velocity: [String; 3],
+    /// North, east wind columns, m/s (absent: no wind).
+    pub wind_ne: Option<[String; 2]>,
+    /// Airspeed below which α, β are undefined (NaN), m/s.
+    pub min_vt_mps: f64,
+}
+
+/// The `[columns]` table: names for the columns of a file without a header row.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ColumnsSpec {
+    names: Vec<String>,
 }
 
 /// Where a resolved channel's value comes from.
@@ -265,15 +371,37 @@ pub struct ChannelMap {
     pub offset: f64,
     /// The unit string as written.
     pub unit: String,
+    /// Piecewise-linear calibration `(raw, value)`, raw strictly increasing.
+    pub calibration: Option<Vec<(f64, f64)>>,
+}
+
+/// Piecewise-linear interpolation in `table` (`(raw, value)`, raw strictly increasing);
+/// NaN outside `[raw_first, raw_last]`.
+pub fn calibrate(table: &[(f64, f64)], raw: f64) -> f64 {
+    let i = table.partition_point(|(r, _)| *r < raw);
+    match (i, table.get(i)) {
+        (_, Some(&(r1, v1))) if r1 == raw => v1,
+        (0, _) | (_, None) => f64::NAN,
+        (i, Some(&(r1, v1))) => {
+            let (r0, v0) = table[i - 1];
+            v0 + (v1 - v0) * (raw - r0) / (r1 - r0)
+        }
+    }
 }
 
 impl ChannelMap {
-    /// Converts a raw value (weighted sum of the columns) to SI.
+    /// Converts a raw value (weighted sum of the columns) to SI, through the calibration
+    /// table if there is one (NaN outside it).
     pub fn to_si(&self, raw: f64) -> f64 {
-        (raw * self.scale + self.offset) * self.to_si
+        let x = match &self.calibration {
+            Some(table) => calibrate(table, raw),
+            None => raw,
+        };
+        (x * self.scale + self.offset) * self.to_si
     }
 
     /// The constant's SI value, if the channel is a constant.
+    /// (A calibration does not apply to constants: `value` is already in `unit`.)
     pub fn constant(&self) -> Option<f64> {
         match self.source {
             Source::Constant(v) => Some(v),
@@ -295,6 +423,16 @@ pub struct Mapping {
     pub time: ChannelMap,
     /// The mapped channels.
     pub channels: BTreeMap<Channel, ChannelMap>,
+    /// `[align]` (multi-rate logs only).
+    pub align: Option<AlignSpec>,
+    /// `[attitude] quaternion` columns (w, x, y, z), body → NED.
+    pub quaternion: Option<[String; 4]>,
+    /// `[air_data]`.
+    pub air_data: Option<AirDataSpec>,
+    /// `[columns] names`: the name of each column, in order, of a file without a header row
+    /// (a whitespace `.asc`, a `.mat` matrix); `None` names them `"1"`, `"2"`, … (see
+    /// [`crate::log`]). A CSV has its own header and ignores this list.
+    pub column_names: Option<Vec<String>>,
 }
 
 /// 1-based line of byte offset `at` in `text`.
@@ -324,6 +462,13 @@ impl Mapping {
         let raw: MappingFile = toml::from_str(text).map_err(|e| {
             FlightDataError::MappingSyntax { file: file.to_string(), message: e.to_string() }
         })?;
+        if raw.time.scale == 0.0 {
+            return Err(FlightDataError::BadSpec {
+                file: file.to_string(),
+                channel: "time".into(),
+                reason: "[time]: `scale = 0`: scale must be non-zero (every row would have the same time)".into(),
+            });
+        }
         let time = resolve(file, "time", &raw.time, Dimension::Time)?;
         if matches!(time.source, Source::Constant(_)) {
             return Err(FlightDataError::BadSpec {
@@ -342,6 +487,20 @@ impl Mapping {
                     valid: Channel::ALL.iter().map(|c| c.key()).collect::<Vec<_>>().join(", "),
                 });
             };
+            if spec.scale == 0.0 {
+                // A zero scale makes the channel identically its offset: every regressor built
+                // on it is 0 and the parameters it feeds are never identified (issue 10 #10).
+                return Err(FlightDataError::BadSpec {
+                    file: file.to_string(),
+                    channel: ch.key().into(),
+                    reason: format!(
+                        "line {}: `scale = 0`: scale must be non-zero (it would make the channel the constant {} {}; map a constant with `value`)",
+                        line_of(text, key.span().start),
+                        spec.offset,
+                        spec.unit
+                    ),
+                });
+            }
             let m = resolve(file, ch.key(), spec, ch.dimension())?;
             if Channel::POSITIVE.contains(&ch)
                 && let Some(v) = m.constant()
@@ -396,12 +555,21 @@ impl Mapping {
                 reason: format!("must be finite and > 0, got {dt}"),
             });
         }
+        let (align, quaternion, air_data) = resolve_log_tables(file, &raw, &channels)?;
+        let column_names = raw.columns.map(|c| c.names);
+        if let Some(names) = &column_names {
+            check_column_names(file, names)?;
+        }
         Ok(Self {
             file: file.to_string(),
             description: raw.description.unwrap_or_default(),
             nominal_dt_s: raw.nominal_dt_s,
             time,
             channels,
+            align,
+            quaternion,
+            air_data,
+            column_names,
         })
     }
 
@@ -409,6 +577,124 @@ impl Mapping {
     pub fn has(&self, ch: Channel) -> bool {
         self.channels.contains_key(&ch)
     }
+}
+
+type LogTables = (Option<AlignSpec>, Option<[String; 4]>, Option<AirDataSpec>);
+
+/// Validates `[align]`, `[attitude]` and `[air_data]`, and that derived columns used by
+/// channels have the table that makes them.
+fn resolve_log_tables(
+    file: &str,
+    raw: &MappingFile,
+    channels: &BTreeMap<Channel, ChannelMap>,
+) -> Result<LogTables, FlightDataError> {
+    let bad = |channel: &str, reason: String| FlightDataError::BadSpec {
+        file: file.to_string(),
+        channel: channel.to_string(),
+        reason,
+    };
+    let align = match &raw.align {
+        None => None,
+        Some(a) => {
+            let method = match a.method.as_str() {
+                "linear" => Interpolation::Linear,
+                "zoh" | "zero-order-hold" => Interpolation::ZeroOrderHold,
+                m => {
+                    return Err(bad(
+                        "align.method",
+                        format!("`{m}` is not a method (use \"linear\" or \"zoh\")"),
+                    ));
+                }
+            };
+            let clock = match (a.rate_hz, &a.clock) {
+                (Some(r), None) if r.is_finite() && r > 0.0 => Clock::RateHz(r),
+                (Some(r), None) => {
+                    return Err(bad("align.rate_hz", format!("must be finite and > 0, got {r}")));
+                }
+                (None, Some(c)) if !c.is_empty() => Clock::Topic(c.clone()),
+                _ => {
+                    return Err(bad(
+                        "align",
+                        "give exactly one of `rate_hz` or `clock` (a topic name)".into(),
+                    ));
+                }
+            };
+            Some(AlignSpec { clock, method })
+        }
+    };
+    let quaternion = match &raw.attitude {
+        None => None,
+        Some(a) => Some(<[String; 4]>::try_from(a.quaternion.clone()).map_err(|q| {
+            bad("attitude.quaternion", format!("give 4 columns (w, x, y, z), got {}", q.len()))
+        })?),
+    };
+    let air_data = match &raw.air_data {
+        None => None,
+        Some(a) => {
+            if quaternion.is_none() {
+                return Err(bad(
+                    "air_data",
+                    "needs [attitude] quaternion to rotate the velocity into body axes".into(),
+                ));
+            }
+            let ned_velocity = <[String; 3]>::try_from(a.ned_velocity.clone()).map_err(|v| {
+                bad("air_data.ned_velocity", format!("give 3 columns (N, E, D), got {}", v.len()))
+            })?;
+            let wind_ne = match &a.wind_ne {
+                None => None,
+                Some(w) => Some(<[String; 2]>::try_from(w.clone()).map_err(|w| {
+                    bad("air_data.wind_ne", format!("give 2 columns (N, E), got {}", w.len()))
+                })?),
+            };
+            let min_vt_mps = a.min_vt_mps.unwrap_or(1.0);
+            if !(min_vt_mps.is_finite() && min_vt_mps > 0.0) {
+                return Err(bad(
+                    "air_data.min_vt_mps",
+                    format!("must be finite and > 0, got {min_vt_mps}"),
+                ));
+            }
+            Some(AirDataSpec { ned_velocity, wind_ne, min_vt_mps })
+        }
+    };
+    for (ch, m) in channels {
+        let Source::Columns(cols) = &m.source else { continue };
+        for (c, _) in cols {
+            let euler = [EULER_PHI, EULER_THETA, EULER_PSI].contains(&c.as_str());
+            let air = [AIR_VT, AIR_ALPHA, AIR_BETA].contains(&c.as_str());
+            if euler && quaternion.is_none() {
+                return Err(bad(ch.key(), format!("column `{c}` needs an [attitude] table")));
+            }
+            if air && air_data.is_none() {
+                return Err(bad(ch.key(), format!("column `{c}` needs an [air_data] table")));
+            }
+        }
+    }
+    Ok((align, quaternion, air_data))
+}
+
+/// `[columns] names` must be non-empty, unique, and free of line breaks and surrounding
+/// spaces (a header field is trimmed, so such a name could never match).
+fn check_column_names(file: &str, names: &[String]) -> Result<(), FlightDataError> {
+    let bad = |reason: String| FlightDataError::BadSpec {
+        file: file.to_string(),
+        channel: "columns.names".into(),
+        reason,
+    };
+    if names.is_empty() {
+        return Err(bad("the list is empty".into()));
+    }
+    for (i, n) in names.iter().enumerate() {
+        if n.is_empty() || n.trim() != n || n.contains(['\n', '\r']) {
+            return Err(bad(format!(
+                "name {} `{n}` is empty, has surrounding spaces or a line break",
+                i + 1
+            )));
+        }
+        if let Some(j) = names[..i].iter().position(|m| m == n) {
+            return Err(bad(format!("`{n}` is given twice (columns {} and {})", j + 1, i + 1)));
+        }
+    }
+    Ok(())
 }
 
 fn resolve(
@@ -470,12 +756,35 @@ fn resolve(
             ));
         }
     };
+    let calibration = match &spec.calibration {
+        None => None,
+        Some(_) if matches!(source, Source::Constant(_)) => {
+            return Err(bad("`calibration` applies to columns, not to a `value`".into()));
+        }
+        Some(points) => {
+            let t: Vec<(f64, f64)> = points.iter().map(|[r, v]| (*r, *v)).collect();
+            if t.len() < 2 {
+                return Err(bad(format!("calibration needs at least 2 points, got {}", t.len())));
+            }
+            if let Some((r, v)) = t.iter().find(|(r, v)| !(r.is_finite() && v.is_finite())) {
+                return Err(bad(format!("calibration point [{r}, {v}] is not finite")));
+            }
+            if let Some(w) = t.windows(2).find(|w| w[1].0 <= w[0].0) {
+                return Err(bad(format!(
+                    "calibration raw values must increase strictly: {} then {}",
+                    w[0].0, w[1].0
+                )));
+            }
+            Some(t)
+        }
+    };
     Ok(ChannelMap {
         source,
         to_si: unit.to_si,
         scale: spec.scale,
         offset: spec.offset,
         unit: spec.unit.clone(),
+        calibration,
     })
 }
 
@@ -484,6 +793,22 @@ mod tests {
     use super::*;
 
     const HEAD: &str = "[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"V\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nmass = { value = 1.0, unit = \"kg\" }\nS = { value = 1.0, unit = \"m2\" }\nrho = { value = 1.0, unit = \"kg/m3\" }\n";
+
+    /// Issue 10 #10: a channel with `scale = 0` is identically its offset, so the parameters it
+    /// feeds could never be identified; the mapping is refused, naming file, line and key.
+    #[test]
+    fn errors_zero_scale_names_file_line_and_key() {
+        let text = format!("{HEAD}q = {{ column = \"q\", unit = \"deg/s\", scale = 0.0 }}\n");
+        let e = Mapping::from_toml_str(&text, "m.toml").unwrap_err().to_string();
+        assert!(e.starts_with("m.toml: channel `q`: line 10: `scale = 0`"), "{e}");
+        assert!(e.contains("scale must be non-zero"), "{e}");
+        let text = HEAD.replace("unit = \"s\"", "unit = \"s\"\nscale = -0.0");
+        let e = Mapping::from_toml_str(&text, "m.toml").unwrap_err().to_string();
+        assert!(e.contains("m.toml: channel `time`") && e.contains("non-zero"), "{e}");
+        // Any non-zero scale (a sign flip) is still accepted.
+        let text = format!("{HEAD}q = {{ column = \"q\", unit = \"deg/s\", scale = -1e-300 }}\n");
+        assert!(Mapping::from_toml_str(&text, "m.toml").is_ok());
+    }
 
     #[test]
     fn errors_unknown_channel_names_file_line_and_key() {
@@ -518,6 +843,74 @@ mod tests {
         let text = format!("{HEAD}b = {{ value = 0.0, unit = \"m\" }}\n");
         let e = Mapping::from_toml_str(&text, "m.toml").unwrap_err().to_string();
         assert!(e.contains("`b`: must be > 0"), "{e}");
+    }
+
+    #[test]
+    fn analytic_calibration_is_piecewise_linear_and_nan_outside() {
+        let text = format!(
+            "{HEAD}de = {{ column = \"pwm\", calibration = [[1000, -20.0], [1500, 0.0], [2000, 30.0]], unit = \"deg\", offset = 1.0 }}\n"
+        );
+        let m = Mapping::from_toml_str(&text, "m.toml").unwrap();
+        let de = &m.channels[&Channel::De];
+        let deg = |d: f64| d.to_radians();
+        assert!((de.to_si(1000.0) - deg(-19.0)).abs() < 1e-15);
+        assert!((de.to_si(1250.0) - deg(-9.0)).abs() < 1e-15);
+        assert!((de.to_si(1500.0) - deg(1.0)).abs() < 1e-15);
+        assert!((de.to_si(1900.0) - deg(25.0)).abs() < 1e-14);
+        assert!((de.to_si(2000.0) - deg(31.0)).abs() < 1e-15);
+        assert!(de.to_si(999.9).is_nan() && de.to_si(2000.1).is_nan());
+        for (cal, want) in [
+            ("[[1000, 0.0]]", "at least 2 points"),
+            ("[[1000, 0.0], [1000, 1.0]]", "must increase strictly: 1000 then 1000"),
+            ("[[1000, 0.0], [900, 1.0]]", "must increase strictly"),
+        ] {
+            let text =
+                format!("{HEAD}de = {{ column = \"pwm\", calibration = {cal}, unit = \"deg\" }}\n");
+            let e = Mapping::from_toml_str(&text, "m.toml").unwrap_err().to_string();
+            assert!(e.contains("`de`") && e.contains(want), "{e}");
+        }
+    }
+
+    #[test]
+    fn log_tables_parse_and_derived_columns_need_their_table() {
+        let text = format!(
+            "{HEAD}phi = {{ column = \"euler.phi\", unit = \"rad\" }}\n[align]\nclock = \"imu\"\nmethod = \"zoh\"\n[attitude]\nquaternion = [\"a.q[0]\", \"a.q[1]\", \"a.q[2]\", \"a.q[3]\"]\n"
+        );
+        let m = Mapping::from_toml_str(&text, "m.toml").unwrap();
+        assert_eq!(
+            m.align,
+            Some(AlignSpec {
+                clock: Clock::Topic("imu".into()),
+                method: Interpolation::ZeroOrderHold
+            })
+        );
+        assert_eq!(m.quaternion.as_ref().unwrap()[3], "a.q[3]");
+        let text = format!("{HEAD}phi = {{ column = \"euler.phi\", unit = \"rad\" }}\n");
+        let e = Mapping::from_toml_str(&text, "m.toml").unwrap_err().to_string();
+        assert!(e.contains("`phi`: column `euler.phi` needs an [attitude] table"), "{e}");
+        let text = format!("{HEAD}[align]\nrate_hz = 50.0\nclock = \"x\"\nmethod = \"linear\"\n");
+        let e = Mapping::from_toml_str(&text, "m.toml").unwrap_err().to_string();
+        assert!(e.contains("exactly one of `rate_hz` or `clock`"), "{e}");
+        let text = format!("{HEAD}[align]\nrate_hz = 50.0\nmethod = \"cubic\"\n");
+        let e = Mapping::from_toml_str(&text, "m.toml").unwrap_err().to_string();
+        assert!(e.contains("`cubic` is not a method"), "{e}");
+        let text = format!("{HEAD}[air_data]\nned_velocity = [\"p.vx\", \"p.vy\", \"p.vz\"]\n");
+        let e = Mapping::from_toml_str(&text, "m.toml").unwrap_err().to_string();
+        assert!(e.contains("needs [attitude] quaternion"), "{e}");
+    }
+
+    #[test]
+    fn column_names_for_headerless_files_are_checked() {
+        let text = format!("{HEAD}[columns]\nnames = [\"t\", \"V\", \"a\"]\n");
+        let m = Mapping::from_toml_str(&text, "m.toml").unwrap();
+        assert_eq!(m.column_names, Some(vec!["t".into(), "V".into(), "a".into()]));
+        assert_eq!(Mapping::from_toml_str(HEAD, "m.toml").unwrap().column_names, None);
+        let text = format!("{HEAD}[columns]\nnames = [\"t\", \"V\", \"t\"]\n");
+        let e = Mapping::from_toml_str(&text, "m.toml").unwrap_err().to_string();
+        assert!(e.contains("`columns.names`: `t` is given twice (columns 1 and 3)"), "{e}");
+        let text = format!("{HEAD}[columns]\nnames = [\"t\", \" V\"]\n");
+        let e = Mapping::from_toml_str(&text, "m.toml").unwrap_err().to_string();
+        assert!(e.contains("name 2 ` V`"), "{e}");
     }
 
     #[test]

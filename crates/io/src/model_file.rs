@@ -12,6 +12,10 @@
 //! [prior.Cm_alpha]                    # optional, per parameter (units of the parameter)
 //! value = -0.5
 //! sigma = 2.0
+//!
+//! [reference.Cm_alpha]                # optional: a published value, shown beside the estimate
+//! value = -1.002
+//! source = "Jategaonkar 2015, test case 4, output error"
 //! ```
 //!
 //! - Coefficients: `CX CY CZ CL CD Cl Cm Cn` (case-sensitive: `CL` lift, `Cl` rolling moment).
@@ -46,6 +50,8 @@ pub struct ModelSpec {
     pub structure: ModelStructure,
     /// One prior per parameter, in parameter order.
     pub priors: Priors,
+    /// Published reference values (`[reference.<param>]`), in file order of the names.
+    pub references: Vec<ParamReference>,
 }
 
 /// Errors of reading a model file. Each names the file (and line and key where they apply).
@@ -129,6 +135,19 @@ pub enum ModelFileError {
         /// Why.
         reason: String,
     },
+    /// A `[reference.X]` for a parameter that is not a vocabulary name or not in the structure,
+    /// or with a value that is not finite.
+    #[error("{file}: line {line}: reference `{name}`: {reason}")]
+    BadReference {
+        /// File path.
+        file: String,
+        /// Line of the key.
+        line: usize,
+        /// The key.
+        name: String,
+        /// Why.
+        reason: String,
+    },
     /// The declared structure is not valid.
     #[error("{file}: {source}")]
     Structure {
@@ -146,6 +165,28 @@ struct ModelFile {
     coefficients: BTreeMap<Spanned<String>, Vec<Spanned<String>>>,
     #[serde(default)]
     prior: BTreeMap<Spanned<String>, PriorEntry>,
+    #[serde(default)]
+    reference: BTreeMap<Spanned<String>, ReferenceEntry>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ReferenceEntry {
+    value: f64,
+    source: String,
+}
+
+/// A published reference value of one parameter (`[reference.<param>]` in a model file), shown
+/// beside the estimate in the results table, the figures and `report.html`; never used by an
+/// estimator.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamReference {
+    /// The parameter.
+    pub param: Param,
+    /// The value, units of the parameter.
+    pub value: f64,
+    /// Where it is published (book, equation or table).
+    pub source: String,
 }
 
 #[derive(Debug, Deserialize)]
@@ -172,6 +213,7 @@ impl ModelSpec {
             description: format!("preset `{name}`"),
             structure,
             priors: Priors::generic(&structure),
+            references: Vec::new(),
         })
     }
 
@@ -274,11 +316,35 @@ impl ModelSpec {
             }
             priors.set(i, ParamPrior { value: entry.value, sigma: entry.sigma });
         }
+        let mut references = Vec::new();
+        for (key, entry) in &raw.reference {
+            let bad = |reason: String| ModelFileError::BadReference {
+                file: file.to_string(),
+                line: line_of(text, key.span().start),
+                name: key.get_ref().clone(),
+                reason,
+            };
+            let p = Param::from_name(key.get_ref()).ok_or_else(|| {
+                bad("not a parameter name `<coefficient>_<term>` of the vocabulary".into())
+            })?;
+            if structure.index_of(p).is_none() {
+                return Err(bad(format!("`{}` is not in the model", p.name())));
+            }
+            if !entry.value.is_finite() {
+                return Err(bad(format!("value {} is not finite", entry.value)));
+            }
+            references.push(ParamReference {
+                param: p,
+                value: entry.value,
+                source: entry.source.clone(),
+            });
+        }
         Ok(Self {
             name: file.to_string(),
             description: raw.description.unwrap_or_default(),
             structure,
             priors,
+            references,
         })
     }
 }
@@ -322,6 +388,32 @@ sigma = 1.5
         // Parameters without a [prior.X] keep the generic prior.
         let cmq = Param::from_name("Cm_q").unwrap();
         assert_eq!(m.priors.prior[6], generic_prior(cmq));
+        assert!(m.references.is_empty());
+    }
+
+    /// `[reference.X]` gives published values; an unknown parameter or one outside the model
+    /// is an error naming the line.
+    #[test]
+    fn references_are_read_and_checked() {
+        let text = format!("{GOOD}[reference.Cm_q]\nvalue = -27.06\nsource = \"a book\"\n");
+        let m = ModelSpec::from_toml_str(&text, "r.toml").unwrap();
+        let cmq = Param::from_name("Cm_q").unwrap();
+        assert_eq!(
+            m.references,
+            vec![ParamReference { param: cmq, value: -27.06, source: "a book".into() }]
+        );
+        let e = ModelSpec::from_toml_str(
+            &format!("{GOOD}[reference.Cn_r]\nvalue = 1.0\nsource = \"x\"\n"),
+            "r.toml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("r.toml: line 9")
+                && e.contains("reference `Cn_r`")
+                && e.contains("not in the model"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -46,7 +46,7 @@ pub enum Dimension {
 impl fmt::Display for Dimension {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let s = match self {
-            Dimension::Time => "time (s, ms)",
+            Dimension::Time => "time (s, ms, us)",
             Dimension::Angle => "angle (rad, deg)",
             Dimension::AngularRate => "angular rate (rad/s, deg/s)",
             Dimension::AngularAcceleration => "angular acceleration (rad/s2, deg/s2)",
@@ -85,7 +85,7 @@ pub struct Unit {
 /// Error: a unit string that is not recognised.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error(
-    "unit `{0}` is not recognised (e.g. rad, deg, deg/s, rad/s2, m, ft, m/s, ft/s, kt, m/s2, g, Pa, psf, N, lbf, kg, slug, kg*m2, slug*ft2, m2, ft2, kg/m3, slug/ft3, N*m, lbf*ft, 1)"
+    "unit `{0}` is not recognised (e.g. s, ms, us, rad, deg, deg/s, rad/s2, m, ft, m/s, ft/s, kt, m/s2, g, Pa, psf, N, lbf, kg, slug, kg*m2, slug*ft2, m2, ft2, kg/m3, slug/ft3, N*m, lbf*ft, 1)"
 )]
 pub struct UnknownUnit(pub String);
 
@@ -108,6 +108,8 @@ impl Unit {
         let (dimension, to_si) = match norm.as_str() {
             "s" | "sec" => (D::Time, 1.0),
             "ms" => (D::Time, 1e-3),
+            // PX4 ULog and ArduPilot DataFlash timestamps are microseconds.
+            "us" | "µs" | "μs" | "usec" => (D::Time, 1e-6),
             "rad" => (D::Angle, 1.0),
             "deg" => (D::Angle, core::f64::consts::PI / 180.0),
             "rad/s" | "radps" => (D::AngularRate, 1.0),
@@ -174,6 +176,18 @@ mod tests {
         close("slug·ft^2", 1.355_818, 1e-6);
         assert_eq!(Unit::parse("deg/s").unwrap().dimension, Dimension::AngularRate);
         assert_eq!(Unit::parse("Pa").unwrap(), Unit::parse("pa").unwrap());
+    }
+
+    #[test]
+    fn analytic_time_units_s_ms_us() {
+        // 1 ms = 10⁻³ s, 1 µs = 10⁻⁶ s (SI prefixes); both spellings of µ and ASCII `us`.
+        for (u, f) in [("s", 1.0), ("ms", 1e-3), ("us", 1e-6), ("µs", 1e-6), ("μs", 1e-6)] {
+            let unit = Unit::parse(u).unwrap();
+            assert_eq!(unit.dimension, Dimension::Time, "{u}");
+            assert_eq!(unit.to_si, f, "{u}");
+        }
+        // A ULog timestamp in µs converts to the seconds the reader works in.
+        assert_eq!(1_234_567.0 * Unit::parse("us").unwrap().to_si, 1.234_567);
     }
 
     #[test]

@@ -332,3 +332,26 @@ fn errors_live_feed_cut_in_last_line_is_rejected() {
         assert!(ev.iter().all(|e| matches!(e, RecordEvent::Sample { .. })), "{ev:?}");
     }
 }
+
+/// A row keeps the number of its line after blank lines (the csv crate would number it from
+/// the first blank line before it) and as an unterminated last line. In a CRLF file a blank
+/// line is `\r`, a one-field row: rejected at its own line.
+#[test]
+fn analytic_rows_after_blank_lines_keep_their_line_numbers() {
+    let rows = |text: &str| -> Vec<u64> {
+        events_str(text)
+            .into_iter()
+            .map(|e| match e {
+                RecordEvent::Sample { row, .. } | RecordEvent::Rejected { row, .. } => row,
+                RecordEvent::Gap { row, .. } => row,
+            })
+            .collect()
+    };
+    let last = row("0.2");
+    let text = format!("{HEADER}{}\n{}\n\n{}", row("0.0"), row("0.1"), last.trim_end());
+    assert_eq!(rows(&text), [2, 4, 7]);
+    let crlf = format!("{HEADER}\n{}{}", row("0.0"), row("0.1")).replace('\n', "\r\n");
+    assert_eq!(rows(&crlf), [2, 3, 4]);
+    let RecordEvent::Rejected { problem, .. } = &events_str(&crlf)[0] else { panic!() };
+    assert_eq!(*problem, RowProblem::FieldCount { expected: 9, found: 1 });
+}

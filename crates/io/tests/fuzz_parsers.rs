@@ -20,7 +20,7 @@ const HEADER: &str = "t,V,a,q,ax,az,de,qbar,qd";
 const FILE: &str = "fuzz-target.input";
 
 /// Valid seeds for the mutation fuzzing: the shipped mappings and model files.
-const MAPPINGS: [&str; 7] = [
+const MAPPINGS: [&str; 9] = [
     MAPPING,
     include_str!("../../../mappings/attas.toml"),
     include_str!("../../../mappings/attas_lateral.toml"),
@@ -28,6 +28,8 @@ const MAPPINGS: [&str; 7] = [
     include_str!("../../../mappings/jsbsim.toml"),
     include_str!("../../../mappings/jsbsim_clean.toml"),
     include_str!("../../../mappings/twin_otter.toml"),
+    include_str!("../../../mappings/px4-fixedwing.toml"),
+    include_str!("../../../mappings/arduplane.toml"),
 ];
 const MODELS: [&str; 3] = [
     include_str!("../../../models/hfb320_book_q0.toml"),

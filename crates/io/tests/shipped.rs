@@ -19,6 +19,7 @@ fn dir(name: &str) -> Vec<PathBuf> {
 fn shipped_mappings_parse_and_map_what_their_records_are_for() {
     let maps = dir("mappings");
     for want in [
+        "aeroident-sim.toml",
         "attas.toml",
         "attas_lateral.toml",
         "hfb320.toml",
@@ -26,6 +27,8 @@ fn shipped_mappings_parse_and_map_what_their_records_are_for() {
         "jsbsim_clean.toml",
         "mavlink-aeroident.toml",
         "twin_otter.toml",
+        "px4-fixedwing.toml",
+        "arduplane.toml",
     ] {
         assert!(maps.iter().any(|p| p.ends_with(want)), "{want} missing: {maps:?}");
     }
@@ -36,10 +39,13 @@ fn shipped_mappings_parse_and_map_what_their_records_are_for() {
         let has_lateral = lateral.iter().all(|c| m.has(*c));
         match name {
             // The MAVLink feed carries every channel (six-axis aircraft).
-            "attas_lateral.toml"
+            "aeroident-sim.toml"
+            | "attas_lateral.toml"
             | "jsbsim.toml"
             | "jsbsim_clean.toml"
-            | "mavlink-aeroident.toml" => {
+            | "mavlink-aeroident.toml"
+            | "px4-fixedwing.toml"
+            | "arduplane.toml" => {
                 assert!(has_lateral, "{name}")
             }
             // Longitudinal records: the lateral preset must not be the default there.

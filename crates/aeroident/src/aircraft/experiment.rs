@@ -136,6 +136,10 @@ pub struct ChannelLog {
     pub stats: String,
     /// Sample-driven estimators: the final [`Status`] name.
     pub status: Option<&'static str>,
+    /// Sample-driven estimators: the final mean normalised innovation squared
+    /// ([`aeroident_estimators::Estimator::nis`]; ≈ 1 for a consistent filter), `None` for
+    /// methods without innovations.
+    pub nis: Option<f64>,
 }
 
 impl ChannelLog {
@@ -424,6 +428,7 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
                 failure: None,
                 stats: String::new(),
                 status,
+                nis: None,
             },
             ch,
         });
@@ -560,6 +565,9 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
                     .join("; "),
                 Channelled::Sample(s) => format!("status {}", s.est.estimates().status.name()),
             };
+            if let Channelled::Sample(s) = &c.ch {
+                c.log.nis = s.est.nis();
+            }
             c.log
         })
         .collect();

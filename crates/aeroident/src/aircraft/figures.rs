@@ -1,6 +1,7 @@
-//! The thesis-style figures of a run: `controls.png` (pilot commands and wind, cf. thesis
-//! Fig. 4.23), `convergence.png` (estimates vs truth, Fig. 4.24; sample-driven estimators with
-//! their ±2σ band) and `tracking.png` (reference vs estimated aircraft states, Fig. 4.25).
+//! The thesis-style figures of a run, each as PNG and SVG: `controls` (pilot commands and wind,
+//! cf. thesis Fig. 4.23), `convergence` (estimates vs truth, Fig. 4.24; sample-driven
+//! estimators with their shaded ±2σ band) and `tracking` (reference vs estimated aircraft
+//! states, Fig. 4.25).
 
 use crate::outdir::OutputDir;
 
@@ -8,7 +9,8 @@ use aeroident_estimators::vocabulary::Param;
 
 use super::experiment::{Quantity, RunOutput, TRACKED_NAMES, tracked};
 use super::report::{PRIMARY_DERIVATIVES, ReportError};
-use crate::plot::{LineKind, Panel, Series, render_panels_png};
+use crate::plot::{Band, LineKind, Panel, Series};
+use crate::report::{Figure, write_figure};
 
 fn series(label: &str, t: &[f64], v: Vec<f64>, kind: LineKind) -> Series {
     Series { label: label.into(), t_s: t.to_vec(), values: v, kind }
@@ -37,34 +39,13 @@ fn plotted(out: &RunOutput) -> Vec<(Param, Quantity)> {
     v
 }
 
-/// Hides (as gaps) the points of every series but the first (the truth) that lie further than
-/// the truth's largest magnitude outside the truth's range, so the start-up transient of an
-/// estimator does not flatten the scale of the whole panel.
-fn clip_to_truth_band(s: &mut [Series]) {
-    let Some((truth, rest)) = s.split_first_mut() else { return };
-    let (lo, hi) = truth
-        .values
-        .iter()
-        .filter(|v| v.is_finite())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
-    if !(lo.is_finite() && hi.is_finite()) {
-        return;
-    }
-    let m = lo.abs().max(hi.abs()).max(1e-6);
-    for series in rest {
-        for v in &mut series.values {
-            if *v < lo - m || *v > hi + m {
-                *v = f64::NAN;
-            }
-        }
-    }
-}
-
-/// Writes `controls.png`, `convergence.png` and `tracking.png` into `od` (each atomically).
+/// Writes `controls`, `convergence` and `tracking` (each `.png` and `.svg`, atomically) into
+/// `od` and returns them as report figures.
 ///
 /// # Errors
 /// [`ReportError::Output`] naming the file.
-pub fn write_figures(out: &RunOutput, od: &mut OutputDir) -> Result<(), ReportError> {
+pub fn write_figures(out: &RunOutput, od: &mut OutputDir) -> Result<Vec<Figure>, ReportError> {
+    let mut figures = Vec::new();
     let t = &out.t_s;
     let name = &out.scenario.name;
     let deg = |v: f64| v.to_degrees();
@@ -77,6 +58,7 @@ pub fn write_figures(out: &RunOutput, od: &mut OutputDir) -> Result<(), ReportEr
                 title: surface.into(),
                 y_label: format!("{sym} (deg)"),
                 series: vec![series(surface, t, v, LineKind::Solid)],
+                ..Default::default()
             });
         }
     }
@@ -89,6 +71,7 @@ pub fn write_figures(out: &RunOutput, od: &mut OutputDir) -> Result<(), ReportEr
             out.controls.iter().map(|c| c[0]).collect(),
             LineKind::Solid,
         )],
+        ..Default::default()
     });
     controls.push(Panel {
         title: "wind (NED)".into(),
@@ -100,10 +83,19 @@ pub fn write_figures(out: &RunOutput, od: &mut OutputDir) -> Result<(), ReportEr
                 series(n, t, out.wind_ned_fps.iter().map(|w| w[k]).collect(), LineKind::Solid)
             })
             .collect(),
+        ..Default::default()
     });
-    od.write_path("controls.png", |p| {
-        render_panels_png(p, &format!("{name}: control commands"), &controls, 1000, 220)
-    })?;
+    for p in &mut controls {
+        p.signals = true;
+    }
+    figures.push(write_figure::<ReportError>(
+        od,
+        "controls",
+        &format!("{name}: control commands"),
+        "Pilot commands and wind.",
+        &controls,
+        (1000, 220),
+    )?);
 
     let mut conv = Vec::new();
     for (p, q) in plotted(out) {
@@ -115,36 +107,50 @@ pub fn write_figures(out: &RunOutput, od: &mut OutputDir) -> Result<(), ReportEr
             .collect();
         let Some((_, first)) = chans.first() else { continue };
         let mut s = vec![series("truth", t, opt(&first.truth), LineKind::Dashed)];
+        let mut bands = Vec::new();
         for (c, l) in &chans {
             s.push(series(&c.label, t, opt(&l.estimate), LineKind::Solid));
             if l.sigma.iter().any(Option::is_some) {
-                for (sign, tag) in [(1.0, "+2σ"), (-1.0, "−2σ")] {
-                    let band: Vec<f64> = l
-                        .estimate
+                let bound = |sign: f64| -> Vec<f64> {
+                    l.estimate
                         .iter()
                         .zip(&l.sigma)
                         .map(|(e, s)| match (e, s) {
                             (Some(e), Some(s)) => e + sign * 2.0 * s,
                             _ => f64::NAN,
                         })
-                        .collect();
-                    s.push(series(&format!("{} {tag}", c.label), t, band, LineKind::Dashed));
-                }
+                        .collect()
+                };
+                bands.push(Band {
+                    label: format!("{} ±2σ", c.label),
+                    series: s.len() - 1,
+                    t_s: t.to_vec(),
+                    lo: bound(-1.0),
+                    hi: bound(1.0),
+                });
             }
-        }
-        if q == Quantity::Derivative {
-            clip_to_truth_band(&mut s);
         }
         let title = match q {
             Quantity::Increment => format!("Δ{}", p.name()),
             Quantity::Derivative => p.name().to_string(),
         };
-        conv.push(Panel { title: title.clone(), y_label: format!("{title} (per rad)"), series: s });
+        conv.push(Panel {
+            title: title.clone(),
+            y_label: format!("{title} (per rad)"),
+            series: s,
+            bands,
+            ..Default::default()
+        });
     }
     if !conv.is_empty() {
-        od.write_path("convergence.png", |p| {
-            render_panels_png(p, &format!("{name}: parameter convergence"), &conv, 1000, 240)
-        })?;
+        figures.push(write_figure::<ReportError>(
+            od,
+            "convergence",
+            &format!("{name}: parameter convergence"),
+            "Estimates against the truth (dashed): a gap until identified, shaded ±2σ where the method gives σ; y-range from the converged part.",
+            &conv,
+            (1000, 240),
+        )?);
     }
 
     let scale = [
@@ -176,10 +182,23 @@ pub fn write_figures(out: &RunOutput, od: &mut OutputDir) -> Result<(), ReportEr
                 LineKind::Solid,
             ));
         }
-        track.push(Panel { title: TRACKED_NAMES[k].into(), y_label: (*unit).into(), series: s });
+        track.push(Panel {
+            title: TRACKED_NAMES[k].into(),
+            y_label: (*unit).into(),
+            series: s,
+            ..Default::default()
+        });
     }
-    od.write_path("tracking.png", |p| {
-        render_panels_png(p, &format!("{name}: reference vs estimated aircraft"), &track, 1000, 220)
-    })?;
-    Ok(())
+    for p in &mut track {
+        p.signals = true;
+    }
+    figures.push(write_figure::<ReportError>(
+        od,
+        "tracking",
+        &format!("{name}: reference vs estimated aircraft"),
+        "Reference aircraft's states against the estimated aircraft's.",
+        &track,
+        (1000, 220),
+    )?);
+    Ok(figures)
 }

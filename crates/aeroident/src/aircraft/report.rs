@@ -608,9 +608,8 @@ pub fn write_all(
         reason: e.to_string(),
     })?;
     od.write_bytes("summary.json", (text + "\n").as_bytes())?;
-    if figures {
-        super::figures::write_figures(out, od)?;
-    }
+    let figs = if figures { super::figures::write_figures(out, od)? } else { Vec::new() };
+    crate::report::run::write(out, &summary, figs, od)?;
     Ok(summary)
 }
 

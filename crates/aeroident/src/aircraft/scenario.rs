@@ -1,6 +1,7 @@
 //! Scenario files of the aircraft experiments (`scenarios/f16/*.toml`, `scenarios/default.toml`).
 //!
 //! ```toml
+//! kind = "run"                          # the one scenario format's kind (crate::scenario_kind)
 //! name = "t4_7_case4"                  # used in reports
 //! description = "Table 4.7 case 4: ΔCm_α alone, 1 Hz 0.05° sine"
 //! duration_s = 10.0
@@ -98,6 +99,9 @@ pub enum ScenarioError {
         /// Why.
         reason: String,
     },
+    /// The file's `kind` is missing or names another command's scenario.
+    #[error(transparent)]
+    Kind(#[from] crate::scenario_kind::KindError),
 }
 
 /// Control channel a pilot input acts on.
@@ -423,6 +427,9 @@ pub enum EstimatorWind {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawScenario {
+    /// `kind = "run"`, checked by [`crate::scenario_kind::check`] before this is parsed.
+    #[serde(rename = "kind")]
+    _kind: crate::scenario_kind::ScenarioKind,
     name: String,
     #[serde(default)]
     description: String,
@@ -611,6 +618,7 @@ impl Scenario {
     /// [`ScenarioError::Invalid`] naming the field for out-of-range values, old names and
     /// unavailable estimators.
     pub fn from_toml(text: &str, path: &str) -> Result<Self, ScenarioError> {
+        crate::scenario_kind::check(text, path, crate::scenario_kind::ScenarioKind::Run)?;
         let raw: RawScenario = toml::from_str(text)
             .map_err(|e| ScenarioError::Parse { path: path.into(), message: e.to_string() })?;
         let bad = |field: String, reason: String| ScenarioError::Invalid {

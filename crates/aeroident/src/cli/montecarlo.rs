@@ -4,7 +4,8 @@
 //!
 //! - default: a table on stdout, `DIR/montecarlo.json` (statistics, failed runs, CRB notes),
 //!   `DIR/runs.json` (every run's final results), `DIR/histograms_<estimator>.png` (final
-//!   estimates of each primary derivative with the truth line) and `DIR/coverage.png`;
+//!   estimates of each primary derivative with the truth line), `DIR/coverage.png` and
+//!   `DIR/report.html` ([`crate::report::montecarlo`]);
 //!   `DIR` defaults to `./aeroident-out/montecarlo`.
 //! - `--json`: only the summary document of [`crate::montecarlo::json_summary`] on stdout (no
 //!   files); failed runs are listed on stderr.
@@ -41,50 +42,69 @@ pub struct MonteCarloArgs {
     pub no_figures: bool,
 }
 
-fn opt(v: Option<f64>, prec: usize) -> String {
-    v.map_or("—".into(), |x| format!("{x:.prec$e}"))
-}
-
-/// The readable table of a campaign.
+/// The readable table of a campaign (`comfy-table`): per estimator and parameter the truth,
+/// the mean estimate's bias and error %, the scatter against the mean σ and the Cramér–Rao
+/// bound, the ±2σ coverage and the median time to ±10 %.
 pub fn table(c: &Campaign) -> String {
+    use crate::table::fmt_sig;
     let mut s = String::new();
     let _ = writeln!(
         s,
         "Monte Carlo `{}`: {} runs, seed {}, {:.1} s wall on {} threads",
         c.scenario, c.runs, c.seed, c.wall_s, c.threads
     );
-    let _ = writeln!(
-        s,
-        "{:<15} {:<10} {:>11} {:>10} {:>9} {:>9} {:>9} {:>6} {:>9} {:>8}",
+    let mut t = comfy_table::Table::new();
+    t.load_preset(comfy_table::presets::UTF8_FULL_CONDENSED).set_header(vec![
         "estimator",
         "param",
         "truth",
         "bias",
+        "error %",
         "scatter",
         "mean σ",
         "σ_CRB",
         "cov2σ",
         "scat/CRB",
-        "t10 med"
-    );
+        "t10 med",
+    ]);
+    for i in 2..11 {
+        if let Some(col) = t.column_mut(i) {
+            col.set_cell_alignment(comfy_table::CellAlignment::Right);
+        }
+    }
     for e in &c.estimators {
         for p in &e.parameters {
-            let _ = writeln!(
-                s,
-                "{:<15} {:<10} {:>11} {:>10} {:>9} {:>9} {:>9} {:>6} {:>9} {:>8}",
-                e.name,
+            let err = match (p.bias, p.truth) {
+                (Some(b), Some(tr)) if tr.abs() > crate::plot::ZERO_THRESHOLD => {
+                    format!("{:+.1}", 100.0 * b / tr.abs())
+                }
+                _ => "—".into(),
+            };
+            t.add_row(vec![
+                e.name.clone(),
                 format!("{}{}", p.name, if p.primary { "*" } else { "" }),
-                opt(p.truth, 3),
-                opt(p.bias, 2),
-                opt(p.scatter, 2),
-                opt(p.mean_sigma, 2),
-                opt(p.crb_sigma, 2),
+                fmt_sig(
+                    p.truth.map(|x| if x.abs() < crate::plot::ZERO_THRESHOLD { 0.0 } else { x }),
+                    4,
+                ),
+                fmt_sig(p.bias, 2),
+                err,
+                fmt_sig(p.scatter, 2),
+                fmt_sig(p.mean_sigma, 2),
+                fmt_sig(p.crb_sigma, 2),
                 p.coverage_2sigma.map_or("—".into(), |x| format!("{:.0} %", 100.0 * x)),
                 p.scatter.zip(p.crb_sigma).map_or("—".into(), |(a, b)| format!("{:.1}", a / b)),
                 p.median_time_to_10pct_s.map_or("never".into(), |t| format!("{t:.2} s")),
-            );
+            ]);
         }
-        let _ = writeln!(s, "{}: {} runs used, {} failed", e.name, e.runs_ok, e.failed_runs.len());
+    }
+    let _ = writeln!(s, "{t}");
+    for e in &c.estimators {
+        let _ = write!(s, "{}: {} runs used, {} failed", e.name, e.runs_ok, e.failed_runs.len());
+        let _ = match e.mean_nis {
+            Some(nis) => writeln!(s, "; mean NIS {nis:.2}"),
+            None => writeln!(s),
+        };
         for f in &e.failed_runs {
             let _ = writeln!(s, "  run {} failed: {}", f.run, f.reason);
         }
@@ -94,7 +114,7 @@ pub fn table(c: &Campaign) -> String {
     }
     let _ = writeln!(
         s,
-        "* = primary derivative; t10 med = median time to stay within ±10 % (never: ≥ half the runs never do)"
+        "* = primary derivative; error % = bias of the mean estimate / |truth|; t10 med = median time to stay within ±10 % (never: ≥ half the runs never do)"
     );
     s
 }
@@ -195,7 +215,13 @@ pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
         None => Scenario::from_toml(DEFAULT_SCENARIO, "<embedded scenarios/default.toml>")?,
     };
     anyhow::ensure!(args.runs >= 1, "--runs must be at least 1");
-    let c = campaign(&sc, args.runs, args.seed).map_err(anyhow::Error::msg)?;
+    let spin = crate::progress::spinner(&format!(
+        "Monte Carlo `{}`: {} runs in parallel",
+        sc.name, args.runs
+    ));
+    let c = campaign(&sc, args.runs, args.seed);
+    spin.finish_and_clear();
+    let c = c.map_err(anyhow::Error::msg)?;
     if args.json {
         for e in &c.estimators {
             for f in &e.failed_runs {
@@ -207,6 +233,7 @@ pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
     }
     let dir = args.out.unwrap_or_else(|| PathBuf::from("aeroident-out").join("montecarlo"));
     write_outputs(&c, &dir, !args.no_figures)?;
+    crate::report::montecarlo::write(&c, &dir)?;
     super::print_stdout(&format!("{}wrote {}", table(&c), dir.display()))?;
     Ok(())
 }

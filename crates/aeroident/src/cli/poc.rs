@@ -3,12 +3,17 @@
 //! - `aeroident poc <scenario.toml> --out <dir> [--estimator published|corrected]
 //!   [--solver implicit|explicit]` writes `timeseries.csv`, `summary.json`, `estimates.png`,
 //!   `states.png` into `<dir>`.
-//! - `aeroident poc --all --out <dir> [--scenarios <dir>]` runs every scenario under
-//!   `scenarios/poc/` with the published estimator (both readings) and the corrected one, in
-//!   parallel, writes each run under `<dir>/<case>/<estimator>[-<solver>]/` and `<dir>/report.md`.
+//! - `aeroident poc --all [<scenarios dir>] --out <dir>` runs every scenario of the directory
+//!   (default: the shipped `scenarios/poc/`, found from any working directory) with the
+//!   published estimator (both readings) and the corrected one, in parallel, writes each run
+//!   under `<dir>/<case>/<estimator>[-<solver>]/` and `<dir>/report.md`, and prints a
+//!   one-screen overview per thesis table.
+//!
+//! Scenario files have `kind = "poc"` ([`crate::scenario_kind`]).
 
-use crate::poc::report::{CaseResult, render};
+use crate::poc::report::{CaseResult, overview, render};
 use crate::poc::{EstimatorKind, PocScenario, SolverReading, output, run};
+use crate::scenario_kind::{ScenarioKind, shipped_dir};
 use anyhow::{Context, bail};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
@@ -20,12 +25,10 @@ pub struct PocArgs {
     /// Scenario file (TOML, see `scenarios/poc/`). Not with `--all`.
     #[arg(required_unless_present = "all", conflicts_with = "all")]
     pub scenario: Option<PathBuf>,
-    /// Run every `*.toml` under `--scenarios` and write `report.md`.
-    #[arg(long)]
-    pub all: bool,
-    /// Directory of scenario files for `--all`.
-    #[arg(long, default_value = "scenarios/poc")]
-    pub scenarios: PathBuf,
+    /// Run every `*.toml` in this directory (default: the shipped `scenarios/poc`) and write
+    /// `report.md`.
+    #[arg(long, value_name = "DIR", num_args = 0..=1)]
+    pub all: Option<Option<PathBuf>>,
     /// Output directory (created if needed).
     #[arg(long)]
     pub out: PathBuf,
@@ -42,15 +45,15 @@ pub struct PocArgs {
 /// # Errors
 /// Bad scenario files (file, line/key, reason), estimator or model failures, output errors.
 pub fn execute(args: PocArgs) -> anyhow::Result<()> {
-    if args.all {
+    if let Some(dir) = args.all {
+        let dir = dir.unwrap_or_else(|| shipped_dir(ScenarioKind::Poc));
         let mut top = crate::outdir::OutputDir::open(&args.out)?;
-        let (results, wall_s) = run_all(&args.scenarios, &args.out)?;
+        let (results, wall_s) = run_all(&dir, &args.out)?;
         let report = render(&results, wall_s);
         let path = top.write_bytes("report.md", report.as_bytes())?;
         super::print_stdout(&format!(
-            "{} scenarios, {} runs in {wall_s:.2} s wall; report: {}",
-            results.len(),
-            3 * results.len(),
+            "{}full report: {}",
+            overview(&results, wall_s),
             path.display()
         ))?;
         return Ok(());

@@ -1,24 +1,35 @@
 //! `aeroident replay`: feed a recorded flight to an online estimator sample by sample.
 //!
 //! ```text
-//! aeroident replay <data.csv|-> --map <map.toml> [--out <dir>]
+//! aeroident replay <data.csv|.asc|.mat|-> --map <map.toml> [--format csv|asc|mat|ulog|dataflash]
+//!                  [--out <dir>]
 //!                  [--model longitudinal|lateral|six-axis|FILE]
 //!                  [--estimator rls|ftr|ekf|smpe|smpe-corrected|gradient|oe] [--forgetting λ]
 //!                  [--derivatives auto|differentiate] [--diff-window N] [--realtime]
+//!                  [--validate-on <data2.csv>]
 //! ```
-//! Writes `<dir>/estimates.csv`, `<dir>/summary.json` and `<dir>/estimates.png` (estimates with
-//! ±2σ). With `-` the record is read from stdin and one CSV line of estimates per sample is
+//! Writes `<dir>/estimates.csv`, `<dir>/summary.json`, `<dir>/estimates.{png,svg}` (estimates
+//! with shaded ±2σ), `<dir>/fit.{png,svg}` (model vs measured) and `<dir>/report.html`
+//! ([`crate::report::replay`]), and prints the results table ([`crate::table`]) on stdout. With `-` the record is read from stdin and one CSV line of estimates per sample is
 //! written to stdout (a live feed: buffered, flushed per line with `--realtime`; the history
 //! kept for the figure and the settling times is bounded, see `History`); the summary then goes to stderr unless
 //! `--out` is given. The model used is printed on stderr. A diverged estimator is an error
 //! (non-zero exit) after the summary is written. `--estimator oe` is the batch output-error
 //! fit: it reads the whole record first (it says so), prints its iterations and writes
 //! `summary.json` (estimates, coloured-residual and Cramér–Rao σ, residual RMS).
+//!
+//! The log format is `--format`, else the file's extension, else CSV
+//! ([`aeroident_io::log`]; `docs/mapping.md` tells how columns are named in each).
+//!
+//! Every summary has `identifiability` and `validation` (the model's fit to the record:
+//! RMSE, bias with 95 % interval, fit %, R², Theil's U, Ljung–Box, residual–input correlation,
+//! ±2σ prediction intervals; `docs/validation.md`), printed as a short block on stderr.
+//! `--validate-on FILE2` applies the final estimates to a second record (same mapping) and
+//! reports the same metrics there under `validation_on`.
 
 use crate::estimators::EstimatorKind;
-use crate::plot::{LineKind, Panel, Series, render_panels_png};
-use crate::replay::{DerivativeSource, History, Pacing, ReplayOptions, ReplayOutcome, replay};
-use aeroident_io::{FlightDataReader, Mapping, ModelSpec};
+use crate::replay::{DerivativeSource, Pacing, ReplayOptions, ReplayOutcome, replay};
+use aeroident_io::{FlightDataReader, LogFormat, Mapping, ModelSpec, open_log_with_notes};
 use anyhow::Context;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -26,12 +37,18 @@ use std::path::{Path, PathBuf};
 /// Arguments of `aeroident replay`.
 #[derive(Debug, clap::Args)]
 pub struct ReplayArgs {
-    /// Recorded flight data: a CSV with one header row, `-` for stdin (live mode), or a live
-    /// MAVLink feed `mavlink:udp:<host>:<port>[?timeout_s=<s>]` (docs/mavlink.md).
+    /// Recorded flight data: a CSV with one header row, a whitespace `.asc`, a MATLAB `.mat`,
+    /// a PX4 ULog `.ulg`, an ArduPilot DataFlash `.bin`, `-` for stdin (live mode: CSV, or
+    /// whitespace text with `--format asc`), or a live MAVLink feed
+    /// `mavlink:udp:<host>:<port>[?timeout_s=<s>]` (docs/mavlink.md).
     pub data: String,
     /// Channel mapping TOML (see `mappings/*.toml` and `docs/mapping.md`).
     #[arg(long)]
     pub map: PathBuf,
+    /// Log format (csv, asc, mat, ulog, dataflash); default: by the file's extension
+    /// (`.asc`, `.mat`, `.ulg`, `.bin`), else CSV.
+    #[arg(long)]
+    pub format: Option<LogFormat>,
     /// Output directory for estimates.csv, summary.json and estimates.png.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -55,6 +72,10 @@ pub struct ReplayArgs {
     /// Pace the replay at the record's own sample rate.
     #[arg(long)]
     pub realtime: bool,
+    /// A second record (same mapping) not used for the fit: the final estimates are applied
+    /// to it and the validation metrics reported under `validation_on` in the summary.
+    #[arg(long, value_name = "FILE2")]
+    pub validate_on: Option<PathBuf>,
 }
 
 fn announce(line: &str) {
@@ -105,6 +126,18 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     } else {
         Box::new(std::io::BufWriter::with_capacity(1 << 16, std::io::stdout().lock()))
     };
+    // Progress on stderr when it is a terminal: bytes of the file, and a status line with the
+    // samples, the record time and the first estimates (the live view of `--realtime`).
+    let bar = match std::fs::metadata(&args.data) {
+        Ok(m) if !live => crate::progress::bytes_bar(
+            m.len(),
+            &Path::new(&args.data)
+                .file_name()
+                .map_or(args.data.clone(), |n| n.to_string_lossy().into()),
+        ),
+        _ => crate::progress::spinner("replay (live)"),
+    };
+    let mut status = crate::progress::StatusSink::new(bar.clone());
     let mut sinks: Vec<&mut dyn Write> = Vec::new();
     if let Some(f) = csv_file.as_mut() {
         sinks.push(f);
@@ -112,24 +145,53 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     if live {
         sinks.push(&mut *stdout_lock);
     }
+    if crate::progress::enabled() {
+        sinks.push(&mut status);
+    }
+    let format = args
+        .format
+        .or_else(|| LogFormat::from_extension(Path::new(&args.data)))
+        .unwrap_or(LogFormat::Csv);
     let outcome = if mavlink {
         let (reader, stats) = crate::live::open_mavlink(&args.data, &mapping)?;
-        let mut outcome = replay(reader, &mapping, &opts, sinks)?;
-        crate::live::finish(&mut outcome.summary, &stats);
-        outcome
-    } else if live {
-        let reader = FlightDataReader::new(std::io::stdin().lock(), "-", &mapping)?;
-        replay(reader, &mapping, &opts, sinks)?
-    } else {
+        replay(reader, &mapping, &opts, sinks).map(|mut outcome| {
+            crate::live::finish(&mut outcome.summary, &stats);
+            outcome
+        })
+    } else if !live && format == LogFormat::Csv {
+        // The CSV file itself, read through the progress bar (what `open_log` opens for CSV).
         let file =
             std::fs::File::open(&args.data).with_context(|| format!("opening {}", args.data))?;
-        let reader = FlightDataReader::new(std::io::BufReader::new(file), &args.data, &mapping)?;
-        replay(reader, &mapping, &opts, sinks)?
+        let reader = FlightDataReader::new(
+            std::io::BufReader::new(bar.wrap_read(file)),
+            &args.data,
+            &mapping,
+        )?;
+        replay(reader, &mapping, &opts, sinks)
+    } else {
+        let (reader, notes) = open_log_with_notes(&args.data, Some(format), &mapping)?;
+        for n in &notes {
+            eprintln!("note: {n}");
+        }
+        replay(reader, &mapping, &opts, sinks)
     };
+    bar.finish_and_clear();
+    let outcome = outcome?;
     if let Some(f) = csv_file {
         f.commit()?;
     }
-    let summary_text = serde_json::to_string_pretty(&outcome.summary)?;
+    let validation_on = match (&args.validate_on, outcome.diverged()) {
+        (Some(path), false) => {
+            let name = path.display().to_string();
+            let (reader, notes) = open_log_with_notes(&name, None, &mapping)?;
+            for n in &notes {
+                eprintln!("note: {n}");
+            }
+            Some(crate::replay::validate_on(reader, &mapping, &opts, &outcome)?)
+        }
+        _ => None,
+    };
+    let summary_text = serde_json::to_string_pretty(&outcome.document(validation_on.as_ref()))?;
     match &args.out {
         Some(dir) => {
             let o = out_dir.as_mut().context("internal: output directory not open")?;
@@ -138,7 +200,14 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
                 .file_name()
                 .map_or(args.data.clone(), |n| n.to_string_lossy().into_owned());
             let title = format!("{name} — {} — {}", args.estimator.name(), outcome.model.name);
-            o.write_path("estimates.png", |p| plot_estimates(p, &title, &outcome.history))?;
+            let results = crate::report::replay::write(
+                &args,
+                &outcome,
+                &title,
+                &crate::report::replay::model_references(&outcome),
+                o,
+            )?;
+            crate::cli::print_stdout(&crate::table::render(&results))?;
             eprintln!(
                 "{}: {} samples read, {} rejected, {:.0} samples/s, status {}; wrote {}",
                 args.data,
@@ -163,14 +232,16 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
             pairs.join(", ")
         );
     }
-    // The end-of-run diagnostics (sign plausibility, filter consistency); the record warnings
-    // were printed as they arose.
-    for w in outcome
-        .summary
-        .warnings
-        .iter()
-        .filter(|w| w.contains("sign a conventional") || w.starts_with("normalised innovation"))
-    {
+    for v in outcome.validation.iter().chain(validation_on.iter()) {
+        eprint!("{}", validation_block(v));
+    }
+    // The end-of-run diagnostics (sign plausibility, filter consistency, collinear
+    // regressors); the record warnings were printed as they arose.
+    for w in outcome.summary.warnings.iter().filter(|w| {
+        w.contains("sign a conventional")
+            || w.starts_with("normalised innovation")
+            || w.starts_with("collinear regressors")
+    }) {
         eprintln!("warning: {w}");
     }
     if let Some(e) = diverged_error(&outcome, args.estimator.name()) {
@@ -183,6 +254,62 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// The console block of a validation report: one line per output.
+pub fn validation_block(v: &crate::replay::prediction::ValidationReport) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let what = if v.used_for_fit { "validation on the fitted record" } else { "validation on" };
+    let _ = writeln!(
+        s,
+        "{what} {} ({}; {} samples):",
+        v.data,
+        v.outputs.first().map_or("-", |o| o.prediction.as_str()),
+        v.samples
+    );
+    let opt = |x: Option<f64>, p: usize| x.map_or("—".to_string(), |x| format!("{x:.p$}"));
+    for o in &v.outputs {
+        let lb = o.ljung_box.as_ref().map_or("—".into(), |l| {
+            format!(
+                "Q({})={:.0} p={:.2}{}",
+                l.lags,
+                l.q,
+                l.p_value,
+                if l.white { "" } else { " (coloured)" }
+            )
+        });
+        let xc: Vec<String> = o
+            .input_correlation
+            .iter()
+            .map(|c| {
+                format!("{} {:.2}{}", c.input, c.max_abs_rho, if c.within_band { "" } else { "*" })
+            })
+            .collect();
+        let pi = o
+            .prediction_interval
+            .as_ref()
+            .map_or("—".into(), |p| format!("{:.0} %", 100.0 * p.fraction_inside));
+        let _ = writeln!(
+            s,
+            "  {:<11} fit {:>6} %  R² {:>6}  rmse {:.3e}  bias {:+.2e} [{:+.2e}, {:+.2e}]  U {}  {}  ρ(e,u) {}  in ±2σ {}",
+            o.name,
+            opt(o.fit_percent, 1),
+            opt(o.r_squared, 3),
+            o.rmse,
+            o.bias,
+            o.bias_ci95[0],
+            o.bias_ci95[1],
+            opt(o.theil_u, 3),
+            lb,
+            if xc.is_empty() { "—".into() } else { xc.join(", ") },
+            pi
+        );
+    }
+    for n in &v.notes {
+        let _ = writeln!(s, "  note: {n}");
+    }
+    s
 }
 
 /// The error message for a diverged estimator (`None` if it did not diverge).
@@ -200,46 +327,6 @@ pub fn diverged_error(outcome: &ReplayOutcome, estimator: &str) -> Option<String
     ))
 }
 
-/// Figure: one panel per parameter, the estimate (solid) and ±2σ (dashed) where known.
-///
-/// # Errors
-/// Plot errors naming the file.
-pub fn plot_estimates(path: &Path, title: &str, h: &History) -> anyhow::Result<()> {
-    let panels: Vec<Panel> = h
-        .names
-        .iter()
-        .enumerate()
-        .map(|(i, name)| {
-            let v: Vec<f64> = h.values.iter().map(|v| v[i].unwrap_or(f64::NAN)).collect();
-            let mut series = vec![Series {
-                label: (*name).to_string(),
-                t_s: h.t_s.clone(),
-                values: v.clone(),
-                kind: LineKind::Solid,
-            }];
-            if h.sigmas.iter().any(|s| s[i].is_some()) {
-                for (label, sign) in [("+2σ", 1.0), ("−2σ", -1.0)] {
-                    let band = h
-                        .sigmas
-                        .iter()
-                        .zip(v.iter())
-                        .map(|(s, v)| s[i].map_or(f64::NAN, |s| v + sign * 2.0 * s))
-                        .collect();
-                    series.push(Series {
-                        label: label.into(),
-                        t_s: h.t_s.clone(),
-                        values: band,
-                        kind: LineKind::Dashed,
-                    });
-                }
-            }
-            Panel { title: (*name).to_string(), y_label: (*name).to_string(), series }
-        })
-        .collect();
-    render_panels_png(path, title, &panels, 1000, 180)?;
-    Ok(())
-}
-
 /// `--estimator oe`: the batch output-error fit of the whole record.
 fn execute_batch(
     args: &ReplayArgs,
@@ -249,17 +336,28 @@ fn execute_batch(
     eprintln!(
         "output error is a batch method: reading the whole record before fitting (not real time)"
     );
-    let outcome = if args.data == "-" {
-        let reader = FlightDataReader::new(std::io::stdin().lock(), "-", mapping)?;
-        crate::replay::batch::fit_record(reader, mapping, model)?
-    } else {
-        let file =
-            std::fs::File::open(&args.data).with_context(|| format!("opening {}", args.data))?;
-        let reader = FlightDataReader::new(std::io::BufReader::new(file), &args.data, mapping)?;
-        crate::replay::batch::fit_record(reader, mapping, model)?
-    };
+    let (reader, notes) = open_log_with_notes(&args.data, args.format, mapping)?;
+    for n in &notes {
+        eprintln!("note: {n}");
+    }
+    let mut outcome = crate::replay::batch::fit_record(reader, mapping, model)?;
+    if let Some(path) = &args.validate_on {
+        let name = path.display().to_string();
+        let (reader, notes) = open_log_with_notes(&name, None, mapping)?;
+        for n in &notes {
+            eprintln!("note: {n}");
+        }
+        outcome.summary.validation_on = Some(crate::replay::batch::validate_on(reader, &outcome)?);
+    }
     eprintln!("model: {}", outcome.model.name);
     crate::cli::print_stdout(&outcome.result.to_string())?;
+    let s = &outcome.summary;
+    for v in std::iter::once(&s.validation).chain(s.validation_on.iter()) {
+        eprint!("{}", validation_block(v));
+    }
+    for w in &s.warnings {
+        eprintln!("warning: {w}");
+    }
     let text = serde_json::to_string_pretty(&outcome.summary)?;
     match &args.out {
         Some(dir) => {

@@ -5,10 +5,15 @@
 //!   aileron and rudder, sensor noise, light turbulence, damage at 20 s; prints a table and
 //!   writes `./aeroident-out/`.
 //! - `aeroident run <scenario.toml> [--out DIR]` — one scenario: `timeseries.csv`,
-//!   `summary.json`, `controls.png`, `convergence.png`, `tracking.png` in `DIR`
-//!   (default `./aeroident-out/<name>`).
-//! - `aeroident run --all <dir> [--out DIR]` — every `*.toml` in `<dir>` in parallel, one
-//!   sub-directory each, plus `DIR/report.md` (thesis versus ours).
+//!   `summary.json`, `controls`, `convergence`, `tracking` (`.png` and `.svg`) and
+//!   `report.html` ([`crate::report::run`]) in `DIR` (default `./aeroident-out/<name>`); the
+//!   results table per estimator (estimate ± σ, truth, error %, status) on stdout.
+//! - `aeroident run --all [<dir>] [--out DIR]` — every `*.toml` in `<dir>` (default: the
+//!   shipped `scenarios/f16/`, found from any working directory) in parallel, one
+//!   sub-directory each, plus `DIR/report.md` (thesis versus ours); prints a one-screen
+//!   overview, one line per scenario.
+//!
+//! Scenario files have `kind = "run"` ([`crate::scenario_kind`]).
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -19,6 +24,7 @@ use rayon::prelude::*;
 use crate::aircraft::report::{self, Summary};
 use crate::aircraft::{Scenario, run};
 use crate::outdir::{OutputDir, safe_component};
+use crate::scenario_kind::{ScenarioKind, shipped_dir};
 
 /// The default scenario, embedded so `aeroident run` works from any directory.
 pub const DEFAULT_SCENARIO: &str = include_str!("../../../../scenarios/default.toml");
@@ -28,9 +34,10 @@ pub const DEFAULT_SCENARIO: &str = include_str!("../../../../scenarios/default.t
 pub struct RunArgs {
     /// Scenario file (TOML). Without it, the built-in default scenario runs.
     pub scenario: Option<PathBuf>,
-    /// Run every `*.toml` in this directory and write `report.md`.
-    #[arg(long, value_name = "DIR", conflicts_with = "scenario")]
-    pub all: Option<PathBuf>,
+    /// Run every `*.toml` in this directory (default: the shipped `scenarios/f16`) and write
+    /// `report.md`.
+    #[arg(long, value_name = "DIR", conflicts_with = "scenario", num_args = 0..=1)]
+    pub all: Option<Option<PathBuf>>,
     /// Output directory.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -76,11 +83,15 @@ pub fn check_names<'a>(named: impl IntoIterator<Item = (&'a str, &'a Path)>) -> 
 /// Unreadable or invalid scenarios (file, line, field), failed runs, unwritable outputs.
 pub fn execute(args: RunArgs) -> anyhow::Result<()> {
     if let Some(dir) = &args.all {
+        let dir = dir.clone().unwrap_or_else(|| shipped_dir(ScenarioKind::Run));
         let out = args.out.clone().unwrap_or_else(|| PathBuf::from("aeroident-out"));
-        let md = run_all(dir, &out, !args.no_figures)?;
+        let (_, overview) = run_all(&dir, &out, !args.no_figures)?;
         // A closed pipe (e.g. `| head`) is not an error of the run.
-        let _ =
-            writeln!(std::io::stdout().lock(), "{md}\nwrote {}", out.join("report.md").display());
+        let _ = writeln!(
+            std::io::stdout().lock(),
+            "{overview}full report: {}",
+            out.join("report.md").display()
+        );
         return Ok(());
     }
     let (sc, default_dir) = match &args.scenario {
@@ -95,18 +106,51 @@ pub fn execute(args: RunArgs) -> anyhow::Result<()> {
         ),
     };
     let dir = args.out.unwrap_or(default_dir);
-    let summary = run_one(&sc, &dir, !args.no_figures)?;
-    let _ =
-        writeln!(std::io::stdout().lock(), "{}wrote {}", report::table(&summary), dir.display());
+    let spin =
+        crate::progress::spinner(&format!("run `{}` ({} s simulated)", sc.name, sc.duration_s));
+    let summary = run_one(&sc, &dir, !args.no_figures);
+    spin.finish_and_clear();
+    let summary = summary?;
+    let _ = writeln!(std::io::stdout().lock(), "{}wrote {}", results_text(&summary), dir.display());
     Ok(())
 }
 
+/// The console text of one run: the header line and target lines of [`report::table`] around
+/// one [`crate::table`] per estimator.
+fn results_text(summary: &Summary) -> String {
+    let mut s = format!(
+        "scenario {}  (realtime factor {:.0}×, {})\n",
+        summary.scenario, summary.realtime_factor, summary.solver
+    );
+    for r in crate::report::run::results(summary) {
+        s.push_str(&crate::table::render(&r));
+    }
+    for t in &summary.targets {
+        s.push_str(&format!(
+            "{}: {}/{} primary derivatives meet the targets{}\n",
+            t.estimator,
+            t.met,
+            t.total,
+            if t.missed.is_empty() {
+                String::new()
+            } else {
+                format!(" (missed: {})", t.missed.join(", "))
+            }
+        ));
+    }
+    s
+}
+
 /// Runs every scenario in `scenarios_dir` (in parallel) into `out/<name>/` and writes
-/// `out/report.md`; returns the report text.
+/// `out/report.md`; returns the report text and the one-screen [`overview`].
 ///
 /// # Errors
 /// An unreadable directory or scenario, or a failed run (named).
-pub fn run_all(scenarios_dir: &Path, out: &Path, figures: bool) -> anyhow::Result<String> {
+pub fn run_all(
+    scenarios_dir: &Path,
+    out: &Path,
+    figures: bool,
+) -> anyhow::Result<(String, String)> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(scenarios_dir)
         .with_context(|| format!("reading {}", scenarios_dir.display()))?
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -117,17 +161,53 @@ pub fn run_all(scenarios_dir: &Path, out: &Path, figures: bool) -> anyhow::Resul
     let scenarios = files.iter().map(|f| Scenario::from_path(f)).collect::<Result<Vec<_>, _>>()?;
     check_names(scenarios.iter().zip(&files).map(|(s, f)| (s.name.as_str(), f.as_path())))?;
     let mut top = OutputDir::open(out)?;
-    let results: Vec<(Scenario, Summary)> = scenarios
+    let bar = crate::progress::count_bar(scenarios.len() as u64, "scenarios");
+    let results: anyhow::Result<Vec<(Scenario, Summary)>> = scenarios
         .into_par_iter()
         .map(|sc| {
             let s = run_one(&sc, &out.join(&sc.name), figures)?;
+            bar.inc(1);
             Ok((sc, s))
         })
-        .collect::<anyhow::Result<_>>()?;
+        .collect();
+    bar.finish_and_clear();
+    let results = results?;
     let mut md = report::markdown(&results);
     md.push_str(&evidence(&results.iter().map(|(sc, _)| sc.clone()).collect::<Vec<_>>())?);
     top.write_bytes("report.md", md.as_bytes())?;
-    Ok(md)
+    Ok((md, overview(&results)))
+}
+
+/// One line per scenario: per estimator, how many of its estimated quantities (increments
+/// and derivatives with a truth) end within 5 % of the truth, and the realtime factor; then a
+/// total per estimator. The per-entry numbers are in `report.md`.
+pub fn overview(results: &[(Scenario, Summary)]) -> String {
+    use std::fmt::Write as _;
+    let mut s =
+        format!("{:<24} {:>8}  final estimates within 5 % of the truth\n", "scenario", "realtime");
+    // (estimator, within, scored) in order of first appearance
+    let mut totals: Vec<(String, usize, usize)> = Vec::new();
+    for (sc, sm) in results {
+        let mut per: Vec<(String, usize, usize)> = Vec::new();
+        for p in &sm.parameters {
+            let Some(e) = p.rel_error else { continue };
+            let ok = usize::from(e.abs() <= 0.05);
+            for list in [&mut per, &mut totals] {
+                match list.iter_mut().find(|x| x.0 == p.estimator) {
+                    Some(x) => {
+                        x.1 += ok;
+                        x.2 += 1;
+                    }
+                    None => list.push((p.estimator.clone(), ok, 1)),
+                }
+            }
+        }
+        let cells: Vec<String> = per.iter().map(|(e, k, n)| format!("{e} {k}/{n}")).collect();
+        let _ = writeln!(s, "{:<24} {:>7.0}×  {}", sc.name, sm.realtime_factor, cells.join(" · "));
+    }
+    let cells: Vec<String> = totals.iter().map(|(e, k, n)| format!("{e} {k}/{n}")).collect();
+    let _ = writeln!(s, "{} scenarios; all: {}", results.len(), cells.join(" · "));
+    s
 }
 
 /// Variants of thesis cases that decide the illegible λ of tables 4.7/4.8 and show the effect of

@@ -33,6 +33,7 @@ fn result(
         outcome: Ok(vec![EstimatorRun {
             name: "rls".into(),
             failure: fail.map(Into::into),
+            nis: None,
             params: vec![prun("Cm_alpha", -1.0, fin, sigma, t10)],
         }]),
     }

@@ -143,6 +143,7 @@ pub fn write_figures(od: &mut crate::outdir::OutputDir, out: &RunOutput) -> anyh
                     kind: LineKind::Solid,
                 },
             ],
+            ..Default::default()
         })
         .collect();
     let title = label(out);
@@ -168,6 +169,7 @@ pub fn write_figures(od: &mut crate::outdir::OutputDir, out: &RunOutput) -> anyh
                     kind: LineKind::Solid,
                 },
             ],
+            ..Default::default()
         })
         .collect();
     od.write_path("states.png", |p| render_panels_png(p, &title, &state_panels, 900, 260))?;

@@ -40,7 +40,10 @@ fn cell(s: &Summary, j: usize) -> String {
     )
 }
 
-fn meets_target(s: &Summary, j: usize) -> bool {
+/// Whether parameter `j` of the run summarised by `s` meets the corrected estimator's target:
+/// final within [`TARGET_FINAL_REL`] of truth and convergence time ≤ [`TARGET_TIME_FACTOR`] ×
+/// the thesis's (any time when the thesis gives none).
+pub fn meets_target(s: &Summary, j: usize) -> bool {
     let p = &s.parameters[j];
     let final_ok = p.rel_error.abs() <= TARGET_FINAL_REL;
     let time_ok = match (p.convergence_time_s, p.thesis_convergence_time_s) {
@@ -139,4 +142,50 @@ pub fn render(results: &[CaseResult], wall_s: f64) -> String {
         TARGET_TIME_FACTOR
     );
     md
+}
+
+/// The one-screen summary of `aeroident poc --all`: per thesis table the cases, how many
+/// parameters the corrected estimator brings within the target and its worst final error, and
+/// a total over tables 4.1–4.4 (the headline of docs/reproduction-poc.md).
+pub fn overview(results: &[CaseResult], wall_s: f64) -> String {
+    let mut by_table: BTreeMap<&str, Vec<&CaseResult>> = BTreeMap::new();
+    for r in results {
+        by_table.entry(r.scenario.case.thesis_table.as_str()).or_default().push(r);
+    }
+    let mut s = format!(
+        "{:<8} {:>6} {:>32} {:>19}\n",
+        "table", "cases", "corrected: parameters on target", "worst final error"
+    );
+    let (mut met, mut total) = (0usize, 0usize);
+    for (table, rows) in &by_table {
+        let (mut m, mut n, mut worst) = (0usize, 0usize, 0.0f64);
+        for r in rows {
+            for (j, p) in r.corrected.0.parameters.iter().enumerate() {
+                n += 1;
+                m += usize::from(meets_target(&r.corrected.0, j));
+                worst = worst.max(p.rel_error.abs());
+            }
+        }
+        if *table != "4.6" {
+            met += m;
+            total += n;
+        }
+        let _ = writeln!(
+            s,
+            "{:<8} {:>6} {:>32} {:>18.2}%",
+            table,
+            rows.len(),
+            format!("{m}/{n}"),
+            100.0 * worst
+        );
+    }
+    let _ = writeln!(
+        s,
+        "{} scenarios, {} runs in {wall_s:.2} s; corrected estimator, tables 4.1–4.4: {met}/{total} parameters on target (final within {:.0} %, time ≤ {}× thesis)",
+        results.len(),
+        3 * results.len(),
+        100.0 * TARGET_FINAL_REL,
+        TARGET_TIME_FACTOR
+    );
+    s
 }

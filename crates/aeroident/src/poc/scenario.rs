@@ -2,6 +2,8 @@
 //!
 //! # TOML shape
 //! ```toml
+//! kind = "poc"                   # the one scenario format's kind (crate::scenario_kind)
+//!
 //! [case]
 //! name = "table_4_1_case_1"      # also the output sub-directory name
 //! thesis_table = "4.1"           # groups the rows of report.md
@@ -82,12 +84,18 @@ pub enum ScenarioError {
         /// Why it is invalid.
         reason: String,
     },
+    /// The file's `kind` is missing or names another command's scenario.
+    #[error(transparent)]
+    Kind(#[from] crate::scenario_kind::KindError),
 }
 
 /// The whole scenario file.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PocScenario {
+    /// `kind = "poc"`, checked by [`crate::scenario_kind::check`] before this is parsed.
+    #[serde(rename = "kind")]
+    _kind: crate::scenario_kind::ScenarioKind,
     /// Identification of the case.
     pub case: CaseInfo,
     /// Reference system.
@@ -312,6 +320,8 @@ impl PocScenario {
     /// # Errors
     /// As [`PocScenario::from_path`].
     pub fn from_str_at(text: &str, path: &Path) -> Result<Self, ScenarioError> {
+        let file = path.display().to_string();
+        crate::scenario_kind::check(text, &file, crate::scenario_kind::ScenarioKind::Poc)?;
         let sc: Self = toml::from_str(text).map_err(|e| {
             let (line, column) = e.span().map_or((0, 0), |s| line_col(text, s.start));
             ScenarioError::Parse {
@@ -451,6 +461,7 @@ mod tests {
     use super::*;
 
     const GOOD: &str = r#"
+kind = "poc"
 [case]
 name = "t"
 thesis_table = "4.1"

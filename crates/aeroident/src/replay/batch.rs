@@ -13,7 +13,12 @@
 //! Cramér–Rao σ is then optimistic), the Cramér–Rao σ otherwise; both are in the summary.
 
 use super::ReplayError;
+use super::diagnostics::{self, Identifiability};
+use super::prediction::{Recorder, ValidationReport, validate_coefficients};
+use crate::validation::{OutputData, validate};
+use aeroident_estimators::Term;
 use aeroident_estimators::flight_model::FlightModel;
+use aeroident_estimators::output_error::Start;
 use aeroident_estimators::output_error::{OeConfig, OeError, OeResult, fit};
 use aeroident_estimators::{AirDataSample, ModelStructure};
 use aeroident_io::{FlightDataReader, Mapping, ModelSpec, RecordEvent, Rejection};
@@ -82,6 +87,19 @@ pub struct BatchSummary {
     pub parameters: Vec<BatchParameter>,
     /// Residual RMS per fitted output (`name`, value in the output's unit).
     pub residual_rms: Vec<(String, f64)>,
+    /// Identifiability: Cramér–Rao correlation matrix, data condition numbers, excitation,
+    /// collinear regressors ([`Identifiability`]).
+    pub identifiability: Identifiability,
+    /// Per coefficient, the condition number of the Cramér–Rao correlation block.
+    pub coefficients: Vec<aeroident_io::replay_output::CoefficientSummary>,
+    /// Parameter pairs with Cramér–Rao `|ρ| > 0.9`.
+    pub correlations: Vec<aeroident_io::replay_output::Correlation>,
+    /// Sign and collinearity warnings.
+    pub warnings: Vec<String>,
+    /// Validation of the simulated outputs on the fitted record.
+    pub validation: ValidationReport,
+    /// Validation on a second record (`--validate-on`), else `null`.
+    pub validation_on: Option<ValidationReport>,
 }
 
 /// The richest preset the flight model can integrate from the record's first sample.
@@ -101,16 +119,19 @@ fn default_model(first: &AirDataSample, mapping: &Mapping) -> Result<ModelSpec, 
     )))
 }
 
-/// Reads the whole record, splits it at gaps and fits it by output error.
+/// A record read whole and split at its gaps.
+struct Manoeuvres {
+    manoeuvres: Vec<Vec<AirDataSample>>,
+    rejections: Vec<Rejection>,
+    read: usize,
+    rejected: usize,
+}
+
+/// Reads the whole record, splitting it into manoeuvres at the reader's gap events.
 ///
 /// # Errors
-/// Fatal data errors, no usable samples, no supported model, and a fit that fails or does not
-/// converge ([`ReplayError::Model`] with the reason and the iteration count).
-pub fn fit_record<R: Read>(
-    reader: FlightDataReader<R>,
-    mapping: &Mapping,
-    model: Option<ModelSpec>,
-) -> Result<BatchOutcome, ReplayError> {
+/// Fatal data errors; no usable sample.
+fn read_manoeuvres<R: Read>(reader: FlightDataReader<R>) -> Result<Manoeuvres, ReplayError> {
     let file = reader.file().to_string();
     let mut manoeuvres: Vec<Vec<AirDataSample>> = vec![Vec::new()];
     let mut rejections = Vec::new();
@@ -142,14 +163,32 @@ pub fn fit_record<R: Read>(
         }
     }
     manoeuvres.retain(|m| !m.is_empty());
-    let Some(first) = manoeuvres.first().and_then(|m| m.first()).copied() else {
+    if manoeuvres.is_empty() {
         return Err(aeroident_io::FlightDataError::NoSamples {
             file,
             rejected,
             first: rejections.iter().take(3).map(|r| (r.row, r.reason.clone())).collect(),
         }
         .into());
-    };
+    }
+    Ok(Manoeuvres { manoeuvres, rejections, read, rejected })
+}
+
+/// Reads the whole record, splits it at gaps and fits it by output error.
+///
+/// # Errors
+/// Fatal data errors, no usable samples, no supported model, and a fit that fails or does not
+/// converge ([`ReplayError::Model`] with the reason and the iteration count).
+pub fn fit_record<R: Read>(
+    reader: FlightDataReader<R>,
+    mapping: &Mapping,
+    model: Option<ModelSpec>,
+) -> Result<BatchOutcome, ReplayError> {
+    let file = reader.file().to_string();
+    let rec = read_manoeuvres(reader)?;
+    let (manoeuvres, rejections, read, rejected) =
+        (rec.manoeuvres, rec.rejections, rec.read, rec.rejected);
+    let first = manoeuvres[0][0];
     let model = match model {
         Some(m) => m,
         None => default_model(&first, mapping)?,
@@ -179,6 +218,25 @@ pub fn fit_record<R: Read>(
             }
         })
         .collect();
+    let st = model.structure;
+    let np = result.n_params;
+    let n = result.n();
+    let values: Vec<Option<f64>> = result.values[..np].iter().map(|v| Some(*v)).collect();
+    let cov = |i: usize, j: usize| Some(result.covariance[i * n + j]);
+    let mut recorder = Recorder::default();
+    for m in &manoeuvres {
+        recorder.new_segment();
+        m.iter().for_each(|s| recorder.push(s));
+    }
+    let identifiability = diagnostics::identifiability(&st, &cov, &recorder, &values);
+    let mut warnings = diagnostics::sign_warnings(&st, &values);
+    for c in &identifiability.collinear_regressors {
+        warnings.push(format!(
+            "collinear regressors {} and {} (sample correlation {:+.3}): the record cannot separate these terms whatever the method",
+            c.a, c.b, c.rho
+        ));
+    }
+    let validation = simulated_validation(&result, &slices, &file, None);
     let summary = BatchSummary {
         estimator: "oe".into(),
         model: model.name.clone(),
@@ -204,6 +262,133 @@ pub fn fit_record<R: Read>(
             .zip(&result.residual_rms)
             .map(|(o, r)| (o.name().to_string(), *r))
             .collect(),
+        coefficients: diagnostics::conditions_from(&st, &values, &cov),
+        correlations: diagnostics::correlations_from(&st, &values, &cov),
+        identifiability,
+        warnings,
+        validation,
+        validation_on: None,
     };
     Ok(BatchOutcome { model, result, summary })
+}
+
+/// The simulated-output validation of an output-error result on `manoeuvres` (its residuals
+/// `z − y` are the result's own; the prediction is `ŷ = z − e`; no prediction variance from
+/// the parameters is formed, so the interval has the residual variance only).
+///
+/// `fit_r`: on a second record, the fitted record's noise variances `R` (per output, order of
+/// `result.outputs`), the residual variance of the prediction interval.
+fn simulated_validation(
+    result: &OeResult,
+    manoeuvres: &[&[AirDataSample]],
+    data: &str,
+    fit_r: Option<&[f64]>,
+) -> ValidationReport {
+    let used_for_fit = fit_r.is_none();
+    let ny = result.outputs.len();
+    let samples: Vec<&AirDataSample> = manoeuvres.iter().flat_map(|m| m.iter()).collect();
+    let st = result.structure;
+    let controls = [(Term::De, "de"), (Term::Da, "da"), (Term::Dr, "dr")];
+    let inputs: Vec<(&str, Vec<f64>)> = controls
+        .iter()
+        .filter(|(t, _)| st.params().any(|p| p.term == *t))
+        .filter_map(|(t, name)| {
+            let u: Option<Vec<f64>> = samples
+                .iter()
+                .map(|s| match t {
+                    Term::De => s.de_rad,
+                    Term::Da => s.da_rad,
+                    _ => s.dr_rad,
+                })
+                .collect();
+            u.map(|u| (*name, u))
+        })
+        .collect();
+    let input_refs: Vec<(&str, &[f64])> = inputs.iter().map(|(n, u)| (*n, u.as_slice())).collect();
+    let mut outputs = Vec::new();
+    let mut notes = Vec::new();
+    for (j, o) in result.outputs.iter().enumerate() {
+        let z: Option<Vec<f64>> = samples.iter().map(|s| o.measured(s)).collect();
+        let Some(z) = z else {
+            notes.push(format!("{}: not validated: not measured in every sample", o.name()));
+            continue;
+        };
+        if result.residuals.len() != z.len() * ny {
+            notes.push(format!("{}: not validated: residuals do not match the samples", o.name()));
+            continue;
+        }
+        let y_hat: Vec<f64> =
+            z.iter().enumerate().map(|(k, z)| z - result.residuals[k * ny + j]).collect();
+        let d = OutputData {
+            name: o.name(),
+            prediction: "simulated",
+            y: &z,
+            y_hat: &y_hat,
+            y_hat_var: None,
+            residual_var: fit_r.and_then(|r| r.get(j).copied()),
+            segments: &result.manoeuvre_lengths,
+            inputs: &input_refs,
+        };
+        match validate(&d) {
+            Ok(v) => outputs.push(v),
+            Err(e) => notes.push(format!("{}: not validated: {e}", o.name())),
+        }
+    }
+    ValidationReport {
+        data: data.to_string(),
+        used_for_fit,
+        prediction: "simulated: the output-error model integrated over each manoeuvre from its first sample's measured state with the estimated parameters; prediction interval from the residual variance only".into(),
+        samples: samples.len(),
+        outputs,
+        notes,
+    }
+}
+
+/// Applies a batch fit's parameters to a second record (prediction interval with the fit's
+/// noise variances `R`) (`--validate-on`): its manoeuvres are
+/// simulated with the parameters fixed (initial states from each manoeuvre's first sample, no
+/// re-estimation; the same outputs), and the simulated outputs validated. If the model cannot
+/// be simulated on that record, the measured coefficients are predicted by equation error
+/// instead (with the Cramér–Rao covariance), and the report says so.
+///
+/// # Errors
+/// Fatal data errors and no usable sample of the second record.
+pub fn validate_on<R: Read>(
+    reader: FlightDataReader<R>,
+    fitted: &BatchOutcome,
+) -> Result<ValidationReport, ReplayError> {
+    let file = reader.file().to_string();
+    let rec = read_manoeuvres(reader)?;
+    let slices: Vec<&[AirDataSample]> = rec.manoeuvres.iter().map(Vec::as_slice).collect();
+    let r = &fitted.result;
+    let np = r.n_params;
+    let mut config = OeConfig::new(r.structure);
+    config.outputs = Some(r.outputs.clone());
+    config.start = Start::Given(r.values[..np].to_vec());
+    config.max_iterations = 0;
+    let simulated = match fit(&slices, &config) {
+        Ok(res) => Ok(res),
+        Err(OeError::NotConverged { result, .. }) => Ok(*result),
+        Err(OeError::Estimator(e)) => Err(e),
+    };
+    match simulated {
+        Ok(res) => Ok(simulated_validation(&res, &slices, &file, Some(&r.r))),
+        Err(e) => {
+            let mut recorder = Recorder::default();
+            for m in &slices {
+                recorder.new_segment();
+                m.iter().for_each(|s| recorder.push(s));
+            }
+            let values: Vec<Option<f64>> = r.values[..np].iter().map(|v| Some(*v)).collect();
+            let n = r.n();
+            let cov = |i: usize, j: usize| Some(r.covariance[i * n + j]);
+            let mut v = validate_coefficients(&recorder, &r.structure, &values, &cov, &file, None);
+            v.used_for_fit = false;
+            v.notes.insert(
+                0,
+                format!("the output-error model could not be simulated on this record ({e}); equation-error prediction of the measured coefficients instead"),
+            );
+            Ok(v)
+        }
+    }
 }

@@ -3,10 +3,19 @@
 //! parameter pairs (Klein & Morelli 2006 §5.4 and ch. 12: pairwise correlations above 0.9 and
 //! large condition numbers flag terms the data cannot separate, e.g. `Cm_q` and `Cm_alphadot`
 //! in a plain short-period manoeuvre, where α̇ ≈ q).
+//!
+//! [`identifiability`] adds what the record itself says, independent of the estimator (so it
+//! exists for every method): per coefficient the condition number of the scaled information
+//! matrix `XᵀX` of its regressors, per parameter an excitation measure (the regressor's
+//! standard deviation and its share of the coefficient's variation), the pairs of regressors
+//! that are collinear (`|r| > 0.9`), the full correlation matrix of the estimates and the
+//! parameters not identified (reported `null`). Summary key `identifiability`.
 
-use aeroident_estimators::{Coefficient, Estimator};
+use super::prediction::Recorder;
+use aeroident_estimators::{Coefficient, Estimator, ModelStructure, Term};
 use aeroident_io::replay_output::{CoefficientSummary, Correlation};
 use nalgebra::{DMatrix, SymmetricEigen};
+use serde::Serialize;
 
 /// Pairs with `|ρ|` above this are listed.
 pub const CORRELATION_THRESHOLD: f64 = 0.9;
@@ -27,12 +36,15 @@ pub fn scaled_condition_number(c: &DMatrix<f64>) -> Option<f64> {
 }
 
 /// The covariance block of parameters `idx`, if the estimator gives every entry.
-fn covariance_block(est: &dyn Estimator, idx: &[usize]) -> Option<DMatrix<f64>> {
+fn covariance_block(
+    cov: &dyn Fn(usize, usize) -> Option<f64>,
+    idx: &[usize],
+) -> Option<DMatrix<f64>> {
     let n = idx.len();
     let mut m = DMatrix::zeros(n, n);
     for (a, &i) in idx.iter().enumerate() {
         for (b, &j) in idx.iter().enumerate() {
-            m[(a, b)] = est.covariance(i, j)?;
+            m[(a, b)] = cov(i, j)?;
         }
     }
     Some(m)
@@ -41,14 +53,23 @@ fn covariance_block(est: &dyn Estimator, idx: &[usize]) -> Option<DMatrix<f64>> 
 /// Per modelled coefficient, the condition number of its parameters' correlation matrix
 /// (`null` when the estimator gives no covariance or a parameter is not identified).
 pub fn coefficient_conditions(est: &dyn Estimator) -> Vec<CoefficientSummary> {
-    let st = *est.structure();
     let e = est.estimates();
+    let values: Vec<Option<f64>> = (0..e.n).map(|i| e.value(i)).collect();
+    conditions_from(est.structure(), &values, &|i, j| est.covariance(i, j))
+}
+
+/// [`coefficient_conditions`] from estimates `values` and covariance `cov(i, j)`.
+pub fn conditions_from(
+    st: &ModelStructure,
+    values: &[Option<f64>],
+    cov: &dyn Fn(usize, usize) -> Option<f64>,
+) -> Vec<CoefficientSummary> {
     st.coefficients()
         .map(|c: Coefficient| {
             let first = st.first_index(c);
             let idx: Vec<usize> = (first..first + st.n_terms(c)).collect();
-            let condition_number = if idx.iter().all(|i| e.is_identified(*i)) {
-                covariance_block(est, &idx).and_then(|m| scaled_condition_number(&m))
+            let condition_number = if idx.iter().all(|i| values[*i].is_some()) {
+                covariance_block(cov, &idx).and_then(|m| scaled_condition_number(&m))
             } else {
                 None
             };
@@ -60,18 +81,26 @@ pub fn coefficient_conditions(est: &dyn Estimator) -> Vec<CoefficientSummary> {
 /// Every pair of identified parameters whose estimates correlate with `|ρ| >`
 /// [`CORRELATION_THRESHOLD`], in parameter order.
 pub fn strong_correlations(est: &dyn Estimator) -> Vec<Correlation> {
-    let st = *est.structure();
     let e = est.estimates();
+    let values: Vec<Option<f64>> = (0..e.n).map(|i| e.value(i)).collect();
+    correlations_from(est.structure(), &values, &|i, j| est.covariance(i, j))
+}
+
+/// [`strong_correlations`] from estimates `values` and covariance `cov(i, j)`.
+pub fn correlations_from(
+    st: &ModelStructure,
+    values: &[Option<f64>],
+    cov: &dyn Fn(usize, usize) -> Option<f64>,
+) -> Vec<Correlation> {
+    let st = *st;
     let n = st.n_params();
     let mut out = Vec::new();
     for i in 0..n {
         for j in i + 1..n {
-            if !(e.is_identified(i) && e.is_identified(j)) {
+            if values[i].is_none() || values[j].is_none() {
                 continue;
             }
-            let (Some(cij), Some(cii), Some(cjj)) =
-                (est.covariance(i, j), est.covariance(i, i), est.covariance(j, j))
-            else {
+            let (Some(cij), Some(cii), Some(cjj)) = (cov(i, j), cov(i, i), cov(j, j)) else {
                 continue;
             };
             if !(cii > 0.0 && cjj > 0.0) {
@@ -82,6 +111,187 @@ pub fn strong_correlations(est: &dyn Estimator) -> Vec<Correlation> {
                 let name = |k: usize| st.param(k).map_or_else(String::new, |p| p.name().into());
                 out.push(Correlation { a: name(i), b: name(j), rho });
             }
+        }
+    }
+    out
+}
+
+/// The correlation matrix of the estimates (`rho[i][j]`, `null` where a parameter is not
+/// identified or the estimator gives no covariance).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CorrelationMatrix {
+    /// Parameter names (rows and columns).
+    pub names: Vec<String>,
+    /// `cov(i,j) / (σ_i σ_j)`.
+    pub rho: Vec<Vec<Option<f64>>>,
+}
+
+/// What the record says about one coefficient's regressors.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DataCondition {
+    /// Coefficient.
+    pub name: String,
+    /// Samples with the coefficient and all its regressors.
+    pub samples: usize,
+    /// 2-norm condition number of `XᵀX` scaled to unit diagonal (`null`: singular, e.g. a
+    /// regressor that is identically zero); > 10³ flags terms the data cannot separate.
+    pub data_condition_number: Option<f64>,
+}
+
+/// Excitation of one parameter's regressor over the record.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Excitation {
+    /// Parameter name.
+    pub parameter: String,
+    /// Standard deviation of the regressor `ξ_j` (its unit: rad, nondimensional rate …;
+    /// 0 for a bias).
+    pub regressor_std: f64,
+    /// `|θ_j| std(ξ_j) / std(C)`: the part of the measured coefficient's variation this term
+    /// explains at the final estimate (`null` if not identified or `C` constant). Terms
+    /// below ≈ 0.05 are barely excited: their estimates rest on little information.
+    pub contribution: Option<f64>,
+}
+
+/// Identifiability of the model on the record (module doc).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Identifiability {
+    /// Per coefficient, the data condition number.
+    pub coefficients: Vec<DataCondition>,
+    /// Per parameter, the excitation.
+    pub excitation: Vec<Excitation>,
+    /// Regressor pairs of the same coefficient with sample correlation `|r| > 0.9` (mean
+    /// removed; biases excluded): terms the data cannot separate whatever the method.
+    pub collinear_regressors: Vec<Correlation>,
+    /// The estimates' correlation matrix.
+    pub correlation_matrix: CorrelationMatrix,
+    /// Parameters not identified at the end (reported `null`).
+    pub not_identified: Vec<String>,
+}
+
+/// The correlation matrix of estimates `values` (structure order, `None` = not identified)
+/// with covariance `cov(i, j)`.
+pub fn correlation_matrix(
+    st: &ModelStructure,
+    values: &[Option<f64>],
+    cov: &dyn Fn(usize, usize) -> Option<f64>,
+) -> CorrelationMatrix {
+    let n = st.n_params();
+    let rho = (0..n)
+        .map(|i| {
+            (0..n)
+                .map(|j| {
+                    if values[i].is_none() || values[j].is_none() {
+                        return None;
+                    }
+                    let (cij, cii, cjj) = (cov(i, j)?, cov(i, i)?, cov(j, j)?);
+                    let r = cij / (cii * cjj).sqrt();
+                    (cii > 0.0 && cjj > 0.0 && r.is_finite()).then_some(r)
+                })
+                .collect()
+        })
+        .collect();
+    CorrelationMatrix { names: st.names().map(String::from).collect(), rho }
+}
+
+fn mean_std(x: &[f64]) -> (f64, f64) {
+    let n = x.len().max(1) as f64;
+    let m = x.iter().sum::<f64>() / n;
+    (m, (x.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / n).sqrt())
+}
+
+/// The record-based measures and the estimates' correlation matrix (module doc). `values`:
+/// the final estimates, structure order; `cov(i, j)` their covariance.
+pub fn identifiability(
+    st: &ModelStructure,
+    cov: &dyn Fn(usize, usize) -> Option<f64>,
+    rec: &Recorder,
+    values: &[Option<f64>],
+) -> Identifiability {
+    let st: ModelStructure = *st;
+    let mut coefficients = Vec::new();
+    let mut excitation = Vec::new();
+    let mut collinear_regressors = Vec::new();
+    for c in st.coefficients() {
+        let first = st.first_index(c);
+        let terms: Vec<Term> = st.terms_of(c).collect();
+        let rows = rec.rows_for(&st, c);
+        let x: Vec<Vec<f64>> = terms.iter().map(|t| rec.term_series(*t, &rows)).collect();
+        let y = rec.coef_series(c, &rows);
+        let p = terms.len();
+        let info = DMatrix::from_fn(p, p, |a, b| x[a].iter().zip(&x[b]).map(|(u, v)| u * v).sum());
+        let data_condition_number = if rows.len() > p {
+            let inv = info.clone().try_inverse();
+            inv.and_then(|m| scaled_condition_number(&m))
+        } else {
+            None
+        };
+        coefficients.push(DataCondition {
+            name: c.name().into(),
+            samples: rows.len(),
+            data_condition_number,
+        });
+        let (_, y_std) = mean_std(&y);
+        let stats: Vec<(f64, f64)> = x.iter().map(|v| mean_std(v)).collect();
+        for (j, t) in terms.iter().enumerate() {
+            let name = st.param(first + j).map_or(String::new(), |q| q.name().to_string());
+            let contribution = values[first + j]
+                .filter(|_| y_std > 0.0 && !rows.is_empty())
+                .map(|v| v.abs() * stats[j].1 / y_std);
+            excitation.push(Excitation {
+                parameter: name.clone(),
+                regressor_std: if rows.is_empty() { 0.0 } else { stats[j].1 },
+                contribution,
+            });
+            for k in j + 1..p {
+                if *t == Term::Bias || terms[k] == Term::Bias {
+                    continue;
+                }
+                let (sj, sk) = (stats[j].1, stats[k].1);
+                if !(sj > 0.0 && sk > 0.0) {
+                    continue;
+                }
+                let cov = x[j]
+                    .iter()
+                    .zip(&x[k])
+                    .map(|(a, b)| (a - stats[j].0) * (b - stats[k].0))
+                    .sum::<f64>()
+                    / rows.len() as f64;
+                let r = cov / (sj * sk);
+                if r.abs() > CORRELATION_THRESHOLD {
+                    let other = st.param(first + k).map_or(String::new(), |q| q.name().into());
+                    collinear_regressors.push(Correlation { a: name.clone(), b: other, rho: r });
+                }
+            }
+        }
+    }
+    let not_identified = (0..st.n_params())
+        .filter(|i| values[*i].is_none())
+        .filter_map(|i| st.param(i).map(|p| p.name().to_string()))
+        .collect();
+    Identifiability {
+        coefficients,
+        excitation,
+        collinear_regressors,
+        correlation_matrix: correlation_matrix(&st, values, cov),
+        not_identified,
+    }
+}
+
+/// A warning for each identified parameter whose sign a conventional stable aircraft does not
+/// have ([`aeroident_estimators::prior::expected_sign`]: positive `Cm_q`, `Cl_p`, `Cn_r`,
+/// `Cm_alpha` … ; Klein & Morelli 2006 ch. 3).
+pub fn sign_warnings(st: &ModelStructure, values: &[Option<f64>]) -> Vec<String> {
+    let mut out = Vec::new();
+    for (i, v) in values.iter().enumerate() {
+        let (Some(v), Some(param)) = (*v, st.param(i)) else { continue };
+        if let Some(sign) = aeroident_estimators::prior::expected_sign(param)
+            && v * sign < 0.0
+        {
+            out.push(format!(
+                "{} = {v:+.4} has the sign a conventional stable aircraft does not have (expected {}): check the record's sign conventions, the excitation and the correlations",
+                param.name(),
+                if sign > 0.0 { "> 0" } else { "< 0" }
+            ));
         }
     }
     out
@@ -108,6 +318,7 @@ mod tests {
             ..Default::default()
         };
         let mut rls = Rls::new(st, RlsConfig::default()).unwrap();
+        let mut rec = Recorder::default();
         for i in 0..400 {
             let t = i as f64 * 0.02;
             let q = 0.1 * (2.1 * t).sin();
@@ -126,6 +337,7 @@ mod tests {
                 ..Default::default()
             };
             rls.update(&s).unwrap();
+            rec.push(&s);
         }
         let ours = coefficient_conditions(&rls)[0].condition_number.unwrap();
         let theirs = rls.condition_number(Coefficient::Cm).unwrap();
@@ -133,6 +345,26 @@ mod tests {
         assert!(ours > 100.0, "{ours}");
         let pairs = strong_correlations(&rls);
         assert!(pairs.iter().any(|c| c.a == "Cm_q" && c.b == "Cm_alphadot" && c.rho < -0.9));
+        // The record's own measures: the information matrix XᵀX of the same samples gives
+        // the same condition number as the RLS covariance (its prior is negligible), and the
+        // regressors q̂ and α̇̂ are collinear (r ≈ +0.99); the matrix's ρ equals the pair's.
+        let e = rls.estimates();
+        let values: Vec<Option<f64>> = (0..e.n).map(|i| e.value(i)).collect();
+        let id = identifiability(&st, &|i, j| rls.covariance(i, j), &rec, &values);
+        let data = id.coefficients[0].data_condition_number.unwrap();
+        assert!((data - theirs).abs() < 0.02 * theirs, "{data} vs {theirs}");
+        assert!(
+            id.collinear_regressors
+                .iter()
+                .any(|c| c.a == "Cm_q" && c.b == "Cm_alphadot" && c.rho > 0.9),
+            "{:?}",
+            id.collinear_regressors
+        );
+        let rho = id.correlation_matrix.rho[2][3].unwrap();
+        let pair = pairs.iter().find(|c| c.a == "Cm_q" && c.b == "Cm_alphadot").unwrap();
+        assert!((rho - pair.rho).abs() < 1e-12);
+        assert!(id.not_identified.is_empty());
+        assert_eq!(id.excitation[0].regressor_std, 0.0, "the bias regressor is constant");
     }
 
     #[test]

@@ -27,10 +27,19 @@
 //! **settle_time_s** (summary): the first sample time after which the estimate stays, to the
 //! end of the record, within `max(5 % of |final|, 2 σ_final)` of its final value (σ_final = 0
 //! where the method gives none); `null` if the final estimate is not identified.
+//!
+//! **Validation and identifiability** (summary keys `validation`, `validation_on`,
+//! `identifiability`; [`ReplayOutcome::document`]): after the replay, every modelled measured
+//! coefficient is predicted from its regressors with the final estimates and compared with
+//! the measured one ([`prediction::validate_coefficients`], metrics in [`crate::validation`]);
+//! [`validate_on`] does the same on a second record not used for the fit. The record's
+//! identifiability measures are [`diagnostics::identifiability`].
 
+pub mod arrays;
 pub mod batch;
 pub mod derivatives;
 pub mod diagnostics;
+pub mod prediction;
 
 use crate::estimators::{BuildError, EstimatorKind, EstimatorOptions, build};
 use aeroident_estimators::{AirDataSample, Coefficient, Estimator, ModelStructure, Status, Term};
@@ -38,6 +47,7 @@ use aeroident_io::mapping::{Channel, Mapping};
 use aeroident_io::replay_output::{ParameterSummary, ReplaySummary};
 use aeroident_io::{FlightDataError, FlightDataReader, ModelSpec, RecordEvent, Rejection};
 use derivatives::{Derivative, DerivativeStage};
+use prediction::{Frozen, Recorder, ValidationReport, validate_coefficients};
 use std::io::{Read, Write};
 use std::time::{Duration, Instant};
 
@@ -193,8 +203,12 @@ impl Default for History {
 }
 
 impl History {
-    /// Default bound on the points kept (≈ 20 MB for 32 parameters with σ).
-    pub const MAX_POINTS: usize = 20_000;
+    /// Default bound on the points kept: 4,000, the most a figure draws per series
+    /// (`plot.rs`), ≈ 4 MB for 32 parameters with σ. The figure's copies of the history are of
+    /// the same size, so the whole live run stays well under 64 MB (measured over 24 h at
+    /// 100 Hz: docs/reliability.md); the settling time's resolution is then the stride, e.g.
+    /// 2,048 samples (20 s at 100 Hz) after 24 h.
+    pub const MAX_POINTS: usize = 4_000;
 
     /// An empty history keeping at most `limit` (≥ 2) points before decimating.
     pub fn with_limit(limit: usize) -> Self {
@@ -256,9 +270,49 @@ pub struct ReplayOutcome {
     pub history: History,
     /// The summary document.
     pub summary: ReplaySummary,
+    /// Validation on the replayed record (`None` if the estimator diverged).
+    pub validation: Option<ValidationReport>,
+    /// Identifiability measures (`None` if the estimator diverged).
+    pub identifiability: Option<diagnostics::Identifiability>,
+    /// The final parameter covariance, `n × n` row-major (`None` where the estimator gives no
+    /// entry), for applying the estimates to another record ([`validate_on`]).
+    pub final_covariance: Vec<Option<f64>>,
+    /// The samples fed to the estimator, as regressors and measured coefficients.
+    pub recorder: Recorder,
+    /// The samples fed to the estimator (bounded), for the fit quality and the
+    /// model-vs-measured figure.
+    pub samples: crate::results::SampleLog,
+}
+
+/// `summary.json`: the [`ReplaySummary`] keys, then `identifiability`, `validation` and
+/// `validation_on` (`null` unless `--validate-on`).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct SummaryDocument<'a> {
+    /// The replay summary (flattened).
+    #[serde(flatten)]
+    pub summary: &'a ReplaySummary,
+    /// [`diagnostics::Identifiability`].
+    pub identifiability: Option<&'a diagnostics::Identifiability>,
+    /// Validation on the fitted record.
+    pub validation: Option<&'a ValidationReport>,
+    /// Validation on a second record.
+    pub validation_on: Option<&'a ValidationReport>,
 }
 
 impl ReplayOutcome {
+    /// The `summary.json` document, with the validation on a second record if given.
+    pub fn document<'a>(
+        &'a self,
+        validation_on: Option<&'a ValidationReport>,
+    ) -> SummaryDocument<'a> {
+        SummaryDocument {
+            summary: &self.summary,
+            identifiability: self.identifiability.as_ref(),
+            validation: self.validation.as_ref(),
+            validation_on,
+        }
+    }
+
     /// Whether the estimator diverged.
     pub fn diverged(&self) -> bool {
         self.summary.status == Status::Diverged.name()
@@ -438,12 +492,14 @@ pub fn replay_with<R: Read>(
     let mut run: Option<Running> = None;
     let mut model: Option<(ModelSpec, bool)> = None;
     let mut history = History::default();
+    let mut fed = crate::results::SampleLog::default();
     let mut busy = Duration::ZERO;
     let mut ready = Vec::new();
     let mut unused = Vec::new();
     let mut pacer = Pacer::default();
     let mut warnings: Vec<String> = Vec::new();
     let mut diverged = false;
+    let mut recorder = Recorder::default();
     for item in reader {
         let event = item?;
         ready.clear();
@@ -464,6 +520,7 @@ pub fn replay_with<R: Read>(
                 if let Some(r) = &mut run {
                     r.stage.flush(&mut unused);
                     r.est.new_manoeuvre();
+                    recorder.new_segment();
                 }
             }
             RecordEvent::Sample { row, sample } => {
@@ -574,7 +631,9 @@ pub fn replay_with<R: Read>(
                     sink.flush()?;
                 }
             }
+            recorder.push(&s);
             history.push(s.t_s, values, sigmas);
+            fed.push(&s);
         }
         if diverged {
             break;
@@ -651,19 +710,8 @@ pub fn replay_with<R: Read>(
     };
     // Physically implausible signs and the filter's consistency, as warnings.
     if !diverged {
-        let st = *r.est.structure();
-        for (i, p) in parameters.iter().enumerate() {
-            let (Some(v), Some(param)) = (p.estimate, st.param(i)) else { continue };
-            if let Some(sign) = aeroident_estimators::prior::expected_sign(param)
-                && v * sign < 0.0
-            {
-                warnings.push(format!(
-                    "{} = {v:+.4} has the sign a conventional stable aircraft does not have (expected {}): check the record's sign conventions, the excitation and the correlations",
-                    p.name,
-                    if sign > 0.0 { "> 0" } else { "< 0" }
-                ));
-            }
-        }
+        let values: Vec<Option<f64>> = parameters.iter().map(|p| p.estimate).collect();
+        warnings.extend(diagnostics::sign_warnings(r.est.structure(), &values));
         if let Some(nis) = r.est.nis() {
             warnings.push(format!(
                 "normalised innovation squared (mean e²/S) = {nis:.2} (1 for a consistent filter; > 2 means its σ are optimistic, < 0.5 pessimistic)"
@@ -673,7 +721,7 @@ pub fn replay_with<R: Read>(
     // Throughput of the estimation stage: the estimator update per sample (CSV parsing,
     // differentiation, pacing and output are excluded).
     let secs = busy.as_secs_f64().max(1e-9);
-    let summary = ReplaySummary {
+    let mut summary = ReplaySummary {
         estimator: r.est.method().to_string(),
         model: spec.name.clone(),
         status: status.name().to_string(),
@@ -687,7 +735,75 @@ pub fn replay_with<R: Read>(
         warnings,
     };
     let differentiated = r.stage.supplies().to_vec();
-    Ok(ReplayOutcome { model: spec, model_defaulted: defaulted, differentiated, history, summary })
+    let n = r.est.structure().n_params();
+    let final_covariance: Vec<Option<f64>> =
+        (0..n * n).map(|k| r.est.covariance(k / n, k % n)).collect();
+    let (validation, identifiability) = if diverged {
+        (None, None)
+    } else {
+        let values: Vec<Option<f64>> = summary.parameters.iter().map(|p| p.estimate).collect();
+        let cov = |i: usize, j: usize| r.est.covariance(i, j);
+        let v = validate_coefficients(&recorder, r.est.structure(), &values, &cov, &file, None);
+        let id = diagnostics::identifiability(r.est.structure(), &cov, &recorder, &values);
+        for c in &id.collinear_regressors {
+            summary.warnings.push(format!(
+                "collinear regressors {} and {} (sample correlation {:+.3}): the record cannot separate these terms whatever the method",
+                c.a, c.b, c.rho
+            ));
+        }
+        (Some(v), Some(id))
+    };
+    Ok(ReplayOutcome {
+        model: spec,
+        model_defaulted: defaulted,
+        differentiated,
+        history,
+        summary,
+        validation,
+        identifiability,
+        final_covariance,
+        recorder,
+        samples: fed,
+    })
+}
+
+/// Applies the final estimates of `fitted` to a second record (`--validate-on`): the record
+/// goes through the same reader, derivative stage and model as the fit, with the parameters
+/// frozen at `fitted`'s final values (and its covariance for the prediction intervals); the
+/// report has the same metrics as the fit's own `validation`, with `used_for_fit = false`.
+///
+/// # Errors
+/// As [`replay`] (the second record must support the fitted model).
+pub fn validate_on<R: Read>(
+    reader: FlightDataReader<R>,
+    mapping: &Mapping,
+    opts: &ReplayOptions,
+    fitted: &ReplayOutcome,
+) -> Result<ValidationReport, ReplayError> {
+    let file = reader.file().to_string();
+    let values: Vec<Option<f64>> = fitted.summary.parameters.iter().map(|p| p.estimate).collect();
+    let opts = ReplayOptions {
+        model: Some(fitted.model.clone()),
+        pacing: Pacing::Unpaced,
+        on_model: None,
+        ..opts.clone()
+    };
+    let make = |spec: &ModelSpec| -> Result<Box<dyn Estimator>, BuildError> {
+        Ok(Box::new(Frozen::new(spec.structure, &values, fitted.final_covariance.clone())))
+    };
+    let out = replay_with(reader, mapping, &opts, make, Vec::new())?;
+    let cov = |i: usize, j: usize| {
+        let n = fitted.model.structure.n_params();
+        fitted.final_covariance.get(i * n + j).copied().flatten()
+    };
+    Ok(validate_coefficients(
+        &out.recorder,
+        &fitted.model.structure,
+        &values,
+        &cov,
+        &file,
+        fitted.validation.as_ref(),
+    ))
 }
 
 /// The given model, or the richest preset the first sample supports.

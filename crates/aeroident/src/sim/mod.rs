@@ -1,4 +1,4 @@
-//! Open-loop F-16 simulation (issue 3): trim → fly with pilot inputs, gusts and turbulence →
+//! Open-loop F-16 simulation: trim → fly with pilot inputs, gusts and turbulence →
 //! sense → `timeseries.csv` and figures.
 //!
 //! Run: `aeroident f16 sim scenarios/sim/elevator_doublet.toml --out out/sim`. The scenario
@@ -16,7 +16,10 @@
 //!
 //! # Output
 //! `timeseries.csv`: one row per step, columns [`crate::sim::SimRun::columns`] (units in the names), the
-//! sensed channels as `meas_<channel>`; `states.png` and `controls_wind.png`.
+//! sensed channels as `meas_<channel>`; `states.png` and `controls_wind.png`. Besides the state,
+//! surfaces, wind, load factors and coefficients, the true channels include what identification
+//! needs: ṗ, q̇, ṙ, α̇ from the state derivative and the accelerometer specific force
+//! `ax/ay/az_fps2` (`az ≈ −g` level), so `mappings/aeroident-sim.toml` replays the file as it is.
 
 pub mod scenario;
 
@@ -24,7 +27,7 @@ use crate::outdir::OutputDir;
 use crate::plot::{LineKind, Panel, Series, render_panels_png};
 use aeroident_models::actuator::{F16WithActuators, SurfaceActuators};
 use aeroident_models::f16::AeroIncrements;
-use aeroident_models::f16::{ALPHA, Q};
+use aeroident_models::f16::{ALPHA, P, Q, R};
 use aeroident_models::f16::{
     F16, F16Controls, F16Outputs, F16State, IncrementReference, IncrementSchedule, N_STATES,
     STATE_NAMES,
@@ -79,13 +82,32 @@ pub fn true_channel_names() -> Vec<String> {
         "Cn",
         "CL",
         "CD",
+        "pdot_rad_s2",
+        "qdot_rad_s2",
+        "rdot_rad_s2",
+        "alphadot_rad_s",
+        "ax_fps2",
+        "ay_fps2",
+        "az_fps2",
     ] {
         v.push(s.to_string());
     }
     v
 }
 
-fn true_row(x: &F16State, applied: &F16Controls, cmd: &F16Controls, o: &F16Outputs) -> Vec<f64> {
+/// One row of [`true_channel_names`]: the state `x`, the surfaces `applied` and commands
+/// `cmd`, the outputs `o`, the body angular accelerations and α̇ from the state derivative
+/// `xdot`, and the accelerometer specific force at the CG in ft/s² (body axes, `az ≈ −g` in
+/// level flight: `ax = nx·g`, `ay = ny·g`, `az = −nz·g` with the model's `g`), the channels
+/// a replay through `mappings/aeroident-sim.toml` identifies from.
+fn true_row(
+    x: &F16State,
+    xdot: &F16State,
+    g_fps2: f64,
+    applied: &F16Controls,
+    cmd: &F16Controls,
+    o: &F16Outputs,
+) -> Vec<f64> {
     let mut v: Vec<f64> = x.iter().copied().collect();
     let c = &o.coefficients;
     v.extend_from_slice(&[
@@ -116,6 +138,13 @@ fn true_row(x: &F16State, applied: &F16Controls, cmd: &F16Controls, o: &F16Outpu
         c.Cn,
         c.CL,
         c.CD,
+        xdot[P],
+        xdot[Q],
+        xdot[R],
+        xdot[ALPHA],
+        o.nx_g * g_fps2,
+        o.ny_g * g_fps2,
+        -o.nz_g * g_fps2,
     ]);
     v
 }
@@ -153,6 +182,8 @@ pub fn load_scenario(path: &Path) -> anyhow::Result<SimScenario> {
 /// # Errors
 /// TOML errors (with line and column) naming the file.
 pub fn parse_scenario(text: &str, path: &Path) -> anyhow::Result<SimScenario> {
+    let file = path.display().to_string();
+    crate::scenario_kind::check(text, &file, crate::scenario_kind::ScenarioKind::Sim)?;
     toml::from_str(text).with_context(|| format!("scenario `{}`", path.display()))
 }
 
@@ -258,6 +289,10 @@ pub fn run(sc: &SimScenario, base_dir: &Path) -> anyhow::Result<SimRun> {
             Plant::Actuated(F16WithActuators { airframe: f16, actuators: SurfaceActuators::f16() })
         }
     };
+    let g_fps2 = match &plant {
+        Plant::Ideal(m) => m.data().mass.g_ft_per_s2,
+        Plant::Actuated(m) => m.airframe.data().mass.g_ft_per_s2,
+    };
     let mut data: Vec<Vec<f64>> = vec![Vec::with_capacity(n_steps + 1); columns.len()];
     let mut xa: SVector<f64, 16> = F16WithActuators::state(&t0.state, &t0.controls);
     let mut xi: F16State = t0.state;
@@ -276,16 +311,18 @@ pub fn run(sc: &SimScenario, base_dir: &Path) -> anyhow::Result<SimRun> {
         }
         let w = wind.wind_body_fps(t);
         cmd.wind_body_fps = [w[0], w[1], w[2]];
-        let (x13, applied, outputs) = match &plant {
-            Plant::Ideal(m) => (xi, cmd, m.outputs(t, &xi, &cmd)),
+        let (x13, applied, evaluated) = match &plant {
+            Plant::Ideal(m) => (xi, cmd, m.evaluate(&xi, &cmd, &m.increments_at(t))),
             Plant::Actuated(m) => {
                 let x13: F16State = xa.fixed_rows::<N_STATES>(0).into_owned();
                 let applied = F16WithActuators::surface_controls(&xa, &cmd);
-                (x13, applied, m.airframe.outputs(t, &x13, &applied))
+                let af = &m.airframe;
+                (x13, applied, af.evaluate(&x13, &applied, &af.increments_at(t)))
             }
         };
-        let outputs = outputs.with_context(|| format!("model outputs at t = {t:.4} s"))?;
-        let row = true_row(&x13, &applied, &cmd, &outputs);
+        let (xdot, outputs) =
+            evaluated.with_context(|| format!("model outputs at t = {t:.4} s"))?;
+        let row = true_row(&x13, &xdot, g_fps2, &applied, &cmd, &outputs);
         data[0].push(t);
         for (c, v) in row.iter().enumerate() {
             data[c + 1].push(*v);
@@ -365,7 +402,12 @@ pub fn write_outputs(run: &SimRun, od: &mut OutputDir) -> anyhow::Result<()> {
                 });
             }
         }
-        Panel { title: title.to_string(), y_label: y_label.to_string(), series }
+        Panel {
+            title: title.to_string(),
+            y_label: y_label.to_string(),
+            series,
+            ..Default::default()
+        }
     };
     let states = [
         panel("true airspeed", "vt (ft/s)", &[("vt_fps", 1.0)]),
@@ -434,7 +476,7 @@ mod tests {
 
     fn scenario(extra: &str, actuators: &str, duration_s: f64) -> SimScenario {
         let text = format!(
-            "[aircraft]\nxcg = 0.30\nactuators = \"{actuators}\"\n[trim]\nalt_ft = 20000.0\nvt_fps = 675.0\n[run]\nduration_s = {duration_s}\ndt_s = 0.01\nseed = 1\n{extra}"
+            "kind = \"sim\"\n[aircraft]\nxcg = 0.30\nactuators = \"{actuators}\"\n[trim]\nalt_ft = 20000.0\nvt_fps = 675.0\n[run]\nduration_s = {duration_s}\ndt_s = 0.01\nseed = 1\n{extra}"
         );
         toml::from_str(&text).unwrap()
     }

@@ -1,6 +1,8 @@
 //! The open-loop simulation scenario file (`aeroident f16 sim <scenario.toml>`).
 //!
 //! ```toml
+//! kind = "sim"                # the one scenario format's kind (crate::scenario_kind)
+//!
 //! [aircraft]
 //! xcg = 0.30                  # fraction of cbar; 0.30 is open-loop stable (data README §7)
 //! actuators = "f16"           # "f16" (20.2 rad/s lags, rate/position limits) | "ideal"
@@ -48,6 +50,9 @@ use serde::Deserialize;
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SimScenario {
+    /// `kind = "sim"`, checked by [`crate::scenario_kind::check`] before this is parsed.
+    #[serde(rename = "kind")]
+    _kind: crate::scenario_kind::ScenarioKind,
     /// The aircraft.
     pub aircraft: AircraftConfig,
     /// The trim the run starts from.

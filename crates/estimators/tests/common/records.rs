@@ -27,19 +27,31 @@ pub fn shared() -> PathBuf {
         .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared"))
 }
 
-/// `<shared>/flightdata/<rel>`, or `None` with a printed skip message when it is absent.
+/// `<shared>/flightdata/<rel>`, or `None` with a printed skip message when it is absent
+/// ([`present`]: a failure under CI).
 pub fn shared_record(rel: &str) -> Option<PathBuf> {
     let p = shared().join("flightdata").join(rel);
+    present(&p).then_some(p)
+}
+
+/// Whether the shared file `p` exists. When it does not, prints a SKIPPED message, except under
+/// CI (`CI=true`), where it panics: CI always has `../shared` beside the repository, so a skip
+/// there would hide a broken path and a test that checks nothing.
+pub fn present(p: &Path) -> bool {
     if p.exists() {
-        Some(p)
-    } else {
-        println!(
-            "SKIPPED: {} not found (the shared records are not in the repository; set \
-             AEROIDENT_SHARED to the shared folder)",
-            p.display()
-        );
-        None
+        return true;
     }
+    assert!(
+        std::env::var("CI").map_or(true, |v| v != "true"),
+        "{} is absent under CI (CI provides ../shared beside the repository)",
+        p.display()
+    );
+    println!(
+        "SKIPPED: {} not found (the shared records are not in the repository; set \
+         AEROIDENT_SHARED to the shared folder)",
+        p.display()
+    );
+    false
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -26,7 +26,7 @@ use std::vec;
 use std::vec::Vec;
 
 /// Result of the correction.
-pub(super) struct Coloured {
+pub(crate) struct Coloured {
     /// The corrected covariance, `None` when a diagonal element came out non-positive (a
     /// truncated autocorrelation sum need not be positive definite).
     pub covariance: Option<DMatrix<f64>>,
@@ -38,7 +38,7 @@ pub(super) struct Coloured {
 ///
 /// `s`: sensitivities, `N × ny × n` row-major; `e`: residuals `N × ny`; `w`: `R⁻¹` diagonal;
 /// `lengths`: samples per manoeuvre (summing to `N`); `minv`: `M⁻¹`; `max_lag`: cap on `K`.
-pub(super) fn covariance(
+pub(crate) fn covariance(
     s: &[f64],
     e: &[f64],
     w: &[f64],

@@ -1,0 +1,77 @@
+//! `report.html` of a Monte Carlo campaign: per estimator the mean final estimate ± its
+//! scatter over the runs against the truth, the campaign's settings and its figures (the
+//! histograms and the coverage chart, inlined as PNG data).
+
+use super::{Report, common_settings, png_figure};
+use crate::montecarlo::Campaign;
+use crate::outdir::{OutputDir, OutputError};
+use crate::results::{ParameterRow, Results};
+use std::path::Path;
+
+/// One [`Results`] per estimator: the mean final estimate (truth + bias) ± the scatter (the
+/// standard deviation over the runs), the truth, the error of the mean and whether the truth
+/// lies within 2 scatters of the mean.
+pub fn results(c: &Campaign) -> Vec<Results> {
+    c.estimators
+        .iter()
+        .map(|e| Results {
+            title: format!(
+                "{} — mean of {} runs ± scatter ({} failed)",
+                e.name,
+                e.runs_ok,
+                e.failed_runs.len()
+            ),
+            reference_label: "truth".into(),
+            rows: e
+                .parameters
+                .iter()
+                .map(|p| {
+                    let mean = p.truth.zip(p.bias).map(|(t, b)| t + b);
+                    let name = format!("{}{}", p.name, if p.primary { "*" } else { "" });
+                    ParameterRow::new(name, mean, p.scatter, p.truth, None)
+                })
+                .collect(),
+            fit: Vec::new(),
+            notes: vec![
+                "estimate ± σ = mean of the final estimates over the runs ± their standard deviation (scatter); status: the truth within 2 scatters of the mean or not; * = primary derivative".into(),
+            ],
+        })
+        .collect()
+}
+
+/// Writes `report.html` into `dir` (through [`OutputDir`]), inlining the figures the campaign
+/// wrote there (`histograms_*.png`, `coverage.png`).
+///
+/// # Errors
+/// [`OutputError`] naming the file.
+pub fn write(c: &Campaign, dir: &Path) -> Result<(), OutputError> {
+    let mut figures = Vec::new();
+    let mut pngs: Vec<_> = std::fs::read_dir(dir)
+        .map(|r| r.filter_map(|e| e.ok().map(|e| e.path())).collect())
+        .unwrap_or_else(|_| Vec::new());
+    pngs.retain(|p: &std::path::PathBuf| p.extension().is_some_and(|x| x == "png"));
+    pngs.sort();
+    for p in pngs {
+        if let Ok(bytes) = std::fs::read(&p) {
+            let name = p.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned());
+            figures.push(png_figure(&bytes, &name, &name));
+        }
+    }
+    let mut settings = common_settings();
+    settings.extend([
+        ("scenario".into(), c.scenario.clone()),
+        ("runs".into(), c.runs.to_string()),
+        ("seed".into(), c.seed.to_string()),
+        ("wall time".into(), format!("{:.1} s on {} threads", c.wall_s, c.threads)),
+    ]);
+    let mut od = OutputDir::open(dir)?;
+    Report {
+        title: format!("aeroident montecarlo — {}", c.scenario),
+        settings,
+        results: results(c),
+        figures,
+        warnings: c.crb_notes.clone(),
+    }
+    .write(&mut od)?;
+    Ok(())
+}

@@ -1,0 +1,105 @@
+//! Results and `report.html` of the closed-loop `run` experiment: one table per estimator
+//! (estimate ± σ against the simulator's truth at the end of the run, error %, status), the
+//! run's settings and its figures ([`crate::aircraft::figures`]).
+
+use super::{Figure, Report, common_settings};
+use crate::aircraft::RunOutput;
+use crate::aircraft::report::Summary;
+use crate::outdir::{OutputDir, OutputError};
+use crate::results::{ParameterRow, Results};
+
+/// One [`Results`] per estimator of `summary`, in order of appearance; the reference column is
+/// the truth at the end of the run (after a damage step, the new value).
+pub fn results(summary: &Summary) -> Vec<Results> {
+    let mut out: Vec<Results> = Vec::new();
+    for p in &summary.parameters {
+        let title = format!("{} — {} ({}s)", summary.scenario, p.estimator, p.quantity);
+        let failure =
+            p.failure.as_deref().map(|_| "failed").or(p.status.filter(|s| *s == "diverged"));
+        let name = format!("{}{}", p.name, if p.primary { "*" } else { "" });
+        let mut row = ParameterRow::new(name, p.r#final, p.sigma, p.truth, failure);
+        if row.status == "ok" && p.meets_targets == Some(false) {
+            row.status = "targets missed".into();
+        }
+        match out.iter_mut().find(|r| r.title == title) {
+            Some(r) => r.rows.push(row),
+            None => out.push(Results {
+                title,
+                reference_label: "truth".into(),
+                rows: vec![row],
+                fit: Vec::new(),
+                notes: Vec::new(),
+            }),
+        }
+    }
+    if let Some(last) = out.last_mut() {
+        last.notes.push(
+            "* = primary derivative; targets: within ±10 % within 5 s of the excitation and of the damage, ±2σ covering the truth at the end".into(),
+        );
+        if let Some(t) = summary.damage_at_s {
+            last.notes.push(format!("truth = the value after the damage at {t:.2} s"));
+        }
+    }
+    out
+}
+
+/// The settings of a run, for the report.
+pub fn settings(out: &RunOutput, summary: &Summary) -> Vec<(String, String)> {
+    let mut s = common_settings();
+    let sc = &out.scenario;
+    s.extend([
+        ("scenario".into(), sc.name.clone()),
+        ("estimators".into(), summary.estimator.clone()),
+        ("duration".into(), format!("{} s", sc.duration_s)),
+        ("solver".into(), summary.solver.clone()),
+        (
+            "trim".into(),
+            format!(
+                "V_T {:.1} ft/s, α {:.2}°, throttle {:.3}, δe {:.2}°",
+                summary.trim[0],
+                summary.trim[1].to_degrees(),
+                summary.trim[2],
+                summary.trim[3].to_degrees()
+            ),
+        ),
+        (
+            "excitation / damage".into(),
+            format!(
+                "from {} / at {}",
+                summary.excitation_start_s.map_or("—".into(), |t| format!("{t:.2} s")),
+                summary.damage_at_s.map_or("none".into(), |t| format!("{t:.2} s"))
+            ),
+        ),
+        ("angular accelerations".into(), summary.angular_accelerations.clone().unwrap_or_default()),
+        ("realtime factor".into(), format!("{:.0}×", summary.realtime_factor)),
+    ]);
+    s
+}
+
+/// Writes `report.html` of a run into `od`.
+///
+/// # Errors
+/// [`OutputError`] naming the file.
+pub fn write(
+    out: &RunOutput,
+    summary: &Summary,
+    figures: Vec<Figure>,
+    od: &mut OutputDir,
+) -> Result<(), OutputError> {
+    let warnings = out
+        .channels
+        .iter()
+        .filter_map(|c| {
+            c.failure.as_ref().map(|(t, m)| format!("{} failed at {t:.2} s: {m}", c.label))
+        })
+        .collect();
+    Report {
+        title: format!("aeroident run — {}", summary.scenario),
+        settings: settings(out, summary),
+        results: results(summary),
+        figures,
+        warnings,
+    }
+    .write(od)?;
+    Ok(())
+}

@@ -1,0 +1,336 @@
+//! The results of a run as data, for people to read: one row per parameter (estimate ± σ, the
+//! reference or truth, the error, a status) and the fit quality of each modelled coefficient
+//! (residual RMS, R², Theil's U), computed here and rendered elsewhere ([`crate::table`] on the
+//! console, [`crate::report`] in `report.html`).
+//!
+//! Fit quality compares a measured coefficient `z` (from the record,
+//! [`AirDataSample::measured_coefficients`]) with the model's prediction `y` from the final
+//! estimates (`Σ θ_j ξ_j`, [`coefficient_value`]) over the samples the estimator was fed:
+//! - residual RMS `√(mean (z − y)²)` (units of the coefficient);
+//! - R² = `1 − Σ(z − y)² / Σ(z − z̄)²`, the coefficient of determination (Klein & Morelli
+//!   2006 §5.4); `None` when `z` is constant;
+//! - Theil's inequality coefficient U = `√mean(z − y)² / (√mean z² + √mean y²)` (Jategaonkar
+//!   2015, model validation: 0 = perfect, 1 = no agreement); `None` when both are zero.
+
+use aeroident_estimators::vocabulary::coefficient_value;
+use aeroident_estimators::{AirDataSample, Coefficient, ModelStructure};
+
+/// One parameter's row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParameterRow {
+    /// Vocabulary name, e.g. `Cm_alpha` (may carry a suffix such as `*` for primaries).
+    pub name: String,
+    /// Final estimate; `None` if not identified.
+    pub estimate: Option<f64>,
+    /// Its standard error; `None` where the method gives none.
+    pub sigma: Option<f64>,
+    /// Reference (published value) or truth; `None` if there is none.
+    pub reference: Option<f64>,
+    /// Status text (e.g. `ok`, `not identified`, `diverged`, `outside ±2σ`).
+    pub status: String,
+}
+
+impl ParameterRow {
+    /// A row whose status is derived from the numbers: `not identified` without an estimate,
+    /// `outside ±2σ` when a reference lies further than 2σ from the estimate, else `ok`. A
+    /// `failure` (e.g. `diverged`) overrides.
+    pub fn new(
+        name: impl Into<String>,
+        estimate: Option<f64>,
+        sigma: Option<f64>,
+        reference: Option<f64>,
+        failure: Option<&str>,
+    ) -> Self {
+        let status = match (failure, estimate) {
+            (Some(f), _) => f.to_string(),
+            (None, None) => "not identified".into(),
+            (None, Some(e)) => match (reference, sigma) {
+                (Some(r), Some(s)) if (e - r).abs() > 2.0 * s => "outside ±2σ".into(),
+                _ => "ok".into(),
+            },
+        };
+        Self { name: name.into(), estimate, sigma, reference, status }
+            .with_reference_noise_as_zero()
+    }
+
+    /// A reference of magnitude below [`crate::plot::ZERO_THRESHOLD`] is round-off of an exact
+    /// 0 (e.g. a simulator's 1e-44 truth): it is 0, and no error % is formed against it.
+    fn with_reference_noise_as_zero(mut self) -> Self {
+        if self.reference.is_some_and(|r| r.abs() < crate::plot::ZERO_THRESHOLD) {
+            self.reference = Some(0.0);
+        }
+        self
+    }
+
+    /// `100 (estimate − reference) / |reference|`, %; `None` without both or for a zero
+    /// reference.
+    pub fn error_pct(&self) -> Option<f64> {
+        match (self.estimate, self.reference) {
+            (Some(e), Some(r)) if r != 0.0 && r.is_finite() => Some(100.0 * (e - r) / r.abs()),
+            _ => None,
+        }
+    }
+}
+
+/// Fit quality of one coefficient (module doc).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct FitQuality {
+    /// Coefficient name (`Cm`, `CL` …).
+    pub coefficient: String,
+    /// Samples compared.
+    pub samples: usize,
+    /// Residual RMS, units of the coefficient.
+    pub residual_rms: f64,
+    /// Coefficient of determination.
+    pub r_squared: Option<f64>,
+    /// Theil's inequality coefficient, 0…1.
+    pub theil_u: Option<f64>,
+}
+
+/// Fit quality of `predicted` against `measured` (module doc); pairs with a non-finite member
+/// are skipped. `None` with no finite pair or lengths that differ.
+pub fn fit_quality(coefficient: &str, measured: &[f64], predicted: &[f64]) -> Option<FitQuality> {
+    if measured.len() != predicted.len() {
+        return None;
+    }
+    let pairs: Vec<(f64, f64)> = measured
+        .iter()
+        .zip(predicted)
+        .filter(|(z, y)| z.is_finite() && y.is_finite())
+        .map(|(z, y)| (*z, *y))
+        .collect();
+    if pairs.is_empty() {
+        return None;
+    }
+    let n = pairs.len() as f64;
+    let ss_res: f64 = pairs.iter().map(|(z, y)| (z - y).powi(2)).sum();
+    let mean_z = pairs.iter().map(|(z, _)| z).sum::<f64>() / n;
+    let ss_tot: f64 = pairs.iter().map(|(z, _)| (z - mean_z).powi(2)).sum();
+    let rms = (ss_res / n).sqrt();
+    let rms_z = (pairs.iter().map(|(z, _)| z * z).sum::<f64>() / n).sqrt();
+    let rms_y = (pairs.iter().map(|(_, y)| y * y).sum::<f64>() / n).sqrt();
+    Some(FitQuality {
+        coefficient: coefficient.to_string(),
+        samples: pairs.len(),
+        residual_rms: rms,
+        r_squared: (ss_tot > 0.0).then(|| 1.0 - ss_res / ss_tot),
+        theil_u: (rms_z + rms_y > 0.0).then(|| rms / (rms_z + rms_y)),
+    })
+}
+
+/// One coefficient's measured and predicted time series (for the overlay and residual figure).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CoefficientFit {
+    /// The coefficient.
+    pub coefficient: Coefficient,
+    /// Sample times, s.
+    pub t_s: Vec<f64>,
+    /// Measured coefficient (NaN where the sample gives none).
+    pub measured: Vec<f64>,
+    /// Model prediction from the final estimates (NaN where a term is unavailable).
+    pub predicted: Vec<f64>,
+}
+
+impl CoefficientFit {
+    /// The fit quality of this series.
+    pub fn quality(&self) -> Option<FitQuality> {
+        fit_quality(self.coefficient.name(), &self.measured, &self.predicted)
+    }
+}
+
+/// Measured versus predicted series of every coefficient of `structure` whose parameters are
+/// all identified in `theta` (`theta[i]` = final estimate of parameter `i`) and that the
+/// samples measure at least once.
+pub fn coefficient_fits(
+    structure: &ModelStructure,
+    theta: &[Option<f64>],
+    samples: &[AirDataSample],
+) -> Vec<CoefficientFit> {
+    let mut out = Vec::new();
+    for c in structure.coefficients() {
+        let first = structure.first_index(c);
+        let n = structure.n_terms(c);
+        if theta.len() < first + n || theta[first..first + n].iter().any(Option::is_none) {
+            continue;
+        }
+        let full: Vec<f64> = theta.iter().map(|v| v.unwrap_or(f64::NAN)).collect();
+        let mut fit = CoefficientFit {
+            coefficient: c,
+            t_s: Vec::with_capacity(samples.len()),
+            measured: Vec::with_capacity(samples.len()),
+            predicted: Vec::with_capacity(samples.len()),
+        };
+        for s in samples {
+            fit.t_s.push(s.t_s);
+            fit.measured.push(s.measured_coefficients()[c.index()].unwrap_or(f64::NAN));
+            fit.predicted.push(coefficient_value(structure, &full, c, s).unwrap_or(f64::NAN));
+        }
+        if fit.measured.iter().any(|v| v.is_finite()) {
+            out.push(fit);
+        }
+    }
+    out
+}
+
+/// The samples an estimator was fed, bounded like the replay's estimate history: at most
+/// `limit` are kept; beyond that every second one is dropped and the stride doubles, so a long
+/// live feed holds constant memory (the fit quality is then computed on the kept samples).
+#[derive(Debug, Clone)]
+pub struct SampleLog {
+    /// The kept samples, in time order.
+    pub samples: Vec<AirDataSample>,
+    /// Samples pushed per kept sample.
+    pub stride: usize,
+    pushed: usize,
+    limit: usize,
+}
+
+impl Default for SampleLog {
+    fn default() -> Self {
+        Self::with_limit(Self::MAX_SAMPLES)
+    }
+}
+
+impl SampleLog {
+    /// Default bound (≈ 10 MB of samples).
+    pub const MAX_SAMPLES: usize = 20_000;
+
+    /// An empty log keeping at most `limit` (≥ 2) samples.
+    pub fn with_limit(limit: usize) -> Self {
+        Self { samples: Vec::new(), stride: 1, pushed: 0, limit: limit.max(2) }
+    }
+
+    /// Adds one sample (decimating as described on the type).
+    pub fn push(&mut self, s: &AirDataSample) {
+        if self.pushed.is_multiple_of(self.stride) {
+            self.samples.push(*s);
+            if self.samples.len() > self.limit {
+                let mut k = 0;
+                self.samples.retain(|_| (k % 2 == 0, k += 1).0);
+                self.stride *= 2;
+            }
+        }
+        self.pushed += 1;
+    }
+}
+
+/// The results of one run, ready to render.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Results {
+    /// Heading, e.g. `hfb320_1_10.csv — rls — longitudinal`.
+    pub title: String,
+    /// Header of the reference column: `reference` (published) or `truth` (simulation).
+    pub reference_label: String,
+    /// One row per parameter.
+    pub rows: Vec<ParameterRow>,
+    /// Fit quality per coefficient (may be empty).
+    pub fit: Vec<FitQuality>,
+    /// Lines printed under the tables (sources, caveats).
+    pub notes: Vec<String>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use aeroident_estimators::{AircraftConstants, Term};
+
+    /// Hand-computed values: z = [1, 2, 3, 4], y = [1, 2, 3, 5]: SS_res = 1, SS_tot = 5,
+    /// RMS = 1/2, R² = 0.8, U = 0.5 / (√7.5 + √9.75).
+    #[test]
+    fn analytic_fit_quality_by_hand() {
+        let q = fit_quality("Cm", &[1.0, 2.0, 3.0, 4.0], &[1.0, 2.0, 3.0, 5.0]).unwrap();
+        assert_eq!(q.samples, 4);
+        assert!((q.residual_rms - 0.5).abs() < 1e-15);
+        assert!((q.r_squared.unwrap() - 0.8).abs() < 1e-15);
+        let u = 0.5 / (7.5f64.sqrt() + 9.75f64.sqrt());
+        assert!((q.theil_u.unwrap() - u).abs() < 1e-15);
+        // A perfect fit: RMS 0, R² 1, U 0; NaN pairs are skipped.
+        let q = fit_quality("CL", &[1.0, f64::NAN, 3.0], &[1.0, 7.0, 3.0]).unwrap();
+        assert_eq!(
+            (q.samples, q.residual_rms, q.r_squared, q.theil_u),
+            (2, 0.0, Some(1.0), Some(0.0))
+        );
+        // Constant measurement: no R²; all zero: no U; nothing finite: no result.
+        assert_eq!(fit_quality("CD", &[0.0, 0.0], &[0.0, 0.0]).unwrap().theil_u, None);
+        assert_eq!(fit_quality("CD", &[2.0, 2.0], &[1.0, 3.0]).unwrap().r_squared, None);
+        assert!(fit_quality("CD", &[f64::NAN], &[1.0]).is_none());
+        assert!(fit_quality("CD", &[1.0], &[1.0, 2.0]).is_none());
+    }
+
+    #[test]
+    fn row_status_and_error() {
+        let r = ParameterRow::new("Cm_alpha", Some(-1.1), Some(0.01), Some(-1.0), None);
+        assert!((r.error_pct().unwrap() + 10.0).abs() < 1e-9, "signed: estimate below");
+        assert_eq!(r.status, "outside ±2σ");
+        let r = ParameterRow::new("Cm_alpha", Some(-1.01), Some(0.01), Some(-1.0), None);
+        assert_eq!(r.status, "ok");
+        assert!((r.error_pct().unwrap() + 1.0).abs() < 1e-9, "sign: estimate more negative");
+        let r = ParameterRow::new("Cm_q", None, None, Some(-20.0), None);
+        assert_eq!((r.status.as_str(), r.error_pct()), ("not identified", None));
+        assert_eq!(ParameterRow::new("x", Some(1.0), None, Some(0.0), None).error_pct(), None);
+        let r = ParameterRow::new("Cl_0", Some(6e-5), None, Some(3.4e-44), None);
+        assert_eq!((r.reference, r.error_pct()), (Some(0.0), None));
+        assert_eq!(
+            ParameterRow::new("x", Some(1.0), None, None, Some("diverged")).status,
+            "diverged"
+        );
+    }
+
+    /// The prediction is Σ θ ξ on each sample: with Cm = 0.1 − 0.5 α and samples generated
+    /// from exactly that model (q̇ = Cm q̄ S c̄ / Iyy), R² = 1 and the residual is 0 to rounding.
+    #[test]
+    fn analytic_prediction_reproduces_an_exact_model() {
+        let st = ModelStructure::empty().with(Coefficient::Cm, &[Term::Bias, Term::Alpha]);
+        let k = AircraftConstants {
+            mass_kg: 1000.0,
+            S_m2: 10.0,
+            cbar_m: Some(2.0),
+            Iyy_kgm2: Some(4000.0),
+            ..Default::default()
+        };
+        let samples: Vec<AirDataSample> = (0..50)
+            .map(|i| {
+                let t = i as f64 * 0.1;
+                let alpha = 0.05 + 0.03 * (1.7 * t).sin();
+                let qbar = 2000.0;
+                let cm = 0.1 - 0.5 * alpha;
+                AirDataSample {
+                    t_s: t,
+                    vt_mps: 60.0,
+                    alpha_rad: alpha,
+                    qbar_pa: qbar,
+                    q_rad_s: Some(0.0),
+                    qdot_rad_s2: Some(cm * qbar * 10.0 * 2.0 / 4000.0),
+                    constants: k,
+                    ..Default::default()
+                }
+            })
+            .collect();
+        let fits = coefficient_fits(&st, &[Some(0.1), Some(-0.5)], &samples);
+        assert_eq!(fits.len(), 1);
+        let q = fits[0].quality().unwrap();
+        assert_eq!(q.samples, 50);
+        assert!(q.residual_rms < 1e-12, "{q:?}");
+        assert!((q.r_squared.unwrap() - 1.0).abs() < 1e-9, "{q:?}");
+        // A parameter not identified: no fit for its coefficient.
+        assert!(coefficient_fits(&st, &[Some(0.1), None], &samples).is_empty());
+    }
+
+    #[test]
+    fn sample_log_is_bounded_and_evenly_decimated() {
+        let mut log = SampleLog::with_limit(10);
+        for k in 0..1000 {
+            log.push(&AirDataSample { t_s: k as f64, ..Default::default() });
+            assert!(log.samples.len() <= 10);
+        }
+        assert!(
+            log.stride >= 100 && log.samples.len() >= 5,
+            "{} {}",
+            log.stride,
+            log.samples.len()
+        );
+        for (k, s) in log.samples.iter().enumerate() {
+            assert_eq!(s.t_s, (k * log.stride) as f64);
+        }
+    }
+}

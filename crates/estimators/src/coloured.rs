@@ -1,0 +1,265 @@
+//! Parameter covariance corrected for coloured (autocorrelated) residuals: the recursive,
+//! allocation-free form for the real-time equation-error estimators ([`crate::rls`]), and the
+//! batch form for output error ([`batch`], std only).
+//!
+//! Source: Morelli & Klein, "Accuracy of aerodynamic model parameters estimated from flight
+//! test data", *J. Guidance, Control, and Dynamics* 20(1), 1997; Klein & Morelli, *Aircraft
+//! System Identification*, AIAA 2006, §5.2 (least squares with coloured residuals; the
+//! equation-error form below) and ch. 6 (the output-error form); SIDPAC `m_colores.m`.
+//!
+//! For least squares `θ̂ = (XᵀX)⁻¹ Xᵀy` with residuals `v` whose autocorrelation is
+//! `R_vv(k) = E[v_i v_{i−k}]`,
+//!
+//! ```text
+//! Cov(θ̂) = (XᵀX)⁻¹ [ Σ_i Σ_j x_i R_vv(i − j) x_jᵀ ] (XᵀX)⁻¹          (x_i the i-th row of X)
+//! ```
+//!
+//! which reduces to `σ² (XᵀX)⁻¹` for white residuals. The sum over lags is truncated at the
+//! first lag `K` at which the normalised autocorrelation `ρ̂(k) = R̂_vv(k)/R̂_vv(0)` lies inside
+//! the 95 % band of a white sequence, `±2/√N` (the lags beyond are estimation noise, and
+//! summing them only adds variance), and at [`MAX_LAG`].
+//!
+//! # Recursive form ([`ColouredCovariance`])
+//!
+//! With exponential forgetting `λ` the weighted least-squares estimate is
+//! `θ̂_n = P_n Σ_i λ^{n−i} x_i y_i`, `P_n = (Σ_i λ^{n−i} x_i x_iᵀ)⁻¹`, and its covariance is the
+//! same sandwich with weights `λ^{n−i} λ^{n−j}` on the pair `(i, j)`:
+//!
+//! ```text
+//! Cov(θ̂_n) = σ̂² P_n M_n P_n,   M_n = Σ_i Σ_j λ^{2n−i−j} ρ(i − j) x_i x_jᵀ
+//! M_n = λ² M_{n−1} + x_n g_nᵀ + g_n x_nᵀ − x_n x_nᵀ,   g_n = x_n + Σ_{k=1..K} ρ̂(k) λ^k x_{n−k}
+//! ρ̂(k) = c_n(k) / c_n(0),   c_n(k) = λ c_{n−1}(k) + v_n v_{n−k}
+//! ```
+//!
+//! `σ̂²` is the estimator's own residual variance. A ring buffer holds the last [`MAX_LAG`]
+//! regressor rows and residuals, so each update costs `O(K p + p²)` and allocates nothing. Each
+//! pair is weighted with the `ρ̂(k)` current when its later member arrives (the batch formula
+//! uses the final `ρ̂`); once `ρ̂` has settled the two agree (tests). With `λ = 1` and white
+//! residuals (`K = 0`) `M_n = P_n⁻¹` and the covariance is exactly `σ̂² P_n`; with `λ < 1` the
+//! `λ²` weighting of `M` is the variance of the exponentially weighted estimate, about half
+//! of `σ̂² P_n` for a memory of many samples.
+
+#[cfg(feature = "std")]
+pub mod batch;
+
+use crate::linalg::Square;
+
+/// Most residual lags the recursive correction sums (a ring buffer of this many rows).
+pub const MAX_LAG: usize = 40;
+
+/// The 95 % band `2/√n` of the normalised autocorrelation of `n` white samples.
+pub fn white_band(n: f64) -> f64 {
+    2.0 / libm::sqrt(n.max(1.0))
+}
+
+/// Running autocorrelation of one residual sequence up to [`MAX_LAG`], with the truncation lag
+/// of the module doc. No allocation.
+#[derive(Debug, Clone, Copy)]
+pub struct Autocorrelation {
+    residuals: [f64; MAX_LAG],
+    head: usize,
+    filled: usize,
+    /// `c(k) = Σ_i λ^{n−i} v_i v_{i−k}`, `k = 0..=MAX_LAG`.
+    c: [f64; MAX_LAG + 1],
+    /// λ-weighted number of residuals in `c(0)`.
+    n_res: f64,
+    lag: usize,
+}
+
+impl Default for Autocorrelation {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Autocorrelation {
+    /// No residual yet.
+    pub const fn new() -> Self {
+        Self {
+            residuals: [0.0; MAX_LAG],
+            head: 0,
+            filled: 0,
+            c: [0.0; MAX_LAG + 1],
+            n_res: 0.0,
+            lag: 0,
+        }
+    }
+
+    /// Adds residual `v` with forgetting `λ` and updates the truncation lag `K`: the last lag
+    /// before the first whose `|ρ̂(k)|` falls inside the white band `2/√N`.
+    pub fn add(&mut self, v: f64, lambda: f64) {
+        let avail = self.filled.min(MAX_LAG);
+        self.c[0] = lambda * self.c[0] + v * v;
+        for k in 1..=avail {
+            let idx = (self.head + MAX_LAG - k) % MAX_LAG;
+            self.c[k] = lambda * self.c[k] + v * self.residuals[idx];
+        }
+        self.n_res = lambda * self.n_res + 1.0;
+        let band = white_band(self.n_res);
+        let mut k_max = 0;
+        if self.c[0] > 0.0 {
+            for k in 1..=avail {
+                if libm::fabs(self.c[k] / self.c[0]) < band {
+                    break;
+                }
+                k_max = k;
+            }
+        }
+        self.lag = k_max;
+        self.push(v);
+    }
+
+    /// Starts a new sequence (a new manoeuvre): lags never span the break; the sums are kept.
+    pub fn restart(&mut self) {
+        self.filled = 0;
+    }
+
+    /// Stores `v` as the latest residual without counting it (a row without residual).
+    fn push(&mut self, v: f64) {
+        self.residuals[self.head] = v;
+        self.head = (self.head + 1) % MAX_LAG;
+        self.filled += 1;
+    }
+
+    /// The truncation lag `K` after the last residual.
+    pub fn lag(&self) -> usize {
+        self.lag
+    }
+
+    /// `ρ̂(k) = c(k)/c(0)`, `None` before any non-zero residual or beyond [`MAX_LAG`].
+    pub fn rho(&self, k: usize) -> Option<f64> {
+        (k <= MAX_LAG && self.c[0] > 0.0).then(|| self.c[k] / self.c[0])
+    }
+
+    /// The variance factor `1 + 2 Σ_{k=1..K} ρ̂(k)` of a mean of the residuals (the
+    /// effective-sample-size correction, Bayley & Hammersley 1946): the coloured-residual
+    /// correction for regressors that vary slowly over `K` samples. 1 before any residual.
+    pub fn variance_factor(&self) -> f64 {
+        let mut f = 1.0;
+        for k in 1..=self.lag {
+            f += 2.0 * self.rho(k).unwrap_or(0.0);
+        }
+        f
+    }
+}
+
+/// Recursive coloured-residual covariance of one least-squares fit with up to `C` regressors
+/// (module doc). No allocation.
+#[derive(Debug, Clone, Copy)]
+pub struct ColouredCovariance<const C: usize> {
+    n: usize,
+    rows: [[f64; C]; MAX_LAG],
+    head: usize,
+    acf: Autocorrelation,
+    m: Square<C>,
+}
+
+impl<const C: usize> ColouredCovariance<C> {
+    /// An empty accumulator for a fit with `n ≤ C` regressors.
+    pub fn new(n: usize) -> Self {
+        Self {
+            n: n.min(C),
+            rows: [[0.0; C]; MAX_LAG],
+            head: 0,
+            acf: Autocorrelation::new(),
+            m: [[0.0; C]; C],
+        }
+    }
+
+    /// Adds regressor row `x` (leading `n` entries) with its residual `v` (`None` while the fit
+    /// is not yet initialised: the row enters `M` as white) and forgetting factor `λ`.
+    pub fn add(&mut self, x: &[f64; C], v: Option<f64>, lambda: f64) {
+        let n = self.n;
+        let k_max = match v {
+            Some(v) => {
+                self.acf.add(v, lambda);
+                self.acf.lag()
+            }
+            None => {
+                self.acf.push(0.0);
+                0
+            }
+        };
+        // g = x + Σ ρ(k) λ^k x_{n−k}
+        let mut g = [0.0; C];
+        g[..n].copy_from_slice(&x[..n]);
+        let mut lk = 1.0;
+        for k in 1..=k_max {
+            lk *= lambda;
+            let w = self.acf.rho(k).unwrap_or(0.0) * lk;
+            let row = &self.rows[(self.head + MAX_LAG - k) % MAX_LAG];
+            for a in 0..n {
+                g[a] += w * row[a];
+            }
+        }
+        let l2 = lambda * lambda;
+        for a in 0..n {
+            for b in a..n {
+                let v = l2 * self.m[a][b] + x[a] * g[b] + g[a] * x[b] - x[a] * x[b];
+                self.m[a][b] = v;
+                self.m[b][a] = v;
+            }
+        }
+        self.rows[self.head] = *x;
+        self.head = (self.head + 1) % MAX_LAG;
+    }
+
+    /// The lag `K` at which the last update truncated the sum.
+    pub fn lag(&self) -> usize {
+        self.acf.lag()
+    }
+
+    /// The normalised residual autocorrelation `ρ̂(k)` (`None` before any residual).
+    pub fn autocorrelation(&self, k: usize) -> Option<f64> {
+        self.acf.rho(k)
+    }
+
+    /// Entry `(i, j)` of `σ̂² P M P` (module doc) for the fit's `P` (leading `n × n` block).
+    pub fn covariance(&self, p: &Square<C>, s2: f64, i: usize, j: usize) -> f64 {
+        let n = self.n;
+        let mut s = 0.0;
+        for a in 0..n {
+            let mut row = 0.0;
+            for b in 0..n {
+                row += self.m[a][b] * p[b][j];
+            }
+            s += p[i][a] * row;
+        }
+        s2 * s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+
+    /// The variance factor of AR(1) residuals is `(1 + a)/(1 − a)` (the sum `1 + 2 Σ aᵏ`),
+    /// minus the tail beyond the truncation lag; of MA(1) residuals `v_i = w_i + b w_{i−1}` it
+    /// is `(1 + b)²/(1 + b²)`; of white residuals 1.
+    #[test]
+    fn analytic_variance_factor_of_ar1_ma1_and_white() {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
+        let n01 = Normal::new(0.0, 1.0).unwrap();
+        let (a, b) = (0.6, 0.8);
+        let (mut ar, mut ma, mut white) =
+            (Autocorrelation::new(), Autocorrelation::new(), Autocorrelation::new());
+        let (mut v, mut w_prev) = (0.0, 0.0);
+        for _ in 0..100_000 {
+            let w = n01.sample(&mut rng);
+            v = a * v + w;
+            ar.add(v, 1.0);
+            ma.add(w + b * w_prev, 1.0);
+            white.add(w, 1.0);
+            w_prev = w;
+        }
+        let f_ar = ar.variance_factor();
+        let f_ma = ma.variance_factor();
+        let f_w = white.variance_factor();
+        assert!((f_ar / ((1.0 + a) / (1.0 - a)) - 1.0).abs() < 0.05, "AR(1): {f_ar}");
+        assert!((f_ma / ((1.0 + b) * (1.0 + b) / (1.0 + b * b)) - 1.0).abs() < 0.05, "MA: {f_ma}");
+        assert_eq!(ma.lag(), 1, "MA(1) has one significant lag");
+        assert!((f_w - 1.0).abs() < 0.05, "white: {f_w}");
+    }
+}

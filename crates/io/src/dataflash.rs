@@ -1,0 +1,410 @@
+//! ArduPilot DataFlash (`.bin`) reader: every timed message type as a [`Topic`].
+//!
+//! The format is self-describing (ArduPilot `libraries/AP_Logger/LogStructure.h`; reference
+//! reader: pymavlink `DFReader.py`, `DFReader_binary`): every message is `0xA3 0x95`, a type
+//! byte and a fixed-length payload. Type 128 (`FMT`, 89 bytes) defines a type: its id, total
+//! length, 4-character name, format string (one character per field) and comma-separated
+//! column names. `FMTU` messages give each field's unit and multiplier ids; a unit `#` marks
+//! the instance field (e.g. `GPS.I`, `XKF1.C`). Field characters, sizes and the scaling
+//! applied (pymavlink's `FORMAT_TO_STRUCT`):
+//!
+//! | char | type | scaling |   | char | type | scaling |
+//! |---|---|---|---|---|---|---|
+//! | `b` `B` `M` | int8, uint8, uint8 mode | — | | `c` `C` | int16, uint16 | × 0.01 |
+//! | `h` `H` | int16, uint16 | — | | `e` `E` | int32, uint32 | × 0.01 |
+//! | `i` `I` | int32, uint32 | — | | `L` | int32 lat/lon | × 1e-7 (deg) |
+//! | `q` `Q` | int64, uint64 | — | | `g` | IEEE half float | — |
+//! | `f` `d` | float, double | — | | `a` | int16\[32\] | — (`field[0..31]`) |
+//! | `n` `N` `Z` | char\[4\], \[16\], \[64\] | text, not a field | | | | |
+//!
+//! The `FMTU`/`MULT` multipliers are **not** applied (pymavlink only uses them to name the
+//! unit): a value is in the unit ArduPilot logs it in (`ATT.Roll` in degrees, `IMU.GyrX` in
+//! rad/s, `RCOU.C2` in µs PWM); the mapping converts it.
+//!
+//! Topics: one per message name with a `TimeUS` (µs) or `TimeMS` (ms) field, which becomes the
+//! time base in seconds (since boot, not shifted); the time field itself is not repeated as a
+//! field. A message type with an instance field is split as ULog topics are: instance 0 keeps
+//! the name (`XKF1`), instance `k ≥ 1` is `XKF1[k]`; the instance field stays a field.
+//! `PARM` messages also fill [`LogContents::parameters`]. Samples whose time does not increase
+//! are left out and counted in [`LogContents::dropped`].
+//!
+//! Corrupt bytes (no header, or a type with no `FMT`) are skipped byte by byte until the next
+//! header, as pymavlink does, and each skipped stretch is listed in [`LogContents::skipped`];
+//! a file that ends inside a message reports [`LogContents::truncated_at`]. A malformed `FMT`
+//! (length under 3, unknown format character, sizes that do not add up to the length) is a
+//! [`FlightDataError::LogDecode`] naming the byte offset and the message name: every later
+//! message of that type would be misread.
+//!
+//! Why not a crate: `ardupilot-binlog` 0.2.0 (its source) computes the payload length as
+//! `msg_len as usize - 3`, which underflows for a corrupt `FMT` with a length under 3, stops
+//! without a word after 256 consecutive bad headers (the rest of the file is silently lost),
+//! and reports no byte offsets.
+
+use crate::FlightDataError;
+use crate::table::Topic;
+use crate::ulog::{LogContents, TopicBuilder};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Message header bytes.
+const HEAD: [u8; 2] = [0xA3, 0x95];
+/// Type id of `FMT`.
+const FMT_TYPE: u8 = 128;
+/// Length of an `FMT` message, header included.
+const FMT_LEN: usize = 89;
+
+/// One field's decoding: byte size, kind.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Kind {
+    Num { size: usize, scale: f64, signed: bool, float: bool },
+    Half,
+    Array,
+    Text(usize),
+}
+
+fn kind(c: u8) -> Option<Kind> {
+    let n = |size, signed| Kind::Num { size, scale: 1.0, signed, float: false };
+    let s = |size, signed, scale| Kind::Num { size, scale, signed, float: false };
+    Some(match c {
+        b'b' => n(1, true),
+        b'B' | b'M' => n(1, false),
+        b'h' => n(2, true),
+        b'H' => n(2, false),
+        b'i' => n(4, true),
+        b'I' => n(4, false),
+        b'q' => n(8, true),
+        b'Q' => n(8, false),
+        b'c' => s(2, true, 0.01),
+        b'C' => s(2, false, 0.01),
+        b'e' => s(4, true, 0.01),
+        b'E' => s(4, false, 0.01),
+        b'L' => s(4, true, 1e-7),
+        b'f' => Kind::Num { size: 4, scale: 1.0, signed: true, float: true },
+        b'd' => Kind::Num { size: 8, scale: 1.0, signed: true, float: true },
+        b'g' => Kind::Half,
+        b'a' => Kind::Array,
+        b'n' => Kind::Text(4),
+        b'N' => Kind::Text(16),
+        b'Z' => Kind::Text(64),
+        _ => return None,
+    })
+}
+
+fn size(k: Kind) -> usize {
+    match k {
+        Kind::Num { size, .. } => size,
+        Kind::Half => 2,
+        Kind::Array => 64,
+        Kind::Text(n) => n,
+    }
+}
+
+/// IEEE 754 binary16 to f64.
+fn half(bits: u16) -> f64 {
+    let sign = if bits & 0x8000 != 0 { -1.0 } else { 1.0 };
+    let exp = i32::from((bits >> 10) & 0x1f);
+    let frac = f64::from(bits & 0x3ff);
+    match exp {
+        0 => sign * frac * 2f64.powi(-24),
+        31 if frac == 0.0 => sign * f64::INFINITY,
+        31 => f64::NAN,
+        e => sign * (1.0 + frac / 1024.0) * 2f64.powi(e - 15),
+    }
+}
+
+/// Reads field `k` at the start of `b` (`b.len() >= size(k)`), numeric kinds only.
+fn read_num(k: Kind, b: &[u8]) -> f64 {
+    match k {
+        Kind::Num { size, scale, signed, float } => {
+            let mut x = [0u8; 8];
+            x[..size].copy_from_slice(&b[..size]);
+            let raw = match (size, signed, float) {
+                (4, _, true) => f64::from(f32::from_le_bytes([x[0], x[1], x[2], x[3]])),
+                (8, _, true) => f64::from_le_bytes(x),
+                (1, true, _) => f64::from(x[0] as i8),
+                (1, false, _) => f64::from(x[0]),
+                (2, true, _) => f64::from(i16::from_le_bytes([x[0], x[1]])),
+                (2, false, _) => f64::from(u16::from_le_bytes([x[0], x[1]])),
+                (4, true, _) => f64::from(i32::from_le_bytes([x[0], x[1], x[2], x[3]])),
+                (4, false, _) => f64::from(u32::from_le_bytes([x[0], x[1], x[2], x[3]])),
+                (_, true, _) => i64::from_le_bytes(x) as f64,
+                (_, false, _) => u64::from_le_bytes(x) as f64,
+            };
+            // pymavlink divides by 1/scale for accuracy (1e-7 is not exact in binary).
+            if scale < 1.0 { raw / (1.0 / scale).round() } else { raw * scale }
+        }
+        Kind::Half => half(u16::from_le_bytes([b[0], b[1]])),
+        Kind::Array | Kind::Text(_) => f64::NAN,
+    }
+}
+
+/// A message type defined by an `FMT`.
+#[derive(Debug, Clone)]
+struct Format {
+    name: String,
+    /// Payload length (message length − 3).
+    payload: usize,
+    /// (column, kind, payload offset) for every field.
+    fields: Vec<(String, Kind, usize)>,
+    /// Index into `fields` of the time field and its µs factor.
+    time: Option<(usize, u64)>,
+    /// Index into `fields` of the instance field (from `FMTU`).
+    instance: Option<usize>,
+}
+
+fn text(b: &[u8]) -> String {
+    let end = b.iter().position(|&c| c == 0).unwrap_or(b.len());
+    String::from_utf8_lossy(&b[..end]).trim().to_string()
+}
+
+/// Parses an `FMT` payload (86 bytes).
+fn parse_fmt(p: &[u8]) -> Result<(u8, Format), String> {
+    let id = p[0];
+    let len = usize::from(p[1]);
+    let name = text(&p[2..6]);
+    let chars = text(&p[6..22]);
+    let cols = text(&p[22..86]);
+    if len < 3 {
+        return Err(format!("FMT of `{name}` (type {id}): length {len} < 3"));
+    }
+    let columns: Vec<&str> =
+        if cols.is_empty() { Vec::new() } else { cols.split(',').map(str::trim).collect() };
+    if columns.len() != chars.len() {
+        return Err(format!(
+            "FMT of `{name}` (type {id}): {} format characters `{chars}` for {} columns `{cols}`",
+            chars.len(),
+            columns.len()
+        ));
+    }
+    let mut fields = Vec::with_capacity(chars.len());
+    let mut at = 0;
+    for (c, col) in chars.bytes().zip(&columns) {
+        let k = kind(c).ok_or_else(|| {
+            format!(
+                "FMT of `{name}` (type {id}): field `{col}`: unknown format character `{}`",
+                c as char
+            )
+        })?;
+        fields.push((col.to_string(), k, at));
+        at += size(k);
+    }
+    if at != len - 3 {
+        return Err(format!(
+            "FMT of `{name}` (type {id}): fields `{chars}` take {at} bytes but the length {len} leaves {}",
+            len - 3
+        ));
+    }
+    let time = fields.iter().position(|(c, k, _)| c == "TimeUS" && matches!(k, Kind::Num { .. }));
+    let time = time.map(|i| (i, 1)).or_else(|| {
+        fields
+            .iter()
+            .position(|(c, k, _)| c == "TimeMS" && matches!(k, Kind::Num { .. }))
+            .map(|i| (i, 1000))
+    });
+    Ok((id, Format { name, payload: len - 3, fields, time, instance: None }))
+}
+
+/// Reads a DataFlash log's timed message types as topics (see the module doc).
+///
+/// # Errors
+/// [`FlightDataError::Io`] if the file cannot be read, [`FlightDataError::LogDecode`] naming
+/// the byte offset for a file with no DataFlash message or a malformed `FMT`.
+pub fn read_dataflash(path: &Path) -> Result<Vec<Topic>, FlightDataError> {
+    Ok(read_dataflash_contents(path)?.topics)
+}
+
+/// Reads a DataFlash log: topics, parameters and what was left out or skipped.
+///
+/// # Errors
+/// As [`read_dataflash`].
+pub fn read_dataflash_contents(path: &Path) -> Result<LogContents, FlightDataError> {
+    let file = path.display().to_string();
+    let bytes =
+        std::fs::read(path).map_err(|source| FlightDataError::Io { file: file.clone(), source })?;
+    parse_dataflash(&bytes, &file)
+}
+
+/// Decodes DataFlash bytes; `file` names them in errors.
+///
+/// # Errors
+/// [`FlightDataError::LogDecode`] naming `file` and the byte offset: a malformed `FMT`, or no
+/// valid message at all (not a DataFlash log).
+pub fn parse_dataflash(bytes: &[u8], file: &str) -> Result<LogContents, FlightDataError> {
+    let err = |offset: usize, message: String| FlightDataError::LogDecode {
+        file: file.to_string(),
+        offset: offset as u64,
+        message,
+    };
+    let mut formats: BTreeMap<u8, Format> = BTreeMap::new();
+    let mut out = LogContents::default();
+    let mut builders: Vec<TopicBuilder> = Vec::new();
+    let mut by_name: BTreeMap<String, usize> = BTreeMap::new();
+    let mut skip_start: Option<usize> = None;
+    let mut messages = 0usize;
+    let mut row: Vec<f64> = Vec::new();
+    let mut at = 0usize;
+    while at < bytes.len() {
+        let ty = match bytes.get(at..at + 3) {
+            Some([a, b, t]) if [*a, *b] == HEAD && (*t == FMT_TYPE || formats.contains_key(t)) => {
+                *t
+            }
+            Some(_) => {
+                skip_start.get_or_insert(at);
+                at += 1;
+                continue;
+            }
+            None => {
+                out.truncated_at = Some(at as u64);
+                break;
+            }
+        };
+        let len = if ty == FMT_TYPE { FMT_LEN - 3 } else { formats[&ty].payload };
+        let Some(p) = bytes.get(at + 3..at + 3 + len) else {
+            out.truncated_at = Some(at as u64);
+            break;
+        };
+        if let Some(s) = skip_start.take() {
+            out.skipped.push((s as u64, (at - s) as u64));
+        }
+        messages += 1;
+        if ty == FMT_TYPE {
+            let (id, f) = parse_fmt(p).map_err(|m| err(at, m))?;
+            if id == FMT_TYPE && (f.payload != FMT_LEN - 3 || f.name != "FMT") {
+                return Err(err(at, format!("FMT redefines the FMT type as `{}`", f.name)));
+            }
+            formats.insert(id, f);
+            at += 3 + len;
+            continue;
+        }
+        let mut instance_of = None;
+        let f = &formats[&ty];
+        let field = |i: usize| {
+            let (_, k, o) = f.fields[i];
+            read_num(k, &p[o..o + size(k)])
+        };
+        match f.name.as_str() {
+            "FMTU" => {
+                // TimeUS, FmtType, UnitIds, MultIds: the instance field is unit `#`.
+                let ty_i = f.fields.iter().position(|(c, _, _)| c == "FmtType");
+                let units_i = f.fields.iter().position(|(c, _, _)| c == "UnitIds");
+                if let (Some(ti), Some(ui)) = (ty_i, units_i) {
+                    let (_, k, o) = f.fields[ui];
+                    instance_of = Some((field(ti) as u8, text(&p[o..o + size(k)]).find('#')));
+                }
+            }
+            "PARM" => {
+                let name_i = f.fields.iter().position(|(c, _, _)| c == "Name");
+                let value_i = f.fields.iter().position(|(c, _, _)| c == "Value");
+                if let (Some(ni), Some(vi)) = (name_i, value_i) {
+                    let (_, k, o) = f.fields[ni];
+                    out.parameters.insert(text(&p[o..o + size(k)]), field(vi));
+                }
+            }
+            _ => {}
+        }
+        if let Some((ti, us)) = f.time {
+            let t_us = (field(ti) as u64).saturating_mul(us);
+            let instance = f.instance.map_or(0, |i| field(i) as i64);
+            let tname =
+                if instance == 0 { f.name.clone() } else { format!("{}[{instance}]", f.name) };
+            row.clear();
+            let mut names = Vec::new();
+            for (i, (c, k, o)) in f.fields.iter().enumerate() {
+                if i == ti {
+                    continue;
+                }
+                match k {
+                    Kind::Num { .. } | Kind::Half => {
+                        names.push(c.clone());
+                        row.push(read_num(*k, &p[*o..*o + size(*k)]));
+                    }
+                    Kind::Array => {
+                        for j in 0..32 {
+                            names.push(format!("{c}[{j}]"));
+                            let b = &p[o + 2 * j..o + 2 * j + 2];
+                            row.push(f64::from(i16::from_le_bytes([b[0], b[1]])));
+                        }
+                    }
+                    Kind::Text(_) => {}
+                }
+            }
+            let i = match by_name.get(&tname) {
+                Some(&i) if builders[i].names == names => i,
+                Some(_) => {
+                    // The type was redefined with other fields: a new topic `NAME#2`, … .
+                    let mut k = 2;
+                    while by_name.contains_key(&format!("{tname}#{k}")) {
+                        k += 1;
+                    }
+                    let n = format!("{tname}#{k}");
+                    builders.push(TopicBuilder::new(n.clone(), names));
+                    by_name.insert(tname.clone(), builders.len() - 1);
+                    by_name.insert(n, builders.len() - 1);
+                    builders.len() - 1
+                }
+                None => {
+                    builders.push(TopicBuilder::new(tname.clone(), names));
+                    by_name.insert(tname, builders.len() - 1);
+                    builders.len() - 1
+                }
+            };
+            builders[i].push(t_us, &row);
+        }
+        if let Some((target, Some(i))) = instance_of
+            && let Some(g) = formats.get_mut(&target)
+            && i < g.fields.len()
+            && matches!(g.fields[i].1, Kind::Num { .. })
+        {
+            g.instance = Some(i);
+        }
+        at += 3 + len;
+    }
+    if let Some(s) = skip_start {
+        out.skipped.push((s as u64, (bytes.len() - s) as u64));
+    }
+    if messages == 0 {
+        return Err(err(
+            0,
+            "no DataFlash message found (no `A3 95` header with a known type)".into(),
+        ));
+    }
+    for b in builders {
+        if b.dropped > 0 {
+            out.dropped.insert(b.name.clone(), b.dropped);
+        }
+        if !b.t_us.is_empty() {
+            out.topics.push(b.finish());
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn analytic_half_floats() {
+        assert_eq!(half(0x3c00), 1.0);
+        assert_eq!(half(0xc000), -2.0);
+        assert_eq!(half(0x3555), 0.333_251_953_125);
+        assert_eq!(half(0x0001), 2f64.powi(-24));
+        assert!(half(0x7e00).is_nan());
+    }
+
+    #[test]
+    fn analytic_scaled_types_follow_pymavlink() {
+        let c = kind(b'c').unwrap();
+        assert_eq!(read_num(c, &(-4500i16).to_le_bytes()), -45.0);
+        let l = kind(b'L').unwrap();
+        assert_eq!(read_num(l, &(-1_234_567_891i32).to_le_bytes()), -123.4567891);
+        let e = kind(b'E').unwrap();
+        assert_eq!(read_num(e, &(4_000_000_000u32).to_le_bytes()), 40_000_000.0);
+    }
+
+    #[test]
+    fn errors_not_dataflash_names_file_and_offset() {
+        let e = parse_dataflash(b"plain text, no header", "x.bin").unwrap_err().to_string();
+        assert!(e.starts_with("x.bin: byte 0: no DataFlash message"), "{e}");
+    }
+}

@@ -1,0 +1,257 @@
+"""aeroident: real-time identification of aircraft aerodynamic derivatives, from Python.
+
+The numbers come from the Rust library behind the ``aeroident`` command line (same code paths,
+same results to the last bit, same error messages). Units are SI, angles in radians, times in
+seconds, unless a name says otherwise (``alt_ft``, ``elevator_deg`` …).
+
+- :func:`read`: a record + channel mapping → dict of numpy arrays (one per channel).
+- :class:`Estimator` and :class:`Rls`, :class:`Ftr`, :class:`Ekf`, :class:`Smpe`,
+  :class:`SmpeCorrected`, :class:`Gradient`: online estimators fed one sample dict at a time.
+- :func:`replay`: a whole record (file + mapping, or arrays) through an estimator in Rust; the
+  estimates as a (time × parameter) numpy matrix.
+- :func:`trim`, :func:`linearize`, :func:`simulate`: the F-16 model.
+- :func:`montecarlo`: seeded closed-loop campaigns, locally (rayon) or on a Ray cluster.
+
+Errors are raised as :class:`AeroidentError` with the message the CLI prints after ``error:``.
+Long calls release the GIL.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any, Mapping, Optional, Union
+
+import numpy as np
+
+from . import _aeroident as _core
+from ._aeroident import AeroidentError, __version__
+from ._aeroident import EstimatorBase as _Estimator
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+__all__ = [
+    "AeroidentError",
+    "Estimator",
+    "Rls",
+    "Ftr",
+    "Ekf",
+    "Smpe",
+    "SmpeCorrected",
+    "Gradient",
+    "read",
+    "replay",
+    "sample_keys",
+    "trim",
+    "linearize",
+    "simulate",
+    "montecarlo",
+    "__version__",
+]
+
+
+def sample_keys() -> list[str]:
+    """The keys a sample dict (and :func:`read`'s result) may hold.
+
+    Required channels ``t_s, vt_mps, alpha_rad, qbar_pa``; optional channels (``beta_rad,
+    p_rad_s, q_rad_s, r_rad_s, pdot_rad_s2, …, ax_mps2, ay_mps2, az_mps2, de_rad, da_rad,
+    dr_rad, thrust_n, …``); aircraft constants (``mass_kg, S_m2, cbar_m, b_m, Ixx_kgm2,
+    Iyy_kgm2, Izz_kgm2, Ixz_kgm2, thrust_arm_m, thrust_incidence_rad, v0_mps``).
+    """
+    return list(_core.sample_keys())
+
+
+def read(path: PathLike, mapping: PathLike) -> dict[str, Any]:
+    """Reads a record (CSV) with a channel mapping (TOML, see ``mappings/`` and docs/mapping.md).
+
+    Returns a dict: one 1-D float64 array per key of :func:`sample_keys` (SI, at the CG, one
+    entry per accepted sample; ``NaN`` where the record has no such channel), ``row`` (int: the
+    record's line number of each sample), and the rows the reader set aside:
+    ``rejected_rows`` (int array), ``rejected_reasons`` (list of str), ``gap_rows`` (int array:
+    samples that follow a time gap). Exactly the samples ``aeroident replay`` sees.
+
+    Raises :class:`AeroidentError` (file, row and column named) on a bad mapping or record.
+    """
+    return _core.read(os.fspath(path), os.fspath(mapping))
+
+
+class Estimator(_Estimator):
+    """An online estimator over one model structure.
+
+    ``Estimator(kind, model="longitudinal", constants=None, forgetting=1.0,
+    sample_interval_s=None, parameter_walk_per_sqrt_s=0.0)`` with ``kind`` one of ``rls, ftr,
+    ekf, smpe, smpe-corrected, gradient`` (the CLI's ``--estimator``) and ``model`` a preset
+    (``longitudinal``, ``lateral``, ``six-axis``) or a model file (TOML, ``models/``).
+    ``constants``: the aircraft constants (keys as in :func:`sample_keys`) used for every sample
+    that does not carry its own.
+
+    - ``update(sample)``: one sample, a dict of SI channels (``None``/``NaN`` = absent). Raises
+      :class:`AeroidentError` if the estimator refuses it (its state is then unchanged) or
+      diverges.
+    - ``estimates()``: dict with ``names``, ``values`` (``None`` = not identified), ``sigma``
+      (``None`` = not reported) and ``status`` (``initialising``, ``running``, ``diverged``).
+    - ``covariance(i, j)``, ``nis()``, ``new_manoeuvre()``; properties ``names``, ``method``,
+      ``model``, ``samples``.
+
+    Unlike :func:`replay` on a file, nothing is differentiated: give ``qdot_rad_s2`` etc. when
+    the method needs them (see ``aeroident replay``'s derivative stage).
+    """
+
+
+def _subclass(kind: str, doc: str) -> type:
+    def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Mapping[str, float]] = None, **options: Any):  # noqa: N807
+        return _Estimator.__new__(cls, kind, os.fspath(model), _plain(constants), **options)
+
+    return type(kind.title().replace("-", ""), (Estimator,), {"__new__": __new__, "__doc__": doc, "__module__": __name__})
+
+
+def _plain(constants: Optional[Mapping[str, float]]) -> Optional[dict[str, Optional[float]]]:
+    return None if constants is None else {str(k): (None if v is None else float(v)) for k, v in constants.items()}
+
+
+Rls = _subclass("rls", "Recursive least squares (equation error) on every modelled coefficient. ``Rls(model, constants, forgetting=1.0)``.")
+Ftr = _subclass("ftr", "Real-time Fourier-transform regression (Morelli 2000). ``Ftr(model, constants, forgetting=1.0, sample_interval_s=None)``.")
+Ekf = _subclass("ekf", "Extended Kalman filter on states and parameters. ``Ekf(model, constants, sample_interval_s=None, parameter_walk_per_sqrt_s=0.0)``.")
+Smpe = _subclass("smpe", "The thesis's sliding-mode parameter estimator. ``Smpe(model, constants)``.")
+SmpeCorrected = _subclass("smpe-corrected", "The corrected sliding-mode parameter estimator. ``SmpeCorrected(model, constants)``.")
+SmpeCorrected.__name__ = SmpeCorrected.__qualname__ = "SmpeCorrected"
+Gradient = _subclass("gradient", "The model-reference gradient estimator. ``Gradient(model, constants)``.")
+
+
+def replay(
+    data: Union[PathLike, Mapping[str, Any]],
+    mapping: Optional[PathLike] = None,
+    estimator: str = "rls",
+    model: Optional[PathLike] = None,
+    *,
+    forgetting: float = 1.0,
+    derivatives: str = "auto",
+    diff_window: int = 5,
+    constants: Optional[Mapping[str, float]] = None,
+    sample_interval_s: Optional[float] = None,
+) -> dict[str, Any]:
+    """Replays a whole record through an estimator, every sample in Rust (no Python loop).
+
+    ``data`` is a record file (then ``mapping=`` is required and the pipeline is exactly
+    ``aeroident replay DATA --map MAPPING --estimator … --model …``: reader, derivative stage,
+    estimator) or a dict of arrays as :func:`read` returns (then the samples go straight to the
+    estimator: nothing is differentiated; ``constants=`` fills constants the arrays lack).
+    ``model=None``: the richest preset the first sample supports, as the CLI chooses.
+
+    Returns a dict:
+
+    - ``names``: list of the ``n`` parameter names;
+    - ``t_s``: (k,) sample times, s, one per sample whose estimates the CLI writes as a line of
+      ``estimates.csv`` (samples the reader or estimator rejected have none);
+    - ``estimates``: (k, n) float64; ``NaN`` where the parameter is not yet identified (the
+      CLI's empty field, ``None`` elsewhere in this API);
+    - ``sigma``: (k, n) float64 standard errors; ``NaN`` where none is reported;
+    - ``model``: the model's name; for a file also ``summary`` (the CLI's ``summary.json`` as a
+      dict), for arrays ``samples_refused``.
+
+    Raises :class:`AeroidentError` with the CLI's message on bad input or when the estimator
+    diverges. ``estimator="oe"`` (batch) is not available here.
+    """
+    if isinstance(data, (str, os.PathLike)):
+        if mapping is None:
+            raise AeroidentError("replay of a record file needs mapping= (the channel mapping TOML)")
+        return _core.replay_file(
+            os.fspath(data),
+            os.fspath(mapping),
+            estimator,
+            None if model is None else os.fspath(model),
+            forgetting,
+            derivatives,
+            diff_window,
+        )
+    keys = set(_core.sample_keys())
+    arrays = {k: np.ascontiguousarray(v, dtype=np.float64) for k, v in data.items() if k in keys}
+    return _core.replay_arrays(
+        arrays, estimator, None if model is None else os.fspath(model), _plain(constants), forgetting, sample_interval_s
+    )
+
+
+def trim(
+    alt_ft: float,
+    vt_fps: float,
+    xcg: float = 0.35,
+    gamma_deg: float = 0.0,
+    turn_rate_deg_s: Optional[float] = None,
+    pull_up_deg_s: Optional[float] = None,
+) -> dict[str, Any]:
+    """Trims the F-16 (Stevens, Lewis & Johnson 3rd ed. §3.6), as ``aeroident f16 trim``.
+
+    Returns ``throttle, elevator_deg, aileron_deg, rudder_deg, alpha_deg, beta_deg, theta_deg,
+    cost`` (the CLI's ``--json`` keys) and ``state`` (13, SLJ order, ``state_names``),
+    ``controls`` (throttle 0–1, elevator/aileron/rudder in rad) and ``out_of_range`` (trim
+    quantities outside the data's ranges). Raises :class:`AeroidentError` when it does not
+    converge.
+    """
+    return _core.trim(alt_ft, vt_fps, xcg, gamma_deg, turn_rate_deg_s, pull_up_deg_s)
+
+
+def linearize(
+    alt_ft: float,
+    vt_fps: float,
+    xcg: float = 0.35,
+    gamma_deg: float = 0.0,
+    turn_rate_deg_s: Optional[float] = None,
+    pull_up_deg_s: Optional[float] = None,
+) -> dict[str, Any]:
+    """Linearizes the F-16 about its trim (as ``aeroident f16 linearize``).
+
+    Returns ``a`` (13×13) and ``b`` (13×4) numpy arrays (states ``state_names``, inputs
+    ``input_names``: throttle, elevator_rad, aileron_rad, rudder_rad), ``eigenvalues`` (13,
+    complex, sorted by real then imaginary part), ``modes`` (list of dicts: name, eigenvalue
+    (re, im), wn_radps, zeta) and ``trim`` (as :func:`trim`).
+    """
+    d = _core.linearize(alt_ft, vt_fps, xcg, gamma_deg, turn_rate_deg_s, pull_up_deg_s)
+    ev = d["eigenvalues"]
+    d["eigenvalues"] = ev[:, 0] + 1j * ev[:, 1]
+    return d
+
+
+def simulate(scenario: PathLike) -> dict[str, np.ndarray]:
+    """Runs an open-loop F-16 simulation scenario (TOML, ``scenarios/sim/``), as ``aeroident f16
+    sim`` does, and returns its ``timeseries.csv`` columns as arrays (first ``t_s``; sensed
+    channels are ``meas_<channel>``; units in the names). Relative paths in the scenario
+    resolve against its directory."""
+    return _core.simulate(os.fspath(scenario))
+
+
+def montecarlo(
+    scenario: Optional[PathLike] = None,
+    runs: int = 100,
+    backend: str = "local",
+    seed: int = 1,
+    *,
+    chunk_size: Optional[int] = None,
+    per_run: bool = False,
+) -> dict[str, Any]:
+    """A Monte Carlo campaign of the closed-loop ``run`` experiment.
+
+    ``scenario``: a scenario file, or ``None`` for the built-in default scenario. Returns the
+    same dict as ``aeroident montecarlo SCENARIO --runs RUNS --seed SEED --json``: ``runs`` and
+    per estimator its ``parameters`` with ``truth, bias, scatter, mean_sigma, coverage_2sigma,
+    crb_sigma, median_time_to_10pct_s`` (``None`` where the CLI prints null).
+    ``per_run=True`` adds ``per_run`` (every run's final results, the CLI's ``runs.json``) and
+    ``wall_s``.
+
+    ``backend="local"``: the runs on this machine's rayon pool. ``backend="ray"``: chunks of
+    ``chunk_size`` seeded runs (default: about 4 chunks per CPU of the cluster) as Ray tasks,
+    each running the Rust campaign code for its runs; the driver reduces the per-run results to
+    the same statistics. Uses the running Ray cluster (``ray.init(address=…)`` first to use a
+    real one), else starts a local one. Run ``i`` depends only on (scenario, seed, i), so both
+    backends give bit-identical per-run results and statistics.
+    """
+    if isinstance(runs, bool) or not isinstance(runs, int) or runs < 1:
+        raise AeroidentError("runs must be at least 1")
+    if seed < 0:
+        raise AeroidentError("seed must be ≥ 0 (a 64-bit unsigned integer)")
+    text, origin = _core.scenario_text(None if scenario is None else os.fspath(scenario))
+    if backend == "local":
+        return _core.montecarlo_local(text, origin, runs, seed, per_run)
+    if backend == "ray":
+        from ._ray import montecarlo_ray
+
+        return montecarlo_ray(text, origin, runs, seed, chunk_size, per_run)
+    raise AeroidentError(f"backend: `{backend}` is not `local` or `ray`")

@@ -1,0 +1,100 @@
+"""Type stubs of the aeroident Python package (see the module docstring for the API)."""
+
+import os
+from typing import Any, Literal, Mapping, Optional, TypedDict, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+PathLike = Union[str, os.PathLike[str]]
+EstimatorName = Literal["rls", "ftr", "ekf", "smpe", "smpe-corrected", "gradient"]
+Constants = Mapping[str, Optional[float]]
+
+class AeroidentError(Exception): ...
+
+class EstimatesDict(TypedDict):
+    names: list[str]
+    values: list[Optional[float]]
+    sigma: list[Optional[float]]
+    status: Literal["initialising", "running", "diverged"]
+
+class ReplayResult(TypedDict, total=False):
+    names: list[str]
+    t_s: npt.NDArray[np.float64]
+    estimates: npt.NDArray[np.float64]
+    sigma: npt.NDArray[np.float64]
+    model: str
+    summary: dict[str, Any]
+    samples_refused: int
+
+class EstimatorBase:
+    def __new__(
+        cls,
+        kind: str,
+        model: str = "longitudinal",
+        constants: Optional[Constants] = None,
+        forgetting: float = 1.0,
+        sample_interval_s: Optional[float] = None,
+        parameter_walk_per_sqrt_s: float = 0.0,
+    ) -> EstimatorBase: ...
+    @property
+    def method(self) -> str: ...
+    @property
+    def model(self) -> str: ...
+    @property
+    def names(self) -> list[str]: ...
+    @property
+    def samples(self) -> int: ...
+    def update(self, sample: Mapping[str, Optional[float]]) -> None: ...
+    def estimates(self) -> EstimatesDict: ...
+    def covariance(self, i: int, j: int) -> Optional[float]: ...
+    def nis(self) -> Optional[float]: ...
+    def new_manoeuvre(self) -> None: ...
+
+class Estimator(EstimatorBase): ...
+
+class Rls(Estimator):
+    def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, forgetting: float = 1.0, sample_interval_s: Optional[float] = None) -> Rls: ...
+
+class Ftr(Estimator):
+    def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, forgetting: float = 1.0, sample_interval_s: Optional[float] = None) -> Ftr: ...
+
+class Ekf(Estimator):
+    def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, sample_interval_s: Optional[float] = None, parameter_walk_per_sqrt_s: float = 0.0) -> Ekf: ...
+
+class Smpe(Estimator):
+    def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, sample_interval_s: Optional[float] = None) -> Smpe: ...
+
+class SmpeCorrected(Estimator):
+    def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, sample_interval_s: Optional[float] = None) -> SmpeCorrected: ...
+
+class Gradient(Estimator):
+    def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, sample_interval_s: Optional[float] = None) -> Gradient: ...
+
+def sample_keys() -> list[str]: ...
+def read(path: PathLike, mapping: PathLike) -> dict[str, Any]: ...
+def replay(
+    data: Union[PathLike, Mapping[str, npt.ArrayLike]],
+    mapping: Optional[PathLike] = None,
+    estimator: EstimatorName = "rls",
+    model: Optional[PathLike] = None,
+    *,
+    forgetting: float = 1.0,
+    derivatives: Literal["auto", "differentiate"] = "auto",
+    diff_window: int = 5,
+    constants: Optional[Constants] = None,
+    sample_interval_s: Optional[float] = None,
+) -> ReplayResult: ...
+def trim(alt_ft: float, vt_fps: float, xcg: float = 0.35, gamma_deg: float = 0.0, turn_rate_deg_s: Optional[float] = None, pull_up_deg_s: Optional[float] = None) -> dict[str, Any]: ...
+def linearize(alt_ft: float, vt_fps: float, xcg: float = 0.35, gamma_deg: float = 0.0, turn_rate_deg_s: Optional[float] = None, pull_up_deg_s: Optional[float] = None) -> dict[str, Any]: ...
+def simulate(scenario: PathLike) -> dict[str, npt.NDArray[np.float64]]: ...
+def montecarlo(
+    scenario: Optional[PathLike] = None,
+    runs: int = 100,
+    backend: Literal["local", "ray"] = "local",
+    seed: int = 1,
+    *,
+    chunk_size: Optional[int] = None,
+    per_run: bool = False,
+) -> dict[str, Any]: ...

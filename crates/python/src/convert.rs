@@ -1,0 +1,239 @@
+//! Conversions between Python objects and the library's types: the sample's channels by name,
+//! and JSON documents (`serde_json::Value`) as Python dicts/lists.
+
+use aeroident_estimators::{AirDataSample, AircraftConstants};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use crate::err;
+
+/// A getter and a setter of one optional channel of [`AirDataSample`].
+type OptField =
+    (&'static str, fn(&AirDataSample) -> Option<f64>, fn(&mut AirDataSample, Option<f64>));
+
+/// The required channels of a sample (SI): time, airspeed, angle of attack, dynamic pressure.
+pub const REQUIRED: [&str; 4] = ["t_s", "vt_mps", "alpha_rad", "qbar_pa"];
+
+macro_rules! opt_fields {
+    ($($f:ident),* $(,)?) => {
+        /// The optional channels of a sample, by their field names (SI units in the names).
+        pub const OPTIONAL: &[OptField] = &[$(
+            (stringify!($f), |s| s.$f, |s, v| s.$f = v),
+        )*];
+    };
+}
+opt_fields!(
+    beta_rad,
+    p_rad_s,
+    q_rad_s,
+    r_rad_s,
+    pdot_rad_s2,
+    qdot_rad_s2,
+    rdot_rad_s2,
+    alphadot_rad_s,
+    phi_rad,
+    theta_rad,
+    psi_rad,
+    ax_mps2,
+    ay_mps2,
+    az_mps2,
+    de_rad,
+    da_rad,
+    dr_rad,
+    thrust_n,
+    throttle,
+    thrust_moment_nm,
+    rho_kgpm3,
+);
+
+/// A getter and a setter of one constant of [`AircraftConstants`] (`None` = absent).
+type ConstField =
+    (&'static str, fn(&AircraftConstants) -> Option<f64>, fn(&mut AircraftConstants, Option<f64>));
+
+/// The aircraft constants by field name; `mass_kg` and `S_m2` are required, the two thrust
+/// geometry values default to 0.
+pub const CONSTANTS: &[ConstField] = &[
+    ("mass_kg", |c| Some(c.mass_kg), |c, v| c.mass_kg = v.unwrap_or(f64::NAN)),
+    ("S_m2", |c| Some(c.S_m2), |c, v| c.S_m2 = v.unwrap_or(f64::NAN)),
+    ("cbar_m", |c| c.cbar_m, |c, v| c.cbar_m = v),
+    ("b_m", |c| c.b_m, |c, v| c.b_m = v),
+    ("Ixx_kgm2", |c| c.Ixx_kgm2, |c, v| c.Ixx_kgm2 = v),
+    ("Iyy_kgm2", |c| c.Iyy_kgm2, |c, v| c.Iyy_kgm2 = v),
+    ("Izz_kgm2", |c| c.Izz_kgm2, |c, v| c.Izz_kgm2 = v),
+    ("Ixz_kgm2", |c| c.Ixz_kgm2, |c, v| c.Ixz_kgm2 = v),
+    ("thrust_arm_m", |c| Some(c.thrust_arm_m), |c, v| c.thrust_arm_m = v.unwrap_or(0.0)),
+    (
+        "thrust_incidence_rad",
+        |c| Some(c.thrust_incidence_rad),
+        |c, v| c.thrust_incidence_rad = v.unwrap_or(0.0),
+    ),
+    ("v0_mps", |c| c.v0_mps, |c, v| c.v0_mps = v),
+];
+
+/// Every key a sample dict may hold: required channels, optional channels, constants.
+pub fn all_keys() -> Vec<&'static str> {
+    REQUIRED
+        .iter()
+        .copied()
+        .chain(OPTIONAL.iter().map(|f| f.0))
+        .chain(CONSTANTS.iter().map(|f| f.0))
+        .collect()
+}
+
+/// `NaN` → absent (numpy's "no value"); anything else as is.
+fn present(v: f64) -> Option<f64> {
+    (!v.is_nan()).then_some(v)
+}
+
+/// A source of named values for one sample: `get(key)` is `None` when the key is absent.
+pub trait Source {
+    /// The value of `key`, `NaN` or missing = absent.
+    fn get(&self, key: &str) -> PyResult<Option<f64>>;
+}
+
+/// Builds one sample from `src`, taking the constants it lacks from `constants`.
+///
+/// # Errors
+/// A missing required channel or constant (`mass_kg`, `S_m2`), named.
+pub fn sample_from(
+    src: &impl Source,
+    constants: &AircraftConstants,
+    what: &dyn Fn() -> String,
+) -> PyResult<AirDataSample> {
+    let req = |k: &str| -> PyResult<f64> {
+        src.get(k)?.ok_or_else(|| err(format!("{}: required channel `{k}` is missing", what())))
+    };
+    let mut s = AirDataSample {
+        t_s: req("t_s")?,
+        vt_mps: req("vt_mps")?,
+        alpha_rad: req("alpha_rad")?,
+        qbar_pa: req("qbar_pa")?,
+        constants: *constants,
+        ..AirDataSample::default()
+    };
+    for (k, _, set) in OPTIONAL {
+        set(&mut s, src.get(k)?);
+    }
+    // The sample's own constants win over the estimator's (`constants`, already copied).
+    for (k, _, set) in CONSTANTS {
+        if let Some(v) = src.get(k)? {
+            set(&mut s.constants, Some(v));
+        }
+    }
+    for k in ["mass_kg", "S_m2"] {
+        let v = CONSTANTS.iter().find(|f| f.0 == k).and_then(|f| (f.1)(&s.constants));
+        if !v.is_some_and(f64::is_finite) {
+            return Err(err(format!(
+                "{}: constant `{k}` is missing (give it in the sample or in constants=)",
+                what()
+            )));
+        }
+    }
+    Ok(s)
+}
+
+/// A Python dict of floats as a [`Source`].
+pub struct DictSource<'a, 'py>(pub &'a Bound<'py, PyDict>);
+
+impl Source for DictSource<'_, '_> {
+    fn get(&self, key: &str) -> PyResult<Option<f64>> {
+        match self.0.get_item(key)? {
+            None => Ok(None),
+            Some(v) if v.is_none() => Ok(None),
+            Some(v) => Ok(present(v.extract::<f64>().map_err(|_| {
+                err(format!(
+                    "sample key `{key}`: expected a number, got {}",
+                    v.repr().map_or_else(|_| "?".into(), |r| r.to_string())
+                ))
+            })?)),
+        }
+    }
+}
+
+/// Constants from a Python dict (`None` → all absent; mass and area then come per sample).
+///
+/// # Errors
+/// An unknown key (listing the known ones) or a non-number.
+pub fn constants_from(d: Option<&Bound<'_, PyDict>>) -> PyResult<AircraftConstants> {
+    let mut c = AircraftConstants { mass_kg: f64::NAN, S_m2: f64::NAN, ..Default::default() };
+    let Some(d) = d else { return Ok(c) };
+    for (k, v) in d.iter() {
+        let k: String = k.extract()?;
+        let Some(f) = CONSTANTS.iter().find(|f| f.0 == k) else {
+            let known: Vec<&str> = CONSTANTS.iter().map(|f| f.0).collect();
+            return Err(err(format!("constants: unknown key `{k}` (known: {})", known.join(", "))));
+        };
+        let v: Option<f64> = if v.is_none() { None } else { present(v.extract()?) };
+        (f.2)(&mut c, v);
+    }
+    Ok(c)
+}
+
+/// A JSON document as Python objects (numbers stay `f64`/`int` exactly; no text round trip).
+pub fn json_to_py<'py>(py: Python<'py>, v: &serde_json::Value) -> PyResult<Bound<'py, PyAny>> {
+    use serde_json::Value as V;
+    Ok(match v {
+        V::Null => py.None().into_bound(py),
+        V::Bool(b) => b.into_pyobject(py)?.to_owned().into_any(),
+        V::Number(n) => match (n.as_u64(), n.as_i64()) {
+            (Some(u), _) => u.into_pyobject(py)?.into_any(),
+            (None, Some(i)) => i.into_pyobject(py)?.into_any(),
+            _ => n.as_f64().unwrap_or(f64::NAN).into_pyobject(py)?.into_any(),
+        },
+        V::String(s) => s.into_pyobject(py)?.into_any(),
+        V::Array(a) => {
+            let l = PyList::empty(py);
+            for x in a {
+                l.append(json_to_py(py, x)?)?;
+            }
+            l.into_any()
+        }
+        V::Object(o) => {
+            let d = PyDict::new(py);
+            for (k, x) in o {
+                d.set_item(k, json_to_py(py, x)?)?;
+            }
+            d.into_any()
+        }
+    })
+}
+
+/// Python objects (dicts, lists, str, int, float, bool, None) as a JSON document.
+///
+/// # Errors
+/// Any other type.
+pub fn py_to_json(o: &Bound<'_, PyAny>) -> PyResult<serde_json::Value> {
+    use serde_json::Value as V;
+    if o.is_none() {
+        return Ok(V::Null);
+    }
+    if let Ok(b) = o.cast::<pyo3::types::PyBool>() {
+        return Ok(V::Bool(b.is_true()));
+    }
+    if let Ok(i) = o.cast::<pyo3::types::PyInt>() {
+        if let Ok(u) = i.extract::<u64>() {
+            return Ok(V::from(u));
+        }
+        return Ok(V::from(i.extract::<i64>()?));
+    }
+    if let Ok(f) = o.cast::<pyo3::types::PyFloat>() {
+        return Ok(serde_json::Number::from_f64(f.value()).map_or(V::Null, V::Number));
+    }
+    if let Ok(s) = o.cast::<pyo3::types::PyString>() {
+        return Ok(V::String(s.to_str()?.to_owned()));
+    }
+    if let Ok(l) = o.cast::<PyList>() {
+        return l.iter().map(|x| py_to_json(&x)).collect::<PyResult<Vec<_>>>().map(V::Array);
+    }
+    if let Ok(d) = o.cast::<PyDict>() {
+        let mut m = serde_json::Map::new();
+        for (k, v) in d.iter() {
+            m.insert(k.extract::<String>()?, py_to_json(&v)?);
+        }
+        return Ok(V::Object(m));
+    }
+    Err(pyo3::exceptions::PyTypeError::new_err(format!(
+        "cannot convert {} to JSON",
+        o.get_type().name()?
+    )))
+}

@@ -1,0 +1,261 @@
+//! Monte Carlo campaigns (`crates/aeroident/src/montecarlo.rs`): the whole campaign on rayon
+//! (`backend="local"`), or its two halves for a distributed backend (Ray, in the Python
+//! package): the seeded runs of one chunk (`montecarlo_runs`), and the reduction of every run's
+//! result to the statistics of `aeroident montecarlo --json` (`montecarlo_reduce`). A run
+//! depends only on (scenario, seed, index) (the module's seed rule), so the chunks can run
+//! anywhere and the statistics equal the local campaign's.
+
+use aeroident::aircraft::Scenario;
+use aeroident::aircraft::scenario::EstimatorSpec;
+use aeroident::montecarlo::{
+    Campaign, CrbTable, EstimatorRun, FailedRun, ParamRun, RunResult, SEED_RULE, campaign,
+    crb_sigmas, json_summary, run_result, seeded_scenario, statistics,
+};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use rayon::prelude::*;
+use serde_json::Value;
+
+use crate::convert::{json_to_py, py_to_json};
+use crate::{err, to_py};
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(scenario_text, m)?)?;
+    m.add_function(wrap_pyfunction!(montecarlo_local, m)?)?;
+    m.add_function(wrap_pyfunction!(montecarlo_runs, m)?)?;
+    m.add_function(wrap_pyfunction!(montecarlo_reduce, m)?)?;
+    Ok(())
+}
+
+const DEFAULT_ORIGIN: &str = "<embedded scenarios/default.toml>";
+
+/// `(toml text, origin)` of a scenario path, or of the built-in default scenario for `None`
+/// (so a remote worker needs no file).
+#[pyfunction]
+#[pyo3(signature = (scenario=None))]
+fn scenario_text(scenario: Option<&str>) -> PyResult<(String, String)> {
+    match scenario {
+        None => Ok((aeroident::cli::run::DEFAULT_SCENARIO.to_owned(), DEFAULT_ORIGIN.to_owned())),
+        Some(p) => {
+            // Parsed here too, so a bad file fails before any task is sent, with the CLI's message.
+            Scenario::from_path(std::path::Path::new(p)).map_err(|e| to_py(e.into()))?;
+            let text = std::fs::read_to_string(p)
+                .map_err(|e| err(format!("reading scenario {p}: {e}")))?;
+            Ok((text, p.to_owned()))
+        }
+    }
+}
+
+fn parse(text: &str, origin: &str) -> PyResult<Scenario> {
+    Scenario::from_toml(text, origin).map_err(|e| to_py(e.into()))
+}
+
+fn runs_to_py<'py>(py: Python<'py>, runs: &[RunResult]) -> PyResult<Bound<'py, PyList>> {
+    let l = PyList::empty(py);
+    for r in runs {
+        let v = serde_json::to_value(r).map_err(|e| err(format!("internal: {e}")))?;
+        l.append(json_to_py(py, &v)?)?;
+    }
+    Ok(l)
+}
+
+/// The whole campaign on this machine's rayon pool (see `aeroident.montecarlo`).
+#[pyfunction]
+#[pyo3(signature = (scenario_toml, origin, runs, seed=1, per_run=false))]
+fn montecarlo_local<'py>(
+    py: Python<'py>,
+    scenario_toml: &str,
+    origin: &str,
+    runs: u64,
+    seed: u64,
+    per_run: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let sc = parse(scenario_toml, origin)?;
+    let c = py.detach(move || campaign(&sc, runs, seed)).map_err(err)?;
+    summary_dict(py, &c, per_run)
+}
+
+fn summary_dict<'py>(py: Python<'py>, c: &Campaign, per_run: bool) -> PyResult<Bound<'py, PyDict>> {
+    let d = json_to_py(py, &json_summary(c))?.cast_into::<PyDict>()?;
+    if per_run {
+        d.set_item("per_run", runs_to_py(py, &c.results)?)?;
+        d.set_item("wall_s", c.wall_s)?;
+    }
+    Ok(d)
+}
+
+/// Runs `start..stop` of the campaign (seed rule of `aeroident::montecarlo`) on this process's
+/// rayon pool (or on `threads` threads of its own when given: a Ray task uses the CPUs it
+/// reserved, not the whole node); per-run results as dicts (the `runs.json` entries of the
+/// CLI).
+#[pyfunction]
+#[pyo3(signature = (scenario_toml, origin, seed, start, stop, threads=None))]
+fn montecarlo_runs<'py>(
+    py: Python<'py>,
+    scenario_toml: &str,
+    origin: &str,
+    seed: u64,
+    start: u64,
+    stop: u64,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyList>> {
+    let sc = parse(scenario_toml, origin)?;
+    let pool = match threads {
+        Some(n) => Some(
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n.max(1))
+                .build()
+                .map_err(|e| err(format!("montecarlo: thread pool: {e}")))?,
+        ),
+        None => None,
+    };
+    let results: Vec<RunResult> = py.detach(move || {
+        let go = || chunk(&sc, seed, start, stop);
+        match &pool {
+            Some(p) => p.install(go),
+            None => go(),
+        }
+    });
+    runs_to_py(py, &results)
+}
+
+/// Runs `start..stop` exactly as `aeroident::montecarlo::run_all` runs each index.
+fn chunk(sc: &Scenario, seed: u64, start: u64, stop: u64) -> Vec<RunResult> {
+    (start..stop)
+        .into_par_iter()
+        .map(|i| {
+            let s = seeded_scenario(sc, seed, i);
+            match aeroident::aircraft::run(&s) {
+                Ok(out) => run_result(i, s.sensors.seed, &out),
+                Err(e) => {
+                    RunResult { index: i, sensor_seed: s.sensors.seed, outcome: Err(e.to_string()) }
+                }
+            }
+        })
+        .collect()
+}
+
+/// The statistics of `aeroident montecarlo --json` from every run's result (any order, each
+/// index `0..runs` exactly once).
+#[pyfunction]
+#[pyo3(signature = (scenario_toml, origin, runs, seed, per_run, wall_s=0.0, threads=0, keep_per_run=false))]
+#[allow(clippy::too_many_arguments)]
+fn montecarlo_reduce<'py>(
+    py: Python<'py>,
+    scenario_toml: &str,
+    origin: &str,
+    runs: u64,
+    seed: u64,
+    per_run: &Bound<'py, PyList>,
+    wall_s: f64,
+    threads: usize,
+    keep_per_run: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    if runs == 0 {
+        return Err(err("runs must be at least 1"));
+    }
+    let sc = parse(scenario_toml, origin)?;
+    let mut results: Vec<RunResult> =
+        per_run.iter().map(|o| run_from_json(&py_to_json(&o)?)).collect::<PyResult<_>>()?;
+    results.sort_by_key(|r| r.index);
+    let indices: Vec<u64> = results.iter().map(|r| r.index).collect();
+    if indices != (0..runs).collect::<Vec<u64>>() {
+        return Err(err(format!(
+            "montecarlo reduce: expected one result for each run 0..{runs}, got {} results",
+            results.len()
+        )));
+    }
+    let c = py.detach(move || {
+        let crb =
+            crb_sigmas(&sc).unwrap_or_else(|e| CrbTable { notes: vec![e], ..Default::default() });
+        let names: Vec<String> = sc.estimator.iter().map(EstimatorSpec::label).collect();
+        let estimators = statistics(&results, &names, &crb);
+        let failed_runs = results
+            .iter()
+            .filter_map(|r| {
+                r.outcome.as_ref().err().map(|e| FailedRun { run: r.index, reason: e.clone() })
+            })
+            .collect();
+        Campaign {
+            scenario: sc.name.clone(),
+            runs,
+            seed,
+            seed_rule: SEED_RULE,
+            failed_runs,
+            estimators,
+            crb_notes: crb.notes,
+            wall_s,
+            threads,
+            results,
+        }
+    });
+    summary_dict(py, &c, keep_per_run)
+}
+
+fn field<'a>(v: &'a Value, k: &str) -> PyResult<&'a Value> {
+    v.get(k).ok_or_else(|| err(format!("per-run result: missing `{k}`")))
+}
+
+fn opt_f64(v: &Value, k: &str) -> PyResult<Option<f64>> {
+    match field(v, k)? {
+        Value::Null => Ok(None),
+        x => x
+            .as_f64()
+            .map(Some)
+            .ok_or_else(|| err(format!("per-run result: `{k}` is not a number"))),
+    }
+}
+
+fn string(v: &Value, k: &str) -> PyResult<String> {
+    field(v, k)?
+        .as_str()
+        .map(str::to_owned)
+        .ok_or_else(|| err(format!("per-run result: `{k}` is not a string")))
+}
+
+fn u64_of(v: &Value, k: &str) -> PyResult<u64> {
+    field(v, k)?.as_u64().ok_or_else(|| err(format!("per-run result: `{k}` is not an integer")))
+}
+
+/// The inverse of `serde_json::to_value(&RunResult)` (floats are carried as Python floats, so
+/// exactly).
+fn run_from_json(v: &Value) -> PyResult<RunResult> {
+    let outcome = field(v, "outcome")?;
+    let outcome = if let Some(e) = outcome.get("Err") {
+        Err(e.as_str().unwrap_or_default().to_owned())
+    } else {
+        let ests = outcome
+            .get("Ok")
+            .and_then(Value::as_array)
+            .ok_or_else(|| err("per-run result: `outcome` is neither Ok nor Err"))?;
+        Ok(ests
+            .iter()
+            .map(|e| {
+                let params = field(e, "params")?
+                    .as_array()
+                    .ok_or_else(|| err("per-run result: `params` is not a list"))?
+                    .iter()
+                    .map(|p| {
+                        Ok(ParamRun {
+                            name: string(p, "name")?,
+                            primary: field(p, "primary")?.as_bool().unwrap_or(false),
+                            truth: opt_f64(p, "truth")?,
+                            truth_before: opt_f64(p, "truth_before")?,
+                            truth_after: opt_f64(p, "truth_after")?,
+                            r#final: opt_f64(p, "final")?,
+                            sigma: opt_f64(p, "sigma")?,
+                            time_to_10pct_s: opt_f64(p, "time_to_10pct_s")?,
+                            reconvergence_10pct_s: opt_f64(p, "reconvergence_10pct_s")?,
+                        })
+                    })
+                    .collect::<PyResult<Vec<_>>>()?;
+                Ok(EstimatorRun {
+                    name: string(e, "name")?,
+                    failure: field(e, "failure")?.as_str().map(str::to_owned),
+                    params,
+                })
+            })
+            .collect::<PyResult<Vec<_>>>()?)
+    };
+    Ok(RunResult { index: u64_of(v, "index")?, sensor_seed: u64_of(v, "sensor_seed")?, outcome })
+}

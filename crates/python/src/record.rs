@@ -1,0 +1,302 @@
+//! `read` (a record as numpy arrays) and `replay` (a record or arrays through an estimator, all
+//! samples in Rust, the estimates as a time × parameter matrix).
+
+use std::path::Path;
+
+use aeroident::estimators::{EstimatorKind, EstimatorOptions, build};
+use aeroident::replay::arrays::{EstimateArrays, replay_arrays, replay_samples};
+use aeroident::replay::{DerivativeSource, Pacing, ReplayOptions, unsupported};
+use aeroident_estimators::{AirDataSample, ModelStructure};
+use aeroident_io::{FlightDataReader, Mapping, ModelSpec, RecordEvent};
+use anyhow::Context as _;
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyReadonlyArray1};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::convert::{self, CONSTANTS, OPTIONAL, REQUIRED, Source};
+use crate::{err, to_py};
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(read, m)?)?;
+    m.add_function(wrap_pyfunction!(replay_file, m)?)?;
+    m.add_function(wrap_pyfunction!(replay_arrays_py, m)?)?;
+    m.add_function(wrap_pyfunction!(sample_keys, m)?)?;
+    Ok(())
+}
+
+/// The estimator by its CLI name (`rls`, `ftr`, `ekf`, `smpe`, `smpe-corrected`, `gradient`,
+/// `oe`).
+pub fn estimator_kind(name: &str) -> PyResult<EstimatorKind> {
+    use clap::ValueEnum as _;
+    EstimatorKind::from_str(name, true).map_err(|_| {
+        let names: Vec<&str> = EstimatorKind::value_variants().iter().map(|k| k.name()).collect();
+        err(format!("unknown estimator `{name}` (one of: {})", names.join(", ")))
+    })
+}
+
+/// A model argument as the CLI's `--model`: a preset name or a model file path.
+pub fn model_spec(model: &str) -> PyResult<ModelSpec> {
+    ModelSpec::from_arg(model).map_err(|e| to_py(e.into()))
+}
+
+/// The keys a sample dict may hold (channels and constants).
+#[pyfunction]
+fn sample_keys() -> Vec<&'static str> {
+    convert::all_keys()
+}
+
+/// One column per sample field (`NaN` = absent), the constants per sample, the row numbers.
+struct Columns {
+    rows: Vec<u64>,
+    cols: Vec<(&'static str, Vec<f64>)>,
+    rejected_rows: Vec<u64>,
+    rejected_reasons: Vec<String>,
+    gap_rows: Vec<u64>,
+}
+
+fn read_columns(path: &str, mapping: &str) -> anyhow::Result<Columns> {
+    let mapping = Mapping::from_path(Path::new(mapping))?;
+    let file = std::fs::File::open(path).with_context(|| format!("opening {path}"))?;
+    let reader = FlightDataReader::new(std::io::BufReader::new(file), path, &mapping)?;
+    let keys = convert::all_keys();
+    let mut c = Columns {
+        rows: Vec::new(),
+        cols: keys.iter().map(|k| (*k, Vec::new())).collect(),
+        rejected_rows: Vec::new(),
+        rejected_reasons: Vec::new(),
+        gap_rows: Vec::new(),
+    };
+    for ev in reader {
+        match ev? {
+            RecordEvent::Sample { row, sample: s } => {
+                c.rows.push(row);
+                let mut k = 0;
+                let mut push = |v: Option<f64>| {
+                    c.cols[k].1.push(v.unwrap_or(f64::NAN));
+                    k += 1;
+                };
+                for v in [s.t_s, s.vt_mps, s.alpha_rad, s.qbar_pa] {
+                    push(Some(v));
+                }
+                for f in OPTIONAL {
+                    push((f.1)(&s));
+                }
+                for f in CONSTANTS {
+                    push((f.1)(&s.constants));
+                }
+            }
+            RecordEvent::Rejected { row, problem } => {
+                c.rejected_rows.push(row);
+                c.rejected_reasons.push(problem.to_string());
+            }
+            RecordEvent::Gap { row, .. } => c.gap_rows.push(row),
+        }
+    }
+    Ok(c)
+}
+
+/// See `aeroident.read` (python/aeroident/__init__.py) for the documentation.
+#[pyfunction]
+#[pyo3(signature = (path, mapping))]
+fn read<'py>(py: Python<'py>, path: &str, mapping: &str) -> PyResult<Bound<'py, PyDict>> {
+    let (p, m) = (path.to_owned(), mapping.to_owned());
+    let c = py.detach(move || read_columns(&p, &m)).map_err(to_py)?;
+    let d = PyDict::new(py);
+    for (k, v) in c.cols {
+        d.set_item(k, v.into_pyarray(py))?;
+    }
+    d.set_item("row", c.rows.into_pyarray(py))?;
+    d.set_item("rejected_rows", c.rejected_rows.into_pyarray(py))?;
+    d.set_item("rejected_reasons", c.rejected_reasons)?;
+    d.set_item("gap_rows", c.gap_rows.into_pyarray(py))?;
+    Ok(d)
+}
+
+/// The result dict of a replay: names, t_s, estimates and sigma (time × parameter).
+fn arrays_dict<'py>(py: Python<'py>, a: EstimateArrays) -> PyResult<Bound<'py, PyDict>> {
+    let n = a.names.len();
+    let k = a.t_s.len();
+    let d = PyDict::new(py);
+    let shape = |v: Vec<f64>| {
+        Array2::from_shape_vec((k, n), v).map_err(|e| err(format!("internal: array shape: {e}")))
+    };
+    d.set_item("names", a.names.iter().map(|s| s.to_string()).collect::<Vec<_>>())?;
+    d.set_item("t_s", a.t_s.into_pyarray(py))?;
+    d.set_item("estimates", shape(a.values)?.into_pyarray(py))?;
+    d.set_item("sigma", shape(a.sigmas)?.into_pyarray(py))?;
+    Ok(d)
+}
+
+fn derivative_source(s: &str) -> PyResult<DerivativeSource> {
+    match s {
+        "auto" => Ok(DerivativeSource::Auto),
+        "differentiate" => Ok(DerivativeSource::Differentiate),
+        _ => Err(err(format!("derivatives: `{s}` is not `auto` or `differentiate`"))),
+    }
+}
+
+/// Replays a record file exactly as `aeroident replay DATA --map MAPPING` (module doc of the
+/// Python package).
+#[pyfunction]
+#[pyo3(signature = (path, mapping, estimator="rls", model=None, forgetting=1.0, derivatives="auto", diff_window=5))]
+#[allow(clippy::too_many_arguments)]
+fn replay_file<'py>(
+    py: Python<'py>,
+    path: &str,
+    mapping: &str,
+    estimator: &str,
+    model: Option<&str>,
+    forgetting: f64,
+    derivatives: &str,
+    diff_window: usize,
+) -> PyResult<Bound<'py, PyDict>> {
+    let kind = estimator_kind(estimator)?;
+    let derivatives = derivative_source(derivatives)?;
+    let (path, mapping, model) = (path.to_owned(), mapping.to_owned(), model.map(str::to_owned));
+    let run = move || -> anyhow::Result<_> {
+        let mapping = Mapping::from_path(Path::new(&mapping))?;
+        let model = model.as_deref().map(ModelSpec::from_arg).transpose()?;
+        if kind == EstimatorKind::Oe {
+            anyhow::bail!(
+                "estimator `oe` is a batch method with no per-sample estimates: use `aeroident replay --estimator oe`"
+            );
+        }
+        let opts = ReplayOptions {
+            estimator: kind,
+            model,
+            forgetting,
+            derivatives,
+            diff_window,
+            pacing: Pacing::Unpaced,
+            on_model: None,
+        };
+        let file = std::fs::File::open(&path).with_context(|| format!("opening {path}"))?;
+        let reader = FlightDataReader::new(std::io::BufReader::new(file), &path, &mapping)?;
+        let (outcome, arrays) = replay_arrays(reader, &mapping, &opts)?;
+        if let Some(e) = aeroident::cli::replay::diverged_error(&outcome, kind.name()) {
+            anyhow::bail!(e);
+        }
+        let summary = serde_json::to_value(&outcome.summary)?;
+        Ok((outcome.model.name, summary, arrays))
+    };
+    let (model, summary, arrays) = py.detach(run).map_err(to_py)?;
+    let d = arrays_dict(py, arrays)?;
+    d.set_item("model", model)?;
+    d.set_item("summary", convert::json_to_py(py, &summary)?)?;
+    Ok(d)
+}
+
+/// Column arrays (read-only float64 views) as a per-row [`Source`].
+struct RowSource<'a> {
+    cols: &'a [(String, &'a [f64])],
+    k: usize,
+}
+
+impl Source for RowSource<'_> {
+    fn get(&self, key: &str) -> PyResult<Option<f64>> {
+        Ok(self.cols.iter().find(|c| c.0 == key).map(|c| c.1[self.k]).filter(|v| !v.is_nan()))
+    }
+}
+
+/// The richest preset (`six-axis`, `longitudinal`, `lateral`) the first sample supports, as the
+/// CLI chooses one (no derivative is differentiated for arrays).
+fn default_model(first: &AirDataSample, uses_measured: bool) -> PyResult<ModelSpec> {
+    let mut why = Vec::new();
+    for name in ModelStructure::PRESETS {
+        let Some(spec) = ModelSpec::preset(name) else { continue };
+        let missing = unsupported(&spec.structure, first, uses_measured, &[]);
+        if missing.is_empty() {
+            return Ok(spec);
+        }
+        why.push(format!("`{name}`: {}", missing.join("; ")));
+    }
+    Err(err(format!(
+        "no preset model is supported by the arrays' channels ({}); give the missing channels or model=",
+        why.join(" | ")
+    )))
+}
+
+/// Replays samples given as arrays (one float64 array per key of `sample_keys()`).
+#[pyfunction]
+#[pyo3(name = "replay_arrays", signature = (arrays, estimator="rls", model=None, constants=None, forgetting=1.0, sample_interval_s=None))]
+fn replay_arrays_py<'py>(
+    py: Python<'py>,
+    arrays: &Bound<'py, PyDict>,
+    estimator: &str,
+    model: Option<&str>,
+    constants: Option<&Bound<'py, PyDict>>,
+    forgetting: f64,
+    sample_interval_s: Option<f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let kind = estimator_kind(estimator)?;
+    let consts = convert::constants_from(constants)?;
+    let keys = convert::all_keys();
+    let mut views: Vec<(String, PyReadonlyArray1<'py, f64>)> = Vec::new();
+    for (k, v) in arrays.iter() {
+        let k: String = k.extract()?;
+        if !keys.contains(&k.as_str()) {
+            continue; // row numbers, rejections and the like
+        }
+        let a: PyReadonlyArray1<'py, f64> = v
+            .extract()
+            .map_err(|_| err(format!("arrays[`{k}`]: expected a 1-D float64 numpy array")))?;
+        views.push((k, a));
+    }
+    for r in REQUIRED {
+        if !views.iter().any(|v| v.0 == r) {
+            return Err(err(format!("arrays: required channel `{r}` is missing")));
+        }
+    }
+    let slices: Vec<(String, &[f64])> = views
+        .iter()
+        .map(|(k, a)| a.as_slice().map(|s| (k.clone(), s)))
+        .collect::<Result<_, _>>()
+        .map_err(|e| err(format!("arrays: not contiguous: {e}")))?;
+    let n = slices[0].1.len();
+    if let Some(bad) = slices.iter().find(|s| s.1.len() != n) {
+        return Err(err(format!(
+            "arrays: `{}` has {} values, `{}` has {n}",
+            bad.0,
+            bad.1.len(),
+            slices[0].0
+        )));
+    }
+    let mut samples = Vec::with_capacity(n);
+    for k in 0..n {
+        let src = RowSource { cols: &slices, k };
+        samples.push(convert::sample_from(&src, &consts, &|| format!("arrays row {k}"))?);
+    }
+    let Some(first) = samples.first() else {
+        return Err(err("arrays: no samples"));
+    };
+    let spec = match model {
+        Some(m) => model_spec(m)?,
+        None => default_model(first, kind.uses_measured_coefficients())?,
+    };
+    let missing = unsupported(&spec.structure, first, kind.uses_measured_coefficients(), &[]);
+    if !missing.is_empty() {
+        return Err(err(format!(
+            "model `{}` is not supported by the arrays: {}",
+            spec.name,
+            missing.join("; ")
+        )));
+    }
+    let opts = EstimatorOptions { forgetting, sample_interval_s, ..EstimatorOptions::default() };
+    drop(slices);
+    let (result, model_name) = py.detach(move || {
+        // Built on this thread: an estimator is not `Send`.
+        let r = build(kind, spec.structure, spec.priors, &opts)
+            .map(|est| replay_samples(est, samples))
+            .map_err(|e| e.to_string());
+        (r, spec.name)
+    });
+    let (arrays, refused, diverged) = result.map_err(err)?;
+    if let Some(msg) = diverged {
+        return Err(err(format!("{msg}; its estimates are not a result")));
+    }
+    let d = arrays_dict(py, arrays)?;
+    d.set_item("model", model_name)?;
+    d.set_item("samples_refused", refused)?;
+    Ok(d)
+}

@@ -1,0 +1,150 @@
+"""The vectorised replay and the estimator objects against the CLI, against each other, and
+against a record generated from known derivatives."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import aeroident
+from conftest import ROOT, cli, cli_error, read_estimates_csv, shared
+
+RECORDS = [
+    ("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv", "mappings/hfb320.toml"),
+    ("jsbsim_f16_sample/f16_doublet_20s_120Hz.csv", "mappings/jsbsim_clean.toml"),
+    ("jsbsim_samples/f16_ail_rud_doublets_20s_60Hz.csv", "mappings/jsbsim_clean.toml"),
+]
+
+
+def assert_equal_nan(a: np.ndarray, b: np.ndarray, tol: float = 1e-12) -> None:
+    assert a.shape == b.shape
+    assert np.array_equal(np.isnan(a), np.isnan(b)), "identified at different samples"
+    ok = ~np.isnan(a)
+    scale = np.maximum(1.0, np.abs(b[ok]))
+    assert np.all(np.abs(a[ok] - b[ok]) <= tol * scale), np.max(np.abs(a[ok] - b[ok]) / scale)
+
+
+@pytest.mark.parametrize("record,mapping", RECORDS)
+@pytest.mark.parametrize("estimator", ["rls", "ftr", "ekf"])
+def test_replay_equals_cli(tmp_path, record, mapping, estimator):
+    data = shared(record)
+    out = tmp_path / "out"
+    r = cli("replay", data, "--map", ROOT / mapping, "--estimator", estimator, "--out", out)
+    assert r.returncode == 0, r.stderr
+    names, t, est, sig = read_estimates_csv(out / "estimates.csv")
+    py = aeroident.replay(data, mapping=ROOT / mapping, estimator=estimator)
+    assert py["names"] == names
+    assert py["estimates"].shape == (len(t), len(names))
+    np.testing.assert_array_equal(py["t_s"], t)
+    assert_equal_nan(py["estimates"], est)
+    assert_equal_nan(py["sigma"], sig)
+    # The summary is the CLI's summary.json, except the measured throughput.
+    expected = json.loads((out / "summary.json").read_text())
+    got = dict(py["summary"])
+    for d in (expected, got):
+        d.pop("throughput_samples_per_s")
+    assert got == expected
+
+
+def test_estimator_objects_equal_vectorised_replay():
+    data = shared(RECORDS[0][0])
+    arrays = aeroident.read(data, ROOT / RECORDS[0][1])
+    n = len(arrays["t_s"])
+    assert n > 100 and arrays["row"].shape == (n,)
+    vec = aeroident.replay(arrays, estimator="rls", model="longitudinal")
+    est = aeroident.Rls(model="longitudinal")
+    keys = aeroident.sample_keys()
+    values = []
+    for k in range(n):
+        est.update({key: float(arrays[key][k]) for key in keys})
+        values.append([np.nan if v is None else v for v in est.estimates()["values"]])
+    assert est.samples == n and vec["estimates"].shape == (n, 12)
+    np.testing.assert_array_equal(np.array(values), vec["estimates"])
+    e = est.estimates()
+    assert e["names"] == vec["names"] and e["status"] == "running"
+    np.testing.assert_array_equal([np.nan if s is None else s for s in e["sigma"]], vec["sigma"][-1])
+
+
+def synthetic(n: int = 400) -> tuple[dict[str, np.ndarray], dict[str, float]]:
+    """A pitch/lift/drag record generated from known derivatives, noise-free:
+    Cm = 0.02 − 0.6 α − 12 q c/2V − 1.1 δe, CL = 0.1 + 5 α, CD = 0.03 + 0.4 α."""
+    t = 0.02 * np.arange(n)
+    alpha = 0.05 + 0.02 * np.sin(1.3 * t)
+    q = 0.03 * np.cos(2.1 * t)
+    de = -0.02 + 0.01 * np.sin(3.7 * t)
+    vt, rho, S, c, m, Iyy = 100.0, 1.0, 30.0, 3.0, 7000.0, 5.0e4
+    qbar = 0.5 * rho * vt**2 * np.ones(n)
+    cm = 0.02 - 0.6 * alpha - 12.0 * q * c / (2 * vt) - 1.1 * de
+    cl, cd = 0.1 + 5.0 * alpha, 0.03 + 0.4 * alpha
+    ax = qbar * S * (-cd * np.cos(alpha) + cl * np.sin(alpha)) / m
+    az = qbar * S * (-cd * np.sin(alpha) - cl * np.cos(alpha)) / m
+    arrays = dict(t_s=t, vt_mps=vt * np.ones(n), alpha_rad=alpha, qbar_pa=qbar, q_rad_s=q,
+                  qdot_rad_s2=cm * qbar * S * c / Iyy, ax_mps2=ax, az_mps2=az, de_rad=de)
+    constants = dict(mass_kg=m, S_m2=S, cbar_m=c, Iyy_kgm2=Iyy)
+    return arrays, constants
+
+
+def test_replay_of_arrays_recovers_known_derivatives():
+    arrays, constants = synthetic()
+    r = aeroident.replay(arrays, estimator="rls", model="longitudinal", constants=constants)
+    last = dict(zip(r["names"], r["estimates"][-1]))
+    for name, truth in [("Cm_alpha", -0.6), ("Cm_q", -12.0), ("Cm_de", -1.1), ("CL_alpha", 5.0), ("CD_alpha", 0.4)]:
+        assert abs(last[name] - truth) < 1e-6 * max(1.0, abs(truth)), (name, last[name])
+    assert r["samples_refused"] == 0
+    # Not identified before enough samples: NaN, never 0.
+    assert np.isnan(r["estimates"][0]).all()
+
+
+def test_refused_sample_raises_and_leaves_the_state():
+    arrays, constants = synthetic(50)
+    est = aeroident.Estimator("rls", model="longitudinal", constants=constants)
+    for k in range(20):
+        est.update({key: v[k] for key, v in arrays.items()})
+    before = est.estimates()
+    bad = {key: v[20] for key, v in arrays.items()}
+    bad["t_s"] = arrays["t_s"][10]  # time going backwards, or a non-finite channel
+    bad["q_rad_s"] = float("inf")
+    with pytest.raises(aeroident.AeroidentError, match="refused sample"):
+        est.update(bad)
+    assert est.estimates() == before and est.samples == 20
+
+
+def test_missing_required_channel_and_constant_are_named():
+    arrays, constants = synthetic(10)
+    est = aeroident.Rls(model="longitudinal", constants=constants)
+    s = {key: v[0] for key, v in arrays.items() if key != "alpha_rad"}
+    with pytest.raises(aeroident.AeroidentError, match="`alpha_rad` is missing"):
+        est.update(s)
+    with pytest.raises(aeroident.AeroidentError, match="`mass_kg` is missing"):
+        aeroident.Rls(model="longitudinal").update({key: v[0] for key, v in arrays.items()})
+    with pytest.raises(aeroident.AeroidentError, match="unknown key `mass`"):
+        aeroident.Rls(constants={"mass": 1.0})
+
+
+@pytest.mark.parametrize(
+    "py_args,cli_args",
+    [
+        (dict(mapping="mappings/does_not_exist.toml"), ["--map", "mappings/does_not_exist.toml"]),
+        (dict(mapping="mappings/hfb320.toml", model="no-such-model"), ["--map", "mappings/hfb320.toml", "--model", "no-such-model"]),
+        (dict(mapping="mappings/jsbsim.toml"), ["--map", "mappings/jsbsim.toml"]),
+    ],
+)
+def test_errors_carry_the_cli_message(tmp_path, py_args, cli_args):
+    data = shared(RECORDS[0][0])
+    py_args = {k: (str(ROOT / v) if k == "mapping" else v) for k, v in py_args.items()}
+    cli_args = [str(ROOT / a) if a.startswith("mappings/") else a for a in cli_args]
+    expected = cli_error("replay", data, *cli_args, "--out", tmp_path / "o")
+    with pytest.raises(aeroident.AeroidentError) as e:
+        aeroident.replay(data, **py_args)
+    assert str(e.value) == expected
+
+
+def test_bad_arguments():
+    with pytest.raises(aeroident.AeroidentError, match="unknown estimator `kalman`"):
+        aeroident.Estimator("kalman")
+    with pytest.raises(aeroident.AeroidentError, match="needs mapping="):
+        aeroident.replay("some.csv")
+    with pytest.raises(aeroident.AeroidentError, match="batch method"):
+        aeroident.Estimator("oe")

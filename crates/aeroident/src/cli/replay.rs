@@ -38,7 +38,9 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, clap::Args)]
 pub struct ReplayArgs {
     /// Recorded flight data: a CSV with one header row, a whitespace `.asc`, a MATLAB `.mat`,
-    /// or `-` for stdin (live mode: CSV, or whitespace text with `--format asc`).
+    /// a PX4 ULog `.ulg`, an ArduPilot DataFlash `.bin`, `-` for stdin (live mode: CSV, or
+    /// whitespace text with `--format asc`), or a live MAVLink feed
+    /// `mavlink:udp:<host>:<port>[?timeout_s=<s>]` (docs/mavlink.md).
     pub data: String,
     /// Channel mapping TOML (see `mappings/*.toml` and `docs/mapping.md`).
     #[arg(long)]
@@ -97,7 +99,13 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         pacing: if args.realtime { Pacing::Realtime } else { Pacing::Unpaced },
         on_model: Some(announce),
     };
-    let live = args.data == "-";
+    let mavlink = crate::live::is_mavlink(&args.data);
+    let live = args.data == "-" || mavlink;
+    if args.estimator == EstimatorKind::Oe && mavlink {
+        anyhow::bail!(
+            "--estimator oe is a batch fit of a whole record, not for a live MAVLink feed"
+        );
+    }
     if args.estimator == EstimatorKind::Oe {
         return execute_batch(&args, &mapping, opts.model);
     }
@@ -112,7 +120,12 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     };
     // Buffered: one write per 64 KiB, not per sample (the replay flushes per line only when
     // paced in real time).
-    let mut stdout_lock = std::io::BufWriter::with_capacity(1 << 16, std::io::stdout().lock());
+    let mut stdout_lock: Box<dyn Write> = if mavlink {
+        // A live feed: each line of estimates out as its message arrives.
+        Box::new(std::io::LineWriter::new(std::io::stdout().lock()))
+    } else {
+        Box::new(std::io::BufWriter::with_capacity(1 << 16, std::io::stdout().lock()))
+    };
     // Progress on stderr when it is a terminal: bytes of the file, and a status line with the
     // samples, the record time and the first estimates (the live view of `--realtime`).
     let bar = match std::fs::metadata(&args.data) {
@@ -130,7 +143,7 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         sinks.push(f);
     }
     if live {
-        sinks.push(&mut stdout_lock);
+        sinks.push(&mut *stdout_lock);
     }
     if crate::progress::enabled() {
         sinks.push(&mut status);
@@ -139,7 +152,13 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         .format
         .or_else(|| LogFormat::from_extension(Path::new(&args.data)))
         .unwrap_or(LogFormat::Csv);
-    let outcome = if !live && format == LogFormat::Csv {
+    let outcome = if mavlink {
+        let (reader, stats) = crate::live::open_mavlink(&args.data, &mapping)?;
+        replay(reader, &mapping, &opts, sinks).map(|mut outcome| {
+            crate::live::finish(&mut outcome.summary, &stats);
+            outcome
+        })
+    } else if !live && format == LogFormat::Csv {
         // The CSV file itself, read through the progress bar (what `open_log` opens for CSV).
         let file =
             std::fs::File::open(&args.data).with_context(|| format!("opening {}", args.data))?;

@@ -10,7 +10,7 @@
 //! ```
 //! Writes `<dir>/estimates.csv`, `<dir>/summary.json`, `<dir>/estimates.{png,svg}` (estimates
 //! with shaded ±2σ), `<dir>/fit.{png,svg}` (model vs measured) and `<dir>/report.html`
-//! ([`crate::report::replay`]), and prints the results table ([`crate::table`]) on stdout. With `-` the record is read from stdin and one CSV line of estimates per sample is
+//! ([`crate::report::replay`]), and prints the results table ([`crate::table`]) on stdout (on stderr in live mode, where stdout carries the estimates). With `-` the record is read from stdin and one CSV line of estimates per sample is
 //! written to stdout (a live feed: buffered, flushed per line with `--realtime`; the history
 //! kept for the figure and the settling times is bounded, see `History`); the summary then goes to stderr unless
 //! `--out` is given. The model used is printed on stderr. A diverged estimator is an error
@@ -207,7 +207,12 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
                 &crate::report::replay::model_references(&outcome),
                 o,
             )?;
-            crate::cli::print_stdout(&crate::table::render(&results))?;
+            if live {
+                // stdout carries the live stream of estimates: the table goes beside the log.
+                eprint!("{}", crate::table::render(&results));
+            } else {
+                crate::cli::print_stdout(&crate::table::render(&results))?;
+            }
             eprintln!(
                 "{}: {} samples read, {} rejected, {:.0} samples/s, status {}; wrote {}",
                 args.data,

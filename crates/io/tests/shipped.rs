@@ -29,6 +29,7 @@ fn shipped_mappings_parse_and_map_what_their_records_are_for() {
         "twin_otter.toml",
         "px4-fixedwing.toml",
         "arduplane.toml",
+        "arduplane-minimal.toml",
     ] {
         assert!(maps.iter().any(|p| p.ends_with(want)), "{want} missing: {maps:?}");
     }
@@ -48,7 +49,8 @@ fn shipped_mappings_parse_and_map_what_their_records_are_for() {
             | "arduplane.toml" => {
                 assert!(has_lateral, "{name}")
             }
-            // Longitudinal records: the lateral preset must not be the default there.
+            // Longitudinal records (and arduplane-minimal.toml, which has no surfaces): the
+            // lateral preset must not be the default there.
             _ => assert!(!has_lateral, "{name}"),
         }
         // JSBSim logs the tensor element ixz = −Jxz: the mappings must flip it.

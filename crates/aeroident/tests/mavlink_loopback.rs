@@ -7,10 +7,11 @@ use aeroident::estimators::EstimatorKind;
 use aeroident::replay::{ReplayOptions, replay};
 use aeroident_estimators::AirDataSample;
 use aeroident_io::mavlink::feed::{Sender, end_of_stream, frame};
-use aeroident_io::mavlink::{MavlinkRows, MavlinkUrl};
+use aeroident_io::mavlink::{LinkStats, MavlinkRows, MavlinkUrl};
 use aeroident_io::{FlightDataReader, Mapping, RecordEvent};
 use std::io::BufRead;
 use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
 
 fn workspace() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -106,15 +107,38 @@ fn as_sent_csv(samples: &[AirDataSample]) -> String {
 
 /// Sends the samples as MAVLink frames to `to`, a garbage datagram first, then the
 /// end-of-stream message.
-fn send(samples: &[AirDataSample], to: std::net::SocketAddr) {
+///
+/// The loopback receive buffer holds only a few hundred datagrams, and on a loaded machine the
+/// receiver thread may not run for tens of milliseconds: an unpaced sender then loses datagrams
+/// in the kernel (which the feed counts as `lost`, but the test wants the whole record). With
+/// `received` (the feed's own statistics, in-process) the sender keeps at most
+/// [`WINDOW`] datagrams in flight — flow control, as a real link's rate limit would give;
+/// without it (a separate process) it paces itself by time.
+fn send(
+    samples: &[AirDataSample],
+    to: std::net::SocketAddr,
+    received: Option<Arc<Mutex<LinkStats>>>,
+) {
+    const WINDOW: u64 = 100;
     let mut tx = Sender::new(to).unwrap();
     tx.send_raw(b"not a MAVLink frame").unwrap();
+    let mut sent = 1u64;
     for s in samples {
         for m in frame(s) {
             tx.send(&m).unwrap();
+            sent += 1;
         }
-        // A little pacing: the loopback receive buffer holds a few hundred datagrams.
-        std::thread::sleep(std::time::Duration::from_micros(200));
+        match &received {
+            Some(stats) => {
+                let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
+                while stats.lock().unwrap().datagrams + WINDOW < sent
+                    && std::time::Instant::now() < deadline
+                {
+                    std::thread::sleep(std::time::Duration::from_micros(100));
+                }
+            }
+            None => std::thread::sleep(std::time::Duration::from_millis(2)),
+        }
     }
     tx.send(&end_of_stream()).unwrap();
 }
@@ -167,7 +191,8 @@ fn loopback_feed_equals_the_file_replay() {
         let stats = rows.stats();
         let sender = {
             let samples = samples.clone();
-            std::thread::spawn(move || send(&samples, to))
+            let received = Arc::clone(&stats);
+            std::thread::spawn(move || send(&samples, to, Some(received)))
         };
         let reader = FlightDataReader::new(rows, &url.text, &map).unwrap();
         let mut live_out = Vec::new();
@@ -220,7 +245,7 @@ fn cli_replays_a_live_feed_and_writes_the_summary() {
         }
     };
     let n = 300;
-    send(&samples[..n], addr);
+    send(&samples[..n], addr, None);
     let stdout = child.stdout.take().unwrap();
     let lines = std::io::BufReader::new(stdout).lines().count();
     let mut rest = String::new();

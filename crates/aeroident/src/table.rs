@@ -69,7 +69,7 @@ pub fn render(r: &Results) -> String {
     }
     let mut s = format!("{}\n{t}\n", r.title);
     if !r.fit.is_empty() {
-        let mut f = table_with(&["coefficient", "samples", "residual RMS", "R²", "Theil's U"], 5);
+        let mut f = table_with(&["measured", "samples", "residual RMS", "R²", "Theil's U"], 5);
         for q in &r.fit {
             f.add_row(vec![
                 q.coefficient.clone(),

@@ -165,10 +165,7 @@ pub fn open_log_with_notes(
             if path == "-" {
                 return Err(FlightDataError::Format {
                     file: path.to_string(),
-                    message: format!(
-                        "a {} log is read from a file, not from stdin",
-                        format.name()
-                    ),
+                    message: format!("a {} log is read from a file, not from stdin", format.name()),
                 });
             }
             let contents = match format {

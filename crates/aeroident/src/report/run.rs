@@ -7,6 +7,7 @@ use crate::aircraft::RunOutput;
 use crate::aircraft::report::Summary;
 use crate::outdir::{OutputDir, OutputError};
 use crate::results::{ParameterRow, Results};
+use std::path::Path;
 
 /// One [`Results`] per estimator of `summary`, in order of appearance; the reference column is
 /// the truth at the end of the run (after a damage step, the new value).
@@ -99,6 +100,53 @@ pub fn write(
         results: results(summary),
         figures,
         warnings,
+        links: Vec::new(),
+    }
+    .write(od)?;
+    Ok(())
+}
+
+/// Writes the top-level `report.html` of `run --all` into `od`: one link per scenario to its
+/// own `<name>/report.html` with its one-line overview (`lines`: (scenario name, overview
+/// cells)), then every scenario's results tables ([`results`]), in the order given.
+///
+/// # Errors
+/// [`OutputError`] naming the file.
+pub fn write_index(
+    scenarios_dir: &Path,
+    lines: &[(String, String)],
+    summaries: &[&Summary],
+    od: &mut OutputDir,
+) -> Result<(), OutputError> {
+    let mut settings = common_settings();
+    settings.extend([
+        ("scenarios".into(), scenarios_dir.display().to_string()),
+        ("runs".into(), lines.len().to_string()),
+        ("thesis comparison".into(), "report.md (thesis vs ours, per table)".into()),
+    ]);
+    let links = lines
+        .iter()
+        .map(|(name, cells)| {
+            (format!("{name}/report.html"), format!("{name} — {cells} within 5 % of the truth"))
+        })
+        .collect();
+    let warnings = summaries
+        .iter()
+        .flat_map(|s| {
+            s.parameters.iter().filter_map(|p| {
+                p.failure
+                    .as_ref()
+                    .map(|f| format!("{}: {} {} failed: {f}", s.scenario, p.estimator, p.name))
+            })
+        })
+        .collect();
+    Report {
+        title: format!("aeroident run --all — {}", scenarios_dir.display()),
+        settings,
+        results: summaries.iter().flat_map(|s| results(s)).collect(),
+        figures: Vec::new(),
+        warnings,
+        links,
     }
     .write(od)?;
     Ok(())

@@ -696,8 +696,8 @@ fn histogram_bins(p: &HistogramPanel) -> (f64, f64, Vec<u32>) {
     (lo, w, counts)
 }
 
-/// Draws a legend of (label, colour, kind: 0 line, 1 dashed, 2 filled box) at the top of
-/// `area`.
+/// Draws a legend of (label, colour, kind: 0 line, 1 dashed, 2 box filled at 70 % as the
+/// histogram bars, 3 box filled solid as the grouped bars) at the top of `area`.
 fn draw_legend<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     entries: &[(String, RGBColor, u8)],
@@ -712,6 +712,9 @@ fn draw_legend<DB: DrawingBackend>(
         match kind {
             2 => area
                 .draw(&Rectangle::new([(x, y - 6), (x + 22, y + 6)], color.mix(0.7).filled()))
+                .map_err(|x| e(&x))?,
+            3 => area
+                .draw(&Rectangle::new([(x, y - 6), (x + 22, y + 6)], color.filled()))
                 .map_err(|x| e(&x))?,
             1 => {
                 for seg in [(x, x + 6), (x + 9, x + 15), (x + 18, x + 22)] {
@@ -750,11 +753,18 @@ fn draw_histograms<DB: DrawingBackend>(
         let hi = lo + w * p.bins as f64;
         let top = f64::from(counts.iter().copied().max().unwrap_or(0).max(1)) * 1.1;
         let (aw, _) = area.dim_in_pixel();
-        let legend_w = 72;
+        let legend_w = 92;
         let (chart_area, legend_area) = area.split_horizontally(aw.saturating_sub(legend_w));
         let (x_span, x_mag) = (hi - lo, lo.abs().max(hi.abs()));
         let x_fmt = move |x: &f64| tick_label(*x, x_span, x_mag);
-        let y_fmt = |y: &f64| format!("{:.0}", y + 0.0);
+        // Counts are whole runs: only integer ticks are labelled.
+        let y_fmt = |y: &f64| {
+            if (y - y.round()).abs() < 1e-9 {
+                format!("{:.0}", y.round() + 0.0)
+            } else {
+                String::new()
+            }
+        };
         let mut chart = ChartBuilder::on(&chart_area)
             .caption(&p.title, (FONT, 15))
             .margin(8)
@@ -767,12 +777,12 @@ fn draw_histograms<DB: DrawingBackend>(
             .x_desc(p.x_label.as_str())
             .y_desc("runs")
             .x_labels(5)
-            .y_labels(5)
+            .y_labels(((top as usize) + 1).min(6))
             .x_label_formatter(&x_fmt)
             .y_label_formatter(&y_fmt)
             .label_style((FONT, 11))
             .axis_desc_style((FONT, 12))
-            .light_line_style(RGBColor(238, 238, 238))
+            .light_line_style(TRANSPARENT)
             .bold_line_style(RGBColor(215, 215, 215))
             .draw()
             .map_err(|x| e(&x))?;
@@ -782,7 +792,7 @@ fn draw_histograms<DB: DrawingBackend>(
                 Rectangle::new([(x0, 0.0), (x0 + w, f64::from(c))], bar_color.mix(0.7).filled())
             }))
             .map_err(|x| e(&x))?;
-        let mut legend = vec![("runs".to_string(), bar_color, 2u8)];
+        let mut legend = vec![("estimates".to_string(), bar_color, 2u8)];
         if let Some(l) = p.line.filter(|l| l.is_finite()) {
             chart
                 .draw_series(DashedLineSeries::new(
@@ -905,11 +915,12 @@ impl GroupedBars {
                 }
             })
             .y_label_formatter(&y_fmt)
+            .y_labels(8)
             .disable_x_mesh()
             .y_desc(self.y_label.as_str())
             .label_style((FONT, 12))
             .axis_desc_style((FONT, 13))
-            .light_line_style(RGBColor(238, 238, 238))
+            .light_line_style(TRANSPARENT)
             .bold_line_style(RGBColor(215, 215, 215))
             .draw()
             .map_err(|x| e(&x))?;
@@ -926,7 +937,7 @@ impl GroupedBars {
                     })
                 }))
                 .map_err(|x| e(&x))?;
-            legend.push((label.clone(), color, 2u8));
+            legend.push((label.clone(), color, 3u8));
         }
         if let Some((r, label)) = &self.reference {
             chart
@@ -1092,6 +1103,83 @@ mod tests {
             assert!(svg.contains(want), "{want}");
         }
         assert!(!svg.contains(">-0<") && !svg.contains(">-0.0<"));
+    }
+
+    /// The `<text>` elements of an SVG from plotters: (x attribute, trimmed content).
+    fn svg_texts(svg: &str) -> Vec<(f64, String)> {
+        svg.split("<text")
+            .skip(1)
+            .filter_map(|t| {
+                let (attrs, rest) = t.split_once('>')?;
+                let content = rest.split("</text>").next()?.trim().to_string();
+                let x = attrs.split("x=\"").nth(1)?.split('"').next()?.parse().ok()?;
+                Some((x, content))
+            })
+            .collect()
+    }
+
+    /// Histograms as SVG: the title, the legend outside the bars (`runs`, `truth` right of the
+    /// plotting area: `estimates`, `truth`), integer count ticks only and no `-0` tick, whatever the values' sign.
+    #[test]
+    fn histogram_svg_has_legend_outside_and_clean_ticks() {
+        let values: Vec<f64> = (0..40).map(|k| -0.02 + 0.001 * f64::from(k % 9)).collect();
+        let p = HistogramPanel {
+            title: "Cm_alpha".into(),
+            x_label: "Cm_alpha".into(),
+            values,
+            bins: 10,
+            line: Some(-0.015),
+            line_label: "truth".into(),
+        };
+        let svg = render_histograms_svg("h.svg", "final estimates", &[p], 1, (400, 260)).unwrap();
+        let texts = svg_texts(&svg);
+        let find = |label: &str| texts.iter().find(|(_, t)| t == label).map(|(x, _)| *x);
+        assert!(find("final estimates").is_some());
+        // The legend starts right of every bar (the chart area ends 92 px before the edge).
+        for label in ["estimates", "truth"] {
+            let x = find(label).unwrap_or_else(|| panic!("no legend entry {label}"));
+            assert!(x > 400.0 - 92.0, "legend entry {label} at x = {x}, inside the chart");
+        }
+        assert!(texts.iter().all(|(_, t)| t != "-0" && t != "-0.0" && t != "-0.000"));
+        // Count ticks are distinct integers (non-integer ticks rounded would repeat).
+        let counts: Vec<&str> = texts
+            .iter()
+            .map(|(_, t)| t.as_str())
+            .filter(|t| !t.is_empty() && t.chars().all(|c| c.is_ascii_digit()))
+            .collect();
+        assert!(counts.len() >= 3, "{counts:?}");
+        let mut dedup = counts.clone();
+        dedup.sort_unstable();
+        dedup.dedup();
+        assert_eq!(counts.len(), dedup.len(), "repeated count tick labels: {counts:?}");
+    }
+
+    /// Grouped bars: every series and the reference line are in the legend, right of the
+    /// bars; a series of the wrong length is an error naming it.
+    #[test]
+    fn grouped_bars_legend_and_length_check() {
+        let mut chart = GroupedBars {
+            title: "coverage".into(),
+            y_label: "fraction of runs".into(),
+            categories: vec!["Cm_q".into(), "Cl_p".into()],
+            series: vec![
+                ("rls".into(), vec![Some(0.9), None]),
+                ("ekf".into(), vec![Some(1.0), Some(0.95)]),
+            ],
+            y_range: (0.0, 1.05),
+            reference: Some((0.95, "0.95 target".into())),
+        };
+        let svg = chart.render_svg("c.svg", (800, 400)).unwrap();
+        let texts = svg_texts(&svg);
+        let find = |label: &str| texts.iter().find(|(_, t)| t == label).map(|(x, _)| *x);
+        for label in ["rls", "ekf", "0.95 target"] {
+            let x = find(label).unwrap_or_else(|| panic!("no legend entry {label}"));
+            assert!(x > 800.0 - 260.0, "legend entry {label} at x = {x}");
+        }
+        assert!(find("Cm_q").is_some() && find("Cl_p").is_some());
+        chart.series[0].1.pop();
+        let err = chart.render_svg("c.svg", (800, 400)).unwrap_err().to_string();
+        assert!(err.contains("rls") && err.contains("c.svg"), "{err}");
     }
 
     #[test]

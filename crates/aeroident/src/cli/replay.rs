@@ -38,7 +38,8 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, clap::Args)]
 pub struct ReplayArgs {
     /// Recorded flight data: a CSV with one header row, a whitespace `.asc`, a MATLAB `.mat`,
-    /// or `-` for stdin (live mode: CSV, or whitespace text with `--format asc`).
+    /// a PX4 ULog `.ulg`, an ArduPilot DataFlash `.bin`, or `-` for stdin (live mode: CSV, or
+    /// whitespace text with `--format asc`).
     pub data: String,
     /// Channel mapping TOML (see `mappings/*.toml` and `docs/mapping.md`).
     #[arg(long)]
@@ -47,7 +48,8 @@ pub struct ReplayArgs {
     /// (`.asc`, `.mat`, `.ulg`, `.bin`), else CSV.
     #[arg(long)]
     pub format: Option<LogFormat>,
-    /// Output directory for estimates.csv, summary.json and estimates.png.
+    /// Output directory: summary.json, report.html and the figures (PNG and SVG), and
+    /// estimates.csv (real-time estimators).
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Model: a preset (`longitudinal`, `lateral`, `six-axis`) or a model file (TOML, see

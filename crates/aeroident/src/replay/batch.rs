@@ -294,7 +294,11 @@ pub fn fit_record<R: Read>(
         m.iter().for_each(|s| recorder.push(s));
     }
     let identifiability = diagnostics::identifiability(&st, &cov, &recorder, &values);
-    let mut warnings = diagnostics::sign_warnings(&st, &values);
+    // The summary's σ: coloured-residual where formed, else Cramér–Rao.
+    let sigmas: Vec<Option<f64>> = (0..np)
+        .map(|i| Some(result.sigma_coloured.as_ref().map_or(result.sigma[i], |c| c[i])))
+        .collect();
+    let mut warnings = diagnostics::sign_warnings(&st, &values, &sigmas);
     for c in &identifiability.collinear_regressors {
         warnings.push(format!(
             "collinear regressors {} and {} (sample correlation {:+.3}): the record cannot separate these terms whatever the method",

@@ -180,7 +180,9 @@ pub fn run_all(
         .iter()
         .map(|r| {
             let line = overview(std::slice::from_ref(r));
-            let cells = line.lines().nth(1).unwrap_or_default().trim().to_string();
+            let cells = line.lines().nth(1).unwrap_or_default();
+            let cells = cells.trim().strip_prefix(r.0.name.as_str()).unwrap_or(cells).trim();
+            let cells = format!("realtime {cells}");
             (r.0.name.clone(), cells)
         })
         .collect();

@@ -290,7 +290,7 @@ const CONTROL_SIGNS: [(&str, f64, &str, &str); 3] = [
 /// A warning for each identified parameter whose sign a conventional stable aircraft does not
 /// have ([`aeroident_estimators::prior::expected_sign`]: positive `Cm_q`, `Cl_p`, `Cn_r`,
 /// `Cm_alpha` … ; Klein & Morelli 2006 ch. 3), and for each primary control derivative whose
-/// sign contradicts the mapping's surface convention ([`CONTROL_SIGNS`]: most often a surface
+/// sign contradicts the mapping's surface convention (`CONTROL_SIGNS`: most often a surface
 /// mapped with the wrong sign; a canard or other unconventional layout can explain it) by more
 /// than 2σ (`sigmas`, one per value; an unexcited surface's derivative near 0 is not a sign).
 pub fn sign_warnings(

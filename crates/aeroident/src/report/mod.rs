@@ -15,7 +15,7 @@ pub mod run;
 use crate::outdir::{OutputDir, OutputError};
 use crate::plot::{Panel, PlotError, render_panels_png, render_panels_svg};
 use crate::results::Results;
-use crate::table::{fmt_estimate, fmt_sig};
+use crate::table::{fmt_error_pct, fmt_estimate, fmt_sig};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -164,7 +164,7 @@ fn params_html(r: &Results, h: &mut String) {
             escape(&row.name),
             escape(&fmt_estimate(row.estimate, row.sigma)),
             escape(&fmt_sig(row.reference, 4)),
-            row.error_pct().map_or("—".into(), |e| format!("{e:+.1}")),
+            fmt_error_pct(row.error_pct()),
             escape(&row.status)
         );
     }

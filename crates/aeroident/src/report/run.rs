@@ -22,6 +22,13 @@ pub fn results(summary: &Summary) -> Vec<Results> {
         if row.status == "ok" && p.meets_targets == Some(false) {
             row.status = "targets missed".into();
         }
+        // Without a σ the status says how close the final value is (the overview's 5 %).
+        if row.status == "ok"
+            && row.sigma.is_none()
+            && row.error_pct().is_some_and(|e| e.abs() > 5.0)
+        {
+            row.status = "not within 5 %".into();
+        }
         match out.iter_mut().find(|r| r.title == title) {
             Some(r) => r.rows.push(row),
             None => out.push(Results {

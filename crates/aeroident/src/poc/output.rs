@@ -199,7 +199,9 @@ pub fn results(summary: &Summary, title: &str) -> Results {
         .map(|p| {
             let mut row =
                 ParameterRow::new(p.name.clone(), Some(p.final_value), None, Some(p.truth), None);
-            if !(p.rel_error.abs() <= CONVERGENCE_TOL_REL) {
+            // A NaN error (no truth to compare with) is not within the tolerance either.
+            let within = p.rel_error.abs() <= CONVERGENCE_TOL_REL;
+            if !within {
                 row.status = format!("not within {:.0} %", 100.0 * CONVERGENCE_TOL_REL);
             }
             row

@@ -176,6 +176,8 @@ pub fn write_figures(
                     kind: LineKind::Solid,
                 },
             ],
+            // States are signals: the whole run sets the range.
+            signals: true,
             ..Default::default()
         })
         .collect();

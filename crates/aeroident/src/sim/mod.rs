@@ -404,10 +404,12 @@ pub fn write_outputs(run: &SimRun, od: &mut OutputDir) -> anyhow::Result<()> {
                 });
             }
         }
+        // Measured signals: the whole record sets the range (a manoeuvre is not a transient).
         Panel {
             title: title.to_string(),
             y_label: y_label.to_string(),
             series,
+            signals: true,
             ..Default::default()
         }
     };

@@ -254,6 +254,13 @@ fn val_output_error_reproduces_the_hfb320_reference_through_the_cli() {
         assert!(((est - value) / value).abs() < 0.01, "{name}: {est} vs {value}");
         assert!((s / sigma - 1.0).abs() < 0.2, "{name}: σ {s} vs {sigma}");
     }
+    // The results table on stdout (estimate ± CRB σ, fit quality of the simulated outputs)
+    // and the report with the model-vs-measured figure beside the summary.
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("Cm_alpha") && stdout.contains("Theil"), "{stdout}");
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(html.contains("Cm_q0") && html.contains("alpha_rad"), "report lacks the tables");
+    assert!(html.contains("<svg") && out.join("fit.png").exists() && out.join("fit.svg").exists());
     let _ = std::fs::remove_dir_all(&out);
 }
 

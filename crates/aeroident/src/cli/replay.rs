@@ -49,7 +49,8 @@ pub struct ReplayArgs {
     /// (`.asc`, `.mat`, `.ulg`, `.bin`), else CSV.
     #[arg(long)]
     pub format: Option<LogFormat>,
-    /// Output directory for estimates.csv, summary.json and estimates.png.
+    /// Output directory: summary.json, report.html and the figures (PNG and SVG), and
+    /// estimates.csv (real-time estimators).
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Model: a preset (`longitudinal`, `lateral`, `six-axis`) or a model file (TOML, see
@@ -355,7 +356,6 @@ fn execute_batch(
         outcome.summary.validation_on = Some(crate::replay::batch::validate_on(reader, &outcome)?);
     }
     eprintln!("model: {}", outcome.model.name);
-    crate::cli::print_stdout(&outcome.result.to_string())?;
     let s = &outcome.summary;
     for v in std::iter::once(&s.validation).chain(s.validation_on.iter()) {
         eprint!("{}", validation_block(v));
@@ -368,6 +368,12 @@ fn execute_batch(
         Some(dir) => {
             let mut out = crate::outdir::OutputDir::open(dir)?;
             out.write_bytes("summary.json", text.as_bytes())?;
+            let name = Path::new(&args.data)
+                .file_name()
+                .map_or(args.data.clone(), |n| n.to_string_lossy().into_owned());
+            let title = format!("{name} — oe — {}", outcome.model.name);
+            let results = crate::report::batch::write(args, &outcome, &title, &mut out)?;
+            crate::cli::print_stdout(&crate::table::render(&results))?;
             eprintln!(
                 "{}: {} samples in {} manoeuvre(s), {} rejected, {} iterations in {:.3} s; wrote {}",
                 args.data,
@@ -379,7 +385,10 @@ fn execute_batch(
                 dir.display()
             );
         }
-        None => eprintln!("{text}"),
+        None => {
+            crate::cli::print_stdout(&outcome.result.to_string())?;
+            eprintln!("{text}");
+        }
     }
     Ok(())
 }

@@ -30,7 +30,7 @@ pub enum EstimatorKind {
     /// The model-reference gradient estimator.
     Gradient,
     /// Batch maximum-likelihood output error (not real time: `replay` reads the whole record
-    /// and fits it, [`crate::replay::batch`]).
+    /// and fits it; `crate::replay::batch`).
     Oe,
 }
 

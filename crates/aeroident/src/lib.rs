@@ -8,6 +8,8 @@
 pub mod aircraft;
 pub mod cli;
 pub mod estimators;
+pub mod export;
+pub mod live;
 /// Convergence-time and error metrics of estimate histories.
 pub mod metrics;
 pub mod montecarlo;

@@ -587,7 +587,8 @@ pub fn render_panels_svg(
 }
 
 /// One histogram panel: the values binned into `bins` equal bins over their range (widened to
-/// include `line`), with a vertical dashed line at `line` (e.g. the truth).
+/// include `line`), with a vertical dashed line at `line` (e.g. the truth) labelled
+/// `line_label` in the legend.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HistogramPanel {
     /// Panel caption.
@@ -600,10 +601,13 @@ pub struct HistogramPanel {
     pub bins: usize,
     /// Position of the vertical line, if any.
     pub line: Option<f64>,
+    /// Legend label of the line (e.g. `truth`).
+    pub line_label: String,
 }
 
 /// Renders histogram panels in a grid of `columns` into a PNG at `path`, each cell
-/// `cell_px` = (width, height).
+/// `cell_px` = (width, height): the counts as bars, the line dashed, a legend in a column
+/// right of each histogram (outside the data), tick labels as [`tick_label`] (never `-0`).
 ///
 /// # Errors
 /// [`PlotError::InvalidFigure`] when there is no panel, a panel has 0 bins or `columns` = 0;
@@ -616,6 +620,45 @@ pub fn render_histograms_png(
     cell_px: (u32, u32),
 ) -> Result<(), PlotError> {
     register_fonts();
+    validate_histograms(path, panels, columns)?;
+    let rows = panels.len().div_ceil(columns);
+    let size = (cell_px.0 * columns as u32, 40 + cell_px.1 * rows as u32);
+    let root = BitMapBackend::new(path, size).into_drawing_area();
+    draw_histograms(&root, title, panels, columns)
+        .map_err(|detail| PlotError::Backend { path: path.to_path_buf(), detail })
+}
+
+/// [`render_histograms_png`] as SVG text (the same layout); `name` only names the figure in
+/// errors.
+///
+/// # Errors
+/// As [`render_histograms_png`].
+pub fn render_histograms_svg(
+    name: &str,
+    title: &str,
+    panels: &[HistogramPanel],
+    columns: usize,
+    cell_px: (u32, u32),
+) -> Result<String, PlotError> {
+    register_fonts();
+    let path = Path::new(name);
+    validate_histograms(path, panels, columns)?;
+    let rows = panels.len().div_ceil(columns);
+    let size = (cell_px.0 * columns as u32, 40 + cell_px.1 * rows as u32);
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        draw_histograms(&root, title, panels, columns)
+            .map_err(|detail| PlotError::Backend { path: path.to_path_buf(), detail })?;
+    }
+    Ok(svg)
+}
+
+fn validate_histograms(
+    path: &Path,
+    panels: &[HistogramPanel],
+    columns: usize,
+) -> Result<(), PlotError> {
     let invalid = |reason: String| PlotError::InvalidFigure { path: path.to_path_buf(), reason };
     if panels.is_empty() || columns == 0 {
         return Err(invalid("no panel to draw (or 0 columns)".into()));
@@ -623,182 +666,294 @@ pub fn render_histograms_png(
     if let Some(p) = panels.iter().find(|p| p.bins == 0) {
         return Err(invalid(format!("panel `{}` has 0 bins", p.title)));
     }
-    let backend_err = |e: &dyn std::fmt::Display| PlotError::Backend {
-        path: path.to_path_buf(),
-        detail: e.to_string(),
+    Ok(())
+}
+
+/// Bin edges and counts of a histogram panel: (lo, bin width, counts).
+fn histogram_bins(p: &HistogramPanel) -> (f64, f64, Vec<u32>) {
+    let vals: Vec<f64> = p.values.iter().copied().filter(|v| v.is_finite()).collect();
+    let mut lo = vals.iter().copied().fold(f64::INFINITY, f64::min);
+    let mut hi = vals.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if let Some(l) = p.line.filter(|l| l.is_finite()) {
+        lo = lo.min(l);
+        hi = hi.max(l);
+    }
+    if !lo.is_finite() {
+        (lo, hi) = (-1.0, 1.0);
+    }
+    let span = if hi - lo > 1e-12 * (hi.abs() + lo.abs()).max(1e-300) {
+        hi - lo
+    } else {
+        hi.abs().max(1.0) * 1e-3
     };
+    let (lo, hi) = (lo - 0.05 * span, hi + 0.05 * span);
+    let w = (hi - lo) / p.bins as f64;
+    let mut counts = vec![0u32; p.bins];
+    for v in &vals {
+        let k = (((v - lo) / w) as usize).min(p.bins - 1);
+        counts[k] += 1;
+    }
+    (lo, w, counts)
+}
+
+/// Draws a legend of (label, colour, kind: 0 line, 1 dashed, 2 box filled at 70 % as the
+/// histogram bars, 3 box filled solid as the grouped bars) at the top of `area`.
+fn draw_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[(String, RGBColor, u8)],
+    font_px: u32,
+    top_px: i32,
+) -> Result<(), String> {
+    let e = |e: &dyn std::fmt::Display| e.to_string();
+    let font = (FONT, font_px).into_font().color(&BLACK);
+    for (k, (label, color, kind)) in entries.iter().enumerate() {
+        let y = top_px + 20 * k as i32;
+        let x = 6;
+        match kind {
+            2 => area
+                .draw(&Rectangle::new([(x, y - 6), (x + 22, y + 6)], color.mix(0.7).filled()))
+                .map_err(|x| e(&x))?,
+            3 => area
+                .draw(&Rectangle::new([(x, y - 6), (x + 22, y + 6)], color.filled()))
+                .map_err(|x| e(&x))?,
+            1 => {
+                for seg in [(x, x + 6), (x + 9, x + 15), (x + 18, x + 22)] {
+                    area.draw(&PathElement::new(
+                        vec![(seg.0, y), (seg.1, y)],
+                        color.stroke_width(2),
+                    ))
+                    .map_err(|x| e(&x))?;
+                }
+            }
+            _ => area
+                .draw(&PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(2)))
+                .map_err(|x| e(&x))?,
+        }
+        area.draw(&Text::new(label.clone(), (x + 28, y - 7), font.clone())).map_err(|x| e(&x))?;
+    }
+    Ok(())
+}
+
+fn draw_histograms<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    panels: &[HistogramPanel],
+    columns: usize,
+) -> Result<(), String> {
+    let e = |e: &dyn std::fmt::Display| e.to_string();
+    root.fill(&WHITE).map_err(|x| e(&x))?;
+    let root =
+        root.titled(title, (FONT, 22).into_font().style(FontStyle::Bold)).map_err(|x| e(&x))?;
     let rows = panels.len().div_ceil(columns);
-    let size = (cell_px.0 * columns as u32, 40 + cell_px.1 * rows as u32);
-    let root = BitMapBackend::new(path, size).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| backend_err(&e))?;
-    let root = root
-        .titled(title, (FONT, 22).into_font().style(FontStyle::Bold))
-        .map_err(|e| backend_err(&e))?;
     let areas = root.split_evenly((rows, columns));
+    let bar_color = PALETTE[2];
+    let line_color = PALETTE[1];
     for (area, p) in areas.iter().zip(panels) {
-        let vals: Vec<f64> = p.values.iter().copied().filter(|v| v.is_finite()).collect();
-        let mut lo = vals.iter().copied().fold(f64::INFINITY, f64::min);
-        let mut hi = vals.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        if let Some(l) = p.line.filter(|l| l.is_finite()) {
-            lo = lo.min(l);
-            hi = hi.max(l);
-        }
-        if !lo.is_finite() {
-            (lo, hi) = (-1.0, 1.0);
-        }
-        let span = if hi - lo > 1e-12 * (hi.abs() + lo.abs()).max(1e-300) {
-            hi - lo
-        } else {
-            hi.abs().max(1.0) * 1e-3
-        };
-        let (lo, hi) = (lo - 0.05 * span, hi + 0.05 * span);
-        let w = (hi - lo) / p.bins as f64;
-        let mut counts = vec![0u32; p.bins];
-        for v in &vals {
-            let k = (((v - lo) / w) as usize).min(p.bins - 1);
-            counts[k] += 1;
-        }
+        let (lo, w, counts) = histogram_bins(p);
+        let hi = lo + w * p.bins as f64;
         let top = f64::from(counts.iter().copied().max().unwrap_or(0).max(1)) * 1.1;
-        let mut chart = ChartBuilder::on(area)
+        let (aw, _) = area.dim_in_pixel();
+        let legend_w = 92;
+        let (chart_area, legend_area) = area.split_horizontally(aw.saturating_sub(legend_w));
+        let (x_span, x_mag) = (hi - lo, lo.abs().max(hi.abs()));
+        let x_fmt = move |x: &f64| tick_label(*x, x_span, x_mag);
+        // Counts are whole runs: only integer ticks are labelled.
+        let y_fmt = |y: &f64| {
+            if (y - y.round()).abs() < 1e-9 {
+                format!("{:.0}", y.round() + 0.0)
+            } else {
+                String::new()
+            }
+        };
+        let mut chart = ChartBuilder::on(&chart_area)
             .caption(&p.title, (FONT, 15))
             .margin(8)
-            .x_label_area_size(30)
+            .x_label_area_size(34)
             .y_label_area_size(40)
             .build_cartesian_2d(lo..hi, 0.0..top)
-            .map_err(|e| backend_err(&e))?;
+            .map_err(|x| e(&x))?;
         chart
             .configure_mesh()
             .x_desc(p.x_label.as_str())
             .y_desc("runs")
             .x_labels(5)
+            .y_labels(((top as usize) + 1).min(6))
+            .x_label_formatter(&x_fmt)
+            .y_label_formatter(&y_fmt)
             .label_style((FONT, 11))
             .axis_desc_style((FONT, 12))
-            .light_line_style(RGBColor(235, 235, 235))
+            .light_line_style(TRANSPARENT)
+            .bold_line_style(RGBColor(215, 215, 215))
             .draw()
-            .map_err(|e| backend_err(&e))?;
+            .map_err(|x| e(&x))?;
         chart
             .draw_series(counts.iter().enumerate().map(|(k, &c)| {
                 let x0 = lo + k as f64 * w;
-                Rectangle::new([(x0, 0.0), (x0 + w, f64::from(c))], PALETTE[2].mix(0.7).filled())
+                Rectangle::new([(x0, 0.0), (x0 + w, f64::from(c))], bar_color.mix(0.7).filled())
             }))
-            .map_err(|e| backend_err(&e))?;
+            .map_err(|x| e(&x))?;
+        let mut legend = vec![("estimates".to_string(), bar_color, 2u8)];
         if let Some(l) = p.line.filter(|l| l.is_finite()) {
             chart
                 .draw_series(DashedLineSeries::new(
                     vec![(l, 0.0), (l, top)],
                     6,
                     4,
-                    ShapeStyle::from(&PALETTE[1]).stroke_width(2),
+                    ShapeStyle::from(&line_color).stroke_width(2),
                 ))
-                .map_err(|e| backend_err(&e))?;
+                .map_err(|x| e(&x))?;
+            legend.push((p.line_label.clone(), line_color, 1));
         }
+        draw_legend(&legend_area, &legend, 11, 34)?;
     }
-    root.present().map_err(|e| backend_err(&e))?;
+    root.present().map_err(|x| e(&x))?;
     Ok(())
 }
 
 /// Grouped bar chart: one group per category, one bar per series (`(label, values)`, one
 /// value per category, `None` = no bar), values on a fixed y range, with an optional
-/// horizontal dashed reference line (e.g. a 0.95 coverage target).
-///
-/// # Errors
-/// [`PlotError::InvalidFigure`] when there is no category or series, or a series's length
-/// differs from the categories'; [`PlotError::Backend`] when drawing or writing fails.
-#[allow(clippy::too_many_arguments)]
-pub fn render_grouped_bars_png(
-    path: &Path,
-    title: &str,
-    y_label: &str,
-    categories: &[String],
-    series: &[(String, Vec<Option<f64>>)],
-    y_range: (f64, f64),
-    reference: Option<f64>,
-    size_px: (u32, u32),
-) -> Result<(), PlotError> {
-    register_fonts();
-    let invalid = |reason: String| PlotError::InvalidFigure { path: path.to_path_buf(), reason };
-    if categories.is_empty() || series.is_empty() {
-        return Err(invalid("no category or no series".into()));
+/// horizontal dashed reference line (e.g. a 0.95 coverage target); the legend in a column
+/// right of the chart (outside the bars), y tick labels as [`tick_label`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct GroupedBars {
+    /// Figure title.
+    pub title: String,
+    /// Y-axis label with unit.
+    pub y_label: String,
+    /// Category names under the groups.
+    pub categories: Vec<String>,
+    /// (label, one value per category).
+    pub series: Vec<(String, Vec<Option<f64>>)>,
+    /// Fixed y range.
+    pub y_range: (f64, f64),
+    /// A dashed horizontal line and its legend label.
+    pub reference: Option<(f64, String)>,
+}
+
+impl GroupedBars {
+    fn validate(&self, path: &Path) -> Result<(), PlotError> {
+        let invalid =
+            |reason: String| PlotError::InvalidFigure { path: path.to_path_buf(), reason };
+        if self.categories.is_empty() || self.series.is_empty() {
+            return Err(invalid("no category or no series".into()));
+        }
+        if let Some((l, v)) = self.series.iter().find(|(_, v)| v.len() != self.categories.len()) {
+            return Err(invalid(format!(
+                "series `{l}` has {} values for {} categories",
+                v.len(),
+                self.categories.len()
+            )));
+        }
+        Ok(())
     }
-    if let Some((l, v)) = series.iter().find(|(_, v)| v.len() != categories.len()) {
-        return Err(invalid(format!(
-            "series `{l}` has {} values for {} categories",
-            v.len(),
-            categories.len()
-        )));
+
+    /// Renders the chart into a PNG at `path`, `size_px` = (width, height).
+    ///
+    /// # Errors
+    /// [`PlotError::InvalidFigure`] when there is no category or series, or a series's length
+    /// differs from the categories'; [`PlotError::Backend`] when drawing or writing fails.
+    pub fn render_png(&self, path: &Path, size_px: (u32, u32)) -> Result<(), PlotError> {
+        register_fonts();
+        self.validate(path)?;
+        let root = BitMapBackend::new(path, size_px).into_drawing_area();
+        self.draw(&root).map_err(|detail| PlotError::Backend { path: path.to_path_buf(), detail })
     }
-    let backend_err = |e: &dyn std::fmt::Display| PlotError::Backend {
-        path: path.to_path_buf(),
-        detail: e.to_string(),
-    };
-    let root = BitMapBackend::new(path, size_px).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| backend_err(&e))?;
-    let nc = categories.len() as f64;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, (FONT, 20))
-        .margin(10)
-        .x_label_area_size(60)
-        .y_label_area_size(50)
-        .build_cartesian_2d(0.0..nc, y_range.0..y_range.1)
-        .map_err(|e| backend_err(&e))?;
-    let cats = categories.to_vec();
-    chart
-        .configure_mesh()
-        .x_labels(categories.len() * 2 + 1)
-        .x_label_formatter(&move |x: &f64| {
-            let k = x.floor() as usize;
-            if (x - x.floor() - 0.5).abs() < 1e-6 && k < cats.len() {
-                cats[k].clone()
-            } else {
-                String::new()
-            }
-        })
-        .disable_x_mesh()
-        .y_desc(y_label)
-        .label_style((FONT, 12))
-        .axis_desc_style((FONT, 13))
-        .light_line_style(RGBColor(235, 235, 235))
-        .draw()
-        .map_err(|e| backend_err(&e))?;
-    let ns = series.len() as f64;
-    let bw = 0.8 / ns;
-    for (j, (label, vals)) in series.iter().enumerate() {
-        let color = PALETTE[(j + 1) % PALETTE.len()];
-        let lo = y_range.0;
+
+    /// The same chart as SVG text; `name` only names the figure in errors.
+    ///
+    /// # Errors
+    /// As [`GroupedBars::render_png`].
+    pub fn render_svg(&self, name: &str, size_px: (u32, u32)) -> Result<String, PlotError> {
+        register_fonts();
+        let path = Path::new(name);
+        self.validate(path)?;
+        let mut svg = String::new();
+        {
+            let root = SVGBackend::with_string(&mut svg, size_px).into_drawing_area();
+            self.draw(&root)
+                .map_err(|detail| PlotError::Backend { path: path.to_path_buf(), detail })?;
+        }
+        Ok(svg)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
+        let e = |e: &dyn std::fmt::Display| e.to_string();
+        root.fill(&WHITE).map_err(|x| e(&x))?;
+        let root = root
+            .titled(&self.title, (FONT, 20).into_font().style(FontStyle::Bold))
+            .map_err(|x| e(&x))?;
+        let legend_chars = self
+            .series
+            .iter()
+            .map(|(l, _)| l.chars().count())
+            .chain(self.reference.iter().map(|(_, l)| l.chars().count()))
+            .max()
+            .unwrap_or(0);
+        let legend_w = (40 + 8 * legend_chars as u32).clamp(90, 260);
+        let (w, _) = root.dim_in_pixel();
+        let (chart_area, legend_area) = root.split_horizontally(w.saturating_sub(legend_w));
+        let nc = self.categories.len() as f64;
+        let (y0, y1) = self.y_range;
+        let (y_span, y_mag) = (y1 - y0, y0.abs().max(y1.abs()));
+        let y_fmt = move |y: &f64| tick_label(*y, y_span, y_mag);
+        let mut chart = ChartBuilder::on(&chart_area)
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(56)
+            .build_cartesian_2d(0.0..nc, y0..y1)
+            .map_err(|x| e(&x))?;
+        let cats = self.categories.clone();
         chart
-            .draw_series(vals.iter().enumerate().filter_map(|(k, v)| {
-                v.map(|v| {
-                    let x0 = k as f64 + 0.1 + j as f64 * bw;
-                    Rectangle::new(
-                        [(x0, lo), (x0 + bw, v.clamp(y_range.0, y_range.1))],
-                        color.filled(),
-                    )
-                })
-            }))
-            .map_err(|e| backend_err(&e))?
-            .label(label.as_str())
-            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 12, y + 5)], color.filled()));
+            .configure_mesh()
+            .x_labels(self.categories.len() * 2 + 1)
+            .x_label_formatter(&move |x: &f64| {
+                let k = x.floor() as usize;
+                if (x - x.floor() - 0.5).abs() < 1e-6 && k < cats.len() {
+                    cats[k].clone()
+                } else {
+                    String::new()
+                }
+            })
+            .y_label_formatter(&y_fmt)
+            .y_labels(8)
+            .disable_x_mesh()
+            .y_desc(self.y_label.as_str())
+            .label_style((FONT, 12))
+            .axis_desc_style((FONT, 13))
+            .light_line_style(TRANSPARENT)
+            .bold_line_style(RGBColor(215, 215, 215))
+            .draw()
+            .map_err(|x| e(&x))?;
+        let ns = self.series.len() as f64;
+        let bw = 0.8 / ns;
+        let mut legend = Vec::new();
+        for (j, (label, vals)) in self.series.iter().enumerate() {
+            let color = PALETTE[(j + 1) % PALETTE.len()];
+            chart
+                .draw_series(vals.iter().enumerate().filter_map(|(k, v)| {
+                    v.map(|v| {
+                        let x0 = k as f64 + 0.1 + j as f64 * bw;
+                        Rectangle::new([(x0, y0), (x0 + bw, v.clamp(y0, y1))], color.filled())
+                    })
+                }))
+                .map_err(|x| e(&x))?;
+            legend.push((label.clone(), color, 3u8));
+        }
+        if let Some((r, label)) = &self.reference {
+            chart
+                .draw_series(DashedLineSeries::new(
+                    vec![(0.0, *r), (nc, *r)],
+                    8,
+                    5,
+                    ShapeStyle::from(&BLACK).stroke_width(1),
+                ))
+                .map_err(|x| e(&x))?;
+            legend.push((label.clone(), BLACK, 1));
+        }
+        draw_legend(&legend_area, &legend, 12, 24)?;
+        root.present().map_err(|x| e(&x))?;
+        Ok(())
     }
-    if let Some(r) = reference {
-        chart
-            .draw_series(DashedLineSeries::new(
-                vec![(0.0, r), (nc, r)],
-                8,
-                5,
-                ShapeStyle::from(&BLACK).stroke_width(1),
-            ))
-            .map_err(|e| backend_err(&e))?;
-    }
-    chart
-        .configure_series_labels()
-        .label_font((FONT, 12))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperLeft)
-        .draw()
-        .map_err(|e| backend_err(&e))?;
-    root.present().map_err(|e| backend_err(&e))?;
-    Ok(())
 }
 
 #[cfg(test)]
@@ -948,6 +1103,83 @@ mod tests {
             assert!(svg.contains(want), "{want}");
         }
         assert!(!svg.contains(">-0<") && !svg.contains(">-0.0<"));
+    }
+
+    /// The `<text>` elements of an SVG from plotters: (x attribute, trimmed content).
+    fn svg_texts(svg: &str) -> Vec<(f64, String)> {
+        svg.split("<text")
+            .skip(1)
+            .filter_map(|t| {
+                let (attrs, rest) = t.split_once('>')?;
+                let content = rest.split("</text>").next()?.trim().to_string();
+                let x = attrs.split("x=\"").nth(1)?.split('"').next()?.parse().ok()?;
+                Some((x, content))
+            })
+            .collect()
+    }
+
+    /// Histograms as SVG: the title, the legend outside the bars (`runs`, `truth` right of the
+    /// plotting area: `estimates`, `truth`), integer count ticks only and no `-0` tick, whatever the values' sign.
+    #[test]
+    fn histogram_svg_has_legend_outside_and_clean_ticks() {
+        let values: Vec<f64> = (0..40).map(|k| -0.02 + 0.001 * f64::from(k % 9)).collect();
+        let p = HistogramPanel {
+            title: "Cm_alpha".into(),
+            x_label: "Cm_alpha".into(),
+            values,
+            bins: 10,
+            line: Some(-0.015),
+            line_label: "truth".into(),
+        };
+        let svg = render_histograms_svg("h.svg", "final estimates", &[p], 1, (400, 260)).unwrap();
+        let texts = svg_texts(&svg);
+        let find = |label: &str| texts.iter().find(|(_, t)| t == label).map(|(x, _)| *x);
+        assert!(find("final estimates").is_some());
+        // The legend starts right of every bar (the chart area ends 92 px before the edge).
+        for label in ["estimates", "truth"] {
+            let x = find(label).unwrap_or_else(|| panic!("no legend entry {label}"));
+            assert!(x > 400.0 - 92.0, "legend entry {label} at x = {x}, inside the chart");
+        }
+        assert!(texts.iter().all(|(_, t)| t != "-0" && t != "-0.0" && t != "-0.000"));
+        // Count ticks are distinct integers (non-integer ticks rounded would repeat).
+        let counts: Vec<&str> = texts
+            .iter()
+            .map(|(_, t)| t.as_str())
+            .filter(|t| !t.is_empty() && t.chars().all(|c| c.is_ascii_digit()))
+            .collect();
+        assert!(counts.len() >= 3, "{counts:?}");
+        let mut dedup = counts.clone();
+        dedup.sort_unstable();
+        dedup.dedup();
+        assert_eq!(counts.len(), dedup.len(), "repeated count tick labels: {counts:?}");
+    }
+
+    /// Grouped bars: every series and the reference line are in the legend, right of the
+    /// bars; a series of the wrong length is an error naming it.
+    #[test]
+    fn grouped_bars_legend_and_length_check() {
+        let mut chart = GroupedBars {
+            title: "coverage".into(),
+            y_label: "fraction of runs".into(),
+            categories: vec!["Cm_q".into(), "Cl_p".into()],
+            series: vec![
+                ("rls".into(), vec![Some(0.9), None]),
+                ("ekf".into(), vec![Some(1.0), Some(0.95)]),
+            ],
+            y_range: (0.0, 1.05),
+            reference: Some((0.95, "0.95 target".into())),
+        };
+        let svg = chart.render_svg("c.svg", (800, 400)).unwrap();
+        let texts = svg_texts(&svg);
+        let find = |label: &str| texts.iter().find(|(_, t)| t == label).map(|(x, _)| *x);
+        for label in ["rls", "ekf", "0.95 target"] {
+            let x = find(label).unwrap_or_else(|| panic!("no legend entry {label}"));
+            assert!(x > 800.0 - 260.0, "legend entry {label} at x = {x}");
+        }
+        assert!(find("Cm_q").is_some() && find("Cl_p").is_some());
+        chart.series[0].1.pop();
+        let err = chart.render_svg("c.svg", (800, 400)).unwrap_err().to_string();
+        assert!(err.contains("rls") && err.contains("c.svg"), "{err}");
     }
 
     #[test]

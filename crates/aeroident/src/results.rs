@@ -75,7 +75,7 @@ impl ParameterRow {
 /// Fit quality of one coefficient (module doc).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct FitQuality {
-    /// Coefficient name (`Cm`, `CL` …).
+    /// What was measured: a coefficient (`Cm`, `CL` …) or an output-error output (`alpha_rad` …).
     pub coefficient: String,
     /// Samples compared.
     pub samples: usize,

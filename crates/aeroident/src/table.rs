@@ -26,6 +26,16 @@ pub fn fmt_sig(x: Option<f64>, sig: usize) -> String {
     }
 }
 
+/// An error in % with its sign and one decimal (`+3.2`, `-0.4`); an error that rounds to zero
+/// is `0.0` (never `-0.0`); `—` for `None`.
+pub fn fmt_error_pct(e: Option<f64>) -> String {
+    match e.filter(|e| e.is_finite()) {
+        None => "—".into(),
+        Some(e) if (e * 10.0).round() == 0.0 => "0.0".into(),
+        Some(e) => format!("{e:+.1}"),
+    }
+}
+
 /// `estimate ± σ` (σ to 2 significant digits, the estimate to the same decimal place where
 /// plain), `—` if not identified.
 pub fn fmt_estimate(est: Option<f64>, sigma: Option<f64>) -> String {
@@ -63,13 +73,13 @@ pub fn render(r: &Results) -> String {
             row.name.clone(),
             fmt_estimate(row.estimate, row.sigma),
             fmt_sig(row.reference, 4),
-            row.error_pct().map_or("—".into(), |e| format!("{e:+.1}")),
+            fmt_error_pct(row.error_pct()),
             row.status.clone(),
         ]);
     }
     let mut s = format!("{}\n{t}\n", r.title);
     if !r.fit.is_empty() {
-        let mut f = table_with(&["coefficient", "samples", "residual RMS", "R²", "Theil's U"], 5);
+        let mut f = table_with(&["measured", "samples", "residual RMS", "R²", "Theil's U"], 5);
         for q in &r.fit {
             f.add_row(vec![
                 q.coefficient.clone(),
@@ -91,6 +101,15 @@ pub fn render(r: &Results) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn error_percent_has_a_sign_but_never_minus_zero() {
+        assert_eq!(fmt_error_pct(Some(-0.04)), "0.0");
+        assert_eq!(fmt_error_pct(Some(-0.0)), "0.0");
+        assert_eq!(fmt_error_pct(Some(-0.06)), "-0.1");
+        assert_eq!(fmt_error_pct(Some(33.333)), "+33.3");
+        assert_eq!(fmt_error_pct(None), "—");
+    }
     use crate::results::{FitQuality, ParameterRow};
 
     #[test]

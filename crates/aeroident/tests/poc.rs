@@ -124,9 +124,22 @@ fn cli_single_run_writes_outputs_with_exact_summary_keys() {
         solver: SolverReading::Explicit,
     };
     aeroident::cli::poc::execute(args).unwrap();
-    for f in ["timeseries.csv", "summary.json", "estimates.png", "states.png"] {
+    for f in [
+        "timeseries.csv",
+        "summary.json",
+        "estimates.png",
+        "estimates.svg",
+        "states.png",
+        "states.svg",
+        "report.html",
+    ] {
         assert!(dir.join(f).is_file(), "{f} missing");
     }
+    // The report's row of `a` carries the scenario's true a = 3 (`[system] a = 3.0`).
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    let row = html.split("<tr><td>a</td>").nth(1).expect("row of a").split("</tr>").next().unwrap();
+    assert_eq!(row.split("<td class=\"n\">").nth(2).unwrap().split('<').next(), Some("3.000"));
+    assert!(html.contains("<svg"), "report without its figures");
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
     let keys = |o: &serde_json::Value| {

@@ -1,6 +1,8 @@
 //! `report.html` of a replay opened in headless Chromium: it renders (a screenshot of the page
 //! is written) and logs no console message; the DOM holds the results table with the known
-//! derivatives of a synthetic record, the fit quality and the inlined figures.
+//! derivatives of a synthetic record, the fit quality and the inlined figures. The top-level
+//! `report.html` of `run --all` is checked the same way: it renders, links every scenario's
+//! own report (which exists) and holds each scenario's table against the truth.
 //!
 //! Needs the `chromium` binary (Debian package `chromium`; `.ci/run` installs it). Without it
 //! the test is skipped with a message — and fails when `CI=true`.
@@ -220,4 +222,67 @@ fn report_html_renders_in_headless_chromium_without_console_errors() {
     .unwrap();
     let (_, _, err) = headless(&chrome, &bad, &dir.join("profile3"), &["--dump-dom"]);
     assert!(!console_lines(&err).is_empty(), "a script error must show in the log: {err}");
+}
+
+/// `run --all` on two shipped scenarios: the index page renders without console messages,
+/// links each scenario's own report (which exists and renders too) and holds each scenario's
+/// results table with the truth of its scenario file (Cm_alpha increment of `t4_7_case4`).
+#[test]
+fn run_all_index_report_renders_and_links_every_scenario() {
+    let Some(chrome) = chromium() else {
+        assert!(
+            std::env::var("CI").as_deref() != Ok("true"),
+            "CI=true but no chromium on PATH: .ci/run must install the Debian package `chromium`"
+        );
+        eprintln!("SKIPPED run --all report: no chromium on PATH");
+        return;
+    };
+    let dir = scratch("runall");
+    let scenarios = dir.join("scenarios");
+    std::fs::create_dir_all(&scenarios).unwrap();
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/f16");
+    for name in ["t4_7_case4", "t4_8_case1"] {
+        std::fs::copy(shipped.join(format!("{name}.toml")), scenarios.join(format!("{name}.toml")))
+            .unwrap();
+    }
+    let out = dir.join("out");
+    let o = bin()
+        .args(["run", "--all"])
+        .arg(&scenarios)
+        .arg("--out")
+        .arg(&out)
+        .arg("--no-figures")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let page = out.join("report.html");
+    assert!(page.is_file(), "no top-level report.html");
+    let shot = dir.join("screenshot.png");
+    let (ok, _, err) = headless(
+        &chrome,
+        &page,
+        &dir.join("profile1"),
+        &[&format!("--screenshot={}", shot.display()), "--window-size=1280,1400"],
+    );
+    assert!(ok, "chromium failed: {err}");
+    assert!(console_lines(&err).is_empty(), "console messages: {:?}", console_lines(&err));
+    assert!(std::fs::metadata(&shot).unwrap().len() > 20_000, "blank screenshot?");
+    let (ok, dom, err) = headless(&chrome, &page, &dir.join("profile2"), &["--dump-dom"]);
+    assert!(ok && console_lines(&err).is_empty(), "{err}");
+    for name in ["t4_7_case4", "t4_8_case1"] {
+        let href = format!("{name}/report.html");
+        assert!(dom.contains(&format!("<a href=\"{href}\">")), "no link to {href}");
+        assert!(out.join(&href).is_file(), "{href} linked but not written");
+        assert!(dom.contains(&format!("<h2>{name} — ")), "no table of {name}");
+    }
+    // The truth column of t4_7_case4's Cm_alpha row is the scenario file's increment.
+    let text = std::fs::read_to_string(scenarios.join("t4_7_case4.toml")).unwrap();
+    let table: toml::Table = toml::from_str(&text).unwrap();
+    let truth = table["increments"]["Cm_alpha"]["truth"].as_float().unwrap();
+    let at = dom.find("<h2>t4_7_case4 — ").unwrap();
+    let row_at = at + dom[at..].find("<td>Cm_alpha").expect("Cm_alpha row");
+    let row = &dom[row_at..row_at + dom[row_at..].find("</tr>").unwrap()];
+    let cell = row.split("<td class=\"n\">").nth(2).unwrap();
+    let shown: f64 = cell.split('<').next().unwrap().parse().unwrap();
+    assert!((shown - truth).abs() <= 1e-3 * truth.abs(), "truth {shown} vs {truth}");
 }

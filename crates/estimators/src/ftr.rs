@@ -704,7 +704,8 @@ mod tests {
     /// sensor-bias change between manoeuvres): with `new_manoeuvre` at the gap each manoeuvre's
     /// signals are referenced to its own first sample and the gap interval carries no weight,
     /// so the summed transforms relate exactly and the slopes are recovered to rounding;
-    /// without it the bias step, weighted by the 30 s interval, biases them by more than 1 %.
+    /// without it the bias step, weighted by the 30 s interval, either biases them by more than
+    /// 1 % or (with the offset column) leaves them not identified.
     #[test]
     fn analytic_new_manoeuvre_restarts_the_trim_reference() {
         let st = ModelStructure::empty()
@@ -727,7 +728,7 @@ mod tests {
                     ftr.update(&pitch_sample(t, alpha, q, de, cm)).unwrap();
                 }
             }
-            [1, 2, 3].map(|i| ftr.estimates().value(i).unwrap())
+            [1, 2, 3].map(|i| ftr.estimates().value(i).unwrap_or(f64::NAN))
         };
         let with = run(true);
         let without = run(false);
@@ -735,7 +736,12 @@ mod tests {
         for i in 0..3 {
             assert!((with[i] - want[i]).abs() < 1e-7 * want[i].abs(), "{i}: {}", with[i]);
         }
-        assert!((0..3).any(|i| (without[i] - want[i]).abs() > 0.01 * want[i].abs()), "{without:?}");
+        // Without the restart the step is either refused by the identifiability test (NaN: not
+        // identified) or biases a slope by more than 1 %.
+        assert!(
+            (0..3).any(|i| without[i].is_nan() || (without[i] - want[i]).abs() > 0.01 * want[i].abs()),
+            "{without:?}"
+        );
     }
 
     #[test]

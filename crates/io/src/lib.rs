@@ -11,6 +11,7 @@ pub mod error;
 pub mod flight_data;
 pub mod log;
 pub mod mapping;
+pub mod mavlink;
 pub mod model_file;
 pub mod multirate;
 pub mod rejection_log;

@@ -25,9 +25,11 @@ fn shipped_mappings_parse_and_map_what_their_records_are_for() {
         "hfb320.toml",
         "jsbsim.toml",
         "jsbsim_clean.toml",
+        "mavlink-aeroident.toml",
         "twin_otter.toml",
         "px4-fixedwing.toml",
         "arduplane.toml",
+        "arduplane-minimal.toml",
     ] {
         assert!(maps.iter().any(|p| p.ends_with(want)), "{want} missing: {maps:?}");
     }
@@ -37,11 +39,18 @@ fn shipped_mappings_parse_and_map_what_their_records_are_for() {
         let lateral = [Channel::Beta, Channel::Ay, Channel::Da, Channel::Dr, Channel::B];
         let has_lateral = lateral.iter().all(|c| m.has(*c));
         match name {
-            "aeroident-sim.toml" | "attas_lateral.toml" | "jsbsim.toml" | "jsbsim_clean.toml"
-            | "px4-fixedwing.toml" | "arduplane.toml" => {
+            // The MAVLink feed carries every channel (six-axis aircraft).
+            "aeroident-sim.toml"
+            | "attas_lateral.toml"
+            | "jsbsim.toml"
+            | "jsbsim_clean.toml"
+            | "mavlink-aeroident.toml"
+            | "px4-fixedwing.toml"
+            | "arduplane.toml" => {
                 assert!(has_lateral, "{name}")
             }
-            // Longitudinal records: the lateral preset must not be the default there.
+            // Longitudinal records (and arduplane-minimal.toml, which has no surfaces): the
+            // lateral preset must not be the default there.
             _ => assert!(!has_lateral, "{name}"),
         }
         // JSBSim logs the tensor element ixz = −Jxz: the mappings must flip it.

@@ -252,6 +252,7 @@ fn run_from_json(v: &Value) -> PyResult<RunResult> {
                 Ok(EstimatorRun {
                     name: string(e, "name")?,
                     failure: field(e, "failure")?.as_str().map(str::to_owned),
+                    nis: opt_f64(e, "nis")?,
                     params,
                 })
             })

@@ -3,6 +3,8 @@
 use clap::{Parser, Subcommand};
 
 pub mod bench;
+pub mod design;
+pub mod export;
 pub mod f16;
 pub mod montecarlo;
 pub mod poc;
@@ -31,6 +33,10 @@ pub enum Command {
     Montecarlo(montecarlo::MonteCarloArgs),
     /// Replay a recorded flight through an estimator, sample by sample.
     Replay(replay::ReplayArgs),
+    /// Write results for other tools (a JSBSim aerodynamics fragment).
+    Export(export::ExportArgs),
+    /// Design an orthogonal multisine input and predict its Cramér–Rao σ before flight.
+    Design(design::DesignArgs),
     /// Measure simulation speed (one F-16 RK4 step, real-time factor).
     Bench(bench::BenchArgs),
 }
@@ -48,6 +54,8 @@ impl Cli {
             Command::Montecarlo(a) => montecarlo::execute(a),
             Command::Replay(a) => replay::execute(a),
             Command::Bench(a) => bench::execute(a),
+            Command::Export(a) => export::execute(a),
+            Command::Design(a) => design::execute(a),
         }
     }
 }

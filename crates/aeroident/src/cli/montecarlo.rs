@@ -18,7 +18,7 @@ use anyhow::Context as _;
 use super::run::DEFAULT_SCENARIO;
 use crate::aircraft::Scenario;
 use crate::montecarlo::{Campaign, campaign, json_summary};
-use crate::plot::{HistogramPanel, render_grouped_bars_png, render_histograms_png};
+use crate::plot::{GroupedBars, HistogramPanel, render_histograms_png, render_histograms_svg};
 
 /// Arguments of `aeroident montecarlo`.
 #[derive(Debug, clap::Args)]
@@ -157,11 +157,12 @@ pub fn write_outputs(c: &Campaign, dir: &Path, figures: bool) -> anyhow::Result<
                     .filter_map(|x| x.params.get(j).and_then(|q| q.r#final))
                     .collect();
                 HistogramPanel {
-                    title: format!("{} (truth dashed)", p.name),
+                    title: p.name.clone(),
                     x_label: p.name.clone(),
                     values,
                     bins: 20,
                     line: p.truth,
+                    line_label: "truth".into(),
                 }
             })
             .collect();
@@ -171,13 +172,19 @@ pub fn write_outputs(c: &Campaign, dir: &Path, figures: bool) -> anyhow::Result<
                 .chars()
                 .map(|ch| if ch.is_ascii_alphanumeric() { ch } else { '_' })
                 .collect();
+            let stem = format!("histograms_{k}_{safe}");
+            let title = format!("{}: final estimates over {} runs", e.name, e.runs_ok);
             render_histograms_png(
-                &dir.join(format!("histograms_{k}_{safe}.png")),
-                &format!("{}: final estimates over {} runs", e.name, e.runs_ok),
+                &dir.join(format!("{stem}.png")),
+                &title,
                 &panels,
                 4,
-                (360, 260),
+                (380, 260),
             )?;
+            let svg =
+                render_histograms_svg(&format!("{stem}.svg"), &title, &panels, 4, (380, 260))?;
+            let path = dir.join(format!("{stem}.svg"));
+            std::fs::write(&path, svg).with_context(|| format!("writing {}", path.display()))?;
         }
     }
     for e in &c.estimators {
@@ -191,16 +198,18 @@ pub fn write_outputs(c: &Campaign, dir: &Path, figures: bool) -> anyhow::Result<
         coverage.push((e.name.clone(), vals));
     }
     if !categories.is_empty() && !coverage.is_empty() {
-        render_grouped_bars_png(
-            &dir.join("coverage.png"),
-            &format!("±2σ coverage of the truth over {} runs (dashed: 0.95)", c.runs),
-            "fraction of runs",
-            &categories,
-            &coverage,
-            (0.0, 1.05),
-            Some(0.95),
-            (1200, 500),
-        )?;
+        let chart = GroupedBars {
+            title: format!("±2σ coverage of the truth over {} runs", c.runs),
+            y_label: "fraction of runs".into(),
+            categories,
+            series: coverage,
+            y_range: (0.0, 1.05),
+            reference: Some((0.95, "0.95 target".into())),
+        };
+        chart.render_png(&dir.join("coverage.png"), (1200, 500))?;
+        let path = dir.join("coverage.svg");
+        std::fs::write(&path, chart.render_svg("coverage.svg", (1200, 500))?)
+            .with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
 }

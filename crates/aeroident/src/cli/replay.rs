@@ -10,7 +10,7 @@
 //! ```
 //! Writes `<dir>/estimates.csv`, `<dir>/summary.json`, `<dir>/estimates.{png,svg}` (estimates
 //! with shaded ±2σ), `<dir>/fit.{png,svg}` (model vs measured) and `<dir>/report.html`
-//! ([`crate::report::replay`]), and prints the results table ([`crate::table`]) on stdout. With `-` the record is read from stdin and one CSV line of estimates per sample is
+//! ([`crate::report::replay`]), and prints the results table ([`crate::table`]) on stdout (on stderr in live mode, where stdout carries the estimates). With `-` the record is read from stdin and one CSV line of estimates per sample is
 //! written to stdout (a live feed: buffered, flushed per line with `--realtime`; the history
 //! kept for the figure and the settling times is bounded, see `History`); the summary then goes to stderr unless
 //! `--out` is given. The model used is printed on stderr. A diverged estimator is an error
@@ -38,7 +38,9 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, clap::Args)]
 pub struct ReplayArgs {
     /// Recorded flight data: a CSV with one header row, a whitespace `.asc`, a MATLAB `.mat`,
-    /// or `-` for stdin (live mode: CSV, or whitespace text with `--format asc`).
+    /// a PX4 ULog `.ulg`, an ArduPilot DataFlash `.bin`, `-` for stdin (live mode: CSV, or
+    /// whitespace text with `--format asc`), or a live MAVLink feed
+    /// `mavlink:udp:<host>:<port>[?timeout_s=<s>]` (docs/mavlink.md).
     pub data: String,
     /// Channel mapping TOML (see `mappings/*.toml` and `docs/mapping.md`).
     #[arg(long)]
@@ -47,7 +49,8 @@ pub struct ReplayArgs {
     /// (`.asc`, `.mat`, `.ulg`, `.bin`), else CSV.
     #[arg(long)]
     pub format: Option<LogFormat>,
-    /// Output directory for estimates.csv, summary.json and estimates.png.
+    /// Output directory: summary.json, report.html and the figures (PNG and SVG), and
+    /// estimates.csv (real-time estimators).
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Model: a preset (`longitudinal`, `lateral`, `six-axis`) or a model file (TOML, see
@@ -97,7 +100,13 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         pacing: if args.realtime { Pacing::Realtime } else { Pacing::Unpaced },
         on_model: Some(announce),
     };
-    let live = args.data == "-";
+    let mavlink = crate::live::is_mavlink(&args.data);
+    let live = args.data == "-" || mavlink;
+    if args.estimator == EstimatorKind::Oe && mavlink {
+        anyhow::bail!(
+            "--estimator oe is a batch fit of a whole record, not for a live MAVLink feed"
+        );
+    }
     if args.estimator == EstimatorKind::Oe {
         return execute_batch(&args, &mapping, opts.model);
     }
@@ -112,7 +121,12 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     };
     // Buffered: one write per 64 KiB, not per sample (the replay flushes per line only when
     // paced in real time).
-    let mut stdout_lock = std::io::BufWriter::with_capacity(1 << 16, std::io::stdout().lock());
+    let mut stdout_lock: Box<dyn Write> = if mavlink {
+        // A live feed: each line of estimates out as its message arrives.
+        Box::new(std::io::LineWriter::new(std::io::stdout().lock()))
+    } else {
+        Box::new(std::io::BufWriter::with_capacity(1 << 16, std::io::stdout().lock()))
+    };
     // Progress on stderr when it is a terminal: bytes of the file, and a status line with the
     // samples, the record time and the first estimates (the live view of `--realtime`).
     let bar = match std::fs::metadata(&args.data) {
@@ -130,7 +144,7 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         sinks.push(f);
     }
     if live {
-        sinks.push(&mut stdout_lock);
+        sinks.push(&mut *stdout_lock);
     }
     if crate::progress::enabled() {
         sinks.push(&mut status);
@@ -139,7 +153,13 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         .format
         .or_else(|| LogFormat::from_extension(Path::new(&args.data)))
         .unwrap_or(LogFormat::Csv);
-    let outcome = if !live && format == LogFormat::Csv {
+    let outcome = if mavlink {
+        let (reader, stats) = crate::live::open_mavlink(&args.data, &mapping)?;
+        replay(reader, &mapping, &opts, sinks).map(|mut outcome| {
+            crate::live::finish(&mut outcome.summary, &stats);
+            outcome
+        })
+    } else if !live && format == LogFormat::Csv {
         // The CSV file itself, read through the progress bar (what `open_log` opens for CSV).
         let file =
             std::fs::File::open(&args.data).with_context(|| format!("opening {}", args.data))?;
@@ -188,7 +208,12 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
                 &crate::report::replay::model_references(&outcome),
                 o,
             )?;
-            crate::cli::print_stdout(&crate::table::render(&results))?;
+            if live {
+                // stdout carries the live stream of estimates: the table goes beside the log.
+                eprint!("{}", crate::table::render(&results));
+            } else {
+                crate::cli::print_stdout(&crate::table::render(&results))?;
+            }
             eprintln!(
                 "{}: {} samples read, {} rejected, {:.0} samples/s, status {}; wrote {}",
                 args.data,
@@ -331,7 +356,6 @@ fn execute_batch(
         outcome.summary.validation_on = Some(crate::replay::batch::validate_on(reader, &outcome)?);
     }
     eprintln!("model: {}", outcome.model.name);
-    crate::cli::print_stdout(&outcome.result.to_string())?;
     let s = &outcome.summary;
     for v in std::iter::once(&s.validation).chain(s.validation_on.iter()) {
         eprint!("{}", validation_block(v));
@@ -344,6 +368,12 @@ fn execute_batch(
         Some(dir) => {
             let mut out = crate::outdir::OutputDir::open(dir)?;
             out.write_bytes("summary.json", text.as_bytes())?;
+            let name = Path::new(&args.data)
+                .file_name()
+                .map_or(args.data.clone(), |n| n.to_string_lossy().into_owned());
+            let title = format!("{name} — oe — {}", outcome.model.name);
+            let results = crate::report::batch::write(args, &outcome, &title, &mut out)?;
+            crate::cli::print_stdout(&crate::table::render(&results))?;
             eprintln!(
                 "{}: {} samples in {} manoeuvre(s), {} rejected, {} iterations in {:.3} s; wrote {}",
                 args.data,
@@ -355,7 +385,10 @@ fn execute_batch(
                 dir.display()
             );
         }
-        None => eprintln!("{text}"),
+        None => {
+            crate::cli::print_stdout(&outcome.result.to_string())?;
+            eprintln!("{text}");
+        }
     }
     Ok(())
 }

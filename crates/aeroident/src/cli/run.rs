@@ -89,8 +89,9 @@ pub fn execute(args: RunArgs) -> anyhow::Result<()> {
         // A closed pipe (e.g. `| head`) is not an error of the run.
         let _ = writeln!(
             std::io::stdout().lock(),
-            "{overview}full report: {}",
-            out.join("report.md").display()
+            "{overview}full report: {} and {}",
+            out.join("report.md").display(),
+            out.join("report.html").display()
         );
         return Ok(());
     }
@@ -142,7 +143,7 @@ fn results_text(summary: &Summary) -> String {
 }
 
 /// Runs every scenario in `scenarios_dir` (in parallel) into `out/<name>/` and writes
-/// `out/report.md`; returns the report text and the one-screen [`overview`].
+/// `out/report.md` and `out/report.html` (every scenario's tables, linking its own report); returns the report text and the one-screen [`overview`].
 ///
 /// # Errors
 /// An unreadable directory or scenario, or a failed run (named).
@@ -175,6 +176,18 @@ pub fn run_all(
     let mut md = report::markdown(&results);
     md.push_str(&evidence(&results.iter().map(|(sc, _)| sc.clone()).collect::<Vec<_>>())?);
     top.write_bytes("report.md", md.as_bytes())?;
+    let lines: Vec<(String, String)> = results
+        .iter()
+        .map(|r| {
+            let line = overview(std::slice::from_ref(r));
+            let cells = line.lines().nth(1).unwrap_or_default();
+            let cells = cells.trim().strip_prefix(r.0.name.as_str()).unwrap_or(cells).trim();
+            let cells = format!("realtime {cells}");
+            (r.0.name.clone(), cells)
+        })
+        .collect();
+    let summaries: Vec<&Summary> = results.iter().map(|(_, s)| s).collect();
+    crate::report::run::write_index(scenarios_dir, &lines, &summaries, &mut top)?;
     Ok((md, overview(&results)))
 }
 

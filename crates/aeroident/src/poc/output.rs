@@ -1,9 +1,13 @@
-//! Outputs of one run: `timeseries.csv`, `summary.json`, `estimates.png`, `states.png`.
+//! Outputs of one run: `timeseries.csv`, `summary.json`, `estimates.{png,svg}`,
+//! `states.{png,svg}` and `report.html` (the final estimates against the truth, the settings,
+//! the figures).
 
 use super::run::{EstimatorKind, RunOutput, SolverReading};
 use super::scenario::PocScenario;
 use crate::metrics::{CONVERGENCE_TOL_REL, convergence_time_s, rel_error};
-use crate::plot::{LineKind, Panel, Series, render_panels_png};
+use crate::plot::{HLine, LineKind, Panel, Series};
+use crate::report::{Figure, Report, common_settings, write_figure};
+use crate::results::{ParameterRow, Results};
 use anyhow::Context;
 use serde::Serialize;
 use std::path::Path;
@@ -114,13 +118,16 @@ fn label(out: &RunOutput) -> String {
     }
 }
 
-/// Writes the thesis-style figures `estimates.png` (one panel per parameter: truth dashed,
-/// estimate solid) and `states.png` (one panel per state: reference dashed, estimated model
-/// solid).
+/// Writes the thesis-style figures `estimates.{png,svg}` (one panel per parameter: the
+/// estimate, the truth dashed) and `states.{png,svg}` (one panel per state: reference dashed,
+/// estimated model solid); returns them for the report.
 ///
 /// # Errors
 /// Rendering or file errors, naming the file.
-pub fn write_figures(od: &mut crate::outdir::OutputDir, out: &RunOutput) -> anyhow::Result<()> {
+pub fn write_figures(
+    od: &mut crate::outdir::OutputDir,
+    out: &RunOutput,
+) -> anyhow::Result<Vec<Figure>> {
     let t = &out.t_s;
     let est_panels: Vec<Panel> = out
         .param_names
@@ -129,25 +136,25 @@ pub fn write_figures(od: &mut crate::outdir::OutputDir, out: &RunOutput) -> anyh
         .map(|(j, p)| Panel {
             title: format!("parameter {p}"),
             y_label: (*p).to_string(),
-            series: vec![
-                Series {
-                    label: format!("{p} true"),
-                    t_s: t.clone(),
-                    values: vec![out.truth[j]; t.len()],
-                    kind: LineKind::Dashed,
-                },
-                Series {
-                    label: format!("{p} estimate"),
-                    t_s: t.clone(),
-                    values: out.estimates[j].clone(),
-                    kind: LineKind::Solid,
-                },
-            ],
+            series: vec![Series {
+                label: "estimate".into(),
+                t_s: t.clone(),
+                values: out.estimates[j].clone(),
+                kind: LineKind::Solid,
+            }],
+            hlines: vec![HLine { label: "truth".into(), value: out.truth[j] }],
             ..Default::default()
         })
         .collect();
     let title = label(out);
-    od.write_path("estimates.png", |p| render_panels_png(p, &title, &est_panels, 900, 260))?;
+    let estimates = write_figure::<anyhow::Error>(
+        od,
+        "estimates",
+        &title,
+        "Each parameter's estimate over the run; dashed: the truth.",
+        &est_panels,
+        (900, 260),
+    )?;
     let state_panels: Vec<Panel> = out
         .state_names
         .iter()
@@ -169,14 +176,62 @@ pub fn write_figures(od: &mut crate::outdir::OutputDir, out: &RunOutput) -> anyh
                     kind: LineKind::Solid,
                 },
             ],
+            // States are signals: the whole run sets the range.
+            signals: true,
             ..Default::default()
         })
         .collect();
-    od.write_path("states.png", |p| render_panels_png(p, &title, &state_panels, 900, 260))?;
-    Ok(())
+    let states = write_figure::<anyhow::Error>(
+        od,
+        "states",
+        &title,
+        "Each state of the reference system and of the estimated model.",
+        &state_panels,
+        (900, 260),
+    )?;
+    Ok(vec![estimates, states])
 }
 
-/// Writes all four output files of one run into the locked output directory `od` (each file
+/// The results of a run: the final estimate of each parameter against its truth; status `ok`
+/// within the convergence tolerance (±5 %), else `not within 5 %`.
+pub fn results(summary: &Summary, title: &str) -> Results {
+    let rows = summary
+        .parameters
+        .iter()
+        .map(|p| {
+            let mut row =
+                ParameterRow::new(p.name.clone(), Some(p.final_value), None, Some(p.truth), None);
+            // A NaN error (no truth to compare with) is not within the tolerance either.
+            let within = p.rel_error.abs() <= CONVERGENCE_TOL_REL;
+            if !within {
+                row.status = format!("not within {:.0} %", 100.0 * CONVERGENCE_TOL_REL);
+            }
+            row
+        })
+        .collect();
+    let notes = summary
+        .parameters
+        .iter()
+        .map(|p| {
+            format!(
+                "{}: within ±{:.0} % from {} (thesis: {})",
+                p.name,
+                100.0 * CONVERGENCE_TOL_REL,
+                p.convergence_time_s.map_or("never".into(), |t| format!("{t:.2} s")),
+                p.thesis_convergence_time_s.map_or("—".into(), |t| format!("{t:.2} s"))
+            )
+        })
+        .collect();
+    Results {
+        title: title.to_string(),
+        reference_label: "truth".into(),
+        rows,
+        fit: Vec::new(),
+        notes,
+    }
+}
+
+/// Writes the output files of one run into the locked output directory `od` (each file
 /// written atomically; open it before the run so a failing run leaves no old outputs) and returns the summary.
 ///
 /// # Errors
@@ -190,6 +245,28 @@ pub fn write_run(
     let summary = summarize(sc, out)?;
     let json = serde_json::to_string_pretty(&summary)?;
     od.write_bytes("summary.json", (json + "\n").as_bytes())?;
-    write_figures(od, out)?;
+    let figures = write_figures(od, out)?;
+    let title = label(out);
+    let mut settings = common_settings();
+    settings.extend([
+        ("scenario".into(), sc.case.name.clone()),
+        ("estimator".into(), format!("{:?}", summary.estimator).to_lowercase()),
+        (
+            "solver".into(),
+            summary
+                .solver
+                .map_or("— (no implicit equation)".into(), |s| format!("{s:?}").to_lowercase()),
+        ),
+        ("realtime factor".into(), format!("{:.0}×", summary.realtime_factor)),
+    ]);
+    Report {
+        title: format!("aeroident poc — {title}"),
+        settings,
+        results: vec![results(&summary, &title)],
+        figures,
+        warnings: out.stopped_early.iter().cloned().collect(),
+        links: Vec::new(),
+    }
+    .write(od)?;
     Ok(summary)
 }

@@ -34,6 +34,71 @@ pub struct BatchOutcome {
     pub result: OeResult,
     /// The summary document.
     pub summary: BatchSummary,
+    /// Per output, the measured and the simulated time history (for the model-vs-measured
+    /// figure of the report).
+    pub traces: Vec<OutputTrace>,
+}
+
+/// One output of a batch fit over the record: measured `z` and the model's simulated `ŷ`
+/// (`z − e`, the fit's residual `e`) against time. A NaN point separates manoeuvres; long
+/// records keep every `stride`th sample (at most [`OutputTrace::MAX_POINTS`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct OutputTrace {
+    /// Output name (`alpha`, `q`, `vt` … as the output-error fit names them).
+    pub name: String,
+    /// Record time, s.
+    pub t_s: Vec<f64>,
+    /// Measured output (the unit of the output: rad, rad/s, m/s …).
+    pub measured: Vec<f64>,
+    /// Simulated output with the estimated parameters, same unit.
+    pub simulated: Vec<f64>,
+    /// Every `stride`th sample kept.
+    pub stride: usize,
+}
+
+impl OutputTrace {
+    /// The most points a trace keeps (figures draw at most a few thousand anyway).
+    pub const MAX_POINTS: usize = 20_000;
+}
+
+/// The [`OutputTrace`]s of `result` over `manoeuvres` (outputs not measured in every sample,
+/// or residuals that do not match the samples, are left out).
+fn output_traces(result: &OeResult, manoeuvres: &[&[AirDataSample]]) -> Vec<OutputTrace> {
+    let ny = result.outputs.len();
+    let total: usize = manoeuvres.iter().map(|m| m.len()).sum();
+    if result.residuals.len() != total * ny {
+        return Vec::new();
+    }
+    let stride = total.div_ceil(OutputTrace::MAX_POINTS).max(1);
+    let mut out = Vec::new();
+    'outputs: for (j, o) in result.outputs.iter().enumerate() {
+        let mut tr = OutputTrace {
+            name: o.name().to_string(),
+            t_s: Vec::new(),
+            measured: Vec::new(),
+            simulated: Vec::new(),
+            stride,
+        };
+        let mut k = 0;
+        for (mi, m) in manoeuvres.iter().enumerate() {
+            if mi > 0 {
+                tr.t_s.push(f64::NAN);
+                tr.measured.push(f64::NAN);
+                tr.simulated.push(f64::NAN);
+            }
+            for (i, s) in m.iter().enumerate() {
+                let Some(z) = o.measured(s) else { continue 'outputs };
+                if i % stride == 0 {
+                    tr.t_s.push(s.t_s);
+                    tr.measured.push(z);
+                    tr.simulated.push(z - result.residuals[k * ny + j]);
+                }
+                k += 1;
+            }
+        }
+        out.push(tr);
+    }
+    out
 }
 
 /// One parameter of the batch summary.
@@ -231,7 +296,11 @@ pub fn fit_record<R: Read>(
     }
     let identifiability = diagnostics::identifiability(&st, &cov, &recorder, &values);
     let (rejections, unlisted) = rejections.finish();
-    let mut warnings = diagnostics::sign_warnings(&st, &values);
+    // The summary's σ: coloured-residual where formed, else Cramér–Rao.
+    let sigmas: Vec<Option<f64>> = (0..np)
+        .map(|i| Some(result.sigma_coloured.as_ref().map_or(result.sigma[i], |c| c[i])))
+        .collect();
+    let mut warnings = diagnostics::sign_warnings(&st, &values, &sigmas);
     warnings.extend(unlisted);
     for c in &identifiability.collinear_regressors {
         warnings.push(format!(
@@ -240,6 +309,7 @@ pub fn fit_record<R: Read>(
         ));
     }
     let validation = simulated_validation(&result, &slices, &file, None);
+    let traces = output_traces(&result, &slices);
     let summary = BatchSummary {
         estimator: "oe".into(),
         model: model.name.clone(),
@@ -272,7 +342,7 @@ pub fn fit_record<R: Read>(
         validation,
         validation_on: None,
     };
-    Ok(BatchOutcome { model, result, summary })
+    Ok(BatchOutcome { model, result, summary, traces })
 }
 
 /// The simulated-output validation of an output-error result on `manoeuvres` (its residuals

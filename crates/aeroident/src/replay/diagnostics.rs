@@ -277,13 +277,42 @@ pub fn identifiability(
     }
 }
 
+/// The primary control derivatives whose sign the mapping's surface conventions fix for a
+/// conventional (tail-aft) aircraft (docs/mapping.md, Channels): `de` > 0 trailing edge down
+/// gives `Cm_de` < 0, `da` > 0 rolls right wing down so `Cl_da` > 0, `dr` > 0 trailing edge
+/// left gives `Cn_dr` < 0. (parameter, expected sign, surface key, its convention).
+const CONTROL_SIGNS: [(&str, f64, &str, &str); 3] = [
+    ("Cm_de", -1.0, "de", "> 0 trailing edge down"),
+    ("Cl_da", 1.0, "da", "> 0 rolls right wing down"),
+    ("Cn_dr", -1.0, "dr", "> 0 trailing edge left"),
+];
+
 /// A warning for each identified parameter whose sign a conventional stable aircraft does not
 /// have ([`aeroident_estimators::prior::expected_sign`]: positive `Cm_q`, `Cl_p`, `Cn_r`,
-/// `Cm_alpha` … ; Klein & Morelli 2006 ch. 3).
-pub fn sign_warnings(st: &ModelStructure, values: &[Option<f64>]) -> Vec<String> {
+/// `Cm_alpha` … ; Klein & Morelli 2006 ch. 3), and for each primary control derivative whose
+/// sign contradicts the mapping's surface convention (`CONTROL_SIGNS`: most often a surface
+/// mapped with the wrong sign; a canard or other unconventional layout can explain it) by more
+/// than 2σ (`sigmas`, one per value; an unexcited surface's derivative near 0 is not a sign).
+pub fn sign_warnings(
+    st: &ModelStructure,
+    values: &[Option<f64>],
+    sigmas: &[Option<f64>],
+) -> Vec<String> {
     let mut out = Vec::new();
     for (i, v) in values.iter().enumerate() {
         let (Some(v), Some(param)) = (*v, st.param(i)) else { continue };
+        let significant = sigmas.get(i).copied().flatten().is_none_or(|s| v.abs() > 2.0 * s);
+        if let Some((_, sign, key, convention)) =
+            CONTROL_SIGNS.iter().find(|(name, ..)| *name == param.name())
+            && v * sign < 0.0
+            && significant
+        {
+            out.push(format!(
+                "{} = {v:+.4} has the sign a conventional aircraft does not have under the mapping's convention for `{key}` ({convention}; expected {}): check the sign (`scale = -1`) of `{key}` in the mapping (docs/mapping.md)",
+                param.name(),
+                if *sign > 0.0 { "> 0" } else { "< 0" }
+            ));
+        }
         if let Some(sign) = aeroident_estimators::prior::expected_sign(param)
             && v * sign < 0.0
         {
@@ -300,8 +329,27 @@ pub fn sign_warnings(st: &ModelStructure, values: &[Option<f64>]) -> Vec<String>
 #[cfg(test)]
 mod tests {
     use super::*;
+
     use aeroident_estimators::rls::{Rls, RlsConfig};
     use aeroident_estimators::{AirDataSample, AircraftConstants, ModelStructure, Term};
+
+    /// A flipped elevator gives `Cm_de` > 0: the warning names the surface key and the fix; a
+    /// correct `Cm_de`, an unidentified one and one within 2σ of 0 give none.
+    #[test]
+    fn control_derivative_against_the_mapping_convention_is_warned() {
+        let st = ModelStructure::empty().with(Coefficient::Cm, &[Term::Alpha, Term::De]);
+        let w = sign_warnings(&st, &[Some(-1.0), Some(1.5)], &[None, Some(0.1)]);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].starts_with("Cm_de = +1.5000")
+                && w[0].contains("`de`")
+                && w[0].contains("scale = -1")
+        );
+        assert!(sign_warnings(&st, &[Some(-1.0), Some(-1.5)], &[None, None]).is_empty());
+        assert!(sign_warnings(&st, &[Some(-1.0), None], &[None, None]).is_empty());
+        // Within 2σ of 0 (an unexcited elevator): no warning.
+        assert!(sign_warnings(&st, &[Some(-1.0), Some(0.02)], &[None, Some(0.05)]).is_empty());
+    }
 
     /// The condition number from the estimator's covariance (nalgebra eigenvalues) equals the
     /// RLS's own (Jacobi iteration on its P), and a nearly collinear pair is listed: two

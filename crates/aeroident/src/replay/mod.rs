@@ -726,7 +726,8 @@ pub fn replay_with<R: Read>(
     // Physically implausible signs and the filter's consistency, as warnings.
     if !diverged {
         let values: Vec<Option<f64>> = parameters.iter().map(|p| p.estimate).collect();
-        warnings.extend(diagnostics::sign_warnings(r.est.structure(), &values));
+        let sigmas: Vec<Option<f64>> = parameters.iter().map(|p| p.std_error).collect();
+        warnings.extend(diagnostics::sign_warnings(r.est.structure(), &values, &sigmas));
         if let Some(nis) = r.est.nis() {
             warnings.push(format!(
                 "normalised innovation squared (mean e²/S) = {nis:.2} (1 for a consistent filter; > 2 means its σ are optimistic, < 0.5 pessimistic)"

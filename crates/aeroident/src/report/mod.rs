@@ -7,6 +7,7 @@
 //! [`replay`] builds the results, figures and report of a `replay`; [`run`] those of the
 //! closed-loop `run` experiment.
 
+pub mod batch;
 pub mod montecarlo;
 pub mod replay;
 pub mod run;
@@ -14,7 +15,7 @@ pub mod run;
 use crate::outdir::{OutputDir, OutputError};
 use crate::plot::{Panel, PlotError, render_panels_png, render_panels_svg};
 use crate::results::Results;
-use crate::table::{fmt_estimate, fmt_sig};
+use crate::table::{fmt_error_pct, fmt_estimate, fmt_sig};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -73,6 +74,9 @@ pub struct Report {
     pub figures: Vec<Figure>,
     /// Warnings of the run.
     pub warnings: Vec<String>,
+    /// Links to the reports of the runs this one summarises: (relative path, text). Relative
+    /// links to sibling files only: the page itself stays self-contained.
+    pub links: Vec<(String, String)>,
 }
 
 /// Renders `panels` (see [`crate::plot`]) to `<stem>.png` and `<stem>.svg` in `od` and returns
@@ -136,6 +140,13 @@ figcaption{color:#555;font-size:.9em}li.warn{color:#8a5a00}";
 
 fn results_html(r: &Results, h: &mut String) {
     let _ = writeln!(h, "<h2>{}</h2>", escape(&r.title));
+    if !r.rows.is_empty() {
+        params_html(r, h);
+    }
+    fit_html(r, h);
+}
+
+fn params_html(r: &Results, h: &mut String) {
     let _ = writeln!(
         h,
         "<table class=\"params\"><tr><th>parameter</th><th>estimate ± σ</th><th>{}</th><th>error %</th><th>status</th></tr>",
@@ -153,14 +164,17 @@ fn results_html(r: &Results, h: &mut String) {
             escape(&row.name),
             escape(&fmt_estimate(row.estimate, row.sigma)),
             escape(&fmt_sig(row.reference, 4)),
-            row.error_pct().map_or("—".into(), |e| format!("{e:+.1}")),
+            fmt_error_pct(row.error_pct()),
             escape(&row.status)
         );
     }
     h.push_str("</table>\n");
+}
+
+fn fit_html(r: &Results, h: &mut String) {
     if !r.fit.is_empty() {
-        h.push_str("<p>Fit quality: measured coefficient versus the model's prediction from the final estimates.</p>\n");
-        h.push_str("<table class=\"fit\"><tr><th>coefficient</th><th>samples</th><th>residual RMS</th><th>R²</th><th>Theil's U</th></tr>\n");
+        h.push_str("<p>Fit quality: each measured quantity (a coefficient, or an output of the output-error model) versus the model's prediction from the final estimates.</p>\n");
+        h.push_str("<table class=\"fit\"><tr><th>measured</th><th>samples</th><th>residual RMS</th><th>R²</th><th>Theil's U</th></tr>\n");
         for q in &r.fit {
             let _ = writeln!(
                 h,
@@ -190,6 +204,13 @@ impl Report {
              <title>{t}</title><style>{STYLE}</style></head>\n<body>\n<h1>{t}</h1>\n",
             t = escape(&self.title)
         );
+        if !self.links.is_empty() {
+            h.push_str("<h2>Runs</h2>\n<ul>\n");
+            for (href, text) in &self.links {
+                let _ = writeln!(h, "<li><a href=\"{}\">{}</a></li>", escape(href), escape(text));
+            }
+            h.push_str("</ul>\n");
+        }
         for r in &self.results {
             results_html(r, &mut h);
         }
@@ -258,6 +279,7 @@ mod tests {
                     .into(),
             }],
             warnings: vec!["w <1>".into()],
+            links: Vec::new(),
         };
         let h = r.to_html();
         assert!(h.starts_with("<!DOCTYPE html>") && h.trim_end().ends_with("</html>"));

@@ -2,7 +2,7 @@
 //! scatter over the runs against the truth, the campaign's settings and its figures (the
 //! histograms and the coverage chart, inlined as PNG data).
 
-use super::{Report, common_settings, png_figure};
+use super::{Figure, Report, common_settings, png_figure};
 use crate::montecarlo::Campaign;
 use crate::outdir::{OutputDir, OutputError};
 use crate::results::{ParameterRow, Results};
@@ -45,15 +45,23 @@ pub fn results(c: &Campaign) -> Vec<Results> {
 /// # Errors
 /// [`OutputError`] naming the file.
 pub fn write(c: &Campaign, dir: &Path) -> Result<(), OutputError> {
-    let mut figures = Vec::new();
-    let mut pngs: Vec<_> = std::fs::read_dir(dir)
+    // The SVG of each figure (the PNG where no SVG was written).
+    let mut files: Vec<std::path::PathBuf> = std::fs::read_dir(dir)
         .map(|r| r.filter_map(|e| e.ok().map(|e| e.path())).collect())
         .unwrap_or_else(|_| Vec::new());
-    pngs.retain(|p: &std::path::PathBuf| p.extension().is_some_and(|x| x == "png"));
-    pngs.sort();
-    for p in pngs {
-        if let Ok(bytes) = std::fs::read(&p) {
-            let name = p.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned());
+    files.retain(|p| {
+        let ext = p.extension().and_then(|x| x.to_str());
+        ext == Some("svg") || (ext == Some("png") && !p.with_extension("svg").exists())
+    });
+    files.sort();
+    let mut figures = Vec::new();
+    for p in files {
+        let name = p.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned());
+        if p.extension().is_some_and(|x| x == "svg") {
+            if let Ok(svg) = std::fs::read_to_string(&p) {
+                figures.push(Figure { caption: name, svg });
+            }
+        } else if let Ok(bytes) = std::fs::read(&p) {
             figures.push(png_figure(&bytes, &name, &name));
         }
     }
@@ -71,6 +79,7 @@ pub fn write(c: &Campaign, dir: &Path) -> Result<(), OutputError> {
         results: results(c),
         figures,
         warnings: c.crb_notes.clone(),
+        links: Vec::new(),
     }
     .write(&mut od)?;
     Ok(())

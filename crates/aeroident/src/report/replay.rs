@@ -24,8 +24,12 @@ pub struct Reference {
 
 /// The references of the model `outcome` identified.
 pub fn model_references(outcome: &ReplayOutcome) -> Vec<Reference> {
-    outcome
-        .model
+    spec_references(&outcome.model)
+}
+
+/// The references of a model file (its `[reference.X]` tables; none for a preset).
+pub fn spec_references(model: &aeroident_io::ModelSpec) -> Vec<Reference> {
+    model
         .references
         .iter()
         .map(|r| Reference {
@@ -257,6 +261,7 @@ pub fn write(
         results: vec![res.clone()],
         figures,
         warnings: outcome.summary.warnings.clone(),
+        links: Vec::new(),
     };
     report.write(od)?;
     Ok(res)

@@ -7,6 +7,7 @@ use crate::aircraft::RunOutput;
 use crate::aircraft::report::Summary;
 use crate::outdir::{OutputDir, OutputError};
 use crate::results::{ParameterRow, Results};
+use std::path::Path;
 
 /// One [`Results`] per estimator of `summary`, in order of appearance; the reference column is
 /// the truth at the end of the run (after a damage step, the new value).
@@ -20,6 +21,13 @@ pub fn results(summary: &Summary) -> Vec<Results> {
         let mut row = ParameterRow::new(name, p.r#final, p.sigma, p.truth, failure);
         if row.status == "ok" && p.meets_targets == Some(false) {
             row.status = "targets missed".into();
+        }
+        // Without a σ the status says how close the final value is (the overview's 5 %).
+        if row.status == "ok"
+            && row.sigma.is_none()
+            && row.error_pct().is_some_and(|e| e.abs() > 5.0)
+        {
+            row.status = "not within 5 %".into();
         }
         match out.iter_mut().find(|r| r.title == title) {
             Some(r) => r.rows.push(row),
@@ -99,6 +107,53 @@ pub fn write(
         results: results(summary),
         figures,
         warnings,
+        links: Vec::new(),
+    }
+    .write(od)?;
+    Ok(())
+}
+
+/// Writes the top-level `report.html` of `run --all` into `od`: one link per scenario to its
+/// own `<name>/report.html` with its one-line overview (`lines`: (scenario name, overview
+/// cells)), then every scenario's results tables ([`results`]), in the order given.
+///
+/// # Errors
+/// [`OutputError`] naming the file.
+pub fn write_index(
+    scenarios_dir: &Path,
+    lines: &[(String, String)],
+    summaries: &[&Summary],
+    od: &mut OutputDir,
+) -> Result<(), OutputError> {
+    let mut settings = common_settings();
+    settings.extend([
+        ("scenarios".into(), scenarios_dir.display().to_string()),
+        ("runs".into(), lines.len().to_string()),
+        ("thesis comparison".into(), "report.md (thesis vs ours, per table)".into()),
+    ]);
+    let links = lines
+        .iter()
+        .map(|(name, cells)| {
+            (format!("{name}/report.html"), format!("{name} — {cells} within 5 % of the truth"))
+        })
+        .collect();
+    let warnings = summaries
+        .iter()
+        .flat_map(|s| {
+            s.parameters.iter().filter_map(|p| {
+                p.failure
+                    .as_ref()
+                    .map(|f| format!("{}: {} {} failed: {f}", s.scenario, p.estimator, p.name))
+            })
+        })
+        .collect();
+    Report {
+        title: format!("aeroident run --all — {}", scenarios_dir.display()),
+        settings,
+        results: summaries.iter().flat_map(|s| results(s)).collect(),
+        figures: Vec::new(),
+        warnings,
+        links,
     }
     .write(od)?;
     Ok(())

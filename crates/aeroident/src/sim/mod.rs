@@ -24,7 +24,8 @@
 pub mod scenario;
 
 use crate::outdir::OutputDir;
-use crate::plot::{LineKind, Panel, Series, render_panels_png};
+use crate::plot::{LineKind, Panel, Series};
+use crate::report::{Report, common_settings, write_figure};
 use aeroident_models::actuator::{F16WithActuators, SurfaceActuators};
 use aeroident_models::f16::AeroIncrements;
 use aeroident_models::f16::{ALPHA, P, Q, R};
@@ -352,8 +353,9 @@ pub fn run(sc: &SimScenario, base_dir: &Path) -> anyhow::Result<SimRun> {
 /// allocation.
 pub const MAX_STEPS: usize = 1_000_000;
 
-/// Writes `timeseries.csv`, `states.png` and `controls_wind.png` into the locked output
-/// directory `od`, each atomically.
+/// Writes `timeseries.csv`, `states.{png,svg}`, `controls_wind.{png,svg}` and `report.html`
+/// (the trim, the record's size and the figures) into the locked output directory `od`, each
+/// atomically.
 ///
 /// # Errors
 /// I/O, CSV or plotting errors naming the file.
@@ -402,10 +404,12 @@ pub fn write_outputs(run: &SimRun, od: &mut OutputDir) -> anyhow::Result<()> {
                 });
             }
         }
+        // Measured signals: the whole record sets the range (a manoeuvre is not a transient).
         Panel {
             title: title.to_string(),
             y_label: y_label.to_string(),
             series,
+            signals: true,
             ..Default::default()
         }
     };
@@ -417,9 +421,14 @@ pub fn write_outputs(run: &SimRun, od: &mut OutputDir) -> anyhow::Result<()> {
         panel("load factors", "g", &[("nz_g", 1.0), ("ny_g", 1.0), ("nx_g", 1.0)]),
         panel("altitude", "alt (ft)", &[("alt_ft", 1.0)]),
     ];
-    od.write_path("states.png", |p| {
-        render_panels_png(p, "F-16 open-loop response", &states, 1000, 230)
-    })?;
+    let states = write_figure::<anyhow::Error>(
+        od,
+        "states",
+        "F-16 open-loop response",
+        "The true states (solid) and the sensed channels (dashed, where the scenario has sensors).",
+        &states,
+        (1000, 230),
+    )?;
     let controls = [
         panel("elevator", "deg", &[("elevator_cmd_rad", d), ("elevator_rad", d)]),
         panel(
@@ -438,9 +447,44 @@ pub fn write_outputs(run: &SimRun, od: &mut OutputDir) -> anyhow::Result<()> {
             &[("wind_body_x_fps", 1.0), ("wind_body_y_fps", 1.0), ("wind_body_z_fps", 1.0)],
         ),
     ];
-    od.write_path("controls_wind.png", |p| {
-        render_panels_png(p, "F-16 controls and wind", &controls, 1000, 230)
-    })?;
+    let controls = write_figure::<anyhow::Error>(
+        od,
+        "controls_wind",
+        "F-16 controls and wind",
+        "Surface commands and positions, throttle and engine power, and the wind in body axes.",
+        &controls,
+        (1000, 230),
+    )?;
+    let mut settings = common_settings();
+    settings.extend([
+        (
+            "record".into(),
+            format!(
+                "{:.2} s, {} rows × {} columns (timeseries.csv)",
+                t.last().copied().unwrap_or(0.0),
+                t.len(),
+                run.columns.len()
+            ),
+        ),
+        (
+            "trim".into(),
+            format!(
+                "throttle {:.4}, elevator {:.4}°, α {:.4}° (cost {:.1e})",
+                run.trim.controls.throttle,
+                run.trim.controls.elevator_rad.to_degrees(),
+                run.trim.state[ALPHA].to_degrees(),
+                run.trim.cost
+            ),
+        ),
+        ("replay it with".into(), "--map mappings/aeroident-sim.toml (docs/mapping.md)".into()),
+    ]);
+    Report {
+        title: "aeroident f16 sim".into(),
+        settings,
+        figures: vec![states, controls],
+        ..Default::default()
+    }
+    .write(od)?;
     Ok(())
 }
 
@@ -456,7 +500,7 @@ pub fn execute(args: SimArgs) -> anyhow::Result<()> {
     let r = run(&sc, base)?;
     write_outputs(&r, &mut od)?;
     crate::cli::print_stdout(&format!(
-        "simulated {:.2} s ({} rows, {} columns) from trim: throttle {:.4}, elevator {:.4} deg, alpha {:.4} deg (trim cost {:.1e})\nwrote {}/timeseries.csv, states.png, controls_wind.png",
+        "simulated {:.2} s ({} rows, {} columns) from trim: throttle {:.4}, elevator {:.4} deg, alpha {:.4} deg (trim cost {:.1e})\nwrote {}/timeseries.csv, report.html, states and controls_wind (.png, .svg)",
         r.data[0].last().copied().unwrap_or(0.0),
         r.data[0].len(),
         r.columns.len(),

@@ -670,3 +670,52 @@ pub fn trim_biases(
 
 #[cfg(test)]
 mod tests;
+
+/// The records a plan predicts: per planned manoeuvre, the samples of step 1 (module doc) with
+/// every planned output replaced by the model's simulated response under the assumed `θ` plus
+/// `noise(j)` for sensor `j` (return 0 for the noise-free response). With white noise of the
+/// sensors' σ these are the data whose output-error estimates scatter as [`predict_crb`] says:
+/// the Monte Carlo check of a design (each manoeuvre simulated from the condition, initial
+/// states as measured at the condition).
+///
+/// # Errors
+/// As [`predict_crb`].
+pub fn simulate_plan(
+    plan: &DesignPlan,
+    noise: &mut dyn FnMut(usize) -> f64,
+) -> Result<Vec<Vec<AirDataSample>>, EstimatorError> {
+    let Prepared { problem, beta, .. } = prepare(plan)?;
+    let mut y = Vec::new();
+    problem.simulate(&beta, &mut y, None)?;
+    let set = problem.model.state_set();
+    let ny = problem.ny();
+    let mut offset = 0;
+    let mut out = Vec::with_capacity(plan.manoeuvres.len());
+    for m in &plan.manoeuvres {
+        let mut data = planned_samples(plan, set, m)?;
+        for s in data.iter_mut() {
+            for (j, sensor) in plan.sensors.iter().enumerate() {
+                let v = y[offset + j] + noise(j);
+                match sensor.output {
+                    Output::Vt => s.vt_mps = v,
+                    Output::Alpha => s.alpha_rad = v,
+                    Output::Beta => s.beta_rad = Some(v),
+                    Output::P => s.p_rad_s = Some(v),
+                    Output::Q => s.q_rad_s = Some(v),
+                    Output::R => s.r_rad_s = Some(v),
+                    Output::Phi => s.phi_rad = Some(v),
+                    Output::Theta => s.theta_rad = Some(v),
+                    Output::Ax => s.ax_mps2 = Some(v),
+                    Output::Ay => s.ay_mps2 = Some(v),
+                    Output::Az => s.az_mps2 = Some(v),
+                    Output::Pdot => s.pdot_rad_s2 = Some(v),
+                    Output::Qdot => s.qdot_rad_s2 = Some(v),
+                    Output::Rdot => s.rdot_rad_s2 = Some(v),
+                }
+            }
+            offset += ny;
+        }
+        out.push(data);
+    }
+    Ok(out)
+}

@@ -1,0 +1,224 @@
+//! `aeroident design`: an orthogonal multisine for chosen surfaces and its predicted
+//! Cramér–Rao σ at an F-16 flight condition (docs/export.md).
+//!
+//! ```text
+//! aeroident design --surfaces de,da,dr --amplitude-deg 2 --duration-s 10 --rate-hz 50
+//!                  [--band-hz 0.1,1.5] [--alt-ft 20000 --vt-fps 675 --xcg 0.35] --out DIR
+//! ```
+//! Writes `DIR/input.csv` (t_s, per surface rad and deg), `DIR/injection.csv` (the autopilot
+//! table: t_ms and per surface the offset from trim in centidegrees) and `DIR/design.json`
+//! (harmonics, condition, predicted σ), and prints σ, σ/|θ| and the response excursions.
+
+use crate::export::design::{Design, DesignSpec, Surface, csv_table, design, large_excursions};
+use crate::outdir::OutputDir;
+use std::path::PathBuf;
+
+/// Arguments of `aeroident design`.
+#[derive(Debug, clap::Args)]
+pub struct DesignArgs {
+    /// Surfaces to excite, each with one member of the orthogonal set.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "de,da,dr")]
+    pub surfaces: Vec<Surface>,
+    /// Peak amplitude of each surface's perturbation about trim, degrees.
+    #[arg(long, default_value_t = 2.0)]
+    pub amplitude_deg: f64,
+    /// Record length (the multisine's base period), s.
+    #[arg(long, default_value_t = 10.0)]
+    pub duration_s: f64,
+    /// Sample rate of the tables, Hz.
+    #[arg(long, default_value_t = 50.0)]
+    pub rate_hz: f64,
+    /// Frequency band of the harmonics, Hz: `lo,hi`.
+    #[arg(long, value_delimiter = ',', num_args = 2, default_values_t = [0.1, 1.5])]
+    pub band_hz: Vec<f64>,
+    /// Flight condition: trim altitude, ft (F-16, wings level).
+    #[arg(long, default_value_t = 20000.0)]
+    pub alt_ft: f64,
+    /// Flight condition: trim true airspeed, ft/s.
+    #[arg(long, default_value_t = 675.0)]
+    pub vt_fps: f64,
+    /// Centre of gravity, fraction of the mean chord.
+    #[arg(long, default_value_t = 0.3)]
+    pub xcg: f64,
+    /// Output directory.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+/// Runs `aeroident design`.
+///
+/// # Errors
+/// Invalid options (naming the option), a trim that does not converge, a prediction that fails
+/// (e.g. the response leaves the model's domain), or an output error naming the file.
+pub fn execute(a: DesignArgs) -> anyhow::Result<()> {
+    let spec = DesignSpec {
+        surfaces: a.surfaces.clone(),
+        amplitude_rad: a.amplitude_deg.to_radians(),
+        duration_s: a.duration_s,
+        rate_hz: a.rate_hz,
+        band_hz: (a.band_hz[0], a.band_hz[1]),
+        alt_ft: a.alt_ft,
+        vt_fps: a.vt_fps,
+        xcg: a.xcg,
+    };
+    let mut out = a.out.as_deref().map(OutputDir::open).transpose()?;
+    let d = design(&spec)?;
+    crate::cli::print_stdout(&report(&a, &d))?;
+    let large = large_excursions(&d);
+    if !large.is_empty() {
+        eprintln!(
+            "warning: the open-loop response is not a small perturbation ({}): the bound assumes the derivatives hold over it; reduce --amplitude-deg or --duration-s, or fly it with the stability augmentation on",
+            large.join(", ")
+        );
+    }
+    if let Some(o) = out.as_mut() {
+        o.write_bytes("input.csv", csv_table(&d).as_bytes())?;
+        o.write_bytes("injection.csv", injection_table(&d).as_bytes())?;
+        o.write_bytes("design.json", serde_json::to_string_pretty(&json(&a, &d))?.as_bytes())?;
+        eprintln!("wrote input.csv, injection.csv, design.json to {}", o.path().display());
+    }
+    Ok(())
+}
+
+/// The autopilot injection table: `t_ms` (integer ms from the start of the manoeuvre) and, per
+/// surface, `<s>_cdeg`: the offset from the trim deflection in centidegrees (rounded), sign
+/// convention of the surface (docs/export.md).
+pub fn injection_table(d: &Design) -> String {
+    let mut out = String::from("t_ms");
+    for (s, _) in &d.inputs {
+        out.push_str(&format!(",{}_cdeg", s.name()));
+    }
+    out.push('\n');
+    for (k, t) in d.t_s.iter().enumerate() {
+        out.push_str(&format!("{}", (t * 1000.0).round() as i64));
+        for (_, v) in &d.inputs {
+            out.push_str(&format!(",{}", (v[k].to_degrees() * 100.0).round() as i64));
+        }
+        out.push('\n');
+    }
+    out
+}
+
+fn report(a: &DesignArgs, d: &Design) -> String {
+    let r = &d.crb;
+    let mut s = format!(
+        "orthogonal multisine: {} at ±{}°, {} s, {} Hz; harmonics (k/{} Hz): {}\n\
+         condition: F-16 trimmed wings level at {} ft, {} ft/s, xcg {}; model {}\n\
+         predicted Cramér–Rao σ (white sensor noise at the simulator's levels, one record):\n",
+        a.surfaces.iter().map(|s| s.name()).collect::<Vec<_>>().join(","),
+        a.amplitude_deg,
+        a.duration_s,
+        a.rate_hz,
+        a.duration_s,
+        d.inputs
+            .iter()
+            .zip(&d.harmonics)
+            .map(|((s, _), h)| format!("{} {:?}", s.name(), h))
+            .collect::<Vec<_>>()
+            .join("; "),
+        a.alt_ft,
+        a.vt_fps,
+        a.xcg,
+        model_name(d),
+    );
+    s.push_str(&format!(
+        "  {:<12} {:>12} {:>12} {:>9}\n",
+        "parameter", "assumed θ", "σ_CRB", "σ/|θ| %"
+    ));
+    for i in 0..r.n_params {
+        let sigma = r.sigma[i].map_or("not identifiable".to_string(), |x| format!("{x:.4e}"));
+        // σ/|θ| only where θ is not ~0 (a trimmed bias of a symmetric aircraft is 1e-26).
+        let rel = r.relative_sigma[i]
+            .filter(|_| r.values[i].abs() > 1e-9)
+            .map_or("—".to_string(), |x| format!("{:.2}", 100.0 * x));
+        s.push_str(&format!(
+            "  {:<12} {:>12.4e} {:>12} {:>9}\n",
+            r.names[i], r.values[i], sigma, rel
+        ));
+    }
+    s.push_str(&format!("condition number {:.3e}", r.condition_number));
+    for (o, e) in r.outputs.iter().zip(&r.output_excursion) {
+        s.push_str(&format!("; peak |Δ{o:?}| {e:.3e}"));
+    }
+    s
+}
+
+fn model_name(d: &Design) -> &'static str {
+    use aeroident_estimators::vocabulary::ModelStructure as M;
+    if d.structure == M::six_axis() {
+        "six-axis"
+    } else if d.structure == M::lateral() {
+        "lateral"
+    } else {
+        "longitudinal"
+    }
+}
+
+fn json(a: &DesignArgs, d: &Design) -> serde_json::Value {
+    let r = &d.crb;
+    serde_json::json!({
+        "surfaces": a.surfaces.iter().map(|s| s.name()).collect::<Vec<_>>(),
+        "amplitude_deg": a.amplitude_deg,
+        "duration_s": a.duration_s,
+        "rate_hz": a.rate_hz,
+        "band_hz": a.band_hz,
+        "harmonics": d.harmonics,
+        "condition": {"aircraft": "F-16 (Stevens & Lewis)", "alt_ft": a.alt_ft, "vt_fps": a.vt_fps, "xcg": a.xcg},
+        "model": model_name(d),
+        "condition_number": if r.condition_number.is_finite() { Some(r.condition_number) } else { None },
+        "parameters": (0..r.n_params).map(|i| serde_json::json!({
+            "name": r.names[i],
+            "assumed": r.values[i],
+            "crb_sigma": r.sigma[i],
+            "relative_crb_sigma": r.relative_sigma[i],
+        })).collect::<Vec<_>>(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn writes_the_tables_and_the_prediction() {
+        let dir = std::env::temp_dir().join(format!("aeroident-design-cli-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let args = DesignArgs {
+            surfaces: vec![Surface::De, Surface::Da],
+            amplitude_deg: 1.0,
+            duration_s: 8.0,
+            rate_hz: 25.0,
+            band_hz: vec![0.1, 1.5],
+            alt_ft: 20000.0,
+            vt_fps: 675.0,
+            xcg: 0.3,
+            out: Some(dir.clone()),
+        };
+        execute(args).unwrap();
+        let input = std::fs::read_to_string(dir.join("input.csv")).unwrap();
+        let inj = std::fs::read_to_string(dir.join("injection.csv")).unwrap();
+        let lines: Vec<&str> = input.lines().collect();
+        assert_eq!(lines[0], "t_s,de_rad,de_deg,da_rad,da_deg");
+        assert_eq!(lines.len(), 1 + 201);
+        let inj_lines: Vec<&str> = inj.lines().collect();
+        assert_eq!(inj_lines[0], "t_ms,de_cdeg,da_cdeg");
+        // The injection table is the input table in ms and rounded centidegrees.
+        for (a, b) in lines.iter().zip(&inj_lines).skip(1) {
+            let x: Vec<f64> = a.split(',').map(|v| v.parse().unwrap()).collect();
+            let y: Vec<i64> = b.split(',').map(|v| v.parse().unwrap()).collect();
+            assert_eq!(y[0], (x[0] * 1000.0).round() as i64);
+            assert_eq!(y[1], (x[2] * 100.0).round() as i64);
+            assert_eq!(y[2], (x[4] * 100.0).round() as i64);
+            assert!((x[2] - x[1].to_degrees()).abs() < 1e-12);
+        }
+        let json: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("design.json")).unwrap()).unwrap();
+        assert_eq!(json["model"], "six-axis");
+        let params = json["parameters"].as_array().unwrap();
+        let six = aeroident_estimators::vocabulary::ModelStructure::six_axis().n_params();
+        assert_eq!(params.len(), six);
+        let cm_q = params.iter().find(|p| p["name"] == "Cm_q").unwrap();
+        assert!(cm_q["crb_sigma"].as_f64().unwrap() > 0.0);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

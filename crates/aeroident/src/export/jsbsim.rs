@@ -1,0 +1,299 @@
+//! Identified derivatives as a JSBSim `<aerodynamics>` fragment.
+//!
+//! Each identified parameter `<coef>_<term>` becomes one function
+//! `aero/coefficient/<coef>_<term>` in the axis of its coefficient, the product of the
+//! dimensional scaling, the derivative and the term's regressor as JSBSim properties
+//! (JSBSim reference manual, "Aerodynamics"; the regressors of
+//! [`aeroident_estimators::vocabulary::Term::value`]):
+//!
+//! | coefficient | axis | scaling |
+//! |---|---|---|
+//! | CL, CD, CY | LIFT, DRAG, SIDE (wind axes) | `aero/qbar-area` |
+//! | CX, CY, CZ | X, Y, Z (body axes) | `aero/qbar-area` |
+//! | Cl, Cn | ROLL, YAW | `aero/qbar-area` · `metrics/bw-ft` |
+//! | Cm | PITCH | `aero/qbar-area` · `metrics/cbarw-ft` |
+//!
+//! | term | regressor |
+//! |---|---|
+//! | bias | 1 |
+//! | alpha, alpha2, beta, alpha_beta | `aero/alpha-rad`, its square, `aero/beta-rad`, α·β |
+//! | p, r | `velocities/p-aero-rad_sec`, `velocities/r-aero-rad_sec` · `aero/bi2vel` (b/2V) |
+//! | q, alphadot | `velocities/q-aero-rad_sec`, `aero/alphadot-rad_sec` · `aero/ci2vel` (c̄/2V) |
+//! | de, da, dr, alpha_de | the surface properties ([`SurfaceProperties`]), α·δe |
+//! | V (V/V0), q0 (q c̄/2V0) | `velocities/vt-fps` / V0, `velocities/q-aero-rad_sec` · `metrics/cbarw-ft` / (2 V0): need V0 |
+//!
+//! Signs are aeroident's (Stevens & Lewis 3rd ed. §2.3): JSBSim's LIFT is up, DRAG aft, SIDE
+//! and Y right, X forward, Z down, ROLL/PITCH/YAW right wing down / nose up / nose right, the
+//! same as CL, CD, CY, CX, CZ, Cl, Cm, Cn; δe > 0 trailing edge down and δr > 0 trailing edge
+//! left as JSBSim's `fcs/elevator-pos-rad` and `fcs/rudder-pos-rad`; δa > 0 rolls right wing down
+//! (check the aileron property of the aircraft). aeroident's CL and CD are stability-axis
+//! coefficients (rotated by α); JSBSim's LIFT and DRAG are wind axes (also rotated by β): the
+//! difference is of order β·CD. Lift and drag on one side and body X/Z on the other cannot be
+//! mixed in one fragment (JSBSim refuses mixed axis systems). A parameter that is not
+//! identified (`null`) is omitted with a comment, never written as 0.
+
+use aeroident_estimators::vocabulary::{Coefficient, Param, Term};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// One parameter read from a summary.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Identified {
+    /// The parameter.
+    pub param: Param,
+    /// Estimate; `None` if not identified.
+    pub value: Option<f64>,
+    /// Standard error, if given.
+    pub sigma: Option<f64>,
+}
+
+/// The identified parameters of a `replay` summary (`summary.json`, online or `oe`), with the
+/// estimator and model names.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SummaryParameters {
+    /// `estimator` of the summary.
+    pub estimator: String,
+    /// `model` of the summary.
+    pub model: String,
+    /// The parameters in summary order.
+    pub parameters: Vec<Identified>,
+}
+
+/// Reads `parameters[].{name, estimate, std_error}` (plus `estimator`, `model`) of a summary.
+///
+/// # Errors
+/// The file cannot be read or parsed, has no `parameters` array, names a parameter outside
+/// the vocabulary, or has a non-finite estimate; each naming the file and parameter.
+pub fn read_summary(path: &Path) -> anyhow::Result<SummaryParameters> {
+    let file = path.display();
+    let text = std::fs::read_to_string(path).map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
+    let json: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| anyhow::anyhow!("{file}: not JSON: {e}"))?;
+    let list = json["parameters"].as_array().ok_or_else(|| {
+        anyhow::anyhow!("{file}: no `parameters` array (is it a replay summary.json?)")
+    })?;
+    let mut parameters = Vec::with_capacity(list.len());
+    for (i, p) in list.iter().enumerate() {
+        let name = p["name"]
+            .as_str()
+            .ok_or_else(|| anyhow::anyhow!("{file}: parameters[{i}] has no `name`"))?;
+        let param = Param::from_name(name).ok_or_else(|| {
+            anyhow::anyhow!(
+                "{file}: parameter `{name}` is not of the vocabulary (<coefficient>_<term>)"
+            )
+        })?;
+        let number = |key: &str| -> anyhow::Result<Option<f64>> {
+            match &p[key] {
+                serde_json::Value::Null => Ok(None),
+                v => v.as_f64().filter(|x| x.is_finite()).map(Some).ok_or_else(|| {
+                    anyhow::anyhow!("{file}: parameter `{name}`: `{key}` is not a finite number")
+                }),
+            }
+        };
+        parameters.push(Identified {
+            param,
+            value: number("estimate")?,
+            sigma: number("std_error")?,
+        });
+    }
+    let text_of = |k: &str| json[k].as_str().unwrap_or("?").to_string();
+    Ok(SummaryParameters { estimator: text_of("estimator"), model: text_of("model"), parameters })
+}
+
+/// The JSBSim properties of the control-surface deflections, rad.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SurfaceProperties {
+    /// Elevator, > 0 trailing edge down.
+    pub elevator: String,
+    /// Aileron, > 0 rolls right wing down.
+    pub aileron: String,
+    /// Rudder, > 0 trailing edge left.
+    pub rudder: String,
+}
+
+impl Default for SurfaceProperties {
+    fn default() -> Self {
+        Self {
+            elevator: "fcs/elevator-pos-rad".into(),
+            aileron: "fcs/left-aileron-pos-rad".into(),
+            rudder: "fcs/rudder-pos-rad".into(),
+        }
+    }
+}
+
+/// ft per m (exact).
+const FT_PER_M: f64 = 1.0 / 0.3048;
+
+/// The regressor of `term` as JSBSim properties and a constant factor, or why it cannot be
+/// expressed.
+fn regressor(
+    term: Term,
+    s: &SurfaceProperties,
+    v0_mps: Option<f64>,
+) -> Result<(Vec<String>, f64), String> {
+    let p = |names: &[&str]| names.iter().map(|n| (*n).to_string()).collect::<Vec<_>>();
+    let v0_fps = || {
+        v0_mps.map(|v| v * FT_PER_M).ok_or_else(|| {
+            format!("term `{}` needs the reference speed V0: give --v0-mps", term.name())
+        })
+    };
+    Ok(match term {
+        Term::Bias => (Vec::new(), 1.0),
+        Term::Alpha => (p(&["aero/alpha-rad"]), 1.0),
+        Term::Alpha2 => (p(&["aero/alpha-rad", "aero/alpha-rad"]), 1.0),
+        Term::Beta => (p(&["aero/beta-rad"]), 1.0),
+        Term::AlphaBeta => (p(&["aero/alpha-rad", "aero/beta-rad"]), 1.0),
+        Term::P => (p(&["velocities/p-aero-rad_sec", "aero/bi2vel"]), 1.0),
+        Term::Q => (p(&["velocities/q-aero-rad_sec", "aero/ci2vel"]), 1.0),
+        Term::R => (p(&["velocities/r-aero-rad_sec", "aero/bi2vel"]), 1.0),
+        Term::Alphadot => (p(&["aero/alphadot-rad_sec", "aero/ci2vel"]), 1.0),
+        Term::De => (vec![s.elevator.clone()], 1.0),
+        Term::Da => (vec![s.aileron.clone()], 1.0),
+        Term::Dr => (vec![s.rudder.clone()], 1.0),
+        Term::AlphaDe => (vec!["aero/alpha-rad".into(), s.elevator.clone()], 1.0),
+        Term::V => (p(&["velocities/vt-fps"]), 1.0 / v0_fps()?),
+        Term::Q0 => {
+            (p(&["velocities/q-aero-rad_sec", "metrics/cbarw-ft"]), 1.0 / (2.0 * v0_fps()?))
+        }
+    })
+}
+
+/// The axis of a coefficient and its scaling properties.
+fn axis(c: Coefficient) -> (&'static str, &'static [&'static str]) {
+    const F: &[&str] = &["aero/qbar-area"];
+    match c {
+        Coefficient::CL => ("LIFT", F),
+        Coefficient::CD => ("DRAG", F),
+        Coefficient::CX => ("X", F),
+        Coefficient::CZ => ("Z", F),
+        Coefficient::CY => ("SIDE", F),
+        Coefficient::Cl => ("ROLL", &["aero/qbar-area", "metrics/bw-ft"]),
+        Coefficient::Cm => ("PITCH", &["aero/qbar-area", "metrics/cbarw-ft"]),
+        Coefficient::Cn => ("YAW", &["aero/qbar-area", "metrics/bw-ft"]),
+    }
+}
+
+/// Writes the `<aerodynamics>` fragment of the identified parameters. `source` is named in the
+/// header comment.
+///
+/// # Errors
+/// Lift/drag mixed with body X/Z coefficients, or no identified parameter at all.
+pub fn aerodynamics_xml(
+    summary: &SummaryParameters,
+    source: &str,
+    surfaces: &SurfaceProperties,
+    v0_mps: Option<f64>,
+) -> anyhow::Result<String> {
+    let coefs: Vec<Coefficient> = summary.parameters.iter().map(|p| p.param.coefficient).collect();
+    let wind = coefs.iter().any(|c| matches!(c, Coefficient::CL | Coefficient::CD));
+    let body = coefs.iter().any(|c| matches!(c, Coefficient::CX | Coefficient::CZ));
+    if wind && body {
+        anyhow::bail!(
+            "{source}: the model mixes lift/drag (CL, CD) with body-axis CX/CZ; JSBSim takes one axis system per aircraft"
+        );
+    }
+    if summary.parameters.iter().all(|p| p.value.is_none()) {
+        anyhow::bail!("{source}: no parameter is identified (all null); nothing to export");
+    }
+    let mut x = String::new();
+    let _ = writeln!(
+        x,
+        "<!-- Generated by `aeroident export jsbsim` from {} (estimator {}, model {}).\n     \
+         Dimensionless derivatives per rad and per unit normalised rate (q c/2V, p b/2V, r b/2V);\n     \
+         signs as in docs/export.md. Replace an aircraft's <aerodynamics> with this element. -->",
+        xml_escape(source),
+        xml_escape(&summary.estimator),
+        xml_escape(&summary.model)
+    );
+    x.push_str("<aerodynamics>\n");
+    for c in Coefficient::ALL {
+        let of_c: Vec<&Identified> =
+            summary.parameters.iter().filter(|p| p.param.coefficient == c).collect();
+        if of_c.is_empty() {
+            continue;
+        }
+        let (name, scale) = axis(c);
+        let name = if c == Coefficient::CY && body { "Y" } else { name };
+        let _ = writeln!(x, "  <axis name=\"{name}\">");
+        for p in of_c {
+            let pname = p.param.name();
+            let Some(v) = p.value else {
+                let _ = writeln!(
+                    x,
+                    "    <!-- {pname}: not identified (null in the summary); omitted -->"
+                );
+                continue;
+            };
+            let (props, factor) = match regressor(p.param.term, surfaces, v0_mps) {
+                Ok(r) => r,
+                Err(why) => {
+                    let _ =
+                        writeln!(x, "    <!-- {pname} = {v}: omitted, {} -->", xml_escape(&why));
+                    continue;
+                }
+            };
+            let sigma = p.sigma.map_or(String::new(), |s| format!(" ± {s} (1σ)"));
+            let _ = writeln!(x, "    <function name=\"aero/coefficient/{pname}\">");
+            let _ = writeln!(x, "      <description>{pname} = {v}{sigma}</description>");
+            x.push_str("      <product>\n");
+            for s in scale.iter().copied().map(str::to_string).chain(props) {
+                let _ = writeln!(x, "        <property>{s}</property>");
+            }
+            let _ = writeln!(x, "        <value>{}</value>", v * factor);
+            x.push_str("      </product>\n    </function>\n");
+        }
+        x.push_str("  </axis>\n");
+    }
+    x.push_str("</aerodynamics>\n");
+    Ok(x)
+}
+
+fn xml_escape(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace("--", "- -")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn id(name: &str, value: Option<f64>) -> Identified {
+        Identified { param: Param::from_name(name).unwrap(), value, sigma: Some(0.5) }
+    }
+
+    fn summary(ps: Vec<Identified>) -> SummaryParameters {
+        SummaryParameters { estimator: "rls".into(), model: "m".into(), parameters: ps }
+    }
+
+    #[test]
+    fn functions_are_scaling_times_value_times_regressor() {
+        let s = summary(vec![
+            id("Cm_q", Some(-12.5)),
+            id("Cm_alphadot", None),
+            id("CL_alpha", Some(4.25)),
+            id("Cm_V", Some(0.1)),
+        ]);
+        let x = aerodynamics_xml(&s, "s.json", &SurfaceProperties::default(), Some(100.0)).unwrap();
+        let cmq = "<function name=\"aero/coefficient/Cm_q\">\n      <description>Cm_q = -12.5 ± 0.5 (1σ)</description>\n      <product>\n        <property>aero/qbar-area</property>\n        <property>metrics/cbarw-ft</property>\n        <property>velocities/q-aero-rad_sec</property>\n        <property>aero/ci2vel</property>\n        <value>-12.5</value>";
+        assert!(x.contains(cmq), "{x}");
+        assert!(x.contains("<!-- Cm_alphadot: not identified (null in the summary); omitted -->"));
+        assert!(x.contains("<axis name=\"LIFT\">"));
+        // V/V0: 0.1 / (100 m/s in ft/s).
+        let v = format!("<value>{}</value>", 0.1 / (100.0 / 0.3048));
+        assert!(x.contains(&v), "{x}");
+        // Without V0 the V term is omitted, with the reason.
+        let x = aerodynamics_xml(&s, "s.json", &SurfaceProperties::default(), None).unwrap();
+        assert!(x.contains("Cm_V = 0.1: omitted, term `V` needs the reference speed V0"));
+    }
+
+    #[test]
+    fn body_axes_use_x_y_z_and_mixing_is_refused() {
+        let s = summary(vec![id("CX_alpha", Some(0.1)), id("CY_beta", Some(-0.5))]);
+        let x = aerodynamics_xml(&s, "s", &SurfaceProperties::default(), None).unwrap();
+        assert!(x.contains("<axis name=\"X\">") && x.contains("<axis name=\"Y\">"), "{x}");
+        let s = summary(vec![id("CX_alpha", Some(0.1)), id("CL_alpha", Some(4.0))]);
+        let e = aerodynamics_xml(&s, "s", &SurfaceProperties::default(), None).unwrap_err();
+        assert!(e.to_string().contains("mixes lift/drag"), "{e}");
+        let s = summary(vec![id("CL_alpha", None)]);
+        assert!(aerodynamics_xml(&s, "s", &SurfaceProperties::default(), None).is_err());
+    }
+}

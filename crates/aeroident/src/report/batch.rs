@@ -1,0 +1,194 @@
+//! Results, figures and `report.html` of `replay --estimator oe` (the batch output-error
+//! fit): the parameter table (estimate ± Cramér–Rao σ against the model file's reference
+//! values, if it gives any), the fit quality of every simulated output (from the summary's
+//! `validation` block: residual RMS, R², Theil's U) and `fit.{png,svg}` (per output the
+//! measured and the simulated time history, and the residual).
+
+use super::replay::{Reference, spec_references};
+use super::{Report, common_settings, write_figure};
+use crate::cli::replay::ReplayArgs;
+use crate::outdir::OutputDir;
+use crate::plot::{HLine, LineKind, Panel, Series};
+use crate::replay::batch::{BatchOutcome, OutputTrace};
+use crate::results::{FitQuality, ParameterRow, Results};
+use crate::table::fmt_sig;
+
+/// The results of a batch fit: one row per parameter (σ = the Cramér–Rao bound; the
+/// coloured-residual σ, where formed, in a note) and one fit-quality row per validated output.
+pub fn results(outcome: &BatchOutcome, title: &str, references: &[Reference]) -> Results {
+    let s = &outcome.summary;
+    let rows = s
+        .parameters
+        .iter()
+        .map(|p| {
+            let reference = references.iter().find(|r| r.name == p.name).map(|r| r.value);
+            ParameterRow::new(p.name.clone(), Some(p.estimate), Some(p.crb_sigma), reference, None)
+        })
+        .collect();
+    let v = &s.validation;
+    let fit = v
+        .outputs
+        .iter()
+        .map(|o| FitQuality {
+            coefficient: o.name.clone(),
+            samples: o.n,
+            residual_rms: o.rmse,
+            r_squared: o.r_squared,
+            theil_u: o.theil_u,
+        })
+        .collect();
+    let mut notes = vec![
+        "σ = Cramér–Rao bound of the output-error fit (optimistic when the residuals are coloured); fit quality of the simulated outputs over the fitted record".into(),
+    ];
+    let coloured: Vec<String> = s
+        .parameters
+        .iter()
+        .filter_map(|p| p.coloured_sigma.map(|c| format!("{} {}", p.name, fmt_sig(Some(c), 2))))
+        .collect();
+    if !coloured.is_empty() {
+        notes.push(format!(
+            "coloured-residual σ (the summary's std_error): {}",
+            coloured.join(", ")
+        ));
+    }
+    let mut sources: Vec<&str> = Vec::new();
+    for r in references {
+        if !sources.contains(&r.source.as_str()) {
+            sources.push(&r.source);
+        }
+    }
+    notes.extend(sources.iter().map(|s| format!("reference: {s}")));
+    notes.extend(v.notes.iter().cloned());
+    Results { title: title.to_string(), reference_label: "reference".into(), rows, fit, notes }
+}
+
+/// Two panels per output: measured and simulated, and the residual.
+pub fn trace_panels(traces: &[OutputTrace]) -> Vec<Panel> {
+    let mut v = Vec::new();
+    for tr in traces {
+        v.push(Panel {
+            title: format!("{}: measured vs simulated (estimated parameters)", tr.name),
+            y_label: tr.name.clone(),
+            series: vec![
+                Series {
+                    label: "measured".into(),
+                    t_s: tr.t_s.clone(),
+                    values: tr.measured.clone(),
+                    kind: LineKind::Solid,
+                },
+                Series {
+                    label: "model".into(),
+                    t_s: tr.t_s.clone(),
+                    values: tr.simulated.clone(),
+                    kind: LineKind::Solid,
+                },
+            ],
+            signals: true,
+            ..Default::default()
+        });
+        v.push(Panel {
+            title: format!("{}: residual (measured − model)", tr.name),
+            y_label: format!("Δ{}", tr.name),
+            series: vec![Series {
+                label: "residual".into(),
+                t_s: tr.t_s.clone(),
+                values: tr.measured.iter().zip(&tr.simulated).map(|(z, y)| z - y).collect(),
+                kind: LineKind::Solid,
+            }],
+            hlines: vec![HLine { label: "0".into(), value: 0.0 }],
+            signals: true,
+            ..Default::default()
+        });
+    }
+    v
+}
+
+/// The settings of a batch fit, for the report.
+pub fn settings(args: &ReplayArgs, outcome: &BatchOutcome) -> Vec<(String, String)> {
+    let s = &outcome.summary;
+    let mut v = common_settings();
+    v.extend([
+        ("data".into(), args.data.clone()),
+        ("mapping".into(), args.map.display().to_string()),
+        ("model".into(), format!("{} — {}", outcome.model.name, outcome.model.description)),
+        ("structure".into(), outcome.model.structure.names().collect::<Vec<_>>().join(", ")),
+        ("estimator".into(), "oe (batch maximum-likelihood output error)".into()),
+        (
+            "outputs".into(),
+            outcome.result.outputs.iter().map(|o| o.name()).collect::<Vec<_>>().join(", "),
+        ),
+        (
+            "samples".into(),
+            format!(
+                "{} read, {} rejected, {} manoeuvre(s); {} iterations in {:.3} s; status {}",
+                s.samples_read,
+                s.samples_rejected,
+                s.manoeuvres,
+                s.iterations.len().saturating_sub(1),
+                s.fit_wall_s,
+                s.status
+            ),
+        ),
+    ]);
+    if let Some(v2) = &s.validation_on {
+        v.push(("validated on".into(), v2.data.clone()));
+    }
+    v
+}
+
+/// Writes `fit.{png,svg}` (when an output could be traced) and `report.html` into `od`;
+/// returns the results for the console.
+///
+/// # Errors
+/// Figure or output errors, naming the file.
+pub fn write(
+    args: &ReplayArgs,
+    outcome: &BatchOutcome,
+    title: &str,
+    od: &mut OutputDir,
+) -> anyhow::Result<Results> {
+    let references = spec_references(&outcome.model);
+    let res = results(outcome, title, &references);
+    let mut figures = Vec::new();
+    let panels = trace_panels(&outcome.traces);
+    if !panels.is_empty() {
+        figures.push(write_figure::<anyhow::Error>(
+            od,
+            "fit",
+            &format!("{title}: model vs measured"),
+            "Each output measured and simulated with the estimated parameters (integrated over each manoeuvre from its first sample), and the residual.",
+            &panels,
+            (1000, 200),
+        )?);
+    }
+    let mut results = vec![res.clone()];
+    if let Some(v2) = &outcome.summary.validation_on {
+        results.push(Results {
+            title: format!("validation on {}", v2.data),
+            reference_label: "reference".into(),
+            rows: Vec::new(),
+            fit: v2
+                .outputs
+                .iter()
+                .map(|o| FitQuality {
+                    coefficient: o.name.clone(),
+                    samples: o.n,
+                    residual_rms: o.rmse,
+                    r_squared: o.r_squared,
+                    theil_u: o.theil_u,
+                })
+                .collect(),
+            notes: v2.notes.clone(),
+        });
+    }
+    Report {
+        title: format!("aeroident replay — {title}"),
+        settings: settings(args, outcome),
+        results,
+        figures,
+        warnings: outcome.summary.warnings.clone(),
+        ..Default::default()
+    }
+    .write(od)?;
+    Ok(res)
+}

@@ -177,7 +177,7 @@ fn replay_file<'py>(
         if let Some(e) = aeroident::cli::replay::diverged_error(&outcome, kind.name()) {
             anyhow::bail!(e);
         }
-        let summary = serde_json::to_value(&outcome.summary)?;
+        let summary = serde_json::to_value(outcome.document(None))?;
         Ok((outcome.model.name, summary, arrays))
     };
     let (model, summary, arrays) = py.detach(run).map_err(to_py)?;

@@ -1,13 +1,11 @@
 //! `aeroident replay` end to end through the binary: output files and their keys, the live
 //! stdin → stdout feed, and the bad-input corpus through the whole pipeline.
 
+mod common;
+use common::workspace;
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
-
-fn workspace() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
 
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_aeroident"))
@@ -211,17 +209,7 @@ fn val_live_stdin_one_line_per_sample() {
 /// error). Skips without `../shared`; fails under CI if the record is missing.
 #[test]
 fn val_output_error_reproduces_the_hfb320_reference_through_the_cli() {
-    let data =
-        workspace().join("../shared/flightdata/jategaonkar_hfb320_attas/csv/hfb320_1_10.csv");
-    if !data.exists() {
-        assert!(
-            std::env::var("CI").map_or(true, |v| v != "true"),
-            "{} absent under CI",
-            data.display()
-        );
-        eprintln!("SKIPPED: {} is absent", data.display());
-        return;
-    }
+    let Some(data) = common::shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
     let out = tmp("oe_hfb320");
     let o = bin()
         .args(["replay"])
@@ -386,17 +374,10 @@ fn formats_by_flag_and_extension_through_the_cli() {
 /// Skips without `../shared`; fails under CI if the log is missing.
 #[test]
 fn val_real_px4_ulog_replays_through_the_cli_with_the_shipped_mapping() {
-    let data = workspace()
-        .join("../shared/flightdata/px4_ardupilot/f16capstone_log_52_2021-5-22-12-42-56.ulg");
-    if !data.exists() {
-        assert!(
-            std::env::var("CI").map_or(true, |v| v != "true"),
-            "{} absent under CI",
-            data.display()
-        );
-        eprintln!("SKIPPED: {} is absent", data.display());
+    let Some(data) = common::shared("px4_ardupilot/f16capstone_log_52_2021-5-22-12-42-56.ulg")
+    else {
         return;
-    }
+    };
     let out = tmp("ulog_f16");
     let o = bin()
         .args(["replay"])
@@ -427,16 +408,7 @@ fn val_real_px4_ulog_replays_through_the_cli_with_the_shipped_mapping() {
 /// anything. Skips without `../shared`; fails under CI if the log is missing.
 #[test]
 fn val_real_dataflash_log_replays_through_the_cli_with_the_shipped_mappings() {
-    let data = workspace().join("../shared/flightdata/px4_ardupilot/pyflightcoach_center_0003.bin");
-    if !data.exists() {
-        assert!(
-            std::env::var("CI").map_or(true, |v| v != "true"),
-            "{} absent under CI",
-            data.display()
-        );
-        eprintln!("SKIPPED: {} is absent", data.display());
-        return;
-    }
+    let Some(data) = common::shared("px4_ardupilot/pyflightcoach_center_0003.bin") else { return };
     let run = |mapping: &str| {
         let dir =
             std::env::temp_dir().join(format!("aeroident-df-{}", std::process::id())).join(mapping);

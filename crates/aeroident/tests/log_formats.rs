@@ -5,30 +5,17 @@
 //! original's `f64`), so the estimates must be equal exactly, not to a tolerance. Skipped with
 //! a message when `../shared` is absent; a failure under `CI=true`.
 
+mod common;
+use common::workspace;
+
+/// `../shared/flightdata/jategaonkar_hfb320_attas/<rel>` as a path string, or `None`
+/// ([`common::shared`]: SKIPPED, a failure under `CI=true`).
+fn shared(rel: &str) -> Option<String> {
+    common::shared(&format!("jategaonkar_hfb320_attas/{rel}")).map(|p| p.display().to_string())
+}
 use aeroident::estimators::EstimatorKind;
 use aeroident::replay::{ReplayOptions, ReplayOutcome, replay};
 use aeroident_io::{LogFormat, Mapping, open_log};
-use std::path::PathBuf;
-
-fn workspace() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-/// `../shared/flightdata/jategaonkar_hfb320_attas/<rel>`, or `None` with a SKIPPED message
-/// (a failure under `CI=true`: CI always has `../shared`).
-fn shared(rel: &str) -> Option<String> {
-    let p = workspace().join("../shared/flightdata/jategaonkar_hfb320_attas").join(rel);
-    if p.exists() {
-        return Some(p.display().to_string());
-    }
-    assert!(
-        std::env::var("CI").map_or(true, |v| v != "true"),
-        "{} is absent under CI",
-        p.display()
-    );
-    eprintln!("SKIPPED: {} is absent (CI provides ../shared beside the repository)", p.display());
-    None
-}
 
 fn run(data: &str, format: Option<LogFormat>, map: &Mapping, est: EstimatorKind) -> ReplayOutcome {
     let reader = open_log(data, format, map).unwrap_or_else(|e| panic!("{e}"));

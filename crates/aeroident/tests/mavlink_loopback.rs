@@ -3,35 +3,16 @@
 //! test), to 1e-12; a garbage datagram is reported and changes nothing; the end-of-stream
 //! message ends the replay. Also through the CLI (`replay mavlink:udp:127.0.0.1:0`).
 
+mod common;
 use aeroident::estimators::EstimatorKind;
 use aeroident::replay::{ReplayOptions, replay};
 use aeroident_estimators::AirDataSample;
 use aeroident_io::mavlink::feed::{Sender, end_of_stream, frame};
 use aeroident_io::mavlink::{LinkStats, MavlinkRows, MavlinkUrl};
 use aeroident_io::{FlightDataReader, Mapping, RecordEvent};
+use common::{shared, workspace};
 use std::io::BufRead;
-use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
-
-fn workspace() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-/// The record at `../shared/flightdata/<rel>`, or `None` (SKIPPED) when absent; a failure under
-/// `CI=true`.
-fn shared(rel: &str) -> Option<PathBuf> {
-    let p = workspace().join("../shared/flightdata").join(rel);
-    if p.exists() {
-        return Some(p);
-    }
-    assert!(
-        std::env::var("CI").map_or(true, |v| v != "true"),
-        "{} is absent under CI",
-        p.display()
-    );
-    eprintln!("SKIPPED: {} is absent (CI provides ../shared beside the repository)", p.display());
-    None
-}
 
 fn mapping(name: &str) -> Mapping {
     Mapping::from_path(&workspace().join("mappings").join(name)).unwrap()

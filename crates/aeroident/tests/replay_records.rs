@@ -5,37 +5,13 @@
 //! `docs/real-data.md` reported before the move to the one vocabulary (RLS is the same
 //! algorithm, so they must be reproduced).
 
+mod common;
 use aeroident::estimators::EstimatorKind;
 use aeroident::replay::{DerivativeSource, ReplayOptions, ReplayOutcome, replay};
 use aeroident_estimators::Coefficient;
 use aeroident_io::{FlightDataReader, Mapping, ModelSpec, RecordEvent};
-use std::path::{Path, PathBuf};
-
-fn workspace() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-/// `../shared/flightdata/<rel>` beside the workspace root, or `None` (with a printed skip).
-/// The record at `../shared/flightdata/<rel>`, or `None` (with a SKIPPED message) when the
-/// shared data are absent. Under CI (`CI=true`) a missing record is a failure: CI always has
-/// `../shared`, so a skip there would hide a broken path.
-fn shared(rel: &str) -> Option<PathBuf> {
-    let p = workspace().join("../shared/flightdata").join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        assert!(
-            std::env::var("CI").map_or(true, |v| v != "true"),
-            "{} is absent under CI",
-            p.display()
-        );
-        eprintln!(
-            "SKIPPED: {} is absent (CI provides ../shared beside the repository)",
-            p.display()
-        );
-        None
-    }
-}
+use common::{shared, workspace};
+use std::path::Path;
 
 fn mapping(map: &str) -> Mapping {
     Mapping::from_path(&workspace().join("mappings").join(map)).unwrap()

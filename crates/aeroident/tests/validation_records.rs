@@ -2,29 +2,11 @@
 //! `fAttasElv1` and `fAttasElv2` (../shared/flightdata; skipped with a message when absent,
 //! a failure under CI). The checks are consequences of least squares, not captured numbers.
 
+mod common;
 use aeroident::replay::{ReplayOptions, ReplayOutcome, replay, validate_on};
 use aeroident_io::{FlightDataReader, Mapping};
-use std::path::{Path, PathBuf};
-
-fn workspace() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-/// The record at `../shared/flightdata/<rel>`, or `None` (SKIPPED) when the shared data are
-/// absent; under CI (`CI=true`) a missing record is a failure.
-fn shared(rel: &str) -> Option<PathBuf> {
-    let p = workspace().join("../shared/flightdata").join(rel);
-    if p.exists() {
-        return Some(p);
-    }
-    assert!(
-        std::env::var("CI").map_or(true, |v| v != "true"),
-        "{} is absent under CI",
-        p.display()
-    );
-    eprintln!("SKIPPED: {} is absent (CI provides ../shared beside the repository)", p.display());
-    None
-}
+use common::{shared, workspace};
+use std::path::Path;
 
 fn reader(data: &Path, m: &Mapping) -> FlightDataReader<std::io::BufReader<std::fs::File>> {
     let f = std::fs::File::open(data).unwrap();

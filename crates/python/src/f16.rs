@@ -3,10 +3,11 @@
 
 use std::path::Path;
 
+use aeroident::cli::f16::{TrimArgs, trim_at};
 use aeroident_models::f16::{ALPHA, BETA, F16, N_STATES, STATE_NAMES, THETA};
 use aeroident_models::linearize::{eigenvalues, f16_modes, linearize_f16};
-use aeroident_models::trim::{F16Trim, TrimCondition, TrimManeuver, trim as trim_f16};
-use anyhow::{Context as _, bail};
+use aeroident_models::trim::F16Trim;
+use anyhow::bail;
 use numpy::IntoPyArray;
 use numpy::ndarray::Array2;
 use pyo3::prelude::*;
@@ -21,36 +22,14 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
-/// The trim condition of `aeroident f16 trim` (same defaults, same checks, same context).
-#[derive(Clone, Copy)]
-struct Condition {
-    alt_ft: f64,
-    vt_fps: f64,
-    xcg: f64,
-    gamma_deg: f64,
-    turn_rate_deg_s: Option<f64>,
-    pull_up_deg_s: Option<f64>,
-}
-
-fn do_trim(a: Condition) -> anyhow::Result<(F16, F16Trim)> {
+/// The trim of `aeroident f16 trim` (same defaults, checks and error context:
+/// [`aeroident::cli::f16::trim_at`]); clap enforces the turn/pull-up exclusion on the command
+/// line, so it is checked here.
+fn do_trim(a: &TrimArgs) -> anyhow::Result<(F16, F16Trim)> {
     if a.turn_rate_deg_s.is_some() && a.pull_up_deg_s.is_some() {
         bail!("give at most one of turn_rate_deg_s and pull_up_deg_s");
     }
-    let f16 = F16::new(a.xcg)?;
-    let maneuver = match (a.turn_rate_deg_s, a.pull_up_deg_s) {
-        (Some(w), _) => TrimManeuver::CoordinatedTurn { turn_rate_rad_s: w.to_radians() },
-        (None, Some(q)) => TrimManeuver::PullUp { pitch_rate_rad_s: q.to_radians() },
-        (None, None) => TrimManeuver::WingsLevel,
-    };
-    let cond = TrimCondition {
-        alt_ft: a.alt_ft,
-        vt_fps: a.vt_fps,
-        gamma_rad: a.gamma_deg.to_radians(),
-        maneuver,
-    };
-    let t = trim_f16(&f16, &cond)
-        .with_context(|| format!("trim at {} ft, {} ft/s, xcg {}", a.alt_ft, a.vt_fps, a.xcg))?;
-    Ok((f16, t))
+    trim_at(a)
 }
 
 fn trim_dict<'py>(py: Python<'py>, t: &F16Trim) -> PyResult<Bound<'py, PyDict>> {
@@ -86,8 +65,9 @@ fn trim<'py>(
     turn_rate_deg_s: Option<f64>,
     pull_up_deg_s: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let c = Condition { alt_ft, vt_fps, xcg, gamma_deg, turn_rate_deg_s, pull_up_deg_s };
-    let (_, t) = py.detach(move || do_trim(c)).map_err(to_py)?;
+    let c =
+        TrimArgs { alt_ft, vt_fps, xcg, gamma_deg, turn_rate_deg_s, pull_up_deg_s, json: false };
+    let (_, t) = py.detach(move || do_trim(&c)).map_err(to_py)?;
     trim_dict(py, &t)
 }
 
@@ -103,10 +83,11 @@ fn linearize<'py>(
     turn_rate_deg_s: Option<f64>,
     pull_up_deg_s: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let c = Condition { alt_ft, vt_fps, xcg, gamma_deg, turn_rate_deg_s, pull_up_deg_s };
+    let c =
+        TrimArgs { alt_ft, vt_fps, xcg, gamma_deg, turn_rate_deg_s, pull_up_deg_s, json: false };
     let (t, lin) = py
         .detach(move || -> anyhow::Result<_> {
-            let (f16, t) = do_trim(c)?;
+            let (f16, t) = do_trim(&c)?;
             let lin = linearize_f16(&f16, &t.state, &t.controls)?;
             Ok((t, lin))
         })

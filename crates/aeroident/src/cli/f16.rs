@@ -147,7 +147,13 @@ pub fn xdot(a: &XdotArgs) -> anyhow::Result<String> {
     Ok(out)
 }
 
-fn do_trim(a: &TrimArgs) -> anyhow::Result<(F16, aeroident_models::trim::F16Trim)> {
+/// The F-16 trimmed at `a` (wings level, coordinated turn or pull-up; Stevens & Lewis §3.6):
+/// the model at `a.xcg` and its trim. Shared by `f16 trim`, `f16 linearize` and the Python
+/// bindings, so both give the same checks and the same error context.
+///
+/// # Errors
+/// An `xcg` outside its range, or a trim that does not converge (naming the condition).
+pub fn trim_at(a: &TrimArgs) -> anyhow::Result<(F16, aeroident_models::trim::F16Trim)> {
     let f16 = F16::new(a.xcg)?;
     let maneuver = match (a.turn_rate_deg_s, a.pull_up_deg_s) {
         (Some(w), _) => TrimManeuver::CoordinatedTurn { turn_rate_rad_s: w.to_radians() },
@@ -176,7 +182,7 @@ fn do_trim(a: &TrimArgs) -> anyhow::Result<(F16, aeroident_models::trim::F16Trim
 /// # Errors
 /// Invalid condition or no convergence.
 pub fn trim_report(a: &TrimArgs) -> anyhow::Result<String> {
-    let (_, t) = do_trim(a)?;
+    let (_, t) = trim_at(a)?;
     let c = &t.controls;
     let v = json!({
         "throttle": c.throttle,
@@ -216,7 +222,7 @@ pub fn trim_report(a: &TrimArgs) -> anyhow::Result<String> {
 /// # Errors
 /// Invalid condition, no trim convergence, or a model error at a perturbed point.
 pub fn linearize_report(a: &TrimArgs) -> anyhow::Result<String> {
-    let (f16, t) = do_trim(a)?;
+    let (f16, t) = trim_at(a)?;
     let lin = linearize_f16(&f16, &t.state, &t.controls)?;
     let ev = eigenvalues(&lin.a);
     let modes = f16_modes(&lin.a);

@@ -1,7 +1,8 @@
 //! The results of a run as data, for people to read: one row per parameter (estimate ± σ, the
 //! reference or truth, the error, a status) and the fit quality of each modelled coefficient
-//! (residual RMS, R², Theil's U), computed here and rendered elsewhere ([`crate::table`] on the
-//! console, [`crate::report`] in `report.html`).
+//! (residual RMS, R², Theil's U), computed here (with the same formulas as the validation
+//! metrics: [`crate::validation::fit_statistics`]) and rendered elsewhere ([`crate::table`] on
+//! the console, [`crate::report`] in `report.html`).
 //!
 //! Fit quality compares a measured coefficient `z` (from the record,
 //! [`AirDataSample::measured_coefficients`]) with the model's prediction `y` from the final
@@ -93,28 +94,22 @@ pub fn fit_quality(coefficient: &str, measured: &[f64], predicted: &[f64]) -> Op
     if measured.len() != predicted.len() {
         return None;
     }
-    let pairs: Vec<(f64, f64)> = measured
+    let (z, y): (Vec<f64>, Vec<f64>) = measured
         .iter()
         .zip(predicted)
         .filter(|(z, y)| z.is_finite() && y.is_finite())
         .map(|(z, y)| (*z, *y))
-        .collect();
-    if pairs.is_empty() {
+        .unzip();
+    if z.is_empty() {
         return None;
     }
-    let n = pairs.len() as f64;
-    let ss_res: f64 = pairs.iter().map(|(z, y)| (z - y).powi(2)).sum();
-    let mean_z = pairs.iter().map(|(z, _)| z).sum::<f64>() / n;
-    let ss_tot: f64 = pairs.iter().map(|(z, _)| (z - mean_z).powi(2)).sum();
-    let rms = (ss_res / n).sqrt();
-    let rms_z = (pairs.iter().map(|(z, _)| z * z).sum::<f64>() / n).sqrt();
-    let rms_y = (pairs.iter().map(|(_, y)| y * y).sum::<f64>() / n).sqrt();
+    let s = crate::validation::fit_statistics(&z, &y);
     Some(FitQuality {
         coefficient: coefficient.to_string(),
-        samples: pairs.len(),
-        residual_rms: rms,
-        r_squared: (ss_tot > 0.0).then(|| 1.0 - ss_res / ss_tot),
-        theil_u: (rms_z + rms_y > 0.0).then(|| rms / (rms_z + rms_y)),
+        samples: z.len(),
+        residual_rms: s.rmse,
+        r_squared: s.r_squared,
+        theil_u: s.theil_u,
     })
 }
 

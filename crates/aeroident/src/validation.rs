@@ -327,6 +327,40 @@ pub fn input_correlation(
     })
 }
 
+/// The fit statistics of a prediction `ŷ` against a measurement `y` (module doc): the part of
+/// [`OutputValidation`] that needs no residual analysis, shared with the console fit table
+/// ([`crate::results::fit_quality`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FitStatistics {
+    /// `sqrt(Σ e² / N)`, units of the output.
+    pub rmse: f64,
+    /// NRMSE fit, %; `None` when `y` is constant.
+    pub fit_percent: Option<f64>,
+    /// Coefficient of determination; `None` when `y` is constant.
+    pub r_squared: Option<f64>,
+    /// Theil's inequality coefficient U1; `None` when `y` and `ŷ` are both zero.
+    pub theil_u: Option<f64>,
+}
+
+/// [`FitStatistics`] of `y_hat` against `y` (same length `N ≥ 1`, all finite: the caller
+/// checks or filters; extra elements of the longer slice are ignored).
+pub fn fit_statistics(y: &[f64], y_hat: &[f64]) -> FitStatistics {
+    let nf = y.len().min(y_hat.len()) as f64;
+    let sse: f64 = y.iter().zip(y_hat).map(|(y, p)| (y - p) * (y - p)).sum();
+    let rmse = (sse / nf).sqrt();
+    let y_mean = y.iter().sum::<f64>() / nf;
+    let sst: f64 = y.iter().map(|v| (v - y_mean) * (v - y_mean)).sum();
+    let (fit_percent, r_squared) = if sst > 0.0 {
+        (Some(100.0 * (1.0 - (sse / sst).sqrt())), Some(1.0 - sse / sst))
+    } else {
+        (None, None)
+    };
+    let rms = |s: &[f64]| (s.iter().map(|v| v * v).sum::<f64>() / nf).sqrt();
+    let denom = rms(y) + rms(y_hat);
+    let theil_u = (denom > 0.0).then(|| rmse / denom);
+    FitStatistics { rmse, fit_percent, r_squared, theil_u }
+}
+
 /// Number of lags used for `N` samples: `min(20, ⌊N/4⌋)`.
 pub fn lags_for(n: usize) -> usize {
     MAX_LAGS.min(n / 4)
@@ -382,8 +416,7 @@ pub fn validate(d: &OutputData<'_>) -> Result<OutputValidation, ValidationError>
     }
     let nf = n as f64;
     let e: Vec<f64> = d.y.iter().zip(d.y_hat).map(|(y, p)| y - p).collect();
-    let sse: f64 = e.iter().map(|v| v * v).sum();
-    let rmse = (sse / nf).sqrt();
+    let FitStatistics { rmse, fit_percent, r_squared, theil_u } = fit_statistics(d.y, d.y_hat);
     let bias = e.iter().sum::<f64>() / nf;
     let s2 = e.iter().map(|v| (v - bias) * (v - bias)).sum::<f64>() / nf;
     // σ of the mean with the residual autocorrelation, summed while positive.
@@ -396,16 +429,6 @@ pub fn validate(d: &OutputData<'_>) -> Result<OutputValidation, ValidationError>
         inflation += 2.0 * (1.0 - k as f64 / nf) * r;
     }
     let half = Z95 * (s2 / nf * inflation).sqrt();
-    let y_mean = d.y.iter().sum::<f64>() / nf;
-    let sst: f64 = d.y.iter().map(|v| (v - y_mean) * (v - y_mean)).sum();
-    let (fit_percent, r_squared) = if sst > 0.0 {
-        (Some(100.0 * (1.0 - (sse / sst).sqrt())), Some(1.0 - sse / sst))
-    } else {
-        (None, None)
-    };
-    let rms = |s: &[f64]| (s.iter().map(|v| v * v).sum::<f64>() / nf).sqrt();
-    let denom = rms(d.y) + rms(d.y_hat);
-    let theil_u = (denom > 0.0).then(|| rmse / denom);
     let h = lags_for(n);
     let ljung_box = (n >= 8 && h >= 1).then(|| ljung_box(&e, d.segments, h));
     let input_correlation = d

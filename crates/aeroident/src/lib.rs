@@ -22,6 +22,7 @@ pub mod progress;
 pub mod replay;
 pub mod report;
 pub mod results;
+pub mod sample_log;
 pub mod scenario_kind;
 /// Open-loop F-16 simulation: trim → inputs, gusts, turbulence → sensors → CSV and figures.
 pub mod sim;

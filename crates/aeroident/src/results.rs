@@ -167,48 +167,11 @@ pub fn coefficient_fits(
     out
 }
 
-/// The samples an estimator was fed, bounded like the replay's estimate history: at most
-/// `limit` are kept; beyond that every second one is dropped and the stride doubles, so a long
-/// live feed holds constant memory (the fit quality is then computed on the kept samples).
-#[derive(Debug, Clone)]
-pub struct SampleLog {
-    /// The kept samples, in time order.
-    pub samples: Vec<AirDataSample>,
-    /// Samples pushed per kept sample.
-    pub stride: usize,
-    pushed: usize,
-    limit: usize,
-}
-
-impl Default for SampleLog {
-    fn default() -> Self {
-        Self::with_limit(Self::MAX_SAMPLES)
-    }
-}
-
-impl SampleLog {
-    /// Default bound: 16,384 samples (≈ 10 MB; a power of two, so the vector's capacity never
-    /// exceeds it: the log decimates before it would grow past the bound).
-    pub const MAX_SAMPLES: usize = 16_384;
-
-    /// An empty log keeping at most `limit` (≥ 2) samples.
-    pub fn with_limit(limit: usize) -> Self {
-        Self { samples: Vec::new(), stride: 1, pushed: 0, limit: limit.max(2) }
-    }
-
-    /// Adds one sample (decimating as described on the type).
-    pub fn push(&mut self, s: &AirDataSample) {
-        if self.pushed.is_multiple_of(self.stride) && self.samples.len() >= self.limit {
-            let mut k = 0;
-            self.samples.retain(|_| (k % 2 == 0, k += 1).0);
-            self.stride *= 2;
-        }
-        if self.pushed.is_multiple_of(self.stride) {
-            self.samples.push(*s);
-        }
-        self.pushed += 1;
-    }
-}
+/// Most samples the replay keeps for the fit quality and the model-vs-measured figure
+/// (a [`crate::sample_log::SampleLog`] of single samples): 16,384 (≈ 10 MB; a power of two, so
+/// the log's capacity never exceeds it). Beyond it every second sample is dropped and the
+/// stride doubles; the fit quality is then computed on the kept samples.
+pub const MAX_FIT_SAMPLES: usize = 16_384;
 
 /// The results of one run, ready to render.
 #[derive(Debug, Clone, PartialEq)]
@@ -310,29 +273,5 @@ mod tests {
         assert!((q.r_squared.unwrap() - 1.0).abs() < 1e-9, "{q:?}");
         // A parameter not identified: no fit for its coefficient.
         assert!(coefficient_fits(&st, &[Some(0.1), None], &samples).is_empty());
-    }
-
-    #[test]
-    fn sample_log_is_bounded_and_evenly_decimated() {
-        let mut log = SampleLog::with_limit(10);
-        for k in 0..1000 {
-            log.push(&AirDataSample { t_s: k as f64, ..Default::default() });
-            assert!(log.samples.len() <= 10);
-        }
-        assert!(
-            log.stride >= 100 && log.samples.len() >= 5,
-            "{} {}",
-            log.stride,
-            log.samples.len()
-        );
-        for (k, s) in log.samples.iter().enumerate() {
-            assert_eq!(s.t_s, (k * log.stride) as f64);
-        }
-        // A power-of-two bound is never exceeded by the allocation either.
-        let mut log = SampleLog::with_limit(16);
-        for k in 0..1000 {
-            log.push(&AirDataSample { t_s: k as f64, ..Default::default() });
-            assert!(log.samples.capacity() <= 16, "{}", log.samples.capacity());
-        }
     }
 }

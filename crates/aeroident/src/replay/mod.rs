@@ -289,7 +289,7 @@ pub struct ReplayOutcome {
     pub recorder: Recorder,
     /// The samples fed to the estimator (bounded), for the fit quality and the
     /// model-vs-measured figure.
-    pub samples: crate::results::SampleLog,
+    pub samples: crate::sample_log::SampleLog<AirDataSample>,
 }
 
 /// `summary.json`: the [`ReplaySummary`] keys, then `identifiability`, `validation` and
@@ -500,7 +500,7 @@ pub fn replay_with<R: Read>(
     let mut run: Option<Running> = None;
     let mut model: Option<(ModelSpec, bool)> = None;
     let mut history = History::default();
-    let mut fed = crate::results::SampleLog::default();
+    let mut fed = crate::sample_log::SampleLog::new(crate::results::MAX_FIT_SAMPLES, 1);
     let mut busy = Duration::ZERO;
     let mut ready = Vec::new();
     let mut unused = Vec::new();
@@ -648,7 +648,7 @@ pub fn replay_with<R: Read>(
             }
             recorder.push(&s);
             history.push(s.t_s, values, sigmas);
-            fed.push(&s);
+            fed.push(s);
         }
         if diverged {
             break;

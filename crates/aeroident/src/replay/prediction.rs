@@ -6,7 +6,7 @@
 //! ([`AirDataSample::measured_coefficients`]), every term's regressor ([`Term::value`]) and the
 //! control inputs `δe, δa, δr`, with the manoeuvre (segment) it belongs to. At most
 //! [`Recorder::MAX_SAMPLES`] samples are kept (a live feed stays bounded), in whole blocks of
-//! [`Recorder::BLOCK`] consecutive samples: when the limit is reached every second kept block
+//! [`Recorder::BLOCK`] consecutive samples (a [`crate::sample_log::SampleLog`]): when the limit is reached every second kept block
 //! is dropped and from then on only every `stride`-th block is kept (the stride doubles each
 //! time), so the validation covers the whole record, not only its beginning, and each kept
 //! block keeps its sample-to-sample structure (the residuals' autocorrelation and lagged
@@ -22,6 +22,7 @@
 //! bias is then re-fitted as the mean of `C − Σ_{j≠0} θ_j ξ_j` over the record, and a note says
 //! so.
 
+use crate::sample_log::SampleLog;
 use crate::validation::{OutputData, OutputValidation, validate};
 use aeroident_estimators::vocabulary::N_TERMS;
 use aeroident_estimators::{
@@ -36,23 +37,22 @@ pub const INPUTS: [&str; 3] = ["de", "da", "dr"];
 /// One kept sample: values `NaN` where absent.
 #[derive(Debug, Clone, Copy)]
 struct Row {
-    segment: usize,
     coefs: [f64; 8],
     terms: [f64; N_TERMS],
     inputs: [f64; 3],
 }
 
-/// The samples fed to an estimator, as regressors and measured coefficients (module doc).
-#[derive(Debug, Clone, Default)]
+/// The samples fed to an estimator, as regressors and measured coefficients (module doc): a
+/// [`SampleLog`] of [`Recorder::MAX_SAMPLES`] rows in blocks of [`Recorder::BLOCK`].
+#[derive(Debug, Clone)]
 pub struct Recorder {
-    rows: Vec<Row>,
-    segment: usize,
-    /// Samples offered and not kept (blocks dropped by the decimation).
-    pub dropped: usize,
-    /// Samples offered.
-    pushed: usize,
-    /// Blocks per kept block (0 until the first push: 1).
-    stride: usize,
+    rows: SampleLog<Row>,
+}
+
+impl Default for Recorder {
+    fn default() -> Self {
+        Self { rows: SampleLog::new(Self::MAX_SAMPLES, Self::BLOCK) }
+    }
 }
 
 fn nan(v: Option<f64>) -> f64 {
@@ -60,8 +60,9 @@ fn nan(v: Option<f64>) -> f64 {
 }
 
 impl Recorder {
-    /// Most samples kept: 65,536 (216 bytes each, 14 MB; a power of two, so the vector's
-    /// capacity never exceeds it): 11 min at 100 Hz before the first decimation.
+    /// Most samples kept: 65,536 (208 bytes each and an 8-byte segment number, 14 MB; a power
+    /// of two, so the vector's capacity never exceeds it): 11 min at 100 Hz before the first
+    /// decimation.
     pub const MAX_SAMPLES: usize = 65_536;
 
     /// Consecutive samples per kept block: 1,024 (10 s at 100 Hz, ≫ the 20 lags of the
@@ -70,70 +71,21 @@ impl Recorder {
 
     /// Keeps sample `s` (fed to the estimator), decimating by blocks (module doc).
     pub fn push(&mut self, s: &AirDataSample) {
-        let stride = self.stride.max(1);
-        let block = self.pushed / Self::BLOCK;
-        let block_start = self.pushed.is_multiple_of(Self::BLOCK);
-        self.pushed += 1;
-        if !block.is_multiple_of(stride) {
-            self.dropped += 1;
-            return;
-        }
-        if self.rows.len() >= Self::MAX_SAMPLES {
-            self.decimate();
-            if !block.is_multiple_of(self.stride) {
-                self.dropped += 1;
-                return;
-            }
-        }
-        // A kept block after skipped ones is not contiguous with the previous kept sample.
-        if block_start && self.stride > 1 {
-            self.new_segment();
-        }
-        let m = s.measured_coefficients();
-        self.rows.push(Row {
-            segment: self.segment,
-            coefs: m.map(nan),
+        self.rows.push_with(|| Row {
+            coefs: s.measured_coefficients().map(nan),
             terms: Term::ALL.map(|t| nan(t.value(s))),
             inputs: [nan(s.de_rad), nan(s.da_rad), nan(s.dr_rad)],
         });
     }
 
-    /// Drops every second kept block (all kept blocks are whole: the vector is full) and doubles
-    /// the stride; the blocks left, no longer adjacent, become separate segments.
-    fn decimate(&mut self) {
-        let b = Self::BLOCK;
-        let mut kept = Vec::with_capacity(self.rows.len());
-        kept.extend(
-            self.rows
-                .iter()
-                .enumerate()
-                .filter(|(k, _)| (k / b).is_multiple_of(2))
-                .map(|(_, r)| *r),
-        );
-        let removed = self.rows.len() - kept.len();
-        // Renumber: a new segment wherever the old segment or the block changes.
-        let mut seg = 0;
-        let mut prev: Option<(usize, usize)> = None;
-        for (k, r) in kept.iter_mut().enumerate() {
-            let key = (r.segment, k / b);
-            if prev.is_some_and(|p| p != key) {
-                seg += 1;
-            }
-            prev = Some(key);
-            r.segment = seg;
-        }
-        self.rows.clear();
-        self.rows.extend(kept);
-        self.segment = seg;
-        self.dropped += removed;
-        self.stride = self.stride.max(1) * 2;
-    }
-
     /// A new manoeuvre starts (a gap): lagged sums will not cross it.
     pub fn new_segment(&mut self) {
-        if self.rows.last().is_some_and(|r| r.segment == self.segment) {
-            self.segment += 1;
-        }
+        self.rows.new_segment();
+    }
+
+    /// Samples offered and not kept (blocks dropped by the decimation).
+    pub fn dropped(&self) -> usize {
+        self.rows.dropped()
     }
 
     /// Samples kept.
@@ -148,9 +100,10 @@ impl Recorder {
 
     /// The rows where coefficient `c` and the given terms are all present: their indices.
     fn usable(&self, c: Coefficient, terms: &[Term]) -> Vec<usize> {
-        (0..self.rows.len())
+        let rows = self.rows.items();
+        (0..rows.len())
             .filter(|&k| {
-                let r = &self.rows[k];
+                let r = &rows[k];
                 r.coefs[c.index()].is_finite()
                     && terms.iter().all(|t| r.terms[t.index()].is_finite())
             })
@@ -159,12 +112,12 @@ impl Recorder {
 
     /// Regressor `t` over rows `idx`.
     pub(crate) fn term_series(&self, t: Term, idx: &[usize]) -> Vec<f64> {
-        idx.iter().map(|&k| self.rows[k].terms[t.index()]).collect()
+        idx.iter().map(|&k| self.rows.items()[k].terms[t.index()]).collect()
     }
 
     /// Measured coefficient `c` over rows `idx`.
     pub(crate) fn coef_series(&self, c: Coefficient, idx: &[usize]) -> Vec<f64> {
-        idx.iter().map(|&k| self.rows[k].coefs[c.index()]).collect()
+        idx.iter().map(|&k| self.rows.items()[k].coefs[c.index()]).collect()
     }
 
     /// The rows where every term of coefficient `c` in `structure` and `c` itself are present.
@@ -178,7 +131,7 @@ impl Recorder {
         let mut out: Vec<usize> = Vec::new();
         let mut last = None;
         for &k in idx {
-            let s = self.rows[k].segment;
+            let s = self.rows.segments()[k];
             if last == Some(s) {
                 if let Some(l) = out.last_mut() {
                     *l += 1;
@@ -198,9 +151,10 @@ impl Recorder {
             let t = [Term::De, Term::Da, Term::Dr][i];
             structure.params().any(|p| p.term == t)
         };
+        let rows = self.rows.items();
         (0..3)
-            .filter(|&i| modelled(i) && idx.iter().all(|&k| self.rows[k].inputs[i].is_finite()))
-            .map(|i| (INPUTS[i], idx.iter().map(|&k| self.rows[k].inputs[i]).collect()))
+            .filter(|&i| modelled(i) && idx.iter().all(|&k| rows[k].inputs[i].is_finite()))
+            .map(|i| (INPUTS[i], idx.iter().map(|&k| rows[k].inputs[i]).collect()))
             .collect()
     }
 }
@@ -302,12 +256,12 @@ pub fn validate_coefficients(
     let used_for_fit = fit.is_none();
     let mut outputs = Vec::new();
     let mut notes = Vec::new();
-    if rec.dropped > 0 {
+    if rec.dropped() > 0 {
         notes.push(format!(
             "{} samples kept for validation, in blocks of {} consecutive samples spread over the record ({} samples not compared)",
             rec.len(),
             Recorder::BLOCK,
-            rec.dropped
+            rec.dropped()
         ));
     }
     for c in structure.coefficients() {
@@ -519,7 +473,7 @@ mod tests {
             rec.push(&s);
         }
         assert!(rec.len() <= Recorder::MAX_SAMPLES);
-        assert_eq!(rec.len() + rec.dropped, n);
+        assert_eq!(rec.len() + rec.dropped(), n);
         let all: Vec<usize> = (0..rec.len()).collect();
         let idx: Vec<usize> =
             rec.term_series(Term::Alpha, &all).iter().map(|a| (a * 1e6).round() as usize).collect();
@@ -537,7 +491,7 @@ mod tests {
         for k in 0..3 * b {
             short.push(&sample(k as f64 * 0.01, 0.0));
         }
-        assert_eq!((short.len(), short.dropped), (3 * b, 0));
+        assert_eq!((short.len(), short.dropped()), (3 * b, 0));
         assert_eq!(short.segments(&(0..3 * b).collect::<Vec<_>>()), vec![3 * b]);
     }
 }

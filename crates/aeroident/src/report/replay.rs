@@ -73,10 +73,10 @@ pub fn results(outcome: &ReplayOutcome, title: &str, references: &[Reference]) -
     for s in sources {
         notes.push(format!("reference: {s}"));
     }
-    if outcome.samples.stride > 1 {
+    if outcome.samples.stride() > 1 {
         notes.push(format!(
             "fit quality on every {}th sample (the kept history of a long record)",
-            outcome.samples.stride
+            outcome.samples.stride()
         ));
     }
     Results { title: title.to_string(), reference_label: "reference".into(), rows, fit, notes }
@@ -84,7 +84,7 @@ pub fn results(outcome: &ReplayOutcome, title: &str, references: &[Reference]) -
 
 fn fits(outcome: &ReplayOutcome) -> Vec<CoefficientFit> {
     let theta: Vec<Option<f64>> = outcome.summary.parameters.iter().map(|p| p.estimate).collect();
-    coefficient_fits(&outcome.model.structure, &theta, &outcome.samples.samples)
+    coefficient_fits(&outcome.model.structure, &theta, outcome.samples.items())
 }
 
 /// One panel per parameter: the estimate (a gap until identified), its shaded ±2σ band and

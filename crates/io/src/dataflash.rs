@@ -368,14 +368,7 @@ pub fn parse_dataflash(bytes: &[u8], file: &str) -> Result<LogContents, FlightDa
             "no DataFlash message found (no `A3 95` header with a known type)".into(),
         ));
     }
-    for b in builders {
-        if b.dropped > 0 {
-            out.dropped.insert(b.name.clone(), b.dropped);
-        }
-        if !b.t_us.is_empty() {
-            out.topics.push(b.finish());
-        }
-    }
+    out.add_topics(builders);
     Ok(out)
 }
 

@@ -71,6 +71,20 @@ impl LogContents {
         }
         v
     }
+
+    /// Ends a read: each builder's non-increasing samples go to [`LogContents::dropped`], and
+    /// each builder that kept a sample becomes a topic, in the builders' order (the last step
+    /// of both binary log readers, ULog and DataFlash).
+    pub(crate) fn add_topics(&mut self, builders: Vec<TopicBuilder>) {
+        for b in builders {
+            if b.dropped > 0 {
+                self.dropped.insert(b.name.clone(), b.dropped);
+            }
+            if !b.t_us.is_empty() {
+                self.topics.push(b.finish());
+            }
+        }
+    }
 }
 
 /// One topic being collected: timestamps in µs and the flattened fields.
@@ -491,14 +505,7 @@ pub fn parse_ulog(bytes: &[u8], file: &str) -> Result<LogContents, FlightDataErr
         }
         at += 3 + size;
     }
-    for b in builders {
-        if b.dropped > 0 {
-            out.dropped.insert(b.name.clone(), b.dropped);
-        }
-        if !b.t_us.is_empty() {
-            out.topics.push(b.finish());
-        }
-    }
+    out.add_topics(builders);
     Ok(out)
 }
 #[cfg(test)]

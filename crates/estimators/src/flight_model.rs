@@ -228,6 +228,27 @@ impl Output {
             Output::Rdot => s.rdot_rad_s2,
         }
     }
+
+    /// Sets this output's channel of sample `s` to `v` (units as [`Output::name`]): the
+    /// inverse of [`Output::measured`], e.g. to put a simulated response in a sample.
+    pub fn set_measured(self, s: &mut AirDataSample, v: f64) {
+        match self {
+            Output::Vt => s.vt_mps = v,
+            Output::Alpha => s.alpha_rad = v,
+            Output::Beta => s.beta_rad = Some(v),
+            Output::P => s.p_rad_s = Some(v),
+            Output::Q => s.q_rad_s = Some(v),
+            Output::R => s.r_rad_s = Some(v),
+            Output::Phi => s.phi_rad = Some(v),
+            Output::Theta => s.theta_rad = Some(v),
+            Output::Ax => s.ax_mps2 = Some(v),
+            Output::Ay => s.ay_mps2 = Some(v),
+            Output::Az => s.az_mps2 = Some(v),
+            Output::Pdot => s.pdot_rad_s2 = Some(v),
+            Output::Qdot => s.qdot_rad_s2 = Some(v),
+            Output::Rdot => s.rdot_rad_s2 = Some(v),
+        }
+    }
 }
 
 /// Which states the model integrates (module doc).

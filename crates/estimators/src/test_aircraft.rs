@@ -173,24 +173,9 @@ pub fn sample(
     }
 }
 
-/// Sets the channel of output `o` in `s` to `v`.
+/// Sets the channel of output `o` in `s` to `v` ([`Output::set_measured`]).
 pub fn set_output(s: &mut AirDataSample, o: Output, v: f64) {
-    match o {
-        Output::Vt => s.vt_mps = v,
-        Output::Alpha => s.alpha_rad = v,
-        Output::Beta => s.beta_rad = Some(v),
-        Output::P => s.p_rad_s = Some(v),
-        Output::Q => s.q_rad_s = Some(v),
-        Output::R => s.r_rad_s = Some(v),
-        Output::Phi => s.phi_rad = Some(v),
-        Output::Theta => s.theta_rad = Some(v),
-        Output::Ax => s.ax_mps2 = Some(v),
-        Output::Ay => s.ay_mps2 = Some(v),
-        Output::Az => s.az_mps2 = Some(v),
-        Output::Pdot => s.pdot_rad_s2 = Some(v),
-        Output::Qdot => s.qdot_rad_s2 = Some(v),
-        Output::Rdot => s.rdot_rad_s2 = Some(v),
-    }
+    o.set_measured(s, v);
 }
 
 /// `n` samples (interval `dt_s`) of the six-axis flight model flown from level trim with the

@@ -695,23 +695,7 @@ pub fn simulate_plan(
         let mut data = planned_samples(plan, set, m)?;
         for s in data.iter_mut() {
             for (j, sensor) in plan.sensors.iter().enumerate() {
-                let v = y[offset + j] + noise(j);
-                match sensor.output {
-                    Output::Vt => s.vt_mps = v,
-                    Output::Alpha => s.alpha_rad = v,
-                    Output::Beta => s.beta_rad = Some(v),
-                    Output::P => s.p_rad_s = Some(v),
-                    Output::Q => s.q_rad_s = Some(v),
-                    Output::R => s.r_rad_s = Some(v),
-                    Output::Phi => s.phi_rad = Some(v),
-                    Output::Theta => s.theta_rad = Some(v),
-                    Output::Ax => s.ax_mps2 = Some(v),
-                    Output::Ay => s.ay_mps2 = Some(v),
-                    Output::Az => s.az_mps2 = Some(v),
-                    Output::Pdot => s.pdot_rad_s2 = Some(v),
-                    Output::Qdot => s.qdot_rad_s2 = Some(v),
-                    Output::Rdot => s.rdot_rad_s2 = Some(v),
-                }
+                sensor.output.set_measured(s, y[offset + j] + noise(j));
             }
             offset += ny;
         }

@@ -59,11 +59,54 @@ pub enum DifferentiateError {
 /// `dt_s` apart. Output units: input units per second.
 #[derive(Debug, Clone)]
 pub struct CausalDifferentiator {
+    fir: Fir,
+}
+
+/// An FIR filter over the last `N = weights.len()` samples spaced `dt_s` apart (a ring
+/// buffer; no allocation after construction): the running part shared by
+/// [`CausalDifferentiator`] and [`MatchedSmoother`], which differ only in their weights.
+#[derive(Debug, Clone)]
+struct Fir {
+    /// Weights, oldest sample first.
     weights: Vec<f64>,
     buf: Vec<f64>,
     head: usize,
     filled: usize,
     dt_s: f64,
+}
+
+impl Fir {
+    fn new(weights: Vec<f64>, dt_s: f64) -> Self {
+        let n = weights.len();
+        Self { weights, buf: vec![0.0; n], head: 0, filled: 0, dt_s }
+    }
+
+    /// `(N−1)·dt/2`, s: the lag of a linear-phase filter's output behind its newest input.
+    fn lag_s(&self) -> f64 {
+        (self.weights.len() as f64 - 1.0) * self.dt_s / 2.0
+    }
+
+    fn reset(&mut self) {
+        self.head = 0;
+        self.filled = 0;
+    }
+
+    /// Pushes `x`; `Σ_k w_k x_k` over the window once `N` samples were seen, else `None`.
+    fn update(&mut self, x: f64) -> Option<f64> {
+        let n = self.weights.len();
+        self.buf[self.head] = x;
+        self.head = (self.head + 1) % n;
+        self.filled = (self.filled + 1).min(n);
+        if self.filled < n {
+            return None;
+        }
+        // Oldest sample is at `head` (after the increment).
+        let mut acc = 0.0;
+        for (k, w) in self.weights.iter().enumerate() {
+            acc += w * self.buf[(self.head + k) % n];
+        }
+        Some(acc)
+    }
 }
 
 impl CausalDifferentiator {
@@ -81,52 +124,40 @@ impl CausalDifferentiator {
         let c = (window as f64 - 1.0) / 2.0;
         let denom: f64 = (0..window).map(|k| (k as f64 - c).powi(2)).sum::<f64>() * dt_s;
         let weights = (0..window).map(|k| (k as f64 - c) / denom).collect();
-        Ok(Self { weights, buf: vec![0.0; window], head: 0, filled: 0, dt_s })
+        Ok(Self { fir: Fir::new(weights, dt_s) })
     }
 
     /// The lag of the output behind the newest input, s: `(N−1)·dt/2`.
     pub fn lag_s(&self) -> f64 {
-        (self.weights.len() as f64 - 1.0) * self.dt_s / 2.0
+        self.fir.lag_s()
     }
 
     /// The window length `N`.
     pub fn window(&self) -> usize {
-        self.weights.len()
+        self.fir.weights.len()
     }
 
     /// Forgets all samples (the next `N−1` calls return `None`).
     pub fn reset(&mut self) {
-        self.head = 0;
-        self.filled = 0;
+        self.fir.reset();
     }
 
     /// Pushes the newest sample `x` and returns the derivative estimate at the window centre
     /// (time of the newest sample minus [`Self::lag_s`]), or `None` until `N` samples were seen.
     pub fn update(&mut self, x: f64) -> Option<f64> {
-        let n = self.weights.len();
-        self.buf[self.head] = x;
-        self.head = (self.head + 1) % n;
-        self.filled = (self.filled + 1).min(n);
-        if self.filled < n {
-            return None;
-        }
-        // Oldest sample is at `head` (after the increment).
-        let mut acc = 0.0;
-        for (k, w) in self.weights.iter().enumerate() {
-            acc += w * self.buf[(self.head + k) % n];
-        }
-        Some(acc)
+        self.fir.update(x)
     }
 
     /// The gain `G(ω)` of the estimate relative to the true derivative for a sinusoid of angular
     /// frequency `omega_rad_s` (phase is the pure lag [`Self::lag_s`]).
     pub fn gain(&self, omega_rad_s: f64) -> f64 {
-        let c = (self.weights.len() as f64 - 1.0) / 2.0;
+        let c = (self.fir.weights.len() as f64 - 1.0) / 2.0;
         let s: f64 = self
+            .fir
             .weights
             .iter()
             .enumerate()
-            .map(|(k, w)| w * (omega_rad_s * (k as f64 - c) * self.dt_s).sin())
+            .map(|(k, w)| w * (omega_rad_s * (k as f64 - c) * self.fir.dt_s).sin())
             .sum();
         s / omega_rad_s
     }
@@ -141,12 +172,8 @@ impl CausalDifferentiator {
 /// (e.g. `x_{j+1} = x_j + y_j dt`) through the differentiator equals it to rounding.
 #[derive(Debug, Clone)]
 pub struct MatchedSmoother {
-    weights: Vec<f64>,
+    fir: Fir,
     held: Vec<f64>,
-    buf: Vec<f64>,
-    head: usize,
-    filled: usize,
-    dt_s: f64,
 }
 
 impl MatchedSmoother {
@@ -160,17 +187,17 @@ impl MatchedSmoother {
         let mut s = vec![0.0; window + 1];
         let mut acc = 0.0;
         for j in 0..window - 1 {
-            acc -= d.weights[j] * dt_s;
+            acc -= d.fir.weights[j] * dt_s;
             s[j + 1] = acc;
         }
         let weights = (0..window).map(|k| 0.5 * (s[k] + s[k + 1])).collect();
         let held = (0..window).map(|k| s[k + 1]).collect();
-        Ok(Self { weights, held, buf: vec![0.0; window], head: 0, filled: 0, dt_s })
+        Ok(Self { fir: Fir::new(weights, dt_s), held })
     }
 
     /// The FIR weights `a_k`, oldest sample first.
     pub fn weights(&self) -> &[f64] {
-        &self.weights
+        &self.fir.weights
     }
 
     /// The weights `s_j` for a signal held between samples (struct doc), oldest sample first
@@ -181,30 +208,18 @@ impl MatchedSmoother {
 
     /// The lag of the output behind the newest input, s: `(N−1)·dt/2`.
     pub fn lag_s(&self) -> f64 {
-        (self.weights.len() as f64 - 1.0) * self.dt_s / 2.0
+        self.fir.lag_s()
     }
 
     /// Forgets all samples (the next `N−1` calls return `None`).
     pub fn reset(&mut self) {
-        self.head = 0;
-        self.filled = 0;
+        self.fir.reset();
     }
 
     /// Pushes the newest sample and returns the smoothed value at the window centre, or `None`
     /// until `N` samples were seen.
     pub fn update(&mut self, x: f64) -> Option<f64> {
-        let n = self.weights.len();
-        self.buf[self.head] = x;
-        self.head = (self.head + 1) % n;
-        self.filled = (self.filled + 1).min(n);
-        if self.filled < n {
-            return None;
-        }
-        let mut acc = 0.0;
-        for (k, w) in self.weights.iter().enumerate() {
-            acc += w * self.buf[(self.head + k) % n];
-        }
-        Some(acc)
+        self.fir.update(x)
     }
 }
 

@@ -235,7 +235,8 @@ impl Wind {
 ///
 /// c3, c4, c7, c9 are in 1/(slug·ft²), the others dimensionless. A model may also supply
 /// published (rounded) values directly, as the F-16 does to reproduce the textbook's check case.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct InertiaConstants {
     /// c1 = ((Jy − Jz)Jz − Jxz²)/Γ.
     pub c1: f64,
@@ -657,7 +658,7 @@ mod tests {
     fn val_inertia_constants_match_slj_f16_values() {
         // SLJ §3.5 prints the F-16's c1..c9 rounded; they must follow from its Jx, Jy, Jz, Jxz.
         let c = InertiaConstants::from_inertia(9_496.0, 55_814.0, 63_100.0, 982.0).unwrap();
-        let printed = crate::f16::F16Data::embedded().moment.clone();
+        let printed = crate::f16::F16Data::embedded().moment;
         for (exact, rounded) in [
             (c.c1, printed.c1),
             (c.c2, printed.c2),

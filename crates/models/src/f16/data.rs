@@ -7,6 +7,7 @@
 //! numbers, TOML syntax errors with their line).
 
 use super::table::{Table1, Table2, check_breakpoints};
+use crate::rigid_body::InertiaConstants;
 use serde::Deserialize;
 use std::sync::OnceLock;
 
@@ -246,29 +247,10 @@ pub struct Geometry {
     pub xcg_nominal: f64,
 }
 
-/// Moment-equation constants c1..c9 (SLJ §3.5, rounded textbook values; see the data file).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct MomentConstants {
-    /// c1.
-    pub c1: f64,
-    /// c2.
-    pub c2: f64,
-    /// c3.
-    pub c3: f64,
-    /// c4.
-    pub c4: f64,
-    /// c5.
-    pub c5: f64,
-    /// c6.
-    pub c6: f64,
-    /// c7.
-    pub c7: f64,
-    /// c8.
-    pub c8: f64,
-    /// c9.
-    pub c9: f64,
-}
+/// Moment-equation constants c1..c9 (SLJ §3.5, rounded textbook values; see the data file):
+/// the rigid body's [`InertiaConstants`], read as printed rather than computed from the
+/// inertias (so the textbook's check case is reproduced).
+pub type MomentConstants = InertiaConstants;
 
 /// The ranges the data are meant for (SLJ subroutine headers; `[ranges]` of the data file),
 /// each `[min, max]`. Outside them the lookups extrapolate (README §4): results are flagged,

@@ -67,7 +67,7 @@ pub use increments::{
 
 use crate::atmosphere::air_data;
 use crate::rigid_body::{
-    self, BodyLoads, InertiaConstants, Kinematics, RigidBody, VelocityAngles, Wind,
+    self, BodyLoads, Kinematics, RigidBody, VelocityAngles, Wind,
 };
 use crate::{Dynamics, ModelError};
 use nalgebra::{SVector, Vector3};
@@ -449,22 +449,8 @@ impl F16 {
     /// constants c1…c9 (not recomputed from the inertias, so the check case of Table 3.5-2 is
     /// reproduced) and the model's g = 32.17 ft/s².
     pub fn rigid_body(&self) -> RigidBody {
-        let (m, c) = (&self.data.mass, &self.data.moment);
-        RigidBody {
-            mass_slug: m.mass_slug(),
-            inertia: InertiaConstants {
-                c1: c.c1,
-                c2: c.c2,
-                c3: c.c3,
-                c4: c.c4,
-                c5: c.c5,
-                c6: c.c6,
-                c7: c.c7,
-                c8: c.c8,
-                c9: c.c9,
-            },
-            g_fps2: m.g_ft_per_s2,
-        }
+        let m = &self.data.mass;
+        RigidBody { mass_slug: m.mass_slug(), inertia: self.data.moment, g_fps2: m.g_ft_per_s2 }
     }
 
     /// Engine (SLJ §3.5 TGEAR, PDOT, THRUST): thrust (lbf) and power rate (percent/s) at power

@@ -88,6 +88,19 @@ pub struct FitQuality {
     pub theil_u: Option<f64>,
 }
 
+impl From<&crate::validation::OutputValidation> for FitQuality {
+    /// The fit-quality row of a validated output (its name, samples, RMSE, R², Theil U).
+    fn from(o: &crate::validation::OutputValidation) -> Self {
+        Self {
+            coefficient: o.name.clone(),
+            samples: o.n,
+            residual_rms: o.rmse,
+            r_squared: o.r_squared,
+            theil_u: o.theil_u,
+        }
+    }
+}
+
 /// Fit quality of `predicted` against `measured` (module doc); pairs with a non-finite member
 /// are skipped. `None` with no finite pair or lengths that differ.
 pub fn fit_quality(coefficient: &str, measured: &[f64], predicted: &[f64]) -> Option<FitQuality> {

@@ -26,17 +26,7 @@ pub fn results(outcome: &BatchOutcome, title: &str, references: &[Reference]) ->
         })
         .collect();
     let v = &s.validation;
-    let fit = v
-        .outputs
-        .iter()
-        .map(|o| FitQuality {
-            coefficient: o.name.clone(),
-            samples: o.n,
-            residual_rms: o.rmse,
-            r_squared: o.r_squared,
-            theil_u: o.theil_u,
-        })
-        .collect();
+    let fit = v.outputs.iter().map(FitQuality::from).collect();
     let mut notes = vec![
         "σ = Cramér–Rao bound of the output-error fit (optimistic when the residuals are coloured); fit quality of the simulated outputs over the fitted record".into(),
     ];
@@ -167,17 +157,7 @@ pub fn write(
             title: format!("validation on {}", v2.data),
             reference_label: "reference".into(),
             rows: Vec::new(),
-            fit: v2
-                .outputs
-                .iter()
-                .map(|o| FitQuality {
-                    coefficient: o.name.clone(),
-                    samples: o.n,
-                    residual_rms: o.rmse,
-                    r_squared: o.r_squared,
-                    theil_u: o.theil_u,
-                })
-                .collect(),
+            fit: v2.outputs.iter().map(FitQuality::from).collect(),
             notes: v2.notes.clone(),
         });
     }

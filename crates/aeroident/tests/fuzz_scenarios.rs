@@ -9,6 +9,10 @@ use aeroident::sim::parse_scenario;
 use proptest::prelude::*;
 use std::path::Path;
 
+#[path = "../../io/tests/common/mutate.rs"]
+mod mutate;
+use mutate::mutate;
+
 fn cases() -> u32 {
     std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(64)
 }
@@ -35,32 +39,6 @@ fn check(text: &str) -> Result<(), TestCaseError> {
         prop_assert!(format!("{e:#}").contains(FILE), "sim: {:#}", e);
     }
     Ok(())
-}
-
-fn mutate(seed: &str, edits: &[(usize, u8, String)]) -> String {
-    let mut c: Vec<char> = seed.chars().collect();
-    for (at, op, s) in edits {
-        let i = at % (c.len() + 1);
-        match op % 4 {
-            0 => c.splice(i..i, s.chars()).for_each(drop),
-            1 => {
-                let end = (i + s.len()).min(c.len());
-                c.drain(i..end).for_each(drop);
-            }
-            2 => {
-                if i < c.len() {
-                    c[i] = s.chars().next().unwrap_or('=');
-                }
-            }
-            _ => {
-                let start = c[..i].iter().rposition(|&x| x == '\n').map_or(0, |p| p + 1);
-                let end = c[i..].iter().position(|&x| x == '\n').map_or(c.len(), |p| i + p + 1);
-                let line: Vec<char> = c[start..end].to_vec();
-                c.splice(end..end, line).for_each(drop);
-            }
-        }
-    }
-    c.into_iter().collect()
 }
 
 fn edits() -> impl Strategy<Value = Vec<(usize, u8, String)>> {

@@ -10,6 +10,10 @@
 use aeroident_io::{FlightDataReader, Mapping, ModelSpec, RecordEvent};
 use proptest::prelude::*;
 
+#[path = "common/mutate.rs"]
+mod mutate;
+use mutate::mutate;
+
 fn cases() -> u32 {
     std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(64)
 }
@@ -165,34 +169,6 @@ fn check_events(events: &[RecordEvent]) -> Result<Vec<u64>, TestCaseError> {
     }
     prop_assert!(rows.windows(2).all(|w| w[0] < w[1]), "rows out of order: {rows:?}");
     Ok(sampled)
-}
-
-fn mutate(seed: &str, edits: &[(usize, u8, String)]) -> String {
-    let mut c: Vec<char> = seed.chars().collect();
-    for (at, op, s) in edits {
-        let i = if c.is_empty() { 0 } else { at % (c.len() + 1) };
-        match op % 4 {
-            0 => c.splice(i..i, s.chars()).for_each(drop),
-            1 => {
-                let end = (i + s.len()).min(c.len());
-                c.drain(i..end).for_each(drop);
-            }
-            2 => {
-                // Replace one character.
-                if i < c.len() {
-                    c[i] = s.chars().next().unwrap_or('=');
-                }
-            }
-            _ => {
-                // Duplicate the line containing `i` (repeated keys and tables).
-                let start = c[..i].iter().rposition(|&x| x == '\n').map_or(0, |p| p + 1);
-                let end = c[i..].iter().position(|&x| x == '\n').map_or(c.len(), |p| i + p + 1);
-                let line: Vec<char> = c[start..end].to_vec();
-                c.splice(end..end, line).for_each(drop);
-            }
-        }
-    }
-    c.into_iter().collect()
 }
 
 /// Edits: inserted text leans on TOML's syntax characters and on numbers of every size.

@@ -191,7 +191,8 @@ mod tests {
         }
         let stride = log.stride();
         assert_eq!(stride, 8);
-        let expected: Vec<usize> = (0..70usize).filter(|k| (k / 4).is_multiple_of(stride)).collect();
+        let expected: Vec<usize> =
+            (0..70usize).filter(|k| (k / 4).is_multiple_of(stride)).collect();
         assert_eq!(log.items(), &expected[..]);
         assert!(log.len() <= 16);
         assert_eq!(log.len() + log.dropped(), 70);

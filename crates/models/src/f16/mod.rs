@@ -66,9 +66,7 @@ pub use increments::{
 };
 
 use crate::atmosphere::air_data;
-use crate::rigid_body::{
-    self, BodyLoads, Kinematics, RigidBody, VelocityAngles, Wind,
-};
+use crate::rigid_body::{self, BodyLoads, Kinematics, RigidBody, VelocityAngles, Wind};
 use crate::{Dynamics, ModelError};
 use nalgebra::{SVector, Vector3};
 use table::Extrapolation;

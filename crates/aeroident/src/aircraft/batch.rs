@@ -111,6 +111,8 @@ pub struct BatchFit {
     pub residual_rms: Vec<f64>,
     /// Whether the σ are the coloured-residual ones (else Cramér–Rao).
     pub coloured_sigma: bool,
+    /// Lag (samples) at which the coloured-residual sum was truncated.
+    pub coloured_lag: usize,
 }
 
 /// The outcome of [`fit_window`]: per structure parameter `(estimate, σ)`, and the log.
@@ -164,5 +166,6 @@ fn log_of(
         wall_s,
         residual_rms: r.residual_rms.clone(),
         coloured_sigma: r.sigma_coloured.is_some(),
+        coloured_lag: r.coloured_lag,
     }
 }

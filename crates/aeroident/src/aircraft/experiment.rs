@@ -13,6 +13,10 @@
 //!      differentiator's lag), passed to each `Box<dyn Estimator>`;
 //! 4. both aircraft advance one RK4 step.
 //!
+//! After the flight, each batch estimator (`kind = "oe"`, [`super::batch`]) fits the samples
+//! it recorded in step 3 on the window after the last change of the truth; its estimate is
+//! logged at the last sample only.
+//!
 //! Truth: the two-aircraft estimators estimate **increments** (their truth is the scenario's
 //! increment); the sample-driven estimators estimate the reference aircraft's **total local
 //! derivatives** (their truth is [`super::truth::local_derivatives`] at the trim point, before

@@ -496,6 +496,21 @@ fn num(v: Option<f64>) -> String {
     v.map_or("null".to_string(), |x| format!("{x:.4e}"))
 }
 
+/// One line on a batch fit: window, initial state, iterations, wall time, σ kind.
+pub fn batch_fit_line(b: &super::batch::BatchFit) -> String {
+    format!(
+        "{}: post-flight fit of {} samples, t = {:.2}–{:.2} s (initial state: {}), {} iterations, {:.2} s wall; σ {}; time columns: batch (no estimate before the end)",
+        b.estimator,
+        b.samples,
+        b.from_s,
+        b.to_s,
+        b.initial_states,
+        b.iterations.map_or("—".into(), |i| i.to_string()),
+        b.wall_s,
+        if b.coloured_sigma { "coloured-residual" } else { "Cramér–Rao" },
+    )
+}
+
 /// A terminal table of a summary: the thesis-style table for increments, the truth / estimate
 /// ± σ / times table for derivatives.
 pub fn table(summary: &Summary) -> String {
@@ -585,19 +600,7 @@ pub fn table(summary: &Summary) -> String {
             .ok();
         }
         for b in &summary.batch_fits {
-            writeln!(
-                s,
-                "{}: post-flight fit of {} samples, t = {:.2}–{:.2} s (initial state: {}), {} iterations, {:.2} s wall; σ {}; time columns: batch (no estimate before the end)",
-                b.estimator,
-                b.samples,
-                b.from_s,
-                b.to_s,
-                b.initial_states,
-                b.iterations.map_or("—".into(), |i| i.to_string()),
-                b.wall_s,
-                if b.coloured_sigma { "coloured-residual" } else { "Cramér–Rao" },
-            )
-            .ok();
+            writeln!(s, "{}", batch_fit_line(b)).ok();
         }
         for t in &summary.targets {
             writeln!(

@@ -26,7 +26,9 @@
 //! - `median_time_to_10pct_s`: median over `runs_ok` of the time from the start of the
 //!   excitation until the estimate stays within ±10 % of the truth up to the damage (or the end)
 //!   ([`crate::aircraft::report`]); a run that never settles counts as +∞, and the median is
-//!   `null` when at least half never settle;
+//!   `null` when at least half never settle; always `null` for a batch estimator (output
+//!   error, [`crate::aircraft::batch`]: no estimate before the end of the flight), which
+//!   reports `mean_iterations` and `mean_fit_wall_s` instead;
 //! - `crb_sigma`: [`crb_sigmas`], the Cramér–Rao σ predicted by
 //!   [`aeroident_estimators::output_error::design::predict_crb`] for the data since the last
 //!   change of the truth (module doc there; Klein & Morelli 2006 ch. 6).
@@ -113,6 +115,11 @@ pub struct EstimatorRun {
     pub failure: Option<String>,
     /// Final mean normalised innovation squared (filters only; ≈ 1 when consistent).
     pub nis: Option<f64>,
+    /// Batch estimators ([`crate::aircraft::batch`]): Gauss–Newton iterations of the fit
+    /// (`null` for real-time estimators and failed fits).
+    pub iterations: Option<usize>,
+    /// Batch estimators: wall time of the post-flight fit, s (`null` otherwise).
+    pub fit_wall_s: Option<f64>,
     /// Per parameter, in the structure's order.
     pub params: Vec<ParamRun>,
 }
@@ -137,16 +144,15 @@ pub fn run_result(index: u64, sensor_seed: u64, out: &RunOutput) -> RunResult {
             if ests.last().is_none_or(|e| e.name != p.estimator) {
                 let diverged = p.status == Some("diverged");
                 let failure = p.failure.clone().or_else(|| diverged.then(|| "diverged".into()));
-                let nis = out
-                    .channels
-                    .iter()
-                    .find(|c| c.label == p.estimator)
-                    .and_then(|c| c.nis)
-                    .filter(|v| v.is_finite());
+                let ch = out.channels.iter().find(|c| c.label == p.estimator);
+                let nis = ch.and_then(|c| c.nis).filter(|v| v.is_finite());
+                let fit = ch.and_then(|c| c.batch.as_ref());
                 ests.push(EstimatorRun {
                     name: p.estimator.clone(),
                     failure,
                     nis,
+                    iterations: fit.and_then(|f| f.iterations),
+                    fit_wall_s: fit.map(|f| f.wall_s),
                     params: Vec::new(),
                 });
             }
@@ -241,6 +247,12 @@ pub struct EstimatorStats {
     /// Mean over `runs_ok` of the final normalised innovation squared (`null` for methods
     /// without innovations); ≈ 1 for a consistent filter.
     pub mean_nis: Option<f64>,
+    /// Batch estimators: mean Gauss–Newton iterations over `runs_ok` (`null` otherwise).
+    pub mean_iterations: Option<f64>,
+    /// Batch estimators: mean wall time of the post-flight fit over `runs_ok`, s (`null`
+    /// otherwise; single-thread time of one fit, measured while the other runs share the
+    /// cores).
+    pub mean_fit_wall_s: Option<f64>,
     /// Per parameter.
     pub parameters: Vec<ParamStats>,
 }
@@ -316,10 +328,15 @@ pub fn statistics(runs: &[RunResult], names: &[String], crb: &CrbTable) -> Vec<E
                 })
                 .unwrap_or_default();
             let nis: Vec<f64> = ok.iter().filter_map(|e| e.nis).collect();
+            let iterations: Vec<f64> =
+                ok.iter().filter_map(|e| e.iterations.map(|i| i as f64)).collect();
+            let fit_wall: Vec<f64> = ok.iter().filter_map(|e| e.fit_wall_s).collect();
             EstimatorStats {
                 name: name.clone(),
                 runs_ok: ok.len(),
                 mean_nis: mean(&nis),
+                mean_iterations: mean(&iterations),
+                mean_fit_wall_s: mean(&fit_wall),
                 failed_runs: failed,
                 parameters,
             }

@@ -510,6 +510,7 @@ fn default_scenario_writes_outputs_with_exact_summary_keys() {
         "angular_accelerations",
         "sample_lag_s",
         "targets",
+        "batch_fits",
     ];
     want.sort();
     assert_eq!(keys(&json), want);
@@ -536,6 +537,7 @@ fn default_scenario_writes_outputs_with_exact_summary_keys() {
         "meets_targets",
         "failure",
         "status",
+        "batch",
     ];
     want_p.sort();
     for p in json["parameters"].as_array().unwrap() {

@@ -13,6 +13,10 @@
 //!      differentiator's lag), passed to each `Box<dyn Estimator>`;
 //! 4. both aircraft advance one RK4 step.
 //!
+//! After the flight, each batch estimator (`kind = "oe"`, [`super::batch`]) fits the samples
+//! it recorded in step 3 on the window after the last change of the truth; its estimate is
+//! logged at the last sample only.
+//!
 //! Truth: the two-aircraft estimators estimate **increments** (their truth is the scenario's
 //! increment); the sample-driven estimators estimate the reference aircraft's **total local
 //! derivatives** (their truth is [`super::truth::local_derivatives`] at the trim point, before
@@ -30,6 +34,7 @@ use aeroident_models::trim::{F16Trim, TrimCondition, trim};
 use aeroident_signals::{Input, InputSignal, WindField, config::build_wind};
 
 use super::air_data::{AirDataSampler, M_PER_FT};
+use super::batch::{BatchFit, fit_window};
 use super::increments::increment_matrix;
 use super::scenario::{Channel, EstimatorSpec, EstimatorWind, SampleEstimatorSpec, Scenario};
 use super::sensors::SensorNoise;
@@ -140,6 +145,17 @@ pub struct ChannelLog {
     /// ([`aeroident_estimators::Estimator::nis`]; ≈ 1 for a consistent filter), `None` for
     /// methods without innovations.
     pub nis: Option<f64>,
+    /// Batch estimators ([`super::batch`]): how the post-flight fit went (`None` for the
+    /// real-time estimators, and for a batch fit that failed before iterating).
+    pub batch: Option<BatchFit>,
+}
+
+impl ChannelLog {
+    /// Whether the channel is a batch (post-flight) estimator: its estimate exists only at the
+    /// end, so it has no time-history metrics.
+    pub fn is_batch(&self) -> bool {
+        super::batch::is_batch(self.kind)
+    }
 }
 
 impl ChannelLog {
@@ -278,9 +294,17 @@ struct SampleChannel {
     structure: ModelStructure,
 }
 
+/// A batch channel: the recorded samples, fitted after the flight.
+struct BatchChannel {
+    config: aeroident_estimators::output_error::OeConfig,
+    structure: ModelStructure,
+    samples: Vec<AirDataSample>,
+}
+
 enum Channelled {
     Two(Box<TwoAircraft>),
     Sample(SampleChannel),
+    Batch(BatchChannel),
 }
 
 struct ChannelRun {
@@ -386,6 +410,21 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
     for (k, spec) in sc.estimator.iter().enumerate() {
         let what = format!("estimator[{k}] `{}`", spec.label());
         let (ch, kind, quantity, params, status) = match spec {
+            EstimatorSpec::Sample(s) if super::batch::is_batch(&s.kind) => {
+                let config = super::batch::config(s).map_err(|e| setup_err(&what, e))?;
+                let structure = config.structure;
+                (
+                    Channelled::Batch(BatchChannel {
+                        config,
+                        structure,
+                        samples: Vec::with_capacity(n + 1),
+                    }),
+                    "oe",
+                    Quantity::Derivative,
+                    structure.params().collect(),
+                    Some("recording"),
+                )
+            }
             EstimatorSpec::Sample(s) => {
                 let est = build_sample_estimator(s).map_err(|e| setup_err(&what, e))?;
                 let structure = *est.structure();
@@ -429,6 +468,7 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
                 stats: String::new(),
                 status,
                 nis: None,
+                batch: None,
             },
             ch,
         });
@@ -448,6 +488,7 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
                                 Some(super::increments::get(&e.increments, l.param))
                             }
                             Channelled::Sample(s) => e.derivatives.truth(&s.structure, l.param),
+                            Channelled::Batch(b) => e.derivatives.truth(&b.structure, l.param),
                         })
                         .collect()
                 })
@@ -459,7 +500,8 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
             l.truth_epochs = t.clone();
         }
     }
-    let has_sample = channels.iter().any(|c| matches!(c.ch, Channelled::Sample(_)));
+    let has_sample =
+        channels.iter().any(|c| matches!(c.ch, Channelled::Sample(_) | Channelled::Batch(_)));
     let mut sampler = if has_sample {
         Some(
             AirDataSampler::new(
@@ -552,6 +594,40 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
         }
     }
     out.wall_s = start.elapsed().as_secs_f64();
+    // The batch fits, after the flight, on the window after the last change of the truth
+    // (module doc of super::batch).
+    let lag_s = out.sample_lag_s.unwrap_or(0.0);
+    let window_from_s = match epochs.last() {
+        Some(e) if e.from_s > 0.0 => e.from_s + lag_s,
+        _ => f64::NEG_INFINITY,
+    };
+    let t_end = out.t_s.last().copied().unwrap_or(0.0);
+    for c in &mut channels {
+        let Channelled::Batch(b) = &c.ch else { continue };
+        match fit_window(&c.log.label, &b.samples, window_from_s, &b.config) {
+            Ok((values, log)) => {
+                for (l, (v, s)) in c.log.params.iter_mut().zip(values) {
+                    if let (Some(e), Some(sg)) = (l.estimate.last_mut(), l.sigma.last_mut()) {
+                        *e = Some(v).filter(|v| v.is_finite());
+                        *sg = Some(s).filter(|s| s.is_finite());
+                    }
+                }
+                c.log.status = Some("converged");
+                c.log.stats = format!(
+                    "output error: {} samples from t = {:.2} s, {} iterations, {:.2} s",
+                    log.samples,
+                    log.from_s,
+                    log.iterations.unwrap_or(0),
+                    log.wall_s
+                );
+                c.log.batch = Some(log);
+            }
+            Err(e) => {
+                c.log.status = Some("failed");
+                c.log.failure = Some((t_end, e));
+            }
+        }
+    }
     out.channels = channels
         .into_iter()
         .map(|mut c| {
@@ -564,6 +640,7 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
                     .collect::<Vec<_>>()
                     .join("; "),
                 Channelled::Sample(s) => format!("status {}", s.est.estimates().status.name()),
+                Channelled::Batch(_) => c.log.stats.clone(),
             };
             if let Channelled::Sample(s) = &c.ch {
                 c.log.nis = s.est.nis();
@@ -635,6 +712,15 @@ fn step_channel(
             for (i, l) in c.log.params.iter_mut().enumerate() {
                 l.estimate.push(if diverged { None } else { e.value(i) });
                 l.sigma.push(if diverged { None } else { e.sigma(i) });
+            }
+        }
+        Channelled::Batch(b) => {
+            if let Some(sample) = air {
+                b.samples.push(*sample);
+            }
+            for l in &mut c.log.params {
+                l.estimate.push(None);
+                l.sigma.push(None);
             }
         }
     }

@@ -7,9 +7,13 @@
 //!   model structure), fed one air-data sample per step ([`air_data`](crate::aircraft::air_data)) and scored against the
 //!   reference's true local derivatives ([`truth`](crate::aircraft::truth)).
 //!
+//! - the **batch** output-error estimator ([`batch`](crate::aircraft::batch)), fitted after the
+//!   flight to the same recorded samples.
+//!
 //! Increments are **per radian** (per unit hat-rate for p̂, q̂, r̂), about the trim point.
 
 pub mod air_data;
+pub mod batch;
 pub mod experiment;
 pub mod figures;
 pub mod increments;

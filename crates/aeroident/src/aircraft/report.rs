@@ -121,8 +121,13 @@ pub struct ParamSummary {
     pub meets_targets: Option<bool>,
     /// Estimator failure (time and message), if any; estimates were held from then on.
     pub failure: Option<String>,
-    /// Sample-driven estimators: the final status (`initialising`, `running`, `diverged`).
+    /// Sample-driven estimators: the final status (`initialising`, `running`, `diverged`;
+    /// batch: `converged` or `failed`).
     pub status: Option<&'static str>,
+    /// Whether the estimator is a batch (post-flight) fit ([`super::batch`]): its estimate
+    /// exists only at the end, so every time metric (`convergence_time_s`, `time_to_10pct_s`,
+    /// …) and `meets_targets` are `null`, not "never converged".
+    pub batch: bool,
 }
 
 /// How many primary derivatives of one estimator meet the issue-8 targets.
@@ -166,8 +171,13 @@ pub struct Summary {
     pub angular_accelerations: Option<String>,
     /// Delay of the air-data samples behind the truth, s.
     pub sample_lag_s: Option<f64>,
-    /// Per sample-driven estimator: primary derivatives meeting the targets.
+    /// Per real-time sample-driven estimator: primary derivatives meeting the targets (batch
+    /// estimators have no time metrics and are not listed).
     pub targets: Vec<TargetSummary>,
+    /// Per batch estimator: the fitted window, iterations and wall time
+    /// ([`super::batch::BatchFit`]; a failed fit is absent here and its reason is in the
+    /// parameters' `failure`).
+    pub batch_fits: Vec<super::batch::BatchFit>,
 }
 
 fn nan_for_none(v: &[Option<f64>]) -> Vec<f64> {
@@ -216,7 +226,8 @@ fn entry(out: &RunOutput, ch: &ChannelLog, l: &ParamLog) -> Result<ParamSummary,
     };
     let damage = sc.damage_at_s();
     let idx = |ts: f64| t.partition_point(|&x| x < ts);
-    let truth_known = l.truth.iter().all(Option::is_some);
+    // A batch estimate exists only at the end: no time history to measure.
+    let truth_known = l.truth.iter().all(Option::is_some) && !ch.is_batch();
     let truth = nan_for_none(&l.truth);
     let pre = step.map_or(n, idx);
     let (conv, first_within, reconv) = if truth_known {
@@ -256,7 +267,7 @@ fn entry(out: &RunOutput, ch: &ChannelLog, l: &ParamLog) -> Result<ParamSummary,
     };
     let primary =
         ch.quantity == Quantity::Derivative && PRIMARY_DERIVATIVES.contains(&l.param.name());
-    let meets = primary.then(|| {
+    let meets = (primary && !ch.is_batch()).then(|| {
         t10.is_some_and(|x| x <= TARGET_WINDOW_S)
             && (damage.is_none() || r10.is_some_and(|x| x <= TARGET_WINDOW_S))
             && covers == Some(true)
@@ -292,6 +303,7 @@ fn entry(out: &RunOutput, ch: &ChannelLog, l: &ParamLog) -> Result<ParamSummary,
         meets_targets: meets,
         failure: ch.failure.as_ref().map(|(t, m)| format!("t = {t:.2} s: {m}")),
         status: ch.status,
+        batch: ch.is_batch(),
     })
 }
 
@@ -308,7 +320,7 @@ pub fn summarize(out: &RunOutput) -> Result<Summary, ReportError> {
         for l in &ch.params {
             parameters.push(entry(out, ch, l)?);
         }
-        if ch.quantity == Quantity::Derivative {
+        if ch.quantity == Quantity::Derivative && !ch.is_batch() {
             let mine: Vec<&ParamSummary> =
                 parameters[first..].iter().filter(|p| p.primary).collect();
             targets.push(TargetSummary {
@@ -361,6 +373,7 @@ pub fn summarize(out: &RunOutput) -> Result<Summary, ReportError> {
         }),
         sample_lag_s: out.sample_lag_s,
         targets,
+        batch_fits: out.channels.iter().filter_map(|c| c.batch.clone()).collect(),
     })
 }
 
@@ -483,6 +496,21 @@ fn num(v: Option<f64>) -> String {
     v.map_or("null".to_string(), |x| format!("{x:.4e}"))
 }
 
+/// One line on a batch fit: window, initial state, iterations, wall time, σ kind.
+pub fn batch_fit_line(b: &super::batch::BatchFit) -> String {
+    format!(
+        "{}: post-flight fit of {} samples, t = {:.2}–{:.2} s (initial state: {}), {} iterations, {:.2} s wall; σ {}; time columns: batch (no estimate before the end)",
+        b.estimator,
+        b.samples,
+        b.from_s,
+        b.to_s,
+        b.initial_states,
+        b.iterations.map_or("—".into(), |i| i.to_string()),
+        b.wall_s,
+        if b.coloured_sigma { "coloured-residual" } else { "Cramér–Rao" },
+    )
+}
+
 /// A terminal table of a summary: the thesis-style table for increments, the truth / estimate
 /// ± σ / times table for derivatives.
 pub fn table(summary: &Summary) -> String {
@@ -558,8 +586,10 @@ pub fn table(summary: &Summary) -> String {
                 if p.step_at_s.is_some() { num(p.truth_after) } else { "=".into() },
                 num(p.r#final),
                 p.sigma.map_or("—".into(), |x| format!("{x:.2e}")),
-                sec(p.time_to_10pct_s),
-                if summary.damage_at_s.is_some() {
+                if p.batch { "batch".into() } else { sec(p.time_to_10pct_s) },
+                if p.batch {
+                    "batch".into()
+                } else if summary.damage_at_s.is_some() {
                     sec(p.reconvergence_10pct_s)
                 } else {
                     "—".into()
@@ -568,6 +598,9 @@ pub fn table(summary: &Summary) -> String {
                 p.meets_targets.map_or("", |b| if b { "met" } else { "MISSED" }),
             )
             .ok();
+        }
+        for b in &summary.batch_fits {
+            writeln!(s, "{}", batch_fit_line(b)).ok();
         }
         for t in &summary.targets {
             writeln!(

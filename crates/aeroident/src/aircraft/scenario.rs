@@ -56,7 +56,9 @@
 //!
 //! Sample-driven kinds (built by the shared factory, `crate::estimators::build`): `rls` and
 //! `ftr` (option `forgetting` ∈ (0, 1] per sample, default 1), `ekf`, `smpe`, `smpe-corrected`,
-//! `gradient`.
+//! `gradient`. Batch kind `oe` (output error fitted after the flight to the recorded samples of
+//! the window after the damage; option `initial_states = "estimate" | "first-sample"`;
+//! [`super::batch`]).
 //!
 //! The old syntax (`[params.dCm_alpha]`, `params = ["dCm_alpha"]`, `kind = "gradient"` for the
 //! two-aircraft gradient law) is refused with a message saying what to write instead.
@@ -535,12 +537,13 @@ fn parse_estimator(k: usize, t: &toml::Table) -> Result<EstimatorSpec, (String, 
             }
         });
     }
-    if !SAMPLE_KINDS.contains(&kind) {
+    if !SAMPLE_KINDS.contains(&kind) && !super::batch::is_batch(kind) {
         return Err((
             format!("{field}.kind"),
             format!(
-                "unknown kind `{kind}`: two-aircraft estimators published | corrected | mr-gradient, sample-driven {}",
-                SAMPLE_KINDS.join(" | ")
+                "unknown kind `{kind}`: two-aircraft estimators published | corrected | mr-gradient, sample-driven {}, batch (post-flight) {}",
+                SAMPLE_KINDS.join(" | "),
+                super::batch::BATCH_KINDS.join(" | ")
             ),
         ));
     }
@@ -786,8 +789,12 @@ impl Scenario {
         }
         for (k, e) in self.estimator.iter().enumerate() {
             if let EstimatorSpec::Sample(s) = e {
-                super::experiment::build_sample_estimator(s)
-                    .map_err(|r| bad(&format!("estimator[{k}]"), r))?;
+                if super::batch::is_batch(&s.kind) {
+                    super::batch::config(s).map_err(|r| bad(&format!("estimator[{k}]"), r))?;
+                } else {
+                    super::experiment::build_sample_estimator(s)
+                        .map_err(|r| bad(&format!("estimator[{k}]"), r))?;
+                }
                 continue;
             }
             let names = e.param_names();

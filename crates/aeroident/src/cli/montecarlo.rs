@@ -94,17 +94,24 @@ pub fn table(c: &Campaign) -> String {
                 fmt_sig(p.crb_sigma, 2),
                 p.coverage_2sigma.map_or("—".into(), |x| format!("{:.0} %", 100.0 * x)),
                 p.scatter.zip(p.crb_sigma).map_or("—".into(), |(a, b)| format!("{:.1}", a / b)),
-                p.median_time_to_10pct_s.map_or("never".into(), |t| format!("{t:.2} s")),
+                if e.mean_fit_wall_s.is_some() {
+                    "batch".into()
+                } else {
+                    p.median_time_to_10pct_s.map_or("never".into(), |t| format!("{t:.2} s"))
+                },
             ]);
         }
     }
     let _ = writeln!(s, "{t}");
     for e in &c.estimators {
         let _ = write!(s, "{}: {} runs used, {} failed", e.name, e.runs_ok, e.failed_runs.len());
-        let _ = match e.mean_nis {
-            Some(nis) => writeln!(s, "; mean NIS {nis:.2}"),
-            None => writeln!(s),
-        };
+        if let Some(nis) = e.mean_nis {
+            let _ = write!(s, "; mean NIS {nis:.2}");
+        }
+        if let (Some(it), Some(w)) = (e.mean_iterations, e.mean_fit_wall_s) {
+            let _ = write!(s, "; post-flight fit: mean {it:.1} iterations, {w:.2} s wall");
+        }
+        let _ = writeln!(s);
         for f in &e.failed_runs {
             let _ = writeln!(s, "  run {} failed: {}", f.run, f.reason);
         }
@@ -114,7 +121,7 @@ pub fn table(c: &Campaign) -> String {
     }
     let _ = writeln!(
         s,
-        "* = primary derivative; error % = bias of the mean estimate / |truth|; t10 med = median time to stay within ±10 % (never: ≥ half the runs never do)"
+        "* = primary derivative; error % = bias of the mean estimate / |truth|; t10 med = median time to stay within ±10 % (never: ≥ half the runs never do; batch: a post-flight fit, no estimate before the end)"
     );
     s
 }

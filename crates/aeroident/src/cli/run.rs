@@ -126,6 +126,10 @@ fn results_text(summary: &Summary) -> String {
     for r in crate::report::run::results(summary) {
         s.push_str(&crate::table::render(&r));
     }
+    for b in &summary.batch_fits {
+        s.push_str(&crate::aircraft::report::batch_fit_line(b));
+        s.push('\n');
+    }
     for t in &summary.targets {
         s.push_str(&format!(
             "{}: {}/{} primary derivatives meet the targets{}\n",

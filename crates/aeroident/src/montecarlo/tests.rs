@@ -34,6 +34,8 @@ fn result(
             name: "rls".into(),
             failure: fail.map(Into::into),
             nis: None,
+            iterations: None,
+            fit_wall_s: None,
             params: vec![prun("Cm_alpha", -1.0, fin, sigma, t10)],
         }]),
     }

@@ -240,6 +240,45 @@ fn read_manoeuvres<R: Read>(reader: FlightDataReader<R>) -> Result<Manoeuvres, R
     Ok(Manoeuvres { manoeuvres, rejections, read, rejected })
 }
 
+/// The output-error configuration of a post-flight fit of `structure` (`replay --estimator
+/// oe`, and the base of the `oe` estimator of `aeroident run`): [`OeConfig::new`]'s defaults,
+/// i.e. every output of the structure's flight model that the data have, no output biases,
+/// each manoeuvre's initial state at its first sample, and the equation-error start (least
+/// squares on the measured coefficients, the generic priors where that fails), never a
+/// reference result.
+pub fn oe_config(structure: ModelStructure) -> OeConfig {
+    OeConfig::new(structure)
+}
+
+/// Fits `manoeuvres` by output error with `config` and times the fit: `(result, wall s)`.
+///
+/// # Errors
+/// A fit that fails or does not converge: a message with the reason and the iteration count
+/// (never the unconverged iterate).
+pub fn fit_manoeuvres(
+    manoeuvres: &[&[AirDataSample]],
+    config: &OeConfig,
+) -> Result<(OeResult, f64), String> {
+    let t0 = std::time::Instant::now();
+    let result = fit(manoeuvres, config).map_err(|e| match e {
+        OeError::NotConverged { reason, result } => format!(
+            "output error did not converge ({reason:?}) after {} iterations: no result",
+            result.iterations.len()
+        ),
+        OeError::Estimator(e) => format!("output error: {e}"),
+    })?;
+    Ok((result, t0.elapsed().as_secs_f64()))
+}
+
+/// The σ a batch fit reports per structure parameter (structure order): the coloured-residual
+/// σ where the correction was formed (real residuals are coloured and the Cramér–Rao σ is then
+/// optimistic; Morelli & Klein 1997), the Cramér–Rao σ otherwise.
+pub fn reported_sigma(result: &OeResult) -> Vec<f64> {
+    (0..result.n_params)
+        .map(|i| result.sigma_coloured.as_ref().map_or(result.sigma[i], |c| c[i]))
+        .collect()
+}
+
 /// Reads the whole record, splits it at gaps and fits it by output error.
 ///
 /// # Errors
@@ -259,29 +298,17 @@ pub fn fit_record<R: Read>(
         Some(m) => m,
         None => default_model(&first, mapping)?,
     };
-    // The default start: equation-error least squares on the measured coefficients (the
-    // generic priors where that fails), never a reference result.
-    let config = OeConfig::new(model.structure);
     let slices: Vec<&[AirDataSample]> = manoeuvres.iter().map(Vec::as_slice).collect();
-    let t0 = std::time::Instant::now();
-    let result = fit(&slices, &config).map_err(|e| match e {
-        OeError::NotConverged { reason, result } => ReplayError::Model(format!(
-            "output error did not converge ({reason:?}) after {} iterations: no result",
-            result.iterations.len()
-        )),
-        OeError::Estimator(e) => ReplayError::Model(format!("output error: {e}")),
-    })?;
-    let fit_wall_s = t0.elapsed().as_secs_f64();
+    let (result, fit_wall_s) =
+        fit_manoeuvres(&slices, &oe_config(model.structure)).map_err(ReplayError::Model)?;
+    let reported = reported_sigma(&result);
     let parameters = (0..result.n_params)
-        .map(|i| {
-            let coloured = result.sigma_coloured.as_ref().map(|s| s[i]);
-            BatchParameter {
-                name: result.names[i].clone(),
-                estimate: result.values[i],
-                std_error: coloured.unwrap_or(result.sigma[i]),
-                crb_sigma: result.sigma[i],
-                coloured_sigma: coloured,
-            }
+        .map(|i| BatchParameter {
+            name: result.names[i].clone(),
+            estimate: result.values[i],
+            std_error: reported[i],
+            crb_sigma: result.sigma[i],
+            coloured_sigma: result.sigma_coloured.as_ref().map(|s| s[i]),
         })
         .collect();
     let st = model.structure;
@@ -297,9 +324,7 @@ pub fn fit_record<R: Read>(
     let identifiability = diagnostics::identifiability(&st, &cov, &recorder, &values);
     let (rejections, unlisted) = rejections.finish();
     // The summary's σ: coloured-residual where formed, else Cramér–Rao.
-    let sigmas: Vec<Option<f64>> = (0..np)
-        .map(|i| Some(result.sigma_coloured.as_ref().map_or(result.sigma[i], |c| c[i])))
-        .collect();
+    let sigmas: Vec<Option<f64>> = reported.iter().map(|s| Some(*s)).collect();
     let mut warnings = diagnostics::sign_warnings(&st, &values, &sigmas);
     warnings.extend(unlisted);
     for c in &identifiability.collinear_regressors {

@@ -1,0 +1,170 @@
+//! The batch output-error estimator (`[[estimator]] kind = "oe"`) in the closed-loop `run`
+//! experiment and the Monte Carlo campaign (crates/aeroident/src/aircraft/batch.rs).
+
+use aeroident::aircraft::Scenario;
+use aeroident::aircraft::experiment::run;
+use aeroident::aircraft::report::summarize;
+use aeroident::montecarlo::{campaign, crb_sigmas};
+use std::path::PathBuf;
+
+fn workspace() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn scenario(text: &str) -> Scenario {
+    Scenario::from_toml(text, "<test>").expect("valid test scenario")
+}
+
+/// Small orthogonal multisines on the three surfaces (nonlinearity negligible).
+fn small_inputs() -> String {
+    let mut text = String::new();
+    for (k, (ch, a)) in [("elevator", 0.1), ("aileron", 0.15), ("rudder", 0.15)].iter().enumerate()
+    {
+        text += &format!(
+            "[[input]]\nchannel = \"{ch}\"\nkind = \"orthogonal_multisine\"\namplitude_deg = {a}\nbase_period_s = 10.0\nharmonics = [2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16]\ninputs = 3\nindex = {k}\n"
+        );
+    }
+    text
+}
+
+/// The short Monte Carlo scenario (10 s, noise, light turbulence, RLS and EKF) with OE added.
+fn short_with_oe(extra: &str) -> Scenario {
+    let text = std::fs::read_to_string(workspace().join("scenarios/montecarlo/short.toml"))
+        .expect("scenarios/montecarlo/short.toml");
+    scenario(&format!("{text}\n{extra}\n[[estimator]]\nkind = \"oe\"\nmodel = \"six-axis\"\n"))
+}
+
+/// Noise-free, still air, small inputs: the post-flight output-error fit of the recorded
+/// samples recovers every primary derivative within 1 % of the reference F-16's true local
+/// derivative (finite differences of its tables at trim, an independent computation), and
+/// reports σ, iterations and wall time, with no time metrics (batch).
+#[test]
+fn val_oe_in_run_noise_free_recovers_true_derivatives() {
+    let text = format!(
+        "kind = \"run\"\nname = \"oe-clean\"\nduration_s = 10.0\n{}[[estimator]]\nkind = \"oe\"\nmodel = \"six-axis\"\n",
+        small_inputs()
+    );
+    let out = run(&scenario(&text)).unwrap();
+    let ch = &out.channels[0];
+    assert!(ch.failure.is_none(), "{:?}", ch.failure);
+    assert_eq!(ch.status, Some("converged"));
+    let fit = ch.batch.as_ref().expect("batch log");
+    assert!(fit.iterations.is_some_and(|i| i >= 1));
+    assert!(fit.wall_s > 0.0);
+    // No damage: the whole record is fitted, every sample the causal differentiator emitted
+    // (from its N-th point on, N − 1 = 2 lag / dt).
+    let window_less_one = (2.0 * out.sample_lag_s.unwrap() / 0.01).round() as usize;
+    assert_eq!(fit.samples, out.t_s.len() - window_less_one);
+    assert_eq!(fit.outputs.len(), 11, "V α β p q r φ θ ax ay az: {:?}", fit.outputs);
+    let s = summarize(&out).unwrap();
+    let primary: Vec<_> = s.parameters.iter().filter(|p| p.primary).collect();
+    assert_eq!(primary.len(), 11);
+    for p in primary {
+        let (f, t) = (p.r#final.unwrap(), p.truth.unwrap());
+        assert!(((f - t) / t).abs() < 0.01, "{}: {f} vs truth {t}", p.name);
+        assert!(p.sigma.is_some_and(|s| s.is_finite() && s > 0.0), "{}: σ", p.name);
+        assert!(p.batch);
+        assert_eq!(p.time_to_10pct_s, None);
+        assert_eq!(p.meets_targets, None);
+    }
+    // The estimate exists only at the end of the time history.
+    let l = &ch.params[0];
+    assert!(l.estimate[..l.estimate.len() - 1].iter().all(Option::is_none));
+    assert!(s.targets.is_empty(), "batch estimators have no real-time targets");
+    assert_eq!(s.batch_fits.len(), 1);
+}
+
+/// After a damage, OE fits only the window after it (from the damage + the sample lag), so
+/// its truth is the post-damage derivative; the Cramér–Rao bound of the campaign is formed for
+/// it like for the other sample-driven estimators.
+#[test]
+fn oe_fits_the_window_after_the_damage() {
+    let text = format!(
+        "kind = \"run\"\nname = \"oe-damage\"\nduration_s = 8.0\n{}[increments.Cm_alpha]\nstep_to_fraction = -0.3\nstep_at_s = 3.0\n[[estimator]]\nkind = \"oe\"\nmodel = \"longitudinal\"\n",
+        small_inputs()
+    );
+    let sc = scenario(&text);
+    let out = run(&sc).unwrap();
+    let fit = out.channels[0].batch.as_ref().expect("converged");
+    let lag = out.sample_lag_s.unwrap();
+    assert!((fit.from_s - (3.0 + lag)).abs() < 0.011, "window from {}", fit.from_s);
+    assert!(fit.to_s <= 8.0 - lag + 1e-9);
+    let s = summarize(&out).unwrap();
+    let cm = s.parameters.iter().find(|p| p.name == "Cm_alpha").unwrap();
+    let (b, a) = (cm.truth_before.unwrap(), cm.truth_after.unwrap());
+    assert!((a - 0.7 * b).abs() < 1e-12);
+    let f = cm.r#final.unwrap();
+    assert!(((f - a) / a).abs() < 0.01, "Cm_alpha {f} vs post-damage truth {a}");
+    let crb = crb_sigmas(&sc).unwrap();
+    assert!(crb.sigma["oe"]["Cm_alpha"] > 0.0);
+}
+
+/// A short noisy campaign with OE (4 runs): every OE run converges, its entries are finite,
+/// the reported σ are positive and not below the ideal Cramér–Rao bound of the window by more
+/// than the turbulence-free, white-noise idealisation allows (½), and the coverage is a
+/// fraction; the batch timing fields are present for OE only.
+#[test]
+fn short_campaign_with_oe_has_finite_entries() {
+    let sc = short_with_oe("");
+    let c = campaign(&sc, 4, 3).unwrap();
+    let oe = c.estimators.iter().find(|e| e.name == "oe").unwrap();
+    assert_eq!(oe.runs_ok, 4, "{:?}", oe.failed_runs);
+    assert!(oe.mean_iterations.is_some_and(|i| i >= 1.0));
+    assert!(oe.mean_fit_wall_s.is_some_and(|w| w > 0.0));
+    let rls = c.estimators.iter().find(|e| e.name == "rls").unwrap();
+    assert_eq!(rls.mean_iterations, None);
+    let primary: Vec<_> = oe.parameters.iter().filter(|p| p.primary).collect();
+    assert_eq!(primary.len(), 11);
+    for p in primary {
+        assert_eq!(p.n_estimates, 4, "{}", p.name);
+        for v in [p.bias, p.scatter, p.mean_sigma, p.crb_sigma] {
+            assert!(v.is_some_and(f64::is_finite), "{}: {p:?}", p.name);
+        }
+        let (sig, crb) = (p.mean_sigma.unwrap(), p.crb_sigma.unwrap());
+        assert!(sig > 0.5 * crb, "{}: mean σ {sig} vs CRB {crb}", p.name);
+        assert!(p.coverage_2sigma.is_some_and(|x| (0.0..=1.0).contains(&x)));
+        assert_eq!(p.median_time_to_10pct_s, None);
+    }
+    for r in &c.results {
+        let e = r.outcome.as_ref().unwrap().iter().find(|e| e.name == "oe").unwrap();
+        assert!(e.iterations.is_some() && e.fit_wall_s.is_some());
+        assert!(e.params.iter().all(|p| p.r#final.is_some_and(f64::is_finite)));
+    }
+}
+
+/// A fit that cannot be made is a failed run with its reason, never averaged in: a damage at
+/// the last sample leaves no sample in OE's window. The real-time estimators are unaffected.
+#[test]
+fn failed_oe_fit_is_a_failed_run_with_its_reason() {
+    let sc = short_with_oe("[increments.Cm_alpha]\nstep_to_fraction = -0.3\nstep_at_s = 10.0\n");
+    let out = run(&sc).unwrap();
+    let ch = out.channels.iter().find(|c| c.label == "oe").unwrap();
+    let (_, why) = ch.failure.as_ref().expect("OE must fail");
+    assert!(why.contains("0 samples after"), "{why}");
+    assert_eq!(ch.status, Some("failed"));
+    let s = summarize(&out).unwrap();
+    for p in s.parameters.iter().filter(|p| p.estimator == "oe") {
+        assert_eq!(p.r#final, None);
+        assert!(p.failure.as_deref().is_some_and(|f| f.contains("0 samples after")));
+    }
+    let c = campaign(&sc, 2, 1).unwrap();
+    let oe = c.estimators.iter().find(|e| e.name == "oe").unwrap();
+    assert_eq!(oe.runs_ok, 0);
+    assert_eq!(oe.failed_runs.len(), 2);
+    assert!(oe.failed_runs.iter().all(|f| f.reason.contains("0 samples after")));
+    let rls = c.estimators.iter().find(|e| e.name == "rls").unwrap();
+    assert_eq!(rls.runs_ok, 2);
+}
+
+/// Options of the `oe` entry are checked when the scenario is read, naming the field.
+#[test]
+fn oe_options_are_checked() {
+    let base = "kind = \"run\"\nname = \"x\"\nduration_s = 1.0\n[[estimator]]\nkind = \"oe\"\nmodel = \"six-axis\"\n";
+    let e = Scenario::from_toml(&format!("{base}forgetting = 0.99\n"), "<t>").unwrap_err();
+    assert!(e.to_string().contains("estimator[0]") && e.to_string().contains("forgetting"), "{e}");
+    let e = Scenario::from_toml(&format!("{base}initial_states = \"guess\"\n"), "<t>").unwrap_err();
+    assert!(e.to_string().contains("initial_states"), "{e}");
+    assert!(Scenario::from_toml(&format!("{base}initial_states = \"estimate\"\n"), "<t>").is_ok());
+    let sc = Scenario::from_path(&workspace().join("scenarios/montecarlo/with-oe.toml")).unwrap();
+    assert!(sc.estimator.iter().any(|e| e.label() == "oe"));
+}

@@ -105,7 +105,6 @@
 //! error; the defaults were chosen on synthetic data, not on any record.
 
 use crate::EstimatorError;
-use change::DriftWindow;
 use crate::coloured::Autocorrelation;
 use crate::estimator::{Estimates, Estimator, Status, check_finite};
 use crate::flight_model::{
@@ -115,6 +114,7 @@ use crate::flight_model::{
 use crate::prior::Priors;
 use crate::sample::AirDataSample;
 use crate::vocabulary::{MAX_PARAMS, ModelStructure};
+use change::DriftWindow;
 
 /// Capacity of the augmented state.
 pub const MAX_AUG: usize = N_STATES + MAX_PARAMS;

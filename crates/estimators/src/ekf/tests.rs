@@ -352,7 +352,8 @@ fn constant_parameters_few_alarms_and_sigma_matches_scatter() {
     let st = ModelStructure::lateral();
     let (st6, th6) = truth();
     let names = ["Cl_beta", "Cl_p", "Cl_da", "Cn_beta", "Cn_r", "Cn_dr"];
-    let idx: Vec<usize> = names.iter().map(|n| st.params().position(|p| p.name() == *n).unwrap()).collect();
+    let idx: Vec<usize> =
+        names.iter().map(|n| st.params().position(|p| p.name() == *n).unwrap()).collect();
     let truth: Vec<f64> =
         idx.iter().map(|&i| th6[st6.index_of(st.params().nth(i).unwrap()).unwrap()]).collect();
     let seeds = 16;
@@ -378,11 +379,15 @@ fn constant_parameters_few_alarms_and_sigma_matches_scatter() {
     assert!(alarms <= 24, "{alarms} change alarms on {seeds} constant-parameter records");
     for k in 0..names.len() {
         let m = finals[k].iter().sum::<f64>() / seeds as f64;
-        let scatter = (finals[k].iter().map(|v| (v - m).powi(2)).sum::<f64>()
-            / (seeds - 1) as f64)
-            .sqrt();
+        let scatter =
+            (finals[k].iter().map(|v| (v - m).powi(2)).sum::<f64>() / (seeds - 1) as f64).sqrt();
         let ratio = sigmas[k] / scatter;
-        std::println!("{:>8} truth {:9.4} mean {m:9.4} scatter {scatter:.2e} σ {:.2e} ratio {ratio:.2}", names[k], truth[k], sigmas[k]);
+        std::println!(
+            "{:>8} truth {:9.4} mean {m:9.4} scatter {scatter:.2e} σ {:.2e} ratio {ratio:.2}",
+            names[k],
+            truth[k],
+            sigmas[k]
+        );
         assert!((0.6..1.7).contains(&ratio), "{}: mean σ / scatter = {ratio}", names[k]);
     }
     let n = seeds as usize * names.len();

@@ -11,7 +11,7 @@
 //!
 //! Augmented state `z = (x, θ)`, `x` the state set's integrated states
 //! ([`StateSet::states`]), `θ` the parameters in structure order (constant up to an optional
-//! random walk).
+//! random walk and the change test's inflations, below).
 //!
 //! - **Prediction.** Mean: classical RK4 over the sample interval with the inputs (controls,
 //!   thrust, density and the measured non-integrated states) interpolated linearly between the
@@ -39,6 +39,31 @@
 //!   innovations, then an exponential window of `W` samples) and `R_min` = (configured σ /
 //!   10)². Only gated-in innovations update it, so one
 //!   outlier cannot inflate it. No noise level is taken from any reference fit.
+//! - **Parameter changes** (`change_false_alarm_interval_s > 0`, the default): a change test on
+//!   the filter's own parameter estimates, which lets the parameter memory grow to the whole
+//!   record while nothing changes and restarts it when something does. For a consistent
+//!   filter with constant parameters `θ̂` is a martingale: the drift `d = θ̂(t₁) − θ̂(t₀)` over
+//!   a window has variance `P(t₀) − P(t₁)` (law of total variance). Every
+//!   `change_window_s` (default 1 s), each identified parameter's drift is standardised,
+//!   `u = d / √(f_i (P₀ − P₁))` with `f_i` the coloured-innovation factor below, and fed to a
+//!   two-sided CUSUM `g± ← max(0, g± ± u − k)`, `k` = 1 (Page 1954; Basseville & Nikiforov,
+//!   *Detection of Abrupt Changes*, 1993, §2.2), whose threshold `h` gives the configured mean
+//!   time between false alarms over all parameters by Siegmund's approximation (B&N eq.
+//!   5.2.44). On an alarm the parameter's variance grows by the squared jump estimate
+//!   `δ̂² = (D/κ)²`, `D` the drift since the CUSUM excursion began and `κ = 1 − P/P_start` the
+//!   fraction of a jump a constant-parameter filter takes up over it (the one-epoch process
+//!   noise that explains the drift, in the spirit of covariance matching: Mehra 1972, Myers &
+//!   Tapley 1976, Jategaonkar 2015 §7.5), capped at the prior variance; a diagonal addition
+//!   keeps `P` positive definite. Counted per parameter ([`Ekf::change_alarms`]). Parameters
+//!   that are not yet identified are not tested (their estimates are in the prior-dominated
+//!   transient, not a martingale).
+//! - **Drift-consistency factor.** The mean square of a parameter's standardised window drifts
+//!   without alarm, `r_i = Σu²/n` (χ²(n)/n, mean 1 for a consistent filter), measures from the
+//!   record how much more the estimate moves than its covariance says: colour beyond the
+//!   autocorrelation window, model error. With [`SigmaOption::ColouredResiduals`] the reported
+//!   variance is `f_i r_i P_ii` once [`MIN_DRIFT_WINDOWS`] windows exist ([`Ekf::drift_factor`];
+//!   by the martingale argument, a filter whose noise is `r` times what it assumes has
+//!   increments `r (P₀ − P₁)` and error variance `r P`).
 //! - **Identified.** A parameter is reported (`identified = true`, [`Estimates::value`] not
 //!   `None`) once its filter posterior σ is below **half its prior σ**: the data, not the
 //!   prior, then determine it. Once identified it stays identified. Until every parameter is
@@ -57,6 +82,7 @@
 //!   Klein & Morelli 2006 §5.2 / ch. 6 (Morelli & Klein 1997) in the form that holds when the
 //!   gains vary slowly over the correlation time (Bayley & Hammersley 1946), output by output:
 //!   the full truncated autocorrelation, not only lag 1. With white innovations `f_i ≈ 1`.
+//!   Times the drift-consistency factor above.
 //! - **Initialisation.** The integrated states from the first sample's measurements (each must
 //!   be present, else an error naming it), `P0 = diag(state σ0², prior σ²)`, `θ0` the prior
 //!   values. [`Estimator::new_manoeuvre`] re-initialises the states (and their covariance
@@ -88,6 +114,7 @@ use crate::flight_model::{
 use crate::prior::Priors;
 use crate::sample::AirDataSample;
 use crate::vocabulary::{MAX_PARAMS, ModelStructure};
+use change::DriftWindow;
 
 /// Capacity of the augmented state.
 pub const MAX_AUG: usize = N_STATES + MAX_PARAMS;
@@ -128,6 +155,16 @@ pub const MIN_COLOURED_FACTOR: f64 = 0.25;
 /// `R` (module doc).
 pub const ADAPTIVE_R_PRIOR_SAMPLES: u32 = 20;
 
+/// Default mean time between false alarms of the change test over all parameters, s: one
+/// spurious inflation per hour of consistent data (module doc).
+pub const DEFAULT_CHANGE_FALSE_ALARM_INTERVAL_S: f64 = 3600.0;
+
+/// Windows without alarm needed before the drift-consistency factor is used (module doc).
+pub const MIN_DRIFT_WINDOWS: u32 = 5;
+
+/// Default change-test window, s (module doc).
+pub const DEFAULT_CHANGE_WINDOW_S: f64 = 1.0;
+
 /// Configuration of [`Ekf`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EkfConfig {
@@ -153,12 +190,20 @@ pub struct EkfConfig {
     /// Window `W` (samples) of the measurement-noise estimate from the innovations (module
     /// doc); 0 keeps `R` at `measurement_sigma²`.
     pub adaptive_r_window: u32,
+    /// Mean time between false alarms of the change test over all parameters, s (module doc,
+    /// "Parameter changes"); 0 disables the detector (the parameters then move only by
+    /// `param_process_noise`).
+    pub change_false_alarm_interval_s: f64,
+    /// Length of one change-test window, s (module doc).
+    pub change_window_s: f64,
 }
 
 impl EkfConfig {
     /// The documented defaults for `structure`: generic priors ([`Priors::generic`]),
     /// [`DEFAULT_STATE_SIGMA0`], [`DEFAULT_STATE_PROCESS_NOISE`], constant parameters,
-    /// [`DEFAULT_MEASUREMENT_SIGMA`], a 5σ gate, 50 consecutive rejections, filter σ.
+    /// [`DEFAULT_MEASUREMENT_SIGMA`], a 5σ gate, 50 consecutive rejections, coloured σ, `R`
+    /// from a 200-sample window, and the change detector on ([`DEFAULT_CHANGE_FALSE_ALARM_INTERVAL_S`],
+    /// [`DEFAULT_CHANGE_WINDOW_S`]).
     pub fn new(structure: ModelStructure) -> Self {
         Self {
             structure,
@@ -171,6 +216,8 @@ impl EkfConfig {
             max_consecutive_rejections: 50,
             sigma: SigmaOption::ColouredResiduals,
             adaptive_r_window: 200,
+            change_false_alarm_interval_s: DEFAULT_CHANGE_FALSE_ALARM_INTERVAL_S,
+            change_window_s: DEFAULT_CHANGE_WINDOW_S,
         }
     }
 }
@@ -206,6 +253,15 @@ pub struct Ekf {
     /// Σ e²/S over accepted innovations and their count (NIS).
     nis_sum: f64,
     nis_count: u64,
+    /// CUSUM threshold `h` of the change test, `None` when it is disabled.
+    change_h: Option<f64>,
+    /// The change test's current window and the alarm count per parameter.
+    drift: DriftWindow,
+    alarms: [u32; MAX_PARAMS],
+    /// Σ u² of the standardised window drifts without alarm, once identified, and their count
+    /// (the drift-consistency factor, module doc).
+    drift_u2: [f64; MAX_PARAMS],
+    drift_n: [u32; MAX_PARAMS],
 }
 
 fn positive(field: &'static str, v: f64) -> Result<(), EstimatorError> {
@@ -268,6 +324,8 @@ impl Ekf {
                 reason: "must be > 0 (infinity disables gating)",
             });
         }
+        nonneg("change_false_alarm_interval_s", cfg.change_false_alarm_interval_s)?;
+        positive("change_window_s", cfg.change_window_s)?;
         if cfg.max_consecutive_rejections == 0 {
             return Err(EstimatorError::InvalidConfig {
                 field: "max_consecutive_rejections",
@@ -310,6 +368,15 @@ impl Ekf {
             r_count: [0; N_OUTPUTS],
             nis_sum: 0.0,
             nis_count: 0,
+            change_h: (cfg.change_false_alarm_interval_s > 0.0).then(|| {
+                // Two sides per parameter share the configured interval.
+                let windows = cfg.change_false_alarm_interval_s / cfg.change_window_s;
+                change::cusum_threshold((windows * 2.0 * np as f64).max(1.0))
+            }),
+            drift: DriftWindow::default(),
+            alarms: [0; MAX_PARAMS],
+            drift_u2: [0.0; MAX_PARAMS],
+            drift_n: [0; MAX_PARAMS],
         })
     }
 
@@ -336,6 +403,12 @@ impl Ekf {
     /// innovations when `adaptive_r_window > 0`), in the output's unit.
     pub fn measurement_sigma(&self, o: Output) -> f64 {
         libm::sqrt(self.r_var[o.index()])
+    }
+
+    /// How many times the change test of parameter `i` (structure order) raised an alarm and
+    /// inflated its variance (module doc, "Parameter changes"); 0 for `i` out of range.
+    pub fn change_alarms(&self, i: usize) -> u32 {
+        if i < self.np { self.alarms[i] } else { 0 }
     }
 
     /// How many times output `o` was rejected by the innovation gate.
@@ -385,10 +458,57 @@ impl Ekf {
         if den > 0.0 { num / den } else { 1.0 }
     }
 
+    /// At the end of each change-test window: the drift test of every parameter and, on an
+    /// alarm, the inflation of its variance (module doc, "Parameter changes"); then a new
+    /// window from the current estimate.
+    fn test_for_change(&mut self, t_s: f64, h: f64) {
+        let (nx, np) = (self.nx, self.np);
+        if self.drift.is_open() && t_s - self.drift.t0_s < self.cfg.change_window_s {
+            return;
+        }
+        if self.drift.is_open() {
+            let mut factor = [1.0; MAX_PARAMS];
+            for (i, f) in factor.iter_mut().enumerate().take(np) {
+                *f = self.coloured_factor(i);
+            }
+            for i in 0..np {
+                let k = nx + i;
+                let sigma = self.cfg.priors.prior[i].sigma;
+                let identified = self.identified[i];
+                if !identified {
+                    continue;
+                }
+                match self.drift.step(i, self.z[k], self.p[k][k], factor[i], h, sigma) {
+                    (_, Some(add)) => {
+                        self.p[k][k] += add;
+                        self.alarms[i] = self.alarms[i].saturating_add(1);
+                    }
+                    (Some(u), None) => {
+                        self.drift_u2[i] += u * u;
+                        self.drift_n[i] += 1;
+                    }
+                    _ => {}
+                }
+            }
+        }
+        self.drift.open(t_s, &self.z[nx..nx + np], |i| self.p[nx + i][nx + i]);
+    }
+
+    /// The drift-consistency factor of parameter `i` (module doc): the mean square of its
+    /// standardised window drifts, `Σ u² / n`, once [`MIN_DRIFT_WINDOWS`] windows without alarm
+    /// have been seen since it was identified; 1 before.
+    pub fn drift_factor(&self, i: usize) -> f64 {
+        if i < self.np && self.drift_n[i] >= MIN_DRIFT_WINDOWS {
+            self.drift_u2[i] / f64::from(self.drift_n[i])
+        } else {
+            1.0
+        }
+    }
+
     fn sigma_factor(&self, i: usize) -> f64 {
         match self.cfg.sigma {
             SigmaOption::Filter => 1.0,
-            SigmaOption::ColouredResiduals => self.coloured_factor(i),
+            SigmaOption::ColouredResiduals => self.coloured_factor(i) * self.drift_factor(i),
         }
     }
 
@@ -429,6 +549,7 @@ impl Ekf {
             a.restart();
         }
         self.innovation = [None; N_OUTPUTS];
+        self.drift = DriftWindow::default();
         Ok(())
     }
 
@@ -631,25 +752,14 @@ impl Estimator for Ekf {
             let mut yhat = self.lin.y[oi];
             if let Some(k) = unit {
                 yhat += z[k] - z_pred[k];
-                ph[..n].copy_from_slice(&w[k][..n]);
             } else {
                 h[..nx].copy_from_slice(&self.lin.dydx[oi][..nx]);
                 h[nx..n].copy_from_slice(&self.lin.dydtheta[oi][..np]);
                 for j in 0..n {
                     yhat += h[j] * (z[j] - z_pred[j]);
                 }
-                for i in 0..n {
-                    let mut acc = 0.0;
-                    for j in 0..n {
-                        acc += w[i][j] * h[j];
-                    }
-                    ph[i] = acc;
-                }
             }
-            let hph = match unit {
-                Some(k) => ph[k],
-                None => (0..n).map(|j| h[j] * ph[j]).sum::<f64>(),
-            };
+            let hph = change::p_times_row(w, unit, &h, n, &mut ph);
             let sv = hph + r_var[oi];
             if !(sv > 0.0 && sv.is_finite()) {
                 return Err(self.diverge("EKF innovation variance not positive", s.t_s));
@@ -736,6 +846,9 @@ impl Estimator for Ekf {
         }
         self.innovation = innovation;
         self.last = Some(u1);
+        if let Some(h) = self.change_h {
+            self.test_for_change(s.t_s, h);
+        }
         self.publish(s.t_s);
         Ok(&self.est)
     }
@@ -760,5 +873,6 @@ impl Estimator for Ekf {
     }
 }
 
+mod change;
 #[cfg(test)]
 mod tests;

@@ -30,7 +30,18 @@ const NOISE: [f64; N_OUTPUTS] = [
 /// linear between samples as the filter assumes), and returns noisy samples (no angular
 /// accelerations, clean controls).
 fn simulate(rate: f64, duration: f64, seed: u64) -> Vec<AirDataSample> {
-    let (st, th) = truth();
+    simulate_with_step(rate, duration, seed, None)
+}
+
+/// [`simulate`] with an optional step of one six-axis parameter `(param, at_s, new value)`.
+fn simulate_with_step(
+    rate: f64,
+    duration: f64,
+    seed: u64,
+    step_change: Option<(Param, f64, f64)>,
+) -> Vec<AirDataSample> {
+    let (st, th0) = truth();
+    let mut th = th0;
     let model = FlightModel::new(st).unwrap();
     let np = st.n_params();
     let k = constants();
@@ -51,6 +62,11 @@ fn simulate(rate: f64, duration: f64, seed: u64) -> Vec<AirDataSample> {
     let z8 = [0.0; 8];
     for step in 0..n {
         let t = step as f64 * dt;
+        if let Some((p, at_s, value)) = step_change
+            && t >= at_s
+        {
+            th[st.index_of(p).unwrap()] = value;
+        }
         let u0 = model.inputs(&base(t, &x)).unwrap();
         let d = model.eval(&th[..np], &u0, &x, &z8, &z8, None).unwrap();
         let mut s = base(t, &x);
@@ -272,6 +288,8 @@ fn divergence_is_reported_and_estimates_keep_last_good_values() {
     // Fixed R: an R estimated from the wild innovations would grow and keep α from running
     // away, which is what the adaptive estimate is for, but not what this checks.
     cfg.adaptive_r_window = 0;
+    // No change test either: inflating the parameters on the wild α would let them absorb it.
+    cfg.change_false_alarm_interval_s = 0.0;
     let mut ekf = Ekf::new(cfg).unwrap();
     for s in &data[..100] {
         ekf.update(s).unwrap();
@@ -314,4 +332,110 @@ fn configuration_errors_are_named() {
     let ekf = Ekf::new(EkfConfig::new(ModelStructure::lateral())).unwrap();
     assert_eq!(ekf.method(), "ekf");
     assert!(ekf.estimates().value(0).is_none(), "nothing identified before data");
+}
+
+/// Runs a fresh filter of `st` with `cfg` over `data`.
+fn run(cfg: EkfConfig, data: &[AirDataSample]) -> Ekf {
+    let mut ekf = Ekf::new(cfg).unwrap();
+    for s in data {
+        ekf.update(s).unwrap();
+    }
+    ekf
+}
+
+/// Constant parameters: the change test raises at most about one alarm per record, and the
+/// reported σ of the roll and yaw derivatives describe the scatter of the estimates over
+/// independent noise records (mean σ / scatter within 0.6–1.7 for each, a band that a σ 2×
+/// off fails), with ±2σ coverage ≥ 80 % overall.
+#[test]
+fn constant_parameters_few_alarms_and_sigma_matches_scatter() {
+    let st = ModelStructure::lateral();
+    let (st6, th6) = truth();
+    let names = ["Cl_beta", "Cl_p", "Cl_da", "Cn_beta", "Cn_r", "Cn_dr"];
+    let idx: Vec<usize> =
+        names.iter().map(|n| st.params().position(|p| p.name() == *n).unwrap()).collect();
+    let truth: Vec<f64> =
+        idx.iter().map(|&i| th6[st6.index_of(st.params().nth(i).unwrap()).unwrap()]).collect();
+    let seeds = 16;
+    let mut finals = std::vec![Vec::new(); names.len()];
+    let mut sigmas = std::vec![0.0; names.len()];
+    let (mut alarms, mut covered) = (0, 0);
+    for seed in 0..seeds {
+        let data = simulate(50.0, 25.0, 100 + seed);
+        let ekf = run(config(st), &data);
+        alarms += (0..ekf.np).map(|i| ekf.change_alarms(i)).sum::<u32>();
+        let e = ekf.estimates();
+        for (k, &i) in idx.iter().enumerate() {
+            let (v, s) = (e.value(i).unwrap(), e.sigma(i).unwrap());
+            finals[k].push(v);
+            sigmas[k] += s / seeds as f64;
+            covered += usize::from((v - truth[k]).abs() <= 2.0 * s);
+        }
+    }
+    // Measured: 17 alarms on 16 records, all on the roll derivatives at the second aileron
+    // doublet (18 s): after one doublet the constant-parameter filter is overconfident (its
+    // estimate is not yet a martingale, Ljung 1979), and the test sees that. The bound keeps
+    // the rate at about one per record, far from an alarm every window.
+    assert!(alarms <= 24, "{alarms} change alarms on {seeds} constant-parameter records");
+    for k in 0..names.len() {
+        let m = finals[k].iter().sum::<f64>() / seeds as f64;
+        let scatter =
+            (finals[k].iter().map(|v| (v - m).powi(2)).sum::<f64>() / (seeds - 1) as f64).sqrt();
+        let ratio = sigmas[k] / scatter;
+        std::println!(
+            "{:>8} truth {:9.4} mean {m:9.4} scatter {scatter:.2e} σ {:.2e} ratio {ratio:.2}",
+            names[k],
+            truth[k],
+            sigmas[k]
+        );
+        assert!((0.6..1.7).contains(&ratio), "{}: mean σ / scatter = {ratio}", names[k]);
+    }
+    let n = seeds as usize * names.len();
+    assert!(covered * 10 >= n * 8, "±2σ covers {covered} of {n}");
+}
+
+/// A 30 % loss of roll damping at 12 s: the change test raises an alarm on Cl_p, and the
+/// filter follows the step to within 10 % by the end of the record; without the test the
+/// constant-parameter filter stays closer to the old value than to the new one.
+#[test]
+fn step_change_is_detected_and_followed() {
+    let st = ModelStructure::lateral();
+    let (st6, th6) = truth();
+    let cl_p = Param::new(C::Cl, T::P);
+    let old = th6[st6.index_of(cl_p).unwrap()];
+    let new = 0.7 * old;
+    let data = simulate_with_step(50.0, 30.0, 11, Some((cl_p, 12.0, new)));
+    let i = st.index_of(cl_p).unwrap();
+    let ekf = run(config(st), &data);
+    let got = ekf.estimates().value(i).unwrap();
+    std::println!("Cl_p old {old:.4} new {new:.4} got {got:.4} alarms {}", ekf.change_alarms(i));
+    assert!(ekf.change_alarms(i) >= 1, "no alarm on Cl_p");
+    assert!((got - new).abs() < 0.1 * new.abs(), "Cl_p {got} vs new truth {new}");
+    let mut off = config(st);
+    off.change_false_alarm_interval_s = 0.0;
+    let fixed = run(off, &data);
+    let stuck = fixed.estimates().value(i).unwrap();
+    assert_eq!(fixed.change_alarms(i), 0);
+    assert!((stuck - old).abs() < (stuck - new).abs(), "constant filter at {stuck}");
+}
+
+/// One wild roll-rate sample (50 noise σ) is rejected by the gate, raises no change alarm and
+/// moves no estimate by more than 0.2 σ.
+#[test]
+fn one_outlier_is_gated_and_raises_no_alarm() {
+    let st = ModelStructure::lateral();
+    let data = simulate(50.0, 25.0, 5);
+    let clean = run(config(st), &data);
+    let mut bad = data.clone();
+    let k = 800;
+    bad[k].p_rad_s = Some(bad[k].p_rad_s.unwrap() + 50.0 * NOISE[Output::P.index()]);
+    let hit = run(config(st), &bad);
+    assert_eq!(hit.rejections(Output::P), clean.rejections(Output::P) + 1);
+    let alarms = |e: &Ekf| (0..e.np).map(|i| e.change_alarms(i)).sum::<u32>();
+    assert_eq!(alarms(&hit), alarms(&clean));
+    for i in 0..st.n_params() {
+        let (a, b) = (clean.estimates().raw_value(i), hit.estimates().raw_value(i));
+        let s = clean.estimates().sigma(i).unwrap();
+        assert!((a - b).abs() < 0.2 * s, "parameter {i}: {a} vs {b} (σ {s})");
+    }
 }

@@ -19,7 +19,7 @@
 //! the 95 % band of a white sequence, `±2/√N` (the lags beyond are estimation noise, and
 //! summing them only adds variance), and at [`MAX_LAG`]. The batch form and
 //! [`Autocorrelation::lag`] (the EKF's) use that rule; the recursive [`ColouredCovariance`]
-//! sums to the last significant lag (below, "Finite memory").
+//! sums through the last significant lobe (below, "Finite memory").
 //!
 //! # Recursive form ([`ColouredCovariance`])
 //!
@@ -57,10 +57,12 @@
 //!   with `r = tr(P M)/N_eff` the fitted share and `ρ_H(k) = s_k/s_0`,
 //!   `s_k = Σ_i λ^{n−i} x_iᵀ P x_{i−k}`, the normalised lag-`k` leverage. The sandwich uses the
 //!   corrected `ρ_v`.
-//! - **Truncation at the last significant lag.** Differentiated noise (the `ṗ q̇ ṙ` of a
+//! - **Truncation after the last significant lobe.** Differentiated noise (the `ṗ q̇ ṙ` of a
 //!   least-squares differentiator) has a positive then a negative lobe that sum to about zero;
 //!   stopping at the first insignificant lag keeps only the positive lobe and doubles σ. The
-//!   sum runs to the last lag (≤ [`MAX_LAG`]) whose `|ρ̂(k)|` lies outside `2/√N`.
+//!   sum runs on through each following lobe (run of one sign of `ρ̂`) whose sum is significant
+//!   against `3√len/√N` ([`Autocorrelation::last_significant_lag`], a 3σ test); testing single lags out to
+//!   [`MAX_LAG`] instead would pick a chance lag in most white records.
 //!
 //! `rls::tests::finite_memory_sigma_matches_scatter_for_smoothed_and_differentiated_noise`
 //! checks the three against the Monte Carlo scatter and the known noise variance.
@@ -72,6 +74,11 @@ use crate::linalg::Square;
 
 /// Most residual lags the recursive correction sums (a ring buffer of this many rows).
 pub const MAX_LAG: usize = 40;
+
+/// A lobe of `ρ̂` past the first truncation lag is kept when its sum exceeds this multiple of
+/// the white band of a sum, `2√len/√N`: 1.5 makes it a 3σ (99.7 %) test, since up to about
+/// twenty lobes are tested per update and a chance lobe adds its lags to σ.
+pub const LOBE_BAND_FACTOR: f64 = 1.5;
 
 /// The 95 % band `2/√n` of the normalised autocorrelation of `n` white samples.
 pub fn white_band(n: f64) -> f64 {
@@ -125,20 +132,43 @@ impl Autocorrelation {
         }
         self.n_res = lambda * self.n_res + 1.0;
         let band = white_band(self.n_res);
-        let (mut k_max, mut k_last, mut inside) = (0, 0, false);
+        let mut k_max = 0;
         if self.c[0] > 0.0 {
             for k in 1..=avail {
                 if libm::fabs(self.c[k] / self.c[0]) < band {
-                    inside = true;
-                } else {
-                    k_last = k;
-                    if !inside {
-                        k_max = k;
-                    }
+                    break;
                 }
+                k_max = k;
             }
         }
         self.lag = k_max;
+        // Further lobes: runs of one sign of ρ̂ beyond K, each kept while its sum is
+        // significant (|Σ ρ̂| ≥ LOBE_BAND_FACTOR · 2√len/√N; 2√len/√N is the band of a sum of
+        // len white lags).
+        let mut k_last = k_max;
+        if self.c[0] > 0.0 {
+            // The insignificant tail of the lobe that ends at K is not a lobe of its own: the
+            // test starts at the next sign change.
+            let mut start = k_max + 1;
+            let sign_k = self.c[k_max] >= 0.0;
+            while start <= avail && (self.c[start] >= 0.0) == sign_k {
+                start += 1;
+            }
+            while start <= avail {
+                let positive = self.c[start] >= 0.0;
+                let (mut end, mut sum) = (start, 0.0);
+                while end <= avail && (self.c[end] >= 0.0) == positive {
+                    sum += self.c[end] / self.c[0];
+                    end += 1;
+                }
+                let len = (end - start) as f64;
+                if libm::fabs(sum) < LOBE_BAND_FACTOR * band * libm::sqrt(len) {
+                    break;
+                }
+                k_last = end - 1;
+                start = end;
+            }
+        }
         self.last_lag = k_last;
         self.push(v);
     }
@@ -160,8 +190,11 @@ impl Autocorrelation {
         self.lag
     }
 
-    /// The last lag `≤ MAX_LAG` whose `|ρ̂(k)|` lies outside the white band `2/√N` (0: white).
-    /// It reaches past sign changes, e.g. the negative lobe of differentiated noise.
+    /// The truncation lag with further lobes: after [`Self::lag`] and the insignificant tail of
+    /// its lobe, each following run of one sign of `ρ̂` (a lobe) whose sum lies outside
+    /// [`LOBE_BAND_FACTOR`] × the band `2√len/√N` of a sum of `len` white lags is added, up to
+    /// the first that does not (≤ [`MAX_LAG`]). It reaches past sign
+    /// changes, e.g. the negative lobe of differentiated noise.
     pub fn last_significant_lag(&self) -> usize {
         self.last_lag
     }
@@ -275,7 +308,7 @@ impl<const C: usize> ColouredCovariance<C> {
         self.filled += 1;
     }
 
-    /// The lag `K` at which the last update truncated the sum (the last significant lag).
+    /// The lag `K` at which the last update truncated the sum (after the last significant lobe).
     pub fn lag(&self) -> usize {
         self.acf.last_significant_lag()
     }

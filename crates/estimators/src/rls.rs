@@ -34,7 +34,7 @@
 //! sandwich of [`crate::coloured`] (Klein & Morelli 2006 §5.2; Morelli & Klein 1997):
 //! `σ̂² P_n M_n P_n` with `M_n = Σ_i Σ_j λ^{2n−i−j} ρ̂(i−j) φ_i φ_jᵀ`, `ρ̂` the normalised
 //! autocorrelation of the a-posteriori residuals `ε_n = e_n λ / (λ + φ_nᵀ P_{n−1} φ_n)` up to
-//! the last significant lag (≤ [`crate::coloured::MAX_LAG`]), corrected for the share of the
+//! the end of the last significant lobe (≤ [`crate::coloured::MAX_LAG`]), corrected for the share of the
 //! noise the fit took into θ̂; `σ̂² = RSS/(N_eff − tr(P M))` (the exact expected weighted RSS;
 //! `crate::coloured`, "Finite memory"). It accounts for residuals
 //! coloured by turbulence, smoothing, differentiation and model error, and for the `λ²` weighting of the noise

@@ -121,8 +121,8 @@ impl Autocorrelation {
     }
 
     /// Adds residual `v` with forgetting `λ` and updates the truncation lag `K`: the last lag
-    /// before the first whose `|ρ̂(k)|` falls inside the white band `2/√N`; and the last
-    /// significant lag ([`Self::last_significant_lag`]).
+    /// before the first whose `|ρ̂(k)|` falls inside the white band `2/√N`; and the end of the
+    /// last significant lobe ([`Self::last_significant_lag`]).
     pub fn add(&mut self, v: f64, lambda: f64) {
         let avail = self.filled.min(MAX_LAG);
         self.c[0] = lambda * self.c[0] + v * v;

@@ -684,7 +684,7 @@ mod tests {
     /// autocorrelation both understate it (σ / scatter was 0.81 for smoothed noise), and the
     /// first-insignificant-lag truncation kept only the positive lobe of differentiated noise
     /// (σ / scatter was 2.0). With the corrections of `crate::coloured` ("Finite memory") σ
-    /// matches the Monte Carlo scatter within 10 % for smoothed noise (measured 1.00) and is
+    /// matches the Monte Carlo scatter within 10 % for smoothed noise (measured 0.99) and is
     /// at most 25 % conservative for differentiated noise (measured 1.17); σ̂² is unbiased for
     /// the known unit noise variance (the identity `E[RSS] = σ²(N_eff − tr(P M))`).
     #[test]

@@ -76,11 +76,11 @@ fn val_hfb320_readme_equation_error_cm_q_is_biased() {
     assert_eq!(o.summary.status, "running");
     // docs/real-data.md, HFB-320 table, "RLS equation error ± σ" column (coloured-residual σ).
     for (name, doc, doc_sigma) in [
-        ("Cm_alpha", -0.958, 0.0135),
-        ("Cm_q", -42.63, 1.084),
-        ("Cm_de", -1.589, 0.0265),
-        ("CL_alpha", 4.236, 0.1285),
-        ("CD_alpha", 0.322, 0.0049),
+        ("Cm_alpha", -0.958, 0.0137),
+        ("Cm_q", -42.63, 1.094),
+        ("Cm_de", -1.589, 0.0268),
+        ("CL_alpha", 4.236, 0.1114),
+        ("CD_alpha", 0.322, 0.0051),
     ] {
         let (est, sigma) = param(&o, name);
         assert!((est - doc).abs() < 0.001 * doc.abs() + 5e-4, "{name}: {est} vs docs {doc}");

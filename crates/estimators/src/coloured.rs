@@ -17,7 +17,9 @@
 //! which reduces to `σ² (XᵀX)⁻¹` for white residuals. The sum over lags is truncated at the
 //! first lag `K` at which the normalised autocorrelation `ρ̂(k) = R̂_vv(k)/R̂_vv(0)` lies inside
 //! the 95 % band of a white sequence, `±2/√N` (the lags beyond are estimation noise, and
-//! summing them only adds variance), and at [`MAX_LAG`].
+//! summing them only adds variance), and at [`MAX_LAG`]. The batch form and
+//! [`Autocorrelation::lag`] (the EKF's) use that rule; the recursive [`ColouredCovariance`]
+//! sums through the last significant lobe (below, "Finite memory").
 //!
 //! # Recursive form ([`ColouredCovariance`])
 //!
@@ -38,6 +40,32 @@
 //! residuals (`K = 0`) `M_n = P_n⁻¹` and the covariance is exactly `σ̂² P_n`; with `λ < 1` the
 //! `λ²` weighting of `M` is the variance of the exponentially weighted estimate, about half
 //! of `σ̂² P_n` for a memory of many samples.
+//!
+//! # Finite memory: what the residuals hide ([`ColouredCovariance`] only)
+//!
+//! With a short memory (λ = 0.995: 200 samples) and residuals correlated over tens of samples,
+//! the fit takes a large share of the noise into θ̂, and residual-based `σ̂²` and `ρ̂` both
+//! understate the noise. Three corrections, each exact or first-order in that share:
+//! - **Degrees of freedom.** For `θ̂ = P XᵀΛy`, `H = X P XᵀΛ`, `ε = (I − H)v`, one has
+//!   `(I − H)ᵀΛ(I − H) = Λ − ΛH`, hence exactly `E[Σ λ^{n−i} ε_i²] = σ²(N_eff − tr(P M))`
+//!   (`M` in correlation units as above). The caller divides its weighted RSS by
+//!   `N_eff − tr(P M)` ([`ColouredCovariance::trace_pm`]); for white residuals and λ = 1 this is
+//!   the usual `N − p`.
+//! - **Lag dependence of the fitted share.** The same fit lowers the residual autocovariance at
+//!   lag `k` by the noise it put into θ̂, with the lag shape of the leverage: to first order
+//!   `E[ρ̂(k)] ≈ (ρ_v(k) − r ρ_H(k))/(1 − r)`, i.e. `ρ_v(k) ≈ (1 − r) ρ̂(k) + r ρ_H(k)`,
+//!   with `r = tr(P M)/N_eff` the fitted share and `ρ_H(k) = s_k/s_0`,
+//!   `s_k = Σ_i λ^{n−i} x_iᵀ P x_{i−k}`, the normalised lag-`k` leverage. The sandwich uses the
+//!   corrected `ρ_v`.
+//! - **Truncation after the last significant lobe.** Differentiated noise (the `ṗ q̇ ṙ` of a
+//!   least-squares differentiator) has a positive then a negative lobe that sum to about zero;
+//!   stopping at the first insignificant lag keeps only the positive lobe and doubles σ. The
+//!   sum runs on through each following lobe (run of one sign of `ρ̂`) whose sum is significant
+//!   against `3√len/√N` ([`Autocorrelation::last_significant_lag`], a 3σ test); testing single lags out to
+//!   [`MAX_LAG`] instead would pick a chance lag in most white records.
+//!
+//! `rls::tests::finite_memory_sigma_matches_scatter_for_smoothed_and_differentiated_noise`
+//! checks the three against the Monte Carlo scatter and the known noise variance.
 
 #[cfg(feature = "std")]
 pub mod batch;
@@ -46,6 +74,11 @@ use crate::linalg::Square;
 
 /// Most residual lags the recursive correction sums (a ring buffer of this many rows).
 pub const MAX_LAG: usize = 40;
+
+/// A lobe of `ρ̂` past the first truncation lag is kept when its sum exceeds this multiple of
+/// the white band of a sum, `2√len/√N`: 1.5 makes it a 3σ (99.7 %) test, since up to about
+/// twenty lobes are tested per update and a chance lobe adds its lags to σ.
+pub const LOBE_BAND_FACTOR: f64 = 1.5;
 
 /// The 95 % band `2/√n` of the normalised autocorrelation of `n` white samples.
 pub fn white_band(n: f64) -> f64 {
@@ -64,6 +97,7 @@ pub struct Autocorrelation {
     /// λ-weighted number of residuals in `c(0)`.
     n_res: f64,
     lag: usize,
+    last_lag: usize,
 }
 
 impl Default for Autocorrelation {
@@ -82,11 +116,13 @@ impl Autocorrelation {
             c: [0.0; MAX_LAG + 1],
             n_res: 0.0,
             lag: 0,
+            last_lag: 0,
         }
     }
 
     /// Adds residual `v` with forgetting `λ` and updates the truncation lag `K`: the last lag
-    /// before the first whose `|ρ̂(k)|` falls inside the white band `2/√N`.
+    /// before the first whose `|ρ̂(k)|` falls inside the white band `2/√N`; and the end of the
+    /// last significant lobe ([`Self::last_significant_lag`]).
     pub fn add(&mut self, v: f64, lambda: f64) {
         let avail = self.filled.min(MAX_LAG);
         self.c[0] = lambda * self.c[0] + v * v;
@@ -106,6 +142,34 @@ impl Autocorrelation {
             }
         }
         self.lag = k_max;
+        // Further lobes: runs of one sign of ρ̂ beyond K, each kept while its sum is
+        // significant (|Σ ρ̂| ≥ LOBE_BAND_FACTOR · 2√len/√N; 2√len/√N is the band of a sum of
+        // len white lags).
+        let mut k_last = k_max;
+        if self.c[0] > 0.0 {
+            // The insignificant tail of the lobe that ends at K is not a lobe of its own: the
+            // test starts at the next sign change.
+            let mut start = k_max + 1;
+            let sign_k = self.c[k_max] >= 0.0;
+            while start <= avail && (self.c[start] >= 0.0) == sign_k {
+                start += 1;
+            }
+            while start <= avail {
+                let positive = self.c[start] >= 0.0;
+                let (mut end, mut sum) = (start, 0.0);
+                while end <= avail && (self.c[end] >= 0.0) == positive {
+                    sum += self.c[end] / self.c[0];
+                    end += 1;
+                }
+                let len = (end - start) as f64;
+                if libm::fabs(sum) < LOBE_BAND_FACTOR * band * libm::sqrt(len) {
+                    break;
+                }
+                k_last = end - 1;
+                start = end;
+            }
+        }
+        self.last_lag = k_last;
         self.push(v);
     }
 
@@ -124,6 +188,15 @@ impl Autocorrelation {
     /// The truncation lag `K` after the last residual.
     pub fn lag(&self) -> usize {
         self.lag
+    }
+
+    /// The truncation lag with further lobes: after [`Self::lag`] and the insignificant tail of
+    /// its lobe, each following run of one sign of `ρ̂` (a lobe) whose sum lies outside
+    /// [`LOBE_BAND_FACTOR`] × the band `2√len/√N` of a sum of `len` white lags is added, up to
+    /// the first that does not (≤ [`MAX_LAG`]). It reaches past sign
+    /// changes, e.g. the negative lobe of differentiated noise.
+    pub fn last_significant_lag(&self) -> usize {
+        self.last_lag
     }
 
     /// `ρ̂(k) = c(k)/c(0)`, `None` before any non-zero residual or beyond [`MAX_LAG`].
@@ -150,8 +223,15 @@ pub struct ColouredCovariance<const C: usize> {
     n: usize,
     rows: [[f64; C]; MAX_LAG],
     head: usize,
+    filled: usize,
     acf: Autocorrelation,
     m: Square<C>,
+    /// `s_k = Σ_i λ^{n−i} x_iᵀ P x_{i−k}`, `k = 0..=MAX_LAG` (lag leverage, module doc).
+    leverage: [f64; MAX_LAG + 1],
+    /// λ-weighted number of rows, `N_eff`.
+    n_eff: f64,
+    /// Fitted share `r = tr(P M)/N_eff` of the last update.
+    fitted: f64,
 }
 
 impl<const C: usize> ColouredCovariance<C> {
@@ -161,32 +241,55 @@ impl<const C: usize> ColouredCovariance<C> {
             n: n.min(C),
             rows: [[0.0; C]; MAX_LAG],
             head: 0,
+            filled: 0,
             acf: Autocorrelation::new(),
             m: [[0.0; C]; C],
+            leverage: [0.0; MAX_LAG + 1],
+            n_eff: 0.0,
+            fitted: 0.0,
         }
     }
 
-    /// Adds regressor row `x` (leading `n` entries) with its residual `v` (`None` while the fit
-    /// is not yet initialised: the row enters `M` as white) and forgetting factor `λ`.
-    pub fn add(&mut self, x: &[f64; C], v: Option<f64>, lambda: f64) {
+    /// Adds regressor row `x` (leading `n` entries) with its residual `v` and forgetting factor
+    /// `λ`. `fit = Some((v, P))` once the fit is initialised (`P` its current inverse
+    /// information, leading `n × n` block); `None` before: the row enters `M` as white.
+    pub fn add(&mut self, x: &[f64; C], fit: Option<(f64, &Square<C>)>, lambda: f64) {
         let n = self.n;
-        let k_max = match v {
-            Some(v) => {
+        self.n_eff = lambda * self.n_eff + 1.0;
+        let avail = self.filled.min(MAX_LAG);
+        let k_max = match fit {
+            Some((v, p)) => {
+                // Fitted share r = tr(P M)/N_eff and lag leverage s_k = Σ λ x_iᵀ P x_{i−k}.
+                self.fitted = (self.trace_pm(p) / self.n_eff).clamp(0.0, 1.0);
+                let mut px = [0.0; C];
+                for a in 0..n {
+                    px[a] = (0..n).map(|b| p[a][b] * x[b]).sum();
+                }
+                let dot = |row: &[f64; C]| (0..n).map(|a| px[a] * row[a]).sum::<f64>();
+                self.leverage[0] = lambda * self.leverage[0] + dot(x);
+                for k in 1..=avail {
+                    let row = &self.rows[(self.head + MAX_LAG - k) % MAX_LAG];
+                    self.leverage[k] = lambda * self.leverage[k] + dot(row);
+                }
                 self.acf.add(v, lambda);
-                self.acf.lag()
+                self.acf.last_significant_lag()
             }
             None => {
                 self.acf.push(0.0);
                 0
             }
         };
-        // g = x + Σ ρ(k) λ^k x_{n−k}
+        // g = x + Σ ρ_v(k) λ^k x_{n−k},  ρ_v(k) = (1 − r) ρ̂(k) + r ρ_H(k)
+        let r = self.fitted;
+        let s0 = self.leverage[0];
         let mut g = [0.0; C];
         g[..n].copy_from_slice(&x[..n]);
         let mut lk = 1.0;
         for k in 1..=k_max {
             lk *= lambda;
-            let w = self.acf.rho(k).unwrap_or(0.0) * lk;
+            let rho_h = if s0 > 0.0 { self.leverage[k] / s0 } else { 0.0 };
+            let rho_v = (1.0 - r) * self.acf.rho(k).unwrap_or(0.0) + r * rho_h;
+            let w = rho_v * lk;
             let row = &self.rows[(self.head + MAX_LAG - k) % MAX_LAG];
             for a in 0..n {
                 g[a] += w * row[a];
@@ -202,11 +305,32 @@ impl<const C: usize> ColouredCovariance<C> {
         }
         self.rows[self.head] = *x;
         self.head = (self.head + 1) % MAX_LAG;
+        self.filled += 1;
     }
 
-    /// The lag `K` at which the last update truncated the sum.
+    /// The lag `K` at which the last update truncated the sum (after the last significant lobe).
     pub fn lag(&self) -> usize {
-        self.acf.lag()
+        self.acf.last_significant_lag()
+    }
+
+    /// The fitted share `r = tr(P M)/N_eff` of the last update (module doc; 0 before the fit
+    /// is initialised).
+    pub fn fitted_share(&self) -> f64 {
+        self.fitted
+    }
+
+    /// `tr(P M)` for the fit's `P` (leading `n × n` block): the degrees of freedom the fit
+    /// takes from the λ-weighted residual sum of squares, `E[RSS] = σ²(N_eff − tr(P M))`
+    /// (module doc). `p` for white residuals and λ = 1.
+    pub fn trace_pm(&self, p: &Square<C>) -> f64 {
+        let n = self.n;
+        let mut t = 0.0;
+        for a in 0..n {
+            for b in 0..n {
+                t += p[a][b] * self.m[b][a];
+            }
+        }
+        t
     }
 
     /// The normalised residual autocorrelation `ρ̂(k)` (`None` before any residual).

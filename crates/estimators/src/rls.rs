@@ -263,17 +263,17 @@ impl Rls {
             value: structure.n_params() as f64,
             reason: "empty, over capacity, or mixes CX/CZ with CL/CD",
         })?;
-        let mut fits = [None; 8];
-        for c in structure.coefficients() {
-            fits[c.index()] = Some(Fit::new(&structure, c));
-        }
-        Ok(Self {
+        let mut rls = Self {
             structure,
-            fits,
+            fits: [None; 8],
             lambda: config.forgetting,
             init_samples: config.init_samples,
             est: Estimates::new(structure.n_params()),
-        })
+        };
+        for c in structure.coefficients() {
+            rls.fits[c.index()] = Some(Fit::new(&structure, c));
+        }
+        Ok(rls)
     }
 
     /// Residual variance `σ̂²` of coefficient `c`'s fit, once defined.

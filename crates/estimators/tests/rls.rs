@@ -204,3 +204,29 @@ fn errors_invalid_forgetting_and_nonfinite_sample_leave_state_unchanged() {
     assert!(rls.update(&bad).is_err());
     assert_eq!(*rls.estimates(), before);
 }
+
+/// Every estimator keeps the structure it was built for, whatever its size, and has
+/// identified nothing before data. Compiled as a dependency at the release profile's
+/// opt-level 3, rustc 1.95 once returned a corrupted structure (31–50 parameters for the
+/// 12-parameter longitudinal preset) from `Rls::new` when the fits array was built on the
+/// stack and moved into the estimator; the unit tests, compiled inside the crate, did not
+/// see it. The construction is now in place; this test guards it for RLS, FTR and the EKF.
+#[test]
+fn every_estimator_keeps_its_structure_after_construction() {
+    use aeroident_estimators::{Ekf, EkfConfig, Ftr, FtrConfig};
+    for st in
+        [ModelStructure::longitudinal(), ModelStructure::lateral(), ModelStructure::six_axis()]
+    {
+        let n = st.n_params();
+        let rls = Rls::new(st, RlsConfig { forgetting: 0.995, init_samples: 0 }).unwrap();
+        assert_eq!(*rls.structure(), st, "rls");
+        let ftr = Ftr::new(st, FtrConfig::default()).unwrap();
+        assert_eq!(*ftr.structure(), st, "ftr");
+        let ekf = Ekf::new(EkfConfig::new(st)).unwrap();
+        assert_eq!(*ekf.structure(), st, "ekf");
+        for e in [&rls as &dyn Estimator, &ftr, &ekf] {
+            assert_eq!(e.structure().n_params(), n, "{}", e.method());
+            assert!((0..n).all(|i| e.estimates().value(i).is_none()), "{}", e.method());
+        }
+    }
+}

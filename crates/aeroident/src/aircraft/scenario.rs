@@ -57,8 +57,8 @@
 //! Sample-driven kinds (built by the shared factory, `crate::estimators::build`): `rls` and
 //! `ftr` (option `forgetting` ∈ (0, 1] per sample, default 1), `ekf`, `smpe`, `smpe-corrected`,
 //! `gradient`. Batch kind `oe` (output error fitted after the flight to the recorded samples of
-//! the window after the damage; option `initial_states = "estimate" | "first-sample"`;
-//! [`super::batch`]).
+//! the window after the damage; options `initial_states = "estimate" | "first-sample"` and
+//! `step = "relaxation" | "concentrated"`; [`super::batch`]).
 //!
 //! The old syntax (`[params.dCm_alpha]`, `params = ["dCm_alpha"]`, `kind = "gradient"` for the
 //! two-aircraft gradient law) is refused with a message saying what to write instead.

@@ -261,10 +261,23 @@ pub fn fit_manoeuvres(
 ) -> Result<(OeResult, f64), String> {
     let t0 = std::time::Instant::now();
     let result = fit(manoeuvres, config).map_err(|e| match e {
-        OeError::NotConverged { reason, result } => format!(
-            "output error did not converge ({reason:?}) after {} iterations: no result",
-            result.iterations.len()
-        ),
+        OeError::NotConverged { reason, result } => {
+            // The last iteration's convergence measures (relative change of det R, largest
+            // step in Cramér–Rao σ), so a creeping fit can be told from a stalled one.
+            let it = &result.iterations;
+            let last = match it.as_slice() {
+                [.., a, b] => format!(
+                    " (last iteration: relative change of det R {:.1e}, largest step {:.1e} σ)",
+                    (b.ln_det_r - a.ln_det_r).exp_m1().abs(),
+                    b.max_step_sigma
+                ),
+                _ => String::new(),
+            };
+            format!(
+                "output error did not converge ({reason:?}) after {} iterations{last}: no result",
+                result.n_iterations()
+            )
+        }
         OeError::Estimator(e) => format!("output error: {e}"),
     })?;
     Ok((result, t0.elapsed().as_secs_f64()))

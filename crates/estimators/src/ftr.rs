@@ -965,7 +965,7 @@ mod tests {
     /// With a 2-s memory the 36 grid frequencies carry only a few independent noise
     /// observations, and the fit removes a large share of the noise exactly where the
     /// regressors have power, so the raw residual periodogram understates the noise there
-    /// (σ / scatter was 0.78–0.88 here). With the fitted-share correction of the residual
+    /// (σ / scatter was 0.77–0.88 here). With the fitted-share correction of the residual
     /// spectrum (module doc) σ matches the scatter of 200 fits within [0.9, 1.15] for white
     /// and for smoothed noise.
     #[test]

@@ -468,26 +468,32 @@ impl Ftr {
         v: &mut [[C64; MAX_FREQUENCIES]; N_TERMS],
     ) -> Square<N_TERMS> {
         let m = self.n_freq;
-        let w_diff = |d: isize| -> C64 {
-            let v = self.w_diff[d.unsigned_abs()];
-            if d >= 0 { v } else { (v.0, -v.1) }
-        };
         // M_jk = ½ Re Σ_f X̃_jf* Σ_g (C_fg X̃_kg + P_fg X̃_kg*),
-        // C_fg = ½(S_f + S_g) W(f − g), P_fg = ½(S_f + S_g) W⁺(f + g).
+        // C_fg = ½(S_f + S_g) W(f − g), P_fg = ½(S_f + S_g) W⁺(f + g), W(−d) = W(d)*.
+        // The inner sums are the hot loop of a solve (run 1 + FITTED_SHARE_ITERATIONS times):
+        // W(f − g) X̃_kg + W⁺(f + g) X̃_kg* is expanded in real arithmetic, and the g ≤ f and
+        // g > f halves (W and W*) are separate loops.
         let q = p + 1;
         let mut mid = [[0.0; N_TERMS]; N_TERMS];
         for k in 0..q {
             let xk = self.column(terms, p, k);
             for f in 0..m {
-                let mut acc = (0.0, 0.0);
-                for g in 0..m {
-                    let sl = 0.5 * (level[f] + level[g]);
-                    let c = cmul(w_diff(f as isize - g as isize), xk[g]);
-                    let q = cmul(self.w_sum[f + g], (xk[g].0, -xk[g].1));
-                    acc.0 += sl * (c.0 + q.0);
-                    acc.1 += sl * (c.1 + q.1);
+                let lf = level[f];
+                let (mut re, mut im) = (0.0, 0.0);
+                for g in 0..=f {
+                    let (x, wd, ws) = (xk[g], self.w_diff[f - g], self.w_sum[f + g]);
+                    let s = lf + level[g];
+                    re += s * (x.0 * (wd.0 + ws.0) + x.1 * (ws.1 - wd.1));
+                    im += s * (x.0 * (wd.1 + ws.1) + x.1 * (wd.0 - ws.0));
                 }
-                v[k][f] = acc;
+                for g in f + 1..m {
+                    // W(f − g) = W(g − f)*.
+                    let (x, wd, ws) = (xk[g], self.w_diff[g - f], self.w_sum[f + g]);
+                    let s = lf + level[g];
+                    re += s * (x.0 * (wd.0 + ws.0) + x.1 * (ws.1 + wd.1));
+                    im += s * (x.0 * (ws.1 - wd.1) + x.1 * (wd.0 - ws.0));
+                }
+                v[k][f] = (0.5 * re, 0.5 * im);
             }
             for j in 0..q {
                 let xj = self.column(terms, p, j);

@@ -378,6 +378,23 @@ fn param_stats(p0: &ParamRun, ps: &[&ParamRun], crb: Option<f64>) -> ParamStats 
     }
 }
 
+/// [`crb_sensors`] restricted to the outputs `structure`'s flight model predicts: the
+/// longitudinal ones (V, α, q, θ, ax, az) if it has a longitudinal coefficient (CL, CD, Cm, CX,
+/// CZ), the lateral ones (β, p, r, φ, ay) if it has CY, Cl or Cn.
+pub fn crb_sensors_for(structure: &ModelStructure, scale: f64) -> Vec<Sensor> {
+    use aeroident_estimators::vocabulary::Coefficient as C;
+    let lon = [C::CL, C::CD, C::Cm, C::CX, C::CZ].into_iter().any(|c| structure.has(c));
+    let lat = [C::CY, C::Cl, C::Cn].into_iter().any(|c| structure.has(c));
+    crb_sensors(scale)
+        .into_iter()
+        .filter(|s| match s.output {
+            Output::Vt | Output::Alpha | Output::Q | Output::Theta | Output::Ax | Output::Az => lon,
+            Output::Beta | Output::P | Output::R | Output::Phi | Output::Ay => lat,
+            _ => false,
+        })
+        .collect()
+}
+
 /// Outputs of the Cramér–Rao prediction and their white-noise σ at the scenario's sensor
 /// scale: the raw sensor levels of [`crate::aircraft::sensors`] (airspeed 11 ft/s, vanes
 /// 0.1°, gyros 0.14°/s, attitude 0.573°, accelerometers 0.98 ft/s²) before the matched
@@ -489,23 +506,7 @@ fn crb_for(
     let u0v = [u0.elevator_rad, u0.aileron_rad, u0.rudder_rad];
     let col = |j: usize| c.iter().map(|u| u[1 + j] - u0v[j]).collect::<Vec<f64>>();
     let inputs = PlannedInputs { dt_s: sc.dt_s, de_rad: col(0), da_rad: col(1), dr_rad: col(2) };
-    // Only the outputs the structure's flight model predicts.
-    let lon = structure.params().any(|p| {
-        use aeroident_estimators::vocabulary::Coefficient as C;
-        matches!(p.coefficient, C::CL | C::CD | C::Cm | C::CX | C::CZ)
-    });
-    let lat = structure.params().any(|p| {
-        use aeroident_estimators::vocabulary::Coefficient as C;
-        matches!(p.coefficient, C::CY | C::Cl | C::Cn)
-    });
-    let sensors: Vec<Sensor> = crb_sensors(sc.sensors.scale)
-        .into_iter()
-        .filter(|s| match s.output {
-            Output::Vt | Output::Alpha | Output::Q | Output::Theta | Output::Ax | Output::Az => lon,
-            Output::Beta | Output::P | Output::R | Output::Phi | Output::Ay => lat,
-            _ => false,
-        })
-        .collect();
+    let sensors = crb_sensors_for(structure, sc.sensors.scale);
     let plan = DesignPlan::new(*structure, theta, constants, condition, vec![inputs], sensors);
     let r = predict_crb(&plan).map_err(|e| e.to_string())?;
     Ok(r.names
@@ -553,10 +554,23 @@ pub fn campaign(sc: &Scenario, runs: u64, seed: u64) -> Result<Campaign, String>
     if runs == 0 {
         return Err("runs must be at least 1".into());
     }
-    let crb = crb_sigmas(sc).unwrap_or_else(|e| CrbTable { notes: vec![e], ..Default::default() });
     let start = Instant::now();
     let results = run_all(sc, runs, seed);
     let wall_s = start.elapsed().as_secs_f64();
+    Ok(assemble(sc, seed, results, wall_s, rayon::current_num_threads()))
+}
+
+/// The campaign document from per-run results (any order of computation; `results` sorted by
+/// index, one per run): the Cramér–Rao prediction, [`statistics`] and the failed runs. Shared
+/// by [`campaign`] and the Python bindings' distributed reduce.
+pub fn assemble(
+    sc: &Scenario,
+    seed: u64,
+    results: Vec<RunResult>,
+    wall_s: f64,
+    threads: usize,
+) -> Campaign {
+    let crb = crb_sigmas(sc).unwrap_or_else(|e| CrbTable { notes: vec![e], ..Default::default() });
     let names: Vec<String> = sc.estimator.iter().map(EstimatorSpec::label).collect();
     let estimators = statistics(&results, &names, &crb);
     let failed_runs = results
@@ -565,18 +579,18 @@ pub fn campaign(sc: &Scenario, runs: u64, seed: u64) -> Result<Campaign, String>
             r.outcome.as_ref().err().map(|e| FailedRun { run: r.index, reason: e.clone() })
         })
         .collect();
-    Ok(Campaign {
+    Campaign {
         scenario: sc.name.clone(),
-        runs,
+        runs: results.len() as u64,
         seed,
         seed_rule: SEED_RULE,
         failed_runs,
         estimators,
         crb_notes: crb.notes,
         wall_s,
-        threads: rayon::current_num_threads(),
+        threads,
         results,
-    })
+    }
 }
 
 /// The `--json` document: exactly `{"runs", "estimators": [{"name", "parameters": [{"name",

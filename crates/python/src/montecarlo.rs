@@ -6,10 +6,9 @@
 //! anywhere and the statistics equal the local campaign's.
 
 use aeroident::aircraft::Scenario;
-use aeroident::aircraft::scenario::EstimatorSpec;
 use aeroident::montecarlo::{
-    Campaign, CrbTable, EstimatorRun, FailedRun, ParamRun, RunResult, SEED_RULE, campaign,
-    crb_sigmas, json_summary, run_result, seeded_scenario, statistics,
+    Campaign, EstimatorRun, ParamRun, RunResult, assemble, campaign, json_summary, run_result,
+    seeded_scenario,
 };
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -165,30 +164,7 @@ fn montecarlo_reduce<'py>(
             results.len()
         )));
     }
-    let c = py.detach(move || {
-        let crb =
-            crb_sigmas(&sc).unwrap_or_else(|e| CrbTable { notes: vec![e], ..Default::default() });
-        let names: Vec<String> = sc.estimator.iter().map(EstimatorSpec::label).collect();
-        let estimators = statistics(&results, &names, &crb);
-        let failed_runs = results
-            .iter()
-            .filter_map(|r| {
-                r.outcome.as_ref().err().map(|e| FailedRun { run: r.index, reason: e.clone() })
-            })
-            .collect();
-        Campaign {
-            scenario: sc.name.clone(),
-            runs,
-            seed,
-            seed_rule: SEED_RULE,
-            failed_runs,
-            estimators,
-            crb_notes: crb.notes,
-            wall_s,
-            threads,
-            results,
-        }
-    });
+    let c = py.detach(move || assemble(&sc, seed, results, wall_s, threads));
     summary_dict(py, &c, keep_per_run)
 }
 

@@ -22,23 +22,9 @@ pyo3::create_exception!(
      message is the one the CLI prints."
 );
 
-/// The error and its causes on one line, exactly as the CLI's `main` prints them after
-/// `error: ` (a cause is appended only when the text so far does not already contain it).
-pub(crate) fn error_chain(e: &anyhow::Error) -> String {
-    let mut msg = e.to_string();
-    for cause in e.chain().skip(1) {
-        let c = cause.to_string();
-        if !msg.contains(&c) {
-            msg.push_str(": ");
-            msg.push_str(&c);
-        }
-    }
-    msg
-}
-
 /// An `anyhow` error as a Python `AeroidentError` with the CLI's message.
 pub(crate) fn to_py(e: anyhow::Error) -> PyErr {
-    AeroidentError::new_err(error_chain(&e))
+    AeroidentError::new_err(aeroident::cli::error_chain(&e))
 }
 
 /// A message as a Python `AeroidentError`.

@@ -74,6 +74,23 @@ pub fn print_stdout(text: &str) -> std::io::Result<()> {
     out.flush()
 }
 
+/// The error and its causes on one line ("file:line: field: reason"), as the CLI prints it
+/// after `error: ` and the Python bindings raise it, with no backtrace whatever RUST_BACKTRACE
+/// says: errors here are problems with the user's input. Some error types print their source in
+/// their own message and some do not, so a cause is appended only when the text so far does not
+/// already contain it.
+pub fn error_chain(e: &anyhow::Error) -> String {
+    let mut msg = e.to_string();
+    for cause in e.chain().skip(1) {
+        let c = cause.to_string();
+        if !msg.contains(&c) {
+            msg.push_str(": ");
+            msg.push_str(&c);
+        }
+    }
+    msg
+}
+
 /// Whether an error (or any of its causes) is a closed output pipe: the reader went away, which
 /// is not a failure of the run (`aeroident … | head`).
 pub fn is_broken_pipe(e: &anyhow::Error) -> bool {

@@ -496,6 +496,16 @@ fn num(v: Option<f64>) -> String {
     v.map_or("null".to_string(), |x| format!("{x:.4e}"))
 }
 
+/// One line on an estimator's targets: met / total primary derivatives and the missed ones.
+pub fn targets_line(t: &TargetSummary) -> String {
+    let missed = if t.missed.is_empty() {
+        String::new()
+    } else {
+        format!(" (missed: {})", t.missed.join(", "))
+    };
+    format!("{}: {}/{} primary derivatives meet the targets{missed}", t.estimator, t.met, t.total)
+}
+
 /// One line on a batch fit: window, initial state, iterations, wall time, σ kind.
 pub fn batch_fit_line(b: &super::batch::BatchFit) -> String {
     format!(
@@ -603,19 +613,7 @@ pub fn table(summary: &Summary) -> String {
             writeln!(s, "{}", batch_fit_line(b)).ok();
         }
         for t in &summary.targets {
-            writeln!(
-                s,
-                "{}: {}/{} primary derivatives meet the targets{}",
-                t.estimator,
-                t.met,
-                t.total,
-                if t.missed.is_empty() {
-                    String::new()
-                } else {
-                    format!(" (missed: {})", t.missed.join(", "))
-                }
-            )
-            .ok();
+            writeln!(s, "{}", targets_line(t)).ok();
         }
     }
     s

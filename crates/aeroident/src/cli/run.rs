@@ -131,17 +131,8 @@ fn results_text(summary: &Summary) -> String {
         s.push('\n');
     }
     for t in &summary.targets {
-        s.push_str(&format!(
-            "{}: {}/{} primary derivatives meet the targets{}\n",
-            t.estimator,
-            t.met,
-            t.total,
-            if t.missed.is_empty() {
-                String::new()
-            } else {
-                format!(" (missed: {})", t.missed.join(", "))
-            }
-        ));
+        s.push_str(&crate::aircraft::report::targets_line(t));
+        s.push('\n');
     }
     s
 }

@@ -22,7 +22,7 @@ use aeroident_estimators::output_error::InitialStates;
 use aeroident_estimators::output_error::design::{
     DesignPlan, DesignResult, FlightCondition, PlannedInputs, predict_crb, trim_biases,
 };
-use aeroident_estimators::vocabulary::{Coefficient, ModelStructure};
+use aeroident_estimators::vocabulary::ModelStructure;
 use aeroident_models::f16::{self, AeroIncrements, F16};
 use aeroident_models::trim::{TrimCondition, TrimManeuver, trim};
 use aeroident_signals::InputSignal;
@@ -239,16 +239,7 @@ pub fn design(spec: &DesignSpec) -> anyhow::Result<Design> {
         da_rad: column(Surface::Da),
         dr_rad: column(Surface::Dr),
     };
-    let lon = structure.has(Coefficient::Cm);
-    let lat = structure.has(Coefficient::Cl);
-    let sensors = crate::montecarlo::crb_sensors(1.0)
-        .into_iter()
-        .filter(|s| match s.output {
-            Output::Vt | Output::Alpha | Output::Q | Output::Theta | Output::Ax | Output::Az => lon,
-            Output::Beta | Output::P | Output::R | Output::Phi | Output::Ay => lat,
-            _ => false,
-        })
-        .collect();
+    let sensors = crate::montecarlo::crb_sensors_for(&structure, 1.0);
     let mut plan = DesignPlan::new(structure, theta, constants, condition, vec![planned], sensors);
     // Initial states estimated with the parameters, as a fit of the record would.
     plan.initial_states = InitialStates::Estimate([true; N_STATES]);

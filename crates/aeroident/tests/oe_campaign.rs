@@ -72,6 +72,10 @@ fn val_oe_in_run_noise_free_recovers_true_derivatives() {
     assert!(l.estimate[..l.estimate.len() - 1].iter().all(Option::is_none));
     assert!(s.targets.is_empty(), "batch estimators have no real-time targets");
     assert_eq!(s.batch_fits.len(), 1);
+    // report.html's settings carry the batch fit's line (window, iterations, wall time).
+    let settings = aeroident::report::run::settings(&out, &s);
+    let line = settings.iter().find(|(k, _)| k == "batch fit").expect("a batch fit setting");
+    assert!(line.1.contains(&format!("{} iterations", fit.iterations.unwrap())), "{}", line.1);
 }
 
 /// After a damage, OE fits only the window after it (from the damage + the sample lag), so

@@ -51,7 +51,8 @@ pub fn results(summary: &Summary) -> Vec<Results> {
     out
 }
 
-/// The settings of a run, for the report.
+/// The settings of a run, for the report: scenario, estimators, trim, excitation and damage
+/// times, and one `batch fit` line per post-flight fit ([`crate::aircraft::report::batch_fit_line`]).
 pub fn settings(out: &RunOutput, summary: &Summary) -> Vec<(String, String)> {
     let mut s = common_settings();
     let sc = &out.scenario;
@@ -81,6 +82,13 @@ pub fn settings(out: &RunOutput, summary: &Summary) -> Vec<(String, String)> {
         ("angular accelerations".into(), summary.angular_accelerations.clone().unwrap_or_default()),
         ("realtime factor".into(), format!("{:.0}×", summary.realtime_factor)),
     ]);
+    // Batch (post-flight) fits: window, iterations, wall time, as the terminal prints them.
+    s.extend(
+        summary
+            .batch_fits
+            .iter()
+            .map(|b| ("batch fit".into(), crate::aircraft::report::batch_fit_line(b))),
+    );
     s
 }
 

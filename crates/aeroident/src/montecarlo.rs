@@ -50,7 +50,7 @@ use aeroident_estimators::output_error::design::{
 use aeroident_estimators::vocabulary::ModelStructure;
 use aeroident_models::f16::{self, AeroIncrements, F16};
 use aeroident_signals::config::WindConfig;
-use aeroident_signals::turbulence::{DrydenComponent, dryden_shaping_filter};
+use aeroident_signals::turbulence::{DrydenComponent, DrydenParameters, dryden_shaping_filter};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -504,10 +504,9 @@ pub fn crb_sigmas(sc: &Scenario) -> Result<CrbTable, String> {
                     Ok(m) => {
                         table.sigma.insert(spec.label(), m);
                     }
-                    Err(e) => table.notes.push(format!(
-                        "{}: no turbulent Cramér–Rao bound: {e}",
-                        spec.label()
-                    )),
+                    Err(e) => table
+                        .notes
+                        .push(format!("{}: no turbulent Cramér–Rao bound: {e}", spec.label())),
                 }
                 table.calm.insert(spec.label(), calm);
             }
@@ -539,17 +538,23 @@ pub fn gust_model(sc: &Scenario) -> Result<Option<GustModel>, String> {
     else {
         return Ok(None);
     };
+    Ok(Some(dryden_gust_model(&params, *vt_fps)))
+}
+
+/// The Dryden gusts of `params` frozen at `vt_fps` as shaping filters in SI (m/s): the
+/// simulator's realisation ([`dryden_shaping_filter`]) with the output scaled from ft/s.
+pub fn dryden_gust_model(params: &DrydenParameters, vt_fps: f64) -> GustModel {
     let filter = |c: DrydenComponent| {
-        let (a, b, cv) = dryden_shaping_filter(&params, c, *vt_fps);
+        let (a, b, cv) = dryden_shaping_filter(params, c, vt_fps);
         ShapingFilter { a, b, c: cv * M_PER_FT }
     };
-    Ok(Some(GustModel {
+    GustModel {
         filters: [
             filter(DrydenComponent::U),
             filter(DrydenComponent::V),
             filter(DrydenComponent::W),
         ],
-    }))
+    }
 }
 
 fn crb_for(

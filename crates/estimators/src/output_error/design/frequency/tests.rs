@@ -329,3 +329,36 @@ fn calm_air_equals_predict_crb_and_gust_axes_are_routed() {
     }
     assert!(larger * 2 > calm.n_params, "turbulence must raise most bounds");
 }
+
+/// Γ is the Jacobian of `(V, α, β) = (|v|, atan(w/u), asin(v/V))` with respect to the body
+/// velocity (central differences at a general attitude, β ≠ 0), rows in the set's state order.
+#[test]
+fn gust_input_matrix_is_the_wind_axis_jacobian() {
+    let (vt, al, be) = (150.0_f64, 0.2_f64, -0.1_f64);
+    let body = [vt * al.cos() * be.cos(), vt * be.sin(), vt * al.sin() * be.cos()];
+    let wind_axes = |b: [f64; 3]| {
+        let v = (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]).sqrt();
+        [v, b[2].atan2(b[0]), (b[1] / v).asin()]
+    };
+    let states = StateSet::Coupled.states();
+    let g = gust_input_matrix(states, vt, al, be);
+    for k in 0..3 {
+        let h = 1e-4;
+        let (mut bp, mut bm) = (body, body);
+        bp[k] += h;
+        bm[k] -= h;
+        let (fp, fm) = (wind_axes(bp), wind_axes(bm));
+        for (r, &st) in states.iter().enumerate() {
+            let want = if st < 3 { (fp[st] - fm[st]) / (2.0 * h) } else { 0.0 };
+            assert!(
+                (g[(r, k)] - want).abs() < 1e-9,
+                "row {st} column {k}: {} vs {want}",
+                g[(r, k)]
+            );
+        }
+    }
+    // Longitudinal set: rows V, α (filter order V, α, θ, q), no β row.
+    let gl = gust_input_matrix(StateSet::Longitudinal.states(), vt, al, 0.0);
+    assert_eq!(gl.nrows(), 4);
+    assert!((gl[(1, 2)] - al.cos() / vt).abs() < 1e-15 && gl[(2, 2)] == 0.0);
+}

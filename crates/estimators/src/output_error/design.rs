@@ -42,7 +42,9 @@
 //! The bound is a prediction for white Gaussian sensor noise of the stated σ and a correct
 //! model; on flight data with turbulence and model error the achieved σ are larger (the
 //! coloured-residual σ of [`super::OeResult::sigma_coloured`]). The tests check the prediction
-//! against the scatter of [`super::fit`] over seeded noisy simulations of the plan.
+//! against the scatter of [`super::fit`] over seeded noisy simulations of the plan. For an
+//! experiment flown in turbulence, [`predict_crb_turbulent`] ([`frequency`]) counts the gusts
+//! as process noise.
 //!
 //! # Inputs
 //!

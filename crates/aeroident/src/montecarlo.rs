@@ -29,20 +29,28 @@
 //!   `null` when at least half never settle; always `null` for a batch estimator (output
 //!   error, [`crate::aircraft::batch`]: no estimate before the end of the flight), which
 //!   reports `mean_iterations` and `mean_fit_wall_s` instead;
-//! - `crb_sigma`: [`crb_sigmas`], the Cramér–Rao σ predicted by
-//!   [`aeroident_estimators::output_error::design::predict_crb`] for the data since the last
-//!   change of the truth (module doc there; Klein & Morelli 2006 ch. 6).
+//! - `crb_sigma`: [`crb_sigmas`], the Cramér–Rao σ of the experiment flown, for the data since
+//!   the last change of the truth: with the scenario's Dryden turbulence as process noise
+//!   ([`aeroident_estimators::output_error::design::predict_crb_turbulent`]) when it has one
+//!   `dryden` wind entry, else the calm-air bound (module docs there; Klein & Morelli 2006
+//!   ch. 6); `crb_notes` say which;
+//! - `crb_sigma_calm`: the calm-air bound of the same flight, white sensor noise only
+//!   ([`aeroident_estimators::output_error::design::predict_crb`]; the bound reported as
+//!   `crb_sigma` before the turbulent one existed).
 
 use std::collections::BTreeMap;
 use std::time::Instant;
 
 use aeroident_estimators::flight_model::Output;
+use aeroident_estimators::output_error::design::frequency::{GustModel, ShapingFilter};
 use aeroident_estimators::output_error::design::{
-    DesignPlan, FlightCondition, PlannedInputs, Sensor, predict_crb, trim_biases,
+    DesignPlan, FlightCondition, PlannedInputs, Sensor, predict_crb, predict_crb_turbulent,
+    trim_biases,
 };
 use aeroident_estimators::vocabulary::ModelStructure;
 use aeroident_models::f16::{self, AeroIncrements, F16};
 use aeroident_signals::config::WindConfig;
+use aeroident_signals::turbulence::{DrydenComponent, DrydenParameters, dryden_shaping_filter};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -227,8 +235,10 @@ pub struct ParamStats {
     pub mean_sigma: Option<f64>,
     /// Fraction of the estimator's good runs whose ±2σ covers the truth.
     pub coverage_2sigma: Option<f64>,
-    /// Predicted Cramér–Rao σ ([`crb_sigmas`]).
+    /// Predicted Cramér–Rao σ of the experiment flown, turbulence included ([`crb_sigmas`]).
     pub crb_sigma: Option<f64>,
+    /// Predicted Cramér–Rao σ in calm air, white sensor noise only ([`crb_sigmas`]).
+    pub crb_sigma_calm: Option<f64>,
     /// Median time to within ±10 %, s (module doc).
     pub median_time_to_10pct_s: Option<f64>,
     /// Median time from the damage to within ±10 % of the new truth, s.
@@ -260,8 +270,11 @@ pub struct EstimatorStats {
 /// The Cramér–Rao σ per estimator label and parameter name, or why there is none.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct CrbTable {
-    /// `label → (parameter name → σ)`; absent entries are `null`.
+    /// `label → (parameter name → σ)` of the experiment flown (turbulence included when the
+    /// scenario has Dryden wind); absent entries are `null`.
     pub sigma: BTreeMap<String, BTreeMap<String, f64>>,
+    /// The same for the calm-air bound (white sensor noise only).
+    pub calm: BTreeMap<String, BTreeMap<String, f64>>,
     /// Notes on estimators or parameters without a bound.
     pub notes: Vec<String>,
 }
@@ -318,11 +331,10 @@ pub fn statistics(runs: &[RunResult], names: &[String], crb: &CrbTable) -> Vec<E
                         .map(|(k, p0)| {
                             let ps: Vec<&ParamRun> =
                                 ok.iter().filter_map(|e| e.params.get(k)).collect();
-                            param_stats(
-                                p0,
-                                &ps,
-                                crb.sigma.get(name).and_then(|m| m.get(&p0.name)).copied(),
-                            )
+                            let of = |t: &BTreeMap<String, BTreeMap<String, f64>>| {
+                                t.get(name).and_then(|m| m.get(&p0.name)).copied()
+                            };
+                            param_stats(p0, &ps, of(&crb.sigma), of(&crb.calm))
                         })
                         .collect()
                 })
@@ -344,7 +356,12 @@ pub fn statistics(runs: &[RunResult], names: &[String], crb: &CrbTable) -> Vec<E
         .collect()
 }
 
-fn param_stats(p0: &ParamRun, ps: &[&ParamRun], crb: Option<f64>) -> ParamStats {
+fn param_stats(
+    p0: &ParamRun,
+    ps: &[&ParamRun],
+    crb: Option<f64>,
+    crb_calm: Option<f64>,
+) -> ParamStats {
     let finals: Vec<f64> = ps.iter().filter_map(|p| p.r#final).collect();
     let sigmas: Vec<f64> = ps.iter().filter_map(|p| p.sigma).collect();
     let truth = p0.truth;
@@ -373,6 +390,7 @@ fn param_stats(p0: &ParamRun, ps: &[&ParamRun], crb: Option<f64>) -> ParamStats 
         mean_sigma: mean(&sigmas),
         coverage_2sigma: coverage,
         crb_sigma: crb,
+        crb_sigma_calm: crb_calm,
         median_time_to_10pct_s: median_with_never(&times),
         median_reconvergence_10pct_s: if changes { median_with_never(&reconv) } else { None },
     }
@@ -425,16 +443,41 @@ pub fn crb_sensors(scale: f64) -> Vec<Sensor> {
 /// the last change of the truth (the damage) to the end, starting from the trim condition, with
 /// `θ` = the reference's true local derivatives in that interval (biases re-trimmed for the
 /// estimators' flight model, [`trim_biases`]), the flown control perturbations about trim, and
-/// white sensor noise of [`crb_sensors`] on the outputs the structure predicts. It ignores the
-/// turbulence (process noise) and the F-16's nonlinearity beyond the local derivatives, so it
-/// is the bound of an ideal output-error estimator on that interval. Two-aircraft estimators
-/// (increments) get no bound (a note).
+/// white sensor noise of [`crb_sensors`] on the outputs the structure predicts. Two bounds:
+/// `calm`, white sensor noise only ([`predict_crb`]), and `sigma`, the experiment flown: when
+/// the scenario has one `dryden` wind entry, its gusts as process noise ([`gust_model`],
+/// [`predict_crb_turbulent`]: linearised about trim, frozen turbulence), else the calm bound.
+/// Both ignore the F-16's nonlinearity beyond the local derivatives. `notes` say which bound
+/// `sigma` is. Two-aircraft estimators (increments) get no bound (a note).
 ///
 /// # Errors
 /// A message when the noise-free flight fails; per-structure failures of the prediction are
 /// notes and leave the σ `null`.
 pub fn crb_sigmas(sc: &Scenario) -> Result<CrbTable, String> {
     let mut table = CrbTable::default();
+    let gusts = match gust_model(sc) {
+        Ok(Some(g)) => {
+            table.notes.push(
+                "crb_sigma: the bound of the experiment flown, the scenario's Dryden turbulence as process noise (linearised about trim, frozen turbulence); crb_sigma_calm: white sensor noise only".into(),
+            );
+            Some(g)
+        }
+        Ok(None) => {
+            table.notes.push(
+                "crb_sigma: no Dryden turbulence in the scenario, the calm-air bound (= crb_sigma_calm)".into(),
+            );
+            None
+        }
+        Err(e) => {
+            table.notes.push(format!("crb_sigma: the calm-air bound (= crb_sigma_calm): {e}"));
+            None
+        }
+    };
+    if sc.wind.iter().any(|w| matches!(w, WindConfig::OneMinusCosine { .. })) {
+        table.notes.push(
+            "the deterministic 1-cos gusts of the scenario are in neither Cramér–Rao bound".into(),
+        );
+    }
     let mut clean = sc.clone();
     clean.estimator.clear();
     let out = run(&clean).map_err(|e| format!("noise-free flight for the CRB: {e}"))?;
@@ -450,14 +493,22 @@ pub fn crb_sigmas(sc: &Scenario) -> Result<CrbTable, String> {
         let r = match done.iter().find(|(st, _)| *st == s.model) {
             Some((_, r)) => r.clone(),
             None => {
-                let r = crb_for(sc, &out, &s.model);
+                let r = crb_for(sc, &out, &s.model, gusts.as_ref());
                 done.push((s.model, r.clone()));
                 r
             }
         };
         match r {
-            Ok(m) => {
-                table.sigma.insert(spec.label(), m);
+            Ok((flown, calm)) => {
+                match flown {
+                    Ok(m) => {
+                        table.sigma.insert(spec.label(), m);
+                    }
+                    Err(e) => table
+                        .notes
+                        .push(format!("{}: no turbulent Cramér–Rao bound: {e}", spec.label())),
+                }
+                table.calm.insert(spec.label(), calm);
             }
             Err(e) => table.notes.push(format!("{}: no Cramér–Rao bound: {e}", spec.label())),
         }
@@ -465,14 +516,53 @@ pub fn crb_sigmas(sc: &Scenario) -> Result<CrbTable, String> {
     Ok(table)
 }
 
-/// Cramér–Rao σ of one structure by parameter name.
-type CrbOfStructure = BTreeMap<String, f64>;
+/// Cramér–Rao σ of one structure by parameter name: (the experiment flown, or why not; calm).
+type CrbOfStructure = (Result<BTreeMap<String, f64>, String>, BTreeMap<String, f64>);
+
+/// The gusts of the scenario's `dryden` wind entry as shaping filters in SI (m/s), frozen at
+/// the entry's airspeed (as the simulator generates them: MIL-F-8785C Dryden, the signals
+/// crate's realisation, [`dryden_shaping_filter`]); `None` without one.
+///
+/// # Errors
+/// Several `dryden` entries (their sum is not one filter per axis), or a bad entry.
+pub fn gust_model(sc: &Scenario) -> Result<Option<GustModel>, String> {
+    let dryden: Vec<&WindConfig> =
+        sc.wind.iter().filter(|w| matches!(w, WindConfig::Dryden { .. })).collect();
+    let w = match dryden.as_slice() {
+        [] => return Ok(None),
+        [w] => *w,
+        _ => return Err("several Dryden wind entries: the turbulent bound takes one".into()),
+    };
+    let (WindConfig::Dryden { vt_fps, .. }, Some(params)) =
+        (w, w.dryden_parameters().map_err(|e| e.to_string())?)
+    else {
+        return Ok(None);
+    };
+    Ok(Some(dryden_gust_model(&params, *vt_fps)))
+}
+
+/// The Dryden gusts of `params` frozen at `vt_fps` as shaping filters in SI (m/s): the
+/// simulator's realisation ([`dryden_shaping_filter`]) with the output scaled from ft/s.
+pub fn dryden_gust_model(params: &DrydenParameters, vt_fps: f64) -> GustModel {
+    let filter = |c: DrydenComponent| {
+        let (a, b, cv) = dryden_shaping_filter(params, c, vt_fps);
+        ShapingFilter { a, b, c: cv * M_PER_FT }
+    };
+    GustModel {
+        filters: [
+            filter(DrydenComponent::U),
+            filter(DrydenComponent::V),
+            filter(DrydenComponent::W),
+        ],
+    }
+}
 
 fn crb_for(
     sc: &Scenario,
     out: &RunOutput,
     structure: &ModelStructure,
-) -> Result<BTreeMap<String, f64>, String> {
+    gusts: Option<&GustModel>,
+) -> Result<CrbOfStructure, String> {
     let f16m = F16::new(sc.trim.xcg).map_err(|e| e.to_string())?;
     let x0 = out.trim.state;
     let u0 = out.trim.controls;
@@ -508,13 +598,20 @@ fn crb_for(
     let inputs = PlannedInputs { dt_s: sc.dt_s, de_rad: col(0), da_rad: col(1), dr_rad: col(2) };
     let sensors = crb_sensors_for(structure, sc.sensors.scale);
     let plan = DesignPlan::new(*structure, theta, constants, condition, vec![inputs], sensors);
-    let r = predict_crb(&plan).map_err(|e| e.to_string())?;
-    Ok(r.names
-        .iter()
-        .take(r.n_params)
-        .zip(&r.sigma)
-        .filter_map(|(n, s)| s.map(|s| (n.clone(), s)))
-        .collect())
+    let by_name = |r: &aeroident_estimators::output_error::design::DesignResult| {
+        r.names
+            .iter()
+            .take(r.n_params)
+            .zip(&r.sigma)
+            .filter_map(|(n, s)| s.map(|s| (n.clone(), s)))
+            .collect::<BTreeMap<String, f64>>()
+    };
+    let calm = by_name(&predict_crb(&plan).map_err(|e| e.to_string())?);
+    let flown = match gusts {
+        None => Ok(calm.clone()),
+        Some(g) => predict_crb_turbulent(&plan, g).map(|r| by_name(&r)).map_err(|e| e.to_string()),
+    };
+    Ok((flown, calm))
 }
 
 /// A finished campaign.
@@ -594,8 +691,9 @@ pub fn assemble(
 }
 
 /// The `--json` document: exactly `{"runs", "estimators": [{"name", "parameters": [{"name",
-/// "truth", "bias", "scatter", "mean_sigma", "coverage_2sigma", "crb_sigma",
-/// "median_time_to_10pct_s"}]}]}`.
+/// "truth", "bias", "scatter", "mean_sigma", "coverage_2sigma", "crb_sigma", "crb_sigma_calm",
+/// "median_time_to_10pct_s"}]}]}` (`crb_sigma`: the bound of the experiment flown;
+/// `crb_sigma_calm`: white sensor noise only, [`crb_sigmas`]).
 pub fn json_summary(c: &Campaign) -> serde_json::Value {
     serde_json::json!({
         "runs": c.runs,
@@ -609,6 +707,7 @@ pub fn json_summary(c: &Campaign) -> serde_json::Value {
                 "mean_sigma": p.mean_sigma,
                 "coverage_2sigma": p.coverage_2sigma,
                 "crb_sigma": p.crb_sigma,
+                "crb_sigma_calm": p.crb_sigma_calm,
                 "median_time_to_10pct_s": p.median_time_to_10pct_s,
             })).collect::<Vec<_>>(),
         })).collect::<Vec<_>>(),

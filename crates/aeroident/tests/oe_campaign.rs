@@ -104,8 +104,9 @@ fn oe_fits_the_window_after_the_damage() {
 }
 
 /// A short noisy campaign with OE (4 runs): every OE run converges, its entries are finite,
-/// the reported σ are positive and not below the ideal Cramér–Rao bound of the window by more
-/// than the turbulence-free, white-noise idealisation allows (½), and the coverage is a
+/// the reported σ are positive and not below the Cramér–Rao bound of the window (the flown
+/// experiment's, turbulence included) by more than its idealisations allow (½: linearised
+/// turbulence response, initial state known), and the coverage is a
 /// fraction; the batch timing fields are present for OE only.
 #[test]
 fn short_campaign_with_oe_has_finite_entries() {

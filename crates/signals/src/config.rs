@@ -695,6 +695,53 @@ impl WindField for Wind {
 }
 
 impl WindConfig {
+    /// The Dryden intensities and scale lengths of a `dryden` entry (the preset or the explicit
+    /// values; `None` for another kind), frozen at the entry's `vt_fps`.
+    ///
+    /// # Errors
+    /// [`SignalError::InvalidList`] for an entry that mixes or omits the preset and the explicit
+    /// parameters; the preset's errors.
+    pub fn dryden_parameters(&self) -> Result<Option<DrydenParameters>, SignalError> {
+        let WindConfig::Dryden {
+            severity,
+            altitude_ft,
+            sigma_u_fps,
+            sigma_v_fps,
+            sigma_w_fps,
+            L_u_ft,
+            L_v_ft,
+            L_w_ft,
+            ..
+        } = *self
+        else {
+            return Ok(None);
+        };
+        let explicit = [sigma_u_fps, sigma_v_fps, sigma_w_fps, L_u_ft, L_v_ft, L_w_ft];
+        Ok(Some(match (severity, altitude_ft, explicit) {
+            (Some(sev), Some(h), [None, None, None, None, None, None]) => {
+                DrydenParameters::mil_f_8785c(h, sev)?
+            }
+            (None, None, [Some(su), Some(sv), Some(sw), Some(lu), Some(lv), Some(lw)]) => {
+                DrydenParameters {
+                    sigma_u_fps: su,
+                    sigma_v_fps: sv,
+                    sigma_w_fps: sw,
+                    L_u_ft: lu,
+                    L_v_ft: lv,
+                    L_w_ft: lw,
+                }
+            }
+            _ => {
+                return Err(SignalError::InvalidList {
+                    field: "dryden",
+                    reason: "give either `severity` and `altitude_ft`, or all of \
+                             sigma_u_fps, sigma_v_fps, sigma_w_fps, L_u_ft, L_v_ft, L_w_ft"
+                        .into(),
+                });
+            }
+        }))
+    }
+
     /// Builds the wind field.
     ///
     /// # Errors
@@ -706,44 +753,11 @@ impl WindConfig {
                 BodyAxisGust::calm()
                     .with(axis, OneMinusCosineGust::new(amplitude_fps, rise_time_s, delay_s)?),
             ),
-            WindConfig::Dryden {
-                severity,
-                altitude_ft,
-                sigma_u_fps,
-                sigma_v_fps,
-                sigma_w_fps,
-                L_u_ft,
-                L_v_ft,
-                L_w_ft,
-                vt_fps,
-                sample_time_s,
-                duration_s,
-                seed,
-            } => {
-                let explicit = [sigma_u_fps, sigma_v_fps, sigma_w_fps, L_u_ft, L_v_ft, L_w_ft];
-                let params = match (severity, altitude_ft, explicit) {
-                    (Some(sev), Some(h), [None, None, None, None, None, None]) => {
-                        DrydenParameters::mil_f_8785c(h, sev)?
-                    }
-                    (None, None, [Some(su), Some(sv), Some(sw), Some(lu), Some(lv), Some(lw)]) => {
-                        DrydenParameters {
-                            sigma_u_fps: su,
-                            sigma_v_fps: sv,
-                            sigma_w_fps: sw,
-                            L_u_ft: lu,
-                            L_v_ft: lv,
-                            L_w_ft: lw,
-                        }
-                    }
-                    _ => {
-                        return Err(SignalError::InvalidList {
-                            field: "dryden",
-                            reason: "give either `severity` and `altitude_ft`, or all of \
-                                     sigma_u_fps, sigma_v_fps, sigma_w_fps, L_u_ft, L_v_ft, L_w_ft"
-                                .into(),
-                        });
-                    }
-                };
+            WindConfig::Dryden { vt_fps, sample_time_s, duration_s, seed, .. } => {
+                let params = self.dryden_parameters()?.ok_or(SignalError::InvalidList {
+                    field: "dryden",
+                    reason: "not a Dryden entry".into(),
+                })?;
                 Wind::Dryden(DrydenTurbulence::generate(
                     &params,
                     vt_fps,

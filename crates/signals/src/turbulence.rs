@@ -246,6 +246,43 @@ pub fn dryden_psd_one_sided(
     }
 }
 
+/// The continuous shaping filter of a component (module doc), as plain matrices for other
+/// crates' use (e.g. the turbulent Cramér–Rao bound): `(a, b, c)` with `ẋ = a x + b η`,
+/// `g = c·x` (ft/s), driven by unit-intensity white noise `η`, so that
+/// `Φ(ω) = |c (iω − a)⁻¹ b|² / π` is [`dryden_psd_one_sided`]. The realisation the generator
+/// discretises: `H_u = σ_u √(2a) / (s + a)` (1 state) and `H_v = σ_v √a (√3 s + a) / (s + a)²`
+/// (2 states, controllable canonical form), `a = V / L`.
+pub fn dryden_shaping_filter(
+    params: &DrydenParameters,
+    component: DrydenComponent,
+    vt_fps: f64,
+) -> (nalgebra::DMatrix<f64>, nalgebra::DVector<f64>, nalgebra::DVector<f64>) {
+    use nalgebra::{DMatrix, DVector};
+    match component {
+        DrydenComponent::U => {
+            let a = vt_fps / params.L_u_ft;
+            (
+                DMatrix::from_element(1, 1, -a),
+                DVector::from_element(1, 1.0),
+                DVector::from_element(1, params.sigma_u_fps * (2.0 * a).sqrt()),
+            )
+        }
+        DrydenComponent::V | DrydenComponent::W => {
+            let (sigma, L) = if component == DrydenComponent::V {
+                (params.sigma_v_fps, params.L_v_ft)
+            } else {
+                (params.sigma_w_fps, params.L_w_ft)
+            };
+            let a = vt_fps / L;
+            (
+                DMatrix::from_row_slice(2, 2, &[0.0, 1.0, -a * a, -2.0 * a]),
+                DVector::from_column_slice(&[0.0, 1.0]),
+                DVector::from_column_slice(&[sigma * a.sqrt() * a, sigma * a.sqrt() * 3f64.sqrt()]),
+            )
+        }
+    }
+}
+
 /// One exactly discretised shaping filter with `N` states.
 #[derive(Debug, Clone, PartialEq)]
 struct DiscreteShapingFilter<const N: usize> {
@@ -463,6 +500,26 @@ impl WindField for DrydenTurbulence {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn shaping_filter_response_is_the_dryden_psd() {
+        let p = DrydenParameters::mil_f_8785c(20000.0, TurbulenceSeverity::Moderate).unwrap();
+        for comp in [DrydenComponent::U, DrydenComponent::V, DrydenComponent::W] {
+            let (a, b, c) = dryden_shaping_filter(&p, comp, 675.0);
+            for w in [0.01, 0.4, 3.0, 40.0] {
+                // H(iω) = c (iω − a)⁻¹ b, by the complex LU of iω − a.
+                let n = a.nrows();
+                let m = nalgebra::DMatrix::from_fn(n, n, |i, j| {
+                    nalgebra::Complex::new(-a[(i, j)], if i == j { w } else { 0.0 })
+                });
+                let x = m.lu().solve(&b.map(|v| nalgebra::Complex::new(v, 0.0))).unwrap();
+                let h: nalgebra::Complex<f64> = x.iter().zip(c.iter()).map(|(x, c)| x * *c).sum();
+                let psd = h.norm_sqr() / core::f64::consts::PI;
+                let want = dryden_psd_one_sided(&p, comp, 675.0, w);
+                assert!((psd / want - 1.0).abs() < 1e-10, "{comp:?} at {w}: {psd} vs {want}");
+            }
+        }
+    }
+
     use super::*;
     use core::f64::consts::{PI, TAU};
 

@@ -3,7 +3,8 @@
 //!
 //! ```text
 //! aeroident design --surfaces de,da,dr --amplitude-deg 2 --duration-s 10 --rate-hz 50
-//!                  [--band-hz 0.1,1.5] [--alt-ft 20000 --vt-fps 675 --xcg 0.35] --out DIR
+//!                  [--band-hz 0.1,1.5] [--alt-ft 20000 --vt-fps 675 --xcg 0.35]
+//!                  [--turbulence light|moderate|severe] --out DIR
 //! ```
 //! Writes `DIR/input.csv` (t_s, per surface rad and deg), `DIR/injection.csv` (the autopilot
 //! table: t_ms and per surface the offset from trim in centidegrees) and `DIR/design.json`
@@ -11,6 +12,7 @@
 
 use crate::export::design::{Design, DesignSpec, Surface, csv_table, design, large_excursions};
 use crate::outdir::OutputDir;
+use aeroident_signals::turbulence::TurbulenceSeverity;
 use std::path::PathBuf;
 
 /// Arguments of `aeroident design`.
@@ -40,9 +42,35 @@ pub struct DesignArgs {
     /// Centre of gravity, fraction of the mean chord.
     #[arg(long, default_value_t = 0.3)]
     pub xcg: f64,
+    /// Fly the record in Dryden turbulence of this MIL-F-8785C severity at the trim altitude:
+    /// the bound counts the gusts as process noise (docs/uncertainty.md, "Cramér–Rao bound
+    /// with turbulence"); default calm air, white sensor noise only.
+    #[arg(long, value_enum)]
+    pub turbulence: Option<Turbulence>,
     /// Output directory.
     #[arg(long)]
     pub out: Option<PathBuf>,
+}
+
+/// `--turbulence` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Turbulence {
+    /// Probability of exceedance 10⁻².
+    Light,
+    /// 10⁻³.
+    Moderate,
+    /// 10⁻⁵.
+    Severe,
+}
+
+impl Turbulence {
+    fn severity(self) -> TurbulenceSeverity {
+        match self {
+            Turbulence::Light => TurbulenceSeverity::Light,
+            Turbulence::Moderate => TurbulenceSeverity::Moderate,
+            Turbulence::Severe => TurbulenceSeverity::Severe,
+        }
+    }
 }
 
 /// Runs `aeroident design`.
@@ -60,6 +88,7 @@ pub fn execute(a: DesignArgs) -> anyhow::Result<()> {
         alt_ft: a.alt_ft,
         vt_fps: a.vt_fps,
         xcg: a.xcg,
+        turbulence: a.turbulence.map(Turbulence::severity),
     };
     let mut out = a.out.as_deref().map(OutputDir::open).transpose()?;
     let d = design(&spec)?;
@@ -104,7 +133,7 @@ fn report(a: &DesignArgs, d: &Design) -> String {
     let mut s = format!(
         "orthogonal multisine: {} at ±{}°, {} s, {} Hz; harmonics (k/{} Hz): {}\n\
          condition: F-16 trimmed wings level at {} ft, {} ft/s, xcg {}; model {}\n\
-         predicted Cramér–Rao σ (white sensor noise at the simulator's levels, one record):\n",
+         predicted Cramér–Rao σ (white sensor noise at the simulator's levels{}, one record):\n",
         a.surfaces.iter().map(|s| s.name()).collect::<Vec<_>>().join(","),
         a.amplitude_deg,
         a.duration_s,
@@ -120,6 +149,10 @@ fn report(a: &DesignArgs, d: &Design) -> String {
         a.vt_fps,
         a.xcg,
         model_name(d),
+        a.turbulence.map_or(String::new(), |t| format!(
+            " and {} Dryden turbulence as process noise",
+            turbulence_name(t)
+        )),
     );
     s.push_str(&format!(
         "  {:<12} {:>12} {:>12} {:>9}\n",
@@ -141,6 +174,14 @@ fn report(a: &DesignArgs, d: &Design) -> String {
         s.push_str(&format!("; peak |Δ{o:?}| {e:.3e}"));
     }
     s
+}
+
+fn turbulence_name(t: Turbulence) -> &'static str {
+    match t {
+        Turbulence::Light => "light",
+        Turbulence::Moderate => "moderate",
+        Turbulence::Severe => "severe",
+    }
 }
 
 fn model_name(d: &Design) -> &'static str {
@@ -165,6 +206,7 @@ fn json(a: &DesignArgs, d: &Design) -> serde_json::Value {
         "harmonics": d.harmonics,
         "condition": {"aircraft": "F-16 (Stevens & Lewis)", "alt_ft": a.alt_ft, "vt_fps": a.vt_fps, "xcg": a.xcg},
         "model": model_name(d),
+        "turbulence": a.turbulence.map(turbulence_name),
         "condition_number": if r.condition_number.is_finite() { Some(r.condition_number) } else { None },
         "parameters": (0..r.n_params).map(|i| serde_json::json!({
             "name": r.names[i],
@@ -192,6 +234,7 @@ mod tests {
             alt_ft: 20000.0,
             vt_fps: 675.0,
             xcg: 0.3,
+            turbulence: None,
             out: Some(dir.clone()),
         };
         execute(args).unwrap();

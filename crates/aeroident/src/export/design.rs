@@ -20,13 +20,15 @@ use crate::aircraft::air_data::{M_PER_FT, N_PER_LBF, PA_PER_PSF, f16_constants};
 use aeroident_estimators::flight_model::{N_STATES, Output};
 use aeroident_estimators::output_error::InitialStates;
 use aeroident_estimators::output_error::design::{
-    DesignPlan, DesignResult, FlightCondition, PlannedInputs, predict_crb, trim_biases,
+    DesignPlan, DesignResult, FlightCondition, PlannedInputs, predict_crb, predict_crb_turbulent,
+    trim_biases,
 };
 use aeroident_estimators::vocabulary::ModelStructure;
 use aeroident_models::f16::{self, AeroIncrements, F16};
 use aeroident_models::trim::{TrimCondition, TrimManeuver, trim};
 use aeroident_signals::InputSignal;
 use aeroident_signals::orthogonal::orthogonal_multisine;
+use aeroident_signals::turbulence::{DrydenParameters, TurbulenceSeverity};
 
 /// A control surface of a design.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -69,6 +71,11 @@ pub struct DesignSpec {
     pub vt_fps: f64,
     /// Centre of gravity, fraction of c̄.
     pub xcg: f64,
+    /// Dryden turbulence (MIL-F-8785C severity at `alt_ft`, frozen at `vt_fps`) to fly the
+    /// record in: the bound then counts it as process noise
+    /// ([`aeroident_estimators::output_error::design::predict_crb_turbulent`]); `None`: calm
+    /// air, white sensor noise only.
+    pub turbulence: Option<TurbulenceSeverity>,
 }
 
 /// Peak excursions beyond which the response is no longer a small perturbation (the bound
@@ -243,7 +250,13 @@ pub fn design(spec: &DesignSpec) -> anyhow::Result<Design> {
     let mut plan = DesignPlan::new(structure, theta, constants, condition, vec![planned], sensors);
     // Initial states estimated with the parameters, as a fit of the record would.
     plan.initial_states = InitialStates::Estimate([true; N_STATES]);
-    let crb = predict_crb(&plan)?;
+    let crb = match spec.turbulence {
+        None => predict_crb(&plan)?,
+        Some(sev) => {
+            let p = DrydenParameters::mil_f_8785c(spec.alt_ft, sev)?;
+            predict_crb_turbulent(&plan, &crate::montecarlo::dryden_gust_model(&p, spec.vt_fps))?
+        }
+    };
     let inputs = spec.surfaces.iter().copied().zip(inputs).collect();
     Ok(Design { t_s, inputs, harmonics, crb, structure, plan })
 }
@@ -282,7 +295,32 @@ mod tests {
             alt_ft: 20000.0,
             vt_fps: 675.0,
             xcg: 0.3,
+            turbulence: None,
         }
+    }
+
+    /// `--turbulence`: the record flown in moderate Dryden turbulence has a different bound
+    /// (the gusts are noise and excitation), finite for every parameter the calm plan
+    /// identifies.
+    #[test]
+    fn turbulence_changes_the_bound() {
+        let calm = design(&spec(vec![Surface::De, Surface::Da, Surface::Dr])).unwrap();
+        let turb = design(&DesignSpec {
+            turbulence: Some(TurbulenceSeverity::Moderate),
+            ..spec(vec![Surface::De, Surface::Da, Surface::Dr])
+        })
+        .unwrap();
+        let (a, b) = (&calm.crb, &turb.crb);
+        assert_eq!(a.names, b.names);
+        let mut changed = 0;
+        for i in 0..a.n_params {
+            if let Some(sa) = a.sigma[i] {
+                let sb = b.sigma[i].expect("identifiable in turbulence too");
+                assert!(sb.is_finite() && sb > 0.0);
+                changed += usize::from((sb / sa - 1.0).abs() > 0.05);
+            }
+        }
+        assert!(changed * 2 > a.n_params, "{changed} of {} changed", a.n_params);
     }
 
     #[test]

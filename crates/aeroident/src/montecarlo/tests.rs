@@ -59,6 +59,7 @@ fn statistics_by_hand() {
     ];
     let mut crb = CrbTable::default();
     crb.sigma.entry("rls".into()).or_default().insert("Cm_alpha".into(), 0.07);
+    crb.calm.entry("rls".into()).or_default().insert("Cm_alpha".into(), 0.03);
     let st = statistics(&runs, &["rls".into()], &crb);
     let e = &st[0];
     assert_eq!(e.runs_ok, 4);
@@ -69,6 +70,7 @@ fn statistics_by_hand() {
     assert!((p.mean_sigma.unwrap() - 0.125).abs() < 1e-12);
     assert_eq!(p.coverage_2sigma, Some(0.5));
     assert_eq!(p.crb_sigma, Some(0.07));
+    assert_eq!(p.crb_sigma_calm, Some(0.03));
     assert_eq!(p.median_time_to_10pct_s, Some(2.5));
     assert_eq!(p.n_estimates, 4);
 }
@@ -159,7 +161,36 @@ fn runs_identical_across_thread_counts() {
     assert_ne!(fin(&a[0]), fin(&a[1]));
 }
 
-/// The `--json` document has exactly the keys of the issue.
+/// The scenario's Dryden entry becomes shaping filters in SI whose variance is the MIL-F-8785C
+/// intensity (`∫₀^∞ |H|²/π dω = σ²`: for the first-order u filter `c² b² / (2a)`), converted
+/// from ft/s; the bound of the flown experiment differs from the calm one with turbulence and
+/// is the calm one without.
+#[test]
+fn turbulent_and_calm_bounds() {
+    use aeroident_signals::turbulence::DrydenParameters;
+    let sc = short_scenario();
+    let g = gust_model(&sc).unwrap().expect("short.toml has Dryden turbulence");
+    let WindConfig::Dryden { severity: Some(sev), altitude_ft: Some(h), .. } = sc.wind[0] else {
+        panic!("expected a Dryden preset");
+    };
+    let p = DrydenParameters::mil_f_8785c(h, sev).unwrap();
+    let f = &g.filters[0];
+    let var = (f.c[0] * f.b[0]).powi(2) / (2.0 * -f.a[(0, 0)]);
+    assert!((var.sqrt() / (p.sigma_u_fps * M_PER_FT) - 1.0).abs() < 1e-12);
+    let crb = crb_sigmas(&sc).unwrap();
+    let (label, flown) = crb.sigma.iter().next().expect("a bound");
+    let calm = &crb.calm[label];
+    let differ = flown.iter().filter(|(k, v)| (*v / calm[*k] - 1.0).abs() > 0.01).count();
+    assert!(differ > flown.len() / 2, "turbulence must change most bounds: {flown:?} {calm:?}");
+    assert!(crb.notes.iter().any(|n| n.contains("Dryden turbulence as process noise")));
+    let mut still = sc.clone();
+    still.wind.clear();
+    let crb = crb_sigmas(&still).unwrap();
+    assert_eq!(crb.sigma, crb.calm);
+    assert!(crb.notes.iter().any(|n| n.contains("no Dryden turbulence")));
+}
+
+/// The `--json` document has exactly the keys of the issue (plus `crb_sigma_calm`).
 #[test]
 fn json_keys_exact() {
     let runs = vec![result(0, Some(-0.9), Some(0.1), Some(1.0), None)];
@@ -192,6 +223,7 @@ fn json_keys_exact() {
         "mean_sigma",
         "coverage_2sigma",
         "crb_sigma",
+        "crb_sigma_calm",
         "median_time_to_10pct_s",
     ];
     want.sort_unstable();

@@ -42,7 +42,9 @@
 //! The bound is a prediction for white Gaussian sensor noise of the stated σ and a correct
 //! model; on flight data with turbulence and model error the achieved σ are larger (the
 //! coloured-residual σ of [`super::OeResult::sigma_coloured`]). The tests check the prediction
-//! against the scatter of [`super::fit`] over seeded noisy simulations of the plan.
+//! against the scatter of [`super::fit`] over seeded noisy simulations of the plan. For an
+//! experiment flown in turbulence, [`predict_crb_turbulent`] ([`frequency`]) counts the gusts
+//! as process noise.
 //!
 //! # Inputs
 //!
@@ -524,14 +526,26 @@ fn analyse(m: &DMatrix<f64>, tolerance: f64) -> Analysis {
 pub fn predict_crb(plan: &DesignPlan) -> Result<DesignResult, EstimatorError> {
     let Prepared { problem: p, beta, weights } = prepare(plan)?;
     let nb = p.n_unknowns;
-    let ny = p.ny();
     let (mut y, mut s) = (Vec::new(), Vec::new());
     p.simulate(&beta, &mut y, Some(&mut s))?;
     let zeros = vec![0.0; y.len()];
     let (mut m, _, _) = normal_equations(&s, &zeros, &weights, nb);
     m *= plan.repeats as f64;
+    analyse_and_report(plan, &p, beta, &y, m)
+}
+
+/// The [`DesignResult`] of an information matrix `m` (repeats included) of the prepared
+/// problem `p` of `plan` at unknowns `beta`, with the noise-free simulated outputs `y`.
+fn analyse_and_report(
+    plan: &DesignPlan,
+    p: &Problem,
+    beta: Vec<f64>,
+    y: &[f64],
+    m: DMatrix<f64>,
+) -> Result<DesignResult, EstimatorError> {
+    let ny = p.ny();
     let a = analyse(&m, plan.singular_tolerance);
-    let names = unknown_names(&p, &plan.structure);
+    let names = unknown_names(p, &plan.structure);
     let not_identifiable =
         names.iter().zip(&a.sigma).filter(|(_, s)| s.is_none()).map(|(n, _)| n.clone()).collect();
     let relative_sigma = a
@@ -667,6 +681,9 @@ pub fn trim_biases(
     }
     Err(EstimatorError::Numerical { what: "trim: the state rates did not vanish", t_s: 0.0 })
 }
+
+pub mod frequency;
+pub use frequency::predict_crb_turbulent;
 
 #[cfg(test)]
 mod tests;

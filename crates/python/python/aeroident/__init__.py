@@ -232,7 +232,8 @@ def montecarlo(
     ``scenario``: a scenario file, or ``None`` for the built-in default scenario. Returns the
     same dict as ``aeroident montecarlo SCENARIO --runs RUNS --seed SEED --json``: ``runs`` and
     per estimator its ``parameters`` with ``truth, bias, scatter, mean_sigma, coverage_2sigma,
-    crb_sigma, median_time_to_10pct_s`` (``None`` where the CLI prints null).
+    crb_sigma, crb_sigma_calm, median_time_to_10pct_s`` (``None`` where the CLI prints null;
+    ``crb_sigma`` is the bound of the experiment flown, turbulence included).
     ``per_run=True`` adds ``per_run`` (every run's final results, the CLI's ``runs.json``) and
     ``wall_s``.
 

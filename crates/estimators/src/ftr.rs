@@ -31,6 +31,19 @@
 //! coefficient is identified once `Re(X̃ₐ†X̃ₐ)` is well conditioned (the same scaled-pivot test
 //! as [`crate::rls`]) and `m > p + 1`.
 //!
+//! # Memory and grid
+//!
+//! The normal equations `Re(X̃ₐ†X̃ₐ)`, `Re(X̃ₐ†C̃)` are products of two transforms, each
+//! weighting sample `i` by `λ^{n−i}`; summed over a grid that spans the signals' band, the
+//! cross products of different samples cancel and sample `i` carries `λ^{2(n−i)}`. The memory
+//! is therefore `Δt/(1 − λ²) ≈ Δt/(2(1 − λ))`, **half** that of [`crate::rls`] with the same
+//! λ (whose loss weights squared residuals by `λ^{n−i}`); the noise enters σ with the same
+//! `λ^{2(n−i)}` (`W` below). FTR with `λ_ftr = √λ_rls` has RLS's memory
+//! (`tests::analytic_memory_is_the_squared_forgetting`). The window's frequency resolution
+//! (half-power half-width) is `(1 − λ)/(2π Δt)` Hz; an excitation harmonic further than a few
+//! half-widths outside `[f_min, f_max]` reaches the fit only through that window's leakage,
+//! so the grid should span the excitation band plus about two half-widths.
+//!
 //! # σ: the residual spectrum and the window
 //!
 //! The book's `cov θ̂ = σ̂² A⁻¹`, `σ̂² = ε̃†ε̃/(m − p)`, `A = Re(X̃†X̃)`, holds when the residual
@@ -110,7 +123,9 @@ pub struct FtrConfig {
     pub f_max_hz: f64,
     /// Grid step, Hz (> 0); at most [`MAX_FREQUENCIES`] frequencies.
     pub f_step_hz: f64,
-    /// Forgetting factor of the recursive transform, `(0, 1]` per sample (1 = none).
+    /// Forgetting factor of the recursive transform, `(0, 1]` per sample (1 = none). The
+    /// estimate's memory is `Δt/(1 − λ²)`, half that of RLS with the same λ (module doc,
+    /// "Memory and grid").
     pub forgetting: f64,
     /// Interval between solves, s (≥ 0; 0 = every sample).
     pub solve_interval_s: f64,
@@ -892,6 +907,39 @@ mod tests {
         let m = est.iter().sum::<f64>() / runs as f64;
         let var = est.iter().map(|e| (e - m) * (e - m)).sum::<f64>() / (runs - 1) as f64;
         (var.sqrt(), sig / runs as f64, covered as f64 / runs as f64)
+    }
+
+    /// The memory of the estimate is `Δt/(1 − λ²)`, not RLS's `Δt/(1 − λ)` (module doc,
+    /// "Memory"): the normal equations are products of two transforms, each weighting sample
+    /// `i` by `λ^{n−i}`. Cm_α steps from −0.8 to −0.4 at 10 s on a white α regressor (no noise
+    /// in Cm); `k = 200` samples after the step, the mean share of the old value left in the
+    /// estimate over 40 records must be `λ^{2k}` = 0.135 (within 25 %), not `λ^k` = 0.37.
+    #[test]
+    fn analytic_memory_is_the_squared_forgetting() {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, Normal};
+        let st = ModelStructure::empty().with(Coefficient::Cm, &[Term::Alpha]);
+        let lambda: f64 = 0.995;
+        let cfg = FtrConfig { forgetting: lambda, solve_interval_s: 0.0, ..Default::default() };
+        let (old, new, n_step, k) = (-0.8, -0.4, 1000usize, 200usize);
+        let mut share = 0.0;
+        let runs = 40;
+        for seed in 0..runs {
+            let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+            let n01 = Normal::new(0.0, 1.0).unwrap();
+            let mut ftr = Ftr::new(st, cfg).unwrap();
+            for i in 0..=n_step + k {
+                let t = i as f64 * 0.01;
+                let alpha = 0.06 + 0.02 * n01.sample(&mut rng);
+                let cma = if i < n_step { old } else { new };
+                ftr.update(&pitch_sample(t, alpha, 0.0, 0.0, cma * alpha)).unwrap();
+            }
+            share += (ftr.estimates().value(0).unwrap() - new) / (old - new);
+        }
+        share /= runs as f64;
+        let want = lambda.powi(2 * k as i32);
+        std::println!("old share {share:.4}, λ^2k {want:.4}, λ^k {:.4}", lambda.powi(k as i32));
+        assert!((share / want - 1.0).abs() < 0.25, "share {share} vs λ^2k {want}");
     }
 
     /// The reported σ match the Monte Carlo scatter (within 20 %, ≥ 90 % coverage) for white

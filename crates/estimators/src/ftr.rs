@@ -71,8 +71,8 @@
 //! The level `S_f` is estimated from the residual periodogram `|ε̃_f|²/W(0)`, Daniell-smoothed
 //! over ±[`SPECTRUM_HALF_WIDTH`] grid frequencies. But the residual is `ε̃ = ṽ − X̃ₐ A⁻¹ u`,
 //! and its periodogram is depleted where the regressors have power, which is exactly where
-//! `M` looks. With a 2-s memory the 36 frequencies carry only a few independent noise
-//! observations (bandwidth × memory ≈ 1.4 Hz × 2 s), so that depletion is large and spread
+//! `M` looks. With λ = 0.995 at 100 Hz (transforms over 2 s, an estimate memory of 1 s) the 36
+//! frequencies carry only a few independent noise observations (bandwidth × 2 s ≈ 3), so that depletion is large and spread
 //! over neighbours (the diagonal leverage `h_f/2` misses it) and the raw level left σ at
 //! 0.77–0.88 of the scatter. Its expected value under a level `S` follows exactly from the
 //! quantities of `M`:
@@ -969,7 +969,8 @@ mod tests {
         w.map(|x| x / norm)
     }
 
-    /// Monte Carlo of FTR with the default scenario's memory (λ = 0.995 at 100 Hz: 2 s) on an
+    /// Monte Carlo of FTR with λ = 0.995 at 100 Hz (transforms over 2 s; the estimate's memory
+    /// `Δt/(1 − λ²)` is 1 s, module doc "Memory and grid") on an
     /// exactly linear pitching moment plus equation-error noise (0.01 × unit white noise, or
     /// through [`smoother`]), three multisine regressors and the offset, `n` samples:
     /// `[(scatter, mean σ, coverage of ±2σ); 3]` for Cm_α, Cm_q, Cm_δe over `runs` seeds.
@@ -1016,7 +1017,7 @@ mod tests {
         })
     }
 
-    /// With a 2-s memory the 36 grid frequencies carry only a few independent noise
+    /// With λ = 0.995 (transforms over 2 s) the 36 grid frequencies carry only a few independent noise
     /// observations, and the fit removes a large share of the noise exactly where the
     /// regressors have power, so the raw residual periodogram understates the noise there
     /// (σ / scatter was 0.77–0.88 here). With the fitted-share correction of the residual
@@ -1042,7 +1043,7 @@ mod tests {
     /// sandwich `A⁻¹ M A⁻¹` built from the recursive `W(ω_f ∓ ω_g)` with a flat level equals the
     /// covariance `Σ_i g_i g_iᵀ` of the estimate computed directly from its time-domain
     /// weights `g_i = A⁻¹ Re(X̃ₐ† e_i)`, `e_i(ω_f) = λ^{n−i} Δt e^{−jω_f t_i}` (θ̂ is linear in
-    /// the noise), with a 2-s memory. So the σ shortfall of the raw periodogram is the level,
+    /// the noise), with λ = 0.995 at 100 Hz. So the σ shortfall of the raw periodogram is the level,
     /// not the window's cross terms.
     #[test]
     fn analytic_white_noise_sandwich_equals_exact_covariance() {

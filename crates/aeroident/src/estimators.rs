@@ -71,11 +71,21 @@ pub struct EstimatorOptions {
     pub parameter_walk_per_sqrt_s: f64,
     /// Nominal sample interval of the data, s, when known (the record's `nominal_dt_s`).
     pub sample_interval_s: Option<f64>,
+    /// FTR frequency grid `(f_min, f_max, step)`, Hz; `None` = Morelli's rigid-body grid
+    /// ([`FtrConfig::default`], 0.1–1.5 Hz in 0.04 Hz). A scenario whose excitation reaches
+    /// beyond 1.5 Hz must extend it: a harmonic outside the grid is seen only through the
+    /// window's leakage (docs/uncertainty.md, "Equation-error coverage, continued").
+    pub ftr_grid_hz: Option<(f64, f64, f64)>,
 }
 
 impl Default for EstimatorOptions {
     fn default() -> Self {
-        Self { forgetting: 1.0, parameter_walk_per_sqrt_s: 0.0, sample_interval_s: None }
+        Self {
+            forgetting: 1.0,
+            parameter_walk_per_sqrt_s: 0.0,
+            sample_interval_s: None,
+            ftr_grid_hz: None,
+        }
     }
 }
 
@@ -118,7 +128,10 @@ pub fn build(
             Box::new(Rls::new(structure, cfg).map_err(config)?)
         }
         EstimatorKind::Ftr => {
-            let cfg = FtrConfig { forgetting: options.forgetting, ..FtrConfig::default() };
+            let mut cfg = FtrConfig { forgetting: options.forgetting, ..FtrConfig::default() };
+            if let Some((f_min_hz, f_max_hz, f_step_hz)) = options.ftr_grid_hz {
+                cfg = FtrConfig { f_min_hz, f_max_hz, f_step_hz, ..cfg };
+            }
             Box::new(Ftr::new(structure, cfg).map_err(config)?)
         }
         EstimatorKind::Ekf => {
@@ -176,6 +189,13 @@ mod tests {
         let bad = EstimatorOptions { forgetting: 1.5, ..Default::default() };
         let err = build(EstimatorKind::Rls, st, pr, &bad).err().unwrap().to_string();
         assert!(err.starts_with("estimator `rls`: invalid configuration `forgetting`"), "{err}");
+        // The FTR grid option reaches the estimator: 0.1–3.0 Hz in 0.04 Hz is 73 frequencies,
+        // over the 64 of `ftr::MAX_FREQUENCIES`; 0.1–1.7 Hz (41) builds.
+        let wide = EstimatorOptions { ftr_grid_hz: Some((0.1, 3.0, 0.04)), ..Default::default() };
+        let err = build(EstimatorKind::Ftr, st, pr, &wide).err().unwrap().to_string();
+        assert!(err.starts_with("estimator `ftr`: invalid configuration `f_step_hz`"), "{err}");
+        let grid = EstimatorOptions { ftr_grid_hz: Some((0.1, 1.7, 0.04)), ..Default::default() };
+        assert!(build(EstimatorKind::Ftr, st, pr, &grid).is_ok());
         // The EKF's flight model needs a state set: Cm alone does not determine one.
         let cm = ModelStructure::empty()
             .with(aeroident_estimators::Coefficient::Cm, &[aeroident_estimators::Term::Alpha]);

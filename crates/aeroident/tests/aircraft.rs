@@ -640,6 +640,19 @@ fn old_syntax_and_inexpressible_increments_are_clear_errors() {
     let t = "kind = \"run\"\nname = \"o\"\nduration_s = 1.0\n[[estimator]]\nkind = \"ekf\"\nmodel = \"six-axis\"\nforgetting = 0.99\n";
     let e = Scenario::from_toml(t, "o.toml").unwrap_err().to_string();
     assert!(e.contains("estimator[0]") && e.contains("unknown option `forgetting`"), "{e}");
+    // FTR's grid: three numbers, a valid grid; rls does not take it.
+    let ftr = |grid: &str, kind: &str| {
+        format!(
+            "kind = \"run\"\nname = \"o\"\nduration_s = 1.0\n[[estimator]]\nkind = \"{kind}\"\nmodel = \"six-axis\"\ngrid_hz = {grid}\n"
+        )
+    };
+    Scenario::from_toml(&ftr("[0.1, 1.7, 0.04]", "ftr"), "o.toml").unwrap();
+    let e = Scenario::from_toml(&ftr("[0.1, 1.7]", "ftr"), "o.toml").unwrap_err().to_string();
+    assert!(e.contains("estimator[0]") && e.contains("`grid_hz` must be"), "{e}");
+    let e = Scenario::from_toml(&ftr("[1.7, 0.1, 0.04]", "ftr"), "o.toml").unwrap_err().to_string();
+    assert!(e.contains("f_min_hz/f_step_hz/f_max_hz"), "{e}");
+    let e = Scenario::from_toml(&ftr("[0.1, 1.7, 0.04]", "rls"), "o.toml").unwrap_err().to_string();
+    assert!(e.contains("unknown option `grid_hz`"), "{e}");
     let typo = "kind = \"run\"\nname = \"o\"\nduration_s = 1.0\n[[estimator]]\nkind = \"rls\"\nmodel = \"six-axis\"\nforgeting = 0.99\n";
     let e = Scenario::from_toml(typo, "o.toml").unwrap_err().to_string();
     assert!(e.contains("forgeting"), "{e}");

@@ -31,6 +31,19 @@
 //! coefficient is identified once `Re(X̃ₐ†X̃ₐ)` is well conditioned (the same scaled-pivot test
 //! as [`crate::rls`]) and `m > p + 1`.
 //!
+//! # Memory and grid
+//!
+//! The normal equations `Re(X̃ₐ†X̃ₐ)`, `Re(X̃ₐ†C̃)` are products of two transforms, each
+//! weighting sample `i` by `λ^{n−i}`; summed over a grid that spans the signals' band, the
+//! cross products of different samples cancel and sample `i` carries `λ^{2(n−i)}`. The memory
+//! is therefore `Δt/(1 − λ²) ≈ Δt/(2(1 − λ))`, **half** that of [`crate::rls`] with the same
+//! λ (whose loss weights squared residuals by `λ^{n−i}`); the noise enters σ with the same
+//! `λ^{2(n−i)}` (`W` below). FTR with `λ_ftr = √λ_rls` has RLS's memory
+//! (`tests::analytic_memory_is_the_squared_forgetting`). The window's frequency resolution
+//! (half-power half-width) is `(1 − λ)/(2π Δt)` Hz; an excitation harmonic further than a few
+//! half-widths outside `[f_min, f_max]` reaches the fit only through that window's leakage,
+//! so the grid should span the excitation band plus about two half-widths.
+//!
 //! # σ: the residual spectrum and the window
 //!
 //! The book's `cov θ̂ = σ̂² A⁻¹`, `σ̂² = ε̃†ε̃/(m − p)`, `A = Re(X̃†X̃)`, holds when the residual
@@ -58,8 +71,8 @@
 //! The level `S_f` is estimated from the residual periodogram `|ε̃_f|²/W(0)`, Daniell-smoothed
 //! over ±[`SPECTRUM_HALF_WIDTH`] grid frequencies. But the residual is `ε̃ = ṽ − X̃ₐ A⁻¹ u`,
 //! and its periodogram is depleted where the regressors have power, which is exactly where
-//! `M` looks. With a 2-s memory the 36 frequencies carry only a few independent noise
-//! observations (bandwidth × memory ≈ 1.4 Hz × 2 s), so that depletion is large and spread
+//! `M` looks. With λ = 0.995 at 100 Hz (transforms over 2 s, an estimate memory of 1 s) the 36
+//! frequencies carry only a few independent noise observations (bandwidth × 2 s ≈ 3), so that depletion is large and spread
 //! over neighbours (the diagonal leverage `h_f/2` misses it) and the raw level left σ at
 //! 0.77–0.88 of the scatter. Its expected value under a level `S` follows exactly from the
 //! quantities of `M`:
@@ -110,7 +123,9 @@ pub struct FtrConfig {
     pub f_max_hz: f64,
     /// Grid step, Hz (> 0); at most [`MAX_FREQUENCIES`] frequencies.
     pub f_step_hz: f64,
-    /// Forgetting factor of the recursive transform, `(0, 1]` per sample (1 = none).
+    /// Forgetting factor of the recursive transform, `(0, 1]` per sample (1 = none). The
+    /// estimate's memory is `Δt/(1 − λ²)`, half that of RLS with the same λ (module doc,
+    /// "Memory and grid").
     pub forgetting: f64,
     /// Interval between solves, s (≥ 0; 0 = every sample).
     pub solve_interval_s: f64,
@@ -894,6 +909,39 @@ mod tests {
         (var.sqrt(), sig / runs as f64, covered as f64 / runs as f64)
     }
 
+    /// The memory of the estimate is `Δt/(1 − λ²)`, not RLS's `Δt/(1 − λ)` (module doc,
+    /// "Memory"): the normal equations are products of two transforms, each weighting sample
+    /// `i` by `λ^{n−i}`. Cm_α steps from −0.8 to −0.4 at 10 s on a white α regressor (no noise
+    /// in Cm); `k = 200` samples after the step, the mean share of the old value left in the
+    /// estimate over 40 records must be `λ^{2k}` = 0.135 (within 25 %), not `λ^k` = 0.37.
+    #[test]
+    fn analytic_memory_is_the_squared_forgetting() {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, Normal};
+        let st = ModelStructure::empty().with(Coefficient::Cm, &[Term::Alpha]);
+        let lambda: f64 = 0.995;
+        let cfg = FtrConfig { forgetting: lambda, solve_interval_s: 0.0, ..Default::default() };
+        let (old, new, n_step, k) = (-0.8, -0.4, 1000usize, 200usize);
+        let mut share = 0.0;
+        let runs = 40;
+        for seed in 0..runs {
+            let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+            let n01 = Normal::new(0.0, 1.0).unwrap();
+            let mut ftr = Ftr::new(st, cfg).unwrap();
+            for i in 0..=n_step + k {
+                let t = i as f64 * 0.01;
+                let alpha = 0.06 + 0.02 * n01.sample(&mut rng);
+                let cma = if i < n_step { old } else { new };
+                ftr.update(&pitch_sample(t, alpha, 0.0, 0.0, cma * alpha)).unwrap();
+            }
+            share += (ftr.estimates().value(0).unwrap() - new) / (old - new);
+        }
+        share /= runs as f64;
+        let want = lambda.powi(2 * k as i32);
+        std::println!("old share {share:.4}, λ^2k {want:.4}, λ^k {:.4}", lambda.powi(k as i32));
+        assert!((share / want - 1.0).abs() < 0.25, "share {share} vs λ^2k {want}");
+    }
+
     /// The reported σ match the Monte Carlo scatter (within 20 %, ≥ 90 % coverage) for white
     /// noise without forgetting, and for strongly coloured noise (AR(1), a = 0.95: a
     /// correlation time of 0.4 s) with a 4-s memory, where neighbouring frequencies of the grid
@@ -921,7 +969,8 @@ mod tests {
         w.map(|x| x / norm)
     }
 
-    /// Monte Carlo of FTR with the default scenario's memory (λ = 0.995 at 100 Hz: 2 s) on an
+    /// Monte Carlo of FTR with λ = 0.995 at 100 Hz (transforms over 2 s; the estimate's memory
+    /// `Δt/(1 − λ²)` is 1 s, module doc "Memory and grid") on an
     /// exactly linear pitching moment plus equation-error noise (0.01 × unit white noise, or
     /// through [`smoother`]), three multisine regressors and the offset, `n` samples:
     /// `[(scatter, mean σ, coverage of ±2σ); 3]` for Cm_α, Cm_q, Cm_δe over `runs` seeds.
@@ -968,7 +1017,7 @@ mod tests {
         })
     }
 
-    /// With a 2-s memory the 36 grid frequencies carry only a few independent noise
+    /// With λ = 0.995 (transforms over 2 s) the 36 grid frequencies carry only a few independent noise
     /// observations, and the fit removes a large share of the noise exactly where the
     /// regressors have power, so the raw residual periodogram understates the noise there
     /// (σ / scatter was 0.77–0.88 here). With the fitted-share correction of the residual
@@ -994,7 +1043,7 @@ mod tests {
     /// sandwich `A⁻¹ M A⁻¹` built from the recursive `W(ω_f ∓ ω_g)` with a flat level equals the
     /// covariance `Σ_i g_i g_iᵀ` of the estimate computed directly from its time-domain
     /// weights `g_i = A⁻¹ Re(X̃ₐ† e_i)`, `e_i(ω_f) = λ^{n−i} Δt e^{−jω_f t_i}` (θ̂ is linear in
-    /// the noise), with a 2-s memory. So the σ shortfall of the raw periodogram is the level,
+    /// the noise), with λ = 0.995 at 100 Hz. So the σ shortfall of the raw periodogram is the level,
     /// not the window's cross terms.
     #[test]
     fn analytic_white_noise_sandwich_equals_exact_covariance() {

@@ -46,6 +46,14 @@
 //!
 //! **WARNING:** equation error is biased when the regressors are noisy; σ describes scatter,
 //! not that bias.
+//!
+//! **Limit: multiplicative noise.** The sandwich assumes a residual whose variance does not
+//! depend on the regressors. Noise in `q̄` (from the measured airspeed, `q̄ ∝ V²`) multiplies
+//! the whole measured coefficient, `C_m = C (1 − 2 δV/V)`, so its residual share grows with
+//! `|φᵀθ|` and σ runs short where `C` is mostly the regressors' own swing (Cm: predicted
+//! `σ/scatter` 0.82 for Cm_α on the default F-16 flight, measured 0.82–0.91; docs/uncertainty.md,
+//! "Equation-error coverage, continued"). A heteroscedasticity-consistent lag-window form
+//! (residual products `φ_i ε_i ε_j φ_jᵀ` in `M`) would remove it; it is not built.
 
 // Index loops follow the recursion's equations line by line.
 #![allow(clippy::needless_range_loop)]

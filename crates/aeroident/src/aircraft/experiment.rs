@@ -270,6 +270,18 @@ pub(super) fn build_sample_estimator(
                         format!("{}: `forgetting` must be a number, got {v}", spec.kind)
                     })?;
             }
+            ("grid_hz", EstimatorKind::Ftr) => {
+                let bad = || {
+                    format!(
+                        "ftr: `grid_hz` must be [f_min, f_max, step] in Hz (three numbers), got {v}"
+                    )
+                };
+                let a = v.as_array().filter(|a| a.len() == 3).ok_or_else(bad)?;
+                let num = |x: &toml::Value| {
+                    x.as_float().or_else(|| x.as_integer().map(|i| i as f64)).ok_or_else(bad)
+                };
+                options.ftr_grid_hz = Some((num(&a[0])?, num(&a[1])?, num(&a[2])?));
+            }
             ("parameter_walk_per_sqrt_s", EstimatorKind::Ekf) => {
                 options.parameter_walk_per_sqrt_s =
                     v.as_float().or_else(|| v.as_integer().map(|i| i as f64)).ok_or_else(|| {
@@ -278,7 +290,7 @@ pub(super) fn build_sample_estimator(
             }
             (other, _) => {
                 return Err(format!(
-                    "{}: unknown option `{other}` (rls and ftr take `forgetting`, ekf `parameter_walk_per_sqrt_s`; the others take none)",
+                    "{}: unknown option `{other}` (rls and ftr take `forgetting`, ftr also `grid_hz`, ekf `parameter_walk_per_sqrt_s`; the others take none)",
                     spec.kind
                 ));
             }

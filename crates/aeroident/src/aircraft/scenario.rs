@@ -55,7 +55,8 @@
 //! `estimator_wind = "unknown" | "known"` (for the two-aircraft estimators' model).
 //!
 //! Sample-driven kinds (built by the shared factory, `crate::estimators::build`): `rls` and
-//! `ftr` (option `forgetting` ∈ (0, 1] per sample, default 1), `ekf`, `smpe`, `smpe-corrected`,
+//! `ftr` (option `forgetting` ∈ (0, 1] per sample, default 1; FTR also `grid_hz = [f_min, f_max,
+//! step]`, default Morelli's 0.1–1.5 Hz in 0.04 Hz), `ekf`, `smpe`, `smpe-corrected`,
 //! `gradient`. Batch kind `oe` (output error fitted after the flight to the recorded samples of
 //! the window after the damage; options `initial_states = "estimate" | "first-sample"` and
 //! `step = "relaxation" | "concentrated"`; [`super::batch`]).

@@ -70,7 +70,11 @@
 //!   times the cross-sensor share `1 − Σ_o w_o²` (`w_o` output `o`'s share of the removed
 //!   variance), floored at [`MIN_Q_SENSITIVITY`]. The update is
 //!   `q ← max(q_min, q + a c / (s dt))`, `a = 1/min(k + 20, W)` (the configured `q` counts as
-//!   [`ADAPTIVE_Q_PRIOR_SAMPLES`] samples), `q_min` = configured `state_process_noise²`. No
+//!   [`ADAPTIVE_Q_PRIOR_SAMPLES`] samples), `q_min` = configured `state_process_noise²`. The
+//!   estimate pauses while any output is in a run of gate rejections: the model then does not
+//!   explain the record, and its corrections are model error (without the pause the filter
+//!   diverged on the ATTAS aileron–rudder record: `β`'s `Q` grew through a roll-rate model-error
+//!   episode until the bank angle failed the gate 50 times in a row). No
 //!   level is taken from any reference fit. *Limits* (tests): the information of the first
 //!   second or two is gathered with the floor `Q` and counted as such (a short steady segment
 //!   before the input helps); the early transient lifts `Q` a little in calm air (σ 1.18× the
@@ -983,7 +987,9 @@ impl Estimator for Ekf {
         self.r_count = r_count;
         self.nis_sum = nis_sum;
         self.nis_count = nis_count;
-        if adapt_q {
+        // While an output is being rejected the model does not explain the record (module
+        // doc): the corrections then come from model error, not from process noise.
+        if adapt_q && self.consecutive.iter().all(|&c| c == 0) {
             // Sensitivity of the statistic to a Q error, from each state's fraction of its
             // prediction variance removed by this sample (module doc).
             let mut q_stat = [0.0; N_STATES];

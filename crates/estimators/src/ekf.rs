@@ -40,8 +40,9 @@
 //!   10)². Only gated-in innovations update it, so one
 //!   outlier cannot inflate it. No noise level is taken from any reference fit.
 //! - **State process noise from the record** (`adaptive_q_window > 0`, the default, 500
-//!   samples; measurements: docs/uncertainty.md, "Adaptive EKF state process noise"): the configured
-//!   `state_process_noise` is the start and the floor; the intensity `q` (units² per s) of
+//!   samples; measurements: docs/uncertainty.md, "Adaptive EKF state process noise"): the
+//!   configured `state_process_noise` is the start and the floor; the intensity `q` (units² per
+//!   s) of
 //!   each state in `adaptive_q_states` (default `α, β`: translational turbulence enters the
 //!   air-relative velocity as `−ġ`, nearly white above `V/L`; rate gyros and attitudes see
 //!   inertial motion and rotational gusts are not modelled) is estimated from the filter's own
@@ -74,14 +75,13 @@
 //!   estimate pauses while any output is in a run of gate rejections: the model then does not
 //!   explain the record, and its corrections are model error (without the pause the filter
 //!   diverged on the ATTAS aileron–rudder record: `β`'s `Q` grew through a roll-rate model-error
-//!   episode until the bank angle failed the gate 50 times in a row). No
-//!   level is taken from any reference fit. *Limits* (tests): the information of the first
+//!   episode until the bank angle failed the gate 50 times in a row). No level is taken from
+//!   any reference fit. *Limits* (tests): the information of the first
 //!   second or two is gathered with the floor `Q` and counted as such (a short steady segment
 //!   before the input helps); the early transient lifts `Q` a little in calm air (σ 1.18× the
 //!   fixed-`Q` filter's on average, up to 2.6×, on the synthetic doublet records); `V` is not
-//!   adapted by default because
-//!   its cross products pick up `α`'s through the `ax`, `az` cross-covariances (4× its floor
-//!   without any `V` noise).
+//!   adapted by default because its cross products pick up `α`'s through the `ax`, `az`
+//!   cross-covariances (4× its floor without any `V` noise).
 //! - **Parameter changes** (`change_false_alarm_interval_s > 0`, the default): a change test on
 //!   the filter's own parameter estimates, which lets the parameter memory grow to the whole
 //!   record while nothing changes and restarts it when something does. For a consistent
@@ -209,8 +209,9 @@ pub const MIN_DRIFT_WINDOWS: u32 = 5;
 /// Default change-test window, s (module doc).
 pub const DEFAULT_CHANGE_WINDOW_S: f64 = 1.0;
 
-/// The states whose process noise is estimated by default, full-state order: the air-relative
-/// `V, α, β` (module doc, "State process noise from the record").
+/// The states whose process noise is estimated by default, full-state order: `α` and `β`,
+/// through which translational turbulence enters (`V` too, but its statistic picks up `α`'s:
+/// module doc, "State process noise from the record").
 pub const DEFAULT_ADAPTIVE_Q_STATES: [bool; N_STATES] =
     [false, true, true, false, false, false, false, false];
 
@@ -760,8 +761,9 @@ impl Ekf {
     }
 
     /// One step of the state process-noise estimate (module doc, "State process noise from
-    /// the record"): `q ← max(q_min, q + a c / dt)` per integrated state, `c` this sample's
-    /// cross products of the state corrections, `a = 1/min(k + ADAPTIVE_Q_PRIOR_SAMPLES, W)`.
+    /// the record"): `q ← max(q_min, q + a c / dt)` per adapted state, `c` this sample's
+    /// cross products of the state corrections divided by their sensitivity ([`sensitivity`]),
+    /// `a = 1/min(k + ADAPTIVE_Q_PRIOR_SAMPLES, W)`; `acc` becomes the forgotten sums.
     fn adapt_process_noise(
         &mut self,
         acc: &[[f64; N_OUTPUTS]; N_STATES],

@@ -39,6 +39,49 @@
 //!   innovations, then an exponential window of `W` samples) and `R_min` = (configured σ /
 //!   10)². Only gated-in innovations update it, so one
 //!   outlier cannot inflate it. No noise level is taken from any reference fit.
+//! - **State process noise from the record** (`adaptive_q_window > 0`, the default, 500
+//!   samples; measurements: docs/uncertainty.md, "Adaptive EKF state process noise"): the
+//!   configured `state_process_noise` is the start and the floor; the intensity `q` (units² per
+//!   s) of
+//!   each state in `adaptive_q_states` (default `α, β`: translational turbulence enters the
+//!   air-relative velocity as `−ġ`, nearly white above `V/L`; rate gyros and attitudes see
+//!   inertial motion and rotational gusts are not modelled) is estimated from the filter's own
+//!   **state corrections** `d_o = K_o e_o` of output `o` (covariance matching of the state
+//!   corrections: Myers & Tapley 1976; Maybeck 1982 vol. 2 §10.4), keeping only the part that
+//!   measurement noise cannot produce. *Identifiability.* For a state measured directly,
+//!   `E[e²] = P⁻ + R`, and the Myers–Tapley statistic `d² − (P⁻ − P⁺)` is `K²(e² − S)`, the
+//!   same statistic as the adaptive `R`'s `e² − S` up to a factor: from variances alone `Q`
+//!   and `R` trade off along `P⁻ + R = E[e²]`. What separates them is correlation. In a
+//!   consistent filter the corrections are uncorrelated between outputs and between samples
+//!   (the innovations are a martingale-difference sequence; Mehra 1970's optimality test),
+//!   while a process-noise deficit makes the filter lag, so the corrections of a state from
+//!   *different* sensors, in the same sample and over the next few, agree in sign: a common
+//!   cause, which independent sensor noise is not, **even when it is coloured** (smoothed or
+//!   differentiated channels: the products of one output with itself are exactly where such
+//!   colour shows, so they are left out). The statistic of one sample for state `k` is
+//!   `c = Σ_o 2 d_o (A − A_o)`, `A_o = λ A_o + d_o` the forgotten sum of output `o`'s
+//!   corrections (`λ = 1 − 1/`[`ADAPTIVE_Q_MEMORY_SAMPLES`]), `A = Σ_o A_o`, each product
+//!   taken against what came before it: mean 0 when `Q` is right, whatever `R` is. That is
+//!   the guard between the two adaptations: `R` is matched on the squares `e_o²`, `Q` on the
+//!   cross products only. A state that only one output informs gets no statistic and keeps its
+//!   configured `Q`. For a scalar random walk with gain `g_k` (the fraction `Σ_o (P hᵀ)_k²/S_o
+//!   / P⁻_kk` of the state's prediction variance this sample removed)
+//!   `E[c] ≈ s (Q − Q_used) dt`, `s = 2g(1 − g)λ / ((2 − g)(1 − λ(1 − g)))` (from the lag
+//!   correlations `C_j = (1 − g)^(j−1) C_1`, `C_1 = (1 − g)(Q − Q_used) dt / (g(2 − g))`),
+//!   times the cross-sensor share `1 − Σ_o w_o²` (`w_o` output `o`'s share of the removed
+//!   variance), floored at [`MIN_Q_SENSITIVITY`]. The update is
+//!   `q ← max(q_min, q + a c / (s dt))`, `a = 1/min(k + 20, W)` (the configured `q` counts as
+//!   [`ADAPTIVE_Q_PRIOR_SAMPLES`] samples), `q_min` = configured `state_process_noise²`. The
+//!   estimate pauses while any output is in a run of gate rejections: the model then does not
+//!   explain the record, and its corrections are model error (without the pause the filter
+//!   diverged on the ATTAS aileron–rudder record: `β`'s `Q` grew through a roll-rate model-error
+//!   episode until the bank angle failed the gate 50 times in a row). No level is taken from
+//!   any reference fit. *Limits* (tests): the information of the first
+//!   second or two is gathered with the floor `Q` and counted as such (a short steady segment
+//!   before the input helps); the early transient lifts `Q` a little in calm air (σ 1.18× the
+//!   fixed-`Q` filter's on average, up to 2.6×, on the synthetic doublet records); `V` is not
+//!   adapted by default because its cross products pick up `α`'s through the `ax`, `az`
+//!   cross-covariances (4× its floor without any `V` noise).
 //! - **Parameter changes** (`change_false_alarm_interval_s > 0`, the default): a change test on
 //!   the filter's own parameter estimates, which lets the parameter memory grow to the whole
 //!   record while nothing changes and restarts it when something does. For a consistent
@@ -143,8 +186,9 @@ pub const DEFAULT_STATE_SIGMA0: [f64; N_STATES] =
     [1.0, 0.007, 0.007, 0.007, 0.007, 0.007, 0.007, 0.007];
 
 /// Default state process noise, full-state order, units per √s (`Q = σ² dt`): a small
-/// allowance for model error (tabulated non-linearity, unmodelled turbulence), m/s/√s for `V`,
-/// rad/√s for angles, rad/s/√s for rates.
+/// allowance for model error (tabulated non-linearity), m/s/√s for `V`, rad/√s for angles,
+/// rad/s/√s for rates; the floor and start of the estimate from the record for the states in
+/// [`EkfConfig::adaptive_q_states`] (turbulence: module doc).
 pub const DEFAULT_STATE_PROCESS_NOISE: [f64; N_STATES] =
     [0.015, 0.0003, 0.0003, 0.0006, 0.0006, 0.0006, 0.00015, 0.00015];
 
@@ -164,6 +208,25 @@ pub const MIN_DRIFT_WINDOWS: u32 = 5;
 
 /// Default change-test window, s (module doc).
 pub const DEFAULT_CHANGE_WINDOW_S: f64 = 1.0;
+
+/// The states whose process noise is estimated by default, full-state order: `α` and `β`,
+/// through which translational turbulence enters (`V` too, but its statistic picks up `α`'s:
+/// module doc, "State process noise from the record").
+pub const DEFAULT_ADAPTIVE_Q_STATES: [bool; N_STATES] =
+    [false, true, true, false, false, false, false, false];
+
+/// Floor of the sensitivity by which the process-noise statistic is divided (module doc):
+/// bounds the amplification of its noise for states whose gain is near 0 or 1.
+pub const MIN_Q_SENSITIVITY: f64 = 0.1;
+
+/// How many samples the configured state process noise is worth in the running estimate of
+/// `Q` (module doc, "State process noise from the record").
+pub const ADAPTIVE_Q_PRIOR_SAMPLES: u32 = 20;
+
+/// Memory, in samples, of the accumulated state corrections whose cross products estimate `Q`
+/// (module doc, "State process noise from the record"): the forgetting factor is
+/// `1 − 1/ADAPTIVE_Q_MEMORY_SAMPLES`.
+pub const ADAPTIVE_Q_MEMORY_SAMPLES: f64 = 8.0;
 
 /// Configuration of [`Ekf`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -196,14 +259,23 @@ pub struct EkfConfig {
     pub change_false_alarm_interval_s: f64,
     /// Length of one change-test window, s (module doc).
     pub change_window_s: f64,
+    /// Window `W` (samples) of the state process-noise estimate from the state corrections
+    /// (module doc, "State process noise from the record"); 0 keeps `Q` at
+    /// `state_process_noise²`, which is otherwise the floor of the estimate.
+    pub adaptive_q_window: u32,
+    /// Which states' process noise is estimated when `adaptive_q_window > 0`, full-state
+    /// order; the others keep `state_process_noise` (module doc: by default the air-relative
+    /// states `V, α, β`, through which translational turbulence enters).
+    pub adaptive_q_states: [bool; N_STATES],
 }
 
 impl EkfConfig {
     /// The documented defaults for `structure`: generic priors ([`Priors::generic`]),
     /// [`DEFAULT_STATE_SIGMA0`], [`DEFAULT_STATE_PROCESS_NOISE`], constant parameters,
     /// [`DEFAULT_MEASUREMENT_SIGMA`], a 5σ gate, 50 consecutive rejections, coloured σ, `R`
-    /// from a 200-sample window, and the change detector on ([`DEFAULT_CHANGE_FALSE_ALARM_INTERVAL_S`],
-    /// [`DEFAULT_CHANGE_WINDOW_S`]).
+    /// from a 200-sample window, the process noise of [`DEFAULT_ADAPTIVE_Q_STATES`] from a
+    /// 500-sample window, and the change detector on
+    /// ([`DEFAULT_CHANGE_FALSE_ALARM_INTERVAL_S`], [`DEFAULT_CHANGE_WINDOW_S`]).
     pub fn new(structure: ModelStructure) -> Self {
         Self {
             structure,
@@ -218,6 +290,8 @@ impl EkfConfig {
             adaptive_r_window: 200,
             change_false_alarm_interval_s: DEFAULT_CHANGE_FALSE_ALARM_INTERVAL_S,
             change_window_s: DEFAULT_CHANGE_WINDOW_S,
+            adaptive_q_window: 500,
+            adaptive_q_states: DEFAULT_ADAPTIVE_Q_STATES,
         }
     }
 }
@@ -262,6 +336,22 @@ pub struct Ekf {
     /// (the drift-consistency factor, module doc).
     drift_u2: [f64; MAX_PARAMS],
     drift_n: [u32; MAX_PARAMS],
+    /// Current state process-noise intensity per full-state index (units² per s) and the count
+    /// of its updates.
+    q_var: [f64; N_STATES],
+    q_count: u32,
+    /// Exponentially forgotten sum of the state corrections `K e` per integrated state (module
+    /// doc, "State process noise from the record").
+    q_acc: [[f64; N_OUTPUTS]; N_STATES],
+}
+
+/// Sensitivity `g` of the state-correction statistic to a process-noise error (module doc,
+/// "State process noise from the record"): `E[c] ≈ g (Q − Q_assumed) dt` for a scalar random
+/// walk measured with a steady gain `k`, `g = 2 k (1 − k) λ / ((2 − k)(1 − λ (1 − k)))`,
+/// floored at [`MIN_Q_SENSITIVITY`].
+fn sensitivity(k: f64, forget: f64, cross_share: f64) -> f64 {
+    let g = 2.0 * k * (1.0 - k) * forget / ((2.0 - k) * (1.0 - forget * (1.0 - k)));
+    (g * cross_share).max(MIN_Q_SENSITIVITY)
 }
 
 fn positive(field: &'static str, v: f64) -> Result<(), EstimatorError> {
@@ -377,6 +467,9 @@ impl Ekf {
             alarms: [0; MAX_PARAMS],
             drift_u2: [0.0; MAX_PARAMS],
             drift_n: [0; MAX_PARAMS],
+            q_var: cfg.state_process_noise.map(|s| s * s),
+            q_count: 0,
+            q_acc: [[0.0; N_OUTPUTS]; N_STATES],
         })
     }
 
@@ -403,6 +496,13 @@ impl Ekf {
     /// innovations when `adaptive_r_window > 0`), in the output's unit.
     pub fn measurement_sigma(&self, o: Output) -> f64 {
         libm::sqrt(self.r_var[o.index()])
+    }
+
+    /// The current state process noise of full-state index `i` ([`state`]), units per √s
+    /// (configured, or estimated from the record when `adaptive_q_window > 0`); `None` if the
+    /// state is not integrated.
+    pub fn state_process_noise(&self, i: usize) -> Option<f64> {
+        self.model.state_set().states().contains(&i).then(|| libm::sqrt(self.q_var[i]))
     }
 
     /// How many times the change test of parameter `i` (structure order) raised an alarm and
@@ -550,6 +650,7 @@ impl Ekf {
         }
         self.innovation = [None; N_OUTPUTS];
         self.drift = DriftWindow::default();
+        self.q_acc = [[0.0; N_OUTPUTS]; N_STATES];
         Ok(())
     }
 
@@ -651,12 +752,35 @@ impl Ekf {
         }
         let states = self.model.state_set().states();
         for (k, &i) in states.iter().enumerate() {
-            let q = self.cfg.state_process_noise[i];
-            w[k][k] += q * q * dt;
+            w[k][k] += self.q_var[i] * dt;
         }
         for i in 0..np {
             let q = self.cfg.param_process_noise[i];
             w[nx + i][nx + i] += q * q * dt;
+        }
+    }
+
+    /// One step of the state process-noise estimate (module doc, "State process noise from
+    /// the record"): `q ← max(q_min, q + a c / dt)` per adapted state, `c` this sample's
+    /// cross products of the state corrections divided by their sensitivity ([`sensitivity`]),
+    /// `a = 1/min(k + ADAPTIVE_Q_PRIOR_SAMPLES, W)`; `acc` becomes the forgotten sums.
+    fn adapt_process_noise(
+        &mut self,
+        acc: &[[f64; N_OUTPUTS]; N_STATES],
+        cross: &[f64; N_STATES],
+        dt: f64,
+    ) {
+        self.q_count = self.q_count.saturating_add(1);
+        let k = self.q_count.saturating_add(ADAPTIVE_Q_PRIOR_SAMPLES);
+        let a = 1.0 / f64::from(k.min(self.cfg.adaptive_q_window.max(1)));
+        for (k, &i) in self.model.state_set().states().iter().enumerate() {
+            self.q_acc[k] = acc[k];
+            if !self.cfg.adaptive_q_states[i] {
+                continue;
+            }
+            let q0 = self.cfg.state_process_noise[i];
+            let q = self.q_var[i] + a * cross[k] / dt;
+            self.q_var[i] = q.max(q0 * q0);
         }
     }
 
@@ -743,6 +867,24 @@ impl Estimator for Ekf {
         let states = self.model.state_set().states();
         let mut h = [0.0; MAX_AUG];
         let mut ph = [0.0; MAX_AUG];
+        // Process-noise statistic (module doc): the forgotten sum of earlier state corrections
+        // and the cross products of this sample's corrections with it.
+        let adapt_q = self.cfg.adaptive_q_window > 0;
+        let mut q_acc = [[0.0; N_OUTPUTS]; N_STATES];
+        let mut q_tot = [0.0; N_STATES];
+        let mut q_cross = [0.0; N_STATES];
+        let mut q_red = [[0.0; 2]; N_STATES];
+        let mut p_prior = [0.0; N_STATES];
+        let forget = 1.0 - 1.0 / ADAPTIVE_Q_MEMORY_SAMPLES;
+        if adapt_q {
+            for k in 0..nx {
+                for (a, b) in q_acc[k].iter_mut().zip(&self.q_acc[k]) {
+                    *a = forget * b;
+                    q_tot[k] += *a;
+                }
+                p_prior[k] = self.work[k][k];
+            }
+        }
         for o in self.model.state_set().outputs() {
             let oi = o.index();
             let Some(y) = o.measured(s) else { continue };
@@ -800,6 +942,17 @@ impl Estimator for Ekf {
             for i in 0..n {
                 z[i] += ph[i] * inv * e;
             }
+            if adapt_q {
+                for k in 0..nx {
+                    let d = ph[k] * inv * e;
+                    q_cross[k] += 2.0 * d * (q_tot[k] - q_acc[k][oi]);
+                    q_acc[k][oi] += d;
+                    q_tot[k] += d;
+                    let red = ph[k] * ph[k] * inv;
+                    q_red[k][0] += red;
+                    q_red[k][1] += red * red;
+                }
+            }
             let w = &mut self.work;
             for i in 0..n {
                 let ki = ph[i] * inv;
@@ -836,6 +989,22 @@ impl Estimator for Ekf {
         self.r_count = r_count;
         self.nis_sum = nis_sum;
         self.nis_count = nis_count;
+        // While an output is being rejected the model does not explain the record (module
+        // doc): the corrections then come from model error, not from process noise.
+        if adapt_q && self.consecutive.iter().all(|&c| c == 0) {
+            // Sensitivity of the statistic to a Q error, from each state's fraction of its
+            // prediction variance removed by this sample (module doc).
+            let mut q_stat = [0.0; N_STATES];
+            for k in 0..nx {
+                let [red, red2] = q_red[k];
+                if red > 0.0 {
+                    let gain = (red / p_prior[k]).clamp(0.0, 1.0);
+                    let cross_share = 1.0 - red2 / (red * red);
+                    q_stat[k] = q_cross[k] / sensitivity(gain, forget, cross_share);
+                }
+            }
+            self.adapt_process_noise(&q_acc, &q_stat, dt);
+        }
         for (oi, v) in normalised.iter().enumerate() {
             if let Some(v) = *v {
                 self.innov_acf[oi].add(v, 1.0);

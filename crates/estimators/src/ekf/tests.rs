@@ -40,12 +40,28 @@ fn simulate_with_step(
     seed: u64,
     step_change: Option<(Param, f64, f64)>,
 ) -> Vec<AirDataSample> {
+    simulate_full(rate, duration, seed, step_change, [0.0; 8], 0.0)
+}
+
+/// [`simulate_with_step`] with white process noise of intensity `process[i]` (units per √s,
+/// full-state order) on each true state: an increment `process[i] √dt N(0, 1)` after each
+/// sample interval, the discrete form of `ẋ = f + w`, `E[w wᵀ] = diag(process²) δ(t)`; the
+/// inputs start `lead_s` later (steady flight before the manoeuvre).
+fn simulate_full(
+    rate: f64,
+    duration: f64,
+    seed: u64,
+    step_change: Option<(Param, f64, f64)>,
+    process: [f64; 8],
+    lead_s: f64,
+) -> Vec<AirDataSample> {
     let (st, th0) = truth();
     let mut th = th0;
     let model = FlightModel::new(st).unwrap();
     let np = st.n_params();
     let k = constants();
     let controls = |t: f64| {
+        let t = t - lead_s;
         (
             doublet(t, 1.0, 0.6, 0.035) + doublet(t, 16.0, 0.4, -0.03),
             doublet(t, 7.0, 0.5, 0.05) + doublet(t, 18.0, 0.5, -0.05),
@@ -108,6 +124,11 @@ fn simulate_with_step(
             let k4 = f(&ub, &x4);
             for i in 0..8 {
                 x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+            }
+        }
+        for (xi, q) in x.iter_mut().zip(process) {
+            if q > 0.0 {
+                *xi += q * dt.sqrt() * n01.sample(&mut rng);
             }
         }
     }
@@ -437,5 +458,172 @@ fn one_outlier_is_gated_and_raises_no_alarm() {
         let (a, b) = (clean.estimates().raw_value(i), hit.estimates().raw_value(i));
         let s = clean.estimates().sigma(i).unwrap();
         assert!((a - b).abs() < 0.2 * s, "parameter {i}: {a} vs {b} (σ {s})");
+    }
+}
+
+/// White process noise of 0.005 rad/√s on the true `α` and `β` (about light turbulence at the
+/// test aircraft's speed: σ_w √(3V/L) / V), [`NOISE`] on the sensors.
+fn turbulent_process() -> [f64; 8] {
+    let mut process = [0.0; 8];
+    process[state::ALPHA] = 0.005;
+    process[state::BETA] = 0.005;
+    process
+}
+
+/// Steady flight before the first input in the process-noise records, s: the `Q` estimate
+/// forms from the record, and information gathered before it has (the first second or two)
+/// is counted with the configured `Q` (module doc).
+const LEAD_S: f64 = 3.0;
+
+fn fixed_q(st: ModelStructure) -> EkfConfig {
+    let mut cfg = config(st);
+    cfg.adaptive_q_window = 0;
+    cfg
+}
+
+fn adaptive_q(st: ModelStructure) -> EkfConfig {
+    let mut cfg = config(st);
+    cfg.adaptive_q_window = 500;
+    cfg
+}
+
+/// (a) Process noise of known intensity on `α` and `β`: the estimated process-noise σ of both
+/// is within a factor 0.6–1.6 of the truth on every seed (25 s of data after 3 s of steady
+/// flight) and within ±30 % on the mean of 6 seeds (measured: α 0.67–0.80 of the truth, β
+/// 0.86–1.18; a `Q` stuck at its floor would be 0.06); the states not adapted keep their
+/// configured σ.
+#[test]
+fn adapted_process_noise_converges_to_the_truth() {
+    let st = ModelStructure::six_axis();
+    let process = turbulent_process();
+    let seeds = 6;
+    let mut mean = [0.0; 2];
+    for seed in 0..seeds {
+        let data = simulate_full(50.0, 28.0, 200 + seed, None, process, LEAD_S);
+        let ekf = run(adaptive_q(st), &data);
+        let q: Vec<f64> = (0..8).map(|i| ekf.state_process_noise(i).unwrap()).collect();
+        std::println!("seed {seed}: Q σ {q:.5?} NIS {:.3}", ekf.nis().unwrap());
+        for (m, i) in mean.iter_mut().zip([state::ALPHA, state::BETA]) {
+            let ratio = q[i] / process[i];
+            assert!(
+                (0.6..1.6).contains(&ratio),
+                "{}: σ_Q {} vs {}",
+                STATE_NAMES[i],
+                q[i],
+                process[i]
+            );
+            *m += ratio / seeds as f64;
+        }
+        for i in [state::V, state::P, state::Q, state::R, state::PHI, state::THETA] {
+            assert_eq!(q[i], DEFAULT_STATE_PROCESS_NOISE[i], "{}", STATE_NAMES[i]);
+        }
+    }
+    std::println!("mean σ_Q / truth: α {:.3}, β {:.3}", mean[0], mean[1]);
+    for m in mean {
+        assert!((0.7..1.3).contains(&m), "mean σ_Q / truth {m}");
+    }
+}
+
+/// (b) No process noise: the estimated `Q` of `α` and `β` stays below 0.001 rad/√s (its floor
+/// is 0.0003, the process noise of the other tests 0.005; measured ≤ 0.00062: the early
+/// transient and the clipping at the floor lift it a little); over the primary derivatives of 4
+/// records the RMS of the standardised error `(θ̂ − θ)/σ` is not larger than the fixed-`Q`
+/// filter's (+10 %; measured 7.71 vs 7.73), each σ is within 0.8–3× the fixed-`Q` filter's
+/// and their mean below 1.25× (measured 1.18, the largest 2.6× on `CL_de` and 2.0× on `Cm_q`
+/// in one record each): the `Q` of the early transient, before the parameters are near the
+/// truth, costs information. That is the price of adapting from the start, which the turbulent
+/// records need (module doc).
+#[test]
+fn adapted_process_noise_stays_at_the_floor_in_calm_air() {
+    let st = ModelStructure::six_axis();
+    let (_, th6) = truth();
+    let (mut err_fixed, mut err_adapted) = (0.0, 0.0);
+    let (mut ratio_sum, mut ratio_n) = (0.0, 0.0);
+    for seed in 0..4 {
+        let data = simulate(50.0, 25.0, 300 + seed);
+        let fixed = run(fixed_q(st), &data);
+        let adapted = run(adaptive_q(st), &data);
+        let q: Vec<f64> = (0..8).map(|i| adapted.state_process_noise(i).unwrap()).collect();
+        std::println!("calm seed {seed}: Q σ {q:.5?}");
+        for i in [state::ALPHA, state::BETA] {
+            assert!(q[i] <= 0.001, "{}: {}", STATE_NAMES[i], q[i]);
+        }
+        let (a, f) = (adapted.estimates(), fixed.estimates());
+        for (i, p) in st.params().enumerate() {
+            if !PRIMARY.contains(&p.name()) {
+                continue;
+            }
+            let (sa, sf) = (a.sigma(i).unwrap(), f.sigma(i).unwrap());
+            err_fixed += ((f.value(i).unwrap() - th6[i]) / sf).powi(2);
+            err_adapted += ((a.value(i).unwrap() - th6[i]) / sa).powi(2);
+            assert!((0.8..3.0).contains(&(sa / sf)), "{}: σ {sa} vs {sf}", p.name());
+            ratio_sum += sa / sf;
+            ratio_n += 1.0;
+        }
+    }
+    let mean_ratio = ratio_sum / ratio_n;
+    std::println!("mean σ adapted / fixed {mean_ratio:.3}");
+    assert!(mean_ratio < 1.25, "mean σ adapted / fixed {mean_ratio}");
+    let (ef, ea) = (err_fixed.sqrt(), err_adapted.sqrt());
+    std::println!("Σ standardised error²: fixed {ef:.3}, adapted {ea:.3}");
+    assert!(ea <= 1.1 * ef, "adapted {ea} vs fixed {ef}");
+}
+
+/// (c) Consistency under process noise: over 24 records with process noise on `α` and `β`,
+/// the filter with `Q` from the record has a mean NIS within 0.9–1.1 and a mean σ / scatter
+/// within 0.7–1.4 for the lateral-directional primary derivatives and `CL_alpha` (measured
+/// 0.80–1.37). The pitch derivatives are still optimistic and held to 0.35–1.4 (measured
+/// `Cm_alpha` 0.56, `Cm_q` 0.84, `Cm_de` 0.39; the fixed-`Q` filter 0.75, 0.90, 0.65 with
+/// 2.5–7× their scatter): the `α` `Q` comes out ~20 % low in (a), the information of the first
+/// seconds is counted with the floor `Q`, and the estimate pauses while an output is being
+/// rejected. The fixed-`Q` filter, which takes the turbulent motion for model error, is printed
+/// for comparison (its scatter is 2.5–50× larger).
+#[test]
+fn adapted_process_noise_is_consistent_over_a_small_monte_carlo() {
+    let st = ModelStructure::six_axis();
+    let (_, th6) = truth();
+    let names = [
+        "CL_alpha", "Cm_alpha", "Cm_q", "Cm_de", "CY_beta", "Cl_p", "Cl_da", "Cn_beta", "Cn_r",
+        "Cn_dr",
+    ];
+    let idx: Vec<usize> =
+        names.iter().map(|n| st.params().position(|p| p.name() == *n).unwrap()).collect();
+    let seeds = 24;
+    for adapt in [false, true] {
+        let mut finals = std::vec![Vec::new(); names.len()];
+        let mut sigmas = std::vec![0.0; names.len()];
+        let mut nis = 0.0;
+        for seed in 0..seeds {
+            let data = simulate_full(50.0, 28.0, 400 + seed, None, turbulent_process(), LEAD_S);
+            let ekf = run(if adapt { adaptive_q(st) } else { fixed_q(st) }, &data);
+            nis += ekf.nis().unwrap() / seeds as f64;
+            for (k, &i) in idx.iter().enumerate() {
+                finals[k].push(ekf.estimates().value(i).unwrap());
+                sigmas[k] += ekf.estimates().sigma(i).unwrap() / seeds as f64;
+            }
+        }
+        std::println!("adaptive Q {adapt}: mean NIS {nis:.3}");
+        let mut ratios = Vec::new();
+        for k in 0..names.len() {
+            let m = finals[k].iter().sum::<f64>() / seeds as f64;
+            let scatter = (finals[k].iter().map(|v| (v - m).powi(2)).sum::<f64>()
+                / (seeds - 1) as f64)
+                .sqrt();
+            let ratio = sigmas[k] / scatter;
+            std::println!(
+                "{:>8} truth {:9.4} mean {m:9.4} scatter {scatter:.2e} σ {:.2e} ratio {ratio:.2}",
+                names[k],
+                th6[idx[k]],
+                sigmas[k]
+            );
+            ratios.push(ratio);
+        }
+        if adapt {
+            assert!((0.9..1.1).contains(&nis), "mean NIS {nis}");
+            for (n, r) in names.iter().zip(&ratios) {
+                let low = if n.starts_with("Cm_") { 0.35 } else { 0.7 };
+                assert!((low..1.4).contains(r), "{n}: mean σ / scatter = {r}");
+            }
+        }
     }
 }

@@ -13,7 +13,9 @@
 //! ```
 //!
 //! with `F` diagonal, one σ per state equation (units of the state per √s), estimated with
-//! `θ`. Which state equations carry process noise is configurable
+//! `θ` as `ln F` (positive by construction; the likelihood is far closer to quadratic in
+//! `ln F` than in `F`: with `F` itself the Gauss–Newton steps of the slow `F_V` overshot and
+//! alternated, measured on the F-16 campaign). Which state equations carry process noise is configurable
 //! ([`FemConfig::process_noise`]); the default ([`AIR_DATA_STATES`]) is the translational
 //! air-data states `V, α, β` of the structure's state set: a translational gust `(u_g, v_g,
 //! w_g)` enters the air-relative `V, α, β` equations as its time derivative, which for the
@@ -104,6 +106,15 @@ pub const AIR_DATA_STATES: [bool; N_STATES] = {
 
 /// Most samples at which `A` and `C` are linearised and averaged (module doc).
 pub const LINEARISATION_POINTS: usize = 50;
+
+/// Lower bound of each process-noise σ, as a fraction of `sqrt(R_j / Δt)` of the output
+/// measuring the state (`10⁻²` state units per √s when none does): the gain goes with `F²`, so
+/// at the bound the process noise no longer affects the filter (`ln F` cannot run to `−∞` on
+/// calm data, where the information on it vanishes).
+pub const F_MIN_FRACTION: f64 = 1e-3;
+
+/// Fraction of the Gauss–Newton step taken in `ln F` (module doc).
+pub const F_STEP: f64 = 0.5;
 
 /// Floor of the measurement-noise variance recovered from the innovations, as a fraction of
 /// the innovation variance `B` of the output.
@@ -233,7 +244,7 @@ impl Filter<'_> {
         let phi = (a * self.dt).exp();
         let mut q = DMatrix::<f64>::zeros(nx, nx);
         for (k, &s) in self.noisy.iter().enumerate() {
-            let f = beta[self.first_f + k];
+            let f = beta[self.first_f + k].exp();
             q[(s, s)] = f * f * self.dt;
         }
         let rm = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(r));
@@ -383,6 +394,14 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
             }
             .into());
         }
+        Some(v) if v.iter().any(|f| !(*f > 0.0 && f.is_finite())) => {
+            return Err(EstimatorError::InvalidConfig {
+                field: "process_noise_start",
+                value: v.iter().copied().fold(f64::NAN, f64::min),
+                reason: "every starting F must be positive and finite",
+            }
+            .into());
+        }
         Some(v) => v.clone(),
         None => noisy
             .iter()
@@ -392,14 +411,24 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
             })
             .collect(),
     };
+    // Lower bound of each ln F: 10⁻³ of the scale of its default start (module doc), where
+    // the process noise no longer matters (the gain goes with F²).
+    let ln_f_min: Vec<f64> = noisy
+        .iter()
+        .map(|&k| {
+            let o = Output::ALL[states[k]];
+            let scale = p.outputs.iter().position(|x| *x == o).map_or(1e-2, |j| (r[j] / dt).sqrt());
+            (F_MIN_FRACTION * scale).ln()
+        })
+        .collect();
     let mut y = Vec::new();
     let (beta_oe, start) = first_start(&p, manoeuvres, oe, |b| {
         let mut full = b.to_vec();
-        full.extend_from_slice(&f0);
+        full.extend(f0.iter().map(|f| f.ln()));
         filter.pass(&full, &r, &mut y).map(|_| ())
     })?;
     let mut beta = beta_oe;
-    beta.extend_from_slice(&f0);
+    beta.extend(f0.iter().map(|f| f.ln()));
     let mut e = Vec::new();
     filter.pass(&beta, &r, &mut y)?;
     let mut b = residuals(&p, &y, &mut e);
@@ -426,17 +455,42 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
         }
         let w: Vec<f64> = b.iter().map(|v| 1.0 / v).collect();
         filter.sensitivities(&beta, &r, &mut s)?;
-        let (m, g, _) = normal_equations(&s, &e, &w, nb);
+        let (mut m, mut g, _) = normal_equations(&s, &e, &w, nb);
         check_identifiable(&m, &p, oe, first_f)?;
+        // An ln F at its bound whose gradient points further down is held there this
+        // iteration (active set): its information vanishes there and would spoil the step.
+        for (k, lo) in ln_f_min.iter().enumerate() {
+            let i = first_f + k;
+            if beta[i] <= *lo && g[i] <= 0.0 {
+                for j in 0..nb {
+                    m[(i, j)] = 0.0;
+                    m[(j, i)] = 0.0;
+                }
+                m[(i, i)] = 1.0;
+                g[i] = 0.0;
+            }
+        }
         let minv = spd_inverse(&m);
         let merit0 = weighted_cost(&e, &w);
         let mut accepted = None;
         loop {
             if let Some(step) = damped_step(&m, &m, &g, lambda) {
-                let mut trial: Vec<f64> =
-                    beta.iter().zip(step.iter()).map(|(b, d)| b + d).collect();
-                // Only F² enters the filter: keep F ≥ 0.
-                trial[first_f..].iter_mut().for_each(|v| *v = v.abs());
+                let trial: Vec<f64> = beta
+                    .iter()
+                    .zip(step.iter())
+                    .enumerate()
+                    .map(|(i, (b, d))| {
+                        if i < first_f {
+                            b + d
+                        } else if b + d <= ln_f_min[i - first_f] {
+                            // ln F bounded below (module doc): a step beyond goes to the bound.
+                            ln_f_min[i - first_f]
+                        } else {
+                            b + F_STEP * d
+                        }
+                    })
+                    .collect();
+                let step = nalgebra::DVector::from_fn(nb, |i, _| trial[i] - beta[i]);
                 if let Ok(st) = filter.pass(&trial, &r, &mut y_try) {
                     let b_try = residuals(&p, &y_try, &mut e_try);
                     let value = weighted_cost(&e_try, &w);
@@ -456,8 +510,17 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
             None => f64::INFINITY,
         };
         let Some((trial, step, b_try, st)) = accepted else {
-            let tiny = damped_step(&m, &m, &g, 0.0)
-                .is_some_and(|st| step_sigma(&st) < oe.step_tolerance_sigma);
+            let tiny = damped_step(&m, &m, &g, 0.0).is_some_and(|st| {
+                // The step as it would be taken (ln F cut at its bound).
+                let taken = nalgebra::DVector::from_fn(nb, |i, _| {
+                    if i >= first_f {
+                        (beta[i] + st[i]).max(ln_f_min[i - first_f]) - beta[i]
+                    } else {
+                        st[i]
+                    }
+                });
+                step_sigma(&taken) < oe.step_tolerance_sigma
+            });
             if tiny {
                 converged = true;
             } else {
@@ -502,7 +565,8 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
     let mut names = unknown_names(&p, &oe.structure);
     names.extend(noisy.iter().map(|&k| format!("F_{}", STATE_NAMES[states[k]])));
     let fit = Fitted { beta: &beta, s: &s, e: &e, w: &w, r: &r, names };
-    let result = assemble(&p, &oe.structure, fit, log, start, converged, oe)?;
+    let mut result = assemble(&p, &oe.structure, fit, log, start, converged, oe)?;
+    from_log_f(&mut result, first_f);
     let ck_diag = filter.gain(&beta, &r)?.ck_diag;
     let out = FemResult {
         result,
@@ -513,6 +577,26 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
     match failure {
         None => Ok(out),
         Some(reason) => Err(OeError::NotConverged { reason, result: Box::new(out.result) }),
+    }
+}
+
+/// The `F` unknowns are estimated as `ln F` (module doc); reports them as `F`, with
+/// `σ_F = F σ_ln F` and the covariance rows and columns scaled by `F` (first-order).
+fn from_log_f(r: &mut OeResult, first_f: usize) {
+    let n = r.values.len();
+    let scale: Vec<f64> =
+        (0..n).map(|i| if i >= first_f { r.values[i].exp() } else { 1.0 }).collect();
+    for i in first_f..n {
+        r.values[i] = scale[i];
+        r.sigma[i] *= scale[i];
+        if let Some(c) = r.sigma_coloured.as_mut() {
+            c[i] *= scale[i];
+        }
+    }
+    for i in 0..n {
+        for j in 0..n {
+            r.covariance[i * n + j] *= scale[i] * scale[j];
+        }
     }
 }
 

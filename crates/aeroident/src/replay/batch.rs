@@ -365,6 +365,8 @@ pub fn fit_record<R: Read>(
     let (result, fit_wall_s, fem_result) = if fem {
         let mut config = FemConfig::new(model.structure);
         config.oe = oe_config(model.structure);
+        // The relaxation of B and R converges linearly (module doc of filter_error).
+        config.oe.max_iterations = crate::aircraft::batch::MAX_ITERATIONS;
         let (f, wall) = fit_fem_manoeuvres(&slices, &config).map_err(ReplayError::Model)?;
         (f.result.clone(), wall, Some(f))
     } else {

@@ -509,24 +509,32 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
             Some(mi) => (0..nb).map(|i| step[i].abs() / mi[(i, i)].sqrt()).fold(0.0, f64::max),
             None => f64::INFINITY,
         };
-        let Some((trial, step, b_try, st)) = accepted else {
-            let tiny = damped_step(&m, &m, &g, 0.0).is_some_and(|st| {
-                // The step as it would be taken (ln F cut at its bound).
-                let taken = nalgebra::DVector::from_fn(nb, |i, _| {
-                    if i >= first_f {
-                        (beta[i] + st[i]).max(ln_f_min[i - first_f]) - beta[i]
-                    } else {
-                        st[i]
-                    }
+        let (trial, step, b_try, st) = match accepted {
+            Some(a) => a,
+            None => {
+                let tiny = damped_step(&m, &m, &g, 0.0).is_some_and(|st| {
+                    // The step as it would be taken (ln F cut at its bound).
+                    let taken = nalgebra::DVector::from_fn(nb, |i, _| {
+                        if i >= first_f {
+                            (beta[i] + st[i]).max(ln_f_min[i - first_f]) - beta[i]
+                        } else {
+                            st[i]
+                        }
+                    });
+                    step_sigma(&taken) < oe.step_tolerance_sigma
                 });
-                step_sigma(&taken) < oe.step_tolerance_sigma
-            });
-            if tiny {
-                converged = true;
-            } else {
-                failure = Some(NotConverged::NoDescent);
+                let last_tiny =
+                    log.last().is_some_and(|it| it.max_step_sigma < oe.step_tolerance_sigma);
+                if !(tiny || last_tiny) {
+                    failure = Some(NotConverged::NoDescent);
+                    break;
+                }
+                // β is at the optimum for this B (to the rounding of the finite-difference
+                // step): no step, the relaxation of B and R goes on.
+                let st = filter.pass(&beta, &r, &mut y_try)?;
+                let b_try = residuals(&p, &y_try, &mut e_try);
+                (beta.clone(), nalgebra::DVector::zeros(nb), b_try, st)
             }
-            break;
         };
         let max_step_sigma = step_sigma(&step);
         let used_lambda = lambda;

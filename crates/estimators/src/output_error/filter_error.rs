@@ -25,9 +25,9 @@
 //! # The filter (per cost evaluation)
 //!
 //! Reuses the output-error problem (manoeuvres, outputs, biases, free initial states) and its
-//! RK4 step ([`super::simulation`]). At the unknowns `β = (θ, b, x0, F)`:
+//! RK4 step (`output_error/simulation.rs`). At the unknowns `β = (θ, b, x0, F)`:
 //!
-//! 1. `A = ∂f/∂x`, `C = ∂h/∂x` ([`FlightModel::linearise`], exact) averaged over up to
+//! 1. `A = ∂f/∂x`, `C = ∂h/∂x` ([`crate::flight_model::FlightModel::linearise`], exact) averaged over up to
 //!    [`LINEARISATION_POINTS`] samples spread over the record, at their **measured** states
 //!    (so the gain is a smooth function of `β`); `Φ = exp(A Δt)` with `Δt` the median sample
 //!    interval; `Q = F Fᵀ Δt` (first order); the steady-state filter from the discrete

@@ -43,16 +43,28 @@
 //! Negative log-likelihood `½ Σ νᵀ B⁻¹ ν + (N/2) ln det B`. Each iteration:
 //!
 //! 1. `B = diag((1/N) Σ ν νᵀ)` (the ML innovation covariance, diagonal as output error's `R`);
-//! 2. one Gauss–Newton step on `β` with `B` fixed: `M = Σ Sᵀ B⁻¹ S`, `g = Σ Sᵀ B⁻¹ ν`,
-//!    `(M + λ diag M) Δ = g`, accepted when `J = ½ Σ νᵀ B⁻¹ ν` falls (Levenberg–Marquardt
-//!    damping exactly as output error's relaxation step);
-//! 3. the measurement-noise covariance the Riccati equation needs from the innovations by the
-//!    compatibility `R = diag(B − C P Cᵀ)` (floored at [`R_FLOOR`] `· B`), so that at the fixed
-//!    point the filter's own innovation covariance `C P Cᵀ + R` matches the measured one. (The
-//!    book solves the Riccati equation with `B` and enforces `R ≥ 0` as the constraint
-//!    `diag(K C) ≤ 1` on `F` with a heuristic `F` correction after each `B` update; this
-//!    implementation keeps `R` explicit instead, which satisfies that constraint by
-//!    construction.)
+//! 2. one Gauss–Newton step on `β = (θ, b, x0, ln F)` with `B` fixed: `M = Σ Sᵀ B⁻¹ S`,
+//!    `g = Σ Sᵀ B⁻¹ ν`, `(M + λ diag M) Δ = g`, accepted when `J = ½ Σ νᵀ B⁻¹ ν` falls
+//!    (Levenberg–Marquardt damping exactly as output error's relaxation step). The `ln F`
+//!    components move by [`F_STEP`] (half) of their Gauss–Newton step: full steps alternated
+//!    on the slowly identified `F_V` (ratio −0.94 per iteration on the F-16 campaign, 110
+//!    iterations; 33 with half steps). `ln F` is bounded below ([`F_MIN_FRACTION`]); a step
+//!    beyond goes to the bound, and a bounded `ln F` whose gradient points further down is
+//!    held there (active set: on calm data its information vanishes). When no step reduces
+//!    `J` but the last accepted step was already below the step tolerance, `β` stays (zero
+//!    step) and the relaxation of `B` and `R` goes on;
+//! 3. the measurement-noise covariance the Riccati equation needs, from the innovations by
+//!    the compatibility `R = diag(B − C P Cᵀ)` (so that at the fixed point the filter's own
+//!    innovation variance `C P Cᵀ + R` matches the measured one), approached by half a Newton
+//!    step of that fixed-point map, `R += ½ (1 − diag(C K)) (B − C P Cᵀ − R)`, limited to a
+//!    factor 4 per iteration and floored at [`R_FLOOR`] `· B`. The plain substitution
+//!    diverges when `diag(C K) > ½` (the map's slope is `−CK/(1 − CK)`; measured on synthetic
+//!    records: `F_α` ran to 750 with `R_α` at its floor). The book solves the Riccati
+//!    equation with `B` and enforces `R ≥ 0` as the constraint `diag(K C) ≤ 1` on `F` with a
+//!    heuristic `F` correction after each `B` update; this implementation keeps `R` explicit
+//!    instead, which satisfies that constraint by construction, but does not bound `F`: on
+//!    records whose output-error residuals are model error (HFB-320's α) `F` on that state
+//!    runs up and `R` to its floor (docs/uncertainty.md, "Filter-error method").
 //!
 //! **Sensitivities** `S = ∂ŷ/∂β` by central differences of the **whole filter**, as `ml_fem.m`:
 //! each unknown perturbed by `±10⁻⁴ max(|β_i|, 10⁻³)`, the gain recomputed for the perturbed
@@ -71,11 +83,20 @@
 //! smooth signal); `F` from [`FemConfig::process_noise_start`], else
 //! `0.1 sqrt(R_j / Δt)` of the output measuring the state (10⁻³ when none does).
 //!
+//! # Data
+//!
+//! The measurement errors must be white from sample to sample: on pre-smoothed records (the
+//! campaign's matched smoother) the one-step predictor follows the smoothed noise and `F`
+//! grows without bound (measured; the campaign fits the unsmoothed samples).
+//!
 //! # Accuracy
 //!
 //! Cramér–Rao σ `sqrt(diag M⁻¹)` with `M = Σ Sᵀ B⁻¹ S` at the estimate (Jategaonkar ch. 5: the
 //! innovations of the correct filter are white, so no coloured-residual correction is needed;
-//! it is still formed, [`super::OeResult::sigma_coloured`], as a check).
+//! it is still formed, [`super::OeResult::sigma_coloured`], as a check). `F` and its σ are
+//! reported from `ln F` to first order (`σ_F = F σ_ln F`, covariance rows scaled by `F`). On
+//! the F-16 campaign this σ is 1.25–2.8× short of the scatter of the estimates
+//! (docs/uncertainty.md, "Filter-error method").
 
 use super::riccati;
 use super::simulation::Problem;

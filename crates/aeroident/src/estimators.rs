@@ -32,6 +32,9 @@ pub enum EstimatorKind {
     /// Batch maximum-likelihood output error (not real time: `replay` reads the whole record
     /// and fits it; `crate::replay::batch`).
     Oe,
+    /// Batch filter-error method: maximum likelihood with process noise (turbulence), a
+    /// steady-state Kalman filter in the cost (Jategaonkar 2015 ch. 5; not real time, as `oe`).
+    Fem,
 }
 
 impl EstimatorKind {
@@ -45,6 +48,7 @@ impl EstimatorKind {
             EstimatorKind::SmpeCorrected => "smpe-corrected",
             EstimatorKind::Gradient => "gradient",
             EstimatorKind::Oe => "oe",
+            EstimatorKind::Fem => "fem",
         }
     }
 
@@ -55,7 +59,12 @@ impl EstimatorKind {
     /// their own model (Kalman filters) do not: a differentiated rate is not an independent
     /// measurement, so they are not given one.
     pub fn uses_measured_coefficients(self) -> bool {
-        !matches!(self, EstimatorKind::Ekf | EstimatorKind::Oe)
+        !matches!(self, EstimatorKind::Ekf | EstimatorKind::Oe | EstimatorKind::Fem)
+    }
+
+    /// Whether the estimator is a batch fit of a whole record (`oe`, `fem`).
+    pub fn is_batch(self) -> bool {
+        matches!(self, EstimatorKind::Oe | EstimatorKind::Fem)
     }
 }
 
@@ -161,7 +170,7 @@ pub fn build(
             GradientEstimator::new(structure, &priors, ModelReferenceConfig::default())
                 .map_err(config)?,
         ),
-        EstimatorKind::Oe => return Err(BuildError::Batch(kind.name())),
+        EstimatorKind::Oe | EstimatorKind::Fem => return Err(BuildError::Batch(kind.name())),
     })
 }
 

@@ -98,6 +98,8 @@
 
 use crate::coloured::batch as coloured;
 pub mod design;
+pub mod filter_error;
+pub mod riccati;
 mod simulation;
 
 use crate::EstimatorError;
@@ -533,70 +535,13 @@ fn damped_step(
 /// # Errors
 /// [`OeError`] as in the module doc.
 pub fn fit(manoeuvres: &[&[AirDataSample]], config: &OeConfig) -> Result<OeResult, OeError> {
-    let model = FlightModel::new(config.structure)?;
-    let set = model.state_set();
-    let np = config.structure.n_params();
-    let first =
-        manoeuvres.first().and_then(|m| m.first()).ok_or(EstimatorError::InvalidConfig {
-            field: "manoeuvres",
-            value: 0.0,
-            reason: "at least one manoeuvre with samples is needed",
-        })?;
-    let outputs = config.outputs.clone().unwrap_or_else(|| default_outputs(set, first));
-    let x0_free = match config.initial_states {
-        InitialStates::FirstSample => [false; N_STATES],
-        InitialStates::Estimate(mask) => mask,
-    };
-    let p = Problem::new(model, manoeuvres, outputs, &config.output_biases, &x0_free)?;
+    let p = prepare(manoeuvres, config)?;
     let nb = p.n_unknowns;
     let ny = p.ny();
-
-    // Starting values: θ, biases 0, free initial states at the first sample.
-    let mut starts: Vec<Vec<f64>> = match &config.start {
-        Start::Given(v) => {
-            if v.len() != np {
-                return Err(EstimatorError::InvalidConfig {
-                    field: "start",
-                    value: v.len() as f64,
-                    reason: "Start::Given needs one value per structure parameter",
-                }
-                .into());
-            }
-            vec![v.clone()]
-        }
-        Start::Priors => vec![priors_start(&config.structure)],
-        Start::EquationError => {
-            vec![
-                equation_error_start(&config.structure, manoeuvres),
-                priors_start(&config.structure),
-            ]
-        }
-    };
-    let mut beta = vec![0.0; nb];
     let mut y = Vec::new();
     let mut e = Vec::new();
-    let mut last_err = None;
-    let mut started = None;
-    for theta0 in starts.drain(..) {
-        beta[..np].copy_from_slice(&theta0);
-        for (m, man) in p.man.iter().enumerate() {
-            for (q, &k) in p.x0_free.iter().enumerate() {
-                beta[p.x0_index(m, q)] = man.x0_meas[k];
-            }
-        }
-        match p.simulate(&beta, &mut y, None) {
-            Ok(()) => {
-                started = Some(theta0);
-                break;
-            }
-            Err(err) => last_err = Some(err),
-        }
-    }
-    let Some(start) = started else {
-        return Err(last_err
-            .unwrap_or(EstimatorError::Numerical { what: "no starting values", t_s: 0.0 })
-            .into());
-    };
+    let (mut beta, start) =
+        first_start(&p, manoeuvres, config, |beta| p.simulate(beta, &mut y, None))?;
     let mut r = residuals(&p, &y, &mut e);
     let ln_det = |r: &[f64]| r.iter().map(|v| v.ln()).sum::<f64>();
     let mut log = vec![OeIteration {
@@ -700,6 +645,73 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &OeConfig) -> Result<OeResul
     }
 }
 
+/// The prepared problem of `config` over `manoeuvres` (outputs from the data by default).
+fn prepare(manoeuvres: &[&[AirDataSample]], config: &OeConfig) -> Result<Problem, OeError> {
+    let model = FlightModel::new(config.structure)?;
+    let set = model.state_set();
+    let first =
+        manoeuvres.first().and_then(|m| m.first()).ok_or(EstimatorError::InvalidConfig {
+            field: "manoeuvres",
+            value: 0.0,
+            reason: "at least one manoeuvre with samples is needed",
+        })?;
+    let outputs = config.outputs.clone().unwrap_or_else(|| default_outputs(set, first));
+    let x0_free = match config.initial_states {
+        InitialStates::FirstSample => [false; N_STATES],
+        InitialStates::Estimate(mask) => mask,
+    };
+    Ok(Problem::new(model, manoeuvres, outputs, &config.output_biases, &x0_free)?)
+}
+
+/// The first starting value of [`Start`] from which `run` (a simulation or a filter pass at
+/// `β`) succeeds: `(β, θ0)` with biases 0 and free initial states at the first sample; the
+/// equation-error start falls back to the generic priors.
+fn first_start(
+    p: &Problem,
+    manoeuvres: &[&[AirDataSample]],
+    config: &OeConfig,
+    mut run: impl FnMut(&[f64]) -> Result<(), EstimatorError>,
+) -> Result<(Vec<f64>, Vec<f64>), OeError> {
+    let np = config.structure.n_params();
+    let starts: Vec<Vec<f64>> = match &config.start {
+        Start::Given(v) => {
+            if v.len() != np {
+                return Err(EstimatorError::InvalidConfig {
+                    field: "start",
+                    value: v.len() as f64,
+                    reason: "Start::Given needs one value per structure parameter",
+                }
+                .into());
+            }
+            vec![v.clone()]
+        }
+        Start::Priors => vec![priors_start(&config.structure)],
+        Start::EquationError => {
+            vec![
+                equation_error_start(&config.structure, manoeuvres),
+                priors_start(&config.structure),
+            ]
+        }
+    };
+    let mut beta = vec![0.0; p.n_unknowns];
+    let mut last_err = None;
+    for theta0 in starts {
+        beta[..np].copy_from_slice(&theta0);
+        for (m, man) in p.man.iter().enumerate() {
+            for (q, &k) in p.x0_free.iter().enumerate() {
+                beta[p.x0_index(m, q)] = man.x0_meas[k];
+            }
+        }
+        match run(&beta) {
+            Ok(()) => return Ok((beta, theta0)),
+            Err(err) => last_err = Some(err),
+        }
+    }
+    Err(last_err
+        .unwrap_or(EstimatorError::Numerical { what: "no starting values", t_s: 0.0 })
+        .into())
+}
+
 fn priors_start(structure: &ModelStructure) -> Vec<f64> {
     let pr = Priors::generic(structure);
     (0..structure.n_params()).map(|i| pr.prior[i].value).collect()
@@ -764,13 +776,41 @@ fn finish(
     converged: bool,
     config: &OeConfig,
 ) -> Result<OeResult, EstimatorError> {
-    let nb = p.n_unknowns;
-    let ny = p.ny();
     let w: Vec<f64> = r.iter().map(|v| 1.0 / v).collect();
     let mut y = Vec::new();
     let mut s = Vec::new();
     p.simulate(beta, &mut y, Some(&mut s))?;
-    let (m, _, _) = normal_equations(&s, e, &w, nb);
+    let fit = Fitted { beta, s: &s, e, w: &w, r, names: unknown_names(p, structure) };
+    assemble(p, structure, fit, iterations, start, converged, config)
+}
+
+/// A converged (or last) iterate, ready for [`assemble`]: unknowns, sensitivities of the
+/// predicted outputs (`N·ny × nβ` row-major), residuals `z − ŷ`, weights `1/B` (per output:
+/// inverse of the residual variance), the reported noise variances and the unknowns' names.
+struct Fitted<'a> {
+    beta: &'a [f64],
+    s: &'a [f64],
+    e: &'a [f64],
+    w: &'a [f64],
+    r: &'a [f64],
+    names: Vec<String>,
+}
+
+/// The result of a fit: Cramér–Rao σ from `M = Σ Sᵀ W S`, correlations, coloured-residual σ
+/// and residual statistics (residual RMS `sqrt(1/w)`).
+fn assemble(
+    p: &Problem,
+    structure: &ModelStructure,
+    fit: Fitted<'_>,
+    iterations: Vec<OeIteration>,
+    start: Vec<f64>,
+    converged: bool,
+    config: &OeConfig,
+) -> Result<OeResult, EstimatorError> {
+    let Fitted { beta, s, e, w, r, names } = fit;
+    let nb = beta.len();
+    let ny = p.ny();
+    let (m, _, _) = normal_equations(s, e, w, nb);
     let minv = spd_inverse(&m).ok_or(EstimatorError::Numerical {
         what: "information matrix singular at the estimate: the unknowns are not all identifiable",
         t_s: 0.0,
@@ -785,10 +825,9 @@ fn finish(
     let lengths: Vec<usize> = p.man.iter().map(|m| m.u.len()).collect();
     let max_lag =
         config.coloured_max_lag.unwrap_or_else(|| lengths.iter().copied().min().unwrap_or(4) / 4);
-    let col = coloured::covariance(&s, e, &w, &lengths, &minv, max_lag);
+    let col = coloured::covariance(s, e, w, &lengths, &minv, max_lag);
     let sigma_coloured =
         col.covariance.map(|c| (0..nb).map(|i| c[(i, i)].sqrt()).collect::<Vec<_>>());
-    let names = unknown_names(p, structure);
     let n = p.n_samples as f64;
     let residual_mean: Vec<f64> =
         (0..ny).map(|j| e.iter().skip(j).step_by(ny).sum::<f64>() / n).collect();
@@ -804,7 +843,7 @@ fn finish(
         correlation,
         outputs: p.outputs.clone(),
         r: r.to_vec(),
-        residual_rms: r.iter().map(|v| v.sqrt()).collect(),
+        residual_rms: w.iter().map(|v| (1.0 / v).sqrt()).collect(),
         residual_mean,
         residuals: e.to_vec(),
         manoeuvre_lengths: lengths,

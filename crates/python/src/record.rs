@@ -157,9 +157,10 @@ fn replay_file<'py>(
     let run = move || -> anyhow::Result<_> {
         let mapping = Mapping::from_path(Path::new(&mapping))?;
         let model = model.as_deref().map(ModelSpec::from_arg).transpose()?;
-        if kind == EstimatorKind::Oe {
+        if kind.is_batch() {
             anyhow::bail!(
-                "estimator `oe` is a batch method with no per-sample estimates: use `aeroident replay --estimator oe`"
+                "estimator `{0}` is a batch method with no per-sample estimates: use `aeroident replay --estimator {0}`",
+                kind.name()
             );
         }
         let opts = ReplayOptions {

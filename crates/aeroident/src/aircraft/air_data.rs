@@ -227,6 +227,8 @@ pub struct AirDataSampler {
     held: Vec<f64>,
     /// The last `window` raw samples, oldest first.
     window: VecDeque<AirDataSample>,
+    /// The unsmoothed sample behind the last emitted one ([`AirDataSampler::raw`]).
+    raw: Option<AirDataSample>,
 }
 
 impl AirDataSampler {
@@ -306,6 +308,7 @@ impl AirDataSampler {
             weights,
             held,
             window: VecDeque::with_capacity(window + 1),
+            raw: None,
         })
     }
 
@@ -372,7 +375,21 @@ impl AirDataSampler {
         out.qdot_rad_s2 = Some(qd);
         out.rdot_rad_s2 = Some(rd);
         out.alphadot_rad_s = Some(ad);
+        let mut raw = *self.window.get(centre)?;
+        raw.pdot_rad_s2 = Some(pd);
+        raw.qdot_rad_s2 = Some(qd);
+        raw.rdot_rad_s2 = Some(rd);
+        raw.alphadot_rad_s = Some(ad);
+        self.raw = Some(raw);
         Some(out)
+    }
+
+    /// The **unsmoothed** sample behind the last one [`AirDataSampler::push`] emitted: the same
+    /// time stamp (`t − lag`), every channel with its sensor noise but without the matched
+    /// smoother (so its measurement errors are white, as a batch maximum-likelihood method
+    /// assumes), the differentiated `ṗ q̇ ṙ α̇` as emitted. `None` before the first emission.
+    pub fn raw(&self) -> Option<&AirDataSample> {
+        self.raw.as_ref()
     }
 }
 

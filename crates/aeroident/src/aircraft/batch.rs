@@ -1,6 +1,7 @@
-//! The batch (post-flight) estimator of `aeroident run` and `aeroident montecarlo`: output
-//! error (`[[estimator]] kind = "oe"`), fitted after the flight to the air-data samples the
-//! real-time estimators saw.
+//! The batch (post-flight) estimators of `aeroident run` and `aeroident montecarlo`: output
+//! error (`[[estimator]] kind = "oe"`) and the filter-error method (`kind = "fem"`, output
+//! error with process noise, [`aeroident_estimators::output_error::filter_error`]), fitted
+//! after the flight to the air-data samples the real-time estimators saw.
 //!
 //! # What is fitted
 //!
@@ -37,14 +38,36 @@
 //! exist before the end of the flight), so the time-history metrics (time to ±10 %, …) are
 //! `null` for it: the report marks the channel `batch`. A fit that fails or does not converge is
 //! the channel's failure, with the reason; its estimates stay `null`.
+//!
+//! # The filter-error method (`kind = "fem"`)
+//!
+//! The same window, outputs and `initial_states` option as `oe`; process noise (one `F` per
+//! state equation, estimated) on the translational air-data states `V, α, β` by default (the
+//! Dryden gusts of the simulation are translational: their derivatives drive the air-relative
+//! `V, α, β` equations, module doc of `filter_error`), option `process_noise = "V,alpha,beta"`
+//! (any of `V alpha beta p q r phi theta`). Its σ is its own Cramér–Rao σ (the innovations of
+//! a correct filter are white, so no coloured-residual correction), and the log carries the
+//! estimated `F`.
+//!
+//! **Samples** (option `samples = "raw" | "smoothed"`): `fem` fits by default the **unsmoothed**
+//! samples ([`super::air_data::AirDataSampler::raw`]: same time stamps, sensor noise, no matched
+//! smoother), `oe` the smoothed ones the real-time estimators see. The matched smoother (0.2 s
+//! window at the default 21 points) makes the measurement errors strongly correlated from one
+//! 0.01 s sample to the next; output error only loses efficiency from that (its coloured σ
+//! accounts for it), but the filter-error method's one-step predictor exploits it: fitted to
+//! the smoothed samples its `F` grows without bound (measured on the default scenario: `F_V`
+//! 3.6·10⁶ m/s/√s, the innovations of α ten times below the vane noise, no convergence), the
+//! filter following the smoothed measurements. Batch methods use no differentiated channel, so
+//! they do not need the smoother.
 
-use aeroident_estimators::flight_model::{N_STATES, Output, StateSet};
+use aeroident_estimators::flight_model::{N_STATES, Output, STATE_NAMES, StateSet, state};
+use aeroident_estimators::output_error::filter_error::{FemConfig, FemResult};
 use aeroident_estimators::output_error::{InitialStates, OeConfig, OeResult, StepKind};
 use aeroident_estimators::sample::AirDataSample;
 use serde::Serialize;
 
 use super::scenario::SampleEstimatorSpec;
-use crate::replay::batch::{fit_manoeuvres, oe_config, reported_sigma};
+use crate::replay::batch::{fit_fem_manoeuvres, fit_manoeuvres, oe_config, reported_sigma};
 
 /// Most Gauss–Newton iterations of the campaign's fits (the estimators crate's default is 50).
 /// On turbulent flights the residuals are large and structured, so Gauss–Newton converges
@@ -55,28 +78,58 @@ use crate::replay::batch::{fit_manoeuvres, oe_config, reported_sigma};
 pub const MAX_ITERATIONS: usize = 250;
 
 /// The batch estimator kinds of `[[estimator]]`.
-pub const BATCH_KINDS: [&str; 1] = ["oe"];
+pub const BATCH_KINDS: [&str; 2] = ["oe", "fem"];
 
 /// Whether `kind` is a batch (post-flight) estimator.
 pub fn is_batch(kind: &str) -> bool {
     BATCH_KINDS.contains(&kind)
 }
 
-/// The output-error configuration of a `kind = "oe"` entry: [`oe_config`] of its structure
-/// with Jategaonkar's relaxation step ([`StepKind::Relaxation`]; option `step =
-/// "concentrated"` for the other) and at most [`MAX_ITERATIONS`] iterations, the outputs of the structure's flight model without the differentiated `ṗ q̇ ṙ` (they are
+/// The configuration of a batch entry: output error or the filter-error method.
+#[derive(Debug, Clone, PartialEq)]
+pub enum BatchConfig {
+    /// `kind = "oe"`.
+    Oe(OeConfig),
+    /// `kind = "fem"`.
+    Fem(FemConfig),
+}
+
+impl BatchConfig {
+    /// The output-error part (for `fem`, the base it extends).
+    pub fn oe(&self) -> &OeConfig {
+        match self {
+            BatchConfig::Oe(c) => c,
+            BatchConfig::Fem(c) => &c.oe,
+        }
+    }
+
+    /// The `kind` of the entry (`oe` or `fem`).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            BatchConfig::Oe(_) => "oe",
+            BatchConfig::Fem(_) => "fem",
+        }
+    }
+}
+
+/// The configuration of a batch entry (`kind = "oe"` or `"fem"`): [`oe_config`] of its
+/// structure with Jategaonkar's relaxation step ([`StepKind::Relaxation`]; option `step =
+/// "concentrated"` for the other, `oe` only) and at most [`MAX_ITERATIONS`] iterations, the
+/// outputs of the structure's flight model without the differentiated `ṗ q̇ ṙ` (they are
 /// computed from the gyros already fitted, not independent measurements: fitting both would
 /// count the gyro noise twice under the diagonal `R`), and its option `initial_states`
-/// (`"first-sample"`, the default, or `"estimate"`).
+/// (`"first-sample"`, the default, or `"estimate"`). `fem` adds process noise on `V, α, β`
+/// (option `process_noise`, module doc).
 ///
 /// # Errors
 /// A message naming an unknown option or value.
-pub fn config(spec: &SampleEstimatorSpec) -> Result<OeConfig, String> {
+pub fn config(spec: &SampleEstimatorSpec) -> Result<BatchConfig, String> {
+    let kind = spec.kind.as_str();
     let mut c = oe_config(spec.model);
     c.initial_states = InitialStates::FirstSample;
     c.step = StepKind::Relaxation;
     c.max_iterations = MAX_ITERATIONS;
-    let set = StateSet::of(&spec.model).map_err(|e| format!("oe: {e}"))?;
+    let set = StateSet::of(&spec.model).map_err(|e| format!("{kind}: {e}"))?;
     c.outputs = Some(
         set.outputs()
             .iter()
@@ -84,6 +137,7 @@ pub fn config(spec: &SampleEstimatorSpec) -> Result<OeConfig, String> {
             .filter(|o| !matches!(o, Output::Pdot | Output::Qdot | Output::Rdot))
             .collect(),
     );
+    let mut process_noise = None;
     for (key, v) in &spec.options {
         match (key.as_str(), v.as_str()) {
             ("initial_states", Some("first-sample")) => {}
@@ -92,24 +146,82 @@ pub fn config(spec: &SampleEstimatorSpec) -> Result<OeConfig, String> {
             }
             ("initial_states", _) => {
                 return Err(format!(
-                    "oe: `initial_states` must be \"estimate\" or \"first-sample\", got {v}"
+                    "{kind}: `initial_states` must be \"estimate\" or \"first-sample\", got {v}"
                 ));
             }
-            ("step", Some("relaxation")) => c.step = StepKind::Relaxation,
-            ("step", Some("concentrated")) => c.step = StepKind::Concentrated,
-            ("step", _) => {
+            ("step", Some("relaxation")) if kind == "oe" => c.step = StepKind::Relaxation,
+            ("step", Some("concentrated")) if kind == "oe" => c.step = StepKind::Concentrated,
+            ("step", _) if kind == "oe" => {
                 return Err(format!(
                     "oe: `step` must be \"relaxation\" or \"concentrated\", got {v}"
                 ));
             }
+            ("samples", Some("raw" | "smoothed")) => {}
+            ("samples", _) => {
+                return Err(format!("{kind}: `samples` must be \"raw\" or \"smoothed\", got {v}"));
+            }
+            ("process_noise", Some(list)) if kind == "fem" => {
+                process_noise = Some(parse_states(list)?);
+            }
             (other, _) => {
                 return Err(format!(
-                    "oe: unknown option `{other}` (oe takes `initial_states` and `step`)"
+                    "{kind}: unknown option `{other}` (oe takes `initial_states`, `samples` and `step`, fem `initial_states`, `samples` and `process_noise`)"
                 ));
             }
         }
     }
-    Ok(c)
+    Ok(match kind {
+        "fem" => {
+            let mut f = FemConfig::new(spec.model);
+            f.oe = c;
+            if let Some(mask) = process_noise {
+                f.process_noise = mask;
+            }
+            BatchConfig::Fem(f)
+        }
+        _ => BatchConfig::Oe(c),
+    })
+}
+
+/// Whether a batch entry fits the unsmoothed samples (option `samples = "raw"`; the default
+/// for `fem`) or the smoothed ones the real-time estimators see (`samples = "smoothed"`; the
+/// default for `oe`). Module doc.
+///
+/// # Errors
+/// A message for a value other than `raw` or `smoothed`.
+pub fn raw_samples(spec: &SampleEstimatorSpec) -> Result<bool, String> {
+    match spec.options.get("samples").map(|v| v.as_str()) {
+        None => Ok(spec.kind == "fem"),
+        Some(Some("raw")) => Ok(true),
+        Some(Some("smoothed")) => Ok(false),
+        Some(v) => {
+            Err(format!("{}: `samples` must be \"raw\" or \"smoothed\", got {v:?}", spec.kind))
+        }
+    }
+}
+
+/// A comma-separated list of state names (`V alpha beta p q r phi theta`) as a full-state mask.
+fn parse_states(list: &str) -> Result<[bool; N_STATES], String> {
+    let mut mask = [false; N_STATES];
+    for name in list.split(',').map(str::trim).filter(|n| !n.is_empty()) {
+        let i = match name {
+            "V" | "vt" => state::V,
+            "alpha" => state::ALPHA,
+            "beta" => state::BETA,
+            "p" => state::P,
+            "q" => state::Q,
+            "r" => state::R,
+            "phi" => state::PHI,
+            "theta" => state::THETA,
+            other => {
+                return Err(format!(
+                    "fem: `process_noise` state `{other}` unknown (V alpha beta p q r phi theta)"
+                ));
+            }
+        };
+        mask[i] = true;
+    }
+    Ok(mask)
 }
 
 /// How a batch fit went (`summary.json` `batch_fits`, and the Monte Carlo per-run results).
@@ -137,6 +249,8 @@ pub struct BatchFit {
     pub coloured_sigma: bool,
     /// Lag (samples) at which the coloured-residual sum was truncated.
     pub coloured_lag: usize,
+    /// `fem`: the estimated process noise `(state, F, σ)` (state unit per √s); empty for `oe`.
+    pub process_noise: Vec<(String, f64, f64)>,
 }
 
 /// The outcome of [`fit_window`]: per structure parameter `(estimate, σ)`, and the log.
@@ -152,21 +266,42 @@ pub fn fit_window(
     label: &str,
     samples: &[AirDataSample],
     window_from_s: f64,
-    config: &OeConfig,
+    config: &BatchConfig,
 ) -> Result<WindowFit, String> {
     let k0 = samples.partition_point(|s| s.t_s < window_from_s);
     let window = &samples[k0..];
     if window.len() < 2 {
         return Err(format!(
-            "output error: {} samples after t = {window_from_s:.3} s, at least 2 needed",
+            "{}: {} samples after t = {window_from_s:.3} s, at least 2 needed",
+            config.kind(),
             window.len()
         ));
     }
-    let (result, wall_s) = fit_manoeuvres(&[window], config)?;
-    let sigma = reported_sigma(&result);
-    let values = result.values[..result.n_params].iter().copied().zip(sigma).collect();
-    let log = log_of(label, window, config, &result, wall_s);
-    Ok((values, log))
+    match config {
+        BatchConfig::Oe(c) => {
+            let (result, wall_s) = fit_manoeuvres(&[window], c)?;
+            let sigma = reported_sigma(&result);
+            let values = result.values[..result.n_params].iter().copied().zip(sigma).collect();
+            let log = log_of(label, window, c, &result, wall_s, Vec::new());
+            Ok((values, log))
+        }
+        BatchConfig::Fem(c) => {
+            let (fem, wall_s) = fit_fem_manoeuvres(&[window], c)?;
+            let r = &fem.result;
+            // The filter-error σ is its own Cramér–Rao σ (module doc).
+            let values = (0..r.n_params).map(|i| (r.values[i], r.sigma[i])).collect();
+            let log = log_of(label, window, &c.oe, r, wall_s, process_noise_of(&fem));
+            Ok((values, log))
+        }
+    }
+}
+
+/// `(state, F, σ)` of each process-noise state of a filter-error fit.
+pub fn process_noise_of(fem: &FemResult) -> Vec<(String, f64, f64)> {
+    fem.process_noise_states
+        .iter()
+        .filter_map(|&i| fem.process_noise(i).map(|(f, s)| (STATE_NAMES[i].to_string(), f, s)))
+        .collect()
 }
 
 fn log_of(
@@ -175,6 +310,7 @@ fn log_of(
     config: &OeConfig,
     r: &OeResult,
     wall_s: f64,
+    process_noise: Vec<(String, f64, f64)>,
 ) -> BatchFit {
     BatchFit {
         estimator: label.into(),
@@ -189,7 +325,8 @@ fn log_of(
         iterations: Some(r.n_iterations()),
         wall_s,
         residual_rms: r.residual_rms.clone(),
-        coloured_sigma: r.sigma_coloured.is_some(),
+        coloured_sigma: r.sigma_coloured.is_some() && process_noise.is_empty(),
         coloured_lag: r.coloured_lag,
+        process_noise,
     }
 }

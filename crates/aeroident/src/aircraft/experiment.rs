@@ -308,7 +308,9 @@ struct SampleChannel {
 
 /// A batch channel: the recorded samples, fitted after the flight.
 struct BatchChannel {
-    config: aeroident_estimators::output_error::OeConfig,
+    config: super::batch::BatchConfig,
+    /// Record the unsmoothed samples ([`AirDataSampler::raw`]) instead of the smoothed ones.
+    raw_samples: bool,
     structure: ModelStructure,
     samples: Vec<AirDataSample>,
 }
@@ -424,14 +426,17 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
         let (ch, kind, quantity, params, status) = match spec {
             EstimatorSpec::Sample(s) if super::batch::is_batch(&s.kind) => {
                 let config = super::batch::config(s).map_err(|e| setup_err(&what, e))?;
-                let structure = config.structure;
+                let structure = config.oe().structure;
+                let kind = config.kind();
+                let raw_samples = super::batch::raw_samples(s).map_err(|e| setup_err(&what, e))?;
                 (
                     Channelled::Batch(BatchChannel {
                         config,
+                        raw_samples,
                         structure,
                         samples: Vec::with_capacity(n + 1),
                     }),
-                    "oe",
+                    kind,
                     Quantity::Derivative,
                     structure.params().collect(),
                     Some("recording"),
@@ -577,8 +582,9 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
             None => (x_ref, xdot_ref),
         };
         let air = sampler.as_mut().and_then(|s| s.push(t, &x_ref, &outputs, &u));
+        let raw = air.and(sampler.as_ref().and_then(AirDataSampler::raw).copied());
         for (c, truth) in channels.iter_mut().zip(&truths) {
-            step_channel(c, t, &z_m, &zdot_m, &u_est, air.as_ref());
+            step_channel(c, t, &z_m, &zdot_m, &u_est, air.as_ref(), raw.as_ref());
             for (l, tr) in c.log.params.iter_mut().zip(truth) {
                 l.truth.push(tr[ep]);
             }
@@ -626,7 +632,11 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
                 }
                 c.log.status = Some("converged");
                 c.log.stats = format!(
-                    "output error: {} samples from t = {:.2} s, {} iterations, {:.2} s",
+                    "{}: {} samples from t = {:.2} s, {} iterations, {:.2} s",
+                    match b.config.kind() {
+                        "fem" => "filter error",
+                        _ => "output error",
+                    },
                     log.samples,
                     log.from_s,
                     log.iterations.unwrap_or(0),
@@ -671,6 +681,7 @@ fn step_channel(
     zdot_m: &F16State,
     u_est: &F16Controls,
     air: Option<&AirDataSample>,
+    raw: Option<&AirDataSample>,
 ) {
     match &mut c.ch {
         Channelled::Two(two) => {
@@ -727,7 +738,7 @@ fn step_channel(
             }
         }
         Channelled::Batch(b) => {
-            if let Some(sample) = air {
+            if let Some(sample) = if b.raw_samples { raw } else { air } {
                 b.samples.push(*sample);
             }
             for l in &mut c.log.params {

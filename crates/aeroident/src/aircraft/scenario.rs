@@ -59,7 +59,9 @@
 //! step]`, default Morelli's 0.1–1.5 Hz in 0.04 Hz), `ekf`, `smpe`, `smpe-corrected`,
 //! `gradient`. Batch kind `oe` (output error fitted after the flight to the recorded samples of
 //! the window after the damage; options `initial_states = "estimate" | "first-sample"` and
-//! `step = "relaxation" | "concentrated"`; [`super::batch`]).
+//! `step = "relaxation" | "concentrated"`, `samples = "smoothed" | "raw"`) and `fem` (the
+//! filter-error method, output error with process noise; options `initial_states`,
+//! `process_noise = "V,alpha,beta"`, `samples = "raw" | "smoothed"`); [`super::batch`].
 //!
 //! The old syntax (`[params.dCm_alpha]`, `params = ["dCm_alpha"]`, `kind = "gradient"` for the
 //! two-aircraft gradient law) is refused with a message saying what to write instead.

@@ -102,12 +102,13 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     };
     let mavlink = crate::live::is_mavlink(&args.data);
     let live = args.data == "-" || mavlink;
-    if args.estimator == EstimatorKind::Oe && mavlink {
+    if args.estimator.is_batch() && mavlink {
         anyhow::bail!(
-            "--estimator oe is a batch fit of a whole record, not for a live MAVLink feed"
+            "--estimator {} is a batch fit of a whole record, not for a live MAVLink feed",
+            args.estimator.name()
         );
     }
-    if args.estimator == EstimatorKind::Oe {
+    if args.estimator.is_batch() {
         return execute_batch(&args, &mapping, opts.model);
     }
     if !live && args.out.is_none() {
@@ -333,20 +334,22 @@ pub fn diverged_error(outcome: &ReplayOutcome, estimator: &str) -> Option<String
     ))
 }
 
-/// `--estimator oe`: the batch output-error fit of the whole record.
+/// `--estimator oe | fem`: the batch output-error (or filter-error) fit of the whole record.
 fn execute_batch(
     args: &ReplayArgs,
     mapping: &Mapping,
     model: Option<ModelSpec>,
 ) -> anyhow::Result<()> {
+    let fem = args.estimator == EstimatorKind::Fem;
     eprintln!(
-        "output error is a batch method: reading the whole record before fitting (not real time)"
+        "{} is a batch method: reading the whole record before fitting (not real time)",
+        if fem { "the filter-error method" } else { "output error" }
     );
     let (reader, notes) = open_log_with_notes(&args.data, args.format, mapping)?;
     for n in &notes {
         eprintln!("note: {n}");
     }
-    let mut outcome = crate::replay::batch::fit_record(reader, mapping, model)?;
+    let mut outcome = crate::replay::batch::fit_record(reader, mapping, model, fem)?;
     if let Some(path) = &args.validate_on {
         let name = path.display().to_string();
         let (reader, notes) = open_log_with_notes(&name, None, mapping)?;
@@ -371,7 +374,7 @@ fn execute_batch(
             let name = Path::new(&args.data)
                 .file_name()
                 .map_or(args.data.clone(), |n| n.to_string_lossy().into_owned());
-            let title = format!("{name} — oe — {}", outcome.model.name);
+            let title = format!("{name} — {} — {}", args.estimator.name(), outcome.model.name);
             let results = crate::report::batch::write(args, &outcome, &title, &mut out)?;
             crate::cli::print_stdout(&crate::table::render(&results))?;
             eprintln!(

@@ -1,5 +1,8 @@
 //! Batch output-error estimation of a whole record (`aeroident replay --estimator oe`): the
-//! post-flight reference a flight-test engineer compares the real-time estimators to.
+//! post-flight reference a flight-test engineer compares the real-time estimators to; and the
+//! filter-error method (`--estimator fem`: output error with process noise on the air-data
+//! states, [`aeroident_estimators::output_error::filter_error`]), whose reported σ is its own
+//! Cramér–Rao σ and whose validation simulates the model with its estimates (no filter).
 //!
 //! Unlike the other estimators this is not causal: it reads the whole record first (and says
 //! so), splits it into manoeuvres at the reader's gap events, and runs
@@ -19,6 +22,7 @@ use crate::validation::{OutputData, validate};
 use aeroident_estimators::Term;
 use aeroident_estimators::flight_model::FlightModel;
 use aeroident_estimators::output_error::Start;
+use aeroident_estimators::output_error::filter_error::{self, FemConfig, FemResult};
 use aeroident_estimators::output_error::{OeConfig, OeError, OeResult, fit};
 use aeroident_estimators::{AirDataSample, ModelStructure};
 use aeroident_io::{FlightDataReader, Mapping, ModelSpec, RecordEvent, Rejection, RejectionLog};
@@ -166,6 +170,11 @@ pub struct BatchSummary {
     pub validation: ValidationReport,
     /// Validation on a second record (`--validate-on`), else `null`.
     pub validation_on: Option<ValidationReport>,
+    /// `fem`: the estimated process noise `(state, F, σ)`, state unit per √s; empty for `oe`.
+    pub process_noise: Vec<(String, f64, f64)>,
+    /// `fem`: the measurement-noise variances `R` recovered from the innovations, per output;
+    /// empty for `oe` (its `residual_rms` is the noise).
+    pub measurement_noise_var: Vec<(String, f64)>,
 }
 
 /// The richest preset the flight model can integrate from the record's first sample.
@@ -260,10 +269,29 @@ pub fn fit_manoeuvres(
     config: &OeConfig,
 ) -> Result<(OeResult, f64), String> {
     let t0 = std::time::Instant::now();
-    let result = fit(manoeuvres, config).map_err(|e| match e {
+    let result = fit(manoeuvres, config).map_err(|e| fit_error("output error", e))?;
+    Ok((result, t0.elapsed().as_secs_f64()))
+}
+
+/// Fits `manoeuvres` by the filter-error method with `config` and times the fit.
+///
+/// # Errors
+/// As [`fit_manoeuvres`].
+pub fn fit_fem_manoeuvres(
+    manoeuvres: &[&[AirDataSample]],
+    config: &FemConfig,
+) -> Result<(FemResult, f64), String> {
+    let t0 = std::time::Instant::now();
+    let result = filter_error::fit(manoeuvres, config).map_err(|e| fit_error("filter error", e))?;
+    Ok((result, t0.elapsed().as_secs_f64()))
+}
+
+/// The message of a failed fit: for one that did not converge, the reason, the iteration count
+/// and the last iteration's convergence measures (relative change of det R, largest step in
+/// Cramér–Rao σ), so a creeping fit can be told from a stalled one.
+fn fit_error(method: &str, e: OeError) -> String {
+    match e {
         OeError::NotConverged { reason, result } => {
-            // The last iteration's convergence measures (relative change of det R, largest
-            // step in Cramér–Rao σ), so a creeping fit can be told from a stalled one.
             let it = &result.iterations;
             let last = match it.as_slice() {
                 [.., a, b] => format!(
@@ -274,13 +302,33 @@ pub fn fit_manoeuvres(
                 _ => String::new(),
             };
             format!(
-                "output error did not converge ({reason:?}) after {} iterations{last}: no result",
+                "{method} did not converge ({reason:?}) after {} iterations{last}: no result",
                 result.n_iterations()
             )
         }
-        OeError::Estimator(e) => format!("output error: {e}"),
-    })?;
-    Ok((result, t0.elapsed().as_secs_f64()))
+        OeError::Estimator(e) => format!("{method}: {e}"),
+    }
+}
+
+/// The model's simulated outputs over `manoeuvres` with parameters `theta` (no fit: output
+/// error's simulation at the given values, initial states at each manoeuvre's first sample),
+/// as a result whose residuals are `z − y` (for the validation of a filter-error fit, whose
+/// own residuals are one-step innovations).
+fn simulate_at(
+    manoeuvres: &[&[AirDataSample]],
+    structure: ModelStructure,
+    outputs: &[aeroident_estimators::Output],
+    theta: &[f64],
+) -> Result<OeResult, aeroident_estimators::EstimatorError> {
+    let mut config = OeConfig::new(structure);
+    config.outputs = Some(outputs.to_vec());
+    config.start = Start::Given(theta.to_vec());
+    config.max_iterations = 0;
+    match fit(manoeuvres, &config) {
+        Ok(res) => Ok(res),
+        Err(OeError::NotConverged { result, .. }) => Ok(*result),
+        Err(OeError::Estimator(e)) => Err(e),
+    }
 }
 
 /// The σ a batch fit reports per structure parameter (structure order): the coloured-residual
@@ -292,7 +340,8 @@ pub fn reported_sigma(result: &OeResult) -> Vec<f64> {
         .collect()
 }
 
-/// Reads the whole record, splits it at gaps and fits it by output error.
+/// Reads the whole record, splits it at gaps and fits it by output error (`fem`: by the
+/// filter-error method with [`FemConfig::new`]'s defaults on [`oe_config`]).
 ///
 /// # Errors
 /// Fatal data errors, no usable samples, no supported model, and a fit that fails or does not
@@ -301,6 +350,7 @@ pub fn fit_record<R: Read>(
     reader: FlightDataReader<R>,
     mapping: &Mapping,
     model: Option<ModelSpec>,
+    fem: bool,
 ) -> Result<BatchOutcome, ReplayError> {
     let file = reader.file().to_string();
     let rec = read_manoeuvres(reader)?;
@@ -312,9 +362,21 @@ pub fn fit_record<R: Read>(
         None => default_model(&first, mapping)?,
     };
     let slices: Vec<&[AirDataSample]> = manoeuvres.iter().map(Vec::as_slice).collect();
-    let (result, fit_wall_s) =
-        fit_manoeuvres(&slices, &oe_config(model.structure)).map_err(ReplayError::Model)?;
-    let reported = reported_sigma(&result);
+    let (result, fit_wall_s, fem_result) = if fem {
+        let mut config = FemConfig::new(model.structure);
+        config.oe = oe_config(model.structure);
+        // The relaxation of B and R converges linearly (module doc of filter_error).
+        config.oe.max_iterations = crate::aircraft::batch::MAX_ITERATIONS;
+        let (f, wall) = fit_fem_manoeuvres(&slices, &config).map_err(ReplayError::Model)?;
+        (f.result.clone(), wall, Some(f))
+    } else {
+        let (r, wall) =
+            fit_manoeuvres(&slices, &oe_config(model.structure)).map_err(ReplayError::Model)?;
+        (r, wall, None)
+    };
+    // The filter-error σ is its own Cramér–Rao σ (its innovations are white by construction).
+    let reported =
+        if fem { result.sigma[..result.n_params].to_vec() } else { reported_sigma(&result) };
     let parameters = (0..result.n_params)
         .map(|i| BatchParameter {
             name: result.names[i].clone(),
@@ -346,10 +408,19 @@ pub fn fit_record<R: Read>(
             c.a, c.b, c.rho
         ));
     }
-    let validation = simulated_validation(&result, &slices, &file, None);
-    let traces = output_traces(&result, &slices);
+    // A filter-error fit is validated (and drawn) by simulating the model at its estimates.
+    let simulated = match &fem_result {
+        Some(_) => {
+            simulate_at(&slices, st, &result.outputs, &result.values[..np]).map_err(|e| {
+                ReplayError::Model(format!("filter error: simulating the estimates: {e}"))
+            })?
+        }
+        None => result.clone(),
+    };
+    let validation = simulated_validation(&simulated, &slices, &file, None);
+    let traces = output_traces(&simulated, &slices);
     let summary = BatchSummary {
-        estimator: "oe".into(),
+        estimator: if fem { "fem" } else { "oe" }.into(),
         model: model.name.clone(),
         status: "converged".into(),
         samples_read: read,
@@ -379,6 +450,19 @@ pub fn fit_record<R: Read>(
         warnings,
         validation,
         validation_on: None,
+        process_noise: fem_result
+            .as_ref()
+            .map_or_else(Vec::new, crate::aircraft::batch::process_noise_of),
+        measurement_noise_var: match &fem_result {
+            Some(f) => f
+                .result
+                .outputs
+                .iter()
+                .zip(&f.result.r)
+                .map(|(o, r)| (o.name().to_string(), *r))
+                .collect(),
+            None => Vec::new(),
+        },
     };
     Ok(BatchOutcome { model, result, summary, traces })
 }
@@ -473,15 +557,7 @@ pub fn validate_on<R: Read>(
     let slices: Vec<&[AirDataSample]> = rec.manoeuvres.iter().map(Vec::as_slice).collect();
     let r = &fitted.result;
     let np = r.n_params;
-    let mut config = OeConfig::new(r.structure);
-    config.outputs = Some(r.outputs.clone());
-    config.start = Start::Given(r.values[..np].to_vec());
-    config.max_iterations = 0;
-    let simulated = match fit(&slices, &config) {
-        Ok(res) => Ok(res),
-        Err(OeError::NotConverged { result, .. }) => Ok(*result),
-        Err(OeError::Estimator(e)) => Err(e),
-    };
+    let simulated = simulate_at(&slices, r.structure, &r.outputs, &r.values[..np]);
     match simulated {
         Ok(res) => Ok(simulated_validation(&res, &slices, &file, Some(&r.r))),
         Err(e) => {

@@ -189,7 +189,7 @@ impl Problem {
     }
 
     /// Initial state of manoeuvre `m` (filter order) at `β`.
-    fn x0(&self, m: usize, beta: &[f64]) -> [f64; N_STATES] {
+    pub fn x0(&self, m: usize, beta: &[f64]) -> [f64; N_STATES] {
         let mut x = self.man[m].x0_meas;
         for (q, &k) in self.x0_free.iter().enumerate() {
             x[k] = beta[self.x0_index(m, q)];
@@ -264,22 +264,16 @@ impl Problem {
                     stage_sensitivity(&lin, nx, np, nb, &xs, &mut kk[0]);
                     lin.f
                 } else {
-                    let xf = self.model.full_state(&x[..nx], u);
-                    let z8 = [0.0; 8];
-                    let d = self.model.eval(theta, u, &xf, &z8, &z8, None)?;
-                    for (j, o) in self.outputs.iter().enumerate() {
-                        yrow[j] = d.output(*o, &xf) + self.bias_of[j].map_or(0.0, |b| beta[b]);
-                    }
-                    let mut f = [0.0; N_STATES];
-                    for (k, &s) in self.model.state_set().states().iter().enumerate() {
-                        f[k] = d.xdot[s];
-                    }
-                    f
+                    self.outputs_at(beta, u, &x, yrow)?
                 };
                 if i + 1 == n {
                     break;
                 }
                 let u1 = &man.u[i + 1];
+                if !with_sens {
+                    x = self.rk4_step(theta, u, u1, &x, k1)?;
+                    continue;
+                }
                 let dt = u1.t_s - u.t_s;
                 let um = ModelInputs::lerp(u, u1, 0.5);
                 let mut kf = [k1, [0.0; N_STATES], [0.0; N_STATES], [0.0; N_STATES]];
@@ -288,26 +282,20 @@ impl Problem {
                     for r in 0..nx {
                         xst[r] = x[r] + c * dt * kf[s][r];
                     }
-                    if with_sens {
-                        let (prev, next) = kk.split_at_mut(s + 1);
-                        for (v, (x0v, kv)) in xstage.iter_mut().zip(xs.iter().zip(&prev[s])) {
-                            *v = x0v + c * dt * kv;
-                        }
-                        self.model.linearise(theta, us, &xst[..nx], &mut lin)?;
-                        stage_sensitivity(&lin, nx, np, nb, &xstage, &mut next[0]);
-                        kf[s + 1] = lin.f;
-                    } else {
-                        kf[s + 1] = self.model.derivatives(theta, us, &xst[..nx])?;
+                    let (prev, next) = kk.split_at_mut(s + 1);
+                    for (v, (x0v, kv)) in xstage.iter_mut().zip(xs.iter().zip(&prev[s])) {
+                        *v = x0v + c * dt * kv;
                     }
+                    self.model.linearise(theta, us, &xst[..nx], &mut lin)?;
+                    stage_sensitivity(&lin, nx, np, nb, &xstage, &mut next[0]);
+                    kf[s + 1] = lin.f;
                 }
                 for r in 0..nx {
                     x[r] += dt / 6.0 * (kf[0][r] + 2.0 * kf[1][r] + 2.0 * kf[2][r] + kf[3][r]);
                 }
-                if with_sens {
-                    for (idx, v) in xs.iter_mut().enumerate() {
-                        *v += dt / 6.0
-                            * (kk[0][idx] + 2.0 * kk[1][idx] + 2.0 * kk[2][idx] + kk[3][idx]);
-                    }
+                for (idx, v) in xs.iter_mut().enumerate() {
+                    *v +=
+                        dt / 6.0 * (kk[0][idx] + 2.0 * kk[1][idx] + 2.0 * kk[2][idx] + kk[3][idx]);
                 }
             }
             row0 += n;
@@ -315,7 +303,63 @@ impl Problem {
         Ok(())
     }
 
-    fn check_state(&self, x: &[f64; N_STATES], t_s: f64) -> Result<(), EstimatorError> {
+    /// The selected outputs `h(x, u, θ) + b` at state `x` (filter order) into `yrow`
+    /// (length `ny`), and `f(x, u, θ)` (returned, filter order).
+    ///
+    /// # Errors
+    /// As [`FlightModel::eval`].
+    pub fn outputs_at(
+        &self,
+        beta: &[f64],
+        u: &ModelInputs,
+        x: &[f64; N_STATES],
+        yrow: &mut [f64],
+    ) -> Result<[f64; N_STATES], EstimatorError> {
+        let xf = self.model.full_state(&x[..self.nx], u);
+        let z8 = [0.0; 8];
+        let d = self.model.eval(&beta[..self.np], u, &xf, &z8, &z8, None)?;
+        for (j, o) in self.outputs.iter().enumerate() {
+            yrow[j] = d.output(*o, &xf) + self.bias_of[j].map_or(0.0, |b| beta[b]);
+        }
+        let mut f = [0.0; N_STATES];
+        for (k, &s) in self.model.state_set().states().iter().enumerate() {
+            f[k] = d.xdot[s];
+        }
+        Ok(f)
+    }
+
+    /// One classical RK4 step (module doc) from state `x` at the sample with inputs `u` to the
+    /// next sample with inputs `u1`, given `k1 = f(x, u)`; returns the state there.
+    ///
+    /// # Errors
+    /// As [`FlightModel::eval`].
+    pub fn rk4_step(
+        &self,
+        theta: &[f64],
+        u: &ModelInputs,
+        u1: &ModelInputs,
+        x: &[f64; N_STATES],
+        k1: [f64; N_STATES],
+    ) -> Result<[f64; N_STATES], EstimatorError> {
+        let nx = self.nx;
+        let dt = u1.t_s - u.t_s;
+        let um = ModelInputs::lerp(u, u1, 0.5);
+        let mut kf = [k1, [0.0; N_STATES], [0.0; N_STATES], [0.0; N_STATES]];
+        for (s, (c, us)) in [(0.5, &um), (0.5, &um), (1.0, u1)].into_iter().enumerate() {
+            let mut xst = [0.0; N_STATES];
+            for r in 0..nx {
+                xst[r] = x[r] + c * dt * kf[s][r];
+            }
+            kf[s + 1] = self.model.derivatives(theta, us, &xst[..nx])?;
+        }
+        let mut out = *x;
+        for r in 0..nx {
+            out[r] += dt / 6.0 * (kf[0][r] + 2.0 * kf[1][r] + 2.0 * kf[2][r] + kf[3][r]);
+        }
+        Ok(out)
+    }
+
+    pub fn check_state(&self, x: &[f64; N_STATES], t_s: f64) -> Result<(), EstimatorError> {
         let states = self.model.state_set().states();
         let bad = x[..self.nx].iter().zip(states).any(|(v, &i)| {
             !v.is_finite()

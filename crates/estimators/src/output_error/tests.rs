@@ -24,6 +24,32 @@ fn simulate(
     seed: u64,
     x0_offset: [f64; N_STATES],
 ) -> Vec<AirDataSample> {
+    simulate_with_process_noise(
+        st,
+        th,
+        rate,
+        duration,
+        noise_scale,
+        seed,
+        x0_offset,
+        [0.0; N_STATES],
+    )
+}
+
+/// [`simulate`] with white process noise of intensity `process[i]` (state unit per √s,
+/// full-state order) added to the integrated state equations: after each RK4 substep of
+/// length `h`, `x_i += process[i] √h N(0, 1)` (Euler–Maruyama; the same seeded generator).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn simulate_with_process_noise(
+    st: &ModelStructure,
+    th: &[f64],
+    rate: f64,
+    duration: f64,
+    noise_scale: f64,
+    seed: u64,
+    x0_offset: [f64; N_STATES],
+    process: [f64; N_STATES],
+) -> Vec<AirDataSample> {
     let model = FlightModel::new(*st).unwrap();
     let set = model.state_set();
     let states = set.states();
@@ -90,13 +116,16 @@ fn simulate(
             let k4 = f(&ub, &a4);
             for (kk, &i) in states.iter().enumerate() {
                 x[i] += h / 6.0 * (k1[kk] + 2.0 * k2[kk] + 2.0 * k3[kk] + k4[kk]);
+                if process[i] > 0.0 {
+                    x[i] += process[i] * h.sqrt() * n01.sample(&mut rng);
+                }
             }
         }
     }
     out
 }
 
-fn lon() -> ModelStructure {
+pub(super) fn lon() -> ModelStructure {
     ModelStructure::empty()
         .with(C::CL, &[T::Bias, T::Alpha, T::De])
         .with(C::CD, &[T::Bias, T::Alpha])

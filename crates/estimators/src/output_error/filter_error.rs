@@ -1,0 +1,662 @@
+//! The filter-error method: maximum-likelihood estimation with process noise, a steady-state
+//! Kalman filter inside the cost (Jategaonkar, *Flight Vehicle System Identification*, 2nd
+//! ed., AIAA 2015, ch. 5, the book's `ml_fem.m`; Maine & Iliff, NASA RP-1168, 1986, ch. 7).
+//! Section and equation numbers are not quoted: they were not checked against the books.
+//!
+//! Output error ([`super::fit`]) treats everything the model does not explain as measurement
+//! noise; in turbulence the aircraft's response to the gusts is then a slowly varying,
+//! strongly coloured "residual", the estimates scatter far beyond the Cramér–Rao bound and
+//! their σ is optimistic. The filter-error method models the gusts as process noise:
+//!
+//! ```text
+//! ẋ = f(x, u, θ) + F w,   z_k = h(x_k, u_k, θ) + b + v_k,   w, v white, cov v = R
+//! ```
+//!
+//! with `F` diagonal, one σ per state equation (units of the state per √s), estimated with
+//! `θ` as `ln F` (positive by construction; the likelihood is far closer to quadratic in
+//! `ln F` than in `F`: with `F` itself the Gauss–Newton steps of the slow `F_V` overshot and
+//! alternated, measured on the F-16 campaign). Which state equations carry process noise is configurable
+//! ([`FemConfig::process_noise`]); the default ([`AIR_DATA_STATES`]) is the translational
+//! air-data states `V, α, β` of the structure's state set: a translational gust `(u_g, v_g,
+//! w_g)` enters the air-relative `V, α, β` equations as its time derivative, which for the
+//! Dryden spectrum is nearly white above `V/L` (≈ 0.4 rad/s for the F-16 campaign), while the
+//! rate equations get no direct gust input.
+//!
+//! # The filter (per cost evaluation)
+//!
+//! Reuses the output-error problem (manoeuvres, outputs, biases, free initial states) and its
+//! RK4 step (`output_error/simulation.rs`). At the unknowns `β = (θ, b, x0, F)`:
+//!
+//! 1. `A = ∂f/∂x`, `C = ∂h/∂x` ([`crate::flight_model::FlightModel::linearise`], exact) averaged over up to
+//!    [`LINEARISATION_POINTS`] samples spread over the record, at their **measured** states
+//!    (so the gain is a smooth function of `β`); `Φ = exp(A Δt)` with `Δt` the median sample
+//!    interval; `Q = F Fᵀ Δt` (first order); the steady-state filter from the discrete
+//!    Riccati equation with the current `R` ([`super::riccati`]).
+//! 2. Per manoeuvre from its initial state: prediction `x̃_k` by the nonlinear model (RK4
+//!    between samples, inputs linear), `ŷ_k = h(x̃_k) + b`, innovation `ν_k = z_k − ŷ_k`,
+//!    correction `x̂_k = x̃_k + K ν_k`.
+//!
+//! With `F = 0` the gain is zero and the filter is the output-error simulation.
+//!
+//! # Estimation (Jategaonkar's two-step relaxation)
+//!
+//! Negative log-likelihood `½ Σ νᵀ B⁻¹ ν + (N/2) ln det B`. Each iteration:
+//!
+//! 1. `B = diag((1/N) Σ ν νᵀ)` (the ML innovation covariance, diagonal as output error's `R`);
+//! 2. one Gauss–Newton step on `β = (θ, b, x0, ln F)` with `B` fixed: `M = Σ Sᵀ B⁻¹ S`,
+//!    `g = Σ Sᵀ B⁻¹ ν`, `(M + λ diag M) Δ = g`, accepted when `J = ½ Σ νᵀ B⁻¹ ν` falls
+//!    (Levenberg–Marquardt damping exactly as output error's relaxation step). The `ln F`
+//!    components move by [`F_STEP`] (half) of their Gauss–Newton step: full steps alternated
+//!    on the slowly identified `F_V` (ratio −0.94 per iteration on the F-16 campaign, 110
+//!    iterations; 33 with half steps). `ln F` is bounded below ([`F_MIN_FRACTION`]); a step
+//!    beyond goes to the bound, and a bounded `ln F` whose gradient points further down is
+//!    held there (active set: on calm data its information vanishes). When no step reduces
+//!    `J` but the last accepted step was already below the step tolerance, `β` stays (zero
+//!    step) and the relaxation of `B` and `R` goes on;
+//! 3. the measurement-noise covariance the Riccati equation needs, from the innovations by
+//!    the compatibility `R = diag(B − C P Cᵀ)` (so that at the fixed point the filter's own
+//!    innovation variance `C P Cᵀ + R` matches the measured one), approached by half a Newton
+//!    step of that fixed-point map, `R += ½ (1 − diag(C K)) (B − C P Cᵀ − R)`, limited to a
+//!    factor 4 per iteration and floored at [`R_FLOOR`] `· B`. The plain substitution
+//!    diverges when `diag(C K) > ½` (the map's slope is `−CK/(1 − CK)`; measured on synthetic
+//!    records: `F_α` ran to 750 with `R_α` at its floor). The book solves the Riccati
+//!    equation with `B` and enforces `R ≥ 0` as the constraint `diag(K C) ≤ 1` on `F` with a
+//!    heuristic `F` correction after each `B` update; this implementation keeps `R` explicit
+//!    instead, which satisfies that constraint by construction, but does not bound `F`: on
+//!    records whose output-error residuals are model error (HFB-320's α) `F` on that state
+//!    runs up and `R` to its floor (docs/uncertainty.md, "Filter-error method").
+//!
+//! **Sensitivities** `S = ∂ŷ/∂β` by central differences of the **whole filter**, as `ml_fem.m`:
+//! each unknown perturbed by `±10⁻⁴ max(|β_i|, 10⁻³)`, the gain recomputed for the perturbed
+//! values (the innovations depend on `F` only through the gain, so it must be), `R` held.
+//! `2 nβ` filter passes per iteration.
+//!
+//! **Convergence** as output error: the relative change of `det B` below
+//! [`super::OeConfig::cost_tolerance`] and the largest step below
+//! [`super::OeConfig::step_tolerance_sigma`] Cramér–Rao σ. A fit that reaches the iteration
+//! limit or stops descending with a large step is [`OeError::NotConverged`] (never a result).
+//!
+//! # Starting values
+//!
+//! `θ` as output error ([`super::Start`]); `R` from the second differences of each measured
+//! output (`Σ (z_{k+1} − 2 z_k + z_{k−1})² / (6 (N − 2))`, the white-noise variance of a
+//! smooth signal); `F` from [`FemConfig::process_noise_start`], else
+//! `0.1 sqrt(R_j / Δt)` of the output measuring the state (10⁻³ when none does).
+//!
+//! # Data
+//!
+//! The measurement errors must be white from sample to sample: on pre-smoothed records (the
+//! campaign's matched smoother) the one-step predictor follows the smoothed noise and `F`
+//! grows without bound (measured; the campaign fits the unsmoothed samples).
+//!
+//! # Accuracy
+//!
+//! Cramér–Rao σ `sqrt(diag M⁻¹)` with `M = Σ Sᵀ B⁻¹ S` at the estimate (Jategaonkar ch. 5: the
+//! innovations of the correct filter are white, so no coloured-residual correction is needed;
+//! it is still formed, [`super::OeResult::sigma_coloured`], as a check). `F` and its σ are
+//! reported from `ln F` to first order (`σ_F = F σ_ln F`, covariance rows scaled by `F`). On
+//! the F-16 campaign this σ is 1.25–2.8× short of the scatter of the estimates
+//! (docs/uncertainty.md, "Filter-error method").
+
+use super::riccati;
+use super::simulation::Problem;
+use super::{
+    Fitted, NotConverged, OeConfig, OeError, OeIteration, OeResult, assemble, damped_step,
+    first_start, normal_equations, prepare, residuals, spd_inverse, unknown_names, weighted_cost,
+};
+use crate::EstimatorError;
+use crate::flight_model::{Linearisation, N_STATES, Output, STATE_NAMES, state};
+use crate::sample::AirDataSample;
+use crate::vocabulary::ModelStructure;
+use core::fmt;
+use nalgebra::DMatrix;
+use std::boxed::Box;
+use std::format;
+use std::vec;
+use std::vec::Vec;
+
+/// The default process-noise states (full-state order `(V, α, β, p, q, r, φ, θ)`): the
+/// translational air-data states `V, α, β` (module doc).
+pub const AIR_DATA_STATES: [bool; N_STATES] = {
+    let mut m = [false; N_STATES];
+    m[state::V] = true;
+    m[state::ALPHA] = true;
+    m[state::BETA] = true;
+    m
+};
+
+/// Most samples at which `A` and `C` are linearised and averaged (module doc).
+pub const LINEARISATION_POINTS: usize = 50;
+
+/// Lower bound of each process-noise σ, as a fraction of `sqrt(R_j / Δt)` of the output
+/// measuring the state (`10⁻²` state units per √s when none does): the gain goes with `F²`, so
+/// at the bound the process noise no longer affects the filter (`ln F` cannot run to `−∞` on
+/// calm data, where the information on it vanishes).
+pub const F_MIN_FRACTION: f64 = 1e-3;
+
+/// Fraction of the Gauss–Newton step taken in `ln F` (module doc).
+pub const F_STEP: f64 = 0.5;
+
+/// Floor of the measurement-noise variance recovered from the innovations, as a fraction of
+/// the innovation variance `B` of the output.
+pub const R_FLOOR: f64 = 1e-3;
+
+/// Configuration of [`fit`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct FemConfig {
+    /// Everything output error has (structure, outputs, biases, initial states, start,
+    /// iterations, tolerances, coloured lag); its `step` is not used (always the relaxation).
+    pub oe: OeConfig,
+    /// State equations with process noise, full-state order; only integrated states count
+    /// (default [`AIR_DATA_STATES`]).
+    pub process_noise: [bool; N_STATES],
+    /// Starting values of `F` (state units per √s), one per process-noise state of the state
+    /// set in filter order; `None`: from the measurement noise (module doc).
+    pub process_noise_start: Option<Vec<f64>>,
+}
+
+impl FemConfig {
+    /// [`OeConfig::new`]'s defaults with process noise on [`AIR_DATA_STATES`].
+    pub fn new(structure: ModelStructure) -> Self {
+        Self {
+            oe: OeConfig::new(structure),
+            process_noise: AIR_DATA_STATES,
+            process_noise_start: None,
+        }
+    }
+}
+
+/// The result of [`fit`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct FemResult {
+    /// The common part, as output error's: unknowns `(θ, b, x0, F)` with names
+    /// (`F_<state>` for the process noise, e.g. `F_alpha_rad`), values, Cramér–Rao σ,
+    /// covariance and correlation; `r` the measurement-noise variances `R`; `residuals` the
+    /// innovations `ν`, `residual_rms` their RMS `sqrt(B)`; `iterations` with `ln_det_r` =
+    /// `ln det B`.
+    pub result: OeResult,
+    /// Full-state indices of the process-noise states, in the order of the `F` unknowns.
+    pub process_noise_states: Vec<usize>,
+    /// Index of the first `F` unknown in `result.values`.
+    pub first_f: usize,
+    /// `diag(C K)` per output of the final filter (`C P Cᵀ S⁻¹`: 0, the output does not
+    /// correct the state; → 1, the filter follows the measurement).
+    pub ck_diag: Vec<f64>,
+}
+
+impl FemResult {
+    /// `(F, σ)` of the process noise on full-state index `i`, if estimated.
+    pub fn process_noise(&self, i: usize) -> Option<(f64, f64)> {
+        let q = self.process_noise_states.iter().position(|&s| s == i)?;
+        let k = self.first_f + q;
+        Some((self.result.values[k], self.result.sigma[k]))
+    }
+}
+
+impl fmt::Display for FemResult {
+    /// Output error's summary (with `R` as the measurement noise and the innovations as
+    /// residuals), then the process noise and `diag(K C)`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "filter error (ML with process noise; ln det R below is ln det B):")?;
+        write!(f, "{}", self.result)?;
+        writeln!(f, "{:<14} {:>12} {:>12}", "output", "R", "diag(CK)")?;
+        for (j, o) in self.result.outputs.iter().enumerate() {
+            writeln!(f, "{:<14} {:>12.5e} {:>12.4}", o.name(), self.result.r[j], self.ck_diag[j])?;
+        }
+        Ok(())
+    }
+}
+
+/// The steady-state gain at one `β` and what the estimation needs of the filter.
+struct Gain {
+    /// `K` (`nx × ny`).
+    k: DMatrix<f64>,
+    /// `diag(C P Cᵀ)` per output (the state-prediction part of the innovation variance).
+    cpc_diag: Vec<f64>,
+    /// `diag(C K)` per output.
+    ck_diag: Vec<f64>,
+}
+
+/// The filter over a prepared problem (module doc).
+struct Filter<'a> {
+    p: &'a Problem,
+    /// Filter-order indices of the process-noise states.
+    noisy: Vec<usize>,
+    /// Index of the first `F` unknown.
+    first_f: usize,
+    /// Total unknowns.
+    nb: usize,
+    dt: f64,
+    /// `(manoeuvre, sample)` of the linearisation points.
+    points: Vec<(usize, usize)>,
+}
+
+impl Filter<'_> {
+    /// The steady-state filter at `β` with measurement-noise variances `r`.
+    fn gain(&self, beta: &[f64], r: &[f64]) -> Result<Gain, EstimatorError> {
+        let p = self.p;
+        let (nx, ny) = (p.nx, p.ny());
+        let theta = &beta[..p.np];
+        let states = p.model.state_set().states();
+        let mut a = DMatrix::<f64>::zeros(nx, nx);
+        let mut c = DMatrix::<f64>::zeros(ny, nx);
+        let mut lin = Linearisation::default();
+        for &(m, i) in &self.points {
+            let u = &p.man[m].u[i];
+            let mut x = [0.0; N_STATES];
+            for (k, &s) in states.iter().enumerate() {
+                x[k] = u.x_meas[s];
+            }
+            p.model.linearise(theta, u, &x[..nx], &mut lin)?;
+            for rr in 0..nx {
+                for cc in 0..nx {
+                    a[(rr, cc)] += lin.dfdx[rr][cc];
+                }
+            }
+            for (j, o) in p.outputs.iter().enumerate() {
+                for cc in 0..nx {
+                    c[(j, cc)] += lin.dydx[o.index()][cc];
+                }
+            }
+        }
+        let npts = self.points.len() as f64;
+        a /= npts;
+        c /= npts;
+        let phi = (a * self.dt).exp();
+        let mut q = DMatrix::<f64>::zeros(nx, nx);
+        for (k, &s) in self.noisy.iter().enumerate() {
+            let f = beta[self.first_f + k].exp();
+            q[(s, s)] = f * f * self.dt;
+        }
+        let rm = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(r));
+        let ss = riccati::steady_state(&phi, &c, &q, &rm)?;
+        let cpc = &c * &ss.p * c.transpose();
+        let ck = &c * &ss.k;
+        Ok(Gain {
+            cpc_diag: (0..ny).map(|j| cpc[(j, j)]).collect(),
+            ck_diag: (0..ny).map(|j| ck[(j, j)]).collect(),
+            k: ss.k,
+        })
+    }
+
+    /// One filter pass (module doc): predicted outputs `ŷ` (`N × ny`) into `y`; returns the
+    /// gain used.
+    fn pass(&self, beta: &[f64], r: &[f64], y: &mut Vec<f64>) -> Result<Gain, EstimatorError> {
+        let p = self.p;
+        let (nx, ny) = (p.nx, p.ny());
+        let theta = &beta[..p.np];
+        let ss = self.gain(beta, r)?;
+        y.clear();
+        y.resize(p.n_samples * ny, 0.0);
+        let mut row0 = 0;
+        let mut nu = vec![0.0; ny];
+        for (m, man) in p.man.iter().enumerate() {
+            let mut x = p.x0(m, beta);
+            let n = man.u.len();
+            for i in 0..n {
+                let u = &man.u[i];
+                p.check_state(&x, u.t_s)?;
+                let yrow = &mut y[(row0 + i) * ny..(row0 + i + 1) * ny];
+                p.outputs_at(beta, u, &x, yrow)?;
+                if i + 1 == n {
+                    break;
+                }
+                let z = &man.z[i * ny..(i + 1) * ny];
+                for j in 0..ny {
+                    nu[j] = z[j] - yrow[j];
+                }
+                for rr in 0..nx {
+                    x[rr] += (0..ny).map(|j| ss.k[(rr, j)] * nu[j]).sum::<f64>();
+                }
+                p.check_state(&x, u.t_s)?;
+                let k1 = p.model.derivatives(theta, u, &x[..nx])?;
+                x = p.rk4_step(theta, u, &man.u[i + 1], &x, k1)?;
+            }
+            row0 += n;
+        }
+        Ok(ss)
+    }
+
+    /// `S = ∂ŷ/∂β` (`N·ny × nβ` row-major) by central differences of the whole filter.
+    fn sensitivities(
+        &self,
+        beta: &[f64],
+        r: &[f64],
+        s: &mut Vec<f64>,
+    ) -> Result<(), EstimatorError> {
+        let nb = self.nb;
+        let rows = self.p.n_samples * self.p.ny();
+        s.clear();
+        s.resize(rows * nb, 0.0);
+        let (mut yp, mut ym) = (Vec::new(), Vec::new());
+        let mut b = beta.to_vec();
+        for a in 0..nb {
+            let h = 1e-4 * beta[a].abs().max(1e-3);
+            b[a] = beta[a] + h;
+            self.pass(&b, r, &mut yp)?;
+            b[a] = beta[a] - h;
+            self.pass(&b, r, &mut ym)?;
+            b[a] = beta[a];
+            for row in 0..rows {
+                s[row * nb + a] = (yp[row] - ym[row]) / (2.0 * h);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Second-difference estimate of each output's white-noise variance (module doc), floored
+/// at 10⁻¹² of its mean square.
+fn noise_start(p: &Problem) -> Vec<f64> {
+    let ny = p.ny();
+    let (mut sum, mut ms, mut count) = (vec![0.0; ny], vec![0.0; ny], 0usize);
+    for man in &p.man {
+        let n = man.u.len();
+        for i in 0..n {
+            for j in 0..ny {
+                ms[j] += man.z[i * ny + j].powi(2);
+            }
+        }
+        for i in 1..n.saturating_sub(1) {
+            for j in 0..ny {
+                let d2 =
+                    man.z[(i + 1) * ny + j] - 2.0 * man.z[i * ny + j] + man.z[(i - 1) * ny + j];
+                sum[j] += d2 * d2;
+            }
+            count += 1;
+        }
+    }
+    (0..ny)
+        .map(|j| {
+            let v = sum[j] / (6.0 * count.max(1) as f64);
+            v.max(1e-12 * ms[j] / p.n_samples as f64).max(1e-300)
+        })
+        .collect()
+}
+
+/// Fits the structure's parameters and the process-noise distribution `F` (and any biases and
+/// free initial states) to the manoeuvres by the filter-error method (module doc).
+///
+/// `manoeuvres` as [`super::fit`]; sample intervals should be (nearly) constant, the
+/// steady-state filter uses the median one.
+///
+/// # Errors
+/// As [`super::fit`]; also [`EstimatorError::InvalidConfig`] for a wrong-length
+/// [`FemConfig::process_noise_start`] and [`EstimatorError::Numerical`] when the Riccati
+/// equation has no stabilising solution at the starting values.
+pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemResult, OeError> {
+    let oe = &config.oe;
+    let p = prepare(manoeuvres, oe)?;
+    let states = p.model.state_set().states();
+    let noisy: Vec<usize> = (0..p.nx).filter(|&k| config.process_noise[states[k]]).collect();
+    let first_f = p.n_unknowns;
+    let nb = first_f + noisy.len();
+    let ny = p.ny();
+    let mut dts: Vec<f64> =
+        p.man.iter().flat_map(|m| m.u.windows(2).map(|w| w[1].t_s - w[0].t_s)).collect();
+    dts.sort_by(f64::total_cmp);
+    let dt = dts[dts.len() / 2];
+    let stride = p.n_samples.div_ceil(LINEARISATION_POINTS).max(1);
+    let points: Vec<(usize, usize)> = p
+        .man
+        .iter()
+        .enumerate()
+        .flat_map(|(m, man)| (0..man.u.len()).step_by(stride).map(move |i| (m, i)))
+        .collect();
+    let filter = Filter { p: &p, noisy: noisy.clone(), first_f, nb, dt, points };
+
+    let mut r = noise_start(&p);
+    let f0: Vec<f64> = match &config.process_noise_start {
+        Some(v) if v.len() != noisy.len() => {
+            return Err(EstimatorError::InvalidConfig {
+                field: "process_noise_start",
+                value: v.len() as f64,
+                reason: "one starting F per process-noise state of the state set is needed",
+            }
+            .into());
+        }
+        Some(v) if v.iter().any(|f| !(*f > 0.0 && f.is_finite())) => {
+            return Err(EstimatorError::InvalidConfig {
+                field: "process_noise_start",
+                value: v.iter().copied().fold(f64::NAN, f64::min),
+                reason: "every starting F must be positive and finite",
+            }
+            .into());
+        }
+        Some(v) => v.clone(),
+        None => noisy
+            .iter()
+            .map(|&k| {
+                let o = Output::ALL[states[k]];
+                p.outputs.iter().position(|x| *x == o).map_or(1e-3, |j| 0.1 * (r[j] / dt).sqrt())
+            })
+            .collect(),
+    };
+    // Lower bound of each ln F: 10⁻³ of the scale of its default start (module doc), where
+    // the process noise no longer matters (the gain goes with F²).
+    let ln_f_min: Vec<f64> = noisy
+        .iter()
+        .map(|&k| {
+            let o = Output::ALL[states[k]];
+            let scale = p.outputs.iter().position(|x| *x == o).map_or(1e-2, |j| (r[j] / dt).sqrt());
+            (F_MIN_FRACTION * scale).ln()
+        })
+        .collect();
+    let mut y = Vec::new();
+    let (beta_oe, start) = first_start(&p, manoeuvres, oe, |b| {
+        let mut full = b.to_vec();
+        full.extend(f0.iter().map(|f| f.ln()));
+        filter.pass(&full, &r, &mut y).map(|_| ())
+    })?;
+    let mut beta = beta_oe;
+    beta.extend(f0.iter().map(|f| f.ln()));
+    let mut e = Vec::new();
+    filter.pass(&beta, &r, &mut y)?;
+    let mut b = residuals(&p, &y, &mut e);
+    let ln_det = |v: &[f64]| v.iter().map(|x| x.ln()).sum::<f64>();
+    let mut log = vec![OeIteration {
+        iteration: 0,
+        ln_det_r: ln_det(&b),
+        cost: 0.5 * (p.n_samples * ny) as f64,
+        lambda: 0.0,
+        max_step_sigma: f64::NAN,
+    }];
+    let mut s = Vec::new();
+    let (mut y_try, mut e_try) = (Vec::new(), Vec::new());
+    let mut lambda = 0.0;
+    let mut converged = false;
+    let mut failure = None;
+    for iteration in 1..=oe.max_iterations {
+        if b.iter().any(|v| v.is_nan() || *v <= 0.0) {
+            return Err(EstimatorError::Numerical {
+                what: "an output's innovations are all zero: its variance cannot be estimated",
+                t_s: 0.0,
+            }
+            .into());
+        }
+        let w: Vec<f64> = b.iter().map(|v| 1.0 / v).collect();
+        filter.sensitivities(&beta, &r, &mut s)?;
+        let (mut m, mut g, _) = normal_equations(&s, &e, &w, nb);
+        check_identifiable(&m, &p, oe, first_f)?;
+        // An ln F at its bound whose gradient points further down is held there this
+        // iteration (active set): its information vanishes there and would spoil the step.
+        for (k, lo) in ln_f_min.iter().enumerate() {
+            let i = first_f + k;
+            if beta[i] <= *lo && g[i] <= 0.0 {
+                for j in 0..nb {
+                    m[(i, j)] = 0.0;
+                    m[(j, i)] = 0.0;
+                }
+                m[(i, i)] = 1.0;
+                g[i] = 0.0;
+            }
+        }
+        let minv = spd_inverse(&m);
+        let merit0 = weighted_cost(&e, &w);
+        let mut accepted = None;
+        loop {
+            if let Some(step) = damped_step(&m, &m, &g, lambda) {
+                let trial: Vec<f64> = beta
+                    .iter()
+                    .zip(step.iter())
+                    .enumerate()
+                    .map(|(i, (b, d))| {
+                        if i < first_f {
+                            b + d
+                        } else if b + d <= ln_f_min[i - first_f] {
+                            // ln F bounded below (module doc): a step beyond goes to the bound.
+                            ln_f_min[i - first_f]
+                        } else {
+                            b + F_STEP * d
+                        }
+                    })
+                    .collect();
+                let step = nalgebra::DVector::from_fn(nb, |i, _| trial[i] - beta[i]);
+                if let Ok(st) = filter.pass(&trial, &r, &mut y_try) {
+                    let b_try = residuals(&p, &y_try, &mut e_try);
+                    let value = weighted_cost(&e_try, &w);
+                    if value.is_finite() && value < merit0 {
+                        accepted = Some((trial, step, b_try, st));
+                        break;
+                    }
+                }
+            }
+            lambda = if lambda == 0.0 { 1e-3 } else { lambda * 10.0 };
+            if lambda > 1e10 {
+                break;
+            }
+        }
+        let step_sigma = |step: &nalgebra::DVector<f64>| match &minv {
+            Some(mi) => (0..nb).map(|i| step[i].abs() / mi[(i, i)].sqrt()).fold(0.0, f64::max),
+            None => f64::INFINITY,
+        };
+        let (trial, step, b_try, st) = match accepted {
+            Some(a) => a,
+            None => {
+                let tiny = damped_step(&m, &m, &g, 0.0).is_some_and(|st| {
+                    // The step as it would be taken (ln F cut at its bound).
+                    let taken = nalgebra::DVector::from_fn(nb, |i, _| {
+                        if i >= first_f {
+                            (beta[i] + st[i]).max(ln_f_min[i - first_f]) - beta[i]
+                        } else {
+                            st[i]
+                        }
+                    });
+                    step_sigma(&taken) < oe.step_tolerance_sigma
+                });
+                let last_tiny =
+                    log.last().is_some_and(|it| it.max_step_sigma < oe.step_tolerance_sigma);
+                if !(tiny || last_tiny) {
+                    failure = Some(NotConverged::NoDescent);
+                    break;
+                }
+                // β is at the optimum for this B (to the rounding of the finite-difference
+                // step): no step, the relaxation of B and R goes on.
+                let st = filter.pass(&beta, &r, &mut y_try)?;
+                let b_try = residuals(&p, &y_try, &mut e_try);
+                (beta.clone(), nalgebra::DVector::zeros(nb), b_try, st)
+            }
+        };
+        let max_step_sigma = step_sigma(&step);
+        let used_lambda = lambda;
+        lambda = if lambda < 1e-6 { 0.0 } else { lambda / 10.0 };
+        beta = trial;
+        // Compatibility: R = diag(B − C P Cᵀ) from the accepted filter (module doc).
+        r = (0..ny)
+            .map(|j| {
+                let target = b_try[j] - st.cpc_diag[j];
+                let step = 0.5 * (1.0 - st.ck_diag[j]).clamp(0.0, 1.0) * (target - r[j]);
+                (r[j] + step).clamp(0.25 * r[j], 4.0 * r[j]).max(R_FLOOR * b_try[j])
+            })
+            .collect();
+        filter.pass(&beta, &r, &mut y)?;
+        let b_new = residuals(&p, &y, &mut e);
+        let rel = (ln_det(&b_new) - ln_det(&b)).exp_m1().abs();
+        b = b_new;
+        log.push(OeIteration {
+            iteration,
+            ln_det_r: ln_det(&b),
+            cost: weighted_cost(&e, &w),
+            lambda: used_lambda,
+            max_step_sigma,
+        });
+        if rel < oe.cost_tolerance && max_step_sigma < oe.step_tolerance_sigma {
+            converged = true;
+            break;
+        }
+    }
+    if !converged && failure.is_none() {
+        failure = Some(NotConverged::MaxIterations);
+    }
+    // Accuracy at the final iterate (sensitivities recomputed there, B and R final).
+    let w: Vec<f64> = b.iter().map(|v| 1.0 / v).collect();
+    filter.sensitivities(&beta, &r, &mut s)?;
+    let mut names = unknown_names(&p, &oe.structure);
+    names.extend(noisy.iter().map(|&k| format!("F_{}", STATE_NAMES[states[k]])));
+    let fit = Fitted { beta: &beta, s: &s, e: &e, w: &w, r: &r, names };
+    let mut result = assemble(&p, &oe.structure, fit, log, start, converged, oe)?;
+    from_log_f(&mut result, first_f);
+    let ck_diag = filter.gain(&beta, &r)?.ck_diag;
+    let out = FemResult {
+        result,
+        process_noise_states: noisy.iter().map(|&k| states[k]).collect(),
+        first_f,
+        ck_diag,
+    };
+    match failure {
+        None => Ok(out),
+        Some(reason) => Err(OeError::NotConverged { reason, result: Box::new(out.result) }),
+    }
+}
+
+/// The `F` unknowns are estimated as `ln F` (module doc); reports them as `F`, with
+/// `σ_F = F σ_ln F` and the covariance rows and columns scaled by `F` (first-order).
+fn from_log_f(r: &mut OeResult, first_f: usize) {
+    let n = r.values.len();
+    let scale: Vec<f64> =
+        (0..n).map(|i| if i >= first_f { r.values[i].exp() } else { 1.0 }).collect();
+    for i in first_f..n {
+        r.values[i] = scale[i];
+        r.sigma[i] *= scale[i];
+        if let Some(c) = r.sigma_coloured.as_mut() {
+            c[i] *= scale[i];
+        }
+    }
+    for i in 0..n {
+        for j in 0..n {
+            r.covariance[i * n + j] *= scale[i] * scale[j];
+        }
+    }
+}
+
+/// Refuses an unknown with no effect on any innovation (a zero column of `S`); an `F` at
+/// exactly zero has none (its gain derivative vanishes), so a zero start is refused here.
+fn check_identifiable(
+    m: &DMatrix<f64>,
+    p: &Problem,
+    oe: &OeConfig,
+    first_f: usize,
+) -> Result<(), EstimatorError> {
+    for i in 0..m.nrows() {
+        if !(m[(i, i)] > 0.0 && m[(i, i)].is_finite()) {
+            let field = if i < p.np {
+                oe.structure.param(i).map_or("parameter", |q| q.name())
+            } else if i < p.np + p.n_biases() {
+                "output bias"
+            } else if i < first_f {
+                "initial state"
+            } else {
+                "process noise F"
+            };
+            return Err(EstimatorError::InvalidConfig {
+                field,
+                value: i as f64,
+                reason: "this unknown does not affect any innovation (a process noise F of exactly 0 does not)",
+            });
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests;

@@ -214,3 +214,28 @@ fn turbulent_run_66_converges_to_the_optimum_both_steps_agree_on() {
         assert!((a - b).abs() < 0.01 * sigma, "{name}: {a} vs {b} (σ {sigma})");
     }
 }
+
+/// The batch campaigns are the default scenario plus the batch estimators, nothing else: the
+/// same flights, sensors, turbulence, damage and real-time estimators (a stale copy once kept
+/// the EKF's former parameter walk).
+#[test]
+fn batch_campaign_scenarios_are_the_default_plus_batch_estimators() {
+    let load =
+        |p: &str| Scenario::from_path(&workspace().join(p)).unwrap_or_else(|e| panic!("{p}: {e}"));
+    let default = load("scenarios/default.toml");
+    for (path, batch) in [
+        ("scenarios/montecarlo/with-oe.toml", vec!["oe"]),
+        ("scenarios/montecarlo/with-fem.toml", vec!["oe", "fem"]),
+    ] {
+        let mut sc = load(path);
+        let extra: Vec<String> =
+            sc.estimator.split_off(default.estimator.len()).iter().map(|e| e.label()).collect();
+        assert_eq!(extra, batch, "{path}: the estimators after the default's");
+        sc.name = default.name.clone();
+        sc.description = default.description.clone();
+        assert_eq!(
+            sc, default,
+            "{path} differs from scenarios/default.toml beyond its batch estimators"
+        );
+    }
+}

@@ -29,7 +29,8 @@ pub struct Estimator {
 #[pymethods]
 impl Estimator {
     #[new]
-    #[pyo3(signature = (kind, model="longitudinal", constants=None, forgetting=1.0, sample_interval_s=None, parameter_walk_per_sqrt_s=0.0))]
+    #[pyo3(signature = (kind, model="longitudinal", constants=None, forgetting=1.0, sample_interval_s=None, parameter_walk_per_sqrt_s=0.0, ftr_grid_hz=None))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         kind: &str,
         model: &str,
@@ -37,11 +38,17 @@ impl Estimator {
         forgetting: f64,
         sample_interval_s: Option<f64>,
         parameter_walk_per_sqrt_s: f64,
+        ftr_grid_hz: Option<(f64, f64, f64)>,
     ) -> PyResult<Self> {
         let k = estimator_kind(kind)?;
         let spec = model_spec(model)?;
         let constants = convert::constants_from(constants)?;
-        let opts = EstimatorOptions { forgetting, sample_interval_s, parameter_walk_per_sqrt_s };
+        let opts = EstimatorOptions {
+            forgetting,
+            sample_interval_s,
+            parameter_walk_per_sqrt_s,
+            ftr_grid_hz,
+        };
         let est = build(k, spec.structure, spec.priors, &opts).map_err(|e| err(e.to_string()))?;
         Ok(Self { est, kind: k, model: spec.name, constants, samples: 0 })
     }

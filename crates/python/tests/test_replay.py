@@ -148,3 +148,11 @@ def test_bad_arguments():
         aeroident.replay("some.csv")
     with pytest.raises(aeroident.AeroidentError, match="batch method"):
         aeroident.Estimator("oe")
+
+
+def test_ftr_grid_reaches_the_estimator():
+    # 0.1-1.7 Hz in 0.04 Hz is 41 frequencies and builds; 0.1-3.0 Hz is 73, over the 64 the
+    # real-time FTR holds (ftr::MAX_FREQUENCIES), and the error names the field.
+    assert aeroident.Ftr(model="longitudinal", forgetting=0.9975, ftr_grid_hz=(0.1, 1.7, 0.04)).method == "ftr"
+    with pytest.raises(aeroident.AeroidentError, match="f_step_hz"):
+        aeroident.Ftr(model="longitudinal", ftr_grid_hz=(0.1, 3.0, 0.04))

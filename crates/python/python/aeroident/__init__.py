@@ -78,11 +78,14 @@ class Estimator(_Estimator):
     """An online estimator over one model structure.
 
     ``Estimator(kind, model="longitudinal", constants=None, forgetting=1.0,
-    sample_interval_s=None, parameter_walk_per_sqrt_s=0.0)`` with ``kind`` one of ``rls, ftr,
+    sample_interval_s=None, parameter_walk_per_sqrt_s=0.0, ftr_grid_hz=None)`` with ``kind`` one of ``rls, ftr,
     ekf, smpe, smpe-corrected, gradient`` (the CLI's ``--estimator``) and ``model`` a preset
     (``longitudinal``, ``lateral``, ``six-axis``) or a model file (TOML, ``models/``).
     ``constants``: the aircraft constants (keys as in :func:`sample_keys`) used for every sample
-    that does not carry its own.
+    that does not carry its own. ``ftr_grid_hz``: FTR's frequency grid ``(f_min, f_max, step)``
+    in Hz (default Morelli's 0.1-1.5 Hz in 0.04 Hz); it must span the excitation. FTR's
+    normal equations weight a sample by ``forgetting**2`` per step: ``forgetting=0.9975`` at
+    100 Hz is a 2-s memory.
 
     - ``update(sample)``: one sample, a dict of SI channels (``None``/``NaN`` = absent). Raises
       :class:`AeroidentError` if the estimator refuses it (its state is then unchanged) or
@@ -109,7 +112,7 @@ def _plain(constants: Optional[Mapping[str, float]]) -> Optional[dict[str, Optio
 
 
 Rls = _subclass("rls", "Recursive least squares (equation error) on every modelled coefficient. ``Rls(model, constants, forgetting=1.0)``.")
-Ftr = _subclass("ftr", "Real-time Fourier-transform regression (Morelli 2000). ``Ftr(model, constants, forgetting=1.0, sample_interval_s=None)``.")
+Ftr = _subclass("ftr", "Real-time Fourier-transform regression (Morelli 2000). ``Ftr(model, constants, forgetting=1.0, sample_interval_s=None, ftr_grid_hz=None)``.")
 Ekf = _subclass("ekf", "Extended Kalman filter on states and parameters. ``Ekf(model, constants, sample_interval_s=None, parameter_walk_per_sqrt_s=0.0)``.")
 Smpe = _subclass("smpe", "The thesis's sliding-mode parameter estimator. ``Smpe(model, constants)``.")
 SmpeCorrected = _subclass("smpe-corrected", "The corrected sliding-mode parameter estimator. ``SmpeCorrected(model, constants)``.")

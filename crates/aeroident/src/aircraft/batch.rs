@@ -251,6 +251,12 @@ pub struct BatchFit {
     pub coloured_lag: usize,
     /// `fem`: the estimated process noise `(state, F, σ)` (state unit per √s); empty for `oe`.
     pub process_noise: Vec<(String, f64, f64)>,
+    /// The candidate σ of the structure parameters (structure order), by kind: `cramer_rao`
+    /// (`sqrt(diag M⁻¹)`, diagonal weighting), `coloured` (the coloured-residual sandwich, all
+    /// lags), and for `fem` `lag0` (sandwich with the full lag-0 innovation covariance) and
+    /// `full_b` (Cramér–Rao with the full innovation covariance); a kind that could not be
+    /// formed is absent. For measuring which σ is honest (docs/uncertainty.md).
+    pub sigma_candidates: Vec<(String, Vec<f64>)>,
 }
 
 /// The outcome of [`fit_window`]: per structure parameter `(estimate, σ)`, and the log.
@@ -282,7 +288,7 @@ pub fn fit_window(
             let (result, wall_s) = fit_manoeuvres(&[window], c)?;
             let sigma = reported_sigma(&result);
             let values = result.values[..result.n_params].iter().copied().zip(sigma).collect();
-            let log = log_of(label, window, c, &result, wall_s, Vec::new());
+            let log = log_of(label, window, c, &result, wall_s, Vec::new(), Vec::new());
             Ok((values, log))
         }
         BatchConfig::Fem(c) => {
@@ -290,7 +296,12 @@ pub fn fit_window(
             let r = &fem.result;
             // The filter-error σ is its own Cramér–Rao σ (module doc).
             let values = (0..r.n_params).map(|i| (r.values[i], r.sigma[i])).collect();
-            let log = log_of(label, window, &c.oe, r, wall_s, process_noise_of(&fem));
+            let np = r.n_params;
+            let extra = [("lag0", &fem.sigma_lag0), ("full_b", &fem.sigma_full_b)]
+                .into_iter()
+                .filter_map(|(k, v)| v.as_ref().map(|v| (k.to_string(), v[..np].to_vec())))
+                .collect();
+            let log = log_of(label, window, &c.oe, r, wall_s, process_noise_of(&fem), extra);
             Ok((values, log))
         }
     }
@@ -311,7 +322,14 @@ fn log_of(
     r: &OeResult,
     wall_s: f64,
     process_noise: Vec<(String, f64, f64)>,
+    extra_sigmas: Vec<(String, Vec<f64>)>,
 ) -> BatchFit {
+    let np = r.n_params;
+    let mut sigma_candidates = vec![("cramer_rao".to_string(), r.sigma[..np].to_vec())];
+    if let Some(c) = &r.sigma_coloured {
+        sigma_candidates.push(("coloured".to_string(), c[..np].to_vec()));
+    }
+    sigma_candidates.extend(extra_sigmas);
     BatchFit {
         estimator: label.into(),
         from_s: window[0].t_s,
@@ -328,5 +346,6 @@ fn log_of(
         coloured_sigma: r.sigma_coloured.is_some() && process_noise.is_empty(),
         coloured_lag: r.coloured_lag,
         process_noise,
+        sigma_candidates,
     }
 }

@@ -105,6 +105,7 @@ use super::{
     first_start, normal_equations, prepare, residuals, spd_inverse, unknown_names, weighted_cost,
 };
 use crate::EstimatorError;
+use crate::coloured::batch as coloured;
 use crate::flight_model::{Linearisation, N_STATES, Output, STATE_NAMES, state};
 use crate::sample::AirDataSample;
 use crate::vocabulary::ModelStructure;
@@ -182,6 +183,16 @@ pub struct FemResult {
     /// `diag(C K)` per output of the final filter (`C P Cᵀ S⁻¹`: 0, the output does not
     /// correct the state; → 1, the filter follows the measurement).
     pub ck_diag: Vec<f64>,
+    /// Diagnostic σ of every unknown (order of `result.values`, `F` as `F`): the sandwich
+    /// `M⁻¹ (Σ Sᵀ B⁻¹ r̂(0) B⁻¹ S) M⁻¹` with the lag-0 innovation covariance `r̂(0) = (1/N) Σ ν νᵀ`
+    /// in full (innovations cross-correlated across outputs but white in time); `None` when a
+    /// diagonal element is not positive. Between [`OeResult::sigma`] (`r̂(0)` diagonal) and
+    /// [`OeResult::sigma_coloured`] (all lags).
+    pub sigma_lag0: Option<Vec<f64>>,
+    /// Diagnostic σ of every unknown: `sqrt(diag M_B⁻¹)`, `M_B = Σ Sᵀ r̂(0)⁻¹ S` with the full
+    /// innovation covariance, the Cramér–Rao σ of an estimator that weighted the innovations by
+    /// the full `B` (this one weights by its diagonal); `None` when `r̂(0)` or `M_B` is singular.
+    pub sigma_full_b: Option<Vec<f64>>,
 }
 
 impl FemResult {
@@ -595,6 +606,11 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
     names.extend(noisy.iter().map(|&k| format!("F_{}", STATE_NAMES[states[k]])));
     let fit = Fitted { beta: &beta, s: &s, e: &e, w: &w, r: &r, names };
     let mut result = assemble(&p, &oe.structure, fit, log, start, converged, oe)?;
+    let (mut sigma_lag0, mut sigma_full_b) = diagnostic_sigmas(&s, &e, &w, &result, nb);
+    let f_scale: Vec<f64> = (0..nb).map(|i| if i >= first_f { beta[i].exp() } else { 1.0 }).collect();
+    for v in [sigma_lag0.as_mut(), sigma_full_b.as_mut()].into_iter().flatten() {
+        v.iter_mut().zip(&f_scale).for_each(|(x, k)| *x *= k);
+    }
     from_log_f(&mut result, first_f);
     let ck_diag = filter.gain(&beta, &r)?.ck_diag;
     let out = FemResult {
@@ -602,11 +618,64 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
         process_noise_states: noisy.iter().map(|&k| states[k]).collect(),
         first_f,
         ck_diag,
+        sigma_lag0,
+        sigma_full_b,
     };
     match failure {
         None => Ok(out),
         Some(reason) => Err(OeError::NotConverged { reason, result: Box::new(out.result) }),
     }
+}
+
+/// The lag-0 sandwich σ and the full-`B` Cramér–Rao σ ([`FemResult::sigma_lag0`],
+/// [`FemResult::sigma_full_b`]) at the estimate, unknowns as estimated (`ln F`). `s`: `N × ny ×
+/// nb` sensitivities, `e`: `N × ny` innovations, `w`: `B⁻¹` diagonal.
+fn diagnostic_sigmas(
+    s: &[f64],
+    e: &[f64],
+    w: &[f64],
+    r: &OeResult,
+    nb: usize,
+) -> (Option<Vec<f64>>, Option<Vec<f64>>) {
+    let ny = w.len();
+    let (m, _, _) = normal_equations(s, e, w, nb);
+    let Some(minv) = spd_inverse(&m) else { return (None, None) };
+    let lag0 = coloured::covariance(s, e, w, &r.manoeuvre_lengths, &minv, 0)
+        .covariance
+        .map(|c| (0..nb).map(|i| c[(i, i)].sqrt()).collect());
+    let n = (e.len() / ny) as f64;
+    let mut b = DMatrix::<f64>::zeros(ny, ny);
+    for nu in e.chunks_exact(ny) {
+        for a in 0..ny {
+            for c in 0..ny {
+                b[(a, c)] += nu[a] * nu[c] / n;
+            }
+        }
+    }
+    let full_b = spd_inverse(&b).and_then(|binv| {
+        let mut mb = DMatrix::<f64>::zeros(nb, nb);
+        let mut t = vec![0.0; ny * nb];
+        for sk in s.chunks_exact(ny * nb) {
+            // t = B⁻¹ S_k (ny × nb), then M_B += S_kᵀ t.
+            for a in 0..ny {
+                for q in 0..nb {
+                    t[a * nb + q] = (0..ny).map(|c| binv[(a, c)] * sk[c * nb + q]).sum();
+                }
+            }
+            for a in 0..ny {
+                for p in 0..nb {
+                    let sp = sk[a * nb + p];
+                    if sp != 0.0 {
+                        for q in 0..nb {
+                            mb[(p, q)] += sp * t[a * nb + q];
+                        }
+                    }
+                }
+            }
+        }
+        spd_inverse(&mb).map(|c| (0..nb).map(|i| c[(i, i)].sqrt()).collect())
+    });
+    (lag0, full_b)
 }
 
 /// The `F` unknowns are estimated as `ln F` (module doc); reports them as `F`, with

@@ -297,7 +297,11 @@ pub fn fit_window(
             // The filter-error σ is its own Cramér–Rao σ (module doc).
             let values = (0..r.n_params).map(|i| (r.values[i], r.sigma[i])).collect();
             let np = r.n_params;
-            let extra = [("lag0", &fem.sigma_lag0), ("full_b", &fem.sigma_full_b)]
+            let extra = [
+                ("lag0", &fem.sigma_lag0),
+                ("full_b", &fem.sigma_full_b),
+                ("coloured_theta", &fem.sigma_coloured_theta),
+            ]
                 .into_iter()
                 .filter_map(|(k, v)| v.as_ref().map(|v| (k.to_string(), v[..np].to_vec())))
                 .collect();

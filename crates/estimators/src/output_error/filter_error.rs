@@ -193,6 +193,12 @@ pub struct FemResult {
     /// innovation covariance, the Cramér–Rao σ of an estimator that weighted the innovations by
     /// the full `B` (this one weights by its diagonal); `None` when `r̂(0)` or `M_B` is singular.
     pub sigma_full_b: Option<Vec<f64>>,
+    /// Diagnostic σ of every unknown from the coloured-residual sandwich of
+    /// [`OeResult::sigma_coloured`] (same lags), formed whenever the diagonal of the
+    /// structure-parameter block is positive (`OeResult::sigma_coloured` needs every unknown,
+    /// `F` included, and is `None` on the F-16 campaign); an `F` entry that is not positive is
+    /// NaN.
+    pub sigma_coloured_theta: Option<Vec<f64>>,
 }
 
 impl FemResult {
@@ -606,9 +612,16 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
     names.extend(noisy.iter().map(|&k| format!("F_{}", STATE_NAMES[states[k]])));
     let fit = Fitted { beta: &beta, s: &s, e: &e, w: &w, r: &r, names };
     let mut result = assemble(&p, &oe.structure, fit, log, start, converged, oe)?;
-    let (mut sigma_lag0, mut sigma_full_b) = diagnostic_sigmas(&s, &e, &w, &result, nb);
+    let max_lag = oe.coloured_max_lag.unwrap_or_else(|| {
+        result.manoeuvre_lengths.iter().copied().min().unwrap_or(4) / 4
+    });
+    let (mut sigma_lag0, mut sigma_full_b, mut sigma_coloured_theta) =
+        diagnostic_sigmas(&s, &e, &w, &result, nb, max_lag);
     let f_scale: Vec<f64> = (0..nb).map(|i| if i >= first_f { beta[i].exp() } else { 1.0 }).collect();
-    for v in [sigma_lag0.as_mut(), sigma_full_b.as_mut()].into_iter().flatten() {
+    for v in [sigma_lag0.as_mut(), sigma_full_b.as_mut(), sigma_coloured_theta.as_mut()]
+        .into_iter()
+        .flatten()
+    {
         v.iter_mut().zip(&f_scale).for_each(|(x, k)| *x *= k);
     }
     from_log_f(&mut result, first_f);
@@ -620,6 +633,7 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
         ck_diag,
         sigma_lag0,
         sigma_full_b,
+        sigma_coloured_theta,
     };
     match failure {
         None => Ok(out),
@@ -636,10 +650,15 @@ fn diagnostic_sigmas(
     w: &[f64],
     r: &OeResult,
     nb: usize,
-) -> (Option<Vec<f64>>, Option<Vec<f64>>) {
+    max_lag: usize,
+) -> (Option<Vec<f64>>, Option<Vec<f64>>, Option<Vec<f64>>) {
     let ny = w.len();
     let (m, _, _) = normal_equations(s, e, w, nb);
-    let Some(minv) = spd_inverse(&m) else { return (None, None) };
+    let Some(minv) = spd_inverse(&m) else { return (None, None, None) };
+    let full = coloured::covariance(s, e, w, &r.manoeuvre_lengths, &minv, max_lag).full;
+    let coloured_theta = (0..r.n_params).all(|i| full[(i, i)] > 0.0).then(|| {
+        (0..nb).map(|i| if full[(i, i)] > 0.0 { full[(i, i)].sqrt() } else { f64::NAN }).collect()
+    });
     let lag0 = coloured::covariance(s, e, w, &r.manoeuvre_lengths, &minv, 0)
         .covariance
         .map(|c| (0..nb).map(|i| c[(i, i)].sqrt()).collect());
@@ -675,7 +694,7 @@ fn diagnostic_sigmas(
         }
         spd_inverse(&mb).map(|c| (0..nb).map(|i| c[(i, i)].sqrt()).collect())
     });
-    (lag0, full_b)
+    (lag0, full_b, coloured_theta)
 }
 
 /// The `F` unknowns are estimated as `ln F` (module doc); reports them as `F`, with

@@ -302,9 +302,9 @@ pub fn fit_window(
                 ("full_b", &fem.sigma_full_b),
                 ("coloured_theta", &fem.sigma_coloured_theta),
             ]
-                .into_iter()
-                .filter_map(|(k, v)| v.as_ref().map(|v| (k.to_string(), v[..np].to_vec())))
-                .collect();
+            .into_iter()
+            .filter_map(|(k, v)| v.as_ref().map(|v| (k.to_string(), v[..np].to_vec())))
+            .collect();
             let log = log_of(label, window, &c.oe, r, wall_s, process_noise_of(&fem), extra);
             Ok((values, log))
         }

@@ -612,12 +612,13 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
     names.extend(noisy.iter().map(|&k| format!("F_{}", STATE_NAMES[states[k]])));
     let fit = Fitted { beta: &beta, s: &s, e: &e, w: &w, r: &r, names };
     let mut result = assemble(&p, &oe.structure, fit, log, start, converged, oe)?;
-    let max_lag = oe.coloured_max_lag.unwrap_or_else(|| {
-        result.manoeuvre_lengths.iter().copied().min().unwrap_or(4) / 4
-    });
+    let max_lag = oe
+        .coloured_max_lag
+        .unwrap_or_else(|| result.manoeuvre_lengths.iter().copied().min().unwrap_or(4) / 4);
     let (mut sigma_lag0, mut sigma_full_b, mut sigma_coloured_theta) =
         diagnostic_sigmas(&s, &e, &w, &result, nb, max_lag);
-    let f_scale: Vec<f64> = (0..nb).map(|i| if i >= first_f { beta[i].exp() } else { 1.0 }).collect();
+    let f_scale: Vec<f64> =
+        (0..nb).map(|i| if i >= first_f { beta[i].exp() } else { 1.0 }).collect();
     for v in [sigma_lag0.as_mut(), sigma_full_b.as_mut(), sigma_coloured_theta.as_mut()]
         .into_iter()
         .flatten()

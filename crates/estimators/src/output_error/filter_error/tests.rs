@@ -130,7 +130,14 @@ const GUST_RUNS: u64 = 16;
 /// whose α process noise is the derivative of a first-order gust (white above
 /// [`GUST_CORNER_RAD_S`], falling as `Ω²` below, as the Dryden `ẇ_g/V` enters α) and so
 /// coloured against the filter's white `F w`. Over a small Monte Carlo the scatter of each
-/// parameter is compared with the RMS of each candidate σ.
+/// parameter is compared with the RMS of each candidate σ. Checked: (1) the lag-0 sandwich
+/// (the diagonally weighted estimator's covariance with cross-correlated white innovations)
+/// is never below the full-`B` Cramér–Rao σ (Gauss–Markov: the full-`B` weighting is the
+/// efficient one), per fit; (2) the Cramér–Rao and coloured σ lie within a factor 1.6 of the
+/// scatter (observed 0.69–1.42 over 12 converged fits: on these records neither is visibly
+/// short, unlike the F-16 campaign, docs/uncertainty.md "Filter-error method: σ and bias");
+/// (3) at least 12 of the 16 fits converge (observed 12: coloured process noise makes the
+/// relaxation fail on some records, NoDescent or a non-positive innovation covariance).
 #[test]
 fn coloured_process_noise_sigma_matches_the_scatter() {
     let st = lon();
@@ -138,6 +145,7 @@ fn coloured_process_noise_sigma_matches_the_scatter() {
     let np = th.len();
     let mut est: Vec<Vec<f64>> = vec![Vec::new(); np];
     let mut s2: Vec<[f64; 4]> = vec![[0.0; 4]; np];
+    let mut converged = 0;
     for seed in 0..GUST_RUNS {
         let data = crate::output_error::tests::simulate_with_gusts(
             &st,
@@ -160,13 +168,20 @@ fn coloured_process_noise_sigma_matches_the_scatter() {
             }
         };
         let r = &fem.result;
+        converged += 1;
         for i in 0..np {
+            let (l0, fb) =
+                (fem.sigma_lag0.as_ref().unwrap()[i], fem.sigma_full_b.as_ref().unwrap()[i]);
+            assert!(
+                fb <= l0 * (1.0 + 1e-6),
+                "seed {seed} unknown {i}: full-B σ {fb} > lag-0 sandwich {l0}"
+            );
             est[i].push(r.values[i]);
             let c = [
                 Some(r.sigma[i]),
                 fem.sigma_lag0.as_ref().map(|v| v[i]),
                 fem.sigma_full_b.as_ref().map(|v| v[i]),
-                r.sigma_coloured.as_ref().map(|v| v[i]),
+                fem.sigma_coloured_theta.as_ref().map(|v| v[i]),
             ];
             for (k, v) in c.iter().enumerate() {
                 s2[i][k] += v.expect("every candidate σ formed").powi(2);
@@ -186,5 +201,14 @@ fn coloured_process_noise_sigma_matches_the_scatter() {
             ratio[2],
             ratio[3]
         );
+        for k in [0, 3] {
+            assert!(
+                (1.0 / 1.6..1.6).contains(&ratio[k]),
+                "{}: σ/scatter {} (candidate {k})",
+                p.name(),
+                ratio[k]
+            );
+        }
     }
+    assert!(converged >= 12, "only {converged} of {GUST_RUNS} fits converged");
 }

@@ -67,7 +67,9 @@ use aeroident_estimators::sample::AirDataSample;
 use serde::Serialize;
 
 use super::scenario::SampleEstimatorSpec;
-use crate::replay::batch::{fit_fem_manoeuvres, fit_manoeuvres, oe_config, reported_sigma};
+use crate::replay::batch::{
+    fem_reported_sigma, fit_fem_manoeuvres, fit_manoeuvres, oe_config, reported_sigma,
+};
 
 /// Most Gauss–Newton iterations of the campaign's fits (the estimators crate's default is 50).
 /// On turbulent flights the residuals are large and structured, so Gauss–Newton converges
@@ -294,8 +296,9 @@ pub fn fit_window(
         BatchConfig::Fem(c) => {
             let (fem, wall_s) = fit_fem_manoeuvres(&[window], c)?;
             let r = &fem.result;
-            // The filter-error σ is its own Cramér–Rao σ (module doc).
-            let values = (0..r.n_params).map(|i| (r.values[i], r.sigma[i])).collect();
+            // Coloured-residual σ where formed, as output error (fem_reported_sigma).
+            let (sigma, coloured) = fem_reported_sigma(&fem);
+            let values = (0..r.n_params).map(|i| (r.values[i], sigma[i])).collect();
             let np = r.n_params;
             let extra = [
                 ("lag0", &fem.sigma_lag0),
@@ -305,7 +308,8 @@ pub fn fit_window(
             .into_iter()
             .filter_map(|(k, v)| v.as_ref().map(|v| (k.to_string(), v[..np].to_vec())))
             .collect();
-            let log = log_of(label, window, &c.oe, r, wall_s, process_noise_of(&fem), extra);
+            let mut log = log_of(label, window, &c.oe, r, wall_s, process_noise_of(&fem), extra);
+            log.coloured_sigma = coloured;
             Ok((values, log))
         }
     }
@@ -347,7 +351,7 @@ fn log_of(
         iterations: Some(r.n_iterations()),
         wall_s,
         residual_rms: r.residual_rms.clone(),
-        coloured_sigma: r.sigma_coloured.is_some() && process_noise.is_empty(),
+        coloured_sigma: r.sigma_coloured.is_some(),
         coloured_lag: r.coloured_lag,
         process_noise,
         sigma_candidates,

@@ -45,9 +45,10 @@
 //! state equation, estimated) on the translational air-data states `V, α, β` by default (the
 //! Dryden gusts of the simulation are translational: their derivatives drive the air-relative
 //! `V, α, β` equations, module doc of `filter_error`), option `process_noise = "V,alpha,beta"`
-//! (any of `V alpha beta p q r phi theta`). Its σ is its own Cramér–Rao σ (the innovations of
-//! a correct filter are white, so no coloured-residual correction), and the log carries the
-//! estimated `F`.
+//! (any of `V alpha beta p q r phi theta`). Its σ is the coloured-residual σ where formed, as
+//! for `oe` (the innovations of an inexact filter are autocorrelated: on the F-16 campaign the
+//! Cramér–Rao σ is 0.34–0.76 of the scatter, the coloured 0.68–1.69; docs/uncertainty.md,
+//! "Filter-error method: σ and bias"), and the log carries the estimated `F`.
 //!
 //! **Samples** (option `samples = "raw" | "smoothed"`): `fem` fits by default the **unsmoothed**
 //! samples ([`super::air_data::AirDataSampler::raw`]: same time stamps, sensor noise, no matched

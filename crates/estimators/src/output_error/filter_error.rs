@@ -91,22 +91,26 @@
 //!
 //! # Accuracy
 //!
-//! Cramér–Rao σ `sqrt(diag M⁻¹)` with `M = Σ Sᵀ B⁻¹ S` at the estimate (Jategaonkar ch. 5: the
-//! innovations of the correct filter are white, so no coloured-residual correction is needed;
-//! it is still formed, [`super::OeResult::sigma_coloured`], as a check). `F` and its σ are
-//! reported from `ln F` to first order (`σ_F = F σ_ln F`, covariance rows scaled by `F`).
+//! Cramér–Rao σ `sqrt(diag M⁻¹)` with `M = Σ Sᵀ B⁻¹ S` at the estimate
+//! ([`OeResult::sigma`]), and the coloured-residual sandwich ([`OeResult::sigma_coloured`],
+//! Morelli & Klein 1997, full cross-output residual autocorrelation). Jategaonkar ch. 5 takes
+//! the innovations of the correct filter as white, so that the Cramér–Rao σ suffices; that
+//! needs the filter's model exact, process noise included. A flight-test model never is: on
+//! the F-16 campaign (Dryden turbulence, whose `ġ` is coloured below `V/L`; no process noise
+//! on the rate equations; lateral model error) the innovations are autocorrelated over
+//! hundreds of samples and the Cramér–Rao σ is 0.34–0.76 of the scatter of the estimates,
+//! the coloured one 0.68–1.69 (40 runs; docs/uncertainty.md, "Filter-error method: σ and
+//! bias"). Callers therefore report the coloured σ where formed, as for output error
+//! (`aeroident::replay::batch::fem_reported_sigma`). Diagnostics: the lag-0 sandwich with the
+//! full cross-output innovation covariance ([`FemResult::sigma_lag0`]) and the full-`B`
+//! Cramér–Rao σ ([`FemResult::sigma_full_b`]) are within 6 % of the Cramér–Rao σ there (the
+//! cross-correlation through the gain is not what makes it short);
+//! [`FemResult::sigma_coloured_theta`] is the coloured σ when only the `F` block of the
+//! sandwich is not positive. `F` and its σ are reported from `ln F` to first order
+//! (`σ_F = F σ_ln F`, covariance rows scaled by `F`).
 //!
-//! On the F-16 campaign (Dryden turbulence, 40 runs) this σ is 1.3–3× short of the scatter of
-//! the estimates, and it stays the reported σ because no alternative measured was better
-//! (docs/uncertainty.md, "Filter-error method: σ and bias"): the lag-0 sandwich with the full
-//! cross-output innovation covariance ([`FemResult::sigma_lag0`]) and the full-`B` Cramér–Rao
-//! σ ([`FemResult::sigma_full_b`]) are within 6 % of it (the innovations' cross-correlation
-//! through the gain is not the cause), and the coloured-residual sandwich was not positive on
-//! any run, not even on the parameter block ([`FemResult::sigma_coloured_theta`]). The scatter
-//! comes from what the innovations at the estimate do not show (white process noise against
-//! the Dryden `ġ`, coloured below `V/L`; no process noise on the rate equations). The biases
-//! there (Cl_p +2.8 %, Cl_δa +1.9 %, Cm_q +2.2 %, Cn_δr +2.4 % of the truth) are present in calm
-//! air, do not shrink with halved inputs and are shared by output error on the same samples;
+//! The biases on that campaign (Cl_p +2.8 %, Cl_δa +1.9 %, Cm_q +2.2 %, Cn_δr +2.4 % of the
+//! truth) are present in calm air, do not shrink with halved inputs and are shared by output error on the same samples;
 //! Cn_r's −10 % is this method's (output error is unbiased there): in calm air `F` stays above
 //! its bound and absorbs lateral model error.
 

@@ -128,6 +128,9 @@ pub struct EstimatorRun {
     pub iterations: Option<usize>,
     /// Batch estimators: wall time of the post-flight fit, s (`null` otherwise).
     pub fit_wall_s: Option<f64>,
+    /// Batch estimators: the candidate σ of the parameters by kind
+    /// ([`crate::aircraft::batch::BatchFit::sigma_candidates`]; empty otherwise).
+    pub sigma_candidates: Vec<(String, Vec<f64>)>,
     /// Per parameter, in the structure's order.
     pub params: Vec<ParamRun>,
 }
@@ -161,6 +164,7 @@ pub fn run_result(index: u64, sensor_seed: u64, out: &RunOutput) -> RunResult {
                     nis,
                     iterations: fit.and_then(|f| f.iterations),
                     fit_wall_s: fit.map(|f| f.wall_s),
+                    sigma_candidates: fit.map(|f| f.sigma_candidates.clone()).unwrap_or_default(),
                     params: Vec::new(),
                 });
             }

@@ -41,8 +41,18 @@ fn fem_in_a_turbulent_run_converges_with_process_noise_on_the_air_data_states() 
             assert!((0.5 * vane..2.0 * vane).contains(rms), "{name}: innovation rms {rms}");
         }
     }
-    assert!(!fit.coloured_sigma, "FEM reports its Cramér–Rao σ");
+    // FEM reports the coloured-residual σ where formed, else the Cramér–Rao one
+    // (docs/uncertainty.md, "Filter-error method: σ and bias").
+    let cand = |k: &str| fit.sigma_candidates.iter().find(|(n, _)| n == k).map(|(_, v)| v.clone());
+    let expected = if fit.coloured_sigma {
+        cand("coloured").or_else(|| cand("coloured_theta")).expect("coloured σ")
+    } else {
+        cand("cramer_rao").expect("Cramér–Rao σ")
+    };
     let s = summarize(&out).unwrap();
+    let reported: Vec<f64> =
+        s.parameters.iter().filter(|p| p.estimator == "fem").filter_map(|p| p.sigma).collect();
+    assert_eq!(reported, expected, "the reported σ is the coloured candidate where formed");
     for p in s.parameters.iter().filter(|p| p.primary && p.estimator == "fem") {
         let (f, t) = (p.r#final.unwrap(), p.truth.unwrap());
         assert!(((f - t) / t).abs() < 0.15, "{}: {f} vs truth {t}", p.name);

@@ -45,9 +45,10 @@
 //! state equation, estimated) on the translational air-data states `V, α, β` by default (the
 //! Dryden gusts of the simulation are translational: their derivatives drive the air-relative
 //! `V, α, β` equations, module doc of `filter_error`), option `process_noise = "V,alpha,beta"`
-//! (any of `V alpha beta p q r phi theta`). Its σ is its own Cramér–Rao σ (the innovations of
-//! a correct filter are white, so no coloured-residual correction), and the log carries the
-//! estimated `F`.
+//! (any of `V alpha beta p q r phi theta`). Its σ is the coloured-residual σ where formed, as
+//! for `oe` (the innovations of an inexact filter are autocorrelated: on the F-16 campaign the
+//! Cramér–Rao σ is 0.34–0.76 of the scatter, the coloured 0.68–1.69; docs/uncertainty.md,
+//! "Filter-error method: σ and bias"), and the log carries the estimated `F`.
 //!
 //! **Samples** (option `samples = "raw" | "smoothed"`): `fem` fits by default the **unsmoothed**
 //! samples ([`super::air_data::AirDataSampler::raw`]: same time stamps, sensor noise, no matched
@@ -67,7 +68,9 @@ use aeroident_estimators::sample::AirDataSample;
 use serde::Serialize;
 
 use super::scenario::SampleEstimatorSpec;
-use crate::replay::batch::{fit_fem_manoeuvres, fit_manoeuvres, oe_config, reported_sigma};
+use crate::replay::batch::{
+    fem_reported_sigma, fit_fem_manoeuvres, fit_manoeuvres, oe_config, reported_sigma,
+};
 
 /// Most Gauss–Newton iterations of the campaign's fits (the estimators crate's default is 50).
 /// On turbulent flights the residuals are large and structured, so Gauss–Newton converges
@@ -251,6 +254,12 @@ pub struct BatchFit {
     pub coloured_lag: usize,
     /// `fem`: the estimated process noise `(state, F, σ)` (state unit per √s); empty for `oe`.
     pub process_noise: Vec<(String, f64, f64)>,
+    /// The candidate σ of the structure parameters (structure order), by kind: `cramer_rao`
+    /// (`sqrt(diag M⁻¹)`, diagonal weighting), `coloured` (the coloured-residual sandwich, all
+    /// lags), and for `fem` `lag0` (sandwich with the full lag-0 innovation covariance) and
+    /// `full_b` (Cramér–Rao with the full innovation covariance); a kind that could not be
+    /// formed is absent. For measuring which σ is honest (docs/uncertainty.md).
+    pub sigma_candidates: Vec<(String, Vec<f64>)>,
 }
 
 /// The outcome of [`fit_window`]: per structure parameter `(estimate, σ)`, and the log.
@@ -282,15 +291,26 @@ pub fn fit_window(
             let (result, wall_s) = fit_manoeuvres(&[window], c)?;
             let sigma = reported_sigma(&result);
             let values = result.values[..result.n_params].iter().copied().zip(sigma).collect();
-            let log = log_of(label, window, c, &result, wall_s, Vec::new());
+            let log = log_of(label, window, c, &result, wall_s, Vec::new(), Vec::new());
             Ok((values, log))
         }
         BatchConfig::Fem(c) => {
             let (fem, wall_s) = fit_fem_manoeuvres(&[window], c)?;
             let r = &fem.result;
-            // The filter-error σ is its own Cramér–Rao σ (module doc).
-            let values = (0..r.n_params).map(|i| (r.values[i], r.sigma[i])).collect();
-            let log = log_of(label, window, &c.oe, r, wall_s, process_noise_of(&fem));
+            // Coloured-residual σ where formed, as output error (fem_reported_sigma).
+            let (sigma, coloured) = fem_reported_sigma(&fem);
+            let values = (0..r.n_params).map(|i| (r.values[i], sigma[i])).collect();
+            let np = r.n_params;
+            let extra = [
+                ("lag0", &fem.sigma_lag0),
+                ("full_b", &fem.sigma_full_b),
+                ("coloured_theta", &fem.sigma_coloured_theta),
+            ]
+            .into_iter()
+            .filter_map(|(k, v)| v.as_ref().map(|v| (k.to_string(), v[..np].to_vec())))
+            .collect();
+            let mut log = log_of(label, window, &c.oe, r, wall_s, process_noise_of(&fem), extra);
+            log.coloured_sigma = coloured;
             Ok((values, log))
         }
     }
@@ -311,7 +331,14 @@ fn log_of(
     r: &OeResult,
     wall_s: f64,
     process_noise: Vec<(String, f64, f64)>,
+    extra_sigmas: Vec<(String, Vec<f64>)>,
 ) -> BatchFit {
+    let np = r.n_params;
+    let mut sigma_candidates = vec![("cramer_rao".to_string(), r.sigma[..np].to_vec())];
+    if let Some(c) = &r.sigma_coloured {
+        sigma_candidates.push(("coloured".to_string(), c[..np].to_vec()));
+    }
+    sigma_candidates.extend(extra_sigmas);
     BatchFit {
         estimator: label.into(),
         from_s: window[0].t_s,
@@ -325,8 +352,9 @@ fn log_of(
         iterations: Some(r.n_iterations()),
         wall_s,
         residual_rms: r.residual_rms.clone(),
-        coloured_sigma: r.sigma_coloured.is_some() && process_noise.is_empty(),
+        coloured_sigma: r.sigma_coloured.is_some(),
         coloured_lag: r.coloured_lag,
         process_noise,
+        sigma_candidates,
     }
 }

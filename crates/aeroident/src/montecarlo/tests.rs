@@ -36,6 +36,7 @@ fn result(
             nis: None,
             iterations: None,
             fit_wall_s: None,
+            sigma_candidates: Vec::new(),
             params: vec![prun("Cm_alpha", -1.0, fin, sigma, t10)],
         }]),
     }

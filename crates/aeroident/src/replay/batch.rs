@@ -340,6 +340,21 @@ pub fn reported_sigma(result: &OeResult) -> Vec<f64> {
         .collect()
 }
 
+/// The σ a filter-error fit reports per structure parameter (structure order) and whether it
+/// is the coloured-residual one: the coloured-residual sandwich where it was formed
+/// ([`OeResult::sigma_coloured`], else its parameter block
+/// [`FemResult::sigma_coloured_theta`]), else the Cramér–Rao σ. On the F-16 campaign the
+/// Cramér–Rao σ is 1.3–3× short of the scatter and the coloured one 0.7–1.7× it
+/// (docs/uncertainty.md, "Filter-error method: σ and bias").
+pub fn fem_reported_sigma(fem: &FemResult) -> (Vec<f64>, bool) {
+    let r = &fem.result;
+    let np = r.n_params;
+    match r.sigma_coloured.as_ref().or(fem.sigma_coloured_theta.as_ref()) {
+        Some(c) => (c[..np].to_vec(), true),
+        None => (r.sigma[..np].to_vec(), false),
+    }
+}
+
 /// Reads the whole record, splits it at gaps and fits it by output error (`fem`: by the
 /// filter-error method with [`FemConfig::new`]'s defaults on [`oe_config`]).
 ///
@@ -374,9 +389,11 @@ pub fn fit_record<R: Read>(
             fit_manoeuvres(&slices, &oe_config(model.structure)).map_err(ReplayError::Model)?;
         (r, wall, None)
     };
-    // The filter-error σ is its own Cramér–Rao σ (its innovations are white by construction).
-    let reported =
-        if fem { result.sigma[..result.n_params].to_vec() } else { reported_sigma(&result) };
+    // Coloured-residual σ where formed, for both methods (fem: [`fem_reported_sigma`]).
+    let reported = match &fem_result {
+        Some(f) => fem_reported_sigma(f).0,
+        None => reported_sigma(&result),
+    };
     let parameters = (0..result.n_params)
         .map(|i| BatchParameter {
             name: result.names[i].clone(),

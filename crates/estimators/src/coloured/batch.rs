@@ -30,6 +30,8 @@ pub(crate) struct Coloured {
     /// The corrected covariance, `None` when a diagonal element came out non-positive (a
     /// truncated autocorrelation sum need not be positive definite).
     pub covariance: Option<DMatrix<f64>>,
+    /// The corrected covariance whatever its diagonal (for callers that need only a block).
+    pub full: DMatrix<f64>,
     /// The lag `K` at which the sum was truncated.
     pub lag: usize,
 }
@@ -127,5 +129,5 @@ pub(crate) fn covariance(
     let cov = minv * f * minv;
     let cov = 0.5 * (&cov + cov.transpose());
     let ok = (0..n).all(|i| cov[(i, i)] > 0.0 && cov[(i, i)].is_finite());
-    Coloured { covariance: ok.then_some(cov), lag }
+    Coloured { covariance: ok.then(|| cov.clone()), full: cov, lag }
 }

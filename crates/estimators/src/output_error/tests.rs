@@ -50,6 +50,26 @@ pub(super) fn simulate_with_process_noise(
     x0_offset: [f64; N_STATES],
     process: [f64; N_STATES],
 ) -> Vec<AirDataSample> {
+    simulate_with_gusts(st, th, rate, duration, noise_scale, seed, x0_offset, process, None)
+}
+
+/// [`simulate_with_process_noise`], with `gust_corner_rad_s = Some(ω)`: the process noise of
+/// state `i` is the time derivative of a first-order Gauss–Markov "gust" `g_i` of corner `ω`
+/// (`x_i += Δg_i` per substep, `g_i` of variance `process[i]² / (2ω)`, discretised exactly),
+/// as a translational Dryden gust enters α: its spectrum is `process[i]²` (white) far above
+/// `ω` and falls as `Ω²` below (coloured).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn simulate_with_gusts(
+    st: &ModelStructure,
+    th: &[f64],
+    rate: f64,
+    duration: f64,
+    noise_scale: f64,
+    seed: u64,
+    x0_offset: [f64; N_STATES],
+    process: [f64; N_STATES],
+    gust_corner_rad_s: Option<f64>,
+) -> Vec<AirDataSample> {
     let model = FlightModel::new(*st).unwrap();
     let set = model.state_set();
     let states = set.states();
@@ -70,6 +90,13 @@ pub(super) fn simulate_with_process_noise(
     let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
     let n01 = Normal::new(0.0, 1.0).unwrap();
     let mut x = [V0, ALPHA0, 0.0, 0.0, 0.0, 0.0, 0.0, ALPHA0];
+    // Gauss–Markov gust states (gust mode), started stationary.
+    let mut gust = [0.0; N_STATES];
+    if let Some(w) = gust_corner_rad_s {
+        for i in 0..N_STATES {
+            gust[i] = process[i] / (2.0 * w).sqrt() * n01.sample(&mut rng);
+        }
+    }
     for &i in states {
         x[i] += x0_offset[i];
     }
@@ -117,7 +144,16 @@ pub(super) fn simulate_with_process_noise(
             for (kk, &i) in states.iter().enumerate() {
                 x[i] += h / 6.0 * (k1[kk] + 2.0 * k2[kk] + 2.0 * k3[kk] + k4[kk]);
                 if process[i] > 0.0 {
-                    x[i] += process[i] * h.sqrt() * n01.sample(&mut rng);
+                    match gust_corner_rad_s {
+                        None => x[i] += process[i] * h.sqrt() * n01.sample(&mut rng),
+                        Some(w) => {
+                            let a = (-w * h).exp();
+                            let sd = process[i] / (2.0 * w).sqrt();
+                            let g1 = a * gust[i] + sd * (1.0 - a * a).sqrt() * n01.sample(&mut rng);
+                            x[i] += g1 - gust[i];
+                            gust[i] = g1;
+                        }
+                    }
                 }
             }
         }

@@ -197,50 +197,56 @@ fn u64_of(v: &Value, k: &str) -> PyResult<u64> {
 /// exactly).
 fn run_from_json(v: &Value) -> PyResult<RunResult> {
     let outcome = field(v, "outcome")?;
-    let outcome =
-        if let Some(e) = outcome.get("Err") {
-            Err(e.as_str().unwrap_or_default().to_owned())
-        } else {
-            let ests = outcome
-                .get("Ok")
-                .and_then(Value::as_array)
-                .ok_or_else(|| err("per-run result: `outcome` is neither Ok nor Err"))?;
-            Ok(ests
-                .iter()
-                .map(|e| {
-                    let params = field(e, "params")?
-                        .as_array()
-                        .ok_or_else(|| err("per-run result: `params` is not a list"))?
-                        .iter()
-                        .map(|p| {
-                            Ok(ParamRun {
-                                name: string(p, "name")?,
-                                primary: field(p, "primary")?.as_bool().unwrap_or(false),
-                                truth: opt_f64(p, "truth")?,
-                                truth_before: opt_f64(p, "truth_before")?,
-                                truth_after: opt_f64(p, "truth_after")?,
-                                r#final: opt_f64(p, "final")?,
-                                sigma: opt_f64(p, "sigma")?,
-                                time_to_10pct_s: opt_f64(p, "time_to_10pct_s")?,
-                                reconvergence_10pct_s: opt_f64(p, "reconvergence_10pct_s")?,
-                            })
+    let outcome = if let Some(e) = outcome.get("Err") {
+        Err(e.as_str().unwrap_or_default().to_owned())
+    } else {
+        let ests = outcome
+            .get("Ok")
+            .and_then(Value::as_array)
+            .ok_or_else(|| err("per-run result: `outcome` is neither Ok nor Err"))?;
+        Ok(ests
+            .iter()
+            .map(|e| {
+                let params = field(e, "params")?
+                    .as_array()
+                    .ok_or_else(|| err("per-run result: `params` is not a list"))?
+                    .iter()
+                    .map(|p| {
+                        Ok(ParamRun {
+                            name: string(p, "name")?,
+                            primary: field(p, "primary")?.as_bool().unwrap_or(false),
+                            truth: opt_f64(p, "truth")?,
+                            truth_before: opt_f64(p, "truth_before")?,
+                            truth_after: opt_f64(p, "truth_after")?,
+                            r#final: opt_f64(p, "final")?,
+                            sigma: opt_f64(p, "sigma")?,
+                            time_to_10pct_s: opt_f64(p, "time_to_10pct_s")?,
+                            reconvergence_10pct_s: opt_f64(p, "reconvergence_10pct_s")?,
                         })
-                        .collect::<PyResult<Vec<_>>>()?;
-                    Ok(EstimatorRun {
-                        name: string(e, "name")?,
-                        failure: field(e, "failure")?.as_str().map(str::to_owned),
-                        nis: opt_f64(e, "nis")?,
-                        iterations: match field(e, "iterations")? {
-                            Value::Null => None,
-                            x => Some(x.as_u64().ok_or_else(|| {
-                                err("per-run result: `iterations` is not an integer")
-                            })? as usize),
-                        },
-                        fit_wall_s: opt_f64(e, "fit_wall_s")?,
-                        params,
                     })
+                    .collect::<PyResult<Vec<_>>>()?;
+                Ok(EstimatorRun {
+                    name: string(e, "name")?,
+                    failure: field(e, "failure")?.as_str().map(str::to_owned),
+                    nis: opt_f64(e, "nis")?,
+                    iterations: match field(e, "iterations")? {
+                        Value::Null => None,
+                        x => {
+                            Some(x.as_u64().ok_or_else(|| {
+                                err("per-run result: `iterations` is not an integer")
+                            })? as usize)
+                        }
+                    },
+                    fit_wall_s: opt_f64(e, "fit_wall_s")?,
+                    sigma_candidates: match e.get("sigma_candidates") {
+                        None | Some(Value::Null) => Vec::new(),
+                        Some(x) => serde_json::from_value(x.clone())
+                            .map_err(|e| err(format!("per-run result: `sigma_candidates`: {e}")))?,
+                    },
+                    params,
                 })
-                .collect::<PyResult<Vec<_>>>()?)
-        };
+            })
+            .collect::<PyResult<Vec<_>>>()?)
+    };
     Ok(RunResult { index: u64_of(v, "index")?, sensor_seed: u64_of(v, "sensor_seed")?, outcome })
 }

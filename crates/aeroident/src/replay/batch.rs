@@ -390,9 +390,9 @@ pub fn fit_record<R: Read>(
         (r, wall, None)
     };
     // Coloured-residual σ where formed, for both methods (fem: [`fem_reported_sigma`]).
-    let reported = match &fem_result {
-        Some(f) => fem_reported_sigma(f).0,
-        None => reported_sigma(&result),
+    let (reported, coloured) = match &fem_result {
+        Some(f) => fem_reported_sigma(f),
+        None => (reported_sigma(&result), result.sigma_coloured.is_some()),
     };
     let parameters = (0..result.n_params)
         .map(|i| BatchParameter {
@@ -400,7 +400,7 @@ pub fn fit_record<R: Read>(
             estimate: result.values[i],
             std_error: reported[i],
             crb_sigma: result.sigma[i],
-            coloured_sigma: result.sigma_coloured.as_ref().map(|s| s[i]),
+            coloured_sigma: coloured.then_some(reported[i]),
         })
         .collect();
     let st = model.structure;

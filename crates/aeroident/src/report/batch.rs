@@ -27,9 +27,10 @@ pub fn results(outcome: &BatchOutcome, title: &str, references: &[Reference]) ->
         .collect();
     let v = &s.validation;
     let fit = v.outputs.iter().map(FitQuality::from).collect();
-    let mut notes = vec![
-        "σ = Cramér–Rao bound of the output-error fit (optimistic when the residuals are coloured); fit quality of the simulated outputs over the fitted record".into(),
-    ];
+    let mut notes = vec![format!(
+        "σ = Cramér–Rao bound of the {} fit (optimistic when the residuals are coloured); fit quality of the simulated outputs over the fitted record",
+        if s.process_noise.is_empty() { "output-error" } else { "filter-error" }
+    )];
     let coloured: Vec<String> = s
         .parameters
         .iter()

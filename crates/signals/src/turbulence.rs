@@ -389,33 +389,38 @@ impl DrydenGenerator {
         let vt = positive("vt_fps", vt_fps)?;
         let dt = positive("sample_time_s", sample_time_s)?;
         let mut rng = Pcg64Mcg::seed_from_u64(seed);
+        // The continuous filters of [`dryden_shaping_filter`], discretised with their
+        // stationary state covariance as the initial one.
+        let filter = |component| dryden_shaping_filter(params, component, vt);
         // u: H = σ√(2a)/(s + a); stationary state variance 1/(2a).
         let au = vt / params.L_u_ft;
+        let (fa, fb, fc) = filter(DrydenComponent::U);
         let u = DiscreteShapingFilter::<1>::new(
-            SMatrix::<f64, 1, 1>::new(-au),
-            SVector::<f64, 1>::new(1.0),
-            SVector::<f64, 1>::new(params.sigma_u_fps * (2.0 * au).sqrt()),
+            SMatrix::<f64, 1, 1>::from_iterator(fa.iter().copied()),
+            SVector::<f64, 1>::from_iterator(fb.iter().copied()),
+            SVector::<f64, 1>::from_iterator(fc.iter().copied()),
             SMatrix::<f64, 1, 1>::new(0.5 / au),
             dt,
             &mut rng,
         )?;
-        let second = |sigma: f64, L: f64, rng: &mut Pcg64Mcg| {
+        let second = |component, L: f64, rng: &mut Pcg64Mcg| {
             // H = σ√a (√3 s + a)/(s + a)², controllable canonical form:
             // A = [[0, 1], [−a², −2a]], B = [0, 1]ᵀ, C = σ√a [a, √3];
             // stationary covariance diag(1/(2 a0 a1), 1/(2 a1)) with a0 = a², a1 = 2a.
             let a = vt / L;
             let (a0, a1) = (a * a, 2.0 * a);
+            let (fa, fb, fc) = filter(component);
             DiscreteShapingFilter::<2>::new(
-                SMatrix::<f64, 2, 2>::new(0.0, 1.0, -a0, -a1),
-                SVector::<f64, 2>::new(0.0, 1.0),
-                SVector::<f64, 2>::new(sigma * a.sqrt() * a, sigma * a.sqrt() * 3f64.sqrt()),
+                SMatrix::<f64, 2, 2>::from_iterator(fa.iter().copied()),
+                SVector::<f64, 2>::from_iterator(fb.iter().copied()),
+                SVector::<f64, 2>::from_iterator(fc.iter().copied()),
                 SMatrix::<f64, 2, 2>::new(0.5 / (a0 * a1), 0.0, 0.0, 0.5 / a1),
                 dt,
                 rng,
             )
         };
-        let v = second(params.sigma_v_fps, params.L_v_ft, &mut rng)?;
-        let w = second(params.sigma_w_fps, params.L_w_ft, &mut rng)?;
+        let v = second(DrydenComponent::V, params.L_v_ft, &mut rng)?;
+        let w = second(DrydenComponent::W, params.L_w_ft, &mut rng)?;
         Ok(Self { u, v, w, rng, sample_time_s: dt })
     }
 

@@ -80,12 +80,18 @@ use crate::replay::batch::{
 /// (docs/uncertainty.md, "Output error in the campaign").
 pub const MAX_ITERATIONS: usize = 250;
 
-/// The batch estimator kinds of `[[estimator]]`.
-pub const BATCH_KINDS: [&str; 2] = ["oe", "fem"];
-
-/// Whether `kind` is a batch (post-flight) estimator.
+/// Whether `kind` (an `[[estimator]] kind`) is a batch (post-flight) estimator: the CLI's
+/// [`EstimatorKind::is_batch`](crate::estimators::EstimatorKind::is_batch) kinds.
 pub fn is_batch(kind: &str) -> bool {
-    BATCH_KINDS.contains(&kind)
+    use clap::ValueEnum;
+    crate::estimators::EstimatorKind::from_str(kind, false).is_ok_and(|k| k.is_batch())
+}
+
+/// The batch estimator kinds of `[[estimator]]` (`oe`, `fem`), for messages.
+pub fn batch_kinds() -> Vec<&'static str> {
+    use clap::ValueEnum;
+    let kinds = crate::estimators::EstimatorKind::value_variants();
+    kinds.iter().filter(|k| k.is_batch()).map(|k| k.name()).collect()
 }
 
 /// The configuration of a batch entry: output error or the filter-error method.
@@ -188,18 +194,11 @@ pub fn config(spec: &SampleEstimatorSpec) -> Result<BatchConfig, String> {
 
 /// Whether a batch entry fits the unsmoothed samples (option `samples = "raw"`; the default
 /// for `fem`) or the smoothed ones the real-time estimators see (`samples = "smoothed"`; the
-/// default for `oe`). Module doc.
-///
-/// # Errors
-/// A message for a value other than `raw` or `smoothed`.
-pub fn raw_samples(spec: &SampleEstimatorSpec) -> Result<bool, String> {
-    match spec.options.get("samples").map(|v| v.as_str()) {
-        None => Ok(spec.kind == "fem"),
-        Some(Some("raw")) => Ok(true),
-        Some(Some("smoothed")) => Ok(false),
-        Some(v) => {
-            Err(format!("{}: `samples` must be \"raw\" or \"smoothed\", got {v:?}", spec.kind))
-        }
+/// default for `oe`). Module doc. The value was checked by [`config`].
+pub fn raw_samples(spec: &SampleEstimatorSpec) -> bool {
+    match spec.options.get("samples").and_then(|v| v.as_str()) {
+        Some(v) => v == "raw",
+        None => spec.kind == "fem",
     }
 }
 

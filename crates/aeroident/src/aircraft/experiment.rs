@@ -428,7 +428,7 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
                 let config = super::batch::config(s).map_err(|e| setup_err(&what, e))?;
                 let structure = config.oe().structure;
                 let kind = config.kind();
-                let raw_samples = super::batch::raw_samples(s).map_err(|e| setup_err(&what, e))?;
+                let raw_samples = super::batch::raw_samples(s);
                 (
                     Channelled::Batch(BatchChannel {
                         config,

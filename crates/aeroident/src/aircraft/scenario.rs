@@ -546,7 +546,7 @@ fn parse_estimator(k: usize, t: &toml::Table) -> Result<EstimatorSpec, (String, 
             format!(
                 "unknown kind `{kind}`: two-aircraft estimators published | corrected | mr-gradient, sample-driven {}, batch (post-flight) {}",
                 SAMPLE_KINDS.join(" | "),
-                super::batch::BATCH_KINDS.join(" | ")
+                super::batch::batch_kinds().join(" | ")
             ),
         ));
     }

@@ -1,8 +1,9 @@
 //! Batch output-error estimation of a whole record (`aeroident replay --estimator oe`): the
 //! post-flight reference a flight-test engineer compares the real-time estimators to; and the
 //! filter-error method (`--estimator fem`: output error with process noise on the air-data
-//! states, [`aeroident_estimators::output_error::filter_error`]), whose reported σ is its own
-//! Cramér–Rao σ and whose validation simulates the model with its estimates (no filter).
+//! states, [`aeroident_estimators::output_error::filter_error`]), whose reported σ is its
+//! coloured-residual σ where formed, else its Cramér–Rao σ ([`fem_reported_sigma`]), and whose
+//! validation simulates the model with its estimates (no filter).
 //!
 //! Unlike the other estimators this is not causal: it reads the whole record first (and says
 //! so), splits it into manoeuvres at the reader's gap events, and runs
@@ -379,7 +380,6 @@ pub fn fit_record<R: Read>(
     let slices: Vec<&[AirDataSample]> = manoeuvres.iter().map(Vec::as_slice).collect();
     let (result, fit_wall_s, fem_result) = if fem {
         let mut config = FemConfig::new(model.structure);
-        config.oe = oe_config(model.structure);
         // The relaxation of B and R converges linearly (module doc of filter_error).
         config.oe.max_iterations = crate::aircraft::batch::MAX_ITERATIONS;
         let (f, wall) = fit_fem_manoeuvres(&slices, &config).map_err(ReplayError::Model)?;

@@ -530,19 +530,21 @@ type CrbOfStructure = (Result<BTreeMap<String, f64>, String>, BTreeMap<String, f
 /// # Errors
 /// Several `dryden` entries (their sum is not one filter per axis), or a bad entry.
 pub fn gust_model(sc: &Scenario) -> Result<Option<GustModel>, String> {
-    let dryden: Vec<&WindConfig> =
-        sc.wind.iter().filter(|w| matches!(w, WindConfig::Dryden { .. })).collect();
-    let w = match dryden.as_slice() {
+    let dryden: Vec<(f64, &WindConfig)> = sc
+        .wind
+        .iter()
+        .filter_map(|w| match w {
+            WindConfig::Dryden { vt_fps, .. } => Some((*vt_fps, w)),
+            _ => None,
+        })
+        .collect();
+    let (vt_fps, w) = match dryden.as_slice() {
         [] => return Ok(None),
-        [w] => *w,
+        [d] => *d,
         _ => return Err("several Dryden wind entries: the turbulent bound takes one".into()),
     };
-    let (WindConfig::Dryden { vt_fps, .. }, Some(params)) =
-        (w, w.dryden_parameters().map_err(|e| e.to_string())?)
-    else {
-        return Ok(None);
-    };
-    Ok(Some(dryden_gust_model(&params, *vt_fps)))
+    let params = w.dryden_parameters().map_err(|e| e.to_string())?;
+    Ok(params.map(|p| dryden_gust_model(&p, vt_fps)))
 }
 
 /// The Dryden gusts of `params` frozen at `vt_fps` as shaping filters in SI (m/s): the

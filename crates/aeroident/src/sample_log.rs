@@ -147,11 +147,6 @@ impl<T> SampleLog<T> {
     pub fn stride(&self) -> usize {
         self.stride
     }
-
-    /// Consecutive items per block.
-    pub fn block(&self) -> usize {
-        self.block
-    }
 }
 
 #[cfg(test)]

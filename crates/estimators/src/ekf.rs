@@ -264,8 +264,9 @@ pub struct EkfConfig {
     /// `state_process_noise²`, which is otherwise the floor of the estimate.
     pub adaptive_q_window: u32,
     /// Which states' process noise is estimated when `adaptive_q_window > 0`, full-state
-    /// order; the others keep `state_process_noise` (module doc: by default the air-relative
-    /// states `V, α, β`, through which translational turbulence enters).
+    /// order; the others keep `state_process_noise` (module doc: by default `α, β`
+    /// ([`DEFAULT_ADAPTIVE_Q_STATES`]), through which translational turbulence enters; `V` is
+    /// not adapted by default).
     pub adaptive_q_states: [bool; N_STATES],
 }
 
@@ -876,8 +877,10 @@ impl Estimator for Ekf {
         let mut q_red = [[0.0; 2]; N_STATES];
         let mut p_prior = [0.0; N_STATES];
         let forget = 1.0 - 1.0 / ADAPTIVE_Q_MEMORY_SAMPLES;
+        // The states whose process noise is estimated: only their statistics are formed.
+        let adapted = |k: usize| self.cfg.adaptive_q_states[states[k]];
         if adapt_q {
-            for k in 0..nx {
+            for k in (0..nx).filter(|&k| adapted(k)) {
                 for (a, b) in q_acc[k].iter_mut().zip(&self.q_acc[k]) {
                     *a = forget * b;
                     q_tot[k] += *a;
@@ -943,7 +946,7 @@ impl Estimator for Ekf {
                 z[i] += ph[i] * inv * e;
             }
             if adapt_q {
-                for k in 0..nx {
+                for k in (0..nx).filter(|&k| adapted(k)) {
                     let d = ph[k] * inv * e;
                     q_cross[k] += 2.0 * d * (q_tot[k] - q_acc[k][oi]);
                     q_acc[k][oi] += d;

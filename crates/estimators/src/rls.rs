@@ -271,6 +271,8 @@ impl Rls {
             value: structure.n_params() as f64,
             reason: "empty, over capacity, or mixes CX/CZ with CL/CD",
         })?;
+        // Built in place: moving a stack-built `[Option<Fit>; 8]` into `Self` was miscompiled
+        // by rustc 1.95 at opt-level 3 (docs/reliability.md; tests/rls.rs guards it in release).
         let mut rls = Self {
             structure,
             fits: [None; 8],

@@ -38,7 +38,21 @@
 //!   `a = 1/min(k + 20, W)` (a running mean in which the configured `R` counts as 20
 //!   innovations, then an exponential window of `W` samples) and `R_min` = (configured σ /
 //!   10)². Only gated-in innovations update it, so one
-//!   outlier cannot inflate it. No noise level is taken from any reference fit.
+//!   outlier cannot inflate it, with one exception: when the state process noise is estimated
+//!   (below), a rejected innovation of an output through which that process noise enters (the
+//!   adapted states' own measurements, and every output whose row of `∂h/∂x` has an entry in
+//!   an adapted state: with `α`, `β` the vanes, specific forces and angular accelerations) is
+//!   a censored observation, `e² > gate² S`, and updates `R` at that bound, `gate² S − h P hᵀ`
+//!   (one rejection moves `R` by at most `a · gate² S`). The estimate of `Q` is noisy (its
+//!   relative standard error over the 500-sample window is of order 1 on turbulent records)
+//!   and pauses while an output is rejected; when it fell towards its floor just before a
+//!   strong gust, the `R` of these outputs (at its floor, since `Q` had taken the turbulence)
+//!   could not grow either, and the gate stayed shut until the divergence rule fired. The
+//!   censored update lets `R` take over what `Q` lost along `P⁻ + R = E[e²]` (measurements:
+//!   docs/uncertainty.md, "EKF divergences from the estimated process noise"). Outputs that
+//!   only see non-adapted states (rates, attitudes, airspeed) keep the strict rule, so a
+//!   moment-derivative change still fails their gate and is left to the change test.
+//!   No noise level is taken from any reference fit.
 //! - **State process noise from the record** (`adaptive_q_window > 0`, the default, 500
 //!   samples; measurements: docs/uncertainty.md, "Adaptive EKF state process noise"): the
 //!   configured `state_process_noise` is the start and the floor; the intensity `q` (units² per
@@ -356,6 +370,26 @@ pub struct Ekf {
 fn sensitivity(k: f64, forget: f64, cross_share: f64) -> f64 {
     let g = 2.0 * k * (1.0 - k) * forget / ((2.0 - k) * (1.0 - forget * (1.0 - k)));
     (g * cross_share).max(MIN_Q_SENSITIVITY)
+}
+
+/// One step of output `oi`'s measurement-noise estimate (module doc, "Measurement noise from
+/// the record"): `R ← R + a (max(excess, R_min) − R)`, `excess` = `e² − h P hᵀ` (or, for a
+/// rejected innovation, its lower bound `gate² S − h P hᵀ`), `a = 1/min(k + 20, W)`.
+fn adapt_r(
+    cfg: &EkfConfig,
+    oi: usize,
+    excess: f64,
+    r_var: &mut [f64; N_OUTPUTS],
+    r_count: &mut [u32; N_OUTPUTS],
+) {
+    r_count[oi] = r_count[oi].saturating_add(1);
+    // The configured R counts as `ADAPTIVE_R_PRIOR_SAMPLES` innovations, so the first few
+    // cannot collapse it (and with it the gate).
+    let k = r_count[oi].saturating_add(ADAPTIVE_R_PRIOR_SAMPLES);
+    let a = 1.0 / f64::from(k.min(cfg.adaptive_r_window.max(1)));
+    let r0 = cfg.measurement_sigma[oi];
+    let r_min = 0.01 * r0 * r0;
+    r_var[oi] += a * (excess.max(r_min) - r_var[oi]);
 }
 
 fn positive(field: &'static str, v: f64) -> Result<(), EstimatorError> {
@@ -916,6 +950,19 @@ impl Estimator for Ekf {
             if e.is_nan() || libm::fabs(e) > self.cfg.gate_sigmas * libm::sqrt(sv) {
                 rejections[oi] += 1;
                 consecutive[oi] += 1;
+                // A rejected innovation of an output through which adapted process noise
+                // enters is a censored observation, `e² > gate² S`: it feeds `R` at that bound
+                // (module doc, "Measurement noise from the record"), so a deficit of `Q`
+                // widens the gate instead of locking it.
+                let sees_q = adapt_q
+                    && match unit {
+                        Some(k) => adapted(k),
+                        None => (0..nx).any(|k| adapted(k) && h[k] != 0.0),
+                    };
+                if sees_q && self.cfg.adaptive_r_window > 0 && !e.is_nan() {
+                    let bound = self.cfg.gate_sigmas * self.cfg.gate_sigmas * sv;
+                    adapt_r(&self.cfg, oi, bound - hph, &mut r_var, &mut r_count);
+                }
                 if consecutive[oi] >= self.cfg.max_consecutive_rejections {
                     self.rejections = rejections;
                     self.consecutive = consecutive;
@@ -936,14 +983,7 @@ impl Estimator for Ekf {
             nis_sum += e * e / sv;
             nis_count += 1;
             if self.cfg.adaptive_r_window > 0 {
-                r_count[oi] = r_count[oi].saturating_add(1);
-                // The configured R counts as `ADAPTIVE_R_PRIOR_SAMPLES` innovations, so the
-                // first few cannot collapse it (and with it the gate).
-                let k = r_count[oi].saturating_add(ADAPTIVE_R_PRIOR_SAMPLES);
-                let a = 1.0 / f64::from(k.min(self.cfg.adaptive_r_window.max(1)));
-                let r0 = self.cfg.measurement_sigma[oi];
-                let r_min = 0.01 * r0 * r0;
-                r_var[oi] += a * ((e * e - hph).max(r_min) - r_var[oi]);
+                adapt_r(&self.cfg, oi, e * e - hph, &mut r_var, &mut r_count);
             }
             for i in 0..n {
                 z[i] += ph[i] * inv * e;

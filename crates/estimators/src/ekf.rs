@@ -39,19 +39,21 @@
 //!   innovations, then an exponential window of `W` samples) and `R_min` = (configured σ /
 //!   10)². Only gated-in innovations update it, so one
 //!   outlier cannot inflate it, with one exception: when the state process noise is estimated
-//!   (below), a rejected innovation of an output through which that process noise enters (the
-//!   adapted states' own measurements, and every output whose row of `∂h/∂x` has an entry in
-//!   an adapted state: with `α`, `β` the vanes, specific forces and angular accelerations) is
-//!   a censored observation, `e² > gate² S`, and updates `R` at that bound, `gate² S − h P hᵀ`
-//!   (one rejection moves `R` by at most `a · gate² S`). The estimate of `Q` is noisy (its
+//!   (below), a rejected innovation of an output of the adapted states' equations (their own
+//!   measurements, and the specific forces `a_x, a_y, a_z` whose row of `∂h/∂x` has an entry
+//!   in an adapted state: with `α`, `β` the vanes and the force outputs, through which
+//!   translational turbulence shows) is a censored observation, `e² > gate² S`, and updates
+//!   `R` at that bound, `gate² S − h P hᵀ` (one rejection moves `R` by at most `a · gate² S`). The estimate of `Q` is noisy (its
 //!   relative standard error over the 500-sample window is of order 1 on turbulent records)
 //!   and pauses while an output is rejected; when it fell towards its floor just before a
 //!   strong gust, the `R` of these outputs (at its floor, since `Q` had taken the turbulence)
 //!   could not grow either, and the gate stayed shut until the divergence rule fired. The
 //!   censored update lets `R` take over what `Q` lost along `P⁻ + R = E[e²]` (measurements:
-//!   docs/uncertainty.md, "EKF divergences from the estimated process noise"). Outputs that
-//!   only see non-adapted states (rates, attitudes, airspeed) keep the strict rule, so a
-//!   moment-derivative change still fails their gate and is left to the change test.
+//!   docs/uncertainty.md, "EKF divergences from the estimated process noise"). The other
+//!   outputs (rates, attitudes, airspeed, angular accelerations) keep the strict rule: a
+//!   moment-derivative change or model error still fails their gate and is left to the change
+//!   test (with the angular accelerations included, the roll model error of the ATTAS
+//!   aileron–rudder record inflated `R` of `ṗ` and the σ of `Cl_β`, `Cl_p` twelvefold).
 //!   No noise level is taken from any reference fit.
 //! - **State process noise from the record** (`adaptive_q_window > 0`, the default, 500
 //!   samples; measurements: docs/uncertainty.md, "Adaptive EKF state process noise"): the
@@ -950,14 +952,17 @@ impl Estimator for Ekf {
             if e.is_nan() || libm::fabs(e) > self.cfg.gate_sigmas * libm::sqrt(sv) {
                 rejections[oi] += 1;
                 consecutive[oi] += 1;
-                // A rejected innovation of an output through which adapted process noise
-                // enters is a censored observation, `e² > gate² S`: it feeds `R` at that bound
-                // (module doc, "Measurement noise from the record"), so a deficit of `Q`
-                // widens the gate instead of locking it.
+                // A rejected innovation of an output of the adapted states' equations is a
+                // censored observation, `e² > gate² S`: it feeds `R` at that bound (module doc,
+                // "Measurement noise from the record"), so a deficit of `Q` widens the gate
+                // instead of locking it.
                 let sees_q = adapt_q
                     && match unit {
                         Some(k) => adapted(k),
-                        None => (0..nx).any(|k| adapted(k) && h[k] != 0.0),
+                        None => {
+                            matches!(o, Output::Ax | Output::Ay | Output::Az)
+                                && (0..nx).any(|k| adapted(k) && h[k] != 0.0)
+                        }
                     };
                 if sees_q && self.cfg.adaptive_r_window > 0 && !e.is_nan() {
                     let bound = self.cfg.gate_sigmas * self.cfg.gate_sigmas * sv;

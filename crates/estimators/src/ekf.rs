@@ -43,9 +43,10 @@
 //!   measurements, and the specific forces `a_x, a_y, a_z` whose row of `∂h/∂x` has an entry
 //!   in an adapted state: with `α`, `β` the vanes and the force outputs, through which
 //!   translational turbulence shows) is a censored observation, `e² > gate² S`, and updates
-//!   `R` at that bound, `gate² S − h P hᵀ` (one rejection moves `R` by at most `a · gate² S`). The estimate of `Q` is noisy (its
-//!   relative standard error over the 500-sample window is of order 1 on turbulent records)
-//!   and pauses while an output is rejected; when it fell towards its floor just before a
+//!   `R` at that bound, `gate² S − h P hᵀ` (one rejection moves `R` by at most
+//!   `a · gate² S`). The estimate of `Q` is noisy (its relative standard error over the
+//!   500-sample window is of order 1 on turbulent records) and pauses while an output is
+//!   rejected; when it fell towards its floor just before a
 //!   strong gust, the `R` of these outputs (at its floor, since `Q` had taken the turbulence)
 //!   could not grow either, and the gate stayed shut until the divergence rule fired. The
 //!   censored update lets `R` take over what `Q` lost along `P⁻ + R = E[e²]` (measurements:

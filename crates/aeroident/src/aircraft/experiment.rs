@@ -1,6 +1,6 @@
 //! The estimation experiment of thesis Figure 3.2, for any increments and any estimator.
 //!
-//! Per sample `k` (interval `dt`, RK4 with the inputs held over the step):
+//! Per sample `k` (interval `dt`, RK4 with the pilot inputs evaluated at the stage times):
 //! 1. the pilot command (trim + inputs) and the wind at `t_k`;
 //! 2. the **reference aircraft** (the F-16 plus the true increments of the scenario, the wind)
 //!    gives `x_ref`, `ẋ_ref` and its outputs;

@@ -22,6 +22,11 @@
 //!   - `alignment = "matched"` (default): every other channel passes the smoother matched to the
 //!     differentiator ([`aeroident_signals::differentiate::MatchedSmoother`]: the same parabolic
 //!     weighting and lag), so both sides of the equation-error regression see the same filter.
+//!     The surfaces and throttle get the same weights as the states: the experiment flies them
+//!     as continuous functions of time ([`super::experiment`], step 4), and the matched weights
+//!     are those of a continuous signal (trapezoidal over each step). Until the staircase
+//!     inputs were replaced they took the smoother's held weights, exact for a command held
+//!     over the step (docs/uncertainty.md, "Bias: the staircase inputs").
 //!     Without it the differentiator's smoothing (a sinusoid's derivative is attenuated by
 //!     `G(ω)`, 0.988 at 1 Hz for 11 points at 100 Hz) faces unfiltered regressors, and
 //!     turbulence content above the differentiator's band acts like regressor noise: the
@@ -161,8 +166,6 @@ fn measured_channels(
 
 /// The channels of a sample that the alignment filters, in a fixed order ([`to_vector`]).
 const N_FILTERED: usize = 18;
-/// Indices of the held commands (δe, δa, δr, throttle) in [`to_vector`]'s order.
-const HELD: core::ops::Range<usize> = 13..17;
 
 fn to_vector(s: &AirDataSample) -> [f64; N_FILTERED] {
     let o = |v: Option<f64>| v.unwrap_or(0.0);
@@ -222,9 +225,6 @@ pub struct AirDataSampler {
     /// Weights of the other channels over the window, oldest first: the matched smoother's,
     /// or a unit weight at the window centre (pure delay).
     weights: Vec<f64>,
-    /// Weights of the held channels (surfaces, throttle: applied with a zero-order hold over
-    /// the step): the matched smoother's held weights, or the centre (pure delay).
-    held: Vec<f64>,
     /// The last `window` raw samples, oldest first.
     window: VecDeque<AirDataSample>,
     /// The unsmoothed sample behind the last emitted one ([`AirDataSampler::raw`]).
@@ -255,13 +255,15 @@ impl AirDataSampler {
         }
         let mk_diff = || CausalDifferentiator::new(window, dt_s).map_err(|e| e.to_string());
         let diff = [mk_diff()?, mk_diff()?, mk_diff()?, mk_diff()?];
-        let (weights, held) = if matched {
-            let m = MatchedSmoother::new(window, dt_s).map_err(|e| e.to_string())?;
-            (m.weights().to_vec(), m.held_weights().to_vec())
+        // Every channel, the surfaces and throttle included, is a continuous signal (the
+        // experiment flies the pilot's controls at the RK4 stage times, not held over the
+        // step), so one weighting serves all.
+        let weights = if matched {
+            MatchedSmoother::new(window, dt_s).map_err(|e| e.to_string())?.weights().to_vec()
         } else {
             let mut w = vec![0.0; window];
             w[(window - 1) / 2] = 1.0;
-            (w.clone(), w)
+            w
         };
         let noise = if noise && scale > 0.0 {
             let s = state_sigma();
@@ -306,7 +308,6 @@ impl AirDataSampler {
             noise,
             diff,
             weights,
-            held,
             window: VecDeque::with_capacity(window + 1),
             raw: None,
         })
@@ -364,10 +365,9 @@ impl AirDataSampler {
         let centre = (self.weights.len() - 1) / 2;
         let mut out = *self.window.get(centre)?;
         let mut acc = [0.0; N_FILTERED];
-        for ((w, h), smp) in self.weights.iter().zip(&self.held).zip(&self.window) {
-            let v = to_vector(smp);
-            for (k, (a, x)) in acc.iter_mut().zip(v).enumerate() {
-                *a += if HELD.contains(&k) { h * x } else { w * x };
+        for (w, smp) in self.weights.iter().zip(&self.window) {
+            for (a, x) in acc.iter_mut().zip(to_vector(smp)) {
+                *a += w * x;
             }
         }
         set_vector(&mut out, &acc);
@@ -489,5 +489,45 @@ mod tests {
             assert!((s.q_rad_s.unwrap() - 0.3 * t_old).abs() < 1e-12);
             assert!((s.qdot_rad_s2.unwrap() - 0.3).abs() < 1e-9, "{}", s.qdot_rad_s2.unwrap());
         }
+    }
+
+    /// The surfaces are continuous signals (the experiment flies them at the RK4 stage times), so
+    /// the matched smoother gives a ramp in a surface back at the sample's time stamp, exactly
+    /// (the weights are symmetric and sum to 1), as it does a ramp in q. The held weights of a
+    /// zero-order-hold command (used until the staircase inputs were replaced) give the ramp
+    /// `dt/2` older: 0.5 · 0.2 rad/s · 0.01 s = 1e-3 rad off.
+    #[test]
+    fn analytic_matched_sampler_smooths_surfaces_as_continuous_signals() {
+        let f = F16::new(0.30).unwrap();
+        let t = trim(&f, &TrimCondition::level(20_000.0, 675.0)).unwrap();
+        let dt = 0.01;
+        let mut smp = AirDataSampler::new(&f, 205.74, dt, false, 1.0, 0, 21, true).unwrap();
+        let rate = 0.2; // rad/s on every surface
+        let mut n = 0;
+        for k in 0..60 {
+            let tk = k as f64 * dt;
+            let mut u = t.controls;
+            u.elevator_rad += rate * tk;
+            u.aileron_rad += rate * tk;
+            u.rudder_rad += rate * tk;
+            let (_, o) = f.evaluate(&t.state, &u, &AeroIncrements::zero()).unwrap();
+            let Some(s) = smp.push(tk, &t.state, &o, &u) else { continue };
+            let ramp = rate * s.t_s;
+            for (got, trim) in [
+                (s.de_rad.unwrap(), t.controls.elevator_rad),
+                (s.da_rad.unwrap(), t.controls.aileron_rad),
+                (s.dr_rad.unwrap(), t.controls.rudder_rad),
+            ] {
+                assert!(
+                    (got - trim - ramp).abs() < 1e-12,
+                    "t {}: {} vs {}",
+                    s.t_s,
+                    got - trim,
+                    ramp
+                );
+            }
+            n += 1;
+        }
+        assert_eq!(n, 40);
     }
 }

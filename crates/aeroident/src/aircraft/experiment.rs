@@ -1,6 +1,6 @@
 //! The estimation experiment of thesis Figure 3.2, for any increments and any estimator.
 //!
-//! Per sample `k` (interval `dt`, RK4 with the inputs held over the step):
+//! Per sample `k` (interval `dt`, RK4 with the pilot inputs evaluated at the stage times):
 //! 1. the pilot command (trim + inputs) and the wind at `t_k`;
 //! 2. the **reference aircraft** (the F-16 plus the true increments of the scenario, the wind)
 //!    gives `x_ref`, `ẋ_ref` and its outputs;
@@ -11,7 +11,13 @@
 //!    - sample-driven estimators: ONE [`AirDataSample`] per step ([`super::air_data`]: SI units,
 //!      noise, differentiated angular accelerations, all channels delayed by the
 //!      differentiator's lag), passed to each `Box<dyn Estimator>`;
-//! 4. both aircraft advance one RK4 step.
+//! 4. both aircraft advance one RK4 step, the pilot's controls evaluated at the stage times
+//!    (they are continuous functions of time, as a real surface's position is;
+//!    [`aeroident_models::integrate::rk4_step_varying`]), the wind of `t_k` held over the step.
+//!    Holding the controls of `t_k` instead (a staircase) flies the recorded surface positions
+//!    `dt/2` late on average, and the batch fits, which interpolate the recorded inputs
+//!    linearly between samples, read that lag as smaller damping and control derivatives
+//!    (docs/uncertainty.md, "Bias: the staircase inputs").
 //!
 //! After the flight, each batch estimator (`kind = "oe"`, [`super::batch`]) fits the samples
 //! it recorded in step 3 on the window after the last change of the truth; its estimate is
@@ -29,7 +35,7 @@ use aeroident_estimators::smpe::SmpeSample;
 use aeroident_estimators::vocabulary::{ModelStructure, Param};
 use aeroident_estimators::{Estimator, Status};
 use aeroident_models::f16::{self, AeroIncrements, F16, F16Controls, F16State, IncrementReference};
-use aeroident_models::integrate::rk4_step;
+use aeroident_models::integrate::rk4_step_varying;
 use aeroident_models::trim::{F16Trim, TrimCondition, trim};
 use aeroident_signals::{Input, InputSignal, WindField, config::build_wind};
 
@@ -555,12 +561,17 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
     let mut x_ref = trim.state;
     let u0 = trim.controls.to_vector();
     let start = Instant::now();
-    for k in 0..=n {
-        let t = k as f64 * sc.dt_s;
+    // The pilot's controls at any time: trim + inputs, continuous in time (module doc, step 4).
+    let pilot = |t: f64| {
         let mut uv = u0;
         for (slot, sigs) in inputs.iter().enumerate() {
             uv[slot] += sigs.iter().map(|s| s.value(t)).sum::<f64>();
         }
+        uv
+    };
+    for k in 0..=n {
+        let t = k as f64 * sc.dt_s;
+        let uv = pilot(t);
         if out.excitation_start_s.is_none() && uv != u0 {
             out.excitation_start_s = Some(t);
         }
@@ -596,12 +607,15 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
         if k == n {
             break;
         }
-        x_ref = rk4_step(&f16_ref, t, &x_ref, &u, sc.dt_s)
+        // The pilot's controls at the RK4 stage times, the wind of the step held (its field is
+        // sampled at the step).
+        let at_stage = |c: F16Controls| move |ts: f64| c.with_vector(&pilot(ts));
+        x_ref = rk4_step_varying(&f16_ref, t, &x_ref, at_stage(u), sc.dt_s)
             .map_err(|e| ExperimentError::Reference { t_s: t, source: e })?;
         for c in &mut channels {
             let Channelled::Two(two) = &mut c.ch else { continue };
             two.f16.increments = two.current.get();
-            match rk4_step(&two.f16, t, &two.x, &u_est, sc.dt_s) {
+            match rk4_step_varying(&two.f16, t, &two.x, at_stage(u_est), sc.dt_s) {
                 Ok(x) => two.x = x,
                 Err(e) => {
                     if c.log.failure.is_none() {

@@ -240,8 +240,11 @@ pub struct OeResult {
     pub sigma: Vec<f64>,
     /// Coloured-residual σ; `None` if the truncated correction was not positive.
     pub sigma_coloured: Option<Vec<f64>>,
-    /// Lag at which the coloured-residual sum was truncated.
+    /// Lag at which the coloured-residual sum over the whitened residuals was truncated.
     pub coloured_lag: usize,
+    /// Autoregressive order of each output's residual model in the coloured-residual σ (order
+    /// of `outputs`; 0: white).
+    pub coloured_ar_orders: Vec<usize>,
     /// `M⁻¹`, row-major `n × n`.
     pub covariance: Vec<f64>,
     /// Correlation matrix of the estimates, row-major `n × n`.
@@ -825,7 +828,8 @@ fn assemble(
     let lengths: Vec<usize> = p.man.iter().map(|m| m.u.len()).collect();
     let max_lag =
         config.coloured_max_lag.unwrap_or_else(|| lengths.iter().copied().min().unwrap_or(4) / 4);
-    let col = coloured::covariance(s, e, w, &lengths, &minv, max_lag);
+    let pre = coloured::prewhitened(s, e, w, &lengths, &minv, max_lag);
+    let col = pre.coloured;
     let sigma_coloured =
         col.covariance.map(|c| (0..nb).map(|i| c[(i, i)].sqrt()).collect::<Vec<_>>());
     let n = p.n_samples as f64;
@@ -839,6 +843,7 @@ fn assemble(
         sigma,
         sigma_coloured,
         coloured_lag: col.lag,
+        coloured_ar_orders: pre.orders,
         covariance: minv.transpose().as_slice().to_vec(),
         correlation,
         outputs: p.outputs.clone(),

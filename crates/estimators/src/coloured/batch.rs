@@ -21,6 +21,8 @@
 //! most at a configured maximum lag. Lags are taken within a manoeuvre only; `r̂` is pooled
 //! over the manoeuvres.
 
+mod ar;
+
 use nalgebra::DMatrix;
 use std::vec;
 use std::vec::Vec;
@@ -50,28 +52,111 @@ pub(crate) fn covariance(
 ) -> Coloured {
     let ny = w.len();
     let n = minv.nrows();
-    let n_total: usize = lengths.iter().sum();
     let max_lag = max_lag.min(lengths.iter().copied().min().unwrap_or(1).saturating_sub(1));
-    // r̂(k) for k = 0..=max_lag, each ny × ny row-major: r[k][a*ny + b] = Σ e_i[a] e_{i−k}[b] / N.
+    let (r, lag) = lagged_covariances(e, ny, lengths, 0, max_lag);
+    // T_i = R⁻¹ S_i (ny × n).
+    let t = weighted_sensitivities(s, w, n);
+    let f = middle(&t, ny, n, lengths, &r, &vec![Vec::new(); ny]);
+    let cov = minv * f * minv;
+    let cov = 0.5 * (&cov + cov.transpose());
+    let ok = (0..n).all(|i| cov[(i, i)] > 0.0 && cov[(i, i)].is_finite());
+    Coloured { covariance: ok.then(|| cov.clone()), full: cov, lag }
+}
+
+/// Most autoregressive order tried per output by [`prewhitened`].
+pub(crate) const MAX_AR_ORDER: usize = 12;
+
+/// Result of [`prewhitened`].
+pub(crate) struct Prewhitened {
+    /// The covariance, as [`Coloured`].
+    pub coloured: Coloured,
+    /// The autoregressive order chosen per output (0: white).
+    pub orders: Vec<usize>,
+}
+
+/// The prewhitened coloured-residual covariance (module doc, "Prewhitening").
+///
+/// Same arguments as [`covariance`]; `max_lag` caps the lag sum on the whitened residuals.
+pub(crate) fn prewhitened(
+    s: &[f64],
+    e: &[f64],
+    w: &[f64],
+    lengths: &[usize],
+    minv: &DMatrix<f64>,
+    max_lag: usize,
+) -> Prewhitened {
+    let ny = w.len();
+    let n = minv.nrows();
+    let shortest = lengths.iter().copied().min().unwrap_or(1);
+    // Orders up to a tenth of the shortest manoeuvre, so that each fit has ≥ 10 samples per
+    // coefficient.
+    let p_cap = MAX_AR_ORDER.min(shortest / 10);
+    let phi: Vec<Vec<f64>> = (0..ny)
+        .map(|a| {
+            let x: Vec<f64> = e.iter().skip(a).step_by(ny).copied().collect();
+            ar::fit_aic(&x, lengths, p_cap)
+        })
+        .collect();
+    let orders: Vec<usize> = phi.iter().map(Vec::len).collect();
+    let skip = orders.iter().copied().max().unwrap_or(0);
+    // Whitened residuals u_i = e_i − Σ_j φ_j e_{i−j} (per output; defined from `skip` on).
+    let mut u = vec![0.0; e.len()];
+    let mut start = 0;
+    for &len in lengths {
+        for i in start + skip.min(len)..start + len {
+            for (a, pa) in phi.iter().enumerate() {
+                let pred: f64 =
+                    pa.iter().enumerate().map(|(j, c)| c * e[(i - j - 1) * ny + a]).sum();
+                u[i * ny + a] = e[i * ny + a] - pred;
+            }
+        }
+        start += len;
+    }
+    let max_lag = max_lag.min(shortest.saturating_sub(skip + 1));
+    let (r, lag) = lagged_covariances(&u, ny, lengths, skip, max_lag);
+    let t = weighted_sensitivities(s, w, n);
+    let f = middle(&t, ny, n, lengths, &r, &phi);
+    let cov = minv * f * minv;
+    let cov = 0.5 * (&cov + cov.transpose());
+    let ok = (0..n).all(|i| cov[(i, i)] > 0.0 && cov[(i, i)].is_finite());
+    Prewhitened {
+        coloured: Coloured { covariance: ok.then(|| cov.clone()), full: cov, lag },
+        orders,
+    }
+}
+
+/// The pooled residual auto/cross-covariances `r̂(k) = (1/N') Σ x_i x_{i−k}ᵀ` (`ny × ny`
+/// row-major per lag, within manoeuvres, the first `skip` samples of each manoeuvre left out,
+/// `N'` the samples kept), up to the truncation lag `K` of the module doc (first lag at which
+/// every output's `|r̂_jj(k)/r̂_jj(0)|` is inside `2/√N'`, minus one; at most `max_lag`).
+/// Returns `r̂(0..=K)` and `K`.
+fn lagged_covariances(
+    x: &[f64],
+    ny: usize,
+    lengths: &[usize],
+    skip: usize,
+    max_lag: usize,
+) -> (Vec<Vec<f64>>, usize) {
+    let n_kept: usize = lengths.iter().map(|l| l.saturating_sub(skip)).sum();
+    let band = 2.0 / (n_kept.max(1) as f64).sqrt();
     let mut r: Vec<Vec<f64>> = Vec::new();
-    let band = 2.0 / (n_total as f64).sqrt();
     let mut lag = max_lag;
     for k in 0..=max_lag {
         let mut rk = vec![0.0; ny * ny];
         let mut start = 0;
         for &len in lengths {
-            for i in (start + k)..(start + len) {
-                let ei = &e[i * ny..(i + 1) * ny];
-                let ej = &e[(i - k) * ny..(i - k + 1) * ny];
+            for i in (start + skip + k)..(start + len) {
+                let xi = &x[i * ny..(i + 1) * ny];
+                let xj = &x[(i - k) * ny..(i - k + 1) * ny];
                 for a in 0..ny {
                     for b in 0..ny {
-                        rk[a * ny + b] += ei[a] * ej[b];
+                        rk[a * ny + b] += xi[a] * xj[b];
                     }
                 }
             }
             start += len;
         }
-        rk.iter_mut().for_each(|v| *v /= n_total as f64);
+        rk.iter_mut().for_each(|v| *v /= n_kept.max(1) as f64);
         let insignificant = k > 0
             && (0..ny).all(|j| {
                 let r0 = r[0][j * ny + j];
@@ -83,26 +168,102 @@ pub(crate) fn covariance(
         }
         r.push(rk);
     }
-    // T_i = R⁻¹ S_i (ny × n).
-    let t: Vec<f64> = s.iter().enumerate().map(|(idx, v)| v * w[(idx / n) % ny]).collect();
-    // F = Σ_i Σ_j T_iᵀ r̂(i−j) T_j = F₊ + F₊ᵀ − A₀ with F₊ = Σ_i T_iᵀ G_i, the causal
-    // convolution G_i = Σ_{k=0..K} r̂(k) T_{i−k}, and A₀ = Σ_i T_iᵀ r̂(0) T_i.
+    (r, lag)
+}
+
+/// `T_i = R⁻¹ S_i`: the sensitivities (`N × ny × n` row-major) times the weights `w` per output.
+fn weighted_sensitivities(s: &[f64], w: &[f64], n: usize) -> Vec<f64> {
+    let ny = w.len();
+    s.iter().enumerate().map(|(idx, v)| v * w[(idx / n) % ny]).collect()
+}
+
+/// The middle term `F = Σ_m Σ_m' U_mᵀ r(m − m') U_m'` of the sandwich, `r(k)` for
+/// `k = 0..r.len()−1` (`ny × ny` row-major, `r(−k) = r(k)ᵀ`, zero beyond), within manoeuvres.
+///
+/// `U` is `T` (`N × ny × n`, manoeuvres concatenated) filtered per output `a` by the
+/// time-reversed impulse response of the autoregression `1/(1 − Σ_j φ_aj q^{−j})`
+/// (`phi[a]`, empty for none): `U_m = T_m + Σ_j φ_aj U_{m+j}` run backwards from the end of
+/// each manoeuvre, with `T_m = 0` outside it. Before a manoeuvre's first sample `U` keeps
+/// going (pre-sample innovations of a stationary process still reach the window) until its
+/// energy has died out (10⁻¹² of the total) or for at most four manoeuvre lengths. Without an
+/// autoregression `U = T` and `F` is the Morelli & Klein sum of the module doc.
+///
+/// Streaming, backwards: `F₊ = Σ_m (Σ_k r(k)ᵀ U_{m+k})ᵀ U_m`, `F = F₊ + F₊ᵀ − Σ_m U_mᵀ r(0) U_m`,
+/// with a ring of the last `max(p, K) + 1` rows of `U`.
+fn middle(
+    t: &[f64],
+    ny: usize,
+    n: usize,
+    lengths: &[usize],
+    r: &[Vec<f64>],
+    phi: &[Vec<f64>],
+) -> DMatrix<f64> {
+    let row = ny * n;
+    let p_max = phi.iter().map(Vec::len).max().unwrap_or(0);
+    let depth = p_max.max(r.len().saturating_sub(1)) + 1;
     let mut fplus = DMatrix::<f64>::zeros(n, n);
     let mut a0 = DMatrix::<f64>::zeros(n, n);
-    let mut g = vec![0.0; ny * n];
-    let mut g0 = vec![0.0; ny * n];
+    let mut ring = vec![0.0; depth * row];
+    let mut g = vec![0.0; row];
+    let mut g0 = vec![0.0; row];
+    let mut u = vec![0.0; row];
     let mut start = 0;
     for &len in lengths {
-        for i in start..start + len {
+        ring.iter_mut().for_each(|v| *v = 0.0);
+        let mut total = 0.0;
+        let mut recent = std::collections::VecDeque::with_capacity(p_max + 1);
+        let pre_max = if p_max == 0 { 0 } else { 4 * len };
+        // Index m runs from start + len − 1 down to start − pre (m_rel = m − start).
+        let mut m_rel = len as isize - 1;
+        let mut slot = 0usize; // ring slot of row m; row m + k is at (slot + k) % depth.
+        loop {
+            if m_rel < 0 {
+                if -m_rel as usize > pre_max {
+                    break;
+                }
+                let tail: f64 = recent.iter().sum();
+                if tail <= 1e-12 * total {
+                    break;
+                }
+            }
+            // U_m = T_m + Σ_j φ_aj U_{m+j}.
+            if m_rel >= 0 {
+                let i = start + m_rel as usize;
+                u.copy_from_slice(&t[i * row..(i + 1) * row]);
+            } else {
+                u.iter_mut().for_each(|v| *v = 0.0);
+            }
+            for (a, pa) in phi.iter().enumerate() {
+                for (j, &c) in pa.iter().enumerate() {
+                    let later = &ring[((slot + j + 1) % depth) * row..][..row];
+                    for (uv, lv) in u[a * n..(a + 1) * n].iter_mut().zip(&later[a * n..(a + 1) * n])
+                    {
+                        *uv += c * lv;
+                    }
+                }
+            }
+            ring[slot * row..(slot + 1) * row].copy_from_slice(&u);
+            let energy: f64 = u.iter().map(|v| v * v).sum();
+            total += energy;
+            if recent.len() == p_max.max(1) {
+                recent.pop_front();
+            }
+            recent.push_back(energy);
+            // G_m = Σ_k r(k)ᵀ U_{m+k}: G[b] = Σ_k Σ_a r(k)[a][b] U_{m+k}[a].
             g.iter_mut().for_each(|v| *v = 0.0);
-            for (k, rk) in r.iter().enumerate().take((lag + 1).min(i - start + 1)) {
-                let tj = &t[(i - k) * ny * n..(i - k + 1) * ny * n];
-                for a in 0..ny {
-                    let ga = &mut g[a * n..(a + 1) * n];
-                    for b in 0..ny {
+            for (k, rk) in r.iter().enumerate() {
+                if m_rel + k as isize >= len as isize {
+                    break;
+                }
+                let uk = &ring[((slot + k) % depth) * row..][..row];
+                for b in 0..ny {
+                    let gb = &mut g[b * n..(b + 1) * n];
+                    for a in 0..ny {
                         let rab = rk[a * ny + b];
-                        for (gv, tv) in ga.iter_mut().zip(&tj[b * n..(b + 1) * n]) {
-                            *gv += rab * tv;
+                        if rab != 0.0 {
+                            for (gv, uv) in gb.iter_mut().zip(&uk[a * n..(a + 1) * n]) {
+                                *gv += rab * uv;
+                            }
                         }
                     }
                 }
@@ -110,24 +271,135 @@ pub(crate) fn covariance(
                     g0.copy_from_slice(&g);
                 }
             }
-            let ti = &t[i * ny * n..(i + 1) * ny * n];
-            for a in 0..ny {
+            for b in 0..ny {
                 for p in 0..n {
-                    let tip = ti[a * n + p];
-                    if tip != 0.0 {
-                        for q in 0..n {
-                            fplus[(p, q)] += tip * g[a * n + q];
-                            a0[(p, q)] += tip * g0[a * n + q];
+                    let gp = g[b * n + p];
+                    let g0p = g0[b * n + p];
+                    for q in 0..n {
+                        let uq = u[b * n + q];
+                        fplus[(p, q)] += gp * uq;
+                        a0[(p, q)] += g0p * uq;
+                    }
+                }
+            }
+            slot = (slot + depth - 1) % depth;
+            m_rel -= 1;
+        }
+        start += len;
+    }
+    &fplus + fplus.transpose() - a0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+
+    /// Least squares `y = Xθ + v` with `N = 2000` samples in two manoeuvres (1200, 800) and
+    /// three regressors (a constant, a slow and a faster sinusoid, all within manoeuvres).
+    /// Returns the regressors `N × 3` (the sensitivities of a one-output fit) and `(XᵀX)⁻¹`.
+    fn regression() -> (Vec<f64>, [usize; 2], DMatrix<f64>) {
+        let lengths = [1200, 800];
+        let mut x = Vec::new();
+        for &len in &lengths {
+            for i in 0..len {
+                let t = i as f64 * 0.01;
+                x.extend([1.0, (0.6 * t).sin(), (5.0 * t).cos()]);
+            }
+        }
+        let xm = DMatrix::from_row_slice(x.len() / 3, 3, &x);
+        let minv = (xm.transpose() * &xm).try_inverse().unwrap();
+        (x, lengths, minv)
+    }
+
+    /// The exact covariance `(XᵀX)⁻¹ Xᵀ Γ X (XᵀX)⁻¹` of the least-squares estimate for noise
+    /// with autocovariance `gamma(k)` (independent between manoeuvres).
+    fn exact(x: &[f64], lengths: &[usize], minv: &DMatrix<f64>, gamma: &[f64]) -> DMatrix<f64> {
+        let mut f = DMatrix::<f64>::zeros(3, 3);
+        let mut start = 0;
+        for &len in lengths {
+            for i in start..start + len {
+                for j in start..start + len {
+                    let g = gamma.get(i.abs_diff(j)).copied().unwrap_or(0.0);
+                    for p in 0..3 {
+                        for q in 0..3 {
+                            f[(p, q)] += x[i * 3 + p] * g * x[j * 3 + q];
                         }
                     }
                 }
             }
+            start += len;
         }
-        start += len;
+        minv * f * minv
     }
-    let f = &fplus + fplus.transpose() - a0;
-    let cov = minv * f * minv;
-    let cov = 0.5 * (&cov + cov.transpose());
-    let ok = (0..n).all(|i| cov[(i, i)] > 0.0 && cov[(i, i)].is_finite());
-    Coloured { covariance: ok.then(|| cov.clone()), full: cov, lag }
+
+    /// Mean prewhitened and lag-truncated σ over 150 realisations of the noise
+    /// `v_i = φ1 v_{i−1} + φ2 v_{i−2} + w_i` (stationary start), each from its own residuals.
+    fn mean_sigmas(phi: [f64; 2], seed: u64) -> ([f64; 3], [f64; 3], Vec<f64>) {
+        let (x, lengths, minv) = regression();
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+        let n01 = Normal::new(0.0, 1.0).unwrap();
+        let n = x.len() / 3;
+        let xm = DMatrix::from_row_slice(n, 3, &x);
+        let (mut pre, mut trunc) = ([0.0; 3], [0.0; 3]);
+        let runs = 150;
+        for _ in 0..runs {
+            let mut v = Vec::with_capacity(n);
+            for &len in &lengths {
+                let (mut v1, mut v2) = (0.0, 0.0);
+                for i in 0..len + 3000 {
+                    let vi = phi[0] * v1 + phi[1] * v2 + n01.sample(&mut rng);
+                    (v2, v1) = (v1, vi);
+                    if i >= 3000 {
+                        v.push(vi);
+                    }
+                }
+            }
+            let y = nalgebra::DVector::from_vec(v);
+            let theta = &minv * xm.transpose() * &y;
+            let e: Vec<f64> = (&y - &xm * theta).iter().copied().collect();
+            let p = prewhitened(&x, &e, &[1.0], &lengths, &minv, 200).coloured.full;
+            let c = covariance(&x, &e, &[1.0], &lengths, &minv, 200).full;
+            for i in 0..3 {
+                pre[i] += p[(i, i)].max(0.0).sqrt() / runs as f64;
+                trunc[i] += c[(i, i)].max(0.0).sqrt() / runs as f64;
+            }
+        }
+        // Autocovariance of the AR(2) from its impulse response (long enough to converge).
+        let mut h = vec![0.0; 20_000];
+        for k in 0..h.len() {
+            h[k] = if k == 0 { 1.0 } else { 0.0 }
+                + if k >= 1 { phi[0] * h[k - 1] } else { 0.0 }
+                + if k >= 2 { phi[1] * h[k - 2] } else { 0.0 };
+        }
+        let gamma: Vec<f64> =
+            (0..1200).map(|k| h.iter().zip(&h[k..]).map(|(a, b)| a * b).sum()).collect();
+        let ex = exact(&x, &lengths, &minv, &gamma);
+        (pre, trunc, (0..3).map(|i| ex[(i, i)].sqrt()).collect())
+    }
+
+    /// The prewhitened σ of a regression on AR(1) and AR(2)-coloured noise match the exact σ
+    /// of the least-squares estimate, `sqrt diag (XᵀX)⁻¹ XᵀΓX (XᵀX)⁻¹`, within 12 % on average
+    /// over 150 realisations; for white noise they equal the Cramér–Rao σ `sqrt diag (XᵀX)⁻¹`
+    /// within 5 %.
+    #[test]
+    fn prewhitened_sigma_matches_exact_covariance_of_ar_coloured_regression() {
+        for (phi, label) in [
+            ([0.0, 0.0], "white"),
+            ([0.98, 0.0], "AR(1) 0.98"),
+            ([1.9, -0.91], "AR(2) poles 0.95 ± 0.1i"),
+        ] {
+            let (pre, trunc, ex) = mean_sigmas(phi, 7);
+            let tol = if phi[0] == 0.0 { 0.05 } else { 0.12 };
+            for i in 0..3 {
+                let ratio = pre[i] / ex[i];
+                std::println!(
+                    "{label} θ{i}: prewhitened/exact {ratio:.3}, truncated/exact {:.3}",
+                    trunc[i] / ex[i]
+                );
+                assert!((ratio - 1.0).abs() < tol, "{label} θ{i}: prewhitened σ / exact σ {ratio}");
+            }
+        }
+    }
 }

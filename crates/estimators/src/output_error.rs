@@ -242,9 +242,13 @@ pub struct OeResult {
     pub sigma_coloured: Option<Vec<f64>>,
     /// Lag at which the coloured-residual sum over the whitened residuals was truncated.
     pub coloured_lag: usize,
-    /// Autoregressive order of each output's residual model in the coloured-residual σ (order
-    /// of `outputs`; 0: white).
-    pub coloured_ar_orders: Vec<usize>,
+    /// Order of the residuals' vector autoregression in the coloured-residual σ (0: white).
+    pub coloured_ar_order: usize,
+    /// The lag-truncated coloured-residual σ (the Morelli & Klein sum of sample
+    /// autocovariances, no prewhitening; [`crate::coloured::batch`]), kept as a diagnostic:
+    /// it understates the σ when the residual correlation outlasts the lag cap. `None` if not
+    /// positive.
+    pub sigma_coloured_truncated: Option<Vec<f64>>,
     /// `M⁻¹`, row-major `n × n`.
     pub covariance: Vec<f64>,
     /// Correlation matrix of the estimates, row-major `n × n`.
@@ -829,6 +833,9 @@ fn assemble(
     let max_lag =
         config.coloured_max_lag.unwrap_or_else(|| lengths.iter().copied().min().unwrap_or(4) / 4);
     let pre = coloured::prewhitened(s, e, w, &lengths, &minv, max_lag);
+    let sigma_coloured_truncated = coloured::covariance(s, e, w, &lengths, &minv, max_lag)
+        .covariance
+        .map(|c| (0..nb).map(|i| c[(i, i)].sqrt()).collect());
     let col = pre.coloured;
     let sigma_coloured =
         col.covariance.map(|c| (0..nb).map(|i| c[(i, i)].sqrt()).collect::<Vec<_>>());
@@ -843,7 +850,8 @@ fn assemble(
         sigma,
         sigma_coloured,
         coloured_lag: col.lag,
-        coloured_ar_orders: pre.orders,
+        coloured_ar_order: pre.order,
+        sigma_coloured_truncated,
         covariance: minv.transpose().as_slice().to_vec(),
         correlation,
         outputs: p.outputs.clone(),

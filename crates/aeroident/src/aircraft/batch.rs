@@ -254,8 +254,9 @@ pub struct BatchFit {
     /// `fem`: the estimated process noise `(state, F, σ)` (state unit per √s); empty for `oe`.
     pub process_noise: Vec<(String, f64, f64)>,
     /// The candidate σ of the structure parameters (structure order), by kind: `cramer_rao`
-    /// (`sqrt(diag M⁻¹)`, diagonal weighting), `coloured` (the coloured-residual sandwich, all
-    /// lags), and for `fem` `lag0` (sandwich with the full lag-0 innovation covariance) and
+    /// (`sqrt(diag M⁻¹)`, diagonal weighting), `coloured` (the prewhitened coloured-residual
+    /// sandwich, the reported one), `coloured_truncated` (the lag-truncated sandwich of sample
+    /// autocovariances), and for `fem` `lag0` (sandwich with the full lag-0 innovation covariance) and
     /// `full_b` (Cramér–Rao with the full innovation covariance); a kind that could not be
     /// formed is absent. For measuring which σ is honest (docs/uncertainty.md).
     pub sigma_candidates: Vec<(String, Vec<f64>)>,
@@ -336,6 +337,9 @@ fn log_of(
     let mut sigma_candidates = vec![("cramer_rao".to_string(), r.sigma[..np].to_vec())];
     if let Some(c) = &r.sigma_coloured {
         sigma_candidates.push(("coloured".to_string(), c[..np].to_vec()));
+    }
+    if let Some(c) = &r.sigma_coloured_truncated {
+        sigma_candidates.push(("coloured_truncated".to_string(), c[..np].to_vec()));
     }
     sigma_candidates.extend(extra_sigmas);
     BatchFit {

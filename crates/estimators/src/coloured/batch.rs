@@ -56,22 +56,27 @@ pub(crate) fn covariance(
     let (r, lag) = lagged_covariances(e, ny, lengths, 0, max_lag);
     // T_i = R⁻¹ S_i (ny × n).
     let t = weighted_sensitivities(s, w, n);
-    let f = middle(&t, ny, n, lengths, &r, &vec![Vec::new(); ny]);
+    let f = middle(&t, ny, n, lengths, &r, &[]);
     let cov = minv * f * minv;
     let cov = 0.5 * (&cov + cov.transpose());
     let ok = (0..n).all(|i| cov[(i, i)] > 0.0 && cov[(i, i)].is_finite());
     Coloured { covariance: ok.then(|| cov.clone()), full: cov, lag }
 }
 
-/// Most autoregressive order tried per output by [`prewhitened`].
+/// Most vector-autoregressive order tried by [`prewhitened`].
 pub(crate) const MAX_AR_ORDER: usize = 12;
+
+/// Passes of the fitted-share correction in [`prewhitened`] (module doc): the covariance is
+/// the fixed point of a linear map whose contraction is the fitted share, a few per cent on
+/// flight records, so two passes leave an error of the order of its cube.
+pub(crate) const FITTED_SHARE_PASSES: usize = 2;
 
 /// Result of [`prewhitened`].
 pub(crate) struct Prewhitened {
     /// The covariance, as [`Coloured`].
     pub coloured: Coloured,
-    /// The autoregressive order chosen per output (0: white).
-    pub orders: Vec<usize>,
+    /// The order of the residuals' vector autoregression (0: white).
+    pub order: usize,
 }
 
 /// The prewhitened coloured-residual covariance (module doc, "Prewhitening").
@@ -87,42 +92,177 @@ pub(crate) fn prewhitened(
 ) -> Prewhitened {
     let ny = w.len();
     let n = minv.nrows();
+    let n_total: usize = lengths.iter().sum();
     let shortest = lengths.iter().copied().min().unwrap_or(1);
-    // Orders up to a tenth of the shortest manoeuvre, so that each fit has ≥ 10 samples per
-    // coefficient.
-    let p_cap = MAX_AR_ORDER.min(shortest / 10);
-    let phi: Vec<Vec<f64>> = (0..ny)
-        .map(|a| {
-            let x: Vec<f64> = e.iter().skip(a).step_by(ny).copied().collect();
-            ar::fit_aic(&x, lengths, p_cap)
-        })
-        .collect();
-    let orders: Vec<usize> = phi.iter().map(Vec::len).collect();
-    let skip = orders.iter().copied().max().unwrap_or(0);
-    // Whitened residuals u_i = e_i − Σ_j φ_j e_{i−j} (per output; defined from `skip` on).
-    let mut u = vec![0.0; e.len()];
+    // Orders with at least ten samples per coefficient of an equation (p·ny) and within a
+    // tenth of the shortest manoeuvre.
+    let p_cap = MAX_AR_ORDER.min(shortest / 10).min(n_total / (10 * ny.max(1)));
+    let to_blocks = |r: &[Vec<f64>]| -> Vec<DMatrix<f64>> {
+        r.iter().map(|rk| DMatrix::from_row_slice(ny, ny, rk)).collect()
+    };
+    let sample = to_blocks(&lagged_raw(e, ny, lengths, 0, p_cap));
+    let order = ar::aic_order_ls(e, ny, lengths, p_cap);
+    let max_lag = max_lag.min(shortest.saturating_sub(order + 1));
+    let t = weighted_sensitivities(s, w, n);
+    let mut fitted: Option<DMatrix<f64>> = None;
+    let mut out = None;
+    for pass in 0..=FITTED_SHARE_PASSES {
+        // Noise autocovariance = residual autocovariance + that of the fitted part S δθ.
+        let mut r = sample[..=order].to_vec();
+        let d_raw: Vec<DMatrix<f64>> = match &fitted {
+            Some(c) => to_blocks(&fitted_autocovariance(s, c, ny, lengths, &[], 0, order)),
+            None => Vec::new(),
+        };
+        for (rk, dk) in r.iter_mut().zip(&d_raw) {
+            *rk += dk;
+        }
+        let mut var = match ar::least_squares(e, ny, lengths, order, order, &d_raw) {
+            Some((a, _)) => a,
+            None => ar::whittle(&r, order).0,
+        };
+        var.resize(order, DMatrix::zeros(ny, ny));
+        let var: Vec<Vec<f64>> = var.iter().map(|m| m.transpose().as_slice().to_vec()).collect();
+        let u = whiten(e, ny, 1, lengths, &var, order);
+        let (mut ru, lag) = lagged_covariances(&u, ny, lengths, order, max_lag);
+        if let Some(c) = &fitted {
+            let d = fitted_autocovariance(s, c, ny, lengths, &var, order, lag);
+            for (rk, dk) in ru.iter_mut().zip(&d) {
+                rk.iter_mut().zip(dk).for_each(|(x, y)| *x += y);
+            }
+        }
+        let f = middle(&t, ny, n, lengths, &ru, &var);
+        let cov = minv * f * minv;
+        let cov = 0.5 * (&cov + cov.transpose());
+        if pass < FITTED_SHARE_PASSES {
+            fitted = Some(cov.clone());
+        }
+        out = Some((cov, lag));
+    }
+    let (cov, lag) = out.expect("at least one pass");
+    let ok = (0..n).all(|i| cov[(i, i)] > 0.0 && cov[(i, i)].is_finite());
+    Prewhitened {
+        coloured: Coloured { covariance: ok.then(|| cov.clone()), full: cov, lag },
+        order,
+    }
+}
+
+/// `u_i = x_i − Σ_j A_j x_{i−j}` for `x` of `N × ny × ncol` (each of the `ncol` columns of
+/// an `ny × ncol` sample filtered alike), `A_j` `ny × ny` row-major (`var[j − 1]`); defined
+/// from sample `skip` of each manoeuvre on (zero before).
+fn whiten(
+    x: &[f64],
+    ny: usize,
+    ncol: usize,
+    lengths: &[usize],
+    var: &[Vec<f64>],
+    skip: usize,
+) -> Vec<f64> {
+    let row = ny * ncol;
+    let mut u = vec![0.0; x.len()];
     let mut start = 0;
     for &len in lengths {
         for i in start + skip.min(len)..start + len {
-            for (a, pa) in phi.iter().enumerate() {
-                let pred: f64 =
-                    pa.iter().enumerate().map(|(j, c)| c * e[(i - j - 1) * ny + a]).sum();
-                u[i * ny + a] = e[i * ny + a] - pred;
+            let ui = &mut u[i * row..(i + 1) * row];
+            ui.copy_from_slice(&x[i * row..(i + 1) * row]);
+            for (j, aj) in var.iter().enumerate() {
+                let xj = &x[(i - j - 1) * row..(i - j) * row];
+                for a in 0..ny {
+                    for b in 0..ny {
+                        let c = aj[a * ny + b];
+                        if c != 0.0 {
+                            for (uv, xv) in ui[a * ncol..(a + 1) * ncol]
+                                .iter_mut()
+                                .zip(&xj[b * ncol..(b + 1) * ncol])
+                            {
+                                *uv -= c * xv;
+                            }
+                        }
+                    }
+                }
             }
         }
         start += len;
     }
-    let max_lag = max_lag.min(shortest.saturating_sub(skip + 1));
-    let (r, lag) = lagged_covariances(&u, ny, lengths, skip, max_lag);
-    let t = weighted_sensitivities(s, w, n);
-    let f = middle(&t, ny, n, lengths, &r, &phi);
-    let cov = minv * f * minv;
-    let cov = 0.5 * (&cov + cov.transpose());
-    let ok = (0..n).all(|i| cov[(i, i)] > 0.0 && cov[(i, i)].is_finite());
-    Prewhitened {
-        coloured: Coloured { covariance: ok.then(|| cov.clone()), full: cov, lag },
-        orders,
+    u
+}
+
+/// The expected lagged covariances `d(k) = (1/N') Σ_i Z_i C Z_{i−k}ᵀ`, `k = 0..=max_lag`
+/// (`ny × ny` row-major, within manoeuvres, from sample `skip` on, `N'` those samples), of the
+/// fitted part `S δθ` of the residuals whitened by `var` ([`whiten`]: `Z_i = S_i − Σ_j A_j
+/// S_{i−j}`), for a parameter error `δθ` of covariance `C` (`n × n`). With empty `var` and
+/// `skip = 0` it is the fitted part's own autocovariance.
+fn fitted_autocovariance(
+    s: &[f64],
+    c: &DMatrix<f64>,
+    ny: usize,
+    lengths: &[usize],
+    var: &[Vec<f64>],
+    skip: usize,
+    max_lag: usize,
+) -> Vec<Vec<f64>> {
+    let n = c.nrows();
+    let z = whiten(s, ny, n, lengths, var, skip);
+    // Y_i = Z_i C (ny × n).
+    let cs = c.as_slice(); // column-major; C symmetric, so row q is column q.
+    let mut y = vec![0.0; z.len()];
+    for (zi, yi) in z.chunks_exact(n).zip(y.chunks_exact_mut(n)) {
+        for (q, yv) in yi.iter_mut().enumerate() {
+            *yv = zi.iter().zip(&cs[q * n..(q + 1) * n]).map(|(a, b)| a * b).sum();
+        }
     }
+    let n_kept: usize = lengths.iter().map(|l| l.saturating_sub(skip)).sum();
+    let mut d = vec![vec![0.0; ny * ny]; max_lag + 1];
+    let mut start = 0;
+    for &len in lengths {
+        for i in start + skip..start + len {
+            for (k, dk) in d.iter_mut().enumerate() {
+                if i < start + skip + k {
+                    break;
+                }
+                let j = i - k;
+                for a in 0..ny {
+                    let ya = &y[(i * ny + a) * n..][..n];
+                    for b in 0..ny {
+                        let zb = &z[(j * ny + b) * n..][..n];
+                        dk[a * ny + b] += ya.iter().zip(zb).map(|(p, q)| p * q).sum::<f64>();
+                    }
+                }
+            }
+        }
+        start += len;
+    }
+    d.iter_mut().flatten().for_each(|v| *v /= n_kept.max(1) as f64);
+    d
+}
+
+/// The pooled lagged covariances `r̂(k)` of [`lagged_covariances`] for every `k = 0..=max_lag`
+/// (no truncation).
+fn lagged_raw(
+    x: &[f64],
+    ny: usize,
+    lengths: &[usize],
+    skip: usize,
+    max_lag: usize,
+) -> Vec<Vec<f64>> {
+    let n_kept: usize = lengths.iter().map(|l| l.saturating_sub(skip)).sum();
+    (0..=max_lag)
+        .map(|k| {
+            let mut rk = vec![0.0; ny * ny];
+            let mut start = 0;
+            for &len in lengths {
+                for i in (start + skip + k)..(start + len) {
+                    for a in 0..ny {
+                        for b in 0..ny {
+                            rk[a * ny + b] += x[i * ny + a] * x[(i - k) * ny + b];
+                        }
+                    }
+                }
+                start += len;
+            }
+            rk.iter_mut().for_each(|v| *v /= n_kept.max(1) as f64);
+            rk
+        })
+        .collect()
 }
 
 /// The pooled residual auto/cross-covariances `r̂(k) = (1/N') Σ x_i x_{i−k}ᵀ` (`ny × ny`
@@ -180,13 +320,13 @@ fn weighted_sensitivities(s: &[f64], w: &[f64], n: usize) -> Vec<f64> {
 /// The middle term `F = Σ_m Σ_m' U_mᵀ r(m − m') U_m'` of the sandwich, `r(k)` for
 /// `k = 0..r.len()−1` (`ny × ny` row-major, `r(−k) = r(k)ᵀ`, zero beyond), within manoeuvres.
 ///
-/// `U` is `T` (`N × ny × n`, manoeuvres concatenated) filtered per output `a` by the
-/// time-reversed impulse response of the autoregression `1/(1 − Σ_j φ_aj q^{−j})`
-/// (`phi[a]`, empty for none): `U_m = T_m + Σ_j φ_aj U_{m+j}` run backwards from the end of
-/// each manoeuvre, with `T_m = 0` outside it. Before a manoeuvre's first sample `U` keeps
-/// going (pre-sample innovations of a stationary process still reach the window) until its
-/// energy has died out (10⁻¹² of the total) or for at most four manoeuvre lengths. Without an
-/// autoregression `U = T` and `F` is the Morelli & Klein sum of the module doc.
+/// `U` is `T` (`N × ny × n`, manoeuvres concatenated) filtered by the time-reversed impulse
+/// response of the vector autoregression `(I − Σ_j A_j q^{−j})⁻¹` (`var[j − 1]` = `A_j`,
+/// `ny × ny` row-major; empty for none): `U_m = T_m + Σ_j A_jᵀ U_{m+j}` run backwards from the
+/// end of each manoeuvre, with `T_m = 0` outside it. Before a manoeuvre's first sample `U`
+/// keeps going (pre-sample innovations of a stationary process still reach the window) until
+/// its energy has died out (10⁻¹² of the total) or for at most four manoeuvre lengths.
+/// Without an autoregression `U = T` and `F` is the Morelli & Klein sum of the module doc.
 ///
 /// Streaming, backwards: `F₊ = Σ_m (Σ_k r(k)ᵀ U_{m+k})ᵀ U_m`, `F = F₊ + F₊ᵀ − Σ_m U_mᵀ r(0) U_m`,
 /// with a ring of the last `max(p, K) + 1` rows of `U`.
@@ -196,10 +336,10 @@ fn middle(
     n: usize,
     lengths: &[usize],
     r: &[Vec<f64>],
-    phi: &[Vec<f64>],
+    var: &[Vec<f64>],
 ) -> DMatrix<f64> {
     let row = ny * n;
-    let p_max = phi.iter().map(Vec::len).max().unwrap_or(0);
+    let p_max = var.len();
     let depth = p_max.max(r.len().saturating_sub(1)) + 1;
     let mut fplus = DMatrix::<f64>::zeros(n, n);
     let mut a0 = DMatrix::<f64>::zeros(n, n);
@@ -233,12 +373,19 @@ fn middle(
             } else {
                 u.iter_mut().for_each(|v| *v = 0.0);
             }
-            for (a, pa) in phi.iter().enumerate() {
-                for (j, &c) in pa.iter().enumerate() {
-                    let later = &ring[((slot + j + 1) % depth) * row..][..row];
-                    for (uv, lv) in u[a * n..(a + 1) * n].iter_mut().zip(&later[a * n..(a + 1) * n])
-                    {
-                        *uv += c * lv;
+            for (j, aj) in var.iter().enumerate() {
+                let later = &ring[((slot + j + 1) % depth) * row..][..row];
+                // U_m[b] += Σ_a A_j[a][b] U_{m+j}[a].
+                for a in 0..ny {
+                    for b in 0..ny {
+                        let c = aj[a * ny + b];
+                        if c != 0.0 {
+                            for (uv, lv) in
+                                u[b * n..(b + 1) * n].iter_mut().zip(&later[a * n..(a + 1) * n])
+                            {
+                                *uv += c * lv;
+                            }
+                        }
                     }
                 }
             }
@@ -380,18 +527,21 @@ mod tests {
     }
 
     /// The prewhitened σ of a regression on AR(1) and AR(2)-coloured noise match the exact σ
-    /// of the least-squares estimate, `sqrt diag (XᵀX)⁻¹ XᵀΓX (XᵀX)⁻¹`, within 12 % on average
-    /// over 150 realisations; for white noise they equal the Cramér–Rao σ `sqrt diag (XᵀX)⁻¹`
-    /// within 5 %.
+    /// of the least-squares estimate, `sqrt diag (XᵀX)⁻¹ XᵀΓX (XᵀX)⁻¹`, within 6 % on average
+    /// over 150 realisations (correlation times of 50 samples and a resonance), and within
+    /// 12 % for a correlation time of 200 samples, a sixth of the manoeuvre (measured 0.91:
+    /// the Burg estimate of a pole that near 1 is biased towards 0 by O(1/N), and σ of the
+    /// constant's coefficient goes as 1/(1 − a); the lag-truncated sum gives 0.61 there); for
+    /// white noise they equal the Cramér–Rao σ `sqrt diag (XᵀX)⁻¹` within 5 %.
     #[test]
     fn prewhitened_sigma_matches_exact_covariance_of_ar_coloured_regression() {
-        for (phi, label) in [
-            ([0.0, 0.0], "white"),
-            ([0.98, 0.0], "AR(1) 0.98"),
-            ([1.9, -0.91], "AR(2) poles 0.95 ± 0.1i"),
+        for (phi, label, tol) in [
+            ([0.0, 0.0], "white", 0.05),
+            ([0.98, 0.0], "AR(1) 0.98", 0.06),
+            ([1.9, -0.91], "AR(2) poles 0.95 ± 0.1i", 0.06),
+            ([0.995, 0.0], "AR(1) 0.995", 0.12),
         ] {
             let (pre, trunc, ex) = mean_sigmas(phi, 7);
-            let tol = if phi[0] == 0.0 { 0.05 } else { 0.12 };
             for i in 0..3 {
                 let ratio = pre[i] / ex[i];
                 std::println!(

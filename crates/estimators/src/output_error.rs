@@ -78,12 +78,16 @@
 //!
 //! - **Cramér–Rao σ** `sqrt(diag M⁻¹)` with `M` at the estimate and the final `R`
 //!   (Jategaonkar ch. 4; Klein & Morelli ch. 6), the correlation matrix.
-//! - **Coloured-residual σ**: `M⁻¹ [Σ_i Σ_j S_iᵀ R⁻¹ r̂(i−j) R⁻¹ S_j] M⁻¹` with the residual
-//!   auto/cross-correlation `r̂` (ny × ny per lag, within manoeuvres) truncated at the first lag
-//!   where every output's normalised autocorrelation is inside the white-noise band `±2/√N`
-//!   (and at [`OeConfig::coloured_max_lag`]); Morelli & Klein, J. Guidance Control Dyn.
-//!   20(1), 1997; SIDPAC `m_colores.m` sums every lag of the unbiased estimate instead. On
-//!   flight data with model error this, not the Cramér–Rao σ, is the honest uncertainty.
+//! - **Coloured-residual σ** ([`OeResult::sigma_coloured`]): `M⁻¹ [Σ_i Σ_j S_iᵀ R⁻¹ R_vv(i−j)
+//!   R⁻¹ S_j] M⁻¹` (Morelli & Klein, J. Guidance Control Dyn. 20(1), 1997; Klein & Morelli
+//!   2006 ch. 6) with the residual auto/cross-covariance `R_vv` of a vector autoregression of
+//!   the residuals, no lag truncation, plus a short lag sum on the whitened residuals (capped
+//!   at [`OeConfig::coloured_max_lag`]) and the fitted share of the residuals put back
+//!   (Andrews & Monahan 1992 prewhitening; [`crate::coloured::batch`], "Prewhitening"). On
+//!   flight data with model error or turbulence this, not the Cramér–Rao σ, is the honest
+//!   uncertainty. [`OeResult::sigma_coloured_truncated`] keeps the former form (sample
+//!   autocovariances truncated at the first lag where every output's normalised
+//!   autocorrelation is inside `±2/√N`) as a diagnostic.
 //!
 //! # Errors
 //!

@@ -151,7 +151,7 @@ pub(super) fn least_squares(
             comp[(k, k - ny)] = 1.0;
         }
         let radius = comp.complex_eigenvalues().iter().map(|l| l.norm()).fold(0.0, f64::max);
-        if !(radius < MAX_ROOT) {
+        if radius >= MAX_ROOT || radius.is_nan() {
             return None;
         }
     }

@@ -249,8 +249,11 @@ pub struct BatchFit {
     pub residual_rms: Vec<f64>,
     /// Whether the σ are the coloured-residual ones (else Cramér–Rao).
     pub coloured_sigma: bool,
-    /// Lag (samples) at which the coloured-residual sum was truncated.
+    /// Lag (samples) at which the coloured-residual sum over the whitened residuals was
+    /// truncated.
     pub coloured_lag: usize,
+    /// Order of the residuals' vector autoregression in the coloured-residual σ (0: white).
+    pub coloured_ar_order: usize,
     /// `fem`: the estimated process noise `(state, F, σ)` (state unit per √s); empty for `oe`.
     pub process_noise: Vec<(String, f64, f64)>,
     /// The candidate σ of the structure parameters (structure order), by kind: `cramer_rao`
@@ -357,6 +360,7 @@ fn log_of(
         residual_rms: r.residual_rms.clone(),
         coloured_sigma: r.sigma_coloured.is_some(),
         coloured_lag: r.coloured_lag,
+        coloured_ar_order: r.coloured_ar_order,
         process_noise,
         sigma_candidates,
     }

@@ -81,6 +81,25 @@ pub(super) fn least_squares(
     skip: usize,
     d: &[DMatrix<f64>],
 ) -> Option<(Vec<DMatrix<f64>>, DMatrix<f64>)> {
+    solve(&cross_products(x, ny, lengths, p, skip)?, ny, p, d)
+}
+
+/// The mean lagged cross-products of [`least_squares`] for orders up to `p`: `zz` of the
+/// stacked regressors `z_i = [x_{i−1}; …; x_{i−p}]`, `yz = mean x_i z_iᵀ`, `yy = mean x_i x_iᵀ`
+/// (the order-`m` products are the leading blocks). `None` without any sample.
+struct CrossProducts {
+    zz: DMatrix<f64>,
+    yz: DMatrix<f64>,
+    yy: DMatrix<f64>,
+}
+
+fn cross_products(
+    x: &[f64],
+    ny: usize,
+    lengths: &[usize],
+    p: usize,
+    skip: usize,
+) -> Option<CrossProducts> {
     let q = p * ny;
     let mut zz = DMatrix::<f64>::zeros(q, q);
     let mut yz = DMatrix::<f64>::zeros(ny, q);
@@ -123,6 +142,20 @@ pub(super) fn least_squares(
     zz /= c;
     yz /= c;
     yy /= c;
+    Some(CrossProducts { zz, yz, yy })
+}
+
+/// [`least_squares`] of order `p` from the leading blocks of `cp`.
+fn solve(
+    cp: &CrossProducts,
+    ny: usize,
+    p: usize,
+    d: &[DMatrix<f64>],
+) -> Option<(Vec<DMatrix<f64>>, DMatrix<f64>)> {
+    let q = p * ny;
+    let mut zz = cp.zz.view((0, 0), (q, q)).into_owned();
+    let mut yz = cp.yz.columns(0, q).into_owned();
+    let mut yy = cp.yy.clone();
     if !d.is_empty() {
         yy += &d[0];
         for j in 0..p {
@@ -168,8 +201,9 @@ pub(super) const MAX_ROOT: f64 = 0.9995;
 pub(super) fn aic_order_ls(x: &[f64], ny: usize, lengths: &[usize], p_max: usize) -> usize {
     let n: usize = lengths.iter().map(|l| l.saturating_sub(p_max)).sum();
     let mut best = (f64::INFINITY, 0);
+    let Some(cp) = cross_products(x, ny, lengths, p_max, p_max) else { return 0 };
     for m in 0..=p_max {
-        let Some((_, sigma)) = least_squares(x, ny, lengths, m, p_max, &[]) else { continue };
+        let Some((_, sigma)) = solve(&cp, ny, m, &[]) else { continue };
         let Some(c) = sigma.cholesky() else { continue };
         let ln_det: f64 = 2.0 * c.l().diagonal().iter().map(|d| d.ln()).sum::<f64>();
         let aic = n as f64 * ln_det + 2.0 * (m * ny * ny) as f64;

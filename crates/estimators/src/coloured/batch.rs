@@ -21,7 +21,7 @@
 //! most at a configured maximum lag. Lags are taken within a manoeuvre only; `r̂` is pooled
 //! over the manoeuvres.
 //!
-//! # Prewhitening ([`prewhitened`], what output error reports)
+//! # Prewhitening (`prewhitened`, what output error reports)
 //!
 //! The truncated sum fails when the residual correlation outlasts the window's statistics: in
 //! the F-16 campaign's Dryden turbulence the sum ran to its cap (a quarter of the 20-s window)
@@ -34,8 +34,8 @@
 //! 1. **Model.** A vector autoregression `e_i = Σ_{j=1..p} A_j e_{i−j} + u_i` of all outputs'
 //!    residuals together (the turbulence moves β, p, r and a_y together, so their
 //!    cross-correlation matters: per-output models lost it and gave Cn_β σ 0.24 of the
-//!    scatter), fitted by least squares, order `p ≤` [`MAX_AR_ORDER`] by AIC, stability
-//!    enforced ([`ar`]).
+//!    scatter), fitted by least squares, order `p ≤ 12` (`MAX_AR_ORDER`) by AIC, stability
+//!    enforced (module `ar`).
 //! 2. **Exact middle term for that model.** With `v = (I − Σ A_j q^{−j})⁻¹ u`,
 //!    `Σ_i T_iᵀ v_i = Σ_m U_mᵀ u_m`, where `U_m = T_m + Σ_j A_jᵀ U_{m+j}` is `T = R⁻¹ S`
 //!    filtered by the time-reversed impulse response of the model, run back from the end of
@@ -50,7 +50,7 @@
 //!    orthogonal in the noise metric: `E[ê ê(k)ᵀ] ≈ R_v(k) − d(k)`; the recursive form's
 //!    "Lag dependence of the fitted share" is the same correction). The VAR's normal equations
 //!    and `Γ_u` (with `Z_i = S_i − Σ_j A_j S_{i−j}` for `S`) get `d` back, and the covariance is
-//!    recomputed: [`FITTED_SHARE_PASSES`] passes of this fixed point. On AR(1) noise with
+//!    recomputed: two (`FITTED_SHARE_PASSES`) passes of this fixed point. On AR(1) noise with
 //!    `a = 0.98` and a constant regressor it moves σ from 0.91 to 1.00 of the exact value.
 //!
 //! Tested against the exact covariance of least squares on AR(1)/AR(2) noise and for white

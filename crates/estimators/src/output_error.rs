@@ -78,12 +78,16 @@
 //!
 //! - **Cramér–Rao σ** `sqrt(diag M⁻¹)` with `M` at the estimate and the final `R`
 //!   (Jategaonkar ch. 4; Klein & Morelli ch. 6), the correlation matrix.
-//! - **Coloured-residual σ**: `M⁻¹ [Σ_i Σ_j S_iᵀ R⁻¹ r̂(i−j) R⁻¹ S_j] M⁻¹` with the residual
-//!   auto/cross-correlation `r̂` (ny × ny per lag, within manoeuvres) truncated at the first lag
-//!   where every output's normalised autocorrelation is inside the white-noise band `±2/√N`
-//!   (and at [`OeConfig::coloured_max_lag`]); Morelli & Klein, J. Guidance Control Dyn.
-//!   20(1), 1997; SIDPAC `m_colores.m` sums every lag of the unbiased estimate instead. On
-//!   flight data with model error this, not the Cramér–Rao σ, is the honest uncertainty.
+//! - **Coloured-residual σ** ([`OeResult::sigma_coloured`]): `M⁻¹ [Σ_i Σ_j S_iᵀ R⁻¹ R_vv(i−j)
+//!   R⁻¹ S_j] M⁻¹` (Morelli & Klein, J. Guidance Control Dyn. 20(1), 1997; Klein & Morelli
+//!   2006 ch. 6) with the residual auto/cross-covariance `R_vv` of a vector autoregression of
+//!   the residuals, no lag truncation, plus a short lag sum on the whitened residuals (capped
+//!   at [`OeConfig::coloured_max_lag`]) and the fitted share of the residuals put back
+//!   (Andrews & Monahan 1992 prewhitening; [`crate::coloured::batch`], "Prewhitening"). On
+//!   flight data with model error or turbulence this, not the Cramér–Rao σ, is the honest
+//!   uncertainty. [`OeResult::sigma_coloured_truncated`] keeps the former form (sample
+//!   autocovariances truncated at the first lag where every output's normalised
+//!   autocorrelation is inside `±2/√N`) as a diagnostic.
 //!
 //! # Errors
 //!
@@ -240,8 +244,15 @@ pub struct OeResult {
     pub sigma: Vec<f64>,
     /// Coloured-residual σ; `None` if the truncated correction was not positive.
     pub sigma_coloured: Option<Vec<f64>>,
-    /// Lag at which the coloured-residual sum was truncated.
+    /// Lag at which the coloured-residual sum over the whitened residuals was truncated.
     pub coloured_lag: usize,
+    /// Order of the residuals' vector autoregression in the coloured-residual σ (0: white).
+    pub coloured_ar_order: usize,
+    /// The lag-truncated coloured-residual σ (the Morelli & Klein sum of sample
+    /// autocovariances, no prewhitening; [`crate::coloured::batch`]), kept as a diagnostic:
+    /// it understates the σ when the residual correlation outlasts the lag cap. `None` if not
+    /// positive.
+    pub sigma_coloured_truncated: Option<Vec<f64>>,
     /// `M⁻¹`, row-major `n × n`.
     pub covariance: Vec<f64>,
     /// Correlation matrix of the estimates, row-major `n × n`.
@@ -825,7 +836,11 @@ fn assemble(
     let lengths: Vec<usize> = p.man.iter().map(|m| m.u.len()).collect();
     let max_lag =
         config.coloured_max_lag.unwrap_or_else(|| lengths.iter().copied().min().unwrap_or(4) / 4);
-    let col = coloured::covariance(s, e, w, &lengths, &minv, max_lag);
+    let pre = coloured::prewhitened(s, e, w, &lengths, &minv, max_lag);
+    let sigma_coloured_truncated = coloured::covariance(s, e, w, &lengths, &minv, max_lag)
+        .covariance
+        .map(|c| (0..nb).map(|i| c[(i, i)].sqrt()).collect());
+    let col = pre.coloured;
     let sigma_coloured =
         col.covariance.map(|c| (0..nb).map(|i| c[(i, i)].sqrt()).collect::<Vec<_>>());
     let n = p.n_samples as f64;
@@ -839,6 +854,8 @@ fn assemble(
         sigma,
         sigma_coloured,
         coloured_lag: col.lag,
+        coloured_ar_order: pre.order,
+        sigma_coloured_truncated,
         covariance: minv.transpose().as_slice().to_vec(),
         correlation,
         outputs: p.outputs.clone(),

@@ -249,13 +249,17 @@ pub struct BatchFit {
     pub residual_rms: Vec<f64>,
     /// Whether the σ are the coloured-residual ones (else Cramér–Rao).
     pub coloured_sigma: bool,
-    /// Lag (samples) at which the coloured-residual sum was truncated.
+    /// Lag (samples) at which the coloured-residual sum over the whitened residuals was
+    /// truncated.
     pub coloured_lag: usize,
+    /// Order of the residuals' vector autoregression in the coloured-residual σ (0: white).
+    pub coloured_ar_order: usize,
     /// `fem`: the estimated process noise `(state, F, σ)` (state unit per √s); empty for `oe`.
     pub process_noise: Vec<(String, f64, f64)>,
     /// The candidate σ of the structure parameters (structure order), by kind: `cramer_rao`
-    /// (`sqrt(diag M⁻¹)`, diagonal weighting), `coloured` (the coloured-residual sandwich, all
-    /// lags), and for `fem` `lag0` (sandwich with the full lag-0 innovation covariance) and
+    /// (`sqrt(diag M⁻¹)`, diagonal weighting), `coloured` (the prewhitened coloured-residual
+    /// sandwich, the reported one), `coloured_truncated` (the lag-truncated sandwich of sample
+    /// autocovariances), and for `fem` `lag0` (sandwich with the full lag-0 innovation covariance) and
     /// `full_b` (Cramér–Rao with the full innovation covariance); a kind that could not be
     /// formed is absent. For measuring which σ is honest (docs/uncertainty.md).
     pub sigma_candidates: Vec<(String, Vec<f64>)>,
@@ -337,6 +341,9 @@ fn log_of(
     if let Some(c) = &r.sigma_coloured {
         sigma_candidates.push(("coloured".to_string(), c[..np].to_vec()));
     }
+    if let Some(c) = &r.sigma_coloured_truncated {
+        sigma_candidates.push(("coloured_truncated".to_string(), c[..np].to_vec()));
+    }
     sigma_candidates.extend(extra_sigmas);
     BatchFit {
         estimator: label.into(),
@@ -353,6 +360,7 @@ fn log_of(
         residual_rms: r.residual_rms.clone(),
         coloured_sigma: r.sigma_coloured.is_some(),
         coloured_lag: r.coloured_lag,
+        coloured_ar_order: r.coloured_ar_order,
         process_noise,
         sigma_candidates,
     }

@@ -20,6 +20,43 @@
 //! `±2/√N` (the lags beyond are estimation noise, and summing them only adds variance), and at
 //! most at a configured maximum lag. Lags are taken within a manoeuvre only; `r̂` is pooled
 //! over the manoeuvres.
+//!
+//! # Prewhitening (`prewhitened`, what output error reports)
+//!
+//! The truncated sum fails when the residual correlation outlasts the window's statistics: in
+//! the F-16 campaign's Dryden turbulence the sum ran to its cap (a quarter of the 20-s window)
+//! on every run with the residuals still correlated, and σ came out 0.5–0.8 of the scatter
+//! (docs/uncertainty.md). The parametric form of the same correction (Andrews & Monahan,
+//! "An improved heteroskedasticity and autocorrelation consistent covariance matrix
+//! estimator", *Econometrica* 60(4), 1992: prewhiten with a VAR, sum the few remaining lags,
+//! recolour) has no lag truncation:
+//!
+//! 1. **Model.** A vector autoregression `e_i = Σ_{j=1..p} A_j e_{i−j} + u_i` of all outputs'
+//!    residuals together (the turbulence moves β, p, r and a_y together, so their
+//!    cross-correlation matters: per-output models lost it and gave Cn_β σ 0.24 of the
+//!    scatter), fitted by least squares, order `p ≤ 12` (`MAX_AR_ORDER`) by AIC, stability
+//!    enforced (module `ar`).
+//! 2. **Exact middle term for that model.** With `v = (I − Σ A_j q^{−j})⁻¹ u`,
+//!    `Σ_i T_iᵀ v_i = Σ_m U_mᵀ u_m`, where `U_m = T_m + Σ_j A_jᵀ U_{m+j}` is `T = R⁻¹ S`
+//!    filtered by the time-reversed impulse response of the model, run back from the end of
+//!    each manoeuvre and on before its start (the innovations before the window still reach
+//!    it). So `F = Σ_m Σ_m' U_mᵀ Γ_u(m − m') U_m'`: the Morelli & Klein sum on `(U, u)` with
+//!    the whitened residuals `u`, whose autocovariance `Γ_u` is short; its lag sum (the
+//!    truncation rule above) is the nonparametric correction of what the VAR misses.
+//! 3. **Fitted share.** The residuals are the noise minus the part the fit took into `θ̂`,
+//!    `e = v − S δθ`, and are orthogonal to the sensitivities, so their autocovariance lacks
+//!    that part's, `d(k) = (1/N) Σ_i S_i C S_{i−k}ᵀ` with `C = Cov(θ̂)`, most at low
+//!    frequency, where the sensitivities and turbulence are (first order, as for a projection
+//!    orthogonal in the noise metric: `E[ê ê(k)ᵀ] ≈ R_v(k) − d(k)`; the recursive form's
+//!    "Lag dependence of the fitted share" is the same correction). The VAR's normal equations
+//!    and `Γ_u` (with `Z_i = S_i − Σ_j A_j S_{i−j}` for `S`) get `d` back, and the covariance is
+//!    recomputed: two (`FITTED_SHARE_PASSES`) passes of this fixed point. On AR(1) noise with
+//!    `a = 0.98` and a constant regressor it moves σ from 0.91 to 1.00 of the exact value.
+//!
+//! Tested against the exact covariance of least squares on AR(1)/AR(2) noise and for white
+//! noise, where it equals the Cramér–Rao σ.
+
+mod ar;
 
 use nalgebra::DMatrix;
 use std::vec;
@@ -50,28 +87,251 @@ pub(crate) fn covariance(
 ) -> Coloured {
     let ny = w.len();
     let n = minv.nrows();
-    let n_total: usize = lengths.iter().sum();
     let max_lag = max_lag.min(lengths.iter().copied().min().unwrap_or(1).saturating_sub(1));
-    // r̂(k) for k = 0..=max_lag, each ny × ny row-major: r[k][a*ny + b] = Σ e_i[a] e_{i−k}[b] / N.
+    let (r, lag) = lagged_covariances(e, ny, lengths, 0, max_lag);
+    // T_i = R⁻¹ S_i (ny × n).
+    let t = weighted_sensitivities(s, w, n);
+    let f = middle(&t, ny, n, lengths, &r, &[]);
+    let cov = minv * f * minv;
+    let cov = 0.5 * (&cov + cov.transpose());
+    let ok = (0..n).all(|i| cov[(i, i)] > 0.0 && cov[(i, i)].is_finite());
+    Coloured { covariance: ok.then(|| cov.clone()), full: cov, lag }
+}
+
+/// Most vector-autoregressive order tried by [`prewhitened`].
+pub(crate) const MAX_AR_ORDER: usize = 12;
+
+/// Passes of the fitted-share correction in [`prewhitened`] (module doc): the covariance is
+/// the fixed point of a linear map whose contraction is the fitted share, a few per cent on
+/// flight records, so two passes leave an error of the order of its cube.
+pub(crate) const FITTED_SHARE_PASSES: usize = 2;
+
+/// Result of [`prewhitened`].
+pub(crate) struct Prewhitened {
+    /// The covariance, as [`Coloured`].
+    pub coloured: Coloured,
+    /// The order of the residuals' vector autoregression (0: white).
+    pub order: usize,
+}
+
+/// The prewhitened coloured-residual covariance (module doc, "Prewhitening").
+///
+/// Same arguments as [`covariance`]; `max_lag` caps the lag sum on the whitened residuals.
+pub(crate) fn prewhitened(
+    s: &[f64],
+    e: &[f64],
+    w: &[f64],
+    lengths: &[usize],
+    minv: &DMatrix<f64>,
+    max_lag: usize,
+) -> Prewhitened {
+    let ny = w.len();
+    let n = minv.nrows();
+    let n_total: usize = lengths.iter().sum();
+    let shortest = lengths.iter().copied().min().unwrap_or(1);
+    // Orders with at least ten samples per coefficient of an equation (p·ny) and within a
+    // tenth of the shortest manoeuvre.
+    let p_cap = MAX_AR_ORDER.min(shortest / 10).min(n_total / (10 * ny.max(1)));
+    let to_blocks = |r: &[Vec<f64>]| -> Vec<DMatrix<f64>> {
+        r.iter().map(|rk| DMatrix::from_row_slice(ny, ny, rk)).collect()
+    };
+    let sample = to_blocks(&lagged_raw(e, ny, lengths, 0, p_cap));
+    let order = ar::aic_order_ls(e, ny, lengths, p_cap);
+    let max_lag = max_lag.min(shortest.saturating_sub(order + 1));
+    let t = weighted_sensitivities(s, w, n);
+    let mut fitted: Option<DMatrix<f64>> = None;
+    let mut out = None;
+    for pass in 0..=FITTED_SHARE_PASSES {
+        // Noise autocovariance = residual autocovariance + that of the fitted part S δθ.
+        let mut r = sample[..=order].to_vec();
+        let d_raw: Vec<DMatrix<f64>> = match &fitted {
+            Some(c) => to_blocks(&fitted_autocovariance(s, c, ny, lengths, &[], 0, order)),
+            None => Vec::new(),
+        };
+        for (rk, dk) in r.iter_mut().zip(&d_raw) {
+            *rk += dk;
+        }
+        let mut var = match ar::least_squares(e, ny, lengths, order, order, &d_raw) {
+            Some((a, _)) => a,
+            None => ar::whittle(&r, order).0,
+        };
+        var.resize(order, DMatrix::zeros(ny, ny));
+        let var: Vec<Vec<f64>> = var.iter().map(|m| m.transpose().as_slice().to_vec()).collect();
+        let u = whiten(e, ny, 1, lengths, &var, order);
+        let (mut ru, lag) = lagged_covariances(&u, ny, lengths, order, max_lag);
+        if let Some(c) = &fitted {
+            let d = fitted_autocovariance(s, c, ny, lengths, &var, order, lag);
+            for (rk, dk) in ru.iter_mut().zip(&d) {
+                rk.iter_mut().zip(dk).for_each(|(x, y)| *x += y);
+            }
+        }
+        let f = middle(&t, ny, n, lengths, &ru, &var);
+        let cov = minv * f * minv;
+        let cov = 0.5 * (&cov + cov.transpose());
+        if pass < FITTED_SHARE_PASSES {
+            fitted = Some(cov.clone());
+        }
+        out = Some((cov, lag));
+    }
+    let (cov, lag) = out.expect("at least one pass");
+    let ok = (0..n).all(|i| cov[(i, i)] > 0.0 && cov[(i, i)].is_finite());
+    Prewhitened {
+        coloured: Coloured { covariance: ok.then(|| cov.clone()), full: cov, lag },
+        order,
+    }
+}
+
+/// `u_i = x_i − Σ_j A_j x_{i−j}` for `x` of `N × ny × ncol` (each of the `ncol` columns of
+/// an `ny × ncol` sample filtered alike), `A_j` `ny × ny` row-major (`var[j − 1]`); defined
+/// from sample `skip` of each manoeuvre on (zero before).
+fn whiten(
+    x: &[f64],
+    ny: usize,
+    ncol: usize,
+    lengths: &[usize],
+    var: &[Vec<f64>],
+    skip: usize,
+) -> Vec<f64> {
+    let row = ny * ncol;
+    let mut u = vec![0.0; x.len()];
+    let mut start = 0;
+    for &len in lengths {
+        for i in start + skip.min(len)..start + len {
+            let ui = &mut u[i * row..(i + 1) * row];
+            ui.copy_from_slice(&x[i * row..(i + 1) * row]);
+            for (j, aj) in var.iter().enumerate() {
+                let xj = &x[(i - j - 1) * row..(i - j) * row];
+                for a in 0..ny {
+                    for b in 0..ny {
+                        let c = aj[a * ny + b];
+                        if c != 0.0 {
+                            for (uv, xv) in ui[a * ncol..(a + 1) * ncol]
+                                .iter_mut()
+                                .zip(&xj[b * ncol..(b + 1) * ncol])
+                            {
+                                *uv -= c * xv;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        start += len;
+    }
+    u
+}
+
+/// The expected lagged covariances `d(k) = (1/N') Σ_i Z_i C Z_{i−k}ᵀ`, `k = 0..=max_lag`
+/// (`ny × ny` row-major, within manoeuvres, from sample `skip` on, `N'` those samples), of the
+/// fitted part `S δθ` of the residuals whitened by `var` ([`whiten`]: `Z_i = S_i − Σ_j A_j
+/// S_{i−j}`), for a parameter error `δθ` of covariance `C` (`n × n`). With empty `var` and
+/// `skip = 0` it is the fitted part's own autocovariance.
+fn fitted_autocovariance(
+    s: &[f64],
+    c: &DMatrix<f64>,
+    ny: usize,
+    lengths: &[usize],
+    var: &[Vec<f64>],
+    skip: usize,
+    max_lag: usize,
+) -> Vec<Vec<f64>> {
+    let n = c.nrows();
+    let z = whiten(s, ny, n, lengths, var, skip);
+    // Y_i = Z_i C (ny × n).
+    let cs = c.as_slice(); // column-major; C symmetric, so row q is column q.
+    let mut y = vec![0.0; z.len()];
+    for (zi, yi) in z.chunks_exact(n).zip(y.chunks_exact_mut(n)) {
+        for (q, yv) in yi.iter_mut().enumerate() {
+            *yv = zi.iter().zip(&cs[q * n..(q + 1) * n]).map(|(a, b)| a * b).sum();
+        }
+    }
+    let n_kept: usize = lengths.iter().map(|l| l.saturating_sub(skip)).sum();
+    let mut d = vec![vec![0.0; ny * ny]; max_lag + 1];
+    let mut start = 0;
+    for &len in lengths {
+        for i in start + skip..start + len {
+            for (k, dk) in d.iter_mut().enumerate() {
+                if i < start + skip + k {
+                    break;
+                }
+                let j = i - k;
+                for a in 0..ny {
+                    let ya = &y[(i * ny + a) * n..][..n];
+                    for b in 0..ny {
+                        let zb = &z[(j * ny + b) * n..][..n];
+                        dk[a * ny + b] += ya.iter().zip(zb).map(|(p, q)| p * q).sum::<f64>();
+                    }
+                }
+            }
+        }
+        start += len;
+    }
+    d.iter_mut().flatten().for_each(|v| *v /= n_kept.max(1) as f64);
+    d
+}
+
+/// The pooled lagged covariances `r̂(k)` of [`lagged_covariances`] for every `k = 0..=max_lag`
+/// (no truncation).
+fn lagged_raw(
+    x: &[f64],
+    ny: usize,
+    lengths: &[usize],
+    skip: usize,
+    max_lag: usize,
+) -> Vec<Vec<f64>> {
+    let n_kept: usize = lengths.iter().map(|l| l.saturating_sub(skip)).sum();
+    (0..=max_lag)
+        .map(|k| {
+            let mut rk = vec![0.0; ny * ny];
+            let mut start = 0;
+            for &len in lengths {
+                for i in (start + skip + k)..(start + len) {
+                    for a in 0..ny {
+                        for b in 0..ny {
+                            rk[a * ny + b] += x[i * ny + a] * x[(i - k) * ny + b];
+                        }
+                    }
+                }
+                start += len;
+            }
+            rk.iter_mut().for_each(|v| *v /= n_kept.max(1) as f64);
+            rk
+        })
+        .collect()
+}
+
+/// The pooled residual auto/cross-covariances `r̂(k) = (1/N') Σ x_i x_{i−k}ᵀ` (`ny × ny`
+/// row-major per lag, within manoeuvres, the first `skip` samples of each manoeuvre left out,
+/// `N'` the samples kept), up to the truncation lag `K` of the module doc (first lag at which
+/// every output's `|r̂_jj(k)/r̂_jj(0)|` is inside `2/√N'`, minus one; at most `max_lag`).
+/// Returns `r̂(0..=K)` and `K`.
+fn lagged_covariances(
+    x: &[f64],
+    ny: usize,
+    lengths: &[usize],
+    skip: usize,
+    max_lag: usize,
+) -> (Vec<Vec<f64>>, usize) {
+    let n_kept: usize = lengths.iter().map(|l| l.saturating_sub(skip)).sum();
+    let band = 2.0 / (n_kept.max(1) as f64).sqrt();
     let mut r: Vec<Vec<f64>> = Vec::new();
-    let band = 2.0 / (n_total as f64).sqrt();
     let mut lag = max_lag;
     for k in 0..=max_lag {
         let mut rk = vec![0.0; ny * ny];
         let mut start = 0;
         for &len in lengths {
-            for i in (start + k)..(start + len) {
-                let ei = &e[i * ny..(i + 1) * ny];
-                let ej = &e[(i - k) * ny..(i - k + 1) * ny];
+            for i in (start + skip + k)..(start + len) {
+                let xi = &x[i * ny..(i + 1) * ny];
+                let xj = &x[(i - k) * ny..(i - k + 1) * ny];
                 for a in 0..ny {
                     for b in 0..ny {
-                        rk[a * ny + b] += ei[a] * ej[b];
+                        rk[a * ny + b] += xi[a] * xj[b];
                     }
                 }
             }
             start += len;
         }
-        rk.iter_mut().for_each(|v| *v /= n_total as f64);
+        rk.iter_mut().for_each(|v| *v /= n_kept.max(1) as f64);
         let insignificant = k > 0
             && (0..ny).all(|j| {
                 let r0 = r[0][j * ny + j];
@@ -83,26 +343,109 @@ pub(crate) fn covariance(
         }
         r.push(rk);
     }
-    // T_i = R⁻¹ S_i (ny × n).
-    let t: Vec<f64> = s.iter().enumerate().map(|(idx, v)| v * w[(idx / n) % ny]).collect();
-    // F = Σ_i Σ_j T_iᵀ r̂(i−j) T_j = F₊ + F₊ᵀ − A₀ with F₊ = Σ_i T_iᵀ G_i, the causal
-    // convolution G_i = Σ_{k=0..K} r̂(k) T_{i−k}, and A₀ = Σ_i T_iᵀ r̂(0) T_i.
+    (r, lag)
+}
+
+/// `T_i = R⁻¹ S_i`: the sensitivities (`N × ny × n` row-major) times the weights `w` per output.
+fn weighted_sensitivities(s: &[f64], w: &[f64], n: usize) -> Vec<f64> {
+    let ny = w.len();
+    s.iter().enumerate().map(|(idx, v)| v * w[(idx / n) % ny]).collect()
+}
+
+/// The middle term `F = Σ_m Σ_m' U_mᵀ r(m − m') U_m'` of the sandwich, `r(k)` for
+/// `k = 0..r.len()−1` (`ny × ny` row-major, `r(−k) = r(k)ᵀ`, zero beyond), within manoeuvres.
+///
+/// `U` is `T` (`N × ny × n`, manoeuvres concatenated) filtered by the time-reversed impulse
+/// response of the vector autoregression `(I − Σ_j A_j q^{−j})⁻¹` (`var[j − 1]` = `A_j`,
+/// `ny × ny` row-major; empty for none): `U_m = T_m + Σ_j A_jᵀ U_{m+j}` run backwards from the
+/// end of each manoeuvre, with `T_m = 0` outside it. Before a manoeuvre's first sample `U`
+/// keeps going (pre-sample innovations of a stationary process still reach the window) until
+/// its energy has died out (10⁻¹² of the total) or for at most four manoeuvre lengths.
+/// Without an autoregression `U = T` and `F` is the Morelli & Klein sum of the module doc.
+///
+/// Streaming, backwards: `F₊ = Σ_m (Σ_k r(k)ᵀ U_{m+k})ᵀ U_m`, `F = F₊ + F₊ᵀ − Σ_m U_mᵀ r(0) U_m`,
+/// with a ring of the last `max(p, K) + 1` rows of `U`.
+fn middle(
+    t: &[f64],
+    ny: usize,
+    n: usize,
+    lengths: &[usize],
+    r: &[Vec<f64>],
+    var: &[Vec<f64>],
+) -> DMatrix<f64> {
+    let row = ny * n;
+    let p_max = var.len();
+    let depth = p_max.max(r.len().saturating_sub(1)) + 1;
     let mut fplus = DMatrix::<f64>::zeros(n, n);
     let mut a0 = DMatrix::<f64>::zeros(n, n);
-    let mut g = vec![0.0; ny * n];
-    let mut g0 = vec![0.0; ny * n];
+    let mut ring = vec![0.0; depth * row];
+    let mut g = vec![0.0; row];
+    let mut g0 = vec![0.0; row];
+    let mut u = vec![0.0; row];
     let mut start = 0;
     for &len in lengths {
-        for i in start..start + len {
-            g.iter_mut().for_each(|v| *v = 0.0);
-            for (k, rk) in r.iter().enumerate().take((lag + 1).min(i - start + 1)) {
-                let tj = &t[(i - k) * ny * n..(i - k + 1) * ny * n];
+        ring.iter_mut().for_each(|v| *v = 0.0);
+        let mut total = 0.0;
+        let mut recent = std::collections::VecDeque::with_capacity(p_max + 1);
+        let pre_max = if p_max == 0 { 0 } else { 4 * len };
+        // Index m runs from start + len − 1 down to start − pre (m_rel = m − start).
+        let mut m_rel = len as isize - 1;
+        let mut slot = 0usize; // ring slot of row m; row m + k is at (slot + k) % depth.
+        loop {
+            if m_rel < 0 {
+                if -m_rel as usize > pre_max {
+                    break;
+                }
+                let tail: f64 = recent.iter().sum();
+                if tail <= 1e-12 * total {
+                    break;
+                }
+            }
+            // U_m = T_m + Σ_j φ_aj U_{m+j}.
+            if m_rel >= 0 {
+                let i = start + m_rel as usize;
+                u.copy_from_slice(&t[i * row..(i + 1) * row]);
+            } else {
+                u.iter_mut().for_each(|v| *v = 0.0);
+            }
+            for (j, aj) in var.iter().enumerate() {
+                let later = &ring[((slot + j + 1) % depth) * row..][..row];
+                // U_m[b] += Σ_a A_j[a][b] U_{m+j}[a].
                 for a in 0..ny {
-                    let ga = &mut g[a * n..(a + 1) * n];
                     for b in 0..ny {
+                        let c = aj[a * ny + b];
+                        if c != 0.0 {
+                            for (uv, lv) in
+                                u[b * n..(b + 1) * n].iter_mut().zip(&later[a * n..(a + 1) * n])
+                            {
+                                *uv += c * lv;
+                            }
+                        }
+                    }
+                }
+            }
+            ring[slot * row..(slot + 1) * row].copy_from_slice(&u);
+            let energy: f64 = u.iter().map(|v| v * v).sum();
+            total += energy;
+            if recent.len() == p_max.max(1) {
+                recent.pop_front();
+            }
+            recent.push_back(energy);
+            // G_m = Σ_k r(k)ᵀ U_{m+k}: G[b] = Σ_k Σ_a r(k)[a][b] U_{m+k}[a].
+            g.iter_mut().for_each(|v| *v = 0.0);
+            for (k, rk) in r.iter().enumerate() {
+                if m_rel + k as isize >= len as isize {
+                    break;
+                }
+                let uk = &ring[((slot + k) % depth) * row..][..row];
+                for b in 0..ny {
+                    let gb = &mut g[b * n..(b + 1) * n];
+                    for a in 0..ny {
                         let rab = rk[a * ny + b];
-                        for (gv, tv) in ga.iter_mut().zip(&tj[b * n..(b + 1) * n]) {
-                            *gv += rab * tv;
+                        if rab != 0.0 {
+                            for (gv, uv) in gb.iter_mut().zip(&uk[a * n..(a + 1) * n]) {
+                                *gv += rab * uv;
+                            }
                         }
                     }
                 }
@@ -110,24 +453,138 @@ pub(crate) fn covariance(
                     g0.copy_from_slice(&g);
                 }
             }
-            let ti = &t[i * ny * n..(i + 1) * ny * n];
-            for a in 0..ny {
+            for b in 0..ny {
                 for p in 0..n {
-                    let tip = ti[a * n + p];
-                    if tip != 0.0 {
-                        for q in 0..n {
-                            fplus[(p, q)] += tip * g[a * n + q];
-                            a0[(p, q)] += tip * g0[a * n + q];
+                    let gp = g[b * n + p];
+                    let g0p = g0[b * n + p];
+                    for q in 0..n {
+                        let uq = u[b * n + q];
+                        fplus[(p, q)] += gp * uq;
+                        a0[(p, q)] += g0p * uq;
+                    }
+                }
+            }
+            slot = (slot + depth - 1) % depth;
+            m_rel -= 1;
+        }
+        start += len;
+    }
+    &fplus + fplus.transpose() - a0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+
+    /// Least squares `y = Xθ + v` with `N = 2000` samples in two manoeuvres (1200, 800) and
+    /// three regressors (a constant, a slow and a faster sinusoid, all within manoeuvres).
+    /// Returns the regressors `N × 3` (the sensitivities of a one-output fit) and `(XᵀX)⁻¹`.
+    fn regression() -> (Vec<f64>, [usize; 2], DMatrix<f64>) {
+        let lengths = [1200, 800];
+        let mut x = Vec::new();
+        for &len in &lengths {
+            for i in 0..len {
+                let t = i as f64 * 0.01;
+                x.extend([1.0, (0.6 * t).sin(), (5.0 * t).cos()]);
+            }
+        }
+        let xm = DMatrix::from_row_slice(x.len() / 3, 3, &x);
+        let minv = (xm.transpose() * &xm).try_inverse().unwrap();
+        (x, lengths, minv)
+    }
+
+    /// The exact covariance `(XᵀX)⁻¹ Xᵀ Γ X (XᵀX)⁻¹` of the least-squares estimate for noise
+    /// with autocovariance `gamma(k)` (independent between manoeuvres).
+    fn exact(x: &[f64], lengths: &[usize], minv: &DMatrix<f64>, gamma: &[f64]) -> DMatrix<f64> {
+        let mut f = DMatrix::<f64>::zeros(3, 3);
+        let mut start = 0;
+        for &len in lengths {
+            for i in start..start + len {
+                for j in start..start + len {
+                    let g = gamma.get(i.abs_diff(j)).copied().unwrap_or(0.0);
+                    for p in 0..3 {
+                        for q in 0..3 {
+                            f[(p, q)] += x[i * 3 + p] * g * x[j * 3 + q];
                         }
                     }
                 }
             }
+            start += len;
         }
-        start += len;
+        minv * f * minv
     }
-    let f = &fplus + fplus.transpose() - a0;
-    let cov = minv * f * minv;
-    let cov = 0.5 * (&cov + cov.transpose());
-    let ok = (0..n).all(|i| cov[(i, i)] > 0.0 && cov[(i, i)].is_finite());
-    Coloured { covariance: ok.then(|| cov.clone()), full: cov, lag }
+
+    /// Mean prewhitened and lag-truncated σ over 150 realisations of the noise
+    /// `v_i = φ1 v_{i−1} + φ2 v_{i−2} + w_i` (stationary start), each from its own residuals.
+    fn mean_sigmas(phi: [f64; 2], seed: u64) -> ([f64; 3], [f64; 3], Vec<f64>) {
+        let (x, lengths, minv) = regression();
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+        let n01 = Normal::new(0.0, 1.0).unwrap();
+        let n = x.len() / 3;
+        let xm = DMatrix::from_row_slice(n, 3, &x);
+        let (mut pre, mut trunc) = ([0.0; 3], [0.0; 3]);
+        let runs = 150;
+        for _ in 0..runs {
+            let mut v = Vec::with_capacity(n);
+            for &len in &lengths {
+                let (mut v1, mut v2) = (0.0, 0.0);
+                for i in 0..len + 3000 {
+                    let vi = phi[0] * v1 + phi[1] * v2 + n01.sample(&mut rng);
+                    (v2, v1) = (v1, vi);
+                    if i >= 3000 {
+                        v.push(vi);
+                    }
+                }
+            }
+            let y = nalgebra::DVector::from_vec(v);
+            let theta = &minv * xm.transpose() * &y;
+            let e: Vec<f64> = (&y - &xm * theta).iter().copied().collect();
+            let p = prewhitened(&x, &e, &[1.0], &lengths, &minv, 200).coloured.full;
+            let c = covariance(&x, &e, &[1.0], &lengths, &minv, 200).full;
+            for i in 0..3 {
+                pre[i] += p[(i, i)].max(0.0).sqrt() / runs as f64;
+                trunc[i] += c[(i, i)].max(0.0).sqrt() / runs as f64;
+            }
+        }
+        // Autocovariance of the AR(2) from its impulse response (long enough to converge).
+        let mut h = vec![0.0; 20_000];
+        for k in 0..h.len() {
+            h[k] = if k == 0 { 1.0 } else { 0.0 }
+                + if k >= 1 { phi[0] * h[k - 1] } else { 0.0 }
+                + if k >= 2 { phi[1] * h[k - 2] } else { 0.0 };
+        }
+        let gamma: Vec<f64> =
+            (0..1200).map(|k| h.iter().zip(&h[k..]).map(|(a, b)| a * b).sum()).collect();
+        let ex = exact(&x, &lengths, &minv, &gamma);
+        (pre, trunc, (0..3).map(|i| ex[(i, i)].sqrt()).collect())
+    }
+
+    /// The prewhitened σ of a regression on AR(1) and AR(2)-coloured noise match the exact σ
+    /// of the least-squares estimate, `sqrt diag (XᵀX)⁻¹ XᵀΓX (XᵀX)⁻¹`, within 6 % on average
+    /// over 150 realisations (correlation times of 50 samples and a resonance), and within
+    /// 12 % for a correlation time of 200 samples, a sixth of the manoeuvre (measured 0.91:
+    /// the Burg estimate of a pole that near 1 is biased towards 0 by O(1/N), and σ of the
+    /// constant's coefficient goes as 1/(1 − a); the lag-truncated sum gives 0.61 there); for
+    /// white noise they equal the Cramér–Rao σ `sqrt diag (XᵀX)⁻¹` within 5 %.
+    #[test]
+    fn prewhitened_sigma_matches_exact_covariance_of_ar_coloured_regression() {
+        for (phi, label, tol) in [
+            ([0.0, 0.0], "white", 0.05),
+            ([0.98, 0.0], "AR(1) 0.98", 0.06),
+            ([1.9, -0.91], "AR(2) poles 0.95 ± 0.1i", 0.06),
+            ([0.995, 0.0], "AR(1) 0.995", 0.12),
+        ] {
+            let (pre, trunc, ex) = mean_sigmas(phi, 7);
+            for i in 0..3 {
+                let ratio = pre[i] / ex[i];
+                std::println!(
+                    "{label} θ{i}: prewhitened/exact {ratio:.3}, truncated/exact {:.3}",
+                    trunc[i] / ex[i]
+                );
+                assert!((ratio - 1.0).abs() < tol, "{label} θ{i}: prewhitened σ / exact σ {ratio}");
+            }
+        }
+    }
 }

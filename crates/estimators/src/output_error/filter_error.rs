@@ -93,7 +93,8 @@
 //!
 //! Cramér–Rao σ `sqrt(diag M⁻¹)` with `M = Σ Sᵀ B⁻¹ S` at the estimate
 //! ([`OeResult::sigma`]), and the coloured-residual sandwich ([`OeResult::sigma_coloured`],
-//! Morelli & Klein 1997, full cross-output residual autocorrelation). Jategaonkar ch. 5 takes
+//! Morelli & Klein 1997, full cross-output residual autocorrelation, prewhitened by a vector
+//! autoregression as for output error: [`crate::coloured::batch`]). Jategaonkar ch. 5 takes
 //! the innovations of the correct filter as white, so that the Cramér–Rao σ suffices; that
 //! needs the filter's model exact, process noise included. A flight-test model never is: on
 //! the F-16 campaign (Dryden turbulence, whose `ġ` is coloured below `V/L`; no process noise
@@ -673,7 +674,7 @@ fn diagnostic_sigmas(
     let ny = w.len();
     let (m, _, _) = normal_equations(s, e, w, nb);
     let Some(minv) = spd_inverse(&m) else { return [None, None, None] };
-    let full = coloured::covariance(s, e, w, &r.manoeuvre_lengths, &minv, max_lag).full;
+    let full = coloured::prewhitened(s, e, w, &r.manoeuvre_lengths, &minv, max_lag).coloured.full;
     let coloured_theta = (0..r.n_params).all(|i| full[(i, i)] > 0.0).then(|| {
         (0..nb).map(|i| if full[(i, i)] > 0.0 { full[(i, i)].sqrt() } else { f64::NAN }).collect()
     });

@@ -380,7 +380,7 @@ pub fn fit_record<R: Read>(
     let slices: Vec<&[AirDataSample]> = manoeuvres.iter().map(Vec::as_slice).collect();
     let (result, fit_wall_s, fem_result) = if fem {
         let mut config = FemConfig::new(model.structure);
-        // The relaxation of B and R converges linearly (module doc of filter_error).
+        // Convergence on turbulent or model-error records is slow (module doc of filter_error).
         config.oe.max_iterations = crate::aircraft::batch::MAX_ITERATIONS;
         let (f, wall) = fit_fem_manoeuvres(&slices, &config).map_err(ReplayError::Model)?;
         (f.result.clone(), wall, Some(f))

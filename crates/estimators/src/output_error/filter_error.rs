@@ -38,41 +38,57 @@
 //!
 //! With `F = 0` the gain is zero and the filter is the output-error simulation.
 //!
-//! # Estimation (Jategaonkar's two-step relaxation)
+//! # Estimation: maximum likelihood in `θ`, `F` and `R` together
 //!
-//! Negative log-likelihood `½ Σ νᵀ B⁻¹ ν + (N/2) ln det B`. Each iteration:
+//! The negative log-likelihood of the innovations of the steady-state filter (prediction-error
+//! form; Åström, "Maximum likelihood and prediction error methods", *Automatica* 16, 1980;
+//! Maine & Iliff RP-1168 ch. 5), with the filter's own innovation variance
+//! `b_j = diag(C P Cᵀ)_j + R_j` (diagonal, as output error's `R`):
 //!
-//! 1. `B = diag((1/N) Σ ν νᵀ)` (the ML innovation covariance, diagonal as output error's `R`);
-//! 2. one Gauss–Newton step on `β = (θ, b, x0, ln F)` with `B` fixed: `M = Σ Sᵀ B⁻¹ S`,
-//!    `g = Σ Sᵀ B⁻¹ ν`, `(M + λ diag M) Δ = g`, accepted when `J = ½ Σ νᵀ B⁻¹ ν` falls
-//!    (Levenberg–Marquardt damping exactly as output error's relaxation step). The `ln F`
-//!    components move by [`F_STEP`] (half) of their Gauss–Newton step: full steps alternated
-//!    on the slowly identified `F_V` (ratio −0.94 per iteration on the F-16 campaign, 110
-//!    iterations; 33 with half steps). `ln F` is bounded below ([`F_MIN_FRACTION`]); a step
-//!    beyond goes to the bound, and a bounded `ln F` whose gradient points further down is
-//!    held there (active set: on calm data its information vanishes). When no step reduces
-//!    `J` but the last accepted step was already below the step tolerance, `β` stays (zero
-//!    step) and the relaxation of `B` and `R` goes on;
-//! 3. the measurement-noise covariance the Riccati equation needs, from the innovations by
-//!    the compatibility `R = diag(B − C P Cᵀ)` (so that at the fixed point the filter's own
-//!    innovation variance `C P Cᵀ + R` matches the measured one), approached by half a Newton
-//!    step of that fixed-point map, `R += ½ (1 − diag(C K)) (B − C P Cᵀ − R)`, limited to a
-//!    factor 4 per iteration and floored at [`R_FLOOR`] `· B`. The plain substitution
-//!    diverges when `diag(C K) > ½` (the map's slope is `−CK/(1 − CK)`; measured on synthetic
-//!    records: `F_α` ran to 750 with `R_α` at its floor). The book solves the Riccati
-//!    equation with `B` and enforces `R ≥ 0` as the constraint `diag(K C) ≤ 1` on `F` with a
-//!    heuristic `F` correction after each `B` update; this implementation keeps `R` explicit
-//!    instead, which satisfies that constraint by construction, but does not bound `F`: on
-//!    records whose output-error residuals are model error (HFB-320's α) `F` on that state
-//!    runs up and `R` to its floor (docs/uncertainty.md, "Filter-error method").
+//! ```text
+//! L(β, R) = ½ Σ_k Σ_j ν_kj² / b_j + (N/2) Σ_j ln b_j
+//! ```
+//!
+//! is minimised over all unknowns `(θ, b, x0, ln F, ln R)` by Fisher scoring with
+//! Levenberg–Marquardt damping: information `M = Σ Sᵀ W S + (N/2) Σ_j D_j D_jᵀ / b_j²` and
+//! descent direction `g = Σ Sᵀ W ν − Σ_j D_j (N/(2 b_j) − Σ_k ν_kj²/(2 b_j²))`, with
+//! `W = diag(1/b)`, `S = ∂ŷ/∂β` and `D_j = ∂b_j/∂β` (the information of a Gaussian whose
+//! mean and variance both depend on the unknowns); a step is accepted when `L` falls. The
+//! `ln F` and `ln R` components move by [`F_STEP`] (half) of their step, at most
+//! [`MAX_LN_STEP`] (a factor 4): full steps alternated on the slowly identified `F_V`
+//! (measured on the F-16 campaign), and unlimited ones overshot by orders of magnitude from
+//! the start on the ATTAS elevator record. Both are bounded below
+//! (`ln F` at [`F_MIN_FRACTION`], `ln R` at [`R_FLOOR`] of its start); a step beyond goes to
+//! the bound, and a bounded unknown whose gradient points further down is held there (active
+//! set: on calm data the information on `F` vanishes).
+//!
+//! **Why not the book's relaxation.** Jategaonkar's `ml_fem.m` alternates a Gauss–Newton step
+//! on `(θ, F)` with the innovation covariance `B` held at its sample value, and an update of
+//! `B` (here of `R` through the compatibility `R = B − C P Cᵀ`). With `B` held, a larger `F`
+//! only shrinks the innovations (the filter follows the measurements); the growth of the
+//! filter's own innovation variance, the `ln det` term that balances it in the likelihood, is
+//! not in that step. On a record with model error the two steps then feed each other: `F`
+//! grows, the compatibility lowers `R`, the gain grows. The book bounds this with the
+//! constraint `diag(K C) ≤ 1` and a heuristic `F` correction; measured here on the HFB-320
+//! record with Jategaonkar's model (`models/hfb320_jategaonkar.toml`), the relaxation drove
+//! `F_α` from 10⁻⁴ to 500 rad/√s and `R` of five outputs to its floor while `ln det B` rose
+//! from −68.9 (iteration 7) to −60.0, and stopped without a descent direction; with `R` fixed
+//! but the `ln det` term in the step, `R_α` still ran to 0.5 % of `B_α`. With the likelihood
+//! in all unknowns the fit converges (31 iterations, 1.1 s, `ln det B` −69.16 against output
+//! error's −54.17), with `F_V` 0.34 m/s/√s and `F_α` 0.0027 rad/√s. On the ATTAS records the
+//! relaxation converged but to far worse likelihoods at implausible process noise (Elv1:
+//! `F_α` 384 rad/√s, `ln det B` −58.2; Ail1: `F_β` 0.17 rad/√s, −67.8); maximum likelihood
+//! gives −67.9 (`F_α` 0.0015) and −68.7 (`F_β` 0.0018). On the synthetic
+//! coloured-process-noise records of the tests 16 of 16 fits converge (12 with the
+//! relaxation).
 //!
 //! **Sensitivities** `S = ∂ŷ/∂β` by central differences of the **whole filter**, as `ml_fem.m`:
 //! each unknown perturbed by `±10⁻⁴ max(|β_i|, 10⁻³)`, the gain recomputed for the perturbed
 //! values (the innovations depend on `F` only through the gain, so it must be), `R` held.
 //! `2 nβ` filter passes per iteration.
 //!
-//! **Convergence** as output error: the relative change of `det B` below
-//! [`super::OeConfig::cost_tolerance`] and the largest step below
+//! **Convergence** as output error: the change of `2L/N` (≈ the relative change of `det B`)
+//! below [`super::OeConfig::cost_tolerance`] and the largest step below
 //! [`super::OeConfig::step_tolerance_sigma`] Cramér–Rao σ. A fit that reaches the iteration
 //! limit or stops descending with a large step is [`OeError::NotConverged`] (never a result).
 //!
@@ -152,18 +168,24 @@ pub const LINEARISATION_POINTS: usize = 50;
 /// calm data, where the information on it vanishes).
 pub const F_MIN_FRACTION: f64 = 1e-3;
 
-/// Fraction of the Gauss–Newton step taken in `ln F` (module doc).
+/// Fraction of the scoring step taken in `ln F` and `ln R` (module doc).
 pub const F_STEP: f64 = 0.5;
 
-/// Floor of the measurement-noise variance recovered from the innovations, as a fraction of
-/// the innovation variance `B` of the output.
+/// Largest change of an `ln F` or `ln R` in one iteration (a factor 4; module doc): far from
+/// the optimum the scoring information of the noise unknowns is poor, and an unlimited first
+/// step multiplied `R` by 10¹⁰ on the ATTAS elevator record.
+pub const MAX_LN_STEP: f64 = core::f64::consts::LN_2 * 2.0;
+
+/// Lower bound of each measurement-noise variance `R_j`, as a fraction of its starting value
+/// (the second-difference estimate of the output's white noise; module doc).
 pub const R_FLOOR: f64 = 1e-3;
 
 /// Configuration of [`fit`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct FemConfig {
     /// Everything output error has (structure, outputs, biases, initial states, start,
-    /// iterations, tolerances, coloured lag); its `step` is not used (always the relaxation).
+    /// iterations, tolerances, coloured lag); its `step` is not used (always the scoring step
+    /// of the module doc).
     pub oe: OeConfig,
     /// State equations with process noise, full-state order; only integrated states count
     /// (default [`AIR_DATA_STATES`]).
@@ -191,7 +213,8 @@ pub struct FemResult {
     /// (`F_<state>` for the process noise, e.g. `F_alpha_rad`), values, Cramér–Rao σ,
     /// covariance and correlation; `r` the measurement-noise variances `R`; `residuals` the
     /// innovations `ν`, `residual_rms` their RMS `sqrt(B)`; `iterations` with `ln_det_r` =
-    /// `ln det B`.
+    /// `ln det B` (the innovations' sample variances) and `cost` = the negative
+    /// log-likelihood `L` of the module doc.
     pub result: OeResult,
     /// Full-state indices of the process-noise states, in the order of the `F` unknowns.
     pub process_noise_states: Vec<usize>,
@@ -351,31 +374,115 @@ impl Filter<'_> {
         Ok(ss)
     }
 
-    /// `S = ∂ŷ/∂β` (`N·ny × nβ` row-major) by central differences of the whole filter.
+    /// As [`Self::sensitivities`] over all unknowns `(β, ln R)` (`nβ + ny` columns), the filter's
+    /// `R = exp(ln R)` from the last `ny` of `full`; returns `∂ diag(C P Cᵀ + R)/∂(β, ln R)`
+    /// (`(nβ + ny) × ny` row-major).
+    fn sensitivities_with_r(
+        &self,
+        full: &[f64],
+        s: &mut Vec<f64>,
+    ) -> Result<Vec<f64>, EstimatorError> {
+        let nb = self.nb;
+        let ny = self.p.ny();
+        let nfull = nb + ny;
+        let rows = self.p.n_samples * ny;
+        s.clear();
+        s.resize(rows * nfull, 0.0);
+        let mut dbf = vec![0.0; nfull * ny];
+        let (mut yp, mut ym) = (Vec::new(), Vec::new());
+        let mut b = full.to_vec();
+        let r_of = |v: &[f64]| -> Vec<f64> { v[nb..].iter().map(|x| x.exp()).collect() };
+        for a in 0..nfull {
+            let h = 1e-4 * full[a].abs().max(1e-3);
+            b[a] = full[a] + h;
+            let rp = r_of(&b);
+            let gp = self.pass(&b[..nb], &rp, &mut yp)?;
+            b[a] = full[a] - h;
+            let rm = r_of(&b);
+            let gm = self.pass(&b[..nb], &rm, &mut ym)?;
+            b[a] = full[a];
+            for row in 0..rows {
+                s[row * nfull + a] = (yp[row] - ym[row]) / (2.0 * h);
+            }
+            for j in 0..ny {
+                dbf[a * ny + j] = (gp.cpc_diag[j] + rp[j] - gm.cpc_diag[j] - rm[j]) / (2.0 * h);
+            }
+        }
+        Ok(dbf)
+    }
+
+    /// `S = ∂ŷ/∂β` (`N·ny × nβ` row-major) by central differences of the whole filter; returns
+    /// `∂ diag(C P Cᵀ)/∂β` (`nβ × ny` row-major) from the same perturbed gains (`R` held).
     fn sensitivities(
         &self,
         beta: &[f64],
         r: &[f64],
         s: &mut Vec<f64>,
-    ) -> Result<(), EstimatorError> {
+    ) -> Result<Vec<f64>, EstimatorError> {
         let nb = self.nb;
-        let rows = self.p.n_samples * self.p.ny();
+        let ny = self.p.ny();
+        let rows = self.p.n_samples * ny;
         s.clear();
         s.resize(rows * nb, 0.0);
+        let mut dcpc = vec![0.0; nb * ny];
         let (mut yp, mut ym) = (Vec::new(), Vec::new());
         let mut b = beta.to_vec();
         for a in 0..nb {
             let h = 1e-4 * beta[a].abs().max(1e-3);
             b[a] = beta[a] + h;
-            self.pass(&b, r, &mut yp)?;
+            let gp = self.pass(&b, r, &mut yp)?;
             b[a] = beta[a] - h;
-            self.pass(&b, r, &mut ym)?;
+            let gm = self.pass(&b, r, &mut ym)?;
             b[a] = beta[a];
             for row in 0..rows {
                 s[row * nb + a] = (yp[row] - ym[row]) / (2.0 * h);
             }
+            for j in 0..ny {
+                dcpc[a * ny + j] = (gp.cpc_diag[j] - gm.cpc_diag[j]) / (2.0 * h);
+            }
         }
-        Ok(())
+        Ok(dcpc)
+    }
+}
+
+/// Negative log-likelihood of the innovations `e` (`N × ny` row-major) under the filter's own
+/// innovation variances `bf = diag(C P Cᵀ) + R`, constants dropped:
+/// `½ Σ_k Σ_j e_kj² / bf_j + (N/2) Σ_j ln bf_j` (module doc, "The β step").
+fn filter_likelihood(e: &[f64], bf: &[f64], n: usize) -> f64 {
+    weighted_cost(e, &bf.iter().map(|v| 1.0 / v).collect::<Vec<_>>())
+        + 0.5 * n as f64 * bf.iter().map(|v| v.ln()).sum::<f64>()
+}
+
+/// Adds to the Gauss–Newton information `m` and descent direction `g` of
+/// [`normal_equations`] the terms of the likelihood's dependence on the innovation variances
+/// `bf_j(β)` (Fisher scoring for a Gaussian with parameter-dependent variance): with
+/// `D_aj = ∂bf_j/∂β_a` (`dcpc`, `nβ × ny` row-major; `R` held) and `s_j = Σ_k e_kj²`,
+/// `m_ab += (N/2) Σ_j D_aj D_bj / bf_j²` and `g_a −= Σ_j D_aj (N/(2 bf_j) − s_j/(2 bf_j²))`.
+fn add_variance_terms(
+    m: &mut DMatrix<f64>,
+    g: &mut nalgebra::DVector<f64>,
+    dcpc: &[f64],
+    e: &[f64],
+    bf: &[f64],
+    n_samples: usize,
+) {
+    let ny = bf.len();
+    let nb = g.len();
+    let n = n_samples as f64;
+    let mut ss = vec![0.0; ny];
+    for (k, v) in e.iter().enumerate() {
+        ss[k % ny] += v * v;
+    }
+    for a in 0..nb {
+        for j in 0..ny {
+            let d = dcpc[a * ny + j];
+            g[a] -= d * (0.5 * n / bf[j] - 0.5 * ss[j] / (bf[j] * bf[j]));
+        }
+        for c in 0..nb {
+            let v: f64 =
+                (0..ny).map(|j| dcpc[a * ny + j] * dcpc[c * ny + j] / (bf[j] * bf[j])).sum();
+            m[(a, c)] += 0.5 * n * v;
+        }
     }
 }
 
@@ -439,7 +546,7 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
         .collect();
     let filter = Filter { p: &p, noisy: noisy.clone(), first_f, nb, dt, points };
 
-    let mut r = noise_start(&p);
+    let r0 = noise_start(&p);
     let f0: Vec<f64> = match &config.process_noise_start {
         Some(v) if v.len() != noisy.len() => {
             return Err(EstimatorError::InvalidConfig {
@@ -462,36 +569,47 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
             .iter()
             .map(|&k| {
                 let o = Output::ALL[states[k]];
-                p.outputs.iter().position(|x| *x == o).map_or(1e-3, |j| 0.1 * (r[j] / dt).sqrt())
+                p.outputs.iter().position(|x| *x == o).map_or(1e-3, |j| 0.1 * (r0[j] / dt).sqrt())
             })
             .collect(),
     };
-    // Lower bound of each ln F: 10⁻³ of the scale of its default start (module doc), where
-    // the process noise no longer matters (the gain goes with F²).
-    let ln_f_min: Vec<f64> = noisy
+    // Lower bounds of the noise unknowns (ln F, then ln R): ln F at 10⁻³ of the scale of its
+    // default start, where the process noise no longer matters (the gain goes with F²); ln R
+    // at R_FLOOR of the second-difference estimate (module doc).
+    let mut ln_min: Vec<f64> = noisy
         .iter()
         .map(|&k| {
             let o = Output::ALL[states[k]];
-            let scale = p.outputs.iter().position(|x| *x == o).map_or(1e-2, |j| (r[j] / dt).sqrt());
+            let scale =
+                p.outputs.iter().position(|x| *x == o).map_or(1e-2, |j| (r0[j] / dt).sqrt());
             (F_MIN_FRACTION * scale).ln()
         })
         .collect();
+    ln_min.extend(r0.iter().map(|v| (R_FLOOR * v).ln()));
+    // All unknowns: β = (θ, b, x0, ln F) then ln R.
+    let nfull = nb + ny;
+    let r_of = |full: &[f64]| -> Vec<f64> { full[nb..].iter().map(|v| v.exp()).collect() };
     let mut y = Vec::new();
     let (beta_oe, start) = first_start(&p, manoeuvres, oe, |b| {
         let mut full = b.to_vec();
         full.extend(f0.iter().map(|f| f.ln()));
-        filter.pass(&full, &r, &mut y).map(|_| ())
+        filter.pass(&full, &r0, &mut y).map(|_| ())
     })?;
     let mut beta = beta_oe;
     beta.extend(f0.iter().map(|f| f.ln()));
+    beta.extend(r0.iter().map(|v| v.ln()));
     let mut e = Vec::new();
-    filter.pass(&beta, &r, &mut y)?;
+    let st = filter.pass(&beta[..nb], &r_of(&beta), &mut y)?;
     let mut b = residuals(&p, &y, &mut e);
     let ln_det = |v: &[f64]| v.iter().map(|x| x.ln()).sum::<f64>();
+    let innovation_var = |g: &Gain, full: &[f64]| -> Vec<f64> {
+        (0..ny).map(|j| g.cpc_diag[j] + full[nb + j].exp()).collect()
+    };
+    let mut bf = innovation_var(&st, &beta);
     let mut log = vec![OeIteration {
         iteration: 0,
         ln_det_r: ln_det(&b),
-        cost: 0.5 * (p.n_samples * ny) as f64,
+        cost: filter_likelihood(&e, &bf, p.n_samples),
         lambda: 0.0,
         max_step_sigma: f64::NAN,
     }];
@@ -508,16 +626,17 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
             }
             .into());
         }
-        let w: Vec<f64> = b.iter().map(|v| 1.0 / v).collect();
-        filter.sensitivities(&beta, &r, &mut s)?;
-        let (mut m, mut g, _) = normal_equations(&s, &e, &w, nb);
+        let w: Vec<f64> = bf.iter().map(|v| 1.0 / v).collect();
+        let dbf = filter.sensitivities_with_r(&beta, &mut s)?;
+        let (mut m, mut g, _) = normal_equations(&s, &e, &w, nfull);
+        add_variance_terms(&mut m, &mut g, &dbf, &e, &bf, p.n_samples);
         check_identifiable(&m, &p, oe, first_f)?;
-        // An ln F at its bound whose gradient points further down is held there this
+        // A noise unknown at its bound whose gradient points further down is held there this
         // iteration (active set): its information vanishes there and would spoil the step.
-        for (k, lo) in ln_f_min.iter().enumerate() {
+        for (k, lo) in ln_min.iter().enumerate() {
             let i = first_f + k;
             if beta[i] <= *lo && g[i] <= 0.0 {
-                for j in 0..nb {
+                for j in 0..nfull {
                     m[(i, j)] = 0.0;
                     m[(j, i)] = 0.0;
                 }
@@ -526,7 +645,7 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
             }
         }
         let minv = spd_inverse(&m);
-        let merit0 = weighted_cost(&e, &w);
+        let merit0 = filter_likelihood(&e, &bf, p.n_samples);
         let mut accepted = None;
         loop {
             if let Some(step) = damped_step(&m, &m, &g, lambda) {
@@ -537,20 +656,21 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
                     .map(|(i, (b, d))| {
                         if i < first_f {
                             b + d
-                        } else if b + d <= ln_f_min[i - first_f] {
-                            // ln F bounded below (module doc): a step beyond goes to the bound.
-                            ln_f_min[i - first_f]
+                        } else if b + d <= ln_min[i - first_f] {
+                            // Bounded below (module doc): a step beyond goes to the bound.
+                            ln_min[i - first_f]
                         } else {
-                            b + F_STEP * d
+                            b + (F_STEP * d).clamp(-MAX_LN_STEP, MAX_LN_STEP)
                         }
                     })
                     .collect();
-                let step = nalgebra::DVector::from_fn(nb, |i, _| trial[i] - beta[i]);
-                if let Ok(st) = filter.pass(&trial, &r, &mut y_try) {
-                    let b_try = residuals(&p, &y_try, &mut e_try);
-                    let value = weighted_cost(&e_try, &w);
+                let step = nalgebra::DVector::from_fn(nfull, |i, _| trial[i] - beta[i]);
+                if let Ok(st_try) = filter.pass(&trial[..nb], &r_of(&trial), &mut y_try) {
+                    let bf_try = innovation_var(&st_try, &trial);
+                    residuals(&p, &y_try, &mut e_try);
+                    let value = filter_likelihood(&e_try, &bf_try, p.n_samples);
                     if value.is_finite() && value < merit0 {
-                        accepted = Some((trial, step, b_try, st));
+                        accepted = Some((trial, step, bf_try, value));
                         break;
                     }
                 }
@@ -561,56 +681,42 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
             }
         }
         let step_sigma = |step: &nalgebra::DVector<f64>| match &minv {
-            Some(mi) => (0..nb).map(|i| step[i].abs() / mi[(i, i)].sqrt()).fold(0.0, f64::max),
+            Some(mi) => (0..nfull).map(|i| step[i].abs() / mi[(i, i)].sqrt()).fold(0.0, f64::max),
             None => f64::INFINITY,
         };
-        let (trial, step, b_try, st) = match accepted {
-            Some(a) => a,
-            None => {
-                let tiny = damped_step(&m, &m, &g, 0.0).is_some_and(|st| {
-                    // The step as it would be taken (ln F cut at its bound).
-                    let taken = nalgebra::DVector::from_fn(nb, |i, _| {
-                        if i >= first_f {
-                            (beta[i] + st[i]).max(ln_f_min[i - first_f]) - beta[i]
-                        } else {
-                            st[i]
-                        }
-                    });
-                    step_sigma(&taken) < oe.step_tolerance_sigma
+        let Some((trial, step, bf_new, value)) = accepted else {
+            let tiny = damped_step(&m, &m, &g, 0.0).is_some_and(|st| {
+                // The step as it would be taken (noise unknowns cut at their bounds).
+                let taken = nalgebra::DVector::from_fn(nfull, |i, _| {
+                    if i >= first_f {
+                        (beta[i] + st[i]).max(ln_min[i - first_f]) - beta[i]
+                    } else {
+                        st[i]
+                    }
                 });
-                let last_tiny =
-                    log.last().is_some_and(|it| it.max_step_sigma < oe.step_tolerance_sigma);
-                if !(tiny || last_tiny) {
-                    failure = Some(NotConverged::NoDescent);
-                    break;
-                }
-                // β is at the optimum for this B (to the rounding of the finite-difference
-                // step): no step, the relaxation of B and R goes on.
-                let st = filter.pass(&beta, &r, &mut y_try)?;
-                let b_try = residuals(&p, &y_try, &mut e_try);
-                (beta.clone(), nalgebra::DVector::zeros(nb), b_try, st)
+                step_sigma(&taken) < oe.step_tolerance_sigma
+            });
+            if tiny {
+                // At the optimum to the rounding of the finite-difference sensitivities.
+                converged = true;
+            } else {
+                failure = Some(NotConverged::NoDescent);
             }
+            break;
         };
         let max_step_sigma = step_sigma(&step);
         let used_lambda = lambda;
         lambda = if lambda < 1e-6 { 0.0 } else { lambda / 10.0 };
+        let rel = 2.0 * ((value - merit0) / p.n_samples as f64).abs();
         beta = trial;
-        // Compatibility: R = diag(B − C P Cᵀ) from the accepted filter (module doc).
-        r = (0..ny)
-            .map(|j| {
-                let target = b_try[j] - st.cpc_diag[j];
-                let step = 0.5 * (1.0 - st.ck_diag[j]).clamp(0.0, 1.0) * (target - r[j]);
-                (r[j] + step).clamp(0.25 * r[j], 4.0 * r[j]).max(R_FLOOR * b_try[j])
-            })
-            .collect();
-        filter.pass(&beta, &r, &mut y)?;
-        let b_new = residuals(&p, &y, &mut e);
-        let rel = (ln_det(&b_new) - ln_det(&b)).exp_m1().abs();
-        b = b_new;
+        bf = bf_new;
+        std::mem::swap(&mut y, &mut y_try);
+        std::mem::swap(&mut e, &mut e_try);
+        b = residuals(&p, &y, &mut e);
         log.push(OeIteration {
             iteration,
             ln_det_r: ln_det(&b),
-            cost: weighted_cost(&e, &w),
+            cost: value,
             lambda: used_lambda,
             max_step_sigma,
         });
@@ -619,6 +725,8 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
             break;
         }
     }
+    let r = r_of(&beta);
+    beta.truncate(nb);
     if !converged && failure.is_none() {
         failure = Some(NotConverged::MaxIterations);
     }

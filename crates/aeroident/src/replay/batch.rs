@@ -345,8 +345,8 @@ pub fn reported_sigma(result: &OeResult) -> Vec<f64> {
 /// is the coloured-residual one: the coloured-residual sandwich where it was formed
 /// ([`OeResult::sigma_coloured`], else its parameter block
 /// [`FemResult::sigma_coloured_theta`]), else the Cramér–Rao σ. On the F-16 campaign the
-/// Cramér–Rao σ is 1.3–3× short of the scatter and the coloured one 0.7–1.7× it
-/// (docs/uncertainty.md, "Filter-error method: σ and bias").
+/// Cramér–Rao σ is 1.3–3× short of the scatter and the coloured one 0.6–1.9× it
+/// (docs/uncertainty.md, "Where the targets stand").
 pub fn fem_reported_sigma(fem: &FemResult) -> (Vec<f64>, bool) {
     let r = &fem.result;
     let np = r.n_params;

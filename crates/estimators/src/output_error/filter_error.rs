@@ -116,8 +116,9 @@
 //! the F-16 campaign (Dryden turbulence, whose `ġ` is coloured below `V/L`; no process noise
 //! on the rate equations; lateral model error) the innovations are autocorrelated over
 //! hundreds of samples and the Cramér–Rao σ is 0.34–0.76 of the scatter of the estimates,
-//! the coloured one 0.68–1.69 (40 runs; docs/uncertainty.md, "Filter-error method: σ and
-//! bias"). Callers therefore report the coloured σ where formed, as for output error
+//! the coloured one 0.68–1.69 with the lag-truncated sandwich (40 runs; docs/uncertainty.md,
+//! "Filter-error method: σ and bias") and 0.60–1.86 with the prewhitened one now used (20
+//! runs, "Where the targets stand"). Callers therefore report the coloured σ where formed, as for output error
 //! (`aeroident::replay::batch::fem_reported_sigma`). Diagnostics: the lag-0 sandwich with the
 //! full cross-output innovation covariance ([`FemResult::sigma_lag0`]) and the full-`B`
 //! Cramér–Rao σ ([`FemResult::sigma_full_b`]) are within 6 % of the Cramér–Rao σ there (the
@@ -126,10 +127,11 @@
 //! sandwich is not positive. `F` and its σ are reported from `ln F` to first order
 //! (`σ_F = F σ_ln F`, covariance rows scaled by `F`).
 //!
-//! The biases on that campaign (Cl_p +2.8 %, Cl_δa +1.9 %, Cm_q +2.2 %, Cn_δr +2.4 % of the
-//! truth) are present in calm air, do not shrink with halved inputs and are shared by output error on the same samples;
-//! Cn_r's −10 % is this method's (output error is unbiased there): in calm air `F` stays above
-//! its bound and absorbs lateral model error.
+//! The biases once seen on that campaign and shared with output error (Cl_p +2.8 %, Cl_δa
+//! +1.9 %, Cm_q +2.2 %, Cn_δr +2.4 % of the truth) were the simulator's inputs held over each
+//! integration step, a dt/2 lag (docs/uncertainty.md, "Bias: the staircase inputs"); what
+//! remains is amplitude-dependent model structure. Cn_r's dependence on the process-noise
+//! model is this method's: `F` absorbs lateral model error.
 
 use super::riccati;
 use super::simulation::Problem;

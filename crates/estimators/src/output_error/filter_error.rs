@@ -82,10 +82,11 @@
 //! coloured-process-noise records of the tests 16 of 16 fits converge (12 with the
 //! relaxation).
 //!
-//! **Sensitivities** `S = ∂ŷ/∂β` by central differences of the **whole filter**, as `ml_fem.m`:
-//! each unknown perturbed by `±10⁻⁴ max(|β_i|, 10⁻³)`, the gain recomputed for the perturbed
-//! values (the innovations depend on `F` only through the gain, so it must be), `R` held.
-//! `2 nβ` filter passes per iteration.
+//! **Sensitivities** `S = ∂ŷ/∂β` and `D_j = ∂b_j/∂β` by central differences of the **whole
+//! filter**, as `ml_fem.m`: each unknown (`ln R` included) perturbed by
+//! `±10⁻⁴ max(|β_i|, 10⁻³)`, the gain recomputed for the perturbed values (the innovations
+//! depend on `F` and `R` only through the gain, so it must be). `2 (nβ + ny)` filter passes
+//! per iteration.
 //!
 //! **Convergence** as output error: the change of `2L/N` (≈ the relative change of `det B`)
 //! below [`super::OeConfig::cost_tolerance`] and the largest step below
@@ -376,25 +377,27 @@ impl Filter<'_> {
         Ok(ss)
     }
 
-    /// As [`Self::sensitivities`] over all unknowns `(β, ln R)` (`nβ + ny` columns), the filter's
-    /// `R = exp(ln R)` from the last `ny` of `full`; returns `∂ diag(C P Cᵀ + R)/∂(β, ln R)`
-    /// (`(nβ + ny) × ny` row-major).
-    fn sensitivities_with_r(
+    /// `S = ∂ŷ/∂u` (`N·ny × cols` row-major) for the first `cols` unknowns `u` of `full =
+    /// (β, ln R)` by central differences of the **whole filter** (gain recomputed, `R =
+    /// exp(ln R)` from the last `ny` of `full`); returns `∂ diag(C P Cᵀ + R)/∂u` (`cols × ny`
+    /// row-major) from the same perturbed gains. The scoring step takes all `nβ + ny`
+    /// unknowns; the accuracy at the end the first `nβ`.
+    fn sensitivities(
         &self,
         full: &[f64],
+        cols: usize,
         s: &mut Vec<f64>,
     ) -> Result<Vec<f64>, EstimatorError> {
         let nb = self.nb;
         let ny = self.p.ny();
-        let nfull = nb + ny;
         let rows = self.p.n_samples * ny;
         s.clear();
-        s.resize(rows * nfull, 0.0);
-        let mut dbf = vec![0.0; nfull * ny];
+        s.resize(rows * cols, 0.0);
+        let mut dbf = vec![0.0; cols * ny];
         let (mut yp, mut ym) = (Vec::new(), Vec::new());
         let mut b = full.to_vec();
         let r_of = |v: &[f64]| -> Vec<f64> { v[nb..].iter().map(|x| x.exp()).collect() };
-        for a in 0..nfull {
+        for a in 0..cols {
             let h = 1e-4 * full[a].abs().max(1e-3);
             b[a] = full[a] + h;
             let rp = r_of(&b);
@@ -404,7 +407,7 @@ impl Filter<'_> {
             let gm = self.pass(&b[..nb], &rm, &mut ym)?;
             b[a] = full[a];
             for row in 0..rows {
-                s[row * nfull + a] = (yp[row] - ym[row]) / (2.0 * h);
+                s[row * cols + a] = (yp[row] - ym[row]) / (2.0 * h);
             }
             for j in 0..ny {
                 dbf[a * ny + j] = (gp.cpc_diag[j] + rp[j] - gm.cpc_diag[j] - rm[j]) / (2.0 * h);
@@ -412,44 +415,11 @@ impl Filter<'_> {
         }
         Ok(dbf)
     }
-
-    /// `S = ∂ŷ/∂β` (`N·ny × nβ` row-major) by central differences of the whole filter; returns
-    /// `∂ diag(C P Cᵀ)/∂β` (`nβ × ny` row-major) from the same perturbed gains (`R` held).
-    fn sensitivities(
-        &self,
-        beta: &[f64],
-        r: &[f64],
-        s: &mut Vec<f64>,
-    ) -> Result<Vec<f64>, EstimatorError> {
-        let nb = self.nb;
-        let ny = self.p.ny();
-        let rows = self.p.n_samples * ny;
-        s.clear();
-        s.resize(rows * nb, 0.0);
-        let mut dcpc = vec![0.0; nb * ny];
-        let (mut yp, mut ym) = (Vec::new(), Vec::new());
-        let mut b = beta.to_vec();
-        for a in 0..nb {
-            let h = 1e-4 * beta[a].abs().max(1e-3);
-            b[a] = beta[a] + h;
-            let gp = self.pass(&b, r, &mut yp)?;
-            b[a] = beta[a] - h;
-            let gm = self.pass(&b, r, &mut ym)?;
-            b[a] = beta[a];
-            for row in 0..rows {
-                s[row * nb + a] = (yp[row] - ym[row]) / (2.0 * h);
-            }
-            for j in 0..ny {
-                dcpc[a * ny + j] = (gp.cpc_diag[j] - gm.cpc_diag[j]) / (2.0 * h);
-            }
-        }
-        Ok(dcpc)
-    }
 }
 
 /// Negative log-likelihood of the innovations `e` (`N × ny` row-major) under the filter's own
 /// innovation variances `bf = diag(C P Cᵀ) + R`, constants dropped:
-/// `½ Σ_k Σ_j e_kj² / bf_j + (N/2) Σ_j ln bf_j` (module doc, "The β step").
+/// `½ Σ_k Σ_j e_kj² / bf_j + (N/2) Σ_j ln bf_j` (module doc, "Estimation").
 fn filter_likelihood(e: &[f64], bf: &[f64], n: usize) -> f64 {
     weighted_cost(e, &bf.iter().map(|v| 1.0 / v).collect::<Vec<_>>())
         + 0.5 * n as f64 * bf.iter().map(|v| v.ln()).sum::<f64>()
@@ -458,12 +428,13 @@ fn filter_likelihood(e: &[f64], bf: &[f64], n: usize) -> f64 {
 /// Adds to the Gauss–Newton information `m` and descent direction `g` of
 /// [`normal_equations`] the terms of the likelihood's dependence on the innovation variances
 /// `bf_j(β)` (Fisher scoring for a Gaussian with parameter-dependent variance): with
-/// `D_aj = ∂bf_j/∂β_a` (`dcpc`, `nβ × ny` row-major; `R` held) and `s_j = Σ_k e_kj²`,
+/// `D_aj = ∂bf_j/∂β_a` (`dbf`, one row of `ny` per unknown, `ln R` included) and
+/// `s_j = Σ_k e_kj²`,
 /// `m_ab += (N/2) Σ_j D_aj D_bj / bf_j²` and `g_a −= Σ_j D_aj (N/(2 bf_j) − s_j/(2 bf_j²))`.
 fn add_variance_terms(
     m: &mut DMatrix<f64>,
     g: &mut nalgebra::DVector<f64>,
-    dcpc: &[f64],
+    dbf: &[f64],
     e: &[f64],
     bf: &[f64],
     n_samples: usize,
@@ -477,12 +448,11 @@ fn add_variance_terms(
     }
     for a in 0..nb {
         for j in 0..ny {
-            let d = dcpc[a * ny + j];
+            let d = dbf[a * ny + j];
             g[a] -= d * (0.5 * n / bf[j] - 0.5 * ss[j] / (bf[j] * bf[j]));
         }
         for c in 0..nb {
-            let v: f64 =
-                (0..ny).map(|j| dcpc[a * ny + j] * dcpc[c * ny + j] / (bf[j] * bf[j])).sum();
+            let v: f64 = (0..ny).map(|j| dbf[a * ny + j] * dbf[c * ny + j] / (bf[j] * bf[j])).sum();
             m[(a, c)] += 0.5 * n * v;
         }
     }
@@ -629,7 +599,7 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
             .into());
         }
         let w: Vec<f64> = bf.iter().map(|v| 1.0 / v).collect();
-        let dbf = filter.sensitivities_with_r(&beta, &mut s)?;
+        let dbf = filter.sensitivities(&beta, nfull, &mut s)?;
         let (mut m, mut g, _) = normal_equations(&s, &e, &w, nfull);
         add_variance_terms(&mut m, &mut g, &dbf, &e, &bf, p.n_samples);
         check_identifiable(&m, &p, oe, first_f)?;
@@ -727,14 +697,14 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
             break;
         }
     }
-    let r = r_of(&beta);
-    beta.truncate(nb);
     if !converged && failure.is_none() {
         failure = Some(NotConverged::MaxIterations);
     }
-    // Accuracy at the final iterate (sensitivities recomputed there, B and R final).
+    // Accuracy at the final iterate (sensitivities of β recomputed there, B and R final).
     let w: Vec<f64> = b.iter().map(|v| 1.0 / v).collect();
-    filter.sensitivities(&beta, &r, &mut s)?;
+    filter.sensitivities(&beta, nb, &mut s)?;
+    let r = r_of(&beta);
+    beta.truncate(nb);
     let mut names = unknown_names(&p, &oe.structure);
     names.extend(noisy.iter().map(|&k| format!("F_{}", STATE_NAMES[states[k]])));
     let fit = Fitted { beta: &beta, s: &s, e: &e, w: &w, r: &r, names };

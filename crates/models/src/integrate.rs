@@ -16,12 +16,7 @@ pub fn rk4_step<const N: usize, D: Dynamics<N>>(
     u: &D::Input,
     dt_s: f64,
 ) -> Result<SVector<f64, N>, ModelError> {
-    let h = dt_s;
-    let k1 = model.derivatives(t_s, x, u)?;
-    let k2 = model.derivatives(t_s + 0.5 * h, &(x + k1 * (0.5 * h)), u)?;
-    let k3 = model.derivatives(t_s + 0.5 * h, &(x + k2 * (0.5 * h)), u)?;
-    let k4 = model.derivatives(t_s + h, &(x + k3 * h), u)?;
-    Ok(x + (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (h / 6.0))
+    rk4_stages(model, t_s, x, [u, u, u], dt_s)
 }
 
 /// One classical fourth-order Runge–Kutta step of `dt_s` seconds from `(t_s, x)` with a
@@ -45,18 +40,30 @@ pub fn rk4_step_varying<const N: usize, D: Dynamics<N>>(
     input: impl Fn(f64) -> D::Input,
     dt_s: f64,
 ) -> Result<SVector<f64, N>, ModelError> {
-    let h = dt_s;
-    let (u0, u_half, u1) = (input(t_s), input(t_s + 0.5 * h), input(t_s + h));
-    let k1 = model.derivatives(t_s, x, &u0)?;
-    let k2 = model.derivatives(t_s + 0.5 * h, &(x + k1 * (0.5 * h)), &u_half)?;
-    let k3 = model.derivatives(t_s + 0.5 * h, &(x + k2 * (0.5 * h)), &u_half)?;
-    let k4 = model.derivatives(t_s + h, &(x + k3 * h), &u1)?;
+    let (u0, u_half, u1) = (input(t_s), input(t_s + 0.5 * dt_s), input(t_s + dt_s));
+    rk4_stages(model, t_s, x, [&u0, &u_half, &u1], dt_s)
+}
+
+/// The four stages of the classical RK4 step with the inputs `[u(t), u(t + h/2), u(t + h)]`
+/// (the two middle stages share the half-step input).
+fn rk4_stages<const N: usize, D: Dynamics<N>>(
+    model: &D,
+    t_s: f64,
+    x: &SVector<f64, N>,
+    [u0, u_half, u1]: [&D::Input; 3],
+    h: f64,
+) -> Result<SVector<f64, N>, ModelError> {
+    let k1 = model.derivatives(t_s, x, u0)?;
+    let k2 = model.derivatives(t_s + 0.5 * h, &(x + k1 * (0.5 * h)), u_half)?;
+    let k3 = model.derivatives(t_s + 0.5 * h, &(x + k2 * (0.5 * h)), u_half)?;
+    let k4 = model.derivatives(t_s + h, &(x + k3 * h), u1)?;
     Ok(x + (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (h / 6.0))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::small::FirstOrder;
 
     /// ẋ = −a x + b, closed form x(t) = b/a + (x0 − b/a) e^{−a t}.
     struct Decay {
@@ -95,22 +102,6 @@ mod tests {
         assert!(final_error(0.001) < 1e-12);
     }
 
-    /// ẋ = −a x + u, the input `u` a model input (for the input-handling tests).
-    struct Forced {
-        a: f64,
-    }
-    impl Dynamics<1> for Forced {
-        type Input = f64;
-        fn derivatives(
-            &self,
-            _t: f64,
-            x: &SVector<f64, 1>,
-            u: &f64,
-        ) -> Result<SVector<f64, 1>, ModelError> {
-            Ok(SVector::<f64, 1>::new(-self.a * x[0] + u))
-        }
-    }
-
     /// Response of ẋ = −a x + sin(ω(t − d)) from x(0) = 0 (closed form, through the responses
     /// to sin ωt and cos ωt).
     fn forced_exact(a: f64, w: f64, d: f64, t: f64) -> f64 {
@@ -125,7 +116,7 @@ mod tests {
     /// the exact response to the input delayed by `delay`.
     fn forced_error(dt: f64, varying: bool, delay: f64) -> f64 {
         let (a, w) = (2.0, 6.0);
-        let m = Forced { a };
+        let m = FirstOrder { a };
         let u = |t: f64| (w * t).sin();
         let mut x = SVector::<f64, 1>::zeros();
         let mut worst = 0.0_f64;

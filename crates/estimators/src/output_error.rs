@@ -242,7 +242,8 @@ pub struct OeResult {
     pub values: Vec<f64>,
     /// Cramér–Rao σ `sqrt(diag M⁻¹)`.
     pub sigma: Vec<f64>,
-    /// Coloured-residual σ; `None` if the truncated correction was not positive.
+    /// Coloured-residual σ (the prewhitened sandwich, [`crate::coloured::batch`]); `None` if
+    /// that correction was not positive.
     pub sigma_coloured: Option<Vec<f64>>,
     /// Lag at which the coloured-residual sum over the whitened residuals was truncated.
     pub coloured_lag: usize,

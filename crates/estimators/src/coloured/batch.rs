@@ -565,7 +565,7 @@ mod tests {
     /// of the least-squares estimate, `sqrt diag (XᵀX)⁻¹ XᵀΓX (XᵀX)⁻¹`, within 6 % on average
     /// over 150 realisations (correlation times of 50 samples and a resonance), and within
     /// 12 % for a correlation time of 200 samples, a sixth of the manoeuvre (measured 0.91:
-    /// the Burg estimate of a pole that near 1 is biased towards 0 by O(1/N), and σ of the
+    /// the least-squares estimate of a pole that near 1 is biased towards 0 by O(1/N), and σ of the
     /// constant's coefficient goes as 1/(1 − a); the lag-truncated sum gives 0.61 there); for
     /// white noise they equal the Cramér–Rao σ `sqrt diag (XᵀX)⁻¹` within 5 %.
     #[test]

@@ -639,10 +639,10 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
                 let step = nalgebra::DVector::from_fn(nfull, |i, _| trial[i] - beta[i]);
                 if let Ok(st_try) = filter.pass(&trial[..nb], &r_of(&trial), &mut y_try) {
                     let bf_try = innovation_var(&st_try, &trial);
-                    residuals(&p, &y_try, &mut e_try);
+                    let b_try = residuals(&p, &y_try, &mut e_try);
                     let value = filter_likelihood(&e_try, &bf_try, p.n_samples);
                     if value.is_finite() && value < merit0 {
-                        accepted = Some((trial, step, bf_try, value));
+                        accepted = Some((trial, step, bf_try, b_try, value));
                         break;
                     }
                 }
@@ -656,7 +656,7 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
             Some(mi) => (0..nfull).map(|i| step[i].abs() / mi[(i, i)].sqrt()).fold(0.0, f64::max),
             None => f64::INFINITY,
         };
-        let Some((trial, step, bf_new, value)) = accepted else {
+        let Some((trial, step, bf_new, b_new, value)) = accepted else {
             let tiny = damped_step(&m, &m, &g, 0.0).is_some_and(|st| {
                 // The step as it would be taken (noise unknowns cut at their bounds).
                 let taken = nalgebra::DVector::from_fn(nfull, |i, _| {
@@ -684,7 +684,7 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
         bf = bf_new;
         std::mem::swap(&mut y, &mut y_try);
         std::mem::swap(&mut e, &mut e_try);
-        b = residuals(&p, &y, &mut e);
+        b = b_new;
         log.push(OeIteration {
             iteration,
             ln_det_r: ln_det(&b),

@@ -1,6 +1,6 @@
-//! Vector autoregression of the residuals for the prewhitened covariance: Whittle's
-//! multivariate Levinson recursion on the pooled sample autocovariances, order by Akaike's
-//! criterion.
+//! Vector autoregression of the residuals for the prewhitened covariance: fitted by least
+//! squares (order by Akaike's criterion), with Whittle's multivariate Levinson recursion on
+//! the pooled sample autocovariances as the always-stable fallback (below).
 //!
 //! For `x_i = Σ_{j=1..p} A_j x_{i−j} + u_i` (`ny`-vectors, `A_j` `ny × ny`) and
 //! `R(k) = E[x_i x_{i−k}ᵀ]`, Whittle (1963; Lütkepohl, *New Introduction to Multiple Time

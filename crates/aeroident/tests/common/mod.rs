@@ -25,3 +25,19 @@ pub fn shared(rel: &str) -> Option<PathBuf> {
     eprintln!("SKIPPED: {} is absent (CI provides ../shared beside the repository)", p.display());
     None
 }
+
+/// `text` (a scenario) with the default scenario's orthogonal multisines put back to the
+/// former design: base period 10 s, harmonics 2–16 dealt out in turn, instead of the odd
+/// harmonics 5–31 over 20 s (docs/uncertainty.md, "Odd-harmonic inputs"). The campaign runs
+/// that the regression tests re-create were found on the former design.
+///
+/// # Panics
+/// When `text` does not hold the current design's three inputs.
+pub fn with_former_default_inputs(text: &str) -> String {
+    let now =
+        "base_period_s = 20.0\nharmonics = [5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31]";
+    let former =
+        "base_period_s = 10.0\nharmonics = [2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16]";
+    assert_eq!(text.matches(now).count(), 3, "the default's three odd-harmonic inputs");
+    text.replace(now, former)
+}

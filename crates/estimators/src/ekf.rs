@@ -102,18 +102,26 @@
 //! - **Parameter changes** (`change_false_alarm_interval_s > 0`, the default): a change test on
 //!   the filter's own parameter estimates, which lets the parameter memory grow to the whole
 //!   record while nothing changes and restarts it when something does. For a consistent
-//!   filter with constant parameters `θ̂` is a martingale: the drift `d = θ̂(t₁) − θ̂(t₀)` over
-//!   a window has variance `P(t₀) − P(t₁)` (law of total variance). Every
-//!   `change_window_s` (default 1 s), each identified parameter's drift is standardised,
-//!   `u = d / √(f_i (P₀ − P₁))` with `f_i` the coloured-innovation factor below, and fed to a
-//!   two-sided CUSUM `g± ← max(0, g± ± u − k)`, `k` = 1 (Page 1954; Basseville & Nikiforov,
-//!   *Detection of Abrupt Changes*, 1993, §2.2), whose threshold `h` gives the configured mean
-//!   time between false alarms over all parameters by Siegmund's approximation (B&N eq.
-//!   5.2.44). On an alarm the parameter's variance grows by the squared jump estimate
-//!   `δ̂² = (D/κ)²`, `D` the drift since the CUSUM excursion began and `κ = 1 − P/P_start` the
-//!   fraction of a jump a constant-parameter filter takes up over it (the one-epoch process
-//!   noise that explains the drift, in the spirit of covariance matching: Mehra 1972, Myers &
-//!   Tapley 1976, Jategaonkar 2015 §7.5), capped at the prior variance; a diagonal addition
+//!   filter the increments of `θ̂` are the gains times white innovations: the drift
+//!   `d = θ̂(t₁) − θ̂(t₀)` over a window has variance `Σ (P⁻ − P⁺)`, the sum of the reductions
+//!   of the parameter's variance by the window's measurement updates (with constant
+//!   parameters `θ̂` is a martingale and the sum telescopes to `P(t₀) − P(t₁)`, the law of
+//!   total variance; under a random walk the variance settles at a steady state and only the
+//!   sum is right). Every `change_window_s` (default 1 s), each identified parameter's drift
+//!   is standardised, `u = d / √(f_i Σ (P⁻ − P⁺))` with `f_i` the coloured-innovation factor
+//!   below, and fed to a two-sided CUSUM `g± ← max(0, g± ± u − k)`, `k` = 1 (Page 1954;
+//!   Basseville & Nikiforov, *Detection of Abrupt Changes*, 1993, §2.2), whose threshold `h`
+//!   gives the configured mean time between false alarms over all parameters by Siegmund's
+//!   approximation (B&N eq. 5.2.44). On an alarm the parameter's variance grows by the squared
+//!   jump estimate `δ̂² = (D/κ)²`, `D` the drift since the CUSUM excursion began and
+//!   `κ = 1 − Π P⁺/P⁻` (over the excursion's measurement updates) the fraction of a jump the
+//!   filter took up over it: a jump's error is multiplied by `P⁺/P⁻` at each update, and with
+//!   constant parameters `κ = 1 − P/P_start`. (The variance forms, used before, are ≈ 0 and
+//!   ≈ 1 under a random walk: they blew the jump estimate up to the prior σ and standardised
+//!   drifts wrongly; docs/uncertainty.md, "EKF: the change test under a parameter random
+//!   walk".) The inflation is the one-epoch process noise that explains the drift, in the
+//!   spirit of covariance matching (Mehra 1972, Myers & Tapley 1976, Jategaonkar 2015 §7.5),
+//!   capped at the prior variance; a diagonal addition
 //!   keeps `P` positive definite. Counted per parameter ([`Ekf::change_alarms`]). Parameters
 //!   that are not yet identified are not tested (their estimates are in the prior-dominated
 //!   transient, not a martingale).
@@ -122,8 +130,8 @@
 //!   record how much more the estimate moves than its covariance says: colour beyond the
 //!   autocorrelation window, model error. With [`SigmaOption::ColouredResiduals`] the reported
 //!   variance is `f_i r_i P_ii` once [`MIN_DRIFT_WINDOWS`] windows exist ([`Ekf::drift_factor`];
-//!   by the martingale argument, a filter whose noise is `r` times what it assumes has
-//!   increments `r (P₀ − P₁)` and error variance `r P`).
+//!   a filter whose noise is `r` times what it assumes has increments of variance
+//!   `r Σ (P⁻ − P⁺)` and error variance `r P`).
 //! - **Identified.** A parameter is reported (`identified = true`, [`Estimates::value`] not
 //!   `None`) once its filter posterior σ is below **half its prior σ**: the data, not the
 //!   prior, then determine it. Once identified it stays identified. Until every parameter is
@@ -174,7 +182,7 @@ use crate::flight_model::{
 use crate::prior::Priors;
 use crate::sample::AirDataSample;
 use crate::vocabulary::{MAX_PARAMS, ModelStructure};
-use change::DriftWindow;
+use change::{DriftWindow, Uptake};
 
 /// Capacity of the augmented state.
 pub const MAX_AUG: usize = N_STATES + MAX_PARAMS;
@@ -352,6 +360,9 @@ pub struct Ekf {
     change_h: Option<f64>,
     /// The change test's current window and the alarm count per parameter.
     drift: DriftWindow,
+    /// What the measurement updates did to each parameter's variance, summed (the change
+    /// test's drift variance and uptake fraction).
+    uptake: [Uptake; MAX_PARAMS],
     alarms: [u32; MAX_PARAMS],
     /// Σ u² of the standardised window drifts without alarm, once identified, and their count
     /// (the drift-consistency factor, module doc).
@@ -505,6 +516,7 @@ impl Ekf {
                 change::cusum_threshold((windows * 2.0 * np as f64).max(1.0))
             }),
             drift: DriftWindow::default(),
+            uptake: [Uptake::default(); MAX_PARAMS],
             alarms: [0; MAX_PARAMS],
             drift_u2: [0.0; MAX_PARAMS],
             drift_n: [0; MAX_PARAMS],
@@ -619,7 +631,15 @@ impl Ekf {
                 if !identified {
                     continue;
                 }
-                match self.drift.step(i, self.z[k], self.p[k][k], factor[i], h, sigma) {
+                match self.drift.step(
+                    i,
+                    self.z[k],
+                    self.uptake[i],
+                    self.p[k][k],
+                    factor[i],
+                    h,
+                    sigma,
+                ) {
                     (_, Some(add)) => {
                         self.p[k][k] += add;
                         self.alarms[i] = self.alarms[i].saturating_add(1);
@@ -632,7 +652,7 @@ impl Ekf {
                 }
             }
         }
-        self.drift.open(t_s, &self.z[nx..nx + np], |i| self.p[nx + i][nx + i]);
+        self.drift.open(t_s, &self.z[nx..nx + np], &self.uptake[..np]);
     }
 
     /// The drift-consistency factor of parameter `i` (module doc): the mean square of its
@@ -897,6 +917,12 @@ impl Estimator for Ekf {
             return Err(self.diverge("EKF: implicit alpha-dot equation singular", s.t_s));
         }
         let z_pred = z;
+        // Predicted parameter variances (after any random walk), for the change test's uptake
+        // sums.
+        let mut p_pred = [0.0; MAX_PARAMS];
+        for (i, v) in p_pred.iter_mut().enumerate().take(np) {
+            *v = self.work[nx + i][nx + i];
+        }
         let mut innovation = [None; N_OUTPUTS];
         let mut normalised = [None; N_OUTPUTS];
         let mut info = [[0.0; MAX_PARAMS]; N_OUTPUTS];
@@ -1034,6 +1060,9 @@ impl Estimator for Ekf {
         self.z = z;
         for i in 0..n {
             self.p[i][..n].copy_from_slice(&self.work[i][..n]);
+        }
+        for (i, u) in self.uptake.iter_mut().enumerate().take(np) {
+            u.add(p_pred[i], self.p[nx + i][nx + i]);
         }
         self.consecutive = consecutive;
         self.rejections = rejections;

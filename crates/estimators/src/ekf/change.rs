@@ -125,7 +125,7 @@ impl DriftWindow {
     ) -> (Option<f64>, Option<f64>) {
         let (u0, d) = (self.uptake0[i], theta - self.theta0[i]);
         let var = f * (uptake.reduced - u0.reduced);
-        if !(var > 0.0) {
+        if var.is_nan() || var <= 0.0 {
             return (None, None);
         }
         let u = d / libm::sqrt(var);

@@ -184,6 +184,10 @@ use crate::sample::AirDataSample;
 use crate::vocabulary::{MAX_PARAMS, ModelStructure};
 use change::{DriftWindow, Uptake};
 
+/// Default [`EkfConfig::reanchor_after`]: five consecutive 5σ rejections, which a consistent
+/// filter produces with probability (6·10⁻⁷)⁵ and a one- or two-sample glitch never does.
+pub const DEFAULT_REANCHOR_AFTER: u32 = 5;
+
 /// Capacity of the augmented state.
 pub const MAX_AUG: usize = N_STATES + MAX_PARAMS;
 
@@ -296,6 +300,11 @@ pub struct EkfConfig {
     /// ([`DEFAULT_ADAPTIVE_Q_STATES`]), through which translational turbulence enters; `V` is
     /// not adapted by default).
     pub adaptive_q_states: [bool; N_STATES],
+    /// After this many consecutive gate rejections of one output, the prediction variance of
+    /// what that output sees is raised to the censored bound and the innovation used (module
+    /// doc, "Re-anchoring"); 0 disables it (the rejections then run on to the divergence
+    /// rule).
+    pub reanchor_after: u32,
 }
 
 impl EkfConfig {
@@ -321,6 +330,7 @@ impl EkfConfig {
             change_window_s: DEFAULT_CHANGE_WINDOW_S,
             adaptive_q_window: 500,
             adaptive_q_states: DEFAULT_ADAPTIVE_Q_STATES,
+            reanchor_after: DEFAULT_REANCHOR_AFTER,
         }
     }
 }
@@ -345,6 +355,7 @@ pub struct Ekf {
     innovation: [Option<f64>; N_OUTPUTS],
     rejections: [u32; N_OUTPUTS],
     consecutive: [u32; N_OUTPUTS],
+    reanchors: [u32; N_OUTPUTS],
     /// Autocorrelation of each output's normalised innovations `e/√S`.
     innov_acf: [Autocorrelation; N_OUTPUTS],
     /// `Σ (P hᵀ)_θ² / S` per output and parameter: the information each output gave each
@@ -384,6 +395,64 @@ pub struct Ekf {
 fn sensitivity(k: f64, forget: f64, cross_share: f64) -> f64 {
     let g = 2.0 * k * (1.0 - k) * forget / ((2.0 - k) * (1.0 - forget * (1.0 - k)));
     (g * cross_share).max(MIN_Q_SENSITIVITY)
+}
+
+/// Re-anchoring (module doc): raises the predicted covariance `p` so that the output with
+/// row `h` (or the unit row of integrated state `unit`) has `h P hᵀ = target`, by scaling what
+/// the output sees. A state output: that state's variance. Any other output: the rows and
+/// columns of the parameters it depends on (`h` non-zero in the parameter block, indices
+/// `nx..n`) by `s` (their block by `s²`: `P ← D P D`, `D = diag(s on those, 1 elsewhere)`,
+/// which keeps `P` positive definite), `s` the root above 1 of `A s² + B s + C = target` with
+/// `A` the parameter block's share of `h P hᵀ`, `B` the state–parameter cross share and `C`
+/// the states' share. Returns whether it changed `p` (`false` when the output depends on no
+/// parameter and is not a state, or `target` is already met).
+fn reanchor(
+    p: &mut Square,
+    unit: Option<usize>,
+    h: &[f64; MAX_AUG],
+    nx: usize,
+    n: usize,
+    target: f64,
+) -> bool {
+    if let Some(k) = unit {
+        let add = target - p[k][k];
+        if add.is_nan() || add <= 0.0 || add.is_infinite() {
+            return false;
+        }
+        p[k][k] += add * (1.0 + 1e-9);
+        return true;
+    }
+    let in_set = |j: usize| j >= nx && j < n && h[j] != 0.0;
+    let (mut a, mut b, mut c) = (0.0, 0.0, 0.0);
+    for i in 0..n {
+        for j in 0..n {
+            let v = h[i] * p[i][j] * h[j];
+            match (in_set(i), in_set(j)) {
+                (true, true) => a += v,
+                (false, false) => c += v,
+                _ => b += v,
+            }
+        }
+    }
+    let target = target * (1.0 + 1e-9);
+    if a.is_nan() || a <= 0.0 || target.is_nan() || target <= a + b + c {
+        return false;
+    }
+    let disc = b * b - 4.0 * a * (c - target);
+    let s = (-b + libm::sqrt(disc)) / (2.0 * a);
+    if s.is_nan() || s <= 1.0 || s.is_infinite() {
+        return false;
+    }
+    for i in 0..n {
+        for j in 0..n {
+            match (in_set(i), in_set(j)) {
+                (true, true) => p[i][j] *= s * s,
+                (true, false) | (false, true) => p[i][j] *= s,
+                _ => {}
+            }
+        }
+    }
+    true
 }
 
 /// One step of output `oi`'s measurement-noise estimate (module doc, "Measurement noise from
@@ -504,6 +573,7 @@ impl Ekf {
             innovation: [None; N_OUTPUTS],
             rejections: [0; N_OUTPUTS],
             consecutive: [0; N_OUTPUTS],
+            reanchors: [0; N_OUTPUTS],
             innov_acf: [Autocorrelation::new(); N_OUTPUTS],
             innov_info: [[0.0; MAX_PARAMS]; N_OUTPUTS],
             r_var: cfg.measurement_sigma.map(|s| s * s),
@@ -928,6 +998,7 @@ impl Estimator for Ekf {
         let mut info = [[0.0; MAX_PARAMS]; N_OUTPUTS];
         let mut consecutive = self.consecutive;
         let mut rejections = self.rejections;
+        let mut reanchors = self.reanchors;
         let mut r_var = self.r_var;
         let mut r_count = self.r_count;
         let (mut nis_sum, mut nis_count) = (self.nis_sum, self.nis_count);
@@ -970,12 +1041,24 @@ impl Estimator for Ekf {
                     yhat += h[j] * (z[j] - z_pred[j]);
                 }
             }
-            let hph = change::p_times_row(w, unit, &h, n, &mut ph);
-            let sv = hph + r_var[oi];
+            let mut hph = change::p_times_row(w, unit, &h, n, &mut ph);
+            let mut sv = hph + r_var[oi];
             if !(sv > 0.0 && sv.is_finite()) {
                 return Err(self.diverge("EKF innovation variance not positive", s.t_s));
             }
             let e = y - yhat;
+            // A run of rejections: raise the prediction variance of what the output sees to
+            // the censored bound and use the innovation (module doc, "Re-anchoring").
+            let gate2 = self.cfg.gate_sigmas * self.cfg.gate_sigmas;
+            if self.cfg.reanchor_after > 0
+                && consecutive[oi] + 1 >= self.cfg.reanchor_after
+                && e * e > gate2 * sv
+                && reanchor(&mut self.work, unit, &h, nx, n, e * e / gate2 - r_var[oi])
+            {
+                reanchors[oi] += 1;
+                hph = change::p_times_row(&self.work, unit, &h, n, &mut ph);
+                sv = hph + r_var[oi];
+            }
             if e.is_nan() || libm::fabs(e) > self.cfg.gate_sigmas * libm::sqrt(sv) {
                 rejections[oi] += 1;
                 consecutive[oi] += 1;
@@ -1066,6 +1149,7 @@ impl Estimator for Ekf {
         }
         self.consecutive = consecutive;
         self.rejections = rejections;
+        self.reanchors = reanchors;
         self.r_var = r_var;
         self.r_count = r_count;
         self.nis_sum = nis_sum;

@@ -27,10 +27,24 @@
 //! - **Innovation gating.** Output `o` with innovation `e` and variance `S = h P hᵀ + R` is
 //!   rejected (not used) when `|e| / √S > gate_sigmas` (a scalar χ² test with one degree of
 //!   freedom; default 5, i.e. a false rejection rate of 6·10⁻⁷ for a consistent filter). Every
-//!   rejection is counted ([`Ekf::rejections`]). **Rule:** an output rejected
-//!   `max_consecutive_rejections` times in a row (default 50) means the model no longer
-//!   explains it: the filter reports divergence (error, [`Status::Diverged`]); nothing is
-//!   reset silently.
+//!   rejection is counted ([`Ekf::rejections`]). **Rule:** an output rejected (or
+//!   re-anchored, below) `max_consecutive_rejections` times in a row (default 50) means the
+//!   model no longer explains it: the filter reports divergence (error,
+//!   [`Status::Diverged`]); nothing is reset silently.
+//! - **Re-anchoring** (`reanchor_after > 0`, default 25): a directly measured state (airspeed,
+//!   vanes, rate gyros, attitudes) rejected `reanchor_after` times in a row has its predicted
+//!   variance raised to the censored bound `e²/gate² − R` (a rejected innovation says
+//!   `e² > gate² S`) and the innovation is used, at the gate ([`Ekf::reanchors`]). Without it
+//!   a sudden change of a moment derivative locked the filter out: the 30 % roll-damping loss
+//!   of the default scenario put the roll-rate gyro outside the gate at once, and rejected it
+//!   could correct neither the roll rate nor, through it, the parameters, so the change test
+//!   (which watches the estimates' drift) saw none; the state ran away from the gyro until the
+//!   rule above fired (22 of 200 default runs with a parameter walk of 0.001, at 20.5 s).
+//!   Shorter runs (outliers, glitches) are still rejected. Only states: raising the
+//!   parameter block of an angular acceleration's or a specific force's row the same way
+//!   turned a start-up divergence that the rule reports (run 349 of the 1,000 × 60 s default
+//!   campaign) into estimates 20–280 prior σ off with status running (docs/uncertainty.md,
+//!   "EKF: re-anchoring after a run of rejections").
 //! - **Measurement noise from the record** (`adaptive_r_window > 0`, the default): the
 //!   configured σ only start the filter; each output's `R` is then estimated from its own
 //!   accepted innovations by covariance matching (Mehra 1970; Myers & Tapley 1976:
@@ -184,9 +198,13 @@ use crate::sample::AirDataSample;
 use crate::vocabulary::{MAX_PARAMS, ModelStructure};
 use change::{DriftWindow, Uptake};
 
-/// Default [`EkfConfig::reanchor_after`]: five consecutive 5σ rejections, which a consistent
-/// filter produces with probability (6·10⁻⁷)⁵ and a one- or two-sample glitch never does.
-pub const DEFAULT_REANCHOR_AFTER: u32 = 5;
+/// Default [`EkfConfig::reanchor_after`]: half the divergence rule's 50. A consistent filter
+/// never produces such a run (each 5σ rejection has probability 6·10⁻⁷), and the parameters
+/// have had that long to take the change up through the other outputs: re-anchoring moves the
+/// model error into the state, which weakens the signal the parameters learn from (re-anchored
+/// after 5 rejections, the synthetic 30 % roll-damping step of the tests ended 24 % from the
+/// new value; after 25, 4 %).
+pub const DEFAULT_REANCHOR_AFTER: u32 = 25;
 
 /// Capacity of the augmented state.
 pub const MAX_AUG: usize = N_STATES + MAX_PARAMS;
@@ -300,10 +318,9 @@ pub struct EkfConfig {
     /// ([`DEFAULT_ADAPTIVE_Q_STATES`]), through which translational turbulence enters; `V` is
     /// not adapted by default).
     pub adaptive_q_states: [bool; N_STATES],
-    /// After this many consecutive gate rejections of one output, the prediction variance of
-    /// what that output sees is raised to the censored bound and the innovation used (module
-    /// doc, "Re-anchoring"); 0 disables it (the rejections then run on to the divergence
-    /// rule).
+    /// After this many consecutive gate rejections of a directly measured state, its
+    /// predicted variance is raised to the censored bound and the innovation used (module doc,
+    /// "Re-anchoring"); 0 disables it (the rejections then run on to the divergence rule).
     pub reanchor_after: u32,
 }
 
@@ -397,61 +414,16 @@ fn sensitivity(k: f64, forget: f64, cross_share: f64) -> f64 {
     (g * cross_share).max(MIN_Q_SENSITIVITY)
 }
 
-/// Re-anchoring (module doc): raises the predicted covariance `p` so that the output with
-/// row `h` (or the unit row of integrated state `unit`) has `h P hᵀ = target`, by scaling what
-/// the output sees. A state output: that state's variance. Any other output: the rows and
-/// columns of the parameters it depends on (`h` non-zero in the parameter block, indices
-/// `nx..n`) by `s` (their block by `s²`: `P ← D P D`, `D = diag(s on those, 1 elsewhere)`,
-/// which keeps `P` positive definite), `s` the root above 1 of `A s² + B s + C = target` with
-/// `A` the parameter block's share of `h P hᵀ`, `B` the state–parameter cross share and `C`
-/// the states' share. Returns whether it changed `p` (`false` when the output depends on no
-/// parameter and is not a state, or `target` is already met).
-fn reanchor(
-    p: &mut Square,
-    unit: Option<usize>,
-    h: &[f64; MAX_AUG],
-    nx: usize,
-    n: usize,
-    target: f64,
-) -> bool {
-    if let Some(k) = unit {
-        let add = target - p[k][k];
-        if add.is_nan() || add <= 0.0 || add.is_infinite() {
-            return false;
-        }
-        p[k][k] += add * (1.0 + 1e-9);
-        return true;
-    }
-    let in_set = |j: usize| j >= nx && j < n && h[j] != 0.0;
-    let (mut a, mut b, mut c) = (0.0, 0.0, 0.0);
-    for i in 0..n {
-        for j in 0..n {
-            let v = h[i] * p[i][j] * h[j];
-            match (in_set(i), in_set(j)) {
-                (true, true) => a += v,
-                (false, false) => c += v,
-                _ => b += v,
-            }
-        }
-    }
-    let target = target * (1.0 + 1e-9);
-    if a.is_nan() || a <= 0.0 || target.is_nan() || target <= a + b + c {
+/// Re-anchoring (module doc): raises the predicted variance of integrated state `k`, measured
+/// directly by the output, so that `P_kk = target` (the censored bound `e²/gate² − R`).
+/// Returns whether it changed `p` (`false` when `target` is already met). Only the diagonal
+/// grows, so `P` stays positive definite.
+fn reanchor(p: &mut Square, k: usize, target: f64) -> bool {
+    let add = target - p[k][k];
+    if add.is_nan() || add <= 0.0 || add.is_infinite() {
         return false;
     }
-    let disc = b * b - 4.0 * a * (c - target);
-    let s = (-b + libm::sqrt(disc)) / (2.0 * a);
-    if s.is_nan() || s <= 1.0 || s.is_infinite() {
-        return false;
-    }
-    for i in 0..n {
-        for j in 0..n {
-            match (in_set(i), in_set(j)) {
-                (true, true) => p[i][j] *= s * s,
-                (true, false) | (false, true) => p[i][j] *= s,
-                _ => {}
-            }
-        }
-    }
+    p[k][k] += add * (1.0 + 1e-9);
     true
 }
 
@@ -637,6 +609,13 @@ impl Ekf {
     /// How many times output `o` was rejected by the innovation gate.
     pub fn rejections(&self, o: Output) -> u32 {
         self.rejections[o.index()]
+    }
+
+    /// How many times output `o` (a directly measured state) was re-anchored (module doc,
+    /// "Re-anchoring"): a run of [`EkfConfig::reanchor_after`] rejections raised the state's
+    /// predicted variance to the gate's bound and its innovation was used.
+    pub fn reanchors(&self, o: Output) -> u32 {
+        self.reanchors[o.index()]
     }
 
     /// The filter σ of parameter `i` (square root of its diagonal of `P`), whether identified
@@ -1047,15 +1026,18 @@ impl Estimator for Ekf {
                 return Err(self.diverge("EKF innovation variance not positive", s.t_s));
             }
             let e = y - yhat;
-            // A run of rejections: raise the prediction variance of what the output sees to
-            // the censored bound and use the innovation (module doc, "Re-anchoring").
+            // A run of rejections of a measured state: raise its predicted variance to the
+            // censored bound and use the innovation (module doc, "Re-anchoring").
             let gate2 = self.cfg.gate_sigmas * self.cfg.gate_sigmas;
-            if self.cfg.reanchor_after > 0
+            let mut reanchored = false;
+            if let Some(k) = unit
+                && self.cfg.reanchor_after > 0
                 && consecutive[oi] + 1 >= self.cfg.reanchor_after
                 && e * e > gate2 * sv
-                && reanchor(&mut self.work, unit, &h, nx, n, e * e / gate2 - r_var[oi])
+                && reanchor(&mut self.work, k, e * e / gate2 - r_var[oi])
             {
                 reanchors[oi] += 1;
+                reanchored = true;
                 hph = change::p_times_row(&self.work, unit, &h, n, &mut ph);
                 sv = hph + r_var[oi];
             }
@@ -1088,7 +1070,22 @@ impl Estimator for Ekf {
                 }
                 continue;
             }
-            consecutive[oi] = 0;
+            // A re-anchored innovation continues the run: a model that must be re-anchored
+            // at every sample for `max_consecutive_rejections` samples does not explain the
+            // output, and the divergence rule still fires.
+            if reanchored {
+                consecutive[oi] += 1;
+                if consecutive[oi] >= self.cfg.max_consecutive_rejections {
+                    self.rejections = rejections;
+                    self.consecutive = consecutive;
+                    return Err(self.diverge(
+                        "EKF: an output failed the innovation gate too many times in a row",
+                        s.t_s,
+                    ));
+                }
+            } else {
+                consecutive[oi] = 0;
+            }
             innovation[oi] = Some(e);
             let inv = 1.0 / sv;
             normalised[oi] = Some(e * libm::sqrt(inv));

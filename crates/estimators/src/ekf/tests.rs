@@ -627,3 +627,56 @@ fn adapted_process_noise_is_consistent_over_a_small_monte_carlo() {
         }
     }
 }
+
+/// A 70 % loss of the dihedral effect (`Cl_beta` × 0.3) at 12 s on the 100-Hz synthetic
+/// lateral record, constant-parameter filter: the roll-rate gyro leaves the gate at once. With
+/// re-anchoring (module doc) the filter runs to the end and follows the step to within 10 %;
+/// without it the gyro is rejected 50 times in a row and the filter reports divergence
+/// (measured: on all three seeds, as a `Cl_p` × 0.3 or a `Cl_da` × 0.5 step does).
+#[test]
+fn sudden_moment_change_is_reanchored_and_followed_not_locked_out() {
+    let st = ModelStructure::lateral();
+    let (st6, th6) = truth();
+    let cl_beta = Param::new(C::Cl, T::Beta);
+    let i = st.index_of(cl_beta).unwrap();
+    let new = 0.3 * th6[st6.index_of(cl_beta).unwrap()];
+    for seed in [11, 12, 13] {
+        let data = simulate_with_step(100.0, 30.0, seed, Some((cl_beta, 12.0, new)));
+        let ekf = run(config(st), &data);
+        let got = ekf.estimates().value(i).unwrap();
+        std::println!(
+            "seed {seed}: Cl_beta {got:.4} (new {new:.4}), re-anchored p {}",
+            ekf.reanchors(Output::P)
+        );
+        assert!(ekf.reanchors(Output::P) >= 1, "seed {seed}: the roll gyro was never re-anchored");
+        assert!((got - new).abs() < 0.1 * new.abs(), "seed {seed}: Cl_beta {got} vs {new}");
+        let mut off = config(st);
+        off.reanchor_after = 0;
+        let mut locked = Ekf::new(off).unwrap();
+        let failed = data.iter().any(|s| locked.update(s).is_err());
+        assert!(failed, "seed {seed}: without re-anchoring the filter should lock out the gyro");
+        assert_eq!(locked.estimates().status, Status::Diverged);
+    }
+}
+
+/// A glitch of `reanchor_after − 1` consecutive wild roll-rate samples (50 noise σ) is
+/// rejected sample by sample: nothing is re-anchored and no estimate moves by 0.2 σ.
+#[test]
+fn a_short_glitch_is_rejected_not_reanchored() {
+    let st = ModelStructure::lateral();
+    let data = simulate(50.0, 25.0, 5);
+    let clean = run(config(st), &data);
+    let mut bad = data.clone();
+    let n = DEFAULT_REANCHOR_AFTER as usize - 1;
+    for s in &mut bad[800..800 + n] {
+        s.p_rad_s = Some(s.p_rad_s.unwrap() + 50.0 * NOISE[Output::P.index()]);
+    }
+    let hit = run(config(st), &bad);
+    assert_eq!(hit.rejections(Output::P), clean.rejections(Output::P) + n as u32);
+    assert_eq!(hit.reanchors(Output::P), 0);
+    for i in 0..st.n_params() {
+        let (a, b) = (clean.estimates().raw_value(i), hit.estimates().raw_value(i));
+        let s = clean.estimates().sigma(i).unwrap();
+        assert!((a - b).abs() < 0.2 * s, "parameter {i}: {a} vs {b} (σ {s})");
+    }
+}

@@ -726,6 +726,19 @@ impl Ekf {
         &self.z[self.nx..self.nx + self.np]
     }
 
+    /// The divergence rule (module doc, "Innovation gating"): keeps the rejection counters of
+    /// the refused sample and reports the divergence.
+    fn locked_out(
+        &mut self,
+        rejections: [u32; N_OUTPUTS],
+        consecutive: [u32; N_OUTPUTS],
+        t_s: f64,
+    ) -> EstimatorError {
+        self.rejections = rejections;
+        self.consecutive = consecutive;
+        self.diverge("EKF: an output failed the innovation gate too many times in a row", t_s)
+    }
+
     fn diverge(&mut self, what: &'static str, t_s: f64) -> EstimatorError {
         self.diverged = true;
         self.est.status = Status::Diverged;
@@ -1061,12 +1074,7 @@ impl Estimator for Ekf {
                     adapt_r(&self.cfg, oi, bound - hph, &mut r_var, &mut r_count);
                 }
                 if consecutive[oi] >= self.cfg.max_consecutive_rejections {
-                    self.rejections = rejections;
-                    self.consecutive = consecutive;
-                    return Err(self.diverge(
-                        "EKF: an output failed the innovation gate too many times in a row",
-                        s.t_s,
-                    ));
+                    return Err(self.locked_out(rejections, consecutive, s.t_s));
                 }
                 continue;
             }
@@ -1076,12 +1084,7 @@ impl Estimator for Ekf {
             if reanchored {
                 consecutive[oi] += 1;
                 if consecutive[oi] >= self.cfg.max_consecutive_rejections {
-                    self.rejections = rejections;
-                    self.consecutive = consecutive;
-                    return Err(self.diverge(
-                        "EKF: an output failed the innovation gate too many times in a row",
-                        s.t_s,
-                    ));
+                    return Err(self.locked_out(rejections, consecutive, s.t_s));
                 }
             } else {
                 consecutive[oi] = 0;

@@ -31,20 +31,26 @@
 //!   re-anchored, below) `max_consecutive_rejections` times in a row (default 50) means the
 //!   model no longer explains it: the filter reports divergence (error,
 //!   [`Status::Diverged`]); nothing is reset silently.
-//! - **Re-anchoring** (`reanchor_after > 0`, default 25): a directly measured state (airspeed,
-//!   vanes, rate gyros, attitudes) rejected `reanchor_after` times in a row has its predicted
-//!   variance raised to the censored bound `e²/gate² − R` (a rejected innovation says
-//!   `e² > gate² S`) and the innovation is used, at the gate ([`Ekf::reanchors`]). Without it
-//!   a sudden change of a moment derivative locked the filter out: the 30 % roll-damping loss
-//!   of the default scenario put the roll-rate gyro outside the gate at once, and rejected it
-//!   could correct neither the roll rate nor, through it, the parameters, so the change test
-//!   (which watches the estimates' drift) saw none; the state ran away from the gyro until the
-//!   rule above fired (22 of 200 default runs with a parameter walk of 0.001, at 20.5 s).
-//!   Shorter runs (outliers, glitches) are still rejected. Only states: raising the
-//!   parameter block of an angular acceleration's or a specific force's row the same way
-//!   turned a start-up divergence that the rule reports (run 349 of the 1,000 × 60 s default
-//!   campaign) into estimates 20–280 prior σ off with status running (docs/uncertainty.md,
-//!   "EKF: re-anchoring after a run of rejections").
+//! - **Re-anchoring** (`reanchor_after > 0`, default 25): an output rejected `reanchor_after`
+//!   times in a row is a censored observation, `e² > gate² S`: the predicted variance of what
+//!   it sees is raised to that bound and the innovation is used, at the gate
+//!   ([`Ekf::reanchors`]). A directly measured state (airspeed, vanes, rate gyros, attitudes):
+//!   its variance, `P_kk = e²/gate² − R`. An output that depends on parameters (angular
+//!   accelerations, specific forces): the block of those parameters, `P ← D P D` with `D` the
+//!   factor on their rows and columns that makes `h P hᵀ + R = e²/gate²`, and only once each of
+//!   them has been through [`MIN_DRIFT_WINDOWS`] change-test windows since it was identified:
+//!   a settled filter that loses an output has met a change, a filter still in its start-up
+//!   transient has diverged, and the rule above says so. Without it a sudden change of a
+//!   moment derivative locked the filter out: the 30 % roll-damping loss of the default
+//!   scenario put the roll-rate gyro and `ṗ` outside the gate at once, and rejected they could
+//!   correct neither the roll rate nor the parameters, so the change test (which watches the
+//!   estimates' drift) saw none (22 of 200 default runs diverged at 20.5 s with a parameter
+//!   walk of 0.001). Shorter runs (outliers, glitches) are still rejected. Measured choices
+//!   (docs/uncertainty.md, "EKF: re-anchoring after a run of rejections"): the parameter block
+//!   in the start-up transient turned run 349's reported divergence into estimates 20–280
+//!   prior σ off with status running; re-anchoring after 5 rejections instead of 25 moved the
+//!   model error into the state and left the synthetic roll-damping step 24 % from its new
+//!   value.
 //! - **Measurement noise from the record** (`adaptive_r_window > 0`, the default): the
 //!   configured σ only start the filter; each output's `R` is then estimated from its own
 //!   accepted innovations by covariance matching (Mehra 1970; Myers & Tapley 1976:
@@ -200,10 +206,10 @@ use change::{DriftWindow, Uptake};
 
 /// Default [`EkfConfig::reanchor_after`]: half the divergence rule's 50. A consistent filter
 /// never produces such a run (each 5σ rejection has probability 6·10⁻⁷), and the parameters
-/// have had that long to take the change up through the other outputs: re-anchoring moves the
-/// model error into the state, which weakens the signal the parameters learn from (re-anchored
-/// after 5 rejections, the synthetic 30 % roll-damping step of the tests ended 24 % from the
-/// new value; after 25, 4 %).
+/// have had that long to take a change up through the other outputs: re-anchoring a state
+/// moves the model error into the state, which weakens the signal the parameters learn from
+/// (re-anchored after 5 rejections, the synthetic 30 % roll-damping step of the tests ended
+/// 24 % from the new value; after 25, 4 %).
 pub const DEFAULT_REANCHOR_AFTER: u32 = 25;
 
 /// Capacity of the augmented state.
@@ -318,9 +324,10 @@ pub struct EkfConfig {
     /// ([`DEFAULT_ADAPTIVE_Q_STATES`]), through which translational turbulence enters; `V` is
     /// not adapted by default).
     pub adaptive_q_states: [bool; N_STATES],
-    /// After this many consecutive gate rejections of a directly measured state, its
-    /// predicted variance is raised to the censored bound and the innovation used (module doc,
-    /// "Re-anchoring"); 0 disables it (the rejections then run on to the divergence rule).
+    /// After this many consecutive gate rejections of an output, the predicted variance of what
+    /// it sees (a measured state, or the parameters of a settled filter) is raised to the
+    /// censored bound and the innovation used (module doc, "Re-anchoring"); 0 disables it (the
+    /// rejections then run on to the divergence rule).
     pub reanchor_after: u32,
 }
 
@@ -424,6 +431,51 @@ fn reanchor(p: &mut Square, k: usize, target: f64) -> bool {
         return false;
     }
     p[k][k] += add * (1.0 + 1e-9);
+    true
+}
+
+/// Re-anchoring of an output that is not a state (module doc): scales the rows and columns of
+/// the parameters it depends on (`h` non-zero in `nx..n`) by `s` (their block by `s²`:
+/// `P ← D P D`, `D = diag(s on those, 1 elsewhere)`, which keeps `P` positive definite), `s`
+/// the root above 1 of `A s² + B s + C = target` with `A` the parameter block's share of
+/// `h P hᵀ`, `B` the state–parameter cross share and `C` the states' share. Returns whether it
+/// changed `p`.
+fn reanchor_parameters(
+    p: &mut Square,
+    h: &[f64; MAX_AUG],
+    nx: usize,
+    n: usize,
+    target: f64,
+) -> bool {
+    let in_set = |j: usize| j >= nx && j < n && h[j] != 0.0;
+    let (mut a, mut b, mut c) = (0.0, 0.0, 0.0);
+    for i in 0..n {
+        for j in 0..n {
+            let v = h[i] * p[i][j] * h[j];
+            match (in_set(i), in_set(j)) {
+                (true, true) => a += v,
+                (false, false) => c += v,
+                _ => b += v,
+            }
+        }
+    }
+    let target = target * (1.0 + 1e-9);
+    if a.is_nan() || a <= 0.0 || target.is_nan() || target <= a + b + c {
+        return false;
+    }
+    let s = (-b + libm::sqrt(b * b - 4.0 * a * (c - target))) / (2.0 * a);
+    if s.is_nan() || s <= 1.0 || s.is_infinite() {
+        return false;
+    }
+    for i in 0..n {
+        for j in 0..n {
+            match (in_set(i), in_set(j)) {
+                (true, true) => p[i][j] *= s * s,
+                (true, false) | (false, true) => p[i][j] *= s,
+                _ => {}
+            }
+        }
+    }
     true
 }
 
@@ -611,9 +663,9 @@ impl Ekf {
         self.rejections[o.index()]
     }
 
-    /// How many times output `o` (a directly measured state) was re-anchored (module doc,
-    /// "Re-anchoring"): a run of [`EkfConfig::reanchor_after`] rejections raised the state's
-    /// predicted variance to the gate's bound and its innovation was used.
+    /// How many times output `o` was re-anchored (module doc, "Re-anchoring"): a run of
+    /// [`EkfConfig::reanchor_after`] rejections raised the predicted variance of what it sees
+    /// to the gate's bound and its innovation was used.
     pub fn reanchors(&self, o: Output) -> u32 {
         self.reanchors[o.index()]
     }
@@ -1039,15 +1091,29 @@ impl Estimator for Ekf {
                 return Err(self.diverge("EKF innovation variance not positive", s.t_s));
             }
             let e = y - yhat;
-            // A run of rejections of a measured state: raise its predicted variance to the
-            // censored bound and use the innovation (module doc, "Re-anchoring").
+            // A run of rejections: raise the predicted variance of what the output sees (a
+            // measured state, or the parameters of a settled filter) to the censored bound and
+            // use the innovation (module doc, "Re-anchoring").
             let gate2 = self.cfg.gate_sigmas * self.cfg.gate_sigmas;
             let mut reanchored = false;
-            if let Some(k) = unit
-                && self.cfg.reanchor_after > 0
+            let settled = |i: usize| self.drift_n[i] >= MIN_DRIFT_WINDOWS;
+            let all_settled = (0..np).all(|i| h[nx + i] == 0.0 || settled(i));
+            if self.cfg.reanchor_after > 0
                 && consecutive[oi] + 1 >= self.cfg.reanchor_after
                 && e * e > gate2 * sv
-                && reanchor(&mut self.work, k, e * e / gate2 - r_var[oi])
+                && match unit {
+                    Some(k) => reanchor(&mut self.work, k, e * e / gate2 - r_var[oi]),
+                    None => {
+                        all_settled
+                            && reanchor_parameters(
+                                &mut self.work,
+                                &h,
+                                nx,
+                                n,
+                                e * e / gate2 - r_var[oi],
+                            )
+                    }
+                }
             {
                 reanchors[oi] += 1;
                 reanchored = true;

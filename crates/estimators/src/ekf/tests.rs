@@ -680,3 +680,60 @@ fn a_short_glitch_is_rejected_not_reanchored() {
         assert!((a - b).abs() < 0.2 * s, "parameter {i}: {a} vs {b} (σ {s})");
     }
 }
+
+/// The parameter-block re-anchoring reaches its target exactly (`h P hᵀ` = target, solved from
+/// the quadratic in the scale), keeps `P` symmetric and positive definite (Cholesky) and keeps
+/// every correlation coefficient, and leaves the states' block and the parameters the output
+/// does not see untouched.
+#[test]
+fn parameter_reanchoring_reaches_the_bound_and_keeps_correlations() {
+    let (nx, n) = (3, 6);
+    // A positive definite P with every pair correlated: B Bᵀ + I.
+    let mut p: Square = [[0.0; MAX_AUG]; MAX_AUG];
+    let b = [
+        [1.0, 0.3, -0.2, 0.5, 0.1, 0.0],
+        [0.2, 0.8, 0.4, -0.3, 0.2, 0.1],
+        [-0.1, 0.5, 1.2, 0.2, -0.4, 0.3],
+        [0.4, -0.2, 0.1, 0.9, 0.3, -0.2],
+        [0.0, 0.3, -0.3, 0.2, 0.7, 0.4],
+        [0.2, 0.1, 0.2, -0.1, 0.3, 0.6],
+    ];
+    for i in 0..n {
+        for j in 0..n {
+            p[i][j] =
+                (0..n).map(|k| b[i][k] * b[j][k]).sum::<f64>() + if i == j { 1.0 } else { 0.0 };
+        }
+    }
+    let before = p;
+    // The output sees states 0 and 2 and parameters 3 and 4, not parameter 5.
+    let mut h = [0.0; MAX_AUG];
+    h[0] = 0.7;
+    h[2] = -0.4;
+    h[3] = 1.5;
+    h[4] = -0.8;
+    let hph = |p: &Square| {
+        (0..n).map(|i| (0..n).map(|j| h[i] * p[i][j] * h[j]).sum::<f64>()).sum::<f64>()
+    };
+    let target = 10.0 * hph(&p);
+    assert!(reanchor_parameters(&mut p, &h, nx, n, target));
+    assert!((hph(&p) / target - 1.0).abs() < 1e-8, "{} vs {target}", hph(&p));
+    let corr = |p: &Square, i: usize, j: usize| p[i][j] / (p[i][i] * p[j][j]).sqrt();
+    for i in 0..n {
+        for j in 0..n {
+            assert_eq!(p[i][j], p[j][i]);
+            assert!((corr(&p, i, j) - corr(&before, i, j)).abs() < 1e-12, "ρ({i},{j})");
+            if !(i == 3 || i == 4 || j == 3 || j == 4) {
+                assert_eq!(p[i][j], before[i][j], "({i},{j}) should be untouched");
+            }
+        }
+    }
+    let m = nalgebra::DMatrix::from_fn(n, n, |i, j| p[i][j]);
+    assert!(m.cholesky().is_some(), "P is no longer positive definite");
+    // Nothing to do when the bound is already met, or when the output sees no parameter.
+    let mut q = before;
+    assert!(!reanchor_parameters(&mut q, &h, nx, n, 0.5 * hph(&before)));
+    let mut states_only = [0.0; MAX_AUG];
+    states_only[1] = 1.0;
+    assert!(!reanchor_parameters(&mut q, &states_only, nx, n, 100.0));
+    assert_eq!(q, before);
+}

@@ -44,13 +44,13 @@
 //!   moment derivative locked the filter out: the 30 % roll-damping loss of the default
 //!   scenario put the roll-rate gyro and `ṗ` outside the gate at once, and rejected they could
 //!   correct neither the roll rate nor the parameters, so the change test (which watches the
-//!   estimates' drift) saw none (22 of 200 default runs diverged at 20.5 s with a parameter
-//!   walk of 0.001). Shorter runs (outliers, glitches) are still rejected. Measured choices
-//!   (docs/uncertainty.md, "EKF: re-anchoring after a run of rejections"): the parameter block
-//!   in the start-up transient turned run 349's reported divergence into estimates 20–280
-//!   prior σ off with status running; re-anchoring after 5 rejections instead of 25 moved the
-//!   model error into the state and left the synthetic roll-damping step 24 % from its new
-//!   value.
+//!   estimates' drift) saw none (22 of 200 default runs diverged 20.5–22.4 s with a
+//!   parameter walk of 0.001). Shorter runs (outliers, glitches) are still rejected.
+//!   Measured choices (docs/uncertainty.md, "EKF: re-anchoring after a run of rejections"):
+//!   the parameter block in the start-up transient turned run 349's reported divergence into
+//!   estimates 20–280 prior σ off with status running; re-anchoring after 5 rejections instead
+//!   of 25 moved the model error into the state and left the synthetic roll-damping step 24 %
+//!   from its new value.
 //! - **Measurement noise from the record** (`adaptive_r_window > 0`, the default): the
 //!   configured σ only start the filter; each output's `R` is then estimated from its own
 //!   accepted innovations by covariance matching (Mehra 1970; Myers & Tapley 1976:

@@ -14,8 +14,8 @@
 //! and 358 are checked too: at 0.001 they diverged at 20.8 s, the damage step, before the
 //! parameter re-anchoring (their angular accelerations were rejected 50 times in a row).
 //!
-//! And run 49 of the blind-condition campaign (550 ft/s, 10,000 ft, seed 3), which diverged at
-//! 21.8 s after the change test's alarms on `Cl_p`, `Cl_beta`, `CY_da` at 21.1 s inflated their
+//! And run 49 of the blind-condition campaign (550 ft/s, 10,000 ft, seed 3), which at the former
+//! walk of 0.003 diverged at 21.8 s after the change test's alarms on `Cl_p`, `Cl_beta`, `CY_da` at 21.1 s inflated their
 //! variances to the prior's: under the parameter random walk the variance ratio `1 − P/P_start`
 //! it took for the fraction of a jump taken up was 0.04 (the true fraction about 0.4), so the
 //! jump estimate was 1.2 for a 0.13 change of `Cl_p` (docs/uncertainty.md, "EKF: the change

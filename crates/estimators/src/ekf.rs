@@ -38,9 +38,9 @@
 //!   its variance, `P_kk = e²/gate² − R`. An output that depends on parameters (angular
 //!   accelerations, specific forces): the block of those parameters, `P ← D P D` with `D` the
 //!   factor on their rows and columns that makes `h P hᵀ + R = e²/gate²`, and only once each of
-//!   them has been through [`MIN_DRIFT_WINDOWS`] change-test windows since it was identified:
-//!   a settled filter that loses an output has met a change, a filter still in its start-up
-//!   transient has diverged, and the rule above says so. Without it a sudden change of a
+//!   them has been through [`MIN_DRIFT_WINDOWS`] change-test windows without alarm since it was
+//!   identified: a settled filter that loses an output has met a change, a filter still in its
+//!   start-up transient has diverged, and the rule above says so. Without it a sudden change of a
 //!   moment derivative locked the filter out: the 30 % roll-damping loss of the default
 //!   scenario put the roll-rate gyro and `ṗ` outside the gate at once, and rejected they could
 //!   correct neither the roll rate nor the parameters, so the change test (which watches the
@@ -760,11 +760,19 @@ impl Ekf {
     /// standardised window drifts, `Σ u² / n`, once [`MIN_DRIFT_WINDOWS`] windows without alarm
     /// have been seen since it was identified; 1 before.
     pub fn drift_factor(&self, i: usize) -> f64 {
-        if i < self.np && self.drift_n[i] >= MIN_DRIFT_WINDOWS {
+        if i < self.np && self.settled(i) {
             self.drift_u2[i] / f64::from(self.drift_n[i])
         } else {
             1.0
         }
+    }
+
+    /// Whether parameter `i` has been through [`MIN_DRIFT_WINDOWS`] informative change-test
+    /// windows without alarm since it was identified: its drift factor is formed, and a run of
+    /// rejections of an output that depends on it is a change, not the start-up transient
+    /// (module doc, "Re-anchoring").
+    fn settled(&self, i: usize) -> bool {
+        self.drift_n[i] >= MIN_DRIFT_WINDOWS
     }
 
     fn sigma_factor(&self, i: usize) -> f64 {
@@ -1096,15 +1104,13 @@ impl Estimator for Ekf {
             // use the innovation (module doc, "Re-anchoring").
             let gate2 = self.cfg.gate_sigmas * self.cfg.gate_sigmas;
             let mut reanchored = false;
-            let settled = |i: usize| self.drift_n[i] >= MIN_DRIFT_WINDOWS;
-            let all_settled = (0..np).all(|i| h[nx + i] == 0.0 || settled(i));
             if self.cfg.reanchor_after > 0
                 && consecutive[oi] + 1 >= self.cfg.reanchor_after
                 && e * e > gate2 * sv
                 && match unit {
                     Some(k) => reanchor(&mut self.work, k, e * e / gate2 - r_var[oi]),
                     None => {
-                        all_settled
+                        (0..np).all(|i| h[nx + i] == 0.0 || self.settled(i))
                             && reanchor_parameters(
                                 &mut self.work,
                                 &h,
@@ -1136,7 +1142,7 @@ impl Estimator for Ekf {
                         }
                     };
                 if sees_q && self.cfg.adaptive_r_window > 0 && !e.is_nan() {
-                    let bound = self.cfg.gate_sigmas * self.cfg.gate_sigmas * sv;
+                    let bound = gate2 * sv;
                     adapt_r(&self.cfg, oi, bound - hph, &mut r_var, &mut r_count);
                 }
                 if consecutive[oi] >= self.cfg.max_consecutive_rejections {

@@ -440,25 +440,37 @@ fn step_change_is_detected_and_followed() {
     assert!((stuck - old).abs() < (stuck - new).abs(), "constant filter at {stuck}");
 }
 
-/// One wild roll-rate sample (50 noise σ) is rejected by the gate, raises no change alarm and
-/// moves no estimate by more than 0.2 σ.
-#[test]
-fn one_outlier_is_gated_and_raises_no_alarm() {
+/// The lateral filter on the 50-Hz synthetic record (seed 5), clean and with `n` consecutive
+/// roll-rate samples from sample 800 made wild (+50 noise σ): `(clean, hit)`.
+fn roll_rate_glitch(n: usize) -> (Ekf, Ekf) {
     let st = ModelStructure::lateral();
     let data = simulate(50.0, 25.0, 5);
     let clean = run(config(st), &data);
     let mut bad = data.clone();
-    let k = 800;
-    bad[k].p_rad_s = Some(bad[k].p_rad_s.unwrap() + 50.0 * NOISE[Output::P.index()]);
-    let hit = run(config(st), &bad);
-    assert_eq!(hit.rejections(Output::P), clean.rejections(Output::P) + 1);
-    let alarms = |e: &Ekf| (0..e.np).map(|i| e.change_alarms(i)).sum::<u32>();
-    assert_eq!(alarms(&hit), alarms(&clean));
-    for i in 0..st.n_params() {
+    for s in &mut bad[800..800 + n] {
+        s.p_rad_s = Some(s.p_rad_s.unwrap() + 50.0 * NOISE[Output::P.index()]);
+    }
+    (clean, run(config(st), &bad))
+}
+
+/// No estimate of `hit` differs from `clean`'s by 0.2 of `clean`'s σ.
+fn assert_estimates_unmoved(clean: &Ekf, hit: &Ekf) {
+    for i in 0..clean.np {
         let (a, b) = (clean.estimates().raw_value(i), hit.estimates().raw_value(i));
         let s = clean.estimates().sigma(i).unwrap();
         assert!((a - b).abs() < 0.2 * s, "parameter {i}: {a} vs {b} (σ {s})");
     }
+}
+
+/// One wild roll-rate sample (50 noise σ) is rejected by the gate, raises no change alarm and
+/// moves no estimate by more than 0.2 σ.
+#[test]
+fn one_outlier_is_gated_and_raises_no_alarm() {
+    let (clean, hit) = roll_rate_glitch(1);
+    assert_eq!(hit.rejections(Output::P), clean.rejections(Output::P) + 1);
+    let alarms = |e: &Ekf| (0..e.np).map(|i| e.change_alarms(i)).sum::<u32>();
+    assert_eq!(alarms(&hit), alarms(&clean));
+    assert_estimates_unmoved(&clean, &hit);
 }
 
 /// White process noise of 0.005 rad/√s on the true `α` and `β` (about light turbulence at the
@@ -663,22 +675,11 @@ fn sudden_moment_change_is_reanchored_and_followed_not_locked_out() {
 /// rejected sample by sample: nothing is re-anchored and no estimate moves by 0.2 σ.
 #[test]
 fn a_short_glitch_is_rejected_not_reanchored() {
-    let st = ModelStructure::lateral();
-    let data = simulate(50.0, 25.0, 5);
-    let clean = run(config(st), &data);
-    let mut bad = data.clone();
-    let n = DEFAULT_REANCHOR_AFTER as usize - 1;
-    for s in &mut bad[800..800 + n] {
-        s.p_rad_s = Some(s.p_rad_s.unwrap() + 50.0 * NOISE[Output::P.index()]);
-    }
-    let hit = run(config(st), &bad);
-    assert_eq!(hit.rejections(Output::P), clean.rejections(Output::P) + n as u32);
+    let n = DEFAULT_REANCHOR_AFTER - 1;
+    let (clean, hit) = roll_rate_glitch(n as usize);
+    assert_eq!(hit.rejections(Output::P), clean.rejections(Output::P) + n);
     assert_eq!(hit.reanchors(Output::P), 0);
-    for i in 0..st.n_params() {
-        let (a, b) = (clean.estimates().raw_value(i), hit.estimates().raw_value(i));
-        let s = clean.estimates().sigma(i).unwrap();
-        assert!((a - b).abs() < 0.2 * s, "parameter {i}: {a} vs {b} (σ {s})");
-    }
+    assert_estimates_unmoved(&clean, &hit);
 }
 
 /// The parameter-block re-anchoring reaches its target exactly (`h P hᵀ` = target, solved from

@@ -178,12 +178,14 @@ fn oe_options_are_checked() {
 /// Run 66 of `scenarios/montecarlo/with-oe.toml` (campaign seed 1): with the estimators crate's
 /// concentrated step and 50 iterations its fit did not converge (turbulence: large, structured
 /// residuals, Gauss–Newton converging linearly). With the campaign's settings (relaxation, up
-/// to 250 iterations, the convergence test unchanged) it converges after more than 50
+/// to 250 iterations, the convergence test unchanged) it converged after more than 50
 /// iterations, and the concentrated step, a different iteration on the same likelihood, given
 /// the same iteration budget, converges to the same estimate within 0.01 σ: a fixed point of
 /// both, not an iterate stopped early (at the iteration where the relative change of det R
-/// first fell below 10⁻⁶ the fit was still 0.14 σ away). The run was found on the former
-/// input design (consecutive harmonics over 10 s), which the test flies.
+/// first fell below 10⁻⁶ the fit was still 0.14 σ away). Since the parabolic step length
+/// (`output_error` module doc, "Step length") both converge within the crate's default 50
+/// (measured 32 relaxation, 46 concentrated; both above 50 before). The run was found on the
+/// former input design (consecutive harmonics over 10 s), which the test flies.
 #[test]
 fn turbulent_run_66_converges_to_the_optimum_both_steps_agree_on() {
     let text = std::fs::read_to_string(workspace().join("scenarios/montecarlo/with-oe.toml"))
@@ -208,7 +210,7 @@ fn turbulent_run_66_converges_to_the_optimum_both_steps_agree_on() {
     };
     let (it_relax, relax) = fit("relaxation");
     let (it_conc, conc) = fit("concentrated");
-    assert!(it_relax > 50 && it_conc > 50, "iterations {it_relax}, {it_conc}");
+    assert!(it_relax <= 50 && it_conc <= 50, "iterations {it_relax}, {it_conc}");
     assert_eq!(relax.len(), 30);
     for ((name, a, sigma), (_, b, _)) in relax.iter().zip(&conc) {
         assert!((a - b).abs() < 0.01 * sigma, "{name}: {a} vs {b} (σ {sigma})");

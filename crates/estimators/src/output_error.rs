@@ -630,35 +630,18 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &OeConfig) -> Result<OeResul
         let merit0 = merit(&e, &r);
         // d merit / dα along a step Δ is `merit_slope · gᵀΔ` (module doc, "Step length").
         let merit_slope = if concentrated { -2.0 / p.n_samples as f64 } else { -1.0 };
+        let offset = |d: &DVector<f64>| -> Vec<f64> {
+            beta.iter().zip(d.iter()).map(|(b, d)| b + d).collect()
+        };
         let mut accepted = None;
         loop {
             if let Some(step) = damped_step(&h, &m, &g, lambda) {
-                let trial: Vec<f64> = beta.iter().zip(step.iter()).map(|(b, d)| b + d).collect();
+                let trial = offset(&step);
                 if p.simulate(&trial, &mut y_try, None).is_ok() {
                     let r_try = residuals(&p, &y_try, &mut e_try);
                     let value = merit(&e_try, &r_try);
                     if value.is_finite() && value < merit0 {
-                        let mut best = (trial, step, r_try, value);
-                        // Undamped step accepted: one more trial at the minimum of the parabola
-                        // through the merit at 0 (value and slope) and at the full step (module
-                        // doc, "Step length").
-                        if lambda == 0.0 {
-                            let slope = merit_slope * g.dot(&best.1);
-                            if let Some(a) = parabolic_step(merit0, slope, value) {
-                                let scaled = &best.1 * a;
-                                let trial: Vec<f64> =
-                                    beta.iter().zip(scaled.iter()).map(|(b, d)| b + d).collect();
-                                if p.simulate(&trial, &mut y_try, None).is_ok() {
-                                    let r_try = residuals(&p, &y_try, &mut e_ext);
-                                    let v = merit(&e_ext, &r_try);
-                                    if v.is_finite() && v < best.3 {
-                                        core::mem::swap(&mut e_try, &mut e_ext);
-                                        best = (trial, scaled, r_try, v);
-                                    }
-                                }
-                            }
-                        }
-                        accepted = Some((best.0, best.1, best.2));
+                        accepted = Some((trial, step, r_try, value));
                         break;
                     }
                 }
@@ -668,11 +651,29 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &OeConfig) -> Result<OeResul
                 break;
             }
         }
+        // The undamped step was accepted (λ is left as it was on acceptance): one more trial at
+        // the minimum of the parabola through the merit at 0 (value and slope) and at the full
+        // step (module doc, "Step length").
+        if let Some((_, step, _, value)) = accepted.as_ref().filter(|_| lambda == 0.0) {
+            let slope = merit_slope * g.dot(step);
+            if let Some(a) = parabolic_step(merit0, slope, *value) {
+                let scaled = step * a;
+                let trial = offset(&scaled);
+                if p.simulate(&trial, &mut y_try, None).is_ok() {
+                    let r_try = residuals(&p, &y_try, &mut e_ext);
+                    let v = merit(&e_ext, &r_try);
+                    if v.is_finite() && v < *value {
+                        core::mem::swap(&mut e_try, &mut e_ext);
+                        accepted = Some((trial, scaled, r_try, v));
+                    }
+                }
+            }
+        }
         let step_sigma = |step: &DVector<f64>| match &minv {
             Some(mi) => (0..nb).map(|i| step[i].abs() / mi[(i, i)].sqrt()).fold(0.0, f64::max),
             None => f64::INFINITY,
         };
-        let Some((trial, step, r_new)) = accepted else {
+        let Some((trial, step, r_new, _)) = accepted else {
             // No descent: converged if the undamped step is already negligible.
             let tiny = damped_step(&h, &m, &g, 0.0)
                 .is_some_and(|st| step_sigma(&st) < config.step_tolerance_sigma);

@@ -94,14 +94,16 @@
 //!   (Jategaonkar ch. 4; Klein & Morelli ch. 6), the correlation matrix.
 //! - **Coloured-residual σ** ([`OeResult::sigma_coloured`]): `M⁻¹ [Σ_i Σ_j S_iᵀ R⁻¹ R_vv(i−j)
 //!   R⁻¹ S_j] M⁻¹` (Morelli & Klein, J. Guidance Control Dyn. 20(1), 1997; Klein & Morelli
-//!   2006 ch. 6) with the residual auto/cross-covariance `R_vv` of a vector autoregression of
-//!   the residuals, no lag truncation, plus a short lag sum on the whitened residuals (capped
-//!   at [`OeConfig::coloured_max_lag`]) and the fitted share of the residuals put back
-//!   (Andrews & Monahan 1992 prewhitening; [`crate::coloured::batch`], "Prewhitening"). On
+//!   2006 ch. 6), evaluated in the frequency domain with a multitaper (sine-taper) estimate of
+//!   the residuals' cross-spectral matrix and the fitted share of the residuals put back
+//!   ([`crate::coloured::batch`], "Spectral form"): no noise model, no lag truncation. On
 //!   flight data with model error or turbulence this, not the Cramér–Rao σ, is the honest
-//!   uncertainty. [`OeResult::sigma_coloured_truncated`] keeps the former form (sample
+//!   uncertainty. Two diagnostics are kept: [`OeResult::sigma_coloured_prewhitened`] (the
+//!   same sandwich with `R_vv` from a vector autoregression of the residuals, Andrews &
+//!   Monahan 1992; exact for autoregressive noise, 0.5–6 × the exact σ when the noise is a
+//!   resonance plus white sensor noise) and [`OeResult::sigma_coloured_truncated`] (sample
 //!   autocovariances truncated at the first lag where every output's normalised
-//!   autocorrelation is inside `±2/√N`) as a diagnostic.
+//!   autocorrelation is inside `±2/√N`, at most [`OeConfig::coloured_max_lag`]).
 //!
 //! # Errors
 //!
@@ -256,12 +258,16 @@ pub struct OeResult {
     pub values: Vec<f64>,
     /// Cramér–Rao σ `sqrt(diag M⁻¹)`.
     pub sigma: Vec<f64>,
-    /// Coloured-residual σ (the prewhitened sandwich, [`crate::coloured::batch`]); `None` if
-    /// that correction was not positive.
+    /// Coloured-residual σ (the spectral, multitaper sandwich, [`crate::coloured::batch`],
+    /// "Spectral form"); `None` if that correction was not positive.
     pub sigma_coloured: Option<Vec<f64>>,
-    /// Lag at which the coloured-residual sum over the whitened residuals was truncated.
+    /// The prewhitened coloured-residual σ (vector autoregression of the residuals,
+    /// [`crate::coloured::batch`], "Prewhitening"), kept as a diagnostic; `None` if not
+    /// positive.
+    pub sigma_coloured_prewhitened: Option<Vec<f64>>,
+    /// Lag at which the prewhitened form's sum over the whitened residuals was truncated.
     pub coloured_lag: usize,
-    /// Order of the residuals' vector autoregression in the coloured-residual σ (0: white).
+    /// Order of the residuals' vector autoregression in the prewhitened form (0: white).
     pub coloured_ar_order: usize,
     /// The lag-truncated coloured-residual σ (the Morelli & Klein sum of sample
     /// autocovariances, no prewhitening; [`crate::coloured::batch`]), kept as a diagnostic:
@@ -343,19 +349,31 @@ impl fmt::Display for OeResult {
                 it.iteration, it.ln_det_r, it.cost, it.lambda, it.max_step_sigma
             )?;
         }
-        writeln!(f, "{:<22} {:>14} {:>12} {:>14}", "unknown", "estimate", "CR σ", "coloured σ")?;
+        writeln!(
+            f,
+            "{:<22} {:>14} {:>12} {:>14} {:>14}",
+            "unknown", "estimate", "CR σ", "coloured σ", "prewhitened σ"
+        )?;
+        let cell =
+            |v: Option<&Vec<f64>>, i: usize| v.map_or("—".into(), |s| format!("{:.6}", s[i]));
         for i in 0..self.n() {
-            let sc = self.sigma_coloured.as_ref().map(|s| s[i]);
             writeln!(
                 f,
-                "{:<22} {:>14.6} {:>12.6} {:>14}",
+                "{:<22} {:>14.6} {:>12.6} {:>14} {:>14}",
                 self.names[i],
                 self.values[i],
                 self.sigma[i],
-                sc.map_or("—".into(), |v| format!("{v:.6}"))
+                cell(self.sigma_coloured.as_ref(), i),
+                cell(self.sigma_coloured_prewhitened.as_ref(), i),
             )?;
         }
-        writeln!(f, "coloured-residual sum truncated at lag {}", self.coloured_lag)?;
+        writeln!(
+            f,
+            "coloured σ: multitaper residual spectrum ({} sine tapers); prewhitened diagnostic: VAR order {}, lag {}",
+            coloured::SPECTRAL_TAPERS,
+            self.coloured_ar_order,
+            self.coloured_lag
+        )?;
         writeln!(f, "{:<14} {:>12} {:>12}", "output", "rms", "mean")?;
         for (j, o) in self.outputs.iter().enumerate() {
             writeln!(
@@ -898,8 +916,11 @@ fn assemble(
         .covariance
         .map(|c| (0..nb).map(|i| c[(i, i)].sqrt()).collect());
     let col = pre.coloured;
-    let sigma_coloured =
+    let sigma_coloured_prewhitened =
         col.covariance.map(|c| (0..nb).map(|i| c[(i, i)].sqrt()).collect::<Vec<_>>());
+    let sigma_coloured = coloured::spectral(s, e, w, &lengths, &minv)
+        .covariance
+        .map(|c| (0..nb).map(|i| c[(i, i)].sqrt()).collect::<Vec<_>>());
     let n = p.n_samples as f64;
     let residual_mean: Vec<f64> =
         (0..ny).map(|j| e.iter().skip(j).step_by(ny).sum::<f64>() / n).collect();
@@ -910,6 +931,7 @@ fn assemble(
         values: beta.to_vec(),
         sigma,
         sigma_coloured,
+        sigma_coloured_prewhitened,
         coloured_lag: col.lag,
         coloured_ar_order: pre.order,
         sigma_coloured_truncated,

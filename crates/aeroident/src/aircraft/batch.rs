@@ -249,16 +249,17 @@ pub struct BatchFit {
     pub residual_rms: Vec<f64>,
     /// Whether the σ are the coloured-residual ones (else Cramér–Rao).
     pub coloured_sigma: bool,
-    /// Lag (samples) at which the coloured-residual sum over the whitened residuals was
-    /// truncated.
+    /// Lag (samples) at which the prewhitened form's sum over the whitened residuals was
+    /// truncated (diagnostic `coloured_prewhitened`).
     pub coloured_lag: usize,
-    /// Order of the residuals' vector autoregression in the coloured-residual σ (0: white).
+    /// Order of the residuals' vector autoregression in the prewhitened form (0: white).
     pub coloured_ar_order: usize,
     /// `fem`: the estimated process noise `(state, F, σ)` (state unit per √s); empty for `oe`.
     pub process_noise: Vec<(String, f64, f64)>,
     /// The candidate σ of the structure parameters (structure order), by kind: `cramer_rao`
-    /// (`sqrt(diag M⁻¹)`, diagonal weighting), `coloured` (the prewhitened coloured-residual
-    /// sandwich, the reported one), `coloured_truncated` (the lag-truncated sandwich of sample
+    /// (`sqrt(diag M⁻¹)`, diagonal weighting), `coloured` (the spectral, multitaper coloured-residual
+    /// sandwich, the reported one), `coloured_prewhitened` (the sandwich with a vector
+    /// autoregression of the residuals), `coloured_truncated` (the lag-truncated sandwich of sample
     /// autocovariances), and for `fem` `lag0` (sandwich with the full lag-0 innovation covariance) and
     /// `full_b` (Cramér–Rao with the full innovation covariance); a kind that could not be
     /// formed is absent. For measuring which σ is honest (docs/uncertainty.md).
@@ -340,6 +341,9 @@ fn log_of(
     let mut sigma_candidates = vec![("cramer_rao".to_string(), r.sigma[..np].to_vec())];
     if let Some(c) = &r.sigma_coloured {
         sigma_candidates.push(("coloured".to_string(), c[..np].to_vec()));
+    }
+    if let Some(c) = &r.sigma_coloured_prewhitened {
+        sigma_candidates.push(("coloured_prewhitened".to_string(), c[..np].to_vec()));
     }
     if let Some(c) = &r.sigma_coloured_truncated {
         sigma_candidates.push(("coloured_truncated".to_string(), c[..np].to_vec()));

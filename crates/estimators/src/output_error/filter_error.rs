@@ -110,16 +110,19 @@
 //!
 //! Cramér–Rao σ `sqrt(diag M⁻¹)` with `M = Σ Sᵀ B⁻¹ S` at the estimate
 //! ([`OeResult::sigma`]), and the coloured-residual sandwich ([`OeResult::sigma_coloured`],
-//! Morelli & Klein 1997, full cross-output residual autocorrelation, prewhitened by a vector
-//! autoregression as for output error: [`crate::coloured::batch`]). Jategaonkar ch. 5 takes
+//! Morelli & Klein 1997, full cross-output residual autocorrelation, from a multitaper
+//! estimate of the innovations' cross-spectral matrix as for output error:
+//! [`crate::coloured::batch`], "Spectral form"). Jategaonkar ch. 5 takes
 //! the innovations of the correct filter as white, so that the Cramér–Rao σ suffices; that
 //! needs the filter's model exact, process noise included. A flight-test model never is: on
 //! the F-16 campaign (Dryden turbulence, whose `ġ` is coloured below `V/L`; no process noise
 //! on the rate equations; lateral model error) the innovations are autocorrelated over
 //! hundreds of samples and the Cramér–Rao σ is 0.34–0.76 of the scatter of the estimates,
 //! the coloured one 0.68–1.69 with the lag-truncated sandwich (40 runs; docs/uncertainty.md,
-//! "Filter-error method: σ and bias") and 0.60–1.86 with the prewhitened one now used (20
-//! runs, "Where the targets stand"). Callers therefore report the coloured σ where formed, as for output error
+//! "Filter-error method: σ and bias"), 0.60–1.86 with the prewhitened one (20 runs, "Where
+//! the targets stand") and, in the 20-run campaign after the merges, 0.63–2.29 with the
+//! spectral one now used (prewhitened 0.58–3.44; docs/uncertainty.md, "Output error: the
+//! spectral coloured-residual σ"). Callers therefore report the coloured σ where formed, as for output error
 //! (`aeroident::replay::batch::fem_reported_sigma`). Diagnostics: the lag-0 sandwich with the
 //! full cross-output innovation covariance ([`FemResult::sigma_lag0`]) and the full-`B`
 //! Cramér–Rao σ ([`FemResult::sigma_full_b`]) are within 6 % of the Cramér–Rao σ there (the
@@ -236,8 +239,8 @@ pub struct FemResult {
     /// innovation covariance, the Cramér–Rao σ of an estimator that weighted the innovations by
     /// the full `B` (this one weights by its diagonal); `None` when `r̂(0)` or `M_B` is singular.
     pub sigma_full_b: Option<Vec<f64>>,
-    /// Diagnostic σ of every unknown from the coloured-residual sandwich of
-    /// [`OeResult::sigma_coloured`] (same lags), formed whenever the diagonal of the
+    /// Diagnostic σ of every unknown from the prewhitened coloured-residual sandwich
+    /// ([`OeResult::sigma_coloured_prewhitened`]'s form), formed whenever the diagonal of the
     /// structure-parameter block is positive (`OeResult::sigma_coloured` needs every unknown,
     /// `F` included, and is `None` on the F-16 campaign); an `F` entry that is not positive is
     /// NaN.

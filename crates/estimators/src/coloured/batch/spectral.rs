@@ -39,6 +39,10 @@
 //!
 //! Frequencies where every parameter's weighted sensitivity is below `10⁻⁹/(L+1)` of its own
 //! largest value are skipped (they carry less than 10⁻⁹ of its sensitivity energy).
+//!
+//! Memory: the weighted sensitivities' transforms at the kept frequencies, plus one taper's
+//! tapered-sensitivity transforms at a time for the fitted share (recomputed each pass), about
+//! four times the sensitivities' own storage (complex, half spectrum of a `2L` transform).
 
 use nalgebra::DMatrix;
 use rustfft::FftPlanner;
@@ -58,15 +62,23 @@ const NEGLIGIBLE: f64 = 1e-9;
 
 /// The transforms of one manoeuvre at the frequencies kept, frequency-major.
 struct Transforms {
+    /// The manoeuvre's samples.
+    samples: core::ops::Range<usize>,
+    /// The kept frequencies, indices into the `2L`-point DFT (`0..=L`).
+    kept: Vec<usize>,
     /// Weight of each kept frequency in the sum (`2/(2L)` inside `(0, π)`, `1/(2L)` at the
     /// ends).
     weight: Vec<f64>,
-    /// Tapered residuals, `[m][k·ny + a]`.
-    e: Vec<C64>,
-    /// Weighted sensitivities, `[m][a·n + p]`.
+    /// The residuals' multitaper cross-spectral matrix `Φ̂`, `[j][a·ny + b]`.
+    phi: Vec<C64>,
+    /// Weighted sensitivities, `[j][a·n + p]`.
     t: Vec<C64>,
-    /// Tapered sensitivities, `[m][(k·ny + a)·n + p]`.
-    s: Vec<C64>,
+}
+
+/// Sine taper `k` (from 0) of a manoeuvre of `len` samples at sample `i` (module doc).
+fn taper(k: usize, i: usize, len: usize) -> f64 {
+    let l1 = len as f64 + 1.0;
+    (2.0 / l1).sqrt() * (core::f64::consts::PI * (k + 1) as f64 * (i + 1) as f64 / l1).sin()
 }
 
 /// DFT of length `2·len` of `f(i)` for `i < len` (zero-padded).
@@ -82,23 +94,17 @@ fn dft<'a>(
     &buf[..]
 }
 
-/// The transforms of the manoeuvre `samples` (`s` sensitivities `N × ny × n`, `t` the
-/// weighted ones, `e` residuals `N × ny`) at the frequencies kept (module doc).
+/// The transforms of the manoeuvre `samples` (`t` the weighted sensitivities `N × ny × n`,
+/// `e` residuals `N × ny`) at the frequencies kept, and the residuals' `Φ̂` (module doc).
 fn transforms(
     planner: &mut FftPlanner<f64>,
-    s: &[f64],
     t: &[f64],
     e: &[f64],
     (ny, n): (usize, usize),
     samples: core::ops::Range<usize>,
 ) -> Transforms {
     let (start, len) = (samples.start, samples.len());
-    let k_tapers = TAPERS;
     let fft = planner.plan_fft_forward(2 * len);
-    let norm = (2.0 / (len as f64 + 1.0)).sqrt();
-    let taper = |k: usize, i: usize| {
-        norm * (core::f64::consts::PI * (k + 1) as f64 * (i + 1) as f64 / (len as f64 + 1.0)).sin()
-    };
     let n_freq = len + 1;
     let mut buf = Vec::with_capacity(2 * len);
     // Weighted sensitivities first: they decide which frequencies are kept.
@@ -130,65 +136,89 @@ fn transforms(
         .collect();
     let t_kept: Vec<C64> =
         kept.iter().flat_map(|&m| t_all[m * ny * n..(m + 1) * ny * n].iter().copied()).collect();
-    let mut e_kept = vec![C64::new(0.0, 0.0); kept.len() * k_tapers * ny];
-    let mut s_kept = vec![C64::new(0.0, 0.0); kept.len() * k_tapers * ny * n];
-    for k in 0..k_tapers {
+    drop(t_all);
+    // Φ̂ = (1/K) Σ_k ẽ_k ẽ_kᴴ.
+    let mut phi = vec![C64::new(0.0, 0.0); kept.len() * ny * ny];
+    let mut e_k = vec![C64::new(0.0, 0.0); kept.len() * ny];
+    for k in 0..TAPERS {
         for a in 0..ny {
-            let x = dft(fft.as_ref(), &mut buf, len, |i| taper(k, i) * e[(start + i) * ny + a]);
+            let x =
+                dft(fft.as_ref(), &mut buf, len, |i| taper(k, i, len) * e[(start + i) * ny + a]);
             for (j, &m) in kept.iter().enumerate() {
-                e_kept[j * k_tapers * ny + k * ny + a] = x[m];
+                e_k[j * ny + a] = x[m];
             }
-            for p in 0..n {
-                let x = dft(fft.as_ref(), &mut buf, len, |i| {
-                    taper(k, i) * s[((start + i) * ny + a) * n + p]
-                });
-                for (j, &m) in kept.iter().enumerate() {
-                    s_kept[(j * k_tapers * ny + k * ny + a) * n + p] = x[m];
+        }
+        for (pj, ej) in phi.chunks_exact_mut(ny * ny).zip(e_k.chunks_exact(ny)) {
+            for a in 0..ny {
+                for b in 0..ny {
+                    pj[a * ny + b] += ej[a] * ej[b].conj() / TAPERS as f64;
                 }
             }
         }
     }
-    Transforms { weight, e: e_kept, t: t_kept, s: s_kept }
+    Transforms { samples, kept, weight, phi, t: t_kept }
 }
 
-/// The middle term `F = Σ_m w_m Re(T̃ᴴ Φ̂ T̃)` over the kept frequencies of every manoeuvre,
-/// `Φ̂` the multitaper estimate plus, with `fitted = Some(C)`, the fitted share.
-fn middle(tr: &[Transforms], ny: usize, n: usize, fitted: Option<&DMatrix<f64>>) -> DMatrix<f64> {
-    let kt = TAPERS;
-    let mut f = DMatrix::<f64>::zeros(n, n);
-    let mut phi = vec![C64::new(0.0, 0.0); ny * ny];
+/// The fitted share `(1/K) Σ_k (h_k S)~ C (h_k S)~ᴴ` at the kept frequencies of `tr`
+/// (`[j][a·ny + b]`), one taper at a time (`s` the sensitivities `N × ny × n`).
+fn fitted_share(
+    planner: &mut FftPlanner<f64>,
+    s: &[f64],
+    tr: &Transforms,
+    (ny, n): (usize, usize),
+    c: &DMatrix<f64>,
+) -> Vec<C64> {
+    let (start, len) = (tr.samples.start, tr.samples.len());
+    let fft = planner.plan_fft_forward(2 * len);
+    let mut buf = Vec::with_capacity(2 * len);
+    let nk = tr.kept.len();
+    let mut d = vec![C64::new(0.0, 0.0); nk * ny * ny];
+    let mut z = vec![C64::new(0.0, 0.0); nk * ny * n];
     let mut y = vec![C64::new(0.0, 0.0); n];
-    let mut g = vec![C64::new(0.0, 0.0); ny * n];
-    for man in tr {
-        for (j, &wm) in man.weight.iter().enumerate() {
-            let e = &man.e[j * kt * ny..(j + 1) * kt * ny];
-            let t = &man.t[j * ny * n..(j + 1) * ny * n];
-            phi.iter_mut().for_each(|v| *v = C64::new(0.0, 0.0));
-            for k in 0..kt {
-                for a in 0..ny {
-                    for b in 0..ny {
-                        phi[a * ny + b] += e[k * ny + a] * e[k * ny + b].conj();
-                    }
-                }
-                if let Some(c) = fitted {
-                    let z = &man.s[(j * kt + k) * ny * n..(j * kt + k + 1) * ny * n];
-                    for a in 0..ny {
-                        let za = &z[a * n..(a + 1) * n];
-                        for (q, yq) in y.iter_mut().enumerate() {
-                            let cq = c.column(q);
-                            *yq = za.iter().zip(cq.iter()).map(|(zv, cv)| zv * *cv).sum();
-                        }
-                        for b in 0..ny {
-                            let zb = &z[b * n..(b + 1) * n];
-                            phi[a * ny + b] +=
-                                y.iter().zip(zb).map(|(yv, zv)| yv * zv.conj()).sum::<C64>();
-                        }
-                    }
+    for k in 0..TAPERS {
+        for a in 0..ny {
+            for p in 0..n {
+                let x = dft(fft.as_ref(), &mut buf, len, |i| {
+                    taper(k, i, len) * s[((start + i) * ny + a) * n + p]
+                });
+                for (j, &m) in tr.kept.iter().enumerate() {
+                    z[(j * ny + a) * n + p] = x[m];
                 }
             }
-            let inv_k = 1.0 / kt as f64;
-            phi.iter_mut().for_each(|v| *v *= inv_k);
-            // G = Φ̂ T̃ (ny × n); F += w Re(T̃ᴴ G).
+        }
+        for (dj, zj) in d.chunks_exact_mut(ny * ny).zip(z.chunks_exact(ny * n)) {
+            for a in 0..ny {
+                let za = &zj[a * n..(a + 1) * n];
+                for (q, yq) in y.iter_mut().enumerate() {
+                    *yq = za.iter().zip(c.column(q).iter()).map(|(zv, cv)| zv * *cv).sum();
+                }
+                for b in 0..ny {
+                    let zb = &zj[b * n..(b + 1) * n];
+                    dj[a * ny + b] += y.iter().zip(zb).map(|(yv, zv)| yv * zv.conj()).sum::<C64>()
+                        / TAPERS as f64;
+                }
+            }
+        }
+    }
+    d
+}
+
+/// The middle term `F = Σ_j w_j Re(T̃ᴴ (Φ̂ + D) T̃)` over the kept frequencies of every
+/// manoeuvre, `D` the fitted share of each (`None`: none).
+fn middle(tr: &[Transforms], d: Option<&[Vec<C64>]>, (ny, n): (usize, usize)) -> DMatrix<f64> {
+    let mut f = DMatrix::<f64>::zeros(n, n);
+    let mut phi = vec![C64::new(0.0, 0.0); ny * ny];
+    let mut g = vec![C64::new(0.0, 0.0); ny * n];
+    for (mi, man) in tr.iter().enumerate() {
+        for (j, &wm) in man.weight.iter().enumerate() {
+            let t = &man.t[j * ny * n..(j + 1) * ny * n];
+            phi.copy_from_slice(&man.phi[j * ny * ny..(j + 1) * ny * ny]);
+            if let Some(d) = d {
+                for (pv, dv) in phi.iter_mut().zip(&d[mi][j * ny * ny..(j + 1) * ny * ny]) {
+                    *pv += dv;
+                }
+            }
+            // G = Φ T̃ (ny × n); F += w Re(T̃ᴴ G).
             for a in 0..ny {
                 for p in 0..n {
                     g[a * n + p] = (0..ny).map(|b| phi[a * ny + b] * t[b * n + p]).sum();
@@ -229,18 +259,18 @@ pub(crate) fn covariance(
     let mut tr = Vec::with_capacity(lengths.len());
     for &len in lengths {
         if len > 0 {
-            tr.push(transforms(&mut planner, s, &t, e, (ny, n), start..start + len));
+            tr.push(transforms(&mut planner, &t, e, (ny, n), start..start + len));
         }
         start += len;
     }
     let mut cov = DMatrix::<f64>::zeros(n, n);
-    let mut fitted: Option<DMatrix<f64>> = None;
+    let mut d: Option<Vec<Vec<C64>>> = None;
     for pass in 0..=super::FITTED_SHARE_PASSES {
-        let f = middle(&tr, ny, n, fitted.as_ref());
+        let f = middle(&tr, d.as_deref(), (ny, n));
         cov = minv * f * minv;
         cov = 0.5 * (&cov + cov.transpose());
         if pass < super::FITTED_SHARE_PASSES {
-            fitted = Some(cov.clone());
+            d = Some(tr.iter().map(|m| fitted_share(&mut planner, s, m, (ny, n), &cov)).collect());
         }
     }
     let ok = (0..n).all(|i| cov[(i, i)] > 0.0 && cov[(i, i)].is_finite());

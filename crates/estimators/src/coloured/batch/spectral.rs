@@ -399,3 +399,120 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod cross_tests {
+    use nalgebra::DMatrix;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+    use std::vec::Vec;
+
+    /// Two outputs whose noise shares an AR(1) component with a lag between them (so the
+    /// cross-covariance is not symmetric in the lag: `Γ₁₂(k) ≠ Γ₁₂(−k)`, which a conjugated
+    /// cross-spectrum would get wrong), plus independent white noise of different variances,
+    /// fitted by weighted least squares with unequal weights. The coefficient whose regressors
+    /// are a sine on one output and a cosine on the other depends on the cross-spectrum's
+    /// phase: its mean multitaper σ over 40 realisations is within 10 % of the exact
+    /// `sqrt diag M⁻¹ (Σ_ij T_iᵀ Γ(i−j) T_j) M⁻¹` (measured 0.94), while the same sum with the
+    /// cross-covariance mirrored in the lag (what a transposed cross-spectrum would estimate)
+    /// is 37 % off, so the test sees the orientation. The two constants: 0.78–1.1 (measured
+    /// 0.83, 0.85; below).
+    #[test]
+    fn spectral_sigma_of_two_outputs_with_lagged_cross_correlation() {
+        let (len, lag, a, c2) = (2000usize, 40usize, 0.98f64, -0.8f64);
+        let (s1, s2) = (0.3f64, 0.2f64);
+        let w = [1.0 / 1.0, 1.0 / 0.5];
+        let (ny, n) = (2usize, 3usize);
+        // S_i (ny × n), row-major per sample.
+        let mut s = Vec::with_capacity(len * ny * n);
+        for i in 0..len {
+            let t = i as f64 * 0.01;
+            s.extend([1.0, (1.3 * t).sin(), (2.0 * t).cos(), 0.0, (1.3 * t).cos(), 1.0]);
+        }
+        let sm = |i: usize| DMatrix::from_row_slice(ny, n, &s[i * ny * n..(i + 1) * ny * n]);
+        let wm = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&w));
+        let mut m = DMatrix::<f64>::zeros(n, n);
+        for i in 0..len {
+            m += sm(i).transpose() * &wm * sm(i);
+        }
+        let minv = m.clone().try_inverse().unwrap();
+        // Γ(k) = E[v_i v_{i−k}ᵀ], v₁ = g_i + s1 w, v₂ = c2 g_{i−lag} + s2 w'.
+        let gamma_g = |k: isize| a.powi(k.unsigned_abs() as i32) / (1.0 - a * a);
+        let gamma = |k: isize, mirrored: bool| {
+            let l = lag as isize;
+            let (g12, g21) = (c2 * gamma_g(k + l), c2 * gamma_g(k - l));
+            let (g12, g21) = if mirrored { (g21, g12) } else { (g12, g21) };
+            let white = if k == 0 { [s1 * s1, s2 * s2] } else { [0.0, 0.0] };
+            DMatrix::from_row_slice(
+                2,
+                2,
+                &[gamma_g(k) + white[0], g12, g21, c2 * c2 * gamma_g(k) + white[1]],
+            )
+        };
+        let exact_sigma = |mirrored: bool| {
+            let t: Vec<DMatrix<f64>> = (0..len).map(|i| &wm * sm(i)).collect();
+            let mut f = DMatrix::<f64>::zeros(n, n);
+            for i in 0..len {
+                for j in 0..len {
+                    f += t[i].transpose() * gamma(i as isize - j as isize, mirrored) * &t[j];
+                }
+            }
+            let c = &minv * f * &minv;
+            (0..n).map(|p| c[(p, p)].sqrt()).collect::<Vec<_>>()
+        };
+        let exact = exact_sigma(false);
+        let mirrored = exact_sigma(true);
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
+        let n01 = Normal::new(0.0, 1.0).unwrap();
+        let runs = 40;
+        let mut mean = [0.0; 3];
+        for _ in 0..runs {
+            let mut g = vec![0.0; len + lag];
+            let mut prev = n01.sample(&mut rng) / (1.0 - a * a).sqrt();
+            for gv in g.iter_mut() {
+                prev = a * prev + n01.sample(&mut rng);
+                *gv = prev;
+            }
+            // v₁(i) = g(i + lag) (index shift so that v₂ sees g lag samples earlier).
+            let mut y = Vec::with_capacity(len * ny);
+            for i in 0..len {
+                y.push(g[i + lag] + s1 * n01.sample(&mut rng));
+                y.push(c2 * g[i] + s2 * n01.sample(&mut rng));
+            }
+            // θ = 0: the data are the noise; fit and form residuals.
+            let mut b = nalgebra::DVector::<f64>::zeros(n);
+            for i in 0..len {
+                b += sm(i).transpose()
+                    * &wm
+                    * nalgebra::DVector::from_column_slice(&y[i * 2..i * 2 + 2]);
+            }
+            let theta = &minv * b;
+            let e: Vec<f64> = (0..len)
+                .flat_map(|i| {
+                    let r =
+                        nalgebra::DVector::from_column_slice(&y[i * 2..i * 2 + 2]) - sm(i) * &theta;
+                    [r[0], r[1]]
+                })
+                .collect();
+            let cov = super::covariance(&s, &e, &w, &[len], &minv).full;
+            for p in 0..n {
+                mean[p] += cov[(p, p)].max(0.0).sqrt() / runs as f64;
+            }
+        }
+        std::println!("exact {exact:?}, mirrored {mirrored:?}, spectral mean {mean:?}");
+        // θ1 (sin on output 1, cos on output 2) carries the cross-spectrum's phase.
+        let r1 = mean[1] / exact[1];
+        assert!((r1 - 1.0).abs() < 0.1, "θ1: spectral / exact {r1}");
+        assert!(
+            (mirrored[1] / exact[1] - 1.0).abs() > 0.3,
+            "the lagged cross-covariance does not matter here: {mirrored:?} vs {exact:?}"
+        );
+        // The constants (θ0 on output 1, θ2 on output 2) sit at the AR(1) noise's spectral
+        // peak at 0 Hz, which the tapers' bandwidth flattens and the fitted share (a first-order
+        // correction) only partly restores: measured 0.83 and 0.85.
+        for p in [0, 2] {
+            let r = mean[p] / exact[p];
+            assert!((0.78..1.1).contains(&r), "θ{p}: spectral / exact {r}");
+        }
+    }
+}

@@ -160,7 +160,10 @@ fn transforms(
 }
 
 /// The fitted share `(1/K) Σ_k (h_k S)~ C (h_k S)~ᴴ` at the kept frequencies of `tr`
-/// (`[j][a·ny + b]`), one taper at a time (`s` the sensitivities `N × ny × n`).
+/// (`[j][a·ny + b]`, `s` the sensitivities `N × ny × n`), one taper at a time. With
+/// `C = L Lᵀ` (`L = V √Λ` from the eigenvectors of `C`, negative rounding clipped) it is
+/// `(1/K) Σ_k G_k G_kᴴ` with `G_k` the transform of `h_k S L`: `ny²·n` per frequency and taper
+/// instead of `ny·n² + ny²·n`.
 fn fitted_share(
     planner: &mut FftPlanner<f64>,
     s: &[f64],
@@ -169,33 +172,46 @@ fn fitted_share(
     c: &DMatrix<f64>,
 ) -> Vec<C64> {
     let (start, len) = (tr.samples.start, tr.samples.len());
+    let eig = c.clone().symmetric_eigen();
+    let mut l = eig.eigenvectors;
+    for (q, lam) in eig.eigenvalues.iter().enumerate() {
+        let r = lam.max(0.0).sqrt();
+        l.column_mut(q).iter_mut().for_each(|v| *v *= r);
+    }
+    // S_i L (ny × n) for the manoeuvre's samples.
+    let mut sl = vec![0.0; len * ny * n];
+    for i in 0..len {
+        for a in 0..ny {
+            let row = &s[((start + i) * ny + a) * n..][..n];
+            for q in 0..n {
+                sl[(i * ny + a) * n + q] =
+                    row.iter().zip(l.column(q).iter()).map(|(x, y)| x * y).sum();
+            }
+        }
+    }
     let fft = planner.plan_fft_forward(2 * len);
     let mut buf = Vec::with_capacity(2 * len);
     let nk = tr.kept.len();
     let mut d = vec![C64::new(0.0, 0.0); nk * ny * ny];
-    let mut z = vec![C64::new(0.0, 0.0); nk * ny * n];
-    let mut y = vec![C64::new(0.0, 0.0); n];
+    let mut g = vec![C64::new(0.0, 0.0); nk * ny * n];
     for k in 0..TAPERS {
         for a in 0..ny {
-            for p in 0..n {
+            for q in 0..n {
                 let x = dft(fft.as_ref(), &mut buf, len, |i| {
-                    taper(k, i, len) * s[((start + i) * ny + a) * n + p]
+                    taper(k, i, len) * sl[(i * ny + a) * n + q]
                 });
                 for (j, &m) in tr.kept.iter().enumerate() {
-                    z[(j * ny + a) * n + p] = x[m];
+                    g[(j * ny + a) * n + q] = x[m];
                 }
             }
         }
-        for (dj, zj) in d.chunks_exact_mut(ny * ny).zip(z.chunks_exact(ny * n)) {
+        for (dj, gj) in d.chunks_exact_mut(ny * ny).zip(g.chunks_exact(ny * n)) {
             for a in 0..ny {
-                let za = &zj[a * n..(a + 1) * n];
-                for (q, yq) in y.iter_mut().enumerate() {
-                    *yq = za.iter().zip(c.column(q).iter()).map(|(zv, cv)| zv * *cv).sum();
-                }
+                let ga = &gj[a * n..(a + 1) * n];
                 for b in 0..ny {
-                    let zb = &zj[b * n..(b + 1) * n];
-                    dj[a * ny + b] += y.iter().zip(zb).map(|(yv, zv)| yv * zv.conj()).sum::<C64>()
-                        / TAPERS as f64;
+                    let gb = &gj[b * n..(b + 1) * n];
+                    dj[a * ny + b] +=
+                        ga.iter().zip(gb).map(|(x, y)| x * y.conj()).sum::<C64>() / TAPERS as f64;
                 }
             }
         }

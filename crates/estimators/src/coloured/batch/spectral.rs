@@ -31,11 +31,12 @@
 //! **Why it is there** (docs/uncertainty.md, "Output error: the spectral coloured-residual
 //! σ"): the prewhitening vector autoregression (`super::prewhitened`) is exact for
 //! autoregressive noise but not robust to noise that is not: on a least-squares fit with a
-//! lightly damped resonance driven by slow noise, plus white sensor noise (the yaw axis of an
-//! aircraft in turbulence, measured), its σ came out 0.5–6 times the exact value, the
-//! multitaper one 0.77–1.19. On slow autoregressive noise the multitaper form is the one that
-//! is short (a correlation time of a sixth of the window, `a = 0.995`: 0.66–1.03 against
-//! 0.92–1.00), as its bandwidth cannot resolve a spectral peak narrower than itself.
+//! lightly damped resonance driven by slow noise, with or without white sensor noise (the kind
+//! of residual output error leaves in turbulence), its σ came out 0.71–12.5 times the exact
+//! value, the multitaper one 0.77–1.36 (tests below). On slow autoregressive noise the
+//! multitaper form is the one that is short (a correlation time of a sixth of the window,
+//! `a = 0.995`: 0.66–1.03 against 0.92–1.00), as its bandwidth cannot resolve a spectral peak
+//! narrower than itself, and at 0 Hz it has only `K` degrees of freedom.
 //!
 //! Frequencies where every parameter's weighted sensitivity is below `10⁻⁹/(L+1)` of its own
 //! largest value are skipped (they carry less than 10⁻⁹ of its sensitivity energy).

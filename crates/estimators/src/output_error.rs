@@ -100,8 +100,8 @@
 //!   flight data with model error or turbulence this, not the Cramér–Rao σ, is the honest
 //!   uncertainty. Two diagnostics are kept: [`OeResult::sigma_coloured_prewhitened`] (the
 //!   same sandwich with `R_vv` from a vector autoregression of the residuals, Andrews &
-//!   Monahan 1992; exact for autoregressive noise, 0.5–6 × the exact σ when the noise is a
-//!   resonance plus white sensor noise) and [`OeResult::sigma_coloured_truncated`] (sample
+//!   Monahan 1992; exact for autoregressive noise, 0.71–12.5 × the exact σ when the noise is a
+//!   lightly damped resonance, with or without white sensor noise) and [`OeResult::sigma_coloured_truncated`] (sample
 //!   autocovariances truncated at the first lag where every output's normalised
 //!   autocorrelation is inside `±2/√N`, at most [`OeConfig::coloured_max_lag`]).
 //!

@@ -64,7 +64,7 @@
 //! autoregressive order (module `spectral`). The prewhitened form is exact for
 //! autoregressive noise and the better one on slow AR noise; the spectral form is the robust
 //! one when the noise is not autoregressive (a resonance driven by slow noise plus white sensor
-//! noise: prewhitened 0.5–6 × the exact σ, spectral 0.77–1.19; tests in `spectral`).
+//! noise: prewhitened 0.71–12.5 × the exact σ, spectral 0.77–1.36; tests in `spectral`).
 
 mod ar;
 mod spectral;

@@ -102,8 +102,9 @@
 //!   same sandwich with `R_vv` from a vector autoregression of the residuals, Andrews &
 //!   Monahan 1992; exact for autoregressive noise, 0.71–12.5 × the exact σ when the noise is a
 //!   lightly damped resonance, with or without white sensor noise) and
-//!   [`OeResult::sigma_coloured_truncated`] (sample autocovariances truncated at the first lag where every output's normalised
-//!   autocorrelation is inside `±2/√N`, at most [`OeConfig::coloured_max_lag`]).
+//!   [`OeResult::sigma_coloured_truncated`] (sample autocovariances truncated at the first
+//!   lag where every output's normalised autocorrelation is inside `±2/√N`, at most
+//!   [`OeConfig::coloured_max_lag`]).
 //!
 //! # Errors
 //!

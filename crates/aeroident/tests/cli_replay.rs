@@ -242,6 +242,15 @@ fn val_output_error_reproduces_the_hfb320_reference_through_the_cli() {
         assert!(((est - value) / value).abs() < 0.01, "{name}: {est} vs {value}");
         assert!((s / sigma - 1.0).abs() < 0.2, "{name}: σ {s} vs {sigma}");
     }
+    // The record's residuals are coloured: both coloured-residual σ (the reported spectral one
+    // and the prewhitened diagnostic) exceed the Cramér–Rao σ of every parameter.
+    for p in v["parameters"].as_array().unwrap() {
+        let crb = p["crb_sigma"].as_f64().unwrap();
+        for key in ["coloured_sigma", "prewhitened_sigma"] {
+            let c = p[key].as_f64().unwrap_or_else(|| panic!("{key} missing: {p}"));
+            assert!(c > crb, "{}: {key} {c} ≤ Cramér–Rao σ {crb}", p["name"]);
+        }
+    }
     // The results table on stdout (estimate ± CRB σ, fit quality of the simulated outputs)
     // and the report with the model-vs-measured figure beside the summary.
     let stdout = String::from_utf8_lossy(&o.stdout);

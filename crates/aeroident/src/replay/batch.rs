@@ -117,8 +117,13 @@ pub struct BatchParameter {
     pub std_error: f64,
     /// Cramér–Rao σ (`sqrt(diag M⁻¹)`).
     pub crb_sigma: f64,
-    /// Coloured-residual σ, when the correction is positive.
+    /// Coloured-residual σ (the spectral form), when the correction is positive.
     pub coloured_sigma: Option<f64>,
+    /// Diagnostic: the prewhitened (vector-autoregression) coloured-residual σ
+    /// ([`OeResult::sigma_coloured_prewhitened`]), when positive; a large disagreement with
+    /// `coloured_sigma` says the residual spectrum is poorly estimated (docs/uncertainty.md,
+    /// "Output error: the spectral coloured-residual σ").
+    pub prewhitened_sigma: Option<f64>,
 }
 
 /// One iteration of the batch summary.
@@ -401,6 +406,7 @@ pub fn fit_record<R: Read>(
             std_error: reported[i],
             crb_sigma: result.sigma[i],
             coloured_sigma: coloured.then_some(reported[i]),
+            prewhitened_sigma: result.sigma_coloured_prewhitened.as_ref().map(|c| c[i]),
         })
         .collect();
     let st = model.structure;

@@ -83,8 +83,18 @@ pub(crate) struct Coloured {
     pub covariance: Option<DMatrix<f64>>,
     /// The corrected covariance whatever its diagonal (for callers that need only a block).
     pub full: DMatrix<f64>,
-    /// The lag `K` at which the sum was truncated.
+    /// The lag `K` at which the sum was truncated (0 for the spectral form: no lag sum).
     pub lag: usize,
+}
+
+impl Coloured {
+    /// From a covariance `M⁻¹FM⁻¹` as computed: symmetrised, and `covariance` set only when
+    /// every diagonal element is positive and finite.
+    fn new(cov: DMatrix<f64>, lag: usize) -> Self {
+        let full = 0.5 * (&cov + cov.transpose());
+        let ok = (0..full.nrows()).all(|i| full[(i, i)] > 0.0 && full[(i, i)].is_finite());
+        Coloured { covariance: ok.then(|| full.clone()), full, lag }
+    }
 }
 
 /// The coloured-residual covariance (module doc).
@@ -106,10 +116,7 @@ pub(crate) fn covariance(
     // T_i = R⁻¹ S_i (ny × n).
     let t = weighted_sensitivities(s, w, n);
     let f = middle(&t, ny, n, lengths, &r, &[]);
-    let cov = minv * f * minv;
-    let cov = 0.5 * (&cov + cov.transpose());
-    let ok = (0..n).all(|i| cov[(i, i)] > 0.0 && cov[(i, i)].is_finite());
-    Coloured { covariance: ok.then(|| cov.clone()), full: cov, lag }
+    Coloured::new(minv * f * minv, lag)
 }
 
 /// Most vector-autoregressive order tried by [`prewhitened`].
@@ -180,19 +187,13 @@ pub(crate) fn prewhitened(
             }
         }
         let f = middle(&t, ny, n, lengths, &ru, &var);
-        let cov = minv * f * minv;
-        let cov = 0.5 * (&cov + cov.transpose());
+        let col = Coloured::new(minv * f * minv, lag);
         if pass < FITTED_SHARE_PASSES {
-            fitted = Some(cov.clone());
+            fitted = Some(col.full.clone());
         }
-        out = Some((cov, lag));
+        out = Some(col);
     }
-    let (cov, lag) = out.expect("at least one pass");
-    let ok = (0..n).all(|i| cov[(i, i)] > 0.0 && cov[(i, i)].is_finite());
-    Prewhitened {
-        coloured: Coloured { covariance: ok.then(|| cov.clone()), full: cov, lag },
-        order,
-    }
+    Prewhitened { coloured: out.expect("at least one pass"), order }
 }
 
 /// `u_i = x_i − Σ_j A_j x_{i−j}` for `x` of `N × ny × ncol` (each of the `ncol` columns of

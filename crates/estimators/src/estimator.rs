@@ -34,6 +34,116 @@ impl Status {
     }
 }
 
+/// What an estimator did to itself that changes how its numbers must be read
+/// ([`Event`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EventKind {
+    /// The estimator restarted from its priors after a divergence rule fired (the `subject`
+    /// names what failed): its estimates and σ from then on come from the samples after the
+    /// event only.
+    Restart,
+    /// A run of innovation-gate rejections of one output (the `subject`) was re-anchored: the
+    /// predicted variance of what it sees was raised to the gate's bound and the output used
+    /// again.
+    Reanchor,
+    /// A change of one parameter (the `subject`) was detected and its variance inflated so the
+    /// estimate can follow.
+    ChangeDetected,
+}
+
+impl EventKind {
+    /// Every kind, in [`EventLog::count`] order.
+    pub const ALL: [EventKind; 3] =
+        [EventKind::Restart, EventKind::Reanchor, EventKind::ChangeDetected];
+
+    /// `restart`, `reanchor` or `change_detected` (the string in summaries).
+    pub fn name(self) -> &'static str {
+        match self {
+            EventKind::Restart => "restart",
+            EventKind::Reanchor => "reanchor",
+            EventKind::ChangeDetected => "change_detected",
+        }
+    }
+
+    fn index(self) -> usize {
+        match self {
+            EventKind::Restart => 0,
+            EventKind::Reanchor => 1,
+            EventKind::ChangeDetected => 2,
+        }
+    }
+}
+
+/// One [`EventKind`] at a time: the sample time it happened at (s) and what it concerns (an
+/// output or parameter name, or the rule that fired).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Event {
+    /// Time of the sample at which it happened, s.
+    pub t_s: f64,
+    /// What happened.
+    pub kind: EventKind,
+    /// The output (e.g. `p`), parameter (e.g. `Cl_p`) or rule it concerns.
+    pub subject: &'static str,
+}
+
+/// Capacity of an [`EventLog`]'s list: the first this many events are kept.
+pub const EVENT_LOG_CAPACITY: usize = 32;
+
+/// The events of an estimator, in time order, without allocating: the first
+/// [`EVENT_LOG_CAPACITY`] are listed ([`EventLog::listed`]), and every event is counted by
+/// kind ([`EventLog::count`]), so counts stay exact when the list is full.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EventLog {
+    events: [Event; EVENT_LOG_CAPACITY],
+    len: usize,
+    counts: [u32; 3],
+}
+
+impl Default for EventLog {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The log of an estimator that has no events.
+static NO_EVENTS: EventLog = EventLog::new();
+
+impl EventLog {
+    /// An empty log.
+    pub const fn new() -> Self {
+        Self {
+            events: [Event { t_s: 0.0, kind: EventKind::Restart, subject: "" }; EVENT_LOG_CAPACITY],
+            len: 0,
+            counts: [0; 3],
+        }
+    }
+
+    /// Records `kind` at `t_s` about `subject`: listed while there is room, always counted.
+    pub fn push(&mut self, t_s: f64, kind: EventKind, subject: &'static str) {
+        if self.len < EVENT_LOG_CAPACITY {
+            self.events[self.len] = Event { t_s, kind, subject };
+            self.len += 1;
+        }
+        let c = &mut self.counts[kind.index()];
+        *c = c.saturating_add(1);
+    }
+
+    /// The listed events (the first [`EVENT_LOG_CAPACITY`]), in time order.
+    pub fn listed(&self) -> &[Event] {
+        &self.events[..self.len]
+    }
+
+    /// How many events of `kind` happened (listed or not).
+    pub fn count(&self, kind: EventKind) -> u32 {
+        self.counts[kind.index()]
+    }
+
+    /// How many events happened and were not listed (the list was full).
+    pub fn unlisted(&self) -> u32 {
+        self.counts.iter().sum::<u32>().saturating_sub(self.len as u32)
+    }
+}
+
 /// The current estimates of a structure's parameters: value and standard error of each, and
 /// whether it is identified. Fixed capacity, parameter order of the structure.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -136,6 +246,13 @@ pub trait Estimator {
         None
     }
 
+    /// What the estimator did to itself so far ([`EventKind`]: restarts, re-anchored outputs,
+    /// detected parameter changes): every one is to be shown with its results, never hidden.
+    /// Empty for methods without such events.
+    fn events(&self) -> &EventLog {
+        &NO_EVENTS
+    }
+
     /// A new manoeuvre starts with the next sample (a gap in the record, a second run):
     /// re-initialise the model state from the next sample and keep the parameters, as
     /// multi-run estimation does. Estimators without a model state ignore it.
@@ -200,5 +317,29 @@ pub fn check_coefficient(field: &'static str, value: f64, t_s: f64) -> Result<f6
         Ok(value)
     } else {
         Err(EstimatorError::ImplausibleInput { field, value, t_s, limit })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Past the capacity, events are no longer listed but every one is still counted by kind.
+    #[test]
+    fn event_log_lists_the_first_events_and_counts_all() {
+        let mut log = EventLog::new();
+        assert!(log.listed().is_empty());
+        for k in 0..EVENT_LOG_CAPACITY + 5 {
+            let kind = if k % 2 == 0 { EventKind::Reanchor } else { EventKind::ChangeDetected };
+            log.push(k as f64, kind, "p");
+        }
+        log.push(99.0, EventKind::Restart, "alpha");
+        assert_eq!(log.listed().len(), EVENT_LOG_CAPACITY);
+        assert_eq!(log.listed()[3].t_s, 3.0);
+        assert_eq!(log.listed()[3].kind, EventKind::ChangeDetected);
+        assert_eq!(log.count(EventKind::Reanchor), 19);
+        assert_eq!(log.count(EventKind::ChangeDetected), 18);
+        assert_eq!(log.count(EventKind::Restart), 1);
+        assert_eq!(log.unlisted(), 6);
     }
 }

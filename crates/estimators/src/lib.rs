@@ -54,7 +54,7 @@ pub(crate) mod test_aircraft;
 
 pub use dual::{Dual, Scalar};
 pub use ekf::{Ekf, EkfConfig, SigmaOption};
-pub use estimator::{Estimates, Estimator, Status};
+pub use estimator::{Estimates, Estimator, Event, EventKind, EventLog, Status};
 pub use flight_model::{FlightModel, Output, StateSet};
 pub use ftr::{Ftr, FtrConfig};
 pub use prior::{ParamPrior, Priors};

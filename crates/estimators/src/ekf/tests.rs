@@ -290,6 +290,7 @@ fn divergence_is_reported_and_estimates_keep_last_good_values() {
     let data = simulate(50.0, 4.0, 3);
     let mut cfg = config(ModelStructure::longitudinal());
     cfg.max_consecutive_rejections = 3;
+    cfg.max_restarts = 0;
     let mut gated = Ekf::new(cfg).unwrap();
     for s in &data[..100] {
         gated.update(s).unwrap();
@@ -335,6 +336,59 @@ fn divergence_is_reported_and_estimates_keep_last_good_values() {
         assert_eq!(after.raw_value(i), before.raw_value(i));
         assert_eq!(after.sigma(i), before.sigma(i));
     }
+}
+
+/// A lock-out with a restart left (module doc, "Restart"): the filter starts again from its
+/// priors with its states from the sample at which the rule fired, the restart is an event
+/// naming the output, the rejection counts run on; at the next lock-out, with no restart
+/// left, it diverges. An α vane stuck at 1 rad for three samples (`max_consecutive_rejections`
+/// 3): the restart takes α = 1 rad from the third, so the good samples after it fail the gate
+/// (a 0.95-rad innovation against the initial state σ of 0.007 rad) and the filter diverges at
+/// the third of them.
+#[test]
+fn a_lock_out_restarts_the_filter_once_and_reports_it() {
+    let data = simulate(50.0, 4.0, 3);
+    let mut cfg = config(ModelStructure::longitudinal());
+    cfg.max_consecutive_rejections = 3;
+    assert_eq!(cfg.max_restarts, DEFAULT_MAX_RESTARTS);
+    let mut ekf = Ekf::new(cfg).unwrap();
+    for s in &data[..100] {
+        ekf.update(s).unwrap();
+    }
+    assert!(ekf.estimates().all_identified());
+    for k in 0..3 {
+        let mut s = data[100 + k];
+        s.alpha_rad = 1.0;
+        let est = ekf.update(&s).expect("a lock-out with a restart left is not an error");
+        assert_eq!(est.status == Status::Initialising, k == 2, "sample {k}");
+    }
+    assert_eq!(ekf.restarts(), 1);
+    assert_eq!(ekf.rejections(Output::Alpha), 3, "counts run on through the restart");
+    let ev = ekf.events().listed();
+    assert_eq!(ev.len(), 1, "{ev:?}");
+    assert_eq!(
+        (ev[0].kind, ev[0].subject, ev[0].t_s),
+        (EventKind::Restart, Output::Alpha.name(), data[102].t_s)
+    );
+    assert_eq!(ekf.events().count(EventKind::Restart), 1);
+    assert_eq!(ekf.state(state::ALPHA), Some(1.0), "states from the sample it fired at");
+    for i in 0..ekf.np {
+        assert_eq!(ekf.estimates().raw_value(i), cfg.priors.prior[i].value, "parameter {i}");
+        assert!(!ekf.estimates().is_identified(i));
+        assert_eq!(ekf.filter_sigma(i), Some(cfg.priors.prior[i].sigma));
+    }
+    assert_eq!(ekf.nis(), None, "a restarted filter's NIS starts empty");
+    // No restart left: the next lock-out is a divergence.
+    let mut err = None;
+    for s in &data[103..110] {
+        if let Err(e) = ekf.update(s) {
+            err = Some(e);
+            break;
+        }
+    }
+    assert!(matches!(err, Some(EstimatorError::Numerical { .. })), "{err:?}");
+    assert_eq!(ekf.estimates().status, Status::Diverged);
+    assert_eq!(ekf.events().count(EventKind::Restart), 1);
 }
 
 #[test]
@@ -432,6 +486,17 @@ fn step_change_is_detected_and_followed() {
     std::println!("Cl_p old {old:.4} new {new:.4} got {got:.4} alarms {}", ekf.change_alarms(i));
     assert!(ekf.change_alarms(i) >= 1, "no alarm on Cl_p");
     assert!((got - new).abs() < 0.1 * new.abs(), "Cl_p {got} vs new truth {new}");
+    // Each alarm is an event naming the parameter; the Cl_p alarms come after the step.
+    let events = ekf.events();
+    let on_cl_p: Vec<f64> = events
+        .listed()
+        .iter()
+        .filter(|e| e.kind == EventKind::ChangeDetected && e.subject == "Cl_p")
+        .map(|e| e.t_s)
+        .collect();
+    assert!(on_cl_p.iter().all(|&t| t > 12.0) && !on_cl_p.is_empty(), "{on_cl_p:?}");
+    let alarms: u32 = (0..ekf.np).map(|k| ekf.change_alarms(k)).sum();
+    assert_eq!(events.count(EventKind::ChangeDetected), alarms);
     let mut off = config(st);
     off.change_false_alarm_interval_s = 0.0;
     let fixed = run(off, &data);
@@ -662,8 +727,18 @@ fn sudden_moment_change_is_reanchored_and_followed_not_locked_out() {
         );
         assert!(ekf.reanchors(Output::P) >= 1, "seed {seed}: the roll gyro was never re-anchored");
         assert!((got - new).abs() < 0.1 * new.abs(), "seed {seed}: Cl_beta {got} vs {new}");
+        // The run of re-anchorings is one event, after the step.
+        let reanchored: Vec<_> = ekf
+            .events()
+            .listed()
+            .iter()
+            .filter(|e| e.kind == EventKind::Reanchor && e.subject == Output::P.name())
+            .collect();
+        assert!(!reanchored.is_empty() && reanchored[0].t_s > 12.0, "{reanchored:?}");
+        assert_eq!(ekf.events().count(EventKind::Restart), 0, "seed {seed}");
         let mut off = config(st);
         off.reanchor_after = 0;
+        off.max_restarts = 0;
         let mut locked = Ekf::new(off).unwrap();
         let failed = data.iter().any(|s| locked.update(s).is_err());
         assert!(failed, "seed {seed}: without re-anchoring the filter should lock out the gyro");

@@ -123,6 +123,9 @@ pub struct EstimatorRun {
     pub failure: Option<String>,
     /// Final mean normalised innovation squared (filters only; ≈ 1 when consistent).
     pub nis: Option<f64>,
+    /// How many times the estimator restarted from its priors
+    /// ([`aeroident_estimators::EventKind::Restart`]); its estimates are still used.
+    pub restarts: u32,
     /// Batch estimators ([`crate::aircraft::batch`]): Gauss–Newton iterations of the fit
     /// (`null` for real-time estimators and failed fits).
     pub iterations: Option<usize>,
@@ -158,10 +161,13 @@ pub fn run_result(index: u64, sensor_seed: u64, out: &RunOutput) -> RunResult {
                 let ch = out.channels.iter().find(|c| c.label == p.estimator);
                 let nis = ch.and_then(|c| c.nis).filter(|v| v.is_finite());
                 let fit = ch.and_then(|c| c.batch.as_ref());
+                let restarts =
+                    ch.map_or(0, |c| c.events.count(aeroident_estimators::EventKind::Restart));
                 ests.push(EstimatorRun {
                     name: p.estimator.clone(),
                     failure,
                     nis,
+                    restarts,
                     iterations: fit.and_then(|f| f.iterations),
                     fit_wall_s: fit.map(|f| f.wall_s),
                     sigma_candidates: fit.map(|f| f.sigma_candidates.clone()).unwrap_or_default(),
@@ -258,6 +264,10 @@ pub struct EstimatorStats {
     pub runs_ok: usize,
     /// Runs excluded from the statistics, with the reason.
     pub failed_runs: Vec<FailedRun>,
+    /// Runs in which the estimator restarted from its priors and then ran to the end: counted
+    /// apart, and kept in the statistics (their estimates and σ come from the samples after the
+    /// restart).
+    pub restarted_runs: Vec<u64>,
     /// Mean over `runs_ok` of the final normalised innovation squared (`null` for methods
     /// without innovations); ≈ 1 for a consistent filter.
     pub mean_nis: Option<f64>,
@@ -311,6 +321,7 @@ pub fn statistics(runs: &[RunResult], names: &[String], crb: &CrbTable) -> Vec<E
         .iter()
         .map(|name| {
             let mut failed = Vec::new();
+            let mut restarted = Vec::new();
             let mut ok: Vec<&EstimatorRun> = Vec::new();
             for r in runs {
                 match &r.outcome {
@@ -320,7 +331,12 @@ pub fn statistics(runs: &[RunResult], names: &[String], crb: &CrbTable) -> Vec<E
                             .push(FailedRun { run: r.index, reason: "estimator absent".into() }),
                         Some(e) => match &e.failure {
                             Some(f) => failed.push(FailedRun { run: r.index, reason: f.clone() }),
-                            None => ok.push(e),
+                            None => {
+                                if e.restarts > 0 {
+                                    restarted.push(r.index);
+                                }
+                                ok.push(e);
+                            }
                         },
                     },
                 }
@@ -354,6 +370,7 @@ pub fn statistics(runs: &[RunResult], names: &[String], crb: &CrbTable) -> Vec<E
                 mean_iterations: mean(&iterations),
                 mean_fit_wall_s: mean(&fit_wall),
                 failed_runs: failed,
+                restarted_runs: restarted,
                 parameters,
             }
         })

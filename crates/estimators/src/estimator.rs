@@ -82,7 +82,7 @@ pub struct Event {
     pub t_s: f64,
     /// What happened.
     pub kind: EventKind,
-    /// The output (e.g. `p`), parameter (e.g. `Cl_p`) or rule it concerns.
+    /// The output (its sample field, e.g. `p_rad_s`), parameter (e.g. `Cl_p`) or rule it concerns.
     pub subject: &'static str,
 }
 

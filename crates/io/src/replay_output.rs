@@ -6,12 +6,16 @@
 //!
 //! `summary.json` keys: `estimator, model, status, samples_read, samples_rejected,
 //! rejections[{row, reason}], throughput_samples_per_s, parameters[{name, estimate, std_error,
-//! settle_time_s}], coefficients[{name, condition_number}], correlations[{a, b, rho}]`.
+//! settle_time_s}], coefficients[{name, condition_number}], correlations[{a, b, rho}],
+//! events{listed[{t_s, kind, subject}], counts{restart, reanchor, change_detected},
+//! not_listed}, warnings[]`.
 //! `estimate`, `std_error`, `settle_time_s` and `condition_number` are `null` where undefined
 //! (not identified, no covariance from the method).
 
 use crate::flight_data::Rejection;
+use aeroident_estimators::{EventKind, EventLog};
 use serde::Serialize;
+use std::collections::BTreeMap;
 use std::io::Write;
 
 /// One parameter's final result.
@@ -49,6 +53,107 @@ pub struct Correlation {
     pub rho: f64,
 }
 
+/// One thing an estimator did to itself ([`aeroident_estimators::Event`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EventSummary {
+    /// Time of the sample at which it happened, s.
+    pub t_s: f64,
+    /// `restart`, `reanchor` or `change_detected` ([`EventKind::name`]).
+    pub kind: String,
+    /// The output (its sample field: `p_rad_s`, `alpha_rad` …), parameter (`Cl_p` …) or rule it
+    /// concerns.
+    pub subject: String,
+}
+
+/// An estimator's events ([`aeroident_estimators::Estimator::events`]): the listed ones in
+/// time order, the exact count of each kind (every kind present, 0 included), and how many
+/// were not listed because the estimator's list was full.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct EventsSummary {
+    /// The listed events, in time order.
+    pub listed: Vec<EventSummary>,
+    /// Per kind name, how many happened (listed or not).
+    pub counts: BTreeMap<String, u32>,
+    /// How many happened but are not listed.
+    pub not_listed: u32,
+}
+
+impl EventsSummary {
+    /// The summary of `log`.
+    pub fn from_log(log: &EventLog) -> Self {
+        Self {
+            listed: log
+                .listed()
+                .iter()
+                .map(|e| EventSummary {
+                    t_s: e.t_s,
+                    kind: e.kind.name().into(),
+                    subject: e.subject.into(),
+                })
+                .collect(),
+            counts: EventKind::ALL.iter().map(|k| (k.name().to_string(), log.count(*k))).collect(),
+            not_listed: log.unlisted(),
+        }
+    }
+
+    /// How many events of `kind` happened.
+    pub fn count(&self, kind: EventKind) -> u32 {
+        self.counts.get(kind.name()).copied().unwrap_or(0)
+    }
+
+    /// One warning per listed restart (time and the output that failed); empty without one.
+    pub fn restart_warnings(&self) -> Vec<String> {
+        let mut out: Vec<String> = self
+            .listed
+            .iter()
+            .filter(|e| e.kind == EventKind::Restart.name())
+            .map(|e| {
+                format!(
+                    "estimator restarted from its priors at t = {:.3} s (output `{}` failed the innovation gate too many times in a row); its estimates come from the samples after that only",
+                    e.t_s, e.subject
+                )
+            })
+            .collect();
+        let unlisted = self.count(EventKind::Restart) as usize - out.len();
+        if unlisted > 0 {
+            out.push(format!("{unlisted} further restart(s), not listed"));
+        }
+        out
+    }
+
+    /// The other events in one readable line, `None` without any: the first
+    /// [`NOTE_EVENTS`] as `change detected in Cl_p at 22.12 s` or `re-anchored output p_rad_s at
+    /// 20.51 s`, then how many more there were.
+    pub fn note(&self) -> Option<String> {
+        let others: Vec<&EventSummary> =
+            self.listed.iter().filter(|e| e.kind != EventKind::Restart.name()).collect();
+        let total = self.count(EventKind::Reanchor) + self.count(EventKind::ChangeDetected);
+        if total == 0 {
+            return None;
+        }
+        let mut items: Vec<String> = others
+            .iter()
+            .take(NOTE_EVENTS)
+            .map(|e| {
+                let what = if e.kind == EventKind::Reanchor.name() {
+                    "re-anchored output"
+                } else {
+                    "change detected in"
+                };
+                format!("{what} {} at {:.2} s", e.subject, e.t_s)
+            })
+            .collect();
+        let shown = items.len() as u32;
+        if total > shown {
+            items.push(format!("{} more (summary.json `events`)", total - shown));
+        }
+        Some(format!("events: {}", items.join("; ")))
+    }
+}
+
+/// How many events [`EventsSummary::note`] names before it counts the rest.
+pub const NOTE_EVENTS: usize = 6;
+
 /// The `summary.json` document.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ReplaySummary {
@@ -75,6 +180,9 @@ pub struct ReplaySummary {
     pub coefficients: Vec<CoefficientSummary>,
     /// Every pair of parameters with |ρ| > 0.9 (where the estimator gives covariances).
     pub correlations: Vec<Correlation>,
+    /// What the estimator did to itself (restarts, re-anchored outputs, detected changes):
+    /// restarts are also in `warnings`.
+    pub events: EventsSummary,
     /// Warnings about the record or the run (e.g. the mapping's `nominal_dt_s` disagrees with
     /// the measured interval; a time jump not slept across in real-time pacing).
     pub warnings: Vec<String>,
@@ -129,4 +237,41 @@ pub fn write_estimates_row<W: Write>(
         }
     }
     writeln!(w)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A log with one restart and eight other events: the restart is a warning naming its time
+    /// and output; the note names the first [`NOTE_EVENTS`] others and counts the two left;
+    /// every kind is counted in `counts`, 0 included.
+    #[test]
+    fn events_summary_warns_of_restarts_and_notes_the_rest() {
+        let mut log = EventLog::new();
+        log.push(1.5, EventKind::Restart, "az_mps2");
+        for k in 0..8 {
+            let kind = if k < 3 { EventKind::Reanchor } else { EventKind::ChangeDetected };
+            log.push(10.0 + f64::from(k), kind, if k < 3 { "p_rad_s" } else { "Cl_p" });
+        }
+        let s = EventsSummary::from_log(&log);
+        assert_eq!(s.listed.len(), 9);
+        assert_eq!(s.count(EventKind::Restart), 1);
+        assert_eq!(s.count(EventKind::Reanchor), 3);
+        assert_eq!(s.count(EventKind::ChangeDetected), 5);
+        let w = s.restart_warnings();
+        assert_eq!(w.len(), 1);
+        assert!(w[0].contains("t = 1.500 s") && w[0].contains("`az_mps2`"), "{}", w[0]);
+        let note = s.note().unwrap();
+        assert!(note.starts_with("events: re-anchored output p_rad_s at 10.00 s;"), "{note}");
+        assert!(note.contains("change detected in Cl_p at 15.00 s"), "{note}");
+        assert!(!note.contains("16.00 s") && note.ends_with("2 more (summary.json `events`)"));
+        let json = serde_json::to_value(&s).unwrap();
+        assert_eq!(json["counts"]["change_detected"], 5);
+        assert_eq!(json["listed"][0]["kind"], "restart");
+        // Without events: no warning, no note, every count 0.
+        let none = EventsSummary::from_log(&EventLog::new());
+        assert!(none.restart_warnings().is_empty() && none.note().is_none());
+        assert_eq!(none.counts.len(), 3);
+    }
 }

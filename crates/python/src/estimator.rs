@@ -120,6 +120,15 @@ impl Estimator {
         self.est.nis()
     }
 
+    /// What the estimator did to itself so far: dict with `listed` (`[{t_s, kind, subject}]`,
+    /// kind `restart`, `reanchor` or `change_detected`), `counts` (per kind) and `not_listed`,
+    /// as in the replay summary's `events`.
+    fn events<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let s = aeroident_io::replay_output::EventsSummary::from_log(self.est.events());
+        let v = serde_json::to_value(&s).map_err(|e| err(e.to_string()))?;
+        crate::convert::json_to_py(py, &v)
+    }
+
     /// A new manoeuvre starts with the next sample (model states re-initialised).
     fn new_manoeuvre(&mut self) {
         self.est.new_manoeuvre();

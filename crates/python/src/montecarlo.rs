@@ -229,6 +229,13 @@ fn run_from_json(v: &Value) -> PyResult<RunResult> {
                     name: string(e, "name")?,
                     failure: field(e, "failure")?.as_str().map(str::to_owned),
                     nis: opt_f64(e, "nis")?,
+                    restarts: match e.get("restarts") {
+                        None | Some(Value::Null) => 0,
+                        Some(x) => x
+                            .as_u64()
+                            .and_then(|v| u32::try_from(v).ok())
+                            .ok_or_else(|| err("per-run result: `restarts` is not a count"))?,
+                    },
                     iterations: match field(e, "iterations")? {
                         Value::Null => None,
                         x => {

@@ -156,3 +156,26 @@ def test_ftr_grid_reaches_the_estimator():
     assert aeroident.Ftr(model="longitudinal", forgetting=0.9975, ftr_grid_hz=(0.1, 1.7, 0.04)).method == "ftr"
     with pytest.raises(aeroident.AeroidentError, match="f_step_hz"):
         aeroident.Ftr(model="longitudinal", ftr_grid_hz=(0.1, 3.0, 0.04))
+
+
+def test_estimator_events_name_a_stuck_vane():
+    """An α vane stuck at 0.5 rad for 30 samples of the HFB-320 record (10 Hz): the EKF's gate
+    rejects it 25 times in a row, then re-anchors the α state: one `reanchor` event naming
+    `alpha_rad` at the 25th stuck sample, every kind counted, no restart."""
+    data = shared(RECORDS[0][0])
+    arrays = aeroident.read(data, ROOT / RECORDS[0][1])
+    t = arrays["t_s"]
+    stuck = slice(400, 430)
+    arrays["alpha_rad"][stuck] = 0.5
+    est = aeroident.Ekf(model="longitudinal")
+    keys = aeroident.sample_keys()
+    for k in range(len(t)):
+        est.update({key: float(arrays[key][k]) for key in keys})
+    got = est.events()
+    assert set(got["counts"]) == {"restart", "reanchor", "change_detected"}
+    assert got["not_listed"] == 0 and len(got["listed"]) == sum(got["counts"].values())
+    assert got["counts"]["restart"] == 0, got
+    first = got["listed"][0]
+    assert (first["kind"], first["subject"]) == ("reanchor", "alpha_rad"), got
+    assert first["t_s"] == t[stuck.start + 24], (first, t[stuck.start + 24])
+    assert aeroident.Rls(model="longitudinal").events()["listed"] == []

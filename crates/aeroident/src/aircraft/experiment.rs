@@ -151,6 +151,10 @@ pub struct ChannelLog {
     /// ([`aeroident_estimators::Estimator::nis`]; ≈ 1 for a consistent filter), `None` for
     /// methods without innovations.
     pub nis: Option<f64>,
+    /// Sample-driven estimators: what the estimator did to itself
+    /// ([`aeroident_estimators::Estimator::events`]: restarts, re-anchored outputs, detected
+    /// changes); empty for the others.
+    pub events: aeroident_io::replay_output::EventsSummary,
     /// Batch estimators ([`super::batch`]): how the post-flight fit went (`None` for the
     /// real-time estimators, and for a batch fit that failed before iterating).
     pub batch: Option<BatchFit>,
@@ -491,6 +495,7 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
                 stats: String::new(),
                 status,
                 nis: None,
+                events: Default::default(),
                 batch: None,
             },
             ch,
@@ -680,6 +685,7 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
             };
             if let Channelled::Sample(s) = &c.ch {
                 c.log.nis = s.est.nis();
+                c.log.events = aeroident_io::replay_output::EventsSummary::from_log(s.est.events());
             }
             c.log
         })

@@ -178,6 +178,45 @@ pub struct Summary {
     /// ([`super::batch::BatchFit`]; a failed fit is absent here and its reason is in the
     /// parameters' `failure`).
     pub batch_fits: Vec<super::batch::BatchFit>,
+    /// Per sample-driven estimator: what it did to itself (restarts, re-anchored outputs,
+    /// detected changes; [`aeroident_io::replay_output::EventsSummary`]).
+    pub events: Vec<EstimatorEvents>,
+}
+
+/// One estimator's events in `summary.json`.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct EstimatorEvents {
+    /// Estimator label.
+    pub estimator: String,
+    /// Its events.
+    #[serde(flatten)]
+    pub events: aeroident_io::replay_output::EventsSummary,
+}
+
+impl Summary {
+    /// The estimators' restart warnings
+    /// ([`aeroident_io::replay_output::EventsSummary::restart_warnings`]), each prefixed with
+    /// the estimator's label.
+    pub fn event_warnings(&self) -> Vec<String> {
+        self.events
+            .iter()
+            .flat_map(|e| {
+                e.events
+                    .restart_warnings()
+                    .into_iter()
+                    .map(move |w| format!("{}: {w}", e.estimator))
+            })
+            .collect()
+    }
+
+    /// The estimators' other events, one line each
+    /// ([`aeroident_io::replay_output::EventsSummary::note`]), prefixed with the label.
+    pub fn event_notes(&self) -> Vec<String> {
+        self.events
+            .iter()
+            .filter_map(|e| e.events.note().map(|n| format!("{}: {n}", e.estimator)))
+            .collect()
+    }
 }
 
 fn nan_for_none(v: &[Option<f64>]) -> Vec<f64> {
@@ -374,6 +413,12 @@ pub fn summarize(out: &RunOutput) -> Result<Summary, ReportError> {
         sample_lag_s: out.sample_lag_s,
         targets,
         batch_fits: out.channels.iter().filter_map(|c| c.batch.clone()).collect(),
+        events: out
+            .channels
+            .iter()
+            .filter(|c| c.quantity == Quantity::Derivative && !c.is_batch())
+            .map(|c| EstimatorEvents { estimator: c.label.clone(), events: c.events.clone() })
+            .collect(),
     })
 }
 
@@ -614,6 +659,12 @@ pub fn table(summary: &Summary) -> String {
         }
         for t in &summary.targets {
             writeln!(s, "{}", targets_line(t)).ok();
+        }
+        for w in summary.event_warnings() {
+            writeln!(s, "warning: {w}").ok();
+        }
+        for n in summary.event_notes() {
+            writeln!(s, "note: {n}").ok();
         }
     }
     s

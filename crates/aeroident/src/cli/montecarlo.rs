@@ -108,6 +108,15 @@ pub fn table(c: &Campaign) -> String {
     let _ = writeln!(s, "{t}");
     for e in &c.estimators {
         let _ = write!(s, "{}: {} runs used, {} failed", e.name, e.runs_ok, e.failed_runs.len());
+        if !e.restarted_runs.is_empty() {
+            let runs: Vec<String> = e.restarted_runs.iter().map(u64::to_string).collect();
+            let _ = write!(
+                s,
+                ", {} restarted from the priors (runs {}; used)",
+                e.restarted_runs.len(),
+                runs.join(", ")
+            );
+        }
         if let Some(nis) = e.mean_nis {
             let _ = write!(s, "; mean NIS {nis:.2}");
         }

@@ -134,6 +134,12 @@ fn results_text(summary: &Summary) -> String {
         s.push_str(&crate::aircraft::report::targets_line(t));
         s.push('\n');
     }
+    for w in summary.event_warnings() {
+        s.push_str(&format!("warning: {w}\n"));
+    }
+    for n in summary.event_notes() {
+        s.push_str(&format!("note: {n}\n"));
+    }
     s
 }
 

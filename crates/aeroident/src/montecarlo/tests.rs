@@ -34,6 +34,7 @@ fn result(
             name: "rls".into(),
             failure: fail.map(Into::into),
             nis: None,
+            restarts: 0,
             iterations: None,
             fit_wall_s: None,
             sigma_candidates: Vec::new(),
@@ -74,6 +75,30 @@ fn statistics_by_hand() {
     assert_eq!(p.crb_sigma_calm, Some(0.03));
     assert_eq!(p.median_time_to_10pct_s, Some(2.5));
     assert_eq!(p.n_estimates, 4);
+    assert!(e.restarted_runs.is_empty());
+}
+
+/// A run whose estimator restarted from its priors and ran to the end is listed in
+/// `restarted_runs` and kept in the statistics; a restarted run that then diverged is a
+/// failure only.
+#[test]
+fn restarted_runs_are_counted_apart_and_used() {
+    let restarted = |mut r: RunResult| {
+        if let Ok(e) = &mut r.outcome {
+            e[0].restarts = 1;
+        }
+        r
+    };
+    let runs = vec![
+        result(0, Some(-0.9), Some(0.1), Some(1.0), None),
+        restarted(result(1, Some(-1.1), Some(0.1), Some(2.0), None)),
+        restarted(result(2, Some(100.0), Some(0.1), None, Some("t = 3 s: diverged"))),
+    ];
+    let st = statistics(&runs, &["rls".into()], &CrbTable::default());
+    assert_eq!(st[0].restarted_runs, vec![1]);
+    assert_eq!(st[0].runs_ok, 2);
+    assert_eq!(st[0].failed_runs.iter().map(|f| f.run).collect::<Vec<_>>(), vec![2]);
+    assert!((st[0].parameters[0].bias.unwrap() - 0.0).abs() < 1e-12);
 }
 
 /// Without σ the coverage is null; a run without an estimate does not cover; a median that

@@ -736,6 +736,8 @@ pub fn replay_with<R: Read>(
     }
     // Throughput of the estimation stage: the estimator update per sample (CSV parsing,
     // differentiation, pacing and output are excluded).
+    let events = aeroident_io::replay_output::EventsSummary::from_log(r.est.events());
+    warnings.extend(events.restart_warnings());
     let secs = busy.as_secs_f64().max(1e-9);
     let (rejections, unlisted) = rejections.finish();
     warnings.extend(unlisted);
@@ -750,6 +752,7 @@ pub fn replay_with<R: Read>(
         parameters,
         coefficients,
         correlations,
+        events,
         warnings,
     };
     let differentiated = r.stage.supplies().to_vec();

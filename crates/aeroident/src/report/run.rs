@@ -108,6 +108,8 @@ pub fn write(
         .filter_map(|c| {
             c.failure.as_ref().map(|(t, m)| format!("{} failed at {t:.2} s: {m}", c.label))
         })
+        .chain(summary.event_warnings())
+        .chain(summary.event_notes())
         .collect();
     Report {
         title: format!("aeroident run — {}", summary.scenario),

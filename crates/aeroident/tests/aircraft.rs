@@ -511,9 +511,15 @@ fn default_scenario_writes_outputs_with_exact_summary_keys() {
         "sample_lag_s",
         "targets",
         "batch_fits",
+        "events",
     ];
     want.sort();
     assert_eq!(keys(&json), want);
+    // One events entry per sample-driven estimator, every kind counted.
+    for e in json["events"].as_array().unwrap() {
+        assert_eq!(keys(e), ["counts", "estimator", "listed", "not_listed"]);
+        assert_eq!(keys(&e["counts"]), ["change_detected", "reanchor", "restart"]);
+    }
     let mut want_p = vec![
         "estimator",
         "name",

@@ -53,6 +53,7 @@ fn errors_bad_corpus_counted_in_summary_with_exact_keys() {
         "parameters",
         "coefficients",
         "correlations",
+        "events",
         "warnings",
         "identifiability",
         "validation",
@@ -63,6 +64,7 @@ fn errors_bad_corpus_counted_in_summary_with_exact_keys() {
     expect.sort_unstable();
     assert_eq!(got, expect);
     assert_eq!(v["estimator"], "rls");
+    assert_eq!(v["events"]["listed"], serde_json::json!([]), "RLS has no events");
     assert!(v["validation_on"].is_null(), "no --validate-on");
     assert_eq!(v["validation"]["used_for_fit"], true);
     assert_eq!(v["model"], "longitudinal");

@@ -16,7 +16,9 @@
 //! # Statistics (per estimator and parameter; [`statistics`])
 //!
 //! Over the runs in which the estimator neither failed nor diverged (`runs_ok`; a failed run of
-//! the whole experiment or of one estimator is counted and listed, never averaged in):
+//! the whole experiment or of one estimator is counted and listed, never averaged in; a run in
+//! which it restarted from its priors and then ran to the end is listed in `restarted_runs` and
+//! kept):
 //! - `truth`: the reference's true value at the end (after the damage, if any);
 //! - `bias`: mean of the final estimates − `truth`;
 //! - `scatter`: sample standard deviation (`n − 1`) of the final estimates;

@@ -57,8 +57,8 @@
 //!   empty) with its states from the sample at which it fired, and records an
 //!   [`EventKind::Restart`] naming the output ([`Estimator::events`]); the counts of
 //!   rejections, re-anchorings and change alarms run on. A start-up transient that went wrong
-//!   (campaign run 349: `Cl_β` "identified" at +0.31 against −0.11 within 0.8 s, then an output
-//!   rejected 50 times in a row at 1.56 s) is what it is for; after the last restart the rule
+//!   (run 349 of the 60-s default campaign with every estimator: `Cl_β` "identified" at +0.31
+//!   against −0.11 within 0.8 s, then an output rejected 50 times in a row at 1.56 s) is what it is for; after the last restart the rule
 //!   is a divergence again. The estimates after a restart come from the samples after it
 //!   only, and every report shows the event (docs/uncertainty.md, "EKF start-up divergence").
 //!   The first re-anchoring of each run of rejections ([`EventKind::Reanchor`]) and each
@@ -226,7 +226,7 @@ pub const DEFAULT_REANCHOR_AFTER: u32 = 25;
 
 /// Default [`EkfConfig::max_restarts`]: one restart from the priors on a lock-out (module doc,
 /// "Restart"). Measured on the EKF-only 60-s default campaign (350 runs, seed 1): one lock-out
-/// (run 349, at 2.14 s, in the start-up transient), after which that run ends with its primary
+/// (run 349, at 2.14 s with the EKF alone, in the start-up transient), after which that run ends with its primary
 /// derivatives within 2.4σ of the truth except `Cm_q` (−4.1σ); every other run is unchanged.
 pub const DEFAULT_MAX_RESTARTS: u32 = 1;
 
@@ -439,6 +439,16 @@ pub struct Ekf {
     /// Exponentially forgotten sum of the state corrections `K e` per integrated state (module
     /// doc, "State process noise from the record").
     q_acc: [[f64; N_OUTPUTS]; N_STATES],
+}
+
+/// The gate's counters of the sample at which the divergence rule fired (uncommitted until
+/// then): totals and runs of rejections, re-anchorings, and which outputs started a run of
+/// re-anchorings at this sample.
+struct LockOutCounts {
+    rejections: [u32; N_OUTPUTS],
+    consecutive: [u32; N_OUTPUTS],
+    reanchors: [u32; N_OUTPUTS],
+    new_reanchor: [bool; N_OUTPUTS],
 }
 
 /// Sensitivity `g` of the state-correction statistic to a process-noise error (module doc,
@@ -827,13 +837,17 @@ impl Ekf {
     /// counters of the refused sample and reports the divergence.
     fn locked_out(
         &mut self,
-        rejections: [u32; N_OUTPUTS],
-        consecutive: [u32; N_OUTPUTS],
+        counts: LockOutCounts,
         o: Output,
         s: &AirDataSample,
         u1: ModelInputs,
     ) -> Result<&Estimates, EstimatorError> {
+        let LockOutCounts { rejections, consecutive, reanchors, new_reanchor } = counts;
         self.rejections = rejections;
+        self.reanchors = reanchors;
+        for o in Output::ALL.iter().filter(|o| new_reanchor[o.index()]) {
+            self.events.push(s.t_s, EventKind::Reanchor, o.name());
+        }
         if self.restarts >= self.cfg.max_restarts {
             self.consecutive = consecutive;
             return Err(self.diverge(
@@ -849,7 +863,11 @@ impl Ekf {
         fresh.events = self.events;
         fresh.events.push(s.t_s, EventKind::Restart, o.name());
         *self = fresh;
-        self.initialise(s, u1)?;
+        // A sample without every state channel cannot start the states: the restarted filter
+        // then waits for one that has them, as a new filter does.
+        if self.initialise(s, u1).is_err() {
+            self.pending_init = true;
+        }
         self.publish(s.t_s);
         Ok(&self.est)
     }
@@ -1208,7 +1226,8 @@ impl Estimator for Ekf {
                     adapt_r(&self.cfg, oi, bound - hph, &mut r_var, &mut r_count);
                 }
                 if consecutive[oi] >= self.cfg.max_consecutive_rejections {
-                    return self.locked_out(rejections, consecutive, *o, s, u1);
+                    let counts = LockOutCounts { rejections, consecutive, reanchors, new_reanchor };
+                    return self.locked_out(counts, *o, s, u1);
                 }
                 continue;
             }
@@ -1217,12 +1236,13 @@ impl Estimator for Ekf {
             // output, and the divergence rule still fires.
             if reanchored {
                 consecutive[oi] += 1;
-                if consecutive[oi] >= self.cfg.max_consecutive_rejections {
-                    return self.locked_out(rejections, consecutive, *o, s, u1);
-                }
                 if !run_reanchored[oi] {
                     run_reanchored[oi] = true;
                     new_reanchor[oi] = true;
+                }
+                if consecutive[oi] >= self.cfg.max_consecutive_rejections {
+                    let counts = LockOutCounts { rejections, consecutive, reanchors, new_reanchor };
+                    return self.locked_out(counts, *o, s, u1);
                 }
             } else {
                 consecutive[oi] = 0;

@@ -89,9 +89,15 @@ pub struct Event {
 /// Capacity of an [`EventLog`]'s list: the first this many events are kept.
 pub const EVENT_LOG_CAPACITY: usize = 32;
 
-/// The events of an estimator, in time order, without allocating: the first
-/// [`EVENT_LOG_CAPACITY`] are listed ([`EventLog::listed`]), and every event is counted by
-/// kind ([`EventLog::count`]), so counts stay exact when the list is full.
+/// Places of an [`EventLog`]'s list kept for [`EventKind::Restart`] events: the other kinds
+/// are listed only while more than this many places are free, so the first
+/// `EVENT_LOG_RESTART_RESERVE` restarts are always listed.
+pub const EVENT_LOG_RESTART_RESERVE: usize = 4;
+
+/// The events of an estimator, in time order, without allocating: the first events are listed
+/// ([`EventLog::listed`]; [`EVENT_LOG_CAPACITY`] places, of which
+/// [`EVENT_LOG_RESTART_RESERVE`] only for restarts), and every event is counted by kind
+/// ([`EventLog::count`]), so counts stay exact when the list is full.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EventLog {
     events: [Event; EVENT_LOG_CAPACITY],
@@ -120,7 +126,11 @@ impl EventLog {
 
     /// Records `kind` at `t_s` about `subject`: listed while there is room, always counted.
     pub fn push(&mut self, t_s: f64, kind: EventKind, subject: &'static str) {
-        if self.len < EVENT_LOG_CAPACITY {
+        let room = match kind {
+            EventKind::Restart => EVENT_LOG_CAPACITY,
+            _ => EVENT_LOG_CAPACITY - EVENT_LOG_RESTART_RESERVE,
+        };
+        if self.len < room {
             self.events[self.len] = Event { t_s, kind, subject };
             self.len += 1;
         }
@@ -128,7 +138,7 @@ impl EventLog {
         *c = c.saturating_add(1);
     }
 
-    /// The listed events (the first [`EVENT_LOG_CAPACITY`]), in time order.
+    /// The listed events, in time order.
     pub fn listed(&self) -> &[Event] {
         &self.events[..self.len]
     }
@@ -140,7 +150,8 @@ impl EventLog {
 
     /// How many events happened and were not listed (the list was full).
     pub fn unlisted(&self) -> u32 {
-        self.counts.iter().sum::<u32>().saturating_sub(self.len as u32)
+        let total: u64 = self.counts.iter().map(|&c| u64::from(c)).sum();
+        u32::try_from(total.saturating_sub(self.len as u64)).unwrap_or(u32::MAX)
     }
 }
 
@@ -324,22 +335,31 @@ pub fn check_coefficient(field: &'static str, value: f64, t_s: f64) -> Result<f6
 mod tests {
     use super::*;
 
-    /// Past the capacity, events are no longer listed but every one is still counted by kind.
+    /// Past the capacity, events are no longer listed but every one is still counted by kind;
+    /// restarts keep their reserved places after the other kinds have filled theirs.
     #[test]
     fn event_log_lists_the_first_events_and_counts_all() {
         let mut log = EventLog::new();
         assert!(log.listed().is_empty());
         for k in 0..EVENT_LOG_CAPACITY + 5 {
             let kind = if k % 2 == 0 { EventKind::Reanchor } else { EventKind::ChangeDetected };
-            log.push(k as f64, kind, "p");
+            log.push(k as f64, kind, "p_rad_s");
         }
-        log.push(99.0, EventKind::Restart, "alpha");
-        assert_eq!(log.listed().len(), EVENT_LOG_CAPACITY);
+        let others = EVENT_LOG_CAPACITY - EVENT_LOG_RESTART_RESERVE;
+        assert_eq!(log.listed().len(), others);
+        log.push(99.0, EventKind::Restart, "alpha_rad");
+        assert_eq!(log.listed().len(), others + 1);
+        assert_eq!(log.listed()[others].kind, EventKind::Restart);
         assert_eq!(log.listed()[3].t_s, 3.0);
         assert_eq!(log.listed()[3].kind, EventKind::ChangeDetected);
         assert_eq!(log.count(EventKind::Reanchor), 19);
         assert_eq!(log.count(EventKind::ChangeDetected), 18);
         assert_eq!(log.count(EventKind::Restart), 1);
-        assert_eq!(log.unlisted(), 6);
+        assert_eq!(log.unlisted(), 37 - others as u32);
+        for _ in 0..10 {
+            log.push(100.0, EventKind::Restart, "alpha_rad");
+        }
+        assert_eq!(log.listed().len(), EVENT_LOG_CAPACITY);
+        assert_eq!(log.count(EventKind::Restart), 11);
     }
 }

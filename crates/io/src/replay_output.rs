@@ -109,14 +109,16 @@ impl EventsSummary {
             .filter(|e| e.kind == EventKind::Restart.name())
             .map(|e| {
                 format!(
-                    "estimator restarted from its priors at t = {:.3} s (output `{}` failed the innovation gate too many times in a row); its estimates come from the samples after that only",
+                    "estimator restarted from its priors at t = {:.3} s (its divergence rule fired on `{}`); its estimates come from the samples after that only",
                     e.t_s, e.subject
                 )
             })
             .collect();
-        let unlisted = self.count(EventKind::Restart) as usize - out.len();
+        let unlisted = (self.count(EventKind::Restart) as usize).saturating_sub(out.len());
         if unlisted > 0 {
-            out.push(format!("{unlisted} further restart(s), not listed"));
+            out.push(format!(
+                "estimator restarted from its priors {unlisted} more time(s), not listed; its estimates come from the samples after the last restart only"
+            ));
         }
         out
     }
@@ -145,7 +147,7 @@ impl EventsSummary {
             .collect();
         let shown = items.len() as u32;
         if total > shown {
-            items.push(format!("{} more (summary.json `events`)", total - shown));
+            items.push(format!("{} more (counted in summary.json `events`)", total - shown));
         }
         Some(format!("events: {}", items.join("; ")))
     }
@@ -265,7 +267,10 @@ mod tests {
         let note = s.note().unwrap();
         assert!(note.starts_with("events: re-anchored output p_rad_s at 10.00 s;"), "{note}");
         assert!(note.contains("change detected in Cl_p at 15.00 s"), "{note}");
-        assert!(!note.contains("16.00 s") && note.ends_with("2 more (summary.json `events`)"));
+        assert!(
+            !note.contains("16.00 s")
+                && note.ends_with("2 more (counted in summary.json `events`)")
+        );
         let json = serde_json::to_value(&s).unwrap();
         assert_eq!(json["counts"]["change_detected"], 5);
         assert_eq!(json["listed"][0]["kind"], "restart");

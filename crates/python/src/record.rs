@@ -292,12 +292,14 @@ fn replay_arrays_py<'py>(
             .map_err(|e| e.to_string());
         (r, spec.name)
     });
-    let (arrays, refused, diverged) = result.map_err(err)?;
+    let (arrays, refused, diverged, events) = result.map_err(err)?;
     if let Some(msg) = diverged {
         return Err(err(format!("{msg}; its estimates are not a result")));
     }
     let d = arrays_dict(py, arrays)?;
     d.set_item("model", model_name)?;
     d.set_item("samples_refused", refused)?;
+    let events = serde_json::to_value(&events).map_err(|e| err(e.to_string()))?;
+    d.set_item("events", crate::convert::json_to_py(py, &events)?)?;
     Ok(d)
 }

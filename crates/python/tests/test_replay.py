@@ -161,7 +161,8 @@ def test_ftr_grid_reaches_the_estimator():
 def test_estimator_events_name_a_stuck_vane():
     """An α vane stuck at 0.5 rad for 30 samples of the HFB-320 record (10 Hz): the EKF's gate
     rejects it 25 times in a row, then re-anchors the α state: one `reanchor` event naming
-    `alpha_rad` at the 25th stuck sample, every kind counted, no restart."""
+    `alpha_rad` at the 25th stuck sample, every kind counted, no restart; the vectorised replay
+    of the same arrays reports the same events."""
     data = shared(RECORDS[0][0])
     arrays = aeroident.read(data, ROOT / RECORDS[0][1])
     t = arrays["t_s"]
@@ -172,6 +173,8 @@ def test_estimator_events_name_a_stuck_vane():
     for k in range(len(t)):
         est.update({key: float(arrays[key][k]) for key in keys})
     got = est.events()
+    # The vectorised replay of the same arrays reports the same events.
+    assert aeroident.replay(arrays, estimator="ekf", model="longitudinal")["events"] == got
     assert set(got["counts"]) == {"restart", "reanchor", "change_detected"}
     assert got["not_listed"] == 0 and len(got["listed"]) == sum(got["counts"].values())
     assert got["counts"]["restart"] == 0, got

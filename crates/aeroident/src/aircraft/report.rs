@@ -208,15 +208,6 @@ impl Summary {
             })
             .collect()
     }
-
-    /// The estimators' other events, one line each
-    /// ([`aeroident_io::replay_output::EventsSummary::note`]), prefixed with the label.
-    pub fn event_notes(&self) -> Vec<String> {
-        self.events
-            .iter()
-            .filter_map(|e| e.events.note().map(|n| format!("{}: {n}", e.estimator)))
-            .collect()
-    }
 }
 
 fn nan_for_none(v: &[Option<f64>]) -> Vec<f64> {
@@ -659,12 +650,6 @@ pub fn table(summary: &Summary) -> String {
         }
         for t in &summary.targets {
             writeln!(s, "{}", targets_line(t)).ok();
-        }
-        for w in summary.event_warnings() {
-            writeln!(s, "warning: {w}").ok();
-        }
-        for n in summary.event_notes() {
-            writeln!(s, "note: {n}").ok();
         }
     }
     s

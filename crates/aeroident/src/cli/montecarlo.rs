@@ -255,6 +255,9 @@ pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
             for f in &e.failed_runs {
                 eprintln!("{}: run {} failed: {}", e.name, f.run, f.reason);
             }
+            for r in &e.restarted_runs {
+                eprintln!("{}: run {r} restarted from the priors (used)", e.name);
+            }
         }
         return super::print_stdout(&serde_json::to_string_pretty(&json_summary(&c))?)
             .map_err(Into::into);

@@ -248,12 +248,8 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         w.contains("sign a conventional")
             || w.starts_with("normalised innovation")
             || w.starts_with("collinear regressors")
-            || w.starts_with("estimator restarted")
     }) {
         eprintln!("warning: {w}");
-    }
-    if let Some(n) = outcome.summary.events.note() {
-        eprintln!("note: {n}");
     }
     if let Some(e) = diverged_error(&outcome, args.estimator.name()) {
         anyhow::bail!(e);

@@ -137,9 +137,6 @@ fn results_text(summary: &Summary) -> String {
     for w in summary.event_warnings() {
         s.push_str(&format!("warning: {w}\n"));
     }
-    for n in summary.event_notes() {
-        s.push_str(&format!("note: {n}\n"));
-    }
     s
 }
 

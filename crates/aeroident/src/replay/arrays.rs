@@ -90,6 +90,9 @@ impl Estimator for Recorder {
     fn nis(&self) -> Option<f64> {
         self.inner.nis()
     }
+    fn events(&self) -> &aeroident_estimators::EventLog {
+        self.inner.events()
+    }
     fn new_manoeuvre(&mut self) {
         self.inner.new_manoeuvre();
     }
@@ -127,11 +130,12 @@ pub fn replay_arrays<R: Read>(
 /// Drives estimator `est` with `samples` in order (module doc) and records its estimates.
 /// Refused samples (input errors) are skipped and counted; a divergence stops the run.
 ///
-/// Returns the arrays, the number of refused samples, and the divergence message if any.
+/// Returns the arrays, the number of refused samples, the divergence message if any, and the
+/// estimator's events ([`Estimator::events`]: restarts, re-anchorings, detected changes).
 pub fn replay_samples(
     est: Box<dyn Estimator>,
     samples: impl IntoIterator<Item = AirDataSample>,
-) -> (EstimateArrays, usize, Option<String>) {
+) -> (EstimateArrays, usize, Option<String>, aeroident_io::replay_output::EventsSummary) {
     let out = Rc::new(RefCell::new(EstimateArrays::default()));
     let mut rec = Recorder::new(est, Rc::clone(&out));
     let mut refused = 0;
@@ -148,9 +152,10 @@ pub fn replay_samples(
             refused += 1;
         }
     }
+    let events = aeroident_io::replay_output::EventsSummary::from_log(rec.events());
     drop(rec);
     let arrays = std::mem::take(&mut *out.borrow_mut());
-    (arrays, refused, diverged)
+    (arrays, refused, diverged, events)
 }
 
 #[cfg(test)]
@@ -213,7 +218,7 @@ mod tests {
         let est =
             build(EstimatorKind::Rls, spec.structure, spec.priors, &EstimatorOptions::default())
                 .expect("rls");
-        let (a, refused, diverged) = replay_samples(est, samples());
+        let (a, refused, diverged, _) = replay_samples(est, samples());
         assert_eq!((refused, diverged), (0, None));
         let n = a.names.len();
         assert_eq!(a.t_s.len(), 400);

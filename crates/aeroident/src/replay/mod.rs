@@ -507,6 +507,9 @@ pub fn replay_with<R: Read>(
     let mut pacer = Pacer::default();
     let mut warnings: Vec<String> = Vec::new();
     let mut diverged = false;
+    // Restarts of the estimator seen so far: each is printed when it happens (on a live feed
+    // the estimates fall back to the priors then, not at the end).
+    let mut restarts_seen = 0;
     let mut recorder = Recorder::default();
     for item in reader {
         let event = item?;
@@ -612,6 +615,15 @@ pub fn replay_with<R: Read>(
                 );
                 diverged = true;
                 break;
+            }
+            let restarts = r.est.events().count(aeroident_estimators::EventKind::Restart);
+            if restarts > restarts_seen {
+                restarts_seen = restarts;
+                eprintln!(
+                    "warning: estimator `{}` restarted from its priors at t = {} s (row {row}); its estimates come from the samples after it only",
+                    r.est.method(),
+                    s.t_s
+                );
             }
             let e = match result {
                 Ok(e) => e,
@@ -734,10 +746,11 @@ pub fn replay_with<R: Read>(
             ));
         }
     }
-    // Throughput of the estimation stage: the estimator update per sample (CSV parsing,
-    // differentiation, pacing and output are excluded).
+    // The estimator's events; its restarts were printed as they happened.
     let events = aeroident_io::replay_output::EventsSummary::from_log(r.est.events());
     warnings.extend(events.restart_warnings());
+    // Throughput of the estimation stage: the estimator update per sample (CSV parsing,
+    // differentiation, pacing and output are excluded).
     let secs = busy.as_secs_f64().max(1e-9);
     let (rejections, unlisted) = rejections.finish();
     warnings.extend(unlisted);

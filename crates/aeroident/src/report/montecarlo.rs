@@ -16,10 +16,11 @@ pub fn results(c: &Campaign) -> Vec<Results> {
         .iter()
         .map(|e| Results {
             title: format!(
-                "{} — mean of {} runs ± scatter ({} failed)",
+                "{} — mean of {} runs ± scatter ({} failed, {} restarted from the priors)",
                 e.name,
                 e.runs_ok,
-                e.failed_runs.len()
+                e.failed_runs.len(),
+                e.restarted_runs.len()
             ),
             reference_label: "truth".into(),
             rows: e

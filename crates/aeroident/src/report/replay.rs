@@ -73,6 +73,9 @@ pub fn results(outcome: &ReplayOutcome, title: &str, references: &[Reference]) -
     for s in sources {
         notes.push(format!("reference: {s}"));
     }
+    if let Some(n) = outcome.summary.events.note() {
+        notes.push(n);
+    }
     if outcome.samples.stride() > 1 {
         notes.push(format!(
             "fit quality on every {}th sample (the kept history of a long record)",

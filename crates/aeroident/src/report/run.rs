@@ -40,6 +40,15 @@ pub fn results(summary: &Summary) -> Vec<Results> {
             }),
         }
     }
+    // Each estimator's events (other than restarts, which are warnings) under its table.
+    for e in &summary.events {
+        let head = format!("{} — {} (", summary.scenario, e.estimator);
+        if let (Some(n), Some(r)) =
+            (e.events.note(), out.iter_mut().find(|r| r.title.starts_with(&head)))
+        {
+            r.notes.push(n);
+        }
+    }
     if let Some(last) = out.last_mut() {
         last.notes.push(
             "* = primary derivative; targets: within ±10 % within 5 s of the excitation and of the damage, ±2σ covering the truth at the end".into(),
@@ -109,7 +118,6 @@ pub fn write(
             c.failure.as_ref().map(|(t, m)| format!("{} failed at {t:.2} s: {m}", c.label))
         })
         .chain(summary.event_warnings())
-        .chain(summary.event_notes())
         .collect();
     Report {
         title: format!("aeroident run — {}", summary.scenario),

@@ -391,6 +391,36 @@ fn a_lock_out_restarts_the_filter_once_and_reports_it() {
     assert_eq!(ekf.events().count(EventKind::Restart), 1);
 }
 
+/// A lock-out at a sample that lacks a state channel (pitch attitude): the restart is made and
+/// reported, and the restarted filter waits for a sample with every state channel to start its
+/// states, as a new filter does, instead of failing.
+#[test]
+fn a_restart_at_an_incomplete_sample_waits_for_a_complete_one() {
+    let data = simulate(50.0, 4.0, 3);
+    let mut cfg = config(ModelStructure::longitudinal());
+    cfg.max_consecutive_rejections = 3;
+    let mut ekf = Ekf::new(cfg).unwrap();
+    for s in &data[..100] {
+        ekf.update(s).unwrap();
+    }
+    for k in 0..3 {
+        let mut s = data[100 + k];
+        s.alpha_rad = 1.0;
+        if k == 2 {
+            s.theta_rad = None;
+        }
+        ekf.update(&s).expect("a restart is not an error");
+    }
+    assert_eq!(ekf.events().count(EventKind::Restart), 1);
+    assert_eq!(ekf.state(state::ALPHA), None, "states not started from an incomplete sample");
+    ekf.update(&data[103]).unwrap();
+    assert_eq!(ekf.state(state::ALPHA), Some(data[103].alpha_rad));
+    for s in &data[104..150] {
+        ekf.update(s).unwrap();
+    }
+    assert_ne!(ekf.estimates().status, Status::Diverged);
+}
+
 #[test]
 fn configuration_errors_are_named() {
     let mut cfg = EkfConfig::new(ModelStructure::lateral());

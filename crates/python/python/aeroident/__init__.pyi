@@ -27,6 +27,7 @@ class ReplayResult(TypedDict, total=False):
     model: str
     summary: dict[str, Any]
     samples_refused: int
+    events: dict[str, Any]
 
 class EstimatorBase:
     def __new__(

@@ -285,16 +285,23 @@ fn new_manoeuvre_reinitialises_states_and_keeps_parameters() {
     assert!(ekf.update(&s2).is_ok());
 }
 
-#[test]
-fn divergence_is_reported_and_estimates_keep_last_good_values() {
+/// The 50-Hz longitudinal record (seed 3) and a filter with `max_consecutive_rejections` 3 and
+/// `max_restarts` restarts, run through its first 100 samples (the stuck-vane tests below).
+fn filter_at_sample_100(max_restarts: u32) -> (Ekf, EkfConfig, Vec<AirDataSample>) {
     let data = simulate(50.0, 4.0, 3);
     let mut cfg = config(ModelStructure::longitudinal());
     cfg.max_consecutive_rejections = 3;
-    cfg.max_restarts = 0;
-    let mut gated = Ekf::new(cfg).unwrap();
+    cfg.max_restarts = max_restarts;
+    let mut ekf = Ekf::new(cfg).unwrap();
     for s in &data[..100] {
-        gated.update(s).unwrap();
+        ekf.update(s).unwrap();
     }
+    (ekf, cfg, data)
+}
+
+#[test]
+fn divergence_is_reported_and_estimates_keep_last_good_values() {
+    let (mut gated, mut cfg, data) = filter_at_sample_100(0);
     // An α sensor stuck at 1 rad: rejected by the gate, then declared divergence.
     for k in 0..3 {
         let mut s = data[100 + k];
@@ -347,14 +354,8 @@ fn divergence_is_reported_and_estimates_keep_last_good_values() {
 /// the third of them.
 #[test]
 fn a_lock_out_restarts_the_filter_once_and_reports_it() {
-    let data = simulate(50.0, 4.0, 3);
-    let mut cfg = config(ModelStructure::longitudinal());
-    cfg.max_consecutive_rejections = 3;
-    assert_eq!(cfg.max_restarts, DEFAULT_MAX_RESTARTS);
-    let mut ekf = Ekf::new(cfg).unwrap();
-    for s in &data[..100] {
-        ekf.update(s).unwrap();
-    }
+    assert_eq!(EkfConfig::new(ModelStructure::longitudinal()).max_restarts, DEFAULT_MAX_RESTARTS);
+    let (mut ekf, cfg, data) = filter_at_sample_100(DEFAULT_MAX_RESTARTS);
     assert!(ekf.estimates().all_identified());
     for k in 0..3 {
         let mut s = data[100 + k];
@@ -396,13 +397,7 @@ fn a_lock_out_restarts_the_filter_once_and_reports_it() {
 /// states, as a new filter does, instead of failing.
 #[test]
 fn a_restart_at_an_incomplete_sample_waits_for_a_complete_one() {
-    let data = simulate(50.0, 4.0, 3);
-    let mut cfg = config(ModelStructure::longitudinal());
-    cfg.max_consecutive_rejections = 3;
-    let mut ekf = Ekf::new(cfg).unwrap();
-    for s in &data[..100] {
-        ekf.update(s).unwrap();
-    }
+    let (mut ekf, _, data) = filter_at_sample_100(1);
     for k in 0..3 {
         let mut s = data[100 + k];
         s.alpha_rad = 1.0;

@@ -42,7 +42,9 @@ use aeroident_signals::{Input, InputSignal, WindField, config::build_wind};
 use super::air_data::{AirDataSampler, M_PER_FT};
 use super::batch::{BatchFit, fit_window};
 use super::increments::increment_matrix;
-use super::scenario::{Channel, EstimatorSpec, EstimatorWind, SampleEstimatorSpec, Scenario};
+use super::scenario::{
+    AerodynamicsSpec, Channel, EstimatorSpec, EstimatorWind, SampleEstimatorSpec, Scenario,
+};
 use super::sensors::SensorNoise;
 use super::truth::{LocalDerivatives, local_derivatives};
 pub use super::two_aircraft::PublishedDiagnostics;
@@ -386,6 +388,17 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
     let trim = trim(&f16, &TrimCondition::level(sc.trim.alt_ft, sc.trim.vt_fps)).map_err(|e| {
         ExperimentError::Trim { vt_fps: sc.trim.vt_fps, alt_ft: sc.trim.alt_ft, source: e }
     })?;
+    // The matched-truth option: the tables' first-order expansion at this trim (same value at
+    // the trim, so the trim holds).
+    let f16 = match sc.aerodynamics {
+        AerodynamicsSpec::Tables => f16,
+        AerodynamicsSpec::Linear => {
+            let ld = local_derivatives(&f16, &trim.state, &trim.controls, &AeroIncrements::zero())
+                .map_err(|e| setup_err("linear aerodynamics at trim", e))?;
+            let vt0 = trim.state[f16::VT];
+            f16.with_linear_aero(super::truth::linearised(&ld, vt0))
+        }
+    };
     let reference = IncrementReference {
         alpha_rad: trim.state[f16::ALPHA],
         elevator_rad: trim.controls.elevator_rad,

@@ -6,6 +6,9 @@
 //! description = "Table 4.7 case 4: ΔCm_α alone, 1 Hz 0.05° sine"
 //! duration_s = 10.0
 //! dt_s = 0.01                           # RK4 step and sample interval (100 Hz)
+//! aerodynamics = "tables"              # optional: "tables" (default) or "linear", the
+//!                                       # tables' expansion at the trim (matched truth of the
+//!                                       # linear six-axis structure)
 //!
 //! [trim]                                # wings-level trim point (thesis: 20,000 ft, 675 ft/s)
 //! vt_fps = 675.0
@@ -428,6 +431,19 @@ pub enum EstimatorWind {
     Known,
 }
 
+/// The reference aircraft's aerodynamics (TOML `aerodynamics`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AerodynamicsSpec {
+    /// The Stevens–Lewis tables (SLJ App. A): nonlinear in α, β and the surfaces.
+    #[default]
+    Tables,
+    /// The tables' first-order expansion at the trim ([`super::truth::linearised`]): the
+    /// matched truth of the linear six-axis structure, whose local derivatives are the trim's
+    /// everywhere. For separating estimator defects from model-structure error.
+    Linear,
+}
+
 /// The TOML shape (names as written); [`Scenario::from_toml`] turns it into a [`Scenario`].
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -445,6 +461,8 @@ struct RawScenario {
     dt_s: f64,
     #[serde(default)]
     trim: TrimSpec,
+    #[serde(default)]
+    aerodynamics: AerodynamicsSpec,
     #[serde(default)]
     input: Vec<InputSpec>,
     #[serde(default)]
@@ -477,6 +495,8 @@ pub struct Scenario {
     pub dt_s: f64,
     /// Trim point.
     pub trim: TrimSpec,
+    /// The reference aircraft's aerodynamics (default the tables).
+    pub aerodynamics: AerodynamicsSpec,
     /// Pilot inputs.
     pub input: Vec<InputSpec>,
     /// Winds on the reference aircraft (body axes; `aeroident_signals::WindConfig`, e.g. the
@@ -668,6 +688,7 @@ impl Scenario {
             duration_s: raw.duration_s,
             dt_s: raw.dt_s,
             trim: raw.trim,
+            aerodynamics: raw.aerodynamics,
             input: raw.input,
             wind: raw.wind,
             estimator_wind: raw.estimator_wind,

@@ -23,9 +23,12 @@
 //! The bias `C_0` of a structure is the intercept of the tangent plane through the point:
 //! `C_0 = C(x₀) − Σ_{j ≠ 0} C_j ξ_j(x₀)` over the structure's terms of that coefficient.
 
-use aeroident_estimators::vocabulary::{ModelStructure, N_TERMS, Param, Term};
+use aeroident_estimators::vocabulary::{Coefficient, ModelStructure, N_TERMS, Param, Term};
 use aeroident_models::ModelError;
-use aeroident_models::f16::{self, AeroCoefficients, AeroIncrements, F16, F16Controls, F16State};
+use aeroident_models::f16::linear::{N_LINEAR_COEFFICIENTS, N_LINEAR_REGRESSORS};
+use aeroident_models::f16::{
+    self, AeroCoefficients, AeroIncrements, F16, F16Controls, F16State, LinearAero,
+};
 
 /// Finite-difference step (rad, or per unit hat-rate / V/V0).
 pub const FD_STEP: f64 = 1e-6;
@@ -147,6 +150,41 @@ pub fn local_derivatives(
     regressor[Term::Dr.index()] = Some(u.rudder_rad);
     regressor[Term::V.index()] = Some(1.0);
     Ok(LocalDerivatives { value, regressor, d })
+}
+
+/// The vocabulary terms of [`LinearAero`]'s regressors, in its order
+/// ([`aeroident_models::f16::linear::LINEAR_REGRESSOR_NAMES`]).
+const LINEAR_TERMS: [Term; N_LINEAR_REGRESSORS] =
+    [Term::Alpha, Term::Beta, Term::P, Term::Q, Term::R, Term::De, Term::Da, Term::Dr, Term::V];
+/// The vocabulary coefficients of [`LinearAero`]'s rows, in its order.
+const LINEAR_COEFFICIENTS: [Coefficient; N_LINEAR_COEFFICIENTS] = [
+    Coefficient::CY,
+    Coefficient::CL,
+    Coefficient::CD,
+    Coefficient::Cl,
+    Coefficient::Cm,
+    Coefficient::Cn,
+];
+
+/// The first-order aerodynamics of the point `ld` was taken at (its values and every
+/// first-order local derivative of `CY CL CD Cl Cm Cn`), with `vt0_fps` the point's airspeed
+/// (ft/s): the matched truth of the linear six-axis structure ([`LinearAero`]). An aircraft
+/// flying it has, everywhere, the local derivatives `ld` has at the point, so the truth of a
+/// campaign is exact along the whole flight, not only at trim.
+pub fn linearised(ld: &LocalDerivatives, vt0_fps: f64) -> LinearAero {
+    let mut reference = [0.0; N_LINEAR_REGRESSORS];
+    let mut gradient = [[0.0; N_LINEAR_REGRESSORS]; N_LINEAR_COEFFICIENTS];
+    let mut value = [0.0; N_LINEAR_COEFFICIENTS];
+    for (j, t) in LINEAR_TERMS.iter().enumerate() {
+        reference[j] = ld.regressor[t.index()].unwrap_or(0.0);
+    }
+    for (k, c) in LINEAR_COEFFICIENTS.iter().enumerate() {
+        value[k] = ld.value[c.index()];
+        for (j, t) in LINEAR_TERMS.iter().enumerate() {
+            gradient[k][j] = ld.d[c.index()][t.index()].unwrap_or(0.0);
+        }
+    }
+    LinearAero { vt0_fps, reference, value, gradient }
 }
 
 #[cfg(test)]
@@ -277,6 +315,41 @@ mod tests {
                 })
                 .sum();
             assert!((v - ld.value[c.index()]).abs() < 1e-12, "{c:?}");
+        }
+    }
+
+    /// The linearised F-16 (matched truth): at trim it has the tables' values and local
+    /// derivatives, so the trim holds (ẋ of the trim ≈ 0); 3° of α and 2° of β away its local
+    /// derivatives are still the trim's (the model is linear), while the tables' have moved
+    /// (Cl_β and Cl_r depend on α: the independent check that the point is off-trim).
+    #[test]
+    fn linearised_aircraft_keeps_the_trim_derivatives_everywhere() {
+        let (f, t) = thesis_trim();
+        let zero = AeroIncrements::zero();
+        let ld = local_derivatives(&f, &t.state, &t.controls, &zero).unwrap();
+        let lin = f.clone().with_linear_aero(linearised(&ld, t.state[f16::VT]));
+        let at_trim = local_derivatives(&lin, &t.state, &t.controls, &zero).unwrap();
+        for k in 0..8 {
+            assert!((at_trim.value[k] - ld.value[k]).abs() < 1e-12, "value {k}");
+        }
+        let xd = aeroident_models::Dynamics::derivatives(&lin, 0.0, &t.state, &t.controls).unwrap();
+        for i in [f16::VT, f16::ALPHA, f16::BETA, f16::P, f16::Q, f16::R] {
+            assert!(xd[i].abs() < 1e-6, "state {i}: {}", xd[i]);
+        }
+        let mut off = t.state;
+        off[f16::ALPHA] += 3f64.to_radians();
+        off[f16::BETA] += 2f64.to_radians();
+        off[f16::P] += 0.1;
+        let far = local_derivatives(&lin, &off, &t.controls, &zero).unwrap();
+        let tables_far = local_derivatives(&f, &off, &t.controls, &zero).unwrap();
+        let names = ["CY_beta", "CL_alpha", "CD_alpha", "Cl_beta", "Cl_p", "Cl_r", "Cl_da"];
+        for n in names.iter().chain(&["Cm_alpha", "Cm_q", "Cm_de", "Cn_beta", "Cn_r", "Cn_dr"]) {
+            let (a, b) = (far.derivative(p(n)).unwrap(), ld.derivative(p(n)).unwrap());
+            assert!((a - b).abs() < 1e-6 * b.abs().max(1e-2), "{n}: {a} vs trim {b}");
+        }
+        for n in ["Cl_beta", "Cl_r"] {
+            let (a, b) = (tables_far.derivative(p(n)).unwrap(), ld.derivative(p(n)).unwrap());
+            assert!((a - b).abs() > 0.05 * b.abs(), "tables' {n} should move off trim: {a} vs {b}");
         }
     }
 }

@@ -57,6 +57,8 @@
 
 pub mod data;
 pub mod increments;
+/// First-order aerodynamics about a reference point: the matched truth of a linear structure.
+pub mod linear;
 pub mod table;
 
 pub use data::{DataError, F16Data};
@@ -64,6 +66,7 @@ pub use increments::{
     AeroCoefficient, AeroIncrements, IncrementInputs, IncrementReference, IncrementRegressor,
     IncrementSchedule,
 };
+pub use linear::{LinearAero, LinearAeroInputs};
 
 use crate::atmosphere::air_data;
 use crate::rigid_body::{self, BodyLoads, Kinematics, RigidBody, VelocityAngles, Wind};
@@ -301,6 +304,20 @@ pub struct F16 {
     pub increments: AeroIncrements,
     /// When the increments act.
     pub schedule: IncrementSchedule,
+    /// The aerodynamic model the increments are added to: the textbook tables (default) or
+    /// a linear model ([`F16::with_linear_aero`]).
+    pub aerodynamics: Aerodynamics,
+}
+
+/// The aerodynamic model of an [`F16`] (increments are added to either).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum Aerodynamics {
+    /// The Stevens–Lewis tables, rate damping and cg transfer (SLJ App. A).
+    #[default]
+    Tables,
+    /// First-order aerodynamics about a reference point ([`linear`]): the body-axis
+    /// coefficients at the actual cg, cg transfer included in its values and gradient.
+    Linear(Box<LinearAero>),
 }
 
 /// The cg range the model accepts, fraction of c̄: `[XCG_MIN, XCG_MAX]`. The Stevens & Lewis
@@ -347,7 +364,17 @@ impl F16 {
             xcg,
             increments: AeroIncrements::zero(),
             schedule: IncrementSchedule::Always,
+            aerodynamics: Aerodynamics::Tables,
         })
+    }
+
+    /// The same aircraft with the linear aerodynamics `aero` in place of the tables (mass,
+    /// engine, geometry and increments unchanged). Build `aero` from the tables' local
+    /// derivatives at a trim to keep that trim (the value at the reference point is the
+    /// tables' there).
+    pub fn with_linear_aero(mut self, aero: LinearAero) -> Self {
+        self.aerodynamics = Aerodynamics::Linear(Box::new(aero));
+        self
     }
 
     /// The same aircraft with `increments` acting per `schedule`.
@@ -460,7 +487,7 @@ impl F16 {
     }
 
     /// Total coefficients at the cg (SLJ §3.5; data README §5): table build-up, rate damping and
-    /// cg shift, then the increments `inc`, at the air-relative `air` and body rates
+    /// cg shift (or the linear model of [`Aerodynamics::Linear`]), then the increments `inc`, at the air-relative `air` and body rates
     /// `[p, q, r]` (rad/s).
     fn aero_coefficients(
         &self,
@@ -470,11 +497,37 @@ impl F16 {
         inc: &AeroIncrements,
     ) -> AeroCoefficients {
         let d = self.data;
-        // α is located once on the shared α axis of every table (checked at load).
-        let a_deg = air.alpha_rad * d.rad_to_deg;
-        let sa = table::segment(&d.cx.r, a_deg, Extrapolation::Linear);
-        let mut c = self.static_coefficients(sa, air.beta_rad * d.rad_to_deg, u);
-        self.add_damping_and_cg(&mut c, sa, air.vt_fps, pqr);
+        let mut c = match &self.aerodynamics {
+            Aerodynamics::Tables => {
+                // α is located once on the shared α axis of every table (checked at load).
+                let a_deg = air.alpha_rad * d.rad_to_deg;
+                let sa = table::segment(&d.cx.r, a_deg, Extrapolation::Linear);
+                let mut c = self.static_coefficients(sa, air.beta_rad * d.rad_to_deg, u);
+                self.add_damping_and_cg(&mut c, sa, air.vt_fps, pqr);
+                c
+            }
+            Aerodynamics::Linear(lin) => {
+                let x = LinearAeroInputs {
+                    vt_fps: air.vt_fps,
+                    alpha_rad: air.alpha_rad,
+                    beta_rad: air.beta_rad,
+                    pqr_rad_s: pqr,
+                    surfaces_rad: [u.elevator_rad, u.aileron_rad, u.rudder_rad],
+                };
+                let g = &d.geometry;
+                let [cx, cy, cz, cl, cm, cn] = lin.body_coefficients(&x, g.span_ft, g.cbar_ft);
+                AeroCoefficients {
+                    CX: cx,
+                    CY: cy,
+                    CZ: cz,
+                    Cl: cl,
+                    Cm: cm,
+                    Cn: cn,
+                    CL: 0.0,
+                    CD: 0.0,
+                }
+            }
+        };
         let (s_alpha, c_alpha) = air.alpha_rad.sin_cos();
         if !inc.is_zero() {
             let g = &d.geometry;

@@ -11,7 +11,7 @@
 //! with α, β, V the air-relative values (rad, rad, ft/s), p, q, r body rates (rad/s), surface
 //! deflections in rad, b the span and c̄ the mean chord (ft). `CL` and `CD` are stability-axis
 //! and rotated into body axes through the air-relative α (the inverse of the relation of
-//! [`super::AeroCoefficients`]): `CX = CL sin α − CD cos α`, `CZ = −CL cos α − CD sin α`.
+//! [`crate::f16::AeroCoefficients`]): `CX = CL sin α − CD cos α`, `CZ = −CL cos α − CD sin α`.
 //! `CY, Cl, Cn, Cm` are body-axis, moments about the cg.
 //!
 //! Built from a table aircraft's local derivatives at its trim, this is the **matched truth**

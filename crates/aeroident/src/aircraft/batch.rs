@@ -192,16 +192,6 @@ pub fn config(spec: &SampleEstimatorSpec) -> Result<BatchConfig, String> {
     })
 }
 
-/// Whether a batch entry fits the unsmoothed samples (option `samples = "raw"`; the default
-/// for `fem`) or the smoothed ones the real-time estimators see (`samples = "smoothed"`; the
-/// default for `oe`). Module doc. The value was checked by [`config`].
-pub fn raw_samples(spec: &SampleEstimatorSpec) -> bool {
-    match spec.options.get("samples").and_then(|v| v.as_str()) {
-        Some(v) => v == "raw",
-        None => spec.kind == "fem",
-    }
-}
-
 /// A comma-separated list of state names (`V alpha beta p q r phi theta`) as a full-state mask.
 fn parse_states(list: &str) -> Result<[bool; N_STATES], String> {
     let mut mask = [false; N_STATES];

@@ -322,22 +322,8 @@ struct SampleChannel {
     est: Box<dyn Estimator>,
     structure: ModelStructure,
     /// Feed the unsmoothed samples without the differentiated `ṗ q̇ ṙ`
-    /// ([`ekf_raw_samples`]).
+    /// ([`SampleEstimatorSpec::raw_samples`]).
     raw_samples: bool,
-}
-
-/// Whether an `ekf` entry is fed the **unsmoothed** samples ([`AirDataSampler::raw`]: white
-/// sensor noise, the same time stamps) **without** the differentiated `ṗ q̇ ṙ` (option
-/// `samples = "raw"`), instead of the matched-smoother samples the equation-error estimators
-/// need (`"smoothed"`, the default). The filter assumes white measurement noise and
-/// independent outputs; the smoothed samples are correlated over the smoother's 0.2 s and the
-/// raw accelerations are differences of the raw gyros around them, so the raw feed without the
-/// accelerations is the one its noise model describes (the moments are then learned from the
-/// gyros through the dynamics, as in output error). Measured on the matched truth in calm air
-/// (docs/uncertainty.md, "Efficiency on the matched truth"): scatter 0.7–4.0 × the Cramér–Rao
-/// bound raw, 0.9–10 × smoothed.
-fn ekf_raw_samples(spec: &SampleEstimatorSpec) -> bool {
-    spec.kind == "ekf" && spec.options.get("samples").and_then(|v| v.as_str()) == Some("raw")
 }
 
 /// A batch channel: the recorded samples, fitted after the flight.
@@ -417,8 +403,7 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
         AerodynamicsSpec::Linear => {
             let ld = local_derivatives(&f16, &trim.state, &trim.controls, &AeroIncrements::zero())
                 .map_err(|e| setup_err("linear aerodynamics at trim", e))?;
-            let vt0 = trim.state[f16::VT];
-            f16.with_linear_aero(super::truth::linearised(&ld, vt0))
+            f16.with_linear_aero(super::truth::linearised(&ld, &trim.state, &trim.controls))
         }
     };
     let reference = IncrementReference {
@@ -473,7 +458,7 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
                 let config = super::batch::config(s).map_err(|e| setup_err(&what, e))?;
                 let structure = config.oe().structure;
                 let kind = config.kind();
-                let raw_samples = super::batch::raw_samples(s);
+                let raw_samples = s.raw_samples();
                 (
                     Channelled::Batch(BatchChannel {
                         config,
@@ -496,7 +481,7 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
                     Channelled::Sample(SampleChannel {
                         est,
                         structure,
-                        raw_samples: ekf_raw_samples(s),
+                        raw_samples: s.raw_samples(),
                     }),
                     kind,
                     Quantity::Derivative,
@@ -777,15 +762,13 @@ fn step_channel(
             c.log.states.push(two.x);
         }
         Channelled::Sample(s) => {
-            let raw_feed = match (s.raw_samples, raw) {
-                (true, Some(r)) => Some(AirDataSample {
-                    pdot_rad_s2: None,
-                    qdot_rad_s2: None,
-                    rdot_rad_s2: None,
-                    ..*r
-                }),
-                _ => None,
+            let without_accelerations = |r: &AirDataSample| AirDataSample {
+                pdot_rad_s2: None,
+                qdot_rad_s2: None,
+                rdot_rad_s2: None,
+                ..*r
             };
+            let raw_feed = raw.filter(|_| s.raw_samples).map(without_accelerations);
             let feed = if s.raw_samples { raw_feed.as_ref() } else { air };
             if c.log.failure.is_none()
                 && let Some(sample) = feed

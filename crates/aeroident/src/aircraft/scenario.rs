@@ -307,6 +307,28 @@ pub struct SampleEstimatorSpec {
     pub options: toml::Table,
 }
 
+impl SampleEstimatorSpec {
+    /// Whether the entry is fed the **unsmoothed** samples (`AirDataSampler::raw`: white sensor
+    /// noise, the same time stamps) instead of the matched-smoother ones the equation-error
+    /// estimators need: option `samples = "raw" | "smoothed"` of `ekf`, `oe` and `fem` (the
+    /// value is checked by the estimator factory or `super::batch::config`); default raw for
+    /// `fem` only.
+    /// - `oe`, `fem`: the samples the post-flight fit records (`super::batch` module doc).
+    /// - `ekf`: raw means the raw samples **without** the differentiated `ṗ q̇ ṙ`. The filter
+    ///   assumes white measurement noise and independent outputs; the smoothed samples are
+    ///   correlated over the smoother's 0.2 s and the raw accelerations are differences of the
+    ///   raw gyros around them, so this is the feed its noise model describes (the moments are
+    ///   then learned from the gyros through the dynamics). Measured on the matched truth in
+    ///   calm air (docs/uncertainty.md, "Efficiency on the matched truth"): scatter 0.7–4.0 ×
+    ///   the Cramér–Rao bound raw, 0.9–10 × smoothed.
+    pub fn raw_samples(&self) -> bool {
+        match self.options.get("samples").and_then(|v| v.as_str()) {
+            Some(v) => v == "raw",
+            None => self.kind == "fem",
+        }
+    }
+}
+
 /// The sample-driven estimator kinds.
 pub const SAMPLE_KINDS: [&str; 6] = ["rls", "ekf", "smpe", "smpe-corrected", "gradient", "ftr"];
 

@@ -25,9 +25,8 @@
 
 use aeroident_estimators::vocabulary::{Coefficient, ModelStructure, N_TERMS, Param, Term};
 use aeroident_models::ModelError;
-use aeroident_models::f16::linear::{N_LINEAR_COEFFICIENTS, N_LINEAR_REGRESSORS};
 use aeroident_models::f16::{
-    self, AeroCoefficients, AeroIncrements, F16, F16Controls, F16State, LinearAero,
+    self, AeroCoefficients, AeroIncrements, F16, F16Controls, F16State, IncrementReference,
 };
 
 /// Finite-difference step (rad, or per unit hat-rate / V/V0).
@@ -152,39 +151,44 @@ pub fn local_derivatives(
     Ok(LocalDerivatives { value, regressor, d })
 }
 
-/// The vocabulary terms of [`LinearAero`]'s regressors, in its order
-/// ([`aeroident_models::f16::linear::LINEAR_REGRESSOR_NAMES`]).
-const LINEAR_TERMS: [Term; N_LINEAR_REGRESSORS] =
-    [Term::Alpha, Term::Beta, Term::P, Term::Q, Term::R, Term::De, Term::Da, Term::Dr, Term::V];
-/// The vocabulary coefficients of [`LinearAero`]'s rows, in its order.
-const LINEAR_COEFFICIENTS: [Coefficient; N_LINEAR_COEFFICIENTS] = [
-    Coefficient::CY,
-    Coefficient::CL,
-    Coefficient::CD,
-    Coefficient::Cl,
-    Coefficient::Cm,
-    Coefficient::Cn,
-];
-
-/// The first-order aerodynamics of the point `ld` was taken at (its values and every
-/// first-order local derivative of `CY CL CD Cl Cm Cn`), with `vt0_fps` the point's airspeed
-/// (ft/s): the matched truth of the linear six-axis structure ([`LinearAero`]). An aircraft
-/// flying it has, everywhere, the local derivatives `ld` has at the point, so the truth of a
-/// campaign is exact along the whole flight, not only at trim.
-pub fn linearised(ld: &LocalDerivatives, vt0_fps: f64) -> LinearAero {
-    let mut reference = [0.0; N_LINEAR_REGRESSORS];
-    let mut gradient = [[0.0; N_LINEAR_REGRESSORS]; N_LINEAR_COEFFICIENTS];
-    let mut value = [0.0; N_LINEAR_COEFFICIENTS];
-    for (j, t) in LINEAR_TERMS.iter().enumerate() {
-        reference[j] = ld.regressor[t.index()].unwrap_or(0.0);
-    }
-    for (k, c) in LINEAR_COEFFICIENTS.iter().enumerate() {
-        value[k] = ld.value[c.index()];
-        for (j, t) in LINEAR_TERMS.iter().enumerate() {
-            gradient[k][j] = ld.d[c.index()][t.index()].unwrap_or(0.0);
+/// The first-order aerodynamics of the point (`x`, `u`) that `ld` was taken at, as the F-16's
+/// linear aerodynamics ([`aeroident_models::f16::Aerodynamics::Linear`]): an increment matrix
+/// about that point ([`super::increments::increment_matrix`]) whose bias column holds the
+/// point's `CL CD CY Cl Cm Cn` and whose `alpha beta p q r de da dr` columns hold their local
+/// derivatives. An aircraft flying it has, everywhere, the local derivatives `ld` has at the
+/// point: the matched truth of the linear six-axis structure, exact along the whole flight.
+/// The airspeed derivative (`Term::V`) is not carried: the F-16's tables depend on the
+/// airspeed only through the hat rates, so it is zero (checked in the tests).
+pub fn linearised(ld: &LocalDerivatives, x: &F16State, u: &F16Controls) -> AeroIncrements {
+    const COEFFICIENTS: [Coefficient; 6] = [
+        Coefficient::CL,
+        Coefficient::CD,
+        Coefficient::CY,
+        Coefficient::Cl,
+        Coefficient::Cm,
+        Coefficient::Cn,
+    ];
+    const TERMS: [Term; 8] =
+        [Term::Alpha, Term::Beta, Term::P, Term::Q, Term::R, Term::De, Term::Da, Term::Dr];
+    let reference = IncrementReference {
+        alpha_rad: x[f16::ALPHA],
+        beta_rad: x[f16::BETA],
+        p_rad_s: x[f16::P],
+        q_rad_s: x[f16::Q],
+        r_rad_s: x[f16::R],
+        elevator_rad: u.elevator_rad,
+        aileron_rad: u.aileron_rad,
+        rudder_rad: u.rudder_rad,
+    };
+    let mut values = Vec::with_capacity(COEFFICIENTS.len() * (TERMS.len() + 1));
+    for c in COEFFICIENTS {
+        values.push((Param::new(c, Term::Bias), ld.value[c.index()]));
+        for t in TERMS {
+            let p = Param::new(c, t);
+            values.push((p, ld.derivative(p).expect("first-order terms have a local value")));
         }
     }
-    LinearAero { vt0_fps, reference, value, gradient }
+    super::increments::increment_matrix(reference, &values)
 }
 
 #[cfg(test)]
@@ -327,7 +331,11 @@ mod tests {
         let (f, t) = thesis_trim();
         let zero = AeroIncrements::zero();
         let ld = local_derivatives(&f, &t.state, &t.controls, &zero).unwrap();
-        let lin = f.clone().with_linear_aero(linearised(&ld, t.state[f16::VT]));
+        let lin = f.clone().with_linear_aero(linearised(&ld, &t.state, &t.controls));
+        for n in ["CL_V", "CD_V", "CY_V", "Cl_V", "Cm_V", "Cn_V"] {
+            let v = ld.derivative(p(n)).unwrap();
+            assert!(v.abs() < 1e-8, "the tables' {n} = {v}: the linear model would drop it");
+        }
         let at_trim = local_derivatives(&lin, &t.state, &t.controls, &zero).unwrap();
         for k in 0..8 {
             assert!((at_trim.value[k] - ld.value[k]).abs() < 1e-12, "value {k}");

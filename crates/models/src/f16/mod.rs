@@ -57,8 +57,6 @@
 
 pub mod data;
 pub mod increments;
-/// First-order aerodynamics about a reference point: the matched truth of a linear structure.
-pub mod linear;
 pub mod table;
 
 pub use data::{DataError, F16Data};
@@ -66,7 +64,6 @@ pub use increments::{
     AeroCoefficient, AeroIncrements, IncrementInputs, IncrementReference, IncrementRegressor,
     IncrementSchedule,
 };
-pub use linear::{LinearAero, LinearAeroInputs};
 
 use crate::atmosphere::air_data;
 use crate::rigid_body::{self, BodyLoads, Kinematics, RigidBody, VelocityAngles, Wind};
@@ -315,9 +312,12 @@ pub enum Aerodynamics {
     /// The Stevens–Lewis tables, rate damping and cg transfer (SLJ App. A).
     #[default]
     Tables,
-    /// First-order aerodynamics about a reference point ([`linear`]): the body-axis
-    /// coefficients at the actual cg, cg transfer included in its values and gradient.
-    Linear(Box<LinearAero>),
+    /// Linear aerodynamics about a reference point, written as an increment matrix
+    /// ([`AeroIncrements`]) added to zero: its bias column holds the coefficients `CL CD CY Cl
+    /// Cm Cn` at the reference, its other columns their first-order derivatives (Klein &
+    /// Morelli 2006 eq. 5.1–5.6). Body-axis moments about the actual cg; `CL`, `CD`
+    /// stability-axis, rotated through the air-relative α as every increment is.
+    Linear(Box<AeroIncrements>),
 }
 
 /// The cg range the model accepts, fraction of c̄: `[XCG_MIN, XCG_MAX]`. The Stevens & Lewis
@@ -369,10 +369,10 @@ impl F16 {
     }
 
     /// The same aircraft with the linear aerodynamics `aero` in place of the tables (mass,
-    /// engine, geometry and increments unchanged). Build `aero` from the tables' local
-    /// derivatives at a trim to keep that trim (the value at the reference point is the
-    /// tables' there).
-    pub fn with_linear_aero(mut self, aero: LinearAero) -> Self {
+    /// engine, geometry and the scheduled increments unchanged; [`Aerodynamics::Linear`]).
+    /// Built from the tables' values and local derivatives at a trim, the trim holds (the
+    /// coefficients at the reference point are the tables' there).
+    pub fn with_linear_aero(mut self, aero: AeroIncrements) -> Self {
         self.aerodynamics = Aerodynamics::Linear(Box::new(aero));
         self
     }
@@ -497,6 +497,18 @@ impl F16 {
         inc: &AeroIncrements,
     ) -> AeroCoefficients {
         let d = self.data;
+        let x = IncrementInputs {
+            vt_fps: air.vt_fps,
+            alpha_rad: air.alpha_rad,
+            beta_rad: air.beta_rad,
+            p_rad_s: pqr[0],
+            q_rad_s: pqr[1],
+            r_rad_s: pqr[2],
+            elevator_rad: u.elevator_rad,
+            aileron_rad: u.aileron_rad,
+            rudder_rad: u.rudder_rad,
+        };
+        let sc_alpha = air.alpha_rad.sin_cos();
         let mut c = match &self.aerodynamics {
             Aerodynamics::Tables => {
                 // α is located once on the shared α axis of every table (checked at load).
@@ -507,57 +519,38 @@ impl F16 {
                 c
             }
             Aerodynamics::Linear(lin) => {
-                let x = LinearAeroInputs {
-                    vt_fps: air.vt_fps,
-                    alpha_rad: air.alpha_rad,
-                    beta_rad: air.beta_rad,
-                    pqr_rad_s: pqr,
-                    surfaces_rad: [u.elevator_rad, u.aileron_rad, u.rudder_rad],
-                };
-                let g = &d.geometry;
-                let [cx, cy, cz, cl, cm, cn] = lin.body_coefficients(&x, g.span_ft, g.cbar_ft);
-                AeroCoefficients {
-                    CX: cx,
-                    CY: cy,
-                    CZ: cz,
-                    Cl: cl,
-                    Cm: cm,
-                    Cn: cn,
-                    CL: 0.0,
-                    CD: 0.0,
-                }
+                let mut c = AeroCoefficients::default();
+                self.add_increments(&mut c, lin, &x, sc_alpha);
+                c
             }
         };
-        let (s_alpha, c_alpha) = air.alpha_rad.sin_cos();
         if !inc.is_zero() {
-            let g = &d.geometry;
-            let dc = inc.deltas(
-                &IncrementInputs {
-                    vt_fps: air.vt_fps,
-                    alpha_rad: air.alpha_rad,
-                    beta_rad: air.beta_rad,
-                    p_rad_s: pqr[0],
-                    q_rad_s: pqr[1],
-                    r_rad_s: pqr[2],
-                    elevator_rad: u.elevator_rad,
-                    aileron_rad: u.aileron_rad,
-                    rudder_rad: u.rudder_rad,
-                },
-                g.span_ft,
-                g.cbar_ft,
-            );
-            // ΔCL, ΔCD are stability-axis: rotate into body x, z by the air-relative α.
-            let (dcl, dcd) = (dc[AeroCoefficient::CL as usize], dc[AeroCoefficient::CD as usize]);
-            c.CX += dcl * s_alpha - dcd * c_alpha;
-            c.CZ += -dcl * c_alpha - dcd * s_alpha;
-            c.CY += dc[AeroCoefficient::CY as usize];
-            c.Cl += dc[AeroCoefficient::Cl as usize];
-            c.Cm += dc[AeroCoefficient::Cm as usize];
-            c.Cn += dc[AeroCoefficient::Cn as usize];
+            self.add_increments(&mut c, inc, &x, sc_alpha);
         }
+        let (s_alpha, c_alpha) = sc_alpha;
         c.CL = c.CX * s_alpha - c.CZ * c_alpha;
         c.CD = -c.CX * c_alpha - c.CZ * s_alpha;
         c
+    }
+
+    /// Adds the increments `inc` at the air-relative condition `x` to `c`; `(sin α, cos α)` of
+    /// the air-relative α rotates ΔCL, ΔCD (stability axes) into body x, z.
+    fn add_increments(
+        &self,
+        c: &mut AeroCoefficients,
+        inc: &AeroIncrements,
+        x: &IncrementInputs,
+        (s_alpha, c_alpha): (f64, f64),
+    ) {
+        let g = &self.data.geometry;
+        let dc = inc.deltas(x, g.span_ft, g.cbar_ft);
+        let (dcl, dcd) = (dc[AeroCoefficient::CL as usize], dc[AeroCoefficient::CD as usize]);
+        c.CX += dcl * s_alpha - dcd * c_alpha;
+        c.CZ += -dcl * c_alpha - dcd * s_alpha;
+        c.CY += dc[AeroCoefficient::CY as usize];
+        c.Cl += dc[AeroCoefficient::Cl as usize];
+        c.Cm += dc[AeroCoefficient::Cm as usize];
+        c.Cn += dc[AeroCoefficient::Cn as usize];
     }
 
     /// Static and control coefficients from the tables (SLJ App. A: CX, CY, CZ, CL, DLDA, DLDR,

@@ -29,6 +29,8 @@
 
 use crate::estimators::EstimatorKind;
 use crate::replay::{DerivativeSource, Pacing, ReplayOptions, ReplayOutcome, replay};
+use aeroident_estimators::flight_model::N_STATES;
+use aeroident_estimators::output_error::InitialStates;
 use aeroident_io::{FlightDataReader, LogFormat, Mapping, ModelSpec, open_log_with_notes};
 use anyhow::Context;
 use std::io::Write;
@@ -77,6 +79,30 @@ pub struct ReplayArgs {
     /// to it and the validation metrics reported under `validation_on` in the summary.
     #[arg(long, value_name = "FILE2")]
     pub validate_on: Option<PathBuf>,
+    /// `oe`, `fem`: each manoeuvre's initial state fixed at its first sample's measurements
+    /// (default; Jategaonkar's `parFlagX0 = 0`) or estimated with the parameters (every
+    /// integrated state of the model, per manoeuvre; `estimate`).
+    #[arg(long, value_enum)]
+    pub initial_states: Option<InitialStatesArg>,
+}
+
+/// `--initial-states` of the batch fits (`aeroident_estimators::output_error::InitialStates`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum InitialStatesArg {
+    /// Each manoeuvre starts at its first sample's measured states.
+    FirstSample,
+    /// Each manoeuvre's initial state is estimated with the parameters.
+    Estimate,
+}
+
+impl InitialStatesArg {
+    /// The estimator crate's setting: every integrated state free for `Estimate`.
+    pub fn to_config(self) -> InitialStates {
+        match self {
+            Self::FirstSample => InitialStates::FirstSample,
+            Self::Estimate => InitialStates::Estimate([true; N_STATES]),
+        }
+    }
 }
 
 fn announce(line: &str) {
@@ -110,6 +136,12 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     }
     if args.estimator.is_batch() {
         return execute_batch(&args, &mapping, opts.model);
+    }
+    if args.initial_states.is_some() {
+        anyhow::bail!(
+            "--initial-states applies to the batch fits (--estimator oe or fem), not to --estimator {}",
+            args.estimator.name()
+        );
     }
     if !live && args.out.is_none() {
         anyhow::bail!("give --out <dir> (or read `-` from stdin for a live feed on stdout)");
@@ -349,7 +381,9 @@ fn execute_batch(
     for n in &notes {
         eprintln!("note: {n}");
     }
-    let mut outcome = crate::replay::batch::fit_record(reader, mapping, model, fem)?;
+    let initial_states = args.initial_states.unwrap_or(InitialStatesArg::FirstSample).to_config();
+    let mut outcome =
+        crate::replay::batch::fit_record(reader, mapping, model, fem, initial_states)?;
     if let Some(path) = &args.validate_on {
         let name = path.display().to_string();
         let (reader, notes) = open_log_with_notes(&name, None, mapping)?;

@@ -22,8 +22,8 @@ use super::prediction::{Recorder, ValidationReport, validate_coefficients};
 use crate::validation::{OutputData, validate};
 use aeroident_estimators::Term;
 use aeroident_estimators::flight_model::FlightModel;
-use aeroident_estimators::output_error::Start;
 use aeroident_estimators::output_error::filter_error::{self, FemConfig, FemResult};
+use aeroident_estimators::output_error::{InitialStates, Start};
 use aeroident_estimators::output_error::{OeConfig, OeError, OeResult, fit};
 use aeroident_estimators::{AirDataSample, ModelStructure};
 use aeroident_io::{FlightDataReader, Mapping, ModelSpec, RecordEvent, Rejection, RejectionLog};
@@ -181,6 +181,12 @@ pub struct BatchSummary {
     /// `fem`: the measurement-noise variances `R` recovered from the innovations, per output;
     /// empty for `oe` (its `residual_rms` is the noise).
     pub measurement_noise_var: Vec<(String, f64)>,
+    /// `first-sample` (each manoeuvre starts at its first sample's measured states) or
+    /// `estimate` (`--initial-states estimate`).
+    pub initial_states: String,
+    /// The estimated initial states `(x0_m<k>_<state>, value, σ)` (state units: m/s, rad,
+    /// rad/s; σ as the parameters'), manoeuvre `k` from 1; empty when they are not estimated.
+    pub estimated_initial_states: Vec<(String, f64, f64)>,
 }
 
 /// The richest preset the flight model can integrate from the record's first sample.
@@ -372,6 +378,7 @@ pub fn fit_record<R: Read>(
     mapping: &Mapping,
     model: Option<ModelSpec>,
     fem: bool,
+    initial_states: InitialStates,
 ) -> Result<BatchOutcome, ReplayError> {
     let file = reader.file().to_string();
     let rec = read_manoeuvres(reader)?;
@@ -387,13 +394,31 @@ pub fn fit_record<R: Read>(
         let mut config = FemConfig::new(model.structure);
         // Convergence on turbulent or model-error records is slow (module doc of filter_error).
         config.oe.max_iterations = crate::aircraft::batch::MAX_ITERATIONS;
+        config.oe.initial_states = initial_states;
         let (f, wall) = fit_fem_manoeuvres(&slices, &config).map_err(ReplayError::Model)?;
         (f.result.clone(), wall, Some(f))
     } else {
-        let (r, wall) =
-            fit_manoeuvres(&slices, &oe_config(model.structure)).map_err(ReplayError::Model)?;
+        let mut config = oe_config(model.structure);
+        config.initial_states = initial_states;
+        let (r, wall) = fit_manoeuvres(&slices, &config).map_err(ReplayError::Model)?;
         (r, wall, None)
     };
+    // The free initial states follow the parameters and the output biases (OeResult::names),
+    // with the σ of the same kind as the parameters' (coloured where formed).
+    let coloured_all = match &fem_result {
+        Some(f) => f.result.sigma_coloured.as_ref().or(f.sigma_coloured_theta.as_ref()),
+        None => result.sigma_coloured.as_ref(),
+    };
+    let estimated_initial_states: Vec<(String, f64, f64)> = result
+        .names
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| n.starts_with("x0_m"))
+        .map(|(i, n)| {
+            let sigma = coloured_all.map_or(result.sigma[i], |c| c[i]);
+            (n.clone(), result.values[i], sigma)
+        })
+        .collect();
     // Coloured-residual σ where formed, for both methods (fem: [`fem_reported_sigma`]).
     let (reported, coloured) = match &fem_result {
         Some(f) => fem_reported_sigma(f),
@@ -486,6 +511,12 @@ pub fn fit_record<R: Read>(
                 .collect(),
             None => Vec::new(),
         },
+        initial_states: match initial_states {
+            InitialStates::FirstSample => "first-sample",
+            InitialStates::Estimate(_) => "estimate",
+        }
+        .into(),
+        estimated_initial_states,
     };
     Ok(BatchOutcome { model, result, summary, traces })
 }

@@ -103,7 +103,16 @@ pub fn settings(args: &ReplayArgs, outcome: &BatchOutcome) -> Vec<(String, Strin
         ("mapping".into(), args.map.display().to_string()),
         ("model".into(), format!("{} — {}", outcome.model.name, outcome.model.description)),
         ("structure".into(), outcome.model.structure.names().collect::<Vec<_>>().join(", ")),
-        ("estimator".into(), "oe (batch maximum-likelihood output error)".into()),
+        (
+            "estimator".into(),
+            if s.estimator == "fem" {
+                "fem (batch maximum-likelihood filter error: output error with process noise)"
+            } else {
+                "oe (batch maximum-likelihood output error)"
+            }
+            .into(),
+        ),
+        ("initial states".into(), s.initial_states.clone()),
         (
             "outputs".into(),
             outcome.result.outputs.iter().map(|o| o.name()).collect::<Vec<_>>().join(", "),

@@ -4,7 +4,7 @@
 mod common;
 use common::workspace;
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
 fn bin() -> Command {
@@ -16,6 +16,33 @@ fn tmp(name: &str) -> PathBuf {
         std::env::temp_dir().join(format!("aeroident-cli-replay-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     d
+}
+
+/// `replay DATA --map mappings/MAP ARGS --out DIR` through the binary (a batch fit): asserts
+/// success and returns the parsed `summary.json` and `report.html` (the directory is removed).
+fn batch_replay(data: &Path, map: &str, args: &[&str], name: &str) -> (serde_json::Value, String) {
+    let out = tmp(name);
+    let o = bin()
+        .args(["replay"])
+        .arg(data)
+        .arg("--map")
+        .arg(workspace().join("mappings").join(map))
+        .args(args)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
+    let v =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    let _ = std::fs::remove_dir_all(&out);
+    (v, html)
+}
+
+/// The last iteration's `ln_det_r` of a batch summary.
+fn final_ln_det(v: &serde_json::Value) -> f64 {
+    v["iterations"].as_array().unwrap().last().unwrap()["ln_det_r"].as_f64().unwrap()
 }
 
 /// The bad-input corpus through the CLI: the run succeeds, every rejected row and gap is in
@@ -275,36 +302,19 @@ fn val_output_error_reproduces_the_hfb320_reference_through_the_cli() {
 #[test]
 fn val_filter_error_converges_on_the_hfb320_to_a_likelihood_above_output_error() {
     let Some(data) = common::shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let model = workspace().join("models/hfb320_jategaonkar.toml");
     let fit = |estimator: &str| {
-        let out = tmp(&format!("fem_hfb320_{estimator}"));
-        let o = bin()
-            .args(["replay"])
-            .arg(&data)
-            .arg("--map")
-            .arg(workspace().join("mappings/hfb320.toml"))
-            .arg("--model")
-            .arg(workspace().join("models/hfb320_jategaonkar.toml"))
-            .args(["--estimator", estimator, "--out"])
-            .arg(&out)
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{estimator}: {}", String::from_utf8_lossy(&o.stderr));
-        let v: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
-                .unwrap();
-        let _ = std::fs::remove_dir_all(&out);
+        let args = ["--model", model.to_str().unwrap(), "--estimator", estimator];
+        let (v, _) = batch_replay(&data, "hfb320.toml", &args, &format!("fem_hfb320_{estimator}"));
         assert_eq!(v["status"], "converged", "{estimator}");
         v
     };
     let (oe, fem) = (fit("oe"), fit("fem"));
-    let ln_det = |v: &serde_json::Value| {
-        v["iterations"].as_array().unwrap().last().unwrap()["ln_det_r"].as_f64().unwrap()
-    };
     assert!(
-        ln_det(&fem) <= ln_det(&oe),
+        final_ln_det(&fem) <= final_ln_det(&oe),
         "FEM ln det B {} > OE ln det R {}",
-        ln_det(&fem),
-        ln_det(&oe)
+        final_ln_det(&fem),
+        final_ln_det(&oe)
     );
     let cm_alpha = fem["parameters"]
         .as_array()
@@ -511,28 +521,10 @@ fn val_real_dataflash_log_replays_through_the_cli_with_the_shipped_mappings() {
 fn val_output_error_estimates_the_initial_state_on_request() {
     let Some(data) = common::shared("jategaonkar_hfb320_attas/csv/fAttasElv2.csv") else { return };
     let fit = |setting: &str| {
-        let out = tmp(&format!("oe_x0_{setting}"));
-        let o = bin()
-            .args(["replay"])
-            .arg(&data)
-            .arg("--map")
-            .arg(workspace().join("mappings/attas.toml"))
-            .args(["--estimator", "oe", "--initial-states", setting, "--out"])
-            .arg(&out)
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(o.status.success(), "{err}");
-        let v: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
-                .unwrap();
-        let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+        let args = ["--estimator", "oe", "--initial-states", setting];
+        let (v, html) = batch_replay(&data, "attas.toml", &args, &format!("oe_x0_{setting}"));
         assert!(html.contains("initial states") && html.contains(setting), "report setting");
-        let _ = std::fs::remove_dir_all(&out);
         v
-    };
-    let ln_det = |v: &serde_json::Value| {
-        v["iterations"].as_array().unwrap().last().unwrap()["ln_det_r"].as_f64().unwrap()
     };
     let fixed = fit("first-sample");
     let free = fit("estimate");
@@ -542,10 +534,10 @@ fn val_output_error_estimates_the_initial_state_on_request() {
     }
     assert!(fixed["estimated_initial_states"].as_array().unwrap().is_empty());
     assert!(
-        ln_det(&free) <= ln_det(&fixed) + 1e-6,
+        final_ln_det(&free) <= final_ln_det(&fixed) + 1e-6,
         "free initial state: ln det R {} > fixed {}",
-        ln_det(&free),
-        ln_det(&fixed)
+        final_ln_det(&free),
+        final_ln_det(&fixed)
     );
     let x0 = free["estimated_initial_states"].as_array().unwrap();
     assert!(!x0.is_empty());

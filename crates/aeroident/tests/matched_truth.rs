@@ -47,6 +47,12 @@ fn primaries(sc: &Scenario, runs: u64, name: &str) -> (Vec<ParamStats>, Option<f
     (p, e.mean_nis)
 }
 
+/// `(scatter / σ_CRB, mean reported σ / scatter)` of one parameter's campaign statistics.
+fn efficiency(p: &ParamStats) -> (f64, f64) {
+    let scatter = p.scatter.unwrap();
+    (scatter / p.crb_sigma.unwrap(), p.mean_sigma.unwrap() / scatter)
+}
+
 /// Calm air (sensor noise the only random input), OE fitted to the raw samples with its
 /// initial state estimated: over 30 runs the scatter of every primary derivative lies within
 /// [0.5, 2] × the bound (measured 0.82–1.48 in 100 runs), the bias within 4 standard errors of
@@ -60,13 +66,11 @@ fn val_output_error_reaches_the_calm_bound() {
     );
     let runs = 30;
     for p in primaries(&sc, runs, "oe").0 {
-        let (scatter, crb) = (p.scatter.unwrap(), p.crb_sigma.unwrap());
-        let ratio = scatter / crb;
+        let (ratio, sig) = efficiency(&p);
         assert!((0.5..=2.0).contains(&ratio), "{}: scatter/σ_CRB = {ratio}", p.name);
         let bias = p.bias.unwrap();
-        let se = scatter / (runs as f64).sqrt();
+        let se = p.scatter.unwrap() / (runs as f64).sqrt();
         assert!(bias.abs() < 4.0 * se, "{}: bias {bias} vs standard error {se}", p.name);
-        let sig = p.mean_sigma.unwrap() / scatter;
         assert!((0.5..=2.0).contains(&sig), "{}: mean σ / scatter = {sig}", p.name);
     }
 }
@@ -83,10 +87,8 @@ fn val_filter_error_reaches_the_turbulent_bound() {
         "[[estimator]]\nkind = \"fem\"\nmodel = \"six-axis\"\ninitial_states = \"estimate\"\n",
     );
     for p in primaries(&sc, 12, "fem").0 {
-        let (scatter, crb) = (p.scatter.unwrap(), p.crb_sigma.unwrap());
-        let ratio = scatter / crb;
+        let (ratio, sig) = efficiency(&p);
         assert!((0.5..=2.0).contains(&ratio), "{}: scatter/σ_CRB = {ratio}", p.name);
-        let sig = p.mean_sigma.unwrap() / scatter;
         assert!((0.4..=2.5).contains(&sig), "{}: mean σ / scatter = {sig}", p.name);
     }
 }
@@ -107,7 +109,7 @@ fn val_ekf_on_raw_samples_near_the_calm_bound() {
     let nis = nis.unwrap();
     assert!((0.8..=1.2).contains(&nis), "mean NIS {nis}");
     for p in params {
-        let ratio = p.scatter.unwrap() / p.crb_sigma.unwrap();
+        let (ratio, _) = efficiency(&p);
         let limit = if p.name == "Cm_alpha" { 6.0 } else { 3.0 };
         assert!(ratio <= limit, "{}: scatter/σ_CRB = {ratio}", p.name);
         let cov = p.coverage_2sigma.unwrap();

@@ -69,7 +69,8 @@ use serde::Serialize;
 
 use super::scenario::SampleEstimatorSpec;
 use crate::replay::batch::{
-    fem_reported_sigma, fit_fem_manoeuvres, fit_manoeuvres, oe_config, reported_sigma,
+    fem_reported_sigma, fit_fem_manoeuvres, fit_manoeuvres, initial_states_name, oe_config,
+    reported_sigma,
 };
 
 /// Most Gauss–Newton iterations of the campaign's fits (the estimators crate's default is 50).
@@ -345,10 +346,7 @@ fn log_of(
         to_s: window[window.len() - 1].t_s,
         samples: window.len(),
         outputs: r.outputs.iter().map(|o| o.name().to_string()).collect(),
-        initial_states: match config.initial_states {
-            InitialStates::FirstSample => "first-sample",
-            InitialStates::Estimate(_) => "estimate",
-        },
+        initial_states: initial_states_name(config.initial_states),
         iterations: Some(r.n_iterations()),
         wall_s,
         residual_rms: r.residual_rms.clone(),

@@ -343,27 +343,35 @@ fn simulate_at(
     }
 }
 
-/// The σ a batch fit reports per structure parameter (structure order): the coloured-residual
-/// σ where the correction was formed (real residuals are coloured and the Cramér–Rao σ is then
+/// The σ a batch fit reports for every unknown (order of [`OeResult::names`]: the structure's
+/// parameters first, then output biases and free initial states): the coloured-residual σ
+/// where the correction was formed (real residuals are coloured and the Cramér–Rao σ is then
 /// optimistic; Morelli & Klein 1997), the Cramér–Rao σ otherwise.
 pub fn reported_sigma(result: &OeResult) -> Vec<f64> {
-    (0..result.n_params)
-        .map(|i| result.sigma_coloured.as_ref().map_or(result.sigma[i], |c| c[i]))
-        .collect()
+    result.sigma_coloured.clone().unwrap_or_else(|| result.sigma.clone())
 }
 
-/// The σ a filter-error fit reports per structure parameter (structure order) and whether it
-/// is the coloured-residual one: the coloured-residual sandwich where it was formed
-/// ([`OeResult::sigma_coloured`], else its parameter block
-/// [`FemResult::sigma_coloured_theta`]), else the Cramér–Rao σ. On the F-16 campaign the
-/// Cramér–Rao σ is 1.3–3× short of the scatter and the coloured one 0.6–1.9× it
-/// (docs/uncertainty.md, "Where the targets stand").
+/// The σ a filter-error fit reports for every unknown (order of [`OeResult::names`], the
+/// structure's parameters first) and whether it is the coloured-residual one: the
+/// coloured-residual sandwich where it was formed ([`OeResult::sigma_coloured`], else
+/// [`FemResult::sigma_coloured_theta`], NaN for a process-noise `F` whose entry was not
+/// positive), else the Cramér–Rao σ. On the F-16 campaign the Cramér–Rao σ is 1.3–3× short of
+/// the scatter and the coloured one 0.6–1.9× it (docs/uncertainty.md, "Where the targets
+/// stand").
 pub fn fem_reported_sigma(fem: &FemResult) -> (Vec<f64>, bool) {
     let r = &fem.result;
-    let np = r.n_params;
     match r.sigma_coloured.as_ref().or(fem.sigma_coloured_theta.as_ref()) {
-        Some(c) => (c[..np].to_vec(), true),
-        None => (r.sigma[..np].to_vec(), false),
+        Some(c) => (c.clone(), true),
+        None => (r.sigma.clone(), false),
+    }
+}
+
+/// The name of an initial-state setting as the CLI (`--initial-states`) and the run scenario
+/// (`initial_states`) write it: `first-sample` or `estimate`.
+pub fn initial_states_name(setting: InitialStates) -> &'static str {
+    match setting {
+        InitialStates::FirstSample => "first-sample",
+        InitialStates::Estimate(_) => "estimate",
     }
 }
 
@@ -403,27 +411,20 @@ pub fn fit_record<R: Read>(
         let (r, wall) = fit_manoeuvres(&slices, &config).map_err(ReplayError::Model)?;
         (r, wall, None)
     };
-    // The free initial states follow the parameters and the output biases (OeResult::names),
-    // with the σ of the same kind as the parameters' (coloured where formed).
-    let coloured_all = match &fem_result {
-        Some(f) => f.result.sigma_coloured.as_ref().or(f.sigma_coloured_theta.as_ref()),
-        None => result.sigma_coloured.as_ref(),
+    // Coloured-residual σ where formed, for both methods (fem: [`fem_reported_sigma`]), for
+    // every unknown.
+    let (reported, coloured) = match &fem_result {
+        Some(f) => fem_reported_sigma(f),
+        None => (reported_sigma(&result), result.sigma_coloured.is_some()),
     };
+    // The free initial states follow the parameters and the output biases (OeResult::names).
     let estimated_initial_states: Vec<(String, f64, f64)> = result
         .names
         .iter()
         .enumerate()
         .filter(|(_, n)| n.starts_with("x0_m"))
-        .map(|(i, n)| {
-            let sigma = coloured_all.map_or(result.sigma[i], |c| c[i]);
-            (n.clone(), result.values[i], sigma)
-        })
+        .map(|(i, n)| (n.clone(), result.values[i], reported[i]))
         .collect();
-    // Coloured-residual σ where formed, for both methods (fem: [`fem_reported_sigma`]).
-    let (reported, coloured) = match &fem_result {
-        Some(f) => fem_reported_sigma(f),
-        None => (reported_sigma(&result), result.sigma_coloured.is_some()),
-    };
     let parameters = (0..result.n_params)
         .map(|i| BatchParameter {
             name: result.names[i].clone(),
@@ -511,11 +512,7 @@ pub fn fit_record<R: Read>(
                 .collect(),
             None => Vec::new(),
         },
-        initial_states: match initial_states {
-            InitialStates::FirstSample => "first-sample",
-            InitialStates::Estimate(_) => "estimate",
-        }
-        .into(),
+        initial_states: initial_states_name(initial_states).into(),
         estimated_initial_states,
     };
     Ok(BatchOutcome { model, result, summary, traces })

@@ -41,6 +41,20 @@ else:
     print(f"{HFB} not found: skipping the flight record")
 
 # %% [markdown]
+# ## 1b. The post-flight reference: output error on the same record
+#
+# `fit` is `aeroident replay --estimator oe|fem`: the whole record, maximum likelihood, with the
+# coloured-residual σ, the correlation matrix, the residuals and the model-vs-measured traces.
+
+# %%
+if HFB.exists():
+    oe = aeroident.fit(HFB, MAPPING, "oe", model=ROOT / "models/hfb320_book_q0.toml")
+    for name, v, s in zip(oe["names"], oe["values"], oe["sigma"]):
+        print(f"{name:9s} = {v:+9.4f} ± {s:.4f}")
+    print(f"{len(oe['summary']['iterations']) - 1} iterations in {oe['summary']['fit_wall_s']:.2f} s;",
+          "residual RMS:", dict(oe["summary"]["residual_rms"]))
+
+# %% [markdown]
 # ## 2. An estimator object, one sample at a time (e.g. fed from a live link)
 
 # %%

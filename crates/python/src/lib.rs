@@ -8,6 +8,7 @@
 
 use pyo3::prelude::*;
 
+mod batch;
 mod convert;
 mod estimator;
 mod f16;
@@ -37,6 +38,7 @@ fn _aeroident(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("AeroidentError", m.py().get_type::<AeroidentError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     record::register(m)?;
+    batch::register(m)?;
     estimator::register(m)?;
     f16::register(m)?;
     montecarlo::register(m)?;

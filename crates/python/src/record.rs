@@ -159,7 +159,7 @@ fn replay_file<'py>(
         let model = model.as_deref().map(ModelSpec::from_arg).transpose()?;
         if kind.is_batch() {
             anyhow::bail!(
-                "estimator `{0}` is a batch method with no per-sample estimates: use `aeroident replay --estimator {0}`",
+                "estimator `{0}` is a batch method with no per-sample estimates: use `aeroident.fit(path, mapping, estimator=\"{0}\")` (CLI: `aeroident replay --estimator {0}`)",
                 kind.name()
             );
         }

@@ -9,6 +9,8 @@ seconds, unless a name says otherwise (``alt_ft``, ``elevator_deg`` …).
   :class:`SmpeCorrected`, :class:`Gradient`: online estimators fed one sample dict at a time.
 - :func:`replay`: a whole record (file + mapping, or arrays) through an estimator in Rust; the
   estimates as a (time × parameter) numpy matrix.
+- :func:`fit`: the post-flight batch fit of a record by output error or the filter-error
+  method (estimates, σ, correlation, residuals, model-vs-measured traces, validation).
 - :func:`trim`, :func:`linearize`, :func:`simulate`: the F-16 model.
 - :func:`montecarlo`: seeded closed-loop campaigns, locally (rayon) or on a Ray cluster.
 
@@ -40,6 +42,7 @@ __all__ = [
     "Gradient",
     "read",
     "replay",
+    "fit",
     "sample_keys",
     "trim",
     "linearize",
@@ -152,7 +155,7 @@ def replay(
       dict), for arrays ``samples_refused``.
 
     Raises :class:`AeroidentError` with the CLI's message on bad input or when the estimator
-    diverges. ``estimator="oe"`` (batch) is not available here.
+    diverges. The batch methods (``oe``, ``fem``) have no per-sample estimates: use :func:`fit`.
     """
     if isinstance(data, (str, os.PathLike)):
         if mapping is None:
@@ -170,6 +173,54 @@ def replay(
     arrays = {k: np.ascontiguousarray(v, dtype=np.float64) for k, v in data.items() if k in keys}
     return _core.replay_arrays(
         arrays, estimator, None if model is None else os.fspath(model), _plain(constants), forgetting, sample_interval_s
+    )
+
+
+def fit(
+    data: PathLike,
+    mapping: PathLike,
+    estimator: str = "oe",
+    model: Optional[PathLike] = None,
+    *,
+    initial_states: str = "first-sample",
+    validate_on: Optional[PathLike] = None,
+) -> dict[str, Any]:
+    """Fits a whole record by batch output error (``"oe"``) or the filter-error method
+    (``"fem"``: output error with process noise on the air-data states, for turbulent records).
+
+    Exactly ``aeroident replay DATA --map MAPPING --estimator oe|fem [--model M]
+    [--initial-states S] [--validate-on V]``: the same reader (CSV, ``.asc``, ``.mat``, ULog,
+    DataFlash by extension), the record split into manoeuvres at its time gaps, maximum-likelihood
+    Gauss–Newton with exact sensitivities and the noise covariance estimated (Jategaonkar 2015
+    ch. 4–5). Not real time: the whole record is read first. ``model=None``: the richest preset
+    the record's channels can drive. ``initial_states``: ``"first-sample"`` (each manoeuvre starts
+    at its first sample's measured states) or ``"estimate"`` (estimated with the parameters).
+    ``validate_on``: a second record (same mapping) on which the fitted model is simulated.
+
+    Returns a dict:
+
+    - ``names``: the ``n`` structure parameters (``Cm_alpha`` …);
+    - ``values``: (n,) estimates; ``sigma``: (n,) the reported σ (coloured-residual where
+      formed, else Cramér–Rao: docs/uncertainty.md); ``crb_sigma``: (n,) the Cramér–Rao σ;
+    - ``correlation``: (n, n) Cramér–Rao correlation of the estimates;
+    - ``outputs``: the ``m`` fitted outputs; ``residuals``: (N, m) measured − model (``fem``:
+      the filter's innovations), the manoeuvres concatenated;
+    - ``traces``: per output, ``{"t_s", "measured", "simulated"}`` arrays (NaN between
+      manoeuvres; ``fem``: the model simulated at its estimates);
+    - ``model``: the model's name; ``notes``: what the reader noted about the record;
+    - ``summary``: the CLI's ``summary.json`` as a dict (iterations, identifiability, warnings,
+      validation, process noise, estimated initial states …).
+
+    Raises :class:`AeroidentError` with the CLI's message on bad input, a real-time estimator,
+    or a fit that does not converge (never an unconverged result).
+    """
+    return _core.fit_file(
+        os.fspath(data),
+        os.fspath(mapping),
+        estimator,
+        None if model is None else os.fspath(model),
+        initial_states,
+        None if validate_on is None else os.fspath(validate_on),
     )
 
 

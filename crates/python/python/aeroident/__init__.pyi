@@ -89,6 +89,33 @@ def replay(
     constants: Optional[Constants] = None,
     sample_interval_s: Optional[float] = None,
 ) -> ReplayResult: ...
+class FitTrace(TypedDict):
+    t_s: npt.NDArray[np.float64]
+    measured: npt.NDArray[np.float64]
+    simulated: npt.NDArray[np.float64]
+
+class FitResult(TypedDict):
+    names: list[str]
+    values: npt.NDArray[np.float64]
+    sigma: npt.NDArray[np.float64]
+    crb_sigma: npt.NDArray[np.float64]
+    correlation: npt.NDArray[np.float64]
+    outputs: list[str]
+    residuals: npt.NDArray[np.float64]
+    traces: dict[str, FitTrace]
+    model: str
+    notes: list[str]
+    summary: dict[str, Any]
+
+def fit(
+    data: PathLike,
+    mapping: PathLike,
+    estimator: Literal["oe", "fem"] = "oe",
+    model: Optional[PathLike] = None,
+    *,
+    initial_states: Literal["first-sample", "estimate"] = "first-sample",
+    validate_on: Optional[PathLike] = None,
+) -> FitResult: ...
 def trim(alt_ft: float, vt_fps: float, xcg: float = 0.35, gamma_deg: float = 0.0, turn_rate_deg_s: Optional[float] = None, pull_up_deg_s: Optional[float] = None) -> dict[str, Any]: ...
 def linearize(alt_ft: float, vt_fps: float, xcg: float = 0.35, gamma_deg: float = 0.0, turn_rate_deg_s: Optional[float] = None, pull_up_deg_s: Optional[float] = None) -> dict[str, Any]: ...
 def simulate(scenario: PathLike) -> dict[str, npt.NDArray[np.float64]]: ...

@@ -1,0 +1,109 @@
+//! `fit`: the batch output-error and filter-error fits of a whole record, exactly as
+//! `aeroident replay DATA --map MAPPING --estimator oe|fem` (the post-flight reference fit,
+//! `aeroident::replay::batch::fit_record`), with the estimates, their σ and correlation, the
+//! residuals and the model-vs-measured traces as numpy arrays.
+
+use std::path::Path;
+
+use aeroident::estimators::EstimatorKind;
+use aeroident::replay::batch::{BatchOutcome, fit_record, validate_on};
+use aeroident_estimators::flight_model::N_STATES;
+use aeroident_estimators::output_error::InitialStates;
+use aeroident_io::{Mapping, ModelSpec, open_log_with_notes};
+use numpy::IntoPyArray;
+use numpy::ndarray::Array2;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::record::estimator_kind;
+use crate::{convert, err, to_py};
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(fit_file, m)?)?;
+    Ok(())
+}
+
+/// The initial-state setting by its CLI name (`--initial-states`).
+fn initial_states(name: &str) -> PyResult<InitialStates> {
+    match name {
+        "first-sample" => Ok(InitialStates::FirstSample),
+        "estimate" => Ok(InitialStates::Estimate([true; N_STATES])),
+        _ => Err(err(format!("initial_states: `{name}` is not `first-sample` or `estimate`"))),
+    }
+}
+
+/// A row-major `rows × cols` vector as a 2-D array.
+fn matrix(v: Vec<f64>, rows: usize, cols: usize) -> PyResult<Array2<f64>> {
+    Array2::from_shape_vec((rows, cols), v).map_err(|e| err(format!("internal: array shape: {e}")))
+}
+
+/// Fits a record file by output error (`oe`) or the filter-error method (`fem`) as
+/// `aeroident replay DATA --map MAPPING --estimator oe|fem [--model M] [--initial-states S]
+/// [--validate-on V]` (documentation: `aeroident.fit` in python/aeroident/__init__.py).
+#[pyfunction]
+#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None))]
+fn fit_file<'py>(
+    py: Python<'py>,
+    path: &str,
+    mapping: &str,
+    estimator: &str,
+    model: Option<&str>,
+    initial_states: &str,
+    validate_with: Option<&str>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let kind = estimator_kind(estimator)?;
+    if !kind.is_batch() {
+        return Err(err(format!(
+            "fit: estimator `{}` is a real-time method: use `aeroident.replay(..., estimator=\"{}\")` (fit takes `oe` or `fem`)",
+            kind.name(),
+            kind.name()
+        )));
+    }
+    let setting = self::initial_states(initial_states)?;
+    let (path, mapping) = (path.to_owned(), mapping.to_owned());
+    let (model, validate_with) = (model.map(str::to_owned), validate_with.map(str::to_owned));
+    let run = move || -> anyhow::Result<(BatchOutcome, Vec<String>)> {
+        let mapping = Mapping::from_path(Path::new(&mapping))?;
+        let model = model.as_deref().map(ModelSpec::from_arg).transpose()?;
+        let (reader, mut notes) = open_log_with_notes(&path, None, &mapping)?;
+        let mut outcome = fit_record(reader, &mapping, model, kind == EstimatorKind::Fem, setting)?;
+        if let Some(v) = &validate_with {
+            let (reader, more) = open_log_with_notes(v, None, &mapping)?;
+            notes.extend(more);
+            outcome.summary.validation_on = Some(validate_on(reader, &outcome)?);
+        }
+        Ok((outcome, notes))
+    };
+    let (outcome, notes) = py.detach(run).map_err(to_py)?;
+    let r = &outcome.result;
+    let (n, np, ny) = (r.n(), r.n_params, r.outputs.len());
+    let s = &outcome.summary;
+    let d = PyDict::new(py);
+    d.set_item("names", r.names[..np].to_vec())?;
+    d.set_item("values", r.values[..np].to_vec().into_pyarray(py))?;
+    let sigma: Vec<f64> = s.parameters.iter().map(|p| p.std_error).collect();
+    d.set_item("sigma", sigma.into_pyarray(py))?;
+    d.set_item("crb_sigma", r.sigma[..np].to_vec().into_pyarray(py))?;
+    let corr: Vec<f64> =
+        (0..np).flat_map(|i| (0..np).map(move |j| r.correlation[i * n + j])).collect();
+    d.set_item("correlation", matrix(corr, np, np)?.into_pyarray(py))?;
+    d.set_item("outputs", r.outputs.iter().map(|o| o.name()).collect::<Vec<_>>())?;
+    d.set_item(
+        "residuals",
+        matrix(r.residuals.clone(), r.residuals.len() / ny.max(1), ny)?.into_pyarray(py),
+    )?;
+    let traces = PyDict::new(py);
+    for t in &outcome.traces {
+        let tr = PyDict::new(py);
+        tr.set_item("t_s", t.t_s.clone().into_pyarray(py))?;
+        tr.set_item("measured", t.measured.clone().into_pyarray(py))?;
+        tr.set_item("simulated", t.simulated.clone().into_pyarray(py))?;
+        traces.set_item(&t.name, tr)?;
+    }
+    d.set_item("traces", traces)?;
+    d.set_item("model", outcome.model.name.clone())?;
+    d.set_item("notes", notes)?;
+    let summary = serde_json::to_value(s).map_err(|e| err(e.to_string()))?;
+    d.set_item("summary", convert::json_to_py(py, &summary)?)?;
+    Ok(d)
+}

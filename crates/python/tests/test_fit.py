@@ -1,0 +1,101 @@
+"""`aeroident.fit` (batch output error and the filter-error method) against the CLI, against the
+published HFB-320 output-error result, and against numpy recomputations of its own arrays."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import aeroident
+from conftest import ROOT, cli, shared
+
+HFB = "jategaonkar_hfb320_attas/csv/hfb320_1_10.csv"
+HFB_MAP = ROOT / "mappings/hfb320.toml"
+BOOK_MODEL = ROOT / "models/hfb320_book_q0.toml"
+# Jategaonkar 2015, HFB-320 output error (../shared/flightdata/jategaonkar_hfb320_attas/README.md).
+PUBLISHED = {"Cm_alpha": -1.002, "Cm_q0": -27.06, "Cm_de": -1.437, "CL_alpha": 3.212}
+
+
+def without_wall_time(summary: dict) -> dict:
+    d = dict(summary)
+    d.pop("fit_wall_s")
+    return d
+
+
+@pytest.mark.parametrize("estimator", ["oe", "fem"])
+def test_fit_equals_cli(tmp_path, estimator):
+    data = shared(HFB)
+    out = tmp_path / "out"
+    r = cli("replay", data, "--map", HFB_MAP, "--model", BOOK_MODEL, "--estimator", estimator, "--out", out)
+    assert r.returncode == 0, r.stderr
+    expected = json.loads((out / "summary.json").read_text())
+    py = aeroident.fit(data, HFB_MAP, estimator, model=BOOK_MODEL)
+    assert without_wall_time(py["summary"]) == without_wall_time(expected)
+    params = expected["parameters"]
+    assert py["names"] == [p["name"] for p in params]
+    np.testing.assert_array_equal(py["values"], [p["estimate"] for p in params])
+    np.testing.assert_array_equal(py["sigma"], [p["std_error"] for p in params])
+    np.testing.assert_array_equal(py["crb_sigma"], [p["crb_sigma"] for p in params])
+
+
+def test_fit_reproduces_the_published_hfb320_output_error_result():
+    py = aeroident.fit(shared(HFB), HFB_MAP, "oe", model=BOOK_MODEL)
+    for name, published in PUBLISHED.items():
+        est = py["values"][py["names"].index(name)]
+        assert abs(est / published - 1.0) < 0.01, (name, est, published)
+
+
+def test_fit_arrays_agree_with_each_other():
+    py = aeroident.fit(shared(HFB), HFB_MAP, "oe", model=BOOK_MODEL)
+    n, m = len(py["names"]), len(py["outputs"])
+    rho = py["correlation"]
+    assert rho.shape == (n, n)
+    np.testing.assert_allclose(np.diag(rho), 1.0, rtol=1e-12)
+    np.testing.assert_allclose(rho, rho.T, atol=1e-12)
+    assert np.all(np.abs(rho) <= 1.0 + 1e-12)
+    assert np.linalg.eigvalsh(rho).min() > 0.0, "a correlation matrix is positive definite"
+    # Every sample of the record is one residual row; each output's residual RMS is the
+    # summary's (recomputed here from the array, not read back).
+    e = py["residuals"]
+    assert e.shape == (py["summary"]["samples_read"] - py["summary"]["samples_rejected"], m)
+    rms = dict(py["summary"]["residual_rms"])
+    for j, name in enumerate(py["outputs"]):
+        assert np.sqrt(np.mean(e[:, j] ** 2)) == pytest.approx(rms[name], rel=1e-9), name
+    # The traces are measured and simulated with simulated = measured − residual (one manoeuvre,
+    # every sample kept: stride 1).
+    assert set(py["traces"]) == set(py["outputs"])
+    for j, name in enumerate(py["outputs"]):
+        tr = py["traces"][name]
+        assert tr["t_s"].shape == tr["measured"].shape == tr["simulated"].shape == (e.shape[0],)
+        np.testing.assert_allclose(tr["measured"] - tr["simulated"], e[:, j], rtol=0, atol=1e-12)
+    # The coloured-residual σ is reported and exceeds the Cramér–Rao σ on this record.
+    assert np.all(py["sigma"] > py["crb_sigma"])
+
+
+def test_fit_with_the_initial_state_estimated():
+    fixed = aeroident.fit(shared(HFB), HFB_MAP, "oe", model=BOOK_MODEL)
+    free = aeroident.fit(shared(HFB), HFB_MAP, "oe", model=BOOK_MODEL, initial_states="estimate")
+    assert fixed["summary"]["initial_states"] == "first-sample"
+    assert free["summary"]["initial_states"] == "estimate"
+    assert fixed["summary"]["estimated_initial_states"] == []
+    x0 = free["summary"]["estimated_initial_states"]
+    assert x0 and all(name.startswith("x0_m1_") for name, _, _ in x0)
+    # The free initial state nests the fixed one: the likelihood cannot be worse.
+    ln_det = lambda r: r["summary"]["iterations"][-1]["ln_det_r"]  # noqa: E731
+    assert ln_det(free) <= ln_det(fixed) + 1e-9
+
+
+def test_fit_refuses_what_it_cannot_do():
+    data = shared(HFB)
+    with pytest.raises(aeroident.AeroidentError, match="real-time method.*aeroident.replay"):
+        aeroident.fit(data, HFB_MAP, "rls")
+    with pytest.raises(aeroident.AeroidentError, match="initial_states: `bogus`"):
+        aeroident.fit(data, HFB_MAP, "oe", initial_states="bogus")
+    with pytest.raises(aeroident.AeroidentError, match="unknown estimator `nope`"):
+        aeroident.fit(data, HFB_MAP, "nope")
+    with pytest.raises(aeroident.AeroidentError, match=r"batch method.*aeroident\.fit"):
+        aeroident.replay(data, mapping=HFB_MAP, estimator="oe")
+    with pytest.raises(aeroident.AeroidentError, match="nothing_here.csv"):
+        aeroident.fit(ROOT / "nothing_here.csv", HFB_MAP, "oe")

@@ -118,6 +118,7 @@
 //! information matrix is singular at the estimate.
 
 use crate::coloured::batch as coloured;
+pub mod bootstrap;
 pub mod design;
 pub mod filter_error;
 pub mod riccati;
@@ -599,6 +600,15 @@ fn parabolic_step(f0: f64, slope: f64, f1: f64) -> Option<f64> {
 /// [`OeError`] as in the module doc.
 pub fn fit(manoeuvres: &[&[AirDataSample]], config: &OeConfig) -> Result<OeResult, OeError> {
     let p = prepare(manoeuvres, config)?;
+    fit_prepared(p, manoeuvres, config)
+}
+
+/// [`fit`] on a prepared problem (`manoeuvres` only for the equation-error start).
+fn fit_prepared(
+    p: Problem,
+    manoeuvres: &[&[AirDataSample]],
+    config: &OeConfig,
+) -> Result<OeResult, OeError> {
     let nb = p.n_unknowns;
     let ny = p.ny();
     let mut y = Vec::new();

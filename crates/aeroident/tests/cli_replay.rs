@@ -573,3 +573,56 @@ fn val_output_error_estimates_the_initial_state_on_request() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("--initial-states"));
 }
+
+/// `replay --estimator oe --bootstrap 20` on the HFB-320 (book model): the estimates are the
+/// plain fit's (the bootstrap changes the σ only); every parameter's reported σ is its
+/// bootstrap σ, positive and at least 0.65 of its Cramér–Rao σ (without process noise the
+/// bootstrap of this model is the Cramér–Rao bound, estimators' unit test; process noise only
+/// adds); the summary names the replicas, the seed and the filter-error noise levels they were
+/// flown with (positive `F` on V and α); a second run gives the same σ (seeded); and the flag
+/// is refused for `fem` and for a real-time estimator. Skips without `../shared`.
+#[test]
+fn val_output_error_bootstrap_sigma_on_request() {
+    let Some(data) = common::shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let model = workspace().join("models/hfb320_book_q0.toml");
+    let model = model.to_str().unwrap();
+    let plain =
+        batch_replay(&data, "hfb320.toml", &["--model", model, "--estimator", "oe"], "oe_plain").0;
+    let args = ["--model", model, "--estimator", "oe", "--bootstrap", "20"];
+    let (boot, html) = batch_replay(&data, "hfb320.toml", &args, "oe_boot");
+    let again = batch_replay(&data, "hfb320.toml", &args, "oe_boot_again").0;
+    assert!(plain["bootstrap"].is_null());
+    let b = &boot["bootstrap"];
+    assert_eq!(b["refits"], 20);
+    assert_eq!(b["failed"], 0);
+    assert_eq!(b["seed"], 1);
+    let f = b["process_noise"].as_array().unwrap();
+    let names: Vec<&str> = f.iter().map(|e| e[0].as_str().unwrap()).collect();
+    assert_eq!(names, ["vt_mps", "alpha_rad"]);
+    assert!(f.iter().all(|e| e[1].as_f64().unwrap() > 0.0), "{f:?}");
+    let params = |v: &serde_json::Value| v["parameters"].as_array().unwrap().clone();
+    for ((p, q), r) in params(&plain).iter().zip(params(&boot)).zip(params(&again)) {
+        assert_eq!(p["name"], q["name"]);
+        assert_eq!(p["estimate"], q["estimate"], "the bootstrap changed the estimate");
+        assert!(p["bootstrap_sigma"].is_null());
+        let (sb, crb) = (q["bootstrap_sigma"].as_f64().unwrap(), q["crb_sigma"].as_f64().unwrap());
+        assert_eq!(q["std_error"].as_f64(), Some(sb), "{}: reported σ", q["name"]);
+        assert!(sb > 0.65 * crb, "{}: bootstrap σ {sb} vs Cramér–Rao {crb}", q["name"]);
+        assert_eq!(q["bootstrap_sigma"], r["bootstrap_sigma"], "not reproducible");
+    }
+    assert!(html.contains("bootstrap"), "the report does not say the σ is the bootstrap's");
+    for (estimator, needle) in [("fem", "output error"), ("rls", "--bootstrap")] {
+        let o = bin()
+            .args(["replay"])
+            .arg(&data)
+            .arg("--map")
+            .arg(workspace().join("mappings/hfb320.toml"))
+            .args(["--estimator", estimator, "--bootstrap", "5", "--out"])
+            .arg(tmp("oe_boot_refused"))
+            .output()
+            .unwrap();
+        assert!(!o.status.success(), "{estimator} accepted --bootstrap");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains("bootstrap") && err.contains(needle), "{estimator}: {err}");
+    }
+}

@@ -171,6 +171,19 @@ fn oe_options_are_checked() {
     let e = Scenario::from_toml(&format!("{base}step = \"newton\"\n"), "<t>").unwrap_err();
     assert!(e.to_string().contains("`step`"), "{e}");
     assert!(Scenario::from_toml(&format!("{base}step = \"concentrated\"\n"), "<t>").is_ok());
+    // The bootstrap needs the unsmoothed samples (its noise levels are a filter-error fit's)
+    // and at least two refits; it is an output-error option only.
+    let raw = format!("{base}samples = \"raw\"\n");
+    assert!(Scenario::from_toml(&format!("{raw}bootstrap_refits = 20\n"), "<t>").is_ok());
+    for bad in ["bootstrap_refits = 1\n", "bootstrap_refits = \"many\"\n"] {
+        let e = Scenario::from_toml(&format!("{raw}{bad}"), "<t>").unwrap_err();
+        assert!(e.to_string().contains("at least 2"), "{bad}: {e}");
+    }
+    let e = Scenario::from_toml(&format!("{base}bootstrap_refits = 20\n"), "<t>").unwrap_err();
+    assert!(e.to_string().contains("samples = \"raw\""), "{e}");
+    let fem = raw.replace("kind = \"oe\"", "kind = \"fem\"");
+    let e = Scenario::from_toml(&format!("{fem}bootstrap_refits = 20\n"), "<t>").unwrap_err();
+    assert!(e.to_string().contains("unknown option `bootstrap_refits`"), "{e}");
     let sc = Scenario::from_path(&workspace().join("scenarios/montecarlo/with-oe.toml")).unwrap();
     assert!(sc.estimator.iter().any(|e| e.label() == "oe"));
 }
@@ -238,6 +251,38 @@ fn batch_campaign_scenarios_are_the_default_plus_batch_estimators() {
         assert_eq!(
             sc, default,
             "{path} differs from scenarios/default.toml beyond its batch estimators"
+        );
+    }
+}
+
+/// `bootstrap_refits` in a flight (the short turbulent scenario, unsmoothed samples): the
+/// reported σ of every parameter is the parametric bootstrap's, logged as the candidate
+/// `bootstrap` beside the coloured and Cramér–Rao ones, positive, and not below half the
+/// Cramér–Rao σ (without process noise the two agree, estimators' unit test; the turbulence
+/// only adds).
+#[test]
+fn oe_bootstrap_sigma_is_reported_in_a_flight() {
+    let text = std::fs::read_to_string(workspace().join("scenarios/montecarlo/short.toml"))
+        .expect("scenarios/montecarlo/short.toml");
+    let sc = scenario(&format!(
+        "{text}\n[[estimator]]\nkind = \"oe\"\nmodel = \"six-axis\"\nsamples = \"raw\"\nbootstrap_refits = 4\n"
+    ));
+    let out = run(&sc).unwrap();
+    let ch = out.channels.iter().find(|c| c.label == "oe").expect("oe channel");
+    assert!(ch.failure.is_none(), "{:?}", ch.failure);
+    let fit = ch.batch.as_ref().expect("batch log");
+    let cand = |k: &str| fit.sigma_candidates.iter().find(|c| c.0 == k).map(|c| c.1.clone());
+    let boot = cand("bootstrap").expect("a bootstrap σ");
+    let crb = cand("cramer_rao").expect("a Cramér–Rao σ");
+    for (k, l) in ch.params.iter().enumerate() {
+        let sigma = l.sigma.last().copied().flatten().expect("a final σ");
+        assert_eq!(sigma, boot[k], "{}: reported σ is not the bootstrap's", l.param.name());
+        assert!(
+            boot[k] > 0.5 * crb[k],
+            "{}: bootstrap {} vs Cramér–Rao {}",
+            l.param.name(),
+            boot[k],
+            crb[k]
         );
     }
 }

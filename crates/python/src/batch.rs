@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use aeroident::estimators::EstimatorKind;
-use aeroident::replay::batch::{BatchOutcome, fit_record, validate_on};
+use aeroident::replay::batch::{BatchOutcome, FitOptions, fit_record, validate_on};
 use aeroident_estimators::flight_model::N_STATES;
 use aeroident_estimators::output_error::InitialStates;
 use aeroident_io::{Mapping, ModelSpec, open_log_with_notes};
@@ -39,9 +39,10 @@ fn matrix(v: Vec<f64>, rows: usize, cols: usize) -> PyResult<Array2<f64>> {
 
 /// Fits a record file by output error (`oe`) or the filter-error method (`fem`) as
 /// `aeroident replay DATA --map MAPPING --estimator oe|fem [--model M] [--initial-states S]
-/// [--validate-on V]` (documentation: `aeroident.fit` in python/aeroident/__init__.py).
+/// [--validate-on V] [--bootstrap N]` (documentation: `aeroident.fit` in python/aeroident/__init__.py).
 #[pyfunction]
-#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None))]
+#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None))]
+#[allow(clippy::too_many_arguments)]
 fn fit_file<'py>(
     py: Python<'py>,
     path: &str,
@@ -50,6 +51,7 @@ fn fit_file<'py>(
     model: Option<&str>,
     initial_states: &str,
     validate_with: Option<&str>,
+    bootstrap: Option<usize>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let kind = estimator_kind(estimator)?;
     if !kind.is_batch() {
@@ -66,7 +68,12 @@ fn fit_file<'py>(
         let mapping = Mapping::from_path(Path::new(&mapping))?;
         let model = model.as_deref().map(ModelSpec::from_arg).transpose()?;
         let (reader, mut notes) = open_log_with_notes(&path, None, &mapping)?;
-        let mut outcome = fit_record(reader, &mapping, model, kind == EstimatorKind::Fem, setting)?;
+        let options = FitOptions {
+            fem: kind == EstimatorKind::Fem,
+            initial_states: setting,
+            bootstrap_refits: bootstrap,
+        };
+        let mut outcome = fit_record(reader, &mapping, model, options)?;
         if let Some(v) = &validate_with {
             let (reader, more) = open_log_with_notes(v, None, &mapping)?;
             notes.extend(more);

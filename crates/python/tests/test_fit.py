@@ -99,3 +99,19 @@ def test_fit_refuses_what_it_cannot_do():
         aeroident.replay(data, mapping=HFB_MAP, estimator="oe")
     with pytest.raises(aeroident.AeroidentError, match="nothing_here.csv"):
         aeroident.fit(ROOT / "nothing_here.csv", HFB_MAP, "oe")
+
+
+def test_fit_bootstrap_sigma():
+    plain = aeroident.fit(shared(HFB), HFB_MAP, "oe", model=BOOK_MODEL)
+    boot = aeroident.fit(shared(HFB), HFB_MAP, "oe", model=BOOK_MODEL, bootstrap=10)
+    b = boot["summary"]["bootstrap"]
+    assert plain["summary"]["bootstrap"] is None
+    assert b["refits"] == 10 and b["failed"] == 0
+    # The bootstrap changes the σ, not the estimates; the reported σ is the bootstrap's.
+    np.testing.assert_array_equal(boot["values"], plain["values"])
+    np.testing.assert_array_equal(boot["sigma"], [p["bootstrap_sigma"] for p in boot["summary"]["parameters"]])
+    assert np.all(boot["sigma"] > 0.5 * boot["crb_sigma"])
+    with pytest.raises(aeroident.AeroidentError, match="bootstrap"):
+        aeroident.fit(shared(HFB), HFB_MAP, "fem", model=BOOK_MODEL, bootstrap=10)
+    with pytest.raises(aeroident.AeroidentError, match="at least 2"):
+        aeroident.fit(shared(HFB), HFB_MAP, "oe", model=BOOK_MODEL, bootstrap=1)

@@ -39,6 +39,14 @@
 //! `null` for it: the report marks the channel `batch`. A fit that fails or does not converge is
 //! the channel's failure, with the reason; its estimates stay `null`.
 //!
+//! **Bootstrap** (`oe` option `bootstrap_refits = N`, with `samples = "raw"`): the reported σ
+//! is the parametric bootstrap's ([`crate::replay::batch::bootstrap_sigma`]: the noise levels
+//! from a filter-error fit of the same window, `N` replicas flown through the fitted model and
+//! refitted; replica `b` seeded `BOOTSTRAP_SEED ^ bits of the window's first α and V + b`, so
+//! every run draws its own), logged as the candidate `bootstrap`. It costs one filter-error
+//! fit and `N` output-error fits per run (docs/uncertainty.md, "Output error: the parametric
+//! bootstrap").
+//!
 //! # The filter-error method (`kind = "fem"`)
 //!
 //! The same window, outputs and `initial_states` option as `oe`; process noise (one `F` per
@@ -69,8 +77,8 @@ use serde::Serialize;
 
 use super::scenario::SampleEstimatorSpec;
 use crate::replay::batch::{
-    fem_reported_sigma, fit_fem_manoeuvres, fit_manoeuvres, initial_states_name, oe_config,
-    reported_sigma,
+    BOOTSTRAP_SEED, bootstrap_sigma, fem_reported_sigma, fit_fem_manoeuvres, fit_manoeuvres,
+    initial_states_name, oe_config, reported_sigma,
 };
 
 /// Most Gauss–Newton iterations of the campaign's fits (the estimators crate's default is 50).
@@ -98,8 +106,15 @@ pub fn batch_kinds() -> Vec<&'static str> {
 /// The configuration of a batch entry: output error or the filter-error method.
 #[derive(Debug, Clone, PartialEq)]
 pub enum BatchConfig {
-    /// `kind = "oe"`.
-    Oe(OeConfig),
+    /// `kind = "oe"`, with the parametric bootstrap's refits when asked for (option
+    /// `bootstrap_refits = N`; its σ is then the reported one).
+    Oe {
+        /// The output-error configuration.
+        config: OeConfig,
+        /// Refits of the parametric bootstrap
+        /// ([`crate::replay::batch::bootstrap_sigma`]), if any.
+        bootstrap_refits: Option<usize>,
+    },
     /// `kind = "fem"`.
     Fem(FemConfig),
 }
@@ -108,7 +123,7 @@ impl BatchConfig {
     /// The output-error part (for `fem`, the base it extends).
     pub fn oe(&self) -> &OeConfig {
         match self {
-            BatchConfig::Oe(c) => c,
+            BatchConfig::Oe { config, .. } => config,
             BatchConfig::Fem(c) => &c.oe,
         }
     }
@@ -116,7 +131,7 @@ impl BatchConfig {
     /// The `kind` of the entry (`oe` or `fem`).
     pub fn kind(&self) -> &'static str {
         match self {
-            BatchConfig::Oe(_) => "oe",
+            BatchConfig::Oe { .. } => "oe",
             BatchConfig::Fem(_) => "fem",
         }
     }
@@ -148,6 +163,8 @@ pub fn config(spec: &SampleEstimatorSpec) -> Result<BatchConfig, String> {
             .collect(),
     );
     let mut process_noise = None;
+    let mut bootstrap_refits = None;
+    let mut raw = false;
     for (key, v) in &spec.options {
         match (key.as_str(), v.as_str()) {
             ("initial_states", Some("first-sample")) => {}
@@ -166,7 +183,18 @@ pub fn config(spec: &SampleEstimatorSpec) -> Result<BatchConfig, String> {
                     "oe: `step` must be \"relaxation\" or \"concentrated\", got {v}"
                 ));
             }
-            ("samples", Some("raw" | "smoothed")) => {}
+            ("samples", Some(which @ ("raw" | "smoothed"))) => raw = which == "raw",
+            ("bootstrap_refits", _) if kind == "oe" => {
+                match spec.options.get(key).and_then(toml::Value::as_integer) {
+                    Some(n) if n >= 2 => bootstrap_refits = Some(n as usize),
+                    _ => {
+                        return Err(format!(
+                            "oe: `bootstrap_refits` must be an integer of at least 2, got {}",
+                            spec.options[key]
+                        ));
+                    }
+                }
+            }
             ("samples", _) => {
                 return Err(format!("{kind}: `samples` must be \"raw\" or \"smoothed\", got {v}"));
             }
@@ -175,7 +203,7 @@ pub fn config(spec: &SampleEstimatorSpec) -> Result<BatchConfig, String> {
             }
             (other, _) => {
                 return Err(format!(
-                    "{kind}: unknown option `{other}` (oe takes `initial_states`, `samples` and `step`, fem `initial_states`, `samples` and `process_noise`)"
+                    "{kind}: unknown option `{other}` (oe takes `initial_states`, `samples`, `step` and `bootstrap_refits`, fem `initial_states`, `samples` and `process_noise`)"
                 ));
             }
         }
@@ -189,7 +217,12 @@ pub fn config(spec: &SampleEstimatorSpec) -> Result<BatchConfig, String> {
             }
             BatchConfig::Fem(f)
         }
-        _ => BatchConfig::Oe(c),
+        _ => {
+            if bootstrap_refits.is_some() && !raw {
+                return Err("oe: `bootstrap_refits` needs `samples = \"raw\"`: the bootstrap's noise levels come from a filter-error fit, which needs measurement errors white from sample to sample (module doc)".into());
+            }
+            BatchConfig::Oe { config: c, bootstrap_refits }
+        }
     })
 }
 
@@ -282,11 +315,24 @@ pub fn fit_window(
         ));
     }
     match config {
-        BatchConfig::Oe(c) => {
+        BatchConfig::Oe { config: c, bootstrap_refits } => {
             let (result, wall_s) = fit_manoeuvres(&[window], c)?;
-            let sigma = reported_sigma(&result);
+            let mut sigma = reported_sigma(&result);
+            let mut extra = Vec::new();
+            if let Some(n) = *bootstrap_refits {
+                // Each run's own draws: the seed mixes in the window's first measurements (a
+                // common seed would correlate the runs' σ through shared replica noise).
+                let first = &window[0];
+                let seed = BOOTSTRAP_SEED
+                    ^ first.alpha_rad.to_bits()
+                    ^ first.vt_mps.to_bits().rotate_left(29);
+                let (b, _) = bootstrap_sigma(&[window], c, &result, n, seed)
+                    .map_err(|e| format!("oe: {e}"))?;
+                sigma[..b.len()].copy_from_slice(&b);
+                extra.push(("bootstrap".to_string(), b));
+            }
             let values = result.values[..result.n_params].iter().copied().zip(sigma).collect();
-            let log = log_of(label, window, c, &result, wall_s, Vec::new(), Vec::new());
+            let log = log_of(label, window, c, &result, wall_s, Vec::new(), extra);
             Ok((values, log))
         }
         BatchConfig::Fem(c) => {

@@ -84,6 +84,12 @@ pub struct ReplayArgs {
     /// integrated state of the model, per manoeuvre; `estimate`).
     #[arg(long, value_enum)]
     pub initial_states: Option<InitialStatesArg>,
+    /// `oe`: the parametric bootstrap σ from N replicas of the record flown through the fitted
+    /// model with the process and measurement noise a filter-error fit of the same record
+    /// estimates, each refitted (N ≥ 2; 20–50 typical; docs/uncertainty.md, "Output error:
+    /// the parametric bootstrap"). Its σ becomes the reported `std_error`.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..))]
+    pub bootstrap: Option<u32>,
 }
 
 /// `--initial-states` of the batch fits (`aeroident_estimators::output_error::InitialStates`).
@@ -140,6 +146,12 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     if args.initial_states.is_some() {
         anyhow::bail!(
             "--initial-states applies to the batch fits (--estimator oe or fem), not to --estimator {}",
+            args.estimator.name()
+        );
+    }
+    if args.bootstrap.is_some() {
+        anyhow::bail!(
+            "--bootstrap applies to output error (--estimator oe), not to --estimator {}",
             args.estimator.name()
         );
     }
@@ -381,9 +393,15 @@ fn execute_batch(
     for n in &notes {
         eprintln!("note: {n}");
     }
-    let initial_states = args.initial_states.unwrap_or(InitialStatesArg::FirstSample).to_config();
-    let mut outcome =
-        crate::replay::batch::fit_record(reader, mapping, model, fem, initial_states)?;
+    let options = crate::replay::batch::FitOptions {
+        fem,
+        initial_states: args.initial_states.unwrap_or(InitialStatesArg::FirstSample).to_config(),
+        bootstrap_refits: args.bootstrap.map(|n| n as usize),
+    };
+    if let Some(n) = options.bootstrap_refits.filter(|_| !fem) {
+        eprintln!("bootstrap: a filter-error fit for the noise levels, then {n} replicas refitted");
+    }
+    let mut outcome = crate::replay::batch::fit_record(reader, mapping, model, options)?;
     if let Some(path) = &args.validate_on {
         let name = path.display().to_string();
         let (reader, notes) = open_log_with_notes(&name, None, mapping)?;

@@ -22,6 +22,7 @@ use super::prediction::{Recorder, ValidationReport, validate_coefficients};
 use crate::validation::{OutputData, validate};
 use aeroident_estimators::Term;
 use aeroident_estimators::flight_model::FlightModel;
+use aeroident_estimators::flight_model::STATE_NAMES;
 use aeroident_estimators::output_error::filter_error::{self, FemConfig, FemResult};
 use aeroident_estimators::output_error::{InitialStates, Start};
 use aeroident_estimators::output_error::{OeConfig, OeError, OeResult, fit};
@@ -113,7 +114,8 @@ pub struct BatchParameter {
     pub name: String,
     /// Estimate.
     pub estimate: f64,
-    /// Reported σ: coloured-residual σ where available, else Cramér–Rao.
+    /// Reported σ: the bootstrap σ when asked for (`--bootstrap`), else the coloured-residual
+    /// σ where available, else Cramér–Rao.
     pub std_error: f64,
     /// Cramér–Rao σ (`sqrt(diag M⁻¹)`).
     pub crb_sigma: f64,
@@ -124,6 +126,8 @@ pub struct BatchParameter {
     /// `coloured_sigma` says the residual spectrum is poorly estimated (docs/uncertainty.md,
     /// "Output error: the spectral coloured-residual σ").
     pub prewhitened_sigma: Option<f64>,
+    /// The parametric bootstrap σ (`--bootstrap N`, `oe`), else `null`.
+    pub bootstrap_sigma: Option<f64>,
 }
 
 /// One iteration of the batch summary.
@@ -187,6 +191,9 @@ pub struct BatchSummary {
     /// The estimated initial states `(x0_m<k>_<state>, value, σ)` (state units: m/s, rad,
     /// rad/s; σ as the parameters'), manoeuvre `k` from 1; empty when they are not estimated.
     pub estimated_initial_states: Vec<(String, f64, f64)>,
+    /// The parametric bootstrap (`--bootstrap N`), else `null`. The estimated initial states
+    /// keep the coloured-residual σ.
+    pub bootstrap: Option<BootstrapSummary>,
 }
 
 /// The richest preset the flight model can integrate from the record's first sample.
@@ -366,6 +373,95 @@ pub fn fem_reported_sigma(fem: &FemResult) -> (Vec<f64>, bool) {
     }
 }
 
+/// The seed of the first bootstrap replica (replica `b` is seeded `seed + b`): fixed, so that
+/// a bootstrap σ is reproducible run to run.
+pub const BOOTSTRAP_SEED: u64 = 1;
+
+/// How the parametric bootstrap of an output-error fit went (`summary.json` `bootstrap`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BootstrapSummary {
+    /// Replicas flown and refitted.
+    pub refits: usize,
+    /// Replicas that failed (the replica left the physical domain, or its refit failed or did
+    /// not converge); the σ is the spread of the others.
+    pub failed: usize,
+    /// Seed of replica 0 (replica `b`: `seed + b`; PCG64, standard normal draws).
+    pub seed: u64,
+    /// The process noise the replicas were flown with: `(state, F)`, state unit per √s, the
+    /// filter-error method's estimate on the same data.
+    pub process_noise: Vec<(String, f64)>,
+    /// The measurement-noise variances `(output, R)` of the replicas (the filter-error
+    /// method's), the output's unit squared.
+    pub measurement_noise_var: Vec<(String, f64)>,
+    /// Wall time of the filter-error fit and the refits, s.
+    pub wall_s: f64,
+}
+
+/// The parametric bootstrap σ of the output-error fit `fitted` of `manoeuvres` with `config`
+/// ([`aeroident_estimators::output_error::bootstrap`]): the noise levels from a filter-error
+/// fit of the same data ([`FemConfig::new`] with `config` as its output-error part, at most
+/// [`crate::aircraft::batch::MAX_ITERATIONS`] iterations), then `refits` replicas flown at the
+/// fitted unknowns and refitted, in parallel (rayon); replica `b` draws from PCG64 seeded
+/// `seed + b`. Returns the σ of the structure parameters (structure order) and the summary.
+///
+/// # Errors
+/// A message when `refits < 2`, the filter-error fit fails or does not converge, or more than
+/// half of the replicas fail (the first reason given).
+pub fn bootstrap_sigma(
+    manoeuvres: &[&[AirDataSample]],
+    config: &OeConfig,
+    fitted: &OeResult,
+    refits: usize,
+    seed: u64,
+) -> Result<(Vec<f64>, BootstrapSummary), String> {
+    use aeroident_estimators::output_error::bootstrap::{self, BootstrapNoise};
+    use rand::{Rng, SeedableRng};
+    use rayon::prelude::*;
+    if refits < 2 {
+        return Err(format!("bootstrap: {refits} refits, at least 2 are needed for a spread"));
+    }
+    let t0 = std::time::Instant::now();
+    let mut fem_config = FemConfig::new(config.structure);
+    fem_config.oe = config.clone();
+    fem_config.oe.max_iterations = crate::aircraft::batch::MAX_ITERATIONS;
+    let (fem, _) = fit_fem_manoeuvres(manoeuvres, &fem_config)
+        .map_err(|e| format!("bootstrap: the noise levels come from a filter-error fit: {e}"))?;
+    let noise = BootstrapNoise::from_fem(&fem);
+    let draws: Vec<Result<Vec<f64>, String>> = (0..refits)
+        .into_par_iter()
+        .map(|b| {
+            let mut rng = rand_pcg::Pcg64::seed_from_u64(seed.wrapping_add(b as u64));
+            let mut normal = || rng.sample::<f64, _>(rand_distr::StandardNormal);
+            bootstrap::refit(manoeuvres, config, fitted, &noise, &mut normal)
+                .map_err(|e| fit_error(&format!("bootstrap replica {b}"), e))
+        })
+        .collect();
+    let failed = draws.iter().filter(|d| d.is_err()).count();
+    if 2 * failed > refits {
+        let first = draws.iter().find_map(|d| d.as_ref().err()).cloned().unwrap_or_default();
+        return Err(format!("bootstrap: {failed} of {refits} replicas failed (first: {first})"));
+    }
+    let ok: Vec<Vec<f64>> = draws.into_iter().filter_map(Result::ok).collect();
+    let sigma = bootstrap::spread(&ok)
+        .ok_or_else(|| format!("bootstrap: {} usable refits, at least 2 needed", ok.len()))?;
+    let names = |i: usize| STATE_NAMES[i].to_string();
+    let summary = BootstrapSummary {
+        refits,
+        failed,
+        seed,
+        process_noise: noise.process_noise.iter().map(|(i, f)| (names(*i), *f)).collect(),
+        measurement_noise_var: fem
+            .result
+            .outputs
+            .iter()
+            .zip(&noise.measurement_var)
+            .map(|(o, r)| (o.name().to_string(), *r))
+            .collect(),
+        wall_s: t0.elapsed().as_secs_f64(),
+    };
+    Ok((sigma, summary))
+}
+
 /// The name of an initial-state setting as the CLI (`--initial-states`) and the run scenario
 /// (`initial_states`) write it: `first-sample` or `estimate`.
 pub fn initial_states_name(setting: InitialStates) -> &'static str {
@@ -375,19 +471,46 @@ pub fn initial_states_name(setting: InitialStates) -> &'static str {
     }
 }
 
+/// What a batch fit of a record fits and how (`replay --estimator oe|fem
+/// [--initial-states …] [--bootstrap N]`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FitOptions {
+    /// The filter-error method (`fem`) instead of output error (`oe`).
+    pub fem: bool,
+    /// Each manoeuvre's initial state: at its first sample, or estimated.
+    pub initial_states: InitialStates,
+    /// `oe` only: the parametric bootstrap with this many refits ([`bootstrap_sigma`], seed
+    /// [`BOOTSTRAP_SEED`]); its σ is then the reported one.
+    pub bootstrap_refits: Option<usize>,
+}
+
+impl Default for FitOptions {
+    /// Output error, initial states at the first sample, no bootstrap.
+    fn default() -> Self {
+        Self { fem: false, initial_states: InitialStates::FirstSample, bootstrap_refits: None }
+    }
+}
+
 /// Reads the whole record, splits it at gaps and fits it by output error (`fem`: by the
-/// filter-error method with [`FemConfig::new`]'s defaults on [`oe_config`]).
+/// filter-error method with [`FemConfig::new`]'s defaults on [`oe_config`]) as `options` say.
 ///
 /// # Errors
-/// Fatal data errors, no usable samples, no supported model, and a fit that fails or does not
-/// converge ([`ReplayError::Model`] with the reason and the iteration count).
+/// Fatal data errors, no usable samples, no supported model, a fit that fails or does not
+/// converge ([`ReplayError::Model`] with the reason and the iteration count), a bootstrap that
+/// fails ([`bootstrap_sigma`]), and a bootstrap asked of `fem` ([`ReplayError::Option`]).
 pub fn fit_record<R: Read>(
     reader: FlightDataReader<R>,
     mapping: &Mapping,
     model: Option<ModelSpec>,
-    fem: bool,
-    initial_states: InitialStates,
+    options: FitOptions,
 ) -> Result<BatchOutcome, ReplayError> {
+    let FitOptions { fem, initial_states, bootstrap_refits } = options;
+    if fem && bootstrap_refits.is_some() {
+        return Err(ReplayError::Option {
+            option: "bootstrap",
+            reason: "the parametric bootstrap is of output error (`--estimator oe`); the filter-error method's own σ accounts for the process noise".into(),
+        });
+    }
     let file = reader.file().to_string();
     let rec = read_manoeuvres(reader)?;
     let (manoeuvres, rejections, read, rejected) =
@@ -398,6 +521,7 @@ pub fn fit_record<R: Read>(
         None => default_model(&first, mapping)?,
     };
     let slices: Vec<&[AirDataSample]> = manoeuvres.iter().map(Vec::as_slice).collect();
+    let mut oe_used = None;
     let (result, fit_wall_s, fem_result) = if fem {
         let mut config = FemConfig::new(model.structure);
         // Convergence on turbulent or model-error records is slow (module doc of filter_error).
@@ -409,13 +533,26 @@ pub fn fit_record<R: Read>(
         let mut config = oe_config(model.structure);
         config.initial_states = initial_states;
         let (r, wall) = fit_manoeuvres(&slices, &config).map_err(ReplayError::Model)?;
+        oe_used = Some(config);
         (r, wall, None)
     };
     // Coloured-residual σ where formed, for both methods (fem: [`fem_reported_sigma`]), for
     // every unknown.
-    let (reported, coloured) = match &fem_result {
+    let (mut reported, coloured) = match &fem_result {
         Some(f) => fem_reported_sigma(f),
         None => (reported_sigma(&result), result.sigma_coloured.is_some()),
+    };
+    let coloured_sigma: Vec<Option<f64>> =
+        reported.iter().map(|s| coloured.then_some(*s)).collect();
+    // The bootstrap σ replaces the reported σ of the structure parameters.
+    let (bootstrap, bootstrap_sigmas) = match (bootstrap_refits, &oe_used) {
+        (Some(n), Some(config)) => {
+            let (sigma, summary) = bootstrap_sigma(&slices, config, &result, n, BOOTSTRAP_SEED)
+                .map_err(ReplayError::Model)?;
+            reported[..sigma.len()].copy_from_slice(&sigma);
+            (Some(summary), Some(sigma))
+        }
+        _ => (None, None),
     };
     // The free initial states follow the parameters and the output biases (OeResult::names).
     let estimated_initial_states: Vec<(String, f64, f64)> = result
@@ -431,7 +568,8 @@ pub fn fit_record<R: Read>(
             estimate: result.values[i],
             std_error: reported[i],
             crb_sigma: result.sigma[i],
-            coloured_sigma: coloured.then_some(reported[i]),
+            coloured_sigma: coloured_sigma[i],
+            bootstrap_sigma: bootstrap_sigmas.as_ref().map(|b| b[i]),
             prewhitened_sigma: result.sigma_coloured_prewhitened.as_ref().map(|c| c[i]),
         })
         .collect();
@@ -514,6 +652,7 @@ pub fn fit_record<R: Read>(
         },
         initial_states: initial_states_name(initial_states).into(),
         estimated_initial_states,
+        bootstrap,
     };
     Ok(BatchOutcome { model, result, summary, traces })
 }

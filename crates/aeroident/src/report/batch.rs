@@ -37,9 +37,22 @@ pub fn results(outcome: &BatchOutcome, title: &str, references: &[Reference]) ->
         .filter_map(|p| p.coloured_sigma.map(|c| format!("{} {}", p.name, fmt_sig(Some(c), 2))))
         .collect();
     if !coloured.is_empty() {
+        let which = if s.bootstrap.is_some() { "" } else { " (the summary's std_error)" };
+        notes.push(format!("coloured-residual σ{which}: {}", coloured.join(", ")));
+    }
+    if let Some(b) = &s.bootstrap {
+        let sig: Vec<String> = s
+            .parameters
+            .iter()
+            .filter_map(|p| {
+                p.bootstrap_sigma.map(|c| format!("{} {}", p.name, fmt_sig(Some(c), 2)))
+            })
+            .collect();
         notes.push(format!(
-            "coloured-residual σ (the summary's std_error): {}",
-            coloured.join(", ")
+            "parametric bootstrap σ (the summary's std_error; {} of {} replicas refitted): {}",
+            b.refits - b.failed,
+            b.refits,
+            sig.join(", ")
         ));
     }
     let mut sources: Vec<&str> = Vec::new();
@@ -130,6 +143,21 @@ pub fn settings(args: &ReplayArgs, outcome: &BatchOutcome) -> Vec<(String, Strin
             ),
         ),
     ]);
+    if let Some(b) = &s.bootstrap {
+        let f: Vec<String> =
+            b.process_noise.iter().map(|(n, f)| format!("{n} {}", fmt_sig(Some(*f), 2))).collect();
+        v.push((
+            "σ".into(),
+            format!(
+                "parametric bootstrap: {} replicas flown through the fitted model with the filter-error fit's process noise F per √s ({}) and measurement noise, refitted; {} failed; seed {}; {:.2} s",
+                b.refits,
+                f.join(", "),
+                b.failed,
+                b.seed,
+                b.wall_s
+            ),
+        ));
+    }
     if let Some(v2) = &s.validation_on {
         v.push(("validated on".into(), v2.data.clone()));
     }

@@ -184,6 +184,7 @@ def fit(
     *,
     initial_states: str = "first-sample",
     validate_on: Optional[PathLike] = None,
+    bootstrap: Optional[int] = None,
 ) -> dict[str, Any]:
     """Fits a whole record by batch output error (``"oe"``) or the filter-error method
     (``"fem"``: output error with process noise on the air-data states, for turbulent records).
@@ -196,12 +197,17 @@ def fit(
     the record's channels can drive. ``initial_states``: ``"first-sample"`` (each manoeuvre starts
     at its first sample's measured states) or ``"estimate"`` (estimated with the parameters).
     ``validate_on``: a second record (same mapping) on which the fitted model is simulated.
+    ``bootstrap=N`` (``oe``, N ≥ 2): the parametric bootstrap σ from N replicas of the record
+    flown through the fitted model with the process and measurement noise a filter-error fit
+    of the same record estimates, each refitted (``--bootstrap N``; docs/uncertainty.md,
+    "Output error: the parametric bootstrap"); it becomes ``sigma`` and ``summary["bootstrap"]``
+    says how it was made.
 
     Returns a dict:
 
     - ``names``: the ``n`` structure parameters (``Cm_alpha`` …);
-    - ``values``: (n,) estimates; ``sigma``: (n,) the reported σ (coloured-residual where
-      formed, else Cramér–Rao: docs/uncertainty.md); ``crb_sigma``: (n,) the Cramér–Rao σ;
+    - ``values``: (n,) estimates; ``sigma``: (n,) the reported σ (the bootstrap's when asked
+      for, else coloured-residual where formed, else Cramér–Rao: docs/uncertainty.md); ``crb_sigma``: (n,) the Cramér–Rao σ;
     - ``correlation``: (n, n) Cramér–Rao correlation of the estimates;
     - ``outputs``: the ``m`` fitted outputs; ``residuals``: (N, m) measured − model (``fem``:
       the filter's innovations), the manoeuvres concatenated;
@@ -221,6 +227,7 @@ def fit(
         None if model is None else os.fspath(model),
         initial_states,
         None if validate_on is None else os.fspath(validate_on),
+        bootstrap,
     )
 
 

@@ -589,6 +589,14 @@ pub fn fit_record<R: Read>(
     let sigmas: Vec<Option<f64>> = reported.iter().map(|s| Some(*s)).collect();
     let mut warnings = diagnostics::sign_warnings(&st, &values, &sigmas);
     warnings.extend(unlisted);
+    if let Some(b) = bootstrap.as_ref().filter(|b| b.failed > 0) {
+        warnings.push(format!(
+            "bootstrap: {} of {} replicas failed and are not in the σ (the spread of the other {})",
+            b.failed,
+            b.refits,
+            b.refits - b.failed
+        ));
+    }
     for c in &identifiability.collinear_regressors {
         warnings.push(format!(
             "collinear regressors {} and {} (sample correlation {:+.3}): the record cannot separate these terms whatever the method",

@@ -136,6 +136,9 @@ pub struct EstimatorRun {
     /// Batch estimators: the candidate σ of the parameters by kind
     /// ([`crate::aircraft::batch::BatchFit::sigma_candidates`]; empty otherwise).
     pub sigma_candidates: Vec<(String, Vec<f64>)>,
+    /// `oe` with `bootstrap_refits`: the bootstrap replicas that failed
+    /// ([`crate::aircraft::batch::BatchFit::bootstrap_failed`]; `null` otherwise).
+    pub bootstrap_failed: Option<usize>,
     /// Per parameter, in the structure's order.
     pub params: Vec<ParamRun>,
 }
@@ -173,6 +176,7 @@ pub fn run_result(index: u64, sensor_seed: u64, out: &RunOutput) -> RunResult {
                     iterations: fit.and_then(|f| f.iterations),
                     fit_wall_s: fit.map(|f| f.wall_s),
                     sigma_candidates: fit.map(|f| f.sigma_candidates.clone()).unwrap_or_default(),
+                    bootstrap_failed: fit.and_then(|f| f.bootstrap_failed),
                     params: Vec::new(),
                 });
             }

@@ -257,7 +257,7 @@ fn batch_campaign_scenarios_are_the_default_plus_batch_estimators() {
 
 /// `bootstrap_refits` in a flight (the short turbulent scenario, unsmoothed samples): the
 /// reported σ of every parameter is the parametric bootstrap's, logged as the candidate
-/// `bootstrap` beside the coloured and Cramér–Rao ones, positive, and not below half the
+/// `bootstrap` beside the coloured and Cramér–Rao ones, with the failed replicas counted, positive, and not below half the
 /// Cramér–Rao σ (without process noise the two agree, estimators' unit test; the turbulence
 /// only adds).
 #[test]
@@ -273,6 +273,8 @@ fn oe_bootstrap_sigma_is_reported_in_a_flight() {
     let fit = ch.batch.as_ref().expect("batch log");
     let cand = |k: &str| fit.sigma_candidates.iter().find(|c| c.0 == k).map(|c| c.1.clone());
     let boot = cand("bootstrap").expect("a bootstrap σ");
+    // Failed replicas are counted (none on this flight), never dropped unrecorded.
+    assert_eq!(fit.bootstrap_failed, Some(0));
     let crb = cand("cramer_rao").expect("a Cramér–Rao σ");
     for (k, l) in ch.params.iter().enumerate() {
         let sigma = l.sigma.last().copied().flatten().expect("a final σ");

@@ -250,6 +250,12 @@ fn run_from_json(v: &Value) -> PyResult<RunResult> {
                         Some(x) => serde_json::from_value(x.clone())
                             .map_err(|e| err(format!("per-run result: `sigma_candidates`: {e}")))?,
                     },
+                    bootstrap_failed: match e.get("bootstrap_failed") {
+                        None | Some(Value::Null) => None,
+                        Some(x) => Some(x.as_u64().ok_or_else(|| {
+                            err("per-run result: `bootstrap_failed` is not a count")
+                        })? as usize),
+                    },
                     params,
                 })
             })

@@ -288,6 +288,9 @@ pub struct BatchFit {
     /// `full_b` (Cramér–Rao with the full innovation covariance); a kind that could not be
     /// formed is absent. For measuring which σ is honest (docs/uncertainty.md).
     pub sigma_candidates: Vec<(String, Vec<f64>)>,
+    /// `oe` with `bootstrap_refits`: the replicas that failed and are not in the bootstrap σ
+    /// (a run fails when more than half do); `null` without the bootstrap.
+    pub bootstrap_failed: Option<usize>,
 }
 
 /// The outcome of [`fit_window`]: per structure parameter `(estimate, σ)`, and the log.
@@ -319,6 +322,7 @@ pub fn fit_window(
             let (result, wall_s) = fit_manoeuvres(&[window], c)?;
             let mut sigma = reported_sigma(&result);
             let mut extra = Vec::new();
+            let mut failed = None;
             if let Some(n) = *bootstrap_refits {
                 // Each run's own draws: the seed mixes in the window's first measurements (a
                 // common seed would correlate the runs' σ through shared replica noise).
@@ -326,13 +330,15 @@ pub fn fit_window(
                 let seed = BOOTSTRAP_SEED
                     ^ first.alpha_rad.to_bits()
                     ^ first.vt_mps.to_bits().rotate_left(29);
-                let (b, _) = bootstrap_sigma(&[window], c, &result, n, seed)
+                let (b, summary) = bootstrap_sigma(&[window], c, &result, n, seed)
                     .map_err(|e| format!("oe: {e}"))?;
+                failed = Some(summary.failed);
                 sigma[..b.len()].copy_from_slice(&b);
                 extra.push(("bootstrap".to_string(), b));
             }
             let values = result.values[..result.n_params].iter().copied().zip(sigma).collect();
-            let log = log_of(label, window, c, &result, wall_s, Vec::new(), extra);
+            let mut log = log_of(label, window, c, &result, wall_s, Vec::new(), extra);
+            log.bootstrap_failed = failed;
             Ok((values, log))
         }
         BatchConfig::Fem(c) => {
@@ -401,5 +407,6 @@ fn log_of(
         coloured_ar_order: r.coloured_ar_order,
         process_noise,
         sigma_candidates,
+        bootstrap_failed: None,
     }
 }

@@ -38,6 +38,7 @@ fn result(
             iterations: None,
             fit_wall_s: None,
             sigma_candidates: Vec::new(),
+            bootstrap_failed: None,
             params: vec![prun("Cm_alpha", -1.0, fin, sigma, t10)],
         }]),
     }

@@ -1,7 +1,6 @@
 //! Parametric bootstrap of an output-error fit: the σ of the converged estimator, process noise
-//! included (Efron & Tibshirani, *An Introduction to the Bootstrap*, 1993, ch. 6, the
-//! parametric bootstrap; Klein & Morelli, *Aircraft System Identification*, 2006, ch. 6 on the
-//! σ of output error in turbulence).
+//! included (the parametric bootstrap of Efron & Tibshirani, *An Introduction to the
+//! Bootstrap*, 1993; chapter numbers are not quoted: they were not checked against the book).
 //!
 //! # Why
 //!
@@ -48,8 +47,9 @@ use std::vec::Vec;
 /// The noise the replicas are flown with.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BootstrapNoise {
-    /// `(full-state index, F)` (indices of [`crate::flight_model::state`]): white process noise on that state equation, state unit per √s
-    /// (e.g. rad/√s on `α`). States outside the structure's state set are ignored.
+    /// `(full-state index, F)` (indices of [`crate::flight_model::state`]): white process
+    /// noise on that state equation, state unit per √s (e.g. rad/√s on `α`). States outside
+    /// the structure's state set are ignored.
     pub process_noise: Vec<(usize, f64)>,
     /// Measurement-noise variance per output, order of the fitted result's `outputs`, the
     /// output's unit squared.

@@ -139,6 +139,9 @@ pub struct EstimatorRun {
     /// `oe` with `bootstrap_refits`: the bootstrap replicas that failed
     /// ([`crate::aircraft::batch::BatchFit::bootstrap_failed`]; `null` otherwise).
     pub bootstrap_failed: Option<usize>,
+    /// `oe` with `bootstrap_refits`: the bootstrap's bias estimate per parameter, structure
+    /// order ([`crate::aircraft::batch::BatchFit::bootstrap_bias`]; `null` otherwise).
+    pub bootstrap_bias: Option<Vec<f64>>,
     /// Per parameter, in the structure's order.
     pub params: Vec<ParamRun>,
 }
@@ -177,6 +180,7 @@ pub fn run_result(index: u64, sensor_seed: u64, out: &RunOutput) -> RunResult {
                     fit_wall_s: fit.map(|f| f.wall_s),
                     sigma_candidates: fit.map(|f| f.sigma_candidates.clone()).unwrap_or_default(),
                     bootstrap_failed: fit.and_then(|f| f.bootstrap_failed),
+                    bootstrap_bias: fit.and_then(|f| f.bootstrap_bias.clone()),
                     params: Vec::new(),
                 });
             }

@@ -275,10 +275,15 @@ fn oe_bootstrap_sigma_is_reported_in_a_flight() {
     let boot = cand("bootstrap").expect("a bootstrap σ");
     // Failed replicas are counted (none on this flight), never dropped unrecorded.
     assert_eq!(fit.bootstrap_failed, Some(0));
+    // The bias estimate (the refits' mean less the estimate) is logged per parameter and is
+    // small against the σ (four replicas: their mean scatters σ/2), never the mean itself.
+    let bias = fit.bootstrap_bias.clone().expect("a bootstrap bias estimate");
+    assert_eq!(bias.len(), ch.params.len());
     let crb = cand("cramer_rao").expect("a Cramér–Rao σ");
     for (k, l) in ch.params.iter().enumerate() {
         let sigma = l.sigma.last().copied().flatten().expect("a final σ");
         assert_eq!(sigma, boot[k], "{}: reported σ is not the bootstrap's", l.param.name());
+        assert!(bias[k].abs() < 3.0 * boot[k], "{}: bias {}", l.param.name(), bias[k]);
         assert!(
             boot[k] > 0.5 * crb[k],
             "{}: bootstrap {} vs Cramér–Rao {}",

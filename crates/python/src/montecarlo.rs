@@ -182,6 +182,18 @@ fn opt_f64(v: &Value, k: &str) -> PyResult<Option<f64>> {
     }
 }
 
+/// An optional list of numbers (`None` when absent or `null`).
+fn opt_f64_list(v: &Value, k: &str) -> PyResult<Option<Vec<f64>>> {
+    match v.get(k) {
+        None | Some(Value::Null) => Ok(None),
+        Some(x) => x
+            .as_array()
+            .and_then(|a| a.iter().map(Value::as_f64).collect::<Option<Vec<f64>>>())
+            .map(Some)
+            .ok_or_else(|| err(format!("per-run result: `{k}` is not a list of numbers"))),
+    }
+}
+
 fn string(v: &Value, k: &str) -> PyResult<String> {
     field(v, k)?
         .as_str()
@@ -256,6 +268,7 @@ fn run_from_json(v: &Value) -> PyResult<RunResult> {
                             err("per-run result: `bootstrap_failed` is not a count")
                         })? as usize),
                     },
+                    bootstrap_bias: opt_f64_list(e, "bootstrap_bias")?,
                     params,
                 })
             })

@@ -291,6 +291,10 @@ pub struct BatchFit {
     /// `oe` with `bootstrap_refits`: the replicas that failed and are not in the bootstrap σ
     /// (a run fails when more than half do); `null` without the bootstrap.
     pub bootstrap_failed: Option<usize>,
+    /// `oe` with `bootstrap_refits`: the bootstrap's bias estimate of the structure parameters
+    /// (structure order; the refits' mean less the estimate, not subtracted from it); `null`
+    /// without the bootstrap.
+    pub bootstrap_bias: Option<Vec<f64>>,
 }
 
 /// The outcome of [`fit_window`]: per structure parameter `(estimate, σ)`, and the log.
@@ -323,6 +327,7 @@ pub fn fit_window(
             let mut sigma = reported_sigma(&result);
             let mut extra = Vec::new();
             let mut failed = None;
+            let mut bias = None;
             if let Some(n) = *bootstrap_refits {
                 // Each run's own draws: the seed mixes in the window's first measurements (a
                 // common seed would correlate the runs' σ through shared replica noise).
@@ -333,12 +338,14 @@ pub fn fit_window(
                 let (b, summary) = bootstrap_sigma(&[window], c, &result, n, seed)
                     .map_err(|e| format!("oe: {e}"))?;
                 failed = Some(summary.failed);
-                sigma[..b.len()].copy_from_slice(&b);
-                extra.push(("bootstrap".to_string(), b));
+                sigma[..b.sigma.len()].copy_from_slice(&b.sigma);
+                extra.push(("bootstrap".to_string(), b.sigma));
+                bias = Some(b.bias);
             }
             let values = result.values[..result.n_params].iter().copied().zip(sigma).collect();
             let mut log = log_of(label, window, c, &result, wall_s, Vec::new(), extra);
             log.bootstrap_failed = failed;
+            log.bootstrap_bias = bias;
             Ok((values, log))
         }
         BatchConfig::Fem(c) => {
@@ -408,5 +415,6 @@ fn log_of(
         process_noise,
         sigma_candidates,
         bootstrap_failed: None,
+        bootstrap_bias: None,
     }
 }

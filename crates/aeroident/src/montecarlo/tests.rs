@@ -39,6 +39,7 @@ fn result(
             fit_wall_s: None,
             sigma_candidates: Vec::new(),
             bootstrap_failed: None,
+            bootstrap_bias: None,
             params: vec![prun("Cm_alpha", -1.0, fin, sigma, t10)],
         }]),
     }

@@ -128,6 +128,9 @@ pub struct BatchParameter {
     pub prewhitened_sigma: Option<f64>,
     /// The parametric bootstrap σ (`--bootstrap N`, `oe`), else `null`.
     pub bootstrap_sigma: Option<f64>,
+    /// The parametric bootstrap's bias estimate (the refits' mean less `estimate`; its sampling
+    /// error is `bootstrap_sigma/√replicas`), else `null`. Not subtracted from `estimate`.
+    pub bootstrap_bias: Option<f64>,
 }
 
 /// One iteration of the batch summary.
@@ -397,12 +400,24 @@ pub struct BootstrapSummary {
     pub wall_s: f64,
 }
 
+/// What the parametric bootstrap gives per structure parameter (structure order, the
+/// parameter's unit).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BootstrapSpread {
+    /// The sample standard deviation of the refits: the σ.
+    pub sigma: Vec<f64>,
+    /// The refits' mean less the estimate: the bootstrap's estimate of the fit's bias (its own
+    /// sampling error is `sigma/√(refits − failed)`). Reported, never subtracted.
+    pub bias: Vec<f64>,
+}
+
 /// The parametric bootstrap σ of the output-error fit `fitted` of `manoeuvres` with `config`
 /// ([`aeroident_estimators::output_error::bootstrap`]): the noise levels from a filter-error
 /// fit of the same data ([`FemConfig::new`] with `config` as its output-error part, at most
 /// [`crate::aircraft::batch::MAX_ITERATIONS`] iterations), then `refits` replicas flown at the
 /// fitted unknowns and refitted, in parallel (rayon); replica `b` draws from PCG64 seeded
-/// `seed + b`. Returns the σ of the structure parameters (structure order) and the summary.
+/// `seed + b`. Returns the σ and the bias estimate of the structure parameters
+/// ([`BootstrapSpread`]) and the summary.
 ///
 /// # Errors
 /// A message when `refits < 2`, the filter-error fit fails or does not converge, or more than
@@ -413,7 +428,7 @@ pub fn bootstrap_sigma(
     fitted: &OeResult,
     refits: usize,
     seed: u64,
-) -> Result<(Vec<f64>, BootstrapSummary), String> {
+) -> Result<(BootstrapSpread, BootstrapSummary), String> {
     use aeroident_estimators::output_error::bootstrap::{self, BootstrapNoise};
     use rand::{Rng, SeedableRng};
     use rayon::prelude::*;
@@ -442,8 +457,9 @@ pub fn bootstrap_sigma(
         return Err(format!("bootstrap: {failed} of {refits} replicas failed (first: {first})"));
     }
     let ok: Vec<Vec<f64>> = draws.into_iter().filter_map(Result::ok).collect();
-    let sigma = bootstrap::spread(&ok)
-        .ok_or_else(|| format!("bootstrap: {} usable refits, at least 2 needed", ok.len()))?;
+    let too_few = || format!("bootstrap: {} usable refits, at least 2 needed", ok.len());
+    let sigma = bootstrap::spread(&ok).ok_or_else(too_few)?;
+    let bias = bootstrap::bias(&ok, &fitted.values[..fitted.n_params]).ok_or_else(too_few)?;
     let names = |i: usize| STATE_NAMES[i].to_string();
     let summary = BootstrapSummary {
         refits,
@@ -459,7 +475,7 @@ pub fn bootstrap_sigma(
             .collect(),
         wall_s: t0.elapsed().as_secs_f64(),
     };
-    Ok((sigma, summary))
+    Ok((BootstrapSpread { sigma, bias }, summary))
 }
 
 /// The name of an initial-state setting as the CLI (`--initial-states`) and the run scenario
@@ -545,12 +561,12 @@ pub fn fit_record<R: Read>(
     let coloured_sigma: Vec<Option<f64>> =
         reported.iter().map(|s| coloured.then_some(*s)).collect();
     // The bootstrap σ replaces the reported σ of the structure parameters.
-    let (bootstrap, bootstrap_sigmas) = match (bootstrap_refits, &oe_used) {
+    let (bootstrap, bootstrap_spread) = match (bootstrap_refits, &oe_used) {
         (Some(n), Some(config)) => {
-            let (sigma, summary) = bootstrap_sigma(&slices, config, &result, n, BOOTSTRAP_SEED)
+            let (spread, summary) = bootstrap_sigma(&slices, config, &result, n, BOOTSTRAP_SEED)
                 .map_err(ReplayError::Model)?;
-            reported[..sigma.len()].copy_from_slice(&sigma);
-            (Some(summary), Some(sigma))
+            reported[..spread.sigma.len()].copy_from_slice(&spread.sigma);
+            (Some(summary), Some(spread))
         }
         _ => (None, None),
     };
@@ -569,7 +585,8 @@ pub fn fit_record<R: Read>(
             std_error: reported[i],
             crb_sigma: result.sigma[i],
             coloured_sigma: coloured_sigma[i],
-            bootstrap_sigma: bootstrap_sigmas.as_ref().map(|b| b[i]),
+            bootstrap_sigma: bootstrap_spread.as_ref().map(|b| b.sigma[i]),
+            bootstrap_bias: bootstrap_spread.as_ref().map(|b| b.bias[i]),
             prewhitened_sigma: result.sigma_coloured_prewhitened.as_ref().map(|c| c[i]),
         })
         .collect();

@@ -54,6 +54,20 @@ pub fn results(outcome: &BatchOutcome, title: &str, references: &[Reference]) ->
             b.refits,
             sig.join(", ")
         ));
+        let bias: Vec<String> = s
+            .parameters
+            .iter()
+            .filter_map(|p| {
+                let (b, sb) = (p.bootstrap_bias?, p.bootstrap_sigma?);
+                (sb > 0.0).then(|| format!("{} {:+.2}σ", p.name, b / sb))
+            })
+            .collect();
+        let n = (b.refits - b.failed).max(1) as f64;
+        notes.push(format!(
+            "bootstrap bias estimate (the refits' mean less the estimate, not subtracted; its own error ±{:.2}σ): {}",
+            1.0 / n.sqrt(),
+            bias.join(", ")
+        ));
     }
     let mut sources: Vec<&str> = Vec::new();
     for r in references {

@@ -30,7 +30,10 @@
 //! filter-error method's `F` and `R` ([`super::filter_error`]), fitted to the same data. The
 //! replica is then refitted by [`super::fit`] with the same configuration, started at `θ̂`; the
 //! σ is the sample standard deviation of the refitted parameters over the replicas
-//! ([`spread`]).
+//! ([`spread`]), and the mean of the refits less the estimate is the bootstrap's estimate of
+//! the fit's bias ([`bias`]; reported, never subtracted: with `B` replicas it carries a
+//! sampling error of `σ/√B`, and Efron & Tibshirani advise against correcting with it unless
+//! it is large against the σ).
 //!
 //! # Cost
 //!
@@ -168,4 +171,17 @@ pub fn spread(refits: &[Vec<f64>]) -> Option<Vec<f64>> {
             })
             .collect(),
     )
+}
+
+/// The bootstrap's estimate of the fit's bias: per parameter, the mean of the refits
+/// (`refits[b][i]`) less the estimate (`estimate[i]`), in the parameter's unit. Its own
+/// sampling error is the bootstrap σ over `√refits.len()`. `None` with no refits or refits whose
+/// length differs from `estimate`'s.
+pub fn bias(refits: &[Vec<f64>], estimate: &[f64]) -> Option<Vec<f64>> {
+    let np = estimate.len();
+    if refits.is_empty() || refits.iter().any(|r| r.len() != np) {
+        return None;
+    }
+    let nf = refits.len() as f64;
+    Some((0..np).map(|i| refits.iter().map(|r| r[i]).sum::<f64>() / nf - estimate[i]).collect())
 }

@@ -717,6 +717,16 @@ fn bootstrap_spread_is_the_sample_standard_deviation() {
     assert!(bootstrap::spread(&[vec![1.0], vec![1.0, 2.0]]).is_none());
 }
 
+/// The bias is the refits' mean less the estimate: {1, 3} and {2, 4} about (1.5, 3) → (0.5,
+/// 0); no refits, or refits of another length, give none.
+#[test]
+fn bootstrap_bias_is_the_refits_mean_less_the_estimate() {
+    let b = bootstrap::bias(&[vec![1.0, 2.0], vec![3.0, 4.0]], &[1.5, 3.0]).unwrap();
+    assert!((b[0] - 0.5).abs() < 1e-15 && b[1].abs() < 1e-15, "{b:?}");
+    assert!(bootstrap::bias(&[], &[1.0]).is_none());
+    assert!(bootstrap::bias(&[vec![1.0, 2.0]], &[1.0]).is_none());
+}
+
 /// A noise description that does not match the fit is refused with the field named, and so is
 /// a negative level.
 #[test]

@@ -201,7 +201,8 @@ def fit(
     flown through the fitted model with the process and measurement noise a filter-error fit
     of the same record estimates, each refitted (``--bootstrap N``; docs/uncertainty.md,
     "Output error: the parametric bootstrap"); it becomes ``sigma`` and ``summary["bootstrap"]``
-    says how it was made.
+    says how it was made. Each ``summary["parameters"]`` entry then also carries
+    ``bootstrap_bias``, the refits' mean less the estimate (not subtracted from ``values``).
 
     Returns a dict:
 

@@ -609,8 +609,8 @@ fn val_output_error_bootstrap_sigma_on_request() {
         assert_eq!(q["std_error"].as_f64(), Some(sb), "{}: reported σ", q["name"]);
         assert!(sb > 0.65 * crb, "{}: bootstrap σ {sb} vs Cramér–Rao {crb}", q["name"]);
         assert_eq!(q["bootstrap_sigma"], r["bootstrap_sigma"], "not reproducible");
-        // The bias estimate is the refits' mean less the estimate: within a few σ of zero
-        // (20 replicas of a fit near its optimum), never the mean itself.
+        // The bias estimate is the refits' mean less the estimate: within 2σ of zero (20
+        // replicas of a fit near its optimum; their mean scatters 0.22σ), never the mean itself.
         assert!(p["bootstrap_bias"].is_null());
         let bias = q["bootstrap_bias"].as_f64().unwrap();
         assert!(bias.abs() < 2.0 * sb, "{}: bootstrap bias {bias} vs σ {sb}", q["name"]);

@@ -32,8 +32,8 @@
 //! σ is the sample standard deviation of the refitted parameters over the replicas
 //! ([`spread`]), and the mean of the refits less the estimate is the bootstrap's estimate of
 //! the fit's bias ([`bias`]; reported, never subtracted: with `B` replicas it carries a
-//! sampling error of `σ/√B`, and Efron & Tibshirani advise against correcting with it unless
-//! it is large against the σ).
+//! sampling error of `σ/√B`, and on the F-16 campaign it is right on average but uncorrelated
+//! with each run's error, docs/uncertainty.md, "The bootstrap's bias estimate").
 //!
 //! # Cost
 //!

@@ -257,9 +257,9 @@ fn batch_campaign_scenarios_are_the_default_plus_batch_estimators() {
 
 /// `bootstrap_refits` in a flight (the short turbulent scenario, unsmoothed samples): the
 /// reported σ of every parameter is the parametric bootstrap's, logged as the candidate
-/// `bootstrap` beside the coloured and Cramér–Rao ones, with the failed replicas counted, positive, and not below half the
-/// Cramér–Rao σ (without process noise the two agree, estimators' unit test; the turbulence
-/// only adds).
+/// `bootstrap` beside the coloured and Cramér–Rao ones, with the failed replicas counted and a
+/// bias estimate per parameter; positive, and not below half the Cramér–Rao σ (without
+/// process noise the two agree, estimators' unit test; the turbulence only adds).
 #[test]
 fn oe_bootstrap_sigma_is_reported_in_a_flight() {
     let text = std::fs::read_to_string(workspace().join("scenarios/montecarlo/short.toml"))

@@ -338,9 +338,10 @@ pub fn fit_window(
                 let (b, summary) = bootstrap_sigma(&[window], c, &result, n, seed)
                     .map_err(|e| format!("oe: {e}"))?;
                 failed = Some(summary.failed);
-                sigma[..b.sigma.len()].copy_from_slice(&b.sigma);
-                extra.push(("bootstrap".to_string(), b.sigma));
-                bias = Some(b.bias);
+                sigma.copy_from_slice(&b.sigma);
+                let np = result.n_params;
+                extra.push(("bootstrap".to_string(), b.sigma[..np].to_vec()));
+                bias = Some(b.bias[..np].to_vec());
             }
             let values = result.values[..result.n_params].iter().copied().zip(sigma).collect();
             let mut log = log_of(label, window, c, &result, wall_s, Vec::new(), extra);

@@ -73,8 +73,9 @@ impl BootstrapNoise {
 }
 
 /// One replica: the record re-flown at the fitted unknowns with `noise` (module doc), refitted
-/// by output error with `config` started at the fitted parameters. Returns the refitted
-/// structure parameters (structure order).
+/// by output error with `config` started at the fitted parameters. Returns every refitted
+/// unknown, order of `fitted.names`: the structure parameters, then the output biases, then
+/// the free initial states (so the bootstrap σ covers the initial states too).
 ///
 /// `manoeuvres` and `config` must be those of `fitted` (same outputs, biases and initial-state
 /// setting); `normal` draws independent standard normal numbers (the caller seeds it).
@@ -149,11 +150,11 @@ pub fn refit(
     let mut cfg = config.clone();
     cfg.start = Start::Given(beta[..np].to_vec());
     let r = fit_prepared(p, manoeuvres, &cfg)?;
-    Ok(r.values[..np].to_vec())
+    Ok(r.values)
 }
 
-/// The bootstrap σ: per parameter, the sample standard deviation (`n − 1`) of the refits
-/// (`refits[b][i]`, replica `b`, parameter `i`); `None` with fewer than two refits or refits of
+/// The bootstrap σ: per unknown, the sample standard deviation (`n − 1`) of the refits
+/// (`refits[b][i]`, replica `b`, unknown `i`); `None` with fewer than two refits or refits of
 /// different lengths.
 pub fn spread(refits: &[Vec<f64>]) -> Option<Vec<f64>> {
     let n = refits.len();
@@ -173,8 +174,8 @@ pub fn spread(refits: &[Vec<f64>]) -> Option<Vec<f64>> {
     )
 }
 
-/// The bootstrap's estimate of the fit's bias: per parameter, the mean of the refits
-/// (`refits[b][i]`) less the estimate (`estimate[i]`), in the parameter's unit. Its own
+/// The bootstrap's estimate of the fit's bias: per unknown, the mean of the refits
+/// (`refits[b][i]`) less the estimate (`estimate[i]`), in the unknown's unit. Its own
 /// sampling error is the bootstrap σ over `√refits.len()`. `None` with no refits or refits whose
 /// length differs from `estimate`'s.
 pub fn bias(refits: &[Vec<f64>], estimate: &[f64]) -> Option<Vec<f64>> {

@@ -286,6 +286,23 @@ fn analytic_crb(st: &ModelStructure, th: &[f64], rate: f64, duration: f64) -> Ve
     (0..np).map(|i| inv[(i, i)].sqrt()).collect()
 }
 
+/// The truth of every unknown of a fit of a [`simulate`] record with no `x0_offset` (order of
+/// `names`): the structure's `th`, then the initial states of the simulation (`V0`, `ALPHA0`
+/// for `α` and `θ`, 0 otherwise; full-state order `(V, α, β, p, q, r, φ, θ)`). Output biases
+/// are not handled.
+fn truth_of_unknowns(names: &[String], th: &[f64]) -> Vec<f64> {
+    let x0 = [V0, ALPHA0, 0.0, 0.0, 0.0, 0.0, 0.0, ALPHA0];
+    let mut truth = th.to_vec();
+    for name in &names[th.len()..] {
+        let i = STATE_NAMES
+            .iter()
+            .position(|s| name.strip_prefix("x0_m1_") == Some(*s))
+            .unwrap_or_else(|| panic!("{name}: not an initial state of manoeuvre 1"));
+        truth.push(x0[i]);
+    }
+    truth
+}
+
 fn with_x0(st: ModelStructure) -> OeConfig {
     let mut cfg = OeConfig::new(st);
     cfg.initial_states = InitialStates::Estimate([true; N_STATES]);
@@ -293,16 +310,19 @@ fn with_x0(st: ModelStructure) -> OeConfig {
 }
 
 /// Synthetic recovery over seeds (initial states estimated: the first sample's measurements
-/// are noisy, and a noisy fixed start biases the fit): every estimate within 3.5σ of the truth; the fit's σ within
-/// 20 % of the independently computed Cramér–Rao bound; the scatter of the estimates over the
-/// seeds consistent with σ (ratio within [0.5, 1.6] for 8 seeds: the 95 % range of a sample
-/// standard deviation of 8 draws is about [0.55, 1.45]); the noise variances recovered.
+/// are noisy, and a noisy fixed start biases the fit): every estimate within 3.5σ of the truth;
+/// the fit's σ within 20 % of the independently computed Cramér–Rao bound; the scatter of the
+/// estimates over the seeds consistent with σ (ratio within [0.5, 1.6] for 8 seeds: the 95 %
+/// range of a sample standard deviation of 8 draws is about [0.55, 1.45]), on the primary
+/// parameters and on every estimated initial state (RMS error about the simulated initial
+/// state); the noise variances recovered.
 fn recovery(st: ModelStructure, rate: f64, duration: f64, primary: &[&str]) {
     let th = trimmed_truth(&st);
     let crb = analytic_crb(&st, &th, rate, duration);
     let seeds = 8;
     let mut est = Vec::new();
     let mut sig = Vec::new();
+    let mut names = Vec::new();
     for seed in 0..seeds {
         let data = simulate(&st, &th, rate, duration, 1.0, 100 + seed, [0.0; N_STATES]);
         let res = fit(&[&data], &with_x0(st)).unwrap();
@@ -327,6 +347,7 @@ fn recovery(st: ModelStructure, rate: f64, duration: f64, primary: &[&str]) {
         }
         est.push(res.values.clone());
         sig.push(res.sigma.clone());
+        names = res.names;
     }
     for (i, p) in st.params().enumerate() {
         let mean = est.iter().map(|e| e[i]).sum::<f64>() / seeds as f64;
@@ -345,6 +366,15 @@ fn recovery(st: ModelStructure, rate: f64, duration: f64, primary: &[&str]) {
             let r = scatter / mean_sigma;
             assert!((0.5..1.6).contains(&r), "{}: scatter / σ = {r}", p.name());
         }
+    }
+    let truth = truth_of_unknowns(&names, &th);
+    for (i, name) in names.iter().enumerate().skip(th.len()) {
+        let rms =
+            (est.iter().map(|e| (e[i] - truth[i]).powi(2)).sum::<f64>() / seeds as f64).sqrt();
+        let mean_sigma = sig.iter().map(|s| s[i]).sum::<f64>() / seeds as f64;
+        println!("{name:>16} truth {:9.4} σ {mean_sigma:.2e} scatter {rms:.2e}", truth[i]);
+        let r = rms / mean_sigma;
+        assert!((0.5..1.6).contains(&r), "{name}: scatter / σ = {r}");
     }
 }
 
@@ -651,8 +681,12 @@ fn bootstrap_sigma_is_the_crb_without_process_noise() {
 /// With white process noise on the α and V equations, output error's Cramér–Rao σ is far
 /// below the scatter of its estimates over independent records; the bootstrap σ of one record,
 /// its replicas flown with the same noise levels, matches that scatter (ratio within
-/// [0.6, 1.6] on every parameter: 24 records and 40 replicas) where the Cramér–Rao σ is
-/// below half of it on the α-equation parameters.
+/// [0.6, 1.6] on every unknown, the estimated initial states included: 24 records and 40
+/// replicas; scatter = RMS error about the truth) where the Cramér–Rao σ is below half of it on
+/// the α-equation parameters. On the initial states of `V` and `θ`, which the process noise
+/// walks away from the measurements, the coloured-residual σ is also short (below 0.75 of
+/// the scatter, its mean over the records; 0.51 and 0.56 measured over 40 records): the reason
+/// the bootstrap σ replaces it there too.
 #[test]
 fn bootstrap_sigma_matches_the_scatter_under_process_noise() {
     let st = lon();
@@ -677,10 +711,11 @@ fn bootstrap_sigma_matches_the_scatter_under_process_noise() {
             fit(&[&d], &cfg).unwrap()
         })
         .collect();
-    let values: Vec<Vec<f64>> = fits.iter().map(|r| r.values[..th.len()].to_vec()).collect();
-    let scatter: Vec<f64> = (0..th.len())
+    let truth = truth_of_unknowns(&fits[0].names, &th);
+    let scatter: Vec<f64> = (0..truth.len())
         .map(|i| {
-            (values.iter().map(|v| (v[i] - th[i]).powi(2)).sum::<f64>() / records as f64).sqrt()
+            (fits.iter().map(|r| (r.values[i] - truth[i]).powi(2)).sum::<f64>() / records as f64)
+                .sqrt()
         })
         .collect();
     let data =
@@ -692,17 +727,27 @@ fn bootstrap_sigma_matches_the_scatter_under_process_noise() {
         measurement_var,
     };
     let sigma = bootstrap_sigma(&data, &cfg, res, &noise, 40);
-    for (i, p) in st.params().enumerate() {
+    assert_eq!(sigma.len(), res.n(), "one bootstrap σ per unknown");
+    // The coloured σ: its mean over the records (one record's is noisy).
+    let coloured: Vec<f64> = (0..truth.len())
+        .map(|i| {
+            fits.iter().map(|r| r.sigma_coloured.as_ref().expect("a coloured σ")[i]).sum::<f64>()
+                / records as f64
+        })
+        .collect();
+    for (i, name) in res.names.iter().enumerate() {
         let (rb, rc) = (sigma[i] / scatter[i], res.sigma[i] / scatter[i]);
-        let col = res.sigma_coloured.as_ref().map_or(f64::NAN, |c| c[i] / scatter[i]);
+        let col = coloured[i] / scatter[i];
         println!(
-            "{:>10} scatter {:.5} bootstrap/scatter {rb:.2} CRB/scatter {rc:.2} coloured/scatter {col:.2}",
-            p.name(),
+            "{name:>16} scatter {:.3e} bootstrap/scatter {rb:.2} CRB/scatter {rc:.2} coloured/scatter {col:.2}",
             scatter[i]
         );
-        assert!((0.6..1.6).contains(&rb), "{}: bootstrap σ / scatter = {rb}", p.name());
-        if ["Cm_alpha", "Cm_q", "Cm_de"].contains(&p.name()) {
-            assert!(rc < 0.5, "{}: the Cramér–Rao σ is not optimistic here ({rc})", p.name());
+        assert!((0.6..1.6).contains(&rb), "{name}: bootstrap σ / scatter = {rb}");
+        if ["Cm_alpha", "Cm_q", "Cm_de"].contains(&name.as_str()) {
+            assert!(rc < 0.5, "{name}: the Cramér–Rao σ is not optimistic here ({rc})");
+        }
+        if ["x0_m1_vt_mps", "x0_m1_theta_rad"].contains(&name.as_str()) {
+            assert!(col < 0.75, "{name}: the coloured σ is not short here ({col})");
         }
     }
 }

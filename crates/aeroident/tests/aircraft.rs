@@ -785,3 +785,33 @@ fn analytic_reference_flies_the_continuous_pilot_input() {
         );
     }
 }
+
+/// What each sample-driven estimator is fed unless told: the EKF (a recursive output error with
+/// its own flight model) the unsmoothed samples without the differentiated accelerations, the
+/// equation-error estimators the matched-smoother samples they regress on
+/// (`SampleEstimatorSpec::raw_samples`; docs/uncertainty.md, "EKF: the raw feed by default").
+#[test]
+fn the_ekf_is_fed_raw_samples_unless_told_smoothed() {
+    use aeroident::aircraft::scenario::EstimatorSpec;
+    let feed = |kind: &str, extra: &str| {
+        let t = format!(
+            "kind = \"run\"\nname = \"o\"\nduration_s = 1.0\n[[estimator]]\nkind = \"{kind}\"\nmodel = \"six-axis\"\n{extra}"
+        );
+        match &scenario(&t).estimator[0] {
+            EstimatorSpec::Sample(s) => s.raw_samples(),
+            other => panic!("{kind}: not sample-driven: {other:?}"),
+        }
+    };
+    assert!(feed("ekf", ""), "ekf defaults to the raw feed");
+    assert!(feed("ekf", "samples = \"raw\"\n"));
+    assert!(!feed("ekf", "samples = \"smoothed\"\n"), "ekf on request smoothed");
+    for kind in ["rls", "ftr", "smpe-corrected", "gradient"] {
+        assert!(!feed(kind, ""), "{kind} regresses on the smoothed samples");
+    }
+    let t = "kind = \"run\"\nname = \"o\"\nduration_s = 1.0\n[[estimator]]\nkind = \"ekf\"\nmodel = \"six-axis\"\nsamples = \"filtered\"\n";
+    let e = Scenario::from_toml(t, "o.toml").unwrap_err().to_string();
+    assert!(e.contains("estimator[0]") && e.contains("`samples` must be"), "{e}");
+    let t = "kind = \"run\"\nname = \"o\"\nduration_s = 1.0\n[[estimator]]\nkind = \"rls\"\nmodel = \"six-axis\"\nsamples = \"raw\"\n";
+    let e = Scenario::from_toml(t, "o.toml").unwrap_err().to_string();
+    assert!(e.contains("unknown option `samples`"), "{e}");
+}

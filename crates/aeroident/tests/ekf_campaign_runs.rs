@@ -21,7 +21,6 @@
 //! jump estimate was 1.2 for a 0.13 change of `Cl_p` (docs/uncertainty.md, "EKF: the change
 //! test under a parameter random walk"); and its run 103, which diverged at 20.7 s at a walk of
 //! 0.001 like runs 295 and 358.
-
 //!
 //! All of these were found on the smoothed feed, the EKF's default until it took the unsmoothed
 //! samples (now its default; docs/uncertainty.md, "EKF: the raw feed by default"), and are
@@ -73,12 +72,14 @@ fn default60_ekf_only(smoothed: bool) -> Scenario {
     default_ekf_only(&edits, "<default60, ekf only>")
 }
 
-/// Runs run `i` of campaign seed `seed` and requires the EKF to reach the end.
-fn assert_runs_to_the_end(sc: &Scenario, seed: u64, i: u64) {
+/// Runs run `i` of campaign seed `seed`, requires the EKF to reach the end and returns how many
+/// times it restarted from its priors.
+fn assert_runs_to_the_end(sc: &Scenario, seed: u64, i: u64) -> u32 {
     let out = run(&seeded_scenario(sc, seed, i)).unwrap();
     let ekf = out.channels.iter().find(|c| c.label == "ekf").expect("ekf channel");
     assert!(ekf.failure.is_none(), "run {i}: {:?}", ekf.failure);
     assert_eq!(ekf.status, Some("running"), "run {i}");
+    ekf.events.count(aeroident_estimators::EventKind::Restart)
 }
 
 #[test]
@@ -148,17 +149,12 @@ fn start_up_lock_out_restarts_once_reports_it_and_runs_to_the_end() {
 #[test]
 fn the_raw_default_feed_flies_the_former_failures_without_a_restart() {
     use aeroident::aircraft::scenario::EstimatorSpec;
-    use aeroident_estimators::EventKind;
     let sc = default60_ekf_only(false);
     let Some(EstimatorSpec::Sample(ekf_entry)) = sc.estimator.first() else {
         panic!("the EKF entry is sample-driven")
     };
     assert!(ekf_entry.raw_samples(), "scenarios/default.toml's EKF is on the raw feed");
     for i in [349, 430, 596, 705, 741, 121, 295, 358] {
-        let out = run(&seeded_scenario(&sc, 1, i)).unwrap();
-        let ekf = out.channels.iter().find(|c| c.label == "ekf").expect("ekf channel");
-        assert!(ekf.failure.is_none(), "run {i}: {:?}", ekf.failure);
-        assert_eq!(ekf.status, Some("running"), "run {i}");
-        assert_eq!(ekf.events.count(EventKind::Restart), 0, "run {i}: {:?}", ekf.events);
+        assert_eq!(assert_runs_to_the_end(&sc, 1, i), 0, "run {i} restarted");
     }
 }

@@ -61,11 +61,12 @@
 //! `ftr` (option `forgetting` ∈ (0, 1] per sample, default 1; FTR also `grid_hz = [f_min, f_max,
 //! step]`, default Morelli's 0.1–1.5 Hz in 0.04 Hz), `ekf` (options `parameter_walk_per_sqrt_s`,
 //! `samples = "raw" | "smoothed"`, default raw: [`SampleEstimatorSpec::raw_samples`]), `smpe`,
-//! `smpe-corrected`, `gradient`. Batch kind `oe` (output error fitted after the flight to the recorded samples of
-//! the window after the damage; options `initial_states = "estimate" | "first-sample"` and
-//! `step = "relaxation" | "concentrated"`, `samples = "smoothed" | "raw"`) and `fem` (the
-//! filter-error method, output error with process noise; options `initial_states`,
-//! `process_noise = "V,alpha,beta"`, `samples = "raw" | "smoothed"`); [`super::batch`].
+//! `smpe-corrected`, `gradient`. Batch kind `oe` (output error fitted after the flight to the
+//! recorded samples of the window after the damage; options `initial_states = "estimate" |
+//! "first-sample"` and `step = "relaxation" | "concentrated"`, `samples = "smoothed" | "raw"`)
+//! and `fem` (the filter-error method, output error with process noise; options
+//! `initial_states`, `process_noise = "V,alpha,beta"`, `samples = "raw" | "smoothed"`);
+//! [`super::batch`].
 //!
 //! The old syntax (`[params.dCm_alpha]`, `params = ["dCm_alpha"]`, `kind = "gradient"` for the
 //! two-aircraft gradient law) is refused with a message saying what to write instead.

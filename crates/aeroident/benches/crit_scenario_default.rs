@@ -8,7 +8,7 @@
 
 #![allow(missing_docs)] // criterion_group! generates an undocumented pub fn.
 
-use aeroident::aircraft::{Scenario, run};
+use aeroident_pipelines::aircraft::{Scenario, run};
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 

@@ -3,13 +3,13 @@
 //! the real-time budget is 1 ms per sample.
 #![allow(missing_docs)] // criterion_group! generates an undocumented pub fn.
 
-use aeroident::poc::ModelAdapter;
 use aeroident_estimators::ParametricEstimator;
 use aeroident_estimators::smpe::{
     CorrectedConfig, CorrectedSmpe, GainForm, ParamSpec, PublishedSmpe, Reading, SlidingSurface,
     SmpeConfig, SmpeSample,
 };
 use aeroident_models::small::SecondOrderNonlinear;
+use aeroident_pipelines::poc::ModelAdapter;
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::SVector;
 use std::hint::black_box;

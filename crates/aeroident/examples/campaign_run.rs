@@ -1,14 +1,14 @@
 //! Re-runs single runs of a Monte Carlo campaign, to look at one failure without the whole
 //! campaign: run `i` of campaign seed `S` is the scenario with the seeds of the seed rule
-//! ([`aeroident::montecarlo::seeded_scenario`], docs/uncertainty.md "Seed rule"), so its
+//! ([`aeroident_pipelines::montecarlo::seeded_scenario`], docs/uncertainty.md "Seed rule"), so its
 //! result is the campaign's. Prints each estimator's status, failure and fit line.
 //!
 //! Run: `cargo run --release -p aeroident --example campaign_run -- SCENARIO.toml SEED RUN...`
 //! (e.g. `scenarios/montecarlo/with-oe.toml 1 66 77`).
 #![allow(missing_docs)]
 
-use aeroident::aircraft::{Scenario, run};
-use aeroident::montecarlo::seeded_scenario;
+use aeroident_pipelines::aircraft::{Scenario, run};
+use aeroident_pipelines::montecarlo::seeded_scenario;
 use std::path::Path;
 use std::process::ExitCode;
 

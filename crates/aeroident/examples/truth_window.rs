@@ -1,7 +1,7 @@
 //! The batch fits of single campaign runs against three candidate truths, to tell a bias of
 //! the estimate from a bias of the truth's definition (docs/uncertainty.md, "Bias: the
 //! staircase inputs"): the truth the campaign scores with (the local derivatives at trim,
-//! [`aeroident::aircraft::truth::local_derivatives`], with the last epoch's increments), the
+//! [`aeroident_pipelines::aircraft::truth::local_derivatives`], with the last epoch's increments), the
 //! local derivatives at the fit window's **mean flown state and controls**, and the **mean of
 //! the local derivatives over the window's flown samples**. Also prints the window's mean
 //! state against the trim. Run `i` of seed `S` is the campaign's run (as `campaign_run`).
@@ -9,10 +9,10 @@
 //! Run: `cargo run --release -p aeroident --example truth_window -- SCENARIO.toml SEED RUN...`
 #![allow(missing_docs)]
 
-use aeroident::aircraft::truth::{LocalDerivatives, local_derivatives};
-use aeroident::aircraft::{Scenario, run};
-use aeroident::montecarlo::seeded_scenario;
 use aeroident_models::f16::{self, F16};
+use aeroident_pipelines::aircraft::truth::{LocalDerivatives, local_derivatives};
+use aeroident_pipelines::aircraft::{Scenario, run};
+use aeroident_pipelines::montecarlo::seeded_scenario;
 use nalgebra::SVector;
 use std::path::Path;
 use std::process::ExitCode;

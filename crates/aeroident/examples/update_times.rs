@@ -20,9 +20,9 @@
 #[path = "../../estimators/src/test_aircraft.rs"]
 mod test_aircraft;
 
-use aeroident::estimators::{EstimatorKind, EstimatorOptions, build};
 use aeroident_estimators::Priors;
 use aeroident_estimators::vocabulary::ModelStructure;
+use aeroident_pipelines::estimators::{EstimatorKind, EstimatorOptions, build};
 use std::hint::black_box;
 use std::time::Instant;
 

@@ -39,8 +39,7 @@ const FONT: &str = "sans-serif";
 /// The fraction of the time axis, at its end, whose values set a panel's y-range.
 pub const CONVERGED_FRACTION: f64 = 0.6;
 
-/// Values of magnitude below this everywhere in a panel are numerical noise around 0.
-pub const ZERO_THRESHOLD: f64 = 1e-12;
+pub use aeroident_pipelines::metrics::ZERO_THRESHOLD;
 
 /// Errors of figure rendering. Each names the output file.
 #[derive(Debug, thiserror::Error)]

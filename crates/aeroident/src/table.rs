@@ -1,9 +1,9 @@
 //! Console tables of [`Results`] (`comfy-table`): the parameter table (estimate ± σ, reference
 //! or truth, error %, status) and the fit-quality table (residual RMS, R², Theil's U). Pure
-//! rendering: the numbers come from [`crate::results`]. [`fmt_sig`] is the one number format
+//! rendering: the numbers come from [`aeroident_pipelines::results`]. [`fmt_sig`] is the one number format
 //! shared with the HTML report.
 
-use crate::results::Results;
+use aeroident_pipelines::results::Results;
 use comfy_table::presets::UTF8_FULL_CONDENSED;
 use comfy_table::{CellAlignment, ColumnConstraint, Table, Width};
 
@@ -110,7 +110,7 @@ mod tests {
         assert_eq!(fmt_error_pct(Some(33.333)), "+33.3");
         assert_eq!(fmt_error_pct(None), "—");
     }
-    use crate::results::{FitQuality, ParameterRow};
+    use aeroident_pipelines::results::{FitQuality, ParameterRow};
 
     #[test]
     fn numbers_have_no_negative_zero_and_sensible_precision() {

@@ -3,13 +3,13 @@
 //! sample-driven estimators in the closed loop (RLS against the true derivatives), the summary
 //! keys and the scenario syntax.
 
-use aeroident::aircraft::experiment::{RunOutput, run};
-use aeroident::aircraft::increments::increment_matrix;
-use aeroident::aircraft::model::{F16IncrementModel, inverse_inertia};
-use aeroident::aircraft::scenario::{EstimatorSpec, Scenario};
 use aeroident_estimators::smpe::ParametricModel;
 use aeroident_estimators::vocabulary::Param;
 use aeroident_models::f16::{self, AeroIncrements, F16, F16Controls, F16State, IncrementReference};
+use aeroident_pipelines::aircraft::experiment::{RunOutput, run};
+use aeroident_pipelines::aircraft::increments::increment_matrix;
+use aeroident_pipelines::aircraft::model::{F16IncrementModel, inverse_inertia};
+use aeroident_pipelines::aircraft::scenario::{EstimatorSpec, Scenario};
 use nalgebra::SVector;
 use proptest::prelude::*;
 use std::cell::Cell;
@@ -395,7 +395,7 @@ fn val_truth_derivatives_same_sign_and_order_as_jsbsim_f16() {
         &aeroident_models::trim::TrimCondition::level(20_000.0, 675.0),
     )
     .unwrap();
-    let ld = aeroident::aircraft::truth::local_derivatives(
+    let ld = aeroident_pipelines::aircraft::truth::local_derivatives(
         &f,
         &t.state,
         &t.controls,
@@ -458,7 +458,7 @@ fn every_scenario_file_parses_and_runs_shortened() {
         sc.duration_s = sc.duration_s.min(0.3);
         let out = run(&sc).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
         assert_finite(&out);
-        let sm = aeroident::aircraft::report::summarize(&out).unwrap();
+        let sm = aeroident_pipelines::aircraft::summary::summarize(&out).unwrap();
         for p in &sm.parameters {
             for v in [p.truth, p.r#final, p.sigma, p.rel_error].into_iter().flatten() {
                 assert!(v.is_finite(), "{}: {} {}", f.display(), p.estimator, p.name);
@@ -473,7 +473,7 @@ fn val_thesis_table_4_7_case_4_full_run_corrected_converges() {
     // before the thesis's 0.4 s, the published-implicit one within the run.
     let sc = Scenario::from_path(&workspace().join("scenarios/f16/t4_7_case4.toml")).unwrap();
     let out = run(&sc).unwrap();
-    let s = aeroident::aircraft::report::summarize(&out).unwrap();
+    let s = aeroident_pipelines::aircraft::summary::summarize(&out).unwrap();
     let get = |label: &str| s.parameters.iter().find(|p| p.estimator == label).unwrap();
     assert!(get("corrected").convergence_time_s.is_some_and(|t| t < 0.4), "{:?}", get("corrected"));
     assert!(
@@ -582,7 +582,7 @@ fn val_rls_closed_loop_noise_free_recovers_true_derivatives() {
     }
     text += "[[estimator]]\nkind = \"rls\"\nmodel = \"six-axis\"\n";
     let out = run(&scenario(&text)).unwrap();
-    let s = aeroident::aircraft::report::summarize(&out).unwrap();
+    let s = aeroident_pipelines::aircraft::summary::summarize(&out).unwrap();
     let primary: Vec<_> = s.parameters.iter().filter(|p| p.primary).collect();
     assert_eq!(primary.len(), 11);
     for p in primary {
@@ -606,7 +606,7 @@ fn val_corrected_settles_every_thesis_table_case() {
             continue;
         }
         sc.estimator.retain(|e| matches!(e, EstimatorSpec::Corrected { .. }));
-        let s = aeroident::aircraft::report::summarize(&run(&sc).unwrap()).unwrap();
+        let s = aeroident_pipelines::aircraft::summary::summarize(&run(&sc).unwrap()).unwrap();
         for p in &s.parameters {
             assert!(
                 p.convergence_time_s.is_some_and(|t| t <= 0.22 + 1e-9),
@@ -675,7 +675,7 @@ fn lateral_damage_changes_the_rls_truth_by_the_increment() {
     let out = run(&scenario(text)).unwrap();
     let l = out.channels[0].param(p("Cn_beta")).unwrap();
     let (before, after) = (l.truth[0].unwrap(), l.truth.last().unwrap().unwrap());
-    let nominal = aeroident::aircraft::truth::local_derivatives(
+    let nominal = aeroident_pipelines::aircraft::truth::local_derivatives(
         &F16::new(0.30).unwrap(),
         &out.trim.state,
         &out.trim.controls,
@@ -792,7 +792,7 @@ fn analytic_reference_flies_the_continuous_pilot_input() {
 /// (`SampleEstimatorSpec::raw_samples`; docs/uncertainty.md, "EKF: the raw feed by default").
 #[test]
 fn the_ekf_is_fed_raw_samples_unless_told_smoothed() {
-    use aeroident::aircraft::scenario::EstimatorSpec;
+    use aeroident_pipelines::aircraft::scenario::EstimatorSpec;
     let feed = |kind: &str, extra: &str| {
         let t = format!(
             "kind = \"run\"\nname = \"o\"\nduration_s = 1.0\n[[estimator]]\nkind = \"{kind}\"\nmodel = \"six-axis\"\n{extra}"

@@ -27,9 +27,9 @@
 //! flown on it ([`SMOOTHED_FEED`]): the fixes they check still guard that feed and any record
 //! the filter meets. The last test flies the same runs on the default raw feed.
 
-use aeroident::aircraft::Scenario;
-use aeroident::aircraft::experiment::run;
-use aeroident::montecarlo::seeded_scenario;
+use aeroident_pipelines::aircraft::Scenario;
+use aeroident_pipelines::aircraft::experiment::run;
+use aeroident_pipelines::montecarlo::seeded_scenario;
 use std::path::PathBuf;
 
 /// `scenarios/default.toml` with each `(from, to)` line replaced (each must be there), keeping
@@ -118,8 +118,8 @@ fn blind_condition_run_with_change_alarms_after_the_damage_runs_to_the_end() {
 /// except `Cm_q` at −4.1σ).
 #[test]
 fn start_up_lock_out_restarts_once_reports_it_and_runs_to_the_end() {
-    use aeroident::aircraft::report::{PRIMARY_DERIVATIVES, summarize};
     use aeroident_estimators::EventKind;
+    use aeroident_pipelines::aircraft::summary::{PRIMARY_DERIVATIVES, summarize};
     let sc = default60_ekf_only(true);
     let out = run(&seeded_scenario(&sc, 1, 349)).unwrap();
     let ekf = out.channels.iter().find(|c| c.label == "ekf").expect("ekf channel");
@@ -131,7 +131,7 @@ fn start_up_lock_out_restarts_once_reports_it_and_runs_to_the_end() {
     let summary = summarize(&out).unwrap();
     let warnings = summary.event_warnings();
     assert!(warnings.iter().any(|w| w.starts_with("ekf: estimator restarted")), "{warnings:?}");
-    let result = aeroident::montecarlo::run_result(349, 0, &out);
+    let result = aeroident_pipelines::montecarlo::run_result(349, 0, &out);
     let runs = result.outcome.unwrap();
     assert_eq!(runs[0].restarts, 1);
     for p in summary.parameters.iter().filter(|p| PRIMARY_DERIVATIVES.contains(&p.name.as_str())) {
@@ -148,7 +148,7 @@ fn start_up_lock_out_restarts_once_reports_it_and_runs_to_the_end() {
 /// lock-out included, whose trigger (`ṗ`, `ṙ` failing the gate) is not fed there.
 #[test]
 fn the_raw_default_feed_flies_the_former_failures_without_a_restart() {
-    use aeroident::aircraft::scenario::EstimatorSpec;
+    use aeroident_pipelines::aircraft::scenario::EstimatorSpec;
     let sc = default60_ekf_only(false);
     let Some(EstimatorSpec::Sample(ekf_entry)) = sc.estimator.first() else {
         panic!("the EKF entry is sample-driven")

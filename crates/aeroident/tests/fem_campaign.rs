@@ -1,9 +1,9 @@
 //! The batch filter-error estimator (`[[estimator]] kind = "fem"`) in the closed-loop `run`
 //! experiment (crates/aeroident/src/aircraft/batch.rs).
 
-use aeroident::aircraft::Scenario;
-use aeroident::aircraft::experiment::run;
-use aeroident::aircraft::report::summarize;
+use aeroident_pipelines::aircraft::Scenario;
+use aeroident_pipelines::aircraft::experiment::run;
+use aeroident_pipelines::aircraft::summary::summarize;
 use std::path::PathBuf;
 
 fn workspace() -> PathBuf {

@@ -3,9 +3,9 @@
 //! (`sim::parse_scenario`), on arbitrary text and on mutated shipped files: never a panic, and
 //! every error names the file. Bounded for CI by `PROPTEST_CASES` (default 64).
 
-use aeroident::aircraft::scenario::Scenario;
-use aeroident::poc::PocScenario;
-use aeroident::sim::parse_scenario;
+use aeroident_pipelines::aircraft::scenario::Scenario;
+use aeroident_pipelines::poc::PocScenario;
+use aeroident_pipelines::sim::parse_scenario;
 use proptest::prelude::*;
 use std::path::Path;
 

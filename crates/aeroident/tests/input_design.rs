@@ -17,7 +17,7 @@
 
 mod common;
 
-use aeroident::aircraft::scenario::Scenario;
+use aeroident_pipelines::aircraft::scenario::Scenario;
 use aeroident_signals::InputSignal;
 use aeroident_signals::config::InputConfig;
 

@@ -13,14 +13,14 @@ use common::workspace;
 fn shared(rel: &str) -> Option<String> {
     common::shared(&format!("jategaonkar_hfb320_attas/{rel}")).map(|p| p.display().to_string())
 }
-use aeroident::estimators::EstimatorKind;
-use aeroident::replay::{ReplayOptions, ReplayOutcome, replay};
 use aeroident_io::{LogFormat, Mapping, open_log};
+use aeroident_pipelines::estimators::EstimatorKind;
+use aeroident_pipelines::replay::{ReplayOptions, ReplayOutcome, replay};
 
 fn run(data: &str, format: Option<LogFormat>, map: &Mapping, est: EstimatorKind) -> ReplayOutcome {
     let reader = open_log(data, format, map).unwrap_or_else(|e| panic!("{e}"));
     let opts = ReplayOptions { estimator: est, ..Default::default() };
-    replay(reader, map, &opts, Vec::new()).unwrap_or_else(|e| panic!("{data}: {e}"))
+    replay(reader, map, &opts, &mut ()).unwrap_or_else(|e| panic!("{data}: {e}"))
 }
 
 /// Every estimate and σ at every sample, the rejections and the final summary parameters.

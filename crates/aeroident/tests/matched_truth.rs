@@ -4,15 +4,15 @@
 //! model the maximum-likelihood estimators must reach the Cramér–Rao bound of the flown
 //! experiment (Fisher information from the model's sensitivities to the inputs flown, the
 //! turbulence as process noise where there is any: an independent computation,
-//! `aeroident::montecarlo::crb_sigmas`), and the filter's σ must match its scatter. On the
+//! `aeroident_pipelines::montecarlo::crb_sigmas`), and the filter's σ must match its scatter. On the
 //! nonlinear tables they cannot, so these campaigns are where an estimator defect shows
 //! apart from the model-structure error (docs/uncertainty.md, "Efficiency on the matched
 //! truth").
 
 mod common;
 
-use aeroident::aircraft::Scenario;
-use aeroident::montecarlo::{ParamStats, campaign};
+use aeroident_pipelines::aircraft::Scenario;
+use aeroident_pipelines::montecarlo::{ParamStats, campaign};
 use common::workspace;
 
 /// `scenarios/default.toml` (inputs, sensors, damage at 20 s) on the matched truth, with its

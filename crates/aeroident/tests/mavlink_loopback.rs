@@ -4,12 +4,12 @@
 //! message ends the replay. Also through the CLI (`replay mavlink:udp:127.0.0.1:0`).
 
 mod common;
-use aeroident::estimators::EstimatorKind;
-use aeroident::replay::{ReplayOptions, replay};
 use aeroident_estimators::AirDataSample;
 use aeroident_io::mavlink::feed::{Sender, end_of_stream, frame};
 use aeroident_io::mavlink::{LinkStats, MavlinkRows, MavlinkUrl};
 use aeroident_io::{FlightDataReader, Mapping, RecordEvent};
+use aeroident_pipelines::estimators::EstimatorKind;
+use aeroident_pipelines::replay::{EstimateRows, ReplayOptions, replay};
 use common::{shared, workspace};
 use std::io::BufRead;
 use std::sync::{Arc, Mutex};
@@ -164,7 +164,13 @@ fn loopback_feed_equals_the_file_replay() {
         let opts = ReplayOptions { estimator, ..ReplayOptions::default() };
         let mut file_out = Vec::new();
         let reader = FlightDataReader::new(csv.as_bytes(), "as-sent.csv", &map).unwrap();
-        let file = replay(reader, &map, &opts, vec![&mut file_out]).unwrap();
+        let file = replay(
+            reader,
+            &map,
+            &opts,
+            &mut EstimateRows { sinks: vec![&mut file_out], flush_each: false },
+        )
+        .unwrap();
 
         let url = MavlinkUrl::parse("mavlink:udp:127.0.0.1:0?timeout_s=20").unwrap();
         let rows = MavlinkRows::open(&url, &map, None).unwrap();
@@ -177,7 +183,13 @@ fn loopback_feed_equals_the_file_replay() {
         };
         let reader = FlightDataReader::new(rows, &url.text, &map).unwrap();
         let mut live_out = Vec::new();
-        let live = replay(reader, &map, &opts, vec![&mut live_out]).unwrap();
+        let live = replay(
+            reader,
+            &map,
+            &opts,
+            &mut EstimateRows { sinks: vec![&mut live_out], flush_each: false },
+        )
+        .unwrap();
         sender.join().unwrap();
 
         let s = stats.lock().unwrap().clone();

@@ -3,10 +3,10 @@
 
 mod common;
 
-use aeroident::aircraft::Scenario;
-use aeroident::aircraft::experiment::run;
-use aeroident::aircraft::report::summarize;
-use aeroident::montecarlo::{campaign, crb_sigmas, seeded_scenario};
+use aeroident_pipelines::aircraft::Scenario;
+use aeroident_pipelines::aircraft::experiment::run;
+use aeroident_pipelines::aircraft::summary::summarize;
+use aeroident_pipelines::montecarlo::{campaign, crb_sigmas, seeded_scenario};
 use common::workspace;
 
 fn scenario(text: &str) -> Scenario {

@@ -1,6 +1,6 @@
 //! Integration tests of the proof-of-concept experiments (issue 2).
 
-use aeroident::poc::{EstimatorKind, PocScenario, SolverReading, run};
+use aeroident_pipelines::poc::{EstimatorKind, PocScenario, SolverReading, run};
 use std::path::{Path, PathBuf};
 
 fn scenario_dir() -> PathBuf {
@@ -177,7 +177,7 @@ fn bad_scenario_file_names_file_line_and_key() {
 }
 
 /// The settling time of docs/reproduction-poc.md, computed here independently of
-/// `aeroident::metrics`: the time of the first sample after which the estimate stays within
+/// `aeroident_pipelines::metrics`: the time of the first sample after which the estimate stays within
 /// ±5 % of the truth; `None` if it is outside the band at the end.
 fn settle_time_s(t_s: &[f64], est: &[f64], truth: f64) -> Option<f64> {
     let inside = |x: f64| (x - truth).abs() <= 0.05 * truth.abs();

@@ -6,10 +6,10 @@
 //! algorithm, so they must be reproduced).
 
 mod common;
-use aeroident::estimators::EstimatorKind;
-use aeroident::replay::{DerivativeSource, ReplayOptions, ReplayOutcome, replay};
 use aeroident_estimators::Coefficient;
 use aeroident_io::{FlightDataReader, Mapping, ModelSpec, RecordEvent};
+use aeroident_pipelines::estimators::EstimatorKind;
+use aeroident_pipelines::replay::{DerivativeSource, ReplayOptions, ReplayOutcome, replay};
 use common::{shared, workspace};
 use std::path::Path;
 
@@ -31,7 +31,7 @@ fn run_with(data: &Path, mapping: &Mapping, opts: ReplayOptions) -> ReplayOutcom
     let reader =
         FlightDataReader::new(std::io::BufReader::new(file), &data.display().to_string(), mapping)
             .unwrap();
-    replay(reader, mapping, &opts, Vec::new()).unwrap()
+    replay(reader, mapping, &opts, &mut ()).unwrap()
 }
 
 fn run(data: &Path, map: &str, opts: ReplayOptions) -> ReplayOutcome {
@@ -460,7 +460,7 @@ fn val_every_estimator_runs_on_every_record() {
             let reader = FlightDataReader::new(file, rel, &m).unwrap();
             let opts =
                 ReplayOptions { estimator: kind, model: model.clone(), ..Default::default() };
-            match replay(reader, &m, &opts, Vec::new()) {
+            match replay(reader, &m, &opts, &mut ()) {
                 Ok(o) => {
                     // A diverged estimator's numbers are not a result: all null.
                     if o.summary.status == "diverged" {

@@ -3,8 +3,8 @@
 //! [`RejectionLog::DEFAULT_LIMIT`] entries and the last are listed, the rest counted per kind
 //! in a warning, and `samples_rejected` still counts every rejected row.
 
-use aeroident::replay::{ReplayOptions, replay};
 use aeroident_io::{FlightDataReader, Mapping, RejectionLog};
+use aeroident_pipelines::replay::{ReplayOptions, replay};
 
 /// Longitudinal channels; the record's interval is 0.1 s but every other row is rejected, so
 /// the accepted samples are 0.2 s apart: the nominal interval (no gaps).
@@ -30,7 +30,7 @@ fn errors_many_rejected_rows_give_a_bounded_list_a_full_count_and_a_warning() {
     let m = Mapping::from_toml_str(MAP, "many.toml").unwrap();
     let reader = FlightDataReader::new(csv.as_bytes(), "many.csv", &m).unwrap();
     let opts = ReplayOptions { diff_window: 3, ..Default::default() };
-    let o = replay(reader, &m, &opts, Vec::new()).unwrap();
+    let o = replay(reader, &m, &opts, &mut ()).unwrap();
     let s = &o.summary;
     assert_eq!(s.samples_read, ROWS);
     assert_eq!(s.samples_rejected, ROWS / 2 + 2, "every rejected row counted");

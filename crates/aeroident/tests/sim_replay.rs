@@ -5,13 +5,14 @@
 //! model's local derivatives at the trim (`aircraft::truth`, central differences of the F-16's
 //! coefficient tables: an independent computation, not a replay).
 
-use aeroident::aircraft::truth::local_derivatives;
 use aeroident::outdir::OutputDir;
-use aeroident::replay::{ReplayOptions, replay};
-use aeroident::sim::{load_scenario, run, write_outputs};
+use aeroident::sim::write_outputs;
 use aeroident_estimators::vocabulary::{Param, Term};
 use aeroident_io::{Mapping, ModelSpec, open_log};
 use aeroident_models::f16::{AeroIncrements, F16};
+use aeroident_pipelines::aircraft::truth::local_derivatives;
+use aeroident_pipelines::replay::{ReplayOptions, replay};
+use aeroident_pipelines::sim::{load_scenario, run};
 use std::path::PathBuf;
 
 fn workspace() -> PathBuf {
@@ -34,7 +35,7 @@ fn val_f16_sim_output_replays_with_the_shipped_mapping_to_the_true_derivatives()
         model: Some(ModelSpec::from_arg("six-axis").unwrap()),
         ..Default::default()
     };
-    let out = replay(reader, &mapping, &opts, Vec::new()).unwrap();
+    let out = replay(reader, &mapping, &opts, &mut ()).unwrap();
     assert_eq!(out.summary.samples_rejected, 0);
     assert_eq!(out.summary.samples_read, sim.data[0].len());
     assert!(out.differentiated.is_empty(), "the sim writes ṗ, q̇, ṙ, α̇: nothing differentiated");

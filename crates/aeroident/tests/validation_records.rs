@@ -3,8 +3,8 @@
 //! a failure under CI). The checks are consequences of least squares, not captured numbers.
 
 mod common;
-use aeroident::replay::{ReplayOptions, ReplayOutcome, replay, validate_on};
 use aeroident_io::{FlightDataReader, Mapping};
+use aeroident_pipelines::replay::{ReplayOptions, ReplayOutcome, replay, validate_on};
 use common::{shared, workspace};
 use std::path::Path;
 
@@ -14,10 +14,10 @@ fn reader(data: &Path, m: &Mapping) -> FlightDataReader<std::io::BufReader<std::
 }
 
 fn fit(data: &Path, m: &Mapping) -> ReplayOutcome {
-    replay(reader(data, m), m, &ReplayOptions::default(), Vec::new()).unwrap()
+    replay(reader(data, m), m, &ReplayOptions::default(), &mut ()).unwrap()
 }
 
-fn fit_percent(v: &aeroident::replay::prediction::ValidationReport, name: &str) -> f64 {
+fn fit_percent(v: &aeroident_pipelines::replay::prediction::ValidationReport, name: &str) -> f64 {
     v.outputs.iter().find(|o| o.name == name).and_then(|o| o.fit_percent).unwrap()
 }
 

@@ -26,6 +26,8 @@
 
 use crate::FlightDataError;
 use crate::flight_data::GAP_FACTOR;
+/// The output time base, a setting of the mapping (`[time] rate_hz` or `clock`).
+pub use crate::mapping::Clock;
 use crate::table::{Interpolation, Table, Topic};
 use std::collections::BTreeMap;
 
@@ -34,15 +36,6 @@ pub const TIME_COLUMN: &str = "time_s";
 
 /// Most rows an alignment may produce (a guard against a rate typo such as `5e6`).
 pub const MAX_ROWS: usize = 50_000_000;
-
-/// The output time base of [`align`].
-#[derive(Debug, Clone, PartialEq)]
-pub enum Clock {
-    /// A uniform grid at this rate, Hz, over the span every topic covers.
-    RateHz(f64),
-    /// The timestamps of this topic (e.g. `sensor_combined` for the IMU rate).
-    Topic(String),
-}
 
 /// An aligned table and what alignment left out.
 #[derive(Debug, Clone, PartialEq)]

@@ -100,13 +100,21 @@
 //! as not finite (naming the column). Servo PWM → surface deflection is the intended use.
 
 use crate::FlightDataError;
-use crate::align::Clock;
 use crate::table::Interpolation;
 use crate::units::{Dimension, Unit};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::Path;
 use toml::Spanned;
+
+/// The output time base of [`align`](crate::align::align).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Clock {
+    /// A uniform grid at this rate, Hz, over the span every topic covers.
+    RateHz(f64),
+    /// The timestamps of this topic (e.g. `sensor_combined` for the IMU rate).
+    Topic(String),
+}
 
 macro_rules! channels {
     ($($(#[$doc:meta])* $v:ident = $key:literal : $dim:ident,)*) => {

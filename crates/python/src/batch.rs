@@ -1,15 +1,15 @@
 //! `fit`: the batch output-error and filter-error fits of a whole record, exactly as
 //! `aeroident replay DATA --map MAPPING --estimator oe|fem` (the post-flight reference fit,
-//! `aeroident::replay::batch::fit_record`), with the estimates, their σ and correlation, the
+//! `aeroident_pipelines::replay::batch::fit_record`), with the estimates, their σ and correlation, the
 //! residuals and the model-vs-measured traces as numpy arrays.
 
 use std::path::Path;
 
-use aeroident::estimators::EstimatorKind;
-use aeroident::replay::batch::{BatchOutcome, FitOptions, fit_record, validate_on};
 use aeroident_estimators::flight_model::N_STATES;
 use aeroident_estimators::output_error::InitialStates;
 use aeroident_io::{Mapping, ModelSpec, open_log_with_notes};
+use aeroident_pipelines::estimators::EstimatorKind;
+use aeroident_pipelines::replay::batch::{BatchOutcome, FitOptions, fit_record, validate_on};
 use numpy::IntoPyArray;
 use numpy::ndarray::Array2;
 use pyo3::prelude::*;

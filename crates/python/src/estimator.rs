@@ -2,8 +2,8 @@
 //! estimator from the factory (`crates/aeroident/src/estimators.rs`), fed one sample dict at a
 //! time.
 
-use aeroident::estimators::{EstimatorKind, EstimatorOptions, build};
 use aeroident_estimators::{AircraftConstants, Status};
+use aeroident_pipelines::estimators::{EstimatorKind, EstimatorOptions, build};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 

@@ -3,10 +3,10 @@
 
 use std::path::Path;
 
-use aeroident::cli::f16::{TrimArgs, trim_at};
 use aeroident_models::f16::{ALPHA, BETA, F16, N_STATES, STATE_NAMES, THETA};
 use aeroident_models::linearize::{eigenvalues, f16_modes, linearize_f16};
 use aeroident_models::trim::F16Trim;
+use aeroident_pipelines::sim::trim::{TrimRequest, out_of_range_warning, trim_at};
 use anyhow::bail;
 use numpy::IntoPyArray;
 use numpy::ndarray::Array2;
@@ -22,14 +22,18 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
-/// The trim of `aeroident f16 trim` (same defaults, checks and error context:
-/// [`aeroident::cli::f16::trim_at`]); clap enforces the turn/pull-up exclusion on the command
-/// line, so it is checked here.
-fn do_trim(a: &TrimArgs) -> anyhow::Result<(F16, F16Trim)> {
+/// The trim of `aeroident f16 trim` (same defaults, checks, error context and warnings:
+/// [`aeroident_pipelines::sim::trim::trim_at`]); the command line enforces the turn/pull-up
+/// exclusion in its parser, so it is checked here.
+fn do_trim(a: &TrimRequest) -> anyhow::Result<(F16, F16Trim)> {
     if a.turn_rate_deg_s.is_some() && a.pull_up_deg_s.is_some() {
         bail!("give at most one of turn_rate_deg_s and pull_up_deg_s");
     }
-    trim_at(a)
+    let (f16, t) = trim_at(a)?;
+    for w in &t.out_of_range {
+        eprintln!("warning: {}", out_of_range_warning(w));
+    }
+    Ok((f16, t))
 }
 
 fn trim_dict<'py>(py: Python<'py>, t: &F16Trim) -> PyResult<Bound<'py, PyDict>> {
@@ -65,8 +69,7 @@ fn trim<'py>(
     turn_rate_deg_s: Option<f64>,
     pull_up_deg_s: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let c =
-        TrimArgs { alt_ft, vt_fps, xcg, gamma_deg, turn_rate_deg_s, pull_up_deg_s, json: false };
+    let c = TrimRequest { alt_ft, vt_fps, xcg, gamma_deg, turn_rate_deg_s, pull_up_deg_s };
     let (_, t) = py.detach(move || do_trim(&c)).map_err(to_py)?;
     trim_dict(py, &t)
 }
@@ -83,8 +86,7 @@ fn linearize<'py>(
     turn_rate_deg_s: Option<f64>,
     pull_up_deg_s: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let c =
-        TrimArgs { alt_ft, vt_fps, xcg, gamma_deg, turn_rate_deg_s, pull_up_deg_s, json: false };
+    let c = TrimRequest { alt_ft, vt_fps, xcg, gamma_deg, turn_rate_deg_s, pull_up_deg_s };
     let (t, lin) = py
         .detach(move || -> anyhow::Result<_> {
             let (f16, t) = do_trim(&c)?;
@@ -124,8 +126,8 @@ fn simulate<'py>(py: Python<'py>, scenario: &str) -> PyResult<Bound<'py, PyDict>
     let r = py
         .detach(move || {
             let p = Path::new(&path);
-            let sc = aeroident::sim::load_scenario(p)?;
-            aeroident::sim::run(&sc, p.parent().unwrap_or(Path::new(".")))
+            let sc = aeroident_pipelines::sim::load_scenario(p)?;
+            aeroident_pipelines::sim::run(&sc, p.parent().unwrap_or(Path::new(".")))
         })
         .map_err(to_py)?;
     let d = PyDict::new(py);

@@ -23,9 +23,9 @@ pyo3::create_exception!(
      message is the one the CLI prints."
 );
 
-/// An `anyhow` error as a Python `AeroidentError` with the CLI's message.
-pub(crate) fn to_py(e: anyhow::Error) -> PyErr {
-    AeroidentError::new_err(aeroident::cli::error_chain(&e))
+/// An error as a Python `AeroidentError` with the CLI's message.
+pub(crate) fn to_py(e: impl Into<anyhow::Error>) -> PyErr {
+    AeroidentError::new_err(aeroident_pipelines::error::chain_message(e.into().chain()))
 }
 
 /// A message as a Python `AeroidentError`.

@@ -5,8 +5,9 @@
 //! depends only on (scenario, seed, index) (the module's seed rule), so the chunks can run
 //! anywhere and the statistics equal the local campaign's.
 
-use aeroident::aircraft::Scenario;
-use aeroident::montecarlo::{
+use aeroident_pipelines::aircraft::Scenario;
+use aeroident_pipelines::aircraft::scenario::{DEFAULT_ORIGIN, DEFAULT_SCENARIO};
+use aeroident_pipelines::montecarlo::{
     Campaign, EstimatorRun, ParamRun, RunResult, assemble, campaign, json_summary, run_result,
     seeded_scenario,
 };
@@ -26,18 +27,16 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
-const DEFAULT_ORIGIN: &str = "<embedded scenarios/default.toml>";
-
 /// `(toml text, origin)` of a scenario path, or of the built-in default scenario for `None`
 /// (so a remote worker needs no file).
 #[pyfunction]
 #[pyo3(signature = (scenario=None))]
 fn scenario_text(scenario: Option<&str>) -> PyResult<(String, String)> {
     match scenario {
-        None => Ok((aeroident::cli::run::DEFAULT_SCENARIO.to_owned(), DEFAULT_ORIGIN.to_owned())),
+        None => Ok((DEFAULT_SCENARIO.to_owned(), DEFAULT_ORIGIN.to_owned())),
         Some(p) => {
             // Parsed here too, so a bad file fails before any task is sent, with the CLI's message.
-            Scenario::from_path(std::path::Path::new(p)).map_err(|e| to_py(e.into()))?;
+            Scenario::from_path(std::path::Path::new(p)).map_err(to_py)?;
             let text = std::fs::read_to_string(p)
                 .map_err(|e| err(format!("reading scenario {p}: {e}")))?;
             Ok((text, p.to_owned()))
@@ -46,7 +45,7 @@ fn scenario_text(scenario: Option<&str>) -> PyResult<(String, String)> {
 }
 
 fn parse(text: &str, origin: &str) -> PyResult<Scenario> {
-    Scenario::from_toml(text, origin).map_err(|e| to_py(e.into()))
+    Scenario::from_toml(text, origin).map_err(to_py)
 }
 
 fn runs_to_py<'py>(py: Python<'py>, runs: &[RunResult]) -> PyResult<Bound<'py, PyList>> {
@@ -83,7 +82,7 @@ fn summary_dict<'py>(py: Python<'py>, c: &Campaign, per_run: bool) -> PyResult<B
     Ok(d)
 }
 
-/// Runs `start..stop` of the campaign (seed rule of `aeroident::montecarlo`) on this process's
+/// Runs `start..stop` of the campaign (seed rule of `aeroident_pipelines::montecarlo`) on this process's
 /// rayon pool (or on `threads` threads of its own when given: a Ray task uses the CPUs it
 /// reserved, not the whole node); per-run results as dicts (the `runs.json` entries of the
 /// CLI).
@@ -118,13 +117,13 @@ fn montecarlo_runs<'py>(
     runs_to_py(py, &results)
 }
 
-/// Runs `start..stop` exactly as `aeroident::montecarlo::run_all` runs each index.
+/// Runs `start..stop` exactly as `aeroident_pipelines::montecarlo::run_all` runs each index.
 fn chunk(sc: &Scenario, seed: u64, start: u64, stop: u64) -> Vec<RunResult> {
     (start..stop)
         .into_par_iter()
         .map(|i| {
             let s = seeded_scenario(sc, seed, i);
-            match aeroident::aircraft::run(&s) {
+            match aeroident_pipelines::aircraft::run(&s) {
                 Ok(out) => run_result(i, s.sensors.seed, &out),
                 Err(e) => {
                     RunResult { index: i, sensor_seed: s.sensors.seed, outcome: Err(e.to_string()) }

@@ -3,11 +3,11 @@
 
 use std::path::Path;
 
-use aeroident::estimators::{EstimatorKind, EstimatorOptions, build};
-use aeroident::replay::arrays::{EstimateArrays, replay_arrays, replay_samples};
-use aeroident::replay::{DerivativeSource, Pacing, ReplayOptions, unsupported};
 use aeroident_estimators::{AirDataSample, ModelStructure};
 use aeroident_io::{FlightDataReader, Mapping, ModelSpec, RecordEvent};
+use aeroident_pipelines::estimators::{EstimatorKind, EstimatorOptions, build};
+use aeroident_pipelines::replay::arrays::{EstimateArrays, replay_arrays, replay_samples};
+use aeroident_pipelines::replay::{DerivativeSource, Pacing, ReplayOptions, unsupported};
 use anyhow::Context as _;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyReadonlyArray1};
@@ -28,16 +28,16 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// The estimator by its CLI name (`rls`, `ftr`, `ekf`, `smpe`, `smpe-corrected`, `gradient`,
 /// `oe`).
 pub fn estimator_kind(name: &str) -> PyResult<EstimatorKind> {
-    use clap::ValueEnum as _;
-    EstimatorKind::from_str(name, true).map_err(|_| {
-        let names: Vec<&str> = EstimatorKind::value_variants().iter().map(|k| k.name()).collect();
-        err(format!("unknown estimator `{name}` (one of: {})", names.join(", ")))
+    use aeroident_pipelines::Named as _;
+    let found = EstimatorKind::ALL.iter().find(|k| k.name().eq_ignore_ascii_case(name));
+    found.copied().ok_or_else(|| {
+        err(format!("unknown estimator `{name}` (one of: {})", EstimatorKind::names().join(", ")))
     })
 }
 
 /// A model argument as the CLI's `--model`: a preset name or a model file path.
 pub fn model_spec(model: &str) -> PyResult<ModelSpec> {
-    ModelSpec::from_arg(model).map_err(|e| to_py(e.into()))
+    ModelSpec::from_arg(model).map_err(to_py)
 }
 
 /// The keys a sample dict may hold (channels and constants).
@@ -170,12 +170,11 @@ fn replay_file<'py>(
             derivatives,
             diff_window,
             pacing: Pacing::Unpaced,
-            on_model: None,
         };
         let file = std::fs::File::open(&path).with_context(|| format!("opening {path}"))?;
         let reader = FlightDataReader::new(std::io::BufReader::new(file), &path, &mapping)?;
         let (outcome, arrays) = replay_arrays(reader, &mapping, &opts)?;
-        if let Some(e) = aeroident::cli::replay::diverged_error(&outcome, kind.name()) {
+        if let Some(e) = outcome.diverged_error(kind.name()) {
             anyhow::bail!(e);
         }
         let summary = serde_json::to_value(outcome.document(None))?;

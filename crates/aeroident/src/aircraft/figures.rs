@@ -7,10 +7,11 @@ use crate::outdir::OutputDir;
 
 use aeroident_estimators::vocabulary::Param;
 
-use super::experiment::{Quantity, RunOutput, TRACKED_NAMES, tracked};
-use super::report::{PRIMARY_DERIVATIVES, ReportError};
+use super::outputs::ReportError;
 use crate::plot::{Band, LineKind, Panel, Series};
 use crate::report::{Figure, write_figure};
+use aeroident_pipelines::aircraft::experiment::{Quantity, RunOutput, TRACKED_NAMES, tracked};
+use aeroident_pipelines::aircraft::summary::PRIMARY_DERIVATIVES;
 
 fn series(label: &str, t: &[f64], v: Vec<f64>, kind: LineKind) -> Series {
     Series { label: label.into(), t_s: t.to_vec(), values: v, kind }

@@ -10,8 +10,10 @@
 //! table: t_ms and per surface the offset from trim in centidegrees) and `DIR/design.json`
 //! (harmonics, condition, predicted σ), and prints σ, σ/|θ| and the response excursions.
 
-use crate::export::design::{Design, DesignSpec, Surface, csv_table, design, large_excursions};
 use crate::outdir::OutputDir;
+use aeroident_pipelines::export::design::{
+    Design, DesignSpec, Surface, csv_table, design, large_excursions,
+};
 use aeroident_signals::turbulence::TurbulenceSeverity;
 use std::path::PathBuf;
 
@@ -19,7 +21,7 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub struct DesignArgs {
     /// Surfaces to excite, each with one member of the orthogonal set.
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "de,da,dr")]
+    #[arg(long, value_parser = super::named::<Surface>(), value_delimiter = ',', default_value = "de,da,dr")]
     pub surfaces: Vec<Surface>,
     /// Peak amplitude of each surface's perturbation about trim, degrees.
     #[arg(long, default_value_t = 2.0)]

@@ -7,7 +7,7 @@
 //! Writes the identified derivatives of a `replay` summary as a JSBSim `<aerodynamics>`
 //! fragment to FILE (atomically: a temporary file beside it, renamed) or to stdout.
 
-use crate::export::jsbsim::{SurfaceProperties, aerodynamics_xml, read_summary};
+use aeroident_pipelines::export::jsbsim::{SurfaceProperties, aerodynamics_xml, read_summary};
 use anyhow::Context;
 use std::io::Write;
 use std::path::{Path, PathBuf};

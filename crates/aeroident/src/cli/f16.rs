@@ -16,7 +16,7 @@ use aeroident_models::f16::{
     ALPHA, BETA, F16, F16Controls, F16State, N_STATES, STATE_NAMES, THETA,
 };
 use aeroident_models::linearize::{eigenvalues, f16_modes, linearize_f16};
-use aeroident_models::trim::{TrimCondition, TrimManeuver, trim};
+use aeroident_pipelines::sim::trim;
 use anyhow::{Context, bail};
 use serde_json::json;
 
@@ -87,6 +87,20 @@ pub struct TrimArgs {
     pub json: bool,
 }
 
+impl TrimArgs {
+    /// The condition these arguments ask for.
+    pub fn request(&self) -> trim::TrimRequest {
+        trim::TrimRequest {
+            alt_ft: self.alt_ft,
+            vt_fps: self.vt_fps,
+            xcg: self.xcg,
+            gamma_deg: self.gamma_deg,
+            turn_rate_deg_s: self.turn_rate_deg_s,
+            pull_up_deg_s: self.pull_up_deg_s,
+        }
+    }
+}
+
 /// Runs `aeroident f16`.
 ///
 /// # Errors
@@ -147,31 +161,15 @@ pub fn xdot(a: &XdotArgs) -> anyhow::Result<String> {
     Ok(out)
 }
 
-/// The F-16 trimmed at `a` (wings level, coordinated turn or pull-up; Stevens & Lewis §3.6):
-/// the model at `a.xcg` and its trim. Shared by `f16 trim`, `f16 linearize` and the Python
-/// bindings, so both give the same checks and the same error context.
+/// The F-16 trimmed at `a` ([`aeroident_pipelines::sim::trim::trim_at`]), warning on stderr
+/// of anything outside the range the F-16 data are meant for.
 ///
 /// # Errors
 /// An `xcg` outside its range, or a trim that does not converge (naming the condition).
 pub fn trim_at(a: &TrimArgs) -> anyhow::Result<(F16, aeroident_models::trim::F16Trim)> {
-    let f16 = F16::new(a.xcg)?;
-    let maneuver = match (a.turn_rate_deg_s, a.pull_up_deg_s) {
-        (Some(w), _) => TrimManeuver::CoordinatedTurn { turn_rate_rad_s: w.to_radians() },
-        (None, Some(q)) => TrimManeuver::PullUp { pitch_rate_rad_s: q.to_radians() },
-        (None, None) => TrimManeuver::WingsLevel,
-    };
-    let cond = TrimCondition {
-        alt_ft: a.alt_ft,
-        vt_fps: a.vt_fps,
-        gamma_rad: a.gamma_deg.to_radians(),
-        maneuver,
-    };
-    let t = trim(&f16, &cond)
-        .with_context(|| format!("trim at {} ft, {} ft/s, xcg {}", a.alt_ft, a.vt_fps, a.xcg))?;
+    let (f16, t) = trim::trim_at(&a.request())?;
     for w in &t.out_of_range {
-        eprintln!(
-            "warning: trim has {w}: outside the range the F-16 data are meant for (the tables extrapolate)"
-        );
+        eprintln!("warning: {}", trim::out_of_range_warning(w));
     }
     Ok((f16, t))
 }

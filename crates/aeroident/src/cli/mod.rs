@@ -60,6 +60,17 @@ impl Cli {
     }
 }
 
+/// A value parser over a [`Named`](aeroident_pipelines::Named) set of choices: the names the
+/// pipelines define are the ones the command line accepts and lists in `--help`.
+pub fn named<T>() -> impl clap::builder::TypedValueParser<Value = T>
+where
+    T: aeroident_pipelines::Named + Clone + Send + Sync,
+{
+    use clap::builder::TypedValueParser as _;
+    clap::builder::PossibleValuesParser::new(T::names())
+        .map(|s| T::from_name(&s).expect("the parser accepts only the listed names"))
+}
+
 /// Writes `text` and a newline to standard output, returning the write error instead of
 /// panicking as `println!` does on a closed pipe (`aeroident f16 trim | head -1`); `main`
 /// ends quietly on a broken pipe.
@@ -80,15 +91,7 @@ pub fn print_stdout(text: &str) -> std::io::Result<()> {
 /// their own message and some do not, so a cause is appended only when the text so far does not
 /// already contain it.
 pub fn error_chain(e: &anyhow::Error) -> String {
-    let mut msg = e.to_string();
-    for cause in e.chain().skip(1) {
-        let c = cause.to_string();
-        if !msg.contains(&c) {
-            msg.push_str(": ");
-            msg.push_str(&c);
-        }
-    }
-    msg
+    aeroident_pipelines::error::chain_message(e.chain())
 }
 
 /// Whether an error (or any of its causes) is a closed output pipe: the reader went away, which

@@ -1,13 +1,13 @@
 //! `aeroident montecarlo [scenario.toml] --runs N [--out DIR] [--json] [--seed S]`: N seeded
 //! noisy closed-loop flights of the `run` experiment in parallel and their statistics per
-//! estimator and parameter ([`crate::montecarlo`]; the seed rule is there).
+//! estimator and parameter ([`aeroident_pipelines::montecarlo`]; the seed rule is there).
 //!
 //! - default: a table on stdout, `DIR/montecarlo.json` (statistics, failed runs, CRB notes),
 //!   `DIR/runs.json` (every run's final results), `DIR/histograms_<estimator>.png` (final
 //!   estimates of each primary derivative with the truth line), `DIR/coverage.png` and
 //!   `DIR/report.html` ([`crate::report::montecarlo`]);
 //!   `DIR` defaults to `./aeroident-out/montecarlo`.
-//! - `--json`: only the summary document of [`crate::montecarlo::json_summary`] on stdout (no
+//! - `--json`: only the summary document of [`aeroident_pipelines::montecarlo::json_summary`] on stdout (no
 //!   files); failed runs are listed on stderr.
 
 use std::fmt::Write as _;
@@ -16,9 +16,9 @@ use std::path::{Path, PathBuf};
 use anyhow::Context as _;
 
 use super::run::DEFAULT_SCENARIO;
-use crate::aircraft::Scenario;
-use crate::montecarlo::{Campaign, campaign, json_summary};
 use crate::plot::{GroupedBars, HistogramPanel, render_histograms_png, render_histograms_svg};
+use aeroident_pipelines::aircraft::Scenario;
+use aeroident_pipelines::montecarlo::{Campaign, campaign, json_summary};
 
 /// Arguments of `aeroident montecarlo`.
 #[derive(Debug, clap::Args)]
@@ -240,7 +240,10 @@ pub fn write_outputs(c: &Campaign, dir: &Path, figures: bool) -> anyhow::Result<
 pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
     let sc = match &args.scenario {
         Some(p) => Scenario::from_path(p)?,
-        None => Scenario::from_toml(DEFAULT_SCENARIO, "<embedded scenarios/default.toml>")?,
+        None => Scenario::from_toml(
+            DEFAULT_SCENARIO,
+            aeroident_pipelines::aircraft::scenario::DEFAULT_ORIGIN,
+        )?,
     };
     anyhow::ensure!(args.runs >= 1, "--runs must be at least 1");
     let spin = crate::progress::spinner(&format!(

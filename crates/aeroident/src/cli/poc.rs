@@ -9,11 +9,12 @@
 //!   under `<dir>/<case>/<estimator>[-<solver>]/` and `<dir>/report.md`, and prints a
 //!   one-screen overview per thesis table.
 //!
-//! Scenario files have `kind = "poc"` ([`crate::scenario_kind`]).
+//! Scenario files have `kind = "poc"` ([`aeroident_pipelines::scenario_kind`]).
 
+use crate::poc::output;
 use crate::poc::report::{CaseResult, overview, render};
-use crate::poc::{EstimatorKind, PocScenario, SolverReading, output, run};
-use crate::scenario_kind::{ScenarioKind, shipped_dir};
+use aeroident_pipelines::poc::{EstimatorKind, PocScenario, SolverReading, run};
+use aeroident_pipelines::scenario_kind::{ScenarioKind, shipped_dir};
 use anyhow::{Context, bail};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
@@ -33,10 +34,10 @@ pub struct PocArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// Estimator: the thesis's (`published`) or the corrected one.
-    #[arg(long, value_enum, default_value_t = EstimatorKind::Published)]
+    #[arg(long, value_parser = super::named::<EstimatorKind>(), default_value = "published")]
     pub estimator: EstimatorKind,
     /// Reading of the published estimator's implicit equation (ignored by `corrected`).
-    #[arg(long, value_enum, default_value_t = SolverReading::Implicit)]
+    #[arg(long, value_parser = super::named::<SolverReading>(), default_value = "implicit")]
     pub solver: SolverReading,
 }
 

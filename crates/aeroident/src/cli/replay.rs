@@ -27,11 +27,13 @@
 //! `--validate-on FILE2` applies the final estimates to a second record (same mapping) and
 //! reports the same metrics there under `validation_on`.
 
-use crate::estimators::EstimatorKind;
-use crate::replay::{DerivativeSource, Pacing, ReplayOptions, ReplayOutcome, replay};
 use aeroident_estimators::flight_model::N_STATES;
 use aeroident_estimators::output_error::InitialStates;
 use aeroident_io::{FlightDataReader, LogFormat, Mapping, ModelSpec, open_log_with_notes};
+use aeroident_pipelines::estimators::EstimatorKind;
+use aeroident_pipelines::replay::{
+    DerivativeSource, EstimateRows, Pacing, ReplayObserver, ReplayOptions, replay,
+};
 use anyhow::Context;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -60,14 +62,14 @@ pub struct ReplayArgs {
     #[arg(long)]
     pub model: Option<String>,
     /// The estimator.
-    #[arg(long, value_enum, default_value_t = EstimatorKind::Rls)]
+    #[arg(long, value_parser = super::named::<EstimatorKind>(), default_value = "rls")]
     pub estimator: EstimatorKind,
     /// RLS forgetting factor in (0, 1]; 1 = ordinary least squares.
     #[arg(long, default_value_t = 1.0)]
     pub forgetting: f64,
     /// Source of ṗ, q̇, ṙ and α̇: the record's channels where mapped (else the causal
     /// differentiator), or always differentiate p, q, r and α.
-    #[arg(long, alias = "qdot", value_enum, default_value_t = DerivativeSource::Auto)]
+    #[arg(long, alias = "qdot", value_parser = super::named::<DerivativeSource>(), default_value = "auto")]
     pub derivatives: DerivativeSource,
     /// Causal differentiator window, samples (odd ≥ 3; lag = (N−1)/2 samples).
     #[arg(long, default_value_t = 5)]
@@ -111,8 +113,35 @@ impl InitialStatesArg {
     }
 }
 
-fn announce(line: &str) {
-    eprintln!("{line}");
+/// The console's view of a replay: the model line and warnings on stderr, the estimates as
+/// CSV lines to the sinks (`estimates.csv`, stdout in live mode, the progress status line).
+struct Console<'a>(EstimateRows<'a>);
+
+impl ReplayObserver for Console<'_> {
+    fn model(&mut self, line: &str) {
+        eprintln!("{line}");
+    }
+
+    fn start(&mut self, names: &[&str]) -> std::io::Result<()> {
+        self.0.start(names)
+    }
+
+    fn estimate(
+        &mut self,
+        t_s: f64,
+        values: &[Option<f64>],
+        sigmas: &[Option<f64>],
+    ) -> std::io::Result<()> {
+        self.0.estimate(t_s, values, sigmas)
+    }
+
+    fn warning(&mut self, text: &str) {
+        eprintln!("warning: {text}");
+    }
+
+    fn finish(&mut self) -> std::io::Result<()> {
+        self.0.finish()
+    }
 }
 
 /// Runs `aeroident replay`.
@@ -130,7 +159,6 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         derivatives: args.derivatives,
         diff_window: args.diff_window,
         pacing: if args.realtime { Pacing::Realtime } else { Pacing::Unpaced },
-        on_model: Some(announce),
     };
     let mavlink = crate::live::is_mavlink(&args.data);
     let live = args.data == "-" || mavlink;
@@ -194,13 +222,14 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     if crate::progress::enabled() {
         sinks.push(&mut status);
     }
+    let mut console = Console(EstimateRows { sinks, flush_each: args.realtime });
     let format = args
         .format
         .or_else(|| LogFormat::from_extension(Path::new(&args.data)))
         .unwrap_or(LogFormat::Csv);
     let outcome = if mavlink {
         let (reader, stats) = crate::live::open_mavlink(&args.data, &mapping)?;
-        replay(reader, &mapping, &opts, sinks).map(|mut outcome| {
+        replay(reader, &mapping, &opts, &mut console).map(|mut outcome| {
             crate::live::finish(&mut outcome.summary, &stats);
             outcome
         })
@@ -213,13 +242,13 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
             &args.data,
             &mapping,
         )?;
-        replay(reader, &mapping, &opts, sinks)
+        replay(reader, &mapping, &opts, &mut console)
     } else {
         let (reader, notes) = open_log_with_notes(&args.data, Some(format), &mapping)?;
         for n in &notes {
             eprintln!("note: {n}");
         }
-        replay(reader, &mapping, &opts, sinks)
+        replay(reader, &mapping, &opts, &mut console)
     };
     bar.finish_and_clear();
     let outcome = outcome?;
@@ -233,7 +262,7 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
             for n in &notes {
                 eprintln!("note: {n}");
             }
-            Some(crate::replay::validate_on(reader, &mapping, &opts, &outcome)?)
+            Some(aeroident_pipelines::replay::validate_on(reader, &mapping, &opts, &outcome)?)
         }
         _ => None,
     };
@@ -246,8 +275,10 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
                 .file_name()
                 .map_or(args.data.clone(), |n| n.to_string_lossy().into_owned());
             let title = format!("{name} — {} — {}", args.estimator.name(), outcome.model.name);
+            let source = crate::report::Source { data: &args.data, mapping: &args.map };
             let results = crate::report::replay::write(
-                &args,
+                &source,
+                &opts,
                 &outcome,
                 &title,
                 &crate::report::replay::model_references(&outcome),
@@ -295,7 +326,7 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     }) {
         eprintln!("warning: {w}");
     }
-    if let Some(e) = diverged_error(&outcome, args.estimator.name()) {
+    if let Some(e) = outcome.diverged_error(args.estimator.name()) {
         anyhow::bail!(e);
     }
     if outcome.summary.status != "running" {
@@ -308,7 +339,7 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
 }
 
 /// The console block of a validation report: one line per output.
-pub fn validation_block(v: &crate::replay::prediction::ValidationReport) -> String {
+pub fn validation_block(v: &aeroident_pipelines::replay::prediction::ValidationReport) -> String {
     use std::fmt::Write as _;
     let mut s = String::new();
     let what = if v.used_for_fit { "validation on the fitted record" } else { "validation on" };
@@ -363,21 +394,6 @@ pub fn validation_block(v: &crate::replay::prediction::ValidationReport) -> Stri
     s
 }
 
-/// The error message for a diverged estimator (`None` if it did not diverge).
-pub fn diverged_error(outcome: &ReplayOutcome, estimator: &str) -> Option<String> {
-    if !outcome.diverged() {
-        return None;
-    }
-    let at = outcome
-        .summary
-        .rejections
-        .last()
-        .map_or(String::new(), |r| format!(" (row {}: {})", r.row, r.reason));
-    Some(format!(
-        "estimator `{estimator}` diverged{at}; its estimates are not a result (summary written with status `diverged`)"
-    ))
-}
-
 /// `--estimator oe | fem`: the batch output-error (or filter-error) fit of the whole record.
 fn execute_batch(
     args: &ReplayArgs,
@@ -393,7 +409,7 @@ fn execute_batch(
     for n in &notes {
         eprintln!("note: {n}");
     }
-    let options = crate::replay::batch::FitOptions {
+    let options = aeroident_pipelines::replay::batch::FitOptions {
         fem,
         initial_states: args.initial_states.unwrap_or(InitialStatesArg::FirstSample).to_config(),
         bootstrap_refits: args.bootstrap.map(|n| n as usize),
@@ -401,14 +417,16 @@ fn execute_batch(
     if let Some(n) = options.bootstrap_refits.filter(|_| !fem) {
         eprintln!("bootstrap: a filter-error fit for the noise levels, then {n} replicas refitted");
     }
-    let mut outcome = crate::replay::batch::fit_record(reader, mapping, model, options)?;
+    let mut outcome =
+        aeroident_pipelines::replay::batch::fit_record(reader, mapping, model, options)?;
     if let Some(path) = &args.validate_on {
         let name = path.display().to_string();
         let (reader, notes) = open_log_with_notes(&name, None, mapping)?;
         for n in &notes {
             eprintln!("note: {n}");
         }
-        outcome.summary.validation_on = Some(crate::replay::batch::validate_on(reader, &outcome)?);
+        outcome.summary.validation_on =
+            Some(aeroident_pipelines::replay::batch::validate_on(reader, &outcome)?);
     }
     eprintln!("model: {}", outcome.model.name);
     let s = &outcome.summary;
@@ -427,7 +445,8 @@ fn execute_batch(
                 .file_name()
                 .map_or(args.data.clone(), |n| n.to_string_lossy().into_owned());
             let title = format!("{name} — {} — {}", args.estimator.name(), outcome.model.name);
-            let results = crate::report::batch::write(args, &outcome, &title, &mut out)?;
+            let source = crate::report::Source { data: &args.data, mapping: &args.map };
+            let results = crate::report::batch::write(&source, &outcome, &title, &mut out)?;
             crate::cli::print_stdout(&crate::table::render(&results))?;
             eprintln!(
                 "{}: {} samples in {} manoeuvre(s), {} rejected, {} iterations in {:.3} s; wrote {}",

@@ -13,7 +13,7 @@
 //!   sub-directory each, plus `DIR/report.md` (thesis versus ours); prints a one-screen
 //!   overview, one line per scenario.
 //!
-//! Scenario files have `kind = "run"` ([`crate::scenario_kind`]).
+//! Scenario files have `kind = "run"` ([`aeroident_pipelines::scenario_kind`]).
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -21,13 +21,13 @@ use std::path::{Path, PathBuf};
 use anyhow::Context as _;
 use rayon::prelude::*;
 
-use crate::aircraft::report::{self, Summary};
-use crate::aircraft::{Scenario, run};
+use crate::aircraft::outputs as report;
 use crate::outdir::{OutputDir, safe_component};
-use crate::scenario_kind::{ScenarioKind, shipped_dir};
+use aeroident_pipelines::aircraft::summary::{self, Summary};
+use aeroident_pipelines::aircraft::{RunOutput, Scenario, run};
+use aeroident_pipelines::scenario_kind::{ScenarioKind, shipped_dir};
 
-/// The default scenario, embedded so `aeroident run` works from any directory.
-pub const DEFAULT_SCENARIO: &str = include_str!("../../../../scenarios/default.toml");
+pub use aeroident_pipelines::aircraft::scenario::DEFAULT_SCENARIO;
 
 /// Arguments of `aeroident run`.
 #[derive(Debug, clap::Args)]
@@ -54,7 +54,7 @@ pub fn run_one(sc: &Scenario, dir: &Path, figures: bool) -> anyhow::Result<Summa
     // Lock and clear the directory before the run, so a failing run leaves no old outputs.
     let mut od = OutputDir::open(dir)?;
     let out = run(sc).with_context(|| format!("scenario `{}`", sc.name))?;
-    report::write_all(&out, &mut od, figures).with_context(|| format!("outputs of `{}`", sc.name))
+    write_all(&out, &mut od, figures).with_context(|| format!("outputs of `{}`", sc.name))
 }
 
 /// Checks that every scenario name is a safe directory name ([`safe_component`]) and that no two
@@ -102,7 +102,10 @@ pub fn execute(args: RunArgs) -> anyhow::Result<()> {
             (sc, d)
         }
         None => (
-            Scenario::from_toml(DEFAULT_SCENARIO, "<embedded scenarios/default.toml>")?,
+            Scenario::from_toml(
+                DEFAULT_SCENARIO,
+                aeroident_pipelines::aircraft::scenario::DEFAULT_ORIGIN,
+            )?,
             PathBuf::from("aeroident-out"),
         ),
     };
@@ -127,11 +130,11 @@ fn results_text(summary: &Summary) -> String {
         s.push_str(&crate::table::render(&r));
     }
     for b in &summary.batch_fits {
-        s.push_str(&crate::aircraft::report::batch_fit_line(b));
+        s.push_str(&crate::aircraft::outputs::batch_fit_line(b));
         s.push('\n');
     }
     for t in &summary.targets {
-        s.push_str(&crate::aircraft::report::targets_line(t));
+        s.push_str(&crate::aircraft::outputs::targets_line(t));
         s.push('\n');
     }
     for w in summary.event_warnings() {
@@ -264,10 +267,13 @@ pub fn evidence(scenarios: &[Scenario]) -> anyhow::Result<String> {
                 }
             }
             sc.estimator.retain(|e| {
-                matches!(e, crate::aircraft::scenario::EstimatorSpec::Published { .. })
+                matches!(
+                    e,
+                    aeroident_pipelines::aircraft::scenario::EstimatorSpec::Published { .. }
+                )
             });
             let out = run(&sc).with_context(|| format!("variant of `{}`", sc.name))?;
-            let sm = report::summarize(&out)?;
+            let sm = summary::summarize(&out)?;
             let mut row = String::new();
             for p in &sm.parameters {
                 let _ = writeln!(
@@ -294,4 +300,29 @@ pub fn evidence(scenarios: &[Scenario]) -> anyhow::Result<String> {
         s.push_str(&r);
     }
     Ok(s)
+}
+
+/// Writes all outputs of one run into the locked output directory `od` (each file atomically)
+/// and returns the summary.
+///
+/// # Errors
+/// [`report::ReportError`] naming the file.
+fn write_all(
+    out: &RunOutput,
+    od: &mut OutputDir,
+    figures: bool,
+) -> Result<Summary, report::ReportError> {
+    let summary = summary::summarize(out)?;
+    let mut f = od.create("timeseries.csv")?;
+    let path = f.path().to_path_buf();
+    report::write_timeseries_to(out, &mut f, &path)?;
+    f.commit()?;
+    let text = serde_json::to_string_pretty(&summary).map_err(|e| report::ReportError::Encode {
+        path: od.path().join("summary.json").display().to_string(),
+        reason: e.to_string(),
+    })?;
+    od.write_bytes("summary.json", (text + "\n").as_bytes())?;
+    let figs = if figures { crate::aircraft::figures::write_figures(out, od)? } else { Vec::new() };
+    crate::report::run::write(out, &summary, figs, od)?;
+    Ok(summary)
 }

@@ -1,12 +1,5 @@
-//! Proof-of-concept experiments of thesis §2.1/§3.3/§4.1: scenario files, the simulation loop,
-//! outputs (CSV, JSON, figures) and the thesis-versus-ours report.
+//! Proof-of-concept outputs (thesis §4.1): CSV, JSON and figures of one case ([`output`](crate::poc::output)) and
+//! the thesis-versus-ours report ([`report`](crate::poc::report)) of an [`aeroident_pipelines::poc`] run.
 
-pub mod adapter;
 pub mod output;
 pub mod report;
-pub mod run;
-pub mod scenario;
-
-pub use adapter::ModelAdapter;
-pub use run::{EstimatorKind, RunError, RunOutput, SolverReading, run};
-pub use scenario::{PocScenario, ScenarioError};

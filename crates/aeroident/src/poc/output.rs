@@ -2,12 +2,12 @@
 //! `states.{png,svg}` and `report.html` (the final estimates against the truth, the settings,
 //! the figures).
 
-use super::run::{EstimatorKind, RunOutput, SolverReading};
-use super::scenario::PocScenario;
-use crate::metrics::{CONVERGENCE_TOL_REL, convergence_time_s, rel_error};
 use crate::plot::{HLine, LineKind, Panel, Series};
 use crate::report::{Figure, Report, common_settings, write_figure};
-use crate::results::{ParameterRow, Results};
+use aeroident_pipelines::metrics::{CONVERGENCE_TOL_REL, convergence_time_s, rel_error};
+use aeroident_pipelines::poc::run::{EstimatorKind, RunOutput, SolverReading};
+use aeroident_pipelines::poc::scenario::PocScenario;
+use aeroident_pipelines::results::{ParameterRow, Results};
 use anyhow::Context;
 use serde::Serialize;
 use std::path::Path;

@@ -3,8 +3,8 @@
 //! estimator.
 
 use super::output::Summary;
-use super::run::RunOutput;
-use super::scenario::PocScenario;
+use aeroident_pipelines::poc::run::RunOutput;
+use aeroident_pipelines::poc::scenario::PocScenario;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 

@@ -6,12 +6,11 @@
 
 use super::replay::{Reference, spec_references};
 use super::{Report, common_settings, write_figure};
-use crate::cli::replay::ReplayArgs;
 use crate::outdir::OutputDir;
 use crate::plot::{HLine, LineKind, Panel, Series};
-use crate::replay::batch::{BatchOutcome, OutputTrace};
-use crate::results::{FitQuality, ParameterRow, Results};
 use crate::table::fmt_sig;
+use aeroident_pipelines::replay::batch::{BatchOutcome, OutputTrace};
+use aeroident_pipelines::results::{FitQuality, ParameterRow, Results};
 
 /// The results of a batch fit: one row per parameter (σ = the Cramér–Rao bound; the
 /// coloured-residual σ, where formed, in a note) and one fit-quality row per validated output.
@@ -121,13 +120,13 @@ pub fn trace_panels(traces: &[OutputTrace]) -> Vec<Panel> {
     v
 }
 
-/// The settings of a batch fit, for the report.
-pub fn settings(args: &ReplayArgs, outcome: &BatchOutcome) -> Vec<(String, String)> {
+/// The settings of a batch fit of `source`, for the report.
+pub fn settings(source: &super::Source, outcome: &BatchOutcome) -> Vec<(String, String)> {
     let s = &outcome.summary;
     let mut v = common_settings();
     v.extend([
-        ("data".into(), args.data.clone()),
-        ("mapping".into(), args.map.display().to_string()),
+        ("data".into(), source.data.to_string()),
+        ("mapping".into(), source.mapping.display().to_string()),
         ("model".into(), format!("{} — {}", outcome.model.name, outcome.model.description)),
         ("structure".into(), outcome.model.structure.names().collect::<Vec<_>>().join(", ")),
         (
@@ -184,7 +183,7 @@ pub fn settings(args: &ReplayArgs, outcome: &BatchOutcome) -> Vec<(String, Strin
 /// # Errors
 /// Figure or output errors, naming the file.
 pub fn write(
-    args: &ReplayArgs,
+    source: &super::Source,
     outcome: &BatchOutcome,
     title: &str,
     od: &mut OutputDir,
@@ -215,7 +214,7 @@ pub fn write(
     }
     Report {
         title: format!("aeroident replay — {title}"),
-        settings: settings(args, outcome),
+        settings: settings(source, outcome),
         results,
         figures,
         warnings: outcome.summary.warnings.clone(),

@@ -1,6 +1,6 @@
 //! `report.html`: one self-contained page per run — the run's settings (command, files,
 //! mapping, estimator, structure, options, version), the results tables of
-//! [`crate::results`] and the figures inlined as SVG — written through
+//! [`aeroident_pipelines::results`] and the figures inlined as SVG — written through
 //! [`OutputDir`] like every other output. No script, no external
 //! file, font or style sheet: the page opens offline in any browser.
 //!
@@ -14,10 +14,19 @@ pub mod run;
 
 use crate::outdir::{OutputDir, OutputError};
 use crate::plot::{Panel, PlotError, render_panels_png, render_panels_svg};
-use crate::results::Results;
 use crate::table::{fmt_error_pct, fmt_estimate, fmt_sig};
+use aeroident_pipelines::results::Results;
 use std::fmt::Write as _;
 use std::path::PathBuf;
+
+/// Where a replayed record came from, as its report's settings table names it.
+#[derive(Debug, Clone, Copy)]
+pub struct Source<'a> {
+    /// The record (a path, `-` for stdin, or a `mavlink:` feed).
+    pub data: &'a str,
+    /// The channel mapping file.
+    pub mapping: &'a std::path::Path,
+}
 
 /// Standard base64 (RFC 4648, with padding) of `bytes`, for PNG figures inlined as data URIs.
 pub fn base64(bytes: &[u8]) -> String {
@@ -253,7 +262,7 @@ impl Report {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::results::{FitQuality, ParameterRow};
+    use aeroident_pipelines::results::{FitQuality, ParameterRow};
 
     #[test]
     fn page_is_self_contained_and_escaped() {

@@ -3,9 +3,9 @@
 //! histograms and the coverage chart, inlined as PNG data).
 
 use super::{Figure, Report, common_settings, png_figure};
-use crate::montecarlo::Campaign;
 use crate::outdir::{OutputDir, OutputError};
-use crate::results::{ParameterRow, Results};
+use aeroident_pipelines::montecarlo::Campaign;
+use aeroident_pipelines::results::{ParameterRow, Results};
 use std::path::Path;
 
 /// One [`Results`] per estimator: the mean final estimate (truth + bias) ± the scatter (the

@@ -5,11 +5,11 @@
 //! the final estimates, and the residual).
 
 use super::{Report, common_settings, write_figure};
-use crate::cli::replay::ReplayArgs;
 use crate::outdir::OutputDir;
 use crate::plot::{Band, HLine, LineKind, Panel, Series};
-use crate::replay::{History, ReplayOutcome};
-use crate::results::{CoefficientFit, ParameterRow, Results, coefficient_fits};
+use aeroident_pipelines::replay::{History, ReplayOutcome};
+use aeroident_pipelines::replay::{Pacing, ReplayOptions};
+use aeroident_pipelines::results::{CoefficientFit, ParameterRow, Results, coefficient_fits};
 
 /// A published reference value of a parameter (from the model file's `[reference.X]`).
 #[derive(Debug, Clone, PartialEq)]
@@ -180,13 +180,17 @@ pub fn fit_panels(fits: &[CoefficientFit]) -> Vec<Panel> {
     v
 }
 
-/// The settings of a replay, for the report.
-pub fn settings(args: &ReplayArgs, outcome: &ReplayOutcome) -> Vec<(String, String)> {
+/// The settings of a replay of `source` with `opts`, for the report.
+pub fn settings(
+    source: &super::Source,
+    opts: &ReplayOptions,
+    outcome: &ReplayOutcome,
+) -> Vec<(String, String)> {
     let mut s = common_settings();
     let derived: Vec<&str> = outcome.differentiated.iter().map(|d| d.name()).collect();
     s.extend([
-        ("data".into(), args.data.clone()),
-        ("mapping".into(), args.map.display().to_string()),
+        ("data".into(), source.data.to_string()),
+        ("mapping".into(), source.mapping.display().to_string()),
         (
             "model".into(),
             format!(
@@ -197,18 +201,21 @@ pub fn settings(args: &ReplayArgs, outcome: &ReplayOutcome) -> Vec<(String, Stri
             ),
         ),
         ("structure".into(), outcome.model.structure.names().collect::<Vec<_>>().join(", ")),
-        ("estimator".into(), format!("{} ({})", args.estimator.name(), outcome.summary.estimator)),
-        ("forgetting factor".into(), args.forgetting.to_string()),
+        ("estimator".into(), format!("{} ({})", opts.estimator.name(), outcome.summary.estimator)),
+        ("forgetting factor".into(), opts.forgetting.to_string()),
         (
             "derivatives".into(),
             format!(
                 "{:?}; differentiated: {} (window {} samples)",
-                args.derivatives,
+                opts.derivatives,
                 if derived.is_empty() { "none".to_string() } else { derived.join(", ") },
-                args.diff_window
+                opts.diff_window
             ),
         ),
-        ("pacing".into(), if args.realtime { "real time".into() } else { "unpaced".into() }),
+        (
+            "pacing".into(),
+            if opts.pacing == Pacing::Realtime { "real time".into() } else { "unpaced".into() },
+        ),
         (
             "samples".into(),
             format!(
@@ -228,7 +235,8 @@ pub fn settings(args: &ReplayArgs, outcome: &ReplayOutcome) -> Vec<(String, Stri
 /// # Errors
 /// Figure or output errors, naming the file.
 pub fn write(
-    args: &ReplayArgs,
+    source: &super::Source,
+    opts: &ReplayOptions,
     outcome: &ReplayOutcome,
     title: &str,
     references: &[Reference],
@@ -260,7 +268,7 @@ pub fn write(
     }
     let report = Report {
         title: format!("aeroident replay — {title}"),
-        settings: settings(args, outcome),
+        settings: settings(source, opts, outcome),
         results: vec![res.clone()],
         figures,
         warnings: outcome.summary.warnings.clone(),

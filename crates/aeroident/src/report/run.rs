@@ -3,10 +3,10 @@
 //! run's settings and its figures ([`crate::aircraft::figures`]).
 
 use super::{Figure, Report, common_settings};
-use crate::aircraft::RunOutput;
-use crate::aircraft::report::Summary;
 use crate::outdir::{OutputDir, OutputError};
-use crate::results::{ParameterRow, Results};
+use aeroident_pipelines::aircraft::RunOutput;
+use aeroident_pipelines::aircraft::summary::Summary;
+use aeroident_pipelines::results::{ParameterRow, Results};
 use std::path::Path;
 
 /// One [`Results`] per estimator of `summary`, in order of appearance; the reference column is
@@ -61,7 +61,7 @@ pub fn results(summary: &Summary) -> Vec<Results> {
 }
 
 /// The settings of a run, for the report: scenario, estimators, trim, excitation and damage
-/// times, and one `batch fit` line per post-flight fit ([`crate::aircraft::report::batch_fit_line`]).
+/// times, and one `batch fit` line per post-flight fit ([`crate::aircraft::outputs::batch_fit_line`]).
 pub fn settings(out: &RunOutput, summary: &Summary) -> Vec<(String, String)> {
     let mut s = common_settings();
     let sc = &out.scenario;
@@ -96,7 +96,7 @@ pub fn settings(out: &RunOutput, summary: &Summary) -> Vec<(String, String)> {
         summary
             .batch_fits
             .iter()
-            .map(|b| ("batch fit".into(), crate::aircraft::report::batch_fit_line(b))),
+            .map(|b| ("batch fit".into(), crate::aircraft::outputs::batch_fit_line(b))),
     );
     s
 }

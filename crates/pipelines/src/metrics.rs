@@ -5,6 +5,10 @@
 //! stays within ±`tol_rel` (5 % in the reports) of the truth until the end of the record;
 //! `None` if the last sample is outside that band. A non-finite estimate counts as outside.
 
+/// Values of magnitude below this are numerical noise around 0 (a reference that small is
+/// round-off of an exact zero; a figure panel that small everywhere is drawn as 0).
+pub const ZERO_THRESHOLD: f64 = 1e-12;
+
 /// Errors of the metric functions.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum MetricsError {

@@ -79,6 +79,14 @@ use aeroident_signals::{InputConfig, WindConfig};
 use serde::Deserialize;
 
 use super::increments::{self, parse_increment};
+pub use crate::estimators::{SAMPLE_KINDS, SampleEstimatorSpec};
+
+/// The default scenario (`scenarios/default.toml`), embedded so the main job runs from any
+/// directory.
+pub const DEFAULT_SCENARIO: &str = include_str!("../../../../scenarios/default.toml");
+
+/// How [`DEFAULT_SCENARIO`] is named in messages.
+pub const DEFAULT_ORIGIN: &str = "<embedded scenarios/default.toml>";
 
 /// Errors reading or validating a scenario. Each names the file and the field.
 #[derive(Debug, thiserror::Error)]
@@ -291,51 +299,6 @@ pub enum ReadingSpec {
     /// Previous θ̂ on the right-hand side.
     Explicit,
 }
-
-/// A sample-driven estimator (TOML `[[estimator]]` with a sample-driven `kind`): an
-/// [`aeroident_estimators::Estimator`] over a model structure of the vocabulary, fed one
-/// air-data sample per step.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SampleEstimatorSpec {
-    /// Method: one of [`SAMPLE_KINDS`].
-    pub kind: String,
-    /// The model structure (preset or list).
-    pub model: ModelStructure,
-    /// How the structure was given (preset name, or `custom`).
-    pub model_name: String,
-    /// Label in outputs (default: the kind).
-    pub label: Option<String>,
-    /// Method options (every other key of the entry), checked by the estimator factory.
-    pub options: toml::Table,
-}
-
-impl SampleEstimatorSpec {
-    /// Whether the entry is fed the **unsmoothed** samples (`AirDataSampler::raw`: white sensor
-    /// noise, the same time stamps) instead of the matched-smoother ones the equation-error
-    /// estimators need: option `samples = "raw" | "smoothed"` of `ekf`, `oe` and `fem` (the
-    /// value is checked by the estimator factory or `super::batch::config`); default raw for
-    /// `ekf` and `fem`, smoothed for `oe`.
-    /// - `oe`, `fem`: the samples the post-flight fit records (`super::batch` module doc).
-    /// - `ekf`: raw means the raw samples **without** the differentiated `ṗ q̇ ṙ`. The filter
-    ///   assumes white measurement noise and independent outputs; the smoothed samples are
-    ///   correlated over the smoother's 0.2 s and the raw accelerations are differences of the
-    ///   raw gyros around them, so this is the feed its noise model describes (the moments are
-    ///   then learned from the gyros through the dynamics). Measured on the matched truth in
-    ///   calm air (docs/uncertainty.md, "Efficiency on the matched truth"): scatter 0.7–4.0 ×
-    ///   the Cramér–Rao bound raw, 0.9–10 × smoothed; on the default scenario's 1,000 × 60 s
-    ///   campaign mean NIS 0.99 against 0.79, scatter ≤ 2× the bound on 4 of 11 primary
-    ///   derivatives against 2 ("EKF: the raw feed by default"). `samples = "smoothed"` gives
-    ///   it the matched-smoother samples with the differentiated accelerations.
-    pub fn raw_samples(&self) -> bool {
-        match self.options.get("samples").and_then(|v| v.as_str()) {
-            Some(v) => v == "raw",
-            None => matches!(self.kind.as_str(), "ekf" | "fem"),
-        }
-    }
-}
-
-/// The sample-driven estimator kinds.
-pub const SAMPLE_KINDS: [&str; 6] = ["rls", "ekf", "smpe", "smpe-corrected", "gradient", "ftr"];
 
 /// One estimator (TOML `[[estimator]]`).
 #[derive(Debug, Clone, PartialEq)]
@@ -587,13 +550,13 @@ fn parse_estimator(k: usize, t: &toml::Table) -> Result<EstimatorSpec, (String, 
             }
         });
     }
-    if !SAMPLE_KINDS.contains(&kind) && !super::batch::is_batch(kind) {
+    if !SAMPLE_KINDS.contains(&kind) && !crate::estimators::is_batch_kind(kind) {
         return Err((
             format!("{field}.kind"),
             format!(
                 "unknown kind `{kind}`: two-aircraft estimators published | corrected | mr-gradient, sample-driven {}, batch (post-flight) {}",
                 SAMPLE_KINDS.join(" | "),
-                super::batch::batch_kinds().join(" | ")
+                crate::estimators::batch_kinds().join(" | ")
             ),
         ));
     }
@@ -840,10 +803,10 @@ impl Scenario {
         }
         for (k, e) in self.estimator.iter().enumerate() {
             if let EstimatorSpec::Sample(s) = e {
-                if super::batch::is_batch(&s.kind) {
+                if crate::estimators::is_batch_kind(&s.kind) {
                     super::batch::config(s).map_err(|r| bad(&format!("estimator[{k}]"), r))?;
                 } else {
-                    super::experiment::build_sample_estimator(s)
+                    crate::estimators::build_sample_estimator(s)
                         .map_err(|r| bad(&format!("estimator[{k}]"), r))?;
                 }
                 continue;

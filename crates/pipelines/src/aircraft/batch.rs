@@ -69,39 +69,17 @@
 //! filter following the smoothed measurements. Batch methods use no differentiated channel, so
 //! they do not need the smoother.
 
-use aeroident_estimators::flight_model::{N_STATES, Output, STATE_NAMES, StateSet, state};
-use aeroident_estimators::output_error::filter_error::{FemConfig, FemResult};
+use aeroident_estimators::flight_model::{N_STATES, Output, StateSet, state};
+use aeroident_estimators::output_error::filter_error::FemConfig;
 use aeroident_estimators::output_error::{InitialStates, OeConfig, OeResult, StepKind};
 use aeroident_estimators::sample::AirDataSample;
 use serde::Serialize;
 
-use super::scenario::SampleEstimatorSpec;
+use crate::estimators::SampleEstimatorSpec;
 use crate::replay::batch::{
-    BOOTSTRAP_SEED, bootstrap_sigma, fem_reported_sigma, fit_fem_manoeuvres, fit_manoeuvres,
-    initial_states_name, oe_config, reported_sigma,
+    BOOTSTRAP_SEED, MAX_ITERATIONS, bootstrap_sigma, fem_reported_sigma, fit_fem_manoeuvres,
+    fit_manoeuvres, initial_states_name, oe_config, process_noise_of, reported_sigma,
 };
-
-/// Most Gauss–Newton iterations of the campaign's fits (the estimators crate's default is 50).
-/// On turbulent flights the residuals are large and structured, so Gauss–Newton converges
-/// only linearly (Dennis & Schnabel 1983 ch. 10: the neglected second-order term of the
-/// Hessian is not small): over 200 runs of `scenarios/montecarlo/with-oe.toml` (seed 1) the
-/// fits took 16 iterations on average and at most 192 to meet the unchanged convergence test
-/// (docs/uncertainty.md, "Output error in the campaign").
-pub const MAX_ITERATIONS: usize = 250;
-
-/// Whether `kind` (an `[[estimator]] kind`) is a batch (post-flight) estimator: the CLI's
-/// [`EstimatorKind::is_batch`](crate::estimators::EstimatorKind::is_batch) kinds.
-pub fn is_batch(kind: &str) -> bool {
-    use clap::ValueEnum;
-    crate::estimators::EstimatorKind::from_str(kind, false).is_ok_and(|k| k.is_batch())
-}
-
-/// The batch estimator kinds of `[[estimator]]` (`oe`, `fem`), for messages.
-pub fn batch_kinds() -> Vec<&'static str> {
-    use clap::ValueEnum;
-    let kinds = crate::estimators::EstimatorKind::value_variants();
-    kinds.iter().filter(|k| k.is_batch()).map(|k| k.name()).collect()
-}
 
 /// The configuration of a batch entry: output error or the filter-error method.
 #[derive(Debug, Clone, PartialEq)]
@@ -369,14 +347,6 @@ pub fn fit_window(
             Ok((values, log))
         }
     }
-}
-
-/// `(state, F, σ)` of each process-noise state of a filter-error fit.
-pub fn process_noise_of(fem: &FemResult) -> Vec<(String, f64, f64)> {
-    fem.process_noise_states
-        .iter()
-        .filter_map(|&i| fem.process_noise(i).map(|(f, s)| (STATE_NAMES[i].to_string(), f, s)))
-        .collect()
 }
 
 fn log_of(

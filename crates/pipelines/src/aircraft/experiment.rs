@@ -42,9 +42,7 @@ use aeroident_signals::{Input, InputSignal, WindField, config::build_wind};
 use super::air_data::{AirDataSampler, M_PER_FT};
 use super::batch::{BatchFit, fit_window};
 use super::increments::increment_matrix;
-use super::scenario::{
-    AerodynamicsSpec, Channel, EstimatorSpec, EstimatorWind, SampleEstimatorSpec, Scenario,
-};
+use super::scenario::{AerodynamicsSpec, Channel, EstimatorSpec, EstimatorWind, Scenario};
 use super::sensors::SensorNoise;
 use super::truth::{LocalDerivatives, local_derivatives};
 pub use super::two_aircraft::PublishedDiagnostics;
@@ -166,7 +164,7 @@ impl ChannelLog {
     /// Whether the channel is a batch (post-flight) estimator: its estimate exists only at the
     /// end, so it has no time-history metrics.
     pub fn is_batch(&self) -> bool {
-        super::batch::is_batch(self.kind)
+        crate::estimators::is_batch_kind(self.kind)
     }
 }
 
@@ -254,67 +252,6 @@ impl RunOutput {
 
 fn setup_err(what: &str, e: impl std::fmt::Display) -> ExperimentError {
     ExperimentError::Setup { what: what.into(), reason: e.to_string() }
-}
-
-/// The sample-driven estimator of `spec`, built by the shared factory
-/// ([`crate::estimators::build`]) with the generic priors. Options: `forgetting` (RLS, FTR).
-///
-/// # Errors
-/// A message naming the kind, the unknown or bad option, or the configuration error.
-pub(super) fn build_sample_estimator(
-    spec: &SampleEstimatorSpec,
-) -> Result<Box<dyn Estimator>, String> {
-    use crate::estimators::{EstimatorKind, EstimatorOptions, build};
-    use clap::ValueEnum;
-    let kind = EstimatorKind::from_str(&spec.kind, false).map_err(|_| {
-        format!(
-            "unknown sample-driven estimator `{}` ({})",
-            spec.kind,
-            super::scenario::SAMPLE_KINDS.join(" | ")
-        )
-    })?;
-    let mut options = EstimatorOptions::default();
-    for (key, v) in &spec.options {
-        match (key.as_str(), kind) {
-            ("forgetting", EstimatorKind::Rls | EstimatorKind::Ftr) => {
-                options.forgetting =
-                    v.as_float().or_else(|| v.as_integer().map(|i| i as f64)).ok_or_else(|| {
-                        format!("{}: `forgetting` must be a number, got {v}", spec.kind)
-                    })?;
-            }
-            ("grid_hz", EstimatorKind::Ftr) => {
-                let bad = || {
-                    format!(
-                        "ftr: `grid_hz` must be [f_min, f_max, step] in Hz (three numbers), got {v}"
-                    )
-                };
-                let a = v.as_array().filter(|a| a.len() == 3).ok_or_else(bad)?;
-                let num = |x: &toml::Value| {
-                    x.as_float().or_else(|| x.as_integer().map(|i| i as f64)).ok_or_else(bad)
-                };
-                options.ftr_grid_hz = Some((num(&a[0])?, num(&a[1])?, num(&a[2])?));
-            }
-            ("parameter_walk_per_sqrt_s", EstimatorKind::Ekf) => {
-                options.parameter_walk_per_sqrt_s =
-                    v.as_float().or_else(|| v.as_integer().map(|i| i as f64)).ok_or_else(|| {
-                        format!("ekf: `parameter_walk_per_sqrt_s` must be a number, got {v}")
-                    })?;
-            }
-            ("samples", EstimatorKind::Ekf) => {
-                if !matches!(v.as_str(), Some("raw" | "smoothed")) {
-                    return Err(format!("ekf: `samples` must be \"raw\" or \"smoothed\", got {v}"));
-                }
-            }
-            (other, _) => {
-                return Err(format!(
-                    "{}: unknown option `{other}` (rls and ftr take `forgetting`, ftr also `grid_hz`, ekf `parameter_walk_per_sqrt_s` and `samples`; the others take none)",
-                    spec.kind
-                ));
-            }
-        }
-    }
-    build(kind, spec.model, aeroident_estimators::Priors::generic(&spec.model), &options)
-        .map_err(|e| e.to_string())
 }
 
 /// A sample-driven channel.
@@ -454,7 +391,7 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
     for (k, spec) in sc.estimator.iter().enumerate() {
         let what = format!("estimator[{k}] `{}`", spec.label());
         let (ch, kind, quantity, params, status) = match spec {
-            EstimatorSpec::Sample(s) if super::batch::is_batch(&s.kind) => {
+            EstimatorSpec::Sample(s) if crate::estimators::is_batch_kind(&s.kind) => {
                 let config = super::batch::config(s).map_err(|e| setup_err(&what, e))?;
                 let structure = config.oe().structure;
                 let kind = config.kind();
@@ -473,7 +410,8 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
                 )
             }
             EstimatorSpec::Sample(s) => {
-                let est = build_sample_estimator(s).map_err(|e| setup_err(&what, e))?;
+                let est = crate::estimators::build_sample_estimator(s)
+                    .map_err(|e| setup_err(&what, e))?;
                 let structure = *est.structure();
                 let params: Vec<Param> = structure.params().collect();
                 let kind = est.method();

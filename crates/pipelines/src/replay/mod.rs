@@ -57,7 +57,7 @@ use std::io::{Read, Write};
 use std::time::{Duration, Instant};
 
 /// Where the derivatives `ṗ, q̇, ṙ, α̇` come from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DerivativeSource {
     /// The record's channel where mapped, else the causal differentiator.
     Auto,
@@ -89,8 +89,91 @@ pub struct ReplayOptions {
     pub diff_window: usize,
     /// Pacing.
     pub pacing: Pacing,
-    /// Called once with a line naming the model when the first sample has chosen it.
-    pub on_model: Option<fn(&str)>,
+}
+
+/// What a face sees of a replay while it runs: the model once chosen, each identified sample's
+/// estimates, warnings as they arise. Every method defaults to doing nothing, so `()` observes
+/// nothing; [`EstimateRows`] writes the estimates as CSV lines.
+pub trait ReplayObserver {
+    /// Once, when the first sample has chosen the model: a line naming it.
+    fn model(&mut self, _line: &str) {}
+
+    /// Once, with the parameter names, before the first [`estimate`](Self::estimate).
+    ///
+    /// # Errors
+    /// A failed write.
+    fn start(&mut self, _names: &[&str]) -> std::io::Result<()> {
+        Ok(())
+    }
+
+    /// One accepted sample's estimates and σ (`None`: not identified / no σ), in the order of
+    /// the names given to [`start`](Self::start); `t_s` is the sample's time, s.
+    ///
+    /// # Errors
+    /// A failed write.
+    fn estimate(
+        &mut self,
+        _t_s: f64,
+        _values: &[Option<f64>],
+        _sigmas: &[Option<f64>],
+    ) -> std::io::Result<()> {
+        Ok(())
+    }
+
+    /// A warning, the moment it arises (those about the data are also kept in the summary).
+    fn warning(&mut self, _text: &str) {}
+
+    /// Once at the end of the record.
+    ///
+    /// # Errors
+    /// A failed write.
+    fn finish(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl ReplayObserver for () {}
+
+/// Writes the estimates to each sink as CSV: a header line, then one line per sample,
+/// `t_s, <names>, sigma_<names>` with empty fields where not identified or no σ
+/// ([`aeroident_io::replay_output::write_estimates_row`]). With `flush_each` (a paced, live
+/// feed) each line goes out at its time; otherwise the sinks stay buffered until the end.
+pub struct EstimateRows<'a> {
+    /// Where the lines go (an `estimates.csv` file, stdout in live mode).
+    pub sinks: Vec<&'a mut dyn Write>,
+    /// Flush after every line.
+    pub flush_each: bool,
+}
+
+impl ReplayObserver for EstimateRows<'_> {
+    fn start(&mut self, names: &[&str]) -> std::io::Result<()> {
+        for s in self.sinks.iter_mut() {
+            aeroident_io::replay_output::write_estimates_header(s, names)?;
+        }
+        Ok(())
+    }
+
+    fn estimate(
+        &mut self,
+        t_s: f64,
+        values: &[Option<f64>],
+        sigmas: &[Option<f64>],
+    ) -> std::io::Result<()> {
+        for s in self.sinks.iter_mut() {
+            aeroident_io::replay_output::write_estimates_row(s, t_s, values, sigmas)?;
+            if self.flush_each {
+                s.flush()?;
+            }
+        }
+        Ok(())
+    }
+
+    fn finish(&mut self) -> std::io::Result<()> {
+        for s in self.sinks.iter_mut() {
+            s.flush()?;
+        }
+        Ok(())
+    }
 }
 
 impl Default for ReplayOptions {
@@ -102,7 +185,6 @@ impl Default for ReplayOptions {
             derivatives: DerivativeSource::Auto,
             diff_window: 5,
             pacing: Pacing::Unpaced,
-            on_model: None,
         }
     }
 }
@@ -325,6 +407,33 @@ impl ReplayOutcome {
     pub fn diverged(&self) -> bool {
         self.summary.status == Status::Diverged.name()
     }
+
+    /// The failure message of a diverged replay (`None` when it did not diverge), naming the
+    /// `estimator` and the row and reason of the last rejection.
+    pub fn diverged_error(&self, estimator: &str) -> Option<String> {
+        if !self.diverged() {
+            return None;
+        }
+        let at = self
+            .summary
+            .rejections
+            .last()
+            .map_or(String::new(), |r| format!(" (row {}: {})", r.row, r.reason));
+        Some(format!(
+            "estimator `{estimator}` diverged{at}; its estimates are not a result (summary written with status `diverged`)"
+        ))
+    }
+}
+
+impl crate::Named for DerivativeSource {
+    const ALL: &'static [Self] = &[DerivativeSource::Auto, DerivativeSource::Differentiate];
+
+    fn name(self) -> &'static str {
+        match self {
+            DerivativeSource::Auto => "auto",
+            DerivativeSource::Differentiate => "differentiate",
+        }
+    }
 }
 
 /// What the model needs that sample `s` lacks, as readable items (empty: supported). Terms
@@ -436,11 +545,9 @@ struct Running {
     v0_mps: f64,
 }
 
-/// Replays a record through the chosen estimator.
-///
-/// `sinks`: each gets a header line and one CSV line of estimates per sample as it is
-/// produced (flushed per line with [`Pacing::Realtime`], else at the end), e.g. the `estimates.csv` file and stdout in live mode. Each line:
-/// `t_s, <names>, sigma_<names>`; empty fields where not identified or no σ.
+/// Replays a record through the chosen estimator; `observer` sees the model, each sample's
+/// estimates and the warnings as they arise ([`EstimateRows`] writes `estimates.csv` or the
+/// live feed's lines, `&mut ()` sees nothing).
 ///
 /// # Errors
 /// [`ReplayError`] for fatal data errors (missing column, unreadable CSV), invalid options, an
@@ -450,7 +557,7 @@ pub fn replay<R: Read>(
     reader: FlightDataReader<R>,
     mapping: &Mapping,
     opts: &ReplayOptions,
-    sinks: Vec<&mut dyn Write>,
+    observer: &mut dyn ReplayObserver,
 ) -> Result<ReplayOutcome, ReplayError> {
     let make = |model: &ModelSpec| {
         let o = EstimatorOptions {
@@ -460,7 +567,7 @@ pub fn replay<R: Read>(
         };
         build(opts.estimator, model.structure, model.priors, &o)
     };
-    replay_with(reader, mapping, opts, make, sinks)
+    replay_with(reader, mapping, opts, make, observer)
 }
 
 /// [`replay`] with the estimator made by `make` (for tests that need an estimator of their
@@ -473,7 +580,7 @@ pub fn replay_with<R: Read>(
     mapping: &Mapping,
     opts: &ReplayOptions,
     make: impl Fn(&ModelSpec) -> Result<Box<dyn Estimator>, BuildError>,
-    mut sinks: Vec<&mut dyn Write>,
+    observer: &mut dyn ReplayObserver,
 ) -> Result<ReplayOutcome, ReplayError> {
     if opts.diff_window < 3 || opts.diff_window.is_multiple_of(2) {
         return Err(ReplayError::Option {
@@ -554,13 +661,9 @@ pub fn replay_with<R: Read>(
                         )));
                     }
                     let est = make(&spec)?;
-                    if let Some(f) = opts.on_model {
-                        f(&model_line(&spec, defaulted, &supply, opts.diff_window));
-                    }
+                    observer.model(&model_line(&spec, defaulted, &supply, opts.diff_window));
                     history.names = spec.structure.names().collect();
-                    for s in sinks.iter_mut() {
-                        aeroident_io::replay_output::write_estimates_header(s, &history.names)?;
-                    }
+                    observer.start(&history.names)?;
                     run = Some(Running {
                         est,
                         stage: DerivativeStage::new(supply, opts.diff_window, mapping.nominal_dt_s),
@@ -575,7 +678,7 @@ pub fn replay_with<R: Read>(
                         ReplayError::Option { option: "diff-window", reason: e.to_string() }
                     })?;
                     if let Some(w) = r.stage.take_warning() {
-                        eprintln!("warning: {w}");
+                        observer.warning(&w);
                         warnings.push(w);
                     }
                 }
@@ -619,11 +722,11 @@ pub fn replay_with<R: Read>(
             let restarts = r.est.events().count(aeroident_estimators::EventKind::Restart);
             if restarts > restarts_seen {
                 restarts_seen = restarts;
-                eprintln!(
-                    "warning: estimator `{}` restarted from its priors at t = {} s (row {row}); its estimates come from the samples after it only",
+                observer.warning(&format!(
+                    "estimator `{}` restarted from its priors at t = {} s (row {row}); its estimates come from the samples after it only",
                     r.est.method(),
                     s.t_s
-                );
+                ));
             }
             let e = match result {
                 Ok(e) => e,
@@ -643,21 +746,14 @@ pub fn replay_with<R: Read>(
                 let dt = r.stage.dt_s().or(mapping.nominal_dt_s);
                 let (wait, note) = pacer.wait(s.t_s, dt, Instant::now());
                 if let Some(n) = note {
-                    eprintln!("warning: {n}");
+                    observer.warning(&n);
                     warnings.push(n);
                 }
                 if !wait.is_zero() {
                     std::thread::sleep(wait);
                 }
             }
-            for sink in sinks.iter_mut() {
-                aeroident_io::replay_output::write_estimates_row(sink, s.t_s, &values, &sigmas)?;
-                // Paced output is a live feed: each line goes out at its time. Otherwise the
-                // sinks stay buffered (flushed at the end).
-                if opts.pacing == Pacing::Realtime {
-                    sink.flush()?;
-                }
-            }
+            observer.estimate(s.t_s, &values, &sigmas)?;
             recorder.push(&s);
             history.push(s.t_s, values, sigmas);
             fed.push(s);
@@ -667,9 +763,7 @@ pub fn replay_with<R: Read>(
         }
     }
     history.finish();
-    for sink in sinks.iter_mut() {
-        sink.flush()?;
-    }
+    observer.finish()?;
     if let Some(r) = &mut run
         && !diverged
     {
@@ -819,13 +913,12 @@ pub fn validate_on<R: Read>(
     let opts = ReplayOptions {
         model: Some(fitted.model.clone()),
         pacing: Pacing::Unpaced,
-        on_model: None,
         ..opts.clone()
     };
     let make = |spec: &ModelSpec| -> Result<Box<dyn Estimator>, BuildError> {
         Ok(Box::new(Frozen::new(spec.structure, &values, fitted.final_covariance.clone())))
     };
-    let out = replay_with(reader, mapping, &opts, make, Vec::new())?;
+    let out = replay_with(reader, mapping, &opts, make, &mut ())?;
     let cov = |i: usize, j: usize| {
         let n = fitted.model.structure.n_params();
         fitted.final_covariance.get(i * n + j).copied().flatten()
@@ -977,7 +1070,7 @@ mod tests {
             }))
         };
         let opts = ReplayOptions { diff_window: 3, ..Default::default() };
-        let out = replay_with(reader, &m, &opts, make, Vec::new());
+        let out = replay_with(reader, &m, &opts, make, &mut ());
         let seen = seen.borrow().clone();
         (out, seen)
     }
@@ -1021,7 +1114,7 @@ mod tests {
         assert!(last.reason.contains("diverged at t = 0.3 s"), "{}", last.reason);
         assert!(o.summary.parameters.iter().all(|p| p.estimate.is_none() && p.std_error.is_none()));
         assert!(o.summary.coefficients.iter().all(|c| c.condition_number.is_none()));
-        let e = crate::cli::replay::diverged_error(&o, "probe").unwrap();
+        let e = o.diverged_error("probe").unwrap();
         assert!(e.contains("estimator `probe` diverged (row 5"), "{e}");
     }
 
@@ -1098,7 +1191,7 @@ mod tests {
         for w in [1003, usize::MAX] {
             let r = FlightDataReader::new(csv.as_bytes(), "d.csv", &m).unwrap();
             let opts = ReplayOptions { diff_window: w, ..Default::default() };
-            let e = replay(r, &m, &opts, Vec::new()).unwrap_err().to_string();
+            let e = replay(r, &m, &opts, &mut ()).unwrap_err().to_string();
             assert!(e.contains("diff-window") && e.contains("1001"), "{e}");
         }
     }
@@ -1141,7 +1234,7 @@ mod tests {
         let m = Mapping::from_toml_str(MAP, "m.toml").unwrap();
         let csv = record().replace(",0.05,", ",,");
         let r = FlightDataReader::new(csv.as_bytes(), "d.csv", &m).unwrap();
-        let e = replay(r, &m, &ReplayOptions::default(), Vec::new()).unwrap_err().to_string();
+        let e = replay(r, &m, &ReplayOptions::default(), &mut ()).unwrap_err().to_string();
         assert!(e.contains("d.csv") && e.contains("no usable samples"), "{e}");
         assert!(e.contains("row 2: column `a`: blank value"), "{e}");
     }
@@ -1163,7 +1256,7 @@ mod tests {
         let run = |forgetting: f64| {
             let r = FlightDataReader::new(csv.as_bytes(), "d.csv", &m).unwrap();
             let opts = ReplayOptions { forgetting, diff_window: 3, ..Default::default() };
-            replay(r, &m, &opts, Vec::new()).unwrap()
+            replay(r, &m, &opts, &mut ()).unwrap()
         };
         let ok = run(1.0);
         assert!(ok.summary.parameters.iter().all(|p| p.estimate.is_some()), "{:?}", ok.summary);

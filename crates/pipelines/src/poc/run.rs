@@ -22,7 +22,7 @@ use nalgebra::SVector;
 use std::time::Instant;
 
 /// Which estimator to run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum EstimatorKind {
     /// The thesis's estimator (3.20)–(3.99).
@@ -32,13 +32,35 @@ pub enum EstimatorKind {
 }
 
 /// Reading of the published estimator's implicit equation.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SolverReading {
     /// Solve for θ̂ at every sample (default).
     Implicit,
     /// Previous sample's θ̂ on the right-hand side.
     Explicit,
+}
+
+impl crate::Named for EstimatorKind {
+    const ALL: &'static [Self] = &[EstimatorKind::Published, EstimatorKind::Corrected];
+
+    fn name(self) -> &'static str {
+        match self {
+            EstimatorKind::Published => "published",
+            EstimatorKind::Corrected => "corrected",
+        }
+    }
+}
+
+impl crate::Named for SolverReading {
+    const ALL: &'static [Self] = &[SolverReading::Implicit, SolverReading::Explicit];
+
+    fn name(self) -> &'static str {
+        match self {
+            SolverReading::Implicit => "implicit",
+            SolverReading::Explicit => "explicit",
+        }
+    }
 }
 
 impl SolverReading {

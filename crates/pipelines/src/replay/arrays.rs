@@ -122,7 +122,7 @@ pub fn replay_arrays<R: Read>(
         let inner = build(opts.estimator, model.structure, model.priors, &eo)?;
         Ok(Box::new(Recorder::new(inner, Rc::clone(&out))))
     };
-    let outcome = replay_with(reader, mapping, opts, make, Vec::new())?;
+    let outcome = replay_with(reader, mapping, opts, make, &mut ())?;
     let arrays = std::mem::take(&mut *out.borrow_mut());
     Ok((outcome, arrays))
 }

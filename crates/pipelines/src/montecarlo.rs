@@ -27,7 +27,7 @@
 //!   no estimate or no σ for the parameter does not cover); `null` for methods without σ;
 //! - `median_time_to_10pct_s`: median over `runs_ok` of the time from the start of the
 //!   excitation until the estimate stays within ±10 % of the truth up to the damage (or the end)
-//!   ([`crate::aircraft::report`]); a run that never settles counts as +∞, and the median is
+//!   ([`crate::aircraft::summary`]); a run that never settles counts as +∞, and the median is
 //!   `null` when at least half never settle; always `null` for a batch estimator (output
 //!   error, [`crate::aircraft::batch`]: no estimate before the end of the flight), which
 //!   reports `mean_iterations` and `mean_fit_wall_s` instead;
@@ -57,8 +57,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::aircraft::air_data::{ACCEL_SIGMA_FPS2, M_PER_FT, PA_PER_PSF, f16_constants};
-use crate::aircraft::report::{self, PRIMARY_DERIVATIVES};
 use crate::aircraft::scenario::EstimatorSpec;
+use crate::aircraft::summary::{self, PRIMARY_DERIVATIVES};
 use crate::aircraft::{RunOutput, Scenario, run};
 
 /// The golden-ratio increment of SplitMix64 (Steele, Lea & Flood, OOPSLA 2014).
@@ -160,7 +160,7 @@ pub struct RunResult {
 /// The final results of one finished experiment (`outcome` is `Err` with a message when the
 /// summary cannot be formed: inconsistent logs, a bug).
 pub fn run_result(index: u64, sensor_seed: u64, out: &RunOutput) -> RunResult {
-    let outcome = report::summarize(out).map_err(|e| e.to_string()).map(|sm| {
+    let outcome = summary::summarize(out).map_err(|e| e.to_string()).map(|sm| {
         let mut ests: Vec<EstimatorRun> = Vec::new();
         for p in &sm.parameters {
             if ests.last().is_none_or(|e| e.name != p.estimator) {

@@ -1,8 +1,8 @@
 //! The results of a run as data, for people to read: one row per parameter (estimate ± σ, the
 //! reference or truth, the error, a status) and the fit quality of each modelled coefficient
 //! (residual RMS, R², Theil's U), computed here (with the same formulas as the validation
-//! metrics: [`crate::validation::fit_statistics`]) and rendered elsewhere ([`crate::table`] on
-//! the console, [`crate::report`] in `report.html`).
+//! metrics: [`crate::validation::fit_statistics`]) and rendered elsewhere (the command line's `table` on
+//! the console, its `report` in `report.html`).
 //!
 //! Fit quality compares a measured coefficient `z` (from the record,
 //! [`AirDataSample::measured_coefficients`]) with the model's prediction `y` from the final
@@ -54,10 +54,10 @@ impl ParameterRow {
             .with_reference_noise_as_zero()
     }
 
-    /// A reference of magnitude below [`crate::plot::ZERO_THRESHOLD`] is round-off of an exact
+    /// A reference of magnitude below [`crate::metrics::ZERO_THRESHOLD`] is round-off of an exact
     /// 0 (e.g. a simulator's 1e-44 truth): it is 0, and no error % is formed against it.
     fn with_reference_noise_as_zero(mut self) -> Self {
-        if self.reference.is_some_and(|r| r.abs() < crate::plot::ZERO_THRESHOLD) {
+        if self.reference.is_some_and(|r| r.abs() < crate::metrics::ZERO_THRESHOLD) {
             self.reference = Some(0.0);
         }
         self

@@ -64,29 +64,29 @@ pub struct SummaryParameters {
 /// # Errors
 /// The file cannot be read or parsed, has no `parameters` array, names a parameter outside
 /// the vocabulary, or has a non-finite estimate; each naming the file and parameter.
-pub fn read_summary(path: &Path) -> anyhow::Result<SummaryParameters> {
+pub fn read_summary(path: &Path) -> crate::error::Result<SummaryParameters> {
     let file = path.display();
-    let text = std::fs::read_to_string(path).map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
+    let text = std::fs::read_to_string(path).map_err(|e| crate::err!("{file}: {e}"))?;
     let json: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| anyhow::anyhow!("{file}: not JSON: {e}"))?;
+        serde_json::from_str(&text).map_err(|e| crate::err!("{file}: not JSON: {e}"))?;
     let list = json["parameters"].as_array().ok_or_else(|| {
-        anyhow::anyhow!("{file}: no `parameters` array (is it a replay summary.json?)")
+        crate::err!("{file}: no `parameters` array (is it a replay summary.json?)")
     })?;
     let mut parameters = Vec::with_capacity(list.len());
     for (i, p) in list.iter().enumerate() {
         let name = p["name"]
             .as_str()
-            .ok_or_else(|| anyhow::anyhow!("{file}: parameters[{i}] has no `name`"))?;
+            .ok_or_else(|| crate::err!("{file}: parameters[{i}] has no `name`"))?;
         let param = Param::from_name(name).ok_or_else(|| {
-            anyhow::anyhow!(
+            crate::err!(
                 "{file}: parameter `{name}` is not of the vocabulary (<coefficient>_<term>)"
             )
         })?;
-        let number = |key: &str| -> anyhow::Result<Option<f64>> {
+        let number = |key: &str| -> crate::error::Result<Option<f64>> {
             match &p[key] {
                 serde_json::Value::Null => Ok(None),
                 v => v.as_f64().filter(|x| x.is_finite()).map(Some).ok_or_else(|| {
-                    anyhow::anyhow!("{file}: parameter `{name}`: `{key}` is not a finite number")
+                    crate::err!("{file}: parameter `{name}`: `{key}` is not a finite number")
                 }),
             }
         };
@@ -183,17 +183,17 @@ pub fn aerodynamics_xml(
     source: &str,
     surfaces: &SurfaceProperties,
     v0_mps: Option<f64>,
-) -> anyhow::Result<String> {
+) -> crate::error::Result<String> {
     let coefs: Vec<Coefficient> = summary.parameters.iter().map(|p| p.param.coefficient).collect();
     let wind = coefs.iter().any(|c| matches!(c, Coefficient::CL | Coefficient::CD));
     let body = coefs.iter().any(|c| matches!(c, Coefficient::CX | Coefficient::CZ));
     if wind && body {
-        anyhow::bail!(
+        crate::bail!(
             "{source}: the model mixes lift/drag (CL, CD) with body-axis CX/CZ; JSBSim takes one axis system per aircraft"
         );
     }
     if summary.parameters.iter().all(|p| p.value.is_none()) {
-        anyhow::bail!("{source}: no parameter is identified (all null); nothing to export");
+        crate::bail!("{source}: no parameter is identified (all null); nothing to export");
     }
     let mut x = String::new();
     let _ = writeln!(

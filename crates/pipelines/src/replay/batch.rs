@@ -376,6 +376,22 @@ pub fn fem_reported_sigma(fem: &FemResult) -> (Vec<f64>, bool) {
     }
 }
 
+/// Most Gauss–Newton iterations of the campaign's fits (the estimators crate's default is 50).
+/// On turbulent flights the residuals are large and structured, so Gauss–Newton converges
+/// only linearly (Dennis & Schnabel 1983 ch. 10: the neglected second-order term of the
+/// Hessian is not small): over 200 runs of `scenarios/montecarlo/with-oe.toml` (seed 1) the
+/// fits took 16 iterations on average and at most 192 to meet the unchanged convergence test
+/// (docs/uncertainty.md, "Output error in the campaign").
+pub const MAX_ITERATIONS: usize = 250;
+
+/// `(state, F, σ)` of each process-noise state of a filter-error fit.
+pub fn process_noise_of(fem: &FemResult) -> Vec<(String, f64, f64)> {
+    fem.process_noise_states
+        .iter()
+        .filter_map(|&i| fem.process_noise(i).map(|(f, s)| (STATE_NAMES[i].to_string(), f, s)))
+        .collect()
+}
+
 /// The seed of the first bootstrap replica (replica `b` is seeded `seed + b`): fixed, so that
 /// a bootstrap σ is reproducible run to run.
 pub const BOOTSTRAP_SEED: u64 = 1;
@@ -448,7 +464,7 @@ pub fn bootstrap_shrink_warnings(
 /// The parametric bootstrap σ of the output-error fit `fitted` of `manoeuvres` with `config`
 /// ([`aeroident_estimators::output_error::bootstrap`]): the noise levels from a filter-error
 /// fit of the same data ([`FemConfig::new`] with `config` as its output-error part, at most
-/// [`crate::aircraft::batch::MAX_ITERATIONS`] iterations), then `refits` replicas flown at the
+/// [`MAX_ITERATIONS`] iterations), then `refits` replicas flown at the
 /// fitted unknowns and refitted, in parallel (rayon); replica `b` draws from PCG64 seeded
 /// `seed + b`. Returns the σ and the bias estimate of every unknown ([`BootstrapSpread`]) and
 /// the summary.
@@ -472,7 +488,7 @@ pub fn bootstrap_sigma(
     let t0 = std::time::Instant::now();
     let mut fem_config = FemConfig::new(config.structure);
     fem_config.oe = config.clone();
-    fem_config.oe.max_iterations = crate::aircraft::batch::MAX_ITERATIONS;
+    fem_config.oe.max_iterations = MAX_ITERATIONS;
     let (fem, _) = fit_fem_manoeuvres(manoeuvres, &fem_config)
         .map_err(|e| format!("bootstrap: the noise levels come from a filter-error fit: {e}"))?;
     let noise = BootstrapNoise::from_fem(&fem);
@@ -575,7 +591,7 @@ pub fn fit_record<R: Read>(
     let (result, fit_wall_s, fem_result) = if fem {
         let mut config = FemConfig::new(model.structure);
         // Convergence on turbulent or model-error records is slow (module doc of filter_error).
-        config.oe.max_iterations = crate::aircraft::batch::MAX_ITERATIONS;
+        config.oe.max_iterations = MAX_ITERATIONS;
         config.oe.initial_states = initial_states;
         let (f, wall) = fit_fem_manoeuvres(&slices, &config).map_err(ReplayError::Model)?;
         (f.result.clone(), wall, Some(f))
@@ -699,9 +715,7 @@ pub fn fit_record<R: Read>(
         warnings,
         validation,
         validation_on: None,
-        process_noise: fem_result
-            .as_ref()
-            .map_or_else(Vec::new, crate::aircraft::batch::process_noise_of),
+        process_noise: fem_result.as_ref().map_or_else(Vec::new, process_noise_of),
         measurement_noise_var: match &fem_result {
             Some(f) => f
                 .result

@@ -31,7 +31,7 @@ use aeroident_signals::orthogonal::orthogonal_multisine;
 use aeroident_signals::turbulence::{DrydenParameters, TurbulenceSeverity};
 
 /// A control surface of a design.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Surface {
     /// Elevator, > 0 trailing edge down.
     De,
@@ -39,6 +39,14 @@ pub enum Surface {
     Da,
     /// Rudder, > 0 trailing edge left.
     Dr,
+}
+
+impl crate::Named for Surface {
+    const ALL: &'static [Self] = &[Surface::De, Surface::Da, Surface::Dr];
+
+    fn name(self) -> &'static str {
+        Surface::name(self)
+    }
 }
 
 impl Surface {
@@ -142,28 +150,28 @@ pub struct Multisines {
 /// # Errors
 /// Non-positive or non-finite amplitude, duration or rate; no surface or a repeated one; a band
 /// with fewer harmonics than surfaces.
-pub fn multisine(spec: &DesignSpec) -> anyhow::Result<Multisines> {
+pub fn multisine(spec: &DesignSpec) -> crate::error::Result<Multisines> {
     for (what, v) in [
         ("--amplitude-deg", spec.amplitude_rad),
         ("--duration-s", spec.duration_s),
         ("--rate-hz", spec.rate_hz),
     ] {
         if !(v.is_finite() && v > 0.0) {
-            anyhow::bail!("{what} must be a positive number, got {v}");
+            crate::bail!("{what} must be a positive number, got {v}");
         }
     }
     if spec.surfaces.is_empty() {
-        anyhow::bail!("--surfaces: give at least one of de, da, dr");
+        crate::bail!("--surfaces: give at least one of de, da, dr");
     }
     for (i, s) in spec.surfaces.iter().enumerate() {
         if spec.surfaces[..i].contains(s) {
-            anyhow::bail!("--surfaces: `{}` given twice", s.name());
+            crate::bail!("--surfaces: `{}` given twice", s.name());
         }
     }
     let pool = pool(spec.duration_s, spec.band_hz);
     let n = spec.surfaces.len();
     if pool.len() < n {
-        anyhow::bail!(
+        crate::bail!(
             "--band-hz {}–{} Hz holds {} harmonics of the {} s record, fewer than the {n} surfaces: lengthen the record or widen the band",
             spec.band_hz.0,
             spec.band_hz.1,
@@ -201,7 +209,7 @@ pub fn structure_for(surfaces: &[Surface]) -> ModelStructure {
 /// # Errors
 /// As [`multisine`]; a trim that does not converge; a prediction error (e.g. the response
 /// leaves the model's domain: the amplitude is too large).
-pub fn design(spec: &DesignSpec) -> anyhow::Result<Design> {
+pub fn design(spec: &DesignSpec) -> crate::error::Result<Design> {
     let Multisines { t_s, inputs, harmonics } = multisine(spec)?;
     let f16m = F16::new(spec.xcg)?;
     let cond = TrimCondition {
@@ -230,11 +238,11 @@ pub fn design(spec: &DesignSpec) -> anyhow::Result<Design> {
     let theta: Vec<f64> = structure
         .params()
         .map(|p| {
-            local.truth(&structure, p).ok_or_else(|| {
-                anyhow::anyhow!("the F-16 gives no single true value of {}", p.name())
-            })
+            local
+                .truth(&structure, p)
+                .ok_or_else(|| crate::err!("the F-16 gives no single true value of {}", p.name()))
         })
-        .collect::<anyhow::Result<_>>()?;
+        .collect::<crate::error::Result<_>>()?;
     let constants = f16_constants(&f16m, vt);
     let theta = trim_biases(&structure, &theta, &constants, &condition)?;
     let column = |s: Surface| {

@@ -1,0 +1,376 @@
+//! The summary of a run (`summary.json`): per estimator and parameter the truth, the final
+//! estimate and σ, convergence and target metrics, per estimator the targets met.
+//!
+//! Metrics per estimator and parameter (truth: the increment for two-aircraft estimators, the
+//! reference's total local derivative for sample-driven ones, [`super::experiment`]):
+//! - thesis metrics, ±5 % ([`CONVERGENCE_TOL_REL`]): `convergence_time_s` (settled before the
+//!   entry's own step), `first_within_s`, `reconvergence_time_s` (after its own step);
+//! - issue-8 metrics, ±10 % ([`TARGET_TOL_REL`]): `time_to_10pct_s`, from the start of the
+//!   excitation until the estimate stays within ±10 % of the truth up to the damage (or the
+//!   end); `reconvergence_10pct_s`, from the damage until it stays within ±10 % of the new truth
+//!   to the end; `covers_truth_2sigma`, whether `|final − truth| ≤ 2σ` at the end.
+//!
+//! "Stays within" is the strict settling definition of [`crate::metrics`]: a later excursion
+//! out of the band moves the time to after it.
+
+use serde::Serialize;
+
+use super::experiment::{ChannelLog, ParamLog, Quantity, RunOutput};
+use crate::metrics::{self, CONVERGENCE_TOL_REL, MetricsError};
+
+/// Tolerance of the issue-8 targets: ±10 % of the truth.
+pub const TARGET_TOL_REL: f64 = 0.10;
+
+/// Time allowed by the issue-8 targets after the excitation starts and after the damage, s.
+pub const TARGET_WINDOW_S: f64 = 5.0;
+
+/// The primary derivatives of the default main job's targets (issue 8): pitch stiffness,
+/// damping and control power, lift-curve slope, dihedral effect, roll damping and control
+/// power, weathercock stability, yaw damping and control power, side-force slope.
+pub const PRIMARY_DERIVATIVES: [&str; 11] = [
+    "Cm_alpha", "Cm_q", "Cm_de", "CL_alpha", "Cl_beta", "Cl_p", "Cl_da", "Cn_beta", "Cn_r",
+    "Cn_dr", "CY_beta",
+];
+
+/// One estimator × parameter entry of `summary.json`.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct ParamSummary {
+    /// Estimator label.
+    pub estimator: String,
+    /// Vocabulary name, e.g. `Cm_alpha`.
+    pub name: String,
+    /// `increment` (two-aircraft estimators: ΔC over the F-16) or `derivative` (the reference
+    /// aircraft's total local derivative).
+    pub quantity: &'static str,
+    /// Whether it is one of [`PRIMARY_DERIVATIVES`] (derivatives only).
+    pub primary: bool,
+    /// True value at the end of the run (after a step, the new value); `null` if none exists.
+    pub truth: Option<f64>,
+    /// True value before the damage.
+    pub truth_before: Option<f64>,
+    /// True value after the damage (= `truth_before` without damage).
+    pub truth_after: Option<f64>,
+    /// Time the truth of this entry changes, s (`null`: constant).
+    pub step_at_s: Option<f64>,
+    /// Final estimate; `null` if never identified or the estimator diverged.
+    pub r#final: Option<f64>,
+    /// Final standard error where the method gives one.
+    pub sigma: Option<f64>,
+    /// `(final − truth)/|truth|`.
+    pub rel_error: Option<f64>,
+    /// Whether `|final − truth| ≤ 2σ` at the end (`null` without σ).
+    pub covers_truth_2sigma: Option<bool>,
+    /// First time after which the estimate stays within ±5 % of the truth (before the entry's
+    /// step), s; `null` if it never settles.
+    pub convergence_time_s: Option<f64>,
+    /// First time the estimate enters the ±5 % band (it may leave it again), s.
+    pub first_within_s: Option<f64>,
+    /// The thesis's reported time, s, where legible.
+    pub thesis_convergence_time_s: Option<f64>,
+    /// The thesis's claim verbatim.
+    pub thesis_note: Option<String>,
+    /// Time from the entry's step until the estimate stays within ±5 % of the new truth, s;
+    /// `null` without a step or if it never settles.
+    pub reconvergence_time_s: Option<f64>,
+    /// Time from the start of the excitation until the estimate stays within ±10 % of the
+    /// truth up to the damage (or the end), s; `null` if it never does.
+    pub time_to_10pct_s: Option<f64>,
+    /// Time from the damage until the estimate stays within ±10 % of the new truth, s; `null`
+    /// without damage or if it never does.
+    pub reconvergence_10pct_s: Option<f64>,
+    /// Primary derivatives: within ±10 % within 5 s of the excitation and of the damage, and
+    /// ±2σ covering the truth at the end; `null` for the others.
+    pub meets_targets: Option<bool>,
+    /// Estimator failure (time and message), if any; estimates were held from then on.
+    pub failure: Option<String>,
+    /// Sample-driven estimators: the final status (`initialising`, `running`, `diverged`;
+    /// batch: `converged` or `failed`).
+    pub status: Option<&'static str>,
+    /// Whether the estimator is a batch (post-flight) fit ([`super::batch`]): its estimate
+    /// exists only at the end, so every time metric (`convergence_time_s`, `time_to_10pct_s`,
+    /// …) and `meets_targets` are `null`, not "never converged".
+    pub batch: bool,
+}
+
+/// How many primary derivatives of one estimator meet the issue-8 targets.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct TargetSummary {
+    /// Estimator label.
+    pub estimator: String,
+    /// Primary derivatives in its structure.
+    pub total: usize,
+    /// Of those, meeting every target.
+    pub met: usize,
+    /// The names of those missing a target.
+    pub missed: Vec<String>,
+}
+
+/// `summary.json`.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Summary {
+    /// Scenario name.
+    pub scenario: String,
+    /// Estimator labels joined with `+`.
+    pub estimator: String,
+    /// Integrator and step.
+    pub solver: String,
+    /// Simulated time / wall-clock time of the closed loop (the reference aircraft, sensors,
+    /// every estimator and the two-aircraft estimators' aircraft; no I/O).
+    pub realtime_factor: f64,
+    /// One entry per estimator and parameter.
+    pub parameters: Vec<ParamSummary>,
+    /// Worst ±5 % re-convergence time over entries with a step, s; `null` without a step or
+    /// if any entry never re-converged.
+    pub reconvergence_time_s: Option<f64>,
+    /// Trim: `[vt_fps, alpha_rad, throttle, elevator_rad]`.
+    pub trim: [f64; 4],
+    /// First time a pilot command differs from trim, s.
+    pub excitation_start_s: Option<f64>,
+    /// Earliest sudden change of an increment (the damage), s.
+    pub damage_at_s: Option<f64>,
+    /// How the sample-driven estimators' angular accelerations are formed (`null` without
+    /// them).
+    pub angular_accelerations: Option<String>,
+    /// Delay of the air-data samples behind the truth, s.
+    pub sample_lag_s: Option<f64>,
+    /// Per real-time sample-driven estimator: primary derivatives meeting the targets (batch
+    /// estimators have no time metrics and are not listed).
+    pub targets: Vec<TargetSummary>,
+    /// Per batch estimator: the fitted window, iterations and wall time
+    /// ([`super::batch::BatchFit`]; a failed fit is absent here and its reason is in the
+    /// parameters' `failure`).
+    pub batch_fits: Vec<super::batch::BatchFit>,
+    /// Per sample-driven estimator: what it did to itself (restarts, re-anchored outputs,
+    /// detected changes; [`aeroident_io::replay_output::EventsSummary`]).
+    pub events: Vec<EstimatorEvents>,
+}
+
+/// One estimator's events in `summary.json`.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct EstimatorEvents {
+    /// Estimator label.
+    pub estimator: String,
+    /// Its events.
+    #[serde(flatten)]
+    pub events: aeroident_io::replay_output::EventsSummary,
+}
+
+impl Summary {
+    /// The estimators' restart warnings
+    /// ([`aeroident_io::replay_output::EventsSummary::restart_warnings`]), each prefixed with
+    /// the estimator's label.
+    pub fn event_warnings(&self) -> Vec<String> {
+        self.events
+            .iter()
+            .flat_map(|e| {
+                e.events
+                    .restart_warnings()
+                    .into_iter()
+                    .map(move |w| format!("{}: {w}", e.estimator))
+            })
+            .collect()
+    }
+}
+
+fn nan_for_none(v: &[Option<f64>]) -> Vec<f64> {
+    v.iter().map(|x| x.unwrap_or(f64::NAN)).collect()
+}
+
+/// Settling time within ±`tol` of `truth` over samples `[from, to)`, measured from `t0`.
+fn settle(
+    t: &[f64],
+    est: &[f64],
+    truth: &[f64],
+    from: usize,
+    to: usize,
+    tol: f64,
+    t0: f64,
+) -> Result<Option<f64>, MetricsError> {
+    if from >= to {
+        return Ok(None);
+    }
+    Ok(metrics::convergence_time_series_s(
+        &t[from..to],
+        &est[from..to],
+        &truth[from..to],
+        tol,
+        f64::NEG_INFINITY,
+    )?
+    .map(|s| s - t0))
+}
+
+fn entry(out: &RunOutput, ch: &ChannelLog, l: &ParamLog) -> Result<ParamSummary, MetricsError> {
+    let sc = &out.scenario;
+    let t = &out.t_s;
+    let n = t.len();
+    let est = nan_for_none(&l.estimate);
+    let inc_entry = match ch.quantity {
+        Quantity::Increment => sc.increment(l.param),
+        Quantity::Derivative => None,
+    };
+    // When this entry's truth changes: the increment's own step, or the first change of the
+    // derivative's truth.
+    let step = match ch.quantity {
+        Quantity::Increment => inc_entry.and_then(|e| e.step_at_s),
+        Quantity::Derivative => (1..l.truth_epochs.len())
+            .find(|&e| l.truth_epochs[e] != l.truth_epochs[e - 1])
+            .map(|e| out.epochs[e].from_s),
+    };
+    let damage = sc.damage_at_s();
+    let idx = |ts: f64| t.partition_point(|&x| x < ts);
+    // A batch estimate exists only at the end: no time history to measure.
+    let truth_known = l.truth.iter().all(Option::is_some) && !ch.is_batch();
+    let truth = nan_for_none(&l.truth);
+    let pre = step.map_or(n, idx);
+    let (conv, first_within, reconv) = if truth_known {
+        let conv = settle(t, &est, &truth, 0, pre, CONVERGENCE_TOL_REL, 0.0)?;
+        let first = (0..pre)
+            .find(|&k| {
+                (est[k] - truth[k]).abs() <= metrics::band_half_width(truth[k], CONVERGENCE_TOL_REL)
+            })
+            .map(|k| t[k]);
+        let reconv = match step {
+            Some(t0) => metrics::reconvergence_time_s(t, &est, &truth, CONVERGENCE_TOL_REL, t0)?,
+            None => None,
+        };
+        (conv, first, reconv)
+    } else {
+        (None, None, None)
+    };
+    let exc = out.excitation_start_s.unwrap_or(0.0);
+    let dmg_idx = damage.map_or(n, idx);
+    let (t10, r10) = if truth_known {
+        (
+            settle(t, &est, &truth, idx(exc), dmg_idx, TARGET_TOL_REL, exc)?,
+            match damage {
+                Some(d) => settle(t, &est, &truth, dmg_idx, n, TARGET_TOL_REL, d)?,
+                None => None,
+            },
+        )
+    } else {
+        (None, None)
+    };
+    let fin = l.estimate.last().copied().flatten();
+    let sig = l.sigma.last().copied().flatten();
+    let tru = l.truth.last().copied().flatten();
+    let covers = match (fin, sig, tru) {
+        (Some(f), Some(s), Some(tr)) => Some((f - tr).abs() <= 2.0 * s),
+        _ => None,
+    };
+    let primary =
+        ch.quantity == Quantity::Derivative && PRIMARY_DERIVATIVES.contains(&l.param.name());
+    let meets = (primary && !ch.is_batch()).then(|| {
+        t10.is_some_and(|x| x <= TARGET_WINDOW_S)
+            && (damage.is_none() || r10.is_some_and(|x| x <= TARGET_WINDOW_S))
+            && covers == Some(true)
+    });
+    let before = l.truth_epochs.first().copied().flatten();
+    let after = match damage {
+        Some(d) => {
+            let e = out.epochs.iter().rposition(|e| d >= e.from_s).unwrap_or(0);
+            l.truth_epochs.get(e).copied().flatten()
+        }
+        None => before,
+    };
+    Ok(ParamSummary {
+        estimator: ch.label.clone(),
+        name: l.param.name().into(),
+        quantity: ch.quantity.name(),
+        primary,
+        truth: tru,
+        truth_before: before,
+        truth_after: after,
+        step_at_s: step,
+        r#final: fin,
+        sigma: sig,
+        rel_error: fin.zip(tru).map(|(f, tr)| metrics::rel_error(f, tr)),
+        covers_truth_2sigma: covers,
+        convergence_time_s: conv,
+        first_within_s: first_within,
+        thesis_convergence_time_s: inc_entry.and_then(|e| e.thesis_convergence_time_s),
+        thesis_note: inc_entry.and_then(|e| e.thesis_note.clone()),
+        reconvergence_time_s: reconv,
+        time_to_10pct_s: t10,
+        reconvergence_10pct_s: r10,
+        meets_targets: meets,
+        failure: ch.failure.as_ref().map(|(t, m)| format!("t = {t:.2} s: {m}")),
+        status: ch.status,
+        batch: ch.is_batch(),
+    })
+}
+
+/// Computes the summary of a run.
+///
+/// # Errors
+/// [`MetricsError`] only on inconsistent logs (a bug).
+pub fn summarize(out: &RunOutput) -> Result<Summary, MetricsError> {
+    let sc = &out.scenario;
+    let mut parameters = Vec::new();
+    let mut targets = Vec::new();
+    for ch in &out.channels {
+        let first = parameters.len();
+        for l in &ch.params {
+            parameters.push(entry(out, ch, l)?);
+        }
+        if ch.quantity == Quantity::Derivative && !ch.is_batch() {
+            let mine: Vec<&ParamSummary> =
+                parameters[first..].iter().filter(|p| p.primary).collect();
+            targets.push(TargetSummary {
+                estimator: ch.label.clone(),
+                total: mine.len(),
+                met: mine.iter().filter(|p| p.meets_targets == Some(true)).count(),
+                missed: mine
+                    .iter()
+                    .filter(|p| p.meets_targets != Some(true))
+                    .map(|p| p.name.clone())
+                    .collect(),
+            });
+        }
+    }
+    let with_step: Vec<Option<f64>> = parameters
+        .iter()
+        .filter(|p| p.step_at_s.is_some())
+        .map(|p| p.reconvergence_time_s)
+        .collect();
+    let worst = if with_step.is_empty() || with_step.iter().any(Option::is_none) {
+        None
+    } else {
+        with_step.iter().flatten().copied().reduce(f64::max)
+    };
+    let has_sample = out.channels.iter().any(|c| c.quantity == Quantity::Derivative);
+    Ok(Summary {
+        scenario: sc.name.clone(),
+        estimator: out.channels.iter().map(|c| c.label.as_str()).collect::<Vec<_>>().join("+"),
+        solver: format!("rk4, dt = {} s", sc.dt_s),
+        realtime_factor: out.realtime_factor(),
+        parameters,
+        reconvergence_time_s: worst,
+        trim: [
+            out.trim.state[aeroident_models::f16::VT],
+            out.trim.state[aeroident_models::f16::ALPHA],
+            out.trim.controls.throttle,
+            out.trim.controls.elevator_rad,
+        ],
+        excitation_start_s: out.excitation_start_s,
+        damage_at_s: sc.damage_at_s(),
+        angular_accelerations: has_sample.then(|| {
+            format!(
+                "causal {}-point least-squares differentiator of the noisy gyros (and α vane for α̇); every other channel {}",
+                sc.sensors.differentiator_window,
+                match sc.sensors.alignment {
+                    super::scenario::Alignment::Matched => "through the matched smoother (same weighting and lag)",
+                    super::scenario::Alignment::Delay => "delayed by the differentiator's lag",
+                }
+            )
+        }),
+        sample_lag_s: out.sample_lag_s,
+        targets,
+        batch_fits: out.channels.iter().filter_map(|c| c.batch.clone()).collect(),
+        events: out
+            .channels
+            .iter()
+            .filter(|c| c.quantity == Quantity::Derivative && !c.is_batch())
+            .map(|c| EstimatorEvents { estimator: c.label.clone(), events: c.events.clone() })
+            .collect(),
+    })
+}

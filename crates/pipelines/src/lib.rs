@@ -1,0 +1,36 @@
+//! # aeroident-pipelines
+//!
+//! The pipelines of aeroident, from samples to one outcome value, with no command line, no
+//! printing and no drawing: the command-line program (`aeroident`) and the Python module are
+//! two thin faces over this crate, and the reports and figures render its outcomes.
+//!
+//! - [`replay`]: a recorded (or streamed) flight through an estimator, online or as a batch
+//!   fit ([`replay::batch`]), with validation on a second record.
+//! - [`aircraft`]: the closed-loop experiment (trim → fly → sense → estimate → summarise).
+//! - [`montecarlo`]: seeded campaigns of the experiment and their statistics.
+//! - [`poc`]: the thesis's proof-of-concept systems; [`sim`]: open-loop F-16 simulation.
+//! - [`export`]: input design and the JSBSim `<aerodynamics>` export.
+//! - [`estimators`]: the estimator kinds, their options and `build`.
+
+/// Aircraft estimation experiments: two F-16s, sensors, estimators.
+pub mod aircraft;
+pub mod error;
+pub mod estimators;
+pub mod export;
+/// Convergence-time and error metrics of estimate histories.
+pub mod metrics;
+pub mod montecarlo;
+pub mod named;
+/// Proof-of-concept experiments (thesis §4.1): scenarios and the simulation loop.
+pub mod poc;
+pub mod replay;
+pub mod results;
+pub mod sample_log;
+pub mod scenario_kind;
+/// Open-loop F-16 simulation: trim → inputs, gusts, turbulence → sensors.
+pub mod sim;
+/// Model validation metrics: fit, residual whiteness, input correlation, prediction intervals.
+pub mod validation;
+
+pub use error::{Context, PipelineError};
+pub use named::Named;

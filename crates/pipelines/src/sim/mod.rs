@@ -1,0 +1,438 @@
+//! Open-loop F-16 simulation: trim → fly with pilot inputs, gusts and turbulence →
+//! sense → one [`SimRun`](crate::sim::SimRun) (the faces write `timeseries.csv` and figures from it).
+//!
+//! Run: `aeroident f16 sim scenarios/sim/elevator_doublet.toml --out out/sim`. The scenario
+//! format is documented in [`crate::sim::scenario`].
+//!
+//! # What is simulated
+//! * The Stevens–Lewis F-16 (`aeroident_models::f16`), trimmed wings-level at the scenario's
+//!   altitude, airspeed and flight-path angle, with optional thesis increments about that trim.
+//! * Surfaces through the F-16 actuators (or ideal), throttle through the engine lag.
+//! * Commands = trim + Σ inputs of the channel (superposed). Wind = Σ disturbances, in body axes
+//!   (signals crate convention), entering the aerodynamics through the air-relative velocity.
+//! * RK4 with step `dt_s`; commands and wind are sampled at the start of each step and held over
+//!   it (zero-order hold).
+//! * Sensors sample the true channels (ZOH at their rate, noise, bias, delay, quantisation).
+//!
+//! # Output
+//! `timeseries.csv`: one row per step, columns [`crate::sim::SimRun::columns`] (units in the names), the
+//! sensed channels as `meas_<channel>`; `states.png` and `controls_wind.png`. Besides the state,
+//! surfaces, wind, load factors and coefficients, the true channels include what identification
+//! needs: ṗ, q̇, ṙ, α̇ from the state derivative and the accelerometer specific force
+//! `ax/ay/az_fps2` (`az ≈ −g` level), so `mappings/aeroident-sim.toml` replays the file as it is.
+
+pub mod scenario;
+pub mod trim;
+
+use crate::bail;
+use crate::error::{Context, Result};
+use aeroident_models::actuator::{F16WithActuators, SurfaceActuators};
+use aeroident_models::f16::AeroIncrements;
+use aeroident_models::f16::{ALPHA, P, Q, R};
+use aeroident_models::f16::{
+    F16, F16Controls, F16Outputs, F16State, IncrementReference, IncrementSchedule, N_STATES,
+    STATE_NAMES,
+};
+use aeroident_models::integrate::rk4_step;
+use aeroident_models::trim::{TrimCondition, TrimManeuver, trim};
+use aeroident_signals::config::build_wind;
+use aeroident_signals::{Input, InputSignal, SensorModel, WindField};
+use nalgebra::SVector;
+use scenario::{ActuatorChoice, Channel, SimScenario};
+use std::path::Path;
+
+/// The true channels written for every step, in CSV order after `t_s` (units in the names).
+pub fn true_channel_names() -> Vec<String> {
+    let mut v: Vec<String> = STATE_NAMES.iter().map(|s| s.to_string()).collect();
+    for s in [
+        "elevator_rad",
+        "aileron_rad",
+        "rudder_rad",
+        "throttle",
+        "elevator_cmd_rad",
+        "aileron_cmd_rad",
+        "rudder_cmd_rad",
+        "wind_body_x_fps",
+        "wind_body_y_fps",
+        "wind_body_z_fps",
+        "vt_air_fps",
+        "alpha_air_rad",
+        "beta_air_rad",
+        "nx_g",
+        "ny_g",
+        "nz_g",
+        "qbar_psf",
+        "mach",
+        "thrust_lbf",
+        "CX",
+        "CY",
+        "CZ",
+        "Cl",
+        "Cm",
+        "Cn",
+        "CL",
+        "CD",
+        "pdot_rad_s2",
+        "qdot_rad_s2",
+        "rdot_rad_s2",
+        "alphadot_rad_s",
+        "ax_fps2",
+        "ay_fps2",
+        "az_fps2",
+    ] {
+        v.push(s.to_string());
+    }
+    v
+}
+
+/// One row of [`true_channel_names`]: the state `x`, the surfaces `applied` and commands
+/// `cmd`, the outputs `o`, the body angular accelerations and α̇ from the state derivative
+/// `xdot`, and the accelerometer specific force at the CG in ft/s² (body axes, `az ≈ −g` in
+/// level flight: `ax = nx·g`, `ay = ny·g`, `az = −nz·g` with the model's `g`), the channels
+/// a replay through `mappings/aeroident-sim.toml` identifies from.
+fn true_row(
+    x: &F16State,
+    xdot: &F16State,
+    g_fps2: f64,
+    applied: &F16Controls,
+    cmd: &F16Controls,
+    o: &F16Outputs,
+) -> Vec<f64> {
+    let mut v: Vec<f64> = x.iter().copied().collect();
+    let c = &o.coefficients;
+    v.extend_from_slice(&[
+        applied.elevator_rad,
+        applied.aileron_rad,
+        applied.rudder_rad,
+        applied.throttle,
+        cmd.elevator_rad,
+        cmd.aileron_rad,
+        cmd.rudder_rad,
+        applied.wind_body_fps[0],
+        applied.wind_body_fps[1],
+        applied.wind_body_fps[2],
+        o.vt_air_fps,
+        o.alpha_air_rad,
+        o.beta_air_rad,
+        o.nx_g,
+        o.ny_g,
+        o.nz_g,
+        o.qbar_psf,
+        o.mach,
+        o.thrust_lbf,
+        c.CX,
+        c.CY,
+        c.CZ,
+        c.Cl,
+        c.Cm,
+        c.Cn,
+        c.CL,
+        c.CD,
+        xdot[P],
+        xdot[Q],
+        xdot[R],
+        xdot[ALPHA],
+        o.nx_g * g_fps2,
+        o.ny_g * g_fps2,
+        -o.nz_g * g_fps2,
+    ]);
+    v
+}
+
+/// A finished run: column names (first `t_s`) and column data of equal length.
+#[derive(Debug, Clone)]
+pub struct SimRun {
+    /// Column names, units in the names; sensed channels are `meas_<channel>`.
+    pub columns: Vec<String>,
+    /// `data[c][k]`: column `c` at step `k`.
+    pub data: Vec<Vec<f64>>,
+    /// The trim the run started from.
+    pub trim: aeroident_models::trim::F16Trim,
+}
+
+impl SimRun {
+    /// The column called `name`, if any.
+    pub fn column(&self, name: &str) -> Option<&[f64]> {
+        self.columns.iter().position(|c| c == name).map(|i| self.data[i].as_slice())
+    }
+}
+
+/// Reads and parses a scenario file.
+///
+/// # Errors
+/// I/O errors and TOML errors (with line and column) naming the file.
+pub fn load_scenario(path: &Path) -> Result<SimScenario> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("reading scenario `{}`", path.display()))?;
+    parse_scenario(&text, path)
+}
+
+/// Parses scenario text; `path` names it in errors.
+///
+/// # Errors
+/// TOML errors (with line and column) naming the file.
+pub fn parse_scenario(text: &str, path: &Path) -> Result<SimScenario> {
+    let file = path.display().to_string();
+    crate::scenario_kind::check(text, &file, crate::scenario_kind::ScenarioKind::Sim)?;
+    toml::from_str(text).with_context(|| format!("scenario `{}`", path.display()))
+}
+
+enum Plant {
+    Ideal(F16),
+    Actuated(F16WithActuators),
+}
+
+/// Runs a scenario. Relative paths inside it (recorded inputs) resolve against `base_dir`.
+///
+/// # Errors
+/// Invalid run settings, unknown sensor channels, input/wind/sensor construction errors, trim
+/// failure, or a model error during the run (e.g. the aircraft left the model's domain), each
+/// with the time or field it happened at.
+pub fn run(sc: &SimScenario, base_dir: &Path) -> Result<SimRun> {
+    let r = &sc.run;
+    if !(r.dt_s.is_finite() && r.dt_s > 0.0) {
+        bail!("[run] dt_s = {} must be finite and > 0", r.dt_s);
+    }
+    if !(r.duration_s.is_finite() && r.duration_s > 0.0) {
+        bail!("[run] duration_s = {} must be finite and > 0", r.duration_s);
+    }
+    let n_steps = (r.duration_s / r.dt_s).round() as usize;
+    if n_steps > MAX_STEPS {
+        bail!(
+            "[run] duration_s / dt_s = {n_steps} steps is too many (max {MAX_STEPS}: the run is held in memory for the figures, 8 bytes per column per step); shorten duration_s or raise dt_s"
+        );
+    }
+
+    let mut f16 = F16::new(sc.aircraft.xcg).context("[aircraft] xcg")?;
+    let cond = TrimCondition {
+        alt_ft: sc.trim.alt_ft,
+        vt_fps: sc.trim.vt_fps,
+        gamma_rad: sc.trim.gamma_deg.to_radians(),
+        maneuver: TrimManeuver::WingsLevel,
+    };
+    let t0 = trim(&f16, &cond)
+        .with_context(|| format!("[trim] at {} ft, {} ft/s", sc.trim.alt_ft, sc.trim.vt_fps))?;
+    if let Some(inc) = &sc.increments {
+        let reference = IncrementReference {
+            alpha_rad: t0.state[ALPHA],
+            q_rad_s: t0.state[Q],
+            elevator_rad: t0.controls.elevator_rad,
+            aileron_rad: t0.controls.aileron_rad,
+            rudder_rad: t0.controls.rudder_rad,
+            ..Default::default()
+        };
+        let schedule = match inc.onset_s {
+            Some(t0_s) if t0_s.is_finite() => IncrementSchedule::StepAt { t0_s },
+            Some(v) => bail!("[increments] onset_s = {v} must be finite"),
+            None => IncrementSchedule::Always,
+        };
+        f16 = f16.with_increments(
+            AeroIncrements::thesis(
+                reference,
+                inc.dCm_alpha,
+                inc.dCm_q,
+                inc.dCL_alpha,
+                inc.dCD_alpha,
+            ),
+            schedule,
+        );
+    }
+
+    let inputs: Vec<(Channel, Input)> = sc
+        .input
+        .iter()
+        .enumerate()
+        .map(|(k, ci)| {
+            Ok((
+                ci.channel,
+                ci.input
+                    .build_in(base_dir)
+                    .with_context(|| format!("[[input]] #{} ({:?})", k + 1, ci.channel))?,
+            ))
+        })
+        .collect::<Result<_>>()?;
+    let wind = build_wind(&sc.wind).context("[[wind]]")?;
+
+    let mut columns = vec!["t_s".to_string()];
+    let names = true_channel_names();
+    columns.extend(names.iter().cloned());
+    let mut sensors: Vec<(usize, SensorModel)> = Vec::with_capacity(sc.sensor.len());
+    for (k, s) in sc.sensor.iter().enumerate() {
+        let Some(idx) = names.iter().position(|n| *n == s.channel) else {
+            bail!(
+                "[[sensor]] #{}: unknown channel `{}`; known channels: {}",
+                k + 1,
+                s.channel,
+                names.join(", ")
+            );
+        };
+        sensors.push((
+            idx,
+            s.build(r.seed).with_context(|| format!("[[sensor]] #{} ({})", k + 1, s.channel))?,
+        ));
+        columns.push(format!("meas_{}", s.channel));
+    }
+
+    let plant = match sc.aircraft.actuators {
+        ActuatorChoice::Ideal => Plant::Ideal(f16),
+        ActuatorChoice::F16 => {
+            Plant::Actuated(F16WithActuators { airframe: f16, actuators: SurfaceActuators::f16() })
+        }
+    };
+    let g_fps2 = match &plant {
+        Plant::Ideal(m) => m.data().mass.g_ft_per_s2,
+        Plant::Actuated(m) => m.airframe.data().mass.g_ft_per_s2,
+    };
+    let mut data: Vec<Vec<f64>> = vec![Vec::with_capacity(n_steps + 1); columns.len()];
+    let mut xa: SVector<f64, 16> = F16WithActuators::state(&t0.state, &t0.controls);
+    let mut xi: F16State = t0.state;
+
+    for k in 0..=n_steps {
+        let t = k as f64 * r.dt_s;
+        let mut cmd = t0.controls;
+        for (ch, inp) in &inputs {
+            let v = inp.value(t);
+            match ch {
+                Channel::Throttle => cmd.throttle += v,
+                Channel::Elevator => cmd.elevator_rad += v,
+                Channel::Aileron => cmd.aileron_rad += v,
+                Channel::Rudder => cmd.rudder_rad += v,
+            }
+        }
+        let w = wind.wind_body_fps(t);
+        cmd.wind_body_fps = [w[0], w[1], w[2]];
+        let (x13, applied, evaluated) = match &plant {
+            Plant::Ideal(m) => (xi, cmd, m.evaluate(&xi, &cmd, &m.increments_at(t))),
+            Plant::Actuated(m) => {
+                let x13: F16State = xa.fixed_rows::<N_STATES>(0).into_owned();
+                let applied = F16WithActuators::surface_controls(&xa, &cmd);
+                let af = &m.airframe;
+                (x13, applied, af.evaluate(&x13, &applied, &af.increments_at(t)))
+            }
+        };
+        let (xdot, outputs) =
+            evaluated.with_context(|| format!("model outputs at t = {t:.4} s"))?;
+        let row = true_row(&x13, &xdot, g_fps2, &applied, &cmd, &outputs);
+        data[0].push(t);
+        for (c, v) in row.iter().enumerate() {
+            data[c + 1].push(*v);
+        }
+        for (j, (idx, sensor)) in sensors.iter_mut().enumerate() {
+            data[1 + names.len() + j].push(sensor.measure(t, row[*idx]));
+        }
+        if k == n_steps {
+            break;
+        }
+        match &plant {
+            Plant::Ideal(m) => {
+                xi = rk4_step(m, t, &xi, &cmd, r.dt_s)
+                    .with_context(|| format!("RK4 step at t = {t:.4} s"))?
+            }
+            Plant::Actuated(m) => {
+                xa = rk4_step(m, t, &xa, &cmd, r.dt_s)
+                    .with_context(|| format!("RK4 step at t = {t:.4} s"))?
+            }
+        }
+    }
+    Ok(SimRun { columns, data, trim: t0 })
+}
+
+/// Most RK4 steps of one simulation: the run is held in memory for the figures (8 bytes per
+/// column per step, so some hundred MB at the limit); longer runs are refused before any
+/// allocation.
+pub const MAX_STEPS: usize = 1_000_000;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use aeroident_models::linearize::linearize_f16;
+
+    fn scenario(extra: &str, actuators: &str, duration_s: f64) -> SimScenario {
+        let text = format!(
+            "kind = \"sim\"\n[aircraft]\nxcg = 0.30\nactuators = \"{actuators}\"\n[trim]\nalt_ft = 20000.0\nvt_fps = 675.0\n[run]\nduration_s = {duration_s}\ndt_s = 0.01\nseed = 1\n{extra}"
+        );
+        toml::from_str(&text).unwrap()
+    }
+
+    #[test]
+    fn analytic_no_input_stays_at_trim() {
+        let r = run(&scenario("", "f16", 10.0), Path::new(".")).unwrap();
+        assert_eq!(r.columns.len(), r.data.len());
+        assert_eq!(r.data[0].len(), 1001);
+        let vt = r.column("vt_fps").unwrap();
+        let a = r.column("alpha_rad").unwrap();
+        assert!(vt.iter().all(|v| (v - 675.0).abs() < 1e-6));
+        assert!(a.iter().all(|v| (v - r.trim.state[ALPHA]).abs() < 1e-9));
+        // Level-flight force balance along the vertical: nz·cosα + nx·sinα = 1 g (θ = α, γ = 0).
+        let (nz, nx) = (r.column("nz_g").unwrap()[0], r.column("nx_g").unwrap()[0]);
+        let al = r.trim.state[ALPHA];
+        assert!((nz * al.cos() + nx * al.sin() - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn analytic_inputs_on_one_channel_superpose() {
+        let two = "[[input]]\nchannel = \"elevator\"\nkind = \"step\"\namplitude_deg = 0.2\nstart_s = 1.0\n[[input]]\nchannel = \"elevator\"\nkind = \"step\"\namplitude_deg = 0.3\nstart_s = 1.0\n";
+        let one = "[[input]]\nchannel = \"elevator\"\nkind = \"step\"\namplitude_deg = 0.5\nstart_s = 1.0\n";
+        let a = run(&scenario(two, "f16", 3.0), Path::new(".")).unwrap();
+        let b = run(&scenario(one, "f16", 3.0), Path::new(".")).unwrap();
+        let (qa, qb) = (a.column("q_rad_s").unwrap(), b.column("q_rad_s").unwrap());
+        assert!(qa.iter().zip(qb).all(|(x, y)| (x - y).abs() < 1e-12));
+        assert!(qa.iter().any(|x| x.abs() > 1e-3), "the step must move the aircraft");
+    }
+
+    /// Independent check of the sim's input path: a small elevator doublet flown through the
+    /// nonlinear model (ideal actuators) agrees with the same doublet through the linearized
+    /// model δẋ = A δx + B δu (A, B by central differences, integrated with RK4 separately).
+    #[test]
+    fn independent_small_doublet_matches_linear_model() {
+        let doublet = "[[input]]\nchannel = \"elevator\"\nkind = \"doublet\"\namplitude_deg = 0.1\nstart_s = 0.5\npulse_width_s = 0.5\n";
+        let r = run(&scenario(doublet, "ideal", 6.0), Path::new(".")).unwrap();
+        let f16 = F16::new(0.30).unwrap();
+        let lin = linearize_f16(&f16, &r.trim.state, &r.trim.controls).unwrap();
+        let de = r.column("elevator_cmd_rad").unwrap();
+        let dt = 0.01;
+        let mut dx = SVector::<f64, 13>::zeros();
+        let mut worst = 0.0f64;
+        let mut peak = 0.0f64;
+        let alpha = r.column("alpha_rad").unwrap();
+        let q = r.column("q_rad_s").unwrap();
+        for k in 0..alpha.len() {
+            let da_nl = alpha[k] - r.trim.state[ALPHA];
+            worst = worst.max((da_nl - dx[ALPHA]).abs()).max((q[k] - dx[Q]).abs() * 0.2);
+            peak = peak.max(da_nl.abs());
+            if k + 1 == alpha.len() {
+                break;
+            }
+            let mut du = SVector::<f64, 4>::zeros();
+            du[1] = de[k] - r.trim.controls.elevator_rad;
+            let f = |x: &SVector<f64, 13>| lin.a * x + lin.b * du;
+            let k1 = f(&dx);
+            let k2 = f(&(dx + k1 * (dt / 2.0)));
+            let k3 = f(&(dx + k2 * (dt / 2.0)));
+            let k4 = f(&(dx + k3 * dt));
+            dx += (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (dt / 6.0);
+        }
+        assert!(peak > 1e-4, "the doublet must excite alpha (peak {peak})");
+        assert!(worst < 0.02 * peak, "nonlinear vs linear: worst {worst:e}, peak {peak:e}");
+    }
+
+    #[test]
+    fn unknown_sensor_channel_is_named() {
+        let s =
+            scenario("[[sensor]]\nchannel = \"alpha_deg\"\nsample_rate_hz = 50.0\n", "f16", 1.0);
+        let e = format!("{:#}", run(&s, Path::new(".")).unwrap_err());
+        assert!(e.contains("alpha_deg") && e.contains("alpha_rad"), "{e}");
+    }
+
+    /// An absurd step count (5e7) is refused before anything is allocated, with an error
+    /// naming the fields and the limit.
+    #[test]
+    fn errors_too_many_steps_are_refused_clearly() {
+        let s = scenario("", "f16", 5e5);
+        let e = format!("{:#}", run(&s, Path::new(".")).unwrap_err());
+        assert!(
+            e.contains("duration_s / dt_s") && e.contains("50000000") && e.contains("1000000"),
+            "{e}"
+        );
+    }
+}

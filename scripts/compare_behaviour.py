@@ -1,0 +1,174 @@
+#!/usr/bin/env python3
+"""Before/after behaviour check of a refactoring: run two `aeroident` binaries on the shipped
+scenarios, the proof-of-concept cases and replays of the shipped flight records, and compare
+every number of every `summary.json` (estimates, sigma, ...) to a relative tolerance.
+
+Usage:
+    scripts/compare_behaviour.py --base BIN_BEFORE --new BIN_AFTER [--out DIR] [--rtol 1e-9]
+        [--flip Cl_da,Cn_da,CY_da] [--only run,poc,replay]
+
+`--flip NAMES` expects those parameters (and their reference values) to change sign exactly on
+the replays whose mapping convention changed; every other number must agree within `--rtol`
+(relative, with an absolute floor of rtol * 1e-6 for numbers that are zero in both). Keys that
+are wall-clock times, paths or throughput are ignored. Exit 0 when everything agrees.
+
+Build a base binary from a commit with, e.g.:
+    git worktree add /tmp/base <commit> && cargo build --release -p aeroident \
+        --manifest-path /tmp/base/Cargo.toml --target-dir /tmp/base-target
+"""
+import argparse
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+SHARED = ROOT.parent / "shared" / "flightdata"
+HA = SHARED / "jategaonkar_hfb320_attas"
+TO = SHARED / "sidpac_twin_otter"
+JS = SHARED / "jsbsim_samples"
+PX = SHARED / "px4_ardupilot"
+
+# (name, record, mapping, extra arguments); every real-time case runs the default estimator.
+REPLAYS = [
+    ("hfb320_rls", HA / "hfb320_1_10.asc", "mappings/hfb320.toml",
+     ["--model", "models/hfb320_book_q0.toml"]),
+    ("hfb320_ftr", HA / "csv/hfb320_1_10.csv", "mappings/hfb320.toml",
+     ["--model", "models/hfb320_book_q0.toml", "--estimator", "ftr"]),
+    ("hfb320_ekf", HA / "csv/hfb320_1_10.csv", "mappings/hfb320.toml",
+     ["--model", "models/hfb320_book_q0.toml", "--estimator", "ekf"]),
+    ("hfb320_oe", HA / "csv/hfb320_1_10.csv", "mappings/hfb320.toml",
+     ["--model", "models/hfb320_jategaonkar.toml", "--estimator", "oe"]),
+    ("hfb320_fem", HA / "csv/hfb320_1_10.csv", "mappings/hfb320.toml",
+     ["--model", "models/hfb320_book_q0.toml", "--estimator", "fem"]),
+    ("attas_elv_validate", HA / "fAttasElv1.mat", "mappings/attas.toml",
+     ["--validate-on", str(HA / "fAttasElv2.mat")]),
+    ("attas_ailrud_oe", HA / "csv/fAttasAilRud1.csv", "mappings/attas_lateral.toml",
+     ["--estimator", "oe", "--initial-states", "estimate"]),
+    ("attas_ailrud_rls", HA / "csv/fAttasAilRud1.csv", "mappings/attas_lateral.toml", []),
+    ("attas_elv1_oe_boot", HA / "fAttasElv1.mat", "mappings/attas.toml",
+     ["--estimator", "oe", "--initial-states", "estimate", "--bootstrap", "8"]),
+    ("twin_otter_rls", TO / "csv/totter_lon_020213f1_018.csv", "mappings/twin_otter.toml", []),
+    ("twin_otter_oe", TO / "csv/totter_lon_020213f1_018.csv", "mappings/twin_otter.toml",
+     ["--estimator", "oe"]),
+    ("jsbsim_lat_rls", JS / "f16_ail_rud_doublets_20s_60Hz.csv", "mappings/jsbsim.toml",
+     ["--model", "lateral"]),
+    ("jsbsim_lon_smpe", SHARED / "jsbsim_f16_sample/f16_doublet_20s_120Hz.csv",
+     "mappings/jsbsim_clean.toml", ["--model", "longitudinal", "--estimator", "smpe-corrected"]),
+    ("px4_ulog", PX / "f16capstone_log_52_2021-5-22-12-42-56.ulg", "mappings/px4-fixedwing.toml",
+     []),
+    ("ardupilot_bin", PX / "pyflightcoach_center_0003.bin", "mappings/arduplane-minimal.toml", []),
+]
+
+IGNORED_KEYS = {
+    "wall_s", "wall_time_s", "elapsed_s", "throughput_samples_per_s", "real_time_factor",
+    "path", "file", "out", "output", "created", "timestamp", "version", "git",
+    "input", "log", "source", "mapping", "map", "model_file", "cpu_s",
+}
+
+
+# Substrings of keys that measure the machine, not the estimate.
+VOLATILE = ("wall", "realtime_factor", "real_time_factor", "throughput", "elapsed", "_per_s")
+
+
+def run(binary, args, cwd):
+    p = subprocess.run([binary, *args], cwd=cwd, capture_output=True, text=True)
+    return p.returncode, p.stdout[-2000:] + p.stderr[-2000:]
+
+
+def compare(a, b, path, rtol, flip, diffs):
+    if isinstance(a, dict) and isinstance(b, dict):
+        for k in sorted(set(a) | set(b)):
+            if k in IGNORED_KEYS or any(w in k for w in VOLATILE):
+                continue
+            if k not in a or k not in b:
+                diffs.append(f"{path}.{k}: only in {'base' if k in a else 'new'}")
+                continue
+            compare(a[k], b[k], f"{path}.{k}", rtol, flip, diffs)
+        return
+    if isinstance(a, list) and isinstance(b, list):
+        if len(a) != len(b):
+            diffs.append(f"{path}: length {len(a)} vs {len(b)}")
+            return
+        for i, (x, y) in enumerate(zip(a, b)):
+            # A parameter row carries its name: flip its numbers when the name is in `flip`.
+            sub_flip = flip
+            if isinstance(x, dict) and x.get("name") in flip.get("names", ()):
+                sub_flip = dict(flip, active=True)
+            compare(x, y, f"{path}[{i}]", rtol, sub_flip, diffs)
+        return
+    if isinstance(a, (int, float)) and isinstance(b, (int, float)) and not isinstance(a, bool):
+        x, y = float(a), float(b)
+        if flip.get("active") and path.rsplit(".", 1)[-1] in flip.get("signed", ()):
+            y = -y
+        if math.isnan(x) and math.isnan(y):
+            return
+        if abs(x - y) > rtol * max(abs(x), abs(y), 1e-6):
+            diffs.append(f"{path}: {a!r} vs {b!r}")
+        return
+    if a != b:
+        diffs.append(f"{path}: {str(a)[:80]!r} vs {str(b)[:80]!r}")
+
+
+def summaries(d):
+    return sorted(p.relative_to(d) for p in Path(d).rglob("*.json"))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--base", required=True)
+    ap.add_argument("--new", required=True)
+    ap.add_argument("--out", default="/tmp/aeroident-compare")
+    ap.add_argument("--rtol", type=float, default=1e-9)
+    ap.add_argument("--flip", default="", help="parameter names that flip sign on replays")
+    ap.add_argument("--only", default="run,poc,replay")
+    a = ap.parse_args()
+    only = set(a.only.split(","))
+    out = Path(a.out)
+    jobs = []
+    if "run" in only:
+        jobs.append(("run_all", ["run", "--all", "--no-figures", "--out", "{d}"], {}))
+        jobs.append(("run_default", ["run", "--no-figures", "--out", "{d}"], {}))
+    if "poc" in only:
+        jobs.append(("poc_all", ["poc", "--all", "--out", "{d}"], {}))
+    if "replay" in only:
+        if not SHARED.is_dir():
+            sys.exit(f"{SHARED} is absent: the replays need the shared flight records")
+        flip = {"names": [n for n in a.flip.split(",") if n],
+                "signed": ("value", "estimate", "reference", "truth", "final", "mean")}
+        for name, rec, mp, extra in REPLAYS:
+            args = ["replay", str(rec), "--map", mp, *extra, "--out", "{d}"]
+            jobs.append((name, args, flip))
+    failures = 0
+    for name, args, flip in jobs:
+        results = {}
+        for side, binary in (("base", a.base), ("new", a.new)):
+            d = out / side / name
+            subprocess.run(["rm", "-rf", str(d)])
+            d.mkdir(parents=True)
+            rc, log = run(os.path.abspath(binary), [x.format(d=d) for x in args], ROOT)
+            results[side] = (rc, d, log)
+        (rb, db, lb), (rn, dn, ln) = results["base"], results["new"]
+        diffs = []
+        if rb != rn:
+            diffs.append(f"exit {rb} vs {rn}\n{lb}\n{ln}")
+        files_b, files_n = summaries(db), summaries(dn)
+        if files_b != files_n:
+            diffs.append(f"json files differ: {files_b} vs {files_n}")
+        for f in set(files_b) & set(files_n):
+            jb = json.loads((db / f).read_text())
+            jn = json.loads((dn / f).read_text())
+            compare(jb, jn, str(f), a.rtol, flip, diffs)
+        status = "same" if not diffs else f"{len(diffs)} differences"
+        print(f"{name:24s} exit {rb}/{rn}  {len(files_b)} json  {status}", flush=True)
+        for d in diffs[:15]:
+            print("    " + d)
+        failures += bool(diffs)
+    print(f"{len(jobs) - failures} passed, {failures} failed")
+    sys.exit(1 if failures else 0)
+
+
+if __name__ == "__main__":
+    main()

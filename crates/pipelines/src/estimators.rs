@@ -198,7 +198,7 @@ pub fn build(
 /// air-data sample per step.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SampleEstimatorSpec {
-    /// Method: one of [`SAMPLE_KINDS`].
+    /// Method: an [`EstimatorKind`] name ([`online_kinds`] or [`batch_kinds`]).
     pub kind: String,
     /// The model structure (preset or list).
     pub model: ModelStructure,
@@ -235,8 +235,11 @@ impl SampleEstimatorSpec {
     }
 }
 
-/// The sample-driven estimator kinds.
-pub const SAMPLE_KINDS: [&str; 6] = ["rls", "ekf", "smpe", "smpe-corrected", "gradient", "ftr"];
+/// The sample-driven (online) estimator kinds of `[[estimator]]`: every [`EstimatorKind`]
+/// that is not a batch fit, in [`Named::ALL`]'s order.
+pub fn online_kinds() -> Vec<&'static str> {
+    EstimatorKind::ALL.iter().filter(|k| !k.is_batch()).map(|k| k.name()).collect()
+}
 
 /// Whether `kind` (an `[[estimator]] kind`) is a batch (post-flight) estimator: the CLI's
 /// [`EstimatorKind::is_batch`] kinds.
@@ -257,7 +260,7 @@ pub fn batch_kinds() -> Vec<&'static str> {
 /// A message naming the kind, the unknown or bad option, or the configuration error.
 pub fn build_sample_estimator(spec: &SampleEstimatorSpec) -> Result<Box<dyn Estimator>, String> {
     let kind = EstimatorKind::from_name(&spec.kind).ok_or_else(|| {
-        format!("unknown sample-driven estimator `{}` ({})", spec.kind, SAMPLE_KINDS.join(" | "))
+        format!("unknown sample-driven estimator `{}` ({})", spec.kind, online_kinds().join(" | "))
     })?;
     let mut options = EstimatorOptions::default();
     for (key, v) in &spec.options {

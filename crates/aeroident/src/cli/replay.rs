@@ -113,34 +113,17 @@ impl InitialStatesArg {
     }
 }
 
-/// The console's view of a replay: the model line and warnings on stderr, the estimates as
-/// CSV lines to the sinks (`estimates.csv`, stdout in live mode, the progress status line).
-struct Console<'a>(EstimateRows<'a>);
+/// The console's view of a replay: the model line and warnings on stderr (the estimates go to
+/// an [`EstimateRows`] beside it).
+struct Console;
 
-impl ReplayObserver for Console<'_> {
+impl ReplayObserver for Console {
     fn model(&mut self, line: &str) {
         eprintln!("{line}");
     }
 
-    fn start(&mut self, names: &[&str]) -> std::io::Result<()> {
-        self.0.start(names)
-    }
-
-    fn estimate(
-        &mut self,
-        t_s: f64,
-        values: &[Option<f64>],
-        sigmas: &[Option<f64>],
-    ) -> std::io::Result<()> {
-        self.0.estimate(t_s, values, sigmas)
-    }
-
     fn warning(&mut self, text: &str) {
         eprintln!("warning: {text}");
-    }
-
-    fn finish(&mut self) -> std::io::Result<()> {
-        self.0.finish()
     }
 }
 
@@ -222,7 +205,7 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     if crate::progress::enabled() {
         sinks.push(&mut status);
     }
-    let mut console = Console(EstimateRows { sinks, flush_each: args.realtime });
+    let mut console = (Console, EstimateRows { sinks, flush_each: args.realtime });
     let format = args
         .format
         .or_else(|| LogFormat::from_extension(Path::new(&args.data)))

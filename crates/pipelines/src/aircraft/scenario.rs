@@ -79,7 +79,8 @@ use aeroident_signals::{InputConfig, WindConfig};
 use serde::Deserialize;
 
 use super::increments::{self, parse_increment};
-pub use crate::estimators::{SAMPLE_KINDS, SampleEstimatorSpec};
+use crate::Named;
+pub use crate::estimators::SampleEstimatorSpec;
 
 /// The default scenario (`scenarios/default.toml`), embedded so the main job runs from any
 /// directory.
@@ -550,12 +551,12 @@ fn parse_estimator(k: usize, t: &toml::Table) -> Result<EstimatorSpec, (String, 
             }
         });
     }
-    if !SAMPLE_KINDS.contains(&kind) && !crate::estimators::is_batch_kind(kind) {
+    if crate::estimators::EstimatorKind::from_name(kind).is_none() {
         return Err((
             format!("{field}.kind"),
             format!(
                 "unknown kind `{kind}`: two-aircraft estimators published | corrected | mr-gradient, sample-driven {}, batch (post-flight) {}",
-                SAMPLE_KINDS.join(" | "),
+                crate::estimators::online_kinds().join(" | "),
                 crate::estimators::batch_kinds().join(" | ")
             ),
         ));

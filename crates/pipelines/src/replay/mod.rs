@@ -13,7 +13,7 @@
 //! (derivatives the stage will supply count as present). A `V/V0` term without a mapped `v0`
 //! uses the first sample's V as V0.
 //!
-//! **Gaps.** At a [`RecordEvent::Gap`] the differentiator restarts and the estimator is told
+//! **Gaps.** At a [`RecordEvent::Gap`](aeroident_io::RecordEvent::Gap) the differentiator restarts and the estimator is told
 //! that a new manoeuvre starts ([`Estimator::new_manoeuvre`]: model states re-initialised,
 //! parameters kept); nothing is bridged.
 //!
@@ -21,7 +21,7 @@
 //! could not centre (its first and last `(N−1)/2` samples and those around a gap) and every
 //! sample an estimator refused is listed in the summary's `rejections` and counted in
 //! `samples_rejected` (gap entries are listed but count no sample). The list is bounded
-//! ([`RejectionLog`]): the first 1,000 entries and always the last; the others are counted per
+//! ([`RejectionLog`](aeroident_io::RejectionLog)): the first 1,000 entries and always the last; the others are counted per
 //! kind in a warning (`N further rejections not listed: …`). A diverged estimator stops
 //! the replay (its row is listed) and the summary's `status` is `diverged`, with every estimate
 //! `null`.
@@ -42,16 +42,15 @@ pub mod batch;
 pub mod derivatives;
 pub mod diagnostics;
 pub mod explain;
+mod online;
 pub mod prediction;
 
 use crate::estimators::{BuildError, EstimatorKind, EstimatorOptions, build};
 use aeroident_estimators::{AirDataSample, Coefficient, Estimator, ModelStructure, Status, Term};
 use aeroident_io::mapping::{Channel, Mapping};
-use aeroident_io::replay_output::{ParameterSummary, ReplaySummary};
-use aeroident_io::{
-    FlightDataError, FlightDataReader, ModelSpec, RecordEvent, Rejection, RejectionLog,
-};
-use derivatives::{Derivative, DerivativeStage};
+use aeroident_io::replay_output::ReplaySummary;
+use aeroident_io::{FlightDataError, FlightDataReader, ModelSpec};
+use derivatives::Derivative;
 use prediction::{Frozen, Recorder, ValidationReport, validate_coefficients};
 use std::io::{Read, Write};
 use std::time::{Duration, Instant};
@@ -133,6 +132,39 @@ pub trait ReplayObserver {
 }
 
 impl ReplayObserver for () {}
+
+/// Two observers, each told everything in turn (the first, then the second).
+impl<A: ReplayObserver, B: ReplayObserver> ReplayObserver for (A, B) {
+    fn model(&mut self, line: &str) {
+        self.0.model(line);
+        self.1.model(line);
+    }
+
+    fn start(&mut self, names: &[&str]) -> std::io::Result<()> {
+        self.0.start(names)?;
+        self.1.start(names)
+    }
+
+    fn estimate(
+        &mut self,
+        t_s: f64,
+        values: &[Option<f64>],
+        sigmas: &[Option<f64>],
+    ) -> std::io::Result<()> {
+        self.0.estimate(t_s, values, sigmas)?;
+        self.1.estimate(t_s, values, sigmas)
+    }
+
+    fn warning(&mut self, text: &str) {
+        self.0.warning(text);
+        self.1.warning(text);
+    }
+
+    fn finish(&mut self) -> std::io::Result<()> {
+        self.0.finish()?;
+        self.1.finish()
+    }
+}
 
 /// Writes the estimates to each sink as CSV: a header line, then one line per sample,
 /// `t_s, <names>, sigma_<names>` with empty fields where not identified or no σ
@@ -538,13 +570,6 @@ fn derivatives_to_supply(
         .collect()
 }
 
-/// The running state once the first sample has fixed the model.
-struct Running {
-    est: Box<dyn Estimator>,
-    stage: DerivativeStage,
-    v0_mps: f64,
-}
-
 /// Replays a record through the chosen estimator; `observer` sees the model, each sample's
 /// estimates and the warnings as they arise ([`EstimateRows`] writes `estimates.csv` or the
 /// live feed's lines, `&mut ()` sees nothing).
@@ -582,317 +607,35 @@ pub fn replay_with<R: Read>(
     make: impl Fn(&ModelSpec) -> Result<Box<dyn Estimator>, BuildError>,
     observer: &mut dyn ReplayObserver,
 ) -> Result<ReplayOutcome, ReplayError> {
-    if opts.diff_window < 3 || opts.diff_window.is_multiple_of(2) {
-        return Err(ReplayError::Option {
-            option: "diff-window",
-            reason: format!("must be odd and ≥ 3 (a whole-sample lag), got {}", opts.diff_window),
-        });
-    }
-    if opts.diff_window > MAX_DIFF_WINDOW {
-        return Err(ReplayError::Option {
-            option: "diff-window",
-            reason: format!(
-                "must be ≤ {MAX_DIFF_WINDOW} samples (a lag of {} samples), got {}",
-                MAX_DIFF_WINDOW / 2,
-                opts.diff_window
-            ),
-        });
-    }
-    let file = reader.file().to_string();
-    let uses_measured = opts.estimator.uses_measured_coefficients();
-    let mapped_v0 = mapping.channels.get(&Channel::V0).and_then(|m| m.constant());
-    let mut rejections = RejectionLog::default();
-    let mut samples_read = 0usize;
-    let mut samples_rejected = 0usize;
-    let mut run: Option<Running> = None;
-    let mut model: Option<(ModelSpec, bool)> = None;
-    let mut history = History::default();
-    let mut fed = crate::sample_log::SampleLog::new(crate::results::MAX_FIT_SAMPLES, 1);
-    let mut busy = Duration::ZERO;
-    let mut ready = Vec::new();
-    let mut unused = Vec::new();
-    let mut pacer = Pacer::default();
-    let mut warnings: Vec<String> = Vec::new();
-    let mut diverged = false;
-    // Restarts of the estimator seen so far: each is printed when it happens (on a live feed
-    // the estimates fall back to the priors then, not at the end).
-    let mut restarts_seen = 0;
-    let mut recorder = Recorder::default();
+    check_diff_window(opts.diff_window)?;
+    let mut run = online::Replay::new(reader.file().to_string(), mapping, opts, observer);
     for item in reader {
-        let event = item?;
-        ready.clear();
-        unused.clear();
-        match event {
-            RecordEvent::Rejected { row, problem } => {
-                samples_read += 1;
-                samples_rejected += 1;
-                rejections.push_row(row, &problem);
-            }
-            RecordEvent::Gap { row, dt_s, nominal_dt_s } => {
-                rejections.push("gap", Rejection {
-                    row,
-                    reason: format!(
-                        "gap: {dt_s} s before this row (nominal {nominal_dt_s} s); not bridged: differentiator restarted, new manoeuvre for the estimator"
-                    ),
-                });
-                if let Some(r) = &mut run {
-                    r.stage.flush(&mut unused);
-                    r.est.new_manoeuvre();
-                    recorder.new_segment();
-                }
-            }
-            RecordEvent::Sample { row, sample } => {
-                samples_read += 1;
-                if run.is_none() {
-                    let (spec, defaulted) = choose_model(opts, mapping, &sample, uses_measured)?;
-                    let supply = derivatives_to_supply(
-                        &spec.structure,
-                        opts.estimator,
-                        mapping,
-                        opts.derivatives,
-                    );
-                    let missing = unsupported(&spec.structure, &sample, uses_measured, &supply);
-                    if !missing.is_empty() {
-                        return Err(ReplayError::Model(format!(
-                            "model `{}` is not supported by {file} with {}: {}",
-                            spec.name,
-                            mapping.file,
-                            missing.join("; ")
-                        )));
-                    }
-                    let est = make(&spec)?;
-                    observer.model(&model_line(&spec, defaulted, &supply, opts.diff_window));
-                    history.names = spec.structure.names().collect();
-                    observer.start(&history.names)?;
-                    run = Some(Running {
-                        est,
-                        stage: DerivativeStage::new(supply, opts.diff_window, mapping.nominal_dt_s),
-                        v0_mps: mapped_v0.unwrap_or(sample.vt_mps),
-                    });
-                    model = Some((spec, defaulted));
-                }
-                if let Some(r) = &mut run {
-                    let mut s = sample;
-                    s.constants.v0_mps.get_or_insert(r.v0_mps);
-                    r.stage.push(row, s, &mut ready, &mut unused).map_err(|e| {
-                        ReplayError::Option { option: "diff-window", reason: e.to_string() }
-                    })?;
-                    if let Some(w) = r.stage.take_warning() {
-                        observer.warning(&w);
-                        warnings.push(w);
-                    }
-                }
-            }
-        }
-        for r in unused.drain(..) {
-            samples_rejected += 1;
-            rejections.push(
-                KIND_NOT_CENTRED,
-                Rejection {
-                    row: r,
-                    reason: "not estimated: no centred derivative (differentiator warm-up or gap)"
-                        .into(),
-                },
-            );
-        }
-        let Some(r) = run.as_mut() else { continue };
-        for (row, s) in ready.drain(..) {
-            let t_in = Instant::now();
-            let result =
-                r.est.update(&s).copied().map_err(|e| explain::estimator_error(&e, mapping));
-            busy += t_in.elapsed();
-            // A numerical failure on valid input is a divergence (the estimator's status says
-            // so, with or without an error); any other error refuses this sample only.
-            if r.est.estimates().status == Status::Diverged {
-                let why = result.err().map_or(String::new(), |e| format!(" ({e})"));
-                rejections.push(
-                    "estimator diverged",
-                    Rejection {
-                        row,
-                        reason: format!(
-                            "estimator `{}` diverged at t = {} s{why}; replay stopped",
-                            r.est.method(),
-                            s.t_s
-                        ),
-                    },
-                );
-                diverged = true;
-                break;
-            }
-            let restarts = r.est.events().count(aeroident_estimators::EventKind::Restart);
-            if restarts > restarts_seen {
-                restarts_seen = restarts;
-                observer.warning(&format!(
-                    "estimator `{}` restarted from its priors at t = {} s (row {row}); its estimates come from the samples after it only",
-                    r.est.method(),
-                    s.t_s
-                ));
-            }
-            let e = match result {
-                Ok(e) => e,
-                Err(err) => {
-                    samples_rejected += 1;
-                    rejections.push(
-                        "estimator refused sample",
-                        Rejection { row, reason: format!("estimator refused sample: {err}") },
-                    );
-                    continue;
-                }
-            };
-            let n = history.names.len();
-            let values: Vec<Option<f64>> = (0..n).map(|i| e.value(i)).collect();
-            let sigmas: Vec<Option<f64>> = (0..n).map(|i| e.sigma(i)).collect();
-            if opts.pacing == Pacing::Realtime {
-                let dt = r.stage.dt_s().or(mapping.nominal_dt_s);
-                let (wait, note) = pacer.wait(s.t_s, dt, Instant::now());
-                if let Some(n) = note {
-                    observer.warning(&n);
-                    warnings.push(n);
-                }
-                if !wait.is_zero() {
-                    std::thread::sleep(wait);
-                }
-            }
-            observer.estimate(s.t_s, &values, &sigmas)?;
-            recorder.push(&s);
-            history.push(s.t_s, values, sigmas);
-            fed.push(s);
-        }
-        if diverged {
+        run.event(item?, &make)?;
+        if run.diverged() {
             break;
         }
     }
-    history.finish();
-    observer.finish()?;
-    if let Some(r) = &mut run
-        && !diverged
-    {
-        r.stage.flush(&mut unused);
-        for row in unused.drain(..) {
-            samples_rejected += 1;
-            rejections.push(KIND_NOT_CENTRED, Rejection {
-                row,
-                reason: "not estimated: no centred derivative (end of record within the differentiator lag)"
-                    .into(),
-            });
-        }
+    run.finish()
+}
+
+/// The differentiator window must be odd, ≥ 3 and ≤ [`MAX_DIFF_WINDOW`].
+fn check_diff_window(window: usize) -> Result<(), ReplayError> {
+    if window < 3 || window.is_multiple_of(2) {
+        return Err(ReplayError::Option {
+            option: "diff-window",
+            reason: format!("must be odd and ≥ 3 (a whole-sample lag), got {window}"),
+        });
     }
-    let (Some(r), Some((spec, defaulted))) = (run, model) else {
-        return Err(FlightDataError::NoSamples {
-            file,
-            rejected: samples_rejected,
-            first: rejections.first(3),
-        }
-        .into());
-    };
-    if history.t_s.is_empty() && !diverged {
-        return Err(FlightDataError::NoSamples {
-            file,
-            rejected: samples_rejected,
-            first: rejections.first(3),
-        }
-        .into());
+    if window > MAX_DIFF_WINDOW {
+        return Err(ReplayError::Option {
+            option: "diff-window",
+            reason: format!(
+                "must be ≤ {MAX_DIFF_WINDOW} samples (a lag of {} samples), got {window}",
+                MAX_DIFF_WINDOW / 2
+            ),
+        });
     }
-    let status = if diverged { Status::Diverged } else { r.est.estimates().status };
-    let parameters: Vec<ParameterSummary> = history
-        .names
-        .iter()
-        .enumerate()
-        .map(|(i, name)| {
-            let last = history.values.last();
-            let (estimate, std_error) = match (diverged, last) {
-                (false, Some(v)) => (v[i], history.sigmas.last().and_then(|s| s[i])),
-                _ => (None, None),
-            };
-            ParameterSummary {
-                name: (*name).to_string(),
-                estimate,
-                std_error,
-                settle_time_s: if diverged { None } else { settle_time_s(&history, i) },
-            }
-        })
-        .collect();
-    let (coefficients, correlations) = if diverged {
-        let none = r
-            .est
-            .structure()
-            .coefficients()
-            .map(|c| aeroident_io::replay_output::CoefficientSummary {
-                name: c.name().into(),
-                condition_number: None,
-            })
-            .collect();
-        (none, Vec::new())
-    } else {
-        (
-            diagnostics::coefficient_conditions(r.est.as_ref()),
-            diagnostics::strong_correlations(r.est.as_ref()),
-        )
-    };
-    // Physically implausible signs and the filter's consistency, as warnings.
-    if !diverged {
-        let values: Vec<Option<f64>> = parameters.iter().map(|p| p.estimate).collect();
-        let sigmas: Vec<Option<f64>> = parameters.iter().map(|p| p.std_error).collect();
-        warnings.extend(diagnostics::sign_warnings(r.est.structure(), &values, &sigmas));
-        if let Some(nis) = r.est.nis() {
-            warnings.push(format!(
-                "normalised innovation squared (mean e²/S) = {nis:.2} (1 for a consistent filter; > 2 means its σ are optimistic, < 0.5 pessimistic)"
-            ));
-        }
-    }
-    // The estimator's events; its restarts were printed as they happened.
-    let events = aeroident_io::replay_output::EventsSummary::from_log(r.est.events());
-    warnings.extend(events.restart_warnings());
-    // Throughput of the estimation stage: the estimator update per sample (CSV parsing,
-    // differentiation, pacing and output are excluded).
-    let secs = busy.as_secs_f64().max(1e-9);
-    let (rejections, unlisted) = rejections.finish();
-    warnings.extend(unlisted);
-    let mut summary = ReplaySummary {
-        estimator: r.est.method().to_string(),
-        model: spec.name.clone(),
-        status: status.name().to_string(),
-        samples_read,
-        samples_rejected,
-        rejections,
-        throughput_samples_per_s: history.samples as f64 / secs,
-        parameters,
-        coefficients,
-        correlations,
-        events,
-        warnings,
-    };
-    let differentiated = r.stage.supplies().to_vec();
-    let n = r.est.structure().n_params();
-    let final_covariance: Vec<Option<f64>> =
-        (0..n * n).map(|k| r.est.covariance(k / n, k % n)).collect();
-    let (validation, identifiability) = if diverged {
-        (None, None)
-    } else {
-        let values: Vec<Option<f64>> = summary.parameters.iter().map(|p| p.estimate).collect();
-        let cov = |i: usize, j: usize| r.est.covariance(i, j);
-        let v = validate_coefficients(&recorder, r.est.structure(), &values, &cov, &file, None);
-        let id = diagnostics::identifiability(r.est.structure(), &cov, &recorder, &values);
-        for c in &id.collinear_regressors {
-            summary.warnings.push(format!(
-                "collinear regressors {} and {} (sample correlation {:+.3}): the record cannot separate these terms whatever the method",
-                c.a, c.b, c.rho
-            ));
-        }
-        (Some(v), Some(id))
-    };
-    Ok(ReplayOutcome {
-        model: spec,
-        model_defaulted: defaulted,
-        differentiated,
-        history,
-        summary,
-        validation,
-        identifiability,
-        final_covariance,
-        recorder,
-        samples: fed,
-    })
+    Ok(())
 }
 
 /// Applies the final estimates of `fitted` to a second record (`--validate-on`): the record
@@ -1073,6 +816,72 @@ mod tests {
         let out = replay_with(reader, &m, &opts, make, &mut ());
         let seen = seen.borrow().clone();
         (out, seen)
+    }
+
+    /// What an observer was told.
+    #[derive(Default)]
+    struct Told {
+        model: Vec<String>,
+        names: Vec<String>,
+        estimates: Vec<(f64, Vec<Option<f64>>)>,
+        finished: bool,
+    }
+
+    impl ReplayObserver for Told {
+        fn model(&mut self, line: &str) {
+            self.model.push(line.into());
+        }
+        fn start(&mut self, names: &[&str]) -> std::io::Result<()> {
+            self.names = names.iter().map(|n| n.to_string()).collect();
+            Ok(())
+        }
+        fn estimate(
+            &mut self,
+            t_s: f64,
+            values: &[Option<f64>],
+            _sigmas: &[Option<f64>],
+        ) -> std::io::Result<()> {
+            self.estimates.push((t_s, values.to_vec()));
+            Ok(())
+        }
+        fn finish(&mut self) -> std::io::Result<()> {
+            self.finished = true;
+            Ok(())
+        }
+    }
+
+    /// A pair of observers is told everything, each in full: the model once, the names, one
+    /// estimate per sample fed (the history's), the end; the CSV side writes a header and
+    /// one line per sample with the estimates (q̇ = 2 exactly for the probe).
+    #[test]
+    fn observer_pair_sees_every_estimate() {
+        let m = Mapping::from_toml_str(MAP, "probe.toml").unwrap();
+        let csv = record();
+        let reader = FlightDataReader::new(csv.as_bytes(), "probe.csv", &m).unwrap();
+        let make = |spec: &ModelSpec| -> Result<Box<dyn Estimator>, BuildError> {
+            Ok(Box::new(Probe {
+                structure: spec.structure,
+                est: Estimates::new(spec.structure.n_params()),
+                seen: Rc::new(RefCell::new(Vec::new())),
+                diverge_at: usize::MAX,
+            }))
+        };
+        let opts = ReplayOptions { diff_window: 3, ..Default::default() };
+        let mut lines = Vec::new();
+        let mut pair =
+            (Told::default(), EstimateRows { sinks: vec![&mut lines], flush_each: false });
+        let o = replay_with(reader, &m, &opts, make, &mut pair).unwrap();
+        let told = pair.0;
+        assert_eq!(told.model.len(), 1);
+        assert!(told.model[0].contains(&o.model.name), "{:?}", told.model);
+        assert_eq!(told.names, o.history.names);
+        assert_eq!(told.estimates.len(), o.history.samples);
+        assert_eq!(told.estimates.iter().map(|e| e.0).collect::<Vec<_>>(), o.history.t_s);
+        assert!(told.estimates.iter().all(|(_, v)| v.iter().all(|x| *x == Some(2.0))));
+        assert!(told.finished);
+        let text = String::from_utf8(lines).unwrap();
+        assert_eq!(text.lines().count(), 1 + o.history.samples, "{text}");
+        assert!(text.lines().next().unwrap().starts_with("t_s,"), "{text}");
     }
 
     /// At a gap the estimator is told a new manoeuvre starts — after the last sample before

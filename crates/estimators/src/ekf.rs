@@ -209,7 +209,6 @@ use crate::coloured::Autocorrelation;
 use crate::estimator::{Estimates, Estimator, EventKind, EventLog, Status, check_finite};
 use crate::flight_model::{
     FlightModel, Linearisation, ModelInputs, N_OUTPUTS, N_STATES, Output, STATE_NAMES, StateSet,
-    state,
 };
 use crate::prior::Priors;
 use crate::sample::AirDataSample;
@@ -667,8 +666,8 @@ impl Ekf {
         self.model.state_set()
     }
 
-    /// The current estimate of full-state index `i` ([`state`]) if it is integrated and the
-    /// filter has been initialised.
+    /// The current estimate of full-state index `i` ([`state`](crate::flight_model::state))
+    /// if it is integrated and the filter has been initialised.
     pub fn state(&self, i: usize) -> Option<f64> {
         self.last?;
         let k = self.model.state_set().states().iter().position(|&j| j == i)?;
@@ -687,9 +686,9 @@ impl Ekf {
         libm::sqrt(self.r_var[o.index()])
     }
 
-    /// The current state process noise of full-state index `i` ([`state`]), units per √s
-    /// (configured, or estimated from the record when `adaptive_q_window > 0`); `None` if the
-    /// state is not integrated.
+    /// The current state process noise of full-state index `i`
+    /// ([`state`](crate::flight_model::state)), units per √s (configured, or estimated from
+    /// the record when `adaptive_q_window > 0`); `None` if the state is not integrated.
     pub fn state_process_noise(&self, i: usize) -> Option<f64> {
         self.model.state_set().states().contains(&i).then(|| libm::sqrt(self.q_var[i]))
     }
@@ -1093,255 +1092,15 @@ impl Estimator for Ekf {
         if dt.is_nan() || dt <= 0.0 {
             return Err(EstimatorError::NonFiniteInput { field: "dt_s", value: dt, t_s: s.t_s });
         }
-        let (nx, np) = (self.nx, self.np);
-        let n = nx + np;
-        // Prediction: linearise at the interval start, propagate P, integrate the mean.
-        // `lin` is scratch (not state): written in place, no copy of its ~9 kB.
-        let mut theta = [0.0; MAX_PARAMS];
-        theta[..np].copy_from_slice(&self.z[nx..n]);
-        let mut x0 = [0.0; N_STATES];
-        x0[..nx].copy_from_slice(&self.z[..nx]);
-        let res = self.model.linearise(&theta[..np], &u0, &x0[..nx], &mut self.lin);
-        if res.is_err() {
-            return Err(self.diverge("EKF: implicit alpha-dot equation singular", s.t_s));
-        }
-        self.propagate_covariance(dt);
-        let Ok(xp) = self.rk4(&u0, &u1, dt) else {
-            return Err(self.diverge("EKF: implicit alpha-dot equation singular", s.t_s));
-        };
-        let mut z = self.z;
-        z[..nx].copy_from_slice(&xp[..nx]);
-        // Measurement update at the predicted state.
-        let res = self.model.linearise(&z[nx..n], &u1, &z[..nx], &mut self.lin);
-        if res.is_err() {
-            return Err(self.diverge("EKF: implicit alpha-dot equation singular", s.t_s));
-        }
-        let z_pred = z;
-        // Predicted parameter variances (after any random walk), for the change test's uptake
-        // sums.
-        let mut p_pred = [0.0; MAX_PARAMS];
-        for (i, v) in p_pred.iter_mut().enumerate().take(np) {
-            *v = self.work[nx + i][nx + i];
-        }
-        let mut innovation = [None; N_OUTPUTS];
-        let mut normalised = [None; N_OUTPUTS];
-        let mut info = [[0.0; MAX_PARAMS]; N_OUTPUTS];
-        let mut consecutive = self.consecutive;
-        let mut rejections = self.rejections;
-        let mut reanchors = self.reanchors;
-        let mut run_reanchored = self.run_reanchored;
-        let mut new_reanchor = [false; N_OUTPUTS];
-        let mut r_var = self.r_var;
-        let mut r_count = self.r_count;
-        let (mut nis_sum, mut nis_count) = (self.nis_sum, self.nis_count);
-        let states = self.model.state_set().states();
-        let mut h = [0.0; MAX_AUG];
-        let mut ph = [0.0; MAX_AUG];
-        // Process-noise statistic (module doc): the forgotten sum of earlier state corrections
-        // and the cross products of this sample's corrections with it.
-        let adapt_q = self.cfg.adaptive_q_window > 0;
-        let mut q_acc = [[0.0; N_OUTPUTS]; N_STATES];
-        let mut q_tot = [0.0; N_STATES];
-        let mut q_cross = [0.0; N_STATES];
-        let mut q_red = [[0.0; 2]; N_STATES];
-        let mut p_prior = [0.0; N_STATES];
-        let forget = 1.0 - 1.0 / ADAPTIVE_Q_MEMORY_SAMPLES;
-        // The states whose process noise is estimated: only their statistics are formed.
-        let adapted = |k: usize| self.cfg.adaptive_q_states[states[k]];
-        if adapt_q {
-            for k in (0..nx).filter(|&k| adapted(k)) {
-                for (a, b) in q_acc[k].iter_mut().zip(&self.q_acc[k]) {
-                    *a = forget * b;
-                    q_tot[k] += *a;
-                }
-                p_prior[k] = self.work[k][k];
+        let z = self.predict(&u0, &u1, dt, s.t_s)?;
+        let mut pending = self.pending(z);
+        for &o in self.model.state_set().outputs() {
+            if let update::Measured::LockedOut(o) = self.measure(o, s, &mut pending)? {
+                return self.locked_out(pending.counts, o, s, u1);
             }
         }
-        for o in self.model.state_set().outputs() {
-            let oi = o.index();
-            let Some(y) = o.measured(s) else { continue };
-            // Row of ∂h/∂z; a state output is a unit row.
-            let unit = if oi < N_STATES { states.iter().position(|&j| j == oi) } else { None };
-            let w = &self.work;
-            let mut yhat = self.lin.y[oi];
-            if let Some(k) = unit {
-                yhat += z[k] - z_pred[k];
-            } else {
-                h[..nx].copy_from_slice(&self.lin.dydx[oi][..nx]);
-                h[nx..n].copy_from_slice(&self.lin.dydtheta[oi][..np]);
-                for j in 0..n {
-                    yhat += h[j] * (z[j] - z_pred[j]);
-                }
-            }
-            let mut hph = change::p_times_row(w, unit, &h, n, &mut ph);
-            let mut sv = hph + r_var[oi];
-            if !(sv > 0.0 && sv.is_finite()) {
-                return Err(self.diverge("EKF innovation variance not positive", s.t_s));
-            }
-            let e = y - yhat;
-            // A run of rejections: raise the predicted variance of what the output sees (a
-            // measured state, or the parameters of a settled filter) to the censored bound and
-            // use the innovation (module doc, "Re-anchoring").
-            let gate2 = self.cfg.gate_sigmas * self.cfg.gate_sigmas;
-            let mut reanchored = false;
-            if self.cfg.reanchor_after > 0
-                && consecutive[oi] + 1 >= self.cfg.reanchor_after
-                && e * e > gate2 * sv
-                && match unit {
-                    Some(k) => reanchor(&mut self.work, k, e * e / gate2 - r_var[oi]),
-                    None => {
-                        (0..np).all(|i| h[nx + i] == 0.0 || self.settled(i))
-                            && reanchor_parameters(
-                                &mut self.work,
-                                &h,
-                                nx,
-                                n,
-                                e * e / gate2 - r_var[oi],
-                            )
-                    }
-                }
-            {
-                reanchors[oi] += 1;
-                reanchored = true;
-                hph = change::p_times_row(&self.work, unit, &h, n, &mut ph);
-                sv = hph + r_var[oi];
-            }
-            if e.is_nan() || libm::fabs(e) > self.cfg.gate_sigmas * libm::sqrt(sv) {
-                rejections[oi] += 1;
-                consecutive[oi] += 1;
-                // A rejected innovation of an output of the adapted states' equations is a
-                // censored observation, `e² > gate² S`: it feeds `R` at that bound (module doc,
-                // "Measurement noise from the record"), so a deficit of `Q` widens the gate
-                // instead of locking it.
-                let sees_q = adapt_q
-                    && match unit {
-                        Some(k) => adapted(k),
-                        None => {
-                            matches!(o, Output::Ax | Output::Ay | Output::Az)
-                                && (0..nx).any(|k| adapted(k) && h[k] != 0.0)
-                        }
-                    };
-                if sees_q && self.cfg.adaptive_r_window > 0 && !e.is_nan() {
-                    let bound = gate2 * sv;
-                    adapt_r(&self.cfg, oi, bound - hph, &mut r_var, &mut r_count);
-                }
-                if consecutive[oi] >= self.cfg.max_consecutive_rejections {
-                    let counts = LockOutCounts { rejections, consecutive, reanchors, new_reanchor };
-                    return self.locked_out(counts, *o, s, u1);
-                }
-                continue;
-            }
-            // A re-anchored innovation continues the run: a model that must be re-anchored
-            // at every sample for `max_consecutive_rejections` samples does not explain the
-            // output, and the divergence rule still fires.
-            if reanchored {
-                consecutive[oi] += 1;
-                if !run_reanchored[oi] {
-                    run_reanchored[oi] = true;
-                    new_reanchor[oi] = true;
-                }
-                if consecutive[oi] >= self.cfg.max_consecutive_rejections {
-                    let counts = LockOutCounts { rejections, consecutive, reanchors, new_reanchor };
-                    return self.locked_out(counts, *o, s, u1);
-                }
-            } else {
-                consecutive[oi] = 0;
-                run_reanchored[oi] = false;
-            }
-            innovation[oi] = Some(e);
-            let inv = 1.0 / sv;
-            normalised[oi] = Some(e * libm::sqrt(inv));
-            for i in 0..np {
-                info[oi][i] = ph[nx + i] * ph[nx + i] * inv;
-            }
-            nis_sum += e * e / sv;
-            nis_count += 1;
-            if self.cfg.adaptive_r_window > 0 {
-                adapt_r(&self.cfg, oi, e * e - hph, &mut r_var, &mut r_count);
-            }
-            for i in 0..n {
-                z[i] += ph[i] * inv * e;
-            }
-            if adapt_q {
-                for k in (0..nx).filter(|&k| adapted(k)) {
-                    let d = ph[k] * inv * e;
-                    q_cross[k] += 2.0 * d * (q_tot[k] - q_acc[k][oi]);
-                    q_acc[k][oi] += d;
-                    q_tot[k] += d;
-                    let red = ph[k] * ph[k] * inv;
-                    q_red[k][0] += red;
-                    q_red[k][1] += red * red;
-                }
-            }
-            let w = &mut self.work;
-            for i in 0..n {
-                let ki = ph[i] * inv;
-                for j in 0..=i {
-                    let v = w[i][j] - ki * ph[j];
-                    w[i][j] = v;
-                    w[j][i] = v;
-                }
-            }
-        }
-        // Divergence checks before committing anything.
-        let finite = z[..n].iter().all(|v| v.is_finite())
-            && (0..n)
-                .all(|i| self.work[i][i] > 0.0 && self.work[i][..n].iter().all(|v| v.is_finite()));
-        let ss = self.model.state_set();
-        let get = |i: usize| states.iter().position(|&j| j == i).map(|k| z[k]);
-        let bad_v = ss.lon() && get(state::V).is_some_and(|v| v.is_nan() || v <= 0.0);
-        let bad_a = get(state::ALPHA).is_some_and(|a| a.is_nan() || libm::fabs(a) > 1.5);
-        let bad_b = get(state::BETA).is_some_and(|b| b.is_nan() || libm::fabs(b) > 1.5);
-        if !finite || bad_v || bad_a || bad_b {
-            return Err(self.diverge(
-                "EKF diverged (non-finite state or covariance, V ≤ 0, or |alpha|, |beta| > 1.5 rad)",
-                s.t_s,
-            ));
-        }
-        // Commit.
-        self.z = z;
-        for i in 0..n {
-            self.p[i][..n].copy_from_slice(&self.work[i][..n]);
-        }
-        for (i, u) in self.uptake.iter_mut().enumerate().take(np) {
-            u.add(p_pred[i], self.p[nx + i][nx + i]);
-        }
-        self.consecutive = consecutive;
-        self.rejections = rejections;
-        self.reanchors = reanchors;
-        self.run_reanchored = run_reanchored;
-        for o in Output::ALL.iter().filter(|o| new_reanchor[o.index()]) {
-            self.events.push(s.t_s, EventKind::Reanchor, o.name());
-        }
-        self.r_var = r_var;
-        self.r_count = r_count;
-        self.nis_sum = nis_sum;
-        self.nis_count = nis_count;
-        // While an output is being rejected the model does not explain the record (module
-        // doc): the corrections then come from model error, not from process noise.
-        if adapt_q && self.consecutive.iter().all(|&c| c == 0) {
-            // Sensitivity of the statistic to a Q error, from each state's fraction of its
-            // prediction variance removed by this sample (module doc).
-            let mut q_stat = [0.0; N_STATES];
-            for k in 0..nx {
-                let [red, red2] = q_red[k];
-                if red > 0.0 {
-                    let gain = (red / p_prior[k]).clamp(0.0, 1.0);
-                    let cross_share = 1.0 - red2 / (red * red);
-                    q_stat[k] = q_cross[k] / sensitivity(gain, forget, cross_share);
-                }
-            }
-            self.adapt_process_noise(&q_acc, &q_stat, dt);
-        }
-        for (oi, v) in normalised.iter().enumerate() {
-            if let Some(v) = *v {
-                self.innov_acf[oi].add(v, 1.0);
-                for i in 0..np {
-                    self.innov_info[oi][i] += info[oi][i];
-                }
-            }
-        }
-        self.innovation = innovation;
+        self.check_state(&pending.z, s.t_s)?;
+        self.commit(pending, s.t_s, dt);
         self.last = Some(u1);
         if let Some(h) = self.change_h {
             self.test_for_change(s.t_s, h);
@@ -1377,3 +1136,4 @@ impl Estimator for Ekf {
 mod change;
 #[cfg(test)]
 mod tests;
+mod update;

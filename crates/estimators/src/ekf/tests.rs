@@ -1,4 +1,5 @@
 use super::*;
+use crate::flight_model::state;
 use crate::sample::AircraftConstants;
 use crate::test_aircraft::{self, ALPHA0, V0, doublet};
 use crate::vocabulary::{Coefficient as C, Param, Term as T};

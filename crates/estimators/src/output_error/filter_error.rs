@@ -503,54 +503,111 @@ fn noise_start(p: &Problem) -> Vec<f64> {
 pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemResult, OeError> {
     let oe = &config.oe;
     let p = prepare(manoeuvres, oe)?;
-    let states = p.model.state_set().states();
-    let noisy: Vec<usize> = (0..p.nx).filter(|&k| config.process_noise[states[k]]).collect();
-    let first_f = p.n_unknowns;
-    let nb = first_f + noisy.len();
-    let ny = p.ny();
+    let fem = Fem::new(&p, config)?;
+    let (mut it, start) = fem.start(manoeuvres, oe)?;
+    let (converged, failure) = fem.iterate(&mut it, oe)?;
+    fem.finish(it, start, converged, failure, oe)
+}
+
+/// The filter-error problem set up: the filter, and the starts and lower bounds of the noise
+/// unknowns.
+struct Fem<'a> {
+    p: &'a Problem,
+    filter: Filter<'a>,
+    /// Filter-order indices of the process-noise states.
+    noisy: Vec<usize>,
+    /// Index of the first `F` unknown.
+    first_f: usize,
+    /// Unknowns of the filter (θ, b, x0, ln F); the `ln R` follow them.
+    nb: usize,
+    ny: usize,
+    /// Starting measurement-noise variances (second differences) and process noise `F`.
+    r0: Vec<f64>,
+    f0: Vec<f64>,
+    /// Lower bounds of the noise unknowns (ln F, then ln R).
+    ln_min: Vec<f64>,
+}
+
+/// The current iterate, its residuals and the iteration log.
+struct Iterate {
+    /// All unknowns: β = (θ, b, x0, ln F) then ln R.
+    beta: Vec<f64>,
+    /// Innovation variances per output.
+    bf: Vec<f64>,
+    /// Residual variances per output.
+    b: Vec<f64>,
+    y: Vec<f64>,
+    e: Vec<f64>,
+    /// Sensitivities (scratch).
+    s: Vec<f64>,
+    y_try: Vec<f64>,
+    e_try: Vec<f64>,
+    /// Levenberg–Marquardt damping, kept from one iteration to the next.
+    lambda: f64,
+    log: Vec<OeIteration>,
+}
+
+/// A trial that lowered the likelihood cost.
+struct Accepted {
+    beta: Vec<f64>,
+    step: nalgebra::DVector<f64>,
+    bf: Vec<f64>,
+    b: Vec<f64>,
+    value: f64,
+}
+
+/// How an iteration ended the fit, if it did: converged, or stopped for a reason.
+type Stop = Option<(bool, Option<NotConverged>)>;
+
+/// The median sample interval of the manoeuvres, s (the steady-state filter's step).
+fn median_interval(p: &Problem) -> f64 {
     let mut dts: Vec<f64> =
         p.man.iter().flat_map(|m| m.u.windows(2).map(|w| w[1].t_s - w[0].t_s)).collect();
     dts.sort_by(f64::total_cmp);
-    let dt = dts[dts.len() / 2];
-    let stride = p.n_samples.div_ceil(LINEARISATION_POINTS).max(1);
-    let points: Vec<(usize, usize)> = p
-        .man
-        .iter()
-        .enumerate()
-        .flat_map(|(m, man)| (0..man.u.len()).step_by(stride).map(move |i| (m, i)))
-        .collect();
-    let filter = Filter { p: &p, noisy: noisy.clone(), first_f, nb, dt, points };
+    dts[dts.len() / 2]
+}
 
-    let r0 = noise_start(&p);
-    let f0: Vec<f64> = match &config.process_noise_start {
-        Some(v) if v.len() != noisy.len() => {
-            return Err(EstimatorError::InvalidConfig {
-                field: "process_noise_start",
-                value: v.len() as f64,
-                reason: "one starting F per process-noise state of the state set is needed",
-            }
-            .into());
+/// The starting `F` of each process-noise state: the configured ones, or 0.1 × the scale of
+/// its output's noise per √s.
+fn process_noise_start(
+    config: &FemConfig,
+    p: &Problem,
+    noisy: &[usize],
+    r0: &[f64],
+    dt: f64,
+) -> Result<Vec<f64>, OeError> {
+    let states = p.model.state_set().states();
+    match &config.process_noise_start {
+        Some(v) if v.len() != noisy.len() => Err(EstimatorError::InvalidConfig {
+            field: "process_noise_start",
+            value: v.len() as f64,
+            reason: "one starting F per process-noise state of the state set is needed",
         }
+        .into()),
         Some(v) if v.iter().any(|f| !(*f > 0.0 && f.is_finite())) => {
-            return Err(EstimatorError::InvalidConfig {
+            Err(EstimatorError::InvalidConfig {
                 field: "process_noise_start",
                 value: v.iter().copied().fold(f64::NAN, f64::min),
                 reason: "every starting F must be positive and finite",
             }
-            .into());
+            .into())
         }
-        Some(v) => v.clone(),
-        None => noisy
+        Some(v) => Ok(v.clone()),
+        None => Ok(noisy
             .iter()
             .map(|&k| {
                 let o = Output::ALL[states[k]];
                 p.outputs.iter().position(|x| *x == o).map_or(1e-3, |j| 0.1 * (r0[j] / dt).sqrt())
             })
-            .collect(),
-    };
-    // Lower bounds of the noise unknowns (ln F, then ln R): ln F at 10⁻³ of the scale of its
-    // default start, where the process noise no longer matters (the gain goes with F²); ln R
-    // at R_FLOOR of the second-difference estimate (module doc).
+            .collect()),
+    }
+}
+
+/// Lower bounds of the noise unknowns (ln F, then ln R): ln F at 10⁻³ of the scale of its
+/// default start, where the process noise no longer matters (the gain goes with F²); ln R at
+/// R_FLOOR of the second-difference estimate (module doc).
+fn noise_bounds(p: &Problem, noisy: &[usize], r0: &[f64], dt: f64) -> Vec<f64> {
+    let states = p.model.state_set().states();
     let mut ln_min: Vec<f64> = noisy
         .iter()
         .map(|&k| {
@@ -561,56 +618,151 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
         })
         .collect();
     ln_min.extend(r0.iter().map(|v| (R_FLOOR * v).ln()));
-    // All unknowns: β = (θ, b, x0, ln F) then ln R.
-    let nfull = nb + ny;
-    let r_of = |full: &[f64]| -> Vec<f64> { full[nb..].iter().map(|v| v.exp()).collect() };
-    let mut y = Vec::new();
-    let (beta_oe, start) = first_start(&p, manoeuvres, oe, |b| {
-        let mut full = b.to_vec();
-        full.extend(f0.iter().map(|f| f.ln()));
-        filter.pass(&full, &r0, &mut y).map(|_| ())
-    })?;
-    let mut beta = beta_oe;
-    beta.extend(f0.iter().map(|f| f.ln()));
-    beta.extend(r0.iter().map(|v| v.ln()));
-    let mut e = Vec::new();
-    let st = filter.pass(&beta[..nb], &r_of(&beta), &mut y)?;
-    let mut b = residuals(&p, &y, &mut e);
-    let ln_det = |v: &[f64]| v.iter().map(|x| x.ln()).sum::<f64>();
-    let innovation_var = |g: &Gain, full: &[f64]| -> Vec<f64> {
-        (0..ny).map(|j| g.cpc_diag[j] + full[nb + j].exp()).collect()
-    };
-    let mut bf = innovation_var(&st, &beta);
-    let mut log = vec![OeIteration {
-        iteration: 0,
-        ln_det_r: ln_det(&b),
-        cost: filter_likelihood(&e, &bf, p.n_samples),
-        lambda: 0.0,
-        max_step_sigma: f64::NAN,
-    }];
-    let mut s = Vec::new();
-    let (mut y_try, mut e_try) = (Vec::new(), Vec::new());
-    let mut lambda = 0.0;
-    let mut converged = false;
-    let mut failure = None;
-    for iteration in 1..=oe.max_iterations {
-        if b.iter().any(|v| v.is_nan() || *v <= 0.0) {
+    ln_min
+}
+
+impl<'a> Fem<'a> {
+    fn new(p: &'a Problem, config: &FemConfig) -> Result<Self, OeError> {
+        let states = p.model.state_set().states();
+        let noisy: Vec<usize> = (0..p.nx).filter(|&k| config.process_noise[states[k]]).collect();
+        let first_f = p.n_unknowns;
+        let nb = first_f + noisy.len();
+        let dt = median_interval(p);
+        let stride = p.n_samples.div_ceil(LINEARISATION_POINTS).max(1);
+        let points: Vec<(usize, usize)> = p
+            .man
+            .iter()
+            .enumerate()
+            .flat_map(|(m, man)| (0..man.u.len()).step_by(stride).map(move |i| (m, i)))
+            .collect();
+        let filter = Filter { p, noisy: noisy.clone(), first_f, nb, dt, points };
+        let r0 = noise_start(p);
+        let f0 = process_noise_start(config, p, &noisy, &r0, dt)?;
+        let ln_min = noise_bounds(p, &noisy, &r0, dt);
+        Ok(Self { p, filter, noisy, first_f, nb, ny: p.ny(), r0, f0, ln_min })
+    }
+
+    /// The measurement-noise variances of unknowns `full`.
+    fn r_of(&self, full: &[f64]) -> Vec<f64> {
+        full[self.nb..].iter().map(|v| v.exp()).collect()
+    }
+
+    /// The innovation variances: the state-prediction part plus `R`.
+    fn innovation_var(&self, g: &Gain, full: &[f64]) -> Vec<f64> {
+        (0..self.ny).map(|j| g.cpc_diag[j] + full[self.nb + j].exp()).collect()
+    }
+
+    /// The starting iterate (the output-error start, then `F` and `R` at their starts) and
+    /// the output-error start's report.
+    fn start(
+        &self,
+        manoeuvres: &[&[AirDataSample]],
+        oe: &OeConfig,
+    ) -> Result<(Iterate, Vec<f64>), OeError> {
+        let mut y = Vec::new();
+        let (beta_oe, start) = first_start(self.p, manoeuvres, oe, |b| {
+            let mut full = b.to_vec();
+            full.extend(self.f0.iter().map(|f| f.ln()));
+            self.filter.pass(&full, &self.r0, &mut y).map(|_| ())
+        })?;
+        let mut beta = beta_oe;
+        beta.extend(self.f0.iter().map(|f| f.ln()));
+        beta.extend(self.r0.iter().map(|v| v.ln()));
+        let mut e = Vec::new();
+        let st = self.filter.pass(&beta[..self.nb], &self.r_of(&beta), &mut y)?;
+        let b = residuals(self.p, &y, &mut e);
+        let bf = self.innovation_var(&st, &beta);
+        let log = vec![OeIteration {
+            iteration: 0,
+            ln_det_r: ln_det(&b),
+            cost: filter_likelihood(&e, &bf, self.p.n_samples),
+            lambda: 0.0,
+            max_step_sigma: f64::NAN,
+        }];
+        let (s, y_try, e_try) = (Vec::new(), Vec::new(), Vec::new());
+        Ok((Iterate { beta, bf, b, y, e, s, y_try, e_try, lambda: 0.0, log }, start))
+    }
+
+    /// Gauss–Newton iterations until convergence, no descent, or the iteration limit.
+    /// Returns whether it converged and, if not, why.
+    fn iterate(
+        &self,
+        it: &mut Iterate,
+        oe: &OeConfig,
+    ) -> Result<(bool, Option<NotConverged>), OeError> {
+        for iteration in 1..=oe.max_iterations {
+            if let Some(stop) = self.step(it, iteration, oe)? {
+                return Ok(stop);
+            }
+        }
+        Ok((false, Some(NotConverged::MaxIterations)))
+    }
+
+    /// One iteration: the normal equations with the variance terms, a damped step that
+    /// lowers the cost, the convergence test.
+    fn step(&self, it: &mut Iterate, iteration: usize, oe: &OeConfig) -> Result<Stop, OeError> {
+        if it.b.iter().any(|v| v.is_nan() || *v <= 0.0) {
             return Err(EstimatorError::Numerical {
                 what: "an output's innovations are all zero: its variance cannot be estimated",
                 t_s: 0.0,
             }
             .into());
         }
-        let w: Vec<f64> = bf.iter().map(|v| 1.0 / v).collect();
-        let dbf = filter.sensitivities(&beta, nfull, &mut s)?;
-        let (mut m, mut g, _) = normal_equations(&s, &e, &w, nfull);
-        add_variance_terms(&mut m, &mut g, &dbf, &e, &bf, p.n_samples);
-        check_identifiable(&m, &p, oe, first_f)?;
-        // A noise unknown at its bound whose gradient points further down is held there this
-        // iteration (active set): its information vanishes there and would spoil the step.
-        for (k, lo) in ln_min.iter().enumerate() {
-            let i = first_f + k;
-            if beta[i] <= *lo && g[i] <= 0.0 {
+        let (m, g) = self.normal_equations(it, oe)?;
+        let minv = spd_inverse(&m);
+        let nfull = self.nb + self.ny;
+        let step_sigma = |step: &nalgebra::DVector<f64>| match &minv {
+            Some(mi) => (0..nfull).map(|i| step[i].abs() / mi[(i, i)].sqrt()).fold(0.0, f64::max),
+            None => f64::INFINITY,
+        };
+        let merit0 = filter_likelihood(&it.e, &it.bf, self.p.n_samples);
+        let Some(a) = self.search(it, &m, &g, merit0) else {
+            // At the optimum to the rounding of the finite-difference sensitivities, or stuck.
+            let tiny = damped_step(&m, &m, &g, 0.0)
+                .is_some_and(|st| step_sigma(&self.taken(&it.beta, &st)) < oe.step_tolerance_sigma);
+            return Ok(Some(if tiny {
+                (true, None)
+            } else {
+                (false, Some(NotConverged::NoDescent))
+            }));
+        };
+        let max_step_sigma = step_sigma(&a.step);
+        let used_lambda = it.lambda;
+        it.lambda = if it.lambda < 1e-6 { 0.0 } else { it.lambda / 10.0 };
+        let rel = 2.0 * ((a.value - merit0) / self.p.n_samples as f64).abs();
+        it.beta = a.beta;
+        it.bf = a.bf;
+        std::mem::swap(&mut it.y, &mut it.y_try);
+        std::mem::swap(&mut it.e, &mut it.e_try);
+        it.b = a.b;
+        it.log.push(OeIteration {
+            iteration,
+            ln_det_r: ln_det(&it.b),
+            cost: a.value,
+            lambda: used_lambda,
+            max_step_sigma,
+        });
+        let done = rel < oe.cost_tolerance && max_step_sigma < oe.step_tolerance_sigma;
+        Ok(done.then_some((true, None)))
+    }
+
+    /// The normal equations of all unknowns at the iterate, with the innovation-variance
+    /// terms. A noise unknown at its bound whose gradient points further down is held there
+    /// this iteration (active set): its information vanishes there and would spoil the step.
+    fn normal_equations(
+        &self,
+        it: &mut Iterate,
+        oe: &OeConfig,
+    ) -> Result<(DMatrix<f64>, nalgebra::DVector<f64>), OeError> {
+        let nfull = self.nb + self.ny;
+        let w: Vec<f64> = it.bf.iter().map(|v| 1.0 / v).collect();
+        let dbf = self.filter.sensitivities(&it.beta, nfull, &mut it.s)?;
+        let (mut m, mut g, _) = normal_equations(&it.s, &it.e, &w, nfull);
+        add_variance_terms(&mut m, &mut g, &dbf, &it.e, &it.bf, self.p.n_samples);
+        check_identifiable(&m, self.p, oe, self.first_f)?;
+        for (k, lo) in self.ln_min.iter().enumerate() {
+            let i = self.first_f + k;
+            if it.beta[i] <= *lo && g[i] <= 0.0 {
                 for j in 0..nfull {
                     m[(i, j)] = 0.0;
                     m[(j, i)] = 0.0;
@@ -619,127 +771,128 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemRes
                 g[i] = 0.0;
             }
         }
-        let minv = spd_inverse(&m);
-        let merit0 = filter_likelihood(&e, &bf, p.n_samples);
-        let mut accepted = None;
+        Ok((m, g))
+    }
+
+    /// The least-damped step that lowers the cost below `merit0`, raising the damping tenfold
+    /// after each failure (`None` past 10¹⁰).
+    fn search(
+        &self,
+        it: &mut Iterate,
+        m: &DMatrix<f64>,
+        g: &nalgebra::DVector<f64>,
+        merit0: f64,
+    ) -> Option<Accepted> {
         loop {
-            if let Some(step) = damped_step(&m, &m, &g, lambda) {
-                let trial: Vec<f64> = beta
-                    .iter()
-                    .zip(step.iter())
-                    .enumerate()
-                    .map(|(i, (b, d))| {
-                        if i < first_f {
-                            b + d
-                        } else if b + d <= ln_min[i - first_f] {
-                            // Bounded below (module doc): a step beyond goes to the bound.
-                            ln_min[i - first_f]
-                        } else {
-                            b + (F_STEP * d).clamp(-MAX_LN_STEP, MAX_LN_STEP)
-                        }
-                    })
-                    .collect();
-                let step = nalgebra::DVector::from_fn(nfull, |i, _| trial[i] - beta[i]);
-                if let Ok(st_try) = filter.pass(&trial[..nb], &r_of(&trial), &mut y_try) {
-                    let bf_try = innovation_var(&st_try, &trial);
-                    let b_try = residuals(&p, &y_try, &mut e_try);
-                    let value = filter_likelihood(&e_try, &bf_try, p.n_samples);
+            if let Some(step) = damped_step(m, m, g, it.lambda) {
+                let trial = self.trial(&it.beta, &step);
+                let nfull = self.nb + self.ny;
+                let step = nalgebra::DVector::from_fn(nfull, |i, _| trial[i] - it.beta[i]);
+                if let Ok(st) =
+                    self.filter.pass(&trial[..self.nb], &self.r_of(&trial), &mut it.y_try)
+                {
+                    let bf = self.innovation_var(&st, &trial);
+                    let b = residuals(self.p, &it.y_try, &mut it.e_try);
+                    let value = filter_likelihood(&it.e_try, &bf, self.p.n_samples);
                     if value.is_finite() && value < merit0 {
-                        accepted = Some((trial, step, bf_try, b_try, value));
-                        break;
+                        return Some(Accepted { beta: trial, step, bf, b, value });
                     }
                 }
             }
-            lambda = if lambda == 0.0 { 1e-3 } else { lambda * 10.0 };
-            if lambda > 1e10 {
-                break;
+            it.lambda = if it.lambda == 0.0 { 1e-3 } else { it.lambda * 10.0 };
+            if it.lambda > 1e10 {
+                return None;
             }
         }
-        let step_sigma = |step: &nalgebra::DVector<f64>| match &minv {
-            Some(mi) => (0..nfull).map(|i| step[i].abs() / mi[(i, i)].sqrt()).fold(0.0, f64::max),
-            None => f64::INFINITY,
-        };
-        let Some((trial, step, bf_new, b_new, value)) = accepted else {
-            let tiny = damped_step(&m, &m, &g, 0.0).is_some_and(|st| {
-                // The step as it would be taken (noise unknowns cut at their bounds).
-                let taken = nalgebra::DVector::from_fn(nfull, |i, _| {
-                    if i >= first_f {
-                        (beta[i] + st[i]).max(ln_min[i - first_f]) - beta[i]
-                    } else {
-                        st[i]
-                    }
-                });
-                step_sigma(&taken) < oe.step_tolerance_sigma
-            });
-            if tiny {
-                // At the optimum to the rounding of the finite-difference sensitivities.
-                converged = true;
+    }
+
+    /// The trial unknowns `beta + step`: the noise unknowns (logarithms) bounded below (a
+    /// step beyond goes to the bound) and their steps scaled and limited (module doc).
+    fn trial(&self, beta: &[f64], step: &nalgebra::DVector<f64>) -> Vec<f64> {
+        let first_f = self.first_f;
+        beta.iter()
+            .zip(step.iter())
+            .enumerate()
+            .map(|(i, (b, d))| {
+                if i < first_f {
+                    b + d
+                } else if b + d <= self.ln_min[i - first_f] {
+                    self.ln_min[i - first_f]
+                } else {
+                    b + (F_STEP * d).clamp(-MAX_LN_STEP, MAX_LN_STEP)
+                }
+            })
+            .collect()
+    }
+
+    /// The step as it would be taken from `beta` (noise unknowns cut at their bounds).
+    fn taken(&self, beta: &[f64], st: &nalgebra::DVector<f64>) -> nalgebra::DVector<f64> {
+        let first_f = self.first_f;
+        nalgebra::DVector::from_fn(self.nb + self.ny, |i, _| {
+            if i >= first_f {
+                (beta[i] + st[i]).max(self.ln_min[i - first_f]) - beta[i]
             } else {
-                failure = Some(NotConverged::NoDescent);
+                st[i]
             }
-            break;
+        })
+    }
+
+    /// The result at the final iterate: accuracy from the sensitivities of β recomputed
+    /// there with B and R final, the diagnostic σ, `F` back from its logarithm; an error
+    /// carrying the last iterate when the fit did not converge.
+    fn finish(
+        &self,
+        mut it: Iterate,
+        start: Vec<f64>,
+        converged: bool,
+        failure: Option<NotConverged>,
+        oe: &OeConfig,
+    ) -> Result<FemResult, OeError> {
+        let (nb, first_f) = (self.nb, self.first_f);
+        let states = self.p.model.state_set().states();
+        let w: Vec<f64> = it.b.iter().map(|v| 1.0 / v).collect();
+        self.filter.sensitivities(&it.beta, nb, &mut it.s)?;
+        let r = self.r_of(&it.beta);
+        let mut beta = it.beta;
+        beta.truncate(nb);
+        let mut names = unknown_names(self.p, &oe.structure);
+        names.extend(self.noisy.iter().map(|&k| format!("F_{}", STATE_NAMES[states[k]])));
+        let fit = Fitted { beta: &beta, s: &it.s, e: &it.e, w: &w, r: &r, names };
+        let mut result = assemble(self.p, &oe.structure, fit, it.log, start, converged, oe)?;
+        let max_lag = oe
+            .coloured_max_lag
+            .unwrap_or_else(|| result.manoeuvre_lengths.iter().copied().min().unwrap_or(4) / 4);
+        let [mut sigma_lag0, mut sigma_full_b, mut sigma_coloured_theta] =
+            diagnostic_sigmas(&it.s, &it.e, &w, &result, nb, max_lag);
+        let f_scale: Vec<f64> =
+            (0..nb).map(|i| if i >= first_f { beta[i].exp() } else { 1.0 }).collect();
+        for v in [sigma_lag0.as_mut(), sigma_full_b.as_mut(), sigma_coloured_theta.as_mut()]
+            .into_iter()
+            .flatten()
+        {
+            v.iter_mut().zip(&f_scale).for_each(|(x, k)| *x *= k);
+        }
+        from_log_f(&mut result, first_f);
+        let ck_diag = self.filter.gain(&beta, &r)?.ck_diag;
+        let out = FemResult {
+            result,
+            process_noise_states: self.noisy.iter().map(|&k| states[k]).collect(),
+            first_f,
+            ck_diag,
+            sigma_lag0,
+            sigma_full_b,
+            sigma_coloured_theta,
         };
-        let max_step_sigma = step_sigma(&step);
-        let used_lambda = lambda;
-        lambda = if lambda < 1e-6 { 0.0 } else { lambda / 10.0 };
-        let rel = 2.0 * ((value - merit0) / p.n_samples as f64).abs();
-        beta = trial;
-        bf = bf_new;
-        std::mem::swap(&mut y, &mut y_try);
-        std::mem::swap(&mut e, &mut e_try);
-        b = b_new;
-        log.push(OeIteration {
-            iteration,
-            ln_det_r: ln_det(&b),
-            cost: value,
-            lambda: used_lambda,
-            max_step_sigma,
-        });
-        if rel < oe.cost_tolerance && max_step_sigma < oe.step_tolerance_sigma {
-            converged = true;
-            break;
+        match failure {
+            None => Ok(out),
+            Some(reason) => Err(OeError::NotConverged { reason, result: Box::new(out.result) }),
         }
     }
-    if !converged && failure.is_none() {
-        failure = Some(NotConverged::MaxIterations);
-    }
-    // Accuracy at the final iterate (sensitivities of β recomputed there, B and R final).
-    let w: Vec<f64> = b.iter().map(|v| 1.0 / v).collect();
-    filter.sensitivities(&beta, nb, &mut s)?;
-    let r = r_of(&beta);
-    beta.truncate(nb);
-    let mut names = unknown_names(&p, &oe.structure);
-    names.extend(noisy.iter().map(|&k| format!("F_{}", STATE_NAMES[states[k]])));
-    let fit = Fitted { beta: &beta, s: &s, e: &e, w: &w, r: &r, names };
-    let mut result = assemble(&p, &oe.structure, fit, log, start, converged, oe)?;
-    let max_lag = oe
-        .coloured_max_lag
-        .unwrap_or_else(|| result.manoeuvre_lengths.iter().copied().min().unwrap_or(4) / 4);
-    let [mut sigma_lag0, mut sigma_full_b, mut sigma_coloured_theta] =
-        diagnostic_sigmas(&s, &e, &w, &result, nb, max_lag);
-    let f_scale: Vec<f64> =
-        (0..nb).map(|i| if i >= first_f { beta[i].exp() } else { 1.0 }).collect();
-    for v in [sigma_lag0.as_mut(), sigma_full_b.as_mut(), sigma_coloured_theta.as_mut()]
-        .into_iter()
-        .flatten()
-    {
-        v.iter_mut().zip(&f_scale).for_each(|(x, k)| *x *= k);
-    }
-    from_log_f(&mut result, first_f);
-    let ck_diag = filter.gain(&beta, &r)?.ck_diag;
-    let out = FemResult {
-        result,
-        process_noise_states: noisy.iter().map(|&k| states[k]).collect(),
-        first_f,
-        ck_diag,
-        sigma_lag0,
-        sigma_full_b,
-        sigma_coloured_theta,
-    };
-    match failure {
-        None => Ok(out),
-        Some(reason) => Err(OeError::NotConverged { reason, result: Box::new(out.result) }),
-    }
+}
+
+/// `ln det` of a diagonal given as its entries.
+fn ln_det(v: &[f64]) -> f64 {
+    v.iter().map(|x| x.ln()).sum::<f64>()
 }
 
 /// The lag-0 sandwich σ and the full-`B` Cramér–Rao σ ([`FemResult::sigma_lag0`],

@@ -325,16 +325,72 @@ fn resolve_increments(
 /// logged in [`ChannelLog::failure`] and that channel's estimates are held.
 pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
     let wind = build_wind(&sc.wind).map_err(|e| setup_err("wind", e))?;
-    let f16 = F16::new(sc.trim.xcg).map_err(|e| ExperimentError::Trim {
-        vt_fps: sc.trim.vt_fps,
-        alt_ft: sc.trim.alt_ft,
-        source: e,
-    })?;
-    let trim = trim(&f16, &TrimCondition::level(sc.trim.alt_ft, sc.trim.vt_fps)).map_err(|e| {
-        ExperimentError::Trim { vt_fps: sc.trim.vt_fps, alt_ft: sc.trim.alt_ft, source: e }
-    })?;
-    // The matched-truth option: the tables' first-order expansion at this trim (same value at
-    // the trim, so the trim holds).
+    let (f16, trim) = trimmed_reference(sc)?;
+    let reference = IncrementReference {
+        alpha_rad: trim.state[f16::ALPHA],
+        elevator_rad: trim.controls.elevator_rad,
+        ..Default::default()
+    };
+    let (increments, epochs) = truth_epochs(sc, &f16, &trim, reference)?;
+    let inputs = pilot_inputs(sc)?;
+    let noise = if sc.sensors.noise {
+        Some(
+            SensorNoise::new(sc.sensors.scale, sc.dt_s, sc.sensors.seed)
+                .map_err(|e| setup_err("sensors", e))?,
+        )
+    } else {
+        None
+    };
+    let n = (sc.duration_s / sc.dt_s).round() as usize;
+    let mut channels = sc
+        .estimator
+        .iter()
+        .enumerate()
+        .map(|(k, spec)| build_channel(sc, k, spec, &f16, reference, &trim, n))
+        .collect::<Result<Vec<_>, _>>()?;
+    let truths = attach_truths(&mut channels, &epochs);
+    let mut sampler = air_data_sampler(sc, &f16, &channels)?;
+    let mut out = RunOutput {
+        scenario: sc.clone(),
+        trim: trim.clone(),
+        t_s: Vec::with_capacity(n + 1),
+        controls: Vec::with_capacity(n + 1),
+        wind_ned_fps: Vec::with_capacity(n + 1),
+        reference: Vec::with_capacity(n + 1),
+        increments,
+        epochs: epochs.clone(),
+        excitation_start_s: None,
+        sample_lag_s: sampler.as_ref().map(AirDataSampler::lag_s),
+        channels: Vec::new(),
+        wall_s: 0.0,
+    };
+    let flight = Flight {
+        sc,
+        f16: &f16,
+        trim: &trim,
+        epochs: &epochs,
+        inputs: &inputs,
+        wind: &wind,
+        noise: noise.as_ref(),
+        truths: &truths,
+    };
+    let start = Instant::now();
+    flight.fly(n, &mut channels, sampler.as_mut(), &mut out)?;
+    out.wall_s = start.elapsed().as_secs_f64();
+    fit_batches(&mut channels, &epochs, &out);
+    out.channels = channels.into_iter().map(finish_channel).collect();
+    Ok(out)
+}
+
+/// The reference F-16 trimmed level at the scenario's condition; with the matched-truth
+/// option, its tables replaced by their first-order expansion at this trim (same value at
+/// the trim, so the trim holds).
+fn trimmed_reference(sc: &Scenario) -> Result<(F16, F16Trim), ExperimentError> {
+    let (vt_fps, alt_ft) = (sc.trim.vt_fps, sc.trim.alt_ft);
+    let f16 =
+        F16::new(sc.trim.xcg).map_err(|source| ExperimentError::Trim { vt_fps, alt_ft, source })?;
+    let trim = trim(&f16, &TrimCondition::level(alt_ft, vt_fps))
+        .map_err(|source| ExperimentError::Trim { vt_fps, alt_ft, source })?;
     let f16 = match sc.aerodynamics {
         AerodynamicsSpec::Tables => f16,
         AerodynamicsSpec::Linear => {
@@ -343,13 +399,19 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
             f16.with_linear_aero(super::truth::linearised(&ld, &trim.state, &trim.controls))
         }
     };
-    let reference = IncrementReference {
-        alpha_rad: trim.state[f16::ALPHA],
-        elevator_rad: trim.controls.elevator_rad,
-        ..Default::default()
-    };
+    Ok((f16, trim))
+}
+
+/// The scenario's increments resolved, and the truth epochs: one from 0 and one from each
+/// increment step, each with its increment matrix and the local derivatives at trim.
+fn truth_epochs(
+    sc: &Scenario,
+    f16: &F16,
+    trim: &F16Trim,
+    reference: IncrementReference,
+) -> Result<(Vec<ResolvedIncrement>, Vec<TruthEpoch>), ExperimentError> {
     let truth_at = |inc: &AeroIncrements| {
-        local_derivatives(&f16, &trim.state, &trim.controls, inc)
+        local_derivatives(f16, &trim.state, &trim.controls, inc)
             .map_err(|e| setup_err("truth derivatives at trim", e))
     };
     let nominal = truth_at(&AeroIncrements::zero())?;
@@ -365,8 +427,11 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
         let inc = increment_matrix(reference, &values_at(from_s));
         epochs.push(TruthEpoch { from_s, increments: inc, derivatives: truth_at(&inc)? });
     }
-    let epoch_index = |t: f64| starts.iter().rposition(|&s| t >= s).unwrap_or(0);
+    Ok((increments, epochs))
+}
 
+/// The pilot's input signals per control: throttle, elevator, aileron, rudder.
+fn pilot_inputs(sc: &Scenario) -> Result<[Vec<Input>; 4], ExperimentError> {
     let mut inputs: [Vec<Input>; 4] = Default::default();
     for (k, i) in sc.input.iter().enumerate() {
         let sig = i.signal.build().map_err(|e| setup_err(&format!("input[{k}]"), e))?;
@@ -378,111 +443,87 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
         };
         inputs[slot].push(sig);
     }
-    let noise = if sc.sensors.noise {
-        Some(
-            SensorNoise::new(sc.sensors.scale, sc.dt_s, sc.sensors.seed)
-                .map_err(|e| setup_err("sensors", e))?,
-        )
-    } else {
-        None
+    Ok(inputs)
+}
+
+/// The estimator of entry `k` of the scenario and its empty log, for a run of `n` steps.
+fn build_channel(
+    sc: &Scenario,
+    k: usize,
+    spec: &EstimatorSpec,
+    f16: &F16,
+    reference: IncrementReference,
+    trim: &F16Trim,
+    n: usize,
+) -> Result<ChannelRun, ExperimentError> {
+    let what = format!("estimator[{k}] `{}`", spec.label());
+    let (ch, kind, quantity, params, status) = match spec {
+        EstimatorSpec::Sample(s) if crate::estimators::is_batch_kind(&s.kind) => {
+            let config = super::batch::config(s).map_err(|e| setup_err(&what, e))?;
+            let structure = config.oe().structure;
+            let kind = config.kind();
+            let samples = Vec::with_capacity(n + 1);
+            let b = BatchChannel { config, raw_samples: s.raw_samples(), structure, samples };
+            let params = structure.params().collect();
+            (Channelled::Batch(b), kind, Quantity::Derivative, params, Some("recording"))
+        }
+        EstimatorSpec::Sample(s) => {
+            let est =
+                crate::estimators::build_sample_estimator(s).map_err(|e| setup_err(&what, e))?;
+            let structure = *est.structure();
+            let params: Vec<Param> = structure.params().collect();
+            let kind = est.method();
+            let c = SampleChannel { est, structure, raw_samples: s.raw_samples() };
+            (Channelled::Sample(c), kind, Quantity::Derivative, params, Some("initialising"))
+        }
+        _ => {
+            let two = two_aircraft::build(sc, spec, f16, reference, &trim.state)
+                .map_err(|e| setup_err(&what, e))?;
+            let (kind, params) = (two.kind, two.params.clone());
+            (Channelled::Two(Box::new(two)), kind, Quantity::Increment, params, None)
+        }
     };
-    let n = (sc.duration_s / sc.dt_s).round() as usize;
-    let mut channels = Vec::new();
-    for (k, spec) in sc.estimator.iter().enumerate() {
-        let what = format!("estimator[{k}] `{}`", spec.label());
-        let (ch, kind, quantity, params, status) = match spec {
-            EstimatorSpec::Sample(s) if crate::estimators::is_batch_kind(&s.kind) => {
-                let config = super::batch::config(s).map_err(|e| setup_err(&what, e))?;
-                let structure = config.oe().structure;
-                let kind = config.kind();
-                let raw_samples = s.raw_samples();
-                (
-                    Channelled::Batch(BatchChannel {
-                        config,
-                        raw_samples,
-                        structure,
-                        samples: Vec::with_capacity(n + 1),
-                    }),
-                    kind,
-                    Quantity::Derivative,
-                    structure.params().collect(),
-                    Some("recording"),
-                )
-            }
-            EstimatorSpec::Sample(s) => {
-                let est = crate::estimators::build_sample_estimator(s)
-                    .map_err(|e| setup_err(&what, e))?;
-                let structure = *est.structure();
-                let params: Vec<Param> = structure.params().collect();
-                let kind = est.method();
-                (
-                    Channelled::Sample(SampleChannel {
-                        est,
-                        structure,
-                        raw_samples: s.raw_samples(),
-                    }),
-                    kind,
-                    Quantity::Derivative,
-                    params,
-                    Some("initialising"),
-                )
-            }
-            _ => {
-                let two = two_aircraft::build(sc, spec, &f16, reference, &trim.state)
-                    .map_err(|e| setup_err(&what, e))?;
-                let (kind, params) = (two.kind, two.params.clone());
-                (Channelled::Two(Box::new(two)), kind, Quantity::Increment, params, None)
-            }
-        };
-        let logs = params
-            .iter()
-            .map(|p| ParamLog {
-                param: *p,
-                estimate: Vec::with_capacity(n + 1),
-                sigma: Vec::with_capacity(n + 1),
-                truth: Vec::with_capacity(n + 1),
-                truth_epochs: Vec::new(),
-            })
-            .collect();
-        let is_two = matches!(ch, Channelled::Two(_));
-        channels.push(ChannelRun {
-            log: ChannelLog {
-                label: spec.label(),
-                kind,
-                quantity,
-                params: logs,
-                states: Vec::with_capacity(if is_two { n + 1 } else { 0 }),
-                diagnostics: Vec::new(),
-                failure: None,
-                stats: String::new(),
-                status,
-                nis: None,
-                events: Default::default(),
-                batch: None,
-            },
-            ch,
-        });
-    }
-    // Per channel and parameter, the truth in each epoch.
+    let logs = params
+        .iter()
+        .map(|p| ParamLog {
+            param: *p,
+            estimate: Vec::with_capacity(n + 1),
+            sigma: Vec::with_capacity(n + 1),
+            truth: Vec::with_capacity(n + 1),
+            truth_epochs: Vec::new(),
+        })
+        .collect();
+    let is_two = matches!(ch, Channelled::Two(_));
+    let log = ChannelLog {
+        label: spec.label(),
+        kind,
+        quantity,
+        params: logs,
+        states: Vec::with_capacity(if is_two { n + 1 } else { 0 }),
+        diagnostics: Vec::new(),
+        failure: None,
+        stats: String::new(),
+        status,
+        nis: None,
+        events: Default::default(),
+        batch: None,
+    };
+    Ok(ChannelRun { log, ch })
+}
+
+/// Per channel and parameter, the truth in each epoch (an increment for the two-aircraft
+/// estimators, the local derivative for the others), also kept in the logs.
+fn attach_truths(channels: &mut [ChannelRun], epochs: &[TruthEpoch]) -> Vec<Vec<Vec<Option<f64>>>> {
+    let truth = |ch: &Channelled, e: &TruthEpoch, p: Param| match ch {
+        Channelled::Two(_) => Some(super::increments::get(&e.increments, p)),
+        Channelled::Sample(s) => e.derivatives.truth(&s.structure, p),
+        Channelled::Batch(b) => e.derivatives.truth(&b.structure, p),
+    };
     let truths: Vec<Vec<Vec<Option<f64>>>> = channels
         .iter()
         .map(|c| {
-            c.log
-                .params
-                .iter()
-                .map(|l| {
-                    epochs
-                        .iter()
-                        .map(|e| match &c.ch {
-                            Channelled::Two(_) => {
-                                Some(super::increments::get(&e.increments, l.param))
-                            }
-                            Channelled::Sample(s) => e.derivatives.truth(&s.structure, l.param),
-                            Channelled::Batch(b) => e.derivatives.truth(&b.structure, l.param),
-                        })
-                        .collect()
-                })
-                .collect()
+            let of = |l: &ParamLog| epochs.iter().map(|e| truth(&c.ch, e, l.param)).collect();
+            c.log.params.iter().map(of).collect()
         })
         .collect();
     for (c, tr) in channels.iter_mut().zip(&truths) {
@@ -490,118 +531,151 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
             l.truth_epochs = t.clone();
         }
     }
-    let has_sample =
-        channels.iter().any(|c| matches!(c.ch, Channelled::Sample(_) | Channelled::Batch(_)));
-    let mut sampler = if has_sample {
-        Some(
-            AirDataSampler::new(
-                &f16,
-                sc.trim.vt_fps * M_PER_FT,
-                sc.dt_s,
-                sc.sensors.noise,
-                sc.sensors.scale,
-                sc.sensors.seed,
-                sc.sensors.differentiator_window,
-                sc.sensors.alignment == super::scenario::Alignment::Matched,
-            )
-            .map_err(|e| setup_err("air-data sensors", e))?,
-        )
-    } else {
-        None
-    };
+    truths
+}
 
-    let mut out = RunOutput {
-        scenario: sc.clone(),
-        trim: trim.clone(),
-        t_s: Vec::with_capacity(n + 1),
-        controls: Vec::with_capacity(n + 1),
-        wind_ned_fps: Vec::with_capacity(n + 1),
-        reference: Vec::with_capacity(n + 1),
-        increments: increments.clone(),
-        epochs: epochs.clone(),
-        excitation_start_s: None,
-        sample_lag_s: sampler.as_ref().map(AirDataSampler::lag_s),
-        channels: Vec::new(),
-        wall_s: 0.0,
-    };
-    let mut f16_ref = f16.clone();
-    let mut x_ref = trim.state;
-    let u0 = trim.controls.to_vector();
-    let start = Instant::now();
-    // The pilot's controls at any time: trim + inputs, continuous in time (module doc, step 4).
-    let pilot = |t: f64| {
-        let mut uv = u0;
-        for (slot, sigs) in inputs.iter().enumerate() {
+/// The air-data sensor path, when a channel is fed samples.
+fn air_data_sampler(
+    sc: &Scenario,
+    f16: &F16,
+    channels: &[ChannelRun],
+) -> Result<Option<AirDataSampler>, ExperimentError> {
+    let fed = |c: &ChannelRun| matches!(c.ch, Channelled::Sample(_) | Channelled::Batch(_));
+    if !channels.iter().any(fed) {
+        return Ok(None);
+    }
+    AirDataSampler::new(
+        f16,
+        sc.trim.vt_fps * M_PER_FT,
+        sc.dt_s,
+        sc.sensors.noise,
+        sc.sensors.scale,
+        sc.sensors.seed,
+        sc.sensors.differentiator_window,
+        sc.sensors.alignment == super::scenario::Alignment::Matched,
+    )
+    .map(Some)
+    .map_err(|e| setup_err("air-data sensors", e))
+}
+
+/// What the flight needs, set up.
+struct Flight<'a> {
+    sc: &'a Scenario,
+    f16: &'a F16,
+    trim: &'a F16Trim,
+    epochs: &'a [TruthEpoch],
+    inputs: &'a [Vec<Input>; 4],
+    wind: &'a aeroident_signals::Wind,
+    noise: Option<&'a SensorNoise>,
+    truths: &'a [Vec<Vec<Option<f64>>>],
+}
+
+impl Flight<'_> {
+    /// The pilot's controls at time `t`: trim + inputs, continuous in time (module doc,
+    /// step 4).
+    fn pilot(&self, t: f64) -> nalgebra::SVector<f64, 4> {
+        let mut uv = self.trim.controls.to_vector();
+        for (slot, sigs) in self.inputs.iter().enumerate() {
             uv[slot] += sigs.iter().map(|s| s.value(t)).sum::<f64>();
         }
         uv
-    };
-    for k in 0..=n {
-        let t = k as f64 * sc.dt_s;
-        let uv = pilot(t);
-        if out.excitation_start_s.is_none() && uv != u0 {
-            out.excitation_start_s = Some(t);
-        }
-        let mut u = trim.controls.with_vector(&uv);
-        let wb = wind.wind_body_fps(t);
-        let wind_ned = body_to_ned(&x_ref, [wb[0], wb[1], wb[2]]);
-        let u_est = match sc.estimator_wind {
-            EstimatorWind::Known => F16Controls { wind_ned_fps: wind_ned, ..u },
-            EstimatorWind::Unknown => u,
-        };
-        u.wind_ned_fps = wind_ned;
-        let ep = epoch_index(t);
-        f16_ref.increments = epochs[ep].increments;
-        let (xdot_ref, outputs) = f16_ref
-            .evaluate(&x_ref, &u, &f16_ref.increments)
-            .map_err(|e| ExperimentError::Reference { t_s: t, source: e })?;
-        let (z_m, zdot_m) = match &noise {
-            Some(nz) => nz.measure(t, &x_ref, &xdot_ref),
-            None => (x_ref, xdot_ref),
-        };
-        let air = sampler.as_mut().and_then(|s| s.push(t, &x_ref, &outputs, &u));
-        let raw = air.and(sampler.as_ref().and_then(AirDataSampler::raw).copied());
-        for (c, truth) in channels.iter_mut().zip(&truths) {
-            step_channel(c, t, &z_m, &zdot_m, &u_est, air.as_ref(), raw.as_ref());
-            for (l, tr) in c.log.params.iter_mut().zip(truth) {
-                l.truth.push(tr[ep]);
+    }
+
+    /// Flies `n` steps: at each, the reference's outputs, the sensors, every channel's
+    /// update and log; between them, RK4 of the reference and of each two-aircraft
+    /// estimator's own aircraft.
+    fn fly(
+        &self,
+        n: usize,
+        channels: &mut [ChannelRun],
+        mut sampler: Option<&mut AirDataSampler>,
+        out: &mut RunOutput,
+    ) -> Result<(), ExperimentError> {
+        let sc = self.sc;
+        let mut f16_ref = self.f16.clone();
+        let mut x_ref = self.trim.state;
+        let u0 = self.trim.controls.to_vector();
+        for k in 0..=n {
+            let t = k as f64 * sc.dt_s;
+            let uv = self.pilot(t);
+            if out.excitation_start_s.is_none() && uv != u0 {
+                out.excitation_start_s = Some(t);
             }
+            let mut u = self.trim.controls.with_vector(&uv);
+            let wb = self.wind.wind_body_fps(t);
+            let wind_ned = body_to_ned(&x_ref, [wb[0], wb[1], wb[2]]);
+            let u_est = match sc.estimator_wind {
+                EstimatorWind::Known => F16Controls { wind_ned_fps: wind_ned, ..u },
+                EstimatorWind::Unknown => u,
+            };
+            u.wind_ned_fps = wind_ned;
+            let ep = self.epochs.iter().rposition(|e| t >= e.from_s).unwrap_or(0);
+            f16_ref.increments = self.epochs[ep].increments;
+            let (xdot_ref, outputs) = f16_ref
+                .evaluate(&x_ref, &u, &f16_ref.increments)
+                .map_err(|e| ExperimentError::Reference { t_s: t, source: e })?;
+            let (z_m, zdot_m) = match self.noise {
+                Some(nz) => nz.measure(t, &x_ref, &xdot_ref),
+                None => (x_ref, xdot_ref),
+            };
+            let air = sampler.as_mut().and_then(|s| s.push(t, &x_ref, &outputs, &u));
+            let raw = air.and(sampler.as_ref().and_then(|s| s.raw()).copied());
+            for (c, truth) in channels.iter_mut().zip(self.truths) {
+                step_channel(c, t, &z_m, &zdot_m, &u_est, air.as_ref(), raw.as_ref());
+                for (l, tr) in c.log.params.iter_mut().zip(truth) {
+                    l.truth.push(tr[ep]);
+                }
+            }
+            out.t_s.push(t);
+            out.controls.push([uv[0], uv[1], uv[2], uv[3]]);
+            out.wind_ned_fps.push(wind_ned);
+            out.reference.push(x_ref);
+            if k == n {
+                break;
+            }
+            // The pilot's controls at the RK4 stage times, the wind of the step held (its
+            // field is sampled at the step).
+            let at_stage = |c: F16Controls| move |ts: f64| c.with_vector(&self.pilot(ts));
+            x_ref = rk4_step_varying(&f16_ref, t, &x_ref, at_stage(u), sc.dt_s)
+                .map_err(|e| ExperimentError::Reference { t_s: t, source: e })?;
+            step_two_aircraft(channels, t, at_stage(u_est), sc.dt_s);
         }
-        out.t_s.push(t);
-        out.controls.push([uv[0], uv[1], uv[2], uv[3]]);
-        out.wind_ned_fps.push(wind_ned);
-        out.reference.push(x_ref);
-        if k == n {
-            break;
-        }
-        // The pilot's controls at the RK4 stage times, the wind of the step held (its field is
-        // sampled at the step).
-        let at_stage = |c: F16Controls| move |ts: f64| c.with_vector(&pilot(ts));
-        x_ref = rk4_step_varying(&f16_ref, t, &x_ref, at_stage(u), sc.dt_s)
-            .map_err(|e| ExperimentError::Reference { t_s: t, source: e })?;
-        for c in &mut channels {
-            let Channelled::Two(two) = &mut c.ch else { continue };
-            two.f16.increments = two.current.get();
-            match rk4_step_varying(&two.f16, t, &two.x, at_stage(u_est), sc.dt_s) {
-                Ok(x) => two.x = x,
-                Err(e) => {
-                    if c.log.failure.is_none() {
-                        c.log.failure = Some((t, format!("estimated aircraft: {e}")));
-                    }
+        Ok(())
+    }
+}
+
+/// RK4 of each two-aircraft estimator's own aircraft over `[t, t + dt]` under `controls`; a
+/// failure is logged once and the aircraft held.
+fn step_two_aircraft(
+    channels: &mut [ChannelRun],
+    t: f64,
+    controls: impl Fn(f64) -> F16Controls + Copy,
+    dt: f64,
+) {
+    for c in channels {
+        let Channelled::Two(two) = &mut c.ch else { continue };
+        two.f16.increments = two.current.get();
+        match rk4_step_varying(&two.f16, t, &two.x, controls, dt) {
+            Ok(x) => two.x = x,
+            Err(e) => {
+                if c.log.failure.is_none() {
+                    c.log.failure = Some((t, format!("estimated aircraft: {e}")));
                 }
             }
         }
     }
-    out.wall_s = start.elapsed().as_secs_f64();
-    // The batch fits, after the flight, on the window after the last change of the truth
-    // (module doc of super::batch).
+}
+
+/// The batch fits, after the flight, on the window after the last change of the truth
+/// (module doc of super::batch).
+fn fit_batches(channels: &mut [ChannelRun], epochs: &[TruthEpoch], out: &RunOutput) {
     let lag_s = out.sample_lag_s.unwrap_or(0.0);
     let window_from_s = match epochs.last() {
         Some(e) if e.from_s > 0.0 => e.from_s + lag_s,
         _ => f64::NEG_INFINITY,
     };
     let t_end = out.t_s.last().copied().unwrap_or(0.0);
-    for c in &mut channels {
+    for c in channels {
         let Channelled::Batch(b) = &c.ch else { continue };
         match fit_window(&c.log.label, &b.samples, window_from_s, &b.config) {
             Ok((values, log)) => {
@@ -631,28 +705,26 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
             }
         }
     }
-    out.channels = channels
-        .into_iter()
-        .map(|mut c| {
-            c.log.stats = match &c.ch {
-                Channelled::Two(two) => two
-                    .engines
-                    .iter()
-                    .map(|e| e.stats())
-                    .filter(|s| !s.is_empty())
-                    .collect::<Vec<_>>()
-                    .join("; "),
-                Channelled::Sample(s) => format!("status {}", s.est.estimates().status.name()),
-                Channelled::Batch(_) => c.log.stats.clone(),
-            };
-            if let Channelled::Sample(s) = &c.ch {
-                c.log.nis = s.est.nis();
-                c.log.events = aeroident_io::replay_output::EventsSummary::from_log(s.est.events());
-            }
-            c.log
-        })
-        .collect();
-    Ok(out)
+}
+
+/// A channel's log, completed with its estimator's final statistics, NIS and events.
+fn finish_channel(mut c: ChannelRun) -> ChannelLog {
+    c.log.stats = match &c.ch {
+        Channelled::Two(two) => two
+            .engines
+            .iter()
+            .map(|e| e.stats())
+            .filter(|s| !s.is_empty())
+            .collect::<Vec<_>>()
+            .join("; "),
+        Channelled::Sample(s) => format!("status {}", s.est.estimates().status.name()),
+        Channelled::Batch(_) => c.log.stats.clone(),
+    };
+    if let Channelled::Sample(s) = &c.ch {
+        c.log.nis = s.est.nis();
+        c.log.events = aeroident_io::replay_output::EventsSummary::from_log(s.est.events());
+    }
+    c.log
 }
 
 /// One channel's update and log at time `t` (module doc, step 3).

@@ -10,9 +10,14 @@
 //!   preset ([`ModelStructure`]);
 //! - one estimator interface, [`Estimator`]: consume a sample, give [`Estimates`] (value, σ,
 //!   whether identified) of the structure's parameters. Estimators that need a model state carry
-//!   and integrate it themselves, so each is usable from samples alone: [`rls::Rls`], and the
-//!   model-reference estimators of [`model_reference`] (the thesis's sliding-mode estimator as
-//!   published, the corrected one, and the gradient law (3.3)).
+//!   and integrate it themselves, so each is usable from samples alone: [`Rls`], [`Ftr`],
+//!   [`Ekf`] (each with its config at the crate root), and the model-reference estimators of
+//!   [`model_reference`] (the thesis's sliding-mode estimator as published, the corrected one,
+//!   and the gradient law (3.3)); the batch output-error and filter-error fits are
+//!   `output_error::fit` and `output_error::filter_error::fit` (with `std`).
+//!
+//! The linear algebra and the dual numbers of the exact partials are internal; [`Scalar`] and
+//! [`Dual`] are exported for the flight model's generic evaluation.
 //!
 //! The crate is `no_std` (build with `--no-default-features`): fixed-capacity arrays, no
 //! allocation and no I/O in a per-sample update, so the same code can run on a flight computer.
@@ -31,12 +36,12 @@
 use nalgebra::{SMatrix, SVector};
 
 pub mod coloured;
-pub mod dual;
+pub(crate) mod dual;
 pub mod ekf;
 pub mod estimator;
 pub mod flight_model;
 pub mod ftr;
-pub mod linalg;
+pub(crate) mod linalg;
 pub mod model_reference;
 #[cfg(feature = "std")]
 pub mod output_error;
@@ -58,6 +63,7 @@ pub use estimator::{Estimates, Estimator, Event, EventKind, EventLog, Status};
 pub use flight_model::{FlightModel, Output, StateSet};
 pub use ftr::{Ftr, FtrConfig};
 pub use prior::{ParamPrior, Priors};
+pub use rls::{Rls, RlsConfig};
 pub use sample::{AirDataSample, AircraftConstants, CoefficientValues};
 pub use vocabulary::{Coefficient, MAX_PARAMS, ModelStructure, Param, Term};
 /// Model-reference gradient estimator of thesis (3.3), the comparison of thesis §4.2.5.

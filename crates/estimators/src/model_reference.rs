@@ -74,7 +74,7 @@
 //!
 //! A coefficient's parameters are identified once its regressors have been persistently
 //! exciting: the accumulated information `Σ φφᵀ` passes the same test as recursive least
-//! squares' exact initialisation ([`crate::linalg::well_conditioned`] with
+//! squares' exact initialisation (the scaled-pivot test of [`crate::rls`] with
 //! [`INIT_MIN_SCALED_PIVOT`], at least `n` samples). Before
 //! that `value(i)` is `None`. These methods give no standard errors: `sigma` and
 //! [`Estimator::covariance`] are `None`. A non-finite estimate or state, or an estimated state

@@ -314,14 +314,10 @@ mod tests {
     fn builds_every_estimator_over_the_same_structure() {
         let st = ModelStructure::longitudinal();
         let pr = Priors::generic(&st);
-        for k in [
-            EstimatorKind::Rls,
-            EstimatorKind::Ftr,
-            EstimatorKind::Ekf,
-            EstimatorKind::Smpe,
-            EstimatorKind::SmpeCorrected,
-            EstimatorKind::Gradient,
-        ] {
+        let online: Vec<EstimatorKind> =
+            EstimatorKind::ALL.iter().copied().filter(|k| !k.is_batch()).collect();
+        assert_eq!(online.len(), 6, "{online:?}");
+        for k in online {
             let e = build(k, st, pr, &EstimatorOptions::default()).unwrap();
             assert_eq!(e.method(), k.name());
             assert_eq!(e.structure().n_params(), 12);

@@ -4,15 +4,16 @@ scenarios, the proof-of-concept cases and replays of the shipped flight records,
 every number of every `summary.json` (estimates, sigma, ...) to a relative tolerance.
 
 Usage:
-    scripts/compare_behaviour.py --base BIN_BEFORE --new BIN_AFTER [--out DIR] [--rtol 1e-9]
-        [--flip Cl_da,Cn_da,CY_da] [--only run,poc,replay]
+    scripts/compare_behaviour.py --base BIN_BEFORE --new BIN_AFTER [--base-root CHECKOUT]
+        [--out DIR] [--rtol 1e-9] [--flip Cl_da,Cn_da,CY_da] [--only run,poc,replay]
 
 `--flip NAMES` expects those parameters (and their reference values) to change sign exactly on
 the replays whose mapping convention changed; every other number must agree within `--rtol`
 (relative, with an absolute floor of rtol * 1e-6 for numbers that are zero in both). Keys that
 are wall-clock times, paths or throughput are ignored. Exit 0 when everything agrees.
 
-Build a base binary from a commit with, e.g.:
+The base binary runs in `--base-root` (default: this checkout), so that it reads its own
+mappings and scenarios. Build a base binary and its checkout from a commit with, e.g.:
     git worktree add /tmp/base <commit> && cargo build --release -p aeroident \
         --manifest-path /tmp/base/Cargo.toml --target-dir /tmp/base-target
 """
@@ -48,6 +49,8 @@ REPLAYS = [
     ("attas_ailrud_oe", HA / "csv/fAttasAilRud1.csv", "mappings/attas_lateral.toml",
      ["--estimator", "oe", "--initial-states", "estimate"]),
     ("attas_ailrud_rls", HA / "csv/fAttasAilRud1.csv", "mappings/attas_lateral.toml", []),
+    ("attas_ailrud_ekf", HA / "csv/fAttasAilRud1.csv", "mappings/attas_lateral.toml",
+     ["--estimator", "ekf"]),
     ("attas_elv1_oe_boot", HA / "fAttasElv1.mat", "mappings/attas.toml",
      ["--estimator", "oe", "--initial-states", "estimate", "--bootstrap", "8"]),
     ("twin_otter_rls", TO / "csv/totter_lon_020213f1_018.csv", "mappings/twin_otter.toml", []),
@@ -78,8 +81,19 @@ def run(binary, args, cwd):
     return p.returncode, p.stdout[-2000:] + p.stderr[-2000:]
 
 
+def flip_matrix(m, names, flipped):
+    """`m[i][j]` of a parameter matrix (correlations) negated where exactly one of parameters
+    i, j is flipped."""
+    f = [n in flipped for n in names]
+    return [[(-v if f[i] != f[j] and isinstance(v, (int, float)) else v)
+             for j, v in enumerate(row)] for i, row in enumerate(m)]
+
+
 def compare(a, b, path, rtol, flip, diffs):
     if isinstance(a, dict) and isinstance(b, dict):
+        names = flip.get("names", ())
+        if names and isinstance(b.get("names"), list) and isinstance(b.get("rho"), list):
+            b = dict(b, rho=flip_matrix(b["rho"], b["names"], names))
         for k in sorted(set(a) | set(b)):
             if k in IGNORED_KEYS or any(w in k for w in VOLATILE):
                 continue
@@ -95,8 +109,12 @@ def compare(a, b, path, rtol, flip, diffs):
         for i, (x, y) in enumerate(zip(a, b)):
             # A parameter row carries its name: flip its numbers when the name is in `flip`.
             sub_flip = flip
-            if isinstance(x, dict) and x.get("name") in flip.get("names", ()):
+            names = flip.get("names", ())
+            if isinstance(x, dict) and x.get("name") in names:
                 sub_flip = dict(flip, active=True)
+            # A correlation of a flipped parameter with an unflipped one flips too.
+            if isinstance(x, dict) and (x.get("a") in names) != (x.get("b") in names):
+                sub_flip = dict(flip, active=True, signed=("rho",))
             compare(x, y, f"{path}[{i}]", rtol, sub_flip, diffs)
         return
     if isinstance(a, (int, float)) and isinstance(b, (int, float)) and not isinstance(a, bool):
@@ -124,6 +142,8 @@ def main():
     ap.add_argument("--rtol", type=float, default=1e-9)
     ap.add_argument("--flip", default="", help="parameter names that flip sign on replays")
     ap.add_argument("--only", default="run,poc,replay")
+    ap.add_argument("--base-root", default=str(ROOT),
+                    help="checkout the base binary runs in (its own mappings, models, scenarios)")
     a = ap.parse_args()
     only = set(a.only.split(","))
     out = Path(a.out)
@@ -144,11 +164,11 @@ def main():
     failures = 0
     for name, args, flip in jobs:
         results = {}
-        for side, binary in (("base", a.base), ("new", a.new)):
+        for side, binary, cwd in (("base", a.base, a.base_root), ("new", a.new, ROOT)):
             d = out / side / name
             subprocess.run(["rm", "-rf", str(d)])
             d.mkdir(parents=True)
-            rc, log = run(os.path.abspath(binary), [x.format(d=d) for x in args], ROOT)
+            rc, log = run(os.path.abspath(binary), [x.format(d=d) for x in args], cwd)
             results[side] = (rc, d, log)
         (rb, db, lb), (rn, dn, ln) = results["base"], results["new"]
         diffs = []

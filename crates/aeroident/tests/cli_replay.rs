@@ -363,7 +363,8 @@ fn val_f16_sim_output_replays_through_the_cli_with_the_shipped_mapping() {
     assert_eq!(params.len(), 30);
     assert!(params.iter().all(|p| p["estimate"].is_f64()), "all identified");
     let cl_da = params.iter().find(|p| p["name"] == "Cl_da").unwrap()["estimate"].as_f64();
-    assert!(cl_da.unwrap() > 0.0, "this format's aileron sign: {cl_da:?}");
+    // The F-16's convention and the sample's: δa > 0 rolls left (Stevens & Lewis DLDA < 0).
+    assert!(cl_da.unwrap() < 0.0, "the aileron sign: {cl_da:?}");
     let _ = std::fs::remove_dir_all(&out);
 }
 

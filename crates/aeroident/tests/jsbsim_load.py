@@ -58,7 +58,9 @@ def main():
     alpha, beta = g("aero/alpha-rad"), g("aero/beta-rad")
     p, q, r = g("velocities/p-aero-rad_sec"), g("velocities/q-aero-rad_sec"), g("velocities/r-aero-rad_sec")
     vt, cbar, b, qs = g("velocities/vt-fps"), g("metrics/cbarw-ft"), g("metrics/bw-ft"), g("aero/qbar-area")
-    de, da, dr = g("fcs/elevator-pos-rad"), g("fcs/left-aileron-pos-rad"), g("fcs/rudder-pos-rad")
+    de, dr = g("fcs/elevator-pos-rad"), g("fcs/rudder-pos-rad")
+    # aeroident's δa > 0 gives a negative rolling moment; JSBSim's aileron > 0 rolls right.
+    da = -g("fcs/left-aileron-pos-rad")
     adot = g("aero/alphadot-rad_sec")
     regressor = {
         "0": 1.0, "alpha": alpha, "alpha2": alpha * alpha, "beta": beta, "alpha_beta": alpha * beta,

@@ -7,7 +7,7 @@
 
 use aeroident::outdir::OutputDir;
 use aeroident::sim::write_outputs;
-use aeroident_estimators::vocabulary::{Param, Term};
+use aeroident_estimators::vocabulary::Param;
 use aeroident_io::{Mapping, ModelSpec, open_log};
 use aeroident_models::f16::{AeroIncrements, F16};
 use aeroident_pipelines::aircraft::truth::local_derivatives;
@@ -49,12 +49,9 @@ fn val_f16_sim_output_replays_with_the_shipped_mapping_to_the_true_derivatives()
     for p in &out.summary.parameters {
         let param = Param::from_name(&p.name).unwrap();
         // Biases have no single true value over a nonlinear record (`None`).
-        let Some(mut t) = truth.derivative(param) else { continue };
-        // The mapping turns the F-16's aileron (> 0 rolls left) into this format's
-        // (> 0 rolls right wing down): the aileron derivatives change sign.
-        if param.term == Term::Da {
-            t = -t;
-        }
+        // The F-16's aileron and the sample's share one convention (> 0 rolls left): the
+        // aileron derivatives are the tables' as they are.
+        let Some(t) = truth.derivative(param) else { continue };
         let est = p.estimate.unwrap_or_else(|| panic!("{} not identified", p.name));
         let rel = (est - t).abs() / t.abs();
         eprintln!("{:10} estimate {est:+.5}  truth {t:+.5}  error {:5.2} %", p.name, 100.0 * rel);

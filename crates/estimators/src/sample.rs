@@ -4,9 +4,11 @@
 //! Axes and signs (Stevens & Lewis, *Aircraft Control and Simulation*, 3rd ed., §1.4, §2.5):
 //! body axes x forward, y right, z down; `p, q, r` body rates; `α`, `β` air-relative flow angles
 //! at the CG; accelerometers give the **specific force** at the CG (non-gravitational force ÷
-//! mass, so `az ≈ −g` in level flight); elevator, aileron and rudder as recorded with the usual
-//! signs (δe > 0 trailing edge down, δa > 0 right wing down, δr > 0 trailing edge left, giving
-//! Cn < 0). Products of inertia in the Stevens & Lewis convention: the inertia tensor is
+//! mass, so `az ≈ −g` in level flight); elevator, aileron and rudder in the convention of
+//! Stevens & Lewis and Jategaonkar, a positive deflection giving a negative moment on a
+//! conventional aircraft: δe > 0 trailing edge down (nose-down, Cm_de < 0), δa > 0 right aileron
+//! trailing edge down (negative rolling moment, Cl_da < 0), δr > 0 trailing edge left
+//! (nose-left, Cn_dr < 0). Products of inertia in the Stevens & Lewis convention: the inertia tensor is
 //! `[[Jx, 0, −Jxz], [0, Jy, 0], [−Jxz, 0, Jz]]`, so `Ixz` here is `Jxz` (≈ +1060 slug·ft² for the
 //! F-16; JSBSim logs the tensor element, i.e. `−Jxz`).
 //!
@@ -99,7 +101,7 @@ pub struct AirDataSample {
     pub az_mps2: Option<f64>,
     /// Elevator, rad (trailing edge down positive).
     pub de_rad: Option<f64>,
-    /// Aileron, rad (right wing down positive).
+    /// Aileron, rad (positive: right aileron trailing edge down, a negative rolling moment).
     pub da_rad: Option<f64>,
     /// Rudder, rad (trailing edge left positive).
     pub dr_rad: Option<f64>,

@@ -46,7 +46,7 @@
 //! | `phi`, `theta`, `psi` | angle | Euler bank, pitch, heading |
 //! | `ax`, `ay`, `az` | acceleration | body specific force at the CG (accelerometer, `az ≈ −g` level) |
 //! | `de` | angle | elevator, > 0 trailing edge down (nose-down moment) |
-//! | `da` | angle | aileron, > 0 rolls right wing down (Cl_da > 0) |
+//! | `da` | angle | aileron, > 0 right aileron trailing edge down: negative rolling moment (Cl_da < 0) |
 //! | `dr` | angle | rudder, > 0 trailing edge left (nose-left moment, Cn_dr < 0) |
 //! | `thrust` | force | total thrust (absent: 0, a glider or thrust-in-trim record) |
 //! | `throttle` | dimensionless | throttle position, 0–1 |
@@ -227,7 +227,7 @@ channels! {
     Az = "az": Acceleration,
     /// Elevator (trailing edge down positive).
     De = "de": Angle,
-    /// Aileron (right wing down positive).
+    /// Aileron (positive: right aileron trailing edge down, a negative rolling moment).
     Da = "da": Angle,
     /// Rudder (trailing edge left positive).
     Dr = "dr": Angle,

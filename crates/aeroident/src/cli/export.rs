@@ -43,7 +43,8 @@ pub struct JsbsimArgs {
     /// JSBSim property of the elevator deflection, rad, > 0 trailing edge down.
     #[arg(long, default_value = "fcs/elevator-pos-rad")]
     pub elevator_property: String,
-    /// JSBSim property of the aileron deflection, rad, > 0 rolls right wing down.
+    /// JSBSim property of the aileron deflection, rad, > 0 rolls right wing down (the
+    /// fragment multiplies it by −1: aeroident's δa > 0 rolls left).
     #[arg(long, default_value = "fcs/left-aileron-pos-rad")]
     pub aileron_property: String,
     /// JSBSim property of the rudder deflection, rad, > 0 trailing edge left.

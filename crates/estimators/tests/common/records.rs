@@ -153,7 +153,8 @@ pub fn jsbsim(path: &Path, ch: JsbsimChannels) -> Result<JsbsimRecord, String> {
             ay_mps2: Some(accel(1)?),
             az_mps2: Some(accel(2)?),
             de_rad: Some(f(de)?),
-            da_rad: Some(f(da)?),
+            // JSBSim's aileron > 0 rolls right; the sample's δa > 0 gives a negative moment.
+            da_rad: Some(-f(da)?),
             dr_rad: Some(f(dr)?),
             thrust_n: Some(fbx_lbs.hypot(fbz_lbs) * LBF),
             thrust_moment_nm: m_prop.map(f).transpose()?.map(|m| m * LBF * FT),
@@ -182,8 +183,9 @@ pub fn jsbsim(path: &Path, ch: JsbsimChannels) -> Result<JsbsimRecord, String> {
 }
 
 /// The truth JSON's `derivatives` under the vocabulary's names (`Cl_p` for `Cl_phat`,
-/// `Cm_alphadot` for `Cm_adothat` …); keys with no vocabulary parameter are dropped, and bias
-/// terms have no truth.
+/// `Cm_alphadot` for `Cm_adothat` …) and sign convention (JSBSim's aileron rolls right when
+/// positive, the vocabulary's δa left: the `_da` derivatives change sign); keys with no
+/// vocabulary parameter are dropped, and bias terms have no truth.
 ///
 /// # Errors
 /// A message when the file cannot be read or has no `derivatives`.
@@ -199,7 +201,8 @@ pub fn read_truth(path: &Path) -> Result<HashMap<String, f64>, String> {
             .replace("_rhat", "_r")
             .replace("_adothat", "_alphadot");
         if let (Some(x), Some(_)) = (val.as_f64(), Param::from_name(&name)) {
-            out.insert(name, x);
+            let sign = if name.ends_with("_da") { -1.0 } else { 1.0 };
+            out.insert(name, sign * x);
         }
     }
     Ok(out)

@@ -35,7 +35,7 @@ use aeroident_signals::turbulence::{DrydenParameters, TurbulenceSeverity};
 pub enum Surface {
     /// Elevator, > 0 trailing edge down.
     De,
-    /// Aileron, > 0 rolls right wing down.
+    /// Aileron, > 0 a negative rolling moment (right aileron trailing edge down).
     Da,
     /// Rudder, > 0 trailing edge left.
     Dr,

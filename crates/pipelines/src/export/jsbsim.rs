@@ -25,8 +25,10 @@
 //! Signs are aeroident's (Stevens & Lewis 3rd ed. §2.3): JSBSim's LIFT is up, DRAG aft, SIDE
 //! and Y right, X forward, Z down, ROLL/PITCH/YAW right wing down / nose up / nose right, the
 //! same as CL, CD, CY, CX, CZ, Cl, Cm, Cn; δe > 0 trailing edge down and δr > 0 trailing edge
-//! left as JSBSim's `fcs/elevator-pos-rad` and `fcs/rudder-pos-rad`; δa > 0 rolls right wing down
-//! (check the aileron property of the aircraft). aeroident's CL and CD are stability-axis
+//! left as JSBSim's `fcs/elevator-pos-rad` and `fcs/rudder-pos-rad`. The aileron is the
+//! exception: aeroident's δa > 0 gives a negative rolling moment (Stevens & Lewis,
+//! Jategaonkar), JSBSim's aileron property is > 0 rolling the right wing down, so the fragment
+//! multiplies the property by −1 (check the aircraft's aileron property). aeroident's CL and CD are stability-axis
 //! coefficients (rotated by α); JSBSim's LIFT and DRAG are wind axes (also rotated by β): the
 //! difference is of order β·CD. Lift and drag on one side and body X/Z on the other cannot be
 //! mixed in one fragment (JSBSim refuses mixed axis systems). A parameter that is not
@@ -105,7 +107,8 @@ pub fn read_summary(path: &Path) -> crate::error::Result<SummaryParameters> {
 pub struct SurfaceProperties {
     /// Elevator, > 0 trailing edge down.
     pub elevator: String,
-    /// Aileron, > 0 rolls right wing down.
+    /// Aileron, > 0 rolls right wing down (JSBSim's convention; the fragment uses −1 × it as
+    /// aeroident's δa).
     pub aileron: String,
     /// Rudder, > 0 trailing edge left.
     pub rudder: String,
@@ -148,7 +151,8 @@ fn regressor(
         Term::R => (p(&["velocities/r-aero-rad_sec", "aero/bi2vel"]), 1.0),
         Term::Alphadot => (p(&["aero/alphadot-rad_sec", "aero/ci2vel"]), 1.0),
         Term::De => (vec![s.elevator.clone()], 1.0),
-        Term::Da => (vec![s.aileron.clone()], 1.0),
+        // JSBSim's aileron rolls right wing down when > 0, aeroident's δa rolls left.
+        Term::Da => (vec![s.aileron.clone()], -1.0),
         Term::Dr => (vec![s.rudder.clone()], 1.0),
         Term::AlphaDe => (vec!["aero/alpha-rad".into(), s.elevator.clone()], 1.0),
         Term::V => (p(&["velocities/vt-fps"]), 1.0 / v0_fps()?),

@@ -279,11 +279,12 @@ pub fn identifiability(
 
 /// The primary control derivatives whose sign the mapping's surface conventions fix for a
 /// conventional (tail-aft) aircraft (docs/mapping.md, Channels): `de` > 0 trailing edge down
-/// gives `Cm_de` < 0, `da` > 0 rolls right wing down so `Cl_da` > 0, `dr` > 0 trailing edge
-/// left gives `Cn_dr` < 0. (parameter, expected sign, surface key, its convention).
+/// gives `Cm_de` < 0, `da` > 0 right aileron trailing edge down gives `Cl_da` < 0, `dr` > 0
+/// trailing edge left gives `Cn_dr` < 0: each positive deflection a negative moment (Stevens &
+/// Lewis, Jategaonkar). (parameter, expected sign, surface key, its convention).
 const CONTROL_SIGNS: [(&str, f64, &str, &str); 3] = [
     ("Cm_de", -1.0, "de", "> 0 trailing edge down"),
-    ("Cl_da", 1.0, "da", "> 0 rolls right wing down"),
+    ("Cl_da", -1.0, "da", "> 0 right aileron trailing edge down, rolling left"),
     ("Cn_dr", -1.0, "dr", "> 0 trailing edge left"),
 ];
 

@@ -445,21 +445,22 @@ pub fn crb_sensors_for(structure: &ModelStructure, scale: f64) -> Vec<Sensor> {
 }
 
 /// Outputs of the Cramér–Rao prediction and their white-noise σ at the scenario's sensor
-/// scale: the raw sensor levels of [`crate::aircraft::sensors`] (airspeed 11 ft/s, vanes
-/// 0.1°, gyros 0.14°/s, attitude 0.573°, accelerometers 0.98 ft/s²) before the matched
-/// smoother, which cannot add information.
+/// scale: the raw sensor levels the air-data path flies with
+/// ([`crate::aircraft::sensors::state_sigma`]: airspeed 11 ft/s, vanes 0.1°, gyros 0.14°/s,
+/// attitude 0.573°; accelerometers [`ACCEL_SIGMA_FPS2`]) before the matched smoother, which
+/// cannot add information.
 pub fn crb_sensors(scale: f64) -> Vec<Sensor> {
-    let d = f64::to_radians;
+    let s = crate::aircraft::sensors::state_sigma();
     let a = ACCEL_SIGMA_FPS2 * M_PER_FT;
     [
-        (Output::Vt, 11.0 * M_PER_FT),
-        (Output::Alpha, d(0.1)),
-        (Output::Beta, d(0.1)),
-        (Output::P, d(0.14)),
-        (Output::Q, d(0.14)),
-        (Output::R, d(0.14)),
-        (Output::Phi, d(0.573)),
-        (Output::Theta, d(0.573)),
+        (Output::Vt, s[f16::VT] * M_PER_FT),
+        (Output::Alpha, s[f16::ALPHA]),
+        (Output::Beta, s[f16::BETA]),
+        (Output::P, s[f16::P]),
+        (Output::Q, s[f16::Q]),
+        (Output::R, s[f16::R]),
+        (Output::Phi, s[f16::PHI]),
+        (Output::Theta, s[f16::THETA]),
         (Output::Ax, a),
         (Output::Ay, a),
         (Output::Az, a),

@@ -81,6 +81,19 @@ impl EstimatorKind {
         !matches!(self, EstimatorKind::Ekf | EstimatorKind::Oe | EstimatorKind::Fem)
     }
 
+    /// The options an `[[estimator]]` entry of this kind takes besides `kind`, `model` and
+    /// `label` ([`EstimatorOptions::set`]; the batch kinds' in `aircraft::batch::config`).
+    pub fn options(self) -> &'static [&'static str] {
+        match self {
+            EstimatorKind::Rls => &["forgetting"],
+            EstimatorKind::Ftr => &["forgetting", "grid_hz"],
+            EstimatorKind::Ekf => &["parameter_walk_per_sqrt_s", "samples"],
+            EstimatorKind::Oe => &["initial_states", "samples", "step", "bootstrap_refits"],
+            EstimatorKind::Fem => &["initial_states", "samples", "process_noise"],
+            EstimatorKind::Smpe | EstimatorKind::SmpeCorrected | EstimatorKind::Gradient => &[],
+        }
+    }
+
     /// Whether the estimator is a batch fit of a whole record (`oe`, `fem`).
     pub fn is_batch(self) -> bool {
         matches!(self, EstimatorKind::Oe | EstimatorKind::Fem)
@@ -253,23 +266,36 @@ pub fn batch_kinds() -> Vec<&'static str> {
     kinds.iter().filter(|k| k.is_batch()).map(|k| k.name()).collect()
 }
 
-/// The sample-driven estimator of `spec`, built by the shared factory
-/// ([`build`]) with the generic priors. Options: `forgetting` (RLS, FTR).
-///
-/// # Errors
-/// A message naming the kind, the unknown or bad option, or the configuration error.
-pub fn build_sample_estimator(spec: &SampleEstimatorSpec) -> Result<Box<dyn Estimator>, String> {
-    let kind = EstimatorKind::from_name(&spec.kind).ok_or_else(|| {
-        format!("unknown sample-driven estimator `{}` ({})", spec.kind, online_kinds().join(" | "))
-    })?;
-    let mut options = EstimatorOptions::default();
-    for (key, v) in &spec.options {
-        match (key.as_str(), kind) {
+/// The message for option `key` that estimator `kind` does not take, listing those it takes
+/// ([`EstimatorKind::options`]).
+pub fn unknown_option(kind: EstimatorKind, key: &str) -> String {
+    let takes = match kind.options() {
+        [] => "it takes none".to_string(),
+        [one] => format!("it takes `{one}`"),
+        [init @ .., last] => {
+            let init: Vec<String> = init.iter().map(|o| format!("`{o}`")).collect();
+            format!("it takes {} and `{last}`", init.join(", "))
+        }
+    };
+    format!("{}: unknown option `{key}` ({takes})", kind.name())
+}
+
+impl EstimatorOptions {
+    /// Sets the scenario option `key` (one of [`EstimatorKind::options`] of `kind`) from its
+    /// TOML value. `samples` is read by the experiment ([`SampleEstimatorSpec::raw_samples`])
+    /// and only checked here.
+    ///
+    /// # Errors
+    /// A message naming the option and what it must be, or [`unknown_option`].
+    pub fn set(&mut self, kind: EstimatorKind, key: &str, v: &toml::Value) -> Result<(), String> {
+        let number = |what: &str| {
+            v.as_float()
+                .or_else(|| v.as_integer().map(|i| i as f64))
+                .ok_or_else(|| format!("{}: `{what}` must be a number, got {v}", kind.name()))
+        };
+        match (key, kind) {
             ("forgetting", EstimatorKind::Rls | EstimatorKind::Ftr) => {
-                options.forgetting =
-                    v.as_float().or_else(|| v.as_integer().map(|i| i as f64)).ok_or_else(|| {
-                        format!("{}: `forgetting` must be a number, got {v}", spec.kind)
-                    })?;
+                self.forgetting = number("forgetting")?;
             }
             ("grid_hz", EstimatorKind::Ftr) => {
                 let bad = || {
@@ -281,26 +307,34 @@ pub fn build_sample_estimator(spec: &SampleEstimatorSpec) -> Result<Box<dyn Esti
                 let num = |x: &toml::Value| {
                     x.as_float().or_else(|| x.as_integer().map(|i| i as f64)).ok_or_else(bad)
                 };
-                options.ftr_grid_hz = Some((num(&a[0])?, num(&a[1])?, num(&a[2])?));
+                self.ftr_grid_hz = Some((num(&a[0])?, num(&a[1])?, num(&a[2])?));
             }
             ("parameter_walk_per_sqrt_s", EstimatorKind::Ekf) => {
-                options.parameter_walk_per_sqrt_s =
-                    v.as_float().or_else(|| v.as_integer().map(|i| i as f64)).ok_or_else(|| {
-                        format!("ekf: `parameter_walk_per_sqrt_s` must be a number, got {v}")
-                    })?;
+                self.parameter_walk_per_sqrt_s = number("parameter_walk_per_sqrt_s")?;
             }
             ("samples", EstimatorKind::Ekf) => {
                 if !matches!(v.as_str(), Some("raw" | "smoothed")) {
                     return Err(format!("ekf: `samples` must be \"raw\" or \"smoothed\", got {v}"));
                 }
             }
-            (other, _) => {
-                return Err(format!(
-                    "{}: unknown option `{other}` (rls and ftr take `forgetting`, ftr also `grid_hz`, ekf `parameter_walk_per_sqrt_s` and `samples`; the others take none)",
-                    spec.kind
-                ));
-            }
+            (other, _) => return Err(unknown_option(kind, other)),
         }
+        Ok(())
+    }
+}
+
+/// The sample-driven estimator of `spec`, built by the shared factory ([`build`]) with the
+/// generic priors and the entry's options ([`EstimatorOptions::set`]).
+///
+/// # Errors
+/// A message naming the kind, the unknown or bad option, or the configuration error.
+pub fn build_sample_estimator(spec: &SampleEstimatorSpec) -> Result<Box<dyn Estimator>, String> {
+    let kind = EstimatorKind::from_name(&spec.kind).ok_or_else(|| {
+        format!("unknown sample-driven estimator `{}` ({})", spec.kind, online_kinds().join(" | "))
+    })?;
+    let mut options = EstimatorOptions::default();
+    for (key, v) in &spec.options {
+        options.set(kind, key, v)?;
     }
     build(kind, spec.model, aeroident_estimators::Priors::generic(&spec.model), &options)
         .map_err(|e| e.to_string())
@@ -309,6 +343,46 @@ pub fn build_sample_estimator(spec: &SampleEstimatorSpec) -> Result<Box<dyn Esti
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every option a kind declares is one its parser takes (with a valid value), and any
+    /// other key is refused with the declared list: the declaration and the parser cannot
+    /// drift apart.
+    #[test]
+    fn declared_options_are_the_parsed_ones() {
+        let valid = |key: &str| -> toml::Value {
+            match key {
+                "forgetting" => toml::Value::Float(0.99),
+                "grid_hz" => toml::Value::Array(vec![0.1.into(), 1.5.into(), 0.04.into()]),
+                "parameter_walk_per_sqrt_s" => toml::Value::Float(0.01),
+                "samples" => "raw".into(),
+                other => panic!("no valid value for `{other}`"),
+            }
+        };
+        for &k in EstimatorKind::ALL.iter().filter(|k| !k.is_batch()) {
+            let mut o = EstimatorOptions::default();
+            for key in k.options() {
+                o.set(k, key, &valid(key)).unwrap_or_else(|e| panic!("{}: {e}", k.name()));
+            }
+            let e = o.set(k, "no_such_option", &toml::Value::Float(1.0)).unwrap_err();
+            assert_eq!(e, unknown_option(k, "no_such_option"));
+        }
+        assert_eq!(
+            unknown_option(EstimatorKind::Ftr, "x"),
+            "ftr: unknown option `x` (it takes `forgetting` and `grid_hz`)"
+        );
+        assert_eq!(
+            unknown_option(EstimatorKind::Oe, "x"),
+            "oe: unknown option `x` (it takes `initial_states`, `samples`, `step` and `bootstrap_refits`)"
+        );
+        assert_eq!(
+            unknown_option(EstimatorKind::Smpe, "x"),
+            "smpe: unknown option `x` (it takes none)"
+        );
+        assert_eq!(
+            unknown_option(EstimatorKind::Rls, "x"),
+            "rls: unknown option `x` (it takes `forgetting`)"
+        );
+    }
 
     #[test]
     fn builds_every_estimator_over_the_same_structure() {

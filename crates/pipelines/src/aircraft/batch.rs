@@ -180,8 +180,10 @@ pub fn config(spec: &SampleEstimatorSpec) -> Result<BatchConfig, String> {
                 process_noise = Some(parse_states(list)?);
             }
             (other, _) => {
-                return Err(format!(
-                    "{kind}: unknown option `{other}` (oe takes `initial_states`, `samples`, `step` and `bootstrap_refits`, fem `initial_states`, `samples` and `process_noise`)"
+                let k = <crate::estimators::EstimatorKind as crate::Named>::from_name(kind);
+                return Err(k.map_or_else(
+                    || format!("{kind}: unknown option `{other}`"),
+                    |k| crate::estimators::unknown_option(k, other),
                 ));
             }
         }

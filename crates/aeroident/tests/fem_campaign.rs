@@ -1,5 +1,5 @@
 //! The batch filter-error estimator (`[[estimator]] kind = "fem"`) in the closed-loop `run`
-//! experiment (crates/aeroident/src/aircraft/batch.rs).
+//! experiment (crates/pipelines/src/aircraft/batch.rs).
 
 use aeroident_pipelines::aircraft::Scenario;
 use aeroident_pipelines::aircraft::experiment::run;

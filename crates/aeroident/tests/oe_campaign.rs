@@ -1,5 +1,5 @@
 //! The batch output-error estimator (`[[estimator]] kind = "oe"`) in the closed-loop `run`
-//! experiment and the Monte Carlo campaign (crates/aeroident/src/aircraft/batch.rs).
+//! experiment and the Monte Carlo campaign (crates/pipelines/src/aircraft/batch.rs).
 
 mod common;
 

@@ -27,7 +27,7 @@ pub struct ParameterSummary {
     pub estimate: Option<f64>,
     /// Final standard error, if the method gives one and the parameter is identified.
     pub std_error: Option<f64>,
-    /// Settling time, s (see `aeroident::replay::settle_time_s` for the definition).
+    /// Settling time, s (see `aeroident_pipelines::replay::settle_time_s` for the definition).
     pub settle_time_s: Option<f64>,
 }
 

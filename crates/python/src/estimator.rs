@@ -1,5 +1,5 @@
 //! `aeroident.Estimator` (and the per-method subclasses in the Python package): one online
-//! estimator from the factory (`crates/aeroident/src/estimators.rs`), fed one sample dict at a
+//! estimator from the factory (`crates/pipelines/src/estimators.rs`), fed one sample dict at a
 //! time.
 
 use aeroident_estimators::{AircraftConstants, Status};

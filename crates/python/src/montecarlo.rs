@@ -1,4 +1,4 @@
-//! Monte Carlo campaigns (`crates/aeroident/src/montecarlo.rs`): the whole campaign on rayon
+//! Monte Carlo campaigns (`crates/pipelines/src/montecarlo.rs`): the whole campaign on rayon
 //! (`backend="local"`), or its two halves for a distributed backend (Ray, in the Python
 //! package): the seeded runs of one chunk (`montecarlo_runs`), and the reduction of every run's
 //! result to the statistics of `aeroident montecarlo --json` (`montecarlo_reduce`). A run

@@ -123,7 +123,7 @@
 //! the targets stand") and, in the 20-run campaign after the merges, 0.63–2.29 with the
 //! spectral one now used (prewhitened 0.58–3.44; docs/uncertainty.md, "Output error: the
 //! spectral coloured-residual σ"). Callers therefore report the coloured σ where formed, as for output error
-//! (`aeroident::replay::batch::fem_reported_sigma`). Diagnostics: the lag-0 sandwich with the
+//! (`aeroident_pipelines::replay::batch::fem_reported_sigma`). Diagnostics: the lag-0 sandwich with the
 //! full cross-output innovation covariance ([`FemResult::sigma_lag0`]) and the full-`B`
 //! Cramér–Rao σ ([`FemResult::sigma_full_b`]) are within 6 % of the Cramér–Rao σ there (the
 //! cross-correlation through the gain is not what makes it short);

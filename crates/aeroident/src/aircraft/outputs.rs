@@ -41,7 +41,7 @@ pub enum ReportError {
     },
 }
 
-pub(super) fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> ReportError + '_ {
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> ReportError + '_ {
     move |source| ReportError::Io { path: path.display().to_string(), source }
 }
 
@@ -49,20 +49,12 @@ fn cell(v: Option<f64>) -> String {
     v.map_or(String::new(), |x| x.to_string())
 }
 
-/// Writes `timeseries.csv` (one row per sample; columns `t_s`, controls, wind, reference
-/// states `ref_*`, true increments `truth_<name>`, then per estimator `<label>.<name>`
-/// (empty while not identified); sample-driven estimators add `<label>.<name>.sigma` and
-/// `<label>.<name>.truth`; two-aircraft estimators add their aircraft's `<label>.<state>` and,
-/// published ones, `<label>.K<g>`, `<label>.sdot<g>` per group).
-///
-/// # Errors
-/// [`ReportError::Io`] naming the file.
-pub fn write_timeseries(out: &RunOutput, path: &Path) -> Result<(), ReportError> {
-    let f = std::fs::File::create(path).map_err(io_err(path))?;
-    write_timeseries_to(out, &mut std::io::BufWriter::new(f), path)
-}
-
-/// [`write_timeseries`] into any writer; `path` names the file in errors.
+/// Writes `timeseries.csv` into `w` (one row per sample; columns `t_s`, controls, wind,
+/// reference states `ref_*`, true increments `truth_<name>`, then per estimator
+/// `<label>.<name>` (empty while not identified); sample-driven estimators add
+/// `<label>.<name>.sigma` and `<label>.<name>.truth`; two-aircraft estimators add their
+/// aircraft's `<label>.<state>` and, published ones, `<label>.K<g>`, `<label>.sdot<g>` per
+/// group). `path` names the file in errors.
 ///
 /// # Errors
 /// [`ReportError::Io`] naming the file.
@@ -142,18 +134,6 @@ pub fn write_timeseries_to(
         writeln!(w, "{line}").map_err(io_err(path))?;
     }
     w.flush().map_err(io_err(path))
-}
-
-/// Writes `summary.json`.
-///
-/// # Errors
-/// [`ReportError`] naming the file.
-pub fn write_summary(summary: &Summary, path: &Path) -> Result<(), ReportError> {
-    let text = serde_json::to_string_pretty(summary).map_err(|e| ReportError::Encode {
-        path: path.display().to_string(),
-        reason: e.to_string(),
-    })?;
-    std::fs::write(path, text + "\n").map_err(io_err(path))
 }
 
 fn sec(v: Option<f64>) -> String {

@@ -368,6 +368,7 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
         sc,
         f16: &f16,
         trim: &trim,
+        u_trim: trim.controls.to_vector(),
         epochs: &epochs,
         inputs: &inputs,
         wind: &wind,
@@ -563,6 +564,8 @@ struct Flight<'a> {
     sc: &'a Scenario,
     f16: &'a F16,
     trim: &'a F16Trim,
+    /// The trim controls as a vector (throttle, elevator, aileron, rudder).
+    u_trim: nalgebra::SVector<f64, 4>,
     epochs: &'a [TruthEpoch],
     inputs: &'a [Vec<Input>; 4],
     wind: &'a aeroident_signals::Wind,
@@ -574,7 +577,7 @@ impl Flight<'_> {
     /// The pilot's controls at time `t`: trim + inputs, continuous in time (module doc,
     /// step 4).
     fn pilot(&self, t: f64) -> nalgebra::SVector<f64, 4> {
-        let mut uv = self.trim.controls.to_vector();
+        let mut uv = self.u_trim;
         for (slot, sigs) in self.inputs.iter().enumerate() {
             uv[slot] += sigs.iter().map(|s| s.value(t)).sum::<f64>();
         }
@@ -594,7 +597,7 @@ impl Flight<'_> {
         let sc = self.sc;
         let mut f16_ref = self.f16.clone();
         let mut x_ref = self.trim.state;
-        let u0 = self.trim.controls.to_vector();
+        let u0 = self.u_trim;
         for k in 0..=n {
             let t = k as f64 * sc.dt_s;
             let uv = self.pilot(t);

@@ -128,7 +128,7 @@ fn main() -> std::io::Result<()> {
     for step in 0..n {
         let t = step as f64 * dt_s;
         let tc = t % 20.0;
-        let surfaces = (db(tc, 1.0, 0.03), db(tc, 6.0, 0.04), db(tc, 12.0, 0.05));
+        let surfaces = (db(tc, 1.0, 0.03), db(tc, 6.0, -0.04), db(tc, 12.0, 0.05));
         let s = test_aircraft::sample(t, &x, surfaces, k);
         let u: ModelInputs = model.inputs(&s).expect("inputs");
         let d = model.eval(&th, &u, &x, &z8, &z8, None).expect("model");

@@ -109,29 +109,30 @@ fn blind_condition_run_with_change_alarms_after_the_damage_runs_to_the_end() {
     }
 }
 
-/// Run 349 of the 60-s default campaign (seed 1): in its start-up transient the EKF took
-/// `Cl_beta` to +0.31 (truth −0.11) within 0.8 s, and an output then failed the innovation gate
-/// 50 times in a row (docs/uncertainty.md, "EKF start-up divergence"). With one restart from
-/// the priors (the default `max_restarts`) it runs to the end; the restart is an event in the
-/// channel's log and a warning of the run's summary, and the run counts as restarted in a
-/// campaign. Its primary derivatives then end within 5σ of the truth (measured: within 2.4σ,
-/// except `Cm_q` at −4.1σ).
+/// Run 878 of the 60-s default campaign (seed 1), the one run of the 1,000 in which the EKF
+/// restarted on the smoothed feed: in its early transient (change alarms on `Cn_beta`,
+/// `Cl_beta`, `Cn_r` at 4–5 s, the rates and φ re-anchored at 6.2–6.3 s) `ṗ` failed the
+/// innovation gate 50 times in a row at 6.33 s (docs/uncertainty.md, "EKF start-up
+/// divergence"; with the former sign of the generic `Cl_da` prior this was run 349, at 0.8 s). With one restart from the priors (the default
+/// `max_restarts`) it runs to the end; the restart is an event in the channel's log and a
+/// warning of the run's summary, and the run counts as restarted in a campaign. Its primary
+/// derivatives then end within 5σ of the truth.
 #[test]
 fn start_up_lock_out_restarts_once_reports_it_and_runs_to_the_end() {
     use aeroident_estimators::EventKind;
     use aeroident_pipelines::aircraft::summary::{PRIMARY_DERIVATIVES, summarize};
     let sc = default60_ekf_only(true);
-    let out = run(&seeded_scenario(&sc, 1, 349)).unwrap();
+    let out = run(&seeded_scenario(&sc, 1, 878)).unwrap();
     let ekf = out.channels.iter().find(|c| c.label == "ekf").expect("ekf channel");
     assert!(ekf.failure.is_none(), "{:?}", ekf.failure);
     assert_eq!(ekf.status, Some("running"));
     assert_eq!(ekf.events.count(EventKind::Restart), 1, "{:?}", ekf.events);
     let restart = ekf.events.listed.iter().find(|e| e.kind == "restart").unwrap();
-    assert!((1.0..5.0).contains(&restart.t_s), "restart at {} s", restart.t_s);
+    assert!((1.0..10.0).contains(&restart.t_s), "restart at {} s", restart.t_s);
     let summary = summarize(&out).unwrap();
     let warnings = summary.event_warnings();
     assert!(warnings.iter().any(|w| w.starts_with("ekf: estimator restarted")), "{warnings:?}");
-    let result = aeroident_pipelines::montecarlo::run_result(349, 0, &out);
+    let result = aeroident_pipelines::montecarlo::run_result(878, 0, &out);
     let runs = result.outcome.unwrap();
     assert_eq!(runs[0].restarts, 1);
     for p in summary.parameters.iter().filter(|p| PRIMARY_DERIVATIVES.contains(&p.name.as_str())) {

@@ -51,11 +51,8 @@ pub fn generic_prior(p: Param) -> ParamPrior {
         (C::Cl, T::Beta) => (-0.1, 0.5),
         (C::Cl, T::P) => (-0.4, 1.0),
         (C::Cl, T::R) => (0.1, 0.5),
-        // The sign of the former convention (δa > 0 rolling right); under the current one a
-        // conventional aircraft has Cl_da < 0. Weak (σ five times the value), but flipping it
-        // changes the EKF's start-up in the closed-loop campaigns, whose tests were measured
-        // with it: to be flipped with them.
-        (C::Cl, T::Da) => (0.1, 0.5),
+        // δa > 0 (right aileron down) rolls left: Cl_da < 0 on a conventional aircraft.
+        (C::Cl, T::Da) => (-0.1, 0.5),
         (C::Cl, T::Dr) => (0.01, 0.1),
         (C::Cn, T::Bias) => (0.0, 0.05),
         (C::Cn, T::Beta) => (0.1, 0.5),

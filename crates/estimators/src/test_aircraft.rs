@@ -57,12 +57,12 @@ pub const DERIVATIVES: [(C, T, f64); 21] = [
     (C::Cl, T::Beta, -0.09),
     (C::Cl, T::P, -0.45),
     (C::Cl, T::R, 0.1),
-    (C::Cl, T::Da, 0.07),
+    (C::Cl, T::Da, -0.07),
     (C::Cl, T::Dr, 0.015),
     (C::Cn, T::Beta, 0.13),
     (C::Cn, T::P, -0.02),
     (C::Cn, T::R, -0.35),
-    (C::Cn, T::Da, 0.01),
+    (C::Cn, T::Da, -0.01),
     (C::Cn, T::Dr, -0.07),
 ];
 
@@ -204,7 +204,7 @@ pub fn six_axis_stream(n: usize, dt_s: f64, period_s: f64) -> Vec<AirDataSample>
     for step in 0..n {
         let t = step as f64 * dt_s;
         let tc = t % period_s;
-        let surfaces = (db(tc, 1.0, 0.03), db(tc, 6.0, 0.04), db(tc, 12.0, 0.05));
+        let surfaces = (db(tc, 1.0, 0.03), db(tc, 6.0, -0.04), db(tc, 12.0, 0.05));
         let mut s = sample(t, &x, surfaces, k);
         let u: ModelInputs = model.inputs(&s).unwrap();
         let d = model.eval(&th, &u, &x, &z8, &z8, None).unwrap();

@@ -65,7 +65,7 @@ fn simulate_full(
         let t = t - lead_s;
         (
             doublet(t, 1.0, 0.6, 0.035) + doublet(t, 16.0, 0.4, -0.03),
-            doublet(t, 7.0, 0.5, 0.05) + doublet(t, 18.0, 0.5, -0.05),
+            -doublet(t, 7.0, 0.5, 0.05) - doublet(t, 18.0, 0.5, -0.05),
             doublet(t, 11.0, 1.0, 0.08) + doublet(t, 21.0, 0.8, -0.08),
         )
     };

@@ -77,7 +77,7 @@ pub(super) fn simulate_with_gusts(
     let controls = |t: f64| {
         (
             doublet(t, 1.0, 0.6, 0.035) + doublet(t, 9.0, 0.4, -0.03),
-            doublet(t, 3.0, 0.5, 0.05) + doublet(t, 11.0, 0.5, -0.05),
+            -doublet(t, 3.0, 0.5, 0.05) - doublet(t, 11.0, 0.5, -0.05),
             doublet(t, 5.0, 1.0, 0.08) + doublet(t, 13.0, 0.8, -0.08),
         )
     };

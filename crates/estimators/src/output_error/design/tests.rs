@@ -68,7 +68,7 @@ fn lat_plan(duration_s: f64, amp: f64) -> DesignPlan {
         condition(),
         vec![PlannedInputs {
             dt_s: DT,
-            da_rad: doublet(1.0, 0.5, amp, duration_s),
+            da_rad: doublet(1.0, 0.5, -amp, duration_s),
             dr_rad: doublet(4.0, 0.8, amp, duration_s),
             ..Default::default()
         }],

@@ -75,6 +75,14 @@ use crate::linalg::Square;
 /// Most residual lags the recursive correction sums (a ring buffer of this many rows).
 pub const MAX_LAG: usize = 40;
 
+/// Slot of the entry `k ≥ 1` places before the next write position `head` of a ring of
+/// [`MAX_LAG`] entries: `(head − k) mod MAX_LAG` without a division (these loops run over every
+/// lag at every sample).
+#[inline]
+fn lag_slot(head: usize, k: usize) -> usize {
+    if head >= k { head - k } else { head + MAX_LAG - k }
+}
+
 /// A lobe of `ρ̂` past the first truncation lag is kept when its sum exceeds this multiple of
 /// the white band of a sum, `2√len/√N`: 1.5 makes it a 3σ (99.7 %) test, since up to about
 /// twenty lobes are tested per update and a chance lobe adds its lags to σ.
@@ -127,7 +135,7 @@ impl Autocorrelation {
         let avail = self.filled.min(MAX_LAG);
         self.c[0] = lambda * self.c[0] + v * v;
         for k in 1..=avail {
-            let idx = (self.head + MAX_LAG - k) % MAX_LAG;
+            let idx = lag_slot(self.head, k);
             self.c[k] = lambda * self.c[k] + v * self.residuals[idx];
         }
         self.n_res = lambda * self.n_res + 1.0;
@@ -268,7 +276,7 @@ impl<const C: usize> ColouredCovariance<C> {
                 let dot = |row: &[f64; C]| (0..n).map(|a| px[a] * row[a]).sum::<f64>();
                 self.leverage[0] = lambda * self.leverage[0] + dot(x);
                 for k in 1..=avail {
-                    let row = &self.rows[(self.head + MAX_LAG - k) % MAX_LAG];
+                    let row = &self.rows[lag_slot(self.head, k)];
                     self.leverage[k] = lambda * self.leverage[k] + dot(row);
                 }
                 self.acf.add(v, lambda);
@@ -290,7 +298,7 @@ impl<const C: usize> ColouredCovariance<C> {
             let rho_h = if s0 > 0.0 { self.leverage[k] / s0 } else { 0.0 };
             let rho_v = (1.0 - r) * self.acf.rho(k).unwrap_or(0.0) + r * rho_h;
             let w = rho_v * lk;
-            let row = &self.rows[(self.head + MAX_LAG - k) % MAX_LAG];
+            let row = &self.rows[lag_slot(self.head, k)];
             for a in 0..n {
                 g[a] += w * row[a];
             }

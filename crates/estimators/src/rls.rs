@@ -226,13 +226,21 @@ impl Fit {
     /// `σ̂² P_ij √(f_i f_j)`, `f_i` = sandwich variance / `σ̂² P_ii`. Falls back to `σ̂² P` when
     /// the truncated sum gives a non-positive variance.
     fn cov(&self, s2: f64, i: usize, j: usize) -> f64 {
-        let white = |k: usize| s2 * self.p[k][k];
-        let factor = |k: usize| {
-            let c = self.coloured.covariance(&self.p, s2, k, k);
-            let w = white(k);
-            if c > 0.0 && c.is_finite() && w > 0.0 { c / w } else { 1.0 }
-        };
-        s2 * self.p[i][j] * libm::sqrt(factor(i) * factor(j))
+        s2 * self.p[i][j] * libm::sqrt(self.variance_factor(s2, i) * self.variance_factor(s2, j))
+    }
+
+    /// `f_k` of [`Self::cov`]: the sandwich variance over the white one, 1 where the truncated
+    /// sum gives a non-positive or non-finite variance.
+    fn variance_factor(&self, s2: f64, k: usize) -> f64 {
+        let c = self.coloured.covariance(&self.p, s2, k, k);
+        let w = s2 * self.p[k][k];
+        if c > 0.0 && c.is_finite() && w > 0.0 { c / w } else { 1.0 }
+    }
+
+    /// Variance of parameter `k`, `cov(s2, k, k)` with the factor formed once: in binary
+    /// floating point `√(f·f) = f` exactly, so the value is the same to the bit.
+    fn variance(&self, s2: f64, k: usize) -> f64 {
+        s2 * self.p[k][k] * self.variance_factor(s2, k)
     }
 
     fn residual_variance(&self) -> Option<f64> {
@@ -312,7 +320,7 @@ impl Rls {
         for f in self.fits.iter().flatten() {
             let s2 = f.residual_variance();
             for k in 0..f.n {
-                let sigma = s2.map(|s2| libm::sqrt(f.cov(s2, k, k).max(0.0)));
+                let sigma = s2.map(|s2| libm::sqrt(f.variance(s2, k).max(0.0)));
                 self.est.set(f.first + k, f.theta[k], sigma, f.initialised);
             }
             all &= f.initialised;

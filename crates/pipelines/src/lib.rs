@@ -10,10 +10,12 @@
 //! - [`montecarlo`]: seeded campaigns of the experiment and their statistics.
 //! - [`poc`]: the thesis's proof-of-concept systems; [`sim`]: open-loop F-16 simulation.
 //! - [`export`]: input design and the JSBSim `<aerodynamics>` export.
+//! - [`condition`]: the conditioning stage every pipeline shares (derivatives, alignment).
 //! - [`estimators`]: the estimator kinds, their options and `build`.
 
 /// Aircraft estimation experiments: two F-16s, sensors, estimators.
 pub mod aircraft;
+pub mod condition;
 pub mod error;
 pub mod estimators;
 pub mod export;

@@ -13,10 +13,9 @@
 //! - `de da dr`: the surface positions (the model has no actuators; no surface sensor noise is
 //!   cited, none is added). `thrust_n`: the engine model's thrust (as the thesis experiment,
 //!   thrust is known from the engine model; F-16 thrust acts along body x through the CG).
-//! - **`ṗ q̇ ṙ` and `α̇`: the causal least-squares differentiator**
-//!   ([`aeroident_signals::differentiate::CausalDifferentiator`], `N` =
-//!   `[sensors] differentiator_window` points, default 11) **applied to the noisy gyro and vane
-//!   signals**, exactly as a flight computer would. Its output is the derivative at the window
+//! - **`ṗ q̇ ṙ` and `α̇`: the causal least-squares differentiator of the shared conditioning
+//!   stage** ([`crate::condition`], `N` = `[sensors] differentiator_window` points, default 11)
+//!   **applied to the noisy gyro and vane signals**, exactly as a flight computer would. Its output is the derivative at the window
 //!   centre, `(N−1)·dt/2` old (0.05 s at 11 points and 100 Hz), so every other channel is
 //!   brought to the same instant and the sample is emitted with that older time stamp:
 //!   - `alignment = "matched"` (default): every other channel passes the smoother matched to the
@@ -41,14 +40,13 @@
 //! `h_x` (a gyroscopic moment `q h_x`, `−r h_x` of order 1e-5 in Cn, Cm), which the sample's
 //! rigid-body equations do not carry.
 
-use std::collections::VecDeque;
-
 use aeroident_estimators::sample::{AirDataSample, AircraftConstants};
 use aeroident_models::f16::{self, F16, F16Controls, F16Outputs, F16State};
-use aeroident_signals::differentiate::{CausalDifferentiator, MatchedSmoother};
+use aeroident_signals::differentiate::CausalDifferentiator;
 use aeroident_signals::{BandLimitedWhiteNoise, InputSignal};
 
 use super::sensors::state_sigma;
+use crate::condition::{Alignment, Conditioner, Conditioning, Derivative};
 
 /// Metres per foot.
 pub const M_PER_FT: f64 = 0.3048;
@@ -164,54 +162,6 @@ fn measured_channels(
     }
 }
 
-/// The channels of a sample that the alignment filters, in a fixed order ([`to_vector`]).
-const N_FILTERED: usize = 18;
-
-fn to_vector(s: &AirDataSample) -> [f64; N_FILTERED] {
-    let o = |v: Option<f64>| v.unwrap_or(0.0);
-    [
-        s.vt_mps,
-        s.alpha_rad,
-        s.qbar_pa,
-        o(s.beta_rad),
-        o(s.p_rad_s),
-        o(s.q_rad_s),
-        o(s.r_rad_s),
-        o(s.phi_rad),
-        o(s.theta_rad),
-        o(s.psi_rad),
-        o(s.ax_mps2),
-        o(s.ay_mps2),
-        o(s.az_mps2),
-        o(s.de_rad),
-        o(s.da_rad),
-        o(s.dr_rad),
-        o(s.throttle),
-        o(s.thrust_n),
-    ]
-}
-
-fn set_vector(s: &mut AirDataSample, v: &[f64; N_FILTERED]) {
-    s.vt_mps = v[0];
-    s.alpha_rad = v[1];
-    s.qbar_pa = v[2];
-    s.beta_rad = Some(v[3]);
-    s.p_rad_s = Some(v[4]);
-    s.q_rad_s = Some(v[5]);
-    s.r_rad_s = Some(v[6]);
-    s.phi_rad = Some(v[7]);
-    s.theta_rad = Some(v[8]);
-    s.psi_rad = Some(v[9]);
-    s.ax_mps2 = Some(v[10]);
-    s.ay_mps2 = Some(v[11]);
-    s.az_mps2 = Some(v[12]);
-    s.de_rad = Some(v[13]);
-    s.da_rad = Some(v[14]);
-    s.dr_rad = Some(v[15]);
-    s.throttle = Some(v[16]);
-    s.thrust_n = Some(v[17]);
-}
-
 /// The sensor chain of the sample-driven estimators (module doc): noise, the causal
 /// differentiator and the matching alignment. One per run; feed it every step.
 #[derive(Debug, Clone)]
@@ -220,15 +170,15 @@ pub struct AirDataSampler {
     constants: AircraftConstants,
     /// Noise generators in the order of [`ChannelNoise`]; `None` = noise-free.
     noise: Option<Box<[BandLimitedWhiteNoise; 12]>>,
-    /// Differentiators of p, q, r, α.
-    diff: [CausalDifferentiator; 4],
-    /// Weights of the other channels over the window, oldest first: the matched smoother's,
-    /// or a unit weight at the window centre (pure delay).
-    weights: Vec<f64>,
-    /// The last `window` raw samples, oldest first.
-    window: VecDeque<AirDataSample>,
-    /// The unsmoothed sample behind the last emitted one ([`AirDataSampler::raw`]).
-    raw: Option<AirDataSample>,
+    /// The shared conditioning stage: `ṗ q̇ ṙ α̇` differentiated, the other channels aligned.
+    stage: Conditioner,
+    /// Differentiator lag `(N−1)·dt/2`, s.
+    lag_s: f64,
+    /// Samples pushed (the stage's row numbers).
+    pushed: u64,
+    /// The stage's output buffers (at most one sample per push; warm-up rows are not kept).
+    ready: Vec<(u64, AirDataSample)>,
+    unused: Vec<u64>,
 }
 
 impl AirDataSampler {
@@ -253,18 +203,17 @@ impl AirDataSampler {
         if window < 3 || window.is_multiple_of(2) {
             return Err(format!("sensors.differentiator_window must be odd and ≥ 3, got {window}"));
         }
-        let mk_diff = || CausalDifferentiator::new(window, dt_s).map_err(|e| e.to_string());
-        let diff = [mk_diff()?, mk_diff()?, mk_diff()?, mk_diff()?];
+        // Checked here, not at the first interval: a bad window or step is a setup error.
+        let lag_s = CausalDifferentiator::new(window, dt_s).map_err(|e| e.to_string())?.lag_s();
         // Every channel, the surfaces and throttle included, is a continuous signal (the
         // experiment flies the pilot's controls at the RK4 stage times, not held over the
-        // step), so one weighting serves all.
-        let weights = if matched {
-            MatchedSmoother::new(window, dt_s).map_err(|e| e.to_string())?.weights().to_vec()
-        } else {
-            let mut w = vec![0.0; window];
-            w[(window - 1) / 2] = 1.0;
-            w
-        };
+        // step), so the matched smoother's one weighting serves all.
+        let stage = Conditioner::new(Conditioning {
+            derivatives: Derivative::ALL.to_vec(),
+            window,
+            nominal_dt_s: Some(dt_s),
+            alignment: if matched { Alignment::Matched } else { Alignment::Delay },
+        });
         let noise = if noise && scale > 0.0 {
             let s = state_sigma();
             let sig = [
@@ -306,16 +255,17 @@ impl AirDataSampler {
             f16: f16.clone(),
             constants: f16_constants(f16, v0_mps),
             noise,
-            diff,
-            weights,
-            window: VecDeque::with_capacity(window + 1),
-            raw: None,
+            stage,
+            lag_s,
+            pushed: 0,
+            ready: Vec::with_capacity(1),
+            unused: Vec::new(),
         })
     }
 
     /// The delay of every emitted sample behind the newest truth, s.
     pub fn lag_s(&self) -> f64 {
-        self.diff[0].lag_s()
+        self.lag_s
     }
 
     /// Feeds the truth at `t_s` (state, evaluation outputs, controls) and returns the sample of
@@ -345,43 +295,12 @@ impl AirDataSampler {
             }
         });
         let s = measured_channels(&self.f16, self.constants, t_s, x, out, u, n);
-        let measured = [
-            s.p_rad_s.unwrap_or(0.0),
-            s.q_rad_s.unwrap_or(0.0),
-            s.r_rad_s.unwrap_or(0.0),
-            s.alpha_rad,
-        ];
-        let mut d = [None; 4];
-        for (k, v) in measured.iter().enumerate() {
-            d[k] = self.diff[k].update(*v);
-        }
-        self.window.push_back(s);
-        while self.window.len() > self.weights.len() {
-            self.window.pop_front();
-        }
-        let [Some(pd), Some(qd), Some(rd), Some(ad)] = d else {
-            return None;
-        };
-        let centre = (self.weights.len() - 1) / 2;
-        let mut out = *self.window.get(centre)?;
-        let mut acc = [0.0; N_FILTERED];
-        for (w, smp) in self.weights.iter().zip(&self.window) {
-            for (a, x) in acc.iter_mut().zip(to_vector(smp)) {
-                *a += w * x;
-            }
-        }
-        set_vector(&mut out, &acc);
-        out.pdot_rad_s2 = Some(pd);
-        out.qdot_rad_s2 = Some(qd);
-        out.rdot_rad_s2 = Some(rd);
-        out.alphadot_rad_s = Some(ad);
-        let mut raw = *self.window.get(centre)?;
-        raw.pdot_rad_s2 = Some(pd);
-        raw.qdot_rad_s2 = Some(qd);
-        raw.rdot_rad_s2 = Some(rd);
-        raw.alphadot_rad_s = Some(ad);
-        self.raw = Some(raw);
-        Some(out)
+        self.ready.clear();
+        self.unused.clear();
+        // The step is checked at construction and the simulator's times advance by it.
+        self.stage.push(self.pushed, s, &mut self.ready, &mut self.unused).ok()?;
+        self.pushed += 1;
+        self.ready.pop().map(|(_, s)| s)
     }
 
     /// The **unsmoothed** sample behind the last one [`AirDataSampler::push`] emitted: the same
@@ -389,7 +308,7 @@ impl AirDataSampler {
     /// smoother (so its measurement errors are white, as a batch maximum-likelihood method
     /// assumes), the differentiated `ṗ q̇ ṙ α̇` as emitted. `None` before the first emission.
     pub fn raw(&self) -> Option<&AirDataSample> {
-        self.raw.as_ref()
+        self.stage.raw()
     }
 }
 

@@ -202,17 +202,7 @@ pub struct SensorSpec {
     pub alignment: Alignment,
 }
 
-/// How the air-data channels are aligned with the differentiated angular accelerations.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Alignment {
-    /// Every other channel passes the smoother matched to the differentiator (same weighting,
-    /// same lag): the regression stays consistent at all frequencies.
-    #[default]
-    Matched,
-    /// Every other channel is only delayed by the differentiator's lag.
-    Delay,
-}
+pub use crate::condition::Alignment;
 
 fn one() -> f64 {
     1.0

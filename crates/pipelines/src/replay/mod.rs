@@ -1,8 +1,9 @@
 //! Replay of a recorded flight through an online estimator, sample by sample, causally.
 //!
 //! Pipeline per row: [`aeroident_io::FlightDataReader`] (CSV → SI [`AirDataSample`] at the CG,
-//! or a counted rejection) → [derivative stage](derivatives) (the `ṗ, q̇, ṙ, α̇` the model needs
-//! and the record lacks, from a causal differentiator, every channel delayed by its lag) →
+//! or a counted rejection) → the [conditioning stage](crate::condition) (the `ṗ, q̇, ṙ, α̇` the
+//! model needs and the record lacks, from a causal differentiator, every channel delayed by its
+//! lag) →
 //! `Box<dyn Estimator>` from [`crate::estimators::build`] (measured coefficients are the core's
 //! [`AirDataSample::measured_coefficients`]) → one estimates line (to `estimates.csv`, and to
 //! stdout in live mode).
@@ -39,18 +40,17 @@
 
 pub mod arrays;
 pub mod batch;
-pub mod derivatives;
 pub mod diagnostics;
 pub mod explain;
 mod online;
 pub mod prediction;
 
+use crate::condition::Derivative;
 use crate::estimators::{BuildError, EstimatorKind, EstimatorOptions, build};
 use aeroident_estimators::{AirDataSample, Coefficient, Estimator, ModelStructure, Status, Term};
 use aeroident_io::mapping::{Channel, Mapping};
 use aeroident_io::replay_output::ReplaySummary;
 use aeroident_io::{FlightDataError, FlightDataReader, ModelSpec};
-use derivatives::Derivative;
 use prediction::{Frozen, Recorder, ValidationReport, validate_coefficients};
 use std::io::{Read, Write};
 use std::time::{Duration, Instant};

@@ -4,13 +4,13 @@
 //! estimated ([`Replay::estimate`]), and the end of the record summarised
 //! ([`Replay::finish`]). [`super::replay_with`] runs them in that order.
 
-use super::derivatives::DerivativeStage;
 use super::prediction::{Recorder, validate_coefficients};
 use super::{
     History, KIND_NOT_CENTRED, Pacer, Pacing, ReplayError, ReplayObserver, ReplayOptions,
     ReplayOutcome, choose_model, derivatives_to_supply, diagnostics, explain, model_line,
     settle_time_s, unsupported,
 };
+use crate::condition::{Alignment, Conditioner, Conditioning};
 use crate::estimators::BuildError;
 use crate::sample_log::SampleLog;
 use aeroident_estimators::{AirDataSample, Estimator, Status};
@@ -24,7 +24,7 @@ use std::time::{Duration, Instant};
 /// The running state once the first sample has fixed the model.
 struct Running {
     est: Box<dyn Estimator>,
-    stage: DerivativeStage,
+    stage: Conditioner,
     v0_mps: f64,
     spec: ModelSpec,
     defaulted: bool,
@@ -167,7 +167,12 @@ impl<'a> Replay<'a> {
         self.observer.start(&self.history.names)?;
         self.run = Some(Running {
             est,
-            stage: DerivativeStage::new(supply, opts.diff_window, mapping.nominal_dt_s),
+            stage: Conditioner::new(Conditioning {
+                derivatives: supply,
+                window: opts.diff_window,
+                nominal_dt_s: mapping.nominal_dt_s,
+                alignment: Alignment::Delay,
+            }),
             v0_mps: self.mapped_v0.unwrap_or(sample.vt_mps),
             spec,
             defaulted,

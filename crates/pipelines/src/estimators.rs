@@ -2,6 +2,10 @@
 //! structure, its priors and the options into a `Box<dyn Estimator>`; the replay pipeline (and
 //! anything else that drives estimators over recorded or simulated samples) uses only that box.
 //!
+//! The registry of every kind a scenario, the command line or Python names: the online and
+//! batch [`EstimatorKind`]s (with their options, default feed and [`build`]) and the
+//! closed-loop experiment's [`TwoAircraftKind`]s.
+//!
 //! Adding an estimator: implement [`aeroident_estimators::Estimator`] in the core, add a
 //! variant to [`EstimatorKind`] and an arm to [`build`].
 
@@ -98,6 +102,77 @@ impl EstimatorKind {
     pub fn is_batch(self) -> bool {
         matches!(self, EstimatorKind::Oe | EstimatorKind::Fem)
     }
+
+    /// The samples the closed-loop experiment feeds it unless its entry says otherwise
+    /// (`samples = "raw" | "smoothed"`, [`SampleEstimatorSpec::raw_samples`]): the raw ones for
+    /// the estimators whose noise model assumes white, independent measurement errors (`ekf`,
+    /// `fem`), the matched-smoother ones for the equation-error estimators and `oe`.
+    pub fn default_feed(self) -> Feed {
+        match self {
+            EstimatorKind::Ekf | EstimatorKind::Fem => Feed::Raw,
+            _ => Feed::Smoothed,
+        }
+    }
+}
+
+/// Which samples of the conditioning stage ([`crate::condition`]) an estimator consumes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Feed {
+    /// The conditioned samples (matched smoother or delay, with the differentiated `ṗ q̇ ṙ α̇`).
+    Smoothed,
+    /// The unsmoothed samples behind them ([`crate::condition::Conditioner::raw`]).
+    Raw,
+}
+
+/// The two-aircraft estimators of the closed-loop experiment (`run`): each flies an estimated
+/// F-16 beside the reference and estimates increments of its aerodynamics (TOML
+/// `[[estimator]] kind`, with `params = [...]` instead of a model structure).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TwoAircraftKind {
+    /// The thesis's sliding-mode parameter estimator as published, (3.163)–(3.175).
+    Published,
+    /// The corrected sliding-mode parameter estimator (`docs/smpe-corrected.md`).
+    Corrected,
+    /// The thesis's model-reference gradient law (3.3).
+    MrGradient,
+}
+
+impl crate::Named for TwoAircraftKind {
+    const ALL: &'static [Self] =
+        &[TwoAircraftKind::Published, TwoAircraftKind::Corrected, TwoAircraftKind::MrGradient];
+
+    fn name(self) -> &'static str {
+        match self {
+            TwoAircraftKind::Published => "published",
+            TwoAircraftKind::Corrected => "corrected",
+            TwoAircraftKind::MrGradient => "mr-gradient",
+        }
+    }
+}
+
+impl TwoAircraftKind {
+    /// The options an `[[estimator]]` entry of this kind takes besides `kind`, `params` and
+    /// `label` (parsed with the entry by `crate::aircraft::scenario`).
+    pub fn options(self) -> &'static [&'static str] {
+        match self {
+            TwoAircraftKind::Published => &["reading"],
+            TwoAircraftKind::Corrected => {
+                &["lambda_per_s", "information_per_s", "tracking_weight", "forgetting_per_s"]
+            }
+            TwoAircraftKind::MrGradient => &[],
+        }
+    }
+}
+
+/// The message for an `[[estimator]] kind` that is none of the registry's, listing them all.
+pub fn unknown_kind(kind: &str) -> String {
+    let two: Vec<&str> = TwoAircraftKind::ALL.iter().map(|k| k.name()).collect();
+    format!(
+        "unknown kind `{kind}`: two-aircraft estimators {}, sample-driven {}, batch (post-flight) {}",
+        two.join(" | "),
+        online_kinds().join(" | "),
+        batch_kinds().join(" | ")
+    )
 }
 
 /// Options of the estimators (each uses the ones that apply to it).
@@ -243,7 +318,9 @@ impl SampleEstimatorSpec {
     pub fn raw_samples(&self) -> bool {
         match self.options.get("samples").and_then(|v| v.as_str()) {
             Some(v) => v == "raw",
-            None => matches!(self.kind.as_str(), "ekf" | "fem"),
+            None => {
+                EstimatorKind::from_name(&self.kind).is_some_and(|k| k.default_feed() == Feed::Raw)
+            }
         }
     }
 }

@@ -512,7 +512,7 @@ fn parse_estimator(k: usize, t: &toml::Table) -> Result<EstimatorSpec, (String, 
         .get("kind")
         .and_then(toml::Value::as_str)
         .ok_or_else(|| (format!("{field}.kind"), "missing or not a string".to_string()))?;
-    if ["published", "corrected", "mr-gradient"].contains(&kind) {
+    if crate::estimators::TwoAircraftKind::from_name(kind).is_some() {
         let raw: RawTwoAircraft = toml::Value::Table(t.clone())
             .try_into()
             .map_err(|e: toml::de::Error| (field.clone(), e.message().to_string()))?;
@@ -542,14 +542,7 @@ fn parse_estimator(k: usize, t: &toml::Table) -> Result<EstimatorSpec, (String, 
         });
     }
     if crate::estimators::EstimatorKind::from_name(kind).is_none() {
-        return Err((
-            format!("{field}.kind"),
-            format!(
-                "unknown kind `{kind}`: two-aircraft estimators published | corrected | mr-gradient, sample-driven {}, batch (post-flight) {}",
-                crate::estimators::online_kinds().join(" | "),
-                crate::estimators::batch_kinds().join(" | ")
-            ),
-        ));
+        return Err((format!("{field}.kind"), crate::estimators::unknown_kind(kind)));
     }
     if t.contains_key("params") {
         let hint = if kind == "gradient" {
@@ -885,5 +878,43 @@ impl Scenario {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::estimators::{TwoAircraftKind, unknown_kind};
+
+    /// Every option a two-aircraft kind declares is one its entry parses (with a valid value),
+    /// and any other key is refused naming it: the registry and the parser cannot drift apart.
+    #[test]
+    fn declared_two_aircraft_options_are_the_parsed_ones() {
+        for &kind in TwoAircraftKind::ALL {
+            let mut t = toml::Table::new();
+            t.insert("kind".into(), kind.name().into());
+            t.insert("params".into(), toml::Value::Array(vec!["Cm_alpha".into()]));
+            for &o in kind.options() {
+                let v: toml::Value = if o == "reading" { "implicit".into() } else { 1.0.into() };
+                t.insert(o.into(), v);
+            }
+            let e = parse_estimator(0, &t).unwrap_or_else(|e| panic!("{}: {e:?}", kind.name()));
+            assert_eq!(e.param_names().len(), 1);
+            t.insert("no_such_option".into(), 1.0.into());
+            let (field, why) = parse_estimator(0, &t).unwrap_err();
+            assert_eq!(field, "estimator[0]");
+            assert!(why.contains("no_such_option"), "{}: {why}", kind.name());
+        }
+        let mut t = toml::Table::new();
+        t.insert("kind".into(), "nope".into());
+        let (field, why) = parse_estimator(3, &t).unwrap_err();
+        assert_eq!(
+            (field.as_str(), why.as_str()),
+            ("estimator[3].kind", unknown_kind("nope").as_str())
+        );
+        assert!(
+            why.contains("published | corrected | mr-gradient") && why.contains("rls"),
+            "{why}"
+        );
     }
 }

@@ -129,11 +129,10 @@ fn arrays_dict<'py>(py: Python<'py>, a: EstimateArrays) -> PyResult<Bound<'py, P
 }
 
 fn derivative_source(s: &str) -> PyResult<DerivativeSource> {
-    match s {
-        "auto" => Ok(DerivativeSource::Auto),
-        "differentiate" => Ok(DerivativeSource::Differentiate),
-        _ => Err(err(format!("derivatives: `{s}` is not `auto` or `differentiate`"))),
-    }
+    use aeroident_pipelines::Named as _;
+    DerivativeSource::from_name(s).ok_or_else(|| {
+        err(format!("derivatives: `{s}` is not one of {}", DerivativeSource::names().join(", ")))
+    })
 }
 
 /// Replays a record file exactly as `aeroident replay DATA --map MAPPING` (module doc of the

@@ -727,11 +727,22 @@ impl Ekf {
     /// The coloured-residual variance factor of parameter `i` (module doc): the output factors
     /// weighted by the information each output gave the parameter; 1 until innovations exist.
     pub fn coloured_factor(&self, i: usize) -> f64 {
+        self.coloured_factor_of(i, &self.output_factors())
+    }
+
+    /// Every output's [`Ekf::output_factor`] (a sum over its residual lags), formed once for
+    /// all the parameters that weight them.
+    fn output_factors(&self) -> [f64; N_OUTPUTS] {
+        core::array::from_fn(|o| self.output_factor(o))
+    }
+
+    /// [`Ekf::coloured_factor`] from the output factors `of`.
+    fn coloured_factor_of(&self, i: usize, of: &[f64; N_OUTPUTS]) -> f64 {
         let (mut num, mut den) = (0.0, 0.0);
-        for o in 0..N_OUTPUTS {
+        for (o, f) in of.iter().enumerate() {
             let w = self.innov_info[o][i];
             if w > 0.0 {
-                num += w * self.output_factor(o);
+                num += w * f;
                 den += w;
             }
         }
@@ -819,9 +830,14 @@ impl Ekf {
     }
 
     fn sigma_factor(&self, i: usize) -> f64 {
+        self.sigma_factor_of(i, &self.output_factors())
+    }
+
+    /// [`Ekf::sigma_factor`] from the output factors `of` ([`Ekf::output_factors`]).
+    fn sigma_factor_of(&self, i: usize, of: &[f64; N_OUTPUTS]) -> f64 {
         match self.cfg.sigma {
             SigmaOption::Filter => 1.0,
-            SigmaOption::ColouredResiduals => self.coloured_factor(i) * self.drift_factor(i),
+            SigmaOption::ColouredResiduals => self.coloured_factor_of(i, of) * self.drift_factor(i),
         }
     }
 
@@ -1047,8 +1063,9 @@ impl Ekf {
     fn publish(&mut self, t_s: f64) {
         let nx = self.nx;
         let mut all = true;
+        let of = self.output_factors();
         for i in 0..self.np {
-            let factor = self.sigma_factor(i);
+            let factor = self.sigma_factor_of(i, &of);
             let var = self.p[nx + i][nx + i].max(0.0);
             let sf = libm::sqrt(var);
             if sf < 0.5 * self.cfg.priors.prior[i].sigma {

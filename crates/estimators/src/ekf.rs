@@ -994,22 +994,27 @@ impl Ekf {
             w[i][nx..n].copy_from_slice(&p[i][nx..n]);
         }
         // New Pxθ = Φxx Pxθ + Φxθ Pθθ; T1 = Φxx Pxx + Φxθ Pθx.
+        // Row by row over contiguous rows of P: each sum is formed in the same order of k as
+        // a dot product per (i, j), so the result is the same to the bit.
         let mut t1 = [[0.0; N_STATES]; N_STATES];
         for i in 0..nx {
-            for j in 0..n {
-                let mut s = 0.0;
-                for k in 0..nx {
-                    s += f[i][k] * p[k][j];
+            let mut s = [0.0; MAX_AUG];
+            for k in 0..nx {
+                let fik = f[i][k];
+                for (sj, pkj) in s[..n].iter_mut().zip(&p[k][..n]) {
+                    *sj += fik * pkj;
                 }
-                for k in 0..np {
-                    s += g[i][k] * p[nx + k][j];
+            }
+            for k in 0..np {
+                let gik = g[i][k];
+                for (sj, pkj) in s[..n].iter_mut().zip(&p[nx + k][..n]) {
+                    *sj += gik * pkj;
                 }
-                if j < nx {
-                    t1[i][j] = s;
-                } else {
-                    w[i][j] = s;
-                    w[j][i] = s;
-                }
+            }
+            t1[i][..nx].copy_from_slice(&s[..nx]);
+            for j in nx..n {
+                w[i][j] = s[j];
+                w[j][i] = s[j];
             }
         }
         // New Pxx = T1 Φxxᵀ + Pxθ' Φxθᵀ.

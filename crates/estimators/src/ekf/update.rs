@@ -317,13 +317,21 @@ impl Ekf {
                 q.red[k][1] += red * red;
             }
         }
+        // P ← P − k (Ph)ᵀ, k = Ph/s, kept exactly symmetric: entry (i, j) is formed with the
+        // gain of the larger index, k_max(i,j) · ph_min(i,j) (products commute exactly), row by
+        // row over contiguous memory instead of mirroring each entry down a column.
+        let mut k = [0.0; MAX_AUG];
+        for (ki, phi) in k[..n].iter_mut().zip(&ph[..n]) {
+            *ki = phi * inv;
+        }
         let w = &mut self.work;
         for i in 0..n {
-            let ki = ph[i] * inv;
-            for j in 0..=i {
-                let v = w[i][j] - ki * ph[j];
-                w[i][j] = v;
-                w[j][i] = v;
+            let (row, ki, phi) = (&mut w[i], k[i], ph[i]);
+            for (wij, phj) in row[..=i].iter_mut().zip(&ph[..=i]) {
+                *wij -= ki * phj;
+            }
+            for (wij, kj) in row[i + 1..n].iter_mut().zip(&k[i + 1..n]) {
+                *wij -= kj * phi;
             }
         }
     }

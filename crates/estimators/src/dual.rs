@@ -1,6 +1,6 @@
-//! Forward-mode dual numbers with a fixed number of derivative directions, and the [`Scalar`]
-//! trait that lets one generic function give values (`f64`) and exact first derivatives
-//! ([`Dual`]).
+//! Forward-mode dual numbers with a fixed number of derivative directions, implementing the
+//! [`Scalar`] trait (of `aeroident-physics`, which implements it for `f64`) so that one generic
+//! function gives values (`f64`) and exact first derivatives ([`Dual`]).
 //!
 //! A dual number `a + Σ_k a_k ε_k` with `ε_j ε_k = 0` carries a value and its derivatives along
 //! `N` directions; arithmetic and the elementary functions apply the chain rule exactly, so a
@@ -12,66 +12,7 @@
 
 use core::ops::{Add, Div, Mul, Neg, Sub};
 
-/// A real scalar usable by the generic model code: `f64` (values) or [`Dual`] (values and
-/// exact derivatives). Arithmetic with `Self` and with `f64` on the right.
-pub trait Scalar:
-    Copy
-    + Add<Output = Self>
-    + Sub<Output = Self>
-    + Mul<Output = Self>
-    + Div<Output = Self>
-    + Neg<Output = Self>
-    + Add<f64, Output = Self>
-    + Sub<f64, Output = Self>
-    + Mul<f64, Output = Self>
-    + Div<f64, Output = Self>
-{
-    /// A constant (zero derivatives).
-    fn cst(v: f64) -> Self;
-    /// The value (real part).
-    fn re(self) -> f64;
-    /// Sine (argument in rad).
-    fn sin(self) -> Self;
-    /// Cosine (argument in rad).
-    fn cos(self) -> Self;
-    /// Tangent (argument in rad).
-    fn tan(self) -> Self;
-    /// Square root (derivative undefined at 0: gives ±∞ there, as `1/(2√0)`).
-    fn sqrt(self) -> Self;
-    /// Four-quadrant arctangent of `self / x`, rad.
-    fn atan2(self, x: Self) -> Self;
-}
-
-impl Scalar for f64 {
-    #[inline]
-    fn cst(v: f64) -> Self {
-        v
-    }
-    #[inline]
-    fn re(self) -> f64 {
-        self
-    }
-    #[inline]
-    fn sin(self) -> Self {
-        libm::sin(self)
-    }
-    #[inline]
-    fn cos(self) -> Self {
-        libm::cos(self)
-    }
-    #[inline]
-    fn tan(self) -> Self {
-        libm::tan(self)
-    }
-    #[inline]
-    fn sqrt(self) -> Self {
-        libm::sqrt(self)
-    }
-    #[inline]
-    fn atan2(self, x: Self) -> Self {
-        libm::atan2(self, x)
-    }
-}
+pub use aeroident_physics::Scalar;
 
 /// A dual number with `N` derivative directions: value `re` and partials `eps[k] = ∂/∂s_k`.
 #[derive(Debug, Clone, Copy, PartialEq)]

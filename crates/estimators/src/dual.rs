@@ -1,6 +1,6 @@
-//! Forward-mode dual numbers with a fixed number of derivative directions, and the [`Scalar`]
-//! trait that lets one generic function give values (`f64`) and exact first derivatives
-//! ([`Dual`]).
+//! Forward-mode dual numbers with a fixed number of derivative directions, implementing the
+//! [`Scalar`] trait (of `aeroident-physics`, which implements it for `f64`) so that one generic
+//! function gives values (`f64`) and exact first derivatives ([`Dual`]).
 //!
 //! A dual number `a + Σ_k a_k ε_k` with `ε_j ε_k = 0` carries a value and its derivatives along
 //! `N` directions; arithmetic and the elementary functions apply the chain rule exactly, so a
@@ -12,66 +12,7 @@
 
 use core::ops::{Add, Div, Mul, Neg, Sub};
 
-/// A real scalar usable by the generic model code: `f64` (values) or [`Dual`] (values and
-/// exact derivatives). Arithmetic with `Self` and with `f64` on the right.
-pub trait Scalar:
-    Copy
-    + Add<Output = Self>
-    + Sub<Output = Self>
-    + Mul<Output = Self>
-    + Div<Output = Self>
-    + Neg<Output = Self>
-    + Add<f64, Output = Self>
-    + Sub<f64, Output = Self>
-    + Mul<f64, Output = Self>
-    + Div<f64, Output = Self>
-{
-    /// A constant (zero derivatives).
-    fn cst(v: f64) -> Self;
-    /// The value (real part).
-    fn re(self) -> f64;
-    /// Sine (argument in rad).
-    fn sin(self) -> Self;
-    /// Cosine (argument in rad).
-    fn cos(self) -> Self;
-    /// Tangent (argument in rad).
-    fn tan(self) -> Self;
-    /// Square root (derivative undefined at 0: gives ±∞ there, as `1/(2√0)`).
-    fn sqrt(self) -> Self;
-    /// Four-quadrant arctangent of `self / x`, rad.
-    fn atan2(self, x: Self) -> Self;
-}
-
-impl Scalar for f64 {
-    #[inline]
-    fn cst(v: f64) -> Self {
-        v
-    }
-    #[inline]
-    fn re(self) -> f64 {
-        self
-    }
-    #[inline]
-    fn sin(self) -> Self {
-        libm::sin(self)
-    }
-    #[inline]
-    fn cos(self) -> Self {
-        libm::cos(self)
-    }
-    #[inline]
-    fn tan(self) -> Self {
-        libm::tan(self)
-    }
-    #[inline]
-    fn sqrt(self) -> Self {
-        libm::sqrt(self)
-    }
-    #[inline]
-    fn atan2(self, x: Self) -> Self {
-        libm::atan2(self, x)
-    }
-}
+pub use aeroident_physics::Scalar;
 
 /// A dual number with `N` derivative directions: value `re` and partials `eps[k] = ∂/∂s_k`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -288,6 +229,49 @@ mod tests {
         let n = -(x * 2.0 - 1.0) / 4.0;
         assert!(close(n.re, -(2.0 * x0 - 1.0) / 4.0) && close(n.eps[0], -0.5));
         assert_eq!(n.eps[1], 0.0);
+    }
+
+    /// The shared rigid-body kernel instantiated with duals (as the flight model runs it):
+    /// every partial of the chain body velocity → force equations → wind-axes rates, Euler
+    /// rates, Euler's equations and their inverse equals a central difference of the `f64`
+    /// instantiation, and the values agree.
+    #[test]
+    fn rigid_body_kernel_dual_partials_match_central_differences_of_f64() {
+        use aeroident_physics::rigid_body::{self as rb, Inertia, InertiaConstants, SinCos};
+        const N: usize = 14;
+        const I: Inertia = Inertia { jx: 1.7e4, jy: 7.7e4, jz: 9.1e4, jxz: 1.4e3 };
+        fn kernel<T: Scalar>(x: [T; N]) -> [T; 12] {
+            let [vt, al, be, p, q, r, ph, th, ax, ay, az, l, m, n] = x;
+            let omega = [p, q, r];
+            let (beta, phi, theta) = (SinCos::of(be), SinCos::of(ph), SinCos::of(th));
+            let v = rb::body_velocity(vt, SinCos::of(al), beta);
+            let vd =
+                rb::body_acceleration(v, omega, rb::gravity_body(9.8, phi, theta), [ax, ay, az]);
+            let [vtd, alphad, betad] = rb::wind_axes_rates(v, vd, vt, beta.cos);
+            let [phid, thetad, psid] = rb::euler_rates(omega, phi, theta);
+            let c = InertiaConstants::of(&I);
+            let [pd, qd, rd] = rb::angular_acceleration(&c, omega, [l, m, n], 160.0);
+            // The inverse at independent angular accelerations (the forward ones would give
+            // back the inputs, a trivial derivative).
+            let [li, ni] = rb::roll_yaw_moments(&I, omega, ax * 0.1, az * 0.1, 160.0);
+            let mi = rb::pitch_moment(&I, p, r, ay * 0.1, 160.0);
+            [vtd, alphad, betad, phid, thetad, psid, pd, qd, rd, li, mi, ni]
+        }
+        let x0 = [120.0, 0.12, -0.07, 0.4, -0.2, 0.3, 0.5, 0.25, 1.2, -0.8, -10.5, 4e4, -6e4, 2e4];
+        let duals = kernel::<Dual<N>>(core::array::from_fn(|k| Dual::variable(x0[k], k)));
+        let values = kernel(x0);
+        for (j, d) in duals.iter().enumerate() {
+            assert!((d.re - values[j]).abs() <= 1e-14 * values[j].abs(), "value {j}");
+            for k in 0..N {
+                let h = 1e-6 * x0[k].abs().max(1.0);
+                let (mut up, mut down) = (x0, x0);
+                up[k] += h;
+                down[k] -= h;
+                let fd = (kernel(up)[j] - kernel(down)[j]) / (2.0 * h);
+                let tol = 1e-6 * (fd.abs() + values[j].abs() / x0[k].abs().max(1.0)) + 1e-12;
+                assert!((d.eps[k] - fd).abs() <= tol, "d out{j}/d x{k}: {} vs {fd}", d.eps[k]);
+            }
+        }
     }
 
     /// The same generic function gives the same value in f64 and in duals, and its dual

@@ -5,13 +5,16 @@
 //!
 //! # Equations (flat, non-rotating earth; constant mass; body axes x forward, y right, z down)
 //!
-//! Body velocities from the wind-axis states (Stevens & Lewis, *Aircraft Control and
-//! Simulation*, 3rd ed., §2.3, the wind-to-body transformation):
+//! The rigid-body equations are the shared kernel's ([`aeroident_physics::rigid_body`], the same
+//! functions the F-16 simulator evaluates; Stevens, Lewis & Johnson, *Aircraft Control and
+//! Simulation*, 3rd ed. (SLJ), §1.3, §2.3, §2.5 and the subroutine F of §3.5; Klein & Morelli
+//! 2006 §3.3, §3.6), with gravity `g0` ([`G0_MPS2`]) and no rotor momentum.
+//!
+//! Body velocities from the wind-axis states (SLJ §2.3):
 //! `u = V cos α cos β`, `v = V sin β`, `w = V sin α cos β`.
 //!
-//! Force equations in body axes (Stevens & Lewis 3rd ed. §2.5, flat-earth equations, Table
-//! 2.5-1; Klein & Morelli 2006 §3.3), with `a = (ax, ay, az)` the specific force (aerodynamic
-//! plus thrust force over mass) and gravity resolved through `φ, θ`:
+//! Force equations in body axes (SLJ §2.5), with `a = (ax, ay, az)` the specific force
+//! (aerodynamic plus thrust force over mass) and gravity resolved through `φ, θ`:
 //!
 //! ```text
 //! u̇ = r v − q w − g sin θ        + ax
@@ -20,27 +23,25 @@
 //! ```
 //!
 //! The wind-axis states follow by differentiating `V = |(u, v, w)|`, `α = atan(w/u)`,
-//! `β = asin(v/V)` (Stevens & Lewis 3rd ed. §2.6, wind-axes state equations; Klein & Morelli
-//! 2006 §3.6):
+//! `β = asin(v/V)` (SLJ §3.5, subroutine F):
 //!
 //! ```text
 //! V̇ = (u u̇ + v v̇ + w ẇ) / V
 //! α̇ = (u ẇ − w u̇) / (u² + w²)
-//! β̇ = (V v̇ − v V̇) / (V² cos β)
+//! β̇ = (V v̇ − v V̇) cos β / (u² + w²)      (= (V v̇ − v V̇) / (V² cos β))
 //! ```
 //!
-//! Moment equations (Stevens & Lewis 3rd ed. eq. 2.5-24 with `Jxy = Jyz = 0`, the inertia
-//! tensor `[[Jx, 0, −Jxz], [0, Jy, 0], [−Jxz, 0, Jz]]`, solved for the accelerations; the 2×2
-//! roll–yaw block by Cramer's rule):
+//! Moment equations (Euler's equations, SLJ §2.5, with `Jxy = Jyz = 0`, the inertia tensor
+//! `[[Jx, 0, −Jxz], [0, Jy, 0], [−Jxz, 0, Jz]]`, solved with the inertia constants `c1 … c9`,
+//! `Γ = Jx Jz − Jxz²`):
 //!
 //! ```text
-//! Jx ṗ − Jxz ṙ = L + Jxz p q − (Jz − Jy) q r
-//! Jz ṙ − Jxz ṗ = N − (Jy − Jx) p q − Jxz q r
-//! Jy q̇         = M + (Jz − Jx) p r − Jxz (p² − r²)
+//! ṗ = (c2 p + c1 r) q + c3 L + c4 N
+//! q̇ = c5 p r + c6 (r² − p²) + c7 M
+//! ṙ = (c8 p − c2 r) q + c4 L + c9 N
 //! ```
 //!
-//! Euler kinematics (Stevens & Lewis 3rd ed. §1.4, the Euler kinematical equations relating
-//! body rates to Euler-angle rates): `φ̇ = p + tan θ (q sin φ + r cos φ)`, `θ̇ = q cos φ − r sin φ`.
+//! Euler kinematics (SLJ §1.3): `φ̇ = p + tan θ (q sin φ + r cos φ)`, `θ̇ = q cos φ − r sin φ`.
 //!
 //! # Forces and moments
 //!
@@ -95,12 +96,13 @@ use crate::EstimatorError;
 use crate::dual::Scalar;
 use crate::sample::AirDataSample;
 use crate::vocabulary::{Coefficient, MAX_PARAMS, ModelStructure, Term};
+use aeroident_physics::rigid_body::{self as rb, Inertia, InertiaConstants, SinCos};
 
 #[cfg(doc)]
 use crate::dual::Dual;
 
-/// Standard gravity, m/s².
-pub const G0_MPS2: f64 = 9.80665;
+/// Standard gravity, m/s² (re-exported from [`aeroident_physics::units`]).
+pub use aeroident_physics::units::G0_MPS2;
 
 /// Number of states of the full model.
 pub const N_STATES: usize = 8;
@@ -697,7 +699,8 @@ impl FlightModel {
     ) -> Result<Derivatives<T>, EstimatorError> {
         let zero = T::cst(0.0);
         let [v, al, be, p, q, r, ph, th] = *x;
-        let (sa, ca, sb, cb) = (al.sin(), al.cos(), be.sin(), be.cos());
+        let (alpha, beta) = (SinCos::of(al), SinCos::of(be));
+        let (sa, ca, cb) = (alpha.sin, alpha.cos, beta.cos);
         let qbar = v * v * (0.5 * u.rho_kgpm3);
         let two_v = v * 2.0;
         // Regressor of each term from the model state (controls from the sample).
@@ -769,16 +772,17 @@ impl FlightModel {
         } else {
             (T::cst(u.accel_meas[1]), zero)
         };
-        // Body velocities and the α̇-free accelerations.
-        let (uu, vv, ww) = (v * ca * cb, v * sb, v * sa * cb);
-        let (sp, cp, st, ct) = (ph.sin(), ph.cos(), th.sin(), th.cos());
-        let udot0 = r * vv - q * ww - st * G0_MPS2 + ax0;
-        let vdot0 = p * ww - r * uu + sp * ct * G0_MPS2 + ay0;
-        let wdot0 = q * uu - p * vv + cp * ct * G0_MPS2 + az0;
+        // Body velocity and the α̇-free body acceleration (the kernel's force equations).
+        let (phi, theta) = (SinCos::of(ph), SinCos::of(th));
+        let omega = [p, q, r];
+        let v_body = rb::body_velocity(v, alpha, beta);
+        let gravity = rb::gravity_body(G0_MPS2, phi, theta);
+        let (a0, a1) = ([ax0, ay0, az0], [ax1, ay1, az1]);
+        let v_dot0 = rb::body_acceleration(v_body, omega, gravity, a0);
         let alphadot = if set.lon() {
-            let uw2 = uu * uu + ww * ww;
-            let num = (uu * wdot0 - ww * udot0) / uw2;
-            let den = -((uu * az1 - ww * ax1) / uw2) + 1.0;
+            // α̇ is linear in the body acceleration, which is v̇0 + a1 α̇: solved in one step.
+            let num = rb::alpha_rate(v_body, v_dot0);
+            let den = -rb::alpha_rate(v_body, a1) + 1.0;
             if den.re().is_nan() || den.re() <= 0.0 {
                 return Err(EstimatorError::Numerical {
                     what: "implicit alpha-dot equation singular (CL_alphadot too negative)",
@@ -796,36 +800,31 @@ impl FlightModel {
                 }
             }
         }
-        let ax = ax0 + ax1 * alphadot;
-        let ay = ay0 + ay1 * alphadot;
-        let az = az0 + az1 * alphadot;
-        let udot = udot0 + ax1 * alphadot;
-        let vdot = vdot0 + ay1 * alphadot;
-        let wdot = wdot0 + az1 * alphadot;
+        let [ax, ay, az] = core::array::from_fn(|k| a0[k] + a1[k] * alphadot);
+        let v_dot: [T; 3] = core::array::from_fn(|k| v_dot0[k] + a1[k] * alphadot);
         let mut xdot = [zero; N_STATES];
         let adhat = alphadot * chat;
         let [jx, jy, jz, jxz] = u.inertia;
+        // Unchecked: without the roll/yaw inertias (longitudinal set, no coupling) only the
+        // pitch constants c5 = c6 = 0, c7 = 1/Jy are used; `ModelInputs` validated the rest.
+        let c = InertiaConstants::of(&Inertia { jx, jy, jz, jxz });
+        let vt_dot = rb::airspeed_rate(v_body, v_dot, v);
+        let [phi_dot, theta_dot, _] = rb::euler_rates(omega, phi, theta);
         if set.lon() {
-            let vdot_ = (uu * udot + vv * vdot + ww * wdot) / v;
-            xdot[state::V] = vdot_;
+            xdot[state::V] = vt_dot;
             xdot[state::ALPHA] = alphadot;
             let cm = c0[C::Cm as usize] + d[C::Cm as usize] * adhat;
             let m_total = qbar * (u.S_m2 * u.cbar_m) * cm + u.thrust_moment_nm;
-            xdot[state::Q] = (m_total + p * r * (jz - jx) - (p * p - r * r) * jxz) / jy;
-            xdot[state::THETA] = q * cp - r * sp;
+            xdot[state::Q] = rb::pitch_acceleration(&c, p, r, m_total, 0.0);
+            xdot[state::THETA] = theta_dot;
         }
         if set.lat() {
-            let vdot_ = (uu * udot + vv * vdot + ww * wdot) / v;
-            xdot[state::BETA] = (v * vdot - vv * vdot_) / (v * v * cb);
+            xdot[state::BETA] = rb::sideslip_rate(v_body, v_dot, v, vt_dot, cb);
             let qsb = qbar * (u.S_m2 * u.b_m);
             let l = qsb * (c0[C::Cl as usize] + d[C::Cl as usize] * adhat);
             let n = qsb * (c0[C::Cn as usize] + d[C::Cn as usize] * adhat);
-            let rhs1 = l + p * q * jxz - q * r * (jz - jy);
-            let rhs2 = n - p * q * (jy - jx) - q * r * jxz;
-            let det = jx * jz - jxz * jxz;
-            xdot[state::P] = (rhs1 * jz + rhs2 * jxz) / det;
-            xdot[state::R] = (rhs2 * jx + rhs1 * jxz) / det;
-            xdot[state::PHI] = p + th.tan() * (q * sp + r * cp);
+            [xdot[state::P], xdot[state::R]] = rb::roll_yaw_acceleration(&c, omega, l, n, 0.0);
+            xdot[state::PHI] = phi_dot;
         }
         Ok(Derivatives { xdot, accel: [ax, ay, az], alphadot })
     }

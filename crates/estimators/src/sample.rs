@@ -26,9 +26,12 @@
 //! ```
 //!
 //! (the moment equations are Stevens & Lewis eq. 2.5-24 solved for the applied moment, with
-//! `Jxy = Jyz = 0`). A coefficient whose channels the sample lacks is `None`, never 0; the one
+//! `Jxy = Jyz = 0`: the shared kernel's `roll_yaw_moments` and `pitch_moment`,
+//! [`aeroident_physics::rigid_body`], without rotor momentum). A coefficient whose channels the sample lacks is `None`, never 0; the one
 //! exception is the pitch coupling term `(Ixx − Izz) p r + Ixz (p² − r²)`, neglected when p, r
 //! or the roll/yaw inertias are absent (a longitudinal record; symmetric flight assumed).
+
+use aeroident_physics::rigid_body::{self as rb, Inertia};
 
 /// Aircraft constants of one sample, SI. Optional values are `None` when the record does not
 /// give them; anything that needs them is then unavailable (never computed with a made-up 0).
@@ -309,24 +312,25 @@ impl AirDataSample {
         // §5.1) — it is second order in the lateral rates.
         let cm = (|| {
             let qd = self.qdot_rad_s2?;
-            let iyy = c.Iyy_kgm2?;
+            let jy = c.Iyy_kgm2?;
             let cbar = c.cbar_m?;
-            let coupling = match (p, r, c.Ixx_kgm2, c.Izz_kgm2, c.Ixz_kgm2) {
-                (Some(pv), Some(rv), Some(ixx), Some(izz), Some(ixz)) => {
-                    (ixx - izz) * pv * rv + ixz * (pv * pv - rv * rv)
+            // Without the coupling, p = r = 0 makes the kernel's coupling term exactly 0.
+            let (i, pv, rv) = match (p, r, c.Ixx_kgm2, c.Izz_kgm2, c.Ixz_kgm2) {
+                (Some(pv), Some(rv), Some(jx), Some(jz), Some(jxz)) => {
+                    (Inertia { jx, jy, jz, jxz }, pv, rv)
                 }
-                _ => 0.0,
+                _ => (Inertia { jy, ..Inertia::default() }, 0.0, 0.0),
             };
             let m_t = self.thrust_moment_nm.unwrap_or(c.thrust_arm_m * t);
-            Some((iyy * qd + coupling - m_t) / (qs * cbar))
+            Some((rb::pitch_moment(&i, pv, rv, qd, 0.0) - m_t) / (qs * cbar))
         })();
         let (cl_roll, cn) = (|| {
-            let (ixx, iyy, izz, ixz) = (c.Ixx_kgm2?, c.Iyy_kgm2?, c.Izz_kgm2?, c.Ixz_kgm2?);
+            let (jx, jy, jz, jxz) = (c.Ixx_kgm2?, c.Iyy_kgm2?, c.Izz_kgm2?, c.Ixz_kgm2?);
             let b = c.b_m?;
-            let (pv, qv, rv) = (p?, q?, r?);
+            let omega = [p?, q?, r?];
             let (pd, rd) = (self.pdot_rad_s2?, self.rdot_rad_s2?);
-            let l = ixx * pd - ixz * (rd + pv * qv) + (izz - iyy) * qv * rv;
-            let n = izz * rd - ixz * (pd - qv * rv) + (iyy - ixx) * pv * qv;
+            let i = Inertia { jx, jy, jz, jxz };
+            let [l, n] = rb::roll_yaw_moments(&i, omega, pd, rd, 0.0);
             Some((Some(l / (qs * b)), Some(n / (qs * b))))
         })()
         .unwrap_or((None, None));

@@ -4,7 +4,8 @@
 //! Two of the shipped records are SI (HFB-320, ATTAS) and two English (Twin Otter, JSBSim);
 //! the non-dimensional coefficients the estimators identify do not depend on the choice.
 //! Conversion factors are exact where defined so (ft = 0.3048 m, lb = 0.45359237 kg,
-//! g₀ = 9.80665 m/s², kt = 1852/3600 m/s; NIST SP 811 appendix B).
+//! g₀ = 9.80665 m/s², kt = 1852/3600 m/s; NIST SP 811 appendix B); they are defined once, in
+//! [`aeroident_physics::units`].
 
 use std::fmt;
 
@@ -66,12 +67,14 @@ impl fmt::Display for Dimension {
     }
 }
 
-const FT_M: f64 = 0.3048;
-const LB_KG: f64 = 0.453_592_37;
-/// Standard gravity, m/s² (the `g` unit of accelerometers).
-pub const G0_MPS2: f64 = 9.80665;
-const LBF_N: f64 = LB_KG * G0_MPS2;
-const SLUG_KG: f64 = LBF_N / FT_M;
+use aeroident_physics::units::{
+    KG_PER_LB, KG_PER_SLUG, KGM2_PER_SLUGFT2, KGPM3_PER_SLUGPFT3, M_PER_FT, M_PER_IN, M2_PER_FT2,
+    MPS_PER_KT, N_PER_LBF, NM_PER_LBFFT, PA_PER_PSF, PA_PER_PSI,
+};
+
+/// Standard gravity, m/s² (the `g` unit of accelerometers; re-exported from
+/// [`aeroident_physics::units`]).
+pub use aeroident_physics::units::G0_MPS2;
 
 /// A parsed unit: its dimension and the factor that converts a value to SI.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -117,34 +120,34 @@ impl Unit {
             "rad/s2" | "radps2" => (D::AngularAcceleration, 1.0),
             "deg/s2" | "degps2" => (D::AngularAcceleration, core::f64::consts::PI / 180.0),
             "m" => (D::Length, 1.0),
-            "ft" => (D::Length, FT_M),
-            "in" => (D::Length, 0.0254),
+            "ft" => (D::Length, M_PER_FT),
+            "in" => (D::Length, M_PER_IN),
             "m/s" | "mps" => (D::Speed, 1.0),
-            "ft/s" | "fps" => (D::Speed, FT_M),
-            "kt" | "kts" => (D::Speed, 1852.0 / 3600.0),
+            "ft/s" | "fps" => (D::Speed, M_PER_FT),
+            "kt" | "kts" => (D::Speed, MPS_PER_KT),
             "km/h" | "kph" => (D::Speed, 1.0 / 3.6),
             "m/s2" | "mps2" => (D::Acceleration, 1.0),
-            "ft/s2" | "fps2" => (D::Acceleration, FT_M),
+            "ft/s2" | "fps2" => (D::Acceleration, M_PER_FT),
             "g" => (D::Acceleration, G0_MPS2),
             "pa" | "n/m2" => (D::Pressure, 1.0),
             "hpa" | "mbar" => (D::Pressure, 100.0),
             "kpa" => (D::Pressure, 1000.0),
-            "psf" | "lbf/ft2" => (D::Pressure, LBF_N / (FT_M * FT_M)),
-            "psi" | "lbf/in2" => (D::Pressure, LBF_N / (0.0254 * 0.0254)),
+            "psf" | "lbf/ft2" => (D::Pressure, PA_PER_PSF),
+            "psi" | "lbf/in2" => (D::Pressure, PA_PER_PSI),
             "n" => (D::Force, 1.0),
             "kn" => (D::Force, 1000.0),
-            "lbf" | "lbs" => (D::Force, LBF_N),
+            "lbf" | "lbs" => (D::Force, N_PER_LBF),
             "n*m" | "nm" | "m*n" => (D::Moment, 1.0),
-            "lbf*ft" | "ft*lbf" | "lbsft" | "lbs*ft" => (D::Moment, LBF_N * FT_M),
+            "lbf*ft" | "ft*lbf" | "lbsft" | "lbs*ft" => (D::Moment, NM_PER_LBFFT),
             "kg" => (D::Mass, 1.0),
-            "slug" => (D::Mass, SLUG_KG),
-            "lb" | "lbm" => (D::Mass, LB_KG),
+            "slug" => (D::Mass, KG_PER_SLUG),
+            "lb" | "lbm" => (D::Mass, KG_PER_LB),
             "kg*m2" | "kgm2" => (D::Inertia, 1.0),
-            "slug*ft2" | "slugft2" => (D::Inertia, SLUG_KG * FT_M * FT_M),
+            "slug*ft2" | "slugft2" => (D::Inertia, KGM2_PER_SLUGFT2),
             "m2" => (D::Area, 1.0),
-            "ft2" => (D::Area, FT_M * FT_M),
+            "ft2" => (D::Area, M2_PER_FT2),
             "kg/m3" | "kgpm3" => (D::Density, 1.0),
-            "slug/ft3" | "slugft3" => (D::Density, SLUG_KG / (FT_M * FT_M * FT_M)),
+            "slug/ft3" | "slugft3" => (D::Density, KGPM3_PER_SLUGPFT3),
             "1" | "-" | "" | "none" => (D::Dimensionless, 1.0),
             _ => return Err(UnknownUnit(s.to_string())),
         };

@@ -46,6 +46,13 @@ pub enum ModelError {
     },
 }
 
+/// An inertia the rigid-body kernel refuses is an invalid value of the model's input.
+impl From<rigid_body::InertiaError> for ModelError {
+    fn from(e: rigid_body::InertiaError) -> Self {
+        ModelError::InvalidValue { field: e.field, value: e.value, reason: e.reason }
+    }
+}
+
 /// A continuous-time model `ẋ = f(t, x, u)` with `N` states.
 ///
 /// One job: give the state derivative. No integration and no I/O.

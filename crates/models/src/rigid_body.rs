@@ -7,6 +7,9 @@
 //! §2.5 (force, kinematic, moment and navigation equations; moment equations with the inertia
 //! constants `c1 … c9`), and their mechanisation in the F-16 subroutine `F` of §3.5, which this
 //! module follows operation for operation (force equations in wind axes `V̇t, α̇, β̇`).
+//! The equations themselves are the shared kernel's ([`aeroident_physics::rigid_body`], the
+//! same functions the estimators evaluate); this module adds the 12-state layout, validation,
+//! the rotation matrix, the wind and the navigation equations.
 //! Validated through the F-16 check case, SLJ Table 3.5-2
 //! (`f16::tests::val_slj_table_3_5_2_state_derivatives`), and by this module's tests.
 //!
@@ -56,7 +59,10 @@
 //! [`RigidBody::derivatives`]: crate::rigid_body::RigidBody::derivatives
 
 use crate::ModelError;
+use aeroident_physics::rigid_body::{self as kernel, SinCos};
 use nalgebra::{Matrix3, SVector, Vector3};
+
+pub use aeroident_physics::rigid_body::{InertiaConstants, InertiaError};
 
 /// Number of rigid-body states.
 pub const N_STATES: usize = 12;
@@ -179,10 +185,9 @@ impl VelocityAngles {
     /// [`Self::to_body`] and `cos β` (reused by the β̇ equation).
     #[inline]
     fn to_body_and_cos_beta(self) -> (Vector3<f64>, f64) {
-        let (sbta, cbta) = self.beta_rad.sin_cos();
-        let (salp, calp) = self.alpha_rad.sin_cos();
-        let vt = self.vt_fps;
-        (Vector3::new(vt * calp * cbta, vt * sbta, vt * salp * cbta), cbta)
+        let beta = sin_cos(self.beta_rad);
+        let v = kernel::body_velocity(self.vt_fps, sin_cos(self.alpha_rad), beta);
+        (v.into(), beta.cos)
     }
 
     /// The inverse of [`Self::to_body`] for body components `(u, v, w)` (ft/s): `Vt = |v|`,
@@ -224,77 +229,12 @@ impl Wind {
     }
 }
 
-/// The moment-equation inertia constants `c1 … c9` (SLJ 3rd ed. §2.5; the F-16 values are
-/// printed in §3.5). With `Γ = Jx·Jz − Jxz²` (slug²·ft⁴):
-///
-/// ```text
-/// Γc1 = (Jy − Jz)Jz − Jxz²   Γc2 = (Jx − Jy + Jz)Jxz   Γc3 = Jz   Γc4 = Jxz
-/// c5 = (Jz − Jx)/Jy          c6 = Jxz/Jy                c7 = 1/Jy
-/// Γc8 = Jx(Jx − Jy) + Jxz²   Γc9 = Jx
-/// ```
-///
-/// c3, c4, c7, c9 are in 1/(slug·ft²), the others dimensionless. A model may also supply
-/// published (rounded) values directly, as the F-16 does to reproduce the textbook's check case.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct InertiaConstants {
-    /// c1 = ((Jy − Jz)Jz − Jxz²)/Γ.
-    pub c1: f64,
-    /// c2 = (Jx − Jy + Jz)Jxz/Γ.
-    pub c2: f64,
-    /// c3 = Jz/Γ, 1/(slug·ft²).
-    pub c3: f64,
-    /// c4 = Jxz/Γ, 1/(slug·ft²).
-    pub c4: f64,
-    /// c5 = (Jz − Jx)/Jy.
-    pub c5: f64,
-    /// c6 = Jxz/Jy.
-    pub c6: f64,
-    /// c7 = 1/Jy, 1/(slug·ft²).
-    pub c7: f64,
-    /// c8 = (Jx(Jx − Jy) + Jxz²)/Γ.
-    pub c8: f64,
-    /// c9 = Jx/Γ, 1/(slug·ft²).
-    pub c9: f64,
-}
-
-impl InertiaConstants {
-    /// The exact constants for moments of inertia `jx`, `jy`, `jz` and product `jxz`
-    /// (slug·ft², SLJ sign convention: the tensor element (1,3) is −Jxz).
-    ///
-    /// # Errors
-    /// [`ModelError::InvalidValue`] if a value is not finite, `Jx`, `Jy`, `Jz` are not positive,
-    /// or `Γ = Jx·Jz − Jxz² ≤ 0` (the x–z block is not positive definite).
-    pub fn from_inertia(jx: f64, jy: f64, jz: f64, jxz: f64) -> Result<Self, ModelError> {
-        for (field, value) in [("jx", jx), ("jy", jy), ("jz", jz)] {
-            if !(value.is_finite() && value > 0.0) {
-                return Err(ModelError::InvalidValue {
-                    field,
-                    value,
-                    reason: "moment of inertia must be finite and > 0",
-                });
-            }
-        }
-        let gamma = jx * jz - jxz * jxz;
-        if !(jxz.is_finite() && gamma > 0.0) {
-            return Err(ModelError::InvalidValue {
-                field: "jxz",
-                value: jxz,
-                reason: "needs a finite Jxz with Jx*Jz - Jxz^2 > 0",
-            });
-        }
-        Ok(Self {
-            c1: ((jy - jz) * jz - jxz * jxz) / gamma,
-            c2: (jx - jy + jz) * jxz / gamma,
-            c3: jz / gamma,
-            c4: jxz / gamma,
-            c5: (jz - jx) / jy,
-            c6: jxz / jy,
-            c7: 1.0 / jy,
-            c8: (jx * (jx - jy) + jxz * jxz) / gamma,
-            c9: jx / gamma,
-        })
-    }
+/// `(sin, cos)` of an angle as the kernel takes it, through `std` (the simulator's trigonometry,
+/// which the F-16's check case was reproduced with).
+#[inline]
+fn sin_cos(angle_rad: f64) -> SinCos<f64> {
+    let (sin, cos) = angle_rad.sin_cos();
+    SinCos { sin, cos }
 }
 
 /// Mass properties and gravity of a rigid body on a flat earth.
@@ -343,10 +283,8 @@ pub struct Kinematics {
     dcm: Matrix3<f64>,
     v_body: Vector3<f64>,
     cos_beta: f64,
-    sin_phi: f64,
-    cos_phi: f64,
-    sin_theta: f64,
-    cos_theta: f64,
+    phi: SinCos<f64>,
+    theta: SinCos<f64>,
 }
 
 impl Kinematics {
@@ -373,20 +311,20 @@ impl Kinematics {
                 reason: "must be > 0",
             });
         }
-        let (sin_theta, cos_theta) = x[THETA].sin_cos();
-        if cos_theta == 0.0 {
+        let theta = sin_cos(x[THETA]);
+        if theta.cos == 0.0 {
             return Err(ModelError::InvalidValue {
                 field: STATE_NAMES[THETA],
                 value: x[THETA],
                 reason: "Euler-angle singularity at |theta| = 90 deg",
             });
         }
-        let (sin_phi, cos_phi) = x[PHI].sin_cos();
-        let dcm = dcm_from_sin_cos((sin_phi, cos_phi), (sin_theta, cos_theta), x[PSI].sin_cos());
+        let phi = sin_cos(x[PHI]);
+        let dcm = dcm_from_sin_cos((phi.sin, phi.cos), (theta.sin, theta.cos), x[PSI].sin_cos());
         let (v_body, cos_beta) =
             VelocityAngles { vt_fps: x[VT], alpha_rad: x[ALPHA], beta_rad: x[BETA] }
                 .to_body_and_cos_beta();
-        Ok(Self { x: *x, dcm, v_body, cos_beta, sin_phi, cos_phi, sin_theta, cos_theta })
+        Ok(Self { x: *x, dcm, v_body, cos_beta, phi, theta })
     }
 
     /// The state.
@@ -462,7 +400,10 @@ impl RigidBody {
     }
 
     /// The flat-earth 6-DOF state derivatives at `k` under `loads` (SLJ 3rd ed. §2.5; the
-    /// mechanisation of subroutine `F`, §3.5), with `a = F/m`, `g_b = C·[0, 0, g]`:
+    /// mechanisation of subroutine `F`, §3.5), with `a = F/m`, `g_b = C·[0, 0, g]`; every group
+    /// but the navigation is a function of the shared kernel ([`aeroident_physics::rigid_body`]:
+    /// `gravity_body`, `body_acceleration`, `wind_axes_rates`, `euler_rates`,
+    /// `angular_acceleration`), which keeps subroutine F's operation order:
     ///
     /// ```text
     /// force:      u̇ = rv − qw + g_b,x + a_x
@@ -490,18 +431,15 @@ impl RigidBody {
     ) -> Result<RigidBodyRates, ModelError> {
         let x = &k.x;
         let (vt, beta) = (x[VT], x[BETA]);
-        let (p, q, r) = (x[P], x[Q], x[R]);
-        let (u, v, w) = (k.v_body[0], k.v_body[1], k.v_body[2]);
-        let (sph, cph, sth, cth) = (k.sin_phi, k.cos_phi, k.sin_theta, k.cos_theta);
+        let omega = [x[P], x[Q], x[R]];
+        let v_body: [f64; 3] = k.v_body.into();
+        let [u, _, w] = v_body;
 
         // Force equations: specific force a = F/m and gravity in body axes.
         let a = loads.force_lbf * (1.0 / self.mass_slug);
-        let gb = rotate_to_body(&k.dcm, &Vector3::new(0.0, 0.0, self.g_fps2));
-        let udot = r * v - q * w + gb[0] + a[0];
-        let vdot = p * w - r * u + gb[1] + a[1];
-        let wdot = q * u - p * v + gb[2] + a[2];
-        let dum = u * u + w * w;
-        if dum <= 0.0 {
+        let gb = kernel::gravity_body(self.g_fps2, k.phi, k.theta);
+        let v_dot = kernel::body_acceleration(v_body, omega, gb, a.into());
+        if u * u + w * w <= 0.0 {
             return Err(ModelError::InvalidValue {
                 field: STATE_NAMES[BETA],
                 value: beta,
@@ -510,24 +448,11 @@ impl RigidBody {
         }
 
         let mut xd = RigidBodyState::zeros();
-        xd[VT] = (u * udot + v * vdot + w * wdot) / vt;
-        xd[ALPHA] = (u * wdot - w * udot) / dum;
-        xd[BETA] = (vt * vdot - v * xd[VT]) * k.cos_beta / dum;
-
-        // Kinematic equations (Euler-angle rates).
-        let qsph = q * sph;
-        xd[PHI] = p + (sth / cth) * (qsph + r * cph);
-        xd[THETA] = q * cph - r * sph;
-        xd[PSI] = (qsph + r * cph) / cth;
-
-        // Moment equations.
-        let c = &self.inertia;
+        [xd[VT], xd[ALPHA], xd[BETA]] = kernel::wind_axes_rates(v_body, v_dot, vt, k.cos_beta);
+        [xd[PHI], xd[THETA], xd[PSI]] = kernel::euler_rates(omega, k.phi, k.theta);
+        let moment = loads.moment_ft_lbf.into();
         let h = loads.heng_slug_ft2_per_s;
-        let [roll, pitch, yaw] =
-            [loads.moment_ft_lbf[0], loads.moment_ft_lbf[1], loads.moment_ft_lbf[2]];
-        xd[P] = (c.c2 * p + c.c1 * r + c.c4 * h) * q + c.c3 * roll + c.c4 * yaw;
-        xd[Q] = (c.c5 * p - c.c7 * h) * r + c.c6 * (r * r - p * p) + c.c7 * pitch;
-        xd[R] = (c.c8 * p - c.c2 * r + c.c9 * h) * q + c.c4 * roll + c.c9 * yaw;
+        [xd[P], xd[Q], xd[R]] = kernel::angular_acceleration(&self.inertia, omega, moment, h);
 
         // Navigation equations.
         let ned = rotate_to_ned(&k.dcm, &k.v_body);

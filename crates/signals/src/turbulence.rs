@@ -45,8 +45,9 @@ use serde::Deserialize;
 use crate::WindField;
 use crate::error::{SignalError, non_negative, positive};
 
-/// Knots to ft/s (1 kt = 1852 m / 3600 s, 1 ft = 0.3048 m).
-pub const FPS_PER_KT: f64 = 1852.0 / 3600.0 / 0.3048;
+/// Knots to ft/s (1 kt = 1852 m / 3600 s, 1 ft = 0.3048 m; re-exported from
+/// [`aeroident_physics::units`]).
+pub use aeroident_physics::units::FPS_PER_KT;
 
 /// Dryden medium/high-altitude scale length (ft) for all three components, MIL-F-8785C
 /// §3.7.3.2 (above 2000 ft).

@@ -9,9 +9,9 @@
 //!
 //! | coefficient | state `z` | `ż` (measured, this module) | `k = ∂ż/∂C` |
 //! |---|---|---|---|
-//! | `Cl` | `p` | `ṗ` channel | `q̄ S b Jz / (Jx Jz − Jxz²)` |
+//! | `Cl` | `p` | `ṗ` channel | `q̄ S b c3`, `c3 = Jz / (Jx Jz − Jxz²)` |
 //! | `Cm` | `q` | `q̇` channel | `q̄ S c̄ / Jy` |
-//! | `Cn` | `r` | `ṙ` channel | `q̄ S b Jx / (Jx Jz − Jxz²)` |
+//! | `Cn` | `r` | `ṙ` channel | `q̄ S b c9`, `c9 = Jx / (Jx Jz − Jxz²)` |
 //! | `CL` | `α` | `(u ẇ − w u̇) / (u² + w²)` | `−q̄ S / (m V cos β)` |
 //! | `CD` | `V` | `(u u̇ + v v̇ + w ẇ) / V` | `−q̄ S cos β / m` |
 //! | `CY` | `β` | `(V v̇ − v V̇) cos β / (u² + w²)` | `q̄ S cos β / (m V)` |
@@ -20,7 +20,8 @@
 //!
 //! with the body velocity `u = V cos α cos β, v = V sin β, w = V sin α cos β` and the body-axis
 //! force equations driven by the measured specific force `a` (accelerometers, which include the
-//! thrust):
+//! thrust), all evaluated by the shared kernel ([`aeroident_physics::rigid_body`]: `body_velocity`,
+//! `gravity_body`, `body_acceleration`, `wind_axes_rates`; the inertia constants `c3`, `c9`):
 //!
 //! ```text
 //! u̇ = r v − q w − g sin θ + ax
@@ -30,7 +31,7 @@
 //!
 //! `Cl` and `Cn` both enter `ṗ` and `ṙ` through `Jxz`: the moment equations are solved for
 //! `[ṗ, ṙ]` with the 2×2 inertia block `[[Jx, −Jxz], [−Jxz, Jz]]` (Stevens & Lewis sign, as
-//! in `sample.rs`), so `∂ṗ/∂Cl = q̄ S b Jz / det` and `∂ṙ/∂Cn = q̄ S b Jx / det`. Each
+//! in `sample.rs`), so `∂ṗ/∂Cl = q̄ S b c3` and `∂ṙ/∂Cn = q̄ S b c9`. Each
 //! coefficient is assigned the state whose partial is the direct (diagonal) one; the other
 //! coefficient's contribution to that state is a measured term like gravity or thrust.
 //!
@@ -44,9 +45,11 @@
 
 use crate::sample::AirDataSample;
 use crate::vocabulary::Coefficient;
+use aeroident_physics::rigid_body::{self as rb, Inertia, InertiaConstants, SinCos};
 
-/// Standard gravity, m/s² (flat Earth, Stevens & Lewis §2.5).
-pub const G0_MPS2: f64 = 9.80665;
+/// Standard gravity, m/s² (flat Earth, Stevens & Lewis §2.5; re-exported from
+/// [`aeroident_physics::units`]).
+pub use aeroident_physics::units::G0_MPS2;
 
 /// The sliding state a coefficient drives (module table).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -142,22 +145,25 @@ pub fn state_rate(c: Coefficient, s: &AirDataSample) -> Result<StateRate, &'stat
             let ixx = positive(k.Ixx_kgm2, "Ixx_kgm2")?;
             let izz = positive(k.Izz_kgm2, "Izz_kgm2")?;
             let ixz = k.Ixz_kgm2.ok_or("Ixz_kgm2")?;
-            let det = ixx * izz - ixz * ixz;
+            let inertia = Inertia { jx: ixx, jy: 0.0, jz: izz, jxz: ixz };
+            let det = inertia.gamma();
             if det.is_nan() || det <= 0.0 {
                 return Err("Ixz_kgm2");
             }
             let qsb = qs * k.b_m.ok_or("b_m")?;
+            // ∂ṗ/∂L = c3 and ∂ṙ/∂N = c9 of the moment equations (Jy does not enter them).
+            let constants = InertiaConstants::of(&inertia);
             Ok(if c == Coefficient::Cl {
                 StateRate {
                     z_m: s.p_rad_s.ok_or("p_rad_s")?,
                     zdot_m: s.pdot_rad_s2.ok_or("pdot_rad_s2")?,
-                    k: qsb * izz / det,
+                    k: qsb * constants.c3,
                 }
             } else {
                 StateRate {
                     z_m: s.r_rad_s.ok_or("r_rad_s")?,
                     zdot_m: s.rdot_rad_s2.ok_or("rdot_rad_s2")?,
-                    k: qsb * ixx / det,
+                    k: qsb * constants.c9,
                 }
             })
         }
@@ -184,10 +190,9 @@ fn body_kinematics(s: &AirDataSample) -> Result<BodyKinematics, &'static str> {
     if vt.is_nan() || vt <= 0.0 {
         return Err("vt_mps");
     }
-    let beta = s.beta_rad.unwrap_or(0.0);
-    let (sa, ca) = (libm::sin(s.alpha_rad), libm::cos(s.alpha_rad));
-    let (sb, cb) = (libm::sin(beta), libm::cos(beta));
-    let (u, v, w) = (vt * ca * cb, vt * sb, vt * sa * cb);
+    let beta = SinCos::of(s.beta_rad.unwrap_or(0.0));
+    let v_body = rb::body_velocity(vt, SinCos::of(s.alpha_rad), beta);
+    let [u, v, w] = v_body;
     // Symmetric flight (v = 0): p, r and ay do not enter u̇, ẇ or V̇.
     let lateral = |x: Option<f64>, name: &'static str| match x {
         Some(x) => Ok(x),
@@ -200,18 +205,11 @@ fn body_kinematics(s: &AirDataSample) -> Result<BodyKinematics, &'static str> {
     let q = s.q_rad_s.ok_or("q_rad_s")?;
     let ax = s.ax_mps2.ok_or("ax_mps2")?;
     let az = s.az_mps2.ok_or("az_mps2")?;
-    let theta = s.theta_rad.ok_or("theta_rad")?;
-    let phi = s.phi_rad.ok_or("phi_rad")?;
-    let (st, ct) = (libm::sin(theta), libm::cos(theta));
-    let (sp, cp) = (libm::sin(phi), libm::cos(phi));
-    Ok(BodyKinematics {
-        u,
-        v,
-        w,
-        udot: r * v - q * w - G0_MPS2 * st + ax,
-        vdot: p * w - r * u + G0_MPS2 * sp * ct + ay,
-        wdot: q * u - p * v + G0_MPS2 * cp * ct + az,
-    })
+    let theta = SinCos::of(s.theta_rad.ok_or("theta_rad")?);
+    let phi = SinCos::of(s.phi_rad.ok_or("phi_rad")?);
+    let gravity = rb::gravity_body(G0_MPS2, phi, theta);
+    let [udot, vdot, wdot] = rb::body_acceleration(v_body, [p, q, r], gravity, [ax, ay, az]);
+    Ok(BodyKinematics { u, v, w, udot, vdot, wdot })
 }
 
 fn force_state(state: SlidingState, s: &AirDataSample, qs: f64) -> Result<StateRate, &'static str> {
@@ -222,22 +220,18 @@ fn force_state(state: SlidingState, s: &AirDataSample, qs: f64) -> Result<StateR
     let b = body_kinematics(s)?;
     let vt = s.vt_mps;
     let cb = libm::cos(s.beta_rad.unwrap_or(0.0));
-    let uw2 = b.u * b.u + b.w * b.w;
-    let vdot_t = (b.u * b.udot + b.v * b.vdot + b.w * b.wdot) / vt;
+    let (v_body, v_dot) = ([b.u, b.v, b.w], [b.udot, b.vdot, b.wdot]);
+    let [vdot_t, alphadot, betadot] = rb::wind_axes_rates(v_body, v_dot, vt, cb);
     Ok(match state {
         SlidingState::U => StateRate { z_m: b.u, zdot_m: b.udot, k: qs / m },
         SlidingState::W => StateRate { z_m: b.w, zdot_m: b.wdot, k: qs / m },
         SlidingState::V => StateRate { z_m: vt, zdot_m: vdot_t, k: -qs * cb / m },
-        SlidingState::Alpha => StateRate {
-            z_m: s.alpha_rad,
-            zdot_m: (b.u * b.wdot - b.w * b.udot) / uw2,
-            k: -qs / (m * vt * cb),
-        },
-        SlidingState::Beta => StateRate {
-            z_m: s.beta_rad.ok_or("beta_rad")?,
-            zdot_m: (vt * b.vdot - b.v * vdot_t) * cb / uw2,
-            k: qs * cb / (m * vt),
-        },
+        SlidingState::Alpha => {
+            StateRate { z_m: s.alpha_rad, zdot_m: alphadot, k: -qs / (m * vt * cb) }
+        }
+        SlidingState::Beta => {
+            StateRate { z_m: s.beta_rad.ok_or("beta_rad")?, zdot_m: betadot, k: qs * cb / (m * vt) }
+        }
         SlidingState::P | SlidingState::Q | SlidingState::R => {
             unreachable!("moment states are handled by state_rate")
         }

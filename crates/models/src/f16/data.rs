@@ -8,6 +8,7 @@
 
 use super::table::{Table1, Table2, check_breakpoints};
 use crate::rigid_body::InertiaConstants;
+use aeroident_physics::rigid_body::Inertia;
 use serde::Deserialize;
 use std::sync::OnceLock;
 
@@ -56,8 +57,25 @@ struct RawFile {
     atmosphere: AtmosphereConstants,
     mass: MassProperties,
     geometry: Geometry,
+    #[serde(with = "MomentConstantsFile")]
     moment_constants: MomentConstants,
     ranges: DataRanges,
+}
+
+/// The `[moment_constants]` table, read into the kernel's [`InertiaConstants`] (a type of
+/// `aeroident-physics`, which is `no_std` without serde).
+#[derive(Deserialize)]
+#[serde(remote = "InertiaConstants", deny_unknown_fields)]
+struct MomentConstantsFile {
+    c1: f64,
+    c2: f64,
+    c3: f64,
+    c4: f64,
+    c5: f64,
+    c6: f64,
+    c7: f64,
+    c8: f64,
+    c9: f64,
 }
 
 #[derive(Deserialize)]
@@ -216,18 +234,13 @@ impl MassProperties {
     /// with Γ = Ixx·Izz − Jxz²: `a11 = Izz/Γ, a13 = a31 = Jxz/Γ, a22 = 1/Iyy, a33 = Ixx/Γ`
     /// (the exact values of SLJ's c3, c4, c7, c9).
     pub fn inverse_inertia(&self) -> nalgebra::Matrix3<f64> {
-        let gamma = self.ixx_slug_ft2 * self.izz_slug_ft2 - self.ixz_slug_ft2 * self.ixz_slug_ft2;
-        nalgebra::Matrix3::new(
-            self.izz_slug_ft2 / gamma,
-            0.0,
-            self.ixz_slug_ft2 / gamma,
-            0.0,
-            1.0 / self.iyy_slug_ft2,
-            0.0,
-            self.ixz_slug_ft2 / gamma,
-            0.0,
-            self.ixx_slug_ft2 / gamma,
-        )
+        let c = InertiaConstants::of(&Inertia {
+            jx: self.ixx_slug_ft2,
+            jy: self.iyy_slug_ft2,
+            jz: self.izz_slug_ft2,
+            jxz: self.ixz_slug_ft2,
+        });
+        nalgebra::Matrix3::new(c.c3, 0.0, c.c4, 0.0, c.c7, 0.0, c.c4, 0.0, c.c9)
     }
 }
 

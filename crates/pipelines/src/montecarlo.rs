@@ -56,10 +56,11 @@ use aeroident_signals::turbulence::{DrydenComponent, DrydenParameters, dryden_sh
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::aircraft::air_data::{ACCEL_SIGMA_FPS2, M_PER_FT, PA_PER_PSF, f16_constants};
+use crate::aircraft::air_data::{ACCEL_SIGMA_FPS2, f16_constants};
 use crate::aircraft::scenario::EstimatorSpec;
 use crate::aircraft::summary::{self, PRIMARY_DERIVATIVES};
 use crate::aircraft::{RunOutput, Scenario, run};
+use aeroident_physics::units::{M_PER_FT, N_PER_LBF, PA_PER_PSF};
 
 /// The golden-ratio increment of SplitMix64 (Steele, Lea & Flood, OOPSLA 2014).
 const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
@@ -608,7 +609,7 @@ fn crb_for(
         alpha_rad: x0[f16::ALPHA],
         theta_rad: x0[f16::THETA],
         rho_kgpm3: rho,
-        thrust_n: outs.thrust_lbf * crate::aircraft::air_data::N_PER_LBF,
+        thrust_n: outs.thrust_lbf * N_PER_LBF,
         de_rad: u0.elevator_rad,
         da_rad: u0.aileron_rad,
         dr_rad: u0.rudder_rad,

@@ -47,17 +47,8 @@ use aeroident_signals::{BandLimitedWhiteNoise, InputSignal};
 
 use super::sensors::state_sigma;
 use crate::condition::{Alignment, Conditioner, Conditioning, Derivative};
+use aeroident_physics::units::{KG_PER_SLUG, KGM2_PER_SLUGFT2, M_PER_FT, N_PER_LBF, PA_PER_PSF};
 
-/// Metres per foot.
-pub const M_PER_FT: f64 = 0.3048;
-/// Kilograms per slug.
-pub const KG_PER_SLUG: f64 = 14.593_902_937_206_364;
-/// Newtons per pound-force.
-pub const N_PER_LBF: f64 = 4.448_221_615_260_5;
-/// Pascals per lbf/ft².
-pub const PA_PER_PSF: f64 = N_PER_LBF / (M_PER_FT * M_PER_FT);
-/// kg·m² per slug·ft².
-pub const KGM2_PER_SLUGFT2: f64 = KG_PER_SLUG * M_PER_FT * M_PER_FT;
 /// σ of the accelerometers, ft/s² (ISRN 2014 Table 3, as [`super::sensors`]).
 pub const ACCEL_SIGMA_FPS2: f64 = 0.98;
 

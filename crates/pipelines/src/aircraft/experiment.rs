@@ -39,7 +39,7 @@ use aeroident_models::integrate::rk4_step_varying;
 use aeroident_models::trim::{F16Trim, TrimCondition, trim};
 use aeroident_signals::{Input, InputSignal, WindField, config::build_wind};
 
-use super::air_data::{AirDataSampler, M_PER_FT};
+use super::air_data::AirDataSampler;
 use super::batch::{BatchFit, fit_window};
 use super::increments::increment_matrix;
 use super::scenario::{AerodynamicsSpec, Channel, EstimatorSpec, EstimatorWind, Scenario};
@@ -47,6 +47,7 @@ use super::sensors::SensorNoise;
 use super::truth::{LocalDerivatives, local_derivatives};
 pub use super::two_aircraft::PublishedDiagnostics;
 use super::two_aircraft::{self, TwoAircraft};
+use aeroident_physics::units::M_PER_FT;
 
 /// Errors of an experiment run.
 #[derive(Debug, thiserror::Error)]

@@ -16,7 +16,7 @@
 //! model ([`trim_biases`]); sensors are the simulator's raw noise levels
 //! ([`crate::montecarlo::crb_sensors`]).
 
-use crate::aircraft::air_data::{M_PER_FT, N_PER_LBF, PA_PER_PSF, f16_constants};
+use crate::aircraft::air_data::f16_constants;
 use aeroident_estimators::flight_model::{N_STATES, Output};
 use aeroident_estimators::output_error::InitialStates;
 use aeroident_estimators::output_error::design::{
@@ -26,6 +26,7 @@ use aeroident_estimators::output_error::design::{
 use aeroident_estimators::vocabulary::ModelStructure;
 use aeroident_models::f16::{self, AeroIncrements, F16};
 use aeroident_models::trim::{TrimCondition, TrimManeuver, trim};
+use aeroident_physics::units::{M_PER_FT, N_PER_LBF, PA_PER_PSF};
 use aeroident_signals::InputSignal;
 use aeroident_signals::orthogonal::orthogonal_multisine;
 use aeroident_signals::turbulence::{DrydenParameters, TurbulenceSeverity};

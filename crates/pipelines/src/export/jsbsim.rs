@@ -35,6 +35,7 @@
 //! identified (`null`) is omitted with a comment, never written as 0.
 
 use aeroident_estimators::vocabulary::{Coefficient, Param, Term};
+use aeroident_physics::units::FT_PER_M;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -123,9 +124,6 @@ impl Default for SurfaceProperties {
         }
     }
 }
-
-/// ft per m (exact).
-const FT_PER_M: f64 = 1.0 / 0.3048;
 
 /// The regressor of `term` as JSBSim properties and a constant factor, or why it cannot be
 /// expressed.

@@ -238,6 +238,13 @@ impl<C: Default> Default for ModelReferenceConfig<C> {
     }
 }
 
+/// Why a channel's step failed: the estimator diverged (with the reason), or the sample is
+/// refused (state unchanged).
+enum StepFailure {
+    Diverged(&'static str),
+    Refused(EstimatorError),
+}
+
 #[derive(Debug, Clone)]
 struct Channel<L> {
     coefficient: Coefficient,
@@ -256,6 +263,62 @@ struct Channel<L> {
 }
 
 impl<L: CoefficientLaw> Channel<L> {
+    /// One sample's step of this channel (module doc): the estimated model integrated over the
+    /// interval `dt` (`None`: restart from the measured state), the law's update, the
+    /// excitation bookkeeping. On an error the channel may be part-updated: the caller restores
+    /// it.
+    fn step(
+        &mut self,
+        s: &AirDataSample,
+        input: &RateInput,
+        dt: Option<f64>,
+    ) -> Result<(), StepFailure> {
+        if !self.started {
+            self.law.start(input, s).map_err(StepFailure::Refused)?;
+            self.started = true;
+        }
+        let z = match (dt, &self.prev) {
+            (Some(dt), Some(prev)) => integrate(self.z_est, prev, input, &self.theta(), dt),
+            _ => input.rate.z_m,
+        };
+        let gap = libm::fabs(z - input.rate.z_m);
+        if gap.is_nan() || gap > self.state.runaway_bound(s.vt_mps) {
+            return Err(StepFailure::Diverged("estimated model ran away from the measured state"));
+        }
+        let sample = SmpeSample {
+            t_s: s.t_s,
+            z: SVector::<f64, 1>::new(z),
+            z_m: SVector::<f64, 1>::new(input.rate.z_m),
+            zdot_m: SVector::<f64, 1>::new(input.rate.zdot_m),
+            u: *input,
+        };
+        match self.law.update(&sample) {
+            Ok(()) => {}
+            Err(EstimatorError::Numerical { what, .. }) => {
+                return Err(StepFailure::Diverged(what));
+            }
+            Err(e) => return Err(StepFailure::Refused(e)),
+        }
+        if self.theta()[..self.n].iter().any(|x| !x.is_finite()) {
+            return Err(StepFailure::Diverged("non-finite parameter estimate"));
+        }
+        self.z_est = z;
+        self.z_m = input.rate.z_m;
+        self.prev = Some(*input);
+        let phi = &input.phi;
+        for i in 0..self.n {
+            for j in 0..self.n {
+                self.info[i][j] += phi[i] * phi[j];
+            }
+        }
+        self.count += 1;
+        if !self.excited && self.count >= self.n {
+            self.excited =
+                well_conditioned(&self.info, self.n, self.count as f64, INIT_MIN_SCALED_PIVOT);
+        }
+        Ok(())
+    }
+
     fn theta(&self) -> [f64; N_TERMS] {
         let mut th = [0.0; N_TERMS];
         for (j, t) in th.iter_mut().enumerate().take(self.n) {
@@ -494,54 +557,25 @@ impl<L: CoefficientLaw> Estimator for ModelReference<L> {
         for ch in self.channels.iter().flatten() {
             inputs[ch.coefficient.index()] = ch.input(s, &measured, self.lambda_per_s)?;
         }
-        let mut next = self.channels.clone();
-        for ch in next.iter_mut().flatten() {
+        // Each channel is backed up before it steps, and every stepped channel is restored
+        // when a later one fails: one copy per update instead of a copy of all and a move back.
+        let mut backup: [Option<Channel<L>>; 8] = Default::default();
+        for k in 0..self.channels.len() {
+            let Some(ch) = self.channels[k].as_mut() else { continue };
+            backup[k] = Some(ch.clone());
             let input = inputs[ch.coefficient.index()];
-            if !ch.started {
-                ch.law.start(&input, s)?;
-                ch.started = true;
-            }
-            let z = match (dt, &ch.prev) {
-                (Some(dt), Some(prev)) => integrate(ch.z_est, prev, &input, &ch.theta(), dt),
-                _ => input.rate.z_m,
-            };
-            let gap = libm::fabs(z - input.rate.z_m);
-            if gap.is_nan() || gap > ch.state.runaway_bound(s.vt_mps) {
-                return Err(self.diverge("estimated model ran away from the measured state", s.t_s));
-            }
-            let sample = SmpeSample {
-                t_s: s.t_s,
-                z: SVector::<f64, 1>::new(z),
-                z_m: SVector::<f64, 1>::new(input.rate.z_m),
-                zdot_m: SVector::<f64, 1>::new(input.rate.zdot_m),
-                u: input,
-            };
-            match ch.law.update(&sample) {
-                Ok(()) => {}
-                Err(EstimatorError::Numerical { what, .. }) => {
-                    return Err(self.diverge(what, s.t_s));
+            if let Err(fail) = ch.step(s, &input, dt) {
+                for (slot, saved) in self.channels.iter_mut().zip(backup.iter_mut()) {
+                    if let Some(saved) = saved.take() {
+                        *slot = Some(saved);
+                    }
                 }
-                Err(e) => return Err(e),
-            }
-            if ch.theta()[..ch.n].iter().any(|x| !x.is_finite()) {
-                return Err(self.diverge("non-finite parameter estimate", s.t_s));
-            }
-            ch.z_est = z;
-            ch.z_m = input.rate.z_m;
-            ch.prev = Some(input);
-            let phi = &input.phi;
-            for i in 0..ch.n {
-                for j in 0..ch.n {
-                    ch.info[i][j] += phi[i] * phi[j];
-                }
-            }
-            ch.count += 1;
-            if !ch.excited && ch.count >= ch.n {
-                ch.excited =
-                    well_conditioned(&ch.info, ch.n, ch.count as f64, INIT_MIN_SCALED_PIVOT);
+                return Err(match fail {
+                    StepFailure::Diverged(what) => self.diverge(what, s.t_s),
+                    StepFailure::Refused(e) => e,
+                });
             }
         }
-        self.channels = next;
         self.last_t_s = Some(s.t_s);
         self.restart = false;
         self.publish(s.t_s);

@@ -152,15 +152,6 @@ impl Conditioner {
         if self.diffs.is_empty() { None } else { self.dt_s }
     }
 
-    /// The delay of every emitted sample behind the newest input, `(N−1)·dt/2` s, once the
-    /// interval is known (0 for a pass-through).
-    pub fn lag_s(&self) -> Option<f64> {
-        if self.cfg.derivatives.is_empty() {
-            return Some(0.0);
-        }
-        self.dt_s().map(|dt| (self.cfg.window as f64 - 1.0) * dt / 2.0)
-    }
-
     /// A warning raised since the last call (nominal and measured interval disagree).
     pub fn take_warning(&mut self) -> Option<String> {
         self.warning.take()

@@ -180,30 +180,10 @@ pub fn run(
             dispatch(sc, m, x0, ["x", "y"], SlidingSurface::first_order(&[0, 1]), estimator, solver)
         }
         SystemConfig::SecondOrder { a1, a2, initial_state } => {
-            let x0 = SVector::from(initial_state.unwrap_or([0.0; 2]));
-            let m = SecondOrder { a1, a2 };
-            dispatch(
-                sc,
-                m,
-                x0,
-                ["x", "xdot"],
-                SlidingSurface::second_order(0, 1),
-                estimator,
-                solver,
-            )
+            second_order(sc, SecondOrder { a1, a2 }, initial_state, estimator, solver)
         }
         SystemConfig::SecondOrderNonlinear { a1, a2, initial_state } => {
-            let x0 = SVector::from(initial_state.unwrap_or([0.0; 2]));
-            let m = SecondOrderNonlinear { a1, a2 };
-            dispatch(
-                sc,
-                m,
-                x0,
-                ["x", "xdot"],
-                SlidingSurface::second_order(0, 1),
-                estimator,
-                solver,
-            )
+            second_order(sc, SecondOrderNonlinear { a1, a2 }, initial_state, estimator, solver)
         }
     }
 }
@@ -222,6 +202,23 @@ fn param_specs<const P: usize>(sc: &PocScenario, names: [&'static str; P]) -> [P
                 .unwrap_or(0.5 * (p.lower + p.upper)),
         }
     })
+}
+
+/// A second-order system (states `x`, `ẋ`, the second-order sliding surface over them)
+/// through [`dispatch`].
+fn second_order<D, const P: usize>(
+    sc: &PocScenario,
+    truth: D,
+    initial_state: Option<[f64; 2]>,
+    estimator: EstimatorKind,
+    solver: SolverReading,
+) -> Result<RunOutput, RunError>
+where
+    D: Dynamics<2, Input = f64> + Parameterized<P> + Clone,
+{
+    let x0 = SVector::from(initial_state.unwrap_or([0.0; 2]));
+    let surface = SlidingSurface::second_order(0, 1);
+    dispatch(sc, truth, x0, ["x", "xdot"], surface, estimator, solver)
 }
 
 fn dispatch<D, const N: usize, const P: usize>(

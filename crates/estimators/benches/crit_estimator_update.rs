@@ -15,8 +15,8 @@ use criterion::{Criterion, Throughput, black_box, criterion_group, criterion_mai
 
 const N: usize = 1000;
 
-/// The new EKF over the longitudinal (4 states + 12 parameters) and lateral (4 + 18)
-/// presets, and the new RLS over the six-axis preset (30 parameters in six fits).
+/// The new EKF over the longitudinal (4 states + 12 parameters), lateral (4 + 18) and six-axis
+/// (the default job's filter) presets, and the new RLS over the six-axis preset (30 parameters in six fits).
 fn bench_structure_estimators(c: &mut Criterion) {
     // 1000 samples at 50 Hz; the doublets (1, 6, 12 s) fall inside the 20 s record.
     let data = test_aircraft::six_axis_stream(N, 0.02, 20.0);
@@ -25,6 +25,7 @@ fn bench_structure_estimators(c: &mut Criterion) {
     for (name, st) in [
         ("ekf_longitudinal", ModelStructure::longitudinal()),
         ("ekf_lateral", ModelStructure::lateral()),
+        ("ekf_six_axis", ModelStructure::six_axis()),
     ] {
         let cfg = aeroident_estimators::EkfConfig::new(st);
         g.bench_function(format!("{name}_1000_samples"), |b| {

@@ -290,6 +290,41 @@ fn val_output_error_reproduces_the_hfb320_reference_through_the_cli() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// A batch fit stopped by `--max-iterations` reports its last iterate instead of failing: exit 0,
+/// status `not_converged` with the reason, every estimate finite, and a likelihood no better
+/// than the converged fit's (Gauss–Newton only descends); the bootstrap is not run on it. The
+/// same record with the default limit converges on both criteria. Skips without `../shared`.
+#[test]
+fn val_a_batch_fit_stopped_by_the_iteration_limit_reports_its_last_iterate() {
+    let Some(data) = common::shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let model = workspace().join("models/hfb320_book_q0.toml");
+    let base = ["--model", model.to_str().unwrap(), "--estimator", "oe"];
+    let (done, _) = batch_replay(&data, "hfb320.toml", &base, "oe_limit_done");
+    assert_eq!(done["status"], "converged");
+    assert!(done["status_reason"].is_null());
+    let args = [&base[..], &["--max-iterations", "2", "--bootstrap", "4"]].concat();
+    let (v, html) = batch_replay(&data, "hfb320.toml", &args, "oe_limit_2");
+    assert_eq!(v["status"], "not_converged");
+    let why = v["status_reason"].as_str().unwrap();
+    assert!(why.contains("iteration limit") && why.contains("after 2 iterations"), "{why}");
+    assert_eq!(v["iterations"].as_array().unwrap().len(), 3);
+    assert!(
+        final_ln_det(&v) >= final_ln_det(&done),
+        "{} vs {}",
+        final_ln_det(&v),
+        final_ln_det(&done)
+    );
+    for p in v["parameters"].as_array().unwrap() {
+        assert!(p["estimate"].as_f64().is_some_and(f64::is_finite), "{p}");
+    }
+    assert!(v["bootstrap"].is_null());
+    let warnings: Vec<&str> =
+        v["warnings"].as_array().unwrap().iter().filter_map(|w| w.as_str()).collect();
+    assert!(warnings.iter().any(|w| w.starts_with("NOT CONVERGED")), "{warnings:?}");
+    assert!(warnings.iter().any(|w| w.starts_with("bootstrap not run")), "{warnings:?}");
+    assert!(html.contains("not_converged"), "the report does not say how the fit ended");
+}
+
 /// `replay --estimator fem` on the HFB-320 with Jategaonkar's model converges to a likelihood
 /// at least as good as output error's: the filter-error model nests output error (process
 /// noise at its lower bound is the output-error simulation), so its innovations' `ln det B`

@@ -73,12 +73,17 @@
 //! fixed point; the replays of the HFB-320 and ATTAS records are unchanged to the printed
 //! digits (docs/uncertainty.md, "Output error: step length").
 //!
-//! **Convergence** (both required): the relative change of `det R` over the iteration is below
-//! [`OeConfig::cost_tolerance`] (default 10⁻⁶) **and** the largest step is below
-//! [`OeConfig::step_tolerance_sigma`] (default 10⁻³) Cramér–Rao σ of its unknown. A fit that
-//! reaches [`OeConfig::max_iterations`] first, or that cannot reduce the cost while its
-//! Gauss–Newton step is still larger than that tolerance, is returned as
-//! [`OeError::NotConverged`] carrying the last iterate (never silently as a result).
+//! **Convergence** ([`Termination`]): [`Termination::Converged`] when the relative change of
+//! `det R` over the iteration is below [`OeConfig::cost_tolerance`] (default 10⁻⁶) **and** the
+//! largest step is below [`OeConfig::step_tolerance_sigma`] (default 10⁻³) Cramér–Rao σ of its
+//! unknown. A fit that reaches [`OeConfig::max_iterations`] first, or that cannot reduce the
+//! cost while its Gauss–Newton step is still larger than that tolerance, has converged in the
+//! cost alone ([`Termination::CostConverged`], returned as a result) when its last accepted
+//! iteration changed `det R` by less than the cost tolerance: the criterion of Jategaonkar's
+//! `ml_oem2` (Jategaonkar 2015 §4.10), met on a cost that is flat along a direction the record
+//! does not determine, where the remaining step (in the iteration log) is a σ-sized wander, not
+//! a descent. Otherwise it is returned as [`OeError::NotConverged`] carrying the last iterate
+//! (never silently as a result).
 //!
 //! # Starting values ([`Start`])
 //!
@@ -245,6 +250,82 @@ pub enum NotConverged {
     NoDescent,
 }
 
+impl NotConverged {
+    /// A sentence for people: what stopped the fit.
+    pub fn describe(self) -> &'static str {
+        match self {
+            NotConverged::MaxIterations => "the iteration limit was reached",
+            NotConverged::NoDescent => {
+                "no step reduced the cost while the Gauss–Newton step was still large"
+            }
+        }
+    }
+}
+
+/// How a batch fit's iterations ended (module doc, "Convergence").
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Termination {
+    /// Both criteria met: the cost stopped changing and the last step was negligible.
+    Converged,
+    /// The cost stopped changing (relative change of `det R` below the tolerance over the last
+    /// accepted iteration) but the step was not negligible when the fit stopped, for the
+    /// reason given: converged by `ml_oem2`'s criterion alone.
+    CostConverged(NotConverged),
+    /// Neither: the result is the last iterate, for the reason given.
+    NotConverged(NotConverged),
+}
+
+impl Termination {
+    /// How a fit with iteration log `log` ended: `converged` when both criteria were met,
+    /// else by the last accepted iteration's relative change of `det R` (`ln_det_r` of the
+    /// last two log entries) against `cost_tolerance`. A log of the start alone has no
+    /// accepted iteration and is [`Termination::NotConverged`].
+    pub fn of(
+        log: &[OeIteration],
+        converged: bool,
+        failure: NotConverged,
+        cost_tolerance: f64,
+    ) -> Self {
+        if converged {
+            return Termination::Converged;
+        }
+        match log {
+            [.., a, b] if (b.ln_det_r - a.ln_det_r).exp_m1().abs() < cost_tolerance => {
+                Termination::CostConverged(failure)
+            }
+            _ => Termination::NotConverged(failure),
+        }
+    }
+
+    /// Whether the fit is a result (both criteria, or the cost criterion alone).
+    pub fn is_converged(self) -> bool {
+        !matches!(self, Termination::NotConverged(_))
+    }
+
+    /// The status word of summaries: `converged`, `converged_in_cost` or `not_converged`.
+    pub fn status(self) -> &'static str {
+        match self {
+            Termination::Converged => "converged",
+            Termination::CostConverged(_) => "converged_in_cost",
+            Termination::NotConverged(_) => "not_converged",
+        }
+    }
+
+    /// A sentence for people.
+    pub fn describe(self) -> String {
+        match self {
+            Termination::Converged => "converged".into(),
+            Termination::CostConverged(why) => format!(
+                "converged in the cost alone (det R stopped changing; {} when it stopped)",
+                why.describe()
+            ),
+            Termination::NotConverged(why) => {
+                format!("NOT CONVERGED ({}): the last iterate", why.describe())
+            }
+        }
+    }
+}
+
 /// The result of [`fit`] (module doc).
 #[derive(Debug, Clone, PartialEq)]
 pub struct OeResult {
@@ -296,11 +377,25 @@ pub struct OeResult {
     pub iterations: Vec<OeIteration>,
     /// The starting values that were used (structure order).
     pub start: Vec<f64>,
-    /// Whether the convergence criteria were met.
-    pub converged: bool,
+    /// How the iterations ended (module doc, "Convergence").
+    pub termination: Termination,
 }
 
 impl OeResult {
+    /// The fit's outcome: the result when it converged (both criteria or the cost alone),
+    /// else [`OeError::NotConverged`] carrying it as the last iterate.
+    ///
+    /// # Errors
+    /// [`OeError::NotConverged`] for [`Termination::NotConverged`].
+    pub fn into_outcome(self) -> Result<OeResult, OeError> {
+        match self.termination {
+            Termination::NotConverged(reason) => {
+                Err(OeError::NotConverged { reason, result: Box::new(self) })
+            }
+            _ => Ok(self),
+        }
+    }
+
     /// Number of unknowns.
     pub fn n(&self) -> usize {
         self.values.len()
@@ -337,7 +432,7 @@ impl fmt::Display for OeResult {
             self.outputs.len(),
             self.manoeuvre_lengths.iter().sum::<usize>(),
             self.manoeuvre_lengths.len(),
-            if self.converged { "converged" } else { "NOT CONVERGED" }
+            self.termination.describe()
         )?;
         writeln!(
             f,
@@ -599,6 +694,15 @@ fn parabolic_step(f0: f64, slope: f64, f1: f64) -> Option<f64> {
 /// # Errors
 /// [`OeError`] as in the module doc.
 pub fn fit(manoeuvres: &[&[AirDataSample]], config: &OeConfig) -> Result<OeResult, OeError> {
+    fit_to_end(manoeuvres, config)?.into_outcome()
+}
+
+/// [`fit`], but a fit that does not converge is returned too: its last iterate, with
+/// [`OeResult::termination`] saying why it stopped (for a caller that reports it as such).
+///
+/// # Errors
+/// As [`fit`], except [`OeError::NotConverged`].
+pub fn fit_to_end(manoeuvres: &[&[AirDataSample]], config: &OeConfig) -> Result<OeResult, OeError> {
     let p = prepare(manoeuvres, config)?;
     fit_prepared(p, manoeuvres, config)
 }
@@ -732,14 +836,13 @@ fn fit_prepared(
             break;
         }
     }
-    if !converged && failure.is_none() {
-        failure = Some(NotConverged::MaxIterations);
-    }
-    let result = finish(&p, &config.structure, &beta, &r, &e, log, start, converged, config)?;
-    match failure {
-        None => Ok(result),
-        Some(reason) => Err(OeError::NotConverged { reason, result: Box::new(result) }),
-    }
+    let termination = Termination::of(
+        &log,
+        converged,
+        failure.unwrap_or(NotConverged::MaxIterations),
+        config.cost_tolerance,
+    );
+    Ok(finish(&p, &config.structure, &beta, &r, &e, log, start, termination, config)?)
 }
 
 /// The prepared problem of `config` over `manoeuvres` (outputs from the data by default).
@@ -870,7 +973,7 @@ fn finish(
     e: &[f64],
     iterations: Vec<OeIteration>,
     start: Vec<f64>,
-    converged: bool,
+    termination: Termination,
     config: &OeConfig,
 ) -> Result<OeResult, EstimatorError> {
     let w: Vec<f64> = r.iter().map(|v| 1.0 / v).collect();
@@ -878,7 +981,7 @@ fn finish(
     let mut s = Vec::new();
     p.simulate(beta, &mut y, Some(&mut s))?;
     let fit = Fitted { beta, s: &s, e, w: &w, r, names: unknown_names(p, structure) };
-    assemble(p, structure, fit, iterations, start, converged, config)
+    assemble(p, structure, fit, iterations, start, termination, config)
 }
 
 /// A converged (or last) iterate, ready for [`assemble`]: unknowns, sensitivities of the
@@ -901,7 +1004,7 @@ fn assemble(
     fit: Fitted<'_>,
     iterations: Vec<OeIteration>,
     start: Vec<f64>,
-    converged: bool,
+    termination: Termination,
     config: &OeConfig,
 ) -> Result<OeResult, EstimatorError> {
     let Fitted { beta, s, e, w, r, names } = fit;
@@ -956,7 +1059,7 @@ fn assemble(
         manoeuvre_lengths: lengths,
         iterations,
         start,
-        converged,
+        termination,
     })
 }
 

@@ -10,7 +10,7 @@
 #[path = "common/records.rs"]
 mod records;
 
-use aeroident_estimators::output_error::{OeConfig, OeResult, StepKind, fit};
+use aeroident_estimators::output_error::{OeConfig, OeResult, StepKind, Termination, fit};
 
 /// The README's reference: (our parameter name, value, Cramér–Rao σ).
 const REFERENCE: [(&str, f64, f64); 11] = [
@@ -49,7 +49,7 @@ fn hfb320_output_error_reproduces_the_published_result() {
     let Some((res, wall_s)) = run(StepKind::Concentrated) else { return };
     println!("{res}");
     println!("wall time {:.1} ms", wall_s * 1e3);
-    assert!(res.converged);
+    assert_eq!(res.termination, Termination::Converged);
     assert_eq!(res.n_params, 11);
     for (name, value, sigma) in REFERENCE {
         let (v, s) = res.get(name).unwrap_or_else(|| panic!("{name} missing"));

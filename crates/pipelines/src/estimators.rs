@@ -92,8 +92,10 @@ impl EstimatorKind {
             EstimatorKind::Rls => &["forgetting"],
             EstimatorKind::Ftr => &["forgetting", "grid_hz"],
             EstimatorKind::Ekf => &["parameter_walk_per_sqrt_s", "samples"],
-            EstimatorKind::Oe => &["initial_states", "samples", "step", "bootstrap_refits"],
-            EstimatorKind::Fem => &["initial_states", "samples", "process_noise"],
+            EstimatorKind::Oe => {
+                &["initial_states", "samples", "step", "bootstrap_refits", "max_iterations"]
+            }
+            EstimatorKind::Fem => &["initial_states", "samples", "process_noise", "max_iterations"],
             EstimatorKind::Smpe | EstimatorKind::SmpeCorrected | EstimatorKind::Gradient => &[],
         }
     }
@@ -449,7 +451,7 @@ mod tests {
         );
         assert_eq!(
             unknown_option(EstimatorKind::Oe, "x"),
-            "oe: unknown option `x` (it takes `initial_states`, `samples`, `step` and `bootstrap_refits`)"
+            "oe: unknown option `x` (it takes `initial_states`, `samples`, `step`, `bootstrap_refits` and `max_iterations`)"
         );
         assert_eq!(
             unknown_option(EstimatorKind::Smpe, "x"),

@@ -166,10 +166,18 @@ pub fn run_result(index: u64, sensor_seed: u64, out: &RunOutput) -> RunResult {
         for p in &sm.parameters {
             if ests.last().is_none_or(|e| e.name != p.estimator) {
                 let diverged = p.status == Some("diverged");
-                let failure = p.failure.clone().or_else(|| diverged.then(|| "diverged".into()));
                 let ch = out.channels.iter().find(|c| c.label == p.estimator);
                 let nis = ch.and_then(|c| c.nis).filter(|v| v.is_finite());
                 let fit = ch.and_then(|c| c.batch.as_ref());
+                // A batch fit's last iterate is not an estimate of the campaign's statistics.
+                let unconverged = fit
+                    .filter(|f| f.status == "not_converged")
+                    .map(|f| f.status_reason.clone().unwrap_or_else(|| "not converged".into()));
+                let failure = p
+                    .failure
+                    .clone()
+                    .or_else(|| diverged.then(|| "diverged".into()))
+                    .or(unconverged);
                 let restarts =
                     ch.map_or(0, |c| c.events.count(aeroident_estimators::EventKind::Restart));
                 ests.push(EstimatorRun {

@@ -9,7 +9,9 @@ use aeroident_estimators::flight_model::N_STATES;
 use aeroident_estimators::output_error::InitialStates;
 use aeroident_io::{Mapping, ModelSpec, open_log_with_notes};
 use aeroident_pipelines::estimators::EstimatorKind;
-use aeroident_pipelines::replay::batch::{BatchOutcome, FitOptions, fit_record, validate_on};
+use aeroident_pipelines::replay::batch::{
+    BatchOutcome, FitOptions, fit_record, parse_process_noise_states, validate_on,
+};
 use numpy::IntoPyArray;
 use numpy::ndarray::Array2;
 use pyo3::prelude::*;
@@ -39,9 +41,10 @@ fn matrix(v: Vec<f64>, rows: usize, cols: usize) -> PyResult<Array2<f64>> {
 
 /// Fits a record file by output error (`oe`) or the filter-error method (`fem`) as
 /// `aeroident replay DATA --map MAPPING --estimator oe|fem [--model M] [--initial-states S]
-/// [--validate-on V] [--bootstrap N]` (documentation: `aeroident.fit` in python/aeroident/__init__.py).
+/// [--validate-on V] [--bootstrap N] [--max-iterations N] [--process-noise S]` (documentation:
+/// `aeroident.fit` in python/aeroident/__init__.py).
 #[pyfunction]
-#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None))]
+#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None, max_iterations=None, process_noise=None))]
 #[allow(clippy::too_many_arguments)]
 fn fit_file<'py>(
     py: Python<'py>,
@@ -52,7 +55,12 @@ fn fit_file<'py>(
     initial_states: &str,
     validate_with: Option<&str>,
     bootstrap: Option<usize>,
+    max_iterations: Option<usize>,
+    process_noise: Option<&str>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    if max_iterations == Some(0) {
+        return Err(err("fit: max_iterations must be a positive integer, got 0".to_string()));
+    }
     let kind = estimator_kind(estimator)?;
     if !kind.is_batch() {
         return Err(err(format!(
@@ -62,6 +70,10 @@ fn fit_file<'py>(
         )));
     }
     let setting = self::initial_states(initial_states)?;
+    let process_noise = process_noise
+        .map(parse_process_noise_states)
+        .transpose()
+        .map_err(|e| err(format!("fit: {e}")))?;
     let (path, mapping) = (path.to_owned(), mapping.to_owned());
     let (model, validate_with) = (model.map(str::to_owned), validate_with.map(str::to_owned));
     let run = move || -> anyhow::Result<(BatchOutcome, Vec<String>)> {
@@ -72,6 +84,8 @@ fn fit_file<'py>(
             fem: kind == EstimatorKind::Fem,
             initial_states: setting,
             bootstrap_refits: bootstrap,
+            max_iterations,
+            process_noise,
         };
         let mut outcome = fit_record(reader, &mapping, model, options)?;
         if let Some(v) = &validate_with {

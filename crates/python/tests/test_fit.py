@@ -99,6 +99,27 @@ def test_fit_refuses_what_it_cannot_do():
         aeroident.replay(data, mapping=HFB_MAP, estimator="oe")
     with pytest.raises(aeroident.AeroidentError, match="nothing_here.csv"):
         aeroident.fit(ROOT / "nothing_here.csv", HFB_MAP, "oe")
+    with pytest.raises(aeroident.AeroidentError, match="max_iterations must be a positive"):
+        aeroident.fit(data, HFB_MAP, "oe", max_iterations=0)
+    with pytest.raises(aeroident.AeroidentError, match="`gamma` unknown"):
+        aeroident.fit(data, HFB_MAP, "fem", process_noise="V,gamma")
+    with pytest.raises(aeroident.AeroidentError, match="filter-error method"):
+        aeroident.fit(data, HFB_MAP, "oe", process_noise="V")
+
+
+def test_fit_past_the_iteration_limit_is_the_last_iterate(tmp_path):
+    # The same as the CLI with --max-iterations 2: a result, status not_converged and why.
+    data = shared(HFB)
+    out = tmp_path / "out"
+    args = ("--model", BOOK_MODEL, "--estimator", "oe", "--max-iterations", "2", "--out", out)
+    r = cli("replay", data, "--map", HFB_MAP, *args)
+    assert r.returncode == 0, r.stderr
+    expected = json.loads((out / "summary.json").read_text())
+    py = aeroident.fit(data, HFB_MAP, "oe", model=BOOK_MODEL, max_iterations=2)
+    assert without_wall_time(py["summary"]) == without_wall_time(expected)
+    assert py["summary"]["status"] == "not_converged"
+    assert "iteration limit" in py["summary"]["status_reason"]
+    assert np.all(np.isfinite(py["values"]))
 
 
 def test_fit_bootstrap_sigma():

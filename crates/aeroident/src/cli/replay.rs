@@ -92,6 +92,16 @@ pub struct ReplayArgs {
     /// the parametric bootstrap"). Its σ becomes the reported `std_error`.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..))]
     pub bootstrap: Option<u32>,
+    /// `oe`, `fem`: most Gauss–Newton iterations (default 50 for `oe`, 250 for `fem`). A fit
+    /// that reaches it reports its last iterate, status `not_converged` (or
+    /// `converged_in_cost` when the cost had stopped changing) and why.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub max_iterations: Option<u32>,
+    /// `fem`: the states with process noise, comma-separated (`V`, `alpha`, `beta`, `p`, `q`,
+    /// `r`, `phi`, `theta`; default `V,alpha,beta`), e.g. `V,alpha,theta,q` for the book's
+    /// HFB-320 fit.
+    #[arg(long, value_name = "STATES")]
+    pub process_noise: Option<String>,
 }
 
 /// `--initial-states` of the batch fits (`aeroident_estimators::output_error::InitialStates`).
@@ -163,6 +173,18 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     if args.bootstrap.is_some() {
         anyhow::bail!(
             "--bootstrap applies to output error (--estimator oe), not to --estimator {}",
+            args.estimator.name()
+        );
+    }
+    if args.process_noise.is_some() {
+        anyhow::bail!(
+            "--process-noise applies to the filter-error method (--estimator fem), not to --estimator {}",
+            args.estimator.name()
+        );
+    }
+    if args.max_iterations.is_some() {
+        anyhow::bail!(
+            "--max-iterations applies to the batch fits (--estimator oe or fem), not to --estimator {}",
             args.estimator.name()
         );
     }
@@ -396,6 +418,13 @@ fn execute_batch(
         fem,
         initial_states: args.initial_states.unwrap_or(InitialStatesArg::FirstSample).to_config(),
         bootstrap_refits: args.bootstrap.map(|n| n as usize),
+        max_iterations: args.max_iterations.map(|n| n as usize),
+        process_noise: args
+            .process_noise
+            .as_deref()
+            .map(aeroident_pipelines::replay::batch::parse_process_noise_states)
+            .transpose()
+            .map_err(|e| anyhow::anyhow!("--process-noise: {e}"))?,
     };
     if let Some(n) = options.bootstrap_refits.filter(|_| !fem) {
         eprintln!("bootstrap: a filter-error fit for the noise levels, then {n} replicas refitted");

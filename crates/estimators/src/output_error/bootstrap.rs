@@ -149,7 +149,8 @@ pub fn refit(
     }
     let mut cfg = config.clone();
     cfg.start = Start::Given(beta[..np].to_vec());
-    let r = fit_prepared(p, manoeuvres, &cfg)?;
+    // A replica that does not converge (not even in the cost) is a failed replica.
+    let r = fit_prepared(p, manoeuvres, &cfg)?.into_outcome()?;
     Ok(r.values)
 }
 

@@ -140,8 +140,9 @@
 use super::riccati;
 use super::simulation::Problem;
 use super::{
-    Fitted, NotConverged, OeConfig, OeError, OeIteration, OeResult, assemble, damped_step,
-    first_start, normal_equations, prepare, residuals, spd_inverse, unknown_names, weighted_cost,
+    Fitted, NotConverged, OeConfig, OeError, OeIteration, OeResult, Termination, assemble,
+    damped_step, first_start, normal_equations, prepare, residuals, spd_inverse, unknown_names,
+    weighted_cost,
 };
 use crate::EstimatorError;
 use crate::coloured::batch as coloured;
@@ -501,12 +502,36 @@ fn noise_start(p: &Problem) -> Vec<f64> {
 /// [`FemConfig::process_noise_start`] and [`EstimatorError::Numerical`] when the Riccati
 /// equation has no stabilising solution at the starting values.
 pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FemConfig) -> Result<FemResult, OeError> {
+    let fem = fit_to_end(manoeuvres, config)?;
+    match fem.result.termination {
+        Termination::NotConverged(reason) => {
+            Err(OeError::NotConverged { reason, result: Box::new(fem.result) })
+        }
+        _ => Ok(fem),
+    }
+}
+
+/// [`fit`], but a fit that does not converge is returned too: its last iterate, with
+/// `result.termination` saying why it stopped (for a caller that reports it as such).
+///
+/// # Errors
+/// As [`fit`], except [`OeError::NotConverged`].
+pub fn fit_to_end(
+    manoeuvres: &[&[AirDataSample]],
+    config: &FemConfig,
+) -> Result<FemResult, OeError> {
     let oe = &config.oe;
     let p = prepare(manoeuvres, oe)?;
     let fem = Fem::new(&p, config)?;
     let (mut it, start) = fem.start(manoeuvres, oe)?;
     let (converged, failure) = fem.iterate(&mut it, oe)?;
-    fem.finish(it, start, converged, failure, oe)
+    let termination = Termination::of(
+        &it.log,
+        converged,
+        failure.unwrap_or(NotConverged::MaxIterations),
+        oe.cost_tolerance,
+    );
+    fem.finish(it, start, termination, oe)
 }
 
 /// The filter-error problem set up: the filter, and the starts and lower bounds of the noise
@@ -837,15 +862,14 @@ impl<'a> Fem<'a> {
         })
     }
 
-    /// The result at the final iterate: accuracy from the sensitivities of β recomputed
-    /// there with B and R final, the diagnostic σ, `F` back from its logarithm; an error
-    /// carrying the last iterate when the fit did not converge.
+    /// The result at the final iterate, converged or not ([`Termination`]): accuracy from the
+    /// sensitivities of β recomputed there with B and R final, the diagnostic σ, `F` back from
+    /// its logarithm.
     fn finish(
         &self,
         mut it: Iterate,
         start: Vec<f64>,
-        converged: bool,
-        failure: Option<NotConverged>,
+        termination: Termination,
         oe: &OeConfig,
     ) -> Result<FemResult, OeError> {
         let (nb, first_f) = (self.nb, self.first_f);
@@ -858,7 +882,7 @@ impl<'a> Fem<'a> {
         let mut names = unknown_names(self.p, &oe.structure);
         names.extend(self.noisy.iter().map(|&k| format!("F_{}", STATE_NAMES[states[k]])));
         let fit = Fitted { beta: &beta, s: &it.s, e: &it.e, w: &w, r: &r, names };
-        let mut result = assemble(self.p, &oe.structure, fit, it.log, start, converged, oe)?;
+        let mut result = assemble(self.p, &oe.structure, fit, it.log, start, termination, oe)?;
         let max_lag = oe
             .coloured_max_lag
             .unwrap_or_else(|| result.manoeuvre_lengths.iter().copied().min().unwrap_or(4) / 4);
@@ -883,10 +907,7 @@ impl<'a> Fem<'a> {
             sigma_full_b,
             sigma_coloured_theta,
         };
-        match failure {
-            None => Ok(out),
-            Some(reason) => Err(OeError::NotConverged { reason, result: Box::new(out.result) }),
-        }
+        Ok(out)
     }
 }
 

@@ -69,7 +69,7 @@
 //! filter following the smoothed measurements. Batch methods use no differentiated channel, so
 //! they do not need the smoother.
 
-use aeroident_estimators::flight_model::{N_STATES, Output, StateSet, state};
+use aeroident_estimators::flight_model::{N_STATES, Output, StateSet};
 use aeroident_estimators::output_error::filter_error::FemConfig;
 use aeroident_estimators::output_error::{InitialStates, OeConfig, OeResult, StepKind};
 use aeroident_estimators::sample::AirDataSample;
@@ -78,7 +78,8 @@ use serde::Serialize;
 use crate::estimators::SampleEstimatorSpec;
 use crate::replay::batch::{
     BOOTSTRAP_SEED, MAX_ITERATIONS, bootstrap_sigma, fem_reported_sigma, fit_fem_manoeuvres,
-    fit_manoeuvres, initial_states_name, oe_config, process_noise_of, reported_sigma,
+    fit_manoeuvres, initial_states_name, oe_config, parse_process_noise_states, process_noise_of,
+    reported_sigma, termination_note,
 };
 
 /// The configuration of a batch entry: output error or the filter-error method.
@@ -120,8 +121,9 @@ impl BatchConfig {
 /// "concentrated"` for the other, `oe` only) and at most [`MAX_ITERATIONS`] iterations, the
 /// outputs of the structure's flight model without the differentiated `ṗ q̇ ṙ` (they are
 /// computed from the gyros already fitted, not independent measurements: fitting both would
-/// count the gyro noise twice under the diagonal `R`), and its option `initial_states`
-/// (`"first-sample"`, the default, or `"estimate"`). `fem` adds process noise on `V, α, β`
+/// count the gyro noise twice under the diagonal `R`), its option `initial_states`
+/// (`"first-sample"`, the default, or `"estimate"`) and `max_iterations` (a positive integer;
+/// past it the fit's last iterate is reported as `not_converged`). `fem` adds process noise on `V, α, β`
 /// (option `process_noise`, module doc).
 ///
 /// # Errors
@@ -177,7 +179,18 @@ pub fn config(spec: &SampleEstimatorSpec) -> Result<BatchConfig, String> {
                 return Err(format!("{kind}: `samples` must be \"raw\" or \"smoothed\", got {v}"));
             }
             ("process_noise", Some(list)) if kind == "fem" => {
-                process_noise = Some(parse_states(list)?);
+                process_noise = Some(parse_process_noise_states(list)?);
+            }
+            ("max_iterations", _) => {
+                match spec.options.get(key).and_then(toml::Value::as_integer) {
+                    Some(n) if n >= 1 => c.max_iterations = n as usize,
+                    _ => {
+                        return Err(format!(
+                            "{kind}: `max_iterations` must be a positive integer, got {}",
+                            spec.options[key]
+                        ));
+                    }
+                }
             }
             (other, _) => {
                 let k = <crate::estimators::EstimatorKind as crate::Named>::from_name(kind);
@@ -206,30 +219,6 @@ pub fn config(spec: &SampleEstimatorSpec) -> Result<BatchConfig, String> {
     })
 }
 
-/// A comma-separated list of state names (`V alpha beta p q r phi theta`) as a full-state mask.
-fn parse_states(list: &str) -> Result<[bool; N_STATES], String> {
-    let mut mask = [false; N_STATES];
-    for name in list.split(',').map(str::trim).filter(|n| !n.is_empty()) {
-        let i = match name {
-            "V" | "vt" => state::V,
-            "alpha" => state::ALPHA,
-            "beta" => state::BETA,
-            "p" => state::P,
-            "q" => state::Q,
-            "r" => state::R,
-            "phi" => state::PHI,
-            "theta" => state::THETA,
-            other => {
-                return Err(format!(
-                    "fem: `process_noise` state `{other}` unknown (V alpha beta p q r phi theta)"
-                ));
-            }
-        };
-        mask[i] = true;
-    }
-    Ok(mask)
-}
-
 /// How a batch fit went (`summary.json` `batch_fits`, and the Monte Carlo per-run results).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BatchFit {
@@ -247,6 +236,11 @@ pub struct BatchFit {
     pub initial_states: &'static str,
     /// Gauss–Newton iterations (`null`: the fit failed before iterating).
     pub iterations: Option<usize>,
+    /// How the fit ended: `converged`, `converged_in_cost` or `not_converged` (the last
+    /// iterate; [`aeroident_estimators::output_error::Termination::status`]).
+    pub status: &'static str,
+    /// Why it is not `converged` ([`termination_note`]); `None` when it is.
+    pub status_reason: Option<String>,
     /// Wall time of the fit, s.
     pub wall_s: f64,
     /// Residual RMS per output (unit of the output).
@@ -283,9 +277,12 @@ pub type WindowFit = (Vec<(f64, f64)>, BatchFit);
 /// Fits `samples` from `window_from_s` (sample time stamps; the first sample at or after it)
 /// by output error with `config`.
 ///
+/// A fit that does not converge on both criteria gives its last iterate, [`BatchFit::status`]
+/// and [`BatchFit::status_reason`] saying how it ended; the bootstrap runs only on a converged
+/// fit.
+///
 /// # Errors
-/// A message: too few samples in the window, or the fit failed or did not converge (reason and
-/// iterations).
+/// A message: too few samples in the window, or the fit failed (the reason).
 pub fn fit_window(
     label: &str,
     samples: &[AirDataSample],
@@ -308,7 +305,7 @@ pub fn fit_window(
             let mut extra = Vec::new();
             let mut failed = None;
             let mut bias = None;
-            if let Some(n) = *bootstrap_refits {
+            if let Some(n) = bootstrap_refits.filter(|_| result.termination.is_converged()) {
                 // Each run's own draws: the seed mixes in the window's first measurements (a
                 // common seed would correlate the runs' σ through shared replica noise).
                 let first = &window[0];
@@ -380,6 +377,8 @@ fn log_of(
         outputs: r.outputs.iter().map(|o| o.name().to_string()).collect(),
         initial_states: initial_states_name(config.initial_states),
         iterations: Some(r.n_iterations()),
+        status: r.termination.status(),
+        status_reason: termination_note(r),
         wall_s,
         residual_rms: r.residual_rms.clone(),
         coloured_sigma: r.sigma_coloured.is_some(),
@@ -389,5 +388,50 @@ fn log_of(
         sigma_candidates,
         bootstrap_failed: None,
         bootstrap_bias: None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use aeroident_estimators::ModelStructure;
+    use aeroident_estimators::flight_model::state;
+
+    fn spec(kind: &str, options: &str) -> SampleEstimatorSpec {
+        SampleEstimatorSpec {
+            kind: kind.into(),
+            model: ModelStructure::longitudinal(),
+            model_name: "longitudinal".into(),
+            label: None,
+            options: toml::from_str(options).unwrap(),
+        }
+    }
+
+    /// `max_iterations` sets the limit of both batch kinds; 0, a float or a string is refused
+    /// with the key named; `process_noise` names the states of `fem`.
+    #[test]
+    fn the_iteration_limit_and_the_process_noise_states_are_options() {
+        for kind in ["oe", "fem"] {
+            let c = config(&spec(kind, "max_iterations = 7")).unwrap();
+            assert_eq!(c.oe().max_iterations, 7, "{kind}");
+            assert_eq!(config(&spec(kind, "")).unwrap().oe().max_iterations, MAX_ITERATIONS);
+            for bad in ["max_iterations = 0", "max_iterations = 2.5", "max_iterations = \"x\""] {
+                let e = config(&spec(kind, bad)).unwrap_err();
+                assert!(e.contains("`max_iterations` must be a positive integer"), "{e}");
+            }
+        }
+        let BatchConfig::Fem(f) =
+            config(&spec("fem", "process_noise = \"V, alpha,theta,q\"")).unwrap()
+        else {
+            panic!("fem expected")
+        };
+        let mut want = [state::V, state::ALPHA, state::THETA, state::Q];
+        want.sort_unstable();
+        let on: Vec<usize> = (0..N_STATES).filter(|&k| f.process_noise[k]).collect();
+        assert_eq!(on, want);
+        let e = config(&spec("fem", "process_noise = \"V,gamma\"")).unwrap_err();
+        assert!(e.contains("`gamma` unknown"), "{e}");
+        let e = config(&spec("fem", "process_noise = \" , \"")).unwrap_err();
+        assert!(e.contains("names no state"), "{e}");
     }
 }

@@ -689,7 +689,7 @@ fn fit_batches(channels: &mut [ChannelRun], epochs: &[TruthEpoch], out: &RunOutp
                         *sg = Some(s).filter(|s| s.is_finite());
                     }
                 }
-                c.log.status = Some("converged");
+                c.log.status = Some(log.status);
                 c.log.stats = format!(
                     "{}: {} samples from t = {:.2} s, {} iterations, {:.2} s",
                     match b.config.kind() {
@@ -701,6 +701,9 @@ fn fit_batches(channels: &mut [ChannelRun], epochs: &[TruthEpoch], out: &RunOutp
                     log.iterations.unwrap_or(0),
                     log.wall_s
                 );
+                if let Some(why) = &log.status_reason {
+                    c.log.stats.push_str(&format!("; {why}"));
+                }
                 c.log.batch = Some(log);
             }
             Err(e) => {

@@ -84,7 +84,8 @@ pub struct ParamSummary {
     /// Estimator failure (time and message), if any; estimates were held from then on.
     pub failure: Option<String>,
     /// Sample-driven estimators: the final status (`initialising`, `running`, `diverged`;
-    /// batch: `converged` or `failed`).
+    /// batch: `converged`, `converged_in_cost`, `not_converged` (the last iterate) or
+    /// `failed`).
     pub status: Option<&'static str>,
     /// Whether the estimator is a batch (post-flight) fit ([`super::batch`]): its estimate
     /// exists only at the end, so every time metric (`convergence_time_s`, `time_to_10pct_s`,

@@ -22,10 +22,12 @@ use super::prediction::{Recorder, ValidationReport, validate_coefficients};
 use crate::validation::{OutputData, validate};
 use aeroident_estimators::Term;
 use aeroident_estimators::flight_model::FlightModel;
-use aeroident_estimators::flight_model::STATE_NAMES;
+use aeroident_estimators::flight_model::{N_STATES, STATE_NAMES, state};
 use aeroident_estimators::output_error::filter_error::{self, FemConfig, FemResult};
 use aeroident_estimators::output_error::{InitialStates, Start};
-use aeroident_estimators::output_error::{OeConfig, OeError, OeResult, fit};
+use aeroident_estimators::output_error::{
+    OeConfig, OeError, OeResult, Termination, fit, fit_to_end,
+};
 use aeroident_estimators::{AirDataSample, ModelStructure};
 use aeroident_io::{FlightDataReader, Mapping, ModelSpec, RecordEvent, Rejection, RejectionLog};
 use serde::Serialize;
@@ -151,8 +153,12 @@ pub struct BatchSummary {
     pub estimator: String,
     /// The model's name.
     pub model: String,
-    /// `converged`.
+    /// How the fit ended: `converged` (both criteria), `converged_in_cost` (the cost stopped
+    /// changing, the step did not become negligible) or `not_converged` (the last iterate).
     pub status: String,
+    /// Why the fit is not `converged`: how it ended and the last iteration's measures; `null`
+    /// for a converged fit.
+    pub status_reason: Option<String>,
     /// Rows read.
     pub samples_read: usize,
     /// Rows rejected (listed in `rejections`).
@@ -281,21 +287,23 @@ pub fn oe_config(structure: ModelStructure) -> OeConfig {
     OeConfig::new(structure)
 }
 
-/// Fits `manoeuvres` by output error with `config` and times the fit: `(result, wall s)`.
+/// Fits `manoeuvres` by output error with `config` and times the fit: `(result, wall s)`. A fit
+/// that does not converge is its last iterate, [`OeResult::termination`] saying why
+/// ([`termination_note`] words it).
 ///
 /// # Errors
-/// A fit that fails or does not converge: a message with the reason and the iteration count
-/// (never the unconverged iterate).
+/// A fit that fails (a model that cannot be simulated, unknowns that are not identifiable …).
 pub fn fit_manoeuvres(
     manoeuvres: &[&[AirDataSample]],
     config: &OeConfig,
 ) -> Result<(OeResult, f64), String> {
     let t0 = std::time::Instant::now();
-    let result = fit(manoeuvres, config).map_err(|e| fit_error("output error", e))?;
+    let result = fit_to_end(manoeuvres, config).map_err(|e| fit_error("output error", e))?;
     Ok((result, t0.elapsed().as_secs_f64()))
 }
 
-/// Fits `manoeuvres` by the filter-error method with `config` and times the fit.
+/// Fits `manoeuvres` by the filter-error method with `config` and times the fit; a fit that
+/// does not converge is its last iterate, as [`fit_manoeuvres`].
 ///
 /// # Errors
 /// As [`fit_manoeuvres`].
@@ -304,32 +312,40 @@ pub fn fit_fem_manoeuvres(
     config: &FemConfig,
 ) -> Result<(FemResult, f64), String> {
     let t0 = std::time::Instant::now();
-    let result = filter_error::fit(manoeuvres, config).map_err(|e| fit_error("filter error", e))?;
+    let result =
+        filter_error::fit_to_end(manoeuvres, config).map_err(|e| fit_error("filter error", e))?;
     Ok((result, t0.elapsed().as_secs_f64()))
 }
 
-/// The message of a failed fit: for one that did not converge, the reason, the iteration count
-/// and the last iteration's convergence measures (relative change of det R, largest step in
-/// Cramér–Rao σ), so a creeping fit can be told from a stalled one.
 fn fit_error(method: &str, e: OeError) -> String {
     match e {
-        OeError::NotConverged { reason, result } => {
-            let it = &result.iterations;
-            let last = match it.as_slice() {
-                [.., a, b] => format!(
-                    " (last iteration: relative change of det R {:.1e}, largest step {:.1e} σ)",
-                    (b.ln_det_r - a.ln_det_r).exp_m1().abs(),
-                    b.max_step_sigma
-                ),
-                _ => String::new(),
-            };
-            format!(
-                "{method} did not converge ({reason:?}) after {} iterations{last}: no result",
-                result.n_iterations()
-            )
-        }
+        // `fit_to_end` returns the last iterate instead.
+        OeError::NotConverged { reason, .. } => format!("{method}: {}", reason.describe()),
         OeError::Estimator(e) => format!("{method}: {e}"),
     }
+}
+
+/// What a fit that did not meet both convergence criteria must say (`None` for one that did):
+/// how it ended, after how many iterations, and the last iteration's convergence measures
+/// (relative change of det R, largest step in Cramér–Rao σ), so a creeping fit can be told
+/// from a stalled one.
+pub fn termination_note(result: &OeResult) -> Option<String> {
+    if result.termination == Termination::Converged {
+        return None;
+    }
+    let last = match result.iterations.as_slice() {
+        [.., a, b] => format!(
+            " (last iteration: relative change of det R {:.1e}, largest step {:.1e} σ)",
+            (b.ln_det_r - a.ln_det_r).exp_m1().abs(),
+            b.max_step_sigma
+        ),
+        _ => String::new(),
+    };
+    Some(format!(
+        "{} after {} iterations{last}",
+        result.termination.describe(),
+        result.n_iterations()
+    ))
 }
 
 /// The model's simulated outputs over `manoeuvres` with parameters `theta` (no fit: output
@@ -489,8 +505,13 @@ pub fn bootstrap_sigma(
     let mut fem_config = FemConfig::new(config.structure);
     fem_config.oe = config.clone();
     fem_config.oe.max_iterations = MAX_ITERATIONS;
-    let (fem, _) = fit_fem_manoeuvres(manoeuvres, &fem_config)
-        .map_err(|e| format!("bootstrap: the noise levels come from a filter-error fit: {e}"))?;
+    let noise_source = "bootstrap: the noise levels come from a filter-error fit";
+    let (fem, _) =
+        fit_fem_manoeuvres(manoeuvres, &fem_config).map_err(|e| format!("{noise_source}: {e}"))?;
+    if !fem.result.termination.is_converged() {
+        let why = termination_note(&fem.result).unwrap_or_default();
+        return Err(format!("{noise_source}, which did not converge: {why}"));
+    }
     let noise = BootstrapNoise::from_fem(&fem);
     let draws: Vec<Result<Vec<f64>, String>> = (0..refits)
         .into_par_iter()
@@ -537,6 +558,37 @@ pub fn initial_states_name(setting: InitialStates) -> &'static str {
     }
 }
 
+/// The states of a comma-separated list (`V` or `vt`, `alpha`, `beta`, `p`, `q`, `r`, `phi`,
+/// `theta`) as a full-state mask: the states the filter-error method gives process noise.
+///
+/// # Errors
+/// A message naming an unknown state.
+pub fn parse_process_noise_states(list: &str) -> Result<[bool; N_STATES], String> {
+    let mut mask = [false; N_STATES];
+    for name in list.split(',').map(str::trim).filter(|n| !n.is_empty()) {
+        let i = match name {
+            "V" | "vt" => state::V,
+            "alpha" => state::ALPHA,
+            "beta" => state::BETA,
+            "p" => state::P,
+            "q" => state::Q,
+            "r" => state::R,
+            "phi" => state::PHI,
+            "theta" => state::THETA,
+            other => {
+                return Err(format!(
+                    "fem: `process_noise` state `{other}` unknown (V alpha beta p q r phi theta)"
+                ));
+            }
+        };
+        mask[i] = true;
+    }
+    if !mask.contains(&true) {
+        return Err(format!("fem: `process_noise` names no state (`{list}`)"));
+    }
+    Ok(mask)
+}
+
 /// What a batch fit of a record fits and how (`replay --estimator oe|fem
 /// [--initial-states …] [--bootstrap N]`).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -548,30 +600,51 @@ pub struct FitOptions {
     /// `oe` only: the parametric bootstrap with this many refits ([`bootstrap_sigma`], seed
     /// [`BOOTSTRAP_SEED`]); its σ is then the reported one.
     pub bootstrap_refits: Option<usize>,
+    /// Most Gauss–Newton iterations; `None`: [`OeConfig::new`]'s 50 for output error,
+    /// [`MAX_ITERATIONS`] for the filter-error method. A fit stopped by it reports its last
+    /// iterate ([`termination_note`]).
+    pub max_iterations: Option<usize>,
+    /// `fem` only: the states with process noise (full-state mask,
+    /// [`parse_process_noise_states`]); `None`: [`FemConfig::new`]'s (`V`, `α`, `β`).
+    pub process_noise: Option<[bool; N_STATES]>,
 }
 
 impl Default for FitOptions {
-    /// Output error, initial states at the first sample, no bootstrap.
+    /// Output error, initial states at the first sample, no bootstrap, the default limit.
     fn default() -> Self {
-        Self { fem: false, initial_states: InitialStates::FirstSample, bootstrap_refits: None }
+        Self {
+            fem: false,
+            initial_states: InitialStates::FirstSample,
+            bootstrap_refits: None,
+            max_iterations: None,
+            process_noise: None,
+        }
     }
 }
 
 /// Reads the whole record, splits it at gaps and fits it by output error (`fem`: by the
 /// filter-error method with [`FemConfig::new`]'s defaults on [`oe_config`]) as `options` say.
+/// A fit that does not meet both convergence criteria is reported all the same, its status
+/// (`converged_in_cost`, `not_converged`) and [`termination_note`] in the summary; the
+/// bootstrap is not run on a fit that did not converge.
 ///
 /// # Errors
-/// Fatal data errors, no usable samples, no supported model, a fit that fails or does not
-/// converge ([`ReplayError::Model`] with the reason and the iteration count), a bootstrap that
-/// fails ([`bootstrap_sigma`]), and a bootstrap asked of `fem` ([`ReplayError::Option`]).
+/// Fatal data errors, no usable samples, no supported model, a fit that fails
+/// ([`ReplayError::Model`] with the reason), a bootstrap that fails ([`bootstrap_sigma`]), and a
+/// bootstrap asked of `fem` ([`ReplayError::Option`]).
 pub fn fit_record<R: Read>(
     reader: FlightDataReader<R>,
     mapping: &Mapping,
     model: Option<ModelSpec>,
     options: FitOptions,
 ) -> Result<BatchOutcome, ReplayError> {
-    let FitOptions { fem, initial_states, bootstrap_refits } = options;
-    if fem && bootstrap_refits.is_some() {
+    if !options.fem && options.process_noise.is_some() {
+        return Err(ReplayError::Option {
+            option: "process-noise",
+            reason: "process noise is the filter-error method's (`--estimator fem`); output error has none".into(),
+        });
+    }
+    if options.fem && options.bootstrap_refits.is_some() {
         return Err(ReplayError::Option {
             option: "bootstrap",
             reason: "the parametric bootstrap is of output error (`--estimator oe`); the filter-error method's own σ accounts for the process noise".into(),
@@ -579,49 +652,148 @@ pub fn fit_record<R: Read>(
     }
     let file = reader.file().to_string();
     let rec = read_manoeuvres(reader)?;
-    let (manoeuvres, rejections, read, rejected) =
-        (rec.manoeuvres, rec.rejections, rec.read, rec.rejected);
-    let first = manoeuvres[0][0];
     let model = match model {
         Some(m) => m,
-        None => default_model(&first, mapping)?,
+        None => default_model(&rec.manoeuvres[0][0], mapping)?,
     };
-    let slices: Vec<&[AirDataSample]> = manoeuvres.iter().map(Vec::as_slice).collect();
-    let mut oe_used = None;
-    let (result, fit_wall_s, fem_result) = if fem {
-        let mut config = FemConfig::new(model.structure);
+    let slices: Vec<&[AirDataSample]> = rec.manoeuvres.iter().map(Vec::as_slice).collect();
+    let fitted = fit_slices(&slices, model.structure, options)?;
+    let sigmas = sigma_stage(&slices, &fitted, options.bootstrap_refits)?;
+    let st = model.structure;
+    let result = &fitted.result;
+    // A filter-error fit is validated (and drawn) by simulating the model at its estimates;
+    // a model whose simulation leaves the physical domain open loop (an unstable mode the
+    // filter held) is shown by its one-step predictions instead, and says so.
+    let mut simulation_note = None;
+    let simulated = match &fitted.fem {
+        Some(_) => {
+            match simulate_at(&slices, st, &result.outputs, &result.values[..result.n_params]) {
+                Ok(r) => r,
+                Err(e) => {
+                    simulation_note = Some(format!(
+                        "filter error: the model at the estimates cannot be simulated open loop ({e}); the validation and the figure show the filter's one-step predictions"
+                    ));
+                    result.clone()
+                }
+            }
+        }
+        None => result.clone(),
+    };
+    let validation = simulated_validation(&simulated, &slices, &file, None);
+    let traces = output_traces(&simulated, &slices);
+    let (rejections, unlisted) = rec.rejections.finish();
+    let mut summary =
+        summarise(&model, &fitted, &sigmas, &rec.manoeuvres, options.initial_states, validation);
+    summary.samples_read = rec.read;
+    summary.samples_rejected = rec.rejected;
+    summary.rejections = rejections;
+    summary.warnings.extend(unlisted);
+    summary.warnings.extend(simulation_note);
+    Ok(BatchOutcome { model, result: fitted.result, summary, traces })
+}
+
+/// A batch fit of the record's manoeuvres, timed.
+struct FittedRecord {
+    /// The output-error result (of the filter-error fit for `fem`).
+    result: OeResult,
+    fit_wall_s: f64,
+    /// `fem`: its full result.
+    fem: Option<FemResult>,
+    /// `oe`: the configuration fitted (the bootstrap refits with it).
+    oe: Option<OeConfig>,
+}
+
+/// The fit stage: output error or the filter-error method on `slices`, as `options` say.
+fn fit_slices(
+    slices: &[&[AirDataSample]],
+    structure: ModelStructure,
+    options: FitOptions,
+) -> Result<FittedRecord, ReplayError> {
+    if options.fem {
+        let mut config = FemConfig::new(structure);
         // Convergence on turbulent or model-error records is slow (module doc of filter_error).
-        config.oe.max_iterations = MAX_ITERATIONS;
-        config.oe.initial_states = initial_states;
-        let (f, wall) = fit_fem_manoeuvres(&slices, &config).map_err(ReplayError::Model)?;
-        (f.result.clone(), wall, Some(f))
+        config.oe.max_iterations = options.max_iterations.unwrap_or(MAX_ITERATIONS);
+        config.oe.initial_states = options.initial_states;
+        if let Some(mask) = options.process_noise {
+            config.process_noise = mask;
+        }
+        let (f, wall) = fit_fem_manoeuvres(slices, &config).map_err(ReplayError::Model)?;
+        Ok(FittedRecord { result: f.result.clone(), fit_wall_s: wall, fem: Some(f), oe: None })
     } else {
-        let mut config = oe_config(model.structure);
-        config.initial_states = initial_states;
-        let (r, wall) = fit_manoeuvres(&slices, &config).map_err(ReplayError::Model)?;
-        oe_used = Some(config);
-        (r, wall, None)
-    };
-    // Coloured-residual σ where formed, for both methods (fem: [`fem_reported_sigma`]), for
-    // every unknown.
-    let (mut reported, coloured) = match &fem_result {
+        let mut config = oe_config(structure);
+        config.initial_states = options.initial_states;
+        if let Some(n) = options.max_iterations {
+            config.max_iterations = n;
+        }
+        let (r, wall) = fit_manoeuvres(slices, &config).map_err(ReplayError::Model)?;
+        Ok(FittedRecord { result: r, fit_wall_s: wall, fem: None, oe: Some(config) })
+    }
+}
+
+/// The σ of every unknown (order of [`OeResult::names`]) and where it comes from.
+struct Sigmas {
+    /// The reported σ: bootstrap, else coloured-residual where formed, else Cramér–Rao.
+    reported: Vec<f64>,
+    /// The coloured-residual σ, where formed.
+    coloured: Vec<Option<f64>>,
+    bootstrap: Option<BootstrapSummary>,
+    spread: Option<BootstrapSpread>,
+    /// Why the bootstrap was not run, when asked for.
+    bootstrap_skipped: Option<String>,
+}
+
+/// The σ stage: coloured-residual σ where formed, for both methods (fem:
+/// [`fem_reported_sigma`]); the bootstrap σ, when asked for on a converged output-error fit,
+/// replaces the reported σ of every unknown (initial states included).
+fn sigma_stage(
+    slices: &[&[AirDataSample]],
+    fitted: &FittedRecord,
+    refits: Option<usize>,
+) -> Result<Sigmas, ReplayError> {
+    let result = &fitted.result;
+    let (mut reported, coloured) = match &fitted.fem {
         Some(f) => fem_reported_sigma(f),
-        None => (reported_sigma(&result), result.sigma_coloured.is_some()),
+        None => (reported_sigma(result), result.sigma_coloured.is_some()),
     };
-    let coloured_sigma: Vec<Option<f64>> =
-        reported.iter().map(|s| coloured.then_some(*s)).collect();
-    // The bootstrap σ replaces the reported σ of every unknown (initial states included).
-    let (bootstrap, bootstrap_spread) = match (bootstrap_refits, &oe_used) {
-        (Some(n), Some(config)) => {
-            let (spread, summary) = bootstrap_sigma(&slices, config, &result, n, BOOTSTRAP_SEED)
+    let coloured = reported.iter().map(|s| coloured.then_some(*s)).collect();
+    let mut out = Sigmas {
+        reported: Vec::new(),
+        coloured,
+        bootstrap: None,
+        spread: None,
+        bootstrap_skipped: None,
+    };
+    if let (Some(n), Some(config)) = (refits, &fitted.oe) {
+        if result.termination.is_converged() {
+            let (spread, summary) = bootstrap_sigma(slices, config, result, n, BOOTSTRAP_SEED)
                 .map_err(ReplayError::Model)?;
             reported.copy_from_slice(&spread.sigma);
-            (Some(summary), Some(spread))
+            out.bootstrap = Some(summary);
+            out.spread = Some(spread);
+        } else {
+            out.bootstrap_skipped =
+                Some("bootstrap not run: the fit did not converge (its σ would describe the last iterate, not the estimator)".into());
         }
-        _ => (None, None),
-    };
+    }
+    out.reported = reported;
+    Ok(out)
+}
+
+/// The summary document of a fit (the record's row counts are the caller's).
+fn summarise(
+    model: &ModelSpec,
+    fitted: &FittedRecord,
+    sigmas: &Sigmas,
+    manoeuvres: &[Vec<AirDataSample>],
+    initial_states: InitialStates,
+    validation: ValidationReport,
+) -> BatchSummary {
+    let result = &fitted.result;
+    let st = model.structure;
+    let reported = &sigmas.reported;
+    let spread = sigmas.spread.as_ref();
     // The free initial states follow the parameters and the output biases (OeResult::names).
-    let estimated_initial_states: Vec<(String, f64, f64)> = result
+    let estimated_initial_states = result
         .names
         .iter()
         .enumerate()
@@ -634,65 +806,33 @@ pub fn fit_record<R: Read>(
             estimate: result.values[i],
             std_error: reported[i],
             crb_sigma: result.sigma[i],
-            coloured_sigma: coloured_sigma[i],
-            bootstrap_sigma: bootstrap_spread.as_ref().map(|b| b.sigma[i]),
-            bootstrap_bias: bootstrap_spread.as_ref().map(|b| b.bias[i]),
+            coloured_sigma: sigmas.coloured[i],
+            bootstrap_sigma: spread.map(|b| b.sigma[i]),
+            bootstrap_bias: spread.map(|b| b.bias[i]),
             prewhitened_sigma: result.sigma_coloured_prewhitened.as_ref().map(|c| c[i]),
         })
         .collect();
-    let st = model.structure;
     let np = result.n_params;
     let n = result.n();
     let values: Vec<Option<f64>> = result.values[..np].iter().map(|v| Some(*v)).collect();
     let cov = |i: usize, j: usize| Some(result.covariance[i * n + j]);
     let mut recorder = Recorder::default();
-    for m in &manoeuvres {
+    for m in manoeuvres {
         recorder.new_segment();
         m.iter().for_each(|s| recorder.push(s));
     }
     let identifiability = diagnostics::identifiability(&st, &cov, &recorder, &values);
-    let (rejections, unlisted) = rejections.finish();
-    // The summary's σ: coloured-residual where formed, else Cramér–Rao.
-    let sigmas: Vec<Option<f64>> = reported.iter().map(|s| Some(*s)).collect();
-    let mut warnings = diagnostics::sign_warnings(&st, &values, &sigmas);
-    warnings.extend(unlisted);
-    if let Some(b) = bootstrap.as_ref().filter(|b| b.failed > 0) {
-        warnings.push(format!(
-            "bootstrap: {} of {} replicas failed and are not in the σ (the spread of the other {})",
-            b.failed,
-            b.refits,
-            b.refits - b.failed
-        ));
-    }
-    if let Some(b) = &bootstrap_spread {
-        warnings.extend(bootstrap_shrink_warnings(&result.names, &coloured_sigma, &b.sigma));
-    }
-    for c in &identifiability.collinear_regressors {
-        warnings.push(format!(
-            "collinear regressors {} and {} (sample correlation {:+.3}): the record cannot separate these terms whatever the method",
-            c.a, c.b, c.rho
-        ));
-    }
-    // A filter-error fit is validated (and drawn) by simulating the model at its estimates.
-    let simulated = match &fem_result {
-        Some(_) => {
-            simulate_at(&slices, st, &result.outputs, &result.values[..np]).map_err(|e| {
-                ReplayError::Model(format!("filter error: simulating the estimates: {e}"))
-            })?
-        }
-        None => result.clone(),
-    };
-    let validation = simulated_validation(&simulated, &slices, &file, None);
-    let traces = output_traces(&simulated, &slices);
-    let summary = BatchSummary {
-        estimator: if fem { "fem" } else { "oe" }.into(),
+    let warnings = fit_warnings(result, sigmas, &identifiability, &values);
+    BatchSummary {
+        estimator: if fitted.fem.is_some() { "fem" } else { "oe" }.into(),
         model: model.name.clone(),
-        status: "converged".into(),
-        samples_read: read,
-        samples_rejected: rejected,
-        rejections,
-        manoeuvres: slices.len(),
-        fit_wall_s,
+        status: result.termination.status().into(),
+        status_reason: termination_note(result),
+        samples_read: 0,
+        samples_rejected: 0,
+        rejections: Vec::new(),
+        manoeuvres: manoeuvres.len(),
+        fit_wall_s: fitted.fit_wall_s,
         iterations: result
             .iterations
             .iter()
@@ -715,8 +855,8 @@ pub fn fit_record<R: Read>(
         warnings,
         validation,
         validation_on: None,
-        process_noise: fem_result.as_ref().map_or_else(Vec::new, process_noise_of),
-        measurement_noise_var: match &fem_result {
+        process_noise: fitted.fem.as_ref().map_or_else(Vec::new, process_noise_of),
+        measurement_noise_var: match &fitted.fem {
             Some(f) => f
                 .result
                 .outputs
@@ -728,9 +868,41 @@ pub fn fit_record<R: Read>(
         },
         initial_states: initial_states_name(initial_states).into(),
         estimated_initial_states,
-        bootstrap,
-    };
-    Ok(BatchOutcome { model, result, summary, traces })
+        bootstrap: sigmas.bootstrap.clone(),
+    }
+}
+
+/// The summary's warnings: how the fit ended when it did not converge on both criteria, the
+/// sign checks (against the reported σ), the bootstrap's failed replicas and shrunk σ, and the
+/// collinear regressors.
+fn fit_warnings(
+    result: &OeResult,
+    sigmas: &Sigmas,
+    identifiability: &Identifiability,
+    values: &[Option<f64>],
+) -> Vec<String> {
+    let mut warnings: Vec<String> = termination_note(result).into_iter().collect();
+    let reported: Vec<Option<f64>> = sigmas.reported.iter().map(|s| Some(*s)).collect();
+    warnings.extend(diagnostics::sign_warnings(&result.structure, values, &reported));
+    warnings.extend(sigmas.bootstrap_skipped.clone());
+    if let Some(b) = sigmas.bootstrap.as_ref().filter(|b| b.failed > 0) {
+        warnings.push(format!(
+            "bootstrap: {} of {} replicas failed and are not in the σ (the spread of the other {})",
+            b.failed,
+            b.refits,
+            b.refits - b.failed
+        ));
+    }
+    if let Some(b) = &sigmas.spread {
+        warnings.extend(bootstrap_shrink_warnings(&result.names, &sigmas.coloured, &b.sigma));
+    }
+    for c in &identifiability.collinear_regressors {
+        warnings.push(format!(
+            "collinear regressors {} and {} (sample correlation {:+.3}): the record cannot separate these terms whatever the method",
+            c.a, c.b, c.rho
+        ));
+    }
+    warnings
 }
 
 /// The simulated-output validation of an output-error result on `manoeuvres` (its residuals

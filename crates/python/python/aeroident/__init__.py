@@ -185,6 +185,8 @@ def fit(
     initial_states: str = "first-sample",
     validate_on: Optional[PathLike] = None,
     bootstrap: Optional[int] = None,
+    max_iterations: Optional[int] = None,
+    process_noise: Optional[str] = None,
 ) -> dict[str, Any]:
     """Fits a whole record by batch output error (``"oe"``) or the filter-error method
     (``"fem"``: output error with process noise on the air-data states, for turbulent records).
@@ -203,6 +205,14 @@ def fit(
     "Output error: the parametric bootstrap"); it becomes ``sigma`` and ``summary["bootstrap"]``
     says how it was made. Each ``summary["parameters"]`` entry then also carries
     ``bootstrap_bias``, the refits' mean less the estimate (not subtracted from ``values``).
+    ``max_iterations``: most Gauss–Newton iterations (``--max-iterations``; default 50 for
+    ``oe``, 250 for ``fem``). ``process_noise`` (``fem``): the states with process noise,
+    comma-separated (``"V,alpha,theta,q"``; ``--process-noise``; default ``V,alpha,beta``).
+
+    A fit that does not meet both convergence criteria is returned all the same:
+    ``summary["status"]`` is ``"converged"``, ``"converged_in_cost"`` (the cost stopped
+    changing, the step did not become negligible: ``ml_oem2``'s criterion) or
+    ``"not_converged"`` (the last iterate), and ``summary["status_reason"]`` says how it ended.
 
     Returns a dict:
 
@@ -219,7 +229,7 @@ def fit(
       validation, process noise, estimated initial states …).
 
     Raises :class:`AeroidentError` with the CLI's message on bad input, a real-time estimator,
-    or a fit that does not converge (never an unconverged result).
+    or a fit that fails (e.g. a model that cannot be simulated).
     """
     return _core.fit_file(
         os.fspath(data),
@@ -229,6 +239,8 @@ def fit(
         initial_states,
         None if validate_on is None else os.fspath(validate_on),
         bootstrap,
+        max_iterations,
+        process_noise,
     )
 
 

@@ -37,7 +37,7 @@ fn process_noise_records_fem_recovers_theta_and_f_where_output_error_does_not() 
             process_alpha(F_ALPHA),
         );
         let fem = fit(&[&data], &FemConfig::new(st)).unwrap();
-        assert!(fem.result.converged);
+        assert_eq!(fem.result.termination, Termination::Converged);
         let mut oe_cfg = OeConfig::new(st);
         oe_cfg.initial_states = InitialStates::Estimate([true; N_STATES]);
         let oe = oe_fit(&[&data], &oe_cfg).unwrap();

@@ -66,16 +66,20 @@ fn table_with(header: &[&str], numeric_to: usize) -> Table {
 /// The parameter table and (if any) the fit-quality table of `r`, with the title above and
 /// the notes below, as text for the console.
 pub fn render(r: &Results) -> String {
-    let mut t =
-        table_with(&["parameter", "estimate ± σ", &r.reference_label, "error %", "status"], 4);
+    let crb = r.has_crb_sigma();
+    let mut header = vec!["parameter", "estimate ± σ"];
+    header.extend(crb.then_some("Cramér–Rao σ"));
+    header.extend([r.reference_label.as_str(), "error %", "status"]);
+    let mut t = table_with(&header, header.len() - 1);
     for row in &r.rows {
-        t.add_row(vec![
-            row.name.clone(),
-            fmt_estimate(row.estimate, row.sigma),
+        let mut cells = vec![row.name.clone(), fmt_estimate(row.estimate, row.sigma)];
+        cells.extend(crb.then(|| fmt_sig(row.crb_sigma, 2)));
+        cells.extend([
             fmt_sig(row.reference, 4),
             fmt_error_pct(row.error_pct()),
             row.status.clone(),
         ]);
+        t.add_row(cells);
     }
     let mut s = format!("{}\n{t}\n", r.title);
     if !r.fit.is_empty() {
@@ -124,6 +128,34 @@ mod tests {
         assert_eq!(fmt_sig(Some(f64::NAN), 3), "—");
         assert_eq!(fmt_estimate(Some(-1.0023), Some(0.0087)), "-1.002 ± 0.0087");
         assert_eq!(fmt_estimate(None, Some(0.1)), "—");
+    }
+
+    /// A batch fit's row: the status is judged against its σ (here a coloured σ of 0.1, the
+    /// reference 1σ away: ok), not against the Cramér–Rao σ shown beside it (0.01: 10σ away),
+    /// and the column appears only when a row has one.
+    #[test]
+    fn the_status_follows_the_reported_sigma_and_the_bound_stands_beside_it() {
+        let row = ParameterRow::new("Cm_alpha", Some(-1.1), Some(0.1), Some(-1.0), None)
+            .with_crb_sigma(0.01);
+        assert_eq!(row.status, "ok");
+        let r = Results {
+            title: "rec — oe".into(),
+            reference_label: "reference".into(),
+            rows: vec![row],
+            fit: Vec::new(),
+            notes: Vec::new(),
+        };
+        let s = render(&r);
+        assert!(s.contains("Cramér–Rao σ"), "{s}");
+        let a = s.lines().find(|l| l.contains("Cm_alpha")).unwrap();
+        for want in ["-1.100 ± 0.10", "0.010", "ok"] {
+            assert!(a.contains(want), "{want} in {a}");
+        }
+        let plain = Results {
+            rows: vec![ParameterRow::new("Cm_alpha", Some(-1.1), Some(0.1), None, None)],
+            ..r
+        };
+        assert!(!render(&plain).contains("Cramér–Rao σ"));
     }
 
     /// Every row and fit entry appears with its numbers; a missing estimate is `—`, never 0.

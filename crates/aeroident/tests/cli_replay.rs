@@ -40,6 +40,12 @@ fn batch_replay(data: &Path, map: &str, args: &[&str], name: &str) -> (serde_jso
     (v, html)
 }
 
+/// `x` to two significant digits, as the results table prints a σ (0.043, 0.0087, 2.9).
+fn fmt2(x: f64) -> String {
+    let decimals = (1 - x.abs().log10().floor() as i32).max(0) as usize;
+    format!("{x:.decimals$}")
+}
+
 /// The last iteration's `ln_det_r` of a batch summary.
 fn final_ln_det(v: &serde_json::Value) -> f64 {
     v["iterations"].as_array().unwrap().last().unwrap()["ln_det_r"].as_f64().unwrap()
@@ -284,6 +290,21 @@ fn val_output_error_reproduces_the_hfb320_reference_through_the_cli() {
     // and the report with the model-vs-measured figure beside the summary.
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(stdout.contains("Cm_alpha") && stdout.contains("Theil"), "{stdout}");
+    // One σ: the table's is the summary's std_error (here the coloured-residual σ), the
+    // Cramér–Rao σ beside it, labelled.
+    let (_, crb) = get("Cm_alpha");
+    let std_error = v["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["name"] == "Cm_alpha")
+        .unwrap()["std_error"]
+        .as_f64()
+        .unwrap();
+    let row = stdout.lines().find(|l| l.contains("Cm_alpha ")).unwrap();
+    assert!(row.contains(&format!("± {}", fmt2(std_error))), "{row} vs {std_error}");
+    assert!(row.contains(&fmt2(crb)), "{row} vs {crb}");
+    assert!(stdout.contains("Cramér–Rao σ") && stdout.contains("(coloured-residual)"), "{stdout}");
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(html.contains("Cm_q0") && html.contains("alpha_rad"), "report lacks the tables");
     assert!(html.contains("<svg") && out.join("fit.png").exists() && out.join("fit.svg").exists());

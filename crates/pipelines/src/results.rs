@@ -23,8 +23,12 @@ pub struct ParameterRow {
     pub name: String,
     /// Final estimate; `None` if not identified.
     pub estimate: Option<f64>,
-    /// Its standard error; `None` where the method gives none.
+    /// Its standard error, the one the status is judged against; `None` where the method
+    /// gives none.
     pub sigma: Option<f64>,
+    /// The Cramér–Rao σ beside it, where `sigma` is another (coloured-residual or bootstrap)
+    /// σ of a batch fit; `None` otherwise.
+    pub crb_sigma: Option<f64>,
     /// Reference (published value) or truth; `None` if there is none.
     pub reference: Option<f64>,
     /// Status text (e.g. `ok`, `not identified`, `diverged`, `outside ±2σ`).
@@ -50,8 +54,14 @@ impl ParameterRow {
                 _ => "ok".into(),
             },
         };
-        Self { name: name.into(), estimate, sigma, reference, status }
+        Self { name: name.into(), estimate, sigma, crb_sigma: None, reference, status }
             .with_reference_noise_as_zero()
+    }
+
+    /// The row with the Cramér–Rao σ `crb` shown beside its σ.
+    pub fn with_crb_sigma(mut self, crb: f64) -> Self {
+        self.crb_sigma = Some(crb);
+        self
     }
 
     /// A reference of magnitude below [`crate::metrics::ZERO_THRESHOLD`] is round-off of an exact
@@ -199,6 +209,13 @@ pub struct Results {
     pub fit: Vec<FitQuality>,
     /// Lines printed under the tables (sources, caveats).
     pub notes: Vec<String>,
+}
+
+impl Results {
+    /// Whether any row carries a Cramér–Rao σ beside its σ (the tables then show that column).
+    pub fn has_crb_sigma(&self) -> bool {
+        self.rows.iter().any(|r| r.crb_sigma.is_some())
+    }
 }
 
 #[cfg(test)]

@@ -1,6 +1,6 @@
 //! Results, figures and `report.html` of `replay --estimator oe` (the batch output-error
-//! fit): the parameter table (estimate ± Cramér–Rao σ against the model file's reference
-//! values, if it gives any), the fit quality of every simulated output (from the summary's
+//! fit): the parameter table (estimate ± the summary's `std_error`, the Cramér–Rao σ beside it,
+//! against the model file's reference values, if it gives any), the fit quality of every simulated output (from the summary's
 //! `validation` block: residual RMS, R², Theil's U) and `fit.{png,svg}` (per output the
 //! measured and the simulated time history, and the residual).
 
@@ -12,8 +12,30 @@ use crate::table::fmt_sig;
 use aeroident_pipelines::replay::batch::{BatchOutcome, OutputTrace};
 use aeroident_pipelines::results::{FitQuality, ParameterRow, Results};
 
-/// The results of a batch fit: one row per parameter (σ = the Cramér–Rao bound; the
-/// coloured-residual σ, where formed, in a note) and one fit-quality row per validated output.
+/// What the summary's `std_error` is, in words: one source, or the parameters of each.
+fn sigma_sources(s: &aeroident_pipelines::replay::batch::BatchSummary) -> String {
+    let word = |k: &str| match k {
+        "bootstrap" => "parametric bootstrap",
+        "coloured" => "coloured-residual",
+        _ => "Cramér–Rao",
+    };
+    let mut kinds: Vec<&str> = s.parameters.iter().map(|p| p.std_error_source).collect();
+    kinds.dedup();
+    match kinds.as_slice() {
+        [] => "none".into(),
+        [k] => word(k).into(),
+        _ => s
+            .parameters
+            .iter()
+            .map(|p| format!("{} {}", p.name, word(p.std_error_source)))
+            .collect::<Vec<_>>()
+            .join(", "),
+    }
+}
+
+/// The results of a batch fit: one row per parameter (σ = the summary's `std_error`, the one
+/// σ of the summary, the Python `sigma` and the ±2σ status; the Cramér–Rao σ beside it) and
+/// one fit-quality row per validated output.
 pub fn results(outcome: &BatchOutcome, title: &str, references: &[Reference]) -> Results {
     let s = &outcome.summary;
     let rows = s
@@ -21,13 +43,15 @@ pub fn results(outcome: &BatchOutcome, title: &str, references: &[Reference]) ->
         .iter()
         .map(|p| {
             let reference = references.iter().find(|r| r.name == p.name).map(|r| r.value);
-            ParameterRow::new(p.name.clone(), Some(p.estimate), Some(p.crb_sigma), reference, None)
+            ParameterRow::new(p.name.clone(), Some(p.estimate), Some(p.std_error), reference, None)
+                .with_crb_sigma(p.crb_sigma)
         })
         .collect();
     let v = &s.validation;
     let fit = v.outputs.iter().map(FitQuality::from).collect();
     let mut notes = vec![format!(
-        "σ = Cramér–Rao bound of the {} fit (optimistic when the residuals are coloured); fit quality of the simulated outputs over the fitted record",
+        "σ = the summary's std_error ({}); Cramér–Rao σ = the bound of the {} fit, optimistic when the residuals are coloured; fit quality of the simulated outputs over the fitted record",
+        sigma_sources(s),
         if s.process_noise.is_empty() { "output-error" } else { "filter-error" }
     )];
     let coloured: Vec<String> = s
@@ -35,9 +59,8 @@ pub fn results(outcome: &BatchOutcome, title: &str, references: &[Reference]) ->
         .iter()
         .filter_map(|p| p.coloured_sigma.map(|c| format!("{} {}", p.name, fmt_sig(Some(c), 2))))
         .collect();
-    if !coloured.is_empty() {
-        let which = if s.bootstrap.is_some() { "" } else { " (the summary's std_error)" };
-        notes.push(format!("coloured-residual σ{which}: {}", coloured.join(", ")));
+    if !coloured.is_empty() && s.bootstrap.is_some() {
+        notes.push(format!("coloured-residual σ: {}", coloured.join(", ")));
     }
     if let Some(b) = &s.bootstrap {
         let sig: Vec<String> = s
@@ -48,7 +71,7 @@ pub fn results(outcome: &BatchOutcome, title: &str, references: &[Reference]) ->
             })
             .collect();
         notes.push(format!(
-            "parametric bootstrap σ (the summary's std_error; {} of {} replicas refitted): {}",
+            "parametric bootstrap σ ({} of {} replicas refitted): {}",
             b.refits - b.failed,
             b.refits,
             sig.join(", ")

@@ -156,9 +156,11 @@ fn results_html(r: &Results, h: &mut String) {
 }
 
 fn params_html(r: &Results, h: &mut String) {
+    let crb = r.has_crb_sigma();
     let _ = writeln!(
         h,
-        "<table class=\"params\"><tr><th>parameter</th><th>estimate ± σ</th><th>{}</th><th>error %</th><th>status</th></tr>",
+        "<table class=\"params\"><tr><th>parameter</th><th>estimate ± σ</th>{}<th>{}</th><th>error %</th><th>status</th></tr>",
+        if crb { "<th>Cramér–Rao σ</th>" } else { "" },
         escape(&r.reference_label)
     );
     for row in &r.rows {
@@ -167,9 +169,14 @@ fn params_html(r: &Results, h: &mut String) {
             "not identified" => "na",
             _ => "bad",
         };
+        let crb_cell = if crb {
+            format!("<td class=\"n\">{}</td>", escape(&fmt_sig(row.crb_sigma, 2)))
+        } else {
+            String::new()
+        };
         let _ = writeln!(
             h,
-            "<tr><td>{}</td><td class=\"n\">{}</td><td class=\"n\">{}</td><td class=\"n\">{}</td><td class=\"{class}\">{}</td></tr>",
+            "<tr><td>{}</td><td class=\"n\">{}</td>{crb_cell}<td class=\"n\">{}</td><td class=\"n\">{}</td><td class=\"{class}\">{}</td></tr>",
             escape(&row.name),
             escape(&fmt_estimate(row.estimate, row.sigma)),
             escape(&fmt_sig(row.reference, 4)),

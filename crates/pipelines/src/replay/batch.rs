@@ -117,8 +117,11 @@ pub struct BatchParameter {
     /// Estimate.
     pub estimate: f64,
     /// Reported σ: the bootstrap σ when asked for (`--bootstrap`), else the coloured-residual
-    /// σ where available, else Cramér–Rao.
+    /// σ where available, else Cramér–Rao. The console table, `report.html` and their ±2σ
+    /// status use it.
     pub std_error: f64,
+    /// Which σ `std_error` is: `bootstrap`, `coloured` or `cramer_rao`.
+    pub std_error_source: &'static str,
     /// Cramér–Rao σ (`sqrt(diag M⁻¹)`).
     pub crb_sigma: f64,
     /// Coloured-residual σ (the spectral form), when the correction is positive.
@@ -805,6 +808,11 @@ fn summarise(
             name: result.names[i].clone(),
             estimate: result.values[i],
             std_error: reported[i],
+            std_error_source: match (spread, sigmas.coloured[i]) {
+                (Some(_), _) => "bootstrap",
+                (None, Some(_)) => "coloured",
+                (None, None) => "cramer_rao",
+            },
             crb_sigma: result.sigma[i],
             coloured_sigma: sigmas.coloured[i],
             bootstrap_sigma: spread.map(|b| b.sigma[i]),

@@ -36,6 +36,8 @@
 use nalgebra::{SMatrix, SVector};
 
 pub mod coloured;
+#[cfg(feature = "std")]
+pub mod compat;
 pub(crate) mod dual;
 pub mod ekf;
 pub mod estimator;

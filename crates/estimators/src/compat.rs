@@ -1,0 +1,847 @@
+//! Data compatibility check and flight-path reconstruction: are a record's accelerations,
+//! rates, attitudes and air data consistent with each other, and what biases, scale factors
+//! and time shifts make them so (Jategaonkar 2015 ch. 10; Klein & Morelli 2006 ch. 10;
+//! Mulder, Chu, Sridhar & Breeman, "Non-linear aircraft flight path reconstruction review and
+//! new advances", Prog. Aerospace Sci. 1999).
+//!
+//! # Model
+//! The kinematic equations of a rigid body over a flat, non-rotating earth in still air (SLJ
+//! §2.5), driven by the corrected inertial channels, states `x = [u, v, w, φ, θ, ψ]`:
+//!
+//! ```text
+//! [u̇ v̇ ẇ] = body_acceleration([u v w], ω, g_b(φ, θ), a)      a = (a_m − b_a) / (1 + k_a)
+//! [φ̇ θ̇ ψ̇] = euler_rates(ω, φ, θ)                              ω = (ω_m − b_ω) / (1 + k_ω)
+//! ```
+//!
+//! `a_m` the measured specific forces (`ax, ay, az`, m/s²), `ω_m` the measured rates (`p, q,
+//! r`, rad/s), `b` their biases, `k` their scale-factor errors (estimated on request,
+//! [`CompatConfig::inertial_scale_factors`]). The inputs are interpolated linearly between
+//! samples and the equations integrated by RK4 from each manoeuvre's initial state.
+//!
+//! The outputs, each measured channel at its own time shift `τ` (a measurement that lags the
+//! kinematics by `τ > 0` reads at `t` what the kinematics had at `t − τ`):
+//!
+//! ```text
+//! V_m = V + b_V          α_m = (1 + k_α) α + b_α          β_m = (1 + k_β) β + b_β
+//! φ_m = φ                θ_m = θ                          ψ_m = ψ
+//! ```
+//!
+//! with `V = |[u v w]|`, `α = atan2(w, u)`, `β = asin(v/V)`. Without a wind model the air data
+//! are compared with the inertial velocity: the check is for calm air (steady wind shows as
+//! biases, turbulence as residual).
+//!
+//! # Estimation
+//! Output error with the noise covariance estimated (diagonal `R`, maximum likelihood;
+//! Jategaonkar ch. 4): Gauss–Newton with Levenberg–Marquardt damping on central-difference
+//! sensitivities. Converged when the relative change of `det R` is below
+//! [`CompatConfig::cost_tolerance`] and the largest step below
+//! [`CompatConfig::step_tolerance_sigma`] σ; a fit stopped earlier reports its last iterate
+//! ([`Termination`]). σ is the Cramér–Rao bound `sqrt(diag M⁻¹)`.
+//!
+//! Without a `β` channel, `β` is reconstructed from the integrated `v`. The initial `v` and the
+//! `ay` bias are still estimated when the record rolls (`v` enters `ẇ` through `p v`, so `α`
+//! sees them); when it does not roll enough for that (the information matrix is singular),
+//! both are fixed at 0 and [`CompatResult::notes`] says so. Without a heading the `ψ` state is
+//! dropped (it enters no other output in still air). A time shift is estimated only where the
+//! channel varies enough to determine it (its Cramér–Rao σ alone below 0.05 s at the start).
+
+use crate::EstimatorError;
+use crate::flight_model::G0_MPS2;
+use crate::output_error::{NotConverged, Termination};
+use crate::sample::AirDataSample;
+use aeroident_physics::rigid_body::{self as rb, SinCos};
+use nalgebra::{DMatrix, DVector};
+
+/// A measured channel the check corrects.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Channel {
+    /// Body x specific force, m/s².
+    Ax,
+    /// Body y specific force, m/s².
+    Ay,
+    /// Body z specific force, m/s².
+    Az,
+    /// Roll rate, rad/s.
+    P,
+    /// Pitch rate, rad/s.
+    Q,
+    /// Yaw rate, rad/s.
+    R,
+    /// True airspeed, m/s.
+    Vt,
+    /// Angle of attack, rad.
+    Alpha,
+    /// Sideslip, rad.
+    Beta,
+    /// Bank angle, rad.
+    Phi,
+    /// Pitch attitude, rad.
+    Theta,
+    /// Heading, rad.
+    Psi,
+}
+
+impl Channel {
+    /// The inertial channels, in the order of `a` then `ω`.
+    pub const INERTIAL: [Channel; 6] =
+        [Channel::Ax, Channel::Ay, Channel::Az, Channel::P, Channel::Q, Channel::R];
+    /// The output channels, in model order.
+    pub const OUTPUTS: [Channel; 6] =
+        [Channel::Vt, Channel::Alpha, Channel::Beta, Channel::Phi, Channel::Theta, Channel::Psi];
+
+    /// The sample field's name (`ax_mps2`, `alpha_rad` …).
+    pub fn name(self) -> &'static str {
+        match self {
+            Channel::Ax => "ax_mps2",
+            Channel::Ay => "ay_mps2",
+            Channel::Az => "az_mps2",
+            Channel::P => "p_rad_s",
+            Channel::Q => "q_rad_s",
+            Channel::R => "r_rad_s",
+            Channel::Vt => "vt_mps",
+            Channel::Alpha => "alpha_rad",
+            Channel::Beta => "beta_rad",
+            Channel::Phi => "phi_rad",
+            Channel::Theta => "theta_rad",
+            Channel::Psi => "psi_rad",
+        }
+    }
+
+    /// The channel's unit (`m/s^2`, `rad/s`, `m/s`, `rad`).
+    pub fn unit(self) -> &'static str {
+        match self {
+            Channel::Ax | Channel::Ay | Channel::Az => "m/s^2",
+            Channel::P | Channel::Q | Channel::R => "rad/s",
+            Channel::Vt => "m/s",
+            _ => "rad",
+        }
+    }
+
+    /// The channel's value in sample `s` (`None` when not recorded).
+    pub fn of(self, s: &AirDataSample) -> Option<f64> {
+        match self {
+            Channel::Ax => s.ax_mps2,
+            Channel::Ay => s.ay_mps2,
+            Channel::Az => s.az_mps2,
+            Channel::P => s.p_rad_s,
+            Channel::Q => s.q_rad_s,
+            Channel::R => s.r_rad_s,
+            Channel::Vt => Some(s.vt_mps),
+            Channel::Alpha => Some(s.alpha_rad),
+            Channel::Beta => s.beta_rad,
+            Channel::Phi => s.phi_rad,
+            Channel::Theta => s.theta_rad,
+            Channel::Psi => s.psi_rad,
+        }
+    }
+}
+
+/// What the check estimates and when it stops.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CompatConfig {
+    /// Estimate a time shift of every measured output (default true).
+    pub time_shifts: bool,
+    /// Estimate the scale-factor errors of the accelerometers and gyros too (default false:
+    /// they need large, varied manoeuvres to separate from the biases).
+    pub inertial_scale_factors: bool,
+    /// Most Gauss–Newton iterations (default 50).
+    pub max_iterations: usize,
+    /// Convergence: relative change of `det R` (default 10⁻⁶).
+    pub cost_tolerance: f64,
+    /// Convergence: largest step in Cramér–Rao σ (default 10⁻³).
+    pub step_tolerance_sigma: f64,
+}
+
+impl Default for CompatConfig {
+    fn default() -> Self {
+        Self {
+            time_shifts: true,
+            inertial_scale_factors: false,
+            max_iterations: 50,
+            cost_tolerance: 1e-6,
+            step_tolerance_sigma: 1e-3,
+        }
+    }
+}
+
+/// One kind of unknown.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Unknown {
+    /// Additive bias of a channel (channel units).
+    Bias(Channel),
+    /// Scale-factor error `k` of a channel (measured = (1 + k) · true).
+    Scale(Channel),
+    /// Time shift of an output, s (> 0: the measurement lags the kinematics).
+    TimeShift(Channel),
+    /// An initial state of a manoeuvre.
+    Initial {
+        /// The manoeuvre, from 0.
+        manoeuvre: usize,
+        /// The state, 0–5: u, v, w (m/s), φ, θ, ψ (rad).
+        state: usize,
+    },
+}
+
+impl Unknown {
+    /// A name for tables: `bias_ax_mps2`, `scale_alpha_rad`, `time_shift_alpha_rad`,
+    /// `x0_m1_u_mps` ….
+    pub fn name(self) -> String {
+        const STATES: [&str; 6] = ["u_mps", "v_mps", "w_mps", "phi_rad", "theta_rad", "psi_rad"];
+        match self {
+            Unknown::Bias(c) => format!("bias_{}", c.name()),
+            Unknown::Scale(c) => format!("scale_{}", c.name()),
+            Unknown::TimeShift(c) => format!("time_shift_{}", c.name()),
+            Unknown::Initial { manoeuvre, state } => {
+                format!("x0_m{}_{}", manoeuvre + 1, STATES[state])
+            }
+        }
+    }
+}
+
+/// The reconstructed air data of one manoeuvre at its sample times (from the fitted states).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Reconstructed {
+    /// Sample times, s.
+    pub t_s: Vec<f64>,
+    /// Airspeed `|[u v w]|`, m/s.
+    pub vt_mps: Vec<f64>,
+    /// Angle of attack `atan2(w, u)`, rad.
+    pub alpha_rad: Vec<f64>,
+    /// Sideslip `asin(v/V)`, rad.
+    pub beta_rad: Vec<f64>,
+}
+
+/// The result of [`check`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct CompatResult {
+    /// The unknowns, in the order of `values`.
+    pub unknowns: Vec<Unknown>,
+    /// Estimates.
+    pub values: Vec<f64>,
+    /// Cramér–Rao σ.
+    pub sigma: Vec<f64>,
+    /// The fitted outputs.
+    pub outputs: Vec<Channel>,
+    /// Residual RMS per output (its unit).
+    pub residual_rms: Vec<f64>,
+    /// Residual mean per output (its unit).
+    pub residual_mean: Vec<f64>,
+    /// Per manoeuvre, the reconstructed air data.
+    pub reconstructed: Vec<Reconstructed>,
+    /// How the iterations ended.
+    pub termination: Termination,
+    /// Gauss–Newton iterations done.
+    pub iterations: usize,
+    /// What the check could not determine and fixed instead.
+    pub notes: Vec<String>,
+}
+
+impl CompatResult {
+    /// Estimate and σ of `u`, if it was estimated.
+    pub fn get(&self, u: Unknown) -> Option<(f64, f64)> {
+        let i = self.unknowns.iter().position(|&v| v == u)?;
+        Some((self.values[i], self.sigma[i]))
+    }
+}
+
+/// Checks the compatibility of `manoeuvres` (each a gap-free run of samples with `ax, ay, az,
+/// p, q, r`, `θ` and `φ`) and reconstructs the flight path (module doc).
+///
+/// # Errors
+/// [`EstimatorError::InvalidConfig`] naming a missing channel or an empty or too short
+/// manoeuvre; [`EstimatorError::Numerical`] when the information matrix is singular at the
+/// start (an unknown the record cannot determine) or the kinematics leave the physical domain.
+pub fn check(
+    manoeuvres: &[&[AirDataSample]],
+    config: &CompatConfig,
+) -> Result<CompatResult, EstimatorError> {
+    let first = Problem::new(manoeuvres, config, Vec::new())?;
+    let (mut exclude, mut notes) = first.undetermined_shifts()?;
+    let full = Problem::new(manoeuvres, config, exclude.clone())?;
+    let has_beta = full.outputs.contains(&Channel::Beta);
+    let mut r = match full.solve(config) {
+        Ok(r) if has_beta || (r.termination.is_converged() && lateral_determined(&r)) => r,
+        Err(e) if has_beta => return Err(e),
+        _ => {
+            exclude.push(Unknown::Bias(Channel::Ay));
+            exclude
+                .extend((0..manoeuvres.len()).map(|m| Unknown::Initial { manoeuvre: m, state: 1 }));
+            notes.push("no sideslip channel and too little roll to determine the initial side velocity and the ay bias: both fixed at 0, so the reconstructed sideslip carries their error".into());
+            Problem::new(manoeuvres, config, exclude)?.solve(config)?
+        }
+    };
+    r.notes = notes;
+    Ok(r)
+}
+
+/// Largest Cramér–Rao σ of a time shift, alone, that the record determines, s.
+const MAX_SHIFT_SIGMA_S: f64 = 0.05;
+
+/// Largest Cramér–Rao σ of an initial side velocity that still determines it, as a fraction of
+/// the airspeed (1°·V of sideslip).
+const V0_SIGMA_OF_V: f64 = 0.0175;
+
+/// Whether a fit without a sideslip channel determined the initial side velocities (σ below
+/// [`V0_SIGMA_OF_V`] of the first airspeed).
+fn lateral_determined(r: &CompatResult) -> bool {
+    r.unknowns.iter().zip(&r.sigma).zip(&r.reconstructed_v0()).all(|((u, s), v)| {
+        !matches!(u, Unknown::Initial { state: 1, .. }) || *s < V0_SIGMA_OF_V * v
+    })
+}
+
+impl CompatResult {
+    /// Per unknown, the first reconstructed airspeed of its manoeuvre (0 for the others).
+    fn reconstructed_v0(&self) -> Vec<f64> {
+        self.unknowns
+            .iter()
+            .map(|u| match *u {
+                Unknown::Initial { manoeuvre, .. } => {
+                    self.reconstructed[manoeuvre].vt_mps.first().copied().unwrap_or(0.0)
+                }
+                _ => 0.0,
+            })
+            .collect()
+    }
+}
+
+impl Problem<'_> {
+    /// The time shifts the record cannot determine (Cramér–Rao σ alone above
+    /// [`MAX_SHIFT_SIGMA_S`] at the start, with the measurement noise of
+    /// [`Problem::noise_variances`]: the channel hardly varies) and a note for each.
+    fn undetermined_shifts(&self) -> Result<(Vec<Unknown>, Vec<String>), EstimatorError> {
+        let beta = self.start();
+        let (mut y, mut e) = (Vec::new(), Vec::new());
+        self.simulate(&beta, &mut y)?;
+        self.residuals(&y, &mut e);
+        let (m, _) = normal_equations(self, &beta, &e, &self.noise_variances())?;
+        let mut out = (Vec::new(), Vec::new());
+        for (i, &u) in self.unknowns.iter().enumerate() {
+            let Unknown::TimeShift(c) = u else { continue };
+            let sigma = 1.0 / m[(i, i)].sqrt();
+            if sigma.is_nan() || sigma >= MAX_SHIFT_SIGMA_S {
+                out.0.push(u);
+                out.1.push(format!("time shift of {} not estimated: the channel hardly varies (its σ alone would be {sigma:.2} s)", c.name()));
+            }
+        }
+        Ok(out)
+    }
+
+    /// Per output, the white measurement-noise variance from the second differences of its
+    /// samples, `mean((z₊ − 2z + z₋)²)/6` (exact for white noise on a signal that is linear
+    /// over three samples), floored at 10⁻¹² of its mean square.
+    fn noise_variances(&self) -> Vec<f64> {
+        self.outputs
+            .iter()
+            .map(|&c| {
+                let (mut sum, mut n, mut ms) = (0.0, 0usize, 0.0);
+                for m in self.man {
+                    let z: Vec<f64> = m.iter().map(|s| c.of(s).unwrap_or(0.0)).collect();
+                    ms += z.iter().map(|v| v * v).sum::<f64>();
+                    for w in z.windows(3) {
+                        let d = wrap(w[2] - w[1]) - wrap(w[1] - w[0]);
+                        sum += d * d;
+                        n += 1;
+                    }
+                }
+                let floor = 1e-12 * ms / self.n_samples() as f64;
+                (sum / (6.0 * n.max(1) as f64)).max(floor).max(1e-300)
+            })
+            .collect()
+    }
+
+    /// Iterates from the start and forms the result.
+    fn solve(&self, config: &CompatConfig) -> Result<CompatResult, EstimatorError> {
+        let mut beta = self.start();
+        let (termination, iterations) = self.iterate(&mut beta, config)?;
+        self.finish(beta, termination, iterations)
+    }
+}
+
+/// The record and the unknowns, set up.
+struct Problem<'a> {
+    man: &'a [&'a [AirDataSample]],
+    outputs: Vec<Channel>,
+    unknowns: Vec<Unknown>,
+}
+
+/// Smallest samples in a manoeuvre: the initial state and a few steps beyond it.
+const MIN_SAMPLES: usize = 10;
+
+impl<'a> Problem<'a> {
+    /// The problem of `man` without the unknowns in `exclude` (held at their starting values:
+    /// no error, the initial states measured).
+    fn new(
+        man: &'a [&'a [AirDataSample]],
+        config: &CompatConfig,
+        exclude: Vec<Unknown>,
+    ) -> Result<Self, EstimatorError> {
+        if man.is_empty() {
+            return Err(EstimatorError::InvalidConfig {
+                field: "manoeuvres",
+                value: 0.0,
+                reason: "at least one manoeuvre is needed",
+            });
+        }
+        for (i, m) in man.iter().enumerate() {
+            if m.len() < MIN_SAMPLES {
+                return Err(EstimatorError::InvalidConfig {
+                    field: "manoeuvre",
+                    value: i as f64,
+                    reason: "a manoeuvre needs at least 10 samples",
+                });
+            }
+        }
+        let needed = [Channel::Phi, Channel::Theta];
+        for c in Channel::INERTIAL.into_iter().chain(needed) {
+            if man.iter().flat_map(|m| m.iter()).any(|s| c.of(s).is_none()) {
+                return Err(EstimatorError::InvalidConfig {
+                    field: c.name(),
+                    value: f64::NAN,
+                    reason: "the compatibility check needs this channel in every sample",
+                });
+            }
+        }
+        let recorded = |c: Channel| man.iter().flat_map(|m| m.iter()).all(|s| c.of(s).is_some());
+        let outputs: Vec<Channel> = Channel::OUTPUTS.into_iter().filter(|&c| recorded(c)).collect();
+        let mut unknowns = unknowns_of(&outputs, man.len(), config);
+        unknowns.retain(|u| !exclude.contains(u));
+        Ok(Self { man, outputs, unknowns })
+    }
+}
+
+/// The unknowns in order: inertial biases, inertial scale factors on request, air-data biases
+/// and scale factors, time shifts, initial states (without `ψ₀` without a heading).
+fn unknowns_of(outputs: &[Channel], n_man: usize, config: &CompatConfig) -> Vec<Unknown> {
+    let heading = outputs.contains(&Channel::Psi);
+    let beta = outputs.contains(&Channel::Beta);
+    let inertial = Channel::INERTIAL.into_iter();
+    let mut u: Vec<Unknown> = inertial.clone().map(Unknown::Bias).collect();
+    if config.inertial_scale_factors {
+        u.extend(inertial.map(Unknown::Scale));
+    }
+    u.push(Unknown::Bias(Channel::Vt));
+    u.extend([Unknown::Scale(Channel::Alpha), Unknown::Bias(Channel::Alpha)]);
+    if beta {
+        u.extend([Unknown::Scale(Channel::Beta), Unknown::Bias(Channel::Beta)]);
+    }
+    if config.time_shifts {
+        u.extend(outputs.iter().map(|&c| Unknown::TimeShift(c)));
+    }
+    for m in 0..n_man {
+        for state in 0..6 {
+            let fixed = state == 5 && !heading;
+            if !fixed {
+                u.push(Unknown::Initial { manoeuvre: m, state });
+            }
+        }
+    }
+    u
+}
+
+/// The unknowns decoded: per channel (index `Channel as usize`) bias, scale-factor error and
+/// time shift, and each manoeuvre's initial state.
+struct Corrections {
+    bias: [f64; 12],
+    scale: [f64; 12],
+    shift: [f64; 12],
+    x0: Vec<[f64; 6]>,
+}
+
+/// The kinematic state rates (module doc) at state `x` under corrected specific force `a`
+/// (m/s²) and rates `w` (rad/s).
+fn kinematics(x: &[f64; 6], a: [f64; 3], w: [f64; 3]) -> [f64; 6] {
+    let (phi, theta) = (SinCos::of(x[3]), SinCos::of(x[4]));
+    let g = rb::gravity_body(G0_MPS2, phi, theta);
+    let vd = rb::body_acceleration([x[0], x[1], x[2]], w, g, a);
+    let e = rb::euler_rates(w, phi, theta);
+    [vd[0], vd[1], vd[2], e[0], e[1], e[2]]
+}
+
+/// `V, α, β, φ, θ, ψ` of state `x`.
+fn air_data(x: &[f64; 6]) -> [f64; 6] {
+    let v = libm::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+    [v, libm::atan2(x[2], x[0]), libm::asin(x[1] / v), x[3], x[4], x[5]]
+}
+
+/// `a − b` wrapped into (−π, π] (heading residuals).
+fn wrap(d: f64) -> f64 {
+    use core::f64::consts::{PI, TAU};
+    let r = libm::remainder(d, TAU);
+    if r <= -PI { r + TAU } else { r }
+}
+
+/// Value of series `y` (one per sample at `t`) at time `at`, linearly interpolated, held at
+/// the ends.
+fn interpolate(t: &[f64], y: &[f64], at: f64) -> f64 {
+    let k = t.partition_point(|&ti| ti <= at);
+    if k == 0 {
+        return y[0];
+    }
+    if k >= t.len() {
+        return y[t.len() - 1];
+    }
+    let (t0, t1) = (t[k - 1], t[k]);
+    let f = (at - t0) / (t1 - t0);
+    y[k - 1] + f * (y[k] - y[k - 1])
+}
+
+impl Problem<'_> {
+    fn ny(&self) -> usize {
+        self.outputs.len()
+    }
+
+    fn n_samples(&self) -> usize {
+        self.man.iter().map(|m| m.len()).sum()
+    }
+
+    /// Starting values: no errors, each initial state from its manoeuvre's first sample.
+    fn start(&self) -> Vec<f64> {
+        self.unknowns
+            .iter()
+            .map(|u| match *u {
+                Unknown::Initial { manoeuvre, state } => {
+                    measured_state(&self.man[manoeuvre][0])[state]
+                }
+                _ => 0.0,
+            })
+            .collect()
+    }
+
+    fn decode(&self, beta: &[f64]) -> Corrections {
+        let mut c = Corrections {
+            bias: [0.0; 12],
+            scale: [0.0; 12],
+            shift: [0.0; 12],
+            x0: self.man.iter().map(|m| measured_state(&m[0])).collect(),
+        };
+        for (u, &b) in self.unknowns.iter().zip(beta) {
+            match *u {
+                Unknown::Bias(ch) => c.bias[ch as usize] = b,
+                Unknown::Scale(ch) => c.scale[ch as usize] = b,
+                Unknown::TimeShift(ch) => c.shift[ch as usize] = b,
+                Unknown::Initial { manoeuvre, state } => c.x0[manoeuvre][state] = b,
+            }
+        }
+        c
+    }
+
+    /// The corrected inertial inputs `(a, ω)` of sample `s`.
+    fn inputs(c: &Corrections, s: &AirDataSample) -> ([f64; 3], [f64; 3]) {
+        let f = |ch: Channel| {
+            let i = ch as usize;
+            (ch.of(s).unwrap_or(0.0) - c.bias[i]) / (1.0 + c.scale[i])
+        };
+        (
+            [f(Channel::Ax), f(Channel::Ay), f(Channel::Az)],
+            [f(Channel::P), f(Channel::Q), f(Channel::R)],
+        )
+    }
+
+    /// The states of manoeuvre `m` at its sample times (RK4, inputs linear between samples).
+    fn states(&self, c: &Corrections, m: usize) -> Result<Vec<[f64; 6]>, EstimatorError> {
+        let man = self.man[m];
+        let mut x = c.x0[m];
+        let mut out = Vec::with_capacity(man.len());
+        for k in 0..man.len() {
+            let v2 = x[0] * x[0] + x[1] * x[1] + x[2] * x[2];
+            if !(v2 > 0.0 && x.iter().all(|v| v.is_finite())) {
+                return Err(EstimatorError::Numerical {
+                    what: "compatibility check: the kinematics left the physical domain (V = 0 or non-finite)",
+                    t_s: man[k].t_s,
+                });
+            }
+            out.push(x);
+            if k + 1 == man.len() {
+                break;
+            }
+            let (a0, w0) = Self::inputs(c, &man[k]);
+            let (a1, w1) = Self::inputs(c, &man[k + 1]);
+            let mid = |p: [f64; 3], q: [f64; 3]| {
+                [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1]), 0.5 * (p[2] + q[2])]
+            };
+            let (am, wm) = (mid(a0, a1), mid(w0, w1));
+            x = rk4(&x, man[k + 1].t_s - man[k].t_s, [(a0, w0), (am, wm), (a1, w1)]);
+        }
+        Ok(out)
+    }
+
+    /// The model outputs (module doc) of every sample, `N × ny` row-major, manoeuvres
+    /// concatenated.
+    fn simulate(&self, beta: &[f64], y: &mut Vec<f64>) -> Result<(), EstimatorError> {
+        let c = self.decode(beta);
+        y.clear();
+        for (m, man) in self.man.iter().enumerate() {
+            let xs = self.states(&c, m)?;
+            let t: Vec<f64> = man.iter().map(|s| s.t_s).collect();
+            let raw: Vec<[f64; 6]> = xs.iter().map(air_data).collect();
+            let series: Vec<Vec<f64>> =
+                (0..6).map(|j| raw.iter().map(|r| r[j]).collect()).collect();
+            for &tk in &t {
+                for &ch in &self.outputs {
+                    let j = output_index(ch);
+                    let i = ch as usize;
+                    let h = interpolate(&t, &series[j], tk - c.shift[i]);
+                    y.push((1.0 + c.scale[i]) * h + c.bias[i]);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Residuals `z − y` (heading wrapped) into `e`; returns the per-output variances.
+    fn residuals(&self, y: &[f64], e: &mut Vec<f64>) -> Vec<f64> {
+        let ny = self.ny();
+        e.clear();
+        let mut r = vec![0.0; ny];
+        for (k, s) in self.man.iter().flat_map(|m| m.iter()).enumerate() {
+            for (j, &ch) in self.outputs.iter().enumerate() {
+                let d = ch.of(s).unwrap_or(0.0) - y[k * ny + j];
+                let d = if ch == Channel::Psi { wrap(d) } else { d };
+                e.push(d);
+                r[j] += d * d;
+            }
+        }
+        let n = self.n_samples() as f64;
+        r.iter().map(|v| (v / n).max(1e-300)).collect()
+    }
+}
+
+/// Index of an output channel in [`air_data`]'s order.
+fn output_index(c: Channel) -> usize {
+    Channel::OUTPUTS.iter().position(|&o| o == c).unwrap_or(0)
+}
+
+/// The kinematic state `[u v w φ θ ψ]` the sample measures (`β`, `ψ` 0 when not recorded).
+fn measured_state(s: &AirDataSample) -> [f64; 6] {
+    let (a, b) = (s.alpha_rad, s.beta_rad.unwrap_or(0.0));
+    let uvw = rb::body_velocity(s.vt_mps, SinCos::of(a), SinCos::of(b));
+    [
+        uvw[0],
+        uvw[1],
+        uvw[2],
+        s.phi_rad.unwrap_or(0.0),
+        s.theta_rad.unwrap_or(0.0),
+        s.psi_rad.unwrap_or(0.0),
+    ]
+}
+
+/// One RK4 step of [`kinematics`] over `h` with the inputs at the start, middle and end.
+fn rk4(x: &[f64; 6], h: f64, u: [([f64; 3], [f64; 3]); 3]) -> [f64; 6] {
+    let add = |x: &[f64; 6], d: &[f64; 6], f: f64| core::array::from_fn(|i| x[i] + f * d[i]);
+    let k1 = kinematics(x, u[0].0, u[0].1);
+    let k2 = kinematics(&add(x, &k1, 0.5 * h), u[1].0, u[1].1);
+    let k3 = kinematics(&add(x, &k2, 0.5 * h), u[1].0, u[1].1);
+    let k4 = kinematics(&add(x, &k3, h), u[2].0, u[2].1);
+    core::array::from_fn(|i| x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]))
+}
+
+/// The perturbation of unknown `u` for its central difference (a small fraction of its
+/// natural size, well above rounding).
+fn delta(u: Unknown) -> f64 {
+    match u {
+        Unknown::Bias(Channel::Ax | Channel::Ay | Channel::Az | Channel::Vt) => 1e-3,
+        Unknown::Bias(_) => 1e-5,
+        Unknown::Scale(_) => 1e-4,
+        Unknown::TimeShift(_) => 1e-3,
+        Unknown::Initial { state, .. } if state < 3 => 1e-3,
+        Unknown::Initial { .. } => 1e-5,
+    }
+}
+
+/// The normal equations at `beta`: `(M, g)` with `M = Σ Sᵀ W S`, `g = Σ Sᵀ W e`, `W = R⁻¹`,
+/// `S` by central differences.
+fn normal_equations(
+    p: &Problem<'_>,
+    beta: &[f64],
+    e: &[f64],
+    r: &[f64],
+) -> Result<(DMatrix<f64>, DVector<f64>), EstimatorError> {
+    let (nb, ny) = (beta.len(), p.ny());
+    let n = p.n_samples();
+    let mut s = DMatrix::zeros(n * ny, nb);
+    let (mut yp, mut ym) = (Vec::new(), Vec::new());
+    let mut trial = beta.to_vec();
+    for (i, &u) in p.unknowns.iter().enumerate() {
+        let d = delta(u);
+        trial[i] = beta[i] + d;
+        p.simulate(&trial, &mut yp)?;
+        trial[i] = beta[i] - d;
+        p.simulate(&trial, &mut ym)?;
+        trial[i] = beta[i];
+        for row in 0..n * ny {
+            s[(row, i)] = (yp[row] - ym[row]) / (2.0 * d);
+        }
+    }
+    let w = DVector::from_fn(n * ny, |row, _| 1.0 / r[row % ny]);
+    let sw = DMatrix::from_fn(n * ny, nb, |row, i| s[(row, i)] * w[row]);
+    let m = sw.transpose() * &s;
+    let g = sw.transpose() * DVector::from_column_slice(e);
+    Ok((m, g))
+}
+
+/// `(M + λ diag M)⁻¹ g`, Jacobi-scaled (Cholesky); `None` when not positive definite.
+fn damped(m: &DMatrix<f64>, g: &DVector<f64>, lambda: f64) -> Option<DVector<f64>> {
+    let n = m.nrows();
+    let d: Vec<f64> = (0..n).map(|i| 1.0 / m[(i, i)].sqrt()).collect();
+    if d.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let ms =
+        DMatrix::from_fn(n, n, |i, j| m[(i, j)] * d[i] * d[j] + if i == j { lambda } else { 0.0 });
+    let gs = DVector::from_fn(n, |i, _| g[i] * d[i]);
+    let sol = ms.cholesky()?.solve(&gs);
+    Some(DVector::from_fn(n, |i, _| sol[i] * d[i]))
+}
+
+fn ln_det(r: &[f64]) -> f64 {
+    r.iter().map(|v| v.ln()).sum()
+}
+
+/// What one iteration did: the accepted unknowns, their residuals and variances, the step in
+/// σ; `None` when no damping lowered the cost.
+type Accepted = Option<(Vec<f64>, Vec<f64>, Vec<f64>, f64)>;
+
+impl Problem<'_> {
+    /// Gauss–Newton iterations from `beta` (module doc, "Estimation"); `beta` is left at the
+    /// last accepted iterate.
+    fn iterate(
+        &self,
+        beta: &mut Vec<f64>,
+        config: &CompatConfig,
+    ) -> Result<(Termination, usize), EstimatorError> {
+        let (mut y, mut e) = (Vec::new(), Vec::new());
+        self.simulate(beta, &mut y)?;
+        let mut r = self.residuals(&y, &mut e);
+        let mut lambda = 0.0;
+        let mut last_rel = f64::INFINITY;
+        for iteration in 1..=config.max_iterations {
+            let (m, g) = normal_equations(self, beta, &e, &r)?;
+            if iteration == 1 && damped(&m, &g, 0.0).is_none() {
+                return Err(EstimatorError::Numerical {
+                    what: "compatibility check: the information matrix is singular at the start (an unknown the record does not determine)",
+                    t_s: self.man[0][0].t_s,
+                });
+            }
+            let Some((b, e_new, r_new, step_sigma)) = self.descend(beta, &m, &g, &r, &mut lambda)
+            else {
+                let tiny = damped(&m, &g, 0.0)
+                    .is_some_and(|st| max_sigma(&m, &st) < config.step_tolerance_sigma);
+                let t = if tiny {
+                    Termination::Converged
+                } else {
+                    stalled(last_rel, config, NotConverged::NoDescent)
+                };
+                return Ok((t, iteration - 1));
+            };
+            last_rel = (ln_det(&r_new) - ln_det(&r)).exp_m1().abs();
+            (*beta, e, r) = (b, e_new, r_new);
+            if last_rel < config.cost_tolerance && step_sigma < config.step_tolerance_sigma {
+                return Ok((Termination::Converged, iteration));
+            }
+        }
+        Ok((stalled(last_rel, config, NotConverged::MaxIterations), config.max_iterations))
+    }
+
+    /// A damped step from `beta` that lowers `ln det R` (λ raised ×10 from 10⁻³ up to 10¹⁰
+    /// until one does; lowered ×10 after an accepted one).
+    fn descend(
+        &self,
+        beta: &[f64],
+        m: &DMatrix<f64>,
+        g: &DVector<f64>,
+        r: &[f64],
+        lambda: &mut f64,
+    ) -> Accepted {
+        let (mut y, mut e) = (Vec::new(), Vec::new());
+        loop {
+            if let Some(step) = damped(m, g, *lambda) {
+                let trial: Vec<f64> = beta.iter().zip(step.iter()).map(|(b, d)| b + d).collect();
+                if self.simulate(&trial, &mut y).is_ok() {
+                    let r_try = self.residuals(&y, &mut e);
+                    if ln_det(&r_try) < ln_det(r) {
+                        *lambda = if *lambda < 1e-6 { 0.0 } else { *lambda / 10.0 };
+                        return Some((trial, e, r_try, max_sigma(m, &step)));
+                    }
+                }
+            }
+            *lambda = if *lambda == 0.0 { 1e-3 } else { *lambda * 10.0 };
+            if *lambda > 1e10 {
+                return None;
+            }
+        }
+    }
+
+    /// The result at `beta`: Cramér–Rao σ, residual statistics, the reconstructed air data.
+    fn finish(
+        &self,
+        beta: Vec<f64>,
+        termination: Termination,
+        iterations: usize,
+    ) -> Result<CompatResult, EstimatorError> {
+        let (mut y, mut e) = (Vec::new(), Vec::new());
+        self.simulate(&beta, &mut y)?;
+        let r = self.residuals(&y, &mut e);
+        let (m, _) = normal_equations(self, &beta, &e, &r)?;
+        let n = m.nrows();
+        let inv = m.clone().cholesky().map(|c| c.inverse()).ok_or(EstimatorError::Numerical {
+            what: "compatibility check: information matrix singular at the estimate",
+            t_s: self.man[0][0].t_s,
+        })?;
+        let ny = self.ny();
+        let ns = self.n_samples() as f64;
+        let residual_mean =
+            (0..ny).map(|j| e.iter().skip(j).step_by(ny).sum::<f64>() / ns).collect();
+        let c = self.decode(&beta);
+        let reconstructed =
+            (0..self.man.len()).map(|k| self.reconstruct(&c, k)).collect::<Result<Vec<_>, _>>()?;
+        Ok(CompatResult {
+            unknowns: self.unknowns.clone(),
+            sigma: (0..n).map(|i| inv[(i, i)].max(0.0).sqrt()).collect(),
+            values: beta,
+            outputs: self.outputs.clone(),
+            residual_rms: r.iter().map(|v| v.sqrt()).collect(),
+            residual_mean,
+            reconstructed,
+            termination,
+            iterations,
+            notes: Vec::new(),
+        })
+    }
+
+    fn reconstruct(&self, c: &Corrections, m: usize) -> Result<Reconstructed, EstimatorError> {
+        let xs = self.states(c, m)?;
+        let mut out = Reconstructed::default();
+        for (x, s) in xs.iter().zip(self.man[m]) {
+            let a = air_data(x);
+            out.t_s.push(s.t_s);
+            out.vt_mps.push(a[0]);
+            out.alpha_rad.push(a[1]);
+            out.beta_rad.push(a[2]);
+        }
+        Ok(out)
+    }
+}
+
+/// How a fit that did not meet both criteria ended: in the cost alone when the last accepted
+/// iteration changed `det R` by less than the tolerance.
+fn stalled(last_rel: f64, config: &CompatConfig, why: NotConverged) -> Termination {
+    if last_rel < config.cost_tolerance {
+        Termination::CostConverged(why)
+    } else {
+        Termination::NotConverged(why)
+    }
+}
+
+/// The largest `|step_i| / sqrt((M⁻¹)_ii)` (∞ when `M` is singular).
+fn max_sigma(m: &DMatrix<f64>, step: &DVector<f64>) -> f64 {
+    match m.clone().cholesky() {
+        Some(c) => {
+            let inv = c.inverse();
+            (0..step.len()).map(|i| step[i].abs() / inv[(i, i)].sqrt()).fold(0.0, f64::max)
+        }
+        None => f64::INFINITY,
+    }
+}
+
+#[cfg(test)]
+mod tests;

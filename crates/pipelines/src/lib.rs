@@ -15,6 +15,7 @@
 
 /// Aircraft estimation experiments: two F-16s, sensors, estimators.
 pub mod aircraft;
+pub mod compat;
 pub mod condition;
 pub mod error;
 pub mod estimators;

@@ -226,18 +226,19 @@ fn default_model(first: &AirDataSample, mapping: &Mapping) -> Result<ModelSpec, 
 }
 
 /// A record read whole and split at its gaps.
-struct Manoeuvres {
-    manoeuvres: Vec<Vec<AirDataSample>>,
-    rejections: RejectionLog,
-    read: usize,
-    rejected: usize,
+/// A whole record, split into manoeuvres at its gaps.
+pub(crate) struct Manoeuvres {
+    pub(crate) manoeuvres: Vec<Vec<AirDataSample>>,
+    pub(crate) rejections: RejectionLog,
+    pub(crate) read: usize,
+    pub(crate) rejected: usize,
 }
 
 /// Reads the whole record, splitting it into manoeuvres at the reader's gap events.
 ///
 /// # Errors
 /// Fatal data errors; no usable sample.
-fn read_manoeuvres<R: Read>(reader: FlightDataReader<R>) -> Result<Manoeuvres, ReplayError> {
+pub(crate) fn read_manoeuvres<R: Read>(reader: FlightDataReader<R>) -> Result<Manoeuvres, ReplayError> {
     let file = reader.file().to_string();
     let mut manoeuvres: Vec<Vec<AirDataSample>> = vec![Vec::new()];
     let mut rejections = RejectionLog::default();

@@ -1,0 +1,206 @@
+//! The data compatibility check of a record (`aeroident compat`): read → split into
+//! manoeuvres → [`aeroident_estimators::compat::check`] → a summary per channel (bias, scale
+//! factor, time shift with σ), the reconstructed air data, the residuals and findings in plain
+//! words.
+//!
+//! `compat.json` keys: `file, status, status_reason, iterations, samples_read,
+//! samples_rejected, manoeuvres, channels[{name, unit, bias, bias_sigma, scale, scale_sigma,
+//! time_shift_s, time_shift_sigma_s}], residual_rms{output: value}, findings[], warnings[],
+//! reconstructed[{manoeuvre, t_s[], vt_mps[], alpha_rad[], beta_rad[]}]`. `scale` is the
+//! factor the channel reads the truth with (`1 + k`); a number the check did not estimate is
+//! `null`.
+
+use crate::replay::ReplayError;
+use crate::replay::batch::read_manoeuvres;
+use aeroident_estimators::compat::{self, Channel, CompatConfig, CompatResult, Unknown};
+use aeroident_estimators::flight_model::G0_MPS2;
+use aeroident_estimators::output_error::Termination;
+use aeroident_io::{FlightDataReader, Rejection};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::io::Read;
+
+/// One channel's corrections: `measured = scale · true + bias`, read `time_shift_s` late.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ChannelSummary {
+    /// The sample field (`ax_mps2`, `alpha_rad` …).
+    pub name: &'static str,
+    /// Its unit.
+    pub unit: &'static str,
+    /// Bias, channel units.
+    pub bias: Option<f64>,
+    /// Its Cramér–Rao σ.
+    pub bias_sigma: Option<f64>,
+    /// Scale factor `1 + k`.
+    pub scale: Option<f64>,
+    /// Its Cramér–Rao σ.
+    pub scale_sigma: Option<f64>,
+    /// Time shift, s (> 0: the channel lags the kinematics).
+    pub time_shift_s: Option<f64>,
+    /// Its Cramér–Rao σ, s.
+    pub time_shift_sigma_s: Option<f64>,
+}
+
+/// One manoeuvre's reconstructed air data at its sample times.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ReconstructedSummary {
+    /// Manoeuvre, from 1.
+    pub manoeuvre: usize,
+    /// Sample times, s.
+    pub t_s: Vec<f64>,
+    /// Airspeed, m/s.
+    pub vt_mps: Vec<f64>,
+    /// Angle of attack, rad.
+    pub alpha_rad: Vec<f64>,
+    /// Sideslip, rad.
+    pub beta_rad: Vec<f64>,
+}
+
+/// `compat.json` (module doc).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CompatSummary {
+    /// The record.
+    pub file: String,
+    /// `converged`, `converged_in_cost` or `not_converged` (the last iterate).
+    pub status: &'static str,
+    /// How a fit that is not `converged` ended.
+    pub status_reason: Option<String>,
+    /// Gauss–Newton iterations.
+    pub iterations: usize,
+    /// Rows read.
+    pub samples_read: usize,
+    /// Rows rejected (listed in `rejections`).
+    pub samples_rejected: usize,
+    /// The rejected rows and gaps (the first ones and the last).
+    pub rejections: Vec<Rejection>,
+    /// Manoeuvres (split at the record's gaps).
+    pub manoeuvres: usize,
+    /// Per channel, its corrections.
+    pub channels: Vec<ChannelSummary>,
+    /// Residual RMS per fitted output, its unit.
+    pub residual_rms: BTreeMap<&'static str, f64>,
+    /// What the numbers say, in words.
+    pub findings: Vec<String>,
+    /// What the check could not determine, and rows it could not read.
+    pub warnings: Vec<String>,
+    /// The reconstructed air data.
+    pub reconstructed: Vec<ReconstructedSummary>,
+}
+
+/// Checks the compatibility of the record `reader` reads with `config`.
+///
+/// # Errors
+/// Fatal data errors, no usable sample, and the check's own errors (a missing channel, a
+/// singular information matrix: [`ReplayError::Model`] with the reason).
+pub fn check_record<R: Read>(
+    reader: FlightDataReader<R>,
+    config: &CompatConfig,
+) -> Result<(CompatSummary, CompatResult), ReplayError> {
+    let file = reader.file().to_string();
+    let rec = read_manoeuvres(reader)?;
+    let slices: Vec<&[aeroident_estimators::AirDataSample]> =
+        rec.manoeuvres.iter().map(Vec::as_slice).collect();
+    let result = compat::check(&slices, config)
+        .map_err(|e| ReplayError::Model(format!("compatibility check of {file}: {e}")))?;
+    let (rejections, unlisted) = rec.rejections.finish();
+    let mut warnings = result.notes.clone();
+    warnings.extend(unlisted);
+    let dt = median_interval(&rec.manoeuvres);
+    let summary = CompatSummary {
+        file,
+        status: result.termination.status(),
+        status_reason: (result.termination != Termination::Converged)
+            .then(|| result.termination.describe()),
+        iterations: result.iterations,
+        samples_read: rec.read,
+        samples_rejected: rec.rejected,
+        rejections,
+        manoeuvres: slices.len(),
+        channels: channels(&result),
+        residual_rms: result.outputs.iter().map(|c| c.name()).zip(result.residual_rms.iter().copied()).collect(),
+        findings: findings(&result, dt),
+        warnings,
+        reconstructed: result
+            .reconstructed
+            .iter()
+            .enumerate()
+            .map(|(m, r)| ReconstructedSummary {
+                manoeuvre: m + 1,
+                t_s: r.t_s.clone(),
+                vt_mps: r.vt_mps.clone(),
+                alpha_rad: r.alpha_rad.clone(),
+                beta_rad: r.beta_rad.clone(),
+            })
+            .collect(),
+    };
+    Ok((summary, result))
+}
+
+/// The median sample interval of the record, s.
+fn median_interval(manoeuvres: &[Vec<aeroident_estimators::AirDataSample>]) -> f64 {
+    let mut d: Vec<f64> =
+        manoeuvres.iter().flat_map(|m| m.windows(2).map(|w| w[1].t_s - w[0].t_s)).collect();
+    d.sort_by(f64::total_cmp);
+    d.get(d.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// Every channel with at least one estimated correction, inertial first.
+fn channels(r: &CompatResult) -> Vec<ChannelSummary> {
+    Channel::INERTIAL
+        .into_iter()
+        .chain(Channel::OUTPUTS)
+        .filter_map(|c| {
+            let bias = r.get(Unknown::Bias(c));
+            let scale = r.get(Unknown::Scale(c));
+            let shift = r.get(Unknown::TimeShift(c));
+            (bias.is_some() || scale.is_some() || shift.is_some()).then(|| ChannelSummary {
+                name: c.name(),
+                unit: c.unit(),
+                bias: bias.map(|b| b.0),
+                bias_sigma: bias.map(|b| b.1),
+                scale: scale.map(|s| 1.0 + s.0),
+                scale_sigma: scale.map(|s| s.1),
+                time_shift_s: shift.map(|s| s.0),
+                time_shift_sigma_s: shift.map(|s| s.1),
+            })
+        })
+        .collect()
+}
+
+/// Significance of a finding: the estimate beyond this many σ.
+const SIGNIFICANT_SIGMAS: f64 = 3.0;
+
+/// The findings in words: a significant time shift of half a sample or more, a significant
+/// bias, a scale factor off by 2 % or more, and an `az` whose bias is `+g` (the channel holds
+/// load factor − 1 g, not the specific force).
+fn findings(r: &CompatResult, dt_s: f64) -> Vec<String> {
+    let mut out = Vec::new();
+    let significant = |v: f64, s: f64| v.abs() > SIGNIFICANT_SIGMAS * s;
+    if let Some((b, s)) = r.get(Unknown::Bias(Channel::Az)) {
+        if (b - G0_MPS2).abs() < 0.1 * G0_MPS2 {
+            out.push(format!("az_mps2 looks like load factor − 1 g, not the specific force (bias {b:+.2} ± {s:.2} m/s² ≈ +g): map it as (n_z·g) with the sign of a specific force (≈ −g level)"));
+        }
+    }
+    for (u, (&v, &s)) in r.unknowns.iter().zip(r.values.iter().zip(&r.sigma)) {
+        match *u {
+            Unknown::TimeShift(c) if significant(v, s) && v.abs() >= 0.5 * dt_s => out.push(format!(
+                "{} {} the kinematics by {:.3} ± {:.3} s",
+                c.name(),
+                if v > 0.0 { "lags" } else { "leads" },
+                v.abs(),
+                s
+            )),
+            Unknown::Bias(c) if significant(v, s) => {
+                out.push(format!("{} bias {v:+.4} ± {s:.4} {}", c.name(), c.unit()));
+            }
+            Unknown::Scale(c) if significant(v, s) && v.abs() >= 0.02 => out.push(format!(
+                "{} reads {:.3} ± {s:.3} × the kinematic value{}",
+                c.name(),
+                1.0 + v,
+                if c == Channel::Alpha { " (vane upwash or calibration)" } else { "" }
+            )),
+            _ => {}
+        }
+    }
+    out
+}

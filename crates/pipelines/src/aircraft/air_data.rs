@@ -1,6 +1,7 @@
 //! From the reference F-16's truth to the ONE air-data sample per step that the sample-driven
 //! estimators see: unit conversion (the F-16 is in ft, slug, lbf; the sample is SI), the sensor
-//! noise of [`super::sensors`], and angular accelerations as a real system forms them.
+//! noise of [`super::sensors`] (one white-noise [`SensorModel`] per sensed channel, read at the
+//! step's time `k·dt`), and angular accelerations as a real system forms them.
 //!
 //! # Channels (truth → sample)
 //! - `vt_mps`, `alpha_rad`, `beta_rad`: **air-relative** airspeed and flow angles (pitot and
@@ -42,10 +43,10 @@
 
 use aeroident_estimators::sample::{AirDataSample, AircraftConstants};
 use aeroident_models::f16::{self, F16, F16Controls, F16Outputs, F16State};
+use aeroident_signals::SensorModel;
 use aeroident_signals::differentiate::CausalDifferentiator;
-use aeroident_signals::{BandLimitedWhiteNoise, InputSignal};
 
-use super::sensors::state_sigma;
+use super::sensors::{state_sigma, white_noise_sensors};
 use crate::condition::{Alignment, Conditioner, Conditioning, Derivative};
 use aeroident_physics::units::{KG_PER_SLUG, KGM2_PER_SLUGFT2, M_PER_FT, N_PER_LBF, PA_PER_PSF};
 
@@ -83,7 +84,7 @@ pub fn exact_sample(
     out: &F16Outputs,
     u: &F16Controls,
 ) -> AirDataSample {
-    let mut s = measured_channels(f16, constants, t_s, x, out, u, None);
+    let mut s = measured_channels(f16, constants, t_s, x, out, u, |_, v| v);
     s.pdot_rad_s2 = Some(xdot[f16::P]);
     s.qdot_rad_s2 = Some(xdot[f16::Q]);
     s.rdot_rad_s2 = Some(xdot[f16::R]);
@@ -91,24 +92,26 @@ pub fn exact_sample(
     s
 }
 
-/// Noise added to one sample, channel units (SI, rad).
-#[derive(Debug, Clone, Copy, Default)]
-struct ChannelNoise {
-    vt_mps: f64,
-    alpha: f64,
-    beta: f64,
-    p: f64,
-    q: f64,
-    r: f64,
-    phi: f64,
-    theta: f64,
-    psi: f64,
-    ax: f64,
-    ay: f64,
-    az: f64,
-}
+/// The twelve sensed channels of a sample, in the order of their sensors (names of
+/// [`AirDataSample`]'s fields, SI units and rad).
+pub const SENSED_CHANNELS: [&str; 12] = [
+    "vt_mps",
+    "alpha_rad",
+    "beta_rad",
+    "p_rad_s",
+    "q_rad_s",
+    "r_rad_s",
+    "phi_rad",
+    "theta_rad",
+    "psi_rad",
+    "ax_mps2",
+    "ay_mps2",
+    "az_mps2",
+];
 
-/// All channels except the angular accelerations and α̇ (set by the caller).
+/// All channels except the angular accelerations and α̇ (set by the caller); each of the
+/// [`SENSED_CHANNELS`] passes through `sense(index, truth)`, and `q̄` follows the sensed
+/// airspeed.
 fn measured_channels(
     f16: &F16,
     constants: AircraftConstants,
@@ -116,32 +119,44 @@ fn measured_channels(
     x: &F16State,
     out: &F16Outputs,
     u: &F16Controls,
-    noise: Option<ChannelNoise>,
+    mut sense: impl FnMut(usize, f64) -> f64,
 ) -> AirDataSample {
-    let n = noise.unwrap_or_default();
     let g_fps2 = f16.data().mass.g_ft_per_s2;
-    let vt_true = out.vt_air_fps * M_PER_FT;
-    let vt_m = vt_true + n.vt_mps;
-    let qbar = out.qbar_psf * PA_PER_PSF * (vt_m / vt_true).powi(2);
+    let truth = [
+        out.vt_air_fps * M_PER_FT,
+        out.alpha_air_rad,
+        out.beta_air_rad,
+        x[f16::P],
+        x[f16::Q],
+        x[f16::R],
+        x[f16::PHI],
+        x[f16::THETA],
+        x[f16::PSI],
+        out.nx_g * g_fps2 * M_PER_FT,
+        out.ny_g * g_fps2 * M_PER_FT,
+        -out.nz_g * g_fps2 * M_PER_FT,
+    ];
+    let m: [f64; 12] = core::array::from_fn(|i| sense(i, truth[i]));
+    let qbar = out.qbar_psf * PA_PER_PSF * (m[0] / truth[0]).powi(2);
     AirDataSample {
         t_s,
-        vt_mps: vt_m,
-        alpha_rad: out.alpha_air_rad + n.alpha,
+        vt_mps: m[0],
+        alpha_rad: m[1],
         qbar_pa: qbar,
-        beta_rad: Some(out.beta_air_rad + n.beta),
-        p_rad_s: Some(x[f16::P] + n.p),
-        q_rad_s: Some(x[f16::Q] + n.q),
-        r_rad_s: Some(x[f16::R] + n.r),
+        beta_rad: Some(m[2]),
+        p_rad_s: Some(m[3]),
+        q_rad_s: Some(m[4]),
+        r_rad_s: Some(m[5]),
         pdot_rad_s2: None,
         qdot_rad_s2: None,
         rdot_rad_s2: None,
         alphadot_rad_s: None,
-        phi_rad: Some(x[f16::PHI] + n.phi),
-        theta_rad: Some(x[f16::THETA] + n.theta),
-        psi_rad: Some(x[f16::PSI] + n.psi),
-        ax_mps2: Some(out.nx_g * g_fps2 * M_PER_FT + n.ax),
-        ay_mps2: Some(out.ny_g * g_fps2 * M_PER_FT + n.ay),
-        az_mps2: Some(-out.nz_g * g_fps2 * M_PER_FT + n.az),
+        phi_rad: Some(m[6]),
+        theta_rad: Some(m[7]),
+        psi_rad: Some(m[8]),
+        ax_mps2: Some(m[9]),
+        ay_mps2: Some(m[10]),
+        az_mps2: Some(m[11]),
         de_rad: Some(u.elevator_rad),
         da_rad: Some(u.aileron_rad),
         dr_rad: Some(u.rudder_rad),
@@ -159,8 +174,8 @@ fn measured_channels(
 pub struct AirDataSampler {
     f16: F16,
     constants: AircraftConstants,
-    /// Noise generators in the order of [`ChannelNoise`]; `None` = noise-free.
-    noise: Option<Box<[BandLimitedWhiteNoise; 12]>>,
+    /// One sensor per channel of [`SENSED_CHANNELS`]; `None` = noise-free.
+    sensors: Vec<Option<SensorModel>>,
     /// The shared conditioning stage: `ṗ q̇ ṙ α̇` differentiated, the other channels aligned.
     stage: Conditioner,
     /// Differentiator lag `(N−1)·dt/2`, s.
@@ -205,7 +220,7 @@ impl AirDataSampler {
             nominal_dt_s: Some(dt_s),
             alignment: if matched { Alignment::Matched } else { Alignment::Delay },
         });
-        let noise = if noise && scale > 0.0 {
+        let sensors = if noise && scale > 0.0 {
             let s = state_sigma();
             let sig = [
                 s[f16::VT] * M_PER_FT,
@@ -221,31 +236,15 @@ impl AirDataSampler {
                 ACCEL_SIGMA_FPS2 * M_PER_FT,
                 ACCEL_SIGMA_FPS2 * M_PER_FT,
             ];
-            let gens = sig
-                .iter()
-                .enumerate()
-                .map(|(i, &sg)| {
-                    let sg = sg * scale;
-                    BandLimitedWhiteNoise::new(
-                        sg * sg * dt_s,
-                        dt_s,
-                        seed.wrapping_mul(1_000).wrapping_add(200 + i as u64),
-                    )
-                })
-                .collect::<Result<Vec<_>, _>>()
-                .map_err(|e| format!("sensors: {e}"))?;
-            let gens: Box<[BandLimitedWhiteNoise; 12]> = gens
-                .into_boxed_slice()
-                .try_into()
-                .map_err(|_| "sensors: twelve noise channels expected".to_string())?;
-            Some(gens)
+            white_noise_sensors(sig.map(|sg| sg * scale), dt_s, seed, 200)
+                .map_err(|e| format!("sensors: {e}"))?
         } else {
-            None
+            vec![None; SENSED_CHANNELS.len()]
         };
         Ok(Self {
             f16: f16.clone(),
             constants: f16_constants(f16, v0_mps),
-            noise,
+            sensors,
             stage,
             lag_s,
             pushed: 0,
@@ -268,24 +267,10 @@ impl AirDataSampler {
         out: &F16Outputs,
         u: &F16Controls,
     ) -> Option<AirDataSample> {
-        let n = self.noise.as_ref().map(|g| {
-            let v: [f64; 12] = core::array::from_fn(|i| g[i].value(t_s));
-            ChannelNoise {
-                vt_mps: v[0],
-                alpha: v[1],
-                beta: v[2],
-                p: v[3],
-                q: v[4],
-                r: v[5],
-                phi: v[6],
-                theta: v[7],
-                psi: v[8],
-                ax: v[9],
-                ay: v[10],
-                az: v[11],
-            }
+        let sensors = &mut self.sensors;
+        let s = measured_channels(&self.f16, self.constants, t_s, x, out, u, |i, v| {
+            sensors[i].as_mut().map_or(v, |sensor| sensor.measure(t_s, v))
         });
-        let s = measured_channels(&self.f16, self.constants, t_s, x, out, u, n);
         self.ready.clear();
         self.unused.clear();
         // The step is checked at construction and the simulator's times advance by it.

@@ -11,6 +11,9 @@
 //! - `p q r`: body rates + gyro noise (0.14°/s). `φ θ ψ`: attitude + 0.573°.
 //! - `ax ay az`: specific force at the CG from the model's load factors (`nx`, `ny`, −`nz`) ×
 //!   the model's g, + accelerometer noise (0.98 ft/s²); level flight reads `az ≈ −g`.
+//! - Any of these twelve sensed channels ([`SENSED_CHANNELS`]) may carry more sensor errors
+//!   from a `[[sensors.channel]]` entry of the scenario (bias, lag, Gauss–Markov drift,
+//!   transport delay, quantisation; [`channel_sensors`]), on top of the same white draws.
 //! - `de da dr`: the surface positions (the model has no actuators; no surface sensor noise is
 //!   cited, none is added). `thrust_n`: the engine model's thrust (as the thesis experiment,
 //!   thrust is known from the engine model; F-16 thrust acts along body x through the CG).
@@ -46,8 +49,9 @@ use aeroident_models::f16::{self, F16, F16Controls, F16Outputs, F16State};
 use aeroident_signals::SensorModel;
 use aeroident_signals::differentiate::CausalDifferentiator;
 
-use super::sensors::{state_sigma, white_noise_sensors};
-use crate::condition::{Alignment, Conditioner, Conditioning, Derivative};
+use super::scenario::SensorSpec;
+use super::sensors::{channel_seed, state_sigma, white_noise_sensors};
+use crate::condition::{Conditioner, Conditioning, Derivative};
 use aeroident_physics::units::{KG_PER_SLUG, KGM2_PER_SLUGFT2, M_PER_FT, N_PER_LBF, PA_PER_PSF};
 
 /// σ of the accelerometers, ft/s² (ISRN 2014 Table 3, as [`super::sensors`]).
@@ -168,6 +172,45 @@ fn measured_channels(
     }
 }
 
+/// The sensors of the [`SENSED_CHANNELS`]: white noise at `scale` × the cited levels when
+/// `noise` is on, channel `i` keyed with [`channel_seed`]`(seed, 200, i)`, and on the channels
+/// of `[[sensors.channel]]` their bias, lag, drift, delay and quantisation on top (same seed, so
+/// the same white draws); `None` = an exact channel.
+///
+/// # Errors
+/// A message naming the sensor setting for a bad level, channel name or channel entry.
+pub fn channel_sensors(spec: &SensorSpec, dt_s: f64) -> Result<Vec<Option<SensorModel>>, String> {
+    let s = state_sigma();
+    let sig = [
+        s[f16::VT] * M_PER_FT,
+        s[f16::ALPHA],
+        s[f16::BETA],
+        s[f16::P],
+        s[f16::Q],
+        s[f16::R],
+        s[f16::PHI],
+        s[f16::THETA],
+        s[f16::PSI],
+        ACCEL_SIGMA_FPS2 * M_PER_FT,
+        ACCEL_SIGMA_FPS2 * M_PER_FT,
+        ACCEL_SIGMA_FPS2 * M_PER_FT,
+    ];
+    let levels = sig.map(|sg| if spec.noise { sg * spec.scale } else { 0.0 });
+    let mut sensors =
+        white_noise_sensors(levels, dt_s, spec.seed, 200).map_err(|e| format!("sensors: {e}"))?;
+    for c in &spec.channel {
+        let Some(i) = SENSED_CHANNELS.iter().position(|n| *n == c.channel) else {
+            return Err(format!("sensors.channel: unknown channel `{}`", c.channel));
+        };
+        let white = levels[i].max(0.0);
+        let sensor = c
+            .build(white, dt_s, channel_seed(spec.seed, 200, i))
+            .map_err(|e| format!("sensors.channel `{}`: {e}", c.channel))?;
+        sensors[i] = Some(sensor);
+    }
+    Ok(sensors)
+}
+
 /// The sensor chain of the sample-driven estimators (module doc): noise, the causal
 /// differentiator and the matching alignment. One per run; feed it every step.
 #[derive(Debug, Clone)]
@@ -188,24 +231,16 @@ pub struct AirDataSampler {
 }
 
 impl AirDataSampler {
-    /// A sampler for the F-16 `f16` at step `dt_s`, `v0_mps` the reference airspeed: noise at
-    /// `scale` × the cited levels from `seed` (`noise = false`: exact channels), a differentiator
-    /// of `window` samples (odd) and the other channels `matched` to it (smoothed with the same
-    /// weighting) or only delayed.
+    /// A sampler for the F-16 `f16` at step `dt_s`, `v0_mps` the reference airspeed, with the
+    /// scenario's `[sensors]`: noise at `scale` × the cited levels from `seed` (`noise =
+    /// false`: exact channels) plus the `[[sensors.channel]]` errors ([`channel_sensors`]), a
+    /// differentiator of `differentiator_window` samples (odd) and the other channels
+    /// `alignment`: matched to it (smoothed with the same weighting) or only delayed.
     ///
     /// # Errors
-    /// A message naming the sensor setting for a bad window, level or interval.
-    #[allow(clippy::too_many_arguments)]
-    pub fn new(
-        f16: &F16,
-        v0_mps: f64,
-        dt_s: f64,
-        noise: bool,
-        scale: f64,
-        seed: u64,
-        window: usize,
-        matched: bool,
-    ) -> Result<Self, String> {
+    /// A message naming the sensor setting for a bad window, level, channel entry or interval.
+    pub fn new(f16: &F16, v0_mps: f64, dt_s: f64, spec: &SensorSpec) -> Result<Self, String> {
+        let window = spec.differentiator_window;
         if window < 3 || window.is_multiple_of(2) {
             return Err(format!("sensors.differentiator_window must be odd and ≥ 3, got {window}"));
         }
@@ -218,29 +253,9 @@ impl AirDataSampler {
             derivatives: Derivative::ALL.to_vec(),
             window,
             nominal_dt_s: Some(dt_s),
-            alignment: if matched { Alignment::Matched } else { Alignment::Delay },
+            alignment: spec.alignment,
         });
-        let sensors = if noise && scale > 0.0 {
-            let s = state_sigma();
-            let sig = [
-                s[f16::VT] * M_PER_FT,
-                s[f16::ALPHA],
-                s[f16::BETA],
-                s[f16::P],
-                s[f16::Q],
-                s[f16::R],
-                s[f16::PHI],
-                s[f16::THETA],
-                s[f16::PSI],
-                ACCEL_SIGMA_FPS2 * M_PER_FT,
-                ACCEL_SIGMA_FPS2 * M_PER_FT,
-                ACCEL_SIGMA_FPS2 * M_PER_FT,
-            ];
-            white_noise_sensors(sig.map(|sg| sg * scale), dt_s, seed, 200)
-                .map_err(|e| format!("sensors: {e}"))?
-        } else {
-            vec![None; SENSED_CHANNELS.len()]
-        };
+        let sensors = channel_sensors(spec, dt_s)?;
         Ok(Self {
             f16: f16.clone(),
             constants: f16_constants(f16, v0_mps),
@@ -291,6 +306,8 @@ impl AirDataSampler {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::aircraft::scenario::ChannelSensorSpec;
+    use crate::condition::Alignment;
     use aeroident_models::f16::AeroIncrements;
     use aeroident_models::trim::{TrimCondition, trim};
 
@@ -364,7 +381,12 @@ mod tests {
         let f = F16::new(0.30).unwrap();
         let t = trim(&f, &TrimCondition::level(20_000.0, 675.0)).unwrap();
         let dt = 0.01;
-        let mut smp = AirDataSampler::new(&f, 205.74, dt, false, 1.0, 0, 11, false).unwrap();
+        let spec = SensorSpec {
+            differentiator_window: 11,
+            alignment: Alignment::Delay,
+            ..SensorSpec::default()
+        };
+        let mut smp = AirDataSampler::new(&f, 205.74, dt, &spec).unwrap();
         let lag = 5;
         assert!((smp.lag_s() - lag as f64 * dt).abs() < 1e-15);
         let mut got = Vec::new();
@@ -386,6 +408,46 @@ mod tests {
         }
     }
 
+    /// A `[[sensors.channel]]` entry adds its errors on top of the same white draws: with the
+    /// channels only delayed, an α vane with bias 0.01 rad and a 2-step transport delay reads
+    /// the plain noisy sampler's α of two steps before plus 0.01, while every other channel
+    /// keeps its bits.
+    #[test]
+    fn analytic_channel_entry_adds_bias_and_delay_on_the_same_noise() {
+        let f = F16::new(0.30).unwrap();
+        let t = trim(&f, &TrimCondition::level(20_000.0, 675.0)).unwrap();
+        let dt = 0.01;
+        let plain = SensorSpec {
+            noise: true,
+            seed: 3,
+            differentiator_window: 5,
+            alignment: Alignment::Delay,
+            ..SensorSpec::default()
+        };
+        let toml = "channel = \"alpha_rad\"\nbias = 0.01\ndelay_samples = 2\n";
+        let entry: ChannelSensorSpec = toml::from_str(toml).unwrap();
+        let vane = SensorSpec { channel: vec![entry], ..plain.clone() };
+        let mut a = AirDataSampler::new(&f, 205.74, dt, &plain).unwrap();
+        let mut b = AirDataSampler::new(&f, 205.74, dt, &vane).unwrap();
+        let mut plain_alpha = Vec::new();
+        for k in 0..60 {
+            let tk = k as f64 * dt;
+            let mut x = t.state;
+            x[f16::ALPHA] += 0.02 * (3.0 * tk).sin(); // a moving truth makes the delay visible
+            let (_, o) = f.evaluate(&x, &t.controls, &AeroIncrements::zero()).unwrap();
+            let (sa, sb) = (a.push(tk, &x, &o, &t.controls), b.push(tk, &x, &o, &t.controls));
+            let (Some(sa), Some(sb)) = (sa, sb) else { continue };
+            plain_alpha.push(sa.alpha_rad);
+            assert_eq!((sa.vt_mps, sa.q_rad_s, sa.az_mps2), (sb.vt_mps, sb.q_rad_s, sb.az_mps2));
+            let n = plain_alpha.len();
+            if n > 2 {
+                let want = plain_alpha[n - 3] + 0.01;
+                assert!((sb.alpha_rad - want).abs() < 1e-12, "k {k}: {} vs {want}", sb.alpha_rad);
+            }
+        }
+        assert_eq!(plain_alpha.len(), 56);
+    }
+
     /// The surfaces are continuous signals (the experiment flies them at the RK4 stage times), so
     /// the matched smoother gives a ramp in a surface back at the sample's time stamp, exactly
     /// (the weights are symmetric and sum to 1), as it does a ramp in q. The held weights of a
@@ -396,7 +458,8 @@ mod tests {
         let f = F16::new(0.30).unwrap();
         let t = trim(&f, &TrimCondition::level(20_000.0, 675.0)).unwrap();
         let dt = 0.01;
-        let mut smp = AirDataSampler::new(&f, 205.74, dt, false, 1.0, 0, 21, true).unwrap();
+        let spec = SensorSpec { differentiator_window: 21, ..SensorSpec::default() };
+        let mut smp = AirDataSampler::new(&f, 205.74, dt, &spec).unwrap();
         let rate = 0.2; // rad/s on every surface
         let mut n = 0;
         for k in 0..60 {

@@ -546,18 +546,9 @@ fn air_data_sampler(
     if !channels.iter().any(fed) {
         return Ok(None);
     }
-    AirDataSampler::new(
-        f16,
-        sc.trim.vt_fps * M_PER_FT,
-        sc.dt_s,
-        sc.sensors.noise,
-        sc.sensors.scale,
-        sc.sensors.seed,
-        sc.sensors.differentiator_window,
-        sc.sensors.alignment == super::scenario::Alignment::Matched,
-    )
-    .map(Some)
-    .map_err(|e| setup_err("air-data sensors", e))
+    AirDataSampler::new(f16, sc.trim.vt_fps * M_PER_FT, sc.dt_s, &sc.sensors)
+        .map(Some)
+        .map_err(|e| setup_err("air-data sensors", e))
 }
 
 /// What the flight needs, set up.

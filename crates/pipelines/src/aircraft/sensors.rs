@@ -65,10 +65,16 @@ pub fn derivative_sigma(dt_s: f64) -> F16State {
     d
 }
 
+/// Seed of channel `i` of a sensor path whose channels start at `offset`:
+/// `1000·seed + offset + i` (wrapping), the experiment's `[sensors] seed` being `seed`.
+pub fn channel_seed(seed: u64, offset: u64, i: usize) -> u64 {
+    seed.wrapping_mul(1_000).wrapping_add(offset).wrapping_add(i as u64)
+}
+
 /// White-noise-only sensors sampled every `dt_s` (s), one per level of `sigma` (σ per sample,
-/// channel units, already scaled); channel `i` is keyed with seed `1000·seed + offset + i`
-/// (wrapping), and is `None` (noise-free) where its level is not > 0. Read at `t = k·dt_s`, a
-/// sensor gives `truth + σ·ξ_k` with `ξ_k` the draw of sample `k` (module docs).
+/// channel units, already scaled); channel `i` is keyed with [`channel_seed`]`(seed, offset,
+/// i)`, and is `None` (noise-free) where its level is not > 0. Read at `t = k·dt_s`, a sensor
+/// gives `truth + σ·ξ_k` with `ξ_k` the draw of sample `k` (module docs).
 ///
 /// # Errors
 /// The signal crate's error for a non-finite level or a non-positive or non-finite interval.
@@ -78,14 +84,13 @@ pub fn white_noise_sensors(
     seed: u64,
     offset: u64,
 ) -> Result<Vec<Option<SensorModel>>, SignalError> {
-    let base = seed.wrapping_mul(1_000).wrapping_add(offset);
     sigma
         .into_iter()
         .enumerate()
         .map(|(i, s)| {
             if s > 0.0 {
                 let p = SensorParameters { white_sigma: s, ..SensorParameters::ideal(1.0 / dt_s) };
-                SensorModel::new(p, base.wrapping_add(i as u64)).map(Some)
+                SensorModel::new(p, channel_seed(seed, offset, i)).map(Some)
             } else {
                 Ok(None)
             }

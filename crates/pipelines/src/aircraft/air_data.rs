@@ -11,7 +11,7 @@
 //! - `p q r`: body rates + gyro noise (0.14°/s). `φ θ ψ`: attitude + 0.573°.
 //! - `ax ay az`: specific force at the CG from the model's load factors (`nx`, `ny`, −`nz`) ×
 //!   the model's g, + accelerometer noise (0.98 ft/s²); level flight reads `az ≈ −g`.
-//! - Any of these twelve sensed channels ([`SENSED_CHANNELS`]) may carry more sensor errors
+//! - Any of these twelve sensed channels ([`sensed_channels`]) may carry more sensor errors
 //!   from a `[[sensors.channel]]` entry of the scenario (bias, lag, Gauss–Markov drift,
 //!   transport delay, quantisation; [`channel_sensors`]), on top of the same white draws.
 //! - `de da dr`: the surface positions (the model has no actuators; no surface sensor noise is
@@ -96,25 +96,30 @@ pub fn exact_sample(
     s
 }
 
-/// The twelve sensed channels of a sample, in the order of their sensors (names of
-/// [`AirDataSample`]'s fields, SI units and rad).
-pub const SENSED_CHANNELS: [&str; 12] = [
-    "vt_mps",
-    "alpha_rad",
-    "beta_rad",
-    "p_rad_s",
-    "q_rad_s",
-    "r_rad_s",
-    "phi_rad",
-    "theta_rad",
-    "psi_rad",
-    "ax_mps2",
-    "ay_mps2",
-    "az_mps2",
-];
+/// The twelve sensed channels of a sample, in the order of their sensors: the name of
+/// [`AirDataSample`]'s field and the white-noise σ at `scale = 1` (SI units and rad; the cited
+/// levels of [`super::sensors`] converted, the accelerometers [`ACCEL_SIGMA_FPS2`]).
+pub fn sensed_channels() -> [(&'static str, f64); 12] {
+    let s = state_sigma();
+    let accel = ACCEL_SIGMA_FPS2 * M_PER_FT;
+    [
+        ("vt_mps", s[f16::VT] * M_PER_FT),
+        ("alpha_rad", s[f16::ALPHA]),
+        ("beta_rad", s[f16::BETA]),
+        ("p_rad_s", s[f16::P]),
+        ("q_rad_s", s[f16::Q]),
+        ("r_rad_s", s[f16::R]),
+        ("phi_rad", s[f16::PHI]),
+        ("theta_rad", s[f16::THETA]),
+        ("psi_rad", s[f16::PSI]),
+        ("ax_mps2", accel),
+        ("ay_mps2", accel),
+        ("az_mps2", accel),
+    ]
+}
 
 /// All channels except the angular accelerations and α̇ (set by the caller); each of the
-/// [`SENSED_CHANNELS`] passes through `sense(index, truth)`, and `q̄` follows the sensed
+/// [`sensed_channels`] passes through `sense(index, truth)`, and `q̄` follows the sensed
 /// airspeed.
 fn measured_channels(
     f16: &F16,
@@ -172,7 +177,7 @@ fn measured_channels(
     }
 }
 
-/// The sensors of the [`SENSED_CHANNELS`]: white noise at `scale` × the cited levels when
+/// The sensors of the [`sensed_channels`]: white noise at `scale` × the cited levels when
 /// `noise` is on, channel `i` keyed with [`channel_seed`]`(seed, 200, i)`, and on the channels
 /// of `[[sensors.channel]]` their bias, lag, drift, delay and quantisation on top (same seed, so
 /// the same white draws); `None` = an exact channel.
@@ -180,26 +185,12 @@ fn measured_channels(
 /// # Errors
 /// A message naming the sensor setting for a bad level, channel name or channel entry.
 pub fn channel_sensors(spec: &SensorSpec, dt_s: f64) -> Result<Vec<Option<SensorModel>>, String> {
-    let s = state_sigma();
-    let sig = [
-        s[f16::VT] * M_PER_FT,
-        s[f16::ALPHA],
-        s[f16::BETA],
-        s[f16::P],
-        s[f16::Q],
-        s[f16::R],
-        s[f16::PHI],
-        s[f16::THETA],
-        s[f16::PSI],
-        ACCEL_SIGMA_FPS2 * M_PER_FT,
-        ACCEL_SIGMA_FPS2 * M_PER_FT,
-        ACCEL_SIGMA_FPS2 * M_PER_FT,
-    ];
-    let levels = sig.map(|sg| if spec.noise { sg * spec.scale } else { 0.0 });
+    let channels = sensed_channels();
+    let levels = channels.map(|(_, sg)| if spec.noise { sg * spec.scale } else { 0.0 });
     let mut sensors =
         white_noise_sensors(levels, dt_s, spec.seed, 200).map_err(|e| format!("sensors: {e}"))?;
     for c in &spec.channel {
-        let Some(i) = SENSED_CHANNELS.iter().position(|n| *n == c.channel) else {
+        let Some(i) = channels.iter().position(|(n, _)| *n == c.channel) else {
             return Err(format!("sensors.channel: unknown channel `{}`", c.channel));
         };
         let white = levels[i].max(0.0);
@@ -217,7 +208,7 @@ pub fn channel_sensors(spec: &SensorSpec, dt_s: f64) -> Result<Vec<Option<Sensor
 pub struct AirDataSampler {
     f16: F16,
     constants: AircraftConstants,
-    /// One sensor per channel of [`SENSED_CHANNELS`]; `None` = noise-free.
+    /// One sensor per channel of [`sensed_channels`]; `None` = noise-free.
     sensors: Vec<Option<SensorModel>>,
     /// The shared conditioning stage: `ṗ q̇ ṙ α̇` differentiated, the other channels aligned.
     stage: Conditioner,

@@ -56,7 +56,7 @@ use aeroident_signals::turbulence::{DrydenComponent, DrydenParameters, dryden_sh
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::aircraft::air_data::{ACCEL_SIGMA_FPS2, f16_constants};
+use crate::aircraft::air_data::f16_constants;
 use crate::aircraft::scenario::EstimatorSpec;
 use crate::aircraft::summary::{self, PRIMARY_DERIVATIVES};
 use crate::aircraft::{RunOutput, Scenario, run};
@@ -455,28 +455,17 @@ pub fn crb_sensors_for(structure: &ModelStructure, scale: f64) -> Vec<Sensor> {
 
 /// Outputs of the Cramér–Rao prediction and their white-noise σ at the scenario's sensor
 /// scale: the raw sensor levels the air-data path flies with
-/// ([`crate::aircraft::sensors::state_sigma`]: airspeed 11 ft/s, vanes 0.1°, gyros 0.14°/s,
-/// attitude 0.573°; accelerometers [`ACCEL_SIGMA_FPS2`]) before the matched smoother, which
-/// cannot add information.
+/// ([`crate::aircraft::air_data::sensed_channels`]: airspeed 11 ft/s, vanes 0.1°, gyros
+/// 0.14°/s, attitude 0.573°, accelerometers 0.98 ft/s²) before the matched smoother, which
+/// cannot add information; ψ, which no flight-model output predicts, is left out.
 pub fn crb_sensors(scale: f64) -> Vec<Sensor> {
-    let s = crate::aircraft::sensors::state_sigma();
-    let a = ACCEL_SIGMA_FPS2 * M_PER_FT;
-    [
-        (Output::Vt, s[f16::VT] * M_PER_FT),
-        (Output::Alpha, s[f16::ALPHA]),
-        (Output::Beta, s[f16::BETA]),
-        (Output::P, s[f16::P]),
-        (Output::Q, s[f16::Q]),
-        (Output::R, s[f16::R]),
-        (Output::Phi, s[f16::PHI]),
-        (Output::Theta, s[f16::THETA]),
-        (Output::Ax, a),
-        (Output::Ay, a),
-        (Output::Az, a),
-    ]
-    .into_iter()
-    .map(|(output, s)| Sensor { output, sigma: s * scale })
-    .collect()
+    crate::aircraft::air_data::sensed_channels()
+        .into_iter()
+        .filter_map(|(name, sigma)| {
+            let output = Output::ALL.into_iter().find(|o| o.name() == name)?;
+            Some(Sensor { output, sigma: sigma * scale })
+        })
+        .collect()
 }
 
 /// The predicted Cramér–Rao σ of every sample-driven estimator's parameters for the scenario's

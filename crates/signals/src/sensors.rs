@@ -1,7 +1,8 @@
-//! Per-channel sensor models (issue 3 item 8; architecture §2 `SensorModel`, after JSBSim's
-//! FGSensor chain): sampling at a fixed rate with zero-order hold, optional first-order lag,
-//! constant bias, first-order Gauss–Markov drift, white noise, quantisation and a transport
-//! delay. All randomness is seeded (reproducible bit for bit).
+//! Per-channel sensor models (architecture §2 `SensorModel`, after JSBSim's FGSensor chain):
+//! sampling at a fixed rate with zero-order hold, optional first-order lag, constant bias,
+//! first-order Gauss–Markov drift, white noise, quantisation and a transport delay. All
+//! randomness is seeded and keyed by the sample index (reproducible bit for bit, whatever the
+//! call pattern).
 //!
 //! # Chain, at each sample instant `t_k = k·Ts`
 //! ```text
@@ -21,15 +22,36 @@
 //! skipped instant using the truth of the current call (so the delay stays exact in time). The
 //! first call fills the delay line with its sample, so during the first `delay` the output is
 //! that first sample. A call with an earlier time than the previous one returns the held output.
+//!
+//! # Reproducibility
+//! Every random number is keyed by the sample index, as in
+//! [`BandLimitedWhiteNoise`](crate::noise::BandLimitedWhiteNoise), instead of being drawn from
+//! a generator that advances with each call:
+//! - the white noise of sample `k` is `ξ_k = standard_normal_keyed(seed, k)`, the very draw
+//!   `BandLimitedWhiteNoise` of the same seed scales by its σ, so a white-noise-only sensor at
+//!   `1/Ts` reads `truth + σ_w·ξ_k`, the block's sample `k` with σ = σ_w;
+//! - the Gauss–Markov drift has a stream of its own, seeded with
+//!   `splitmix64(seed ^ DRIFT_TAG)`: the drive `ζ_k` is its draw at key `2k` and the initial
+//!   state `b_0/σ_gm` its draw at key 1 (odd, so never a drive). The white and the drift noise
+//!   of one channel are therefore independent.
+//!
+//! A reading is thus a pure function of `(seed, sample index, truth history)`: calling at every
+//! integration stage or only at the sample instants gives the same bits, and a sensor sampled
+//! as the block is reproduces its numbers. When a call skips more sample instants than the
+//! delay line holds, the samples that can no longer reach the output are not formed: the lag
+//! and the drift jump over them with their exact many-step transitions, the drift driven by
+//! the draw of the last skipped instant (the same distribution, other bits than a
+//! sample-by-sample walk).
 
-use rand::{Rng, SeedableRng};
-use rand_distr::StandardNormal;
-use rand_pcg::Pcg64Mcg;
 use serde::Deserialize;
 
 use crate::error::{SignalError, non_negative, positive};
 use crate::filters::FirstOrderLowPass;
-use crate::noise::splitmix64;
+use crate::noise::{splitmix64, standard_normal_keyed};
+
+/// Mixed into a channel's seed to seed its Gauss–Markov stream ("GMdrift" in ASCII), so the
+/// drift never reuses the white noise's draws.
+const DRIFT_TAG: u64 = 0x0047_4d64_7269_6674;
 
 /// A sensor: truth in, reading out, with the noise variance an estimator may use as R.
 /// (Architecture §2; one job: turn a true value into a measurement.)
@@ -78,11 +100,15 @@ impl SensorParameters {
     }
 }
 
-/// The sensor chain of the module docs, with its own seeded generator.
+/// The sensor chain of the module docs, its randomness keyed by seed and sample index.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SensorModel {
     p: SensorParameters,
     sample_time_s: f64,
+    /// Seed of the white noise (the channel's seed).
+    seed: u64,
+    /// Seed of the Gauss–Markov stream (module docs, reproducibility).
+    drift_seed: u64,
     gm_phi: f64,
     gm_drive: f64,
     gm_state: f64,
@@ -92,11 +118,19 @@ pub struct SensorModel {
     head: usize,
     last_index: Option<i64>,
     output: f64,
-    rng: Pcg64Mcg,
+}
+
+/// Exact `steps`-sample transition of the Gauss–Markov drift of stationary σ `sigma` and
+/// `Ts/τ = ts_over_tau`: `(φ, drive)` with `b' = φ·b + drive·ζ`, `φ = e^{−steps·Ts/τ}`,
+/// `drive = σ·√(1 − φ²)` (so the stationary variance σ² is kept).
+fn drift_transition(sigma: f64, ts_over_tau: f64, steps: f64) -> (f64, f64) {
+    let a = steps * ts_over_tau;
+    ((-a).exp(), sigma * (-(-2.0 * a).exp_m1()).sqrt())
 }
 
 impl SensorModel {
-    /// Builds the chain; `seed` seeds this channel's generator.
+    /// Builds the chain; `seed` keys this channel's random numbers (module docs,
+    /// reproducibility).
     ///
     /// # Errors
     /// [`SignalError::InvalidParameter`] naming the bad field (negative sigma, non-positive
@@ -110,8 +144,8 @@ impl SensorModel {
             Some((sigma, tau)) => {
                 let sigma = non_negative("gauss_markov_sigma", sigma)?;
                 let tau = positive("gauss_markov_tau_s", tau)?;
-                let phi = (-ts / tau).exp();
-                (phi, sigma * (-(-2.0 * ts / tau).exp_m1()).sqrt(), sigma)
+                let (phi, drive) = drift_transition(sigma, ts / tau, 1.0);
+                (phi, drive, sigma)
             }
             None => (0.0, 0.0, 0.0),
         };
@@ -134,15 +168,17 @@ impl SensorModel {
                 reason: "must be <= 1e6",
             });
         }
-        let mut rng = Pcg64Mcg::seed_from_u64(seed);
+        let drift_seed = splitmix64(seed ^ DRIFT_TAG);
         let gm_state = if params.gauss_markov.is_some() {
-            gm_sigma * rng.sample::<f64, _>(StandardNormal)
+            gm_sigma * standard_normal_keyed(drift_seed, 1)
         } else {
             0.0
         };
         Ok(Self {
             p: params,
             sample_time_s: ts,
+            seed,
+            drift_seed,
             gm_phi,
             gm_drive,
             gm_state,
@@ -151,7 +187,6 @@ impl SensorModel {
             head: 0,
             last_index: None,
             output: 0.0,
-            rng,
         })
     }
 
@@ -186,9 +221,9 @@ impl SensorModel {
         self.white_variance() + gm + q
     }
 
-    /// Takes one sample of `truth` with white noise `xi` (a standard normal), pushing it into
-    /// the delay line.
-    fn take_sample(&mut self, truth: f64, xi: f64, zeta: f64) {
+    /// Takes sample `k` of `truth`, pushing it into the delay line. Draws are made only for
+    /// the terms present, which changes no value (each is keyed, not sequential).
+    fn take_sample(&mut self, k: i64, truth: f64) {
         let x = match self.lag.as_mut() {
             Some(f) => {
                 let y = f.output();
@@ -197,8 +232,16 @@ impl SensorModel {
             }
             None => truth,
         };
-        let mut m = x + self.p.bias + self.gm_state + self.p.white_sigma * xi;
-        self.gm_state = self.gm_phi * self.gm_state + self.gm_drive * zeta;
+        let white = if self.p.white_sigma > 0.0 {
+            self.p.white_sigma * standard_normal_keyed(self.seed, k as u64)
+        } else {
+            0.0
+        };
+        let mut m = x + self.p.bias + self.gm_state + white;
+        if self.p.gauss_markov.is_some() {
+            let zeta = standard_normal_keyed(self.drift_seed, (k as u64).wrapping_mul(2));
+            self.gm_state = self.gm_phi * self.gm_state + self.gm_drive * zeta;
+        }
         if let Some(q) = self.p.quantum {
             m = q * (m / q).round();
         }
@@ -209,47 +252,55 @@ impl SensorModel {
         self.output = self.delay_line[(self.head + 1) % n];
     }
 
-    fn measure_inner(&mut self, t_s: f64, truth: f64, mut draw: impl FnMut() -> f64) -> f64 {
+    /// Carries the lag and the drift from sample `from` to sample `to` over samples that are
+    /// not formed (module docs), each with its exact many-step transition: the lag towards
+    /// the held `truth`, the drift driven by the drive draw of the last skipped sample
+    /// `to − 1`, which no formed sample uses.
+    fn skip_unformed(&mut self, from: i64, to: i64, truth: f64) {
+        if to <= from {
+            return;
+        }
+        let steps = (to as f64) - (from as f64);
+        if let (Some(f), Some(tau)) = (self.lag.as_mut(), self.p.lag_tau_s) {
+            let decay = (-steps * self.sample_time_s / tau).exp();
+            f.reset(truth + (f.output() - truth) * decay);
+        }
+        if let Some((sigma, tau)) = self.p.gauss_markov {
+            let (phi, drive) = drift_transition(sigma, self.sample_time_s / tau, steps);
+            let zeta = standard_normal_keyed(self.drift_seed, ((to - 1) as u64).wrapping_mul(2));
+            self.gm_state = phi * self.gm_state + drive * zeta;
+        }
+    }
+
+    /// Reading at `t_s` (s) for the true value `truth` (channel units), following the calling
+    /// convention of the module docs; a pure function of the seed, the sample index and the
+    /// truths passed at the sample instants.
+    pub fn measure(&mut self, t_s: f64, truth: f64) -> f64 {
         let k = (t_s / self.sample_time_s + 1e-9).floor() as i64;
         match self.last_index {
             None => {
                 if let Some(f) = self.lag.as_mut() {
                     f.reset(truth); // start the lag in steady state
                 }
-                let (xi, zeta) = (draw(), draw());
-                self.take_sample(truth, xi, zeta);
+                self.take_sample(k, truth);
                 // Fill the delay line with the first sample.
                 let first = self.delay_line[self.head];
-                self.delay_line.iter_mut().for_each(|v| *v = first);
+                self.delay_line.fill(first);
                 self.output = first;
-                self.last_index = Some(k);
             }
             Some(last) if k > last => {
-                let hits = (k - last).min(self.delay_line.len() as i64 + 1);
-                for _ in 0..hits {
-                    let (xi, zeta) = (draw(), draw());
-                    self.take_sample(truth, xi, zeta);
+                // Only the last `delay + 1` samples can still reach the output.
+                let reach = self.delay_line.len() as i64;
+                let first = k.saturating_sub(reach).saturating_add(1).max(last.saturating_add(1));
+                self.skip_unformed(last.saturating_add(1), first, truth);
+                for j in first..=k {
+                    self.take_sample(j, truth);
                 }
-                self.last_index = Some(k);
             }
-            Some(_) => {}
+            Some(_) => return self.output,
         }
+        self.last_index = Some(k);
         self.output
-    }
-
-    /// Reading at `t_s` using this channel's own seeded generator (see the module docs).
-    pub fn measure(&mut self, t_s: f64, truth: f64) -> f64 {
-        // Copy the 16-byte generator out and back so the closure does not borrow `self`.
-        let mut rng = self.rng.clone();
-        let out = self.measure_inner(t_s, truth, || rng.sample(StandardNormal));
-        self.rng = rng;
-        out
-    }
-
-    /// Reading at `t_s` drawing the randomness from the caller's generator `rng` instead (e.g.
-    /// one seeded generator for all channels). Two standard normals are drawn per sample taken.
-    pub fn measure_with<R: Rng + ?Sized>(&mut self, t_s: f64, truth: f64, rng: &mut R) -> f64 {
-        self.measure_inner(t_s, truth, || rng.sample(StandardNormal))
     }
 }
 
@@ -503,18 +554,143 @@ mod tests {
         };
         assert_eq!(run(&cfg), run(&cfg));
         assert_ne!(run(&cfg), run(&other));
-        // Caller-provided generator: same stream -> same readings.
-        let mut a = cfg.build(1).unwrap();
-        let mut b = cfg.build(1).unwrap();
-        let mut r1 = Pcg64Mcg::seed_from_u64(5);
-        let mut r2 = Pcg64Mcg::seed_from_u64(5);
-        for i in 0..100 {
-            let t = i as f64 * 0.01;
-            assert_eq!(
-                a.measure_with(t, 0.0, &mut r1).to_bits(),
-                b.measure_with(t, 0.0, &mut r2).to_bits()
-            );
+    }
+
+    /// A white-noise-only sensor at `1/Ts` reads `truth + BandLimitedWhiteNoise::value(t)` of
+    /// the same seed (σ = √(P/Ts)), sample for sample, at the sample instants `k·dt` and in
+    /// between, for step sizes that are not binary fractions. The block is an independent
+    /// computation of the same keyed draws.
+    #[test]
+    fn analytic_white_noise_reproduces_band_limited_white_noise() {
+        use crate::InputSignal;
+        use crate::noise::BandLimitedWhiteNoise;
+        for (dt, sigma, seed) in [(0.01, 0.3, 7_u64), (0.02, 1.5, 1_000_213), (1e-3, 2e-4, 0)] {
+            let block = BandLimitedWhiteNoise::new(sigma * sigma * dt, dt, seed).unwrap();
+            let p = SensorParameters { white_sigma: block.sigma(), ..ideal(1.0 / dt) };
+            let mut s = SensorModel::new(p, seed).unwrap();
+            for k in 0..5_000 {
+                let t = k as f64 * dt;
+                let truth = (3.0 * t).sin();
+                assert_eq!(s.measure(t, truth), truth + block.value(t), "dt {dt}, k {k}");
+                // Half a step later the sample is held.
+                let t_mid = t + 0.5 * dt;
+                assert_eq!(s.measure(t_mid, 9.0), truth + block.value(t_mid), "dt {dt}, k {k}");
+            }
         }
+    }
+
+    /// The readings do not depend on how often the sensor is called: RK4 stage calls with an
+    /// integration step of Ts/4 (exact binary fractions, so the stage times hit the sample
+    /// instants exactly) give the same bits at every sample instant as calls there only, with
+    /// every term of the chain on.
+    #[test]
+    fn repro_readings_independent_of_the_call_pattern() {
+        let p = SensorParameters {
+            white_sigma: 0.01,
+            bias: 0.2,
+            gauss_markov: Some((0.02, 0.5)),
+            sample_rate_hz: 64.0,
+            delay_samples: 3,
+            lag_tau_s: Some(0.05),
+            quantum: Some(1e-3),
+        };
+        let truth = |t: f64| (2.0 * t).sin() + 0.1 * t;
+        let mut sparse = SensorModel::new(p, 11).unwrap();
+        let at_instants: Vec<u64> = (0..640)
+            .map(|k| sparse.measure(k as f64 / 64.0, truth(k as f64 / 64.0)).to_bits())
+            .collect();
+        let mut dense = SensorModel::new(p, 11).unwrap();
+        let h = 1.0 / 256.0;
+        let mut at_steps = Vec::new();
+        for n in 0..(4 * 640) {
+            let t = n as f64 * h;
+            let y = dense.measure(t, truth(t));
+            if n % 4 == 0 {
+                at_steps.push(y.to_bits());
+            }
+            for c in [0.5, 0.5, 1.0] {
+                dense.measure(t + c * h, truth(t + c * h));
+            }
+        }
+        assert_eq!(at_instants, at_steps);
+        let moved = at_instants.iter().filter(|b| **b != at_instants[0]).count();
+        assert!(moved > 600, "the chain must not be constant ({moved} samples moved)");
+    }
+
+    /// Pearson correlation of two equally long series.
+    fn correlation(u: &[f64], v: &[f64]) -> f64 {
+        let m = u.len() as f64;
+        let (mu, mv) = (u.iter().sum::<f64>() / m, v.iter().sum::<f64>() / m);
+        let (mut suv, mut suu, mut svv) = (0.0, 0.0, 0.0);
+        for (a, b) in u.iter().zip(v) {
+            suv += (a - mu) * (b - mv);
+            suu += (a - mu) * (a - mu);
+            svv += (b - mv) * (b - mv);
+        }
+        suv / (suu * svv).sqrt()
+    }
+
+    /// The drift is a first-order Gauss–Markov process driven by a stream of its own. From a
+    /// drift-only sensor (σ = 1, τ = 0.1 s, Ts = 0.01 s) the innovations
+    /// `ζ_k = (b_{k+1} − φ b_k)/√(1 − φ²)`, φ = e^{−Ts/τ} computed here, must be white and of
+    /// unit variance, and uncorrelated with the white draws ξ of a white-only sensor of the same
+    /// seed at the indices `k + L` and `2k + L` (|L| ≤ 2: where a shared stream would put them,
+    /// given the drift's key 2k). N = 100k: |r| < 5/√N; variance within 5·√(2/N).
+    #[test]
+    fn analytic_drift_stream_is_markov_and_independent_of_white() {
+        let n = 100_000;
+        let white = SensorParameters { white_sigma: 1.0, ..ideal(100.0) };
+        let drift = SensorParameters { gauss_markov: Some((1.0, 0.1)), ..ideal(100.0) };
+        let mut a = SensorModel::new(white, 5).unwrap();
+        let mut b = SensorModel::new(drift, 5).unwrap();
+        let xi: Vec<f64> = (0..2 * n + 8).map(|k| a.measure(k as f64 * 0.01, 0.0)).collect();
+        let bk: Vec<f64> = (0..=n).map(|k| b.measure(k as f64 * 0.01, 0.0)).collect();
+        let phi = (-0.1_f64).exp();
+        let drive = (1.0 - phi * phi).sqrt();
+        let zeta: Vec<f64> = bk.windows(2).map(|w| (w[1] - phi * w[0]) / drive).collect();
+        let tol = 5.0 / (n as f64).sqrt();
+        let var = zeta.iter().map(|z| z * z).sum::<f64>() / n as f64;
+        assert!((var - 1.0).abs() < 5.0 * (2.0 / n as f64).sqrt(), "innovation variance {var}");
+        let r1 = correlation(&zeta[..n - 1], &zeta[1..]);
+        assert!(r1.abs() < tol, "innovations lag-1 r = {r1}");
+        for l in 0..5 {
+            let same: Vec<f64> = (0..n).map(|k| xi[k + l]).collect();
+            let doubled: Vec<f64> = (0..n).map(|k| xi[2 * k + l]).collect();
+            let (r_same, r_doubled) = (correlation(&zeta, &same), correlation(&zeta, &doubled));
+            assert!(r_same.abs() < tol && r_doubled.abs() < tol, "L {l}: {r_same}, {r_doubled}");
+        }
+    }
+
+    /// A call far past the delay line jumps the drift with its exact transition: over 4000
+    /// seeds, the drift after a 1e4 s gap (τ = 1 s) has variance σ² = 1 (standard error
+    /// √(2/4000) = 0.022; tolerance 0.1) and is uncorrelated with the first reading
+    /// (|r| < 0.08 = 5/√4000); the lag, with a constant truth, reaches it.
+    #[test]
+    fn analytic_gap_past_the_delay_line_keeps_drift_statistics() {
+        let p = SensorParameters {
+            gauss_markov: Some((1.0, 1.0)),
+            lag_tau_s: Some(0.5),
+            ..ideal(100.0)
+        };
+        let m = 4000;
+        let (mut s0, mut s1, mut s11, mut s01) = (0.0, 0.0, 0.0, 0.0);
+        let mut s00 = 0.0;
+        for seed in 0..m {
+            let mut s = SensorModel::new(p, seed).unwrap();
+            let first = s.measure(0.0, 0.0);
+            let later = s.measure(1e4, 3.0) - 3.0;
+            s0 += first;
+            s1 += later;
+            s00 += first * first;
+            s11 += later * later;
+            s01 += first * later;
+        }
+        let mf = m as f64;
+        let var1 = s11 / mf - (s1 / mf).powi(2);
+        assert!((var1 - 1.0).abs() < 0.1, "variance after the gap {var1}");
+        let cov = s01 / mf - s0 * s1 / (mf * mf);
+        let r = cov / ((s00 / mf - (s0 / mf).powi(2)) * var1).sqrt();
+        assert!(r.abs() < 0.08, "correlation across the gap {r}");
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! From the reference F-16's truth to the ONE air-data sample per step that the sample-driven
 //! estimators see: unit conversion (the F-16 is in ft, slug, lbf; the sample is SI), the sensor
-//! noise of [`super::sensors`], and angular accelerations as a real system forms them.
+//! noise of [`super::sensors`] (one white-noise [`SensorModel`] per sensed channel, read at the
+//! step's time `k·dt`), and angular accelerations as a real system forms them.
 //!
 //! # Channels (truth → sample)
 //! - `vt_mps`, `alpha_rad`, `beta_rad`: **air-relative** airspeed and flow angles (pitot and
@@ -10,6 +11,9 @@
 //! - `p q r`: body rates + gyro noise (0.14°/s). `φ θ ψ`: attitude + 0.573°.
 //! - `ax ay az`: specific force at the CG from the model's load factors (`nx`, `ny`, −`nz`) ×
 //!   the model's g, + accelerometer noise (0.98 ft/s²); level flight reads `az ≈ −g`.
+//! - Any of these twelve sensed channels ([`sensed_channels`]) may carry more sensor errors
+//!   from a `[[sensors.channel]]` entry of the scenario (bias, lag, Gauss–Markov drift,
+//!   transport delay, quantisation; [`channel_sensors`]), on top of the same white draws.
 //! - `de da dr`: the surface positions (the model has no actuators; no surface sensor noise is
 //!   cited, none is added). `thrust_n`: the engine model's thrust (as the thesis experiment,
 //!   thrust is known from the engine model; F-16 thrust acts along body x through the CG).
@@ -42,11 +46,12 @@
 
 use aeroident_estimators::sample::{AirDataSample, AircraftConstants};
 use aeroident_models::f16::{self, F16, F16Controls, F16Outputs, F16State};
+use aeroident_signals::SensorModel;
 use aeroident_signals::differentiate::CausalDifferentiator;
-use aeroident_signals::{BandLimitedWhiteNoise, InputSignal};
 
-use super::sensors::state_sigma;
-use crate::condition::{Alignment, Conditioner, Conditioning, Derivative};
+use super::scenario::SensorSpec;
+use super::sensors::{channel_seed, state_sigma, white_noise_sensors};
+use crate::condition::{Conditioner, Conditioning, Derivative};
 use aeroident_physics::units::{KG_PER_SLUG, KGM2_PER_SLUGFT2, M_PER_FT, N_PER_LBF, PA_PER_PSF};
 
 /// σ of the accelerometers, ft/s² (ISRN 2014 Table 3, as [`super::sensors`]).
@@ -83,7 +88,7 @@ pub fn exact_sample(
     out: &F16Outputs,
     u: &F16Controls,
 ) -> AirDataSample {
-    let mut s = measured_channels(f16, constants, t_s, x, out, u, None);
+    let mut s = measured_channels(f16, constants, t_s, x, out, u, |_, v| v);
     s.pdot_rad_s2 = Some(xdot[f16::P]);
     s.qdot_rad_s2 = Some(xdot[f16::Q]);
     s.rdot_rad_s2 = Some(xdot[f16::R]);
@@ -91,24 +96,31 @@ pub fn exact_sample(
     s
 }
 
-/// Noise added to one sample, channel units (SI, rad).
-#[derive(Debug, Clone, Copy, Default)]
-struct ChannelNoise {
-    vt_mps: f64,
-    alpha: f64,
-    beta: f64,
-    p: f64,
-    q: f64,
-    r: f64,
-    phi: f64,
-    theta: f64,
-    psi: f64,
-    ax: f64,
-    ay: f64,
-    az: f64,
+/// The twelve sensed channels of a sample, in the order of their sensors: the name of
+/// [`AirDataSample`]'s field and the white-noise σ at `scale = 1` (SI units and rad; the cited
+/// levels of [`super::sensors`] converted, the accelerometers [`ACCEL_SIGMA_FPS2`]).
+pub fn sensed_channels() -> [(&'static str, f64); 12] {
+    let s = state_sigma();
+    let accel = ACCEL_SIGMA_FPS2 * M_PER_FT;
+    [
+        ("vt_mps", s[f16::VT] * M_PER_FT),
+        ("alpha_rad", s[f16::ALPHA]),
+        ("beta_rad", s[f16::BETA]),
+        ("p_rad_s", s[f16::P]),
+        ("q_rad_s", s[f16::Q]),
+        ("r_rad_s", s[f16::R]),
+        ("phi_rad", s[f16::PHI]),
+        ("theta_rad", s[f16::THETA]),
+        ("psi_rad", s[f16::PSI]),
+        ("ax_mps2", accel),
+        ("ay_mps2", accel),
+        ("az_mps2", accel),
+    ]
 }
 
-/// All channels except the angular accelerations and α̇ (set by the caller).
+/// All channels except the angular accelerations and α̇ (set by the caller); each of the
+/// [`sensed_channels`] passes through `sense(index, truth)`, and `q̄` follows the sensed
+/// airspeed.
 fn measured_channels(
     f16: &F16,
     constants: AircraftConstants,
@@ -116,32 +128,44 @@ fn measured_channels(
     x: &F16State,
     out: &F16Outputs,
     u: &F16Controls,
-    noise: Option<ChannelNoise>,
+    mut sense: impl FnMut(usize, f64) -> f64,
 ) -> AirDataSample {
-    let n = noise.unwrap_or_default();
     let g_fps2 = f16.data().mass.g_ft_per_s2;
-    let vt_true = out.vt_air_fps * M_PER_FT;
-    let vt_m = vt_true + n.vt_mps;
-    let qbar = out.qbar_psf * PA_PER_PSF * (vt_m / vt_true).powi(2);
+    let truth = [
+        out.vt_air_fps * M_PER_FT,
+        out.alpha_air_rad,
+        out.beta_air_rad,
+        x[f16::P],
+        x[f16::Q],
+        x[f16::R],
+        x[f16::PHI],
+        x[f16::THETA],
+        x[f16::PSI],
+        out.nx_g * g_fps2 * M_PER_FT,
+        out.ny_g * g_fps2 * M_PER_FT,
+        -out.nz_g * g_fps2 * M_PER_FT,
+    ];
+    let m: [f64; 12] = core::array::from_fn(|i| sense(i, truth[i]));
+    let qbar = out.qbar_psf * PA_PER_PSF * (m[0] / truth[0]).powi(2);
     AirDataSample {
         t_s,
-        vt_mps: vt_m,
-        alpha_rad: out.alpha_air_rad + n.alpha,
+        vt_mps: m[0],
+        alpha_rad: m[1],
         qbar_pa: qbar,
-        beta_rad: Some(out.beta_air_rad + n.beta),
-        p_rad_s: Some(x[f16::P] + n.p),
-        q_rad_s: Some(x[f16::Q] + n.q),
-        r_rad_s: Some(x[f16::R] + n.r),
+        beta_rad: Some(m[2]),
+        p_rad_s: Some(m[3]),
+        q_rad_s: Some(m[4]),
+        r_rad_s: Some(m[5]),
         pdot_rad_s2: None,
         qdot_rad_s2: None,
         rdot_rad_s2: None,
         alphadot_rad_s: None,
-        phi_rad: Some(x[f16::PHI] + n.phi),
-        theta_rad: Some(x[f16::THETA] + n.theta),
-        psi_rad: Some(x[f16::PSI] + n.psi),
-        ax_mps2: Some(out.nx_g * g_fps2 * M_PER_FT + n.ax),
-        ay_mps2: Some(out.ny_g * g_fps2 * M_PER_FT + n.ay),
-        az_mps2: Some(-out.nz_g * g_fps2 * M_PER_FT + n.az),
+        phi_rad: Some(m[6]),
+        theta_rad: Some(m[7]),
+        psi_rad: Some(m[8]),
+        ax_mps2: Some(m[9]),
+        ay_mps2: Some(m[10]),
+        az_mps2: Some(m[11]),
         de_rad: Some(u.elevator_rad),
         da_rad: Some(u.aileron_rad),
         dr_rad: Some(u.rudder_rad),
@@ -153,14 +177,39 @@ fn measured_channels(
     }
 }
 
+/// The sensors of the [`sensed_channels`]: white noise at `scale` × the cited levels when
+/// `noise` is on, channel `i` keyed with [`channel_seed`]`(seed, 200, i)`, and on the channels
+/// of `[[sensors.channel]]` their bias, lag, drift, delay and quantisation on top (same seed, so
+/// the same white draws); `None` = an exact channel.
+///
+/// # Errors
+/// A message naming the sensor setting for a bad level, channel name or channel entry.
+pub fn channel_sensors(spec: &SensorSpec, dt_s: f64) -> Result<Vec<Option<SensorModel>>, String> {
+    let channels = sensed_channels();
+    let levels = channels.map(|(_, sg)| if spec.noise { sg * spec.scale } else { 0.0 });
+    let mut sensors =
+        white_noise_sensors(levels, dt_s, spec.seed, 200).map_err(|e| format!("sensors: {e}"))?;
+    for c in &spec.channel {
+        let Some(i) = channels.iter().position(|(n, _)| *n == c.channel) else {
+            return Err(format!("sensors.channel: unknown channel `{}`", c.channel));
+        };
+        let white = levels[i].max(0.0);
+        let sensor = c
+            .build(white, dt_s, channel_seed(spec.seed, 200, i))
+            .map_err(|e| format!("sensors.channel `{}`: {e}", c.channel))?;
+        sensors[i] = Some(sensor);
+    }
+    Ok(sensors)
+}
+
 /// The sensor chain of the sample-driven estimators (module doc): noise, the causal
 /// differentiator and the matching alignment. One per run; feed it every step.
 #[derive(Debug, Clone)]
 pub struct AirDataSampler {
     f16: F16,
     constants: AircraftConstants,
-    /// Noise generators in the order of [`ChannelNoise`]; `None` = noise-free.
-    noise: Option<Box<[BandLimitedWhiteNoise; 12]>>,
+    /// One sensor per channel of [`sensed_channels`]; `None` = noise-free.
+    sensors: Vec<Option<SensorModel>>,
     /// The shared conditioning stage: `ṗ q̇ ṙ α̇` differentiated, the other channels aligned.
     stage: Conditioner,
     /// Differentiator lag `(N−1)·dt/2`, s.
@@ -173,24 +222,16 @@ pub struct AirDataSampler {
 }
 
 impl AirDataSampler {
-    /// A sampler for the F-16 `f16` at step `dt_s`, `v0_mps` the reference airspeed: noise at
-    /// `scale` × the cited levels from `seed` (`noise = false`: exact channels), a differentiator
-    /// of `window` samples (odd) and the other channels `matched` to it (smoothed with the same
-    /// weighting) or only delayed.
+    /// A sampler for the F-16 `f16` at step `dt_s`, `v0_mps` the reference airspeed, with the
+    /// scenario's `[sensors]`: noise at `scale` × the cited levels from `seed` (`noise =
+    /// false`: exact channels) plus the `[[sensors.channel]]` errors ([`channel_sensors`]), a
+    /// differentiator of `differentiator_window` samples (odd) and the other channels
+    /// `alignment`: matched to it (smoothed with the same weighting) or only delayed.
     ///
     /// # Errors
-    /// A message naming the sensor setting for a bad window, level or interval.
-    #[allow(clippy::too_many_arguments)]
-    pub fn new(
-        f16: &F16,
-        v0_mps: f64,
-        dt_s: f64,
-        noise: bool,
-        scale: f64,
-        seed: u64,
-        window: usize,
-        matched: bool,
-    ) -> Result<Self, String> {
+    /// A message naming the sensor setting for a bad window, level, channel entry or interval.
+    pub fn new(f16: &F16, v0_mps: f64, dt_s: f64, spec: &SensorSpec) -> Result<Self, String> {
+        let window = spec.differentiator_window;
         if window < 3 || window.is_multiple_of(2) {
             return Err(format!("sensors.differentiator_window must be odd and ≥ 3, got {window}"));
         }
@@ -203,49 +244,13 @@ impl AirDataSampler {
             derivatives: Derivative::ALL.to_vec(),
             window,
             nominal_dt_s: Some(dt_s),
-            alignment: if matched { Alignment::Matched } else { Alignment::Delay },
+            alignment: spec.alignment,
         });
-        let noise = if noise && scale > 0.0 {
-            let s = state_sigma();
-            let sig = [
-                s[f16::VT] * M_PER_FT,
-                s[f16::ALPHA],
-                s[f16::BETA],
-                s[f16::P],
-                s[f16::Q],
-                s[f16::R],
-                s[f16::PHI],
-                s[f16::THETA],
-                s[f16::PSI],
-                ACCEL_SIGMA_FPS2 * M_PER_FT,
-                ACCEL_SIGMA_FPS2 * M_PER_FT,
-                ACCEL_SIGMA_FPS2 * M_PER_FT,
-            ];
-            let gens = sig
-                .iter()
-                .enumerate()
-                .map(|(i, &sg)| {
-                    let sg = sg * scale;
-                    BandLimitedWhiteNoise::new(
-                        sg * sg * dt_s,
-                        dt_s,
-                        seed.wrapping_mul(1_000).wrapping_add(200 + i as u64),
-                    )
-                })
-                .collect::<Result<Vec<_>, _>>()
-                .map_err(|e| format!("sensors: {e}"))?;
-            let gens: Box<[BandLimitedWhiteNoise; 12]> = gens
-                .into_boxed_slice()
-                .try_into()
-                .map_err(|_| "sensors: twelve noise channels expected".to_string())?;
-            Some(gens)
-        } else {
-            None
-        };
+        let sensors = channel_sensors(spec, dt_s)?;
         Ok(Self {
             f16: f16.clone(),
             constants: f16_constants(f16, v0_mps),
-            noise,
+            sensors,
             stage,
             lag_s,
             pushed: 0,
@@ -268,24 +273,10 @@ impl AirDataSampler {
         out: &F16Outputs,
         u: &F16Controls,
     ) -> Option<AirDataSample> {
-        let n = self.noise.as_ref().map(|g| {
-            let v: [f64; 12] = core::array::from_fn(|i| g[i].value(t_s));
-            ChannelNoise {
-                vt_mps: v[0],
-                alpha: v[1],
-                beta: v[2],
-                p: v[3],
-                q: v[4],
-                r: v[5],
-                phi: v[6],
-                theta: v[7],
-                psi: v[8],
-                ax: v[9],
-                ay: v[10],
-                az: v[11],
-            }
+        let sensors = &mut self.sensors;
+        let s = measured_channels(&self.f16, self.constants, t_s, x, out, u, |i, v| {
+            sensors[i].as_mut().map_or(v, |sensor| sensor.measure(t_s, v))
         });
-        let s = measured_channels(&self.f16, self.constants, t_s, x, out, u, n);
         self.ready.clear();
         self.unused.clear();
         // The step is checked at construction and the simulator's times advance by it.
@@ -306,6 +297,8 @@ impl AirDataSampler {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::aircraft::scenario::ChannelSensorSpec;
+    use crate::condition::Alignment;
     use aeroident_models::f16::AeroIncrements;
     use aeroident_models::trim::{TrimCondition, trim};
 
@@ -379,7 +372,12 @@ mod tests {
         let f = F16::new(0.30).unwrap();
         let t = trim(&f, &TrimCondition::level(20_000.0, 675.0)).unwrap();
         let dt = 0.01;
-        let mut smp = AirDataSampler::new(&f, 205.74, dt, false, 1.0, 0, 11, false).unwrap();
+        let spec = SensorSpec {
+            differentiator_window: 11,
+            alignment: Alignment::Delay,
+            ..SensorSpec::default()
+        };
+        let mut smp = AirDataSampler::new(&f, 205.74, dt, &spec).unwrap();
         let lag = 5;
         assert!((smp.lag_s() - lag as f64 * dt).abs() < 1e-15);
         let mut got = Vec::new();
@@ -401,6 +399,46 @@ mod tests {
         }
     }
 
+    /// A `[[sensors.channel]]` entry adds its errors on top of the same white draws: with the
+    /// channels only delayed, an α vane with bias 0.01 rad and a 2-step transport delay reads
+    /// the plain noisy sampler's α of two steps before plus 0.01, while every other channel
+    /// keeps its bits.
+    #[test]
+    fn analytic_channel_entry_adds_bias_and_delay_on_the_same_noise() {
+        let f = F16::new(0.30).unwrap();
+        let t = trim(&f, &TrimCondition::level(20_000.0, 675.0)).unwrap();
+        let dt = 0.01;
+        let plain = SensorSpec {
+            noise: true,
+            seed: 3,
+            differentiator_window: 5,
+            alignment: Alignment::Delay,
+            ..SensorSpec::default()
+        };
+        let toml = "channel = \"alpha_rad\"\nbias = 0.01\ndelay_samples = 2\n";
+        let entry: ChannelSensorSpec = toml::from_str(toml).unwrap();
+        let vane = SensorSpec { channel: vec![entry], ..plain.clone() };
+        let mut a = AirDataSampler::new(&f, 205.74, dt, &plain).unwrap();
+        let mut b = AirDataSampler::new(&f, 205.74, dt, &vane).unwrap();
+        let mut plain_alpha = Vec::new();
+        for k in 0..60 {
+            let tk = k as f64 * dt;
+            let mut x = t.state;
+            x[f16::ALPHA] += 0.02 * (3.0 * tk).sin(); // a moving truth makes the delay visible
+            let (_, o) = f.evaluate(&x, &t.controls, &AeroIncrements::zero()).unwrap();
+            let (sa, sb) = (a.push(tk, &x, &o, &t.controls), b.push(tk, &x, &o, &t.controls));
+            let (Some(sa), Some(sb)) = (sa, sb) else { continue };
+            plain_alpha.push(sa.alpha_rad);
+            assert_eq!((sa.vt_mps, sa.q_rad_s, sa.az_mps2), (sb.vt_mps, sb.q_rad_s, sb.az_mps2));
+            let n = plain_alpha.len();
+            if n > 2 {
+                let want = plain_alpha[n - 3] + 0.01;
+                assert!((sb.alpha_rad - want).abs() < 1e-12, "k {k}: {} vs {want}", sb.alpha_rad);
+            }
+        }
+        assert_eq!(plain_alpha.len(), 56);
+    }
+
     /// The surfaces are continuous signals (the experiment flies them at the RK4 stage times), so
     /// the matched smoother gives a ramp in a surface back at the sample's time stamp, exactly
     /// (the weights are symmetric and sum to 1), as it does a ramp in q. The held weights of a
@@ -411,7 +449,8 @@ mod tests {
         let f = F16::new(0.30).unwrap();
         let t = trim(&f, &TrimCondition::level(20_000.0, 675.0)).unwrap();
         let dt = 0.01;
-        let mut smp = AirDataSampler::new(&f, 205.74, dt, false, 1.0, 0, 21, true).unwrap();
+        let spec = SensorSpec { differentiator_window: 21, ..SensorSpec::default() };
+        let mut smp = AirDataSampler::new(&f, 205.74, dt, &spec).unwrap();
         let rate = 0.2; // rad/s on every surface
         let mut n = 0;
         for k in 0..60 {

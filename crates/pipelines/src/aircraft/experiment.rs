@@ -334,7 +334,7 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
     };
     let (increments, epochs) = truth_epochs(sc, &f16, &trim, reference)?;
     let inputs = pilot_inputs(sc)?;
-    let noise = if sc.sensors.noise {
+    let mut noise = if sc.sensors.noise {
         Some(
             SensorNoise::new(sc.sensors.scale, sc.dt_s, sc.sensors.seed)
                 .map_err(|e| setup_err("sensors", e))?,
@@ -373,11 +373,11 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
         epochs: &epochs,
         inputs: &inputs,
         wind: &wind,
-        noise: noise.as_ref(),
         truths: &truths,
     };
     let start = Instant::now();
-    flight.fly(n, &mut channels, sampler.as_mut(), &mut out)?;
+    let sensors = Sensing { noise: noise.as_mut(), sampler: sampler.as_mut() };
+    flight.fly(n, &mut channels, sensors, &mut out)?;
     out.wall_s = start.elapsed().as_secs_f64();
     fit_batches(&mut channels, &epochs, &out);
     out.channels = channels.into_iter().map(finish_channel).collect();
@@ -546,18 +546,9 @@ fn air_data_sampler(
     if !channels.iter().any(fed) {
         return Ok(None);
     }
-    AirDataSampler::new(
-        f16,
-        sc.trim.vt_fps * M_PER_FT,
-        sc.dt_s,
-        sc.sensors.noise,
-        sc.sensors.scale,
-        sc.sensors.seed,
-        sc.sensors.differentiator_window,
-        sc.sensors.alignment == super::scenario::Alignment::Matched,
-    )
-    .map(Some)
-    .map_err(|e| setup_err("air-data sensors", e))
+    AirDataSampler::new(f16, sc.trim.vt_fps * M_PER_FT, sc.dt_s, &sc.sensors)
+        .map(Some)
+        .map_err(|e| setup_err("air-data sensors", e))
 }
 
 /// What the flight needs, set up.
@@ -570,8 +561,15 @@ struct Flight<'a> {
     epochs: &'a [TruthEpoch],
     inputs: &'a [Vec<Input>; 4],
     wind: &'a aeroident_signals::Wind,
-    noise: Option<&'a SensorNoise>,
     truths: &'a [Vec<Vec<Option<f64>>>],
+}
+
+/// The two sensor paths of the flight (module doc, step 3), each read once per step.
+struct Sensing<'a> {
+    /// The two-aircraft estimators' measured states and derivatives; `None`: exact.
+    noise: Option<&'a mut SensorNoise>,
+    /// The sample-driven estimators' air-data samples, when a channel is fed them.
+    sampler: Option<&'a mut AirDataSampler>,
 }
 
 impl Flight<'_> {
@@ -592,7 +590,7 @@ impl Flight<'_> {
         &self,
         n: usize,
         channels: &mut [ChannelRun],
-        mut sampler: Option<&mut AirDataSampler>,
+        mut sensors: Sensing<'_>,
         out: &mut RunOutput,
     ) -> Result<(), ExperimentError> {
         let sc = self.sc;
@@ -618,12 +616,12 @@ impl Flight<'_> {
             let (xdot_ref, outputs) = f16_ref
                 .evaluate(&x_ref, &u, &f16_ref.increments)
                 .map_err(|e| ExperimentError::Reference { t_s: t, source: e })?;
-            let (z_m, zdot_m) = match self.noise {
+            let (z_m, zdot_m) = match sensors.noise.as_mut() {
                 Some(nz) => nz.measure(t, &x_ref, &xdot_ref),
                 None => (x_ref, xdot_ref),
             };
-            let air = sampler.as_mut().and_then(|s| s.push(t, &x_ref, &outputs, &u));
-            let raw = air.and(sampler.as_ref().and_then(|s| s.raw()).copied());
+            let air = sensors.sampler.as_mut().and_then(|s| s.push(t, &x_ref, &outputs, &u));
+            let raw = air.and(sensors.sampler.as_ref().and_then(|s| s.raw()).copied());
             for (c, truth) in channels.iter_mut().zip(self.truths) {
                 step_channel(c, t, &z_m, &zdot_m, &u_est, air.as_ref(), raw.as_ref());
                 for (l, tr) in c.log.params.iter_mut().zip(truth) {

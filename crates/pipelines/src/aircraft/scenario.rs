@@ -28,6 +28,15 @@
 //! differentiator_window = 11            # sample-driven estimators: ṗ q̇ ṙ α̇ differentiator
 //! alignment = "matched"                 # other channels: "matched" smoother | "delay"
 //!
+//! [[sensors.channel]]                   # optional, any number: more sensor errors on one
+//! channel = "alpha_rad"                 # air-data channel of the sample-driven estimators
+//! bias = 0.002                          # (vt_mps alpha_rad beta_rad p_rad_s q_rad_s r_rad_s
+//! lag_tau_s = 0.02                      # phi_rad theta_rad psi_rad ax_mps2 ay_mps2 az_mps2),
+//! gauss_markov_sigma = 0.001            # SI units; keys of aeroident_signals::SensorConfig
+//! gauss_markov_tau_s = 30.0             # (bias, lag_tau_s, gauss_markov_sigma + _tau_s,
+//! delay_s = 0.02                        # delay_s | delay_samples in whole steps, quantum);
+//! quantum = 0.0001                      # white σ, rate 1/dt_s and seed stay the table's
+//!
 //! [increments.Cm_alpha]                 # one table per TRUE increment of the reference F-16,
 //! truth = 0.0015                        # named with the vocabulary (super::increments);
 //! lower = 0.001                         # per rad / per unit hat-rate about the trim point.
@@ -180,7 +189,7 @@ impl Default for TrimSpec {
 }
 
 /// Sensor model switch (TOML `[sensors]`); levels in [`super::sensors`].
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SensorSpec {
     /// Add noise to the measured states and derivatives.
@@ -200,6 +209,68 @@ pub struct SensorSpec {
     /// ones ([`super::air_data`]).
     #[serde(default)]
     pub alignment: Alignment,
+    /// Sample-driven estimators: sensor errors beyond the white noise on some of the twelve
+    /// air-data channels (TOML `[[sensors.channel]]`).
+    #[serde(default)]
+    pub channel: Vec<ChannelSensorSpec>,
+}
+
+/// One `[[sensors.channel]]` entry: bias, lag, Gauss–Markov drift, transport delay and
+/// quantisation on one of the air-data channels of the sample-driven estimators
+/// ([`super::air_data::sensed_channels`]), in that channel's SI units (rad, m/s, m/s²) and
+/// seconds; the keys and their meaning are those of [`aeroident_signals::SensorConfig`]. The
+/// white noise, sample rate (`1/dt_s`) and seed stay the experiment's, so the white draws are
+/// the same with or without the entry. The two-aircraft estimators' sensors do not read it.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ChannelSensorSpec {
+    /// The channel, e.g. `alpha_rad`.
+    pub channel: String,
+    /// Constant bias (channel units).
+    #[serde(default)]
+    pub bias: f64,
+    /// Gauss–Markov stationary σ (channel units), with `gauss_markov_tau_s`.
+    pub gauss_markov_sigma: Option<f64>,
+    /// Gauss–Markov correlation time (s), with `gauss_markov_sigma`.
+    pub gauss_markov_tau_s: Option<f64>,
+    /// First-order lag time constant (s).
+    pub lag_tau_s: Option<f64>,
+    /// Transport delay (s), a whole number of steps.
+    pub delay_s: Option<f64>,
+    /// Transport delay (steps).
+    pub delay_samples: Option<usize>,
+    /// Quantisation LSB (channel units).
+    pub quantum: Option<f64>,
+}
+
+impl ChannelSensorSpec {
+    /// The channel's sensor: these errors on white noise of σ `white_sigma` (channel units),
+    /// sampled every `dt_s` (s), keyed with `seed`.
+    ///
+    /// # Errors
+    /// [`aeroident_signals::SignalError`] naming the bad key (e.g. a `delay_s` that is not a
+    /// whole number of steps, a lone `gauss_markov_sigma`, a non-positive `lag_tau_s`).
+    pub fn build(
+        &self,
+        white_sigma: f64,
+        dt_s: f64,
+        seed: u64,
+    ) -> Result<aeroident_signals::SensorModel, aeroident_signals::SignalError> {
+        let config = aeroident_signals::SensorConfig {
+            channel: self.channel.clone(),
+            white_sigma,
+            bias: self.bias,
+            gauss_markov_sigma: self.gauss_markov_sigma,
+            gauss_markov_tau_s: self.gauss_markov_tau_s,
+            sample_rate_hz: 1.0 / dt_s,
+            delay_s: self.delay_s,
+            delay_samples: self.delay_samples,
+            quantum: self.quantum,
+            lag_tau_s: self.lag_tau_s,
+            seed: Some(seed),
+        };
+        config.build(0)
+    }
 }
 
 pub use crate::condition::Alignment;
@@ -220,6 +291,7 @@ impl Default for SensorSpec {
             scale: 1.0,
             differentiator_window: default_window(),
             alignment: Alignment::Matched,
+            channel: Vec::new(),
         }
     }
 }
@@ -695,6 +767,24 @@ impl Scenario {
         self.increments.values().filter_map(|e| e.step_at_s).reduce(f64::min)
     }
 
+    /// Each `[[sensors.channel]]` names a distinct air-data channel and builds; the error is
+    /// the key (`sensors.channel[k]` or its `.channel`) and why.
+    fn validate_channel_sensors(&self) -> Result<(), (String, String)> {
+        let known = super::air_data::sensed_channels().map(|(name, _)| name);
+        for (k, c) in self.sensors.channel.iter().enumerate() {
+            let key = format!("sensors.channel[{k}]");
+            if !known.contains(&c.channel.as_str()) {
+                let why = format!("unknown channel `{}`; known: {}", c.channel, known.join(", "));
+                return Err((format!("{key}.channel"), why));
+            }
+            if self.sensors.channel[..k].iter().any(|o| o.channel == c.channel) {
+                return Err((format!("{key}.channel"), format!("`{}` given twice", c.channel)));
+            }
+            c.build(0.0, self.dt_s, 0).map_err(|e| (key, e.to_string()))?;
+        }
+        Ok(())
+    }
+
     fn validate(&self, path: &str) -> Result<(), ScenarioError> {
         let bad = |field: &str, reason: String| ScenarioError::Invalid {
             path: path.into(),
@@ -730,6 +820,7 @@ impl Scenario {
                 format!("must be odd and ≥ 3 (a whole-sample lag), got {w}"),
             ));
         }
+        self.validate_channel_sensors().map_err(|(field, reason)| bad(&field, reason))?;
         for (p, e) in &self.increments {
             let name = p.name();
             let f = |k: &str| format!("increments.{name}.{k}");
@@ -885,6 +976,40 @@ impl Scenario {
 mod tests {
     use super::*;
     use crate::estimators::{TwoAircraftKind, unknown_kind};
+
+    /// `[[sensors.channel]]` entries parse into their keys, and a bad entry is refused naming
+    /// the key: an unknown channel, a channel given twice, a delay that is not whole steps, a
+    /// lone Gauss–Markov σ, an unknown key.
+    #[test]
+    fn channel_sensor_entries_parse_and_bad_ones_name_the_key() {
+        let head = "kind = \"run\"\nname = \"t\"\nduration_s = 1.0\ndt_s = 0.01\n";
+        let rls = "[[estimator]]\nkind = \"rls\"\nmodel = \"six-axis\"\n";
+        let with = |entries: &str| Scenario::from_toml(&format!("{head}{entries}{rls}"), "t.toml");
+        let ok = with(
+            "[[sensors.channel]]\nchannel = \"q_rad_s\"\nbias = 0.001\ndelay_s = 0.03\n\
+             [[sensors.channel]]\nchannel = \"az_mps2\"\nquantum = 0.01\nlag_tau_s = 0.05\n",
+        )
+        .unwrap();
+        let c = &ok.sensors.channel;
+        assert_eq!((c.len(), c[0].channel.as_str(), c[0].bias), (2, "q_rad_s", 0.001));
+        assert_eq!(
+            (c[0].delay_s, c[1].quantum, c[1].lag_tau_s),
+            (Some(0.03), Some(0.01), Some(0.05))
+        );
+        let err = |entries: &str| with(entries).unwrap_err().to_string();
+        let e = err("[[sensors.channel]]\nchannel = \"alpha_deg\"\n");
+        assert!(e.contains("`sensors.channel[0].channel`") && e.contains("alpha_deg"), "{e}");
+        let e = err(
+            "[[sensors.channel]]\nchannel = \"p_rad_s\"\n[[sensors.channel]]\nchannel = \"p_rad_s\"\n",
+        );
+        assert!(e.contains("`sensors.channel[1].channel`") && e.contains("twice"), "{e}");
+        let e = err("[[sensors.channel]]\nchannel = \"p_rad_s\"\ndelay_s = 0.015\n");
+        assert!(e.contains("`sensors.channel[0]`") && e.contains("delay_s"), "{e}");
+        let e = err("[[sensors.channel]]\nchannel = \"p_rad_s\"\ngauss_markov_sigma = 0.1\n");
+        assert!(e.contains("gauss_markov"), "{e}");
+        let e = err("[[sensors.channel]]\nchannel = \"p_rad_s\"\nwhite_sigma = 0.1\n");
+        assert!(e.contains("white_sigma"), "{e}");
+    }
 
     /// Every option a two-aircraft kind declares is one its entry parses (with a valid value),
     /// and any other key is refused naming it: the registry and the parser cannot drift apart.

@@ -1,8 +1,11 @@
 //! The sensor model between the reference aircraft and the two-aircraft estimators: additive,
 //! zero-mean, white Gaussian noise per measured state and per measured state derivative, seeded
-//! and reproducible (Simulink-style band-limited white noise of `aeroident_signals`, held for one
-//! sample). The sample-driven estimators' sensors ([`super::air_data`]) use the same levels but
-//! differentiate the noisy rates themselves.
+//! and reproducible: one [`SensorModel`] per channel (the one sensor chain of
+//! `aeroident_signals`, also behind `f16 sim`), white noise only, sampled every step. Its
+//! samples are the Simulink-style band-limited white noise of the thesis, draw for draw
+//! (`aeroident_signals::sensors`, reproducibility). The sample-driven estimators' sensors
+//! ([`super::air_data`]) use the same levels and the same chain but differentiate the noisy
+//! rates themselves.
 //!
 //! # Levels (σ at `scale = 1`) and their source
 //! States, from "Designing Stipulated Gains of Aircraft Stability and Control Augmentation
@@ -22,7 +25,7 @@
 //! the engine model).
 
 use aeroident_models::f16::{self, F16State, N_STATES};
-use aeroident_signals::{BandLimitedWhiteNoise, InputSignal};
+use aeroident_signals::{SensorModel, SensorParameters, SignalError};
 
 /// Window of the smoothing differentiator assumed for the derivative noise, samples.
 pub const DIFFERENTIATOR_WINDOW: usize = 11;
@@ -62,52 +65,71 @@ pub fn derivative_sigma(dt_s: f64) -> F16State {
     d
 }
 
-/// Noise generators for the 13 states and 13 derivatives.
+/// Seed of channel `i` of a sensor path whose channels start at `offset`:
+/// `1000·seed + offset + i` (wrapping), the experiment's `[sensors] seed` being `seed`.
+pub fn channel_seed(seed: u64, offset: u64, i: usize) -> u64 {
+    seed.wrapping_mul(1_000).wrapping_add(offset).wrapping_add(i as u64)
+}
+
+/// White-noise-only sensors sampled every `dt_s` (s), one per level of `sigma` (σ per sample,
+/// channel units, already scaled); channel `i` is keyed with [`channel_seed`]`(seed, offset,
+/// i)`, and is `None` (noise-free) where its level is not > 0. Read at `t = k·dt_s`, a sensor
+/// gives `truth + σ·ξ_k` with `ξ_k` the draw of sample `k` (module docs).
+///
+/// # Errors
+/// The signal crate's error for a non-finite level or a non-positive or non-finite interval.
+pub fn white_noise_sensors(
+    sigma: impl IntoIterator<Item = f64>,
+    dt_s: f64,
+    seed: u64,
+    offset: u64,
+) -> Result<Vec<Option<SensorModel>>, SignalError> {
+    sigma
+        .into_iter()
+        .enumerate()
+        .map(|(i, s)| {
+            if s > 0.0 {
+                let p = SensorParameters { white_sigma: s, ..SensorParameters::ideal(1.0 / dt_s) };
+                SensorModel::new(p, channel_seed(seed, offset, i)).map(Some)
+            } else {
+                Ok(None)
+            }
+        })
+        .collect()
+}
+
+/// The sensors of the 13 states and 13 derivatives.
 #[derive(Debug, Clone)]
 pub struct SensorNoise {
-    states: Vec<Option<BandLimitedWhiteNoise>>,
-    derivatives: Vec<Option<BandLimitedWhiteNoise>>,
+    states: Vec<Option<SensorModel>>,
+    derivatives: Vec<Option<SensorModel>>,
 }
 
 impl SensorNoise {
-    /// Noise at `scale` × the default levels, held for `dt_s`, from `seed`. `None` where σ = 0.
+    /// Noise at `scale` × the default levels, sampled every `dt_s`, from `seed` (states at
+    /// offset 0, derivatives at offset 100 of [`white_noise_sensors`]). `None` where σ = 0.
     ///
     /// # Errors
     /// The signal crate's error for a non-finite level or interval.
-    pub fn new(scale: f64, dt_s: f64, seed: u64) -> Result<Self, aeroident_signals::SignalError> {
-        let make = |sig: F16State, offset: u64| {
-            (0..N_STATES)
-                .map(|i| {
-                    let s = sig[i] * scale;
-                    if s > 0.0 {
-                        BandLimitedWhiteNoise::new(
-                            s * s * dt_s,
-                            dt_s,
-                            seed.wrapping_mul(1_000).wrapping_add(offset + i as u64),
-                        )
-                        .map(Some)
-                    } else {
-                        Ok(None)
-                    }
-                })
-                .collect::<Result<Vec<_>, _>>()
-        };
+    pub fn new(scale: f64, dt_s: f64, seed: u64) -> Result<Self, SignalError> {
+        let levels = |sig: F16State| (0..N_STATES).map(move |i| sig[i] * scale);
         Ok(Self {
-            states: make(state_sigma(), 0)?,
-            derivatives: make(derivative_sigma(dt_s), 100)?,
+            states: white_noise_sensors(levels(state_sigma()), dt_s, seed, 0)?,
+            derivatives: white_noise_sensors(levels(derivative_sigma(dt_s)), dt_s, seed, 100)?,
         })
     }
 
-    /// Measured states and derivatives at `t_s` from the true ones.
-    pub fn measure(&self, t_s: f64, x: &F16State, xdot: &F16State) -> (F16State, F16State) {
+    /// Measured states and derivatives at `t_s` from the true ones. Call once per step at
+    /// `t = k·dt` (later calls within a step return the held readings).
+    pub fn measure(&mut self, t_s: f64, x: &F16State, xdot: &F16State) -> (F16State, F16State) {
         let mut z = *x;
         let mut zd = *xdot;
         for i in 0..N_STATES {
-            if let Some(n) = &self.states[i] {
-                z[i] += n.value(t_s);
+            if let Some(s) = &mut self.states[i] {
+                z[i] = s.measure(t_s, x[i]);
             }
-            if let Some(n) = &self.derivatives[i] {
-                zd[i] += n.value(t_s);
+            if let Some(s) = &mut self.derivatives[i] {
+                zd[i] = s.measure(t_s, xdot[i]);
             }
         }
         (z, zd)
@@ -117,6 +139,40 @@ impl SensorNoise {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Read once per step at `t = k·dt`, the sensors give the truth plus the thesis's
+    /// band-limited white noise of power `σ²·dt` at step `dt` with the channel's seed
+    /// `1000·seed + offset + i`, sample for sample (the block is an independent computation of
+    /// the same keyed draws; its σ = √(σ²·dt/dt) may differ from σ in the last bit, hence the
+    /// few-ulp tolerance). σ = 0 channels (e.g. engine power) read the truth exactly.
+    #[test]
+    fn analytic_readings_are_truth_plus_band_limited_white_noise() {
+        use aeroident_signals::{BandLimitedWhiteNoise, InputSignal};
+        let (scale, dt, seed) = (1.7, 0.01, 42_u64);
+        let mut sensors = SensorNoise::new(scale, dt, seed).unwrap();
+        let block = |sig: f64, offset: u64, i: usize| {
+            let s = sig * scale;
+            BandLimitedWhiteNoise::new(s * s * dt, dt, seed * 1000 + offset + i as u64).unwrap()
+        };
+        let (ss, ds) = (state_sigma(), derivative_sigma(dt));
+        for k in 0..400 {
+            let t = k as f64 * dt;
+            let x = F16State::from_fn(|i, _| 100.0 * (i as f64 + 1.0) + (t * i as f64).sin());
+            let xd = F16State::from_fn(|i, _| (t * (i as f64 + 0.5)).cos());
+            let (z, zd) = sensors.measure(t, &x, &xd);
+            for i in 0..N_STATES {
+                for (got, truth, sig, offset) in [(z, x, ss, 0), (zd, xd, ds, 100)] {
+                    let want = if sig[i] > 0.0 {
+                        truth[i] + block(sig[i], offset, i).value(t)
+                    } else {
+                        truth[i]
+                    };
+                    let tol = 4.0 * f64::EPSILON * want.abs().max(1.0);
+                    assert!((got[i] - want).abs() <= tol, "k {k}, channel {offset}+{i}");
+                }
+            }
+        }
+    }
 
     #[test]
     fn analytic_slope_noise_gain_11_points() {

@@ -139,7 +139,7 @@ impl Channel {
 /// What the check estimates and when it stops.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CompatConfig {
-    /// Estimate a time shift of every measured output (default true).
+    /// Estimate a time shift of every measured output but the airspeed (default true).
     pub time_shifts: bool,
     /// Estimate the scale-factor errors of the accelerometers and gyros too (default false:
     /// they need large, varied manoeuvres to separate from the biases).
@@ -245,7 +245,8 @@ impl CompatResult {
 }
 
 /// Checks the compatibility of `manoeuvres` (each a gap-free run of samples with `ax, ay, az,
-/// p, q, r`, `θ` and `φ`) and reconstructs the flight path (module doc).
+/// p, q, r`, `θ` and `φ`; a longitudinal record with none of `ay, p, r, φ` is checked in the
+/// vertical plane) and reconstructs the flight path (module doc).
 ///
 /// # Errors
 /// [`EstimatorError::InvalidConfig`] naming a missing channel or an empty or too short
@@ -391,21 +392,44 @@ impl<'a> Problem<'a> {
                 });
             }
         }
-        let needed = [Channel::Phi, Channel::Theta];
-        for c in Channel::INERTIAL.into_iter().chain(needed) {
-            if man.iter().flat_map(|m| m.iter()).any(|s| c.of(s).is_none()) {
+        let samples = || man.iter().flat_map(|m| m.iter());
+        let recorded = |c: Channel| samples().all(|s| c.of(s).is_some());
+        let longitudinal = LATERAL.iter().all(|&c| samples().all(|s| c.of(s).is_none()));
+        let needed = [Channel::Ax, Channel::Az, Channel::Q, Channel::Theta];
+        let lateral = if longitudinal { &[][..] } else { &LATERAL[..] };
+        for &c in needed.iter().chain(lateral) {
+            if !recorded(c) {
                 return Err(EstimatorError::InvalidConfig {
                     field: c.name(),
                     value: f64::NAN,
-                    reason: "the compatibility check needs this channel in every sample",
+                    reason: "the compatibility check needs this channel in every sample (a longitudinal record: none of ay, p, r, phi)",
                 });
             }
         }
-        let recorded = |c: Channel| man.iter().flat_map(|m| m.iter()).all(|s| c.of(s).is_some());
-        let outputs: Vec<Channel> = Channel::OUTPUTS.into_iter().filter(|&c| recorded(c)).collect();
+        let outputs: Vec<Channel> = Channel::OUTPUTS
+            .into_iter()
+            .filter(|&c| recorded(c) && !(longitudinal && c == Channel::Psi))
+            .collect();
         let mut unknowns = unknowns_of(&outputs, man.len(), config);
-        unknowns.retain(|u| !exclude.contains(u));
+        unknowns.retain(|u| !exclude.contains(u) && !(longitudinal && is_lateral(*u)));
         Ok(Self { man, outputs, unknowns })
+    }
+}
+
+/// The lateral channels; a record with none of them is checked as longitudinal (`v, φ, ψ`
+/// and the lateral rates and force zero).
+const LATERAL: [Channel; 4] = [Channel::Ay, Channel::P, Channel::R, Channel::Phi];
+
+/// Whether `u` belongs to the lateral motion.
+fn is_lateral(u: Unknown) -> bool {
+    match u {
+        Unknown::Bias(c) | Unknown::Scale(c) | Unknown::TimeShift(c) => {
+            matches!(
+                c,
+                Channel::Ay | Channel::P | Channel::R | Channel::Beta | Channel::Phi | Channel::Psi
+            )
+        }
+        Unknown::Initial { state, .. } => matches!(state, 1 | 3 | 5),
     }
 }
 
@@ -425,7 +449,9 @@ fn unknowns_of(outputs: &[Channel], n_man: usize, config: &CompatConfig) -> Vec<
         u.extend([Unknown::Scale(Channel::Beta), Unknown::Bias(Channel::Beta)]);
     }
     if config.time_shifts {
-        u.extend(outputs.iter().map(|&c| Unknown::TimeShift(c)));
+        // Not the airspeed's: it varies slowly, so its shift would absorb the wind and the
+        // slow model errors (the HFB-320 record: −2.7 s) instead of measuring a lag.
+        u.extend(outputs.iter().filter(|&&c| c != Channel::Vt).map(|&c| Unknown::TimeShift(c)));
     }
     for m in 0..n_man {
         for state in 0..6 {

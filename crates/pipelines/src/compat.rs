@@ -117,7 +117,12 @@ pub fn check_record<R: Read>(
         rejections,
         manoeuvres: slices.len(),
         channels: channels(&result),
-        residual_rms: result.outputs.iter().map(|c| c.name()).zip(result.residual_rms.iter().copied()).collect(),
+        residual_rms: result
+            .outputs
+            .iter()
+            .map(|c| c.name())
+            .zip(result.residual_rms.iter().copied())
+            .collect(),
         findings: findings(&result, dt),
         warnings,
         reconstructed: result
@@ -189,6 +194,9 @@ fn findings(r: &CompatResult, dt_s: f64) -> Vec<String> {
                 if v > 0.0 { "lags" } else { "leads" },
                 v.abs(),
                 s
+            )),
+            Unknown::Bias(Channel::Vt) if significant(v, s) => out.push(format!(
+                "vt_mps reads {v:+.2} ± {s:.2} m/s above the inertial speed (a steady wind shows here: the check compares the air data with the inertial velocity)"
             )),
             Unknown::Bias(c) if significant(v, s) => {
                 out.push(format!("{} bias {v:+.4} ± {s:.4} {}", c.name(), c.unit()));

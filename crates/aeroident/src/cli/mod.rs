@@ -3,6 +3,7 @@
 use clap::{Parser, Subcommand};
 
 pub mod bench;
+pub mod compat;
 pub mod design;
 pub mod export;
 pub mod f16;
@@ -33,6 +34,9 @@ pub enum Command {
     Montecarlo(montecarlo::MonteCarloArgs),
     /// Replay a recorded flight through an estimator, sample by sample.
     Replay(replay::ReplayArgs),
+    /// Check a record's data compatibility: the biases, scale factors and time shifts that
+    /// make its accelerations, rates, attitudes and air data consistent.
+    Compat(compat::CompatArgs),
     /// Write results for other tools (a JSBSim aerodynamics fragment).
     Export(export::ExportArgs),
     /// Design an orthogonal multisine input and predict its Cramér–Rao σ before flight.
@@ -53,6 +57,7 @@ impl Cli {
             Command::Run(a) => run::execute(a),
             Command::Montecarlo(a) => montecarlo::execute(a),
             Command::Replay(a) => replay::execute(a),
+            Command::Compat(a) => compat::execute(a),
             Command::Bench(a) => bench::execute(a),
             Command::Export(a) => export::execute(a),
             Command::Design(a) => design::execute(a),

@@ -238,7 +238,9 @@ pub(crate) struct Manoeuvres {
 ///
 /// # Errors
 /// Fatal data errors; no usable sample.
-pub(crate) fn read_manoeuvres<R: Read>(reader: FlightDataReader<R>) -> Result<Manoeuvres, ReplayError> {
+pub(crate) fn read_manoeuvres<R: Read>(
+    reader: FlightDataReader<R>,
+) -> Result<Manoeuvres, ReplayError> {
     let file = reader.file().to_string();
     let mut manoeuvres: Vec<Vec<AirDataSample>> = vec![Vec::new()];
     let mut rejections = RejectionLog::default();

@@ -1,0 +1,116 @@
+//! `aeroident compat`: the data compatibility check of a record (are its accelerations, rates,
+//! attitudes and air data consistent, and with which biases, scale factors and time shifts).
+//!
+//! ```text
+//! aeroident compat <log> --map <map.toml> [--format …] [--out DIR] [--no-time-shifts]
+//!                  [--inertial-scale-factors] [--max-iterations N]
+//! ```
+//! Prints the corrections per channel and the findings; with `--out`, writes
+//! `DIR/compat.json` ([`aeroident_pipelines::compat`] documents its keys).
+
+use aeroident_estimators::compat::CompatConfig;
+use aeroident_io::{LogFormat, Mapping, open_log_with_notes};
+use aeroident_pipelines::compat::{ChannelSummary, CompatSummary, check_record};
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+/// Arguments of `aeroident compat`.
+#[derive(Debug, clap::Args)]
+pub struct CompatArgs {
+    /// Recorded flight data (CSV, `.asc`, `.mat`, PX4 `.ulg`, ArduPilot `.bin`), with the
+    /// accelerometers, the gyros, roll and pitch attitude and the air data mapped.
+    pub data: String,
+    /// Channel mapping TOML (`docs/mapping.md`).
+    #[arg(long)]
+    pub map: PathBuf,
+    /// Log format; default by the file's extension, else CSV.
+    #[arg(long)]
+    pub format: Option<LogFormat>,
+    /// Output directory for `compat.json`.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Do not estimate the outputs' time shifts.
+    #[arg(long)]
+    pub no_time_shifts: bool,
+    /// Estimate the accelerometers' and gyros' scale factors too (needs large, varied
+    /// manoeuvres).
+    #[arg(long)]
+    pub inertial_scale_factors: bool,
+    /// Most Gauss–Newton iterations (default 50); past it the last iterate is reported.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub max_iterations: Option<u32>,
+}
+
+/// Runs `aeroident compat`.
+///
+/// # Errors
+/// Unreadable mapping or record, a missing channel, a check that fails, an unwritable output.
+pub fn execute(args: CompatArgs) -> anyhow::Result<()> {
+    let mapping = Mapping::from_path(&args.map)?;
+    let (reader, notes) = open_log_with_notes(&args.data, args.format, &mapping)?;
+    for n in &notes {
+        eprintln!("note: {n}");
+    }
+    let mut config = CompatConfig {
+        time_shifts: !args.no_time_shifts,
+        inertial_scale_factors: args.inertial_scale_factors,
+        ..CompatConfig::default()
+    };
+    if let Some(n) = args.max_iterations {
+        config.max_iterations = n as usize;
+    }
+    let (summary, _) = check_record(reader, &config)?;
+    super::print_stdout(&render(&summary))?;
+    if let Some(dir) = &args.out {
+        let mut out = crate::outdir::OutputDir::open(dir)?;
+        out.write_bytes("compat.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
+        eprintln!("wrote {}", dir.join("compat.json").display());
+    }
+    Ok(())
+}
+
+/// The console text: status, the channel table, residuals, findings and warnings.
+fn render(s: &CompatSummary) -> String {
+    let mut t = format!(
+        "{}: {} samples in {} manoeuvre(s), {} rejected; {} after {} iterations{}\n",
+        s.file,
+        s.samples_read,
+        s.manoeuvres,
+        s.samples_rejected,
+        s.status,
+        s.iterations,
+        s.status_reason.as_ref().map_or(String::new(), |r| format!(" ({r})"))
+    );
+    let _ = writeln!(
+        t,
+        "{:<11} {:>22} {:>18} {:>20}  unit",
+        "channel", "bias ± σ", "scale ± σ", "time shift ± σ (s)"
+    );
+    for c in &s.channels {
+        let _ = writeln!(t, "{}", row(c));
+    }
+    let rms: Vec<String> = s.residual_rms.iter().map(|(k, v)| format!("{k} {v:.3e}")).collect();
+    let _ = writeln!(t, "residual RMS: {}", rms.join(", "));
+    for f in &s.findings {
+        let _ = writeln!(t, "finding: {f}");
+    }
+    for w in &s.warnings {
+        let _ = writeln!(t, "warning: {w}");
+    }
+    t
+}
+
+fn row(c: &ChannelSummary) -> String {
+    let pm = |v: Option<f64>, s: Option<f64>, prec: usize| match (v, s) {
+        (Some(v), Some(s)) => format!("{v:+.prec$} ± {s:.prec$}"),
+        _ => "—".into(),
+    };
+    format!(
+        "{:<11} {:>22} {:>18} {:>20}  {}",
+        c.name,
+        pm(c.bias, c.bias_sigma, 5),
+        pm(c.scale, c.scale_sigma, 4),
+        pm(c.time_shift_s, c.time_shift_sigma_s, 3),
+        c.unit
+    )
+}

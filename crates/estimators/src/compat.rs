@@ -411,7 +411,8 @@ impl<'a> Problem<'a> {
             .filter(|&c| recorded(c) && !(longitudinal && c == Channel::Psi))
             .collect();
         let mut unknowns = unknowns_of(&outputs, man.len(), config);
-        unknowns.retain(|u| !exclude.contains(u) && !(longitudinal && is_lateral(*u)));
+        let dropped = |u: &Unknown| exclude.contains(u) || (longitudinal && is_lateral(*u));
+        unknowns.retain(|u| !dropped(u));
         Ok(Self { man, outputs, unknowns })
     }
 }

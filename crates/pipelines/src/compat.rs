@@ -181,10 +181,10 @@ const SIGNIFICANT_SIGMAS: f64 = 3.0;
 fn findings(r: &CompatResult, dt_s: f64) -> Vec<String> {
     let mut out = Vec::new();
     let significant = |v: f64, s: f64| v.abs() > SIGNIFICANT_SIGMAS * s;
-    if let Some((b, s)) = r.get(Unknown::Bias(Channel::Az)) {
-        if (b - G0_MPS2).abs() < 0.1 * G0_MPS2 {
-            out.push(format!("az_mps2 looks like load factor − 1 g, not the specific force (bias {b:+.2} ± {s:.2} m/s² ≈ +g): map it as (n_z·g) with the sign of a specific force (≈ −g level)"));
-        }
+    if let Some((b, s)) = r.get(Unknown::Bias(Channel::Az))
+        && (b - G0_MPS2).abs() < 0.1 * G0_MPS2
+    {
+        out.push(format!("az_mps2 looks like load factor − 1 g, not the specific force (bias {b:+.2} ± {s:.2} m/s² ≈ +g): map it as (n_z·g) with the sign of a specific force (≈ −g level)"));
     }
     for (u, (&v, &s)) in r.unknowns.iter().zip(r.values.iter().zip(&r.sigma)) {
         match *u {
@@ -211,4 +211,49 @@ fn findings(r: &CompatResult, dt_s: f64) -> Vec<String> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn result(unknowns: Vec<Unknown>, values: Vec<f64>, sigma: Vec<f64>) -> CompatResult {
+        CompatResult {
+            unknowns,
+            values,
+            sigma,
+            outputs: Vec::new(),
+            residual_rms: Vec::new(),
+            residual_mean: Vec::new(),
+            reconstructed: Vec::new(),
+            termination: Termination::Converged,
+            iterations: 3,
+            notes: Vec::new(),
+        }
+    }
+
+    /// An az bias of +g is load factor − 1 g; a lag of 0.18 ± 0.01 s at 10 Hz is a finding, a
+    /// shift below half a sample or within 3σ of zero is not; a bias within 3σ is not.
+    #[test]
+    fn findings_name_load_factor_lags_and_significant_biases_only() {
+        let r = result(
+            vec![
+                Unknown::Bias(Channel::Az),
+                Unknown::TimeShift(Channel::Alpha),
+                Unknown::TimeShift(Channel::Theta),
+                Unknown::TimeShift(Channel::Phi),
+                Unknown::Bias(Channel::Q),
+            ],
+            vec![9.75, 0.18, 0.04, 0.2, 1e-4],
+            vec![0.02, 0.01, 0.001, 0.1, 1e-4],
+        );
+        let f = findings(&r, 0.1);
+        assert!(f[0].starts_with("az_mps2 looks like load factor − 1 g"), "{f:?}");
+        assert!(
+            f.contains(&"alpha_rad lags the kinematics by 0.180 ± 0.010 s".to_string()),
+            "{f:?}"
+        );
+        assert!(!f.iter().any(|x| x.starts_with("theta_rad") || x.starts_with("phi_rad")), "{f:?}");
+        assert!(!f.iter().any(|x| x.starts_with("q_rad_s")), "{f:?}");
+    }
 }

@@ -35,7 +35,9 @@
 //! Jategaonkar ch. 4): Gauss–Newton with Levenberg–Marquardt damping on central-difference
 //! sensitivities. Converged when the relative change of `det R` is below
 //! [`CompatConfig::cost_tolerance`] and the largest step below
-//! [`CompatConfig::step_tolerance_sigma`] σ; a fit stopped earlier reports its last iterate
+//! [`CompatConfig::step_tolerance_sigma`] σ (or, when no damped step lowers the cost, the
+//! Gauss–Newton step is below 0.01 σ, the precision of the central differences); a fit
+//! stopped earlier reports its last iterate
 //! ([`Termination`]). σ is the Cramér–Rao bound `sqrt(diag M⁻¹)`.
 //!
 //! Without a `β` channel, `β` is reconstructed from the integrated `v`. The initial `v` and the
@@ -274,6 +276,12 @@ pub fn check(
     r.notes = notes;
     Ok(r)
 }
+
+/// The largest Gauss–Newton step, in Cramér–Rao σ, that counts as converged when no damped step
+/// lowers the cost: the central-difference sensitivities leave steps of order 10⁻³–10⁻² σ at
+/// the optimum (measured: 0.0032 σ on the synthetic record of the tests), far below anything
+/// that moves an estimate.
+const NO_DESCENT_STEP_SIGMA: f64 = 0.01;
 
 /// Largest Cramér–Rao σ of a time shift, alone, that the record determines, s.
 const MAX_SHIFT_SIGMA_S: f64 = 0.05;
@@ -751,8 +759,10 @@ impl Problem<'_> {
             }
             let Some((b, e_new, r_new, step_sigma)) = self.descend(beta, &m, &g, &r, &mut lambda)
             else {
-                let tiny = damped(&m, &g, 0.0)
-                    .is_some_and(|st| max_sigma(&m, &st) < config.step_tolerance_sigma);
+                // At the optimum the central-difference sensitivities leave a step no damping
+                // can turn into a descent (the cost is flat to its rounding there).
+                let floor = config.step_tolerance_sigma.max(NO_DESCENT_STEP_SIGMA);
+                let tiny = damped(&m, &g, 0.0).is_some_and(|st| max_sigma(&m, &st) < floor);
                 let t = if tiny {
                     Termination::Converged
                 } else {

@@ -119,6 +119,29 @@ impl Channel {
         }
     }
 
+    /// Sets the channel's value in sample `s` to `v`.
+    pub fn set(self, s: &mut AirDataSample, v: f64) {
+        match self {
+            Channel::Ax => s.ax_mps2 = Some(v),
+            Channel::Ay => s.ay_mps2 = Some(v),
+            Channel::Az => s.az_mps2 = Some(v),
+            Channel::P => s.p_rad_s = Some(v),
+            Channel::Q => s.q_rad_s = Some(v),
+            Channel::R => s.r_rad_s = Some(v),
+            Channel::Vt => s.vt_mps = v,
+            Channel::Alpha => s.alpha_rad = v,
+            Channel::Beta => s.beta_rad = Some(v),
+            Channel::Phi => s.phi_rad = Some(v),
+            Channel::Theta => s.theta_rad = Some(v),
+            Channel::Psi => s.psi_rad = Some(v),
+        }
+    }
+
+    /// The channel of a sample field's name (`alpha_rad` …), if it is one.
+    pub fn from_name(name: &str) -> Option<Channel> {
+        Channel::INERTIAL.into_iter().chain(Channel::OUTPUTS).find(|c| c.name() == name)
+    }
+
     /// The channel's value in sample `s` (`None` when not recorded).
     pub fn of(self, s: &AirDataSample) -> Option<f64> {
         match self {

@@ -10,6 +10,10 @@
 //! factor the channel reads the truth with (`1 + k`); a number the check did not estimate is
 //! `null`.
 
+mod apply;
+
+pub use apply::{Corrected, Corrections};
+
 use crate::replay::ReplayError;
 use crate::replay::batch::read_manoeuvres;
 use aeroident_estimators::compat::{self, Channel, CompatConfig, CompatResult, Unknown};
@@ -97,7 +101,7 @@ pub fn check_record<R: Read>(
     config: &CompatConfig,
 ) -> Result<(CompatSummary, CompatResult), ReplayError> {
     let file = reader.file().to_string();
-    let rec = read_manoeuvres(reader)?;
+    let rec = read_manoeuvres(reader, None)?;
     let slices: Vec<&[aeroident_estimators::AirDataSample]> =
         rec.manoeuvres.iter().map(Vec::as_slice).collect();
     let result = compat::check(&slices, config)

@@ -44,7 +44,7 @@ fn matrix(v: Vec<f64>, rows: usize, cols: usize) -> PyResult<Array2<f64>> {
 /// [--validate-on V] [--bootstrap N] [--max-iterations N] [--process-noise S]` (documentation:
 /// `aeroident.fit` in python/aeroident/__init__.py).
 #[pyfunction]
-#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None, max_iterations=None, process_noise=None))]
+#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None, max_iterations=None, process_noise=None, compat=None))]
 #[allow(clippy::too_many_arguments)]
 fn fit_file<'py>(
     py: Python<'py>,
@@ -57,7 +57,12 @@ fn fit_file<'py>(
     bootstrap: Option<usize>,
     max_iterations: Option<usize>,
     process_noise: Option<&str>,
+    compat: Option<&str>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let compat = compat
+        .map(|c| aeroident_pipelines::compat::Corrections::from_json(Path::new(c)))
+        .transpose()
+        .map_err(|e| err(format!("fit: {e}")))?;
     if max_iterations == Some(0) {
         return Err(err("fit: max_iterations must be a positive integer, got 0".to_string()));
     }
@@ -86,6 +91,7 @@ fn fit_file<'py>(
             bootstrap_refits: bootstrap,
             max_iterations,
             process_noise,
+            compat,
         };
         let mut outcome = fit_record(reader, &mapping, model, options)?;
         if let Some(v) = &validate_with {

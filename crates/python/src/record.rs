@@ -138,7 +138,7 @@ fn derivative_source(s: &str) -> PyResult<DerivativeSource> {
 /// Replays a record file exactly as `aeroident replay DATA --map MAPPING` (module doc of the
 /// Python package).
 #[pyfunction]
-#[pyo3(signature = (path, mapping, estimator="rls", model=None, forgetting=1.0, derivatives="auto", diff_window=5))]
+#[pyo3(signature = (path, mapping, estimator="rls", model=None, forgetting=1.0, derivatives="auto", diff_window=5, compat=None))]
 #[allow(clippy::too_many_arguments)]
 fn replay_file<'py>(
     py: Python<'py>,
@@ -149,8 +149,10 @@ fn replay_file<'py>(
     forgetting: f64,
     derivatives: &str,
     diff_window: usize,
+    compat: Option<&str>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let kind = estimator_kind(estimator)?;
+    let compat = compat.map(str::to_owned);
     let derivatives = derivative_source(derivatives)?;
     let (path, mapping, model) = (path.to_owned(), mapping.to_owned(), model.map(str::to_owned));
     let run = move || -> anyhow::Result<_> {
@@ -169,6 +171,10 @@ fn replay_file<'py>(
             derivatives,
             diff_window,
             pacing: Pacing::Unpaced,
+            compat: compat
+                .as_deref()
+                .map(|c| aeroident_pipelines::compat::Corrections::from_json(Path::new(c)))
+                .transpose()?,
         };
         let file = std::fs::File::open(&path).with_context(|| format!("opening {path}"))?;
         let reader = FlightDataReader::new(std::io::BufReader::new(file), &path, &mapping)?;

@@ -102,6 +102,12 @@ pub struct ReplayArgs {
     /// HFB-320 fit.
     #[arg(long, value_name = "STATES")]
     pub process_noise: Option<String>,
+    /// Apply a data compatibility check's corrections before estimating: a `compat.json` of
+    /// `aeroident compat`, or `auto` to run the check on this record first. Removes the
+    /// inertial and vane biases and scale factors, undoes the time shifts, and fills a
+    /// missing sideslip with the reconstructed one; the summary's warnings list what.
+    #[arg(long, value_name = "FILE|auto")]
+    pub compat: Option<String>,
 }
 
 /// `--initial-states` of the batch fits (`aeroident_estimators::output_error::InitialStates`).
@@ -145,6 +151,8 @@ impl ReplayObserver for Console {
 pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     let mapping = Mapping::from_path(&args.map)?;
     let model = args.model.as_deref().map(ModelSpec::from_arg).transpose()?;
+    let mavlink = crate::live::is_mavlink(&args.data);
+    let live = args.data == "-" || mavlink;
     let opts = ReplayOptions {
         estimator: args.estimator,
         model,
@@ -152,9 +160,8 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         derivatives: args.derivatives,
         diff_window: args.diff_window,
         pacing: if args.realtime { Pacing::Realtime } else { Pacing::Unpaced },
+        compat: compat_corrections(&args, &mapping, live)?,
     };
-    let mavlink = crate::live::is_mavlink(&args.data);
-    let live = args.data == "-" || mavlink;
     if args.estimator.is_batch() && mavlink {
         anyhow::bail!(
             "--estimator {} is a batch fit of a whole record, not for a live MAVLink feed",
@@ -162,7 +169,7 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         );
     }
     if args.estimator.is_batch() {
-        return execute_batch(&args, &mapping, opts.model);
+        return execute_batch(&args, &mapping, opts.model, opts.compat);
     }
     if args.initial_states.is_some() {
         anyhow::bail!(
@@ -399,11 +406,36 @@ pub fn validation_block(v: &aeroident_pipelines::replay::prediction::ValidationR
     s
 }
 
+/// `--compat FILE|auto`: the corrections to apply, if any (`auto` runs the check on the record,
+/// which a live feed cannot give whole).
+fn compat_corrections(
+    args: &ReplayArgs,
+    mapping: &Mapping,
+    live: bool,
+) -> anyhow::Result<Option<aeroident_pipelines::compat::Corrections>> {
+    use aeroident_pipelines::compat::{Corrections, check_record};
+    let Some(which) = args.compat.as_deref() else { return Ok(None) };
+    if which != "auto" {
+        return Ok(Some(Corrections::from_json(Path::new(which))?));
+    }
+    if live {
+        anyhow::bail!("--compat auto needs the whole record; for a live feed give a compat.json");
+    }
+    let (reader, _) = open_log_with_notes(&args.data, args.format, mapping)?;
+    let config = aeroident_estimators::compat::CompatConfig::default();
+    let (summary, _) = check_record(reader, &config)?;
+    for f in &summary.findings {
+        eprintln!("compat: {f}");
+    }
+    Ok(Some(Corrections::from_summary(&summary)?))
+}
+
 /// `--estimator oe | fem`: the batch output-error (or filter-error) fit of the whole record.
 fn execute_batch(
     args: &ReplayArgs,
     mapping: &Mapping,
     model: Option<ModelSpec>,
+    compat: Option<aeroident_pipelines::compat::Corrections>,
 ) -> anyhow::Result<()> {
     let fem = args.estimator == EstimatorKind::Fem;
     eprintln!(
@@ -425,6 +457,7 @@ fn execute_batch(
             .map(aeroident_pipelines::replay::batch::parse_process_noise_states)
             .transpose()
             .map_err(|e| anyhow::anyhow!("--process-noise: {e}"))?,
+        compat,
     };
     if let Some(n) = options.bootstrap_refits.filter(|_| !fem) {
         eprintln!("bootstrap: a filter-error fit for the noise levels, then {n} replicas refitted");

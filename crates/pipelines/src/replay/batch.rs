@@ -234,18 +234,25 @@ pub(crate) struct Manoeuvres {
     pub(crate) rejected: usize,
 }
 
-/// Reads the whole record, splitting it into manoeuvres at the reader's gap events.
+/// Reads the whole record, splitting it into manoeuvres at the reader's gap events, with a
+/// compatibility check's corrections applied when given.
 ///
 /// # Errors
 /// Fatal data errors; no usable sample.
 pub(crate) fn read_manoeuvres<R: Read>(
     reader: FlightDataReader<R>,
+    compat: Option<&crate::compat::Corrections>,
 ) -> Result<Manoeuvres, ReplayError> {
     let file = reader.file().to_string();
+    let events: Box<dyn Iterator<Item = Result<RecordEvent, aeroident_io::FlightDataError>>> =
+        match compat {
+            Some(c) => Box::new(crate::compat::Corrected::new(reader, c.clone())),
+            None => Box::new(reader),
+        };
     let mut manoeuvres: Vec<Vec<AirDataSample>> = vec![Vec::new()];
     let mut rejections = RejectionLog::default();
     let (mut read, mut rejected) = (0usize, 0usize);
-    for event in reader {
+    for event in events {
         match event? {
             RecordEvent::Sample { sample, .. } => {
                 read += 1;
@@ -597,7 +604,7 @@ pub fn parse_process_noise_states(list: &str) -> Result<[bool; N_STATES], String
 
 /// What a batch fit of a record fits and how (`replay --estimator oe|fem
 /// [--initial-states …] [--bootstrap N]`).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct FitOptions {
     /// The filter-error method (`fem`) instead of output error (`oe`).
     pub fem: bool,
@@ -613,6 +620,9 @@ pub struct FitOptions {
     /// `fem` only: the states with process noise (full-state mask,
     /// [`parse_process_noise_states`]); `None`: [`FemConfig::new`]'s (`V`, `α`, `β`).
     pub process_noise: Option<[bool; N_STATES]>,
+    /// A compatibility check's corrections, applied to every sample before the fit
+    /// ([`crate::compat::Corrected`]); the summary's warnings list them.
+    pub compat: Option<crate::compat::Corrections>,
 }
 
 impl Default for FitOptions {
@@ -624,6 +634,7 @@ impl Default for FitOptions {
             bootstrap_refits: None,
             max_iterations: None,
             process_noise: None,
+            compat: None,
         }
     }
 }
@@ -657,13 +668,13 @@ pub fn fit_record<R: Read>(
         });
     }
     let file = reader.file().to_string();
-    let rec = read_manoeuvres(reader)?;
+    let rec = read_manoeuvres(reader, options.compat.as_ref())?;
     let model = match model {
         Some(m) => m,
         None => default_model(&rec.manoeuvres[0][0], mapping)?,
     };
     let slices: Vec<&[AirDataSample]> = rec.manoeuvres.iter().map(Vec::as_slice).collect();
-    let fitted = fit_slices(&slices, model.structure, options)?;
+    let fitted = fit_slices(&slices, model.structure, &options)?;
     let sigmas = sigma_stage(&slices, &fitted, options.bootstrap_refits)?;
     let st = model.structure;
     let result = &fitted.result;
@@ -695,6 +706,9 @@ pub fn fit_record<R: Read>(
     summary.rejections = rejections;
     summary.warnings.extend(unlisted);
     summary.warnings.extend(simulation_note);
+    if let Some(c) = &options.compat {
+        summary.warnings.extend(c.applied.iter().map(|a| format!("compat applied: {a}")));
+    }
     Ok(BatchOutcome { model, result: fitted.result, summary, traces })
 }
 
@@ -713,7 +727,7 @@ struct FittedRecord {
 fn fit_slices(
     slices: &[&[AirDataSample]],
     structure: ModelStructure,
-    options: FitOptions,
+    options: &FitOptions,
 ) -> Result<FittedRecord, ReplayError> {
     if options.fem {
         let mut config = FemConfig::new(structure);
@@ -1002,7 +1016,7 @@ pub fn validate_on<R: Read>(
     fitted: &BatchOutcome,
 ) -> Result<ValidationReport, ReplayError> {
     let file = reader.file().to_string();
-    let rec = read_manoeuvres(reader)?;
+    let rec = read_manoeuvres(reader, None)?;
     let slices: Vec<&[AirDataSample]> = rec.manoeuvres.iter().map(Vec::as_slice).collect();
     let r = &fitted.result;
     let np = r.n_params;

@@ -50,7 +50,7 @@ use crate::estimators::{BuildError, EstimatorKind, EstimatorOptions, build};
 use aeroident_estimators::{AirDataSample, Coefficient, Estimator, ModelStructure, Status, Term};
 use aeroident_io::mapping::{Channel, Mapping};
 use aeroident_io::replay_output::ReplaySummary;
-use aeroident_io::{FlightDataError, FlightDataReader, ModelSpec};
+use aeroident_io::{FlightDataError, FlightDataReader, ModelSpec, RecordEvent};
 use prediction::{Frozen, Recorder, ValidationReport, validate_coefficients};
 use std::io::{Read, Write};
 use std::time::{Duration, Instant};
@@ -88,6 +88,9 @@ pub struct ReplayOptions {
     pub diff_window: usize,
     /// Pacing.
     pub pacing: Pacing,
+    /// A compatibility check's corrections, applied to every sample before the conditioning
+    /// stage ([`crate::compat::Corrected`]); the summary's warnings list them.
+    pub compat: Option<crate::compat::Corrections>,
 }
 
 /// What a face sees of a replay while it runs: the model once chosen, each identified sample's
@@ -217,6 +220,7 @@ impl Default for ReplayOptions {
             derivatives: DerivativeSource::Auto,
             diff_window: 5,
             pacing: Pacing::Unpaced,
+            compat: None,
         }
     }
 }
@@ -609,13 +613,22 @@ pub fn replay_with<R: Read>(
 ) -> Result<ReplayOutcome, ReplayError> {
     check_diff_window(opts.diff_window)?;
     let mut run = online::Replay::new(reader.file().to_string(), mapping, opts, observer);
-    for item in reader {
+    let events: Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>>> = match &opts.compat
+    {
+        Some(c) => Box::new(crate::compat::Corrected::new(reader, c.clone())),
+        None => Box::new(reader),
+    };
+    for item in events {
         run.event(item?, &make)?;
         if run.diverged() {
             break;
         }
     }
-    run.finish()
+    let mut out = run.finish()?;
+    if let Some(c) = &opts.compat {
+        out.summary.warnings.extend(c.applied.iter().map(|a| format!("compat applied: {a}")));
+    }
+    Ok(out)
 }
 
 /// The differentiator window must be odd, ≥ 3 and ≤ [`MAX_DIFF_WINDOW`].

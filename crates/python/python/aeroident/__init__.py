@@ -134,6 +134,7 @@ def replay(
     diff_window: int = 5,
     constants: Optional[Mapping[str, float]] = None,
     sample_interval_s: Optional[float] = None,
+    compat: Optional[PathLike] = None,
 ) -> dict[str, Any]:
     """Replays a whole record through an estimator, every sample in Rust (no Python loop).
 
@@ -142,6 +143,8 @@ def replay(
     estimator) or a dict of arrays as :func:`read` returns (then the samples go straight to the
     estimator: nothing is differentiated; ``constants=`` fills constants the arrays lack).
     ``model=None``: the richest preset the first sample supports, as the CLI chooses.
+    ``compat``: a record file's ``compat.json`` (``aeroident compat``) whose corrections are
+    applied to every sample first (``--compat FILE``).
 
     Returns a dict:
 
@@ -168,6 +171,7 @@ def replay(
             forgetting,
             derivatives,
             diff_window,
+            None if compat is None else os.fspath(compat),
         )
     keys = set(_core.sample_keys())
     arrays = {k: np.ascontiguousarray(v, dtype=np.float64) for k, v in data.items() if k in keys}
@@ -187,6 +191,7 @@ def fit(
     bootstrap: Optional[int] = None,
     max_iterations: Optional[int] = None,
     process_noise: Optional[str] = None,
+    compat: Optional[PathLike] = None,
 ) -> dict[str, Any]:
     """Fits a whole record by batch output error (``"oe"``) or the filter-error method
     (``"fem"``: output error with process noise on the air-data states, for turbulent records).
@@ -208,6 +213,8 @@ def fit(
     ``max_iterations``: most Gauss–Newton iterations (``--max-iterations``; default 50 for
     ``oe``, 250 for ``fem``). ``process_noise`` (``fem``): the states with process noise,
     comma-separated (``"V,alpha,theta,q"``; ``--process-noise``; default ``V,alpha,beta``).
+    ``compat``: a ``compat.json`` (``aeroident compat``) whose corrections are applied to every
+    sample before the fit (``--compat FILE``).
 
     A fit that does not meet both convergence criteria is returned all the same:
     ``summary["status"]`` is ``"converged"``, ``"converged_in_cost"`` (the cost stopped
@@ -241,6 +248,7 @@ def fit(
         bootstrap,
         max_iterations,
         process_noise,
+        None if compat is None else os.fspath(compat),
     )
 
 

@@ -1,0 +1,345 @@
+//! Applying a compatibility check's corrections to a record as it streams (`replay --compat`):
+//! each channel's bias and scale factor removed, `(x − bias) / scale`, each time shift undone
+//! (a channel that lags the kinematics by `τ` is read `τ` later, linearly interpolated), and
+//! the reconstructed sideslip put where the record has none. Causal: a sample leaves the stage
+//! once the record has reached its time plus the largest lag, so the stage delays the stream by
+//! that much and keeps every time stamp.
+//!
+//! Not applied: the airspeed bias (in still air it is the wind along the flight path, and the
+//! aerodynamics need the airspeed, not the inertial speed).
+
+use super::ChannelSummary;
+use crate::replay::ReplayError;
+use aeroident_estimators::AirDataSample;
+use aeroident_estimators::compat::Channel;
+use aeroident_io::{FlightDataError, RecordEvent};
+use serde::Deserialize;
+use std::collections::VecDeque;
+use std::path::Path;
+
+/// The corrections of a compatibility check (from its `compat.json`, or its summary).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Corrections {
+    /// `(channel, bias, scale)`: the stage replaces `x` by `(x − bias) / scale`.
+    affine: Vec<(Channel, f64, f64)>,
+    /// `(channel, τ)`: the stage reads the channel `τ` later.
+    shifts: Vec<(Channel, f64)>,
+    /// Per manoeuvre, the reconstructed sideslip `(t_s, β)`, for records without one.
+    beta: Vec<(Vec<f64>, Vec<f64>)>,
+    /// What the stage applies, in words (for the summary).
+    pub applied: Vec<String>,
+}
+
+#[derive(Deserialize)]
+struct CompatFile {
+    channels: Vec<ChannelEntry>,
+    #[serde(default)]
+    reconstructed: Vec<ReconstructedEntry>,
+}
+
+#[derive(Deserialize)]
+struct ChannelEntry {
+    name: String,
+    bias: Option<f64>,
+    scale: Option<f64>,
+    time_shift_s: Option<f64>,
+}
+
+#[derive(Deserialize)]
+struct ReconstructedEntry {
+    t_s: Vec<f64>,
+    beta_rad: Vec<f64>,
+}
+
+/// One channel's row: `(channel, bias, scale, time shift)`.
+type Entry = (Channel, Option<f64>, Option<f64>, Option<f64>);
+
+impl Corrections {
+    /// The corrections of a `compat.json` file.
+    ///
+    /// # Errors
+    /// [`ReplayError::Option`] naming the file: unreadable, not a compat.json, an unknown
+    /// channel, a scale that is not positive, or a non-finite number.
+    pub fn from_json(path: &Path) -> Result<Self, ReplayError> {
+        let bad = |reason: String| ReplayError::Option {
+            option: "compat",
+            reason: format!("{}: {reason}", path.display()),
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| bad(e.to_string()))?;
+        let file: CompatFile = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+        let mut entries = Vec::new();
+        for c in &file.channels {
+            let ch = Channel::from_name(&c.name)
+                .ok_or_else(|| bad(format!("unknown channel `{}`", c.name)))?;
+            entries.push((ch, c.bias, c.scale, c.time_shift_s));
+        }
+        let beta = file.reconstructed.into_iter().map(|r| (r.t_s, r.beta_rad)).collect();
+        Self::new(entries, beta).map_err(bad)
+    }
+
+    /// The corrections of a check's summary (`--compat auto`).
+    ///
+    /// # Errors
+    /// As [`Corrections::from_json`].
+    pub fn from_summary(s: &super::CompatSummary) -> Result<Self, ReplayError> {
+        let bad = |reason: String| ReplayError::Option { option: "compat", reason };
+        let entries: Option<Vec<Entry>> = s.channels.iter().map(entry).collect();
+        let beta = s.reconstructed.iter().map(|r| (r.t_s.clone(), r.beta_rad.clone())).collect();
+        Self::new(entries.ok_or_else(|| bad("an unknown channel".into()))?, beta).map_err(bad)
+    }
+
+    fn new(entries: Vec<Entry>, beta: Vec<(Vec<f64>, Vec<f64>)>) -> Result<Self, String> {
+        let mut c = Corrections { beta, ..Self::default() };
+        for (ch, bias, scale, shift) in entries {
+            let (b, k) = (bias.unwrap_or(0.0), scale.unwrap_or(1.0));
+            if !(b.is_finite() && k.is_finite() && k > 0.0 && shift.is_none_or(f64::is_finite)) {
+                return Err(format!(
+                    "{}: bias, scale and time shift must be finite, the scale > 0",
+                    ch.name()
+                ));
+            }
+            if ch != Channel::Vt && (b != 0.0 || k != 1.0) {
+                c.affine.push((ch, b, k));
+                c.applied.push(format!(
+                    "{}: bias {b:+.4e} {} removed, scale {k:.4} divided out",
+                    ch.name(),
+                    ch.unit()
+                ));
+            }
+            if let Some(t) = shift.filter(|t| *t != 0.0) {
+                c.shifts.push((ch, t));
+                c.applied.push(format!("{}: read {t:+.3} s later (its time shift)", ch.name()));
+            }
+        }
+        if c.beta.iter().any(|(t, _)| !t.is_empty()) {
+            c.applied.push("beta_rad: the reconstructed sideslip where the record has none".into());
+        }
+        Ok(c)
+    }
+
+    /// The largest lag the stage undoes (its delay), s.
+    fn lead_s(&self) -> f64 {
+        self.shifts.iter().map(|s| s.1).fold(0.0, f64::max)
+    }
+
+    /// The largest lead it undoes (the history it keeps), s.
+    fn history_s(&self) -> f64 {
+        self.shifts.iter().map(|s| -s.1).fold(0.0, f64::max)
+    }
+
+    /// The reconstructed sideslip at `t_s`, if a manoeuvre of the check spans it.
+    fn beta_at(&self, t_s: f64) -> Option<f64> {
+        let (t, b) = self.beta.iter().find(|(t, b)| {
+            t.len() == b.len()
+                && t.first().is_some_and(|&a| a <= t_s)
+                && t.last().is_some_and(|&z| t_s <= z)
+        })?;
+        Some(interpolate(t, b, t_s))
+    }
+}
+
+/// `(channel, bias, scale, time shift)` of a summary row.
+fn entry(c: &ChannelSummary) -> Option<Entry> {
+    Some((Channel::from_name(c.name)?, c.bias, c.scale, c.time_shift_s))
+}
+
+/// `y` (one per `t`) at `at`, linearly interpolated, held at the ends.
+fn interpolate(t: &[f64], y: &[f64], at: f64) -> f64 {
+    let k = t.partition_point(|&ti| ti <= at);
+    match k {
+        0 => y[0],
+        k if k >= t.len() => y[t.len() - 1],
+        k => y[k - 1] + (at - t[k - 1]) / (t[k] - t[k - 1]) * (y[k] - y[k - 1]),
+    }
+}
+
+/// The record's events with [`Corrections`] applied to every sample (module doc).
+pub struct Corrected<I> {
+    inner: I,
+    corr: Corrections,
+    /// The current manoeuvre's raw samples: history, then those not yet emitted.
+    window: VecDeque<(u64, AirDataSample)>,
+    /// Index in `window` of the next sample to emit.
+    next: usize,
+    out: VecDeque<Result<RecordEvent, FlightDataError>>,
+    done: bool,
+}
+
+impl<I> Corrected<I> {
+    /// The stage over the events `inner`.
+    pub fn new(inner: I, corr: Corrections) -> Self {
+        Self { inner, corr, window: VecDeque::new(), next: 0, out: VecDeque::new(), done: false }
+    }
+
+    /// Emits every sample the record has gone far enough past (all of them with `flush`), and
+    /// drops the history no later sample needs.
+    fn emit(&mut self, flush: bool) {
+        let newest = self.window.back().map_or(f64::NEG_INFINITY, |s| s.1.t_s);
+        while self.next < self.window.len()
+            && (flush || self.window[self.next].1.t_s + self.corr.lead_s() <= newest)
+        {
+            let (row, sample) = (self.window[self.next].0, self.corrected(self.next));
+            self.out.push_back(Ok(RecordEvent::Sample { row, sample }));
+            self.next += 1;
+        }
+        let first_needed =
+            self.window.get(self.next).map_or(newest, |s| s.1.t_s) - self.corr.history_s();
+        while self.next > 1 && self.window[1].1.t_s <= first_needed {
+            self.window.pop_front();
+            self.next -= 1;
+        }
+    }
+
+    /// Sample `k` of the window, corrected.
+    fn corrected(&self, k: usize) -> AirDataSample {
+        let mut s = self.window[k].1;
+        if !self.corr.shifts.is_empty() {
+            let t: Vec<f64> = self.window.iter().map(|w| w.1.t_s).collect();
+            for &(ch, tau) in &self.corr.shifts {
+                let y: Option<Vec<f64>> = self.window.iter().map(|w| ch.of(&w.1)).collect();
+                if let Some(y) = y {
+                    let v = interpolate(&t, &y, s.t_s + tau);
+                    ch.set(&mut s, v);
+                }
+            }
+        }
+        for &(ch, b, k) in &self.corr.affine {
+            if let Some(x) = ch.of(&s) {
+                ch.set(&mut s, (x - b) / k);
+            }
+        }
+        if s.beta_rad.is_none()
+            && let Some(b) = self.corr.beta_at(s.t_s)
+        {
+            s.beta_rad = Some(b);
+        }
+        s
+    }
+}
+
+impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Iterator for Corrected<I> {
+    type Item = Result<RecordEvent, FlightDataError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        loop {
+            if let Some(e) = self.out.pop_front() {
+                return Some(e);
+            }
+            if self.done {
+                return None;
+            }
+            match self.inner.next() {
+                None => {
+                    self.emit(true);
+                    self.done = true;
+                }
+                Some(Ok(RecordEvent::Sample { row, sample })) => {
+                    self.window.push_back((row, sample));
+                    self.emit(false);
+                }
+                Some(Ok(gap @ RecordEvent::Gap { .. })) => {
+                    // The manoeuvre ends: its last samples leave (held at its end), then the gap.
+                    self.emit(true);
+                    self.window.clear();
+                    self.next = 0;
+                    self.out.push_back(Ok(gap));
+                }
+                Some(other) => self.out.push_back(other),
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample(t: f64) -> AirDataSample {
+        AirDataSample {
+            t_s: t,
+            vt_mps: 50.0,
+            // α lags a sine by 0.2 s and carries a bias of 0.01 rad and a scale of 1.05.
+            alpha_rad: 1.05 * (0.5 * (t - 0.2)).sin() * 0.1 + 0.01,
+            q_rad_s: Some(0.003 + (0.5 * t).cos()),
+            ..Default::default()
+        }
+    }
+
+    fn events(ts: &[f64], first_row: u64) -> Vec<Result<RecordEvent, FlightDataError>> {
+        ts.iter()
+            .enumerate()
+            .map(|(i, &t)| Ok(RecordEvent::Sample { row: first_row + i as u64, sample: sample(t) }))
+            .collect()
+    }
+
+    /// The lag, bias and scale of α and the bias of q are undone (α within the linear
+    /// interpolation's error of the 0.1 s grid, 1e-4 rad, except the last 0.2 s, held), every
+    /// sample leaves once with its time stamp and row, and a gap flushes the manoeuvre.
+    #[test]
+    fn lags_biases_and_scales_are_undone_sample_by_sample() {
+        let corr = Corrections::new(
+            vec![
+                (Channel::Alpha, Some(0.01), Some(1.05), Some(0.2)),
+                (Channel::Q, Some(0.003), None, None),
+            ],
+            Vec::new(),
+        )
+        .unwrap();
+        assert_eq!(corr.applied.len(), 3, "{:?}", corr.applied);
+        let ts: Vec<f64> = (0..100).map(|k| k as f64 * 0.1).collect();
+        let mut input = events(&ts[..50], 0);
+        input.push(Ok(RecordEvent::Gap { row: 50, dt_s: 1.0, nominal_dt_s: 0.1 }));
+        input.extend(events(&ts[50..], 50));
+        let out: Vec<RecordEvent> =
+            Corrected::new(input.into_iter(), corr).map(Result::unwrap).collect();
+        assert_eq!(out.len(), 101);
+        assert!(matches!(out[50], RecordEvent::Gap { row: 50, .. }));
+        let samples: Vec<(u64, AirDataSample)> = out
+            .into_iter()
+            .filter_map(|e| match e {
+                RecordEvent::Sample { row, sample } => Some((row, sample)),
+                _ => None,
+            })
+            .collect();
+        for (k, (row, s)) in samples.iter().enumerate() {
+            assert_eq!(*row, k as u64);
+            assert_eq!(s.t_s, ts[k]);
+            assert!((s.q_rad_s.unwrap() - (0.5 * s.t_s).cos()).abs() < 1e-12);
+            let last_of_manoeuvre = if k < 50 { ts[49] } else { ts[99] };
+            if s.t_s + 0.2 <= last_of_manoeuvre + 1e-9 {
+                let want = (0.5 * s.t_s).sin() * 0.1;
+                assert!(
+                    (s.alpha_rad - want).abs() < 1e-4,
+                    "t {}: {} vs {want}",
+                    s.t_s,
+                    s.alpha_rad
+                );
+            }
+        }
+    }
+
+    /// A record without a sideslip channel gets the reconstructed one (interpolated in time),
+    /// a record with one keeps its own; a scale of 0 is refused with the channel named.
+    #[test]
+    fn the_reconstructed_sideslip_fills_only_a_missing_channel() {
+        let beta = vec![(vec![0.0, 1.0], vec![0.0, 0.02])];
+        let corr = Corrections::new(Vec::new(), beta).unwrap();
+        let mut with = sample(0.5);
+        with.beta_rad = Some(0.3);
+        let input = vec![
+            Ok(RecordEvent::Sample { row: 0, sample: sample(0.5) }),
+            Ok(RecordEvent::Sample { row: 1, sample: with }),
+        ];
+        let out: Vec<AirDataSample> = Corrected::new(input.into_iter(), corr)
+            .filter_map(|e| match e.unwrap() {
+                RecordEvent::Sample { sample, .. } => Some(sample),
+                _ => None,
+            })
+            .collect();
+        assert!((out[0].beta_rad.unwrap() - 0.01).abs() < 1e-15);
+        assert_eq!(out[1].beta_rad, Some(0.3));
+        let e = Corrections::new(vec![(Channel::Ax, Some(0.1), Some(0.0), None)], Vec::new())
+            .unwrap_err();
+        assert!(e.contains("ax_mps2"), "{e}");
+    }
+}

@@ -528,9 +528,9 @@ fn wrap(d: f64) -> f64 {
     if r <= -PI { r + TAU } else { r }
 }
 
-/// Value of series `y` (one per sample at `t`) at time `at`, linearly interpolated, held at
-/// the ends.
-fn interpolate(t: &[f64], y: &[f64], at: f64) -> f64 {
+/// Value of series `y` (one per sample at the increasing times `t`, s) at time `at`, linearly
+/// interpolated, held at the ends. `t` and `y` must be of one, non-zero length.
+pub fn interpolate(t: &[f64], y: &[f64], at: f64) -> f64 {
     let k = t.partition_point(|&ti| ti <= at);
     if k == 0 {
         return y[0];

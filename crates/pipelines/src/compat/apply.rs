@@ -11,7 +11,7 @@
 use super::ChannelSummary;
 use crate::replay::ReplayError;
 use aeroident_estimators::AirDataSample;
-use aeroident_estimators::compat::Channel;
+use aeroident_estimators::compat::{Channel, interpolate};
 use aeroident_io::{FlightDataError, RecordEvent};
 use serde::Deserialize;
 use std::collections::VecDeque;
@@ -141,16 +141,6 @@ impl Corrections {
 /// `(channel, bias, scale, time shift)` of a summary row.
 fn entry(c: &ChannelSummary) -> Option<Entry> {
     Some((Channel::from_name(c.name)?, c.bias, c.scale, c.time_shift_s))
-}
-
-/// `y` (one per `t`) at `at`, linearly interpolated, held at the ends.
-fn interpolate(t: &[f64], y: &[f64], at: f64) -> f64 {
-    let k = t.partition_point(|&ti| ti <= at);
-    match k {
-        0 => y[0],
-        k if k >= t.len() => y[t.len() - 1],
-        k => y[k - 1] + (at - t[k - 1]) / (t[k] - t[k - 1]) * (y[k] - y[k - 1]),
-    }
 }
 
 /// The record's events with [`Corrections`] applied to every sample (module doc).

@@ -38,7 +38,9 @@
 //! [`CompatConfig::step_tolerance_sigma`] σ (or, when no damped step lowers the cost, the
 //! Gauss–Newton step is below 0.01 σ, the precision of the central differences); a fit
 //! stopped earlier reports its last iterate
-//! ([`Termination`]). σ is the Cramér–Rao bound `sqrt(diag M⁻¹)`.
+//! ([`Termination`]). σ is the Cramér–Rao bound `sqrt(diag M⁻¹)` and, where formed, the
+//! coloured-residual σ of output error's spectral sandwich (`crate::coloured::batch`), which
+//! the residuals of a real record (turbulence, model error, sample-and-hold) call for.
 //!
 //! Without a `β` channel, `β` is reconstructed from the integrated `v`. The initial `v` and the
 //! `ay` bias are still estimated when the record rolls (`v` enters `ẇ` through `p v`, so `α`
@@ -245,6 +247,9 @@ pub struct CompatResult {
     pub values: Vec<f64>,
     /// Cramér–Rao σ.
     pub sigma: Vec<f64>,
+    /// The coloured-residual σ (output error's spectral sandwich, `crate::coloured::batch`),
+    /// where formed: the honest σ on a real record, whose residuals are coloured.
+    pub sigma_coloured: Option<Vec<f64>>,
     /// The fitted outputs.
     pub outputs: Vec<Channel>,
     /// Residual RMS per output (its unit).
@@ -262,10 +267,16 @@ pub struct CompatResult {
 }
 
 impl CompatResult {
-    /// Estimate and σ of `u`, if it was estimated.
+    /// Estimate and Cramér–Rao σ of `u`, if it was estimated.
     pub fn get(&self, u: Unknown) -> Option<(f64, f64)> {
         let i = self.unknowns.iter().position(|&v| v == u)?;
         Some((self.values[i], self.sigma[i]))
+    }
+
+    /// The reported σ of every unknown: the coloured-residual σ where formed, else the
+    /// Cramér–Rao σ.
+    pub fn reported_sigma(&self) -> &[f64] {
+        self.sigma_coloured.as_deref().unwrap_or(&self.sigma)
     }
 }
 
@@ -714,6 +725,18 @@ fn normal_equations(
     e: &[f64],
     r: &[f64],
 ) -> Result<(DMatrix<f64>, DVector<f64>), EstimatorError> {
+    let s = sensitivities(p, beta)?;
+    let (nb, ny) = (beta.len(), p.ny());
+    let n = p.n_samples();
+    let w = DVector::from_fn(n * ny, |row, _| 1.0 / r[row % ny]);
+    let sw = DMatrix::from_fn(n * ny, nb, |row, i| s[(row, i)] * w[row]);
+    let m = sw.transpose() * &s;
+    let g = sw.transpose() * DVector::from_column_slice(e);
+    Ok((m, g))
+}
+
+/// `S = ∂y/∂β` at `beta` by central differences, `N·ny × nβ`.
+fn sensitivities(p: &Problem<'_>, beta: &[f64]) -> Result<DMatrix<f64>, EstimatorError> {
     let (nb, ny) = (beta.len(), p.ny());
     let n = p.n_samples();
     let mut s = DMatrix::zeros(n * ny, nb);
@@ -730,11 +753,7 @@ fn normal_equations(
             s[(row, i)] = (yp[row] - ym[row]) / (2.0 * d);
         }
     }
-    let w = DVector::from_fn(n * ny, |row, _| 1.0 / r[row % ny]);
-    let sw = DMatrix::from_fn(n * ny, nb, |row, i| s[(row, i)] * w[row]);
-    let m = sw.transpose() * &s;
-    let g = sw.transpose() * DVector::from_column_slice(e);
-    Ok((m, g))
+    Ok(s)
 }
 
 /// `(M + λ diag M)⁻¹ g`, Jacobi-scaled (Cholesky); `None` when not positive definite.
@@ -841,12 +860,23 @@ impl Problem<'_> {
         let (mut y, mut e) = (Vec::new(), Vec::new());
         self.simulate(&beta, &mut y)?;
         let r = self.residuals(&y, &mut e);
-        let (m, _) = normal_equations(self, &beta, &e, &r)?;
+        let s = sensitivities(self, &beta)?;
+        let w: Vec<f64> = r.iter().map(|v| 1.0 / v).collect();
+        let sw = DMatrix::from_fn(s.nrows(), s.ncols(), |row, i| s[(row, i)] * w[row % w.len()]);
+        let m = sw.transpose() * &s;
         let n = m.nrows();
         let inv = m.clone().cholesky().map(|c| c.inverse()).ok_or(EstimatorError::Numerical {
             what: "compatibility check: information matrix singular at the estimate",
             t_s: self.man[0][0].t_s,
         })?;
+        // The residuals of a real record are coloured (turbulence, model error, sample-and-hold):
+        // the spectral sandwich of output error (crate::coloured::batch, "Spectral form").
+        let s_rows: Vec<f64> =
+            (0..s.nrows()).flat_map(|row| s.row(row).iter().copied().collect::<Vec<_>>()).collect();
+        let lengths: Vec<usize> = self.man.iter().map(|m| m.len()).collect();
+        let sigma_coloured = crate::coloured::batch::spectral(&s_rows, &e, &w, &lengths, &inv)
+            .covariance
+            .map(|c| (0..n).map(|i| c[(i, i)].max(0.0).sqrt()).collect());
         let ny = self.ny();
         let ns = self.n_samples() as f64;
         let residual_mean =
@@ -857,6 +887,7 @@ impl Problem<'_> {
         Ok(CompatResult {
             unknowns: self.unknowns.clone(),
             sigma: (0..n).map(|i| inv[(i, i)].max(0.0).sqrt()).collect(),
+            sigma_coloured,
             values: beta,
             outputs: self.outputs.clone(),
             residual_rms: r.iter().map(|v| v.sqrt()).collect(),

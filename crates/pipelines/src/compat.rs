@@ -3,12 +3,13 @@
 //! factor, time shift with σ), the reconstructed air data, the residuals and findings in plain
 //! words.
 //!
-//! `compat.json` keys: `file, status, status_reason, iterations, samples_read,
+//! `compat.json` keys: `file, sigma, status, status_reason, iterations, samples_read,
 //! samples_rejected, manoeuvres, channels[{name, unit, bias, bias_sigma, scale, scale_sigma,
 //! time_shift_s, time_shift_sigma_s}], residual_rms{output: value}, findings[], warnings[],
 //! reconstructed[{manoeuvre, t_s[], vt_mps[], alpha_rad[], beta_rad[]}]`. `scale` is the
 //! factor the channel reads the truth with (`1 + k`); a number the check did not estimate is
-//! `null`.
+//! `null`. The `*_sigma` keys are the coloured-residual σ where it was formed (`sigma =
+//! "coloured"`), else the Cramér–Rao σ (`"cramer_rao"`); findings are judged against them.
 
 mod apply;
 
@@ -65,6 +66,8 @@ pub struct ReconstructedSummary {
 pub struct CompatSummary {
     /// The record.
     pub file: String,
+    /// Which σ the `*_sigma` keys are: `coloured` (the coloured-residual σ) or `cramer_rao`.
+    pub sigma: &'static str,
     /// `converged`, `converged_in_cost` or `not_converged` (the last iterate).
     pub status: &'static str,
     /// How a fit that is not `converged` ended.
@@ -112,6 +115,7 @@ pub fn check_record<R: Read>(
     let dt = median_interval(&rec.manoeuvres);
     let summary = CompatSummary {
         file,
+        sigma: if result.sigma_coloured.is_some() { "coloured" } else { "cramer_rao" },
         status: result.termination.status(),
         status_reason: (result.termination != Termination::Converged)
             .then(|| result.termination.describe()),
@@ -153,15 +157,21 @@ fn median_interval(manoeuvres: &[Vec<aeroident_estimators::AirDataSample>]) -> f
     d.get(d.len() / 2).copied().unwrap_or(0.0)
 }
 
+/// Estimate and reported σ ([`CompatResult::reported_sigma`]) of `u`, if estimated.
+fn reported(r: &CompatResult, u: Unknown) -> Option<(f64, f64)> {
+    let i = r.unknowns.iter().position(|&v| v == u)?;
+    Some((r.values[i], r.reported_sigma()[i]))
+}
+
 /// Every channel with at least one estimated correction, inertial first.
 fn channels(r: &CompatResult) -> Vec<ChannelSummary> {
     Channel::INERTIAL
         .into_iter()
         .chain(Channel::OUTPUTS)
         .filter_map(|c| {
-            let bias = r.get(Unknown::Bias(c));
-            let scale = r.get(Unknown::Scale(c));
-            let shift = r.get(Unknown::TimeShift(c));
+            let bias = reported(r, Unknown::Bias(c));
+            let scale = reported(r, Unknown::Scale(c));
+            let shift = reported(r, Unknown::TimeShift(c));
             (bias.is_some() || scale.is_some() || shift.is_some()).then(|| ChannelSummary {
                 name: c.name(),
                 unit: c.unit(),
@@ -185,12 +195,12 @@ const SIGNIFICANT_SIGMAS: f64 = 3.0;
 fn findings(r: &CompatResult, dt_s: f64) -> Vec<String> {
     let mut out = Vec::new();
     let significant = |v: f64, s: f64| v.abs() > SIGNIFICANT_SIGMAS * s;
-    if let Some((b, s)) = r.get(Unknown::Bias(Channel::Az))
+    if let Some((b, s)) = reported(r, Unknown::Bias(Channel::Az))
         && (b - G0_MPS2).abs() < 0.1 * G0_MPS2
     {
         out.push(format!("az_mps2 looks like load factor − 1 g, not the specific force (bias {b:+.2} ± {s:.2} m/s² ≈ +g): map it as (n_z·g) with the sign of a specific force (≈ −g level)"));
     }
-    for (u, (&v, &s)) in r.unknowns.iter().zip(r.values.iter().zip(&r.sigma)) {
+    for (u, (&v, &s)) in r.unknowns.iter().zip(r.values.iter().zip(r.reported_sigma())) {
         match *u {
             Unknown::TimeShift(c) if significant(v, s) && v.abs() >= 0.5 * dt_s => out.push(format!(
                 "{} {} the kinematics by {:.3} ± {:.3} s",
@@ -226,6 +236,7 @@ mod tests {
             unknowns,
             values,
             sigma,
+            sigma_coloured: None,
             outputs: Vec::new(),
             residual_rms: Vec::new(),
             residual_mean: Vec::new(),

@@ -14,7 +14,7 @@
 //! (derivatives the stage will supply count as present). A `V/V0` term without a mapped `v0`
 //! uses the first sample's V as V0.
 //!
-//! **Gaps.** At a [`RecordEvent::Gap`](aeroident_io::RecordEvent::Gap) the differentiator restarts and the estimator is told
+//! **Gaps.** At a [`RecordEvent::Gap`] the differentiator restarts and the estimator is told
 //! that a new manoeuvre starts ([`Estimator::new_manoeuvre`]: model states re-initialised,
 //! parameters kept); nothing is bridged.
 //!

@@ -50,7 +50,7 @@
 //! channel varies enough to determine it (its Cramér–Rao σ alone below 0.05 s at the start).
 
 use crate::EstimatorError;
-use crate::flight_model::G0_MPS2;
+use crate::flight_model::{G0_MPS2, Output};
 use crate::output_error::{NotConverged, Termination};
 use crate::sample::AirDataSample;
 use aeroident_physics::rigid_body::{self as rb, SinCos};
@@ -93,22 +93,28 @@ impl Channel {
     pub const OUTPUTS: [Channel; 6] =
         [Channel::Vt, Channel::Alpha, Channel::Beta, Channel::Phi, Channel::Theta, Channel::Psi];
 
-    /// The sample field's name (`ax_mps2`, `alpha_rad` …).
+    /// The flight model's output this channel is (every one but the heading, which the flight
+    /// model does not carry): its name, reading and writing are [`Output`]'s.
+    pub fn output(self) -> Option<Output> {
+        Some(match self {
+            Channel::Ax => Output::Ax,
+            Channel::Ay => Output::Ay,
+            Channel::Az => Output::Az,
+            Channel::P => Output::P,
+            Channel::Q => Output::Q,
+            Channel::R => Output::R,
+            Channel::Vt => Output::Vt,
+            Channel::Alpha => Output::Alpha,
+            Channel::Beta => Output::Beta,
+            Channel::Phi => Output::Phi,
+            Channel::Theta => Output::Theta,
+            Channel::Psi => return None,
+        })
+    }
+
+    /// The sample field's name (`ax_mps2`, `alpha_rad` …; [`Output::name`]).
     pub fn name(self) -> &'static str {
-        match self {
-            Channel::Ax => "ax_mps2",
-            Channel::Ay => "ay_mps2",
-            Channel::Az => "az_mps2",
-            Channel::P => "p_rad_s",
-            Channel::Q => "q_rad_s",
-            Channel::R => "r_rad_s",
-            Channel::Vt => "vt_mps",
-            Channel::Alpha => "alpha_rad",
-            Channel::Beta => "beta_rad",
-            Channel::Phi => "phi_rad",
-            Channel::Theta => "theta_rad",
-            Channel::Psi => "psi_rad",
-        }
+        self.output().map_or("psi_rad", Output::name)
     }
 
     /// The channel's unit (`m/s^2`, `rad/s`, `m/s`, `rad`).
@@ -121,21 +127,11 @@ impl Channel {
         }
     }
 
-    /// Sets the channel's value in sample `s` to `v`.
+    /// Sets the channel's value in sample `s` to `v` ([`Output::set_measured`]).
     pub fn set(self, s: &mut AirDataSample, v: f64) {
-        match self {
-            Channel::Ax => s.ax_mps2 = Some(v),
-            Channel::Ay => s.ay_mps2 = Some(v),
-            Channel::Az => s.az_mps2 = Some(v),
-            Channel::P => s.p_rad_s = Some(v),
-            Channel::Q => s.q_rad_s = Some(v),
-            Channel::R => s.r_rad_s = Some(v),
-            Channel::Vt => s.vt_mps = v,
-            Channel::Alpha => s.alpha_rad = v,
-            Channel::Beta => s.beta_rad = Some(v),
-            Channel::Phi => s.phi_rad = Some(v),
-            Channel::Theta => s.theta_rad = Some(v),
-            Channel::Psi => s.psi_rad = Some(v),
+        match self.output() {
+            Some(o) => o.set_measured(s, v),
+            None => s.psi_rad = Some(v),
         }
     }
 
@@ -144,21 +140,11 @@ impl Channel {
         Channel::INERTIAL.into_iter().chain(Channel::OUTPUTS).find(|c| c.name() == name)
     }
 
-    /// The channel's value in sample `s` (`None` when not recorded).
+    /// The channel's value in sample `s` (`None` when not recorded; [`Output::measured`]).
     pub fn of(self, s: &AirDataSample) -> Option<f64> {
-        match self {
-            Channel::Ax => s.ax_mps2,
-            Channel::Ay => s.ay_mps2,
-            Channel::Az => s.az_mps2,
-            Channel::P => s.p_rad_s,
-            Channel::Q => s.q_rad_s,
-            Channel::R => s.r_rad_s,
-            Channel::Vt => Some(s.vt_mps),
-            Channel::Alpha => Some(s.alpha_rad),
-            Channel::Beta => s.beta_rad,
-            Channel::Phi => s.phi_rad,
-            Channel::Theta => s.theta_rad,
-            Channel::Psi => s.psi_rad,
+        match self.output() {
+            Some(o) => o.measured(s),
+            None => s.psi_rad,
         }
     }
 }

@@ -776,7 +776,8 @@ impl Problem<'_> {
         self.simulate(beta, &mut y)?;
         let mut r = self.residuals(&y, &mut e);
         let mut lambda = 0.0;
-        let mut last_rel = f64::INFINITY;
+        // Relative change of det R over the last accepted iteration (None before one).
+        let mut last_rel = None;
         for iteration in 1..=config.max_iterations {
             let (m, g) = normal_equations(self, beta, &e, &r)?;
             if iteration == 1 && damped(&m, &g, 0.0).is_none() {
@@ -791,20 +792,19 @@ impl Problem<'_> {
                 // can turn into a descent (the cost is flat to its rounding there).
                 let floor = config.step_tolerance_sigma.max(NO_DESCENT_STEP_SIGMA);
                 let tiny = damped(&m, &g, 0.0).is_some_and(|st| max_sigma(&m, &st) < floor);
-                let t = if tiny {
-                    Termination::Converged
-                } else {
-                    stalled(last_rel, config, NotConverged::NoDescent)
-                };
+                let why = NotConverged::NoDescent;
+                let t = Termination::after(tiny, last_rel, why, config.cost_tolerance);
                 return Ok((t, iteration - 1));
             };
-            last_rel = (ln_det(&r_new) - ln_det(&r)).exp_m1().abs();
+            let rel = (ln_det(&r_new) - ln_det(&r)).exp_m1().abs();
+            last_rel = Some(rel);
             (*beta, e, r) = (b, e_new, r_new);
-            if last_rel < config.cost_tolerance && step_sigma < config.step_tolerance_sigma {
+            if rel < config.cost_tolerance && step_sigma < config.step_tolerance_sigma {
                 return Ok((Termination::Converged, iteration));
             }
         }
-        Ok((stalled(last_rel, config, NotConverged::MaxIterations), config.max_iterations))
+        let why = NotConverged::MaxIterations;
+        Ok((Termination::after(false, last_rel, why, config.cost_tolerance), config.max_iterations))
     }
 
     /// A damped step from `beta` that lowers `ln det R` (λ raised ×10 from 10⁻³ up to 10¹⁰
@@ -896,16 +896,6 @@ impl Problem<'_> {
             out.beta_rad.push(a[2]);
         }
         Ok(out)
-    }
-}
-
-/// How a fit that did not meet both criteria ended: in the cost alone when the last accepted
-/// iteration changed `det R` by less than the tolerance.
-fn stalled(last_rel: f64, config: &CompatConfig, why: NotConverged) -> Termination {
-    if last_rel < config.cost_tolerance {
-        Termination::CostConverged(why)
-    } else {
-        Termination::NotConverged(why)
     }
 }
 

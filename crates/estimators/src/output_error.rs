@@ -286,13 +286,24 @@ impl Termination {
         failure: NotConverged,
         cost_tolerance: f64,
     ) -> Self {
-        if converged {
-            return Termination::Converged;
-        }
-        match log {
-            [.., a, b] if (b.ln_det_r - a.ln_det_r).exp_m1().abs() < cost_tolerance => {
-                Termination::CostConverged(failure)
-            }
+        let last_change = match log {
+            [.., a, b] => Some((b.ln_det_r - a.ln_det_r).exp_m1().abs()),
+            _ => None,
+        };
+        Self::after(converged, last_change, failure, cost_tolerance)
+    }
+
+    /// How a fit ended given whether both criteria were met and the relative change of
+    /// `det R` over its last accepted iteration (`None`: no iteration was accepted).
+    pub fn after(
+        converged: bool,
+        last_change: Option<f64>,
+        failure: NotConverged,
+        cost_tolerance: f64,
+    ) -> Self {
+        match last_change {
+            _ if converged => Termination::Converged,
+            Some(rel) if rel < cost_tolerance => Termination::CostConverged(failure),
             _ => Termination::NotConverged(failure),
         }
     }

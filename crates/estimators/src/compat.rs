@@ -264,6 +264,12 @@ impl CompatResult {
     pub fn reported_sigma(&self) -> &[f64] {
         self.sigma_coloured.as_deref().unwrap_or(&self.sigma)
     }
+
+    /// Estimate and reported σ ([`CompatResult::reported_sigma`]) of `u`, if it was estimated.
+    pub fn reported(&self, u: Unknown) -> Option<(f64, f64)> {
+        let i = self.unknowns.iter().position(|&v| v == u)?;
+        Some((self.values[i], self.reported_sigma()[i]))
+    }
 }
 
 /// Checks the compatibility of `manoeuvres` (each a gap-free run of samples with `ax, ay, az,
@@ -711,14 +717,14 @@ fn normal_equations(
     e: &[f64],
     r: &[f64],
 ) -> Result<(DMatrix<f64>, DVector<f64>), EstimatorError> {
-    let s = sensitivities(p, beta)?;
-    let (nb, ny) = (beta.len(), p.ny());
-    let n = p.n_samples();
-    let w = DVector::from_fn(n * ny, |row, _| 1.0 / r[row % ny]);
-    let sw = DMatrix::from_fn(n * ny, nb, |row, i| s[(row, i)] * w[row]);
-    let m = sw.transpose() * &s;
-    let g = sw.transpose() * DVector::from_column_slice(e);
-    Ok((m, g))
+    Ok(information(&sensitivities(p, beta)?, e, r))
+}
+
+/// `(M, g)` of sensitivities `s` (`N·ny × nβ`), residuals `e` and output variances `r`.
+fn information(s: &DMatrix<f64>, e: &[f64], r: &[f64]) -> (DMatrix<f64>, DVector<f64>) {
+    let ny = r.len();
+    let sw = DMatrix::from_fn(s.nrows(), s.ncols(), |row, i| s[(row, i)] / r[row % ny]);
+    (sw.transpose() * s, sw.transpose() * DVector::from_column_slice(e))
 }
 
 /// `S = ∂y/∂β` at `beta` by central differences, `N·ny × nβ`.
@@ -847,9 +853,7 @@ impl Problem<'_> {
         self.simulate(&beta, &mut y)?;
         let r = self.residuals(&y, &mut e);
         let s = sensitivities(self, &beta)?;
-        let w: Vec<f64> = r.iter().map(|v| 1.0 / v).collect();
-        let sw = DMatrix::from_fn(s.nrows(), s.ncols(), |row, i| s[(row, i)] * w[row % w.len()]);
-        let m = sw.transpose() * &s;
+        let (m, _) = information(&s, &e, &r);
         let n = m.nrows();
         let inv = m.clone().cholesky().map(|c| c.inverse()).ok_or(EstimatorError::Numerical {
             what: "compatibility check: information matrix singular at the estimate",
@@ -857,12 +861,14 @@ impl Problem<'_> {
         })?;
         // The residuals of a real record are coloured (turbulence, model error, sample-and-hold):
         // the spectral sandwich of output error (crate::coloured::batch, "Spectral form").
-        let s_rows: Vec<f64> =
-            (0..s.nrows()).flat_map(|row| s.row(row).iter().copied().collect::<Vec<_>>()).collect();
+        // Column-major storage of Sᵀ is S row-major, the layout the sandwich takes.
+        let s_rows = s.transpose();
+        let w: Vec<f64> = r.iter().map(|v| 1.0 / v).collect();
         let lengths: Vec<usize> = self.man.iter().map(|m| m.len()).collect();
-        let sigma_coloured = crate::coloured::batch::spectral(&s_rows, &e, &w, &lengths, &inv)
-            .covariance
-            .map(|c| (0..n).map(|i| c[(i, i)].max(0.0).sqrt()).collect());
+        let sigma_coloured =
+            crate::coloured::batch::spectral(s_rows.as_slice(), &e, &w, &lengths, &inv)
+                .covariance
+                .map(|c| (0..n).map(|i| c[(i, i)].max(0.0).sqrt()).collect());
         let ny = self.ny();
         let ns = self.n_samples() as f64;
         let residual_mean =

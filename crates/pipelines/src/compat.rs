@@ -157,21 +157,15 @@ fn median_interval(manoeuvres: &[Vec<aeroident_estimators::AirDataSample>]) -> f
     d.get(d.len() / 2).copied().unwrap_or(0.0)
 }
 
-/// Estimate and reported σ ([`CompatResult::reported_sigma`]) of `u`, if estimated.
-fn reported(r: &CompatResult, u: Unknown) -> Option<(f64, f64)> {
-    let i = r.unknowns.iter().position(|&v| v == u)?;
-    Some((r.values[i], r.reported_sigma()[i]))
-}
-
 /// Every channel with at least one estimated correction, inertial first.
 fn channels(r: &CompatResult) -> Vec<ChannelSummary> {
     Channel::INERTIAL
         .into_iter()
         .chain(Channel::OUTPUTS)
         .filter_map(|c| {
-            let bias = reported(r, Unknown::Bias(c));
-            let scale = reported(r, Unknown::Scale(c));
-            let shift = reported(r, Unknown::TimeShift(c));
+            let bias = r.reported(Unknown::Bias(c));
+            let scale = r.reported(Unknown::Scale(c));
+            let shift = r.reported(Unknown::TimeShift(c));
             (bias.is_some() || scale.is_some() || shift.is_some()).then(|| ChannelSummary {
                 name: c.name(),
                 unit: c.unit(),
@@ -195,7 +189,7 @@ const SIGNIFICANT_SIGMAS: f64 = 3.0;
 fn findings(r: &CompatResult, dt_s: f64) -> Vec<String> {
     let mut out = Vec::new();
     let significant = |v: f64, s: f64| v.abs() > SIGNIFICANT_SIGMAS * s;
-    if let Some((b, s)) = reported(r, Unknown::Bias(Channel::Az))
+    if let Some((b, s)) = r.reported(Unknown::Bias(Channel::Az))
         && (b - G0_MPS2).abs() < 0.1 * G0_MPS2
     {
         out.push(format!("az_mps2 looks like load factor − 1 g, not the specific force (bias {b:+.2} ± {s:.2} m/s² ≈ +g): map it as (n_z·g) with the sign of a specific force (≈ −g level)"));

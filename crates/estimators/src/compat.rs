@@ -345,14 +345,13 @@ impl Problem<'_> {
     /// [`Problem::noise_variances`]: the channel hardly varies) and a note for each.
     fn undetermined_shifts(&self) -> Result<(Vec<Unknown>, Vec<String>), EstimatorError> {
         let beta = self.start();
-        let (mut y, mut e) = (Vec::new(), Vec::new());
-        self.simulate(&beta, &mut y)?;
-        self.residuals(&y, &mut e);
-        let (m, _) = normal_equations(self, &beta, &e, &self.noise_variances())?;
+        let r = self.noise_variances();
         let mut out = (Vec::new(), Vec::new());
         for (i, &u) in self.unknowns.iter().enumerate() {
             let Unknown::TimeShift(c) = u else { continue };
-            let sigma = 1.0 / m[(i, i)].sqrt();
+            let s = sensitivity(self, &beta, i)?;
+            let info: f64 = s.iter().enumerate().map(|(row, v)| v * v / r[row % r.len()]).sum();
+            let sigma = 1.0 / info.sqrt();
             if sigma.is_nan() || sigma >= MAX_SHIFT_SIGMA_S {
                 out.0.push(u);
                 out.1.push(format!("time shift of {} not estimated: the channel hardly varies (its σ alone would be {sigma:.2} s)", c.name()));
@@ -729,23 +728,21 @@ fn information(s: &DMatrix<f64>, e: &[f64], r: &[f64]) -> (DMatrix<f64>, DVector
 
 /// `S = ∂y/∂β` at `beta` by central differences, `N·ny × nβ`.
 fn sensitivities(p: &Problem<'_>, beta: &[f64]) -> Result<DMatrix<f64>, EstimatorError> {
-    let (nb, ny) = (beta.len(), p.ny());
-    let n = p.n_samples();
-    let mut s = DMatrix::zeros(n * ny, nb);
+    let columns =
+        (0..beta.len()).map(|i| sensitivity(p, beta, i)).collect::<Result<Vec<_>, _>>()?;
+    Ok(DMatrix::from_fn(p.n_samples() * p.ny(), beta.len(), |row, i| columns[i][row]))
+}
+
+/// `∂y/∂β_i` at `beta` by a central difference of [`delta`], `N·ny` row-major.
+fn sensitivity(p: &Problem<'_>, beta: &[f64], i: usize) -> Result<Vec<f64>, EstimatorError> {
+    let d = delta(p.unknowns[i]);
     let (mut yp, mut ym) = (Vec::new(), Vec::new());
     let mut trial = beta.to_vec();
-    for (i, &u) in p.unknowns.iter().enumerate() {
-        let d = delta(u);
-        trial[i] = beta[i] + d;
-        p.simulate(&trial, &mut yp)?;
-        trial[i] = beta[i] - d;
-        p.simulate(&trial, &mut ym)?;
-        trial[i] = beta[i];
-        for row in 0..n * ny {
-            s[(row, i)] = (yp[row] - ym[row]) / (2.0 * d);
-        }
-    }
-    Ok(s)
+    trial[i] = beta[i] + d;
+    p.simulate(&trial, &mut yp)?;
+    trial[i] = beta[i] - d;
+    p.simulate(&trial, &mut ym)?;
+    Ok(yp.iter().zip(&ym).map(|(a, b)| (a - b) / (2.0 * d)).collect())
 }
 
 /// `(M + λ diag M)⁻¹ g`, Jacobi-scaled (Cholesky); `None` when not positive definite.

@@ -21,17 +21,19 @@ use aeroident_estimators::compat::{self, Channel, CompatConfig, CompatResult, Un
 use aeroident_estimators::flight_model::G0_MPS2;
 use aeroident_estimators::output_error::Termination;
 use aeroident_io::{FlightDataReader, Rejection};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::io::Read;
 
-/// One channel's corrections: `measured = scale · true + bias`, read `time_shift_s` late.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+/// One channel's corrections: `measured = scale · true + bias`, read `time_shift_s` late (a
+/// `compat.json` row, written and read back by `replay --compat`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ChannelSummary {
     /// The sample field (`ax_mps2`, `alpha_rad` …).
-    pub name: &'static str,
+    pub name: String,
     /// Its unit.
-    pub unit: &'static str,
+    #[serde(default)]
+    pub unit: String,
     /// Bias, channel units.
     pub bias: Option<f64>,
     /// Its Cramér–Rao σ.
@@ -47,7 +49,7 @@ pub struct ChannelSummary {
 }
 
 /// One manoeuvre's reconstructed air data at its sample times.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ReconstructedSummary {
     /// Manoeuvre, from 1.
     pub manoeuvre: usize,
@@ -167,8 +169,8 @@ fn channels(r: &CompatResult) -> Vec<ChannelSummary> {
             let scale = r.reported(Unknown::Scale(c));
             let shift = r.reported(Unknown::TimeShift(c));
             (bias.is_some() || scale.is_some() || shift.is_some()).then(|| ChannelSummary {
-                name: c.name(),
-                unit: c.unit(),
+                name: c.name().into(),
+                unit: c.unit().into(),
                 bias: bias.map(|b| b.0),
                 bias_sigma: bias.map(|b| b.1),
                 scale: scale.map(|s| 1.0 + s.0),

@@ -8,7 +8,7 @@
 //! Not applied: the airspeed bias (in still air it is the wind along the flight path, and the
 //! aerodynamics need the airspeed, not the inertial speed).
 
-use super::ChannelSummary;
+use super::{ChannelSummary, ReconstructedSummary};
 use crate::replay::ReplayError;
 use aeroident_estimators::AirDataSample;
 use aeroident_estimators::compat::{Channel, interpolate};
@@ -30,25 +30,13 @@ pub struct Corrections {
     pub applied: Vec<String>,
 }
 
+/// What `replay --compat` reads of a `compat.json`: its channel rows and reconstructed air
+/// data (the other keys are for people).
 #[derive(Deserialize)]
 struct CompatFile {
-    channels: Vec<ChannelEntry>,
+    channels: Vec<ChannelSummary>,
     #[serde(default)]
-    reconstructed: Vec<ReconstructedEntry>,
-}
-
-#[derive(Deserialize)]
-struct ChannelEntry {
-    name: String,
-    bias: Option<f64>,
-    scale: Option<f64>,
-    time_shift_s: Option<f64>,
-}
-
-#[derive(Deserialize)]
-struct ReconstructedEntry {
-    t_s: Vec<f64>,
-    beta_rad: Vec<f64>,
+    reconstructed: Vec<ReconstructedSummary>,
 }
 
 /// One channel's row: `(channel, bias, scale, time shift)`.
@@ -67,14 +55,7 @@ impl Corrections {
         };
         let text = std::fs::read_to_string(path).map_err(|e| bad(e.to_string()))?;
         let file: CompatFile = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
-        let mut entries = Vec::new();
-        for c in &file.channels {
-            let ch = Channel::from_name(&c.name)
-                .ok_or_else(|| bad(format!("unknown channel `{}`", c.name)))?;
-            entries.push((ch, c.bias, c.scale, c.time_shift_s));
-        }
-        let beta = file.reconstructed.into_iter().map(|r| (r.t_s, r.beta_rad)).collect();
-        Self::new(entries, beta).map_err(bad)
+        Self::of_rows(&file.channels, &file.reconstructed).map_err(bad)
     }
 
     /// The corrections of a check's summary (`--compat auto`).
@@ -82,10 +63,20 @@ impl Corrections {
     /// # Errors
     /// As [`Corrections::from_json`].
     pub fn from_summary(s: &super::CompatSummary) -> Result<Self, ReplayError> {
-        let bad = |reason: String| ReplayError::Option { option: "compat", reason };
-        let entries: Option<Vec<Entry>> = s.channels.iter().map(entry).collect();
-        let beta = s.reconstructed.iter().map(|r| (r.t_s.clone(), r.beta_rad.clone())).collect();
-        Self::new(entries.ok_or_else(|| bad("an unknown channel".into()))?, beta).map_err(bad)
+        Self::of_rows(&s.channels, &s.reconstructed)
+            .map_err(|reason| ReplayError::Option { option: "compat", reason })
+    }
+
+    /// The corrections of a check's channel rows and reconstructed air data.
+    fn of_rows(rows: &[ChannelSummary], rec: &[ReconstructedSummary]) -> Result<Self, String> {
+        let mut entries = Vec::new();
+        for c in rows {
+            let ch = Channel::from_name(&c.name)
+                .ok_or_else(|| format!("unknown channel `{}`", c.name))?;
+            entries.push((ch, c.bias, c.scale, c.time_shift_s));
+        }
+        let beta = rec.iter().map(|r| (r.t_s.clone(), r.beta_rad.clone())).collect();
+        Self::new(entries, beta)
     }
 
     fn new(entries: Vec<Entry>, beta: Vec<(Vec<f64>, Vec<f64>)>) -> Result<Self, String> {
@@ -136,11 +127,6 @@ impl Corrections {
         })?;
         Some(interpolate(t, b, t_s))
     }
-}
-
-/// `(channel, bias, scale, time shift)` of a summary row.
-fn entry(c: &ChannelSummary) -> Option<Entry> {
-    Some((Channel::from_name(c.name)?, c.bias, c.scale, c.time_shift_s))
 }
 
 /// The record's events with [`Corrections`] applied to every sample (module doc).
@@ -306,6 +292,42 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// A `compat.json` as `aeroident compat` writes it (extra keys, `null` where not estimated)
+    /// reads back to the corrections of its rows; an unknown channel is refused naming the file
+    /// and the channel.
+    #[test]
+    fn a_compat_json_reads_back_to_its_rows() {
+        let dir =
+            std::env::temp_dir().join(format!("aeroident-compat-json-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("compat.json");
+        let row = |name: &str, b: &str, k: &str, t: &str| {
+            format!(
+                r#"{{"name": "{name}", "unit": "rad", "bias": {b}, "bias_sigma": 0.001, "scale": {k}, "scale_sigma": null, "time_shift_s": {t}, "time_shift_sigma_s": null}}"#
+            )
+        };
+        let text = format!(
+            r#"{{"file": "x.csv", "sigma": "coloured", "channels": [{}, {}], "findings": [], "reconstructed": [{{"manoeuvre": 1, "t_s": [0.0, 1.0], "vt_mps": [50.0, 50.0], "alpha_rad": [0.1, 0.1], "beta_rad": [0.0, 0.02]}}]}}"#,
+            row("alpha_rad", "0.01", "1.05", "0.2"),
+            row("q_rad_s", "0.003", "null", "null")
+        );
+        std::fs::write(&path, text).unwrap();
+        let read = Corrections::from_json(&path).unwrap();
+        let want = Corrections::new(
+            vec![
+                (Channel::Alpha, Some(0.01), Some(1.05), Some(0.2)),
+                (Channel::Q, Some(0.003), None, None),
+            ],
+            vec![(vec![0.0, 1.0], vec![0.0, 0.02])],
+        )
+        .unwrap();
+        assert_eq!(read, want);
+        std::fs::write(&path, r#"{"channels": [{"name": "gamma_rad", "bias": 0.1}]}"#).unwrap();
+        let e = Corrections::from_json(&path).unwrap_err().to_string();
+        assert!(e.contains("compat.json") && e.contains("gamma_rad"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     /// A record without a sideslip channel gets the reconstructed one (interpolated in time),

@@ -183,9 +183,15 @@
 //!   gains vary slowly over the correlation time (Bayley & Hammersley 1946), output by output:
 //!   the full truncated autocorrelation, not only lag 1. With white innovations `f_i ≈ 1`.
 //!   Times the drift-consistency factor above.
-//! - **Initialisation.** The integrated states from the first sample's measurements (each must
-//!   be present, else an error naming it), `P0 = diag(state σ0², prior σ²)`, `θ0` the prior
-//!   values. [`Estimator::new_manoeuvre`] re-initialises the states (and their covariance
+//! - **Initialisation.** The integrated states from the first sample's measurements,
+//!   `P0 = diag(state σ0², prior σ²)`, `θ0` the prior values. A state the sample does not
+//!   measure (absent from the first sample: β on a record without a sideslip vane) is a state
+//!   all the same: it starts at 0, at every (re-)initialisation, with σ0 at least
+//!   [`UNMEASURED_STATE_SIGMA0`], and is seen through the outputs it drives (`ay`, `p`, `r`);
+//!   its process noise stays at the configured level (not estimated from the record: see
+//!   "State process noise from the record").
+//!   A measured state's channel missing at a later (re-)initialisation is a dropout: the filter
+//!   waits for a sample that has it. [`Estimator::new_manoeuvre`] re-initialises the states (and their covariance
 //!   rows) from the next sample and keeps `θ` and its covariance block.
 //! - **Divergence.** A non-finite state or covariance, `V ≤ 0`, `|α|` or `|β| > 1.5 rad`, a
 //!   singular implicit-α̇ equation or the gating rule above: the update returns
@@ -254,6 +260,11 @@ pub const DEFAULT_MEASUREMENT_SIGMA: [f64; N_OUTPUTS] =
 /// measurement σ of each state (the states start at one noisy measurement).
 pub const DEFAULT_STATE_SIGMA0: [f64; N_STATES] =
     [1.0, 0.007, 0.007, 0.007, 0.007, 0.007, 0.007, 0.007];
+
+/// Initial σ of a state the sample does not measure (β without a sideslip vane; rad or
+/// rad/s), which starts at 0: 0.1 rad is 5.7°, the sideslip of a flat, uncoordinated turn, so a
+/// start at wings-level trim lies well inside it.
+pub const UNMEASURED_STATE_SIGMA0: f64 = 0.1;
 
 /// Default state process noise, full-state order, units per √s (`Q = σ² dt`): a small
 /// allowance for model error (tabulated non-linearity), m/s/√s for `V`, rad/√s for angles,
@@ -395,6 +406,9 @@ pub struct Ekf {
     lin: Linearisation,
     last: Option<ModelInputs>,
     pending_init: bool,
+    /// The states (full-state order) whose channel the first sample lacked: the record does
+    /// not measure them, so every (re-)initialisation starts them at 0. `None` before it.
+    unmeasured: Option<[bool; N_STATES]>,
     diverged: bool,
     est: Estimates,
     identified: [bool; MAX_PARAMS],
@@ -629,6 +643,7 @@ impl Ekf {
             lin: Linearisation::default(),
             last: None,
             pending_init: true,
+            unmeasured: None,
             diverged: false,
             est,
             identified: [false; MAX_PARAMS],
@@ -877,6 +892,7 @@ impl Ekf {
         fresh.restarts = self.restarts + 1;
         fresh.events = self.events;
         fresh.events.push(s.t_s, EventKind::Restart, o.name());
+        fresh.unmeasured = self.unmeasured;
         *self = fresh;
         // A sample without every state channel cannot start the states: the restarted filter
         // then waits for one that has them, as a new filter does.
@@ -898,25 +914,38 @@ impl Ekf {
         EstimatorError::Numerical { what, t_s }
     }
 
-    /// (Re-)initialises the integrated states from sample `s`'s measurements.
+    /// (Re-)initialises the integrated states from sample `s`'s measurements; a state the
+    /// record does not measure (absent from the first sample) starts at 0.
+    ///
+    /// # Errors
+    /// [`EstimatorError::NonFiniteInput`] naming a measured state's channel that this sample
+    /// lacks (a dropout: the caller waits for a complete sample).
     fn initialise(&mut self, s: &AirDataSample, u: ModelInputs) -> Result<(), EstimatorError> {
         let states = self.model.state_set().states();
-        let mut x0 = [0.0; N_STATES];
-        for (k, &i) in states.iter().enumerate() {
-            x0[k] = Output::ALL[i].measured(s).ok_or(EstimatorError::NonFiniteInput {
-                field: STATE_NAMES[i],
-                value: f64::NAN,
-                t_s: s.t_s,
-            })?;
+        let unmeasured = *self
+            .unmeasured
+            .get_or_insert_with(|| core::array::from_fn(|i| Output::ALL[i].measured(s).is_none()));
+        for &i in states {
+            if Output::ALL[i].measured(s).is_none() && !unmeasured[i] {
+                return Err(EstimatorError::NonFiniteInput {
+                    field: STATE_NAMES[i],
+                    value: f64::NAN,
+                    t_s: s.t_s,
+                });
+            }
         }
         let n = self.nx + self.np;
         for (k, &i) in states.iter().enumerate() {
-            self.z[k] = x0[k];
+            let measured = Output::ALL[i].measured(s).filter(|_| !unmeasured[i]);
+            self.z[k] = measured.unwrap_or(0.0);
             for j in 0..n {
                 self.p[k][j] = 0.0;
                 self.p[j][k] = 0.0;
             }
-            let s0 = self.cfg.state_sigma0[i];
+            let s0 = match measured {
+                Some(_) => self.cfg.state_sigma0[i],
+                None => self.cfg.state_sigma0[i].max(UNMEASURED_STATE_SIGMA0),
+            };
             self.p[k][k] = s0 * s0;
         }
         self.last = Some(u);
@@ -1045,6 +1074,16 @@ impl Ekf {
     /// the record"): `q ← max(q_min, q + a c / dt)` per adapted state, `c` this sample's
     /// cross products of the state corrections divided by their sensitivity ([`sensitivity`]),
     /// `a = 1/min(k + ADAPTIVE_Q_PRIOR_SAMPLES, W)`; `acc` becomes the forgotten sums.
+    /// Whether the process noise of state `i` (full-state order) is estimated: configured so,
+    /// and the record measures the state. An unmeasured state's corrections come only from the
+    /// outputs it drives, whose innovations carry the parameters' errors too, so the
+    /// statistic reads parameter error as process noise: on the synthetic lateral record
+    /// without its β channel, adapting β's `Q` ended at `CY_β` −0.50, `Cn_r` −0.92 (truth
+    /// −0.90, −0.35); keeping the configured `Q`, within 7 %.
+    fn q_adapted(&self, i: usize) -> bool {
+        self.cfg.adaptive_q_states[i] && !self.unmeasured.is_some_and(|u| u[i])
+    }
+
     fn adapt_process_noise(
         &mut self,
         acc: &[[f64; N_OUTPUTS]; N_STATES],
@@ -1056,7 +1095,7 @@ impl Ekf {
         let a = 1.0 / f64::from(k.min(self.cfg.adaptive_q_window.max(1)));
         for (k, &i) in self.model.state_set().states().iter().enumerate() {
             self.q_acc[k] = acc[k];
-            if !self.cfg.adaptive_q_states[i] {
+            if !self.q_adapted(i) {
                 continue;
             }
             let q0 = self.cfg.state_process_noise[i];

@@ -20,7 +20,10 @@
 //! from the structure, [`StateSet::of`]): states integrated from an initial state, outputs
 //! `y = h(x, u, θ) + b` with optional constant output biases `b` ([`OeConfig::output_biases`],
 //! shared by all manoeuvres). Each manoeuvre has its own initial state: the first sample's
-//! measurements, or estimated ([`InitialStates`]). Integration: classical RK4 over each sample
+//! measurements, or estimated ([`InitialStates`]). A state the record does not measure (β on
+//! a record without a sideslip vane) is still a state, integrated from its own equation and
+//! seen through the outputs it drives (`ay`, `p`, `r`): its initial value is estimated per
+//! manoeuvre from a start of 0, and [`OeResult::unmeasured_states`] names it. Integration: classical RK4 over each sample
 //! interval with the inputs interpolated linearly between the two samples (start, midpoint,
 //! end), as Jategaonkar's `ruku4.m`. A record with time gaps must be split into manoeuvres
 //! first ([`split_at_gaps`]).
@@ -118,7 +121,8 @@
 //! output the state set does not predict (or selected twice), a bias on an output not
 //! selected, a time gap within a manoeuvre, a wrong-sized [`Start::Given`] vector, an unknown that does not affect any output,
 //! or fewer measurements than unknowns; [`EstimatorError::NonFiniteInput`] naming a missing or
-//! non-finite channel (a selected output must be present in every sample);
+//! non-finite channel (a selected output or a model input must be present in every sample; an
+//! unmeasured state is not an error);
 //! [`EstimatorError::Numerical`] when the model diverges at every starting point tried or the
 //! information matrix is singular at the estimate.
 
@@ -390,6 +394,11 @@ pub struct OeResult {
     pub start: Vec<f64>,
     /// How the iterations ended (module doc, "Convergence").
     pub termination: Termination,
+    /// The integrated states with no measurement at a manoeuvre's first sample (names as
+    /// [`STATE_NAMES`], e.g. `beta_rad` on a record without a sideslip vane): their initial
+    /// values were estimated from 0 (module doc, "Model"), whatever
+    /// [`OeConfig::initial_states`] said.
+    pub unmeasured_states: Vec<&'static str>,
 }
 
 impl OeResult {
@@ -1071,6 +1080,11 @@ fn assemble(
         iterations,
         start,
         termination,
+        unmeasured_states: p
+            .unmeasured
+            .iter()
+            .map(|&k| STATE_NAMES[p.model.state_set().states()[k]])
+            .collect(),
     })
 }
 

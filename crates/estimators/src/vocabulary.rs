@@ -291,6 +291,11 @@ impl ModelStructure {
         self.terms[p.coefficient.index()] |= 1 << p.term.index();
     }
 
+    /// Removes one parameter (nothing when it is not in the structure).
+    pub fn remove(&mut self, p: Param) {
+        self.terms[p.coefficient.index()] &= !(1 << p.term.index());
+    }
+
     /// Whether the structure has parameter `p`.
     pub fn contains(&self, p: Param) -> bool {
         self.terms[p.coefficient.index()] & (1 << p.term.index()) != 0

@@ -217,6 +217,20 @@ impl ModelSpec {
         })
     }
 
+    /// This model without parameter `p` (its prior and reference dropped with it; the same
+    /// model when it has no `p`). The name says what was left out (`lateral without CY_0`).
+    pub fn without(mut self, p: Param) -> Self {
+        let Some(i) = self.structure.index_of(p) else { return self };
+        let kept: Vec<_> =
+            (0..self.priors.n).filter(|&k| k != i).map(|k| self.priors.prior[k]).collect();
+        self.structure.remove(p);
+        self.priors.n = kept.len();
+        self.priors.prior[..kept.len()].copy_from_slice(&kept);
+        self.references.retain(|r| r.param != p);
+        self.name = format!("{} without {}", self.name, p.name());
+        self
+    }
+
     /// A preset name or a model file path (a preset name wins; write `./longitudinal` for a
     /// file of that name).
     ///

@@ -143,7 +143,7 @@ impl Ekf {
 
     /// Whether the process noise of state `k` (model-state index) is estimated.
     fn adapted(&self, k: usize) -> bool {
-        self.cfg.adaptive_q_states[self.model.state_set().states()[k]]
+        self.q_adapted(self.model.state_set().states()[k])
     }
 
     /// The scalar measurement update of output `o` from sample `s` into `pd` (and `work`):

@@ -25,9 +25,7 @@
 //! and `X = ∂x0/∂β` at the first sample (the unit columns of the free initial states, else 0).
 
 use crate::EstimatorError;
-use crate::flight_model::{
-    FlightModel, Linearisation, ModelInputs, N_STATES, Output, STATE_NAMES, state,
-};
+use crate::flight_model::{FlightModel, Linearisation, ModelInputs, N_STATES, Output, state};
 use crate::sample::AirDataSample;
 use std::vec;
 use std::vec::Vec;
@@ -54,6 +52,9 @@ pub(super) struct Problem {
     pub bias_of: Vec<Option<usize>>,
     /// Filter-order indices of the integrated states whose initial values are estimated.
     pub x0_free: Vec<usize>,
+    /// Filter-order indices of the integrated states with no measurement at the first sample
+    /// of some manoeuvre: estimated (in `x0_free`) from a start of 0.
+    pub unmeasured: Vec<usize>,
     pub man: Vec<Manoeuvre>,
     pub n_unknowns: usize,
     pub n_samples: usize,
@@ -106,8 +107,16 @@ impl Problem {
             }
             bias_of[j] = Some(np + k);
         }
+        // A state without a measurement is still a state: its initial value is estimated.
+        let unmeasured: Vec<usize> = (0..nx)
+            .filter(|&k| {
+                manoeuvres.iter().any(|m| {
+                    m.first().is_some_and(|s| Output::ALL[states[k]].measured(s).is_none())
+                })
+            })
+            .collect();
         let x0_free: Vec<usize> =
-            states.iter().enumerate().filter(|(_, i)| x0_free_full[**i]).map(|(k, _)| k).collect();
+            (0..nx).filter(|&k| x0_free_full[states[k]] || unmeasured.contains(&k)).collect();
         let mut man = Vec::with_capacity(manoeuvres.len());
         let mut n_samples = 0;
         for samples in manoeuvres {
@@ -154,12 +163,7 @@ impl Problem {
             }
             let mut x0_meas = [0.0; N_STATES];
             for (k, &i) in states.iter().enumerate() {
-                x0_meas[k] =
-                    Output::ALL[i].measured(&samples[0]).ok_or(EstimatorError::NonFiniteInput {
-                        field: STATE_NAMES[i],
-                        value: f64::NAN,
-                        t_s: samples[0].t_s,
-                    })?;
+                x0_meas[k] = Output::ALL[i].measured(&samples[0]).unwrap_or(0.0);
             }
             n_samples += samples.len();
             man.push(Manoeuvre { u, z, x0_meas });
@@ -172,7 +176,18 @@ impl Problem {
                 "fewer measured values than unknowns",
             ));
         }
-        Ok(Self { model, nx, np, outputs, bias_of, x0_free, man, n_unknowns, n_samples })
+        Ok(Self {
+            model,
+            nx,
+            np,
+            outputs,
+            bias_of,
+            x0_free,
+            unmeasured,
+            man,
+            n_unknowns,
+            n_samples,
+        })
     }
 
     /// Index in `β` of free initial state `q` (position in `x0_free`) of manoeuvre `m`.

@@ -392,6 +392,36 @@ fn synthetic_recovery_lateral_matches_crb_and_scatter() {
     recovery(st, 20.0, 16.0, &["Cl_beta", "Cl_p", "Cl_da", "Cn_beta", "Cn_r", "Cn_dr"]);
 }
 
+/// A record without a sideslip channel: β is still a state, its initial value estimated
+/// (named in `unmeasured_states`, not an error, with or without the other initial states
+/// estimated), and the lateral derivatives and the initial
+/// sideslip are recovered within 3.5σ of the simulation's truth through `ay`, `p`, `r`, `φ`.
+/// `CY_0` is left out: without β its level and a constant sideslip are the same unknown.
+#[test]
+fn an_unmeasured_sideslip_is_a_state_estimated_from_the_other_outputs() {
+    let st = ModelStructure::empty()
+        .with(C::CY, &[T::Beta, T::Dr])
+        .with(C::Cl, &[T::Bias, T::Beta, T::P, T::R, T::Da, T::Dr])
+        .with(C::Cn, &[T::Bias, T::Beta, T::R, T::Da, T::Dr]);
+    let th = trimmed_truth(&st);
+    let mut off = [0.0; N_STATES];
+    off[state::BETA] = 0.02;
+    let mut data = simulate(&st, &th, 20.0, 16.0, 1.0, 11, off);
+    data.iter_mut().for_each(|s| s.beta_rad = None);
+    // The first sample's noisy p, r, φ estimated too: a noisy fixed start biases the fit.
+    let res = fit(&[&data], &with_x0(st)).unwrap();
+    assert_eq!(res.unmeasured_states, ["beta_rad"]);
+    assert!(!res.outputs.contains(&Output::Beta));
+    for (i, p) in st.params().enumerate() {
+        let z = (res.values[i] - th[i]) / res.sigma[i];
+        assert!(z.abs() < 3.5, "{} = {} vs truth {} ({z:.1} σ)", p.name(), res.values[i], th[i]);
+    }
+    let (b0, s0) = res.get("x0_m1_beta_rad").expect("β0 is estimated");
+    assert!((b0 - 0.02).abs() < 3.5 * s0 && s0 < 0.005, "β0 = {b0} ± {s0} (truth 0.02)");
+    let fixed = fit(&[&data], &OeConfig::new(st)).unwrap();
+    assert_eq!(fixed.names.last().map(String::as_str), Some("x0_m1_beta_rad"));
+}
+
 #[test]
 fn both_step_kinds_reach_the_same_estimate_and_estimated_initial_states_are_recovered() {
     let st = lon();

@@ -673,6 +673,7 @@ pub fn fit_record<R: Read>(
         Some(m) => m,
         None => default_model(&rec.manoeuvres[0][0], mapping)?,
     };
+    let (model, level_note) = super::sideslip_level(model, &rec.manoeuvres[0][0]);
     let slices: Vec<&[AirDataSample]> = rec.manoeuvres.iter().map(Vec::as_slice).collect();
     let fitted = fit_slices(&slices, model.structure, &options)?;
     let sigmas = sigma_stage(&slices, &fitted, options.bootstrap_refits)?;
@@ -706,6 +707,7 @@ pub fn fit_record<R: Read>(
     summary.rejections = rejections;
     summary.warnings.extend(unlisted);
     summary.warnings.extend(simulation_note);
+    summary.warnings.extend(level_note);
     if let Some(c) = &options.compat {
         summary.warnings.extend(c.applied.iter().map(|a| format!("compat applied: {a}")));
     }

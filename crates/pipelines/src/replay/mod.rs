@@ -472,9 +472,39 @@ impl crate::Named for DerivativeSource {
     }
 }
 
+/// `model` for a record whose first sample has no sideslip: `CY_0` left out when the model
+/// integrates β, with the note that says so.
+///
+/// Without a β measurement the level of β is not determined: a constant sideslip `δ` with
+/// `CY_0`, `Cl_0`, `Cn_0` shifted by `−CY_β δ`, `−Cl_β δ`, `−Cn_β δ` gives the same side
+/// force, moments, `ay`, `p` and `r` (the model is linear in β up to the small `cos β` factors
+/// of the kinematics). The fit then wanders along that valley (ATTAS AilRud1 without its β
+/// column: β0 = 27° ± 9°, `CY_0` = 0.55). Zero side force at zero sideslip and zero controls, a
+/// symmetric aircraft, fixes the level: β is then the sideslip that balances the measured
+/// side force.
+pub(crate) fn sideslip_level(
+    model: ModelSpec,
+    first: &AirDataSample,
+) -> (ModelSpec, Option<String>) {
+    let cy0 = aeroident_estimators::Param::new(
+        aeroident_estimators::Coefficient::CY,
+        aeroident_estimators::Term::Bias,
+    );
+    let integrates_beta = aeroident_estimators::StateSet::of(&model.structure)
+        .is_ok_and(|set| set.states().contains(&aeroident_estimators::flight_model::state::BETA));
+    if first.beta_rad.is_some() || !integrates_beta || !model.structure.contains(cy0) {
+        return (model, None);
+    }
+    let note = "β is not measured: the model carries it as a state, its initial value estimated; CY_0 is left out (zero side force at zero sideslip), since without β a constant sideslip and CY_0 are the same thing to the record";
+    (model.without(cy0), Some(note.into()))
+}
+
 /// What the model needs that sample `s` lacks, as readable items (empty: supported). Terms
 /// are checked for every estimator, measured coefficients for those that use them.
-/// Derivatives in `supplied` count as present.
+/// Derivatives in `supplied` count as present. The estimators that do not use measured
+/// coefficients integrate the model's states themselves (EKF, output error, filter error), so
+/// for them a state the record does not measure (β without a sideslip vane) is not missing:
+/// they carry it as a state.
 pub fn unsupported(
     structure: &ModelStructure,
     s: &AirDataSample,
@@ -485,6 +515,14 @@ pub fn unsupported(
     for d in supplied {
         if d.source(&probe).is_some() {
             d.set(&mut probe, Some(0.0));
+        }
+    }
+    if !uses_measured && let Ok(set) = aeroident_estimators::StateSet::of(structure) {
+        for &i in set.states() {
+            let o = aeroident_estimators::Output::ALL[i];
+            if o.measured(&probe).is_none() {
+                o.set_measured(&mut probe, 0.0);
+            }
         }
     }
     let mut out = Vec::new();

@@ -149,6 +149,16 @@ impl<'a> Replay<'a> {
     ) -> Result<(), ReplayError> {
         let (opts, mapping) = (self.opts, self.mapping);
         let (spec, defaulted) = choose_model(opts, mapping, sample, self.uses_measured)?;
+        let spec = if self.uses_measured {
+            spec
+        } else {
+            let (spec, note) = super::sideslip_level(spec, sample);
+            if let Some(n) = note {
+                self.observer.warning(&n);
+                self.warnings.push(n);
+            }
+            spec
+        };
         let supply =
             derivatives_to_supply(&spec.structure, opts.estimator, mapping, opts.derivatives);
         let missing = unsupported(&spec.structure, sample, self.uses_measured, &supply);

@@ -139,6 +139,7 @@ pub struct FlightDataReader<R: Read> {
     record: csv::StringRecord,
     last_t: Option<f64>,
     nominal_dt: Option<f64>,
+    inertia_reference_mass_kg: Option<f64>,
     pending: Option<RecordEvent>,
     done: bool,
     /// Lines of the CSV text that are not lines of the file the user gave (a header
@@ -242,6 +243,7 @@ impl<R: Read> FlightDataReader<R> {
             record: csv::StringRecord::new(),
             last_t: None,
             nominal_dt: mapping.nominal_dt_s,
+            inertia_reference_mass_kg: mapping.inertia_reference_mass_kg,
             pending: None,
             done: false,
             synthetic_lines: 0,
@@ -263,6 +265,7 @@ impl<R: Read> FlightDataReader<R> {
 
     fn field(&self, ch: &str, r: &Resolved) -> Result<f64, RowProblem> {
         let mut sum = 0.0;
+        let mut values = Vec::new();
         for ((idx, name), w) in r.columns.iter().zip(r.names.iter()).zip(r.weights.iter()) {
             let text = self.record.get(*idx).unwrap_or("");
             if text.is_empty() {
@@ -276,11 +279,20 @@ impl<R: Read> FlightDataReader<R> {
                 return Err(RowProblem::NonFinite { column: name.clone(), text: text.to_string() });
             }
             sum += w * v;
+            if r.map.expression.is_some() {
+                values.push(v);
+            }
+        }
+        if let Some(e) = &r.map.expression {
+            sum = e.eval(&values);
         }
         let si = r.map.to_si(sum);
         if !si.is_finite() {
             return Err(RowProblem::NonFiniteSi {
-                column: r.names.join("+"),
+                column: match &r.map.expression {
+                    Some(e) => format!("expr `{}` over {}", e.text(), r.names.join(", ")),
+                    None => r.names.join("+"),
+                },
                 channel: ch.to_string(),
                 text: self.record.get(r.columns[0]).unwrap_or("").to_string(),
                 value: si,
@@ -383,15 +395,18 @@ impl<R: Read> FlightDataReader<R> {
                 });
             }
         };
+        let mass_kg = self.required(Channel::Mass)?;
+        let k = self.inertia_reference_mass_kg.map_or(1.0, |m0| mass_kg / m0);
+        let inertia = |ch: Channel| g(ch).map(|v| v.map(|v| v * k));
         let constants = AircraftConstants {
-            mass_kg: self.required(Channel::Mass)?,
+            mass_kg,
             S_m2: self.required(Channel::S)?,
             cbar_m: g(Channel::Cbar)?,
             b_m: g(Channel::B)?,
-            Ixx_kgm2: g(Channel::Ixx)?,
-            Iyy_kgm2: g(Channel::Iyy)?,
-            Izz_kgm2: g(Channel::Izz)?,
-            Ixz_kgm2: g(Channel::Ixz)?,
+            Ixx_kgm2: inertia(Channel::Ixx)?,
+            Iyy_kgm2: inertia(Channel::Iyy)?,
+            Izz_kgm2: inertia(Channel::Izz)?,
+            Ixz_kgm2: inertia(Channel::Ixz)?,
             thrust_arm_m: g(Channel::ThrustArm)?.unwrap_or(0.0),
             thrust_incidence_rad: g(Channel::ThrustIncidence)?.unwrap_or(0.0),
             v0_mps: g(Channel::V0)?,

@@ -8,6 +8,7 @@
 pub mod align;
 pub mod dataflash;
 pub mod error;
+pub mod expression;
 pub mod flight_data;
 pub mod log;
 pub mod mapping;

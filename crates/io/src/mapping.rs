@@ -19,6 +19,15 @@
 //! da    = { columns = ["ail_left_deg", "ail_right_deg"], weights = [0.5, -0.5], unit = "deg" }
 //! Ixz   = { column = "ixz", unit = "slug*ft2", scale = -1.0 }      # JSBSim logs −Jxz
 //! mass  = { value = 7472.0, unit = "kg" }                             # a constant
+//! rho   = { expr = "isa_pressure(h_ft * 0.3048) / (287.05287 * sat_K)", unit = "kg/m3" }
+//! ```
+//!
+//! `expr` computes a channel from columns ([`crate::expression`]: arithmetic, the standard
+//! atmosphere's `isa_pressure`/`isa_temperature`/`isa_density`; mass from fuel used is
+//! `expr = "17631 - fuel_used_kg"`). A top-level `inertia_reference_mass_kg = 17631.0` scales
+//! the mapped inertias by each sample's mass over it ([`Mapping::inertia_reference_mass_kg`]).
+//!
+//! ```toml
 //!
 //! [columns]       # optional: names of the columns of a file without a header row
 //! names = ["time_s", "elevator_rad", "qbar_Pa"]   # (.asc, a .mat matrix); default "1", "2", …
@@ -309,6 +318,9 @@ pub struct ChannelSpec {
     pub weights: Option<Vec<f64>>,
     /// A constant value (in `unit`).
     pub value: Option<f64>,
+    /// An expression over columns whose value is in `unit` ([`crate::expression`]), e.g.
+    /// `"17631 - fuel_used_kg"`.
+    pub expr: Option<String>,
     /// Unit string, e.g. `"deg/s"`.
     pub unit: String,
     /// Multiplier applied to the raw value before `offset` (default 1).
@@ -333,6 +345,7 @@ fn one() -> f64 {
 struct MappingFile {
     description: Option<String>,
     nominal_dt_s: Option<f64>,
+    inertia_reference_mass_kg: Option<f64>,
     time: ChannelSpec,
     channels: BTreeMap<Spanned<String>, ChannelSpec>,
     columns: Option<ColumnsSpec>,
@@ -407,7 +420,8 @@ struct ColumnsSpec {
 /// Where a resolved channel's value comes from.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Source {
-    /// Weighted sum of these CSV columns: `(name, weight)`.
+    /// Weighted sum of these CSV columns: `(name, weight)`; for a channel with an
+    /// [`ChannelMap::expression`], the columns it reads (weights 1, not used).
     Columns(Vec<(String, f64)>),
     /// A constant, already in SI.
     Constant(f64),
@@ -428,6 +442,10 @@ pub struct ChannelMap {
     pub unit: String,
     /// Piecewise-linear calibration `(raw, value)`, raw strictly increasing.
     pub calibration: Option<Vec<(f64, f64)>>,
+    /// How the columns of [`Source::Columns`] combine into the raw value when not by their
+    /// weighted sum: an expression over them (`expr = …`), its columns in the order of
+    /// [`crate::expression::Expression::columns`].
+    pub expression: Option<crate::expression::Expression>,
 }
 
 /// Piecewise-linear interpolation in `table` (`(raw, value)`, raw strictly increasing);
@@ -474,6 +492,11 @@ pub struct Mapping {
     pub description: String,
     /// Nominal sample interval, s, if given.
     pub nominal_dt_s: Option<f64>,
+    /// `inertia_reference_mass_kg`: the mass, kg, at which the mapped `Ixx`, `Iyy`, `Izz`,
+    /// `Ixz` hold; each sample's inertias are scaled by its mass over it (constant radii of
+    /// gyration: the usual first approximation of fuel burn when no loading data are given).
+    /// `None`: the inertias as mapped.
+    pub inertia_reference_mass_kg: Option<f64>,
     /// The time channel.
     pub time: ChannelMap,
     /// The mapped channels.
@@ -610,6 +633,23 @@ impl Mapping {
                 reason: format!("must be finite and > 0, got {dt}"),
             });
         }
+        if let Some(m0) = raw.inertia_reference_mass_kg {
+            if !(m0.is_finite() && m0 > 0.0) {
+                return Err(FlightDataError::BadSpec {
+                    file: file.to_string(),
+                    channel: "inertia_reference_mass_kg".into(),
+                    reason: format!("must be finite and > 0, got {m0}"),
+                });
+            }
+            if ![Channel::Ixx, Channel::Iyy, Channel::Izz].iter().any(|c| channels.contains_key(c))
+            {
+                return Err(FlightDataError::BadSpec {
+                    file: file.to_string(),
+                    channel: "inertia_reference_mass_kg".into(),
+                    reason: "no inertia (Ixx, Iyy, Izz) is mapped to scale".into(),
+                });
+            }
+        }
         let (align, quaternion, air_data) = resolve_log_tables(file, &raw, &channels)?;
         let column_names = raw.columns.map(|c| c.names);
         if let Some(names) = &column_names {
@@ -619,6 +659,7 @@ impl Mapping {
             file: file.to_string(),
             description: raw.description.unwrap_or_default(),
             nominal_dt_s: raw.nominal_dt_s,
+            inertia_reference_mass_kg: raw.inertia_reference_mass_kg,
             time,
             channels,
             align,
@@ -642,7 +683,11 @@ impl Mapping {
         let ch = Channel::of_sample_field(field)?;
         let file = &self.file;
         let key = ch.key();
+        let expression = self.channels.get(&ch).and_then(|m| m.expression.as_ref());
         Some(match self.channels.get(&ch).map(|m| &m.source) {
+            Some(Source::Columns(_)) if let Some(e) = expression => {
+                format!("channel `{key}` (expression `{}` of {file})", e.text())
+            }
             Some(Source::Columns(cols)) => {
                 let names: Vec<String> = cols.iter().map(|(c, _)| format!("`{c}`")).collect();
                 let what = if names.len() == 1 { "column" } else { "columns" };
@@ -805,7 +850,26 @@ fn resolve(
     if spec.weights.is_some() && spec.columns.is_none() {
         return Err(bad("`weights` needs `columns`".into()));
     }
+    let mut expression = None;
     let source = match (&spec.column, &spec.columns, spec.value) {
+        (None, None, None) if spec.expr.is_some() => {
+            let text = spec.expr.as_deref().unwrap_or_default();
+            let e = crate::expression::Expression::parse(text)
+                .map_err(|m| bad(format!("expr `{text}`: {m}")))?;
+            if e.columns().is_empty() {
+                return Err(bad(format!(
+                    "expr `{text}` reads no column: map a constant with `value`"
+                )));
+            }
+            let cols = e.columns().iter().map(|c| (c.clone(), 1.0)).collect();
+            expression = Some(e);
+            Source::Columns(cols)
+        }
+        _ if spec.expr.is_some() => {
+            return Err(bad(
+                "give exactly one of `column`, `columns` (non-empty), `value` or `expr`".into(),
+            ));
+        }
         (Some(c), None, None) => Source::Columns(vec![(c.clone(), 1.0)]),
         (None, Some(cs), None) if !cs.is_empty() => {
             let weights = spec.weights.clone().unwrap_or_else(|| vec![1.0; cs.len()]);
@@ -830,7 +894,7 @@ fn resolve(
         }
         _ => {
             return Err(bad(
-                "give exactly one of `column`, `columns` (non-empty) or `value`".into()
+                "give exactly one of `column`, `columns` (non-empty), `value` or `expr`".into(),
             ));
         }
     };
@@ -863,6 +927,7 @@ fn resolve(
         offset: spec.offset,
         unit: spec.unit.clone(),
         calibration,
+        expression,
     })
 }
 

@@ -13,6 +13,7 @@
 //! equations) and §3.5 (their mechanisation in the F-16 subroutine `F`).
 #![no_std]
 
+pub mod isa;
 pub mod rigid_body;
 pub mod scalar;
 pub mod units;

@@ -1,0 +1,102 @@
+//! Channels a raw log does not record directly, computed by the mapping: density from pressure
+//! altitude and static temperature, mass from fuel used, inertias scaled with mass, and any
+//! expression over columns, each checked against hand arithmetic and the standard atmosphere's
+//! published values; a bad expression is an error naming the file and the channel.
+
+use aeroident_io::{FlightDataError, FlightDataReader, Mapping, RecordEvent, RowProblem};
+
+const MAPPING: &str = r#"
+inertia_reference_mass_kg = 17631.0
+[time]
+column = "t"
+unit = "s"
+[channels]
+vt = { column = "V", unit = "m/s" }
+alpha = { column = "a", unit = "deg" }
+rho = { expr = "isa_pressure(h_ft * 0.3048) / (287.05287 * sat_K)", unit = "kg/m3" }
+mass = { expr = "17631 - fuel_used_kg", unit = "kg" }
+Ixx = { value = 1.33367e5, unit = "kg*m2" }
+de = { expr = "({elev.left} + {elev.right}) / 2", unit = "deg", offset = 1.0 }
+S = { value = 64.0, unit = "m2" }
+"#;
+
+const CSV: &str = "t,V,a,h_ft,sat_K,fuel_used_kg,elev.left,elev.right\n\
+0.0,100.0,2.0,0.0,288.15,0.0,1.0,3.0\n\
+0.1,100.0,2.0,16404.2,255.65,1763.1,-2.0,-4.0\n\
+0.2,100.0,2.0,70000.0,216.65,0.0,0.0,0.0\n";
+
+fn events(mapping: &str, csv: &str) -> Vec<RecordEvent> {
+    let m = Mapping::from_toml_str(mapping, "computed.toml").unwrap();
+    FlightDataReader::new(csv.as_bytes(), "computed.csv", &m).unwrap().map(|e| e.unwrap()).collect()
+}
+
+fn sample(e: &RecordEvent) -> &aeroident_estimators::AirDataSample {
+    match e {
+        RecordEvent::Sample { sample, .. } => sample,
+        other => panic!("{other:?}"),
+    }
+}
+
+/// ISA at sea level (1.2250 kg/m³) and at 5 km pressure altitude on a standard day (0.73612
+/// kg/m³; 16 404.2 ft, 255.65 K); mass = 17 631 − fuel; Ixx × mass / 17 631; the mean of two
+/// elevator columns plus the offset; a pressure altitude above the model is a rejected row
+/// naming the expression.
+#[test]
+fn analytic_density_mass_inertia_and_expression_channels() {
+    let ev = events(MAPPING, CSV);
+    assert_eq!(ev.len(), 3);
+    let (s0, s1) = (sample(&ev[0]), sample(&ev[1]));
+    assert!((s0.rho_kgpm3.unwrap() - 1.2250).abs() < 1e-4, "{:?}", s0.rho_kgpm3);
+    assert!((s1.rho_kgpm3.unwrap() - 0.736_12).abs() < 2e-4, "{:?}", s1.rho_kgpm3);
+    assert!((s0.qbar_pa - 0.5 * 1.2250 * 100.0 * 100.0).abs() < 1.0);
+    assert_eq!(s0.constants.mass_kg, 17631.0);
+    assert_eq!(s1.constants.mass_kg, 17631.0 - 1763.1);
+    assert!((s1.constants.Ixx_kgm2.unwrap() - 1.33367e5 * 0.9).abs() < 1e-6);
+    assert_eq!(s0.constants.Ixx_kgm2, Some(1.33367e5));
+    assert!((s0.de_rad.unwrap() - 3.0f64.to_radians()).abs() < 1e-15);
+    assert!((s1.de_rad.unwrap() - (-2.0f64).to_radians()).abs() < 1e-15);
+    let RecordEvent::Rejected { row: 4, problem: RowProblem::NonFiniteSi { column, channel, .. } } =
+        &ev[2]
+    else {
+        panic!("{:?}", ev[2])
+    };
+    assert_eq!(channel, "rho");
+    assert!(column.starts_with("expr `isa_pressure(h_ft"), "{column}");
+}
+
+/// A mapped expression's columns must be in the record, an expression must parse and read a
+/// column, and `expr` excludes the other sources: each refusal names the file and channel.
+#[test]
+fn errors_bad_expressions_name_the_file_and_channel() {
+    let with = |line: &str| {
+        MAPPING.replace("mass = { expr = \"17631 - fuel_used_kg\", unit = \"kg\" }", line)
+    };
+    for (line, needle) in [
+        ("mass = { expr = \"17631 - \", unit = \"kg\" }", "expr `17631 - `"),
+        ("mass = { expr = \"17631\", unit = \"kg\" }", "reads no column"),
+        ("mass = { expr = \"m\", value = 3.0, unit = \"kg\" }", "exactly one of"),
+    ] {
+        let e = Mapping::from_toml_str(&with(line), "computed.toml").unwrap_err();
+        let text = e.to_string();
+        assert!(matches!(e, FlightDataError::BadSpec { .. }), "{text}");
+        assert!(
+            text.contains("computed.toml") && text.contains("mass") && text.contains(needle),
+            "{text}"
+        );
+    }
+    let m = Mapping::from_toml_str(
+        &with("mass = { expr = \"m0 - burnt\", unit = \"kg\" }"),
+        "computed.toml",
+    )
+    .unwrap();
+    let Err(e) = FlightDataReader::new(CSV.as_bytes(), "computed.csv", &m) else { panic!() };
+    assert!(
+        matches!(&e, FlightDataError::MissingColumn { column, channel, .. } if column == "burnt" || column == "m0")
+            && e.to_string().contains("mass"),
+        "{e}"
+    );
+    let bad =
+        MAPPING.replace("inertia_reference_mass_kg = 17631.0", "inertia_reference_mass_kg = 0.0");
+    let e = Mapping::from_toml_str(&bad, "computed.toml").unwrap_err().to_string();
+    assert!(e.contains("inertia_reference_mass_kg") && e.contains("> 0"), "{e}");
+}

@@ -106,7 +106,7 @@ pub fn check_record<R: Read>(
     config: &CompatConfig,
 ) -> Result<(CompatSummary, CompatResult), ReplayError> {
     let file = reader.file().to_string();
-    let rec = read_manoeuvres(reader, None)?;
+    let rec = read_manoeuvres(reader, None, &[])?;
     let slices: Vec<&[aeroident_estimators::AirDataSample]> =
         rec.manoeuvres.iter().map(Vec::as_slice).collect();
     let result = compat::check(&slices, config)

@@ -10,7 +10,8 @@
 //! - [`montecarlo`]: seeded campaigns of the experiment and their statistics.
 //! - [`poc`]: the thesis's proof-of-concept systems; [`sim`]: open-loop F-16 simulation.
 //! - [`export`]: input design and the JSBSim `<aerodynamics>` export.
-//! - [`condition`]: the conditioning stage every pipeline shares (derivatives, alignment).
+//! - [`condition`]: the conditioning stage every pipeline shares (derivatives, alignment);
+//!   [`window`]: the time windows of a long record, each a manoeuvre.
 //! - [`estimators`]: the estimator kinds, their options and `build`.
 
 /// Aircraft estimation experiments: two F-16s, sensors, estimators.
@@ -34,6 +35,7 @@ pub mod scenario_kind;
 pub mod sim;
 /// Model validation metrics: fit, residual whiteness, input correlation, prediction intervals.
 pub mod validation;
+pub mod window;
 
 pub use error::{Context, PipelineError};
 pub use named::Named;

@@ -41,10 +41,11 @@ fn matrix(v: Vec<f64>, rows: usize, cols: usize) -> PyResult<Array2<f64>> {
 
 /// Fits a record file by output error (`oe`) or the filter-error method (`fem`) as
 /// `aeroident replay DATA --map MAPPING --estimator oe|fem [--model M] [--initial-states S]
-/// [--validate-on V] [--bootstrap N] [--max-iterations N] [--process-noise S]` (documentation:
+/// [--validate-on V] [--bootstrap N] [--max-iterations N] [--process-noise S] [--window A:B …]`
+/// (documentation:
 /// `aeroident.fit` in python/aeroident/__init__.py).
 #[pyfunction]
-#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None, max_iterations=None, process_noise=None, compat=None))]
+#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None, max_iterations=None, process_noise=None, compat=None, windows=None))]
 #[allow(clippy::too_many_arguments)]
 fn fit_file<'py>(
     py: Python<'py>,
@@ -58,7 +59,9 @@ fn fit_file<'py>(
     max_iterations: Option<usize>,
     process_noise: Option<&str>,
     compat: Option<&str>,
+    windows: Option<Vec<(f64, f64)>>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let windows = crate::record::time_windows("fit", windows)?;
     let compat = compat
         .map(|c| aeroident_pipelines::compat::Corrections::from_json(Path::new(c)))
         .transpose()
@@ -92,6 +95,7 @@ fn fit_file<'py>(
             max_iterations,
             process_noise,
             compat,
+            windows,
         };
         let mut outcome = fit_record(reader, &mapping, model, options)?;
         if let Some(v) = &validate_with {

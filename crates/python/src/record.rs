@@ -25,6 +25,25 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
+/// The `windows=[(start_s, end_s), …]` argument of `replay` and `fit` as checked time windows.
+///
+/// # Errors
+/// A window that is not finite with start < end, or windows that overlap, naming `func`.
+pub fn time_windows(
+    func: &str,
+    windows: Option<Vec<(f64, f64)>>,
+) -> PyResult<Vec<aeroident_pipelines::window::TimeWindow>> {
+    let windows: Vec<_> = windows
+        .unwrap_or_default()
+        .into_iter()
+        .map(|(a, b)| aeroident_pipelines::window::TimeWindow::parse(&format!("{a}:{b}")))
+        .collect::<Result<_, _>>()
+        .map_err(|e| err(format!("{func}: windows: {e}")))?;
+    aeroident_pipelines::window::check_windows(&windows)
+        .map_err(|e| err(format!("{func}: windows: {e}")))?;
+    Ok(windows)
+}
+
 /// The estimator by its CLI name (`rls`, `ftr`, `ekf`, `smpe`, `smpe-corrected`, `gradient`,
 /// `oe`).
 pub fn estimator_kind(name: &str) -> PyResult<EstimatorKind> {
@@ -138,7 +157,7 @@ fn derivative_source(s: &str) -> PyResult<DerivativeSource> {
 /// Replays a record file exactly as `aeroident replay DATA --map MAPPING` (module doc of the
 /// Python package).
 #[pyfunction]
-#[pyo3(signature = (path, mapping, estimator="rls", model=None, forgetting=1.0, derivatives="auto", diff_window=5, compat=None))]
+#[pyo3(signature = (path, mapping, estimator="rls", model=None, forgetting=1.0, derivatives="auto", diff_window=5, compat=None, windows=None))]
 #[allow(clippy::too_many_arguments)]
 fn replay_file<'py>(
     py: Python<'py>,
@@ -150,8 +169,10 @@ fn replay_file<'py>(
     derivatives: &str,
     diff_window: usize,
     compat: Option<&str>,
+    windows: Option<Vec<(f64, f64)>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let kind = estimator_kind(estimator)?;
+    let windows = time_windows("replay", windows)?;
     let compat = compat.map(str::to_owned);
     let derivatives = derivative_source(derivatives)?;
     let (path, mapping, model) = (path.to_owned(), mapping.to_owned(), model.map(str::to_owned));
@@ -175,6 +196,7 @@ fn replay_file<'py>(
                 .as_deref()
                 .map(|c| aeroident_pipelines::compat::Corrections::from_json(Path::new(c)))
                 .transpose()?,
+            windows,
         };
         let file = std::fs::File::open(&path).with_context(|| format!("opening {path}"))?;
         let reader = FlightDataReader::new(std::io::BufReader::new(file), &path, &mapping)?;

@@ -136,3 +136,19 @@ def test_fit_bootstrap_sigma():
         aeroident.fit(shared(HFB), HFB_MAP, "fem", model=BOOK_MODEL, bootstrap=10)
     with pytest.raises(aeroident.AeroidentError, match="at least 2"):
         aeroident.fit(shared(HFB), HFB_MAP, "oe", model=BOOK_MODEL, bootstrap=1)
+
+
+def test_fit_windows_equal_cli(tmp_path):
+    # fAttasAilRud1 is the aileron record (50.08–80.08 s) and the rudder record joined: the
+    # window of the first is fitted as the CLI's --window, and a bad window is refused.
+    data = shared("jategaonkar_hfb320_attas/csv/fAttasAilRud1.csv")
+    mapping = ROOT / "mappings/attas_lateral.toml"
+    out = tmp_path / "out"
+    r = cli("replay", data, "--map", mapping, "--estimator", "oe", "--window", "50:81", "--out", out)
+    assert r.returncode == 0, r.stderr
+    expected = json.loads((out / "summary.json").read_text())
+    py = aeroident.fit(data, mapping, "oe", windows=[(50, 81)])
+    assert without_wall_time(py["summary"]) == without_wall_time(expected)
+    assert py["summary"]["manoeuvres"] == 1
+    with pytest.raises(aeroident.AeroidentError, match="windows: `5:2`"):
+        aeroident.fit(data, mapping, "oe", windows=[(5, 2)])

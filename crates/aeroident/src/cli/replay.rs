@@ -6,7 +6,7 @@
 //!                  [--model longitudinal|lateral|six-axis|FILE]
 //!                  [--estimator rls|ftr|ekf|smpe|smpe-corrected|gradient|oe] [--forgetting λ]
 //!                  [--derivatives auto|differentiate] [--diff-window N] [--realtime]
-//!                  [--validate-on <data2.csv>]
+//!                  [--validate-on <data2.csv>] [--window START:END …]
 //! ```
 //! Writes `<dir>/estimates.csv`, `<dir>/summary.json`, `<dir>/estimates.{png,svg}` (estimates
 //! with shaded ±2σ), `<dir>/fit.{png,svg}` (model vs measured) and `<dir>/report.html`
@@ -34,6 +34,7 @@ use aeroident_pipelines::estimators::EstimatorKind;
 use aeroident_pipelines::replay::{
     DerivativeSource, EstimateRows, Pacing, ReplayObserver, ReplayOptions, replay,
 };
+use aeroident_pipelines::window::TimeWindow;
 use anyhow::Context;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -77,6 +78,11 @@ pub struct ReplayArgs {
     /// Pace the replay at the record's own sample rate.
     #[arg(long)]
     pub realtime: bool,
+    /// A time window `START:END` (record seconds) of the record to use; repeat it for several
+    /// manoeuvres of one flight, each window its own manoeuvre (own initial state). Default:
+    /// the whole record.
+    #[arg(long = "window", value_name = "START:END", value_parser = parse_window)]
+    pub windows: Vec<TimeWindow>,
     /// A second record (same mapping) not used for the fit: the final estimates are applied
     /// to it and the validation metrics reported under `validation_on` in the summary.
     #[arg(long, value_name = "FILE2")]
@@ -143,6 +149,10 @@ impl ReplayObserver for Console {
     }
 }
 
+fn parse_window(text: &str) -> Result<TimeWindow, String> {
+    TimeWindow::parse(text)
+}
+
 /// Runs `aeroident replay`.
 ///
 /// # Errors
@@ -161,6 +171,7 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         diff_window: args.diff_window,
         pacing: if args.realtime { Pacing::Realtime } else { Pacing::Unpaced },
         compat: compat_corrections(&args, &mapping, live)?,
+        windows: args.windows.clone(),
     };
     if args.estimator.is_batch() && mavlink {
         anyhow::bail!(
@@ -458,6 +469,7 @@ fn execute_batch(
             .transpose()
             .map_err(|e| anyhow::anyhow!("--process-noise: {e}"))?,
         compat,
+        windows: args.windows.clone(),
     };
     if let Some(n) = options.bootstrap_refits.filter(|_| !fem) {
         eprintln!("bootstrap: a filter-error fit for the noise levels, then {n} replicas refitted");

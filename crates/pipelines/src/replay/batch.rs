@@ -232,6 +232,8 @@ pub(crate) struct Manoeuvres {
     pub(crate) rejections: RejectionLog,
     pub(crate) read: usize,
     pub(crate) rejected: usize,
+    /// What the time windows did ([`crate::window::Windowed::note`]).
+    pub(crate) window_note: Option<String>,
 }
 
 /// Reads the whole record, splitting it into manoeuvres at the reader's gap events, with a
@@ -242,17 +244,16 @@ pub(crate) struct Manoeuvres {
 pub(crate) fn read_manoeuvres<R: Read>(
     reader: FlightDataReader<R>,
     compat: Option<&crate::compat::Corrections>,
+    windows: &[crate::window::TimeWindow],
 ) -> Result<Manoeuvres, ReplayError> {
     let file = reader.file().to_string();
-    let events: Box<dyn Iterator<Item = Result<RecordEvent, aeroident_io::FlightDataError>>> =
-        match compat {
-            Some(c) => Box::new(crate::compat::Corrected::new(reader, c.clone())),
-            None => Box::new(reader),
-        };
+    crate::window::check_windows(windows)
+        .map_err(|reason| ReplayError::Option { option: "window", reason })?;
+    let mut events = super::record_events(reader, compat, windows);
     let mut manoeuvres: Vec<Vec<AirDataSample>> = vec![Vec::new()];
     let mut rejections = RejectionLog::default();
     let (mut read, mut rejected) = (0usize, 0usize);
-    for event in events {
+    for event in events.by_ref() {
         match event? {
             RecordEvent::Sample { sample, .. } => {
                 read += 1;
@@ -287,7 +288,7 @@ pub(crate) fn read_manoeuvres<R: Read>(
         }
         .into());
     }
-    Ok(Manoeuvres { manoeuvres, rejections, read, rejected })
+    Ok(Manoeuvres { manoeuvres, rejections, read, rejected, window_note: events.note() })
 }
 
 /// The output-error configuration of a post-flight fit of `structure` (`replay --estimator
@@ -623,6 +624,9 @@ pub struct FitOptions {
     /// A compatibility check's corrections, applied to every sample before the fit
     /// ([`crate::compat::Corrected`]); the summary's warnings list them.
     pub compat: Option<crate::compat::Corrections>,
+    /// The time windows of the record fitted, each its own manoeuvre ([`crate::window`]);
+    /// empty: the whole record.
+    pub windows: Vec<crate::window::TimeWindow>,
 }
 
 impl Default for FitOptions {
@@ -635,6 +639,7 @@ impl Default for FitOptions {
             max_iterations: None,
             process_noise: None,
             compat: None,
+            windows: Vec::new(),
         }
     }
 }
@@ -668,7 +673,7 @@ pub fn fit_record<R: Read>(
         });
     }
     let file = reader.file().to_string();
-    let rec = read_manoeuvres(reader, options.compat.as_ref())?;
+    let rec = read_manoeuvres(reader, options.compat.as_ref(), &options.windows)?;
     let model = match model {
         Some(m) => m,
         None => default_model(&rec.manoeuvres[0][0], mapping)?,
@@ -708,6 +713,7 @@ pub fn fit_record<R: Read>(
     summary.warnings.extend(unlisted);
     summary.warnings.extend(simulation_note);
     summary.warnings.extend(level_note);
+    summary.warnings.extend(rec.window_note.clone());
     if let Some(c) = &options.compat {
         summary.warnings.extend(c.applied.iter().map(|a| format!("compat applied: {a}")));
     }
@@ -1018,7 +1024,7 @@ pub fn validate_on<R: Read>(
     fitted: &BatchOutcome,
 ) -> Result<ValidationReport, ReplayError> {
     let file = reader.file().to_string();
-    let rec = read_manoeuvres(reader, None)?;
+    let rec = read_manoeuvres(reader, None, &[])?;
     let slices: Vec<&[AirDataSample]> = rec.manoeuvres.iter().map(Vec::as_slice).collect();
     let r = &fitted.result;
     let np = r.n_params;

@@ -91,6 +91,9 @@ pub struct ReplayOptions {
     /// A compatibility check's corrections, applied to every sample before the conditioning
     /// stage ([`crate::compat::Corrected`]); the summary's warnings list them.
     pub compat: Option<crate::compat::Corrections>,
+    /// The time windows of the record used, each its own manoeuvre ([`crate::window`]); empty:
+    /// the whole record.
+    pub windows: Vec<crate::window::TimeWindow>,
 }
 
 /// What a face sees of a replay while it runs: the model once chosen, each identified sample's
@@ -221,6 +224,7 @@ impl Default for ReplayOptions {
             diff_window: 5,
             pacing: Pacing::Unpaced,
             compat: None,
+            windows: Vec::new(),
         }
     }
 }
@@ -650,13 +654,11 @@ pub fn replay_with<R: Read>(
     observer: &mut dyn ReplayObserver,
 ) -> Result<ReplayOutcome, ReplayError> {
     check_diff_window(opts.diff_window)?;
+    crate::window::check_windows(&opts.windows)
+        .map_err(|reason| ReplayError::Option { option: "window", reason })?;
     let mut run = online::Replay::new(reader.file().to_string(), mapping, opts, observer);
-    let events: Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>>> = match &opts.compat
-    {
-        Some(c) => Box::new(crate::compat::Corrected::new(reader, c.clone())),
-        None => Box::new(reader),
-    };
-    for item in events {
+    let mut events = record_events(reader, opts.compat.as_ref(), &opts.windows);
+    for item in events.by_ref() {
         run.event(item?, &make)?;
         if run.diverged() {
             break;
@@ -666,7 +668,23 @@ pub fn replay_with<R: Read>(
     if let Some(c) = &opts.compat {
         out.summary.warnings.extend(c.applied.iter().map(|a| format!("compat applied: {a}")));
     }
+    out.summary.warnings.extend(events.note());
     Ok(out)
+}
+
+/// The events of a record as the estimators see them: read, corrected by a compatibility
+/// check's corrections when given ([`crate::compat::Corrected`], over the whole record: its
+/// time shifts reach across window edges), then cut to the time windows ([`crate::window`]).
+pub(crate) fn record_events<'a, R: Read + 'a>(
+    reader: FlightDataReader<R>,
+    compat: Option<&crate::compat::Corrections>,
+    windows: &[crate::window::TimeWindow],
+) -> crate::window::Windowed<Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a>> {
+    let events: Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a> = match compat {
+        Some(c) => Box::new(crate::compat::Corrected::new(reader, c.clone())),
+        None => Box::new(reader),
+    };
+    crate::window::Windowed::new(events, windows.to_vec())
 }
 
 /// The differentiator window must be odd, ≥ 3 and ≤ [`MAX_DIFF_WINDOW`].

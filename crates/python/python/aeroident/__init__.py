@@ -21,7 +21,7 @@ Long calls release the GIL.
 from __future__ import annotations
 
 import os
-from typing import Any, Mapping, Optional, Union
+from typing import Any, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
@@ -135,6 +135,7 @@ def replay(
     constants: Optional[Mapping[str, float]] = None,
     sample_interval_s: Optional[float] = None,
     compat: Optional[PathLike] = None,
+    windows: Optional[Sequence[tuple[float, float]]] = None,
 ) -> dict[str, Any]:
     """Replays a whole record through an estimator, every sample in Rust (no Python loop).
 
@@ -144,7 +145,8 @@ def replay(
     estimator: nothing is differentiated; ``constants=`` fills constants the arrays lack).
     ``model=None``: the richest preset the first sample supports, as the CLI chooses.
     ``compat``: a record file's ``compat.json`` (``aeroident compat``) whose corrections are
-    applied to every sample first (``--compat FILE``).
+    applied to every sample first (``--compat FILE``). ``windows``: ``[(start_s, end_s), …]``
+    record-time windows, each its own manoeuvre, the rest not used (``--window START:END``).
 
     Returns a dict:
 
@@ -172,6 +174,7 @@ def replay(
             derivatives,
             diff_window,
             None if compat is None else os.fspath(compat),
+            None if windows is None else [(float(a), float(b)) for a, b in windows],
         )
     keys = set(_core.sample_keys())
     arrays = {k: np.ascontiguousarray(v, dtype=np.float64) for k, v in data.items() if k in keys}
@@ -192,6 +195,7 @@ def fit(
     max_iterations: Optional[int] = None,
     process_noise: Optional[str] = None,
     compat: Optional[PathLike] = None,
+    windows: Optional[Sequence[tuple[float, float]]] = None,
 ) -> dict[str, Any]:
     """Fits a whole record by batch output error (``"oe"``) or the filter-error method
     (``"fem"``: output error with process noise on the air-data states, for turbulent records).
@@ -214,7 +218,8 @@ def fit(
     ``oe``, 250 for ``fem``). ``process_noise`` (``fem``): the states with process noise,
     comma-separated (``"V,alpha,theta,q"``; ``--process-noise``; default ``V,alpha,beta``).
     ``compat``: a ``compat.json`` (``aeroident compat``) whose corrections are applied to every
-    sample before the fit (``--compat FILE``).
+    sample before the fit (``--compat FILE``). ``windows``: ``[(start_s, end_s), …]``
+    record-time windows, each its own manoeuvre, the rest not used (``--window START:END``).
 
     A fit that does not meet both convergence criteria is returned all the same:
     ``summary["status"]`` is ``"converged"``, ``"converged_in_cost"`` (the cost stopped
@@ -249,6 +254,7 @@ def fit(
         max_iterations,
         process_noise,
         None if compat is None else os.fspath(compat),
+        None if windows is None else [(float(a), float(b)) for a, b in windows],
     )
 
 

@@ -1,0 +1,201 @@
+//! Time windows of a record (`replay --window 3630:3660 --window 3700:3725`): the manoeuvres of
+//! a long flight log, each window its own manoeuvre (its own initial state), the rest not used.
+//!
+//! The stage sits between the reader and the estimators. A sample inside a window passes; the
+//! first sample of a window after another is preceded by a [`RecordEvent::Gap`], so every
+//! consumer (the batch fit's manoeuvre split, the online estimators' re-initialisation) starts
+//! a new manoeuvre there exactly as at a gap in the record. A sample outside every window is
+//! not used and counted ([`Windowed::note`] says how many), never silently dropped; a rejected
+//! row or a gap is passed only while inside a window (outside, it concerns no used sample).
+
+use aeroident_io::{FlightDataError, RecordEvent};
+
+/// A closed time window `[start_s, end_s]` of record time, s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TimeWindow {
+    /// First time, s.
+    pub start_s: f64,
+    /// Last time, s.
+    pub end_s: f64,
+}
+
+impl TimeWindow {
+    /// Parses `START:END` (record time, s).
+    ///
+    /// # Errors
+    /// A message naming the text when it is not two finite numbers with `START < END`.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let bad = || format!("`{text}`: give START:END in record seconds with START < END");
+        let (a, b) = text.split_once(':').ok_or_else(bad)?;
+        let (start_s, end_s) = (
+            a.trim().parse::<f64>().map_err(|_| bad())?,
+            b.trim().parse::<f64>().map_err(|_| bad())?,
+        );
+        if !(start_s.is_finite() && end_s.is_finite() && start_s < end_s) {
+            return Err(bad());
+        }
+        Ok(Self { start_s, end_s })
+    }
+
+    fn contains(&self, t_s: f64) -> bool {
+        (self.start_s..=self.end_s).contains(&t_s)
+    }
+}
+
+/// Checks that `windows` are in time order and do not overlap.
+///
+/// # Errors
+/// A message naming the two windows that overlap or are out of order.
+pub fn check_windows(windows: &[TimeWindow]) -> Result<(), String> {
+    for w in windows.windows(2) {
+        if w[1].start_s <= w[0].end_s {
+            return Err(format!(
+                "windows {}:{} and {}:{} overlap or are out of time order",
+                w[0].start_s, w[0].end_s, w[1].start_s, w[1].end_s
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The window stage over a reader's events (module doc). With no windows it passes everything.
+pub struct Windowed<I> {
+    inner: I,
+    windows: Vec<TimeWindow>,
+    /// The window of the last sample, `None` outside all (or before the first sample).
+    current: Option<usize>,
+    /// Last used sample's time, s (the gap before the next window is measured from it).
+    last_used_t_s: Option<f64>,
+    /// Interval between the last two used samples, s: the nominal interval of the gap event.
+    last_dt_s: f64,
+    /// The sample that follows the gap event just returned.
+    pending: Option<RecordEvent>,
+    used: usize,
+    outside: usize,
+}
+
+impl<I> Windowed<I> {
+    /// The stage over `inner` with `windows` (checked with [`check_windows`] by the caller).
+    pub fn new(inner: I, windows: Vec<TimeWindow>) -> Self {
+        Self {
+            inner,
+            windows,
+            current: None,
+            last_used_t_s: None,
+            last_dt_s: f64::NAN,
+            pending: None,
+            used: 0,
+            outside: 0,
+        }
+    }
+
+    /// What the windows did, for the summary's warnings: `None` without windows.
+    pub fn note(&self) -> Option<String> {
+        if self.windows.is_empty() {
+            return None;
+        }
+        let list: Vec<String> =
+            self.windows.iter().map(|w| format!("{}–{} s", w.start_s, w.end_s)).collect();
+        Some(format!(
+            "time windows {} (each its own manoeuvre): {} samples used, {} outside the windows not used",
+            list.join(", "),
+            self.used,
+            self.outside
+        ))
+    }
+}
+
+impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Iterator for Windowed<I> {
+    type Item = Result<RecordEvent, FlightDataError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.windows.is_empty() {
+            return self.inner.next();
+        }
+        if let Some(e) = self.pending.take() {
+            return Some(Ok(e));
+        }
+        loop {
+            let event = match self.inner.next()? {
+                Ok(e) => e,
+                Err(e) => return Some(Err(e)),
+            };
+            let RecordEvent::Sample { row, sample } = &event else {
+                if self.current.is_some() {
+                    return Some(Ok(event));
+                }
+                continue;
+            };
+            let Some(k) = self.windows.iter().position(|w| w.contains(sample.t_s)) else {
+                self.current = None;
+                self.outside += 1;
+                continue;
+            };
+            let entering = self.current != Some(k);
+            self.current = Some(k);
+            self.used += 1;
+            let previous = self.last_used_t_s.replace(sample.t_s);
+            let Some(t0) = previous else { return Some(Ok(event)) };
+            let dt_s = sample.t_s - t0;
+            if !entering {
+                self.last_dt_s = dt_s;
+                return Some(Ok(event));
+            }
+            // A new window: a manoeuvre boundary, as a gap in the record is.
+            let gap = RecordEvent::Gap { row: *row, dt_s, nominal_dt_s: self.last_dt_s };
+            self.pending = Some(event);
+            return Some(Ok(gap));
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use aeroident_estimators::AirDataSample;
+
+    fn sample(row: u64, t_s: f64) -> Result<RecordEvent, FlightDataError> {
+        Ok(RecordEvent::Sample { row, sample: AirDataSample { t_s, ..Default::default() } })
+    }
+
+    fn times(events: &[RecordEvent]) -> Vec<String> {
+        events
+            .iter()
+            .map(|e| match e {
+                RecordEvent::Sample { sample, .. } => format!("{}", sample.t_s),
+                RecordEvent::Gap { dt_s, nominal_dt_s, .. } => format!("gap {dt_s} {nominal_dt_s}"),
+                RecordEvent::Rejected { row, .. } => format!("rejected {row}"),
+            })
+            .collect()
+    }
+
+    /// Samples 0..10 s at 1 s, windows [2, 4] and [7, 8]: 5 used, 6 outside; a gap of 3 s
+    /// (nominal 1 s) before 7 s; the rejected row at 5.5 s (outside) is not passed, the one at
+    /// 3.5 s is.
+    #[test]
+    fn windows_keep_their_samples_and_start_a_manoeuvre_each() {
+        let mut input: Vec<_> = (0..=10).map(|k| sample(k + 2, k as f64)).collect();
+        let rejected = |row| {
+            Ok(RecordEvent::Rejected {
+                row,
+                problem: aeroident_io::RowProblem::Blank { column: "q".into() },
+            })
+        };
+        input.insert(4, rejected(100));
+        input.insert(7, rejected(101));
+        let windows = vec![TimeWindow::parse("2:4").unwrap(), TimeWindow::parse(" 7 : 8").unwrap()];
+        check_windows(&windows).unwrap();
+        let mut w = Windowed::new(input.into_iter(), windows);
+        let out: Vec<RecordEvent> = w.by_ref().map(Result::unwrap).collect();
+        assert_eq!(times(&out), ["2", "3", "rejected 100", "4", "gap 3 1", "7", "8"]);
+        assert!(w.note().unwrap().contains("5 samples used, 6 outside"), "{:?}", w.note());
+    }
+
+    #[test]
+    fn bad_windows_are_named() {
+        assert!(TimeWindow::parse("5:2").unwrap_err().contains("`5:2`"));
+        assert!(TimeWindow::parse("5").is_err() && TimeWindow::parse("a:3").is_err());
+        let w = [TimeWindow::parse("0:5").unwrap(), TimeWindow::parse("4:9").unwrap()];
+        assert!(check_windows(&w).unwrap_err().contains("overlap"));
+    }
+}

@@ -1,11 +1,12 @@
 //! Time windows of a record (`replay --window START:END`) on ATTAS AilRud1, which is fAttasAil1
 //! (50.08–80.08 s) and fAttasRud1 (110.16–140.16 s) joined (../shared/flightdata; skipped with a
-//! message when absent, a failure under CI): a window is exactly the record it cuts out, and
-//! windows covering both manoeuvres are exactly the whole record.
+//! message when absent, a failure under CI): a window is exactly the record it cuts out,
+//! windows covering both manoeuvres are exactly the whole record, and the two records fitted
+//! together (`--and`) are exactly the joined one.
 
 mod common;
 use aeroident_io::{Mapping, open_log};
-use aeroident_pipelines::replay::batch::{BatchSummary, FitOptions, fit_record};
+use aeroident_pipelines::replay::batch::{BatchSummary, FitOptions, fit_record, fit_records};
 use aeroident_pipelines::window::TimeWindow;
 use common::{shared, workspace};
 use std::path::Path;
@@ -39,4 +40,21 @@ fn val_a_window_is_the_record_it_cuts_out() {
     let whole = fit(&joined, &[]);
     assert_eq!(both.manoeuvres, 2);
     assert_eq!(values(&both), values(&whole));
+}
+
+#[test]
+fn val_two_records_fitted_together_are_the_joined_record() {
+    let rel = |n: &str| shared(&format!("jategaonkar_hfb320_attas/csv/{n}.csv"));
+    let (Some(joined), Some(ail), Some(rud)) =
+        (rel("fAttasAilRud1"), rel("fAttasAil1"), rel("fAttasRud1"))
+    else {
+        return;
+    };
+    let m = Mapping::from_path(&workspace().join("mappings/attas_lateral.toml")).unwrap();
+    let open = |p: &Path| open_log(&p.display().to_string(), None, &m).unwrap();
+    let together =
+        fit_records(vec![open(&ail), open(&rud)], &m, None, FitOptions::default()).unwrap().summary;
+    let whole = fit(&joined, &[]);
+    assert_eq!((together.manoeuvres, together.samples_read), (2, 1502));
+    assert_eq!(values(&together), values(&whole));
 }

@@ -10,7 +10,7 @@ use aeroident_estimators::output_error::InitialStates;
 use aeroident_io::{Mapping, ModelSpec, open_log_with_notes};
 use aeroident_pipelines::estimators::EstimatorKind;
 use aeroident_pipelines::replay::batch::{
-    BatchOutcome, FitOptions, fit_record, parse_process_noise_states, validate_on,
+    BatchOutcome, FitOptions, fit_records, parse_process_noise_states, validate_on,
 };
 use numpy::IntoPyArray;
 use numpy::ndarray::Array2;
@@ -41,11 +41,11 @@ fn matrix(v: Vec<f64>, rows: usize, cols: usize) -> PyResult<Array2<f64>> {
 
 /// Fits a record file by output error (`oe`) or the filter-error method (`fem`) as
 /// `aeroident replay DATA --map MAPPING --estimator oe|fem [--model M] [--initial-states S]
-/// [--validate-on V] [--bootstrap N] [--max-iterations N] [--process-noise S] [--window A:B …]`
+/// [--validate-on V] [--bootstrap N] [--max-iterations N] [--process-noise S] [--window A:B …] [--and FILE …]`
 /// (documentation:
 /// `aeroident.fit` in python/aeroident/__init__.py).
 #[pyfunction]
-#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None, max_iterations=None, process_noise=None, compat=None, windows=None))]
+#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None, max_iterations=None, process_noise=None, compat=None, windows=None, also=None))]
 #[allow(clippy::too_many_arguments)]
 fn fit_file<'py>(
     py: Python<'py>,
@@ -60,8 +60,10 @@ fn fit_file<'py>(
     process_noise: Option<&str>,
     compat: Option<&str>,
     windows: Option<Vec<(f64, f64)>>,
+    also: Option<Vec<String>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let windows = crate::record::time_windows("fit", windows)?;
+    let also = also.unwrap_or_default();
     let compat = compat
         .map(|c| aeroident_pipelines::compat::Corrections::from_json(Path::new(c)))
         .transpose()
@@ -87,7 +89,12 @@ fn fit_file<'py>(
     let run = move || -> anyhow::Result<(BatchOutcome, Vec<String>)> {
         let mapping = Mapping::from_path(Path::new(&mapping))?;
         let model = model.as_deref().map(ModelSpec::from_arg).transpose()?;
-        let (reader, mut notes) = open_log_with_notes(&path, None, &mapping)?;
+        let (mut readers, mut notes) = (Vec::new(), Vec::new());
+        for file in std::iter::once(&path).chain(&also) {
+            let (reader, more) = open_log_with_notes(file, None, &mapping)?;
+            readers.push(reader);
+            notes.extend(more);
+        }
         let options = FitOptions {
             fem: kind == EstimatorKind::Fem,
             initial_states: setting,
@@ -97,7 +104,7 @@ fn fit_file<'py>(
             compat,
             windows,
         };
-        let mut outcome = fit_record(reader, &mapping, model, options)?;
+        let mut outcome = fit_records(readers, &mapping, model, options)?;
         if let Some(v) = &validate_with {
             let (reader, more) = open_log_with_notes(v, None, &mapping)?;
             notes.extend(more);

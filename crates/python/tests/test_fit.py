@@ -152,3 +152,14 @@ def test_fit_windows_equal_cli(tmp_path):
     assert py["summary"]["manoeuvres"] == 1
     with pytest.raises(aeroident.AeroidentError, match="windows: `5:2`"):
         aeroident.fit(data, mapping, "oe", windows=[(5, 2)])
+
+
+def test_fit_of_two_records_equals_the_joined_record():
+    # fAttasAilRud1 is fAttasAil1 and fAttasRud1 joined at a gap: fitted together (also=, the
+    # CLI's --and) they give the joined record's estimates.
+    rel = lambda n: shared(f"jategaonkar_hfb320_attas/csv/{n}.csv")  # noqa: E731
+    mapping = ROOT / "mappings/attas_lateral.toml"
+    together = aeroident.fit(rel("fAttasAil1"), mapping, "oe", also=[rel("fAttasRud1")])
+    joined = aeroident.fit(rel("fAttasAilRud1"), mapping, "oe")
+    assert together["summary"]["manoeuvres"] == 2
+    np.testing.assert_array_equal(together["values"], joined["values"])

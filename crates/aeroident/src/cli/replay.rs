@@ -6,7 +6,7 @@
 //!                  [--model longitudinal|lateral|six-axis|FILE]
 //!                  [--estimator rls|ftr|ekf|smpe|smpe-corrected|gradient|oe] [--forgetting λ]
 //!                  [--derivatives auto|differentiate] [--diff-window N] [--realtime]
-//!                  [--validate-on <data2.csv>] [--window START:END …]
+//!                  [--validate-on <data2.csv>] [--window START:END …] [--and <more.csv> …]
 //! ```
 //! Writes `<dir>/estimates.csv`, `<dir>/summary.json`, `<dir>/estimates.{png,svg}` (estimates
 //! with shaded ±2σ), `<dir>/fit.{png,svg}` (model vs measured) and `<dir>/report.html`
@@ -83,6 +83,11 @@ pub struct ReplayArgs {
     /// the whole record.
     #[arg(long = "window", value_name = "START:END", value_parser = parse_window)]
     pub windows: Vec<TimeWindow>,
+    /// `--estimator oe | fem`: a further record of the same aircraft (same mapping and
+    /// format), fitted together with the first, each file a manoeuvre of its own; repeat it
+    /// for more. `--compat auto` is checked on the first record and applied to all.
+    #[arg(long = "and", value_name = "FILE")]
+    pub and: Vec<String>,
     /// A second record (same mapping) not used for the fit: the final estimates are applied
     /// to it and the validation metrics reported under `validation_on` in the summary.
     #[arg(long, value_name = "FILE2")]
@@ -181,6 +186,12 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     }
     if args.estimator.is_batch() {
         return execute_batch(&args, &mapping, opts.model, opts.compat);
+    }
+    if !args.and.is_empty() {
+        anyhow::bail!(
+            "--and fits several records together: it is for the batch fits (--estimator oe | fem); replay each record on its own with --estimator {}",
+            args.estimator.name()
+        );
     }
     if args.initial_states.is_some() {
         anyhow::bail!(
@@ -453,9 +464,13 @@ fn execute_batch(
         "{} is a batch method: reading the whole record before fitting (not real time)",
         if fem { "the filter-error method" } else { "output error" }
     );
-    let (reader, notes) = open_log_with_notes(&args.data, args.format, mapping)?;
-    for n in &notes {
-        eprintln!("note: {n}");
+    let mut readers = Vec::new();
+    for file in std::iter::once(&args.data).chain(&args.and) {
+        let (reader, notes) = open_log_with_notes(file, args.format, mapping)?;
+        for n in &notes {
+            eprintln!("note: {n}");
+        }
+        readers.push(reader);
     }
     let options = aeroident_pipelines::replay::batch::FitOptions {
         fem,
@@ -475,7 +490,7 @@ fn execute_batch(
         eprintln!("bootstrap: a filter-error fit for the noise levels, then {n} replicas refitted");
     }
     let mut outcome =
-        aeroident_pipelines::replay::batch::fit_record(reader, mapping, model, options)?;
+        aeroident_pipelines::replay::batch::fit_records(readers, mapping, model, options)?;
     if let Some(path) = &args.validate_on {
         let name = path.display().to_string();
         let (reader, notes) = open_log_with_notes(&name, None, mapping)?;

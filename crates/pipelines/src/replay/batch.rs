@@ -246,49 +246,69 @@ pub(crate) fn read_manoeuvres<R: Read>(
     compat: Option<&crate::compat::Corrections>,
     windows: &[crate::window::TimeWindow],
 ) -> Result<Manoeuvres, ReplayError> {
-    let file = reader.file().to_string();
+    read_records(vec![reader], compat, windows)
+}
+
+/// [`read_manoeuvres`] over several records of one aircraft (same mapping), each file starting
+/// a manoeuvre of its own; with more than one file every rejection names its file.
+///
+/// # Errors
+/// As [`read_manoeuvres`]; no usable sample in any file.
+pub(crate) fn read_records<R: Read>(
+    readers: Vec<FlightDataReader<R>>,
+    compat: Option<&crate::compat::Corrections>,
+    windows: &[crate::window::TimeWindow],
+) -> Result<Manoeuvres, ReplayError> {
     crate::window::check_windows(windows)
         .map_err(|reason| ReplayError::Option { option: "window", reason })?;
-    let mut events = super::record_events(reader, compat, windows);
+    let files: Vec<String> = readers.iter().map(|r| r.file().to_string()).collect();
+    let named = files.len() > 1;
     let mut manoeuvres: Vec<Vec<AirDataSample>> = vec![Vec::new()];
     let mut rejections = RejectionLog::default();
     let (mut read, mut rejected) = (0usize, 0usize);
-    for event in events.by_ref() {
-        match event? {
-            RecordEvent::Sample { sample, .. } => {
-                read += 1;
-                if let Some(m) = manoeuvres.last_mut() {
-                    m.push(sample);
+    let mut notes = Vec::new();
+    for (reader, file) in readers.into_iter().zip(&files) {
+        let prefix = if named { format!("{file}: ") } else { String::new() };
+        let mut events = super::record_events(reader, compat, windows);
+        for event in events.by_ref() {
+            match event? {
+                RecordEvent::Sample { sample, .. } => {
+                    read += 1;
+                    if let Some(m) = manoeuvres.last_mut() {
+                        m.push(sample);
+                    }
                 }
-            }
-            RecordEvent::Rejected { row, problem } => {
-                read += 1;
-                rejected += 1;
-                rejections.push_row(row, &problem);
-            }
-            RecordEvent::Gap { row, dt_s, nominal_dt_s } => {
-                rejections.push("gap", Rejection {
-                    row,
-                    reason: format!(
-                        "gap: {dt_s} s before this row (nominal {nominal_dt_s} s); a new manoeuvre with its own initial state"
-                    ),
-                });
-                if manoeuvres.last().is_some_and(|m| !m.is_empty()) {
+                RecordEvent::Rejected { row, problem } => {
+                    read += 1;
+                    rejected += 1;
+                    let reason = format!("{prefix}{problem}");
+                    rejections.push(problem.kind(), Rejection { row, reason });
+                }
+                RecordEvent::Gap { row, dt_s, nominal_dt_s } => {
+                    rejections.push("gap", Rejection {
+                        row,
+                        reason: format!(
+                            "{prefix}gap: {dt_s} s before this row (nominal {nominal_dt_s} s); a new manoeuvre with its own initial state"
+                        ),
+                    });
                     manoeuvres.push(Vec::new());
                 }
             }
         }
+        notes.extend(events.note().map(|n| format!("{prefix}{n}")));
+        manoeuvres.push(Vec::new());
     }
     manoeuvres.retain(|m| !m.is_empty());
     if manoeuvres.is_empty() {
         return Err(aeroident_io::FlightDataError::NoSamples {
-            file,
+            file: files.join(", "),
             rejected,
             first: rejections.first(3),
         }
         .into());
     }
-    Ok(Manoeuvres { manoeuvres, rejections, read, rejected, window_note: events.note() })
+    let window_note = (!notes.is_empty()).then(|| notes.join("; "));
+    Ok(Manoeuvres { manoeuvres, rejections, read, rejected, window_note })
 }
 
 /// The output-error configuration of a post-flight fit of `structure` (`replay --estimator
@@ -660,6 +680,22 @@ pub fn fit_record<R: Read>(
     model: Option<ModelSpec>,
     options: FitOptions,
 ) -> Result<BatchOutcome, ReplayError> {
+    fit_records(vec![reader], mapping, model, options)
+}
+
+/// [`fit_record`] over several records of one aircraft read with the same mapping (`replay A
+/// --and B --and C`): each file is a manoeuvre of its own (or several, at its gaps and
+/// windows), all fitted together; the time windows and the compatibility corrections apply to
+/// every file, and with more than one file each rejection names its file.
+///
+/// # Errors
+/// As [`fit_record`].
+pub fn fit_records<R: Read>(
+    readers: Vec<FlightDataReader<R>>,
+    mapping: &Mapping,
+    model: Option<ModelSpec>,
+    options: FitOptions,
+) -> Result<BatchOutcome, ReplayError> {
     if !options.fem && options.process_noise.is_some() {
         return Err(ReplayError::Option {
             option: "process-noise",
@@ -672,8 +708,8 @@ pub fn fit_record<R: Read>(
             reason: "the parametric bootstrap is of output error (`--estimator oe`); the filter-error method's own σ accounts for the process noise".into(),
         });
     }
-    let file = reader.file().to_string();
-    let rec = read_manoeuvres(reader, options.compat.as_ref(), &options.windows)?;
+    let file = readers.iter().map(|r| r.file()).collect::<Vec<_>>().join(", ");
+    let rec = read_records(readers, options.compat.as_ref(), &options.windows)?;
     let model = match model {
         Some(m) => m,
         None => default_model(&rec.manoeuvres[0][0], mapping)?,

@@ -196,6 +196,7 @@ def fit(
     process_noise: Optional[str] = None,
     compat: Optional[PathLike] = None,
     windows: Optional[Sequence[tuple[float, float]]] = None,
+    also: Optional[Sequence[PathLike]] = None,
 ) -> dict[str, Any]:
     """Fits a whole record by batch output error (``"oe"``) or the filter-error method
     (``"fem"``: output error with process noise on the air-data states, for turbulent records).
@@ -220,6 +221,8 @@ def fit(
     ``compat``: a ``compat.json`` (``aeroident compat``) whose corrections are applied to every
     sample before the fit (``--compat FILE``). ``windows``: ``[(start_s, end_s), …]``
     record-time windows, each its own manoeuvre, the rest not used (``--window START:END``).
+    ``also``: further records of the same aircraft (same mapping), fitted together with
+    ``data``, each file a manoeuvre of its own (``--and FILE``).
 
     A fit that does not meet both convergence criteria is returned all the same:
     ``summary["status"]`` is ``"converged"``, ``"converged_in_cost"`` (the cost stopped
@@ -255,6 +258,7 @@ def fit(
         process_noise,
         None if compat is None else os.fspath(compat),
         None if windows is None else [(float(a), float(b)) for a, b in windows],
+        None if also is None else [os.fspath(p) for p in also],
     )
 
 

@@ -92,6 +92,7 @@ fn fit_file<'py>(
             max_iterations,
             process_noise,
             compat,
+            ..FitOptions::default()
         };
         let mut outcome = fit_record(reader, &mapping, model, options)?;
         if let Some(v) = &validate_with {

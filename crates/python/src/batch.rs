@@ -103,6 +103,7 @@ fn fit_file<'py>(
             process_noise,
             compat,
             windows,
+            ..FitOptions::default()
         };
         let mut outcome = fit_records(readers, &mapping, model, options)?;
         if let Some(v) = &validate_with {

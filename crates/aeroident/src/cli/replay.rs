@@ -113,6 +113,11 @@ pub struct ReplayArgs {
     /// HFB-320 fit.
     #[arg(long, value_name = "STATES")]
     pub process_noise: Option<String>,
+    /// `fem`: let the Kalman gain correct a state by more than its prediction error
+    /// (`diag(K C) > 1`); by default every element is held at or below 1, as Jategaonkar's
+    /// filter-error method (2015, ch. 5) does.
+    #[arg(long)]
+    pub no_gain_constraint: bool,
     /// Apply a data compatibility check's corrections before estimating: a `compat.json` of
     /// `aeroident compat`, or `auto` to run the check on this record first. Removes the
     /// inertial and vane biases and scale factors, undoes the time shifts, and fills a
@@ -202,6 +207,12 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     if args.bootstrap.is_some() {
         anyhow::bail!(
             "--bootstrap applies to output error (--estimator oe), not to --estimator {}",
+            args.estimator.name()
+        );
+    }
+    if args.no_gain_constraint {
+        anyhow::bail!(
+            "--no-gain-constraint applies to the filter-error method (--estimator fem), not to --estimator {}",
             args.estimator.name()
         );
     }
@@ -483,6 +494,7 @@ fn execute_batch(
             .map(aeroident_pipelines::replay::batch::parse_process_noise_states)
             .transpose()
             .map_err(|e| anyhow::anyhow!("--process-noise: {e}"))?,
+        gain_constraint: !args.no_gain_constraint,
         compat,
         windows: args.windows.clone(),
     };

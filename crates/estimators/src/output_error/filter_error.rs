@@ -82,6 +82,42 @@
 //! coloured-process-noise records of the tests 16 of 16 fits converge (12 with the
 //! relaxation).
 //!
+//! # The gain constraint
+//!
+//! Jategaonkar's filter-error method holds every diagonal element of `K C` (`nx × nx`) at or
+//! below 1 (2015 ch. 5; `kcle1.m`, called from `ml_fem.m` after each Gauss–Newton step): a
+//! correction may remove at most a state's whole prediction error, never over-correct it. The
+//! book linearises `diag(K C)` in the step, `kc + G Δ` (`G` its gradient, from the perturbed
+//! gains of the sensitivities), and for the elements whose prediction exceeds 1 replaces the
+//! step by the minimum of the quadratic model on those constraints held as equalities:
+//! `Δ ← Δ − M⁻¹ Gᵀ (G M⁻¹ Gᵀ)⁻¹ s`, `s` the excesses. Built here the same way
+//! ([`FemConfig::gain_limit`], default [`GAIN_LIMIT`] = 1, `None` to switch it off), in all
+//! unknowns (`θ`, `ln F`, `ln R`; biases and initial states do not move the gain) with two
+//! additions: the metric is the damped `M + λ diag M` of the trial (the constrained minimum of
+//! the model that step minimises), and the projection is redone when it pushes another element
+//! over (at most `nx` rounds). The linearisation is exact to first order only, so a trial is
+//! also checked with its own gain: one with an element above the bound plus [`KC_TOLERANCE`]
+//! (and above the iterate's) is rejected like one that raises the cost, and the damping grows.
+//! Cramér–Rao σ are those of the unconstrained information, as the book's.
+//!
+//! **Where it binds.** In the book the innovation covariance `B` is the residuals' sample
+//! covariance and the gain `P Cᵀ B⁻¹` with `P` from the continuous Riccati equation: nothing
+//! ties `C P Cᵀ` to stay below `B`, and `(K C)_jj > 1` for a state measured alone means the
+//! implied measurement noise `B − C P Cᵀ` is negative (Maine & Iliff RP-1168 discuss the same
+//! compatibility). Here `R` is an unknown of its own, positive by construction, and `K = P Cᵀ
+//! (C P Cᵀ + R)⁻¹`: for a state measured by one output alone `(K C)_jj = P_jj / (P_jj + R_j)
+//! < 1`. Only cross-coupling through the other outputs (the accelerations) can carry an
+//! element over 1. Measured: on the HFB-320 record (process noise on `V, α, θ, q`) the free
+//! fit ends at `diag(K C)` = 0.974, 0.994, 0.340, 0.9993 and the constraint changes nothing
+//! (docs/uncertainty.md, "Filter-error method: the gain constraint"); on the synthetic records
+//! of the tests it stays below 1 too. The `R` floor ([`R_FLOOR`]), active on the HFB-320's
+//! `q`, is what bounds the gain there.
+//!
+//! **Steps that leave the physical domain.** A trial whose filter pass fails (a state
+//! non-finite, `V ≤ 0`, `|α|` or `|β|` over 1.5 rad, no stabilising Riccati solution) or whose
+//! likelihood is not finite is rejected and the step shortened by more damping; only when no
+//! damping up to 10¹⁰ gives a lower cost does the fit stop ([`NotConverged::NoDescent`]).
+//!
 //! **Sensitivities** `S = ∂ŷ/∂β` and `D_j = ∂b_j/∂β` by central differences of the **whole
 //! filter**, as `ml_fem.m`: each unknown (`ln R` included) perturbed by
 //! `±10⁻⁴ max(|β_i|, 10⁻³)`, the gain recomputed for the perturbed values (the innovations
@@ -183,6 +219,17 @@ pub const F_STEP: f64 = 0.5;
 /// step multiplied `R` by 10¹⁰ on the ATTAS elevator record.
 pub const MAX_LN_STEP: f64 = core::f64::consts::LN_2 * 2.0;
 
+/// The book's bound of every `diag(K C)` element ([`FemConfig::gain_limit`]'s default): a
+/// correction may remove at most the whole prediction error of a state, never more
+/// (Jategaonkar 2015 ch. 5, `kcle1.m`).
+pub const GAIN_LIMIT: f64 = 1.0;
+
+/// Largest excess of a `diag(K C)` element over its limit that an accepted step may leave
+/// ([`FemConfig::gain_limit`]): the projection onto the linearised constraint is exact to
+/// first order in the step only, and a trial beyond this is rejected like one that raises the
+/// cost (the damping grows, the step shortens).
+pub const KC_TOLERANCE: f64 = 1e-3;
+
 /// Lower bound of each measurement-noise variance `R_j`, as a fraction of its starting value
 /// (the second-difference estimate of the output's white noise; module doc).
 pub const R_FLOOR: f64 = 1e-3;
@@ -200,6 +247,10 @@ pub struct FemConfig {
     /// Starting values of `F` (state units per √s), one per process-noise state of the state
     /// set in filter order; `None`: from the measurement noise (module doc).
     pub process_noise_start: Option<Vec<f64>>,
+    /// Upper bound of every diagonal element of the gain product `K C` (`nx × nx`,
+    /// dimensionless); `None`: unconstrained. Default [`GAIN_LIMIT`] (1, Jategaonkar 2015
+    /// ch. 5, `kcle1.m`; module doc, "The gain constraint").
+    pub gain_limit: Option<f64>,
 }
 
 impl FemConfig {
@@ -209,6 +260,7 @@ impl FemConfig {
             oe: OeConfig::new(structure),
             process_noise: AIR_DATA_STATES,
             process_noise_start: None,
+            gain_limit: Some(GAIN_LIMIT),
         }
     }
 }
@@ -230,6 +282,12 @@ pub struct FemResult {
     /// `diag(C K)` per output of the final filter (`C P Cᵀ S⁻¹`: 0, the output does not
     /// correct the state; → 1, the filter follows the measurement).
     pub ck_diag: Vec<f64>,
+    /// `diag(K C)` per integrated state of the final filter, in the order of
+    /// [`FemResult::kc_states`] (dimensionless: the fraction of a state's prediction error
+    /// that one correction removes; the gain constraint holds it at or below 1).
+    pub kc_diag: Vec<f64>,
+    /// Full-state indices of the integrated states, the order of [`FemResult::kc_diag`].
+    pub kc_states: Vec<usize>,
     /// Diagnostic σ of every unknown (order of `result.values`, `F` as `F`): the sandwich
     /// `M⁻¹ (Σ Sᵀ B⁻¹ r̂(0) B⁻¹ S) M⁻¹` with the lag-0 innovation covariance `r̂(0) = (1/N) Σ ν νᵀ`
     /// in full (innovations cross-correlated across outputs but white in time); `None` when a
@@ -267,6 +325,10 @@ impl fmt::Display for FemResult {
         for (j, o) in self.result.outputs.iter().enumerate() {
             writeln!(f, "{:<14} {:>12.5e} {:>12.4}", o.name(), self.result.r[j], self.ck_diag[j])?;
         }
+        writeln!(f, "{:<14} {:>12}", "state", "diag(KC)")?;
+        for (&i, v) in self.kc_states.iter().zip(&self.kc_diag) {
+            writeln!(f, "{:<14} {:>12.4}", STATE_NAMES[i], v)?;
+        }
         Ok(())
     }
 }
@@ -279,6 +341,8 @@ struct Gain {
     cpc_diag: Vec<f64>,
     /// `diag(C K)` per output.
     ck_diag: Vec<f64>,
+    /// `diag(K C)` per filter state.
+    kc_diag: Vec<f64>,
 }
 
 /// The filter over a prepared problem (module doc).
@@ -336,9 +400,11 @@ impl Filter<'_> {
         let ss = riccati::steady_state(&phi, &c, &q, &rm)?;
         let cpc = &c * &ss.p * c.transpose();
         let ck = &c * &ss.k;
+        let kc = &ss.k * &c;
         Ok(Gain {
             cpc_diag: (0..ny).map(|j| cpc[(j, j)]).collect(),
             ck_diag: (0..ny).map(|j| ck[(j, j)]).collect(),
+            kc_diag: (0..nx).map(|i| kc[(i, i)]).collect(),
             k: ss.k,
         })
     }
@@ -384,20 +450,21 @@ impl Filter<'_> {
     /// `S = ∂ŷ/∂u` (`N·ny × cols` row-major) for the first `cols` unknowns `u` of `full =
     /// (β, ln R)` by central differences of the **whole filter** (gain recomputed, `R =
     /// exp(ln R)` from the last `ny` of `full`); returns `∂ diag(C P Cᵀ + R)/∂u` (`cols × ny`
-    /// row-major) from the same perturbed gains. The scoring step takes all `nβ + ny`
-    /// unknowns; the accuracy at the end the first `nβ`.
+    /// row-major) and `∂ diag(K C)/∂u` (`cols × nx` row-major) from the same perturbed gains.
+    /// The scoring step takes all `nβ + ny` unknowns; the accuracy at the end the first `nβ`.
     fn sensitivities(
         &self,
         full: &[f64],
         cols: usize,
         s: &mut Vec<f64>,
-    ) -> Result<Vec<f64>, EstimatorError> {
+    ) -> Result<GainDerivatives, EstimatorError> {
         let nb = self.nb;
-        let ny = self.p.ny();
+        let (nx, ny) = (self.p.nx, self.p.ny());
         let rows = self.p.n_samples * ny;
         s.clear();
         s.resize(rows * cols, 0.0);
         let mut dbf = vec![0.0; cols * ny];
+        let mut dkc = vec![0.0; cols * nx];
         let (mut yp, mut ym) = (Vec::new(), Vec::new());
         let mut b = full.to_vec();
         let r_of = |v: &[f64]| -> Vec<f64> { v[nb..].iter().map(|x| x.exp()).collect() };
@@ -416,9 +483,20 @@ impl Filter<'_> {
             for j in 0..ny {
                 dbf[a * ny + j] = (gp.cpc_diag[j] + rp[j] - gm.cpc_diag[j] - rm[j]) / (2.0 * h);
             }
+            for i in 0..nx {
+                dkc[a * nx + i] = (gp.kc_diag[i] - gm.kc_diag[i]) / (2.0 * h);
+            }
         }
-        Ok(dbf)
+        Ok(GainDerivatives { dbf, dkc })
     }
+}
+
+/// Derivatives of the filter's gain-dependent quantities from [`Filter::sensitivities`].
+struct GainDerivatives {
+    /// `∂ diag(C P Cᵀ + R)/∂u` (`cols × ny` row-major).
+    dbf: Vec<f64>,
+    /// `∂ diag(K C)/∂u` (`cols × nx` row-major).
+    dkc: Vec<f64>,
 }
 
 /// Negative log-likelihood of the innovations `e` (`N × ny` row-major) under the filter's own
@@ -551,6 +629,8 @@ struct Fem<'a> {
     f0: Vec<f64>,
     /// Lower bounds of the noise unknowns (ln F, then ln R).
     ln_min: Vec<f64>,
+    /// [`FemConfig::gain_limit`].
+    gain_limit: Option<f64>,
 }
 
 /// The current iterate, its residuals and the iteration log.
@@ -569,6 +649,11 @@ struct Iterate {
     e_try: Vec<f64>,
     /// Levenberg–Marquardt damping, kept from one iteration to the next.
     lambda: f64,
+    /// `diag(K C)` per filter state at the iterate.
+    kc: Vec<f64>,
+    /// Its derivatives by the unknowns (`(nβ + ny) × nx` row-major; zero rows for unknowns
+    /// held at a bound), from the last normal equations.
+    dkc: Vec<f64>,
     log: Vec<OeIteration>,
 }
 
@@ -578,6 +663,7 @@ struct Accepted {
     step: nalgebra::DVector<f64>,
     bf: Vec<f64>,
     b: Vec<f64>,
+    kc: Vec<f64>,
     value: f64,
 }
 
@@ -664,7 +750,8 @@ impl<'a> Fem<'a> {
         let r0 = noise_start(p);
         let f0 = process_noise_start(config, p, &noisy, &r0, dt)?;
         let ln_min = noise_bounds(p, &noisy, &r0, dt);
-        Ok(Self { p, filter, noisy, first_f, nb, ny: p.ny(), r0, f0, ln_min })
+        let gain_limit = config.gain_limit;
+        Ok(Self { p, filter, noisy, first_f, nb, ny: p.ny(), r0, f0, ln_min, gain_limit })
     }
 
     /// The measurement-noise variances of unknowns `full`.
@@ -704,8 +791,10 @@ impl<'a> Fem<'a> {
             lambda: 0.0,
             max_step_sigma: f64::NAN,
         }];
-        let (s, y_try, e_try) = (Vec::new(), Vec::new(), Vec::new());
-        Ok((Iterate { beta, bf, b, y, e, s, y_try, e_try, lambda: 0.0, log }, start))
+        let (s, y_try, e_try, dkc) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let kc = st.kc_diag;
+        let it = Iterate { beta, bf, b, y, e, s, y_try, e_try, lambda: 0.0, kc, dkc, log };
+        Ok((it, start))
     }
 
     /// Gauss–Newton iterations until convergence, no descent, or the iteration limit.
@@ -743,8 +832,9 @@ impl<'a> Fem<'a> {
         let merit0 = filter_likelihood(&it.e, &it.bf, self.p.n_samples);
         let Some(a) = self.search(it, &m, &g, merit0) else {
             // At the optimum to the rounding of the finite-difference sensitivities, or stuck.
-            let tiny = damped_step(&m, &m, &g, 0.0)
-                .is_some_and(|st| step_sigma(&self.taken(&it.beta, &st)) < oe.step_tolerance_sigma);
+            let tiny = self
+                .full_step(it, &m, &g)
+                .is_some_and(|st| step_sigma(&st) < oe.step_tolerance_sigma);
             return Ok(Some(if tiny {
                 (true, None)
             } else {
@@ -760,6 +850,7 @@ impl<'a> Fem<'a> {
         std::mem::swap(&mut it.y, &mut it.y_try);
         std::mem::swap(&mut it.e, &mut it.e_try);
         it.b = a.b;
+        it.kc = a.kc;
         it.log.push(OeIteration {
             iteration,
             ln_det_r: ln_det(&it.b),
@@ -781,10 +872,12 @@ impl<'a> Fem<'a> {
     ) -> Result<(DMatrix<f64>, nalgebra::DVector<f64>), OeError> {
         let nfull = self.nb + self.ny;
         let w: Vec<f64> = it.bf.iter().map(|v| 1.0 / v).collect();
-        let dbf = self.filter.sensitivities(&it.beta, nfull, &mut it.s)?;
+        let d = self.filter.sensitivities(&it.beta, nfull, &mut it.s)?;
         let (mut m, mut g, _) = normal_equations(&it.s, &it.e, &w, nfull);
-        add_variance_terms(&mut m, &mut g, &dbf, &it.e, &it.bf, self.p.n_samples);
+        add_variance_terms(&mut m, &mut g, &d.dbf, &it.e, &it.bf, self.p.n_samples);
         check_identifiable(&m, self.p, oe, self.first_f)?;
+        it.dkc = d.dkc;
+        let nx = self.p.nx;
         for (k, lo) in self.ln_min.iter().enumerate() {
             let i = self.first_f + k;
             if it.beta[i] <= *lo && g[i] <= 0.0 {
@@ -794,6 +887,7 @@ impl<'a> Fem<'a> {
                 }
                 m[(i, i)] = 1.0;
                 g[i] = 0.0;
+                it.dkc[i * nx..(i + 1) * nx].fill(0.0);
             }
         }
         Ok((m, g))
@@ -809,18 +903,22 @@ impl<'a> Fem<'a> {
         merit0: f64,
     ) -> Option<Accepted> {
         loop {
-            if let Some(step) = damped_step(m, m, g, it.lambda) {
-                let trial = self.trial(&it.beta, &step);
+            if let Some(trial) = self.propose(it, m, g, it.lambda) {
                 let nfull = self.nb + self.ny;
                 let step = nalgebra::DVector::from_fn(nfull, |i, _| trial[i] - it.beta[i]);
+                // A trial whose filter or prediction fails (the state leaves the physical
+                // domain, no stabilising Riccati solution) or whose gain breaks the constraint
+                // is a step too long: rejected like one that raises the cost, the damping grows.
                 if let Ok(st) =
                     self.filter.pass(&trial[..self.nb], &self.r_of(&trial), &mut it.y_try)
+                    && self.gain_admissible(&st.kc_diag, &it.kc)
                 {
                     let bf = self.innovation_var(&st, &trial);
                     let b = residuals(self.p, &it.y_try, &mut it.e_try);
                     let value = filter_likelihood(&it.e_try, &bf, self.p.n_samples);
                     if value.is_finite() && value < merit0 {
-                        return Some(Accepted { beta: trial, step, bf, b, value });
+                        let kc = st.kc_diag;
+                        return Some(Accepted { beta: trial, step, bf, b, kc, value });
                     }
                 }
             }
@@ -829,6 +927,51 @@ impl<'a> Fem<'a> {
                 return None;
             }
         }
+    }
+
+    /// The trial unknowns at damping `lambda`: the damped scoring step, its noise unknowns
+    /// scaled and bounded ([`Self::trial`]), then projected onto the linearised gain
+    /// constraint ([`constrain_gain`]) when it is on; `None` when a system is singular.
+    fn propose(
+        &self,
+        it: &Iterate,
+        m: &DMatrix<f64>,
+        g: &nalgebra::DVector<f64>,
+        lambda: f64,
+    ) -> Option<Vec<f64>> {
+        let trial = self.trial(&it.beta, &damped_step(m, m, g, lambda)?);
+        let Some(limit) = self.gain_limit else { return Some(trial) };
+        let n = trial.len();
+        let mut delta = nalgebra::DVector::from_fn(n, |i, _| trial[i] - it.beta[i]);
+        constrain_gain(&it.kc, &it.dkc, limit, &damped_matrix(m, lambda), &mut delta)?;
+        let delta = self.taken(&it.beta, &delta);
+        Some((0..n).map(|i| it.beta[i] + delta[i]).collect())
+    }
+
+    /// The undamped, unscaled step as it would be taken (bounds, gain constraint): the
+    /// distance to the optimum the convergence test measures when no step lowers the cost.
+    fn full_step(
+        &self,
+        it: &Iterate,
+        m: &DMatrix<f64>,
+        g: &nalgebra::DVector<f64>,
+    ) -> Option<nalgebra::DVector<f64>> {
+        let mut delta = self.taken(&it.beta, &damped_step(m, m, g, 0.0)?);
+        if let Some(limit) = self.gain_limit {
+            constrain_gain(&it.kc, &it.dkc, limit, m, &mut delta)?;
+            delta = self.taken(&it.beta, &delta);
+        }
+        Some(delta)
+    }
+
+    /// Whether a trial's `diag(K C)` (`kc_trial`) keeps the gain constraint: each element at
+    /// most the limit plus [`KC_TOLERANCE`] (the linearised projection's second-order error),
+    /// or no larger than at the iterate (`kc_now`; a start beyond the bound is led back, not
+    /// refused). Always true with the constraint off.
+    fn gain_admissible(&self, kc_trial: &[f64], kc_now: &[f64]) -> bool {
+        self.gain_limit.is_none_or(|limit| {
+            kc_trial.iter().zip(kc_now).all(|(t, n)| *t <= (limit + KC_TOLERANCE).max(*n))
+        })
     }
 
     /// The trial unknowns `beta + step`: the noise unknowns (logarithms) bounded below (a
@@ -897,18 +1040,69 @@ impl<'a> Fem<'a> {
             v.iter_mut().zip(&f_scale).for_each(|(x, k)| *x *= k);
         }
         from_log_f(&mut result, first_f);
-        let ck_diag = self.filter.gain(&beta, &r)?.ck_diag;
+        let gain = self.filter.gain(&beta, &r)?;
         let out = FemResult {
             result,
             process_noise_states: self.noisy.iter().map(|&k| states[k]).collect(),
             first_f,
-            ck_diag,
+            ck_diag: gain.ck_diag,
+            kc_diag: gain.kc_diag,
+            kc_states: states[..self.p.nx].to_vec(),
             sigma_lag0,
             sigma_full_b,
             sigma_coloured_theta,
         };
         Ok(out)
     }
+}
+
+/// `M + λ diag(M)`: the matrix whose step [`damped_step`] solves for at damping `lambda`
+/// (the metric of the constrained step at that damping).
+fn damped_matrix(m: &DMatrix<f64>, lambda: f64) -> DMatrix<f64> {
+    DMatrix::from_fn(m.nrows(), m.ncols(), |i, j| {
+        m[(i, j)] + if i == j { lambda * m[(i, i)] } else { 0.0 }
+    })
+}
+
+/// Projects the step `delta` onto the linearised gain constraint `diag(K C) ≤ limit`
+/// (Jategaonkar 2015 ch. 5, limit 1; module doc, "The gain constraint"): with `kc` the current
+/// `diag(K C)` (`nx`) and `dkc` its derivatives (`n × nx` row-major, `n = delta.len()`), the
+/// elements whose linear prediction `kc_i + ∇kc_i · δ` exceeds `limit` form the rows of `G`
+/// and the excesses `s`, and `δ ← δ − A⁻¹ Gᵀ (G A⁻¹ Gᵀ)⁻¹ s`: the minimum of the quadratic model with
+/// metric `A` (`n × n`, symmetric positive definite) on those constraints held as equalities.
+/// A projection can push another element over; it then joins the set and the projection is
+/// redone from the original step (at most `nx` rounds). Elements no unknown moves (a zero row)
+/// are left out. `None` when `A` or `G A⁻¹ Gᵀ` is singular.
+fn constrain_gain(
+    kc: &[f64],
+    dkc: &[f64],
+    limit: f64,
+    a: &DMatrix<f64>,
+    delta: &mut nalgebra::DVector<f64>,
+) -> Option<()> {
+    let (n, nx) = (delta.len(), kc.len());
+    let excess = |d: &nalgebra::DVector<f64>, i: usize| {
+        kc[i] + (0..n).map(|k| dkc[k * nx + i] * d[k]).sum::<f64>() - limit
+    };
+    let movable = |i: usize| (0..n).any(|k| dkc[k * nx + i] != 0.0);
+    let chol = a.clone().cholesky()?;
+    let d0 = delta.clone();
+    let mut active: Vec<usize> = Vec::new();
+    for _ in 0..nx {
+        let new: Vec<usize> = (0..nx)
+            .filter(|&i| !active.contains(&i) && movable(i) && excess(delta, i) > 0.0)
+            .collect();
+        if new.is_empty() {
+            break;
+        }
+        active.extend(new);
+        let g = DMatrix::from_fn(active.len(), n, |r, k| dkc[k * nx + active[r]]);
+        let ainv_gt = chol.solve(&g.transpose());
+        let s = nalgebra::DVector::from_fn(active.len(), |r, _| excess(&d0, active[r]));
+        let mult = (&g * &ainv_gt).lu().solve(&s)?;
+        *delta = &d0 - ainv_gt * mult;
+    }
+    delta.iter().all(|v| v.is_finite()).then_some(())
 }
 
 /// `ln det` of a diagonal given as its entries.

@@ -197,6 +197,9 @@ pub struct BatchSummary {
     /// `fem`: the measurement-noise variances `R` recovered from the innovations, per output;
     /// empty for `oe` (its `residual_rms` is the noise).
     pub measurement_noise_var: Vec<(String, f64)>,
+    /// `fem`: `diag(K C)` of the final filter per integrated state (dimensionless; the gain
+    /// constraint, on unless `--no-gain-constraint`, holds each at or below 1); empty for `oe`.
+    pub gain_kc_diag: Vec<(String, f64)>,
     /// `first-sample` (each manoeuvre starts at its first sample's measured states) or
     /// `estimate` (`--initial-states estimate`).
     pub initial_states: String,
@@ -641,6 +644,9 @@ pub struct FitOptions {
     /// `fem` only: the states with process noise (full-state mask,
     /// [`parse_process_noise_states`]); `None`: [`FemConfig::new`]'s (`V`, `α`, `β`).
     pub process_noise: Option<[bool; N_STATES]>,
+    /// `fem` only: hold `diag(K C) ≤ 1` ([`FemConfig::gain_limit`], Jategaonkar 2015 ch. 5);
+    /// default on.
+    pub gain_constraint: bool,
     /// A compatibility check's corrections, applied to every sample before the fit
     /// ([`crate::compat::Corrected`]); the summary's warnings list them.
     pub compat: Option<crate::compat::Corrections>,
@@ -650,7 +656,8 @@ pub struct FitOptions {
 }
 
 impl Default for FitOptions {
-    /// Output error, initial states at the first sample, no bootstrap, the default limit.
+    /// Output error, initial states at the first sample, no bootstrap, the default limit
+    /// (`fem`: the gain constraint on).
     fn default() -> Self {
         Self {
             fem: false,
@@ -658,6 +665,7 @@ impl Default for FitOptions {
             bootstrap_refits: None,
             max_iterations: None,
             process_noise: None,
+            gain_constraint: true,
             compat: None,
             windows: Vec::new(),
         }
@@ -700,6 +708,12 @@ pub fn fit_records<R: Read>(
         return Err(ReplayError::Option {
             option: "process-noise",
             reason: "process noise is the filter-error method's (`--estimator fem`); output error has none".into(),
+        });
+    }
+    if !options.fem && !options.gain_constraint {
+        return Err(ReplayError::Option {
+            option: "no-gain-constraint",
+            reason: "the gain constraint is the filter-error method's (`--estimator fem`); output error has no filter".into(),
         });
     }
     if options.fem && options.bootstrap_refits.is_some() {
@@ -780,6 +794,9 @@ fn fit_slices(
         config.oe.initial_states = options.initial_states;
         if let Some(mask) = options.process_noise {
             config.process_noise = mask;
+        }
+        if !options.gain_constraint {
+            config.gain_limit = None;
         }
         let (f, wall) = fit_fem_manoeuvres(slices, &config).map_err(ReplayError::Model)?;
         Ok(FittedRecord { result: f.result.clone(), fit_wall_s: wall, fem: Some(f), oe: None })
@@ -935,6 +952,9 @@ fn summarise(
                 .collect(),
             None => Vec::new(),
         },
+        gain_kc_diag: fitted.fem.as_ref().map_or_else(Vec::new, |f| {
+            f.kc_states.iter().map(|&i| STATE_NAMES[i].to_string()).zip(f.kc_diag.clone()).collect()
+        }),
         initial_states: initial_states_name(initial_states).into(),
         estimated_initial_states,
         bootstrap: sigmas.bootstrap.clone(),

@@ -1,4 +1,5 @@
 use super::*;
+use crate::flight_model::Linearisation;
 use crate::flight_model::state;
 use crate::output_error::tests::{lon, simulate_with_process_noise};
 use crate::output_error::{InitialStates, fit as oe_fit};
@@ -211,4 +212,156 @@ fn coloured_process_noise_sigma_matches_the_scatter() {
         }
     }
     assert_eq!(converged, GUST_RUNS, "only {converged} of {GUST_RUNS} fits converged");
+}
+
+/// `diag(K C)` of the steady-state filter at a fit's estimates, formed here from the flight
+/// model's Jacobians (not from the estimator's filter): `A`, `C` averaged over the samples
+/// `0, s, 2s, …` (`s = ⌈N / LINEARISATION_POINTS⌉`) at their measured states, `Φ = exp(A Δt)`,
+/// `Q = F² Δt` on the process-noise states, `R` the estimated measurement noise.
+fn kc_at_estimates(st: &ModelStructure, data: &[AirDataSample], fem: &FemResult) -> Vec<f64> {
+    let model = crate::flight_model::FlightModel::new(*st).unwrap();
+    let states = model.state_set().states();
+    let nx = fem.kc_states.len();
+    let r = &fem.result;
+    let ny = r.outputs.len();
+    let theta = &r.values[..r.n_params];
+    let stride = data.len().div_ceil(LINEARISATION_POINTS);
+    let (mut a, mut c) = (DMatrix::<f64>::zeros(nx, nx), DMatrix::<f64>::zeros(ny, nx));
+    let mut lin = Linearisation::default();
+    let mut count = 0.0;
+    for s in data.iter().step_by(stride) {
+        let u = model.inputs(s).unwrap();
+        let x: Vec<f64> = states[..nx].iter().map(|&i| u.x_meas[i]).collect();
+        model.linearise(theta, &u, &x, &mut lin).unwrap();
+        a += DMatrix::from_fn(nx, nx, |i, j| lin.dfdx[i][j]);
+        c += DMatrix::from_fn(ny, nx, |j, k| lin.dydx[r.outputs[j].index()][k]);
+        count += 1.0;
+    }
+    let dt = data[1].t_s - data[0].t_s;
+    let phi = (a / count * dt).exp();
+    let c = c / count;
+    let q = DMatrix::from_fn(nx, nx, |i, j| match fem.process_noise(states[i]) {
+        Some((f, _)) if i == j => f * f * dt,
+        _ => 0.0,
+    });
+    let rm = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&r.r));
+    let ss = crate::output_error::riccati::steady_state(&phi, &c, &q, &rm).unwrap();
+    let kc = &ss.k * &c;
+    (0..nx).map(|i| kc[(i, i)]).collect()
+}
+
+/// The gain constraint where it binds. The book's bound (1) does not bind on these records
+/// (the free fit's `diag(K C)` stays below 1: the maximum-likelihood `R` is positive), so
+/// the bound is set to half the free fit's largest element: the constrained fit converges
+/// with every element, recomputed independently ([`kc_at_estimates`]), at most the bound
+/// plus [`KC_TOLERANCE`], the bound reached (the likelihood wants more gain), and a negative
+/// log-likelihood no lower than the free fit's (a constrained optimum cannot beat it).
+#[test]
+fn gain_limit_holds_diag_kc_where_the_free_fit_exceeds_it() {
+    let st = lon();
+    let th = trimmed_truth(&st);
+    let data = simulate_with_process_noise(
+        &st,
+        &th,
+        20.0,
+        16.0,
+        1.0,
+        11,
+        [0.0; N_STATES],
+        process_alpha(F_ALPHA),
+    );
+    let mut cfg = FemConfig::new(st);
+    cfg.gain_limit = None;
+    let free = fit(&[&data], &cfg).unwrap();
+    let free_kc = kc_at_estimates(&st, &data, &free);
+    let free_max = free_kc.iter().copied().fold(f64::MIN, f64::max);
+    assert!(
+        free_kc.iter().zip(&free.kc_diag).all(|(a, b)| (a - b).abs() < 1e-6 * a.abs().max(1e-3))
+    );
+    let limit = 0.5 * free_max;
+    assert!(limit > 0.1, "the free gain is too small for the test: {free_kc:?}");
+    cfg.gain_limit = Some(limit);
+    let held = fit(&[&data], &cfg).unwrap();
+    let held_kc = kc_at_estimates(&st, &data, &held);
+    let held_max = held_kc.iter().copied().fold(f64::MIN, f64::max);
+    println!("diag(KC) free {free_kc:?}, held {held_kc:?} (limit {limit})");
+    assert!(held_max <= limit + KC_TOLERANCE, "held max diag(KC) {held_max} > {limit}");
+    assert!(held_max >= limit - 0.01, "constraint not active: {held_max} vs {limit}");
+    let cost = |f: &FemResult| f.result.iterations.last().unwrap().cost;
+    assert!(
+        cost(&held) >= cost(&free) - 1e-6 * cost(&free).abs(),
+        "{} < {}",
+        cost(&held),
+        cost(&free)
+    );
+}
+
+/// Where the gain stays below the bound the constraint changes nothing: on the calm record
+/// the fit with the book's bound equals the free fit (same iterates: the projection and the
+/// admissibility test only act on an element over the bound).
+#[test]
+fn gain_constraint_is_inactive_on_calm_data() {
+    let st = lon();
+    let th = trimmed_truth(&st);
+    let data =
+        simulate_with_process_noise(&st, &th, 20.0, 16.0, 1.0, 7, [0.0; N_STATES], [0.0; N_STATES]);
+    let mut cfg = FemConfig::new(st);
+    cfg.process_noise = process_alpha(1.0).map(|v| v > 0.0);
+    assert_eq!(cfg.gain_limit, Some(GAIN_LIMIT));
+    let held = fit(&[&data], &cfg).unwrap();
+    cfg.gain_limit = None;
+    let free = fit(&[&data], &cfg).unwrap();
+    let kc = kc_at_estimates(&st, &data, &held);
+    assert!(kc.iter().all(|v| *v < GAIN_LIMIT), "diag(KC) {kc:?}");
+    assert_eq!(held.result.values, free.result.values);
+    assert_eq!(held.result.sigma, free.result.sigma);
+}
+
+/// The projection onto the linearised constraint against the bordered (KKT) system solved
+/// directly: for the elements the step would push over the limit, `[A Gᵀ; G 0] [δ; μ] =
+/// [A δ₀; limit − kc]`; the others stay within the limit, and a step within it is kept.
+#[test]
+fn gain_projection_solves_the_constrained_quadratic() {
+    let (n, nx, limit) = (5, 3, 1.0);
+    let l =
+        DMatrix::from_fn(
+            n,
+            n,
+            |i, j| if i >= j { 1.0 + ((i * 7 + j * 3) % 5) as f64 * 0.3 } else { 0.0 },
+        );
+    let a = &l * l.transpose();
+    let dkc: Vec<f64> = (0..n * nx).map(|k| ((k * 37 % 11) as f64 - 5.0) * 0.1).collect();
+    let kc = [0.95, 0.5, 0.99];
+    let d0 = nalgebra::DVector::from_fn(n, |i, _| 0.3 * (i as f64 - 1.5));
+    let lin = |d: &nalgebra::DVector<f64>, i: usize| {
+        kc[i] + (0..n).map(|k| dkc[k * nx + i] * d[k]).sum::<f64>()
+    };
+    let over: Vec<usize> = (0..nx).filter(|&i| lin(&d0, i) > limit).collect();
+    assert!(!over.is_empty(), "test step violates nothing");
+    let mut d = d0.clone();
+    constrain_gain(&kc, &dkc, limit, &a, &mut d).unwrap();
+    // The bordered system with the elements the result holds at the limit.
+    let active: Vec<usize> = (0..nx).filter(|&i| (lin(&d, i) - limit).abs() < 1e-9).collect();
+    assert!(over.iter().all(|i| active.contains(i)), "active {active:?}, over {over:?}");
+    let m = active.len();
+    let mut kkt = DMatrix::<f64>::zeros(n + m, n + m);
+    let mut rhs = nalgebra::DVector::<f64>::zeros(n + m);
+    kkt.view_mut((0, 0), (n, n)).copy_from(&a);
+    for (r, &i) in active.iter().enumerate() {
+        for k in 0..n {
+            kkt[(n + r, k)] = dkc[k * nx + i];
+            kkt[(k, n + r)] = dkc[k * nx + i];
+        }
+        rhs[n + r] = limit - kc[i];
+    }
+    rhs.rows_mut(0, n).copy_from(&(&a * &d0));
+    let sol = kkt.lu().solve(&rhs).unwrap();
+    for k in 0..n {
+        assert!((sol[k] - d[k]).abs() < 1e-10, "δ[{k}] {} vs KKT {}", d[k], sol[k]);
+    }
+    assert!((0..nx).all(|i| lin(&d, i) <= limit + 1e-10));
+    let small = &d0 * 1e-3;
+    let mut kept = small.clone();
+    constrain_gain(&kc, &dkc, limit, &a, &mut kept).unwrap();
+    assert_eq!(kept, small);
 }

@@ -73,8 +73,8 @@
 //!   outlier cannot inflate it, with one exception: when the state process noise is estimated
 //!   (below), a rejected innovation of an output of the adapted states' equations (their own
 //!   measurements, and the specific forces `a_x, a_y, a_z` whose row of `∂h/∂x` has an entry
-//!   in an adapted state: with `α`, `β` the vanes and the force outputs, through which
-//!   translational turbulence shows) is a censored observation, `e² > gate² S`, and updates
+//!   in an adapted state: with `V`, `α`, `β` the airspeed, the vanes and the force outputs,
+//!   through which translational turbulence shows) is a censored observation, `e² > gate² S`, and updates
 //!   `R` at that bound, `gate² S − h P hᵀ` (one rejection moves `R` by at most
 //!   `a · gate² S`). The estimate of `Q` is noisy (its relative standard error over the
 //!   500-sample window is of order 1 on turbulent records) and pauses while an output is
@@ -83,7 +83,7 @@
 //!   could not grow either, and the gate stayed shut until the divergence rule fired. The
 //!   censored update lets `R` take over what `Q` lost along `P⁻ + R = E[e²]` (measurements:
 //!   docs/uncertainty.md, "EKF divergences from the estimated process noise"). The other
-//!   outputs (rates, attitudes, airspeed, angular accelerations) keep the strict rule: a
+//!   outputs (rates, attitudes, angular accelerations) keep the strict rule: a
 //!   moment-derivative change or model error still fails their gate and is left to the change
 //!   test (with the angular accelerations included, the roll model error of the ATTAS
 //!   aileron–rudder record inflated `R` of `ṗ` and the σ of `Cl_β`, `Cl_p` twelvefold).
@@ -92,7 +92,7 @@
 //!   samples; measurements: docs/uncertainty.md, "Adaptive EKF state process noise"): the
 //!   configured `state_process_noise` is the start and the floor; the intensity `q` (units² per
 //!   s) of
-//!   each state in `adaptive_q_states` (default `α, β`: translational turbulence enters the
+//!   each state in `adaptive_q_states` (default `V, α, β`: translational turbulence enters the
 //!   air-relative velocity as `−ġ`, nearly white above `V/L`; rate gyros and attitudes see
 //!   inertial motion and rotational gusts are not modelled) is estimated from the filter's own
 //!   **state corrections** `d_o = K_o e_o` of output `o` (covariance matching of the state
@@ -112,8 +112,28 @@
 //!   corrections (`λ = 1 − 1/`[`ADAPTIVE_Q_MEMORY_SAMPLES`]), `A = Σ_o A_o`, each product
 //!   taken against what came before it: mean 0 when `Q` is right, whatever `R` is. That is
 //!   the guard between the two adaptations: `R` is matched on the squares `e_o²`, `Q` on the
-//!   cross products only. A state that only one output informs gets no statistic and keeps its
-//!   configured `Q`. For a scalar random walk with gain `g_k` (the fraction `Σ_o (P hᵀ)_k²/S_o
+//!   cross products only. A state that only one output informs gets no statistic from them.
+//!   *Airspeed.* `V`'s prediction variance is removed by the airspeed alone (the other outputs
+//!   see it only through small drag and lift changes), so its cross-sensor share is ≈ 0: the
+//!   cross products have no sensitivity to `V`'s own `Q` and carry only what `α`'s corrections
+//!   put on `V` through the `V`–`α` covariance (on synthetic records without `V` noise they
+//!   lifted it to 4× its floor). For the states in `adaptive_q_own_lags` (default `V`) the
+//!   statistic also takes each output's products with its *own earlier* corrections
+//!   (lags ≥ 1, `2 d_o A_o`; never the same-sample square, which is `R`'s): the innovation
+//!   autocorrelation of Mehra 1970, whose lag terms a scalar random walk with a `Q` deficit
+//!   makes positive and a consistent filter leaves at 0; the sensitivity is then the full
+//!   random-walk one (cross share 1). The price is the guard against coloured sensor noise:
+//!   a smoothed airspeed channel reads as process noise (the statistic cannot tell them
+//!   apart), which is why it is not used for the vanes. Measured (tests): 0.3 m/s/√s on the
+//!   true `V` of the synthetic records is recovered at 0.97–1.29× on 6 seeds (mean 1.12);
+//!   without `V` noise (calm air, or `α`, `β` turbulence only) it ends at 0.015–0.028 m/s/√s
+//!   (floor 0.015); on the HFB-320 record (Jategaonkar 2015 test case 4) it rises to 0.36 by 10 s
+//!   and ends at 0.56 m/s/√s (the filter-error fit's `F_V` 0.34–0.36), the airspeed's `R`
+//!   falls from σ 1.65 to 0.12 m/s (the fixed-`Q` filter put the airspeed's process noise in
+//!   its measurement noise), and `CL_α` goes from 3.81 ± 0.24 to 4.38 ± 0.08 (filter error
+//!   4.39 ± 0.10); its mean NIS from 0.90 to 0.38 (measured, not explained: the innovation
+//!   variances are now larger than the innovations; docs/uncertainty.md).
+//!   For a scalar random walk with gain `g_k` (the fraction `Σ_o (P hᵀ)_k²/S_o
 //!   / P⁻_kk` of the state's prediction variance this sample removed)
 //!   `E[c] ≈ s (Q − Q_used) dt`, `s = 2g(1 − g)λ / ((2 − g)(1 − λ(1 − g)))` (from the lag
 //!   correlations `C_j = (1 − g)^(j−1) C_1`, `C_1 = (1 − g)(Q − Q_used) dt / (g(2 − g))`),
@@ -128,9 +148,11 @@
 //!   any reference fit. *Limits* (tests): the information of the first
 //!   second or two is gathered with the floor `Q` and counted as such (a short steady segment
 //!   before the input helps); the early transient lifts `Q` a little in calm air (σ 1.18× the
-//!   fixed-`Q` filter's on average, up to 2.6×, on the synthetic doublet records); `V` is not
-//!   adapted by default because its cross products pick up `α`'s through the `ax`, `az`
-//!   cross-covariances (4× its floor without any `V` noise).
+//!   fixed-`Q` filter's on average, up to 2.6×, on the synthetic doublet records); the rates
+//!   and attitudes are not adapted by default: rotational process noise is where a moment
+//!   derivative's change or model error would go, which the change test is for, and their
+//!   cross-sensor statistic reads the start-up parameter error as rotational noise (all states
+//!   adapted on 3 calm synthetic records: `q`'s σ rose to 0.014–0.089 rad/s/√s, floor 0.0006).
 //! - **Parameter changes** (`change_false_alarm_interval_s > 0`, the default): a change test on
 //!   the filter's own parameter estimates, which lets the parameter memory grow to the whole
 //!   record while nothing changes and restarts it when something does. For a consistent
@@ -293,11 +315,17 @@ pub const MIN_DRIFT_WINDOWS: u32 = 5;
 /// Default change-test window, s (module doc).
 pub const DEFAULT_CHANGE_WINDOW_S: f64 = 1.0;
 
-/// The states whose process noise is estimated by default, full-state order: `α` and `β`,
-/// through which translational turbulence enters (`V` too, but its statistic picks up `α`'s:
-/// module doc, "State process noise from the record").
+/// The states whose process noise is estimated by default, full-state order: `V`, `α` and
+/// `β`, through which translational turbulence (and a drag or thrust model error) enters
+/// (module doc, "State process noise from the record").
 pub const DEFAULT_ADAPTIVE_Q_STATES: [bool; N_STATES] =
-    [false, true, true, false, false, false, false, false];
+    [true, true, true, false, false, false, false, false];
+
+/// The adapted states whose process-noise statistic includes the outputs' own lag products
+/// ([`EkfConfig::adaptive_q_own_lags`]), full-state order: `V`, whose prediction variance the
+/// airspeed alone removes (module doc, "State process noise from the record").
+pub const DEFAULT_ADAPTIVE_Q_OWN_LAGS: [bool; N_STATES] =
+    [true, false, false, false, false, false, false, false];
 
 /// Floor of the sensitivity by which the process-noise statistic is divided (module doc):
 /// bounds the amplification of its noise for states whose gain is near 0 or 1.
@@ -348,10 +376,14 @@ pub struct EkfConfig {
     /// `state_process_noise²`, which is otherwise the floor of the estimate.
     pub adaptive_q_window: u32,
     /// Which states' process noise is estimated when `adaptive_q_window > 0`, full-state
-    /// order; the others keep `state_process_noise` (module doc: by default `α, β`
-    /// ([`DEFAULT_ADAPTIVE_Q_STATES`]), through which translational turbulence enters; `V` is
-    /// not adapted by default).
+    /// order; the others keep `state_process_noise` (module doc: by default `V, α, β`
+    /// ([`DEFAULT_ADAPTIVE_Q_STATES`]), through which translational turbulence enters).
     pub adaptive_q_states: [bool; N_STATES],
+    /// Which adapted states' statistic also takes each output's products with its own earlier
+    /// corrections (lags ≥ 1: the innovation autocorrelation of Mehra 1970), full-state order
+    /// (module doc, "State process noise from the record": by default `V`
+    /// ([`DEFAULT_ADAPTIVE_Q_OWN_LAGS`]), which one sensor informs).
+    pub adaptive_q_own_lags: [bool; N_STATES],
     /// After this many consecutive gate rejections of an output, the predicted variance of what
     /// it sees (a measured state, or the parameters of a settled filter) is raised to the
     /// censored bound and the innovation used (module doc, "Re-anchoring"); 0 disables it (the
@@ -386,6 +418,7 @@ impl EkfConfig {
             change_window_s: DEFAULT_CHANGE_WINDOW_S,
             adaptive_q_window: 500,
             adaptive_q_states: DEFAULT_ADAPTIVE_Q_STATES,
+            adaptive_q_own_lags: DEFAULT_ADAPTIVE_Q_OWN_LAGS,
             reanchor_after: DEFAULT_REANCHOR_AFTER,
             max_restarts: DEFAULT_MAX_RESTARTS,
         }

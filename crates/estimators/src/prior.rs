@@ -5,7 +5,10 @@
 //! conventional subsonic aircraft (signs from static stability and damping: Cm_alpha < 0,
 //! Cn_beta > 0, Cl_beta < 0, Cm_q, Cl_p, Cn_r < 0) and a σ several times larger than the
 //! magnitude. It is not taken from any record or reference result. A model file can override
-//! every entry.
+//! every entry. The pitch rate normalised with the reference speed (`q0` = q c̄/(2 V0)) is q̂ at
+//! `V = V0` and has q̂'s prior: the catch-all 0 ± 1 is a fifteenth of a typical `Cm_q`, and the
+//! filter held it there (on the HFB-320 record `Cm_q0` was never identified and `Cm_de` ended
+//! 20 % off).
 
 use crate::vocabulary::{Coefficient as C, MAX_PARAMS, ModelStructure, Param, Term as T};
 
@@ -23,22 +26,22 @@ pub fn generic_prior(p: Param) -> ParamPrior {
     let (value, sigma) = match (p.coefficient, p.term) {
         (C::CL, T::Bias) => (0.2, 1.0),
         (C::CL, T::Alpha) => (4.5, 5.0),
-        (C::CL, T::Q) => (5.0, 30.0),
+        (C::CL, T::Q | T::Q0) => (5.0, 30.0),
         (C::CL, T::Alphadot) => (0.0, 10.0),
         (C::CL, T::De) => (0.3, 2.0),
         (C::CZ, T::Bias) => (-0.2, 1.0),
         (C::CZ, T::Alpha) => (-4.5, 5.0),
-        (C::CZ, T::Q) => (-5.0, 30.0),
+        (C::CZ, T::Q | T::Q0) => (-5.0, 30.0),
         (C::CZ, T::Alphadot) => (0.0, 10.0),
         (C::CZ, T::De) => (-0.3, 2.0),
         (C::CD | C::CX, T::Bias) => (if p.coefficient == C::CD { 0.03 } else { -0.03 }, 0.3),
         (C::CD, T::Alpha) => (0.3, 2.0),
         (C::CX, T::Alpha) => (0.1, 2.0),
-        (C::CD | C::CX, T::Q) => (0.0, 10.0),
+        (C::CD | C::CX, T::Q | T::Q0) => (0.0, 10.0),
         (C::CD | C::CX, T::De) => (0.0, 1.0),
         (C::Cm, T::Bias) => (0.0, 0.5),
         (C::Cm, T::Alpha) => (-0.5, 2.0),
-        (C::Cm, T::Q) => (-15.0, 30.0),
+        (C::Cm, T::Q | T::Q0) => (-15.0, 30.0),
         (C::Cm, T::Alphadot) => (-5.0, 15.0),
         (C::Cm, T::De) => (-1.0, 2.0),
         (C::CY, T::Bias) => (0.0, 0.1),
@@ -105,9 +108,24 @@ impl Priors {
 /// can explain it (Klein & Morelli 2006 ch. 3; Stevens & Lewis §2.3).
 pub fn expected_sign(p: Param) -> Option<f64> {
     Some(match (p.coefficient, p.term) {
-        (C::Cm, T::Q) | (C::Cl, T::P) | (C::Cn, T::R) => -1.0,
+        (C::Cm, T::Q | T::Q0) | (C::Cl, T::P) | (C::Cn, T::R) => -1.0,
         (C::Cm, T::Alpha) | (C::Cl, T::Beta) | (C::CY, T::Beta) | (C::CZ, T::Alpha) => -1.0,
         (C::Cn, T::Beta) | (C::CL, T::Alpha) => 1.0,
         _ => return None,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `q0` is q̂ at the reference speed: the same prior and the same expected sign.
+    #[test]
+    fn pitch_rate_normalised_by_v0_has_the_prior_of_q_hat() {
+        for c in [C::CL, C::CZ, C::CD, C::CX, C::Cm] {
+            let (q, q0) = (Param::new(c, T::Q), Param::new(c, T::Q0));
+            assert_eq!(generic_prior(q0), generic_prior(q), "{}", q0.name());
+            assert_eq!(expected_sign(q0), expected_sign(q), "{}", q0.name());
+        }
+    }
 }

@@ -23,6 +23,10 @@ pub(super) struct QStats {
     acc: [[f64; N_OUTPUTS]; N_STATES],
     tot: [f64; N_STATES],
     cross: [f64; N_STATES],
+    /// Products of each output's correction with its own earlier ones (lags ≥ 1), for the
+    /// states whose own-lag statistic is on.
+    own: [f64; N_STATES],
+    own_on: [bool; N_STATES],
     red: [[f64; 2]; N_STATES],
     p_prior: [f64; N_STATES],
 }
@@ -126,6 +130,8 @@ impl Ekf {
             acc: [[0.0; N_OUTPUTS]; N_STATES],
             tot: [0.0; N_STATES],
             cross: [0.0; N_STATES],
+            own: [0.0; N_STATES],
+            own_on: [false; N_STATES],
             red: [[0.0; 2]; N_STATES],
             p_prior: [0.0; N_STATES],
         };
@@ -136,6 +142,7 @@ impl Ekf {
                     q.tot[k] += *a;
                 }
                 q.p_prior[k] = self.work[k][k];
+                q.own_on[k] = self.cfg.adaptive_q_own_lags[self.model.state_set().states()[k]];
             }
         }
         q
@@ -310,6 +317,8 @@ impl Ekf {
             for k in (0..nx).filter(|&k| self.adapted(k)) {
                 let d = ph[k] * inv * e;
                 q.cross[k] += 2.0 * d * (q.tot[k] - q.acc[k][oi]);
+                // `acc[k][oi]` holds only earlier samples here: an output is used once a sample.
+                q.own[k] += 2.0 * d * q.acc[k][oi];
                 q.acc[k][oi] += d;
                 q.tot[k] += d;
                 let red = ph[k] * ph[k] * inv;
@@ -415,8 +424,13 @@ fn q_statistic(q: &QStats, nx: usize) -> [f64; N_STATES] {
         let [red, red2] = q.red[k];
         if red > 0.0 {
             let gain = (red / q.p_prior[k]).clamp(0.0, 1.0);
-            let cross_share = 1.0 - red2 / (red * red);
-            q_stat[k] = q.cross[k] / sensitivity(gain, q.forget, cross_share);
+            q_stat[k] = if q.own_on[k] {
+                // Every product but the same-sample squares: the whole lag correlation.
+                (q.cross[k] + q.own[k]) / sensitivity(gain, q.forget, 1.0)
+            } else {
+                let cross_share = 1.0 - red2 / (red * red);
+                q.cross[k] / sensitivity(gain, q.forget, cross_share)
+            };
         }
     }
     q_stat

@@ -43,15 +43,16 @@ mod tests {
     use aeroident_estimators::{Estimator, ModelStructure};
     use aeroident_io::{FlightDataReader, RecordEvent};
 
-    /// Every lateral channel the EKF needs except the yaw rate `r`.
-    const MAP: &str = "nominal_dt_s = 0.02\n[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"V\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nbeta = { column = \"b\", unit = \"rad\" }\np = { column = \"P_dps\", unit = \"deg/s\" }\nq = { column = \"Q_dps\", unit = \"deg/s\" }\nphi = { column = \"phi\", unit = \"rad\" }\ntheta = { column = \"theta\", unit = \"rad\" }\nax = { column = \"ax\", unit = \"m/s2\" }\nay = { column = \"ay\", unit = \"m/s2\" }\naz = { column = \"az\", unit = \"m/s2\" }\nda = { column = \"da\", unit = \"rad\" }\ndr = { column = \"dr\", unit = \"rad\" }\nrho = { value = 1.2, unit = \"kg/m3\" }\nmass = { value = 9000.0, unit = \"kg\" }\nS = { value = 28.0, unit = \"m2\" }\ncbar = { value = 3.5, unit = \"m\" }\nb = { value = 9.0, unit = \"m\" }\nIxx = { value = 12000.0, unit = \"kg*m2\" }\nIyy = { value = 75000.0, unit = \"kg*m2\" }\nIzz = { value = 85000.0, unit = \"kg*m2\" }\nIxz = { value = 1300.0, unit = \"kg*m2\" }\n";
+    /// Every lateral channel the EKF needs except the rudder `dr` (a model input; an
+    /// unmeasured state such as `r` would be carried as a state instead).
+    const MAP: &str = "nominal_dt_s = 0.02\n[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"V\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nbeta = { column = \"b\", unit = \"rad\" }\np = { column = \"P_dps\", unit = \"deg/s\" }\nq = { column = \"Q_dps\", unit = \"deg/s\" }\nphi = { column = \"phi\", unit = \"rad\" }\ntheta = { column = \"theta\", unit = \"rad\" }\nax = { column = \"ax\", unit = \"m/s2\" }\nay = { column = \"ay\", unit = \"m/s2\" }\naz = { column = \"az\", unit = \"m/s2\" }\nda = { column = \"da\", unit = \"rad\" }\nr = { column = \"r\", unit = \"rad/s\" }\nrho = { value = 1.2, unit = \"kg/m3\" }\nmass = { value = 9000.0, unit = \"kg\" }\nS = { value = 28.0, unit = \"m2\" }\ncbar = { value = 3.5, unit = \"m\" }\nb = { value = 9.0, unit = \"m\" }\nIxx = { value = 12000.0, unit = \"kg*m2\" }\nIyy = { value = 75000.0, unit = \"kg*m2\" }\nIzz = { value = 85000.0, unit = \"kg*m2\" }\nIxz = { value = 1300.0, unit = \"kg*m2\" }\n";
 
-    /// The lateral EKF fed a record without `r` refuses the sample; the message names the
-    /// channel `r` and the mapping file, not the sample field `r_rad_s`.
+    /// The lateral EKF fed a record without `dr` refuses the sample; the message names the
+    /// channel `dr` and the mapping file, not the sample field `dr_rad`.
     #[test]
     fn errors_ekf_missing_channel_is_named_as_the_mapping_channel() {
         let m = Mapping::from_toml_str(MAP, "lat.toml").unwrap();
-        let csv = "t,V,a,b,P_dps,Q_dps,phi,theta,ax,ay,az,da,dr\n0,150,0.05,0.01,1,0,0.02,0.05,0.3,0.1,-9.8,0.01,0.0\n";
+        let csv = "t,V,a,b,P_dps,Q_dps,phi,theta,ax,ay,az,da,r\n0,150,0.05,0.01,1,0,0.02,0.05,0.3,0.1,-9.8,0.01,0.0\n";
         let mut reader = FlightDataReader::new(csv.as_bytes(), "lat.csv", &m).unwrap();
         let Some(Ok(RecordEvent::Sample { sample, .. })) = reader.next() else {
             panic!("the row is a sample")
@@ -59,10 +60,10 @@ mod tests {
         let st = ModelStructure::preset("lateral").unwrap();
         let mut ekf = Ekf::new(EkfConfig::new(st)).unwrap();
         let e = ekf.update(&sample).unwrap_err();
-        assert!(e.to_string().contains("r_rad_s"), "the core names its field: {e}");
+        assert!(e.to_string().contains("dr_rad"), "the core names its field: {e}");
         let text = estimator_error(&e, &m);
-        assert!(text.starts_with("channel `r` (not mapped in lat.toml) has no value"), "{text}");
-        assert!(!text.contains("r_rad_s") && !text.contains("NaN"), "{text}");
+        assert!(text.starts_with("channel `dr` (not mapped in lat.toml) has no value"), "{text}");
+        assert!(!text.contains("dr_rad") && !text.contains("NaN"), "{text}");
     }
 
     /// A mapped channel is named with its column; a constant as a constant; an error about the

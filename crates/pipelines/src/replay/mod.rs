@@ -40,6 +40,7 @@
 
 pub mod arrays;
 pub mod batch;
+pub mod cross_check;
 pub mod diagnostics;
 pub mod explain;
 mod online;
@@ -412,10 +413,14 @@ pub struct ReplayOutcome {
     /// The samples fed to the estimator (bounded), for the fit quality and the
     /// model-vs-measured figure.
     pub samples: crate::sample_log::SampleLog<AirDataSample>,
+    /// The comparison with the batch fit of the same record ([`cross_check_record`]), when
+    /// asked for.
+    pub cross_check: Option<cross_check::CrossCheck>,
 }
 
-/// `summary.json`: the [`ReplaySummary`] keys, then `identifiability`, `validation` and
-/// `validation_on` (`null` unless `--validate-on`).
+/// `summary.json`: the [`ReplaySummary`] keys, then `identifiability`, `validation`,
+/// `validation_on` (`null` unless `--validate-on`) and `cross_check` (`null` unless
+/// `--cross-check`).
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct SummaryDocument<'a> {
     /// The replay summary (flattened).
@@ -427,6 +432,8 @@ pub struct SummaryDocument<'a> {
     pub validation: Option<&'a ValidationReport>,
     /// Validation on a second record.
     pub validation_on: Option<&'a ValidationReport>,
+    /// The comparison with the batch fit (`--cross-check`), else `null`.
+    pub cross_check: Option<&'a cross_check::CrossCheck>,
 }
 
 impl ReplayOutcome {
@@ -440,6 +447,7 @@ impl ReplayOutcome {
             identifiability: self.identifiability.as_ref(),
             validation: self.validation.as_ref(),
             validation_on,
+            cross_check: self.cross_check.as_ref(),
         }
     }
 
@@ -670,6 +678,43 @@ pub fn replay_with<R: Read>(
     }
     out.summary.warnings.extend(events.note());
     Ok(out)
+}
+
+/// Sets the online replay `outcome` beside the batch output-error fit of the same record
+/// (`reader`, a second reading of it) and model, with `opts`' compatibility corrections and
+/// windows (`replay --cross-check`): `outcome.cross_check` and one warning per flagged
+/// parameter ([`cross_check`]). A batch fit that fails is a warning, not an error (the online
+/// result stands on its own).
+///
+/// # Errors
+/// None beyond the batch fit's own, which become a warning.
+pub fn cross_check_record<R: Read>(
+    outcome: &mut ReplayOutcome,
+    reader: FlightDataReader<R>,
+    mapping: &Mapping,
+    opts: &ReplayOptions,
+) {
+    let options = batch::FitOptions {
+        compat: opts.compat.clone(),
+        windows: opts.windows.clone(),
+        ..batch::FitOptions::default()
+    };
+    match batch::fit_record(reader, mapping, Some(outcome.model.clone()), options) {
+        Ok(fit) => {
+            let check = cross_check::cross_check(
+                opts.estimator,
+                &outcome.summary,
+                &fit.summary,
+                opts.compat.is_some(),
+            );
+            outcome.summary.warnings.extend(cross_check::warnings(&check));
+            outcome.cross_check = Some(check);
+        }
+        Err(e) => outcome
+            .summary
+            .warnings
+            .push(format!("cross-check: the output-error fit of the record failed: {e}")),
+    }
 }
 
 /// The events of a record as the estimators see them: read, corrected by a compatibility

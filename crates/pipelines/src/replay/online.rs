@@ -353,6 +353,7 @@ impl<'a> Replay<'a> {
             final_covariance,
             recorder: self.recorder,
             samples: self.fed,
+            cross_check: None,
         })
     }
 

@@ -7,6 +7,7 @@
 //!                  [--estimator rls|ftr|ekf|smpe|smpe-corrected|gradient|oe] [--forgetting λ]
 //!                  [--derivatives auto|differentiate] [--diff-window N] [--realtime]
 //!                  [--validate-on <data2.csv>] [--window START:END …] [--and <more.csv> …]
+//!                  [--cross-check]
 //! ```
 //! Writes `<dir>/estimates.csv`, `<dir>/summary.json`, `<dir>/estimates.{png,svg}` (estimates
 //! with shaded ±2σ), `<dir>/fit.{png,svg}` (model vs measured) and `<dir>/report.html`
@@ -88,6 +89,11 @@ pub struct ReplayArgs {
     /// for more. `--compat auto` is checked on the first record and applied to all.
     #[arg(long = "and", value_name = "FILE")]
     pub and: Vec<String>,
+    /// Real-time estimators: also fit the record by output error with the same model and set
+    /// the two side by side; a parameter further apart than 2 combined σ is flagged in the
+    /// table, the warnings and `summary.json` `cross_check`, with its likely cause.
+    #[arg(long)]
+    pub cross_check: bool,
     /// A second record (same mapping) not used for the fit: the final estimates are applied
     /// to it and the validation metrics reported under `validation_on` in the summary.
     #[arg(long, value_name = "FILE2")]
@@ -191,6 +197,11 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     }
     if args.estimator.is_batch() {
         return execute_batch(&args, &mapping, opts.model, opts.compat);
+    }
+    if args.cross_check && (live || args.estimator.is_batch()) {
+        anyhow::bail!(
+            "--cross-check sets a real-time estimator beside the batch fit of a whole record: not for a live feed or a batch estimator"
+        );
     }
     if !args.and.is_empty() {
         anyhow::bail!(
@@ -296,7 +307,17 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         replay(reader, &mapping, &opts, &mut console)
     };
     bar.finish_and_clear();
-    let outcome = outcome?;
+    let mut outcome = outcome?;
+    if args.cross_check {
+        let (reader, _) = open_log_with_notes(&args.data, Some(format), &mapping)?;
+        eprintln!("cross-check: fitting the record by output error with the same model");
+        aeroident_pipelines::replay::cross_check_record(&mut outcome, reader, &mapping, &opts);
+        if let Some(c) = &outcome.cross_check {
+            for w in aeroident_pipelines::replay::cross_check::warnings(c) {
+                eprintln!("warning: {w}");
+            }
+        }
+    }
     if let Some(f) = csv_file {
         f.commit()?;
     }

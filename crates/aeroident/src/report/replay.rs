@@ -49,12 +49,13 @@ pub fn results(outcome: &ReplayOutcome, title: &str, references: &[Reference]) -
         .iter()
         .map(|p| {
             let reference = references.iter().find(|r| r.name == p.name).map(|r| r.value);
+            let differs = cross_check_status(outcome, &p.name);
             ParameterRow::new(
                 p.name.clone(),
                 p.estimate,
                 p.std_error,
                 reference,
-                diverged.then_some("diverged"),
+                if diverged { Some("diverged") } else { differs.as_deref() },
             )
         })
         .collect();
@@ -83,6 +84,13 @@ pub fn results(outcome: &ReplayOutcome, title: &str, references: &[Reference]) -
         ));
     }
     Results { title: title.to_string(), reference_label: "reference".into(), rows, fit, notes }
+}
+
+/// `differs from oe by 3.1σ` for a parameter `--cross-check` flagged, else `None`.
+fn cross_check_status(outcome: &ReplayOutcome, name: &str) -> Option<String> {
+    let c = outcome.cross_check.as_ref()?;
+    let d = c.flagged.iter().find(|d| d.parameter == name)?;
+    Some(format!("differs from {} by {:.1}σ", c.batch_estimator, d.combined_sigmas))
 }
 
 fn fits(outcome: &ReplayOutcome) -> Vec<CoefficientFit> {

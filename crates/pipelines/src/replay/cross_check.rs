@@ -13,7 +13,8 @@
 //!   measured coefficient are not of one instant), which `aeroident compat` measures;
 //! - **EKF**: its process- and measurement-noise model (unmodelled process noise moves both its
 //!   estimates and its σ; the batch fit's do not depend on them);
-//! - other estimators: their own bias (docs/smpe-corrected.md, docs/model-reference.md).
+//! - other estimators: their own bias (docs/smpe-corrected.md, docs/model-reference.md);
+//! - a constant term (`Cm_0` …), whatever the estimator: it takes up the others' differences.
 //!
 //! The combined σ is `√(σ_online² + σ_batch²)`, each estimator's reported σ (the batch one the
 //! coloured-residual σ): the two estimates come from the same record, so their errors are
@@ -99,7 +100,7 @@ fn compare(
                 batch_estimate: b,
                 batch_std_error: b_sigma,
                 combined_sigmas: z,
-                likely_cause: likely_cause(kind, est, b, compat_applied).into(),
+                likely_cause: likely_cause(kind, name, est, b, compat_applied).into(),
             });
         }
     }
@@ -108,10 +109,14 @@ fn compare(
 
 fn likely_cause(
     kind: EstimatorKind,
+    name: &str,
     online: f64,
     batch: f64,
     compat_applied: bool,
 ) -> &'static str {
+    if name.ends_with("_0") {
+        return "a constant term: it takes up the other parameters' differences";
+    }
     match kind {
         EstimatorKind::Rls | EstimatorKind::Ftr => {
             let shrunk = online.signum() == batch.signum() && online.abs() < batch.abs();
@@ -189,6 +194,9 @@ mod tests {
         assert!(away.flagged[0].likely_cause.contains("aeroident compat"));
         let ekf = compare(EstimatorKind::Ekf, &[("Cm_q", Some(-3.0), Some(0.05))], &batch, true);
         assert!(ekf.flagged[0].likely_cause.starts_with("the EKF's noise model"));
+        let bias = [("Cm_0", Some(1.0), Some(0.05))];
+        let bias = compare(EstimatorKind::Rls, &bias, &[("Cm_0", 0.0, 0.1)], false);
+        assert!(bias.flagged[0].likely_cause.starts_with("a constant term"));
         c.flagged.iter().for_each(|d| assert!(d.combined_sigmas > FLAG_SIGMAS));
     }
 }

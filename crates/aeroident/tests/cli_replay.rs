@@ -91,6 +91,7 @@ fn errors_bad_corpus_counted_in_summary_with_exact_keys() {
         "identifiability",
         "validation",
         "validation_on",
+        "cross_check",
     ];
     let mut got = keys.clone();
     got.sort_unstable();

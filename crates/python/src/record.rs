@@ -157,7 +157,7 @@ fn derivative_source(s: &str) -> PyResult<DerivativeSource> {
 /// Replays a record file exactly as `aeroident replay DATA --map MAPPING` (module doc of the
 /// Python package).
 #[pyfunction]
-#[pyo3(signature = (path, mapping, estimator="rls", model=None, forgetting=1.0, derivatives="auto", diff_window=5, compat=None, windows=None))]
+#[pyo3(signature = (path, mapping, estimator="rls", model=None, forgetting=1.0, derivatives="auto", diff_window=5, compat=None, windows=None, cross_check=false))]
 #[allow(clippy::too_many_arguments)]
 fn replay_file<'py>(
     py: Python<'py>,
@@ -170,6 +170,7 @@ fn replay_file<'py>(
     diff_window: usize,
     compat: Option<&str>,
     windows: Option<Vec<(f64, f64)>>,
+    cross_check: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let kind = estimator_kind(estimator)?;
     let windows = time_windows("replay", windows)?;
@@ -200,9 +201,14 @@ fn replay_file<'py>(
         };
         let file = std::fs::File::open(&path).with_context(|| format!("opening {path}"))?;
         let reader = FlightDataReader::new(std::io::BufReader::new(file), &path, &mapping)?;
-        let (outcome, arrays) = replay_arrays(reader, &mapping, &opts)?;
+        let (mut outcome, arrays) = replay_arrays(reader, &mapping, &opts)?;
         if let Some(e) = outcome.diverged_error(kind.name()) {
             anyhow::bail!(e);
+        }
+        if cross_check {
+            let file = std::fs::File::open(&path).with_context(|| format!("opening {path}"))?;
+            let reader = FlightDataReader::new(std::io::BufReader::new(file), &path, &mapping)?;
+            aeroident_pipelines::replay::cross_check_record(&mut outcome, reader, &mapping, &opts);
         }
         let summary = serde_json::to_value(outcome.document(None))?;
         Ok((outcome.model.name, summary, arrays))

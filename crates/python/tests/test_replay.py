@@ -182,3 +182,18 @@ def test_estimator_events_name_a_stuck_vane():
     assert (first["kind"], first["subject"]) == ("reanchor", "alpha_rad"), got
     assert first["t_s"] == t[stuck.start + 24], (first, t[stuck.start + 24])
     assert aeroident.Rls(model="longitudinal").events()["listed"] == []
+
+
+def test_cross_check_equals_cli(tmp_path):
+    # The HFB-320 record with Jategaonkar's model: RLS beside output error, as the CLI's
+    # --cross-check; equation error's Cm_q (α lagging the kinematics) is flagged.
+    data = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv")
+    mapping, model = ROOT / "mappings/hfb320.toml", ROOT / "models/hfb320_jategaonkar.toml"
+    out = tmp_path / "out"
+    r = cli("replay", data, "--map", mapping, "--model", model, "--cross-check", "--out", out)
+    assert r.returncode == 0, r.stderr
+    expected = json.loads((out / "summary.json").read_text())["cross_check"]
+    py = aeroident.replay(data, mapping=mapping, model=model, cross_check=True)
+    assert py["summary"]["cross_check"] == expected
+    assert "Cm_q" in [d["parameter"] for d in expected["flagged"]]
+    assert aeroident.replay(data, mapping=mapping, model=model)["summary"]["cross_check"] is None

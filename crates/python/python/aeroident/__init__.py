@@ -136,6 +136,7 @@ def replay(
     sample_interval_s: Optional[float] = None,
     compat: Optional[PathLike] = None,
     windows: Optional[Sequence[tuple[float, float]]] = None,
+    cross_check: bool = False,
 ) -> dict[str, Any]:
     """Replays a whole record through an estimator, every sample in Rust (no Python loop).
 
@@ -147,6 +148,9 @@ def replay(
     ``compat``: a record file's ``compat.json`` (``aeroident compat``) whose corrections are
     applied to every sample first (``--compat FILE``). ``windows``: ``[(start_s, end_s), …]``
     record-time windows, each its own manoeuvre, the rest not used (``--window START:END``).
+    ``cross_check=True`` (a record file): the record is also fitted by output error with the
+    same model and ``summary["cross_check"]`` lists the parameters further apart than 2
+    combined σ with the likely cause (``--cross-check``).
 
     Returns a dict:
 
@@ -175,6 +179,7 @@ def replay(
             diff_window,
             None if compat is None else os.fspath(compat),
             None if windows is None else [(float(a), float(b)) for a, b in windows],
+            cross_check,
         )
     keys = set(_core.sample_keys())
     arrays = {k: np.ascontiguousarray(v, dtype=np.float64) for k, v in data.items() if k in keys}

@@ -242,6 +242,12 @@ pub struct CompatResult {
     pub residual_rms: Vec<f64>,
     /// Residual mean per output (its unit).
     pub residual_mean: Vec<f64>,
+    /// The modelled outputs at the estimate (what each sensor should read from the
+    /// reconstructed flight path with its bias, scale and time shift), `N × ny` row-major, the
+    /// manoeuvres' samples concatenated in order; the measured value is this plus the residual.
+    pub predicted: Vec<f64>,
+    /// The residuals measured − `predicted`, same layout (heading wrapped into (−π, π]).
+    pub residuals: Vec<f64>,
     /// Per manoeuvre, the reconstructed air data.
     pub reconstructed: Vec<Reconstructed>,
     /// How the iterations ended.
@@ -881,6 +887,8 @@ impl Problem<'_> {
             outputs: self.outputs.clone(),
             residual_rms: r.iter().map(|v| v.sqrt()).collect(),
             residual_mean,
+            predicted: y,
+            residuals: e,
             reconstructed,
             termination,
             iterations,

@@ -16,7 +16,7 @@ mod apply;
 pub use apply::{Corrected, Corrections};
 
 use crate::replay::ReplayError;
-use crate::replay::batch::read_manoeuvres;
+use crate::replay::batch::{OutputTrace, read_manoeuvres};
 use aeroident_estimators::compat::{self, Channel, CompatConfig, CompatResult, Unknown};
 use aeroident_estimators::flight_model::G0_MPS2;
 use aeroident_estimators::output_error::Termination;
@@ -152,6 +152,48 @@ pub fn check_record<R: Read>(
 }
 
 /// The median sample interval of the record, s.
+/// Per fitted channel, the measured and modelled time histories of a check (`report.html`'s
+/// figure): the manoeuvres joined with a NaN break between them, at most
+/// [`OutputTrace::MAX_POINTS`] points each (every `stride`th sample). Empty when the result's
+/// arrays do not match its samples.
+pub fn traces(r: &CompatResult) -> Vec<OutputTrace> {
+    let ny = r.outputs.len();
+    let total: usize = r.reconstructed.iter().map(|m| m.t_s.len()).sum();
+    if r.residuals.len() != total * ny || r.predicted.len() != total * ny {
+        return Vec::new();
+    }
+    let stride = total.div_ceil(OutputTrace::MAX_POINTS).max(1);
+    let mut out = Vec::with_capacity(ny);
+    for (j, ch) in r.outputs.iter().enumerate() {
+        let mut tr = OutputTrace {
+            name: ch.name().to_string(),
+            t_s: Vec::new(),
+            measured: Vec::new(),
+            simulated: Vec::new(),
+            stride,
+        };
+        let mut k = 0;
+        for (mi, m) in r.reconstructed.iter().enumerate() {
+            if mi > 0 {
+                tr.t_s.push(f64::NAN);
+                tr.measured.push(f64::NAN);
+                tr.simulated.push(f64::NAN);
+            }
+            for (i, &t) in m.t_s.iter().enumerate() {
+                if i % stride == 0 {
+                    let y = r.predicted[k * ny + j];
+                    tr.t_s.push(t);
+                    tr.simulated.push(y);
+                    tr.measured.push(y + r.residuals[k * ny + j]);
+                }
+                k += 1;
+            }
+        }
+        out.push(tr);
+    }
+    out
+}
+
 fn median_interval(manoeuvres: &[Vec<aeroident_estimators::AirDataSample>]) -> f64 {
     let mut d: Vec<f64> =
         manoeuvres.iter().flat_map(|m| m.windows(2).map(|w| w[1].t_s - w[0].t_s)).collect();
@@ -236,6 +278,8 @@ mod tests {
             outputs: Vec::new(),
             residual_rms: Vec::new(),
             residual_mean: Vec::new(),
+            predicted: Vec::new(),
+            residuals: Vec::new(),
             reconstructed: Vec::new(),
             termination: Termination::Converged,
             iterations: 3,

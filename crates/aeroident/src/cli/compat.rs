@@ -59,12 +59,15 @@ pub fn execute(args: CompatArgs) -> anyhow::Result<()> {
     if let Some(n) = args.max_iterations {
         config.max_iterations = n as usize;
     }
-    let (summary, _) = check_record(reader, &config)?;
+    let (summary, result) = check_record(reader, &config)?;
     super::print_stdout(&render(&summary))?;
     if let Some(dir) = &args.out {
         let mut out = crate::outdir::OutputDir::open(dir)?;
         out.write_bytes("compat.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
-        eprintln!("wrote {}", dir.join("compat.json").display());
+        let source = crate::report::Source { data: &args.data, mapping: &args.map };
+        let traces = aeroident_pipelines::compat::traces(&result);
+        crate::report::compat::write(&source, &summary, &traces, &mut out)?;
+        eprintln!("wrote {} and report.html", dir.join("compat.json").display());
     }
     Ok(())
 }

@@ -104,10 +104,16 @@ pub fn results(outcome: &BatchOutcome, title: &str, references: &[Reference]) ->
 
 /// Two panels per output: measured and simulated, and the residual.
 pub fn trace_panels(traces: &[OutputTrace]) -> Vec<Panel> {
+    measured_vs(traces, "simulated (estimated parameters)")
+}
+
+/// Two panels per output: measured against the model (`model`, for the title), and the
+/// residual.
+pub fn measured_vs(traces: &[OutputTrace], model: &str) -> Vec<Panel> {
     let mut v = Vec::new();
     for tr in traces {
         v.push(Panel {
-            title: format!("{}: measured vs simulated (estimated parameters)", tr.name),
+            title: format!("{}: measured vs {model}", tr.name),
             y_label: tr.name.clone(),
             series: vec![
                 Series {

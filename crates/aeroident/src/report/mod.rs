@@ -8,6 +8,7 @@
 //! closed-loop `run` experiment.
 
 pub mod batch;
+pub mod compat;
 pub mod montecarlo;
 pub mod replay;
 pub mod run;

@@ -234,7 +234,8 @@ pub struct CompatResult {
     /// Cramér–Rao σ.
     pub sigma: Vec<f64>,
     /// The coloured-residual σ (output error's spectral sandwich, `crate::coloured::batch`),
-    /// where formed: the honest σ on a real record, whose residuals are coloured.
+    /// where formed: it allows for coloured residuals, as a real record has (not yet checked
+    /// against the scatter of repeated records: the degraded test finds q's bias 4.9σ off).
     pub sigma_coloured: Option<Vec<f64>>,
     /// The fitted outputs.
     pub outputs: Vec<Channel>,
@@ -529,8 +530,8 @@ fn air_data(x: &[f64; 6]) -> [f64; 6] {
     [v, libm::atan2(x[2], x[0]), libm::asin(x[1] / v), x[3], x[4], x[5]]
 }
 
-/// `a − b` wrapped into (−π, π] (heading residuals).
-fn wrap(d: f64) -> f64 {
+/// An angle (or angle difference) wrapped into (−π, π] (heading residuals and interpolation).
+pub fn wrap(d: f64) -> f64 {
     use core::f64::consts::{PI, TAU};
     let r = libm::remainder(d, TAU);
     if r <= -PI { r + TAU } else { r }

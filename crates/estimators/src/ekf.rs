@@ -284,8 +284,9 @@ pub const DEFAULT_STATE_SIGMA0: [f64; N_STATES] =
     [1.0, 0.007, 0.007, 0.007, 0.007, 0.007, 0.007, 0.007];
 
 /// Initial σ of a state the sample does not measure (β without a sideslip vane; rad or
-/// rad/s), which starts at 0: 0.1 rad is 5.7°, the sideslip of a flat, uncoordinated turn, so a
-/// start at wings-level trim lies well inside it.
+/// rad/s), which starts at 0: 0.1 rad (5.7°) is a prior, not a measurement, chosen wide
+/// against the sideslip of a trimmed start; the synthetic β-less test and ATTAS AilRud1 start
+/// inside it (`ekf::tests::an_unmeasured_sideslip_is_carried_as_a_state`).
 pub const UNMEASURED_STATE_SIGMA0: f64 = 0.1;
 
 /// Default state process noise, full-state order, units per √s (`Q = σ² dt`): a small
@@ -1103,10 +1104,6 @@ impl Ekf {
         }
     }
 
-    /// One step of the state process-noise estimate (module doc, "State process noise from
-    /// the record"): `q ← max(q_min, q + a c / dt)` per adapted state, `c` this sample's
-    /// cross products of the state corrections divided by their sensitivity ([`sensitivity`]),
-    /// `a = 1/min(k + ADAPTIVE_Q_PRIOR_SAMPLES, W)`; `acc` becomes the forgotten sums.
     /// Whether the process noise of state `i` (full-state order) is estimated: configured so,
     /// and the record measures the state. An unmeasured state's corrections come only from the
     /// outputs it drives, whose innovations carry the parameters' errors too, so the
@@ -1117,6 +1114,12 @@ impl Ekf {
         self.cfg.adaptive_q_states[i] && !self.unmeasured.is_some_and(|u| u[i])
     }
 
+    /// One step of the state process-noise estimate (module doc, "State process noise from
+    /// the record"): `q ← max(q_min, q + a c / dt)` per adapted state, `c` this sample's
+    /// statistic (`cross`: the cross products of the state corrections, for the states in
+    /// `adaptive_q_own_lags` also their own-lag products) divided by its sensitivity
+    /// ([`sensitivity`]), `a = 1/min(k + ADAPTIVE_Q_PRIOR_SAMPLES, W)`; `acc` becomes the
+    /// forgotten sums.
     fn adapt_process_noise(
         &mut self,
         acc: &[[f64; N_OUTPUTS]; N_STATES],

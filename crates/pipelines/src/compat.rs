@@ -36,15 +36,15 @@ pub struct ChannelSummary {
     pub unit: String,
     /// Bias, channel units.
     pub bias: Option<f64>,
-    /// Its Cramér–Rao σ.
+    /// Its reported σ (`compat.json` `sigma`: coloured-residual where formed, else Cramér–Rao).
     pub bias_sigma: Option<f64>,
     /// Scale factor `1 + k`.
     pub scale: Option<f64>,
-    /// Its Cramér–Rao σ.
+    /// Its reported σ (`compat.json` `sigma`: coloured-residual where formed, else Cramér–Rao).
     pub scale_sigma: Option<f64>,
     /// Time shift, s (> 0: the channel lags the kinematics).
     pub time_shift_s: Option<f64>,
-    /// Its Cramér–Rao σ, s.
+    /// Its reported σ, s (as `bias_sigma`).
     pub time_shift_sigma_s: Option<f64>,
 }
 
@@ -151,7 +151,6 @@ pub fn check_record<R: Read>(
     Ok((summary, result))
 }
 
-/// The median sample interval of the record, s.
 /// Per fitted channel, the measured and modelled time histories of a check (`report.html`'s
 /// figure): the manoeuvres joined with a NaN break between them, at most
 /// [`OutputTrace::MAX_POINTS`] points each (every `stride`th sample). Empty when the result's
@@ -194,6 +193,7 @@ pub fn traces(r: &CompatResult) -> Vec<OutputTrace> {
     out
 }
 
+/// The median sample interval of the record, s.
 fn median_interval(manoeuvres: &[Vec<aeroident_estimators::AirDataSample>]) -> f64 {
     let mut d: Vec<f64> =
         manoeuvres.iter().flat_map(|m| m.windows(2).map(|w| w[1].t_s - w[0].t_s)).collect();

@@ -11,7 +11,7 @@
 use super::{ChannelSummary, ReconstructedSummary};
 use crate::replay::ReplayError;
 use aeroident_estimators::AirDataSample;
-use aeroident_estimators::compat::{Channel, interpolate};
+use aeroident_estimators::compat::{Channel, interpolate, wrap};
 use aeroident_io::{FlightDataError, RecordEvent};
 use serde::Deserialize;
 use std::collections::VecDeque;
@@ -43,6 +43,12 @@ struct CompatFile {
 type Entry = (Channel, Option<f64>, Option<f64>, Option<f64>);
 
 impl Corrections {
+    /// The summary warnings that say what was applied (`compat applied: …`), one per item of
+    /// [`Corrections::applied`].
+    pub fn warnings(&self) -> impl Iterator<Item = String> + '_ {
+        self.applied.iter().map(|a| format!("compat applied: {a}"))
+    }
+
     /// The corrections of a `compat.json` file.
     ///
     /// # Errors
@@ -166,17 +172,31 @@ impl<I> Corrected<I> {
         }
     }
 
+    /// Channel `ch` of the window at time `at_s` (as `interpolate` over the window: linear
+    /// between the two samples around it, held beyond its ends), heading the short way round
+    /// ±π; `None` when a sample it needs lacks the channel (the sample is then left as read).
+    /// Only the two neighbours are read: this runs for every sample and shifted channel.
+    fn at(&self, ch: Channel, at_s: f64) -> Option<f64> {
+        let w = &self.window;
+        let k = w.partition_point(|s| s.1.t_s <= at_s);
+        if k == 0 || k >= w.len() {
+            return ch.of(&w[k.min(w.len() - 1)].1);
+        }
+        let (a, b) = (&w[k - 1].1, &w[k].1);
+        let (ya, yb) = (ch.of(a)?, ch.of(b)?);
+        let f = (at_s - a.t_s) / (b.t_s - a.t_s);
+        Some(match ch {
+            Channel::Psi => wrap(ya + f * wrap(yb - ya)),
+            _ => ya + f * (yb - ya),
+        })
+    }
+
     /// Sample `k` of the window, corrected.
     fn corrected(&self, k: usize) -> AirDataSample {
         let mut s = self.window[k].1;
-        if !self.corr.shifts.is_empty() {
-            let t: Vec<f64> = self.window.iter().map(|w| w.1.t_s).collect();
-            for &(ch, tau) in &self.corr.shifts {
-                let y: Option<Vec<f64>> = self.window.iter().map(|w| ch.of(&w.1)).collect();
-                if let Some(y) = y {
-                    let v = interpolate(&t, &y, s.t_s + tau);
-                    ch.set(&mut s, v);
-                }
+        for &(ch, tau) in &self.corr.shifts {
+            if let Some(v) = self.at(ch, s.t_s + tau) {
+                ch.set(&mut s, v);
             }
         }
         for &(ch, b, k) in &self.corr.affine {
@@ -246,6 +266,37 @@ mod tests {
             .enumerate()
             .map(|(i, &t)| Ok(RecordEvent::Sample { row: first_row + i as u64, sample: sample(t) }))
             .collect()
+    }
+
+    /// A heading that turns through ±π, read 0.05 s later: each sample between two of a 0.1 s
+    /// grid takes the mean of its neighbours the short way round (near ±π, never near 0), and
+    /// a sample without heading leaves only its own neighbours uncorrected.
+    #[test]
+    fn a_shifted_heading_is_interpolated_across_plus_minus_pi() {
+        use core::f64::consts::PI;
+        let corr =
+            Corrections::new(vec![(Channel::Psi, None, None, Some(0.05))], Vec::new()).unwrap();
+        let psi = |k: usize| wrap(PI - 0.3 + 0.1 * k as f64);
+        let input: Vec<_> = (0..8)
+            .map(|k| {
+                let mut s = AirDataSample { t_s: k as f64 * 0.1, ..Default::default() };
+                s.psi_rad = (k != 6).then(|| psi(k));
+                Ok(RecordEvent::Sample { row: k as u64, sample: s })
+            })
+            .collect();
+        let out: Vec<RecordEvent> =
+            Corrected::new(input.into_iter(), corr).map(Result::unwrap).collect();
+        let got = |k: usize| match &out[k] {
+            RecordEvent::Sample { sample, .. } => sample.psi_rad,
+            e => panic!("{e:?}"),
+        };
+        for k in 0..5 {
+            let want = wrap(PI - 0.25 + 0.1 * k as f64);
+            let v = got(k).unwrap();
+            assert!(wrap(v - want).abs() < 1e-12, "{k}: {v} vs {want}");
+        }
+        assert_eq!(got(5), Some(psi(5)), "its later neighbour has no heading: left as read");
+        assert_eq!(got(6), None);
     }
 
     /// The lag, bias and scale of α and the bias of q are undone (α within the linear

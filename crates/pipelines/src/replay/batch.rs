@@ -228,7 +228,6 @@ fn default_model(first: &AirDataSample, mapping: &Mapping) -> Result<ModelSpec, 
     )))
 }
 
-/// A record read whole and split at its gaps.
 /// A whole record, split into manoeuvres at its gaps.
 pub(crate) struct Manoeuvres {
     pub(crate) manoeuvres: Vec<Vec<AirDataSample>>,
@@ -765,7 +764,7 @@ pub fn fit_records<R: Read>(
     summary.warnings.extend(level_note);
     summary.warnings.extend(rec.window_note.clone());
     if let Some(c) = &options.compat {
-        summary.warnings.extend(c.applied.iter().map(|a| format!("compat applied: {a}")));
+        summary.warnings.extend(c.warnings());
     }
     Ok(BatchOutcome { model, result: fitted.result, summary, traces })
 }

@@ -8,7 +8,7 @@
 //! than [`FLAG_SIGMAS`] combined σ from the batch one is flagged with the likely cause:
 //! - **equation error** (`rls`, `ftr`) with the estimate nearer zero than the batch one:
 //!   regressor noise, the errors-in-variables bias of least squares towards zero (Klein &
-//!   Morelli 2006 §5.3, "bias from noisy regressors");
+//!   Morelli 2006 ch. 5 on equation error with noisy regressors);
 //! - **equation error** otherwise: a time skew or bias between channels (the regressors and the
 //!   measured coefficient are not of one instant), which `aeroident compat` measures;
 //! - **EKF**: its process- and measurement-noise model (unmodelled process noise moves both its

@@ -674,7 +674,7 @@ pub fn replay_with<R: Read>(
     }
     let mut out = run.finish()?;
     if let Some(c) = &opts.compat {
-        out.summary.warnings.extend(c.applied.iter().map(|a| format!("compat applied: {a}")));
+        out.summary.warnings.extend(c.warnings());
     }
     out.summary.warnings.extend(events.note());
     Ok(out)
@@ -685,9 +685,6 @@ pub fn replay_with<R: Read>(
 /// windows (`replay --cross-check`): `outcome.cross_check` and one warning per flagged
 /// parameter ([`cross_check`]). A batch fit that fails is a warning, not an error (the online
 /// result stands on its own).
-///
-/// # Errors
-/// None beyond the batch fit's own, which become a warning.
 pub fn cross_check_record<R: Read>(
     outcome: &mut ReplayOutcome,
     reader: FlightDataReader<R>,

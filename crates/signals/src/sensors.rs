@@ -1,13 +1,13 @@
 //! Per-channel sensor models (architecture §2 `SensorModel`, after JSBSim's FGSensor chain):
-//! sampling at a fixed rate with zero-order hold, optional first-order lag, constant bias,
-//! first-order Gauss–Markov drift, white noise, quantisation and a transport delay. All
+//! sampling at a fixed rate with zero-order hold, optional first-order lag, scale factor,
+//! constant bias, first-order Gauss–Markov drift, white noise, quantisation and a transport delay. All
 //! randomness is seeded and keyed by the sample index (reproducible bit for bit, whatever the
 //! call pattern).
 //!
 //! # Chain, at each sample instant `t_k = k·Ts`
 //! ```text
 //!   x_k   = lag(truth(t_k))                       optional first-order lag, ZOH-exact at Ts
-//!   m_k   = x_k + bias + b_k + σ_w·ξ_k            b_k: Gauss–Markov drift, ξ_k ~ N(0, 1)
+//!   m_k   = scale·x_k + bias + b_k + σ_w·ξ_k      b_k: Gauss–Markov drift, ξ_k ~ N(0, 1)
 //!   q_k   = LSB·round(m_k / LSB)                  optional mid-tread quantiser
 //!   out   = q_{k−N}                               transport delay of N = delay_s/Ts samples
 //! ```
@@ -72,6 +72,9 @@ pub struct SensorParameters {
     pub white_sigma: f64,
     /// Constant bias (channel units).
     pub bias: f64,
+    /// Scale factor on the (lagged) truth, finite and non-zero: `1.03` reads 3 % high, `−1`
+    /// reads with the opposite sign (the convention of a compatibility check's `scale`).
+    pub scale: f64,
     /// First-order Gauss–Markov drift `(σ_gm, τ_s)`: stationary standard deviation (channel
     /// units, ≥ 0) and correlation time (s, > 0).
     pub gauss_markov: Option<(f64, f64)>,
@@ -91,6 +94,7 @@ impl SensorParameters {
         Self {
             white_sigma: 0.0,
             bias: 0.0,
+            scale: 1.0,
             gauss_markov: None,
             sample_rate_hz,
             delay_samples: 0,
@@ -138,6 +142,13 @@ impl SensorModel {
     pub fn new(params: SensorParameters, seed: u64) -> Result<Self, SignalError> {
         non_negative("white_sigma", params.white_sigma)?;
         crate::error::finite("bias", params.bias)?;
+        if !(params.scale.is_finite() && params.scale != 0.0) {
+            return Err(SignalError::InvalidParameter {
+                field: "scale",
+                value: params.scale,
+                reason: "must be finite and non-zero",
+            });
+        }
         let fs = positive("sample_rate_hz", params.sample_rate_hz)?;
         let ts = 1.0 / fs;
         let (gm_phi, gm_drive, gm_sigma) = match params.gauss_markov {
@@ -237,7 +248,7 @@ impl SensorModel {
         } else {
             0.0
         };
-        let mut m = x + self.p.bias + self.gm_state + white;
+        let mut m = self.p.scale * x + self.p.bias + self.gm_state + white;
         if self.p.gauss_markov.is_some() {
             let zeta = standard_normal_keyed(self.drift_seed, (k as u64).wrapping_mul(2));
             self.gm_state = self.gm_phi * self.gm_state + self.gm_drive * zeta;
@@ -325,6 +336,7 @@ impl Sensor for SensorModel {
 /// channel = "alpha_rad"        # the measured quantity, named with its unit
 /// white_sigma = 0.001          # default 0
 /// bias = 0.0                   # default 0
+/// scale = 1.0                  # default 1: reads scale·truth (1.03: 3 % high)
 /// sample_rate_hz = 100.0       # required
 /// delay_s = 0.02               # OR delay_samples = 2; must be a whole number of samples
 /// quantum = 0.0001             # optional LSB
@@ -350,6 +362,9 @@ pub struct SensorConfig {
     /// Constant bias (channel units).
     #[serde(default)]
     pub bias: f64,
+    /// Scale factor on the truth (default 1; [`SensorParameters::scale`]).
+    #[serde(default = "unit_scale")]
+    pub scale: f64,
     /// Gauss–Markov stationary σ (channel units).
     pub gauss_markov_sigma: Option<f64>,
     /// Gauss–Markov correlation time (s).
@@ -366,6 +381,11 @@ pub struct SensorConfig {
     pub lag_tau_s: Option<f64>,
     /// Seed of this channel's generator.
     pub seed: Option<u64>,
+}
+
+/// The default [`SensorConfig::scale`]: a sensor that reads the truth's size.
+fn unit_scale() -> f64 {
+    1.0
 }
 
 impl SensorConfig {
@@ -414,6 +434,7 @@ impl SensorConfig {
         Ok(SensorParameters {
             white_sigma: self.white_sigma,
             bias: self.bias,
+            scale: self.scale,
             gauss_markov,
             sample_rate_hz: fs,
             delay_samples,
@@ -494,6 +515,26 @@ mod tests {
         }
         let mut b = SensorModel::new(SensorParameters { bias: -2.0, ..ideal(50.0) }, 0).unwrap();
         assert_eq!(b.measure(0.0, 1.0), -1.0);
+    }
+
+    #[test]
+    fn analytic_scale_factor_multiplies_the_truth_before_the_bias() {
+        // A sensor 4 % high with a bias: scale·truth + bias at every sample; a sign-flipped
+        // one reads −truth.
+        let p = SensorParameters { scale: 1.04, bias: 0.5, ..ideal(10.0) };
+        let mut s = SensorModel::new(p, 0).unwrap();
+        for k in 0..20 {
+            let truth = (k as f64 * 0.3).cos();
+            assert!((s.measure(k as f64 * 0.1, truth) - (1.04 * truth + 0.5)).abs() < 1e-12);
+        }
+        let mut flip =
+            SensorModel::new(SensorParameters { scale: -1.0, ..ideal(10.0) }, 0).unwrap();
+        assert_eq!(flip.measure(0.0, 9.81), -9.81);
+        for bad in [0.0, f64::NAN, f64::INFINITY] {
+            let e =
+                SensorModel::new(SensorParameters { scale: bad, ..ideal(10.0) }, 0).unwrap_err();
+            assert!(e.to_string().contains("scale"), "{e}");
+        }
     }
 
     #[test]
@@ -588,6 +629,7 @@ mod tests {
         let p = SensorParameters {
             white_sigma: 0.01,
             bias: 0.2,
+            scale: 1.03,
             gauss_markov: Some((0.02, 0.5)),
             sample_rate_hz: 64.0,
             delay_samples: 3,
@@ -735,13 +777,14 @@ mod tests {
         #[test]
         fn prop_sensor_output_finite_for_finite_inputs(
             sigma in 0.0f64..10.0, bias in -10.0f64..10.0, gm in 0.0f64..5.0,
-            tau in 1e-3f64..100.0, fs in 0.1f64..2000.0, delay in 0usize..20,
+            tau in 1e-3f64..100.0, fs in 0.1f64..2000.0, delay in 0usize..20, scale in 0.5f64..1.5,
             lsb in 1e-6f64..1.0, lag in 1e-4f64..10.0, seed in 0u64..1000,
             truth in -1e6f64..1e6, dt in 1e-4f64..1.0,
         ) {
             let p = SensorParameters {
                 white_sigma: sigma,
                 bias,
+                scale,
                 gauss_markov: Some((gm, tau)),
                 sample_rate_hz: fs,
                 delay_samples: delay,

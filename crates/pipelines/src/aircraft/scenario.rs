@@ -229,6 +229,9 @@ pub struct ChannelSensorSpec {
     /// Constant bias (channel units).
     #[serde(default)]
     pub bias: f64,
+    /// Scale factor on the truth (default 1; `aeroident_signals::SensorParameters::scale`).
+    #[serde(default = "unit_scale")]
+    pub scale: f64,
     /// Gauss–Markov stationary σ (channel units), with `gauss_markov_tau_s`.
     pub gauss_markov_sigma: Option<f64>,
     /// Gauss–Markov correlation time (s), with `gauss_markov_sigma`.
@@ -241,6 +244,11 @@ pub struct ChannelSensorSpec {
     pub delay_samples: Option<usize>,
     /// Quantisation LSB (channel units).
     pub quantum: Option<f64>,
+}
+
+/// The default [`ChannelSensorSpec::scale`]: a sensor that reads the truth's size.
+fn unit_scale() -> f64 {
+    1.0
 }
 
 impl ChannelSensorSpec {
@@ -260,6 +268,7 @@ impl ChannelSensorSpec {
             channel: self.channel.clone(),
             white_sigma,
             bias: self.bias,
+            scale: self.scale,
             gauss_markov_sigma: self.gauss_markov_sigma,
             gauss_markov_tau_s: self.gauss_markov_tau_s,
             sample_rate_hz: 1.0 / dt_s,

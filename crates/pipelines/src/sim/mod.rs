@@ -24,6 +24,8 @@
 pub mod scenario;
 pub mod trim;
 
+use crate::aircraft::scenario::AerodynamicsSpec;
+use crate::aircraft::truth::{linearised, local_derivatives};
 use crate::bail;
 use crate::error::{Context, Result};
 use aeroident_models::actuator::{F16WithActuators, SurfaceActuators};
@@ -212,6 +214,11 @@ pub fn run(sc: &SimScenario, base_dir: &Path) -> Result<SimRun> {
     };
     let t0 = trim(&f16, &cond)
         .with_context(|| format!("[trim] at {} ft, {} ft/s", sc.trim.alt_ft, sc.trim.vt_fps))?;
+    if sc.aircraft.aerodynamics == AerodynamicsSpec::Linear {
+        let ld = local_derivatives(&f16, &t0.state, &t0.controls, &AeroIncrements::zero())
+            .context("[aircraft] aerodynamics = \"linear\": the derivatives at the trim")?;
+        f16 = f16.with_linear_aero(linearised(&ld, &t0.state, &t0.controls));
+    }
     if let Some(inc) = &sc.increments {
         let reference = IncrementReference {
             alpha_rad: t0.state[ALPHA],

@@ -6,6 +6,8 @@
 //! [aircraft]
 //! xcg = 0.30                  # fraction of cbar; 0.30 is open-loop stable (data README §7)
 //! actuators = "f16"           # "f16" (20.2 rad/s lags, rate/position limits) | "ideal"
+//! aerodynamics = "tables"     # optional: "tables" (default) | "linear", the tables' first-
+//!                             # order expansion at the trim (the linear structure's truth)
 //!
 //! [trim]                      # steady wings-level trim the run starts from
 //! alt_ft = 20000.0
@@ -81,6 +83,11 @@ pub struct AircraftConfig {
     /// Surface actuator model.
     #[serde(default)]
     pub actuators: ActuatorChoice,
+    /// The tables, or their first-order expansion at the trim: a record whose every
+    /// derivative is the trim's along the whole flight, so what an estimator misses on it is
+    /// the data's fault, not the linear model structure's.
+    #[serde(default)]
+    pub aerodynamics: crate::aircraft::scenario::AerodynamicsSpec,
 }
 
 /// Which surface actuators to fly with.

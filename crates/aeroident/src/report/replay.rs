@@ -7,7 +7,7 @@
 use super::{Report, common_settings, write_figure};
 use crate::outdir::OutputDir;
 use crate::plot::{Band, HLine, LineKind, Panel, Series};
-use aeroident_pipelines::replay::{History, ReplayOutcome};
+use aeroident_pipelines::replay::{History, ReplayOutcome, precision};
 use aeroident_pipelines::replay::{Pacing, ReplayOptions};
 use aeroident_pipelines::results::{CoefficientFit, ParameterRow, Results, coefficient_fits};
 
@@ -49,13 +49,19 @@ pub fn results(outcome: &ReplayOutcome, title: &str, references: &[Reference]) -
         .iter()
         .map(|p| {
             let reference = references.iter().find(|r| r.name == p.name).map(|r| r.value);
-            let differs = cross_check_status(outcome, &p.name);
+            let flag = cross_check_status(outcome, &p.name).or_else(|| {
+                let outside = reference
+                    .zip(p.estimate.zip(p.std_error))
+                    .is_some_and(|(r, (e, s))| (e - r).abs() > 2.0 * s);
+                let relative = precision::imprecise(&p.name, p.estimate, p.std_error);
+                relative.filter(|_| !outside).map(precision::status)
+            });
             ParameterRow::new(
                 p.name.clone(),
                 p.estimate,
                 p.std_error,
                 reference,
-                if diverged { Some("diverged") } else { differs.as_deref() },
+                if diverged { Some("diverged") } else { flag.as_deref() },
             )
         })
         .collect();

@@ -44,6 +44,7 @@ pub mod cross_check;
 pub mod diagnostics;
 pub mod explain;
 mod online;
+pub mod precision;
 pub mod prediction;
 
 use crate::condition::Derivative;
@@ -673,6 +674,9 @@ pub fn replay_with<R: Read>(
         }
     }
     let mut out = run.finish()?;
+    if !out.diverged() {
+        out.summary.warnings.extend(precision::warning(&out.summary.parameters));
+    }
     if let Some(c) = &opts.compat {
         out.summary.warnings.extend(c.warnings());
     }

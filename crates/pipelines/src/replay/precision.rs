@@ -1,0 +1,88 @@
+//! Whether the record determines an estimate at all: an estimate whose σ is a large share of
+//! its own size cannot be trusted whatever it agrees with. Flight-test practice reads the
+//! relative standard error `σ/|θ|` for this (Jategaonkar 2015 ch. 4 and Klein & Morelli 2006
+//! ch. 5 report it beside every estimate); above [`RELATIVE_SIGMA_LIMIT`] the estimate is not
+//! known to the accuracy a derivative is wanted to, and the replay table and warnings say so.
+//!
+//! Constant terms (`CY_0`, `Cm_0` …) are left out: their size is the trim's and the axes', not
+//! a property the σ can be weighed against.
+
+use aeroident_io::replay_output::ParameterSummary;
+
+/// Relative standard error `σ/|θ|` above which an estimate is flagged as imprecise (10 %: the
+/// accuracy a stability derivative is wanted to in a flight-test report).
+pub const RELATIVE_SIGMA_LIMIT: f64 = 0.10;
+
+/// `σ/|θ|` of an estimate when it exceeds [`RELATIVE_SIGMA_LIMIT`], else `None` (also for a
+/// constant term, a missing estimate or σ, or an estimate of exactly 0 with σ 0).
+pub fn imprecise(name: &str, estimate: Option<f64>, std_error: Option<f64>) -> Option<f64> {
+    if name.ends_with("_0") {
+        return None;
+    }
+    let (e, s) = (estimate?, std_error?);
+    let relative = if e == 0.0 { (s > 0.0).then_some(f64::INFINITY)? } else { s / e.abs() };
+    (relative > RELATIVE_SIGMA_LIMIT).then_some(relative)
+}
+
+/// The table status of an imprecise estimate: `σ 32 % of |estimate|`.
+pub fn status(relative: f64) -> String {
+    if relative.is_finite() {
+        format!("σ {:.0} % of |estimate|", 100.0 * relative)
+    } else {
+        "σ > 0 at an estimate of 0".into()
+    }
+}
+
+/// One summary warning listing every imprecise estimate of `parameters`, or none.
+pub fn warning(parameters: &[ParameterSummary]) -> Option<String> {
+    let list: Vec<String> = parameters
+        .iter()
+        .filter_map(|p| {
+            let r = imprecise(&p.name, p.estimate, p.std_error)?;
+            Some(format!(
+                "{} {}",
+                p.name,
+                if r.is_finite() { format!("{:.0} %", 100.0 * r) } else { "∞".into() }
+            ))
+        })
+        .collect();
+    (!list.is_empty()).then(|| {
+        format!(
+            "imprecise (σ above {:.0} % of the estimate: the record does not determine them to that accuracy): {}",
+            100.0 * RELATIVE_SIGMA_LIMIT,
+            list.join(", ")
+        )
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn p(name: &str, estimate: Option<f64>, std_error: Option<f64>) -> ParameterSummary {
+        ParameterSummary { name: name.into(), estimate, std_error, settle_time_s: None }
+    }
+
+    /// The rule by hand: −0.37 ± 0.18 is 49 %, −0.43 ± 0.02 is 4.7 %; constant terms, nulls
+    /// and an estimate of 0 with σ > 0 as documented.
+    #[test]
+    fn analytic_relative_standard_error_and_the_warning() {
+        let r = imprecise("Cn_r", Some(-0.37), Some(0.18)).unwrap();
+        assert!((r - 0.18 / 0.37).abs() < 1e-12);
+        assert_eq!(status(r), "σ 49 % of |estimate|");
+        assert_eq!(imprecise("Cl_p", Some(-0.43), Some(0.02)), None);
+        assert_eq!(imprecise("Cm_0", Some(-0.001), Some(0.01)), None);
+        assert_eq!(imprecise("Cm_q", None, Some(1.0)), None);
+        assert_eq!(imprecise("Cm_q", Some(-6.0), None), None);
+        assert_eq!(imprecise("Cl_r", Some(0.0), Some(0.0)), None);
+        assert_eq!(imprecise("Cl_r", Some(0.0), Some(0.1)), Some(f64::INFINITY));
+        let w = warning(&[
+            p("Cl_p", Some(-0.43), Some(0.02)),
+            p("Cn_r", Some(-0.37), Some(0.18)),
+            p("Cl_r", Some(0.0), Some(0.1)),
+        ])
+        .unwrap();
+        assert!(w.ends_with(": Cn_r 49 %, Cl_r ∞"), "{w}");
+        assert_eq!(warning(&[p("Cl_p", Some(-0.43), Some(0.02))]), None);
+    }
+}

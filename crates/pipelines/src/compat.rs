@@ -8,7 +8,8 @@
 //! time_shift_s, time_shift_sigma_s}], residual_rms{output: value}, findings[], warnings[],
 //! reconstructed[{manoeuvre, t_s[], vt_mps[], alpha_rad[], beta_rad[]}]`. `scale` is the
 //! factor the channel reads the truth with (`1 + k`); a number the check did not estimate is
-//! `null`. The `*_sigma` keys are the coloured-residual σ where it was formed (`sigma =
+//! `null`. A gyro's `time_shift_s` (`CompatConfig::gyro_time_shifts`) is against the
+//! accelerometers, as every shift is. The `*_sigma` keys are the coloured-residual σ where it was formed (`sigma =
 //! "coloured"`), else the Cramér–Rao σ (`"cramer_rao"`); findings are judged against them.
 
 mod apply;
@@ -288,7 +289,8 @@ mod tests {
     }
 
     /// An az bias of +g is load factor − 1 g; a lag of 0.18 ± 0.01 s at 10 Hz is a finding, a
-    /// shift below half a sample or within 3σ of zero is not; a bias within 3σ is not.
+    /// gyro's as an output's, a shift below half a sample or within 3σ of zero is not; a bias
+    /// within 3σ is not.
     #[test]
     fn findings_name_load_factor_lags_and_significant_biases_only() {
         let r = result(
@@ -298,9 +300,10 @@ mod tests {
                 Unknown::TimeShift(Channel::Theta),
                 Unknown::TimeShift(Channel::Phi),
                 Unknown::Bias(Channel::Q),
+                Unknown::TimeShift(Channel::Q),
             ],
-            vec![9.75, 0.18, 0.04, 0.2, 1e-4],
-            vec![0.02, 0.01, 0.001, 0.1, 1e-4],
+            vec![9.75, 0.18, 0.04, 0.2, 1e-4, 0.15],
+            vec![0.02, 0.01, 0.001, 0.1, 1e-4, 0.01],
         );
         let f = findings(&r, 0.1);
         assert!(f[0].starts_with("az_mps2 looks like load factor − 1 g"), "{f:?}");
@@ -309,6 +312,10 @@ mod tests {
             "{f:?}"
         );
         assert!(!f.iter().any(|x| x.starts_with("theta_rad") || x.starts_with("phi_rad")), "{f:?}");
-        assert!(!f.iter().any(|x| x.starts_with("q_rad_s")), "{f:?}");
+        let q: Vec<&String> = f.iter().filter(|x| x.starts_with("q_rad_s")).collect();
+        assert_eq!(q, ["q_rad_s lags the kinematics by 0.150 ± 0.010 s"], "{f:?}");
+        let rows = channels(&r);
+        let q = rows.iter().find(|c| c.name == "q_rad_s").unwrap();
+        assert_eq!((q.time_shift_s, q.time_shift_sigma_s), (Some(0.15), Some(0.01)));
     }
 }

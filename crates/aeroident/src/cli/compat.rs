@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! aeroident compat <log> --map <map.toml> [--format …] [--out DIR] [--no-time-shifts]
-//!                  [--inertial-scale-factors] [--max-iterations N]
+//!                  [--gyro-time-shifts] [--inertial-scale-factors] [--max-iterations N]
 //! ```
 //! Prints the corrections per channel and the findings; with `--out`, writes
 //! `DIR/compat.json` ([`aeroident_pipelines::compat`] documents its keys).
@@ -32,6 +32,10 @@ pub struct CompatArgs {
     /// Do not estimate the outputs' time shifts.
     #[arg(long)]
     pub no_time_shifts: bool,
+    /// Estimate the time shift of each gyro (p, q, r) against the accelerometers too: the
+    /// late rates of an AHRS (off by default: it can trade with slow model errors).
+    #[arg(long)]
+    pub gyro_time_shifts: bool,
     /// Estimate the accelerometers' and gyros' scale factors too (needs large, varied
     /// manoeuvres).
     #[arg(long)]
@@ -53,6 +57,7 @@ pub fn execute(args: CompatArgs) -> anyhow::Result<()> {
     }
     let mut config = CompatConfig {
         time_shifts: !args.no_time_shifts,
+        gyro_time_shifts: args.gyro_time_shifts,
         inertial_scale_factors: args.inertial_scale_factors,
         ..CompatConfig::default()
     };

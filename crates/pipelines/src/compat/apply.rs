@@ -345,6 +345,41 @@ mod tests {
         }
     }
 
+    /// A gyro that lags by 0.15 s with a bias (an AHRS's rate) is read 0.15 s later and its
+    /// bias removed: the pitch rate of a sine within the linear interpolation's error of the
+    /// 0.05 s grid (2e-4 rad/s), except the last 0.15 s, held; the stage says so.
+    #[test]
+    fn a_lagging_gyro_is_read_later() {
+        let corr = Corrections::new(vec![(Channel::Q, Some(0.003), None, Some(0.15))], Vec::new())
+            .unwrap();
+        assert_eq!(
+            corr.applied,
+            [
+                "q_rad_s: bias +3.0000e-3 rad/s removed, scale 1.0000 divided out",
+                "q_rad_s: read +0.150 s later (its time shift)"
+            ]
+        );
+        let q = |t: f64| 0.2 * (1.3 * t).sin();
+        let input: Vec<_> = (0..200)
+            .map(|k| {
+                let t = k as f64 * 0.05;
+                let s = AirDataSample {
+                    t_s: t,
+                    q_rad_s: Some(q(t - 0.15) + 0.003),
+                    ..Default::default()
+                };
+                Ok(RecordEvent::Sample { row: k as u64, sample: s })
+            })
+            .collect();
+        for e in Corrected::new(input.into_iter(), corr) {
+            let RecordEvent::Sample { sample: s, .. } = e.unwrap() else { panic!("a gap") };
+            if s.t_s + 0.15 <= 199.0 * 0.05 + 1e-9 {
+                let v = s.q_rad_s.unwrap();
+                assert!((v - q(s.t_s)).abs() < 2e-4, "t {}: {v} vs {}", s.t_s, q(s.t_s));
+            }
+        }
+    }
+
     /// A `compat.json` as `aeroident compat` writes it (extra keys, `null` where not estimated)
     /// reads back to the corrections of its rows; an unknown channel is refused naming the file
     /// and the channel.

@@ -67,9 +67,11 @@
 //! the shifts to the accelerometers (the airspeed, the vanes, `a_z` through `α`) is weak, and
 //! at a coarse sample rate the cost has local minima a whole sample apart in the common shift
 //! of the AHRS (the linear interpolation is exact at whole samples and smooths between them):
-//! on a 10 Hz F-16 record with the gyros and attitudes 0.1 s late, the fit from zero ends 0.05–
-//! 0.1 s late on all of them. With a gyro's shift the fit therefore starts from common AHRS
-//! shifts of 0, 0.1, 0.2 and 0.3 s (whole samples) and keeps the lowest `det R`.
+//! on a 10 Hz F-16 record with the gyros and attitudes 0.1 s late, the fit from zero ends a
+//! further 0.05 s (pitch) to 0.12 s (roll and yaw) late on all of them, vanes included. With
+//! a gyro's shift the fit therefore starts from common AHRS shifts of 0, 0.1, 0.2 and 0.3 s
+//! (whole samples) and keeps the lowest `det R`, a converged fit before one that is not
+//! within half a unit of log-likelihood.
 //!
 //! Off by default: on the HFB-320 record (Jategaonkar test case 4) the shift of `q` trades
 //! with the slow misfit of the airspeed (its residual falls from 0.88 to 0.69 m/s as `q`, `θ`

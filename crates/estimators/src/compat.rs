@@ -48,7 +48,11 @@
 //! sees them); when it does not roll enough for that (the information matrix is singular),
 //! both are fixed at 0 and [`CompatResult::notes`] says so. Without a heading the `ψ` state is
 //! dropped (it enters no other output in still air). A time shift is estimated only where the
-//! channel varies enough to determine it (its Cramér–Rao σ alone below 0.05 s at the start).
+//! channel varies enough to determine it (its Cramér–Rao σ alone below 0.05 s at the start); a
+//! scale factor only where the record determines it with the other unknowns (σ below 0.1, at
+//! the start and again after the fit, with its residuals; else left out and the fit redone):
+//! without a sideslip channel the `ay` scale factor trades with the `ay` bias and the initial
+//! side velocity (`determined`).
 //!
 //! # Time shifts
 //! Every output but the airspeed gets one ([`CompatConfig::time_shifts`]); on request each gyro
@@ -87,6 +91,7 @@ use crate::sample::AirDataSample;
 use aeroident_physics::rigid_body::{self as rb, SinCos};
 use nalgebra::{DMatrix, DVector};
 
+mod determined;
 mod inputs;
 mod starts;
 
@@ -333,22 +338,51 @@ pub fn check(
     config: &CompatConfig,
 ) -> Result<CompatResult, EstimatorError> {
     let first = Problem::new(manoeuvres, config, Vec::new())?;
-    let (mut exclude, mut notes) = first.undetermined_shifts()?;
+    let (mut exclude, mut notes) = first.undetermined()?;
+    loop {
+        let mut r = solve_without_beta_fallback(manoeuvres, config, &mut exclude, &mut notes)?;
+        match r.undetermined_scale() {
+            Some((u, sigma)) => {
+                notes.push(determined::scale_note(u, sigma));
+                exclude.push(u);
+            }
+            None => {
+                r.notes = notes;
+                return Ok(r);
+            }
+        }
+    }
+}
+
+/// The fit without the unknowns in `exclude`. Without a `β` channel, when the record does not
+/// determine the initial side velocities (or the fit fails), it is redone with them and the
+/// `ay` bias and scale factor fixed, which `exclude` and `notes` then record.
+fn solve_without_beta_fallback(
+    manoeuvres: &[&[AirDataSample]],
+    config: &CompatConfig,
+    exclude: &mut Vec<Unknown>,
+    notes: &mut Vec<String>,
+) -> Result<CompatResult, EstimatorError> {
     let full = Problem::new(manoeuvres, config, exclude.clone())?;
     let has_beta = full.outputs.contains(&Channel::Beta);
-    let mut r = match full.solve(config) {
-        Ok(r) if has_beta || (r.termination.is_converged() && lateral_determined(&r)) => r,
-        Err(e) if has_beta => return Err(e),
+    match full.solve(config) {
+        Ok(r) if has_beta || (r.termination.is_converged() && lateral_determined(&r)) => Ok(r),
+        Err(e) if has_beta => Err(e),
         _ => {
-            exclude.push(Unknown::Bias(Channel::Ay));
-            exclude
-                .extend((0..manoeuvres.len()).map(|m| Unknown::Initial { manoeuvre: m, state: 1 }));
-            notes.push("no sideslip channel and too little roll to determine the initial side velocity and the ay bias: both fixed at 0, so the reconstructed sideslip carries their error".into());
-            Problem::new(manoeuvres, config, exclude)?.solve(config)?
+            let v0 = (0..manoeuvres.len()).map(|m| Unknown::Initial { manoeuvre: m, state: 1 });
+            let ay = [Unknown::Bias(Channel::Ay), Unknown::Scale(Channel::Ay)];
+            for u in ay.into_iter().chain(v0) {
+                if !exclude.contains(&u) {
+                    exclude.push(u);
+                }
+            }
+            let note = "no sideslip channel and too little roll to determine the initial side velocity and the ay bias: both fixed at 0 (and the ay scale factor at 1), so the reconstructed sideslip carries their error";
+            if !notes.iter().any(|n| n == note) {
+                notes.push(note.into());
+            }
+            Problem::new(manoeuvres, config, exclude.clone())?.solve(config)
         }
-    };
-    r.notes = notes;
-    Ok(r)
+    }
 }
 
 /// The largest Gauss–Newton step, in Cramér–Rao σ, that counts as converged when no damped step
@@ -388,26 +422,6 @@ impl CompatResult {
 }
 
 impl Problem<'_> {
-    /// The time shifts the record cannot determine (Cramér–Rao σ alone above
-    /// [`MAX_SHIFT_SIGMA_S`] at the start, with the measurement noise of
-    /// [`Problem::noise_variances`]: the channel hardly varies) and a note for each.
-    fn undetermined_shifts(&self) -> Result<(Vec<Unknown>, Vec<String>), EstimatorError> {
-        let beta = self.start();
-        let r = self.noise_variances();
-        let mut out = (Vec::new(), Vec::new());
-        for (i, &u) in self.unknowns.iter().enumerate() {
-            let Unknown::TimeShift(c) = u else { continue };
-            let s = sensitivity(self, &beta, i)?;
-            let info: f64 = s.iter().enumerate().map(|(row, v)| v * v / r[row % r.len()]).sum();
-            let sigma = 1.0 / info.sqrt();
-            if sigma.is_nan() || sigma >= MAX_SHIFT_SIGMA_S {
-                out.0.push(u);
-                out.1.push(format!("time shift of {} not estimated: the channel hardly varies (its σ alone would be {sigma:.2} s)", c.name()));
-            }
-        }
-        Ok(out)
-    }
-
     /// Per output, the white measurement-noise variance from the second differences of its
     /// samples, `mean((z₊ − 2z + z₋)²)/6` (exact for white noise on a signal that is linear
     /// over three samples), floored at 10⁻¹² of its mean square.

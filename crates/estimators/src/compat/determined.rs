@@ -114,7 +114,9 @@ impl CompatResult {
         self.unknowns
             .iter()
             .zip(self.reported_sigma())
-            .filter(|(u, s)| matches!(u, Unknown::Scale(_)) && !(**s <= MAX_SCALE_SIGMA))
+            .filter(|(u, s)| {
+                matches!(u, Unknown::Scale(_)) && (s.is_nan() || **s > MAX_SCALE_SIGMA)
+            })
             .max_by(|a, b| a.1.total_cmp(b.1))
             .map(|(u, s)| (*u, *s))
     }

@@ -83,6 +83,22 @@
 //! vane is found 0.22 s late; on the degraded F-16 record the `p` bias goes from within 1σ of
 //! the truth to 12σ (3 %) off, though every shift is right there (`r` and `ψ`, recorded at
 //! 100 Hz, lead the accelerometers' 10 Hz hold by half a sample, 0.050 s).
+//!
+//! **What decides the common AHRS shift, and why a coarse record cannot.** Only `α` ties the
+//! gyros to the accelerometers on a record without a sideslip vane (the attitudes share the
+//! gyros' shift, the airspeed varies slowly), and the α vane's own shift and scale factor are
+//! unknowns too: the timing of `a_z` against `q` shows in the fast part of the response (a
+//! control step). Measured on the F-16 flying its linear aerodynamics in calm air, every
+//! rate and attitude and the α vane 0.2 s late (pure delays), biases and 2–5 % scale factors on
+//! every accelerometer and gyro, no β vane (`--gyro-time-shifts --inertial-scale-factors`):
+//! at 100 Hz every shift is 0.19–0.197 ± 0.012 s and the α scale 1.002; the same record kept
+//! at 50, 20 and 10 Hz gives 0.243 ± 0.011, 0.309 ± 0.014 and 0.312 ± 0.014 s with the α scale
+//! 0.97, 0.92, 0.92 taking up the difference, the residuals at the noise level each time
+//! (cubic instead of linear interpolation: 0.214, 0.259, 0.307 s). Without the inertial scale
+//! factors the 100 Hz record's shift is 0.29 s: the gyros' scale errors pass for a lag. So at
+//! 10 Hz the common AHRS shift is not measured to 0.03 s without a β vane or a known vane
+//! delay, and its Cramér–Rao σ does not show it; a note says so
+//! ([`CompatResult::notes`]).
 
 use crate::EstimatorError;
 use crate::flight_model::{G0_MPS2, Output};
@@ -347,11 +363,41 @@ pub fn check(
                 exclude.push(u);
             }
             None => {
+                notes.extend(gyro_shift_caveats(&r, config, manoeuvres));
                 r.notes = notes;
                 return Ok(r);
             }
         }
     }
+}
+
+/// Sample interval above which the gyros' common shift is not measured to 0.03 s without a
+/// sideslip vane, s (module doc, "What decides the common AHRS shift").
+const COARSE_FOR_GYRO_SHIFT_S: f64 = 0.015;
+
+/// What the estimated gyro shifts of `r` cannot be trusted for (module doc, "What decides the
+/// common AHRS shift"): a record without a sideslip vane sampled coarser than
+/// [`COARSE_FOR_GYRO_SHIFT_S`], and gyro scale factors left unestimated.
+fn gyro_shift_caveats(
+    r: &CompatResult,
+    config: &CompatConfig,
+    manoeuvres: &[&[AirDataSample]],
+) -> Vec<String> {
+    let shifted =
+        r.unknowns.iter().any(|u| matches!(u, Unknown::TimeShift(c) if GYROS.contains(c)));
+    let mut out = Vec::new();
+    if !shifted {
+        return out;
+    }
+    let m = manoeuvres[0];
+    let dt = (m[m.len() - 1].t_s - m[0].t_s) / (m.len() - 1) as f64;
+    if !r.outputs.contains(&Channel::Beta) && dt > COARSE_FOR_GYRO_SHIFT_S {
+        out.push(format!("the gyros' time shifts rest on the α vane alone at a {dt:.3} s sample interval: on simulated records at 10–20 Hz they came out 0.11 s late with σ 0.014 s, the α scale factor taking up the difference; treat them as unmeasured"));
+    }
+    if !config.inertial_scale_factors {
+        out.push("the gyros' time shifts were estimated without their scale factors: on a simulated 100 Hz record 3–5 % scale errors passed for 0.09 s of lag; estimate the inertial scale factors too".into());
+    }
+    out
 }
 
 /// The fit without the unknowns in `exclude`. Without a `β` channel, when the record does not

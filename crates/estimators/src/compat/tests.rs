@@ -384,3 +384,21 @@ fn undetermined_scale_factors_are_left_out_and_named() {
         assert!((v - k).abs() < 3.0 * s, "{}: {v} ± {s} vs {k}", c.name());
     }
 }
+
+/// The caveats on the gyros' shifts: a record without a sideslip vane sampled at 10 Hz gets
+/// the note that they rest on the α vane alone, one with the vane does not; both get the note
+/// on the unestimated scale factors, and neither once they are estimated.
+#[test]
+fn the_gyro_shift_caveats_name_a_coarse_record_without_a_vane_and_missing_scale_factors() {
+    let rests = |r: &CompatResult| r.notes.iter().any(|n| n.contains("rest on the α vane alone"));
+    let scales = |r: &CompatResult| r.notes.iter().any(|n| n.contains("without their scale"));
+    for with_beta in [false, true] {
+        let (data, _) = record(40.0, 0.1, Faults { with_beta, ..NONE }, 10);
+        let r = check(&[&data], &with_gyros()).unwrap();
+        assert_eq!(rests(&r), !with_beta, "{:?}", r.notes);
+        assert!(scales(&r), "{:?}", r.notes);
+        let config = CompatConfig { inertial_scale_factors: true, ..with_gyros() };
+        let r = check(&[&data], &config).unwrap();
+        assert!(!scales(&r), "{:?}", r.notes);
+    }
+}

@@ -346,14 +346,16 @@ impl<const C: usize> ColouredCovariance<C> {
         self.acf.rho(k)
     }
 
-    /// Entry `(i, j)` of `σ̂² P M P` (module doc) for the fit's `P` (leading `n × n` block).
+    /// Entry `(i, j)` of `σ̂² P M Pᵀ` (module doc) for the fit's `P` (leading `n × n` block):
+    /// `σ̂² P M P` for least squares, whose `P` is symmetric; for instrumental variables
+    /// (`crate::iv`) `P = (Σ λ z φᵀ)⁻¹` is not, and `M` is built from the instrument rows `z`.
     pub fn covariance(&self, p: &Square<C>, s2: f64, i: usize, j: usize) -> f64 {
         let n = self.n;
         let mut s = 0.0;
         for a in 0..n {
             let mut row = 0.0;
             for b in 0..n {
-                row += self.m[a][b] * p[b][j];
+                row += self.m[a][b] * p[j][b];
             }
             s += p[i][a] * row;
         }

@@ -10,7 +10,8 @@
 //!   preset ([`ModelStructure`]);
 //! - one estimator interface, [`Estimator`]: consume a sample, give [`Estimates`] (value, σ,
 //!   whether identified) of the structure's parameters. Estimators that need a model state carry
-//!   and integrate it themselves, so each is usable from samples alone: [`Rls`], [`Ftr`],
+//!   and integrate it themselves, so each is usable from samples alone: [`Rls`] (and its
+//!   instrumental-variable form [`RlsIv`], for noisy regressors), [`Ftr`],
 //!   [`Ekf`] (each with its config at the crate root), and the model-reference estimators of
 //!   [`model_reference`] (the thesis's sliding-mode estimator as published, the corrected one,
 //!   and the gradient law (3.3)); the batch output-error and filter-error fits are
@@ -43,6 +44,7 @@ pub mod ekf;
 pub mod estimator;
 pub mod flight_model;
 pub mod ftr;
+pub mod iv;
 pub(crate) mod linalg;
 pub mod model_reference;
 #[cfg(feature = "std")]
@@ -64,6 +66,7 @@ pub use ekf::{Ekf, EkfConfig, SigmaOption};
 pub use estimator::{Estimates, Estimator, Event, EventKind, EventLog, Status};
 pub use flight_model::{FlightModel, Output, StateSet};
 pub use ftr::{Ftr, FtrConfig};
+pub use iv::{IvConfig, RlsIv};
 pub use prior::{ParamPrior, Priors};
 pub use rls::{Rls, RlsConfig};
 pub use sample::{AirDataSample, AircraftConstants, CoefficientValues};

@@ -86,13 +86,76 @@ impl Default for RlsConfig {
 /// Smallest admissible pivot of the unit-diagonal-scaled information matrix at initialisation.
 pub const INIT_MIN_SCALED_PIVOT: f64 = crate::linalg::MIN_SCALED_PIVOT;
 
+/// One coefficient's regression `C = Σ_k θ_k ξ_k`: its terms and where its parameters start
+/// in the structure's parameter order.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Regression {
+    pub(crate) coefficient: Coefficient,
+    /// Number of terms.
+    pub(crate) n: usize,
+    /// Index of the first parameter in the structure's order.
+    pub(crate) first: usize,
+    pub(crate) terms: [Term; N_TERMS],
+}
+
+impl Regression {
+    pub(crate) fn new(structure: &ModelStructure, c: Coefficient) -> Self {
+        let mut terms = [Term::Bias; N_TERMS];
+        let mut n = 0;
+        for (k, t) in structure.terms_of(c).enumerate() {
+            terms[k] = t;
+            n = k + 1;
+        }
+        Self { coefficient: c, n, first: structure.first_index(c), terms }
+    }
+
+    /// The regressor row `φ` of sample `s` (leading `n` entries).
+    ///
+    /// # Errors
+    /// [`EstimatorError::NonFiniteInput`] when a term's channel is absent.
+    pub(crate) fn regressors(&self, s: &AirDataSample) -> Result<[f64; N_TERMS], EstimatorError> {
+        let mut phi = [0.0; N_TERMS];
+        for k in 0..self.n {
+            phi[k] = regressor(self.terms[k], s)?;
+        }
+        Ok(phi)
+    }
+}
+
+/// One coefficient's recursive fit as the estimator-level driver ([`update_fits`],
+/// [`publish`], [`covariance`]) sees it: least squares ([`Fit`]) or instrumental variables
+/// (`crate::iv`).
+pub(crate) trait CoefficientFit {
+    /// The regression fitted.
+    fn regression(&self) -> &Regression;
+    /// One sample's row `φ` and measured coefficient `y`, with forgetting `λ`; `Err` (state
+    /// unchanged) on a numerical failure.
+    fn update(
+        &mut self,
+        phi: &[f64; N_TERMS],
+        y: f64,
+        lambda: f64,
+        init_samples: usize,
+        t_s: f64,
+    ) -> Result<(), EstimatorError>;
+    /// Whether the parameters are identified (the exact initialisation is done).
+    fn initialised(&self) -> bool;
+    /// The parameter estimates (leading `n`).
+    fn theta(&self) -> &[f64; N_TERMS];
+    /// Residual variance `σ̂²`, once defined.
+    fn residual_variance(&self) -> Option<f64>;
+    /// Covariance entry `(i, j)` (fit-local indices) for residual variance `s2`.
+    fn cov(&self, s2: f64, i: usize, j: usize) -> f64;
+    /// Variance of parameter `k`, `cov(s2, k, k)`.
+    fn variance(&self, s2: f64, k: usize) -> f64 {
+        self.cov(s2, k, k)
+    }
+}
+
 /// One coefficient's fit.
 #[derive(Debug, Clone, Copy)]
 struct Fit {
-    coefficient: Coefficient,
-    n: usize,
-    first: usize,
-    terms: [Term; N_TERMS],
+    reg: Regression,
     info: Square<N_TERMS>,
     info_b: [f64; N_TERMS],
     info_yy: f64,
@@ -107,17 +170,9 @@ struct Fit {
 
 impl Fit {
     fn new(structure: &ModelStructure, c: Coefficient) -> Self {
-        let mut terms = [Term::Bias; N_TERMS];
-        let mut n = 0;
-        for (k, t) in structure.terms_of(c).enumerate() {
-            terms[k] = t;
-            n = k + 1;
-        }
+        let reg = Regression::new(structure, c);
         Self {
-            coefficient: c,
-            n,
-            first: structure.first_index(c),
-            terms,
+            reg,
             info: [[0.0; N_TERMS]; N_TERMS],
             info_b: [0.0; N_TERMS],
             info_yy: 0.0,
@@ -127,16 +182,22 @@ impl Fit {
             count: 0,
             n_eff: 0.0,
             rss: 0.0,
-            coloured: ColouredCovariance::new(n),
+            coloured: ColouredCovariance::new(reg.n),
         }
     }
 
-    fn regressors(&self, s: &AirDataSample) -> Result<[f64; N_TERMS], EstimatorError> {
-        let mut phi = [0.0; N_TERMS];
-        for k in 0..self.n {
-            phi[k] = regressor(self.terms[k], s)?;
-        }
-        Ok(phi)
+    /// `f_k` of [`Self::cov`]: the sandwich variance over the white one, 1 where the truncated
+    /// sum gives a non-positive or non-finite variance.
+    fn variance_factor(&self, s2: f64, k: usize) -> f64 {
+        let c = self.coloured.covariance(&self.p, s2, k, k);
+        let w = s2 * self.p[k][k];
+        if c > 0.0 && c.is_finite() && w > 0.0 { c / w } else { 1.0 }
+    }
+}
+
+impl CoefficientFit for Fit {
+    fn regression(&self) -> &Regression {
+        &self.reg
     }
 
     /// One update; returns `Err` (state unchanged) on a numerical failure.
@@ -148,7 +209,7 @@ impl Fit {
         init_samples: usize,
         t_s: f64,
     ) -> Result<(), EstimatorError> {
-        let n = self.n;
+        let n = self.reg.n;
         if !self.initialised {
             for i in 0..n {
                 for j in 0..n {
@@ -221,20 +282,20 @@ impl Fit {
         Ok(())
     }
 
+    fn initialised(&self) -> bool {
+        self.initialised
+    }
+
+    fn theta(&self) -> &[f64; N_TERMS] {
+        &self.theta
+    }
+
     /// Covariance entry `(i, j)` (fit-local indices): the coloured-residual variances of the
     /// sandwich on the diagonal, with the correlation of `P` (module doc), i.e.
     /// `σ̂² P_ij √(f_i f_j)`, `f_i` = sandwich variance / `σ̂² P_ii`. Falls back to `σ̂² P` when
     /// the truncated sum gives a non-positive variance.
     fn cov(&self, s2: f64, i: usize, j: usize) -> f64 {
         s2 * self.p[i][j] * libm::sqrt(self.variance_factor(s2, i) * self.variance_factor(s2, j))
-    }
-
-    /// `f_k` of [`Self::cov`]: the sandwich variance over the white one, 1 where the truncated
-    /// sum gives a non-positive or non-finite variance.
-    fn variance_factor(&self, s2: f64, k: usize) -> f64 {
-        let c = self.coloured.covariance(&self.p, s2, k, k);
-        let w = s2 * self.p[k][k];
-        if c > 0.0 && c.is_finite() && w > 0.0 { c / w } else { 1.0 }
     }
 
     /// Variance of parameter `k`, `cov(s2, k, k)` with the factor formed once: in binary
@@ -246,8 +307,106 @@ impl Fit {
     fn residual_variance(&self) -> Option<f64> {
         // E[RSS] = σ²(N_eff − tr(P M)) (crate::coloured, "Finite memory").
         let dof = self.n_eff - self.coloured.trace_pm(&self.p);
-        (self.initialised && dof > 0.0 && self.n_eff > self.n as f64).then(|| self.rss / dof)
+        (self.initialised && dof > 0.0 && self.n_eff > self.reg.n as f64).then(|| self.rss / dof)
     }
+}
+
+/// The forgetting factor and structure of a per-coefficient recursive estimator, checked.
+///
+/// # Errors
+/// [`EstimatorError::InvalidConfig`] if `forgetting ∉ (0, 1]` or the structure is invalid
+/// (empty, over capacity, CX/CZ mixed with CL/CD).
+pub(crate) fn validated(
+    structure: ModelStructure,
+    forgetting: f64,
+) -> Result<ModelStructure, EstimatorError> {
+    if !(forgetting > 0.0 && forgetting <= 1.0) {
+        return Err(EstimatorError::InvalidConfig {
+            field: "forgetting",
+            value: forgetting,
+            reason: "must be in (0, 1]",
+        });
+    }
+    structure.validated().map_err(|_| EstimatorError::InvalidConfig {
+        field: "model structure",
+        value: structure.n_params() as f64,
+        reason: "empty, over capacity, or mixes CX/CZ with CL/CD",
+    })
+}
+
+/// One sample through every fit of `fits`, all or nothing: every `(φ, y)` is formed before
+/// any fit changes; then the estimates are published. `what` names the method in errors.
+///
+/// # Errors
+/// A missing or non-finite channel (nothing changes); a numerical failure, after which `est`
+/// is [`Status::Diverged`].
+pub(crate) fn update_fits<F: CoefficientFit>(
+    fits: &mut [Option<F>; 8],
+    est: &mut Estimates,
+    lambda: f64,
+    init_samples: usize,
+    s: &AirDataSample,
+    what: &'static str,
+) -> Result<(), EstimatorError> {
+    if est.status == Status::Diverged {
+        return Err(EstimatorError::Numerical { what, t_s: s.t_s });
+    }
+    check_finite(s)?;
+    let measured = s.measured_coefficients();
+    let mut rows = [([0.0; N_TERMS], 0.0); 8];
+    for f in fits.iter().flatten() {
+        let c = f.regression().coefficient;
+        let y = measured_coefficient(&measured, c, s.t_s)?;
+        rows[c.index()] = (f.regression().regressors(s)?, y);
+    }
+    // Each fit's update is atomic (computed, checked, then committed). A numerical failure
+    // after finite inputs means overflow: the estimator has diverged and says so, rather
+    // than carrying a copy of every fit to roll back.
+    for f in fits.iter_mut().flatten() {
+        let (phi, y) = rows[f.regression().coefficient.index()];
+        if let Err(e) = f.update(&phi, y, lambda, init_samples, s.t_s) {
+            est.status = Status::Diverged;
+            return Err(e);
+        }
+    }
+    publish(fits, est, s.t_s);
+    Ok(())
+}
+
+/// Sets `est` from the fits at time `t_s`: values, σ (null until `σ̂²` is defined), and
+/// [`Status::Running`] once every fit is initialised.
+fn publish<F: CoefficientFit>(fits: &[Option<F>; 8], est: &mut Estimates, t_s: f64) {
+    est.t_s = t_s;
+    let mut all = true;
+    for f in fits.iter().flatten() {
+        let s2 = f.residual_variance();
+        let reg = f.regression();
+        for k in 0..reg.n {
+            let sigma = s2.map(|s2| libm::sqrt(f.variance(s2, k).max(0.0)));
+            est.set(reg.first + k, f.theta()[k], sigma, f.initialised());
+        }
+        all &= f.initialised();
+    }
+    est.status = if all { Status::Running } else { Status::Initialising };
+}
+
+/// Covariance of parameters `i` and `j` of `structure`: `None` between coefficients (fitted
+/// independently) and before `σ̂²` is defined.
+pub(crate) fn covariance<F: CoefficientFit>(
+    structure: &ModelStructure,
+    fits: &[Option<F>; 8],
+    i: usize,
+    j: usize,
+) -> Option<f64> {
+    let pi = structure.param(i)?;
+    let pj = structure.param(j)?;
+    if pi.coefficient != pj.coefficient {
+        return None;
+    }
+    let f = fits[pi.coefficient.index()].as_ref()?;
+    let s2 = f.residual_variance()?;
+    let first = f.regression().first;
+    Some(f.cov(s2, i - first, j - first))
 }
 
 /// Recursive least squares on every coefficient of a structure. No allocation per update.
@@ -267,18 +426,7 @@ impl Rls {
     /// [`EstimatorError::InvalidConfig`] if `forgetting ∉ (0, 1]` or the structure is invalid
     /// (empty, over capacity, CX/CZ mixed with CL/CD).
     pub fn new(structure: ModelStructure, config: RlsConfig) -> Result<Self, EstimatorError> {
-        if !(config.forgetting > 0.0 && config.forgetting <= 1.0) {
-            return Err(EstimatorError::InvalidConfig {
-                field: "forgetting",
-                value: config.forgetting,
-                reason: "must be in (0, 1]",
-            });
-        }
-        let structure = structure.validated().map_err(|_| EstimatorError::InvalidConfig {
-            field: "model structure",
-            value: structure.n_params() as f64,
-            reason: "empty, over capacity, or mixes CX/CZ with CL/CD",
-        })?;
+        let structure = validated(structure, config.forgetting)?;
         // Built in place: moving a stack-built `[Option<Fit>; 8]` into `Self` was miscompiled
         // by rustc 1.95 at opt-level 3 (docs/reliability.md; tests/rls.rs guards it in release).
         let mut rls = Self {
@@ -311,21 +459,7 @@ impl Rls {
         if !f.initialised {
             return None;
         }
-        crate::linalg::scaled_condition_number(&f.p, f.n)
-    }
-
-    fn publish(&mut self, t_s: f64) {
-        self.est.t_s = t_s;
-        let mut all = true;
-        for f in self.fits.iter().flatten() {
-            let s2 = f.residual_variance();
-            for k in 0..f.n {
-                let sigma = s2.map(|s2| libm::sqrt(f.variance(s2, k).max(0.0)));
-                self.est.set(f.first + k, f.theta[k], sigma, f.initialised);
-            }
-            all &= f.initialised;
-        }
-        self.est.status = if all { Status::Running } else { Status::Initialising };
+        crate::linalg::scaled_condition_number(&f.p, f.reg.n)
     }
 }
 
@@ -339,29 +473,8 @@ impl Estimator for Rls {
     }
 
     fn update(&mut self, s: &AirDataSample) -> Result<&Estimates, EstimatorError> {
-        if self.est.status == Status::Diverged {
-            return Err(EstimatorError::Numerical { what: "RLS has diverged", t_s: s.t_s });
-        }
-        check_finite(s)?;
-        let measured = s.measured_coefficients();
-        // All or nothing: form every (φ, y) before touching any fit.
-        let mut rows = [([0.0; N_TERMS], 0.0); 8];
-        for f in self.fits.iter().flatten() {
-            let c = f.coefficient;
-            let y = measured_coefficient(&measured, c, s.t_s)?;
-            rows[c.index()] = (f.regressors(s)?, y);
-        }
-        // Each fit's update is atomic (computed, checked, then committed). A numerical failure
-        // after finite inputs means overflow: the estimator has diverged and says so, rather
-        // than carrying a copy of every fit to roll back.
-        for f in self.fits.iter_mut().flatten() {
-            let (phi, y) = rows[f.coefficient.index()];
-            if let Err(e) = f.update(&phi, y, self.lambda, self.init_samples, s.t_s) {
-                self.est.status = Status::Diverged;
-                return Err(e);
-            }
-        }
-        self.publish(s.t_s);
+        let (lambda, init) = (self.lambda, self.init_samples);
+        update_fits(&mut self.fits, &mut self.est, lambda, init, s, "RLS has diverged")?;
         Ok(&self.est)
     }
 
@@ -370,14 +483,7 @@ impl Estimator for Rls {
     }
 
     fn covariance(&self, i: usize, j: usize) -> Option<f64> {
-        let pi = self.structure.param(i)?;
-        let pj = self.structure.param(j)?;
-        if pi.coefficient != pj.coefficient {
-            return None;
-        }
-        let f = self.fits[pi.coefficient.index()].as_ref()?;
-        let s2 = f.residual_variance()?;
-        Some(f.cov(s2, i - f.first, j - f.first))
+        covariance(&self.structure, &self.fits, i, j)
     }
 }
 

@@ -45,6 +45,7 @@ impl Estimator {
         let constants = convert::constants_from(constants)?;
         let opts = EstimatorOptions {
             forgetting,
+            instrument_delay: None,
             sample_interval_s,
             parameter_walk_per_sqrt_s,
             ftr_grid_hz,
@@ -53,7 +54,7 @@ impl Estimator {
         Ok(Self { est, kind: k, model: spec.name, constants, samples: 0 })
     }
 
-    /// The method's name (`rls`, `ftr`, `ekf` …).
+    /// The method's name (`rls`, `rls-iv`, `ftr`, `ekf` …).
     #[getter]
     fn method(&self) -> &'static str {
         self.kind.name()

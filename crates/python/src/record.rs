@@ -44,8 +44,8 @@ pub fn time_windows(
     Ok(windows)
 }
 
-/// The estimator by its CLI name (`rls`, `ftr`, `ekf`, `smpe`, `smpe-corrected`, `gradient`,
-/// `oe`).
+/// The estimator by its CLI name (`rls`, `rls-iv`, `ftr`, `ekf`, `smpe`, `smpe-corrected`,
+/// `gradient`, `oe`, `fem`).
 pub fn estimator_kind(name: &str) -> PyResult<EstimatorKind> {
     use aeroident_pipelines::Named as _;
     let found = EstimatorKind::ALL.iter().find(|k| k.name().eq_ignore_ascii_case(name));
@@ -192,6 +192,7 @@ fn replay_file<'py>(
             forgetting,
             derivatives,
             diff_window,
+            instrument_delay: None,
             pacing: Pacing::Unpaced,
             compat: compat
                 .as_deref()

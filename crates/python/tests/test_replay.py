@@ -27,7 +27,7 @@ def assert_equal_nan(a: np.ndarray, b: np.ndarray, tol: float = 1e-12) -> None:
 
 
 @pytest.mark.parametrize("record,mapping", RECORDS)
-@pytest.mark.parametrize("estimator", ["rls", "ftr", "ekf"])
+@pytest.mark.parametrize("estimator", ["rls", "rls-iv", "ftr", "ekf"])
 def test_replay_equals_cli(tmp_path, record, mapping, estimator):
     data = shared(record)
     out = tmp_path / "out"

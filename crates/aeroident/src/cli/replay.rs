@@ -4,7 +4,8 @@
 //! aeroident replay <data.csv|.asc|.mat|-> --map <map.toml> [--format csv|asc|mat|ulog|dataflash]
 //!                  [--out <dir>]
 //!                  [--model longitudinal|lateral|six-axis|FILE]
-//!                  [--estimator rls|ftr|ekf|smpe|smpe-corrected|gradient|oe] [--forgetting λ]
+//!                  [--estimator rls|rls-iv|ftr|ekf|smpe|smpe-corrected|gradient|oe|fem]
+//!                  [--forgetting λ] [--instrument-delay N]
 //!                  [--derivatives auto|differentiate] [--diff-window N] [--realtime]
 //!                  [--validate-on <data2.csv>] [--window START:END …] [--and <more.csv> …]
 //!                  [--cross-check]
@@ -66,7 +67,7 @@ pub struct ReplayArgs {
     /// The estimator.
     #[arg(long, value_parser = super::named::<EstimatorKind>(), default_value = "rls")]
     pub estimator: EstimatorKind,
-    /// RLS forgetting factor in (0, 1]; 1 = ordinary least squares.
+    /// Forgetting factor of `rls`, `rls-iv` and `ftr`, in (0, 1]; 1 = ordinary least squares.
     #[arg(long, default_value_t = 1.0)]
     pub forgetting: f64,
     /// Source of ṗ, q̇, ṙ and α̇: the record's channels where mapped (else the causal
@@ -76,6 +77,11 @@ pub struct ReplayArgs {
     /// Causal differentiator window, samples (odd ≥ 3; lag = (N−1)/2 samples).
     #[arg(long, default_value_t = 5)]
     pub diff_window: usize,
+    /// `--estimator rls-iv`: delay of the instruments (the state regressors' earlier values),
+    /// samples, 1–64; it must exceed the regressor noise's correlation time and, when rates are
+    /// differentiated, the differentiator's half-window. Default: the differentiator window.
+    #[arg(long, value_name = "N")]
+    pub instrument_delay: Option<usize>,
     /// Pace the replay at the record's own sample rate.
     #[arg(long)]
     pub realtime: bool,
@@ -185,10 +191,17 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         forgetting: args.forgetting,
         derivatives: args.derivatives,
         diff_window: args.diff_window,
+        instrument_delay: args.instrument_delay,
         pacing: if args.realtime { Pacing::Realtime } else { Pacing::Unpaced },
         compat: compat_corrections(&args, &mapping, live)?,
         windows: args.windows.clone(),
     };
+    if args.instrument_delay.is_some() && args.estimator != EstimatorKind::RlsIv {
+        anyhow::bail!(
+            "--instrument-delay applies to instrumental variables (--estimator rls-iv), not to --estimator {}",
+            args.estimator.name()
+        );
+    }
     if args.estimator.is_batch() && mavlink {
         anyhow::bail!(
             "--estimator {} is a batch fit of a whole record, not for a live MAVLink feed",

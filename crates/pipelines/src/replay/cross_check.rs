@@ -11,6 +11,8 @@
 //!   Morelli 2006 ch. 5 on equation error with noisy regressors);
 //! - **equation error** otherwise: a time skew or bias between channels (the regressors and the
 //!   measured coefficient are not of one instant), which `aeroident compat` measures;
+//! - **instrumental variables** (`rls-iv`), which removes the regressor-noise bias: a time skew
+//!   or bias as above, or, nearer zero, noise correlated over more than the instrument delay;
 //! - **EKF**: its process- and measurement-noise model (unmodelled process noise moves both its
 //!   estimates and its σ; the batch fit's do not depend on them);
 //! - other estimators: their own bias (docs/smpe-corrected.md, docs/model-reference.md);
@@ -118,9 +120,12 @@ fn likely_cause(
         return "a constant term: it takes up the other parameters' differences";
     }
     match kind {
-        EstimatorKind::Rls | EstimatorKind::Ftr => {
+        EstimatorKind::Rls | EstimatorKind::Ftr | EstimatorKind::RlsIv => {
             let shrunk = online.signum() == batch.signum() && online.abs() < batch.abs();
             match (shrunk, compat_applied) {
+                (true, _) if kind == EstimatorKind::RlsIv => {
+                    "regressor noise correlated over more than the instrument delay (raise `instrument_delay`), or a time skew between channels"
+                }
                 (true, _) => {
                     "regressor noise: least squares on noisy measured states is biased towards zero (errors in variables)"
                 }
@@ -192,6 +197,8 @@ mod tests {
         assert!(d.likely_cause.starts_with("regressor noise"));
         let away = compare(EstimatorKind::Ftr, &[("Cm_q", Some(-3.0), Some(0.05))], &batch, false);
         assert!(away.flagged[0].likely_cause.contains("aeroident compat"));
+        let iv = compare(EstimatorKind::RlsIv, &online[..1], &batch, false);
+        assert!(iv.flagged[0].likely_cause.contains("instrument delay"));
         let ekf = compare(EstimatorKind::Ekf, &[("Cm_q", Some(-3.0), Some(0.05))], &batch, true);
         assert!(ekf.flagged[0].likely_cause.starts_with("the EKF's noise model"));
         let bias = [("Cm_0", Some(1.0), Some(0.05))];

@@ -88,6 +88,9 @@ pub struct ReplayOptions {
     pub derivatives: DerivativeSource,
     /// Differentiator window, samples (odd, ≥ 3).
     pub diff_window: usize,
+    /// `rls-iv`: delay of the instruments, samples; `None`:
+    /// [`crate::estimators::instrument_delay`] of the differentiator window.
+    pub instrument_delay: Option<usize>,
     /// Pacing.
     pub pacing: Pacing,
     /// A compatibility check's corrections, applied to every sample before the conditioning
@@ -224,6 +227,7 @@ impl Default for ReplayOptions {
             forgetting: 1.0,
             derivatives: DerivativeSource::Auto,
             diff_window: 5,
+            instrument_delay: None,
             pacing: Pacing::Unpaced,
             compat: None,
             windows: Vec::new(),
@@ -642,6 +646,7 @@ pub fn replay<R: Read>(
     let make = |model: &ModelSpec| {
         let o = EstimatorOptions {
             forgetting: opts.forgetting,
+            instrument_delay: Some(crate::estimators::instrument_delay(opts)),
             sample_interval_s: mapping.nominal_dt_s,
             ..EstimatorOptions::default()
         };

@@ -11,7 +11,7 @@ use super::{
     settle_time_s, unsupported,
 };
 use crate::condition::{Alignment, Conditioner, Conditioning};
-use crate::estimators::BuildError;
+use crate::estimators::{BuildError, EstimatorKind};
 use crate::sample_log::SampleLog;
 use aeroident_estimators::{AirDataSample, Estimator, Status};
 use aeroident_io::mapping::{Channel, Mapping};
@@ -20,6 +20,30 @@ use aeroident_io::replay_output::{
 };
 use aeroident_io::{FlightDataError, ModelSpec, RecordEvent, Rejection, RejectionLog};
 use std::time::{Duration, Instant};
+
+/// `rls-iv` on differentiated rates: the instruments must lie beyond the differentiator's
+/// half-span `(N−1)/2`, or the rate's noise reaches both the instrument and the measured
+/// moment and the estimate is biased (`aeroident_estimators::iv`, "Instruments").
+fn check_instrument_delay(opts: &ReplayOptions, differentiates: bool) -> Result<(), ReplayError> {
+    let d = crate::estimators::instrument_delay(opts);
+    let half = (opts.diff_window - 1) / 2;
+    if opts.estimator != EstimatorKind::RlsIv || !differentiates || d > half {
+        return Ok(());
+    }
+    let max = aeroident_estimators::iv::MAX_INSTRUMENT_DELAY;
+    let fix = if half < max {
+        format!("use --instrument-delay above {half}")
+    } else {
+        format!("the delay is at most {max} samples: use --diff-window {} or less", 2 * max - 1)
+    };
+    Err(ReplayError::Option {
+        option: "instrument-delay",
+        reason: format!(
+            "{d} samples is within the differentiator's half-window of {half} samples (--diff-window {}): the differentiated rates' noise would reach the instruments; {fix}",
+            opts.diff_window
+        ),
+    })
+}
 
 /// The running state once the first sample has fixed the model.
 struct Running {
@@ -161,6 +185,7 @@ impl<'a> Replay<'a> {
         };
         let supply =
             derivatives_to_supply(&spec.structure, opts.estimator, mapping, opts.derivatives);
+        check_instrument_delay(opts, !supply.is_empty())?;
         let missing = unsupported(&spec.structure, sample, self.uses_measured, &supply);
         if !missing.is_empty() {
             return Err(ReplayError::Model(format!(

@@ -5,8 +5,9 @@ same results to the last bit, same error messages). Units are SI, angles in radi
 seconds, unless a name says otherwise (``alt_ft``, ``elevator_deg`` …).
 
 - :func:`read`: a record + channel mapping → dict of numpy arrays (one per channel).
-- :class:`Estimator` and :class:`Rls`, :class:`Ftr`, :class:`Ekf`, :class:`Smpe`,
-  :class:`SmpeCorrected`, :class:`Gradient`: online estimators fed one sample dict at a time.
+- :class:`Estimator` and :class:`Rls`, :class:`RlsIv`, :class:`Ftr`, :class:`Ekf`,
+  :class:`Smpe`, :class:`SmpeCorrected`, :class:`Gradient`: online estimators fed one sample
+  dict at a time.
 - :func:`replay`: a whole record (file + mapping, or arrays) through an estimator in Rust; the
   estimates as a (time × parameter) numpy matrix.
 - :func:`fit`: the post-flight batch fit of a record by output error or the filter-error
@@ -35,6 +36,7 @@ __all__ = [
     "AeroidentError",
     "Estimator",
     "Rls",
+    "RlsIv",
     "Ftr",
     "Ekf",
     "Smpe",
@@ -81,8 +83,8 @@ class Estimator(_Estimator):
     """An online estimator over one model structure.
 
     ``Estimator(kind, model="longitudinal", constants=None, forgetting=1.0,
-    sample_interval_s=None, parameter_walk_per_sqrt_s=0.0, ftr_grid_hz=None)`` with ``kind`` one of ``rls, ftr,
-    ekf, smpe, smpe-corrected, gradient`` (the CLI's ``--estimator``) and ``model`` a preset
+    sample_interval_s=None, parameter_walk_per_sqrt_s=0.0, ftr_grid_hz=None)`` with ``kind`` one of ``rls, rls-iv,
+    ftr, ekf, smpe, smpe-corrected, gradient`` (the CLI's ``--estimator``) and ``model`` a preset
     (``longitudinal``, ``lateral``, ``six-axis``) or a model file (TOML, ``models/``).
     ``constants``: the aircraft constants (keys as in :func:`sample_keys`) used for every sample
     that does not carry its own. ``ftr_grid_hz``: FTR's frequency grid ``(f_min, f_max, step)``
@@ -115,6 +117,7 @@ def _plain(constants: Optional[Mapping[str, float]]) -> Optional[dict[str, Optio
 
 
 Rls = _subclass("rls", "Recursive least squares (equation error) on every modelled coefficient. ``Rls(model, constants, forgetting=1.0)``.")
+RlsIv = _subclass("rls-iv", "Recursive instrumental variables: equation error whose estimates regressor noise does not pull towards zero; the state regressors' instruments are their values 5 samples earlier (in :func:`replay` of a file, the differentiator window). ``RlsIv(model, constants, forgetting=1.0)``.")
 Ftr = _subclass("ftr", "Real-time Fourier-transform regression (Morelli 2000). ``Ftr(model, constants, forgetting=1.0, sample_interval_s=None, ftr_grid_hz=None)``.")
 Ekf = _subclass("ekf", "Extended Kalman filter on states and parameters. ``Ekf(model, constants, sample_interval_s=None, parameter_walk_per_sqrt_s=0.0)``.")
 Smpe = _subclass("smpe", "The thesis's sliding-mode parameter estimator. ``Smpe(model, constants)``.")

@@ -8,7 +8,7 @@ import numpy.typing as npt
 
 __version__: str
 PathLike = Union[str, os.PathLike[str]]
-EstimatorName = Literal["rls", "ftr", "ekf", "smpe", "smpe-corrected", "gradient"]
+EstimatorName = Literal["rls", "rls-iv", "ftr", "ekf", "smpe", "smpe-corrected", "gradient"]
 Constants = Mapping[str, Optional[float]]
 
 class AeroidentError(Exception): ...
@@ -59,6 +59,9 @@ class Estimator(EstimatorBase): ...
 
 class Rls(Estimator):
     def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, forgetting: float = 1.0, sample_interval_s: Optional[float] = None) -> Rls: ...
+
+class RlsIv(Estimator):
+    def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, forgetting: float = 1.0, sample_interval_s: Optional[float] = None) -> RlsIv: ...
 
 class Ftr(Estimator):
     def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, forgetting: float = 1.0, sample_interval_s: Optional[float] = None, ftr_grid_hz: Optional[tuple[float, float, float]] = None) -> Ftr: ...

@@ -97,11 +97,15 @@ impl Corrections {
             }
             if ch != Channel::Vt && (b != 0.0 || k != 1.0) {
                 c.affine.push((ch, b, k));
-                c.applied.push(format!(
-                    "{}: bias {b:+.4e} {} removed, scale {k:.4} divided out",
-                    ch.name(),
-                    ch.unit()
-                ));
+                // Name only what is removed: a scale factor the check left out is not one.
+                let removed = format!("bias {b:+.4e} {} removed", ch.unit());
+                let divided = format!("scale {k:.4} divided out");
+                let what = match (b != 0.0, scale.is_some()) {
+                    (true, true) => format!("{removed}, {divided}"),
+                    (true, false) => removed,
+                    _ => divided,
+                };
+                c.applied.push(format!("{}: {what}", ch.name()));
             }
             if let Some(t) = shift.filter(|t| *t != 0.0) {
                 c.shifts.push((ch, t));
@@ -355,7 +359,7 @@ mod tests {
         assert_eq!(
             corr.applied,
             [
-                "q_rad_s: bias +3.0000e-3 rad/s removed, scale 1.0000 divided out",
+                "q_rad_s: bias +3.0000e-3 rad/s removed",
                 "q_rad_s: read +0.150 s later (its time shift)"
             ]
         );

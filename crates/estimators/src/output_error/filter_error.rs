@@ -131,7 +131,11 @@
 //!
 //! # Starting values
 //!
-//! `θ` as output error ([`super::Start`]); `R` from the second differences of each measured
+//! `θ`, the biases and the free initial states from the output-error fit of the same record
+//! ([`FemConfig::start_from_output_error`]; Jategaonkar 2015 ch. 5 starts the filter-error
+//! method from output error's estimates); when that fit fails or the filter cannot run at its
+//! result, `θ` as output error starts ([`super::Start`]) and the initial states at the first
+//! samples. `R` from the second differences of each measured
 //! output (`Σ (z_{k+1} − 2 z_k + z_{k−1})² / (6 (N − 2))`, the white-noise variance of a
 //! smooth signal); `F` from [`FemConfig::process_noise_start`], else
 //! `0.1 sqrt(R_j / Δt)` of the output measuring the state (10⁻³ when none does).
@@ -251,6 +255,10 @@ pub struct FemConfig {
     /// dimensionless); `None`: unconstrained. Default [`GAIN_LIMIT`] (1, Jategaonkar 2015
     /// ch. 5, `kcle1.m`; module doc, "The gain constraint").
     pub gain_limit: Option<f64>,
+    /// Start `θ`, the biases and the initial states from the output-error fit of the same
+    /// record (default true; module doc, "Starting values"); false: from
+    /// [`OeConfig::start`] as output error itself starts.
+    pub start_from_output_error: bool,
 }
 
 impl FemConfig {
@@ -261,6 +269,7 @@ impl FemConfig {
             process_noise: AIR_DATA_STATES,
             process_noise_start: None,
             gain_limit: Some(GAIN_LIMIT),
+            start_from_output_error: true,
         }
     }
 }
@@ -472,19 +481,27 @@ impl Filter<'_> {
             let h = 1e-4 * full[a].abs().max(1e-3);
             b[a] = full[a] + h;
             let rp = r_of(&b);
-            let gp = self.pass(&b[..nb], &rp, &mut yp)?;
+            let plus = self.pass(&b[..nb], &rp, &mut yp);
             b[a] = full[a] - h;
             let rm = r_of(&b);
-            let gm = self.pass(&b[..nb], &rm, &mut ym)?;
+            let minus = self.pass(&b[..nb], &rm, &mut ym);
             b[a] = full[a];
+            // At the edge of the physical domain one side's pass may fail where the iterate's
+            // did not: a one-sided difference from the iterate, as far as it goes.
+            let (gp, gm, rp, rm, span) = match (plus, minus) {
+                (Ok(gp), Ok(gm)) => (gp, gm, rp, rm, 2.0 * h),
+                (Ok(gp), Err(_)) => (gp, self.pass(&b[..nb], &r_of(&b), &mut ym)?, rp, r_of(&b), h),
+                (Err(_), Ok(gm)) => (self.pass(&b[..nb], &r_of(&b), &mut yp)?, gm, r_of(&b), rm, h),
+                (Err(e), Err(_)) => return Err(e),
+            };
             for row in 0..rows {
-                s[row * cols + a] = (yp[row] - ym[row]) / (2.0 * h);
+                s[row * cols + a] = (yp[row] - ym[row]) / span;
             }
             for j in 0..ny {
-                dbf[a * ny + j] = (gp.cpc_diag[j] + rp[j] - gm.cpc_diag[j] - rm[j]) / (2.0 * h);
+                dbf[a * ny + j] = (gp.cpc_diag[j] + rp[j] - gm.cpc_diag[j] - rm[j]) / span;
             }
             for i in 0..nx {
-                dkc[a * nx + i] = (gp.kc_diag[i] - gm.kc_diag[i]) / (2.0 * h);
+                dkc[a * nx + i] = (gp.kc_diag[i] - gm.kc_diag[i]) / span;
             }
         }
         Ok(GainDerivatives { dbf, dkc })
@@ -631,6 +648,8 @@ struct Fem<'a> {
     ln_min: Vec<f64>,
     /// [`FemConfig::gain_limit`].
     gain_limit: Option<f64>,
+    /// [`FemConfig::start_from_output_error`].
+    from_output_error: bool,
 }
 
 /// The current iterate, its residuals and the iteration log.
@@ -751,7 +770,20 @@ impl<'a> Fem<'a> {
         let f0 = process_noise_start(config, p, &noisy, &r0, dt)?;
         let ln_min = noise_bounds(p, &noisy, &r0, dt);
         let gain_limit = config.gain_limit;
-        Ok(Self { p, filter, noisy, first_f, nb, ny: p.ny(), r0, f0, ln_min, gain_limit })
+        let from_output_error = config.start_from_output_error;
+        Ok(Self {
+            p,
+            filter,
+            noisy,
+            first_f,
+            nb,
+            ny: p.ny(),
+            r0,
+            f0,
+            ln_min,
+            gain_limit,
+            from_output_error,
+        })
     }
 
     /// The measurement-noise variances of unknowns `full`.
@@ -772,11 +804,14 @@ impl<'a> Fem<'a> {
         oe: &OeConfig,
     ) -> Result<(Iterate, Vec<f64>), OeError> {
         let mut y = Vec::new();
-        let (beta_oe, start) = first_start(self.p, manoeuvres, oe, |b| {
-            let mut full = b.to_vec();
-            full.extend(self.f0.iter().map(|f| f.ln()));
-            self.filter.pass(&full, &self.r0, &mut y).map(|_| ())
-        })?;
+        let (beta_oe, start) = match self.output_error_start(manoeuvres, oe, &mut y) {
+            Some(s) => s,
+            None => first_start(self.p, manoeuvres, oe, |b| {
+                let mut full = b.to_vec();
+                full.extend(self.f0.iter().map(|f| f.ln()));
+                self.filter.pass(&full, &self.r0, &mut y).map(|_| ())
+            })?,
+        };
         let mut beta = beta_oe;
         beta.extend(self.f0.iter().map(|f| f.ln()));
         beta.extend(self.r0.iter().map(|v| v.ln()));
@@ -795,6 +830,30 @@ impl<'a> Fem<'a> {
         let kc = st.kc_diag;
         let it = Iterate { beta, bf, b, y, e, s, y_try, e_try, lambda: 0.0, kc, dkc, log };
         Ok((it, start))
+    }
+
+    /// `(θ, b, x0)` and `θ` of the output-error fit of the record when
+    /// [`FemConfig::start_from_output_error`] asks for it, the fit ends with a finite result
+    /// (converged or not: its last iterate is still nearer than the equation-error start) and
+    /// the filter runs there at the starting noise; else `None` (module doc, "Starting values").
+    fn output_error_start(
+        &self,
+        manoeuvres: &[&[AirDataSample]],
+        oe: &OeConfig,
+        y: &mut Vec<f64>,
+    ) -> Option<(Vec<f64>, Vec<f64>)> {
+        if !self.from_output_error {
+            return None;
+        }
+        let r = super::fit_to_end(manoeuvres, oe).ok()?;
+        let n = self.p.n_unknowns;
+        if r.values.len() != n || !r.values.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let mut full = r.values.clone();
+        full.extend(self.f0.iter().map(|f| f.ln()));
+        self.filter.pass(&full, &self.r0, y).ok()?;
+        Some((r.values.clone(), r.values[..r.n_params].to_vec()))
     }
 
     /// Gauss–Newton iterations until convergence, no descent, or the iteration limit.

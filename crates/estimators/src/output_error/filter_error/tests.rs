@@ -365,3 +365,35 @@ fn gain_projection_solves_the_constrained_quadratic() {
     constrain_gain(&kc, &dkc, limit, &a, &mut kept).unwrap();
     assert_eq!(kept, small);
 }
+
+/// The fit starts from the output-error fit of the same record (module doc, "Starting
+/// values"): its starting `θ` is output error's estimate, computed here independently; off, it
+/// is output error's own start (the equation-error values). Both reach the same optimum on this
+/// record (within 0.1 σ), as on the HFB-320 (docs/uncertainty.md).
+#[test]
+fn the_fit_starts_from_the_output_error_fit_of_the_record() {
+    let st = lon();
+    let th = trimmed_truth(&st);
+    let data = simulate_with_process_noise(
+        &st,
+        &th,
+        20.0,
+        16.0,
+        1.0,
+        301,
+        [0.0; N_STATES],
+        process_alpha(F_ALPHA),
+    );
+    let config = FemConfig::new(st);
+    let oe = crate::output_error::fit_to_end(&[&data], &config.oe).unwrap();
+    let from_oe = fit(&[&data], &config).unwrap();
+    assert_eq!(from_oe.result.start, oe.values[..oe.n_params]);
+    let off = FemConfig { start_from_output_error: false, ..FemConfig::new(st) };
+    let from_ee = fit(&[&data], &off).unwrap();
+    assert_ne!(from_ee.result.start, from_oe.result.start);
+    for i in 0..st.n_params() {
+        let (a, b, s) =
+            (from_oe.result.values[i], from_ee.result.values[i], from_oe.result.sigma[i]);
+        assert!((a - b).abs() < 0.1 * s, "{i}: {a} vs {b} (σ {s})");
+    }
+}

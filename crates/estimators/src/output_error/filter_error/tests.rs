@@ -15,6 +15,14 @@ fn process_alpha(f: f64) -> [f64; N_STATES] {
     p
 }
 
+/// A 16-s longitudinal record at 20 Hz of the trimmed truth with process noise [`F_ALPHA`] on
+/// the α equation, seed `seed`.
+fn alpha_noise_record(seed: u64) -> Vec<AirDataSample> {
+    let st = lon();
+    let (th, none) = (trimmed_truth(&st), [0.0; N_STATES]);
+    simulate_with_process_noise(&st, &th, 20.0, 16.0, 1.0, seed, none, process_alpha(F_ALPHA))
+}
+
 /// The estimator's own longitudinal flight model (V, α, θ, q; 9 parameters), 16 s at 20 Hz
 /// with elevator doublets, the sensor noise of the output-error tests and white process
 /// noise of known intensity on the α equation: the filter-error method recovers every
@@ -27,16 +35,7 @@ fn process_noise_records_fem_recovers_theta_and_f_where_output_error_does_not() 
     let th = trimmed_truth(&st);
     let (mut z2_fem, mut z2_oe, mut count) = (0.0, 0.0, 0.0);
     for seed in 0..3 {
-        let data = simulate_with_process_noise(
-            &st,
-            &th,
-            20.0,
-            16.0,
-            1.0,
-            300 + seed,
-            [0.0; N_STATES],
-            process_alpha(F_ALPHA),
-        );
+        let data = alpha_noise_record(300 + seed);
         let fem = fit(&[&data], &FemConfig::new(st)).unwrap();
         assert_eq!(fem.result.termination, Termination::Converged);
         let mut oe_cfg = OeConfig::new(st);
@@ -259,17 +258,7 @@ fn kc_at_estimates(st: &ModelStructure, data: &[AirDataSample], fem: &FemResult)
 #[test]
 fn gain_limit_holds_diag_kc_where_the_free_fit_exceeds_it() {
     let st = lon();
-    let th = trimmed_truth(&st);
-    let data = simulate_with_process_noise(
-        &st,
-        &th,
-        20.0,
-        16.0,
-        1.0,
-        11,
-        [0.0; N_STATES],
-        process_alpha(F_ALPHA),
-    );
+    let data = alpha_noise_record(11);
     let mut cfg = FemConfig::new(st);
     cfg.gain_limit = None;
     let free = fit(&[&data], &cfg).unwrap();
@@ -373,17 +362,7 @@ fn gain_projection_solves_the_constrained_quadratic() {
 #[test]
 fn the_fit_starts_from_the_output_error_fit_of_the_record() {
     let st = lon();
-    let th = trimmed_truth(&st);
-    let data = simulate_with_process_noise(
-        &st,
-        &th,
-        20.0,
-        16.0,
-        1.0,
-        301,
-        [0.0; N_STATES],
-        process_alpha(F_ALPHA),
-    );
+    let data = alpha_noise_record(301);
     let config = FemConfig::new(st);
     let oe = crate::output_error::fit_to_end(&[&data], &config.oe).unwrap();
     let from_oe = fit(&[&data], &config).unwrap();

@@ -276,7 +276,7 @@ struct BatchChannel {
 enum Channelled {
     Two(Box<TwoAircraft>),
     Sample(SampleChannel),
-    Batch(BatchChannel),
+    Batch(Box<BatchChannel>),
 }
 
 struct ChannelRun {
@@ -467,7 +467,7 @@ fn build_channel(
             let samples = Vec::with_capacity(n + 1);
             let b = BatchChannel { config, raw_samples: s.raw_samples(), structure, samples };
             let params = structure.params().collect();
-            (Channelled::Batch(b), kind, Quantity::Derivative, params, Some("recording"))
+            (Channelled::Batch(Box::new(b)), kind, Quantity::Derivative, params, Some("recording"))
         }
         EstimatorSpec::Sample(s) => {
             let est =

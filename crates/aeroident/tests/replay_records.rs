@@ -515,3 +515,32 @@ fn val_sign_warning_and_ekf_consistency_are_reported() {
     assert!((0.5..2.0).contains(&nis), "NIS {nis}");
     assert!(!o.summary.warnings.iter().any(|w| w.contains("sign a conventional")));
 }
+
+/// A batch fit whose information matrix is singular at the last iterate still ends with a
+/// result: the JSBSim C172x elevator record with every initial state estimated (its lateral
+/// initial states and biases are not determined by an elevator input) is reported
+/// `not_converged`, the reason naming the unidentifiable unknowns, every estimate a number and
+/// every σ `null`; before, the fit ended with an error and no result.
+#[test]
+fn val_a_batch_fit_singular_at_its_last_iterate_reports_it_without_sigma() {
+    let Some(data) = shared("jsbsim_samples/c172x_elevator_3211_15s_60Hz.csv") else { return };
+    let out = std::env::temp_dir().join(format!("aeroident-singular-{}", std::process::id()));
+    let st = std::process::Command::new(env!("CARGO_BIN_EXE_aeroident"))
+        .arg("replay")
+        .arg(&data)
+        .arg("--map")
+        .arg(workspace().join("mappings/jsbsim.toml"))
+        .args(["--estimator", "oe", "--initial-states", "estimate", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    std::fs::remove_dir_all(&out).ok();
+    let s: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(s["status"], "not_converged");
+    let reason = s["status_reason"].as_str().unwrap();
+    assert!(reason.contains("not all identifiable"), "{reason}");
+    let params = s["parameters"].as_array().unwrap();
+    assert!(params.iter().all(|p| p["estimate"].is_f64() && p["std_error"].is_null()));
+}

@@ -123,8 +123,9 @@
 //! or fewer measurements than unknowns; [`EstimatorError::NonFiniteInput`] naming a missing or
 //! non-finite channel (a selected output or a model input must be present in every sample; an
 //! unmeasured state is not an error);
-//! [`EstimatorError::Numerical`] when the model diverges at every starting point tried or the
-//! information matrix is singular at the estimate.
+//! [`EstimatorError::Numerical`] when the model diverges at every starting point tried. An
+//! information matrix singular at the last iterate is not an error: the iterate is returned as
+//! [`NotConverged::Unidentifiable`] with NaN σ.
 
 use crate::coloured::batch as coloured;
 pub mod bootstrap;
@@ -252,6 +253,9 @@ pub enum NotConverged {
     MaxIterations,
     /// No step reduced the cost (λ up to 10¹⁰) while the Gauss–Newton step was still large.
     NoDescent,
+    /// The information matrix is singular at the last iterate: some unknowns are not
+    /// identifiable from the record, and no σ can be given (the result's σ are NaN).
+    Unidentifiable,
 }
 
 impl NotConverged {
@@ -261,6 +265,9 @@ impl NotConverged {
             NotConverged::MaxIterations => "the iteration limit was reached",
             NotConverged::NoDescent => {
                 "no step reduced the cost while the Gauss–Newton step was still large"
+            }
+            NotConverged::Unidentifiable => {
+                "the information matrix is singular at the last iterate: the unknowns are not all identifiable from this record, so no σ is given"
             }
         }
     }
@@ -1031,10 +1038,16 @@ fn assemble(
     let nb = beta.len();
     let ny = p.ny();
     let (m, _, _) = normal_equations(s, e, w, nb);
-    let minv = spd_inverse(&m).ok_or(EstimatorError::Numerical {
-        what: "information matrix singular at the estimate: the unknowns are not all identifiable",
-        t_s: 0.0,
-    })?;
+    // Singular at the last iterate: its values are still the fit's answer, reported as not
+    // converged with NaN σ (a caller's `null`), rather than no result at all.
+    let (minv, termination) = match spd_inverse(&m) {
+        Some(minv) => (minv, termination),
+        None => (
+            DMatrix::from_element(nb, nb, f64::NAN),
+            Termination::NotConverged(NotConverged::Unidentifiable),
+        ),
+    };
+    let identified = minv.iter().all(|v| v.is_finite());
     let sigma: Vec<f64> = (0..nb).map(|i| minv[(i, i)].sqrt()).collect();
     let correlation: Vec<f64> = (0..nb * nb)
         .map(|k| {
@@ -1045,16 +1058,17 @@ fn assemble(
     let lengths: Vec<usize> = p.man.iter().map(|m| m.u.len()).collect();
     let max_lag =
         config.coloured_max_lag.unwrap_or_else(|| lengths.iter().copied().min().unwrap_or(4) / 4);
-    let pre = coloured::prewhitened(s, e, w, &lengths, &minv, max_lag);
-    let sigma_coloured_truncated = coloured::covariance(s, e, w, &lengths, &minv, max_lag)
-        .covariance
-        .map(|c| (0..nb).map(|i| c[(i, i)].sqrt()).collect());
-    let col = pre.coloured;
-    let sigma_coloured_prewhitened =
-        col.covariance.map(|c| (0..nb).map(|i| c[(i, i)].sqrt()).collect::<Vec<_>>());
-    let sigma_coloured = coloured::spectral(s, e, w, &lengths, &minv)
-        .covariance
-        .map(|c| (0..nb).map(|i| c[(i, i)].sqrt()).collect::<Vec<_>>());
+    let diag = |c: DMatrix<f64>| (0..nb).map(|i| c[(i, i)].sqrt()).collect::<Vec<_>>();
+    let (sigma_coloured, sigma_coloured_prewhitened, sigma_coloured_truncated, lag, order) =
+        if identified {
+            let pre = coloured::prewhitened(s, e, w, &lengths, &minv, max_lag);
+            let truncated = coloured::covariance(s, e, w, &lengths, &minv, max_lag).covariance;
+            let spectral = coloured::spectral(s, e, w, &lengths, &minv).covariance;
+            let col = pre.coloured;
+            (spectral.map(diag), col.covariance.map(diag), truncated.map(diag), col.lag, pre.order)
+        } else {
+            (None, None, None, 0, 0)
+        };
     let n = p.n_samples as f64;
     let residual_mean: Vec<f64> =
         (0..ny).map(|j| e.iter().skip(j).step_by(ny).sum::<f64>() / n).collect();
@@ -1066,8 +1080,8 @@ fn assemble(
         sigma,
         sigma_coloured,
         sigma_coloured_prewhitened,
-        coloured_lag: col.lag,
-        coloured_ar_order: pre.order,
+        coloured_lag: lag,
+        coloured_ar_order: order,
         sigma_coloured_truncated,
         covariance: minv.transpose().as_slice().to_vec(),
         correlation,

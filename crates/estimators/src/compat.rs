@@ -93,10 +93,12 @@
 //! every accelerometer and gyro, no β vane (`--gyro-time-shifts --inertial-scale-factors`;
 //! `scenarios/sim/degraded_raw.toml` without its turbulence, the AHRS lag replaced by the
 //! delay, sensors at 100 Hz and the record kept at every 1st, 2nd, 5th and 10th row): at 100
-//! and 50 Hz every shift is 0.193–0.206 ± 0.009 s; at 20 Hz 0.243–0.255 ± 0.009 s with the α
+//! and 50 Hz every shift is 0.189–0.205 ± 0.010 s; at 20 Hz 0.243–0.255 ± 0.010 s with the α
 //! scale factor 0.962 taking up the difference, the residuals at the noise level; at 10 Hz
-//! 0.183–0.204 ± 0.019 s (`scenarios/sim/ahrs_delay_nobeta.toml` at 10 Hz: 0.199–0.211 ± 0.013
-//! s); a like record measured before put the 10 and 20 Hz shifts 0.11 s late. Without the
+//! p, r, φ, ψ 0.189–0.200 s but q, θ, α 0.249–0.254 ± 0.012 s (α scale 0.966);
+//! `scenarios/sim/ahrs_delay_nobeta.toml` at 10 Hz the other way round (q, θ, α 0.215 s;
+//! p, r, φ, ψ 0.250–0.255 ± 0.015 s); a like record measured before put the 10 and 20 Hz
+//! shifts 0.11 s late. Without the
 //! inertial scale factors the 100 Hz record's shift is 0.29 s: the gyros' scale errors pass
 //! for a lag. So at coarse sample rates without a β vane the common AHRS shift can be off by
 //! several times its Cramér–Rao σ, and nothing in the residuals shows it; a note says so

@@ -1040,14 +1040,14 @@ fn assemble(
     let (m, _, _) = normal_equations(s, e, w, nb);
     // Singular at the last iterate: its values are still the fit's answer, reported as not
     // converged with NaN σ (a caller's `null`), rather than no result at all.
-    let (minv, termination) = match spd_inverse(&m) {
-        Some(minv) => (minv, termination),
-        None => (
-            DMatrix::from_element(nb, nb, f64::NAN),
-            Termination::NotConverged(NotConverged::Unidentifiable),
-        ),
+    let inverse = spd_inverse(&m);
+    let identified = inverse.is_some();
+    let termination = if identified {
+        termination
+    } else {
+        Termination::NotConverged(NotConverged::Unidentifiable)
     };
-    let identified = minv.iter().all(|v| v.is_finite());
+    let minv = inverse.unwrap_or_else(|| DMatrix::from_element(nb, nb, f64::NAN));
     let sigma: Vec<f64> = (0..nb).map(|i| minv[(i, i)].sqrt()).collect();
     let correlation: Vec<f64> = (0..nb * nb)
         .map(|k| {

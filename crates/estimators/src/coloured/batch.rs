@@ -67,6 +67,7 @@
 //! noise: prewhitened 0.71–12.5 × the exact σ, spectral 0.77–1.36; tests in `spectral`).
 
 mod ar;
+mod lags;
 mod spectral;
 
 pub(crate) use spectral::TAPERS as SPECTRAL_TAPERS;
@@ -260,29 +261,7 @@ fn fitted_autocovariance(
             *yv = zi.iter().zip(&cs[q * n..(q + 1) * n]).map(|(a, b)| a * b).sum();
         }
     }
-    let n_kept: usize = lengths.iter().map(|l| l.saturating_sub(skip)).sum();
-    let mut d = vec![vec![0.0; ny * ny]; max_lag + 1];
-    let mut start = 0;
-    for &len in lengths {
-        for i in start + skip..start + len {
-            for (k, dk) in d.iter_mut().enumerate() {
-                if i < start + skip + k {
-                    break;
-                }
-                let j = i - k;
-                for a in 0..ny {
-                    let ya = &y[(i * ny + a) * n..][..n];
-                    for b in 0..ny {
-                        let zb = &z[(j * ny + b) * n..][..n];
-                        dk[a * ny + b] += ya.iter().zip(zb).map(|(p, q)| p * q).sum::<f64>();
-                    }
-                }
-            }
-        }
-        start += len;
-    }
-    d.iter_mut().flatten().for_each(|v| *v /= n_kept.max(1) as f64);
-    d
+    pooled_lags(&y, &z, ny, n, lengths, skip, max_lag)
 }
 
 /// The pooled lagged covariances `r̂(k)` of [`lagged_covariances`] for every `k = 0..=max_lag`
@@ -294,25 +273,35 @@ fn lagged_raw(
     skip: usize,
     max_lag: usize,
 ) -> Vec<Vec<f64>> {
+    pooled_lags(x, x, ny, 1, lengths, skip, max_lag)
+}
+
+/// `(1/N') Σ_i Σ_q y_i[a, q] z_{i−k}[b, q]` for `k = 0..=max_lag` (`ny × ny` row-major; `y`,
+/// `z`: `N × ny × ncol` row-major), pooled over the manoeuvres of `lengths`, pairs within a
+/// manoeuvre and from its sample `skip` on, `N'` the samples kept ([`lags::cross_lags`]).
+fn pooled_lags(
+    y: &[f64],
+    z: &[f64],
+    ny: usize,
+    ncol: usize,
+    lengths: &[usize],
+    skip: usize,
+    max_lag: usize,
+) -> Vec<Vec<f64>> {
+    let row = ny * ncol;
     let n_kept: usize = lengths.iter().map(|l| l.saturating_sub(skip)).sum();
-    (0..=max_lag)
-        .map(|k| {
-            let mut rk = vec![0.0; ny * ny];
-            let mut start = 0;
-            for &len in lengths {
-                for i in (start + skip + k)..(start + len) {
-                    for a in 0..ny {
-                        for b in 0..ny {
-                            rk[a * ny + b] += x[i * ny + a] * x[(i - k) * ny + b];
-                        }
-                    }
-                }
-                start += len;
-            }
-            rk.iter_mut().for_each(|v| *v /= n_kept.max(1) as f64);
-            rk
-        })
-        .collect()
+    let mut d = vec![vec![0.0; ny * ny]; max_lag + 1];
+    let mut start = 0;
+    for &len in lengths {
+        let rows = (start + skip.min(len)) * row..(start + len) * row;
+        let seg = lags::cross_lags(&y[rows.clone()], &z[rows], ny, ncol, max_lag);
+        for (dk, sk) in d.iter_mut().zip(&seg) {
+            dk.iter_mut().zip(sk).for_each(|(a, b)| *a += b);
+        }
+        start += len;
+    }
+    d.iter_mut().flatten().for_each(|v| *v /= n_kept.max(1) as f64);
+    d
 }
 
 /// The pooled residual auto/cross-covariances `r̂(k) = (1/N') Σ x_i x_{i−k}ᵀ` (`ny × ny`
@@ -329,35 +318,15 @@ fn lagged_covariances(
 ) -> (Vec<Vec<f64>>, usize) {
     let n_kept: usize = lengths.iter().map(|l| l.saturating_sub(skip)).sum();
     let band = 2.0 / (n_kept.max(1) as f64).sqrt();
-    let mut r: Vec<Vec<f64>> = Vec::new();
-    let mut lag = max_lag;
-    for k in 0..=max_lag {
-        let mut rk = vec![0.0; ny * ny];
-        let mut start = 0;
-        for &len in lengths {
-            for i in (start + skip + k)..(start + len) {
-                let xi = &x[i * ny..(i + 1) * ny];
-                let xj = &x[(i - k) * ny..(i - k + 1) * ny];
-                for a in 0..ny {
-                    for b in 0..ny {
-                        rk[a * ny + b] += xi[a] * xj[b];
-                    }
-                }
-            }
-            start += len;
-        }
-        rk.iter_mut().for_each(|v| *v /= n_kept.max(1) as f64);
-        let insignificant = k > 0
-            && (0..ny).all(|j| {
-                let r0 = r[0][j * ny + j];
-                r0 <= 0.0 || (rk[j * ny + j] / r0).abs() < band
-            });
-        if insignificant {
-            lag = k - 1;
-            break;
-        }
-        r.push(rk);
-    }
+    let mut r = pooled_lags(x, x, ny, 1, lengths, skip, max_lag);
+    let white = |k: usize| {
+        (0..ny).all(|j| {
+            let r0 = r[0][j * ny + j];
+            r0 <= 0.0 || (r[k][j * ny + j] / r0).abs() < band
+        })
+    };
+    let lag = (1..=max_lag).find(|&k| white(k)).map_or(max_lag, |k| k - 1);
+    r.truncate(lag + 1);
     (r, lag)
 }
 
@@ -377,9 +346,7 @@ fn weighted_sensitivities(s: &[f64], w: &[f64], n: usize) -> Vec<f64> {
 /// keeps going (pre-sample innovations of a stationary process still reach the window) until
 /// its energy has died out (10⁻¹² of the total) or for at most four manoeuvre lengths.
 /// Without an autoregression `U = T` and `F` is the Morelli & Klein sum of the module doc.
-///
-/// Streaming, backwards: `F₊ = Σ_m (Σ_k r(k)ᵀ U_{m+k})ᵀ U_m`, `F = F₊ + F₊ᵀ − Σ_m U_mᵀ r(0) U_m`,
-/// with a ring of the last `max(p, K) + 1` rows of `U`.
+/// The double sum itself is [`lags::sandwich`] (through the FFT when the lags are many).
 fn middle(
     t: &[f64],
     ny: usize,
@@ -389,102 +356,63 @@ fn middle(
     var: &[Vec<f64>],
 ) -> DMatrix<f64> {
     let row = ny * n;
-    let p_max = var.len();
-    let depth = p_max.max(r.len().saturating_sub(1)) + 1;
-    let mut fplus = DMatrix::<f64>::zeros(n, n);
-    let mut a0 = DMatrix::<f64>::zeros(n, n);
-    let mut ring = vec![0.0; depth * row];
-    let mut g = vec![0.0; row];
-    let mut g0 = vec![0.0; row];
-    let mut u = vec![0.0; row];
+    let mut f = DMatrix::<f64>::zeros(n, n);
     let mut start = 0;
     for &len in lengths {
-        ring.iter_mut().for_each(|v| *v = 0.0);
-        let mut total = 0.0;
-        let mut recent = std::collections::VecDeque::with_capacity(p_max + 1);
-        let pre_max = if p_max == 0 { 0 } else { 4 * len };
-        // Index m runs from start + len − 1 down to start − pre (m_rel = m − start).
-        let mut m_rel = len as isize - 1;
-        let mut slot = 0usize; // ring slot of row m; row m + k is at (slot + k) % depth.
-        loop {
-            if m_rel < 0 {
-                if -m_rel as usize > pre_max {
-                    break;
-                }
-                let tail: f64 = recent.iter().sum();
-                if tail <= 1e-12 * total {
-                    break;
-                }
-            }
-            // U_m = T_m + Σ_j φ_aj U_{m+j}.
-            if m_rel >= 0 {
-                let i = start + m_rel as usize;
-                u.copy_from_slice(&t[i * row..(i + 1) * row]);
-            } else {
-                u.iter_mut().for_each(|v| *v = 0.0);
-            }
-            for (j, aj) in var.iter().enumerate() {
-                let later = &ring[((slot + j + 1) % depth) * row..][..row];
-                // U_m[b] += Σ_a A_j[a][b] U_{m+j}[a].
-                for a in 0..ny {
-                    for b in 0..ny {
-                        let c = aj[a * ny + b];
-                        if c != 0.0 {
-                            for (uv, lv) in
-                                u[b * n..(b + 1) * n].iter_mut().zip(&later[a * n..(a + 1) * n])
-                            {
-                                *uv += c * lv;
-                            }
-                        }
-                    }
-                }
-            }
-            ring[slot * row..(slot + 1) * row].copy_from_slice(&u);
-            let energy: f64 = u.iter().map(|v| v * v).sum();
-            total += energy;
-            if recent.len() == p_max.max(1) {
-                recent.pop_front();
-            }
-            recent.push_back(energy);
-            // G_m = Σ_k r(k)ᵀ U_{m+k}: G[b] = Σ_k Σ_a r(k)[a][b] U_{m+k}[a].
-            g.iter_mut().for_each(|v| *v = 0.0);
-            for (k, rk) in r.iter().enumerate() {
-                if m_rel + k as isize >= len as isize {
-                    break;
-                }
-                let uk = &ring[((slot + k) % depth) * row..][..row];
-                for b in 0..ny {
-                    let gb = &mut g[b * n..(b + 1) * n];
-                    for a in 0..ny {
-                        let rab = rk[a * ny + b];
-                        if rab != 0.0 {
-                            for (gv, uv) in gb.iter_mut().zip(&uk[a * n..(a + 1) * n]) {
-                                *gv += rab * uv;
-                            }
-                        }
-                    }
-                }
-                if k == 0 {
-                    g0.copy_from_slice(&g);
-                }
-            }
-            for b in 0..ny {
-                for p in 0..n {
-                    let gp = g[b * n + p];
-                    let g0p = g0[b * n + p];
-                    for q in 0..n {
-                        let uq = u[b * n + q];
-                        fplus[(p, q)] += gp * uq;
-                        a0[(p, q)] += g0p * uq;
-                    }
-                }
-            }
-            slot = (slot + depth - 1) % depth;
-            m_rel -= 1;
-        }
+        let own = &t[start * row..(start + len) * row];
+        f += if var.is_empty() {
+            lags::sandwich(own, ny, n, r)
+        } else {
+            lags::sandwich(&recoloured(own, ny, n, var), ny, n, r)
+        };
         start += len;
     }
-    &fplus + fplus.transpose() - a0
+    f
+}
+
+/// `U` of [`middle`] for one manoeuvre's `T` (`len × ny × n`), in time order, its pre-sample
+/// rows first.
+fn recoloured(t: &[f64], ny: usize, n: usize, var: &[Vec<f64>]) -> Vec<f64> {
+    let row = ny * n;
+    let len = t.len() / row;
+    let p_max = var.len();
+    // Rows from the last sample backwards; row m + j is `back[back.len() − j·row ..]`.
+    let mut back: Vec<f64> = Vec::with_capacity(t.len());
+    let mut total = 0.0;
+    let mut recent = std::collections::VecDeque::with_capacity(p_max + 1);
+    let mut u = vec![0.0; row];
+    for m_rel in (-(4 * len as isize)..len as isize).rev() {
+        if m_rel < 0 && recent.iter().sum::<f64>() <= 1e-12 * total {
+            break;
+        }
+        if m_rel >= 0 {
+            u.copy_from_slice(&t[m_rel as usize * row..][..row]);
+        } else {
+            u.iter_mut().for_each(|v| *v = 0.0);
+        }
+        let done = back.len() / row;
+        for (j, aj) in var.iter().enumerate().take(done) {
+            let later = &back[(done - j - 1) * row..][..row];
+            // U_m[b] += Σ_a A_j[a][b] U_{m+j}[a].
+            for a in 0..ny {
+                for b in 0..ny {
+                    let c = aj[a * ny + b];
+                    for (uv, lv) in u[b * n..][..n].iter_mut().zip(&later[a * n..][..n]) {
+                        *uv += c * lv;
+                    }
+                }
+            }
+        }
+        let energy: f64 = u.iter().map(|v| v * v).sum();
+        total += energy;
+        if recent.len() == p_max.max(1) {
+            recent.pop_front();
+        }
+        recent.push_back(energy);
+        back.extend_from_slice(&u);
+    }
+    // Time order: reverse the rows.
+    back.chunks_exact(row).rev().flatten().copied().collect()
 }
 
 #[cfg(test)]

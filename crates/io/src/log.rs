@@ -28,7 +28,9 @@
 
 use crate::error::FlightDataError;
 use crate::flight_data::FlightDataReader;
+use crate::log_contents::{LogContents, TopicFilter};
 use crate::mapping::{Mapping, Source};
+use crate::reader_report::ReaderReport;
 use crate::table::Table;
 use std::fmt::Write as _;
 use std::io::{BufRead, BufReader, Read};
@@ -126,21 +128,36 @@ pub fn open_log(
 }
 
 /// [`open_log`], and one line per thing the reading or alignment of a multi-rate log (ULog,
-/// DataFlash) left out: samples whose timestamp did not increase, a truncated last message,
-/// skipped corrupt bytes ([`crate::ulog::LogContents::notes`]), and rows dropped by the
-/// alignment per topic ([`crate::align::Aligned::dropped_by`]). Empty for CSV, `.asc`, `.mat`.
+/// DataFlash) left out ([`ReaderReport::notes`]). Empty for CSV, `.asc`, `.mat`.
+///
+/// # Errors
+/// As [`open_log_with_report`].
+pub fn open_log_with_notes(
+    path: &str,
+    format: Option<LogFormat>,
+    mapping: &Mapping,
+) -> Result<(LogReader, Vec<String>), FlightDataError> {
+    open_log_with_report(path, format, mapping).map(|(r, report)| (r, report.notes()))
+}
+
+/// [`open_log`], and what the reading or alignment of a multi-rate log (ULog, DataFlash) left
+/// out, counted per kind and topic ([`ReaderReport`]): samples whose timestamp broke their
+/// topic's order, a truncated last message, skipped corrupt bytes, rows dropped by the
+/// alignment. Empty for CSV, `.asc`, `.mat`. A multi-rate log is streamed and only the topics
+/// and fields the mapping reads are kept ([`TopicFilter::for_mapping`]).
 ///
 /// # Errors
 /// [`FlightDataError::Io`] naming the file; [`FlightDataError::Format`] for a file that is
 /// not of its format (or a binary log from stdin); the CSV reader's header errors;
 /// [`FlightDataError::NoSuchColumn`] for a mapped column the record lacks; for ULog and
 /// DataFlash the decoder's [`FlightDataError::LogDecode`] and the alignment's
-/// [`FlightDataError::MissingTopic`] / [`FlightDataError::BadSpec`] / [`FlightDataError::Align`].
-pub fn open_log_with_notes(
+/// [`FlightDataError::MissingTopic`] (listing what the log has, and saying where a cut file
+/// ends) / [`FlightDataError::BadSpec`] / [`FlightDataError::Align`].
+pub fn open_log_with_report(
     path: &str,
     format: Option<LogFormat>,
     mapping: &Mapping,
-) -> Result<(LogReader, Vec<String>), FlightDataError> {
+) -> Result<(LogReader, ReaderReport), FlightDataError> {
     let format =
         format.or_else(|| LogFormat::from_extension(Path::new(path))).unwrap_or(LogFormat::Csv);
     let io = |source| FlightDataError::Io { file: path.to_string(), source };
@@ -151,15 +168,20 @@ pub fn open_log_with_notes(
             Ok(Box::new(BufReader::new(std::fs::File::open(path).map_err(io)?)))
         }
     };
+    let empty = ReaderReport {
+        file: path.to_string(),
+        format: format.name().to_string(),
+        dropped: Vec::new(),
+    };
     match format {
         LogFormat::Csv => Ok((
             FlightDataReader::new(Box::new(open()?) as Box<dyn Read>, path, mapping)?,
-            Vec::new(),
+            empty,
         )),
-        LogFormat::Asc => Ok((asc_reader(open()?, path, mapping)?, Vec::new())),
+        LogFormat::Asc => Ok((asc_reader(open()?, path, mapping)?, empty)),
         LogFormat::Mat => {
             let table = read_mat(open()?, path, mapping.column_names.as_deref())?;
-            Ok((table_reader(table, mapping)?, Vec::new()))
+            Ok((table_reader(table, mapping)?, empty))
         }
         LogFormat::Ulog | LogFormat::Dataflash => {
             if path == "-" {
@@ -168,21 +190,77 @@ pub fn open_log_with_notes(
                     message: format!("a {} log is read from a file, not from stdin", format.name()),
                 });
             }
+            let filter = TopicFilter::for_mapping(mapping);
             let contents = match format {
-                LogFormat::Ulog => crate::ulog::read_ulog_contents(Path::new(path))?,
-                _ => crate::dataflash::read_dataflash_contents(Path::new(path))?,
+                LogFormat::Ulog => crate::ulog::read_ulog_filtered(Path::new(path), &filter)?,
+                _ => crate::dataflash::read_dataflash_filtered(Path::new(path), &filter)?,
             };
-            let mut notes = contents.notes(path);
-            let aligned = crate::multirate::log_table(&contents.topics, mapping, path)?;
-            for (topic, n) in &aligned.dropped_by {
-                notes.push(format!(
-                    "{path}: {n} of {} aligned rows dropped: topic `{topic}` had no value there \
-                     (before its first sample or past its hold interval)",
-                    aligned.rows_considered
-                ));
-            }
-            Ok((table_reader(aligned.table, mapping)?, notes))
+            let mut report = ReaderReport::from_contents(path, format.name(), &contents);
+            let cut = |e| with_cut_note(e, contents.truncated_at);
+            check_catalogue(&contents, mapping, path).map_err(cut)?;
+            let aligned = crate::multirate::log_table(&contents.topics, mapping, path).map_err(cut)?;
+            drop(contents);
+            report.add_alignment(&aligned.dropped_by, aligned.rows_considered);
+            Ok((table_reader(aligned.table, mapping)?, report))
         }
+    }
+}
+
+/// Every `<topic>.<field>` column the mapping reads must be in the log's catalogue (every
+/// topic with a message, kept or not); the error lists what the log has, as
+/// [`crate::align::select`] does for the kept topics.
+fn check_catalogue(
+    contents: &LogContents,
+    mapping: &Mapping,
+    file: &str,
+) -> Result<(), FlightDataError> {
+    let missing = |column: &str, needed_by: &str, reason: String| FlightDataError::MissingTopic {
+        file: file.to_string(),
+        column: column.to_string(),
+        needed_by: needed_by.to_string(),
+        reason,
+    };
+    for (column, needed_by) in crate::multirate::needed_columns(mapping) {
+        let Some((tname, field)) = crate::align::split_column(&column) else { continue };
+        let Some(topic) = contents.catalogue.iter().find(|t| t.name == tname) else {
+            let mut have: Vec<&str> = contents.catalogue.iter().map(|t| t.name.as_str()).collect();
+            have.sort_unstable();
+            return Err(missing(
+                &column,
+                &needed_by,
+                format!("the log has no topic/message `{tname}` (it has: {})", have.join(", ")),
+            ));
+        };
+        if !topic.fields.iter().any(|f| f == field) {
+            return Err(missing(
+                &column,
+                &needed_by,
+                format!(
+                    "topic `{tname}` has no field `{field}` (it has: {})",
+                    topic.fields.join(", ")
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A missing topic or an alignment failure in a file cut short may only mean the cut came
+/// before the topic: say where the file ends.
+fn with_cut_note(e: FlightDataError, truncated_at: Option<u64>) -> FlightDataError {
+    let Some(at) = truncated_at else { return e };
+    let note = format!(
+        "; note: the file ends inside a message at byte {at} (a cut log: what it defines or \
+         logs after that is missing)"
+    );
+    match e {
+        FlightDataError::MissingTopic { file, column, needed_by, reason } => {
+            FlightDataError::MissingTopic { file, column, needed_by, reason: reason + &note }
+        }
+        FlightDataError::Align { file, reason } => {
+            FlightDataError::Align { file, reason: reason + &note }
+        }
+        other => other,
     }
 }
 

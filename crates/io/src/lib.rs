@@ -14,6 +14,7 @@ pub mod flight_data;
 pub mod log;
 pub mod log_contents;
 pub mod mapping;
+mod mat5;
 pub mod mavlink;
 pub mod model_file;
 pub mod multirate;

@@ -506,7 +506,7 @@ impl Read for TableAsCsv {
     }
 }
 
-/// Reads a MATLAB level-5 `.mat` file (the `matfile` crate) into a [`Table`].
+/// Reads a MATLAB level-5 `.mat` file ([`crate::mat5`]) into a [`Table`].
 ///
 /// - One numeric 2-D variable (the FVSysID layout, e.g. `fAttasElv1`, 626 × 45): its
 ///   columns are the table's, named by `column_names` (the mapping's `[columns] names`) or
@@ -543,44 +543,30 @@ pub fn read_mat<R: Read>(
             .into()));
     }
     check_mat_elements(&bytes).map_err(bad)?;
-    let mat = matfile::MatFile::parse(bytes.as_slice())
-        .map_err(|e| bad(format!("reading the .mat file: {e}")))?;
-    let arrays: Vec<(&matfile::Array, Vec<f64>)> = mat
-        .arrays()
-        .iter()
-        .map(|a| {
-            real_f64(a).map(|v| (a, v)).map_err(|m| bad(format!("variable `{}`: {m}", a.name())))
-        })
-        .collect::<Result<_, _>>()?;
-    for (a, data) in &arrays {
-        if a.ndims() != 2 {
+    let arrays = crate::mat5::read_arrays(&bytes).map_err(bad)?;
+    drop(bytes);
+    for a in &arrays {
+        if a.dims.len() != 2 {
             return Err(bad(format!(
                 "variable `{}` has {} dimensions; only 2-D variables are read",
-                a.name(),
-                a.ndims()
-            )));
-        }
-        // A corrupt dimension (found by fuzzing: one flipped bit in the row count) would
-        // otherwise give a table whose column count differs from its names.
-        let (r, c) = (a.size()[0], a.size()[1]);
-        if r.checked_mul(c) != Some(data.len()) {
-            return Err(bad(format!(
-                "variable `{}` is declared {r}×{c} but holds {} values: a corrupt file",
-                a.name(),
-                data.len()
+                a.name,
+                a.dims.len()
             )));
         }
     }
     let file_s = file.to_string();
-    match arrays.as_slice() {
+    let mut arrays = arrays;
+    let n_vars = arrays.len();
+    match arrays.as_mut_slice() {
         [] => Err(bad("no numeric variable in the file".into())),
-        [(a, data)] => {
-            let (rows, cols) = (a.size()[0], a.size()[1]);
+        [a] => {
+            let data = &a.values;
+            let (rows, cols) = (a.dims[0], a.dims[1]);
             let names: Vec<String> = match column_names {
                 Some(n) if n.len() != cols => {
                     return Err(bad(format!(
                         "variable `{}` has {cols} columns, but `[columns] names` names {}",
-                        a.name(),
+                        a.name,
                         n.len()
                     )));
                 }
@@ -594,14 +580,14 @@ pub fn read_mat<R: Read>(
         many => {
             let len = many
                 .iter()
-                .filter(|(a, _)| a.size().contains(&1))
-                .map(|(_, d)| d.len())
+                .filter(|a| a.dims.contains(&1))
+                .map(|a| a.values.len())
                 .max()
                 .unwrap_or(0);
             let mut names = Vec::new();
             let mut columns = Vec::new();
-            for (a, data) in many {
-                let s = a.size();
+            for a in many.iter_mut() {
+                let (s, data) = (&a.dims, &a.values);
                 if data.len() == 1 && len > 1 {
                     continue;
                 }
@@ -609,21 +595,21 @@ pub fn read_mat<R: Read>(
                     return Err(bad(format!(
                         "variable `{}` is a {}×{} matrix among {} variables: save one matrix \
                          (columns = channels) or one vector per channel",
-                        a.name(),
+                        a.name,
                         s[0],
                         s[1],
-                        many.len()
+                        n_vars
                     )));
                 }
                 if data.len() != len {
                     return Err(bad(format!(
                         "variable `{}` has {} values, others have {len}",
-                        a.name(),
+                        a.name,
                         data.len()
                     )));
                 }
-                names.push(a.name().to_string());
-                columns.push(data.clone());
+                names.push(a.name.clone());
+                columns.push(std::mem::take(&mut a.values));
             }
             Ok(Table { file: file_s, names, columns })
         }
@@ -666,30 +652,6 @@ fn check_mat_elements(bytes: &[u8]) -> Result<(), String> {
         at = end;
     }
     Ok(())
-}
-
-/// A real numeric array's values as `f64` (column-major), or why not.
-fn real_f64(a: &matfile::Array) -> Result<Vec<f64>, String> {
-    use matfile::NumericData as N;
-    fn conv<T: Copy + Into<f64>>(real: &[T], imag: &Option<Vec<T>>) -> Result<Vec<f64>, String> {
-        if imag.is_some() {
-            return Err("complex data is not read".into());
-        }
-        Ok(real.iter().map(|x| (*x).into()).collect())
-    }
-    match a.data() {
-        N::Double { real, imag } => conv(real, imag),
-        N::Single { real, imag } => conv(real, imag),
-        N::Int8 { real, imag } => conv(real, imag),
-        N::UInt8 { real, imag } => conv(real, imag),
-        N::Int16 { real, imag } => conv(real, imag),
-        N::UInt16 { real, imag } => conv(real, imag),
-        N::Int32 { real, imag } => conv(real, imag),
-        N::UInt32 { real, imag } => conv(real, imag),
-        N::Int64 { .. } | N::UInt64 { .. } => {
-            Err("64-bit integer data is not read (not exact in f64)".into())
-        }
-    }
 }
 
 #[cfg(test)]

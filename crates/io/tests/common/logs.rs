@@ -84,3 +84,58 @@ pub fn mapping_text(topic: &str, rate_hz: f64) -> String {
         1.0 / rate_hz
     )
 }
+
+/// One miMATRIX element of a MATLAB level-5 file (MathWorks "MAT-File Format", ch. 1):
+/// array flags (class double), dimensions `dims` as declared (may disagree with `data`), name,
+/// real part as miDOUBLE.
+pub fn mat_matrix(name: &str, dims: &[i32], data: &[f64]) -> Vec<u8> {
+    let tag = |v: &mut Vec<u8>, ty: u32, n: usize| {
+        v.extend(ty.to_le_bytes());
+        v.extend(u32::try_from(n).unwrap().to_le_bytes());
+    };
+    let pad = |v: &mut Vec<u8>| v.resize(v.len().div_ceil(8) * 8, 0);
+    let mut m = Vec::new();
+    tag(&mut m, 6, 8);
+    m.extend(6u32.to_le_bytes());
+    m.extend(0u32.to_le_bytes());
+    tag(&mut m, 5, 4 * dims.len());
+    for d in dims {
+        m.extend(d.to_le_bytes());
+    }
+    pad(&mut m);
+    tag(&mut m, 1, name.len());
+    m.extend(name.as_bytes());
+    pad(&mut m);
+    tag(&mut m, 9, 8 * data.len());
+    for x in data {
+        m.extend(x.to_le_bytes());
+    }
+    let mut out = Vec::new();
+    tag(&mut out, 14, m.len());
+    out.extend(m);
+    out
+}
+
+/// The 128-byte level-5 header (little-endian), then `elements`.
+pub fn mat_file(elements: &[Vec<u8>]) -> Vec<u8> {
+    let mut out = format!("{:<116}", "MATLAB 5.0 MAT-file, written by a test").into_bytes();
+    out.extend([0u8; 8]);
+    out.extend(0x0100u16.to_le_bytes());
+    out.extend(*b"IM");
+    for e in elements {
+        out.extend(e);
+    }
+    out
+}
+
+/// `element` as a miCOMPRESSED element (zlib).
+pub fn mat_compressed(element: &[u8]) -> Vec<u8> {
+    use std::io::Write;
+    let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::best());
+    z.write_all(element).unwrap();
+    let c = z.finish().unwrap();
+    let mut out = 15u32.to_le_bytes().to_vec();
+    out.extend(u32::try_from(c.len()).unwrap().to_le_bytes());
+    out.extend(c);
+    out
+}

@@ -345,7 +345,9 @@ pub fn decode_dataflash<R: Read>(
     loop {
         let at = w.offset();
         let ty = match w.peek(3).map_err(io)? {
-            Some([a, b, t]) if [*a, *b] == HEAD && (*t == FMT_TYPE || d.formats.contains_key(t)) => {
+            Some([a, b, t])
+                if [*a, *b] == HEAD && (*t == FMT_TYPE || d.formats.contains_key(t)) =>
+            {
                 *t
             }
             Some(_) => {
@@ -467,7 +469,8 @@ impl Decoder<'_> {
         };
         let f = self.formats.get_mut(&ty).expect("type checked by the caller");
         f.variant = Some(variant);
-        let mut tname = if instance == 0 { f.name.clone() } else { format!("{}[{instance}]", f.name) };
+        let mut tname =
+            if instance == 0 { f.name.clone() } else { format!("{}[{instance}]", f.name) };
         if variant > 1 {
             tname = format!("{tname}#{variant}");
         }

@@ -28,7 +28,7 @@ pub mod units;
 pub use error::{FlightDataError, RowProblem};
 pub use flight_data::{FlightDataReader, RecordEvent, Rejection};
 pub use log::{LogFormat, LogReader, open_log, open_log_with_notes, open_log_with_report};
-pub use reader_report::ReaderReport;
 pub use mapping::{Channel, Mapping};
 pub use model_file::{ModelFileError, ModelSpec, ParamReference};
+pub use reader_report::ReaderReport;
 pub use rejection_log::RejectionLog;

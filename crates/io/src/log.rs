@@ -174,10 +174,9 @@ pub fn open_log_with_report(
         dropped: Vec::new(),
     };
     match format {
-        LogFormat::Csv => Ok((
-            FlightDataReader::new(Box::new(open()?) as Box<dyn Read>, path, mapping)?,
-            empty,
-        )),
+        LogFormat::Csv => {
+            Ok((FlightDataReader::new(Box::new(open()?) as Box<dyn Read>, path, mapping)?, empty))
+        }
         LogFormat::Asc => Ok((asc_reader(open()?, path, mapping)?, empty)),
         LogFormat::Mat => {
             let table = read_mat(open()?, path, mapping.column_names.as_deref())?;
@@ -198,7 +197,8 @@ pub fn open_log_with_report(
             let mut report = ReaderReport::from_contents(path, format.name(), &contents);
             let cut = |e| with_cut_note(e, contents.truncated_at);
             check_catalogue(&contents, mapping, path).map_err(cut)?;
-            let aligned = crate::multirate::log_table(&contents.topics, mapping, path).map_err(cut)?;
+            let aligned =
+                crate::multirate::log_table(&contents.topics, mapping, path).map_err(cut)?;
             drop(contents);
             report.add_alignment(&aligned.dropped_by, aligned.rows_considered);
             Ok((table_reader(aligned.table, mapping)?, report))
@@ -595,10 +595,7 @@ pub fn read_mat<R: Read>(
                     return Err(bad(format!(
                         "variable `{}` is a {}×{} matrix among {} variables: save one matrix \
                          (columns = channels) or one vector per channel",
-                        a.name,
-                        s[0],
-                        s[1],
-                        n_vars
+                        a.name, s[0], s[1], n_vars
                     )));
                 }
                 if data.len() != len {

@@ -212,11 +212,7 @@ pub(crate) struct TopicBuilder {
 
 impl TopicBuilder {
     /// A topic with fields `all_fields`, of which `kept` (names) are collected if `kept_topic`.
-    pub(crate) fn new(
-        name: String,
-        all_fields: Vec<String>,
-        kept: Option<Vec<String>>,
-    ) -> Self {
+    pub(crate) fn new(name: String, all_fields: Vec<String>, kept: Option<Vec<String>>) -> Self {
         let kept_topic = kept.is_some();
         let names = kept.unwrap_or_default();
         let n = names.len();

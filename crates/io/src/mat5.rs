@@ -41,10 +41,10 @@ pub(crate) struct MatArray {
 /// Bytes of one element of storage type `ty` (`miINT8` … `miUINT64`), `None` for others.
 fn type_size(ty: u32) -> Option<usize> {
     Some(match ty {
-        1 | 2 => 1,  // miINT8, miUINT8
-        3 | 4 => 2,  // miINT16, miUINT16
-        5..=7 => 4,  // miINT32, miUINT32, miSINGLE
-        9 => 8,      // miDOUBLE
+        1 | 2 => 1,   // miINT8, miUINT8
+        3 | 4 => 2,   // miINT16, miUINT16
+        5..=7 => 4,   // miINT32, miUINT32, miSINGLE
+        9 => 8,       // miDOUBLE
         12 | 13 => 8, // miINT64, miUINT64
         _ => return None,
     })

@@ -42,8 +42,8 @@
 
 use crate::FlightDataError;
 use crate::byte_window::ByteWindow;
-pub use crate::log_contents::{LogContents, TopicFilter, TopicInfo};
 use crate::log_contents::TopicBuilder;
+pub use crate::log_contents::{LogContents, TopicFilter, TopicInfo};
 use crate::table::Topic;
 use std::collections::BTreeMap;
 use std::io::Read;
@@ -317,7 +317,8 @@ fn compile(
             for i in 0..count {
                 let mut sub = Vec::new();
                 let mut sub_bytes = if padding { 0 } else { *name_bytes };
-                at = compile(formats, &f.type_name, &element(i, "."), at, &mut sub, &mut sub_bytes)?;
+                at =
+                    compile(formats, &f.type_name, &element(i, "."), at, &mut sub, &mut sub_bytes)?;
                 if !padding {
                     *name_bytes = sub_bytes;
                     leaves.extend(sub);
@@ -514,7 +515,10 @@ impl Decoder<'_> {
             }
             b'A' => {
                 if payload.len() < 3 {
-                    return Err(err(format!("subscription message of {} bytes (< 3)", payload.len())));
+                    return Err(err(format!(
+                        "subscription message of {} bytes (< 3)",
+                        payload.len()
+                    )));
                 }
                 let multi = payload[0];
                 let id = u16::from_le_bytes([payload[1], payload[2]]);
@@ -599,8 +603,10 @@ impl Decoder<'_> {
         }
         let id = u16::from_le_bytes([payload[0], payload[1]]);
         let data = &payload[2..];
-        let sub =
-            self.subs.get(&id).ok_or_else(|| format!("data message for unknown subscription {id}"))?;
+        let sub = self
+            .subs
+            .get(&id)
+            .ok_or_else(|| format!("data message for unknown subscription {id}"))?;
         let b = &mut self.builders[sub.topic];
         let c = &sub.compiled;
         if data.len() < c.min_len {
@@ -615,9 +621,8 @@ impl Decoder<'_> {
                 data.len(),
             ));
         }
-        let t_us = u64::from_le_bytes(
-            data[c.timestamp..c.timestamp + 8].try_into().unwrap_or([0; 8]),
-        );
+        let t_us =
+            u64::from_le_bytes(data[c.timestamp..c.timestamp + 8].try_into().unwrap_or([0; 8]));
         self.row.clear();
         for &li in &sub.columns {
             let l = &c.leaves[li];

@@ -92,6 +92,7 @@ fn errors_bad_corpus_counted_in_summary_with_exact_keys() {
         "validation",
         "validation_on",
         "cross_check",
+        "reader",
     ];
     let mut got = keys.clone();
     got.sort_unstable();

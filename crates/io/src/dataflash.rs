@@ -41,9 +41,11 @@
 //! and reports no byte offsets.
 
 use crate::FlightDataError;
+use crate::byte_window::ByteWindow;
+use crate::log_contents::{LogContents, TopicBuilder, TopicFilter};
 use crate::table::Topic;
-use crate::ulog::{LogContents, TopicBuilder};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
+use std::io::Read;
 use std::path::Path;
 
 /// Message header bytes.
@@ -150,6 +152,14 @@ struct Format {
     time: Option<(usize, u64)>,
     /// Index into `fields` of the instance field (from `FMTU`).
     instance: Option<usize>,
+    /// The topic's field names: every numeric field but the time, arrays flattened.
+    columns: Vec<String>,
+    /// Layout number under this name (1: the name itself, k: `NAME#k`), fixed at the type's
+    /// first timed message.
+    variant: Option<usize>,
+    /// Instance → builder, filled as instances appear (a cache: names are built once per
+    /// topic, not per message).
+    topics: HashMap<i64, usize>,
 }
 
 fn text(b: &[u8]) -> String {
@@ -201,7 +211,47 @@ fn parse_fmt(p: &[u8]) -> Result<(u8, Format), String> {
             .position(|(c, k, _)| c == "TimeMS" && matches!(k, Kind::Num { .. }))
             .map(|i| (i, 1000))
     });
-    Ok((id, Format { name, payload: len - 3, fields, time, instance: None }))
+    let columns = time.map_or_else(Vec::new, |(ti, _)| flat_columns(&fields, ti));
+    let f = Format {
+        name,
+        payload: len - 3,
+        fields,
+        time,
+        instance: None,
+        columns,
+        variant: None,
+        topics: HashMap::new(),
+    };
+    Ok((id, f))
+}
+
+/// The numeric fields but the time field `ti`, arrays as `name[0..31]`.
+fn flat_columns(fields: &[(String, Kind, usize)], ti: usize) -> Vec<String> {
+    let mut names = Vec::new();
+    for (i, (c, k, _)) in fields.iter().enumerate() {
+        match k {
+            _ if i == ti => {}
+            Kind::Num { .. } | Kind::Half => names.push(c.clone()),
+            Kind::Array => names.extend((0..32).map(|j| format!("{c}[{j}]"))),
+            Kind::Text(_) => {}
+        }
+    }
+    names
+}
+
+/// Appends the values of `flat_columns(fields, ti)` in payload `p` to `row`.
+fn flat_values(fields: &[(String, Kind, usize)], ti: usize, p: &[u8], row: &mut Vec<f64>) {
+    for (i, (_, k, o)) in fields.iter().enumerate() {
+        match k {
+            _ if i == ti => {}
+            Kind::Num { .. } | Kind::Half => row.push(read_num(*k, &p[*o..*o + size(*k)])),
+            Kind::Array => row.extend((0..32).map(|j| {
+                let b = &p[o + 2 * j..o + 2 * j + 2];
+                f64::from(i16::from_le_bytes([b[0], b[1]]))
+            })),
+            Kind::Text(_) => {}
+        }
+    }
 }
 
 /// Reads a DataFlash log's timed message types as topics (see the module doc).
@@ -213,154 +263,129 @@ pub fn read_dataflash(path: &Path) -> Result<Vec<Topic>, FlightDataError> {
     Ok(read_dataflash_contents(path)?.topics)
 }
 
-/// Reads a DataFlash log: topics, parameters and what was left out or skipped.
+/// Reads a DataFlash log: every topic, parameters and what was left out or skipped.
 ///
 /// # Errors
 /// As [`read_dataflash`].
 pub fn read_dataflash_contents(path: &Path) -> Result<LogContents, FlightDataError> {
-    let file = path.display().to_string();
-    let bytes =
-        std::fs::read(path).map_err(|source| FlightDataError::Io { file: file.clone(), source })?;
-    parse_dataflash(&bytes, &file)
+    read_dataflash_filtered(path, &TopicFilter::all())
 }
 
-/// Decodes DataFlash bytes; `file` names them in errors.
+/// Reads a DataFlash log keeping only the topics and fields `filter` names (the others are
+/// checked, counted and listed in [`LogContents::catalogue`]); the file is streamed.
+///
+/// # Errors
+/// As [`read_dataflash`].
+pub fn read_dataflash_filtered(
+    path: &Path,
+    filter: &TopicFilter,
+) -> Result<LogContents, FlightDataError> {
+    let file = path.display().to_string();
+    let f = std::fs::File::open(path)
+        .map_err(|source| FlightDataError::Io { file: file.clone(), source })?;
+    decode_dataflash(f, &file, filter)
+}
+
+/// Decodes DataFlash bytes; `file` names them in errors. Every topic and field is kept.
 ///
 /// # Errors
 /// [`FlightDataError::LogDecode`] naming `file` and the byte offset: a malformed `FMT`, or no
 /// valid message at all (not a DataFlash log).
 pub fn parse_dataflash(bytes: &[u8], file: &str) -> Result<LogContents, FlightDataError> {
-    let err = |offset: usize, message: String| FlightDataError::LogDecode {
+    decode_dataflash(bytes, file, &TopicFilter::all())
+}
+
+/// The reader's state between messages.
+struct Decoder<'a> {
+    filter: &'a TopicFilter,
+    out: LogContents,
+    formats: BTreeMap<u8, Format>,
+    builders: Vec<TopicBuilder>,
+    /// For each builder, the indices of its kept fields among its layout's columns.
+    kept: Vec<Vec<usize>>,
+    by_name: HashMap<String, usize>,
+    /// `(name, columns)` → layout number, and the layouts counted per name: a type
+    /// redefined again and again costs one hash lookup per definition, not a search.
+    layouts: HashMap<(String, Vec<String>), usize>,
+    layout_count: HashMap<String, usize>,
+    row: Vec<f64>,
+    flat: Vec<f64>,
+}
+
+/// Decodes a DataFlash stream keeping what `filter` names; `file` names it in errors.
+///
+/// # Errors
+/// As [`parse_dataflash`], and [`FlightDataError::Io`] for a read error.
+pub fn decode_dataflash<R: Read>(
+    source: R,
+    file: &str,
+    filter: &TopicFilter,
+) -> Result<LogContents, FlightDataError> {
+    let io = |source| FlightDataError::Io { file: file.to_string(), source };
+    let err = |offset: u64, message: String| FlightDataError::LogDecode {
         file: file.to_string(),
-        offset: offset as u64,
+        offset,
         message,
     };
-    let mut formats: BTreeMap<u8, Format> = BTreeMap::new();
-    let mut out = LogContents::default();
-    let mut builders: Vec<TopicBuilder> = Vec::new();
-    let mut by_name: BTreeMap<String, usize> = BTreeMap::new();
-    let mut skip_start: Option<usize> = None;
+    let mut w = ByteWindow::new(source);
+    let mut d = Decoder {
+        filter,
+        out: LogContents::default(),
+        formats: BTreeMap::new(),
+        builders: Vec::new(),
+        kept: Vec::new(),
+        by_name: HashMap::new(),
+        layouts: HashMap::new(),
+        layout_count: HashMap::new(),
+        row: Vec::new(),
+        flat: Vec::new(),
+    };
+    let mut skip_start: Option<u64> = None;
     let mut messages = 0usize;
-    let mut row: Vec<f64> = Vec::new();
-    let mut at = 0usize;
-    while at < bytes.len() {
-        let ty = match bytes.get(at..at + 3) {
-            Some([a, b, t]) if [*a, *b] == HEAD && (*t == FMT_TYPE || formats.contains_key(t)) => {
+    loop {
+        let at = w.offset();
+        let ty = match w.peek(3).map_err(io)? {
+            Some([a, b, t])
+                if [*a, *b] == HEAD && (*t == FMT_TYPE || d.formats.contains_key(t)) =>
+            {
                 *t
             }
             Some(_) => {
                 skip_start.get_or_insert(at);
-                at += 1;
+                w.consume(1).map_err(io)?;
                 continue;
             }
             None => {
-                out.truncated_at = Some(at as u64);
+                if !w.at_end().map_err(io)? {
+                    d.out.truncated_at = Some(at);
+                }
                 break;
             }
         };
-        let len = if ty == FMT_TYPE { FMT_LEN - 3 } else { formats[&ty].payload };
-        let Some(p) = bytes.get(at + 3..at + 3 + len) else {
-            out.truncated_at = Some(at as u64);
+        let len = if ty == FMT_TYPE { FMT_LEN - 3 } else { d.formats[&ty].payload };
+        let Some(msg) = w.peek(3 + len).map_err(io)? else {
+            d.out.truncated_at = Some(at);
             break;
         };
         if let Some(s) = skip_start.take() {
-            out.skipped.push((s as u64, (at - s) as u64));
+            d.out.skip(s, at - s);
         }
         messages += 1;
+        let p = &msg[3..];
         if ty == FMT_TYPE {
             let (id, f) = parse_fmt(p).map_err(|m| err(at, m))?;
             if id == FMT_TYPE && (f.payload != FMT_LEN - 3 || f.name != "FMT") {
                 return Err(err(at, format!("FMT redefines the FMT type as `{}`", f.name)));
             }
-            formats.insert(id, f);
-            at += 3 + len;
-            continue;
+            d.formats.insert(id, f);
+        } else {
+            d.message(ty, p, at);
         }
-        let mut instance_of = None;
-        let f = &formats[&ty];
-        let field = |i: usize| {
-            let (_, k, o) = f.fields[i];
-            read_num(k, &p[o..o + size(k)])
-        };
-        match f.name.as_str() {
-            "FMTU" => {
-                // TimeUS, FmtType, UnitIds, MultIds: the instance field is unit `#`.
-                let ty_i = f.fields.iter().position(|(c, _, _)| c == "FmtType");
-                let units_i = f.fields.iter().position(|(c, _, _)| c == "UnitIds");
-                if let (Some(ti), Some(ui)) = (ty_i, units_i) {
-                    let (_, k, o) = f.fields[ui];
-                    instance_of = Some((field(ti) as u8, text(&p[o..o + size(k)]).find('#')));
-                }
-            }
-            "PARM" => {
-                let name_i = f.fields.iter().position(|(c, _, _)| c == "Name");
-                let value_i = f.fields.iter().position(|(c, _, _)| c == "Value");
-                if let (Some(ni), Some(vi)) = (name_i, value_i) {
-                    let (_, k, o) = f.fields[ni];
-                    out.parameters.insert(text(&p[o..o + size(k)]), field(vi));
-                }
-            }
-            _ => {}
-        }
-        if let Some((ti, us)) = f.time {
-            let t_us = (field(ti) as u64).saturating_mul(us);
-            let instance = f.instance.map_or(0, |i| field(i) as i64);
-            let tname =
-                if instance == 0 { f.name.clone() } else { format!("{}[{instance}]", f.name) };
-            row.clear();
-            let mut names = Vec::new();
-            for (i, (c, k, o)) in f.fields.iter().enumerate() {
-                if i == ti {
-                    continue;
-                }
-                match k {
-                    Kind::Num { .. } | Kind::Half => {
-                        names.push(c.clone());
-                        row.push(read_num(*k, &p[*o..*o + size(*k)]));
-                    }
-                    Kind::Array => {
-                        for j in 0..32 {
-                            names.push(format!("{c}[{j}]"));
-                            let b = &p[o + 2 * j..o + 2 * j + 2];
-                            row.push(f64::from(i16::from_le_bytes([b[0], b[1]])));
-                        }
-                    }
-                    Kind::Text(_) => {}
-                }
-            }
-            let i = match by_name.get(&tname) {
-                Some(&i) if builders[i].names == names => i,
-                Some(_) => {
-                    // The type was redefined with other fields: a new topic `NAME#2`, … .
-                    let mut k = 2;
-                    while by_name.contains_key(&format!("{tname}#{k}")) {
-                        k += 1;
-                    }
-                    let n = format!("{tname}#{k}");
-                    builders.push(TopicBuilder::new(n.clone(), names));
-                    by_name.insert(tname.clone(), builders.len() - 1);
-                    by_name.insert(n, builders.len() - 1);
-                    builders.len() - 1
-                }
-                None => {
-                    builders.push(TopicBuilder::new(tname.clone(), names));
-                    by_name.insert(tname, builders.len() - 1);
-                    builders.len() - 1
-                }
-            };
-            builders[i].push(t_us, &row);
-        }
-        if let Some((target, Some(i))) = instance_of
-            && let Some(g) = formats.get_mut(&target)
-            && i < g.fields.len()
-            && matches!(g.fields[i].1, Kind::Num { .. })
-        {
-            g.instance = Some(i);
-        }
-        at += 3 + len;
+        w.consume(3 + len as u64).map_err(io)?;
     }
     if let Some(s) = skip_start {
-        out.skipped.push((s as u64, (bytes.len() - s) as u64));
+        let end = w.offset();
+        d.out.skip(s, end - s);
     }
     if messages == 0 {
         return Err(err(
@@ -368,8 +393,104 @@ pub fn parse_dataflash(bytes: &[u8], file: &str) -> Result<LogContents, FlightDa
             "no DataFlash message found (no `A3 95` header with a known type)".into(),
         ));
     }
+    let Decoder { mut out, builders, .. } = d;
     out.add_topics(builders);
     Ok(out)
+}
+
+impl Decoder<'_> {
+    /// A message of defined type `ty` (not `FMT`) at byte `at` with payload `p`.
+    fn message(&mut self, ty: u8, p: &[u8], at: u64) {
+        let f = &self.formats[&ty];
+        let field = |i: usize| {
+            let (_, k, o) = f.fields[i];
+            read_num(k, &p[o..o + size(k)])
+        };
+        let col = |name: &str| f.fields.iter().position(|(c, _, _)| c == name);
+        let mut instance_of = None;
+        match f.name.as_str() {
+            "FMTU" => {
+                // TimeUS, FmtType, UnitIds, MultIds: the instance field is unit `#`.
+                if let (Some(ti), Some(ui)) = (col("FmtType"), col("UnitIds")) {
+                    let (_, k, o) = f.fields[ui];
+                    instance_of = Some((field(ti) as u8, text(&p[o..o + size(k)]).find('#')));
+                }
+            }
+            "PARM" => {
+                if let (Some(ni), Some(vi)) = (col("Name"), col("Value")) {
+                    let (_, k, o) = f.fields[ni];
+                    self.out.parameters.insert(text(&p[o..o + size(k)]), field(vi));
+                }
+            }
+            _ => {}
+        }
+        if let Some((ti, us)) = f.time {
+            let t_us = (field(ti) as u64).saturating_mul(us);
+            let instance = f.instance.map_or(0, |i| field(i) as i64);
+            let b = self.topic(ty, instance);
+            if self.builders[b].kept {
+                let f = &self.formats[&ty];
+                self.flat.clear();
+                flat_values(&f.fields, ti, p, &mut self.flat);
+                self.row.clear();
+                self.row.extend(self.kept[b].iter().map(|&j| self.flat[j]));
+            }
+            self.builders[b].push(t_us, &self.row, at);
+        }
+        if let Some((target, Some(i))) = instance_of
+            && let Some(g) = self.formats.get_mut(&target)
+            && i < g.fields.len()
+            && matches!(g.fields[i].1, Kind::Num { .. })
+            && g.instance != Some(i)
+        {
+            g.instance = Some(i);
+            g.topics.clear();
+        }
+    }
+
+    /// The builder of type `ty`'s messages of `instance`: `NAME`, `NAME[k]`, and `#n` after
+    /// either for the n-th field layout seen under this name (a redefined type).
+    fn topic(&mut self, ty: u8, instance: i64) -> usize {
+        let f = &self.formats[&ty];
+        if let Some(&b) = f.topics.get(&instance) {
+            return b;
+        }
+        let variant = match f.variant {
+            Some(v) => v,
+            None => {
+                let key = (f.name.clone(), f.columns.clone());
+                let n = self.layout_count.entry(f.name.clone()).or_default();
+                let v = *self.layouts.entry(key).or_insert_with(|| {
+                    *n += 1;
+                    *n
+                });
+                v
+            }
+        };
+        let f = self.formats.get_mut(&ty).expect("type checked by the caller");
+        f.variant = Some(variant);
+        let mut tname =
+            if instance == 0 { f.name.clone() } else { format!("{}[{instance}]", f.name) };
+        if variant > 1 {
+            tname = format!("{tname}#{variant}");
+        }
+        let b = match self.by_name.get(&tname) {
+            Some(&b) => b,
+            None => {
+                let all = f.columns.clone();
+                let kept_idx: Option<Vec<usize>> = self.filter.topic(&tname).map(|only| {
+                    (0..all.len()).filter(|&j| only.is_none_or(|s| s.contains(&all[j]))).collect()
+                });
+                let kept = kept_idx.as_ref().map(|ix| ix.iter().map(|&j| all[j].clone()).collect());
+                self.builders.push(TopicBuilder::new(tname.clone(), all, kept));
+                self.kept.push(kept_idx.unwrap_or_default());
+                self.by_name.insert(tname, self.builders.len() - 1);
+                self.builders.len() - 1
+            }
+        };
+        f.topics.insert(instance, b);
+        b
+    }
 }
 
 #[cfg(test)]

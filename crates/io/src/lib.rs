@@ -6,15 +6,19 @@
 //! Every reader error names the file, the line or row, and the field.
 
 pub mod align;
+mod byte_window;
 pub mod dataflash;
 pub mod error;
 pub mod expression;
 pub mod flight_data;
 pub mod log;
+pub mod log_contents;
 pub mod mapping;
+mod mat5;
 pub mod mavlink;
 pub mod model_file;
 pub mod multirate;
+pub mod reader_report;
 pub mod rejection_log;
 pub mod replay_output;
 pub mod table;
@@ -23,7 +27,8 @@ pub mod units;
 
 pub use error::{FlightDataError, RowProblem};
 pub use flight_data::{FlightDataReader, RecordEvent, Rejection};
-pub use log::{LogFormat, LogReader, open_log, open_log_with_notes};
+pub use log::{LogFormat, LogReader, open_log, open_log_with_notes, open_log_with_report};
 pub use mapping::{Channel, Mapping};
 pub use model_file::{ModelFileError, ModelSpec, ParamReference};
+pub use reader_report::ReaderReport;
 pub use rejection_log::RejectionLog;

@@ -28,7 +28,9 @@
 
 use crate::error::FlightDataError;
 use crate::flight_data::FlightDataReader;
+use crate::log_contents::{LogContents, TopicFilter};
 use crate::mapping::{Mapping, Source};
+use crate::reader_report::ReaderReport;
 use crate::table::Table;
 use std::fmt::Write as _;
 use std::io::{BufRead, BufReader, Read};
@@ -126,21 +128,36 @@ pub fn open_log(
 }
 
 /// [`open_log`], and one line per thing the reading or alignment of a multi-rate log (ULog,
-/// DataFlash) left out: samples whose timestamp did not increase, a truncated last message,
-/// skipped corrupt bytes ([`crate::ulog::LogContents::notes`]), and rows dropped by the
-/// alignment per topic ([`crate::align::Aligned::dropped_by`]). Empty for CSV, `.asc`, `.mat`.
+/// DataFlash) left out ([`ReaderReport::notes`]). Empty for CSV, `.asc`, `.mat`.
+///
+/// # Errors
+/// As [`open_log_with_report`].
+pub fn open_log_with_notes(
+    path: &str,
+    format: Option<LogFormat>,
+    mapping: &Mapping,
+) -> Result<(LogReader, Vec<String>), FlightDataError> {
+    open_log_with_report(path, format, mapping).map(|(r, report)| (r, report.notes()))
+}
+
+/// [`open_log`], and what the reading or alignment of a multi-rate log (ULog, DataFlash) left
+/// out, counted per kind and topic ([`ReaderReport`]): samples whose timestamp broke their
+/// topic's order, a truncated last message, skipped corrupt bytes, rows dropped by the
+/// alignment. Empty for CSV, `.asc`, `.mat`. A multi-rate log is streamed and only the topics
+/// and fields the mapping reads are kept ([`TopicFilter::for_mapping`]).
 ///
 /// # Errors
 /// [`FlightDataError::Io`] naming the file; [`FlightDataError::Format`] for a file that is
 /// not of its format (or a binary log from stdin); the CSV reader's header errors;
 /// [`FlightDataError::NoSuchColumn`] for a mapped column the record lacks; for ULog and
 /// DataFlash the decoder's [`FlightDataError::LogDecode`] and the alignment's
-/// [`FlightDataError::MissingTopic`] / [`FlightDataError::BadSpec`] / [`FlightDataError::Align`].
-pub fn open_log_with_notes(
+/// [`FlightDataError::MissingTopic`] (listing what the log has, and saying where a cut file
+/// ends) / [`FlightDataError::BadSpec`] / [`FlightDataError::Align`].
+pub fn open_log_with_report(
     path: &str,
     format: Option<LogFormat>,
     mapping: &Mapping,
-) -> Result<(LogReader, Vec<String>), FlightDataError> {
+) -> Result<(LogReader, ReaderReport), FlightDataError> {
     let format =
         format.or_else(|| LogFormat::from_extension(Path::new(path))).unwrap_or(LogFormat::Csv);
     let io = |source| FlightDataError::Io { file: path.to_string(), source };
@@ -151,15 +168,19 @@ pub fn open_log_with_notes(
             Ok(Box::new(BufReader::new(std::fs::File::open(path).map_err(io)?)))
         }
     };
+    let empty = ReaderReport {
+        file: path.to_string(),
+        format: format.name().to_string(),
+        dropped: Vec::new(),
+    };
     match format {
-        LogFormat::Csv => Ok((
-            FlightDataReader::new(Box::new(open()?) as Box<dyn Read>, path, mapping)?,
-            Vec::new(),
-        )),
-        LogFormat::Asc => Ok((asc_reader(open()?, path, mapping)?, Vec::new())),
+        LogFormat::Csv => {
+            Ok((FlightDataReader::new(Box::new(open()?) as Box<dyn Read>, path, mapping)?, empty))
+        }
+        LogFormat::Asc => Ok((asc_reader(open()?, path, mapping)?, empty)),
         LogFormat::Mat => {
             let table = read_mat(open()?, path, mapping.column_names.as_deref())?;
-            Ok((table_reader(table, mapping)?, Vec::new()))
+            Ok((table_reader(table, mapping)?, empty))
         }
         LogFormat::Ulog | LogFormat::Dataflash => {
             if path == "-" {
@@ -168,21 +189,78 @@ pub fn open_log_with_notes(
                     message: format!("a {} log is read from a file, not from stdin", format.name()),
                 });
             }
+            let filter = TopicFilter::for_mapping(mapping);
             let contents = match format {
-                LogFormat::Ulog => crate::ulog::read_ulog_contents(Path::new(path))?,
-                _ => crate::dataflash::read_dataflash_contents(Path::new(path))?,
+                LogFormat::Ulog => crate::ulog::read_ulog_filtered(Path::new(path), &filter)?,
+                _ => crate::dataflash::read_dataflash_filtered(Path::new(path), &filter)?,
             };
-            let mut notes = contents.notes(path);
-            let aligned = crate::multirate::log_table(&contents.topics, mapping, path)?;
-            for (topic, n) in &aligned.dropped_by {
-                notes.push(format!(
-                    "{path}: {n} of {} aligned rows dropped: topic `{topic}` had no value there \
-                     (before its first sample or past its hold interval)",
-                    aligned.rows_considered
-                ));
-            }
-            Ok((table_reader(aligned.table, mapping)?, notes))
+            let mut report = ReaderReport::from_contents(path, format.name(), &contents);
+            let cut = |e| with_cut_note(e, contents.truncated_at);
+            check_catalogue(&contents, mapping, path).map_err(cut)?;
+            let aligned =
+                crate::multirate::log_table(&contents.topics, mapping, path).map_err(cut)?;
+            drop(contents);
+            report.add_alignment(&aligned.dropped_by, aligned.rows_considered);
+            Ok((table_reader(aligned.table, mapping)?, report))
         }
+    }
+}
+
+/// Every `<topic>.<field>` column the mapping reads must be in the log's catalogue (every
+/// topic with a message, kept or not); the error lists what the log has, as
+/// [`crate::align::select`] does for the kept topics.
+fn check_catalogue(
+    contents: &LogContents,
+    mapping: &Mapping,
+    file: &str,
+) -> Result<(), FlightDataError> {
+    let missing = |column: &str, needed_by: &str, reason: String| FlightDataError::MissingTopic {
+        file: file.to_string(),
+        column: column.to_string(),
+        needed_by: needed_by.to_string(),
+        reason,
+    };
+    for (column, needed_by) in crate::multirate::needed_columns(mapping) {
+        let Some((tname, field)) = crate::align::split_column(&column) else { continue };
+        let Some(topic) = contents.catalogue.iter().find(|t| t.name == tname) else {
+            let mut have: Vec<&str> = contents.catalogue.iter().map(|t| t.name.as_str()).collect();
+            have.sort_unstable();
+            return Err(missing(
+                &column,
+                &needed_by,
+                format!("the log has no topic/message `{tname}` (it has: {})", have.join(", ")),
+            ));
+        };
+        if !topic.fields.iter().any(|f| f == field) {
+            return Err(missing(
+                &column,
+                &needed_by,
+                format!(
+                    "topic `{tname}` has no field `{field}` (it has: {})",
+                    topic.fields.join(", ")
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A missing topic or an alignment failure in a file cut short may only mean the cut came
+/// before the topic: say where the file ends.
+fn with_cut_note(e: FlightDataError, truncated_at: Option<u64>) -> FlightDataError {
+    let Some(at) = truncated_at else { return e };
+    let note = format!(
+        "; note: the file ends inside a message at byte {at} (a cut log: what it defines or \
+         logs after that is missing)"
+    );
+    match e {
+        FlightDataError::MissingTopic { file, column, needed_by, reason } => {
+            FlightDataError::MissingTopic { file, column, needed_by, reason: reason + &note }
+        }
+        FlightDataError::Align { file, reason } => {
+            FlightDataError::Align { file, reason: reason + &note }
+        }
+        other => other,
     }
 }
 
@@ -428,7 +506,7 @@ impl Read for TableAsCsv {
     }
 }
 
-/// Reads a MATLAB level-5 `.mat` file (the `matfile` crate) into a [`Table`].
+/// Reads a MATLAB level-5 `.mat` file ([`crate::mat5`]) into a [`Table`].
 ///
 /// - One numeric 2-D variable (the FVSysID layout, e.g. `fAttasElv1`, 626 × 45): its
 ///   columns are the table's, named by `column_names` (the mapping's `[columns] names`) or
@@ -465,44 +543,30 @@ pub fn read_mat<R: Read>(
             .into()));
     }
     check_mat_elements(&bytes).map_err(bad)?;
-    let mat = matfile::MatFile::parse(bytes.as_slice())
-        .map_err(|e| bad(format!("reading the .mat file: {e}")))?;
-    let arrays: Vec<(&matfile::Array, Vec<f64>)> = mat
-        .arrays()
-        .iter()
-        .map(|a| {
-            real_f64(a).map(|v| (a, v)).map_err(|m| bad(format!("variable `{}`: {m}", a.name())))
-        })
-        .collect::<Result<_, _>>()?;
-    for (a, data) in &arrays {
-        if a.ndims() != 2 {
+    let arrays = crate::mat5::read_arrays(&bytes).map_err(bad)?;
+    drop(bytes);
+    for a in &arrays {
+        if a.dims.len() != 2 {
             return Err(bad(format!(
                 "variable `{}` has {} dimensions; only 2-D variables are read",
-                a.name(),
-                a.ndims()
-            )));
-        }
-        // A corrupt dimension (found by fuzzing: one flipped bit in the row count) would
-        // otherwise give a table whose column count differs from its names.
-        let (r, c) = (a.size()[0], a.size()[1]);
-        if r.checked_mul(c) != Some(data.len()) {
-            return Err(bad(format!(
-                "variable `{}` is declared {r}×{c} but holds {} values: a corrupt file",
-                a.name(),
-                data.len()
+                a.name,
+                a.dims.len()
             )));
         }
     }
     let file_s = file.to_string();
-    match arrays.as_slice() {
+    let mut arrays = arrays;
+    let n_vars = arrays.len();
+    match arrays.as_mut_slice() {
         [] => Err(bad("no numeric variable in the file".into())),
-        [(a, data)] => {
-            let (rows, cols) = (a.size()[0], a.size()[1]);
+        [a] => {
+            let data = &a.values;
+            let (rows, cols) = (a.dims[0], a.dims[1]);
             let names: Vec<String> = match column_names {
                 Some(n) if n.len() != cols => {
                     return Err(bad(format!(
                         "variable `{}` has {cols} columns, but `[columns] names` names {}",
-                        a.name(),
+                        a.name,
                         n.len()
                     )));
                 }
@@ -516,14 +580,14 @@ pub fn read_mat<R: Read>(
         many => {
             let len = many
                 .iter()
-                .filter(|(a, _)| a.size().contains(&1))
-                .map(|(_, d)| d.len())
+                .filter(|a| a.dims.contains(&1))
+                .map(|a| a.values.len())
                 .max()
                 .unwrap_or(0);
             let mut names = Vec::new();
             let mut columns = Vec::new();
-            for (a, data) in many {
-                let s = a.size();
+            for a in many.iter_mut() {
+                let (s, data) = (&a.dims, &a.values);
                 if data.len() == 1 && len > 1 {
                     continue;
                 }
@@ -531,21 +595,18 @@ pub fn read_mat<R: Read>(
                     return Err(bad(format!(
                         "variable `{}` is a {}×{} matrix among {} variables: save one matrix \
                          (columns = channels) or one vector per channel",
-                        a.name(),
-                        s[0],
-                        s[1],
-                        many.len()
+                        a.name, s[0], s[1], n_vars
                     )));
                 }
                 if data.len() != len {
                     return Err(bad(format!(
                         "variable `{}` has {} values, others have {len}",
-                        a.name(),
+                        a.name,
                         data.len()
                     )));
                 }
-                names.push(a.name().to_string());
-                columns.push(data.clone());
+                names.push(a.name.clone());
+                columns.push(std::mem::take(&mut a.values));
             }
             Ok(Table { file: file_s, names, columns })
         }
@@ -588,30 +649,6 @@ fn check_mat_elements(bytes: &[u8]) -> Result<(), String> {
         at = end;
     }
     Ok(())
-}
-
-/// A real numeric array's values as `f64` (column-major), or why not.
-fn real_f64(a: &matfile::Array) -> Result<Vec<f64>, String> {
-    use matfile::NumericData as N;
-    fn conv<T: Copy + Into<f64>>(real: &[T], imag: &Option<Vec<T>>) -> Result<Vec<f64>, String> {
-        if imag.is_some() {
-            return Err("complex data is not read".into());
-        }
-        Ok(real.iter().map(|x| (*x).into()).collect())
-    }
-    match a.data() {
-        N::Double { real, imag } => conv(real, imag),
-        N::Single { real, imag } => conv(real, imag),
-        N::Int8 { real, imag } => conv(real, imag),
-        N::UInt8 { real, imag } => conv(real, imag),
-        N::Int16 { real, imag } => conv(real, imag),
-        N::UInt16 { real, imag } => conv(real, imag),
-        N::Int32 { real, imag } => conv(real, imag),
-        N::UInt32 { real, imag } => conv(real, imag),
-        N::Int64 { .. } | N::UInt64 { .. } => {
-            Err("64-bit integer data is not read (not exact in f64)".into())
-        }
-    }
 }
 
 #[cfg(test)]

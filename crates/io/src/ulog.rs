@@ -17,14 +17,23 @@
 //! - Times are the messages' `timestamp` (µs since boot) in seconds, **not** shifted to the
 //!   log start: a few PX4 topics carry timestamps before the file header's start time, and an
 //!   unsigned subtraction would wrap around (pyulog's `sample_log_small.ulg` has four).
-//! - A sample whose timestamp does not increase over its topic's previous one is left out and
-//!   counted in [`LogContents::dropped`] (never silently).
+//! - A subscription is decoded by the format definition in force when it was made: a format
+//!   redefined under a new `msg_id` with its fields reordered fills the same topic by field
+//!   name; one redefined with other fields is a new topic `name#2`, `name#3`, … .
+//! - Samples whose timestamps break the increasing order are left out, the fewest that must
+//!   go ([`crate::log_contents`]), and counted in [`LogContents::dropped`] (never silently).
 //! - Parameters (`PWM_MAIN_REV2`, …) are kept in [`LogContents::parameters`] (last value wins).
+//!
+//! Sizes are checked before anything is allocated for them: a format whose struct (arrays of
+//! nested formats included) would exceed the 65 533 bytes a data message can carry, nests
+//! deeper than 8 levels, or whose flattened field names pass 1 MiB is an error naming the
+//! subscription, the format and the field.
 //!
 //! A file that ends inside a message (a log cut at power-off) keeps every complete message
 //! and reports the cut in [`LogContents::truncated_at`]. Any other problem is a
 //! [`FlightDataError::LogDecode`] naming the file, the byte offset of the message and what is
-//! wrong (message type, topic, field). The whole file is read into memory (logs are MB).
+//! wrong (message type, topic, field). The file is streamed; only the topics and fields a
+//! [`TopicFilter`] names are kept ([`read_ulog_filtered`]).
 //!
 //! Why not a crate: `yule_log` 0.4.0 reads both shipped PX4 logs correctly but decodes a
 //! message cut off by the end of the file from a zero-filled buffer (fabricated samples at
@@ -32,96 +41,13 @@
 //! stdout for every `*heartbeat*` format, and reports no byte offsets.
 
 use crate::FlightDataError;
+use crate::byte_window::ByteWindow;
+use crate::log_contents::TopicBuilder;
+pub use crate::log_contents::{LogContents, TopicFilter, TopicInfo};
 use crate::table::Topic;
 use std::collections::BTreeMap;
+use std::io::Read;
 use std::path::Path;
-
-/// Everything a multi-rate log reader returns besides the topics.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct LogContents {
-    /// The topics (message streams) that have samples, in order of subscription.
-    pub topics: Vec<Topic>,
-    /// Parameters by name, as logged (the last value of a parameter changed in flight).
-    pub parameters: BTreeMap<String, f64>,
-    /// Samples left out because their timestamp did not increase: topic name → count.
-    pub dropped: BTreeMap<String, usize>,
-    /// Byte offset of a message the file ends inside (that partial message is not used).
-    pub truncated_at: Option<u64>,
-    /// Corrupt stretches skipped to find the next message: `(byte offset, length)`
-    /// (DataFlash resynchronises on the message header as pymavlink does; ULog never skips).
-    pub skipped: Vec<(u64, u64)>,
-}
-
-impl LogContents {
-    /// One line per thing left out of the topics (non-increasing samples, a truncated last
-    /// message, skipped bytes), for the caller to print; empty when nothing was.
-    pub fn notes(&self, file: &str) -> Vec<String> {
-        let mut v: Vec<String> = self
-            .dropped
-            .iter()
-            .map(|(t, n)| {
-                format!("{file}: topic `{t}`: {n} samples left out (timestamp did not increase)")
-            })
-            .collect();
-        if let Some(at) = self.truncated_at {
-            v.push(format!("{file}: byte {at}: the file ends inside this message (not used)"));
-        }
-        for (at, len) in &self.skipped {
-            v.push(format!("{file}: byte {at}: {len} corrupt bytes skipped"));
-        }
-        v
-    }
-
-    /// Ends a read: each builder's non-increasing samples go to [`LogContents::dropped`], and
-    /// each builder that kept a sample becomes a topic, in the builders' order (the last step
-    /// of both binary log readers, ULog and DataFlash).
-    pub(crate) fn add_topics(&mut self, builders: Vec<TopicBuilder>) {
-        for b in builders {
-            if b.dropped > 0 {
-                self.dropped.insert(b.name.clone(), b.dropped);
-            }
-            if !b.t_us.is_empty() {
-                self.topics.push(b.finish());
-            }
-        }
-    }
-}
-
-/// One topic being collected: timestamps in µs and the flattened fields.
-pub(crate) struct TopicBuilder {
-    pub(crate) name: String,
-    pub(crate) t_us: Vec<u64>,
-    pub(crate) names: Vec<String>,
-    pub(crate) values: Vec<Vec<f64>>,
-    pub(crate) dropped: usize,
-}
-
-impl TopicBuilder {
-    pub(crate) fn new(name: String, names: Vec<String>) -> Self {
-        let n = names.len();
-        Self { name, t_us: Vec::new(), names, values: vec![Vec::new(); n], dropped: 0 }
-    }
-
-    /// Appends one sample if its time increases; `row` must have one value per field.
-    pub(crate) fn push(&mut self, t_us: u64, row: &[f64]) {
-        if self.t_us.last().is_some_and(|&last| t_us <= last) {
-            self.dropped += 1;
-            return;
-        }
-        self.t_us.push(t_us);
-        for (col, v) in self.values.iter_mut().zip(row) {
-            col.push(*v);
-        }
-    }
-
-    pub(crate) fn finish(self) -> Topic {
-        Topic {
-            name: self.name,
-            t_s: self.t_us.iter().map(|&t| t as f64 * 1e-6).collect(),
-            fields: self.names.into_iter().zip(self.values).collect(),
-        }
-    }
-}
 
 /// Reads a ULog file's topics (see the module doc for naming and time base).
 ///
@@ -132,15 +58,27 @@ pub fn read_ulog(path: &Path) -> Result<Vec<Topic>, FlightDataError> {
     Ok(read_ulog_contents(path)?.topics)
 }
 
-/// Reads a ULog file: topics, parameters and what was left out.
+/// Reads a ULog file: every topic, parameters and what was left out.
 ///
 /// # Errors
 /// As [`read_ulog`].
 pub fn read_ulog_contents(path: &Path) -> Result<LogContents, FlightDataError> {
+    read_ulog_filtered(path, &TopicFilter::all())
+}
+
+/// Reads a ULog file keeping only the topics and fields `filter` names (the others are
+/// checked, counted and listed in [`LogContents::catalogue`]); the file is streamed.
+///
+/// # Errors
+/// As [`read_ulog`].
+pub fn read_ulog_filtered(
+    path: &Path,
+    filter: &TopicFilter,
+) -> Result<LogContents, FlightDataError> {
     let file = path.display().to_string();
-    let bytes =
-        std::fs::read(path).map_err(|source| FlightDataError::Io { file: file.clone(), source })?;
-    parse_ulog(&bytes, &file)
+    let f = std::fs::File::open(path)
+        .map_err(|source| FlightDataError::Io { file: file.clone(), source })?;
+    decode_ulog(f, &file, filter)
 }
 
 /// ULog file magic (first 7 bytes of the header).
@@ -243,6 +181,9 @@ struct Compiled {
     leaves: Vec<Leaf>,
     /// Offset of the `uint64_t timestamp` field.
     timestamp: usize,
+    /// Bytes a data message needs to hold every leaf and the timestamp (trailing padding
+    /// may be left out of a message).
+    min_len: usize,
 }
 
 fn parse_format(text: &str) -> Result<(String, Vec<FieldDef>), String> {
@@ -267,43 +208,119 @@ fn parse_format(text: &str) -> Result<(String, Vec<FieldDef>), String> {
     Ok((name.to_string(), fields))
 }
 
-/// Size of format `name` in bytes and its numeric leaves (prefixed with `prefix`), at `base`.
+/// Largest struct a data message can carry: its payload size is a `u16`, less the 2-byte
+/// `msg_id`.
+const MAX_STRUCT: usize = 65_535 - 2;
+/// Most bytes of flattened field names one topic may have (a nested array repeats its
+/// prefix for every element: `a[3].b[7].c`).
+const MAX_NAME_BYTES: usize = 1 << 20;
+
+/// The type of field `f` as written in the format (`float[3]`).
+fn type_text(f: &FieldDef) -> String {
+    match f.len {
+        Some(n) => format!("{}[{n}]", f.type_name),
+        None => f.type_name.clone(),
+    }
+}
+
+/// Size in bytes of format `name`, checked against [`MAX_STRUCT`] and [`MAX_NESTING`] before
+/// anything is allocated per element (a format nesting arrays of arrays declares sizes far
+/// beyond what a message can hold). `memo` holds the sizes of formats already computed.
+fn struct_size(
+    formats: &BTreeMap<String, Vec<FieldDef>>,
+    name: &str,
+    depth: usize,
+    memo: &mut BTreeMap<String, usize>,
+) -> Result<usize, String> {
+    if let Some(&s) = memo.get(name) {
+        return Ok(s);
+    }
+    if depth > MAX_NESTING {
+        return Err(format!("format `{name}` nests deeper than {MAX_NESTING} levels"));
+    }
+    let fields = formats.get(name).ok_or_else(|| format!("no format definition for `{name}`"))?;
+    let mut total: usize = 0;
+    for f in fields {
+        let one = match Basic::parse(&f.type_name) {
+            Some(k) => k.size(),
+            None => {
+                let s = struct_size(formats, &f.type_name, depth + 1, memo)?;
+                if s == 0 {
+                    return Err(format!(
+                        "format `{name}`: field `{} {}`: nested format `{}` has no bytes",
+                        type_text(f),
+                        f.name,
+                        f.type_name
+                    ));
+                }
+                s
+            }
+        };
+        total = f
+            .len
+            .unwrap_or(1)
+            .checked_mul(one)
+            .and_then(|b| total.checked_add(b))
+            .filter(|t| *t <= MAX_STRUCT)
+            .ok_or_else(|| {
+                format!(
+                    "format `{name}`: field `{} {}` makes the struct larger than {MAX_STRUCT} \
+                     bytes, the most a data message holds",
+                    type_text(f),
+                    f.name
+                )
+            })?;
+    }
+    memo.insert(name.to_string(), total);
+    Ok(total)
+}
+
+/// Appends the numeric leaves of format `name` (prefixed with `prefix`, at byte `base`) to
+/// `leaves`; returns the offset after the struct. Call only after [`struct_size`] accepted the
+/// topic: every element then has at least one byte, so the elements visited are at most
+/// [`MAX_STRUCT`]. `name_bytes` counts the names' bytes against [`MAX_NAME_BYTES`].
 fn compile(
     formats: &BTreeMap<String, Vec<FieldDef>>,
     name: &str,
     prefix: &str,
     base: usize,
-    depth: usize,
     leaves: &mut Vec<Leaf>,
+    name_bytes: &mut usize,
 ) -> Result<usize, String> {
-    if depth > MAX_NESTING {
-        return Err(format!("format `{name}` nests deeper than {MAX_NESTING} levels"));
-    }
     let fields = formats.get(name).ok_or_else(|| format!("no format definition for `{name}`"))?;
     let mut at = base;
     for f in fields {
         let count = f.len.unwrap_or(1);
         let padding = f.name.starts_with("_padding");
+        let element = |i: usize, dot: &str| match f.len {
+            Some(_) => format!("{prefix}{}[{i}]{dot}", f.name),
+            None => format!("{prefix}{}{dot}", f.name),
+        };
         if let Some(kind) = Basic::parse(&f.type_name) {
             if !padding && kind != Basic::Char {
                 for i in 0..count {
-                    let n = match f.len {
-                        Some(_) => format!("{prefix}{}[{i}]", f.name),
-                        None => format!("{prefix}{}", f.name),
-                    };
+                    let n = element(i, "");
+                    *name_bytes += n.len();
+                    if *name_bytes > MAX_NAME_BYTES {
+                        return Err(format!(
+                            "format `{name}`: field `{} {}`: the flattened field names pass \
+                             {MAX_NAME_BYTES} bytes",
+                            type_text(f),
+                            f.name
+                        ));
+                    }
                     leaves.push(Leaf { name: n, kind, offset: at + i * kind.size() });
                 }
             }
             at += count * kind.size();
         } else {
             for i in 0..count {
-                let p = match f.len {
-                    Some(_) => format!("{prefix}{}[{i}].", f.name),
-                    None => format!("{prefix}{}.", f.name),
-                };
                 let mut sub = Vec::new();
-                at = compile(formats, &f.type_name, &p, at, depth + 1, &mut sub)?;
+                let mut sub_bytes = if padding { 0 } else { *name_bytes };
+                at =
+                    compile(formats, &f.type_name, &element(i, "."), at, &mut sub, &mut sub_bytes)?;
                 if !padding {
+                    *name_bytes = sub_bytes;
                     leaves.extend(sub);
                 }
             }
@@ -316,198 +333,306 @@ fn compile_topic(
     formats: &BTreeMap<String, Vec<FieldDef>>,
     name: &str,
 ) -> Result<Compiled, String> {
+    struct_size(formats, name, 0, &mut BTreeMap::new())?;
     let mut leaves = Vec::new();
-    compile(formats, name, "", 0, 0, &mut leaves)?;
+    compile(formats, name, "", 0, &mut leaves, &mut 0)?;
     let ts = leaves
         .iter()
         .position(|l| l.name == "timestamp" && l.kind == Basic::U64)
         .ok_or_else(|| format!("format `{name}` has no `uint64_t timestamp` field"))?;
     let timestamp = leaves.remove(ts).offset;
-    Ok(Compiled { leaves, timestamp })
+    let min_len = leaves.iter().map(|l| l.offset + l.kind.size()).fold(timestamp + 8, usize::max);
+    Ok(Compiled { leaves, timestamp, min_len })
 }
 
+/// A subscription (`msg_id`) with the format in force when it was made.
 struct Subscription {
+    /// Index of its topic's builder.
     topic: usize,
     compiled: Compiled,
+    /// For each kept field of the topic, in the topic's order, the leaf that holds it here.
+    columns: Vec<usize>,
 }
 
-/// Decodes ULog bytes; `file` names them in errors.
+/// Do two topic definitions have the same fields, in any order?
+fn same_fields(a: &[String], b: &[Leaf]) -> bool {
+    let mut a: Vec<&str> = a.iter().map(String::as_str).collect();
+    let mut b: Vec<&str> = b.iter().map(|l| l.name.as_str()).collect();
+    a.sort_unstable();
+    b.sort_unstable();
+    a == b
+}
+
+/// The reader's state between messages.
+struct Decoder<'a> {
+    filter: &'a TopicFilter,
+    out: LogContents,
+    formats: BTreeMap<String, Vec<FieldDef>>,
+    subs: BTreeMap<u16, Subscription>,
+    builders: Vec<TopicBuilder>,
+    /// `(message name, multi_id)` → builders of its field layouts (a format redefined with
+    /// other fields is a topic `name#2`, …).
+    by_key: BTreeMap<(String, u8), Vec<usize>>,
+    /// Offsets of appended-data sections still ahead.
+    appended: Vec<u64>,
+    row: Vec<f64>,
+}
+
+/// Decodes ULog bytes; `file` names them in errors. Every topic and field is kept.
 ///
 /// # Errors
 /// [`FlightDataError::LogDecode`] naming `file`, the byte offset of the offending message and
-/// what is wrong: not a ULog file, unknown incompatible flags, a malformed format definition,
-/// subscription or parameter, a data message for an unknown subscription or shorter than its
-/// format.
+/// what is wrong: not a ULog file, unknown incompatible flags, a malformed format definition
+/// (or one whose declared size or nesting no data message can hold), subscription or
+/// parameter, a data message for an unknown subscription or shorter than its format.
 pub fn parse_ulog(bytes: &[u8], file: &str) -> Result<LogContents, FlightDataError> {
-    let err = |offset: usize, message: String| FlightDataError::LogDecode {
-        file: file.to_string(),
-        offset: offset as u64,
-        message,
-    };
-    if bytes.len() < HEADER_LEN || bytes[..7] != MAGIC {
-        return Err(err(0, "not a ULog file (no `ULog` header magic)".into()));
+    decode_ulog(bytes, file, &TopicFilter::all())
+}
+
+/// Decodes a ULog stream keeping what `filter` names; `file` names it in errors.
+///
+/// # Errors
+/// As [`parse_ulog`], and [`FlightDataError::Io`] for a read error.
+pub fn decode_ulog<R: Read>(
+    source: R,
+    file: &str,
+    filter: &TopicFilter,
+) -> Result<LogContents, FlightDataError> {
+    let io = |source| FlightDataError::Io { file: file.to_string(), source };
+    let mut w = ByteWindow::new(source);
+    match w.peek(HEADER_LEN).map_err(io)? {
+        Some(h) if h[..7] == MAGIC => {}
+        _ => {
+            return Err(FlightDataError::LogDecode {
+                file: file.to_string(),
+                offset: 0,
+                message: "not a ULog file (no `ULog` header magic)".into(),
+            });
+        }
     }
-    let mut out = LogContents::default();
-    let mut formats: BTreeMap<String, Vec<FieldDef>> = BTreeMap::new();
-    let mut subs: BTreeMap<u16, Subscription> = BTreeMap::new();
-    let mut builders: Vec<TopicBuilder> = Vec::new();
-    let mut by_key: BTreeMap<(String, u8), usize> = BTreeMap::new();
-    let mut appended: Vec<usize> = Vec::new();
-    let mut row: Vec<f64> = Vec::new();
-    let mut at = HEADER_LEN;
-    while at < bytes.len() {
-        // A main section that ends inside a message before appended data: continue there.
-        if let Some(&next) = appended.first()
-            && at + 3 > next
+    w.consume(HEADER_LEN as u64).map_err(io)?;
+    let mut d = Decoder {
+        filter,
+        out: LogContents::default(),
+        formats: BTreeMap::new(),
+        subs: BTreeMap::new(),
+        builders: Vec::new(),
+        by_key: BTreeMap::new(),
+        appended: Vec::new(),
+        row: Vec::new(),
+    };
+    loop {
+        let at = w.offset();
+        if let Some(&next) = d.appended.first()
+            && next <= at
         {
-            at = next;
-            appended.remove(0);
+            d.appended.remove(0);
             continue;
         }
-        let Some(head) = bytes.get(at..at + 3) else {
-            out.truncated_at = Some(at as u64);
+        let Some(head) = w.peek(3).map_err(io)? else {
+            if !w.at_end().map_err(io)? {
+                d.out.truncated_at = Some(at);
+            }
             break;
         };
         let size = usize::from(u16::from_le_bytes([head[0], head[1]]));
-        let kind = head[2];
-        let Some(payload) = bytes.get(at + 3..at + 3 + size) else {
-            if appended.first().is_some_and(|&next| next > at) {
-                at = appended.remove(0);
-                continue;
+        let end = at + 3 + size as u64;
+        // A main section that ends inside a message before appended data: continue there.
+        if let Some(&next) = d.appended.first()
+            && next < end
+        {
+            if w.peek((next - at) as usize).map_err(io)?.is_none() {
+                d.out.truncated_at = Some(at);
+                break;
             }
-            out.truncated_at = Some(at as u64);
+            w.consume(next - at).map_err(io)?;
+            d.appended.remove(0);
+            continue;
+        }
+        let Some(msg) = w.peek(3 + size).map_err(io)? else {
+            d.out.truncated_at = Some(at);
             break;
+        };
+        d.message(msg[2], &msg[3..], at, file)?;
+        w.consume(3 + size as u64).map_err(io)?;
+    }
+    let Decoder { mut out, builders, .. } = d;
+    out.add_topics(builders);
+    Ok(out)
+}
+
+impl Decoder<'_> {
+    /// Handles one message of type `kind` at byte `at`.
+    fn message(
+        &mut self,
+        kind: u8,
+        payload: &[u8],
+        at: u64,
+        file: &str,
+    ) -> Result<(), FlightDataError> {
+        let err = |message: String| FlightDataError::LogDecode {
+            file: file.to_string(),
+            offset: at,
+            message,
         };
         let text = |b: &[u8], what: &str| {
             std::str::from_utf8(b)
                 .map(str::to_string)
-                .map_err(|_| err(at, format!("`{}` message: {what} is not UTF-8", kind as char)))
+                .map_err(|_| err(format!("`{}` message: {what} is not UTF-8", kind as char)))
         };
         match kind {
-            b'B' => {
-                if payload.len() < 40 {
-                    return Err(err(at, format!("flag bits message of {size} bytes (< 40)")));
-                }
-                let incompat = &payload[8..16];
-                if incompat[0] & !1 != 0 || incompat[1..].iter().any(|b| *b != 0) {
-                    return Err(err(
-                        at,
-                        format!(
-                            "unknown incompatible flags {incompat:?}: this ULog version is not supported"
-                        ),
-                    ));
-                }
-                if incompat[0] & 1 == 1 {
-                    for k in 0..3 {
-                        let o = u64::from_le_bytes(
-                            payload[16 + 8 * k..24 + 8 * k].try_into().unwrap_or([0; 8]),
-                        );
-                        if o > 0 && (o as usize) > at && (o as usize) <= bytes.len() {
-                            appended.push(o as usize);
-                        }
-                    }
-                    appended.sort_unstable();
-                }
-            }
+            b'B' => self.flag_bits(payload, at).map_err(err)?,
             b'F' => {
                 let t = text(payload, "the format")?;
-                let (name, fields) = parse_format(&t).map_err(|m| err(at, m))?;
-                formats.insert(name, fields);
+                let (name, fields) = parse_format(&t).map_err(err)?;
+                self.formats.insert(name, fields);
             }
             b'P' => {
                 let Some((&klen, rest)) = payload.split_first() else {
-                    return Err(err(at, "empty parameter message".into()));
+                    return Err(err("empty parameter message".into()));
                 };
                 let klen = usize::from(klen);
                 let (Some(key), Some(value)) = (rest.get(..klen), rest.get(klen..)) else {
-                    return Err(err(at, "parameter key runs past the message".into()));
+                    return Err(err("parameter key runs past the message".into()));
                 };
                 let key = text(key, "the parameter key")?;
                 let (ty, name) = key
                     .split_once(' ')
-                    .ok_or_else(|| err(at, format!("parameter key `{key}` has no type")))?;
+                    .ok_or_else(|| err(format!("parameter key `{key}` has no type")))?;
                 let v = match (ty, value) {
                     ("int32_t", [a, b, c, d, ..]) => {
                         f64::from(i32::from_le_bytes([*a, *b, *c, *d]))
                     }
                     ("float", [a, b, c, d, ..]) => f64::from(f32::from_le_bytes([*a, *b, *c, *d])),
                     _ => {
-                        return Err(err(
-                            at,
-                            format!(
-                                "parameter `{name}`: type `{ty}` with {} value bytes",
-                                value.len()
-                            ),
-                        ));
+                        return Err(err(format!(
+                            "parameter `{name}`: type `{ty}` with {} value bytes",
+                            value.len()
+                        )));
                     }
                 };
-                out.parameters.insert(name.to_string(), v);
+                self.out.parameters.insert(name.to_string(), v);
             }
             b'A' => {
                 if payload.len() < 3 {
-                    return Err(err(at, format!("subscription message of {size} bytes (< 3)")));
+                    return Err(err(format!(
+                        "subscription message of {} bytes (< 3)",
+                        payload.len()
+                    )));
                 }
                 let multi = payload[0];
                 let id = u16::from_le_bytes([payload[1], payload[2]]);
                 let name = text(&payload[3..], "the subscription's format name")?;
-                let compiled = compile_topic(&formats, &name)
-                    .map_err(|m| err(at, format!("subscription {id} (`{name}`): {m}")))?;
-                let key = (name.clone(), multi);
-                let topic = match by_key.get(&key) {
-                    Some(&i) => i,
-                    None => {
-                        let tname = if multi == 0 { name } else { format!("{name}[{multi}]") };
-                        let names = compiled.leaves.iter().map(|l| l.name.clone()).collect();
-                        builders.push(TopicBuilder::new(tname, names));
-                        by_key.insert(key, builders.len() - 1);
-                        builders.len() - 1
-                    }
-                };
-                subs.insert(id, Subscription { topic, compiled });
+                let compiled = compile_topic(&self.formats, &name)
+                    .map_err(|m| err(format!("subscription {id} (`{name}`): {m}")))?;
+                self.subscribe(id, multi, name, compiled);
             }
-            b'D' => {
-                if payload.len() < 2 {
-                    return Err(err(at, format!("data message of {size} bytes (< 2)")));
-                }
-                let id = u16::from_le_bytes([payload[0], payload[1]]);
-                let data = &payload[2..];
-                let sub = subs.get(&id).ok_or_else(|| {
-                    err(at, format!("data message for unknown subscription {id}"))
-                })?;
-                let b = &mut builders[sub.topic];
-                let field = |l: &Leaf| data.get(l.offset..l.offset + l.kind.size());
-                let Some(ts) = data.get(sub.compiled.timestamp..sub.compiled.timestamp + 8) else {
-                    return Err(err(
-                        at,
-                        format!("topic `{}`: data message too short for `timestamp`", b.name),
-                    ));
-                };
-                let t_us = u64::from_le_bytes(ts.try_into().unwrap_or([0; 8]));
-                row.clear();
-                for l in &sub.compiled.leaves {
-                    let Some(v) = field(l) else {
-                        return Err(err(
-                            at,
-                            format!(
-                                "topic `{}`: data message of {} bytes too short for field `{}` (byte {} of the struct)",
-                                b.name,
-                                data.len(),
-                                l.name,
-                                l.offset
-                            ),
-                        ));
-                    };
-                    row.push(l.kind.read(v));
-                }
-                b.push(t_us, &row);
-            }
+            b'D' => self.data(payload, at).map_err(err)?,
             _ => {}
         }
-        at += 3 + size;
+        Ok(())
     }
-    out.add_topics(builders);
-    Ok(out)
+
+    /// The `B` message: incompatible flags (refused unless only "appended data") and the
+    /// appended-data offsets.
+    fn flag_bits(&mut self, payload: &[u8], at: u64) -> Result<(), String> {
+        if payload.len() < 40 {
+            return Err(format!("flag bits message of {} bytes (< 40)", payload.len()));
+        }
+        let incompat = &payload[8..16];
+        if incompat[0] & !1 != 0 || incompat[1..].iter().any(|b| *b != 0) {
+            return Err(format!(
+                "unknown incompatible flags {incompat:?}: this ULog version is not supported"
+            ));
+        }
+        if incompat[0] & 1 == 1 {
+            for k in 0..3 {
+                let o = u64::from_le_bytes(
+                    payload[16 + 8 * k..24 + 8 * k].try_into().unwrap_or([0; 8]),
+                );
+                if o > at {
+                    self.appended.push(o);
+                }
+            }
+            self.appended.sort_unstable();
+        }
+        Ok(())
+    }
+
+    /// Subscription `id` to format `name`, instance `multi`: the topic of that field layout
+    /// (a new one `name#k` for a layout not seen before under this name), and which leaves
+    /// fill its kept fields.
+    fn subscribe(&mut self, id: u16, multi: u8, name: String, compiled: Compiled) {
+        let key = (name, multi);
+        let variants = self.by_key.entry(key.clone()).or_default();
+        let found = variants
+            .iter()
+            .copied()
+            .find(|&i| same_fields(&self.builders[i].all_fields, &compiled.leaves));
+        let topic = match found {
+            Some(i) => i,
+            None => {
+                let (name, multi) = key;
+                let base = if multi == 0 { name } else { format!("{name}[{multi}]") };
+                let tname = match variants.len() {
+                    0 => base,
+                    k => format!("{base}#{}", k + 1),
+                };
+                let all: Vec<String> = compiled.leaves.iter().map(|l| l.name.clone()).collect();
+                let kept = self.filter.topic(&tname).map(|only| match only {
+                    None => all.clone(),
+                    Some(set) => all.iter().filter(|n| set.contains(*n)).cloned().collect(),
+                });
+                self.builders.push(TopicBuilder::new(tname, all, kept));
+                variants.push(self.builders.len() - 1);
+                self.builders.len() - 1
+            }
+        };
+        let columns = self.builders[topic]
+            .names
+            .iter()
+            .filter_map(|n| compiled.leaves.iter().position(|l| &l.name == n))
+            .collect();
+        self.subs.insert(id, Subscription { topic, compiled, columns });
+    }
+
+    /// A data message: its subscription's timestamp and kept fields.
+    fn data(&mut self, payload: &[u8], at: u64) -> Result<(), String> {
+        if payload.len() < 2 {
+            return Err(format!("data message of {} bytes (< 2)", payload.len()));
+        }
+        let id = u16::from_le_bytes([payload[0], payload[1]]);
+        let data = &payload[2..];
+        let sub = self
+            .subs
+            .get(&id)
+            .ok_or_else(|| format!("data message for unknown subscription {id}"))?;
+        let b = &mut self.builders[sub.topic];
+        let c = &sub.compiled;
+        if data.len() < c.min_len {
+            if data.len() < c.timestamp + 8 {
+                return Err(format!("topic `{}`: data message too short for `timestamp`", b.name));
+            }
+            let l = c.leaves.iter().find(|l| l.offset + l.kind.size() > data.len());
+            let (field, offset) = l.map_or(("?", 0), |l| (l.name.as_str(), l.offset));
+            return Err(format!(
+                "topic `{}`: data message of {} bytes too short for field `{field}` (byte {offset} of the struct)",
+                b.name,
+                data.len(),
+            ));
+        }
+        let t_us =
+            u64::from_le_bytes(data[c.timestamp..c.timestamp + 8].try_into().unwrap_or([0; 8]));
+        self.row.clear();
+        for &li in &sub.columns {
+            let l = &c.leaves[li];
+            self.row.push(l.kind.read(&data[l.offset..]));
+        }
+        b.push(t_us, &self.row, at);
+        Ok(())
+    }
 }
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -518,18 +643,5 @@ mod tests {
         let s = e.to_string();
         assert!(s.starts_with("x.ulg: byte "), "{s}");
         assert!(matches!(e, FlightDataError::LogDecode { .. }), "{s}");
-    }
-
-    #[test]
-    fn analytic_builder_drops_non_increasing_times_and_converts_us_to_s() {
-        let mut b = TopicBuilder::new("t".into(), vec!["x".into()]);
-        b.push(1_000_000, &[1.0]);
-        b.push(1_000_000, &[2.0]);
-        b.push(500_000, &[3.0]);
-        b.push(1_500_000, &[4.0]);
-        assert_eq!(b.dropped, 2);
-        let t = b.finish();
-        assert_eq!(t.t_s, vec![1.0, 1.5]);
-        assert_eq!(t.fields, vec![("x".to_string(), vec![1.0, 4.0])]);
     }
 }

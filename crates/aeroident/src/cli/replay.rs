@@ -31,7 +31,9 @@
 
 use aeroident_estimators::flight_model::N_STATES;
 use aeroident_estimators::output_error::InitialStates;
-use aeroident_io::{FlightDataReader, LogFormat, Mapping, ModelSpec, open_log_with_notes};
+use aeroident_io::{
+    FlightDataReader, LogFormat, Mapping, ModelSpec, open_log_with_notes, open_log_with_report,
+};
 use aeroident_pipelines::estimators::EstimatorKind;
 use aeroident_pipelines::replay::{
     DerivativeSource, EstimateRows, Pacing, ReplayObserver, ReplayOptions, replay,
@@ -313,11 +315,14 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         )?;
         replay(reader, &mapping, &opts, &mut console)
     } else {
-        let (reader, notes) = open_log_with_notes(&args.data, Some(format), &mapping)?;
-        for n in &notes {
+        let (reader, report) = open_log_with_report(&args.data, Some(format), &mapping)?;
+        for n in report.notes() {
             eprintln!("note: {n}");
         }
-        replay(reader, &mapping, &opts, &mut console)
+        replay(reader, &mapping, &opts, &mut console).map(|mut outcome| {
+            outcome.reader.push(report);
+            outcome
+        })
     };
     bar.finish_and_clear();
     let mut outcome = outcome?;
@@ -510,12 +515,14 @@ fn execute_batch(
         if fem { "the filter-error method" } else { "output error" }
     );
     let mut readers = Vec::new();
+    let mut reports = Vec::new();
     for file in std::iter::once(&args.data).chain(&args.and) {
-        let (reader, notes) = open_log_with_notes(file, args.format, mapping)?;
-        for n in &notes {
+        let (reader, report) = open_log_with_report(file, args.format, mapping)?;
+        for n in report.notes() {
             eprintln!("note: {n}");
         }
         readers.push(reader);
+        reports.push(report);
     }
     let options = aeroident_pipelines::replay::batch::FitOptions {
         fem,
@@ -537,6 +544,7 @@ fn execute_batch(
     }
     let mut outcome =
         aeroident_pipelines::replay::batch::fit_records(readers, mapping, model, options)?;
+    outcome.summary.reader = reports;
     if let Some(path) = &args.validate_on {
         let name = path.display().to_string();
         let (reader, notes) = open_log_with_notes(&name, None, mapping)?;

@@ -241,12 +241,15 @@ pub fn write(
             notes: v2.notes.clone(),
         });
     }
+    let (reader_settings, reader_warnings) = super::reader_rows(&outcome.summary.reader);
+    let mut settings = settings(source, outcome);
+    settings.extend(reader_settings);
     Report {
         title: format!("aeroident replay — {title}"),
-        settings: settings(source, outcome),
+        settings,
         results,
         figures,
-        warnings: outcome.summary.warnings.clone(),
+        warnings: outcome.summary.warnings.iter().cloned().chain(reader_warnings).collect(),
         ..Default::default()
     }
     .write(od)?;

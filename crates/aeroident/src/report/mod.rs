@@ -118,6 +118,31 @@ pub fn common_settings() -> Vec<(String, String)> {
     ]
 }
 
+/// The settings row `left out by the reader` (per file: what a multi-rate log reader left
+/// out, totals per unit) and one warning per loss ([`aeroident_io::ReaderReport::notes`]);
+/// nothing when no reader report was made (a CSV record).
+pub fn reader_rows(reports: &[aeroident_io::ReaderReport]) -> (Vec<(String, String)>, Vec<String>) {
+    if reports.is_empty() {
+        return (Vec::new(), Vec::new());
+    }
+    let text: Vec<String> = reports
+        .iter()
+        .map(|r| {
+            let (samples, messages, bytes, rows) = r.totals();
+            if r.dropped.is_empty() {
+                format!("{}: nothing", r.file)
+            } else {
+                format!(
+                    "{}: {samples} samples (timestamps out of order), {messages} cut message(s), {bytes} corrupt bytes skipped, {rows} aligned rows dropped (see warnings)",
+                    r.file
+                )
+            }
+        })
+        .collect();
+    let warnings = reports.iter().flat_map(|r| r.notes()).collect();
+    (vec![("left out by the reader".into(), text.join("; "))], warnings)
+}
+
 /// `s` with `& < > " '` escaped for HTML text and attribute values.
 pub fn escape(s: &str) -> String {
     let mut o = String::with_capacity(s.len());

@@ -280,12 +280,15 @@ pub fn write(
             (1000, 200),
         )?);
     }
+    let (reader_settings, reader_warnings) = super::reader_rows(&outcome.reader);
+    let mut settings = settings(source, opts, outcome);
+    settings.extend(reader_settings);
     let report = Report {
         title: format!("aeroident replay — {title}"),
-        settings: settings(source, opts, outcome),
+        settings,
         results: vec![res.clone()],
         figures,
-        warnings: outcome.summary.warnings.clone(),
+        warnings: outcome.summary.warnings.iter().cloned().chain(reader_warnings).collect(),
         links: Vec::new(),
     };
     report.write(od)?;

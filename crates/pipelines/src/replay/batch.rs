@@ -192,6 +192,9 @@ pub struct BatchSummary {
     pub validation: ValidationReport,
     /// Validation on a second record (`--validate-on`), else `null`.
     pub validation_on: Option<ValidationReport>,
+    /// What the log reader left out of each record read, as the caller that opened them
+    /// reports it ([`aeroident_io::open_log_with_report`]); empty for CSV records.
+    pub reader: Vec<aeroident_io::ReaderReport>,
     /// `fem`: the estimated process noise `(state, F, σ)`, state unit per √s; empty for `oe`.
     pub process_noise: Vec<(String, f64, f64)>,
     /// `fem`: the measurement-noise variances `R` recovered from the innovations, per output;
@@ -940,6 +943,7 @@ fn summarise(
         warnings,
         validation,
         validation_on: None,
+        reader: Vec::new(),
         process_noise: fitted.fem.as_ref().map_or_else(Vec::new, process_noise_of),
         measurement_noise_var: match &fitted.fem {
             Some(f) => f

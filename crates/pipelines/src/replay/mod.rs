@@ -52,7 +52,7 @@ use crate::estimators::{BuildError, EstimatorKind, EstimatorOptions, build};
 use aeroident_estimators::{AirDataSample, Coefficient, Estimator, ModelStructure, Status, Term};
 use aeroident_io::mapping::{Channel, Mapping};
 use aeroident_io::replay_output::ReplaySummary;
-use aeroident_io::{FlightDataError, FlightDataReader, ModelSpec, RecordEvent};
+use aeroident_io::{FlightDataError, FlightDataReader, ModelSpec, ReaderReport, RecordEvent};
 use prediction::{Frozen, Recorder, ValidationReport, validate_coefficients};
 use std::io::{Read, Write};
 use std::time::{Duration, Instant};
@@ -421,11 +421,16 @@ pub struct ReplayOutcome {
     /// The comparison with the batch fit of the same record ([`cross_check_record`]), when
     /// asked for.
     pub cross_check: Option<cross_check::CrossCheck>,
+    /// What reading the record left out before its rows (a multi-rate log's dropped
+    /// samples, skipped bytes, cut message, alignment drops), as the caller that opened it
+    /// reports it ([`aeroident_io::open_log_with_report`]); empty when nothing was or for a
+    /// CSV.
+    pub reader: Vec<ReaderReport>,
 }
 
 /// `summary.json`: the [`ReplaySummary`] keys, then `identifiability`, `validation`,
-/// `validation_on` (`null` unless `--validate-on`) and `cross_check` (`null` unless
-/// `--cross-check`).
+/// `validation_on` (`null` unless `--validate-on`), `cross_check` (`null` unless
+/// `--cross-check`) and `reader` (what the log reader left out, per file).
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct SummaryDocument<'a> {
     /// The replay summary (flattened).
@@ -439,6 +444,8 @@ pub struct SummaryDocument<'a> {
     pub validation_on: Option<&'a ValidationReport>,
     /// The comparison with the batch fit (`--cross-check`), else `null`.
     pub cross_check: Option<&'a cross_check::CrossCheck>,
+    /// What the log reader left out, per file read ([`ReplayOutcome::reader`]).
+    pub reader: &'a [ReaderReport],
 }
 
 impl ReplayOutcome {
@@ -453,6 +460,7 @@ impl ReplayOutcome {
             validation: self.validation.as_ref(),
             validation_on,
             cross_check: self.cross_check.as_ref(),
+            reader: &self.reader,
         }
     }
 

@@ -379,6 +379,7 @@ impl<'a> Replay<'a> {
             recorder: self.recorder,
             samples: self.fed,
             cross_check: None,
+            reader: Vec::new(),
         })
     }
 

@@ -1,0 +1,341 @@
+//! What the multi-rate log readers ([`crate::ulog`], [`crate::dataflash`]) return, the filter
+//! that tells them which topics and fields to keep, and the per-topic sample collector they
+//! share.
+//!
+//! # Kept and left out
+//!
+//! A read keeps only what its [`TopicFilter`] names (a mapping's columns and clock topic,
+//! [`TopicFilter::for_mapping`]); every other topic is still decoded far enough to be checked
+//! and counted, and is listed with its fields in [`LogContents::catalogue`] so that an error
+//! for a column the log lacks can name what it has. Memory is then the kept samples, not the
+//! file.
+//!
+//! # Timestamps that do not increase
+//!
+//! A topic's samples are kept in the order of the file; samples whose timestamps break the
+//! increasing order are left out as the fewest that must go: the kept samples are a longest
+//! strictly increasing subsequence of the timestamps (patience sorting, O(n log n); among
+//! equal timestamps the first is kept). One absurd timestamp (a glitch to `u64::MAX`) thus
+//! costs that sample, not every later one. Each topic's left-out count, first left-out sample
+//! and the byte offset of the first message whose timestamp did not increase over the one
+//! before are in [`LogContents::dropped`] and [`LogContents::dropped_at`].
+
+use crate::mapping::{Clock, Mapping};
+use crate::table::Topic;
+use std::collections::{BTreeMap, BTreeSet};
+
+/// Most skipped stretches listed one by one in [`LogContents::skipped`]; further ones are only
+/// counted in [`LogContents::skipped_total`] (a file of garbage must not cost more memory to
+/// describe than to read).
+pub const MAX_SKIPPED_LISTED: usize = 100;
+
+/// Which topics and which of their fields a log read keeps.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TopicFilter {
+    /// `None`: every topic and field. Otherwise topic name → fields kept (an empty set keeps
+    /// the timestamps only, for an `[align] clock` topic).
+    only: Option<BTreeMap<String, BTreeSet<String>>>,
+}
+
+impl TopicFilter {
+    /// Keeps every topic and field.
+    pub fn all() -> Self {
+        Self::default()
+    }
+
+    /// Keeps the `<topic>.<field>` columns named (as a mapping writes them: `vehicle_imu.x`,
+    /// `actuator_outputs[1].output[2]`, `ATT.Roll`) and the timestamps of `clock_topics`.
+    /// A name that is not `<topic>.<field>` keeps nothing (the mapping check reports it).
+    pub fn columns<'a>(
+        columns: impl IntoIterator<Item = &'a str>,
+        clock_topics: impl IntoIterator<Item = &'a str>,
+    ) -> Self {
+        let mut only: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+        for c in columns {
+            if let Some((topic, field)) = crate::align::split_column(c) {
+                only.entry(topic).or_default().insert(field.to_string());
+            }
+        }
+        for t in clock_topics {
+            only.entry(t.strip_suffix("[0]").unwrap_or(t).to_string()).or_default();
+        }
+        Self { only: Some(only) }
+    }
+
+    /// The columns `mapping` reads from a log ([`crate::multirate::needed_columns`]: channels,
+    /// `[attitude]`, `[air_data]`) and its `[align] clock` topic.
+    pub fn for_mapping(mapping: &Mapping) -> Self {
+        let needed = crate::multirate::needed_columns(mapping);
+        let clock = match mapping.align.as_ref().map(|a| &a.clock) {
+            Some(Clock::Topic(t)) => Some(t.as_str()),
+            _ => None,
+        };
+        Self::columns(needed.iter().map(|(c, _)| c.as_str()), clock)
+    }
+
+    /// Is topic `name` kept, and which fields: `None` not kept, `Some(None)` every field,
+    /// `Some(Some(set))` the fields in `set`.
+    pub(crate) fn topic(&self, name: &str) -> Option<Option<&BTreeSet<String>>> {
+        match &self.only {
+            None => Some(None),
+            Some(m) => m.get(name).map(Some),
+        }
+    }
+}
+
+/// One topic of a log as read: its name, every field it has and how many messages it had,
+/// kept or not.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TopicInfo {
+    /// Topic name as in [`Topic::name`].
+    pub name: String,
+    /// Every numeric field, in the order of the topic's definition.
+    pub fields: Vec<String>,
+    /// Messages of the topic in the file (before timestamp checks).
+    pub messages: usize,
+}
+
+/// Everything a multi-rate log reader returns besides the topics.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LogContents {
+    /// The kept topics that have samples, in order of subscription (definition), with only
+    /// the kept fields.
+    pub topics: Vec<Topic>,
+    /// Every topic with at least one message, kept or not, in the same order.
+    pub catalogue: Vec<TopicInfo>,
+    /// Parameters by name, as logged (the last value of a parameter changed in flight).
+    pub parameters: BTreeMap<String, f64>,
+    /// Samples left out because their timestamp broke the topic's increasing order (module
+    /// doc): topic name → count. Kept topics only.
+    pub dropped: BTreeMap<String, usize>,
+    /// For each topic in [`LogContents::dropped`]: the index (0-based, in file order) of its
+    /// first left-out sample and the byte offset of its first message whose timestamp did not
+    /// increase over the one before.
+    pub dropped_at: BTreeMap<String, (usize, u64)>,
+    /// Byte offset of a message the file ends inside (that partial message is not used).
+    pub truncated_at: Option<u64>,
+    /// Corrupt stretches skipped to find the next message: `(byte offset, length)`, the first
+    /// [`MAX_SKIPPED_LISTED`] (DataFlash resynchronises on the message header as pymavlink
+    /// does; ULog never skips).
+    pub skipped: Vec<(u64, u64)>,
+    /// All skipped stretches: `(count, total bytes)`, listed or not.
+    pub skipped_total: (u64, u64),
+}
+
+impl LogContents {
+    /// One line per thing left out of the topics (non-increasing samples, a truncated last
+    /// message, skipped bytes), for the caller to print; empty when nothing was.
+    pub fn notes(&self, file: &str) -> Vec<String> {
+        let mut v: Vec<String> = self
+            .dropped
+            .iter()
+            .map(|(t, n)| {
+                let at = match self.dropped_at.get(t) {
+                    Some((k, byte)) => format!(
+                        " (the first at sample {k}; the first timestamp that did not increase at byte {byte})"
+                    ),
+                    None => String::new(),
+                };
+                format!(
+                    "{file}: topic `{t}`: {n} samples left out (timestamp out of increasing order){at}"
+                )
+            })
+            .collect();
+        if let Some(at) = self.truncated_at {
+            v.push(format!("{file}: byte {at}: the file ends inside this message (not used)"));
+        }
+        for (at, len) in &self.skipped {
+            v.push(format!("{file}: byte {at}: {len} corrupt bytes skipped"));
+        }
+        let (n, bytes) = self.skipped_total;
+        if n as usize > self.skipped.len() {
+            v.push(format!(
+                "{file}: {n} corrupt stretches skipped in all ({bytes} bytes; the first {} listed)",
+                self.skipped.len()
+            ));
+        }
+        v
+    }
+
+    /// Records a corrupt stretch skipped at `offset`.
+    pub(crate) fn skip(&mut self, offset: u64, len: u64) {
+        if self.skipped.len() < MAX_SKIPPED_LISTED {
+            self.skipped.push((offset, len));
+        }
+        self.skipped_total.0 += 1;
+        self.skipped_total.1 += len;
+    }
+
+    /// Ends a read: each builder's samples out of increasing order go to
+    /// [`LogContents::dropped`], and each kept builder that has a sample becomes a topic, in
+    /// the builders' order; every builder with a message enters the catalogue.
+    pub(crate) fn add_topics(&mut self, builders: Vec<TopicBuilder>) {
+        for mut b in builders {
+            if b.messages > 0 {
+                self.catalogue.push(TopicInfo {
+                    name: b.name.clone(),
+                    fields: std::mem::take(&mut b.all_fields),
+                    messages: b.messages,
+                });
+            }
+            if !b.kept {
+                continue;
+            }
+            let (dropped, first) = b.keep_increasing();
+            if dropped > 0 {
+                self.dropped.insert(b.name.clone(), dropped);
+                self.dropped_at.insert(b.name.clone(), (first, b.first_descent.unwrap_or(0)));
+            }
+            if !b.t_us.is_empty() {
+                self.topics.push(b.finish());
+            }
+        }
+    }
+}
+
+/// One topic being collected: timestamps in µs and the kept fields, in file order.
+pub(crate) struct TopicBuilder {
+    pub(crate) name: String,
+    /// Every field of the topic (for the catalogue).
+    pub(crate) all_fields: Vec<String>,
+    /// Is the topic kept (else only its messages are counted)?
+    pub(crate) kept: bool,
+    pub(crate) t_us: Vec<u64>,
+    /// Kept fields' names and values.
+    pub(crate) names: Vec<String>,
+    pub(crate) values: Vec<Vec<f64>>,
+    /// Messages seen, kept or not.
+    pub(crate) messages: usize,
+    /// Byte offset of the first message whose timestamp did not increase over the previous.
+    pub(crate) first_descent: Option<u64>,
+}
+
+impl TopicBuilder {
+    /// A topic with fields `all_fields`, of which `kept` (names) are collected if `kept_topic`.
+    pub(crate) fn new(name: String, all_fields: Vec<String>, kept: Option<Vec<String>>) -> Self {
+        let kept_topic = kept.is_some();
+        let names = kept.unwrap_or_default();
+        let n = names.len();
+        Self {
+            name,
+            all_fields,
+            kept: kept_topic,
+            t_us: Vec::new(),
+            names,
+            values: vec![Vec::new(); n],
+            messages: 0,
+            first_descent: None,
+        }
+    }
+
+    /// Appends one sample (message at byte `offset`); `row` has one value per kept field.
+    pub(crate) fn push(&mut self, t_us: u64, row: &[f64], offset: u64) {
+        self.messages += 1;
+        if !self.kept {
+            return;
+        }
+        if self.first_descent.is_none() && self.t_us.last().is_some_and(|&last| t_us <= last) {
+            self.first_descent = Some(offset);
+        }
+        self.t_us.push(t_us);
+        for (col, v) in self.values.iter_mut().zip(row) {
+            col.push(*v);
+        }
+    }
+
+    /// Leaves out the fewest samples so the rest have strictly increasing times (module doc);
+    /// returns how many were left out and the index of the first.
+    fn keep_increasing(&mut self) -> (usize, usize) {
+        if self.first_descent.is_none() {
+            return (0, 0);
+        }
+        let keep = longest_increasing(&self.t_us);
+        let n = self.t_us.len();
+        let first = keep.iter().position(|k| !k).unwrap_or(n);
+        let dropped = keep.iter().filter(|k| !**k).count();
+        let mut it = keep.iter();
+        self.t_us.retain(|_| *it.next().unwrap_or(&false));
+        for col in &mut self.values {
+            let mut it = keep.iter();
+            col.retain(|_| *it.next().unwrap_or(&false));
+        }
+        (dropped, first)
+    }
+
+    pub(crate) fn finish(self) -> Topic {
+        // In place (same size and alignment): no second copy of the time column.
+        let t_s: Vec<f64> = self.t_us.into_iter().map(|t| t as f64 * 1e-6).collect();
+        let mut fields: Vec<(String, Vec<f64>)> = self.names.into_iter().zip(self.values).collect();
+        for (_, v) in &mut fields {
+            v.shrink_to_fit();
+        }
+        Topic { name: self.name, t_s, fields }
+    }
+}
+
+/// Which elements of `t` form a longest strictly increasing subsequence. Among the longest,
+/// the one taken keeps the earlier samples (it is built from the end, each run starting at
+/// the largest value, the earliest of equal ones): a repeated timestamp keeps its first sample
+/// and a sample that goes back in time is the one left out, as a reader that only compared
+/// each sample with the previous would do when one sample is enough.
+pub(crate) fn longest_increasing(t: &[u64]) -> Vec<bool> {
+    // heads[k]: start of the run of length k + 1 (so far, from the end) with the largest
+    // first value; their values decrease with k.
+    let mut heads: Vec<u32> = Vec::new();
+    let mut next: Vec<u32> = vec![u32::MAX; t.len()];
+    for i in (0..t.len()).rev() {
+        let x = t[i];
+        let pos = heads.partition_point(|&j| t[j as usize] > x);
+        if pos > 0 {
+            next[i] = heads[pos - 1];
+        }
+        if pos == heads.len() {
+            heads.push(i as u32);
+        } else {
+            heads[pos] = i as u32;
+        }
+    }
+    let mut keep = vec![false; t.len()];
+    let mut k = heads.last().copied().unwrap_or(u32::MAX);
+    while k != u32::MAX {
+        keep[k as usize] = true;
+        k = next[k as usize];
+    }
+    keep
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn analytic_builder_drops_out_of_order_times_and_converts_us_to_s() {
+        let mut b = TopicBuilder::new("t".into(), vec!["x".into()], Some(vec!["x".into()]));
+        b.push(1_000_000, &[1.0], 10);
+        b.push(1_000_000, &[2.0], 20);
+        b.push(500_000, &[3.0], 30);
+        b.push(1_500_000, &[4.0], 40);
+        assert_eq!(b.keep_increasing(), (2, 1));
+        // Two samples must go either way: the later ones that go back in time do.
+        assert_eq!(b.first_descent, Some(20));
+        let t = b.finish();
+        assert_eq!(t.t_s, vec![1.0, 1.5]);
+        assert_eq!(t.fields, vec![("x".to_string(), vec![1.0, 4.0])]);
+    }
+
+    #[test]
+    fn analytic_one_absurd_timestamp_costs_one_sample() {
+        let mut t: Vec<u64> = (0..2001).map(|i| 1_000 * i).collect();
+        t[600] = u64::MAX;
+        let keep = longest_increasing(&t);
+        assert_eq!(keep.iter().filter(|k| !**k).count(), 1);
+        assert!(!keep[600]);
+        // A clock that restarts keeps the longer run; a value at the start that is too
+        // large costs only itself.
+        let keep = longest_increasing(&[5, 6, 7, 1, 2, 3, 4]);
+        assert_eq!(keep, [false, false, false, true, true, true, true]);
+        let keep = longest_increasing(&[u64::MAX, 1, 2, 3]);
+        assert_eq!(keep, [false, true, true, true]);
+        assert!(longest_increasing(&[]).is_empty());
+    }
+}

@@ -178,7 +178,7 @@ fn read_rows(rows: &mut MavlinkRows, text: &mut String, n: usize) {
     }
 }
 
-/// A consumer that stops while 8,000 datagrams arrive: the queue keeps at most
+/// A consumer that stops while 24,000 datagrams arrive: the queue keeps at most
 /// `QUEUE_DATAGRAMS`, the oldest are dropped and counted, and every row holds one frame's
 /// values (none mixes values from before the hole with the clock after it).
 #[test]
@@ -193,9 +193,9 @@ fn analytic_flood_into_a_paused_consumer_is_bounded_and_counted() {
     }
     read_rows(&mut rows, &mut text, 10);
     let before = stats.lock().unwrap().datagrams;
-    // The consumer pauses: 2,000 frames (8,000 datagrams), paced so the receiving thread (not
+    // The consumer pauses: 6,000 frames (24,000 datagrams), paced so the receiving thread (not
     // the kernel) is what has to hold them.
-    for k in 11..=2010 {
+    for k in 11..=6010 {
         for msg in frame(k) {
             link.send(&msg, 1);
         }

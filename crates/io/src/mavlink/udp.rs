@@ -4,10 +4,11 @@
 //!
 //! # The receive queue
 //!
-//! The queue holds at most [`QUEUE_DATAGRAMS`] datagrams and [`QUEUE_BYTES`] bytes: about two
-//! seconds of a 100 Hz feed of 20 messages per sample, so jitter in the consumer is absorbed,
-//! while a flood (or an estimator slower than the feed) costs bounded memory and a bounded
-//! delay instead of growing without limit. When it is full the **oldest** datagram is dropped:
+//! The queue holds at most [`QUEUE_DATAGRAMS`] datagrams and [`QUEUE_BYTES`] bytes: about 8 s
+//! of a 100 Hz feed of 20 messages per sample (≈ 2 MB of MAVLink 2 datagrams), so a consumer's
+//! start-up (building the estimator) and its jitter are absorbed, while a flood (or an
+//! estimator slower than the feed) costs bounded memory and a bounded delay instead of growing
+//! without limit. When it is full the **oldest** datagram is dropped:
 //! a live estimate should follow the aircraft as it is now, and the newest messages supersede
 //! the old ones under the zero-order hold, so it is the stale data that goes. Drops are counted
 //! ([`LinkStats::dropped`]); after a drop the row builder forgets its held values, so no row
@@ -32,7 +33,7 @@ use std::time::{Duration, Instant};
 const REPORTED: u64 = 5;
 
 /// Datagrams the receive queue holds at most (module doc).
-pub const QUEUE_DATAGRAMS: usize = 4096;
+pub const QUEUE_DATAGRAMS: usize = 16_384;
 
 /// Bytes of datagrams the receive queue holds at most (module doc): 4 MiB, which bounds the
 /// queue when a sender floods it with large datagrams.

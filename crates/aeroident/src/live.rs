@@ -45,19 +45,18 @@ pub fn open_mavlink(
     Ok((reader, stats))
 }
 
-/// One line on the link: counts and how it ended.
+/// One line on the link: counts and how it ended ([`LinkStats::line`]).
 pub fn link_line(s: &LinkStats) -> String {
-    format!(
-        "mavlink: {} datagrams, {} messages, {} rows; {} unparseable datagrams, {} undecodable frames, {} messages lost (sequence gaps), {} clock messages before every column had arrived; ended: {}",
-        s.datagrams,
-        s.messages,
-        s.rows,
-        s.unparseable,
-        s.undecodable,
-        s.lost,
-        s.clock_without_row,
-        s.end
-    )
+    s.line()
+}
+
+/// A replay of the feed failed: the link statistics on stderr, unless the error already
+/// carries them (a feed that produced no row).
+pub fn report_failure(stats: &Mutex<LinkStats>) {
+    let s = stats.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    if s.rows > 0 {
+        eprintln!("{}", s.line());
+    }
 }
 
 /// Prints the link line and adds it (and any problem) to the summary's warnings.

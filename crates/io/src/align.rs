@@ -37,6 +37,32 @@ pub const TIME_COLUMN: &str = "time_s";
 /// Most rows an alignment may produce (a guard against a rate typo such as `5e6`).
 pub const MAX_ROWS: usize = 50_000_000;
 
+/// Most memory, bytes, the aligned table may take (`rows × columns × 8`, the time column
+/// included): 1 GiB. A log at 200 Hz with 30 columns fits 6 hours; a rate typo such as
+/// `rate_hz = 2e6` over a 20 s log (40 M rows × 16 columns = 5.1 GB) is refused before it is
+/// allocated instead of exhausting the memory.
+pub const MAX_TABLE_BYTES: u64 = 1 << 30;
+
+/// Refuses a table of `rows` × `columns` `f64`s over [`MAX_TABLE_BYTES`]; `what` names the
+/// setting that chose the rows (e.g. "[align] rate_hz = 2000000 Hz over 20 s").
+fn check_table_size(
+    rows: f64,
+    columns: usize,
+    what: &str,
+    file: &str,
+) -> Result<(), FlightDataError> {
+    let bytes = rows * columns as f64 * 8.0;
+    if bytes > MAX_TABLE_BYTES as f64 {
+        return Err(FlightDataError::Align {
+            file: file.to_string(),
+            reason: format!(
+                "{what} gives {rows} rows × {columns} columns × 8 bytes = {bytes} bytes, more than the cap of {MAX_TABLE_BYTES} bytes for an aligned table (lower the rate, or align on a clock topic)"
+            ),
+        });
+    }
+    Ok(())
+}
+
 /// An aligned table and what alignment left out.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Aligned {
@@ -107,13 +133,28 @@ impl Cursor<'_> {
 /// # Errors
 /// [`FlightDataError::Align`] for no topics, a topic without samples or with times that do
 /// not increase, a rate that is not finite and > 0 or that would give more than [`MAX_ROWS`]
-/// rows, topics that do not overlap in time, or every row dropped (naming the topics);
+/// rows, a table over [`MAX_TABLE_BYTES`] (checked before it is allocated), topics that do not overlap in time, or every row dropped (naming the topics);
 /// [`FlightDataError::MissingTopic`] for a clock topic that is not among `topics`.
 pub fn align(
     topics: &[Topic],
     clock: &Clock,
     method: Interpolation,
     file: &str,
+) -> Result<Aligned, FlightDataError> {
+    align_with_room(topics, clock, method, file, 0)
+}
+
+/// [`align`], counting `extra_columns` more columns of the table's length (columns the caller
+/// derives from it afterwards) against [`MAX_TABLE_BYTES`].
+///
+/// # Errors
+/// As [`align`].
+pub fn align_with_room(
+    topics: &[Topic],
+    clock: &Clock,
+    method: Interpolation,
+    file: &str,
+    extra_columns: usize,
 ) -> Result<Aligned, FlightDataError> {
     let bad = |reason: String| FlightDataError::Align { file: file.to_string(), reason };
     if topics.is_empty() {
@@ -135,6 +176,7 @@ pub fn align(
             )));
         }
     }
+    let columns = 1 + topics.iter().map(|t| t.fields.len()).sum::<usize>() + extra_columns;
     let times: Vec<f64> = match clock {
         Clock::RateHz(rate) => {
             if !(rate.is_finite() && *rate > 0.0) {
@@ -161,6 +203,8 @@ pub fn align(
                     t1 - t0
                 )));
             }
+            let what = format!("[align] rate_hz = {rate} Hz over {} s", t1 - t0);
+            check_table_size(n, columns, &what, file)?;
             (0..n as usize).map(|i| t0 + i as f64 / rate).filter(|t| *t <= t1).collect()
         }
         Clock::Topic(name) => {
@@ -175,6 +219,8 @@ pub fn align(
                     ),
                 }
             })?;
+            let what = format!("[align] clock = `{name}`");
+            check_table_size(t.t_s.len() as f64, columns, &what, file)?;
             t.t_s.clone()
         }
     };

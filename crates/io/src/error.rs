@@ -141,6 +141,16 @@ pub enum FlightDataError {
         /// What was wrong, naming the column.
         problem: RowProblem,
     },
+    /// The file holds no data at all: no bytes, or a header row and no data row. Said apart
+    /// from [`FlightDataError::NoSamples`] (rows that were all rejected), whose count would be a
+    /// misleading "0 rows rejected" here.
+    #[error("{file}: the file has no data ({what})")]
+    NoData {
+        /// Data file.
+        file: String,
+        /// What it holds instead, e.g. "a header row and no data rows".
+        what: String,
+    },
     /// The record has no usable samples.
     #[error("{file}: no usable samples ({rejected} rows rejected{})", first_reasons(.first))]
     NoSamples {
@@ -265,6 +275,22 @@ pub enum RowProblem {
         /// The factor.
         factor: f64,
     },
+    /// A time far ahead of both the previous accepted sample and the next row, i.e. one corrupt
+    /// time stamp rather than a gap in the record (after a gap the next row's time is later
+    /// still): this row only is rejected and the record goes on from the previous time.
+    #[error(
+        "column `{column}`: time {t_s} s is ahead of both the previous row ({prev_t_s} s) and the next ({next_t_s} s): an isolated bad time stamp, not a gap"
+    )]
+    TimeOutlier {
+        /// Time column name.
+        column: String,
+        /// The time, s.
+        t_s: f64,
+        /// Previous accepted time, s.
+        prev_t_s: f64,
+        /// The next row's time, s.
+        next_t_s: f64,
+    },
     /// The last line of a live feed (`-`) has no terminating newline: it may have been cut off
     /// inside a value, so it is not used.
     #[error(
@@ -314,6 +340,7 @@ impl RowProblem {
             Self::RepeatedTime { .. } => "repeated time",
             Self::NonMonotonicTime { .. } => "time goes backwards",
             Self::ImplausibleTimeJump { .. } => "implausible time jump",
+            Self::TimeOutlier { .. } => "isolated time outlier",
             Self::Truncated => "truncated last line",
             Self::FieldCount { .. } => "wrong field count",
             Self::Implausible { .. } => "implausible value",

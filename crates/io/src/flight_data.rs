@@ -6,11 +6,28 @@
 //! number in the file, header = line 1), the column and the reason. Rows are rejected for a
 //! blank, non-numeric or non-finite value in a mapped column, a value that is not finite after
 //! the unit conversion, a wrong field count, a repeated or backward time, a time implausibly far
-//! ahead ([`IMPLAUSIBLE_JUMP_FACTOR`] × the nominal interval; the last good time is kept), and a non-positive
-//! airspeed, mass, area, chord, span, moment of inertia, density or dynamic pressure. A gap —
-//! an interval longer than [`GAP_FACTOR`] × the nominal interval — is reported as a
-//! [`RecordEvent::Gap`] *before* the sample that follows it; it is never bridged silently.
-//! Nothing is dropped without an event.
+//! ahead ([`IMPLAUSIBLE_JUMP_FACTOR`] × the nominal interval; the last good time is kept), and a
+//! non-positive airspeed, mass, area, chord, span, moment of inertia, density or dynamic
+//! pressure. A gap — an interval longer than [`GAP_FACTOR`] × the nominal interval — is
+//! reported as a [`RecordEvent::Gap`] *before* the sample that follows it; it is never bridged
+//! silently. Nothing is dropped without an event.
+//!
+//! # One bad time stamp costs one row
+//!
+//! A time further ahead of the previous sample than a gap is either the sample after a gap or a
+//! single corrupt time stamp (a 10000 in a record at 2 s): accepting the latter would reject
+//! every later row as going backwards. Such a sample (and the second sample of a record whose
+//! mapping gives no `nominal_dt_s`, which would fix the nominal interval) is therefore held
+//! until a later row settles it: a row at or after its time means it was a gap; a good sample
+//! between the previous time and it means the held row alone is rejected
+//! ([`RowProblem::TimeOutlier`]) and the record goes on from the previous time. A rejected row
+//! earlier than it proves nothing (it may be the bad one) and waits behind it, up to
+//! [`HELD_ROWS_MAX`] rows. The cost is one row of latency after a jump on a live feed; at the
+//! end of the record a held sample is taken as it is. (A bad time in the record's *first* row cannot be told from a
+//! record whose rest is bad; it still rejects the rows after it.)
+//!
+//! A file without data rows (empty, or a header alone) is an error of its own
+//! ([`FlightDataError::NoData`]), not a record whose rows were all rejected.
 //!
 //! # What a sample holds
 //!
@@ -43,7 +60,7 @@
 use crate::error::{FlightDataError, RowProblem};
 use crate::mapping::{Channel, ChannelMap, Mapping, Source};
 use aeroident_estimators::{AirDataSample, AircraftConstants};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, VecDeque};
 use std::io::Read;
 
 /// Gap threshold: an interval longer than this multiple of the nominal interval is a gap.
@@ -53,6 +70,19 @@ pub const GAP_FACTOR: f64 = 1.5;
 /// sample is implausible (a corrupt value such as 1e308): the row is rejected and the previous
 /// time kept. Smaller jumps are gaps ([`GAP_FACTOR`]).
 pub const IMPLAUSIBLE_JUMP_FACTOR: f64 = 1e6;
+
+/// Rejected rows that may follow a held sample before it is accepted unjudged (their
+/// rejections wait behind it, to keep the events in row order).
+pub const HELD_ROWS_MAX: usize = 64;
+
+/// A sample after a jump in time, waiting for the next readable time to judge it.
+#[derive(Debug, Clone)]
+struct Held {
+    row: u64,
+    sample: AirDataSample,
+    /// Rows rejected after it, in order.
+    after: Vec<(u64, RowProblem)>,
+}
 
 /// A rejected row: its line number and the reason (naming the column).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -122,7 +152,9 @@ impl<R: Read> Read for Tail<R> {
     }
 }
 
-/// The streaming reader. Iterate it for [`RecordEvent`]s; fatal problems are `Err` items.
+/// The streaming reader. Iterate it for [`RecordEvent`]s; fatal problems are `Err` items (an
+/// error of the source itself is [`FlightDataError::Io`]; a source that ends without a data row
+/// ends with [`FlightDataError::NoData`]).
 ///
 /// Two framing problems are caught: a quote that is never closed (the CSV parser would take
 /// the rest of the file as one field) is a fatal error naming the row, the column and the lines
@@ -140,7 +172,12 @@ pub struct FlightDataReader<R: Read> {
     last_t: Option<f64>,
     nominal_dt: Option<f64>,
     inertia_reference_mass_kg: Option<f64>,
-    pending: Option<RecordEvent>,
+    /// Events read but not yet returned.
+    pending: VecDeque<Result<RecordEvent, FlightDataError>>,
+    /// A sample after a jump in time, held until the next row's time judges it (`event`).
+    held: Option<Held>,
+    /// Data records read (to tell a file without data from one whose rows were all rejected).
+    rows_seen: u64,
     done: bool,
     /// Lines of the CSV text that are not lines of the file the user gave (a header
     /// [`crate::log`] writes for a file without one): subtracted from every row number.
@@ -152,8 +189,8 @@ impl<R: Read> FlightDataReader<R> {
     /// mapping.
     ///
     /// # Errors
-    /// [`FlightDataError::Csv`] if the header cannot be read, [`FlightDataError::MissingColumn`]
-    /// for a mapped column not in the header.
+    /// [`FlightDataError::Csv`] if the header cannot be read, [`FlightDataError::NoData`] for an
+    /// empty source, [`FlightDataError::MissingColumn`] for a mapped column not in the header.
     pub fn new(source: R, file: &str, mapping: &Mapping) -> Result<Self, FlightDataError> {
         let mut csv = csv::ReaderBuilder::new()
             .has_headers(true)
@@ -172,6 +209,12 @@ impl<R: Read> FlightDataReader<R> {
                 message: e.to_string(),
             })?
             .clone();
+        if headers.is_empty() {
+            return Err(FlightDataError::NoData {
+                file: file.to_string(),
+                what: "it is empty: no header row and no data rows".into(),
+            });
+        }
         let header_len = headers.len();
         for (i, h) in headers.iter().enumerate() {
             if let Some(j) = headers.iter().take(i).position(|g| g == h && !g.is_empty()) {
@@ -244,7 +287,9 @@ impl<R: Read> FlightDataReader<R> {
             last_t: None,
             nominal_dt: mapping.nominal_dt_s,
             inertia_reference_mass_kg: mapping.inertia_reference_mass_kg,
-            pending: None,
+            pending: VecDeque::new(),
+            held: None,
+            rows_seen: 0,
             done: false,
             synthetic_lines: 0,
         })
@@ -333,34 +378,45 @@ impl<R: Read> FlightDataReader<R> {
         })
     }
 
-    fn parse_row(&self) -> Result<AirDataSample, RowProblem> {
+    /// The current row's time, s, after the field count is checked (the time is needed before
+    /// the rest of the row to judge a time stamp held back as a possible outlier).
+    fn row_time(&self) -> Result<f64, RowProblem> {
         if self.record.len() != self.header_len {
             return Err(RowProblem::FieldCount {
                 expected: self.header_len,
                 found: self.record.len(),
             });
         }
-        let t_s = self.field("time", &self.time)?;
-        if let Some(prev) = self.last_t {
-            let column = self.time.names[0].clone();
-            if t_s == prev {
-                return Err(RowProblem::RepeatedTime { column, t_s });
-            }
-            if t_s < prev {
-                return Err(RowProblem::NonMonotonicTime { column, t_s, prev_t_s: prev });
-            }
-            if let Some(nom) = self.nominal_dt
-                && t_s - prev > IMPLAUSIBLE_JUMP_FACTOR * nom
-            {
-                return Err(RowProblem::ImplausibleTimeJump {
-                    column,
-                    t_s,
-                    prev_t_s: prev,
-                    nominal_dt_s: nom,
-                    factor: IMPLAUSIBLE_JUMP_FACTOR,
-                });
-            }
+        self.field("time", &self.time)
+    }
+
+    /// `t_s` against the previous accepted time: not repeated, not backwards, not implausibly
+    /// far ahead.
+    fn check_time(&self, t_s: f64) -> Result<(), RowProblem> {
+        let Some(prev) = self.last_t else { return Ok(()) };
+        let column = self.time.names[0].clone();
+        if t_s == prev {
+            return Err(RowProblem::RepeatedTime { column, t_s });
         }
+        if t_s < prev {
+            return Err(RowProblem::NonMonotonicTime { column, t_s, prev_t_s: prev });
+        }
+        if let Some(nom) = self.nominal_dt
+            && t_s - prev > IMPLAUSIBLE_JUMP_FACTOR * nom
+        {
+            return Err(RowProblem::ImplausibleTimeJump {
+                column,
+                t_s,
+                prev_t_s: prev,
+                nominal_dt_s: nom,
+                factor: IMPLAUSIBLE_JUMP_FACTOR,
+            });
+        }
+        Ok(())
+    }
+
+    /// The sample of the current row at time `t_s` (already read and checked).
+    fn parse_row(&self, t_s: f64) -> Result<AirDataSample, RowProblem> {
         let g = |ch: Channel| self.get(ch);
         let vt_mps = self.required(Channel::Vt)?;
         let alpha_vane = self.required(Channel::Alpha)?;
@@ -457,12 +513,26 @@ impl<R: Read> Iterator for FlightDataReader<R> {
     type Item = Result<RecordEvent, FlightDataError>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        if let Some(ev) = self.pending.take() {
-            return Some(Ok(ev));
+        loop {
+            if let Some(ev) = self.pending.pop_front() {
+                return Some(ev);
+            }
+            if self.done {
+                return None;
+            }
+            self.read_record();
         }
-        if self.done {
-            return None;
-        }
+    }
+}
+
+impl<R: Read> FlightDataReader<R> {
+    fn header_name(&self, i: usize) -> String {
+        self.csv_headers.get(i).cloned().unwrap_or_else(|| format!("#{}", i + 1))
+    }
+
+    /// Reads one CSV record and queues what it produced (none, one or several events: a held
+    /// time stamp is settled by the row after it).
+    fn read_record(&mut self) {
         let mut record = std::mem::take(&mut self.record);
         let more = self.csv.read_record(&mut record);
         let shift = self.synthetic_lines;
@@ -470,21 +540,32 @@ impl<R: Read> Iterator for FlightDataReader<R> {
         self.record = record;
         match more {
             Err(e) => {
-                self.done = true;
                 let row = e.position().map(|p| p.line().saturating_sub(shift)).unwrap_or(row);
-                Some(Err(FlightDataError::Csv {
-                    file: self.file.clone(),
-                    row,
-                    message: e.to_string(),
-                }))
+                let message = e.to_string();
+                let error = match e.into_kind() {
+                    // The source's own error (e.g. a live feed that ended without data) says
+                    // what went wrong; it is no CSV row's.
+                    csv::ErrorKind::Io(source) => {
+                        FlightDataError::Io { file: self.file.clone(), source }
+                    }
+                    _ => FlightDataError::Csv { file: self.file.clone(), row, message },
+                };
+                self.end(Some(error));
             }
             Ok(false) => {
-                self.done = true;
-                None
+                let error = (self.rows_seen == 0).then(|| FlightDataError::NoData {
+                    file: self.file.clone(),
+                    what: if self.synthetic_lines > 0 {
+                        "no data rows".into()
+                    } else {
+                        "a header row and no data rows".into()
+                    },
+                });
+                self.end(error);
             }
             Ok(true) => {
+                self.rows_seen += 1;
                 if let Some(i) = self.record.iter().position(|f| f.contains(['\n', '\r'])) {
-                    self.done = true;
                     let column = self.header_name(i);
                     let tail = self.csv.get_ref();
                     // After a final newline the position is on the (empty) next line.
@@ -494,14 +575,16 @@ impl<R: Read> Iterator for FlightDataReader<R> {
                         .position()
                         .line()
                         .saturating_sub(u64::from(ended_on_newline) + shift);
-                    return Some(Err(FlightDataError::Csv {
+                    let error = FlightDataError::Csv {
                         file: self.file.clone(),
                         row,
                         message: format!(
                             "field {} (column `{column}`) contains a line break: a quote opened here is never closed and runs over lines {row}–{end} (the rest of the file would be read as one field)",
                             i + 1
                         ),
-                    }));
+                    };
+                    self.end(Some(error));
+                    return;
                 }
                 let tail = self.csv.get_ref();
                 // The csv crate numbers a record from where its reading began, so a record
@@ -513,40 +596,116 @@ impl<R: Read> Iterator for FlightDataReader<R> {
                 let row =
                     self.csv.position().line().saturating_sub(u64::from(!unterminated) + shift);
                 if self.file == "-" && unterminated {
-                    self.done = true;
-                    return Some(Ok(RecordEvent::Rejected { row, problem: RowProblem::Truncated }));
+                    self.end(None);
+                    self.pending.push_back(Ok(RecordEvent::Rejected {
+                        row,
+                        problem: RowProblem::Truncated,
+                    }));
+                    return;
                 }
-                self.event(row)
+                self.event(row);
             }
         }
     }
-}
 
-impl<R: Read> FlightDataReader<R> {
-    fn header_name(&self, i: usize) -> String {
-        self.csv_headers.get(i).cloned().unwrap_or_else(|| format!("#{}", i + 1))
+    /// The end of the record: a time stamp still held has no next row to judge it by and is
+    /// taken as the sample after a gap; then `error`, if any, ends the events.
+    fn end(&mut self, error: Option<FlightDataError>) {
+        self.done = true;
+        self.release_held(None);
+        self.pending.extend(error.map(Err));
     }
 
-    fn event(&mut self, row: u64) -> Option<Result<RecordEvent, FlightDataError>> {
-        match self.parse_row() {
-            Err(problem) => Some(Ok(RecordEvent::Rejected { row, problem })),
+    /// The events of data row `row`. A sample whose time is further ahead than a gap (or that
+    /// would fix the nominal interval) is held until the rows after it say whether it is the
+    /// sample after a gap or an isolated bad time stamp (module doc): a good sample earlier than
+    /// it (and later than the previous one) makes it an outlier ([`RowProblem::TimeOutlier`],
+    /// the held row rejected alone); any row at or after its time makes it a gap. A rejected
+    /// row earlier than it proves nothing and waits behind it.
+    fn event(&mut self, row: u64) {
+        let t_s = match self.row_time() {
+            Ok(t) => t,
+            Err(problem) => return self.reject(row, problem),
+        };
+        if let Some(h) = &self.held {
+            if t_s >= h.sample.t_s {
+                self.release_held(None);
+            } else if let Err(problem) = self.check_time(t_s).and_then(|()| self.parse_row(t_s)) {
+                return self.reject(row, problem);
+            } else {
+                self.release_held(Some(t_s));
+            }
+        }
+        match self.check_time(t_s).and_then(|()| self.parse_row(t_s)) {
+            Err(problem) => self.reject(row, problem),
             Ok(sample) => {
-                let ev = RecordEvent::Sample { row, sample };
-                let mut out = ev.clone();
-                if let Some(prev) = self.last_t {
-                    let dt = sample.t_s - prev;
-                    match self.nominal_dt {
-                        None => self.nominal_dt = Some(dt),
-                        Some(nom) if dt > GAP_FACTOR * nom => {
-                            self.pending = Some(ev);
-                            out = RecordEvent::Gap { row, dt_s: dt, nominal_dt_s: nom };
-                        }
-                        Some(_) => {}
-                    }
+                let suspect = match (self.last_t, self.nominal_dt) {
+                    (None, _) => false,
+                    (Some(_), None) => true,
+                    (Some(prev), Some(nom)) => sample.t_s - prev > GAP_FACTOR * nom,
+                };
+                if suspect {
+                    self.held = Some(Held { row, sample, after: Vec::new() });
+                } else {
+                    self.accept(row, sample);
                 }
-                self.last_t = Some(sample.t_s);
-                Some(Ok(out))
             }
         }
+    }
+
+    /// Queues the rejection of `row`, behind a held sample if there is one (events stay in row
+    /// order); past [`HELD_ROWS_MAX`] such rows the held sample is accepted unjudged.
+    fn reject(&mut self, row: u64, problem: RowProblem) {
+        match &mut self.held {
+            Some(h) if h.after.len() < HELD_ROWS_MAX => h.after.push((row, problem)),
+            Some(_) => {
+                self.release_held(None);
+                self.pending.push_back(Ok(RecordEvent::Rejected { row, problem }));
+            }
+            None => self.pending.push_back(Ok(RecordEvent::Rejected { row, problem })),
+        }
+    }
+
+    /// Settles the held sample, if any: `Some(next_t_s)`, the time of a good sample before it,
+    /// rejects it as an outlier; `None` (a row at or after it, the end of the record, too many
+    /// rejected rows after it) accepts it. The rejections held behind it follow.
+    fn release_held(&mut self, next_t_s: Option<f64>) {
+        let Some(h) = self.held.take() else { return };
+        match next_t_s {
+            Some(next) => {
+                let problem = RowProblem::TimeOutlier {
+                    column: self.time.names[0].clone(),
+                    t_s: h.sample.t_s,
+                    prev_t_s: self.last_t.unwrap_or(f64::NAN),
+                    next_t_s: next,
+                };
+                self.pending.push_back(Ok(RecordEvent::Rejected { row: h.row, problem }));
+            }
+            None => self.accept(h.row, h.sample),
+        }
+        for (row, problem) in h.after {
+            self.pending.push_back(Ok(RecordEvent::Rejected { row, problem }));
+        }
+    }
+
+    /// Queues an accepted sample, after a [`RecordEvent::Gap`] if its interval is one; the
+    /// first interval fixes the nominal one when the mapping gives none.
+    fn accept(&mut self, row: u64, sample: AirDataSample) {
+        if let Some(prev) = self.last_t {
+            let dt = sample.t_s - prev;
+            match self.nominal_dt {
+                None => self.nominal_dt = Some(dt),
+                Some(nom) if dt > GAP_FACTOR * nom => {
+                    self.pending.push_back(Ok(RecordEvent::Gap {
+                        row,
+                        dt_s: dt,
+                        nominal_dt_s: nom,
+                    }));
+                }
+                Some(_) => {}
+            }
+        }
+        self.last_t = Some(sample.t_s);
+        self.pending.push_back(Ok(RecordEvent::Sample { row, sample }));
     }
 }

@@ -547,6 +547,7 @@ impl Mapping {
                 reason: "[time]: `scale = 0`: scale must be non-zero (every row would have the same time)".into(),
             });
         }
+        check_time_spec(file, &raw.time)?;
         let time = resolve(file, "time", &raw.time, Dimension::Time)?;
         if matches!(time.source, Source::Constant(_)) {
             return Err(FlightDataError::BadSpec {
@@ -751,6 +752,9 @@ fn resolve_log_tables(
             bad("attitude.quaternion", format!("give 4 columns (w, x, y, z), got {}", q.len()))
         })?),
     };
+    if let Some(q) = &quaternion {
+        distinct_components(q).map_err(|r| bad("attitude.quaternion", r))?;
+    }
     let air_data = match &raw.air_data {
         None => None,
         Some(a) => {
@@ -763,12 +767,16 @@ fn resolve_log_tables(
             let ned_velocity = <[String; 3]>::try_from(a.ned_velocity.clone()).map_err(|v| {
                 bad("air_data.ned_velocity", format!("give 3 columns (N, E, D), got {}", v.len()))
             })?;
+            distinct_components(&ned_velocity).map_err(|r| bad("air_data.ned_velocity", r))?;
             let wind_ne = match &a.wind_ne {
                 None => None,
                 Some(w) => Some(<[String; 2]>::try_from(w.clone()).map_err(|w| {
                     bad("air_data.wind_ne", format!("give 2 columns (N, E), got {}", w.len()))
                 })?),
             };
+            if let Some(w) = &wind_ne {
+                distinct_components(w).map_err(|r| bad("air_data.wind_ne", r))?;
+            }
             let min_vt_mps = a.min_vt_mps.unwrap_or(1.0);
             if !(min_vt_mps.is_finite() && min_vt_mps > 0.0) {
                 return Err(bad(
@@ -795,6 +803,25 @@ fn resolve_log_tables(
     Ok((align, quaternion, air_data))
 }
 
+/// The components of a vector (quaternion, velocity, wind) must be different, non-empty
+/// columns: one column as two components makes an absurd vector (a quaternion of one component
+/// four times is the fixed attitude φ = 90°, θ = 0, ψ = 90°, whatever the aircraft does).
+fn distinct_components(columns: &[String]) -> Result<(), String> {
+    for (i, c) in columns.iter().enumerate() {
+        if c.is_empty() {
+            return Err(format!("component {} is an empty column name", i + 1));
+        }
+        if let Some(j) = columns[..i].iter().position(|d| d == c) {
+            return Err(format!(
+                "`{c}` is given twice (components {} and {}): each component needs its own column",
+                j + 1,
+                i + 1
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// `[columns] names` must be non-empty, unique, and free of line breaks and surrounding
 /// spaces (a header field is trimmed, so such a name could never match).
 fn check_column_names(file: &str, names: &[String]) -> Result<(), FlightDataError> {
@@ -816,6 +843,98 @@ fn check_column_names(file: &str, names: &[String]) -> Result<(), FlightDataErro
         if let Some(j) = names[..i].iter().position(|m| m == n) {
             return Err(bad(format!("`{n}` is given twice (columns {} and {})", j + 1, i + 1)));
         }
+    }
+    Ok(())
+}
+
+/// The time channel must grow with its column: a negative scale would reverse every interval
+/// (each row then "goes backwards"), and a calibration table has no meaning for a clock.
+fn check_time_spec(file: &str, spec: &ChannelSpec) -> Result<(), FlightDataError> {
+    let bad = |reason: String| FlightDataError::BadSpec {
+        file: file.to_string(),
+        channel: "time".into(),
+        reason,
+    };
+    if spec.scale < 0.0 {
+        return Err(bad(format!(
+            "`scale = {}`: a negative scale reverses time (every row would go backwards)",
+            spec.scale
+        )));
+    }
+    if spec.calibration.is_some() {
+        return Err(bad("`calibration` does not apply to the time channel".into()));
+    }
+    Ok(())
+}
+
+/// The columns of one channel: named, and each once. A column given twice is summed twice
+/// (the channel would be double its value), a zero weight drops its column (all zero: a
+/// constant channel).
+fn check_columns(cols: &[(String, f64)]) -> Result<(), String> {
+    for (i, (c, w)) in cols.iter().enumerate() {
+        if c.is_empty() {
+            return Err("a column name is empty".into());
+        }
+        if let Some(j) = cols[..i].iter().position(|(d, _)| d == c) {
+            return Err(format!(
+                "column `{c}` is given twice (entries {} and {}): its values would be summed twice; give it once, with a weight if a multiple is meant",
+                j + 1,
+                i + 1
+            ));
+        }
+        if *w == 0.0 {
+            return Err(format!(
+                "weight {} (column `{c}`) is 0: the column would not count; remove it",
+                i + 1
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The gain from a raw column value to SI, `weight · scale · unit factor`, must be a normal
+/// number: one that underflows to 0 (or a subnormal) makes the channel constant, one that
+/// overflows makes every row non-finite.
+fn check_gain(spec: &ChannelSpec, unit: &Unit, source: &Source) -> Result<(), String> {
+    let Source::Columns(cols) = source else { return Ok(()) };
+    let weights: Vec<f64> =
+        if spec.expr.is_some() { vec![1.0] } else { cols.iter().map(|(_, w)| *w).collect() };
+    for w in weights {
+        let gain = w * spec.scale * unit.to_si;
+        if !gain.is_normal() {
+            let weight = if w == 1.0 { String::new() } else { format!("weight {w:e} × ") };
+            return Err(format!(
+                "{weight}scale {:e} × unit `{}` ({:e} SI) gives the gain {gain:e}: the channel would be {}",
+                spec.scale,
+                spec.unit,
+                unit.to_si,
+                if gain.is_finite() {
+                    "constant (underflow to 0)"
+                } else {
+                    "non-finite (overflow)"
+                }
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A calibration's values must not all be equal (a constant channel) and must run one way
+/// (non-decreasing or non-increasing; flat stretches are dead bands): a table that rises and
+/// falls maps two raw values to one deflection.
+fn check_calibration_values(table: &[(f64, f64)]) -> Result<(), String> {
+    let first = table[0].1;
+    if table.iter().all(|(_, v)| *v == first) {
+        return Err(format!("calibration values are all {first}: the channel would be constant"));
+    }
+    let rises = table.windows(2).any(|w| w[1].1 > w[0].1);
+    let falls = table.windows(2).any(|w| w[1].1 < w[0].1);
+    if rises && falls {
+        let values: Vec<String> = table.iter().map(|(_, v)| v.to_string()).collect();
+        return Err(format!(
+            "calibration values rise and fall ({}): two raw values would give the same value; the values must run one way",
+            values.join(", ")
+        ));
     }
     Ok(())
 }
@@ -898,6 +1017,12 @@ fn resolve(
             ));
         }
     };
+    if let Source::Columns(cols) = &source
+        && expression.is_none()
+    {
+        check_columns(cols).map_err(bad)?;
+    }
+    check_gain(spec, &unit, &source).map_err(bad)?;
     let calibration = match &spec.calibration {
         None => None,
         Some(_) if matches!(source, Source::Constant(_)) => {
@@ -917,6 +1042,7 @@ fn resolve(
                     w[0].0, w[1].0
                 )));
             }
+            check_calibration_values(&t).map_err(bad)?;
             Some(t)
         }
     };

@@ -37,16 +37,23 @@
 //! datagram once messages have arrived, or on the sentinel message `NAMED_VALUE_FLOAT` named
 //! [`END_OF_STREAM_NAME`]; if nothing arrives within the timeout at all, reading fails with
 //! [`MavlinkError::NothingReceived`]. Datagrams with no valid MAVLink frame are counted and
-//! the first few are reported on stderr with their first bytes ([`LinkStats::unparseable`]);
-//! gaps in the per-sender sequence numbers are counted as lost messages
-//! ([`LinkStats::lost`]). Messages from every system and component are merged.
+//! the first few are reported on stderr with their first bytes ([`LinkStats::unparseable`]).
+//! Sequence numbers are per sender (system, component), mod 256: a gap counts its missing
+//! messages as lost ([`LinkStats::lost`]); a repeat of the last number is a duplicate
+//! ([`LinkStats::duplicates`]) and a number behind it a late message
+//! ([`LinkStats::out_of_order`]), neither used again (the held values stay the newest; three
+//! in a row behind mean the sender restarted its count, and are used). The receive queue is
+//! bounded and drops the oldest datagrams when full ([`LinkStats::dropped`]; see
+//! `mavlink/udp.rs`). A feed that ends without producing a row fails with
+//! [`MavlinkError::NoRows`], naming the columns (and channels) never received and giving the
+//! link statistics. Messages from every system and component are merged.
 
 pub mod feed;
 mod rows;
 mod udp;
 
 pub use rows::RowBuilder;
-pub use udp::{LinkStats, MavlinkRows};
+pub use udp::{LinkStats, MavlinkRows, QUEUE_BYTES, QUEUE_DATAGRAMS};
 
 /// Name of the `NAMED_VALUE_FLOAT` that ends a feed cleanly (≤ 10 characters, the field size).
 pub const END_OF_STREAM_NAME: &str = "aid_end";
@@ -138,14 +145,34 @@ pub enum MavlinkError {
         /// The I/O error.
         source: std::io::Error,
     },
-    /// Nothing arrived within the timeout.
-    #[error("{url}: no MAVLink datagram received within {timeout_s} s")]
+    /// Nothing arrived within the timeout. (The message leaves out the source: the reader's
+    /// error names it.)
+    #[error("no MAVLink datagram received within {timeout_s} s")]
     NothingReceived {
         /// The source.
         url: String,
         /// The timeout, s.
         timeout_s: f64,
     },
+    /// The feed ended without producing a row: which mapped columns (and so channels) never
+    /// arrived, and the link statistics. (The message leaves out the source: the reader's error
+    /// names it.)
+    #[error(
+        "the feed ended without a row (one is made on each clock message `{clock}` once every mapped column has arrived); never received: {}; {link}",
+        never_received_list(.never_received)
+    )]
+    NoRows {
+        /// The clock topic.
+        clock: String,
+        /// The columns never received, with their channels.
+        never_received: Vec<String>,
+        /// The link statistics ([`LinkStats::line`]).
+        link: String,
+    },
+}
+
+fn never_received_list(columns: &[String]) -> String {
+    if columns.is_empty() { "nothing".into() } else { columns.join(", ") }
 }
 
 #[cfg(test)]

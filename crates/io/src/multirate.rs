@@ -24,7 +24,7 @@
 //!   errors.
 
 use crate::FlightDataError;
-use crate::align::{Aligned, Clock, TIME_COLUMN, align, select};
+use crate::align::{Aligned, Clock, TIME_COLUMN, align_with_room, select};
 use crate::mapping::{
     AIR_ALPHA, AIR_BETA, AIR_VT, EULER_PHI, EULER_PSI, EULER_THETA, Mapping, Source,
 };
@@ -179,7 +179,11 @@ pub fn log_table(
             continuous_quaternion(t, &fields);
         }
     }
-    let mut out = align(&chosen, &spec.clock, spec.method, file)?;
+    // The derived columns and their row-by-row temporaries (quaternions: 4, Euler angles:
+    // 3 + 3, air data: 3 + 3) count against the table's memory cap too.
+    let room = if mapping.quaternion.is_some() { 10 } else { 0 }
+        + if mapping.air_data.is_some() { 6 } else { 0 };
+    let mut out = align_with_room(&chosen, &spec.clock, spec.method, file, room)?;
     let col = |out: &Aligned, name: &str| {
         let key = match crate::align::split_column(name) {
             Some((t, f)) => format!("{t}.{f}"),

@@ -300,10 +300,12 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         .unwrap_or(LogFormat::Csv);
     let outcome = if mavlink {
         let (reader, stats) = crate::live::open_mavlink(&args.data, &mapping)?;
-        replay(reader, &mapping, &opts, &mut console).map(|mut outcome| {
-            crate::live::finish(&mut outcome.summary, &stats);
-            outcome
-        })
+        replay(reader, &mapping, &opts, &mut console)
+            .map(|mut outcome| {
+                crate::live::finish(&mut outcome.summary, &stats);
+                outcome
+            })
+            .inspect_err(|_| crate::live::report_failure(&stats))
     } else if !live && format == LogFormat::Csv {
         // The CSV file itself, read through the progress bar (what `open_log` opens for CSV).
         let file =

@@ -23,12 +23,15 @@ struct Column {
 #[derive(Debug)]
 pub struct RowBuilder {
     names: Vec<String>,
+    /// The channel (key) that reads each column first (`time` for the clock).
+    channels: Vec<String>,
     columns: Vec<Column>,
     /// Latest value per column: `None` until received; NaN = received as unknown.
     values: Vec<Option<f64>>,
     /// Column indices per topic.
     by_topic: HashMap<String, Vec<usize>>,
     clock_topic: String,
+    clock_messages: u64,
     clock_without_row: u64,
     rows: u64,
 }
@@ -111,6 +114,7 @@ impl RowBuilder {
     /// [`MavlinkError::Column`] naming the mapping file, channel and column.
     pub fn new(mapping: &Mapping) -> Result<Self, MavlinkError> {
         let mut names: Vec<String> = Vec::new();
+        let mut channels: Vec<String> = Vec::new();
         let mut columns = Vec::new();
         let mut by_topic: HashMap<String, Vec<usize>> = HashMap::new();
         let mut clock_topic = String::new();
@@ -166,11 +170,22 @@ impl RowBuilder {
                 }
                 by_topic.entry(topic).or_default().push(columns.len());
                 names.push(name.clone());
+                channels.push(channel.to_string());
                 columns.push(Column { field: field.to_string(), index });
             }
         }
         let values = vec![None; columns.len()];
-        Ok(Self { names, columns, values, by_topic, clock_topic, clock_without_row: 0, rows: 0 })
+        Ok(Self {
+            names,
+            channels,
+            columns,
+            values,
+            by_topic,
+            clock_topic,
+            clock_messages: 0,
+            clock_without_row: 0,
+            rows: 0,
+        })
     }
 
     /// The CSV header line (with its newline): the mapped columns, time first.
@@ -181,6 +196,11 @@ impl RowBuilder {
     /// The clock topic (the time column's message).
     pub fn clock_topic(&self) -> &str {
         &self.clock_topic
+    }
+
+    /// Clock messages received.
+    pub fn clock_messages(&self) -> u64 {
+        self.clock_messages
     }
 
     /// Clock messages that produced no row because a column had not been received yet.
@@ -201,6 +221,24 @@ impl RowBuilder {
             .filter(|(_, v)| v.is_none())
             .map(|(n, _)| n.as_str())
             .collect()
+    }
+
+    /// The columns not received yet, each with the channel that reads it:
+    /// ``AOA_SSA.AOA (channel `alpha`)``.
+    pub fn missing_with_channels(&self) -> Vec<String> {
+        self.names
+            .iter()
+            .zip(&self.channels)
+            .zip(&self.values)
+            .filter(|(_, v)| v.is_none())
+            .map(|((n, c), _)| format!("{n} (channel `{c}`)"))
+            .collect()
+    }
+
+    /// Forgets every held value (after messages were lost in bulk): the next row waits until
+    /// every column has been received again.
+    pub fn forget(&mut self) {
+        self.values.iter_mut().for_each(|v| *v = None);
     }
 
     /// Takes in one message: updates the held values of its columns and, if it is the clock
@@ -225,6 +263,7 @@ impl RowBuilder {
         if topic != self.clock_topic {
             return false;
         }
+        self.clock_messages += 1;
         if self.values.iter().any(Option::is_none) {
             self.clock_without_row += 1;
             return false;
@@ -306,6 +345,7 @@ mod tests {
         assert!(!b.push(&attitude(10, 0.25), &mut out));
         assert_eq!(b.clock_without_row(), 1);
         assert_eq!(b.missing(), vec!["AOA_SSA.AOA"]);
+        assert_eq!(b.missing_with_channels(), vec!["AOA_SSA.AOA (channel `alpha`)"]);
         b.push(&aoa(2.0), &mut out);
         // Another name of the same message is another topic: ignored here.
         b.push(&nvf("other", 7.0), &mut out);
@@ -319,6 +359,12 @@ mod tests {
         assert!(b.push(&attitude(30, 0.1), &mut out));
         assert_eq!(String::from_utf8(out).unwrap(), format!("30,100.5,,{q}\n"), "NaN is blank");
         assert_eq!(b.rows(), 2);
+        // After `forget` the clock waits for every column again.
+        b.forget();
+        let mut out = Vec::new();
+        assert!(!b.push(&attitude(40, 0.1), &mut out));
+        assert_eq!(b.missing(), vec!["NAMED_VALUE_FLOAT[vt].value", "AOA_SSA.AOA"]);
+        assert_eq!((b.clock_messages(), b.clock_without_row()), (4, 2));
     }
 
     #[test]

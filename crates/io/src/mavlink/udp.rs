@@ -1,5 +1,19 @@
 //! The UDP side of a live feed: a receiving thread (so a slow consumer never makes the kernel
-//! drop datagrams), frame parsing, sequence-gap counting, and the CSV text handed to the reader.
+//! drop datagrams) feeding a bounded queue, frame parsing, sequence-number accounting, and the
+//! CSV text handed to the reader.
+//!
+//! # The receive queue
+//!
+//! The queue holds at most [`QUEUE_DATAGRAMS`] datagrams and [`QUEUE_BYTES`] bytes: about 8 s
+//! of a 100 Hz feed of 20 messages per sample (≈ 2 MB of MAVLink 2 datagrams), so a consumer's
+//! start-up (building the estimator) and its jitter are absorbed, while a flood (or an
+//! estimator slower than the feed) costs bounded memory and a bounded delay instead of growing
+//! without limit. When it is full the **oldest** datagram is dropped:
+//! a live estimate should follow the aircraft as it is now, and the newest messages supersede
+//! the old ones under the zero-order hold, so it is the stale data that goes. Drops are counted
+//! ([`LinkStats::dropped`]); after a drop the row builder forgets its held values, so no row
+//! mixes values from both sides of the hole (rows resume once every column has arrived again,
+//! and the reader reports the hole in time as a gap).
 
 use super::{END_OF_STREAM_NAME, MavlinkError, MavlinkUrl, RowBuilder};
 use crate::mapping::Mapping;
@@ -7,21 +21,32 @@ use mavlink::MavlinkReader;
 use mavlink::dialects::ardupilotmega::MavMessage;
 use mavlink::error::MessageReadError;
 use std::collections::HashMap;
+use std::collections::VecDeque;
 use std::io::Read;
 use std::net::UdpSocket;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{Receiver, RecvTimeoutError, channel};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 /// Unparseable datagrams reported one by one before only counting.
 const REPORTED: u64 = 5;
 
+/// Datagrams the receive queue holds at most (module doc).
+pub const QUEUE_DATAGRAMS: usize = 16_384;
+
+/// Bytes of datagrams the receive queue holds at most (module doc): 4 MiB, which bounds the
+/// queue when a sender floods it with large datagrams.
+pub const QUEUE_BYTES: usize = 4 << 20;
+
+/// Consecutive messages behind a sender's sequence number after which the sender is taken to
+/// have restarted its count (and its messages are used again).
+const RESYNC_AFTER: u8 = 3;
+
 /// What a feed received, shared with the caller while the reader owns the feed.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct LinkStats {
-    /// Datagrams received.
+    /// Datagrams received (taken from the queue).
     pub datagrams: u64,
     /// MAVLink messages decoded.
     pub messages: u64,
@@ -29,13 +54,26 @@ pub struct LinkStats {
     pub unparseable: u64,
     /// Frames with a valid CRC that did not decode (unknown message id, invalid enum value).
     pub undecodable: u64,
-    /// Messages missing from the per-sender (system, component) sequence numbers.
+    /// Messages missing from the per-sender (system, component) sequence numbers (mod 256):
+    /// lost on the link or in the kernel, not counting the datagrams the queue dropped
+    /// ([`LinkStats::dropped`]).
     pub lost: u64,
+    /// Messages repeating their sender's last sequence number: the same message delivered
+    /// twice, not used again.
+    pub duplicates: u64,
+    /// Messages behind their sender's sequence number (late or reordered): older than what
+    /// was already used, so not used.
+    pub out_of_order: u64,
+    /// Datagrams dropped because the receive queue was full (the oldest go first).
+    pub dropped: u64,
     /// Rows produced.
     pub rows: u64,
+    /// Clock messages received.
+    pub clock_messages: u64,
     /// Clock messages that produced no row because a mapped column had not been received.
     pub clock_without_row: u64,
-    /// Mapped columns never received (at the end).
+    /// Mapped columns never received (at the end), each with the channel that reads it, e.g.
+    /// ``AOA_SSA.AOA (channel `alpha`)``.
     pub never_received: Vec<String>,
     /// Why the feed ended (`""` while running).
     pub end: String,
@@ -43,10 +81,141 @@ pub struct LinkStats {
     pub problems: Vec<String>,
 }
 
-enum Received {
-    Datagram(Vec<u8>),
+impl LinkStats {
+    /// The statistics in one line, for stderr and the summary's warnings.
+    pub fn line(&self) -> String {
+        format!(
+            "mavlink: {} datagrams, {} messages, {} rows; {} unparseable datagrams, {} undecodable frames, {} messages lost (sequence gaps), {} duplicates and {} out-of-order messages not used, {} datagrams dropped (receive queue full at {QUEUE_DATAGRAMS} datagrams or {QUEUE_BYTES} bytes), {} of {} clock messages before every column had arrived; ended: {}",
+            self.datagrams,
+            self.messages,
+            self.rows,
+            self.unparseable,
+            self.undecodable,
+            self.lost,
+            self.duplicates,
+            self.out_of_order,
+            self.dropped,
+            self.clock_without_row,
+            self.clock_messages,
+            self.end
+        )
+    }
+}
+
+/// How the receiving thread ended.
+enum End {
     Idle,
     Failed(std::io::Error),
+}
+
+/// What the consumer takes from the queue.
+enum Received {
+    /// A datagram, and the datagrams dropped (in total) before it.
+    Datagram(Vec<u8>, u64),
+    End(End),
+    /// Nothing within the wait.
+    Nothing,
+}
+
+#[derive(Default)]
+struct QueueState {
+    datagrams: VecDeque<Vec<u8>>,
+    bytes: usize,
+    dropped: u64,
+    end: Option<End>,
+}
+
+/// The bounded queue between the receiving thread and the reader (module doc).
+#[derive(Default)]
+struct Queue {
+    state: Mutex<QueueState>,
+    ready: Condvar,
+}
+
+impl Queue {
+    fn lock(&self) -> std::sync::MutexGuard<'_, QueueState> {
+        self.state.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
+    /// Appends a datagram, dropping the oldest while over capacity.
+    fn push(&self, datagram: Vec<u8>) {
+        let mut s = self.lock();
+        s.bytes += datagram.len();
+        s.datagrams.push_back(datagram);
+        while s.datagrams.len() > QUEUE_DATAGRAMS || s.bytes > QUEUE_BYTES {
+            let Some(old) = s.datagrams.pop_front() else { break };
+            s.bytes -= old.len();
+            s.dropped += 1;
+        }
+        drop(s);
+        self.ready.notify_one();
+    }
+
+    /// Marks the end (after the datagrams still queued).
+    fn end(&self, end: End) {
+        self.lock().end = Some(end);
+        self.ready.notify_one();
+    }
+
+    /// The next datagram, else the end, waiting up to `wait` for either.
+    fn pop(&self, wait: Duration) -> Received {
+        let mut s = self.lock();
+        if s.datagrams.is_empty() && s.end.is_none() {
+            s = self
+                .ready
+                .wait_timeout(s, wait)
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+                .0;
+        }
+        if let Some(d) = s.datagrams.pop_front() {
+            s.bytes -= d.len();
+            return Received::Datagram(d, s.dropped);
+        }
+        s.end.take().map_or(Received::Nothing, Received::End)
+    }
+}
+
+/// A sender's sequence numbers: the last used and how many messages in a row were behind it.
+#[derive(Debug, Clone, Copy)]
+struct Sequence {
+    last: u8,
+    behind: u8,
+}
+
+/// What a message's sequence number says.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum SeqVerdict {
+    /// Next in line, or after `n` missing ones.
+    Use {
+        missing: u8,
+    },
+    Duplicate,
+    OutOfOrder,
+}
+
+impl Sequence {
+    /// Judges sequence number `seq` (mod 256) against the last one used: equal is a duplicate;
+    /// up to 128 ahead is new (the numbers between are missing); further ahead is behind
+    /// (late), unless [`RESYNC_AFTER`] arrive behind in a row, which means the sender restarted
+    /// its count.
+    fn judge(&mut self, seq: u8) -> SeqVerdict {
+        let delta = seq.wrapping_sub(self.last);
+        if delta == 0 {
+            return SeqVerdict::Duplicate;
+        }
+        if delta > 128 {
+            self.behind += 1;
+            if self.behind < RESYNC_AFTER {
+                return SeqVerdict::OutOfOrder;
+            }
+            self.last = seq;
+            self.behind = 0;
+            return SeqVerdict::Use { missing: 0 };
+        }
+        self.last = seq;
+        self.behind = 0;
+        SeqVerdict::Use { missing: delta - 1 }
+    }
 }
 
 /// A live MAVLink feed as a [`Read`] of CSV text: the header (the mapped columns) and one row
@@ -55,16 +224,45 @@ enum Received {
 pub struct MavlinkRows {
     url: MavlinkUrl,
     local: std::net::SocketAddr,
-    rx: Receiver<Received>,
+    queue: Arc<Queue>,
     stop: Arc<AtomicBool>,
     thread: Option<JoinHandle<()>>,
     builder: RowBuilder,
     buf: Vec<u8>,
     pos: usize,
     stats: Arc<Mutex<LinkStats>>,
-    seq: HashMap<(u32, u8), u8>,
+    seq: HashMap<(u32, u8), Sequence>,
+    dropped_seen: u64,
     done: bool,
     on_problem: Option<fn(&str)>,
+}
+
+/// The receiving thread: datagrams into `queue` until `stop`, an idle `timeout` or a socket
+/// error.
+fn receive(socket: UdpSocket, queue: &Queue, stop: &AtomicBool, timeout: Duration) {
+    let mut last = Instant::now();
+    let mut buf = vec![0u8; 65_536];
+    while !stop.load(Ordering::Relaxed) {
+        match socket.recv(&mut buf) {
+            Ok(n) => {
+                last = Instant::now();
+                queue.push(buf[..n].to_vec());
+            }
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                ) =>
+            {
+                if last.elapsed() >= timeout {
+                    return queue.end(End::Idle);
+                }
+            }
+            // An ICMP "port unreachable" from an earlier send is not ours to end on.
+            Err(e) if e.kind() == std::io::ErrorKind::ConnectionRefused => {}
+            Err(e) => return queue.end(End::Failed(e)),
+        }
+    }
 }
 
 impl MavlinkRows {
@@ -84,45 +282,18 @@ impl MavlinkRows {
         let socket = UdpSocket::bind(url.addr).map_err(io)?;
         let local = socket.local_addr().map_err(io)?;
         socket.set_read_timeout(Some(Duration::from_millis(50))).map_err(io)?;
-        let (tx, rx) = channel();
+        let queue = Arc::new(Queue::default());
         let stop = Arc::new(AtomicBool::new(false));
-        let stop_thread = Arc::clone(&stop);
-        let timeout = Duration::from_secs_f64(url.timeout_s);
-        let thread = std::thread::spawn(move || {
-            let mut last = Instant::now();
-            let mut buf = vec![0u8; 65_536];
-            while !stop_thread.load(Ordering::Relaxed) {
-                let item = match socket.recv(&mut buf) {
-                    Ok(n) => {
-                        last = Instant::now();
-                        Received::Datagram(buf[..n].to_vec())
-                    }
-                    Err(e)
-                        if matches!(
-                            e.kind(),
-                            std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
-                        ) =>
-                    {
-                        if last.elapsed() < timeout {
-                            continue;
-                        }
-                        Received::Idle
-                    }
-                    // An ICMP "port unreachable" from an earlier send is not ours to end on.
-                    Err(e) if e.kind() == std::io::ErrorKind::ConnectionRefused => continue,
-                    Err(e) => Received::Failed(e),
-                };
-                let end = !matches!(item, Received::Datagram(_));
-                if tx.send(item).is_err() || end {
-                    break;
-                }
-            }
-        });
+        let thread = {
+            let (queue, stop) = (Arc::clone(&queue), Arc::clone(&stop));
+            let timeout = Duration::from_secs_f64(url.timeout_s);
+            std::thread::spawn(move || receive(socket, &queue, &stop, timeout))
+        };
         let buf = builder.header().into_bytes();
         Ok(Self {
             url: url.clone(),
             local,
-            rx,
+            queue,
             stop,
             thread: Some(thread),
             builder,
@@ -130,6 +301,7 @@ impl MavlinkRows {
             pos: 0,
             stats: Arc::new(Mutex::new(LinkStats::default())),
             seq: HashMap::new(),
+            dropped_seen: 0,
             done: false,
             on_problem,
         })
@@ -159,6 +331,29 @@ impl MavlinkRows {
         }
     }
 
+    /// Whether a message is used, by its sender's sequence number (counted in `stats`).
+    fn in_sequence(&mut self, stats: &mut LinkStats, header: &mavlink::MavHeader) -> bool {
+        let key = (header.system_id, header.component_id);
+        let Some(seq) = self.seq.get_mut(&key) else {
+            self.seq.insert(key, Sequence { last: header.sequence, behind: 0 });
+            return true;
+        };
+        match seq.judge(header.sequence) {
+            SeqVerdict::Use { missing } => {
+                stats.lost += u64::from(missing);
+                true
+            }
+            SeqVerdict::Duplicate => {
+                stats.duplicates += 1;
+                false
+            }
+            SeqVerdict::OutOfOrder => {
+                stats.out_of_order += 1;
+                false
+            }
+        }
+    }
+
     /// Decodes one datagram, feeding its messages to the row builder.
     fn take(&mut self, bytes: &[u8]) {
         let stats = Arc::clone(&self.stats);
@@ -171,9 +366,8 @@ impl MavlinkRows {
             match reader.read_any_message::<MavMessage>() {
                 Ok((header, msg)) => {
                     decoded += 1;
-                    let key = (header.system_id, header.component_id);
-                    if let Some(prev) = self.seq.insert(key, header.sequence) {
-                        stats.lost += u64::from(header.sequence.wrapping_sub(prev).wrapping_sub(1));
+                    if !self.in_sequence(&mut stats, &header) {
+                        continue;
                     }
                     if let MavMessage::NAMED_VALUE_FLOAT(d) = &msg
                         && d.name.to_str() == Ok(END_OF_STREAM_NAME)
@@ -209,17 +403,38 @@ impl MavlinkRows {
             );
             self.problem(&mut stats, text);
         }
+        stats.clock_messages = self.builder.clock_messages();
         stats.clock_without_row = self.builder.clock_without_row();
     }
 
-    fn finish(&mut self, end: Option<String>) {
+    /// Datagrams the queue dropped before the next one: the held values are forgotten, so no
+    /// row mixes values from before and after the hole, and so are the senders' sequence
+    /// numbers (the hole is counted as dropped, not again as lost).
+    fn after_drops(&mut self, dropped: u64) {
+        if dropped > self.dropped_seen {
+            self.dropped_seen = dropped;
+            self.builder.forget();
+            self.seq.clear();
+            self.stats.lock().unwrap_or_else(std::sync::PoisonError::into_inner).dropped = dropped;
+        }
+    }
+
+    /// Ends the feed: stops the receiving thread and completes the statistics. Returns the
+    /// error that a feed which produced no row ends with (what never arrived, and the link
+    /// statistics), `None` when it produced rows.
+    fn finish(&mut self, end: Option<String>) -> Option<MavlinkError> {
         self.done = true;
         self.stop.store(true, Ordering::Relaxed);
         let mut stats = self.stats.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         if let Some(e) = end {
             stats.end = e;
         }
-        stats.never_received = self.builder.missing().iter().map(|s| (*s).to_string()).collect();
+        stats.never_received = self.builder.missing_with_channels();
+        (stats.rows == 0 && stats.datagrams > 0).then(|| MavlinkError::NoRows {
+            clock: self.builder.clock_topic().to_string(),
+            never_received: stats.never_received.clone(),
+            link: stats.line(),
+        })
     }
 }
 
@@ -228,16 +443,15 @@ impl Read for MavlinkRows {
         while self.pos == self.buf.len() && !self.done {
             self.buf.clear();
             self.pos = 0;
-            match self.rx.recv_timeout(Duration::from_secs(1)) {
-                Ok(Received::Datagram(d)) => {
+            let ended = match self.queue.pop(Duration::from_secs(1)) {
+                Received::Datagram(d, dropped) => {
+                    self.after_drops(dropped);
                     self.take(&d);
-                    if self.done {
-                        self.finish(None);
-                    }
+                    if self.done { self.finish(None) } else { None }
                 }
-                Ok(Received::Idle) => {
+                Received::End(End::Idle) => {
                     let received = self.stats.lock().map_or(0, |s| s.datagrams);
-                    self.finish(Some(format!(
+                    let no_rows = self.finish(Some(format!(
                         "no datagram for {} s (timeout)",
                         self.url.timeout_s
                     )));
@@ -247,15 +461,16 @@ impl Read for MavlinkRows {
                             timeout_s: self.url.timeout_s,
                         }));
                     }
+                    no_rows
                 }
-                Ok(Received::Failed(e)) => {
+                Received::End(End::Failed(e)) => {
                     self.finish(Some(format!("socket error: {e}")));
                     return Err(e);
                 }
-                Err(RecvTimeoutError::Timeout) => {}
-                Err(RecvTimeoutError::Disconnected) => {
-                    self.finish(Some("receiver stopped".into()));
-                }
+                Received::Nothing => None,
+            };
+            if let Some(e) = ended {
+                return Err(std::io::Error::other(e));
             }
         }
         let n = out.len().min(self.buf.len() - self.pos);
@@ -271,5 +486,62 @@ impl Drop for MavlinkRows {
         if let Some(t) = self.thread.take() {
             let _ = t.join();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Sequence numbers mod 256: next in line, a gap, a duplicate, a late message, the wrap
+    /// from 255 to 0, and a sender restarting its count.
+    #[test]
+    fn analytic_sequence_numbers_count_gaps_duplicates_and_late_messages() {
+        let mut s = Sequence { last: 10, behind: 0 };
+        assert_eq!(s.judge(11), SeqVerdict::Use { missing: 0 });
+        assert_eq!(s.judge(11), SeqVerdict::Duplicate);
+        assert_eq!(s.judge(14), SeqVerdict::Use { missing: 2 });
+        assert_eq!(s.judge(13), SeqVerdict::OutOfOrder);
+        assert_eq!(s.judge(15), SeqVerdict::Use { missing: 0 });
+        let mut s = Sequence { last: 254, behind: 0 };
+        assert_eq!(s.judge(255), SeqVerdict::Use { missing: 0 });
+        assert_eq!(s.judge(0), SeqVerdict::Use { missing: 0 });
+        assert_eq!(s.judge(0), SeqVerdict::Duplicate);
+        assert_eq!(s.judge(3), SeqVerdict::Use { missing: 2 });
+        // A restart (from 100 back to 0, 156 "ahead" mod 256, so behind): two messages are not
+        // used, the third resyncs.
+        let mut s = Sequence { last: 100, behind: 0 };
+        assert_eq!(s.judge(0), SeqVerdict::OutOfOrder);
+        assert_eq!(s.judge(1), SeqVerdict::OutOfOrder);
+        assert_eq!(s.judge(2), SeqVerdict::Use { missing: 0 });
+        assert_eq!(s.judge(3), SeqVerdict::Use { missing: 0 });
+    }
+
+    /// The queue keeps the newest [`QUEUE_DATAGRAMS`], counting the oldest it drops, and
+    /// hands out the end only after the datagrams.
+    #[test]
+    fn analytic_queue_drops_the_oldest_and_counts_them() {
+        let q = Queue::default();
+        let n = QUEUE_DATAGRAMS + 10;
+        for k in 0..n {
+            q.push((k as u32).to_le_bytes().to_vec());
+        }
+        q.end(End::Idle);
+        let Received::Datagram(first, dropped) = q.pop(Duration::ZERO) else { panic!() };
+        assert_eq!(dropped, 10);
+        assert_eq!(u32::from_le_bytes(first.try_into().unwrap()), 10);
+        let mut count = 1;
+        while let Received::Datagram(..) = q.pop(Duration::ZERO) {
+            count += 1;
+        }
+        assert_eq!(count, QUEUE_DATAGRAMS);
+        assert!(matches!(q.pop(Duration::ZERO), Received::Nothing));
+        // Bytes bound too: 100 datagrams of 60 kB are over 4 MiB.
+        let q = Queue::default();
+        for _ in 0..100 {
+            q.push(vec![0; 60_000]);
+        }
+        let Received::Datagram(_, dropped) = q.pop(Duration::ZERO) else { panic!() };
+        assert_eq!(dropped, 100 - QUEUE_BYTES as u64 / 60_000);
     }
 }

@@ -1,0 +1,329 @@
+//! Hostile records and mappings: one bad time stamp costs its own row only, a file without data
+//! says so, mapping fields that would make a channel constant, doubled, absurd or reversed are
+//! refused naming the file and the field, and an alignment whose table would not fit the memory
+//! cap is refused before it is built.
+
+use aeroident_io::align::{MAX_TABLE_BYTES, align};
+use aeroident_io::mapping::Clock;
+use aeroident_io::table::{Interpolation, Topic};
+use aeroident_io::{FlightDataError, FlightDataReader, Mapping, RecordEvent, RowProblem};
+use std::path::PathBuf;
+
+fn workspace() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// A file of `../shared/flightdata`, or `None` (skipped) when that directory is absent; under
+/// `CI=true` its absence fails the test.
+fn shared(rel: &str) -> Option<PathBuf> {
+    let p = workspace().join("../shared/flightdata").join(rel);
+    if p.exists() {
+        return Some(p);
+    }
+    assert!(
+        std::env::var("CI").map_or(true, |v| v != "true"),
+        "{} is absent under CI",
+        p.display()
+    );
+    eprintln!("SKIPPED: {} is absent (CI provides ../shared beside the repository)", p.display());
+    None
+}
+
+const MAP: &str = "[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\n\
+    vt = { column = \"V\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\n\
+    q = { column = \"q\", unit = \"rad/s\" }\n\
+    mass = { value = 1.0, unit = \"kg\" }\nS = { value = 1.0, unit = \"m2\" }\n\
+    rho = { value = 1.0, unit = \"kg/m3\" }\n";
+
+/// The events of `csv` read through `map`, every item unwrapped.
+fn events(map: &str, csv: &str) -> Vec<RecordEvent> {
+    let m = Mapping::from_toml_str(map, "m.toml").unwrap();
+    FlightDataReader::new(csv.as_bytes(), "r.csv", &m).unwrap().map(|e| e.unwrap()).collect()
+}
+
+/// A record at the given times (V, α, q constant).
+fn record(times: &[&str]) -> String {
+    let mut csv = "t,V,a,q\n".to_string();
+    for t in times {
+        csv.push_str(&format!("{t},100,0.1,0.01\n"));
+    }
+    csv
+}
+
+/// What each event is, in order: `S t` sample, `R row kind`, `G row`.
+fn outline(ev: &[RecordEvent]) -> Vec<String> {
+    ev.iter()
+        .map(|e| match e {
+            RecordEvent::Sample { sample, .. } => format!("S {}", sample.t_s),
+            RecordEvent::Rejected { row, problem } => format!("R {row} {}", problem.kind()),
+            RecordEvent::Gap { row, .. } => format!("G {row}"),
+        })
+        .collect()
+}
+
+/// A time of 10000 s in the middle of a 0.1 s record is ahead of both neighbours: that row
+/// alone is rejected, naming the time, both neighbours and the column; the record goes on.
+#[test]
+fn errors_isolated_time_jump_rejects_only_its_row() {
+    let map = format!("nominal_dt_s = 0.1\n{MAP}");
+    let ev = events(&map, &record(&["0", "0.1", "0.2", "10000", "0.3", "0.4"]));
+    assert_eq!(
+        outline(&ev),
+        ["S 0", "S 0.1", "S 0.2", "R 5 isolated time outlier", "S 0.3", "S 0.4"],
+        "{ev:?}"
+    );
+    let RecordEvent::Rejected { problem, .. } = &ev[3] else { unreachable!() };
+    assert_eq!(
+        problem,
+        &RowProblem::TimeOutlier { column: "t".into(), t_s: 10000.0, prev_t_s: 0.2, next_t_s: 0.3 }
+    );
+    let text = problem.to_string();
+    assert!(
+        text.contains("column `t`") && text.contains("10000") && text.contains("0.3"),
+        "{text}"
+    );
+}
+
+/// A genuine gap (the times after it stay later) is a gap, not an outlier: no row is lost, and
+/// the gap event precedes the sample after it. At the end of the record a jump has no next row
+/// to judge it and is kept (as a gap).
+#[test]
+fn analytic_genuine_gap_and_last_row_jump_are_kept() {
+    let map = format!("nominal_dt_s = 0.1\n{MAP}");
+    let ev = events(&map, &record(&["0", "0.1", "5.0", "5.1", "5.2", "9.0"]));
+    assert_eq!(outline(&ev), ["S 0", "S 0.1", "G 4", "S 5", "S 5.1", "S 5.2", "G 7", "S 9"]);
+    let RecordEvent::Gap { dt_s, nominal_dt_s, .. } = ev[2] else { unreachable!() };
+    assert!((dt_s - 4.9).abs() < 1e-12 && nominal_dt_s == 0.1, "{dt_s} {nominal_dt_s}");
+}
+
+/// Without `nominal_dt_s` the first interval fixes the nominal one: a bad time in the second
+/// row would fix it at hours and reject the rest, so it is judged by the third row too. A row
+/// whose time cannot be read does not settle the held time; the next readable one does.
+#[test]
+fn errors_bad_second_time_without_nominal_interval_costs_its_row() {
+    let ev = events(MAP, &record(&["0", "10000", "", "0.1", "0.2", "0.3", "0.6"]));
+    assert_eq!(
+        outline(&ev),
+        [
+            "S 0",
+            "R 3 isolated time outlier",
+            "R 4 blank value",
+            "S 0.1",
+            "S 0.2",
+            "S 0.3",
+            "G 8",
+            "S 0.6"
+        ],
+        "{ev:?}"
+    );
+}
+
+/// A jump whose next row repeats its time is the record's own time (a gap); the repeat and a
+/// later row going backwards are rejected as before.
+#[test]
+fn analytic_two_rows_after_a_jump_make_it_a_gap() {
+    let map = format!("nominal_dt_s = 0.1\n{MAP}");
+    let ev = events(&map, &record(&["0", "0.1", "3", "3", "0.2"]));
+    assert_eq!(
+        outline(&ev),
+        ["S 0", "S 0.1", "G 4", "S 3", "R 5 repeated time", "R 6 time goes backwards"],
+        "{ev:?}"
+    );
+}
+
+/// The HFB-320 record (601 rows at 0.1 s) with `time_s` = 10000 on data row 22 (line 23):
+/// exactly that row is rejected, as an isolated time outlier, and the other 600 rows are
+/// samples at their own times.
+#[test]
+fn errors_hfb320_with_one_bad_time_keeps_600_samples() {
+    let Some(path) = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let (first, rest) = lines[22].split_once(',').unwrap();
+    assert_eq!(first.parse::<f64>().unwrap(), 2.1, "line 23 is data row 22 at 2.1 s");
+    lines[22] = format!("10000,{rest}");
+    let csv = lines.join("\n") + "\n";
+    let m = Mapping::from_path(&workspace().join("mappings/hfb320.toml")).unwrap();
+    let ev: Vec<RecordEvent> = FlightDataReader::new(csv.as_bytes(), "hfb320-bad-time.csv", &m)
+        .unwrap()
+        .map(|e| e.unwrap())
+        .collect();
+    let rejected: Vec<(u64, &RowProblem)> = ev
+        .iter()
+        .filter_map(|e| match e {
+            RecordEvent::Rejected { row, problem } => Some((*row, problem)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(rejected.len(), 1, "{rejected:?}");
+    assert_eq!(rejected[0].0, 23);
+    assert!(matches!(rejected[0].1, RowProblem::TimeOutlier { t_s: 10000.0, .. }));
+    let times: Vec<f64> = ev
+        .iter()
+        .filter_map(|e| match e {
+            RecordEvent::Sample { sample, .. } => Some(sample.t_s),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(times.len(), 600);
+    // The one hole is the rejected row's: a 0.2 s gap before the next row (as any rejected row
+    // leaves), not a 9998 s one.
+    let gaps: Vec<(u64, f64)> = ev
+        .iter()
+        .filter_map(|e| match e {
+            RecordEvent::Gap { row, dt_s, .. } => Some((*row, *dt_s)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(gaps.len(), 1, "{gaps:?}");
+    assert!(gaps[0].0 == 24 && (gaps[0].1 - 0.2).abs() < 1e-9, "{gaps:?}");
+    // Every interval is the record's 0.1 s except the 0.2 s across the rejected row.
+    let long: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).filter(|d| *d > 0.15).collect();
+    assert_eq!(long.len(), 1, "{long:?}");
+    assert!((long[0] - 0.2).abs() < 1e-9);
+}
+
+/// A header without data rows, and an empty file, are "no data", naming the file, not "no
+/// usable samples (0 rows rejected)".
+#[test]
+fn errors_file_without_data_says_so() {
+    let m = Mapping::from_toml_str(MAP, "m.toml").unwrap();
+    let all: Vec<Result<RecordEvent, FlightDataError>> =
+        FlightDataReader::new("t,V,a,q\n".as_bytes(), "only-header.csv", &m).unwrap().collect();
+    assert_eq!(all.len(), 1);
+    let e = all[0].as_ref().unwrap_err().to_string();
+    assert_eq!(e, "only-header.csv: the file has no data (a header row and no data rows)");
+    let Err(e) = FlightDataReader::new("".as_bytes(), "empty.csv", &m) else { panic!() };
+    assert!(e.to_string().starts_with("empty.csv: the file has no data (it is empty"), "{e}");
+    // A file whose rows are all rejected is not "no data": its rejections are its events.
+    let ev: Vec<_> =
+        FlightDataReader::new("t,V,a,q\n0,,0.1,0\n".as_bytes(), "r.csv", &m).unwrap().collect();
+    assert_eq!(ev.len(), 1);
+    assert!(matches!(ev[0], Ok(RecordEvent::Rejected { row: 2, .. })), "{ev:?}");
+}
+
+/// The mapping error of `extra` added to the minimal mapping.
+fn mapping_error(extra: &str) -> String {
+    let text = format!("{MAP}{extra}");
+    match Mapping::from_toml_str(&text, "m.toml") {
+        Ok(_) => panic!("accepted: {extra}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+/// Mapping fields that would double a channel, make it constant, absurd or reversed are
+/// refused with the file and the field named.
+#[test]
+fn errors_mapping_fields_that_would_corrupt_a_channel() {
+    let cases: &[(&str, &str)] = &[
+        // The same column twice sums it twice (Cm_q would halve).
+        (
+            "p = { columns = [\"q_radps\", \"q_radps\"], unit = \"rad/s\" }\n",
+            "m.toml: channel `p`: column `q_radps` is given twice",
+        ),
+        // A zero weight drops its column; all-zero weights make the channel constant.
+        (
+            "da = { columns = [\"l\", \"r\"], weights = [0.5, 0.0], unit = \"deg\" }\n",
+            "m.toml: channel `da`: weight 2 (column `r`) is 0",
+        ),
+        (
+            "r = { column = \"\", unit = \"rad/s\" }\n",
+            "m.toml: channel `r`: a column name is empty",
+        ),
+        // A scale so small that scale × unit factor underflows to 0 (or overflows).
+        (
+            "p = { column = \"p\", unit = \"deg/s\", scale = 1e-320 }\n",
+            "m.toml: channel `p`: scale 1e-320 × unit `deg/s`",
+        ),
+        (
+            "p = { column = \"p\", unit = \"deg/s\", scale = nan }\n",
+            "m.toml: channel `p`: scale NaN",
+        ),
+        (
+            "thrust = { column = \"T\", unit = \"lbf\", scale = 1e308 }\n",
+            "m.toml: channel `thrust`: scale 1e308 × unit `lbf`",
+        ),
+        // A calibration whose values are all equal is a constant; one that folds back maps two
+        // raw values to one deflection.
+        (
+            "de = { column = \"pwm\", calibration = [[1000, 5.0], [2000, 5.0]], unit = \"deg\" }\n",
+            "m.toml: channel `de`: calibration values are all 5",
+        ),
+        (
+            "de = { column = \"pwm\", calibration = [[1000, -20.0], [1500, 0.0], [2000, -20.0]], unit = \"deg\" }\n",
+            "m.toml: channel `de`: calibration values rise and fall",
+        ),
+        // The quaternion's components must be four different columns; so must the velocity's.
+        (
+            "[align]\nrate_hz = 50.0\nmethod = \"linear\"\n[attitude]\nquaternion = [\"a.q[0]\", \"a.q[0]\", \"a.q[0]\", \"a.q[0]\"]\n",
+            "m.toml: channel `attitude.quaternion`: `a.q[0]` is given twice (components 1 and 2)",
+        ),
+        (
+            "[align]\nrate_hz = 50.0\nmethod = \"linear\"\n[attitude]\nquaternion = [\"a.q[0]\", \"a.q[1]\", \"a.q[2]\", \"a.q[3]\"]\n[air_data]\nned_velocity = [\"p.vx\", \"p.vx\", \"p.vz\"]\n",
+            "m.toml: channel `air_data.ned_velocity`: `p.vx` is given twice (components 1 and 2)",
+        ),
+        (
+            "[align]\nrate_hz = 50.0\nmethod = \"linear\"\n[attitude]\nquaternion = [\"a.q[0]\", \"a.q[1]\", \"a.q[2]\", \"a.q[3]\"]\n[air_data]\nned_velocity = [\"p.vx\", \"p.vy\", \"p.vz\"]\nwind_ne = [\"w.n\", \"w.n\"]\n",
+            "m.toml: channel `air_data.wind_ne`: `w.n` is given twice",
+        ),
+    ];
+    for (extra, want) in cases {
+        let e = mapping_error(extra);
+        assert!(e.starts_with(want), "{extra}\n→ {e}\nwant {want}");
+    }
+}
+
+/// The time channel must increase with the column: a negative scale reverses every interval
+/// and a calibration has no meaning for a clock.
+#[test]
+fn errors_time_channel_reversed_or_calibrated() {
+    let e = Mapping::from_toml_str(
+        &MAP.replace("unit = \"s\"\n", "unit = \"s\"\nscale = -1.0\n"),
+        "m.toml",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.starts_with("m.toml: channel `time`: `scale = -1`"), "{e}");
+    let e = Mapping::from_toml_str(
+        &MAP.replace("unit = \"s\"\n", "unit = \"s\"\ncalibration = [[0, 0], [1, 2]]\n"),
+        "m.toml",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.starts_with("m.toml: channel `time`: `calibration`"), "{e}");
+}
+
+/// What the same checks let through: a sign flip, a weighted difference, a reversed servo
+/// table with a dead band, a column reused by an expression.
+#[test]
+fn analytic_legitimate_mappings_still_parse() {
+    for extra in [
+        "p = { column = \"p\", unit = \"deg/s\", scale = -1.0 }\n",
+        "da = { columns = [\"l\", \"r\"], weights = [0.5, -0.5], unit = \"deg\" }\n",
+        "de = { column = \"pwm\", calibration = [[1000, 25.0], [1480, 0.0], [1520, 0.0], [2000, -25.0]], unit = \"deg\" }\n",
+        "thrust = { expr = \"T * T / 1000\", unit = \"N\" }\n",
+    ] {
+        let text = format!("{MAP}{extra}");
+        Mapping::from_toml_str(&text, "m.toml").unwrap_or_else(|e| panic!("{extra}: {e}"));
+    }
+}
+
+/// `rate_hz = 2e6` over 20 s is 40 M rows, under the row guard, but 40 M × 16 columns × 8 bytes
+/// = 5.1 GB: refused before anything is allocated, naming the field and the numbers.
+#[test]
+fn errors_alignment_over_the_memory_cap_is_refused_before_allocating() {
+    let t: Vec<f64> = (0..=200).map(|k| f64::from(k) * 0.1).collect();
+    let fields: Vec<(String, Vec<f64>)> =
+        (0..15).map(|k| (format!("f{k}"), vec![0.0; t.len()])).collect();
+    let topics = vec![Topic { name: "imu".into(), t_s: t, fields }];
+    let e = align(&topics, &Clock::RateHz(2e6), Interpolation::Linear, "big.ulg").unwrap_err();
+    let e = e.to_string();
+    let rows: u64 = 40_000_001;
+    let bytes = rows * 16 * 8;
+    assert!(e.starts_with("big.ulg: alignment: [align] rate_hz = 2000000 Hz"), "{e}");
+    assert!(e.contains(&format!("{rows} rows × 16 columns × 8 bytes = {bytes} bytes")), "{e}");
+    assert!(e.contains(&MAX_TABLE_BYTES.to_string()), "{e}");
+    // The same topics at 50 Hz fit.
+    let ok = align(&topics, &Clock::RateHz(50.0), Interpolation::Linear, "big.ulg").unwrap();
+    assert_eq!(ok.table.columns[0].len(), 1001);
+}

@@ -10,7 +10,9 @@ fn main() -> ExitCode {
         Err(e) if aeroident::cli::is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {}", aeroident::cli::error_chain(&e));
-            ExitCode::FAILURE
+            // A run ended by a signal exits as the shell expects of one (128 + signal).
+            e.downcast_ref::<aeroident::interrupt::Interrupted>()
+                .map_or(ExitCode::FAILURE, |i| ExitCode::from(i.exit_code()))
         }
     }
 }

@@ -270,7 +270,11 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     // `interrupted` (crate::interrupt).
     let interrupt = crate::interrupt::Interrupt::install().context("installing signal handlers")?;
     // Lock the directory and clear the previous run's files before reading anything.
-    let mut out_dir = args.out.as_deref().map(crate::outdir::OutputDir::open).transpose()?;
+    let mut out_dir = args
+        .out
+        .as_deref()
+        .map(|d| crate::outdir::OutputDir::open(d, "replay", &input_paths(&args)))
+        .transpose()?;
     let mut csv_file = match out_dir.as_mut() {
         Some(o) => Some(o.create("estimates.csv")?),
         None => None,
@@ -399,6 +403,8 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
                 &crate::report::replay::model_references(&outcome),
                 o,
             )?;
+            // Complete: a divergence or an interruption reported below keeps these files.
+            o.finish();
             if live {
                 // stdout carries the live stream of estimates: the table goes beside the log.
                 eprint!("{}", crate::table::render(&results));
@@ -455,6 +461,18 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// Every file the replay reads (the records, mapping, model file, compatibility file and
+/// validation record): the output directory never removes or overwrites them. A live source
+/// or a preset name names no file and is left out by [`crate::outdir::OutputDir::open`].
+fn input_paths(args: &ReplayArgs) -> Vec<&Path> {
+    let mut p: Vec<&Path> = std::iter::once(&args.data).chain(&args.and).map(Path::new).collect();
+    p.push(&args.map);
+    p.extend(args.model.as_deref().map(Path::new));
+    p.extend(args.compat.as_deref().filter(|c| *c != "auto").map(Path::new));
+    p.extend(args.validate_on.as_deref());
+    p
 }
 
 /// The console block of a validation report: one line per output.
@@ -597,7 +615,7 @@ fn execute_batch(
     let text = serde_json::to_string_pretty(&outcome.summary)?;
     match &args.out {
         Some(dir) => {
-            let mut out = crate::outdir::OutputDir::open(dir)?;
+            let mut out = crate::outdir::OutputDir::open(dir, "replay", &input_paths(args))?;
             out.write_bytes("summary.json", text.as_bytes())?;
             let name = Path::new(&args.data)
                 .file_name()
@@ -605,6 +623,7 @@ fn execute_batch(
             let title = format!("{name} — {} — {}", args.estimator.name(), outcome.model.name);
             let source = crate::report::Source { data: &args.data, mapping: &args.map };
             let results = crate::report::batch::write(&source, &outcome, &title, &mut out)?;
+            out.finish();
             crate::cli::print_stdout(&crate::table::render(&results))?;
             eprintln!(
                 "{}: {} samples in {} manoeuvre(s), {} rejected, {} iterations in {:.3} s; wrote {}",

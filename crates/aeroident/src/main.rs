@@ -1,10 +1,10 @@
 //! The `aeroident` command-line program. It only parses arguments; see [`aeroident::cli`].
 
-use clap::Parser;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
-    match aeroident::cli::Cli::parse().execute() {
+    let cli = aeroident::cli::Cli::try_parse_args(std::env::args_os()).unwrap_or_else(|e| e.exit());
+    match cli.execute() {
         Ok(()) => ExitCode::SUCCESS,
         // The reader of our output went away (`| head`): end quietly, as a filter should.
         Err(e) if aeroident::cli::is_broken_pipe(&e) => ExitCode::SUCCESS,

@@ -207,3 +207,44 @@ fn errors_bad_options_per_subcommand() {
     expect(&["nosuchcommand"], 2, &[]);
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// A negative number is an option's value, not a flag: `--xcg -0.5` reaches the range check
+/// as `--xcg=-0.5` does (clap said "unexpected argument '-0'"), and a negative in range is
+/// accepted.
+#[test]
+fn exit_negative_numbers_are_option_values() {
+    let trim = ["f16", "trim", "--alt-ft", "10000", "--vt-fps", "500"];
+    for xcg in [&["--xcg", "-0.5"][..], &["--xcg=-0.5"][..]] {
+        let args: Vec<&str> = trim.iter().chain(xcg).copied().collect();
+        let err = expect(&args, 1, &["xcg", "-0.5", "cg range"]);
+        assert!(!err.contains("unexpected argument"), "{err}");
+    }
+    let args: Vec<&str> =
+        trim.iter().chain(&["--gamma-deg", "-2", "--xcg", "0.3"]).copied().collect();
+    expect(&args, 0, &[]);
+}
+
+/// Every subcommand, at every depth, takes negative numbers as values (one definition for the
+/// whole command line, so a new subcommand cannot forget it).
+#[test]
+fn exit_every_subcommand_allows_negative_numbers() {
+    fn check(cmd: &clap::Command, path: &str) {
+        assert!(cmd.is_allow_negative_numbers_set(), "`{path}` reads -1 as a flag");
+        for sub in cmd.get_subcommands() {
+            check(sub, &format!("{path} {}", sub.get_name()));
+        }
+    }
+    let def = aeroident::cli::Cli::definition();
+    assert!(def.get_subcommands().count() >= 9);
+    check(&def, "aeroident");
+    let cli = aeroident::cli::Cli::try_parse_args([
+        "aeroident",
+        "f16",
+        "trim",
+        "--alt-ft",
+        "-100",
+        "--vt-fps",
+        "500",
+    ]);
+    assert!(cli.is_ok(), "{cli:?}");
+}

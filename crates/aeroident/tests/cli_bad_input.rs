@@ -248,3 +248,38 @@ fn exit_every_subcommand_allows_negative_numbers() {
     ]);
     assert!(cli.is_ok(), "{cli:?}");
 }
+
+/// `export jsbsim` with a property name JSBSim would not accept (XML markup in it) exits 1
+/// naming it, and writes nothing (it wrote malformed XML with exit 0).
+#[test]
+fn exit_export_refuses_property_names_that_are_not_jsbsims() {
+    let d = scratch("export-prop");
+    let summary = d.join("summary.json");
+    std::fs::write(
+        &summary,
+        r#"{"estimator":"rls","model":"m","parameters":[{"name":"Cm_de","estimate":-1.2,"std_error":0.1}]}"#,
+    )
+    .unwrap();
+    let out = d.join("aero.xml");
+    let (s, o) = (summary.to_str().unwrap(), out.to_str().unwrap());
+    let args = ["export", "jsbsim", "--summary", s, "--out", o, "--elevator-property", "fcs/a&b<c"];
+    expect(&args, 1, &["elevator property", "fcs/a&b<c", "not a JSBSim property name"]);
+    assert!(!out.exists());
+    expect(&["export", "jsbsim", "--summary", s, "--out", o], 0, &[]);
+    assert!(
+        std::fs::read_to_string(&out)
+            .unwrap()
+            .contains("<property>fcs/elevator-pos-rad</property>")
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// `design` refuses what it cannot sample, allocate or trim, naming the option, before any
+/// work (these aborted allocating or said "trim did not converge: no start evaluated").
+#[test]
+fn exit_design_refuses_out_of_range_options() {
+    expect(&["design", "--band-hz", "0.1", "100"], 1, &["--band-hz", "Nyquist frequency 25 Hz"]);
+    expect(&["design", "--rate-hz", "1e9"], 1, &["--rate-hz", "samples"]);
+    expect(&["design", "--duration-s", "1e9"], 1, &["--duration-s", "samples"]);
+    expect(&["design", "--alt-ft", "1e6"], 1, &["--alt-ft", "1000000", "altitudes"]);
+}

@@ -489,7 +489,8 @@ fn val_thesis_table_4_7_case_4_full_run_corrected_converges() {
 fn default_scenario_writes_outputs_with_exact_summary_keys() {
     let sc = Scenario::from_toml(aeroident::cli::run::DEFAULT_SCENARIO, "default").unwrap();
     let dir = std::env::temp_dir().join(format!("aeroident-test-default-{}", std::process::id()));
-    let s = aeroident::cli::run::run_one(&Scenario { duration_s: 1.0, ..sc }, &dir, true).unwrap();
+    let s =
+        aeroident::cli::run::run_one(&Scenario { duration_s: 1.0, ..sc }, &dir, &[], true).unwrap();
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
     let keys = |v: &serde_json::Value| {

@@ -207,3 +207,79 @@ fn errors_bad_options_per_subcommand() {
     expect(&["nosuchcommand"], 2, &[]);
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// A negative number is an option's value, not a flag: `--xcg -0.5` reaches the range check
+/// as `--xcg=-0.5` does (clap said "unexpected argument '-0'"), and a negative in range is
+/// accepted.
+#[test]
+fn exit_negative_numbers_are_option_values() {
+    let trim = ["f16", "trim", "--alt-ft", "10000", "--vt-fps", "500"];
+    for xcg in [&["--xcg", "-0.5"][..], &["--xcg=-0.5"][..]] {
+        let args: Vec<&str> = trim.iter().chain(xcg).copied().collect();
+        let err = expect(&args, 1, &["xcg", "-0.5", "cg range"]);
+        assert!(!err.contains("unexpected argument"), "{err}");
+    }
+    let args: Vec<&str> =
+        trim.iter().chain(&["--gamma-deg", "-2", "--xcg", "0.3"]).copied().collect();
+    expect(&args, 0, &[]);
+}
+
+/// Every subcommand, at every depth, takes negative numbers as values (one definition for the
+/// whole command line, so a new subcommand cannot forget it).
+#[test]
+fn exit_every_subcommand_allows_negative_numbers() {
+    fn check(cmd: &clap::Command, path: &str) {
+        assert!(cmd.is_allow_negative_numbers_set(), "`{path}` reads -1 as a flag");
+        for sub in cmd.get_subcommands() {
+            check(sub, &format!("{path} {}", sub.get_name()));
+        }
+    }
+    let def = aeroident::cli::Cli::definition();
+    assert!(def.get_subcommands().count() >= 9);
+    check(&def, "aeroident");
+    let cli = aeroident::cli::Cli::try_parse_args([
+        "aeroident",
+        "f16",
+        "trim",
+        "--alt-ft",
+        "-100",
+        "--vt-fps",
+        "500",
+    ]);
+    assert!(cli.is_ok(), "{cli:?}");
+}
+
+/// `export jsbsim` with a property name JSBSim would not accept (XML markup in it) exits 1
+/// naming it, and writes nothing (it wrote malformed XML with exit 0).
+#[test]
+fn exit_export_refuses_property_names_that_are_not_jsbsims() {
+    let d = scratch("export-prop");
+    let summary = d.join("summary.json");
+    std::fs::write(
+        &summary,
+        r#"{"estimator":"rls","model":"m","parameters":[{"name":"Cm_de","estimate":-1.2,"std_error":0.1}]}"#,
+    )
+    .unwrap();
+    let out = d.join("aero.xml");
+    let (s, o) = (summary.to_str().unwrap(), out.to_str().unwrap());
+    let args = ["export", "jsbsim", "--summary", s, "--out", o, "--elevator-property", "fcs/a&b<c"];
+    expect(&args, 1, &["elevator property", "fcs/a&b<c", "not a JSBSim property name"]);
+    assert!(!out.exists());
+    expect(&["export", "jsbsim", "--summary", s, "--out", o], 0, &[]);
+    assert!(
+        std::fs::read_to_string(&out)
+            .unwrap()
+            .contains("<property>fcs/elevator-pos-rad</property>")
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// `design` refuses what it cannot sample, allocate or trim, naming the option, before any
+/// work (these aborted allocating or said "trim did not converge: no start evaluated").
+#[test]
+fn exit_design_refuses_out_of_range_options() {
+    expect(&["design", "--band-hz", "0.1", "100"], 1, &["--band-hz", "Nyquist frequency 25 Hz"]);
+    expect(&["design", "--rate-hz", "1e9"], 1, &["--rate-hz", "samples"]);
+    expect(&["design", "--duration-s", "1e9"], 1, &["--duration-s", "samples"]);
+    expect(&["design", "--alt-ft", "1e6"], 1, &["--alt-ft", "1000000", "altitudes"]);
+}

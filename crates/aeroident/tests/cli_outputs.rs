@@ -114,3 +114,76 @@ fn outputs_duplicate_scenario_names_name_both_files() {
     assert!(!d.join("out/same").exists(), "ran despite the duplicate");
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// `f16 sim --out d` then `replay d/timeseries.csv --out d`: the replay must not delete its own
+/// input (nor the simulation's other results); it is refused with an error naming the command
+/// whose results are there, and every file stays.
+#[test]
+fn outputs_replay_into_the_simulations_directory_keeps_its_input() {
+    let d = scratch("input");
+    let sc = d.join("sim.toml");
+    std::fs::write(&sc, SIM).unwrap();
+    let out = d.join("out");
+    let o = bin().args(["f16", "sim"]).arg(&sc).arg("--out").arg(&out).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let before = std::fs::read(out.join("timeseries.csv")).unwrap();
+    let o = bin()
+        .arg("replay")
+        .arg(out.join("timeseries.csv"))
+        .arg("--map")
+        .arg(repo("mappings/aeroident-sim.toml"))
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("f16 sim") && err.contains("not removed"), "{err}");
+    assert_eq!(std::fs::read(out.join("timeseries.csv")).unwrap(), before);
+    assert!(out.join("states.png").exists() && out.join("report.html").exists());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A figure that cannot be written (its temporary path is taken by a directory, as a full disk
+/// would fail it): the run exits non-zero and leaves no `summary.json` or `estimates.csv` that
+/// would look like a result.
+#[test]
+fn outputs_failed_figure_leaves_no_results_that_look_valid() {
+    let d = scratch("figfail");
+    let sc = d.join("sim.toml");
+    std::fs::write(&sc, SIM).unwrap();
+    let sim = d.join("sim");
+    let o = bin().args(["f16", "sim"]).arg(&sc).arg("--out").arg(&sim).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = d.join("out");
+    std::fs::create_dir_all(out.join(".tmp-estimates.png")).unwrap();
+    let o = bin()
+        .arg("replay")
+        .arg(sim.join("timeseries.csv"))
+        .arg("--map")
+        .arg(repo("mappings/aeroident-sim.toml"))
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("estimates.png"), "{err}");
+    for f in ["summary.json", "estimates.csv", "estimates.png", "report.html", "fit.png"] {
+        assert!(!out.join(f).exists(), "{f} left beside a failed run");
+    }
+    // Without the obstacle the same run succeeds and its results stay.
+    std::fs::remove_dir(out.join(".tmp-estimates.png")).unwrap();
+    let o = bin()
+        .arg("replay")
+        .arg(sim.join("timeseries.csv"))
+        .arg("--map")
+        .arg(repo("mappings/aeroident-sim.toml"))
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.join("summary.json").exists() && out.join("estimates.csv").exists());
+    let _ = std::fs::remove_dir_all(&d);
+}

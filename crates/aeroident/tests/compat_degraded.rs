@@ -32,8 +32,9 @@ fn val_compat_recovers_the_injected_biases_and_time_shifts_of_a_degraded_record(
     let sc = load_scenario(&scenario).unwrap();
     let sim = run(&sc, scenario.parent().unwrap()).unwrap();
     let dir = std::env::temp_dir().join(format!("aeroident-compat-{}", std::process::id()));
-    let mut od = OutputDir::open(&dir).unwrap();
+    let mut od = OutputDir::open(&dir, "f16 sim", &[]).unwrap();
     write_outputs(&sim, &mut od).unwrap();
+    od.finish();
     // The shipped mapping of the sim's true channels, pointed at what the sensors measured,
     // without the sideslip vane.
     let shipped = std::fs::read_to_string(workspace().join("mappings/aeroident-sim.toml")).unwrap();

@@ -81,8 +81,9 @@ fn simulate(toml: &str, tag: &str) -> (PathBuf, String, LocalDerivatives) {
     std::fs::write(&path, toml).unwrap();
     let sc = load_scenario(&path).unwrap();
     let sim = run(&sc, &dir).unwrap();
-    let mut od = OutputDir::open(&dir).unwrap();
+    let mut od = OutputDir::open(&dir, "f16 sim", &[]).unwrap();
     write_outputs(&sim, &mut od).unwrap();
+    od.finish();
     let f16 = F16::new(sc.aircraft.xcg).unwrap();
     let truth =
         local_derivatives(&f16, &sim.trim.state, &sim.trim.controls, &AeroIncrements::zero())

@@ -25,8 +25,9 @@ fn val_f16_sim_output_replays_with_the_shipped_mapping_to_the_true_derivatives()
     let sc = load_scenario(&scenario).unwrap();
     let sim = run(&sc, scenario.parent().unwrap()).unwrap();
     let dir = std::env::temp_dir().join(format!("aeroident-sim-replay-{}", std::process::id()));
-    let mut od = OutputDir::open(&dir).unwrap();
+    let mut od = OutputDir::open(&dir, "f16 sim", &[]).unwrap();
     write_outputs(&sim, &mut od).unwrap();
+    od.finish();
     let csv = dir.join("timeseries.csv").display().to_string();
 
     let mapping = Mapping::from_path(&workspace().join("mappings/aeroident-sim.toml")).unwrap();

@@ -163,7 +163,9 @@ pub struct ReplaySummary {
     pub estimator: String,
     /// The model: a preset name (`longitudinal`, `lateral`, `six-axis`) or the model file.
     pub model: String,
-    /// Estimator status at the end: `running`, `initialising` or `diverged`.
+    /// Estimator status at the end: `running`, `initialising` or `diverged`; `interrupted` when
+    /// a signal stopped the replay before the end of its record (the warnings give the
+    /// estimator's own status then).
     pub status: String,
     /// Data rows read (accepted + rejected).
     pub samples_read: usize,

@@ -12,7 +12,7 @@ use aeroident_estimators::compat::CompatConfig;
 use aeroident_io::{LogFormat, Mapping, open_log_with_notes};
 use aeroident_pipelines::compat::{ChannelSummary, CompatSummary, check_record};
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `aeroident compat`.
 #[derive(Debug, clap::Args)]
@@ -67,11 +67,13 @@ pub fn execute(args: CompatArgs) -> anyhow::Result<()> {
     let (summary, result) = check_record(reader, &config)?;
     super::print_stdout(&render(&summary))?;
     if let Some(dir) = &args.out {
-        let mut out = crate::outdir::OutputDir::open(dir)?;
+        let inputs = [Path::new(&args.data), args.map.as_path()];
+        let mut out = crate::outdir::OutputDir::open(dir, "compat", &inputs)?;
         out.write_bytes("compat.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
         let source = crate::report::Source { data: &args.data, mapping: &args.map };
         let traces = aeroident_pipelines::compat::traces(&result);
         crate::report::compat::write(&source, &summary, &traces, &mut out)?;
+        out.finish();
         eprintln!("wrote {} and report.html", dir.join("compat.json").display());
     }
     Ok(())

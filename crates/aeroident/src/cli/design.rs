@@ -92,7 +92,7 @@ pub fn execute(a: DesignArgs) -> anyhow::Result<()> {
         xcg: a.xcg,
         turbulence: a.turbulence.map(Turbulence::severity),
     };
-    let mut out = a.out.as_deref().map(OutputDir::open).transpose()?;
+    let mut out = a.out.as_deref().map(|d| OutputDir::open(d, "design", &[])).transpose()?;
     let d = design(&spec)?;
     crate::cli::print_stdout(&report(&a, &d))?;
     let large = large_excursions(&d);
@@ -106,6 +106,7 @@ pub fn execute(a: DesignArgs) -> anyhow::Result<()> {
         o.write_bytes("input.csv", csv_table(&d).as_bytes())?;
         o.write_bytes("injection.csv", injection_table(&d).as_bytes())?;
         o.write_bytes("design.json", serde_json::to_string_pretty(&json(&a, &d))?.as_bytes())?;
+        o.finish();
         eprintln!("wrote input.csv, injection.csv, design.json to {}", o.path().display());
     }
     Ok(())

@@ -1,6 +1,6 @@
 //! Command-line subcommands. Each submodule owns its `clap` arguments and an `execute` function.
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 pub mod bench;
 pub mod compat;
@@ -46,6 +46,27 @@ pub enum Command {
 }
 
 impl Cli {
+    /// The command line's definition: every (sub)command takes negative numbers as option
+    /// values (`--xcg -0.5`, `--band-hz -1 5`), which clap otherwise reads as unknown flags.
+    pub fn definition() -> clap::Command {
+        fn negatives(cmd: clap::Command) -> clap::Command {
+            cmd.allow_negative_numbers(true).mut_subcommands(negatives)
+        }
+        negatives(Self::command())
+    }
+
+    /// Parses `args` (the program name first) by [`Cli::definition`].
+    ///
+    /// # Errors
+    /// clap's error for a bad command line (print it with `Error::exit`).
+    pub fn try_parse_args<I, T>(args: I) -> Result<Self, clap::Error>
+    where
+        I: IntoIterator<Item = T>,
+        T: Into<std::ffi::OsString> + Clone,
+    {
+        Self::from_arg_matches(&Self::definition().try_get_matches_from(args)?)
+    }
+
     /// Runs the parsed command.
     ///
     /// # Errors

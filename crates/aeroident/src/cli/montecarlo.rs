@@ -13,7 +13,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::Context as _;
+use crate::outdir::OutputDir;
 
 use super::run::DEFAULT_SCENARIO;
 use crate::plot::{GroupedBars, HistogramPanel, render_histograms_png, render_histograms_svg};
@@ -138,18 +138,13 @@ pub fn table(c: &Campaign) -> String {
     s
 }
 
-/// Writes `montecarlo.json`, `runs.json` and (unless `figures` is false) the figures into `dir`.
+/// Writes `montecarlo.json`, `runs.json` and (unless `figures` is false) the figures into `od`.
 ///
 /// # Errors
 /// Unwritable files or figures, named.
-pub fn write_outputs(c: &Campaign, dir: &Path, figures: bool) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    let path = dir.join("montecarlo.json");
-    std::fs::write(&path, serde_json::to_string_pretty(c)?)
-        .with_context(|| format!("writing {}", path.display()))?;
-    let path = dir.join("runs.json");
-    std::fs::write(&path, serde_json::to_string(&c.results)?)
-        .with_context(|| format!("writing {}", path.display()))?;
+pub fn write_outputs(c: &Campaign, od: &mut OutputDir, figures: bool) -> anyhow::Result<()> {
+    od.write_bytes("montecarlo.json", serde_json::to_string_pretty(c)?.as_bytes())?;
+    od.write_bytes("runs.json", serde_json::to_string(&c.results)?.as_bytes())?;
     if !figures {
         return Ok(());
     }
@@ -193,17 +188,12 @@ pub fn write_outputs(c: &Campaign, dir: &Path, figures: bool) -> anyhow::Result<
                 .collect();
             let stem = format!("histograms_{k}_{safe}");
             let title = format!("{}: final estimates over {} runs", e.name, e.runs_ok);
-            render_histograms_png(
-                &dir.join(format!("{stem}.png")),
-                &title,
-                &panels,
-                4,
-                (380, 260),
-            )?;
+            od.write_path(&format!("{stem}.png"), |p| {
+                render_histograms_png(p, &title, &panels, 4, (380, 260))
+            })?;
             let svg =
                 render_histograms_svg(&format!("{stem}.svg"), &title, &panels, 4, (380, 260))?;
-            let path = dir.join(format!("{stem}.svg"));
-            std::fs::write(&path, svg).with_context(|| format!("writing {}", path.display()))?;
+            od.write_bytes(&format!("{stem}.svg"), svg.as_bytes())?;
         }
     }
     for e in &c.estimators {
@@ -225,10 +215,8 @@ pub fn write_outputs(c: &Campaign, dir: &Path, figures: bool) -> anyhow::Result<
             y_range: (0.0, 1.05),
             reference: Some((0.95, "0.95 target".into())),
         };
-        chart.render_png(&dir.join("coverage.png"), (1200, 500))?;
-        let path = dir.join("coverage.svg");
-        std::fs::write(&path, chart.render_svg("coverage.svg", (1200, 500))?)
-            .with_context(|| format!("writing {}", path.display()))?;
+        od.write_path("coverage.png", |p| chart.render_png(p, (1200, 500)))?;
+        od.write_bytes("coverage.svg", chart.render_svg("coverage.svg", (1200, 500))?.as_bytes())?;
     }
     Ok(())
 }
@@ -266,8 +254,11 @@ pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
             .map_err(Into::into);
     }
     let dir = args.out.unwrap_or_else(|| PathBuf::from("aeroident-out").join("montecarlo"));
-    write_outputs(&c, &dir, !args.no_figures)?;
-    crate::report::montecarlo::write(&c, &dir)?;
+    let inputs: Vec<&Path> = args.scenario.iter().map(PathBuf::as_path).collect();
+    let mut od = OutputDir::open(&dir, "montecarlo", &inputs)?;
+    write_outputs(&c, &mut od, !args.no_figures)?;
+    crate::report::montecarlo::write(&c, &mut od)?;
+    od.finish();
     super::print_stdout(&format!("{}wrote {}", table(&c), dir.display()))?;
     Ok(())
 }

@@ -48,10 +48,13 @@ pub struct PocArgs {
 pub fn execute(args: PocArgs) -> anyhow::Result<()> {
     if let Some(dir) = args.all {
         let dir = dir.unwrap_or_else(|| shipped_dir(ScenarioKind::Poc));
-        let mut top = crate::outdir::OutputDir::open(&args.out)?;
-        let (results, wall_s) = run_all(&dir, &args.out)?;
+        let files = scenario_files(&dir)?;
+        let inputs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+        let mut top = crate::outdir::OutputDir::open(&args.out, "poc", &inputs)?;
+        let (results, wall_s) = run_all(&dir, &mut top)?;
         let report = render(&results, wall_s);
         let path = top.write_bytes("report.md", report.as_bytes())?;
+        top.finish();
         super::print_stdout(&format!(
             "{}full report: {}",
             overview(&results, wall_s),
@@ -61,9 +64,10 @@ pub fn execute(args: PocArgs) -> anyhow::Result<()> {
     }
     let Some(path) = args.scenario else { bail!("give a scenario file or --all") };
     let sc = PocScenario::from_path(&path)?;
-    let mut od = crate::outdir::OutputDir::open(&args.out)?;
+    let mut od = crate::outdir::OutputDir::open(&args.out, "poc", &[path.as_path()])?;
     let out = run(&sc, args.estimator, args.solver)?;
     let summary = output::write_run(&mut od, &sc, &out)?;
+    od.finish();
     super::print_stdout(&serde_json::to_string_pretty(&summary)?)?;
     if let Some(s) = &out.stopped_early {
         super::print_stdout(&format!("note: {s}"))?;
@@ -89,12 +93,16 @@ pub fn scenario_files(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
 }
 
 /// Runs every scenario of `scenarios_dir` three ways (published implicit, published
-/// explicit, corrected) in parallel, writing each run's files under `out`. Returns the
-/// results and the wall time, s.
+/// explicit, corrected) in parallel, writing each run's files into a subdirectory of `top`
+/// (registered there, so the next run or this one's failure clears it). Returns the results
+/// and the wall time, s.
 ///
 /// # Errors
 /// The first failing scenario's error, naming it.
-pub fn run_all(scenarios_dir: &Path, out: &Path) -> anyhow::Result<(Vec<CaseResult>, f64)> {
+pub fn run_all(
+    scenarios_dir: &Path,
+    top: &mut crate::outdir::OutputDir,
+) -> anyhow::Result<(Vec<CaseResult>, f64)> {
     let start = Instant::now();
     let files = scenario_files(scenarios_dir)?;
     let scenarios: Vec<PocScenario> =
@@ -111,17 +119,23 @@ pub fn run_all(scenarios_dir: &Path, out: &Path) -> anyhow::Result<(Vec<CaseResu
             ]
         })
         .collect();
+    let sub = |est, solver: SolverReading| match est {
+        EstimatorKind::Published => format!("published-{solver:?}").to_lowercase(),
+        EstimatorKind::Corrected => "corrected".to_string(),
+    };
+    for &(i, est, solver) in &jobs {
+        top.register_dir(&format!("{}/{}", scenarios[i].case.name, sub(est, solver)))?;
+    }
+    let out = top.path().to_path_buf();
     let runs: Vec<_> = jobs
         .par_iter()
         .map(|&(i, est, solver)| -> anyhow::Result<_> {
             let sc = &scenarios[i];
-            let sub = match est {
-                EstimatorKind::Published => format!("published-{solver:?}").to_lowercase(),
-                EstimatorKind::Corrected => "corrected".to_string(),
-            };
-            let mut od = crate::outdir::OutputDir::open(&out.join(&sc.case.name).join(sub))?;
+            let dir = out.join(&sc.case.name).join(sub(est, solver));
+            let mut od = crate::outdir::OutputDir::open(&dir, "poc", &[files[i].as_path()])?;
             let r = run(sc, est, solver)?;
             let summary = output::write_run(&mut od, sc, &r)?;
+            od.finish();
             Ok((summary, r))
         })
         .collect::<anyhow::Result<_>>()?;

@@ -20,6 +20,11 @@
 //! fit: it reads the whole record first (it says so), prints its iterations and writes
 //! `summary.json` (estimates, coloured-residual and Cramér–Rao σ, residual RMS).
 //!
+//! SIGINT (Ctrl-C) or SIGTERM ends a real-time replay gracefully, the normal end of a live feed
+//! ([`crate::interrupt`]): the sample in hand is finished, `estimates.csv`, `summary.json`
+//! (status `interrupted`) and the report are written for the samples read until then, and the
+//! exit code is 128 + signal; a second signal ends at once.
+//!
 //! The log format is `--format`, else the file's extension, else CSV
 //! ([`aeroident_io::log`]; `docs/mapping.md` tells how columns are named in each).
 //!
@@ -160,10 +165,16 @@ impl InitialStatesArg {
 }
 
 /// The console's view of a replay: the model line and warnings on stderr (the estimates go to
-/// an [`EstimateRows`] beside it).
-struct Console;
+/// an [`EstimateRows`] beside it), and the stop a signal asks for.
+struct Console<'a> {
+    interrupt: &'a crate::interrupt::Interrupt,
+}
 
-impl ReplayObserver for Console {
+impl ReplayObserver for Console<'_> {
+    fn stop_requested(&mut self) -> bool {
+        self.interrupt.requested()
+    }
+
     fn model(&mut self, line: &str) {
         eprintln!("{line}");
     }
@@ -257,8 +268,15 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     if !live && args.out.is_none() {
         anyhow::bail!("give --out <dir> (or read `-` from stdin for a live feed on stdout)");
     }
+    // From here a signal ends the replay gracefully: the results so far are written, marked
+    // `interrupted` (crate::interrupt).
+    let interrupt = crate::interrupt::Interrupt::install().context("installing signal handlers")?;
     // Lock the directory and clear the previous run's files before reading anything.
-    let mut out_dir = args.out.as_deref().map(crate::outdir::OutputDir::open).transpose()?;
+    let mut out_dir = args
+        .out
+        .as_deref()
+        .map(|d| crate::outdir::OutputDir::open(d, "replay", &input_paths(&args)))
+        .transpose()?;
     let mut csv_file = match out_dir.as_mut() {
         Some(o) => Some(o.create("estimates.csv")?),
         None => None,
@@ -293,7 +311,8 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     if crate::progress::enabled() {
         sinks.push(&mut status);
     }
-    let mut console = (Console, EstimateRows { sinks, flush_each: args.realtime });
+    let mut console =
+        (Console { interrupt: &interrupt }, EstimateRows { sinks, flush_each: args.realtime });
     let format = args
         .format
         .or_else(|| LogFormat::from_extension(Path::new(&args.data)))
@@ -306,6 +325,15 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
                 outcome
             })
             .inspect_err(|_| crate::live::report_failure(&stats))
+    } else if live && matches!(format, LogFormat::Csv | LogFormat::Asc) {
+        // stdin through a reader that ends the record on a signal even while no line arrives.
+        let stdin = crate::interrupt::InterruptibleStdin::new(interrupt.flag());
+        let reader = if format == LogFormat::Asc {
+            aeroident_io::log::asc_reader(std::io::BufReader::new(stdin), "-", &mapping)?
+        } else {
+            FlightDataReader::new(Box::new(stdin) as Box<dyn std::io::Read>, "-", &mapping)?
+        };
+        replay(reader, &mapping, &opts, &mut console)
     } else if !live && format == LogFormat::Csv {
         // The CSV file itself, read through the progress bar (what `open_log` opens for CSV).
         let file =
@@ -328,7 +356,19 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     };
     bar.finish_and_clear();
     let mut outcome = outcome?;
-    if args.cross_check {
+    let interrupted = outcome.interrupted();
+    if interrupted {
+        eprintln!(
+            "interrupted: finishing with the {} samples read (a second signal ends at once)",
+            outcome.summary.samples_read
+        );
+        if args.validate_on.is_some() || args.cross_check {
+            let w = "the run was interrupted: --validate-on / --cross-check not done".to_string();
+            eprintln!("warning: {w}");
+            outcome.summary.warnings.push(w);
+        }
+    }
+    if args.cross_check && !interrupted {
         let (reader, _) = open_log_with_notes(&args.data, Some(format), &mapping)?;
         eprintln!("cross-check: fitting the record by output error with the same model");
         aeroident_pipelines::replay::cross_check_record(&mut outcome, reader, &mapping, &opts);
@@ -341,7 +381,7 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     if let Some(f) = csv_file {
         f.commit()?;
     }
-    let validation_on = match (&args.validate_on, outcome.diverged()) {
+    let validation_on = match (&args.validate_on, outcome.diverged() || interrupted) {
         (Some(path), false) => {
             let name = path.display().to_string();
             let (reader, notes) = open_log_with_notes(&name, None, &mapping)?;
@@ -370,6 +410,8 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
                 &crate::report::replay::model_references(&outcome),
                 o,
             )?;
+            // Complete: a divergence or an interruption reported below keeps these files.
+            o.finish();
             if live {
                 // stdout carries the live stream of estimates: the table goes beside the log.
                 eprint!("{}", crate::table::render(&results));
@@ -415,13 +457,29 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     if let Some(e) = outcome.diverged_error(args.estimator.name()) {
         anyhow::bail!(e);
     }
-    if outcome.summary.status != "running" {
+    if interrupted {
+        if let Some(e) = interrupt.error() {
+            return Err(e.into());
+        }
+    } else if outcome.summary.status != "running" {
         eprintln!(
             "warning: estimator status `{}`: not every parameter was identified (null in the summary)",
             outcome.summary.status
         );
     }
     Ok(())
+}
+
+/// Every file the replay reads (the records, mapping, model file, compatibility file and
+/// validation record): the output directory never removes or overwrites them. A live source
+/// or a preset name names no file and is left out by [`crate::outdir::OutputDir::open`].
+fn input_paths(args: &ReplayArgs) -> Vec<&Path> {
+    let mut p: Vec<&Path> = std::iter::once(&args.data).chain(&args.and).map(Path::new).collect();
+    p.push(&args.map);
+    p.extend(args.model.as_deref().map(Path::new));
+    p.extend(args.compat.as_deref().filter(|c| *c != "auto").map(Path::new));
+    p.extend(args.validate_on.as_deref());
+    p
 }
 
 /// The console block of a validation report: one line per output.
@@ -567,7 +625,7 @@ fn execute_batch(
     let text = serde_json::to_string_pretty(&outcome.summary)?;
     match &args.out {
         Some(dir) => {
-            let mut out = crate::outdir::OutputDir::open(dir)?;
+            let mut out = crate::outdir::OutputDir::open(dir, "replay", &input_paths(args))?;
             out.write_bytes("summary.json", text.as_bytes())?;
             let name = Path::new(&args.data)
                 .file_name()
@@ -575,6 +633,7 @@ fn execute_batch(
             let title = format!("{name} — {} — {}", args.estimator.name(), outcome.model.name);
             let source = crate::report::Source { data: &args.data, mapping: &args.map };
             let results = crate::report::batch::write(&source, &outcome, &title, &mut out)?;
+            out.finish();
             crate::cli::print_stdout(&crate::table::render(&results))?;
             eprintln!(
                 "{}: {} samples in {} manoeuvre(s), {} rejected, {} iterations in {:.3} s; wrote {}",

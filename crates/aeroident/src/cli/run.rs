@@ -46,15 +46,24 @@ pub struct RunArgs {
     pub no_figures: bool,
 }
 
-/// Runs one scenario and writes its outputs into `dir`.
+/// Runs one scenario (read from `inputs`, never removed or overwritten) and writes its outputs
+/// into `dir`.
 ///
 /// # Errors
 /// Experiment or output errors, with the scenario name.
-pub fn run_one(sc: &Scenario, dir: &Path, figures: bool) -> anyhow::Result<Summary> {
+pub fn run_one(
+    sc: &Scenario,
+    dir: &Path,
+    inputs: &[&Path],
+    figures: bool,
+) -> anyhow::Result<Summary> {
     // Lock and clear the directory before the run, so a failing run leaves no old outputs.
-    let mut od = OutputDir::open(dir)?;
+    let mut od = OutputDir::open(dir, "run", inputs)?;
     let out = run(sc).with_context(|| format!("scenario `{}`", sc.name))?;
-    write_all(&out, &mut od, figures).with_context(|| format!("outputs of `{}`", sc.name))
+    let summary =
+        write_all(&out, &mut od, figures).with_context(|| format!("outputs of `{}`", sc.name))?;
+    od.finish();
+    Ok(summary)
 }
 
 /// Checks that every scenario name is a safe directory name ([`safe_component`]) and that no two
@@ -112,7 +121,8 @@ pub fn execute(args: RunArgs) -> anyhow::Result<()> {
     let dir = args.out.unwrap_or(default_dir);
     let spin =
         crate::progress::spinner(&format!("run `{}` ({} s simulated)", sc.name, sc.duration_s));
-    let summary = run_one(&sc, &dir, !args.no_figures);
+    let inputs: Vec<&Path> = args.scenario.iter().map(PathBuf::as_path).collect();
+    let summary = run_one(&sc, &dir, &inputs, !args.no_figures);
     spin.finish_and_clear();
     let summary = summary?;
     let _ = writeln!(std::io::stdout().lock(), "{}wrote {}", results_text(&summary), dir.display());
@@ -162,12 +172,17 @@ pub fn run_all(
     anyhow::ensure!(!files.is_empty(), "no *.toml scenario in {}", scenarios_dir.display());
     let scenarios = files.iter().map(|f| Scenario::from_path(f)).collect::<Result<Vec<_>, _>>()?;
     check_names(scenarios.iter().zip(&files).map(|(s, f)| (s.name.as_str(), f.as_path())))?;
-    let mut top = OutputDir::open(out)?;
+    let inputs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    let mut top = OutputDir::open(out, "run", &inputs)?;
+    for sc in &scenarios {
+        top.register_dir(&sc.name)?;
+    }
     let bar = crate::progress::count_bar(scenarios.len() as u64, "scenarios");
     let results: anyhow::Result<Vec<(Scenario, Summary)>> = scenarios
         .into_par_iter()
-        .map(|sc| {
-            let s = run_one(&sc, &out.join(&sc.name), figures)?;
+        .zip(&files)
+        .map(|(sc, file)| {
+            let s = run_one(&sc, &out.join(&sc.name), &[file.as_path()], figures)?;
             bar.inc(1);
             Ok((sc, s))
         })
@@ -189,6 +204,7 @@ pub fn run_all(
         .collect();
     let summaries: Vec<&Summary> = results.iter().map(|(_, s)| s).collect();
     crate::report::run::write_index(scenarios_dir, &lines, &summaries, &mut top)?;
+    top.finish();
     Ok((md, overview(&results)))
 }
 

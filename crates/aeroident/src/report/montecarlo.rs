@@ -6,7 +6,6 @@ use super::{Figure, Report, common_settings, png_figure};
 use crate::outdir::{OutputDir, OutputError};
 use aeroident_pipelines::montecarlo::Campaign;
 use aeroident_pipelines::results::{ParameterRow, Results};
-use std::path::Path;
 
 /// One [`Results`] per estimator: the mean final estimate (truth + bias) ± the scatter (the
 /// standard deviation over the runs), the truth, the error of the mean and whether the truth
@@ -40,16 +39,14 @@ pub fn results(c: &Campaign) -> Vec<Results> {
         .collect()
 }
 
-/// Writes `report.html` into `dir` (through [`OutputDir`]), inlining the figures the campaign
-/// wrote there (`histograms_*.png`, `coverage.png`).
+/// Writes `report.html` into `od`, inlining the figures the campaign wrote there
+/// (`histograms_*.png`, `coverage.png`).
 ///
 /// # Errors
 /// [`OutputError`] naming the file.
-pub fn write(c: &Campaign, dir: &Path) -> Result<(), OutputError> {
-    // The SVG of each figure (the PNG where no SVG was written).
-    let mut files: Vec<std::path::PathBuf> = std::fs::read_dir(dir)
-        .map(|r| r.filter_map(|e| e.ok().map(|e| e.path())).collect())
-        .unwrap_or_else(|_| Vec::new());
+pub fn write(c: &Campaign, od: &mut OutputDir) -> Result<(), OutputError> {
+    // The SVG of each figure (the PNG where no SVG was written), of those this run wrote.
+    let mut files: Vec<std::path::PathBuf> = od.written().map(|n| od.path().join(n)).collect();
     files.retain(|p| {
         let ext = p.extension().and_then(|x| x.to_str());
         ext == Some("svg") || (ext == Some("png") && !p.with_extension("svg").exists())
@@ -73,7 +70,6 @@ pub fn write(c: &Campaign, dir: &Path) -> Result<(), OutputError> {
         ("seed".into(), c.seed.to_string()),
         ("wall time".into(), format!("{:.1} s on {} threads", c.wall_s, c.threads)),
     ]);
-    let mut od = OutputDir::open(dir)?;
     Report {
         title: format!("aeroident montecarlo — {}", c.scenario),
         settings,
@@ -82,6 +78,6 @@ pub fn write(c: &Campaign, dir: &Path) -> Result<(), OutputError> {
         warnings: c.crb_notes.clone(),
         links: Vec::new(),
     }
-    .write(&mut od)?;
+    .write(od)?;
     Ok(())
 }

@@ -162,9 +162,10 @@ pub fn execute(args: SimArgs) -> anyhow::Result<()> {
     let sc = load_scenario(&args.scenario)?;
     let base = args.scenario.parent().unwrap_or(Path::new("."));
     // Lock and clear the directory first, so a failing run leaves no old outputs.
-    let mut od = OutputDir::open(&args.out)?;
+    let mut od = OutputDir::open(&args.out, "f16 sim", &[args.scenario.as_path()])?;
     let r = run(&sc, base)?;
     write_outputs(&r, &mut od)?;
+    od.finish();
     crate::cli::print_stdout(&format!(
         "simulated {:.2} s ({} rows, {} columns) from trim: throttle {:.4}, elevator {:.4} deg, alpha {:.4} deg (trim cost {:.1e})\nwrote {}/timeseries.csv, report.html, states and controls_wind (.png, .svg)",
         r.data[0].last().copied().unwrap_or(0.0),
@@ -200,7 +201,9 @@ mod tests {
             if n == 1 {
                 let out =
                     std::env::temp_dir().join(format!("aeroident_sim_test_{}", std::process::id()));
-                write_outputs(&r, &mut OutputDir::open(&out).unwrap()).unwrap();
+                let mut od = OutputDir::open(&out, "f16 sim", &[]).unwrap();
+                write_outputs(&r, &mut od).unwrap();
+                od.finish();
                 let csv = std::fs::read_to_string(out.join("timeseries.csv")).unwrap();
                 assert_eq!(csv.lines().count(), r.data[0].len() + 1);
                 assert!(out.join("states.png").exists() && out.join("controls_wind.png").exists());

@@ -128,6 +128,42 @@ pub struct Design {
     pub plan: DesignPlan,
 }
 
+/// Most samples of a design's tables: checked before any is allocated (a sample count far
+/// beyond flight-test practice, ~17 min at 100 Hz, would exhaust memory in the prediction's
+/// sensitivities rather than tell anything).
+pub const MAX_DESIGN_SAMPLES: f64 = 100_000.0;
+
+/// Most harmonics in the band (each is evaluated at every sample; a designed manoeuvre uses
+/// tens of them).
+pub const MAX_DESIGN_HARMONICS: f64 = 2_000.0;
+
+/// The altitudes of the flight condition, ft: the span of the F-16 engine's thrust tables
+/// (Stevens & Lewis, 0–50 000 ft); beyond it the trim would rest on extrapolated thrust.
+pub const DESIGN_ALT_RANGE_FT: (f64, f64) = (0.0, 50_000.0);
+
+/// Checks the band against the sample rate and the record (Nyquist limit, harmonic count).
+fn check_band(spec: &DesignSpec) -> crate::error::Result<()> {
+    let (lo, hi) = spec.band_hz;
+    if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && lo < hi) {
+        crate::bail!("--band-hz {lo} {hi}: give two finite frequencies, 0 ≤ low < high, Hz");
+    }
+    let nyquist = spec.rate_hz / 2.0;
+    if hi >= nyquist {
+        crate::bail!(
+            "--band-hz {lo} {hi}: the upper edge is not below the Nyquist frequency {nyquist} Hz of --rate-hz {}: its harmonics cannot be sampled; lower the band or raise the rate",
+            spec.rate_hz
+        );
+    }
+    let harmonics = (hi - lo) * spec.duration_s;
+    if harmonics > MAX_DESIGN_HARMONICS {
+        crate::bail!(
+            "--band-hz {lo} {hi} over --duration-s {} holds about {harmonics:.0} harmonics, more than {MAX_DESIGN_HARMONICS}: narrow the band or shorten the record",
+            spec.duration_s
+        );
+    }
+    Ok(())
+}
+
 /// The harmonics `k` of base period `t` in the band.
 fn pool(duration_s: f64, band_hz: (f64, f64)) -> Vec<u32> {
     let lo = (band_hz.0 * duration_s).ceil().max(1.0) as u32;
@@ -161,6 +197,15 @@ pub fn multisine(spec: &DesignSpec) -> crate::error::Result<Multisines> {
             crate::bail!("{what} must be a positive number, got {v}");
         }
     }
+    let samples = spec.duration_s * spec.rate_hz + 1.0;
+    if samples > MAX_DESIGN_SAMPLES {
+        crate::bail!(
+            "--duration-s {} at --rate-hz {} is {samples:.3e} samples, more than {MAX_DESIGN_SAMPLES}: shorten the record or lower the rate",
+            spec.duration_s,
+            spec.rate_hz
+        );
+    }
+    check_band(spec)?;
     if spec.surfaces.is_empty() {
         crate::bail!("--surfaces: give at least one of de, da, dr");
     }
@@ -211,6 +256,7 @@ pub fn structure_for(surfaces: &[Surface]) -> ModelStructure {
 /// As [`multisine`]; a trim that does not converge; a prediction error (e.g. the response
 /// leaves the model's domain: the amplitude is too large).
 pub fn design(spec: &DesignSpec) -> crate::error::Result<Design> {
+    check_condition(spec)?;
     let Multisines { t_s, inputs, harmonics } = multisine(spec)?;
     let f16m = F16::new(spec.xcg)?;
     let cond = TrimCondition {
@@ -268,6 +314,22 @@ pub fn design(spec: &DesignSpec) -> crate::error::Result<Design> {
     };
     let inputs = spec.surfaces.iter().copied().zip(inputs).collect();
     Ok(Design { t_s, inputs, harmonics, crb, structure, plan })
+}
+
+/// Checks the flight condition is within the F-16 model's range before trimming (a trim
+/// outside it fails without saying why).
+fn check_condition(spec: &DesignSpec) -> crate::error::Result<()> {
+    let (lo, hi) = DESIGN_ALT_RANGE_FT;
+    if !(spec.alt_ft.is_finite() && (lo..=hi).contains(&spec.alt_ft)) {
+        crate::bail!(
+            "--alt-ft {}: the F-16 model's altitudes are {lo}–{hi} ft (its engine's thrust tables)",
+            spec.alt_ft
+        );
+    }
+    if !(spec.vt_fps.is_finite() && spec.vt_fps > 0.0) {
+        crate::bail!("--vt-fps {}: give a positive true airspeed, ft/s", spec.vt_fps);
+    }
+    Ok(())
 }
 
 /// The CSV table: `t_s`, then per surface `<s>_rad` and `<s>_deg`.
@@ -330,6 +392,39 @@ mod tests {
             }
         }
         assert!(changed * 2 > a.n_params, "{changed} of {} changed", a.n_params);
+    }
+
+    /// Bands reaching the Nyquist frequency, sample counts that would exhaust memory and flight
+    /// conditions outside the model are refused before anything is allocated or trimmed, each
+    /// naming its option.
+    #[test]
+    fn out_of_range_designs_are_refused_naming_the_option() {
+        let all = || spec(vec![Surface::De, Surface::Da, Surface::Dr]);
+        let cases: Vec<(DesignSpec, &[&str])> = vec![
+            (DesignSpec { band_hz: (0.1, 100.0), ..all() }, &["--band-hz", "Nyquist", "25 Hz"]),
+            (DesignSpec { band_hz: (0.1, 25.0), ..all() }, &["--band-hz", "Nyquist"]),
+            (DesignSpec { band_hz: (-1.0, 5.0), ..all() }, &["--band-hz", "0 ≤ low < high"]),
+            (DesignSpec { band_hz: (2.0, 1.0), ..all() }, &["--band-hz"]),
+            (DesignSpec { rate_hz: 1e9, ..all() }, &["--rate-hz", "samples", "100000"]),
+            (DesignSpec { duration_s: 1e9, ..all() }, &["--duration-s", "samples"]),
+            (
+                DesignSpec { duration_s: 1000.0, band_hz: (0.1, 24.0), ..all() },
+                &["--band-hz", "harmonics"],
+            ),
+            (DesignSpec { alt_ft: 1e6, ..all() }, &["--alt-ft", "50000"]),
+            (DesignSpec { alt_ft: -100.0, ..all() }, &["--alt-ft"]),
+            (DesignSpec { alt_ft: f64::NAN, ..all() }, &["--alt-ft"]),
+            (DesignSpec { vt_fps: 0.0, ..all() }, &["--vt-fps"]),
+        ];
+        for (s, needles) in cases {
+            let e = design(&s).unwrap_err().to_string();
+            for n in needles {
+                assert!(e.contains(n), "{n:?} not in: {e}");
+            }
+        }
+        // Just below the Nyquist frequency is a valid design: harmonics k = 1 … 24 of 1 Hz.
+        let m = multisine(&DesignSpec { duration_s: 1.0, band_hz: (0.1, 24.9), ..all() }).unwrap();
+        assert_eq!(m.harmonics.iter().map(Vec::len).sum::<usize>(), 24, "k = 1 … 24");
     }
 
     #[test]

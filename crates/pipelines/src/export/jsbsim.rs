@@ -115,6 +115,60 @@ pub struct SurfaceProperties {
     pub rudder: String,
 }
 
+impl SurfaceProperties {
+    /// Checks each property is a name JSBSim's property tree accepts (so the fragment is
+    /// well-formed XML and JSBSim finds the property): `/`-separated components of ASCII
+    /// letters, digits, `_`, `-` and `.`, each starting with a letter or `_` and optionally
+    /// indexed `[n]`.
+    ///
+    /// # Errors
+    /// The first property that is not such a name, naming the surface, the property and the
+    /// offending character.
+    pub fn check(&self) -> crate::error::Result<()> {
+        for (surface, name) in
+            [("elevator", &self.elevator), ("aileron", &self.aileron), ("rudder", &self.rudder)]
+        {
+            if let Err(why) = check_property_name(name) {
+                crate::bail!(
+                    "{surface} property `{name}` is not a JSBSim property name: {why} (a property is `/`-separated names of letters, digits, `_`, `-`, `.`, each starting with a letter or `_`, optionally indexed `[n]`, e.g. `fcs/elevator-pos-rad`)"
+                );
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Why `name` is not a JSBSim property path (see [`SurfaceProperties::check`]).
+fn check_property_name(name: &str) -> Result<(), String> {
+    if name.is_empty() {
+        return Err("it is empty".into());
+    }
+    for part in name.split('/') {
+        let (base, index) = match part.split_once('[') {
+            Some((b, rest)) => (b, Some(rest)),
+            None => (part, None),
+        };
+        let mut chars = base.chars();
+        match chars.next() {
+            None => return Err(format!("an empty component in `{name}`")),
+            Some(c) if !(c.is_ascii_alphabetic() || c == '_') => {
+                return Err(format!("component `{part}` starts with `{c}`"));
+            }
+            Some(_) => {}
+        }
+        if let Some(c) = chars.find(|c| !(c.is_ascii_alphanumeric() || "_-.".contains(*c))) {
+            return Err(format!("character `{c}` in component `{part}`"));
+        }
+        if let Some(rest) = index {
+            let digits = rest.strip_suffix(']').unwrap_or("x");
+            if digits.is_empty() || !digits.chars().all(|c| c.is_ascii_digit()) {
+                return Err(format!("component `{part}` has a malformed index"));
+            }
+        }
+    }
+    Ok(())
+}
+
 impl Default for SurfaceProperties {
     fn default() -> Self {
         Self {
@@ -179,13 +233,15 @@ fn axis(c: Coefficient) -> (&'static str, &'static [&'static str]) {
 /// header comment.
 ///
 /// # Errors
-/// Lift/drag mixed with body X/Z coefficients, or no identified parameter at all.
+/// A surface property JSBSim would not accept ([`SurfaceProperties::check`]), lift/drag
+/// mixed with body X/Z coefficients, or no identified parameter at all.
 pub fn aerodynamics_xml(
     summary: &SummaryParameters,
     source: &str,
     surfaces: &SurfaceProperties,
     v0_mps: Option<f64>,
 ) -> crate::error::Result<String> {
+    surfaces.check()?;
     let coefs: Vec<Coefficient> = summary.parameters.iter().map(|p| p.param.coefficient).collect();
     let wind = coefs.iter().any(|c| matches!(c, Coefficient::CL | Coefficient::CD));
     let body = coefs.iter().any(|c| matches!(c, Coefficient::CX | Coefficient::CZ));
@@ -235,11 +291,12 @@ pub fn aerodynamics_xml(
                 }
             };
             let sigma = p.sigma.map_or(String::new(), |s| format!(" ± {s} (1σ)"));
+            let pname = xml_text(pname);
             let _ = writeln!(x, "    <function name=\"aero/coefficient/{pname}\">");
             let _ = writeln!(x, "      <description>{pname} = {v}{sigma}</description>");
             x.push_str("      <product>\n");
             for s in scale.iter().copied().map(str::to_string).chain(props) {
-                let _ = writeln!(x, "        <property>{s}</property>");
+                let _ = writeln!(x, "        <property>{}</property>", xml_text(&s));
             }
             let _ = writeln!(x, "        <value>{}</value>", v * factor);
             x.push_str("      </product>\n    </function>\n");
@@ -250,8 +307,18 @@ pub fn aerodynamics_xml(
     Ok(x)
 }
 
+/// `s` as XML text or attribute value (either quote): the markup characters escaped.
+fn xml_text(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+        .replace('\'', "&apos;")
+}
+
+/// `s` as comment content: as [`xml_text`], and `--` (not allowed in a comment) split.
 fn xml_escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace("--", "- -")
+    xml_text(s).replace("--", "- -")
 }
 
 #[cfg(test)]
@@ -297,5 +364,52 @@ mod tests {
         assert!(e.to_string().contains("mixes lift/drag"), "{e}");
         let s = summary(vec![id("CL_alpha", None)]);
         assert!(aerodynamics_xml(&s, "s", &SurfaceProperties::default(), None).is_err());
+    }
+
+    /// Every element's text, in document order, after a strict parse (malformed XML fails).
+    fn parsed_texts(x: &str) -> Vec<String> {
+        let mut r = quick_xml::Reader::from_str(x);
+        r.config_mut().check_comments = true;
+        r.config_mut().check_end_names = true;
+        let (mut texts, mut depth) = (Vec::new(), 0_i32);
+        loop {
+            match r.read_event().unwrap_or_else(|e| panic!("malformed XML: {e}\n{x}")) {
+                quick_xml::events::Event::Start(_) => depth += 1,
+                quick_xml::events::Event::End(_) => depth -= 1,
+                quick_xml::events::Event::Text(t) => {
+                    let raw = std::str::from_utf8(&t).unwrap().to_string();
+                    let text = quick_xml::escape::unescape(&raw).unwrap().trim().to_string();
+                    if !text.is_empty() {
+                        texts.push(text);
+                    }
+                }
+                quick_xml::events::Event::Eof => break,
+                _ => {}
+            }
+        }
+        assert_eq!(depth, 0, "unbalanced elements:\n{x}");
+        texts
+    }
+
+    #[test]
+    fn property_names_jsbsim_would_not_accept_are_refused() {
+        let s = summary(vec![id("Cm_de", Some(-1.2))]);
+        for bad in ["fcs/a&b<c", "fcs/a\"b", "", "fcs//x", "fcs/1x", "fcs/x y", "fcs/x[1", "-fcs/x"]
+        {
+            let p = SurfaceProperties { elevator: bad.into(), ..SurfaceProperties::default() };
+            let e = aerodynamics_xml(&s, "s", &p, None).unwrap_err().to_string();
+            assert!(e.contains("elevator property") && e.contains(bad), "{bad:?}: {e}");
+        }
+        // Indexed and dotted names are JSBSim's own: accepted, and the text parses back to them.
+        let p = SurfaceProperties {
+            elevator: "fcs/elevator-pos-rad[1]".into(),
+            rudder: "fcs/rudder.pos_rad".into(),
+            ..SurfaceProperties::default()
+        };
+        let s = summary(vec![id("Cm_de", Some(-1.2)), id("Cn_dr", Some(-0.1))]);
+        let x = aerodynamics_xml(&s, "a&b <c> --d.json", &p, None).unwrap();
+        let texts = parsed_texts(&x);
+        assert!(texts.iter().any(|t| t == "fcs/elevator-pos-rad[1]"), "{texts:?}");
+        assert!(texts.iter().any(|t| t == "fcs/rudder.pos_rad"), "{texts:?}");
     }
 }

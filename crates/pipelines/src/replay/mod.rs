@@ -140,7 +140,18 @@ pub trait ReplayObserver {
     fn finish(&mut self) -> std::io::Result<()> {
         Ok(())
     }
+
+    /// Whether the face asks the replay to stop (a signal, Ctrl-C): asked after each record
+    /// event, so the current sample is finished first; the replay then ends as at the end of
+    /// the record, with the summary's status [`STATUS_INTERRUPTED`].
+    fn stop_requested(&mut self) -> bool {
+        false
+    }
 }
+
+/// `summary.status` of a replay stopped on request ([`ReplayObserver::stop_requested`]) before
+/// the end of its record: its estimates are those of the samples read until then.
+pub const STATUS_INTERRUPTED: &str = "interrupted";
 
 impl ReplayObserver for () {}
 
@@ -174,6 +185,10 @@ impl<A: ReplayObserver, B: ReplayObserver> ReplayObserver for (A, B) {
     fn finish(&mut self) -> std::io::Result<()> {
         self.0.finish()?;
         self.1.finish()
+    }
+
+    fn stop_requested(&mut self) -> bool {
+        self.0.stop_requested() || self.1.stop_requested()
     }
 }
 
@@ -258,6 +273,14 @@ pub enum ReplayError {
     /// Writing the live output failed.
     #[error("writing estimates: {0}")]
     Output(#[from] std::io::Error),
+    /// The replay was stopped on request before any sample was estimated.
+    #[error("{file}: interrupted before any sample was estimated ({samples_read} rows read)")]
+    Interrupted {
+        /// The record.
+        file: String,
+        /// Rows read until then.
+        samples_read: usize,
+    },
 }
 
 /// Kind of the rejections of samples the differentiator could not centre (warm-up, gaps, end).
@@ -467,6 +490,12 @@ impl ReplayOutcome {
     /// Whether the estimator diverged.
     pub fn diverged(&self) -> bool {
         self.summary.status == Status::Diverged.name()
+    }
+
+    /// Whether the replay was stopped on request before the end of its record
+    /// ([`STATUS_INTERRUPTED`]).
+    pub fn interrupted(&self) -> bool {
+        self.summary.status == STATUS_INTERRUPTED
     }
 
     /// The failure message of a diverged replay (`None` when it did not diverge), naming the
@@ -682,7 +711,7 @@ pub fn replay_with<R: Read>(
     let mut events = record_events(reader, opts.compat.as_ref(), &opts.windows);
     for item in events.by_ref() {
         run.event(item?, &make)?;
-        if run.diverged() {
+        if run.diverged() || run.stop_requested() {
             break;
         }
     }

@@ -74,6 +74,8 @@ pub(super) struct Replay<'a> {
     pacer: Pacer,
     warnings: Vec<String>,
     diverged: bool,
+    /// The observer asked the replay to stop before the end of the record.
+    interrupted: bool,
     /// Restarts of the estimator seen so far: each is reported when it happens (on a live
     /// feed the estimates fall back to the priors then, not at the end).
     restarts_seen: u32,
@@ -108,6 +110,7 @@ impl<'a> Replay<'a> {
             pacer: Pacer::default(),
             warnings: Vec::new(),
             diverged: false,
+            interrupted: false,
             restarts_seen: 0,
             ready: Vec::new(),
             unused: Vec::new(),
@@ -117,6 +120,13 @@ impl<'a> Replay<'a> {
     /// Whether the estimator diverged (the replay stops).
     pub(super) fn diverged(&self) -> bool {
         self.diverged
+    }
+
+    /// Whether the observer asks the replay to stop (asked between events, so the sample in
+    /// hand is finished); once asked, the replay stays interrupted.
+    pub(super) fn stop_requested(&mut self) -> bool {
+        self.interrupted = self.interrupted || self.observer.stop_requested();
+        self.interrupted
     }
 
     /// Reads one record event: a rejected row is counted, a gap restarts the differentiator
@@ -322,6 +332,9 @@ impl<'a> Replay<'a> {
     /// No usable sample; a failed write of the observer.
     pub(super) fn finish(mut self) -> Result<ReplayOutcome, ReplayError> {
         self.history.finish();
+        // A request that came while the reader waited (a live feed ended by its reader on the
+        // request) is an interruption too.
+        self.stop_requested();
         self.observer.finish()?;
         if let Some(r) = &mut self.run
             && !self.diverged
@@ -333,6 +346,12 @@ impl<'a> Replay<'a> {
         }
         let no_samples = self.run.is_none() || (self.history.t_s.is_empty() && !self.diverged);
         let Some(r) = self.run.take().filter(|_| !no_samples) else {
+            if self.interrupted {
+                return Err(ReplayError::Interrupted {
+                    file: self.file,
+                    samples_read: self.samples_read,
+                });
+            }
             return Err(FlightDataError::NoSamples {
                 file: self.file,
                 rejected: self.samples_rejected,
@@ -390,6 +409,17 @@ impl<'a> Replay<'a> {
         let parameters = self.parameter_summaries();
         let (coefficients, correlations) = self.conditioning(r);
         let mut warnings = std::mem::take(&mut self.warnings);
+        let status = if self.interrupted && !self.diverged {
+            warnings.push(format!(
+                "interrupted after {} rows (last estimated sample t = {} s): the estimates are those of the samples read until then; the estimator's own status was `{}`",
+                self.samples_read,
+                self.history.t_s.last().map_or("-".into(), |t| t.to_string()),
+                status.name()
+            ));
+            super::STATUS_INTERRUPTED.to_string()
+        } else {
+            status.name().to_string()
+        };
         if !self.diverged {
             let values: Vec<Option<f64>> = parameters.iter().map(|p| p.estimate).collect();
             let sigmas: Vec<Option<f64>> = parameters.iter().map(|p| p.std_error).collect();
@@ -411,7 +441,7 @@ impl<'a> Replay<'a> {
         ReplaySummary {
             estimator: r.est.method().to_string(),
             model: r.spec.name.clone(),
-            status: status.name().to_string(),
+            status,
             samples_read: self.samples_read,
             samples_rejected: self.samples_rejected,
             rejections,

@@ -1,0 +1,185 @@
+//! A signal ends a live or long replay gracefully: the binary is spawned on a live input
+//! (stdin `-`), sent SIGINT or SIGTERM after some rows, and must leave `estimates.csv`,
+//! `summary.json` (status `interrupted`) and the report, no hidden temporary file, and exit
+//! with 128 + signal.
+#![cfg(unix)]
+
+mod common;
+use common::workspace;
+use std::io::{BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_aeroident"))
+}
+
+fn scratch(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("aeroident-cli-int-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A simulated record (`f16 sim`, 20 s at 100 Hz): its `timeseries.csv` lines.
+fn sim_lines(dir: &Path) -> Vec<String> {
+    let sc = dir.join("sim.toml");
+    std::fs::write(
+        &sc,
+        "kind = \"sim\"\n[aircraft]\nxcg = 0.30\nactuators = \"f16\"\n[trim]\nalt_ft = 20000.0\nvt_fps = 675.0\n[run]\nduration_s = 20.0\ndt_s = 0.01\nseed = 1\n",
+    )
+    .unwrap();
+    let out = dir.join("sim");
+    let o = bin().args(["f16", "sim"]).arg(&sc).arg("--out").arg(&out).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(out.join("timeseries.csv")).unwrap();
+    text.lines().map(str::to_string).collect()
+}
+
+/// `replay - --map aeroident-sim.toml --out OUT` with stdin piped; its stderr collected by a
+/// thread into the returned buffer.
+fn spawn_live(out: &Path) -> (Child, Arc<Mutex<String>>) {
+    let mut child = bin()
+        .args(["replay", "-", "--estimator", "rls", "--map"])
+        .arg(workspace().join("mappings/aeroident-sim.toml"))
+        .arg("--out")
+        .arg(out)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let err = Arc::new(Mutex::new(String::new()));
+    let sink = Arc::clone(&err);
+    let stderr = child.stderr.take().unwrap();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            let mut s = sink.lock().unwrap();
+            s.push_str(&line);
+            s.push('\n');
+        }
+    });
+    (child, err)
+}
+
+/// Waits until `text` shows `what` (the child has started estimating), at most 60 s.
+fn wait_for(text: &Mutex<String>, what: &str) {
+    let start = Instant::now();
+    while !text.lock().unwrap().contains(what) {
+        assert!(start.elapsed() < Duration::from_secs(60), "no `{what}`: {}", text.lock().unwrap());
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn signal(child: &Child, sig: &str) {
+    let ok = Command::new("kill").args([sig, &child.id().to_string()]).status().unwrap();
+    assert!(ok.success());
+}
+
+/// The child's exit code, failing (and killing it) if it has not ended within 60 s.
+fn exit_code(child: &mut Child, err: &Mutex<String>) -> i32 {
+    let start = Instant::now();
+    loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            return s.code().unwrap_or_else(|| panic!("killed by a signal: {s:?}"));
+        }
+        if start.elapsed() > Duration::from_secs(60) {
+            let _ = child.kill();
+            panic!("the replay did not end on the signal: {}", err.lock().unwrap());
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// Checks the outputs of an interrupted run: status `interrupted`, one estimates line per
+/// estimated sample, no hidden temporary file. Returns the summary's `samples_read`.
+fn check_interrupted_outputs(out: &Path, fed: &[String]) -> usize {
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(v["status"], "interrupted", "{v}");
+    let read = v["samples_read"].as_u64().unwrap() as usize;
+    let rejected = v["samples_rejected"].as_u64().unwrap() as usize;
+    assert!(read >= 1 && read < fed.len(), "{read} of {}", fed.len() - 1);
+    assert!(v["warnings"].to_string().contains("interrupted after"), "{v}");
+    let est = std::fs::read_to_string(out.join("estimates.csv")).unwrap();
+    let rows: Vec<&str> = est.lines().skip(1).collect();
+    assert_eq!(rows.len(), read - rejected, "one estimates line per estimated sample");
+    // The last estimated sample is one of the record's (its time column is the first).
+    let last_t: f64 = rows.last().unwrap().split(',').next().unwrap().parse().unwrap();
+    let fed_t: Vec<f64> =
+        fed[1..].iter().map(|l| l.split(',').next().unwrap().parse().unwrap()).collect();
+    assert!(fed_t.iter().any(|t| (t - last_t).abs() < 1e-9), "t = {last_t}");
+    assert!(out.join("report.html").exists());
+    let hidden: Vec<String> = std::fs::read_dir(out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".tmp") || n.starts_with(".tmp-"))
+        .collect();
+    assert!(hidden.is_empty(), "temporary files left: {hidden:?}");
+    read
+}
+
+/// Ctrl-C while the live feed is silent (stdin open, no line arriving): the replay must not
+/// wait for a line that never comes; it writes the results of the rows it had, status
+/// `interrupted`, and exits 130.
+#[test]
+fn sigint_on_a_silent_live_feed_writes_an_interrupted_summary() {
+    let d = scratch("silent");
+    let lines = sim_lines(&d);
+    let out = d.join("out");
+    let (mut child, err) = spawn_live(&out);
+    let mut stdin = child.stdin.take().unwrap();
+    let fed = &lines[..301];
+    for l in fed {
+        writeln!(stdin, "{l}").unwrap();
+    }
+    stdin.flush().unwrap();
+    wait_for(&err, "model");
+    std::thread::sleep(Duration::from_millis(500));
+    signal(&child, "-INT");
+    let code = exit_code(&mut child, &err);
+    drop(stdin);
+    let text = err.lock().unwrap().clone();
+    assert_eq!(code, 130, "{text}");
+    assert!(text.contains("interrupted by SIGINT"), "{text}");
+    let read = check_interrupted_outputs(&out, &lines);
+    assert!(read <= 300, "{read} rows read of 300 fed");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// SIGTERM while rows keep arriving: the replay stops between samples (before the record's
+/// end), writes its results, status `interrupted`, and exits 143.
+#[test]
+fn sigterm_on_a_flowing_live_feed_stops_between_samples() {
+    let d = scratch("flowing");
+    let lines = sim_lines(&d);
+    let out = d.join("out");
+    let (mut child, err) = spawn_live(&out);
+    let mut stdin = child.stdin.take().unwrap();
+    let feed = lines.clone();
+    // About 2,000 rows a second: the record would last ~1 s more than the signal's delay.
+    let feeder = std::thread::spawn(move || -> std::io::Result<()> {
+        for chunk in feed.chunks(20) {
+            for l in chunk {
+                writeln!(stdin, "{l}")?;
+            }
+            stdin.flush()?;
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        // Keep the feed open, as a live one is.
+        std::thread::sleep(Duration::from_secs(120));
+        Ok(())
+    });
+    wait_for(&err, "model");
+    std::thread::sleep(Duration::from_millis(300));
+    signal(&child, "-TERM");
+    let code = exit_code(&mut child, &err);
+    let text = err.lock().unwrap().clone();
+    assert_eq!(code, 143, "{text}");
+    assert!(text.contains("interrupted by SIGTERM"), "{text}");
+    check_interrupted_outputs(&out, &lines);
+    drop(feeder);
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -236,7 +236,8 @@ pub fn write_outputs(c: &Campaign, dir: &Path, figures: bool) -> anyhow::Result<
 /// Runs `aeroident montecarlo`.
 ///
 /// # Errors
-/// An unreadable or invalid scenario, `--runs 0`, unwritable outputs.
+/// An unreadable or invalid scenario, `--runs` 0 or above
+/// [`aeroident_pipelines::montecarlo::MAX_RUNS`], unwritable outputs.
 pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
     let sc = match &args.scenario {
         Some(p) => Scenario::from_path(p)?,
@@ -245,7 +246,7 @@ pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
             aeroident_pipelines::aircraft::scenario::DEFAULT_ORIGIN,
         )?,
     };
-    anyhow::ensure!(args.runs >= 1, "--runs must be at least 1");
+    aeroident_pipelines::montecarlo::check_runs(args.runs, "--runs").map_err(anyhow::Error::msg)?;
     let spin = crate::progress::spinner(&format!(
         "Monte Carlo `{}`: {} runs in parallel",
         sc.name, args.runs

@@ -268,7 +268,7 @@ fn json_keys_exact() {
 fn run_counts_are_limited_before_allocating() {
     let sc = short_scenario();
     for runs in [MAX_RUNS + 1, 1_000_000_000_000, u64::MAX] {
-        let e = campaign(&sc, runs, 1).err().expect("refused");
+        let Err(e) = campaign(&sc, runs, 1) else { panic!("{runs} runs accepted") };
         assert!(e.starts_with(&format!("runs = {runs} is more than the {MAX_RUNS}")), "{e}");
         let e = check_runs(runs, "--runs").unwrap_err();
         assert!(e.starts_with("--runs = "), "{e}");
@@ -278,5 +278,6 @@ fn run_counts_are_limited_before_allocating() {
     assert_eq!(check_runs(1, "runs"), Ok(()));
     let e = run_range(&sc, 1, 5..5 + MAX_RUNS + 1).unwrap_err();
     assert!(e.contains(&format!("{}", MAX_RUNS + 1)), "{e}");
-    assert_eq!(run_range(&sc, 1, 7..3), Ok(Vec::new()));
+    let (start, stop) = (7, 3);
+    assert_eq!(run_range(&sc, 1, start..stop), Ok(Vec::new()));
 }

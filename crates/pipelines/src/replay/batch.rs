@@ -1151,7 +1151,9 @@ mod tests {
             let map = "[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"V\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nrho = { value = 1.0, unit = \"kg/m3\" }\nmass = { value = 1000.0, unit = \"kg\" }\nS = { value = 10.0, unit = \"m2\" }\n";
             let mapping = Mapping::from_toml_str(map, "m.toml").unwrap();
             let readers: Vec<FlightDataReader<&[u8]>> = Vec::new();
-            let e = fit_records(readers, &mapping, None, options).err().expect("refused");
+            let Err(e) = fit_records(readers, &mapping, None, options) else {
+                panic!("{n} refits accepted");
+            };
             let ReplayError::Option { option: "bootstrap", reason } = &e else {
                 panic!("expected the bootstrap option named, got {e}");
             };

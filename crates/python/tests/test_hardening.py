@@ -37,9 +37,9 @@ def test_montecarlo_runs_past_the_limit_are_refused_at_once(runs):
 
 def test_distributed_campaign_halves_hold_the_same_limit():
     text, origin = aeroident._core.scenario_text(str(SHORT))
-    with pytest.raises(aeroident.AeroidentError, match="more than the 100000 runs"):
+    with pytest.raises(aeroident.AeroidentError, match=f"more than the {aeroident.MAX_RUNS} runs"):
         aeroident._core.montecarlo_runs(text, origin, 1, 7, 7 + 10**12)
-    with pytest.raises(aeroident.AeroidentError, match="more than the 100000 runs"):
+    with pytest.raises(aeroident.AeroidentError, match=f"more than the {aeroident.MAX_RUNS} runs"):
         aeroident._core.montecarlo_reduce(text, origin, 10**12, 1, [])
     assert aeroident._core.montecarlo_runs(text, origin, 1, 9, 3) == []
 
@@ -146,8 +146,8 @@ def test_ctrl_c_stops_a_long_array_replay_as_keyboard_interrupt():
 
 
 def test_ctrl_c_stops_a_long_campaign_as_keyboard_interrupt():
-    # 100000 runs would take hours: stopped after the chunk of runs under way.
-    _, elapsed = run_interrupted("", f"aeroident.montecarlo({str(SHORT)!r}, runs=100000)")
+    # MAX_RUNS runs would take hours: stopped after the chunk of runs under way.
+    _, elapsed = run_interrupted("", f"aeroident.montecarlo({str(SHORT)!r}, runs=aeroident.MAX_RUNS)")
     assert elapsed < 60.0, elapsed
 
 

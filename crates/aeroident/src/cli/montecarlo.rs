@@ -25,7 +25,7 @@ use aeroident_pipelines::montecarlo::{Campaign, campaign, json_summary};
 pub struct MonteCarloArgs {
     /// Scenario file (TOML). Without it, the built-in default scenario (`aeroident run`'s).
     pub scenario: Option<PathBuf>,
-    /// Number of runs.
+    /// Number of runs (1 to 10 000: every run's results are kept for the statistics).
     #[arg(long, default_value_t = 100)]
     pub runs: u64,
     /// Output directory (default `./aeroident-out/montecarlo`).

@@ -354,7 +354,7 @@ def montecarlo(
     ``crb_sigma`` is the bound of the experiment flown, turbulence included).
     ``per_run=True`` adds ``per_run`` (every run's final results, the CLI's ``runs.json``) and
     ``wall_s``. ``runs`` is at most :data:`MAX_RUNS` (every run's results are kept for the
-    statistics; the sampling error of a σ at that many runs is already 0.2 %).
+    statistics; the sampling error of a σ at that many runs is already 0.7 %).
 
     ``backend="local"``: the runs on this machine's rayon pool. ``backend="ray"``: chunks of
     ``chunk_size`` seeded runs (default: about 4 chunks per CPU of the cluster) as Ray tasks,

@@ -246,7 +246,9 @@ pub enum BuildError {
 }
 
 /// Builds estimator `kind` over `structure` with `priors` (one per parameter, parameter
-/// order; used by the estimators that start from a prior) and `options`.
+/// order; used by the estimators that start from a prior) and `options`. Every estimator is
+/// `Send`, so a caller may move it to another thread (the Python class, usable from any
+/// thread).
 ///
 /// # Errors
 /// [`BuildError::Batch`] for the batch output-error method; [`BuildError::Config`] when the
@@ -257,7 +259,7 @@ pub fn build(
     structure: ModelStructure,
     priors: Priors,
     options: &EstimatorOptions,
-) -> Result<Box<dyn Estimator>, BuildError> {
+) -> Result<Box<dyn Estimator + Send>, BuildError> {
     let config = |source| BuildError::Config { estimator: kind.name(), source };
     Ok(match kind {
         // RLS and FTR start without a prior (exact initialisation / frequency-domain solve).
@@ -463,6 +465,7 @@ pub fn build_sample_estimator(spec: &SampleEstimatorSpec) -> Result<Box<dyn Esti
         return Err("rls-iv: give `instrument_delay` (samples), at least `[sensors] differentiator_window`: the matched smoother correlates the noise over the whole window".into());
     }
     build(kind, spec.model, aeroident_estimators::Priors::generic(&spec.model), &options)
+        .map(|e| e as Box<dyn Estimator>)
         .map_err(|e| e.to_string())
 }
 

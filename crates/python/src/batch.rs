@@ -113,7 +113,10 @@ fn fit_file<'py>(
         }
         Ok((outcome, notes))
     };
-    let (outcome, notes) = py.detach(run).map_err(to_py)?;
+    let signals = crate::Signals::new();
+    let r = py.detach(run);
+    signals.finish(py)?;
+    let (outcome, notes) = r.map_err(to_py)?;
     let r = &outcome.result;
     let (n, np, ny) = (r.n(), r.n_params, r.outputs.len());
     let s = &outcome.summary;

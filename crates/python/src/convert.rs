@@ -94,7 +94,8 @@ pub trait Source {
 /// Builds one sample from `src`, taking the constants it lacks from `constants`.
 ///
 /// # Errors
-/// A missing required channel or constant (`mass_kg`, `S_m2`), named.
+/// A missing required channel or constant (`mass_kg`, `S_m2`), named; a constant out of its
+/// physical range ([`check_constants`]).
 pub fn sample_from(
     src: &impl Source,
     constants: &AircraftConstants,
@@ -129,7 +130,56 @@ pub fn sample_from(
             )));
         }
     }
+    check_constants(&s.constants).map_err(|e| err(format!("{}: {e}", what())))?;
     Ok(s)
+}
+
+/// Checks the constants present in `c` (absent: `NaN` mass or area, `None` others) against the
+/// library's limits, so an impossible constant is refused where it enters instead of making
+/// every sample's update fail: the estimators' finiteness and plausibility checks
+/// ([`AirDataSample::first_non_finite`], [`AirDataSample::first_implausible`]: mass, area,
+/// lengths and inertias positive and within [`aeroident_estimators::sample::PLAUSIBILITY`]),
+/// and the three they do not cover: `v0_mps` positive, `thrust_arm_m` within the length limit,
+/// `thrust_incidence_rad` within the angle limit.
+///
+/// # Errors
+/// The first constant out of range, named, with its value and the limit.
+pub fn check_constants(c: &AircraftConstants) -> Result<(), String> {
+    let limits = &aeroident_estimators::sample::PLAUSIBILITY;
+    // A probe sample with plausible channels: only the constants can be out of range. An absent
+    // mass or area (taken per sample) is probed with 1.
+    let present = |v: f64| if v.is_nan() { 1.0 } else { v };
+    let probe = AirDataSample {
+        vt_mps: 1.0,
+        qbar_pa: limits.qbar_min_pa,
+        constants: AircraftConstants { mass_kg: present(c.mass_kg), S_m2: present(c.S_m2), ..*c },
+        ..AirDataSample::default()
+    };
+    if let Some((field, value)) = probe.first_non_finite() {
+        return Err(format!("constant `{field}` = {value} is not a finite number"));
+    }
+    if let Some((field, value, limit)) = probe.first_implausible() {
+        let why = if value >= limit {
+            format!("above the limit {limit:e}")
+        } else if limit <= f64::MIN_POSITIVE {
+            "it must be positive".to_string()
+        } else {
+            format!("below the limit {limit:e}")
+        };
+        return Err(format!("constant `{field}` = {value}: {why}"));
+    }
+    let extra = [
+        ("v0_mps", c.v0_mps, f64::MIN_POSITIVE, limits.vt_mps),
+        ("thrust_arm_m", Some(c.thrust_arm_m), -limits.length_m, limits.length_m),
+        ("thrust_incidence_rad", Some(c.thrust_incidence_rad), -limits.angle_rad, limits.angle_rad),
+    ];
+    for (field, v, lo, hi) in extra {
+        if let Some(v) = v.filter(|v| !(*v >= lo && *v <= hi)) {
+            let why = if lo > 0.0 { "positive and at most " } else { "within ±" };
+            return Err(format!("constant `{field}` = {v}: it must be {why}{hi:e}"));
+        }
+    }
+    Ok(())
 }
 
 /// A Python dict of floats as a [`Source`].
@@ -141,10 +191,7 @@ impl Source for DictSource<'_, '_> {
             None => Ok(None),
             Some(v) if v.is_none() => Ok(None),
             Some(v) => Ok(present(v.extract::<f64>().map_err(|_| {
-                err(format!(
-                    "sample key `{key}`: expected a number, got {}",
-                    v.repr().map_or_else(|_| "?".into(), |r| r.to_string())
-                ))
+                err(format!("sample key `{key}`: expected a number, got {}", describe(&v)))
             })?)),
         }
     }
@@ -153,7 +200,8 @@ impl Source for DictSource<'_, '_> {
 /// Constants from a Python dict (`None` → all absent; mass and area then come per sample).
 ///
 /// # Errors
-/// An unknown key (listing the known ones) or a non-number.
+/// An unknown key (listing the known ones), a non-number, or a constant out of its physical
+/// range ([`check_constants`]).
 pub fn constants_from(d: Option<&Bound<'_, PyDict>>) -> PyResult<AircraftConstants> {
     let mut c = AircraftConstants { mass_kg: f64::NAN, S_m2: f64::NAN, ..Default::default() };
     let Some(d) = d else { return Ok(c) };
@@ -163,10 +211,22 @@ pub fn constants_from(d: Option<&Bound<'_, PyDict>>) -> PyResult<AircraftConstan
             let known: Vec<&str> = CONSTANTS.iter().map(|f| f.0).collect();
             return Err(err(format!("constants: unknown key `{k}` (known: {})", known.join(", "))));
         };
-        let v: Option<f64> = if v.is_none() { None } else { present(v.extract()?) };
+        let v: Option<f64> = if v.is_none() {
+            None
+        } else {
+            present(v.extract().map_err(|_| {
+                err(format!("constants: `{k}` must be a number or None, got {}", describe(&v)))
+            })?)
+        };
         (f.2)(&mut c, v);
     }
+    check_constants(&c).map_err(|e| err(format!("constants: {e}")))?;
     Ok(c)
+}
+
+/// A Python object's `repr` for an error message.
+fn describe(v: &Bound<'_, PyAny>) -> String {
+    v.repr().map_or_else(|_| "?".into(), |r| r.to_string())
 }
 
 /// A JSON document as Python objects (numbers stay `f64`/`int` exactly; no text round trip).

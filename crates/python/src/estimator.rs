@@ -1,6 +1,12 @@
 //! `aeroident.Estimator` (and the per-method subclasses in the Python package): one online
 //! estimator from the factory (`crates/pipelines/src/estimators.rs`), fed one sample dict at a
 //! time.
+//!
+//! The object may be used from any Python thread (a thread pool, a callback thread): its state
+//! is behind a mutex, each method holding it only for its own call, so updates from several
+//! threads are applied one at a time, whole, in the order they take it.
+
+use std::sync::{Mutex, MutexGuard};
 
 use aeroident_estimators::{AircraftConstants, Status};
 use aeroident_pipelines::estimators::{EstimatorKind, EstimatorOptions, build};
@@ -17,13 +23,31 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 }
 
 /// An online estimator (see the Python package's `Estimator` docstring).
-#[pyclass(unsendable, subclass, module = "aeroident", name = "EstimatorBase")]
+#[pyclass(subclass, module = "aeroident", name = "EstimatorBase")]
 pub struct Estimator {
-    est: Box<dyn aeroident_estimators::Estimator>,
+    state: Mutex<State>,
     kind: EstimatorKind,
     model: String,
     constants: AircraftConstants,
+}
+
+/// What an update changes: the estimator and its count of accepted samples.
+struct State {
+    est: Box<dyn aeroident_estimators::Estimator + Send>,
     samples: usize,
+}
+
+impl Estimator {
+    /// The state, for one method call. A panic while it was held (a bug) leaves it poisoned:
+    /// the estimator is then refused rather than used half-updated.
+    fn state(&self) -> PyResult<MutexGuard<'_, State>> {
+        self.state.lock().map_err(|_| {
+            err(format!(
+                "estimator `{}`: an earlier call failed inside the library; make a new estimator",
+                self.kind.name()
+            ))
+        })
+    }
 }
 
 #[pymethods]
@@ -51,7 +75,12 @@ impl Estimator {
             ftr_grid_hz,
         };
         let est = build(k, spec.structure, spec.priors, &opts).map_err(|e| err(e.to_string()))?;
-        Ok(Self { est, kind: k, model: spec.name, constants, samples: 0 })
+        Ok(Self {
+            state: Mutex::new(State { est, samples: 0 }),
+            kind: k,
+            model: spec.name,
+            constants,
+        })
     }
 
     /// The method's name (`rls`, `rls-iv`, `ftr`, `ekf` …).
@@ -68,28 +97,31 @@ impl Estimator {
 
     /// Parameter names, in order.
     #[getter]
-    fn names(&self) -> Vec<&'static str> {
-        self.est.structure().names().collect()
+    fn names(&self) -> PyResult<Vec<&'static str>> {
+        Ok(self.state()?.est.structure().names().collect())
     }
 
     /// Samples accepted so far.
     #[getter]
-    fn samples(&self) -> usize {
-        self.samples
+    fn samples(&self) -> PyResult<usize> {
+        Ok(self.state()?.samples)
     }
 
     /// Consumes one sample (a dict of SI channels; see `sample_keys()`).
-    fn update(&mut self, sample: &Bound<'_, PyDict>) -> PyResult<()> {
-        let n = self.samples;
-        let s =
-            convert::sample_from(&DictSource(sample), &self.constants, &|| format!("sample {n}"))?;
-        let r = self.est.update(&s).map(|_| ());
+    fn update(&self, sample: &Bound<'_, PyDict>) -> PyResult<()> {
+        // The sample is converted first (it may run Python code: a number's `__float__`), and
+        // the state taken after, so no Python code runs while it is held.
+        let n = self.state()?.samples;
+        let what = || format!("sample {n}");
+        let s = convert::sample_from(&DictSource(sample), &self.constants, &what)?;
+        let mut st = self.state()?;
+        let r = st.est.update(&s).map(|_| ());
         match r {
             Ok(_) => {
-                self.samples += 1;
+                st.samples += 1;
                 Ok(())
             }
-            Err(e) if self.est.estimates().status == Status::Diverged => Err(err(format!(
+            Err(e) if st.est.estimates().status == Status::Diverged => Err(err(format!(
                 "estimator `{}` diverged at t = {} s ({e})",
                 self.kind.name(),
                 s.t_s
@@ -101,47 +133,65 @@ impl Estimator {
     /// The current estimates: dict with `names`, `values` (None = not identified), `sigma`
     /// (None = none reported) and `status`.
     fn estimates<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let e = self.est.estimates();
-        let n = self.est.structure().n_params();
+        let (names, values, sigma, status) = {
+            let st = self.state()?;
+            let (e, structure) = (st.est.estimates(), st.est.structure());
+            let n = structure.n_params();
+            let names: Vec<&'static str> = structure.names().collect();
+            let values: Vec<Option<f64>> = (0..n).map(|i| e.value(i)).collect();
+            let sigma: Vec<Option<f64>> = (0..n).map(|i| e.sigma(i)).collect();
+            (names, values, sigma, e.status.name())
+        };
         let d = PyDict::new(py);
-        d.set_item("names", self.names())?;
-        d.set_item("values", (0..n).map(|i| e.value(i)).collect::<Vec<_>>())?;
-        d.set_item("sigma", (0..n).map(|i| e.sigma(i)).collect::<Vec<_>>())?;
-        d.set_item("status", e.status.name())?;
+        d.set_item("names", names)?;
+        d.set_item("values", values)?;
+        d.set_item("sigma", sigma)?;
+        d.set_item("status", status)?;
         Ok(d)
     }
 
-    /// Covariance of parameters `i` and `j` (None where the method gives none).
-    fn covariance(&self, i: usize, j: usize) -> Option<f64> {
-        self.est.covariance(i, j)
+    /// Covariance of parameters `i` and `j` (None where the method gives none); an index past
+    /// the parameters is an `IndexError`.
+    fn covariance(&self, i: usize, j: usize) -> PyResult<Option<f64>> {
+        let st = self.state()?;
+        let n = st.est.structure().n_params();
+        if i >= n || j >= n {
+            return Err(pyo3::exceptions::PyIndexError::new_err(format!(
+                "covariance({i}, {j}): the model has {n} parameters (indices 0 to {})",
+                n.saturating_sub(1)
+            )));
+        }
+        Ok(st.est.covariance(i, j))
     }
 
     /// Mean normalised innovation squared (None for methods without innovations).
-    fn nis(&self) -> Option<f64> {
-        self.est.nis()
+    fn nis(&self) -> PyResult<Option<f64>> {
+        Ok(self.state()?.est.nis())
     }
 
     /// What the estimator did to itself so far: dict with `listed` (`[{t_s, kind, subject}]`,
     /// kind `restart`, `reanchor` or `change_detected`), `counts` (per kind) and `not_listed`,
     /// as in the replay summary's `events`.
     fn events<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let s = aeroident_io::replay_output::EventsSummary::from_log(self.est.events());
+        let s = aeroident_io::replay_output::EventsSummary::from_log(self.state()?.est.events());
         let v = serde_json::to_value(&s).map_err(|e| err(e.to_string()))?;
         crate::convert::json_to_py(py, &v)
     }
 
     /// A new manoeuvre starts with the next sample (model states re-initialised).
-    fn new_manoeuvre(&mut self) {
-        self.est.new_manoeuvre();
+    fn new_manoeuvre(&self) -> PyResult<()> {
+        self.state()?.est.new_manoeuvre();
+        Ok(())
     }
 
-    fn __repr__(&self) -> String {
-        format!(
+    fn __repr__(&self) -> PyResult<String> {
+        let st = self.state()?;
+        Ok(format!(
             "<aeroident estimator {} on {} ({} parameters), {} samples>",
             self.kind.name(),
             self.model,
-            self.est.structure().n_params(),
-            self.samples
-        )
+            st.est.structure().n_params(),
+            st.samples
+        ))
     }
 }

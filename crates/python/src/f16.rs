@@ -1,6 +1,7 @@
 //! The F-16 (Stevens, Lewis & Johnson 3rd ed.): `trim`, `linearize`, `simulate`, the same code
 //! and messages as `aeroident f16 trim|linearize|sim`.
 
+use std::io::Write as _;
 use std::path::Path;
 
 use aeroident_models::f16::{ALPHA, BETA, F16, N_STATES, STATE_NAMES, THETA};
@@ -31,7 +32,8 @@ fn do_trim(a: &TrimRequest) -> anyhow::Result<(F16, F16Trim)> {
     }
     let (f16, t) = trim_at(a)?;
     for w in &t.out_of_range {
-        eprintln!("warning: {}", out_of_range_warning(w));
+        // `eprintln!` panics when stderr is closed; a warning is not worth a panic.
+        let _ = writeln!(std::io::stderr(), "warning: {}", out_of_range_warning(w));
     }
     Ok((f16, t))
 }
@@ -70,7 +72,9 @@ fn trim<'py>(
     pull_up_deg_s: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let c = TrimRequest { alt_ft, vt_fps, xcg, gamma_deg, turn_rate_deg_s, pull_up_deg_s };
-    let (_, t) = py.detach(move || do_trim(&c)).map_err(to_py)?;
+    let r = py.detach(move || do_trim(&c));
+    py.check_signals()?;
+    let (_, t) = r.map_err(to_py)?;
     trim_dict(py, &t)
 }
 
@@ -87,13 +91,13 @@ fn linearize<'py>(
     pull_up_deg_s: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let c = TrimRequest { alt_ft, vt_fps, xcg, gamma_deg, turn_rate_deg_s, pull_up_deg_s };
-    let (t, lin) = py
-        .detach(move || -> anyhow::Result<_> {
-            let (f16, t) = do_trim(&c)?;
-            let lin = linearize_f16(&f16, &t.state, &t.controls)?;
-            Ok((t, lin))
-        })
-        .map_err(to_py)?;
+    let r = py.detach(move || -> anyhow::Result<_> {
+        let (f16, t) = do_trim(&c)?;
+        let lin = linearize_f16(&f16, &t.state, &t.controls)?;
+        Ok((t, lin))
+    });
+    py.check_signals()?;
+    let (t, lin) = r.map_err(to_py)?;
     let a = Array2::from_shape_fn((N_STATES, N_STATES), |(i, j)| lin.a[(i, j)]);
     let b = Array2::from_shape_fn((N_STATES, 4), |(i, j)| lin.b[(i, j)]);
     let ev = eigenvalues(&lin.a);
@@ -123,13 +127,13 @@ fn linearize<'py>(
 #[pyfunction]
 fn simulate<'py>(py: Python<'py>, scenario: &str) -> PyResult<Bound<'py, PyDict>> {
     let path = scenario.to_owned();
-    let r = py
-        .detach(move || {
-            let p = Path::new(&path);
-            let sc = aeroident_pipelines::sim::load_scenario(p)?;
-            aeroident_pipelines::sim::run(&sc, p.parent().unwrap_or(Path::new(".")))
-        })
-        .map_err(to_py)?;
+    let r = py.detach(move || {
+        let p = Path::new(&path);
+        let sc = aeroident_pipelines::sim::load_scenario(p)?;
+        aeroident_pipelines::sim::run(&sc, p.parent().unwrap_or(Path::new(".")))
+    });
+    py.check_signals()?;
+    let r = r.map_err(to_py)?;
     let d = PyDict::new(py);
     for (name, col) in r.columns.iter().zip(r.data) {
         d.set_item(name, col.into_pyarray(py))?;

@@ -8,16 +8,14 @@
 use aeroident_pipelines::aircraft::Scenario;
 use aeroident_pipelines::aircraft::scenario::{DEFAULT_ORIGIN, DEFAULT_SCENARIO};
 use aeroident_pipelines::montecarlo::{
-    Campaign, EstimatorRun, ParamRun, RunResult, assemble, campaign, json_summary, run_result,
-    seeded_scenario,
+    Campaign, EstimatorRun, ParamRun, RunResult, assemble, check_runs, json_summary, run_range,
 };
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use rayon::prelude::*;
 use serde_json::Value;
 
 use crate::convert::{json_to_py, py_to_json};
-use crate::{err, to_py};
+use crate::{Signals, err, to_py};
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(scenario_text, m)?)?;
@@ -57,7 +55,8 @@ fn runs_to_py<'py>(py: Python<'py>, runs: &[RunResult]) -> PyResult<Bound<'py, P
     Ok(l)
 }
 
-/// The whole campaign on this machine's rayon pool (see `aeroident.montecarlo`).
+/// The whole campaign on this machine's rayon pool (see `aeroident.montecarlo`), run in
+/// chunks so that Ctrl-C is seen between them (`KeyboardInterrupt`, nothing returned).
 #[pyfunction]
 #[pyo3(signature = (scenario_toml, origin, runs, seed=1, per_run=false))]
 fn montecarlo_local<'py>(
@@ -68,9 +67,59 @@ fn montecarlo_local<'py>(
     seed: u64,
     per_run: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
+    check_runs(runs, "runs").map_err(err)?;
     let sc = parse(scenario_toml, origin)?;
-    let c = py.detach(move || campaign(&sc, runs, seed)).map_err(err)?;
+    let signals = Signals::new();
+    let c = py.detach(|| -> Result<Option<Campaign>, String> {
+        let start = std::time::Instant::now();
+        let Some(results) = runs_in_chunks(&sc, seed, 0, runs, &signals, None)? else {
+            return Ok(None);
+        };
+        let wall_s = start.elapsed().as_secs_f64();
+        Ok(Some(assemble(&sc, seed, results, wall_s, rayon::current_num_threads())))
+    });
+    signals.finish(py)?;
+    let c = c.map_err(err)?.ok_or_else(|| err("montecarlo: interrupted"))?;
     summary_dict(py, &c, per_run)
+}
+
+/// Runs `start..stop` ([`run_range`]) a few runs per thread at a time, asking `signals` between
+/// chunks; `None` when interrupted. The results are those of one [`run_range`] call (each run
+/// depends only on its index), in run order.
+///
+/// # Errors
+/// More than [`aeroident_pipelines::montecarlo::MAX_RUNS`] runs, before any.
+fn runs_in_chunks(
+    sc: &aeroident_pipelines::aircraft::Scenario,
+    seed: u64,
+    start: u64,
+    stop: u64,
+    signals: &Signals,
+    pool: Option<&rayon::ThreadPool>,
+) -> Result<Option<Vec<RunResult>>, String> {
+    let n = stop.saturating_sub(start);
+    if n > 0 {
+        check_runs(n, "runs")?;
+    }
+    let threads =
+        pool.map_or_else(rayon::current_num_threads, rayon::ThreadPool::current_num_threads);
+    let chunk = 4 * threads.max(1) as u64;
+    let mut results = Vec::new();
+    let mut a = start;
+    while a < stop {
+        // Asked on the calling thread: Python runs signal handlers on the main thread only.
+        if signals.interrupted() {
+            return Ok(None);
+        }
+        let b = a.saturating_add(chunk).min(stop);
+        let go = || run_range(sc, seed, a..b);
+        results.extend(match pool {
+            Some(p) => p.install(go),
+            None => go(),
+        }?);
+        a = b;
+    }
+    Ok(Some(results))
 }
 
 fn summary_dict<'py>(py: Python<'py>, c: &Campaign, per_run: bool) -> PyResult<Bound<'py, PyDict>> {
@@ -85,7 +134,7 @@ fn summary_dict<'py>(py: Python<'py>, c: &Campaign, per_run: bool) -> PyResult<B
 /// Runs `start..stop` of the campaign (seed rule of `aeroident_pipelines::montecarlo`) on this process's
 /// rayon pool (or on `threads` threads of its own when given: a Ray task uses the CPUs it
 /// reserved, not the whole node); per-run results as dicts (the `runs.json` entries of the
-/// CLI).
+/// CLI). At most [`aeroident_pipelines::montecarlo::MAX_RUNS`] runs.
 #[pyfunction]
 #[pyo3(signature = (scenario_toml, origin, seed, start, stop, threads=None))]
 fn montecarlo_runs<'py>(
@@ -97,6 +146,10 @@ fn montecarlo_runs<'py>(
     stop: u64,
     threads: Option<usize>,
 ) -> PyResult<Bound<'py, PyList>> {
+    let n = stop.saturating_sub(start);
+    if n > 0 {
+        check_runs(n, "stop - start").map_err(err)?;
+    }
     let sc = parse(scenario_toml, origin)?;
     let pool = match threads {
         Some(n) => Some(
@@ -107,30 +160,11 @@ fn montecarlo_runs<'py>(
         ),
         None => None,
     };
-    let results: Vec<RunResult> = py.detach(move || {
-        let go = || chunk(&sc, seed, start, stop);
-        match &pool {
-            Some(p) => p.install(go),
-            None => go(),
-        }
-    });
+    let signals = Signals::new();
+    let results = py.detach(|| runs_in_chunks(&sc, seed, start, stop, &signals, pool.as_ref()));
+    signals.finish(py)?;
+    let results = results.map_err(err)?.ok_or_else(|| err("montecarlo: interrupted"))?;
     runs_to_py(py, &results)
-}
-
-/// Runs `start..stop` exactly as `aeroident_pipelines::montecarlo::run_all` runs each index.
-fn chunk(sc: &Scenario, seed: u64, start: u64, stop: u64) -> Vec<RunResult> {
-    (start..stop)
-        .into_par_iter()
-        .map(|i| {
-            let s = seeded_scenario(sc, seed, i);
-            match aeroident_pipelines::aircraft::run(&s) {
-                Ok(out) => run_result(i, s.sensors.seed, &out),
-                Err(e) => {
-                    RunResult { index: i, sensor_seed: s.sensors.seed, outcome: Err(e.to_string()) }
-                }
-            }
-        })
-        .collect()
 }
 
 /// The statistics of `aeroident montecarlo --json` from every run's result (any order, each
@@ -149,15 +183,12 @@ fn montecarlo_reduce<'py>(
     threads: usize,
     keep_per_run: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
-    if runs == 0 {
-        return Err(err("runs must be at least 1"));
-    }
+    check_runs(runs, "runs").map_err(err)?;
     let sc = parse(scenario_toml, origin)?;
     let mut results: Vec<RunResult> =
         per_run.iter().map(|o| run_from_json(&py_to_json(&o)?)).collect::<PyResult<_>>()?;
     results.sort_by_key(|r| r.index);
-    let indices: Vec<u64> = results.iter().map(|r| r.index).collect();
-    if indices != (0..runs).collect::<Vec<u64>>() {
+    if !results.iter().map(|r| r.index).eq(0..runs) {
         return Err(err(format!(
             "montecarlo reduce: expected one result for each run 0..{runs}, got {} results",
             results.len()

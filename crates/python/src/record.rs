@@ -4,18 +4,19 @@
 use std::path::Path;
 
 use aeroident_estimators::{AirDataSample, ModelStructure};
-use aeroident_io::{FlightDataReader, Mapping, ModelSpec, RecordEvent};
+use aeroident_io::{Mapping, ModelSpec, RecordEvent, open_log_with_notes};
 use aeroident_pipelines::estimators::{EstimatorKind, EstimatorOptions, build};
-use aeroident_pipelines::replay::arrays::{EstimateArrays, replay_arrays, replay_samples};
-use aeroident_pipelines::replay::{DerivativeSource, Pacing, ReplayOptions, unsupported};
-use anyhow::Context as _;
+use aeroident_pipelines::replay::arrays::{EstimateArrays, replay_arrays_observed, replay_samples};
+use aeroident_pipelines::replay::{
+    DerivativeSource, Pacing, ReplayObserver, ReplayOptions, unsupported,
+};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyReadonlyArray1};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::convert::{self, CONSTANTS, OPTIONAL, REQUIRED, Source};
-use crate::{err, to_py};
+use crate::{Signals, err, to_py};
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read, m)?)?;
@@ -72,12 +73,14 @@ struct Columns {
     rejected_rows: Vec<u64>,
     rejected_reasons: Vec<String>,
     gap_rows: Vec<u64>,
+    notes: Vec<String>,
 }
 
-fn read_columns(path: &str, mapping: &str) -> anyhow::Result<Columns> {
+/// Reads `path` with the CLI's reader for its extension ([`open_log_with_notes`]: CSV,
+/// `.asc`, `.mat`, ULog, DataFlash), stopping early when `signals` reports Ctrl-C.
+fn read_columns(path: &str, mapping: &str, signals: &Signals) -> anyhow::Result<Columns> {
     let mapping = Mapping::from_path(Path::new(mapping))?;
-    let file = std::fs::File::open(path).with_context(|| format!("opening {path}"))?;
-    let reader = FlightDataReader::new(std::io::BufReader::new(file), path, &mapping)?;
+    let (reader, notes) = open_log_with_notes(path, None, &mapping)?;
     let keys = convert::all_keys();
     let mut c = Columns {
         rows: Vec::new(),
@@ -85,8 +88,12 @@ fn read_columns(path: &str, mapping: &str) -> anyhow::Result<Columns> {
         rejected_rows: Vec::new(),
         rejected_reasons: Vec::new(),
         gap_rows: Vec::new(),
+        notes,
     };
     for ev in reader {
+        if signals.interrupted() {
+            break; // the caller raises the handler's exception
+        }
         match ev? {
             RecordEvent::Sample { row, sample: s } => {
                 c.rows.push(row);
@@ -120,7 +127,10 @@ fn read_columns(path: &str, mapping: &str) -> anyhow::Result<Columns> {
 #[pyo3(signature = (path, mapping))]
 fn read<'py>(py: Python<'py>, path: &str, mapping: &str) -> PyResult<Bound<'py, PyDict>> {
     let (p, m) = (path.to_owned(), mapping.to_owned());
-    let c = py.detach(move || read_columns(&p, &m)).map_err(to_py)?;
+    let signals = Signals::new();
+    let c = py.detach(|| read_columns(&p, &m, &signals));
+    signals.finish(py)?;
+    let c = c.map_err(to_py)?;
     let d = PyDict::new(py);
     for (k, v) in c.cols {
         d.set_item(k, v.into_pyarray(py))?;
@@ -129,7 +139,26 @@ fn read<'py>(py: Python<'py>, path: &str, mapping: &str) -> PyResult<Bound<'py, 
     d.set_item("rejected_rows", c.rejected_rows.into_pyarray(py))?;
     d.set_item("rejected_reasons", c.rejected_reasons)?;
     d.set_item("gap_rows", c.gap_rows.into_pyarray(py))?;
+    d.set_item("notes", c.notes)?;
     Ok(d)
+}
+
+/// A replay observer that ends the replay at Ctrl-C (its error stops the replay loop; the
+/// caller raises the handler's exception instead of that error).
+struct Interruptible<'a>(&'a Signals);
+
+impl ReplayObserver for Interruptible<'_> {
+    fn estimate(
+        &mut self,
+        _t_s: f64,
+        _v: &[Option<f64>],
+        _s: &[Option<f64>],
+    ) -> std::io::Result<()> {
+        if self.0.interrupted() {
+            return Err(std::io::Error::other("interrupted"));
+        }
+        Ok(())
+    }
 }
 
 /// The result dict of a replay: names, t_s, estimates and sigma (time × parameter).
@@ -177,7 +206,8 @@ fn replay_file<'py>(
     let compat = compat.map(str::to_owned);
     let derivatives = derivative_source(derivatives)?;
     let (path, mapping, model) = (path.to_owned(), mapping.to_owned(), model.map(str::to_owned));
-    let run = move || -> anyhow::Result<_> {
+    let signals = Signals::new();
+    let run = || -> anyhow::Result<_> {
         let mapping = Mapping::from_path(Path::new(&mapping))?;
         let model = model.as_deref().map(ModelSpec::from_arg).transpose()?;
         if kind.is_batch() {
@@ -200,24 +230,26 @@ fn replay_file<'py>(
                 .transpose()?,
             windows,
         };
-        let file = std::fs::File::open(&path).with_context(|| format!("opening {path}"))?;
-        let reader = FlightDataReader::new(std::io::BufReader::new(file), &path, &mapping)?;
-        let (mut outcome, arrays) = replay_arrays(reader, &mapping, &opts)?;
+        let (reader, notes) = open_log_with_notes(&path, None, &mapping)?;
+        let (mut outcome, arrays) =
+            replay_arrays_observed(reader, &mapping, &opts, &mut Interruptible(&signals))?;
         if let Some(e) = outcome.diverged_error(kind.name()) {
             anyhow::bail!(e);
         }
         if cross_check {
-            let file = std::fs::File::open(&path).with_context(|| format!("opening {path}"))?;
-            let reader = FlightDataReader::new(std::io::BufReader::new(file), &path, &mapping)?;
+            let (reader, _) = open_log_with_notes(&path, None, &mapping)?;
             aeroident_pipelines::replay::cross_check_record(&mut outcome, reader, &mapping, &opts);
         }
         let summary = serde_json::to_value(outcome.document(None))?;
-        Ok((outcome.model.name, summary, arrays))
+        Ok((outcome.model.name, summary, arrays, notes))
     };
-    let (model, summary, arrays) = py.detach(run).map_err(to_py)?;
+    let r = py.detach(run);
+    signals.finish(py)?;
+    let (model, summary, arrays, notes) = r.map_err(to_py)?;
     let d = arrays_dict(py, arrays)?;
     d.set_item("model", model)?;
     d.set_item("summary", convert::json_to_py(py, &summary)?)?;
+    d.set_item("notes", notes)?;
     Ok(d)
 }
 
@@ -318,16 +350,32 @@ fn replay_arrays_py<'py>(
     }
     let opts = EstimatorOptions { forgetting, sample_interval_s, ..EstimatorOptions::default() };
     drop(slices);
-    let (result, model_name) = py.detach(move || {
-        // Built on this thread: an estimator is not `Send`.
+    let first = *first;
+    let (spec_structure, spec_priors) = (spec.structure, spec.priors);
+    let signals = Signals::new();
+    let (result, model_name) = py.detach(|| {
+        // Ctrl-C ends the feed; the handler's exception is raised below.
+        let feed = samples.into_iter().take_while(|_| !signals.interrupted());
         let r = build(kind, spec.structure, spec.priors, &opts)
-            .map(|est| replay_samples(est, samples))
+            .map(|est| replay_samples(est, feed))
             .map_err(|e| e.to_string());
         (r, spec.name)
     });
+    signals.finish(py)?;
     let (arrays, refused, diverged, events) = result.map_err(err)?;
     if let Some(msg) = diverged {
         return Err(err(format!("{msg}; its estimates are not a result")));
+    }
+    if arrays.t_s.is_empty() {
+        // Every sample refused: empty arrays would pass for a result. The first refusal's
+        // reason, from a fresh estimator given the first sample.
+        let why = build(kind, spec_structure, spec_priors, &opts)
+            .ok()
+            .and_then(|mut est| est.update(&first).err())
+            .map_or_else(String::new, |e| format!(" (the first: {e})"));
+        return Err(err(format!(
+            "arrays: the estimator accepted none of the {n} samples, {refused} refused{why}"
+        )));
     }
     let d = arrays_dict(py, arrays)?;
     d.set_item("model", model_name)?;

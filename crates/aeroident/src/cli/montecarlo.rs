@@ -25,7 +25,7 @@ use aeroident_pipelines::montecarlo::{Campaign, campaign, json_summary};
 pub struct MonteCarloArgs {
     /// Scenario file (TOML). Without it, the built-in default scenario (`aeroident run`'s).
     pub scenario: Option<PathBuf>,
-    /// Number of runs.
+    /// Number of runs (1 to 10 000: every run's results are kept for the statistics).
     #[arg(long, default_value_t = 100)]
     pub runs: u64,
     /// Output directory (default `./aeroident-out/montecarlo`).
@@ -224,7 +224,8 @@ pub fn write_outputs(c: &Campaign, od: &mut OutputDir, figures: bool) -> anyhow:
 /// Runs `aeroident montecarlo`.
 ///
 /// # Errors
-/// An unreadable or invalid scenario, `--runs 0`, unwritable outputs.
+/// An unreadable or invalid scenario, `--runs` 0 or above
+/// [`aeroident_pipelines::montecarlo::MAX_RUNS`], unwritable outputs.
 pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
     let sc = match &args.scenario {
         Some(p) => Scenario::from_path(p)?,
@@ -233,7 +234,7 @@ pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
             aeroident_pipelines::aircraft::scenario::DEFAULT_ORIGIN,
         )?,
     };
-    anyhow::ensure!(args.runs >= 1, "--runs must be at least 1");
+    aeroident_pipelines::montecarlo::check_runs(args.runs, "--runs").map_err(anyhow::Error::msg)?;
     let spin = crate::progress::spinner(&format!(
         "Monte Carlo `{}`: {} runs in parallel",
         sc.name, args.runs

@@ -118,8 +118,9 @@ pub struct ReplayArgs {
     pub initial_states: Option<InitialStatesArg>,
     /// `oe`: the parametric bootstrap σ from N replicas of the record flown through the fitted
     /// model with the process and measurement noise a filter-error fit of the same record
-    /// estimates, each refitted (N ≥ 2; 20–50 typical; docs/uncertainty.md, "Output error:
-    /// the parametric bootstrap"). Its σ becomes the reported `std_error`.
+    /// estimates, each refitted (N ≥ 2; 20–50 typical; at most 10 000, each replica being a
+    /// whole refit; docs/uncertainty.md, "Output error: the parametric bootstrap"). Its σ
+    /// becomes the reported `std_error`.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..))]
     pub bootstrap: Option<u32>,
     /// `oe`, `fem`: most Gauss–Newton iterations (default 50 for `oe`, 250 for `fem`). A fit

@@ -77,9 +77,9 @@ use serde::Serialize;
 
 use crate::estimators::SampleEstimatorSpec;
 use crate::replay::batch::{
-    BOOTSTRAP_SEED, MAX_ITERATIONS, bootstrap_sigma, fem_reported_sigma, fit_fem_manoeuvres,
-    fit_manoeuvres, initial_states_name, oe_config, parse_process_noise_states, process_noise_of,
-    reported_sigma, termination_note,
+    BOOTSTRAP_SEED, MAX_ITERATIONS, bootstrap_sigma, check_bootstrap_refits, fem_reported_sigma,
+    fit_fem_manoeuvres, fit_manoeuvres, initial_states_name, oe_config, parse_process_noise_states,
+    process_noise_of, reported_sigma, termination_note,
 };
 
 /// The configuration of a batch entry: output error or the filter-error method.
@@ -165,8 +165,13 @@ pub fn config(spec: &SampleEstimatorSpec) -> Result<BatchConfig, String> {
             }
             ("samples", Some(which @ ("raw" | "smoothed"))) => raw = which == "raw",
             ("bootstrap_refits", _) if kind == "oe" => {
-                match spec.options.get(key).and_then(toml::Value::as_integer) {
-                    Some(n) if n >= 2 => bootstrap_refits = Some(n as usize),
+                let n = spec.options.get(key).and_then(toml::Value::as_integer);
+                match n.and_then(|n| usize::try_from(n).ok()) {
+                    Some(n) if n >= 2 => {
+                        check_bootstrap_refits(n)
+                            .map_err(|e| format!("oe: `bootstrap_refits`: {e}"))?;
+                        bootstrap_refits = Some(n);
+                    }
                     _ => {
                         return Err(format!(
                             "oe: `bootstrap_refits` must be an integer of at least 2, got {}",
@@ -433,5 +438,21 @@ mod tests {
         assert!(e.contains("`gamma` unknown"), "{e}");
         let e = config(&spec("fem", "process_noise = \" , \"")).unwrap_err();
         assert!(e.contains("names no state"), "{e}");
+    }
+
+    /// `bootstrap_refits` is held to 2 to [`MAX_BOOTSTRAP_REFITS`] when the scenario is read,
+    /// with the key named; a count past `usize` or negative is refused too.
+    #[test]
+    fn the_bootstrap_refit_count_is_limited() {
+        use crate::replay::batch::MAX_BOOTSTRAP_REFITS;
+        let ok = format!("samples = \"raw\"\nbootstrap_refits = {MAX_BOOTSTRAP_REFITS}");
+        assert!(config(&spec("oe", &ok)).is_ok());
+        for n in [MAX_BOOTSTRAP_REFITS as i64 + 1, 4_294_967_295, i64::MAX] {
+            let e = config(&spec("oe", &format!("samples = \"raw\"\nbootstrap_refits = {n}")))
+                .unwrap_err();
+            assert!(e.starts_with("oe: `bootstrap_refits`: ") && e.contains("more than"), "{e}");
+        }
+        let e = config(&spec("oe", "samples = \"raw\"\nbootstrap_refits = -3")).unwrap_err();
+        assert!(e.contains("at least 2"), "{e}");
     }
 }

@@ -179,8 +179,8 @@ fn seeded_scenario_sets_seeds() {
 fn runs_identical_across_thread_counts() {
     let sc = short_scenario();
     let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
-    let a = pool(1).install(|| run_all(&sc, 3, 11));
-    let b = pool(2).install(|| run_all(&sc, 3, 11));
+    let a = pool(1).install(|| run_range(&sc, 11, 0..3)).unwrap();
+    let b = pool(2).install(|| run_range(&sc, 11, 0..3)).unwrap();
     assert_eq!(a, b);
     let fin = |r: &RunResult| -> Vec<Option<u64>> {
         r.outcome.as_ref().unwrap()[0].params.iter().map(|p| p.r#final.map(f64::to_bits)).collect()
@@ -258,4 +258,26 @@ fn json_keys_exact() {
     assert_eq!(keys(&e["parameters"][0]), want);
     assert_eq!(v["runs"], 1);
     assert!(e["parameters"][0]["crb_sigma"].is_null());
+}
+
+/// A campaign's run count is checked before any run or allocation: 0 and more than
+/// [`MAX_RUNS`] are refused with the option named (`u64::MAX` once overflowed the results'
+/// capacity), [`MAX_RUNS`] itself is accepted; a chunk of a distributed campaign is held to the
+/// same limit wherever it starts, and an empty (or reversed) chunk is no error.
+#[test]
+fn run_counts_are_limited_before_allocating() {
+    let sc = short_scenario();
+    for runs in [MAX_RUNS + 1, 1_000_000_000_000, u64::MAX] {
+        let Err(e) = campaign(&sc, runs, 1) else { panic!("{runs} runs accepted") };
+        assert!(e.starts_with(&format!("runs = {runs} is more than the {MAX_RUNS}")), "{e}");
+        let e = check_runs(runs, "--runs").unwrap_err();
+        assert!(e.starts_with("--runs = "), "{e}");
+    }
+    assert_eq!(campaign(&sc, 0, 1).err().as_deref(), Some("runs must be at least 1"));
+    assert_eq!(check_runs(MAX_RUNS, "runs"), Ok(()));
+    assert_eq!(check_runs(1, "runs"), Ok(()));
+    let e = run_range(&sc, 1, 5..5 + MAX_RUNS + 1).unwrap_err();
+    assert!(e.contains(&format!("{}", MAX_RUNS + 1)), "{e}");
+    let (start, stop) = (7, 3);
+    assert_eq!(run_range(&sc, 1, start..stop), Ok(Vec::new()));
 }

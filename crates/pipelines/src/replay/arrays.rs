@@ -116,13 +116,27 @@ pub fn replay_arrays<R: Read>(
     mapping: &Mapping,
     opts: &ReplayOptions,
 ) -> Result<(ReplayOutcome, EstimateArrays), ReplayError> {
+    replay_arrays_observed(reader, mapping, opts, &mut ())
+}
+
+/// [`replay_arrays`] with `observer` told of the replay as [`super::replay_with`] tells it:
+/// a caller's progress, or its way to stop a long replay (an error from the observer ends it).
+///
+/// # Errors
+/// As [`super::replay`]; the observer's error as [`ReplayError::Output`].
+pub fn replay_arrays_observed<R: Read>(
+    reader: FlightDataReader<R>,
+    mapping: &Mapping,
+    opts: &ReplayOptions,
+    observer: &mut dyn super::ReplayObserver,
+) -> Result<(ReplayOutcome, EstimateArrays), ReplayError> {
     let out = Rc::new(RefCell::new(EstimateArrays::default()));
     let eo = estimator_options(mapping, opts);
     let make = |model: &ModelSpec| -> Result<Box<dyn Estimator>, BuildError> {
         let inner = build(opts.estimator, model.structure, model.priors, &eo)?;
         Ok(Box::new(Recorder::new(inner, Rc::clone(&out))))
     };
-    let outcome = replay_with(reader, mapping, opts, make, &mut ())?;
+    let outcome = replay_with(reader, mapping, opts, make, observer)?;
     let arrays = std::mem::take(&mut *out.borrow_mut());
     Ok((outcome, arrays))
 }

@@ -451,6 +451,31 @@ pub fn process_noise_of(fem: &FemResult) -> Vec<(String, f64, f64)> {
 /// a bootstrap σ is reproducible run to run.
 pub const BOOTSTRAP_SEED: u64 = 1;
 
+/// The most replicas a parametric bootstrap ([`bootstrap_sigma`]) refits.
+///
+/// Each replica is a whole output-error fit of the record (as long as the fit itself), and the
+/// σ of `B` replicas has a relative sampling error of about `1/√(2(B − 1))`: 0.7 % at the
+/// limit, 5 % at the 200 replicas Efron & Tibshirani (1993, §6.4) find enough for a standard
+/// error. More replicas cost hours and memory and buy nothing measurable.
+pub const MAX_BOOTSTRAP_REFITS: usize = 10_000;
+
+/// Checks a bootstrap's number of replicas, before anything is fitted or allocated: 2 (a
+/// spread needs two) to [`MAX_BOOTSTRAP_REFITS`].
+///
+/// # Errors
+/// Why the count is refused (the caller names its option: `--bootstrap`, `bootstrap_refits`).
+pub fn check_bootstrap_refits(refits: usize) -> Result<(), String> {
+    if refits < 2 {
+        return Err(format!("{refits} refits: at least 2 are needed for a spread"));
+    }
+    if refits > MAX_BOOTSTRAP_REFITS {
+        return Err(format!(
+            "{refits} refits is more than the {MAX_BOOTSTRAP_REFITS} a bootstrap takes (each is a whole fit of the record; the σ of {MAX_BOOTSTRAP_REFITS} replicas is already within 0.7 %)"
+        ));
+    }
+    Ok(())
+}
+
 /// How the parametric bootstrap of an output-error fit went (`summary.json` `bootstrap`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BootstrapSummary {
@@ -525,8 +550,9 @@ pub fn bootstrap_shrink_warnings(
 /// the summary.
 ///
 /// # Errors
-/// A message when `refits < 2`, the filter-error fit fails or does not converge, or more than
-/// half of the replicas fail (the first reason given).
+/// A message when `refits` is outside 2 to [`MAX_BOOTSTRAP_REFITS`] (before any fit), the
+/// filter-error fit fails or does not converge, or more than half of the replicas fail (the
+/// first reason given).
 pub fn bootstrap_sigma(
     manoeuvres: &[&[AirDataSample]],
     config: &OeConfig,
@@ -537,9 +563,7 @@ pub fn bootstrap_sigma(
     use aeroident_estimators::output_error::bootstrap::{self, BootstrapNoise};
     use rand::{Rng, SeedableRng};
     use rayon::prelude::*;
-    if refits < 2 {
-        return Err(format!("bootstrap: {refits} refits, at least 2 are needed for a spread"));
-    }
+    check_bootstrap_refits(refits).map_err(|e| format!("bootstrap: {e}"))?;
     let t0 = std::time::Instant::now();
     let mut fem_config = FemConfig::new(config.structure);
     fem_config.oe = config.clone();
@@ -723,6 +747,11 @@ pub fn fit_records<R: Read>(
             option: "bootstrap",
             reason: "the parametric bootstrap is of output error (`--estimator oe`); the filter-error method's own σ accounts for the process noise".into(),
         });
+    }
+    if let Some(n) = options.bootstrap_refits {
+        // Before the record is read: the replicas' storage and time grow with the count.
+        check_bootstrap_refits(n)
+            .map_err(|reason| ReplayError::Option { option: "bootstrap", reason })?;
     }
     let file = readers.iter().map(|r| r.file()).collect::<Vec<_>>().join(", ");
     let rec = read_records(readers, options.compat.as_ref(), &options.windows)?;
@@ -1113,6 +1142,30 @@ pub fn validate_on<R: Read>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A bootstrap's replica count is refused outside 2 to [`MAX_BOOTSTRAP_REFITS`] by a fit
+    /// before any record is read or replica allocated (4294967295 replicas once allocated
+    /// 137 GB and aborted): the fit here has no record at all, so only the check can answer.
+    #[test]
+    fn bootstrap_refit_counts_are_limited_before_reading() {
+        assert_eq!(check_bootstrap_refits(2), Ok(()));
+        assert_eq!(check_bootstrap_refits(MAX_BOOTSTRAP_REFITS), Ok(()));
+        for n in [0, 1, MAX_BOOTSTRAP_REFITS + 1, u32::MAX as usize, usize::MAX] {
+            let options = FitOptions { bootstrap_refits: Some(n), ..FitOptions::default() };
+            let map = "[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"V\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nrho = { value = 1.0, unit = \"kg/m3\" }\nmass = { value = 1000.0, unit = \"kg\" }\nS = { value = 10.0, unit = \"m2\" }\n";
+            let mapping = Mapping::from_toml_str(map, "m.toml").unwrap();
+            let readers: Vec<FlightDataReader<&[u8]>> = Vec::new();
+            let Err(e) = fit_records(readers, &mapping, None, options) else {
+                panic!("{n} refits accepted");
+            };
+            let ReplayError::Option { option: "bootstrap", reason } = &e else {
+                panic!("expected the bootstrap option named, got {e}");
+            };
+            assert!(reason.starts_with(&format!("{n} refits")), "{reason}");
+            let limit = format!("more than the {MAX_BOOTSTRAP_REFITS}");
+            assert_eq!(reason.contains(&limit), n > MAX_BOOTSTRAP_REFITS, "{reason}");
+        }
+    }
 
     /// Flagged below 1/4 of the coloured σ, not at or above it, and never without a coloured
     /// σ; the warning names the unknown and the ratio.

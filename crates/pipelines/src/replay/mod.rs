@@ -687,7 +687,7 @@ pub fn replay<R: Read>(
             sample_interval_s: mapping.nominal_dt_s,
             ..EstimatorOptions::default()
         };
-        build(opts.estimator, model.structure, model.priors, &o)
+        build(opts.estimator, model.structure, model.priors, &o).map(|e| e as Box<dyn Estimator>)
     };
     replay_with(reader, mapping, opts, make, observer)
 }

@@ -16,7 +16,10 @@ seconds, unless a name says otherwise (``alt_ft``, ``elevator_deg`` …).
 - :func:`montecarlo`: seeded closed-loop campaigns, locally (rayon) or on a Ray cluster.
 
 Errors are raised as :class:`AeroidentError` with the message the CLI prints after ``error:``.
-Long calls release the GIL.
+Long calls release the GIL, and Ctrl-C during one raises ``KeyboardInterrupt`` (a replay or a
+Monte Carlo campaign stops at the next sample or chunk of runs; a fit, a trim or a simulation
+when it returns). An :class:`Estimator` may be used from any thread: its calls are applied one
+at a time.
 """
 
 from __future__ import annotations
@@ -27,7 +30,7 @@ from typing import Any, Mapping, Optional, Sequence, Union
 import numpy as np
 
 from . import _aeroident as _core
-from ._aeroident import AeroidentError, __version__
+from ._aeroident import MAX_BOOTSTRAP_REFITS, MAX_RUNS, AeroidentError, __version__
 from ._aeroident import EstimatorBase as _Estimator
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -50,6 +53,8 @@ __all__ = [
     "linearize",
     "simulate",
     "montecarlo",
+    "MAX_RUNS",
+    "MAX_BOOTSTRAP_REFITS",
     "__version__",
 ]
 
@@ -66,13 +71,17 @@ def sample_keys() -> list[str]:
 
 
 def read(path: PathLike, mapping: PathLike) -> dict[str, Any]:
-    """Reads a record (CSV) with a channel mapping (TOML, see ``mappings/`` and docs/mapping.md).
+    """Reads a record with a channel mapping (TOML, see ``mappings/`` and docs/mapping.md), with
+    the CLI's reader for the file's extension: CSV, ``.asc``, ``.mat``, ULog ``.ulg``,
+    DataFlash ``.bin``.
 
     Returns a dict: one 1-D float64 array per key of :func:`sample_keys` (SI, at the CG, one
     entry per accepted sample; ``NaN`` where the record has no such channel), ``row`` (int: the
     record's line number of each sample), and the rows the reader set aside:
     ``rejected_rows`` (int array), ``rejected_reasons`` (list of str), ``gap_rows`` (int array:
-    samples that follow a time gap). Exactly the samples ``aeroident replay`` sees.
+    samples that follow a time gap), and ``notes`` (list of str: what the reading or the
+    alignment of a multi-rate log left out, as the CLI prints them). Exactly the samples
+    ``aeroident replay`` sees.
 
     Raises :class:`AeroidentError` (file, row and column named) on a bad mapping or record.
     """
@@ -164,10 +173,13 @@ def replay(
       CLI's empty field, ``None`` elsewhere in this API);
     - ``sigma``: (k, n) float64 standard errors; ``NaN`` where none is reported;
     - ``model``: the model's name; for a file also ``summary`` (the CLI's ``summary.json`` as a
-      dict), for arrays ``samples_refused``.
+      dict) and ``notes`` (what the reader left out, as :func:`read`), for arrays
+      ``samples_refused``.
 
-    Raises :class:`AeroidentError` with the CLI's message on bad input or when the estimator
-    diverges. The batch methods (``oe``, ``fem``) have no per-sample estimates: use :func:`fit`.
+    A record file is read by the CLI's reader for its extension (CSV, ``.asc``, ``.mat``,
+    ULog, DataFlash). Raises :class:`AeroidentError` with the CLI's message on bad input (a
+    constant out of its physical range, such as a mass ≤ 0, is named), when the estimator
+    diverges, or when it accepts none of the arrays' samples. The batch methods (``oe``, ``fem``) have no per-sample estimates: use :func:`fit`.
     """
     if isinstance(data, (str, os.PathLike)):
         if mapping is None:
@@ -217,7 +229,8 @@ def fit(
     the record's channels can drive. ``initial_states``: ``"first-sample"`` (each manoeuvre starts
     at its first sample's measured states) or ``"estimate"`` (estimated with the parameters).
     ``validate_on``: a second record (same mapping) on which the fitted model is simulated.
-    ``bootstrap=N`` (``oe``, N ≥ 2): the parametric bootstrap σ from N replicas of the record
+    ``bootstrap=N`` (``oe``, 2 ≤ N ≤ :data:`MAX_BOOTSTRAP_REFITS`, each replica being a whole
+    refit): the parametric bootstrap σ from N replicas of the record
     flown through the fitted model with the process and measurement noise a filter-error fit
     of the same record estimates, each refitted (``--bootstrap N``; docs/uncertainty.md,
     "Output error: the parametric bootstrap"); it becomes ``sigma`` and ``summary["bootstrap"]``
@@ -254,6 +267,11 @@ def fit(
     Raises :class:`AeroidentError` with the CLI's message on bad input, a real-time estimator,
     or a fit that fails (e.g. a model that cannot be simulated).
     """
+    if bootstrap is not None and (isinstance(bootstrap, bool) or not isinstance(bootstrap, int)):
+        raise TypeError(f"bootstrap must be an int or None, got {bootstrap!r}")
+    if bootstrap is not None:
+        # The library's check and message, before the record is read (counts past 64 bits too).
+        _core.check_bootstrap_refits(bootstrap)
     return _core.fit_file(
         os.fspath(data),
         os.fspath(mapping),
@@ -335,7 +353,8 @@ def montecarlo(
     crb_sigma, crb_sigma_calm, median_time_to_10pct_s`` (``None`` where the CLI prints null;
     ``crb_sigma`` is the bound of the experiment flown, turbulence included).
     ``per_run=True`` adds ``per_run`` (every run's final results, the CLI's ``runs.json``) and
-    ``wall_s``.
+    ``wall_s``. ``runs`` is at most :data:`MAX_RUNS` (every run's results are kept for the
+    statistics; the sampling error of a σ at that many runs is already 0.7 %).
 
     ``backend="local"``: the runs on this machine's rayon pool. ``backend="ray"``: chunks of
     ``chunk_size`` seeded runs (default: about 4 chunks per CPU of the cluster) as Ray tasks,
@@ -346,7 +365,9 @@ def montecarlo(
     """
     if isinstance(runs, bool) or not isinstance(runs, int) or runs < 1:
         raise AeroidentError("runs must be at least 1")
-    if seed < 0:
+    # Before any run or task: the library's check and message (counts past 64 bits too).
+    _core.check_runs(runs)
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**64:
         raise AeroidentError("seed must be ≥ 0 (a 64-bit unsigned integer)")
     text, origin = _core.scenario_text(None if scenario is None else os.fspath(scenario))
     if backend == "local":

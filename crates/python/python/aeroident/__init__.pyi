@@ -7,6 +7,10 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
+MAX_RUNS: int
+"""Most runs of one Monte Carlo campaign (every run's results are kept for the statistics)."""
+MAX_BOOTSTRAP_REFITS: int
+"""Most replicas of a fit's parametric bootstrap (each is a whole refit of the record)."""
 PathLike = Union[str, os.PathLike[str]]
 EstimatorName = Literal["rls", "rls-iv", "ftr", "ekf", "smpe", "smpe-corrected", "gradient"]
 Constants = Mapping[str, Optional[float]]
@@ -28,6 +32,7 @@ class ReplayResult(TypedDict, total=False):
     summary: dict[str, Any]
     samples_refused: int
     events: dict[str, Any]
+    notes: list[str]
 
 class EstimatorBase:
     def __new__(

@@ -1,0 +1,261 @@
+"""Hostile and careless use of the Python API: counts past the library's limits, estimators
+shared between threads, Ctrl-C during long calls, binary records, impossible constants. Each
+must end in a Python exception (never a dead interpreter or a Rust `PanicException`) or in the
+right result."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import aeroident
+from conftest import ROOT, shared
+from test_replay import synthetic
+
+HERE = Path(__file__).resolve().parent
+SHORT = ROOT / "scenarios" / "montecarlo" / "short.toml"
+
+
+# --- counts past the limits: refused before anything is allocated ---------------------------
+
+
+@pytest.mark.parametrize("runs", [aeroident.MAX_RUNS + 1, 10**12, 2**64 - 1, 2**64 + 5, 10**30])
+def test_montecarlo_runs_past_the_limit_are_refused_at_once(runs):
+    t = time.perf_counter()
+    with pytest.raises(aeroident.AeroidentError, match=rf"runs = {runs} is more than the {aeroident.MAX_RUNS} runs"):
+        aeroident.montecarlo(SHORT, runs=runs)
+    # Refused before any run: a single run of short.toml takes longer than this.
+    assert time.perf_counter() - t < 0.5
+
+
+def test_distributed_campaign_halves_hold_the_same_limit():
+    text, origin = aeroident._core.scenario_text(str(SHORT))
+    with pytest.raises(aeroident.AeroidentError, match=f"more than the {aeroident.MAX_RUNS} runs"):
+        aeroident._core.montecarlo_runs(text, origin, 1, 7, 7 + 10**12)
+    with pytest.raises(aeroident.AeroidentError, match=f"more than the {aeroident.MAX_RUNS} runs"):
+        aeroident._core.montecarlo_reduce(text, origin, 10**12, 1, [])
+    assert aeroident._core.montecarlo_runs(text, origin, 1, 9, 3) == []
+
+
+@pytest.mark.parametrize(
+    "bootstrap,message",
+    [
+        (2**32 - 1, "4294967295 refits is more than the 10000"),
+        (aeroident.MAX_BOOTSTRAP_REFITS + 1, "10001 refits is more than the 10000"),
+        (2**64 + 1, f"{2**64 + 1} refits is more than the 10000"),
+        (1, "1 refits: at least 2"),
+        (-3, "bootstrap` = -3: a count cannot be negative"),
+    ],
+)
+def test_fit_bootstrap_past_the_limit_is_refused_before_reading(bootstrap, message):
+    # The record does not exist: only a check made before reading can answer.
+    with pytest.raises(aeroident.AeroidentError, match=message):
+        aeroident.fit(ROOT / "no-such-record.csv", ROOT / "mappings/hfb320.toml", "oe", bootstrap=bootstrap)
+    with pytest.raises(TypeError):
+        aeroident.fit(ROOT / "no-such-record.csv", ROOT / "mappings/hfb320.toml", "oe", bootstrap=2.5)
+
+
+# --- an estimator shared between threads ------------------------------------------------------
+
+
+def test_estimator_updated_from_a_thread_pool_equals_one_thread():
+    arrays, constants = synthetic(300)
+    rows = [{k: float(v[i]) for k, v in arrays.items()} for i in range(300)]
+    alone = aeroident.Rls(model="longitudinal", constants=constants)
+    for r in rows:
+        alone.update(r)
+    shared_est = aeroident.Rls(model="longitudinal", constants=constants)
+    with ThreadPoolExecutor(max_workers=4) as pool:
+        # One sample at a time, each on whichever worker is free: the order is the record's.
+        for r in rows:
+            pool.submit(shared_est.update, r).result()
+        assert pool.submit(lambda: shared_est.samples).result() == 300
+        from_thread = pool.submit(shared_est.estimates).result()
+    assert from_thread == alone.estimates()
+    assert from_thread["values"][from_thread["names"].index("Cm_alpha")] == pytest.approx(-0.6, rel=1e-6)
+
+
+def test_estimator_updated_concurrently_takes_every_sample_whole():
+    arrays, constants = synthetic(400)
+    est = aeroident.Ftr(model="longitudinal", constants=constants)
+    errors: list[BaseException] = []
+
+    def feed(k: int) -> None:
+        # Each thread its own slice, in time order; the slices interleave, so some samples go
+        # back in time and are refused: a typed error, never a panic or a torn state.
+        for i in range(k, 400, 4):
+            try:
+                est.update({key: float(v[i]) for key, v in arrays.items()})
+            except aeroident.AeroidentError as e:
+                errors.append(e)
+            est.estimates()
+            repr(est)
+
+    with ThreadPoolExecutor(max_workers=4) as pool:
+        list(pool.map(feed, range(4)))
+    assert est.samples + len(errors) == 400
+    assert est.samples > 0
+
+
+# --- Ctrl-C during a long call ----------------------------------------------------------------
+
+
+def run_interrupted(setup: str, call: str) -> tuple[str, float]:
+    """Runs `setup`, then `call` in a fresh interpreter (numpy's C API not yet used, as in a
+    user's first call) with SIGINT raised from a timer thread 0.3 s into `call`; returns what
+    the call raised (or `RETURNED`) and its duration, s."""
+    script = textwrap.dedent(
+        """
+        import signal, sys, threading, time
+        sys.path.insert(0, {here!r})
+        import aeroident
+        {setup}
+        threading.Timer(0.3, lambda: signal.raise_signal(signal.SIGINT)).start()
+        t = time.perf_counter()
+        try:
+            {call}
+            print("RETURNED", time.perf_counter() - t)
+        except KeyboardInterrupt:
+            print("KEYBOARDINTERRUPT", time.perf_counter() - t)
+        except BaseException as e:
+            print("OTHER", time.perf_counter() - t, type(e).__module__, type(e).__name__, e)
+        """
+    ).format(here=str(HERE), setup=setup, call=call)
+    r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stdout + r.stderr
+    word, elapsed, *_ = r.stdout.split()
+    assert word == "KEYBOARDINTERRUPT", r.stdout + r.stderr
+    return word, float(elapsed)
+
+
+def test_ctrl_c_stops_a_long_array_replay_as_keyboard_interrupt():
+    # 400000 samples through the EKF: 10 s uninterrupted (measured, release build, 25 µs a
+    # sample); stopped at the next sample after the signal.
+    _, elapsed = run_interrupted(
+        "from test_replay import synthetic; a, c = synthetic(400_000)",
+        'aeroident.replay(a, estimator="ekf", model="longitudinal", constants=c)',
+    )
+    assert elapsed < 3.0, elapsed
+
+
+def test_ctrl_c_stops_a_long_campaign_as_keyboard_interrupt():
+    # MAX_RUNS runs would take hours: stopped after the chunk of runs under way.
+    _, elapsed = run_interrupted("", f"aeroident.montecarlo({str(SHORT)!r}, runs=aeroident.MAX_RUNS)")
+    assert elapsed < 60.0, elapsed
+
+
+def test_ctrl_c_during_a_call_that_cannot_stop_raises_keyboard_interrupt_when_it_returns(tmp_path):
+    # An open-loop simulation of 6000 s (about 4 s) is not interruptible: the signal that
+    # arrives during it is raised when it returns, before any of its arrays is built.
+    text = (ROOT / "scenarios/sim/elevator_doublet.toml").read_text()
+    long = tmp_path / "long.toml"
+    long.write_text("\n".join("duration_s = 6000.0" if l.startswith("duration_s") else l for l in text.splitlines()))
+    _, elapsed = run_interrupted("", f"aeroident.simulate({str(long)!r})")
+    assert elapsed > 0.3, elapsed
+
+
+# --- the reader chosen by extension, as the CLI ----------------------------------------------
+
+
+def test_read_and_replay_of_a_mat_record_equal_its_csv_copy():
+    mat = shared("jategaonkar_hfb320_attas/fAttasElv1.mat")
+    csv = shared("jategaonkar_hfb320_attas/csv/fAttasElv1.csv")
+    mapping = ROOT / "mappings/attas.toml"
+    a, b = aeroident.read(mat, mapping), aeroident.read(csv, mapping)
+    # The README: the CSV copies hold the .mat's numbers exactly (shortest round trip).
+    assert len(a["t_s"]) > 600  # 25 s at 25 Hz
+    for k in aeroident.sample_keys():
+        np.testing.assert_array_equal(a[k], b[k], err_msg=k)
+    # Row numbers: the .mat's row of the record, the CSV's line in the file (header = 1).
+    np.testing.assert_array_equal(a["row"], b["row"] - 1)
+    assert len(a["rejected_rows"]) == len(b["rejected_rows"])
+    ra, rb = aeroident.replay(mat, mapping, "rls"), aeroident.replay(csv, mapping, "rls")
+    np.testing.assert_array_equal(ra["estimates"], rb["estimates"])
+    assert ra["notes"] == []
+
+
+def test_read_of_a_px4_ulog_aligns_its_topics():
+    ulg = shared("px4_ardupilot/f16capstone_log_52_2021-5-22-12-42-56.ulg")
+    d = aeroident.read(ulg, ROOT / "mappings/px4-fixedwing.toml")
+    # The io crate's multirate test checks the airborne part's 453 samples against the
+    # independent pyulog inventory of this log; the taxi rows are set aside with a reason.
+    assert len(d["t_s"]) == 453, len(d["t_s"])
+    assert len(d["rejected_rows"]) == len(d["rejected_reasons"]) > 2000
+    assert np.all(np.diff(d["t_s"]) > 0)
+    r = aeroident.replay(ulg, ROOT / "mappings/px4-fixedwing.toml", "rls")
+    assert r["estimates"].shape[0] > 400 and isinstance(r["notes"], list)
+
+
+# --- impossible constants: named where they enter ---------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "constant,value",
+    [("mass_kg", -1.0), ("S_m2", 0.0), ("Iyy_kgm2", -5.0e4), ("cbar_m", float("inf")), ("mass_kg", 1e9), ("v0_mps", -3.0)],
+)
+def test_impossible_constants_are_named(constant, value):
+    arrays, constants = synthetic(50)
+    bad = dict(constants, **{constant: value})
+    with pytest.raises(aeroident.AeroidentError, match=rf"constants: constant `{constant}` = "):
+        aeroident.replay(arrays, estimator="rls", model="longitudinal", constants=bad)
+    with pytest.raises(aeroident.AeroidentError, match=rf"constant `{constant}`"):
+        aeroident.Rls(model="longitudinal", constants=bad)
+    # Per sample (a column of the arrays, a key of a sample dict): the row is named.
+    per_row = dict(arrays, **{constant: np.full(50, value)})
+    with pytest.raises(aeroident.AeroidentError, match=rf"arrays row 0: constant `{constant}`"):
+        aeroident.replay(per_row, estimator="rls", model="longitudinal", constants=constants)
+    est = aeroident.Rls(model="longitudinal", constants=constants)
+    with pytest.raises(aeroident.AeroidentError, match=rf"sample 0: constant `{constant}`"):
+        est.update({k: float(v[0]) for k, v in per_row.items()})
+    assert est.samples == 0
+
+
+def test_mass_must_be_positive_message():
+    arrays, constants = synthetic(10)
+    with pytest.raises(aeroident.AeroidentError, match="constant `mass_kg` = -1: it must be positive"):
+        aeroident.replay(arrays, estimator="rls", model="longitudinal", constants=dict(constants, mass_kg=-1))
+
+
+def test_arrays_whose_every_sample_is_refused_raise():
+    arrays, constants = synthetic(30)
+    arrays = dict(arrays, vt_mps=-np.abs(arrays["vt_mps"]))
+    with pytest.raises(aeroident.AeroidentError, match=r"accepted none of the 30 samples, 30 refused \(the first: .*vt_mps"):
+        aeroident.replay(arrays, estimator="rls", model="longitudinal", constants=constants)
+
+
+# --- other inputs that once could panic --------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda: aeroident.Estimator("rls", forgetting=float("nan")),
+        lambda: aeroident.Estimator("ftr", ftr_grid_hz=(1.0, 0.1, 0.0)),
+        lambda: aeroident.Estimator("ekf", parameter_walk_per_sqrt_s=float("inf")),
+        lambda: aeroident.replay({"t_s": np.zeros((2, 2))}),
+        lambda: aeroident.replay({k: np.zeros(0) for k in ["t_s", "vt_mps", "alpha_rad", "qbar_pa"]}),
+        lambda: aeroident.replay({"t_s": np.zeros(3), "vt_mps": np.zeros(2), "alpha_rad": np.zeros(3), "qbar_pa": np.zeros(3)}),
+        lambda: aeroident.Rls(constants={1: 2.0}),
+        lambda: aeroident.Rls(constants={"mass_kg": "heavy"}),
+        lambda: aeroident.Rls().update({"t_s": "now"}),
+        lambda: aeroident.Rls().covariance(10**6, 10**6),
+        lambda: aeroident.trim(float("nan"), 500.0),
+        lambda: aeroident.trim(1e12, 1e12),
+        lambda: aeroident.linearize(10000.0, -1.0),
+        lambda: aeroident.replay(ROOT / "mappings/hfb320.toml", ROOT / "mappings/hfb320.toml", diff_window=2**62),
+        lambda: aeroident.montecarlo(SHORT, runs=1, seed=2**64),
+    ],
+)
+def test_bad_input_is_a_python_exception_never_a_panic(call):
+    try:
+        call()
+    except BaseException as e:  # noqa: BLE001 - the type is what is tested
+        assert isinstance(e, (aeroident.AeroidentError, TypeError, ValueError, OverflowError, IndexError)), repr(e)
+        assert type(e).__name__ != "PanicException", repr(e)

@@ -114,6 +114,33 @@
 //!   lag where every output's normalised autocorrelation is inside `±2/√N`, at most
 //!   [`OeConfig::coloured_max_lag`]).
 //!
+//! # Dominant samples
+//!
+//! One corrupt sample can own a least-squares fit. [`OeResult::dominance`] names the sample
+//! with the largest share of the weighted cost `Σ_i e_iᵀ R⁻¹ e_i` (and the output that
+//! contributes most to it), and the sample with the largest Cook's distance
+//! `D_i = g_iᵀ M⁻¹ g_i / nβ`, `g_i = S_iᵀ R⁻¹ e_i` (the one-step change of the estimate were
+//! the sample removed, in the metric of its covariance; Cook & Weisberg, *Residuals and
+//! Influence in Regression*, 1982, without the `(1 − h_ii)⁻²` factor). A fit is dominated by
+//! one sample when that share is at least [`Dominance::SHARE_LIMIT`] (5 %) with a χ² of at
+//! least `10 ny`, or when that Cook's distance is at least [`Dominance::COOK_LIMIT`] (1).
+//!
+//! # Robust option
+//!
+//! With [`OeConfig::robust`], Huber's M-estimate (Huber, *Robust Statistics*, Wiley 1981,
+//! ch. 7; the output-error form as iteratively reweighted least squares, Holland & Welsch,
+//! Commun. Statist. A6(9), 1977): the cost is `Σ_ij ρ(e_ij/σ_j)`, Huber's `ρ` with
+//! [`Huber::k`], the scale `σ_j = 1.4826 · MAD` of output `j`'s residuals (the mean square
+//! where the MAD is 0). Each iteration fixes the scale and the weights `u_ij = min(1,
+//! k/|e_ij/σ_j|)` at the current residuals and takes the relaxation's Gauss–Newton step with
+//! `M = Σ Sᵀ U R⁻¹ S`, accepted when Huber's cost at that scale falls (the concentrated step
+//! does not apply). Convergence as above with `R = diag(σ_j²)`. The σ are those of the
+//! weighted problem (`√u e`, `√u S`): the Cramér–Rao and coloured-residual formulas at the
+//! final weights, without Huber's asymptotic efficiency factor (about 5 % at `k` = 1.345 on
+//! Gaussian residuals). A residual outlier (a spike in a measured output) then counts
+//! linearly; an outlier in an input (thrust, a control surface) is integrated by the model
+//! and corrupts the simulation after it: the replay's spike screen is the remedy for those.
+//!
 //! # Errors
 //!
 //! [`OeError::Estimator`] with [`EstimatorError::InvalidConfig`] for a structure without a
@@ -207,6 +234,76 @@ pub struct OeConfig {
     pub step_tolerance_sigma: f64,
     /// Largest lag of the coloured-residual sum; `None`: a quarter of the shortest manoeuvre.
     pub coloured_max_lag: Option<usize>,
+    /// Outlier-resistant fit with Huber's weights ([`Huber`], module doc "Robust option");
+    /// `None` (default): the Gaussian maximum-likelihood fit.
+    pub robust: Option<Huber>,
+}
+
+/// Huber's M-estimate for output error (module doc, "Robust option"): residuals beyond `k`
+/// robust standard deviations of their output count linearly, not quadratically.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Huber {
+    /// The tuning constant `k`, in robust standard deviations `1.4826 · MAD` (default 1.345:
+    /// 95 % efficiency on Gaussian residuals, Huber 1981).
+    pub k: f64,
+}
+
+impl Default for Huber {
+    fn default() -> Self {
+        Self { k: 1.345 }
+    }
+}
+
+impl Huber {
+    /// The IRLS weight `ψ(z)/z = min(1, k/|z|)` of a normalised residual `z`.
+    pub fn weight(self, z: f64) -> f64 {
+        if z.abs() <= self.k { 1.0 } else { self.k / z.abs() }
+    }
+
+    /// Huber's loss `ρ(z)`: `z²/2` within `k`, `k|z| − k²/2` beyond.
+    pub fn loss(self, z: f64) -> f64 {
+        if z.abs() <= self.k { 0.5 * z * z } else { self.k * z.abs() - 0.5 * self.k * self.k }
+    }
+}
+
+/// The sample that weighs most on a fit ([`OeResult::dominance`]): a warning when one sample
+/// owns the estimate (module doc, "Dominant samples").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Dominance {
+    /// The sample with the largest share of the cost: index over the manoeuvres concatenated.
+    pub share_sample: usize,
+    /// Its share of the weighted cost `Σ eᵀ R⁻¹ e` (of the robust weighted cost with
+    /// [`OeConfig::robust`]), 0…1.
+    pub share: f64,
+    /// Its term `e_iᵀ R⁻¹ e_i` (a χ² with `ny` degrees of freedom for Gaussian residuals).
+    pub chi2: f64,
+    /// The output that contributes most to that term.
+    pub share_output: Output,
+    /// The sample with the largest Cook's distance.
+    pub cook_sample: usize,
+    /// Its Cook's distance `D_i = g_iᵀ M⁻¹ g_i / nβ`, `g_i = S_iᵀ R⁻¹ e_i`: the shift of the
+    /// estimate without the sample, in the metric of its covariance, per unknown.
+    pub cook: f64,
+}
+
+impl Dominance {
+    /// Share of the cost above which one sample dominates ([`Dominance::share_dominates`]).
+    pub const SHARE_LIMIT: f64 = 0.05;
+    /// Cook's distance above which one sample dominates (Cook & Weisberg 1982's rule of thumb:
+    /// removing it moves the estimate beyond its 50 % confidence region).
+    pub const COOK_LIMIT: f64 = 1.0;
+
+    /// Whether the largest share dominates: at least [`Dominance::SHARE_LIMIT`] of the cost
+    /// and a χ² of at least `10 · ny` (out of reach of Gaussian residuals, so that a short
+    /// record's largest sample is not flagged for being one of few).
+    pub fn share_dominates(&self, ny: usize) -> bool {
+        self.share >= Self::SHARE_LIMIT && self.chi2 >= 10.0 * ny as f64
+    }
+
+    /// Whether the largest Cook's distance dominates (≥ [`Dominance::COOK_LIMIT`]).
+    pub fn cook_dominates(&self) -> bool {
+        self.cook >= Self::COOK_LIMIT
+    }
 }
 
 impl OeConfig {
@@ -225,6 +322,7 @@ impl OeConfig {
             cost_tolerance: 1e-6,
             step_tolerance_sigma: 1e-3,
             coloured_max_lag: None,
+            robust: None,
         }
     }
 }
@@ -406,6 +504,9 @@ pub struct OeResult {
     /// values were estimated from 0 (module doc, "Model"), whatever
     /// [`OeConfig::initial_states`] said.
     pub unmeasured_states: Vec<&'static str>,
+    /// The sample with the largest share of the cost and the one with the largest Cook's
+    /// distance (`None` when the fit is not identified).
+    pub dominance: Option<Dominance>,
 }
 
 impl OeResult {
@@ -610,6 +711,46 @@ fn residuals(p: &Problem, y: &[f64], e: &mut Vec<f64>) -> Vec<f64> {
     r
 }
 
+/// The robust noise variances (module doc, "Robust option"): per output `(1.4826 · MAD)²` of
+/// the residuals `e` (`ny`-interleaved), the mean square `ms` where the MAD is 0.
+fn robust_variances(e: &[f64], ms: Vec<f64>) -> Vec<f64> {
+    let ny = ms.len();
+    let mut col = Vec::with_capacity(e.len() / ny.max(1));
+    ms.iter()
+        .enumerate()
+        .map(|(j, &m)| {
+            col.clear();
+            col.extend(e.iter().skip(j).step_by(ny).copied());
+            let med = median_in_place(&mut col);
+            col.iter_mut().for_each(|v| *v = (*v - med).abs());
+            let s = 1.4826 * median_in_place(&mut col);
+            if s > 0.0 && s.is_finite() { s * s } else { m }
+        })
+        .collect()
+}
+
+fn median_in_place(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    let k = v.len() / 2;
+    let (_, m, _) = v.select_nth_unstable_by(k, f64::total_cmp);
+    *m
+}
+
+/// Huber's IRLS weights `min(1, k/|e/σ|)` of the residuals `e` with the noise variances `r`.
+fn huber_weights(h: Huber, e: &[f64], r: &[f64]) -> Vec<f64> {
+    let ny = r.len();
+    let sd: Vec<f64> = r.iter().map(|v| v.sqrt()).collect();
+    e.iter().enumerate().map(|(k, v)| h.weight(v / sd[k % ny])).collect()
+}
+
+/// Huber's cost `Σ ρ(e/σ)` at the standard deviations `sd`.
+fn huber_cost(h: Huber, e: &[f64], sd: &[f64]) -> f64 {
+    let ny = sd.len();
+    e.iter().enumerate().map(|(k, v)| h.loss(v / sd[k % ny])).sum()
+}
+
 fn weighted_cost(e: &[f64], w: &[f64]) -> f64 {
     let ny = w.len();
     0.5 * e.iter().enumerate().map(|(k, v)| v * v * w[k % ny]).sum::<f64>()
@@ -623,12 +764,24 @@ fn normal_equations(
     w: &[f64],
     n: usize,
 ) -> (DMatrix<f64>, DVector<f64>, Vec<f64>) {
+    normal_equations_weighted(s, e, w, &[], n)
+}
+
+/// [`normal_equations`] with a further weight per residual `u` (Huber's IRLS weights; empty:
+/// all 1).
+fn normal_equations_weighted(
+    s: &[f64],
+    e: &[f64],
+    w: &[f64],
+    u: &[f64],
+    n: usize,
+) -> (DMatrix<f64>, DVector<f64>, Vec<f64>) {
     let ny = w.len();
     let mut m = DMatrix::<f64>::zeros(n, n);
     let mut gj = vec![0.0; ny * n];
     for (row, ev) in e.iter().enumerate() {
         let j = row % ny;
-        let wj = w[j];
+        let wj = w[j] * u.get(row).copied().unwrap_or(1.0);
         let sr = &s[row * n..(row + 1) * n];
         let g = &mut gj[j * n..(j + 1) * n];
         for a in 0..n {
@@ -746,7 +899,14 @@ fn fit_prepared(
     let mut e = Vec::new();
     let (mut beta, start) =
         first_start(&p, manoeuvres, config, |beta| p.simulate(beta, &mut y, None))?;
-    let mut r = residuals(&p, &y, &mut e);
+    let robust = config.robust;
+    // The noise variances: the ML mean squares, or the robust (MAD) ones with Huber's weights.
+    let noise = |e: &[f64], r: Vec<f64>| match robust {
+        Some(_) => robust_variances(e, r),
+        None => r,
+    };
+    let ms = residuals(&p, &y, &mut e);
+    let mut r = noise(&e, ms);
     let ln_det = |r: &[f64]| r.iter().map(|v| v.ln()).sum::<f64>();
     let mut log = vec![OeIteration {
         iteration: 0,
@@ -771,21 +931,27 @@ fn fit_prepared(
             .into());
         }
         let w: Vec<f64> = r.iter().map(|v| 1.0 / v).collect();
+        let u = robust.map_or_else(Vec::new, |h| huber_weights(h, &e, &r));
+        let sd: Vec<f64> = r.iter().map(|v| v.sqrt()).collect();
         p.simulate(&beta, &mut y, Some(&mut s))?;
-        let (m, g, gj) = normal_equations(&s, &e, &w, nb);
+        let (m, g, gj) = normal_equations_weighted(&s, &e, &w, &u, nb);
         check_identifiable(&m, &p, &config.structure)?;
         let minv = spd_inverse(&m);
         // Step matrix and merit (module doc): the relaxation's M with J at fixed R, or the
         // concentrated Hessian (M where that is not positive definite) with ln det R.
-        let concentrated = config.step == StepKind::Concentrated;
+        // The robust fit is an IRLS relaxation: the weights and the scale fixed over the step,
+        // which is accepted when Huber's cost at that scale falls.
+        let concentrated = config.step == StepKind::Concentrated && robust.is_none();
         let h = if concentrated {
             let h = concentrated_hessian(&m, &gj, p.n_samples);
             if h.clone().cholesky().is_some() { h } else { m.clone() }
         } else {
             m.clone()
         };
-        let merit = |e: &[f64], r: &[f64]| {
-            if concentrated { ln_det(r) } else { weighted_cost(e, &w) }
+        let merit = |e: &[f64], r: &[f64]| match robust {
+            _ if concentrated => ln_det(r),
+            Some(h) => huber_cost(h, e, &sd),
+            None => weighted_cost(e, &w),
         };
         let merit0 = merit(&e, &r);
         // d merit / dα along a step Δ is `merit_slope · gᵀΔ` (module doc, "Step length").
@@ -798,7 +964,8 @@ fn fit_prepared(
             if let Some(step) = damped_step(&h, &m, &g, lambda) {
                 let trial = offset(&step);
                 if p.simulate(&trial, &mut y_try, None).is_ok() {
-                    let r_try = residuals(&p, &y_try, &mut e_try);
+                    let ms = residuals(&p, &y_try, &mut e_try);
+                    let r_try = noise(&e_try, ms);
                     let value = merit(&e_try, &r_try);
                     if value.is_finite() && value < merit0 {
                         accepted = Some((trial, step, r_try, value));
@@ -820,7 +987,8 @@ fn fit_prepared(
                 let scaled = step * a;
                 let trial = offset(&scaled);
                 if p.simulate(&trial, &mut y_try, None).is_ok() {
-                    let r_try = residuals(&p, &y_try, &mut e_ext);
+                    let ms = residuals(&p, &y_try, &mut e_ext);
+                    let r_try = noise(&e_ext, ms);
                     let v = merit(&e_ext, &r_try);
                     if v.is_finite() && v < *value {
                         core::mem::swap(&mut e_try, &mut e_ext);
@@ -1004,21 +1172,24 @@ fn finish(
     config: &OeConfig,
 ) -> Result<OeResult, EstimatorError> {
     let w: Vec<f64> = r.iter().map(|v| 1.0 / v).collect();
+    let u = config.robust.map_or_else(Vec::new, |h| huber_weights(h, e, r));
     let mut y = Vec::new();
     let mut s = Vec::new();
     p.simulate(beta, &mut y, Some(&mut s))?;
-    let fit = Fitted { beta, s: &s, e, w: &w, r, names: unknown_names(p, structure) };
+    let fit = Fitted { beta, s: &s, e, w: &w, u: &u, r, names: unknown_names(p, structure) };
     assemble(p, structure, fit, iterations, start, termination, config)
 }
 
 /// A converged (or last) iterate, ready for [`assemble`]: unknowns, sensitivities of the
 /// predicted outputs (`N·ny × nβ` row-major), residuals `z − ŷ`, weights `1/B` (per output:
-/// inverse of the residual variance), the reported noise variances and the unknowns' names.
+/// inverse of the residual variance), Huber's weight per residual (empty: none), the reported
+/// noise variances and the unknowns' names.
 struct Fitted<'a> {
     beta: &'a [f64],
     s: &'a [f64],
     e: &'a [f64],
     w: &'a [f64],
+    u: &'a [f64],
     r: &'a [f64],
     names: Vec<String>,
 }
@@ -1034,10 +1205,10 @@ fn assemble(
     termination: Termination,
     config: &OeConfig,
 ) -> Result<OeResult, EstimatorError> {
-    let Fitted { beta, s, e, w, r, names } = fit;
+    let Fitted { beta, s, e, w, u, r, names } = fit;
     let nb = beta.len();
     let ny = p.ny();
-    let (m, _, _) = normal_equations(s, e, w, nb);
+    let (m, _, _) = normal_equations_weighted(s, e, w, u, nb);
     // Singular at the last iterate: its values are still the fit's answer, reported as not
     // converged with NaN σ (a caller's `null`), rather than no result at all.
     let inverse = spd_inverse(&m);
@@ -1059,11 +1230,21 @@ fn assemble(
     let max_lag =
         config.coloured_max_lag.unwrap_or_else(|| lengths.iter().copied().min().unwrap_or(4) / 4);
     let diag = |c: DMatrix<f64>| (0..nb).map(|i| c[(i, i)].sqrt()).collect::<Vec<_>>();
+    let dominance = identified.then(|| dominance(&p.outputs, s, e, w, u, &minv)).flatten();
+    // Huber's weights enter the σ as the weighted problem `√u e`, `√u S` (module doc).
+    let (s_w, e_w);
+    let (s, e_col) = if u.is_empty() {
+        (s, e)
+    } else {
+        e_w = e.iter().zip(u).map(|(e, u)| e * u.sqrt()).collect::<Vec<_>>();
+        s_w = s.iter().enumerate().map(|(k, v)| v * u[k / nb].sqrt()).collect::<Vec<_>>();
+        (s_w.as_slice(), e_w.as_slice())
+    };
     let (sigma_coloured, sigma_coloured_prewhitened, sigma_coloured_truncated, lag, order) =
         if identified {
-            let pre = coloured::prewhitened(s, e, w, &lengths, &minv, max_lag);
-            let truncated = coloured::covariance(s, e, w, &lengths, &minv, max_lag).covariance;
-            let spectral = coloured::spectral(s, e, w, &lengths, &minv).covariance;
+            let pre = coloured::prewhitened(s, e_col, w, &lengths, &minv, max_lag);
+            let truncated = coloured::covariance(s, e_col, w, &lengths, &minv, max_lag).covariance;
+            let spectral = coloured::spectral(s, e_col, w, &lengths, &minv).covariance;
             let col = pre.coloured;
             (spectral.map(diag), col.covariance.map(diag), truncated.map(diag), col.lag, pre.order)
         } else {
@@ -1099,6 +1280,60 @@ fn assemble(
             .iter()
             .map(|&k| STATE_NAMES[p.model.state_set().states()[k]])
             .collect(),
+        dominance,
+    })
+}
+
+/// The samples that weigh most on the fit (module doc, "Dominant samples"): the largest share
+/// of the weighted cost `Σ u w e²` and the largest Cook's distance `g_iᵀ M⁻¹ g_i / nβ`;
+/// `None` without samples.
+fn dominance(
+    outputs: &[Output],
+    s: &[f64],
+    e: &[f64],
+    w: &[f64],
+    u: &[f64],
+    minv: &DMatrix<f64>,
+) -> Option<Dominance> {
+    let ny = w.len();
+    let nb = minv.nrows();
+    let uw = |k: usize| w[k % ny] * u.get(k).copied().unwrap_or(1.0);
+    let total: f64 = e.iter().enumerate().map(|(k, v)| uw(k) * v * v).sum();
+    let mut best: Option<Dominance> = None;
+    let mut g = DVector::<f64>::zeros(nb);
+    for i in 0..e.len() / ny {
+        g.fill(0.0);
+        let (mut chi2, mut top, mut top_j) = (0.0, -1.0, 0);
+        for j in 0..ny {
+            let k = i * ny + j;
+            let term = uw(k) * e[k] * e[k];
+            chi2 += term;
+            if term > top {
+                (top, top_j) = (term, j);
+            }
+            for a in 0..nb {
+                g[a] += uw(k) * e[k] * s[k * nb + a];
+            }
+        }
+        let cook = g.dot(&(minv * &g)) / nb as f64;
+        let d = best.get_or_insert(Dominance {
+            share_sample: i,
+            share: 0.0,
+            chi2,
+            share_output: outputs[0],
+            cook_sample: i,
+            cook,
+        });
+        if chi2 >= d.chi2 {
+            (d.share_sample, d.chi2, d.share_output) = (i, chi2, outputs[top_j]);
+        }
+        if cook >= d.cook {
+            (d.cook_sample, d.cook) = (i, cook);
+        }
+    }
+    best.map(|mut d| {
+        d.share = if total > 0.0 { d.chi2 / total } else { 0.0 };
+        d
     })
 }
 

@@ -317,6 +317,21 @@ pub enum RowProblem {
         /// The limit it exceeds, SI.
         limit: f64,
     },
+    /// An isolated one-sample spike in a measured channel, found by a screening stage after
+    /// the reader (the pipelines' spike screen): the row is not used.
+    #[error(
+        "`{field}` = {value} is an isolated spike (median of its neighbours {median}, more than {threshold} away)"
+    )]
+    Spike {
+        /// Sample field (SI name, e.g. `thrust_n`).
+        field: String,
+        /// The SI value.
+        value: f64,
+        /// The median of the window around it, SI.
+        median: f64,
+        /// The departure from the median beyond which a sample is a spike, SI.
+        threshold: f64,
+    },
     /// A value outside the physical domain (e.g. V ≤ 0, mass ≤ 0).
     #[error("column `{column}`: {reason}")]
     Domain {
@@ -344,6 +359,7 @@ impl RowProblem {
             Self::Truncated => "truncated last line",
             Self::FieldCount { .. } => "wrong field count",
             Self::Implausible { .. } => "implausible value",
+            Self::Spike { .. } => "isolated spike",
             Self::Domain { .. } => "value outside its domain",
         }
     }

@@ -1083,7 +1083,7 @@ impl<'a> Fem<'a> {
         beta.truncate(nb);
         let mut names = unknown_names(self.p, &oe.structure);
         names.extend(self.noisy.iter().map(|&k| format!("F_{}", STATE_NAMES[states[k]])));
-        let fit = Fitted { beta: &beta, s: &it.s, e: &it.e, w: &w, r: &r, names };
+        let fit = Fitted { beta: &beta, s: &it.s, e: &it.e, w: &w, u: &[], r: &r, names };
         let mut result = assemble(self.p, &oe.structure, fit, it.log, start, termination, oe)?;
         let max_lag = oe
             .coloured_max_lag

@@ -866,3 +866,66 @@ fn bootstrap_refuses_noise_that_does_not_match_the_fit() {
     let e = bootstrap::refit(&[&data], &cfg, &res, &negative, &mut normals(1)).unwrap_err();
     assert!(format!("{e}").contains("non-negative"), "{e}");
 }
+
+/// Huber's weight and loss (Huber 1981): quadratic within `k`, linear beyond, continuous with
+/// a continuous slope at `k`; the weight is `ψ(z)/z`.
+#[test]
+fn analytic_huber_weight_and_loss() {
+    let h = Huber::default();
+    assert_eq!(h.k, 1.345);
+    assert_eq!(h.weight(0.5), 1.0);
+    assert_eq!(h.weight(-1.345), 1.0);
+    assert!((h.weight(13.45) - 0.1).abs() < 1e-15);
+    assert!((h.loss(1.0) - 0.5).abs() < 1e-15);
+    let k = h.k;
+    assert!((h.loss(k) - 0.5 * k * k).abs() < 1e-15);
+    assert!((h.loss(-10.0) - (10.0 * k - 0.5 * k * k)).abs() < 1e-12);
+    // ψ(z) = z·weight(z) = ρ'(z): the slope by central difference beyond k.
+    let z = 3.0;
+    let d = (h.loss(z + 1e-6) - h.loss(z - 1e-6)) / 2e-6;
+    assert!((d - z * h.weight(z)).abs() < 1e-6, "{d}");
+}
+
+/// One measured α of 0.3 rad too much (a spike within any plausibility limit) in a clean
+/// synthetic record: the Gaussian fit names that sample as dominating (its share of the cost
+/// above the limit) and is thrown off by several σ of the clean fit; Huber's fit recovers the
+/// truth within 3.5 σ. On the clean record nothing is flagged and Huber's fit
+/// agrees with the Gaussian one within 0.5 σ.
+#[test]
+fn one_output_spike_is_flagged_and_huber_resists_it() {
+    let st = lon();
+    let th = trimmed_truth(&st);
+    let clean = simulate(&st, &th, 20.0, 16.0, 1.0, 31, [0.0; N_STATES]);
+    let cfg = with_x0(st);
+    let mut robust = cfg.clone();
+    robust.robust = Some(Huber::default());
+    let ny = |r: &OeResult| r.outputs.len();
+
+    let plain = fit(&[&clean], &cfg).unwrap();
+    let clean_sigma = plain.sigma.clone();
+    let d = plain.dominance.unwrap();
+    assert!(!d.share_dominates(ny(&plain)) && !d.cook_dominates(), "clean record: {d:?}");
+    let huber = fit(&[&clean], &robust).unwrap();
+    for i in 0..st.n_params() {
+        let z = (huber.values[i] - plain.values[i]) / plain.sigma[i];
+        assert!(z.abs() < 0.5, "{}: Huber vs Gaussian {z:.2} σ on a clean record", plain.names[i]);
+    }
+
+    let k = 100; // t = 5 s, during the elevator doublet's response
+    let mut spiked = clean.clone();
+    spiked[k].alpha_rad += 0.3;
+    let plain = fit(&[&spiked], &cfg).unwrap();
+    let d = plain.dominance.unwrap();
+    assert_eq!((d.share_sample, d.share_output), (k, Output::Alpha), "{d:?}");
+    assert!(d.share_dominates(ny(&plain)), "{d:?}");
+    let worst = (0..st.n_params())
+        .map(|i| ((plain.values[i] - th[i]) / clean_sigma[i]).abs())
+        .fold(0.0, f64::max);
+    assert!(worst > 5.0, "the Gaussian fit is thrown off: worst {worst:.1} σ");
+    let huber = fit(&[&spiked], &robust).unwrap();
+    for (i, p) in st.params().enumerate() {
+        let z = (huber.values[i] - th[i]) / huber.sigma[i];
+        assert!(z.abs() < 3.5, "{} = {} vs truth {} ({z:.1} σ)", p.name(), huber.values[i], th[i]);
+    }
+    println!("spike: plain worst {worst:.1} σ, share {:.3}, cook {:.2}", d.share, d.cook);
+}

@@ -251,7 +251,7 @@ pub(crate) fn read_manoeuvres<R: Read>(
     compat: Option<&crate::compat::Corrections>,
     windows: &[crate::window::TimeWindow],
 ) -> Result<Manoeuvres, ReplayError> {
-    read_records(vec![reader], compat, windows)
+    read_records(vec![reader], Some(super::outliers::SpikeScreen::default()), compat, windows)
 }
 
 /// [`read_manoeuvres`] over several records of one aircraft (same mapping), each file starting
@@ -261,11 +261,13 @@ pub(crate) fn read_manoeuvres<R: Read>(
 /// As [`read_manoeuvres`]; no usable sample in any file.
 pub(crate) fn read_records<R: Read>(
     readers: Vec<FlightDataReader<R>>,
+    screen: Option<super::outliers::SpikeScreen>,
     compat: Option<&crate::compat::Corrections>,
     windows: &[crate::window::TimeWindow],
 ) -> Result<Manoeuvres, ReplayError> {
     crate::window::check_windows(windows)
         .map_err(|reason| ReplayError::Option { option: "window", reason })?;
+    super::check_spike_screen(screen.as_ref())?;
     let files: Vec<String> = readers.iter().map(|r| r.file().to_string()).collect();
     let named = files.len() > 1;
     let mut manoeuvres: Vec<Vec<AirDataSample>> = vec![Vec::new()];
@@ -274,7 +276,7 @@ pub(crate) fn read_records<R: Read>(
     let mut notes = Vec::new();
     for (reader, file) in readers.into_iter().zip(&files) {
         let prefix = if named { format!("{file}: ") } else { String::new() };
-        let mut events = super::record_events(reader, compat, windows);
+        let mut events = super::record_events(reader, screen, compat, windows);
         for event in events.by_ref() {
             match event? {
                 RecordEvent::Sample { sample, .. } => {
@@ -679,6 +681,11 @@ pub struct FitOptions {
     /// The time windows of the record fitted, each its own manoeuvre ([`crate::window`]);
     /// empty: the whole record.
     pub windows: Vec<crate::window::TimeWindow>,
+    /// The spike screen before the fit ([`super::outliers`]); `None`: off. Default on.
+    pub spike_screen: Option<super::outliers::SpikeScreen>,
+    /// `oe` only: Huber's robust weights on the normalised residuals
+    /// ([`OeConfig::robust`]); `None`: the Gaussian maximum-likelihood fit. Default off.
+    pub robust: Option<aeroident_estimators::output_error::Huber>,
 }
 
 impl Default for FitOptions {
@@ -694,6 +701,8 @@ impl Default for FitOptions {
             gain_constraint: true,
             compat: None,
             windows: Vec::new(),
+            spike_screen: Some(super::outliers::SpikeScreen::default()),
+            robust: None,
         }
     }
 }
@@ -742,6 +751,12 @@ pub fn fit_records<R: Read>(
             reason: "the gain constraint is the filter-error method's (`--estimator fem`); output error has no filter".into(),
         });
     }
+    if options.fem && options.robust.is_some() {
+        return Err(ReplayError::Option {
+            option: "robust",
+            reason: "Huber's robust weights are of output error (`--estimator oe`), not of the filter-error method".into(),
+        });
+    }
     if options.fem && options.bootstrap_refits.is_some() {
         return Err(ReplayError::Option {
             option: "bootstrap",
@@ -754,7 +769,8 @@ pub fn fit_records<R: Read>(
             .map_err(|reason| ReplayError::Option { option: "bootstrap", reason })?;
     }
     let file = readers.iter().map(|r| r.file()).collect::<Vec<_>>().join(", ");
-    let rec = read_records(readers, options.compat.as_ref(), &options.windows)?;
+    let rec =
+        read_records(readers, options.spike_screen, options.compat.as_ref(), &options.windows)?;
     let model = match model {
         Some(m) => m,
         None => default_model(&rec.manoeuvres[0][0], mapping)?,
@@ -795,10 +811,42 @@ pub fn fit_records<R: Read>(
     summary.warnings.extend(simulation_note);
     summary.warnings.extend(level_note);
     summary.warnings.extend(rec.window_note.clone());
+    summary.warnings.extend(dominance_warnings(&fitted.result, &slices));
     if let Some(c) = &options.compat {
         summary.warnings.extend(c.warnings());
     }
     Ok(BatchOutcome { model, result: fitted.result, summary, traces })
+}
+
+/// The summary's warnings when one sample dominates the fit
+/// ([`aeroident_estimators::output_error::Dominance`]): the sample's time and the output (the
+/// share of the cost) or its Cook's distance, against the stated limits.
+pub fn dominance_warnings(result: &OeResult, manoeuvres: &[&[AirDataSample]]) -> Vec<String> {
+    use aeroident_estimators::output_error::Dominance;
+    let Some(d) = result.dominance else { return Vec::new() };
+    let t_s = |i: usize| manoeuvres.iter().flat_map(|m| m.iter()).nth(i).map(|s| s.t_s);
+    let at =
+        |i: usize| t_s(i).map_or(format!("sample {i}"), |t| format!("the sample at t = {t} s"));
+    let mut out = Vec::new();
+    if d.share_dominates(result.outputs.len()) {
+        out.push(format!(
+            "one sample dominates the fit: {} holds {:.1} % of the weighted cost Σ eᵀR⁻¹e (limit {} %; χ² {:.0}, mostly output `{}`); check it for a spike, or fit with the robust option",
+            at(d.share_sample),
+            100.0 * d.share,
+            100.0 * Dominance::SHARE_LIMIT,
+            d.chi2,
+            d.share_output.name()
+        ));
+    }
+    if d.cook_dominates() {
+        out.push(format!(
+            "one sample dominates the fit: {} has Cook's distance {:.3} (limit {}): without it the estimate would move beyond its confidence region; check it for a spike, or fit with the robust option",
+            at(d.cook_sample),
+            d.cook,
+            Dominance::COOK_LIMIT
+        ));
+    }
+    out
 }
 
 /// A batch fit of the record's manoeuvres, timed.
@@ -834,6 +882,7 @@ fn fit_slices(
     } else {
         let mut config = oe_config(structure);
         config.initial_states = options.initial_states;
+        config.robust = options.robust;
         if let Some(n) = options.max_iterations {
             config.max_iterations = n;
         }

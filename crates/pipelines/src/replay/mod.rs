@@ -44,6 +44,7 @@ pub mod cross_check;
 pub mod diagnostics;
 pub mod explain;
 mod online;
+pub mod outliers;
 pub mod precision;
 pub mod prediction;
 
@@ -99,6 +100,8 @@ pub struct ReplayOptions {
     /// The time windows of the record used, each its own manoeuvre ([`crate::window`]); empty:
     /// the whole record.
     pub windows: Vec<crate::window::TimeWindow>,
+    /// The spike screen before every estimator ([`outliers`]); `None`: off. Default on.
+    pub spike_screen: Option<outliers::SpikeScreen>,
 }
 
 /// What a face sees of a replay while it runs: the model once chosen, each identified sample's
@@ -246,6 +249,7 @@ impl Default for ReplayOptions {
             pacing: Pacing::Unpaced,
             compat: None,
             windows: Vec::new(),
+            spike_screen: Some(outliers::SpikeScreen::default()),
         }
     }
 }
@@ -708,7 +712,8 @@ pub fn replay_with<R: Read>(
     crate::window::check_windows(&opts.windows)
         .map_err(|reason| ReplayError::Option { option: "window", reason })?;
     let mut run = online::Replay::new(reader.file().to_string(), mapping, opts, observer);
-    let mut events = record_events(reader, opts.compat.as_ref(), &opts.windows);
+    check_spike_screen(opts.spike_screen.as_ref())?;
+    let mut events = record_events(reader, opts.spike_screen, opts.compat.as_ref(), &opts.windows);
     for item in events.by_ref() {
         run.event(item?, &make)?;
         if run.diverged() || run.stop_requested() {
@@ -740,6 +745,7 @@ pub fn cross_check_record<R: Read>(
     let options = batch::FitOptions {
         compat: opts.compat.clone(),
         windows: opts.windows.clone(),
+        spike_screen: opts.spike_screen,
         ..batch::FitOptions::default()
     };
     match batch::fit_record(reader, mapping, Some(outcome.model.clone()), options) {
@@ -760,19 +766,31 @@ pub fn cross_check_record<R: Read>(
     }
 }
 
-/// The events of a record as the estimators see them: read, corrected by a compatibility
-/// check's corrections when given ([`crate::compat::Corrected`], over the whole record: its
-/// time shifts reach across window edges), then cut to the time windows ([`crate::window`]).
+/// The events of a record as the estimators see them: read, screened for isolated spikes when
+/// `screen` is given ([`outliers`]), corrected by a compatibility check's corrections when
+/// given ([`crate::compat::Corrected`], over the whole record: its time shifts reach across
+/// window edges), then cut to the time windows ([`crate::window`]).
 pub(crate) fn record_events<'a, R: Read + 'a>(
     reader: FlightDataReader<R>,
+    screen: Option<outliers::SpikeScreen>,
     compat: Option<&crate::compat::Corrections>,
     windows: &[crate::window::TimeWindow],
 ) -> crate::window::Windowed<Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a>> {
+    let screened = outliers::Screened::new(reader, screen);
     let events: Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a> = match compat {
-        Some(c) => Box::new(crate::compat::Corrected::new(reader, c.clone())),
-        None => Box::new(reader),
+        Some(c) => Box::new(crate::compat::Corrected::new(screened, c.clone())),
+        None => Box::new(screened),
     };
     crate::window::Windowed::new(events, windows.to_vec())
+}
+
+/// The spike screen's settings must be sane ([`outliers::SpikeScreen::check`]).
+pub(crate) fn check_spike_screen(
+    screen: Option<&outliers::SpikeScreen>,
+) -> Result<(), ReplayError> {
+    screen
+        .map_or(Ok(()), outliers::SpikeScreen::check)
+        .map_err(|reason| ReplayError::Option { option: "spike-screen", reason })
 }
 
 /// The differentiator window must be odd, ≥ 3 and ≤ [`MAX_DIFF_WINDOW`].

@@ -1,0 +1,306 @@
+//! The spike screen: a stage between the reader and every estimator that rejects a row whose
+//! measured channel holds an isolated one-sample spike (a corrupt value that is still within
+//! the reader's plausibility limits, e.g. a thrust of 10⁶ N in a record at 11.6 kN). One such
+//! row owns a least-squares or output-error fit (every batch and recursive estimator minimises
+//! squared residuals); the screen keeps it out of all of them alike.
+//!
+//! **Test** (per channel, per sample `x_i`, over the window of the [`SpikeScreen::half_width`]
+//! `h` samples on each side within the same manoeuvre — a gap or a time window ends it; at a
+//! manoeuvre's ends the window is shifted to hold `2h` others where it can, not cut):
+//!
+//! 1. **Hampel identifier**: `|x_i − med| > t · 1.4826 · MAD`, with `med` and `MAD` the median
+//!    and the median absolute deviation of the window (`x_i` included), `t` =
+//!    [`SpikeScreen::hampel_t`]. 1.4826·MAD is the standard deviation of Gaussian noise, so a
+//!    noise sample passes (Hampel 1974; Pearson, "Outliers in process modeling and
+//!    identification", IEEE Trans. Control Syst. Technol. 10(1), 2002).
+//! 2. **Isolation guard**: `x_i` departs from each of its immediate neighbours, on the same
+//!    side, by more than [`SpikeScreen::isolation`] × the range of the other samples of the
+//!    window, and by more than 10⁻³ of `|med|` (a
+//!    rounding flick on a constant channel is not a spike). A step (doublet, 3-2-1-1) has its
+//!    centre sample on the majority side of its window and passes 1; a one-sample pulse of a
+//!    3-2-1-1 departs from its neighbours by the same amplitude as the rest of the manoeuvre
+//!    spans, so it passes 2. A one-sample pulse on an otherwise constant channel cannot be told
+//!    from a spike: such a record needs the screen off. Two spikes within one window widen
+//!    each other's range and both pass: the screen is for isolated spikes; the output-error
+//!    fit's dominance warning and its Huber option cover what it lets through.
+//!
+//! A sample failing both is rejected ([`RowProblem::Spike`], naming the channel, the value, the
+//! median and the threshold), listed in the summary's rejections and counted. The screened
+//! channels are every measured one of [`AirDataSample`] except `ψ` (which wraps at ±π).
+//!
+//! **Default: on.** A spike is never information an estimator should fit, and the records
+//! shipped in `../shared` pass it unchanged (tests); the cost is a lookahead of `h` samples
+//! (`2h` at a manoeuvre's start; 0.5 s at 10 Hz) before a sample reaches the estimator, so a
+//! paced replay's estimates lag by that much.
+
+use aeroident_estimators::AirDataSample;
+use aeroident_io::{FlightDataError, RecordEvent, RowProblem};
+use std::collections::VecDeque;
+
+/// Settings of the spike screen (module doc).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpikeScreen {
+    /// Samples on each side of the tested one (default 5: a window of 11).
+    pub half_width: usize,
+    /// Hampel threshold `t`, in robust standard deviations `1.4826 · MAD` (default 5).
+    pub hampel_t: f64,
+    /// Isolation factor: the departure from each neighbour must exceed this multiple of the
+    /// range of the rest of the window (default 3: Gaussian noise would need a departure of about 9 σ from each neighbour).
+    pub isolation: f64,
+}
+
+impl Default for SpikeScreen {
+    fn default() -> Self {
+        Self { half_width: 5, hampel_t: 5.0, isolation: 3.0 }
+    }
+}
+
+/// Smallest departure, as a fraction of `|median|`, that can be a spike (rounding on a
+/// constant channel is not).
+const RELATIVE_FLOOR: f64 = 1e-3;
+
+/// Most events held ahead of the tested sample (rows the reader rejected in between count):
+/// beyond it the sample is decided with the samples ahead it has, so memory stays bounded.
+const MAX_AHEAD_EVENTS: usize = 10_000;
+
+/// Fewest samples in a window (the tested one included) for a verdict: a manoeuvre shorter
+/// than this is not screened.
+const MIN_WINDOW: usize = 5;
+
+/// Number of screened channels ([`channels`]).
+const N_CHANNELS: usize = 23;
+
+/// The screened channels of `s` by SI name (`None`: not recorded).
+fn channels(s: &AirDataSample) -> [(&'static str, Option<f64>); N_CHANNELS] {
+    [
+        ("vt_mps", Some(s.vt_mps)),
+        ("alpha_rad", Some(s.alpha_rad)),
+        ("qbar_pa", Some(s.qbar_pa)),
+        ("beta_rad", s.beta_rad),
+        ("p_rad_s", s.p_rad_s),
+        ("q_rad_s", s.q_rad_s),
+        ("r_rad_s", s.r_rad_s),
+        ("pdot_rad_s2", s.pdot_rad_s2),
+        ("qdot_rad_s2", s.qdot_rad_s2),
+        ("rdot_rad_s2", s.rdot_rad_s2),
+        ("alphadot_rad_s", s.alphadot_rad_s),
+        ("phi_rad", s.phi_rad),
+        ("theta_rad", s.theta_rad),
+        ("ax_mps2", s.ax_mps2),
+        ("ay_mps2", s.ay_mps2),
+        ("az_mps2", s.az_mps2),
+        ("de_rad", s.de_rad),
+        ("da_rad", s.da_rad),
+        ("dr_rad", s.dr_rad),
+        ("thrust_n", s.thrust_n),
+        ("throttle", s.throttle),
+        ("thrust_moment_nm", s.thrust_moment_nm),
+        ("rho_kgpm3", s.rho_kgpm3),
+    ]
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+}
+
+impl SpikeScreen {
+    /// Checks the settings.
+    ///
+    /// # Errors
+    /// A message naming the setting when the half-width is not 2…500, `t` or the isolation
+    /// factor not finite and positive.
+    pub fn check(&self) -> Result<(), String> {
+        if !(2..=500).contains(&self.half_width) {
+            return Err(format!("half-width {} must be 2…500 samples", self.half_width));
+        }
+        for (name, v) in [("Hampel t", self.hampel_t), ("isolation factor", self.isolation)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(format!("{name} {v} must be finite and positive"));
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether `window[centre]` is a spike (module doc): `Some((median, threshold))` if so.
+    /// `window` holds one channel's values around the tested sample, in time order.
+    pub fn spike(&self, window: &[f64], centre: usize) -> Option<(f64, f64)> {
+        let x = window[centre];
+        if window.len() < MIN_WINDOW {
+            return None;
+        }
+        let mut sorted = window.to_vec();
+        let med = median(&mut sorted);
+        let mut dev: Vec<f64> = window.iter().map(|v| (v - med).abs()).collect();
+        let scale = 1.4826 * median(&mut dev);
+        if (x - med).abs() <= self.hampel_t * scale {
+            return None;
+        }
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for (k, &v) in window.iter().enumerate() {
+            if k != centre {
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+        }
+        let range = if lo <= hi { hi - lo } else { 0.0 };
+        let threshold = (self.isolation * range).max(RELATIVE_FLOOR * med.abs());
+        let neighbours = [centre.checked_sub(1), Some(centre + 1).filter(|&k| k < window.len())];
+        let mut sides = neighbours.iter().flatten().map(|&k| x - window[k]);
+        let first = sides.next()?;
+        let isolated = first.abs() > threshold
+            && sides.all(|d| d.abs() > threshold && d.signum() == first.signum());
+        isolated.then_some((med, threshold.max(self.hampel_t * scale)))
+    }
+}
+
+/// The spike screen over a reader's events (module doc); with `None` settings it passes
+/// everything.
+pub struct Screened<I> {
+    inner: I,
+    screen: Option<SpikeScreen>,
+    /// Values of the last samples passed in the current manoeuvre (at most `2 half_width`).
+    past: VecDeque<[Option<f64>; N_CHANNELS]>,
+    /// Events read but not yet passed, the tested sample first.
+    ahead: VecDeque<Result<RecordEvent, FlightDataError>>,
+    ended: bool,
+    rejected: usize,
+}
+
+impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Screened<I> {
+    /// The stage over `inner` (settings checked by the caller, [`SpikeScreen::check`]).
+    pub fn new(inner: I, screen: Option<SpikeScreen>) -> Self {
+        Self {
+            inner,
+            screen,
+            past: VecDeque::new(),
+            ahead: VecDeque::new(),
+            ended: false,
+            rejected: 0,
+        }
+    }
+
+    /// Rows the screen rejected so far.
+    pub fn rejected(&self) -> usize {
+        self.rejected
+    }
+
+    /// Samples ahead of the front event up to the next gap (or error), and whether that
+    /// count is final (a gap, an error, the end of the record or the event bound reached).
+    fn samples_ahead(&self) -> (usize, bool) {
+        let mut n = 0;
+        for e in self.ahead.iter().skip(1) {
+            match e {
+                Ok(RecordEvent::Sample { .. }) => n += 1,
+                Ok(RecordEvent::Rejected { .. }) => {}
+                Ok(RecordEvent::Gap { .. }) | Err(_) => return (n, true),
+            }
+        }
+        (n, self.ended || self.ahead.len() >= MAX_AHEAD_EVENTS)
+    }
+
+    /// Samples wanted ahead of the tested one: `h`, more at a manoeuvre's start (`2h` others
+    /// in all).
+    fn lookahead(&self, screen: &SpikeScreen) -> usize {
+        screen.half_width.max(2 * screen.half_width - self.past.len().min(2 * screen.half_width))
+    }
+
+    /// The front sample's verdict: the problem if one of its channels is a spike.
+    fn verdict(&self, screen: &SpikeScreen, sample: &AirDataSample) -> Option<RowProblem> {
+        let future: Vec<_> = self
+            .ahead
+            .iter()
+            .skip(1)
+            .map_while(|e| match e {
+                Ok(RecordEvent::Gap { .. }) | Err(_) => None,
+                Ok(ev) => Some(ev),
+            })
+            .filter_map(|e| match e {
+                RecordEvent::Sample { sample, .. } => Some(channels(sample).map(|c| c.1)),
+                _ => None,
+            })
+            .take(self.lookahead(screen))
+            .collect();
+        // A window of 2h others where the manoeuvre has them: shifted, not cut, at its ends.
+        let from_past =
+            self.past.len().min(2 * screen.half_width - future.len().min(2 * screen.half_width));
+        let past = self.past.range(self.past.len() - from_past..);
+        let here = channels(sample);
+        for (c, &(field, value)) in here.iter().enumerate() {
+            let Some(value) = value else { continue };
+            let mut window: Vec<f64> = past.clone().filter_map(|v| v[c]).collect();
+            let centre = window.len();
+            window.push(value);
+            window.extend(future.iter().filter_map(|v| v[c]));
+            if let Some((median, threshold)) = screen.spike(&window, centre) {
+                return Some(RowProblem::Spike { field: field.into(), value, median, threshold });
+            }
+        }
+        None
+    }
+}
+
+impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Iterator for Screened<I> {
+    type Item = Result<RecordEvent, FlightDataError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        let Some(screen) = self.screen else { return self.inner.next() };
+        loop {
+            if self.ahead.is_empty() {
+                if self.ended {
+                    return None;
+                }
+                self.pull();
+                continue;
+            }
+            match self.ahead.front() {
+                Some(Ok(RecordEvent::Sample { .. })) => {}
+                Some(Ok(RecordEvent::Gap { .. })) => {
+                    self.past.clear();
+                    return self.ahead.pop_front();
+                }
+                _ => return self.ahead.pop_front(),
+            }
+            let (n, last) = self.samples_ahead();
+            if n < self.lookahead(&screen) && !last {
+                self.pull();
+                continue;
+            }
+            let verdict = match self.ahead.front() {
+                Some(Ok(RecordEvent::Sample { sample, .. })) => self.verdict(&screen, sample),
+                _ => None,
+            };
+            let Some(Ok(RecordEvent::Sample { row, sample })) = self.ahead.pop_front() else {
+                continue;
+            };
+            if let Some(problem) = verdict {
+                self.rejected += 1;
+                return Some(Ok(RecordEvent::Rejected { row, problem }));
+            }
+            if self.past.len() == 2 * screen.half_width {
+                self.past.pop_front();
+            }
+            self.past.push_back(channels(&sample).map(|c| c.1));
+            return Some(Ok(RecordEvent::Sample { row, sample }));
+        }
+    }
+}
+
+impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Screened<I> {
+    /// Reads one more event into `ahead` (an error or the end stops the reading).
+    fn pull(&mut self) {
+        match self.inner.next() {
+            Some(e) => {
+                if e.is_err() {
+                    self.ended = true;
+                }
+                self.ahead.push_back(e);
+            }
+            None => self.ended = true,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

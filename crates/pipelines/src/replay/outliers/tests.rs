@@ -1,0 +1,151 @@
+use super::*;
+
+fn screen() -> SpikeScreen {
+    SpikeScreen::default()
+}
+
+/// The samples of `x` the stage rejects (one channel: thrust).
+fn flagged(x: &[f64]) -> Vec<usize> {
+    let events = x.iter().enumerate().map(|(k, &v)| {
+        Ok(RecordEvent::Sample {
+            row: k as u64,
+            sample: AirDataSample {
+                vt_mps: 100.0,
+                alpha_rad: 0.1,
+                qbar_pa: 4000.0,
+                thrust_n: Some(v),
+                ..Default::default()
+            },
+        })
+    });
+    Screened::new(events, Some(screen()))
+        .filter_map(|e| match e.unwrap() {
+            RecordEvent::Rejected { row, .. } => Some(row as usize),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Deterministic pseudo-noise in ±1 (a linear congruential sequence), no generator needed.
+fn noise(n: usize, seed: u64) -> Vec<f64> {
+    let mut s = seed;
+    (0..n)
+        .map(|_| {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        })
+        .collect()
+}
+
+/// Steps, doublets and 3-2-1-1 manoeuvres down to one sample per unit, on quiet and on noisy
+/// channels, pass: none of their samples is an isolated spike.
+#[test]
+fn manoeuvres_pass() {
+    for unit in 1..=6 {
+        // 3-2-1-1 of `unit` samples per unit between quiet stretches.
+        let mut x = vec![0.0; 20];
+        for (len, v) in [(3, 1.0), (2, -1.0), (1, 1.0), (1, -1.0)] {
+            x.extend(std::iter::repeat_n(v, len * unit));
+        }
+        x.extend(vec![0.0; 20]);
+        assert_eq!(flagged(&x), Vec::<usize>::new(), "3-2-1-1, {unit} samples per unit");
+        let noisy: Vec<f64> = x.iter().zip(noise(x.len(), 3)).map(|(a, b)| a + 0.01 * b).collect();
+        assert_eq!(flagged(&noisy), Vec::<usize>::new(), "noisy 3-2-1-1, unit {unit}");
+        // A doublet.
+        let mut d = vec![0.0; 20];
+        d.extend(std::iter::repeat_n(0.5, unit));
+        d.extend(std::iter::repeat_n(-0.5, unit));
+        d.extend(vec![0.0; 20]);
+        assert_eq!(flagged(&d), Vec::<usize>::new(), "doublet, unit {unit}");
+    }
+    // A step with an intermediate sample, and a ramp.
+    let step: Vec<f64> = (0..40)
+        .map(|k| {
+            if k < 20 {
+                0.0
+            } else if k == 20 {
+                0.4
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    assert!(flagged(&step).is_empty());
+    let ramp: Vec<f64> = (0..40).map(|k| k as f64 * 0.1).collect();
+    assert!(flagged(&ramp).is_empty());
+    // Gaussian-like noise of any level passes.
+    assert!(flagged(&noise(2000, 7)).is_empty());
+    // A rounding flick on a constant channel (far below 10⁻³ of its value) passes.
+    let mut c = vec![11_600.0; 30];
+    c[15] += 0.001;
+    assert!(flagged(&c).is_empty());
+}
+
+/// An isolated spike is found, on a quiet and on a noisy channel, at the start, the middle
+/// and the end of a record, whichever its sign; the verdict gives the window's median.
+#[test]
+fn isolated_spikes_are_found() {
+    let base: Vec<f64> = noise(60, 11).iter().map(|v| 11_600.0 + 30.0 * v).collect();
+    for (k, v) in [(0, 1e6), (30, 1e6), (59, 1e6), (30, -2e4), (31, 12_500.0)] {
+        let mut x = base.clone();
+        x[k] = v;
+        assert_eq!(flagged(&x), vec![k], "spike {v} at {k}");
+    }
+    let mut x = base.clone();
+    x[30] = 1e6;
+    let (median, threshold) = screen().spike(&x[25..36], 5).unwrap();
+    assert!((median - 11_600.0).abs() < 30.0 && threshold < 200.0, "{median} {threshold}");
+}
+
+/// The stage: a spike row becomes a rejection naming the channel (counted), the other events
+/// pass in order; a gap restarts the window (a level change across it is no spike); with the
+/// screen off everything passes.
+#[test]
+fn the_stage_rejects_the_spike_row_only() {
+    let sample = |row: u64, thrust: f64| RecordEvent::Sample {
+        row,
+        sample: AirDataSample {
+            t_s: row as f64 * 0.1,
+            vt_mps: 100.0,
+            alpha_rad: 0.1,
+            qbar_pa: 4000.0,
+            thrust_n: Some(thrust),
+            ..Default::default()
+        },
+    };
+    let mut input: Vec<RecordEvent> =
+        (0..30).map(|k| sample(k, 11_600.0 + (k % 3) as f64)).collect();
+    input[12] = sample(12, 1e6);
+    input.insert(20, RecordEvent::Gap { row: 19, dt_s: 1.0, nominal_dt_s: 0.1 });
+    for e in input.iter_mut().skip(21) {
+        if let RecordEvent::Sample { sample, .. } = e {
+            sample.thrust_n = Some(20_000.0);
+        }
+    }
+    // The first sample after the gap is a lone value: a lone level is no spike either.
+    let mut stage = Screened::new(input.clone().into_iter().map(Ok), Some(screen()));
+    let out: Vec<RecordEvent> = stage.by_ref().map(Result::unwrap).collect();
+    assert_eq!(out.len(), input.len());
+    assert_eq!(stage.rejected(), 1);
+    let RecordEvent::Rejected { row: 12, problem } = &out[12] else { panic!("{:?}", out[12]) };
+    assert_eq!(problem.kind(), "isolated spike");
+    let text = problem.to_string();
+    assert!(text.contains("thrust_n") && text.contains("1000000"), "{text}");
+    assert!(matches!(out[20], RecordEvent::Gap { row: 19, .. }));
+    assert!(
+        out.iter().enumerate().all(|(k, e)| k == 12 || !matches!(e, RecordEvent::Rejected { .. }))
+    );
+    let off: Vec<_> =
+        Screened::new(input.clone().into_iter().map(Ok), None).map(Result::unwrap).collect();
+    assert!(off.iter().all(|e| !matches!(e, RecordEvent::Rejected { .. })));
+}
+
+/// Bad settings are named.
+#[test]
+fn bad_settings_are_named() {
+    let bad = SpikeScreen { half_width: 1, ..screen() };
+    assert!(bad.check().unwrap_err().contains("half-width 1"));
+    let bad = SpikeScreen { hampel_t: f64::NAN, ..screen() };
+    assert!(bad.check().unwrap_err().contains("Hampel t"));
+    assert!(screen().check().is_ok());
+}

@@ -8,7 +8,7 @@
 //!
 //! No call panics into Python: bad input is an `AeroidentError` (or a `TypeError`/`ValueError`
 //! of pyo3's argument conversion), and Ctrl-C during a long call is Python's
-//! `KeyboardInterrupt` ([`Signals`]).
+//! `KeyboardInterrupt` (`Signals`).
 
 use std::sync::Mutex;
 use std::time::{Duration, Instant};

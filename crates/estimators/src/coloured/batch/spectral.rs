@@ -20,8 +20,10 @@
 //!
 //! an average of `K` nearly independent tapered periodograms, smoothing over a half-bandwidth
 //! of `(K + 1)/(2(L + 1))` cycles per sample, with no model of the noise. Its autocovariance has
-//! lags below `L`, so with the transforms zero-padded to `2L` the sum over the `2L` frequencies
-//! is the integral exactly (no circular wrap); real signals need only `ω ∈ [0, π]`.
+//! lags below `L`, so with the transforms zero-padded to `P ≥ 2L` samples the sum over the `P`
+//! frequencies is the integral exactly (no circular wrap); real signals need only `ω ∈ [0, π]`.
+//! `P` is the power of two at or above `2L`: `2L` itself often has a large prime factor (a
+//! 600,001-sample record: 2·19·23·1373), where the FFT falls back to far slower algorithms.
 //!
 //! **Fitted share.** The residuals are the noise minus the part the fit took into `θ̂`,
 //! `e = v − S δθ`; their tapered periodograms lack that part's, `(h_k S)~ C (h_k S)~ᴴ` for a
@@ -38,12 +40,13 @@
 //! `a = 0.995`: 0.66–1.03 against 0.92–1.00), as its bandwidth cannot resolve a spectral peak
 //! narrower than itself, and at 0 Hz it has only `K` degrees of freedom.
 //!
-//! Frequencies where every parameter's weighted sensitivity is below `10⁻⁹/(L+1)` of its own
+//! Frequencies where every parameter's weighted sensitivity is below `10⁻⁹/(P/2+1)` of its own
 //! largest value are skipped (they carry less than 10⁻⁹ of its sensitivity energy).
 //!
 //! Memory: the weighted sensitivities' transforms at the kept frequencies, plus one taper's
-//! tapered-sensitivity transforms at a time for the fitted share (recomputed each pass), about
-//! four times the sensitivities' own storage (complex, half spectrum of a `2L` transform).
+//! tapered-sensitivity transforms at a time for the fitted share (recomputed each pass), four
+//! to eight times the sensitivities' own storage (complex, half spectrum of a `P`-point
+//! transform, `2L ≤ P < 4L`).
 
 use nalgebra::DMatrix;
 use rustfft::FftPlanner;
@@ -58,7 +61,7 @@ use std::vec::Vec;
 /// usual compromise of bias and variance (Percival & Walden §7.1).
 pub(crate) const TAPERS: usize = 3;
 
-/// Skipped frequencies: below this fraction, divided by `L + 1`, of every parameter's largest
+/// Skipped frequencies: below this fraction, divided by `P/2 + 1`, of every parameter's largest
 /// weighted-sensitivity energy.
 const NEGLIGIBLE: f64 = 1e-9;
 
@@ -66,10 +69,9 @@ const NEGLIGIBLE: f64 = 1e-9;
 struct Transforms {
     /// The manoeuvre's samples.
     samples: core::ops::Range<usize>,
-    /// The kept frequencies, indices into the `2L`-point DFT (`0..=L`).
+    /// The kept frequencies, indices into the `P`-point DFT (`0..=P/2`, [`padded`]).
     kept: Vec<usize>,
-    /// Weight of each kept frequency in the sum (`2/(2L)` inside `(0, π)`, `1/(2L)` at the
-    /// ends).
+    /// Weight of each kept frequency in the sum (`2/P` inside `(0, π)`, `1/P` at the ends).
     weight: Vec<f64>,
     /// The residuals' multitaper cross-spectral matrix `Φ̂`, `[j][a·ny + b]`.
     phi: Vec<C64>,
@@ -83,7 +85,13 @@ fn taper(k: usize, i: usize, len: usize) -> f64 {
     (2.0 / l1).sqrt() * (core::f64::consts::PI * (k + 1) as f64 * (i + 1) as f64 / l1).sin()
 }
 
-/// DFT of length `2·len` of `f(i)` for `i < len` (zero-padded).
+/// The transform length `P` for a manoeuvre of `len` samples: the power of two at or above
+/// `2·len` (module doc).
+fn padded(len: usize) -> usize {
+    (2 * len).max(2).next_power_of_two()
+}
+
+/// DFT of length [`padded`]`(len)` of `f(i)` for `i < len` (zero-padded).
 fn dft<'a>(
     fft: &dyn rustfft::Fft<f64>,
     buf: &'a mut Vec<C64>,
@@ -91,7 +99,7 @@ fn dft<'a>(
     f: impl Fn(usize) -> f64,
 ) -> &'a [C64] {
     buf.clear();
-    buf.extend((0..2 * len).map(|i| C64::new(if i < len { f(i) } else { 0.0 }, 0.0)));
+    buf.extend((0..padded(len)).map(|i| C64::new(if i < len { f(i) } else { 0.0 }, 0.0)));
     fft.process(buf);
     &buf[..]
 }
@@ -106,9 +114,10 @@ fn transforms(
     samples: core::ops::Range<usize>,
 ) -> Transforms {
     let (start, len) = (samples.start, samples.len());
-    let fft = planner.plan_fft_forward(2 * len);
-    let n_freq = len + 1;
-    let mut buf = Vec::with_capacity(2 * len);
+    let p = padded(len);
+    let fft = planner.plan_fft_forward(p);
+    let n_freq = p / 2 + 1;
+    let mut buf = Vec::with_capacity(p);
     // Weighted sensitivities first: they decide which frequencies are kept.
     let mut t_all = vec![C64::new(0.0, 0.0); n_freq * ny * n];
     for a in 0..ny {
@@ -132,10 +141,8 @@ fn transforms(
     let kept: Vec<usize> = (0..n_freq)
         .filter(|&m| (0..n).any(|p| peak[p] > 0.0 && energy[m * n + p] > cut * peak[p]))
         .collect();
-    let weight = kept
-        .iter()
-        .map(|&m| if m == 0 || m == len { 1.0 } else { 2.0 } / (2 * len) as f64)
-        .collect();
+    let weight =
+        kept.iter().map(|&m| if m == 0 || m == p / 2 { 1.0 } else { 2.0 } / p as f64).collect();
     let t_kept: Vec<C64> =
         kept.iter().flat_map(|&m| t_all[m * ny * n..(m + 1) * ny * n].iter().copied()).collect();
     drop(t_all);
@@ -191,8 +198,8 @@ fn fitted_share(
             }
         }
     }
-    let fft = planner.plan_fft_forward(2 * len);
-    let mut buf = Vec::with_capacity(2 * len);
+    let fft = planner.plan_fft_forward(padded(len));
+    let mut buf = Vec::with_capacity(padded(len));
     let nk = tr.kept.len();
     let mut d = vec![C64::new(0.0, 0.0); nk * ny * ny];
     let mut g = vec![C64::new(0.0, 0.0); nk * ny * n];

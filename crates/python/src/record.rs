@@ -199,6 +199,7 @@ fn replay_file<'py>(
                 .map(|c| aeroident_pipelines::compat::Corrections::from_json(Path::new(c)))
                 .transpose()?,
             windows,
+            ..ReplayOptions::default()
         };
         let file = std::fs::File::open(&path).with_context(|| format!("opening {path}"))?;
         let reader = FlightDataReader::new(std::io::BufReader::new(file), &path, &mapping)?;

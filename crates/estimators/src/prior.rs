@@ -21,6 +21,53 @@ pub struct ParamPrior {
     pub sigma: f64,
 }
 
+impl ParamPrior {
+    /// Largest prior `|value|` accepted: ten times the largest plausible coefficient
+    /// ([`crate::sample::PLAUSIBILITY`]`.coefficient`, 1000), room for a derivative on a
+    /// small normalised regressor (a `CL_q` of 100 on `q c̄/2V`) with margin.
+    pub const MAX_ABS_VALUE: f64 = 1e4;
+    /// Largest prior σ accepted (same bound): a wider prior says nothing a record could not
+    /// say better, and it breaks the estimators that scale by it: the sliding-mode bounds
+    /// `[v/ρ, vρ]`, `ρ = 1 + 3σ/|v|` (a 128-point root search over 10¹⁰ reports grid points and
+    /// bounds as estimates), the EKF's `P₀ = σ²`.
+    pub const MAX_SIGMA: f64 = 1e4;
+    /// Smallest prior σ accepted, relative to `max(|value|, 1)`: below it the bounds
+    /// `v ± 3σ` of the sliding-mode estimators are not distinct numbers and the EKF's `P₀`
+    /// leaves the parameter fixed; a parameter known that well belongs out of the model.
+    pub const MIN_RELATIVE_SIGMA: f64 = 1e-9;
+
+    /// Checks the prior against the limits above.
+    ///
+    /// # Errors
+    /// A sentence saying which limit the value or σ breaks (the caller names the parameter
+    /// and where the prior came from).
+    pub fn check(&self) -> Result<(), String> {
+        let (v, s) = (self.value, self.sigma);
+        if !(v.is_finite() && v.abs() <= Self::MAX_ABS_VALUE) {
+            return Err(format!(
+                "value {v} is not finite or beyond ±{:e} (no aerodynamic parameter is that large)",
+                Self::MAX_ABS_VALUE
+            ));
+        }
+        if !(s.is_finite() && s > 0.0) {
+            return Err(format!("sigma must be finite and > 0, got {s}"));
+        }
+        if s > Self::MAX_SIGMA {
+            return Err(format!(
+                "sigma {s} is beyond {:e}: a prior that wide says nothing and breaks the estimators that scale by it (give a σ of the parameter's plausible range, or leave the prior out for the generic one)",
+                Self::MAX_SIGMA
+            ));
+        }
+        let floor = Self::MIN_RELATIVE_SIGMA * v.abs().max(1.0);
+        if s < floor {
+            return Err(format!(
+                "sigma {s} is below {floor:e} (10⁻⁹ of max(|value|, 1)): the estimators cannot hold a parameter that tight; leave the parameter out of the model instead"
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// The generic prior of parameter `p` (module doc).
 pub fn generic_prior(p: Param) -> ParamPrior {
     let (value, sigma) = match (p.coefficient, p.term) {

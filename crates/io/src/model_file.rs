@@ -322,13 +322,9 @@ impl ModelSpec {
                     structure.names().collect::<Vec<_>>().join(", ")
                 ))
             })?;
-            if !entry.value.is_finite() {
-                return Err(bad(format!("value {} is not finite", entry.value)));
-            }
-            if !(entry.sigma.is_finite() && entry.sigma > 0.0) {
-                return Err(bad(format!("sigma must be finite and > 0, got {}", entry.sigma)));
-            }
-            priors.set(i, ParamPrior { value: entry.value, sigma: entry.sigma });
+            let prior = ParamPrior { value: entry.value, sigma: entry.sigma };
+            prior.check().map_err(bad)?;
+            priors.set(i, prior);
         }
         let mut references = Vec::new();
         for (key, entry) in &raw.reference {

@@ -235,6 +235,23 @@ pub enum BuildError {
         "estimator `{0}` is a batch method (it reads the whole record): run it with `aeroident replay --estimator {0}`"
     )]
     Batch(&'static str),
+    /// A prior outside the limits every estimator can start from
+    /// ([`aeroident_estimators::prior::ParamPrior::check`]).
+    #[error(
+        "estimator `{estimator}`: the prior of `{name}` (value {value}, sigma {sigma}, from the model file or the generic priors): {reason}"
+    )]
+    Prior {
+        /// Estimator name.
+        estimator: &'static str,
+        /// Parameter name.
+        name: &'static str,
+        /// Prior value.
+        value: f64,
+        /// Prior σ.
+        sigma: f64,
+        /// Which limit it breaks.
+        reason: String,
+    },
     /// The estimator rejected its configuration.
     #[error("estimator `{estimator}`: {source}")]
     Config {
@@ -245,13 +262,37 @@ pub enum BuildError {
     },
 }
 
+/// Refuses a prior outside [`aeroident_estimators::prior::ParamPrior::check`]'s limits,
+/// naming the parameter, its value and σ, before any estimator starts from it.
+///
+/// # Errors
+/// [`BuildError::Prior`] for the first such prior.
+pub fn check_priors(
+    kind: EstimatorKind,
+    structure: &ModelStructure,
+    priors: &Priors,
+) -> Result<(), BuildError> {
+    for (i, p) in structure.params().enumerate() {
+        let Some(prior) = priors.prior.get(i).filter(|_| i < priors.n) else { break };
+        prior.check().map_err(|reason| BuildError::Prior {
+            estimator: kind.name(),
+            name: p.name(),
+            value: prior.value,
+            sigma: prior.sigma,
+            reason,
+        })?;
+    }
+    Ok(())
+}
+
 /// Builds estimator `kind` over `structure` with `priors` (one per parameter, parameter
 /// order; used by the estimators that start from a prior) and `options`. Every estimator is
 /// `Send`, so a caller may move it to another thread (the Python class, usable from any
 /// thread).
 ///
 /// # Errors
-/// [`BuildError::Batch`] for the batch output-error method; [`BuildError::Config`] when the
+/// [`BuildError::Batch`] for the batch output-error method; [`BuildError::Prior`] for a prior
+/// outside the limits ([`check_priors`]); [`BuildError::Config`] when the
 /// estimator rejects the structure or an option (e.g. a
 /// forgetting factor outside (0, 1], or a structure the EKF's flight model cannot integrate).
 pub fn build(
@@ -261,6 +302,7 @@ pub fn build(
     options: &EstimatorOptions,
 ) -> Result<Box<dyn Estimator + Send>, BuildError> {
     let config = |source| BuildError::Config { estimator: kind.name(), source };
+    check_priors(kind, &structure, &priors)?;
     Ok(match kind {
         // RLS and FTR start without a prior (exact initialisation / frequency-domain solve).
         EstimatorKind::Rls => {

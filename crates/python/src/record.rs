@@ -229,6 +229,7 @@ fn replay_file<'py>(
                 .map(|c| aeroident_pipelines::compat::Corrections::from_json(Path::new(c)))
                 .transpose()?,
             windows,
+            ..ReplayOptions::default()
         };
         let (reader, notes) = open_log_with_notes(&path, None, &mapping)?;
         let (mut outcome, arrays) =

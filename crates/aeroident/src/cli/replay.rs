@@ -8,7 +8,7 @@
 //!                  [--forgetting λ] [--instrument-delay N]
 //!                  [--derivatives auto|differentiate] [--diff-window N] [--realtime]
 //!                  [--validate-on <data2.csv>] [--window START:END …] [--and <more.csv> …]
-//!                  [--cross-check]
+//!                  [--cross-check] [--no-spike-screen] [--robust]
 //! ```
 //! Writes `<dir>/estimates.csv`, `<dir>/summary.json`, `<dir>/estimates.{png,svg}` (estimates
 //! with shaded ±2σ), `<dir>/fit.{png,svg}` (model vs measured) and `<dir>/report.html`
@@ -24,6 +24,11 @@
 //! ([`crate::interrupt`]): the sample in hand is finished, `estimates.csv`, `summary.json`
 //! (status `interrupted`) and the report are written for the samples read until then, and the
 //! exit code is 128 + signal; a second signal ends at once.
+//!
+//! Before any estimator, rows with an isolated one-sample spike in a measured channel are
+//! rejected and listed (`aeroident_pipelines::replay::outliers`; `--no-spike-screen` turns it
+//! off). A batch fit warns in `summary.json` when one sample dominates it; `--robust` fits
+//! output error with Huber's weights.
 //!
 //! The log format is `--format`, else the file's extension, else CSV
 //! ([`aeroident_io::log`]; `docs/mapping.md` tells how columns are named in each).
@@ -144,6 +149,16 @@ pub struct ReplayArgs {
     /// missing sideslip with the reconstructed one; the summary's warnings list what.
     #[arg(long, value_name = "FILE|auto")]
     pub compat: Option<String>,
+    /// Do not screen the record for isolated one-sample spikes before estimating (by default
+    /// a row whose channel jumps far out of its neighbours and back is rejected and listed;
+    /// `aeroident_pipelines::replay::outliers`). For records whose inputs are genuine
+    /// one-sample pulses on an otherwise constant channel.
+    #[arg(long)]
+    pub no_spike_screen: bool,
+    /// `oe`: Huber's outlier-resistant fit (IRLS weights on the residuals normalised by their
+    /// robust σ, k = 1.345) instead of the Gaussian maximum-likelihood one.
+    #[arg(long)]
+    pub robust: bool,
 }
 
 /// `--initial-states` of the batch fits (`aeroident_estimators::output_error::InitialStates`).
@@ -209,7 +224,15 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         pacing: if args.realtime { Pacing::Realtime } else { Pacing::Unpaced },
         compat: compat_corrections(&args, &mapping, live)?,
         windows: args.windows.clone(),
+        spike_screen: (!args.no_spike_screen)
+            .then(aeroident_pipelines::replay::outliers::SpikeScreen::default),
     };
+    if args.robust && args.estimator != EstimatorKind::Oe {
+        anyhow::bail!(
+            "--robust is Huber's output-error fit (--estimator oe), not --estimator {}",
+            args.estimator.name()
+        );
+    }
     if args.instrument_delay.is_some() && args.estimator != EstimatorKind::RlsIv {
         anyhow::bail!(
             "--instrument-delay applies to instrumental variables (--estimator rls-iv), not to --estimator {}",
@@ -599,6 +622,9 @@ fn execute_batch(
         gain_constraint: !args.no_gain_constraint,
         compat,
         windows: args.windows.clone(),
+        spike_screen: (!args.no_spike_screen)
+            .then(aeroident_pipelines::replay::outliers::SpikeScreen::default),
+        robust: args.robust.then(aeroident_estimators::output_error::Huber::default),
     };
     if let Some(n) = options.bootstrap_refits.filter(|_| !fem) {
         eprintln!("bootstrap: a filter-error fit for the noise levels, then {n} replicas refitted");

@@ -13,16 +13,21 @@
 //!    [`SpikeScreen::hampel_t`]. 1.4826·MAD is the standard deviation of Gaussian noise, so a
 //!    noise sample passes (Hampel 1974; Pearson, "Outliers in process modeling and
 //!    identification", IEEE Trans. Control Syst. Technol. 10(1), 2002).
-//! 2. **Isolation guard**: `x_i` departs from each of its immediate neighbours, on the same
-//!    side, by more than [`SpikeScreen::isolation`] × the range of the other samples of the
-//!    window, and by more than 10⁻³ of `|med|` (a
-//!    rounding flick on a constant channel is not a spike). A step (doublet, 3-2-1-1) has its
-//!    centre sample on the majority side of its window and passes 1; a one-sample pulse of a
-//!    3-2-1-1 departs from its neighbours by the same amplitude as the rest of the manoeuvre
-//!    spans, so it passes 2. A one-sample pulse on an otherwise constant channel cannot be told
-//!    from a spike: such a record needs the screen off. Two spikes within one window widen
-//!    each other's range and both pass: the screen is for isolated spikes; the output-error
-//!    fit's dominance warning and its Huber option cover what it lets through.
+//! 2. **Gross isolation guard**: `x_i` departs from each of its immediate neighbours, on the
+//!    same side, by more than each of: [`SpikeScreen::isolation`] × the range of the other
+//!    samples of the window; the whole range of the channel over its context (the last
+//!    [`CONTEXT`] samples passed in the manoeuvre and the window's samples ahead); 5 % of the
+//!    largest `|x|` of that context (a quantisation flick of one step on a constant
+//!    channel is not a spike); and 10⁻⁶ (SI units, below any sensor's resolution). A step
+//!    (doublet, 3-2-1-1) has its centre sample on the majority side of its window and passes
+//!    1; a one-sample pulse of a 3-2-1-1 departs from its neighbours by no more than the
+//!    manoeuvre spans, so it passes 2. The guard makes this a screen for gross spikes, a
+//!    sample out of the envelope of everything around it (on the shipped HFB-320 record a
+//!    genuine `V` sample departs 7 × its window's range, but stays within its context's
+//!    range). A one-sample pulse on an otherwise constant channel cannot be told from a
+//!    spike: such a record needs the screen off. Two spikes within one window widen each
+//!    other's range and both pass; the output-error fit's dominance warning and its Huber
+//!    option cover what the screen lets through.
 //!
 //! A sample failing both is rejected ([`RowProblem::Spike`], naming the channel, the value, the
 //! median and the threshold), listed in the summary's rejections and counted. The screened
@@ -45,19 +50,25 @@ pub struct SpikeScreen {
     /// Hampel threshold `t`, in robust standard deviations `1.4826 · MAD` (default 5).
     pub hampel_t: f64,
     /// Isolation factor: the departure from each neighbour must exceed this multiple of the
-    /// range of the rest of the window (default 3: Gaussian noise would need a departure of about 9 σ from each neighbour).
+    /// range of the rest of the window (default 10; the largest ratio of a genuine sample on
+    /// the shipped records is 7, HFB-320 `V` at 39.1 s).
     pub isolation: f64,
 }
 
 impl Default for SpikeScreen {
     fn default() -> Self {
-        Self { half_width: 5, hampel_t: 5.0, isolation: 3.0 }
+        Self { half_width: 5, hampel_t: 5.0, isolation: 10.0 }
     }
 }
 
-/// Smallest departure, as a fraction of `|median|`, that can be a spike (rounding on a
-/// constant channel is not).
-const RELATIVE_FLOOR: f64 = 1e-3;
+/// Smallest departure, as a fraction of the largest `|x|` of the context, that can be a spike.
+const CONTEXT_FRACTION: f64 = 0.05;
+
+/// Smallest departure that can be a spike, SI units.
+const ABSOLUTE_FLOOR: f64 = 1e-6;
+
+/// Samples passed before the tested one that make its context (module doc).
+pub const CONTEXT: usize = 100;
 
 /// Most events held ahead of the tested sample (rows the reader rejected in between count):
 /// beyond it the sample is decided with the samples ahead it has, so memory stays bounded.
@@ -124,8 +135,9 @@ impl SpikeScreen {
     }
 
     /// Whether `window[centre]` is a spike (module doc): `Some((median, threshold))` if so.
-    /// `window` holds one channel's values around the tested sample, in time order.
-    pub fn spike(&self, window: &[f64], centre: usize) -> Option<(f64, f64)> {
+    /// `window` holds one channel's values around the tested sample, in time order;
+    /// `context` the channel's values around it that set its scale (the tested one left out).
+    pub fn spike(&self, window: &[f64], centre: usize, context: &[f64]) -> Option<(f64, f64)> {
         let x = window[centre];
         if window.len() < MIN_WINDOW {
             return None;
@@ -145,7 +157,11 @@ impl SpikeScreen {
             }
         }
         let range = if lo <= hi { hi - lo } else { 0.0 };
-        let threshold = (self.isolation * range).max(RELATIVE_FLOOR * med.abs());
+        let (clo, chi, big) = context
+            .iter()
+            .fold((med, med, med.abs()), |(l, h, b), &v| (l.min(v), h.max(v), b.max(v.abs())));
+        let threshold =
+            (self.isolation * range).max(chi - clo).max(CONTEXT_FRACTION * big).max(ABSOLUTE_FLOOR);
         let neighbours = [centre.checked_sub(1), Some(centre + 1).filter(|&k| k < window.len())];
         let mut sides = neighbours.iter().flatten().map(|&k| x - window[k]);
         let first = sides.next()?;
@@ -160,7 +176,8 @@ impl SpikeScreen {
 pub struct Screened<I> {
     inner: I,
     screen: Option<SpikeScreen>,
-    /// Values of the last samples passed in the current manoeuvre (at most `2 half_width`).
+    /// Values of the last samples passed in the current manoeuvre (at most [`CONTEXT`], at
+    /// least `2 half_width`).
     past: VecDeque<[Option<f64>; N_CHANNELS]>,
     /// Events read but not yet passed, the tested sample first.
     ahead: VecDeque<Result<RecordEvent, FlightDataError>>,
@@ -233,7 +250,8 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Screened<I> {
             let centre = window.len();
             window.push(value);
             window.extend(future.iter().filter_map(|v| v[c]));
-            if let Some((median, threshold)) = screen.spike(&window, centre) {
+            let context: Vec<f64> = self.past.iter().chain(&future).filter_map(|v| v[c]).collect();
+            if let Some((median, threshold)) = screen.spike(&window, centre, &context) {
                 return Some(RowProblem::Spike { field: field.into(), value, median, threshold });
             }
         }
@@ -278,7 +296,7 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Iterator for Scre
                 self.rejected += 1;
                 return Some(Ok(RecordEvent::Rejected { row, problem }));
             }
-            if self.past.len() == 2 * screen.half_width {
+            if self.past.len() >= CONTEXT.max(2 * screen.half_width) {
                 self.past.pop_front();
             }
             self.past.push_back(channels(&sample).map(|c| c.1));

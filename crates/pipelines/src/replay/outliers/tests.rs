@@ -75,10 +75,14 @@ fn manoeuvres_pass() {
     assert!(flagged(&ramp).is_empty());
     // Gaussian-like noise of any level passes.
     assert!(flagged(&noise(2000, 7)).is_empty());
-    // A rounding flick on a constant channel (far below 10⁻³ of its value) passes.
-    let mut c = vec![11_600.0; 30];
-    c[15] += 0.001;
+    // A quantisation flick of one step on a constant channel (ATTAS rudder, 0.0215° steps)
+    // passes, as does a departure within the range of the channel's context.
+    let mut c = vec![0.62513; 30];
+    c[11] = 0.64658;
     assert!(flagged(&c).is_empty());
+    let mut v: Vec<f64> = (0..60).map(|k| 108.0 + 0.02 * k as f64).collect();
+    v[40] -= 0.35;
+    assert!(flagged(&v).is_empty());
 }
 
 /// An isolated spike is found, on a quiet and on a noisy channel, at the start, the middle
@@ -86,15 +90,19 @@ fn manoeuvres_pass() {
 #[test]
 fn isolated_spikes_are_found() {
     let base: Vec<f64> = noise(60, 11).iter().map(|v| 11_600.0 + 30.0 * v).collect();
-    for (k, v) in [(0, 1e6), (30, 1e6), (59, 1e6), (30, -2e4), (31, 12_500.0)] {
+    for (k, v) in [(0, 1e6), (30, 1e6), (59, 1e6), (30, -2e4), (31, 13_000.0)] {
         let mut x = base.clone();
         x[k] = v;
         assert_eq!(flagged(&x), vec![k], "spike {v} at {k}");
     }
     let mut x = base.clone();
     x[30] = 1e6;
-    let (median, threshold) = screen().spike(&x[25..36], 5).unwrap();
-    assert!((median - 11_600.0).abs() < 30.0 && threshold < 200.0, "{median} {threshold}");
+    let context: Vec<f64> =
+        x.iter().enumerate().filter(|(k, _)| *k != 30).map(|(_, v)| *v).collect();
+    let (median, threshold) = screen().spike(&x[25..36], 5, &context).unwrap();
+    assert!((median - 11_600.0).abs() < 30.0, "{median}");
+    // The threshold: 5 % of the largest |thrust| of the context.
+    assert!((580.0..600.0).contains(&threshold), "{threshold}");
 }
 
 /// The stage: a spike row becomes a rejection naming the channel (counted), the other events

@@ -187,3 +187,57 @@ fn outputs_failed_figure_leaves_no_results_that_look_valid() {
     assert!(out.join("summary.json").exists() && out.join("estimates.csv").exists());
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// `run --all` into a directory, then the same with one scenario fewer: the scenario
+/// subdirectory the second run no longer writes is cleared with the rest of the first run's
+/// results. A `replay` into that directory is refused (the scenario directories are another
+/// command's results) and removes nothing.
+#[test]
+fn outputs_run_all_subdirectories_are_cleared_by_the_next_run_and_kept_from_a_replay() {
+    let d = scratch("runall");
+    let sc = d.join("sc");
+    std::fs::create_dir_all(&sc).unwrap();
+    let text = std::fs::read_to_string(repo("scenarios/f16/t4_7_case1.toml")).unwrap();
+    for name in ["a", "b"] {
+        let t = text.replacen("name = \"t4_7_case1\"", &format!("name = \"{name}\""), 1).replacen(
+            "duration_s = 10.0",
+            "duration_s = 1.0",
+            1,
+        );
+        std::fs::write(sc.join(format!("{name}.toml")), t).unwrap();
+    }
+    let out = d.join("out");
+    let run_all = || {
+        let o = bin()
+            .args(["run", "--no-figures", "--all"])
+            .arg(&sc)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    run_all();
+    assert!(out.join("a/summary.json").exists() && out.join("b/summary.json").exists());
+    let sim = d.join("sim");
+    std::fs::write(d.join("sim.toml"), SIM).unwrap();
+    let o = bin().args(["f16", "sim"]).arg(d.join("sim.toml")).arg("--out").arg(&sim).output();
+    assert!(o.unwrap().status.success());
+    let o = bin()
+        .arg("replay")
+        .arg(sim.join("timeseries.csv"))
+        .arg("--map")
+        .arg(repo("mappings/aeroident-sim.toml"))
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("aeroident run"), "{err}");
+    assert!(out.join("a/summary.json").exists() && out.join("report.md").exists());
+    std::fs::remove_file(sc.join("b.toml")).unwrap();
+    run_all();
+    assert!(out.join("a/summary.json").exists());
+    assert!(!out.join("b").exists(), "the first run's scenario `b` left beside the second");
+    let _ = std::fs::remove_dir_all(&d);
+}

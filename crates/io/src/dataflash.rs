@@ -460,11 +460,10 @@ impl Decoder<'_> {
             None => {
                 let key = (f.name.clone(), f.columns.clone());
                 let n = self.layout_count.entry(f.name.clone()).or_default();
-                let v = *self.layouts.entry(key).or_insert_with(|| {
+                *self.layouts.entry(key).or_insert_with(|| {
                     *n += 1;
                     *n
-                });
-                v
+                })
             }
         };
         let f = self.formats.get_mut(&ty).expect("type checked by the caller");

@@ -195,7 +195,7 @@ fn val_dataflash_type_redefined_20000_times_reads_in_linear_time() {
     assert!(secs < 5.0, "{secs} s");
     let names: Vec<&str> = c.topics.iter().map(|t| t.name.as_str()).collect();
     assert_eq!(names, ["TST", "TST#2"]);
-    let want: Vec<f64> = (0..20_000).step_by(2).map(|i| f64::from(i)).collect();
+    let want: Vec<f64> = (0..20_000).step_by(2).map(f64::from).collect();
     assert_eq!(c.topics[0].fields[0].1, want);
     let y: Vec<f64> = (1..20_000).step_by(2).map(|i| -f64::from(i)).collect();
     assert_eq!(c.topics[1].fields[1].1, y);

@@ -17,11 +17,9 @@ fn data_messages(b: &[u8], name: &str) -> Vec<usize> {
         let size = usize::from(u16::from_le_bytes([b[at], b[at + 1]]));
         let p = &b[(at + 3).min(b.len())..(at + 3 + size).min(b.len())];
         match b[at + 2] {
-            b'F' => {
-                if p.starts_with(format!("{name}:").as_bytes()) {
-                    // The timestamp must be the first field for the offset below.
-                    assert!(p.starts_with(format!("{name}:uint64_t timestamp;").as_bytes()));
-                }
+            // The timestamp must be the first field for the offset below.
+            b'F' if p.starts_with(format!("{name}:").as_bytes()) => {
+                assert!(p.starts_with(format!("{name}:uint64_t timestamp;").as_bytes()));
             }
             b'A' if p.len() > 3 && p[0] == 0 && &p[3..] == name.as_bytes() => {
                 id = Some([p[1], p[2]]);

@@ -52,6 +52,9 @@ use std::path::Path;
 const HEAD: [u8; 2] = [0xA3, 0x95];
 /// Type id of `FMT`.
 const FMT_TYPE: u8 = 128;
+/// Most fields the topics of one log may have in all (each instance and field layout of a
+/// type is a topic: a hostile log could otherwise make millions).
+const MAX_FIELDS: usize = 2_000_000;
 /// Length of an `FMT` message, header included.
 const FMT_LEN: usize = 89;
 
@@ -308,6 +311,8 @@ struct Decoder<'a> {
     /// redefined again and again costs one hash lookup per definition, not a search.
     layouts: HashMap<(String, Vec<String>), usize>,
     layout_count: HashMap<String, usize>,
+    /// Fields of all topics made so far, against [`MAX_FIELDS`].
+    fields_held: usize,
     row: Vec<f64>,
     flat: Vec<f64>,
 }
@@ -337,6 +342,7 @@ pub fn decode_dataflash<R: Read>(
         by_name: HashMap::new(),
         layouts: HashMap::new(),
         layout_count: HashMap::new(),
+        fields_held: 0,
         row: Vec::new(),
         flat: Vec::new(),
     };
@@ -379,7 +385,7 @@ pub fn decode_dataflash<R: Read>(
             }
             d.formats.insert(id, f);
         } else {
-            d.message(ty, p, at);
+            d.message(ty, p, at).map_err(|m| err(at, m))?;
         }
         w.consume(3 + len as u64).map_err(io)?;
     }
@@ -400,7 +406,7 @@ pub fn decode_dataflash<R: Read>(
 
 impl Decoder<'_> {
     /// A message of defined type `ty` (not `FMT`) at byte `at` with payload `p`.
-    fn message(&mut self, ty: u8, p: &[u8], at: u64) {
+    fn message(&mut self, ty: u8, p: &[u8], at: u64) -> Result<(), String> {
         let f = &self.formats[&ty];
         let field = |i: usize| {
             let (_, k, o) = f.fields[i];
@@ -427,7 +433,7 @@ impl Decoder<'_> {
         if let Some((ti, us)) = f.time {
             let t_us = (field(ti) as u64).saturating_mul(us);
             let instance = f.instance.map_or(0, |i| field(i) as i64);
-            let b = self.topic(ty, instance);
+            let b = self.topic(ty, instance)?;
             if self.builders[b].kept {
                 let f = &self.formats[&ty];
                 self.flat.clear();
@@ -446,25 +452,28 @@ impl Decoder<'_> {
             g.instance = Some(i);
             g.topics.clear();
         }
+        Ok(())
     }
 
     /// The builder of type `ty`'s messages of `instance`: `NAME`, `NAME[k]`, and `#n` after
     /// either for the n-th field layout seen under this name (a redefined type).
-    fn topic(&mut self, ty: u8, instance: i64) -> usize {
+    ///
+    /// # Errors
+    /// A new topic that would take the log's topic fields past [`MAX_FIELDS`].
+    fn topic(&mut self, ty: u8, instance: i64) -> Result<usize, String> {
         let f = &self.formats[&ty];
         if let Some(&b) = f.topics.get(&instance) {
-            return b;
+            return Ok(b);
         }
         let variant = match f.variant {
             Some(v) => v,
             None => {
                 let key = (f.name.clone(), f.columns.clone());
                 let n = self.layout_count.entry(f.name.clone()).or_default();
-                let v = *self.layouts.entry(key).or_insert_with(|| {
+                *self.layouts.entry(key).or_insert_with(|| {
                     *n += 1;
                     *n
-                });
-                v
+                })
             }
         };
         let f = self.formats.get_mut(&ty).expect("type checked by the caller");
@@ -477,6 +486,13 @@ impl Decoder<'_> {
         let b = match self.by_name.get(&tname) {
             Some(&b) => b,
             None => {
+                self.fields_held += f.columns.len() + 1;
+                if self.fields_held > MAX_FIELDS {
+                    return Err(format!(
+                        "topic `{tname}`: the log's topics (one per type, instance and field \
+                         layout) pass {MAX_FIELDS} fields in all"
+                    ));
+                }
                 let all = f.columns.clone();
                 let kept_idx: Option<Vec<usize>> = self.filter.topic(&tname).map(|only| {
                     (0..all.len()).filter(|&j| only.is_none_or(|s| s.contains(&all[j]))).collect()
@@ -489,7 +505,7 @@ impl Decoder<'_> {
             }
         };
         f.topics.insert(instance, b);
-        b
+        Ok(b)
     }
 }
 

@@ -234,7 +234,11 @@ impl TopicBuilder {
         if !self.kept {
             return;
         }
-        if self.first_descent.is_none() && self.t_us.last().is_some_and(|&last| t_us <= last) {
+        // Compared as the seconds they become: two stamps past 2⁵³ µs can differ as integers
+        // and be equal as `f64`.
+        if self.first_descent.is_none()
+            && self.t_us.last().is_some_and(|&last| seconds(t_us) <= seconds(last))
+        {
             self.first_descent = Some(offset);
         }
         self.t_us.push(t_us);
@@ -249,7 +253,10 @@ impl TopicBuilder {
         if self.first_descent.is_none() {
             return (0, 0);
         }
-        let keep = longest_increasing(&self.t_us);
+        // Non-negative finite `f64`s order as their bits.
+        let keys: Vec<u64> = self.t_us.iter().map(|&t| seconds(t).to_bits()).collect();
+        let keep = longest_increasing(&keys);
+        drop(keys);
         let n = self.t_us.len();
         let first = keep.iter().position(|k| !k).unwrap_or(n);
         let dropped = keep.iter().filter(|k| !**k).count();
@@ -264,13 +271,18 @@ impl TopicBuilder {
 
     pub(crate) fn finish(self) -> Topic {
         // In place (same size and alignment): no second copy of the time column.
-        let t_s: Vec<f64> = self.t_us.into_iter().map(|t| t as f64 * 1e-6).collect();
+        let t_s: Vec<f64> = self.t_us.into_iter().map(seconds).collect();
         let mut fields: Vec<(String, Vec<f64>)> = self.names.into_iter().zip(self.values).collect();
         for (_, v) in &mut fields {
             v.shrink_to_fit();
         }
         Topic { name: self.name, t_s, fields }
     }
+}
+
+/// A timestamp in µs as seconds.
+fn seconds(t_us: u64) -> f64 {
+    t_us as f64 * 1e-6
 }
 
 /// Which elements of `t` form a longest strictly increasing subsequence. Among the longest,
@@ -337,5 +349,17 @@ mod tests {
         let keep = longest_increasing(&[u64::MAX, 1, 2, 3]);
         assert_eq!(keep, [false, true, true, true]);
         assert!(longest_increasing(&[]).is_empty());
+    }
+
+    #[test]
+    fn analytic_stamps_equal_as_seconds_count_as_repeated() {
+        // u64::MAX − 1 and u64::MAX are the same f64: the second is a repeat.
+        let mut b = TopicBuilder::new("t".into(), vec![], Some(vec![]));
+        for (k, t) in [1, u64::MAX - 1, u64::MAX].into_iter().enumerate() {
+            b.push(t, &[], k as u64);
+        }
+        assert_eq!(b.keep_increasing(), (1, 2));
+        let t = b.finish();
+        assert!(t.t_s.windows(2).all(|w| w[1] > w[0]), "{:?}", t.t_s);
     }
 }

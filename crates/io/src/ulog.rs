@@ -45,7 +45,7 @@ use crate::byte_window::ByteWindow;
 use crate::log_contents::TopicBuilder;
 pub use crate::log_contents::{LogContents, TopicFilter, TopicInfo};
 use crate::table::Topic;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::io::Read;
 use std::path::Path;
 
@@ -211,6 +211,9 @@ fn parse_format(text: &str) -> Result<(String, Vec<FieldDef>), String> {
 /// Largest struct a data message can carry: its payload size is a `u16`, less the 2-byte
 /// `msg_id`.
 const MAX_STRUCT: usize = 65_535 - 2;
+/// Most fields the subscriptions and topic layouts of one log may define in all (a log can
+/// subscribe 65 536 times to a 65 000-field format in a few hundred kB).
+const MAX_FIELDS: usize = 2_000_000;
 /// Most bytes of flattened field names one topic may have (a nested array repeats its
 /// prefix for every element: `a[3].b[7].c`).
 const MAX_NAME_BYTES: usize = 1 << 20;
@@ -329,11 +332,21 @@ fn compile(
     Ok(at)
 }
 
+/// Compiles topic format `name`; `budget` is how many more fields the log may hold
+/// ([`MAX_FIELDS`]), checked against the struct's size (at least a byte per field) before
+/// the fields are built.
 fn compile_topic(
     formats: &BTreeMap<String, Vec<FieldDef>>,
     name: &str,
+    budget: usize,
 ) -> Result<Compiled, String> {
-    struct_size(formats, name, 0, &mut BTreeMap::new())?;
+    let size = struct_size(formats, name, 0, &mut BTreeMap::new())?;
+    if size > budget {
+        return Err(format!(
+            "format `{name}` ({size} bytes) would take the fields of this log's subscriptions \
+             past {MAX_FIELDS} in all"
+        ));
+    }
     let mut leaves = Vec::new();
     compile(formats, name, "", 0, &mut leaves, &mut 0)?;
     let ts = leaves
@@ -354,15 +367,6 @@ struct Subscription {
     columns: Vec<usize>,
 }
 
-/// Do two topic definitions have the same fields, in any order?
-fn same_fields(a: &[String], b: &[Leaf]) -> bool {
-    let mut a: Vec<&str> = a.iter().map(String::as_str).collect();
-    let mut b: Vec<&str> = b.iter().map(|l| l.name.as_str()).collect();
-    a.sort_unstable();
-    b.sort_unstable();
-    a == b
-}
-
 /// The reader's state between messages.
 struct Decoder<'a> {
     filter: &'a TopicFilter,
@@ -370,9 +374,13 @@ struct Decoder<'a> {
     formats: BTreeMap<String, Vec<FieldDef>>,
     subs: BTreeMap<u16, Subscription>,
     builders: Vec<TopicBuilder>,
-    /// `(message name, multi_id)` → builders of its field layouts (a format redefined with
-    /// other fields is a topic `name#2`, …).
-    by_key: BTreeMap<(String, u8), Vec<usize>>,
+    /// `(message name, multi_id, sorted field names)` → its builder, and the layouts seen
+    /// per `(message name, multi_id)` (a format redefined with other fields is a topic
+    /// `name#2`, …): one lookup per subscription however often a format is redefined.
+    layouts: HashMap<(String, u8, Vec<String>), usize>,
+    layout_count: HashMap<(String, u8), usize>,
+    /// Fields held by the live subscriptions and the topic layouts, against [`MAX_FIELDS`].
+    fields_held: usize,
     /// Offsets of appended-data sections still ahead.
     appended: Vec<u64>,
     row: Vec<f64>,
@@ -417,7 +425,9 @@ pub fn decode_ulog<R: Read>(
         formats: BTreeMap::new(),
         subs: BTreeMap::new(),
         builders: Vec::new(),
-        by_key: BTreeMap::new(),
+        layouts: HashMap::new(),
+        layout_count: HashMap::new(),
+        fields_held: 0,
         appended: Vec::new(),
         row: Vec::new(),
     };
@@ -523,7 +533,9 @@ impl Decoder<'_> {
                 let multi = payload[0];
                 let id = u16::from_le_bytes([payload[1], payload[2]]);
                 let name = text(&payload[3..], "the subscription's format name")?;
-                let compiled = compile_topic(&self.formats, &name)
+                let replaced = self.subs.get(&id).map_or(0, |s| s.compiled.leaves.len());
+                let budget = MAX_FIELDS.saturating_sub(self.fields_held - replaced);
+                let compiled = compile_topic(&self.formats, &name, budget)
                     .map_err(|m| err(format!("subscription {id} (`{name}`): {m}")))?;
                 self.subscribe(id, multi, name, compiled);
             }
@@ -563,37 +575,39 @@ impl Decoder<'_> {
     /// (a new one `name#k` for a layout not seen before under this name), and which leaves
     /// fill its kept fields.
     fn subscribe(&mut self, id: u16, multi: u8, name: String, compiled: Compiled) {
-        let key = (name, multi);
-        let variants = self.by_key.entry(key.clone()).or_default();
-        let found = variants
-            .iter()
-            .copied()
-            .find(|&i| same_fields(&self.builders[i].all_fields, &compiled.leaves));
-        let topic = match found {
-            Some(i) => i,
+        let mut sorted: Vec<String> = compiled.leaves.iter().map(|l| l.name.clone()).collect();
+        sorted.sort_unstable();
+        let key = (name, multi, sorted);
+        let topic = match self.layouts.get(&key) {
+            Some(&i) => i,
             None => {
-                let (name, multi) = key;
-                let base = if multi == 0 { name } else { format!("{name}[{multi}]") };
-                let tname = match variants.len() {
-                    0 => base,
-                    k => format!("{base}#{}", k + 1),
-                };
+                let count = self.layout_count.entry((key.0.clone(), multi)).or_default();
+                *count += 1;
+                let base = if multi == 0 { key.0.clone() } else { format!("{}[{multi}]", key.0) };
+                let tname = if *count == 1 { base } else { format!("{base}#{count}") };
                 let all: Vec<String> = compiled.leaves.iter().map(|l| l.name.clone()).collect();
                 let kept = self.filter.topic(&tname).map(|only| match only {
                     None => all.clone(),
                     Some(set) => all.iter().filter(|n| set.contains(*n)).cloned().collect(),
                 });
+                // The layout's names stay for the catalogue: counted, never given back.
+                self.fields_held += all.len() + 1;
                 self.builders.push(TopicBuilder::new(tname, all, kept));
-                variants.push(self.builders.len() - 1);
+                self.layouts.insert(key, self.builders.len() - 1);
                 self.builders.len() - 1
             }
         };
+        let index: HashMap<&str, usize> =
+            compiled.leaves.iter().enumerate().map(|(i, l)| (l.name.as_str(), i)).collect();
         let columns = self.builders[topic]
             .names
             .iter()
-            .filter_map(|n| compiled.leaves.iter().position(|l| &l.name == n))
+            .filter_map(|n| index.get(n.as_str()).copied())
             .collect();
-        self.subs.insert(id, Subscription { topic, compiled, columns });
+        self.fields_held += compiled.leaves.len();
+        if let Some(old) = self.subs.insert(id, Subscription { topic, compiled, columns }) {
+            self.fields_held -= old.compiled.leaves.len();
+        }
     }
 
     /// A data message: its subscription's timestamp and kept fields.

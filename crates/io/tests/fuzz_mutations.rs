@@ -239,7 +239,7 @@ fn mat_seeds() -> Vec<Vec<u8>> {
     let t = mat_matrix("t", &[4, 1], &data[..4]);
     let v = mat_matrix("V", &[1, 4], &data[4..8]);
     vec![
-        mat_file(&[m.clone()]),
+        mat_file(std::slice::from_ref(&m)),
         mat_file(&[mat_compressed(&m)]),
         mat_file(&[mat_compressed(&t), mat_compressed(&v)]),
         mat_file(&[t, v]),

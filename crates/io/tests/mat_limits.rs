@@ -17,7 +17,7 @@ fn read(bytes: &[u8]) -> Result<aeroident_io::table::Table, String> {
 fn val_compressed_and_plain_variables_read_alike() {
     let data: Vec<f64> = (0..12).map(|i| f64::from(i) * 0.5).collect();
     let plain = mat_matrix("rec", &[4, 3], &data);
-    for f in [mat_file(&[plain.clone()]), mat_file(&[mat_compressed(&plain)])] {
+    for f in [mat_file(std::slice::from_ref(&plain)), mat_file(&[mat_compressed(&plain)])] {
         let t = read(&f).unwrap();
         assert_eq!(t.names, ["1", "2", "3"]);
         assert_eq!(t.columns[2], data[8..12]);

@@ -189,12 +189,13 @@ fn val_dataflash_type_redefined_20000_times_reads_in_linear_time() {
     let started = Instant::now();
     let c = parse_dataflash(&d.0, "redef.bin").unwrap();
     let secs = started.elapsed().as_secs_f64();
+    eprintln!("20 000 DataFlash redefinitions ({} bytes) read in {secs:.3} s", d.0.len());
     // Quadratic handling took about a minute here; linear is well under a second even
     // unoptimised.
     assert!(secs < 5.0, "{secs} s");
     let names: Vec<&str> = c.topics.iter().map(|t| t.name.as_str()).collect();
     assert_eq!(names, ["TST", "TST#2"]);
-    let want: Vec<f64> = (0..20_000).step_by(2).map(|i| f64::from(i)).collect();
+    let want: Vec<f64> = (0..20_000).step_by(2).map(f64::from).collect();
     assert_eq!(c.topics[0].fields[0].1, want);
     let y: Vec<f64> = (1..20_000).step_by(2).map(|i| -f64::from(i)).collect();
     assert_eq!(c.topics[1].fields[1].1, y);
@@ -219,4 +220,70 @@ fn val_filtered_read_keeps_only_what_the_mapping_reads() {
     let cat: Vec<(&str, usize, usize)> =
         c.catalogue.iter().map(|t| (t.name.as_str(), t.fields.len(), t.messages)).collect();
     assert_eq!(cat, [("imu", 3, 100), ("big", 8, 100)]);
+}
+
+#[test]
+fn val_ulog_formats_redefined_and_wide_formats_read_in_linear_time() {
+    // 20 000 redefinitions, each subscribed under a new msg_id with one sample, two layouts.
+    let mut u = Ulog::new();
+    for i in 0..20_000u64 {
+        let f = if i % 2 == 0 {
+            "t:uint64_t timestamp;float x;"
+        } else {
+            "t:uint64_t timestamp;float x;float y;"
+        };
+        u.format(f);
+        u.subscribe(0, (i % 60_000) as u16, "t");
+        let fields: &[f32] = if i % 2 == 0 { &[1.0] } else { &[1.0, 2.0] };
+        u.data_f32((i % 60_000) as u16, 1_000 + i, fields);
+    }
+    // A format of 65 000 one-byte fields (an array, flattened), all kept.
+    let wide = "wide:uint64_t timestamp;uint8_t[65000] a;";
+    u.format(wide);
+    u.subscribe(0, 60_001, "wide");
+    let started = Instant::now();
+    let c = parse_ulog(&u.0, "many.ulg").unwrap();
+    let secs = started.elapsed().as_secs_f64();
+    assert!(secs < 10.0, "{secs} s");
+    let names: Vec<(&str, usize)> =
+        c.topics.iter().map(|t| (t.name.as_str(), t.t_s.len())).collect();
+    assert_eq!(names, [("t", 10_000), ("t#2", 10_000)]);
+    assert_eq!(c.catalogue.len(), 2, "the wide topic has no message");
+}
+
+#[test]
+fn errors_many_subscriptions_to_a_wide_format_are_refused_before_their_fields_are_built() {
+    // 65 000 fields a subscription, resubscribed under new ids: a few kB of file.
+    let mut u = Ulog::new();
+    u.format("wide:uint64_t timestamp;uint8_t[65000] a;");
+    for id in 0..40u16 {
+        u.subscribe(0, id, "wide");
+    }
+    let (_, msg) = decode_error(parse_ulog(&u.0, "wide.ulg").unwrap_err());
+    assert!(msg.contains("(`wide`): format `wide` (65008 bytes) would take the fields"), "{msg}");
+    assert!(msg.contains("past 2000000 in all"), "{msg}");
+    // Resubscribing the same id replaces the subscription: no limit reached.
+    let mut u = Ulog::new();
+    u.format("wide:uint64_t timestamp;uint8_t[65000] a;");
+    for _ in 0..40 {
+        u.subscribe(0, 1, "wide");
+    }
+    assert!(parse_ulog(&u.0, "wide.ulg").is_ok());
+    // DataFlash: a timed type whose instance field takes a new value in every message.
+    let mut d = Dataflash::new();
+    d.fmt(200, 3 + 8 + 4 + 32 * 2, "INS", "Qia", "TimeUS,I,A");
+    d.fmt(201, 3 + 8 + 1 + 16 + 16, "FMTU", "QBNN", "TimeUS,FmtType,UnitIds,MultIds");
+    let mut fmtu = 1u64.to_le_bytes().to_vec();
+    fmtu.push(200);
+    fmtu.extend_from_slice(b"s#\0\0\0\0\0\0\0\0\0\0\0\0\0\0");
+    fmtu.extend_from_slice(&[0u8; 16]);
+    d.msg(201, &fmtu);
+    for i in 0..70_000i32 {
+        let mut p = (i as u64).to_le_bytes().to_vec();
+        p.extend_from_slice(&i.to_le_bytes());
+        p.extend_from_slice(&[0u8; 64]);
+        d.msg(200, &p);
+    }
+    let (_, msg) = decode_error(parse_dataflash(&d.0, "ins.bin").unwrap_err());
+    assert!(msg.contains("pass 2000000 fields in all"), "{msg}");
 }

@@ -506,7 +506,7 @@ impl Read for TableAsCsv {
     }
 }
 
-/// Reads a MATLAB level-5 `.mat` file ([`crate::mat5`]) into a [`Table`].
+/// Reads a MATLAB level-5 `.mat` file (the crate's own level-5 reader, module `mat5`) into a [`Table`].
 ///
 /// - One numeric 2-D variable (the FVSysID layout, e.g. `fAttasElv1`, 626 × 45): its
 ///   columns are the table's, named by `column_names` (the mapping's `[columns] names`) or

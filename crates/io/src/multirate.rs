@@ -126,7 +126,7 @@ fn continuous_quaternion(topic: &mut Topic, fields: &[&str; 4]) {
 /// [`FlightDataError::BadSpec`] for a mapping without `[align]`, with a time column other than
 /// [`TIME_COLUMN`], or with quaternion components from different topics;
 /// [`FlightDataError::MissingTopic`] naming the first column (topic/message and field) the log
-/// lacks and what needs it; the errors of [`align`].
+/// lacks and what needs it; the errors of [`crate::align::align`].
 pub fn log_table(
     topics: &[Topic],
     mapping: &Mapping,

@@ -40,8 +40,10 @@ impl ParamPrior {
     ///
     /// # Errors
     /// A sentence saying which limit the value or σ breaks (the caller names the parameter
-    /// and where the prior came from).
-    pub fn check(&self) -> Result<(), String> {
+    /// and where the prior came from). With the crate's `std` feature (it builds the message).
+    #[cfg(feature = "std")]
+    pub fn check(&self) -> Result<(), std::string::String> {
+        use std::format;
         let (v, s) = (self.value, self.sigma);
         if !(v.is_finite() && v.abs() <= Self::MAX_ABS_VALUE) {
             return Err(format!(

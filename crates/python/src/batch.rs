@@ -7,7 +7,7 @@ use std::path::Path;
 
 use aeroident_estimators::flight_model::N_STATES;
 use aeroident_estimators::output_error::InitialStates;
-use aeroident_io::{Mapping, ModelSpec, open_log_with_notes};
+use aeroident_io::{Mapping, ModelSpec, open_log_with_notes, open_log_with_report};
 use aeroident_pipelines::estimators::EstimatorKind;
 use aeroident_pipelines::replay::batch::{
     BatchOutcome, FitOptions, fit_records, parse_process_noise_states, validate_on,
@@ -89,11 +89,12 @@ fn fit_file<'py>(
     let run = move || -> anyhow::Result<(BatchOutcome, Vec<String>)> {
         let mapping = Mapping::from_path(Path::new(&mapping))?;
         let model = model.as_deref().map(ModelSpec::from_arg).transpose()?;
-        let (mut readers, mut notes) = (Vec::new(), Vec::new());
+        let (mut readers, mut notes, mut reports) = (Vec::new(), Vec::new(), Vec::new());
         for file in std::iter::once(&path).chain(&also) {
-            let (reader, more) = open_log_with_notes(file, None, &mapping)?;
+            let (reader, report) = open_log_with_report(file, None, &mapping)?;
             readers.push(reader);
-            notes.extend(more);
+            notes.extend(report.notes());
+            reports.push(report);
         }
         let options = FitOptions {
             fem: kind == EstimatorKind::Fem,
@@ -106,6 +107,8 @@ fn fit_file<'py>(
             ..FitOptions::default()
         };
         let mut outcome = fit_records(readers, &mapping, model, options)?;
+        // What each reader left out, as the CLI's summary.json lists it.
+        outcome.summary.reader = reports;
         if let Some(v) = &validate_with {
             let (reader, more) = open_log_with_notes(v, None, &mapping)?;
             notes.extend(more);

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use aeroident_estimators::{AirDataSample, ModelStructure};
-use aeroident_io::{Mapping, ModelSpec, RecordEvent, open_log_with_notes};
+use aeroident_io::{Mapping, ModelSpec, RecordEvent, open_log_with_notes, open_log_with_report};
 use aeroident_pipelines::estimators::{EstimatorKind, EstimatorOptions, build};
 use aeroident_pipelines::replay::arrays::{EstimateArrays, replay_arrays_observed, replay_samples};
 use aeroident_pipelines::replay::{
@@ -231,9 +231,11 @@ fn replay_file<'py>(
             windows,
             ..ReplayOptions::default()
         };
-        let (reader, notes) = open_log_with_notes(&path, None, &mapping)?;
+        let (reader, report) = open_log_with_report(&path, None, &mapping)?;
+        let notes = report.notes();
         let (mut outcome, arrays) =
             replay_arrays_observed(reader, &mapping, &opts, &mut Interruptible(&signals))?;
+        outcome.reader.push(report);
         if let Some(e) = outcome.diverged_error(kind.name()) {
             anyhow::bail!(e);
         }

@@ -31,7 +31,12 @@ const DIRECT_MAX_LAG: usize = 16;
 
 /// Half-spectrum transforms of the `ncol` real columns of `x` (`len × ncol` row-major),
 /// zero-padded to `p` (even): `[c][j]` for `j = 0..=p/2`.
-fn half_spectra(planner: &mut FftPlanner<f64>, x: &[f64], ncol: usize, p: usize) -> Vec<Vec<C64>> {
+pub(super) fn half_spectra(
+    planner: &mut FftPlanner<f64>,
+    x: &[f64],
+    ncol: usize,
+    p: usize,
+) -> Vec<Vec<C64>> {
     let len = x.len() / ncol.max(1);
     let fft = planner.plan_fft_forward(p);
     let half = p / 2 + 1;

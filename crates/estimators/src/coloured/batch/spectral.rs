@@ -43,11 +43,14 @@
 //! Frequencies where every parameter's weighted sensitivity is below `10⁻⁹/(P/2+1)` of its own
 //! largest value are skipped (they carry less than 10⁻⁹ of its sensitivity energy).
 //!
-//! Memory: the weighted sensitivities' transforms at the kept frequencies, plus one taper's
-//! tapered-sensitivity transforms at a time for the fitted share (recomputed each pass), four
-//! to eight times the sensitivities' own storage (complex, half spectrum of a `P`-point
-//! transform, `2L ≤ P < 4L`).
+//! Memory: one manoeuvre at a time. The fitted share of each pass needs the covariance of the
+//! pass before over every manoeuvre, so the passes run outside the manoeuvres and a
+//! manoeuvre's transforms are made anew in each pass (two real columns per complex FFT, as in
+//! `lags`); what is held is one manoeuvre's transforms, four to eight times its sensitivities'
+//! own storage (complex, half spectrum of a `P`-point transform, `2L ≤ P < 4L`). A record of
+//! many manoeuvres costs no more than its longest one.
 
+use super::lags::half_spectra;
 use nalgebra::DMatrix;
 use rustfft::FftPlanner;
 use rustfft::num_complex::Complex64 as C64;
@@ -91,17 +94,18 @@ fn padded(len: usize) -> usize {
     (2 * len).max(2).next_power_of_two()
 }
 
-/// DFT of length [`padded`]`(len)` of `f(i)` for `i < len` (zero-padded).
-fn dft<'a>(
-    fft: &dyn rustfft::Fft<f64>,
-    buf: &'a mut Vec<C64>,
-    len: usize,
-    f: impl Fn(usize) -> f64,
-) -> &'a [C64] {
-    buf.clear();
-    buf.extend((0..padded(len)).map(|i| C64::new(if i < len { f(i) } else { 0.0 }, 0.0)));
-    fft.process(buf);
-    &buf[..]
+/// The [`TAPERS`] tapered copies of `x` (`len × ncol` row-major) side by side:
+/// `len × (TAPERS·ncol)`, column `k·ncol + c` = `h_k(i) x[i, c]`.
+fn tapered(x: &[f64], ncol: usize) -> Vec<f64> {
+    let len = x.len() / ncol.max(1);
+    let mut out = Vec::with_capacity(x.len() * TAPERS);
+    for (i, xi) in x.chunks_exact(ncol).enumerate() {
+        for k in 0..TAPERS {
+            let h = taper(k, i, len);
+            out.extend(xi.iter().map(|v| h * v));
+        }
+    }
+    out
 }
 
 /// The transforms of the manoeuvre `samples` (`t` the weighted sensitivities `N × ny × n`,
@@ -113,54 +117,37 @@ fn transforms(
     (ny, n): (usize, usize),
     samples: core::ops::Range<usize>,
 ) -> Transforms {
-    let (start, len) = (samples.start, samples.len());
+    let len = samples.len();
     let p = padded(len);
-    let fft = planner.plan_fft_forward(p);
     let n_freq = p / 2 + 1;
-    let mut buf = Vec::with_capacity(p);
-    // Weighted sensitivities first: they decide which frequencies are kept.
-    let mut t_all = vec![C64::new(0.0, 0.0); n_freq * ny * n];
-    for a in 0..ny {
-        for p in 0..n {
-            let x = dft(fft.as_ref(), &mut buf, len, |i| t[((start + i) * ny + a) * n + p]);
-            for m in 0..n_freq {
-                t_all[m * ny * n + a * n + p] = x[m];
-            }
-        }
-    }
-    let mut energy = vec![0.0; n_freq * n];
-    let mut peak = vec![0.0f64; n];
-    for m in 0..n_freq {
-        for p in 0..n {
-            let en: f64 = (0..ny).map(|a| t_all[m * ny * n + a * n + p].norm_sqr()).sum();
-            energy[m * n + p] = en;
-            peak[p] = peak[p].max(en);
-        }
-    }
+    let row = ny * n;
+    // Weighted sensitivities first: they decide which frequencies are kept. `[a·n + p][m]`.
+    let t_all = half_spectra(planner, &t[samples.start * row..samples.end * row], row, p);
+    let energy = |m: usize, q: usize| (0..ny).map(|a| t_all[a * n + q][m].norm_sqr()).sum::<f64>();
+    let peak: Vec<f64> =
+        (0..n).map(|q| (0..n_freq).map(|m| energy(m, q)).fold(0.0, f64::max)).collect();
     let cut = NEGLIGIBLE / n_freq as f64;
     let kept: Vec<usize> = (0..n_freq)
-        .filter(|&m| (0..n).any(|p| peak[p] > 0.0 && energy[m * n + p] > cut * peak[p]))
+        .filter(|&m| (0..n).any(|q| peak[q] > 0.0 && energy(m, q) > cut * peak[q]))
         .collect();
     let weight =
         kept.iter().map(|&m| if m == 0 || m == p / 2 { 1.0 } else { 2.0 } / p as f64).collect();
-    let t_kept: Vec<C64> =
-        kept.iter().flat_map(|&m| t_all[m * ny * n..(m + 1) * ny * n].iter().copied()).collect();
+    let t_kept: Vec<C64> = kept.iter().flat_map(|&m| t_all.iter().map(move |c| c[m])).collect();
     drop(t_all);
-    // Φ̂ = (1/K) Σ_k ẽ_k ẽ_kᴴ.
+    // Φ̂ = (1/K) Σ_k ẽ_k ẽ_kᴴ, all tapers' transforms at once (`[k·ny + a][m]`).
+    let e_all = half_spectra(
+        planner,
+        &tapered(&e[samples.start * ny..samples.end * ny], ny),
+        TAPERS * ny,
+        p,
+    );
     let mut phi = vec![C64::new(0.0, 0.0); kept.len() * ny * ny];
-    let mut e_k = vec![C64::new(0.0, 0.0); kept.len() * ny];
-    for k in 0..TAPERS {
-        for a in 0..ny {
-            let x =
-                dft(fft.as_ref(), &mut buf, len, |i| taper(k, i, len) * e[(start + i) * ny + a]);
-            for (j, &m) in kept.iter().enumerate() {
-                e_k[j * ny + a] = x[m];
-            }
-        }
-        for (pj, ej) in phi.chunks_exact_mut(ny * ny).zip(e_k.chunks_exact(ny)) {
+    for (pj, &m) in phi.chunks_exact_mut(ny * ny).zip(&kept) {
+        for k in 0..TAPERS {
+            let ek = &e_all[k * ny..(k + 1) * ny];
             for a in 0..ny {
                 for b in 0..ny {
-                    pj[a * ny + b] += ej[a] * ej[b].conj() / TAPERS as f64;
+                    pj[a * ny + b] += ek[a][m] * ek[b][m].conj() / TAPERS as f64;
                 }
             }
         }
@@ -168,25 +155,30 @@ fn transforms(
     Transforms { samples, kept, weight, phi, t: t_kept }
 }
 
-/// The fitted share `(1/K) Σ_k (h_k S)~ C (h_k S)~ᴴ` at the kept frequencies of `tr`
-/// (`[j][a·ny + b]`, `s` the sensitivities `N × ny × n`), one taper at a time. With
-/// `C = L Lᵀ` (`L = V √Λ` from the eigenvectors of `C`, negative rounding clipped) it is
-/// `(1/K) Σ_k G_k G_kᴴ` with `G_k` the transform of `h_k S L`: `ny²·n` per frequency and taper
-/// instead of `ny·n² + ny²·n`.
-fn fitted_share(
-    planner: &mut FftPlanner<f64>,
-    s: &[f64],
-    tr: &Transforms,
-    (ny, n): (usize, usize),
-    c: &DMatrix<f64>,
-) -> Vec<C64> {
-    let (start, len) = (tr.samples.start, tr.samples.len());
+/// A square root `L` of the covariance `C = L Lᵀ` (`L = V √Λ` from the eigenvectors of `C`,
+/// negative rounding clipped), for [`fitted_share`].
+fn square_root(c: &DMatrix<f64>) -> DMatrix<f64> {
     let eig = c.clone().symmetric_eigen();
     let mut l = eig.eigenvectors;
     for (q, lam) in eig.eigenvalues.iter().enumerate() {
         let r = lam.max(0.0).sqrt();
         l.column_mut(q).iter_mut().for_each(|v| *v *= r);
     }
+    l
+}
+
+/// The fitted share `(1/K) Σ_k (h_k S)~ C (h_k S)~ᴴ` at the kept frequencies of `tr`
+/// (`[j][a·ny + b]`, `s` the sensitivities `N × ny × n`), one taper at a time. With
+/// `C = L Lᵀ` ([`square_root`]) it is `(1/K) Σ_k G_k G_kᴴ` with `G_k` the transform of
+/// `h_k S L`: `ny²·n` per frequency and taper instead of `ny·n² + ny²·n`.
+fn fitted_share(
+    planner: &mut FftPlanner<f64>,
+    s: &[f64],
+    tr: &Transforms,
+    (ny, n): (usize, usize),
+    l: &DMatrix<f64>,
+) -> Vec<C64> {
+    let (start, len) = (tr.samples.start, tr.samples.len());
     // S_i L (ny × n) for the manoeuvre's samples.
     let mut sl = vec![0.0; len * ny * n];
     for i in 0..len {
@@ -198,29 +190,17 @@ fn fitted_share(
             }
         }
     }
-    let fft = planner.plan_fft_forward(padded(len));
-    let mut buf = Vec::with_capacity(padded(len));
-    let nk = tr.kept.len();
-    let mut d = vec![C64::new(0.0, 0.0); nk * ny * ny];
-    let mut g = vec![C64::new(0.0, 0.0); nk * ny * n];
+    let p = padded(len);
+    let mut d = vec![C64::new(0.0, 0.0); tr.kept.len() * ny * ny];
     for k in 0..TAPERS {
-        for a in 0..ny {
-            for q in 0..n {
-                let x = dft(fft.as_ref(), &mut buf, len, |i| {
-                    taper(k, i, len) * sl[(i * ny + a) * n + q]
-                });
-                for (j, &m) in tr.kept.iter().enumerate() {
-                    g[(j * ny + a) * n + q] = x[m];
-                }
-            }
-        }
-        for (dj, gj) in d.chunks_exact_mut(ny * ny).zip(g.chunks_exact(ny * n)) {
+        let h: Vec<f64> =
+            sl.iter().enumerate().map(|(idx, v)| taper(k, idx / (ny * n), len) * v).collect();
+        let g = half_spectra(planner, &h, ny * n, p); // `[a·n + q][m]`
+        for (dj, &m) in d.chunks_exact_mut(ny * ny).zip(&tr.kept) {
             for a in 0..ny {
-                let ga = &gj[a * n..(a + 1) * n];
                 for b in 0..ny {
-                    let gb = &gj[b * n..(b + 1) * n];
-                    dj[a * ny + b] +=
-                        ga.iter().zip(gb).map(|(x, y)| x * y.conj()).sum::<C64>() / TAPERS as f64;
+                    let acc: C64 = (0..n).map(|q| g[a * n + q][m] * g[b * n + q][m].conj()).sum();
+                    dj[a * ny + b] += acc / TAPERS as f64;
                 }
             }
         }
@@ -228,47 +208,42 @@ fn fitted_share(
     d
 }
 
-/// The middle term `F = Σ_j w_j Re(T̃ᴴ (Φ̂ + D) T̃)` over the kept frequencies of every
-/// manoeuvre, `D` the fitted share of each (`None`: none).
-fn middle(tr: &[Transforms], d: Option<&[Vec<C64>]>, (ny, n): (usize, usize)) -> DMatrix<f64> {
-    let mut f = DMatrix::<f64>::zeros(n, n);
+/// Adds one manoeuvre's share of the middle term, `Σ_j w_j Re(T̃ᴴ (Φ̂ + D) T̃)` over its kept
+/// frequencies, to `f`; `D` its fitted share (`None`: none).
+fn add_middle(f: &mut DMatrix<f64>, man: &Transforms, d: Option<&[C64]>, (ny, n): (usize, usize)) {
     let mut phi = vec![C64::new(0.0, 0.0); ny * ny];
     let mut g = vec![C64::new(0.0, 0.0); ny * n];
-    for (mi, man) in tr.iter().enumerate() {
-        for (j, &wm) in man.weight.iter().enumerate() {
-            let t = &man.t[j * ny * n..(j + 1) * ny * n];
-            phi.copy_from_slice(&man.phi[j * ny * ny..(j + 1) * ny * ny]);
-            if let Some(d) = d {
-                for (pv, dv) in phi.iter_mut().zip(&d[mi][j * ny * ny..(j + 1) * ny * ny]) {
-                    *pv += dv;
-                }
+    for (j, &wm) in man.weight.iter().enumerate() {
+        let t = &man.t[j * ny * n..(j + 1) * ny * n];
+        phi.copy_from_slice(&man.phi[j * ny * ny..(j + 1) * ny * ny]);
+        if let Some(d) = d {
+            for (pv, dv) in phi.iter_mut().zip(&d[j * ny * ny..(j + 1) * ny * ny]) {
+                *pv += dv;
             }
-            // G = Φ T̃ (ny × n); F += w Re(T̃ᴴ G).
-            for a in 0..ny {
-                for p in 0..n {
-                    g[a * n + p] = (0..ny).map(|b| phi[a * ny + b] * t[b * n + p]).sum();
-                }
-            }
+        }
+        // G = Φ T̃ (ny × n); F += w Re(T̃ᴴ G).
+        for a in 0..ny {
             for p in 0..n {
-                for q in p..n {
-                    let acc: f64 = (0..ny).map(|a| (t[a * n + p].conj() * g[a * n + q]).re).sum();
-                    f[(p, q)] += wm * acc;
-                }
+                g[a * n + p] = (0..ny).map(|b| phi[a * ny + b] * t[b * n + p]).sum();
+            }
+        }
+        for p in 0..n {
+            for q in p..n {
+                let acc: f64 = (0..ny).map(|a| (t[a * n + p].conj() * g[a * n + q]).re).sum();
+                f[(p, q)] += wm * acc;
             }
         }
     }
-    for p in 0..n {
-        for q in 0..p {
-            f[(p, q)] = f[(q, p)];
-        }
-    }
-    f
 }
 
 /// The spectral coloured-residual covariance (module doc), arguments as
 /// [`super::covariance`]: `s` sensitivities `N × ny × n`, `e` residuals `N × ny`, `w` the
 /// weights `R⁻¹` (diagonal), `lengths` samples per manoeuvre, `minv` = `M⁻¹`. The `lag` of
 /// the result is 0 (no lag sum).
+///
+/// Each pass of the fitted share needs the covariance of the pass before over all
+/// manoeuvres, so the passes run outside the manoeuvres and each manoeuvre's transforms are
+/// made anew in every pass: memory is that of one manoeuvre, not of the record.
 pub(crate) fn covariance(
     s: &[f64],
     e: &[f64],
@@ -280,24 +255,30 @@ pub(crate) fn covariance(
     let n = minv.nrows();
     let t = super::weighted_sensitivities(s, w, n);
     let mut planner = FftPlanner::<f64>::new();
-    let mut start = 0;
-    let mut tr = Vec::with_capacity(lengths.len());
-    for &len in lengths {
-        if len > 0 {
-            tr.push(transforms(&mut planner, &t, e, (ny, n), start..start + len));
+    let mut one_pass = |root: Option<&DMatrix<f64>>| {
+        let mut f = DMatrix::<f64>::zeros(n, n);
+        let mut start = 0;
+        for &len in lengths {
+            if len > 0 {
+                let tr = transforms(&mut planner, &t, e, (ny, n), start..start + len);
+                let d = root.map(|l| fitted_share(&mut planner, s, &tr, (ny, n), l));
+                add_middle(&mut f, &tr, d.as_deref(), (ny, n));
+            }
+            start += len;
         }
-        start += len;
-    }
-    let mut d: Option<Vec<Vec<C64>>> = None;
-    let mut pass = 0;
-    loop {
-        let col = super::Coloured::new(minv * middle(&tr, d.as_deref(), (ny, n)) * minv, 0);
-        if pass == super::FITTED_SHARE_PASSES {
-            return col;
+        for p in 0..n {
+            for q in 0..p {
+                f[(p, q)] = f[(q, p)];
+            }
         }
-        d = Some(tr.iter().map(|m| fitted_share(&mut planner, s, m, (ny, n), &col.full)).collect());
-        pass += 1;
+        super::Coloured::new(minv * f * minv, 0)
+    };
+    let mut col = one_pass(None);
+    for _ in 0..super::FITTED_SHARE_PASSES {
+        let root = square_root(&col.full);
+        col = one_pass(Some(&root));
     }
+    col
 }
 
 #[cfg(test)]

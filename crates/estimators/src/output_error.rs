@@ -160,6 +160,7 @@ pub mod design;
 pub mod filter_error;
 pub mod riccati;
 mod simulation;
+pub use simulation::MAX_SENSITIVITY_VALUES;
 
 use crate::EstimatorError;
 use crate::flight_model::{FlightModel, N_STATES, Output, STATE_NAMES, StateSet};

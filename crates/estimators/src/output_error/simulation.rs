@@ -60,6 +60,13 @@ pub(super) struct Problem {
     pub n_samples: usize,
 }
 
+/// Most values `N·ny·nβ` of the sensitivities `∂y/∂β` a problem may hold (1 GiB of f64),
+/// checked before the manoeuvres are simulated. The fit holds a few arrays of this size and
+/// the coloured-residual σ their transforms (measured: peak memory ≈ 7 times the
+/// sensitivities on 60,000 samples in 100 manoeuvres), so a record beyond it would need
+/// several GiB more than the data; at 7 outputs and 12 unknowns it is 1.6 million samples.
+pub const MAX_SENSITIVITY_VALUES: usize = 1 << 27;
+
 fn invalid(field: &'static str, value: f64, reason: &'static str) -> EstimatorError {
     EstimatorError::InvalidConfig { field, value, reason }
 }
@@ -169,6 +176,14 @@ impl Problem {
             man.push(Manoeuvre { u, z, x0_meas });
         }
         let n_unknowns = np + biases.len() + x0_free.len() * man.len();
+        let values = n_samples as f64 * ny as f64 * n_unknowns as f64;
+        if values > MAX_SENSITIVITY_VALUES as f64 {
+            return Err(invalid(
+                "samples × outputs × unknowns",
+                values,
+                "the sensitivities ∂y/∂β hold one f64 each and are limited to 2^27 values (1 GiB; the fit's peak memory is several times that): fit windows of the record (replay --window) or fewer manoeuvres",
+            ));
+        }
         if n_samples * ny <= n_unknowns {
             return Err(invalid(
                 "manoeuvres",

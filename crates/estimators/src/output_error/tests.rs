@@ -566,6 +566,19 @@ fn bad_configurations_and_data_are_named() {
     cfg.start = Start::Given(vec![0.0; 3]);
     assert!(matches!(err(&cfg, &[&data]), EstimatorError::InvalidConfig { field: "start", .. }));
     assert!(matches!(err(&OeConfig::new(st), &[]), EstimatorError::InvalidConfig { .. }));
+    // Sensitivities beyond MAX_SENSITIVITY_VALUES are refused before any simulation: 2,000
+    // ten-sample manoeuvres with estimated initial states have 20,000 samples but 8,000+
+    // unknowns (over 1.6e8 values per output).
+    let pieces: Vec<&[AirDataSample]> = (0..2_000).map(|k| &data[k % 100..k % 100 + 10]).collect();
+    match err(&with_x0(st), &pieces) {
+        EstimatorError::InvalidConfig {
+            field: "samples × outputs × unknowns", value, ..
+        } => {
+            assert!(value > MAX_SENSITIVITY_VALUES as f64, "{value}");
+            assert!(value >= 20_000.0 * 8_000.0, "{value}");
+        }
+        other => panic!("expected the size refusal, got {other:?}"),
+    }
 }
 
 /// The convolution form of the coloured-residual sum equals the double sum of its formula

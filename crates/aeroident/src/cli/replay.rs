@@ -367,7 +367,17 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
             &args.data,
             &mapping,
         )?;
-        replay(reader, &mapping, &opts, &mut console)
+        // Listed like every file read (a CSV reader leaves nothing out before the rows), as
+        // the batch fits and Python list it.
+        let report = aeroident_io::ReaderReport {
+            file: args.data.clone(),
+            format: format.name().to_string(),
+            dropped: Vec::new(),
+        };
+        replay(reader, &mapping, &opts, &mut console).map(|mut outcome| {
+            outcome.reader.push(report);
+            outcome
+        })
     } else {
         let (reader, report) = open_log_with_report(&args.data, Some(format), &mapping)?;
         for n in report.notes() {

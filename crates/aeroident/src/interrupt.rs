@@ -1,4 +1,4 @@
-//! Graceful shutdown of live and long runs on SIGINT (Ctrl-C) and SIGTERM.
+//! Graceful shutdown of live and long runs on SIGINT (Ctrl-C), SIGTERM and SIGHUP.
 //!
 //! A live feed never ends by itself, so a signal is its normal end: the first signal only sets a
 //! flag ([`Interrupt::requested`]) that the run polls between samples; the run then finishes the
@@ -20,7 +20,9 @@ use std::sync::mpsc::{Receiver, RecvTimeoutError, SyncSender, sync_channel};
 use std::time::Duration;
 
 #[cfg(unix)]
-const SIGNALS: [i32; 2] = [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM];
+// SIGHUP too: closing the terminal a live feed runs in is as ordinary an end as Ctrl-C.
+const SIGNALS: [i32; 3] =
+    [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM, signal_hook::consts::SIGHUP];
 #[cfg(not(unix))]
 const SIGNALS: [i32; 1] = [signal_hook::consts::SIGINT];
 
@@ -99,6 +101,7 @@ impl Interrupted {
 
 fn signal_name(signal: i32) -> String {
     match signal {
+        1 => "SIGHUP".into(),
         2 => "SIGINT".into(),
         15 => "SIGTERM".into(),
         n => format!("signal {n}"),

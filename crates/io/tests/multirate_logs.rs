@@ -80,25 +80,13 @@ fn corr(a: &[f64], b: &[f64]) -> f64 {
     cov / (va * vb).sqrt()
 }
 
+/// A PX4/ArduPilot log of `../shared/flightdata/px4_ardupilot` ([`shared_data::shared`]).
 fn shared(rel: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/flightdata/px4_ardupilot")
-        .join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        assert!(
-            std::env::var("CI").map_or(true, |v| v != "true"),
-            "{} is absent under CI",
-            p.display()
-        );
-        eprintln!(
-            "SKIPPED: {} is absent (CI provides ../shared beside the repository)",
-            p.display()
-        );
-        None
-    }
+    shared_data::shared(&format!("px4_ardupilot/{rel}"))
 }
+
+#[path = "common/shared.rs"]
+mod shared_data;
 
 /// One inventory line: name as the reader names it, sample count, field names.
 struct Entry {

@@ -7,27 +7,10 @@ use aeroident_io::align::{MAX_TABLE_BYTES, align};
 use aeroident_io::mapping::Clock;
 use aeroident_io::table::{Interpolation, Topic};
 use aeroident_io::{FlightDataError, FlightDataReader, Mapping, RecordEvent, RowProblem};
-use std::path::PathBuf;
 
-fn workspace() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-/// A file of `../shared/flightdata`, or `None` (skipped) when that directory is absent; under
-/// `CI=true` its absence fails the test.
-fn shared(rel: &str) -> Option<PathBuf> {
-    let p = workspace().join("../shared/flightdata").join(rel);
-    if p.exists() {
-        return Some(p);
-    }
-    assert!(
-        std::env::var("CI").map_or(true, |v| v != "true"),
-        "{} is absent under CI",
-        p.display()
-    );
-    eprintln!("SKIPPED: {} is absent (CI provides ../shared beside the repository)", p.display());
-    None
-}
+#[path = "common/shared.rs"]
+mod shared_data;
+use shared_data::{shared, workspace};
 
 const MAP: &str = "[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\n\
     vt = { column = \"V\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\n\

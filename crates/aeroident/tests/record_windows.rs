@@ -58,3 +58,41 @@ fn val_two_records_fitted_together_are_the_joined_record() {
     assert_eq!((together.manoeuvres, together.samples_read), (2, 1502));
     assert_eq!(values(&together), values(&whole));
 }
+
+/// A window holding one sample (ATTAS at 25 Hz: 110.16–110.17 s holds the sample at 110.16 s)
+/// is a manoeuvre output error cannot simulate: it is rejected by its row, named, and the fit is
+/// exactly the one without it; windows that each hold at most one sample are an error that names
+/// the file and the first rows.
+#[test]
+fn val_a_one_sample_window_is_rejected_by_row_not_an_anonymous_error() {
+    let Some(joined) = shared("jategaonkar_hfb320_attas/csv/fAttasAilRud1.csv") else {
+        return;
+    };
+    let with_lone = fit(&joined, &["50:81", "110.16:110.17"]);
+    let without = fit(&joined, &["50:81"]);
+    assert_eq!(values(&with_lone), values(&without));
+    assert_eq!(with_lone.manoeuvres, 1);
+    assert_eq!(with_lone.samples_rejected, without.samples_rejected + 1);
+    let lone: Vec<_> = with_lone
+        .rejections
+        .iter()
+        .filter(|r| r.reason.contains("manoeuvre of one sample"))
+        .collect();
+    assert_eq!(lone.len(), 1, "{:?}", with_lone.rejections);
+
+    let m = Mapping::from_path(&workspace().join("mappings/attas_lateral.toml")).unwrap();
+    let reader = open_log(&joined.display().to_string(), None, &m).unwrap();
+    let tiny: Vec<TimeWindow> = (0..590)
+        .map(|k| {
+            TimeWindow::parse(&format!("{}:{}", 50.0 + 0.1 * k as f64, 50.03 + 0.1 * k as f64))
+                .unwrap()
+        })
+        .collect();
+    let err = fit_record(reader, &m, None, FitOptions { windows: tiny, ..Default::default() })
+        .err()
+        .expect("windows of at most one sample each cannot be fitted")
+        .to_string();
+    assert!(err.contains("fAttasAilRud1.csv"), "{err}");
+    assert!(err.contains("manoeuvre of one sample"), "{err}");
+    assert!(err.contains("row"), "{err}");
+}

@@ -66,7 +66,10 @@ pub struct Windowed<I> {
     current: Option<usize>,
     /// Last used sample's time, s (the gap before the next window is measured from it).
     last_used_t_s: Option<f64>,
-    /// Interval between the last two used samples, s: the nominal interval of the gap event.
+    /// Time of the last sample read, used or not, s.
+    last_seen_t_s: Option<f64>,
+    /// Interval between the last two samples read, s: the nominal interval of the gap event
+    /// (of the record, not of the used samples, so a window of one sample has one too).
     last_dt_s: f64,
     /// The sample that follows the gap event just returned.
     pending: Option<RecordEvent>,
@@ -82,6 +85,7 @@ impl<I> Windowed<I> {
             windows,
             current: None,
             last_used_t_s: None,
+            last_seen_t_s: None,
             last_dt_s: f64::NAN,
             pending: None,
             used: 0,
@@ -126,6 +130,9 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Iterator for Wind
                 }
                 continue;
             };
+            if let Some(t0) = self.last_seen_t_s.replace(sample.t_s) {
+                self.last_dt_s = sample.t_s - t0;
+            }
             let Some(k) = self.windows.iter().position(|w| w.contains(sample.t_s)) else {
                 self.current = None;
                 self.outside += 1;
@@ -138,7 +145,6 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Iterator for Wind
             let Some(t0) = previous else { return Some(Ok(event)) };
             let dt_s = sample.t_s - t0;
             if !entering {
-                self.last_dt_s = dt_s;
                 return Some(Ok(event));
             }
             // A new window: a manoeuvre boundary, as a gap in the record is.

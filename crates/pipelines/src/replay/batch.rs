@@ -271,6 +271,8 @@ pub(crate) fn read_records<R: Read>(
     let files: Vec<String> = readers.iter().map(|r| r.file().to_string()).collect();
     let named = files.len() > 1;
     let mut manoeuvres: Vec<Vec<AirDataSample>> = vec![Vec::new()];
+    // Each manoeuvre's first row and file prefix, to name a manoeuvre too short to simulate.
+    let mut starts: Vec<(u64, String)> = vec![(0, String::new())];
     let mut rejections = RejectionLog::default();
     let (mut read, mut rejected) = (0usize, 0usize);
     let mut notes = Vec::new();
@@ -279,9 +281,12 @@ pub(crate) fn read_records<R: Read>(
         let mut events = super::record_events(reader, screen, compat, windows);
         for event in events.by_ref() {
             match event? {
-                RecordEvent::Sample { sample, .. } => {
+                RecordEvent::Sample { row, sample } => {
                     read += 1;
-                    if let Some(m) = manoeuvres.last_mut() {
+                    if let (Some(m), Some(start)) = (manoeuvres.last_mut(), starts.last_mut()) {
+                        if m.is_empty() {
+                            *start = (row, prefix.clone());
+                        }
                         m.push(sample);
                     }
                 }
@@ -299,23 +304,57 @@ pub(crate) fn read_records<R: Read>(
                         ),
                     });
                     manoeuvres.push(Vec::new());
+                    starts.push((row, prefix.clone()));
                 }
             }
         }
         notes.extend(events.note().map(|n| format!("{prefix}{n}")));
         manoeuvres.push(Vec::new());
+        starts.push((0, String::new()));
     }
-    manoeuvres.retain(|m| !m.is_empty());
+    let lone = reject_lone_samples(&mut manoeuvres, &starts, &mut rejections);
+    rejected += lone.len();
     if manoeuvres.is_empty() {
+        // Lone samples first: the gaps before them say nothing of why nothing is left.
+        let mut first = lone;
+        first.extend(rejections.first(3));
+        first.truncate(3);
         return Err(aeroident_io::FlightDataError::NoSamples {
             file: files.join(", "),
             rejected,
-            first: rejections.first(3),
+            first,
         }
         .into());
     }
     let window_note = (!notes.is_empty()).then(|| notes.join("; "));
     Ok(Manoeuvres { manoeuvres, rejections, read, rejected, window_note })
+}
+
+/// Removes the empty manoeuvres and rejects each manoeuvre of one sample (a lone sample between
+/// two gaps, or alone in a time window): output error simulates every manoeuvre from its first
+/// sample, so one sample holds nothing to fit. Each is listed in `rejections` by its row and file
+/// prefix (`starts`, parallel to `manoeuvres`). Returns the rejections (row, reason).
+fn reject_lone_samples(
+    manoeuvres: &mut Vec<Vec<AirDataSample>>,
+    starts: &[(u64, String)],
+    rejections: &mut RejectionLog,
+) -> Vec<(u64, String)> {
+    let mut lone = Vec::new();
+    let mut kept = Vec::with_capacity(manoeuvres.len());
+    for (m, (row, prefix)) in manoeuvres.drain(..).zip(starts) {
+        if m.len() == 1 {
+            let reason = format!(
+                "{prefix}a manoeuvre of one sample (alone between gaps or in its time window): output error simulates each manoeuvre from its first sample and needs at least two"
+            );
+            rejections
+                .push("one-sample manoeuvre", Rejection { row: *row, reason: reason.clone() });
+            lone.push((*row, reason));
+        } else if !m.is_empty() {
+            kept.push(m);
+        }
+    }
+    *manoeuvres = kept;
+    lone
 }
 
 /// The output-error configuration of a post-flight fit of `structure` (`replay --estimator

@@ -223,6 +223,11 @@ fn newton_polish(pb: &Problem<'_>, z0: [f64; 6]) -> Result<([f64; 6], usize), Mo
     Ok((z, it))
 }
 
+/// The lowest altitude a trim is computed at, ft: below the lowest ground on Earth (the Dead
+/// Sea shore, about −1,400 ft) with a margin. Between it and 0 ft the atmosphere extrapolates
+/// and [`F16Trim::out_of_range`] says so; further down no aircraft flies.
+pub const LOWEST_TRIM_ALT_FT: f64 = -2_000.0;
+
 /// Trims `model` (its increments included) for `cond`.
 ///
 /// A trim is **feasible** when the throttle is within 0–1 and each surface within its
@@ -232,8 +237,8 @@ fn newton_polish(pb: &Problem<'_>, z0: [f64; 6]) -> Result<([f64; 6], usize), Mo
 /// [`F16Trim::out_of_range`] (the published 130 ft/s trim has α = 45.6°).
 ///
 /// # Errors
-/// [`ModelError::InvalidValue`] for a non-finite or non-positive airspeed or non-finite
-/// altitude / γ; [`ModelError::NoConvergence`] when no start reaches a residual below 1e-8, or
+/// [`ModelError::InvalidValue`] for a non-finite or non-positive airspeed, a non-finite
+/// altitude / γ or an altitude below [`LOWEST_TRIM_ALT_FT`]; [`ModelError::NoConvergence`] when no start reaches a residual below 1e-8, or
 /// the only trims found need throttle or surfaces beyond their ranges (the detail says which).
 pub fn trim(model: &F16, cond: &TrimCondition) -> Result<F16Trim, ModelError> {
     if !(cond.vt_fps.is_finite() && cond.vt_fps > 0.0) {
@@ -247,6 +252,13 @@ pub fn trim(model: &F16, cond: &TrimCondition) -> Result<F16Trim, ModelError> {
         if !v.is_finite() {
             return Err(ModelError::InvalidValue { field: f, value: v, reason: "not finite" });
         }
+    }
+    if cond.alt_ft < LOWEST_TRIM_ALT_FT {
+        return Err(ModelError::InvalidValue {
+            field: "alt_ft",
+            value: cond.alt_ft,
+            reason: "below the lowest ground on Earth (the Dead Sea shore, about -1,400 ft; trims go down to -2,000 ft)",
+        });
     }
     let pb = Problem { model, cond: *cond };
     let mut best: Option<(F16Trim, Vec<String>)> = None;
@@ -355,6 +367,26 @@ fn range_check(model: &F16, x: &F16State, u: &F16Controls) -> (Vec<String>, Vec<
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_altitude_below_any_ground_is_refused_naming_it() {
+        let f16 = F16::new(0.35).unwrap();
+        let cond = |alt_ft| TrimCondition {
+            alt_ft,
+            vt_fps: 500.0,
+            gamma_rad: 0.0,
+            maneuver: TrimManeuver::WingsLevel,
+        };
+        let e = trim(&f16, &cond(-5e4)).unwrap_err().to_string();
+        assert!(e.contains("alt_ft") && e.contains("-50000"), "{e}");
+        // Just above the bound: trimmed, the altitude flagged as outside the data's range.
+        let t = trim(&f16, &cond(-1_000.0)).unwrap();
+        assert!(
+            t.out_of_range.iter().any(|s| s.starts_with("altitude_ft")),
+            "{:?}",
+            t.out_of_range
+        );
+    }
 
     #[test]
     fn infeasible_trims_are_errors_naming_the_control() {

@@ -32,7 +32,7 @@ pub struct DesignArgs {
     /// Sample rate of the tables, Hz.
     #[arg(long, default_value_t = 50.0)]
     pub rate_hz: f64,
-    /// Frequency band of the harmonics, Hz: `lo,hi`.
+    /// Frequency band of the harmonics, Hz: two values, `lo,hi` or `lo hi` (below Nyquist).
     #[arg(long, value_delimiter = ',', num_args = 2, default_values_t = [0.1, 1.5])]
     pub band_hz: Vec<f64>,
     /// Flight condition: trim altitude, ft (F-16, wings level).

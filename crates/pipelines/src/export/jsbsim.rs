@@ -34,6 +34,7 @@
 //! mixed in one fragment (JSBSim refuses mixed axis systems). A parameter that is not
 //! identified (`null`) is omitted with a comment, never written as 0.
 
+use aeroident_estimators::prior::ParamPrior;
 use aeroident_estimators::vocabulary::{Coefficient, Param, Term};
 use aeroident_physics::units::FT_PER_M;
 use std::fmt::Write as _;
@@ -66,7 +67,8 @@ pub struct SummaryParameters {
 ///
 /// # Errors
 /// The file cannot be read or parsed, has no `parameters` array, names a parameter outside
-/// the vocabulary, or has a non-finite estimate; each naming the file and parameter.
+/// the vocabulary, or has a non-finite or absurd estimate (beyond ±1e4) or a negative σ; each
+/// naming the file and parameter.
 pub fn read_summary(path: &Path) -> crate::error::Result<SummaryParameters> {
     let file = path.display();
     let text = std::fs::read_to_string(path).map_err(|e| crate::err!("{file}: {e}"))?;
@@ -93,14 +95,28 @@ pub fn read_summary(path: &Path) -> crate::error::Result<SummaryParameters> {
                 }),
             }
         };
-        parameters.push(Identified {
-            param,
-            value: number("estimate")?,
-            sigma: number("std_error")?,
-        });
+        let (value, sigma) = (number("estimate")?, number("std_error")?);
+        check_identified(name, value, sigma).map_err(|why| crate::err!("{file}: {why}"))?;
+        parameters.push(Identified { param, value, sigma });
     }
     let text_of = |k: &str| json[k].as_str().unwrap_or("?").to_string();
     Ok(SummaryParameters { estimator: text_of("estimator"), model: text_of("model"), parameters })
+}
+
+/// Checks an estimate and its σ are numbers a fit can report: `|estimate|` at most
+/// [`ParamPrior::MAX_ABS_VALUE`] (ten times the largest plausible coefficient) and σ ≥ 0. A
+/// hand-edited or corrupted summary would otherwise become an aircraft model JSBSim flies.
+fn check_identified(name: &str, value: Option<f64>, sigma: Option<f64>) -> Result<(), String> {
+    let max = ParamPrior::MAX_ABS_VALUE;
+    if let Some(v) = value.filter(|v| v.abs() > max) {
+        return Err(format!(
+            "parameter `{name}`: estimate {v:e} is beyond ±{max:e}, no identified coefficient (is the summary edited or corrupted?)"
+        ));
+    }
+    if let Some(s) = sigma.filter(|s| *s < 0.0) {
+        return Err(format!("parameter `{name}`: std_error {s} is negative"));
+    }
+    Ok(())
 }
 
 /// The JSBSim properties of the control-surface deflections, rad.
@@ -331,6 +347,28 @@ mod tests {
 
     fn summary(ps: Vec<Identified>) -> SummaryParameters {
         SummaryParameters { estimator: "rls".into(), model: "m".into(), parameters: ps }
+    }
+
+    /// A summary with `CL_alpha` = `estimate`, σ `std_error`, read back from a file.
+    fn read_one(estimate: f64, std_error: f64) -> crate::error::Result<SummaryParameters> {
+        let dir = std::env::temp_dir().join(format!("aeroident-jsbsim-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join(format!("s{:x}.json", estimate.to_bits() ^ std_error.to_bits()));
+        let json = serde_json::json!({"estimator": "oe", "model": "m", "parameters": [
+            {"name": "CL_alpha", "estimate": estimate, "std_error": std_error}]});
+        std::fs::write(&path, json.to_string()).unwrap();
+        let read = read_summary(&path);
+        std::fs::remove_file(&path).unwrap();
+        read
+    }
+
+    #[test]
+    fn absurd_estimates_and_negative_sigmas_are_refused_naming_the_parameter() {
+        assert_eq!(read_one(4.4, 0.1).unwrap().parameters[0].value, Some(4.4));
+        let e = read_one(1e308, 0.1).unwrap_err().to_string();
+        assert!(e.contains("`CL_alpha`") && e.contains("1e308") && e.contains(".json"), "{e}");
+        let e = read_one(4.4, -0.1).unwrap_err().to_string();
+        assert!(e.contains("`CL_alpha`") && e.contains("negative"), "{e}");
     }
 
     #[test]

@@ -52,6 +52,8 @@ pub mod output_error;
 pub mod prior;
 pub mod rls;
 pub mod sample;
+#[cfg(feature = "std")]
+pub mod structure;
 pub mod vocabulary;
 
 // The test-support aircraft names the crate `aeroident_estimators` so that the bench and the

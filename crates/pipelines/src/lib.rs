@@ -33,6 +33,7 @@ pub mod sample_log;
 pub mod scenario_kind;
 /// Open-loop F-16 simulation: trim → inputs, gusts, turbulence → sensors.
 pub mod sim;
+pub mod structure;
 /// Model validation metrics: fit, residual whiteness, input correlation, prediction intervals.
 pub mod validation;
 pub mod window;

@@ -8,11 +8,14 @@
 //! part.
 //!
 //! Every declared size is checked before anything is allocated or inflated for it: a
-//! sub-element must fit in its variable, the dimensions' product must fit in
-//! [`MAX_VALUES`] and equal the real part's byte count over its type's size, and a compressed
-//! variable may not declare more bytes than its compressed data can inflate to (deflate
-//! expands at most 1032:1). Variables of other classes (char, cell, struct, sparse, object)
-//! are skipped.
+//! sub-element must fit in its variable, the dimensions' product must equal the real part's
+//! byte count over its type's size, and a compressed variable may not declare more bytes
+//! than its compressed data can inflate to (deflate expands at most 1032:1). A record decodes
+//! at most [`MAX_DECODED_BYTES`] (512 MiB): its values as `f64` are checked against it from
+//! the declared dimensions, and what its compressed variables inflate (names and dimensions
+//! included) is counted against it before each read, so a 2 MB zlib bomb is refused before
+//! it fills gigabytes. Variables of other classes (char, cell, struct, sparse, object) are
+//! skipped.
 //!
 //! Why not the `matfile` crate (0.5): it prints a raw debug struct to stderr on a corrupt
 //! zlib stream, answers any corrupt file with "An error occurred while parsing the file",
@@ -21,8 +24,10 @@
 use flate2::read::ZlibDecoder;
 use std::io::Read;
 
-/// Most values (all variables together) a `.mat` record may declare: 2²⁸, 2 GiB as `f64`.
-pub const MAX_VALUES: usize = 1 << 28;
+/// Most bytes a `.mat` record may decode: its values as `f64`, and separately what its
+/// compressed variables inflate to. Well under the 1 GiB the aligned table may hold, as the
+/// values are copied once more into the table's columns.
+const MAX_DECODED_BYTES: usize = 512 << 20;
 /// Most dimensions a variable may declare.
 const MAX_DIMS: usize = 32;
 /// Longest variable name read (MATLAB's limit is 63 characters).
@@ -73,21 +78,43 @@ fn convert(ty: u32, b: &[u8], big: bool, out: &mut Vec<f64>) {
     }
 }
 
+/// What a record may still decode, of [`MAX_DECODED_BYTES`] (`cap`, lower in unit tests).
+#[derive(Debug, Clone, Copy)]
+struct Budget {
+    /// Values, as `f64` of 8 bytes each.
+    values: usize,
+    /// Bytes the compressed variables may still inflate to.
+    inflated: usize,
+    cap: usize,
+}
+
+impl Budget {
+    fn new(cap: usize) -> Self {
+        Self { values: cap / 8, inflated: cap, cap }
+    }
+}
+
 /// A reader of one variable's sub-elements.
-struct Body<R> {
+struct Body<'a, R> {
     r: R,
     big: bool,
     /// Bytes of the variable not yet read.
     left: usize,
+    budget: &'a mut Budget,
+    /// Whether `r` inflates (its bytes count against [`Budget::inflated`]).
+    compressed: bool,
 }
 
-impl<R: Read> Body<R> {
+impl<R: Read> Body<'_, R> {
     fn bytes(&mut self, n: usize, what: &str) -> Result<Vec<u8>, String> {
         if n > self.left {
             return Err(format!(
                 "{what} declares {n} bytes but only {} are left in the variable",
                 self.left
             ));
+        }
+        if self.compressed {
+            self.inflate(n, what)?;
         }
         let mut v = Vec::new();
         (&mut self.r).take(n as u64).read_to_end(&mut v).map_err(|e| corrupt(&e, what))?;
@@ -96,6 +123,19 @@ impl<R: Read> Body<R> {
         }
         self.left -= n;
         Ok(v)
+    }
+
+    /// Counts `n` more bytes to inflate against [`Budget::inflated`], before reading them.
+    fn inflate(&mut self, n: usize, what: &str) -> Result<(), String> {
+        self.budget.inflated = self.budget.inflated.checked_sub(n).ok_or_else(|| {
+            format!(
+                "{what}: inflating its {n} bytes would take the record's decompressed data past \
+                 {} bytes ({} MiB), the most a record may decode",
+                self.budget.cap,
+                self.budget.cap >> 20
+            )
+        })?;
+        Ok(())
     }
 
     fn word(&self, b: &[u8]) -> u32 {
@@ -143,15 +183,16 @@ fn corrupt(e: &std::io::Error, what: &str) -> String {
     format!("{what}: the compressed data is corrupt ({e})")
 }
 
-/// Reads one `miMATRIX` body of `n` bytes from `r`; `None` for a class that is not a real
-/// numeric array. `values_left` is what [`MAX_VALUES`] still allows.
+/// Reads one `miMATRIX` body of `n` bytes from `r` (inflating if `compressed`); `None` for a
+/// class that is not a real numeric array. `budget` is what the record may still decode.
 fn matrix<R: Read>(
     r: R,
     n: usize,
     big: bool,
-    values_left: usize,
+    budget: &mut Budget,
+    compressed: bool,
 ) -> Result<Option<MatArray>, String> {
-    let mut b = Body { r, big, left: n };
+    let mut b = Body { r, big, left: n, budget, compressed };
     let (ty, flags) = b.element("its array flags", 16)?;
     if ty != 6 || flags.len() != 8 {
         return Err(format!("array flags of type {ty} and {} bytes (miUINT32, 8)", flags.len()));
@@ -177,12 +218,19 @@ fn matrix<R: Read>(
     if dims.iter().any(|&d| d < 0) {
         return Err(named(format!("negative dimension in {shape}")));
     }
+    let cap = b.budget.cap;
     let count = dims
         .iter()
         .try_fold(1usize, |p, &d| p.checked_mul(d as usize))
-        .filter(|&c| c <= values_left)
+        .filter(|&c| c <= b.budget.values)
         .ok_or_else(|| {
-            named(format!("declared {shape}: more than the {MAX_VALUES} values a record may have"))
+            named(format!(
+                "declared {shape}: more than the {} values ({cap} bytes, {} MiB, as f64) a \
+                 record may decode ({} left)",
+                cap / 8,
+                cap >> 20,
+                b.budget.values
+            ))
         })?;
     if class == 14 || class == 15 {
         return Err(named("64-bit integer data is not read (not exact in f64)".into()));
@@ -201,6 +249,14 @@ fn matrix<R: Read>(
              {size}-byte values: a corrupt file"
         )));
     }
+    if compressed && small.is_none() && bytes > b.budget.inflated {
+        return Err(named(format!(
+            "its real part declares {bytes} bytes to inflate, past the {cap} bytes ({} MiB) a \
+             record may decode ({} left)",
+            cap >> 20,
+            b.budget.inflated
+        )));
+    }
     let mut values = Vec::new();
     if let Some(d) = small {
         convert(ty, &d, big, &mut values);
@@ -214,6 +270,7 @@ fn matrix<R: Read>(
             left -= k;
         }
     }
+    b.budget.values -= values.len();
     let dims = dims.into_iter().map(|d| d as usize).collect();
     Ok(Some(MatArray { name, dims, values }))
 }
@@ -224,13 +281,18 @@ fn matrix<R: Read>(
 /// # Errors
 /// What is wrong, naming the variable (by name, else by number and byte offset).
 pub(crate) fn read_arrays(bytes: &[u8]) -> Result<Vec<MatArray>, String> {
+    read_arrays_capped(bytes, MAX_DECODED_BYTES)
+}
+
+/// [`read_arrays`] decoding at most `cap` bytes (module doc).
+fn read_arrays_capped(bytes: &[u8], cap: usize) -> Result<Vec<MatArray>, String> {
     let big = bytes.get(126..128) == Some(b"MI");
     let word = |at: usize| {
         let w: [u8; 4] = bytes[at..at + 4].try_into().unwrap_or([0; 4]);
         if big { u32::from_be_bytes(w) } else { u32::from_le_bytes(w) }
     };
     let mut out: Vec<MatArray> = Vec::new();
-    let mut values_left = MAX_VALUES;
+    let mut budget = Budget::new(cap);
     let mut at = 128usize;
     let mut k = 0;
     while at + 8 <= bytes.len() {
@@ -245,14 +307,11 @@ pub(crate) fn read_arrays(bytes: &[u8]) -> Result<Vec<MatArray>, String> {
             }
         };
         let array = match ty {
-            14 => matrix(body, body.len(), big, values_left).map_err(which)?,
-            15 => compressed(body, big, values_left).map_err(which)?,
+            14 => matrix(body, body.len(), big, &mut budget, false).map_err(which)?,
+            15 => compressed(body, big, &mut budget).map_err(which)?,
             _ => None,
         };
-        if let Some(a) = array {
-            values_left -= a.values.len();
-            out.push(a);
-        }
+        out.extend(array);
         at = at.saturating_add(8).saturating_add(if ty == 15 { n } else { n.div_ceil(8) * 8 });
     }
     Ok(out)
@@ -260,9 +319,13 @@ pub(crate) fn read_arrays(bytes: &[u8]) -> Result<Vec<MatArray>, String> {
 
 /// A `miCOMPRESSED` element: the zlib stream's one element, inflated only as far as its
 /// checked sizes allow.
-fn compressed(body: &[u8], big: bool, values_left: usize) -> Result<Option<MatArray>, String> {
+fn compressed(body: &[u8], big: bool, budget: &mut Budget) -> Result<Option<MatArray>, String> {
     let mut z = ZlibDecoder::new(body);
     let mut tag = [0u8; 8];
+    let inflated = &mut budget.inflated;
+    *inflated = inflated.checked_sub(8).ok_or_else(|| {
+        format!("its tag would take the record's decompressed data past {} bytes", budget.cap)
+    })?;
     z.read_exact(&mut tag).map_err(|e| corrupt(&e, "its tag"))?;
     let w = |b: &[u8]| {
         let a: [u8; 4] = b.try_into().unwrap_or([0; 4]);
@@ -279,5 +342,72 @@ fn compressed(body: &[u8], big: bool, values_left: usize) -> Result<Option<MatAr
             body.len()
         ));
     }
-    matrix(z, n, big, values_left)
+    matrix(z, n, big, budget, true)
+}
+
+/// Builders of level-5 files shared with the integration tests.
+#[cfg(test)]
+#[path = "../tests/common/logs.rs"]
+mod test_files;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use test_files::{mat_compressed, mat_file, mat_matrix};
+
+    /// Bytes a compressed 1 × `n` double variable named `name` inflates to as read: the
+    /// element's tag, then flags, dimensions, name (padded to 8) and real part, each tagged.
+    fn inflated(name: &str, n: usize) -> usize {
+        8 + 16 + 16 + 8 + name.len().div_ceil(8) * 8 + 8 + 8 * n
+    }
+
+    #[test]
+    fn errors_the_decoded_bytes_of_a_record_are_counted_across_its_variables() {
+        let cap = 4096;
+        // Values: 512 as f64 in all; the second plain variable asks for 300 with 212 left.
+        let v = |name: &str| mat_matrix(name, &[300, 1], &[1.0; 300]);
+        let e = read_arrays_capped(&mat_file(&[v("a"), v("b")]), cap).unwrap_err();
+        assert!(e.starts_with("variable `b`: declared 300×1: more than the 512 values"), "{e}");
+        assert!(e.contains("(4096 bytes, 0 MiB, as f64) a record may decode (212 left)"), "{e}");
+        // Inflated bytes, declared: a long name leaves too few for the next real part.
+        let long = "l".repeat(3000);
+        let f = mat_file(&[
+            mat_compressed(&mat_matrix(&long, &[1, 1], &[1.0])),
+            mat_compressed(&mat_matrix("b", &[150, 1], &[2.0; 150])),
+        ]);
+        let left = cap - inflated(&long, 1) - (inflated("b", 150) - 8 * 150);
+        let e = read_arrays_capped(&f, cap).unwrap_err();
+        assert!(
+            e.starts_with(&format!(
+                "variable `b`: its real part declares 1200 bytes to inflate, past the 4096 \
+                 bytes (0 MiB) a record may decode ({left} left)"
+            )),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn errors_inflated_names_are_counted_as_they_stream() {
+        // Variables of one value and a 1500-byte name: the third's name would pass the cap,
+        // though no dimension declares more than a value.
+        let cap = 4096;
+        let name = |k: usize| format!("{k}{}", "n".repeat(1499));
+        let vars: Vec<Vec<u8>> =
+            (0..3).map(|k| mat_compressed(&mat_matrix(&name(k), &[1, 1], &[1.0]))).collect();
+        assert!(2 * inflated(&name(0), 1) + 8 + 16 + 16 + 8 + 1500 > cap);
+        let at = 128 + vars[0].len() + vars[1].len();
+        let e = read_arrays_capped(&mat_file(&vars), cap).unwrap_err();
+        assert_eq!(
+            e,
+            format!(
+                "variable 3 (element at byte {at}): its name: inflating its 1500 bytes would \
+                 take the record's decompressed data past 4096 bytes (0 MiB), the most a \
+                 record may decode"
+            )
+        );
+        // Two of them fit and read.
+        let a = read_arrays_capped(&mat_file(&vars[..2]), cap).unwrap();
+        assert_eq!(a.len(), 2);
+        assert_eq!(a[1].values, [1.0]);
+    }
 }

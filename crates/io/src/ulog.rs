@@ -27,7 +27,11 @@
 //! Sizes are checked before anything is allocated for them: a format whose struct (arrays of
 //! nested formats included) would exceed the 65 533 bytes a data message can carry, nests
 //! deeper than 8 levels, or whose flattened field names pass 1 MiB is an error naming the
-//! subscription, the format and the field.
+//! subscription, the format and the field. So is a log whose subscriptions together would
+//! build more than 64 MiB of names: each subscription builds its names anew, and a few bytes
+//! of subscription message could otherwise cost a megabyte each (the shipped PX4 logs build
+//! 14 and 18 kB). `_padding…` fields are skipped by their size, never expanded into names:
+//! the work a format costs is bounded by its definition's bytes and these limits.
 //!
 //! A file that ends inside a message (a log cut at power-off) keeps every complete message
 //! and reports the cut in [`LogContents::truncated_at`]. Any other problem is a
@@ -228,12 +232,14 @@ fn type_text(f: &FieldDef) -> String {
 
 /// Size in bytes of format `name`, checked against [`MAX_STRUCT`] and [`MAX_NESTING`] before
 /// anything is allocated per element (a format nesting arrays of arrays declares sizes far
-/// beyond what a message can hold). `memo` holds the sizes of formats already computed.
+/// beyond what a message can hold). `memo` holds the sizes of formats already computed;
+/// `visited` counts the fields looked at (each format's once).
 fn struct_size(
     formats: &BTreeMap<String, Vec<FieldDef>>,
     name: &str,
     depth: usize,
     memo: &mut BTreeMap<String, usize>,
+    visited: &mut usize,
 ) -> Result<usize, String> {
     if let Some(&s) = memo.get(name) {
         return Ok(s);
@@ -243,11 +249,12 @@ fn struct_size(
     }
     let fields = formats.get(name).ok_or_else(|| format!("no format definition for `{name}`"))?;
     let mut total: usize = 0;
+    *visited += fields.len();
     for f in fields {
         let one = match Basic::parse(&f.type_name) {
             Some(k) => k.size(),
             None => {
-                let s = struct_size(formats, &f.type_name, depth + 1, memo)?;
+                let s = struct_size(formats, &f.type_name, depth + 1, memo, visited)?;
                 if s == 0 {
                     return Err(format!(
                         "format `{name}`: field `{} {}`: nested format `{}` has no bytes",
@@ -278,77 +285,122 @@ fn struct_size(
     Ok(total)
 }
 
-/// Appends the numeric leaves of format `name` (prefixed with `prefix`, at byte `base`) to
-/// `leaves`; returns the offset after the struct. Call only after [`struct_size`] accepted the
-/// topic: every element then has at least one byte, so the elements visited are at most
-/// [`MAX_STRUCT`]. `name_bytes` counts the names' bytes against [`MAX_NAME_BYTES`].
-fn compile(
-    formats: &BTreeMap<String, Vec<FieldDef>>,
-    name: &str,
-    prefix: &str,
-    base: usize,
-    leaves: &mut Vec<Leaf>,
-    name_bytes: &mut usize,
-) -> Result<usize, String> {
-    let fields = formats.get(name).ok_or_else(|| format!("no format definition for `{name}`"))?;
-    let mut at = base;
-    for f in fields {
-        let count = f.len.unwrap_or(1);
-        let padding = f.name.starts_with("_padding");
-        let element = |i: usize, dot: &str| match f.len {
-            Some(_) => format!("{prefix}{}[{i}]{dot}", f.name),
-            None => format!("{prefix}{}{dot}", f.name),
-        };
-        if let Some(kind) = Basic::parse(&f.type_name) {
-            if !padding && kind != Basic::Char {
+/// Most work compiling all of a log's subscriptions may take, counted as [`compile`] counts it
+/// (bytes of names built plus one per field visited) and one per field [`struct_size`]
+/// visits: every subscription builds its names anew, so a few bytes of `A` message could
+/// otherwise make a megabyte of names each, again and again.
+const MAX_LOG_NAME_WORK: usize = 64 << 20;
+
+/// Flattens a topic's format into its numeric leaves, counting the work against
+/// [`MAX_NAME_BYTES`] for the topic and `log_left` for the log.
+struct Flatten<'a> {
+    formats: &'a BTreeMap<String, Vec<FieldDef>>,
+    /// Sizes of the formats the topic reaches, from [`struct_size`].
+    sizes: &'a BTreeMap<String, usize>,
+    leaves: Vec<Leaf>,
+    /// Bytes of names (leaves and the prefixes of nested elements) built for this topic, plus
+    /// one per field visited (a field may have no bytes and no name: `char[0] x`).
+    work: usize,
+    /// What [`MAX_LOG_NAME_WORK`] still allows.
+    log_left: &'a mut usize,
+}
+
+impl Flatten<'_> {
+    /// Counts `n` units of work done for field `f` of format `name`.
+    fn spend(&mut self, n: usize, name: &str, f: &FieldDef) -> Result<(), String> {
+        let field = || format!("format `{name}`: field `{} {}`", type_text(f), f.name);
+        self.work += n;
+        if self.work > MAX_NAME_BYTES {
+            return Err(format!(
+                "{}: the flattened field names pass {MAX_NAME_BYTES} bytes",
+                field()
+            ));
+        }
+        *self.log_left = self.log_left.checked_sub(n).ok_or_else(|| {
+            format!(
+                "{}: the flattened field names of this log's subscriptions pass \
+                 {MAX_LOG_NAME_WORK} bytes in all",
+                field()
+            )
+        })?;
+        Ok(())
+    }
+
+    /// Appends the numeric leaves of format `name` (prefixed with `prefix`, at byte `base`);
+    /// returns the offset after the struct. Call only after [`struct_size`] accepted the
+    /// topic: every nested element then has at least one byte, so the elements visited are
+    /// at most [`MAX_STRUCT`]. Padding is skipped by its size, never expanded: its elements
+    /// have no names to build.
+    fn compile(&mut self, name: &str, prefix: &str, base: usize) -> Result<usize, String> {
+        let formats = self.formats;
+        let fields =
+            formats.get(name).ok_or_else(|| format!("no format definition for `{name}`"))?;
+        let mut at = base;
+        for f in fields {
+            self.spend(1, name, f)?;
+            let count = f.len.unwrap_or(1);
+            let padding = f.name.starts_with("_padding");
+            let element = |i: usize, dot: &str| match f.len {
+                Some(_) => format!("{prefix}{}[{i}]{dot}", f.name),
+                None => format!("{prefix}{}{dot}", f.name),
+            };
+            let basic = Basic::parse(&f.type_name);
+            if padding || basic == Some(Basic::Char) {
+                let one = match basic {
+                    Some(k) => k.size(),
+                    None => self
+                        .sizes
+                        .get(&f.type_name)
+                        .copied()
+                        .ok_or_else(|| format!("no format definition for `{}`", f.type_name))?,
+                };
+                at += count * one;
+            } else if let Some(kind) = basic {
                 for i in 0..count {
                     let n = element(i, "");
-                    *name_bytes += n.len();
-                    if *name_bytes > MAX_NAME_BYTES {
-                        return Err(format!(
-                            "format `{name}`: field `{} {}`: the flattened field names pass \
-                             {MAX_NAME_BYTES} bytes",
-                            type_text(f),
-                            f.name
-                        ));
-                    }
-                    leaves.push(Leaf { name: n, kind, offset: at + i * kind.size() });
+                    self.spend(n.len(), name, f)?;
+                    self.leaves.push(Leaf { name: n, kind, offset: at + i * kind.size() });
                 }
-            }
-            at += count * kind.size();
-        } else {
-            for i in 0..count {
-                let mut sub = Vec::new();
-                let mut sub_bytes = if padding { 0 } else { *name_bytes };
-                at =
-                    compile(formats, &f.type_name, &element(i, "."), at, &mut sub, &mut sub_bytes)?;
-                if !padding {
-                    *name_bytes = sub_bytes;
-                    leaves.extend(sub);
+                at += count * kind.size();
+            } else {
+                for i in 0..count {
+                    let p = element(i, ".");
+                    self.spend(p.len(), name, f)?;
+                    at = self.compile(&f.type_name, &p, at)?;
                 }
             }
         }
+        Ok(at)
     }
-    Ok(at)
 }
 
 /// Compiles topic format `name`; `budget` is how many more fields the log may hold
 /// ([`MAX_FIELDS`]), checked against the struct's size (at least a byte per field) before
-/// the fields are built.
+/// the fields are built; `log_left` is what [`MAX_LOG_NAME_WORK`] still allows.
 fn compile_topic(
     formats: &BTreeMap<String, Vec<FieldDef>>,
     name: &str,
     budget: usize,
+    log_left: &mut usize,
 ) -> Result<Compiled, String> {
-    let size = struct_size(formats, name, 0, &mut BTreeMap::new())?;
+    let mut sizes = BTreeMap::new();
+    let mut visited = 0;
+    let size = struct_size(formats, name, 0, &mut sizes, &mut visited)?;
+    *log_left = log_left.checked_sub(visited).ok_or_else(|| {
+        format!(
+            "format `{name}`: its definitions ({visited} fields): the flattened field names of \
+             this log's subscriptions pass {MAX_LOG_NAME_WORK} bytes in all"
+        )
+    })?;
     if size > budget {
         return Err(format!(
             "format `{name}` ({size} bytes) would take the fields of this log's subscriptions \
              past {MAX_FIELDS} in all"
         ));
     }
-    let mut leaves = Vec::new();
-    compile(formats, name, "", 0, &mut leaves, &mut 0)?;
+    let mut flat = Flatten { formats, sizes: &sizes, leaves: Vec::new(), work: 0, log_left };
+    flat.compile(name, "", 0)?;
+    let mut leaves = flat.leaves;
     let ts = leaves
         .iter()
         .position(|l| l.name == "timestamp" && l.kind == Basic::U64)
@@ -381,6 +433,8 @@ struct Decoder<'a> {
     layout_count: HashMap<(String, u8), usize>,
     /// Fields held by the live subscriptions and the topic layouts, against [`MAX_FIELDS`].
     fields_held: usize,
+    /// What [`MAX_LOG_NAME_WORK`] still allows the subscriptions to come.
+    name_work_left: usize,
     /// Offsets of appended-data sections still ahead.
     appended: Vec<u64>,
     row: Vec<f64>,
@@ -428,6 +482,7 @@ pub fn decode_ulog<R: Read>(
         layouts: HashMap::new(),
         layout_count: HashMap::new(),
         fields_held: 0,
+        name_work_left: MAX_LOG_NAME_WORK,
         appended: Vec::new(),
         row: Vec::new(),
     };
@@ -535,8 +590,9 @@ impl Decoder<'_> {
                 let name = text(&payload[3..], "the subscription's format name")?;
                 let replaced = self.subs.get(&id).map_or(0, |s| s.compiled.leaves.len());
                 let budget = MAX_FIELDS.saturating_sub(self.fields_held - replaced);
-                let compiled = compile_topic(&self.formats, &name, budget)
-                    .map_err(|m| err(format!("subscription {id} (`{name}`): {m}")))?;
+                let compiled =
+                    compile_topic(&self.formats, &name, budget, &mut self.name_work_left)
+                        .map_err(|m| err(format!("subscription {id} (`{name}`): {m}")))?;
                 self.subscribe(id, multi, name, compiled);
             }
             b'D' => self.data(payload, at).map_err(err)?,

@@ -73,3 +73,78 @@ fn errors_a_small_file_declaring_gigabytes_fails_before_inflating_them() {
     assert!(started.elapsed().as_secs_f64() < 5.0);
     assert!(e.contains("more than its") && e.contains("compressed bytes can inflate to"), "{e}");
 }
+
+/// A zlib stream (RFC 1950/1951) of `head` followed by `repeats` × `chunk` zero bytes, made
+/// without compressing the zeros `repeats` times: `chunk` zeros deflated once by a fresh
+/// compressor and flushed to a byte boundary only refer back to zeros, so the same bytes
+/// repeated inflate to zeros again. An empty final block and the Adler-32 close it.
+fn zero_bomb(head: &[u8], chunk: usize, repeats: usize) -> Vec<u8> {
+    use std::io::Write;
+    let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::best());
+    z.write_all(head).unwrap();
+    z.flush().unwrap();
+    let mut out = z.get_ref().clone();
+    let mut d = flate2::write::DeflateEncoder::new(Vec::new(), flate2::Compression::best());
+    d.write_all(&vec![0u8; chunk]).unwrap();
+    d.flush().unwrap();
+    for _ in 0..repeats {
+        out.extend_from_slice(d.get_ref());
+    }
+    out.extend([0x03, 0x00]); // final fixed-Huffman block holding only end-of-block
+    // Adler-32: zeros leave the byte sum `a` alone and add it to `b` once per byte.
+    let m = 65_521u64;
+    let (mut a, mut b) = (1u64, 0u64);
+    for &x in head {
+        a = (a + u64::from(x)) % m;
+        b = (b + a) % m;
+    }
+    b = (b + (chunk as u64 * repeats as u64 % m) * a) % m;
+    out.extend(((b << 16 | a) as u32).to_be_bytes());
+    out
+}
+
+/// `stream` as a miCOMPRESSED element.
+fn compressed_element(stream: &[u8]) -> Vec<u8> {
+    let mut out = 15u32.to_le_bytes().to_vec();
+    out.extend(u32::try_from(stream.len()).unwrap().to_le_bytes());
+    out.extend_from_slice(stream);
+    out
+}
+
+/// The head of a double `rows` × `cols` variable `name` whose real part declares `zeros`
+/// bytes (all of which follow the head in a zero bomb).
+fn zero_matrix_head(name: &str, rows: i32, cols: i32, zeros: usize) -> Vec<u8> {
+    let mut m = mat_matrix(name, &[rows, cols], &[]);
+    let real_tag = m.len() - 8;
+    m[real_tag + 4..real_tag + 8].copy_from_slice(&u32::try_from(zeros).unwrap().to_le_bytes());
+    let total = m.len() - 8 + zeros;
+    m[4..8].copy_from_slice(&u32::try_from(total).unwrap().to_le_bytes());
+    m
+}
+
+#[test]
+fn val_the_zero_bomb_builder_inflates_to_what_it_declares() {
+    let head = zero_matrix_head("z", 3000, 2, 3 * 16_000);
+    let stream = zero_bomb(&head, 16_000, 3);
+    let mut all = Vec::new();
+    std::io::Read::read_to_end(&mut flate2::read::ZlibDecoder::new(&stream[..]), &mut all).unwrap();
+    assert_eq!(all.len(), head.len() + 3 * 16_000);
+    assert_eq!(all[..head.len()], head);
+    assert!(all[head.len()..].iter().all(|&x| x == 0));
+    let t = read(&mat_file(&[compressed_element(&stream)])).unwrap();
+    assert_eq!(t.names, ["1", "2"]);
+    assert_eq!(t.columns, [vec![0.0; 3000], vec![0.0; 3000]]);
+}
+
+#[test]
+fn errors_a_zlib_bomb_of_gigabytes_is_refused_from_its_dimensions_before_inflating() {
+    // The probe's file: ~1.9 MB of zlib inflating to a 12e6 × 20 double matrix (1.92 GB),
+    // within the 1032:1 deflate can expand and the 2²⁸ values once allowed.
+    let zeros = 12_000_000 * 20 * 8;
+    let head = zero_matrix_head("bomb", 12_000_000, 20, zeros);
+    let stream = zero_bomb(&head, zeros / 2000, 2000);
+    assert!(stream.len() * 1032 > zeros && stream.len() < 2_000_000, "{}", stream.len());
+    let e = read(&mat_file(&[compressed_element(&stream)])).unwrap_err();
+    assert!(e.starts_with("r.mat: variable `bomb`: declared 12000000×20: more than"), "{e}");
+    assert!(e.contains("536870912 bytes, 512 MiB, as f64) a record may decode"), "{e}");
+}

@@ -287,3 +287,69 @@ fn errors_many_subscriptions_to_a_wide_format_are_refused_before_their_fields_ar
     let (_, msg) = decode_error(parse_dataflash(&d.0, "ins.bin").unwrap_err());
     assert!(msg.contains("pass 2000000 fields in all"), "{msg}");
 }
+
+/// A ULog whose formats `p0` … `p6` nest one in the next, each through a field with a
+/// 60 000-character name (`p0` holds `uint8_t[leaf_len]`), and whose topic `pad` carries
+/// `p6[count] _padding0` between its timestamp and a `float v`; one sample, `v` = 2.5.
+fn ulog_with_named_padding(leaf_len: usize, count: usize) -> Vec<u8> {
+    let long = |k: usize| format!("{k}{}", "n".repeat(60_000));
+    let mut u = Ulog::new();
+    u.format(&format!("p0:uint8_t[{leaf_len}] {};", long(0)));
+    for k in 1..7 {
+        u.format(&format!("p{k}:p{} {};", k - 1, long(k)));
+    }
+    u.format(&format!("pad:uint64_t timestamp;p6[{count}] _padding0;float v;"));
+    u.subscribe(0, 1, "pad");
+    let mut p = 1u16.to_le_bytes().to_vec();
+    p.extend_from_slice(&5_000u64.to_le_bytes());
+    p.resize(p.len() + count * leaf_len, 0xee);
+    p.extend_from_slice(&2.5f32.to_le_bytes());
+    u.msg(b'D', &p);
+    u.0
+}
+
+#[test]
+fn val_ulog_padding_is_skipped_by_its_size_without_building_names() {
+    // One padding element would expand to three leaves of 6 × 60 000 + … bytes of name each:
+    // more than the 1 MiB a topic's names may have, were padding named.
+    let c = parse_ulog(&ulog_with_named_padding(3, 20_000), "pad3.ulg").unwrap();
+    assert_eq!(c.topics.len(), 1);
+    assert_eq!(c.topics[0].fields, [("v".to_string(), vec![2.5])]);
+    assert_eq!(c.topics[0].t_s, [0.005]);
+    // The probe's shape: 65 000 one-byte elements of 420 kB of name each (27 GB of names,
+    // half a minute per subscription when padding was expanded). Four subscriptions.
+    let mut bytes = ulog_with_named_padding(1, 65_000);
+    let mut u = Ulog(Vec::new());
+    for id in 2..5 {
+        u.subscribe(0, id, "pad");
+    }
+    bytes.extend_from_slice(&u.0);
+    let c = parse_ulog(&bytes, "pad1.ulg").unwrap();
+    assert_eq!(c.topics[0].fields, [("v".to_string(), vec![2.5])]);
+}
+
+#[test]
+fn errors_subscriptions_rebuilding_a_megabyte_of_names_each_are_refused_in_all() {
+    // 112 leaves of ~8 kB of name: under the 1 MiB a topic may have, each resubscription
+    // (8 bytes of file) builds them again.
+    let long = "n".repeat(8_000);
+    let mut u = Ulog::new();
+    u.format(&format!("leaf:uint8_t[8] {long};"));
+    u.format("mid:leaf[14] m;");
+    u.format("names:uint64_t timestamp;mid m;");
+    let leaf_names: usize = (0..14)
+        .flat_map(|i| (0..8).map(move |j| (i, j)))
+        .map(|(i, j)| format!("m.m[{i}].{long}[{j}]").len())
+        .sum();
+    let mut at = Vec::new();
+    for _ in 0..200 {
+        at.push(u.0.len() as u64);
+        u.subscribe(0, 1, "names");
+    }
+    let (offset, msg) = decode_error(parse_ulog(&u.0, "names.ulg").unwrap_err());
+    assert!(msg.contains("subscription 1 (`names`)"), "{msg}");
+    assert!(msg.contains("names of this log's subscriptions pass 67108864 bytes in all"), "{msg}");
+    // At least the leaves' names are built per subscription, at most the topic's 1 MiB.
+    let k = at.iter().position(|&a| a == offset).unwrap();
+    assert!(k >= 64 && k <= (64 << 20) / leaf_names, "refused at subscription {k}");
+}

@@ -275,20 +275,23 @@ pub enum RowProblem {
         /// The factor.
         factor: f64,
     },
-    /// A time far ahead of both the previous accepted sample and the next row, i.e. one corrupt
-    /// time stamp rather than a gap in the record (after a gap the next row's time is later
-    /// still): this row only is rejected and the record goes on from the previous time.
+    /// A time ahead of the record around it: the row is one of a short run (at most
+    /// [`crate::flight_data::TIME_RUN_MAX`] rows) after a jump in time, or at the record's
+    /// start, and the rows after the run go on from before it (after a gap they would stay
+    /// later). A corrupt time stamp, not a gap: the run alone is rejected and the record goes
+    /// on from the previous time.
     #[error(
-        "column `{column}`: time {t_s} s is ahead of both the previous row ({prev_t_s} s) and the next ({next_t_s} s): an isolated bad time stamp, not a gap"
+        "column `{column}`: time {t_s} s is ahead of {}: a bad time stamp, not a gap",
+        outlier_neighbours(*prev_t_s, *next_t_s)
     )]
     TimeOutlier {
         /// Time column name.
         column: String,
         /// The time, s.
         t_s: f64,
-        /// Previous accepted time, s.
-        prev_t_s: f64,
-        /// The next row's time, s.
+        /// Previous accepted time, s (`None`: the row is at the record's start).
+        prev_t_s: Option<f64>,
+        /// The time of the row going on from before the run, s.
         next_t_s: f64,
     },
     /// The last line of a live feed (`-`) has no terminating newline: it may have been cut off
@@ -342,6 +345,14 @@ pub enum RowProblem {
     },
 }
 
+/// The rows a [`RowProblem::TimeOutlier`] is ahead of, for its message.
+fn outlier_neighbours(prev_t_s: Option<f64>, next_t_s: f64) -> String {
+    match prev_t_s {
+        Some(p) => format!("both the previous row ({p} s) and the next ({next_t_s} s)"),
+        None => format!("the rows after it (next {next_t_s} s) at the record's start"),
+    }
+}
+
 impl RowProblem {
     /// A short fixed label of the problem's kind, without the column or value (e.g.
     /// `blank value`, `time goes backwards`): what [`crate::rejection_log::RejectionLog`] counts
@@ -355,7 +366,7 @@ impl RowProblem {
             Self::RepeatedTime { .. } => "repeated time",
             Self::NonMonotonicTime { .. } => "time goes backwards",
             Self::ImplausibleTimeJump { .. } => "implausible time jump",
-            Self::TimeOutlier { .. } => "isolated time outlier",
+            Self::TimeOutlier { .. } => "time outlier",
             Self::Truncated => "truncated last line",
             Self::FieldCount { .. } => "wrong field count",
             Self::Implausible { .. } => "implausible value",

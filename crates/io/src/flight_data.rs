@@ -6,25 +6,43 @@
 //! number in the file, header = line 1), the column and the reason. Rows are rejected for a
 //! blank, non-numeric or non-finite value in a mapped column, a value that is not finite after
 //! the unit conversion, a wrong field count, a repeated or backward time, a time implausibly far
-//! ahead ([`IMPLAUSIBLE_JUMP_FACTOR`] × the nominal interval; the last good time is kept), and a
-//! non-positive airspeed, mass, area, chord, span, moment of inertia, density or dynamic
-//! pressure. A gap — an interval longer than [`GAP_FACTOR`] × the nominal interval — is
+//! ahead ([`IMPLAUSIBLE_JUMP_FACTOR`] × the nominal interval; the last good time is kept), a
+//! short run of bad time stamps (below), and a non-positive airspeed, mass, area, chord, span,
+//! moment of inertia, density or dynamic pressure. A gap — an interval longer than [`GAP_FACTOR`] × the nominal interval — is
 //! reported as a [`RecordEvent::Gap`] *before* the sample that follows it; it is never bridged
 //! silently. Nothing is dropped without an event.
 //!
-//! # One bad time stamp costs one row
+//! # Bad time stamps cost their own rows
 //!
-//! A time further ahead of the previous sample than a gap is either the sample after a gap or a
-//! single corrupt time stamp (a 10000 in a record at 2 s): accepting the latter would reject
-//! every later row as going backwards. Such a sample (and the second sample of a record whose
-//! mapping gives no `nominal_dt_s`, which would fix the nominal interval) is therefore held
-//! until a later row settles it: a row at or after its time means it was a gap; a good sample
-//! between the previous time and it means the held row alone is rejected
-//! ([`RowProblem::TimeOutlier`]) and the record goes on from the previous time. A rejected row
-//! earlier than it proves nothing (it may be the bad one) and waits behind it, up to
-//! [`HELD_ROWS_MAX`] rows. The cost is one row of latency after a jump on a live feed; at the
-//! end of the record a held sample is taken as it is. (A bad time in the record's *first* row cannot be told from a
-//! record whose rest is bad; it still rejects the rows after it.)
+//! A time further ahead of the previous sample than a gap (over the rows between: rows
+//! rejected between two samples explain a longer interval) is either the sample after a gap or
+//! a corrupt time stamp (a 10000 in a record at 2 s): accepting the latter would reject every
+//! later row as going backwards. Such a sample (and the second sample of a record whose mapping
+//! gives no `nominal_dt_s`, which would fix the nominal interval) therefore starts a *run* that
+//! is held until later rows settle it:
+//!
+//! - a good sample later than the previous time but earlier than the run goes on from before
+//!   the jump: every row of the run is rejected ([`RowProblem::TimeOutlier`], each with its
+//!   row), and the record goes on from the previous time;
+//! - more than [`TIME_RUN_MAX`] samples in the run (each later than the one before it) make it
+//!   the record's own time: a gap, every row kept, as is a run still held at the record's end.
+//!
+//! A jump within a run starts a run of its own, judged the same way (a bad time stamp a few
+//! rows after a genuine gap costs its own row). A rejected row proves nothing (it may be the
+//! bad one) and waits in its place, up to [`HELD_ROWS_MAX`] rows held; a row rejected as
+//! repeated or backward against a run that is then rejected is a time outlier too.
+//!
+//! The record's *first* rows have no previous time to judge them by, so they are held too: the
+//! first sample starts the record when more than [`TIME_RUN_MAX`] later samples are after it,
+//! and is a time outlier when more than that many are before it (at the record's end, or with
+//! [`HELD_ROWS_MAX`] rows held, the majority decides; a tie keeps it); then the next sample is
+//! judged the same way. A 10000 in the first row of a record at 0.1 s thus costs that row, not
+//! the 600 after it.
+//!
+//! The cost on a live feed is latency: [`TIME_RUN_MAX`] + 1 samples at the start and after a
+//! gap. The price of telling a short run from a gap is that a run of at most [`TIME_RUN_MAX`]
+//! genuine samples after a gap, followed by a bad time stamp between the two, is rejected in
+//! its place (a gap that short, then a bad stamp, is the rarer record).
 //!
 //! A file without data rows (empty, or a header alone) is an error of its own
 //! ([`FlightDataError::NoData`]), not a record whose rows were all rejected.
@@ -63,6 +81,8 @@ use aeroident_estimators::{AirDataSample, AircraftConstants};
 use std::collections::{BTreeMap, VecDeque};
 use std::io::Read;
 
+mod held;
+
 /// Gap threshold: an interval longer than this multiple of the nominal interval is a gap.
 pub const GAP_FACTOR: f64 = 1.5;
 
@@ -71,18 +91,14 @@ pub const GAP_FACTOR: f64 = 1.5;
 /// time kept. Smaller jumps are gaps ([`GAP_FACTOR`]).
 pub const IMPLAUSIBLE_JUMP_FACTOR: f64 = 1e6;
 
-/// Rejected rows that may follow a held sample before it is accepted unjudged (their
-/// rejections wait behind it, to keep the events in row order).
+/// Most rows held while time stamps are judged (module doc): past it the rows held are taken as
+/// they are (a rejection waits behind a held sample, to keep the events in row order).
 pub const HELD_ROWS_MAX: usize = 64;
 
-/// A sample after a jump in time, waiting for the next readable time to judge it.
-#[derive(Debug, Clone)]
-struct Held {
-    row: u64,
-    sample: AirDataSample,
-    /// Rows rejected after it, in order.
-    after: Vec<(u64, RowProblem)>,
-}
+/// Most rows after a jump in time (or at the record's start) that can be rejected together as
+/// bad time stamps when the record goes on from before them (module doc); a run of more
+/// samples is the record's own time. Also the rows of latency after a gap on a live feed.
+pub const TIME_RUN_MAX: usize = 4;
 
 /// A rejected row: its line number and the reason (naming the column).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -170,12 +186,17 @@ pub struct FlightDataReader<R: Read> {
     constants: BTreeMap<Channel, f64>,
     record: csv::StringRecord,
     last_t: Option<f64>,
+    /// Row of the last accepted sample.
+    last_row: u64,
     nominal_dt: Option<f64>,
     inertia_reference_mass_kg: Option<f64>,
     /// Events read but not yet returned.
     pending: VecDeque<Result<RecordEvent, FlightDataError>>,
-    /// A sample after a jump in time, held until the next row's time judges it (`event`).
-    held: Option<Held>,
+    /// Rows held while the time stamps after a jump (or at the record's start) are judged, in
+    /// row order ([`held`]).
+    held: Vec<held::Entry>,
+    /// Whether the record's start is still being judged ([`held`]).
+    opening: bool,
     /// Data records read (to tell a file without data from one whose rows were all rejected).
     rows_seen: u64,
     done: bool,
@@ -285,10 +306,12 @@ impl<R: Read> FlightDataReader<R> {
             constants,
             record: csv::StringRecord::new(),
             last_t: None,
+            last_row: 0,
             nominal_dt: mapping.nominal_dt_s,
             inertia_reference_mass_kg: mapping.inertia_reference_mass_kg,
             pending: VecDeque::new(),
-            held: None,
+            held: Vec::new(),
+            opening: true,
             rows_seen: 0,
             done: false,
             synthetic_lines: 0,
@@ -390,10 +413,10 @@ impl<R: Read> FlightDataReader<R> {
         self.field("time", &self.time)
     }
 
-    /// `t_s` against the previous accepted time: not repeated, not backwards, not implausibly
-    /// far ahead.
-    fn check_time(&self, t_s: f64) -> Result<(), RowProblem> {
-        let Some(prev) = self.last_t else { return Ok(()) };
+    /// `t_s` against the time of the sample before it (`prev`, `None` at the record's start):
+    /// not repeated, not backwards, not implausibly far ahead.
+    fn check_time(&self, prev: Option<f64>, t_s: f64) -> Result<(), RowProblem> {
+        let Some(prev) = prev else { return Ok(()) };
         let column = self.time.names[0].clone();
         if t_s == prev {
             return Err(RowProblem::RepeatedTime { column, t_s });
@@ -608,86 +631,6 @@ impl<R: Read> FlightDataReader<R> {
         }
     }
 
-    /// The end of the record: a time stamp still held has no next row to judge it by and is
-    /// taken as the sample after a gap; then `error`, if any, ends the events.
-    fn end(&mut self, error: Option<FlightDataError>) {
-        self.done = true;
-        self.release_held(None);
-        self.pending.extend(error.map(Err));
-    }
-
-    /// The events of data row `row`. A sample whose time is further ahead than a gap (or that
-    /// would fix the nominal interval) is held until the rows after it say whether it is the
-    /// sample after a gap or an isolated bad time stamp (module doc): a good sample earlier than
-    /// it (and later than the previous one) makes it an outlier ([`RowProblem::TimeOutlier`],
-    /// the held row rejected alone); any row at or after its time makes it a gap. A rejected
-    /// row earlier than it proves nothing and waits behind it.
-    fn event(&mut self, row: u64) {
-        let t_s = match self.row_time() {
-            Ok(t) => t,
-            Err(problem) => return self.reject(row, problem),
-        };
-        if let Some(h) = &self.held {
-            if t_s >= h.sample.t_s {
-                self.release_held(None);
-            } else if let Err(problem) = self.check_time(t_s).and_then(|()| self.parse_row(t_s)) {
-                return self.reject(row, problem);
-            } else {
-                self.release_held(Some(t_s));
-            }
-        }
-        match self.check_time(t_s).and_then(|()| self.parse_row(t_s)) {
-            Err(problem) => self.reject(row, problem),
-            Ok(sample) => {
-                let suspect = match (self.last_t, self.nominal_dt) {
-                    (None, _) => false,
-                    (Some(_), None) => true,
-                    (Some(prev), Some(nom)) => sample.t_s - prev > GAP_FACTOR * nom,
-                };
-                if suspect {
-                    self.held = Some(Held { row, sample, after: Vec::new() });
-                } else {
-                    self.accept(row, sample);
-                }
-            }
-        }
-    }
-
-    /// Queues the rejection of `row`, behind a held sample if there is one (events stay in row
-    /// order); past [`HELD_ROWS_MAX`] such rows the held sample is accepted unjudged.
-    fn reject(&mut self, row: u64, problem: RowProblem) {
-        match &mut self.held {
-            Some(h) if h.after.len() < HELD_ROWS_MAX => h.after.push((row, problem)),
-            Some(_) => {
-                self.release_held(None);
-                self.pending.push_back(Ok(RecordEvent::Rejected { row, problem }));
-            }
-            None => self.pending.push_back(Ok(RecordEvent::Rejected { row, problem })),
-        }
-    }
-
-    /// Settles the held sample, if any: `Some(next_t_s)`, the time of a good sample before it,
-    /// rejects it as an outlier; `None` (a row at or after it, the end of the record, too many
-    /// rejected rows after it) accepts it. The rejections held behind it follow.
-    fn release_held(&mut self, next_t_s: Option<f64>) {
-        let Some(h) = self.held.take() else { return };
-        match next_t_s {
-            Some(next) => {
-                let problem = RowProblem::TimeOutlier {
-                    column: self.time.names[0].clone(),
-                    t_s: h.sample.t_s,
-                    prev_t_s: self.last_t.unwrap_or(f64::NAN),
-                    next_t_s: next,
-                };
-                self.pending.push_back(Ok(RecordEvent::Rejected { row: h.row, problem }));
-            }
-            None => self.accept(h.row, h.sample),
-        }
-        for (row, problem) in h.after {
-            self.pending.push_back(Ok(RecordEvent::Rejected { row, problem }));
-        }
-    }
-
     /// Queues an accepted sample, after a [`RecordEvent::Gap`] if its interval is one; the
     /// first interval fixes the nominal one when the mapping gives none.
     fn accept(&mut self, row: u64, sample: AirDataSample) {
@@ -706,6 +649,7 @@ impl<R: Read> FlightDataReader<R> {
             }
         }
         self.last_t = Some(sample.t_s);
+        self.last_row = row;
         self.pending.push_back(Ok(RecordEvent::Sample { row, sample }));
     }
 }

@@ -4,6 +4,7 @@
 //! cap is refused before it is built.
 
 use aeroident_io::align::{MAX_TABLE_BYTES, align};
+use aeroident_io::flight_data::TIME_RUN_MAX;
 use aeroident_io::mapping::Clock;
 use aeroident_io::table::{Interpolation, Topic};
 use aeroident_io::{FlightDataError, FlightDataReader, Mapping, RecordEvent, RowProblem};
@@ -52,13 +53,18 @@ fn errors_isolated_time_jump_rejects_only_its_row() {
     let ev = events(&map, &record(&["0", "0.1", "0.2", "10000", "0.3", "0.4"]));
     assert_eq!(
         outline(&ev),
-        ["S 0", "S 0.1", "S 0.2", "R 5 isolated time outlier", "S 0.3", "S 0.4"],
+        ["S 0", "S 0.1", "S 0.2", "R 5 time outlier", "S 0.3", "S 0.4"],
         "{ev:?}"
     );
     let RecordEvent::Rejected { problem, .. } = &ev[3] else { unreachable!() };
     assert_eq!(
         problem,
-        &RowProblem::TimeOutlier { column: "t".into(), t_s: 10000.0, prev_t_s: 0.2, next_t_s: 0.3 }
+        &RowProblem::TimeOutlier {
+            column: "t".into(),
+            t_s: 10000.0,
+            prev_t_s: Some(0.2),
+            next_t_s: 0.3
+        }
     );
     let text = problem.to_string();
     assert!(
@@ -87,35 +93,54 @@ fn errors_bad_second_time_without_nominal_interval_costs_its_row() {
     let ev = events(MAP, &record(&["0", "10000", "", "0.1", "0.2", "0.3", "0.6"]));
     assert_eq!(
         outline(&ev),
+        ["S 0", "R 3 time outlier", "R 4 blank value", "S 0.1", "S 0.2", "S 0.3", "G 8", "S 0.6"],
+        "{ev:?}"
+    );
+}
+
+/// A jump whose next rows repeat its time and go on from it is the record's own time (a gap)
+/// once more than `TIME_RUN_MAX` samples follow it; the repeat and a later row going backwards
+/// are rejected as before. With fewer, a row going on from before the jump rejects it, and the
+/// repeat (judged against a time that was bad) with it.
+#[test]
+fn analytic_rows_after_a_jump_make_it_a_gap() {
+    assert_eq!(TIME_RUN_MAX, 4);
+    let map = format!("nominal_dt_s = 0.1\n{MAP}");
+    let ev = events(&map, &record(&["0", "0.1", "3", "3", "3.1", "3.2", "3.3", "3.4", "0.2"]));
+    assert_eq!(
+        outline(&ev),
         [
             "S 0",
-            "R 3 isolated time outlier",
-            "R 4 blank value",
             "S 0.1",
+            "G 4",
+            "S 3",
+            "R 5 repeated time",
+            "S 3.1",
+            "S 3.2",
+            "S 3.3",
+            "S 3.4",
+            "R 10 time goes backwards"
+        ],
+        "{ev:?}"
+    );
+    let ev = events(&map, &record(&["0", "0.1", "3", "3", "3.1", "0.2", "0.3"]));
+    assert_eq!(
+        outline(&ev),
+        [
+            "S 0",
+            "S 0.1",
+            "R 4 time outlier",
+            "R 5 time outlier",
+            "R 6 time outlier",
             "S 0.2",
-            "S 0.3",
-            "G 8",
-            "S 0.6"
+            "S 0.3"
         ],
         "{ev:?}"
     );
 }
 
-/// A jump whose next row repeats its time is the record's own time (a gap); the repeat and a
-/// later row going backwards are rejected as before.
-#[test]
-fn analytic_two_rows_after_a_jump_make_it_a_gap() {
-    let map = format!("nominal_dt_s = 0.1\n{MAP}");
-    let ev = events(&map, &record(&["0", "0.1", "3", "3", "0.2"]));
-    assert_eq!(
-        outline(&ev),
-        ["S 0", "S 0.1", "G 4", "S 3", "R 5 repeated time", "R 6 time goes backwards"],
-        "{ev:?}"
-    );
-}
-
 /// The HFB-320 record (601 rows at 0.1 s) with `time_s` = 10000 on data row 22 (line 23):
-/// exactly that row is rejected, as an isolated time outlier, and the other 600 rows are
+/// exactly that row is rejected, as a time outlier, and the other 600 rows are
 /// samples at their own times.
 #[test]
 fn errors_hfb320_with_one_bad_time_keeps_600_samples() {
@@ -164,6 +189,156 @@ fn errors_hfb320_with_one_bad_time_keeps_600_samples() {
     let long: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).filter(|d| *d > 0.15).collect();
     assert_eq!(long.len(), 1, "{long:?}");
     assert!((long[0] - 0.2).abs() < 1e-9);
+}
+
+/// The HFB-320 record with the times of `lines` (line number, header = 1) replaced: its events.
+fn hfb320_with_times(lines_times: &[(usize, &str)]) -> Option<Vec<RecordEvent>> {
+    let path = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv")?;
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    assert_eq!(lines.len(), 602, "a header and 601 data rows");
+    for (line, t) in lines_times {
+        let (first, rest) = lines[line - 1].split_once(',').unwrap();
+        // Data row k (line k + 1) is at 0.1 (k − 1) s.
+        let want = 0.1 * (*line as f64 - 2.0);
+        assert!((first.parse::<f64>().unwrap() - want).abs() < 1e-4, "line {line}: {first}");
+        lines[line - 1] = format!("{t},{rest}");
+    }
+    let csv = lines.join("\n") + "\n";
+    let m = Mapping::from_path(&workspace().join("mappings/hfb320.toml")).unwrap();
+    let reader = FlightDataReader::new(csv.as_bytes(), "hfb320-bad-times.csv", &m).unwrap();
+    Some(reader.map(|e| e.unwrap()).collect())
+}
+
+/// The rejections of `ev` (row, problem) and the times of its samples.
+fn split(ev: &[RecordEvent]) -> (Vec<(u64, RowProblem)>, Vec<f64>) {
+    let mut rejected = Vec::new();
+    let mut times = Vec::new();
+    for e in ev {
+        match e {
+            RecordEvent::Rejected { row, problem } => rejected.push((*row, problem.clone())),
+            RecordEvent::Sample { sample, .. } => times.push(sample.t_s),
+            RecordEvent::Gap { .. } => {}
+        }
+    }
+    (rejected, times)
+}
+
+/// A time of 10000 s in the record's FIRST row has no previous time to be judged by; the rows
+/// after it, all earlier, make it the bad one: that row alone is rejected, as a time outlier at
+/// the record's start, and the 600 others are samples at their own 0.1 s intervals, no gap.
+#[test]
+fn errors_hfb320_with_a_bad_first_time_keeps_600_samples() {
+    let Some(ev) = hfb320_with_times(&[(2, "10000")]) else { return };
+    let (rejected, times) = split(&ev);
+    assert_eq!(rejected.len(), 1, "{rejected:?}");
+    assert_eq!(rejected[0].0, 2);
+    assert_eq!(
+        rejected[0].1,
+        RowProblem::TimeOutlier {
+            column: "time_s".into(),
+            t_s: 10000.0,
+            prev_t_s: None,
+            next_t_s: 0.1
+        }
+    );
+    let text = rejected[0].1.to_string();
+    assert!(text.contains("10000") && text.contains("record's start"), "{text}");
+    assert_eq!(times.len(), 600);
+    assert!((times[0] - 0.1).abs() < 1e-9 && (times[599] - 60.0).abs() < 1e-4, "{times:?}");
+    assert!(times.windows(2).all(|w| (w[1] - w[0] - 0.1).abs() < 1e-3));
+    assert!(!ev.iter().any(|e| matches!(e, RecordEvent::Gap { .. })));
+}
+
+/// Two consecutive absurd times mid-record (10000, 10000.1 s on data rows 200–201) are a run
+/// that the record goes on from before: both rows are rejected, each naming itself, and the
+/// other 599 rows are samples; the one gap is the 0.3 s across the two rows.
+#[test]
+fn errors_hfb320_with_two_bad_times_keeps_599_samples() {
+    let Some(ev) = hfb320_with_times(&[(201, "10000"), (202, "10000.1")]) else { return };
+    let (rejected, times) = split(&ev);
+    let rows: Vec<u64> = rejected.iter().map(|r| r.0).collect();
+    assert_eq!(rows, [201, 202], "{rejected:?}");
+    for ((_, problem), t) in rejected.iter().zip([10000.0, 10000.1]) {
+        let RowProblem::TimeOutlier { t_s, prev_t_s, next_t_s, .. } = problem else {
+            panic!("{problem}")
+        };
+        assert_eq!(*t_s, t);
+        assert!((prev_t_s.unwrap() - 19.8).abs() < 1e-4 && (next_t_s - 20.1).abs() < 1e-4);
+    }
+    assert_eq!(times.len(), 599);
+    let gaps: Vec<(u64, f64)> = ev
+        .iter()
+        .filter_map(|e| match e {
+            RecordEvent::Gap { row, dt_s, .. } => Some((*row, *dt_s)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(gaps.len(), 1, "{gaps:?}");
+    assert!(gaps[0].0 == 203 && (gaps[0].1 - 0.3).abs() < 1e-4, "{gaps:?}");
+}
+
+/// Runs of up to `TIME_RUN_MAX` bad times are rejected, one more is the record's own time (a
+/// second segment of the record, which the rows after it must go on from).
+#[test]
+fn analytic_run_length_decides_between_bad_times_and_a_second_segment() {
+    let map = format!("nominal_dt_s = 0.1\n{MAP}");
+    let mut times = vec!["0", "0.1", "0.2"];
+    let bad = ["500", "500.1", "500.2", "500.3"];
+    times.extend(bad);
+    times.extend(["0.3", "0.4"]);
+    let ev = events(&map, &record(&times));
+    let mut want = vec!["S 0".to_string(), "S 0.1".into(), "S 0.2".into()];
+    want.extend((5..9).map(|r| format!("R {r} time outlier")));
+    want.extend(["S 0.3".into(), "S 0.4".into()]);
+    assert_eq!(outline(&ev), want, "{ev:?}");
+    // One more sample after the jump: a genuine second segment; the rows going back are
+    // rejected as going backwards, the segment is kept whole.
+    times.insert(7, "500.4");
+    let ev = events(&map, &record(&times));
+    let mut want = vec!["S 0".to_string(), "S 0.1".into(), "S 0.2".into(), "G 5".into()];
+    want.extend(bad.iter().chain(&["500.4"]).map(|t| format!("S {t}")));
+    want.extend(["R 10 time goes backwards".into(), "R 11 time goes backwards".into()]);
+    assert_eq!(outline(&ev), want, "{ev:?}");
+}
+
+/// A bad time a few rows after a genuine gap costs its own row (it starts a run of its own
+/// within the segment after the gap); two bad times in a row before the record goes on each
+/// cost their own row; a bad SECOND row (earlier than the first) costs its own row, the first
+/// row kept.
+#[test]
+fn errors_bad_times_near_a_gap_or_the_start_cost_their_own_rows() {
+    let map = format!("nominal_dt_s = 0.1\n{MAP}");
+    let ev = events(&map, &record(&["0", "0.1", "5", "5.1", "1e4", "5.3", "5.4", "5.5", "5.6"]));
+    assert_eq!(
+        outline(&ev),
+        [
+            "S 0",
+            "S 0.1",
+            "G 4",
+            "S 5",
+            "S 5.1",
+            "R 6 time outlier",
+            "G 7",
+            "S 5.3",
+            "S 5.4",
+            "S 5.5",
+            "S 5.6"
+        ],
+        "{ev:?}"
+    );
+    let ev = events(&map, &record(&["0", "0.1", "1e4", "5000", "0.4", "0.5"]));
+    assert_eq!(
+        outline(&ev),
+        ["S 0", "S 0.1", "R 4 time outlier", "R 5 time outlier", "G 6", "S 0.4", "S 0.5"],
+        "{ev:?}"
+    );
+    let ev = events(&map, &record(&["0", "-5", "0.2", "0.3", "0.4", "0.5", "0.6"]));
+    assert_eq!(
+        outline(&ev),
+        ["S 0", "R 3 time goes backwards", "G 4", "S 0.2", "S 0.3", "S 0.4", "S 0.5", "S 0.6"],
+        "{ev:?}"
+    );
 }
 
 /// A header without data rows, and an empty file, are "no data", naming the file, not "no

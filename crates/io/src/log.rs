@@ -151,8 +151,8 @@ pub fn open_log_with_notes(
 /// not of its format (or a binary log from stdin); the CSV reader's header errors;
 /// [`FlightDataError::NoSuchColumn`] for a mapped column the record lacks; for ULog and
 /// DataFlash the decoder's [`FlightDataError::LogDecode`] and the alignment's
-/// [`FlightDataError::MissingTopic`] (listing what the log has, and saying where a cut file
-/// ends) / [`FlightDataError::BadSpec`] / [`FlightDataError::Align`].
+/// [`FlightDataError::MissingTopic`] (listing what the log has; led by where a cut file ends
+/// and what corrupt bytes were skipped when the topic is absent, else noting them) / [`FlightDataError::BadSpec`] / [`FlightDataError::Align`].
 pub fn open_log_with_report(
     path: &str,
     format: Option<LogFormat>,
@@ -195,8 +195,9 @@ pub fn open_log_with_report(
                 _ => crate::dataflash::read_dataflash_filtered(Path::new(path), &filter)?,
             };
             let mut report = ReaderReport::from_contents(path, format.name(), &contents);
-            let cut = |e| with_cut_note(e, contents.truncated_at);
-            check_catalogue(&contents, mapping, path).map_err(cut)?;
+            let losses = Losses::of(&contents);
+            let cut = |e| with_cut_note(e, &losses);
+            check_catalogue(&contents, mapping, path)?;
             let aligned =
                 crate::multirate::log_table(&contents.topics, mapping, path).map_err(cut)?;
             drop(contents);
@@ -206,53 +207,106 @@ pub fn open_log_with_report(
     }
 }
 
-/// Every `<topic>.<field>` column the mapping reads must be in the log's catalogue (every
-/// topic with a message, kept or not); the error lists what the log has, as
-/// [`crate::align::select`] does for the kept topics.
+/// What a log's decoding could not read: where a cut file ends and the corrupt stretches
+/// skipped (`(count, bytes, first offset)`).
+#[derive(Debug, Clone, Copy)]
+struct Losses {
+    truncated_at: Option<u64>,
+    skipped: Option<(u64, u64, u64)>,
+}
+
+impl Losses {
+    fn of(contents: &LogContents) -> Self {
+        let (n, bytes) = contents.skipped_total;
+        let skipped = contents.skipped.first().filter(|_| n > 0).map(|&(at, _)| (n, bytes, at));
+        Self { truncated_at: contents.truncated_at, skipped }
+    }
+
+    /// The losses as a clause (`None` for a log read whole).
+    fn clause(&self) -> Option<String> {
+        let cut =
+            self.truncated_at.map(|at| format!("the file ends inside a message at byte {at}"));
+        let skipped = self.skipped.map(|(n, bytes, at)| match n {
+            1 => format!("a corrupt stretch of {bytes} bytes at byte {at} was skipped"),
+            _ => format!(
+                "{n} corrupt stretches of {bytes} bytes in all (the first at byte {at}) were \
+                 skipped"
+            ),
+        });
+        match (cut, skipped) {
+            (None, None) => None,
+            (Some(c), None) | (None, Some(c)) => Some(c),
+            (Some(c), Some(k)) => Some(format!("{c}, and {k}")),
+        }
+    }
+
+    /// Where in the file a topic was looked for.
+    fn searched(&self) -> String {
+        match (self.truncated_at, self.skipped) {
+            (Some(at), None) => format!("before byte {at}"),
+            (None, Some(_)) => "outside the skipped bytes".into(),
+            _ => "in what could be read".into(),
+        }
+    }
+}
+
+/// Why topic `tname` is missing from a log with `have` (its topics): led by what the reading
+/// lost, which may be where the topic was.
+fn no_topic(tname: &str, have: &[&str], losses: &Losses) -> String {
+    let have = if have.is_empty() { "none".to_string() } else { have.join(", ") };
+    match losses.clause() {
+        None => format!("the log has no topic/message `{tname}` (it has: {have})"),
+        Some(lost) => format!(
+            "{lost}: no topic/message `{tname}` was found {} (it has: {have})",
+            losses.searched()
+        ),
+    }
+}
+
+/// Every `<topic>.<field>` column the mapping reads, and the `[align] clock` topic, must be in
+/// the log's catalogue (every topic with a message, kept or not); the error lists what the
+/// log has, as [`crate::align::select`] does for the kept topics, led by what a cut or
+/// corrupt file lost when the topic is absent.
 fn check_catalogue(
     contents: &LogContents,
     mapping: &Mapping,
     file: &str,
 ) -> Result<(), FlightDataError> {
+    let losses = Losses::of(contents);
     let missing = |column: &str, needed_by: &str, reason: String| FlightDataError::MissingTopic {
         file: file.to_string(),
         column: column.to_string(),
         needed_by: needed_by.to_string(),
         reason,
     };
+    let mut have: Vec<&str> = contents.catalogue.iter().map(|t| t.name.as_str()).collect();
+    have.sort_unstable();
     for (column, needed_by) in crate::multirate::needed_columns(mapping) {
         let Some((tname, field)) = crate::align::split_column(&column) else { continue };
         let Some(topic) = contents.catalogue.iter().find(|t| t.name == tname) else {
-            let mut have: Vec<&str> = contents.catalogue.iter().map(|t| t.name.as_str()).collect();
-            have.sort_unstable();
-            return Err(missing(
-                &column,
-                &needed_by,
-                format!("the log has no topic/message `{tname}` (it has: {})", have.join(", ")),
-            ));
+            return Err(missing(&column, &needed_by, no_topic(&tname, &have, &losses)));
         };
         if !topic.fields.iter().any(|f| f == field) {
-            return Err(missing(
-                &column,
-                &needed_by,
-                format!(
-                    "topic `{tname}` has no field `{field}` (it has: {})",
-                    topic.fields.join(", ")
-                ),
-            ));
+            let reason = format!(
+                "topic `{tname}` has no field `{field}` (it has: {})",
+                topic.fields.join(", ")
+            );
+            return Err(with_cut_note(missing(&column, &needed_by, reason), &losses));
         }
+    }
+    if let Some(crate::mapping::Clock::Topic(name)) = mapping.align.as_ref().map(|a| &a.clock)
+        && !contents.catalogue.iter().any(|t| &t.name == name)
+    {
+        return Err(missing(name, "[align] clock", no_topic(name, &have, &losses)));
     }
     Ok(())
 }
 
-/// A missing topic or an alignment failure in a file cut short may only mean the cut came
-/// before the topic: say where the file ends.
-fn with_cut_note(e: FlightDataError, truncated_at: Option<u64>) -> FlightDataError {
-    let Some(at) = truncated_at else { return e };
-    let note = format!(
-        "; note: the file ends inside a message at byte {at} (a cut log: what it defines or \
-         logs after that is missing)"
-    );
+/// A missing topic or an alignment failure in a file cut short or with corrupt stretches
+/// skipped may only mean the topic was in what was lost: say what was.
+fn with_cut_note(e: FlightDataError, losses: &Losses) -> FlightDataError {
+    let Some(lost) = losses.clause() else { return e };
+    let note = format!("; note: {lost} (what the file holds there is missing)");
     match e {
         FlightDataError::MissingTopic { file, column, needed_by, reason } => {
             FlightDataError::MissingTopic { file, column, needed_by, reason: reason + &note }

@@ -42,7 +42,9 @@
 //! messages as lost ([`LinkStats::lost`]); a repeat of the last number is a duplicate
 //! ([`LinkStats::duplicates`]) and a number behind it a late message
 //! ([`LinkStats::out_of_order`]), neither used again (the held values stay the newest; three
-//! in a row behind mean the sender restarted its count, and are used). The receive queue is
+//! in a row behind mean the sender restarted its count, and are used). A late message a gap
+//! had skipped (two neighbours swapped on the link) was not lost: it is taken off the lost
+//! count and counted late only. The receive queue is
 //! bounded and drops the oldest datagrams when full ([`LinkStats::dropped`]; see
 //! `mavlink/udp.rs`). A feed that ends without producing a row fails with
 //! [`MavlinkError::NoRows`], naming the columns (and channels) never received and giving the

@@ -1,6 +1,7 @@
 //! A live MAVLink feed over UDP loopback under link trouble: a feed where only the clock
 //! arrives ends with an error naming what never arrived and the link statistics; duplicated
-//! datagrams are counted as duplicates (not as 255 lost each) and not used twice; a flood into
+//! datagrams are counted as duplicates (not as 255 lost each) and not used twice; a message
+//! arriving after its successor is late, not lost; a flood into
 //! a paused consumer is bounded by the receive queue, whose drops are counted, and no row mixes
 //! values from both sides of the hole.
 
@@ -52,6 +53,20 @@ impl Link {
             self.sent += 1;
         }
         self.seq = self.seq.wrapping_add(1);
+    }
+
+    /// Sends `first` and `second` under the next two sequence numbers, `second` first: a pair
+    /// swapped on the link.
+    fn send_swapped(&mut self, first: &MavMessage, second: &MavMessage) {
+        let (s0, s1) = (self.seq, self.seq.wrapping_add(1));
+        for (msg, sequence) in [(second, s1), (first, s0)] {
+            let header = MavHeader { system_id: 1, component_id: 1, sequence };
+            let mut buf = Vec::new();
+            mavlink::write_versioned_msg(&mut buf, MavlinkVersion::V2, header, msg).unwrap();
+            self.socket.send_to(&buf, self.to).unwrap();
+            self.sent += 1;
+        }
+        self.seq = self.seq.wrapping_add(2);
     }
 }
 
@@ -155,6 +170,45 @@ fn analytic_duplicated_datagrams_are_duplicates_not_losses() {
     assert!(s.line().contains("0 messages lost (sequence gaps), 200 duplicates"), "{}", s.line());
     assert_eq!(events.len(), 50, "every event a sample: {events:?}");
     assert!(events.iter().all(|e| matches!(e, RecordEvent::Sample { .. })), "{events:?}");
+}
+
+/// 30 frames, each led by an unmapped value sent after its successor (sequence n + 1, then n):
+/// 30 late messages, none lost, and every frame's row with its own values (the late ones are
+/// not used, and mapped nothing).
+#[test]
+fn analytic_swapped_neighbours_are_late_not_lost() {
+    let (mut rows, to, stats, _) = open();
+    let reader = std::thread::spawn(move || {
+        let mut text = String::new();
+        rows.read_to_string(&mut text).unwrap();
+        text
+    });
+    let mut link = Link::new(to);
+    for k in 1..=30 {
+        let f = frame(k);
+        link.send_swapped(&named("c", -1.0), &f[0]);
+        for msg in &f[1..] {
+            link.send(msg, 1);
+        }
+        wait_taken(&stats, link.sent);
+    }
+    link.send(&end_of_stream(), 1);
+    let text = reader.join().unwrap();
+    let s = stats.lock().unwrap().clone();
+    assert_eq!(
+        (s.datagrams, s.messages, s.duplicates, s.lost, s.out_of_order),
+        (151, 151, 0, 0, 30),
+        "{s:?}"
+    );
+    assert!(s.line().contains("0 messages lost (sequence gaps), 0 duplicates and 30 out-of-order"));
+    let parsed = parse_rows(&text);
+    let want: Vec<[f64; 5]> = (1..=30)
+        .map(|k| {
+            let small = f64::from(k as f32 / 1000.0);
+            [10.0 * f64::from(k), 100.0 + f64::from(k), small, small, small]
+        })
+        .collect();
+    assert_eq!(parsed, want);
 }
 
 /// The CSV rows of the feed: (time ms, V, α, q, δe).

@@ -148,28 +148,70 @@ fn val_one_absurd_timestamp_costs_one_sample_and_is_counted_in_the_report() {
     assert_eq!(samples, 2001);
 }
 
-#[test]
-fn errors_a_log_cut_in_its_definitions_keeps_the_truncation_note() {
+/// The error opening `bytes` (written as `name`) with a mapping reading `imu.v` and `imu.a`.
+fn open_error(name: &str, bytes: &[u8]) -> String {
     let m = Mapping::from_toml_str(&mapping_text("imu", 100.0), "m.toml").unwrap();
+    let path = temp_file(name, bytes);
+    open_log_with_report(path.to_str().unwrap(), None, &m).err().unwrap().to_string()
+}
+
+#[test]
+fn errors_a_log_cut_in_its_definitions_leads_with_the_cut() {
     let mut u = Ulog::new();
     u.format("other:uint64_t timestamp;float x;");
     u.subscribe(0, 1, "other");
     u.data_f32(1, 1_000, &[1.0]);
     let cut_at = u.0.len();
     u.format("imu:uint64_t timestamp;float v;float a;");
-    let bytes = &u.0[..cut_at + 10];
-    let path = temp_file("cut.ulg", bytes);
-    let e = open_log_with_report(path.to_str().unwrap(), None, &m).err().unwrap().to_string();
-    assert!(e.contains("the log has no topic/message `imu` (it has: other)"), "{e}");
-    assert!(e.contains(&format!("the file ends inside a message at byte {cut_at}")), "{e}");
-    // DataFlash cut inside the FMT of the type the mapping needs.
+    let e = open_error("cut.ulg", &u.0[..cut_at + 10]);
+    let lead = format!(
+        "`imu.v` for channel `vt`: the file ends inside a message at byte {cut_at}: no \
+         topic/message `imu` was found before byte {cut_at} (it has: other)"
+    );
+    assert!(e.ends_with(&lead), "{e}");
+    // DataFlash cut inside the FMT of the type the mapping needs: no topic at all.
     let mut d = Dataflash::new();
     let cut_at = d.0.len();
     d.fmt(200, 3 + 8 + 8, "imu", "Qff", "TimeUS,v,a");
-    let path = temp_file("cut.bin", &d.0[..cut_at + 40]);
-    let e = open_log_with_report(path.to_str().unwrap(), None, &m).err().unwrap().to_string();
-    assert!(e.contains("no topic/message `imu`"), "{e}");
-    assert!(e.contains(&format!("the file ends inside a message at byte {cut_at}")), "{e}");
+    let e = open_error("cut.bin", &d.0[..cut_at + 40]);
+    let lead = format!(
+        "`imu.v` for channel `vt`: the file ends inside a message at byte {cut_at}: no \
+         topic/message `imu` was found before byte {cut_at} (it has: none)"
+    );
+    assert!(e.ends_with(&lead), "{e}");
+    // DataFlash whose `imu` FMT is overwritten by 40 corrupt bytes: its messages are skipped
+    // as well (a type with no FMT); the first joins the junk, the others are stretches of
+    // their own between `oth` messages.
+    let mut d = Dataflash::new();
+    d.fmt(201, 3 + 8 + 4, "oth", "Qf", "TimeUS,x");
+    let junk_at = d.0.len();
+    d.0.extend([0x5a; 40]);
+    for i in 0..3u64 {
+        d.msg(200, &[(1_000 * i).to_le_bytes().as_slice(), &[0u8; 8]].concat());
+        d.msg(201, &[(1_000 * i).to_le_bytes().as_slice(), &1f32.to_le_bytes()].concat());
+    }
+    let total = 40 + 3 * (3 + 16);
+    let e = open_error("junk.bin", &d.0);
+    let lead = format!(
+        "`imu.v` for channel `vt`: 3 corrupt stretches of {total} bytes in all (the first at \
+         byte {junk_at}) were skipped: no topic/message `imu` was found outside the skipped \
+         bytes (it has: oth)"
+    );
+    assert!(e.ends_with(&lead), "{e}");
+    // A topic that is there but lacks the field: the cut is a trailing note.
+    let mut u = Ulog::new();
+    u.format("imu:uint64_t timestamp;float v;");
+    u.subscribe(0, 1, "imu");
+    u.data_f32(1, 1_000, &[1.0]);
+    let cut_at = u.0.len();
+    u.data_f32(1, 2_000, &[1.0]);
+    let e = open_error("field.ulg", &u.0[..cut_at + 5]);
+    assert!(e.contains("`alpha`: topic `imu` has no field `a` (it has: v)"), "{e}");
+    let note = format!(
+        "; note: the file ends inside a message at byte {cut_at} (what the file holds there is \
+         missing)"
+    );
+    assert!(e.ends_with(&note), "{e}");
 }
 
 #[test]

@@ -56,13 +56,15 @@ pub struct LinkStats {
     pub undecodable: u64,
     /// Messages missing from the per-sender (system, component) sequence numbers (mod 256):
     /// lost on the link or in the kernel, not counting the datagrams the queue dropped
-    /// ([`LinkStats::dropped`]).
+    /// ([`LinkStats::dropped`]). Counted when the gap is seen; a skipped message that arrives
+    /// later (within 128 numbers) is taken back off and counted in
+    /// [`LinkStats::out_of_order`] only.
     pub lost: u64,
     /// Messages repeating their sender's last sequence number: the same message delivered
     /// twice, not used again.
     pub duplicates: u64,
-    /// Messages behind their sender's sequence number (late or reordered): older than what
-    /// was already used, so not used.
+    /// Messages behind their sender's sequence number (late or reordered, e.g. arriving after
+    /// their successor): older than what was already used, so not used.
     pub out_of_order: u64,
     /// Datagrams dropped because the receive queue was full (the oldest go first).
     pub dropped: u64,
@@ -177,9 +179,14 @@ impl Queue {
 
 /// A sender's sequence numbers: the last used and how many messages in a row were behind it.
 #[derive(Debug, Clone, Copy)]
+/// A sender's sequence numbers so far.
 struct Sequence {
+    /// The last number used.
     last: u8,
+    /// Messages behind `last` in a row (a restart after [`RESYNC_AFTER`]).
     behind: u8,
+    /// Bit `k` set: number `last - 1 - k` was skipped (counted lost) and has not arrived since.
+    gaps: u128,
 }
 
 /// What a message's sequence number says.
@@ -190,28 +197,45 @@ enum SeqVerdict {
         missing: u8,
     },
     Duplicate,
-    OutOfOrder,
+    /// Behind the last number used; `was_lost` if it is one of the numbers a gap skipped
+    /// (counted lost then, late now).
+    OutOfOrder {
+        was_lost: bool,
+    },
 }
 
 impl Sequence {
+    fn new(first: u8) -> Self {
+        Self { last: first, behind: 0, gaps: 0 }
+    }
+
     /// Judges sequence number `seq` (mod 256) against the last one used: equal is a duplicate;
     /// up to 128 ahead is new (the numbers between are missing); further ahead is behind
-    /// (late), unless [`RESYNC_AFTER`] arrive behind in a row, which means the sender restarted
-    /// its count.
+    /// (late). A late number a gap skipped was not lost after all (two messages swapped on
+    /// the link); [`RESYNC_AFTER`] other late ones in a row mean the sender restarted its
+    /// count.
     fn judge(&mut self, seq: u8) -> SeqVerdict {
         let delta = seq.wrapping_sub(self.last);
         if delta == 0 {
             return SeqVerdict::Duplicate;
         }
         if delta > 128 {
+            let bit = 1u128 << (self.last.wrapping_sub(seq) - 1);
+            if self.gaps & bit != 0 {
+                self.gaps &= !bit;
+                return SeqVerdict::OutOfOrder { was_lost: true };
+            }
             self.behind += 1;
             if self.behind < RESYNC_AFTER {
-                return SeqVerdict::OutOfOrder;
+                return SeqVerdict::OutOfOrder { was_lost: false };
             }
-            self.last = seq;
-            self.behind = 0;
+            *self = Self::new(seq);
             return SeqVerdict::Use { missing: 0 };
         }
+        // The old gaps move `delta` further behind; the `delta - 1` numbers skipped now are
+        // the nearest behind the new last.
+        let skipped = (1u128 << (delta - 1)) - 1;
+        self.gaps = self.gaps.checked_shl(u32::from(delta)).unwrap_or(0) | skipped;
         self.last = seq;
         self.behind = 0;
         SeqVerdict::Use { missing: delta - 1 }
@@ -335,7 +359,7 @@ impl MavlinkRows {
     fn in_sequence(&mut self, stats: &mut LinkStats, header: &mavlink::MavHeader) -> bool {
         let key = (header.system_id, header.component_id);
         let Some(seq) = self.seq.get_mut(&key) else {
-            self.seq.insert(key, Sequence { last: header.sequence, behind: 0 });
+            self.seq.insert(key, Sequence::new(header.sequence));
             return true;
         };
         match seq.judge(header.sequence) {
@@ -347,7 +371,10 @@ impl MavlinkRows {
                 stats.duplicates += 1;
                 false
             }
-            SeqVerdict::OutOfOrder => {
+            SeqVerdict::OutOfOrder { was_lost } => {
+                if was_lost {
+                    stats.lost -= 1;
+                }
                 stats.out_of_order += 1;
                 false
             }
@@ -497,24 +524,49 @@ mod tests {
     /// from 255 to 0, and a sender restarting its count.
     #[test]
     fn analytic_sequence_numbers_count_gaps_duplicates_and_late_messages() {
-        let mut s = Sequence { last: 10, behind: 0 };
+        let late = |was_lost| SeqVerdict::OutOfOrder { was_lost };
+        let mut s = Sequence::new(10);
         assert_eq!(s.judge(11), SeqVerdict::Use { missing: 0 });
         assert_eq!(s.judge(11), SeqVerdict::Duplicate);
         assert_eq!(s.judge(14), SeqVerdict::Use { missing: 2 });
-        assert_eq!(s.judge(13), SeqVerdict::OutOfOrder);
+        // 13 and 12 were counted missing: each arrives late once, then is only behind.
+        assert_eq!(s.judge(13), late(true));
+        assert_eq!(s.judge(13), late(false));
         assert_eq!(s.judge(15), SeqVerdict::Use { missing: 0 });
-        let mut s = Sequence { last: 254, behind: 0 };
+        assert_eq!(s.judge(12), late(true));
+        assert_eq!(s.judge(11), late(false));
+        let mut s = Sequence::new(254);
         assert_eq!(s.judge(255), SeqVerdict::Use { missing: 0 });
         assert_eq!(s.judge(0), SeqVerdict::Use { missing: 0 });
         assert_eq!(s.judge(0), SeqVerdict::Duplicate);
         assert_eq!(s.judge(3), SeqVerdict::Use { missing: 2 });
         // A restart (from 100 back to 0, 156 "ahead" mod 256, so behind): two messages are not
         // used, the third resyncs.
-        let mut s = Sequence { last: 100, behind: 0 };
-        assert_eq!(s.judge(0), SeqVerdict::OutOfOrder);
-        assert_eq!(s.judge(1), SeqVerdict::OutOfOrder);
+        let mut s = Sequence::new(100);
+        assert_eq!(s.judge(0), late(false));
+        assert_eq!(s.judge(1), late(false));
         assert_eq!(s.judge(2), SeqVerdict::Use { missing: 0 });
         assert_eq!(s.judge(3), SeqVerdict::Use { missing: 0 });
+    }
+
+    /// A gap is remembered across the wrap for as long as its number counts as behind (127).
+    #[test]
+    fn analytic_a_late_message_is_matched_to_its_gap_within_128_numbers() {
+        let late = |was_lost| SeqVerdict::OutOfOrder { was_lost };
+        let mut s = Sequence::new(250);
+        assert_eq!(s.judge(253), SeqVerdict::Use { missing: 2 }); // 251, 252 skipped
+        for k in 254..=255 + 124 {
+            assert_eq!(s.judge((k % 256) as u8), SeqVerdict::Use { missing: 0 });
+        }
+        // 252 is 127 behind 123 (mod 256), 251 128 behind: as far ahead, so new.
+        assert_eq!((s.last, s.judge(252), s.judge(252)), (123, late(true), late(false)));
+        assert_eq!(s.judge(251), SeqVerdict::Use { missing: 127 });
+        // A gap of 128 (the most ahead that counts as new).
+        let mut s = Sequence::new(0);
+        assert_eq!(s.judge(128), SeqVerdict::Use { missing: 127 });
+        assert_eq!(s.judge(1), late(true));
+        assert_eq!(s.judge(127), late(true));
+        assert_eq!(s.judge(1), late(false));
     }
 
     /// The queue keeps the newest [`QUEUE_DATAGRAMS`], counting the oldest it drops, and

@@ -320,20 +320,22 @@ pub enum RowProblem {
         /// The limit it exceeds, SI.
         limit: f64,
     },
-    /// An isolated one-sample spike in a measured channel, found by a screening stage after
-    /// the reader (the pipelines' spike screen): the row is not used.
-    #[error(
-        "`{field}` = {value} is an isolated spike (median of its neighbours {median}, more than {threshold} away)"
-    )]
+    /// A spike in a measured channel, found by a screening stage after the reader (the
+    /// pipelines' spike screen): an isolated sample (`samples` = 1), or one of a short run of
+    /// `samples` consecutive gross outliers with the channel back at its level on both sides.
+    /// The row is not used.
+    #[error("`{field}` = {value} is {}", spike_detail(*samples, *median, *threshold))]
     Spike {
         /// Sample field (SI name, e.g. `thrust_n`).
         field: String,
         /// The SI value.
         value: f64,
-        /// The median of the window around it, SI.
+        /// The median of the window around it (of the samples around the run), SI.
         median: f64,
         /// The departure from the median beyond which a sample is a spike, SI.
         threshold: f64,
+        /// Samples in the run (1: an isolated spike).
+        samples: usize,
     },
     /// A value outside the physical domain (e.g. V ≤ 0, mass ≤ 0).
     #[error("column `{column}`: {reason}")]
@@ -343,6 +345,18 @@ pub enum RowProblem {
         /// What is wrong.
         reason: String,
     },
+}
+
+/// What a [`RowProblem::Spike`] is, for its message.
+fn spike_detail(samples: usize, median: f64, threshold: f64) -> String {
+    match samples {
+        1 => format!(
+            "an isolated spike (median of its neighbours {median}, more than {threshold} away)"
+        ),
+        n => format!(
+            "one of a run of {n} spikes (median of the samples around the run {median}, more than {threshold} away from it and from the samples on both sides)"
+        ),
+    }
 }
 
 /// The rows a [`RowProblem::TimeOutlier`] is ahead of, for its message.
@@ -370,7 +384,8 @@ impl RowProblem {
             Self::Truncated => "truncated last line",
             Self::FieldCount { .. } => "wrong field count",
             Self::Implausible { .. } => "implausible value",
-            Self::Spike { .. } => "isolated spike",
+            Self::Spike { samples: 1, .. } => "isolated spike",
+            Self::Spike { .. } => "spike run",
             Self::Domain { .. } => "value outside its domain",
         }
     }

@@ -25,10 +25,11 @@
 //! (status `interrupted`) and the report are written for the samples read until then, and the
 //! exit code is 128 + signal; a second signal ends at once.
 //!
-//! Before any estimator, rows with an isolated one-sample spike in a measured channel are
-//! rejected and listed (`aeroident_pipelines::replay::outliers`; `--no-spike-screen` turns it
-//! off). A batch fit warns in `summary.json` when one sample dominates it; `--robust` fits
-//! output error with Huber's weights.
+//! Before any estimator, rows with an isolated one-sample spike in a measured channel, or a run
+//! of up to 3 on a channel other than a control input, are rejected and listed
+//! (`aeroident_pipelines::replay::outliers`; `--no-spike-screen` turns it off); runs of 4–5
+//! are warned of in `summary.json`, for every estimator. A batch fit also warns when one
+//! sample dominates it; `--robust` fits output error with Huber's weights.
 //!
 //! The log format is `--format`, else the file's extension, else CSV
 //! ([`aeroident_io::log`]; `docs/mapping.md` tells how columns are named in each).
@@ -149,10 +150,10 @@ pub struct ReplayArgs {
     /// missing sideslip with the reconstructed one; the summary's warnings list what.
     #[arg(long, value_name = "FILE|auto")]
     pub compat: Option<String>,
-    /// Do not screen the record for isolated one-sample spikes before estimating (by default
-    /// a row whose channel jumps far out of its neighbours and back is rejected and listed;
-    /// `aeroident_pipelines::replay::outliers`). For records whose inputs are genuine
-    /// one-sample pulses on an otherwise constant channel.
+    /// Do not screen the record for spikes before estimating (by default a row whose channel
+    /// jumps far out of its neighbours and back, alone or in a run of up to 3 rows, is
+    /// rejected and listed; `aeroident_pipelines::replay::outliers`). For records whose inputs
+    /// are genuine one-sample pulses on an otherwise constant channel.
     #[arg(long)]
     pub no_spike_screen: bool,
     /// `oe`: Huber's outlier-resistant fit (IRLS weights on the residuals normalised by their

@@ -237,8 +237,9 @@ pub(crate) struct Manoeuvres {
     pub(crate) rejections: RejectionLog,
     pub(crate) read: usize,
     pub(crate) rejected: usize,
-    /// What the time windows did ([`crate::window::Windowed::note`]).
-    pub(crate) window_note: Option<String>,
+    /// What the time windows did and the runs the spike screen saw but did not reject
+    /// (`super::RecordEvents::notes`), one warning each.
+    pub(crate) notes: Vec<String>,
 }
 
 /// Reads the whole record, splitting it into manoeuvres at the reader's gap events, with a
@@ -308,7 +309,7 @@ pub(crate) fn read_records<R: Read>(
                 }
             }
         }
-        notes.extend(events.note().map(|n| format!("{prefix}{n}")));
+        notes.extend(events.notes().into_iter().map(|n| format!("{prefix}{n}")));
         manoeuvres.push(Vec::new());
         starts.push((0, String::new()));
     }
@@ -326,8 +327,7 @@ pub(crate) fn read_records<R: Read>(
         }
         .into());
     }
-    let window_note = (!notes.is_empty()).then(|| notes.join("; "));
-    Ok(Manoeuvres { manoeuvres, rejections, read, rejected, window_note })
+    Ok(Manoeuvres { manoeuvres, rejections, read, rejected, notes })
 }
 
 /// Removes the empty manoeuvres and rejects each manoeuvre of one sample (a lone sample between
@@ -849,7 +849,7 @@ pub fn fit_records<R: Read>(
     summary.warnings.extend(unlisted);
     summary.warnings.extend(simulation_note);
     summary.warnings.extend(level_note);
-    summary.warnings.extend(rec.window_note.clone());
+    summary.warnings.extend(rec.notes.iter().cloned());
     summary.warnings.extend(dominance_warnings(&fitted.result, &slices));
     if let Some(c) = &options.compat {
         summary.warnings.extend(c.warnings());

@@ -727,7 +727,7 @@ pub fn replay_with<R: Read>(
     if let Some(c) = &opts.compat {
         out.summary.warnings.extend(c.warnings());
     }
-    out.summary.warnings.extend(events.note());
+    out.summary.warnings.extend(events.notes());
     Ok(out)
 }
 
@@ -775,13 +775,39 @@ pub(crate) fn record_events<'a, R: Read + 'a>(
     screen: Option<outliers::SpikeScreen>,
     compat: Option<&crate::compat::Corrections>,
     windows: &[crate::window::TimeWindow],
-) -> crate::window::Windowed<Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a>> {
+) -> RecordEvents<'a> {
     let screened = outliers::Screened::new(reader, screen);
+    let screen_notes = screened.notes();
     let events: Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a> = match compat {
         Some(c) => Box::new(crate::compat::Corrected::new(screened, c.clone())),
         None => Box::new(screened),
     };
-    crate::window::Windowed::new(events, windows.to_vec())
+    RecordEvents { events: crate::window::Windowed::new(events, windows.to_vec()), screen_notes }
+}
+
+/// [`record_events`]: the events, and the notes of the stages they went through.
+pub(crate) struct RecordEvents<'a> {
+    events: crate::window::Windowed<
+        Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a>,
+    >,
+    screen_notes: outliers::ScreenNotes,
+}
+
+impl RecordEvents<'_> {
+    /// The warnings of the stages so far: what the time windows did, the runs the spike screen
+    /// saw but did not reject.
+    pub(crate) fn notes(&self) -> Vec<String> {
+        let screen = self.screen_notes.lock().map(|n| n.clone()).unwrap_or_default();
+        self.events.note().into_iter().chain(screen).collect()
+    }
+}
+
+impl Iterator for RecordEvents<'_> {
+    type Item = Result<RecordEvent, FlightDataError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        self.events.next()
+    }
 }
 
 /// The spike screen's settings must be sane ([`outliers::SpikeScreen::check`]).

@@ -1,8 +1,9 @@
 //! The spike screen: a stage between the reader and every estimator that rejects a row whose
-//! measured channel holds an isolated one-sample spike (a corrupt value that is still within
-//! the reader's plausibility limits, e.g. a thrust of 10⁶ N in a record at 11.6 kN). One such
-//! row owns a least-squares or output-error fit (every batch and recursive estimator minimises
-//! squared residuals); the screen keeps it out of all of them alike.
+//! measured channel holds an isolated one-sample spike, or one of a short run of them (a
+//! corrupt value that is still within the reader's plausibility limits, e.g. a thrust of 10⁶ N
+//! in a record at 11.6 kN). One such row owns a least-squares or output-error fit (every batch
+//! and recursive estimator minimises squared residuals); the screen keeps it out of all of them
+//! alike.
 //!
 //! **Test** (per channel, per sample `x_i`, over the window of the [`SpikeScreen::half_width`]
 //! `h` samples on each side within the same manoeuvre — a gap or a time window ends it; at a
@@ -25,22 +26,42 @@
 //!    sample out of the envelope of everything around it (on the shipped HFB-320 record a
 //!    genuine `V` sample departs 7 × its window's range, but stays within its context's
 //!    range). A one-sample pulse on an otherwise constant channel cannot be told from a
-//!    spike: such a record needs the screen off. Two spikes within one window widen each
-//!    other's range and both pass; the output-error fit's dominance warning and its Huber
+//!    spike: such a record needs the screen off. Two spikes apart within one window widen
+//!    each other's range and both pass; the output-error fit's dominance warning and its Huber
 //!    option cover what the screen lets through.
 //!
 //! A sample failing both is rejected ([`RowProblem::Spike`], naming the channel, the value, the
 //! median and the threshold), listed in the summary's rejections and counted. The screened
 //! channels are every measured one of [`AirDataSample`] except `ψ` (which wraps at ±π).
 //!
+//! 3. **Short runs** (a corrupt value repeated over 2–3 rows, which 2 cannot see: each member's
+//!    neighbour in the run is as far out as itself). For `k` = 2 to [`WARN_RUN_MAX`]
+//!    consecutive samples from the tested one, with the `h` samples before the run and the `h`
+//!    after it as *others* (at least 2 on each side): every member departs from the sample
+//!    just before the run and the one just after it, on the same side, by more than the guard
+//!    of 2 (isolation × the range of the others; the range of the context, the run left out;
+//!    5 % of its largest `|x|`; the floor), and from the others' median by more than
+//!    `t · 1.4826 · MAD` of the others. The channel is back at its level on both sides and the
+//!    run is outside the envelope of everything around it. Runs of up to [`RUN_MAX`] are
+//!    rejected whole (each row naming the run's length); runs of [`RUN_MAX`] + 1 to
+//!    [`WARN_RUN_MAX`] are only a warning in the summary, for the real-time estimators as for
+//!    the batch fits (a record re-gridded with a zero-order hold holds each genuine sample of
+//!    a slower channel over several rows: on the UAV-OAT records, airspeed at 10 Hz on a
+//!    50 Hz grid, a genuine 5-row level reaches 0.96 of this threshold, where no run of 2–4
+//!    on any shipped record reaches 0.32). The control inputs (`δe`, `δa`, `δr`, throttle) are
+//!    not tested: a short one-sided pulse is what a pilot's doublet or 3-2-1-1 unit is. A
+//!    response channel does not come back within 3 samples from beyond its whole context
+//!    range; the step-like parts of a manoeuvre do not come back at all.
+//!
 //! **Default: on.** A spike is never information an estimator should fit, and the records
-//! shipped in `../shared` pass it unchanged (tests); the cost is a lookahead of `h` samples
-//! (`2h` at a manoeuvre's start; 0.5 s at 10 Hz) before a sample reaches the estimator, so a
-//! paced replay's estimates lag by that much.
+//! shipped in `../shared` pass it unchanged (tests); the cost is a lookahead of `h` +
+//! [`RUN_MAX`] samples (`2h` + [`RUN_MAX`] at a manoeuvre's start; 0.8 s at 10 Hz) before a
+//! sample reaches the estimator, so a paced replay's estimates lag by that much.
 
 use aeroident_estimators::AirDataSample;
 use aeroident_io::{FlightDataError, RecordEvent, RowProblem};
 use std::collections::VecDeque;
+use std::sync::{Arc, Mutex};
 
 /// Settings of the spike screen (module doc).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -77,6 +98,19 @@ const MAX_AHEAD_EVENTS: usize = 10_000;
 /// Fewest samples in a window (the tested one included) for a verdict: a manoeuvre shorter
 /// than this is not screened.
 const MIN_WINDOW: usize = 5;
+
+/// Longest run of consecutive gross outliers on one channel that the screen rejects (module
+/// doc, test 3).
+pub const RUN_MAX: usize = 3;
+
+/// Longest run that is reported (a warning, not rejected): runs of [`RUN_MAX`] + 1 to this
+/// many samples.
+pub const WARN_RUN_MAX: usize = 5;
+
+/// The control inputs among the screened channels: a short pulse on them is the manoeuvre
+/// itself (a doublet's half, a 3-2-1-1's units), so test 3 leaves them out (a single sample is
+/// still tested, test 1–2).
+const INPUTS: [&str; 4] = ["de_rad", "da_rad", "dr_rad", "throttle"];
 
 /// Number of screened channels ([`channels`]).
 const N_CHANNELS: usize = 23;
@@ -157,11 +191,7 @@ impl SpikeScreen {
             }
         }
         let range = if lo <= hi { hi - lo } else { 0.0 };
-        let (clo, chi, big) = context
-            .iter()
-            .fold((med, med, med.abs()), |(l, h, b), &v| (l.min(v), h.max(v), b.max(v.abs())));
-        let threshold =
-            (self.isolation * range).max(chi - clo).max(CONTEXT_FRACTION * big).max(ABSOLUTE_FLOOR);
+        let threshold = self.guard(range, med, context);
         let neighbours = [centre.checked_sub(1), Some(centre + 1).filter(|&k| k < window.len())];
         let mut sides = neighbours.iter().flatten().map(|&k| x - window[k]);
         let first = sides.next()?;
@@ -169,7 +199,79 @@ impl SpikeScreen {
             && sides.all(|d| d.abs() > threshold && d.signum() == first.signum());
         isolated.then_some((med, threshold.max(self.hampel_t * scale)))
     }
+
+    /// The gross-outlier guard of test 2 (module doc): the departure from the neighbours must
+    /// exceed the isolation factor × `range` (of the window's other samples), the range of
+    /// `context` (and `med`), 5 % of its largest `|x|` and the absolute floor.
+    fn guard(&self, range: f64, med: f64, context: &[f64]) -> f64 {
+        let (clo, chi, big) = context
+            .iter()
+            .fold((med, med, med.abs()), |(l, h, b), &v| (l.min(v), h.max(v), b.max(v.abs())));
+        (self.isolation * range).max(chi - clo).max(CONTEXT_FRACTION * big).max(ABSOLUTE_FLOOR)
+    }
+
+    /// Whether `run`, one channel's consecutive values, is a run of gross outliers (module doc,
+    /// test 3): `before` and `after` are the channel's values just before and after it (in
+    /// time order, at least 2 each), `context` its values around it that set its scale (the
+    /// run left out). `Some((median, threshold))` of the samples around the run if so.
+    pub fn run_spike(
+        &self,
+        before: &[f64],
+        run: &[f64],
+        after: &[f64],
+        context: &[f64],
+    ) -> Option<(f64, f64)> {
+        if before.len() < 2 || after.len() < 2 {
+            return None;
+        }
+        let (&prev, &next, &first) = (before.last()?, after.first()?, run.first()?);
+        let mut others: Vec<f64> = before.iter().chain(after).copied().collect();
+        let (lo, hi) = others
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
+        let med = median(&mut others);
+        let mut dev: Vec<f64> = others.iter().map(|v| (v - med).abs()).collect();
+        let scale = 1.4826 * median(&mut dev);
+        let threshold = self.guard(hi - lo, med, context);
+        let side = (first - prev).signum();
+        let far = run.iter().all(|&x| {
+            (x - prev) * side > threshold
+                && (x - next) * side > threshold
+                && (x - med).abs() > self.hampel_t * scale
+        });
+        far.then_some((med, threshold.max(self.hampel_t * scale)))
+    }
 }
+
+/// The rest of a run of spikes found at its first sample: the next `left` samples are rejected
+/// as its members (their value of `channel`).
+#[derive(Debug, Clone, Copy)]
+struct RunRest {
+    left: usize,
+    channel: usize,
+    samples: usize,
+    median: f64,
+    threshold: f64,
+}
+
+impl RunRest {
+    /// The rejection of the sample on `row` as a member of the run.
+    fn member(&self, row: u64, sample: &AirDataSample) -> RecordEvent {
+        let (field, value) = channels(sample)[self.channel];
+        let problem = RowProblem::Spike {
+            field: field.into(),
+            value: value.unwrap_or(f64::NAN),
+            median: self.median,
+            threshold: self.threshold,
+            samples: self.samples,
+        };
+        RecordEvent::Rejected { row, problem }
+    }
+}
+
+/// Warnings of a [`Screened`] stage, shared with whoever reports them after the events are
+/// consumed (the stage itself is then inside an iterator chain).
+pub type ScreenNotes = Arc<Mutex<Vec<String>>>;
 
 /// The spike screen over a reader's events (module doc); with `None` settings it passes
 /// everything.
@@ -183,6 +285,9 @@ pub struct Screened<I> {
     ahead: VecDeque<Result<RecordEvent, FlightDataError>>,
     ended: bool,
     rejected: usize,
+    /// The members of a run of spikes still to reject.
+    run: Option<RunRest>,
+    notes: ScreenNotes,
 }
 
 impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Screened<I> {
@@ -195,12 +300,20 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Screened<I> {
             ahead: VecDeque::new(),
             ended: false,
             rejected: 0,
+            run: None,
+            notes: ScreenNotes::default(),
         }
     }
 
     /// Rows the screen rejected so far.
     pub fn rejected(&self) -> usize {
         self.rejected
+    }
+
+    /// The stage's warnings (runs that look like spikes but are not rejected, module doc),
+    /// filled as the events are read.
+    pub fn notes(&self) -> ScreenNotes {
+        Arc::clone(&self.notes)
     }
 
     /// Samples ahead of the front event up to the next gap (or error), and whether that
@@ -217,16 +330,16 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Screened<I> {
         (n, self.ended || self.ahead.len() >= MAX_AHEAD_EVENTS)
     }
 
-    /// Samples wanted ahead of the tested one: `h`, more at a manoeuvre's start (`2h` others
-    /// in all).
+    /// Samples wanted ahead of the tested one for test 1–2: `h`, more at a manoeuvre's start
+    /// (`2h` others in all).
     fn lookahead(&self, screen: &SpikeScreen) -> usize {
         screen.half_width.max(2 * screen.half_width - self.past.len().min(2 * screen.half_width))
     }
 
-    /// The front sample's verdict: the problem if one of its channels is a spike.
-    fn verdict(&self, screen: &SpikeScreen, sample: &AirDataSample) -> Option<RowProblem> {
-        let future: Vec<_> = self
-            .ahead
+    /// The channels of the samples ahead of the front one, up to the next gap: as many as
+    /// test 3 looks at ([`RUN_MAX`] more than test 1–2).
+    fn future(&self, screen: &SpikeScreen) -> Vec<[Option<f64>; N_CHANNELS]> {
+        self.ahead
             .iter()
             .skip(1)
             .map_while(|e| match e {
@@ -237,8 +350,19 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Screened<I> {
                 RecordEvent::Sample { sample, .. } => Some(channels(sample).map(|c| c.1)),
                 _ => None,
             })
-            .take(self.lookahead(screen))
-            .collect();
+            .take(self.lookahead(screen) + RUN_MAX)
+            .collect()
+    }
+
+    /// The front sample's verdict: the problem if one of its channels is a spike (test 1–2)
+    /// or starts a run of spikes (test 3; the rest of the run to reject with it).
+    fn verdict(
+        &self,
+        screen: &SpikeScreen,
+        sample: &AirDataSample,
+    ) -> Option<(RowProblem, Option<RunRest>)> {
+        let ahead = self.future(screen);
+        let future = &ahead[..ahead.len().min(self.lookahead(screen))];
         // A window of 2h others where the manoeuvre has them: shifted, not cut, at its ends.
         let from_past =
             self.past.len().min(2 * screen.half_width - future.len().min(2 * screen.half_width));
@@ -250,10 +374,77 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Screened<I> {
             let centre = window.len();
             window.push(value);
             window.extend(future.iter().filter_map(|v| v[c]));
-            let context: Vec<f64> = self.past.iter().chain(&future).filter_map(|v| v[c]).collect();
+            let context: Vec<f64> = self.past.iter().chain(future).filter_map(|v| v[c]).collect();
             if let Some((median, threshold)) = screen.spike(&window, centre, &context) {
-                return Some(RowProblem::Spike { field: field.into(), value, median, threshold });
+                let field = field.into();
+                return Some((
+                    RowProblem::Spike { field, value, median, threshold, samples: 1 },
+                    None,
+                ));
             }
+        }
+        here.iter().enumerate().find_map(|(c, &(field, value))| {
+            self.run_verdict(screen, sample.t_s, c, field, value?, &ahead)
+        })
+    }
+
+    /// Test 3 on channel `c` (value `value` in the front sample at `t_s`, `ahead` the samples
+    /// after it): the shortest run of 2 to [`WARN_RUN_MAX`] samples from the front one that
+    /// is a run of gross outliers. Up to [`RUN_MAX`] samples it is rejected; longer, it is a
+    /// warning only. Control inputs are not tested ([`INPUTS`]).
+    fn run_verdict(
+        &self,
+        screen: &SpikeScreen,
+        t_s: f64,
+        c: usize,
+        field: &str,
+        value: f64,
+        ahead: &[[Option<f64>; N_CHANNELS]],
+    ) -> Option<(RowProblem, Option<RunRest>)> {
+        if INPUTS.contains(&field) {
+            return None;
+        }
+        let h = screen.half_width;
+        let skip = self.past.len().saturating_sub(h);
+        let before: Vec<f64> = self.past.iter().skip(skip).filter_map(|v| v[c]).collect();
+        // A necessary condition first (the others hold `before`), so that the runs are built
+        // for a sample far out only, not for every sample of every channel.
+        let (lo, hi) = before
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
+        let departure = (value - before.last()?).abs();
+        if departure <= screen.isolation * (hi - lo) || departure <= ABSOLUTE_FLOOR {
+            return None;
+        }
+        let col: Vec<Option<f64>> = ahead.iter().map(|v| v[c]).collect();
+        for k in 2..=WARN_RUN_MAX.min(col.len().saturating_sub(1)) {
+            let rest = col[..k - 1].iter().copied().collect::<Option<Vec<f64>>>()?;
+            let run: Vec<f64> = std::iter::once(value).chain(rest).collect();
+            let after: Vec<f64> = col[k - 1..].iter().take(h).flatten().copied().collect();
+            let context: Vec<f64> = self
+                .past
+                .iter()
+                .map(|v| v[c])
+                .chain(col[k - 1..].iter().copied())
+                .flatten()
+                .collect();
+            let Some((median, threshold)) = screen.run_spike(&before, &run, &after, &context)
+            else {
+                continue;
+            };
+            if k <= RUN_MAX {
+                let rest = RunRest { left: k - 1, channel: c, samples: k, median, threshold };
+                let problem =
+                    RowProblem::Spike { field: field.into(), value, median, threshold, samples: k };
+                return Some((problem, Some(rest)));
+            }
+            let note = format!(
+                "spike screen: `{field}` departs from the samples on both sides like a spike for {k} samples from t = {t_s} s (to {value}, median around them {median}, threshold {threshold}); not rejected (a run longer than {RUN_MAX} samples can be genuine): check those rows, or cut them out with a time window"
+            );
+            if let Ok(mut notes) = self.notes.lock() {
+                notes.push(note);
+            }
+            return None;
         }
         None
     }
@@ -276,12 +467,21 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Iterator for Scre
                 Some(Ok(RecordEvent::Sample { .. })) => {}
                 Some(Ok(RecordEvent::Gap { .. })) => {
                     self.past.clear();
+                    self.run = None;
                     return self.ahead.pop_front();
                 }
                 _ => return self.ahead.pop_front(),
             }
+            if let Some(rest) = self.run.filter(|r| r.left > 0) {
+                self.run = Some(RunRest { left: rest.left - 1, ..rest });
+                if let Some(Ok(RecordEvent::Sample { row, sample })) = self.ahead.pop_front() {
+                    self.rejected += 1;
+                    return Some(Ok(rest.member(row, &sample)));
+                }
+                continue;
+            }
             let (n, last) = self.samples_ahead();
-            if n < self.lookahead(&screen) && !last {
+            if n < self.lookahead(&screen) + RUN_MAX && !last {
                 self.pull();
                 continue;
             }
@@ -292,8 +492,9 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Iterator for Scre
             let Some(Ok(RecordEvent::Sample { row, sample })) = self.ahead.pop_front() else {
                 continue;
             };
-            if let Some(problem) = verdict {
+            if let Some((problem, rest)) = verdict {
                 self.rejected += 1;
+                self.run = rest;
                 return Some(Ok(RecordEvent::Rejected { row, problem }));
             }
             if self.past.len() >= CONTEXT.max(2 * screen.half_width) {

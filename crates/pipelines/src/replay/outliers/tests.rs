@@ -157,3 +157,104 @@ fn bad_settings_are_named() {
     assert!(bad.check().unwrap_err().contains("Hampel t"));
     assert!(screen().check().is_ok());
 }
+
+/// The rejections (row, problem) and warnings of the stage over samples whose thrust is `x`
+/// and elevator `de`.
+fn screened(x: &[f64], de: &[f64]) -> (Vec<(usize, RowProblem)>, Vec<String>) {
+    let events = x.iter().zip(de).enumerate().map(|(k, (&v, &d))| {
+        Ok(RecordEvent::Sample {
+            row: k as u64,
+            sample: AirDataSample {
+                t_s: k as f64 * 0.1,
+                vt_mps: 100.0,
+                alpha_rad: 0.1,
+                qbar_pa: 4000.0,
+                thrust_n: Some(v),
+                de_rad: Some(d),
+                ..Default::default()
+            },
+        })
+    });
+    let stage = Screened::new(events, Some(screen()));
+    let notes = stage.notes();
+    let rejected = stage
+        .filter_map(|e| match e.unwrap() {
+            RecordEvent::Rejected { row, problem } => Some((row as usize, problem)),
+            _ => None,
+        })
+        .collect();
+    let notes = notes.lock().unwrap().clone();
+    (rejected, notes)
+}
+
+/// Runs of 2 and 3 gross outliers with the channel back at its level on both sides are
+/// rejected whole, each row naming the channel, its value and the run; on a quiet and a noisy
+/// channel, whichever the sign, near the record's start and end as in its middle.
+#[test]
+fn short_runs_of_spikes_are_found() {
+    let base: Vec<f64> = noise(80, 5).iter().map(|v| 11_600.0 + 30.0 * v).collect();
+    let quiet = vec![11_600.0; 80];
+    let de = vec![0.0; 80];
+    for x0 in [&base, &quiet] {
+        for (at, len, v) in [(40, 2, 1e6), (40, 3, 1e6), (40, 3, -5e4), (7, 2, 2e5), (72, 3, 2e5)] {
+            let mut x = x0.clone();
+            x[at..at + len].iter_mut().for_each(|s| *s = v);
+            let (rejected, notes) = screened(&x, &de);
+            let rows: Vec<usize> = rejected.iter().map(|r| r.0).collect();
+            assert_eq!(rows, (at..at + len).collect::<Vec<_>>(), "{len} × {v} at {at}");
+            for (_, p) in &rejected {
+                assert_eq!(p.kind(), "spike run");
+                let RowProblem::Spike { field, value, samples, .. } = p else { panic!("{p}") };
+                assert_eq!((field.as_str(), *value, *samples), ("thrust_n", v, len));
+            }
+            assert!(notes.is_empty(), "{notes:?}");
+        }
+    }
+    // Two run members need not be equal: q̄ × 10 on two noisy samples.
+    let mut x = base.clone();
+    x[30] *= 10.0;
+    x[31] *= 10.0;
+    assert_eq!(screened(&x, &de).0.iter().map(|r| r.0).collect::<Vec<_>>(), [30, 31]);
+}
+
+/// Runs of 4 and 5 are reported (a warning naming the channel, the time and the length), not
+/// rejected; a run of 6 is neither. Short pulses on a control input (a genuine manoeuvre's)
+/// are neither rejected nor reported, nor is a short excursion that does not come back (a step
+/// in two stages) or one within the range of its context.
+#[test]
+fn longer_runs_are_reported_and_manoeuvre_like_runs_pass() {
+    let quiet = vec![11_600.0; 80];
+    let de = vec![0.0; 80];
+    for len in [4, 5, 6] {
+        let mut x = quiet.clone();
+        x[40..40 + len].iter_mut().for_each(|s| *s = 1e6);
+        let (rejected, notes) = screened(&x, &de);
+        assert!(rejected.is_empty(), "{len}: {rejected:?}");
+        if len <= WARN_RUN_MAX {
+            assert_eq!(notes.len(), 1, "{len}: {notes:?}");
+            assert!(
+                notes[0].contains("thrust_n")
+                    && notes[0].contains(&format!("for {len} samples from t = 4 s")),
+                "{}",
+                notes[0]
+            );
+        } else {
+            assert!(notes.is_empty(), "{len}: {notes:?}");
+        }
+    }
+    for len in 2..=WARN_RUN_MAX {
+        let mut d = de.clone();
+        d[40..40 + len].iter_mut().for_each(|s| *s = 0.1);
+        assert_eq!(screened(&quiet, &d), (vec![], vec![]), "elevator pulse of {len}");
+    }
+    let mut x = quiet.clone();
+    x[40..42].iter_mut().for_each(|s| *s = 1e6);
+    x[42..].iter_mut().for_each(|s| *s = 5e5);
+    assert_eq!(screened(&x, &de), (vec![], vec![]), "step in two stages");
+    let mut x = quiet.clone();
+    x[10] = 1e6;
+    x[11] = -1e6;
+    x[40..42].iter_mut().for_each(|s| *s = 1e6);
+    let (rejected, notes) = screened(&x, &de);
+    assert!(rejected.iter().all(|r| r.0 < 40) && notes.is_empty(), "{rejected:?} {notes:?}");
+}

@@ -1,14 +1,16 @@
 //! A signal ends a live or long replay gracefully: the binary is spawned on a live input
-//! (stdin `-`), sent SIGINT or SIGTERM after some rows, and must leave `estimates.csv`,
+//! (stdin `-`), sent SIGINT, SIGTERM or SIGHUP after some rows, and must leave `estimates.csv`,
 //! `summary.json` (status `interrupted`) and the report, no hidden temporary file, and exit
 //! with 128 + signal.
 #![cfg(unix)]
 
 mod common;
 use common::workspace;
+use std::ffi::OsString;
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -40,10 +42,17 @@ fn sim_lines(dir: &Path) -> Vec<String> {
 
 /// `replay - --map aeroident-sim.toml --out OUT` with stdin piped; its stderr collected by a
 /// thread into the returned buffer.
-fn spawn_live(out: &Path) -> (Child, Arc<Mutex<String>>) {
+fn spawn_live(out: &Path) -> (Child, Arc<Stderr>) {
+    let map = workspace().join("mappings/aeroident-sim.toml");
+    spawn_replay(&["--estimator".into(), "rls".into(), "--map".into(), map.into()], out)
+}
+
+/// `replay - ARGS --out OUT` with stdin piped; its stderr collected by a thread into the
+/// returned buffer.
+fn spawn_replay(args: &[OsString], out: &Path) -> (Child, Arc<Stderr>) {
     let mut child = bin()
-        .args(["replay", "-", "--estimator", "rls", "--map"])
-        .arg(workspace().join("mappings/aeroident-sim.toml"))
+        .args(["replay", "-"])
+        .args(args)
         .arg("--out")
         .arg(out)
         .stdin(Stdio::piped())
@@ -51,24 +60,39 @@ fn spawn_live(out: &Path) -> (Child, Arc<Mutex<String>>) {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let err = Arc::new(Mutex::new(String::new()));
+    let err = Arc::new(Stderr::default());
     let sink = Arc::clone(&err);
     let stderr = child.stderr.take().unwrap();
     std::thread::spawn(move || {
         for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-            let mut s = sink.lock().unwrap();
+            let mut s = sink.text.lock().unwrap();
             s.push_str(&line);
             s.push('\n');
         }
+        sink.closed.store(true, Ordering::SeqCst);
     });
     (child, err)
 }
 
-/// Waits until `text` shows `what` (the child has started estimating), at most 60 s.
-fn wait_for(text: &Mutex<String>, what: &str) {
+/// A child's stderr, collected line by line by a thread until it closes.
+#[derive(Debug, Default)]
+struct Stderr {
+    text: Mutex<String>,
+    closed: AtomicBool,
+}
+
+impl Stderr {
+    /// What has arrived so far.
+    fn text(&self) -> String {
+        self.text.lock().unwrap().clone()
+    }
+}
+
+/// Waits until `err` shows `what` (the child has reached that point), at most 60 s.
+fn wait_for(err: &Stderr, what: &str) {
     let start = Instant::now();
-    while !text.lock().unwrap().contains(what) {
-        assert!(start.elapsed() < Duration::from_secs(60), "no `{what}`: {}", text.lock().unwrap());
+    while !err.text().contains(what) {
+        assert!(start.elapsed() < Duration::from_secs(60), "no `{what}`: {}", err.text());
         std::thread::sleep(Duration::from_millis(20));
     }
 }
@@ -78,26 +102,51 @@ fn signal(child: &Child, sig: &str) {
     assert!(ok.success());
 }
 
-/// The child's exit code, failing (and killing it) if it has not ended within 60 s.
-fn exit_code(child: &mut Child, err: &Mutex<String>) -> i32 {
+/// The child's exit code, failing (and killing it) if it has not ended within 60 s; once it
+/// has, waits for the rest of its stderr (at most 10 s), so that `err` holds all of it.
+fn exit_code(child: &mut Child, err: &Stderr) -> i32 {
     let start = Instant::now();
-    loop {
+    let status = loop {
         if let Some(s) = child.try_wait().unwrap() {
-            return s.code().unwrap_or_else(|| panic!("killed by a signal: {s:?}"));
+            break s;
         }
         if start.elapsed() > Duration::from_secs(60) {
             let _ = child.kill();
-            panic!("the replay did not end on the signal: {}", err.lock().unwrap());
+            panic!("the replay did not end on the signal: {}", err.text());
         }
         std::thread::sleep(Duration::from_millis(20));
+    };
+    let end = Instant::now();
+    while !err.closed.load(Ordering::SeqCst) && end.elapsed() < Duration::from_secs(10) {
+        std::thread::sleep(Duration::from_millis(10));
     }
+    status.code().unwrap_or_else(|| panic!("killed by a signal: {status:?}\n{}", err.text()))
+}
+
+fn summary(out: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+}
+
+/// The hidden temporary files left in `out` (a file being written when the run ended).
+fn temporaries(out: &Path) -> Vec<String> {
+    std::fs::read_dir(out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".tmp") || n.starts_with(".tmp-"))
+        .collect()
 }
 
 /// Checks the outputs of an interrupted run: status `interrupted`, one estimates line per
 /// estimated sample, no hidden temporary file. Returns the summary's `samples_read`.
 fn check_interrupted_outputs(out: &Path, fed: &[String]) -> usize {
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let read = check_interrupted_estimates(out, fed);
+    assert!(out.join("report.html").exists());
+    read
+}
+
+/// [`check_interrupted_outputs`] but for the report, which a second signal leaves out.
+fn check_interrupted_estimates(out: &Path, fed: &[String]) -> usize {
+    let v = summary(out);
     assert_eq!(v["status"], "interrupted", "{v}");
     let read = v["samples_read"].as_u64().unwrap() as usize;
     let rejected = v["samples_rejected"].as_u64().unwrap() as usize;
@@ -111,12 +160,7 @@ fn check_interrupted_outputs(out: &Path, fed: &[String]) -> usize {
     let fed_t: Vec<f64> =
         fed[1..].iter().map(|l| l.split(',').next().unwrap().parse().unwrap()).collect();
     assert!(fed_t.iter().any(|t| (t - last_t).abs() < 1e-9), "t = {last_t}");
-    assert!(out.join("report.html").exists());
-    let hidden: Vec<String> = std::fs::read_dir(out)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n.ends_with(".tmp") || n.starts_with(".tmp-"))
-        .collect();
+    let hidden = temporaries(out);
     assert!(hidden.is_empty(), "temporary files left: {hidden:?}");
     read
 }
@@ -126,7 +170,20 @@ fn check_interrupted_outputs(out: &Path, fed: &[String]) -> usize {
 /// `interrupted`, and exits 130.
 #[test]
 fn sigint_on_a_silent_live_feed_writes_an_interrupted_summary() {
-    let d = scratch("silent");
+    signal_a_silent_live_feed("silent", "INT", 130);
+}
+
+/// SIGHUP (the terminal the feed ran in closed) ends the replay as SIGINT does: results
+/// written, status `interrupted`, exit 129.
+#[test]
+fn sighup_on_a_silent_live_feed_writes_an_interrupted_summary() {
+    signal_a_silent_live_feed("hangup", "HUP", 129);
+}
+
+/// Feeds 300 rows to a live replay, leaves stdin open and silent, sends SIG`sig` and checks
+/// the exit `code` and the interrupted outputs.
+fn signal_a_silent_live_feed(tag: &str, sig: &str, code: i32) {
+    let d = scratch(tag);
     let lines = sim_lines(&d);
     let out = d.join("out");
     let (mut child, err) = spawn_live(&out);
@@ -138,12 +195,12 @@ fn sigint_on_a_silent_live_feed_writes_an_interrupted_summary() {
     stdin.flush().unwrap();
     wait_for(&err, "model");
     std::thread::sleep(Duration::from_millis(500));
-    signal(&child, "-INT");
-    let code = exit_code(&mut child, &err);
+    signal(&child, &format!("-{sig}"));
+    let got = exit_code(&mut child, &err);
     drop(stdin);
-    let text = err.lock().unwrap().clone();
-    assert_eq!(code, 130, "{text}");
-    assert!(text.contains("interrupted by SIGINT"), "{text}");
+    let text = err.text();
+    assert_eq!(got, code, "{text}");
+    assert!(text.contains(&format!("interrupted by SIG{sig}")), "{text}");
     let read = check_interrupted_outputs(&out, &lines);
     assert!(read <= 300, "{read} rows read of 300 fed");
     let _ = std::fs::remove_dir_all(&d);
@@ -176,7 +233,7 @@ fn sigterm_on_a_flowing_live_feed_stops_between_samples() {
     std::thread::sleep(Duration::from_millis(300));
     signal(&child, "-TERM");
     let code = exit_code(&mut child, &err);
-    let text = err.lock().unwrap().clone();
+    let text = err.text();
     assert_eq!(code, 143, "{text}");
     assert!(text.contains("interrupted by SIGTERM"), "{text}");
     check_interrupted_outputs(&out, &lines);

@@ -1,7 +1,8 @@
 //! A signal ends a live or long replay gracefully: the binary is spawned on a live input
 //! (stdin `-`), sent SIGINT, SIGTERM or SIGHUP after some rows, and must leave `estimates.csv`,
 //! `summary.json` (status `interrupted`) and the report, no hidden temporary file, and exit
-//! with 128 + signal.
+//! with 128 + signal. A second signal while the results are written is ignored; one before
+//! that leaves `summary.json` alone.
 #![cfg(unix)]
 
 mod common;
@@ -9,7 +10,7 @@ use common::workspace;
 use std::ffi::OsString;
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, ChildStdin, Command, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -136,6 +137,11 @@ fn temporaries(out: &Path) -> Vec<String> {
         .collect()
 }
 
+/// Whether `out/name` exists and is not empty.
+fn written(out: &Path, name: &str) -> bool {
+    std::fs::metadata(out.join(name)).is_ok_and(|m| m.len() > 0)
+}
+
 /// Checks the outputs of an interrupted run: status `interrupted`, one estimates line per
 /// estimated sample, no hidden temporary file. Returns the summary's `samples_read`.
 fn check_interrupted_outputs(out: &Path, fed: &[String]) -> usize {
@@ -238,5 +244,97 @@ fn sigterm_on_a_flowing_live_feed_stops_between_samples() {
     assert!(text.contains("interrupted by SIGTERM"), "{text}");
     check_interrupted_outputs(&out, &lines);
     drop(feeder);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Starts a live replay of 300 rows and sends SIGINT once it estimates: the child, its stderr
+/// and stdin (held open, silent), and the rows.
+fn interrupted_live_feed(d: &Path, out: &Path) -> (Child, Arc<Stderr>, ChildStdin, Vec<String>) {
+    let lines = sim_lines(d);
+    let (mut child, err) = spawn_live(out);
+    let mut stdin = child.stdin.take().unwrap();
+    for l in &lines[..301] {
+        writeln!(stdin, "{l}").unwrap();
+    }
+    stdin.flush().unwrap();
+    wait_for(&err, "model");
+    std::thread::sleep(Duration::from_millis(500));
+    signal(&child, "-INT");
+    (child, err, stdin, lines)
+}
+
+/// A second Ctrl-C while the results are written is noted and ignored: the report and its
+/// figures are all written, no temporary file is left, and the exit is still 130.
+#[test]
+fn a_second_sigint_while_the_results_are_written_is_ignored() {
+    let d = scratch("repeat-writing");
+    let out = d.join("out");
+    let (mut child, err, stdin, lines) = interrupted_live_feed(&d, &out);
+    // Printed once the writing has begun (the figures take a second or more after it).
+    wait_for(&err, "writing the results");
+    signal(&child, "-INT");
+    let code = exit_code(&mut child, &err);
+    drop(stdin);
+    let text = err.text();
+    assert_eq!(code, 130, "{text}");
+    assert!(text.contains("SIGINT: ignored while the results are written"), "{text}");
+    check_interrupted_outputs(&out, &lines);
+    for f in ["estimates.png", "estimates.svg", "report.html"] {
+        assert!(written(&out, f), "{f} missing or empty: {text}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Two Ctrl-C 20 ms apart: whichever phase the second lands in, the output directory is
+/// valid: the estimates and `summary.json` (status `interrupted`), no temporary file, and
+/// either the whole report or none of it with the summary saying why.
+#[test]
+fn two_quick_sigints_leave_a_valid_output_directory() {
+    let d = scratch("repeat-quick");
+    let out = d.join("out");
+    let (mut child, err, stdin, lines) = interrupted_live_feed(&d, &out);
+    std::thread::sleep(Duration::from_millis(20));
+    signal(&child, "-INT");
+    let code = exit_code(&mut child, &err);
+    drop(stdin);
+    let text = err.text();
+    assert_eq!(code, 130, "{text}");
+    check_interrupted_estimates(&out, &lines);
+    let v = summary(&out);
+    let summary_only = v["warnings"].to_string().contains("only summary.json");
+    for f in ["estimates.png", "estimates.svg", "report.html"] {
+        assert_eq!(written(&out, f), !summary_only, "{f}: {v}\n{text}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Ctrl-C before a live feed has sent a single row (only its header): no estimates, but still
+/// a `summary.json` saying the run was interrupted and why, exit 130.
+#[test]
+fn sigint_before_a_live_feed_has_a_row_writes_a_summary_without_estimates() {
+    let d = scratch("live-empty");
+    let lines = sim_lines(&d);
+    let out = d.join("out");
+    let (mut child, err) = spawn_live(&out);
+    let mut stdin = child.stdin.take().unwrap();
+    writeln!(stdin, "{}", lines[0]).unwrap();
+    stdin.flush().unwrap();
+    // The output directory is locked after the handlers are installed, before any read.
+    let start = Instant::now();
+    while !out.join(".aeroident.lock").exists() {
+        assert!(start.elapsed() < Duration::from_secs(60), "no output directory: {}", err.text());
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    signal(&child, "-INT");
+    let code = exit_code(&mut child, &err);
+    drop(stdin);
+    let text = err.text();
+    assert_eq!(code, 130, "{text}");
+    let v = summary(&out);
+    assert_eq!(v["status"], "interrupted", "{v}");
+    assert!(v["parameters"].is_null(), "{v}");
+    assert!(v["status_reason"].as_str().unwrap().contains("before any sample"), "{v}");
+    assert!(!out.join("estimates.csv").exists() && temporaries(&out).is_empty());
     let _ = std::fs::remove_dir_all(&d);
 }

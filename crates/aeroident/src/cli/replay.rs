@@ -20,10 +20,12 @@
 //! fit: it reads the whole record first (it says so), prints its iterations and writes
 //! `summary.json` (estimates, coloured-residual and Cramér–Rao σ, residual RMS).
 //!
-//! SIGINT (Ctrl-C) or SIGTERM ends a real-time replay gracefully, the normal end of a live feed
-//! ([`crate::interrupt`]): the sample in hand is finished, `estimates.csv`, `summary.json`
-//! (status `interrupted`) and the report are written for the samples read until then, and the
-//! exit code is 128 + signal; a second signal ends at once.
+//! SIGINT (Ctrl-C), SIGTERM or SIGHUP ends a real-time replay gracefully, the normal end of a
+//! live feed ([`crate::interrupt`]): the sample in hand is finished, `estimates.csv`,
+//! `summary.json` (status `interrupted`) and the report are written for the samples read until
+//! then, and the exit code is 128 + signal. A second signal before the results are written
+//! stops at once with `summary.json` alone; one while they are written is ignored, so that no
+//! file is left half-written.
 //!
 //! Before any estimator, rows with an isolated one-sample spike in a measured channel are
 //! rejected and listed (`aeroident_pipelines::replay::outliers`; `--no-spike-screen` turns it
@@ -353,11 +355,14 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         // stdin through a reader that ends the record on a signal even while no line arrives.
         let stdin = crate::interrupt::InterruptibleStdin::new(interrupt.flag());
         let reader = if format == LogFormat::Asc {
-            aeroident_io::log::asc_reader(std::io::BufReader::new(stdin), "-", &mapping)?
+            aeroident_io::log::asc_reader(std::io::BufReader::new(stdin), "-", &mapping)
         } else {
-            FlightDataReader::new(Box::new(stdin) as Box<dyn std::io::Read>, "-", &mapping)?
+            FlightDataReader::new(Box::new(stdin) as Box<dyn std::io::Read>, "-", &mapping)
         };
-        replay(reader, &mapping, &opts, &mut console)
+        // A header cut short by a signal is an interruption too (below), not a plain error.
+        reader
+            .map_err(aeroident_pipelines::replay::ReplayError::from)
+            .and_then(|reader| replay(reader, &mapping, &opts, &mut console))
     } else if !live && format == LogFormat::Csv {
         // The CSV file itself, read through the progress bar (what `open_log` opens for CSV).
         let file =
@@ -389,18 +394,32 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         })
     };
     bar.finish_and_clear();
-    let mut outcome = outcome?;
-    let interrupted = outcome.interrupted();
-    if interrupted {
-        eprintln!(
-            "interrupted: finishing with the {} samples read (a second signal ends at once)",
-            outcome.summary.samples_read
-        );
-        if args.validate_on.is_some() || args.cross_check {
-            let w = "the run was interrupted: --validate-on / --cross-check not done".to_string();
-            eprintln!("warning: {w}");
-            outcome.summary.warnings.push(w);
+    let mut outcome = match outcome {
+        Ok(outcome) => outcome,
+        // A live feed stopped before any sample was estimated (even before its header): no
+        // results, but still a summary saying so.
+        Err(e) if live && interrupt.requested() => {
+            drop(csv_file);
+            let read = match &e {
+                aeroident_pipelines::replay::ReplayError::Interrupted { samples_read, .. } => {
+                    Some(*samples_read)
+                }
+                _ => None,
+            };
+            let why = format!(
+                "interrupted by {} before any sample was estimated: {e}",
+                interrupt.signal_name().unwrap_or_default()
+            );
+            write_stopped_summary(&args, out_dir.as_mut(), read, &why)?;
+            return Err(stopped(&interrupt, "no sample was estimated"));
         }
+        Err(e) => return Err(e.into()),
+    };
+    let interrupted = outcome.interrupted();
+    if interrupted && (args.validate_on.is_some() || args.cross_check) {
+        let w = "the run was interrupted: --validate-on / --cross-check not done".to_string();
+        eprintln!("warning: {w}");
+        outcome.summary.warnings.push(w);
     }
     if args.cross_check && !interrupted {
         let (reader, _) = open_log_with_notes(&args.data, Some(format), &mapping)?;
@@ -426,8 +445,29 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         }
         _ => None,
     };
+    // From here further signals are ignored until the results are written (crate::interrupt);
+    // a second one before this point leaves the report and figures out.
+    let summary_only = interrupt.begin_writing();
+    if summary_only {
+        outcome.summary.warnings.push(SUMMARY_ONLY.to_string());
+    } else if interrupted {
+        eprintln!(
+            "interrupted: writing the results of the {} samples read; a further signal is ignored until they are written",
+            outcome.summary.samples_read
+        );
+    }
     let summary_text = serde_json::to_string_pretty(&outcome.document(validation_on.as_ref()))?;
     match &args.out {
+        Some(dir) if summary_only => {
+            let o = out_dir.as_mut().context("internal: output directory not open")?;
+            o.write_bytes("summary.json", summary_text.as_bytes())?;
+            o.finish();
+            eprintln!(
+                "wrote {} and {}",
+                dir.join("estimates.csv").display(),
+                dir.join("summary.json").display()
+            );
+        }
         Some(dir) => {
             let o = out_dir.as_mut().context("internal: output directory not open")?;
             o.write_bytes("summary.json", summary_text.as_bytes())?;
@@ -491,8 +531,13 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     if let Some(e) = outcome.diverged_error(args.estimator.name()) {
         anyhow::bail!(e);
     }
+    if summary_only {
+        return Err(stopped(&interrupt, SUMMARY_ONLY));
+    }
     if interrupted {
-        if let Some(e) = interrupt.error() {
+        if let Some(e) = interrupt.error(
+            "the results of the samples read until then were written, with status `interrupted`",
+        ) {
             return Err(e.into());
         }
     } else if outcome.summary.status != "running" {
@@ -594,6 +639,50 @@ fn compat_corrections(
         eprintln!("compat: {f}");
     }
     Ok(Some(Corrections::from_summary(&summary)?))
+}
+
+/// The warning (and error) of a run that a second signal stopped before its results were
+/// written (crate::interrupt): `summary.json` was written, nothing else.
+const SUMMARY_ONLY: &str = "a second signal came before the results were written: only summary.json (and the real-time estimators' estimates.csv) was written, not report.html or the figures";
+
+/// The error ending a run stopped by a signal, `what` saying what was written.
+fn stopped(interrupt: &crate::interrupt::Interrupt, what: &str) -> anyhow::Error {
+    interrupt
+        .error(what)
+        .map_or_else(|| anyhow::anyhow!("internal: stopped without a signal"), Into::into)
+}
+
+/// Writes the `summary.json` of a run a signal stopped before it had estimates: status
+/// `interrupted`, `status_reason` why, the estimates `null`; into `out` (then marked
+/// complete), or on stderr without `--out`.
+///
+/// # Errors
+/// Output I/O errors.
+fn write_stopped_summary(
+    args: &ReplayArgs,
+    out: Option<&mut crate::outdir::OutputDir>,
+    samples_read: Option<usize>,
+    why: &str,
+) -> anyhow::Result<()> {
+    let summary = serde_json::json!({
+        "estimator": args.estimator.name(),
+        "model": args.model,
+        "status": aeroident_pipelines::replay::STATUS_INTERRUPTED,
+        "status_reason": why,
+        "samples_read": samples_read,
+        "parameters": null,
+        "warnings": [why],
+    });
+    let text = serde_json::to_string_pretty(&summary)?;
+    match out {
+        Some(o) => {
+            let path = o.write_bytes("summary.json", text.as_bytes())?;
+            o.finish();
+            eprintln!("{why}; wrote {}", path.display());
+        }
+        None => eprintln!("{text}"),
+    }
+    Ok(())
 }
 
 /// `--estimator oe | fem`: the batch output-error (or filter-error) fit of the whole record.

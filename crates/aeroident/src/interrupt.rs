@@ -4,11 +4,14 @@
 //! flag ([`Interrupt::requested`]) that the run polls between samples; the run then finishes the
 //! sample in hand and writes its results marked `interrupted`, and the process exits with
 //! `128 + signal` ([`Interrupted::exit_code`], the shell's convention for "ended by a signal").
+//! A batch fit of stdin ends its read on the flag and fits the rows read; a signal during the
+//! fit itself lets it run to its end, the estimators having no stop between iterations (at
+//! most `--max-iterations`), and says so.
 //!
 //! **A second signal** weighs a fast stop against a valid output directory:
-//! - *before the results are written* (the run still stopping) it
+//! - *before the results are written* (the run still stopping, a batch fit still running) it
 //!   asks for a stop at once ([`Interrupt::stop_now`]): the command skips what is left (the
-//!   report and figures) and writes `summary.json` alone, status
+//!   report and figures; an unfinished batch fit) and writes `summary.json` alone, status
 //!   `interrupted`, saying so, then exits `128 + signal`. Whoever presses Ctrl-C twice wants the
 //!   prompt stop, and still gets a summary telling what the run had done;
 //! - *while the results are written* ([`Interrupt::begin_writing`] on) it is noted on stderr

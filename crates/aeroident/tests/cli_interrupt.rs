@@ -2,7 +2,8 @@
 //! (stdin `-`), sent SIGINT, SIGTERM or SIGHUP after some rows, and must leave `estimates.csv`,
 //! `summary.json` (status `interrupted`) and the report, no hidden temporary file, and exit
 //! with 128 + signal. A second signal while the results are written is ignored; one before
-//! that leaves `summary.json` alone.
+//! that leaves `summary.json` alone. A batch fit (`--estimator oe`) reading stdin fits the rows
+//! read before the signal.
 #![cfg(unix)]
 
 mod common;
@@ -336,5 +337,149 @@ fn sigint_before_a_live_feed_has_a_row_writes_a_summary_without_estimates() {
     assert!(v["parameters"].is_null(), "{v}");
     assert!(v["status_reason"].as_str().unwrap().contains("before any sample"), "{v}");
     assert!(!out.join("estimates.csv").exists() && temporaries(&out).is_empty());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// The HFB-320 record (Jategaonkar 2015) as lines, or `None` when the shared data are absent.
+fn hfb320_lines() -> Option<Vec<String>> {
+    let path = common::shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv")?;
+    Some(std::fs::read_to_string(path).unwrap().lines().map(str::to_string).collect())
+}
+
+/// `replay - --map hfb320.toml --model longitudinal --estimator oe` and `extra` arguments.
+fn oe_args(extra: &[&str]) -> Vec<OsString> {
+    let mut a: Vec<OsString> =
+        vec!["--map".into(), workspace().join("mappings/hfb320.toml").into()];
+    a.extend(["--model", "longitudinal", "--estimator", "oe"].map(OsString::from));
+    a.extend(extra.iter().map(OsString::from));
+    a
+}
+
+/// The parameter estimates of a batch summary, by name.
+fn estimates(v: &serde_json::Value) -> Vec<(String, f64)> {
+    v["parameters"]
+        .as_array()
+        .unwrap_or_else(|| panic!("no parameters: {v}"))
+        .iter()
+        .map(|p| (p["name"].as_str().unwrap().to_string(), p["estimate"].as_f64().unwrap()))
+        .collect()
+}
+
+/// SIGTERM while output error still reads a silent stdin (200 lines fed, the feed open):
+/// the read ends, the fit is of the rows read (the same estimates as the fit of a file
+/// holding just those rows), the results are written with status `interrupted`, exit 143.
+#[test]
+fn sigterm_while_a_batch_fit_reads_stdin_fits_the_rows_read() {
+    let Some(lines) = hfb320_lines() else { return };
+    let d = scratch("batch-read");
+    let out = d.join("out");
+    let (mut child, err) = spawn_replay(&oe_args(&[]), &out);
+    let mut stdin = child.stdin.take().unwrap();
+    for l in &lines[..200] {
+        writeln!(stdin, "{l}").unwrap();
+    }
+    stdin.flush().unwrap();
+    wait_for(&err, "reading the whole record");
+    std::thread::sleep(Duration::from_millis(1500));
+    signal(&child, "-TERM");
+    let code = exit_code(&mut child, &err);
+    drop(stdin);
+    let text = err.text();
+    assert_eq!(code, 143, "{text}");
+    assert!(text.contains("interrupted by SIGTERM"), "{text}");
+    let v = summary(&out);
+    assert_eq!(v["status"], "interrupted", "{v}");
+    assert!(v["warnings"].to_string().contains("interrupted after"), "{v}");
+    let read = v["samples_read"].as_u64().unwrap() as usize;
+    assert!((10..=199).contains(&read), "{read} rows read of 199 fed");
+    assert!(written(&out, "report.html"));
+    assert!(temporaries(&out).is_empty(), "{:?}", temporaries(&out));
+    // The same fit of a file holding the rows read.
+    let file = d.join("rows_read.csv");
+    std::fs::write(&file, lines[..=read].join("\n") + "\n").unwrap();
+    let whole = d.join("whole");
+    let o = bin()
+        .arg("replay")
+        .arg(&file)
+        .args(oe_args(&[]))
+        .arg("--out")
+        .arg(&whole)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let w = summary(&whole);
+    assert_eq!(w["samples_read"].as_u64(), Some(read as u64));
+    let reason = v["status_reason"].as_str().unwrap();
+    assert!(
+        reason.contains(&format!("own status was `{}`", w["status"].as_str().unwrap())),
+        "{reason}"
+    );
+    let (got, want) = (estimates(&v), estimates(&w));
+    assert_eq!(got.len(), want.len());
+    for ((n, a), (m, b)) in got.iter().zip(&want) {
+        assert_eq!(n, m);
+        assert!(
+            (a - b).abs() <= 1e-9 * b.abs().max(1e-6),
+            "{n}: {a} from stdin, {b} from the file"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// SIGTERM before output error has a single row (only the header fed): no fit, but still a
+/// `summary.json` saying the run was interrupted and why there are no estimates, exit 143.
+#[test]
+fn sigterm_before_a_batch_fit_has_a_row_writes_a_summary_without_estimates() {
+    let Some(lines) = hfb320_lines() else { return };
+    let d = scratch("batch-empty");
+    let out = d.join("out");
+    let (mut child, err) = spawn_replay(&oe_args(&[]), &out);
+    let mut stdin = child.stdin.take().unwrap();
+    writeln!(stdin, "{}", lines[0]).unwrap();
+    stdin.flush().unwrap();
+    wait_for(&err, "reading the whole record");
+    std::thread::sleep(Duration::from_millis(500));
+    signal(&child, "-TERM");
+    let code = exit_code(&mut child, &err);
+    drop(stdin);
+    let text = err.text();
+    assert_eq!(code, 143, "{text}");
+    let v = summary(&out);
+    assert_eq!(v["status"], "interrupted", "{v}");
+    assert!(v["parameters"].is_null(), "{v}");
+    assert!(v["status_reason"].as_str().unwrap().contains("too few to fit"), "{v}");
+    assert!(!out.join("report.html").exists());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A first SIGTERM during a long batch fit (output error with a 20-replica bootstrap) lets it
+/// run on, saying a second stops it; the second abandons the fit at once and leaves a summary
+/// without estimates, exit 143.
+#[test]
+fn a_second_sigterm_during_a_batch_fit_abandons_it_with_a_summary() {
+    let Some(lines) = hfb320_lines() else { return };
+    let d = scratch("batch-fit");
+    let out = d.join("out");
+    let (mut child, err) = spawn_replay(&oe_args(&["--bootstrap", "20"]), &out);
+    let mut stdin = child.stdin.take().unwrap();
+    for l in &lines {
+        writeln!(stdin, "{l}").unwrap();
+    }
+    drop(stdin);
+    wait_for(&err, "stdin closed after");
+    signal(&child, "-TERM");
+    wait_for(&err, "the fit runs to its end");
+    signal(&child, "-TERM");
+    let code = exit_code(&mut child, &err);
+    let text = err.text();
+    assert_eq!(code, 143, "{text}");
+    let v = summary(&out);
+    assert_eq!(v["status"], "interrupted", "{v}");
+    assert!(v["parameters"].is_null(), "{v}");
+    assert!(
+        v["status_reason"].as_str().unwrap().contains("stopped the fit before it ended"),
+        "{v}"
+    );
+    assert!(!out.join("report.html").exists());
     let _ = std::fs::remove_dir_all(&d);
 }

@@ -1,14 +1,18 @@
 //! A signal ends a live or long replay gracefully: the binary is spawned on a live input
-//! (stdin `-`), sent SIGINT or SIGTERM after some rows, and must leave `estimates.csv`,
+//! (stdin `-`), sent SIGINT, SIGTERM or SIGHUP after some rows, and must leave `estimates.csv`,
 //! `summary.json` (status `interrupted`) and the report, no hidden temporary file, and exit
-//! with 128 + signal.
+//! with 128 + signal. A second signal while the results are written is ignored; one before
+//! that leaves `summary.json` alone. A batch fit (`--estimator oe`) reading stdin fits the rows
+//! read before the signal.
 #![cfg(unix)]
 
 mod common;
 use common::workspace;
+use std::ffi::OsString;
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, ChildStdin, Command, Stdio};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -40,10 +44,17 @@ fn sim_lines(dir: &Path) -> Vec<String> {
 
 /// `replay - --map aeroident-sim.toml --out OUT` with stdin piped; its stderr collected by a
 /// thread into the returned buffer.
-fn spawn_live(out: &Path) -> (Child, Arc<Mutex<String>>) {
+fn spawn_live(out: &Path) -> (Child, Arc<Stderr>) {
+    let map = workspace().join("mappings/aeroident-sim.toml");
+    spawn_replay(&["--estimator".into(), "rls".into(), "--map".into(), map.into()], out)
+}
+
+/// `replay - ARGS --out OUT` with stdin piped; its stderr collected by a thread into the
+/// returned buffer.
+fn spawn_replay(args: &[OsString], out: &Path) -> (Child, Arc<Stderr>) {
     let mut child = bin()
-        .args(["replay", "-", "--estimator", "rls", "--map"])
-        .arg(workspace().join("mappings/aeroident-sim.toml"))
+        .args(["replay", "-"])
+        .args(args)
         .arg("--out")
         .arg(out)
         .stdin(Stdio::piped())
@@ -51,24 +62,39 @@ fn spawn_live(out: &Path) -> (Child, Arc<Mutex<String>>) {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let err = Arc::new(Mutex::new(String::new()));
+    let err = Arc::new(Stderr::default());
     let sink = Arc::clone(&err);
     let stderr = child.stderr.take().unwrap();
     std::thread::spawn(move || {
         for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-            let mut s = sink.lock().unwrap();
+            let mut s = sink.text.lock().unwrap();
             s.push_str(&line);
             s.push('\n');
         }
+        sink.closed.store(true, Ordering::SeqCst);
     });
     (child, err)
 }
 
-/// Waits until `text` shows `what` (the child has started estimating), at most 60 s.
-fn wait_for(text: &Mutex<String>, what: &str) {
+/// A child's stderr, collected line by line by a thread until it closes.
+#[derive(Debug, Default)]
+struct Stderr {
+    text: Mutex<String>,
+    closed: AtomicBool,
+}
+
+impl Stderr {
+    /// What has arrived so far.
+    fn text(&self) -> String {
+        self.text.lock().unwrap().clone()
+    }
+}
+
+/// Waits until `err` shows `what` (the child has reached that point), at most 60 s.
+fn wait_for(err: &Stderr, what: &str) {
     let start = Instant::now();
-    while !text.lock().unwrap().contains(what) {
-        assert!(start.elapsed() < Duration::from_secs(60), "no `{what}`: {}", text.lock().unwrap());
+    while !err.text().contains(what) {
+        assert!(start.elapsed() < Duration::from_secs(60), "no `{what}`: {}", err.text());
         std::thread::sleep(Duration::from_millis(20));
     }
 }
@@ -78,26 +104,56 @@ fn signal(child: &Child, sig: &str) {
     assert!(ok.success());
 }
 
-/// The child's exit code, failing (and killing it) if it has not ended within 60 s.
-fn exit_code(child: &mut Child, err: &Mutex<String>) -> i32 {
+/// The child's exit code, failing (and killing it) if it has not ended within 60 s; once it
+/// has, waits for the rest of its stderr (at most 10 s), so that `err` holds all of it.
+fn exit_code(child: &mut Child, err: &Stderr) -> i32 {
     let start = Instant::now();
-    loop {
+    let status = loop {
         if let Some(s) = child.try_wait().unwrap() {
-            return s.code().unwrap_or_else(|| panic!("killed by a signal: {s:?}"));
+            break s;
         }
         if start.elapsed() > Duration::from_secs(60) {
             let _ = child.kill();
-            panic!("the replay did not end on the signal: {}", err.lock().unwrap());
+            panic!("the replay did not end on the signal: {}", err.text());
         }
         std::thread::sleep(Duration::from_millis(20));
+    };
+    let end = Instant::now();
+    while !err.closed.load(Ordering::SeqCst) && end.elapsed() < Duration::from_secs(10) {
+        std::thread::sleep(Duration::from_millis(10));
     }
+    status.code().unwrap_or_else(|| panic!("killed by a signal: {status:?}\n{}", err.text()))
+}
+
+fn summary(out: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+}
+
+/// The hidden temporary files left in `out` (a file being written when the run ended).
+fn temporaries(out: &Path) -> Vec<String> {
+    std::fs::read_dir(out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".tmp") || n.starts_with(".tmp-"))
+        .collect()
+}
+
+/// Whether `out/name` exists and is not empty.
+fn written(out: &Path, name: &str) -> bool {
+    std::fs::metadata(out.join(name)).is_ok_and(|m| m.len() > 0)
 }
 
 /// Checks the outputs of an interrupted run: status `interrupted`, one estimates line per
 /// estimated sample, no hidden temporary file. Returns the summary's `samples_read`.
 fn check_interrupted_outputs(out: &Path, fed: &[String]) -> usize {
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let read = check_interrupted_estimates(out, fed);
+    assert!(out.join("report.html").exists());
+    read
+}
+
+/// [`check_interrupted_outputs`] but for the report, which a second signal leaves out.
+fn check_interrupted_estimates(out: &Path, fed: &[String]) -> usize {
+    let v = summary(out);
     assert_eq!(v["status"], "interrupted", "{v}");
     let read = v["samples_read"].as_u64().unwrap() as usize;
     let rejected = v["samples_rejected"].as_u64().unwrap() as usize;
@@ -111,12 +167,7 @@ fn check_interrupted_outputs(out: &Path, fed: &[String]) -> usize {
     let fed_t: Vec<f64> =
         fed[1..].iter().map(|l| l.split(',').next().unwrap().parse().unwrap()).collect();
     assert!(fed_t.iter().any(|t| (t - last_t).abs() < 1e-9), "t = {last_t}");
-    assert!(out.join("report.html").exists());
-    let hidden: Vec<String> = std::fs::read_dir(out)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n.ends_with(".tmp") || n.starts_with(".tmp-"))
-        .collect();
+    let hidden = temporaries(out);
     assert!(hidden.is_empty(), "temporary files left: {hidden:?}");
     read
 }
@@ -126,7 +177,20 @@ fn check_interrupted_outputs(out: &Path, fed: &[String]) -> usize {
 /// `interrupted`, and exits 130.
 #[test]
 fn sigint_on_a_silent_live_feed_writes_an_interrupted_summary() {
-    let d = scratch("silent");
+    signal_a_silent_live_feed("silent", "INT", 130);
+}
+
+/// SIGHUP (the terminal the feed ran in closed) ends the replay as SIGINT does: results
+/// written, status `interrupted`, exit 129.
+#[test]
+fn sighup_on_a_silent_live_feed_writes_an_interrupted_summary() {
+    signal_a_silent_live_feed("hangup", "HUP", 129);
+}
+
+/// Feeds 300 rows to a live replay, leaves stdin open and silent, sends SIG`sig` and checks
+/// the exit `code` and the interrupted outputs.
+fn signal_a_silent_live_feed(tag: &str, sig: &str, code: i32) {
+    let d = scratch(tag);
     let lines = sim_lines(&d);
     let out = d.join("out");
     let (mut child, err) = spawn_live(&out);
@@ -138,12 +202,12 @@ fn sigint_on_a_silent_live_feed_writes_an_interrupted_summary() {
     stdin.flush().unwrap();
     wait_for(&err, "model");
     std::thread::sleep(Duration::from_millis(500));
-    signal(&child, "-INT");
-    let code = exit_code(&mut child, &err);
+    signal(&child, &format!("-{sig}"));
+    let got = exit_code(&mut child, &err);
     drop(stdin);
-    let text = err.lock().unwrap().clone();
-    assert_eq!(code, 130, "{text}");
-    assert!(text.contains("interrupted by SIGINT"), "{text}");
+    let text = err.text();
+    assert_eq!(got, code, "{text}");
+    assert!(text.contains(&format!("interrupted by SIG{sig}")), "{text}");
     let read = check_interrupted_outputs(&out, &lines);
     assert!(read <= 300, "{read} rows read of 300 fed");
     let _ = std::fs::remove_dir_all(&d);
@@ -176,10 +240,246 @@ fn sigterm_on_a_flowing_live_feed_stops_between_samples() {
     std::thread::sleep(Duration::from_millis(300));
     signal(&child, "-TERM");
     let code = exit_code(&mut child, &err);
-    let text = err.lock().unwrap().clone();
+    let text = err.text();
     assert_eq!(code, 143, "{text}");
     assert!(text.contains("interrupted by SIGTERM"), "{text}");
     check_interrupted_outputs(&out, &lines);
     drop(feeder);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Starts a live replay of 300 rows and sends SIGINT once it estimates: the child, its stderr
+/// and stdin (held open, silent), and the rows.
+fn interrupted_live_feed(d: &Path, out: &Path) -> (Child, Arc<Stderr>, ChildStdin, Vec<String>) {
+    let lines = sim_lines(d);
+    let (mut child, err) = spawn_live(out);
+    let mut stdin = child.stdin.take().unwrap();
+    for l in &lines[..301] {
+        writeln!(stdin, "{l}").unwrap();
+    }
+    stdin.flush().unwrap();
+    wait_for(&err, "model");
+    std::thread::sleep(Duration::from_millis(500));
+    signal(&child, "-INT");
+    (child, err, stdin, lines)
+}
+
+/// A second Ctrl-C while the results are written is noted and ignored: the report and its
+/// figures are all written, no temporary file is left, and the exit is still 130.
+#[test]
+fn a_second_sigint_while_the_results_are_written_is_ignored() {
+    let d = scratch("repeat-writing");
+    let out = d.join("out");
+    let (mut child, err, stdin, lines) = interrupted_live_feed(&d, &out);
+    // Printed once the writing has begun (the figures take a second or more after it).
+    wait_for(&err, "writing the results");
+    signal(&child, "-INT");
+    let code = exit_code(&mut child, &err);
+    drop(stdin);
+    let text = err.text();
+    assert_eq!(code, 130, "{text}");
+    assert!(text.contains("SIGINT: ignored while the results are written"), "{text}");
+    check_interrupted_outputs(&out, &lines);
+    for f in ["estimates.png", "estimates.svg", "report.html"] {
+        assert!(written(&out, f), "{f} missing or empty: {text}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Two Ctrl-C 20 ms apart: whichever phase the second lands in, the output directory is
+/// valid: the estimates and `summary.json` (status `interrupted`), no temporary file, and
+/// either the whole report or none of it with the summary saying why.
+#[test]
+fn two_quick_sigints_leave_a_valid_output_directory() {
+    let d = scratch("repeat-quick");
+    let out = d.join("out");
+    let (mut child, err, stdin, lines) = interrupted_live_feed(&d, &out);
+    std::thread::sleep(Duration::from_millis(20));
+    signal(&child, "-INT");
+    let code = exit_code(&mut child, &err);
+    drop(stdin);
+    let text = err.text();
+    assert_eq!(code, 130, "{text}");
+    check_interrupted_estimates(&out, &lines);
+    let v = summary(&out);
+    let summary_only = v["warnings"].to_string().contains("only summary.json");
+    for f in ["estimates.png", "estimates.svg", "report.html"] {
+        assert_eq!(written(&out, f), !summary_only, "{f}: {v}\n{text}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Ctrl-C before a live feed has sent a single row (only its header): no estimates, but still
+/// a `summary.json` saying the run was interrupted and why, exit 130.
+#[test]
+fn sigint_before_a_live_feed_has_a_row_writes_a_summary_without_estimates() {
+    let d = scratch("live-empty");
+    let lines = sim_lines(&d);
+    let out = d.join("out");
+    let (mut child, err) = spawn_live(&out);
+    let mut stdin = child.stdin.take().unwrap();
+    writeln!(stdin, "{}", lines[0]).unwrap();
+    stdin.flush().unwrap();
+    // The output directory is locked after the handlers are installed, before any read.
+    let start = Instant::now();
+    while !out.join(".aeroident.lock").exists() {
+        assert!(start.elapsed() < Duration::from_secs(60), "no output directory: {}", err.text());
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    signal(&child, "-INT");
+    let code = exit_code(&mut child, &err);
+    drop(stdin);
+    let text = err.text();
+    assert_eq!(code, 130, "{text}");
+    let v = summary(&out);
+    assert_eq!(v["status"], "interrupted", "{v}");
+    assert!(v["parameters"].is_null(), "{v}");
+    assert!(v["status_reason"].as_str().unwrap().contains("before any sample"), "{v}");
+    assert!(!out.join("estimates.csv").exists() && temporaries(&out).is_empty());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// The HFB-320 record (Jategaonkar 2015) as lines, or `None` when the shared data are absent.
+fn hfb320_lines() -> Option<Vec<String>> {
+    let path = common::shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv")?;
+    Some(std::fs::read_to_string(path).unwrap().lines().map(str::to_string).collect())
+}
+
+/// `replay - --map hfb320.toml --model longitudinal --estimator oe` and `extra` arguments.
+fn oe_args(extra: &[&str]) -> Vec<OsString> {
+    let mut a: Vec<OsString> =
+        vec!["--map".into(), workspace().join("mappings/hfb320.toml").into()];
+    a.extend(["--model", "longitudinal", "--estimator", "oe"].map(OsString::from));
+    a.extend(extra.iter().map(OsString::from));
+    a
+}
+
+/// The parameter estimates of a batch summary, by name.
+fn estimates(v: &serde_json::Value) -> Vec<(String, f64)> {
+    v["parameters"]
+        .as_array()
+        .unwrap_or_else(|| panic!("no parameters: {v}"))
+        .iter()
+        .map(|p| (p["name"].as_str().unwrap().to_string(), p["estimate"].as_f64().unwrap()))
+        .collect()
+}
+
+/// SIGTERM while output error still reads a silent stdin (200 lines fed, the feed open):
+/// the read ends, the fit is of the rows read (the same estimates as the fit of a file
+/// holding just those rows), the results are written with status `interrupted`, exit 143.
+#[test]
+fn sigterm_while_a_batch_fit_reads_stdin_fits_the_rows_read() {
+    let Some(lines) = hfb320_lines() else { return };
+    let d = scratch("batch-read");
+    let out = d.join("out");
+    let (mut child, err) = spawn_replay(&oe_args(&[]), &out);
+    let mut stdin = child.stdin.take().unwrap();
+    for l in &lines[..200] {
+        writeln!(stdin, "{l}").unwrap();
+    }
+    stdin.flush().unwrap();
+    wait_for(&err, "reading the whole record");
+    std::thread::sleep(Duration::from_millis(1500));
+    signal(&child, "-TERM");
+    let code = exit_code(&mut child, &err);
+    drop(stdin);
+    let text = err.text();
+    assert_eq!(code, 143, "{text}");
+    assert!(text.contains("interrupted by SIGTERM"), "{text}");
+    let v = summary(&out);
+    assert_eq!(v["status"], "interrupted", "{v}");
+    assert!(v["warnings"].to_string().contains("interrupted after"), "{v}");
+    let read = v["samples_read"].as_u64().unwrap() as usize;
+    assert!((10..=199).contains(&read), "{read} rows read of 199 fed");
+    assert!(written(&out, "report.html"));
+    assert!(temporaries(&out).is_empty(), "{:?}", temporaries(&out));
+    // The same fit of a file holding the rows read.
+    let file = d.join("rows_read.csv");
+    std::fs::write(&file, lines[..=read].join("\n") + "\n").unwrap();
+    let whole = d.join("whole");
+    let o = bin()
+        .arg("replay")
+        .arg(&file)
+        .args(oe_args(&[]))
+        .arg("--out")
+        .arg(&whole)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let w = summary(&whole);
+    assert_eq!(w["samples_read"].as_u64(), Some(read as u64));
+    let reason = v["status_reason"].as_str().unwrap();
+    assert!(
+        reason.contains(&format!("own status was `{}`", w["status"].as_str().unwrap())),
+        "{reason}"
+    );
+    let (got, want) = (estimates(&v), estimates(&w));
+    assert_eq!(got.len(), want.len());
+    for ((n, a), (m, b)) in got.iter().zip(&want) {
+        assert_eq!(n, m);
+        assert!(
+            (a - b).abs() <= 1e-9 * b.abs().max(1e-6),
+            "{n}: {a} from stdin, {b} from the file"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// SIGTERM before output error has a single row (only the header fed): no fit, but still a
+/// `summary.json` saying the run was interrupted and why there are no estimates, exit 143.
+#[test]
+fn sigterm_before_a_batch_fit_has_a_row_writes_a_summary_without_estimates() {
+    let Some(lines) = hfb320_lines() else { return };
+    let d = scratch("batch-empty");
+    let out = d.join("out");
+    let (mut child, err) = spawn_replay(&oe_args(&[]), &out);
+    let mut stdin = child.stdin.take().unwrap();
+    writeln!(stdin, "{}", lines[0]).unwrap();
+    stdin.flush().unwrap();
+    wait_for(&err, "reading the whole record");
+    std::thread::sleep(Duration::from_millis(500));
+    signal(&child, "-TERM");
+    let code = exit_code(&mut child, &err);
+    drop(stdin);
+    let text = err.text();
+    assert_eq!(code, 143, "{text}");
+    let v = summary(&out);
+    assert_eq!(v["status"], "interrupted", "{v}");
+    assert!(v["parameters"].is_null(), "{v}");
+    assert!(v["status_reason"].as_str().unwrap().contains("too few to fit"), "{v}");
+    assert!(!out.join("report.html").exists());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A first SIGTERM during a long batch fit (output error with a 20-replica bootstrap) lets it
+/// run on, saying a second stops it; the second abandons the fit at once and leaves a summary
+/// without estimates, exit 143.
+#[test]
+fn a_second_sigterm_during_a_batch_fit_abandons_it_with_a_summary() {
+    let Some(lines) = hfb320_lines() else { return };
+    let d = scratch("batch-fit");
+    let out = d.join("out");
+    let (mut child, err) = spawn_replay(&oe_args(&["--bootstrap", "20"]), &out);
+    let mut stdin = child.stdin.take().unwrap();
+    for l in &lines {
+        writeln!(stdin, "{l}").unwrap();
+    }
+    drop(stdin);
+    wait_for(&err, "stdin closed after");
+    signal(&child, "-TERM");
+    wait_for(&err, "the fit runs to its end");
+    signal(&child, "-TERM");
+    let code = exit_code(&mut child, &err);
+    let text = err.text();
+    assert_eq!(code, 143, "{text}");
+    let v = summary(&out);
+    assert_eq!(v["status"], "interrupted", "{v}");
+    assert!(v["parameters"].is_null(), "{v}");
+    assert!(
+        v["status_reason"].as_str().unwrap().contains("stopped the fit before it ended"),
+        "{v}"
+    );
+    assert!(!out.join("report.html").exists());
     let _ = std::fs::remove_dir_all(&d);
 }

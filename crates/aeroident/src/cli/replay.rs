@@ -20,10 +20,14 @@
 //! fit: it reads the whole record first (it says so), prints its iterations and writes
 //! `summary.json` (estimates, coloured-residual and Cramér–Rao σ, residual RMS).
 //!
-//! SIGINT (Ctrl-C) or SIGTERM ends a real-time replay gracefully, the normal end of a live feed
-//! ([`crate::interrupt`]): the sample in hand is finished, `estimates.csv`, `summary.json`
-//! (status `interrupted`) and the report are written for the samples read until then, and the
-//! exit code is 128 + signal; a second signal ends at once.
+//! SIGINT (Ctrl-C), SIGTERM or SIGHUP ends a real-time replay gracefully, the normal end of a
+//! live feed ([`crate::interrupt`]): the sample in hand is finished, `estimates.csv`,
+//! `summary.json` (status `interrupted`) and the report are written for the samples read until
+//! then, and the exit code is 128 + signal. A batch fit of stdin (`-`) ends its read on the
+//! signal and fits the rows read, or, with too few to fit, writes a summary saying so; a
+//! signal during the fit lets the fit finish (it cannot stop between iterations). A second
+//! signal before the results are written stops at once with `summary.json` alone; one while
+//! they are written is ignored, so that no file is left half-written.
 //!
 //! Before any estimator, rows with an isolated one-sample spike in a measured channel, or a run
 //! of up to 3 on a channel other than a control input, are rejected and listed
@@ -354,11 +358,14 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         // stdin through a reader that ends the record on a signal even while no line arrives.
         let stdin = crate::interrupt::InterruptibleStdin::new(interrupt.flag());
         let reader = if format == LogFormat::Asc {
-            aeroident_io::log::asc_reader(std::io::BufReader::new(stdin), "-", &mapping)?
+            aeroident_io::log::asc_reader(std::io::BufReader::new(stdin), "-", &mapping)
         } else {
-            FlightDataReader::new(Box::new(stdin) as Box<dyn std::io::Read>, "-", &mapping)?
+            FlightDataReader::new(Box::new(stdin) as Box<dyn std::io::Read>, "-", &mapping)
         };
-        replay(reader, &mapping, &opts, &mut console)
+        // A header cut short by a signal is an interruption too (below), not a plain error.
+        reader
+            .map_err(aeroident_pipelines::replay::ReplayError::from)
+            .and_then(|reader| replay(reader, &mapping, &opts, &mut console))
     } else if !live && format == LogFormat::Csv {
         // The CSV file itself, read through the progress bar (what `open_log` opens for CSV).
         let file =
@@ -390,18 +397,32 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         })
     };
     bar.finish_and_clear();
-    let mut outcome = outcome?;
-    let interrupted = outcome.interrupted();
-    if interrupted {
-        eprintln!(
-            "interrupted: finishing with the {} samples read (a second signal ends at once)",
-            outcome.summary.samples_read
-        );
-        if args.validate_on.is_some() || args.cross_check {
-            let w = "the run was interrupted: --validate-on / --cross-check not done".to_string();
-            eprintln!("warning: {w}");
-            outcome.summary.warnings.push(w);
+    let mut outcome = match outcome {
+        Ok(outcome) => outcome,
+        // A live feed stopped before any sample was estimated (even before its header): no
+        // results, but still a summary saying so.
+        Err(e) if live && interrupt.requested() => {
+            drop(csv_file);
+            let read = match &e {
+                aeroident_pipelines::replay::ReplayError::Interrupted { samples_read, .. } => {
+                    Some(*samples_read)
+                }
+                _ => None,
+            };
+            let why = format!(
+                "interrupted by {} before any sample was estimated: {e}",
+                interrupt.signal_name().unwrap_or_default()
+            );
+            write_stopped_summary(&args, out_dir.as_mut(), read, &why)?;
+            return Err(stopped(&interrupt, "no sample was estimated"));
         }
+        Err(e) => return Err(e.into()),
+    };
+    let interrupted = outcome.interrupted();
+    if interrupted && (args.validate_on.is_some() || args.cross_check) {
+        let w = "the run was interrupted: --validate-on / --cross-check not done".to_string();
+        eprintln!("warning: {w}");
+        outcome.summary.warnings.push(w);
     }
     if args.cross_check && !interrupted {
         let (reader, _) = open_log_with_notes(&args.data, Some(format), &mapping)?;
@@ -427,8 +448,29 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         }
         _ => None,
     };
+    // From here further signals are ignored until the results are written (crate::interrupt);
+    // a second one before this point leaves the report and figures out.
+    let summary_only = interrupt.begin_writing();
+    if summary_only {
+        outcome.summary.warnings.push(SUMMARY_ONLY.to_string());
+    } else if interrupted {
+        eprintln!(
+            "interrupted: writing the results of the {} samples read; a further signal is ignored until they are written",
+            outcome.summary.samples_read
+        );
+    }
     let summary_text = serde_json::to_string_pretty(&outcome.document(validation_on.as_ref()))?;
     match &args.out {
+        Some(dir) if summary_only => {
+            let o = out_dir.as_mut().context("internal: output directory not open")?;
+            o.write_bytes("summary.json", summary_text.as_bytes())?;
+            o.finish();
+            eprintln!(
+                "wrote {} and {}",
+                dir.join("estimates.csv").display(),
+                dir.join("summary.json").display()
+            );
+        }
         Some(dir) => {
             let o = out_dir.as_mut().context("internal: output directory not open")?;
             o.write_bytes("summary.json", summary_text.as_bytes())?;
@@ -492,8 +534,13 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     if let Some(e) = outcome.diverged_error(args.estimator.name()) {
         anyhow::bail!(e);
     }
+    if summary_only {
+        return Err(stopped(&interrupt, SUMMARY_ONLY));
+    }
     if interrupted {
-        if let Some(e) = interrupt.error() {
+        if let Some(e) = interrupt.error(
+            "the results of the samples read until then were written, with status `interrupted`",
+        ) {
             return Err(e.into());
         }
     } else if outcome.summary.status != "running" {
@@ -597,7 +644,185 @@ fn compat_corrections(
     Ok(Some(Corrections::from_summary(&summary)?))
 }
 
+/// The warning (and error) of a run that a second signal stopped before its results were
+/// written (crate::interrupt): `summary.json` was written, nothing else.
+const SUMMARY_ONLY: &str = "a second signal came before the results were written: only summary.json (and the real-time estimators' estimates.csv) was written, not report.html or the figures";
+
+/// The error ending a run stopped by a signal, `what` saying what was written.
+fn stopped(interrupt: &crate::interrupt::Interrupt, what: &str) -> anyhow::Error {
+    interrupt
+        .error(what)
+        .map_or_else(|| anyhow::anyhow!("internal: stopped without a signal"), Into::into)
+}
+
+/// Writes the `summary.json` of a run a signal stopped before it had estimates: status
+/// `interrupted`, `status_reason` why, the estimates `null`; into `out` (then marked
+/// complete), or on stderr without `--out`.
+///
+/// # Errors
+/// Output I/O errors.
+fn write_stopped_summary(
+    args: &ReplayArgs,
+    out: Option<&mut crate::outdir::OutputDir>,
+    samples_read: Option<usize>,
+    why: &str,
+) -> anyhow::Result<()> {
+    let summary = serde_json::json!({
+        "estimator": args.estimator.name(),
+        "model": args.model,
+        "status": aeroident_pipelines::replay::STATUS_INTERRUPTED,
+        "status_reason": why,
+        "samples_read": samples_read,
+        "parameters": null,
+        "warnings": [why],
+    });
+    let text = serde_json::to_string_pretty(&summary)?;
+    match out {
+        Some(o) => {
+            let path = o.write_bytes("summary.json", text.as_bytes())?;
+            o.finish();
+            eprintln!("{why}; wrote {}", path.display());
+        }
+        None => eprintln!("{text}"),
+    }
+    Ok(())
+}
+
+/// What a batch fit reads and how it fits, owned so that the fit can run on a thread of its
+/// own ([`fit_watched`]).
+struct BatchInput {
+    files: Vec<String>,
+    format: Option<LogFormat>,
+    mapping: Mapping,
+    model: Option<ModelSpec>,
+    options: aeroident_pipelines::replay::batch::FitOptions,
+}
+
+type Fitted = (aeroident_pipelines::replay::batch::BatchOutcome, Vec<aeroident_io::ReaderReport>);
+
+impl BatchInput {
+    /// Opens the records (`-` through `stdin` when given) and fits them.
+    fn read_and_fit(
+        self,
+        mut stdin: Option<crate::interrupt::InterruptibleStdin>,
+    ) -> anyhow::Result<Fitted> {
+        let mut readers = Vec::new();
+        let mut reports = Vec::new();
+        for file in &self.files {
+            let (reader, report) = match stdin.take_if(|_| file == "-") {
+                Some(s) => open_stdin(s, self.format, &self.mapping)?,
+                None => open_log_with_report(file, self.format, &self.mapping)?,
+            };
+            for n in report.notes() {
+                eprintln!("note: {n}");
+            }
+            readers.push(reader);
+            reports.push(report);
+        }
+        let fit = aeroident_pipelines::replay::batch::fit_records(
+            readers,
+            &self.mapping,
+            self.model,
+            self.options,
+        )?;
+        Ok((fit, reports))
+    }
+}
+
+/// The record on stdin, read through `stdin` (which a signal ends at a line boundary); a
+/// binary log is refused as [`open_log_with_report`] refuses it.
+fn open_stdin(
+    stdin: crate::interrupt::InterruptibleStdin,
+    format: Option<LogFormat>,
+    mapping: &Mapping,
+) -> Result<(aeroident_io::LogReader, aeroident_io::ReaderReport), aeroident_io::FlightDataError> {
+    use aeroident_io::log::{asc_reader, read_mat, table_reader};
+    let format = format.unwrap_or(LogFormat::Csv);
+    let reader = match format {
+        LogFormat::Csv => {
+            FlightDataReader::new(Box::new(stdin) as Box<dyn std::io::Read>, "-", mapping)?
+        }
+        LogFormat::Asc => asc_reader(std::io::BufReader::new(stdin), "-", mapping)?,
+        LogFormat::Mat => {
+            table_reader(read_mat(stdin, "-", mapping.column_names.as_deref())?, mapping)?
+        }
+        _ => return open_log_with_report("-", Some(format), mapping),
+    };
+    let report = aeroident_io::ReaderReport {
+        file: "-".into(),
+        format: format.name().to_string(),
+        dropped: Vec::new(),
+    };
+    Ok((reader, report))
+}
+
+/// Runs `fit` (the batch fit of stdin) on a thread of its own while answering the signals
+/// (crate::interrupt): the first ends the read of stdin (`stdin` tells when and how the read
+/// ended) and the fit runs on what was read; a first signal during the fit lets it run to its
+/// end, since output error and the filter-error method have no stop between iterations (at
+/// most `--max-iterations`); a second signal abandons the fit at once: `None`.
+///
+/// # Errors
+/// The fit's thread could not start or ended without a result (a panic).
+fn fit_watched<T: Send + 'static>(
+    fit: impl FnOnce() -> T + Send + 'static,
+    interrupt: &crate::interrupt::Interrupt,
+    stdin: &crate::interrupt::StdinProgress,
+) -> anyhow::Result<Option<T>> {
+    use crate::interrupt::StdinEnd;
+    use std::sync::mpsc::RecvTimeoutError;
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::Builder::new()
+        .name("batch-fit".into())
+        .spawn(move || {
+            let _ = tx.send(fit());
+        })
+        .context("starting the batch fit's thread")?;
+    let (mut ended, mut noted) = (false, false);
+    let sig = || interrupt.signal_name().unwrap_or_default();
+    let again = "a second signal stops at once, writing summary.json alone";
+    loop {
+        match rx.recv_timeout(std::time::Duration::from_millis(50)) {
+            Ok(r) => return Ok(Some(r)),
+            Err(RecvTimeoutError::Disconnected) => {
+                anyhow::bail!("internal: the batch fit's thread ended without a result")
+            }
+            Err(RecvTimeoutError::Timeout) => {}
+        }
+        if interrupt.stop_now() {
+            return Ok(None);
+        }
+        if let Some(end) = stdin.end().filter(|_| !ended) {
+            ended = true;
+            noted = end == StdinEnd::Cut;
+            match end {
+                StdinEnd::Cut => eprintln!(
+                    "{}: stdin read ended after {} lines; fitting the samples read ({again})",
+                    sig(),
+                    stdin.lines()
+                ),
+                StdinEnd::Closed => {
+                    eprintln!("stdin closed after {} lines: fitting", stdin.lines())
+                }
+            }
+        }
+        if ended && !noted && interrupt.requested() {
+            noted = true;
+            eprintln!(
+                "{}: the fit runs to its end (it cannot stop between iterations); {again}",
+                sig()
+            );
+        }
+    }
+}
+
 /// `--estimator oe | fem`: the batch output-error (or filter-error) fit of the whole record.
+///
+/// A record on stdin is read and fitted on a thread of its own under the signal handlers
+/// ([`fit_watched`]): a signal ends the read and the fit is of the samples read until then,
+/// `summary.json` status `interrupted`, exit 128 + signal; too few to fit, the summary says so
+/// with no estimates. A record in a file keeps the default signals: a fit killed before its
+/// output directory is opened leaves the previous results as they were.
 fn execute_batch(
     args: &ReplayArgs,
     mapping: &Mapping,
@@ -605,22 +830,93 @@ fn execute_batch(
     compat: Option<aeroident_pipelines::compat::Corrections>,
 ) -> anyhow::Result<()> {
     let fem = args.estimator == EstimatorKind::Fem;
+    let options = fit_options(args, compat)?;
+    let interrupt = (args.data == "-")
+        .then(crate::interrupt::Interrupt::install)
+        .transpose()
+        .context("installing signal handlers")?;
     eprintln!(
         "{} is a batch method: reading the whole record before fitting (not real time)",
         if fem { "the filter-error method" } else { "output error" }
     );
-    let mut readers = Vec::new();
-    let mut reports = Vec::new();
-    for file in std::iter::once(&args.data).chain(&args.and) {
-        let (reader, report) = open_log_with_report(file, args.format, mapping)?;
-        for n in report.notes() {
-            eprintln!("note: {n}");
-        }
-        readers.push(reader);
-        reports.push(report);
+    if let Some(n) = options.bootstrap_refits.filter(|_| !fem) {
+        eprintln!("bootstrap: a filter-error fit for the noise levels, then {n} replicas refitted");
     }
-    let options = aeroident_pipelines::replay::batch::FitOptions {
-        fem,
+    let input = BatchInput {
+        files: std::iter::once(&args.data).chain(&args.and).cloned().collect(),
+        format: args.format,
+        mapping: mapping.clone(),
+        model,
+        options,
+    };
+    let Some(interrupt) = interrupt else {
+        let (outcome, reports) = input.read_and_fit(None)?;
+        return write_batch(args, mapping, outcome, reports, None);
+    };
+    let stdin = crate::interrupt::InterruptibleStdin::new(interrupt.flag());
+    let progress = stdin.progress();
+    let Some(fitted) = fit_watched(move || input.read_and_fit(Some(stdin)), &interrupt, &progress)?
+    else {
+        interrupt.begin_writing();
+        let why = format!(
+            "a second {} stopped the fit before it ended: no estimates",
+            interrupt.signal_name().unwrap_or_default()
+        );
+        write_stopped_summary(args, open_out(args)?.as_mut(), None, &why)?;
+        return Err(stopped(&interrupt, "the fit was abandoned; summary.json says so"));
+    };
+    let cut = progress.end() == Some(crate::interrupt::StdinEnd::Cut);
+    let (mut outcome, reports) = match fitted {
+        Ok(f) => f,
+        // Too little read to fit: the summary still says what happened.
+        Err(e) if cut => {
+            interrupt.begin_writing();
+            let why = format!(
+                "interrupted by {} after {} lines of stdin, too few to fit: {e:#}",
+                interrupt.signal_name().unwrap_or_default(),
+                progress.lines()
+            );
+            write_stopped_summary(args, open_out(args)?.as_mut(), None, &why)?;
+            return Err(stopped(&interrupt, "no fit; summary.json says why"));
+        }
+        Err(e) => return Err(e),
+    };
+    if cut {
+        mark_interrupted(&mut outcome.summary, &interrupt.signal_name().unwrap_or_default());
+    }
+    write_batch(args, mapping, outcome, reports, Some(&interrupt))
+}
+
+/// The output directory of `--out`, opened (locked, the previous run's files cleared).
+fn open_out(args: &ReplayArgs) -> anyhow::Result<Option<crate::outdir::OutputDir>> {
+    Ok(args
+        .out
+        .as_deref()
+        .map(|d| crate::outdir::OutputDir::open(d, "replay", &input_paths(args)))
+        .transpose()?)
+}
+
+/// A batch summary of a record a signal cut short: status `interrupted`, and why, with the
+/// fit's own status.
+fn mark_interrupted(s: &mut aeroident_pipelines::replay::batch::BatchSummary, signal: &str) {
+    let why = format!(
+        "interrupted after {} rows by {signal}: the estimates are those of the samples read until then; the fit's own status was `{}`{}",
+        s.samples_read,
+        s.status,
+        s.status_reason.as_deref().map_or(String::new(), |r| format!(" ({r})"))
+    );
+    s.warnings.push(why.clone());
+    s.status = aeroident_pipelines::replay::STATUS_INTERRUPTED.to_string();
+    s.status_reason = Some(why);
+}
+
+/// The batch fit's options from the command line.
+fn fit_options(
+    args: &ReplayArgs,
+    compat: Option<aeroident_pipelines::compat::Corrections>,
+) -> anyhow::Result<aeroident_pipelines::replay::batch::FitOptions> {
+    Ok(aeroident_pipelines::replay::batch::FitOptions {
+        fem: args.estimator == EstimatorKind::Fem,
         initial_states: args.initial_states.unwrap_or(InitialStatesArg::FirstSample).to_config(),
         bootstrap_refits: args.bootstrap.map(|n| n as usize),
         max_iterations: args.max_iterations.map(|n| n as usize),
@@ -636,21 +932,37 @@ fn execute_batch(
         spike_screen: (!args.no_spike_screen)
             .then(aeroident_pipelines::replay::outliers::SpikeScreen::default),
         robust: args.robust.then(aeroident_estimators::output_error::Huber::default),
-    };
-    if let Some(n) = options.bootstrap_refits.filter(|_| !fem) {
-        eprintln!("bootstrap: a filter-error fit for the noise levels, then {n} replicas refitted");
-    }
-    let mut outcome =
-        aeroident_pipelines::replay::batch::fit_records(readers, mapping, model, options)?;
+    })
+}
+
+/// Validates (`--validate-on`), prints and writes a batch fit's results. With `interrupt`
+/// (a record on stdin): an interrupted fit skips `--validate-on`, further signals are ignored
+/// while the results are written, and a second signal before then leaves the report out
+/// (crate::interrupt); an interrupted run ends with the [`crate::interrupt::Interrupted`] error.
+fn write_batch(
+    args: &ReplayArgs,
+    mapping: &Mapping,
+    mut outcome: aeroident_pipelines::replay::batch::BatchOutcome,
+    reports: Vec<aeroident_io::ReaderReport>,
+    interrupt: Option<&crate::interrupt::Interrupt>,
+) -> anyhow::Result<()> {
     outcome.summary.reader = reports;
-    if let Some(path) = &args.validate_on {
-        let name = path.display().to_string();
-        let (reader, notes) = open_log_with_notes(&name, None, mapping)?;
-        for n in &notes {
-            eprintln!("note: {n}");
+    let interrupted = outcome.summary.status == aeroident_pipelines::replay::STATUS_INTERRUPTED;
+    match &args.validate_on {
+        Some(_) if interrupted => {
+            let w = "the run was interrupted: --validate-on not done".to_string();
+            outcome.summary.warnings.push(w);
         }
-        outcome.summary.validation_on =
-            Some(aeroident_pipelines::replay::batch::validate_on(reader, &outcome)?);
+        Some(path) => {
+            let name = path.display().to_string();
+            let (reader, notes) = open_log_with_notes(&name, None, mapping)?;
+            for n in &notes {
+                eprintln!("note: {n}");
+            }
+            outcome.summary.validation_on =
+                Some(aeroident_pipelines::replay::batch::validate_on(reader, &outcome)?);
+        }
+        None => {}
     }
     eprintln!("model: {}", outcome.model.name);
     let s = &outcome.summary;
@@ -660,34 +972,66 @@ fn execute_batch(
     for w in &s.warnings {
         eprintln!("warning: {w}");
     }
+    let summary_only = interrupt.is_some_and(crate::interrupt::Interrupt::begin_writing);
+    if summary_only {
+        outcome.summary.warnings.push(SUMMARY_ONLY.to_string());
+    } else if interrupted {
+        eprintln!(
+            "interrupted: writing the results of the {} samples read; a further signal is ignored until they are written",
+            outcome.summary.samples_read
+        );
+    }
     let text = serde_json::to_string_pretty(&outcome.summary)?;
     match &args.out {
         Some(dir) => {
             let mut out = crate::outdir::OutputDir::open(dir, "replay", &input_paths(args))?;
-            out.write_bytes("summary.json", text.as_bytes())?;
-            let name = Path::new(&args.data)
-                .file_name()
-                .map_or(args.data.clone(), |n| n.to_string_lossy().into_owned());
-            let title = format!("{name} — {} — {}", args.estimator.name(), outcome.model.name);
-            let source = crate::report::Source { data: &args.data, mapping: &args.map };
-            let results = crate::report::batch::write(&source, &outcome, &title, &mut out)?;
-            out.finish();
-            crate::cli::print_stdout(&crate::table::render(&results))?;
-            eprintln!(
-                "{}: {} samples in {} manoeuvre(s), {} rejected, {} iterations in {:.3} s; wrote {}",
-                args.data,
-                outcome.summary.samples_read,
-                outcome.summary.manoeuvres,
-                outcome.summary.samples_rejected,
-                outcome.summary.iterations.len().saturating_sub(1),
-                outcome.summary.fit_wall_s,
-                dir.display()
-            );
+            let path = out.write_bytes("summary.json", text.as_bytes())?;
+            if summary_only {
+                out.finish();
+                eprintln!("wrote {}", path.display());
+            } else {
+                write_batch_report(args, &outcome, &mut out)?;
+            }
         }
         None => {
             crate::cli::print_stdout(&outcome.result.to_string())?;
             eprintln!("{text}");
         }
     }
+    match interrupt {
+        Some(i) if summary_only => Err(stopped(i, SUMMARY_ONLY)),
+        Some(i) if interrupted => Err(stopped(
+            i,
+            "the fit of the samples read until then was written, with status `interrupted`",
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// The batch fit's report, figures and table (`summary.json` is written), and its line on
+/// stderr; marks `out` complete.
+fn write_batch_report(
+    args: &ReplayArgs,
+    outcome: &aeroident_pipelines::replay::batch::BatchOutcome,
+    out: &mut crate::outdir::OutputDir,
+) -> anyhow::Result<()> {
+    let name = Path::new(&args.data)
+        .file_name()
+        .map_or(args.data.clone(), |n| n.to_string_lossy().into_owned());
+    let title = format!("{name} — {} — {}", args.estimator.name(), outcome.model.name);
+    let source = crate::report::Source { data: &args.data, mapping: &args.map };
+    let results = crate::report::batch::write(&source, outcome, &title, out)?;
+    out.finish();
+    crate::cli::print_stdout(&crate::table::render(&results))?;
+    eprintln!(
+        "{}: {} samples in {} manoeuvre(s), {} rejected, {} iterations in {:.3} s; wrote {}",
+        args.data,
+        outcome.summary.samples_read,
+        outcome.summary.manoeuvres,
+        outcome.summary.samples_rejected,
+        outcome.summary.iterations.len().saturating_sub(1),
+        outcome.summary.fit_wall_s,
+        out.path().display()
+    );
     Ok(())
 }

@@ -144,51 +144,31 @@ fn analytic_rows_after_a_jump_make_it_a_gap() {
 /// samples at their own times.
 #[test]
 fn errors_hfb320_with_one_bad_time_keeps_600_samples() {
-    let Some(path) = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
-    let (first, rest) = lines[22].split_once(',').unwrap();
-    assert_eq!(first.parse::<f64>().unwrap(), 2.1, "line 23 is data row 22 at 2.1 s");
-    lines[22] = format!("10000,{rest}");
-    let csv = lines.join("\n") + "\n";
-    let m = Mapping::from_path(&workspace().join("mappings/hfb320.toml")).unwrap();
-    let ev: Vec<RecordEvent> = FlightDataReader::new(csv.as_bytes(), "hfb320-bad-time.csv", &m)
-        .unwrap()
-        .map(|e| e.unwrap())
-        .collect();
-    let rejected: Vec<(u64, &RowProblem)> = ev
-        .iter()
-        .filter_map(|e| match e {
-            RecordEvent::Rejected { row, problem } => Some((*row, problem)),
-            _ => None,
-        })
-        .collect();
+    let Some(ev) = hfb320_with_times(&[(23, "10000")]) else { return };
+    let (rejected, times) = split(&ev);
     assert_eq!(rejected.len(), 1, "{rejected:?}");
     assert_eq!(rejected[0].0, 23);
     assert!(matches!(rejected[0].1, RowProblem::TimeOutlier { t_s: 10000.0, .. }));
-    let times: Vec<f64> = ev
-        .iter()
-        .filter_map(|e| match e {
-            RecordEvent::Sample { sample, .. } => Some(sample.t_s),
-            _ => None,
-        })
-        .collect();
     assert_eq!(times.len(), 600);
     // The one hole is the rejected row's: a 0.2 s gap before the next row (as any rejected row
     // leaves), not a 9998 s one.
-    let gaps: Vec<(u64, f64)> = ev
-        .iter()
-        .filter_map(|e| match e {
-            RecordEvent::Gap { row, dt_s, .. } => Some((*row, *dt_s)),
-            _ => None,
-        })
-        .collect();
+    let gaps = gaps(&ev);
     assert_eq!(gaps.len(), 1, "{gaps:?}");
     assert!(gaps[0].0 == 24 && (gaps[0].1 - 0.2).abs() < 1e-9, "{gaps:?}");
     // Every interval is the record's 0.1 s except the 0.2 s across the rejected row.
     let long: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).filter(|d| *d > 0.15).collect();
     assert_eq!(long.len(), 1, "{long:?}");
     assert!((long[0] - 0.2).abs() < 1e-9);
+}
+
+/// The gap events of `ev`: (row after the gap, interval in s).
+fn gaps(ev: &[RecordEvent]) -> Vec<(u64, f64)> {
+    ev.iter()
+        .filter_map(|e| match e {
+            RecordEvent::Gap { row, dt_s, .. } => Some((*row, *dt_s)),
+            _ => None,
+        })
+        .collect()
 }
 
 /// The HFB-320 record with the times of `lines` (line number, header = 1) replaced: its events.
@@ -267,13 +247,7 @@ fn errors_hfb320_with_two_bad_times_keeps_599_samples() {
         assert!((prev_t_s.unwrap() - 19.8).abs() < 1e-4 && (next_t_s - 20.1).abs() < 1e-4);
     }
     assert_eq!(times.len(), 599);
-    let gaps: Vec<(u64, f64)> = ev
-        .iter()
-        .filter_map(|e| match e {
-            RecordEvent::Gap { row, dt_s, .. } => Some((*row, *dt_s)),
-            _ => None,
-        })
-        .collect();
+    let gaps = gaps(&ev);
     assert_eq!(gaps.len(), 1, "{gaps:?}");
     assert!(gaps[0].0 == 203 && (gaps[0].1 - 0.3).abs() < 1e-4, "{gaps:?}");
 }

@@ -450,15 +450,12 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     };
     // From here further signals are ignored until the results are written (crate::interrupt);
     // a second one before this point leaves the report and figures out.
-    let summary_only = interrupt.begin_writing();
-    if summary_only {
-        outcome.summary.warnings.push(SUMMARY_ONLY.to_string());
-    } else if interrupted {
-        eprintln!(
-            "interrupted: writing the results of the {} samples read; a further signal is ignored until they are written",
-            outcome.summary.samples_read
-        );
-    }
+    let summary_only = begin_writing(
+        Some(&interrupt),
+        interrupted,
+        outcome.summary.samples_read,
+        &mut outcome.summary.warnings,
+    );
     let summary_text = serde_json::to_string_pretty(&outcome.document(validation_on.as_ref()))?;
     match &args.out {
         Some(dir) if summary_only => {
@@ -642,6 +639,26 @@ fn compat_corrections(
         eprintln!("compat: {f}");
     }
     Ok(Some(Corrections::from_summary(&summary)?))
+}
+
+/// Enters the writing phase of `interrupt` (crate::interrupt: further signals are ignored from
+/// here). Returns whether a second signal came first, in which case only the summary is to be
+/// written and `warnings` says so; otherwise an `interrupted` run says on stderr what it writes.
+fn begin_writing(
+    interrupt: Option<&crate::interrupt::Interrupt>,
+    interrupted: bool,
+    samples_read: usize,
+    warnings: &mut Vec<String>,
+) -> bool {
+    let summary_only = interrupt.is_some_and(crate::interrupt::Interrupt::begin_writing);
+    if summary_only {
+        warnings.push(SUMMARY_ONLY.to_string());
+    } else if interrupted {
+        eprintln!(
+            "interrupted: writing the results of the {samples_read} samples read; a further signal is ignored until they are written"
+        );
+    }
+    summary_only
 }
 
 /// The warning (and error) of a run that a second signal stopped before its results were
@@ -972,15 +989,12 @@ fn write_batch(
     for w in &s.warnings {
         eprintln!("warning: {w}");
     }
-    let summary_only = interrupt.is_some_and(crate::interrupt::Interrupt::begin_writing);
-    if summary_only {
-        outcome.summary.warnings.push(SUMMARY_ONLY.to_string());
-    } else if interrupted {
-        eprintln!(
-            "interrupted: writing the results of the {} samples read; a further signal is ignored until they are written",
-            outcome.summary.samples_read
-        );
-    }
+    let summary_only = begin_writing(
+        interrupt,
+        interrupted,
+        outcome.summary.samples_read,
+        &mut outcome.summary.warnings,
+    );
     let text = serde_json::to_string_pretty(&outcome.summary)?;
     match &args.out {
         Some(dir) => {

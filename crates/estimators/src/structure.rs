@@ -102,9 +102,12 @@ impl Candidates {
         self.z.iter().map(|v| (v - mean).powi(2)).sum()
     }
 
-    /// `σ²_max = Σ(z − z̄)² / (2N)` (module doc).
-    fn sigma2_max(&self) -> f64 {
-        self.total_ss() / (2.0 * self.n() as f64)
+    /// PSE and `R²` (module doc) of a model of `p` terms (constant included) leaving the
+    /// residual sum of squares `sse`.
+    fn pse_r2(&self, sse: f64, p: usize) -> (f64, f64) {
+        let (n, sst) = (self.n() as f64, self.total_ss());
+        let pse = sse / n + 2.0 * (sst / (2.0 * n)) * p as f64 / n;
+        (pse, if sst > 0.0 { 1.0 - sse / sst } else { 0.0 })
     }
 }
 
@@ -132,11 +135,6 @@ impl Fit {
         let s = self.std_error[k];
         if s > 0.0 { (self.theta[k] / s).powi(2) } else { f64::INFINITY }
     }
-
-    /// Fit error `√(SSE / (N − p))`.
-    pub fn fit_error(&self, n: usize) -> f64 {
-        (self.sse / (n - self.theta.len()).max(1) as f64).sqrt()
-    }
 }
 
 /// The regressor matrix `[x_terms…, 1]`.
@@ -160,16 +158,13 @@ pub fn fit(c: &Candidates, terms: &[usize]) -> Fit {
     let resid = &c.z - &x * &theta;
     let sse = resid.norm_squared();
     let s2 = sse / (n.saturating_sub(p)).max(1) as f64;
-    let xtx = x.transpose() * &x;
-    let std_error: Vec<f64> = match xtx.clone().try_inverse() {
+    let std_error: Vec<f64> = match (x.transpose() * &x).try_inverse() {
         Some(inv) if svd.singular_values.min() > tol => {
             (0..p).map(|k| (s2 * inv[(k, k)]).max(0.0).sqrt()).collect()
         }
         _ => vec![f64::INFINITY; p],
     };
-    let sst = c.total_ss();
-    let r2 = if sst > 0.0 { 1.0 - sse / sst } else { 0.0 };
-    let pse = sse / n as f64 + 2.0 * c.sigma2_max() * p as f64 / n as f64;
+    let (pse, r2) = c.pse_r2(sse, p);
     Fit { terms: terms.to_vec(), theta: theta.iter().copied().collect(), std_error, sse, r2, pse }
 }
 
@@ -233,9 +228,10 @@ impl Default for StepwiseConfig {
     }
 }
 
-/// Squared partial correlation of candidate `j` with `z`, both conditioned on the model fit of
-/// `terms` (SIDPAC `swr`'s entry ranking); 0 for a candidate the model already explains.
-fn partial_correlation2(c: &Candidates, terms: &[usize], j: usize) -> f64 {
+/// Squared partial correlations with `z` of the candidates not in `terms`, each and `z`
+/// conditioned on the model fit of `terms` (SIDPAC `swr`'s entry ranking), as (candidate, r²);
+/// 0 for a candidate the model already explains. One projection serves every candidate.
+fn partial_correlations2(c: &Candidates, terms: &[usize]) -> Vec<(usize, f64)> {
     let x = design(c, terms);
     let svd = x.clone().svd(true, true);
     let tol = 1e-12 * svd.singular_values.max().max(f64::MIN_POSITIVE);
@@ -243,14 +239,23 @@ fn partial_correlation2(c: &Candidates, terms: &[usize], j: usize) -> f64 {
         let b = svd.solve(&v, tol).unwrap_or_else(|_| DVector::zeros(terms.len() + 1));
         v - &x * b
     };
-    let xc = resid(c.columns.column(j).into_owned());
     let zc = resid(c.z.clone());
-    let (sxx, szz) = (xc.norm_squared(), zc.norm_squared());
-    let scale = c.columns.column(j).norm_squared().max(f64::MIN_POSITIVE);
-    if sxx <= 1e-12 * scale || szz == 0.0 {
-        return 0.0;
-    }
-    xc.dot(&zc).powi(2) / (sxx * szz)
+    let szz = zc.norm_squared();
+    (0..c.names.len())
+        .filter(|j| !terms.contains(j))
+        .map(|j| {
+            let xj = c.columns.column(j).into_owned();
+            let scale = xj.norm_squared().max(f64::MIN_POSITIVE);
+            let xc = resid(xj);
+            let sxx = xc.norm_squared();
+            let r2 = if sxx <= 1e-12 * scale || szz == 0.0 {
+                0.0
+            } else {
+                xc.dot(&zc).powi(2) / (sxx * szz)
+            };
+            (j, r2)
+        })
+        .collect()
 }
 
 /// Forward–backward stepwise regression (module doc), from the constant alone.
@@ -263,7 +268,6 @@ fn partial_correlation2(c: &Candidates, terms: &[usize], j: usize) -> f64 {
 /// [`Candidates::check`]'s.
 pub fn stepwise(c: &Candidates, config: StepwiseConfig) -> Result<Selection, StructureError> {
     c.check()?;
-    let m = c.names.len();
     let mut terms: Vec<usize> = Vec::new();
     let mut current = fit(c, &terms);
     let mut path = Vec::new();
@@ -282,10 +286,8 @@ pub fn stepwise(c: &Candidates, config: StepwiseConfig) -> Result<Selection, Str
                 r2: current.r2,
             });
         } else {
-            let best = (0..m)
-                .filter(|j| !terms.contains(j))
-                .map(|j| (j, partial_correlation2(c, &terms, j)))
-                .max_by(|a, b| a.1.total_cmp(&b.1));
+            let best =
+                partial_correlations2(c, &terms).into_iter().max_by(|a, b| a.1.total_cmp(&b.1));
             let Some((j, r2)) = best.filter(|&(_, r2)| r2 > 0.0) else {
                 break "every candidate is in the model or explained by it".to_string();
             };
@@ -384,18 +386,12 @@ pub fn orthogonal(c: &Candidates, ranking: Ranking) -> Result<OrthogonalSelectio
         })
         .collect();
     let reduction = |p: &DVector<f64>| c.z.dot(p).powi(2) / p.norm_squared();
-    let (sst, s2max) = (c.total_ss(), c.sigma2_max());
     let mut sse = c.z.norm_squared();
     let mut ranked = Vec::new();
     let mut chosen: Option<DVector<f64>> = Some(ones);
     let mut candidate = None;
     while let Some(p) = chosen.take() {
-        let dj = reduction(&p);
-        sse = (sse - dj).max(0.0);
-        let k = ranked.len() + 1;
-        let pse = sse / n as f64 + 2.0 * s2max * k as f64 / n as f64;
-        let r2 = if sst > 0.0 { 1.0 - sse / sst } else { 0.0 };
-        ranked.push(OrthogonalFunction { candidate, cost_reduction: dj, pse, r2 });
+        push_ranked(c, &mut ranked, &mut sse, candidate, reduction(&p));
         let pn = p.norm_squared();
         for (_, x, _) in &mut remaining {
             *x -= &p * (p.dot(x) / pn);
@@ -410,14 +406,44 @@ pub fn orthogonal(c: &Candidates, ranking: Ranking) -> Result<OrthogonalSelectio
             chosen = Some(x);
         }
     }
-    let kept_functions = ranked
-        .iter()
-        .enumerate()
-        .min_by(|a, b| a.1.pse.total_cmp(&b.1.pse))
-        .map_or(1, |(k, _)| k + 1);
+    let kept_functions = pse_minimum(&ranked);
     let kept = &ranked[..kept_functions];
     let mut terms: Vec<usize> = kept.iter().filter_map(|f| f.candidate).collect();
     terms.sort_unstable();
+    let stopped = format!(
+        "minimum of the predicted squared error at {kept_functions} orthogonal functions (constant included)"
+    );
+    let selection = selection_of(c, kept, &terms, stopped);
+    Ok(OrthogonalSelection { ranked, kept_functions, selection })
+}
+
+/// Appends the next ranked function (its candidate, cost reduction `dj`) with the PSE and `R²`
+/// of the model of every function so far; `sse` is the residual sum of squares before it.
+fn push_ranked(
+    c: &Candidates,
+    ranked: &mut Vec<OrthogonalFunction>,
+    sse: &mut f64,
+    candidate: Option<usize>,
+    dj: f64,
+) {
+    *sse = (*sse - dj).max(0.0);
+    let (pse, r2) = c.pse_r2(*sse, ranked.len() + 1);
+    ranked.push(OrthogonalFunction { candidate, cost_reduction: dj, pse, r2 });
+}
+
+/// How many of `ranked` the PSE minimum keeps (the constant included).
+fn pse_minimum(ranked: &[OrthogonalFunction]) -> usize {
+    ranked.iter().enumerate().min_by(|a, b| a.1.pse.total_cmp(&b.1.pse)).map_or(1, |(k, _)| k + 1)
+}
+
+/// The selection of ordinary `terms` after the `kept` orthogonal functions (each an entry of
+/// the path), refitted on `c`.
+fn selection_of(
+    c: &Candidates,
+    kept: &[OrthogonalFunction],
+    terms: &[usize],
+    stopped: String,
+) -> Selection {
     let path = kept
         .iter()
         .filter_map(|f| {
@@ -430,15 +456,7 @@ pub fn orthogonal(c: &Candidates, ranking: Ranking) -> Result<OrthogonalSelectio
             })
         })
         .collect();
-    let selection = Selection {
-        names: c.names.clone(),
-        path,
-        fit: fit(c, &terms),
-        stopped: format!(
-            "minimum of the predicted squared error at {kept_functions} orthogonal functions (constant included)"
-        ),
-    };
-    Ok(OrthogonalSelection { ranked, kept_functions, selection })
+    Selection { names: c.names.clone(), path, fit: fit(c, terms), stopped }
 }
 
 /// [`Ranking::Generation`] of [`orthogonal`] (checked candidates).
@@ -464,24 +482,12 @@ fn generation_order(c: &Candidates) -> OrthogonalSelection {
     let mut order: Vec<usize> = (1..psi.len()).collect();
     order.sort_by(|&a, &b| reduction(&psi[b]).total_cmp(&reduction(&psi[a])));
     order.insert(0, 0);
-    let (sst, s2max) = (c.total_ss(), c.sigma2_max());
     let mut sse = c.z.norm_squared();
-    let ranked: Vec<OrthogonalFunction> = order
-        .iter()
-        .enumerate()
-        .map(|(k, &i)| {
-            let dj = reduction(&psi[i]);
-            sse = (sse - dj).max(0.0);
-            let pse = sse / n as f64 + 2.0 * s2max * (k + 1) as f64 / n as f64;
-            let r2 = if sst > 0.0 { 1.0 - sse / sst } else { 0.0 };
-            OrthogonalFunction { candidate: source[i], cost_reduction: dj, pse, r2 }
-        })
-        .collect();
-    let kept_functions = ranked
-        .iter()
-        .enumerate()
-        .min_by(|a, b| a.1.pse.total_cmp(&b.1.pse))
-        .map_or(1, |(k, _)| k + 1);
+    let mut ranked = Vec::with_capacity(order.len());
+    for &i in &order {
+        push_ranked(c, &mut ranked, &mut sse, source[i], reduction(&psi[i]));
+    }
+    let kept_functions = pse_minimum(&ranked);
     // The kept model's output, expanded over every candidate up to the last kept one.
     let y = order[..kept_functions].iter().fold(DVector::zeros(n), |acc: DVector<f64>, &i| {
         let p = &psi[i];
@@ -501,27 +507,11 @@ fn generation_order(c: &Candidates) -> OrthogonalSelection {
         })
         .map(|(_, &j)| j)
         .collect();
-    let path = ranked[..kept_functions]
-        .iter()
-        .filter_map(|f| {
-            f.candidate.map(|candidate| Step {
-                action: StepAction::Enter,
-                candidate,
-                partial_f: f64::NAN,
-                pse: f.pse,
-                r2: f.r2,
-            })
-        })
-        .collect();
-    let selection = Selection {
-        names: c.names.clone(),
-        path,
-        fit: fit(c, &terms),
-        stopped: format!(
-            "minimum of the predicted squared error at {kept_functions} orthogonal functions (constant included), expanded into {} ordinary terms",
-            terms.len()
-        ),
-    };
+    let stopped = format!(
+        "minimum of the predicted squared error at {kept_functions} orthogonal functions (constant included), expanded into {} ordinary terms",
+        terms.len()
+    );
+    let selection = selection_of(c, &ranked[..kept_functions], &terms, stopped);
     OrthogonalSelection { ranked, kept_functions, selection }
 }
 

@@ -3,7 +3,9 @@
 //! [`RejectionLog::DEFAULT_LIMIT`] entries and the last are listed, the rest counted per kind
 //! in a warning, and `samples_rejected` still counts every rejected row.
 
+mod common;
 use aeroident_io::{FlightDataReader, Mapping, RejectionLog};
+use aeroident_pipelines::replay::batch::{FitOptions, fit_record};
 use aeroident_pipelines::replay::{ReplayOptions, replay};
 
 /// Longitudinal channels; the record's interval is 0.1 s but every other row is rejected, so
@@ -53,4 +55,37 @@ fn errors_many_rejected_rows_give_a_bounded_list_a_full_count_and_a_warning() {
     // ≈ 100 bytes per listed entry: the JSON list stays small whatever the record's length.
     let json = serde_json::to_string(&s.rejections).unwrap();
     assert!(json.len() < 150 * (RejectionLog::DEFAULT_LIMIT + 1), "{} bytes", json.len());
+}
+
+/// The HFB-320 record (10 Hz, time in seconds) through its mapping with the time unit declared
+/// `ms`: the record would last 0.06 s. The replay says so in the summary's warnings, for a
+/// real-time estimator and for the batch fit alike, naming the unit that gives 10 Hz.
+#[test]
+fn errors_time_unit_off_by_1000_is_a_summary_warning() {
+    let Some(data) = common::shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let text = std::fs::read_to_string(common::workspace().join("mappings/hfb320.toml")).unwrap();
+    let text = text.replace(
+        "[time]\ncolumn = \"time_s\"\nunit = \"s\"",
+        "[time]\ncolumn = \"time_s\"\nunit = \"ms\"",
+    );
+    assert!(text.contains("unit = \"ms\""));
+    let m = Mapping::from_toml_str(&text, "hfb320-ms.toml").unwrap();
+    let open = || {
+        let f = std::fs::File::open(&data).unwrap();
+        FlightDataReader::new(std::io::BufReader::new(f), "hfb320.csv", &m).unwrap()
+    };
+    let wanted = |warnings: &[String]| {
+        let w: Vec<&String> = warnings.iter().filter(|w| w.contains("time column")).collect();
+        assert_eq!(w.len(), 1, "{warnings:?}");
+        assert!(
+            w[0].contains("`time_s` in `ms`") && w[0].contains("0.0001 s (10000 Hz)"),
+            "{}",
+            w[0]
+        );
+        assert!(w[0].contains("with `unit = \"s\"` it would be 0.1 s (10 Hz)"), "{}", w[0]);
+    };
+    let o = replay(open(), &m, &ReplayOptions::default(), &mut ()).unwrap();
+    wanted(&o.summary.warnings);
+    let fit = fit_record(open(), &m, None, FitOptions::default()).unwrap();
+    wanted(&fit.summary.warnings);
 }

@@ -7,8 +7,9 @@
 //! blank, non-numeric or non-finite value in a mapped column, a value that is not finite after
 //! the unit conversion, a wrong field count, a repeated or backward time, a time implausibly far
 //! ahead ([`IMPLAUSIBLE_JUMP_FACTOR`] × the nominal interval; the last good time is kept), a
-//! short run of bad time stamps (below), and a non-positive airspeed, mass, area, chord, span,
-//! moment of inertia, density or dynamic pressure. A gap — an interval longer than [`GAP_FACTOR`] × the nominal interval — is
+//! short run of bad time stamps (below), a non-positive airspeed, mass, area, chord, span,
+//! moment of inertia, density or dynamic pressure, and a mass, area, chord, span or inertia
+//! outside its physical range ([`crate::mapping::CONSTANT_RANGES`]). A gap — an interval longer than [`GAP_FACTOR`] × the nominal interval — is
 //! reported as a [`RecordEvent::Gap`] *before* the sample that follows it; it is never bridged
 //! silently. Nothing is dropped without an event.
 //!
@@ -90,6 +91,21 @@ pub const GAP_FACTOR: f64 = 1.5;
 /// sample is implausible (a corrupt value such as 1e308): the row is rejected and the previous
 /// time kept. Smaller jumps are gaps ([`GAP_FACTOR`]).
 pub const IMPLAUSIBLE_JUMP_FACTOR: f64 = 1e6;
+
+/// The sample rates of flight data, Hz (lowest, highest): a record whose median interval over
+/// its first [`RATE_CHECK_INTERVALS`] is outside them after the time unit's conversion is
+/// warned of ([`FlightDataReader::notes`]), naming the unit that would give a plausible rate.
+/// Wide: a 0.2 Hz record (5 s between samples) resolves no short period, and nothing logs a
+/// whole record for identification at 5 kHz; a time column in ms declared `s` (or the
+/// reverse) is off by 1000 and lands outside for any rate from 5 Hz to 200 Hz.
+pub const PLAUSIBLE_RATE_HZ: (f64, f64) = (0.2, 5000.0);
+
+/// Accepted intervals whose median is checked against [`PLAUSIBLE_RATE_HZ`] (all of them in a
+/// shorter record, if it has two).
+pub const RATE_CHECK_INTERVALS: usize = 20;
+
+/// Warnings of a reader, shared with whoever reports them after the events are consumed.
+pub type ReaderNotes = std::sync::Arc<std::sync::Mutex<Vec<String>>>;
 
 /// Most rows held while time stamps are judged (module doc): past it the rows held are taken as
 /// they are (a rejection waits behind a held sample, to keep the events in row order).
@@ -203,6 +219,12 @@ pub struct FlightDataReader<R: Read> {
     /// Lines of the CSV text that are not lines of the file the user gave (a header
     /// [`crate::log`] writes for a file without one): subtracted from every row number.
     synthetic_lines: u64,
+    /// The mapping file (named in the reader's warnings).
+    mapping_file: String,
+    /// The first accepted intervals, s, until the rate is checked ([`PLAUSIBLE_RATE_HZ`]).
+    intervals: Vec<f64>,
+    rate_checked: bool,
+    notes: ReaderNotes,
 }
 
 impl<R: Read> FlightDataReader<R> {
@@ -315,6 +337,10 @@ impl<R: Read> FlightDataReader<R> {
             rows_seen: 0,
             done: false,
             synthetic_lines: 0,
+            mapping_file: mapping.file.clone(),
+            intervals: Vec::new(),
+            rate_checked: false,
+            notes: ReaderNotes::default(),
         })
     }
 
@@ -324,6 +350,13 @@ impl<R: Read> FlightDataReader<R> {
     pub(crate) fn with_synthetic_lines(mut self, n: u64) -> Self {
         self.synthetic_lines = n;
         self
+    }
+
+    /// The reader's warnings, filled as the record is read (shared: the reader is usually
+    /// consumed by the stages after it): a time unit that makes the record's rate implausible
+    /// ([`PLAUSIBLE_RATE_HZ`]).
+    pub fn notes(&self) -> ReaderNotes {
+        std::sync::Arc::clone(&self.notes)
     }
 
     /// The data file's name as used in messages.
@@ -388,6 +421,15 @@ impl<R: Read> FlightDataReader<R> {
             return Err(RowProblem::Domain {
                 column,
                 reason: format!("{} must be > 0, got {v}", ch.key()),
+            });
+        }
+        // Constants were checked with the mapping; a column's value is checked here.
+        if let Some(r) = self.channels.get(&ch)
+            && let Err(reason) = crate::mapping::check_constant_range(ch, v)
+        {
+            return Err(RowProblem::Domain {
+                column: r.names.join("+"),
+                reason: format!("{}: {reason}", ch.key()),
             });
         }
         Ok(Some(v))
@@ -648,8 +690,82 @@ impl<R: Read> FlightDataReader<R> {
                 Some(_) => {}
             }
         }
+        if let Some(prev) = self.last_t
+            && !self.rate_checked
+        {
+            self.intervals.push(sample.t_s - prev);
+            if self.intervals.len() >= RATE_CHECK_INTERVALS {
+                self.check_rate();
+            }
+        }
         self.last_t = Some(sample.t_s);
         self.last_row = row;
         self.pending.push_back(Ok(RecordEvent::Sample { row, sample }));
+    }
+}
+
+impl<R: Read> FlightDataReader<R> {
+    /// Checks the median of the first accepted intervals against [`PLAUSIBLE_RATE_HZ`] (once,
+    /// with at least two): outside, a warning naming the time column, its unit and the unit
+    /// (s, ms, us) that would give a plausible rate.
+    fn check_rate(&mut self) {
+        if self.rate_checked || self.intervals.len() < 2 {
+            return;
+        }
+        self.rate_checked = true;
+        let mut intervals = std::mem::take(&mut self.intervals);
+        intervals.sort_by(f64::total_cmp);
+        let dt = intervals[intervals.len() / 2];
+        let (lo, hi) = PLAUSIBLE_RATE_HZ;
+        let plausible = |dt: f64| dt >= 1.0 / hi && dt <= 1.0 / lo;
+        if plausible(dt) {
+            return;
+        }
+        // The interval in each time unit, the raw column and its scale unchanged; the one
+        // nearest the middle of the plausible rates (log scale) is named.
+        let middle = (lo * hi).sqrt().recip().ln();
+        let declared = &self.time.map;
+        let other = [("s", 1.0), ("ms", 1e-3), ("us", 1e-6)]
+            .into_iter()
+            .map(|(unit, to_si)| (unit, dt / declared.to_si * to_si))
+            .filter(|&(_, d)| plausible(d))
+            .min_by(|a, b| (a.1.ln() - middle).abs().total_cmp(&(b.1.ln() - middle).abs()));
+        let hint = match other {
+            Some((unit, d)) => format!(
+                "with `unit = \"{unit}\"` it would be {} s ({} Hz): check the unit",
+                sig(d),
+                sig(1.0 / d)
+            ),
+            None => {
+                "no time unit (s, ms, us) gives a plausible rate: check the column and its scale"
+                    .into()
+            }
+        };
+        let note = format!(
+            "{}: time column `{}` in `{}` ({} [time]): the median interval of the first {} samples is {} s ({} Hz), outside the rates of flight data ({lo} Hz to {hi} Hz); {hint}",
+            self.file,
+            self.time.names.join("+"),
+            declared.unit,
+            self.mapping_file,
+            intervals.len() + 1,
+            sig(dt),
+            sig(1.0 / dt),
+        );
+        if let Ok(mut notes) = self.notes.lock() {
+            notes.push(note);
+        }
+    }
+}
+
+/// `x` to 4 significant digits, without trailing zeros.
+fn sig(x: f64) -> String {
+    if !(x.is_finite() && x != 0.0) {
+        return format!("{x}");
+    }
+    let decimals = (3 - x.abs().log10().floor() as i64).clamp(0, 20) as usize;
+    let text = format!("{x:.decimals$}");
+    match text.contains('.') {
+        true => text.trim_end_matches('0').trim_end_matches('.').to_string(),
+        false => text,
     }
 }

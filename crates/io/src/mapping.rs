@@ -305,6 +305,50 @@ impl Channel {
     ];
 }
 
+/// The physical range of each aircraft constant, SI (lowest, highest, unit): a value outside
+/// it is a slip (a unit, an exponent), never an aircraft. Wide enough for a 1 g micro air
+/// vehicle (mass 10⁻³ kg, wing 1 cm², chord and span of a centimetre, inertias about
+/// 10⁻⁷ kg·m²) and for the largest aircraft with margin (A380: 575 t, 845 m², span 80 m, mean
+/// chord 12 m, inertias of order 10⁸ kg·m²; An-225 640 t). The upper ends stay within the
+/// estimators' own plausibility limits (`aeroident_estimators::sample::PLAUSIBILITY`), so a
+/// mapping that passes here yields samples they accept. A constant outside its range is a
+/// mapping error; a value read from a column outside it rejects its row.
+pub const CONSTANT_RANGES: [(Channel, f64, f64, &str); 8] = [
+    (Channel::Mass, 1e-3, 1e7, "kg"),
+    (Channel::S, 1e-4, 1e4, "m²"),
+    (Channel::Cbar, 1e-3, 1e2, "m"),
+    (Channel::B, 1e-2, 1e3, "m"),
+    (Channel::Ixx, 1e-9, 1e10, "kg·m²"),
+    (Channel::Iyy, 1e-9, 1e10, "kg·m²"),
+    (Channel::Izz, 1e-9, 1e10, "kg·m²"),
+    (Channel::Ixz, -1e10, 1e10, "kg·m²"),
+];
+
+/// `ch`'s physical range ([`CONSTANT_RANGES`]): `Err` with the reason when `v_si` is outside.
+pub(crate) fn check_constant_range(ch: Channel, v_si: f64) -> Result<(), String> {
+    let Some(&(_, lo, hi, unit)) = CONSTANT_RANGES.iter().find(|r| r.0 == ch) else {
+        return Ok(());
+    };
+    if (lo..=hi).contains(&v_si) {
+        return Ok(());
+    }
+    Err(format!(
+        "{} {unit} is outside the physical range {lo:e} … {hi:e} {unit} (a 1 g micro air vehicle to beyond the largest aircraft): check the unit and the exponent",
+        exponent_form(v_si)
+    ))
+}
+
+/// `x` in exponent form to 4 significant digits, without trailing zeros (`1.858e5`, `1e-300`).
+fn exponent_form(x: f64) -> String {
+    let text = format!("{x:.3e}");
+    match text.split_once('e') {
+        Some((mantissa, exp)) if mantissa.contains('.') => {
+            format!("{}e{exp}", mantissa.trim_end_matches('0').trim_end_matches('.'))
+        }
+        _ => text,
+    }
+}
+
 /// One `[channels]` entry as written in TOML.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -589,6 +633,20 @@ impl Mapping {
                     file: file.to_string(),
                     channel: ch.key().into(),
                     reason: format!("must be > 0, got {v}"),
+                });
+            }
+            if let Some(v) = m.constant()
+                && let Err(reason) = check_constant_range(ch, v)
+            {
+                return Err(FlightDataError::BadSpec {
+                    file: file.to_string(),
+                    channel: ch.key().into(),
+                    reason: format!(
+                        "line {}: `value = {:?}` {}: {reason}",
+                        line_of(text, key.span().start),
+                        spec.value.unwrap_or(v),
+                        spec.unit
+                    ),
                 });
             }
             channels.insert(ch, m);

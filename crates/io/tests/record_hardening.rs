@@ -459,3 +459,82 @@ fn errors_alignment_over_the_memory_cap_is_refused_before_allocating() {
     let ok = align(&topics, &Clock::RateHz(50.0), Interpolation::Linear, "big.ulg").unwrap();
     assert_eq!(ok.table.columns[0].len(), 1001);
 }
+
+/// Physically absurd aircraft constants are refused with the mapping file, the channel, the
+/// line and the value named (after the unit conversion: slug and ft² are checked in SI); a
+/// 1 g micro air vehicle's and an A380's constants pass. A column's value outside the range
+/// rejects its row.
+#[test]
+fn errors_absurd_constants_are_refused_naming_file_field_and_value() {
+    let minimal = MAP.replace("mass = { value = 1.0, unit = \"kg\" }\n", "");
+    let refuse = |extra: &str, channel: &str, value: &str| {
+        let text = format!("{minimal}{extra}\n");
+        let e = Mapping::from_toml_str(&text, "absurd.toml").unwrap_err().to_string();
+        assert!(e.starts_with(&format!("absurd.toml: channel `{channel}`: line ")), "{e}");
+        assert!(e.contains(value) && e.contains("outside the physical range"), "{e}");
+    };
+    refuse("mass = { value = 1e-300, unit = \"kg\" }", "mass", "`value = 1e-300` kg");
+    refuse("mass = { value = 1e9, unit = \"kg\" }", "mass", "1e9 kg");
+    refuse("mass = { value = 1e9, unit = \"slug\" }", "mass", "`value = 1000000000.0` slug");
+    let kg = "mass = { value = 1.0, unit = \"kg\" }\n";
+    refuse(&format!("{kg}cbar = {{ value = 1e-9, unit = \"m\" }}"), "cbar", "1e-9 m");
+    refuse(&format!("{kg}b = {{ value = 5e3, unit = \"m\" }}"), "b", "5e3 m");
+    refuse(&format!("{kg}Iyy = {{ value = 1e12, unit = \"kg*m2\" }}"), "Iyy", "1e12 kg·m²");
+    refuse(&format!("{kg}Ixz = {{ value = -1e11, unit = \"kg*m2\" }}"), "Ixz", "-1e11 kg·m²");
+    let area =
+        MAP.replace("S = { value = 1.0, unit = \"m2\" }", "S = { value = 2e6, unit = \"ft2\" }");
+    let e = Mapping::from_toml_str(&area, "absurd.toml").unwrap_err().to_string();
+    assert!(e.contains("channel `S`") && e.contains("1.858e5 m²"), "{e}");
+    // A 1 g micro air vehicle and an A380, with margin.
+    for (m, s, c, b, i) in [(1e-3, 1e-4, 1e-3, 1e-2, 1e-9), (5.75e5, 845.0, 12.0, 79.8, 1e8)] {
+        let text = format!(
+            "{minimal}mass = {{ value = {m}, unit = \"kg\" }}\ncbar = {{ value = {c}, unit = \"m\" }}\nb = {{ value = {b}, unit = \"m\" }}\nIyy = {{ value = {i}, unit = \"kg*m2\" }}\n"
+        )
+        .replace("S = { value = 1.0, unit = \"m2\" }", &format!("S = {{ value = {s}, unit = \"m2\" }}"));
+        Mapping::from_toml_str(&text, "fine.toml").unwrap();
+    }
+    // From a column: the row is rejected, naming the column and the range.
+    let map = format!("{}mass = {{ column = \"m\", unit = \"kg\" }}\n", minimal);
+    let csv = "t,V,a,q,m\n0,100,0.1,0.01,5\n0.1,100,0.1,0.01,1e-300\n0.2,100,0.1,0.01,5\n";
+    let ev = events(&map, csv);
+    assert_eq!(outline(&ev), ["S 0", "R 3 value outside its domain", "S 0.2"]);
+    let RecordEvent::Rejected { problem, .. } = &ev[1] else { unreachable!() };
+    let text = problem.to_string();
+    assert!(text.contains("column `m`") && text.contains("1e-300 kg is outside"), "{text}");
+}
+
+/// A time unit that makes the record's rate implausible is warned of (not an error), naming the
+/// column, the declared unit and the unit that would give a plausible rate: a 10 Hz record in
+/// seconds declared `ms` (median interval 0.0001 s: 10 kHz), a 100 Hz record in ms declared `s`
+/// (10 s: 0.1 Hz). The right units give no warning; the record is read either way.
+#[test]
+fn errors_implausible_time_unit_is_warned_of_with_the_plausible_one() {
+    let notes = |unit: &str, step: f64| {
+        let map = MAP.replace("unit = \"s\"", &format!("unit = \"{unit}\""));
+        let times: Vec<String> = (0..601).map(|k| format!("{}", k as f64 * step)).collect();
+        let times: Vec<&str> = times.iter().map(String::as_str).collect();
+        let m = Mapping::from_toml_str(&map, "unit.toml").unwrap();
+        let csv = record(&times);
+        let reader = FlightDataReader::new(csv.as_bytes(), "unit.csv", &m).unwrap();
+        let handle = reader.notes();
+        let n = reader.filter(|e| matches!(e, Ok(RecordEvent::Sample { .. }))).count();
+        assert_eq!(n, 601, "every row read");
+        handle.lock().unwrap().clone()
+    };
+    let n = notes("ms", 0.1);
+    assert_eq!(n.len(), 1, "{n:?}");
+    assert!(n[0].starts_with("unit.csv: time column `t` in `ms` (unit.toml [time])"), "{}", n[0]);
+    assert!(n[0].contains("0.0001 s (10000 Hz)"), "{}", n[0]);
+    assert!(n[0].contains("with `unit = \"s\"` it would be 0.1 s (10 Hz)"), "{}", n[0]);
+    let n = notes("s", 10.0);
+    assert_eq!(n.len(), 1, "{n:?}");
+    assert!(
+        n[0].contains("10 s (0.1 Hz)")
+            && n[0].contains("`unit = \"ms\"` it would be 0.01 s (100 Hz)"),
+        "{}",
+        n[0]
+    );
+    assert!(notes("s", 0.1).is_empty());
+    assert!(notes("ms", 10.0).is_empty());
+    assert!(notes("us", 20_000.0).is_empty());
+}

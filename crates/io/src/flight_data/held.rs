@@ -63,6 +63,7 @@ impl<R: Read> FlightDataReader<R> {
             self.settle_opening(true);
         }
         self.release_all();
+        self.check_rate();
         self.pending.extend(error.map(Err));
     }
 

@@ -776,13 +776,15 @@ pub(crate) fn record_events<'a, R: Read + 'a>(
     compat: Option<&crate::compat::Corrections>,
     windows: &[crate::window::TimeWindow],
 ) -> RecordEvents<'a> {
+    let reader_notes = reader.notes();
     let screened = outliers::Screened::new(reader, screen);
     let screen_notes = screened.notes();
     let events: Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a> = match compat {
         Some(c) => Box::new(crate::compat::Corrected::new(screened, c.clone())),
         None => Box::new(screened),
     };
-    RecordEvents { events: crate::window::Windowed::new(events, windows.to_vec()), screen_notes }
+    let events = crate::window::Windowed::new(events, windows.to_vec());
+    RecordEvents { events, notes: [reader_notes, screen_notes] }
 }
 
 /// [`record_events`]: the events, and the notes of the stages they went through.
@@ -790,15 +792,17 @@ pub(crate) struct RecordEvents<'a> {
     events: crate::window::Windowed<
         Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a>,
     >,
-    screen_notes: outliers::ScreenNotes,
+    /// The warnings of the reader ([`FlightDataReader::notes`]) and of the spike screen.
+    notes: [outliers::ScreenNotes; 2],
 }
 
 impl RecordEvents<'_> {
-    /// The warnings of the stages so far: what the time windows did, the runs the spike screen
-    /// saw but did not reject.
+    /// The warnings of the stages so far: the reader's (an implausible time unit), what the
+    /// time windows did, the runs the spike screen saw but did not reject.
     pub(crate) fn notes(&self) -> Vec<String> {
-        let screen = self.screen_notes.lock().map(|n| n.clone()).unwrap_or_default();
-        self.events.note().into_iter().chain(screen).collect()
+        let [reader, screen] = &self.notes;
+        let get = |n: &outliers::ScreenNotes| n.lock().map(|n| n.clone()).unwrap_or_default();
+        get(reader).into_iter().chain(self.events.note()).chain(get(screen)).collect()
     }
 }
 

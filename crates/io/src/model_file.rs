@@ -359,6 +359,51 @@ impl ModelSpec {
     }
 }
 
+impl ModelSpec {
+    /// The model as a model file ([`ModelSpec::from_toml_str`] reads it back to the same
+    /// structure, priors and references): the description, the coefficients' terms in
+    /// vocabulary order, and the priors that differ from [`Priors::generic`].
+    pub fn to_toml(&self) -> String {
+        use std::fmt::Write as _;
+        let quoted = |s: &str| toml::Value::String(s.to_string()).to_string();
+        let mut out = format!("description = {}\n\n[coefficients]\n", quoted(&self.description));
+        for c in Coefficient::ALL {
+            let terms: Vec<String> = self
+                .structure
+                .params()
+                .filter(|p| p.coefficient == c)
+                .map(|p| quoted(p.term.name()))
+                .collect();
+            if !terms.is_empty() {
+                let _ = writeln!(out, "{} = [{}]", c.name(), terms.join(", "));
+            }
+        }
+        let generic = Priors::generic(&self.structure);
+        for (i, p) in self.structure.params().enumerate() {
+            let prior = self.priors.prior[i];
+            if prior != generic.prior[i] {
+                let _ = write!(
+                    out,
+                    "\n[prior.{}]\nvalue = {:?}\nsigma = {:?}\n",
+                    p.name(),
+                    prior.value,
+                    prior.sigma
+                );
+            }
+        }
+        for r in &self.references {
+            let _ = write!(
+                out,
+                "\n[reference.{}]\nvalue = {:?}\nsource = {}\n",
+                r.param.name(),
+                r.value,
+                quoted(&r.source)
+            );
+        }
+        out
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -399,6 +444,21 @@ sigma = 1.5
         let cmq = Param::from_name("Cm_q").unwrap();
         assert_eq!(m.priors.prior[6], generic_prior(cmq));
         assert!(m.references.is_empty());
+    }
+
+    /// A model written by `to_toml` reads back to the same structure, priors and references,
+    /// including a description that needs escaping.
+    #[test]
+    fn to_toml_reads_back_to_the_same_model() {
+        let text = format!("{GOOD}[reference.Cm_q]\nvalue = -27.06\nsource = \"a \\\"book\\\"\"\n");
+        let mut m = ModelSpec::from_toml_str(&text, "r.toml").unwrap();
+        m.description = "selected by \"swr\"\non x.csv".into();
+        let back = ModelSpec::from_toml_str(&m.to_toml(), "back.toml").unwrap();
+        assert_eq!(back.structure, m.structure);
+        assert_eq!(back.priors.prior[..back.priors.n], m.priors.prior[..m.priors.n]);
+        assert_eq!(back.references, m.references);
+        assert_eq!(back.description, m.description);
+        assert_eq!(m.references[0].source, "a \"book\"");
     }
 
     /// `[reference.X]` gives published values; an unknown parameter or one outside the model

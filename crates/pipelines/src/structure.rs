@@ -6,6 +6,13 @@
 //! moments from the accelerations and angular accelerations); a sample where the coefficient
 //! or a candidate is not measured is left out of that coefficient's selection and counted.
 
+mod auto;
+pub use auto::{
+    AutoModel, AutoSelection, CoefficientReport, PathStep, Scope, StructureReport, model_from_args,
+    select_model,
+};
+
+use crate::condition::{Alignment, Conditioner, Conditioning, Derivative};
 use crate::replay::ReplayError;
 use aeroident_estimators::structure::{
     self, Candidates, Ranking, Selection, StepwiseConfig, StructureError,
@@ -25,6 +32,19 @@ pub enum Method {
 }
 
 impl Method {
+    /// `swr` (stepwise regression, SIDPAC's cut-off) or `mof` (orthogonal functions, SIDPAC
+    /// `offit`'s ranking).
+    ///
+    /// # Errors
+    /// Another name, listing the two.
+    pub fn from_name(name: &str) -> Result<Self, String> {
+        match name {
+            "swr" => Ok(Method::Stepwise(StepwiseConfig::default())),
+            "mof" => Ok(Method::Orthogonal(Ranking::Generation)),
+            _ => Err(format!("unknown selection method `{name}` (swr or mof)")),
+        }
+    }
+
     /// `swr` or `mof`, as the summary names it.
     pub fn name(&self) -> &'static str {
         match self {
@@ -132,8 +152,9 @@ fn check_candidates(candidates: &[Term]) -> Result<(), String> {
     Ok(())
 }
 
-/// Reads the record (split at its gaps, spikes screened, as the batch fits read it) and selects
-/// each of `coefficients`' terms among `candidates`.
+/// Reads the record and selects each of `coefficients`' terms among `candidates`, as
+/// [`select_model`] does for `--model auto` (the same reading and conditioning, default
+/// differentiator window, the record's own sample interval).
 ///
 /// # Errors
 /// Reading errors, no usable samples, and [`select_on_samples`]'s ([`ReplayError::Model`]).
@@ -143,10 +164,105 @@ pub fn select_structure<R: Read>(
     candidates: &[Term],
     method: Method,
 ) -> Result<Vec<CoefficientSelection>, ReplayError> {
-    let rec = crate::replay::batch::read_manoeuvres(reader, None, &[])?;
-    let slices: Vec<&[AirDataSample]> = rec.manoeuvres.iter().map(Vec::as_slice).collect();
+    let (rec, first) = read_for_selection(vec![reader], None, &[])?;
+    let supplied = to_supply(&Wanted { coefficients, candidates }, &first);
+    let rec = condition(&rec, supplied, DIFF_WINDOW, None)?;
+    let slices = rec.slices();
     coefficients
         .iter()
         .map(|&c| select_on_samples(&slices, c, candidates, method).map_err(ReplayError::Model))
         .collect()
+}
+
+/// The differentiator window of [`select_structure`], samples: the replay's default.
+pub const DIFF_WINDOW: usize = 5;
+
+/// What a selection needs from the record: the coefficients (`q̇` for `Cm`, `ṗ` and `ṙ` for
+/// `Cl` and `Cn`) and the candidates (`α̇` for `alphadot`).
+struct Wanted<'a> {
+    coefficients: &'a [Coefficient],
+    candidates: &'a [Term],
+}
+
+impl Wanted<'_> {
+    fn needs(&self, d: Derivative) -> bool {
+        let has = |c| self.coefficients.contains(&c);
+        match d {
+            Derivative::Qdot => has(Coefficient::Cm),
+            Derivative::Pdot | Derivative::Rdot => has(Coefficient::Cl) || has(Coefficient::Cn),
+            Derivative::Alphadot => self.candidates.contains(&Term::Alphadot),
+        }
+    }
+}
+
+/// A record read for a selection: its manoeuvres with the derivatives supplied.
+struct Conditioned {
+    manoeuvres: Vec<Vec<AirDataSample>>,
+    supplied: Vec<Derivative>,
+    read: usize,
+}
+
+impl Conditioned {
+    fn slices(&self) -> Vec<&[AirDataSample]> {
+        self.manoeuvres.iter().map(Vec::as_slice).collect()
+    }
+
+    fn first(&self) -> Option<&AirDataSample> {
+        self.manoeuvres.iter().flatten().next()
+    }
+}
+
+/// Reads the records as the batch fits read them (split at gaps, spikes screened, `compat`
+/// and `windows` applied); the samples read and the first usable one.
+fn read_for_selection<R: Read>(
+    readers: Vec<FlightDataReader<R>>,
+    compat: Option<&crate::compat::Corrections>,
+    windows: &[crate::window::TimeWindow],
+) -> Result<(crate::replay::batch::Manoeuvres, AirDataSample), ReplayError> {
+    let file = readers.first().map_or(String::new(), |r| r.file().to_string());
+    let screen = Some(crate::replay::outliers::SpikeScreen::default());
+    let rec = crate::replay::batch::read_records(readers, screen, compat, windows)?;
+    let first = rec.manoeuvres.iter().flatten().next().copied().ok_or_else(|| {
+        ReplayError::Model(format!("{file}: no usable sample to select a structure on"))
+    })?;
+    Ok((rec, first))
+}
+
+/// The derivatives `wanted` needs that the record lacks (judged on its `first` sample).
+fn to_supply(wanted: &Wanted, first: &AirDataSample) -> Vec<Derivative> {
+    Derivative::ALL
+        .into_iter()
+        .filter(|&d| wanted.needs(d) && d.recorded(first).is_none() && d.source(first).is_some())
+        .collect()
+}
+
+/// Supplies the derivatives `wanted` needs and the record lacks through the conditioning stage
+/// with the matched smoother ([`Alignment::Matched`]: both sides of the regression see the
+/// same filter); only then are the other channels smoothed. The first and last `(N−1)/2`
+/// samples of each manoeuvre get no centred derivative and are left out.
+fn condition(
+    rec: &crate::replay::batch::Manoeuvres,
+    supplied: Vec<Derivative>,
+    diff_window: usize,
+    nominal_dt_s: Option<f64>,
+) -> Result<Conditioned, ReplayError> {
+    let diff_err = |e: aeroident_signals::differentiate::DifferentiateError| ReplayError::Option {
+        option: "diff-window",
+        reason: e.to_string(),
+    };
+    let mut manoeuvres = Vec::with_capacity(rec.manoeuvres.len());
+    for m in &rec.manoeuvres {
+        let mut stage = Conditioner::new(Conditioning {
+            derivatives: supplied.clone(),
+            window: diff_window,
+            nominal_dt_s,
+            alignment: Alignment::Matched,
+        });
+        let (mut ready, mut unused) = (Vec::new(), Vec::new());
+        for (row, s) in m.iter().enumerate() {
+            stage.push(row as u64, *s, &mut ready, &mut unused).map_err(diff_err)?;
+        }
+        manoeuvres.push(ready.into_iter().map(|(_, s)| s).collect());
+    }
+    Ok(Conditioned { manoeuvres, supplied, read: rec.read })
 }

@@ -1,0 +1,506 @@
+//! `--model auto`: the model structure chosen from the record itself, coefficient by
+//! coefficient, by equation error ([`super::select_on_samples`]), then handed to any estimator
+//! as an ordinary [`ModelSpec`] (Klein & Morelli 2006 ch. 5: determine the structure by
+//! regression, then estimate its parameters by output error).
+//!
+//! The record is read as the batch fits read it (split at gaps, spikes screened, compatibility
+//! corrections and time windows applied). The time derivatives the record lacks (`ṗ`, `q̇`,
+//! `ṙ` for the moment coefficients, `α̇` for the `alphadot` candidate) come from the
+//! conditioning stage with the matched smoother ([`crate::condition::Alignment::Matched`]), so
+//! both sides of the regression see the same filter.
+
+use super::{
+    CoefficientSelection, Method, Wanted, condition, read_for_selection, select_on_samples,
+    to_supply,
+};
+use crate::condition::Derivative;
+use crate::replay::ReplayError;
+use aeroident_estimators::structure::StepAction;
+use aeroident_estimators::{AirDataSample, Coefficient, ModelStructure, Param, Priors, Term};
+use aeroident_io::{FlightDataReader, Mapping, ModelSpec};
+use serde::Serialize;
+use std::io::Read;
+
+/// Which coefficients the selection covers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scope {
+    /// `CL`, `CD`, `Cm`.
+    Longitudinal,
+    /// `CY`, `Cl`, `Cn`.
+    Lateral,
+    /// Both.
+    SixAxis,
+}
+
+impl Scope {
+    /// `longitudinal`, `lateral` or `six-axis` (the preset names).
+    pub fn name(self) -> &'static str {
+        match self {
+            Scope::Longitudinal => "longitudinal",
+            Scope::Lateral => "lateral",
+            Scope::SixAxis => "six-axis",
+        }
+    }
+
+    /// The coefficients selected, in vocabulary order.
+    pub fn coefficients(self) -> Vec<Coefficient> {
+        let lon = [Coefficient::CL, Coefficient::CD, Coefficient::Cm];
+        let lat = [Coefficient::CY, Coefficient::Cl, Coefficient::Cn];
+        let mut c: Vec<Coefficient> = match self {
+            Scope::Longitudinal => lon.to_vec(),
+            Scope::Lateral => lat.to_vec(),
+            Scope::SixAxis => lon.into_iter().chain(lat).collect(),
+        };
+        c.sort();
+        c
+    }
+
+    /// The default candidates of coefficient `c`: the preset's terms and the nonlinear ones a
+    /// flight-test engineer tries next (Klein & Morelli 2006 §5.4: α², α·δe and V/V0 for the
+    /// longitudinal coefficients; α·β for the lateral ones). `alphadot` is offered only when
+    /// asked for (`AutoModel::candidates`): in most manoeuvres α̇ and q̂ move together, and α̇
+    /// also stands in for a lag of the α channel behind the kinematics. On the HFB-320 (α ~0.2 s
+    /// late) it enters CL with partial F ≈ 1,700, and output error then gives CL_q −216 ± 1,325
+    /// and CL_alphadot 312 ± 1,498: a pair the record cannot separate.
+    pub fn default_candidates(c: Coefficient) -> Vec<Term> {
+        use Term::*;
+        if matches!(c, Coefficient::CY | Coefficient::Cl | Coefficient::Cn) {
+            vec![Beta, P, R, Da, Dr, AlphaBeta]
+        } else {
+            vec![Alpha, Q, De, V, Alpha2, AlphaDe]
+        }
+    }
+}
+
+/// `--model auto[:longitudinal|lateral|six-axis]`: the scope (`None`: six-axis when the record
+/// has β and the lateral channels, else longitudinal), the method and, optionally, the
+/// candidates of every coefficient (else [`Scope::default_candidates`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct AutoModel {
+    /// The coefficients covered; `None`: the richest the record supports.
+    pub scope: Option<Scope>,
+    /// Stepwise regression or orthogonal functions.
+    pub method: Method,
+    /// The candidates of every coefficient; `None`: the defaults.
+    pub candidates: Option<Vec<Term>>,
+}
+
+impl AutoModel {
+    /// Reads a `--model` argument: `None` when it does not start with `auto`.
+    ///
+    /// # Errors
+    /// `auto:` followed by something other than a scope, naming the valid ones.
+    pub fn parse(arg: &str, method: Method) -> Option<Result<Self, String>> {
+        let rest = arg.strip_prefix("auto")?;
+        let scope = match rest {
+            "" => None,
+            ":longitudinal" => Some(Scope::Longitudinal),
+            ":lateral" => Some(Scope::Lateral),
+            ":six-axis" => Some(Scope::SixAxis),
+            _ => {
+                return Some(Err(format!(
+                    "--model {arg}: write `auto`, `auto:longitudinal`, `auto:lateral` or `auto:six-axis`"
+                )));
+            }
+        };
+        Some(Ok(Self { scope, method, candidates: None }))
+    }
+
+    /// The faces' arguments: a `--model` value, the method's name ([`Method::from_name`]) and
+    /// candidate names (empty: the defaults). `None` when `model` does not start with `auto`.
+    ///
+    /// # Errors
+    /// A bad scope or method, or a candidate that is not a vocabulary term (or is the constant).
+    pub fn from_args(
+        model: &str,
+        method: &str,
+        candidates: &[String],
+    ) -> Option<Result<Self, String>> {
+        let method = match Method::from_name(method) {
+            Ok(m) => m,
+            Err(e) if model.starts_with("auto") => return Some(Err(e)),
+            Err(_) => return None,
+        };
+        let auto = match Self::parse(model, method)? {
+            Ok(a) => a,
+            Err(e) => return Some(Err(e)),
+        };
+        if candidates.is_empty() {
+            return Some(Ok(auto));
+        }
+        let terms = candidates.iter().map(|n| {
+            Term::from_name(n).filter(|t| *t != Term::Bias).ok_or_else(|| {
+                let valid: Vec<&str> =
+                    Term::ALL.iter().filter(|t| **t != Term::Bias).map(|t| t.name()).collect();
+                format!("candidate `{n}` is not a term of the vocabulary ({})", valid.join(", "))
+            })
+        });
+        Some(terms.collect::<Result<Vec<_>, _>>().map(|c| Self { candidates: Some(c), ..auto }))
+    }
+}
+
+/// A structure chosen from the record: the model to fit and how it was chosen.
+#[derive(Debug, Clone)]
+pub struct AutoSelection {
+    /// The model: each coefficient's constant and kept terms, generic priors.
+    pub model: ModelSpec,
+    /// The scope used (given, or the richest the record supports).
+    pub scope: Scope,
+    /// The method.
+    pub method: Method,
+    /// Each coefficient's selection.
+    pub selections: Vec<CoefficientSelection>,
+    /// Candidates the record cannot evaluate (a channel or constant unmapped), left out.
+    pub unavailable: Vec<Term>,
+    /// Derivatives the conditioning stage supplied.
+    pub supplied: Vec<Derivative>,
+    /// Samples read.
+    pub samples_read: usize,
+    /// Samples with their derivatives, over all manoeuvres (the derivative stage leaves out
+    /// each manoeuvre's ends).
+    pub samples_used: usize,
+}
+
+/// Reads the records and selects each coefficient's terms (module doc).
+///
+/// # Errors
+/// Reading errors, no usable sample, a scope the record cannot support (no β for the lateral
+/// coefficients), a coefficient with no candidate left, and [`select_on_samples`]'s.
+pub fn select_model<R: Read>(
+    readers: Vec<FlightDataReader<R>>,
+    mapping: &Mapping,
+    auto: &AutoModel,
+    compat: Option<&crate::compat::Corrections>,
+    windows: &[crate::window::TimeWindow],
+    diff_window: usize,
+) -> Result<AutoSelection, ReplayError> {
+    let file = readers.first().map_or(String::new(), |r| r.file().to_string());
+    let (raw, first) = read_for_selection(readers, compat, windows)?;
+    let offered = |c| auto.candidates.clone().unwrap_or_else(|| Scope::default_candidates(c));
+    let scope = auto.scope.unwrap_or_else(|| richest_scope(&first));
+    let coefficients = scope.coefficients();
+    let candidates: Vec<Term> = coefficients.iter().flat_map(|&c| offered(c)).collect();
+    let supplied =
+        to_supply(&Wanted { coefficients: &coefficients, candidates: &candidates }, &first);
+    let rec = condition(&raw, supplied, diff_window, mapping.nominal_dt_s)?;
+    let probe = rec.first().copied().ok_or_else(|| {
+        ReplayError::Model(format!(
+            "{file}: every manoeuvre is shorter than the differentiator window ({diff_window} samples)"
+        ))
+    })?;
+    let slices = rec.slices();
+    let mut unavailable = Vec::new();
+    let mut selections = Vec::new();
+    for &c in &coefficients {
+        let (usable, missing): (Vec<Term>, Vec<Term>) =
+            offered(c).into_iter().partition(|t| t.value(&probe).is_some());
+        for t in missing {
+            if !unavailable.contains(&t) {
+                unavailable.push(t);
+            }
+        }
+        if usable.is_empty() {
+            return Err(ReplayError::Model(format!(
+                "{file}: {}: no candidate term can be evaluated on this record (unmapped: {})",
+                c.name(),
+                names(&unavailable)
+            )));
+        }
+        selections
+            .push(select_on_samples(&slices, c, &usable, auto.method).map_err(ReplayError::Model)?);
+    }
+    let model = model_of(&selections, scope, auto.method, &file)?;
+    Ok(AutoSelection {
+        model,
+        scope,
+        method: auto.method,
+        selections,
+        unavailable,
+        supplied: rec.supplied.clone(),
+        samples_read: rec.read,
+        samples_used: slices.iter().map(|m| m.len()).sum(),
+    })
+}
+
+/// The model of a face's arguments (`--model`, `--select`, `--candidates`): a preset or a
+/// model file as [`ModelSpec::from_arg`] reads it, or, for `auto…`, the structure
+/// [`select_model`] chooses on the records `open` gives (`None` and `None`: no model given).
+///
+/// # Errors
+/// `method` other than `swr` or `candidates` without `auto`; a bad model argument or file;
+/// `open`'s and [`select_model`]'s errors.
+#[allow(clippy::too_many_arguments)]
+pub fn model_from_args<R: Read>(
+    model: Option<&str>,
+    method: &str,
+    candidates: &[String],
+    open: impl FnOnce() -> Result<Vec<FlightDataReader<R>>, aeroident_io::FlightDataError>,
+    mapping: &Mapping,
+    compat: Option<&crate::compat::Corrections>,
+    windows: &[crate::window::TimeWindow],
+    diff_window: usize,
+) -> Result<(Option<ModelSpec>, Option<AutoSelection>), ReplayError> {
+    let arg = model.unwrap_or_default();
+    let Some(auto) = AutoModel::from_args(arg, method, candidates) else {
+        if !candidates.is_empty() || method != "swr" {
+            return Err(ReplayError::Option {
+                option: "select",
+                reason: "a selection method and candidates apply to the model `auto`".into(),
+            });
+        }
+        let spec = model.map(ModelSpec::from_arg).transpose();
+        return Ok((spec.map_err(|e| ReplayError::Model(e.to_string()))?, None));
+    };
+    let auto = auto.map_err(|e| ReplayError::Model(format!("model `{arg}`: {e}")))?;
+    let selection = select_model(open()?, mapping, &auto, compat, windows, diff_window)?;
+    Ok((Some(selection.model.clone()), Some(selection)))
+}
+
+/// Six-axis when the record measures the lateral coefficients (β, and the rates whose
+/// derivatives the conditioning stage would supply), else longitudinal.
+fn richest_scope(first: &AirDataSample) -> Scope {
+    let mut s = *first;
+    for d in Derivative::ALL {
+        if d.recorded(&s).is_none() && d.source(&s).is_some() {
+            d.set(&mut s, Some(0.0));
+        }
+    }
+    let measured = s.measured_coefficients();
+    let lateral = Scope::Lateral.coefficients().iter().all(|c| measured[c.index()].is_some());
+    if lateral && s.beta_rad.is_some() { Scope::SixAxis } else { Scope::Longitudinal }
+}
+
+fn names(terms: &[Term]) -> String {
+    terms.iter().map(|t| t.name()).collect::<Vec<_>>().join(", ")
+}
+
+/// The model of the kept terms, each coefficient with its constant.
+fn model_of(
+    selections: &[CoefficientSelection],
+    scope: Scope,
+    method: Method,
+    file: &str,
+) -> Result<ModelSpec, ReplayError> {
+    let mut structure = ModelStructure::empty();
+    for s in selections {
+        structure.insert(Param::new(s.coefficient, Term::Bias));
+        for t in s.kept() {
+            structure.insert(Param::new(s.coefficient, t));
+        }
+    }
+    let structure = structure.validated().map_err(|e| ReplayError::Model(e.to_string()))?;
+    Ok(ModelSpec {
+        name: format!("auto:{} ({})", scope.name(), method.name()),
+        description: format!(
+            "selected by {} on {file} (aeroident --model auto)",
+            match method {
+                Method::Stepwise(_) => "stepwise regression",
+                Method::Orthogonal(_) => "multivariate orthogonal functions",
+            }
+        ),
+        priors: Priors::generic(&structure),
+        structure,
+        references: Vec::new(),
+    })
+}
+
+/// One step of a selection path, as `summary.json` gives it.
+#[derive(Debug, Clone, Serialize)]
+pub struct PathStep {
+    /// `enter` or `remove`.
+    pub action: &'static str,
+    /// The term moved.
+    pub term: &'static str,
+    /// Its partial F ratio (after entering, or when it left); `null` when infinite.
+    pub partial_f: Option<f64>,
+    /// Predicted squared error of the model after the step.
+    pub pse: f64,
+    /// `R²` after the step.
+    pub r2: f64,
+}
+
+/// One coefficient's selection, as `summary.json` gives it.
+#[derive(Debug, Clone, Serialize)]
+pub struct CoefficientReport {
+    /// The coefficient.
+    pub coefficient: &'static str,
+    /// The candidates offered.
+    pub candidates: Vec<&'static str>,
+    /// The terms kept (the constant is always in the model).
+    pub kept: Vec<&'static str>,
+    /// The path.
+    pub path: Vec<PathStep>,
+    /// Why the selection stopped.
+    pub stopped: String,
+    /// Equation-error estimates of the kept terms and the constant: name, value, standard
+    /// error (least squares, `s²(XᵀX)⁻¹`: no allowance for coloured residuals).
+    pub equation_error: Vec<(String, f64, f64)>,
+    /// `R²` of the final fit.
+    pub r2: f64,
+    /// Predicted squared error of the final fit.
+    pub pse: f64,
+    /// Samples used, and left out (coefficient or a candidate not measured).
+    pub samples: usize,
+    /// Samples left out.
+    pub skipped: usize,
+}
+
+/// `structure_selection` of `summary.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct StructureReport {
+    /// `swr` or `mof`.
+    pub method: &'static str,
+    /// Stepwise: partial F to enter and to leave; `null` for orthogonal functions.
+    pub f_in: Option<f64>,
+    /// As `f_in`.
+    pub f_out: Option<f64>,
+    /// The coefficients covered.
+    pub scope: &'static str,
+    /// Candidates the record cannot evaluate, left out.
+    pub unavailable: Vec<&'static str>,
+    /// Derivatives the conditioning stage supplied.
+    pub derivatives_supplied: Vec<&'static str>,
+    /// Samples read and used.
+    pub samples_read: usize,
+    /// As `samples_read`.
+    pub samples_used: usize,
+    /// Per coefficient.
+    pub coefficients: Vec<CoefficientReport>,
+}
+
+impl AutoSelection {
+    /// The report for `summary.json`.
+    pub fn report(&self) -> StructureReport {
+        let (f_in, f_out) = match self.method {
+            Method::Stepwise(c) => (Some(c.f_in), Some(c.f_out)),
+            Method::Orthogonal(_) => (None, None),
+        };
+        StructureReport {
+            method: self.method.name(),
+            f_in,
+            f_out,
+            scope: self.scope.name(),
+            unavailable: self.unavailable.iter().map(|t| t.name()).collect(),
+            derivatives_supplied: self.supplied.iter().map(|d| d.name()).collect(),
+            samples_read: self.samples_read,
+            samples_used: self.samples_used,
+            coefficients: self.selections.iter().map(coefficient_report).collect(),
+        }
+    }
+
+    /// The selection path for people: per coefficient, one line per step and the result.
+    pub fn path_lines(&self) -> Vec<String> {
+        let mut lines = vec![format!(
+            "structure: {} on {} samples, {} coefficients{}",
+            self.method.name(),
+            self.samples_used,
+            self.scope.name(),
+            if self.unavailable.is_empty() {
+                String::new()
+            } else {
+                format!(" (not in the record: {})", names(&self.unavailable))
+            }
+        )];
+        for r in self.selections.iter().map(coefficient_report) {
+            let steps: Vec<String> = r
+                .path
+                .iter()
+                .map(|s| {
+                    let sign = if s.action == "enter" { "+" } else { "−" };
+                    let f = s.partial_f.map_or("∞".into(), |f| format!("{f:.1}"));
+                    format!("{sign}{} (F {f}, PSE {:.3e})", s.term, s.pse)
+                })
+                .collect();
+            lines.push(format!(
+                "  {}: {} → keeps 0, {} (R² {:.3}); {}",
+                r.coefficient,
+                steps.join(", "),
+                r.kept.join(", "),
+                r.r2,
+                r.stopped
+            ));
+        }
+        lines
+    }
+}
+
+fn coefficient_report(s: &CoefficientSelection) -> CoefficientReport {
+    let term = |k: usize| s.candidates[k].name();
+    let fit = &s.selection.fit;
+    let mut equation_error: Vec<(String, f64, f64)> = fit
+        .terms
+        .iter()
+        .enumerate()
+        .map(|(i, &k)| {
+            (
+                Param::new(s.coefficient, s.candidates[k]).name().to_string(),
+                fit.theta[i],
+                fit.std_error[i],
+            )
+        })
+        .collect();
+    let n = fit.terms.len();
+    equation_error.push((
+        Param::new(s.coefficient, Term::Bias).name().to_string(),
+        fit.theta[n],
+        fit.std_error[n],
+    ));
+    CoefficientReport {
+        coefficient: s.coefficient.name(),
+        candidates: s.candidates.iter().map(|t| t.name()).collect(),
+        kept: s.kept().iter().map(|t| t.name()).collect(),
+        path: s
+            .selection
+            .path
+            .iter()
+            .map(|p| PathStep {
+                action: match p.action {
+                    StepAction::Enter => "enter",
+                    StepAction::Remove => "remove",
+                },
+                term: term(p.candidate),
+                partial_f: p.partial_f.is_finite().then_some(p.partial_f),
+                pse: p.pse,
+                r2: p.r2,
+            })
+            .collect(),
+        stopped: s.selection.stopped.clone(),
+        equation_error,
+        r2: fit.r2,
+        pse: fit.pse,
+        samples: s.samples,
+        skipped: s.skipped,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn from_args_reads_scope_method_and_candidates() {
+        let a = AutoModel::from_args("auto:lateral", "mof", &[]).unwrap().unwrap();
+        assert_eq!(a.scope, Some(Scope::Lateral));
+        assert_eq!(a.method.name(), "mof");
+        assert_eq!(a.candidates, None);
+        let b = AutoModel::from_args("auto", "swr", &["alphadot".into(), "q".into()]);
+        let b = b.unwrap().unwrap();
+        assert_eq!((b.scope, b.candidates), (None, Some(vec![Term::Alphadot, Term::Q])));
+        assert!(AutoModel::from_args("longitudinal", "swr", &[]).is_none());
+        assert!(AutoModel::from_args("auto:pitch", "swr", &[]).unwrap().is_err());
+        assert!(AutoModel::from_args("auto", "lasso", &[]).unwrap().is_err());
+        let e = AutoModel::from_args("auto", "swr", &["0".into()]).unwrap().unwrap_err();
+        assert!(e.contains("`0`") && e.contains("alpha_beta"), "{e}");
+    }
+
+    #[test]
+    fn scopes_cover_their_coefficients() {
+        let six = Scope::SixAxis.coefficients();
+        assert_eq!(six.len(), 6);
+        for c in Scope::Longitudinal.coefficients().into_iter().chain(Scope::Lateral.coefficients())
+        {
+            assert!(six.contains(&c));
+            assert!(!Scope::default_candidates(c).contains(&Term::Alphadot));
+        }
+    }
+}

@@ -3,7 +3,8 @@
 //! ```text
 //! aeroident replay <data.csv|.asc|.mat|-> --map <map.toml> [--format csv|asc|mat|ulog|dataflash]
 //!                  [--out <dir>]
-//!                  [--model longitudinal|lateral|six-axis|FILE]
+//!                  [--model longitudinal|lateral|six-axis|FILE|auto[:longitudinal|lateral|six-axis]]
+//!                  [--select swr|mof] [--candidates TERM,…]
 //!                  [--estimator rls|rls-iv|ftr|ekf|smpe|smpe-corrected|gradient|oe|fem]
 //!                  [--forgetting λ] [--instrument-delay N]
 //!                  [--derivatives auto|differentiate] [--diff-window N] [--realtime]
@@ -43,6 +44,12 @@
 //! ±2σ prediction intervals; `docs/validation.md`), printed as a short block on stderr.
 //! `--validate-on FILE2` applies the final estimates to a second record (same mapping) and
 //! reports the same metrics there under `validation_on`.
+//!
+//! `--model auto` chooses each coefficient's terms from the record by equation error
+//! (`--select swr`, stepwise regression, or `mof`, orthogonal functions;
+//! `aeroident_pipelines::structure::select_model`), prints the selection path, writes it in
+//! `summary.json` (`structure_selection`) and the chosen model as `<dir>/model.toml`, then
+//! fits that model with the estimator asked for.
 
 use aeroident_estimators::flight_model::N_STATES;
 use aeroident_estimators::output_error::InitialStates;
@@ -53,6 +60,7 @@ use aeroident_pipelines::estimators::EstimatorKind;
 use aeroident_pipelines::replay::{
     DerivativeSource, EstimateRows, Pacing, ReplayObserver, ReplayOptions, replay,
 };
+use aeroident_pipelines::structure::AutoSelection;
 use aeroident_pipelines::window::TimeWindow;
 use anyhow::Context;
 use std::io::Write;
@@ -77,10 +85,22 @@ pub struct ReplayArgs {
     /// estimates.csv (real-time estimators).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Model: a preset (`longitudinal`, `lateral`, `six-axis`) or a model file (TOML, see
-    /// `models/`). Default: the richest preset the record's first sample supports.
+    /// Model: a preset (`longitudinal`, `lateral`, `six-axis`), a model file (TOML, see
+    /// `models/`), or `auto[:longitudinal|lateral|six-axis]`: the terms chosen from the
+    /// record (see `--select`). Default: the richest preset the record's first sample supports.
     #[arg(long)]
     pub model: Option<String>,
+    /// How `--model auto` chooses terms: `swr` (stepwise regression, partial F cut-off 20,
+    /// SIDPAC `swr`) or `mof` (multivariate orthogonal functions to the PSE minimum, SIDPAC
+    /// `offit`).
+    #[arg(long, value_parser = ["swr", "mof"], default_value = "swr")]
+    pub select: String,
+    /// `--model auto`: the candidate terms of every coefficient, comma-separated (vocabulary
+    /// names: alpha, q, alphadot, de, V, alpha2, alpha_de, beta, p, r, da, dr, alpha_beta).
+    /// Default: per coefficient, its preset's terms and the usual nonlinear ones; `alphadot`
+    /// only when listed here (it also stands in for a lag of the α channel).
+    #[arg(long, value_delimiter = ',')]
+    pub candidates: Vec<String>,
     /// The estimator.
     #[arg(long, value_parser = super::named::<EstimatorKind>(), default_value = "rls")]
     pub estimator: EstimatorKind,
@@ -216,9 +236,10 @@ fn parse_window(text: &str) -> Result<TimeWindow, String> {
 /// estimator errors (not available, bad option, diverged), and output I/O errors.
 pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     let mapping = Mapping::from_path(&args.map)?;
-    let model = args.model.as_deref().map(ModelSpec::from_arg).transpose()?;
     let mavlink = crate::live::is_mavlink(&args.data);
     let live = args.data == "-" || mavlink;
+    let compat = compat_corrections(&args, &mapping, live)?;
+    let (model, selection) = resolve_model(&args, &mapping, compat.as_ref(), live)?;
     let opts = ReplayOptions {
         estimator: args.estimator,
         model,
@@ -227,7 +248,7 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         diff_window: args.diff_window,
         instrument_delay: args.instrument_delay,
         pacing: if args.realtime { Pacing::Realtime } else { Pacing::Unpaced },
-        compat: compat_corrections(&args, &mapping, live)?,
+        compat,
         windows: args.windows.clone(),
         spike_screen: (!args.no_spike_screen)
             .then(aeroident_pipelines::replay::outliers::SpikeScreen::default),
@@ -251,7 +272,7 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         );
     }
     if args.estimator.is_batch() {
-        return execute_batch(&args, &mapping, opts.model, opts.compat);
+        return execute_batch(&args, &mapping, opts.model, opts.compat, selection);
     }
     if args.cross_check && (live || args.estimator.is_batch()) {
         anyhow::bail!(
@@ -456,7 +477,10 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         outcome.summary.samples_read,
         &mut outcome.summary.warnings,
     );
-    let summary_text = serde_json::to_string_pretty(&outcome.document(validation_on.as_ref()))?;
+    let summary_text = summary_json(&outcome.document(validation_on.as_ref()), selection.as_ref())?;
+    if let (Some(s), Some(o)) = (&selection, out_dir.as_mut()) {
+        o.write_bytes("model.toml", s.model.to_toml().as_bytes())?;
+    }
     match &args.out {
         Some(dir) if summary_only => {
             let o = out_dir.as_mut().context("internal: output directory not open")?;
@@ -615,6 +639,53 @@ pub fn validation_block(v: &aeroident_pipelines::replay::prediction::ValidationR
         let _ = writeln!(s, "  note: {n}");
     }
     s
+}
+
+/// `--model`: a preset or file, or (`auto…`) the structure chosen from the record, whose
+/// selection path is printed on stderr.
+fn resolve_model(
+    args: &ReplayArgs,
+    mapping: &Mapping,
+    compat: Option<&aeroident_pipelines::compat::Corrections>,
+    live: bool,
+) -> anyhow::Result<(Option<ModelSpec>, Option<AutoSelection>)> {
+    let auto = args.model.as_deref().is_some_and(|m| m.starts_with("auto"));
+    if auto && live {
+        anyhow::bail!(
+            "--model auto selects the terms on the whole record: give a file, not a live feed"
+        );
+    }
+    let open = || {
+        let files = std::iter::once(&args.data).chain(&args.and);
+        files.map(|f| open_log_with_notes(f, args.format, mapping).map(|(r, _)| r)).collect()
+    };
+    let (model, selection) = aeroident_pipelines::structure::model_from_args(
+        args.model.as_deref(),
+        &args.select,
+        &args.candidates,
+        open,
+        mapping,
+        compat,
+        &args.windows,
+        args.diff_window,
+    )?;
+    for line in selection.iter().flat_map(AutoSelection::path_lines) {
+        eprintln!("{line}");
+    }
+    Ok((model, selection))
+}
+
+/// `summary.json`'s text: `summary` with the structure selection (`structure_selection`) of
+/// `--model auto`.
+fn summary_json(
+    summary: &impl serde::Serialize,
+    selection: Option<&AutoSelection>,
+) -> anyhow::Result<String> {
+    let mut doc = serde_json::to_value(summary)?;
+    if let (Some(s), Some(map)) = (selection, doc.as_object_mut()) {
+        map.insert("structure_selection".into(), serde_json::to_value(s.report())?);
+    }
+    Ok(serde_json::to_string_pretty(&doc)?)
 }
 
 /// `--compat FILE|auto`: the corrections to apply, if any (`auto` runs the check on the record,
@@ -845,6 +916,7 @@ fn execute_batch(
     mapping: &Mapping,
     model: Option<ModelSpec>,
     compat: Option<aeroident_pipelines::compat::Corrections>,
+    selection: Option<AutoSelection>,
 ) -> anyhow::Result<()> {
     let fem = args.estimator == EstimatorKind::Fem;
     let options = fit_options(args, compat)?;
@@ -868,7 +940,7 @@ fn execute_batch(
     };
     let Some(interrupt) = interrupt else {
         let (outcome, reports) = input.read_and_fit(None)?;
-        return write_batch(args, mapping, outcome, reports, None);
+        return write_batch(args, mapping, outcome, reports, None, selection.as_ref());
     };
     let stdin = crate::interrupt::InterruptibleStdin::new(interrupt.flag());
     let progress = stdin.progress();
@@ -901,7 +973,7 @@ fn execute_batch(
     if cut {
         mark_interrupted(&mut outcome.summary, &interrupt.signal_name().unwrap_or_default());
     }
-    write_batch(args, mapping, outcome, reports, Some(&interrupt))
+    write_batch(args, mapping, outcome, reports, Some(&interrupt), None)
 }
 
 /// The output directory of `--out`, opened (locked, the previous run's files cleared).
@@ -962,6 +1034,7 @@ fn write_batch(
     mut outcome: aeroident_pipelines::replay::batch::BatchOutcome,
     reports: Vec<aeroident_io::ReaderReport>,
     interrupt: Option<&crate::interrupt::Interrupt>,
+    selection: Option<&AutoSelection>,
 ) -> anyhow::Result<()> {
     outcome.summary.reader = reports;
     let interrupted = outcome.summary.status == aeroident_pipelines::replay::STATUS_INTERRUPTED;
@@ -995,11 +1068,14 @@ fn write_batch(
         outcome.summary.samples_read,
         &mut outcome.summary.warnings,
     );
-    let text = serde_json::to_string_pretty(&outcome.summary)?;
+    let text = summary_json(&outcome.summary, selection)?;
     match &args.out {
         Some(dir) => {
             let mut out = crate::outdir::OutputDir::open(dir, "replay", &input_paths(args))?;
             let path = out.write_bytes("summary.json", text.as_bytes())?;
+            if let Some(s) = selection {
+                out.write_bytes("model.toml", s.model.to_toml().as_bytes())?;
+            }
             if summary_only {
                 out.finish();
                 eprintln!("wrote {}", path.display());

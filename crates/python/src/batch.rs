@@ -7,11 +7,12 @@ use std::path::Path;
 
 use aeroident_estimators::flight_model::N_STATES;
 use aeroident_estimators::output_error::InitialStates;
-use aeroident_io::{Mapping, ModelSpec, open_log_with_notes, open_log_with_report};
+use aeroident_io::{Mapping, open_log_with_notes, open_log_with_report};
 use aeroident_pipelines::estimators::EstimatorKind;
 use aeroident_pipelines::replay::batch::{
     BatchOutcome, FitOptions, fit_records, parse_process_noise_states, validate_on,
 };
+use aeroident_pipelines::structure::{AutoSelection, model_from_args};
 use numpy::IntoPyArray;
 use numpy::ndarray::Array2;
 use pyo3::prelude::*;
@@ -45,7 +46,7 @@ fn matrix(v: Vec<f64>, rows: usize, cols: usize) -> PyResult<Array2<f64>> {
 /// (documentation:
 /// `aeroident.fit` in python/aeroident/__init__.py).
 #[pyfunction]
-#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None, max_iterations=None, process_noise=None, compat=None, windows=None, also=None))]
+#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None, max_iterations=None, process_noise=None, compat=None, windows=None, also=None, select="swr", candidates=None))]
 #[allow(clippy::too_many_arguments)]
 fn fit_file<'py>(
     py: Python<'py>,
@@ -61,7 +62,10 @@ fn fit_file<'py>(
     compat: Option<&str>,
     windows: Option<Vec<(f64, f64)>>,
     also: Option<Vec<String>>,
+    select: &str,
+    candidates: Option<Vec<String>>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let (select, candidates) = (select.to_owned(), candidates.unwrap_or_default());
     let windows = crate::record::time_windows("fit", windows)?;
     let also = also.unwrap_or_default();
     let compat = compat
@@ -86,9 +90,22 @@ fn fit_file<'py>(
         .map_err(|e| err(format!("fit: {e}")))?;
     let (path, mapping) = (path.to_owned(), mapping.to_owned());
     let (model, validate_with) = (model.map(str::to_owned), validate_with.map(str::to_owned));
-    let run = move || -> anyhow::Result<(BatchOutcome, Vec<String>)> {
+    let run = move || -> anyhow::Result<(BatchOutcome, Vec<String>, Option<AutoSelection>)> {
         let mapping = Mapping::from_path(Path::new(&mapping))?;
-        let model = model.as_deref().map(ModelSpec::from_arg).transpose()?;
+        let open = || {
+            let files = std::iter::once(&path).chain(&also);
+            files.map(|f| open_log_with_notes(f, None, &mapping).map(|(r, _)| r)).collect()
+        };
+        let (model, selection) = model_from_args(
+            model.as_deref(),
+            &select,
+            &candidates,
+            open,
+            &mapping,
+            compat.as_ref(),
+            &windows,
+            aeroident_pipelines::structure::DIFF_WINDOW,
+        )?;
         let (mut readers, mut notes, mut reports) = (Vec::new(), Vec::new(), Vec::new());
         for file in std::iter::once(&path).chain(&also) {
             let (reader, report) = open_log_with_report(file, None, &mapping)?;
@@ -114,12 +131,12 @@ fn fit_file<'py>(
             notes.extend(more);
             outcome.summary.validation_on = Some(validate_on(reader, &outcome)?);
         }
-        Ok((outcome, notes))
+        Ok((outcome, notes, selection))
     };
     let signals = crate::Signals::new();
     let r = py.detach(run);
     signals.finish(py)?;
-    let (outcome, notes) = r.map_err(to_py)?;
+    let (outcome, notes, selection) = r.map_err(to_py)?;
     let r = &outcome.result;
     let (n, np, ny) = (r.n(), r.n_params, r.outputs.len());
     let s = &outcome.summary;
@@ -149,6 +166,8 @@ fn fit_file<'py>(
     d.set_item("model", outcome.model.name.clone())?;
     d.set_item("notes", notes)?;
     let summary = serde_json::to_value(s).map_err(|e| err(e.to_string()))?;
+    let summary = crate::record::with_selection(summary, selection.as_ref())?;
     d.set_item("summary", convert::json_to_py(py, &summary)?)?;
+    d.set_item("selected_model", selection.map(|s| s.model.to_toml()))?;
     Ok(d)
 }

@@ -10,6 +10,7 @@ use aeroident_pipelines::replay::arrays::{EstimateArrays, replay_arrays_observed
 use aeroident_pipelines::replay::{
     DerivativeSource, Pacing, ReplayObserver, ReplayOptions, unsupported,
 };
+use aeroident_pipelines::structure::{AutoSelection, model_from_args};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyReadonlyArray1};
 use pyo3::prelude::*;
@@ -186,7 +187,7 @@ fn derivative_source(s: &str) -> PyResult<DerivativeSource> {
 /// Replays a record file exactly as `aeroident replay DATA --map MAPPING` (module doc of the
 /// Python package).
 #[pyfunction]
-#[pyo3(signature = (path, mapping, estimator="rls", model=None, forgetting=1.0, derivatives="auto", diff_window=5, compat=None, windows=None, cross_check=false))]
+#[pyo3(signature = (path, mapping, estimator="rls", model=None, forgetting=1.0, derivatives="auto", diff_window=5, compat=None, windows=None, cross_check=false, select="swr", candidates=None))]
 #[allow(clippy::too_many_arguments)]
 fn replay_file<'py>(
     py: Python<'py>,
@@ -200,7 +201,10 @@ fn replay_file<'py>(
     compat: Option<&str>,
     windows: Option<Vec<(f64, f64)>>,
     cross_check: bool,
+    select: &str,
+    candidates: Option<Vec<String>>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let (select, candidates) = (select.to_owned(), candidates.unwrap_or_default());
     let kind = estimator_kind(estimator)?;
     let windows = time_windows("replay", windows)?;
     let compat = compat.map(str::to_owned);
@@ -209,13 +213,27 @@ fn replay_file<'py>(
     let signals = Signals::new();
     let run = || -> anyhow::Result<_> {
         let mapping = Mapping::from_path(Path::new(&mapping))?;
-        let model = model.as_deref().map(ModelSpec::from_arg).transpose()?;
+        let compat = compat
+            .as_deref()
+            .map(|c| aeroident_pipelines::compat::Corrections::from_json(Path::new(c)))
+            .transpose()?;
         if kind.is_batch() {
             anyhow::bail!(
                 "estimator `{0}` is a batch method with no per-sample estimates: use `aeroident.fit(path, mapping, estimator=\"{0}\")` (CLI: `aeroident replay --estimator {0}`)",
                 kind.name()
             );
         }
+        let open = || open_log_with_notes(&path, None, &mapping).map(|(r, _)| vec![r]);
+        let (model, selection) = model_from_args(
+            model.as_deref(),
+            &select,
+            &candidates,
+            open,
+            &mapping,
+            compat.as_ref(),
+            &windows,
+            diff_window,
+        )?;
         let opts = ReplayOptions {
             estimator: kind,
             model,
@@ -224,10 +242,7 @@ fn replay_file<'py>(
             diff_window,
             instrument_delay: None,
             pacing: Pacing::Unpaced,
-            compat: compat
-                .as_deref()
-                .map(|c| aeroident_pipelines::compat::Corrections::from_json(Path::new(c)))
-                .transpose()?,
+            compat,
             windows,
             ..ReplayOptions::default()
         };
@@ -243,17 +258,35 @@ fn replay_file<'py>(
             let (reader, _) = open_log_with_notes(&path, None, &mapping)?;
             aeroident_pipelines::replay::cross_check_record(&mut outcome, reader, &mapping, &opts);
         }
-        let summary = serde_json::to_value(outcome.document(None))?;
-        Ok((outcome.model.name, summary, arrays, notes))
+        let summary =
+            with_selection(serde_json::to_value(outcome.document(None))?, selection.as_ref())?;
+        let toml = selection.map(|s| s.model.to_toml());
+        Ok((outcome.model.name, summary, arrays, notes, toml))
     };
     let r = py.detach(run);
     signals.finish(py)?;
-    let (model, summary, arrays, notes) = r.map_err(to_py)?;
+    let (model, summary, arrays, notes, toml) = r.map_err(to_py)?;
     let d = arrays_dict(py, arrays)?;
     d.set_item("model", model)?;
+    d.set_item("selected_model", toml)?;
     d.set_item("summary", convert::json_to_py(py, &summary)?)?;
     d.set_item("notes", notes)?;
     Ok(d)
+}
+
+/// A summary as JSON with `--model auto`'s `structure_selection`, as the CLI's `summary.json`.
+///
+/// # Errors
+/// A report that does not serialise (a bug).
+pub fn with_selection(
+    mut doc: serde_json::Value,
+    selection: Option<&AutoSelection>,
+) -> PyResult<serde_json::Value> {
+    if let (Some(s), Some(map)) = (selection, doc.as_object_mut()) {
+        let report = serde_json::to_value(s.report()).map_err(|e| err(e.to_string()))?;
+        map.insert("structure_selection".into(), report);
+    }
+    Ok(doc)
 }
 
 /// Column arrays (read-only float64 views) as a per-row [`Source`].

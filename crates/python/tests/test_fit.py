@@ -163,3 +163,35 @@ def test_fit_of_two_records_equals_the_joined_record():
     joined = aeroident.fit(rel("fAttasAilRud1"), mapping, "oe")
     assert together["summary"]["manoeuvres"] == 2
     np.testing.assert_array_equal(together["values"], joined["values"])
+
+
+C172 = "jsbsim_samples/c172x_elevator_3211_15s_60Hz.csv"
+JSBSIM_MAP = ROOT / "mappings/jsbsim_clean.toml"
+ALPHADOT = ["alpha", "q", "alphadot", "de", "V", "alpha2", "alpha_de"]
+
+
+def test_fit_model_auto_equals_cli(tmp_path):
+    """`fit(..., model="auto:…", candidates=…)` is `replay --model auto:… --candidates …`: the
+    same summary with its `structure_selection`, and `selected_model` is the CLI's model.toml."""
+    data = shared(C172)
+    out = tmp_path / "out"
+    r = cli("replay", data, "--map", JSBSIM_MAP, "--model", "auto:longitudinal",
+            "--candidates", ",".join(ALPHADOT), "--estimator", "oe", "--out", out)
+    assert r.returncode == 0, r.stderr
+    expected = json.loads((out / "summary.json").read_text())
+    py = aeroident.fit(data, JSBSIM_MAP, "oe", model="auto:longitudinal", candidates=ALPHADOT)
+    assert without_wall_time(py["summary"]) == without_wall_time(expected)
+    assert "alphadot" in [c for s in expected["structure_selection"]["coefficients"]
+                          if s["coefficient"] == "Cm" for c in s["kept"]]
+    assert py["selected_model"] == (out / "model.toml").read_text()
+    assert aeroident.fit(data, JSBSIM_MAP, "oe")["selected_model"] is None
+
+
+def test_replay_model_auto_selects_and_refuses_a_bad_candidate():
+    """The real-time replay takes the same selection; a bad candidate is the library's error."""
+    data = shared(C172)
+    py = aeroident.replay(data, JSBSIM_MAP, "rls", model="auto:longitudinal", candidates=ALPHADOT)
+    assert "Cm_alphadot" in py["names"]
+    assert py["summary"]["structure_selection"]["method"] == "swr"
+    with pytest.raises(aeroident.AeroidentError, match="`bogus`"):
+        aeroident.replay(data, JSBSIM_MAP, "rls", model="auto", candidates=["bogus"])

@@ -149,6 +149,8 @@ def replay(
     compat: Optional[PathLike] = None,
     windows: Optional[Sequence[tuple[float, float]]] = None,
     cross_check: bool = False,
+    select: str = "swr",
+    candidates: Optional[Sequence[str]] = None,
 ) -> dict[str, Any]:
     """Replays a whole record through an estimator, every sample in Rust (no Python loop).
 
@@ -157,6 +159,12 @@ def replay(
     estimator) or a dict of arrays as :func:`read` returns (then the samples go straight to the
     estimator: nothing is differentiated; ``constants=`` fills constants the arrays lack).
     ``model=None``: the richest preset the first sample supports, as the CLI chooses.
+    ``model="auto"`` (or ``"auto:longitudinal"``, ``"auto:lateral"``, ``"auto:six-axis"``; a
+    record file): each coefficient's terms chosen from the record by equation error
+    (``select="swr"`` stepwise regression or ``"mof"`` orthogonal functions; ``candidates``: the
+    terms offered, e.g. ``["alpha", "q", "alphadot", "de"]``), as ``--model auto --select …
+    --candidates …``: ``summary["structure_selection"]`` holds the selection path and
+    ``selected_model`` the chosen model as model-file TOML (``None`` otherwise).
     ``compat``: a record file's ``compat.json`` (``aeroident compat``) whose corrections are
     applied to every sample first (``--compat FILE``). ``windows``: ``[(start_s, end_s), …]``
     record-time windows, each its own manoeuvre, the rest not used (``--window START:END``).
@@ -195,6 +203,8 @@ def replay(
             None if compat is None else os.fspath(compat),
             None if windows is None else [(float(a), float(b)) for a, b in windows],
             cross_check,
+            select,
+            None if candidates is None else list(candidates),
         )
     keys = set(_core.sample_keys())
     arrays = {k: np.ascontiguousarray(v, dtype=np.float64) for k, v in data.items() if k in keys}
@@ -217,6 +227,8 @@ def fit(
     compat: Optional[PathLike] = None,
     windows: Optional[Sequence[tuple[float, float]]] = None,
     also: Optional[Sequence[PathLike]] = None,
+    select: str = "swr",
+    candidates: Optional[Sequence[str]] = None,
 ) -> dict[str, Any]:
     """Fits a whole record by batch output error (``"oe"``) or the filter-error method
     (``"fem"``: output error with process noise on the air-data states, for turbulent records).
@@ -243,7 +255,9 @@ def fit(
     sample before the fit (``--compat FILE``). ``windows``: ``[(start_s, end_s), …]``
     record-time windows, each its own manoeuvre, the rest not used (``--window START:END``).
     ``also``: further records of the same aircraft (same mapping), fitted together with
-    ``data``, each file a manoeuvre of its own (``--and FILE``).
+    ``data``, each file a manoeuvre of its own (``--and FILE``). ``model="auto[:scope]"``,
+    ``select`` and ``candidates``: the structure chosen from the records first, as in
+    :func:`replay` (``--model auto --select … --candidates …``).
 
     A fit that does not meet both convergence criteria is returned all the same:
     ``summary["status"]`` is ``"converged"``, ``"converged_in_cost"`` (the cost stopped
@@ -262,7 +276,9 @@ def fit(
       manoeuvres; ``fem``: the model simulated at its estimates);
     - ``model``: the model's name; ``notes``: what the reader noted about the record;
     - ``summary``: the CLI's ``summary.json`` as a dict (iterations, identifiability, warnings,
-      validation, process noise, estimated initial states …).
+      validation, process noise, estimated initial states, ``structure_selection`` …);
+    - ``selected_model``: with ``model="auto…"`` the chosen model as model-file TOML (the
+      CLI's ``model.toml``), else ``None``.
 
     Raises :class:`AeroidentError` with the CLI's message on bad input, a real-time estimator,
     or a fit that fails (e.g. a model that cannot be simulated).
@@ -285,6 +301,8 @@ def fit(
         None if compat is None else os.fspath(compat),
         None if windows is None else [(float(a), float(b)) for a, b in windows],
         None if also is None else [os.fspath(p) for p in also],
+        select,
+        None if candidates is None else list(candidates),
     )
 
 

@@ -1,7 +1,7 @@
 """Type stubs of the aeroident Python package (see the module docstring for the API)."""
 
 import os
-from typing import Any, Literal, Mapping, Optional, TypedDict, Union
+from typing import Any, Literal, Mapping, Optional, Sequence, TypedDict, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -33,6 +33,7 @@ class ReplayResult(TypedDict, total=False):
     samples_refused: int
     events: dict[str, Any]
     notes: list[str]
+    selected_model: Optional[str]
 
 class EstimatorBase:
     def __new__(
@@ -96,6 +97,11 @@ def replay(
     diff_window: int = 5,
     constants: Optional[Constants] = None,
     sample_interval_s: Optional[float] = None,
+    compat: Optional[PathLike] = None,
+    windows: Optional[Sequence[tuple[float, float]]] = None,
+    cross_check: bool = False,
+    select: Literal["swr", "mof"] = "swr",
+    candidates: Optional[Sequence[str]] = None,
 ) -> ReplayResult: ...
 class FitTrace(TypedDict):
     t_s: npt.NDArray[np.float64]
@@ -114,6 +120,7 @@ class FitResult(TypedDict):
     model: str
     notes: list[str]
     summary: dict[str, Any]
+    selected_model: Optional[str]
 
 def fit(
     data: PathLike,
@@ -124,6 +131,13 @@ def fit(
     initial_states: Literal["first-sample", "estimate"] = "first-sample",
     validate_on: Optional[PathLike] = None,
     bootstrap: Optional[int] = None,
+    max_iterations: Optional[int] = None,
+    process_noise: Optional[str] = None,
+    compat: Optional[PathLike] = None,
+    windows: Optional[Sequence[tuple[float, float]]] = None,
+    also: Optional[Sequence[PathLike]] = None,
+    select: Literal["swr", "mof"] = "swr",
+    candidates: Optional[Sequence[str]] = None,
 ) -> FitResult: ...
 def trim(alt_ft: float, vt_fps: float, xcg: float = 0.35, gamma_deg: float = 0.0, turn_rate_deg_s: Optional[float] = None, pull_up_deg_s: Optional[float] = None) -> dict[str, Any]: ...
 def linearize(alt_ft: float, vt_fps: float, xcg: float = 0.35, gamma_deg: float = 0.0, turn_rate_deg_s: Optional[float] = None, pull_up_deg_s: Optional[float] = None) -> dict[str, Any]: ...

@@ -500,10 +500,10 @@ impl FlightModel {
                 n = k + 1;
                 match t {
                     Term::De | Term::AlphaDe => needs.de = true,
-                    Term::Da => needs.da = true,
-                    Term::Dr => needs.dr = true,
-                    Term::Q => needs.cbar = true,
-                    Term::P | Term::R => needs.b = true,
+                    Term::Da | Term::AlphaDa => needs.da = true,
+                    Term::Dr | Term::AlphaDr => needs.dr = true,
+                    Term::Q | Term::AlphaQ => needs.cbar = true,
+                    Term::P | Term::R | Term::AlphaP | Term::AlphaR => needs.b = true,
                     Term::V => needs.v0 = true,
                     Term::Q0 => {
                         needs.cbar = true;
@@ -721,6 +721,11 @@ impl FlightModel {
                 Term::AlphaDe => al * u.de_rad,
                 Term::AlphaBeta => al * be,
                 Term::Q0 => q * (u.cbar_m / (2.0 * u.v0_mps)),
+                Term::AlphaP => al * p * u.b_m / two_v,
+                Term::AlphaQ => al * q * u.cbar_m / two_v,
+                Term::AlphaR => al * r * u.b_m / two_v,
+                Term::AlphaDa => al * u.da_rad,
+                Term::AlphaDr => al * u.dr_rad,
             }
         };
         // C0_k (without α̇ term) and D_k = ∂C_k/∂(α̇ c̄/2V).

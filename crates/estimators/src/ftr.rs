@@ -180,7 +180,7 @@ pub struct Ftr {
     step: [C64; MAX_FREQUENCIES],
     step_dt: f64,
     since_exact: usize,
-    used_terms: u16,
+    used_terms: u32,
     x: Transforms,
     /// `W(d) = Σ_i λ^{2(n−i)} Δt_i² e^{−j (ω_d − ω_0) t_i}`, `d = 0..m−1` (module doc, σ).
     w_diff: [C64; MAX_FREQUENCIES],
@@ -237,7 +237,7 @@ impl Ftr {
         for (m, w) in omega.iter_mut().enumerate().take(n) {
             *w = 2.0 * PI * (cfg.f_min_hz + m as f64 * cfg.f_step_hz);
         }
-        let mut used_terms = 0u16;
+        let mut used_terms = 0u32;
         for p in structure.params() {
             if p.term != Term::Bias {
                 used_terms |= 1 << p.term.index();

@@ -26,6 +26,13 @@
 //! | α·δe | `alpha_de` | α δe, rad² |
 //! | α·β | `alpha_beta` | α β, rad² |
 //! | q̂0 | `q0` | q c̄ / (2 V0): the pitch rate normalised with the reference speed, as Jategaonkar 2015 eq. 5.86 (HFB-320 test case 4) writes `Cm_q` |
+//! | α·p̂, α·q̂, α·r̂ | `alpha_p`, `alpha_q`, `alpha_r` | α p̂, α q̂, α r̂ (rad) |
+//! | α·δa, α·δr | `alpha_da`, `alpha_dr` | α δa, α δr, rad² |
+//!
+//! The α products are the first-order α-dependence of a derivative (Klein & Morelli 2006 §5.4:
+//! a damping or control derivative that varies with α, as the F-16's tables do, Stevens & Lewis
+//! 2003 table B-4): with `Cl_alpha_p` in the model, `Cl_p` is the roll damping at α = 0 and
+//! the local one at α is `Cl_p + Cl_alpha_p α`.
 //!
 //! Parameter names follow the field: `Cm_alpha`, `Cm_q`, `Cm_alphadot`, `CL_alpha`, `CY_beta`,
 //! `Cl_p`, `Cn_r`, `Cn_dr`, `Cm_V`, `Cm_alpha2`, `CD_0` … Parameters are ordered coefficient by
@@ -91,7 +98,7 @@ impl Coefficient {
 const COEFFICIENT_NAMES: [&str; 8] = ["CX", "CY", "CZ", "CL", "CD", "Cl", "Cm", "Cn"];
 
 /// Number of terms in the vocabulary.
-pub const N_TERMS: usize = 15;
+pub const N_TERMS: usize = 20;
 
 /// One regressor of a linear coefficient model (table in the module doc).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -127,6 +134,16 @@ pub enum Term {
     /// `q c̄ / (2 V0)`: pitch rate normalised with the constant reference speed `V0`
     /// (Jategaonkar 2015 eq. 5.86, the HFB-320 model of test case 4), not with `V` as [`Term::Q`].
     Q0,
+    /// `α p̂`, rad: the α-dependence of the `p̂` derivative.
+    AlphaP,
+    /// `α q̂`, rad.
+    AlphaQ,
+    /// `α r̂`, rad.
+    AlphaR,
+    /// `α δa`, rad².
+    AlphaDa,
+    /// `α δr`, rad².
+    AlphaDr,
 }
 
 const TERM_NAMES: [&str; N_TERMS] = [
@@ -145,6 +162,11 @@ const TERM_NAMES: [&str; N_TERMS] = [
     "alpha_de",
     "alpha_beta",
     "q0",
+    "alpha_p",
+    "alpha_q",
+    "alpha_r",
+    "alpha_da",
+    "alpha_dr",
 ];
 
 macro_rules! param_names {
@@ -154,6 +176,8 @@ macro_rules! param_names {
             concat!($c, "_q"), concat!($c, "_r"), concat!($c, "_alphadot"), concat!($c, "_de"),
             concat!($c, "_da"), concat!($c, "_dr"), concat!($c, "_V"), concat!($c, "_alpha2"),
             concat!($c, "_alpha_de"), concat!($c, "_alpha_beta"), concat!($c, "_q0"),
+            concat!($c, "_alpha_p"), concat!($c, "_alpha_q"), concat!($c, "_alpha_r"),
+            concat!($c, "_alpha_da"), concat!($c, "_alpha_dr"),
         ]),*]
     };
 }
@@ -180,6 +204,11 @@ impl Term {
         Term::AlphaDe,
         Term::AlphaBeta,
         Term::Q0,
+        Term::AlphaP,
+        Term::AlphaQ,
+        Term::AlphaR,
+        Term::AlphaDa,
+        Term::AlphaDr,
     ];
 
     /// Index in [`Term::ALL`].
@@ -218,6 +247,11 @@ impl Term {
             Term::AlphaDe => s.alpha_rad * s.de_rad?,
             Term::AlphaBeta => s.alpha_rad * s.beta_rad?,
             Term::Q0 => s.q_rad_s? * c.cbar_m? / (2.0 * c.v0_mps?),
+            Term::AlphaP => s.alpha_rad * Term::P.value(s)?,
+            Term::AlphaQ => s.alpha_rad * Term::Q.value(s)?,
+            Term::AlphaR => s.alpha_rad * Term::R.value(s)?,
+            Term::AlphaDa => s.alpha_rad * s.da_rad?,
+            Term::AlphaDr => s.alpha_rad * s.dr_rad?,
         })
     }
 }
@@ -269,7 +303,7 @@ pub enum StructureError {
 /// [`Term::ALL`]). Copy, fixed size, `no_std`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct ModelStructure {
-    terms: [u16; 8],
+    terms: [u32; 8],
 }
 
 impl ModelStructure {
@@ -517,7 +551,16 @@ mod tests {
         assert!((v(Term::AlphaBeta) - 0.002).abs() < 1e-15);
         assert!((v(Term::Q0) - 0.05 * 3.0 / 160.0).abs() < 1e-15);
         assert_eq!(Param::from_name("Cm_q0"), Some(Param::new(Coefficient::Cm, Term::Q0)));
-        assert!(Term::Da.value(&s).is_none());
+        assert!((v(Term::AlphaP) - 0.1 * 0.4 * 10.0 / 200.0).abs() < 1e-15);
+        assert!((v(Term::AlphaQ) - 0.1 * 0.05 * 3.0 / 200.0).abs() < 1e-15);
+        assert!((v(Term::AlphaR) + 0.1 * 0.1 * 10.0 / 200.0).abs() < 1e-15);
+        assert_eq!(Param::from_name("Cl_alpha_p"), Some(Param::new(Coefficient::Cl, Term::AlphaP)));
+        assert_eq!(Param::new(Coefficient::Cn, Term::AlphaDr).name(), "Cn_alpha_dr");
+        assert!(Term::Da.value(&s).is_none() && Term::AlphaDa.value(&s).is_none());
+        // Terms past the 16th still form structures (the bit set is 32 wide).
+        let wide = ModelStructure::empty().with(Coefficient::Cl, &Term::ALL);
+        assert_eq!(wide.terms_of(Coefficient::Cl).count(), N_TERMS);
+        assert!(wide.contains(Param::new(Coefficient::Cl, Term::AlphaDr)));
         let st = ModelStructure::empty().with(Coefficient::Cm, &[Term::Bias, Term::Alpha, Term::Q]);
         let cm = coefficient_value(&st, &[0.1, -1.0, -20.0], Coefficient::Cm, &s).unwrap();
         assert!((cm - (0.1 - 0.1 - 20.0 * 0.05 * 3.0 / 200.0)).abs() < 1e-15);

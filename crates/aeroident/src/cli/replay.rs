@@ -96,7 +96,8 @@ pub struct ReplayArgs {
     #[arg(long, value_parser = ["swr", "mof"], default_value = "swr")]
     pub select: String,
     /// `--model auto`: the candidate terms of every coefficient, comma-separated (vocabulary
-    /// names: alpha, q, alphadot, de, V, alpha2, alpha_de, beta, p, r, da, dr, alpha_beta).
+    /// names: alpha, q, alphadot, de, V, alpha2, alpha_de, alpha_q, beta, p, r, da, dr,
+    /// alpha_beta, alpha_p, alpha_r, alpha_da, alpha_dr).
     /// Default: per coefficient, its preset's terms and the usual nonlinear ones; `alphadot`
     /// only when listed here (it also stands in for a lag of the α channel).
     #[arg(long, value_delimiter = ',')]

@@ -314,3 +314,33 @@ fn missing_channels_and_constants_are_named() {
     s.constants.Iyy_kgm2 = None;
     assert!(matches!(lon.inputs(&s), Err(EstimatorError::InvalidConfig { field: "Iyy_kgm2", .. })));
 }
+
+/// The flight model's regressors are the vocabulary's: at the measured state, every term of a
+/// six-axis structure with all α products (which `Term::value` computes from the sample
+/// independently) has the value the model writes into `xi`.
+#[test]
+fn regressors_of_every_term_match_the_vocabulary() {
+    let mut st = ModelStructure::six_axis();
+    for c in [C::Cl, C::Cn] {
+        st = st.with(c, &[T::AlphaBeta, T::AlphaP, T::AlphaR, T::AlphaDa, T::AlphaDr]);
+    }
+    st = st.with(C::CY, &[T::AlphaBeta]);
+    st = st.with(C::Cm, &[T::AlphaQ, T::Alpha2, T::AlphaDe, T::V, T::Q0]);
+    let st = st.validated().unwrap();
+    let model = FlightModel::new(st).unwrap();
+    let s = sample();
+    let u = model.inputs(&s).unwrap();
+    let z = [0.0; 8];
+    let mut xi = [f64::NAN; MAX_PARAMS];
+    let th = theta_for(&st);
+    model.eval(&th[..st.n_params()], &u, &u.x_meas, &z, &z, Some(&mut xi)).unwrap();
+    for (j, p) in st.params().enumerate() {
+        let want = p.term.value(&s).unwrap();
+        assert!(
+            (xi[j] - want).abs() < 1e-14 * want.abs().max(1.0),
+            "{}: {} vs {want}",
+            p.name(),
+            xi[j]
+        );
+    }
+}

@@ -226,7 +226,13 @@ fn regressor_reference(t: Term, s: &AirDataSample) -> f64 {
             RATE_REF_RAD_S * k.cbar_m.unwrap_or(f64::NAN) / (2.0 * k.v0_mps.unwrap_or(f64::NAN))
         }
         Term::V => SPEED_REF_FRACTION,
-        Term::Alpha2 | Term::AlphaDe | Term::AlphaBeta => ANGLE_REF_RAD * ANGLE_REF_RAD,
+        Term::Alpha2 | Term::AlphaDe | Term::AlphaBeta | Term::AlphaDa | Term::AlphaDr => {
+            ANGLE_REF_RAD * ANGLE_REF_RAD
+        }
+        Term::AlphaP | Term::AlphaR => {
+            ANGLE_REF_RAD * RATE_REF_RAD_S * k.b_m.unwrap_or(f64::NAN) / two_v
+        }
+        Term::AlphaQ => ANGLE_REF_RAD * RATE_REF_RAD_S * k.cbar_m.unwrap_or(f64::NAN) / two_v,
     }
 }
 

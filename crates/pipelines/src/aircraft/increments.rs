@@ -101,7 +101,17 @@ pub fn slot(p: Param) -> Result<(AeroCoefficient, IncrementRegressor), Increment
         Term::De => IncrementRegressor::Elevator,
         Term::Da => IncrementRegressor::Aileron,
         Term::Dr => IncrementRegressor::Rudder,
-        Term::Alphadot | Term::Q0 | Term::V | Term::Alpha2 | Term::AlphaDe | Term::AlphaBeta => {
+        Term::Alphadot
+        | Term::Q0
+        | Term::V
+        | Term::Alpha2
+        | Term::AlphaDe
+        | Term::AlphaBeta
+        | Term::AlphaP
+        | Term::AlphaQ
+        | Term::AlphaR
+        | Term::AlphaDa
+        | Term::AlphaDr => {
             return Err(IncrementError::NotExpressible {
                 name: p.name(),
                 what: format!("`{}` regressor", p.term.name()),

@@ -14,8 +14,18 @@
 //!
 //! The F-16's tables are piecewise linear (5° in α and β, 12° in δe), so inside a segment the
 //! central difference is the table slope to rounding (≈ 1e-10). `alphadot` is 0 exactly: the
-//! model's coefficients do not depend on α̇. Second-order terms (`alpha2`, `alpha_de`,
-//! `alpha_beta`) have no single local value and are `None`.
+//! model's coefficients do not depend on α̇.
+//!
+//! The α products (`alpha_beta`, `alpha_p`, `alpha_q`, `alpha_r`, `alpha_de`, `alpha_da`,
+//! `alpha_dr`) are the mixed second derivative `∂²C/∂α∂ξ`: the central difference, over α ±
+//! [`FD_STEP_ALPHA`], of the first derivative w.r.t. `ξ`; `alpha2` is half the second
+//! derivative in α. Inside a table segment these are the bilinear cross terms of the tables
+//! (the α-dependence of the damping and control derivatives, Stevens & Lewis 2003 table B-4).
+//! With products in a structure its first-order parameters are the derivatives at α = 0 (or
+//! ξ = 0), not at the point: the true `C_ξ` of such a structure is the local derivative less
+//! what the products contribute at the point, `C_ξ = ∂C/∂ξ − Σ_s C_s ∂ξ_s/∂ξ` over the
+//! structure's product terms `s` ([`LocalDerivatives::truth`]), e.g. `Cl_p = ∂Cl/∂p̂ −
+//! Cl_alpha_p α₀`.
 //!
 //! Units and axes (as [`aeroident_estimators::vocabulary`]): forces `CX CY CZ` body axes,
 //! `CL CD` stability axes with the air-relative α; moments `Cl Cm Cn` body axes about the actual
@@ -31,6 +41,22 @@ use aeroident_models::f16::{
 
 /// Finite-difference step (rad, or per unit hat-rate / V/V0).
 pub const FD_STEP: f64 = 1e-6;
+
+/// The α step of the mixed second derivatives, rad (0.006°: inside any 5° table segment
+/// unless the point is that close to a breakpoint; rounding error ≈ 1e-16/(1e-6 · 1e-4)).
+pub const FD_STEP_ALPHA: f64 = 1e-4;
+
+/// The product terms: each with its two factors (`alpha2`: α twice).
+const PRODUCTS: [(Term, Term, Term); 8] = [
+    (Term::Alpha2, Term::Alpha, Term::Alpha),
+    (Term::AlphaBeta, Term::Alpha, Term::Beta),
+    (Term::AlphaDe, Term::Alpha, Term::De),
+    (Term::AlphaP, Term::Alpha, Term::P),
+    (Term::AlphaQ, Term::Alpha, Term::Q),
+    (Term::AlphaR, Term::Alpha, Term::R),
+    (Term::AlphaDa, Term::Alpha, Term::Da),
+    (Term::AlphaDr, Term::Alpha, Term::Dr),
+];
 
 /// The total coefficients of one evaluation in vocabulary order `CX CY CZ CL CD Cl Cm Cn`.
 pub fn coefficient_vector(c: &AeroCoefficients) -> [f64; 8] {
@@ -49,22 +75,33 @@ pub struct LocalDerivatives {
 }
 
 impl LocalDerivatives {
-    /// `∂C/∂ξ` of parameter `p` (`None` for a bias or a second-order term).
+    /// `∂C/∂ξ` of parameter `p` at the point, `½∂²C/∂α²` for `alpha2`, `∂²C/∂α∂ξ` for the other
+    /// α products (module doc); `None` for the bias.
     pub fn derivative(&self, p: Param) -> Option<f64> {
         self.d[p.coefficient.index()][p.term.index()]
     }
 
-    /// The true value of parameter `p` within `structure`: the local derivative, or for the
-    /// bias the intercept of the tangent plane over the structure's other terms of that
-    /// coefficient (module doc). `None` where no single true value exists.
+    /// The true value of parameter `p` within `structure`: the derivative less what the
+    /// structure's product terms contribute to it at the point, or for the bias the intercept
+    /// of the model through the point over the structure's other terms of that coefficient
+    /// (module doc). `None` where no single true value exists.
     pub fn truth(&self, structure: &ModelStructure, p: Param) -> Option<f64> {
-        if p.term != Term::Bias {
-            return self.derivative(p);
-        }
         let c = p.coefficient;
+        if p.term != Term::Bias {
+            let mut v = self.derivative(p)?;
+            for (s, a, b) in PRODUCTS {
+                if structure.contains(Param::new(c, s)) && (a == p.term || b == p.term) {
+                    // ∂(ξa ξb)/∂ξt at the point: the other factor (2 α for α²).
+                    let other = if a == p.term { b } else { a };
+                    let slope = if a == b { 2.0 } else { 1.0 } * self.regressor[other.index()]?;
+                    v -= self.d[c.index()][s.index()]? * slope;
+                }
+            }
+            return Some(v);
+        }
         let mut v = self.value[c.index()];
         for t in structure.terms_of(c).filter(|t| *t != Term::Bias) {
-            v -= self.d[c.index()][t.index()]? * self.regressor[t.index()]?;
+            v -= self.truth(structure, Param::new(c, t))? * self.regressor[t.index()]?;
         }
         Some(v)
     }
@@ -83,10 +120,54 @@ pub fn local_derivatives(
 ) -> Result<LocalDerivatives, ModelError> {
     let u = F16Controls { wind_ned_fps: [0.0; 3], wind_body_fps: [0.0; 3], ..*u };
     let g = &f16.data().geometry;
+    let value = coefficient_vector(&f16.evaluate(x, &u, inc)?.1.coefficients);
+    let mut d = first_order(f16, x, &u, inc)?;
+    let alpha_shifted = |sign: f64| {
+        let mut xs = *x;
+        xs[f16::ALPHA] += sign * FD_STEP_ALPHA;
+        first_order(f16, &xs, &u, inc)
+    };
+    let (dp, dm) = (alpha_shifted(1.0)?, alpha_shifted(-1.0)?);
+    for (s, a, b) in PRODUCTS {
+        let half = if a == b { 0.5 } else { 1.0 };
+        for k in 0..8 {
+            let slope = |d: &[[Option<f64>; N_TERMS]; 8]| d[k][b.index()];
+            d[k][s.index()] =
+                slope(&dp).zip(slope(&dm)).map(|(p, m)| half * (p - m) / (2.0 * FD_STEP_ALPHA));
+        }
+    }
+    let vt = x[f16::VT];
+    let two_v = 2.0 * vt;
+    let mut regressor = [None; N_TERMS];
+    regressor[Term::Bias.index()] = Some(1.0);
+    regressor[Term::Alpha.index()] = Some(x[f16::ALPHA]);
+    regressor[Term::Beta.index()] = Some(x[f16::BETA]);
+    regressor[Term::P.index()] = Some(x[f16::P] * g.span_ft / two_v);
+    regressor[Term::Q.index()] = Some(x[f16::Q] * g.cbar_ft / two_v);
+    regressor[Term::R.index()] = Some(x[f16::R] * g.span_ft / two_v);
+    regressor[Term::Alphadot.index()] = Some(0.0);
+    regressor[Term::De.index()] = Some(u.elevator_rad);
+    regressor[Term::Da.index()] = Some(u.aileron_rad);
+    regressor[Term::Dr.index()] = Some(u.rudder_rad);
+    regressor[Term::V.index()] = Some(1.0);
+    for (s, a, b) in PRODUCTS {
+        regressor[s.index()] = regressor[a.index()].zip(regressor[b.index()]).map(|(a, b)| a * b);
+    }
+    Ok(LocalDerivatives { value, regressor, d })
+}
+
+/// `∂C_k/∂ξ_j` of the first-order terms at (`x`, `u`), still air (`u` already without wind);
+/// the bias and the products `None`.
+fn first_order(
+    f16: &F16,
+    x: &F16State,
+    u: &F16Controls,
+    inc: &AeroIncrements,
+) -> Result<[[Option<f64>; N_TERMS]; 8], ModelError> {
+    let g = &f16.data().geometry;
     let coeffs = |x: &F16State, u: &F16Controls| -> Result<[f64; 8], ModelError> {
         f16.evaluate(x, u, inc).map(|(_, o)| coefficient_vector(&o.coefficients))
     };
-    let value = coeffs(x, &u)?;
     let vt = x[f16::VT];
     let h = FD_STEP;
     let mut d = [[None; N_TERMS]; 8];
@@ -107,7 +188,7 @@ pub fn local_derivatives(
         let (mut xp, mut xm) = (*x, *x);
         xp[i] += h * scale;
         xm[i] -= h * scale;
-        put(term, coeffs(&xp, &u)?, coeffs(&xm, &u)?, h);
+        put(term, coeffs(&xp, u)?, coeffs(&xm, u)?, h);
     }
     // Airspeed with the hat-rates held: the body rates scale with V.
     {
@@ -118,7 +199,7 @@ pub fn local_derivatives(
                 xs[i] = x[i] * f;
             }
         }
-        put(Term::V, coeffs(&xp, &u)?, coeffs(&xm, &u)?, h);
+        put(Term::V, coeffs(&xp, u)?, coeffs(&xm, u)?, h);
     }
     type Field = fn(&mut F16Controls) -> &mut f64;
     let surfaces: [(Term, Field); 3] = [
@@ -127,7 +208,7 @@ pub fn local_derivatives(
         (Term::Dr, |c| &mut c.rudder_rad),
     ];
     for (term, field) in surfaces {
-        let (mut up, mut um) = (u, u);
+        let (mut up, mut um) = (*u, *u);
         *field(&mut up) += h;
         *field(&mut um) -= h;
         put(term, coeffs(x, &up)?, coeffs(x, &um)?, h);
@@ -135,20 +216,7 @@ pub fn local_derivatives(
     for row in &mut d {
         row[Term::Alphadot.index()] = Some(0.0);
     }
-    let two_v = 2.0 * vt;
-    let mut regressor = [None; N_TERMS];
-    regressor[Term::Bias.index()] = Some(1.0);
-    regressor[Term::Alpha.index()] = Some(x[f16::ALPHA]);
-    regressor[Term::Beta.index()] = Some(x[f16::BETA]);
-    regressor[Term::P.index()] = Some(x[f16::P] * g.span_ft / two_v);
-    regressor[Term::Q.index()] = Some(x[f16::Q] * g.cbar_ft / two_v);
-    regressor[Term::R.index()] = Some(x[f16::R] * g.span_ft / two_v);
-    regressor[Term::Alphadot.index()] = Some(0.0);
-    regressor[Term::De.index()] = Some(u.elevator_rad);
-    regressor[Term::Da.index()] = Some(u.aileron_rad);
-    regressor[Term::Dr.index()] = Some(u.rudder_rad);
-    regressor[Term::V.index()] = Some(1.0);
-    Ok(LocalDerivatives { value, regressor, d })
+    Ok(d)
 }
 
 /// The first-order aerodynamics of the point (`x`, `u`) that `ld` was taken at, as the F-16's
@@ -319,6 +387,46 @@ mod tests {
                 })
                 .sum();
             assert!((v - ld.value[c.index()]).abs() < 1e-12, "{c:?}");
+        }
+    }
+
+    /// The α products against the damping table by hand: inside the 0–5° segment the slope
+    /// of the `Clp` and `Clr` rows per rad is `Cl_alpha_p` and `Cl_alpha_r`. In a structure
+    /// with those products, `Cl_p` is the damping extrapolated to α = 0 (the row's value at 0°
+    /// on a linear segment), and the model through the truths reproduces the local derivative
+    /// and the coefficient at the point.
+    #[test]
+    fn alpha_products_are_the_table_cross_slopes() {
+        let (f, t) = thesis_trim();
+        let ld = local_derivatives(&f, &t.state, &t.controls, &AeroIncrements::zero()).unwrap();
+        let a0 = t.state[f16::ALPHA];
+        assert!((0.0..5f64.to_radians()).contains(&a0));
+        let damping = &f.data().damping;
+        let per_rad = |row: usize| (damping[row].y[3] - damping[row].y[2]) / 5f64.to_radians();
+        for (name, row) in [("Cl_alpha_p", 5), ("Cl_alpha_r", 4)] {
+            let got = ld.derivative(p(name)).unwrap();
+            assert!((got - per_rad(row)).abs() < 1e-5, "{name}: {got} vs {}", per_rad(row));
+        }
+        let st = ModelStructure::lateral()
+            .with(Coefficient::Cl, &[Term::AlphaP, Term::AlphaR, Term::AlphaBeta]);
+        let cl_p = ld.truth(&st, p("Cl_p")).unwrap();
+        assert!((cl_p - damping[5].y[2]).abs() < 1e-5, "Cl_p at α = 0: {cl_p}");
+        let local = cl_p + ld.truth(&st, p("Cl_alpha_p")).unwrap() * a0;
+        assert!((local - ld.derivative(p("Cl_p")).unwrap()).abs() < 1e-9);
+        let v: f64 = st
+            .terms_of(Coefficient::Cl)
+            .map(|t| {
+                let xi = ld.regressor[t.index()].unwrap();
+                ld.truth(&st, Param::new(Coefficient::Cl, t)).unwrap() * xi
+            })
+            .sum();
+        assert!((v - ld.value[Coefficient::Cl.index()]).abs() < 1e-12);
+        // The linear (matched-truth) aircraft has no cross terms in its moments.
+        let lin = f.clone().with_linear_aero(linearised(&ld, &t.state, &t.controls));
+        let ll = local_derivatives(&lin, &t.state, &t.controls, &AeroIncrements::zero()).unwrap();
+        for n in ["Cl_alpha_p", "Cl_alpha_r", "Cm_alpha_q", "Cn_alpha_dr", "Cl_alpha_beta"] {
+            let v = ll.derivative(p(n)).unwrap();
+            assert!(v.abs() < 1e-5, "linear aircraft {n} = {v}");
         }
     }
 

@@ -223,6 +223,11 @@ fn regressor(
         Term::Da => (vec![s.aileron.clone()], -1.0),
         Term::Dr => (vec![s.rudder.clone()], 1.0),
         Term::AlphaDe => (vec!["aero/alpha-rad".into(), s.elevator.clone()], 1.0),
+        Term::AlphaP => (p(&["aero/alpha-rad", "velocities/p-aero-rad_sec", "aero/bi2vel"]), 1.0),
+        Term::AlphaQ => (p(&["aero/alpha-rad", "velocities/q-aero-rad_sec", "aero/ci2vel"]), 1.0),
+        Term::AlphaR => (p(&["aero/alpha-rad", "velocities/r-aero-rad_sec", "aero/bi2vel"]), 1.0),
+        Term::AlphaDa => (vec!["aero/alpha-rad".into(), s.aileron.clone()], -1.0),
+        Term::AlphaDr => (vec!["aero/alpha-rad".into(), s.rudder.clone()], 1.0),
         Term::V => (p(&["velocities/vt-fps"]), 1.0 / v0_fps()?),
         Term::Q0 => {
             (p(&["velocities/q-aero-rad_sec", "metrics/cbarw-ft"]), 1.0 / (2.0 * v0_fps()?))

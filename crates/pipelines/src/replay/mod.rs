@@ -603,14 +603,14 @@ pub fn unsupported(
 fn term_needs(t: Term) -> &'static str {
     match t {
         Term::Beta | Term::AlphaBeta => "needs beta",
-        Term::P => "needs p and the span b",
-        Term::Q => "needs q and cbar",
+        Term::P | Term::AlphaP => "needs p and the span b",
+        Term::Q | Term::AlphaQ => "needs q and cbar",
         Term::Q0 => "needs q, cbar and v0",
-        Term::R => "needs r and the span b",
+        Term::R | Term::AlphaR => "needs r and the span b",
         Term::Alphadot => "needs alphadot or alpha to differentiate, and cbar",
         Term::De | Term::AlphaDe => "needs de",
-        Term::Da => "needs da",
-        Term::Dr => "needs dr",
+        Term::Da | Term::AlphaDa => "needs da",
+        Term::Dr | Term::AlphaDr => "needs dr",
         Term::V => "needs v0",
         Term::Bias | Term::Alpha | Term::Alpha2 => "always available",
     }

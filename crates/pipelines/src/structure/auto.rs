@@ -56,8 +56,9 @@ impl Scope {
     }
 
     /// The default candidates of coefficient `c`: the preset's terms and the nonlinear ones a
-    /// flight-test engineer tries next (Klein & Morelli 2006 §5.4: α², α·δe and V/V0 for the
-    /// longitudinal coefficients; α·β for the lateral ones). `alphadot` is offered only when
+    /// flight-test engineer tries next (Klein & Morelli 2006 §5.4: α², α·δe, α·q̂ and V/V0 for
+    /// the longitudinal coefficients; for the lateral ones α times each preset term, the
+    /// α-dependence of the lateral derivatives that tables such as the F-16's have). `alphadot` is offered only when
     /// asked for (`AutoModel::candidates`): in most manoeuvres α̇ and q̂ move together, and α̇
     /// also stands in for a lag of the α channel behind the kinematics. On the HFB-320 (α ~0.2 s
     /// late) it enters CL with partial F ≈ 1,700, and output error then gives CL_q −216 ± 1,325
@@ -65,9 +66,9 @@ impl Scope {
     pub fn default_candidates(c: Coefficient) -> Vec<Term> {
         use Term::*;
         if matches!(c, Coefficient::CY | Coefficient::Cl | Coefficient::Cn) {
-            vec![Beta, P, R, Da, Dr, AlphaBeta]
+            vec![Beta, P, R, Da, Dr, AlphaBeta, AlphaP, AlphaR, AlphaDa, AlphaDr]
         } else {
-            vec![Alpha, Q, De, V, Alpha2, AlphaDe]
+            vec![Alpha, Q, De, V, Alpha2, AlphaDe, AlphaQ]
         }
     }
 }

@@ -233,3 +233,22 @@ fn errors_model_auto_arguments() {
     assert!(e.contains("`bogus`"), "{e}");
     assert!(run(&[d, "--model", "auto", "--candidates", "0"]).contains("`0`"));
 }
+
+/// A scope the record cannot measure says what the mapping lacks: the HFB-320 record is
+/// longitudinal (no lateral rates nor inertias mapped).
+#[test]
+fn val_model_auto_lateral_on_a_longitudinal_record_names_what_is_missing() {
+    let Some(data) = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let map = workspace().join("mappings/hfb320.toml");
+    let o = bin()
+        .arg("replay")
+        .arg(&data)
+        .arg("--map")
+        .arg(&map)
+        .args(["--model", "auto:lateral"])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(e.contains("does not measure it") && e.contains("span b"), "{e}");
+}

@@ -110,10 +110,18 @@ pub fn select_on_samples(
             .filter(|t| first.is_some_and(|s| t.value(s).is_none()))
             .map(|t| t.name())
             .collect();
-        return Err(format!(
-            "{who}: no sample has the coefficient and every candidate measured (missing in the first sample: {})",
-            if missing.is_empty() { "the coefficient".to_string() } else { missing.join(", ") }
-        ));
+        let measured = first.and_then(|s| s.measured_coefficients()[coefficient.index()]);
+        return Err(if measured.is_none() {
+            format!(
+                "{who}: the record does not measure it: it {} (see the mapping)",
+                crate::replay::coefficient_needs(coefficient)
+            )
+        } else {
+            format!(
+                "{who}: no sample has every candidate measured (missing in the first sample: {})",
+                missing.join(", ")
+            )
+        });
     }
     let c = Candidates {
         names: candidates.iter().map(|t| t.name().to_string()).collect(),

@@ -58,7 +58,9 @@
 //!
 //! [[estimator]]                         # sample-driven estimators (aeroident_estimators::
 //! kind = "rls"                          # Estimator) fed one AirDataSample per step:
-//! model = "six-axis"                    # preset name or a list of parameter names
+//! model = "six-axis"                    # preset name, a list of parameter names, or a model
+//!                                       # file (`….toml`, relative to this file: e.g. the
+//!                                       # model.toml of `replay --model auto`)
 //! forgetting = 0.995                    # method options
 //! ```
 //! Corrected estimator keys: `lambda_per_s`, `information_per_s`, `tracking_weight`,
@@ -586,8 +588,22 @@ fn parse_params(names: &[String], field: &str) -> Result<Vec<Param>, (String, St
         .collect()
 }
 
-/// Parses one `[[estimator]]` table.
-fn parse_estimator(k: usize, t: &toml::Table) -> Result<EstimatorSpec, (String, String)> {
+/// The structure of a model file (`models/*.toml`, or the `model.toml` that `replay --model
+/// auto` writes), its path taken relative to `base_dir` (the scenario file's directory) unless
+/// absolute; the file's name names the model. Its priors and references are not used: each
+/// estimator of a scenario takes its own priors.
+fn model_file(name: &str, base_dir: &Path) -> Result<(ModelStructure, String), String> {
+    let path = base_dir.join(name);
+    let spec = aeroident_io::ModelSpec::from_path(&path).map_err(|e| e.to_string())?;
+    Ok((spec.structure, name.to_string()))
+}
+
+/// Parses one `[[estimator]]` table; model files are read relative to `base_dir`.
+fn parse_estimator(
+    k: usize,
+    t: &toml::Table,
+    base_dir: &Path,
+) -> Result<EstimatorSpec, (String, String)> {
     let field = format!("estimator[{k}]");
     let kind = t
         .get("kind")
@@ -634,12 +650,15 @@ fn parse_estimator(k: usize, t: &toml::Table) -> Result<EstimatorSpec, (String, 
         return Err((format!("{field}.params"), hint.into()));
     }
     let (model, model_name) = match t.get("model") {
+        Some(toml::Value::String(name)) if name.ends_with(".toml") => {
+            model_file(name, base_dir).map_err(|e| (format!("{field}.model"), e))?
+        }
         Some(toml::Value::String(name)) => (
             ModelStructure::preset(name).ok_or_else(|| {
                 (
                     format!("{field}.model"),
                     format!(
-                        "unknown preset `{name}` (presets: {}; or a list of parameter names)",
+                        "unknown preset `{name}` (presets: {}; a model file `….toml`; or a list of parameter names)",
                         ModelStructure::PRESETS.join(", ")
                     ),
                 )
@@ -733,7 +752,7 @@ impl Scenario {
             .estimator
             .iter()
             .enumerate()
-            .map(|(k, t)| parse_estimator(k, t))
+            .map(|(k, t)| parse_estimator(k, t, Path::new(path).parent().unwrap_or(Path::new(""))))
             .collect::<Result<Vec<_>, _>>()
             .map_err(|(f, r)| bad(f, r))?;
         let s = Scenario {
@@ -1020,6 +1039,45 @@ mod tests {
         assert!(e.contains("white_sigma"), "{e}");
     }
 
+    /// `model = "….toml"` reads a model file relative to the scenario's directory (the
+    /// `model.toml` `replay --model auto` writes), and a missing or bad one is refused naming
+    /// the estimator's key and the file.
+    #[test]
+    fn estimator_model_from_a_model_file_next_to_the_scenario() {
+        let dir =
+            std::env::temp_dir().join(format!("aeroident-scenario-model-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let model = "[coefficients]\nCm = [\"0\", \"alpha\", \"q\", \"de\"]\nCL = [\"0\", \"alpha\"]\nCD = [\"0\", \"alpha2\", \"alpha_q\"]\n";
+        std::fs::write(dir.join("chosen.toml"), model).unwrap();
+        let head = "kind = \"run\"\nname = \"t\"\nduration_s = 1.0\ndt_s = 0.01\n";
+        let scenario_path = dir.join("s.toml").display().to_string();
+        let with = |m: &str| {
+            let text = format!("{head}[[estimator]]\nkind = \"rls\"\nmodel = \"{m}\"\n");
+            Scenario::from_toml(&text, &scenario_path)
+        };
+        let s = with("chosen.toml").unwrap();
+        let EstimatorSpec::Sample(e) = &s.estimator[0] else { panic!("a sample estimator") };
+        let names: Vec<&str> = e.model.names().collect();
+        assert_eq!(
+            names,
+            [
+                "CL_0",
+                "CL_alpha",
+                "CD_0",
+                "CD_alpha2",
+                "CD_alpha_q",
+                "Cm_0",
+                "Cm_alpha",
+                "Cm_q",
+                "Cm_de"
+            ]
+        );
+        assert_eq!(e.model_name, "chosen.toml");
+        let e = with("missing.toml").unwrap_err().to_string();
+        assert!(e.contains("estimator[0].model") && e.contains("missing.toml"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
     /// Every option a two-aircraft kind declares is one its entry parses (with a valid value),
     /// and any other key is refused naming it: the registry and the parser cannot drift apart.
     #[test]
@@ -1032,16 +1090,17 @@ mod tests {
                 let v: toml::Value = if o == "reading" { "implicit".into() } else { 1.0.into() };
                 t.insert(o.into(), v);
             }
-            let e = parse_estimator(0, &t).unwrap_or_else(|e| panic!("{}: {e:?}", kind.name()));
+            let e = parse_estimator(0, &t, Path::new(""))
+                .unwrap_or_else(|e| panic!("{}: {e:?}", kind.name()));
             assert_eq!(e.param_names().len(), 1);
             t.insert("no_such_option".into(), 1.0.into());
-            let (field, why) = parse_estimator(0, &t).unwrap_err();
+            let (field, why) = parse_estimator(0, &t, Path::new("")).unwrap_err();
             assert_eq!(field, "estimator[0]");
             assert!(why.contains("no_such_option"), "{}: {why}", kind.name());
         }
         let mut t = toml::Table::new();
         t.insert("kind".into(), "nope".into());
-        let (field, why) = parse_estimator(3, &t).unwrap_err();
+        let (field, why) = parse_estimator(3, &t, Path::new("")).unwrap_err();
         assert_eq!(
             (field.as_str(), why.as_str()),
             ("estimator[3].kind", unknown_kind("nope").as_str())

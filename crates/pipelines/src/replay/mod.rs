@@ -616,7 +616,9 @@ fn term_needs(t: Term) -> &'static str {
     }
 }
 
-fn coefficient_needs(c: Coefficient) -> &'static str {
+/// What the record must map for coefficient `c` to be measured from its accelerations (in
+/// the mapping's channel and constant names).
+pub(crate) fn coefficient_needs(c: Coefficient) -> &'static str {
     match c {
         Coefficient::CX | Coefficient::CZ | Coefficient::CL | Coefficient::CD => "needs ax and az",
         Coefficient::CY => "needs ay",

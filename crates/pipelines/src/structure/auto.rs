@@ -408,12 +408,17 @@ impl AutoSelection {
                 .iter()
                 .map(|s| {
                     let sign = if s.action == "enter" { "+" } else { "−" };
-                    let f = s.partial_f.map_or("∞".into(), |f| format!("{f:.1}"));
-                    format!("{sign}{} (F {f}, PSE {:.3e})", s.term, s.pse)
+                    let f = s.partial_f.map_or(String::new(), |f| format!("F {f:.1}, "));
+                    format!("{sign}{} ({f}PSE {:.3e})", s.term, s.pse)
                 })
                 .collect();
+            // Orthogonal functions are expanded back into the ordinary terms they are made of.
+            let keeps = match self.method {
+                Method::Stepwise(_) => "keeps",
+                Method::Orthogonal(_) => "functions expanded back to",
+            };
             lines.push(format!(
-                "  {}: {} → keeps 0, {} (R² {:.3}); {}",
+                "  {}: {} → {keeps} 0, {} (R² {:.3}); {}",
                 r.coefficient,
                 steps.join(", "),
                 r.kept.join(", "),

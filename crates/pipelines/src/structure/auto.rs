@@ -289,7 +289,11 @@ fn model_of(
             structure.insert(Param::new(s.coefficient, t));
         }
     }
-    let structure = structure.validated().map_err(|e| ReplayError::Model(e.to_string()))?;
+    let structure = structure.validated().map_err(|e| {
+        ReplayError::Model(format!(
+            "{file}: the selected model is not usable: {e} (offer fewer candidates with --candidates, select one scope at a time, or select with --select mof)"
+        ))
+    })?;
     Ok(ModelSpec {
         name: format!("auto:{} ({})", scope.name(), method.name()),
         description: format!(

@@ -89,3 +89,40 @@ fn errors_time_unit_off_by_1000_is_a_summary_warning() {
     let fit = fit_record(open(), &m, None, FitOptions::default()).unwrap();
     wanted(&fit.summary.warnings);
 }
+
+/// A row's problem names the mapping's channel and column, not the sample's SI field: a
+/// one-row spike on `q` (column `Q_rate`) and a `de` made implausible by the mapping's offset
+/// (every row rejected) both say `channel … (column …)`, the latter with the offset.
+#[test]
+fn errors_row_problems_name_the_mapping_channel_and_column() {
+    let map = MAP.replace("column = \"q\"", "column = \"Q_rate\"");
+    let mut csv = String::from("t,V,a,Q_rate,ax,az,de\n");
+    for k in 0..200 {
+        let t = k as f64 * 0.2;
+        let (a, de) = (0.05 + 0.01 * (0.7 * t).sin(), 0.02 * (1.3 * t).cos());
+        let q = if k == 100 { 5.0 } else { 0.1 * t.sin() };
+        csv.push_str(&format!("{t:.1},50,{a},{q},0.1,{},{de}\n", -9.8 - 2.0 * a));
+    }
+    let m = Mapping::from_toml_str(&map, "names.toml").unwrap();
+    let reader = FlightDataReader::new(csv.as_bytes(), "names.csv", &m).unwrap();
+    let o = replay(reader, &m, &ReplayOptions::default(), &mut ()).unwrap();
+    let spike = o.summary.rejections.iter().find(|r| r.row == 102).expect("row 102 rejected");
+    assert!(
+        spike.reason.starts_with("channel `q` (column `Q_rate`) = 5 is an isolated spike"),
+        "{}",
+        spike.reason
+    );
+    let map = map.replace(
+        "de = { column = \"de\", unit = \"rad\" }",
+        "de = { column = \"de\", unit = \"rad\", offset = 3.0 }",
+    );
+    let m = Mapping::from_toml_str(&map, "offset.toml").unwrap();
+    let reader = FlightDataReader::new(csv.as_bytes(), "offset.csv", &m).unwrap();
+    let e =
+        replay(reader, &m, &ReplayOptions::default(), &mut ()).err().expect("no usable samples");
+    let text = e.to_string();
+    assert!(
+        text.contains("row 2: channel `de` (column `de`, the mapping's offset 3 applied) = 3.02"),
+        "{text}"
+    );
+}

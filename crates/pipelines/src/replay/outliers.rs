@@ -59,7 +59,7 @@
 //! sample reaches the estimator, so a paced replay's estimates lag by that much.
 
 use aeroident_estimators::AirDataSample;
-use aeroident_io::{FlightDataError, RecordEvent, RowProblem};
+use aeroident_io::{FlightDataError, Mapping, RecordEvent, RowProblem};
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
 
@@ -255,11 +255,11 @@ struct RunRest {
 }
 
 impl RunRest {
-    /// The rejection of the sample on `row` as a member of the run.
-    fn member(&self, row: u64, sample: &AirDataSample) -> RecordEvent {
-        let (field, value) = channels(sample)[self.channel];
+    /// The rejection of the sample on `row` as a member of the run, its channel named `field`.
+    fn member(&self, row: u64, sample: &AirDataSample, field: String) -> RecordEvent {
+        let value = channels(sample)[self.channel].1;
         let problem = RowProblem::Spike {
-            field: field.into(),
+            field,
             value: value.unwrap_or(f64::NAN),
             median: self.median,
             threshold: self.threshold,
@@ -288,6 +288,8 @@ pub struct Screened<I> {
     /// The members of a run of spikes still to reject.
     run: Option<RunRest>,
     notes: ScreenNotes,
+    /// The mapping the record was read with, to name a channel as the user wrote it.
+    mapping: Option<Arc<Mapping>>,
 }
 
 impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Screened<I> {
@@ -302,6 +304,22 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Screened<I> {
             rejected: 0,
             run: None,
             notes: ScreenNotes::default(),
+            mapping: None,
+        }
+    }
+
+    /// The stage naming each channel in its messages as `mapping` does
+    /// ([`Mapping::field_label`]); without it, by the sample field.
+    pub fn named_by(mut self, mapping: Arc<Mapping>) -> Self {
+        self.mapping = Some(mapping);
+        self
+    }
+
+    /// Sample field `field` as the messages name it.
+    fn label(&self, field: &str) -> String {
+        match &self.mapping {
+            Some(m) => m.field_label(field),
+            None => format!("`{field}`"),
         }
     }
 
@@ -376,7 +394,7 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Screened<I> {
             window.extend(future.iter().filter_map(|v| v[c]));
             let context: Vec<f64> = self.past.iter().chain(future).filter_map(|v| v[c]).collect();
             if let Some((median, threshold)) = screen.spike(&window, centre, &context) {
-                let field = field.into();
+                let field = self.label(field);
                 return Some((
                     RowProblem::Spike { field, value, median, threshold, samples: 1 },
                     None,
@@ -434,12 +452,18 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Screened<I> {
             };
             if k <= RUN_MAX {
                 let rest = RunRest { left: k - 1, channel: c, samples: k, median, threshold };
-                let problem =
-                    RowProblem::Spike { field: field.into(), value, median, threshold, samples: k };
+                let problem = RowProblem::Spike {
+                    field: self.label(field),
+                    value,
+                    median,
+                    threshold,
+                    samples: k,
+                };
                 return Some((problem, Some(rest)));
             }
             let note = format!(
-                "spike screen: `{field}` departs from the samples on both sides like a spike for {k} samples from t = {t_s} s (to {value}, median around them {median}, threshold {threshold}); not rejected (a run longer than {RUN_MAX} samples can be genuine): check those rows, or cut them out with a time window"
+                "spike screen: {} departs from the samples on both sides like a spike for {k} samples from t = {t_s} s (to {value}, median around them {median}, threshold {threshold}); not rejected (a run longer than {RUN_MAX} samples can be genuine): check those rows, or cut them out with a time window",
+                self.label(field)
             );
             if let Ok(mut notes) = self.notes.lock() {
                 notes.push(note);
@@ -476,7 +500,8 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Iterator for Scre
                 self.run = Some(RunRest { left: rest.left - 1, ..rest });
                 if let Some(Ok(RecordEvent::Sample { row, sample })) = self.ahead.pop_front() {
                     self.rejected += 1;
-                    return Some(Ok(rest.member(row, &sample)));
+                    let field = self.label(channels(&sample)[rest.channel].0);
+                    return Some(Ok(rest.member(row, &sample, field)));
                 }
                 continue;
             }

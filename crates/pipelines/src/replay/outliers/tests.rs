@@ -205,7 +205,7 @@ fn short_runs_of_spikes_are_found() {
             for (_, p) in &rejected {
                 assert_eq!(p.kind(), "spike run");
                 let RowProblem::Spike { field, value, samples, .. } = p else { panic!("{p}") };
-                assert_eq!((field.as_str(), *value, *samples), ("thrust_n", v, len));
+                assert_eq!((field.as_str(), *value, *samples), ("`thrust_n`", v, len));
             }
             assert!(notes.is_empty(), "{notes:?}");
         }

@@ -126,3 +126,36 @@ fn errors_row_problems_name_the_mapping_channel_and_column() {
         "{text}"
     );
 }
+
+/// A channel a model term needs that holds one value over the whole record (an elevator not
+/// moved, a rate channel stuck at 0) is named in a summary warning with the parameters it
+/// leaves unidentifiable; a record where it varies gets no such warning.
+#[test]
+fn errors_a_constant_channel_is_named_with_the_parameters_it_leaves_unidentified() {
+    let record = |de_fixed: Option<f64>, q_fixed: Option<f64>| {
+        let mut csv = String::from("t,V,a,q,ax,az,de\n");
+        for k in 0..300 {
+            let t = k as f64 * 0.2;
+            let a = 0.05 + 0.01 * (0.7 * t).sin();
+            let q = q_fixed.unwrap_or(0.1 * t.sin());
+            let de = de_fixed.unwrap_or(0.02 * (1.3 * t).cos());
+            csv.push_str(&format!("{t:.1},50,{a},{q},0.1,{},{de}\n", -9.8 - 2.0 * a));
+        }
+        let m = Mapping::from_toml_str(MAP, "const.toml").unwrap();
+        let reader = FlightDataReader::new(csv.as_bytes(), "const.csv", &m).unwrap();
+        let o = replay(reader, &m, &ReplayOptions::default(), &mut ()).unwrap();
+        o.summary.warnings
+    };
+    let constant = |w: &Vec<String>| -> Vec<String> {
+        w.iter().filter(|w| w.starts_with("constant channel")).cloned().collect()
+    };
+    assert!(constant(&record(None, None)).is_empty());
+    let w = constant(&record(Some(0.01), None));
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(w[0].contains("channel `de` (column `de`) does not vary"), "{}", w[0]);
+    assert!(w[0].contains("0.01 in all") && w[0].contains("Cm_de"), "{}", w[0]);
+    assert!(!w[0].contains("Cm_q") && !w[0].contains("Cm_alpha"), "{}", w[0]);
+    let w = constant(&record(None, Some(0.0)));
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(w[0].contains("channel `q` (column `q`)") && w[0].contains("Cm_q"), "{}", w[0]);
+}

@@ -40,6 +40,7 @@
 
 pub mod arrays;
 pub mod batch;
+pub mod constant;
 pub mod cross_check;
 pub mod diagnostics;
 pub mod explain;

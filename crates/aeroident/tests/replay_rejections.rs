@@ -118,8 +118,9 @@ fn errors_row_problems_name_the_mapping_channel_and_column() {
     );
     let m = Mapping::from_toml_str(&map, "offset.toml").unwrap();
     let reader = FlightDataReader::new(csv.as_bytes(), "offset.csv", &m).unwrap();
-    let e =
-        replay(reader, &m, &ReplayOptions::default(), &mut ()).err().expect("no usable samples");
+    let Err(e) = replay(reader, &m, &ReplayOptions::default(), &mut ()) else {
+        panic!("no usable samples expected")
+    };
     let text = e.to_string();
     assert!(
         text.contains("row 2: channel `de` (column `de`, the mapping's offset 3 applied) = 3.02"),

@@ -89,3 +89,74 @@ fn errors_time_unit_off_by_1000_is_a_summary_warning() {
     let fit = fit_record(open(), &m, None, FitOptions::default()).unwrap();
     wanted(&fit.summary.warnings);
 }
+
+/// A row's problem names the mapping's channel and column, not the sample's SI field: a
+/// one-row spike on `q` (column `Q_rate`) and a `de` made implausible by the mapping's offset
+/// (every row rejected) both say `channel … (column …)`, the latter with the offset.
+#[test]
+fn errors_row_problems_name_the_mapping_channel_and_column() {
+    let map = MAP.replace("column = \"q\"", "column = \"Q_rate\"");
+    let mut csv = String::from("t,V,a,Q_rate,ax,az,de\n");
+    for k in 0..200 {
+        let t = k as f64 * 0.2;
+        let (a, de) = (0.05 + 0.01 * (0.7 * t).sin(), 0.02 * (1.3 * t).cos());
+        let q = if k == 100 { 5.0 } else { 0.1 * t.sin() };
+        csv.push_str(&format!("{t:.1},50,{a},{q},0.1,{},{de}\n", -9.8 - 2.0 * a));
+    }
+    let m = Mapping::from_toml_str(&map, "names.toml").unwrap();
+    let reader = FlightDataReader::new(csv.as_bytes(), "names.csv", &m).unwrap();
+    let o = replay(reader, &m, &ReplayOptions::default(), &mut ()).unwrap();
+    let spike = o.summary.rejections.iter().find(|r| r.row == 102).expect("row 102 rejected");
+    assert!(
+        spike.reason.starts_with("channel `q` (column `Q_rate`) = 5 is an isolated spike"),
+        "{}",
+        spike.reason
+    );
+    let map = map.replace(
+        "de = { column = \"de\", unit = \"rad\" }",
+        "de = { column = \"de\", unit = \"rad\", offset = 3.0 }",
+    );
+    let m = Mapping::from_toml_str(&map, "offset.toml").unwrap();
+    let reader = FlightDataReader::new(csv.as_bytes(), "offset.csv", &m).unwrap();
+    let Err(e) = replay(reader, &m, &ReplayOptions::default(), &mut ()) else {
+        panic!("no usable samples expected")
+    };
+    let text = e.to_string();
+    assert!(
+        text.contains("row 2: channel `de` (column `de`, the mapping's offset 3 applied) = 3.02"),
+        "{text}"
+    );
+}
+
+/// A channel a model term needs that holds one value over the whole record (an elevator not
+/// moved, a rate channel stuck at 0) is named in a summary warning with the parameters it
+/// leaves unidentifiable; a record where it varies gets no such warning.
+#[test]
+fn errors_a_constant_channel_is_named_with_the_parameters_it_leaves_unidentified() {
+    let record = |de_fixed: Option<f64>, q_fixed: Option<f64>| {
+        let mut csv = String::from("t,V,a,q,ax,az,de\n");
+        for k in 0..300 {
+            let t = k as f64 * 0.2;
+            let a = 0.05 + 0.01 * (0.7 * t).sin();
+            let q = q_fixed.unwrap_or(0.1 * t.sin());
+            let de = de_fixed.unwrap_or(0.02 * (1.3 * t).cos());
+            csv.push_str(&format!("{t:.1},50,{a},{q},0.1,{},{de}\n", -9.8 - 2.0 * a));
+        }
+        let m = Mapping::from_toml_str(MAP, "const.toml").unwrap();
+        let reader = FlightDataReader::new(csv.as_bytes(), "const.csv", &m).unwrap();
+        let o = replay(reader, &m, &ReplayOptions::default(), &mut ()).unwrap();
+        o.summary.warnings
+    };
+    let constant = |w: &Vec<String>| -> Vec<String> {
+        w.iter().filter(|w| w.starts_with("constant channel")).cloned().collect()
+    };
+    assert!(constant(&record(None, None)).is_empty());
+    let w = constant(&record(Some(0.01), None));
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(w[0].contains("channel `de` (column `de`) does not vary"), "{}", w[0]);
+    assert!(w[0].contains("0.01 in all") && w[0].contains("Cm_de"), "{}", w[0]);
+    assert!(!w[0].contains("Cm_q") && !w[0].contains("Cm_alpha"), "{}", w[0]);
+    let w = constant(&record(None, Some(0.0)));
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(w[0].contains("channel `q` (column `q`)") && w[0].contains("Cm_q"), "{}", w[0]);
+}

@@ -311,9 +311,10 @@ pub enum RowProblem {
     /// A finite value outside the plausibility limits every estimator applies
     /// (`aeroident_estimators::sample::PLAUSIBILITY`, e.g. V > 5000 m/s, |α| > 10 rad): a
     /// corrupt record, rejected here so that no sample the reader yields is refused later.
-    #[error("`{field}` = {value} is implausible (limit {limit})")]
+    #[error("{field} = {value} is implausible (limit {limit}; SI, after the mapping's conversion)")]
     Implausible {
-        /// Sample field (SI name, e.g. `vt_mps`).
+        /// The channel as the mapping names it, and its source
+        /// ([`crate::Mapping::field_label`], e.g. ``channel `vt` (column `V`)``).
         field: String,
         /// The SI value.
         value: f64,
@@ -324,9 +325,10 @@ pub enum RowProblem {
     /// pipelines' spike screen): an isolated sample (`samples` = 1), or one of a short run of
     /// `samples` consecutive gross outliers with the channel back at its level on both sides.
     /// The row is not used.
-    #[error("`{field}` = {value} is {}", spike_detail(*samples, *median, *threshold))]
+    #[error("{field} = {value} is {}", spike_detail(*samples, *median, *threshold))]
     Spike {
-        /// Sample field (SI name, e.g. `thrust_n`).
+        /// The channel as the mapping names it, and its source
+        /// ([`crate::Mapping::field_label`], e.g. ``channel `thrust` (column `thrust_N`)``).
         field: String,
         /// The SI value.
         value: f64,

@@ -221,6 +221,8 @@ pub struct FlightDataReader<R: Read> {
     synthetic_lines: u64,
     /// The mapping file (named in the reader's warnings).
     mapping_file: String,
+    /// The mapping, to name a sample field in a row's message as the user wrote it.
+    mapping: std::sync::Arc<Mapping>,
     /// The first accepted intervals, s, until the rate is checked ([`PLAUSIBLE_RATE_HZ`]).
     intervals: Vec<f64>,
     rate_checked: bool,
@@ -338,6 +340,7 @@ impl<R: Read> FlightDataReader<R> {
             done: false,
             synthetic_lines: 0,
             mapping_file: mapping.file.clone(),
+            mapping: std::sync::Arc::new(mapping.clone()),
             intervals: Vec::new(),
             rate_checked: false,
             notes: ReaderNotes::default(),
@@ -357,6 +360,11 @@ impl<R: Read> FlightDataReader<R> {
     /// ([`PLAUSIBLE_RATE_HZ`]).
     pub fn notes(&self) -> ReaderNotes {
         std::sync::Arc::clone(&self.notes)
+    }
+
+    /// The mapping the record is read with (the stages after the reader name its channels).
+    pub fn mapping(&self) -> std::sync::Arc<Mapping> {
+        std::sync::Arc::clone(&self.mapping)
     }
 
     /// The data file's name as used in messages.
@@ -568,7 +576,8 @@ impl<R: Read> FlightDataReader<R> {
             });
         }
         if let Some((field, value, limit)) = s.first_implausible() {
-            return Err(RowProblem::Implausible { field: field.to_string(), value, limit });
+            let field = self.mapping.field_label(field);
+            return Err(RowProblem::Implausible { field, value, limit });
         }
         Ok(s)
     }

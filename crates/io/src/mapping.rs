@@ -761,6 +761,49 @@ impl Mapping {
     }
 }
 
+impl Mapping {
+    /// A sample field (`de_rad`, `thrust_n`, …) as a row's message names it: the mapping
+    /// channel and where it comes from, without the mapping file, e.g. ``channel `de` (column
+    /// `elevator_rad`, the mapping's offset 3 applied)`` or ``channel `qdot` (derived, not a
+    /// column)``. A name that is no sample field is given as it is, in backticks.
+    pub fn field_label(&self, field: &str) -> String {
+        let Some(ch) = Channel::of_sample_field(field) else { return format!("`{field}`") };
+        let key = ch.key();
+        let Some(m) = self.channels.get(&ch) else {
+            return format!("channel `{key}` (derived, not a column)");
+        };
+        let source = match (&m.source, &m.expression) {
+            (Source::Columns(_), Some(e)) => format!("expression `{}`", e.text()),
+            (Source::Columns(cols), None) => {
+                let names: Vec<String> = cols.iter().map(|(c, _)| format!("`{c}`")).collect();
+                let what = if names.len() == 1 { "column" } else { "columns" };
+                format!("{what} {}", names.join(", "))
+            }
+            (Source::Constant(_), _) => "a constant".into(),
+        };
+        format!("channel `{key}` ({source}{})", Self::adjustment(m))
+    }
+
+    /// What the mapping does to a channel's raw value besides the unit, for a message: its
+    /// scale, offset or calibration table (empty when none).
+    fn adjustment(m: &ChannelMap) -> String {
+        let mut parts = Vec::new();
+        if m.scale != 1.0 {
+            parts.push(format!("scale {}", m.scale));
+        }
+        if m.offset != 0.0 {
+            parts.push(format!("offset {}", m.offset));
+        }
+        if m.calibration.is_some() {
+            parts.push("calibration table".to_string());
+        }
+        if parts.is_empty() {
+            return String::new();
+        }
+        format!(", the mapping's {} applied", parts.join(" and "))
+    }
+}
+
 type LogTables = (Option<AlignSpec>, Option<[String; 4]>, Option<AirDataSpec>);
 
 /// Validates `[align]`, `[attitude]` and `[air_data]`, and that derived columns used by

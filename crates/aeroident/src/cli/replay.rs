@@ -550,6 +550,7 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         w.contains("sign a conventional")
             || w.starts_with("normalised innovation")
             || w.starts_with("collinear regressors")
+            || w.starts_with("constant channel")
     }) {
         eprintln!("warning: {w}");
     }

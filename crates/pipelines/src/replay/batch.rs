@@ -851,6 +851,9 @@ pub fn fit_records<R: Read>(
     summary.warnings.extend(level_note);
     summary.warnings.extend(rec.notes.iter().cloned());
     summary.warnings.extend(dominance_warnings(&fitted.result, &slices));
+    let mut spread = super::constant::Spread::default();
+    slices.iter().flat_map(|m| m.iter()).for_each(|s| spread.push(s));
+    summary.warnings.extend(spread.warnings(&st, mapping));
     if let Some(c) = &options.compat {
         summary.warnings.extend(c.warnings());
     }

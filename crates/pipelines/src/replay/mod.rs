@@ -40,6 +40,7 @@
 
 pub mod arrays;
 pub mod batch;
+pub mod constant;
 pub mod cross_check;
 pub mod diagnostics;
 pub mod explain;
@@ -779,7 +780,8 @@ pub(crate) fn record_events<'a, R: Read + 'a>(
     windows: &[crate::window::TimeWindow],
 ) -> RecordEvents<'a> {
     let reader_notes = reader.notes();
-    let screened = outliers::Screened::new(reader, screen);
+    let mapping = reader.mapping();
+    let screened = outliers::Screened::new(reader, screen).named_by(mapping);
     let screen_notes = screened.notes();
     let events: Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a> = match compat {
         Some(c) => Box::new(crate::compat::Corrected::new(screened, c.clone())),

@@ -68,6 +68,8 @@ pub(super) struct Replay<'a> {
     run: Option<Running>,
     history: History,
     fed: SampleLog<AirDataSample>,
+    /// Each regressor channel's range over the estimated samples ([`super::constant`]).
+    spread: super::constant::Spread,
     recorder: Recorder,
     /// Time spent in the estimator's update (the throughput of the estimation stage).
     busy: Duration,
@@ -105,6 +107,7 @@ impl<'a> Replay<'a> {
             run: None,
             history: History::default(),
             fed: SampleLog::new(crate::results::MAX_FIT_SAMPLES, 1),
+            spread: super::constant::Spread::default(),
             recorder: Recorder::default(),
             busy: Duration::ZERO,
             pacer: Pacer::default(),
@@ -306,6 +309,7 @@ impl<'a> Replay<'a> {
         self.recorder.push(s);
         self.history.push(s.t_s, values, sigmas);
         self.fed.push(*s);
+        self.spread.push(s);
         Ok(true)
     }
 
@@ -360,6 +364,7 @@ impl<'a> Replay<'a> {
             .into());
         };
         let mut summary = self.summary(&r);
+        summary.warnings.extend(self.spread.warnings(r.est.structure(), self.mapping));
         let differentiated = r.stage.supplies().to_vec();
         let n = r.est.structure().n_params();
         let final_covariance: Vec<Option<f64>> =

@@ -26,9 +26,11 @@
 //!    sample out of the envelope of everything around it (on the shipped HFB-320 record a
 //!    genuine `V` sample departs 7 × its window's range, but stays within its context's
 //!    range). A one-sample pulse on an otherwise constant channel cannot be told from a
-//!    spike: such a record needs the screen off. Two spikes apart within one window widen
-//!    each other's range and both pass; the output-error fit's dominance warning and its Huber
-//!    option cover what the screen lets through.
+//!    spike: such a record needs the screen off. The other spikes of the window (samples beyond
+//!    the Hampel threshold on the same side with both neighbours within it,
+//!    [`SpikeScreen::fellow_spikes`]) are left out of the range and of the context ahead, so
+//!    a few spikes within one window do not hide each other; the output-error fit's dominance
+//!    warning and its Huber option cover what the screen lets through.
 //!
 //! A sample failing both is rejected ([`RowProblem::Spike`], naming the channel, the value, the
 //! median and the threshold), listed in the summary's rejections and counted. The screened
@@ -37,8 +39,9 @@
 //! 3. **Short runs** (a corrupt value repeated over 2–3 rows, which 2 cannot see: each member's
 //!    neighbour in the run is as far out as itself). For `k` = 2 to [`WARN_RUN_MAX`]
 //!    consecutive samples from the tested one, with the `h` samples before the run and the `h`
-//!    after it as *others* (at least 2 on each side): every member departs from the sample
-//!    just before the run and the one just after it, on the same side, by more than the guard
+//!    after it as *others* (at least 2 on each side; at a manoeuvre's start or end, where one
+//!    side has fewer than 2, the `h` of the other side): every member departs from the sample
+//!    just before the run and the one just after it (the one of them there is), on the same side, by more than the guard
 //!    of 2 (isolation × the range of the others; the range of the context, the run left out;
 //!    5 % of its largest `|x|`; the floor), and from the others' median by more than
 //!    `t · 1.4826 · MAD` of the others. The channel is back at its level on both sides and the
@@ -59,7 +62,7 @@
 //! sample reaches the estimator, so a paced replay's estimates lag by that much.
 
 use aeroident_estimators::AirDataSample;
-use aeroident_io::{FlightDataError, RecordEvent, RowProblem};
+use aeroident_io::{FlightDataError, Mapping, RecordEvent, RowProblem};
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
 
@@ -144,6 +147,14 @@ fn channels(s: &AirDataSample) -> [(&'static str, Option<f64>); N_CHANNELS] {
     ]
 }
 
+/// The median of `v` and its robust standard deviation `1.4826 · MAD`.
+fn robust(v: &[f64]) -> (f64, f64) {
+    let mut sorted = v.to_vec();
+    let med = median(&mut sorted);
+    let mut dev: Vec<f64> = v.iter().map(|x| (x - med).abs()).collect();
+    (med, 1.4826 * median(&mut dev))
+}
+
 fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);
     let n = v.len();
@@ -176,16 +187,14 @@ impl SpikeScreen {
         if window.len() < MIN_WINDOW {
             return None;
         }
-        let mut sorted = window.to_vec();
-        let med = median(&mut sorted);
-        let mut dev: Vec<f64> = window.iter().map(|v| (v - med).abs()).collect();
-        let scale = 1.4826 * median(&mut dev);
+        let (med, scale) = robust(window);
         if (x - med).abs() <= self.hampel_t * scale {
             return None;
         }
+        let fellows = self.fellow_spikes(window, centre);
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
         for (k, &v) in window.iter().enumerate() {
-            if k != centre {
+            if k != centre && !fellows[k] {
                 lo = lo.min(v);
                 hi = hi.max(v);
             }
@@ -200,6 +209,29 @@ impl SpikeScreen {
         isolated.then_some((med, threshold.max(self.hampel_t * scale)))
     }
 
+    /// The other samples of `window` that look like `window[centre]` does as a spike: beyond
+    /// the window's Hampel threshold on the same side, with every immediate neighbour within
+    /// it. A few spikes within one window would otherwise widen each other's range and
+    /// context until none of them stood out; a genuine manoeuvre's samples are excluded from
+    /// neither (their neighbours are out too, or they are the past the screen passed).
+    pub fn fellow_spikes(&self, window: &[f64], centre: usize) -> Vec<bool> {
+        let (med, scale) = robust(window);
+        let limit = self.hampel_t * scale;
+        let side = (window[centre] - med).signum();
+        let out = |k: usize| (window[k] - med).abs() > limit;
+        (0..window.len())
+            .map(|k| {
+                k != centre
+                    && out(k)
+                    && (window[k] - med).signum() == side
+                    && [k.checked_sub(1), Some(k + 1).filter(|&j| j < window.len())]
+                        .iter()
+                        .flatten()
+                        .all(|&j| j == centre || !out(j))
+            })
+            .collect()
+    }
+
     /// The gross-outlier guard of test 2 (module doc): the departure from the neighbours must
     /// exceed the isolation factor × `range` (of the window's other samples), the range of
     /// `context` (and `med`), 5 % of its largest `|x|` and the absolute floor.
@@ -212,8 +244,9 @@ impl SpikeScreen {
 
     /// Whether `run`, one channel's consecutive values, is a run of gross outliers (module doc,
     /// test 3): `before` and `after` are the channel's values just before and after it (in
-    /// time order, at least 2 each), `context` its values around it that set its scale (the
-    /// run left out). `Some((median, threshold))` of the samples around the run if so.
+    /// time order, at least 2 each; at a manoeuvre's edge one side may have fewer, and the
+    /// other must then have `h`), `context` its values around it that set its scale (the run
+    /// left out). `Some((median, threshold))` of the samples around the run if so.
     pub fn run_spike(
         &self,
         before: &[f64],
@@ -221,22 +254,25 @@ impl SpikeScreen {
         after: &[f64],
         context: &[f64],
     ) -> Option<(f64, f64)> {
-        if before.len() < 2 || after.len() < 2 {
+        let h = self.half_width;
+        let judged = (before.len() >= 2 && after.len() >= 2)
+            || (before.len() < 2 && after.len() >= h)
+            || (after.len() < 2 && before.len() >= h);
+        if !judged {
             return None;
         }
-        let (&prev, &next, &first) = (before.last()?, after.first()?, run.first()?);
-        let mut others: Vec<f64> = before.iter().chain(after).copied().collect();
+        // The level the run must depart from: the sample on each side that there is.
+        let ends: Vec<f64> = before.last().into_iter().chain(after.first()).copied().collect();
+        let first = *run.first()?;
+        let others: Vec<f64> = before.iter().chain(after).copied().collect();
         let (lo, hi) = others
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
-        let med = median(&mut others);
-        let mut dev: Vec<f64> = others.iter().map(|v| (v - med).abs()).collect();
-        let scale = 1.4826 * median(&mut dev);
+        let (med, scale) = robust(&others);
         let threshold = self.guard(hi - lo, med, context);
-        let side = (first - prev).signum();
+        let side = (first - ends[0]).signum();
         let far = run.iter().all(|&x| {
-            (x - prev) * side > threshold
-                && (x - next) * side > threshold
+            ends.iter().all(|&e| (x - e) * side > threshold)
                 && (x - med).abs() > self.hampel_t * scale
         });
         far.then_some((med, threshold.max(self.hampel_t * scale)))
@@ -255,11 +291,11 @@ struct RunRest {
 }
 
 impl RunRest {
-    /// The rejection of the sample on `row` as a member of the run.
-    fn member(&self, row: u64, sample: &AirDataSample) -> RecordEvent {
-        let (field, value) = channels(sample)[self.channel];
+    /// The rejection of the sample on `row` as a member of the run, its channel named `field`.
+    fn member(&self, row: u64, sample: &AirDataSample, field: String) -> RecordEvent {
+        let value = channels(sample)[self.channel].1;
         let problem = RowProblem::Spike {
-            field: field.into(),
+            field,
             value: value.unwrap_or(f64::NAN),
             median: self.median,
             threshold: self.threshold,
@@ -288,6 +324,8 @@ pub struct Screened<I> {
     /// The members of a run of spikes still to reject.
     run: Option<RunRest>,
     notes: ScreenNotes,
+    /// The mapping the record was read with, to name a channel as the user wrote it.
+    mapping: Option<Arc<Mapping>>,
 }
 
 impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Screened<I> {
@@ -302,6 +340,22 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Screened<I> {
             rejected: 0,
             run: None,
             notes: ScreenNotes::default(),
+            mapping: None,
+        }
+    }
+
+    /// The stage naming each channel in its messages as `mapping` does
+    /// ([`Mapping::field_label`]); without it, by the sample field.
+    pub fn named_by(mut self, mapping: Arc<Mapping>) -> Self {
+        self.mapping = Some(mapping);
+        self
+    }
+
+    /// Sample field `field` as the messages name it.
+    fn label(&self, field: &str) -> String {
+        match &self.mapping {
+            Some(m) => m.field_label(field),
+            None => format!("`{field}`"),
         }
     }
 
@@ -374,9 +428,13 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Screened<I> {
             let centre = window.len();
             window.push(value);
             window.extend(future.iter().filter_map(|v| v[c]));
-            let context: Vec<f64> = self.past.iter().chain(future).filter_map(|v| v[c]).collect();
+            // The spikes ahead are not yet screened: they must not set the scale.
+            let fellows = screen.fellow_spikes(&window, centre);
+            let ahead = window.iter().zip(&fellows).skip(centre + 1).filter(|f| !f.1);
+            let context: Vec<f64> =
+                self.past.iter().filter_map(|v| v[c]).chain(ahead.map(|f| *f.0)).collect();
             if let Some((median, threshold)) = screen.spike(&window, centre, &context) {
-                let field = field.into();
+                let field = self.label(field);
                 return Some((
                     RowProblem::Spike { field, value, median, threshold, samples: 1 },
                     None,
@@ -412,12 +470,19 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Screened<I> {
         let (lo, hi) = before
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
-        let departure = (value - before.last()?).abs();
-        if departure <= screen.isolation * (hi - lo) || departure <= ABSOLUTE_FLOOR {
-            return None;
+        // At a manoeuvre's start there is nothing before to compare with: the runs are built.
+        if let Some(&prev) = before.last() {
+            let departure = (value - prev).abs();
+            if departure <= screen.isolation * (hi - lo) || departure <= ABSOLUTE_FLOOR {
+                return None;
+            }
         }
         let col: Vec<Option<f64>> = ahead.iter().map(|v| v[c]).collect();
-        for k in 2..=WARN_RUN_MAX.min(col.len().saturating_sub(1)) {
+        // Fewer samples ahead than the stage waits for: the manoeuvre ends there, and a run
+        // may reach its last sample.
+        let at_end = col.len() < self.lookahead(screen) + RUN_MAX;
+        let longest = if at_end { col.len() + 1 } else { col.len().saturating_sub(1) };
+        for k in 2..=WARN_RUN_MAX.min(longest) {
             let rest = col[..k - 1].iter().copied().collect::<Option<Vec<f64>>>()?;
             let run: Vec<f64> = std::iter::once(value).chain(rest).collect();
             let after: Vec<f64> = col[k - 1..].iter().take(h).flatten().copied().collect();
@@ -434,12 +499,18 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Screened<I> {
             };
             if k <= RUN_MAX {
                 let rest = RunRest { left: k - 1, channel: c, samples: k, median, threshold };
-                let problem =
-                    RowProblem::Spike { field: field.into(), value, median, threshold, samples: k };
+                let problem = RowProblem::Spike {
+                    field: self.label(field),
+                    value,
+                    median,
+                    threshold,
+                    samples: k,
+                };
                 return Some((problem, Some(rest)));
             }
             let note = format!(
-                "spike screen: `{field}` departs from the samples on both sides like a spike for {k} samples from t = {t_s} s (to {value}, median around them {median}, threshold {threshold}); not rejected (a run longer than {RUN_MAX} samples can be genuine): check those rows, or cut them out with a time window"
+                "spike screen: {} departs from the samples on both sides like a spike for {k} samples from t = {t_s} s (to {value}, median around them {median}, threshold {threshold}); not rejected (a run longer than {RUN_MAX} samples can be genuine): check those rows, or cut them out with a time window",
+                self.label(field)
             );
             if let Ok(mut notes) = self.notes.lock() {
                 notes.push(note);
@@ -476,7 +547,8 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Iterator for Scre
                 self.run = Some(RunRest { left: rest.left - 1, ..rest });
                 if let Some(Ok(RecordEvent::Sample { row, sample })) = self.ahead.pop_front() {
                     self.rejected += 1;
-                    return Some(Ok(rest.member(row, &sample)));
+                    let field = self.label(channels(&sample)[rest.channel].0);
+                    return Some(Ok(rest.member(row, &sample, field)));
                 }
                 continue;
             }

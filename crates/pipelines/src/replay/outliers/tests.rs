@@ -205,7 +205,7 @@ fn short_runs_of_spikes_are_found() {
             for (_, p) in &rejected {
                 assert_eq!(p.kind(), "spike run");
                 let RowProblem::Spike { field, value, samples, .. } = p else { panic!("{p}") };
-                assert_eq!((field.as_str(), *value, *samples), ("thrust_n", v, len));
+                assert_eq!((field.as_str(), *value, *samples), ("`thrust_n`", v, len));
             }
             assert!(notes.is_empty(), "{notes:?}");
         }
@@ -257,4 +257,33 @@ fn longer_runs_are_reported_and_manoeuvre_like_runs_pass() {
     x[40..42].iter_mut().for_each(|s| *s = 1e6);
     let (rejected, notes) = screened(&x, &de);
     assert!(rejected.iter().all(|r| r.0 < 40) && notes.is_empty(), "{rejected:?} {notes:?}");
+}
+
+/// Runs of 2 and 3 gross outliers at the very start or end of a record, where the channel's
+/// level is on one side only, are rejected whole (judged against the rest of the record).
+#[test]
+fn short_runs_at_the_record_edges_are_found() {
+    let base: Vec<f64> = noise(60, 5).iter().map(|v| 11_600.0 + 30.0 * v).collect();
+    let de = vec![0.0; 60];
+    for (at, len) in [(0, 2), (0, 3), (58, 2), (57, 3)] {
+        let mut x = base.clone();
+        x[at..at + len].iter_mut().for_each(|s| *s *= 10.0);
+        let (rejected, notes) = screened(&x, &de);
+        let rows: Vec<usize> = rejected.iter().map(|r| r.0).collect();
+        assert_eq!(rows, (at..at + len).collect::<Vec<_>>(), "{len} at {at}");
+        assert!(rejected.iter().all(|r| r.1.kind() == "spike run"), "{rejected:?}");
+        assert!(notes.is_empty(), "{notes:?}");
+    }
+}
+
+/// Spikes two samples apart, each within the others' windows, are each rejected: the other
+/// spikes set neither the window's range nor the context's.
+#[test]
+fn alternating_spikes_are_found() {
+    let base: Vec<f64> = noise(80, 9).iter().map(|v| 0.02 * v).collect();
+    for at in [vec![30, 32, 34], vec![30, 32], vec![0, 2, 4], vec![75, 77, 79]] {
+        let mut x = base.clone();
+        at.iter().for_each(|&k| x[k] = 0.9);
+        assert_eq!(flagged(&x), at, "spikes at {at:?}");
+    }
 }

@@ -1,0 +1,115 @@
+//! Channels a model term needs that do not vary over the record. Such a term's regressor is
+//! zero or a multiple of another's (the bias, for a constant channel), so its parameters are
+//! not identifiable whatever the method: an estimator leaves them (and, for a recursive one,
+//! possibly the whole model) unidentified, and the user is told which channel is the cause.
+//!
+//! "Does not vary" is judged without physics: every estimated sample holds exactly the same
+//! value. (A held or stuck sensor, a channel set to a constant in the data, a surface not
+//! moved during the manoeuvre.)
+
+use aeroident_estimators::{AirDataSample, ModelStructure, Term};
+use aeroident_io::Mapping;
+
+/// The sample fields the regressors read, besides `V` (which every normalised rate reads and
+/// the `V` term itself).
+const FIELDS: [&str; 10] = [
+    "alpha_rad",
+    "beta_rad",
+    "p_rad_s",
+    "q_rad_s",
+    "r_rad_s",
+    "alphadot_rad_s",
+    "de_rad",
+    "da_rad",
+    "dr_rad",
+    "vt_mps",
+];
+
+/// The value of sample field `name` (one of [`FIELDS`]) in `s`.
+fn value(s: &AirDataSample, name: &str) -> Option<f64> {
+    match name {
+        "alpha_rad" => Some(s.alpha_rad),
+        "beta_rad" => s.beta_rad,
+        "p_rad_s" => s.p_rad_s,
+        "q_rad_s" => s.q_rad_s,
+        "r_rad_s" => s.r_rad_s,
+        "alphadot_rad_s" => s.alphadot_rad_s,
+        "de_rad" => s.de_rad,
+        "da_rad" => s.da_rad,
+        "dr_rad" => s.dr_rad,
+        "vt_mps" => Some(s.vt_mps),
+        _ => None,
+    }
+}
+
+/// The fields whose variation term `t`'s regressor needs (a product needs both factors).
+fn term_fields(t: Term) -> &'static [&'static str] {
+    use Term as T;
+    match t {
+        T::Bias => &[],
+        T::Alpha | T::Alpha2 => &["alpha_rad"],
+        T::Beta => &["beta_rad"],
+        T::P => &["p_rad_s"],
+        T::Q | T::Q0 => &["q_rad_s"],
+        T::R => &["r_rad_s"],
+        T::Alphadot => &["alphadot_rad_s"],
+        T::De => &["de_rad"],
+        T::Da => &["da_rad"],
+        T::Dr => &["dr_rad"],
+        T::V => &["vt_mps"],
+        T::AlphaDe => &["alpha_rad", "de_rad"],
+        T::AlphaBeta => &["alpha_rad", "beta_rad"],
+        T::AlphaP => &["alpha_rad", "p_rad_s"],
+        T::AlphaQ => &["alpha_rad", "q_rad_s"],
+        T::AlphaR => &["alpha_rad", "r_rad_s"],
+        T::AlphaDa => &["alpha_rad", "da_rad"],
+        T::AlphaDr => &["alpha_rad", "dr_rad"],
+    }
+}
+
+/// The smallest and largest value of each of [`FIELDS`] over the samples pushed, and how many
+/// held it.
+#[derive(Debug, Clone)]
+pub struct Spread {
+    ranges: [(f64, f64, usize); FIELDS.len()],
+}
+
+impl Default for Spread {
+    fn default() -> Self {
+        Self { ranges: [(f64::INFINITY, f64::NEG_INFINITY, 0); FIELDS.len()] }
+    }
+}
+
+impl Spread {
+    /// Takes one estimated sample into account.
+    pub fn push(&mut self, s: &AirDataSample) {
+        for (name, r) in FIELDS.iter().zip(&mut self.ranges) {
+            if let Some(v) = value(s, name) {
+                *r = (r.0.min(v), r.1.max(v), r.2 + 1);
+            }
+        }
+    }
+
+    /// One warning per channel that held one value in every sample (at least 2) and that a
+    /// term of `structure` needs, naming the channel as `mapping` does and the parameters it
+    /// leaves unidentifiable.
+    pub fn warnings(&self, structure: &ModelStructure, mapping: &Mapping) -> Vec<String> {
+        let constant = FIELDS.iter().zip(&self.ranges).filter(|(_, r)| r.2 >= 2 && r.0 == r.1);
+        constant
+            .filter_map(|(name, &(v, _, n))| {
+                let params: Vec<&str> = structure
+                    .params()
+                    .filter(|p| term_fields(p.term).contains(name))
+                    .map(|p| p.name())
+                    .collect();
+                (!params.is_empty()).then(|| {
+                    format!(
+                        "constant channel: {} does not vary over the record ({v} in all {n} estimated samples), so the terms that need it cannot be identified: {}",
+                        mapping.field_label(name),
+                        params.join(", ")
+                    )
+                })
+            })
+            .collect()
+    }
+}

@@ -252,3 +252,51 @@ fn val_model_auto_lateral_on_a_longitudinal_record_names_what_is_missing() {
     assert!(!o.status.success());
     assert!(e.contains("does not measure it") && e.contains("span b"), "{e}");
 }
+
+/// The F-16 structure campaign's model file is what `--model auto:six-axis` selects on the
+/// shipped flight of the default main job (`scenarios/sim/default_excitation_measured.toml`
+/// read through `mappings/aeroident-sim-measured.toml`): rebuilt here from the simulator, not
+/// read back from a captured run. The selection differs from the preset where the tables
+/// differ from a linear model: `Cl` keeps `alpha_beta` (the α-dependence of `Cl_β`).
+#[test]
+fn val_f16_default_flight_selects_the_shipped_structure() {
+    let out = std::env::temp_dir().join(format!("aeroident-f16-select-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let sim = bin()
+        .args(["f16", "sim"])
+        .arg(workspace().join("scenarios/sim/default_excitation_measured.toml"))
+        .arg("--out")
+        .arg(out.join("sim"))
+        .output()
+        .unwrap();
+    assert!(sim.status.success(), "{}", String::from_utf8_lossy(&sim.stderr));
+    let args = ["--model", "auto:six-axis", "--estimator", "rls"];
+    let (s, model) =
+        auto_replay(&out.join("sim/timeseries.csv"), "aeroident-sim-measured.toml", &args, "f16");
+    let shipped =
+        aeroident_io::ModelSpec::from_path(&workspace().join("models/f16_default_selected.toml"))
+            .unwrap();
+    assert_eq!(model.structure, shipped.structure, "{}", s["structure_selection"]);
+    assert!(strings(&selected(&s, "Cl")["kept"]).contains(&"alpha_beta"));
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// The structure campaigns fly the default main job: everything but their estimators is
+/// `scenarios/default.toml`'s, and the model files they name load.
+#[test]
+fn structure_campaigns_fly_the_default_scenario() {
+    use aeroident_pipelines::aircraft::scenario::Scenario;
+    let load =
+        |p: &str| Scenario::from_path(&workspace().join(p)).unwrap_or_else(|e| panic!("{p}: {e}"));
+    let default = load("scenarios/default.toml");
+    for path in
+        ["scenarios/montecarlo/with-selected.toml", "scenarios/montecarlo/with-alpha-products.toml"]
+    {
+        let mut sc = load(path);
+        assert!(sc.estimator.len() >= 2, "{path}");
+        sc.name = default.name.clone();
+        sc.description = default.description.clone();
+        sc.estimator = default.estimator.clone();
+        assert_eq!(sc, default, "{path} flies another experiment than scenarios/default.toml");
+    }
+}

@@ -266,8 +266,9 @@ pub enum ReplayError {
     /// The model does not fit the record.
     #[error("{0}")]
     Model(String),
-    /// An option is invalid.
-    #[error("option `{option}`: {reason}")]
+    /// An option is invalid; `option` is its name as the command line spells it, without the
+    /// leading `--`.
+    #[error("option `--{option}`: {reason}")]
     Option {
         /// Option name.
         option: &'static str,
@@ -708,7 +709,7 @@ pub fn replay_with<R: Read>(
     make: impl Fn(&ModelSpec) -> Result<Box<dyn Estimator>, BuildError>,
     observer: &mut dyn ReplayObserver,
 ) -> Result<ReplayOutcome, ReplayError> {
-    check_diff_window(opts.diff_window)?;
+    check_numeric_options(opts)?;
     crate::window::check_windows(&opts.windows)
         .map_err(|reason| ReplayError::Option { option: "window", reason })?;
     let mut run = online::Replay::new(reader.file().to_string(), mapping, opts, observer);
@@ -821,6 +822,30 @@ pub(crate) fn check_spike_screen(
     screen
         .map_or(Ok(()), outliers::SpikeScreen::check)
         .map_err(|reason| ReplayError::Option { option: "spike-screen", reason })
+}
+
+/// The numeric options of a replay, checked before anything is read or built, each error
+/// naming the option as the command line spells it and the value exactly as given: the
+/// differentiator window, the forgetting factor (of the estimators that take one) and the
+/// instruments' delay.
+fn check_numeric_options(opts: &ReplayOptions) -> Result<(), ReplayError> {
+    check_diff_window(opts.diff_window)?;
+    if opts.estimator.options().contains(&"forgetting")
+        && !(opts.forgetting > 0.0 && opts.forgetting <= 1.0)
+    {
+        return Err(ReplayError::Option {
+            option: "forgetting",
+            reason: format!("must be in (0, 1] (1: no forgetting), got {}", opts.forgetting),
+        });
+    }
+    let max = aeroident_estimators::iv::MAX_INSTRUMENT_DELAY;
+    match opts.instrument_delay {
+        Some(d) if !(1..=max).contains(&d) => Err(ReplayError::Option {
+            option: "instrument-delay",
+            reason: format!("must be 1 to {max} samples, got {d}"),
+        }),
+        _ => Ok(()),
+    }
 }
 
 /// The differentiator window must be odd, ≥ 3 and ≤ [`MAX_DIFF_WINDOW`].

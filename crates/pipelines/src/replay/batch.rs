@@ -277,6 +277,7 @@ pub(crate) fn read_records<R: Read>(
     let mut rejections = RejectionLog::default();
     let (mut read, mut rejected) = (0usize, 0usize);
     let mut notes = Vec::new();
+    let mut missed = Vec::new();
     for (reader, file) in readers.into_iter().zip(&files) {
         let prefix = if named { format!("{file}: ") } else { String::new() };
         let mut events = super::record_events(reader, screen, compat, windows);
@@ -310,11 +311,18 @@ pub(crate) fn read_records<R: Read>(
             }
         }
         notes.extend(events.notes().into_iter().map(|n| format!("{prefix}{n}")));
+        missed.push(events.windows_missed().map(|why| format!("{file}: {why}")));
         manoeuvres.push(Vec::new());
         starts.push((0, String::new()));
     }
     let lone = reject_lone_samples(&mut manoeuvres, &starts, &mut rejections);
     rejected += lone.len();
+    if manoeuvres.is_empty()
+        && let Some(why) = missed.into_iter().collect::<Option<Vec<String>>>()
+    {
+        // Every file's samples all lie outside the windows: the windows are the cause.
+        return Err(ReplayError::Option { option: "window", reason: why.join("; ") });
+    }
     if manoeuvres.is_empty() {
         // Lone samples first: the gaps before them say nothing of why nothing is left.
         let mut first = lone;

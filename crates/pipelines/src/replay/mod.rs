@@ -712,7 +712,8 @@ pub fn replay_with<R: Read>(
     check_numeric_options(opts)?;
     crate::window::check_windows(&opts.windows)
         .map_err(|reason| ReplayError::Option { option: "window", reason })?;
-    let mut run = online::Replay::new(reader.file().to_string(), mapping, opts, observer);
+    let events_file = reader.file().to_string();
+    let mut run = online::Replay::new(events_file.clone(), mapping, opts, observer);
     check_spike_screen(opts.spike_screen.as_ref())?;
     let mut events = record_events(reader, opts.spike_screen, opts.compat.as_ref(), &opts.windows);
     for item in events.by_ref() {
@@ -721,7 +722,8 @@ pub fn replay_with<R: Read>(
             break;
         }
     }
-    let mut out = run.finish()?;
+    let file = events_file;
+    let mut out = run.finish().map_err(|e| events.explain_no_samples(&file, e))?;
     if !out.diverged() {
         out.summary.warnings.extend(precision::warning(&out.summary.parameters));
     }
@@ -804,6 +806,24 @@ impl RecordEvents<'_> {
         let [reader, screen] = &self.notes;
         let get = |n: &outliers::ScreenNotes| n.lock().map(|n| n.clone()).unwrap_or_default();
         get(reader).into_iter().chain(self.events.note()).chain(get(screen)).collect()
+    }
+}
+
+impl RecordEvents<'_> {
+    /// `error` (the end of a replay of `file`), or in place of a "no usable samples" one the
+    /// `--window` error saying that the windows missed the record ([`crate::window::Windowed::missed`]).
+    pub(crate) fn explain_no_samples(&self, file: &str, error: ReplayError) -> ReplayError {
+        match (&error, self.events.missed()) {
+            (ReplayError::Data(FlightDataError::NoSamples { .. }), Some(why)) => {
+                ReplayError::Option { option: "window", reason: format!("{file}: {why}") }
+            }
+            _ => error,
+        }
+    }
+
+    /// [`crate::window::Windowed::missed`] of these events.
+    pub(crate) fn windows_missed(&self) -> Option<String> {
+        self.events.missed()
     }
 }
 

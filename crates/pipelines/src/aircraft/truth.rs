@@ -130,9 +130,9 @@ pub fn local_derivatives(
     let (dp, dm) = (alpha_shifted(1.0)?, alpha_shifted(-1.0)?);
     for (s, a, b) in PRODUCTS {
         let half = if a == b { 0.5 } else { 1.0 };
-        for k in 0..8 {
+        for (k, row) in d.iter_mut().enumerate() {
             let slope = |d: &[[Option<f64>; N_TERMS]; 8]| d[k][b.index()];
-            d[k][s.index()] =
+            row[s.index()] =
                 slope(&dp).zip(slope(&dm)).map(|(p, m)| half * (p - m) / (2.0 * FD_STEP_ALPHA));
         }
     }

@@ -262,11 +262,14 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     if args.estimator.is_batch() {
         return execute_batch(&args, &mapping, opts.model, opts.compat, selection, out_dir);
     }
+    if !live && args.out.is_none() {
+        anyhow::bail!("give --out <dir> (or read `-` from stdin for a live feed on stdout)");
+    }
     execute_online(args, mapping, opts, selection, out_dir)
 }
 
 /// Refuses options that do not go together (the estimator's own options, a batch fit of a
-/// live feed, a file without `--out`), before anything is opened.
+/// live feed), before anything is opened.
 fn check_combination(args: &ReplayArgs, live: bool, mavlink: bool) -> anyhow::Result<()> {
     if args.robust && args.estimator != EstimatorKind::Oe {
         anyhow::bail!(
@@ -334,9 +337,6 @@ fn check_online_combination(args: &ReplayArgs, live: bool) -> anyhow::Result<()>
             "--max-iterations applies to the batch fits (--estimator oe or fem), not to --estimator {}",
             args.estimator.name()
         );
-    }
-    if !live && args.out.is_none() {
-        anyhow::bail!("give --out <dir> (or read `-` from stdin for a live feed on stdout)");
     }
     Ok(())
 }

@@ -5,8 +5,9 @@
 //! sample in hand and writes its results marked `interrupted`, and the process exits with
 //! `128 + signal` ([`Interrupted::exit_code`], the shell's convention for "ended by a signal").
 //! A batch fit of stdin ends its read on the flag and fits the rows read; a signal during the
-//! fit itself lets it run to its end, the estimators having no stop between iterations (at
-//! most `--max-iterations`), and says so.
+//! fit itself (of a file or of stdin read whole) stops it at its next iteration, a bootstrap
+//! before its next replica, and the last iterate is written; a Monte Carlo campaign starts no
+//! further run and writes its statistics over the runs done.
 //!
 //! **A second signal** weighs a fast stop against a valid output directory:
 //! - *before the results are written* (the run still stopping, a batch fit still running) it

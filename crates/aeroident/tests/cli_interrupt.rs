@@ -3,7 +3,8 @@
 //! `summary.json` (status `interrupted`) and the report, no hidden temporary file, and exit
 //! with 128 + signal. A second signal while the results are written is ignored; one before
 //! that leaves `summary.json` alone. A batch fit (`--estimator oe`) reading stdin fits the rows
-//! read before the signal.
+//! read before the signal; a signal during a batch fit (of a file or of stdin read whole)
+//! stops it at its next iteration or bootstrap replica and writes what it had.
 #![cfg(unix)]
 
 mod common;
@@ -52,8 +53,15 @@ fn spawn_live(out: &Path) -> (Child, Arc<Stderr>) {
 /// `replay - ARGS --out OUT` with stdin piped; its stderr collected by a thread into the
 /// returned buffer.
 fn spawn_replay(args: &[OsString], out: &Path) -> (Child, Arc<Stderr>) {
+    spawn_replay_of("-".as_ref(), args, out)
+}
+
+/// `replay DATA ARGS --out OUT` with stdin piped; its stderr collected by a thread into the
+/// returned buffer.
+fn spawn_replay_of(data: &std::ffi::OsStr, args: &[OsString], out: &Path) -> (Child, Arc<Stderr>) {
     let mut child = bin()
-        .args(["replay", "-"])
+        .arg("replay")
+        .arg(data)
         .args(args)
         .arg("--out")
         .arg(out)
@@ -452,25 +460,27 @@ fn sigterm_before_a_batch_fit_has_a_row_writes_a_summary_without_estimates() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-/// A first SIGTERM during a long batch fit (output error with a 20-replica bootstrap) lets it
-/// run on, saying a second stops it; the second abandons the fit at once and leaves a summary
-/// without estimates, exit 143.
+/// SIGTERM while output error reads a silent stdin ends the read; the fit of the rows read
+/// (with a 10 000-replica bootstrap, minutes) then runs on, saying that a second signal stops
+/// it; the second abandons the fit at once and leaves a summary without estimates, exit 143.
 #[test]
 fn a_second_sigterm_during_a_batch_fit_abandons_it_with_a_summary() {
     let Some(lines) = hfb320_lines() else { return };
     let d = scratch("batch-fit");
     let out = d.join("out");
-    let (mut child, err) = spawn_replay(&oe_args(&["--bootstrap", "20"]), &out);
+    let (mut child, err) = spawn_replay(&oe_args(&["--bootstrap", "10000"]), &out);
     let mut stdin = child.stdin.take().unwrap();
-    for l in &lines {
+    for l in &lines[..200] {
         writeln!(stdin, "{l}").unwrap();
     }
-    drop(stdin);
-    wait_for(&err, "stdin closed after");
+    stdin.flush().unwrap();
+    wait_for(&err, "reading the whole record");
+    std::thread::sleep(Duration::from_millis(1500));
     signal(&child, "-TERM");
-    wait_for(&err, "the fit runs to its end");
+    wait_for(&err, "a second signal stops at once");
     signal(&child, "-TERM");
     let code = exit_code(&mut child, &err);
+    drop(stdin);
     let text = err.text();
     assert_eq!(code, 143, "{text}");
     let v = summary(&out);
@@ -481,5 +491,147 @@ fn a_second_sigterm_during_a_batch_fit_abandons_it_with_a_summary() {
         "{v}"
     );
     assert!(!out.join("report.html").exists());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// The parameters of a batch summary by name: estimate and reported σ.
+fn estimates_and_sigma(v: &serde_json::Value) -> Vec<(String, f64, f64)> {
+    let p = v["parameters"].as_array().unwrap_or_else(|| panic!("no parameters: {v}"));
+    p.iter()
+        .map(|p| {
+            let name = p["name"].as_str().unwrap().to_string();
+            (name, p["estimate"].as_f64().unwrap(), p["std_error"].as_f64().unwrap())
+        })
+        .collect()
+}
+
+/// Checks a bootstrap that a signal stopped: 10 000 replicas asked for, fewer done, and the
+/// reported σ are the spread of those done (their count in a warning); or, stopped before it
+/// had 2, no bootstrap σ and a warning saying so.
+fn check_stopped_bootstrap(v: &serde_json::Value) {
+    let b = &v["bootstrap"];
+    let warnings = v["warnings"].to_string();
+    if b.is_null() {
+        assert!(warnings.contains("bootstrap stopped on request before it had a σ"), "{v}");
+        return;
+    }
+    assert_eq!(b["requested"], 10_000, "{v}");
+    let done = b["refits"].as_u64().unwrap();
+    assert!((2..10_000).contains(&done), "{done} replicas done");
+    assert!(warnings.contains(&format!("after {done} of 10000 replicas")), "{warnings}");
+    for p in v["parameters"].as_array().unwrap() {
+        assert_eq!(p["std_error"], p["bootstrap_sigma"], "{p}");
+        assert!(p["bootstrap_sigma"].as_f64().unwrap() > 0.0, "{p}");
+    }
+}
+
+/// SIGINT during the bootstrap of a fit of a file (`--bootstrap 10000`: a quarter of an hour
+/// whole): it stops before its next replica, and the fit's estimates (converged before the
+/// bootstrap began: the same as a fit without it) are written with the σ of the replicas
+/// done, status `interrupted`, exit 130.
+#[test]
+fn sigint_during_the_bootstrap_of_a_file_writes_the_replicas_done() {
+    let Some(h) = common::shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let d = scratch("file-boot");
+    let out = d.join("out");
+    let (mut child, err) =
+        spawn_replay_of(h.as_os_str(), &oe_args(&["--bootstrap", "10000"]), &out);
+    wait_for(&err, "replicas refitted");
+    std::thread::sleep(Duration::from_secs(4));
+    signal(&child, "-INT");
+    let sent = Instant::now();
+    let code = exit_code(&mut child, &err);
+    assert!(sent.elapsed() < Duration::from_secs(30), "{:?} after the signal", sent.elapsed());
+    let text = err.text();
+    assert_eq!(code, 130, "{text}");
+    let v = summary(&out);
+    assert_eq!(v["status"], "interrupted", "{v}");
+    let reason = v["status_reason"].as_str().unwrap();
+    assert!(reason.contains("SIGINT") && reason.contains("own status was `converged`"), "{v}");
+    check_stopped_bootstrap(&v);
+    assert!(written(&out, "report.html") && temporaries(&out).is_empty());
+    let plain = d.join("plain");
+    let o = bin().arg("replay").arg(&h).args(oe_args(&[])).arg("--out").arg(&plain).output();
+    let o = o.unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let want = estimates(&summary(&plain));
+    for ((n, a, _), (m, b)) in estimates_and_sigma(&v).iter().zip(&want) {
+        assert_eq!(n, m);
+        assert!((a - b).abs() <= 1e-9 * b.abs().max(1e-6), "{n}: {a} stopped, {b} whole");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// SIGINT at the start of a filter-error fit of a file (initial states estimated, process noise
+/// on V, α, θ, q: 30-odd iterations whole): the fit stops at its next iteration and its last
+/// iterate is written, status `interrupted` with the reason, fewer iterations than the whole
+/// fit, exit 130.
+#[test]
+fn sigint_during_a_filter_error_fit_of_a_file_writes_its_last_iterate() {
+    let Some(h) = common::shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let d = scratch("file-fem");
+    let mut args: Vec<OsString> =
+        vec!["--map".into(), workspace().join("mappings/hfb320.toml").into()];
+    args.extend(
+        [
+            "--estimator",
+            "fem",
+            "--initial-states",
+            "estimate",
+            "--process-noise",
+            "V,alpha,theta,q",
+        ]
+        .map(OsString::from),
+    );
+    let out = d.join("out");
+    let (mut child, err) = spawn_replay_of(h.as_os_str(), &args, &out);
+    wait_for(&err, "reading the whole record");
+    signal(&child, "-INT");
+    let code = exit_code(&mut child, &err);
+    let text = err.text();
+    assert_eq!(code, 130, "{text}");
+    assert!(text.contains("stopping the fit at its next iteration"), "{text}");
+    let v = summary(&out);
+    assert_eq!(v["status"], "interrupted", "{v}");
+    let reason = v["status_reason"].as_str().unwrap();
+    assert!(reason.contains("during the fit: the estimates are its last iterate"), "{reason}");
+    assert!(reason.contains("a stop was asked for before it converged"), "{reason}");
+    let whole = d.join("whole");
+    let o = bin().arg("replay").arg(&h).args(&args).arg("--out").arg(&whole).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let w = summary(&whole);
+    let n = |v: &serde_json::Value| v["iterations"].as_array().unwrap().len();
+    assert!(n(&v) < n(&w), "{} iterations stopped, {} whole", n(&v), n(&w));
+    assert!(estimates_and_sigma(&v).iter().all(|(_, a, _)| a.is_finite()), "{v}");
+    assert!(written(&out, "report.html") && temporaries(&out).is_empty());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// One SIGINT while output error's 10 000-replica bootstrap runs on a record read whole from
+/// stdin: the bootstrap stops before its next replica and the fit is written with the σ of
+/// the replicas done, status `interrupted`, exit 130 (it used to run on to its end).
+#[test]
+fn one_sigint_stops_the_bootstrap_of_a_record_read_from_stdin() {
+    let Some(lines) = hfb320_lines() else { return };
+    let d = scratch("stdin-boot");
+    let out = d.join("out");
+    let (mut child, err) = spawn_replay(&oe_args(&["--bootstrap", "10000"]), &out);
+    let mut stdin = child.stdin.take().unwrap();
+    for l in &lines {
+        writeln!(stdin, "{l}").unwrap();
+    }
+    drop(stdin);
+    wait_for(&err, "stdin closed after");
+    std::thread::sleep(Duration::from_secs(4));
+    signal(&child, "-INT");
+    let sent = Instant::now();
+    let code = exit_code(&mut child, &err);
+    assert!(sent.elapsed() < Duration::from_secs(30), "{:?} after the signal", sent.elapsed());
+    let text = err.text();
+    assert_eq!(code, 130, "{text}");
+    let v = summary(&out);
+    assert_eq!(v["status"], "interrupted", "{v}");
+    assert_eq!(v["samples_read"], 601, "{v}");
+    check_stopped_bootstrap(&v);
     let _ = std::fs::remove_dir_all(&d);
 }

@@ -65,3 +65,45 @@ fn montecarlo_zero_runs_is_an_error() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--runs"));
 }
+
+/// SIGINT during `--runs 10000` (the documented maximum, tens of minutes): no further run
+/// starts, the runs under way finish, and `montecarlo.json`, `runs.json` and the report are
+/// written over the runs done, status `interrupted` with their count; exit 130.
+#[cfg(unix)]
+#[test]
+fn montecarlo_sigint_writes_the_runs_done_marked_interrupted() {
+    let dir = std::env::temp_dir().join(format!("aeroident_mc_int_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let child = Command::new(env!("CARGO_BIN_EXE_aeroident"))
+        .args(["montecarlo", &scenario(), "--runs", "10000", "--no-figures", "--out"])
+        .arg(&dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_secs(4));
+    let kill = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(kill.success());
+    let sent = std::time::Instant::now();
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(sent.elapsed() < std::time::Duration::from_secs(30), "{:?}", sent.elapsed());
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
+    let file: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("montecarlo.json")).unwrap())
+            .unwrap();
+    assert_eq!(file["status"], "interrupted", "{file}");
+    assert_eq!(file["runs_requested"], 10_000);
+    let done = file["runs"].as_u64().unwrap();
+    assert!((1..10_000).contains(&done), "{done} runs done");
+    let reason = format!("stopped on request after {done} of 10000 runs");
+    assert!(file["status_reason"].as_str().unwrap().contains(&reason), "{file}");
+    assert!(String::from_utf8_lossy(&out.stdout).contains(&reason));
+    let ok = file["estimators"][0]["runs_ok"].as_u64().unwrap();
+    assert!(ok >= 1 && ok <= done, "statistics over {ok} of the {done} runs done");
+    let runs: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("runs.json")).unwrap()).unwrap();
+    assert_eq!(runs.as_array().unwrap().len() as u64, done);
+    assert!(dir.join("report.html").is_file());
+    std::fs::remove_dir_all(&dir).ok();
+}

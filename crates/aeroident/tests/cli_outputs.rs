@@ -241,3 +241,50 @@ fn outputs_run_all_subdirectories_are_cleared_by_the_next_run_and_kept_from_a_re
     assert!(!out.join("b").exists(), "the first run's scenario `b` left beside the second");
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// A batch fit (`--estimator oe --bootstrap 50`) into a directory that cannot take its results
+/// (another command's outputs; a previous run's file that is also an `--and` input) is refused
+/// before the record is read and fitted, not after the fit with its results lost.
+#[test]
+fn outputs_batch_replay_checks_its_out_before_the_fit() {
+    let d = scratch("batch-out");
+    let sc = d.join("sim.toml");
+    std::fs::write(&sc, SIM).unwrap();
+    let sim = d.join("sim");
+    let o = bin().args(["f16", "sim"]).arg(&sc).arg("--out").arg(&sim).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let record = sim.join("timeseries.csv");
+    let replay = |out: &Path, extra: &[&Path]| {
+        let mut c = bin();
+        c.arg("replay").arg(&record).arg("--map").arg(repo("mappings/aeroident-sim.toml"));
+        c.args(["--estimator", "oe", "--bootstrap", "50", "--out"]).arg(out);
+        for a in extra {
+            c.arg("--and").arg(a);
+        }
+        let o = c.output().unwrap();
+        (o.status.success(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let design = d.join("design");
+    let o = bin().arg("design").arg("--out").arg(&design).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (ok, err) = replay(&design, &[]);
+    assert!(!ok && err.contains("aeroident design") && err.contains("not removed"), "{err}");
+    assert!(!err.contains("batch method"), "refused only after reading and fitting: {err}");
+    // A previous replay's estimates.csv, replaced by a record and given as a further input.
+    let out = d.join("out");
+    let o = bin()
+        .arg("replay")
+        .arg(&record)
+        .arg("--map")
+        .arg(repo("mappings/aeroident-sim.toml"))
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::copy(&record, out.join("estimates.csv")).unwrap();
+    let (ok, err) = replay(&out, &[&out.join("estimates.csv")]);
+    assert!(!ok && err.contains("estimates.csv"), "{err}");
+    assert!(!err.contains("batch method"), "refused only after reading and fitting: {err}");
+    let _ = std::fs::remove_dir_all(&d);
+}

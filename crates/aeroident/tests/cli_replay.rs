@@ -197,7 +197,34 @@ fn errors_estimator_model_and_model_file_problems_are_named() {
     assert!(!ok, "{err}");
     assert!(err.contains("bad_model.toml: line 3: coefficient `Cn`: unknown term `yaw`"), "{err}");
     let (ok, err) = replay_good(&["--forgetting", "1.5"], "forget");
-    assert!(!ok && err.contains("invalid configuration `forgetting`"), "{err}");
+    assert!(!ok && err.contains("option `--forgetting`: must be in (0, 1]"), "{err}");
+}
+
+/// A numeric option out of range names the option as it is typed (`--instrument-delay`, not
+/// the estimator's configuration field) and the value exactly as given, not rounded through
+/// a float.
+#[test]
+fn errors_numeric_options_name_the_cli_option_and_the_exact_value() {
+    let delay = ["--estimator", "rls-iv", "--instrument-delay", "18446744073709551615"];
+    let (ok, err) = replay_good(&delay, "delay");
+    assert!(!ok, "{err}");
+    assert!(
+        err.contains(
+            "option `--instrument-delay`: must be 1 to 64 samples, got 18446744073709551615"
+        ),
+        "{err}"
+    );
+    assert!(!err.contains("instrument_delay") && !err.contains("18446744073709552000"), "{err}");
+    let (ok, err) = replay_good(&["--estimator", "rls-iv", "--instrument-delay", "0"], "d0");
+    assert!(!ok && err.contains("option `--instrument-delay`") && err.contains("got 0"), "{err}");
+    let (ok, err) = replay_good(&["--estimator", "ftr", "--forgetting", "NaN"], "fnan");
+    assert!(!ok && err.contains("option `--forgetting`") && err.contains("got NaN"), "{err}");
+    let (ok, err) = replay_good(&["--diff-window", "18446744073709551615"], "dw");
+    assert!(!ok, "{err}");
+    assert!(
+        err.contains("option `--diff-window`") && err.contains("18446744073709551615"),
+        "{err}"
+    );
 }
 
 /// Live mode: the HFB-320 record on stdin gives one estimates line per sample on stdout.

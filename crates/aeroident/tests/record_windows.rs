@@ -97,3 +97,29 @@ fn val_a_one_sample_window_is_rejected_by_row_not_an_anonymous_error() {
     assert!(err.contains("manoeuvre of one sample"), "{err}");
     assert!(err.contains("row"), "{err}");
 }
+
+/// Windows beyond the record's end (AilRud1 spans 50.08–140.16 s) are an error naming the
+/// `--window` option, the windows and the record's time span, for the batch fit and the
+/// real-time estimators alike, not "no usable samples (0 rows rejected)".
+#[test]
+fn errors_windows_outside_the_record_name_the_windows_and_its_span() {
+    let Some(joined) = shared("jategaonkar_hfb320_attas/csv/fAttasAilRud1.csv") else {
+        return;
+    };
+    let m = Mapping::from_path(&workspace().join("mappings/attas_lateral.toml")).unwrap();
+    let windows: Vec<TimeWindow> =
+        ["200:300", "400:500"].iter().map(|w| TimeWindow::parse(w).unwrap()).collect();
+    let file = joined.display().to_string();
+    let check = |e: String| {
+        assert!(e.contains("option `--window`") && e.contains(&file), "{e}");
+        assert!(e.contains("windows 200:300, 400:500 lie outside"), "{e}");
+        assert!(e.contains("50.08 to 140.16 s"), "{e}");
+        assert!(!e.contains("no usable samples"), "{e}");
+    };
+    let reader = open_log(&file, None, &m).unwrap();
+    let options = FitOptions { windows: windows.clone(), ..Default::default() };
+    check(fit_record(reader, &m, None, options).unwrap_err().to_string());
+    let reader = open_log(&file, None, &m).unwrap();
+    let opts = aeroident_pipelines::replay::ReplayOptions { windows, ..Default::default() };
+    check(aeroident_pipelines::replay::replay(reader, &m, &opts, &mut ()).unwrap_err().to_string());
+}

@@ -228,7 +228,7 @@ fn errors_model_auto_arguments() {
     assert!(run(&["-", "--model", "auto"]).contains("whole record"));
     assert!(run(&[d, "--model", "auto:pitch"]).contains("auto:longitudinal"));
     let e = run(&[d, "--model", "longitudinal", "--select", "mof"]);
-    assert!(e.contains("option `select`") && e.contains("`auto`"), "{e}");
+    assert!(e.contains("option `--select`") && e.contains("`auto`"), "{e}");
     let e = run(&[d, "--model", "auto", "--candidates", "alpha,bogus"]);
     assert!(e.contains("`bogus`"), "{e}");
     assert!(run(&[d, "--model", "auto", "--candidates", "0"]).contains("`0`"));

@@ -238,6 +238,44 @@ pub struct OeConfig {
     /// Outlier-resistant fit with Huber's weights ([`Huber`], module doc "Robust option");
     /// `None` (default): the Gaussian maximum-likelihood fit.
     pub robust: Option<Huber>,
+    /// A request to stop, looked at before every iteration: once raised, the fit ends with
+    /// its last iterate ([`NotConverged::Stopped`]). `None` (default): it runs to its end.
+    pub stop: Option<StopFlag>,
+}
+
+/// A request to stop a batch fit at its next iteration (and a bootstrap before its next
+/// replica), raised from another thread (a signal handler's, a user interface's). Clones share
+/// the request.
+#[derive(Debug, Clone, Default)]
+pub struct StopFlag(std::sync::Arc<core::sync::atomic::AtomicBool>);
+
+impl StopFlag {
+    /// A flag shared with `flag` (raised when `flag` is set).
+    pub fn new(flag: std::sync::Arc<core::sync::atomic::AtomicBool>) -> Self {
+        Self(flag)
+    }
+
+    /// Asks the fits that hold this flag to stop.
+    pub fn raise(&self) {
+        self.0.store(true, core::sync::atomic::Ordering::SeqCst);
+    }
+
+    /// Whether a stop was asked for.
+    pub fn raised(&self) -> bool {
+        self.0.load(core::sync::atomic::Ordering::SeqCst)
+    }
+}
+
+impl PartialEq for StopFlag {
+    /// Equal when shared: the same request.
+    fn eq(&self, other: &Self) -> bool {
+        std::sync::Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+
+/// Whether `stop` (a config's [`OeConfig::stop`]) has been raised.
+fn stop_raised(stop: Option<&StopFlag>) -> bool {
+    stop.is_some_and(StopFlag::raised)
 }
 
 /// Huber's M-estimate for output error (module doc, "Robust option"): residuals beyond `k`
@@ -324,6 +362,7 @@ impl OeConfig {
             step_tolerance_sigma: 1e-3,
             coloured_max_lag: None,
             robust: None,
+            stop: None,
         }
     }
 }
@@ -355,6 +394,8 @@ pub enum NotConverged {
     /// The information matrix is singular at the last iterate: some unknowns are not
     /// identifiable from the record, and no σ can be given (the result's σ are NaN).
     Unidentifiable,
+    /// A stop was asked for ([`OeConfig::stop`]) before the fit converged.
+    Stopped,
 }
 
 impl NotConverged {
@@ -368,6 +409,7 @@ impl NotConverged {
             NotConverged::Unidentifiable => {
                 "the information matrix is singular at the last iterate: the unknowns are not all identifiable from this record, so no σ is given"
             }
+            NotConverged::Stopped => "a stop was asked for before it converged",
         }
     }
 }
@@ -924,6 +966,10 @@ fn fit_prepared(
     let mut converged = false;
     let mut failure = None;
     for iteration in 1..=config.max_iterations {
+        if stop_raised(config.stop.as_ref()) {
+            failure = Some(NotConverged::Stopped);
+            break;
+        }
         if r.iter().any(|v| v.is_nan() || *v <= 0.0) {
             return Err(EstimatorError::Numerical {
                 what: "an output's residuals are all zero: its noise variance cannot be estimated",

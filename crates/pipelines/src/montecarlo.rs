@@ -41,6 +41,7 @@
 //!   `crb_sigma` before the turbulent one existed).
 
 use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use aeroident_estimators::flight_model::Output;
@@ -257,18 +258,31 @@ pub fn run_range(
     if n > 0 {
         check_runs(n, "runs")?;
     }
-    Ok(runs
-        .into_par_iter()
-        .map(|i| {
+    Ok(run_range_until(sc, campaign_seed, runs, None))
+}
+
+/// [`run_range`] (its count checked by the caller) that starts no run once `stop` is set: the
+/// runs started before it finish, the others are left out. Results in run order.
+fn run_range_until(
+    sc: &Scenario,
+    campaign_seed: u64,
+    runs: std::ops::Range<u64>,
+    stop: Option<&AtomicBool>,
+) -> Vec<RunResult> {
+    runs.into_par_iter()
+        .filter_map(|i| {
+            if stop.is_some_and(|s| s.load(Ordering::SeqCst)) {
+                return None;
+            }
             let s = seeded_scenario(sc, campaign_seed, i);
-            match run(&s) {
+            Some(match run(&s) {
                 Ok(out) => run_result(i, s.sensors.seed, &out),
                 Err(e) => {
                     RunResult { index: i, sensor_seed: s.sensors.seed, outcome: Err(e.to_string()) }
                 }
-            }
+            })
         })
-        .collect())
+        .collect()
 }
 
 /// A failed run of one estimator (or of the whole experiment).
@@ -690,8 +704,15 @@ fn crb_for(
 pub struct Campaign {
     /// Scenario name.
     pub scenario: String,
-    /// Number of runs.
+    /// Number of runs done (the statistics are over them).
     pub runs: u64,
+    /// Number of runs asked for: more than [`Campaign::runs`] when a stop ended the campaign
+    /// early ([`campaign_until`]).
+    pub runs_requested: u64,
+    /// `complete`, or `interrupted` when a stop ended the campaign before every run was done.
+    pub status: &'static str,
+    /// Why the campaign is `interrupted`, else `null`.
+    pub status_reason: Option<String>,
     /// Campaign seed.
     pub seed: u64,
     /// The seed rule, in words.
@@ -719,12 +740,39 @@ pub const SEED_RULE: &str = "run i, stream s (0 = sensors, 1 + j = wind j): spli
 /// # Errors
 /// `runs` = 0 or above [`MAX_RUNS`] ([`check_runs`]), before any run.
 pub fn campaign(sc: &Scenario, runs: u64, seed: u64) -> Result<Campaign, String> {
+    campaign_until(sc, runs, seed, None)
+}
+
+/// [`campaign`] that starts no further run once `stop` is set (a signal, from another
+/// thread): the runs started finish, and the statistics are over the runs done, the campaign
+/// `interrupted` with [`Campaign::runs`] of [`Campaign::runs_requested`] done.
+///
+/// # Errors
+/// As [`campaign`].
+pub fn campaign_until(
+    sc: &Scenario,
+    runs: u64,
+    seed: u64,
+    stop: Option<&AtomicBool>,
+) -> Result<Campaign, String> {
     check_runs(runs, "runs")?;
     let start = Instant::now();
-    let results = run_range(sc, seed, 0..runs)?;
+    let results = run_range_until(sc, seed, 0..runs, stop);
     let wall_s = start.elapsed().as_secs_f64();
-    Ok(assemble(sc, seed, results, wall_s, rayon::current_num_threads()))
+    let mut c = assemble(sc, seed, results, wall_s, rayon::current_num_threads());
+    c.runs_requested = runs;
+    if c.runs < runs {
+        c.status = STATUS_INTERRUPTED;
+        c.status_reason = Some(format!(
+            "stopped on request after {} of {runs} runs: the statistics are over those {}",
+            c.runs, c.runs
+        ));
+    }
+    Ok(c)
 }
+
+/// [`Campaign::status`] of a campaign a stop ended early.
+pub const STATUS_INTERRUPTED: &str = "interrupted";
 
 /// The campaign document from per-run results (any order of computation; `results` sorted by
 /// index, one per run): the Cramér–Rao prediction, [`statistics`] and the failed runs. Shared
@@ -748,6 +796,9 @@ pub fn assemble(
     Campaign {
         scenario: sc.name.clone(),
         runs: results.len() as u64,
+        runs_requested: results.len() as u64,
+        status: "complete",
+        status_reason: None,
         seed,
         seed_rule: SEED_RULE,
         failed_runs,

@@ -66,6 +66,8 @@ pub struct Windowed<I> {
     current: Option<usize>,
     /// Last used sample's time, s (the gap before the next window is measured from it).
     last_used_t_s: Option<f64>,
+    /// Time of the first sample read, used or not, s.
+    first_seen_t_s: Option<f64>,
     /// Time of the last sample read, used or not, s.
     last_seen_t_s: Option<f64>,
     /// Interval between the last two samples read, s: the nominal interval of the gap event
@@ -85,6 +87,7 @@ impl<I> Windowed<I> {
             windows,
             current: None,
             last_used_t_s: None,
+            first_seen_t_s: None,
             last_seen_t_s: None,
             last_dt_s: f64::NAN,
             pending: None,
@@ -105,6 +108,25 @@ impl<I> Windowed<I> {
             list.join(", "),
             self.used,
             self.outside
+        ))
+    }
+}
+
+impl<I> Windowed<I> {
+    /// Why no sample was used, when the record had samples but none in any window: the
+    /// windows and the record's time span (the first and last sample read). `None` when a
+    /// sample was used, without windows, or when no sample was read at all.
+    pub fn missed(&self) -> Option<String> {
+        if self.windows.is_empty() || self.used > 0 {
+            return None;
+        }
+        let (first, last) = (self.first_seen_t_s?, self.last_seen_t_s?);
+        let list: Vec<String> =
+            self.windows.iter().map(|w| format!("{}:{}", w.start_s, w.end_s)).collect();
+        let (s, lie) = if list.len() > 1 { ("s", "lie") } else { ("", "lies") };
+        Some(format!(
+            "the time window{s} {} {lie} outside the record's time span, {first} to {last} s (its first and last sample): no sample was used",
+            list.join(", ")
         ))
     }
 }
@@ -130,6 +152,7 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Iterator for Wind
                 }
                 continue;
             };
+            self.first_seen_t_s.get_or_insert(sample.t_s);
             if let Some(t0) = self.last_seen_t_s.replace(sample.t_s) {
                 self.last_dt_s = sample.t_s - t0;
             }

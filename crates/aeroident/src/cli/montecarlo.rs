@@ -18,7 +18,7 @@ use crate::outdir::OutputDir;
 use super::run::DEFAULT_SCENARIO;
 use crate::plot::{GroupedBars, HistogramPanel, render_histograms_png, render_histograms_svg};
 use aeroident_pipelines::aircraft::Scenario;
-use aeroident_pipelines::montecarlo::{Campaign, campaign, json_summary};
+use aeroident_pipelines::montecarlo::{Campaign, campaign_until, json_summary};
 
 /// Arguments of `aeroident montecarlo`.
 #[derive(Debug, clap::Args)]
@@ -54,6 +54,9 @@ pub fn table(c: &Campaign) -> String {
         "Monte Carlo `{}`: {} runs, seed {}, {:.1} s wall on {} threads",
         c.scenario, c.runs, c.seed, c.wall_s, c.threads
     );
+    if let Some(why) = &c.status_reason {
+        let _ = writeln!(s, "INTERRUPTED: {why}");
+    }
     let mut t = comfy_table::Table::new();
     t.load_preset(comfy_table::presets::UTF8_FULL_CONDENSED).set_header(vec![
         "estimator",
@@ -223,9 +226,14 @@ pub fn write_outputs(c: &Campaign, od: &mut OutputDir, figures: bool) -> anyhow:
 
 /// Runs `aeroident montecarlo`.
 ///
+/// SIGINT, SIGTERM or SIGHUP stops the campaign (crate::interrupt): no further run starts, the
+/// runs under way finish, and the outputs are written over the runs done with `montecarlo.json`
+/// status `interrupted`; a second signal before then leaves the figures and the report out.
+/// The exit code is then 128 + signal.
+///
 /// # Errors
 /// An unreadable or invalid scenario, `--runs` 0 or above
-/// [`aeroident_pipelines::montecarlo::MAX_RUNS`], unwritable outputs.
+/// [`aeroident_pipelines::montecarlo::MAX_RUNS`], unwritable outputs, an interruption.
 pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
     let sc = match &args.scenario {
         Some(p) => Scenario::from_path(p)?,
@@ -235,31 +243,50 @@ pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
         )?,
     };
     aeroident_pipelines::montecarlo::check_runs(args.runs, "--runs").map_err(anyhow::Error::msg)?;
+    let dir = args.out.clone().unwrap_or_else(|| PathBuf::from("aeroident-out").join("montecarlo"));
+    let inputs: Vec<&Path> = args.scenario.iter().map(PathBuf::as_path).collect();
+    // Refused before the runs, not after them.
+    let od = (!args.json).then(|| OutputDir::open(&dir, "montecarlo", &inputs)).transpose()?;
+    let interrupt = crate::interrupt::Interrupt::install()?;
     let spin = crate::progress::spinner(&format!(
         "Monte Carlo `{}`: {} runs in parallel",
         sc.name, args.runs
     ));
-    let c = campaign(&sc, args.runs, args.seed);
+    let flag = interrupt.flag();
+    let c = campaign_until(&sc, args.runs, args.seed, Some(&flag));
     spin.finish_and_clear();
     let c = c.map_err(anyhow::Error::msg)?;
-    if args.json {
-        for e in &c.estimators {
-            for f in &e.failed_runs {
-                eprintln!("{}: run {} failed: {}", e.name, f.run, f.reason);
-            }
-            for r in &e.restarted_runs {
-                eprintln!("{}: run {r} restarted from the priors (used)", e.name);
-            }
-        }
-        return super::print_stdout(&serde_json::to_string_pretty(&json_summary(&c))?)
-            .map_err(Into::into);
+    if let Some(why) = &c.status_reason {
+        eprintln!("{}: {why}", interrupt.signal_name().unwrap_or_default());
     }
-    let dir = args.out.unwrap_or_else(|| PathBuf::from("aeroident-out").join("montecarlo"));
-    let inputs: Vec<&Path> = args.scenario.iter().map(PathBuf::as_path).collect();
-    let mut od = OutputDir::open(&dir, "montecarlo", &inputs)?;
-    write_outputs(&c, &mut od, !args.no_figures)?;
-    crate::report::montecarlo::write(&c, &mut od)?;
-    od.finish();
-    super::print_stdout(&format!("{}wrote {}", table(&c), dir.display()))?;
-    Ok(())
+    // From here further signals are ignored until the outputs are written.
+    let summary_only = interrupt.begin_writing();
+    match od {
+        None => print_json(&c)?,
+        Some(mut od) => {
+            write_outputs(&c, &mut od, !args.no_figures && !summary_only)?;
+            if !summary_only {
+                crate::report::montecarlo::write(&c, &mut od)?;
+            }
+            od.finish();
+            super::print_stdout(&format!("{}wrote {}", table(&c), dir.display()))?;
+        }
+    }
+    match interrupt.error("the outputs over the runs done were written, status `interrupted`") {
+        Some(e) => Err(e.into()),
+        None => Ok(()),
+    }
+}
+
+/// `--json`: the summary document on stdout, the failed and restarted runs on stderr.
+fn print_json(c: &Campaign) -> anyhow::Result<()> {
+    for e in &c.estimators {
+        for f in &e.failed_runs {
+            eprintln!("{}: run {} failed: {}", e.name, f.run, f.reason);
+        }
+        for r in &e.restarted_runs {
+            eprintln!("{}: run {r} restarted from the priors (used)", e.name);
+        }
+    }
+    super::print_stdout(&serde_json::to_string_pretty(&json_summary(c))?).map_err(Into::into)
 }

@@ -26,7 +26,8 @@
 //! `summary.json` (status `interrupted`) and the report are written for the samples read until
 //! then, and the exit code is 128 + signal. A batch fit of stdin (`-`) ends its read on the
 //! signal and fits the rows read, or, with too few to fit, writes a summary saying so; a
-//! signal during the fit lets the fit finish (it cannot stop between iterations). A second
+//! signal during a batch fit stops it at its next iteration (a bootstrap before its next
+//! replica, its σ then over the replicas done) and writes its last iterate. A second
 //! signal before the results are written stops at once with `summary.json` alone; one while
 //! they are written is ignored, so that no file is left half-written.
 //!
@@ -52,7 +53,7 @@
 //! fits that model with the estimator asked for.
 
 use aeroident_estimators::flight_model::N_STATES;
-use aeroident_estimators::output_error::InitialStates;
+use aeroident_estimators::output_error::{InitialStates, StopFlag};
 use aeroident_io::{
     FlightDataReader, LogFormat, Mapping, ModelSpec, open_log_with_notes, open_log_with_report,
 };
@@ -239,6 +240,10 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     let mapping = Mapping::from_path(&args.map)?;
     let mavlink = crate::live::is_mavlink(&args.data);
     let live = args.data == "-" || mavlink;
+    check_combination(&args, live, mavlink)?;
+    // Lock the directory and clear the previous run's files before reading anything: a
+    // directory that cannot take the results is refused before a long fit, not after it.
+    let out_dir = open_out(&args)?;
     let compat = compat_corrections(&args, &mapping, live)?;
     let (model, selection) = resolve_model(&args, &mapping, compat.as_ref(), live)?;
     let opts = ReplayOptions {
@@ -254,6 +259,18 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         spike_screen: (!args.no_spike_screen)
             .then(aeroident_pipelines::replay::outliers::SpikeScreen::default),
     };
+    if args.estimator.is_batch() {
+        return execute_batch(&args, &mapping, opts.model, opts.compat, selection, out_dir);
+    }
+    if !live && args.out.is_none() {
+        anyhow::bail!("give --out <dir> (or read `-` from stdin for a live feed on stdout)");
+    }
+    execute_online(args, mapping, opts, selection, out_dir)
+}
+
+/// Refuses options that do not go together (the estimator's own options, a batch fit of a
+/// live feed), before anything is opened.
+fn check_combination(args: &ReplayArgs, live: bool, mavlink: bool) -> anyhow::Result<()> {
     if args.robust && args.estimator != EstimatorKind::Oe {
         anyhow::bail!(
             "--robust is Huber's output-error fit (--estimator oe), not --estimator {}",
@@ -273,8 +290,13 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         );
     }
     if args.estimator.is_batch() {
-        return execute_batch(&args, &mapping, opts.model, opts.compat, selection);
+        return Ok(());
     }
+    check_online_combination(args, live)
+}
+
+/// [`check_combination`] for the real-time estimators: the batch fits' options refused.
+fn check_online_combination(args: &ReplayArgs, live: bool) -> anyhow::Result<()> {
     if args.cross_check && (live || args.estimator.is_batch()) {
         anyhow::bail!(
             "--cross-check sets a real-time estimator beside the batch fit of a whole record: not for a live feed or a batch estimator"
@@ -316,18 +338,23 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
             args.estimator.name()
         );
     }
-    if !live && args.out.is_none() {
-        anyhow::bail!("give --out <dir> (or read `-` from stdin for a live feed on stdout)");
-    }
+    Ok(())
+}
+
+/// The real-time estimators' replay (`execute` past the checks): estimates per sample, then
+/// the results, into `out_dir` (opened) when `--out` is given.
+fn execute_online(
+    args: ReplayArgs,
+    mapping: Mapping,
+    opts: ReplayOptions,
+    selection: Option<AutoSelection>,
+    mut out_dir: Option<crate::outdir::OutputDir>,
+) -> anyhow::Result<()> {
+    let mavlink = crate::live::is_mavlink(&args.data);
+    let live = args.data == "-" || mavlink;
     // From here a signal ends the replay gracefully: the results so far are written, marked
     // `interrupted` (crate::interrupt).
     let interrupt = crate::interrupt::Interrupt::install().context("installing signal handlers")?;
-    // Lock the directory and clear the previous run's files before reading anything.
-    let mut out_dir = args
-        .out
-        .as_deref()
-        .map(|d| crate::outdir::OutputDir::open(d, "replay", &input_paths(&args)))
-        .transpose()?;
     let mut csv_file = match out_dir.as_mut() {
         Some(o) => Some(o.create("estimates.csv")?),
         None => None,
@@ -846,20 +873,20 @@ fn open_stdin(
     Ok((reader, report))
 }
 
-/// Runs `fit` (the batch fit of stdin) on a thread of its own while answering the signals
-/// (crate::interrupt): the first ends the read of stdin (`stdin` tells when and how the read
-/// ended) and the fit runs on what was read; a first signal during the fit lets it run to its
-/// end, since output error and the filter-error method have no stop between iterations (at
-/// most `--max-iterations`); a second signal abandons the fit at once: `None`.
+/// Runs `fit` (the batch fit, of a file or of stdin) on a thread of its own while answering the
+/// signals (crate::interrupt). Reading stdin (`stdin` tells when and how its read ended), the
+/// first signal ends the read and the fit runs on what was read. A first signal once the
+/// record is read raises `stop`: the fit ends at its next iteration with its last iterate, the
+/// bootstrap before its next replica. A second signal abandons the fit at once: `None`.
 ///
 /// # Errors
 /// The fit's thread could not start or ended without a result (a panic).
 fn fit_watched<T: Send + 'static>(
     fit: impl FnOnce() -> T + Send + 'static,
     interrupt: &crate::interrupt::Interrupt,
-    stdin: &crate::interrupt::StdinProgress,
+    stdin: Option<&crate::interrupt::StdinProgress>,
+    stop: &StopFlag,
 ) -> anyhow::Result<Option<T>> {
-    use crate::interrupt::StdinEnd;
     use std::sync::mpsc::RecvTimeoutError;
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::Builder::new()
@@ -868,9 +895,7 @@ fn fit_watched<T: Send + 'static>(
             let _ = tx.send(fit());
         })
         .context("starting the batch fit's thread")?;
-    let (mut ended, mut noted) = (false, false);
-    let sig = || interrupt.signal_name().unwrap_or_default();
-    let again = "a second signal stops at once, writing summary.json alone";
+    let mut watch = FitWatch::default();
     loop {
         match rx.recv_timeout(std::time::Duration::from_millis(50)) {
             Ok(r) => return Ok(Some(r)),
@@ -882,50 +907,82 @@ fn fit_watched<T: Send + 'static>(
         if interrupt.stop_now() {
             return Ok(None);
         }
-        if let Some(end) = stdin.end().filter(|_| !ended) {
-            ended = true;
-            noted = end == StdinEnd::Cut;
-            match end {
-                StdinEnd::Cut => eprintln!(
-                    "{}: stdin read ended after {} lines; fitting the samples read ({again})",
-                    sig(),
-                    stdin.lines()
-                ),
-                StdinEnd::Closed => {
-                    eprintln!("stdin closed after {} lines: fitting", stdin.lines())
+        watch.look(interrupt, stdin, stop);
+    }
+}
+
+/// What [`fit_watched`] has seen and said so far.
+#[derive(Default)]
+struct FitWatch {
+    /// The record is read (stdin ended, or a file).
+    read: bool,
+    /// The first signal has been answered (it cut stdin, or it raised the stop).
+    answered: bool,
+}
+
+impl FitWatch {
+    /// Notes the end of stdin's read, and raises `stop` on a signal that came once the record
+    /// was read (one that ended the read is answered by that).
+    fn look(
+        &mut self,
+        interrupt: &crate::interrupt::Interrupt,
+        stdin: Option<&crate::interrupt::StdinProgress>,
+        stop: &StopFlag,
+    ) {
+        use crate::interrupt::StdinEnd;
+        let sig = || interrupt.signal_name().unwrap_or_default();
+        let again = "a second signal stops at once, writing summary.json alone";
+        if !self.read {
+            let Some(end) = stdin.map_or(Some(StdinEnd::Closed), |p| p.end()) else { return };
+            self.read = true;
+            let lines = stdin.map_or(0, |p| p.lines());
+            match (end, stdin.is_some()) {
+                (StdinEnd::Cut, _) => {
+                    self.answered = true;
+                    eprintln!(
+                        "{}: stdin read ended after {lines} lines; fitting the samples read ({again})",
+                        sig()
+                    );
                 }
+                (StdinEnd::Closed, true) => eprintln!("stdin closed after {lines} lines: fitting"),
+                (StdinEnd::Closed, false) => {}
             }
         }
-        if ended && !noted && interrupt.requested() {
-            noted = true;
+        if !self.answered && interrupt.requested() {
+            self.answered = true;
+            stop.raise();
             eprintln!(
-                "{}: the fit runs to its end (it cannot stop between iterations); {again}",
+                "{}: stopping the fit at its next iteration (a bootstrap before its next replica), its last iterate reported; {again}",
                 sig()
             );
         }
     }
 }
 
-/// `--estimator oe | fem`: the batch output-error (or filter-error) fit of the whole record.
+/// `--estimator oe | fem`: the batch output-error (or filter-error) fit of the whole record,
+/// into `out` (opened) when `--out` is given.
 ///
-/// A record on stdin is read and fitted on a thread of its own under the signal handlers
-/// ([`fit_watched`]): a signal ends the read and the fit is of the samples read until then,
-/// `summary.json` status `interrupted`, exit 128 + signal; too few to fit, the summary says so
-/// with no estimates. A record in a file keeps the default signals: a fit killed before its
-/// output directory is opened leaves the previous results as they were.
+/// The record is read and fitted on a thread of its own under the signal handlers
+/// ([`fit_watched`]). A signal while stdin is read ends the read and the fit is of the samples
+/// read until then; too few to fit, the summary says so with no estimates. A signal during
+/// the fit stops it at its next iteration (a bootstrap before its next replica) and its last
+/// iterate is written. Either way `summary.json` has status `interrupted` and the exit code is
+/// 128 + signal.
 fn execute_batch(
     args: &ReplayArgs,
     mapping: &Mapping,
     model: Option<ModelSpec>,
     compat: Option<aeroident_pipelines::compat::Corrections>,
     selection: Option<AutoSelection>,
+    mut out: Option<crate::outdir::OutputDir>,
 ) -> anyhow::Result<()> {
     let fem = args.estimator == EstimatorKind::Fem;
-    let options = fit_options(args, compat)?;
-    let interrupt = (args.data == "-")
-        .then(crate::interrupt::Interrupt::install)
-        .transpose()
-        .context("installing signal handlers")?;
+    let stop = StopFlag::default();
+    let options = aeroident_pipelines::replay::batch::FitOptions {
+        stop: Some(stop.clone()),
+        ..fit_options(args, compat)?
+    };
+    let interrupt = crate::interrupt::Interrupt::install().context("installing signal handlers")?;
     eprintln!(
         "{} is a batch method: reading the whole record before fitting (not real time)",
         if fem { "the filter-error method" } else { "output error" }
@@ -940,42 +997,46 @@ fn execute_batch(
         model,
         options,
     };
-    let Some(interrupt) = interrupt else {
-        let (outcome, reports) = input.read_and_fit(None)?;
-        return write_batch(args, mapping, outcome, reports, None, selection.as_ref());
-    };
-    let stdin = crate::interrupt::InterruptibleStdin::new(interrupt.flag());
-    let progress = stdin.progress();
-    let Some(fitted) = fit_watched(move || input.read_and_fit(Some(stdin)), &interrupt, &progress)?
-    else {
+    let stdin =
+        (args.data == "-").then(|| crate::interrupt::InterruptibleStdin::new(interrupt.flag()));
+    let progress = stdin.as_ref().map(crate::interrupt::InterruptibleStdin::progress);
+    let watched =
+        fit_watched(move || input.read_and_fit(stdin), &interrupt, progress.as_deref(), &stop)?;
+    let Some(fitted) = watched else {
         interrupt.begin_writing();
         let why = format!(
             "a second {} stopped the fit before it ended: no estimates",
             interrupt.signal_name().unwrap_or_default()
         );
-        write_stopped_summary(args, open_out(args)?.as_mut(), None, &why)?;
+        write_stopped_summary(args, out.as_mut(), None, &why)?;
         return Err(stopped(&interrupt, "the fit was abandoned; summary.json says so"));
     };
-    let cut = progress.end() == Some(crate::interrupt::StdinEnd::Cut);
+    let cut = progress.as_ref().is_some_and(|p| p.end() == Some(crate::interrupt::StdinEnd::Cut));
     let (mut outcome, reports) = match fitted {
         Ok(f) => f,
-        // Too little read to fit: the summary still says what happened.
-        Err(e) if cut => {
+        // Nothing to report but why: the summary still says what happened.
+        Err(e) if cut || stop.raised() => {
             interrupt.begin_writing();
+            let what = match progress.filter(|_| cut) {
+                Some(p) => format!(" after {} lines of stdin, too few to fit", p.lines()),
+                None => ", with no fit".into(),
+            };
             let why = format!(
-                "interrupted by {} after {} lines of stdin, too few to fit: {e:#}",
-                interrupt.signal_name().unwrap_or_default(),
-                progress.lines()
+                "interrupted by {}{what}: {e:#}",
+                interrupt.signal_name().unwrap_or_default()
             );
-            write_stopped_summary(args, open_out(args)?.as_mut(), None, &why)?;
+            write_stopped_summary(args, out.as_mut(), None, &why)?;
             return Err(stopped(&interrupt, "no fit; summary.json says why"));
         }
         Err(e) => return Err(e),
     };
+    let signal = interrupt.signal_name().unwrap_or_default();
     if cut {
-        mark_interrupted(&mut outcome.summary, &interrupt.signal_name().unwrap_or_default());
+        mark_interrupted(&mut outcome.summary, &signal);
+    } else if stop.raised() {
+        mark_stopped(&mut outcome, &signal);
     }
-    write_batch(args, mapping, outcome, reports, Some(&interrupt), None)
+    write_batch(args, mapping, outcome, reports, Some(&interrupt), selection.as_ref(), out)
 }
 
 /// The output directory of `--out`, opened (locked, the previous run's files cleared).
@@ -985,6 +1046,29 @@ fn open_out(args: &ReplayArgs) -> anyhow::Result<Option<crate::outdir::OutputDir
         .as_deref()
         .map(|d| crate::outdir::OutputDir::open(d, "replay", &input_paths(args)))
         .transpose()?)
+}
+
+/// A batch summary of a fit a signal stopped at a safe point: status `interrupted`, and why,
+/// with the fit's own status (how many bootstrap replicas were done is in their own warning).
+fn mark_stopped(outcome: &mut aeroident_pipelines::replay::batch::BatchOutcome, signal: &str) {
+    use aeroident_estimators::output_error::{NotConverged, Termination};
+    let s = &mut outcome.summary;
+    let what = match outcome.result.termination {
+        Termination::NotConverged(NotConverged::Stopped)
+        | Termination::CostConverged(NotConverged::Stopped) => format!(
+            "during the fit: the estimates are its last iterate ({} iterations)",
+            s.iterations.len().saturating_sub(1)
+        ),
+        _ => "after the fit had ended: the estimates are its result, and the warnings say what the stop cut short".to_string(),
+    };
+    let why = format!(
+        "interrupted by {signal} {what}; the fit's own status was `{}`{}",
+        s.status,
+        s.status_reason.as_deref().map_or(String::new(), |r| format!(" ({r})"))
+    );
+    s.warnings.push(why.clone());
+    s.status = aeroident_pipelines::replay::STATUS_INTERRUPTED.to_string();
+    s.status_reason = Some(why);
 }
 
 /// A batch summary of a record a signal cut short: status `interrupted`, and why, with the
@@ -1023,11 +1107,13 @@ fn fit_options(
         spike_screen: (!args.no_spike_screen)
             .then(aeroident_pipelines::replay::outliers::SpikeScreen::default),
         robust: args.robust.then(aeroident_estimators::output_error::Huber::default),
+        stop: None,
     })
 }
 
-/// Validates (`--validate-on`), prints and writes a batch fit's results. With `interrupt`
-/// (a record on stdin): an interrupted fit skips `--validate-on`, further signals are ignored
+/// Validates (`--validate-on`), prints and writes a batch fit's results into `out` (opened
+/// before the fit), else on stdout and stderr. With `interrupt`: an interrupted fit skips
+/// `--validate-on`, further signals are ignored
 /// while the results are written, and a second signal before then leaves the report out
 /// (crate::interrupt); an interrupted run ends with the [`crate::interrupt::Interrupted`] error.
 fn write_batch(
@@ -1037,6 +1123,7 @@ fn write_batch(
     reports: Vec<aeroident_io::ReaderReport>,
     interrupt: Option<&crate::interrupt::Interrupt>,
     selection: Option<&AutoSelection>,
+    out: Option<crate::outdir::OutputDir>,
 ) -> anyhow::Result<()> {
     outcome.summary.reader = reports;
     let interrupted = outcome.summary.status == aeroident_pipelines::replay::STATUS_INTERRUPTED;
@@ -1071,9 +1158,8 @@ fn write_batch(
         &mut outcome.summary.warnings,
     );
     let text = summary_json(&outcome.summary, selection)?;
-    match &args.out {
-        Some(dir) => {
-            let mut out = crate::outdir::OutputDir::open(dir, "replay", &input_paths(args))?;
+    match out {
+        Some(mut out) => {
             let path = out.write_bytes("summary.json", text.as_bytes())?;
             if let Some(s) = selection {
                 out.write_bytes("model.toml", s.model.to_toml().as_bytes())?;
@@ -1092,10 +1178,9 @@ fn write_batch(
     }
     match interrupt {
         Some(i) if summary_only => Err(stopped(i, SUMMARY_ONLY)),
-        Some(i) if interrupted => Err(stopped(
-            i,
-            "the fit of the samples read until then was written, with status `interrupted`",
-        )),
+        Some(i) if interrupted => {
+            Err(stopped(i, "the results so far were written, with status `interrupted`"))
+        }
         _ => Ok(()),
     }
 }

@@ -864,6 +864,9 @@ impl<'a> Fem<'a> {
         oe: &OeConfig,
     ) -> Result<(bool, Option<NotConverged>), OeError> {
         for iteration in 1..=oe.max_iterations {
+            if super::stop_raised(oe.stop.as_ref()) {
+                return Ok((false, Some(NotConverged::Stopped)));
+            }
             if let Some(stop) = self.step(it, iteration, oe)? {
                 return Ok(stop);
             }

@@ -225,6 +225,9 @@ fn json_keys_exact() {
     let c = Campaign {
         scenario: "x".into(),
         runs: 1,
+        runs_requested: 1,
+        status: "complete",
+        status_reason: None,
         seed: 1,
         seed_rule: SEED_RULE,
         failed_runs: vec![],

@@ -26,7 +26,7 @@ use aeroident_estimators::flight_model::{N_STATES, STATE_NAMES, state};
 use aeroident_estimators::output_error::filter_error::{self, FemConfig, FemResult};
 use aeroident_estimators::output_error::{InitialStates, Start};
 use aeroident_estimators::output_error::{
-    OeConfig, OeError, OeResult, Termination, fit, fit_to_end,
+    OeConfig, OeError, OeResult, StopFlag, Termination, fit, fit_to_end,
 };
 use aeroident_estimators::{AirDataSample, ModelStructure};
 use aeroident_io::{FlightDataReader, Mapping, ModelSpec, RecordEvent, Rejection, RejectionLog};
@@ -277,6 +277,7 @@ pub(crate) fn read_records<R: Read>(
     let mut rejections = RejectionLog::default();
     let (mut read, mut rejected) = (0usize, 0usize);
     let mut notes = Vec::new();
+    let mut missed = Vec::new();
     for (reader, file) in readers.into_iter().zip(&files) {
         let prefix = if named { format!("{file}: ") } else { String::new() };
         let mut events = super::record_events(reader, screen, compat, windows);
@@ -310,11 +311,18 @@ pub(crate) fn read_records<R: Read>(
             }
         }
         notes.extend(events.notes().into_iter().map(|n| format!("{prefix}{n}")));
+        missed.push(events.windows_missed().map(|why| format!("{file}: {why}")));
         manoeuvres.push(Vec::new());
         starts.push((0, String::new()));
     }
     let lone = reject_lone_samples(&mut manoeuvres, &starts, &mut rejections);
     rejected += lone.len();
+    if manoeuvres.is_empty()
+        && let Some(why) = missed.into_iter().collect::<Option<Vec<String>>>()
+    {
+        // Every file's samples all lie outside the windows: the windows are the cause.
+        return Err(ReplayError::Option { option: "window", reason: why.join("; ") });
+    }
     if manoeuvres.is_empty() {
         // Lone samples first: the gaps before them say nothing of why nothing is left.
         let mut first = lone;
@@ -520,8 +528,11 @@ pub fn check_bootstrap_refits(refits: usize) -> Result<(), String> {
 /// How the parametric bootstrap of an output-error fit went (`summary.json` `bootstrap`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BootstrapSummary {
-    /// Replicas flown and refitted.
+    /// Replicas flown and refitted: all those asked for unless a stop came first.
     pub refits: usize,
+    /// Replicas asked for (`--bootstrap N`); more than [`BootstrapSummary::refits`] when a stop
+    /// ([`OeConfig::stop`]) ended the bootstrap early.
+    pub requested: usize,
     /// Replicas that failed (the replica left the physical domain, or its refit failed or did
     /// not converge); the σ is the spread of the others.
     pub failed: usize,
@@ -590,10 +601,14 @@ pub fn bootstrap_shrink_warnings(
 /// `seed + b`. Returns the σ and the bias estimate of every unknown ([`BootstrapSpread`]) and
 /// the summary.
 ///
+/// A stop raised on `config` ([`OeConfig::stop`]) starts no further replica and drops the
+/// refits it interrupts: the σ is then the spread of the replicas done
+/// ([`BootstrapSummary::refits`] of [`BootstrapSummary::requested`]).
+///
 /// # Errors
 /// A message when `refits` is outside 2 to [`MAX_BOOTSTRAP_REFITS`] (before any fit), the
-/// filter-error fit fails or does not converge, or more than half of the replicas fail (the
-/// first reason given).
+/// filter-error fit fails or does not converge, more than half of the replicas done fail (the
+/// first reason given), or fewer than 2 are usable.
 pub fn bootstrap_sigma(
     manoeuvres: &[&[AirDataSample]],
     config: &OeConfig,
@@ -602,8 +617,6 @@ pub fn bootstrap_sigma(
     seed: u64,
 ) -> Result<(BootstrapSpread, BootstrapSummary), String> {
     use aeroident_estimators::output_error::bootstrap::{self, BootstrapNoise};
-    use rand::{Rng, SeedableRng};
-    use rayon::prelude::*;
     check_bootstrap_refits(refits).map_err(|e| format!("bootstrap: {e}"))?;
     let t0 = std::time::Instant::now();
     let mut fem_config = FemConfig::new(config.structure);
@@ -617,27 +630,22 @@ pub fn bootstrap_sigma(
         return Err(format!("{noise_source}, which did not converge: {why}"));
     }
     let noise = BootstrapNoise::from_fem(&fem);
-    let draws: Vec<Result<Vec<f64>, String>> = (0..refits)
-        .into_par_iter()
-        .map(|b| {
-            let mut rng = rand_pcg::Pcg64::seed_from_u64(seed.wrapping_add(b as u64));
-            let mut normal = || rng.sample::<f64, _>(rand_distr::StandardNormal);
-            bootstrap::refit(manoeuvres, config, fitted, &noise, &mut normal)
-                .map_err(|e| fit_error(&format!("bootstrap replica {b}"), e))
-        })
-        .collect();
+    let draws = replicas(manoeuvres, config, fitted, &noise, refits, seed);
+    let done = draws.len();
     let failed = draws.iter().filter(|d| d.is_err()).count();
-    if 2 * failed > refits {
+    if 2 * failed > done {
         let first = draws.iter().find_map(|d| d.as_ref().err()).cloned().unwrap_or_default();
-        return Err(format!("bootstrap: {failed} of {refits} replicas failed (first: {first})"));
+        return Err(format!("bootstrap: {failed} of {done} replicas failed (first: {first})"));
     }
     let ok: Vec<Vec<f64>> = draws.into_iter().filter_map(Result::ok).collect();
-    let too_few = || format!("bootstrap: {} usable refits, at least 2 needed", ok.len());
+    let too_few =
+        || format!("bootstrap: {} usable refits of {done} done, at least 2 needed", ok.len());
     let sigma = bootstrap::spread(&ok).ok_or_else(too_few)?;
     let bias = bootstrap::bias(&ok, &fitted.values).ok_or_else(too_few)?;
     let names = |i: usize| STATE_NAMES[i].to_string();
     let summary = BootstrapSummary {
-        refits,
+        refits: done,
+        requested: refits,
         failed,
         seed,
         process_noise: noise.process_noise.iter().map(|(i, f)| (names(*i), *f)).collect(),
@@ -651,6 +659,38 @@ pub fn bootstrap_sigma(
         wall_s: t0.elapsed().as_secs_f64(),
     };
     Ok((BootstrapSpread { sigma, bias }, summary))
+}
+
+/// The bootstrap's replicas ([`bootstrap_sigma`]), in parallel, in replica order: each
+/// replica's refitted unknowns or why it failed. Once `config`'s stop is raised no replica
+/// starts and a refit it interrupts is left out, so only the replicas done are returned.
+fn replicas(
+    manoeuvres: &[&[AirDataSample]],
+    config: &OeConfig,
+    fitted: &OeResult,
+    noise: &aeroident_estimators::output_error::bootstrap::BootstrapNoise,
+    refits: usize,
+    seed: u64,
+) -> Vec<Result<Vec<f64>, String>> {
+    use aeroident_estimators::output_error::{NotConverged, bootstrap};
+    use rand::{Rng, SeedableRng};
+    use rayon::prelude::*;
+    let stopped = || config.stop.as_ref().is_some_and(StopFlag::raised);
+    let draws: Vec<Option<Result<Vec<f64>, String>>> = (0..refits)
+        .into_par_iter()
+        .map(|b| {
+            if stopped() {
+                return None;
+            }
+            let mut rng = rand_pcg::Pcg64::seed_from_u64(seed.wrapping_add(b as u64));
+            let mut normal = || rng.sample::<f64, _>(rand_distr::StandardNormal);
+            match bootstrap::refit(manoeuvres, config, fitted, noise, &mut normal) {
+                Err(OeError::NotConverged { reason: NotConverged::Stopped, .. }) => None,
+                r => Some(r.map_err(|e| fit_error(&format!("bootstrap replica {b}"), e))),
+            }
+        })
+        .collect();
+    draws.into_iter().flatten().collect()
 }
 
 /// The name of an initial-state setting as the CLI (`--initial-states`) and the run scenario
@@ -725,6 +765,10 @@ pub struct FitOptions {
     /// `oe` only: Huber's robust weights on the normalised residuals
     /// ([`OeConfig::robust`]); `None`: the Gaussian maximum-likelihood fit. Default off.
     pub robust: Option<aeroident_estimators::output_error::Huber>,
+    /// A request to stop ([`OeConfig::stop`]): the fit ends at its next iteration with its
+    /// last iterate, the bootstrap before its next replica with the replicas done. `None`
+    /// (default): it runs to its end.
+    pub stop: Option<StopFlag>,
 }
 
 impl Default for FitOptions {
@@ -742,6 +786,7 @@ impl Default for FitOptions {
             windows: Vec::new(),
             spike_screen: Some(super::outliers::SpikeScreen::default()),
             robust: None,
+            stop: None,
         }
     }
 }
@@ -913,6 +958,7 @@ fn fit_slices(
         // Convergence on turbulent or model-error records is slow (module doc of filter_error).
         config.oe.max_iterations = options.max_iterations.unwrap_or(MAX_ITERATIONS);
         config.oe.initial_states = options.initial_states;
+        config.oe.stop.clone_from(&options.stop);
         if let Some(mask) = options.process_noise {
             config.process_noise = mask;
         }
@@ -925,6 +971,7 @@ fn fit_slices(
         let mut config = oe_config(structure);
         config.initial_states = options.initial_states;
         config.robust = options.robust;
+        config.stop.clone_from(&options.stop);
         if let Some(n) = options.max_iterations {
             config.max_iterations = n;
         }
@@ -967,12 +1014,26 @@ fn sigma_stage(
         bootstrap_skipped: None,
     };
     if let (Some(n), Some(config)) = (refits, &fitted.oe) {
-        if result.termination.is_converged() {
-            let (spread, summary) = bootstrap_sigma(slices, config, result, n, BOOTSTRAP_SEED)
-                .map_err(ReplayError::Model)?;
-            reported.copy_from_slice(&spread.sigma);
-            out.bootstrap = Some(summary);
-            out.spread = Some(spread);
+        let stopped = || config.stop.as_ref().is_some_and(StopFlag::raised);
+        if stopped() {
+            out.bootstrap_skipped = Some(
+                "bootstrap not run: a stop was asked for during the fit (the reported σ is the fit's own)".into(),
+            );
+        } else if result.termination.is_converged() {
+            match bootstrap_sigma(slices, config, result, n, BOOTSTRAP_SEED) {
+                Ok((spread, summary)) => {
+                    reported.copy_from_slice(&spread.sigma);
+                    out.bootstrap = Some(summary);
+                    out.spread = Some(spread);
+                }
+                // Stopped before it had a σ: the fit's own σ stand, and the summary says why.
+                Err(e) if stopped() => {
+                    out.bootstrap_skipped = Some(format!(
+                        "bootstrap stopped on request before it had a σ ({e}); the reported σ is the fit's own"
+                    ));
+                }
+                Err(e) => return Err(ReplayError::Model(e)),
+            }
         } else {
             out.bootstrap_skipped =
                 Some("bootstrap not run: the fit did not converge (its σ would describe the last iterate, not the estimator)".into());
@@ -1097,6 +1158,12 @@ fn fit_warnings(
     let reported: Vec<Option<f64>> = sigmas.reported.iter().map(|s| Some(*s)).collect();
     warnings.extend(diagnostics::sign_warnings(&result.structure, values, &reported));
     warnings.extend(sigmas.bootstrap_skipped.clone());
+    if let Some(b) = sigmas.bootstrap.as_ref().filter(|b| b.refits < b.requested) {
+        warnings.push(format!(
+            "bootstrap stopped on request after {} of {} replicas: its σ is the spread of those {}",
+            b.refits, b.requested, b.refits
+        ));
+    }
     if let Some(b) = sigmas.bootstrap.as_ref().filter(|b| b.failed > 0) {
         warnings.push(format!(
             "bootstrap: {} of {} replicas failed and are not in the σ (the spread of the other {})",

@@ -267,8 +267,9 @@ pub enum ReplayError {
     /// The model does not fit the record.
     #[error("{0}")]
     Model(String),
-    /// An option is invalid.
-    #[error("option `{option}`: {reason}")]
+    /// An option is invalid; `option` is its name as the command line spells it, without the
+    /// leading `--`.
+    #[error("option `--{option}`: {reason}")]
     Option {
         /// Option name.
         option: &'static str,
@@ -711,10 +712,11 @@ pub fn replay_with<R: Read>(
     make: impl Fn(&ModelSpec) -> Result<Box<dyn Estimator>, BuildError>,
     observer: &mut dyn ReplayObserver,
 ) -> Result<ReplayOutcome, ReplayError> {
-    check_diff_window(opts.diff_window)?;
+    check_numeric_options(opts)?;
     crate::window::check_windows(&opts.windows)
         .map_err(|reason| ReplayError::Option { option: "window", reason })?;
-    let mut run = online::Replay::new(reader.file().to_string(), mapping, opts, observer);
+    let events_file = reader.file().to_string();
+    let mut run = online::Replay::new(events_file.clone(), mapping, opts, observer);
     check_spike_screen(opts.spike_screen.as_ref())?;
     let mut events = record_events(reader, opts.spike_screen, opts.compat.as_ref(), &opts.windows);
     for item in events.by_ref() {
@@ -723,7 +725,8 @@ pub fn replay_with<R: Read>(
             break;
         }
     }
-    let mut out = run.finish()?;
+    let file = events_file;
+    let mut out = run.finish().map_err(|e| events.explain_no_samples(&file, e))?;
     if !out.diverged() {
         out.summary.warnings.extend(precision::warning(&out.summary.parameters));
     }
@@ -810,6 +813,24 @@ impl RecordEvents<'_> {
     }
 }
 
+impl RecordEvents<'_> {
+    /// `error` (the end of a replay of `file`), or in place of a "no usable samples" one the
+    /// `--window` error saying that the windows missed the record ([`crate::window::Windowed::missed`]).
+    pub(crate) fn explain_no_samples(&self, file: &str, error: ReplayError) -> ReplayError {
+        match (&error, self.events.missed()) {
+            (ReplayError::Data(FlightDataError::NoSamples { .. }), Some(why)) => {
+                ReplayError::Option { option: "window", reason: format!("{file}: {why}") }
+            }
+            _ => error,
+        }
+    }
+
+    /// [`crate::window::Windowed::missed`] of these events.
+    pub(crate) fn windows_missed(&self) -> Option<String> {
+        self.events.missed()
+    }
+}
+
 impl Iterator for RecordEvents<'_> {
     type Item = Result<RecordEvent, FlightDataError>;
 
@@ -825,6 +846,30 @@ pub(crate) fn check_spike_screen(
     screen
         .map_or(Ok(()), outliers::SpikeScreen::check)
         .map_err(|reason| ReplayError::Option { option: "spike-screen", reason })
+}
+
+/// The numeric options of a replay, checked before anything is read or built, each error
+/// naming the option as the command line spells it and the value exactly as given: the
+/// differentiator window, the forgetting factor (of the estimators that take one) and the
+/// instruments' delay.
+fn check_numeric_options(opts: &ReplayOptions) -> Result<(), ReplayError> {
+    check_diff_window(opts.diff_window)?;
+    if opts.estimator.options().contains(&"forgetting")
+        && !(opts.forgetting > 0.0 && opts.forgetting <= 1.0)
+    {
+        return Err(ReplayError::Option {
+            option: "forgetting",
+            reason: format!("must be in (0, 1] (1: no forgetting), got {}", opts.forgetting),
+        });
+    }
+    let max = aeroident_estimators::iv::MAX_INSTRUMENT_DELAY;
+    match opts.instrument_delay {
+        Some(d) if !(1..=max).contains(&d) => Err(ReplayError::Option {
+            option: "instrument-delay",
+            reason: format!("must be 1 to {max} samples, got {d}"),
+        }),
+        _ => Ok(()),
+    }
 }
 
 /// The differentiator window must be odd, ≥ 3 and ≤ [`MAX_DIFF_WINDOW`].

@@ -149,6 +149,27 @@ pub enum EstimatorError {
         /// The coefficients the structure declares: bit `i` for `Coefficient::ALL[i]`.
         declared: u8,
     },
+    /// A batch fit whose estimated peak memory is over its limit, refused before anything is
+    /// simulated (`output_error::estimated_peak_bytes`).
+    #[error(
+        "{samples} samples × {outputs} outputs × {unknowns} unknowns (the longest manoeuvre {longest} samples): the fit would need about {} MB at its peak, more than the limit of {} MB; fit windows of the record (replay --window) or fewer manoeuvres",
+        (*bytes / 1e6).round(),
+        (*limit / 1e6).round()
+    )]
+    TooLarge {
+        /// Samples in all manoeuvres.
+        samples: usize,
+        /// Outputs fitted.
+        outputs: usize,
+        /// Unknowns (parameters, biases, free initial states).
+        unknowns: usize,
+        /// Samples of the longest manoeuvre (its transforms are held at once).
+        longest: usize,
+        /// Estimated peak memory, bytes.
+        bytes: f64,
+        /// The limit, bytes.
+        limit: f64,
+    },
     /// A matrix that must be positive definite was not (e.g. a Cholesky factorisation failed).
     #[error("numerical failure in `{what}` at t = {t_s} s")]
     Numerical {

@@ -280,8 +280,9 @@ impl StateSet {
     /// The state set a structure determines (module doc).
     ///
     /// # Errors
-    /// [`EstimatorError::InvalidConfig`] naming the missing coefficients when the structure's
-    /// longitudinal or lateral coefficients are incomplete, or it mixes CX/CZ with CL/CD.
+    /// [`EstimatorError::IncompleteAxis`] naming what the axis needs and what the structure
+    /// declares when its longitudinal or lateral coefficients are incomplete;
+    /// [`EstimatorError::InvalidConfig`] when it mixes CX/CZ with CL/CD.
     pub fn of(structure: &ModelStructure) -> Result<Self, EstimatorError> {
         use Coefficient as C;
         let has = |c: C| structure.has(c);
@@ -297,19 +298,13 @@ impl StateSet {
         let lon = ((has(C::CL) && has(C::CD)) || (has(C::CX) && has(C::CZ))) && has(C::Cm);
         let any_lat = has(C::CY) || has(C::Cl) || has(C::Cn);
         let lat = has(C::CY) && has(C::Cl) && has(C::Cn);
+        let declared = C::ALL.iter().enumerate().filter(|(_, c)| has(**c)).map(|(i, _)| 1 << i);
+        let declared = declared.fold(0u8, |bits, bit| bits | bit);
         if any_lon && !lon {
-            return Err(invalid(
-                "model structure",
-                n,
-                "the EKF's longitudinal states (V, alpha, theta, q) need a force pair (CL and CD, or CX and CZ) and Cm",
-            ));
+            return Err(EstimatorError::IncompleteAxis { lateral: false, declared });
         }
         if any_lat && !lat {
-            return Err(invalid(
-                "model structure",
-                n,
-                "the EKF's lateral-directional states (beta, p, r, phi) need CY, Cl and Cn",
-            ));
+            return Err(EstimatorError::IncompleteAxis { lateral: true, declared });
         }
         Ok(match (lon, lat) {
             (true, true) => StateSet::Coupled,

@@ -139,6 +139,37 @@ pub enum EstimatorError {
         /// Why it is invalid.
         reason: &'static str,
     },
+    /// A structure whose longitudinal or lateral-directional coefficients are incomplete, so
+    /// the states of that axis cannot be integrated (the estimators that simulate the
+    /// aircraft need a whole axis, [`StateSet::of`]).
+    #[error("{}", incomplete_axis(*lateral, *declared))]
+    IncompleteAxis {
+        /// Whether the lateral-directional axis (else the longitudinal one) is incomplete.
+        lateral: bool,
+        /// The coefficients the structure declares: bit `i` for `Coefficient::ALL[i]`.
+        declared: u8,
+    },
+    /// A batch fit whose estimated peak memory is over its limit, refused before anything is
+    /// simulated (`output_error::estimated_peak_bytes`).
+    #[error(
+        "{samples} samples × {outputs} outputs × {unknowns} unknowns (the longest manoeuvre {longest} samples): the fit would need about {} MB at its peak, more than the limit of {} MB; fit windows of the record (replay --window) or fewer manoeuvres",
+        (*bytes / 1e6).round(),
+        (*limit / 1e6).round()
+    )]
+    TooLarge {
+        /// Samples in all manoeuvres.
+        samples: usize,
+        /// Outputs fitted.
+        outputs: usize,
+        /// Unknowns (parameters, biases, free initial states).
+        unknowns: usize,
+        /// Samples of the longest manoeuvre (its transforms are held at once).
+        longest: usize,
+        /// Estimated peak memory, bytes.
+        bytes: f64,
+        /// The limit, bytes.
+        limit: f64,
+    },
     /// A matrix that must be positive definite was not (e.g. a Cholesky factorisation failed).
     #[error("numerical failure in `{what}` at t = {t_s} s")]
     Numerical {
@@ -147,6 +178,23 @@ pub enum EstimatorError {
         /// Sample time, s.
         t_s: f64,
     },
+}
+
+/// The message of [`EstimatorError::IncompleteAxis`], in the coefficient names a model file
+/// uses.
+fn incomplete_axis(lateral: bool, declared: u8) -> String {
+    let need = if lateral {
+        "a lateral-directional model needs CY, Cl and Cn (its states beta, p, r, phi are integrated)"
+    } else {
+        "a longitudinal model needs a force pair (CL and CD, or CX and CZ) and Cm (its states V, alpha, theta, q are integrated)"
+    };
+    let names: Vec<&str> = vocabulary::Coefficient::ALL
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| declared >> i & 1 == 1)
+        .map(|(_, c)| c.name())
+        .collect();
+    format!("{need}; this model declares {}", names.join(", "))
 }
 
 /// The engine-level interface of the generic sliding-mode and gradient estimators over a

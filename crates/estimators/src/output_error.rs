@@ -160,7 +160,7 @@ pub mod design;
 pub mod filter_error;
 pub mod riccati;
 mod simulation;
-pub use simulation::MAX_SENSITIVITY_VALUES;
+pub use simulation::{MAX_FIT_BYTES, MAX_SENSITIVITY_VALUES, estimated_peak_bytes};
 
 use crate::EstimatorError;
 use crate::flight_model::{FlightModel, N_STATES, Output, STATE_NAMES, StateSet};

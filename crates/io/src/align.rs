@@ -197,13 +197,14 @@ pub fn align_with_room(
                 )));
             }
             let n = ((t1 - t0) * rate).floor() + 1.0;
+            let span = span_ends(topics, t0, t1);
             if n > MAX_ROWS as f64 {
                 return Err(bad(format!(
-                    "{rate} Hz over {} s gives {n} rows (more than {MAX_ROWS})",
+                    "{rate} Hz over {} s ({span}) gives {n} rows (more than {MAX_ROWS})",
                     t1 - t0
                 )));
             }
-            let what = format!("[align] rate_hz = {rate} Hz over {} s", t1 - t0);
+            let what = format!("[align] rate_hz = {rate} Hz over {} s ({span})", t1 - t0);
             check_table_size(n, columns, &what, file)?;
             (0..n as usize).map(|i| t0 + i as f64 / rate).filter(|t| *t <= t1).collect()
         }
@@ -267,6 +268,19 @@ pub fn align_with_room(
         rows_considered: times.len(),
         dropped_by,
     })
+}
+
+/// Which topics bound the common span `t0`–`t1` (the latest first sample, the earliest last
+/// one), so that a span too long to align names the time stamps that make it so.
+fn span_ends(topics: &[Topic], t0: f64, t1: f64) -> String {
+    let named = |pick: fn(&Topic) -> f64, t: f64| {
+        let names: Vec<String> =
+            topics.iter().filter(|x| pick(x) == t).map(|x| format!("`{}`", x.name)).collect();
+        names.join(", ")
+    };
+    let first = named(|x| x.t_s[0], t0);
+    let last = named(|x| x.t_s[x.t_s.len() - 1], t1);
+    format!("from {t0} s, where {first} starts, to {t1} s, where {last} ends")
 }
 
 /// Splits a column name `<topic>.<field>` (the topic may carry `[instance]`; `topic[0]` is
@@ -430,6 +444,20 @@ mod tests {
         assert!(t.iter().all(|&x| x <= 1.15 + 1e-9 || x >= 3.0 - 1e-9), "nothing in the gap");
         // Clock times 1.155..2.995 s (185) have no value of `g`.
         assert_eq!(out.dropped_by["g"], 185);
+    }
+
+    /// A span too long to align names the topics and time stamps that bound it.
+    #[test]
+    fn errors_span_too_long_names_its_topics_and_times() {
+        let b = topic("b", [grid(0.5, 0.1, 10), vec![86_400.0]].concat(), |t| t);
+        let d = topic("d", grid(0.0, 0.1, 900_000), |t| t);
+        let e = align(&[b, d], &Clock::RateHz(1000.0), Interpolation::Linear, "log.ulg")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("over 86399.5 s (from 0.5 s, where `b` starts, to 86400 s, where `b` ends)"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -219,6 +219,20 @@ pub enum RowProblem {
         /// The field text.
         text: String,
     },
+    /// A field whose bytes are not UTF-8 text (e.g. a Latin-1 `é`), so no number.
+    #[error(
+        "field {field} (column `{column}`): invalid UTF-8 byte 0x{byte:02X} at byte {offset} of the field: not a number (is the file in another encoding?)"
+    )]
+    InvalidUtf8 {
+        /// 1-based field position in the row.
+        field: usize,
+        /// Column name.
+        column: String,
+        /// The first byte that is not UTF-8.
+        byte: u8,
+        /// Its 0-based offset in the field.
+        offset: usize,
+    },
     /// NaN or infinity.
     #[error("column `{column}`: non-finite value `{text}`")]
     NonFinite {
@@ -377,6 +391,7 @@ impl RowProblem {
         match self {
             Self::Blank { .. } => "blank value",
             Self::NotANumber { .. } => "not a number",
+            Self::InvalidUtf8 { .. } => "invalid UTF-8",
             Self::NonFinite { .. } => "non-finite value",
             Self::NonFiniteSi { .. } => "not finite in SI",
             Self::RepeatedTime { .. } => "repeated time",

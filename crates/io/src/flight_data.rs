@@ -77,6 +77,7 @@
 //! value can overflow), and the finished sample is checked field by field.
 
 use crate::error::{FlightDataError, RowProblem};
+use crate::line_ends::BareCrAsLf;
 use crate::mapping::{Channel, ChannelMap, Mapping, Source};
 use aeroident_estimators::{AirDataSample, AircraftConstants};
 use std::collections::{BTreeMap, VecDeque};
@@ -192,15 +193,17 @@ impl<R: Read> Read for Tail<R> {
 /// the rest of the file as one field) is a fatal error naming the row, the column and the lines
 /// it spans; and in a live feed (file name `-`) a last line without a terminating newline is
 /// rejected as possibly truncated ([`RowProblem::Truncated`]). Files keep their last line.
+/// A bare `\r` (old Mac line ends) ends a line as `\n` does. Rows are read as bytes: a mapped
+/// field that is not UTF-8 rejects its row ([`RowProblem::InvalidUtf8`]), not the file.
 pub struct FlightDataReader<R: Read> {
     file: String,
-    csv: csv::Reader<Tail<R>>,
+    csv: csv::Reader<Tail<BareCrAsLf<R>>>,
     csv_headers: Vec<String>,
     header_len: usize,
     time: Resolved,
     channels: BTreeMap<Channel, Resolved>,
     constants: BTreeMap<Channel, f64>,
-    record: csv::StringRecord,
+    record: csv::ByteRecord,
     last_t: Option<f64>,
     /// Row of the last accepted sample.
     last_row: u64,
@@ -245,7 +248,7 @@ impl<R: Read> FlightDataReader<R> {
             // reports every row of a CRLF file one line early; the `\r` before the `\n` is
             // trimmed as whitespace.
             .terminator(csv::Terminator::Any(b'\n'))
-            .from_reader(Tail { inner: source, eof: false, last_byte: None });
+            .from_reader(Tail { inner: BareCrAsLf::new(source), eof: false, last_byte: None });
         let headers = csv
             .headers()
             .map_err(|e| FlightDataError::Csv {
@@ -261,16 +264,7 @@ impl<R: Read> FlightDataReader<R> {
             });
         }
         let header_len = headers.len();
-        for (i, h) in headers.iter().enumerate() {
-            if let Some(j) = headers.iter().take(i).position(|g| g == h && !g.is_empty()) {
-                return Err(FlightDataError::DuplicateColumn {
-                    file: file.to_string(),
-                    column: h.to_string(),
-                    first: j + 1,
-                    second: i + 1,
-                });
-            }
-        }
+        let positions = column_positions(&headers, file)?;
         let hint = match headers.iter().collect::<Vec<_>>().as_slice() {
             [one] if one.contains(';') => {
                 "; the header is one field containing `;`: the file looks semicolon-delimited, \
@@ -290,7 +284,7 @@ impl<R: Read> FlightDataReader<R> {
             let weights: Vec<f64> = cols.iter().map(|(_, w)| *w).collect();
             let mut columns = Vec::with_capacity(names.len());
             for n in &names {
-                let idx = headers.iter().position(|h| h == n).ok_or_else(|| {
+                let idx = positions.get(n.as_str()).copied().ok_or_else(|| {
                     FlightDataError::MissingColumn {
                         file: file.to_string(),
                         channel: key.to_string(),
@@ -328,7 +322,7 @@ impl<R: Read> FlightDataReader<R> {
             time,
             channels,
             constants,
-            record: csv::StringRecord::new(),
+            record: csv::ByteRecord::new(),
             last_t: None,
             last_row: 0,
             nominal_dt: mapping.nominal_dt_s,
@@ -372,11 +366,23 @@ impl<R: Read> FlightDataReader<R> {
         &self.file
     }
 
+    /// The text of field `idx` (0-based) of the current row, column `name`: read as bytes, so
+    /// that a byte that is not UTF-8 costs its row (a bad field), not the file.
+    fn text(&self, idx: usize, name: &str) -> Result<&str, RowProblem> {
+        let bytes = self.record.get(idx).unwrap_or(b"");
+        std::str::from_utf8(bytes).map_err(|e| RowProblem::InvalidUtf8 {
+            field: idx + 1,
+            column: name.to_string(),
+            byte: bytes[e.valid_up_to()],
+            offset: e.valid_up_to(),
+        })
+    }
+
     fn field(&self, ch: &str, r: &Resolved) -> Result<f64, RowProblem> {
         let mut sum = 0.0;
         let mut values = Vec::new();
         for ((idx, name), w) in r.columns.iter().zip(r.names.iter()).zip(r.weights.iter()) {
-            let text = self.record.get(*idx).unwrap_or("");
+            let text = self.text(*idx, name)?;
             if text.is_empty() {
                 return Err(RowProblem::Blank { column: name.clone() });
             }
@@ -403,7 +409,8 @@ impl<R: Read> FlightDataReader<R> {
                     None => r.names.join("+"),
                 },
                 channel: ch.to_string(),
-                text: self.record.get(r.columns[0]).unwrap_or("").to_string(),
+                text: String::from_utf8_lossy(self.record.get(r.columns[0]).unwrap_or(b""))
+                    .into_owned(),
                 value: si,
             });
         }
@@ -608,7 +615,7 @@ impl<R: Read> FlightDataReader<R> {
     /// time stamp is settled by the row after it).
     fn read_record(&mut self) {
         let mut record = std::mem::take(&mut self.record);
-        let more = self.csv.read_record(&mut record);
+        let more = self.csv.read_byte_record(&mut record);
         let shift = self.synthetic_lines;
         let row = record.position().map(|p| p.line()).unwrap_or(0).saturating_sub(shift);
         self.record = record;
@@ -639,7 +646,9 @@ impl<R: Read> FlightDataReader<R> {
             }
             Ok(true) => {
                 self.rows_seen += 1;
-                if let Some(i) = self.record.iter().position(|f| f.contains(['\n', '\r'])) {
+                if let Some(i) =
+                    self.record.iter().position(|f| f.iter().any(|&b| b == b'\n' || b == b'\r'))
+                {
                     let column = self.header_name(i);
                     let tail = self.csv.get_ref();
                     // After a final newline the position is on the (empty) next line.
@@ -764,6 +773,27 @@ impl<R: Read> FlightDataReader<R> {
             notes.push(note);
         }
     }
+}
+
+/// Each header name's 0-based position (one pass, hashed: a record may have 10⁵ columns);
+/// a name given twice is an error naming both positions (1-based). Empty names may repeat.
+fn column_positions<'h>(
+    headers: &'h csv::StringRecord,
+    file: &str,
+) -> Result<std::collections::HashMap<&'h str, usize>, FlightDataError> {
+    let mut positions = std::collections::HashMap::with_capacity(headers.len());
+    for (i, h) in headers.iter().enumerate().filter(|(_, h)| !h.is_empty()) {
+        if let Some(&j) = positions.get(h) {
+            return Err(FlightDataError::DuplicateColumn {
+                file: file.to_string(),
+                column: h.to_string(),
+                first: j + 1,
+                second: i + 1,
+            });
+        }
+        positions.insert(h, i);
+    }
+    Ok(positions)
 }
 
 /// `x` to 4 significant digits, without trailing zeros.

@@ -11,6 +11,7 @@ pub mod dataflash;
 pub mod error;
 pub mod expression;
 pub mod flight_data;
+mod line_ends;
 pub mod log;
 pub mod log_contents;
 pub mod mapping;

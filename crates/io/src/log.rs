@@ -332,6 +332,8 @@ pub fn asc_reader<R: BufRead + 'static>(
     file: &str,
     mapping: &Mapping,
 ) -> Result<LogReader, FlightDataError> {
+    // Bare `\r` line ends (old Mac files) would make the whole file one line.
+    let source = BufReader::new(crate::line_ends::BareCrAsLf::new(source));
     let mut text = AscAsCsv { source, lines: Vec::new(), out: Vec::new(), pos: 0, eof: false };
     // Read up to the first data line to count its fields; those lines are replayed after
     // the header, so the line numbering is unchanged.
@@ -849,6 +851,24 @@ mod tests {
         ));
         // After two blank lines, on line 7, without a final newline (kept: a file, not `-`).
         assert!(matches!(got.last(), Some(RecordEvent::Sample { row: 7, .. })), "{got:?}");
+    }
+
+    /// Bare `\r` line ends (old Mac files): each `\r` ends a line, as `\n` does.
+    #[test]
+    fn val_asc_with_bare_cr_line_ends_reads_every_line() {
+        let m = mapping("[columns]\nnames = [\"t\", \"V\", \"a\"]\n");
+        let asc = "0.0 100.0 0.05\r0.1 100.5 0.051\r\n0.2 101 0.05\r0.3 101 0.06\r";
+        let got = events(asc_reader(std::io::Cursor::new(asc), "r.asc", &m).unwrap());
+        let rows: Vec<u64> = got
+            .iter()
+            .map(|e| match e {
+                RecordEvent::Sample { row, .. } | RecordEvent::Rejected { row, .. } => *row,
+                RecordEvent::Gap { row, .. } => *row,
+            })
+            .collect();
+        assert_eq!(rows, [1, 2, 3, 4], "{got:?}");
+        let RecordEvent::Sample { sample, .. } = &got[3] else { panic!("{:?}", got[3]) };
+        assert_eq!((sample.t_s, sample.vt_mps, sample.alpha_rad), (0.3, 101.0, 0.06));
     }
 
     #[test]

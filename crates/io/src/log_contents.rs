@@ -19,7 +19,11 @@
 //! costs that sample, not every later one. Each topic's left-out count, first left-out sample
 //! and the byte offset of the first message whose timestamp did not increase over the one
 //! before are in [`LogContents::dropped`] and [`LogContents::dropped_at`].
+//! The last few samples of a topic after a jump forward longer than the topic's whole span
+//! before it (a corrupt timestamp, nothing after it) are left out as time outliers
+//! ([`LogContents::time_outliers`]).
 
+use crate::flight_data::TIME_RUN_MAX;
 use crate::mapping::{Clock, Mapping};
 use crate::table::Topic;
 use std::collections::{BTreeMap, BTreeSet};
@@ -112,6 +116,11 @@ pub struct LogContents {
     /// first left-out sample and the byte offset of its first message whose timestamp did not
     /// increase over the one before.
     pub dropped_at: BTreeMap<String, (usize, u64)>,
+    /// Samples left out as time outliers: the last few samples of a topic after a jump
+    /// forward longer than the topic's whole span before it (a corrupt timestamp, e.g. one
+    /// day late; kept, it would stretch the aligned time base over the day). Topic name →
+    /// (count, index of the first, 0-based in the kept order, its time in s). Kept topics only.
+    pub time_outliers: BTreeMap<String, (usize, usize, f64)>,
     /// Byte offset of a message the file ends inside (that partial message is not used).
     pub truncated_at: Option<u64>,
     /// Corrupt stretches skipped to find the next message: `(byte offset, length)`, the first
@@ -141,6 +150,9 @@ impl LogContents {
                 )
             })
             .collect();
+        for (t, (n, k, t_s)) in &self.time_outliers {
+            v.push(format!("{file}: topic `{t}`: {}", late_tail_note(*n, *k, *t_s)));
+        }
         if let Some(at) = self.truncated_at {
             v.push(format!("{file}: byte {at}: the file ends inside this message (not used)"));
         }
@@ -169,7 +181,8 @@ impl LogContents {
     /// Ends a read: each builder's samples out of increasing order go to
     /// [`LogContents::dropped`], and each kept builder that has a sample becomes a topic, in
     /// the builders' order; every builder with a message enters the catalogue.
-    pub(crate) fn add_topics(&mut self, builders: Vec<TopicBuilder>) {
+    pub(crate) fn add_topics(&mut self, mut builders: Vec<TopicBuilder>) {
+        self.drop_late_tails(&mut builders);
         for mut b in builders {
             if b.messages > 0 {
                 self.catalogue.push(TopicInfo {
@@ -181,13 +194,45 @@ impl LogContents {
             if !b.kept {
                 continue;
             }
-            let (dropped, first) = b.keep_increasing();
+            let (dropped, first) = b.dropped_by_order;
             if dropped > 0 {
                 self.dropped.insert(b.name.clone(), dropped);
                 self.dropped_at.insert(b.name.clone(), (first, b.first_descent.unwrap_or(0)));
             }
             if !b.t_us.is_empty() {
                 self.topics.push(b.finish());
+            }
+        }
+    }
+}
+
+impl LogContents {
+    /// Leaves out the late tails of the kept topics ([`LogContents::time_outliers`]): a tail
+    /// ([`TopicBuilder::late_tail_start`]) that starts after the end of every topic's samples
+    /// before its own tail. A late sample of an event topic (a parameter changed in flight)
+    /// lies within the other topics' time and is kept.
+    fn drop_late_tails(&mut self, builders: &mut [TopicBuilder]) {
+        let mut starts = Vec::with_capacity(builders.len());
+        for b in builders.iter_mut().filter(|b| b.kept) {
+            b.dropped_by_order = b.keep_increasing();
+            starts.push(b.late_tail_start());
+        }
+        let body_end = |b: &TopicBuilder, k: Option<usize>| b.t_us[k.unwrap_or(b.t_us.len()) - 1];
+        let ends: Vec<u64> = builders
+            .iter()
+            .filter(|b| b.kept)
+            .zip(&starts)
+            .filter(|(b, _)| !b.t_us.is_empty())
+            .map(|(b, &k)| body_end(b, k))
+            .collect();
+        let Some(&log_end) = ends.iter().max() else { return };
+        let mut starts = starts.into_iter();
+        for b in builders.iter_mut().filter(|b| b.kept) {
+            let Some(Some(k)) = starts.next() else { continue };
+            if b.t_us[k] > log_end {
+                let late = (b.t_us.len() - k, k, seconds(b.t_us[k]));
+                b.truncate(k);
+                self.time_outliers.insert(b.name.clone(), late);
             }
         }
     }
@@ -208,6 +253,8 @@ pub(crate) struct TopicBuilder {
     pub(crate) messages: usize,
     /// Byte offset of the first message whose timestamp did not increase over the previous.
     pub(crate) first_descent: Option<u64>,
+    /// What [`TopicBuilder::keep_increasing`] left out: (count, index of the first).
+    dropped_by_order: (usize, usize),
 }
 
 impl TopicBuilder {
@@ -225,6 +272,7 @@ impl TopicBuilder {
             values: vec![Vec::new(); n],
             messages: 0,
             first_descent: None,
+            dropped_by_order: (0, 0),
         }
     }
 
@@ -269,6 +317,23 @@ impl TopicBuilder {
         (dropped, first)
     }
 
+    /// Where a late tail starts: at most [`TIME_RUN_MAX`] last samples after a jump longer
+    /// than the topic's span before it, with at least [`LATE_TAIL_MIN_BEFORE`] samples before.
+    fn late_tail_start(&self) -> Option<usize> {
+        let n = self.t_us.len();
+        let t = |i: usize| seconds(self.t_us[i]);
+        let first = n.saturating_sub(TIME_RUN_MAX).max(LATE_TAIL_MIN_BEFORE);
+        (first..n).find(|&k| t(k) - t(k - 1) > t(k - 1) - t(0))
+    }
+
+    /// Keeps the first `k` samples.
+    fn truncate(&mut self, k: usize) {
+        self.t_us.truncate(k);
+        for col in &mut self.values {
+            col.truncate(k);
+        }
+    }
+
     pub(crate) fn finish(self) -> Topic {
         // In place (same size and alignment): no second copy of the time column.
         let t_s: Vec<f64> = self.t_us.into_iter().map(seconds).collect();
@@ -278,6 +343,17 @@ impl TopicBuilder {
         }
         Topic { name: self.name, t_s, fields }
     }
+}
+
+/// Fewest samples a topic must have before a jump for the samples after it to be judged a
+/// late tail ([`TopicBuilder::late_tail_start`]): a topic of a few samples has no span to judge by.
+pub const LATE_TAIL_MIN_BEFORE: usize = 8;
+
+/// What a late tail of `n` samples from sample `k` at `t_s` s is, for a note.
+pub(crate) fn late_tail_note(n: usize, k: usize, t_s: f64) -> String {
+    format!(
+        "{n} last samples left out as time outliers (from sample {k}, at {t_s} s, the topic jumps further ahead than its whole span before)"
+    )
 }
 
 /// A timestamp in µs as seconds.
@@ -319,6 +395,48 @@ pub(crate) fn longest_increasing(t: &[u64]) -> Vec<bool> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A topic at 100 Hz over 10 s whose last message is stamped one day late: that sample is
+    /// a time outlier, counted, and the topic ends at 9.99 s; a gap followed by more samples
+    /// than a run, or a jump shorter than the span before it, is the topic's own time.
+    #[test]
+    fn errors_late_last_timestamp_is_a_time_outlier() {
+        let topic = |name: &str, n: u64, tail: &[u64]| {
+            let mut b = TopicBuilder::new(name.into(), vec!["x".into()], Some(vec!["x".into()]));
+            for i in 0..n {
+                b.push(i * 10_000, &[i as f64], i);
+            }
+            for &t in tail {
+                b.push(t, &[0.0], 0);
+            }
+            b
+        };
+        let day_late = |t: u64| 86_400_000_000 + 10_000_000 + t;
+        let built = |tail: &[u64]| {
+            let mut c = LogContents::default();
+            c.add_topics(vec![topic("imu", 1000, tail), topic("gps", 900, &[day_late(0)])]);
+            c
+        };
+        let day = day_late(0);
+        let c = built(&[day]);
+        assert_eq!(c.time_outliers["imu"], (1, 1000, 86_410.0));
+        assert_eq!(c.time_outliers["gps"], (1, 900, 86_410.0));
+        assert_eq!(c.topics[0].t_s.len(), 1000);
+        assert_eq!(*c.topics[0].t_s.last().unwrap(), 9.99);
+        let note = c.notes("x.ulg").join("\n");
+        assert!(note.contains("x.ulg: topic `imu`: 1 last samples left out as time outliers (from sample 1000, at 86410 s"), "{note}");
+        let report = crate::reader_report::ReaderReport::from_contents("x.ulg", "ulog", &c);
+        assert_eq!(report.totals().0, 2);
+        let c = built(&[day, day + 10_000, day + 20_000, day + 30_000, day + 40_000]);
+        assert!(c.time_outliers.is_empty() && c.topics[0].t_s.len() == 1005);
+        let c = built(&[19_000_000]);
+        assert_eq!(c.topics[0].t_s.len(), 1001);
+        assert_eq!(c.time_outliers.keys().collect::<Vec<_>>(), ["gps"]);
+        // A late sample within the other topics' time (a parameter changed in flight) is kept.
+        let mut c = LogContents::default();
+        c.add_topics(vec![topic("parm", 10, &[300_000_000]), topic("imu", 60_000, &[])]);
+        assert!(c.time_outliers.is_empty() && c.topics[0].t_s.len() == 11);
+    }
 
     #[test]
     fn analytic_builder_drops_out_of_order_times_and_converts_us_to_s() {

@@ -148,6 +148,19 @@ pub enum ModelFileError {
         /// Why.
         reason: String,
     },
+    /// A coefficient declared with no terms (`CL = []`): it would be left out of the model
+    /// without a word, though the file names it.
+    #[error(
+        "{file}: line {line}: coefficient `{coefficient}` has no terms (list at least one, e.g. `[\"0\"]` for a bias alone, or leave the coefficient out)"
+    )]
+    EmptyCoefficient {
+        /// File path.
+        file: String,
+        /// 1-based line of the coefficient.
+        line: usize,
+        /// The coefficient.
+        coefficient: String,
+    },
     /// The declared structure is not valid.
     #[error("{file}: {source}")]
     Structure {
@@ -278,6 +291,13 @@ impl ModelSpec {
                     valid: coefficient_names(),
                 });
             };
+            if terms.is_empty() {
+                return Err(ModelFileError::EmptyCoefficient {
+                    file: file.to_string(),
+                    line: line_of(text, key.span().start),
+                    coefficient: c.name().into(),
+                });
+            }
             for t in terms {
                 let line = line_of(text, t.span().start);
                 let Some(term) = Term::from_name(t.get_ref()) else {
@@ -529,5 +549,12 @@ sigma = 1.5
         assert!(e.contains("declares no parameter"), "{e}");
         let e = ModelSpec::from_arg("no/such/model.toml").unwrap_err().to_string();
         assert!(e.starts_with("no/such/model.toml: not a preset (longitudinal"), "{e}");
+    }
+
+    /// A coefficient with an empty term list is refused where it is declared, not dropped.
+    #[test]
+    fn errors_empty_coefficient_names_file_line_and_coefficient() {
+        let e = err("description = \"x\"\n[coefficients]\nCL = []\nCD = [\"0\"]\nCm = [\"q\"]\n");
+        assert!(e.starts_with("m.toml: line 3: coefficient `CL` has no terms"), "{e}");
     }
 }

@@ -4,7 +4,8 @@
 //!
 //! Kinds ([`DropKind`]): samples whose timestamp broke their topic's increasing order, the
 //! message a cut file ends inside, corrupt bytes skipped to resynchronise, and aligned rows
-//! dropped because a topic had no value there ([`crate::align`]).
+//! dropped because a topic had no value there ([`crate::align`]), and the late last samples of
+//! a topic left out as time outliers.
 
 use crate::log_contents::LogContents;
 use serde::Serialize;
@@ -21,6 +22,9 @@ pub enum DropKind {
     SkippedBytes,
     /// Aligned rows dropped because a topic had no value there (unit: rows).
     Alignment,
+    /// The last samples of a topic after a jump forward longer than its span before
+    /// ([`LogContents::time_outliers`]; unit: samples).
+    TimeOutlier,
 }
 
 /// One kind of loss, for one topic where it has one.
@@ -45,6 +49,9 @@ pub struct Dropped {
     /// Index (0-based, in file order) of the first left-out sample of the topic.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub first_sample: Option<u64>,
+    /// Time stamp, s, of the first left-out sample, where it says why (a time outlier).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub first_time_s: Option<f64>,
 }
 
 /// Everything a log read left out; empty `dropped` when nothing was.
@@ -78,9 +85,22 @@ impl ReaderReport {
                         .map(|t| t.messages as u64),
                     first_byte: at.map(|a| a.1),
                     first_sample: at.map(|a| a.0 as u64),
+                    first_time_s: None,
                 }
             })
             .collect();
+        for (topic, &(n, k, t_s)) in &contents.time_outliers {
+            dropped.push(Dropped {
+                kind: DropKind::TimeOutlier,
+                topic: Some(topic.clone()),
+                count: n as u64,
+                unit: "samples",
+                of: contents.catalogue.iter().find(|t| &t.name == topic).map(|t| t.messages as u64),
+                first_byte: None,
+                first_sample: Some(k as u64),
+                first_time_s: Some(t_s),
+            });
+        }
         if let Some(at) = contents.truncated_at {
             dropped.push(Dropped {
                 kind: DropKind::Truncated,
@@ -90,6 +110,7 @@ impl ReaderReport {
                 of: None,
                 first_byte: Some(at),
                 first_sample: None,
+                first_time_s: None,
             });
         }
         let (stretches, bytes) = contents.skipped_total;
@@ -102,6 +123,7 @@ impl ReaderReport {
                 of: None,
                 first_byte: contents.skipped.first().map(|s| s.0),
                 first_sample: None,
+                first_time_s: None,
             });
         }
         Self { file: file.to_string(), format: format.to_string(), dropped }
@@ -122,6 +144,7 @@ impl ReaderReport {
                 of: Some(considered as u64),
                 first_byte: None,
                 first_sample: None,
+                first_time_s: None,
             });
         }
     }
@@ -155,6 +178,14 @@ impl ReaderReport {
                         "{f}: {} corrupt bytes skipped (the first stretch at byte {})",
                         d.count,
                         d.first_byte.unwrap_or(0)
+                    ),
+                    DropKind::TimeOutlier => format!(
+                        "{f}: topic `{topic}`: {}",
+                        crate::log_contents::late_tail_note(
+                            d.count as usize,
+                            d.first_sample.unwrap_or(0) as usize,
+                            d.first_time_s.unwrap_or(f64::NAN)
+                        )
                     ),
                     DropKind::Alignment => format!(
                         "{f}: {} of {} aligned rows dropped: topic `{topic}` had no value there (before its first sample or past its hold interval)",

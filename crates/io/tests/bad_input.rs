@@ -355,3 +355,59 @@ fn analytic_rows_after_blank_lines_keep_their_line_numbers() {
     let RecordEvent::Rejected { problem, .. } = &events_str(&crlf)[0] else { panic!() };
     assert_eq!(*problem, RowProblem::FieldCount { expected: 9, found: 1 });
 }
+
+/// Bare `\r` line ends on some lines (a stretch from an old Mac file): each is a row of its own
+/// line, not one long row taken for an unclosed quote; `\r\n` stays one line end.
+#[test]
+fn errors_bare_cr_line_ends_are_rows_not_an_unclosed_quote() {
+    let rows: Vec<String> = (0..6).map(|k| row(&format!("0.{k}"))).collect();
+    let cr = rows[2..5].concat().replace('\n', "\r");
+    let csv = format!("{HEADER}{}{}{cr}{}", rows[0], rows[1].replace('\n', "\r\n"), rows[5]);
+    let ev = events_str(&csv);
+    let samples: Vec<(u64, f64)> = ev
+        .iter()
+        .map(|e| match e {
+            RecordEvent::Sample { row, sample } => (*row, sample.t_s),
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    assert_eq!(samples, [(2, 0.0), (3, 0.1), (4, 0.2), (5, 0.3), (6, 0.4), (7, 0.5)]);
+}
+
+/// A field whose bytes are not UTF-8 (a Latin-1 `é` in a number) rejects its row like any
+/// unparsable number, naming the row, the 1-based field and the column; the file goes on.
+#[test]
+fn errors_invalid_utf8_field_rejects_only_its_row() {
+    let mut csv = HEADER.as_bytes().to_vec();
+    csv.extend_from_slice(row("0.0").as_bytes());
+    csv.extend_from_slice(b"0.1,200,2\xe9,0.5,0.01,-1.0,1.0,100,0.1\n");
+    csv.extend_from_slice(row("0.2").as_bytes());
+    let m = mapping();
+    let ev: Vec<RecordEvent> =
+        FlightDataReader::new(&csv[..], "l1.csv", &m).unwrap().map(|e| e.unwrap()).collect();
+    let RecordEvent::Rejected { row: 3, problem } = &ev[1] else { panic!("{:?}", ev[1]) };
+    assert_eq!(
+        *problem,
+        RowProblem::InvalidUtf8 { field: 3, column: "a".into(), byte: 0xE9, offset: 1 }
+    );
+    assert!(problem.to_string().starts_with("field 3 (column `a`): invalid UTF-8 byte 0xE9"));
+    assert!(matches!(ev.last(), Some(RecordEvent::Sample { row: 4, sample }) if sample.t_s == 0.2));
+}
+
+/// A header of 200,000 columns (and rows as wide) is read in linear time: the duplicate check
+/// and the column look-up are hashed (a pairwise check took minutes at this width).
+#[test]
+fn errors_very_wide_header_is_read_in_linear_time() {
+    let n = 200_000;
+    let extra: String = (0..n).map(|i| format!(",x{i}")).collect();
+    let zeros = ",0".repeat(n);
+    let mut csv = format!("{}{extra}\n", HEADER.trim_end());
+    for t in ["0.0", "0.1"] {
+        csv.push_str(&format!("{}{zeros}\n", row(t).trim_end()));
+    }
+    let started = std::time::Instant::now();
+    let ev = events_str(&csv);
+    let took = started.elapsed().as_secs_f64();
+    assert!(matches!(&ev[..], [RecordEvent::Sample { .. }, RecordEvent::Sample { .. }]));
+    assert!(took < 5.0, "{took} s for {n} extra columns");
+}

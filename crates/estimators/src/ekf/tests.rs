@@ -496,7 +496,7 @@ fn configuration_errors_are_named() {
     let cm = ModelStructure::empty().with(C::Cm, &[T::Alpha]);
     assert!(matches!(
         Ekf::new(EkfConfig::new(cm)),
-        Err(EstimatorError::InvalidConfig { field: "model structure", .. })
+        Err(EstimatorError::IncompleteAxis { lateral: false, .. })
     ));
     let ekf = Ekf::new(EkfConfig::new(ModelStructure::lateral())).unwrap();
     assert_eq!(ekf.method(), "ekf");

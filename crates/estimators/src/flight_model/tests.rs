@@ -276,12 +276,28 @@ fn state_sets_follow_the_structure_and_partial_ones_are_refused() {
     let cm_only = ModelStructure::empty().with(C::Cm, &[T::Alpha, T::Q]);
     assert!(matches!(
         StateSet::of(&cm_only),
-        Err(EstimatorError::InvalidConfig { field: "model structure", .. })
+        Err(EstimatorError::IncompleteAxis { lateral: false, .. })
     ));
     let cl_cn = ModelStructure::empty().with(C::Cl, &[T::Beta]).with(C::Cn, &[T::Beta]);
     assert!(StateSet::of(&cl_cn).is_err());
     let lon_no_cm = ModelStructure::empty().with(C::CL, &[T::Alpha]).with(C::CD, &[T::Bias]);
     assert!(StateSet::of(&lon_no_cm).is_err());
+}
+
+/// An incomplete axis is explained in the model file's coefficient names, whichever
+/// estimator simulates it.
+#[test]
+fn errors_incomplete_axis_names_what_it_needs_and_what_is_declared() {
+    let cd_cm = ModelStructure::empty().with(C::CD, &[T::Bias]).with(C::Cm, &[T::Q]);
+    let e = StateSet::of(&cd_cm).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        "a longitudinal model needs a force pair (CL and CD, or CX and CZ) and Cm (its states V, alpha, theta, q are integrated); this model declares CD, Cm"
+    );
+    let cl_cn = ModelStructure::empty().with(C::Cl, &[T::Beta]).with(C::Cn, &[T::Beta]);
+    let e = StateSet::of(&cl_cn).unwrap_err().to_string();
+    assert!(e.starts_with("a lateral-directional model needs CY, Cl and Cn"), "{e}");
+    assert!(e.ends_with("this model declares Cl, Cn"), "{e}");
 }
 
 #[test]

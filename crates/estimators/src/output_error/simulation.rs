@@ -60,12 +60,31 @@ pub(super) struct Problem {
     pub n_samples: usize,
 }
 
-/// Most values `N·ny·nβ` of the sensitivities `∂y/∂β` a problem may hold (1 GiB of f64),
-/// checked before the manoeuvres are simulated. The fit holds a few arrays of this size and
-/// the coloured-residual σ their transforms (measured: peak memory ≈ 7 times the
-/// sensitivities on 60,000 samples in 100 manoeuvres), so a record beyond it would need
-/// several GiB more than the data; at 7 outputs and 12 unknowns it is 1.6 million samples.
+/// Most values `N·ny·nβ` of the sensitivities `∂y/∂β` a problem may hold (1 GiB of f64).
+/// The fit's peak memory is several times that ([`estimated_peak_bytes`]), which is what
+/// [`MAX_FIT_BYTES`] limits; this bound is implied by it.
 pub const MAX_SENSITIVITY_VALUES: usize = 1 << 27;
+
+/// Most memory, bytes, a fit may be estimated to need at its peak ([`estimated_peak_bytes`]):
+/// 2 GiB, checked before the manoeuvres are simulated.
+pub const MAX_FIT_BYTES: f64 = 2.0 * (1u64 << 30) as f64;
+
+/// The peak memory, bytes, of an output-error fit of `samples` samples (the longest manoeuvre
+/// `longest`), `ny` outputs and `nb` unknowns. With `S = 8·N·ny·nβ` the sensitivities' bytes
+/// and `T = 16·ny·nβ·(P/2 + 1)` the longest manoeuvre's half-spectrum transforms (`P` the
+/// power of two at or above twice its length, `coloured::batch::spectral`): the fit and the
+/// coloured-residual σ hold about eight arrays the size of `S` (sensitivities, their weighted
+/// copy, the prewhitened form's filtered copies, run beside the spectral one) and two of `T`
+/// (a manoeuvre's transforms and the frequencies kept), and the allocator keeps about half as
+/// much again (heap profile and peak RSS of `replay --estimator oe` on one 20,000-sample
+/// manoeuvre, 7 outputs × 12 unknowns: heap 206 MB, RSS 309 MB; 80,000 samples: RSS 1.22 GB).
+pub fn estimated_peak_bytes(samples: usize, longest: usize, ny: usize, nb: usize) -> f64 {
+    let row = (ny * nb) as f64;
+    let sens = 8.0 * samples as f64 * row;
+    let half = ((2 * longest).max(2).next_power_of_two() / 2 + 1) as f64;
+    let transforms = 16.0 * row * half;
+    1.5 * (8.0 * sens + 2.0 * transforms)
+}
 
 fn invalid(field: &'static str, value: f64, reason: &'static str) -> EstimatorError {
     EstimatorError::InvalidConfig { field, value, reason }
@@ -176,13 +195,17 @@ impl Problem {
             man.push(Manoeuvre { u, z, x0_meas });
         }
         let n_unknowns = np + biases.len() + x0_free.len() * man.len();
-        let values = n_samples as f64 * ny as f64 * n_unknowns as f64;
-        if values > MAX_SENSITIVITY_VALUES as f64 {
-            return Err(invalid(
-                "samples × outputs × unknowns",
-                values,
-                "the sensitivities ∂y/∂β hold one f64 each and are limited to 2^27 values (1 GiB; the fit's peak memory is several times that): fit windows of the record (replay --window) or fewer manoeuvres",
-            ));
+        let longest = man.iter().map(|m| m.u.len()).max().unwrap_or(0);
+        let bytes = estimated_peak_bytes(n_samples, longest, ny, n_unknowns);
+        if bytes > MAX_FIT_BYTES {
+            return Err(EstimatorError::TooLarge {
+                samples: n_samples,
+                outputs: ny,
+                unknowns: n_unknowns,
+                longest,
+                bytes,
+                limit: MAX_FIT_BYTES,
+            });
         }
         if n_samples * ny <= n_unknowns {
             return Err(invalid(

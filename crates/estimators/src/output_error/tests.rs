@@ -566,19 +566,44 @@ fn bad_configurations_and_data_are_named() {
     cfg.start = Start::Given(vec![0.0; 3]);
     assert!(matches!(err(&cfg, &[&data]), EstimatorError::InvalidConfig { field: "start", .. }));
     assert!(matches!(err(&OeConfig::new(st), &[]), EstimatorError::InvalidConfig { .. }));
-    // Sensitivities beyond MAX_SENSITIVITY_VALUES are refused before any simulation: 2,000
-    // ten-sample manoeuvres with estimated initial states have 20,000 samples but 8,000+
-    // unknowns (over 1.6e8 values per output).
+    // A fit estimated to need more than MAX_FIT_BYTES is refused before any simulation:
+    // 2,000 ten-sample manoeuvres with estimated initial states have 20,000 samples but
+    // 8,000+ unknowns.
     let pieces: Vec<&[AirDataSample]> = (0..2_000).map(|k| &data[k % 100..k % 100 + 10]).collect();
     match err(&with_x0(st), &pieces) {
-        EstimatorError::InvalidConfig {
-            field: "samples × outputs × unknowns", value, ..
-        } => {
-            assert!(value > MAX_SENSITIVITY_VALUES as f64, "{value}");
-            assert!(value >= 20_000.0 * 8_000.0, "{value}");
+        EstimatorError::TooLarge { samples: 20_000, unknowns, bytes, longest: 10, .. } => {
+            assert!(unknowns >= 8_000 && bytes > MAX_FIT_BYTES, "{unknowns} {bytes}");
         }
         other => panic!("expected the size refusal, got {other:?}"),
     }
+}
+
+/// The memory guard counts the longest manoeuvre's transforms, not only the sensitivities:
+/// one manoeuvre of 160,000 samples, 7 outputs and 12 unknowns (1.1e8 sensitivity values,
+/// under the old 2^27 bound, but about 2.4 GB at the peak as measured at 80,000 samples) is
+/// refused, 600 samples (the HFB-320 record) and 40,000 are not.
+#[test]
+fn errors_peak_memory_of_one_long_manoeuvre_is_refused_up_front() {
+    let bytes = |n: usize| estimated_peak_bytes(n, n, 7, 12);
+    assert!(bytes(600) < 1e7, "{}", bytes(600));
+    assert!(bytes(40_000) < 1e9, "{}", bytes(40_000));
+    // Measured: 1.22 GB at 80,000 samples; the estimate is within 10 %.
+    assert!((bytes(80_000) / 1.22e9 - 1.0).abs() < 0.1, "{}", bytes(80_000));
+    assert!(((160_000 * 7 * 12) as f64) < MAX_SENSITIVITY_VALUES as f64);
+    assert!(bytes(160_000) > MAX_FIT_BYTES, "{}", bytes(160_000));
+    let e = EstimatorError::TooLarge {
+        samples: 160_000,
+        outputs: 7,
+        unknowns: 12,
+        longest: 160_000,
+        bytes: bytes(160_000),
+        limit: MAX_FIT_BYTES,
+    };
+    assert!(e.to_string().starts_with("160000 samples × 7 outputs × 12 unknowns (the longest manoeuvre 160000 samples): the fit would need about 2"), "{e}");
+    assert!(
+        e.to_string().ends_with("fit windows of the record (replay --window) or fewer manoeuvres"),
+        "{e}"
+    );
 }
 
 /// The convolution form of the coloured-residual sum equals the double sum of its formula

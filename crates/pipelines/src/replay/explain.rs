@@ -32,7 +32,7 @@ pub fn estimator_error(e: &EstimatorError, mapping: &Mapping) -> String {
             Some(d) => format!("{d} = {value}: {reason}"),
             None => e.to_string(),
         },
-        E::Numerical { .. } => e.to_string(),
+        E::Numerical { .. } | E::IncompleteAxis { .. } | E::TooLarge { .. } => e.to_string(),
     }
 }
 

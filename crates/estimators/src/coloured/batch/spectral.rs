@@ -132,7 +132,10 @@ fn transforms(
         .collect();
     let weight =
         kept.iter().map(|&m| if m == 0 || m == p / 2 { 1.0 } else { 2.0 } / p as f64).collect();
-    let t_kept: Vec<C64> = kept.iter().flat_map(|&m| t_all.iter().map(move |c| c[m])).collect();
+    // Sized up front: collected from a `flat_map` the vector grows by doubling, to twice the
+    // kept transforms and a copy of them at each growth.
+    let mut t_kept: Vec<C64> = Vec::with_capacity(kept.len() * t_all.len());
+    t_kept.extend(kept.iter().flat_map(|&m| t_all.iter().map(move |c| c[m])));
     drop(t_all);
     // Φ̂ = (1/K) Σ_k ẽ_k ẽ_kᴴ, all tapers' transforms at once (`[k·ny + a][m]`).
     let e_all = half_spectra(

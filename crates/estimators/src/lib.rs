@@ -142,7 +142,7 @@ pub enum EstimatorError {
     /// A structure whose longitudinal or lateral-directional coefficients are incomplete, so
     /// the states of that axis cannot be integrated (the estimators that simulate the
     /// aircraft need a whole axis, [`StateSet::of`]).
-    #[error("{}", incomplete_axis(*lateral, *declared))]
+    #[error("{}", IncompleteAxisMessage { lateral: *lateral, declared: *declared })]
     IncompleteAxis {
         /// Whether the lateral-directional axis (else the longitudinal one) is incomplete.
         lateral: bool,
@@ -153,8 +153,8 @@ pub enum EstimatorError {
     /// simulated (`output_error::estimated_peak_bytes`).
     #[error(
         "{samples} samples × {outputs} outputs × {unknowns} unknowns (the longest manoeuvre {longest} samples): the fit would need about {} MB at its peak, more than the limit of {} MB; fit windows of the record (replay --window) or fewer manoeuvres",
-        (*bytes / 1e6).round(),
-        (*limit / 1e6).round()
+        libm::round(*bytes / 1e6),
+        libm::round(*limit / 1e6)
     )]
     TooLarge {
         /// Samples in all manoeuvres.
@@ -181,20 +181,32 @@ pub enum EstimatorError {
 }
 
 /// The message of [`EstimatorError::IncompleteAxis`], in the coefficient names a model file
-/// uses.
-fn incomplete_axis(lateral: bool, declared: u8) -> String {
-    let need = if lateral {
-        "a lateral-directional model needs CY, Cl and Cn (its states beta, p, r, phi are integrated)"
-    } else {
-        "a longitudinal model needs a force pair (CL and CD, or CX and CZ) and Cm (its states V, alpha, theta, q are integrated)"
-    };
-    let names: Vec<&str> = vocabulary::Coefficient::ALL
-        .iter()
-        .enumerate()
-        .filter(|(i, _)| declared >> i & 1 == 1)
-        .map(|(_, c)| c.name())
-        .collect();
-    format!("{need}; this model declares {}", names.join(", "))
+/// uses; written as it is displayed, without allocating (the core is `no_std`).
+struct IncompleteAxisMessage {
+    lateral: bool,
+    declared: u8,
+}
+
+impl core::fmt::Display for IncompleteAxisMessage {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(if self.lateral {
+            "a lateral-directional model needs CY, Cl and Cn (its states beta, p, r, phi are integrated)"
+        } else {
+            "a longitudinal model needs a force pair (CL and CD, or CX and CZ) and Cm (its states V, alpha, theta, q are integrated)"
+        })?;
+        f.write_str("; this model declares ")?;
+        let declared = vocabulary::Coefficient::ALL
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| self.declared >> i & 1 == 1);
+        for (k, (_, c)) in declared.enumerate() {
+            if k > 0 {
+                f.write_str(", ")?;
+            }
+            f.write_str(c.name())?;
+        }
+        Ok(())
+    }
 }
 
 /// The engine-level interface of the generic sliding-mode and gradient estimators over a

@@ -346,7 +346,7 @@ impl TopicBuilder {
 }
 
 /// Fewest samples a topic must have before a jump for the samples after it to be judged a
-/// late tail ([`TopicBuilder::late_tail_start`]): a topic of a few samples has no span to judge by.
+/// late tail (`TopicBuilder::late_tail_start`): a topic of a few samples has no span to judge by.
 pub const LATE_TAIL_MIN_BEFORE: usize = 8;
 
 /// What a late tail of `n` samples from sample `k` at `t_s` s is, for a note.

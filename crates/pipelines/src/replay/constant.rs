@@ -67,7 +67,7 @@ fn term_fields(t: Term) -> &'static [&'static str] {
     }
 }
 
-/// The smallest and largest value of each of [`FIELDS`] over the samples pushed, and how many
+/// The smallest and largest value of each of `FIELDS` over the samples pushed, and how many
 /// held it.
 #[derive(Debug, Clone)]
 pub struct Spread {

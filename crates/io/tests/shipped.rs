@@ -20,6 +20,7 @@ fn shipped_mappings_parse_and_map_what_their_records_are_for() {
     let maps = dir("mappings");
     for want in [
         "aeroident-sim.toml",
+        "aeroident-sim-measured.toml",
         "attas.toml",
         "attas_lateral.toml",
         "hfb320.toml",
@@ -41,6 +42,7 @@ fn shipped_mappings_parse_and_map_what_their_records_are_for() {
         match name {
             // The MAVLink feed carries every channel (six-axis aircraft).
             "aeroident-sim.toml"
+            | "aeroident-sim-measured.toml"
             | "attas_lateral.toml"
             | "jsbsim.toml"
             | "jsbsim_clean.toml"

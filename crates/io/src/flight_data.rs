@@ -644,6 +644,9 @@ impl<R: Read> FlightDataReader<R> {
                 });
                 self.end(error);
             }
+            // A blank line (an empty `\r\n`, or `\r\r\n` of a file converted to CRLF twice)
+            // is no row, as a blank `\n` line is not.
+            Ok(true) if self.record.len() == 1 && matches!(&self.record[0], b"" | b"\r") => {}
             Ok(true) => {
                 self.rows_seen += 1;
                 if let Some(i) =

@@ -335,7 +335,7 @@ fn errors_live_feed_cut_in_last_line_is_rejected() {
 
 /// A row keeps the number of its line after blank lines (the csv crate would number it from
 /// the first blank line before it) and as an unterminated last line. In a CRLF file a blank
-/// line is `\r`, a one-field row: rejected at its own line.
+/// line (`\r` to the csv crate) is no row either.
 #[test]
 fn analytic_rows_after_blank_lines_keep_their_line_numbers() {
     let rows = |text: &str| -> Vec<u64> {
@@ -351,9 +351,8 @@ fn analytic_rows_after_blank_lines_keep_their_line_numbers() {
     let text = format!("{HEADER}{}\n{}\n\n{}", row("0.0"), row("0.1"), last.trim_end());
     assert_eq!(rows(&text), [2, 4, 7]);
     let crlf = format!("{HEADER}\n{}{}", row("0.0"), row("0.1")).replace('\n', "\r\n");
-    assert_eq!(rows(&crlf), [2, 3, 4]);
-    let RecordEvent::Rejected { problem, .. } = &events_str(&crlf)[0] else { panic!() };
-    assert_eq!(*problem, RowProblem::FieldCount { expected: 9, found: 1 });
+    assert_eq!(rows(&crlf), [3, 4]);
+    assert!(events_str(&crlf).iter().all(|e| matches!(e, RecordEvent::Sample { .. })));
 }
 
 /// Bare `\r` line ends on some lines (a stretch from an old Mac file): each is a row of its own
@@ -372,6 +371,23 @@ fn errors_bare_cr_line_ends_are_rows_not_an_unclosed_quote() {
         })
         .collect();
     assert_eq!(samples, [(2, 0.0), (3, 0.1), (4, 0.2), (5, 0.3), (6, 0.4), (7, 0.5)]);
+}
+
+/// Lines ending `\r\r\n` (a file converted to CRLF twice) and a blank `\r\n` line are read as
+/// the rows they hold: no blank line becomes a rejected one-field row.
+#[test]
+fn errors_doubled_cr_line_ends_and_blank_crlf_lines_are_no_rows() {
+    let rows: Vec<String> =
+        (0..4).map(|k| row(&format!("0.{k}")).replace('\n', "\r\r\n")).collect();
+    let csv = format!("{HEADER}{}{}\r\n{}{}", rows[0], rows[1], rows[2], rows[3]);
+    let times: Vec<f64> = events_str(&csv)
+        .iter()
+        .map(|e| match e {
+            RecordEvent::Sample { sample, .. } => sample.t_s,
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    assert_eq!(times, [0.0, 0.1, 0.2, 0.3]);
 }
 
 /// A field whose bytes are not UTF-8 (a Latin-1 `é` in a number) rejects its row like any

@@ -19,6 +19,7 @@ fn montecarlo_four_runs_end_to_end() {
     assert!(out.status.success(), "stderr: {}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["runs"], 4);
+    assert_eq!((v["status"].as_str(), v["runs_requested"].as_u64()), (Some("complete"), Some(4)));
     let ests = v["estimators"].as_array().unwrap();
     assert_eq!(
         ests.iter().map(|e| e["name"].as_str().unwrap()).collect::<Vec<_>>(),

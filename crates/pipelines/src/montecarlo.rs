@@ -810,13 +810,18 @@ pub fn assemble(
     }
 }
 
-/// The `--json` document: exactly `{"runs", "estimators": [{"name", "parameters": [{"name",
+/// The `--json` document: exactly `{"status", "status_reason", "runs", "runs_requested",
+/// "estimators": [{"name", "parameters": [{"name",
 /// "truth", "bias", "scatter", "mean_sigma", "coverage_2sigma", "crb_sigma", "crb_sigma_calm",
 /// "median_time_to_10pct_s"}]}]}` (`crb_sigma`: the bound of the experiment flown;
-/// `crb_sigma_calm`: white sensor noise only, [`crb_sigmas`]).
+/// `crb_sigma_calm`: white sensor noise only, [`crb_sigmas`]). `status` is `complete`, or
+/// `interrupted` when a stop ended the campaign after `runs` of `runs_requested`.
 pub fn json_summary(c: &Campaign) -> serde_json::Value {
     serde_json::json!({
+        "status": c.status,
+        "status_reason": c.status_reason,
         "runs": c.runs,
+        "runs_requested": c.runs_requested,
         "estimators": c.estimators.iter().map(|e| serde_json::json!({
             "name": e.name,
             "parameters": e.parameters.iter().map(|p| serde_json::json!({

@@ -243,7 +243,8 @@ fn json_keys_exact() {
         k.sort_unstable();
         k
     };
-    assert_eq!(keys(&v), ["estimators", "runs"]);
+    assert_eq!(keys(&v), ["estimators", "runs", "runs_requested", "status", "status_reason"]);
+    assert_eq!((v["status"].as_str(), v["runs_requested"].as_u64()), (Some("complete"), Some(1)));
     let e = &v["estimators"][0];
     assert_eq!(keys(e), ["name", "parameters"]);
     let mut want = vec![

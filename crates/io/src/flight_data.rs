@@ -249,14 +249,16 @@ impl<R: Read> FlightDataReader<R> {
             // trimmed as whitespace.
             .terminator(csv::Terminator::Any(b'\n'))
             .from_reader(Tail { inner: BareCrAsLf::new(source), eof: false, last_byte: None });
+        // A name that is not UTF-8 (a Latin-1 `é` of an unmapped column) is read with U+FFFD in
+        // place of its bad bytes: the file is not lost for a column the mapping never reads.
         let headers = csv
-            .headers()
+            .byte_headers()
             .map_err(|e| FlightDataError::Csv {
                 file: file.to_string(),
                 row: 1,
                 message: e.to_string(),
-            })?
-            .clone();
+            })
+            .map(|h| csv::StringRecord::from_byte_record_lossy(h.clone()))?;
         if headers.is_empty() {
             return Err(FlightDataError::NoData {
                 file: file.to_string(),

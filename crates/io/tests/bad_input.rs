@@ -390,6 +390,29 @@ fn errors_doubled_cr_line_ends_and_blank_crlf_lines_are_no_rows() {
     assert_eq!(times, [0.0, 0.1, 0.2, 0.3]);
 }
 
+/// A header name that is not UTF-8 (a Latin-1 `é` in a column the mapping does not read) costs
+/// nothing: every row is read.
+#[test]
+fn errors_non_utf8_name_of_an_unmapped_column_is_no_error() {
+    let mut csv = HEADER.trim_end().as_bytes().to_vec();
+    csv.extend_from_slice(b",extra\xe9\n");
+    for k in 0..3 {
+        csv.extend_from_slice(row(&format!("0.{k}")).trim_end().as_bytes());
+        csv.extend_from_slice(b",1\n");
+    }
+    let m = mapping();
+    let ev: Vec<RecordEvent> =
+        FlightDataReader::new(&csv[..], "h.csv", &m).unwrap().map(|e| e.unwrap()).collect();
+    let times: Vec<f64> = ev
+        .iter()
+        .map(|e| match e {
+            RecordEvent::Sample { sample, .. } => sample.t_s,
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    assert_eq!(times, [0.0, 0.1, 0.2]);
+}
+
 /// A field whose bytes are not UTF-8 (a Latin-1 `é` in a number) rejects its row like any
 /// unparsable number, naming the row, the 1-based field and the column; the file goes on.
 #[test]

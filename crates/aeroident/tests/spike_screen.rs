@@ -164,6 +164,9 @@ fn one_thrust_spike_is_rejected_and_the_fit_keeps_its_clean_values() {
     let warn: Vec<&String> = thrown.warnings.iter().filter(|w| w.contains("dominates")).collect();
     eprintln!("unscreened: CD_0 {v}, warnings {warn:?}");
     assert!(warn.iter().any(|w| w.contains("t = 30")), "{:?}", thrown.warnings);
+    // The output is named as the mapping names it, not by the sample's SI field.
+    let share = warn.iter().find(|w| w.contains("mostly output"));
+    assert!(share.is_some_and(|w| w.contains("mostly output channel `")), "{warn:?}");
     std::fs::remove_dir_all(&dir).ok();
 }
 

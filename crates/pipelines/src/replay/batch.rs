@@ -895,7 +895,7 @@ pub fn fit_records<R: Read>(
     summary.warnings.extend(simulation_note);
     summary.warnings.extend(level_note);
     summary.warnings.extend(rec.notes.iter().cloned());
-    summary.warnings.extend(dominance_warnings(&fitted.result, &slices));
+    summary.warnings.extend(dominance_warnings(&fitted.result, &slices, mapping));
     let mut spread = super::constant::Spread::default();
     slices.iter().flat_map(|m| m.iter()).for_each(|s| spread.push(s));
     summary.warnings.extend(spread.warnings(&st, mapping));
@@ -907,8 +907,13 @@ pub fn fit_records<R: Read>(
 
 /// The summary's warnings when one sample dominates the fit
 /// ([`aeroident_estimators::output_error::Dominance`]): the sample's time and the output (the
-/// share of the cost) or its Cook's distance, against the stated limits.
-pub fn dominance_warnings(result: &OeResult, manoeuvres: &[&[AirDataSample]]) -> Vec<String> {
+/// share of the cost, named by `mapping`'s channel and column) or its Cook's distance, against
+/// the stated limits.
+pub fn dominance_warnings(
+    result: &OeResult,
+    manoeuvres: &[&[AirDataSample]],
+    mapping: &Mapping,
+) -> Vec<String> {
     use aeroident_estimators::output_error::Dominance;
     let Some(d) = result.dominance else { return Vec::new() };
     let t_s = |i: usize| manoeuvres.iter().flat_map(|m| m.iter()).nth(i).map(|s| s.t_s);
@@ -917,12 +922,12 @@ pub fn dominance_warnings(result: &OeResult, manoeuvres: &[&[AirDataSample]]) ->
     let mut out = Vec::new();
     if d.share_dominates(result.outputs.len()) {
         out.push(format!(
-            "one sample dominates the fit: {} holds {:.1} % of the weighted cost Σ eᵀR⁻¹e (limit {} %; χ² {:.0}, mostly output `{}`); check it for a spike, or fit with the robust option",
+            "one sample dominates the fit: {} holds {:.1} % of the weighted cost Σ eᵀR⁻¹e (limit {} %; χ² {:.0}, mostly output {}); check it for a spike, or fit with the robust option",
             at(d.share_sample),
             100.0 * d.share,
             100.0 * Dominance::SHARE_LIMIT,
             d.chi2,
-            d.share_output.name()
+            mapping.field_label(d.share_output.name())
         ));
     }
     if d.cook_dominates() {

@@ -226,6 +226,24 @@ impl Term {
         Self::ALL.into_iter().find(|t| t.name() == s)
     }
 
+    /// The two factors of a product term (`alpha2`: α twice; `alpha_p`: α and p̂ …), `None`
+    /// for a first-order term.
+    pub fn factors(self) -> Option<(Term, Term)> {
+        use Term::*;
+        let other = match self {
+            Alpha2 => Alpha,
+            AlphaBeta => Beta,
+            AlphaDe => De,
+            AlphaP => P,
+            AlphaQ => Q,
+            AlphaR => R,
+            AlphaDa => Da,
+            AlphaDr => Dr,
+            _ => return None,
+        };
+        Some((Alpha, other))
+    }
+
     /// The regressor value `ξ` of this term at sample `s` (module doc), `None` when a channel
     /// or constant it needs is absent (e.g. `p̂` without `p` or the span).
     pub fn value(self, s: &AirDataSample) -> Option<f64> {
@@ -243,15 +261,18 @@ impl Term {
             Term::Da => s.da_rad?,
             Term::Dr => s.dr_rad?,
             Term::V => s.vt_mps / c.v0_mps?,
-            Term::Alpha2 => s.alpha_rad * s.alpha_rad,
-            Term::AlphaDe => s.alpha_rad * s.de_rad?,
-            Term::AlphaBeta => s.alpha_rad * s.beta_rad?,
             Term::Q0 => s.q_rad_s? * c.cbar_m? / (2.0 * c.v0_mps?),
-            Term::AlphaP => s.alpha_rad * Term::P.value(s)?,
-            Term::AlphaQ => s.alpha_rad * Term::Q.value(s)?,
-            Term::AlphaR => s.alpha_rad * Term::R.value(s)?,
-            Term::AlphaDa => s.alpha_rad * s.da_rad?,
-            Term::AlphaDr => s.alpha_rad * s.dr_rad?,
+            Term::Alpha2
+            | Term::AlphaDe
+            | Term::AlphaBeta
+            | Term::AlphaP
+            | Term::AlphaQ
+            | Term::AlphaR
+            | Term::AlphaDa
+            | Term::AlphaDr => {
+                let (a, b) = self.factors()?;
+                a.value(s)? * b.value(s)?
+            }
         })
     }
 }

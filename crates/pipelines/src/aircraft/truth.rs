@@ -46,17 +46,10 @@ pub const FD_STEP: f64 = 1e-6;
 /// unless the point is that close to a breakpoint; rounding error ≈ 1e-16/(1e-6 · 1e-4)).
 pub const FD_STEP_ALPHA: f64 = 1e-4;
 
-/// The product terms: each with its two factors (`alpha2`: α twice).
-const PRODUCTS: [(Term, Term, Term); 8] = [
-    (Term::Alpha2, Term::Alpha, Term::Alpha),
-    (Term::AlphaBeta, Term::Alpha, Term::Beta),
-    (Term::AlphaDe, Term::Alpha, Term::De),
-    (Term::AlphaP, Term::Alpha, Term::P),
-    (Term::AlphaQ, Term::Alpha, Term::Q),
-    (Term::AlphaR, Term::Alpha, Term::R),
-    (Term::AlphaDa, Term::Alpha, Term::Da),
-    (Term::AlphaDr, Term::Alpha, Term::Dr),
-];
+/// The product terms of the vocabulary with their two factors ([`Term::factors`]).
+fn products() -> impl Iterator<Item = (Term, Term, Term)> {
+    Term::ALL.into_iter().filter_map(|t| t.factors().map(|(a, b)| (t, a, b)))
+}
 
 /// The total coefficients of one evaluation in vocabulary order `CX CY CZ CL CD Cl Cm Cn`.
 pub fn coefficient_vector(c: &AeroCoefficients) -> [f64; 8] {
@@ -89,7 +82,7 @@ impl LocalDerivatives {
         let c = p.coefficient;
         if p.term != Term::Bias {
             let mut v = self.derivative(p)?;
-            for (s, a, b) in PRODUCTS {
+            for (s, a, b) in products() {
                 if structure.contains(Param::new(c, s)) && (a == p.term || b == p.term) {
                     // ∂(ξa ξb)/∂ξt at the point: the other factor (2 α for α²).
                     let other = if a == p.term { b } else { a };
@@ -128,7 +121,7 @@ pub fn local_derivatives(
         first_order(f16, &xs, &u, inc)
     };
     let (dp, dm) = (alpha_shifted(1.0)?, alpha_shifted(-1.0)?);
-    for (s, a, b) in PRODUCTS {
+    for (s, a, b) in products() {
         let half = if a == b { 0.5 } else { 1.0 };
         for (k, row) in d.iter_mut().enumerate() {
             let slope = |d: &[[Option<f64>; N_TERMS]; 8]| d[k][b.index()];
@@ -150,7 +143,7 @@ pub fn local_derivatives(
     regressor[Term::Da.index()] = Some(u.aileron_rad);
     regressor[Term::Dr.index()] = Some(u.rudder_rad);
     regressor[Term::V.index()] = Some(1.0);
-    for (s, a, b) in PRODUCTS {
+    for (s, a, b) in products() {
         regressor[s.index()] = regressor[a.index()].zip(regressor[b.index()]).map(|(a, b)| a * b);
     }
     Ok(LocalDerivatives { value, regressor, d })

@@ -168,6 +168,35 @@ pub fn fit(c: &Candidates, terms: &[usize]) -> Fit {
     Fit { terms: terms.to_vec(), theta: theta.iter().copied().collect(), std_error, sse, r2, pse }
 }
 
+/// Standard errors of `fit` corrected for coloured residuals: the spectral sandwich
+/// `(XᵀX)⁻¹ [Σ_i Σ_j x_i r̂(i − j) x_jᵀ] (XᵀX)⁻¹` that output error reports
+/// ([`crate::coloured`], "Spectral form"; Klein & Morelli 2006 §5.2, Morelli & Klein, JGCD
+/// 20(1), 1997), as `fit.std_error` (kept terms in order, then the constant).
+///
+/// The partial F of the selection keeps SIDPAC's white-residual `s²(XᵀX)⁻¹`: its cut-off of 20
+/// already carries the allowance for coloured residuals. These are the σ to quote for the
+/// estimates, which on flight data are correlated over the turbulence's and the model error's
+/// time scales, and `fit.std_error` is then too small.
+///
+/// `lengths`: samples per manoeuvre of `c` in order (lags are taken within a manoeuvre),
+/// summing to `N`. `None` when they do not, when the regressors are dependent, or when a
+/// corrected variance comes out non-positive.
+pub fn coloured_std_error(c: &Candidates, fit: &Fit, lengths: &[usize]) -> Option<Vec<f64>> {
+    if lengths.iter().sum::<usize>() != c.n() || lengths.contains(&0) {
+        return None;
+    }
+    let x = design(c, &fit.terms);
+    let theta = DVector::from_column_slice(&fit.theta);
+    let resid = &c.z - &x * theta;
+    let minv = (x.transpose() * &x).try_inverse()?;
+    // Row-major N × 1 × p: the regressor rows are the sensitivities of equation error.
+    let rows = x.transpose();
+    let cov =
+        crate::coloured::batch::spectral(rows.as_slice(), resid.as_slice(), &[1.0], lengths, &minv)
+            .covariance?;
+    Some((0..cov.nrows()).map(|i| cov[(i, i)].sqrt()).collect())
+}
+
 /// What a step of a selection did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum StepAction {

@@ -8,8 +8,8 @@
 
 mod auto;
 pub use auto::{
-    AutoModel, AutoSelection, CoefficientReport, PathStep, Scope, StructureReport, model_from_args,
-    select_model,
+    AutoModel, AutoSelection, CoefficientReport, EquationErrorEstimate, PathStep, Scope,
+    StructureReport, model_from_args, select_model,
 };
 
 use crate::condition::{Alignment, Conditioner, Conditioning, Derivative};
@@ -63,6 +63,10 @@ pub struct CoefficientSelection {
     pub candidates: Vec<Term>,
     /// The selection (path, kept candidates, fit).
     pub selection: Selection,
+    /// The final fit's standard errors corrected for coloured residuals
+    /// ([`structure::coloured_std_error`]), as `selection.fit.std_error`; `None` when the
+    /// correction could not be formed.
+    pub std_error_coloured: Option<Vec<f64>>,
     /// Samples used.
     pub samples: usize,
     /// Samples left out (coefficient or a candidate not measured).
@@ -92,15 +96,22 @@ pub fn select_on_samples(
     let mut rows = Vec::new();
     let mut z = Vec::new();
     let mut skipped = 0;
-    for s in manoeuvres.iter().flat_map(|m| m.iter()) {
-        let y = s.measured_coefficients()[coefficient.index()];
-        let x: Option<Vec<f64>> = candidates.iter().map(|t| t.value(s)).collect();
-        match (y, x) {
-            (Some(y), Some(x)) if y.is_finite() => {
-                rows.extend(x);
-                z.push(y);
+    let mut lengths = Vec::new();
+    for m in manoeuvres {
+        let before = z.len();
+        for s in m.iter() {
+            let y = s.measured_coefficients()[coefficient.index()];
+            let x: Option<Vec<f64>> = candidates.iter().map(|t| t.value(s)).collect();
+            match (y, x) {
+                (Some(y), Some(x)) if y.is_finite() => {
+                    rows.extend(x);
+                    z.push(y);
+                }
+                _ => skipped += 1,
             }
-            _ => skipped += 1,
+        }
+        if z.len() > before {
+            lengths.push(z.len() - before);
         }
     }
     if z.is_empty() {
@@ -129,10 +140,12 @@ pub fn select_on_samples(
         z: DVector::from_vec(z),
     };
     let selection = run(&c, method).map_err(|e| format!("{who}: {e}"))?;
+    let std_error_coloured = structure::coloured_std_error(&c, &selection.fit, &lengths);
     Ok(CoefficientSelection {
         coefficient,
         candidates: candidates.to_vec(),
         selection,
+        std_error_coloured,
         samples: c.z.len(),
         skipped,
     })

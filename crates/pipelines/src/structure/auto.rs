@@ -324,6 +324,22 @@ pub struct PathStep {
     pub r2: f64,
 }
 
+/// One least-squares estimate of the selected structure, as `summary.json` gives it.
+#[derive(Debug, Clone, Serialize)]
+pub struct EquationErrorEstimate {
+    /// Parameter name (`Cm_q`).
+    pub name: String,
+    /// The estimate.
+    pub value: f64,
+    /// Standard error corrected for coloured residuals (the spectral sandwich output error
+    /// reports, [`aeroident_estimators::structure::coloured_std_error`]); `null` when it could
+    /// not be formed.
+    pub sigma: Option<f64>,
+    /// The white-residual standard error `s²(XᵀX)⁻¹` the partial F uses; too small on flight
+    /// data, whose residuals are correlated.
+    pub sigma_white: f64,
+}
+
 /// One coefficient's selection, as `summary.json` gives it.
 #[derive(Debug, Clone, Serialize)]
 pub struct CoefficientReport {
@@ -337,9 +353,8 @@ pub struct CoefficientReport {
     pub path: Vec<PathStep>,
     /// Why the selection stopped.
     pub stopped: String,
-    /// Equation-error estimates of the kept terms and the constant: name, value, standard
-    /// error (least squares, `s²(XᵀX)⁻¹`: no allowance for coloured residuals).
-    pub equation_error: Vec<(String, f64, f64)>,
+    /// Equation-error estimates of the kept terms and the constant.
+    pub equation_error: Vec<EquationErrorEstimate>,
     /// `R²` of the final fit.
     pub r2: f64,
     /// Predicted squared error of the final fit.
@@ -437,24 +452,17 @@ impl AutoSelection {
 fn coefficient_report(s: &CoefficientSelection) -> CoefficientReport {
     let term = |k: usize| s.candidates[k].name();
     let fit = &s.selection.fit;
-    let mut equation_error: Vec<(String, f64, f64)> = fit
-        .terms
-        .iter()
+    // The kept terms in order, then the constant, as the fit holds them.
+    let terms = fit.terms.iter().map(|&k| s.candidates[k]).chain([Term::Bias]);
+    let equation_error = terms
         .enumerate()
-        .map(|(i, &k)| {
-            (
-                Param::new(s.coefficient, s.candidates[k]).name().to_string(),
-                fit.theta[i],
-                fit.std_error[i],
-            )
+        .map(|(i, t)| EquationErrorEstimate {
+            name: Param::new(s.coefficient, t).name().to_string(),
+            value: fit.theta[i],
+            sigma: s.std_error_coloured.as_ref().map(|c| c[i]),
+            sigma_white: fit.std_error[i],
         })
         .collect();
-    let n = fit.terms.len();
-    equation_error.push((
-        Param::new(s.coefficient, Term::Bias).name().to_string(),
-        fit.theta[n],
-        fit.std_error[n],
-    ));
     CoefficientReport {
         coefficient: s.coefficient.name(),
         candidates: s.candidates.iter().map(|t| t.name()).collect(),

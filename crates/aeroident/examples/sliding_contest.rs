@@ -55,7 +55,9 @@ fn rms_of(out: &RunOutput, damage_s: f64) -> Rms {
 
 fn main() -> Result<(), String> {
     let args: Vec<String> = std::env::args().collect();
-    let path = args.get(1).ok_or("usage: sliding_contest SCENARIO RUNS SEED [--noise-scale K] [--calm]")?;
+    let path = args
+        .get(1)
+        .ok_or("usage: sliding_contest SCENARIO RUNS SEED [--noise-scale K] [--calm]")?;
     let runs: u64 = args.get(2).and_then(|a| a.parse().ok()).ok_or("RUNS")?;
     let seed: u64 = args.get(3).and_then(|a| a.parse().ok()).ok_or("SEED")?;
     let mut sc = Scenario::from_path(std::path::Path::new(path)).map_err(|e| e.to_string())?;
@@ -88,9 +90,15 @@ fn main() -> Result<(), String> {
         .map(|i| {
             let s = seeded_scenario(&sc, seed, i);
             match run(&s) {
-                Ok(out) => (run_result(i, run_seed(seed, i, 0), &out), Some(rms_of(&out, damage_s))),
+                Ok(out) => {
+                    (run_result(i, run_seed(seed, i, 0), &out), Some(rms_of(&out, damage_s)))
+                }
                 Err(e) => (
-                    RunResult { index: i, sensor_seed: run_seed(seed, i, 0), outcome: Err(e.to_string()) },
+                    RunResult {
+                        index: i,
+                        sensor_seed: run_seed(seed, i, 0),
+                        outcome: Err(e.to_string()),
+                    },
                     None,
                 ),
             }
@@ -123,7 +131,9 @@ fn main() -> Result<(), String> {
     for est in &stats {
         for p in est.parameters.iter().filter(|p| p.primary) {
             let r = total.get(&(est.name.clone(), p.name.clone()));
-            let rms = |w: usize| r.filter(|r| r[w].1 > 0).map(|r| 100.0 * (r[w].0 / r[w].1 as f64).sqrt());
+            let rms = |w: usize| {
+                r.filter(|r| r[w].1 > 0).map(|r| 100.0 * (r[w].0 / r[w].1 as f64).sqrt())
+            };
             println!(
                 "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 est.name,
@@ -137,7 +147,12 @@ fn main() -> Result<(), String> {
                 f(p.mean_sigma.zip(p.scatter).map(|(m, s)| m / s), 2),
             );
         }
-        println!("<!-- {}: {} runs ok, failed {} -->", est.name, est.runs_ok, est.failed_runs.len());
+        println!(
+            "<!-- {}: {} runs ok, failed {} -->",
+            est.name,
+            est.runs_ok,
+            est.failed_runs.len()
+        );
     }
     Ok(())
 }

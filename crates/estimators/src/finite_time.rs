@@ -167,7 +167,6 @@ impl CoefficientFit for SlidingFit {
         t_s: f64,
     ) -> Result<(), EstimatorError> {
         let was_initialised = self.memory.initialised();
-        let before = self.memory;
         self.memory.update(phi, y, lambda, init_samples, t_s)?;
         let n = self.memory.regression().n;
         for i in 0..n {
@@ -189,10 +188,11 @@ impl CoefficientFit for SlidingFit {
             return Ok(());
         }
         self.slide(dt);
+        // Non-finite after finite inputs is an overflow: the caller marks the estimator
+        // diverged, so nothing is rolled back (as RLS's fits).
         if self.theta[..n].iter().all(|v| v.is_finite()) {
             Ok(())
         } else {
-            self.memory = before;
             Err(EstimatorError::Numerical { what: "sliding-mode memory law", t_s })
         }
     }

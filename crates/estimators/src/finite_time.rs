@@ -58,7 +58,7 @@
 //! coloured-residual covariance of `θ̄` ([`crate::rls`], [`crate::coloured`]) plus `δ δᵀ` (the
 //! distance still to slide is counted as error; it is 0 on the surface). Before the memory's
 //! exact initialisation a coefficient's parameters are not identified (`null`); a numerical
-//! failure is a divergence ([`Status::Diverged`]). A sample whose time is not after the previous
+//! failure is a divergence ([`crate::Status::Diverged`]). A sample whose time is not after the previous
 //! one is refused and nothing changes. There is no change detection: the memory horizon `τ`
 //! bounds how long a change takes to show, as for [`crate::Rls`].
 

@@ -550,12 +550,13 @@ fn default_scenario_writes_outputs_with_exact_summary_keys() {
     for p in json["parameters"].as_array().unwrap() {
         assert_eq!(keys(p), want_p);
     }
-    // Four estimators (rls, ftr, ekf, smpe-corrected), each over the six-axis preset.
-    for est in ["rls", "ftr", "ekf", "smpe-corrected"] {
+    // Five estimators (rls, ftr, ekf, smpe-corrected, smpe-finite-time), each over the
+    // six-axis preset.
+    for est in ["rls", "ftr", "ekf", "smpe-corrected", "smpe-finite-time"] {
         let n = s.parameters.iter().filter(|p| p.estimator == est).count();
         assert_eq!(n, 30, "{est}: six-axis preset");
     }
-    assert_eq!(s.parameters.len(), 120);
+    assert_eq!(s.parameters.len(), 150);
     assert_eq!(json["damage_at_s"], 20.0);
     assert_eq!(json["targets"][0]["total"], 11);
     let cm_a = s.parameters.iter().find(|p| p.name == "Cm_alpha").unwrap();

@@ -7,6 +7,7 @@
 #[path = "../src/test_aircraft.rs"]
 mod test_aircraft;
 
+use aeroident_estimators::finite_time::{FiniteTimeConfig, FiniteTimeSmpe};
 use aeroident_estimators::ftr::{Ftr, FtrConfig};
 use aeroident_estimators::rls::{Rls as StructureRls, RlsConfig as StructureRlsConfig};
 use aeroident_estimators::vocabulary::ModelStructure;
@@ -61,9 +62,41 @@ fn bench_structure_estimators(c: &mut Criterion) {
     g.finish();
 }
 
+/// The sliding-mode memory estimator against RLS on the same structure and memory (the
+/// default job's λ = 0.995): its update is RLS's plus the information matrix and the law, and
+/// must cost at most 2× RLS's (docs/smpe-finite-time.md).
+fn bench_sliding_memory_against_rls(c: &mut Criterion) {
+    let data = test_aircraft::six_axis_stream(N, 0.02, 20.0);
+    let mut g = c.benchmark_group("sliding_memory_vs_rls");
+    g.throughput(Throughput::Elements(N as u64));
+    for (name, st) in
+        [("six_axis", ModelStructure::six_axis()), ("longitudinal", ModelStructure::longitudinal())]
+    {
+        g.bench_function(format!("rls_{name}_1000_samples"), |b| {
+            let cfg = StructureRlsConfig { forgetting: 0.995, init_samples: 0 };
+            b.iter(|| {
+                let mut e = StructureRls::new(st, cfg).unwrap();
+                for s in &data {
+                    black_box(e.update(black_box(s)).unwrap());
+                }
+            })
+        });
+        g.bench_function(format!("smpe_finite_time_{name}_1000_samples"), |b| {
+            let cfg = FiniteTimeConfig { forgetting: 0.995, ..FiniteTimeConfig::default() };
+            b.iter(|| {
+                let mut e = FiniteTimeSmpe::new(st, cfg).unwrap();
+                for s in &data {
+                    black_box(e.update(black_box(s)).unwrap());
+                }
+            })
+        });
+    }
+    g.finish();
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default();
-    targets = bench_structure_estimators
+    targets = bench_structure_estimators, bench_sliding_memory_against_rls
 }
 criterion_main!(benches);

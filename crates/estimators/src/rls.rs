@@ -154,12 +154,12 @@ pub(crate) trait CoefficientFit {
 
 /// One coefficient's fit.
 #[derive(Debug, Clone, Copy)]
-struct Fit {
+pub(crate) struct Fit {
     reg: Regression,
     info: Square<N_TERMS>,
     info_b: [f64; N_TERMS],
     info_yy: f64,
-    p: Square<N_TERMS>,
+    pub(crate) p: Square<N_TERMS>,
     theta: [f64; N_TERMS],
     initialised: bool,
     count: usize,
@@ -169,7 +169,7 @@ struct Fit {
 }
 
 impl Fit {
-    fn new(structure: &ModelStructure, c: Coefficient) -> Self {
+    pub(crate) fn new(structure: &ModelStructure, c: Coefficient) -> Self {
         let reg = Regression::new(structure, c);
         Self {
             reg,

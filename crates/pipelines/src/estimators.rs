@@ -10,6 +10,7 @@
 //! variant to [`EstimatorKind`] and an arm to [`build`].
 
 use aeroident_estimators::ekf::{Ekf, EkfConfig};
+use aeroident_estimators::finite_time::{FiniteTimeConfig, FiniteTimeSmpe};
 use aeroident_estimators::ftr::{Ftr, FtrConfig};
 use aeroident_estimators::iv::{DEFAULT_INSTRUMENT_DELAY, IvConfig, MAX_INSTRUMENT_DELAY, RlsIv};
 use aeroident_estimators::model_reference::{
@@ -37,6 +38,9 @@ pub enum EstimatorKind {
     Smpe,
     /// The corrected sliding-mode parameter estimator.
     SmpeCorrected,
+    /// The finite-time sliding-mode estimator on the forgotten information memory, with the
+    /// memory's σ (`aeroident_estimators::finite_time`, `docs/smpe-finite-time.md`).
+    SmpeFiniteTime,
     /// The model-reference gradient estimator.
     Gradient,
     /// Batch maximum-likelihood output error (not real time: `replay` reads the whole record
@@ -55,6 +59,7 @@ impl crate::Named for EstimatorKind {
         EstimatorKind::Ekf,
         EstimatorKind::Smpe,
         EstimatorKind::SmpeCorrected,
+        EstimatorKind::SmpeFiniteTime,
         EstimatorKind::Gradient,
         EstimatorKind::Oe,
         EstimatorKind::Fem,
@@ -75,6 +80,7 @@ impl EstimatorKind {
             EstimatorKind::Ekf => "ekf",
             EstimatorKind::Smpe => "smpe",
             EstimatorKind::SmpeCorrected => "smpe-corrected",
+            EstimatorKind::SmpeFiniteTime => "smpe-finite-time",
             EstimatorKind::Gradient => "gradient",
             EstimatorKind::Oe => "oe",
             EstimatorKind::Fem => "fem",
@@ -99,6 +105,9 @@ impl EstimatorKind {
             EstimatorKind::RlsIv => &["forgetting", "instrument_delay"],
             EstimatorKind::Ftr => &["forgetting", "grid_hz"],
             EstimatorKind::Ekf => &["parameter_walk_per_sqrt_s", "samples"],
+            EstimatorKind::SmpeFiniteTime => {
+                &["forgetting", "sliding_gain_per_s", "reaching_rate_per_s"]
+            }
             EstimatorKind::Oe => {
                 &["initial_states", "samples", "step", "bootstrap_refits", "max_iterations"]
             }
@@ -213,6 +222,12 @@ pub struct EstimatorOptions {
     /// beyond 1.5 Hz must extend it: a harmonic outside the grid is seen only through the
     /// window's leakage (docs/uncertainty.md, "Equation-error coverage, continued").
     pub ftr_grid_hz: Option<(f64, f64, f64)>,
+    /// `smpe-finite-time`: sliding gain `γ`, standard errors per second
+    /// ([`FiniteTimeConfig::sliding_gain_per_s`]).
+    pub sliding_gain_per_s: f64,
+    /// `smpe-finite-time`: exponential reaching rate `q`, 1/s
+    /// ([`FiniteTimeConfig::reaching_rate_per_s`]).
+    pub reaching_rate_per_s: f64,
 }
 
 impl Default for EstimatorOptions {
@@ -223,6 +238,8 @@ impl Default for EstimatorOptions {
             parameter_walk_per_sqrt_s: 0.0,
             sample_interval_s: None,
             ftr_grid_hz: None,
+            sliding_gain_per_s: FiniteTimeConfig::default().sliding_gain_per_s,
+            reaching_rate_per_s: FiniteTimeConfig::default().reaching_rate_per_s,
         }
     }
 }
@@ -347,6 +364,16 @@ pub fn build(
             CorrectedSmpeEstimator::new(structure, &priors, ModelReferenceConfig::default())
                 .map_err(config)?,
         ),
+        // Starts without a prior, as RLS (the memory's exact initialisation).
+        EstimatorKind::SmpeFiniteTime => {
+            let cfg = FiniteTimeConfig {
+                forgetting: options.forgetting,
+                init_samples: 0,
+                sliding_gain_per_s: options.sliding_gain_per_s,
+                reaching_rate_per_s: options.reaching_rate_per_s,
+            };
+            Box::new(FiniteTimeSmpe::new(structure, cfg).map_err(config)?)
+        }
         EstimatorKind::Gradient => Box::new(
             GradientEstimator::new(structure, &priors, ModelReferenceConfig::default())
                 .map_err(config)?,
@@ -445,8 +472,20 @@ impl EstimatorOptions {
                 .ok_or_else(|| format!("{}: `{what}` must be a number, got {v}", kind.name()))
         };
         match (key, kind) {
-            ("forgetting", EstimatorKind::Rls | EstimatorKind::RlsIv | EstimatorKind::Ftr) => {
+            (
+                "forgetting",
+                EstimatorKind::Rls
+                | EstimatorKind::RlsIv
+                | EstimatorKind::Ftr
+                | EstimatorKind::SmpeFiniteTime,
+            ) => {
                 self.forgetting = number("forgetting")?;
+            }
+            ("sliding_gain_per_s", EstimatorKind::SmpeFiniteTime) => {
+                self.sliding_gain_per_s = number("sliding_gain_per_s")?;
+            }
+            ("reaching_rate_per_s", EstimatorKind::SmpeFiniteTime) => {
+                self.reaching_rate_per_s = number("reaching_rate_per_s")?;
             }
             ("instrument_delay", EstimatorKind::RlsIv) => {
                 let d = v.as_integer().filter(|d| *d >= 1).ok_or_else(|| {
@@ -527,6 +566,7 @@ mod tests {
                 "grid_hz" => toml::Value::Array(vec![0.1.into(), 1.5.into(), 0.04.into()]),
                 "parameter_walk_per_sqrt_s" => toml::Value::Float(0.01),
                 "samples" => "raw".into(),
+                "sliding_gain_per_s" | "reaching_rate_per_s" => toml::Value::Float(5.0),
                 other => panic!("no valid value for `{other}`"),
             }
         };
@@ -581,7 +621,7 @@ mod tests {
         let pr = Priors::generic(&st);
         let online: Vec<EstimatorKind> =
             EstimatorKind::ALL.iter().copied().filter(|k| !k.is_batch()).collect();
-        assert_eq!(online.len(), 7, "{online:?}");
+        assert_eq!(online.len(), 8, "{online:?}");
         for k in online {
             let e = build(k, st, pr, &EstimatorOptions::default()).unwrap();
             assert_eq!(e.method(), k.name());

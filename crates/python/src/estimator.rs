@@ -53,7 +53,7 @@ impl Estimator {
 #[pymethods]
 impl Estimator {
     #[new]
-    #[pyo3(signature = (kind, model="longitudinal", constants=None, forgetting=1.0, sample_interval_s=None, parameter_walk_per_sqrt_s=0.0, ftr_grid_hz=None))]
+    #[pyo3(signature = (kind, model="longitudinal", constants=None, forgetting=1.0, sample_interval_s=None, parameter_walk_per_sqrt_s=0.0, ftr_grid_hz=None, sliding_gain_per_s=None, reaching_rate_per_s=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         kind: &str,
@@ -63,6 +63,8 @@ impl Estimator {
         sample_interval_s: Option<f64>,
         parameter_walk_per_sqrt_s: f64,
         ftr_grid_hz: Option<(f64, f64, f64)>,
+        sliding_gain_per_s: Option<f64>,
+        reaching_rate_per_s: Option<f64>,
     ) -> PyResult<Self> {
         let k = estimator_kind(kind)?;
         let spec = model_spec(model)?;
@@ -73,6 +75,12 @@ impl Estimator {
             sample_interval_s,
             parameter_walk_per_sqrt_s,
             ftr_grid_hz,
+            ..EstimatorOptions::default()
+        };
+        let opts = EstimatorOptions {
+            sliding_gain_per_s: sliding_gain_per_s.unwrap_or(opts.sliding_gain_per_s),
+            reaching_rate_per_s: reaching_rate_per_s.unwrap_or(opts.reaching_rate_per_s),
+            ..opts
         };
         let est = build(k, spec.structure, spec.priors, &opts).map_err(|e| err(e.to_string()))?;
         Ok(Self {

@@ -150,6 +150,25 @@ def test_bad_arguments():
         aeroident.Estimator("oe")
 
 
+def test_smpe_finite_time_recovers_known_derivatives_with_sigma_and_takes_its_options():
+    # Noise-free samples of known derivatives: the memory's solution is exact and the sliding
+    # estimate sits on it; unlike the thesis's sliding-mode estimators it reports a sigma.
+    arrays, constants = synthetic()
+    est = aeroident.SmpeFiniteTime(model="longitudinal", constants=constants, forgetting=1.0, sliding_gain_per_s=5.0)
+    assert est.method == "smpe-finite-time"
+    for k in range(len(arrays["t_s"])):
+        est.update({key: v[k] for key, v in arrays.items()})
+    e = est.estimates()
+    last = dict(zip(e["names"], e["values"]))
+    for name, truth in [("Cm_alpha", -0.6), ("Cm_q", -12.0), ("CL_alpha", 5.0)]:
+        assert abs(last[name] - truth) < 1e-6 * max(1.0, abs(truth)), (name, last[name])
+    assert all(s is not None for s in e["sigma"])
+    with pytest.raises(aeroident.AeroidentError, match="sliding_gain_per_s"):
+        aeroident.SmpeFiniteTime(model="longitudinal", sliding_gain_per_s=-1.0)
+    with pytest.raises(aeroident.AeroidentError, match="reaching_rate_per_s"):
+        aeroident.Estimator("smpe-finite-time", reaching_rate_per_s=float("nan"))
+
+
 def test_ftr_grid_reaches_the_estimator():
     # 0.1-1.7 Hz in 0.04 Hz is 41 frequencies and builds; 0.1-3.0 Hz is 73, over the 64 the
     # real-time FTR holds (ftr::MAX_FREQUENCIES), and the error names the field.

@@ -5,7 +5,7 @@
 //!                  [--out <dir>]
 //!                  [--model longitudinal|lateral|six-axis|FILE|auto[:longitudinal|lateral|six-axis]]
 //!                  [--select swr|mof] [--candidates TERM,…]
-//!                  [--estimator rls|rls-iv|ftr|ekf|smpe|smpe-corrected|gradient|oe|fem]
+//!                  [--estimator rls|rls-iv|ftr|ekf|smpe|smpe-corrected|smpe-finite-time|gradient|oe|fem]
 //!                  [--forgetting λ] [--instrument-delay N]
 //!                  [--derivatives auto|differentiate] [--diff-window N] [--realtime]
 //!                  [--validate-on <data2.csv>] [--window START:END …] [--and <more.csv> …]

@@ -72,7 +72,8 @@
 //! `ftr` (option `forgetting` ∈ (0, 1] per sample, default 1; FTR also `grid_hz = [f_min, f_max,
 //! step]`, default Morelli's 0.1–1.5 Hz in 0.04 Hz), `ekf` (options `parameter_walk_per_sqrt_s`,
 //! `samples = "raw" | "smoothed"`, default raw: [`SampleEstimatorSpec::raw_samples`]), `smpe`,
-//! `smpe-corrected`, `gradient`. Batch kind `oe` (output error fitted after the flight to the
+//! `smpe-corrected`, `smpe-finite-time` (options `forgetting`, `sliding_gain_per_s`,
+//! `reaching_rate_per_s`; `aeroident_estimators::finite_time`), `gradient`. Batch kind `oe` (output error fitted after the flight to the
 //! recorded samples of the window after the damage; options `initial_states = "estimate" |
 //! "first-sample"` and `step = "relaxation" | "concentrated"`, `samples = "smoothed" | "raw"`)
 //! and `fem` (the filter-error method, output error with process noise; options

@@ -6,7 +6,7 @@ seconds, unless a name says otherwise (``alt_ft``, ``elevator_deg`` …).
 
 - :func:`read`: a record + channel mapping → dict of numpy arrays (one per channel).
 - :class:`Estimator` and :class:`Rls`, :class:`RlsIv`, :class:`Ftr`, :class:`Ekf`,
-  :class:`Smpe`, :class:`SmpeCorrected`, :class:`Gradient`: online estimators fed one sample
+  :class:`Smpe`, :class:`SmpeCorrected`, :class:`SmpeFiniteTime`, :class:`Gradient`: online estimators fed one sample
   dict at a time.
 - :func:`replay`: a whole record (file + mapping, or arrays) through an estimator in Rust; the
   estimates as a (time × parameter) numpy matrix.
@@ -44,6 +44,7 @@ __all__ = [
     "Ekf",
     "Smpe",
     "SmpeCorrected",
+    "SmpeFiniteTime",
     "Gradient",
     "read",
     "replay",
@@ -93,7 +94,7 @@ class Estimator(_Estimator):
 
     ``Estimator(kind, model="longitudinal", constants=None, forgetting=1.0,
     sample_interval_s=None, parameter_walk_per_sqrt_s=0.0, ftr_grid_hz=None)`` with ``kind`` one of ``rls, rls-iv,
-    ftr, ekf, smpe, smpe-corrected, gradient`` (the CLI's ``--estimator``) and ``model`` a preset
+    ftr, ekf, smpe, smpe-corrected, smpe-finite-time, gradient`` (the CLI's ``--estimator``) and ``model`` a preset
     (``longitudinal``, ``lateral``, ``six-axis``) or a model file (TOML, ``models/``).
     ``constants``: the aircraft constants (keys as in :func:`sample_keys`) used for every sample
     that does not carry its own. ``ftr_grid_hz``: FTR's frequency grid ``(f_min, f_max, step)``
@@ -132,6 +133,8 @@ Ekf = _subclass("ekf", "Extended Kalman filter on states and parameters. ``Ekf(m
 Smpe = _subclass("smpe", "The thesis's sliding-mode parameter estimator. ``Smpe(model, constants)``.")
 SmpeCorrected = _subclass("smpe-corrected", "The corrected sliding-mode parameter estimator. ``SmpeCorrected(model, constants)``.")
 SmpeCorrected.__name__ = SmpeCorrected.__qualname__ = "SmpeCorrected"
+SmpeFiniteTime = _subclass("smpe-finite-time", "The finite-time sliding-mode estimator on the forgotten information memory, with the memory's sigma (docs/smpe-finite-time.md). ``SmpeFiniteTime(model, constants, forgetting=1.0, sliding_gain_per_s=10.0, reaching_rate_per_s=10.0)``.")
+SmpeFiniteTime.__name__ = SmpeFiniteTime.__qualname__ = "SmpeFiniteTime"
 Gradient = _subclass("gradient", "The model-reference gradient estimator. ``Gradient(model, constants)``.")
 
 

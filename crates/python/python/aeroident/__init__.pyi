@@ -12,7 +12,7 @@ MAX_RUNS: int
 MAX_BOOTSTRAP_REFITS: int
 """Most replicas of a fit's parametric bootstrap (each is a whole refit of the record)."""
 PathLike = Union[str, os.PathLike[str]]
-EstimatorName = Literal["rls", "rls-iv", "ftr", "ekf", "smpe", "smpe-corrected", "gradient"]
+EstimatorName = Literal["rls", "rls-iv", "ftr", "ekf", "smpe", "smpe-corrected", "smpe-finite-time", "gradient"]
 Constants = Mapping[str, Optional[float]]
 
 class AeroidentError(Exception): ...
@@ -45,6 +45,8 @@ class EstimatorBase:
         sample_interval_s: Optional[float] = None,
         parameter_walk_per_sqrt_s: float = 0.0,
         ftr_grid_hz: Optional[tuple[float, float, float]] = None,
+        sliding_gain_per_s: Optional[float] = None,
+        reaching_rate_per_s: Optional[float] = None,
     ) -> EstimatorBase: ...
     @property
     def method(self) -> str: ...
@@ -80,6 +82,9 @@ class Smpe(Estimator):
 
 class SmpeCorrected(Estimator):
     def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, sample_interval_s: Optional[float] = None) -> SmpeCorrected: ...
+
+class SmpeFiniteTime(Estimator):
+    def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, forgetting: float = 1.0, sample_interval_s: Optional[float] = None, sliding_gain_per_s: Optional[float] = None, reaching_rate_per_s: Optional[float] = None) -> SmpeFiniteTime: ...
 
 class Gradient(Estimator):
     def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, sample_interval_s: Optional[float] = None) -> Gradient: ...

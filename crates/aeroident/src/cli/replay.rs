@@ -27,7 +27,10 @@
 //! then, and the exit code is 128 + signal. A batch fit of stdin (`-`) ends its read on the
 //! signal and fits the rows read, or, with too few to fit, writes a summary saying so; a
 //! signal during a batch fit stops it at its next iteration (a bootstrap before its next
-//! replica, its σ then over the replicas done) and writes its last iterate. A second
+//! replica, its σ then over the replicas done) and writes its last iterate. A signal during a
+//! step over the whole record before or after the estimator (`--compat auto`'s check,
+//! `--model auto`'s selection, `--validate-on`) abandons that step at once: the summary
+//! says which, status `interrupted` (after `--validate-on`, with the fit's results). A second
 //! signal before the results are written stops at once with `summary.json` alone; one while
 //! they are written is ignored, so that no file is left half-written.
 //!
@@ -106,9 +109,10 @@ pub struct ReplayArgs {
     /// The estimator.
     #[arg(long, value_parser = super::named::<EstimatorKind>(), default_value = "rls")]
     pub estimator: EstimatorKind,
-    /// Forgetting factor of `rls`, `rls-iv` and `ftr`, in (0, 1]; 1 = ordinary least squares.
-    #[arg(long, default_value_t = 1.0)]
-    pub forgetting: f64,
+    /// Forgetting factor of `rls`, `rls-iv` and `ftr`, in (0, 1]; 1 (default) = ordinary
+    /// least squares. Refused with the other estimators, which have none.
+    #[arg(long)]
+    pub forgetting: Option<f64>,
     /// Source of ṗ, q̇, ṙ and α̇: the record's channels where mapped (else the causal
     /// differentiator), or always differentiate p, q, r and α.
     #[arg(long, alias = "qdot", value_parser = super::named::<DerivativeSource>(), default_value = "auto")]
@@ -264,7 +268,7 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     let opts = ReplayOptions {
         estimator: args.estimator,
         model,
-        forgetting: args.forgetting,
+        forgetting: args.forgetting.unwrap_or(1.0),
         derivatives: args.derivatives,
         diff_window: args.diff_window,
         instrument_delay: args.instrument_delay,
@@ -347,6 +351,14 @@ fn check_combination(args: &ReplayArgs, live: bool, mavlink: bool) -> anyhow::Re
     if args.robust && args.estimator != EstimatorKind::Oe {
         anyhow::bail!(
             "--robust is Huber's output-error fit (--estimator oe), not --estimator {}",
+            args.estimator.name()
+        );
+    }
+    let forgets =
+        matches!(args.estimator, EstimatorKind::Rls | EstimatorKind::RlsIv | EstimatorKind::Ftr);
+    if args.forgetting.is_some() && !forgets {
+        anyhow::bail!(
+            "--forgetting is the forgetting factor of rls, rls-iv and ftr; --estimator {} has none (it would be ignored)",
             args.estimator.name()
         );
     }

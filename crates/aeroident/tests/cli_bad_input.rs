@@ -197,6 +197,13 @@ fn errors_bad_options_per_subcommand() {
         &["diff-window"],
     );
     expect(&["replay", s(&good), "--map", s(&min)], 1, &["--out"]);
+    // A forgetting factor means nothing to the EKF or the batch fits: refused, not ignored.
+    for est in ["ekf", "oe", "fem"] {
+        let args = ["replay", s(&good), "--map", s(&min), "--out", s(&out), "--estimator", est];
+        let mut args = args.to_vec();
+        args.extend(["--forgetting", "0.99"]);
+        expect(&args, 1, &["--forgetting", est, "has none"]);
+    }
     expect(&["replay", s(&good), "--map", s(&min), "--estimator", "kalman"], 2, &[]);
     expect(&["montecarlo", "--runs", "0"], 1, &["runs"]);
     expect(&["f16", "trim", "--alt-ft", "20000", "--vt-fps", "675", "--xcg", "0.9"], 1, &["xcg"]);

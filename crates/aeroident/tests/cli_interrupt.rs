@@ -635,3 +635,62 @@ fn one_sigint_stops_the_bootstrap_of_a_record_read_from_stdin() {
     check_stopped_bootstrap(&v);
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// A simulated record of 300 s at 100 Hz (`f16 sim`, elevator, aileron and rudder doublets):
+/// its path. Long enough that the steps over the whole record take seconds.
+fn long_sim(dir: &Path) -> PathBuf {
+    let sc = dir.join("long.toml");
+    let mut scenario = String::from(
+        "kind = \"sim\"\n[aircraft]\nxcg = 0.30\nactuators = \"f16\"\n[trim]\nalt_ft = 20000.0\nvt_fps = 675.0\n[run]\nduration_s = 300.0\ndt_s = 0.01\nseed = 1\n",
+    );
+    for (channel, start) in [("elevator", 2.0), ("aileron", 10.0), ("rudder", 20.0)] {
+        scenario.push_str(&format!(
+            "[[input]]\nchannel = \"{channel}\"\nkind = \"doublet\"\namplitude_deg = 2.0\nstart_s = {start}\npulse_width_s = 1.0\n"
+        ));
+    }
+    std::fs::write(&sc, scenario).unwrap();
+    let out = dir.join("long");
+    let o = bin().args(["f16", "sim"]).arg(&sc).arg("--out").arg(&out).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    out.join("timeseries.csv")
+}
+
+/// SIGINT during the steps over the whole record that come before the estimator, the data
+/// compatibility check of `--compat auto` and the structure selection of `--model auto` (each
+/// seconds on a 30 000-sample record): the run stops at once, `summary.json` says during which
+/// step, status `interrupted`, no temporary file, exit 130 (the signal used to kill the
+/// process, leaving only the output directory's lock).
+#[test]
+fn sigint_during_compat_auto_or_model_auto_writes_an_interrupted_summary() {
+    let d = scratch("whole-record");
+    let data = long_sim(&d);
+    let map = workspace().join("mappings/aeroident-sim.toml");
+    for (option, announced) in
+        [("--compat", "compat: checking"), ("--model", "structure: selecting")]
+    {
+        let out = d.join(&option[2..]);
+        let args: Vec<OsString> = vec![
+            "--map".into(),
+            map.clone().into(),
+            "--estimator".into(),
+            "rls".into(),
+            option.into(),
+            "auto".into(),
+        ];
+        let (mut child, err) = spawn_replay_of(data.as_os_str(), &args, &out);
+        wait_for(&err, announced);
+        std::thread::sleep(Duration::from_millis(200));
+        signal(&child, "-INT");
+        let sent = Instant::now();
+        let code = exit_code(&mut child, &err);
+        let text = err.text();
+        assert!(sent.elapsed() < Duration::from_secs(10), "{:?}: {text}", sent.elapsed());
+        assert_eq!(code, 130, "{option}: {text}");
+        let v = summary(&out);
+        assert_eq!(v["status"], "interrupted", "{v}");
+        let reason = v["status_reason"].as_str().unwrap();
+        assert!(reason.contains(&format!("SIGINT during {option} auto")), "{reason}");
+        assert!(temporaries(&out).is_empty(), "{:?}", temporaries(&out));
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -300,3 +300,34 @@ fn structure_campaigns_fly_the_default_scenario() {
         assert_eq!(sc, default, "{path} flies another experiment than scenarios/default.toml");
     }
 }
+
+/// A selection on too few samples for its candidates warns, in the path printed and in
+/// `structure_selection.warnings`: the HFB-320 record's first 20 rows (under 10 samples per
+/// term of CL's regression on α, q̂ and the constant) warn; the whole record (601 rows) does
+/// not.
+#[test]
+fn a_selection_on_few_samples_warns() {
+    use aeroident_pipelines::structure::{AutoModel, SAMPLES_PER_TERM, select_model};
+    let Some(data) = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let m = Mapping::from_path(&workspace().join("mappings/hfb320.toml")).unwrap();
+    let text = std::fs::read_to_string(&data).unwrap();
+    let short = std::env::temp_dir().join(format!("aeroident-few-{}.csv", std::process::id()));
+    let head: Vec<&str> = text.lines().take(21).collect();
+    std::fs::write(&short, head.join("\n") + "\n").unwrap();
+    let auto = AutoModel::from_args("auto:longitudinal", "swr", &["alpha".into(), "q".into()]);
+    let auto = auto.unwrap().unwrap();
+    for (file, warned) in [(&short, true), (&data, false)] {
+        let reader = open_log(&file.display().to_string(), None, &m).unwrap();
+        let s = select_model(vec![reader], &m, &auto, None, &[], 5).unwrap();
+        assert_eq!(s.samples_used < 3 * SAMPLES_PER_TERM, warned, "{} samples", s.samples_used);
+        let w = s.report().warnings;
+        assert_eq!(w.len(), usize::from(warned), "{w:?}");
+        let printed =
+            s.path_lines().iter().any(|l| l.starts_with("warning: structure selection on"));
+        assert_eq!(printed, warned);
+        if warned {
+            assert!(w[0].contains(&format!("on {} samples for up to 3 terms", s.samples_used)));
+        }
+    }
+    std::fs::remove_file(&short).ok();
+}

@@ -238,8 +238,10 @@ pub struct OeConfig {
     /// Outlier-resistant fit with Huber's weights ([`Huber`], module doc "Robust option");
     /// `None` (default): the Gaussian maximum-likelihood fit.
     pub robust: Option<Huber>,
-    /// A request to stop, looked at before every iteration: once raised, the fit ends with
-    /// its last iterate ([`NotConverged::Stopped`]). `None` (default): it runs to its end.
+    /// A request to stop, looked at before every iteration and every damped trial step: once
+    /// raised, the fit ends with its last iterate ([`NotConverged::Stopped`]) and its
+    /// Cramér–Rao σ only (the coloured-residual σ, the slowest part after the iterations, are
+    /// then `None`). `None` (default): it runs to its end.
     pub stop: Option<StopFlag>,
 }
 
@@ -505,7 +507,8 @@ pub struct OeResult {
     /// Cramér–Rao σ `sqrt(diag M⁻¹)`.
     pub sigma: Vec<f64>,
     /// Coloured-residual σ (the spectral, multitaper sandwich, [`crate::coloured::batch`],
-    /// "Spectral form"); `None` if that correction was not positive.
+    /// "Spectral form"); `None` if that correction was not positive, or not formed because a
+    /// stop was asked for ([`OeConfig::stop`]).
     pub sigma_coloured: Option<Vec<f64>>,
     /// The prewhitened coloured-residual σ (vector autoregression of the residuals,
     /// [`crate::coloured::batch`], "Prewhitening"), kept as a diagnostic; `None` if not
@@ -1007,7 +1010,9 @@ fn fit_prepared(
             beta.iter().zip(d.iter()).map(|(b, d)| b + d).collect()
         };
         let mut accepted = None;
-        loop {
+        // A stop asked for during the damping ends it too: each trial is a simulation of the
+        // whole record, and up to 14 of them may follow.
+        while !stop_raised(config.stop.as_ref()) {
             if let Some(step) = damped_step(&h, &m, &g, lambda) {
                 let trial = offset(&step);
                 if p.simulate(&trial, &mut y_try, None).is_ok() {
@@ -1049,6 +1054,10 @@ fn fit_prepared(
             None => f64::INFINITY,
         };
         let Some((trial, step, r_new, _)) = accepted else {
+            if stop_raised(config.stop.as_ref()) {
+                failure = Some(NotConverged::Stopped);
+                break;
+            }
             // No descent: converged if the undamped step is already negligible.
             let tiny = damped_step(&h, &m, &g, 0.0)
                 .is_some_and(|st| step_sigma(&st) < config.step_tolerance_sigma);
@@ -1290,8 +1299,10 @@ fn assemble(
         s_w = s.iter().enumerate().map(|(k, v)| v * u[k / nb].sqrt()).collect::<Vec<_>>();
         (s_w.as_slice(), e_w.as_slice())
     };
+    // A fit stopped on request reports its Cramér–Rao σ at once: the coloured forms cost
+    // seconds on a long record (several sweeps over all residual lags), which the stop is for.
     let (sigma_coloured, sigma_coloured_prewhitened, sigma_coloured_truncated, lag, order) =
-        if identified {
+        if identified && !stop_raised(config.stop.as_ref()) {
             // The prewhitened form costs about as much as the other two together (a 60,000-
             // sample record: 5.5 s against 2.2 s), and they share nothing but their inputs:
             // on a second core the σ takes the time of the slowest form, not of all three.

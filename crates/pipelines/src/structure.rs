@@ -8,8 +8,8 @@
 
 mod auto;
 pub use auto::{
-    AutoModel, AutoSelection, CoefficientReport, EquationErrorEstimate, PathStep, Scope,
-    StructureReport, model_from_args, select_model,
+    AutoModel, AutoSelection, CoefficientReport, EquationErrorEstimate, PathStep, SAMPLES_PER_TERM,
+    Scope, StructureReport, model_from_args, select_model,
 };
 
 use crate::condition::{Alignment, Conditioner, Conditioning, Derivative};

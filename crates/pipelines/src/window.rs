@@ -42,13 +42,15 @@ impl TimeWindow {
     }
 }
 
-/// Checks that `windows` are in time order and do not overlap.
+/// Checks that `windows` are in time order and do not overlap. Touching windows (one's end
+/// the next's start, `0:10` then `10:20`) do not overlap: a sample at the instant they share
+/// is the first one's, and the next starts a new manoeuvre after it.
 ///
 /// # Errors
 /// A message naming the two windows that overlap or are out of order.
 pub fn check_windows(windows: &[TimeWindow]) -> Result<(), String> {
     for w in windows.windows(2) {
-        if w[1].start_s <= w[0].end_s {
+        if w[1].start_s < w[0].end_s {
             return Err(format!(
                 "windows {}:{} and {}:{} overlap or are out of time order",
                 w[0].start_s, w[0].end_s, w[1].start_s, w[1].end_s
@@ -77,6 +79,11 @@ pub struct Windowed<I> {
     pending: Option<RecordEvent>,
     used: usize,
     outside: usize,
+    /// Samples used per window.
+    per_window: Vec<usize>,
+    /// Per window, the last sample's time before its start and the first after its end, s: a
+    /// window that used no sample but has both lies in a gap of the record.
+    around: Vec<(Option<f64>, Option<f64>)>,
 }
 
 impl<I> Windowed<I> {
@@ -84,7 +91,6 @@ impl<I> Windowed<I> {
     pub fn new(inner: I, windows: Vec<TimeWindow>) -> Self {
         Self {
             inner,
-            windows,
             current: None,
             last_used_t_s: None,
             first_seen_t_s: None,
@@ -93,7 +99,38 @@ impl<I> Windowed<I> {
             pending: None,
             used: 0,
             outside: 0,
+            per_window: vec![0; windows.len()],
+            around: vec![(None, None); windows.len()],
+            windows,
         }
+    }
+
+    /// Notes `t_s`, a sample's time, as before or after each window.
+    fn bracket(&mut self, t_s: f64) {
+        for (w, (before, after)) in self.windows.iter().zip(&mut self.around) {
+            if t_s < w.start_s {
+                *before = Some(t_s);
+            } else if t_s > w.end_s && after.is_none() {
+                *after = Some(t_s);
+            }
+        }
+    }
+
+    /// The windows that used no sample: those inside the record's time span, each with the
+    /// gap of the record it falls in (`"a:b (no sample from x to y s)"`), and those outside
+    /// it (`"a:b"`).
+    fn empty_windows(&self) -> (Vec<String>, Vec<String>) {
+        let (mut in_gap, mut outside) = (Vec::new(), Vec::new());
+        for ((w, &n), around) in self.windows.iter().zip(&self.per_window).zip(&self.around) {
+            match (n, around) {
+                (0, (Some(a), Some(b))) => {
+                    in_gap.push(format!("{}:{} (no sample from {a} to {b} s)", w.start_s, w.end_s))
+                }
+                (0, _) => outside.push(format!("{}:{}", w.start_s, w.end_s)),
+                _ => {}
+            }
+        }
+        (in_gap, outside)
     }
 
     /// What the windows did, for the summary's warnings: `None` without windows.
@@ -103,12 +140,31 @@ impl<I> Windowed<I> {
         }
         let list: Vec<String> =
             self.windows.iter().map(|w| format!("{}–{} s", w.start_s, w.end_s)).collect();
-        Some(format!(
+        let mut note = format!(
             "time windows {} (each its own manoeuvre): {} samples used, {} outside the windows not used",
             list.join(", "),
             self.used,
             self.outside
-        ))
+        );
+        let (in_gap, outside) = self.empty_windows();
+        if self.used > 0 && !in_gap.is_empty() {
+            let s = if in_gap.len() > 1 { "s" } else { "" };
+            note.push_str(&format!(
+                "; window{s} {} matched no sample: inside the record's time span, in a gap of the record",
+                in_gap.join(", ")
+            ));
+        }
+        if let (Some(first), Some(last)) = (self.first_seen_t_s, self.last_seen_t_s)
+            && self.used > 0
+            && !outside.is_empty()
+        {
+            let s = if outside.len() > 1 { "s" } else { "" };
+            note.push_str(&format!(
+                "; window{s} {} matched no sample: outside the record's time span, {first} to {last} s",
+                outside.join(", ")
+            ));
+        }
+        Some(note)
     }
 }
 
@@ -121,13 +177,23 @@ impl<I> Windowed<I> {
             return None;
         }
         let (first, last) = (self.first_seen_t_s?, self.last_seen_t_s?);
-        let list: Vec<String> =
-            self.windows.iter().map(|w| format!("{}:{}", w.start_s, w.end_s)).collect();
-        let (s, lie) = if list.len() > 1 { ("s", "lie") } else { ("", "lies") };
-        Some(format!(
-            "the time window{s} {} {lie} outside the record's time span, {first} to {last} s (its first and last sample): no sample was used",
-            list.join(", ")
-        ))
+        let (in_gap, outside) = self.empty_windows();
+        let mut why = Vec::new();
+        if !outside.is_empty() {
+            let (s, lie) = if outside.len() > 1 { ("s", "lie") } else { ("", "lies") };
+            why.push(format!(
+                "the time window{s} {} {lie} outside the record's time span, {first} to {last} s (its first and last sample)",
+                outside.join(", ")
+            ));
+        }
+        if !in_gap.is_empty() {
+            let (s, lie) = if in_gap.len() > 1 { ("s", "lie") } else { ("", "lies") };
+            why.push(format!(
+                "the time window{s} {} {lie} inside the record's time span, {first} to {last} s, but in a gap of the record",
+                in_gap.join(", ")
+            ));
+        }
+        Some(format!("{}: no sample was used", why.join("; ")))
     }
 }
 
@@ -153,6 +219,8 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Iterator for Wind
                 continue;
             };
             self.first_seen_t_s.get_or_insert(sample.t_s);
+            let t_s = sample.t_s;
+            self.bracket(t_s);
             if let Some(t0) = self.last_seen_t_s.replace(sample.t_s) {
                 self.last_dt_s = sample.t_s - t0;
             }
@@ -164,6 +232,7 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Iterator for Wind
             let entering = self.current != Some(k);
             self.current = Some(k);
             self.used += 1;
+            self.per_window[k] += 1;
             let previous = self.last_used_t_s.replace(sample.t_s);
             let Some(t0) = previous else { return Some(Ok(event)) };
             let dt_s = sample.t_s - t0;
@@ -226,5 +295,53 @@ mod tests {
         assert!(TimeWindow::parse("5").is_err() && TimeWindow::parse("a:3").is_err());
         let w = [TimeWindow::parse("0:5").unwrap(), TimeWindow::parse("4:9").unwrap()];
         assert!(check_windows(&w).unwrap_err().contains("overlap"));
+    }
+
+    /// A window inside the record's time span that falls in a gap of it (samples at 0–3 s
+    /// and 7–10 s, window [4, 6]) is said to be so, not "outside the span"; beside a window that
+    /// matches samples, the note names the one that matched none and why.
+    #[test]
+    fn a_window_in_a_gap_is_named_as_such() {
+        let times_s = [0.0, 1.0, 2.0, 3.0, 7.0, 8.0, 9.0, 10.0];
+        let input = || times_s.iter().enumerate().map(|(k, &t)| sample(k as u64 + 2, t));
+        let gap = vec![TimeWindow::parse("4:6").unwrap()];
+        let mut w = Windowed::new(input().collect::<Vec<_>>().into_iter(), gap);
+        assert_eq!(w.by_ref().count(), 0);
+        let missed = w.missed().unwrap();
+        assert!(missed.contains("4:6 (no sample from 3 to 7 s) lies inside"), "{missed}");
+        assert!(!missed.contains("outside"), "{missed}");
+        let two = vec![
+            TimeWindow::parse("1:2").unwrap(),
+            TimeWindow::parse("4:6").unwrap(),
+            TimeWindow::parse("20:30").unwrap(),
+        ];
+        let mut w = Windowed::new(input().collect::<Vec<_>>().into_iter(), two);
+        assert_eq!(w.by_ref().count(), 2);
+        assert!(w.missed().is_none());
+        let note = w.note().unwrap();
+        assert!(
+            note.contains("window 4:6 (no sample from 3 to 7 s) matched no sample: inside"),
+            "{note}"
+        );
+        assert!(
+            note.contains(
+                "window 20:30 matched no sample: outside the record's time span, 0 to 10 s"
+            ),
+            "{note}"
+        );
+    }
+
+    /// Touching windows [2, 4] and [4, 6] over samples 0..10 s at 1 s are accepted: the
+    /// sample at 4 s is used once (the first window's), the second window starts a manoeuvre
+    /// at 5 s; 5 used, 6 outside.
+    #[test]
+    fn touching_windows_are_accepted() {
+        let input: Vec<_> = (0..=10).map(|k| sample(k + 2, k as f64)).collect();
+        let windows = vec![TimeWindow::parse("2:4").unwrap(), TimeWindow::parse("4:6").unwrap()];
+        check_windows(&windows).unwrap();
+        let mut w = Windowed::new(input.into_iter(), windows);
+        let out: Vec<RecordEvent> = w.by_ref().map(Result::unwrap).collect();
+        assert_eq!(times(&out), ["2", "3", "4", "gap 1 1", "5", "6"]);
+        assert!(w.note().unwrap().contains("5 samples used, 6 outside"), "{:?}", w.note());
     }
 }

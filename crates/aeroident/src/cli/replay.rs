@@ -27,7 +27,10 @@
 //! then, and the exit code is 128 + signal. A batch fit of stdin (`-`) ends its read on the
 //! signal and fits the rows read, or, with too few to fit, writes a summary saying so; a
 //! signal during a batch fit stops it at its next iteration (a bootstrap before its next
-//! replica, its σ then over the replicas done) and writes its last iterate. A second
+//! replica, its σ then over the replicas done) and writes its last iterate. A signal during a
+//! step over the whole record before or after the estimator (`--compat auto`'s check,
+//! `--model auto`'s selection, `--validate-on`) abandons that step at once: the summary
+//! says which, status `interrupted` (after `--validate-on`, with the fit's results). A second
 //! signal before the results are written stops at once with `summary.json` alone; one while
 //! they are written is ignored, so that no file is left half-written.
 //!
@@ -68,7 +71,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `aeroident replay`.
-#[derive(Debug, clap::Args)]
+#[derive(Debug, Clone, clap::Args)]
 pub struct ReplayArgs {
     /// Recorded flight data: a CSV with one header row, a whitespace `.asc`, a MATLAB `.mat`,
     /// a PX4 ULog `.ulg`, an ArduPilot DataFlash `.bin`, `-` for stdin (live mode: CSV, or
@@ -106,9 +109,10 @@ pub struct ReplayArgs {
     /// The estimator.
     #[arg(long, value_parser = super::named::<EstimatorKind>(), default_value = "rls")]
     pub estimator: EstimatorKind,
-    /// Forgetting factor of `rls`, `rls-iv` and `ftr`, in (0, 1]; 1 = ordinary least squares.
-    #[arg(long, default_value_t = 1.0)]
-    pub forgetting: f64,
+    /// Forgetting factor of `rls`, `rls-iv` and `ftr`, in (0, 1]; 1 (default) = ordinary
+    /// least squares. Refused with the other estimators, which have none.
+    #[arg(long)]
+    pub forgetting: Option<f64>,
     /// Source of ṗ, q̇, ṙ and α̇: the record's channels where mapped (else the causal
     /// differentiator), or always differentiate p, q, r and α.
     #[arg(long, alias = "qdot", value_parser = super::named::<DerivativeSource>(), default_value = "auto")]
@@ -243,13 +247,28 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     check_combination(&args, live, mavlink)?;
     // Lock the directory and clear the previous run's files before reading anything: a
     // directory that cannot take the results is refused before a long fit, not after it.
-    let out_dir = open_out(&args)?;
-    let compat = compat_corrections(&args, &mapping, live)?;
-    let (model, selection) = resolve_model(&args, &mapping, compat.as_ref(), live)?;
+    let mut out_dir = open_out(&args)?;
+    // From here a signal ends the run gracefully (crate::interrupt): the steps over the whole
+    // record before the estimator too, with a summary saying so.
+    let interrupt = crate::interrupt::Interrupt::install().context("installing signal handlers")?;
+    let (a, m) = (args.clone(), mapping.clone());
+    let stage = move || compat_corrections(&a, &m, live);
+    let Some(compat) = stage_watched(&interrupt, stage)? else {
+        let step = "--compat auto (the data compatibility check)";
+        return stopped_before_fit(&args, &interrupt, out_dir.as_mut(), step);
+    };
+    let compat = compat?;
+    let (a, m, c) = (args.clone(), mapping.clone(), compat.clone());
+    let stage = move || resolve_model(&a, &m, c.as_ref(), live);
+    let Some(resolved) = stage_watched(&interrupt, stage)? else {
+        let step = "--model auto (the structure selection)";
+        return stopped_before_fit(&args, &interrupt, out_dir.as_mut(), step);
+    };
+    let (model, selection) = resolved?;
     let opts = ReplayOptions {
         estimator: args.estimator,
         model,
-        forgetting: args.forgetting,
+        forgetting: args.forgetting.unwrap_or(1.0),
         derivatives: args.derivatives,
         diff_window: args.diff_window,
         instrument_delay: args.instrument_delay,
@@ -260,12 +279,70 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
             .then(aeroident_pipelines::replay::outliers::SpikeScreen::default),
     };
     if args.estimator.is_batch() {
-        return execute_batch(&args, &mapping, opts.model, opts.compat, selection, out_dir);
+        let given = (opts.model, opts.compat);
+        return execute_batch(&args, &mapping, given, selection, &interrupt, out_dir);
     }
     if !live && args.out.is_none() {
         anyhow::bail!("give --out <dir> (or read `-` from stdin for a live feed on stdout)");
     }
-    execute_online(args, mapping, opts, selection, out_dir)
+    execute_online(args, mapping, opts, selection, &interrupt, out_dir)
+}
+
+/// Runs `stage`, a step over a whole record that no estimator watches (`--compat auto`,
+/// `--model auto`, `--validate-on`), on a thread of its own while answering the signals
+/// (crate::interrupt): a signal abandons it at once, `None` (the thread ends with the process,
+/// which writes its summary and exits). Such a step has no safe point to stop at and nothing
+/// of it is worth keeping half done.
+///
+/// # Errors
+/// The thread could not start or ended without a result (a panic).
+fn stage_watched<T: Send + 'static>(
+    interrupt: &crate::interrupt::Interrupt,
+    stage: impl FnOnce() -> T + Send + 'static,
+) -> anyhow::Result<Option<T>> {
+    use std::sync::mpsc::RecvTimeoutError;
+    if interrupt.requested() {
+        return Ok(None);
+    }
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::Builder::new()
+        .name("whole-record".into())
+        .stack_size(64 << 20)
+        .spawn(move || {
+            let _ = tx.send(stage());
+        })
+        .context("starting a thread")?;
+    loop {
+        match rx.recv_timeout(std::time::Duration::from_millis(50)) {
+            Ok(r) => return Ok(Some(r)),
+            Err(RecvTimeoutError::Disconnected) => {
+                anyhow::bail!("internal: a step over the whole record ended without a result")
+            }
+            Err(RecvTimeoutError::Timeout) if interrupt.requested() => return Ok(None),
+            Err(RecvTimeoutError::Timeout) => {}
+        }
+    }
+}
+
+/// Ends a run that a signal stopped during `step` (an option's step over the whole record),
+/// before any estimator ran: `summary.json` with status `interrupted` and why, exit
+/// 128 + signal.
+///
+/// # Errors
+/// Always: the interruption (or an output I/O error).
+fn stopped_before_fit(
+    args: &ReplayArgs,
+    interrupt: &crate::interrupt::Interrupt,
+    out: Option<&mut crate::outdir::OutputDir>,
+    step: &str,
+) -> anyhow::Result<()> {
+    interrupt.begin_writing();
+    let why = format!(
+        "interrupted by {} during {step}, before any estimate",
+        interrupt.signal_name().unwrap_or_default()
+    );
+    write_stopped_summary(args, out, None, &why)?;
+    Err(stopped(interrupt, "no estimates; summary.json says why"))
 }
 
 /// Refuses options that do not go together (the estimator's own options, a batch fit of a
@@ -274,6 +351,14 @@ fn check_combination(args: &ReplayArgs, live: bool, mavlink: bool) -> anyhow::Re
     if args.robust && args.estimator != EstimatorKind::Oe {
         anyhow::bail!(
             "--robust is Huber's output-error fit (--estimator oe), not --estimator {}",
+            args.estimator.name()
+        );
+    }
+    let forgets =
+        matches!(args.estimator, EstimatorKind::Rls | EstimatorKind::RlsIv | EstimatorKind::Ftr);
+    if args.forgetting.is_some() && !forgets {
+        anyhow::bail!(
+            "--forgetting is the forgetting factor of rls, rls-iv and ftr; --estimator {} has none (it would be ignored)",
             args.estimator.name()
         );
     }
@@ -348,13 +433,11 @@ fn execute_online(
     mapping: Mapping,
     opts: ReplayOptions,
     selection: Option<AutoSelection>,
+    interrupt: &crate::interrupt::Interrupt,
     mut out_dir: Option<crate::outdir::OutputDir>,
 ) -> anyhow::Result<()> {
     let mavlink = crate::live::is_mavlink(&args.data);
     let live = args.data == "-" || mavlink;
-    // From here a signal ends the replay gracefully: the results so far are written, marked
-    // `interrupted` (crate::interrupt).
-    let interrupt = crate::interrupt::Interrupt::install().context("installing signal handlers")?;
     let mut csv_file = match out_dir.as_mut() {
         Some(o) => Some(o.create("estimates.csv")?),
         None => None,
@@ -389,8 +472,7 @@ fn execute_online(
     if crate::progress::enabled() {
         sinks.push(&mut status);
     }
-    let mut console =
-        (Console { interrupt: &interrupt }, EstimateRows { sinks, flush_each: args.realtime });
+    let mut console = (Console { interrupt }, EstimateRows { sinks, flush_each: args.realtime });
     let format = args
         .format
         .or_else(|| LogFormat::from_extension(Path::new(&args.data)))
@@ -463,11 +545,11 @@ fn execute_online(
                 interrupt.signal_name().unwrap_or_default()
             );
             write_stopped_summary(&args, out_dir.as_mut(), read, &why)?;
-            return Err(stopped(&interrupt, "no sample was estimated"));
+            return Err(stopped(interrupt, "no sample was estimated"));
         }
         Err(e) => return Err(e.into()),
     };
-    let interrupted = outcome.interrupted();
+    let mut interrupted = outcome.interrupted();
     if interrupted && (args.validate_on.is_some() || args.cross_check) {
         let w = "the run was interrupted: --validate-on / --cross-check not done".to_string();
         eprintln!("warning: {w}");
@@ -488,19 +570,32 @@ fn execute_online(
     }
     let validation_on = match (&args.validate_on, outcome.diverged() || interrupted) {
         (Some(path), false) => {
-            let name = path.display().to_string();
-            let (reader, notes) = open_log_with_notes(&name, None, &mapping)?;
-            for n in &notes {
-                eprintln!("note: {n}");
+            let (name, m, o, fitted) =
+                (path.display().to_string(), mapping.clone(), opts.clone(), outcome.clone());
+            let stage = move || -> anyhow::Result<_> {
+                let (reader, notes) = open_log_with_notes(&name, None, &m)?;
+                for n in &notes {
+                    eprintln!("note: {n}");
+                }
+                Ok(aeroident_pipelines::replay::validate_on(reader, &m, &o, &fitted)?)
+            };
+            match stage_watched(interrupt, stage)? {
+                Some(v) => Some(v?),
+                None => {
+                    interrupted = true;
+                    let s = &mut outcome.summary;
+                    s.status = aeroident_pipelines::replay::STATUS_INTERRUPTED.to_string();
+                    s.warnings.push(validation_stopped(interrupt));
+                    None
+                }
             }
-            Some(aeroident_pipelines::replay::validate_on(reader, &mapping, &opts, &outcome)?)
         }
         _ => None,
     };
     // From here further signals are ignored until the results are written (crate::interrupt);
     // a second one before this point leaves the report and figures out.
     let summary_only = begin_writing(
-        Some(&interrupt),
+        Some(interrupt),
         interrupted,
         outcome.summary.samples_read,
         &mut outcome.summary.warnings,
@@ -585,7 +680,7 @@ fn execute_online(
         anyhow::bail!(e);
     }
     if summary_only {
-        return Err(stopped(&interrupt, SUMMARY_ONLY));
+        return Err(stopped(interrupt, SUMMARY_ONLY));
     }
     if interrupted {
         if let Some(e) = interrupt.error(
@@ -684,6 +779,9 @@ fn resolve_model(
             "--model auto selects the terms on the whole record: give a file, not a live feed"
         );
     }
+    if auto {
+        eprintln!("structure: selecting the terms on the whole record (--model auto)");
+    }
     let open = || {
         let files = std::iter::once(&args.data).chain(&args.and);
         files.map(|f| open_log_with_notes(f, args.format, mapping).map(|(r, _)| r)).collect()
@@ -732,6 +830,7 @@ fn compat_corrections(
     if live {
         anyhow::bail!("--compat auto needs the whole record; for a live feed give a compat.json");
     }
+    eprintln!("compat: checking the record's data compatibility (--compat auto)");
     let (reader, _) = open_log_with_notes(&args.data, args.format, mapping)?;
     let config = aeroident_estimators::compat::CompatConfig::default();
     let (summary, _) = check_record(reader, &config)?;
@@ -739,6 +838,14 @@ fn compat_corrections(
         eprintln!("compat: {f}");
     }
     Ok(Some(Corrections::from_summary(&summary)?))
+}
+
+/// The warning of a run that a signal stopped during `--validate-on`.
+fn validation_stopped(interrupt: &crate::interrupt::Interrupt) -> String {
+    format!(
+        "interrupted by {} during --validate-on: the fit's results are written, the validation on the second record is not done",
+        interrupt.signal_name().unwrap_or_default()
+    )
 }
 
 /// Enters the writing phase of `interrupt` (crate::interrupt: further signals are ignored from
@@ -971,9 +1078,9 @@ impl FitWatch {
 fn execute_batch(
     args: &ReplayArgs,
     mapping: &Mapping,
-    model: Option<ModelSpec>,
-    compat: Option<aeroident_pipelines::compat::Corrections>,
+    (model, compat): (Option<ModelSpec>, Option<aeroident_pipelines::compat::Corrections>),
     selection: Option<AutoSelection>,
+    interrupt: &crate::interrupt::Interrupt,
     mut out: Option<crate::outdir::OutputDir>,
 ) -> anyhow::Result<()> {
     let fem = args.estimator == EstimatorKind::Fem;
@@ -982,7 +1089,6 @@ fn execute_batch(
         stop: Some(stop.clone()),
         ..fit_options(args, compat)?
     };
-    let interrupt = crate::interrupt::Interrupt::install().context("installing signal handlers")?;
     eprintln!(
         "{} is a batch method: reading the whole record before fitting (not real time)",
         if fem { "the filter-error method" } else { "output error" }
@@ -1001,7 +1107,7 @@ fn execute_batch(
         (args.data == "-").then(|| crate::interrupt::InterruptibleStdin::new(interrupt.flag()));
     let progress = stdin.as_ref().map(crate::interrupt::InterruptibleStdin::progress);
     let watched =
-        fit_watched(move || input.read_and_fit(stdin), &interrupt, progress.as_deref(), &stop)?;
+        fit_watched(move || input.read_and_fit(stdin), interrupt, progress.as_deref(), &stop)?;
     let Some(fitted) = watched else {
         interrupt.begin_writing();
         let why = format!(
@@ -1009,7 +1115,7 @@ fn execute_batch(
             interrupt.signal_name().unwrap_or_default()
         );
         write_stopped_summary(args, out.as_mut(), None, &why)?;
-        return Err(stopped(&interrupt, "the fit was abandoned; summary.json says so"));
+        return Err(stopped(interrupt, "the fit was abandoned; summary.json says so"));
     };
     let cut = progress.as_ref().is_some_and(|p| p.end() == Some(crate::interrupt::StdinEnd::Cut));
     let (mut outcome, reports) = match fitted {
@@ -1026,7 +1132,7 @@ fn execute_batch(
                 interrupt.signal_name().unwrap_or_default()
             );
             write_stopped_summary(args, out.as_mut(), None, &why)?;
-            return Err(stopped(&interrupt, "no fit; summary.json says why"));
+            return Err(stopped(interrupt, "no fit; summary.json says why"));
         }
         Err(e) => return Err(e),
     };
@@ -1036,7 +1142,7 @@ fn execute_batch(
     } else if stop.raised() {
         mark_stopped(&mut outcome, &signal);
     }
-    write_batch(args, mapping, outcome, reports, Some(&interrupt), selection.as_ref(), out)
+    write_batch(args, mapping, outcome, reports, Some(interrupt), selection.as_ref(), out)
 }
 
 /// The output directory of `--out`, opened (locked, the previous run's files cleared).
@@ -1126,20 +1232,35 @@ fn write_batch(
     out: Option<crate::outdir::OutputDir>,
 ) -> anyhow::Result<()> {
     outcome.summary.reader = reports;
-    let interrupted = outcome.summary.status == aeroident_pipelines::replay::STATUS_INTERRUPTED;
+    let mut interrupted = outcome.summary.status == aeroident_pipelines::replay::STATUS_INTERRUPTED;
     match &args.validate_on {
         Some(_) if interrupted => {
             let w = "the run was interrupted: --validate-on not done".to_string();
             outcome.summary.warnings.push(w);
         }
         Some(path) => {
-            let name = path.display().to_string();
-            let (reader, notes) = open_log_with_notes(&name, None, mapping)?;
-            for n in &notes {
-                eprintln!("note: {n}");
+            let (name, m, fitted) = (path.display().to_string(), mapping.clone(), outcome.clone());
+            let stage = move || -> anyhow::Result<_> {
+                let (reader, notes) = open_log_with_notes(&name, None, &m)?;
+                for n in &notes {
+                    eprintln!("note: {n}");
+                }
+                Ok(aeroident_pipelines::replay::batch::validate_on(reader, &fitted)?)
+            };
+            match interrupt {
+                Some(i) => match stage_watched(i, stage)? {
+                    Some(v) => outcome.summary.validation_on = Some(v?),
+                    None => {
+                        interrupted = true;
+                        let why = validation_stopped(i);
+                        let s = &mut outcome.summary;
+                        s.warnings.push(why.clone());
+                        s.status = aeroident_pipelines::replay::STATUS_INTERRUPTED.to_string();
+                        s.status_reason = Some(why);
+                    }
+                },
+                None => outcome.summary.validation_on = Some(stage()?),
             }
-            outcome.summary.validation_on =
-                Some(aeroident_pipelines::replay::batch::validate_on(reader, &outcome)?);
         }
         None => {}
     }

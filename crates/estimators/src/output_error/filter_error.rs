@@ -892,7 +892,10 @@ impl<'a> Fem<'a> {
             None => f64::INFINITY,
         };
         let merit0 = filter_likelihood(&it.e, &it.bf, self.p.n_samples);
-        let Some(a) = self.search(it, &m, &g, merit0) else {
+        let Some(a) = self.search(it, &m, &g, merit0, oe.stop.as_ref()) else {
+            if super::stop_raised(oe.stop.as_ref()) {
+                return Ok(Some((false, Some(NotConverged::Stopped))));
+            }
             // At the optimum to the rounding of the finite-difference sensitivities, or stuck.
             let tiny = self
                 .full_step(it, &m, &g)
@@ -956,15 +959,17 @@ impl<'a> Fem<'a> {
     }
 
     /// The least-damped step that lowers the cost below `merit0`, raising the damping tenfold
-    /// after each failure (`None` past 10¹⁰).
+    /// after each failure (`None` past 10¹⁰, or once `stop` is raised).
     fn search(
         &self,
         it: &mut Iterate,
         m: &DMatrix<f64>,
         g: &nalgebra::DVector<f64>,
         merit0: f64,
+        stop: Option<&super::StopFlag>,
     ) -> Option<Accepted> {
-        loop {
+        // Each trial is a filter pass over the whole record: a stop asked for ends the search.
+        while !super::stop_raised(stop) {
             if let Some(trial) = self.propose(it, m, g, it.lambda) {
                 let nfull = self.nb + self.ny;
                 let step = nalgebra::DVector::from_fn(nfull, |i, _| trial[i] - it.beta[i]);
@@ -989,6 +994,7 @@ impl<'a> Fem<'a> {
                 return None;
             }
         }
+        None
     }
 
     /// The trial unknowns at damping `lambda`: the damped scoring step, its noise unknowns
@@ -1091,8 +1097,14 @@ impl<'a> Fem<'a> {
         let max_lag = oe
             .coloured_max_lag
             .unwrap_or_else(|| result.manoeuvre_lengths.iter().copied().min().unwrap_or(4) / 4);
+        // Stopped on request: the Cramér–Rao σ only (the diagnostic σ cost seconds on a long
+        // record, which the stop is for).
         let [mut sigma_lag0, mut sigma_full_b, mut sigma_coloured_theta] =
-            diagnostic_sigmas(&it.s, &it.e, &w, &result, nb, max_lag);
+            if super::stop_raised(oe.stop.as_ref()) {
+                [None, None, None]
+            } else {
+                diagnostic_sigmas(&it.s, &it.e, &w, &result, nb, max_lag)
+            };
         let f_scale: Vec<f64> =
             (0..nb).map(|i| if i >= first_f { beta[i].exp() } else { 1.0 }).collect();
         for v in [sigma_lag0.as_mut(), sigma_full_b.as_mut(), sigma_coloured_theta.as_mut()]

@@ -967,3 +967,25 @@ fn one_output_spike_is_flagged_and_huber_resists_it() {
     }
     println!("spike: plain worst {worst:.1} σ, share {:.3}, cook {:.2}", d.share, d.cook);
 }
+
+/// A fit whose stop is raised ends with its last iterate at once: `NotConverged::Stopped`
+/// (before its first iteration here), its Cramér–Rao σ finite, the coloured-residual σ not
+/// formed (they cost seconds on a long record, after the stop); the same fit run to its end
+/// forms them.
+#[test]
+fn a_stopped_fit_skips_the_coloured_sigma() {
+    let st = lon();
+    let th = trimmed_truth(&st);
+    let data = simulate(&st, &th, 20.0, 12.0, 1.0, 9, [0.0; N_STATES]);
+    let whole = fit_to_end(&[&data], &OeConfig::new(st)).unwrap();
+    assert!(whole.sigma_coloured_prewhitened.is_some() && whole.coloured_lag > 0);
+    let stop = StopFlag::default();
+    stop.raise();
+    let cfg = OeConfig { stop: Some(stop), ..OeConfig::new(st) };
+    let stopped = fit_to_end(&[&data], &cfg).unwrap();
+    assert_eq!(stopped.termination, Termination::NotConverged(NotConverged::Stopped));
+    assert_eq!(stopped.n_iterations(), 0);
+    assert!(stopped.sigma.iter().all(|s| s.is_finite() && *s > 0.0), "{:?}", stopped.sigma);
+    assert!(stopped.sigma_coloured.is_none() && stopped.sigma_coloured_prewhitened.is_none());
+    assert!(stopped.sigma_coloured_truncated.is_none());
+}

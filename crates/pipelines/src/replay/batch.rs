@@ -221,7 +221,7 @@ fn default_model(first: &AirDataSample, mapping: &Mapping) -> Result<ModelSpec, 
         let Some(spec) = ModelSpec::preset(name) else { continue };
         match FlightModel::new(spec.structure).and_then(|m| m.inputs(first).map(|_| ())) {
             Ok(()) => return Ok(spec),
-            Err(e) => why.push(format!("`{name}`: {e}")),
+            Err(e) => why.push(format!("`{name}`: {}", as_mapped(&e, mapping))),
         }
     }
     Err(ReplayError::Model(format!(
@@ -229,6 +229,46 @@ fn default_model(first: &AirDataSample, mapping: &Mapping) -> Result<ModelSpec, 
         mapping.file,
         why.join(" | ")
     )))
+}
+
+/// Checks that the flight model of `model` can take the record's first sample, its error
+/// naming what the user wrote in `mapping` ([`as_mapped`]) rather than the sample's field.
+fn check_model_inputs(
+    model: &ModelSpec,
+    first: &AirDataSample,
+    mapping: &Mapping,
+) -> Result<(), ReplayError> {
+    FlightModel::new(model.structure).and_then(|m| m.inputs(first).map(|_| ())).map_err(|e| {
+        ReplayError::Model(format!("model `{}`: {}", model.name, as_mapped(&e, mapping)))
+    })
+}
+
+/// `e` in the mapping's words: an error about a sample field or constant (a configuration
+/// value, a non-finite input) names the mapping's channel as the user wrote it (its column,
+/// expression or constant, [`Mapping::field_label`]), or says the mapping lacks it; any other
+/// error as it is.
+fn as_mapped(e: &aeroident_estimators::EstimatorError, mapping: &Mapping) -> String {
+    use aeroident_estimators::EstimatorError as E;
+    let (field, what) = match e {
+        E::InvalidConfig { field, value, reason } => (*field, format!("= {value}: {reason}")),
+        E::NonFiniteInput { field, value, t_s } => {
+            (*field, format!("= {value} at t = {t_s} s is not finite"))
+        }
+        _ => return e.to_string(),
+    };
+    match aeroident_io::Channel::of_sample_field(field) {
+        Some(ch) if mapping.channels.contains_key(&ch) => {
+            format!("{} {what}", mapping.field_label(field))
+        }
+        Some(ch) => {
+            format!(
+                "`{}` is not in the mapping {}: the flight model needs it",
+                ch.key(),
+                mapping.file
+            )
+        }
+        None => e.to_string(),
+    }
 }
 
 /// A whole record, split into manoeuvres at its gaps.
@@ -859,6 +899,7 @@ pub fn fit_records<R: Read>(
         Some(m) => m,
         None => default_model(&rec.manoeuvres[0][0], mapping)?,
     };
+    check_model_inputs(&model, &rec.manoeuvres[0][0], mapping)?;
     let (model, level_note) = super::sideslip_level(model, &rec.manoeuvres[0][0]);
     let slices: Vec<&[AirDataSample]> = rec.manoeuvres.iter().map(Vec::as_slice).collect();
     let fitted = fit_slices(&slices, model.structure, &options)?;
@@ -1305,6 +1346,34 @@ pub fn validate_on<R: Read>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A record whose mapping lacks the constants the flight model needs (here the chord and
+    /// the pitch inertia): the error names them as the mapping would (`cbar`, `Iyy`), not by
+    /// the sample's internal field with a NaN (`Iyy_kgm2` = NaN), for the default model and
+    /// for a model given.
+    #[test]
+    fn a_missing_constant_is_named_as_the_mapping_names_it() {
+        let map = "[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"V\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nq = { column = \"q\", unit = \"rad/s\" }\ntheta = { column = \"th\", unit = \"rad\" }\nde = { column = \"de\", unit = \"rad\" }\nrho = { value = 1.0, unit = \"kg/m3\" }\nmass = { value = 1000.0, unit = \"kg\" }\nS = { value = 10.0, unit = \"m2\" }\n";
+        let mapping = Mapping::from_toml_str(map, "m.toml").unwrap();
+        let mut csv = String::from("t,V,a,q,th,de\n");
+        for k in 0..50 {
+            let x = 0.01 * (k as f64 * 0.3).sin();
+            csv.push_str(&format!("{},100,{},{x},{},{x}\n", k as f64 * 0.1, 0.05 + x, 0.05 + x));
+        }
+        for model in [None, ModelSpec::from_arg("longitudinal").ok()] {
+            let reader = FlightDataReader::new(csv.as_bytes(), "r.csv", &mapping).unwrap();
+            let Err(e) = fit_records(vec![reader], &mapping, model, FitOptions::default()) else {
+                panic!("fitted without the chord and the inertia");
+            };
+            let text = e.to_string();
+            assert!(text.contains("is not in the mapping m.toml"), "{text}");
+            assert!(text.contains("`Iyy`") || text.contains("`cbar`"), "{text}");
+            assert!(
+                !text.contains("NaN") && !text.contains("_kgm2") && !text.contains("cbar_m"),
+                "{text}"
+            );
+        }
+    }
 
     /// A bootstrap's replica count is refused outside 2 to [`MAX_BOOTSTRAP_REFITS`] by a fit
     /// before any record is read or replica allocated (4294967295 replicas once allocated

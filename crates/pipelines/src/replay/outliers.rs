@@ -45,7 +45,13 @@
 //!    of 2 (isolation × the range of the others; the range of the context, the run left out;
 //!    5 % of its largest `|x|`; the floor), and from the others' median by more than
 //!    `t · 1.4826 · MAD` of the others. The channel is back at its level on both sides and the
-//!    run is outside the envelope of everything around it. Runs of up to [`RUN_MAX`] are
+//!    run is outside the envelope of everything around it. The other short runs of a cluster
+//!    ahead (runs of up to [`RUN_MAX`] on the same side, a row or two apart,
+//!    [`SpikeScreen::fellows`]) are left out of the samples after the run and of the context,
+//!    as test 1–2 leaves out the other spikes of its window: a rigid airframe's rates and
+//!    angles move continuously (finite moments over finite inertia), so a channel that jumps
+//!    out and back within a sample, again and again, beyond everything its clean samples do
+//!    around it, is a sensor or a link, not a motion. Runs of up to [`RUN_MAX`] are
 //!    rejected whole (each row naming the run's length); runs of [`RUN_MAX`] + 1 to
 //!    [`WARN_RUN_MAX`] are only a warning in the summary, for the real-time estimators as for
 //!    the batch fits (a record re-gridded with a zero-order hold holds each genuine sample of
@@ -209,27 +215,49 @@ impl SpikeScreen {
         isolated.then_some((med, threshold.max(self.hampel_t * scale)))
     }
 
-    /// The other samples of `window` that look like `window[centre]` does as a spike: beyond
-    /// the window's Hampel threshold on the same side, with every immediate neighbour within
-    /// it. A few spikes within one window would otherwise widen each other's range and
-    /// context until none of them stood out; a genuine manoeuvre's samples are excluded from
-    /// neither (their neighbours are out too, or they are the past the screen passed).
+    /// The other samples of `window` that look like `window[centre]` does as a spike
+    /// ([`Self::fellows`] beside the one sample `centre`).
     pub fn fellow_spikes(&self, window: &[f64], centre: usize) -> Vec<bool> {
+        self.fellows(window, centre..centre + 1)
+    }
+
+    /// The other spikes of `window` beside the samples `own` (the tested sample or run, not
+    /// empty): the maximal runs of at most [`RUN_MAX`] samples beyond the window's Hampel
+    /// threshold on the side of `window[own.start]`, apart from `own`, with the samples just
+    /// before and after each run within the threshold (a single sample may also end the
+    /// window). A few spikes, or a cluster of short runs a row or two apart, would otherwise
+    /// widen each other's range and context until none of them stood out; a genuine
+    /// manoeuvre's samples are excluded from neither (a rigid airframe's rates and angles move
+    /// continuously, so its excursions are not single rows or short runs back at the level on
+    /// both sides; or they are the past the screen passed).
+    pub fn fellows(&self, window: &[f64], own: std::ops::Range<usize>) -> Vec<bool> {
         let (med, scale) = robust(window);
         let limit = self.hampel_t * scale;
-        let side = (window[centre] - med).signum();
+        let side = (window[own.start] - med).signum();
         let out = |k: usize| (window[k] - med).abs() > limit;
-        (0..window.len())
-            .map(|k| {
-                k != centre
-                    && out(k)
-                    && (window[k] - med).signum() == side
-                    && [k.checked_sub(1), Some(k + 1).filter(|&j| j < window.len())]
-                        .iter()
-                        .flatten()
-                        .all(|&j| j == centre || !out(j))
-            })
-            .collect()
+        let same = |k: usize| out(k) && (window[k] - med).signum() == side;
+        let mut mask = vec![false; window.len()];
+        let mut k = 0;
+        while k < window.len() {
+            let start = k;
+            while k < window.len() && same(k) {
+                k += 1;
+            }
+            if k == start {
+                k += 1;
+                continue;
+            }
+            let len = k - start;
+            let bounded = |j: Option<usize>| j.is_none_or(|j| own.contains(&j) || !out(j));
+            let after = Some(k).filter(|&j| j < window.len());
+            let closed = start > 0 && after.is_some() || len == 1;
+            let apart = k <= own.start || start >= own.end;
+            if len <= RUN_MAX && closed && apart && bounded(start.checked_sub(1)) && bounded(after)
+            {
+                mask[start..k].iter_mut().for_each(|m| *m = true);
+            }
+        }
+        mask
     }
 
     /// The gross-outlier guard of test 2 (module doc): the departure from the neighbours must
@@ -485,14 +513,16 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Screened<I> {
         for k in 2..=WARN_RUN_MAX.min(longest) {
             let rest = col[..k - 1].iter().copied().collect::<Option<Vec<f64>>>()?;
             let run: Vec<f64> = std::iter::once(value).chain(rest).collect();
-            let after: Vec<f64> = col[k - 1..].iter().take(h).flatten().copied().collect();
-            let context: Vec<f64> = self
-                .past
-                .iter()
-                .map(|v| v[c])
-                .chain(col[k - 1..].iter().copied())
-                .flatten()
-                .collect();
+            // The other short runs of a cluster ahead must not set the scale (as in test 1–2).
+            let next: Vec<f64> = col[k - 1..].iter().flatten().copied().collect();
+            let window: Vec<f64> = before.iter().chain(&run).chain(&next).copied().collect();
+            let own = before.len()..before.len() + k;
+            let fellows = screen.fellows(&window, own.clone());
+            let clean: Vec<f64> =
+                next.iter().zip(&fellows[own.end..]).filter(|f| !f.1).map(|f| *f.0).collect();
+            let after: Vec<f64> = clean.iter().take(h).copied().collect();
+            let context: Vec<f64> =
+                self.past.iter().filter_map(|v| v[c]).chain(clean.iter().copied()).collect();
             let Some((median, threshold)) = screen.run_spike(&before, &run, &after, &context)
             else {
                 continue;

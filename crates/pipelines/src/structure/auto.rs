@@ -386,7 +386,16 @@ pub struct StructureReport {
     pub samples_used: usize,
     /// Per coefficient.
     pub coefficients: Vec<CoefficientReport>,
+    /// What the selection's reader should doubt ([`AutoSelection::warnings`]).
+    pub warnings: Vec<String>,
 }
+
+/// Fewest samples per term of the largest regression (the candidates and the constant) for
+/// which a selection is trusted without a warning. Equation error's partial F and PSE are
+/// estimated from the residuals: with fewer than about ten samples per regressor the residual
+/// variance has few degrees of freedom and the F cut-off (20) is met by chance (Klein &
+/// Morelli 2006, ch. 5, recommend many samples per parameter).
+pub const SAMPLES_PER_TERM: usize = 10;
 
 impl AutoSelection {
     /// The report for `summary.json`.
@@ -405,7 +414,22 @@ impl AutoSelection {
             samples_read: self.samples_read,
             samples_used: self.samples_used,
             coefficients: self.selections.iter().map(coefficient_report).collect(),
+            warnings: self.warnings(),
         }
+    }
+
+    /// Warnings about the selection: too few samples for the candidates offered (fewer than
+    /// [`SAMPLES_PER_TERM`] per term of the largest regression).
+    pub fn warnings(&self) -> Vec<String> {
+        let terms = self.selections.iter().map(|s| s.candidates.len() + 1).max().unwrap_or(0);
+        let mut out = Vec::new();
+        if self.samples_used < SAMPLES_PER_TERM * terms {
+            out.push(format!(
+                "structure selection on {} samples for up to {terms} terms (candidates and the constant): fewer than {SAMPLES_PER_TERM} samples per term, so its partial F tests mean little; select on a longer record or offer fewer candidates (--candidates)",
+                self.samples_used
+            ));
+        }
+        out
     }
 
     /// The selection path for people: per coefficient, one line per step and the result.
@@ -445,6 +469,7 @@ impl AutoSelection {
                 r.stopped
             ));
         }
+        lines.extend(self.warnings().into_iter().map(|w| format!("warning: {w}")));
         lines
     }
 }

@@ -287,3 +287,30 @@ fn alternating_spikes_are_found() {
         assert_eq!(flagged(&x), at, "spikes at {at:?}");
     }
 }
+
+/// Clusters of short runs a row or two apart on a response channel (±0.02 of noise, members
+/// at 0.9: as q in rad/s, a jump out and back each sample that no rigid airframe makes) are
+/// rejected whole, each member only: the other runs of the cluster set neither the range around
+/// a run nor its context, as the other spikes of a window do not for a single one. The samples
+/// between the runs pass.
+#[test]
+fn clusters_of_short_runs_are_found() {
+    let base: Vec<f64> = noise(80, 11).iter().map(|v| 0.02 * v).collect();
+    let clusters: [&[usize]; 7] = [
+        &[30, 31, 33],
+        &[30, 32, 33],
+        &[30, 31, 34, 35],
+        &[30, 31, 32, 34, 35, 36],
+        &[30, 31, 33, 34, 36],
+        &[30, 33, 34],
+        &[0, 1, 3],
+    ];
+    for at in clusters {
+        let mut x = base.clone();
+        at.iter().for_each(|&k| x[k] = 0.9);
+        let (rejected, notes) = screened(&x, &vec![0.0; 80]);
+        let rows: Vec<usize> = rejected.iter().map(|r| r.0).collect();
+        assert_eq!(rows, at, "cluster {at:?}: {rejected:?}");
+        assert!(notes.is_empty(), "{notes:?}");
+    }
+}

@@ -14,7 +14,11 @@
 //! lateral one, both for a coupled one; every other model input that varies over the manoeuvre
 //! is an input of the linear model, measured: the controls, the thrust and its moment, and the
 //! measured states the set does not integrate (`V`, `θ` on the short period; `V, α, q, θ` and
-//! the measured `ax, az` on the lateral set).
+//! the measured `ax, az` on the lateral set). The speed's effect runs through the total
+//! coefficients (`q̄ S CL` with `CL` at the reference), so the parameters not estimated enter
+//! it at their starting values; on the Twin Otter records leaving `V` out (a constant-speed
+//! short period) moved `CL_alpha`, `CL_de` and `Cm_q` 1.5–2.7 combined σ away from the
+//! time-domain fit, with it they agree within 1.7 (docs/fdoe.md).
 //!
 //! The data are sampled with the inputs linear between samples (as the time-domain fit
 //! integrates them), so the exact discrete model is the first-order hold
@@ -179,6 +183,35 @@ impl FdoeResult {
     pub fn get(&self, name: &str) -> Option<(f64, f64)> {
         let i = self.names.iter().position(|n| n == name)?;
         Some((self.values[i], self.sigma[i]?))
+    }
+}
+
+impl core::fmt::Display for FdoeResult {
+    /// A printable summary: band, iteration log, estimates with Cramér–Rao σ (`—` for the
+    /// parameters not estimated).
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let k: usize = self.frequencies_hz.iter().map(Vec::len).sum();
+        writeln!(
+            f,
+            "frequency-domain output error: {}–{} Hz, {k} frequencies in {} manoeuvre(s), {} outputs: {}",
+            self.band_hz.0,
+            self.band_hz.1,
+            self.frequencies_hz.len(),
+            self.outputs.len(),
+            self.termination.describe()
+        )?;
+        writeln!(f, "{:>5} {:>14} {:>12}", "iter", "ln det S", "max step/σ")?;
+        for it in &self.iterations {
+            writeln!(f, "{:>5} {:>14.8} {:>12.3e}", it.iteration, it.ln_det_r, it.max_step_sigma)?;
+        }
+        writeln!(f, "{:<22} {:>14} {:>12}", "parameter", "estimate", "CR σ")?;
+        for (i, name) in self.names.iter().enumerate() {
+            match self.sigma[i].filter(|_| self.estimated[i]) {
+                Some(s) => writeln!(f, "{name:<22} {:>14.6} {s:>12.6}", self.values[i])?,
+                None => writeln!(f, "{name:<22} {:>14} {:>12}", "—", "—")?,
+            }
+        }
+        Ok(())
     }
 }
 
@@ -617,19 +650,25 @@ impl Context {
         let ny = self.outputs.len();
         let nx = self.states.len();
         let nf = self.free.len();
-        let (theta, _) = self.split(theta0, beta);
+        let (theta, xd) = self.split(theta0, beta);
         let mut out: Vec<Vec<DMatrix<C64>>> =
             self.man.iter().map(|m| vec![DMatrix::zeros(ny, nb); m.z.len()]).collect();
+        // The whole prediction, the transient term included (it depends on θ through Φ, C).
+        let full = |theta: &[f64], mi: usize| -> Result<Vec<DVector<C64>>, FdoeError> {
+            let m = &self.man[mi];
+            let (y, tr) = predict(&self.model, theta, m, &self.states, &self.outputs)?;
+            let x = DVector::from_iterator(nx, xd[mi].iter().map(|v| C64::new(*v, 0.0)));
+            Ok(y.iter().zip(&tr).map(|(y, t)| y + t * &x).collect())
+        };
         for (col, &i) in self.free.iter().enumerate() {
             let h = 1e-5 * theta[i].abs().max(1e-2);
             let mut tp = theta.clone();
             tp[i] += h;
             let mut tm = theta.clone();
             tm[i] -= h;
-            for (mi, m) in self.man.iter().enumerate() {
-                let (yp, _) = predict(&self.model, &tp, m, &self.states, &self.outputs)?;
-                let (ym, _) = predict(&self.model, &tm, m, &self.states, &self.outputs)?;
-                for k in 0..m.z.len() {
+            for mi in 0..self.man.len() {
+                let (yp, ym) = (full(&tp, mi)?, full(&tm, mi)?);
+                for k in 0..yp.len() {
                     let d = (&yp[k] - &ym[k]) / C64::new(2.0 * h, 0.0);
                     out[mi][k].set_column(col, &d);
                 }

@@ -89,7 +89,9 @@ fn val_fdoe_agrees_with_output_error_on_the_twin_otter() {
 /// does not (4.4 combined σ: fdoe 4.28 ± 0.16, oe 3.21 ± 0.19). Within the band the az channel
 /// asks for a lift slope of about 4.3 where α asks for 3.3–3.5 (fitted on α, q, q̇ alone fdoe
 /// gives 3.47 ± 0.29); the time-domain fit weights az by its whole-record residual, which the
-/// phugoid's model error makes large, so the α channel sets its CL_alpha (docs/fdoe.md).
+/// slow airspeed/attitude model error makes large, so the α channel sets its CL_alpha; the
+/// filter-error method and the EKF, which model that error as process noise, give 4.39 and
+/// 4.38 (README, "Compare the estimators"), as fdoe does (docs/fdoe.md).
 /// The test holds that finding: it fails if CL_alpha comes within 2σ or a Cm leaves it.
 #[test]
 fn val_fdoe_on_the_hfb320_pitching_moment_agrees_lift_slope_does_not() {

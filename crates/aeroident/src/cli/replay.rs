@@ -5,7 +5,8 @@
 //!                  [--out <dir>]
 //!                  [--model longitudinal|lateral|six-axis|FILE|auto[:longitudinal|lateral|six-axis]]
 //!                  [--select swr|mof] [--candidates TERM,…]
-//!                  [--estimator rls|rls-iv|ftr|ekf|smpe|smpe-corrected|gradient|oe|fem]
+//!                  [--estimator rls|rls-iv|ftr|ekf|smpe|smpe-corrected|gradient|oe|fem|fdoe]
+//!                  [--band-hz F_MIN:F_MAX]
 //!                  [--forgetting λ] [--instrument-delay N]
 //!                  [--derivatives auto|differentiate] [--diff-window N] [--realtime]
 //!                  [--validate-on <data2.csv>] [--window START:END …] [--and <more.csv> …]
@@ -19,7 +20,8 @@
 //! `--out` is given. The model used is printed on stderr. A diverged estimator is an error
 //! (non-zero exit) after the summary is written. `--estimator oe` is the batch output-error
 //! fit: it reads the whole record first (it says so), prints its iterations and writes
-//! `summary.json` (estimates, coloured-residual and Cramér–Rao σ, residual RMS).
+//! `summary.json` (estimates, coloured-residual and Cramér–Rao σ, residual RMS). `--estimator
+//! fdoe` is frequency-domain output error over `--band-hz` (docs/fdoe.md), in the same shape.
 //!
 //! SIGINT (Ctrl-C), SIGTERM or SIGHUP ends a real-time replay gracefully, the normal end of a
 //! live feed ([`crate::interrupt`]): the sample in hand is finished, `estimates.csv`,

@@ -112,7 +112,9 @@ impl EstimatorKind {
                 &["initial_states", "samples", "step", "bootstrap_refits", "max_iterations"]
             }
             EstimatorKind::Fem => &["initial_states", "samples", "process_noise", "max_iterations"],
-            EstimatorKind::Fdoe => &["band_hz", "max_iterations"],
+            // A recorded flight's fit only (`replay --band-hz`, `--max-iterations`): the
+            // closed-loop experiment refuses the kind (`aircraft::batch::config`).
+            EstimatorKind::Fdoe => &[],
             EstimatorKind::Smpe | EstimatorKind::SmpeCorrected | EstimatorKind::Gradient => &[],
         }
     }

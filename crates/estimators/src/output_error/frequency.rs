@@ -79,6 +79,10 @@ use std::{format, vec};
 
 type C64 = Complex<f64>;
 
+/// Per frequency, the forced prediction `Ŷ_k` (without the transient) and the transient's
+/// matrix `C (z_k I − Φ)⁻¹ z_k`.
+type Prediction = (Vec<DVector<C64>>, Vec<DMatrix<C64>>);
+
 /// SIDPAC's rigid-body band for frequency-domain estimation, Hz (Klein & Morelli 2006 ch. 7:
 /// 0.1–1.5 Hz covers the short-period and Dutch-roll modes of transport and general-aviation
 /// aircraft and the energy of the usual multistep inputs). A record whose excitation or modes
@@ -557,7 +561,7 @@ fn predict(
     m: &Manoeuvre,
     states: &[usize],
     outputs: &[Output],
-) -> Result<(Vec<DVector<C64>>, Vec<DMatrix<C64>>), FdoeError> {
+) -> Result<Prediction, FdoeError> {
     let lin = linearise(model, theta, m, states, outputs)?;
     let (phi, g0, g1) = first_order_hold(&lin.a, &lin.b, m.dt_s);
     let cx = |x: &DMatrix<f64>| x.map(|v| C64::new(v, 0.0));
@@ -798,7 +802,6 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FdoeConfig) -> Result<FdoeR
         ));
     }
     let start = equation_error_start(&config.structure, manoeuvres);
-    let nf = ctx.free.len();
     let nb = ctx.n_unknowns();
     let ny = ctx.outputs.len();
     let mut beta: Vec<f64> = ctx.free.iter().map(|&i| start[i]).collect();
@@ -896,7 +899,6 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FdoeConfig) -> Result<FdoeR
     } else {
         termination
     };
-    let _ = nf;
     Ok(FdoeResult {
         structure: config.structure,
         names: config.structure.params().map(|p| p.name().to_string()).collect(),

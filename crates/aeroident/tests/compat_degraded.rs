@@ -99,7 +99,7 @@ fn val_compat_recovers_the_injected_biases_and_time_shifts_of_a_degraded_record(
     for name in ["CL_alpha", "Cm_alpha", "Cm_q", "Cm_de"] {
         let t = truth.derivative(Param::from_name(name).unwrap()).unwrap();
         let est = |sm: &aeroident_pipelines::replay::batch::BatchSummary| {
-            sm.parameters.iter().find(|p| p.name == name).unwrap().estimate
+            sm.parameters.iter().find(|p| p.name == name).unwrap().estimate.unwrap()
         };
         eprintln!(
             "{name}: truth {t:+.4}  raw {:+.4}  corrected {:+.4}",
@@ -133,7 +133,7 @@ fn val_compat_recovers_the_injected_biases_and_time_shifts_of_a_degraded_record(
     for fit in [&state, &lateral] {
         for name in ["Cl_beta", "Cl_p", "Cn_beta", "Cn_r"] {
             let t = truth.derivative(Param::from_name(name).unwrap()).unwrap();
-            let est = fit.parameters.iter().find(|p| p.name == name).unwrap().estimate;
+            let est = fit.parameters.iter().find(|p| p.name == name).unwrap().estimate.unwrap();
             assert!((est - t).abs() < 0.05 * t.abs(), "{} {name}: {est} vs truth {t}", fit.model);
         }
     }

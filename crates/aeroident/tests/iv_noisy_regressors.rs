@@ -122,7 +122,8 @@ fn val_rls_iv_removes_the_regressor_noise_bias_that_least_squares_has() {
         let o = oe.parameters.iter().find(|p| p.name == name).unwrap();
         eprintln!(
             "{name:9} truth {t:+.4}  noise-free RLS {r:+.4}  RLS {l:+.4} ± {ls:.4}  RLS-IV {v:+.4} ± {vs:.4}  OE {:+.4} ± {:.4}",
-            o.estimate, o.std_error
+            o.estimate.unwrap(),
+            o.std_error.unwrap()
         );
         assert!((v - r).abs() < 2.0 * vs, "{name}: RLS-IV {v} ± {vs} vs noise-free {r}");
     }

@@ -19,7 +19,10 @@ fn fit(data: &Path, windows: &[&str]) -> BatchSummary {
 }
 
 fn values(s: &BatchSummary) -> Vec<(String, f64, f64)> {
-    s.parameters.iter().map(|p| (p.name.clone(), p.estimate, p.std_error)).collect()
+    s.parameters
+        .iter()
+        .map(|p| (p.name.clone(), p.estimate.unwrap(), p.std_error.unwrap()))
+        .collect()
 }
 
 #[test]

@@ -33,7 +33,7 @@ fn oe(data: &Path, m: &Mapping) -> BatchSummary {
 
 fn estimate(s: &BatchSummary, name: &str) -> (f64, f64) {
     let p = s.parameters.iter().find(|p| p.name == name).unwrap_or_else(|| panic!("no {name}"));
-    (p.estimate, p.std_error)
+    (p.estimate.unwrap(), p.std_error.unwrap())
 }
 
 /// Output error without β: converged, β's initial value estimated per manoeuvre and said so,

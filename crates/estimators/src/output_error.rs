@@ -158,6 +158,7 @@ use crate::coloured::batch as coloured;
 pub mod bootstrap;
 pub mod design;
 pub mod filter_error;
+pub mod frequency;
 pub mod riccati;
 mod simulation;
 pub use simulation::{MAX_FIT_BYTES, MAX_SENSITIVITY_VALUES, estimated_peak_bytes};

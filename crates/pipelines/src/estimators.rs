@@ -49,6 +49,10 @@ pub enum EstimatorKind {
     /// Batch filter-error method: maximum likelihood with process noise (turbulence), a
     /// steady-state Kalman filter in the cost (Jategaonkar 2015 ch. 5; not real time, as `oe`).
     Fem,
+    /// Batch frequency-domain output error: the derivatives of the structure's linearised model
+    /// from the Fourier transforms of the record over a band (Klein & Morelli 2006 ch. 7,
+    /// SIDPAC `fdoe`; `crate::replay::frequency`). `replay` only.
+    Fdoe,
 }
 
 impl crate::Named for EstimatorKind {
@@ -63,6 +67,7 @@ impl crate::Named for EstimatorKind {
         EstimatorKind::Gradient,
         EstimatorKind::Oe,
         EstimatorKind::Fem,
+        EstimatorKind::Fdoe,
     ];
 
     fn name(self) -> &'static str {
@@ -84,6 +89,7 @@ impl EstimatorKind {
             EstimatorKind::Gradient => "gradient",
             EstimatorKind::Oe => "oe",
             EstimatorKind::Fem => "fem",
+            EstimatorKind::Fdoe => "fdoe",
         }
     }
 
@@ -94,7 +100,10 @@ impl EstimatorKind {
     /// their own model (Kalman filters) do not: a differentiated rate is not an independent
     /// measurement, so they are not given one.
     pub fn uses_measured_coefficients(self) -> bool {
-        !matches!(self, EstimatorKind::Ekf | EstimatorKind::Oe | EstimatorKind::Fem)
+        !matches!(
+            self,
+            EstimatorKind::Ekf | EstimatorKind::Oe | EstimatorKind::Fem | EstimatorKind::Fdoe
+        )
     }
 
     /// The options an `[[estimator]]` entry of this kind takes besides `kind`, `model` and
@@ -112,13 +121,16 @@ impl EstimatorKind {
                 &["initial_states", "samples", "step", "bootstrap_refits", "max_iterations"]
             }
             EstimatorKind::Fem => &["initial_states", "samples", "process_noise", "max_iterations"],
+            // A recorded flight's fit only (`replay --band-hz`, `--max-iterations`): the
+            // closed-loop experiment refuses the kind (`aircraft::batch::config`).
+            EstimatorKind::Fdoe => &[],
             EstimatorKind::Smpe | EstimatorKind::SmpeCorrected | EstimatorKind::Gradient => &[],
         }
     }
 
-    /// Whether the estimator is a batch fit of a whole record (`oe`, `fem`).
+    /// Whether the estimator is a batch fit of a whole record (`oe`, `fem`, `fdoe`).
     pub fn is_batch(self) -> bool {
-        matches!(self, EstimatorKind::Oe | EstimatorKind::Fem)
+        matches!(self, EstimatorKind::Oe | EstimatorKind::Fem | EstimatorKind::Fdoe)
     }
 
     /// The samples the closed-loop experiment feeds it unless its entry says otherwise
@@ -378,7 +390,9 @@ pub fn build(
             GradientEstimator::new(structure, &priors, ModelReferenceConfig::default())
                 .map_err(config)?,
         ),
-        EstimatorKind::Oe | EstimatorKind::Fem => return Err(BuildError::Batch(kind.name())),
+        EstimatorKind::Oe | EstimatorKind::Fem | EstimatorKind::Fdoe => {
+            return Err(BuildError::Batch(kind.name()));
+        }
     })
 }
 

@@ -10,7 +10,7 @@ use aeroident_estimators::output_error::InitialStates;
 use aeroident_io::{Mapping, open_log_with_notes, open_log_with_report};
 use aeroident_pipelines::estimators::EstimatorKind;
 use aeroident_pipelines::replay::batch::{
-    BatchOutcome, FitOptions, fit_records, parse_process_noise_states, validate_on,
+    BatchMethod, BatchOutcome, FitOptions, fit_records, parse_process_noise_states, validate_on,
 };
 use aeroident_pipelines::structure::{AutoSelection, model_from_args};
 use numpy::IntoPyArray;
@@ -83,6 +83,12 @@ fn fit_file<'py>(
             kind.name()
         )));
     }
+    if kind == EstimatorKind::Fdoe {
+        return Err(err(
+            "fit: `fdoe` is not available from Python yet: run `aeroident replay --estimator fdoe`"
+                .to_string(),
+        ));
+    }
     let setting = self::initial_states(initial_states)?;
     let process_noise = process_noise
         .map(parse_process_noise_states)
@@ -114,7 +120,7 @@ fn fit_file<'py>(
             reports.push(report);
         }
         let options = FitOptions {
-            fem: kind == EstimatorKind::Fem,
+            method: if kind == EstimatorKind::Fem { BatchMethod::Fem } else { BatchMethod::Oe },
             initial_states: setting,
             bootstrap_refits: bootstrap,
             max_iterations,
@@ -143,7 +149,8 @@ fn fit_file<'py>(
     let d = PyDict::new(py);
     d.set_item("names", r.names[..np].to_vec())?;
     d.set_item("values", r.values[..np].to_vec().into_pyarray(py))?;
-    let sigma: Vec<f64> = s.parameters.iter().map(|p| p.std_error).collect();
+    // `oe` and `fem` give every parameter a σ (only `fdoe`, refused above, has nulls).
+    let sigma: Vec<f64> = s.parameters.iter().map(|p| p.std_error.unwrap_or(f64::NAN)).collect();
     d.set_item("sigma", sigma.into_pyarray(py))?;
     d.set_item("crb_sigma", r.sigma[..np].to_vec().into_pyarray(py))?;
     let corr: Vec<f64> =

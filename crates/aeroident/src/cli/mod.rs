@@ -33,7 +33,7 @@ pub enum Command {
     /// Monte Carlo campaign: N seeded noisy flights of a scenario, statistics per estimator.
     Montecarlo(montecarlo::MonteCarloArgs),
     /// Replay a recorded flight through an estimator, sample by sample.
-    Replay(replay::ReplayArgs),
+    Replay(Box<replay::ReplayArgs>),
     /// Check a record's data compatibility: the biases, scale factors and time shifts that
     /// make its accelerations, rates, attitudes and air data consistent.
     Compat(compat::CompatArgs),
@@ -77,7 +77,7 @@ impl Cli {
             Command::F16(a) => f16::execute(a),
             Command::Run(a) => run::execute(a),
             Command::Montecarlo(a) => montecarlo::execute(a),
-            Command::Replay(a) => replay::execute(a),
+            Command::Replay(a) => replay::execute(*a),
             Command::Compat(a) => compat::execute(a),
             Command::Bench(a) => bench::execute(a),
             Command::Export(a) => export::execute(a),

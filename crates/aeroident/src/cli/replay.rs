@@ -5,7 +5,8 @@
 //!                  [--out <dir>]
 //!                  [--model longitudinal|lateral|six-axis|FILE|auto[:longitudinal|lateral|six-axis]]
 //!                  [--select swr|mof] [--candidates TERM,…]
-//!                  [--estimator rls|rls-iv|ftr|ekf|smpe|smpe-corrected|smpe-finite-time|gradient|oe|fem]
+//!                  [--estimator rls|rls-iv|ftr|ekf|smpe|smpe-corrected|smpe-finite-time|gradient|oe|fem|fdoe]
+//!                  [--band-hz F_MIN:F_MAX]
 //!                  [--forgetting λ] [--instrument-delay N]
 //!                  [--derivatives auto|differentiate] [--diff-window N] [--realtime]
 //!                  [--validate-on <data2.csv>] [--window START:END …] [--and <more.csv> …]
@@ -19,7 +20,8 @@
 //! `--out` is given. The model used is printed on stderr. A diverged estimator is an error
 //! (non-zero exit) after the summary is written. `--estimator oe` is the batch output-error
 //! fit: it reads the whole record first (it says so), prints its iterations and writes
-//! `summary.json` (estimates, coloured-residual and Cramér–Rao σ, residual RMS).
+//! `summary.json` (estimates, coloured-residual and Cramér–Rao σ, residual RMS). `--estimator
+//! fdoe` is frequency-domain output error over `--band-hz` (docs/fdoe.md), in the same shape.
 //!
 //! SIGINT (Ctrl-C), SIGTERM or SIGHUP ends a real-time replay gracefully, the normal end of a
 //! live feed ([`crate::interrupt`]): the sample in hand is finished, `estimates.csv`,
@@ -61,6 +63,7 @@ use aeroident_io::{
     FlightDataReader, LogFormat, Mapping, ModelSpec, open_log_with_notes, open_log_with_report,
 };
 use aeroident_pipelines::estimators::EstimatorKind;
+use aeroident_pipelines::replay::batch::BatchMethod;
 use aeroident_pipelines::replay::{
     DerivativeSource, EstimateRows, Pacing, ReplayObserver, ReplayOptions, replay,
 };
@@ -186,6 +189,11 @@ pub struct ReplayArgs {
     /// are genuine one-sample pulses on an otherwise constant channel.
     #[arg(long)]
     pub no_spike_screen: bool,
+    /// `fdoe`: the band fitted, `F_MIN:F_MAX` in Hz (default 0.1:1.5, SIDPAC's rigid-body
+    /// band, Klein & Morelli 2006 ch. 7). Choose it from the excitation: where the inputs have
+    /// energy and the modes of the model lie, below Nyquist.
+    #[arg(long, value_name = "F_MIN:F_MAX", value_parser = parse_band)]
+    pub band_hz: Option<(f64, f64)>,
     /// `oe`: Huber's outlier-resistant fit (IRLS weights on the residuals normalised by their
     /// robust σ, k = 1.345) instead of the Gaussian maximum-likelihood one.
     #[arg(long)]
@@ -233,6 +241,18 @@ impl ReplayObserver for Console<'_> {
 
 fn parse_window(text: &str) -> Result<TimeWindow, String> {
     TimeWindow::parse(text)
+}
+
+/// `F_MIN:F_MAX` in Hz, `0 < F_MIN < F_MAX`.
+fn parse_band(text: &str) -> Result<(f64, f64), String> {
+    let bad = || format!("`{text}`: give the band as F_MIN:F_MAX in Hz with 0 < F_MIN < F_MAX");
+    let (a, b) = text.split_once(':').ok_or_else(bad)?;
+    let f0: f64 = a.trim().parse().map_err(|_| bad())?;
+    let f1: f64 = b.trim().parse().map_err(|_| bad())?;
+    if !(f0 > 0.0 && f1 > f0 && f1.is_finite()) {
+        return Err(bad());
+    }
+    Ok((f0, f1))
 }
 
 /// Runs `aeroident replay`.
@@ -365,6 +385,12 @@ fn check_combination(args: &ReplayArgs, live: bool, mavlink: bool) -> anyhow::Re
     if args.instrument_delay.is_some() && args.estimator != EstimatorKind::RlsIv {
         anyhow::bail!(
             "--instrument-delay applies to instrumental variables (--estimator rls-iv), not to --estimator {}",
+            args.estimator.name()
+        );
+    }
+    if args.band_hz.is_some() && args.estimator != EstimatorKind::Fdoe {
+        anyhow::bail!(
+            "--band-hz is the band of frequency-domain output error (--estimator fdoe), not of --estimator {}",
             args.estimator.name()
         );
     }
@@ -1083,7 +1109,7 @@ fn execute_batch(
     interrupt: &crate::interrupt::Interrupt,
     mut out: Option<crate::outdir::OutputDir>,
 ) -> anyhow::Result<()> {
-    let fem = args.estimator == EstimatorKind::Fem;
+    let oe = args.estimator == EstimatorKind::Oe;
     let stop = StopFlag::default();
     let options = aeroident_pipelines::replay::batch::FitOptions {
         stop: Some(stop.clone()),
@@ -1091,9 +1117,13 @@ fn execute_batch(
     };
     eprintln!(
         "{} is a batch method: reading the whole record before fitting (not real time)",
-        if fem { "the filter-error method" } else { "output error" }
+        match args.estimator {
+            EstimatorKind::Fem => "the filter-error method",
+            EstimatorKind::Fdoe => "frequency-domain output error",
+            _ => "output error",
+        }
     );
-    if let Some(n) = options.bootstrap_refits.filter(|_| !fem) {
+    if let Some(n) = options.bootstrap_refits.filter(|_| oe) {
         eprintln!("bootstrap: a filter-error fit for the noise levels, then {n} replicas refitted");
     }
     let input = BatchInput {
@@ -1197,7 +1227,15 @@ fn fit_options(
     compat: Option<aeroident_pipelines::compat::Corrections>,
 ) -> anyhow::Result<aeroident_pipelines::replay::batch::FitOptions> {
     Ok(aeroident_pipelines::replay::batch::FitOptions {
-        fem: args.estimator == EstimatorKind::Fem,
+        method: match args.estimator {
+            EstimatorKind::Fem => BatchMethod::Fem,
+            EstimatorKind::Fdoe => BatchMethod::Fdoe {
+                band_hz: args
+                    .band_hz
+                    .unwrap_or(aeroident_estimators::output_error::frequency::DEFAULT_BAND_HZ),
+            },
+            _ => BatchMethod::Oe,
+        },
         initial_states: args.initial_states.unwrap_or(InitialStatesArg::FirstSample).to_config(),
         bootstrap_refits: args.bootstrap.map(|n| n as usize),
         max_iterations: args.max_iterations.map(|n| n as usize),
@@ -1293,7 +1331,11 @@ fn write_batch(
             }
         }
         None => {
-            crate::cli::print_stdout(&outcome.result.to_string())?;
+            let table = match &outcome.frequency {
+                Some(f) => f.to_string(),
+                None => outcome.result.to_string(),
+            };
+            crate::cli::print_stdout(&table)?;
             eprintln!("{text}");
         }
     }

@@ -43,8 +43,11 @@ pub fn results(outcome: &BatchOutcome, title: &str, references: &[Reference]) ->
         .iter()
         .map(|p| {
             let reference = references.iter().find(|r| r.name == p.name).map(|r| r.value);
-            ParameterRow::new(p.name.clone(), Some(p.estimate), Some(p.std_error), reference, None)
-                .with_crb_sigma(p.crb_sigma)
+            let row = ParameterRow::new(p.name.clone(), p.estimate, p.std_error, reference, None);
+            match p.crb_sigma {
+                Some(c) => row.with_crb_sigma(c),
+                None => row,
+            }
         })
         .collect();
     let v = &s.validation;
@@ -160,12 +163,24 @@ pub fn settings(source: &super::Source, outcome: &BatchOutcome) -> Vec<(String, 
         ("structure".into(), outcome.model.structure.names().collect::<Vec<_>>().join(", ")),
         (
             "estimator".into(),
-            if s.estimator == "fem" {
-                "fem (batch maximum-likelihood filter error: output error with process noise)"
-            } else {
-                "oe (batch maximum-likelihood output error)"
-            }
-            .into(),
+            match s.estimator.as_str() {
+                "fem" => {
+                    "fem (batch maximum-likelihood filter error: output error with process noise)"
+                        .to_string()
+                }
+                "fdoe" => match &s.frequency_domain {
+                    Some(f) => format!(
+                        "fdoe (frequency-domain output error, Klein & Morelli ch. 7) over {}–{} Hz; linear model states {}, inputs {}; not estimated (null): {}",
+                        f.band_hz.0,
+                        f.band_hz.1,
+                        f.states.join(", "),
+                        f.inputs.join(", "),
+                        f.not_estimated.join(", ")
+                    ),
+                    None => "fdoe (frequency-domain output error)".to_string(),
+                },
+                _ => "oe (batch maximum-likelihood output error)".to_string(),
+            },
         ),
         ("initial states".into(), s.initial_states.clone()),
         (

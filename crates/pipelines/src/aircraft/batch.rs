@@ -127,9 +127,12 @@ impl BatchConfig {
 /// (option `process_noise`, module doc).
 ///
 /// # Errors
-/// A message naming an unknown option or value.
+/// A message naming an unknown option or value; `fdoe`, which fits recorded flights only.
 pub fn config(spec: &SampleEstimatorSpec) -> Result<BatchConfig, String> {
     let kind = spec.kind.as_str();
+    if kind == "fdoe" {
+        return Err("fdoe: frequency-domain output error fits a recorded flight (`aeroident replay --estimator fdoe`); the closed-loop experiment's batch fits are `oe` and `fem`".into());
+    }
     let mut c = oe_config(spec.model);
     c.initial_states = InitialStates::FirstSample;
     c.step = StepKind::Relaxation;

@@ -45,6 +45,9 @@ pub struct BatchOutcome {
     /// Per output, the measured and the simulated time history (for the model-vs-measured
     /// figure of the report).
     pub traces: Vec<OutputTrace>,
+    /// `fdoe`: the frequency-domain fit itself (`result` is then the time-domain simulation
+    /// at its estimates, with its σ and iteration log); `None` for `oe`, `fem`.
+    pub frequency: Option<aeroident_estimators::output_error::frequency::FdoeResult>,
 }
 
 /// One output of a batch fit over the record: measured `z` and the model's simulated `ŷ`
@@ -71,7 +74,10 @@ impl OutputTrace {
 
 /// The [`OutputTrace`]s of `result` over `manoeuvres` (outputs not measured in every sample,
 /// or residuals that do not match the samples, are left out).
-fn output_traces(result: &OeResult, manoeuvres: &[&[AirDataSample]]) -> Vec<OutputTrace> {
+pub(super) fn output_traces(
+    result: &OeResult,
+    manoeuvres: &[&[AirDataSample]],
+) -> Vec<OutputTrace> {
     let ny = result.outputs.len();
     let total: usize = manoeuvres.iter().map(|m| m.len()).sum();
     if result.residuals.len() != total * ny {
@@ -114,16 +120,17 @@ fn output_traces(result: &OeResult, manoeuvres: &[&[AirDataSample]]) -> Vec<Outp
 pub struct BatchParameter {
     /// Name (`Cm_alpha` …).
     pub name: String,
-    /// Estimate.
-    pub estimate: f64,
-    /// Reported σ: the bootstrap σ when asked for (`--bootstrap`), else the coloured-residual
+    /// Estimate; `null` for a parameter the method does not estimate (`fdoe`: those its
+    /// linear model cannot see, [`aeroident_estimators::output_error::frequency`]).
+    pub estimate: Option<f64>,
+    /// Reported σ (`null` where the estimate is): the bootstrap σ when asked for (`--bootstrap`), else the coloured-residual
     /// σ where available, else Cramér–Rao. The console table, `report.html` and their ±2σ
     /// status use it.
-    pub std_error: f64,
+    pub std_error: Option<f64>,
     /// Which σ `std_error` is: `bootstrap`, `coloured` or `cramer_rao`.
     pub std_error_source: &'static str,
-    /// Cramér–Rao σ (`sqrt(diag M⁻¹)`).
-    pub crb_sigma: f64,
+    /// Cramér–Rao σ (`sqrt(diag M⁻¹)`), `null` where the estimate is.
+    pub crb_sigma: Option<f64>,
     /// Coloured-residual σ (the spectral form), when the correction is positive.
     pub coloured_sigma: Option<f64>,
     /// Diagnostic: the prewhitened (vector-autoregression) coloured-residual σ
@@ -212,10 +219,16 @@ pub struct BatchSummary {
     /// The parametric bootstrap (`--bootstrap N`), else `null`. Its σ is the reported σ of
     /// every unknown, the estimated initial states included.
     pub bootstrap: Option<BootstrapSummary>,
+    /// `fdoe`: the band, frequencies, linear model and residual spectra; absent for `oe`, `fem`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frequency_domain: Option<super::frequency::FrequencyDomainSummary>,
 }
 
 /// The richest preset the flight model can integrate from the record's first sample.
-fn default_model(first: &AirDataSample, mapping: &Mapping) -> Result<ModelSpec, ReplayError> {
+pub(super) fn default_model(
+    first: &AirDataSample,
+    mapping: &Mapping,
+) -> Result<ModelSpec, ReplayError> {
     let mut why = Vec::new();
     for name in ModelStructure::PRESETS {
         let Some(spec) = ModelSpec::preset(name) else { continue };
@@ -458,10 +471,19 @@ fn fit_error(method: &str, e: OeError) -> String {
 /// (relative change of det R, largest step in Cramér–Rao σ), so a creeping fit can be told
 /// from a stalled one.
 pub fn termination_note(result: &OeResult) -> Option<String> {
-    if result.termination == Termination::Converged {
+    termination_note_of(result.termination, &result.iterations)
+}
+
+/// [`termination_note`] of a fit that ended as `termination` with iteration log `iterations`
+/// (`ln_det_r` the log-determinant of its noise covariance).
+pub fn termination_note_of(
+    termination: Termination,
+    iterations: &[aeroident_estimators::output_error::OeIteration],
+) -> Option<String> {
+    if termination == Termination::Converged {
         return None;
     }
-    let last = match result.iterations.as_slice() {
+    let last = match iterations {
         [.., a, b] => format!(
             " (last iteration: relative change of det R {:.1e}, largest step {:.1e} σ)",
             (b.ln_det_r - a.ln_det_r).exp_m1().abs(),
@@ -471,8 +493,8 @@ pub fn termination_note(result: &OeResult) -> Option<String> {
     };
     Some(format!(
         "{} after {} iterations{last}",
-        result.termination.describe(),
-        result.n_iterations()
+        termination.describe(),
+        iterations.len().saturating_sub(1)
     ))
 }
 
@@ -480,7 +502,7 @@ pub fn termination_note(result: &OeResult) -> Option<String> {
 /// error's simulation at the given values, initial states at each manoeuvre's first sample),
 /// as a result whose residuals are `z − y` (for the validation of a filter-error fit, whose
 /// own residuals are one-step innovations).
-fn simulate_at(
+pub(super) fn simulate_at(
     manoeuvres: &[&[AirDataSample]],
     structure: ModelStructure,
     outputs: &[aeroident_estimators::Output],
@@ -773,12 +795,27 @@ pub fn parse_process_noise_states(list: &str) -> Result<[bool; N_STATES], String
     Ok(mask)
 }
 
+/// Which batch fit of a record (`replay --estimator oe | fem | fdoe`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum BatchMethod {
+    /// Time-domain maximum-likelihood output error.
+    Oe,
+    /// The filter-error method (output error with process noise).
+    Fem,
+    /// Frequency-domain output error ([`super::frequency`]) over the band `band_hz`
+    /// `(f_min, f_max)`, Hz.
+    Fdoe {
+        /// The band fitted, Hz.
+        band_hz: (f64, f64),
+    },
+}
+
 /// What a batch fit of a record fits and how (`replay --estimator oe|fem
 /// [--initial-states …] [--bootstrap N]`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct FitOptions {
-    /// The filter-error method (`fem`) instead of output error (`oe`).
-    pub fem: bool,
+    /// The method: output error, the filter-error method or frequency-domain output error.
+    pub method: BatchMethod,
     /// Each manoeuvre's initial state: at its first sample, or estimated.
     pub initial_states: InitialStates,
     /// `oe` only: the parametric bootstrap with this many refits ([`bootstrap_sigma`], seed
@@ -816,7 +853,7 @@ impl Default for FitOptions {
     /// (`fem`: the gain constraint on).
     fn default() -> Self {
         Self {
-            fem: false,
+            method: BatchMethod::Oe,
             initial_states: InitialStates::FirstSample,
             bootstrap_refits: None,
             max_iterations: None,
@@ -863,29 +900,32 @@ pub fn fit_records<R: Read>(
     model: Option<ModelSpec>,
     options: FitOptions,
 ) -> Result<BatchOutcome, ReplayError> {
-    if !options.fem && options.process_noise.is_some() {
+    if options.method != BatchMethod::Fem && options.process_noise.is_some() {
         return Err(ReplayError::Option {
             option: "process-noise",
             reason: "process noise is the filter-error method's (`--estimator fem`); output error has none".into(),
         });
     }
-    if !options.fem && !options.gain_constraint {
+    if options.method != BatchMethod::Fem && !options.gain_constraint {
         return Err(ReplayError::Option {
             option: "no-gain-constraint",
             reason: "the gain constraint is the filter-error method's (`--estimator fem`); output error has no filter".into(),
         });
     }
-    if options.fem && options.robust.is_some() {
+    if options.method == BatchMethod::Fem && options.robust.is_some() {
         return Err(ReplayError::Option {
             option: "robust",
             reason: "Huber's robust weights are of output error (`--estimator oe`), not of the filter-error method".into(),
         });
     }
-    if options.fem && options.bootstrap_refits.is_some() {
+    if options.method == BatchMethod::Fem && options.bootstrap_refits.is_some() {
         return Err(ReplayError::Option {
             option: "bootstrap",
             reason: "the parametric bootstrap is of output error (`--estimator oe`); the filter-error method's own σ accounts for the process noise".into(),
         });
+    }
+    if let BatchMethod::Fdoe { .. } = options.method {
+        check_fdoe_options(&options)?;
     }
     if let Some(n) = options.bootstrap_refits {
         // Before the record is read: the replicas' storage and time grow with the count.
@@ -895,6 +935,9 @@ pub fn fit_records<R: Read>(
     let file = readers.iter().map(|r| r.file()).collect::<Vec<_>>().join(", ");
     let rec =
         read_records(readers, options.spike_screen, options.compat.as_ref(), &options.windows)?;
+    if let BatchMethod::Fdoe { band_hz } = options.method {
+        return super::frequency::fit_fdoe(rec, &file, mapping, model, band_hz, &options);
+    }
     let model = match model {
         Some(m) => m,
         None => default_model(&rec.manoeuvres[0][0], mapping)?,
@@ -943,7 +986,32 @@ pub fn fit_records<R: Read>(
     if let Some(c) = &options.compat {
         summary.warnings.extend(c.warnings());
     }
-    Ok(BatchOutcome { model, result: fitted.result, summary, traces })
+    Ok(BatchOutcome { model, result: fitted.result, summary, traces, frequency: None })
+}
+
+/// Refuses the time-domain fits' options on a frequency-domain fit.
+fn check_fdoe_options(options: &FitOptions) -> Result<(), ReplayError> {
+    let refuse = |option: &'static str, what: &str| {
+        Err(ReplayError::Option {
+            option,
+            reason: format!(
+                "{what} is of the time-domain fits (`--estimator oe`), not of frequency-domain output error"
+            ),
+        })
+    };
+    if options.bootstrap_refits.is_some() {
+        return refuse("bootstrap", "the parametric bootstrap");
+    }
+    if options.robust.is_some() {
+        return refuse("robust", "Huber's robust weighting");
+    }
+    if options.initial_states != InitialStates::FirstSample {
+        return refuse(
+            "initial-states",
+            "estimating initial states (fdoe estimates each manoeuvre's initial/final-condition terms anyway)",
+        );
+    }
+    Ok(())
 }
 
 /// The summary's warnings when one sample dominates the fit
@@ -999,7 +1067,7 @@ fn fit_slices(
     structure: ModelStructure,
     options: &FitOptions,
 ) -> Result<FittedRecord, ReplayError> {
-    if options.fem {
+    if options.method == BatchMethod::Fem {
         let mut config = FemConfig::new(structure);
         // Convergence on turbulent or model-error records is slow (module doc of filter_error).
         config.oe.max_iterations = options.max_iterations.unwrap_or(MAX_ITERATIONS);
@@ -1113,14 +1181,14 @@ fn summarise(
     let parameters = (0..result.n_params)
         .map(|i| BatchParameter {
             name: result.names[i].clone(),
-            estimate: result.values[i],
-            std_error: reported[i],
+            estimate: Some(result.values[i]),
+            std_error: Some(reported[i]),
             std_error_source: match (spread, sigmas.coloured[i]) {
                 (Some(_), _) => "bootstrap",
                 (None, Some(_)) => "coloured",
                 (None, None) => "cramer_rao",
             },
-            crb_sigma: result.sigma[i],
+            crb_sigma: Some(result.sigma[i]),
             coloured_sigma: sigmas.coloured[i],
             bootstrap_sigma: spread.map(|b| b.sigma[i]),
             bootstrap_bias: spread.map(|b| b.bias[i]),
@@ -1188,6 +1256,7 @@ fn summarise(
         initial_states: initial_states_name(initial_states).into(),
         estimated_initial_states,
         bootstrap: sigmas.bootstrap.clone(),
+        frequency_domain: None,
     }
 }
 
@@ -1236,7 +1305,7 @@ fn fit_warnings(
 ///
 /// `fit_r`: on a second record, the fitted record's noise variances `R` (per output, order of
 /// `result.outputs`), the residual variance of the prediction interval.
-fn simulated_validation(
+pub(super) fn simulated_validation(
     result: &OeResult,
     manoeuvres: &[&[AirDataSample]],
     data: &str,

@@ -72,8 +72,11 @@ pub fn cross_check(
 ) -> CrossCheck {
     let rows: Vec<(&str, Option<f64>, Option<f64>)> =
         online.parameters.iter().map(|p| (p.name.as_str(), p.estimate, p.std_error)).collect();
-    let reference: Vec<(&str, f64, f64)> =
-        batch.parameters.iter().map(|p| (p.name.as_str(), p.estimate, p.std_error)).collect();
+    let reference: Vec<(&str, f64, f64)> = batch
+        .parameters
+        .iter()
+        .filter_map(|p| Some((p.name.as_str(), p.estimate?, p.std_error?)))
+        .collect();
     let mut check = compare(kind, &rows, &reference, compat_applied);
     check.batch_estimator.clone_from(&batch.estimator);
     check.batch_status.clone_from(&batch.status);

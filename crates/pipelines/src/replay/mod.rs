@@ -44,6 +44,7 @@ pub mod constant;
 pub mod cross_check;
 pub mod diagnostics;
 pub mod explain;
+pub mod frequency;
 mod online;
 pub mod outliers;
 pub mod precision;

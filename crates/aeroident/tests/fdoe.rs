@@ -1,0 +1,138 @@
+//! `replay --estimator fdoe` (frequency-domain output error) against the time-domain output
+//! error on the same records and models: the target "within 2 combined σ"
+//! (`|Δ| ≤ 2 √(σ_fdoe² + σ_oe²)`, each method's reported σ) per shared parameter
+//! (docs/fdoe.md has the table). Skip without `../shared`, fail under CI if it is missing.
+
+mod common;
+use common::workspace;
+use std::path::Path;
+use std::process::Command;
+
+/// `replay DATA --map MAP --estimator EST ARGS --out DIR`: the parsed `summary.json`.
+fn fit(data: &Path, map: &str, estimator: &str, args: &[&str], name: &str) -> serde_json::Value {
+    let out = std::env::temp_dir().join(format!("aeroident-fdoe-{}-{name}", std::process::id()));
+    let o = Command::new(env!("CARGO_BIN_EXE_aeroident"))
+        .arg("replay")
+        .arg(data)
+        .arg("--map")
+        .arg(workspace().join("mappings").join(map))
+        .args(["--estimator", estimator])
+        .args(args)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
+    let v =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let _ = std::fs::remove_dir_all(&out);
+    v
+}
+
+/// Per parameter fdoe estimated: `(name, |Δ| / combined σ)` against `oe`.
+fn combined_sigmas(fd: &serde_json::Value, oe: &serde_json::Value) -> Vec<(String, f64)> {
+    let oe_params = oe["parameters"].as_array().unwrap();
+    let mut out = Vec::new();
+    for p in fd["parameters"].as_array().unwrap() {
+        let Some(est) = p["estimate"].as_f64() else {
+            assert!(p["std_error"].is_null(), "a null estimate with a σ: {p}");
+            continue;
+        };
+        let o = oe_params.iter().find(|o| o["name"] == p["name"]).unwrap();
+        let (s1, s2) = (p["std_error"].as_f64().unwrap(), o["std_error"].as_f64().unwrap());
+        let d = (est - o["estimate"].as_f64().unwrap()).abs() / s1.hypot(s2);
+        out.push((p["name"].as_str().unwrap().to_string(), d));
+    }
+    out
+}
+
+/// Both fits of one record: fdoe converged, the parameters it cannot see `null`, and the ratios.
+fn compare(data: &Path, map: &str, args: &[&str], name: &str) -> Vec<(String, f64)> {
+    let oe = fit(data, map, "oe", args, &format!("{name}-oe"));
+    let fd = fit(data, map, "fdoe", args, &format!("{name}-fdoe"));
+    assert_eq!(oe["status"], "converged", "{name}");
+    assert_eq!(fd["status"], "converged", "{name}: {}", fd["status_reason"]);
+    assert_eq!(fd["estimator"], "fdoe");
+    let f = &fd["frequency_domain"];
+    assert_eq!(f["band_hz"], serde_json::json!([0.1, 1.5]));
+    let not: Vec<&str> =
+        f["not_estimated"].as_array().unwrap().iter().map(|v| v.as_str().unwrap()).collect();
+    for n in &not {
+        assert!(n.starts_with("CD_") || n.ends_with("_0") || n.ends_with("_V"), "{name}: {n}");
+    }
+    let ratios = combined_sigmas(&fd, &oe);
+    eprintln!("{name}: {ratios:?}");
+    ratios
+}
+
+/// Twin Otter (SIDPAC 017, 018, 019; the default longitudinal model): every derivative
+/// fdoe estimates (`CL_alpha, CL_q, CL_de, Cm_alpha, Cm_q, Cm_de`) within 2 combined σ of
+/// output error's. Measured largest ratios 0.63, 0.83, 1.67.
+#[test]
+fn val_fdoe_agrees_with_output_error_on_the_twin_otter() {
+    for rec in ["017", "018", "019"] {
+        let Some(data) =
+            common::shared(&format!("sidpac_twin_otter/csv/totter_lon_020213f1_{rec}.csv"))
+        else {
+            return;
+        };
+        let ratios = compare(&data, "twin_otter.toml", &[], rec);
+        assert_eq!(ratios.len(), 6, "{rec}: {ratios:?}");
+        for (n, r) in ratios {
+            assert!(r <= 2.0, "{rec} {n}: {r:.2} combined σ");
+        }
+    }
+}
+
+/// HFB-320 (the book's model, `models/hfb320_book_q0.toml`): the pitching-moment derivatives
+/// agree within 2 combined σ (measured 0.03, 0.55, 0.45 for Cm_alpha, Cm_de, Cm_q0); CL_alpha
+/// does not (4.4 combined σ: fdoe 4.28 ± 0.16, oe 3.21 ± 0.19). Within the band the az channel
+/// asks for a lift slope of about 4.3 where α asks for 3.3–3.5 (fitted on α, q, q̇ alone fdoe
+/// gives 3.47 ± 0.29); the time-domain fit weights az by its whole-record residual, which the
+/// slow airspeed/attitude model error makes large, so the α channel sets its CL_alpha; the
+/// filter-error method and the EKF, which model that error as process noise, give 4.39 and
+/// 4.38 (README, "Compare the estimators"), as fdoe does (docs/fdoe.md).
+/// The test holds that finding: it fails if CL_alpha comes within 2σ or a Cm leaves it.
+#[test]
+fn val_fdoe_on_the_hfb320_pitching_moment_agrees_lift_slope_does_not() {
+    let Some(data) = common::shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else {
+        return;
+    };
+    let model = workspace().join("models/hfb320_book_q0.toml");
+    let ratios = compare(&data, "hfb320.toml", &["--model", model.to_str().unwrap()], "hfb320");
+    assert_eq!(ratios.len(), 4, "{ratios:?}");
+    for (n, r) in ratios {
+        if n == "CL_alpha" {
+            assert!(r > 2.0, "CL_alpha now within {r:.2} combined σ: update docs/fdoe.md");
+        } else {
+            assert!(r <= 2.0, "{n}: {r:.2} combined σ");
+        }
+    }
+}
+
+/// A band without frequencies of the record is refused naming it, and `--band-hz` is only for
+/// fdoe.
+#[test]
+fn errors_fdoe_band() {
+    let Some(data) = common::shared("sidpac_twin_otter/csv/totter_lon_020213f1_018.csv") else {
+        return;
+    };
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_aeroident"))
+            .arg("replay")
+            .arg(&data)
+            .arg("--map")
+            .arg(workspace().join("mappings/twin_otter.toml"))
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let o = run(&["--estimator", "fdoe", "--band-hz", "0.01:0.05"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("no frequency in the band 0.01–0.05 Hz"), "{err}");
+    let o = run(&["--estimator", "oe", "--band-hz", "0.1:2"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("--band-hz"), "{err}");
+    let o = run(&["--estimator", "fdoe", "--band-hz", "2:1"]);
+    assert!(!o.status.success());
+}

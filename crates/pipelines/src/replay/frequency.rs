@@ -1,0 +1,254 @@
+//! Frequency-domain output error of a whole record (`aeroident replay --estimator fdoe`):
+//! [`aeroident_estimators::output_error::frequency`] on the record's manoeuvres, reported in
+//! the batch fits' `summary.json` shape ([`BatchSummary`]) so the report, the results table
+//! and the cross-check read it as they read `oe`.
+//!
+//! The parameters the linear model does not see (drag, zero-order, `V` and product terms) are
+//! reported with a `null` estimate and σ. The validation and the model-vs-measured figure
+//! simulate the nonlinear flight model over each manoeuvre with the fdoe estimates and the
+//! unseen parameters at their equation-error values (the time-domain fit's own start), as the
+//! filter-error method's are simulated; a model that cannot be simulated open loop is said so
+//! in the warnings and leaves the figure out.
+
+use super::ReplayError;
+use super::batch::{
+    BatchIteration, BatchOutcome, BatchParameter, BatchSummary, FitOptions, Manoeuvres,
+    default_model, output_traces, simulate_at, simulated_validation,
+};
+use super::diagnostics;
+use super::prediction::Recorder;
+use aeroident_estimators::AirDataSample;
+use aeroident_estimators::flight_model::STATE_NAMES;
+use aeroident_estimators::output_error::OeResult;
+use aeroident_estimators::output_error::frequency::{FdoeConfig, FdoeResult, fit};
+use aeroident_io::{Mapping, ModelSpec};
+use serde::Serialize;
+
+/// The frequency-domain part of an `fdoe` summary (`summary.json` `frequency_domain`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FrequencyDomainSummary {
+    /// The band fitted, Hz.
+    pub band_hz: (f64, f64),
+    /// Frequencies fitted per manoeuvre: count, lowest and highest, Hz.
+    pub frequencies: Vec<(usize, f64, f64)>,
+    /// The linear model's states (sample field names).
+    pub states: Vec<String>,
+    /// Its measured inputs (model-input names: `de_rad`, `thrust_n`, `vt_mps` …).
+    pub inputs: Vec<String>,
+    /// Outputs fitted.
+    pub outputs: Vec<String>,
+    /// Per output, the residual spectral variance `S_jj` (output unit² · samples², the
+    /// transform being the plain sum `Σ x_i z^{−i}`).
+    pub residual_spectral_variance: Vec<(String, f64)>,
+    /// Per manoeuvre, the linearisation's mean airspeed (m/s) and dynamic pressure (Pa).
+    pub flight_conditions: Vec<(f64, f64)>,
+    /// The parameters not estimated (reported `null`), held at their equation-error values.
+    pub not_estimated: Vec<String>,
+}
+
+/// Fits the record `rec` (read and split by the caller) by frequency-domain output error over
+/// `band_hz` with `model` (else the default preset) and reports it as a batch fit.
+///
+/// # Errors
+/// No supported model; the fit fails ([`ReplayError::Model`] with the reason: a band without
+/// frequencies, non-uniform sampling, nothing identifiable …).
+pub(super) fn fit_fdoe(
+    rec: Manoeuvres,
+    file: &str,
+    mapping: &Mapping,
+    model: Option<ModelSpec>,
+    band_hz: (f64, f64),
+    options: &FitOptions,
+) -> Result<BatchOutcome, ReplayError> {
+    let model = match model {
+        Some(m) => m,
+        None => default_model(&rec.manoeuvres[0][0], mapping)?,
+    };
+    let (model, level_note) = super::sideslip_level(model, &rec.manoeuvres[0][0]);
+    let slices: Vec<&[AirDataSample]> = rec.manoeuvres.iter().map(Vec::as_slice).collect();
+    let mut config = FdoeConfig { band_hz, ..FdoeConfig::new(model.structure) };
+    if let Some(n) = options.max_iterations {
+        config.max_iterations = n;
+    }
+    config.stop.clone_from(&options.stop);
+    let t0 = std::time::Instant::now();
+    let fd = fit(&slices, &config).map_err(|e| ReplayError::Model(e.to_string()))?;
+    let wall = t0.elapsed().as_secs_f64();
+    let mut warnings = Vec::new();
+    let simulated = match simulate_at(&slices, model.structure, &fd.outputs, &fd.values) {
+        Ok(r) => Some(r),
+        Err(e) => {
+            warnings.push(format!(
+                    "fdoe: the nonlinear model at the estimates cannot be simulated open loop ({e}); no time-domain validation or figure"
+                ));
+            None
+        }
+    };
+    let validation = match &simulated {
+        Some(r) => simulated_validation(r, &slices, file, None),
+        None => super::prediction::ValidationReport {
+            data: file.to_string(),
+            used_for_fit: true,
+            prediction: "none: the model could not be simulated".into(),
+            samples: slices.iter().map(|m| m.len()).sum(),
+            outputs: Vec::new(),
+            notes: Vec::new(),
+        },
+    };
+    let traces = simulated.as_ref().map_or_else(Vec::new, |r| output_traces(r, &slices));
+    let (rejections, unlisted) = rec.rejections.finish();
+    let mut summary = summarise(&model, &fd, &slices, wall, validation);
+    summary.samples_read = rec.read;
+    summary.samples_rejected = rec.rejected;
+    summary.rejections = rejections;
+    summary.warnings.extend(unlisted);
+    summary.warnings.extend(warnings);
+    summary.warnings.extend(level_note);
+    summary.warnings.extend(rec.notes.iter().cloned());
+    if let Some(c) = &options.compat {
+        summary.warnings.extend(c.warnings());
+    }
+    let result = simulated.map_or_else(|| bare_result(&fd), |r| with_estimates(r, &fd));
+    Ok(BatchOutcome { model, result, summary, traces, frequency: Some(fd) })
+}
+
+/// The time-domain simulation's result at the fdoe estimates, carrying the fdoe σ and
+/// termination (σ 0 for the parameters not estimated: the CLI's table and Python read the
+/// summary's `null` instead).
+fn with_estimates(mut r: OeResult, fd: &FdoeResult) -> OeResult {
+    let np = fd.values.len();
+    r.values[..np].copy_from_slice(&fd.values);
+    for (s, f) in r.sigma.iter_mut().zip(&fd.sigma) {
+        *s = f.unwrap_or(0.0);
+    }
+    r.sigma_coloured = None;
+    r.sigma_coloured_prewhitened = None;
+    r.sigma_coloured_truncated = None;
+    r.iterations.clone_from(&fd.iterations);
+    r.termination = fd.termination;
+    r.start.clone_from(&fd.start);
+    r
+}
+
+/// A result without a time-domain simulation (the model could not be simulated).
+fn bare_result(fd: &FdoeResult) -> OeResult {
+    let np = fd.values.len();
+    OeResult {
+        structure: fd.structure,
+        names: fd.names.clone(),
+        n_params: np,
+        values: fd.values.clone(),
+        sigma: fd.sigma.iter().map(|s| s.unwrap_or(0.0)).collect(),
+        sigma_coloured: None,
+        sigma_coloured_prewhitened: None,
+        coloured_lag: 0,
+        coloured_ar_order: 0,
+        sigma_coloured_truncated: None,
+        covariance: fd.covariance.iter().map(|c| c.unwrap_or(0.0)).collect(),
+        correlation: vec![0.0; np * np],
+        outputs: fd.outputs.clone(),
+        r: Vec::new(),
+        residual_rms: Vec::new(),
+        residual_mean: Vec::new(),
+        residuals: Vec::new(),
+        manoeuvre_lengths: Vec::new(),
+        iterations: fd.iterations.clone(),
+        start: fd.start.clone(),
+        termination: fd.termination,
+        unmeasured_states: Vec::new(),
+        dominance: None,
+    }
+}
+
+/// The batch summary of an fdoe fit (the record's row counts are the caller's).
+fn summarise(
+    model: &ModelSpec,
+    fd: &FdoeResult,
+    slices: &[&[AirDataSample]],
+    fit_wall_s: f64,
+    validation: super::prediction::ValidationReport,
+) -> BatchSummary {
+    let st = model.structure;
+    let np = fd.values.len();
+    let values: Vec<Option<f64>> =
+        (0..np).map(|i| fd.estimated[i].then_some(fd.values[i])).collect();
+    let parameters = (0..np)
+        .map(|i| BatchParameter {
+            name: fd.names[i].clone(),
+            estimate: values[i],
+            std_error: fd.sigma[i],
+            std_error_source: "cramer_rao",
+            crb_sigma: fd.sigma[i],
+            coloured_sigma: None,
+            prewhitened_sigma: None,
+            bootstrap_sigma: None,
+            bootstrap_bias: None,
+        })
+        .collect();
+    let cov = |i: usize, j: usize| fd.covariance[i * np + j];
+    let mut recorder = Recorder::default();
+    for m in slices {
+        recorder.new_segment();
+        m.iter().for_each(|s| recorder.push(s));
+    }
+    let identifiability = diagnostics::identifiability(&st, &cov, &recorder, &values);
+    let mut warnings: Vec<String> =
+        super::batch::termination_note_of(fd.termination, &fd.iterations).into_iter().collect();
+    warnings.extend(diagnostics::sign_warnings(&st, &values, &fd.sigma));
+    let not_estimated: Vec<String> =
+        (0..np).filter(|&i| !fd.estimated[i]).map(|i| fd.names[i].clone()).collect();
+    BatchSummary {
+        estimator: "fdoe".into(),
+        model: model.name.clone(),
+        status: fd.termination.status().into(),
+        status_reason: super::batch::termination_note_of(fd.termination, &fd.iterations),
+        samples_read: 0,
+        samples_rejected: 0,
+        rejections: Vec::new(),
+        manoeuvres: slices.len(),
+        fit_wall_s,
+        iterations: fd
+            .iterations
+            .iter()
+            .map(|it| BatchIteration {
+                iteration: it.iteration,
+                ln_det_r: it.ln_det_r,
+                max_step_sigma: it.max_step_sigma,
+            })
+            .collect(),
+        parameters,
+        residual_rms: Vec::new(),
+        coefficients: diagnostics::conditions_from(&st, &values, &cov),
+        correlations: diagnostics::correlations_from(&st, &values, &cov),
+        identifiability,
+        warnings,
+        validation,
+        validation_on: None,
+        reader: Vec::new(),
+        process_noise: Vec::new(),
+        measurement_noise_var: Vec::new(),
+        gain_kc_diag: Vec::new(),
+        initial_states: "transient terms (x_Δ per manoeuvre)".into(),
+        estimated_initial_states: Vec::new(),
+        bootstrap: None,
+        frequency_domain: Some(FrequencyDomainSummary {
+            band_hz: fd.band_hz,
+            frequencies: fd
+                .frequencies_hz
+                .iter()
+                .map(|f| (f.len(), f[0], f[f.len() - 1]))
+                .collect(),
+            states: fd.states.iter().map(|&i| STATE_NAMES[i].to_string()).collect(),
+            inputs: fd.inputs.iter().map(|s| s.to_string()).collect(),
+            outputs: fd.outputs.iter().map(|o| o.name().to_string()).collect(),
+            residual_spectral_variance: fd
+                .outputs
+                .iter()
+                .zip(&fd.s_vv)
+                .map(|(o, s)| (o.name().to_string(), *s))
+                .collect(),
+            flight_conditions: fd.flight_conditions.clone(),
+            not_estimated,
+        }),
+    }
+}

@@ -1,10 +1,11 @@
-//! `aeroident design`: an orthogonal multisine for chosen surfaces and its predicted
-//! Cramér–Rao σ at an F-16 flight condition (docs/export.md).
+//! `aeroident design`: an orthogonal multisine (or one chirp per surface in turn) for chosen
+//! surfaces and its predicted Cramér–Rao σ at an F-16 flight condition (docs/export.md).
 //!
 //! ```text
 //! aeroident design --surfaces de,da,dr --amplitude-deg 2 --duration-s 10 --rate-hz 50
 //!                  [--band-hz 0.1,1.5] [--alt-ft 20000 --vt-fps 675 --xcg 0.35]
-//!                  [--turbulence light|moderate|severe] --out DIR
+//!                  [--turbulence light|moderate|severe]
+//!                  [--signal multisine|chirp [--sweep logarithmic|linear] [--fade-s 1]] --out DIR
 //! ```
 //! Writes `DIR/input.csv` (t_s, per surface rad and deg), `DIR/injection.csv` (the autopilot
 //! table: t_ms and per surface the offset from trim in centidegrees) and `DIR/design.json`
@@ -12,8 +13,9 @@
 
 use crate::outdir::OutputDir;
 use aeroident_pipelines::export::design::{
-    Design, DesignSpec, Surface, csv_table, design, large_excursions,
+    Design, DesignSpec, Surface, Waveform, csv_table, design, large_excursions,
 };
+use aeroident_signals::inputs::SweepLaw;
 use aeroident_signals::turbulence::TurbulenceSeverity;
 use std::path::PathBuf;
 
@@ -33,7 +35,7 @@ pub struct DesignArgs {
     #[arg(long, default_value_t = 50.0)]
     pub rate_hz: f64,
     /// Frequency band of the harmonics, Hz: two values, `lo,hi` or `lo hi` (below Nyquist).
-    #[arg(long, value_delimiter = ',', num_args = 2, default_values_t = [0.1, 1.5])]
+    #[arg(long, value_delimiter = ',', num_args = 1..=2, default_values_t = [0.1, 1.5])]
     pub band_hz: Vec<f64>,
     /// Flight condition: trim altitude, ft (F-16, wings level).
     #[arg(long, default_value_t = 20000.0)]
@@ -49,9 +51,61 @@ pub struct DesignArgs {
     /// with turbulence"); default calm air, white sensor noise only.
     #[arg(long, value_enum)]
     pub turbulence: Option<Turbulence>,
+    /// The waveform: orthogonal multisines on every surface at once, or a constant-amplitude
+    /// sweep across the band on each surface in turn (`--duration-s` per sweep).
+    #[arg(long, value_enum, default_value_t = Signal::Multisine)]
+    pub signal: Signal,
+    /// The chirp's frequency law: logarithmic (equal time per octave, more time at the low
+    /// frequencies of the rigid-body modes) or linear.
+    #[arg(long, value_enum, default_value_t = SweepKind::Logarithmic)]
+    pub sweep: SweepKind,
+    /// The chirp's raised-cosine fade-in and fade-out, s (at most half a sweep).
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    pub fade_s: f64,
     /// Output directory.
     #[arg(long)]
     pub out: Option<PathBuf>,
+}
+
+/// `--signal` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Signal {
+    /// Orthogonal phase-optimised multisines.
+    Multisine,
+    /// One frequency sweep per surface, in turn.
+    Chirp,
+}
+
+/// `--sweep` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SweepKind {
+    /// Equal time per octave.
+    Logarithmic,
+    /// Frequency linear in time.
+    Linear,
+}
+
+impl DesignArgs {
+    fn waveform(&self) -> Waveform {
+        match self.signal {
+            Signal::Multisine => Waveform::Multisine,
+            Signal::Chirp => Waveform::Chirp {
+                law: match self.sweep {
+                    SweepKind::Logarithmic => SweepLaw::Logarithmic,
+                    SweepKind::Linear => SweepLaw::Linear,
+                },
+                fade_s: self.fade_s,
+            },
+        }
+    }
+
+    fn signal_name(&self) -> &'static str {
+        match (self.signal, self.sweep) {
+            (Signal::Multisine, _) => "multisine",
+            (Signal::Chirp, SweepKind::Logarithmic) => "chirp (logarithmic)",
+            (Signal::Chirp, SweepKind::Linear) => "chirp (linear)",
+        }
+    }
 }
 
 /// `--turbulence` values.
@@ -81,6 +135,10 @@ impl Turbulence {
 /// Invalid options (naming the option), a trim that does not converge, a prediction that fails
 /// (e.g. the response leaves the model's domain), or an output error naming the file.
 pub fn execute(a: DesignArgs) -> anyhow::Result<()> {
+    // `lo,hi` arrives as one argument split in two, `lo hi` as two.
+    if a.band_hz.len() != 2 {
+        anyhow::bail!("--band-hz: give two frequencies, low and high, Hz (`0.1,1.5` or `0.1 1.5`)");
+    }
     let spec = DesignSpec {
         surfaces: a.surfaces.clone(),
         amplitude_rad: a.amplitude_deg.to_radians(),
@@ -91,6 +149,7 @@ pub fn execute(a: DesignArgs) -> anyhow::Result<()> {
         vt_fps: a.vt_fps,
         xcg: a.xcg,
         turbulence: a.turbulence.map(Turbulence::severity),
+        signal: a.waveform(),
     };
     let mut out = a.out.as_deref().map(|d| OutputDir::open(d, "design", &[])).transpose()?;
     let d = design(&spec)?;
@@ -133,21 +192,30 @@ pub fn injection_table(d: &Design) -> String {
 
 fn report(a: &DesignArgs, d: &Design) -> String {
     let r = &d.crb;
+    let waveform = match a.signal {
+        Signal::Multisine => format!(
+            "harmonics (k/{} Hz): {}",
+            a.duration_s,
+            d.inputs
+                .iter()
+                .zip(&d.harmonics)
+                .map(|((s, _), h)| format!("{} {:?}", s.name(), h))
+                .collect::<Vec<_>>()
+                .join("; ")
+        ),
+        Signal::Chirp => {
+            format!("{}–{} Hz per surface in turn, fade {} s", a.band_hz[0], a.band_hz[1], a.fade_s)
+        }
+    };
     let mut s = format!(
-        "orthogonal multisine: {} at ±{}°, {} s, {} Hz; harmonics (k/{} Hz): {}\n\
+        "{}: {} at ±{}°, {} s, {} Hz; {waveform}\n\
          condition: F-16 trimmed wings level at {} ft, {} ft/s, xcg {}; model {}\n\
          predicted Cramér–Rao σ (white sensor noise at the simulator's levels{}, one record):\n",
+        a.signal_name(),
         a.surfaces.iter().map(|s| s.name()).collect::<Vec<_>>().join(","),
         a.amplitude_deg,
         a.duration_s,
         a.rate_hz,
-        a.duration_s,
-        d.inputs
-            .iter()
-            .zip(&d.harmonics)
-            .map(|((s, _), h)| format!("{} {:?}", s.name(), h))
-            .collect::<Vec<_>>()
-            .join("; "),
         a.alt_ft,
         a.vt_fps,
         a.xcg,
@@ -201,6 +269,8 @@ fn model_name(d: &Design) -> &'static str {
 fn json(a: &DesignArgs, d: &Design) -> serde_json::Value {
     let r = &d.crb;
     serde_json::json!({
+        "signal": a.signal_name(),
+        "fade_s": (a.signal == Signal::Chirp).then_some(a.fade_s),
         "surfaces": a.surfaces.iter().map(|s| s.name()).collect::<Vec<_>>(),
         "amplitude_deg": a.amplitude_deg,
         "duration_s": a.duration_s,
@@ -238,6 +308,9 @@ mod tests {
             vt_fps: 675.0,
             xcg: 0.3,
             turbulence: None,
+            signal: Signal::Multisine,
+            sweep: SweepKind::Logarithmic,
+            fade_s: 1.0,
             out: Some(dir.clone()),
         };
         execute(args).unwrap();

@@ -28,6 +28,7 @@ use aeroident_models::f16::{self, AeroIncrements, F16};
 use aeroident_models::trim::{TrimCondition, TrimManeuver, trim};
 use aeroident_physics::units::{M_PER_FT, N_PER_LBF, PA_PER_PSF};
 use aeroident_signals::InputSignal;
+use aeroident_signals::inputs::{Sweep, SweepLaw};
 use aeroident_signals::orthogonal::orthogonal_multisine;
 use aeroident_signals::turbulence::{DrydenParameters, TurbulenceSeverity};
 
@@ -85,6 +86,27 @@ pub struct DesignSpec {
     /// ([`aeroident_estimators::output_error::design::predict_crb_turbulent`]); `None`: calm
     /// air, white sensor noise only.
     pub turbulence: Option<TurbulenceSeverity>,
+    /// The waveform: an orthogonal multisine (all surfaces at once) or chirps.
+    pub signal: Waveform,
+}
+
+/// The waveform of a design.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Waveform {
+    /// Orthogonal phase-optimised multisines, every surface excited over the whole record
+    /// (module doc).
+    Multisine,
+    /// A constant-amplitude frequency sweep per surface, one surface after another (the
+    /// single-axis sweeps of frequency-response testing, Tischler & Remple 2012 ch. 5, and of
+    /// ArduPilot's SYSID mode): each sweeps the band from its low to its high edge over
+    /// `duration_s`, with `law` and a raised-cosine fade of `fade_s` at both ends
+    /// ([`aeroident_signals::inputs::Sweep`]); the record is `n × duration_s` long.
+    Chirp {
+        /// Linear or logarithmic (equal time per octave) frequency law.
+        law: SweepLaw,
+        /// Fade-in and fade-out time, s (≤ half the sweep).
+        fade_s: f64,
+    },
 }
 
 /// Peak excursions beyond which the response is no longer a small perturbation (the bound
@@ -141,7 +163,7 @@ pub const MAX_DESIGN_HARMONICS: f64 = 2_000.0;
 /// (Stevens & Lewis, 0–50 000 ft); beyond it the trim would rest on extrapolated thrust.
 pub const DESIGN_ALT_RANGE_FT: (f64, f64) = (0.0, 50_000.0);
 
-/// Checks the band against the sample rate and the record (Nyquist limit, harmonic count).
+/// Checks the band against the sample rate (Nyquist limit).
 fn check_band(spec: &DesignSpec) -> crate::error::Result<()> {
     let (lo, hi) = spec.band_hz;
     if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && lo < hi) {
@@ -152,13 +174,6 @@ fn check_band(spec: &DesignSpec) -> crate::error::Result<()> {
         crate::bail!(
             "--band-hz {lo} {hi}: the upper edge is not below the Nyquist frequency {nyquist} Hz of --rate-hz {}: its harmonics cannot be sampled; lower the band or raise the rate",
             spec.rate_hz
-        );
-    }
-    let harmonics = (hi - lo) * spec.duration_s;
-    if harmonics > MAX_DESIGN_HARMONICS {
-        crate::bail!(
-            "--band-hz {lo} {hi} over --duration-s {} holds about {harmonics:.0} harmonics, more than {MAX_DESIGN_HARMONICS}: narrow the band or shorten the record",
-            spec.duration_s
         );
     }
     Ok(())
@@ -182,12 +197,9 @@ pub struct Multisines {
     pub harmonics: Vec<Vec<u32>>,
 }
 
-/// The orthogonal multisine samples: times and one perturbation per surface (rad).
-///
-/// # Errors
-/// Non-positive or non-finite amplitude, duration or rate; no surface or a repeated one; a band
-/// with fewer harmonics than surfaces.
-pub fn multisine(spec: &DesignSpec) -> crate::error::Result<Multisines> {
+/// The checks every waveform shares: positive amplitude, duration and rate, the sample
+/// count, the band, and the surfaces.
+fn check_common(spec: &DesignSpec) -> crate::error::Result<()> {
     for (what, v) in [
         ("--amplitude-deg", spec.amplitude_rad),
         ("--duration-s", spec.duration_s),
@@ -214,6 +226,24 @@ pub fn multisine(spec: &DesignSpec) -> crate::error::Result<Multisines> {
             crate::bail!("--surfaces: `{}` given twice", s.name());
         }
     }
+    Ok(())
+}
+
+/// The orthogonal multisine samples: times and one perturbation per surface (rad).
+///
+/// # Errors
+/// Non-positive or non-finite amplitude, duration or rate; no surface or a repeated one; a band
+/// with fewer harmonics than surfaces.
+pub fn multisine(spec: &DesignSpec) -> crate::error::Result<Multisines> {
+    check_common(spec)?;
+    let (lo, hi) = spec.band_hz;
+    let harmonics = (hi - lo) * spec.duration_s;
+    if harmonics > MAX_DESIGN_HARMONICS {
+        crate::bail!(
+            "--band-hz {lo} {hi} over --duration-s {} holds about {harmonics:.0} harmonics, more than {MAX_DESIGN_HARMONICS}: narrow the band or shorten the record",
+            spec.duration_s
+        );
+    }
     let pool = pool(spec.duration_s, spec.band_hz);
     let n = spec.surfaces.len();
     if pool.len() < n {
@@ -238,6 +268,59 @@ pub fn multisine(spec: &DesignSpec) -> crate::error::Result<Multisines> {
     Ok(Multisines { t_s, inputs, harmonics })
 }
 
+/// The samples of the spec's waveform ([`multisine`] or [`chirps`]).
+///
+/// # Errors
+/// As [`multisine`] or [`chirps`].
+pub fn excitation(spec: &DesignSpec) -> crate::error::Result<Multisines> {
+    match spec.signal {
+        Waveform::Multisine => multisine(spec),
+        Waveform::Chirp { law, fade_s } => chirps(spec, law, fade_s),
+    }
+}
+
+/// One sweep per surface in turn (the surface order of the spec), each over `duration_s` from
+/// the band's low to its high edge (`Waveform::Chirp`); `harmonics` are empty (a sweep has
+/// none). Times run 0 … `n × duration_s`, both ends.
+///
+/// # Errors
+/// As [`multisine`] for the amplitude, duration, rate, surfaces and band (below Nyquist,
+/// sample count over the whole record); a logarithmic sweep from 0 Hz; a fade longer than half
+/// the sweep, naming `--fade-s`.
+pub fn chirps(spec: &DesignSpec, law: SweepLaw, fade_s: f64) -> crate::error::Result<Multisines> {
+    let n = spec.surfaces.len();
+    // The checks of the multisine on the whole record (every surface's sweep in turn).
+    let whole = DesignSpec {
+        duration_s: spec.duration_s * n.max(1) as f64,
+        signal: Waveform::Multisine,
+        ..spec.clone()
+    };
+    check_common(&whole)?;
+    let (lo, hi) = spec.band_hz;
+    if law == SweepLaw::Logarithmic && lo <= 0.0 {
+        crate::bail!("--band-hz {lo} {hi}: a logarithmic sweep needs a low edge above 0 Hz");
+    }
+    if !(fade_s.is_finite() && fade_s >= 0.0 && fade_s <= 0.5 * spec.duration_s) {
+        crate::bail!(
+            "--fade-s {fade_s}: give 0 to half the sweep's --duration-s {} s",
+            spec.duration_s
+        );
+    }
+    let tau = std::f64::consts::TAU;
+    let dt = 1.0 / spec.rate_hz;
+    let samples = (whole.duration_s * spec.rate_hz).round() as usize + 1;
+    let t_s: Vec<f64> = (0..samples).map(|k| k as f64 * dt).collect();
+    let mut inputs = Vec::with_capacity(n);
+    for i in 0..n {
+        let start = i as f64 * spec.duration_s;
+        let sweep =
+            Sweep::new(spec.amplitude_rad, tau * lo, tau * hi, start, spec.duration_s, law, fade_s)
+                .map_err(|e| crate::err!("chirp: {e}"))?;
+        inputs.push(t_s.iter().map(|&t| sweep.value(t)).collect());
+    }
+    Ok(Multisines { t_s, inputs, harmonics: vec![Vec::new(); n] })
+}
+
 /// The structure predicted for: longitudinal for the elevator alone, lateral without it,
 /// six-axis for both.
 pub fn structure_for(surfaces: &[Surface]) -> ModelStructure {
@@ -257,7 +340,7 @@ pub fn structure_for(surfaces: &[Surface]) -> ModelStructure {
 /// leaves the model's domain: the amplitude is too large).
 pub fn design(spec: &DesignSpec) -> crate::error::Result<Design> {
     check_condition(spec)?;
-    let Multisines { t_s, inputs, harmonics } = multisine(spec)?;
+    let Multisines { t_s, inputs, harmonics } = excitation(spec)?;
     let f16m = F16::new(spec.xcg)?;
     let cond = TrimCondition {
         alt_ft: spec.alt_ft,
@@ -367,6 +450,7 @@ mod tests {
             vt_fps: 675.0,
             xcg: 0.3,
             turbulence: None,
+            signal: Waveform::Multisine,
         }
     }
 
@@ -491,6 +575,65 @@ mod tests {
         }
         for (name, ratio) in ratios {
             assert!((0.6..=1.5).contains(&ratio), "{name}: scatter / σ_CRB = {ratio}");
+        }
+    }
+
+    /// Chirps: each surface sweeps in turn; its samples are `A w(τ) sin θ(τ)` with the phase
+    /// written here from its definition (`θ = 2π(f₀τ + (f₁ − f₀)τ²/(2T))` linear,
+    /// `2π f₀ T (r^{τ/T} − 1)/ln r`, `r = f₁/f₀`, logarithmic) and the raised-cosine fade; the
+    /// other surfaces are 0 meanwhile. Bands above Nyquist and fades over half the sweep are
+    /// refused by name.
+    #[test]
+    fn analytic_chirps_follow_the_sweep_law_one_surface_after_another() {
+        let (f0, f1, t, a, fade) = (0.2, 3.0, 20.0, 2f64.to_radians(), 2.0);
+        for law in [SweepLaw::Linear, SweepLaw::Logarithmic] {
+            let sp = DesignSpec {
+                band_hz: (f0, f1),
+                duration_s: t,
+                amplitude_rad: a,
+                signal: Waveform::Chirp { law, fade_s: fade },
+                ..spec(vec![Surface::De, Surface::Dr])
+            };
+            let m = excitation(&sp).unwrap();
+            assert_eq!(m.t_s.len(), (2.0 * t * 50.0) as usize + 1);
+            assert!((m.t_s.last().unwrap() - 2.0 * t).abs() < 1e-9);
+            for (k, &time) in m.t_s.iter().enumerate() {
+                let (active, idle) = if time < t { (0, 1) } else { (1, 0) };
+                let tau = if time < t { time } else { time - t };
+                let theta = match law {
+                    SweepLaw::Linear => {
+                        std::f64::consts::TAU * (f0 * tau + (f1 - f0) * tau * tau / (2.0 * t))
+                    }
+                    SweepLaw::Logarithmic => {
+                        let r: f64 = f1 / f0;
+                        std::f64::consts::TAU * f0 * t * (r.powf(tau / t) - 1.0) / r.ln()
+                    }
+                };
+                let edge = tau.min(t - tau);
+                let w = if edge < fade {
+                    0.5 * (1.0 - (std::f64::consts::PI * edge / fade).cos())
+                } else {
+                    1.0
+                };
+                let expected = if time >= 2.0 * t { 0.0 } else { a * w * theta.sin() };
+                assert!((m.inputs[active][k] - expected).abs() < 1e-9, "{law:?} t {time}");
+                assert_eq!(m.inputs[idle][k], 0.0, "{law:?} t {time}: the other surface rests");
+            }
+        }
+        let chirp = |band_hz, fade_s| DesignSpec {
+            band_hz,
+            signal: Waveform::Chirp { law: SweepLaw::Logarithmic, fade_s },
+            ..spec(vec![Surface::De])
+        };
+        for (sp, words) in [
+            (chirp((0.1, 30.0), 1.0), &["--band-hz", "Nyquist"][..]),
+            (chirp((0.0, 3.0), 1.0), &["--band-hz", "logarithmic", "above 0"][..]),
+            (chirp((0.1, 3.0), 6.0), &["--fade-s", "half"][..]),
+        ] {
+            let e = excitation(&sp).unwrap_err().to_string();
+            for w in words {
+                assert!(e.contains(w), "{e}");
+            }
         }
     }
 }

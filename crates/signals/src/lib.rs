@@ -81,6 +81,8 @@ pub mod recorded;
 pub mod sensors;
 /// Frequency responses by composite-window spectral estimation (Tischler & Remple, CIFER).
 pub mod spectral;
+/// Low-order equivalent systems: transfer functions with delay fitted to frequency responses.
+pub mod tf_fit;
 /// Continuous Dryden turbulence (MIL-F-8785C), exactly discretised, seeded.
 pub mod turbulence;
 

@@ -42,8 +42,12 @@
 //! averages are not added).
 
 use rustfft::FftPlanner;
-use rustfft::num_complex::Complex64;
+pub use rustfft::num_complex::Complex64;
 use std::f64::consts::PI;
+
+/// Coherence below which, at every grid frequency and for every output, an input is taken as
+/// not excited ([`SpectralError::NotExcited`]): no response can be read from it.
+pub const MIN_USEFUL_COHERENCE: f64 = 0.2;
 
 /// Options of the spectral estimation (module doc).
 #[derive(Debug, Clone, PartialEq)]

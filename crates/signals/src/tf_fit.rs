@@ -309,19 +309,27 @@ fn levenberg_marquardt(
             for d in 0..a.nrows() {
                 a[(d, d)] += lambda * jtj[(d, d)].max(1e-12);
             }
-            let Some(step) = a.lu().solve(&(-&g)) else {
+            let Some(mut step) = a.clone().lu().solve(&(-&g)) else {
                 lambda *= 10.0;
                 continue;
             };
-            let mut trial: Vec<f64> = p.iter().zip(step.iter()).map(|(x, d)| x + d).collect();
-            if l.delay {
-                let k = trial.len() - 1;
-                trial[k] = trial[k].max(0.0);
+            let k = p.len() - 1;
+            if l.delay && p[k] + step[k] < 0.0 {
+                // The delay's bound is active: move it to 0 and solve for the others with it
+                // held there (clamping the free step instead crawls along the bound).
+                step = match bounded_step(&a, &g, k, -p[k]) {
+                    Some(s) => s,
+                    None => {
+                        lambda *= 10.0;
+                        continue;
+                    }
+                };
             }
+            let trial: Vec<f64> = p.iter().zip(step.iter()).map(|(x, d)| x + d).collect();
             let rt = residuals(l, &trial, pts);
             let ct = cost(&rt);
             if ct.is_finite() && ct < c {
-                let small = (c - ct) <= 1e-10 * c.max(1e-12);
+                let small = (c - ct) <= 1e-8 * c.max(1e-12);
                 let tiny = step.iter().zip(&p).all(|(d, x)| d.abs() <= 1e-9 * x.abs().max(1e-6));
                 p = trial;
                 r = rt;
@@ -340,6 +348,21 @@ fn levenberg_marquardt(
         }
     }
     (p, c, max_it, false)
+}
+
+/// The damped Gauss–Newton step `a δ = −g` with component `k` held at `d_k`.
+fn bounded_step(a: &DMatrix<f64>, g: &DVector<f64>, k: usize, d_k: f64) -> Option<DVector<f64>> {
+    let n = g.len();
+    let mut a2 = a.clone();
+    let mut rhs = -g.clone();
+    for i in 0..n {
+        rhs[i] -= a[(i, k)] * d_k;
+        a2[(i, k)] = 0.0;
+        a2[(k, i)] = 0.0;
+    }
+    a2[(k, k)] = 1.0;
+    rhs[k] = d_k;
+    a2.lu().solve(&rhs)
 }
 
 /// The starts: modes spread over the band, zeros a decade lower, both gain signs; the gain

@@ -232,3 +232,22 @@ fn bad_input_is_named() {
         .unwrap_err();
     assert!(e.to_string().contains("sample 7"), "{e}");
 }
+
+#[test]
+fn log_chirp_drive_recovers_the_response() {
+    // The F-16 flight-test input: a logarithmic sweep 0.1–20 rad/s over 240 s with fades.
+    let bq = biquad(2.0 * PI * 0.3, 0.5, 3.0);
+    let sweep =
+        crate::Sweep::new(1.0, 0.1, 20.0, 5.0, 240.0, crate::SweepLaw::Logarithmic, 5.0).unwrap();
+    let x: Vec<f64> =
+        (0..25_000).map(|k| crate::InputSignal::value(&sweep, k as f64 * DT)).collect();
+    let y = filter(&bq, &x);
+    let o = SpectralOptions {
+        f_min_hz: Some(0.1 / (2.0 * PI) * 1.5),
+        f_max_hz: Some(2.0),
+        ..SpectralOptions::default()
+    };
+    let r = frequency_responses(&[vec![x, y]], &names(&["u"]), &names(&["y"]), DT, &o).unwrap();
+    let (db, deg) = deviation_where(&r.pairs[0], |f| response(&bq, f), 0.8);
+    assert!(db < 1.0 && deg < 5.0, "{db} dB {deg} deg");
+}

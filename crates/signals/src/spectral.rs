@@ -548,7 +548,7 @@ fn solve(s: &[Complex64], m: usize, n_d: f64) -> Option<Solved> {
     let inv = invert(&gxx, m)?;
     let h: Vec<Complex64> = (0..m).map(|a| (0..m).map(|b| inv[a * m + b] * gxy[b]).sum()).collect();
     let explained: f64 = (0..m).map(|a| (gxy[a].conj() * h[a]).re).sum();
-    if !(gyy > 0.0) {
+    if gyy.is_nan() || gyy <= 0.0 {
         return None;
     }
     let multiple = (explained / gyy).clamp(0.0, 1.0);
@@ -593,7 +593,7 @@ fn composite(cells: impl Iterator<Item = (Vec<Complex64>, f64)>, m: usize) -> Op
 /// partial pivoting; `None` when a pivot falls below `1e-10` of the largest diagonal element.
 fn invert(a: &[Complex64], n: usize) -> Option<Vec<Complex64>> {
     let scale = (0..n).map(|i| a[i * n + i].norm()).fold(0.0, f64::max);
-    if !(scale > 0.0) || !scale.is_finite() {
+    if scale.is_nan() || scale <= 0.0 || !scale.is_finite() {
         return None;
     }
     let mut m = a.to_vec();

@@ -451,8 +451,18 @@ pub fn fit_transfer_function(
         status: if converged { "converged" } else { "max_iterations" },
         iterations,
         model_magnitude_db: model.iter().map(|z| 20.0 * z.norm().log10()).collect(),
-        model_phase_deg: crate::spectral::unwrap_deg(&re, &im),
+        model_phase_deg: on_branch_of(crate::spectral::unwrap_deg(&re, &im), &resp.phase_deg),
     })
+}
+
+/// `model` shifted by whole turns so that it starts on the branch of `data` (both unwrapped
+/// phases, deg): the model is drawn over the response, not 360° away from it.
+fn on_branch_of(mut model: Vec<f64>, data: &[f64]) -> Vec<f64> {
+    if let Some((m, d)) = model.iter().zip(data).find(|(m, d)| m.is_finite() && d.is_finite()) {
+        let shift = 360.0 * ((d - m) / 360.0).round();
+        model.iter_mut().for_each(|v| *v += shift);
+    }
+    model
 }
 
 /// `s² (JᵣᵀJᵣ)⁻¹` at the optimum (module doc); `None` when singular.

@@ -47,7 +47,7 @@ use std::f64::consts::PI;
 
 /// Coherence below which, at every grid frequency and for every output, an input is taken as
 /// not excited ([`SpectralError::NotExcited`]): no response can be read from it.
-pub const MIN_USEFUL_COHERENCE: f64 = 0.2;
+pub const MIN_USEFUL_COHERENCE: f64 = 0.5;
 
 /// Options of the spectral estimation (module doc).
 #[derive(Debug, Clone, PartialEq)]
@@ -390,6 +390,17 @@ impl Plan {
             })
             .collect()
     }
+}
+
+/// Whether channel `c` varies by no more than round-off (`1e-9` of its magnitude) in every
+/// stretch.
+fn is_constant(stretches: &[Stretch], c: usize) -> bool {
+    stretches.iter().all(|s| {
+        let (lo, hi) = s[c]
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(*v), b.max(*v)));
+        hi - lo <= 1e-9 * lo.abs().max(hi.abs())
+    })
 }
 
 fn check_stretches(stretches: &[Stretch], channels: usize) -> Result<(), SpectralError> {

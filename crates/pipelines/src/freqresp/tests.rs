@@ -87,8 +87,8 @@ fn bad_channels_and_windows_are_named() {
         e.contains("--window") && e.contains("longer than the longest contiguous stretch"),
         "{e}"
     );
-    let e = run(&opts(&["alpha"], &["q"])).unwrap_err().to_string();
-    assert!(e.contains("input `alpha` is not excited"), "{e}");
+    let e = run(&opts(&["vt"], &["q"])).unwrap_err().to_string();
+    assert!(e.contains("input `vt` is not excited"), "{e}");
     let mut o = opts(&["de"], &["q"]);
     o.fits = vec![TfSpec::parse("r/dr:0/2").unwrap()];
     let e = run(&o).unwrap_err().to_string();

@@ -45,10 +45,6 @@ use rustfft::FftPlanner;
 pub use rustfft::num_complex::Complex64;
 use std::f64::consts::PI;
 
-/// Coherence below which, at every grid frequency and for every output, an input is taken as
-/// not excited ([`SpectralError::NotExcited`]): no response can be read from it.
-pub const MIN_USEFUL_COHERENCE: f64 = 0.5;
-
 /// Options of the spectral estimation (module doc).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SpectralOptions {
@@ -90,14 +86,16 @@ pub enum SpectralError {
     /// The data cannot give a response (too short, wrong shape, not finite).
     #[error("{0}")]
     Data(String),
-    /// An input carries no excitation the others do not: its spectral matrix is singular at
-    /// every grid frequency.
-    #[error(
-        "input `{input}` is not excited independently of the other inputs at any frequency of the grid ({f_lo_hz:.4}–{f_hi_hz:.4} Hz)"
-    )]
+    /// An input carries no usable excitation: it is constant, or it moves only with the other
+    /// inputs (its spectra are singular at every grid frequency). (Low coherence is not judged
+    /// here: at the lowest frequencies few averages bias it up to about 0.6 for unrelated
+    /// signals; the user reads it.)
+    #[error("input `{input}` is not excited: {why} over the grid ({f_lo_hz:.4}–{f_hi_hz:.4} Hz)")]
     NotExcited {
         /// The input's name.
         input: String,
+        /// What shows it.
+        why: String,
         /// Grid, Hz.
         f_lo_hz: f64,
         /// Grid, Hz.
@@ -201,16 +199,22 @@ pub fn frequency_responses(
         }
     }
     for (i, input) in inputs.iter().enumerate() {
-        let excited =
-            pairs.iter().filter(|p| p.input == *input).any(|p| p.re.iter().any(|v| v.is_finite()));
-        if !excited {
+        let mine = || pairs.iter().filter(|p| p.input == *input);
+        let why = if is_constant(stretches, i) {
+            Some("constant (no variation beyond round-off)".to_string())
+        } else if !mine().any(|p| p.re.iter().any(|v| v.is_finite())) {
+            Some("it moves only with the other inputs".to_string())
+        } else {
+            None
+        };
+        if let Some(why) = why {
             return Err(SpectralError::NotExcited {
                 input: input.clone(),
+                why,
                 f_lo_hz: plan.grid[0],
                 f_hi_hz: *plan.grid.last().unwrap_or(&plan.grid[0]),
             });
         }
-        let _ = i;
     }
     Ok(FrequencyResponses {
         pairs,

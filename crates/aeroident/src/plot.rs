@@ -132,7 +132,7 @@ const MAX_POINTS: usize = 4000;
 
 static REGISTER: Once = Once::new();
 
-fn register_fonts() {
+pub(crate) fn register_fonts() {
     REGISTER.call_once(|| {
         // The embedded DejaVu font is valid TrueType; a failure here would only mean text is
         // missing, which the backend then reports on first use.

@@ -10,6 +10,7 @@
 //! - [`montecarlo`]: seeded campaigns of the experiment and their statistics.
 //! - [`poc`]: the thesis's proof-of-concept systems; [`sim`]: open-loop F-16 simulation.
 //! - [`export`]: input design and the JSBSim `<aerodynamics>` export.
+//! - [`freqresp`]: frequency responses (composite windows, coherence) and transfer-function fits.
 //! - [`condition`]: the conditioning stage every pipeline shares (derivatives, alignment);
 //!   [`window`]: the time windows of a long record, each a manoeuvre.
 //! - [`estimators`]: the estimator kinds, their options and `build`.
@@ -21,6 +22,7 @@ pub mod condition;
 pub mod error;
 pub mod estimators;
 pub mod export;
+pub mod freqresp;
 /// Convergence-time and error metrics of estimate histories.
 pub mod metrics;
 pub mod montecarlo;

@@ -19,6 +19,7 @@ mod batch;
 mod convert;
 mod estimator;
 mod f16;
+mod freqresp;
 mod montecarlo;
 mod record;
 
@@ -156,5 +157,6 @@ fn _aeroident(m: &Bound<'_, PyModule>) -> PyResult<()> {
     estimator::register(m)?;
     f16::register(m)?;
     montecarlo::register(m)?;
+    freqresp::register(m)?;
     Ok(())
 }

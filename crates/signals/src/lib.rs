@@ -79,6 +79,10 @@ pub mod orthogonal;
 pub mod recorded;
 /// Per-channel sensor models: ZOH sampling, lag, bias, Gauss–Markov, noise, quantisation, delay.
 pub mod sensors;
+/// Frequency responses by composite-window spectral estimation (Tischler & Remple, CIFER).
+pub mod spectral;
+/// Low-order equivalent systems: transfer functions with delay fitted to frequency responses.
+pub mod tf_fit;
 /// Continuous Dryden turbulence (MIL-F-8785C), exactly discretised, seeded.
 pub mod turbulence;
 

@@ -7,6 +7,7 @@ pub mod compat;
 pub mod design;
 pub mod export;
 pub mod f16;
+pub mod freqresp;
 pub mod montecarlo;
 pub mod poc;
 pub mod replay;
@@ -39,6 +40,9 @@ pub enum Command {
     Compat(compat::CompatArgs),
     /// Write results for other tools (a JSBSim aerodynamics fragment).
     Export(export::ExportArgs),
+    /// Frequency responses of a sweep or chirp record (composite windows, coherence, random
+    /// error) and low-order transfer-function fits.
+    Freqresp(freqresp::FreqRespArgs),
     /// Design an orthogonal multisine input and predict its Cramér–Rao σ before flight.
     Design(design::DesignArgs),
     /// Measure simulation speed (one F-16 RK4 step, real-time factor).
@@ -82,6 +86,7 @@ impl Cli {
             Command::Bench(a) => bench::execute(a),
             Command::Export(a) => export::execute(a),
             Command::Design(a) => design::execute(a),
+            Command::Freqresp(a) => freqresp::execute(a),
         }
     }
 }

@@ -9,6 +9,7 @@
 
 pub mod batch;
 pub mod compat;
+pub mod freqresp;
 pub mod montecarlo;
 pub mod replay;
 pub mod run;

@@ -49,6 +49,7 @@ __all__ = [
     "read",
     "replay",
     "fit",
+    "freqresp",
     "sample_keys",
     "trim",
     "linearize",
@@ -306,6 +307,58 @@ def fit(
         None if also is None else [os.fspath(p) for p in also],
         select,
         None if candidates is None else list(candidates),
+    )
+
+
+def freqresp(
+    data: PathLike,
+    map: PathLike,
+    input: Union[str, Sequence[str]],
+    output: Union[str, Sequence[str]],
+    *,
+    windows: Optional[Sequence[tuple[float, float]]] = None,
+    windows_s: Optional[Sequence[float]] = None,
+    overlap: float = 0.8,
+    f_min_hz: Optional[float] = None,
+    f_max_hz: Optional[float] = None,
+    points_per_decade: int = 40,
+    fit: Optional[Union[str, Sequence[str]]] = None,
+    min_coherence: float = 0.6,
+) -> dict[str, Any]:
+    """Frequency responses of a sweep or chirp record, with coherence and random error, and
+    optional transfer-function fits.
+
+    Exactly ``aeroident freqresp DATA --map MAP --input … --output … [--window A:B …]
+    [--windows-s …] [--overlap F] [--f-min-hz F] [--f-max-hz F] [--points-per-decade N]
+    [--fit SPEC …] [--min-coherence G]`` (docs/frequency-response.md): composite-window
+    spectral estimation (Tischler & Remple, CIFER), conditioned multi-input responses with
+    partial coherence when several inputs are given, and low-order transfer functions with a
+    delay fitted by the MIL-STD-1797 mismatch cost (``fit="q/de:1/2+delay@0.5:10"``, band in
+    rad/s). Channels are mapping keys (``de``, ``q`` …) read in SI.
+
+    Returns a dict: ``file``, ``samples``, ``stretches``, ``dt_s``, ``window_lengths_s``
+    (array), ``overlap``, ``pairs`` (one dict per (output, input) with ``input``, ``output`` and
+    the arrays ``frequency_hz``, ``magnitude_db``, ``phase_deg``, ``coherence``,
+    ``multiple_coherence``, ``random_error``, ``magnitude_error_db``, ``phase_error_deg``; NaN
+    where not identified), ``fits`` (as in ``freqresp.json``) and ``warnings``.
+
+    Raises :class:`AeroidentError` with the CLI's message (an unmapped channel, an input not
+    excited, a window longer than the data, a bad fit spec …).
+    """
+    as_list = lambda v: [v] if isinstance(v, str) else list(v)
+    return _core.freqresp_file(
+        os.fspath(data),
+        os.fspath(map),
+        as_list(input),
+        as_list(output),
+        None if windows is None else [tuple(w) for w in windows],
+        None if windows_s is None else [float(w) for w in windows_s],
+        float(overlap),
+        f_min_hz,
+        f_max_hz,
+        int(points_per_decade),
+        None if fit is None else as_list(fit),
+        float(min_coherence),
     )
 
 

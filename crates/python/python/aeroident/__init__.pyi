@@ -144,6 +144,21 @@ def fit(
     select: Literal["swr", "mof"] = "swr",
     candidates: Optional[Sequence[str]] = None,
 ) -> FitResult: ...
+def freqresp(
+    data: PathLike,
+    map: PathLike,
+    input: Union[str, Sequence[str]],
+    output: Union[str, Sequence[str]],
+    *,
+    windows: Optional[Sequence[tuple[float, float]]] = None,
+    windows_s: Optional[Sequence[float]] = None,
+    overlap: float = 0.8,
+    f_min_hz: Optional[float] = None,
+    f_max_hz: Optional[float] = None,
+    points_per_decade: int = 40,
+    fit: Optional[Union[str, Sequence[str]]] = None,
+    min_coherence: float = 0.6,
+) -> dict[str, Any]: ...
 def trim(alt_ft: float, vt_fps: float, xcg: float = 0.35, gamma_deg: float = 0.0, turn_rate_deg_s: Optional[float] = None, pull_up_deg_s: Optional[float] = None) -> dict[str, Any]: ...
 def linearize(alt_ft: float, vt_fps: float, xcg: float = 0.35, gamma_deg: float = 0.0, turn_rate_deg_s: Optional[float] = None, pull_up_deg_s: Optional[float] = None) -> dict[str, Any]: ...
 def simulate(scenario: PathLike) -> dict[str, npt.NDArray[np.float64]]: ...

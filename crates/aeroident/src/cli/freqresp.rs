@@ -1,0 +1,232 @@
+//! `aeroident freqresp`: frequency responses of a sweep or chirp record, with coherence and
+//! random error, and optional low-order transfer-function fits
+//! ([`aeroident_pipelines::freqresp`]; method in docs/frequency-response.md).
+//!
+//! ```text
+//! aeroident freqresp <log> --map M --input de --output q [--input da …] [--output …]
+//!                    [--window a:b …] [--windows-s 60,30,15] [--overlap 0.8]
+//!                    [--f-min-hz F] [--f-max-hz F] [--fit "q/de:1/2+delay@1:10" …]
+//!                    [--min-coherence 0.6] [--out DIR]
+//! ```
+//! Prints a summary per pair and each fit; with `--out`, writes `DIR/freqresp.json`,
+//! `DIR/freqresp.csv` (one row per pair and frequency), a Bode figure per pair with its
+//! coherence (`bode_<output>_<input>.{png,svg}`) and `report.html`.
+
+use aeroident_io::{LogFormat, Mapping, open_log_with_notes};
+use aeroident_pipelines::freqresp::{FreqRespOptions, FreqRespOutcome, freqresp};
+use aeroident_pipelines::window::TimeWindow;
+use aeroident_signals::spectral::SpectralOptions;
+use aeroident_signals::tf_fit::{FitOptions, TfSpec};
+use anyhow::Context;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Arguments of `aeroident freqresp`.
+#[derive(Debug, clap::Args)]
+pub struct FreqRespArgs {
+    /// Recorded flight data (CSV, `.asc`, `.mat`, PX4 `.ulg`, ArduPilot `.bin`).
+    pub data: String,
+    /// Channel mapping TOML (`docs/mapping.md`).
+    #[arg(long)]
+    pub map: PathBuf,
+    /// Log format; default by the file's extension, else CSV.
+    #[arg(long)]
+    pub format: Option<LogFormat>,
+    /// Input channel (mapping key: de, da, dr, throttle …); several: the conditioned
+    /// multi-input responses (partial coherence).
+    #[arg(long = "input", required = true)]
+    pub inputs: Vec<String>,
+    /// Output channel (mapping key: p, q, r, alpha, beta, ax, ay, az …); several allowed.
+    #[arg(long = "output", required = true)]
+    pub outputs: Vec<String>,
+    /// Time window `START:END` of the record, s; several allowed (each its own stretch).
+    #[arg(long = "window", value_parser = TimeWindow::parse)]
+    pub windows: Vec<TimeWindow>,
+    /// Spectral window lengths, s, comma-separated; default five from half the longest
+    /// stretch down to an eighth of that.
+    #[arg(long, value_delimiter = ',')]
+    pub windows_s: Vec<f64>,
+    /// Overlap of consecutive spectral windows, fraction in [0, 0.95].
+    #[arg(long, default_value_t = 0.8)]
+    pub overlap: f64,
+    /// Lowest frequency, Hz (default two periods in the longest window).
+    #[arg(long)]
+    pub f_min_hz: Option<f64>,
+    /// Highest frequency, Hz (default a fifth of the sample rate).
+    #[arg(long)]
+    pub f_max_hz: Option<f64>,
+    /// Frequency points per decade.
+    #[arg(long, default_value_t = 40)]
+    pub points_per_decade: usize,
+    /// Transfer-function fit `output/input:num/den[+delay][@lo:hi]` (band in rad/s), e.g.
+    /// `q/de:1/2+delay@1:10`; several allowed.
+    #[arg(long = "fit", value_parser = TfSpec::parse)]
+    pub fits: Vec<TfSpec>,
+    /// Lowest coherence of a frequency the fits use.
+    #[arg(long, default_value_t = 0.6)]
+    pub min_coherence: f64,
+    /// Output directory for freqresp.json, freqresp.csv, the Bode figures and report.html.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+impl FreqRespArgs {
+    /// The pipeline's options.
+    pub fn options(&self) -> FreqRespOptions {
+        FreqRespOptions {
+            inputs: self.inputs.clone(),
+            outputs: self.outputs.clone(),
+            windows: self.windows.clone(),
+            spectral: SpectralOptions {
+                window_lengths_s: self.windows_s.clone(),
+                overlap: self.overlap,
+                f_min_hz: self.f_min_hz,
+                f_max_hz: self.f_max_hz,
+                points_per_decade: self.points_per_decade,
+            },
+            fits: self.fits.clone(),
+            fit: FitOptions { min_coherence: self.min_coherence, ..FitOptions::default() },
+        }
+    }
+}
+
+/// Runs `aeroident freqresp`.
+///
+/// # Errors
+/// Unreadable mapping or record, a channel not mapped or not excited, a bad window or fit
+/// spec, an unwritable output.
+pub fn execute(args: FreqRespArgs) -> anyhow::Result<()> {
+    let mapping = Mapping::from_path(&args.map)?;
+    let (reader, notes) = open_log_with_notes(&args.data, args.format, &mapping)?;
+    for n in &notes {
+        eprintln!("note: {n}");
+    }
+    let outcome = freqresp(reader, &args.options())?;
+    super::print_stdout(&render(&outcome))?;
+    if let Some(dir) = &args.out {
+        let inputs = [Path::new(&args.data), args.map.as_path()];
+        let mut out = crate::outdir::OutputDir::open(dir, "freqresp", &inputs)?;
+        out.write_bytes("freqresp.json", serde_json::to_string_pretty(&outcome)?.as_bytes())?;
+        out.write_bytes("freqresp.csv", csv_text(&outcome)?.as_bytes())?;
+        let source = crate::report::Source { data: &args.data, mapping: &args.map };
+        crate::report::freqresp::write(&source, &outcome, &mut out)?;
+        out.finish();
+        eprintln!("wrote {} and report.html", dir.join("freqresp.json").display());
+    }
+    Ok(())
+}
+
+/// `freqresp.csv`: one row per pair and grid frequency (empty where not identified).
+///
+/// # Errors
+/// A CSV error.
+pub fn csv_text(o: &FreqRespOutcome) -> anyhow::Result<String> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record([
+        "output",
+        "input",
+        "frequency_hz",
+        "frequency_rad_s",
+        "magnitude_db",
+        "phase_deg",
+        "coherence",
+        "multiple_coherence",
+        "random_error",
+        "magnitude_error_db",
+        "phase_error_deg",
+    ])?;
+    let num = |v: f64| if v.is_finite() { format!("{v:.8e}") } else { String::new() };
+    for p in &o.pairs {
+        for k in 0..p.frequency_hz.len() {
+            let f = p.frequency_hz[k];
+            let mut row = vec![
+                p.output.clone(),
+                p.input.clone(),
+                num(f),
+                num(2.0 * std::f64::consts::PI * f),
+            ];
+            for v in [
+                p.magnitude_db[k],
+                p.phase_deg[k],
+                p.coherence[k],
+                p.multiple_coherence[k],
+                p.random_error[k],
+                p.magnitude_error_db[k],
+                p.phase_error_deg[k],
+            ] {
+                row.push(num(v));
+            }
+            w.write_record(&row)?;
+        }
+    }
+    String::from_utf8(w.into_inner().context("writing freqresp.csv")?).context("freqresp.csv")
+}
+
+/// The console text: the record, each pair's coherent band and each fit.
+fn render(o: &FreqRespOutcome) -> String {
+    let mut t = format!(
+        "{}: {} samples in {} stretch(es), Δt {} s; windows {} s, overlap {}\n",
+        o.file,
+        o.samples,
+        o.stretches,
+        o.dt_s,
+        o.window_lengths_s.iter().map(|w| format!("{w:.2}")).collect::<Vec<_>>().join(", "),
+        o.overlap
+    );
+    for p in &o.pairs {
+        let good: Vec<f64> = p
+            .frequency_hz
+            .iter()
+            .zip(&p.coherence)
+            .filter(|(_, g)| **g >= 0.8)
+            .map(|(f, _)| 2.0 * std::f64::consts::PI * f)
+            .collect();
+        let band = match (good.first(), good.last()) {
+            (Some(a), Some(b)) => {
+                format!("{a:.3}–{b:.3} rad/s ({} of {} points)", good.len(), p.frequency_hz.len())
+            }
+            _ => "none".into(),
+        };
+        let _ = writeln!(t, "{}/{}: coherence ≥ 0.8 over {band}", p.output, p.input);
+    }
+    for f in &o.fits {
+        let _ = writeln!(
+            t,
+            "fit {}: J = {:.1} over {} frequencies ({:.3}–{:.3} rad/s), {}; K = {:.5}{}, τ = {:.4} s{}",
+            f.spec,
+            f.fit.cost,
+            f.fit.frequencies_used,
+            f.fit.band_rad_s.0,
+            f.fit.band_rad_s.1,
+            f.fit.status,
+            f.fit.gain,
+            pm(f.fit.gain_sigma),
+            f.fit.delay_s,
+            pm(f.fit.delay_sigma_s)
+        );
+        for (what, list) in [("pole", &f.fit.poles), ("zero", &f.fit.zeros)] {
+            for fac in list.iter() {
+                let roots: Vec<String> =
+                    fac.roots.iter().map(|r| format!("{:.4}{:+.4}j", r[0], r[1])).collect();
+                let modal = match (fac.wn_rad_s, fac.zeta) {
+                    (Some(w), Some(z)) => format!(
+                        "  ωn {w:.4}{} rad/s  ζ {z:.4}{}",
+                        pm(fac.wn_sigma_rad_s),
+                        pm(fac.zeta_sigma)
+                    ),
+                    (Some(w), None) => format!("  |root| {w:.4}{} rad/s", pm(fac.wn_sigma_rad_s)),
+                    _ => String::new(),
+                };
+                let _ = writeln!(t, "  {what} {}{modal}", roots.join(", "));
+            }
+        }
+    }
+    for w in &o.warnings {
+        let _ = writeln!(t, "warning: {w}");
+    }
+    t
+}
+
+fn pm(s: Option<f64>) -> String {
+    s.map_or(String::new(), |s| format!(" ± {s:.4}"))
+}

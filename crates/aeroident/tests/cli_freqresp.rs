@@ -1,0 +1,90 @@
+//! `aeroident freqresp` end to end: a record of a discrete lag whose response is known, the
+//! files it writes, their agreement with the exact response, and its errors on bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const MAP: &str = "nominal_dt_s = 0.02\n[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"V\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nq = { column = \"q\", unit = \"rad/s\" }\nde = { column = \"de\", unit = \"rad\" }\nrho = { value = 1.0, unit = \"kg/m3\" }\nmass = { value = 1000.0, unit = \"kg\" }\nS = { value = 10.0, unit = \"m2\" }\ncbar = { value = 1.5, unit = \"m\" }\nIyy = { value = 2000.0, unit = \"kg*m2\" }\n";
+const DT: f64 = 0.02;
+const A: f64 = 0.9;
+
+fn scratch(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("aeroident-freqresp-{}-{tag}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// `q[k] = A q[k−1] + (1 − A) de[k−1]` driven by a deterministic pseudo-random elevator.
+fn write_record(dir: &Path) {
+    let mut csv = String::from("t,V,a,q,de\n");
+    let (mut q, mut prev, mut seed) = (0.0f64, 0.0f64, 7u64);
+    for k in 0..5000 {
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        let de = (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+        q = A * q + (1.0 - A) * prev;
+        prev = de;
+        csv.push_str(&format!("{:.2},50,0.05,{q:.12e},{de:.12e}\n", k as f64 * DT));
+    }
+    std::fs::write(dir.join("r.csv"), csv).unwrap();
+    std::fs::write(dir.join("m.toml"), MAP).unwrap();
+}
+
+#[test]
+fn writes_json_csv_figures_and_report_matching_the_exact_response() {
+    let d = scratch("files");
+    write_record(&d);
+    let out = d.join("out");
+    let o = Command::new(env!("CARGO_BIN_EXE_aeroident"))
+        .args([
+            "freqresp", "r.csv", "--map", "m.toml", "--input", "de", "--output", "q", "--fit",
+            "q/de:0/1",
+        ])
+        .arg("--out")
+        .arg(&out)
+        .current_dir(&d)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in ["freqresp.json", "freqresp.csv", "report.html", "bode_q_de.png", "bode_q_de.svg"] {
+        assert!(out.join(f).exists(), "{f} missing");
+    }
+    let j: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("freqresp.json")).unwrap()).unwrap();
+    let p = &j["pairs"][0];
+    assert_eq!((p["input"].as_str(), p["output"].as_str()), (Some("de"), Some("q")));
+    let f = p["frequency_hz"].as_array().unwrap();
+    let mag = p["magnitude_db"].as_array().unwrap();
+    for (f, m) in f.iter().zip(mag) {
+        let w = 2.0 * std::f64::consts::PI * f.as_f64().unwrap() * DT;
+        // |(1 − A) e^{−jw} / (1 − A e^{−jw})|
+        let den = ((1.0 - A * w.cos()).powi(2) + (A * w.sin()).powi(2)).sqrt();
+        let exact = 20.0 * ((1.0 - A) / den).log10();
+        assert!((m.as_f64().unwrap() - exact).abs() < 0.3, "{f} Hz: {m} vs {exact}");
+    }
+    let csv = std::fs::read_to_string(out.join("freqresp.csv")).unwrap();
+    assert_eq!(csv.lines().count(), f.len() + 1);
+    assert!(csv.starts_with("output,input,frequency_hz,frequency_rad_s,magnitude_db"));
+    assert!(j["fits"][0]["cost"].as_f64().unwrap() < 100.0);
+}
+
+#[test]
+fn bad_input_names_the_option() {
+    let d = scratch("bad");
+    write_record(&d);
+    for (args, needle) in [
+        (vec!["--input", "de", "--output", "r"], "`r` is not in the record"),
+        (vec!["--input", "de", "--output", "q", "--windows-s", "500"], "--window"),
+        (vec!["--input", "de", "--output", "q", "--fit", "q/de:3/2"], "--fit"),
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_aeroident"))
+            .args(["freqresp", "r.csv", "--map", "m.toml"])
+            .args(&args)
+            .current_dir(&d)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && !err.contains("panicked"), "{args:?}: {err}");
+        assert!(err.contains(needle), "{args:?}: `{needle}` not in {err}");
+    }
+}

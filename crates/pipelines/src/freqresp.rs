@@ -1,0 +1,274 @@
+//! Frequency responses of a record (`aeroident freqresp`): read through the mapping → the time
+//! windows → contiguous, uniformly sampled stretches → the composite-window spectral estimate
+//! of [`aeroident_signals::spectral`] for every (output, input) pair → optional low-order
+//! transfer-function fits ([`aeroident_signals::tf_fit`]).
+//!
+//! **Channels** are named by their mapping keys and read in SI from the reader's samples:
+//! `de, da, dr` (rad), `p, q, r` (rad/s), `alpha, beta, phi, theta, psi` (rad), `ax, ay, az`
+//! (m/s²), `vt` (m/s), `qbar` (Pa), `throttle` (–), `thrust` (N). A response's magnitude is in
+//! dB of the output's SI unit per the input's (rad/s per rad for `q/de`).
+//!
+//! **Stretches.** Spectral windows need every sample at the same interval: the record is split
+//! at its gaps (the reader's gap events, the time windows) and wherever an interval differs
+//! from the record's median by more than 1 % (a rejected row leaves a hole); each stretch is
+//! windowed on its own. No spike screen: a spike is data the coherence judges.
+//!
+//! `freqresp.json` keys: `file, samples, stretches, dt_s, window_lengths_s, overlap,
+//! pairs[{input, output, frequency_hz[], magnitude_db[], phase_deg[], coherence[],
+//! multiple_coherence[], random_error[], magnitude_error_db[], phase_error_deg[]}],
+//! fits[…] (see [`FitSummary`]), warnings[]`; a value not identified is `null`.
+
+use crate::replay::ReplayError;
+use crate::replay::batch::read_records;
+use crate::window::TimeWindow;
+use aeroident_estimators::AirDataSample;
+use aeroident_io::FlightDataReader;
+use aeroident_signals::spectral::{PairResponse, SpectralOptions, Stretch, frequency_responses};
+use aeroident_signals::tf_fit::{FitOptions, TfFit, TfSpec, fit_transfer_function};
+use serde::Serialize;
+use std::io::Read;
+
+/// Options of one frequency-response run.
+#[derive(Debug, Clone, Default)]
+pub struct FreqRespOptions {
+    /// Input channels (mapping keys), at least one.
+    pub inputs: Vec<String>,
+    /// Output channels (mapping keys), at least one.
+    pub outputs: Vec<String>,
+    /// Time windows of the record used; empty: all of it.
+    pub windows: Vec<TimeWindow>,
+    /// Spectral options.
+    pub spectral: SpectralOptions,
+    /// Transfer-function fits to make on the responses.
+    pub fits: Vec<TfSpec>,
+    /// Options of the fits.
+    pub fit: FitOptions,
+}
+
+/// One transfer-function fit in `freqresp.json` (the fitted model and how well it matches).
+#[derive(Debug, Clone, Serialize)]
+pub struct FitSummary {
+    /// The spec as given, e.g. `q/de:1/2+delay`.
+    pub spec: String,
+    /// The fit ([`TfFit`] documents its keys).
+    #[serde(flatten)]
+    pub fit: TfFit,
+}
+
+/// `freqresp.json` (module doc).
+#[derive(Debug, Clone, Serialize)]
+pub struct FreqRespOutcome {
+    /// The record.
+    pub file: String,
+    /// Samples used.
+    pub samples: usize,
+    /// Contiguous stretches the samples form.
+    pub stretches: usize,
+    /// Sample interval, s.
+    pub dt_s: f64,
+    /// Window lengths, s.
+    pub window_lengths_s: Vec<f64>,
+    /// Window overlap, fraction.
+    pub overlap: f64,
+    /// Every (output, input) pair, outputs outer.
+    pub pairs: Vec<PairResponse>,
+    /// Transfer-function fits.
+    pub fits: Vec<FitSummary>,
+    /// What the reader and the stage noticed (rejected rows, stretches dropped).
+    pub warnings: Vec<String>,
+}
+
+/// The SI value of channel `key` (module doc) in `s`, `None` when the sample lacks it or the
+/// key names no channel this stage reads.
+pub fn channel_value(s: &AirDataSample, key: &str) -> Option<f64> {
+    match key {
+        "de" => s.de_rad,
+        "da" => s.da_rad,
+        "dr" => s.dr_rad,
+        "p" => s.p_rad_s,
+        "q" => s.q_rad_s,
+        "r" => s.r_rad_s,
+        "alpha" => Some(s.alpha_rad),
+        "beta" => s.beta_rad,
+        "phi" => s.phi_rad,
+        "theta" => s.theta_rad,
+        "psi" => s.psi_rad,
+        "ax" => s.ax_mps2,
+        "ay" => s.ay_mps2,
+        "az" => s.az_mps2,
+        "vt" => Some(s.vt_mps),
+        "qbar" => Some(s.qbar_pa),
+        "throttle" => s.throttle,
+        "thrust" => s.thrust_n,
+        _ => None,
+    }
+}
+
+/// The channel keys [`channel_value`] reads.
+pub const CHANNELS: &[&str] = &[
+    "de", "da", "dr", "p", "q", "r", "alpha", "beta", "phi", "theta", "psi", "ax", "ay", "az",
+    "vt", "qbar", "throttle", "thrust",
+];
+
+/// Frequency responses (and fits) of the record `reader` reads (module doc).
+///
+/// # Errors
+/// [`ReplayError::Option`] naming `input`/`output` for a channel that is not known or not in
+/// the record, `window` for bad time windows, and the spectral stage's errors (window too long,
+/// an input not excited, frequency range) naming their option or channel; fatal data errors.
+pub fn freqresp<R: Read>(
+    reader: FlightDataReader<R>,
+    opts: &FreqRespOptions,
+) -> Result<FreqRespOutcome, ReplayError> {
+    check_channels(opts)?;
+    let file = reader.file().to_string();
+    let rec = read_records(vec![reader], None, None, &opts.windows)?;
+    let mut warnings = rec.notes.clone();
+    let (rejections, unlisted) = rec.rejections.finish();
+    warnings.extend(rejections.iter().take(20).map(|r| format!("row {}: {}", r.row, r.reason)));
+    warnings.extend(unlisted);
+    let names: Vec<String> = opts.inputs.iter().chain(&opts.outputs).cloned().collect();
+    let (stretches, dt_s, dropped) = stretches(&rec.manoeuvres, &names, opts.inputs.len())?;
+    if dropped > 0 {
+        warnings.push(format!(
+            "{dropped} samples in stretches of fewer than 4 samples between holes were not used"
+        ));
+    }
+    let samples = stretches.iter().map(|s| s[0].len()).sum();
+    let r = frequency_responses(&stretches, &opts.inputs, &opts.outputs, dt_s, &opts.spectral)
+        .map_err(spectral_error)?;
+    let fits = opts
+        .fits
+        .iter()
+        .map(|spec| fit_one(spec, &r.pairs, &opts.fit))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(FreqRespOutcome {
+        file,
+        samples,
+        stretches: stretches.len(),
+        dt_s,
+        window_lengths_s: r.window_lengths_s,
+        overlap: r.overlap,
+        pairs: r.pairs,
+        fits,
+        warnings,
+    })
+}
+
+fn check_channels(opts: &FreqRespOptions) -> Result<(), ReplayError> {
+    for (option, list) in [("input", &opts.inputs), ("output", &opts.outputs)] {
+        if list.is_empty() {
+            return Err(ReplayError::Option { option, reason: "give at least one channel".into() });
+        }
+        if let Some(bad) = list.iter().find(|k| !CHANNELS.contains(&k.as_str())) {
+            return Err(ReplayError::Option {
+                option,
+                reason: format!("`{bad}` is not a channel; one of {}", CHANNELS.join(", ")),
+            });
+        }
+    }
+    if let Some(dup) = opts.inputs.iter().find(|k| opts.outputs.contains(k)) {
+        return Err(ReplayError::Option {
+            option: "output",
+            reason: format!("`{dup}` is also an input"),
+        });
+    }
+    Ok(())
+}
+
+fn spectral_error(e: aeroident_signals::spectral::SpectralError) -> ReplayError {
+    use aeroident_signals::spectral::SpectralError as E;
+    match e {
+        E::Option { option, reason } => ReplayError::Option { option, reason },
+        E::NotExcited { .. } => ReplayError::Option { option: "input", reason: e.to_string() },
+        E::Data(m) => ReplayError::Model(m),
+    }
+}
+
+/// The record's median sample interval, s.
+fn median_dt(manoeuvres: &[Vec<AirDataSample>]) -> Option<f64> {
+    let mut d: Vec<f64> = manoeuvres
+        .iter()
+        .flat_map(|m| m.windows(2).map(|w| w[1].t_s - w[0].t_s))
+        .filter(|v| *v > 0.0)
+        .collect();
+    if d.is_empty() {
+        return None;
+    }
+    let mid = d.len() / 2;
+    Some(*d.select_nth_unstable_by(mid, f64::total_cmp).1)
+}
+
+/// Splits the manoeuvres into uniformly sampled stretches of the channels `names` (module
+/// doc). Returns them, the interval and the samples of stretches too short to use.
+fn stretches(
+    manoeuvres: &[Vec<AirDataSample>],
+    names: &[String],
+    n_inputs: usize,
+) -> Result<(Vec<Stretch>, f64, usize), ReplayError> {
+    let dt = median_dt(manoeuvres)
+        .ok_or_else(|| ReplayError::Model("fewer than two samples: no sample interval".into()))?;
+    let mut out: Vec<Stretch> = Vec::new();
+    let mut dropped = 0;
+    for m in manoeuvres {
+        let mut current: Stretch = vec![Vec::new(); names.len()];
+        let mut last_t: Option<f64> = None;
+        for s in m {
+            if let Some(t0) = last_t
+                && ((s.t_s - t0) - dt).abs() > 0.01 * dt
+            {
+                dropped += close(&mut current, &mut out);
+            }
+            for (c, key) in names.iter().enumerate() {
+                let v = channel_value(s, key).ok_or_else(|| ReplayError::Option {
+                    option: if c < n_inputs { "input" } else { "output" },
+                    reason: format!(
+                        "channel `{key}` is not in the record at t = {} s (map it in the mapping's [channels])",
+                        s.t_s
+                    ),
+                })?;
+                current[c].push(v);
+            }
+            last_t = Some(s.t_s);
+        }
+        dropped += close(&mut current, &mut out);
+    }
+    Ok((out, dt, dropped))
+}
+
+/// Moves `current` to `out` when it holds at least 4 samples; returns the samples dropped.
+fn close(current: &mut Stretch, out: &mut Vec<Stretch>) -> usize {
+    let n = current[0].len();
+    let taken = std::mem::replace(current, vec![Vec::new(); current.len()]);
+    if n >= 4 {
+        out.push(taken);
+        0
+    } else {
+        n
+    }
+}
+
+/// Fits `spec` to its pair's response.
+fn fit_one(
+    spec: &TfSpec,
+    pairs: &[PairResponse],
+    opts: &FitOptions,
+) -> Result<FitSummary, ReplayError> {
+    let p = pairs.iter().find(|p| p.input == spec.input && p.output == spec.output).ok_or_else(
+        || ReplayError::Option {
+            option: "fit",
+            reason: format!(
+                "`{}`: no response of `{}` to `{}` (give them as --output and --input)",
+                spec.text, spec.output, spec.input
+            ),
+        },
+    )?;
+    let fit = fit_transfer_function(p, spec, opts).map_err(|e| ReplayError::Option {
+        option: "fit",
+        reason: format!("`{}`: {e}", spec.text),
+    })?;
+    Ok(FitSummary { spec: spec.text.clone(), fit })
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,96 @@
+//! The stage on a CSV record of a known discrete system, read through a mapping.
+
+use super::*;
+use aeroident_io::Mapping;
+use rand::SeedableRng;
+use rand_distr::{Distribution, Normal};
+use std::f64::consts::PI;
+
+const MAP: &str = "nominal_dt_s = 0.02\n[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"V\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nq = { column = \"q\", unit = \"rad/s\" }\nde = { column = \"de\", unit = \"deg\" }\nrho = { value = 1.0, unit = \"kg/m3\" }\nmass = { value = 1000.0, unit = \"kg\" }\nS = { value = 10.0, unit = \"m2\" }\ncbar = { value = 1.5, unit = \"m\" }\nIyy = { value = 2000.0, unit = \"kg*m2\" }\n";
+
+const DT: f64 = 0.02;
+/// `q[k] = A q[k−1] + G (1 − A) de[k−1]` (de in rad): exact response
+/// `G (1 − A) z⁻¹ / (1 − A z⁻¹)`.
+const A: f64 = 0.95;
+const G: f64 = -2.0;
+
+fn exact(f_hz: f64) -> aeroident_signals::spectral::Complex64 {
+    let z1 = aeroident_signals::spectral::Complex64::from_polar(1.0, -2.0 * PI * f_hz * DT);
+    G * (1.0 - A) * z1 / (1.0 - A * z1)
+}
+
+/// 8 000 rows of white elevator (deg in the file) and the lagged pitch rate, row 4 001 missing
+/// (a hole: two stretches).
+fn record() -> String {
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
+    let d = Normal::new(0.0, 1.0).unwrap();
+    let mut csv = String::from("t,V,a,q,de\n");
+    let (mut q, mut de_prev) = (0.0, 0.0);
+    for k in 0..8000 {
+        let de_deg: f64 = d.sample(&mut rng);
+        q = A * q + G * (1.0 - A) * de_prev;
+        de_prev = de_deg.to_radians();
+        if k != 4000 {
+            csv.push_str(&format!("{:.2},50,0.05,{q:.9e},{de_deg:.9e}\n", k as f64 * DT));
+        }
+    }
+    csv
+}
+
+fn run(opts: &FreqRespOptions) -> Result<FreqRespOutcome, ReplayError> {
+    let m = Mapping::from_toml_str(MAP, "m.toml").unwrap();
+    let csv = record();
+    let reader = FlightDataReader::new(csv.as_bytes(), "r.csv", &m).unwrap();
+    freqresp(reader, opts)
+}
+
+fn opts(inputs: &[&str], outputs: &[&str]) -> FreqRespOptions {
+    FreqRespOptions {
+        inputs: inputs.iter().map(|s| s.to_string()).collect(),
+        outputs: outputs.iter().map(|s| s.to_string()).collect(),
+        ..FreqRespOptions::default()
+    }
+}
+
+#[test]
+fn record_through_the_mapping_gives_the_systems_response_in_si() {
+    let mut o = opts(&["de"], &["q"]);
+    o.fits = vec![TfSpec::parse("q/de:0/1").unwrap()];
+    let r = run(&o).unwrap();
+    assert_eq!((r.stretches, r.samples), (2, 7999));
+    assert!((r.dt_s - DT).abs() < 1e-12);
+    let p = &r.pairs[0];
+    for k in 0..p.frequency_hz.len() {
+        let h = exact(p.frequency_hz[k]);
+        let db = p.magnitude_db[k] - 20.0 * h.norm().log10();
+        let deg = p.phase_deg[k] - h.arg().to_degrees();
+        let deg = (deg + 180.0).rem_euclid(360.0) - 180.0;
+        assert!(db.abs() < 0.3 && deg.abs() < 2.0, "{} Hz: {db} dB {deg} deg", p.frequency_hz[k]);
+        assert!(p.coherence[k] > 0.99);
+    }
+    // The discrete lag is close to G·a/(s + a) with a = −ln(A)/Δt at low frequency.
+    let pole = &r.fits[0].fit.poles[0];
+    let a = -A.ln() / DT;
+    assert!((pole.wn_rad_s.unwrap() - a).abs() < 0.05 * a, "{pole:?} vs {a}");
+}
+
+#[test]
+fn bad_channels_and_windows_are_named() {
+    let e = run(&opts(&["de"], &["p"])).unwrap_err().to_string();
+    assert!(e.contains("--output") && e.contains("`p` is not in the record"), "{e}");
+    let e = run(&opts(&["elevator"], &["q"])).unwrap_err().to_string();
+    assert!(e.contains("--input") && e.contains("`elevator` is not a channel"), "{e}");
+    let mut o = opts(&["de"], &["q"]);
+    o.spectral.window_lengths_s = vec![100.0];
+    let e = run(&o).unwrap_err().to_string();
+    assert!(
+        e.contains("--window") && e.contains("longer than the longest contiguous stretch"),
+        "{e}"
+    );
+    let e = run(&opts(&["vt"], &["q"])).unwrap_err().to_string();
+    assert!(e.contains("input `vt` is not excited"), "{e}");
+    let mut o = opts(&["de"], &["q"]);
+    o.fits = vec![TfSpec::parse("r/dr:0/2").unwrap()];
+    let e = run(&o).unwrap_err().to_string();
+    assert!(e.contains("--fit") && e.contains("no response of `r` to `dr`"), "{e}");
+}

@@ -1,0 +1,177 @@
+//! The frequency responses of simulated F-16 chirp flights (scenarios/sim/chirp_*.toml: sensor
+//! noise, light turbulence) against the analytic responses `C (jωI − A)⁻¹ B` of the
+//! linearisation at the same trim, and the fitted modes against its eigenvalues.
+//!
+//! Like with like: the record's surface channels are the actuators' outputs (the mapping's
+//! `elevator_rad` etc.), so the linearisation's B (surface inputs) is compared without the
+//! actuator; the sensed rates carry white noise only (no filter, no delay). Both are
+//! perturbations about the same trim (the spectra remove each window's mean and trend).
+
+use aeroident_io::{FlightDataReader, Mapping};
+use aeroident_models::f16::{F16, N_STATES, P, Q, R};
+use aeroident_models::linearize::{ModeName, f16_modes, linearize_f16};
+use aeroident_pipelines::freqresp::{FreqRespOptions, freqresp};
+use aeroident_pipelines::sim::{SimRun, load_scenario, run};
+use aeroident_signals::spectral::Complex64;
+use aeroident_signals::tf_fit::TfSpec;
+use nalgebra::DMatrix;
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn simulate(name: &str) -> SimRun {
+    let path = root().join(format!("scenarios/sim/{name}.toml"));
+    run(&load_scenario(&path).unwrap(), path.parent().unwrap()).unwrap()
+}
+
+fn csv(run: &SimRun) -> String {
+    let mut t = run.columns.join(",");
+    t.push('\n');
+    for k in 0..run.data[0].len() {
+        let row: Vec<String> = run.data.iter().map(|c| format!("{:.12e}", c[k])).collect();
+        t.push_str(&row.join(","));
+        t.push('\n');
+    }
+    t
+}
+
+/// `C (jωI − A)⁻¹ B` of state `out` to control column `input` at `w` rad/s.
+fn analytic(a: &DMatrix<Complex64>, b: &[f64], out: usize, w: f64) -> Complex64 {
+    let n = N_STATES;
+    let mut m = -a.clone();
+    for i in 0..n {
+        m[(i, i)] += Complex64::new(0.0, w);
+    }
+    let rhs = nalgebra::DVector::from_iterator(n, b.iter().map(|v| Complex64::new(*v, 0.0)));
+    m.lu().solve(&rhs).unwrap()[out]
+}
+
+struct Axis {
+    scenario: &'static str,
+    input: &'static str,
+    output: &'static str,
+    state: usize,
+    control: usize,
+    fit: &'static str,
+    mode: ModeName,
+}
+
+/// The issue's targets, as a measurement: run with
+/// `cargo test --release -p aeroident-pipelines --test freqresp_f16 -- --ignored --nocapture`
+/// (it prints every axis's numbers). Ignored in CI because the targets are not met on these
+/// records (docs/frequency-response.md, "Measured against the linearisation").
+#[test]
+#[ignore = "targets not met yet: see docs/frequency-response.md"]
+fn chirp_responses_match_the_linearisation_and_the_fitted_modes_its_eigenvalues() {
+    let axes = [
+        Axis {
+            scenario: "chirp_elevator",
+            input: "de",
+            output: "q",
+            state: Q,
+            control: 1,
+            fit: "q/de:1/2+delay@0.5:10",
+            mode: ModeName::ShortPeriod,
+        },
+        Axis {
+            scenario: "chirp_aileron",
+            input: "da",
+            output: "p",
+            state: P,
+            control: 2,
+            fit: "",
+            mode: ModeName::Roll,
+        },
+        Axis {
+            scenario: "chirp_rudder",
+            input: "dr",
+            output: "r",
+            state: R,
+            control: 3,
+            fit: "r/dr:3/4+delay",
+            mode: ModeName::DutchRoll,
+        },
+    ];
+    let mut failures = Vec::new();
+    let mapping = Mapping::from_path(&root().join("mappings/aeroident-sim-measured.toml")).unwrap();
+    for ax in &axes {
+        let sim = simulate(ax.scenario);
+        let lin =
+            linearize_f16(&F16::new(0.30).unwrap(), &sim.trim.state, &sim.trim.controls).unwrap();
+        let a = DMatrix::from_fn(N_STATES, N_STATES, |i, j| Complex64::new(lin.a[(i, j)], 0.0));
+        let b: Vec<f64> = (0..N_STATES).map(|i| lin.b[(i, ax.control)]).collect();
+        let text = csv(&sim);
+        let reader = FlightDataReader::new(text.as_bytes(), ax.scenario, &mapping).unwrap();
+        let opts = FreqRespOptions {
+            inputs: vec![ax.input.into()],
+            outputs: vec![ax.output.into()],
+            fits: if ax.fit.is_empty() { vec![] } else { vec![TfSpec::parse(ax.fit).unwrap()] },
+            ..FreqRespOptions::default()
+        };
+        let r = freqresp(reader, &opts).unwrap();
+        let p = &r.pairs[0];
+        let (mut db, mut deg, mut used, mut beyond) = (0.0f64, 0.0f64, 0, Vec::new());
+        for k in 0..p.frequency_hz.len() {
+            let w = 2.0 * std::f64::consts::PI * p.frequency_hz[k];
+            if !(0.1..=10.0).contains(&w) || p.coherence[k] < 0.8 {
+                continue;
+            }
+            let h = analytic(&a, &b, ax.state, w);
+            let ratio = Complex64::new(p.re[k], p.im[k]) / h;
+            if std::env::var("F16_DEBUG").is_ok() {
+                eprintln!(
+                    "{w:.3} rad/s γ² {:.3} Δ {:.3} dB {:.2} deg ε {:.4}",
+                    p.coherence[k],
+                    20.0 * ratio.norm().log10(),
+                    ratio.arg().to_degrees(),
+                    p.random_error[k]
+                );
+            }
+            let e = p.random_error[k];
+            let (ddb, ddeg) = ((20.0 * ratio.norm().log10()).abs(), ratio.arg().to_degrees().abs());
+            if ddb > 1.0 || ddeg > 5.0 {
+                beyond.push(format!("{w:.3} rad/s: {ddb:.2} dB {ddeg:.1} deg, ε {e:.3}"));
+            }
+            db = db.max((20.0 * ratio.norm().log10()).abs());
+            deg = deg.max(ratio.arg().to_degrees().abs());
+            used += 1;
+        }
+        eprintln!(
+            "{}/{}: {used} points with γ² ≥ 0.8 in 0.1–10 rad/s, max |Δ| {db:.3} dB {deg:.2} deg",
+            ax.output, ax.input
+        );
+        assert!(used >= 30, "{}/{}: only {used} coherent points", ax.output, ax.input);
+        if !beyond.is_empty() {
+            failures.push(format!("{}/{}: beyond 1 dB / 5° at {beyond:?}", ax.output, ax.input));
+        }
+        if let Some(fit) = r.fits.first() {
+            let truth = f16_modes(&lin.a).into_iter().find(|m| m.name == ax.mode).unwrap();
+            let pole = fit
+                .fit
+                .poles
+                .iter()
+                .filter(|f| f.zeta.is_some_and(|z| z < 1.0))
+                .min_by(|x, y| {
+                    (x.wn_rad_s.unwrap() - truth.wn_rad_s)
+                        .abs()
+                        .total_cmp(&(y.wn_rad_s.unwrap() - truth.wn_rad_s).abs())
+                })
+                .unwrap();
+            let (wn, zeta) = (pole.wn_rad_s.unwrap(), pole.zeta.unwrap());
+            let (ew, ez) = ((wn / truth.wn_rad_s - 1.0) * 100.0, (zeta / truth.zeta - 1.0) * 100.0);
+            eprintln!(
+                "{}: ωn {wn:.4} vs {:.4} rad/s ({ew:+.2} %), ζ {zeta:.4} vs {:.4} ({ez:+.2} %), J {:.1}",
+                fit.spec, truth.wn_rad_s, truth.zeta, fit.fit.cost
+            );
+            let sw = 100.0 * 3.0 * pole.wn_sigma_rad_s.unwrap_or(f64::NAN) / truth.wn_rad_s;
+            let sz = 100.0 * 3.0 * pole.zeta_sigma.unwrap_or(f64::NAN) / truth.zeta;
+            eprintln!("  3σ of the fit: ωn {sw:.2} %, ζ {sz:.2} %");
+            if !(ew.abs() <= 5.0 && ez.abs() <= 5.0) {
+                failures.push(format!("{}: ωn {ew} %, ζ {ez} %", fit.spec));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}

@@ -1,0 +1,253 @@
+//! Checks against discrete systems whose frequency response is known exactly: a second-order
+//! filter driven by white noise, with and without output noise, one and two inputs.
+
+use super::*;
+use rand::SeedableRng;
+use rand_distr::{Distribution, Normal};
+
+const DT: f64 = 0.01;
+
+/// Tustin discretisation of `ωn²/(s² + 2ζωn s + ωn²)`: `(b, a)` of
+/// `y[k] = Σ b_j x[k−j] − a1 y[k−1] − a2 y[k−2]`.
+fn biquad(wn: f64, zeta: f64, gain: f64) -> ([f64; 3], [f64; 2]) {
+    let c = 2.0 / DT;
+    let d = c * c + 2.0 * zeta * wn * c + wn * wn;
+    let k = gain * wn * wn / d;
+    (
+        [k, 2.0 * k, k],
+        [(2.0 * wn * wn - 2.0 * c * c) / d, (c * c - 2.0 * zeta * wn * c + wn * wn) / d],
+    )
+}
+
+/// Exact discrete response of the filter at `f_hz`.
+fn response(bq: &([f64; 3], [f64; 2]), f_hz: f64) -> Complex64 {
+    let z1 = Complex64::from_polar(1.0, -2.0 * PI * f_hz * DT);
+    let z2 = z1 * z1;
+    let (b, a) = bq;
+    (b[0] + z1 * b[1] + z2 * b[2]) / (1.0 + z1 * a[0] + z2 * a[1])
+}
+
+fn filter(bq: &([f64; 3], [f64; 2]), x: &[f64]) -> Vec<f64> {
+    let (b, a) = bq;
+    let mut y = vec![0.0; x.len()];
+    for k in 0..x.len() {
+        let xm = |j: usize| if k >= j { x[k - j] } else { 0.0 };
+        let ym = |y: &[f64], j: usize| if k >= j { y[k - j] } else { 0.0 };
+        y[k] = b[0] * xm(0) + b[1] * xm(1) + b[2] * xm(2) - a[0] * ym(&y, 1) - a[1] * ym(&y, 2);
+    }
+    y
+}
+
+fn white(n: usize, sigma: f64, seed: u64) -> Vec<f64> {
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+    let d = Normal::new(0.0, sigma).unwrap();
+    (0..n).map(|_| d.sample(&mut rng)).collect()
+}
+
+fn names(v: &[&str]) -> Vec<String> {
+    v.iter().map(|s| s.to_string()).collect()
+}
+
+fn opts() -> SpectralOptions {
+    SpectralOptions { f_max_hz: Some(5.0), ..SpectralOptions::default() }
+}
+
+/// Largest |dB| and |deg| deviation from the exact response over the grid.
+fn deviation(p: &PairResponse, exact: impl Fn(f64) -> Complex64) -> (f64, f64) {
+    deviation_where(p, exact, 0.0)
+}
+
+/// [`deviation`] at the grid points whose coherence is at least `min_coherence`.
+fn deviation_where(
+    p: &PairResponse,
+    exact: impl Fn(f64) -> Complex64,
+    min_coherence: f64,
+) -> (f64, f64) {
+    let (mut db, mut deg) = (0.0f64, 0.0f64);
+    for k in (0..p.frequency_hz.len()).filter(|&k| p.coherence[k] >= min_coherence) {
+        let h = exact(p.frequency_hz[k]);
+        let est = Complex64::new(p.re[k], p.im[k]);
+        let (d1, d2) =
+            ((20.0 * (est.norm() / h.norm()).log10()).abs(), (est / h).arg().to_degrees().abs());
+        if std::env::var("SPECTRAL_DEBUG").is_ok() {
+            eprintln!(
+                "{:.4} Hz {d1:.3} dB {d2:.2} deg coh {:.4}",
+                p.frequency_hz[k], p.coherence[k]
+            );
+        }
+        db = db.max(d1);
+        deg = deg.max(d2);
+    }
+    (db, deg)
+}
+
+#[test]
+fn noise_free_second_order_system_is_recovered_with_unit_coherence() {
+    let bq = biquad(2.0 * PI * 0.8, 0.3, 2.0);
+    let x = white(30_000, 1.0, 1);
+    let y = filter(&bq, &x);
+    let r =
+        frequency_responses(&[vec![x, y]], &names(&["u"]), &names(&["y"]), DT, &opts()).unwrap();
+    let p = &r.pairs[0];
+    let (db, deg) = deviation(p, |f| response(&bq, f));
+    assert!(db < 0.3 && deg < 2.0, "deviation {db} dB {deg} deg");
+    let min_coh = p.coherence.iter().copied().fold(1.0, f64::min);
+    assert!(min_coh > 0.99, "coherence {min_coh}");
+    // The grid spans 2/T_max to f_max at 40 points per decade.
+    assert!((p.frequency_hz[0] - 2.0 / r.window_lengths_s[0]).abs() < 1e-12);
+    assert!(*p.frequency_hz.last().unwrap() <= 5.0 + 1e-9);
+}
+
+#[test]
+fn noisy_output_stays_within_its_random_error_and_the_error_matches_the_scatter() {
+    let bq = biquad(2.0 * PI * 0.8, 0.3, 2.0);
+    let seeds = 16;
+    let mut logs: Vec<Vec<f64>> = Vec::new();
+    let mut eps_mean: Vec<f64> = Vec::new();
+    for seed in 0..seeds {
+        let x = white(20_000, 1.0, 100 + seed);
+        let noise = white(20_000, 1.5, 200 + seed);
+        let y: Vec<f64> = filter(&bq, &x).iter().zip(&noise).map(|(a, b)| a + b).collect();
+        let r = frequency_responses(&[vec![x, y]], &names(&["u"]), &names(&["y"]), DT, &opts())
+            .unwrap();
+        let p = &r.pairs[0];
+        let rel: Vec<f64> = (0..p.frequency_hz.len())
+            .map(|k| {
+                Complex64::new(p.re[k], p.im[k]).norm() / response(&bq, p.frequency_hz[k]).norm()
+            })
+            .map(f64::ln)
+            .collect();
+        logs.push(rel);
+        if eps_mean.is_empty() {
+            eps_mean = vec![0.0; p.random_error.len()];
+        }
+        eps_mean.iter_mut().zip(&p.random_error).for_each(|(m, e)| *m += e / seeds as f64);
+    }
+    // ε is the σ of ln|H| to first order: compare with the scatter over seeds, averaged over
+    // frequency bands of 10 grid points (each band's ratio from 160 values).
+    let n = eps_mean.len();
+    for band in (0..n).collect::<Vec<_>>().chunks(10) {
+        let (mut var, mut e2) = (0.0, 0.0);
+        for &k in band {
+            let mean = logs.iter().map(|l| l[k]).sum::<f64>() / seeds as f64;
+            var += logs.iter().map(|l| (l[k] - mean).powi(2)).sum::<f64>() / (seeds - 1) as f64;
+            e2 += eps_mean[k] * eps_mean[k];
+        }
+        let ratio = (var / e2).sqrt();
+        assert!(
+            (0.5..2.0).contains(&ratio),
+            "band from {} Hz: observed/predicted σ = {ratio}",
+            band[0]
+        );
+    }
+}
+
+#[test]
+fn two_correlated_inputs_are_separated_by_conditioning() {
+    let b1 = biquad(2.0 * PI * 0.8, 0.3, 2.0);
+    let b2 = biquad(2.0 * PI * 2.0, 0.6, -0.5);
+    let n = 30_000;
+    let x1 = white(n, 1.0, 5);
+    // The second input partly follows the first (a crossfeed): SISO estimates would be biased.
+    let x2: Vec<f64> = white(n, 1.0, 6).iter().zip(&x1).map(|(a, b)| a + 0.7 * b).collect();
+    let y: Vec<f64> = filter(&b1, &x1).iter().zip(filter(&b2, &x2)).map(|(a, b)| a + b).collect();
+    let r =
+        frequency_responses(&[vec![x1, x2, y]], &names(&["a", "b"]), &names(&["y"]), DT, &opts())
+            .unwrap();
+    // Near input a's resonance the leakage of its large response is noise to input b's
+    // estimate; the partial coherence says so (it drops to about 0.75 there), so compare where
+    // it is high, as a user filters a response.
+    let (db1, deg1) = deviation_where(&r.pairs[0], |f| response(&b1, f), 0.95);
+    let (db2, deg2) = deviation_where(&r.pairs[1], |f| response(&b2, f), 0.95);
+    let kept = r.pairs[1].coherence.iter().filter(|&&g| g >= 0.95).count();
+    assert!(kept * 10 >= r.pairs[1].coherence.len() * 8, "only {kept} points kept");
+    // Everywhere, coherence high or not, the random error from the partial coherence covers
+    // the deviation (3ε, plus 0.5 % for the taper's bias).
+    for (p, bq) in r.pairs.iter().zip([&b1, &b2]) {
+        for k in 0..p.frequency_hz.len() {
+            let ratio = Complex64::new(p.re[k], p.im[k]) / response(bq, p.frequency_hz[k]);
+            let bound = 3.0 * p.random_error[k] + 0.005;
+            assert!(
+                ratio.norm().ln().abs() < bound && ratio.arg().abs() < bound,
+                "{} at {} Hz: ratio {ratio}, ε {}",
+                p.input,
+                p.frequency_hz[k],
+                p.random_error[k]
+            );
+        }
+    }
+    assert!(db1 < 0.5 && deg1 < 3.0, "input a: {db1} dB {deg1} deg");
+    assert!(db2 < 0.5 && deg2 < 3.0, "input b: {db2} dB {deg2} deg");
+    let worst = r.pairs[0].multiple_coherence.iter().copied().fold(1.0, f64::min);
+    assert!(worst > 0.95, "multiple coherence down to {worst} with no noise");
+}
+
+#[test]
+fn stretches_are_windowed_separately_and_gaps_do_not_leak() {
+    let bq = biquad(2.0 * PI * 0.8, 0.3, 2.0);
+    let mk = |seed| {
+        let x = white(8_000, 1.0, seed);
+        let y = filter(&bq, &x);
+        vec![x, y]
+    };
+    // Two stretches of unrelated data: joined they would not be one record.
+    let o = SpectralOptions { window_lengths_s: vec![40.0, 20.0, 10.0], ..opts() };
+    let r = frequency_responses(&[mk(11), mk(12)], &names(&["u"]), &names(&["y"]), DT, &o).unwrap();
+    let (db, deg) = deviation(&r.pairs[0], |f| response(&bq, f));
+    assert!(db < 0.5 && deg < 3.0, "{db} dB {deg} deg");
+}
+
+#[test]
+fn bad_input_is_named() {
+    let x = white(2_000, 1.0, 1);
+    let y = x.clone();
+    let long = SpectralOptions { window_lengths_s: vec![30.0], ..opts() };
+    let e = frequency_responses(
+        &[vec![x.clone(), y.clone()]],
+        &names(&["de"]),
+        &names(&["q"]),
+        DT,
+        &long,
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("`window`") && e.to_string().contains("longer"), "{e}");
+    let zero = vec![0.0; 2_000];
+    let e =
+        frequency_responses(&[vec![zero, y.clone()]], &names(&["de"]), &names(&["q"]), DT, &opts())
+            .unwrap_err();
+    assert!(e.to_string().contains("input `de` is not excited"), "{e}");
+    let low = SpectralOptions { f_min_hz: Some(0.01), ..opts() };
+    let e = frequency_responses(
+        &[vec![x.clone(), y.clone()]],
+        &names(&["de"]),
+        &names(&["q"]),
+        DT,
+        &low,
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("`f_min`"), "{e}");
+    let mut bad = y;
+    bad[7] = f64::NAN;
+    let e = frequency_responses(&[vec![x, bad]], &names(&["de"]), &names(&["q"]), DT, &opts())
+        .unwrap_err();
+    assert!(e.to_string().contains("sample 7"), "{e}");
+}
+
+#[test]
+fn log_chirp_drive_recovers_the_response() {
+    // The F-16 flight-test input: a logarithmic sweep 0.1–20 rad/s over 240 s with fades.
+    let bq = biquad(2.0 * PI * 0.3, 0.5, 3.0);
+    let sweep =
+        crate::Sweep::new(1.0, 0.1, 20.0, 5.0, 240.0, crate::SweepLaw::Logarithmic, 5.0).unwrap();
+    let x: Vec<f64> =
+        (0..25_000).map(|k| crate::InputSignal::value(&sweep, k as f64 * DT)).collect();
+    let y = filter(&bq, &x);
+    let o = SpectralOptions {
+        f_min_hz: Some(0.1 / (2.0 * PI) * 1.5),
+        f_max_hz: Some(2.0),
+        ..SpectralOptions::default()
+    };
+    let r = frequency_responses(&[vec![x, y]], &names(&["u"]), &names(&["y"]), DT, &o).unwrap();
+    let (db, deg) = deviation_where(&r.pairs[0], |f| response(&bq, f), 0.8);
+    assert!(db < 1.0 && deg < 5.0, "{db} dB {deg} deg");
+}

@@ -156,6 +156,16 @@ pub struct BatchIteration {
     pub max_step_sigma: f64,
 }
 
+impl From<&aeroident_estimators::output_error::OeIteration> for BatchIteration {
+    fn from(it: &aeroident_estimators::output_error::OeIteration) -> Self {
+        BatchIteration {
+            iteration: it.iteration,
+            ln_det_r: it.ln_det_r,
+            max_step_sigma: it.max_step_sigma,
+        }
+    }
+}
+
 /// `summary.json` of a batch fit.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BatchSummary {
@@ -1216,15 +1226,7 @@ fn summarise(
         rejections: Vec::new(),
         manoeuvres: manoeuvres.len(),
         fit_wall_s: fitted.fit_wall_s,
-        iterations: result
-            .iterations
-            .iter()
-            .map(|it| BatchIteration {
-                iteration: it.iteration,
-                ln_det_r: it.ln_det_r,
-                max_step_sigma: it.max_step_sigma,
-            })
-            .collect(),
+        iterations: result.iterations.iter().map(BatchIteration::from).collect(),
         parameters,
         residual_rms: result
             .outputs

@@ -207,15 +207,7 @@ fn summarise(
         rejections: Vec::new(),
         manoeuvres: slices.len(),
         fit_wall_s,
-        iterations: fd
-            .iterations
-            .iter()
-            .map(|it| BatchIteration {
-                iteration: it.iteration,
-                ln_det_r: it.ln_det_r,
-                max_step_sigma: it.max_step_sigma,
-            })
-            .collect(),
+        iterations: fd.iterations.iter().map(BatchIteration::from).collect(),
         parameters,
         residual_rms: Vec::new(),
         coefficients: diagnostics::conditions_from(&st, &values, &cov),

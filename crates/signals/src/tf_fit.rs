@@ -25,7 +25,10 @@
 //! least-squares covariance with the misfit as the noise level. (Tischler & Remple's
 //! Cramér–Rao bound `√[(Hessian⁻¹)ᵢᵢ]` assumes the weights are the inverse noise variances;
 //! the coherence weighting is not, so the misfit sets the scale here.) σ of ωn, ζ, roots and
-//! the gain are propagated through their gradients.
+//! the gain are propagated through their gradients. Checked against scatter on independent
+//! magnitude and phase errors of equal weighted variance: ωn 1.02, ζ 1.06 × σ over 100 draws
+//! (test `sigma_of_the_modes_matches_their_scatter_over_noise_draws`). Errors correlated across
+//! frequency (a composite response's neighbouring points share data) are not covered.
 
 use crate::spectral::PairResponse;
 use nalgebra::{DMatrix, DVector};
@@ -605,6 +608,53 @@ mod tests {
         let (wn, s) = (p.wn_rad_s.unwrap(), p.wn_sigma_rad_s.unwrap());
         assert!(s > 0.0 && (wn - 2.0).abs() < 3.0 * s + 1e-3, "ωn {wn} ± {s}");
         assert!(fit.cost > 0.0 && fit.cost < 10.0, "J {}", fit.cost);
+    }
+
+    /// σ against scatter: the exact second-order response with independent Gaussian errors of
+    /// 0.3 dB in magnitude and 0.3/√0.01745 = 2.27° in phase at every frequency (equal weighted
+    /// variance in the mismatch cost, coherence 1, so the least-squares covariance is the exact
+    /// one to first order). Over 100 draws the scatter of the fitted ωn and ζ is within 0.75–1.33
+    /// of the mean reported σ (the sample σ of 100 draws has ≈ 7 % standard error).
+    #[test]
+    fn sigma_of_the_modes_matches_their_scatter_over_noise_draws() {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let l = Layout { num: 0, den: 2, delay: false };
+        let clean = exact(&l, &[4.0, 2.0 * 0.3 * 2.0, 4.0]);
+        let (sd_db, sd_deg) = (0.3, 0.3 / 0.01745f64.sqrt());
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
+        let spec = TfSpec::parse("y/u:0/2").unwrap();
+        let (mut wn, mut zeta, mut s_wn, mut s_zeta) = (vec![], vec![], 0.0, 0.0);
+        let draws = 100;
+        for _ in 0..draws {
+            let mut resp = clean.clone();
+            for k in 0..resp.re.len() {
+                let g: f64 = StandardNormal.sample(&mut rng);
+                let ph: f64 = StandardNormal.sample(&mut rng);
+                let e =
+                    Complex64::from_polar(10f64.powf(sd_db * g / 20.0), (sd_deg * ph).to_radians());
+                let z = Complex64::new(resp.re[k], resp.im[k]) * e;
+                (resp.re[k], resp.im[k]) = (z.re, z.im);
+            }
+            resp.phase_deg = crate::spectral::unwrap_deg(&resp.re, &resp.im);
+            let fit = fit_transfer_function(&resp, &spec, &FitOptions::default()).unwrap();
+            let p = &fit.poles[0];
+            wn.push(p.wn_rad_s.unwrap());
+            zeta.push(p.zeta.unwrap());
+            s_wn += p.wn_sigma_rad_s.unwrap() / draws as f64;
+            s_zeta += p.zeta_sigma.unwrap() / draws as f64;
+        }
+        let sd = |v: &[f64]| {
+            let m = v.iter().sum::<f64>() / v.len() as f64;
+            (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt()
+        };
+        for (name, scatter, sigma) in [("ωn", sd(&wn), s_wn), ("ζ", sd(&zeta), s_zeta)] {
+            let r = scatter / sigma;
+            assert!(
+                (0.75..=1.33).contains(&r),
+                "{name}: scatter {scatter:.3e} / σ {sigma:.3e} = {r:.3}"
+            );
+        }
     }
 
     #[test]

@@ -155,6 +155,35 @@ pub struct Plausibility {
     pub coefficient: f64,
 }
 
+/// The names of the per-sample measured fields [`AirDataSample::field`] reads, in the
+/// sample's order.
+pub const MEASURED_FIELDS: [&str; 24] = [
+    "vt_mps",
+    "alpha_rad",
+    "qbar_pa",
+    "beta_rad",
+    "p_rad_s",
+    "q_rad_s",
+    "r_rad_s",
+    "pdot_rad_s2",
+    "qdot_rad_s2",
+    "rdot_rad_s2",
+    "alphadot_rad_s",
+    "phi_rad",
+    "theta_rad",
+    "psi_rad",
+    "ax_mps2",
+    "ay_mps2",
+    "az_mps2",
+    "de_rad",
+    "da_rad",
+    "dr_rad",
+    "thrust_n",
+    "throttle",
+    "thrust_moment_nm",
+    "rho_kgpm3",
+];
+
 /// The limits every estimator applies ([`AirDataSample::first_implausible`]).
 pub const PLAUSIBILITY: Plausibility = Plausibility {
     vt_mps: 5000.0,
@@ -187,6 +216,39 @@ impl AirDataSample {
     /// Air density, kg/m³: the recorded one, else `2 q̄ / V²`.
     pub fn rho(&self) -> f64 {
         self.rho_kgpm3.unwrap_or(2.0 * self.qbar_pa / (self.vt_mps * self.vt_mps))
+    }
+
+    /// The measured field named `field` (one of [`MEASURED_FIELDS`], the SI names the
+    /// estimators use in their errors), `None` when the sample lacks it or the name is not one
+    /// of them.
+    pub fn field(&self, field: &str) -> Option<f64> {
+        match field {
+            "vt_mps" => Some(self.vt_mps),
+            "alpha_rad" => Some(self.alpha_rad),
+            "qbar_pa" => Some(self.qbar_pa),
+            "beta_rad" => self.beta_rad,
+            "p_rad_s" => self.p_rad_s,
+            "q_rad_s" => self.q_rad_s,
+            "r_rad_s" => self.r_rad_s,
+            "pdot_rad_s2" => self.pdot_rad_s2,
+            "qdot_rad_s2" => self.qdot_rad_s2,
+            "rdot_rad_s2" => self.rdot_rad_s2,
+            "alphadot_rad_s" => self.alphadot_rad_s,
+            "phi_rad" => self.phi_rad,
+            "theta_rad" => self.theta_rad,
+            "psi_rad" => self.psi_rad,
+            "ax_mps2" => self.ax_mps2,
+            "ay_mps2" => self.ay_mps2,
+            "az_mps2" => self.az_mps2,
+            "de_rad" => self.de_rad,
+            "da_rad" => self.da_rad,
+            "dr_rad" => self.dr_rad,
+            "thrust_n" => self.thrust_n,
+            "throttle" => self.throttle,
+            "thrust_moment_nm" => self.thrust_moment_nm,
+            "rho_kgpm3" => self.rho_kgpm3,
+            _ => None,
+        }
     }
 
     /// Names of the fields that are not finite (`None` fields are not checked), for a clear
@@ -373,6 +435,46 @@ mod tests {
             },
             ..Default::default()
         }
+    }
+
+    /// Every name of `MEASURED_FIELDS` reads its own field: a sample whose measured fields hold
+    /// 1, 2, … 24 in the struct's order gives them back in the list's order; unknown names
+    /// and constants read nothing.
+    #[test]
+    fn measured_fields_read_by_name() {
+        let s = AirDataSample {
+            vt_mps: 1.0,
+            alpha_rad: 2.0,
+            qbar_pa: 3.0,
+            beta_rad: Some(4.0),
+            p_rad_s: Some(5.0),
+            q_rad_s: Some(6.0),
+            r_rad_s: Some(7.0),
+            pdot_rad_s2: Some(8.0),
+            qdot_rad_s2: Some(9.0),
+            rdot_rad_s2: Some(10.0),
+            alphadot_rad_s: Some(11.0),
+            phi_rad: Some(12.0),
+            theta_rad: Some(13.0),
+            psi_rad: Some(14.0),
+            ax_mps2: Some(15.0),
+            ay_mps2: Some(16.0),
+            az_mps2: Some(17.0),
+            de_rad: Some(18.0),
+            da_rad: Some(19.0),
+            dr_rad: Some(20.0),
+            thrust_n: Some(21.0),
+            throttle: Some(22.0),
+            thrust_moment_nm: Some(23.0),
+            rho_kgpm3: Some(24.0),
+            ..level()
+        };
+        for (i, name) in MEASURED_FIELDS.iter().enumerate() {
+            assert_eq!(s.field(name), Some(i as f64 + 1.0), "{name}");
+        }
+        assert_eq!(s.field("mass_kg"), None);
+        assert_eq!(s.field("t_s"), None);
+        assert_eq!(level().field("psi_rad"), None);
     }
 
     /// Level, unaccelerated flight: lift balances weight, no drag without thrust, no moments.

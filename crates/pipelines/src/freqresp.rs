@@ -3,9 +3,10 @@
 //! of [`aeroident_signals::spectral`] for every (output, input) pair → optional low-order
 //! transfer-function fits ([`aeroident_signals::tf_fit`]).
 //!
-//! **Channels** are named by their mapping keys and read in SI from the reader's samples:
-//! `de, da, dr` (rad), `p, q, r` (rad/s), `alpha, beta, phi, theta, psi` (rad), `ax, ay, az`
-//! (m/s²), `vt` (m/s), `qbar` (Pa), `throttle` (–), `thrust` (N). A response's magnitude is in
+//! **Channels** are named by their mapping keys and read in SI from the reader's samples
+//! ([`AirDataSample::field`]): any channel that fills a measured field, e.g. `de, da, dr`
+//! (rad), `p, q, r` (rad/s), `alpha, beta, phi, theta, psi` (rad), `ax, ay, az` (m/s²), `vt`
+//! (m/s), `qbar` (Pa), `throttle` (–), `thrust` (N), `pdot` (rad/s²). A response's magnitude is in
 //! dB of the output's SI unit per the input's (rad/s per rad for `q/de`).
 //!
 //! **Stretches.** Spectral windows need every sample at the same interval: the record is split
@@ -22,7 +23,8 @@ use crate::replay::ReplayError;
 use crate::replay::batch::read_records;
 use crate::window::TimeWindow;
 use aeroident_estimators::AirDataSample;
-use aeroident_io::FlightDataReader;
+use aeroident_estimators::sample::MEASURED_FIELDS;
+use aeroident_io::{Channel, FlightDataReader};
 use aeroident_signals::spectral::{PairResponse, SpectralOptions, Stretch, frequency_responses};
 use aeroident_signals::tf_fit::{FitOptions, TfFit, TfSpec, fit_transfer_function};
 use serde::Serialize;
@@ -78,37 +80,20 @@ pub struct FreqRespOutcome {
     pub warnings: Vec<String>,
 }
 
-/// The SI value of channel `key` (module doc) in `s`, `None` when the sample lacks it or the
-/// key names no channel this stage reads.
-pub fn channel_value(s: &AirDataSample, key: &str) -> Option<f64> {
-    match key {
-        "de" => s.de_rad,
-        "da" => s.da_rad,
-        "dr" => s.dr_rad,
-        "p" => s.p_rad_s,
-        "q" => s.q_rad_s,
-        "r" => s.r_rad_s,
-        "alpha" => Some(s.alpha_rad),
-        "beta" => s.beta_rad,
-        "phi" => s.phi_rad,
-        "theta" => s.theta_rad,
-        "psi" => s.psi_rad,
-        "ax" => s.ax_mps2,
-        "ay" => s.ay_mps2,
-        "az" => s.az_mps2,
-        "vt" => Some(s.vt_mps),
-        "qbar" => Some(s.qbar_pa),
-        "throttle" => s.throttle,
-        "thrust" => s.thrust_n,
-        _ => None,
-    }
+/// The sample field (SI name, [`MEASURED_FIELDS`]) that the mapping's channel `key` fills;
+/// `None` for a key that fills none (a constant, or no channel).
+fn sample_field(key: &str) -> Option<&'static str> {
+    MEASURED_FIELDS
+        .iter()
+        .copied()
+        .find(|f| Channel::of_sample_field(f).is_some_and(|c| c.key() == key))
 }
 
-/// The channel keys [`channel_value`] reads.
-pub const CHANNELS: &[&str] = &[
-    "de", "da", "dr", "p", "q", "r", "alpha", "beta", "phi", "theta", "psi", "ax", "ay", "az",
-    "vt", "qbar", "throttle", "thrust",
-];
+/// The mapping keys a response can be taken of: every channel that fills a measured field of
+/// the sample.
+pub fn channels() -> Vec<&'static str> {
+    MEASURED_FIELDS.iter().filter_map(|f| Channel::of_sample_field(f)).map(Channel::key).collect()
+}
 
 /// Frequency responses (and fits) of the record `reader` reads (module doc).
 ///
@@ -160,10 +145,10 @@ fn check_channels(opts: &FreqRespOptions) -> Result<(), ReplayError> {
         if list.is_empty() {
             return Err(ReplayError::Option { option, reason: "give at least one channel".into() });
         }
-        if let Some(bad) = list.iter().find(|k| !CHANNELS.contains(&k.as_str())) {
+        if let Some(bad) = list.iter().find(|k| sample_field(k).is_none()) {
             return Err(ReplayError::Option {
                 option,
-                reason: format!("`{bad}` is not a channel; one of {}", CHANNELS.join(", ")),
+                reason: format!("`{bad}` is not a channel; one of {}", channels().join(", ")),
             });
         }
     }
@@ -208,6 +193,8 @@ fn stretches(
 ) -> Result<(Vec<Stretch>, f64, usize), ReplayError> {
     let dt = median_dt(manoeuvres)
         .ok_or_else(|| ReplayError::Model("fewer than two samples: no sample interval".into()))?;
+    // Resolved once: the keys were checked by `check_channels`.
+    let fields: Vec<&str> = names.iter().map(|k| sample_field(k).unwrap_or("")).collect();
     let mut out: Vec<Stretch> = Vec::new();
     let mut dropped = 0;
     for m in manoeuvres {
@@ -219,8 +206,8 @@ fn stretches(
             {
                 dropped += close(&mut current, &mut out);
             }
-            for (c, key) in names.iter().enumerate() {
-                let v = channel_value(s, key).ok_or_else(|| ReplayError::Option {
+            for (c, (key, field)) in names.iter().zip(&fields).enumerate() {
+                let v = s.field(field).ok_or_else(|| ReplayError::Option {
                     option: if c < n_inputs { "input" } else { "output" },
                     reason: format!(
                         "channel `{key}` is not in the record at t = {} s (map it in the mapping's [channels])",

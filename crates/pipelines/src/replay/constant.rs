@@ -25,23 +25,6 @@ const FIELDS: [&str; 10] = [
     "vt_mps",
 ];
 
-/// The value of sample field `name` (one of [`FIELDS`]) in `s`.
-fn value(s: &AirDataSample, name: &str) -> Option<f64> {
-    match name {
-        "alpha_rad" => Some(s.alpha_rad),
-        "beta_rad" => s.beta_rad,
-        "p_rad_s" => s.p_rad_s,
-        "q_rad_s" => s.q_rad_s,
-        "r_rad_s" => s.r_rad_s,
-        "alphadot_rad_s" => s.alphadot_rad_s,
-        "de_rad" => s.de_rad,
-        "da_rad" => s.da_rad,
-        "dr_rad" => s.dr_rad,
-        "vt_mps" => Some(s.vt_mps),
-        _ => None,
-    }
-}
-
 /// The fields whose variation term `t`'s regressor needs (a product needs both factors).
 fn term_fields(t: Term) -> &'static [&'static str] {
     use Term as T;
@@ -84,7 +67,7 @@ impl Spread {
     /// Takes one estimated sample into account.
     pub fn push(&mut self, s: &AirDataSample) {
         for (name, r) in FIELDS.iter().zip(&mut self.ranges) {
-            if let Some(v) = value(s, name) {
+            if let Some(v) = s.field(name) {
                 *r = (r.0.min(v), r.1.max(v), r.2 + 1);
             }
         }

@@ -9,12 +9,13 @@
 
 use aeroident_io::{FlightDataReader, Mapping};
 use aeroident_models::f16::{F16, N_STATES, P, Q, R};
-use aeroident_models::linearize::{ModeName, f16_modes, linearize_f16};
+use aeroident_models::linearize::{Linearization, ModeName, f16_modes, linearize_f16};
 use aeroident_pipelines::freqresp::{FreqRespOptions, freqresp};
 use aeroident_pipelines::sim::{SimRun, load_scenario, run};
-use aeroident_signals::spectral::Complex64;
+use aeroident_signals::Input;
+use aeroident_signals::spectral::{Complex64, SpectralOptions, frequency_responses};
 use aeroident_signals::tf_fit::TfSpec;
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, SVector};
 use std::path::{Path, PathBuf};
 
 fn root() -> PathBuf {
@@ -59,7 +60,7 @@ struct Axis {
 }
 
 /// The targets, as a measurement: run with
-/// `cargo test --release -p aeroident-pipelines --test freqresp_f16 -- --ignored --nocapture`
+/// `cargo test --release -p aeroident-pipelines --test freqresp_f16 -- --include-ignored --nocapture`
 /// (it prints every axis's numbers). Ignored in CI because the targets are not met on these
 /// records (docs/frequency-response.md, "Measured against the linearisation").
 #[test]
@@ -174,4 +175,180 @@ fn chirp_responses_match_the_linearisation_and_the_fitted_modes_its_eigenvalues(
         }
     }
     assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// The linearisation driven by the record's own surface history `u` (control column
+/// `control`), from trim: `δẋ = A δx + B δu` by RK4 at the record's step, the surface
+/// interpolated linearly within a step (it is a continuous actuator state in the sim, so a
+/// zero-order hold would add a half-step delay the flight does not have). Returns state `out`.
+fn linear_truth(
+    lin: &Linearization<N_STATES, 4>,
+    u: &[f64],
+    u_trim: f64,
+    control: usize,
+    out: usize,
+    dt: f64,
+) -> Vec<f64> {
+    let mut dx = SVector::<f64, N_STATES>::zeros();
+    let mut y = Vec::with_capacity(u.len());
+    for k in 0..u.len() {
+        y.push(dx[out]);
+        let next = u.get(k + 1).copied().unwrap_or(u[k]);
+        let f = |x: &SVector<f64, N_STATES>, s: f64| {
+            let mut du = SVector::<f64, 4>::zeros();
+            du[control] = u[k] + s * (next - u[k]) - u_trim;
+            lin.a * x + lin.b * du
+        };
+        let k1 = f(&dx, 0.0);
+        let k2 = f(&(dx + k1 * (dt / 2.0)), 0.5);
+        let k3 = f(&(dx + k2 * (dt / 2.0)), 0.5);
+        let k4 = f(&(dx + k3 * dt), 1.0);
+        dx += (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (dt / 6.0);
+    }
+    y
+}
+
+/// `(ω rad/s, γ², 20 log₁₀|Ĥ/H|, ∠(Ĥ/H) deg)` of the composite estimate of `y` to `u` (the
+/// defaults of `aeroident freqresp`) against the analytic response, at every grid point.
+fn deviations(u: &[f64], y: &[f64], dt: f64, h: impl Fn(f64) -> Complex64) -> Vec<[f64; 4]> {
+    let st = vec![vec![u.to_vec(), y.to_vec()]];
+    let r = frequency_responses(&st, &["u".into()], &["y".into()], dt, &SpectralOptions::default())
+        .unwrap();
+    let p = &r.pairs[0];
+    (0..p.frequency_hz.len())
+        .map(|k| {
+            let w = 2.0 * std::f64::consts::PI * p.frequency_hz[k];
+            let ratio = Complex64::new(p.re[k], p.im[k]) / h(w);
+            [w, p.coherence[k], 20.0 * ratio.norm().log10(), ratio.arg().to_degrees()]
+        })
+        .collect()
+}
+
+/// One cause of the q/de misses, checked: the open-loop elevator chirp excites the phugoid
+/// (ωn 0.06 rad/s, ζ 0.1), so the airspeed wanders by ±60 ft/s over the sweep, and each
+/// frequency is measured at the dynamic pressure the flight holds when the chirp passes it.
+/// Above the short period q/de ≈ M_δe/(jω) ∝ q̄, so in calm air, on the true q, the deviation
+/// from the trim's linearisation must be `20 log₁₀(q̄(t_ω)/q̄_trim)`, with `t_ω` the time the
+/// sweep's instantaneous frequency is ω — while the linearisation driven by the same surface
+/// history (the exact linear truth) shows no deviation there, so the estimator is not the cause.
+#[test]
+fn q_de_above_the_short_period_follows_the_dynamic_pressure_the_flight_holds() {
+    let path = root().join("scenarios/sim/chirp_elevator.toml");
+    let mut sc = load_scenario(&path).unwrap();
+    sc.wind.clear();
+    let sim = run(&sc, path.parent().unwrap()).unwrap();
+    let lin = linearize_f16(&F16::new(0.30).unwrap(), &sim.trim.state, &sim.trim.controls).unwrap();
+    let a = DMatrix::from_fn(N_STATES, N_STATES, |i, j| Complex64::new(lin.a[(i, j)], 0.0));
+    let b: Vec<f64> = (0..N_STATES).map(|i| lin.b[(i, 1)]).collect();
+    let h = |w: f64| analytic(&a, &b, Q, w);
+    let (dt, de) = (sc.run.dt_s, sim.column("elevator_rad").unwrap());
+    let flown = deviations(de, sim.column("q_rad_s").unwrap(), dt, h);
+    let y_lin = linear_truth(&lin, de, sim.trim.controls.elevator_rad, 1, Q, dt);
+    let exact = deviations(de, &y_lin, dt, h);
+    let Input::Sweep(sweep) = sc.input[0].input.build_in(&root()).unwrap() else {
+        panic!("chirp_elevator's input is a sweep")
+    };
+    let t = sim.column("t_s").unwrap();
+    let qbar = sim.column("qbar_psf").unwrap();
+    let mut largest = 0.0f64;
+    for (f, e) in flown.iter().zip(&exact).filter(|(f, _)| (3.0..=10.0).contains(&f[0])) {
+        // The first sample at which the sweep has reached ω.
+        let k = t.iter().position(|&ts| sweep.instantaneous_frequency_rad_s(ts) >= f[0]).unwrap();
+        let qbar_db = 20.0 * (qbar[k] / qbar[0]).log10();
+        largest = largest.max(qbar_db.abs());
+        assert!(f[1] > 0.99, "{:.3} rad/s: calm air, true channels, γ² {}", f[0], f[1]);
+        assert!(e[2].abs() < 0.1, "{:.3} rad/s: the linear truth is off by {} dB", e[0], e[2]);
+        assert!(
+            (f[2] - qbar_db).abs() < 0.15,
+            "{:.3} rad/s: Δ {:.3} dB but q̄ then {qbar_db:+.3} dB from trim",
+            f[0],
+            f[2]
+        );
+    }
+    assert!(largest > 0.5, "the q̄ drift must matter here ({largest:.2} dB at most)");
+}
+
+/// Whether a deviation `[ω, γ², dB, deg]` is beyond the 1 dB / 5°.
+fn beyond(d: &[f64; 4]) -> bool {
+    d[2].abs() > 1.0 || d[3].abs() > 5.0
+}
+
+/// The misses of [`chirp_responses_match_the_linearisation_and_the_fitted_modes_its_eigenvalues`]
+/// split by cause, one flight per axis three ways: the linearisation driven by the flight's own
+/// surface history (what the estimator and the chirp's design miss on the exact linear system),
+/// the same chirp flown in calm air read on the true channels (adds what the nonlinear flight's
+/// drift from trim does), and the scenario as it is (adds turbulence and sensor noise, judged
+/// against the point's random error ε). Prints the numbers of docs/frequency-response.md
+/// (`-- --nocapture`);
+/// checks that every coherent miss has one of the three causes: the linear truth misses too, or
+/// the calm-air flight does, or the flown estimate lies within 4ε of the calm-air one (the
+/// complex error of an estimate is Rayleigh-distributed with scale ε, so beyond 4ε has odds
+/// e⁻⁸ ≈ 3·10⁻⁴ per point; beyond 3ε, e^−4.5 ≈ 1 %, expected once in a hundred points).
+#[test]
+fn chirp_misses_split_into_design_drift_and_random_error() {
+    let axes = [
+        ("chirp_elevator", "elevator_rad", "q_rad_s", Q, 1),
+        ("chirp_aileron", "aileron_rad", "p_rad_s", P, 2),
+        ("chirp_rudder", "rudder_rad", "r_rad_s", R, 3),
+    ];
+    let mut unexplained = Vec::new();
+    for (name, surface, rate, state, control) in axes {
+        let path = root().join(format!("scenarios/sim/{name}.toml"));
+        let sc = load_scenario(&path).unwrap();
+        let flown = run(&sc, path.parent().unwrap()).unwrap();
+        let mut calm_sc = sc.clone();
+        calm_sc.wind.clear();
+        let calm = run(&calm_sc, path.parent().unwrap()).unwrap();
+        let lin = linearize_f16(&F16::new(0.30).unwrap(), &flown.trim.state, &flown.trim.controls)
+            .unwrap();
+        let a = DMatrix::from_fn(N_STATES, N_STATES, |i, j| Complex64::new(lin.a[(i, j)], 0.0));
+        let b: Vec<f64> = (0..N_STATES).map(|i| lin.b[(i, control)]).collect();
+        let h = |w: f64| analytic(&a, &b, state, w);
+        let dt = sc.run.dt_s;
+        let u_trim = flown.trim.controls.to_vector()[control];
+        let (u, u_calm) = (flown.column(surface).unwrap(), calm.column(surface).unwrap());
+        let truth = deviations(u, &linear_truth(&lin, u, u_trim, control, state, dt), dt, h);
+        let calm_d = deviations(u_calm, calm.column(rate).unwrap(), dt, h);
+        let st = vec![vec![u.to_vec(), flown.column(&format!("meas_{rate}")).unwrap().to_vec()]];
+        let r = frequency_responses(&st, &["u".into()], &["y".into()], dt, &Default::default())
+            .unwrap();
+        let p = &r.pairs[0];
+        let (mut n, mut design, mut drift, mut random, mut z_max) = (0, 0, 0, 0, 0.0f64);
+        for k in 0..p.frequency_hz.len() {
+            let w = 2.0 * std::f64::consts::PI * p.frequency_hz[k];
+            if !(0.1..=10.0).contains(&w) || p.coherence[k] < 0.8 {
+                continue;
+            }
+            let ratio = Complex64::new(p.re[k], p.im[k]) / h(w);
+            let d = [w, p.coherence[k], 20.0 * ratio.norm().log10(), ratio.arg().to_degrees()];
+            if !beyond(&d) {
+                continue;
+            }
+            n += 1;
+            // The calm-air estimate in the same form: the flown one over it is what turbulence
+            // and noise changed.
+            let c = &calm_d[k];
+            let calm_ratio = Complex64::from_polar(10f64.powf(c[2] / 20.0), c[3].to_radians());
+            let z = (ratio / calm_ratio - 1.0).norm() / p.random_error[k];
+            eprintln!(
+                "  {name} {w:.3} rad/s γ² {:.3}: flown {:+.2} dB {:+.1}°, calm {:+.2} dB {:+.1}°, linear truth {:+.2} dB {:+.1}°, |flown/calm − 1| = {z:.1} ε (ε {:.3})",
+                d[1], d[2], d[3], c[2], c[3], truth[k][2], truth[k][3], p.random_error[k]
+            );
+            if beyond(&truth[k]) {
+                design += 1;
+            } else if beyond(c) {
+                drift += 1;
+            } else {
+                random += 1;
+                z_max = z_max.max(z);
+                if z > 4.0 {
+                    unexplained.push(format!("{name} {w:.3} rad/s: {z:.1} ε"));
+                }
+            }
+        }
+        eprintln!(
+            "{name}: {n} coherent points beyond 1 dB / 5°: {design} the linear truth misses too, {drift} the calm-air flight misses (not the linear truth), {random} neither (largest |flown/calm − 1| {z_max:.1} ε)"
+        );
+    }
+    assert!(unexplained.is_empty(), "misses with no cause found: {unexplained:?}");
 }

@@ -532,7 +532,10 @@ mod tests {
             topic_from(name, head, day + 1_000_000, n, dt, tail)
         };
         let mut c = LogContents::default();
-        c.add_topics(vec![topic("imu", &[1_000_000], 1000, 10_000, &[]), topic("gps", &[2_000_000], 50, 200_000, &[])]);
+        c.add_topics(vec![
+            topic("imu", &[1_000_000], 1000, 10_000, &[]),
+            topic("gps", &[2_000_000], 50, 200_000, &[]),
+        ]);
         assert_eq!(c.early_time_outliers["imu"], (1, 1.0));
         assert_eq!(c.early_time_outliers["gps"], (1, 2.0));
         assert!(c.time_outliers.is_empty() && c.dropped.is_empty());
@@ -544,7 +547,10 @@ mod tests {
         assert!(note.contains("x.ulg: topic `imu`: 1 first samples left out as time outliers (from sample 0, at 1 s"), "{note}");
         let report = crate::reader_report::ReaderReport::from_contents("x.ulg", "ulog", &c);
         assert_eq!(report.totals().0, 2);
-        assert!(report.dropped.iter().all(|d| d.kind == crate::reader_report::DropKind::TimeOutlier && d.first_sample == Some(0)));
+        assert!(
+            report.dropped.iter().all(|d| d.kind == crate::reader_report::DropKind::TimeOutlier
+                && d.first_sample == Some(0))
+        );
         assert!(report.notes()[0].contains("first samples left out"), "{:?}", report.notes());
         // Two early samples, and a day-late last one on the same topic: all three go.
         let late = 2 * day;

@@ -519,7 +519,9 @@ sigma = 1.5
             .unwrap_err()
             .to_string();
             assert!(
-                e.contains("r.toml: line 9") && e.contains("reference `Cm_q`") && e.contains("beyond ±1e4"),
+                e.contains("r.toml: line 9")
+                    && e.contains("reference `Cm_q`")
+                    && e.contains("beyond ±1e4"),
                 "{v}: {e}"
             );
         }

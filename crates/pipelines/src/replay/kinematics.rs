@@ -50,6 +50,9 @@ const MIN_EQUATIONS: usize = 50;
 /// A gain is judged only when `|k − 1|` exceeds this many of its σ.
 const MIN_SIGMAS: f64 = 10.0;
 
+/// One rate channel's gain: its sample field, the gain `k` and its σ.
+pub type Gain = (&'static str, f64, f64);
+
 /// The normal equations of the regression (module doc), accumulated sample by sample.
 #[derive(Debug, Clone)]
 pub struct Kinematics {
@@ -165,7 +168,7 @@ impl Kinematics {
 
     /// The gains `(field, k, σ_k)` of the rate channels the equations determine, and R² of the
     /// regression (the biases taken out of the total); `None` with too few equations.
-    pub fn gains(&self) -> Option<(Vec<(&'static str, f64, f64)>, f64)> {
+    pub fn gains(&self) -> Option<(Vec<Gain>, f64)> {
         let m: usize = self.equations.iter().sum();
         if m < MIN_EQUATIONS {
             return None;

@@ -160,3 +160,46 @@ fn errors_a_constant_channel_is_named_with_the_parameters_it_leaves_unidentified
     assert_eq!(w.len(), 1, "{w:?}");
     assert!(w[0].contains("channel `q` (column `q`)") && w[0].contains("Cm_q"), "{}", w[0]);
 }
+
+/// The HFB-320 record with `q` mapped as deg/s (its column is in rad/s), or `theta` as deg:
+/// the Euler kinematics against the differentiated attitude give q a gain of 57.3 (or 1/57.3),
+/// and the summary warns, naming the channel, its column and the likely unit, for the
+/// real-time and the batch path; the shipped mapping warns of nothing.
+#[test]
+fn errors_a_rate_in_the_wrong_unit_is_warned_of() {
+    let Some(data) = common::shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else {
+        return;
+    };
+    let text = std::fs::read_to_string(common::workspace().join("mappings/hfb320.toml")).unwrap();
+    let warnings = |mapping: &str| {
+        let m = Mapping::from_toml_str(mapping, "hfb.toml").unwrap();
+        let open = || aeroident_io::open_log(&data.display().to_string(), None, &m).unwrap();
+        let online = replay(open(), &m, &ReplayOptions::default(), &mut ()).unwrap();
+        let batch = fit_record(open(), &m, None, FitOptions::default()).unwrap();
+        let units = |w: &[String]| -> Vec<String> {
+            w.iter().filter(|w| w.starts_with("unit mismatch")).cloned().collect()
+        };
+        (units(&online.summary.warnings), units(&batch.summary.warnings))
+    };
+    assert_eq!(warnings(&text), (vec![], vec![]));
+    let q_deg = text.replace(
+        "q = { column = \"q_radps\", unit = \"rad/s\" }",
+        "q = { column = \"q_radps\", unit = \"deg/s\" }",
+    );
+    assert_ne!(q_deg, text);
+    let (online, batch) = warnings(&q_deg);
+    for w in [&online, &batch] {
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(w[0].contains("channel `q` (column `q_radps`"), "{}", w[0]);
+        assert!(w[0].contains("rad/s data mapped as deg/s"), "{}", w[0]);
+    }
+    let theta_deg = text.replace(
+        "theta = { column = \"theta_rad\", unit = \"rad\" }",
+        "theta = { column = \"theta_rad\", unit = \"deg\" }",
+    );
+    let (online, _) = warnings(&theta_deg);
+    assert!(
+        online.iter().any(|w| w.contains("channel `q`") && w.contains("57.3 times too large")),
+        "{online:?}"
+    );
+}

@@ -281,3 +281,61 @@ fn short_runs() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// One absurd time stamp (10000 s) on data row 300 of the HFB-320 record (0.1 s grid) costs
+/// that row only: the reader rejects it as a time outlier, reports no gap over the hole it left
+/// (one sample missing from the grid), and RLS with q̇ differentiated (the stage bridges the hole
+/// with a stand-in) and output error give the estimates of the record with that row removed by
+/// hand. Before, the hole was a gap: the differentiator restarted (4 more rows unused) and output
+/// error fitted two manoeuvres, each with its own initial state.
+#[test]
+fn one_bad_time_stamp_costs_its_row_only() {
+    let run = std::thread::Builder::new().stack_size(64 << 20).spawn(one_bad_time).unwrap();
+    run.join().unwrap();
+}
+
+fn one_bad_time() {
+    let Some(clean) = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let dir = std::env::temp_dir().join(format!("aeroident-bad-time-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = hfb320_edited(&dir, "bad_time.csv", "time_s", [300], |_| 10000.0).unwrap();
+    let text = std::fs::read_to_string(&clean).unwrap();
+    let mut lines: Vec<&str> = text.lines().collect();
+    lines.remove(300);
+    let removed = dir.join("removed.csv");
+    std::fs::write(&removed, lines.join("\n") + "\n").unwrap();
+
+    let m = Mapping::from_path(&workspace().join("mappings/hfb320.toml")).unwrap();
+    let opts = ReplayOptions {
+        estimator: EstimatorKind::Rls,
+        model: Some(ModelSpec::from_arg("longitudinal").unwrap()),
+        derivatives: aeroident_pipelines::replay::DerivativeSource::Differentiate,
+        ..ReplayOptions::default()
+    };
+    let rls = |data: &Path| {
+        let reader = open_log(&data.display().to_string(), None, &m).unwrap();
+        replay(reader, &m, &opts, &mut ()).unwrap().summary
+    };
+    let (a, b) = (rls(&bad), rls(&removed));
+    assert!(a.rejections.iter().all(|r| !r.reason.contains("gap")), "{:?}", a.rejections);
+    let time_rows: Vec<u64> =
+        a.rejections.iter().filter(|r| r.reason.contains("time")).map(|r| r.row).collect();
+    assert_eq!(time_rows, vec![301], "{:?}", a.rejections);
+    assert_eq!((a.samples_read, a.samples_rejected), (b.samples_read + 1, b.samples_rejected + 1));
+    let same = |x: Option<f64>, y: Option<f64>, what: &str| {
+        let (x, y) = (x.unwrap(), y.unwrap());
+        assert!((x - y).abs() <= 1e-9 * y.abs().max(1e-3), "{what}: {x} vs {y}");
+    };
+    for (p, q) in a.parameters.iter().zip(&b.parameters) {
+        same(p.estimate, q.estimate, &format!("rls {}", p.name));
+    }
+
+    let (a, b) = (fit(&bad, FitOptions::default()), fit(&removed, FitOptions::default()));
+    assert_eq!((a.samples_rejected, b.samples_rejected), (1, 0));
+    assert!(a.rejections.iter().all(|r| !r.reason.contains("gap")), "{:?}", a.rejections);
+    for (p, q) in a.parameters.iter().zip(&b.parameters) {
+        same(p.estimate, q.estimate, &format!("oe {}", p.name));
+        same(p.std_error, q.std_error, &format!("oe σ {}", p.name));
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -242,7 +242,9 @@ pub struct OeConfig {
     /// A request to stop, looked at before every iteration and every damped trial step: once
     /// raised, the fit ends with its last iterate ([`NotConverged::Stopped`]) and its
     /// Cramér–Rao σ only (the coloured-residual σ, the slowest part after the iterations, are
-    /// then `None`). `None` (default): it runs to its end.
+    /// then `None`). Raised while the coloured σ are formed, it ends them at their next look
+    /// (between passes and manoeuvres): the σ are then `None` and the termination the fit's
+    /// own. `None` (default): it runs to its end.
     pub stop: Option<StopFlag>,
 }
 
@@ -1301,25 +1303,35 @@ fn assemble(
         (s_w.as_slice(), e_w.as_slice())
     };
     // A fit stopped on request reports its Cramér–Rao σ at once: the coloured forms cost
-    // seconds on a long record (several sweeps over all residual lags), which the stop is for.
-    let (sigma_coloured, sigma_coloured_prewhitened, sigma_coloured_truncated, lag, order) =
-        if identified && !stop_raised(config.stop.as_ref()) {
-            // The prewhitened form costs about as much as the other two together (a 60,000-
-            // sample record: 5.5 s against 2.2 s), and they share nothing but their inputs:
-            // on a second core the σ takes the time of the slowest form, not of all three.
-            let (pre, (truncated, spectral)) = std::thread::scope(|scope| {
-                let other = scope.spawn(|| {
-                    let truncated =
-                        coloured::covariance(s, e_col, w, &lengths, &minv, max_lag).covariance;
-                    (truncated, coloured::spectral(s, e_col, w, &lengths, &minv).covariance)
-                });
-                let pre = coloured::prewhitened(s, e_col, w, &lengths, &minv, max_lag);
-                (pre, other.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic)))
+    // seconds on a long record (several sweeps over all residual lags), which the stop is for;
+    // a stop raised while they are formed ends them at their next look (all three dropped).
+    let stop = || stop_raised(config.stop.as_ref());
+    let formed = if identified && !stop() {
+        // The prewhitened form costs about as much as the other two together (a 60,000-
+        // sample record: 5.5 s against 2.2 s), and they share nothing but their inputs:
+        // on a second core the σ takes the time of the slowest form, not of all three.
+        let (pre, other) = std::thread::scope(|scope| {
+            let other = scope.spawn(|| {
+                let truncated =
+                    coloured::covariance_until(s, e_col, w, &lengths, &minv, max_lag, &stop)?;
+                let spectral = coloured::spectral_until(s, e_col, w, &lengths, &minv, &stop)?;
+                Some((truncated.covariance, spectral.covariance))
             });
-            let col = pre.coloured;
-            (spectral.map(diag), col.covariance.map(diag), truncated.map(diag), col.lag, pre.order)
-        } else {
-            (None, None, None, 0, 0)
+            let pre = coloured::prewhitened_until(s, e_col, w, &lengths, &minv, max_lag, &stop);
+            (pre, other.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic)))
+        });
+        pre.zip(other)
+    } else {
+        None
+    };
+    let (sigma_coloured, sigma_coloured_prewhitened, sigma_coloured_truncated, lag, order) =
+        match formed {
+            Some((pre, (truncated, spectral))) => {
+                let col = pre.coloured;
+                let (lag, order) = (col.lag, pre.order);
+                (spectral.map(diag), col.covariance.map(diag), truncated.map(diag), lag, order)
+            }
+            None => (None, None, None, 0, 0),
         };
     let n = p.n_samples as f64;
     let residual_mean: Vec<f64> =

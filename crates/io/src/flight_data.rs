@@ -9,9 +9,20 @@
 //! ahead ([`IMPLAUSIBLE_JUMP_FACTOR`] × the nominal interval; the last good time is kept), a
 //! short run of bad time stamps (below), a non-positive airspeed, mass, area, chord, span,
 //! moment of inertia, density or dynamic pressure, and a mass, area, chord, span or inertia
-//! outside its physical range ([`crate::mapping::CONSTANT_RANGES`]). A gap — an interval longer than [`GAP_FACTOR`] × the nominal interval — is
+//! outside its physical range ([`crate::mapping::CONSTANT_RANGES`]). A gap — an interval longer than [`ONE_SAMPLE_HOLE_MAX`] × the nominal interval — is
 //! reported as a [`RecordEvent::Gap`] *before* the sample that follows it; it is never bridged
 //! silently. Nothing is dropped without an event.
+//!
+//! # A hole of one sample is no gap
+//!
+//! An interval of about two nominal intervals (over [`GAP_FACTOR`], up to
+//! [`ONE_SAMPLE_HOLE_MAX`] × nominal) is one sample missing from the grid — a row this reader
+//! rejected (a bad time stamp, a blank value), or a sample the recorder lost — and the record
+//! goes on on the same grid: it is no [`RecordEvent::Gap`], so the row costs itself only. Every
+//! stage after the reader takes sample times from the samples (output error integrates over the
+//! interval as it is), and the pipelines' differentiating stage puts a stand-in, interpolated
+//! between the two neighbours, in the missing sample's place, so no restart costs the `N − 1`
+//! samples around it. A longer hole is a gap.
 //!
 //! # Bad time stamps cost their own rows
 //!
@@ -85,8 +96,14 @@ use std::io::Read;
 
 mod held;
 
-/// Gap threshold: an interval longer than this multiple of the nominal interval is a gap.
+/// Longest regular interval, in nominal intervals: beyond it a sample is missing (one, up to
+/// [`ONE_SAMPLE_HOLE_MAX`]) or there is a gap.
 pub const GAP_FACTOR: f64 = 1.5;
+
+/// Longest interval, in nominal intervals, that is one sample missing from the grid (module
+/// doc, "A hole of one sample is no gap"): an interval over [`GAP_FACTOR`] and up to this is
+/// no gap. Two intervals, with the jitter [`GAP_FACTOR`] allows a single one.
+pub const ONE_SAMPLE_HOLE_MAX: f64 = 2.5;
 
 /// A time more than this multiple of the nominal interval ahead of the previous accepted
 /// sample is implausible (a corrupt value such as 1e308): the row is rejected and the previous
@@ -696,14 +713,15 @@ impl<R: Read> FlightDataReader<R> {
         }
     }
 
-    /// Queues an accepted sample, after a [`RecordEvent::Gap`] if its interval is one; the
-    /// first interval fixes the nominal one when the mapping gives none.
+    /// Queues an accepted sample, after a [`RecordEvent::Gap`] if its interval is one (longer
+    /// than a hole of one sample, module doc); the first interval fixes the nominal one when
+    /// the mapping gives none.
     fn accept(&mut self, row: u64, sample: AirDataSample) {
         if let Some(prev) = self.last_t {
             let dt = sample.t_s - prev;
             match self.nominal_dt {
                 None => self.nominal_dt = Some(dt),
-                Some(nom) if dt > GAP_FACTOR * nom => {
+                Some(nom) if dt > ONE_SAMPLE_HOLE_MAX * nom => {
                     self.pending.push_back(Ok(RecordEvent::Gap {
                         row,
                         dt_s: dt,

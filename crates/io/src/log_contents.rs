@@ -21,7 +21,10 @@
 //! before are in [`LogContents::dropped`] and [`LogContents::dropped_at`].
 //! The last few samples of a topic after a jump forward longer than the topic's whole span
 //! before it (a corrupt timestamp, nothing after it) are left out as time outliers
-//! ([`LogContents::time_outliers`]).
+//! ([`LogContents::time_outliers`]); so are, mirrored, the first few samples of a topic before
+//! a jump longer than its whole span after them (e.g. stamped a day early,
+//! [`LogContents::early_time_outliers`]). Either end is judged without the few samples the
+//! other end could lose, so a topic with both ends corrupt loses both.
 
 use crate::flight_data::TIME_RUN_MAX;
 use crate::mapping::{Clock, Mapping};
@@ -121,6 +124,12 @@ pub struct LogContents {
     /// day late; kept, it would stretch the aligned time base over the day). Topic name →
     /// (count, index of the first, 0-based in the kept order, its time in s). Kept topics only.
     pub time_outliers: BTreeMap<String, (usize, usize, f64)>,
+    /// Samples left out as time outliers at a topic's start: the first few samples before a
+    /// jump forward longer than the topic's whole span after it, all earlier than every
+    /// topic's other samples (a corrupt timestamp, e.g. one day early; kept, it would stretch
+    /// the aligned time base over the day). Topic name → (count, time of the first in s);
+    /// they are the topic's first samples in kept order (from sample 0). Kept topics only.
+    pub early_time_outliers: BTreeMap<String, (usize, f64)>,
     /// Byte offset of a message the file ends inside (that partial message is not used).
     pub truncated_at: Option<u64>,
     /// Corrupt stretches skipped to find the next message: `(byte offset, length)`, the first
@@ -150,6 +159,9 @@ impl LogContents {
                 )
             })
             .collect();
+        for (t, (n, t_s)) in &self.early_time_outliers {
+            v.push(format!("{file}: topic `{t}`: {}", early_head_note(*n, *t_s)));
+        }
         for (t, (n, k, t_s)) in &self.time_outliers {
             v.push(format!("{file}: topic `{t}`: {}", late_tail_note(*n, *k, *t_s)));
         }
@@ -182,6 +194,10 @@ impl LogContents {
     /// [`LogContents::dropped`], and each kept builder that has a sample becomes a topic, in
     /// the builders' order; every builder with a message enters the catalogue.
     pub(crate) fn add_topics(&mut self, mut builders: Vec<TopicBuilder>) {
+        for b in builders.iter_mut().filter(|b| b.kept) {
+            b.dropped_by_order = b.keep_increasing();
+        }
+        self.drop_early_heads(&mut builders);
         self.drop_late_tails(&mut builders);
         for mut b in builders {
             if b.messages > 0 {
@@ -212,11 +228,8 @@ impl LogContents {
     /// before its own tail. A late sample of an event topic (a parameter changed in flight)
     /// lies within the other topics' time and is kept.
     fn drop_late_tails(&mut self, builders: &mut [TopicBuilder]) {
-        let mut starts = Vec::with_capacity(builders.len());
-        for b in builders.iter_mut().filter(|b| b.kept) {
-            b.dropped_by_order = b.keep_increasing();
-            starts.push(b.late_tail_start());
-        }
+        let starts: Vec<Option<usize>> =
+            builders.iter().filter(|b| b.kept).map(TopicBuilder::late_tail_start).collect();
         let body_end = |b: &TopicBuilder, k: Option<usize>| b.t_us[k.unwrap_or(b.t_us.len()) - 1];
         let ends: Vec<u64> = builders
             .iter()
@@ -233,6 +246,34 @@ impl LogContents {
                 let late = (b.t_us.len() - k, k, seconds(b.t_us[k]));
                 b.truncate(k);
                 self.time_outliers.insert(b.name.clone(), late);
+            }
+        }
+    }
+}
+
+impl LogContents {
+    /// Leaves out the early heads of the kept topics ([`LogContents::early_time_outliers`]),
+    /// the mirror of [`LogContents::drop_late_tails`]: a head
+    /// ([`TopicBuilder::early_head_end`]) that ends before the start of every topic's samples
+    /// after its own head. An event topic's early sample (a parameter logged at boot) that
+    /// lies within the other topics' time is kept.
+    fn drop_early_heads(&mut self, builders: &mut [TopicBuilder]) {
+        let ends: Vec<Option<usize>> =
+            builders.iter().filter(|b| b.kept).map(TopicBuilder::early_head_end).collect();
+        let starts: Vec<u64> = builders
+            .iter()
+            .filter(|b| b.kept)
+            .zip(&ends)
+            .filter(|(b, _)| !b.t_us.is_empty())
+            .map(|(b, &k)| b.t_us[k.unwrap_or(0)])
+            .collect();
+        let Some(&log_start) = starts.iter().min() else { return };
+        let mut ends = ends.into_iter();
+        for b in builders.iter_mut().filter(|b| b.kept) {
+            let Some(Some(k)) = ends.next() else { continue };
+            if b.t_us[k - 1] < log_start {
+                self.early_time_outliers.insert(b.name.clone(), (k, seconds(b.t_us[0])));
+                b.drain_head(k);
             }
         }
     }
@@ -326,6 +367,27 @@ impl TopicBuilder {
         (first..n).find(|&k| t(k) - t(k - 1) > t(k - 1) - t(0))
     }
 
+    /// Where an early head ends (the mirror of [`TopicBuilder::late_tail_start`]): the count
+    /// `k` of at most [`TIME_RUN_MAX`] first samples before a jump longer than the topic's span
+    /// after it, with at least [`LATE_TAIL_MIN_BEFORE`] samples after. The span after is
+    /// measured without the last [`TIME_RUN_MAX`] samples, which may be a late tail of their
+    /// own (judged after the head is gone).
+    fn early_head_end(&self) -> Option<usize> {
+        let n = self.t_us.len();
+        let t = |i: usize| seconds(self.t_us[i]);
+        let last = TIME_RUN_MAX.min(n.saturating_sub(LATE_TAIL_MIN_BEFORE + TIME_RUN_MAX));
+        let body_end = n.saturating_sub(1 + TIME_RUN_MAX);
+        (1..=last).rev().find(|&k| t(k) - t(k - 1) > t(body_end) - t(k))
+    }
+
+    /// Leaves out the first `k` samples.
+    fn drain_head(&mut self, k: usize) {
+        self.t_us.drain(..k);
+        for col in &mut self.values {
+            col.drain(..k);
+        }
+    }
+
     /// Keeps the first `k` samples.
     fn truncate(&mut self, k: usize) {
         self.t_us.truncate(k);
@@ -353,6 +415,13 @@ pub const LATE_TAIL_MIN_BEFORE: usize = 8;
 pub(crate) fn late_tail_note(n: usize, k: usize, t_s: f64) -> String {
     format!(
         "{n} last samples left out as time outliers (from sample {k}, at {t_s} s, the topic jumps further ahead than its whole span before)"
+    )
+}
+
+/// What an early head of `n` samples whose first is at `t_s` s is, for a note.
+pub(crate) fn early_head_note(n: usize, t_s: f64) -> String {
+    format!(
+        "{n} first samples left out as time outliers (from sample 0, at {t_s} s, before a jump further ahead than the topic's whole span after it)"
     )
 }
 
@@ -436,6 +505,71 @@ mod tests {
         let mut c = LogContents::default();
         c.add_topics(vec![topic("parm", 10, &[300_000_000]), topic("imu", 60_000, &[])]);
         assert!(c.time_outliers.is_empty() && c.topics[0].t_s.len() == 11);
+    }
+
+    /// The mirror: every topic's first sample stamped one day before the rest is a time
+    /// outlier, counted, and each topic starts with its own samples; a topic whose first and
+    /// last samples are both a day off loses both; an early sample within the other topics'
+    /// time (a parameter logged at boot) and a head before a jump shorter than the span after
+    /// it are kept.
+    #[test]
+    fn errors_early_first_timestamp_is_a_time_outlier() {
+        let day = 86_400_000_000u64;
+        let topic_from = |name: &str, head: &[u64], start: u64, n: u64, dt: u64, tail: &[u64]| {
+            let mut b = TopicBuilder::new(name.into(), vec!["x".into()], Some(vec!["x".into()]));
+            for &t in head {
+                b.push(t, &[-1.0], 0);
+            }
+            for i in 0..n {
+                b.push(start + i * dt, &[i as f64], i);
+            }
+            for &t in tail {
+                b.push(t, &[-2.0], 0);
+            }
+            b
+        };
+        let topic = |name: &str, head: &[u64], n: u64, dt: u64, tail: &[u64]| {
+            topic_from(name, head, day + 1_000_000, n, dt, tail)
+        };
+        let mut c = LogContents::default();
+        c.add_topics(vec![
+            topic("imu", &[1_000_000], 1000, 10_000, &[]),
+            topic("gps", &[2_000_000], 50, 200_000, &[]),
+        ]);
+        assert_eq!(c.early_time_outliers["imu"], (1, 1.0));
+        assert_eq!(c.early_time_outliers["gps"], (1, 2.0));
+        assert!(c.time_outliers.is_empty() && c.dropped.is_empty());
+        assert_eq!(c.topics[0].t_s.len(), 1000);
+        assert_eq!(c.topics[0].t_s[0], 86_401.0);
+        assert_eq!(c.topics[0].fields[0].1[0], 0.0);
+        assert_eq!(c.topics[1].t_s.len(), 50);
+        let note = c.notes("x.ulg").join("\n");
+        assert!(note.contains("x.ulg: topic `imu`: 1 first samples left out as time outliers (from sample 0, at 1 s"), "{note}");
+        let report = crate::reader_report::ReaderReport::from_contents("x.ulg", "ulog", &c);
+        assert_eq!(report.totals().0, 2);
+        assert!(
+            report.dropped.iter().all(|d| d.kind == crate::reader_report::DropKind::TimeOutlier
+                && d.first_sample == Some(0))
+        );
+        assert!(report.notes()[0].contains("first samples left out"), "{:?}", report.notes());
+        // Two early samples, and a day-late last one on the same topic: all three go.
+        let late = 2 * day;
+        let mut c = LogContents::default();
+        c.add_topics(vec![topic("imu", &[0, 10_000], 1000, 10_000, &[late])]);
+        assert_eq!(c.early_time_outliers["imu"], (2, 0.0));
+        assert_eq!(c.time_outliers["imu"], (1, 1000, 172_800.0));
+        assert_eq!(c.topics[0].t_s.len(), 1000);
+        // A parameter logged early but within the imu's time, its later values much later,
+        // is kept; so is a head before a jump shorter than the span after it.
+        let mut c = LogContents::default();
+        c.add_topics(vec![
+            topic_from("parm", &[day + 2_000_000], day + 400_000_000, 20, 10_000, &[]),
+            topic("imu", &[], 60_000, 10_000, &[]),
+        ]);
+        assert!(c.early_time_outliers.is_empty() && c.topics[0].t_s.len() == 21);
+        let mut c = LogContents::default();
+        c.add_topics(vec![topic("imu", &[day - 5_000_000], 1000, 10_000, &[])]);
+        assert!(c.early_time_outliers.is_empty() && c.topics[0].t_s.len() == 1001);
     }
 
     #[test]

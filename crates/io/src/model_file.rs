@@ -360,8 +360,14 @@ impl ModelSpec {
             if structure.index_of(p).is_none() {
                 return Err(bad(format!("`{}` is not in the model", p.name())));
             }
-            if !entry.value.is_finite() {
-                return Err(bad(format!("value {} is not finite", entry.value)));
+            // A reference is compared with the estimate (its difference in σ): a value no
+            // aerodynamic parameter can take is a typo, refused as a prior's is.
+            let v = entry.value;
+            if !(v.is_finite() && v.abs() <= ParamPrior::MAX_ABS_VALUE) {
+                return Err(bad(format!(
+                    "value {v} is not finite or beyond ±{:e} (no aerodynamic parameter is that large)",
+                    ParamPrior::MAX_ABS_VALUE
+                )));
             }
             references.push(ParamReference {
                 param: p,
@@ -504,6 +510,23 @@ sigma = 1.5
                 && e.contains("not in the model"),
             "{e}"
         );
+        // Absurd values are refused with the line and the parameter, as a prior's are.
+        for v in ["1e308", "-2e4", "nan", "inf"] {
+            let e = ModelSpec::from_toml_str(
+                &format!("{GOOD}[reference.Cm_q]\nvalue = {v}\nsource = \"x\"\n"),
+                "r.toml",
+            )
+            .unwrap_err()
+            .to_string();
+            assert!(
+                e.contains("r.toml: line 9")
+                    && e.contains("reference `Cm_q`")
+                    && e.contains("beyond ±1e4"),
+                "{v}: {e}"
+            );
+        }
+        let edge = format!("{GOOD}[reference.Cm_q]\nvalue = -1e4\nsource = \"x\"\n");
+        assert_eq!(ModelSpec::from_toml_str(&edge, "r.toml").unwrap().references[0].value, -1e4);
     }
 
     #[test]

@@ -4,8 +4,8 @@
 //!
 //! Kinds ([`DropKind`]): samples whose timestamp broke their topic's increasing order, the
 //! message a cut file ends inside, corrupt bytes skipped to resynchronise, and aligned rows
-//! dropped because a topic had no value there ([`crate::align`]), and the late last samples of
-//! a topic left out as time outliers.
+//! dropped because a topic had no value there ([`crate::align`]), and the far-early first or
+//! far-late last samples of a topic left out as time outliers.
 
 use crate::log_contents::LogContents;
 use serde::Serialize;
@@ -23,7 +23,8 @@ pub enum DropKind {
     /// Aligned rows dropped because a topic had no value there (unit: rows).
     Alignment,
     /// The last samples of a topic after a jump forward longer than its span before
-    /// ([`LogContents::time_outliers`]; unit: samples).
+    /// ([`LogContents::time_outliers`]), or its first samples before a jump longer than its
+    /// span after ([`LogContents::early_time_outliers`]; `first_sample` 0); unit: samples.
     TimeOutlier,
 }
 
@@ -89,7 +90,9 @@ impl ReaderReport {
                 }
             })
             .collect();
-        for (topic, &(n, k, t_s)) in &contents.time_outliers {
+        let early = contents.early_time_outliers.iter().map(|(t, &(n, t_s))| (t, (n, 0, t_s)));
+        let late = contents.time_outliers.iter().map(|(t, &v)| (t, v));
+        for (topic, (n, k, t_s)) in early.chain(late) {
             dropped.push(Dropped {
                 kind: DropKind::TimeOutlier,
                 topic: Some(topic.clone()),
@@ -178,6 +181,14 @@ impl ReaderReport {
                         "{f}: {} corrupt bytes skipped (the first stretch at byte {})",
                         d.count,
                         d.first_byte.unwrap_or(0)
+                    ),
+                    // A late tail has samples before it; only an early head starts at sample 0.
+                    DropKind::TimeOutlier if d.first_sample == Some(0) => format!(
+                        "{f}: topic `{topic}`: {}",
+                        crate::log_contents::early_head_note(
+                            d.count as usize,
+                            d.first_time_s.unwrap_or(f64::NAN)
+                        )
                     ),
                     DropKind::TimeOutlier => format!(
                         "{f}: topic `{topic}`: {}",

@@ -395,3 +395,46 @@ fn errors_subscriptions_rebuilding_a_megabyte_of_names_each_are_refused_in_all()
     let k = at.iter().position(|&a| a == offset).unwrap();
     assert!(k >= 64 && k <= (64 << 20) / leaf_names, "refused at subscription {k}");
 }
+
+/// Every topic's first message stamped one day before the rest (a clock not yet set when
+/// logging began): the first samples are time outliers, counted in the reader report with the
+/// topic, and the record spans the topics' own time; before, the day-long span was refused.
+#[test]
+fn errors_every_topics_first_sample_a_day_early_is_dropped_and_counted() {
+    let day = 86_400_000_000u64;
+    let mut u = Ulog::new();
+    u.format("imu:uint64_t timestamp;float v;float a;");
+    u.format("gps:uint64_t timestamp;float v;float a;");
+    u.subscribe(0, 1, "imu");
+    u.subscribe(0, 2, "gps");
+    u.data_f32(1, 1_000_000, &[1.0, 1.0]);
+    u.data_f32(2, 1_000_500, &[1.0, 1.0]);
+    for i in 0..1001u64 {
+        u.data_f32(1, day + 1_000 * i, &[50.0 + i as f32 * 0.001, 0.05]);
+        if i % 10 == 0 {
+            u.data_f32(2, day + 1_000 * i, &[0.0, 0.0]);
+        }
+    }
+    let c = parse_ulog(&u.0, "early.ulg").unwrap();
+    assert_eq!(c.early_time_outliers["imu"], (1, 1.0));
+    assert_eq!(c.early_time_outliers["gps"], (1, 1.0005));
+    let path = temp_file("early.ulg", &u.0);
+    let m = Mapping::from_toml_str(&mapping_text("imu", 1000.0), "m.toml").unwrap();
+    let (reader, report) = open_log_with_report(path.to_str().unwrap(), None, &m).unwrap();
+    let d = &report.dropped;
+    assert_eq!(d.len(), 1, "only the mapped topic is kept: {d:?}");
+    assert_eq!(d[0].kind, DropKind::TimeOutlier);
+    assert_eq!((d[0].topic.as_deref(), d[0].count, d[0].of), (Some("imu"), 1, Some(1002)));
+    assert_eq!((d[0].first_sample, d[0].first_time_s), (Some(0), Some(1.0)));
+    let json = serde_json::to_value(&report).unwrap();
+    assert_eq!(json["dropped"][0]["kind"], "time_outlier");
+    let samples: Vec<f64> = reader
+        .filter_map(|e| match e {
+            Ok(RecordEvent::Sample { sample, .. }) => Some(sample.vt_mps),
+            _ => None,
+        })
+        .collect();
+    // 1 s at 1 kHz: 1001 rows, the first the first sample of the day (v = 50).
+    assert_eq!(samples.len(), 1001);
+    assert_eq!(samples[0], 50.0);
+}

@@ -21,8 +21,16 @@
 //! side of a gap) never get a centred derivative; they are returned as unused, for the caller
 //! to count and list. After a gap the stage restarts ([`Conditioner::flush`]); nothing is
 //! bridged. With nothing to differentiate the stage passes samples through undelayed.
+//!
+//! **A hole of one sample** (an interval over [`GAP_FACTOR`] and up to [`ONE_SAMPLE_HOLE_MAX`]
+//! differentiator intervals: one row rejected, by the reader or the spike screen, on an
+//! otherwise regular grid) is no gap (the reader's module doc): the differentiators assume a
+//! regular grid, so the stage puts a stand-in in the missing sample's place, every channel
+//! interpolated linearly between its two neighbours, and goes on. The stand-in is never
+//! emitted nor listed: the hole costs its own row only, not the `N − 1` samples of a restart.
 
 use aeroident_estimators::AirDataSample;
+use aeroident_io::flight_data::{GAP_FACTOR, ONE_SAMPLE_HOLE_MAX};
 use aeroident_signals::differentiate::{CausalDifferentiator, DifferentiateError, MatchedSmoother};
 use std::collections::VecDeque;
 
@@ -119,8 +127,9 @@ pub struct Conditioner {
     cfg: Conditioning,
     dt_s: Option<f64>,
     diffs: Vec<CausalDifferentiator>,
-    /// Samples not yet emitted (at most `(N−1)/2 + 1`), with their rows.
-    delay: VecDeque<(u64, AirDataSample)>,
+    /// Samples not yet emitted (at most `(N−1)/2 + 1`), with their rows (`None`: a stand-in
+    /// for a one-sample hole, never emitted).
+    delay: VecDeque<(Option<u64>, AirDataSample)>,
     /// The last `N` samples, oldest first (matched alignment only).
     window: VecDeque<AirDataSample>,
     /// Matched-smoother weights over the window, oldest first (matched alignment only).
@@ -189,6 +198,40 @@ impl Conditioner {
         if self.diffs.is_empty() && !self.start(row, s)? {
             return Ok(());
         }
+        if let Some(stand_in) = self.stand_in(&s) {
+            self.push_running(None, stand_in, ready, unused);
+        }
+        self.push_running(Some(row), s, ready, unused);
+        Ok(())
+    }
+
+    /// The stand-in for a one-sample hole before `s` (module doc), if there is one.
+    fn stand_in(&self, s: &AirDataSample) -> Option<AirDataSample> {
+        let (_, prev) = self.delay.back()?;
+        let dt = self.dt_s?;
+        let interval = s.t_s - prev.t_s;
+        if !(interval > GAP_FACTOR * dt && interval <= ONE_SAMPLE_HOLE_MAX * dt) {
+            return None;
+        }
+        let mut mid = *prev;
+        mid.t_s = 0.5 * (prev.t_s + s.t_s);
+        // A channel one neighbour lacks stays as the previous sample has it.
+        for (get, set) in SMOOTHED {
+            if let (Some(a), Some(b)) = (get(prev), get(s)) {
+                set(&mut mid, 0.5 * (a + b));
+            }
+        }
+        Some(mid)
+    }
+
+    /// Pushes a sample (a stand-in when `row` is `None`) through the running stage.
+    fn push_running(
+        &mut self,
+        row: Option<u64>,
+        s: AirDataSample,
+        ready: &mut Vec<(u64, AirDataSample)>,
+        unused: &mut Vec<u64>,
+    ) {
         let half = self.cfg.window / 2;
         self.delay.push_back((row, s));
         if !self.weights.is_empty() {
@@ -203,13 +246,14 @@ impl Conditioner {
         }
         if self.delay.len() > half + 1 {
             // Only during warm-up can the delay line overflow: these never get a centred value.
-            if let Some((r, _)) = self.delay.pop_front() {
+            if let Some((Some(r), _)) = self.delay.pop_front() {
                 unused.push(r);
             }
         }
         if out[0].is_some()
             && let Some((r, mut c)) = self.delay.pop_front()
         {
+            let Some(r) = r else { return };
             for (k, w) in self.cfg.derivatives.iter().enumerate() {
                 w.set(&mut c, out[k].filter(|v| v.is_finite()));
             }
@@ -219,7 +263,6 @@ impl Conditioner {
             }
             ready.push((r, c));
         }
-        Ok(())
     }
 
     /// Measures the interval from the first two samples and builds the differentiators (and
@@ -228,7 +271,7 @@ impl Conditioner {
         let measured = match self.delay.back() {
             Some((_, prev)) => s.t_s - prev.t_s,
             None => {
-                self.delay.push_back((row, s));
+                self.delay.push_back((Some(row), s));
                 return Ok(false);
             }
         };
@@ -267,7 +310,7 @@ impl Conditioner {
             d.reset();
         }
         self.window.clear();
-        unused.extend(self.delay.drain(..).map(|(r, _)| r));
+        unused.extend(self.delay.drain(..).filter_map(|(r, _)| r));
     }
 }
 

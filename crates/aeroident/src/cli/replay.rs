@@ -699,6 +699,7 @@ fn execute_online(
             || w.starts_with("normalised innovation")
             || w.starts_with("collinear regressors")
             || w.starts_with("constant channel")
+            || w.starts_with("unit mismatch")
     }) {
         eprintln!("warning: {w}");
     }

@@ -72,10 +72,19 @@ mod spectral;
 
 pub(crate) use spectral::TAPERS as SPECTRAL_TAPERS;
 pub(crate) use spectral::covariance as spectral;
+pub(crate) use spectral::covariance_until as spectral_until;
 
 use nalgebra::DMatrix;
 use std::vec;
 use std::vec::Vec;
+
+/// A caller's request to give up (a user's stop of a long fit), looked at between the passes
+/// and manoeuvres of a computation here: each piece between two looks costs a fraction of a
+/// second on a 60,000-sample manoeuvre. A computation that sees it raised returns `None`.
+pub(crate) type Stop<'a> = &'a (dyn Fn() -> bool + Sync);
+
+/// Never asks to stop.
+pub(crate) const NEVER: Stop<'static> = &|| false;
 
 /// Result of the correction.
 pub(crate) struct Coloured {
@@ -102,6 +111,7 @@ impl Coloured {
 ///
 /// `s`: sensitivities, `N × ny × n` row-major; `e`: residuals `N × ny`; `w`: `R⁻¹` diagonal;
 /// `lengths`: samples per manoeuvre (summing to `N`); `minv`: `M⁻¹`; `max_lag`: cap on `K`.
+#[cfg(test)]
 pub(crate) fn covariance(
     s: &[f64],
     e: &[f64],
@@ -110,14 +120,27 @@ pub(crate) fn covariance(
     minv: &DMatrix<f64>,
     max_lag: usize,
 ) -> Coloured {
+    covariance_until(s, e, w, lengths, minv, max_lag, NEVER).unwrap_or_else(|| unreachable!())
+}
+
+/// [`covariance`], given up (`None`) once `stop` asks.
+pub(crate) fn covariance_until(
+    s: &[f64],
+    e: &[f64],
+    w: &[f64],
+    lengths: &[usize],
+    minv: &DMatrix<f64>,
+    max_lag: usize,
+    stop: Stop,
+) -> Option<Coloured> {
     let ny = w.len();
     let n = minv.nrows();
     let max_lag = max_lag.min(lengths.iter().copied().min().unwrap_or(1).saturating_sub(1));
     let (r, lag) = lagged_covariances(e, ny, lengths, 0, max_lag);
     // T_i = R⁻¹ S_i (ny × n).
     let t = weighted_sensitivities(s, w, n);
-    let f = middle(&t, ny, n, lengths, &r, &[]);
-    Coloured::new(minv * f * minv, lag)
+    let f = middle(&t, ny, n, lengths, &r, &[], stop)?;
+    Some(Coloured::new(minv * f * minv, lag))
 }
 
 /// Most vector-autoregressive order tried by [`prewhitened`].
@@ -139,6 +162,7 @@ pub(crate) struct Prewhitened {
 /// The prewhitened coloured-residual covariance (module doc, "Prewhitening").
 ///
 /// Same arguments as [`covariance`]; `max_lag` caps the lag sum on the whitened residuals.
+#[cfg(test)]
 pub(crate) fn prewhitened(
     s: &[f64],
     e: &[f64],
@@ -147,6 +171,19 @@ pub(crate) fn prewhitened(
     minv: &DMatrix<f64>,
     max_lag: usize,
 ) -> Prewhitened {
+    prewhitened_until(s, e, w, lengths, minv, max_lag, NEVER).unwrap_or_else(|| unreachable!())
+}
+
+/// [`prewhitened`], given up (`None`) once `stop` asks.
+pub(crate) fn prewhitened_until(
+    s: &[f64],
+    e: &[f64],
+    w: &[f64],
+    lengths: &[usize],
+    minv: &DMatrix<f64>,
+    max_lag: usize,
+    stop: Stop,
+) -> Option<Prewhitened> {
     let ny = w.len();
     let n = minv.nrows();
     let n_total: usize = lengths.iter().sum();
@@ -164,6 +201,9 @@ pub(crate) fn prewhitened(
     let mut fitted: Option<DMatrix<f64>> = None;
     let mut out = None;
     for pass in 0..=FITTED_SHARE_PASSES {
+        if stop() {
+            return None;
+        }
         // Noise autocovariance = residual autocovariance + that of the fitted part S δθ.
         let mut r = sample[..=order].to_vec();
         let d_raw: Vec<DMatrix<f64>> = match &fitted {
@@ -187,14 +227,14 @@ pub(crate) fn prewhitened(
                 rk.iter_mut().zip(dk).for_each(|(x, y)| *x += y);
             }
         }
-        let f = middle(&t, ny, n, lengths, &ru, &var);
+        let f = middle(&t, ny, n, lengths, &ru, &var, stop)?;
         let col = Coloured::new(minv * f * minv, lag);
         if pass < FITTED_SHARE_PASSES {
             fitted = Some(col.full.clone());
         }
         out = Some(col);
     }
-    Prewhitened { coloured: out.expect("at least one pass"), order }
+    Some(Prewhitened { coloured: out.expect("at least one pass"), order })
 }
 
 /// `u_i = x_i − Σ_j A_j x_{i−j}` for `x` of `N × ny × ncol` (each of the `ncol` columns of
@@ -347,6 +387,7 @@ fn weighted_sensitivities(s: &[f64], w: &[f64], n: usize) -> Vec<f64> {
 /// its energy has died out (10⁻¹² of the total) or for at most four manoeuvre lengths.
 /// Without an autoregression `U = T` and `F` is the Morelli & Klein sum of the module doc.
 /// The double sum itself is [`lags::sandwich`] (through the FFT when the lags are many).
+/// `None` when `stop` asks (looked at before each manoeuvre and between its two steps).
 fn middle(
     t: &[f64],
     ny: usize,
@@ -354,20 +395,28 @@ fn middle(
     lengths: &[usize],
     r: &[Vec<f64>],
     var: &[Vec<f64>],
-) -> DMatrix<f64> {
+    stop: Stop,
+) -> Option<DMatrix<f64>> {
     let row = ny * n;
     let mut f = DMatrix::<f64>::zeros(n, n);
     let mut start = 0;
     for &len in lengths {
+        if stop() {
+            return None;
+        }
         let own = &t[start * row..(start + len) * row];
         f += if var.is_empty() {
             lags::sandwich(own, ny, n, r)
         } else {
-            lags::sandwich(&recoloured(own, ny, n, var), ny, n, r)
+            let u = recoloured(own, ny, n, var);
+            if stop() {
+                return None;
+            }
+            lags::sandwich(&u, ny, n, r)
         };
         start += len;
     }
-    f
+    Some(f)
 }
 
 /// `U` of [`middle`] for one manoeuvre's `T` (`len × ny × n`), in time order, its pre-sample
@@ -534,5 +583,45 @@ pub(super) mod tests {
                 assert!((ratio - 1.0).abs() < tol, "{label} θ{i}: prewhitened σ / exact σ {ratio}");
             }
         }
+    }
+
+    /// A stop raised at any look of the three coloured forms ends that form with `None`; each
+    /// looks more than once per pass over the two manoeuvres (so a long record's σ ends within
+    /// a piece of one manoeuvre's work); never raised, each gives the value it gives without a
+    /// stop, bit for bit.
+    #[test]
+    fn a_stop_at_any_look_ends_each_coloured_form() {
+        use core::sync::atomic::{AtomicUsize, Ordering};
+        let (x, lengths, minv) = regression();
+        let e: Vec<f64> =
+            (0..x.len() / 3).map(|i| ((i * 7919) % 101) as f64 / 50.0 - 1.0).collect();
+        let w = [1.0];
+        let looks = |form: &dyn Fn(Stop) -> Option<DMatrix<f64>>| {
+            let seen = AtomicUsize::new(0);
+            let whole = form(&|| {
+                seen.fetch_add(1, Ordering::SeqCst);
+                false
+            })
+            .unwrap();
+            let n = seen.load(Ordering::SeqCst);
+            for k in 0..n {
+                let count = AtomicUsize::new(0);
+                let stopped = form(&|| count.fetch_add(1, Ordering::SeqCst) >= k);
+                assert!(stopped.is_none(), "look {k} of {n}");
+            }
+            (n, whole)
+        };
+        let (n, c) =
+            looks(&|stop| Some(covariance_until(&x, &e, &w, &lengths, &minv, 50, stop)?.full));
+        assert!(n >= lengths.len(), "{n}");
+        assert_eq!(c, covariance(&x, &e, &w, &lengths, &minv, 50).full);
+        let (n, p) = looks(&|stop| {
+            Some(prewhitened_until(&x, &e, &w, &lengths, &minv, 50, stop)?.coloured.full)
+        });
+        assert!(n >= (FITTED_SHARE_PASSES + 1) * (1 + lengths.len()), "{n}");
+        assert_eq!(p, prewhitened(&x, &e, &w, &lengths, &minv, 50).coloured.full);
+        let (n, sp) = looks(&|stop| Some(spectral_until(&x, &e, &w, &lengths, &minv, stop)?.full));
+        assert!(n >= 2 * (FITTED_SHARE_PASSES + 1) * lengths.len(), "{n}");
+        assert_eq!(sp, spectral(&x, &e, &w, &lengths, &minv).full);
     }
 }

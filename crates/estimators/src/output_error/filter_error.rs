@@ -1103,7 +1103,8 @@ impl<'a> Fem<'a> {
             if super::stop_raised(oe.stop.as_ref()) {
                 [None, None, None]
             } else {
-                diagnostic_sigmas(&it.s, &it.e, &w, &result, nb, max_lag)
+                let stop = || super::stop_raised(oe.stop.as_ref());
+                diagnostic_sigmas(&it.s, &it.e, &w, &result, nb, max_lag, &stop)
             };
         let f_scale: Vec<f64> =
             (0..nb).map(|i| if i >= first_f { beta[i].exp() } else { 1.0 }).collect();
@@ -1195,17 +1196,23 @@ fn diagnostic_sigmas(
     r: &OeResult,
     nb: usize,
     max_lag: usize,
+    stop: coloured::Stop,
 ) -> [Option<Vec<f64>>; 3] {
     let ny = w.len();
     let (m, _, _) = normal_equations(s, e, w, nb);
     let Some(minv) = spd_inverse(&m) else { return [None, None, None] };
-    let full = coloured::prewhitened(s, e, w, &r.manoeuvre_lengths, &minv, max_lag).coloured.full;
+    let lengths = &r.manoeuvre_lengths;
+    let Some(pre) = coloured::prewhitened_until(s, e, w, lengths, &minv, max_lag, stop) else {
+        return [None, None, None];
+    };
+    let full = pre.coloured.full;
     let coloured_theta = (0..r.n_params).all(|i| full[(i, i)] > 0.0).then(|| {
         (0..nb).map(|i| if full[(i, i)] > 0.0 { full[(i, i)].sqrt() } else { f64::NAN }).collect()
     });
-    let lag0 = coloured::covariance(s, e, w, &r.manoeuvre_lengths, &minv, 0)
-        .covariance
-        .map(|c| (0..nb).map(|i| c[(i, i)].sqrt()).collect());
+    let Some(lag0) = coloured::covariance_until(s, e, w, lengths, &minv, 0, stop) else {
+        return [None, None, None];
+    };
+    let lag0 = lag0.covariance.map(|c| (0..nb).map(|i| c[(i, i)].sqrt()).collect());
     let n = (e.len() / ny) as f64;
     let mut b = DMatrix::<f64>::zeros(ny, ny);
     for nu in e.chunks_exact(ny) {

@@ -859,9 +859,17 @@ impl Scenario {
             finite.extend(e.step_to.map(|v| ("step_to", v)));
             finite.extend(e.step_to_fraction.map(|v| ("step_to_fraction", v)));
             finite.extend(e.initial.map(|v| ("initial", v)));
+            // The increment of an aerodynamic derivative and its bounds: beyond a prior's
+            // limit no parameter is that large (a typo), and the flight would not stay finite.
+            let max = aeroident_estimators::ParamPrior::MAX_ABS_VALUE;
             for (k, v) in finite {
-                if !v.is_finite() {
-                    return Err(bad(&f(k), format!("must be finite, got {v}")));
+                if !(v.is_finite() && v.abs() <= max) {
+                    return Err(bad(
+                        &f(k),
+                        format!(
+                            "must be finite and within ±{max:e} (no aerodynamic parameter is that large), got {v}"
+                        ),
+                    ));
                 }
             }
             match (e.lower, e.upper) {
@@ -1038,6 +1046,26 @@ mod tests {
         assert!(e.contains("gauss_markov"), "{e}");
         let e = err("[[sensors.channel]]\nchannel = \"p_rad_s\"\nwhite_sigma = 0.1\n");
         assert!(e.contains("white_sigma"), "{e}");
+    }
+
+    /// A true increment (or its bounds, start, step) no aerodynamic parameter can take is
+    /// refused naming its key and value, as a prior beyond ±1e4 is; ±1e4 itself is accepted.
+    #[test]
+    fn absurd_true_increments_are_refused_naming_the_key() {
+        let head = "kind = \"run\"\nname = \"t\"\nduration_s = 1.0\ndt_s = 0.01\n";
+        let rls = "[[estimator]]\nkind = \"rls\"\nmodel = \"six-axis\"\n";
+        let with = |inc: &str| Scenario::from_toml(&format!("{head}{inc}{rls}"), "t.toml");
+        for (inc, key) in [
+            ("truth = 1e308", "increments.Cm_alpha.truth"),
+            ("truth = -2e4", "increments.Cm_alpha.truth"),
+            ("lower = -1e300\nupper = 1.0", "increments.Cm_alpha.lower"),
+            ("truth = 0.1\ninitial = 1e305", "increments.Cm_alpha.initial"),
+        ] {
+            let e = with(&format!("[increments.Cm_alpha]\n{inc}\n")).unwrap_err().to_string();
+            assert!(e.contains(key) && e.contains("within ±1e4"), "{inc}: {e}");
+        }
+        let s = with("[increments.Cm_alpha]\ntruth = -1e4\n").unwrap();
+        assert_eq!(s.increments.values().next().map(|e| e.truth), Some(-1e4));
     }
 
     /// `model = "….toml"` reads a model file relative to the scenario's directory (the

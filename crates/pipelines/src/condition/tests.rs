@@ -140,3 +140,33 @@ fn analytic_matched_smoother_equals_the_derivative_of_the_trapezoidal_integral()
         }
     }
 }
+
+/// One sample missing from a regular grid (row 20 of a linear q = 0.3 t): the stand-in keeps
+/// the grid, so every other sample keeps its exact derivative 0.3 and none but the missing one
+/// is lost (only the record's own ends are unused); three missing samples are no hole of one:
+/// the derivative across them is wrong and nothing is bridged (the reader reports a gap there).
+#[test]
+fn analytic_one_missing_sample_is_bridged_and_costs_only_itself() {
+    let dt = 0.02;
+    let run = |missing: &[u64]| {
+        let mut st = Conditioner::new(delayed(vec![Derivative::Qdot], 5, Some(dt)));
+        let (mut ready, mut unused) = (Vec::new(), Vec::new());
+        for k in (0..40u64).filter(|k| !missing.contains(k)) {
+            let t = k as f64 * dt;
+            let s = AirDataSample { t_s: t, q_rad_s: Some(0.3 * t), ..Default::default() };
+            st.push(k, s, &mut ready, &mut unused).unwrap();
+        }
+        st.flush(&mut unused);
+        (ready, unused)
+    };
+    let (ready, unused) = run(&[20]);
+    assert_eq!(unused, vec![0, 1, 38, 39]);
+    let rows: Vec<u64> = ready.iter().map(|r| r.0).collect();
+    assert_eq!(rows, (2..38).filter(|&k| k != 20).collect::<Vec<_>>());
+    for (row, s) in &ready {
+        assert!((s.qdot_rad_s2.unwrap() - 0.3).abs() < 1e-9, "row {row}: {:?}", s.qdot_rad_s2);
+        assert!((s.t_s - *row as f64 * dt).abs() < 1e-12, "row {row} keeps its own time");
+    }
+    let (ready, _) = run(&[20, 21, 22]);
+    assert!(ready.iter().any(|(_, s)| (s.qdot_rad_s2.unwrap() - 0.3).abs() > 1e-3));
+}

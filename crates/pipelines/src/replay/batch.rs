@@ -993,6 +993,9 @@ pub fn fit_records<R: Read>(
     let mut spread = super::constant::Spread::default();
     slices.iter().flat_map(|m| m.iter()).for_each(|s| spread.push(s));
     summary.warnings.extend(spread.warnings(&st, mapping));
+    summary
+        .warnings
+        .extend(super::kinematics::Kinematics::of_manoeuvres(&slices).warnings(mapping));
     if let Some(c) = &options.compat {
         summary.warnings.extend(c.warnings());
     }

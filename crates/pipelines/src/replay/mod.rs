@@ -45,6 +45,7 @@ pub mod cross_check;
 pub mod diagnostics;
 pub mod explain;
 pub mod frequency;
+pub mod kinematics;
 mod online;
 pub mod outliers;
 pub mod precision;

@@ -70,6 +70,7 @@ pub(super) struct Replay<'a> {
     fed: SampleLog<AirDataSample>,
     /// Each regressor channel's range over the estimated samples ([`super::constant`]).
     spread: super::constant::Spread,
+    kinematics: super::kinematics::Kinematics,
     recorder: Recorder,
     /// Time spent in the estimator's update (the throughput of the estimation stage).
     busy: Duration,
@@ -108,6 +109,7 @@ impl<'a> Replay<'a> {
             history: History::default(),
             fed: SampleLog::new(crate::results::MAX_FIT_SAMPLES, 1),
             spread: super::constant::Spread::default(),
+            kinematics: super::kinematics::Kinematics::default(),
             recorder: Recorder::default(),
             busy: Duration::ZERO,
             pacer: Pacer::default(),
@@ -175,6 +177,7 @@ impl<'a> Replay<'a> {
             r.est.new_manoeuvre();
             self.recorder.new_segment();
         }
+        self.kinematics.new_segment();
     }
 
     /// The first sample: chooses the model, checks the record supports it, builds the
@@ -310,6 +313,7 @@ impl<'a> Replay<'a> {
         self.history.push(s.t_s, values, sigmas);
         self.fed.push(*s);
         self.spread.push(s);
+        self.kinematics.push(s);
         Ok(true)
     }
 
@@ -365,6 +369,7 @@ impl<'a> Replay<'a> {
         };
         let mut summary = self.summary(&r);
         summary.warnings.extend(self.spread.warnings(r.est.structure(), self.mapping));
+        summary.warnings.extend(self.kinematics.warnings(self.mapping));
         let differentiated = r.stage.supplies().to_vec();
         let n = r.est.structure().n_params();
         let final_covariance: Vec<Option<f64>> =

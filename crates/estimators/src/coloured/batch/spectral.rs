@@ -254,6 +254,19 @@ pub(crate) fn covariance(
     lengths: &[usize],
     minv: &DMatrix<f64>,
 ) -> super::Coloured {
+    covariance_until(s, e, w, lengths, minv, super::NEVER).unwrap_or_else(|| unreachable!())
+}
+
+/// [`covariance`], given up (`None`) once `stop` asks (looked at before each manoeuvre's
+/// transforms and its fitted share, in every pass).
+pub(crate) fn covariance_until(
+    s: &[f64],
+    e: &[f64],
+    w: &[f64],
+    lengths: &[usize],
+    minv: &DMatrix<f64>,
+    stop: super::Stop,
+) -> Option<super::Coloured> {
     let ny = w.len();
     let n = minv.nrows();
     let t = super::weighted_sensitivities(s, w, n);
@@ -263,7 +276,13 @@ pub(crate) fn covariance(
         let mut start = 0;
         for &len in lengths {
             if len > 0 {
+                if stop() {
+                    return None;
+                }
                 let tr = transforms(&mut planner, &t, e, (ny, n), start..start + len);
+                if stop() {
+                    return None;
+                }
                 let d = root.map(|l| fitted_share(&mut planner, s, &tr, (ny, n), l));
                 add_middle(&mut f, &tr, d.as_deref(), (ny, n));
             }
@@ -274,14 +293,14 @@ pub(crate) fn covariance(
                 f[(p, q)] = f[(q, p)];
             }
         }
-        super::Coloured::new(minv * f * minv, 0)
+        Some(super::Coloured::new(minv * f * minv, 0))
     };
-    let mut col = one_pass(None);
+    let mut col = one_pass(None)?;
     for _ in 0..super::FITTED_SHARE_PASSES {
         let root = square_root(&col.full);
-        col = one_pass(Some(&root));
+        col = one_pass(Some(&root))?;
     }
-    col
+    Some(col)
 }
 
 #[cfg(test)]

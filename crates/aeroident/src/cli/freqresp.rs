@@ -159,7 +159,7 @@ impl FreqRespArgs {
         let format = self.format.or_else(|| LogFormat::from_extension(path));
         if format != Some(LogFormat::Dataflash) {
             anyhow::bail!(
-                "option `--window`: `sysid` reads an ArduPilot DataFlash log's SYSID sweeps (SIDS, SIDD); {} is not one (PX4 logs no sweep marker: give the windows as START:END, docs/frequency-response.md)",
+                "option `--window`: `sysid` reads an ArduPilot DataFlash log's SYSID sweeps (SIDS, SIDD); {} is not one (PX4 logs no sweep setup message: give the windows as START:END, section Finding the excitation of docs/frequency-response.md)",
                 self.data
             );
         }

@@ -216,7 +216,7 @@ fn check_against_plant(pair: &serde_json::Value, gain_db: f64) {
         (col("frequency_hz"), col("magnitude_db"), col("phase_deg"), col("coherence"));
     let mut checked = 0;
     for k in 0..f.len() {
-        if !(0.3..=6.0).contains(&f[k]) || !(coh[k] >= 0.95) {
+        if !(0.3..=6.0).contains(&f[k]) || coh[k].is_nan() || coh[k] < 0.95 {
             continue;
         }
         let (m, p) = exact(f[k]);
@@ -278,6 +278,7 @@ fn every_sweep_is_found_and_bad_choices_are_named() {
         (vec!["--window", "sysid:99"], "`99` is not a SID_AXIS"),
         (vec!["--window", "sysid", "--window", "1:2"], "not beside START:END"),
         (vec!["--input", "sysid", "--window", "20:30"], "give --window sysid"),
+        (vec!["--window", "sysid", "--format", "ulog"], "PX4 logs no sweep setup message"),
     ] {
         let o = run(&d, &[&["--map", "plain.toml", "--output", "q"], args.as_slice()].concat());
         let err = String::from_utf8_lossy(&o.stderr);

@@ -176,11 +176,13 @@ impl FreqRespArgs {
 /// spec, an unwritable output.
 pub fn execute(args: FreqRespArgs) -> anyhow::Result<()> {
     let mapping = Mapping::from_path(&args.map)?;
+    // The options first: a `--window sysid` on a log that cannot have sweeps is named as such.
+    let options = args.options(&mapping)?;
     let (reader, notes) = open_log_with_notes(&args.data, args.format, &mapping)?;
     for n in &notes {
         eprintln!("note: {n}");
     }
-    let outcome = freqresp(reader, &args.options(&mapping)?)?;
+    let outcome = freqresp(reader, &options)?;
     super::print_stdout(&render(&outcome))?;
     if let Some(dir) = &args.out {
         let inputs = [Path::new(&args.data), args.map.as_path()];

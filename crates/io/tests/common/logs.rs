@@ -4,6 +4,7 @@
 
 #[path = "log_writers.rs"]
 mod log_writers;
+#[allow(unused_imports)]
 pub use log_writers::{Dataflash, Ulog};
 
 /// A minimal mapping reading `topic.v` as airspeed and `topic.a` as α from an aligned log at

@@ -9,6 +9,7 @@ pub mod align;
 mod byte_window;
 pub mod dataflash;
 pub mod error;
+pub mod excitation;
 pub mod expression;
 pub mod flight_data;
 mod line_ends;

@@ -7,7 +7,10 @@
 //! ([`AirDataSample::field`]): any channel that fills a measured field, e.g. `de, da, dr`
 //! (rad), `p, q, r` (rad/s), `alpha, beta, phi, theta, psi` (rad), `ax, ay, az` (m/s²), `vt`
 //! (m/s), `qbar` (Pa), `throttle` (–), `thrust` (N), `pdot` (rad/s²). A response's magnitude is in
-//! dB of the output's SI unit per the input's (rad/s per rad for `q/de`).
+//! dB of the output's SI unit per the input's (rad/s per rad for `q/de`). On a log with
+//! ArduPilot SYSID sweeps, the channel [`sysid::INJECTED`] (`sysid`) is the injected waveform
+//! ([`FreqRespOptions::excitation`], [`sysid`]), linear between its samples; a sample it does
+//! not cover (outside the sweeps, across a gap in `SIDD`) ends the stretch.
 //!
 //! **Stretches.** Spectral windows need every sample at the same interval: the record is split
 //! at its gaps (the reader's gap events, the time windows) and wherever an interval differs
@@ -15,7 +18,7 @@
 //! windowed on its own. No spike screen: a spike is data the coherence judges.
 //!
 //! `freqresp.json` keys: `file, samples, stretches, dt_s, window_lengths_s, overlap,
-//! pairs[{input, output, frequency_hz[], magnitude_db[], phase_deg[], coherence[],
+//! sweeps[…] (see [`sysid::SweepSummary`]; empty without `excitation`), pairs[{input, output, frequency_hz[], magnitude_db[], phase_deg[], coherence[],
 //! multiple_coherence[], random_error[], magnitude_error_db[], phase_error_deg[]}],
 //! fits[…] (see [`FitSummary`]), warnings[]`; a value not identified is `null`.
 
@@ -24,11 +27,15 @@ use crate::replay::batch::read_records;
 use crate::window::TimeWindow;
 use aeroident_estimators::AirDataSample;
 use aeroident_estimators::sample::MEASURED_FIELDS;
+use aeroident_io::excitation::{Excitation, injected_at};
 use aeroident_io::{Channel, FlightDataReader};
 use aeroident_signals::spectral::{PairResponse, SpectralOptions, Stretch, frequency_responses};
 use aeroident_signals::tf_fit::{FitOptions, TfFit, TfSpec, fit_transfer_function};
 use serde::Serialize;
 use std::io::Read;
+use sysid::{INJECTED, SweepSummary};
+
+pub mod sysid;
 
 /// Options of one frequency-response run.
 #[derive(Debug, Clone, Default)]
@@ -45,6 +52,9 @@ pub struct FreqRespOptions {
     pub fits: Vec<TfSpec>,
     /// Options of the fits.
     pub fit: FitOptions,
+    /// The log's SYSID sweeps used (their spans are normally the `windows`) and the injected
+    /// waveform, the channel [`sysid::INJECTED`]; `None`: no such channel.
+    pub excitation: Option<Excitation>,
 }
 
 /// One transfer-function fit in `freqresp.json` (the fitted model and how well it matches).
@@ -72,6 +82,8 @@ pub struct FreqRespOutcome {
     pub window_lengths_s: Vec<f64>,
     /// Window overlap, fraction.
     pub overlap: f64,
+    /// The SYSID sweeps used (empty without [`FreqRespOptions::excitation`]).
+    pub sweeps: Vec<SweepSummary>,
     /// Every (output, input) pair, outputs outer.
     pub pairs: Vec<PairResponse>,
     /// Transfer-function fits.
@@ -113,10 +125,22 @@ pub fn freqresp<R: Read>(
     warnings.extend(rejections.iter().take(20).map(|r| format!("row {}: {}", r.row, r.reason)));
     warnings.extend(unlisted);
     let names: Vec<String> = opts.inputs.iter().chain(&opts.outputs).cloned().collect();
-    let (stretches, dt_s, dropped) = stretches(&rec.manoeuvres, &names, opts.inputs.len())?;
-    if dropped > 0 {
+    let sources = Sources {
+        names: &names,
+        n_inputs: opts.inputs.len(),
+        excitation: opts.excitation.as_ref(),
+    };
+    let (stretches, dt_s, dropped) = stretches(&rec.manoeuvres, &sources)?;
+    if dropped.short > 0 {
         warnings.push(format!(
-            "{dropped} samples in stretches of fewer than 4 samples between holes were not used"
+            "{} samples in stretches of fewer than 4 samples between holes were not used",
+            dropped.short
+        ));
+    }
+    if dropped.uncovered > 0 {
+        warnings.push(format!(
+            "{} samples outside the injected waveform's samples (SIDD) were not used",
+            dropped.uncovered
         ));
     }
     let samples = stretches.iter().map(|s| s[0].len()).sum();
@@ -134,6 +158,11 @@ pub fn freqresp<R: Read>(
         dt_s,
         window_lengths_s: r.window_lengths_s,
         overlap: r.overlap,
+        sweeps: opts
+            .excitation
+            .iter()
+            .flat_map(|e| e.sweeps.iter().map(SweepSummary::from))
+            .collect(),
         pairs: r.pairs,
         fits,
         warnings,
@@ -145,7 +174,17 @@ fn check_channels(opts: &FreqRespOptions) -> Result<(), ReplayError> {
         if list.is_empty() {
             return Err(ReplayError::Option { option, reason: "give at least one channel".into() });
         }
-        if let Some(bad) = list.iter().find(|k| sample_field(k).is_none()) {
+        if list.iter().any(|k| k == INJECTED)
+            && opts.excitation.as_ref().is_none_or(|e| e.t_s.is_empty())
+        {
+            return Err(ReplayError::Option {
+                option,
+                reason: format!(
+                    "`{INJECTED}` is the injected waveform of an ArduPilot SYSID log: give --window sysid on a log with SIDS and SIDD messages"
+                ),
+            });
+        }
+        if let Some(bad) = list.iter().find(|k| *k != INJECTED && sample_field(k).is_none()) {
             return Err(ReplayError::Option {
                 option,
                 reason: format!("`{bad}` is not a channel; one of {}", channels().join(", ")),
@@ -184,43 +223,89 @@ fn median_dt(manoeuvres: &[Vec<AirDataSample>]) -> Option<f64> {
     Some(*d.select_nth_unstable_by(mid, f64::total_cmp).1)
 }
 
-/// Splits the manoeuvres into uniformly sampled stretches of the channels `names` (module
-/// doc). Returns them, the interval and the samples of stretches too short to use.
+/// Where the channels of a response come from: the sample's fields, or the injected waveform.
+struct Sources<'a> {
+    /// Inputs then outputs (mapping keys or [`INJECTED`]).
+    names: &'a [String],
+    n_inputs: usize,
+    excitation: Option<&'a Excitation>,
+}
+
+/// Samples left out of the stretches.
+#[derive(Default)]
+struct Dropped {
+    /// In stretches too short to use.
+    short: usize,
+    /// Where the injected waveform has no value.
+    uncovered: usize,
+}
+
+/// Splits the manoeuvres into uniformly sampled stretches of the channels `src.names` (module
+/// doc). Returns them, the interval and the samples left out.
 fn stretches(
     manoeuvres: &[Vec<AirDataSample>],
-    names: &[String],
-    n_inputs: usize,
-) -> Result<(Vec<Stretch>, f64, usize), ReplayError> {
+    src: &Sources,
+) -> Result<(Vec<Stretch>, f64, Dropped), ReplayError> {
     let dt = median_dt(manoeuvres)
         .ok_or_else(|| ReplayError::Model("fewer than two samples: no sample interval".into()))?;
     // Resolved once: the keys were checked by `check_channels`.
-    let fields: Vec<&str> = names.iter().map(|k| sample_field(k).unwrap_or("")).collect();
+    let fields: Vec<&str> = src.names.iter().map(|k| sample_field(k).unwrap_or("")).collect();
+    let hold = src.excitation.map_or(0.0, |e| aeroident_io::align::hold_interval_s(&e.t_s));
     let mut out: Vec<Stretch> = Vec::new();
-    let mut dropped = 0;
+    let mut dropped = Dropped::default();
     for m in manoeuvres {
-        let mut current: Stretch = vec![Vec::new(); names.len()];
+        let mut current: Stretch = vec![Vec::new(); src.names.len()];
         let mut last_t: Option<f64> = None;
         for s in m {
             if let Some(t0) = last_t
                 && ((s.t_s - t0) - dt).abs() > 0.01 * dt
             {
-                dropped += close(&mut current, &mut out);
-            }
-            for (c, (key, field)) in names.iter().zip(&fields).enumerate() {
-                let v = s.field(field).ok_or_else(|| ReplayError::Option {
-                    option: if c < n_inputs { "input" } else { "output" },
-                    reason: format!(
-                        "channel `{key}` is not in the record at t = {} s (map it in the mapping's [channels])",
-                        s.t_s
-                    ),
-                })?;
-                current[c].push(v);
+                dropped.short += close(&mut current, &mut out);
             }
             last_t = Some(s.t_s);
+            let Some(row) = row_of(s, src, &fields, hold)? else {
+                dropped.uncovered += 1;
+                dropped.short += close(&mut current, &mut out);
+                continue;
+            };
+            for (c, v) in row.into_iter().enumerate() {
+                current[c].push(v);
+            }
         }
-        dropped += close(&mut current, &mut out);
+        dropped.short += close(&mut current, &mut out);
     }
     Ok((out, dt, dropped))
+}
+
+/// The channels' values in sample `s`; `None` where the injected waveform has none.
+///
+/// # Errors
+/// A mapped channel the sample lacks, naming it.
+fn row_of(
+    s: &AirDataSample,
+    src: &Sources,
+    fields: &[&str],
+    hold: f64,
+) -> Result<Option<Vec<f64>>, ReplayError> {
+    let mut row = Vec::with_capacity(fields.len());
+    for (c, (key, field)) in src.names.iter().zip(fields).enumerate() {
+        if key == INJECTED {
+            match src.excitation.and_then(|e| injected_at(e, s.t_s, hold)) {
+                Some(v) => row.push(v),
+                None => return Ok(None),
+            }
+            continue;
+        }
+        let v = s.field(field).ok_or_else(|| ReplayError::Option {
+            option: if c < src.n_inputs { "input" } else { "output" },
+            reason: format!(
+                "channel `{key}` is not in the record at t = {} s (map it in the mapping's [channels])",
+                s.t_s
+            ),
+        })?;
+        row.push(v);
+    }
+    Ok(Some(row))
 }
 
 /// Moves `current` to `out` when it holds at least 4 samples; returns the samples dropped.

@@ -1,5 +1,6 @@
-//! `fit`: the batch output-error and filter-error fits of a whole record, exactly as
-//! `aeroident replay DATA --map MAPPING --estimator oe|fem` (the post-flight reference fit,
+//! `fit`: the batch output-error, filter-error and frequency-domain output-error fits of a
+//! whole record, exactly as `aeroident replay DATA --map MAPPING --estimator oe|fem|fdoe`
+//! (the post-flight reference fit,
 //! `aeroident_pipelines::replay::batch::fit_record`), with the estimates, their σ and correlation, the
 //! residuals and the model-vs-measured traces as numpy arrays.
 
@@ -35,18 +36,43 @@ fn initial_states(name: &str) -> PyResult<InitialStates> {
     }
 }
 
+/// The batch method of `kind` (`oe`, `fem`, `fdoe`); `band_hz` is fdoe's band (`--band-hz`),
+/// refused with the other methods as the CLI refuses it.
+fn batch_method(kind: EstimatorKind, band_hz: Option<(f64, f64)>) -> PyResult<BatchMethod> {
+    match kind {
+        EstimatorKind::Fdoe => Ok(BatchMethod::Fdoe {
+            band_hz: band_hz
+                .unwrap_or(aeroident_estimators::output_error::frequency::DEFAULT_BAND_HZ),
+        }),
+        _ if band_hz.is_some() => Err(err(format!(
+            "fit: band_hz is the band of frequency-domain output error (estimator=\"fdoe\"), not of estimator `{}`",
+            kind.name()
+        ))),
+        EstimatorKind::Fem => Ok(BatchMethod::Fem),
+        _ => Ok(BatchMethod::Oe),
+    }
+}
+
+/// The correlation matrix (row-major `n × n`) of a covariance whose entries may be absent
+/// (fdoe's parameters not estimated): NaN in their rows and columns.
+fn correlation_of(cov: &[Option<f64>], n: usize) -> Vec<f64> {
+    let c = |i: usize, j: usize| cov[i * n + j].unwrap_or(f64::NAN);
+    (0..n).flat_map(|i| (0..n).map(move |j| c(i, j) / (c(i, i) * c(j, j)).sqrt())).collect()
+}
+
 /// A row-major `rows × cols` vector as a 2-D array.
 fn matrix(v: Vec<f64>, rows: usize, cols: usize) -> PyResult<Array2<f64>> {
     Array2::from_shape_vec((rows, cols), v).map_err(|e| err(format!("internal: array shape: {e}")))
 }
 
-/// Fits a record file by output error (`oe`) or the filter-error method (`fem`) as
-/// `aeroident replay DATA --map MAPPING --estimator oe|fem [--model M] [--initial-states S]
+/// Fits a record file by output error (`oe`), the filter-error method (`fem`) or
+/// frequency-domain output error (`fdoe`, over `band_hz`) as
+/// `aeroident replay DATA --map MAPPING --estimator oe|fem|fdoe [--band-hz F0:F1] [--model M] [--initial-states S]
 /// [--validate-on V] [--bootstrap N] [--max-iterations N] [--process-noise S] [--window A:B …] [--and FILE …]`
 /// (documentation:
 /// `aeroident.fit` in python/aeroident/__init__.py).
 #[pyfunction]
-#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None, max_iterations=None, process_noise=None, compat=None, windows=None, also=None, select="swr", candidates=None))]
+#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None, max_iterations=None, process_noise=None, compat=None, windows=None, also=None, select="swr", candidates=None, band_hz=None))]
 #[allow(clippy::too_many_arguments)]
 fn fit_file<'py>(
     py: Python<'py>,
@@ -64,6 +90,7 @@ fn fit_file<'py>(
     also: Option<Vec<String>>,
     select: &str,
     candidates: Option<Vec<String>>,
+    band_hz: Option<(f64, f64)>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (select, candidates) = (select.to_owned(), candidates.unwrap_or_default());
     let windows = crate::record::time_windows("fit", windows)?;
@@ -83,12 +110,7 @@ fn fit_file<'py>(
             kind.name()
         )));
     }
-    if kind == EstimatorKind::Fdoe {
-        return Err(err(
-            "fit: `fdoe` is not available from Python yet: run `aeroident replay --estimator fdoe`"
-                .to_string(),
-        ));
-    }
+    let method = batch_method(kind, band_hz)?;
     let setting = self::initial_states(initial_states)?;
     let process_noise = process_noise
         .map(parse_process_noise_states)
@@ -120,7 +142,7 @@ fn fit_file<'py>(
             reports.push(report);
         }
         let options = FitOptions {
-            method: if kind == EstimatorKind::Fem { BatchMethod::Fem } else { BatchMethod::Oe },
+            method,
             initial_states: setting,
             bootstrap_refits: bootstrap,
             max_iterations,
@@ -148,13 +170,19 @@ fn fit_file<'py>(
     let s = &outcome.summary;
     let d = PyDict::new(py);
     d.set_item("names", r.names[..np].to_vec())?;
-    d.set_item("values", r.values[..np].to_vec().into_pyarray(py))?;
-    // `oe` and `fem` give every parameter a σ (only `fdoe`, refused above, has nulls).
-    let sigma: Vec<f64> = s.parameters.iter().map(|p| p.std_error.unwrap_or(f64::NAN)).collect();
+    // The summary's numbers, NaN where it has `null` (a parameter fdoe's linear model cannot
+    // see); for `oe` and `fem` they are the fit's own.
+    let nan = |v: Option<f64>| v.unwrap_or(f64::NAN);
+    let values: Vec<f64> = s.parameters.iter().map(|p| nan(p.estimate)).collect();
+    d.set_item("values", values.into_pyarray(py))?;
+    let sigma: Vec<f64> = s.parameters.iter().map(|p| nan(p.std_error)).collect();
     d.set_item("sigma", sigma.into_pyarray(py))?;
-    d.set_item("crb_sigma", r.sigma[..np].to_vec().into_pyarray(py))?;
-    let corr: Vec<f64> =
-        (0..np).flat_map(|i| (0..np).map(move |j| r.correlation[i * n + j])).collect();
+    let crb: Vec<f64> = s.parameters.iter().map(|p| nan(p.crb_sigma)).collect();
+    d.set_item("crb_sigma", crb.into_pyarray(py))?;
+    let corr: Vec<f64> = match &outcome.frequency {
+        Some(fd) => correlation_of(&fd.covariance, np),
+        None => (0..np).flat_map(|i| (0..np).map(move |j| r.correlation[i * n + j])).collect(),
+    };
     d.set_item("correlation", matrix(corr, np, np)?.into_pyarray(py))?;
     d.set_item("outputs", r.outputs.iter().map(|o| o.name()).collect::<Vec<_>>())?;
     d.set_item(

@@ -59,6 +59,7 @@ fn freqresp_file<'py>(
         },
         fits,
         fit: FitOptions { min_coherence, ..FitOptions::default() },
+        excitation: None,
     };
     let (path, mapping) = (path.to_owned(), mapping.to_owned());
     let run = move || -> anyhow::Result<_> {

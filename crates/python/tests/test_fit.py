@@ -195,3 +195,43 @@ def test_replay_model_auto_selects_and_refuses_a_bad_candidate():
     assert py["summary"]["structure_selection"]["method"] == "swr"
     with pytest.raises(aeroident.AeroidentError, match="`bogus`"):
         aeroident.replay(data, JSBSIM_MAP, "rls", model="auto", candidates=["bogus"])
+
+
+TOTTER = "sidpac_twin_otter/csv/totter_lon_020213f1_018.csv"
+TOTTER_MAP = ROOT / "mappings/twin_otter.toml"
+
+
+def null_as_nan(values) -> list[float]:
+    return [np.nan if v is None else v for v in values]
+
+
+@pytest.mark.parametrize("band", [None, (0.1, 1.2)])
+def test_fdoe_fit_equals_cli_on_the_twin_otter(tmp_path, band):
+    data = shared(TOTTER)
+    out = tmp_path / "out"
+    extra = [] if band is None else ["--band-hz", f"{band[0]}:{band[1]}"]
+    r = cli("replay", data, "--map", TOTTER_MAP, "--estimator", "fdoe", *extra, "--out", out)
+    assert r.returncode == 0, r.stderr
+    expected = json.loads((out / "summary.json").read_text())
+    py = aeroident.fit(data, TOTTER_MAP, "fdoe", band_hz=band)
+    assert without_wall_time(py["summary"]) == without_wall_time(expected)
+    params = expected["parameters"]
+    assert py["names"] == [p["name"] for p in params]
+    # fdoe leaves the parameters its linear model cannot see `null`: NaN in the arrays.
+    assert any(p["estimate"] is None for p in params) and any(p["estimate"] is not None for p in params)
+    np.testing.assert_array_equal(py["values"], null_as_nan(p["estimate"] for p in params))
+    np.testing.assert_array_equal(py["sigma"], null_as_nan(p["std_error"] for p in params))
+    np.testing.assert_array_equal(py["crb_sigma"], null_as_nan(p["crb_sigma"] for p in params))
+    # The correlation of the estimated parameters, from the same covariance as their σ.
+    est = [i for i, p in enumerate(params) if p["estimate"] is not None]
+    rho = py["correlation"][np.ix_(est, est)]
+    np.testing.assert_allclose(np.diag(rho), 1.0, rtol=1e-12)
+    np.testing.assert_allclose(rho, rho.T, atol=1e-12)
+    assert np.isnan(py["correlation"][[i for i in range(len(params)) if i not in est][0]]).all()
+
+
+def test_fdoe_band_is_refused_for_other_estimators():
+    with pytest.raises(aeroident.AeroidentError, match="band_hz"):
+        aeroident.fit(shared(TOTTER), TOTTER_MAP, "oe", band_hz=(0.1, 2.0))
+    with pytest.raises(aeroident.AeroidentError, match="0 < f_min < f_max"):
+        aeroident.fit(shared(TOTTER), TOTTER_MAP, "fdoe", band_hz=(2.0, 1.0))

@@ -4,15 +4,22 @@
 //!
 //! ```text
 //! aeroident freqresp <log> --map M --input de --output q [--input da …] [--output …]
-//!                    [--window a:b …] [--windows-s 60,30,15] [--overlap 0.8]
-//!                    [--f-min-hz F] [--f-max-hz F] [--fit "q/de:1/2+delay@1:10" …]
-//!                    [--min-coherence 0.6] [--out DIR]
+//!                    [--window a:b … | --window sysid[:AXIS]] [--windows-s 60,30,15]
+//!                    [--overlap 0.8] [--f-min-hz F] [--f-max-hz F]
+//!                    [--fit "q/de:1/2+delay@1:10" …] [--min-coherence 0.6] [--out DIR]
 //! ```
+//! `--window sysid` (ArduPilot DataFlash logs): every SYSID sweep's span is a window
+//! ([`aeroident_io::excitation`]); `sysid:AXIS` only the sweeps on that `SID_AXIS` (number or
+//! name, e.g. `sysid:FW_MIX_PITCH`); without `--input` the input is the swept surface when the
+//! mapping maps it, else the injected waveform `sysid`
+//! ([`aeroident_pipelines::freqresp::sysid`]).
 //! Prints a summary per pair and each fit; with `--out`, writes `DIR/freqresp.json`,
 //! `DIR/freqresp.csv` (one row per pair and frequency), a Bode figure per pair with its
 //! coherence (`bode_<output>_<input>.{png,svg}`) and `report.html`.
 
+use aeroident_io::excitation::{Axis, Excitation, axis_by_name, read_sysid};
 use aeroident_io::{LogFormat, Mapping, open_log_with_notes};
+use aeroident_pipelines::freqresp::sysid::{choose_sweeps, default_input};
 use aeroident_pipelines::freqresp::{FreqRespOptions, FreqRespOutcome, freqresp};
 use aeroident_pipelines::window::TimeWindow;
 use aeroident_signals::spectral::SpectralOptions;
@@ -32,16 +39,20 @@ pub struct FreqRespArgs {
     /// Log format; default by the file's extension, else CSV.
     #[arg(long)]
     pub format: Option<LogFormat>,
-    /// Input channel (mapping key: de, da, dr, throttle …); several: the conditioned
-    /// multi-input responses (partial coherence).
-    #[arg(long = "input", required = true)]
+    /// Input channel (mapping key: de, da, dr, throttle …, or `sysid`, the injected waveform
+    /// of an ArduPilot SYSID log); several: the conditioned multi-input responses (partial
+    /// coherence). Required but with `--window sysid`, where it defaults to the swept surface
+    /// if mapped, else `sysid`.
+    #[arg(long = "input")]
     pub inputs: Vec<String>,
     /// Output channel (mapping key: p, q, r, alpha, beta, ax, ay, az …); several allowed.
     #[arg(long = "output", required = true)]
     pub outputs: Vec<String>,
-    /// Time window `START:END` of the record, s; several allowed (each its own stretch).
-    #[arg(long = "window", value_parser = TimeWindow::parse)]
-    pub windows: Vec<TimeWindow>,
+    /// Time window `START:END` of the record, s; several allowed (each its own stretch). Or
+    /// `sysid[:AXIS]`: the spans of an ArduPilot log's SYSID sweeps (on `SID_AXIS` AXIS,
+    /// number or name), found from its SIDS and SIDD messages.
+    #[arg(long = "window", value_parser = parse_window)]
+    pub windows: Vec<WindowArg>,
     /// Spectral window lengths, s, comma-separated; default five from half the longest
     /// stretch down to an eighth of that.
     #[arg(long, value_delimiter = ',')]
@@ -70,13 +81,48 @@ pub struct FreqRespArgs {
     pub out: Option<PathBuf>,
 }
 
+/// A `--window`: a span of the record, or the log's SYSID sweeps (on one axis).
+#[derive(Debug, Clone)]
+pub enum WindowArg {
+    /// `START:END`, s.
+    Span(TimeWindow),
+    /// `sysid[:AXIS]`.
+    Sysid(Option<&'static Axis>),
+}
+
+fn parse_window(text: &str) -> Result<WindowArg, String> {
+    let t = text.trim();
+    if !t.eq_ignore_ascii_case("sysid") && !t.to_ascii_lowercase().starts_with("sysid:") {
+        return TimeWindow::parse(t).map(WindowArg::Span);
+    }
+    match t.split_once(':') {
+        None => Ok(WindowArg::Sysid(None)),
+        Some((_, a)) => axis_by_name(a).map(|a| WindowArg::Sysid(Some(a))).ok_or_else(|| {
+            format!(
+                "`{t}`: `{a}` is not a SID_AXIS (a number or a name such as FW_MIX_PITCH, RATE_ROLL)"
+            )
+        }),
+    }
+}
+
 impl FreqRespArgs {
-    /// The pipeline's options.
-    pub fn options(&self) -> FreqRespOptions {
-        FreqRespOptions {
-            inputs: self.inputs.clone(),
+    /// The pipeline's options, with the time windows and the SYSID excitation resolved
+    /// (`sysid` windows read the log's sweeps; the default input follows them).
+    ///
+    /// # Errors
+    /// `sysid` beside time windows or twice, on a log that is not DataFlash, a log without a
+    /// sweep (on the axis), the reader's errors, sweeps on several axes without `--input`.
+    pub fn options(&self, mapping: &Mapping) -> anyhow::Result<FreqRespOptions> {
+        let (windows, excitation) = self.resolve_windows()?;
+        let mut inputs = self.inputs.clone();
+        if let (true, Some(e)) = (inputs.is_empty(), &excitation) {
+            inputs.push(default_input(&e.sweeps, mapping)?);
+        }
+        Ok(FreqRespOptions {
+            inputs,
             outputs: self.outputs.clone(),
-            windows: self.windows.clone(),
+            windows,
+            excitation,
             spectral: SpectralOptions {
                 window_lengths_s: self.windows_s.clone(),
                 overlap: self.overlap,
@@ -86,7 +132,40 @@ impl FreqRespArgs {
             },
             fits: self.fits.clone(),
             fit: FitOptions { min_coherence: self.min_coherence, ..FitOptions::default() },
+        })
+    }
+
+    /// The time windows and, with `--window sysid`, the chosen sweeps and the injected
+    /// waveform.
+    fn resolve_windows(&self) -> anyhow::Result<(Vec<TimeWindow>, Option<Excitation>)> {
+        let spans: Vec<TimeWindow> = self
+            .windows
+            .iter()
+            .filter_map(|w| if let WindowArg::Span(s) = w { Some(*s) } else { None })
+            .collect();
+        let sysid: Vec<Option<&Axis>> = self
+            .windows
+            .iter()
+            .filter_map(|w| if let WindowArg::Sysid(a) = w { Some(*a) } else { None })
+            .collect();
+        let axis = match (sysid.as_slice(), spans.is_empty()) {
+            ([], _) => return Ok((spans, None)),
+            ([a], true) => *a,
+            _ => anyhow::bail!(
+                "option `--window`: give `sysid[:AXIS]` once, and not beside START:END windows"
+            ),
+        };
+        let path = Path::new(&self.data);
+        let format = self.format.or_else(|| LogFormat::from_extension(path));
+        if format != Some(LogFormat::Dataflash) {
+            anyhow::bail!(
+                "option `--window`: `sysid` reads an ArduPilot DataFlash log's SYSID sweeps (SIDS, SIDD); {} is not one (PX4 logs no sweep setup message: give the windows as START:END, section Finding the excitation of docs/frequency-response.md)",
+                self.data
+            );
         }
+        let excitation = read_sysid(path)?;
+        let (sweeps, windows) = choose_sweeps(&excitation, axis, &self.data)?;
+        Ok((windows, Some(Excitation { sweeps, ..excitation })))
     }
 }
 
@@ -97,11 +176,13 @@ impl FreqRespArgs {
 /// spec, an unwritable output.
 pub fn execute(args: FreqRespArgs) -> anyhow::Result<()> {
     let mapping = Mapping::from_path(&args.map)?;
+    // The options first: a `--window sysid` on a log that cannot have sweeps is named as such.
+    let options = args.options(&mapping)?;
     let (reader, notes) = open_log_with_notes(&args.data, args.format, &mapping)?;
     for n in &notes {
         eprintln!("note: {n}");
     }
-    let outcome = freqresp(reader, &args.options())?;
+    let outcome = freqresp(reader, &options)?;
     super::print_stdout(&render(&outcome))?;
     if let Some(dir) = &args.out {
         let inputs = [Path::new(&args.data), args.map.as_path()];
@@ -173,6 +254,21 @@ fn render(o: &FreqRespOutcome) -> String {
         o.window_lengths_s.iter().map(|w| format!("{w:.2}")).collect::<Vec<_>>().join(", "),
         o.overlap
     );
+    for s in &o.sweeps {
+        let _ = writeln!(
+            t,
+            "sweep {} ({}): {}–{} Hz, magnitude {} {}, {:.3}–{:.3} s ({} SIDD samples)",
+            s.axis_name,
+            s.axis,
+            s.band_hz.0,
+            s.band_hz.1,
+            s.magnitude,
+            s.injected_unit,
+            s.span_s.0,
+            s.span_s.1,
+            s.sidd_samples
+        );
+    }
     for p in &o.pairs {
         let good: Vec<f64> = p
             .frequency_hz

@@ -233,9 +233,12 @@ def fit(
     also: Optional[Sequence[PathLike]] = None,
     select: str = "swr",
     candidates: Optional[Sequence[str]] = None,
+    band_hz: Optional[tuple[float, float]] = None,
 ) -> dict[str, Any]:
-    """Fits a whole record by batch output error (``"oe"``) or the filter-error method
-    (``"fem"``: output error with process noise on the air-data states, for turbulent records).
+    """Fits a whole record by batch output error (``"oe"``), the filter-error method
+    (``"fem"``: output error with process noise on the air-data states, for turbulent records)
+    or frequency-domain output error (``"fdoe"``: the model linearised about each manoeuvre's
+    mean condition, fitted to the record's Fourier transforms over ``band_hz``; docs/fdoe.md).
 
     Exactly ``aeroident replay DATA --map MAPPING --estimator oe|fem [--model M]
     [--initial-states S] [--validate-on V]``: the same reader (CSV, ``.asc``, ``.mat``, ULog,
@@ -261,7 +264,8 @@ def fit(
     ``also``: further records of the same aircraft (same mapping), fitted together with
     ``data``, each file a manoeuvre of its own (``--and FILE``). ``model="auto[:scope]"``,
     ``select`` and ``candidates``: the structure chosen from the records first, as in
-    :func:`replay` (``--model auto --select … --candidates …``).
+    :func:`replay` (``--model auto --select … --candidates …``). ``band_hz`` (``fdoe`` only):
+    the band fitted, ``(f_min_hz, f_max_hz)`` (``--band-hz F0:F1``; default 0.1–1.5 Hz).
 
     A fit that does not meet both convergence criteria is returned all the same:
     ``summary["status"]`` is ``"converged"``, ``"converged_in_cost"`` (the cost stopped
@@ -273,11 +277,15 @@ def fit(
     - ``names``: the ``n`` structure parameters (``Cm_alpha`` …);
     - ``values``: (n,) estimates; ``sigma``: (n,) the reported σ (the bootstrap's when asked
       for, else coloured-residual where formed, else Cramér–Rao: docs/uncertainty.md); ``crb_sigma``: (n,) the Cramér–Rao σ;
-    - ``correlation``: (n, n) Cramér–Rao correlation of the estimates;
+      ``fdoe``: NaN where the summary has ``null`` (parameters the linear model cannot see:
+      CD, zero-order, V and product terms);
+    - ``correlation``: (n, n) Cramér–Rao correlation of the estimates (``fdoe``: of its
+      frequency-domain fit, NaN rows and columns for the parameters not estimated);
     - ``outputs``: the ``m`` fitted outputs; ``residuals``: (N, m) measured − model (``fem``:
-      the filter's innovations), the manoeuvres concatenated;
+      the filter's innovations; ``fdoe``: of the time-domain simulation at its estimates), the
+      manoeuvres concatenated;
     - ``traces``: per output, ``{"t_s", "measured", "simulated"}`` arrays (NaN between
-      manoeuvres; ``fem``: the model simulated at its estimates);
+      manoeuvres; ``fem``, ``fdoe``: the model simulated at its estimates);
     - ``model``: the model's name; ``notes``: what the reader noted about the record;
     - ``summary``: the CLI's ``summary.json`` as a dict (iterations, identifiability, warnings,
       validation, process noise, estimated initial states, ``structure_selection`` …);
@@ -307,6 +315,7 @@ def fit(
         None if also is None else [os.fspath(p) for p in also],
         select,
         None if candidates is None else list(candidates),
+        None if band_hz is None else (float(band_hz[0]), float(band_hz[1])),
     )
 
 

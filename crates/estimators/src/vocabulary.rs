@@ -391,7 +391,7 @@ impl AlphaKnots {
         }
         let mut k = Self::NONE;
         for (index, &value) in knots_rad.iter().enumerate() {
-            if !(value.abs() <= core::f64::consts::FRAC_PI_2) {
+            if !value.is_finite() || value.abs() > core::f64::consts::FRAC_PI_2 {
                 return Err(KnotError::NotAnAngle { index, value });
             }
             if index > 0 && value <= knots_rad[index - 1] {

@@ -306,12 +306,17 @@ pub fn measured_coefficient(
     check_coefficient(c.name(), y, t_s)
 }
 
-/// The regressor of term `t` at sample `s` ([`crate::vocabulary::Term::value`]), present.
+/// The regressor of term `t` at sample `s` with the structure's α knots `knots`
+/// ([`crate::vocabulary::Term::value`]), present.
 ///
 /// # Errors
 /// [`EstimatorError::NonFiniteInput`] when a channel or constant the term needs is absent.
-pub fn regressor(t: crate::vocabulary::Term, s: &AirDataSample) -> Result<f64, EstimatorError> {
-    t.value(s).ok_or(EstimatorError::NonFiniteInput {
+pub fn regressor(
+    t: crate::vocabulary::Term,
+    s: &AirDataSample,
+    knots: &crate::vocabulary::AlphaKnots,
+) -> Result<f64, EstimatorError> {
+    t.value(s, knots).ok_or(EstimatorError::NonFiniteInput {
         field: "regressor (a term's channel is absent)",
         value: f64::NAN,
         t_s: s.t_s,

@@ -291,7 +291,7 @@ impl StateSet {
             return Err(invalid(
                 "model structure",
                 n,
-                "empty, over capacity, or mixes CX/CZ with CL/CD",
+                "empty, over capacity, mixes CX/CZ with CL/CD, or lacks a spline term's α knot",
             ));
         }
         let any_lon = has(C::CL) || has(C::CD) || has(C::CX) || has(C::CZ) || has(C::Cm);
@@ -369,6 +369,9 @@ pub struct ModelInputs {
     pub thrust_moment_nm: f64,
     /// Air density, kg/m³.
     pub rho_kgpm3: f64,
+    /// Speed of sound of the Mach terms, m/s ([`AirDataSample::speed_of_sound_mps`]; 0 when
+    /// the structure has none).
+    pub a_mps: f64,
     /// Measured specific forces `(ax, ay, az)`, m/s² (0 where absent).
     pub accel_meas: [f64; 3],
     /// Measured `α̇`, rad/s (0 where absent and not needed).
@@ -405,6 +408,7 @@ impl ModelInputs {
         o.thrust_n = l(a.thrust_n, b.thrust_n);
         o.thrust_moment_nm = l(a.thrust_moment_nm, b.thrust_moment_nm);
         o.rho_kgpm3 = l(a.rho_kgpm3, b.rho_kgpm3);
+        o.a_mps = l(a.a_mps, b.a_mps);
         for i in 0..3 {
             o.accel_meas[i] = l(a.accel_meas[i], b.accel_meas[i]);
         }
@@ -447,6 +451,7 @@ struct Needs {
     b: bool,
     v0: bool,
     alphadot: bool,
+    mach: bool,
 }
 
 /// The model's derivatives and predicted specific forces at one point.
@@ -500,6 +505,7 @@ impl FlightModel {
                     Term::Q | Term::AlphaQ => needs.cbar = true,
                     Term::P | Term::R | Term::AlphaP | Term::AlphaR => needs.b = true,
                     Term::V => needs.v0 = true,
+                    Term::Mach | Term::Mach2 => needs.mach = true,
                     Term::Q0 => {
                         needs.cbar = true;
                         needs.v0 = true;
@@ -608,6 +614,14 @@ impl FlightModel {
         let cbar_m = if n.cbar { konst(c.cbar_m, "cbar_m")? } else { 0.0 };
         let b_m = if n.b { konst(c.b_m, "b_m")? } else { 0.0 };
         let v0_mps = if n.v0 { konst(c.v0_mps, "v0_mps")? } else { 0.0 };
+        let a_mps = match n.mach {
+            true => s.speed_of_sound_mps().ok_or(EstimatorError::NonFiniteInput {
+                field: "rho_kgpm3 (outside the standard atmosphere: no speed of sound)",
+                value: rho,
+                t_s,
+            })?,
+            false => 0.0,
+        };
         let mut inertia = [0.0; 4];
         // The longitudinal set keeps the inertial pitch coupling when p, r and the roll/yaw
         // inertias are all known, and neglects it otherwise (a longitudinal record such as the
@@ -647,6 +661,7 @@ impl FlightModel {
             thrust_n,
             thrust_moment_nm: s.thrust_moment_nm.unwrap_or(c.thrust_arm_m * thrust_n),
             rho_kgpm3: rho,
+            a_mps,
             accel_meas,
             alphadot_meas,
             mass_kg,
@@ -698,6 +713,13 @@ impl FlightModel {
         let (sa, ca, cb) = (alpha.sin, alpha.cos, beta.cos);
         let qbar = v * v * (0.5 * u.rho_kgpm3);
         let two_v = v * 2.0;
+        let knots = self.structure.knots();
+        // (α − k)₊ with its exact partial (1 above the knot, 0 below); the structure is
+        // validated, so every spline term has its knot.
+        let spline = |t: Term| match t.knot().and_then(|i| knots.get(i)) {
+            Some(k) if al.re() > k => al - k,
+            _ => zero,
+        };
         // Regressor of each term from the model state (controls from the sample).
         let xi_of = |t: Term| -> T {
             match t {
@@ -721,6 +743,9 @@ impl FlightModel {
                 Term::AlphaR => al * r * u.b_m / two_v,
                 Term::AlphaDa => al * u.da_rad,
                 Term::AlphaDr => al * u.dr_rad,
+                Term::AlphaK1 | Term::AlphaK2 | Term::AlphaK3 | Term::AlphaK4 => spline(t),
+                Term::Mach => v / u.a_mps,
+                Term::Mach2 => v * v / (u.a_mps * u.a_mps),
             }
         };
         // C0_k (without α̇ term) and D_k = ∂C_k/∂(α̇ c̄/2V).

@@ -610,7 +610,7 @@ impl Estimator for Ftr {
         let mut term_values = [0.0; N_TERMS];
         for t in Term::ALL {
             if self.used_terms & (1 << t.index()) != 0 {
-                term_values[t.index()] = regressor(t, s)?;
+                term_values[t.index()] = regressor(t, s, self.structure.knots())?;
             }
         }
         let mut coef_values = [0.0; 8];

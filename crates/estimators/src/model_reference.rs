@@ -89,7 +89,7 @@ use crate::prior::{ParamPrior, Priors};
 use crate::rls::INIT_MIN_SCALED_PIVOT;
 use crate::sample::{AirDataSample, CoefficientValues};
 use crate::smpe::{ParametricModel, SmpeSample};
-use crate::vocabulary::{Coefficient, ModelStructure, N_TERMS, Term};
+use crate::vocabulary::{AlphaKnots, Coefficient, ModelStructure, N_TERMS, Term};
 use nalgebra::{SMatrix, SVector};
 
 mod laws;
@@ -252,6 +252,7 @@ struct Channel<L> {
     first: usize,
     n: usize,
     terms: [Term; N_TERMS],
+    knots: AlphaKnots,
     law: L,
     started: bool,
     z_est: f64,
@@ -338,7 +339,7 @@ impl<L: CoefficientLaw> Channel<L> {
         let c_m = measured[self.coefficient.index()].ok_or(missing(self.coefficient.name()))?;
         let mut phi = [0.0; N_TERMS];
         for (x, t) in phi.iter_mut().zip(&self.terms[..self.n]) {
-            *x = t.value(s).ok_or(missing(term_channel(*t, s)))?;
+            *x = t.value(s, &self.knots).ok_or(missing(term_channel(*t, s)))?;
         }
         Ok(RateInput { rate, c_m, phi, lambda_per_s })
     }
@@ -359,6 +360,7 @@ fn term_channel(t: Term, s: &AirDataSample) -> &'static str {
         Term::Da => "da_rad",
         Term::Dr => "dr_rad",
         Term::V => "v0_mps",
+        Term::Mach | Term::Mach2 => "rho_kgpm3 (density outside the standard atmosphere)",
         _ => "regressor",
     }
 }
@@ -444,6 +446,7 @@ impl<L: CoefficientLaw> ModelReference<L> {
                 first,
                 n,
                 terms,
+                knots: *structure.knots(),
                 law: L::new(&spec, &config.law)?,
                 started: false,
                 z_est: 0.0,

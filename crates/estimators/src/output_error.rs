@@ -722,7 +722,7 @@ fn equation_error_start(structure: &ModelStructure, manoeuvres: &[&[AirDataSampl
         let mut rhs: Vec<f64> = Vec::new();
         for s in manoeuvres.iter().flat_map(|m| m.iter()) {
             let Some(y) = s.measured_coefficients()[c.index()] else { continue };
-            let xi: Option<Vec<f64>> = terms.iter().map(|t| t.value(s)).collect();
+            let xi: Option<Vec<f64>> = terms.iter().map(|t| structure.value(*t, s)).collect();
             if let Some(xi) = xi {
                 rows.extend(xi);
                 rhs.push(y);

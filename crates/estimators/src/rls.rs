@@ -65,7 +65,7 @@ use crate::estimator::{
 };
 use crate::linalg::{Square, cholesky, cholesky_inverse, cholesky_solve, well_conditioned};
 use crate::sample::AirDataSample;
-use crate::vocabulary::{Coefficient, ModelStructure, N_TERMS, Term};
+use crate::vocabulary::{AlphaKnots, Coefficient, ModelStructure, N_TERMS, Term};
 
 /// Configuration of [`Rls`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -96,6 +96,8 @@ pub(crate) struct Regression {
     /// Index of the first parameter in the structure's order.
     pub(crate) first: usize,
     pub(crate) terms: [Term; N_TERMS],
+    /// The structure's α knots (the spline terms' regressors).
+    pub(crate) knots: AlphaKnots,
 }
 
 impl Regression {
@@ -106,7 +108,13 @@ impl Regression {
             terms[k] = t;
             n = k + 1;
         }
-        Self { coefficient: c, n, first: structure.first_index(c), terms }
+        Self {
+            coefficient: c,
+            n,
+            first: structure.first_index(c),
+            terms,
+            knots: *structure.knots(),
+        }
     }
 
     /// The regressor row `φ` of sample `s` (leading `n` entries).
@@ -116,7 +124,7 @@ impl Regression {
     pub(crate) fn regressors(&self, s: &AirDataSample) -> Result<[f64; N_TERMS], EstimatorError> {
         let mut phi = [0.0; N_TERMS];
         for k in 0..self.n {
-            phi[k] = regressor(self.terms[k], s)?;
+            phi[k] = regressor(self.terms[k], s, &self.knots)?;
         }
         Ok(phi)
     }

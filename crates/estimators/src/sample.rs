@@ -218,6 +218,23 @@ impl AirDataSample {
         self.rho_kgpm3.unwrap_or(2.0 * self.qbar_pa / (self.vt_mps * self.vt_mps))
     }
 
+    /// The speed of sound, m/s, at the standard temperature of the density altitude of
+    /// [`AirDataSample::rho`] ([`aeroident_physics::isa::temperature_of_density_k`]); `None`
+    /// when that density is outside the standard atmosphere's −1 … 20 km.
+    ///
+    /// The sample has no static temperature: this is the standard day's. On a day `ΔT` off
+    /// standard the speed of sound is off by about `−0.62 ΔT/T` (−3.2 % at ISA + 15 K), and a
+    /// Mach number formed from it by `+0.62 ΔT/T`.
+    pub fn speed_of_sound_mps(&self) -> Option<f64> {
+        use aeroident_physics::isa;
+        isa::temperature_of_density_k(self.rho()).map(isa::speed_of_sound_mps)
+    }
+
+    /// Mach number `V / a` with [`AirDataSample::speed_of_sound_mps`].
+    pub fn mach(&self) -> Option<f64> {
+        Some(self.vt_mps / self.speed_of_sound_mps()?)
+    }
+
     /// The measured field named `field` (one of [`MEASURED_FIELDS`], the SI names the
     /// estimators use in their errors), `None` when the sample lacks it or the name is not one
     /// of them.

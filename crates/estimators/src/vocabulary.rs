@@ -28,6 +28,15 @@
 //! | q̂0 | `q0` | q c̄ / (2 V0): the pitch rate normalised with the reference speed, as Jategaonkar 2015 eq. 5.86 (HFB-320 test case 4) writes `Cm_q` |
 //! | α·p̂, α·q̂, α·r̂ | `alpha_p`, `alpha_q`, `alpha_r` | α p̂, α q̂, α r̂ (rad) |
 //! | α·δa, α·δr | `alpha_da`, `alpha_dr` | α δa, α δr, rad² |
+//! | (α − k_i)₊ | `alpha_k1` … `alpha_k4` | max(α − k_i, 0), rad: the structure's i-th α knot [`AlphaKnots`] |
+//! | M | `mach` | V / a, a the speed of sound at the density altitude ([`AirDataSample::mach`]) |
+//! | M² | `mach2` | (V / a)² |
+//!
+//! The α splines are first-degree truncated power splines (Klein & Morelli 2006 §5.4, SIDPAC
+//! `splgen`): with `CL_alpha_k1` in a model, the lift slope is `CL_alpha` below the knot `k1`
+//! and `CL_alpha + CL_alpha_k1` above it, and the coefficient is continuous across the knot.
+//! The knots belong to the structure ([`ModelStructure::with_knots`]), not to the sample, so
+//! every estimator that holds the structure forms the same regressors.
 //!
 //! The α products are the first-order α-dependence of a derivative (Klein & Morelli 2006 §5.4:
 //! a damping or control derivative that varies with α, as the F-16's tables do, Stevens & Lewis
@@ -98,7 +107,7 @@ impl Coefficient {
 const COEFFICIENT_NAMES: [&str; 8] = ["CX", "CY", "CZ", "CL", "CD", "Cl", "Cm", "Cn"];
 
 /// Number of terms in the vocabulary.
-pub const N_TERMS: usize = 20;
+pub const N_TERMS: usize = 26;
 
 /// One regressor of a linear coefficient model (table in the module doc).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -144,6 +153,19 @@ pub enum Term {
     AlphaDa,
     /// `α δr`, rad².
     AlphaDr,
+    /// `(α − k1)₊ = max(α − k1, 0)`, rad: the first α knot of the structure ([`AlphaKnots`]).
+    AlphaK1,
+    /// `(α − k2)₊`, rad.
+    AlphaK2,
+    /// `(α − k3)₊`, rad.
+    AlphaK3,
+    /// `(α − k4)₊`, rad.
+    AlphaK4,
+    /// Mach number `V / a`, `a` the speed of sound at the density altitude
+    /// ([`AirDataSample::mach`]).
+    Mach,
+    /// `M²`.
+    Mach2,
 }
 
 const TERM_NAMES: [&str; N_TERMS] = [
@@ -167,6 +189,12 @@ const TERM_NAMES: [&str; N_TERMS] = [
     "alpha_r",
     "alpha_da",
     "alpha_dr",
+    "alpha_k1",
+    "alpha_k2",
+    "alpha_k3",
+    "alpha_k4",
+    "mach",
+    "mach2",
 ];
 
 macro_rules! param_names {
@@ -177,7 +205,9 @@ macro_rules! param_names {
             concat!($c, "_da"), concat!($c, "_dr"), concat!($c, "_V"), concat!($c, "_alpha2"),
             concat!($c, "_alpha_de"), concat!($c, "_alpha_beta"), concat!($c, "_q0"),
             concat!($c, "_alpha_p"), concat!($c, "_alpha_q"), concat!($c, "_alpha_r"),
-            concat!($c, "_alpha_da"), concat!($c, "_alpha_dr"),
+            concat!($c, "_alpha_da"), concat!($c, "_alpha_dr"), concat!($c, "_alpha_k1"),
+            concat!($c, "_alpha_k2"), concat!($c, "_alpha_k3"), concat!($c, "_alpha_k4"),
+            concat!($c, "_mach"), concat!($c, "_mach2"),
         ]),*]
     };
 }
@@ -209,6 +239,12 @@ impl Term {
         Term::AlphaR,
         Term::AlphaDa,
         Term::AlphaDr,
+        Term::AlphaK1,
+        Term::AlphaK2,
+        Term::AlphaK3,
+        Term::AlphaK4,
+        Term::Mach,
+        Term::Mach2,
     ];
 
     /// Index in [`Term::ALL`].
@@ -244,9 +280,26 @@ impl Term {
         Some((Alpha, other))
     }
 
-    /// The regressor value `ξ` of this term at sample `s` (module doc), `None` when a channel
-    /// or constant it needs is absent (e.g. `p̂` without `p` or the span).
-    pub fn value(self, s: &AirDataSample) -> Option<f64> {
+    /// The knot number (0-based, in [`AlphaKnots`]) of an α spline term, `None` for the others.
+    pub fn knot(self) -> Option<usize> {
+        match self {
+            Term::AlphaK1 => Some(0),
+            Term::AlphaK2 => Some(1),
+            Term::AlphaK3 => Some(2),
+            Term::AlphaK4 => Some(3),
+            _ => None,
+        }
+    }
+
+    /// The α spline term of knot `i` (0-based), `None` past [`MAX_KNOTS`].
+    pub fn spline(i: usize) -> Option<Term> {
+        [Term::AlphaK1, Term::AlphaK2, Term::AlphaK3, Term::AlphaK4].get(i).copied()
+    }
+
+    /// The regressor value `ξ` of this term at sample `s` (module doc), with the α knots of the
+    /// structure; `None` when a channel, constant or knot it needs is absent (e.g. `p̂` without
+    /// `p` or the span, `alpha_k2` with one knot).
+    pub fn value(self, s: &AirDataSample, knots: &AlphaKnots) -> Option<f64> {
         let two_v = 2.0 * s.vt_mps;
         let c = &s.constants;
         Some(match self {
@@ -262,6 +315,11 @@ impl Term {
             Term::Dr => s.dr_rad?,
             Term::V => s.vt_mps / c.v0_mps?,
             Term::Q0 => s.q_rad_s? * c.cbar_m? / (2.0 * c.v0_mps?),
+            Term::AlphaK1 | Term::AlphaK2 | Term::AlphaK3 | Term::AlphaK4 => {
+                spline(s.alpha_rad, knots.get(self.knot()?)?)
+            }
+            Term::Mach => s.mach()?,
+            Term::Mach2 => s.mach()? * s.mach()?,
             Term::Alpha2
             | Term::AlphaDe
             | Term::AlphaBeta
@@ -271,9 +329,98 @@ impl Term {
             | Term::AlphaDa
             | Term::AlphaDr => {
                 let (a, b) = self.factors()?;
-                a.value(s)? * b.value(s)?
+                a.value(s, knots)? * b.value(s, knots)?
             }
         })
+    }
+}
+
+/// `(α − k)₊ = max(α − k, 0)`, rad.
+pub fn spline(alpha_rad: f64, knot_rad: f64) -> f64 {
+    if alpha_rad > knot_rad { alpha_rad - knot_rad } else { 0.0 }
+}
+
+/// Most α knots one structure holds (one [`Term`] per knot: `alpha_k1` … `alpha_k4`).
+pub const MAX_KNOTS: usize = 4;
+
+/// The α knots of a structure's spline terms, rad, strictly ascending, finite, within ±90°.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct AlphaKnots {
+    rad: [f64; MAX_KNOTS],
+    n: usize,
+}
+
+/// Why a list of α knots was refused.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum KnotError {
+    /// More than [`MAX_KNOTS`].
+    #[error("{0} α knots; at most {MAX_KNOTS} are supported")]
+    TooMany(usize),
+    /// A knot that is not finite or beyond ±90°.
+    #[error("α knot {index} ({value} rad) is not a finite angle within ±90°")]
+    NotAnAngle {
+        /// 0-based position in the list.
+        index: usize,
+        /// The value, rad.
+        value: f64,
+    },
+    /// A knot not above the one before it (unsorted or repeated).
+    #[error(
+        "α knot {index} ({value} rad) is not above the one before it: list the knots ascending, each once"
+    )]
+    NotAscending {
+        /// 0-based position in the list.
+        index: usize,
+        /// The value, rad.
+        value: f64,
+    },
+}
+
+impl AlphaKnots {
+    /// No knots.
+    pub const NONE: AlphaKnots = AlphaKnots { rad: [0.0; MAX_KNOTS], n: 0 };
+
+    /// The knots `knots_rad`, rad.
+    ///
+    /// # Errors
+    /// [`KnotError`]: more than [`MAX_KNOTS`], a knot not finite or beyond ±90°, or a list not
+    /// strictly ascending.
+    pub fn new(knots_rad: &[f64]) -> Result<Self, KnotError> {
+        if knots_rad.len() > MAX_KNOTS {
+            return Err(KnotError::TooMany(knots_rad.len()));
+        }
+        let mut k = Self::NONE;
+        for (index, &value) in knots_rad.iter().enumerate() {
+            if !value.is_finite() || value.abs() > core::f64::consts::FRAC_PI_2 {
+                return Err(KnotError::NotAnAngle { index, value });
+            }
+            if index > 0 && value <= knots_rad[index - 1] {
+                return Err(KnotError::NotAscending { index, value });
+            }
+            k.rad[index] = value;
+        }
+        k.n = knots_rad.len();
+        Ok(k)
+    }
+
+    /// The knots, rad, ascending.
+    pub fn as_slice(&self) -> &[f64] {
+        &self.rad[..self.n]
+    }
+
+    /// Knot `i` (0-based), rad.
+    pub fn get(&self, i: usize) -> Option<f64> {
+        self.as_slice().get(i).copied()
+    }
+
+    /// Number of knots.
+    pub fn len(&self) -> usize {
+        self.n
+    }
+
+    /// Whether there is no knot.
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
     }
 }
 
@@ -318,19 +465,42 @@ pub enum StructureError {
         "model structure declares `{0}` and `{1}`: choose body axes (CX, CZ) or stability axes (CL, CD) for the longitudinal forces"
     )]
     MixedAxes(&'static str, &'static str),
+    /// A spline term whose knot the structure does not have.
+    #[error(
+        "model structure has the term `{0}` but only {1} α knot(s): give one knot per spline term"
+    )]
+    MissingKnot(&'static str, usize),
 }
 
 /// A model structure: for each coefficient the set of its terms (a bit set over
-/// [`Term::ALL`]). Copy, fixed size, `no_std`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// [`Term::ALL`]), and the α knots of its spline terms. Copy, fixed size, `no_std`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ModelStructure {
     terms: [u32; 8],
+    knots: AlphaKnots,
 }
 
 impl ModelStructure {
     /// The empty structure (build one with [`ModelStructure::with`]).
     pub const fn empty() -> Self {
-        Self { terms: [0; 8] }
+        Self { terms: [0; 8], knots: AlphaKnots::NONE }
+    }
+
+    /// This structure with the α knots `knots` (replacing any it had): knot `i` is the one of
+    /// spline term [`Term::spline`]`(i)`.
+    pub fn with_knots(mut self, knots: AlphaKnots) -> Self {
+        self.knots = knots;
+        self
+    }
+
+    /// The α knots of the spline terms.
+    pub fn knots(&self) -> &AlphaKnots {
+        &self.knots
+    }
+
+    /// The regressor of term `t` at sample `s` with this structure's knots ([`Term::value`]).
+    pub fn value(&self, t: Term, s: &AirDataSample) -> Option<f64> {
+        t.value(s, &self.knots)
     }
 
     /// This structure with `coefficient` explained by `terms` (added to any it had).
@@ -375,6 +545,9 @@ impl ModelStructure {
                     return Err(StructureError::MixedAxes(body.name(), stab.name()));
                 }
             }
+        }
+        if let Some(p) = self.params().find(|p| p.term.knot().is_some_and(|i| i >= self.knots.n)) {
+            return Err(StructureError::MissingKnot(p.term.name(), self.knots.n));
         }
         Ok(self)
     }
@@ -429,7 +602,7 @@ impl ModelStructure {
     /// (its channels and constants are present). `measured` are the sample's measured
     /// coefficients, [`AirDataSample::measured_coefficients`].
     pub fn supported_by(&self, s: &AirDataSample, measured: &[Option<f64>; 8]) -> bool {
-        self.params().all(|p| p.term.value(s).is_some())
+        self.params().all(|p| self.value(p.term, s).is_some())
             && self.coefficients().all(|c| measured[c.index()].is_some())
     }
 
@@ -488,7 +661,7 @@ pub fn coefficient_value(
     let first = structure.first_index(c);
     let mut sum = 0.0;
     for (k, t) in structure.terms_of(c).enumerate() {
-        sum += theta[first + k] * t.value(s)?;
+        sum += theta[first + k] * structure.value(t, s)?;
     }
     Some(sum)
 }
@@ -561,7 +734,7 @@ mod tests {
             },
             ..Default::default()
         };
-        let v = |t: Term| t.value(&s).unwrap();
+        let v = |t: Term| t.value(&s, &AlphaKnots::NONE).unwrap();
         assert_eq!(v(Term::Bias), 1.0);
         assert!((v(Term::P) - 0.4 * 10.0 / 200.0).abs() < 1e-15);
         assert!((v(Term::Q) - 0.05 * 3.0 / 200.0).abs() < 1e-15);
@@ -577,7 +750,8 @@ mod tests {
         assert!((v(Term::AlphaR) + 0.1 * 0.1 * 10.0 / 200.0).abs() < 1e-15);
         assert_eq!(Param::from_name("Cl_alpha_p"), Some(Param::new(Coefficient::Cl, Term::AlphaP)));
         assert_eq!(Param::new(Coefficient::Cn, Term::AlphaDr).name(), "Cn_alpha_dr");
-        assert!(Term::Da.value(&s).is_none() && Term::AlphaDa.value(&s).is_none());
+        let none = AlphaKnots::NONE;
+        assert!(Term::Da.value(&s, &none).is_none() && Term::AlphaDa.value(&s, &none).is_none());
         // Terms past the 16th still form structures (the bit set is 32 wide).
         let wide = ModelStructure::empty().with(Coefficient::Cl, &Term::ALL);
         assert_eq!(wide.terms_of(Coefficient::Cl).count(), N_TERMS);
@@ -585,5 +759,57 @@ mod tests {
         let st = ModelStructure::empty().with(Coefficient::Cm, &[Term::Bias, Term::Alpha, Term::Q]);
         let cm = coefficient_value(&st, &[0.1, -1.0, -20.0], Coefficient::Cm, &s).unwrap();
         assert!((cm - (0.1 - 0.1 - 20.0 * 0.05 * 3.0 / 200.0)).abs() < 1e-15);
+    }
+
+    /// `(α − k)₊` by hand on both sides of a knot, a missing knot, and Mach at the standard
+    /// sea-level density (a = 340.294 m/s, ICAO Doc 7488).
+    #[test]
+    fn analytic_spline_and_mach_values() {
+        let s = AirDataSample {
+            vt_mps: 170.147,
+            alpha_rad: 0.2,
+            qbar_pa: 0.5 * 1.225 * 170.147 * 170.147,
+            ..Default::default()
+        };
+        let k = AlphaKnots::new(&[0.05, 0.2, 0.25]).unwrap();
+        assert!((Term::AlphaK1.value(&s, &k).unwrap() - 0.15).abs() < 1e-15);
+        assert_eq!(Term::AlphaK2.value(&s, &k), Some(0.0));
+        assert_eq!(Term::AlphaK3.value(&s, &k), Some(0.0));
+        assert_eq!(Term::AlphaK4.value(&s, &k), None);
+        assert_eq!(Param::new(Coefficient::CL, Term::AlphaK2).name(), "CL_alpha_k2");
+        assert_eq!(Term::spline(3), Some(Term::AlphaK4));
+        assert_eq!(Term::spline(4), None);
+        let m = Term::Mach.value(&s, &k).unwrap();
+        assert!((m - 0.5).abs() < 1e-4, "{m}");
+        assert!((Term::Mach2.value(&s, &k).unwrap() - m * m).abs() < 1e-15);
+        let st = ModelStructure::longitudinal().with(Coefficient::CL, &[Term::AlphaK2]);
+        assert_eq!(st.validated(), Err(StructureError::MissingKnot("alpha_k2", 0)));
+        let one = AlphaKnots::new(&[0.1]).unwrap();
+        assert_eq!(st.with_knots(one).validated(), Err(StructureError::MissingKnot("alpha_k2", 1)));
+        assert!(st.with_knots(k).validated().is_ok());
+    }
+
+    /// Knots are refused unsorted, repeated, not finite, beyond ±90° or more than four.
+    #[test]
+    fn bad_knots_are_refused() {
+        assert_eq!(
+            AlphaKnots::new(&[0.1, 0.05]),
+            Err(KnotError::NotAscending { index: 1, value: 0.05 })
+        );
+        assert_eq!(
+            AlphaKnots::new(&[0.1, 0.1]),
+            Err(KnotError::NotAscending { index: 1, value: 0.1 })
+        );
+        assert!(matches!(
+            AlphaKnots::new(&[f64::NAN]),
+            Err(KnotError::NotAnAngle { index: 0, .. })
+        ));
+        assert!(matches!(
+            AlphaKnots::new(&[0.0, f64::INFINITY]),
+            Err(KnotError::NotAnAngle { index: 1, .. })
+        ));
+        assert!(matches!(AlphaKnots::new(&[2.0]), Err(KnotError::NotAnAngle { index: 0, .. })));
+        assert_eq!(AlphaKnots::new(&[0.0, 0.1, 0.2, 0.3, 0.4]), Err(KnotError::TooMany(5)));
+        assert_eq!(AlphaKnots::new(&[-0.1, 0.3]).unwrap().as_slice(), &[-0.1, 0.3]);
     }
 }

@@ -87,8 +87,10 @@ fn corrected_smpe_equals_the_batch_regularised_least_squares() {
                     if let Some(prev) = last {
                         let k = state_rate(c, s).unwrap().k;
                         let w = kappa * (s.t_s - prev.t_s) * k * k;
-                        let phi =
-                            DVector::from_iterator(n, terms.iter().map(|t| t.value(s).unwrap()));
+                        let phi = DVector::from_iterator(
+                            n,
+                            terms.iter().map(|t| st.value(*t, s).unwrap()),
+                        );
                         let y = s.measured_coefficients()[c.index()].unwrap();
                         a += &phi * phi.transpose() * w;
                         b += &phi * (w * y);

@@ -9,6 +9,9 @@
 //! Cm = ["0", "alpha", "q", "alphadot", "de"]
 //! CL = ["0", "alpha", "q", "de"]
 //!
+//! [knots]                             # the α knots of the spline terms alpha_k1 … alpha_k4
+//! alpha_deg = [8.0]                   # or alpha_rad = [...]; ascending, at most four
+//!
 //! [prior.Cm_alpha]                    # optional, per parameter (units of the parameter)
 //! value = -0.5
 //! sigma = 2.0
@@ -20,7 +23,15 @@
 //!
 //! - Coefficients: `CX CY CZ CL CD Cl Cm Cn` (case-sensitive: `CL` lift, `Cl` rolling moment).
 //! - Terms: `0` (bias), `alpha`, `beta`, `p`, `q`, `r` (p̂ = pb/2V, q̂ = qc̄/2V, r̂ = rb/2V),
-//!   `alphadot` (α̇c̄/2V), `de`, `da`, `dr`, `V` (V/V0), `alpha2`, `alpha_de`, `alpha_beta`.
+//!   `alphadot` (α̇c̄/2V), `de`, `da`, `dr`, `V` (V/V0), `alpha2`, `alpha_de`, `alpha_beta`,
+//!   `q0`, `alpha_p`, `alpha_q`, `alpha_r`, `alpha_da`, `alpha_dr`, the α splines `alpha_k1` …
+//!   `alpha_k4` (`(α − k_i)₊`, knot `k_i` from `[knots]`) and `mach`, `mach2` (Mach number at
+//!   the standard temperature of the density altitude, [`AirDataSample::mach`]).
+//! - Knots: `[knots]` with `alpha_deg` or `alpha_rad` (not both), finite, strictly ascending,
+//!   within ±90°, at most four; the i-th is the knot of `alpha_k<i>`. A replay refuses knots
+//!   outside the record's α range (their spline terms could not be identified).
+//!
+//! [`AirDataSample::mach`]: aeroident_estimators::AirDataSample::mach
 //! - Priors not given are the generic weak priors of [`Priors::generic`]; a prior is used only
 //!   by estimators that start from one (Kalman filters, sliding-mode and gradient estimators),
 //!   RLS ignores it.
@@ -32,7 +43,9 @@
 //! and an unknown coefficient or term lists the valid names.
 
 use crate::mapping::line_of;
-use aeroident_estimators::vocabulary::{Coefficient, StructureError, Term};
+use aeroident_estimators::vocabulary::{
+    AlphaKnots, Coefficient, KnotError, MAX_KNOTS, StructureError, Term,
+};
 use aeroident_estimators::{ModelStructure, Param, ParamPrior, Priors};
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -161,6 +174,18 @@ pub enum ModelFileError {
         /// The coefficient.
         coefficient: String,
     },
+    /// A `[knots]` list that is not a valid list of α knots.
+    #[error("{file}: line {line}: knots `{key}`: {reason}")]
+    BadKnots {
+        /// File path.
+        file: String,
+        /// Line of the list.
+        line: usize,
+        /// The key (`alpha_deg`, `alpha_rad`).
+        key: &'static str,
+        /// Why.
+        reason: String,
+    },
     /// The declared structure is not valid.
     #[error("{file}: {source}")]
     Structure {
@@ -180,6 +205,14 @@ struct ModelFile {
     prior: BTreeMap<Spanned<String>, PriorEntry>,
     #[serde(default)]
     reference: BTreeMap<Spanned<String>, ReferenceEntry>,
+    knots: Option<Spanned<KnotsEntry>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct KnotsEntry {
+    alpha_deg: Option<Spanned<Vec<f64>>>,
+    alpha_rad: Option<Spanned<Vec<f64>>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -322,6 +355,7 @@ impl ModelSpec {
             }
         }
         let structure = structure
+            .with_knots(knots_of(raw.knots.as_ref(), text, file)?)
             .validated()
             .map_err(|source| ModelFileError::Structure { file: file.to_string(), source })?;
         let mut priors = Priors::generic(&structure);
@@ -385,6 +419,59 @@ impl ModelSpec {
     }
 }
 
+/// The α knots of a `[knots]` table, rad (none without one).
+fn knots_of(
+    entry: Option<&Spanned<KnotsEntry>>,
+    text: &str,
+    file: &str,
+) -> Result<AlphaKnots, ModelFileError> {
+    let Some(entry) = entry else { return Ok(AlphaKnots::NONE) };
+    let bad = |key, at: usize, reason: String| ModelFileError::BadKnots {
+        file: file.to_string(),
+        line: line_of(text, at),
+        key,
+        reason,
+    };
+    let k = entry.get_ref();
+    let (key, list, scale) = match (&k.alpha_deg, &k.alpha_rad) {
+        (Some(d), None) => ("alpha_deg", d, 1f64.to_radians()),
+        (None, Some(r)) => ("alpha_rad", r, 1.0),
+        (Some(d), Some(_)) => {
+            return Err(bad(
+                "alpha_deg",
+                d.span().start,
+                "give alpha_deg or alpha_rad, not both".into(),
+            ));
+        }
+        (None, None) => {
+            return Err(bad(
+                "alpha_deg",
+                entry.span().start,
+                "write alpha_deg = [..] or alpha_rad = [..]".into(),
+            ));
+        }
+    };
+    let rad: Vec<f64> = list.get_ref().iter().map(|v| v * scale).collect();
+    AlphaKnots::new(&rad).map_err(|e| {
+        let reason = match e {
+            KnotError::TooMany(n) => format!("{n} knots; at most {MAX_KNOTS}"),
+            KnotError::NotAnAngle { index, .. } => format!(
+                "knot {} ({}) is not a finite angle within ±90°",
+                index + 1,
+                list.get_ref()[index]
+            ),
+            KnotError::NotAscending { index, .. } => format!(
+                "knot {} ({}) is not above knot {} ({}): list the knots ascending, each once",
+                index + 1,
+                list.get_ref()[index],
+                index,
+                list.get_ref()[index - 1]
+            ),
+        };
+        bad(key, list.span().start, reason)
+    })
+}
+
 impl ModelSpec {
     /// The model as a model file ([`ModelSpec::from_toml_str`] reads it back to the same
     /// structure, priors and references): the description, the coefficients' terms in
@@ -393,6 +480,7 @@ impl ModelSpec {
         use std::fmt::Write as _;
         let quoted = |s: &str| toml::Value::String(s.to_string()).to_string();
         let mut out = format!("description = {}\n\n[coefficients]\n", quoted(&self.description));
+        let knots = self.structure.knots().as_slice();
         for c in Coefficient::ALL {
             let terms: Vec<String> = self
                 .structure
@@ -403,6 +491,17 @@ impl ModelSpec {
             if !terms.is_empty() {
                 let _ = writeln!(out, "{} = [{}]", c.name(), terms.join(", "));
             }
+        }
+        if !knots.is_empty() {
+            // Radians, so that the file reads back the same bits; the degrees as a comment.
+            let rad: Vec<String> = knots.iter().map(|k| format!("{k:?}")).collect();
+            let deg: Vec<String> = knots.iter().map(|k| format!("{:.3}", k.to_degrees())).collect();
+            let _ = write!(
+                out,
+                "\n[knots]\nalpha_rad = [{}]  # deg: {}\n",
+                rad.join(", "),
+                deg.join(", ")
+            );
         }
         let generic = Priors::generic(&self.structure);
         for (i, p) in self.structure.params().enumerate() {
@@ -579,5 +678,56 @@ sigma = 1.5
     fn errors_empty_coefficient_names_file_line_and_coefficient() {
         let e = err("description = \"x\"\n[coefficients]\nCL = []\nCD = [\"0\"]\nCm = [\"q\"]\n");
         assert!(e.starts_with("m.toml: line 3: coefficient `CL` has no terms"), "{e}");
+    }
+
+    /// Knots in degrees read as radians; the model file written back reads to the same
+    /// structure, knots bit for bit.
+    #[test]
+    fn knots_round_trip_through_the_model_file() {
+        let text = "description = \"lift break\"\n[coefficients]\nCL = [\"0\", \"alpha\", \"alpha_k1\", \"alpha_k2\", \"mach\"]\nCD = [\"0\", \"mach2\"]\nCm = [\"0\", \"alpha\", \"alpha_k2\"]\n[knots]\nalpha_deg = [8.0, 12.5]\n";
+        let m = ModelSpec::from_toml_str(text, "m.toml").unwrap();
+        assert_eq!(m.structure.knots().as_slice(), &[8f64.to_radians(), 12.5f64.to_radians()]);
+        assert_eq!(m.structure.names().nth(2), Some("CL_alpha_k1"));
+        let back = ModelSpec::from_toml_str(&m.to_toml(), "back.toml").unwrap();
+        assert_eq!(back.structure, m.structure);
+        assert_eq!(back.structure.knots().as_slice(), m.structure.knots().as_slice());
+        let rad = "[coefficients]\nCL = [\"alpha_k1\"]\n[knots]\nalpha_rad = [0.1]\n";
+        assert_eq!(err_free(rad).structure.knots().as_slice(), &[0.1]);
+    }
+
+    fn err_free(text: &str) -> ModelSpec {
+        ModelSpec::from_toml_str(text, "m.toml").unwrap()
+    }
+
+    /// Knots unsorted, repeated, not finite, beyond ±90°, too many, in both units, or fewer
+    /// than the spline terms need, are refused naming the file, line and key.
+    #[test]
+    fn bad_knots_are_refused_with_file_line_and_key() {
+        let with = |knots: &str| {
+            err(&format!(
+                "[coefficients]\nCL = [\"0\", \"alpha_k1\", \"alpha_k2\"]\n\n[knots]\n{knots}\n"
+            ))
+        };
+        let e = with("alpha_deg = [12.0, 8.0]");
+        assert!(
+            e.starts_with("m.toml: line 5: knots `alpha_deg`: knot 2 (8) is not above knot 1 (12)"),
+            "{e}"
+        );
+        let e = with("alpha_deg = [8.0, 8.0]");
+        assert!(e.contains("line 5") && e.contains("knot 2 (8) is not above knot 1 (8)"), "{e}");
+        let e = with("alpha_deg = [8.0, nan]");
+        assert!(e.contains("line 5") && e.contains("knot 2 (NaN) is not a finite angle"), "{e}");
+        let e = with("alpha_deg = [8.0, inf]");
+        assert!(e.contains("knot 2 (inf) is not a finite angle"), "{e}");
+        let e = with("alpha_deg = [8.0, 95.0]");
+        assert!(e.contains("knot 2 (95) is not a finite angle within ±90°"), "{e}");
+        let e = with("alpha_deg = [1.0, 2.0, 3.0, 4.0, 5.0]");
+        assert!(e.contains("line 5") && e.contains("5 knots; at most 4"), "{e}");
+        let e = with("alpha_deg = [8.0, 9.0]\nalpha_rad = [0.1, 0.2]");
+        assert!(e.contains("line 5") && e.contains("not both"), "{e}");
+        let e = with("alpha_deg = [8.0]");
+        assert!(e.contains("m.toml") && e.contains("`alpha_k2` but only 1 α knot"), "{e}");
+        let e = with("alpha = [8.0]");
+        assert!(e.contains("m.toml: model syntax") && e.contains("alpha"), "{e}");
     }
 }

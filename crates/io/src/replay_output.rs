@@ -163,6 +163,10 @@ pub struct ReplaySummary {
     pub estimator: String,
     /// The model: a preset name (`longitudinal`, `lateral`, `six-axis`) or the model file.
     pub model: String,
+    /// The model's α knots of its spline terms, rad (absent when it has none): the JSBSim
+    /// export forms the splines from them.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub alpha_knots_rad: Vec<f64>,
     /// Estimator status at the end: `running`, `initialising` or `diverged`; `interrupted` when
     /// a signal stopped the replay before the end of its record (the warnings give the
     /// estimator's own status then).

@@ -61,6 +61,39 @@ pub fn density_kgpm3(p_pa: f64, t_k: f64) -> f64 {
     p_pa / (R_AIR_J_PER_KG_K * t_k)
 }
 
+/// Ratio of specific heats of dry air, –.
+pub const GAMMA_AIR: f64 = 1.4;
+
+/// The standard temperature at the altitude whose standard density is `rho_kgpm3`, K (the
+/// temperature of the *density altitude*); `None` for a density that is not finite or lies
+/// outside the model's range ([`BOTTOM_M`]..=[`TOP_M`]).
+///
+/// Below the tropopause the standard atmosphere has `ρ/ρ0 = (T/T0)^(n − 1)`, `n = g0/(R L)`,
+/// so `T = T0 (ρ/ρ0)^(1/(n − 1))`; above it `T` is 216.65 K. On a day `ΔT` off standard at a
+/// given pressure altitude this is not the day's temperature: the density altitude's standard
+/// temperature is then about `T_std − 0.235 ΔT`, an error of `−1.235 ΔT` (from `ρ ∝ p/T` and
+/// `p ∝ T^n` along the standard atmosphere), so that a speed of sound formed from it is off by
+/// about `−0.62 ΔT/T` (−3.2 % at ISA + 15 K near sea level).
+pub fn temperature_of_density_k(rho_kgpm3: f64) -> Option<f64> {
+    let n = G0_MPS2 / (R_AIR_J_PER_KG_K * LAPSE_K_PER_M);
+    let rho0 = density_kgpm3(P0_PA, T0_K);
+    let t11 = T0_K - LAPSE_K_PER_M * TROPOPAUSE_M;
+    let rho_of = |h: f64| Some(density_kgpm3(pressure_pa(h)?, temperature_k(h)?));
+    let (top, bottom, rho11) = (rho_of(TOP_M)?, rho_of(BOTTOM_M)?, rho_of(TROPOPAUSE_M)?);
+    if !(top..=bottom).contains(&rho_kgpm3) {
+        return None;
+    }
+    if rho_kgpm3 <= rho11 {
+        return Some(t11);
+    }
+    Some(T0_K * libm::pow(rho_kgpm3 / rho0, 1.0 / (n - 1.0)))
+}
+
+/// Speed of sound in dry air at static temperature `t_k`, m/s: `√(γ R T)`.
+pub fn speed_of_sound_mps(t_k: f64) -> f64 {
+    libm::sqrt(GAMMA_AIR * R_AIR_J_PER_KG_K * t_k)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -82,5 +115,21 @@ mod tests {
         }
         assert_eq!(pressure_pa(20_001.0), None);
         assert_eq!(pressure_pa(f64::NAN), None);
+    }
+
+    /// The density altitude's temperature reads back the standard temperature of the standard
+    /// density (ICAO Doc 7488 table values: 1.2250 kg/m³ → 288.15 K, 0.736 12 → 255.65 K,
+    /// 0.363 92 → 216.65 K, 0.2 kg/m³ in the isothermal layer → 216.65 K) and the speed of
+    /// sound at sea level is 340.29 m/s (same table).
+    #[test]
+    fn temperature_of_density_inverts_the_table() {
+        for (rho, t) in [(1.2250, 288.15), (0.736_12, 255.65), (0.363_92, 216.65), (0.2, 216.65)] {
+            let got = temperature_of_density_k(rho).unwrap();
+            assert!((got - t).abs() < 0.02, "{rho} kg/m3: {got} K vs {t}");
+        }
+        assert!((speed_of_sound_mps(288.15) - 340.294).abs() < 0.01);
+        assert_eq!(temperature_of_density_k(f64::NAN), None);
+        assert_eq!(temperature_of_density_k(2.0), None);
+        assert_eq!(temperature_of_density_k(0.01), None);
     }
 }

@@ -17,7 +17,7 @@ use crate::replay::ReplayError;
 use aeroident_estimators::structure::{
     self, Candidates, Ranking, Selection, StepwiseConfig, StructureError,
 };
-use aeroident_estimators::{AirDataSample, Coefficient, Term};
+use aeroident_estimators::{AirDataSample, AlphaKnots, Coefficient, Term};
 use aeroident_io::FlightDataReader;
 use nalgebra::{DMatrix, DVector};
 use std::io::Read;
@@ -80,7 +80,8 @@ impl CoefficientSelection {
     }
 }
 
-/// Selects `coefficient`'s terms among `candidates` on `manoeuvres`.
+/// Selects `coefficient`'s terms among `candidates` on `manoeuvres`; the spline candidates
+/// take their knots from `knots`.
 ///
 /// # Errors
 /// A candidate that is the constant or listed twice, no candidate, a candidate no sample can
@@ -89,6 +90,7 @@ pub fn select_on_samples(
     manoeuvres: &[&[AirDataSample]],
     coefficient: Coefficient,
     candidates: &[Term],
+    knots: &AlphaKnots,
     method: Method,
 ) -> Result<CoefficientSelection, String> {
     let who = coefficient.name();
@@ -101,7 +103,7 @@ pub fn select_on_samples(
         let before = z.len();
         for s in m.iter() {
             let y = s.measured_coefficients()[coefficient.index()];
-            let x: Option<Vec<f64>> = candidates.iter().map(|t| t.value(s)).collect();
+            let x: Option<Vec<f64>> = candidates.iter().map(|t| t.value(s, knots)).collect();
             match (y, x) {
                 (Some(y), Some(x)) if y.is_finite() => {
                     rows.extend(x);
@@ -118,7 +120,7 @@ pub fn select_on_samples(
         let first = manoeuvres.iter().flat_map(|m| m.iter()).next();
         let missing: Vec<&str> = candidates
             .iter()
-            .filter(|t| first.is_some_and(|s| t.value(s).is_none()))
+            .filter(|t| first.is_some_and(|s| t.value(s, knots).is_none()))
             .map(|t| t.name())
             .collect();
         let measured = first.and_then(|s| s.measured_coefficients()[coefficient.index()]);
@@ -175,7 +177,8 @@ fn check_candidates(candidates: &[Term]) -> Result<(), String> {
 
 /// Reads the record and selects each of `coefficients`' terms among `candidates`, as
 /// [`select_model`] does for `--model auto` (the same reading and conditioning, default
-/// differentiator window, the record's own sample interval).
+/// differentiator window, the record's own sample interval, spline knots at the α quantiles,
+/// [`alpha_quantile_knots`]).
 ///
 /// # Errors
 /// Reading errors, no usable samples, and [`select_on_samples`]'s ([`ReplayError::Model`]).
@@ -189,10 +192,80 @@ pub fn select_structure<R: Read>(
     let supplied = to_supply(&Wanted { coefficients, candidates }, &first);
     let rec = condition(&rec, supplied, DIFF_WINDOW, None)?;
     let slices = rec.slices();
+    let knots = alpha_quantile_knots(&slices, candidates).map_err(ReplayError::Model)?;
     coefficients
         .iter()
-        .map(|&c| select_on_samples(&slices, c, candidates, method).map_err(ReplayError::Model))
+        .map(|&c| {
+            select_on_samples(&slices, c, candidates, &knots, method).map_err(ReplayError::Model)
+        })
         .collect()
+}
+
+/// The knots of the spline candidates among `candidates` (as many as the highest spline term
+/// listed: `alpha_k3` asks for three): at the α quantiles `i/(n + 1)`, `i = 1 … n`, of every
+/// sample of `manoeuvres`, so that each interval between knots holds the same share of the
+/// data (Klein & Morelli 2006 §5.4 place spline knots where the data are; the order statistic
+/// `⌊q (N − 1)⌋` of the sorted α is taken, no interpolation). No knot when no spline is listed.
+///
+/// # Errors
+/// No sample, or α that does not spread over `n + 1` distinct values at those quantiles.
+pub fn alpha_quantile_knots(
+    manoeuvres: &[&[AirDataSample]],
+    candidates: &[Term],
+) -> Result<AlphaKnots, String> {
+    let n = candidates.iter().filter_map(|t| t.knot()).max().map_or(0, |i| i + 1);
+    if n == 0 {
+        return Ok(AlphaKnots::NONE);
+    }
+    let mut alpha: Vec<f64> =
+        manoeuvres.iter().flat_map(|m| m.iter().map(|s| s.alpha_rad)).collect();
+    if alpha.is_empty() {
+        return Err("no sample to place the α knots on".into());
+    }
+    alpha.sort_by(f64::total_cmp);
+    let last = alpha.len() - 1;
+    let knots: Vec<f64> =
+        (1..=n).map(|i| alpha[(i as f64 / (n as f64 + 1.0) * last as f64) as usize]).collect();
+    AlphaKnots::new(&knots).map_err(|e| {
+        format!(
+            "cannot place {n} α knot(s) at the α quantiles ({}°): {e}; the record's α spans {:.3}° to {:.3}°",
+            knots.iter().map(|k| format!("{:.3}", k.to_degrees())).collect::<Vec<_>>().join(", "),
+            alpha[0].to_degrees(),
+            alpha[last].to_degrees()
+        )
+    })
+}
+
+/// Checks that every knot of `structure` lies inside the α range of `manoeuvres`: a knot
+/// outside it makes its spline term zero on every sample, or equal to `α − k`, which the
+/// constant and `alpha` already span, so its parameter could not be identified.
+///
+/// # Errors
+/// The first knot outside the range, with the range, naming `model` (the model file).
+pub fn check_knots_in_range(
+    structure: &aeroident_estimators::ModelStructure,
+    manoeuvres: &[&[AirDataSample]],
+    model: &str,
+) -> Result<(), String> {
+    let knots = structure.knots();
+    if knots.is_empty() {
+        return Ok(());
+    }
+    let alpha = manoeuvres.iter().flat_map(|m| m.iter().map(|s| s.alpha_rad));
+    let (lo, hi) = alpha.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), a| (l.min(a), h.max(a)));
+    for (i, k) in knots.as_slice().iter().enumerate() {
+        if !(lo < *k && *k < hi) {
+            return Err(format!(
+                "{model}: α knot {} ({:.3}°) lies outside the record's α range {:.3}° to {:.3}°: its spline term `{}` could not be identified",
+                i + 1,
+                k.to_degrees(),
+                lo.to_degrees(),
+                hi.to_degrees(),
+                Term::spline(i).map_or("", |t| t.name())
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The differentiator window of [`select_structure`], samples: the replay's default.
@@ -286,4 +359,129 @@ fn condition(
         manoeuvres.push(ready.into_iter().map(|(_, s)| s).collect());
     }
     Ok(Conditioned { manoeuvres, supplied, read: rec.read })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use aeroident_estimators::AircraftConstants;
+    use aeroident_estimators::structure::StepwiseConfig;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+
+    const BREAK_DEG: f64 = 8.0;
+
+    /// 40 s at 50 Hz of a record whose lift slope breaks at 8°: `CL = 0.2 + 4.5 α + 6 q̂ +
+    /// 0.4 δe + dcla (α − 8°)₊` plus white noise of σ 0.01, `CD = 0.05 + 0.5 α²`, written
+    /// into the specific forces (q̄S/m = 50 m/s²) so that the measured coefficients read them
+    /// back. α swings 8° ± 8.5° about the break, symmetrically (its median is 8°).
+    fn slope_break(dcla: f64, seed: u64) -> Vec<AirDataSample> {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+        let noise = Normal::new(0.0, 0.01).unwrap();
+        let tau = std::f64::consts::TAU;
+        (0..2000)
+            .map(|i| {
+                let t = i as f64 / 50.0;
+                let alpha =
+                    (BREAK_DEG + 7.0 * (tau * t / 10.0).sin() + 1.5 * (tau * t / 1.3).sin())
+                        .to_radians();
+                let q = 0.1 * (tau * t / 2.1).sin();
+                let de = 2f64.to_radians() * (tau * t / 2.7).sin();
+                let qhat = q * 2.0 / 200.0;
+                let cl = 0.2
+                    + 4.5 * alpha
+                    + 6.0 * qhat
+                    + 0.4 * de
+                    + dcla * (alpha - BREAK_DEG.to_radians()).max(0.0)
+                    + noise.sample(&mut rng);
+                let cd = 0.05 + 0.5 * alpha * alpha;
+                let (sa, ca) = alpha.sin_cos();
+                let (cx, cz) = (-cd * ca + cl * sa, -cl * ca - cd * sa);
+                AirDataSample {
+                    t_s: t,
+                    vt_mps: 100.0,
+                    alpha_rad: alpha,
+                    qbar_pa: 5000.0,
+                    q_rad_s: Some(q),
+                    de_rad: Some(de),
+                    ax_mps2: Some(50.0 * cx),
+                    az_mps2: Some(50.0 * cz),
+                    constants: AircraftConstants {
+                        mass_kg: 1000.0,
+                        S_m2: 10.0,
+                        cbar_m: Some(2.0),
+                        ..Default::default()
+                    },
+                    ..Default::default()
+                }
+            })
+            .collect()
+    }
+
+    const SWR: Method = Method::Stepwise(StepwiseConfig { f_in: 20.0, f_out: 20.0 });
+
+    /// Stepwise regression keeps the spline of a lift slope that breaks at its knot and
+    /// recovers the slope change within 3σ on five records, with the knot given (8°) or
+    /// placed at the record's α median (the one-knot quantile); on records without a break the
+    /// spline is left out.
+    #[test]
+    fn stepwise_selects_the_spline_of_a_slope_break_and_recovers_it() {
+        let candidates = [Term::Alpha, Term::Q, Term::De, Term::AlphaK1];
+        for seed in 0..5 {
+            let rec = slope_break(-2.0, seed);
+            let slices = [rec.as_slice()];
+            let quantile = alpha_quantile_knots(&slices, &candidates).unwrap();
+            let median = quantile.get(0).unwrap().to_degrees();
+            assert!((median - BREAK_DEG).abs() < 0.3, "median knot {median}°");
+            let given = AlphaKnots::new(&[BREAK_DEG.to_radians()]).unwrap();
+            for knots in [given, quantile] {
+                let sel =
+                    select_on_samples(&slices, Coefficient::CL, &candidates, &knots, SWR).unwrap();
+                assert_eq!(sel.kept(), candidates, "seed {seed}, knot {:?}", knots.as_slice());
+                let fit = &sel.selection.fit;
+                let (v, s) = (fit.theta[3], fit.std_error[3]);
+                let tolerance = if knots == given { 3.0 * s } else { 3.0 * s + 0.1 };
+                assert!((v + 2.0).abs() < tolerance, "seed {seed}: ΔCL_alpha {v} ± {s}");
+            }
+            let flat = slope_break(0.0, seed);
+            let sel = select_on_samples(&[&flat], Coefficient::CL, &candidates, &given_knot(), SWR)
+                .unwrap();
+            assert!(!sel.kept().contains(&Term::AlphaK1), "seed {seed}: {:?}", sel.kept());
+        }
+    }
+
+    fn given_knot() -> AlphaKnots {
+        AlphaKnots::new(&[BREAK_DEG.to_radians()]).unwrap()
+    }
+
+    /// `alpha_k2` asks for two knots at the α terciles, ascending; a record of one α cannot
+    /// place them; a knot outside the record's α is refused naming the model and the term.
+    #[test]
+    fn quantile_knots_and_knots_outside_the_record() {
+        let rec = slope_break(-2.0, 1);
+        let slices = [rec.as_slice()];
+        let k = alpha_quantile_knots(&slices, &[Term::AlphaK2, Term::Alpha]).unwrap();
+        let mut alpha: Vec<f64> = rec.iter().map(|s| s.alpha_rad).collect();
+        alpha.sort_by(f64::total_cmp);
+        let below = |x: f64| alpha.iter().filter(|a| **a < x).count() as f64 / alpha.len() as f64;
+        assert_eq!(k.len(), 2);
+        assert!((below(k.get(0).unwrap()) - 1.0 / 3.0).abs() < 0.01);
+        assert!((below(k.get(1).unwrap()) - 2.0 / 3.0).abs() < 0.01);
+        assert_eq!(alpha_quantile_knots(&slices, &[Term::Alpha]).unwrap().len(), 0);
+        let constant: Vec<AirDataSample> =
+            rec.iter().map(|s| AirDataSample { alpha_rad: 0.1, ..*s }).collect();
+        let e = alpha_quantile_knots(&[&constant], &[Term::AlphaK1, Term::AlphaK2]).unwrap_err();
+        assert!(e.contains("cannot place 2 α knot(s)") && e.contains("not above"), "{e}");
+        let st = aeroident_estimators::ModelStructure::longitudinal()
+            .with(Coefficient::CL, &[Term::AlphaK1])
+            .with_knots(AlphaKnots::new(&[30f64.to_radians()]).unwrap());
+        let e = check_knots_in_range(&st, &slices, "m.toml").unwrap_err();
+        assert!(
+            e.starts_with("m.toml: α knot 1 (30.000°) lies outside the record's α range"),
+            "{e}"
+        );
+        assert!(e.contains("alpha_k1"), "{e}");
+        let inside = st.with_knots(given_knot());
+        assert!(check_knots_in_range(&inside, &slices, "m.toml").is_ok());
+    }
 }

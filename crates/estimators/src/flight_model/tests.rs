@@ -75,6 +75,16 @@ fn rich_lon() -> ModelStructure {
         .with(C::Cm, &[T::V, T::Alpha2, T::Q0])
 }
 
+/// α splines with one knot below the sample's α (0.11 rad, active) and one above (inactive),
+/// and the Mach terms.
+fn spline_mach_lon() -> ModelStructure {
+    ModelStructure::longitudinal()
+        .with(C::CL, &[T::AlphaK1, T::AlphaK2, T::Mach])
+        .with(C::CD, &[T::Mach2, T::AlphaK1])
+        .with(C::Cm, &[T::AlphaK2, T::AlphaK1, T::Mach])
+        .with_knots(crate::vocabulary::AlphaKnots::new(&[0.05, 0.3]).unwrap())
+}
+
 fn body_lon() -> ModelStructure {
     const TT: [T; 4] = [T::Bias, T::Alpha, T::Q, T::De];
     ModelStructure::empty().with(C::CX, &TT).with(C::CZ, &TT).with(C::Cm, &TT)
@@ -150,6 +160,8 @@ fn dual_partials_match_central_differences_longitudinal() {
     check_partials(ModelStructure::longitudinal());
     check_partials(rich_lon());
     check_partials(body_lon());
+    check_partials(spline_mach_lon());
+    check_partials(with_alphadot(spline_mach_lon()));
 }
 
 #[test]
@@ -342,21 +354,30 @@ fn regressors_of_every_term_match_the_vocabulary() {
     }
     st = st.with(C::CY, &[T::AlphaBeta]);
     st = st.with(C::Cm, &[T::AlphaQ, T::Alpha2, T::AlphaDe, T::V, T::Q0]);
-    let st = st.validated().unwrap();
-    let model = FlightModel::new(st).unwrap();
-    let s = sample();
-    let u = model.inputs(&s).unwrap();
-    let z = [0.0; 8];
-    let mut xi = [f64::NAN; MAX_PARAMS];
-    let th = theta_for(&st);
-    model.eval(&th[..st.n_params()], &u, &u.x_meas, &z, &z, Some(&mut xi)).unwrap();
-    for (j, p) in st.params().enumerate() {
-        let want = p.term.value(&s).unwrap();
-        assert!(
-            (xi[j] - want).abs() < 1e-14 * want.abs().max(1.0),
-            "{}: {} vs {want}",
-            p.name(),
-            xi[j]
-        );
+    // Every spline (knots on both sides of the sample's α = 0.11 rad) and the Mach terms.
+    let splines = [T::AlphaK1, T::AlphaK2, T::AlphaK3, T::AlphaK4, T::Mach, T::Mach2];
+    let knots = crate::vocabulary::AlphaKnots::new(&[-0.1, 0.05, 0.1, 0.2]).unwrap();
+    let st_splines = ModelStructure::longitudinal()
+        .with(C::CL, &splines)
+        .with(C::Cm, &splines)
+        .with_knots(knots);
+    for st in [st, st_splines] {
+        let st = st.validated().unwrap();
+        let model = FlightModel::new(st).unwrap();
+        let s = sample();
+        let u = model.inputs(&s).unwrap();
+        let z = [0.0; 8];
+        let mut xi = [f64::NAN; MAX_PARAMS];
+        let th = theta_for(&st);
+        model.eval(&th[..st.n_params()], &u, &u.x_meas, &z, &z, Some(&mut xi)).unwrap();
+        for (j, p) in st.params().enumerate() {
+            let want = st.value(p.term, &s).unwrap();
+            assert!(
+                (xi[j] - want).abs() < 1e-14 * want.abs().max(1.0),
+                "{}: {} vs {want}",
+                p.name(),
+                xi[j]
+            );
+        }
     }
 }

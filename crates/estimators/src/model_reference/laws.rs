@@ -226,6 +226,10 @@ fn regressor_reference(t: Term, s: &AirDataSample) -> f64 {
             RATE_REF_RAD_S * k.cbar_m.unwrap_or(f64::NAN) / (2.0 * k.v0_mps.unwrap_or(f64::NAN))
         }
         Term::V => SPEED_REF_FRACTION,
+        // A perturbation of α past the knot; of M and M² by the reference fraction of V.
+        Term::AlphaK1 | Term::AlphaK2 | Term::AlphaK3 | Term::AlphaK4 => ANGLE_REF_RAD,
+        Term::Mach => SPEED_REF_FRACTION * s.mach().unwrap_or(f64::NAN),
+        Term::Mach2 => 2.0 * SPEED_REF_FRACTION * s.mach().map_or(f64::NAN, |m| m * m),
         Term::Alpha2 | Term::AlphaDe | Term::AlphaBeta | Term::AlphaDa | Term::AlphaDr => {
             ANGLE_REF_RAD * ANGLE_REF_RAD
         }

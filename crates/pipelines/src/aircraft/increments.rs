@@ -111,7 +111,13 @@ pub fn slot(p: Param) -> Result<(AeroCoefficient, IncrementRegressor), Increment
         | Term::AlphaQ
         | Term::AlphaR
         | Term::AlphaDa
-        | Term::AlphaDr => {
+        | Term::AlphaDr
+        | Term::AlphaK1
+        | Term::AlphaK2
+        | Term::AlphaK3
+        | Term::AlphaK4
+        | Term::Mach
+        | Term::Mach2 => {
             return Err(IncrementError::NotExpressible {
                 name: p.name(),
                 what: format!("`{}` regressor", p.term.name()),

@@ -21,6 +21,8 @@
 //! | q, alphadot | `velocities/q-aero-rad_sec`, `aero/alphadot-rad_sec` · `aero/ci2vel` (c̄/2V) |
 //! | de, da, dr, alpha_de | the surface properties ([`SurfaceProperties`]), α·δe |
 //! | V (V/V0), q0 (q c̄/2V0) | `velocities/vt-fps` / V0, `velocities/q-aero-rad_sec` · `metrics/cbarw-ft` / (2 V0): need V0 |
+//! | alpha_k1 … alpha_k4 | `max(aero/alpha-rad − k, 0)`, a `<max>` of a `<difference>`: needs the knot (`alpha_knots_rad` of the summary) |
+//! | mach, mach2 | `velocities/mach`, its square (JSBSim's Mach, from its own atmosphere) |
 //!
 //! Signs are aeroident's (Stevens & Lewis 3rd ed. §2.3): JSBSim's LIFT is up, DRAG aft, SIDE
 //! and Y right, X forward, Z down, ROLL/PITCH/YAW right wing down / nose up / nose right, the
@@ -61,6 +63,8 @@ pub struct SummaryParameters {
     pub model: String,
     /// The parameters in summary order.
     pub parameters: Vec<Identified>,
+    /// The model's α knots, rad (`alpha_knots_rad` of the summary; empty without one).
+    pub alpha_knots_rad: Vec<f64>,
 }
 
 /// Reads `parameters[].{name, estimate, std_error}` (plus `estimator`, `model`) of a summary.
@@ -100,7 +104,20 @@ pub fn read_summary(path: &Path) -> crate::error::Result<SummaryParameters> {
         parameters.push(Identified { param, value, sigma });
     }
     let text_of = |k: &str| json[k].as_str().unwrap_or("?").to_string();
-    Ok(SummaryParameters { estimator: text_of("estimator"), model: text_of("model"), parameters })
+    let knots = json["alpha_knots_rad"].as_array().map_or(&[][..], Vec::as_slice);
+    let alpha_knots_rad = knots
+        .iter()
+        .map(|k| k.as_f64().filter(|k| k.is_finite()))
+        .collect::<Option<Vec<f64>>>()
+        .ok_or_else(|| {
+            crate::err!("{file}: `alpha_knots_rad` holds a value that is not a finite number")
+        })?;
+    Ok(SummaryParameters {
+        estimator: text_of("estimator"),
+        model: text_of("model"),
+        parameters,
+        alpha_knots_rad,
+    })
 }
 
 /// Checks an estimate and its σ are numbers a fit can report: `|estimate|` at most
@@ -195,9 +212,38 @@ impl Default for SurfaceProperties {
     }
 }
 
-/// The regressor of `term` as JSBSim properties and a constant factor, or why it cannot be
-/// expressed.
+/// The regressor of `term` as JSBSim function elements (properties, or for a spline its
+/// `<max>` element) and a constant factor, or why it cannot be expressed. `knots_rad` are the
+/// model's α knots.
 fn regressor(
+    term: Term,
+    s: &SurfaceProperties,
+    v0_mps: Option<f64>,
+    knots_rad: &[f64],
+) -> Result<(Vec<String>, f64), String> {
+    let elements = |names: Vec<String>| {
+        names.iter().map(|n| format!("<property>{}</property>", xml_text(n))).collect()
+    };
+    if let Some(i) = term.knot() {
+        let k = knots_rad.get(i).ok_or_else(|| {
+            format!(
+                "term `{}` needs its α knot; the summary gives {}",
+                term.name(),
+                knots_rad.len()
+            )
+        })?;
+        let spline = format!(
+            "<max><difference><property>aero/alpha-rad</property><value>{k:?}</value></difference><value>0</value></max>"
+        );
+        return Ok((vec![spline], 1.0));
+    }
+    let (names, factor) = regressor_properties(term, s, v0_mps)?;
+    Ok((elements(names), factor))
+}
+
+/// The regressor of a term that is a product of JSBSim properties (every term but the
+/// splines), with its constant factor.
+fn regressor_properties(
     term: Term,
     s: &SurfaceProperties,
     v0_mps: Option<f64>,
@@ -231,6 +277,11 @@ fn regressor(
         Term::V => (p(&["velocities/vt-fps"]), 1.0 / v0_fps()?),
         Term::Q0 => {
             (p(&["velocities/q-aero-rad_sec", "metrics/cbarw-ft"]), 1.0 / (2.0 * v0_fps()?))
+        }
+        Term::Mach => (p(&["velocities/mach"]), 1.0),
+        Term::Mach2 => (p(&["velocities/mach", "velocities/mach"]), 1.0),
+        Term::AlphaK1 | Term::AlphaK2 | Term::AlphaK3 | Term::AlphaK4 => {
+            return Err(format!("term `{}` is a spline, not a product", term.name()));
         }
     })
 }
@@ -303,7 +354,8 @@ pub fn aerodynamics_xml(
                 );
                 continue;
             };
-            let (props, factor) = match regressor(p.param.term, surfaces, v0_mps) {
+            let knots = &summary.alpha_knots_rad;
+            let (factors, factor) = match regressor(p.param.term, surfaces, v0_mps, knots) {
                 Ok(r) => r,
                 Err(why) => {
                     let _ =
@@ -316,8 +368,11 @@ pub fn aerodynamics_xml(
             let _ = writeln!(x, "    <function name=\"aero/coefficient/{pname}\">");
             let _ = writeln!(x, "      <description>{pname} = {v}{sigma}</description>");
             x.push_str("      <product>\n");
-            for s in scale.iter().copied().map(str::to_string).chain(props) {
-                let _ = writeln!(x, "        <property>{}</property>", xml_text(&s));
+            for s in scale {
+                let _ = writeln!(x, "        <property>{}</property>", xml_text(s));
+            }
+            for f in factors {
+                let _ = writeln!(x, "        {f}");
             }
             let _ = writeln!(x, "        <value>{}</value>", v * factor);
             x.push_str("      </product>\n    </function>\n");
@@ -351,7 +406,12 @@ mod tests {
     }
 
     fn summary(ps: Vec<Identified>) -> SummaryParameters {
-        SummaryParameters { estimator: "rls".into(), model: "m".into(), parameters: ps }
+        SummaryParameters {
+            estimator: "rls".into(),
+            model: "m".into(),
+            parameters: ps,
+            alpha_knots_rad: Vec::new(),
+        }
     }
 
     /// A summary with `CL_alpha` = `estimate`, σ `std_error`, read back from a file.

@@ -173,6 +173,10 @@ pub struct BatchSummary {
     pub estimator: String,
     /// The model's name.
     pub model: String,
+    /// The model's α knots of its spline terms, rad (absent when it has none): the JSBSim
+    /// export forms the splines from them.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub alpha_knots_rad: Vec<f64>,
     /// How the fit ended: `converged` (both criteria), `converged_in_cost` (the cost stopped
     /// changing, the step did not become negligible) or `not_converged` (the last iterate).
     pub status: String,
@@ -955,6 +959,8 @@ pub fn fit_records<R: Read>(
     check_model_inputs(&model, &rec.manoeuvres[0][0], mapping)?;
     let (model, level_note) = super::sideslip_level(model, &rec.manoeuvres[0][0]);
     let slices: Vec<&[AirDataSample]> = rec.manoeuvres.iter().map(Vec::as_slice).collect();
+    crate::structure::check_knots_in_range(&model.structure, &slices, &model.name)
+        .map_err(ReplayError::Model)?;
     let fitted = fit_slices(&slices, model.structure, &options)?;
     let sigmas = sigma_stage(&slices, &fitted, options.bootstrap_refits)?;
     let st = model.structure;
@@ -1212,7 +1218,7 @@ fn summarise(
     let n = result.n();
     let values: Vec<Option<f64>> = result.values[..np].iter().map(|v| Some(*v)).collect();
     let cov = |i: usize, j: usize| Some(result.covariance[i * n + j]);
-    let mut recorder = Recorder::default();
+    let mut recorder = Recorder::for_structure(&st);
     for m in manoeuvres {
         recorder.new_segment();
         m.iter().for_each(|s| recorder.push(s));
@@ -1222,6 +1228,7 @@ fn summarise(
     BatchSummary {
         estimator: if fitted.fem.is_some() { "fem" } else { "oe" }.into(),
         model: model.name.clone(),
+        alpha_knots_rad: model.structure.knots().as_slice().to_vec(),
         status: result.termination.status().into(),
         status_reason: termination_note(result),
         samples_read: 0,
@@ -1398,7 +1405,7 @@ pub fn validate_on<R: Read>(
     match simulated {
         Ok(res) => Ok(simulated_validation(&res, &slices, &file, Some(&r.r))),
         Err(e) => {
-            let mut recorder = Recorder::default();
+            let mut recorder = Recorder::for_structure(&r.structure);
             for m in &slices {
                 recorder.new_segment();
                 m.iter().for_each(|s| recorder.push(s));

@@ -30,7 +30,7 @@ fn term_fields(t: Term) -> &'static [&'static str] {
     use Term as T;
     match t {
         T::Bias => &[],
-        T::Alpha | T::Alpha2 => &["alpha_rad"],
+        T::Alpha | T::Alpha2 | T::AlphaK1 | T::AlphaK2 | T::AlphaK3 | T::AlphaK4 => &["alpha_rad"],
         T::Beta => &["beta_rad"],
         T::P => &["p_rad_s"],
         T::Q | T::Q0 => &["q_rad_s"],
@@ -39,7 +39,8 @@ fn term_fields(t: Term) -> &'static [&'static str] {
         T::De => &["de_rad"],
         T::Da => &["da_rad"],
         T::Dr => &["dr_rad"],
-        T::V => &["vt_mps"],
+        // Mach also moves with the density; a constant airspeed is what usually holds it.
+        T::V | T::Mach | T::Mach2 => &["vt_mps"],
         T::AlphaDe => &["alpha_rad", "de_rad"],
         T::AlphaBeta => &["alpha_rad", "beta_rad"],
         T::AlphaP => &["alpha_rad", "p_rad_s"],
@@ -76,10 +77,26 @@ impl Spread {
     /// One warning per channel that held one value in every sample (at least 2) and that a
     /// term of `structure` needs, naming the channel as `mapping` does and the parameters it
     /// leaves unidentifiable.
+    ///
+    /// Also one warning per α knot of `structure` outside the α range seen (a recursive replay
+    /// cannot refuse such a knot before it has read the record, as the batch fits do): the
+    /// spline term is then zero throughout, or `α − k`, which the constant and `alpha` span.
     pub fn warnings(&self, structure: &ModelStructure, mapping: &Mapping) -> Vec<String> {
+        let (lo, hi, n) = self.ranges[0];
+        let knots = structure.knots().as_slice().iter().enumerate();
+        let outside = knots.filter(|(_, k)| n > 0 && !(lo < **k && **k < hi)).map(|(i, k)| {
+            format!(
+                "α knot {} ({:.3}°) lies outside the α range of the estimated samples ({:.3}° to {:.3}°): the parameters of `{}` cannot be identified",
+                i + 1,
+                k.to_degrees(),
+                lo.to_degrees(),
+                hi.to_degrees(),
+                Term::spline(i).map_or("", |t| t.name())
+            )
+        });
         let constant = FIELDS.iter().zip(&self.ranges).filter(|(_, r)| r.2 >= 2 && r.0 == r.1);
-        constant
-            .filter_map(|(name, &(v, _, n))| {
+        let mut out: Vec<String> = outside.collect();
+        out.extend(constant.filter_map(|(name, &(v, _, n))| {
                 let params: Vec<&str> = structure
                     .params()
                     .filter(|p| term_fields(p.term).contains(name))
@@ -92,7 +109,7 @@ impl Spread {
                         params.join(", ")
                     )
                 })
-            })
-            .collect()
+        }));
+        out
     }
 }

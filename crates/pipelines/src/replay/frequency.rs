@@ -66,6 +66,8 @@ pub(super) fn fit_fdoe(
     };
     let (model, level_note) = super::sideslip_level(model, &rec.manoeuvres[0][0]);
     let slices: Vec<&[AirDataSample]> = rec.manoeuvres.iter().map(Vec::as_slice).collect();
+    crate::structure::check_knots_in_range(&model.structure, &slices, &model.name)
+        .map_err(ReplayError::Model)?;
     let mut config = FdoeConfig { band_hz, ..FdoeConfig::new(model.structure) };
     if let Some(n) = options.max_iterations {
         config.max_iterations = n;
@@ -186,7 +188,7 @@ fn summarise(
         })
         .collect();
     let cov = |i: usize, j: usize| fd.covariance[i * np + j];
-    let mut recorder = Recorder::default();
+    let mut recorder = Recorder::for_structure(&model.structure);
     for m in slices {
         recorder.new_segment();
         m.iter().for_each(|s| recorder.push(s));
@@ -200,6 +202,7 @@ fn summarise(
     BatchSummary {
         estimator: "fdoe".into(),
         model: model.name.clone(),
+        alpha_knots_rad: model.structure.knots().as_slice().to_vec(),
         status: fd.termination.status().into(),
         status_reason: super::batch::termination_note_of(fd.termination, &fd.iterations),
         samples_read: 0,

@@ -589,7 +589,7 @@ pub fn unsupported(
     }
     let mut out = Vec::new();
     for t in Term::ALL {
-        if structure.params().any(|p| p.term == t) && t.value(&probe).is_none() {
+        if structure.params().any(|p| p.term == t) && structure.value(t, &probe).is_none() {
             out.push(format!("term `{}` ({})", t.name(), term_needs(t)));
         }
     }
@@ -616,6 +616,10 @@ fn term_needs(t: Term) -> &'static str {
         Term::Da | Term::AlphaDa => "needs da",
         Term::Dr | Term::AlphaDr => "needs dr",
         Term::V => "needs v0",
+        Term::Mach | Term::Mach2 => "needs a density within the standard atmosphere (-1 to 20 km)",
+        Term::AlphaK1 | Term::AlphaK2 | Term::AlphaK3 | Term::AlphaK4 => {
+            "needs its alpha knot in the model"
+        }
         Term::Bias | Term::Alpha | Term::Alpha2 => "always available",
     }
 }

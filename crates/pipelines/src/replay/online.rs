@@ -215,6 +215,7 @@ impl<'a> Replay<'a> {
         let est = make(&spec)?;
         self.observer.model(&model_line(&spec, defaulted, &supply, opts.diff_window));
         self.history.names = spec.structure.names().collect();
+        self.recorder = Recorder::for_structure(&spec.structure);
         self.observer.start(&self.history.names)?;
         self.run = Some(Running {
             est,
@@ -451,6 +452,7 @@ impl<'a> Replay<'a> {
         ReplaySummary {
             estimator: r.est.method().to_string(),
             model: r.spec.name.clone(),
+            alpha_knots_rad: r.spec.structure.knots().as_slice().to_vec(),
             status,
             samples_read: self.samples_read,
             samples_rejected: self.samples_rejected,

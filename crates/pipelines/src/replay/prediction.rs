@@ -24,7 +24,7 @@
 
 use crate::sample_log::SampleLog;
 use crate::validation::{OutputData, OutputValidation, validate};
-use aeroident_estimators::vocabulary::N_TERMS;
+use aeroident_estimators::vocabulary::{AlphaKnots, N_TERMS};
 use aeroident_estimators::{
     AirDataSample, Coefficient, Estimates, Estimator, ModelStructure, Status, Term,
     estimator::check_finite,
@@ -47,11 +47,13 @@ struct Row {
 #[derive(Debug, Clone)]
 pub struct Recorder {
     rows: SampleLog<Row>,
+    /// The α knots of the spline terms' regressors (the structure's).
+    knots: AlphaKnots,
 }
 
 impl Default for Recorder {
     fn default() -> Self {
-        Self { rows: SampleLog::new(Self::MAX_SAMPLES, Self::BLOCK) }
+        Self::for_structure(&ModelStructure::empty())
     }
 }
 
@@ -69,11 +71,17 @@ impl Recorder {
     /// residual tests).
     pub const BLOCK: usize = 1_024;
 
+    /// A recorder of the regressors of `structure` (its α knots form the spline terms).
+    pub fn for_structure(structure: &ModelStructure) -> Self {
+        Self { rows: SampleLog::new(Self::MAX_SAMPLES, Self::BLOCK), knots: *structure.knots() }
+    }
+
     /// Keeps sample `s` (fed to the estimator), decimating by blocks (module doc).
     pub fn push(&mut self, s: &AirDataSample) {
+        let knots = &self.knots;
         self.rows.push_with(|| Row {
             coefs: s.measured_coefficients().map(nan),
-            terms: Term::ALL.map(|t| nan(t.value(s))),
+            terms: Term::ALL.map(|t| nan(t.value(s, knots))),
             inputs: [nan(s.de_rad), nan(s.da_rad), nan(s.dr_rad)],
         });
     }

@@ -10,13 +10,15 @@
 //! both sides of the regression see the same filter.
 
 use super::{
-    CoefficientSelection, Method, Wanted, condition, read_for_selection, select_on_samples,
-    to_supply,
+    CoefficientSelection, Method, Wanted, alpha_quantile_knots, condition, read_for_selection,
+    select_on_samples, to_supply,
 };
 use crate::condition::Derivative;
 use crate::replay::ReplayError;
 use aeroident_estimators::structure::StepAction;
-use aeroident_estimators::{AirDataSample, Coefficient, ModelStructure, Param, Priors, Term};
+use aeroident_estimators::{
+    AirDataSample, AlphaKnots, Coefficient, ModelStructure, Param, Priors, Term,
+};
 use aeroident_io::{FlightDataReader, Mapping, ModelSpec};
 use serde::Serialize;
 use std::io::Read;
@@ -190,11 +192,13 @@ pub fn select_model<R: Read>(
         ))
     })?;
     let slices = rec.slices();
+    let knots = alpha_quantile_knots(&slices, &candidates)
+        .map_err(|e| ReplayError::Model(format!("{file}: {e}")))?;
     let mut unavailable = Vec::new();
     let mut selections = Vec::new();
     for &c in &coefficients {
         let (usable, missing): (Vec<Term>, Vec<Term>) =
-            offered(c).into_iter().partition(|t| t.value(&probe).is_some());
+            offered(c).into_iter().partition(|t| t.value(&probe, &knots).is_some());
         for t in missing {
             if !unavailable.contains(&t) {
                 unavailable.push(t);
@@ -207,10 +211,12 @@ pub fn select_model<R: Read>(
                 names(&unavailable)
             )));
         }
-        selections
-            .push(select_on_samples(&slices, c, &usable, auto.method).map_err(ReplayError::Model)?);
+        selections.push(
+            select_on_samples(&slices, c, &usable, &knots, auto.method)
+                .map_err(ReplayError::Model)?,
+        );
     }
-    let model = model_of(&selections, scope, auto.method, &file)?;
+    let model = model_of(&selections, knots, scope, auto.method, &file)?;
     Ok(AutoSelection {
         model,
         scope,
@@ -275,14 +281,16 @@ fn names(terms: &[Term]) -> String {
     terms.iter().map(|t| t.name()).collect::<Vec<_>>().join(", ")
 }
 
-/// The model of the kept terms, each coefficient with its constant.
+/// The model of the kept terms, each coefficient with its constant, and the knots the
+/// spline candidates were offered with.
 fn model_of(
     selections: &[CoefficientSelection],
+    knots: AlphaKnots,
     scope: Scope,
     method: Method,
     file: &str,
 ) -> Result<ModelSpec, ReplayError> {
-    let mut structure = ModelStructure::empty();
+    let mut structure = ModelStructure::empty().with_knots(knots);
     for s in selections {
         structure.insert(Param::new(s.coefficient, Term::Bias));
         for t in s.kept() {
@@ -376,6 +384,9 @@ pub struct StructureReport {
     pub f_out: Option<f64>,
     /// The coefficients covered.
     pub scope: &'static str,
+    /// The α knots of the spline candidates, degrees (the record's α quantiles,
+    /// [`super::alpha_quantile_knots`]); empty when no spline was offered.
+    pub alpha_knots_deg: Vec<f64>,
     /// Candidates the record cannot evaluate, left out.
     pub unavailable: Vec<&'static str>,
     /// Derivatives the conditioning stage supplied.
@@ -409,6 +420,14 @@ impl AutoSelection {
             f_in,
             f_out,
             scope: self.scope.name(),
+            alpha_knots_deg: self
+                .model
+                .structure
+                .knots()
+                .as_slice()
+                .iter()
+                .map(|k| k.to_degrees())
+                .collect(),
             unavailable: self.unavailable.iter().map(|t| t.name()).collect(),
             derivatives_supplied: self.supplied.iter().map(|d| d.name()).collect(),
             samples_read: self.samples_read,

@@ -4,6 +4,7 @@ use std::process::ExitCode;
 
 fn main() -> ExitCode {
     let cli = aeroident::cli::Cli::try_parse_args(std::env::args_os()).unwrap_or_else(|e| e.exit());
+    aeroident_pipelines::install_worker_stacks();
     match cli.execute() {
         Ok(()) => ExitCode::SUCCESS,
         // The reader of our output went away (`| head`): end quietly, as a filter should.

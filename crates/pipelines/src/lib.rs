@@ -42,3 +42,19 @@ pub mod window;
 
 pub use error::{Context, PipelineError};
 pub use named::Named;
+
+/// Stack size, bytes, for the threads that fly, replay and fit (rayon workers, fit threads).
+///
+/// The estimators are fixed-capacity and allocation-free (the core is `no_std`), so a run holds
+/// their state by value while it builds and boxes them; with the vocabulary's 26 terms a
+/// six-axis run needs about 2.4 MiB, past the 2 MiB default of a spawned thread. 64 MiB is
+/// address space reserved per thread, not memory used. The CLI and Python give it to every
+/// thread pool they build; `.cargo/config.toml` gives it to test threads (`RUST_MIN_STACK`).
+pub const WORKER_STACK_BYTES: usize = 64 << 20;
+
+/// Makes rayon's global pool use [`WORKER_STACK_BYTES`] stacks. Call before any parallel work;
+/// a pool already built keeps its stacks (the call then does nothing).
+pub fn install_worker_stacks() {
+    // An error only says the global pool exists already: nothing to do then.
+    let _ = rayon::ThreadPoolBuilder::new().stack_size(WORKER_STACK_BYTES).build_global();
+}

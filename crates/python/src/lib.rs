@@ -133,6 +133,7 @@ fn check_bootstrap_refits(refits: &Bound<'_, pyo3::types::PyInt>) -> PyResult<()
 #[pymodule]
 fn _aeroident(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("AeroidentError", m.py().get_type::<AeroidentError>())?;
+    aeroident_pipelines::install_worker_stacks();
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     // numpy's C API and the numpy crate's shared borrow checking are looked up on the first
     // array built or borrowed; a failure there (e.g. a pending KeyboardInterrupt raised while

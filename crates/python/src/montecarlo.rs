@@ -155,6 +155,7 @@ fn montecarlo_runs<'py>(
         Some(n) => Some(
             rayon::ThreadPoolBuilder::new()
                 .num_threads(n.max(1))
+                .stack_size(aeroident_pipelines::WORKER_STACK_BYTES)
                 .build()
                 .map_err(|e| err(format!("montecarlo: thread pool: {e}")))?,
         ),

@@ -327,7 +327,7 @@ fn stage_watched<T: Send + 'static>(
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::Builder::new()
         .name("whole-record".into())
-        .stack_size(64 << 20)
+        .stack_size(aeroident_pipelines::WORKER_STACK_BYTES)
         .spawn(move || {
             let _ = tx.send(stage());
         })
@@ -1025,6 +1025,7 @@ fn fit_watched<T: Send + 'static>(
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::Builder::new()
         .name("batch-fit".into())
+        .stack_size(aeroident_pipelines::WORKER_STACK_BYTES)
         .spawn(move || {
             let _ = tx.send(fit());
         })

@@ -33,6 +33,7 @@
 
 use aeroident_estimators::AirDataSample;
 use aeroident_io::Mapping;
+use aeroident_physics::rigid_body::{SinCos, euler_rates};
 use nalgebra::{DMatrix, DVector};
 
 /// Unknowns: gains of p, q, r, then the biases of the φ̇, θ̇, ψ̇ equations.
@@ -124,26 +125,31 @@ impl Kinematics {
         let phi = mid(|s| s.phi_rad).map(wrapped);
         let theta = mid(|s| s.theta_rad);
         let rate = |f: fn(&AirDataSample) -> Option<f64>| Some(wrapped(f(b)? - f(a)?) / dt);
-        let (sphi, cphi) = phi.map_or((0.0, 1.0), f64::sin_cos);
         let th = theta.unwrap_or(0.0);
         if th.cos().abs() < 0.1 {
             return;
         }
-        let (tth, sec) = (th.tan(), 1.0 / th.cos());
-        // θ̇ = q cosφ − r sinφ.
-        if let (Some(y), Some(q)) = (rate(|s| s.theta_rad), q) {
-            self.add([0.0, q * cphi, -r.unwrap_or(0.0) * sphi], 1, y);
+        // The kinematics are linear in (p, q, r): column c of their matrix is the Euler rates
+        // of a unit rate c, so each channel's share of each equation comes from the one
+        // definition in the physics crate. A channel not mapped contributes nothing.
+        let (sphi, stheta) = (SinCos::of(phi.unwrap_or(0.0)), SinCos::of(th));
+        let unit =
+            |c: usize| euler_rates(core::array::from_fn(|i| f64::from(i == c)), sphi, stheta);
+        let columns = [unit(0), unit(1), unit(2)];
+        let share = |eq: usize, rates: [Option<f64>; 3]| -> [f64; 3] {
+            core::array::from_fn(|c| columns[c][eq] * rates[c].unwrap_or(0.0))
+        };
+        // φ̇ = p + tanθ (q sinφ + r cosφ), θ̇ = q cosφ − r sinφ, ψ̇ = (q sinφ + r cosφ)/cosθ.
+        if let (Some(y), Some(_)) = (rate(|s| s.phi_rad), p) {
+            self.add(share(0, [p, q, r]), 0, y);
         }
-        // φ̇ = p + tanθ (q sinφ + r cosφ).
-        if let (Some(y), Some(p)) = (rate(|s| s.phi_rad), p) {
-            let (qs, rc) = (q.unwrap_or(0.0) * sphi, r.unwrap_or(0.0) * cphi);
-            self.add([p, tth * qs, tth * rc], 0, y);
+        if let (Some(y), Some(_)) = (rate(|s| s.theta_rad), q) {
+            self.add(share(1, [None, q, r]), 1, y);
         }
-        // ψ̇ = (q sinφ + r cosφ) / cosθ.
-        if let (Some(y), Some(q), Some(r), Some(_), Some(_)) =
+        if let (Some(y), Some(_), Some(_), Some(_), Some(_)) =
             (rate(|s| s.psi_rad), q, r, phi, theta)
         {
-            self.add([0.0, sec * q * sphi, sec * r * cphi], 2, y);
+            self.add(share(2, [None, q, r]), 2, y);
         }
     }
 

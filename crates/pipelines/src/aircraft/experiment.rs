@@ -198,7 +198,7 @@ impl ResolvedIncrement {
 }
 
 /// The reference aircraft's truth over one interval of constant increments.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct TruthEpoch {
     /// Start of the interval, s (0 for the first).
     pub from_s: f64,

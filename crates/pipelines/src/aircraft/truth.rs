@@ -27,17 +27,32 @@
 //! structure's product terms `s` ([`LocalDerivatives::truth`]), e.g. `Cl_p = ∂Cl/∂p̂ −
 //! Cl_alpha_p α₀`.
 //!
+//! The α splines `alpha_k1…alpha_k4` (`(α − k)₊`, knots from the structure) have as truth the
+//! jump of the α-slope at their knot, `∂C/∂α(k⁺) − ∂C/∂α(k⁻)`, with every other variable at the
+//! point ([`LocalDerivatives::alpha_slope_jump`]). The tables are piecewise linear in α between
+//! their α breakpoints (−10…45° by 5°), so the jump is zero except at a breakpoint, where it is
+//! taken from one-sided slopes [`FD_STEP_ALPHA`] and twice that away, extrapolated to the
+//! breakpoint (the stability-axis rotation of `CL`, `CD` curves the segments slightly). With a
+//! spline in a structure, its `C_α` is the slope below every knot the point lies above:
+//! `C_α = ∂C/∂α − Σ_{k < α₀} ΔC_α(k)`.
+//!
+//! `mach` and `mach2` are 0 exactly: the Stevens–Lewis tables are low-speed data with no Mach
+//! dependence (SLJ App. A). Their regressors at the point use the vocabulary's speed of sound
+//! (the standard temperature of the density altitude,
+//! [`aeroident_estimators::sample::AirDataSample::mach`]).
+//!
 //! Units and axes (as [`aeroident_estimators::vocabulary`]): forces `CX CY CZ` body axes,
 //! `CL CD` stability axes with the air-relative α; moments `Cl Cm Cn` body axes about the actual
 //! CG (the model's cg transfer included); per rad, per unit p̂ = pb/2V, q̂ = qc̄/2V, r̂ = rb/2V.
 //! The bias `C_0` of a structure is the intercept of the tangent plane through the point:
 //! `C_0 = C(x₀) − Σ_{j ≠ 0} C_j ξ_j(x₀)` over the structure's terms of that coefficient.
 
-use aeroident_estimators::vocabulary::{Coefficient, ModelStructure, N_TERMS, Param, Term};
+use aeroident_estimators::vocabulary::{Coefficient, ModelStructure, N_TERMS, Param, Term, spline};
 use aeroident_models::ModelError;
 use aeroident_models::f16::{
     self, AeroCoefficients, AeroIncrements, F16, F16Controls, F16State, IncrementReference,
 };
+use aeroident_physics::isa;
 
 /// Finite-difference step (rad, or per unit hat-rate / V/V0).
 pub const FD_STEP: f64 = 1e-6;
@@ -45,6 +60,19 @@ pub const FD_STEP: f64 = 1e-6;
 /// The α step of the mixed second derivatives, rad (0.006°: inside any 5° table segment
 /// unless the point is that close to a breakpoint; rounding error ≈ 1e-16/(1e-6 · 1e-4)).
 pub const FD_STEP_ALPHA: f64 = 1e-4;
+
+/// A knot this close to a table breakpoint, rad, is at it: the model's breakpoints are
+/// degrees over the textbook's 57.29578 (≈ 1e-9 rad from `k.to_radians()`).
+pub const KNOT_AT_BREAKPOINT_RAD: f64 = 1e-6;
+
+/// The jump of every coefficient's α-slope at one α breakpoint of the model's tables.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AlphaKink {
+    /// The breakpoint, rad.
+    pub alpha_rad: f64,
+    /// `∂C/∂α(k⁺) − ∂C/∂α(k⁻)` per rad, vocabulary order `CX CY CZ CL CD Cl Cm Cn`.
+    pub jump: [f64; 8],
+}
 
 /// The product terms of the vocabulary with their two factors ([`Term::factors`]).
 fn products() -> impl Iterator<Item = (Term, Term, Term)> {
@@ -57,14 +85,17 @@ pub fn coefficient_vector(c: &AeroCoefficients) -> [f64; 8] {
 }
 
 /// Local derivatives of every coefficient w.r.t. every first-order term at one point.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct LocalDerivatives {
     /// Coefficients at the point, vocabulary order.
     pub value: [f64; 8],
-    /// Regressor values `ξ_j` at the point (vocabulary units: α, β rad; hats; δ rad; V/V0 = 1).
+    /// Regressor values `ξ_j` at the point (vocabulary units: α, β rad; hats; δ rad; V/V0 = 1;
+    /// Mach); `None` for the α splines, whose knots belong to a structure.
     pub regressor: [Option<f64>; N_TERMS],
-    /// `∂C_k/∂ξ_j`, `[coefficient][term]`; `None` for the bias and second-order terms.
+    /// `∂C_k/∂ξ_j`, `[coefficient][term]`; `None` for the bias and the α splines.
     pub d: [[Option<f64>; N_TERMS]; 8],
+    /// The α-slope jumps at the tables' α breakpoints, ascending (module doc).
+    pub alpha_kinks: Vec<AlphaKink>,
 }
 
 impl LocalDerivatives {
@@ -80,8 +111,14 @@ impl LocalDerivatives {
     /// (module doc). `None` where no single true value exists.
     pub fn truth(&self, structure: &ModelStructure, p: Param) -> Option<f64> {
         let c = p.coefficient;
+        if let Some(i) = p.term.knot() {
+            return Some(self.alpha_slope_jump(c, structure.knots().get(i)?));
+        }
         if p.term != Term::Bias {
             let mut v = self.derivative(p)?;
+            if p.term == Term::Alpha {
+                v -= self.spline_slope_at_point(structure, c)?;
+            }
             for (s, a, b) in products() {
                 if structure.contains(Param::new(c, s)) && (a == p.term || b == p.term) {
                     // ∂(ξa ξb)/∂ξt at the point: the other factor (2 α for α²).
@@ -94,9 +131,44 @@ impl LocalDerivatives {
         }
         let mut v = self.value[c.index()];
         for t in structure.terms_of(c).filter(|t| *t != Term::Bias) {
-            v -= self.truth(structure, Param::new(c, t))? * self.regressor[t.index()]?;
+            v -= self.truth(structure, Param::new(c, t))? * self.regressor_in(structure, t)?;
         }
         Some(v)
+    }
+
+    /// `∂C/∂α(k⁺) − ∂C/∂α(k⁻)` of coefficient `c` at the knot `knot_rad` (module doc): the jump
+    /// at a table breakpoint within [`KNOT_AT_BREAKPOINT_RAD`], zero elsewhere.
+    pub fn alpha_slope_jump(&self, c: Coefficient, knot_rad: f64) -> f64 {
+        self.alpha_kinks
+            .iter()
+            .find(|k| (k.alpha_rad - knot_rad).abs() <= KNOT_AT_BREAKPOINT_RAD)
+            .map_or(0.0, |k| k.jump[c.index()])
+    }
+
+    /// What the structure's α splines of `c` add to its α-slope at the point: the jumps at the
+    /// knots below the point's α.
+    fn spline_slope_at_point(&self, structure: &ModelStructure, c: Coefficient) -> Option<f64> {
+        let alpha = self.regressor[Term::Alpha.index()]?;
+        let mut v = 0.0;
+        for t in structure.terms_of(c) {
+            if let Some(i) = t.knot() {
+                let k = structure.knots().get(i)?;
+                if alpha > k {
+                    v += self.alpha_slope_jump(c, k);
+                }
+            }
+        }
+        Some(v)
+    }
+
+    /// The regressor of term `t` at the point, the α splines with `structure`'s knots.
+    fn regressor_in(&self, structure: &ModelStructure, t: Term) -> Option<f64> {
+        match t.knot() {
+            Some(i) => {
+                Some(spline(self.regressor[Term::Alpha.index()]?, structure.knots().get(i)?))
+            }
+            None => self.regressor[t.index()],
+        }
     }
 }
 
@@ -143,10 +215,76 @@ pub fn local_derivatives(
     regressor[Term::Da.index()] = Some(u.aileron_rad);
     regressor[Term::Dr.index()] = Some(u.rudder_rad);
     regressor[Term::V.index()] = Some(1.0);
+    let mach = mach_at(f16, x, &u)?;
+    regressor[Term::Mach.index()] = mach;
+    regressor[Term::Mach2.index()] = mach.map(|m| m * m);
     for (s, a, b) in products() {
         regressor[s.index()] = regressor[a.index()].zip(regressor[b.index()]).map(|(a, b)| a * b);
     }
-    Ok(LocalDerivatives { value, regressor, d })
+    let alpha_kinks = alpha_kinks(f16, x, &u, inc)?;
+    Ok(LocalDerivatives { value, regressor, d, alpha_kinks })
+}
+
+/// The Mach number at the point as the vocabulary forms it
+/// ([`aeroident_estimators::sample::AirDataSample::mach`]): the
+/// speed of sound at the standard temperature of the density altitude, `ρ = 2 q̄ / V²`; `None`
+/// outside the standard atmosphere's range.
+fn mach_at(f16: &F16, x: &F16State, u: &F16Controls) -> Result<Option<f64>, ModelError> {
+    use aeroident_physics::units::{M_PER_FT, PA_PER_PSF};
+    let o = f16.outputs(0.0, x, u)?;
+    let vt = x[f16::VT] * M_PER_FT;
+    let rho = 2.0 * o.qbar_psf * PA_PER_PSF / (vt * vt);
+    let a = isa::temperature_of_density_k(rho).map(isa::speed_of_sound_mps);
+    Ok(a.map(|a| vt / a))
+}
+
+/// The α breakpoints of every table of the model's data, rad, ascending, each once.
+fn alpha_breakpoints_rad(f16: &F16) -> Vec<f64> {
+    let d = f16.data();
+    let mut deg: Vec<f64> = [&d.cx.r, &d.cm.r].into_iter().flatten().copied().collect();
+    for t in [&d.cl, &d.cn, &d.dlda, &d.dldr, &d.dnda, &d.dndr] {
+        deg.extend(t.r);
+    }
+    deg.extend(d.cz.table.x);
+    for t in &d.damping {
+        deg.extend(t.x);
+    }
+    deg.sort_by(f64::total_cmp);
+    deg.dedup();
+    deg.into_iter().map(|a| a / d.rad_to_deg).collect()
+}
+
+/// The α-slope jump of every coefficient at each α breakpoint, every other variable at the
+/// point: one-sided slopes at `h` and `2h` from the breakpoint (`h` = [`FD_STEP_ALPHA`])
+/// extrapolated to it, `2 s(h) − s(2h)`, so the segments' own curvature cancels.
+fn alpha_kinks(
+    f16: &F16,
+    x: &F16State,
+    u: &F16Controls,
+    inc: &AeroIncrements,
+) -> Result<Vec<AlphaKink>, ModelError> {
+    let slope_at = |alpha: f64| -> Result<[f64; 8], ModelError> {
+        let (mut xp, mut xm) = (*x, *x);
+        xp[f16::ALPHA] = alpha + FD_STEP;
+        xm[f16::ALPHA] = alpha - FD_STEP;
+        let c = |x: &F16State| {
+            f16.evaluate(x, u, inc).map(|(_, o)| coefficient_vector(&o.coefficients))
+        };
+        let (p, m) = (c(&xp)?, c(&xm)?);
+        Ok(core::array::from_fn(|k| (p[k] - m[k]) / (2.0 * FD_STEP)))
+    };
+    let h = FD_STEP_ALPHA;
+    let side = |k: f64, sign: f64| -> Result<[f64; 8], ModelError> {
+        let (s1, s2) = (slope_at(k + sign * h)?, slope_at(k + sign * 2.0 * h)?);
+        Ok(core::array::from_fn(|i| 2.0 * s1[i] - s2[i]))
+    };
+    alpha_breakpoints_rad(f16)
+        .into_iter()
+        .map(|k| {
+            let (above, below) = (side(k, 1.0)?, side(k, -1.0)?);
+            Ok(AlphaKink { alpha_rad: k, jump: core::array::from_fn(|i| above[i] - below[i]) })
+        })
+        .collect()
 }
 
 /// `∂C_k/∂ξ_j` of the first-order terms at (`x`, `u`), still air (`u` already without wind);
@@ -206,8 +344,11 @@ fn first_order(
         *field(&mut um) -= h;
         put(term, coeffs(x, &up)?, coeffs(x, &um)?, h);
     }
+    // The tables depend on neither α̇ nor Mach (low-speed data, SLJ App. A).
     for row in &mut d {
-        row[Term::Alphadot.index()] = Some(0.0);
+        for t in [Term::Alphadot, Term::Mach, Term::Mach2] {
+            row[t.index()] = Some(0.0);
+        }
     }
     Ok(d)
 }
@@ -421,6 +562,60 @@ mod tests {
             let v = ll.derivative(p(n)).unwrap();
             assert!(v.abs() < 1e-5, "linear aircraft {n} = {v}");
         }
+    }
+
+    /// The α splines against the tables themselves: with knots on the 0° and 5° breakpoints,
+    /// the body-axis `CX`, `CZ` and `Cm` are linear in α on each 5° segment at the trim's other
+    /// variables, so the structure `1, α, (α−0°)₊, (α−5°)₊` through the truths reproduces the
+    /// model's own values from −4° to 9°, on both sides of both knots. The stability-axis `CL`
+    /// jump is the rotation of the body-axis ones (`−ΔCZ_α cos k + ΔCX_α sin k`); a knot between
+    /// breakpoints has no jump; the tables have no Mach term, and the point's Mach is the
+    /// standard atmosphere's (675 ft/s at 20,000 ft: 675/1036.9, ICAO table).
+    #[test]
+    fn alpha_splines_are_the_tables_slope_jumps() {
+        use aeroident_estimators::vocabulary::AlphaKnots;
+        let (f, t) = thesis_trim();
+        let ld = local_derivatives(&f, &t.state, &t.controls, &AeroIncrements::zero()).unwrap();
+        let knots = AlphaKnots::new(&[0.0, 5f64.to_radians()]).unwrap();
+        let terms = [Term::Alpha, Term::AlphaK1, Term::AlphaK2];
+        let mut st = ModelStructure::default().with_knots(knots);
+        for c in [Coefficient::CX, Coefficient::CZ, Coefficient::Cm, Coefficient::CL] {
+            st = st.with(c, &terms);
+        }
+        let u = F16Controls { wind_ned_fps: [0.0; 3], wind_body_fps: [0.0; 3], ..t.controls };
+        for c in [Coefficient::CX, Coefficient::CZ, Coefficient::Cm] {
+            let th = |t: Term| ld.truth(&st, Param::new(c, t)).unwrap();
+            assert!(th(Term::AlphaK2).abs() > 1e-3, "{c:?}: the 5° breakpoint has a kink");
+            for a_deg in [-4.0, -1.0, 3.0, 7.0, 9.0] {
+                let a = f64::to_radians(a_deg);
+                let mut x = t.state;
+                x[f16::ALPHA] = a;
+                let model = coefficient_vector(
+                    &f.evaluate(&x, &u, &AeroIncrements::zero()).unwrap().1.coefficients,
+                );
+                let fit = th(Term::Bias)
+                    + th(Term::Alpha) * a
+                    + th(Term::AlphaK1) * spline(a, 0.0)
+                    + th(Term::AlphaK2) * spline(a, 5f64.to_radians());
+                let want = model[c.index()];
+                assert!((fit - want).abs() < 1e-7, "{c:?} at {a_deg}°: {fit} vs {want}");
+            }
+        }
+        let k = 5f64.to_radians();
+        let jump = |c: Coefficient| ld.alpha_slope_jump(c, k);
+        let rotated = -jump(Coefficient::CZ) * k.cos() + jump(Coefficient::CX) * k.sin();
+        assert!(
+            (jump(Coefficient::CL) - rotated).abs() < 1e-6,
+            "CL jump {}",
+            jump(Coefficient::CL)
+        );
+        assert_eq!(ld.alpha_slope_jump(Coefficient::Cm, 7f64.to_radians()), 0.0);
+        let with_mach =
+            ModelStructure::longitudinal().with(Coefficient::Cm, &[Term::Mach, Term::Mach2]);
+        assert_eq!(ld.truth(&with_mach, p("Cm_mach")), Some(0.0));
+        assert_eq!(ld.truth(&with_mach, p("Cm_mach2")), Some(0.0));
+        let mach = ld.regressor[Term::Mach.index()].unwrap();
+        assert!((mach - 675.0 / 1036.9).abs() < 0.003, "Mach {mach}");
     }
 
     /// The linearised F-16 (matched truth): at trim it has the tables' values and local

@@ -43,14 +43,16 @@ pub mod window;
 pub use error::{Context, PipelineError};
 pub use named::Named;
 
-/// Stack size, bytes, for the threads that fly, replay and fit (rayon workers, fit threads).
+/// Stack size, bytes, for the threads that fly, replay and fit (rayon workers, fit threads):
+/// margin over the 2 MiB default of a spawned thread, which every six-axis run fits in.
 ///
-/// The estimators are fixed-capacity and allocation-free (the core is `no_std`), so a run holds
-/// their state by value while it builds and boxes them; with the vocabulary's 26 terms a
-/// six-axis run needs about 2.4 MiB, past the 2 MiB default of a spawned thread. 64 MiB is
-/// address space reserved per thread, not memory used. The CLI and Python give it to every
-/// thread pool they build; `.cargo/config.toml` gives it to test threads (`RUST_MIN_STACK`).
-pub const WORKER_STACK_BYTES: usize = 64 << 20;
+/// The estimators are fixed-capacity and allocation-free (the core is `no_std`), so each is
+/// built by value before it is boxed ([`estimators::build`], one estimator on the stack at a
+/// time). Measured with `crates/aeroident/examples/stack_need.rs`, a six-axis run needs at
+/// most 1.2 MiB (`replay --estimator rls-iv`; `aeroident run` and `montecarlo` 0.6 MiB). The
+/// CLI and Python give this to every thread pool they build, `.cargo/config.toml` to test
+/// threads (`RUST_MIN_STACK`); it is address space reserved per thread, not memory used.
+pub const WORKER_STACK_BYTES: usize = 8 << 20;
 
 /// Makes rayon's global pool use [`WORKER_STACK_BYTES`] stacks. Call before any parallel work;
 /// a pool already built keeps its stacks (the call then does nothing).

@@ -145,6 +145,11 @@ fn strings(v: &serde_json::Value) -> Vec<&str> {
     v.as_array().unwrap().iter().map(|s| s.as_str().unwrap()).collect()
 }
 
+fn sigma(summary: &serde_json::Value, name: &str) -> f64 {
+    let p = summary["parameters"].as_array().unwrap().iter().find(|p| p["name"] == name);
+    p.unwrap_or_else(|| panic!("{name} not estimated"))["std_error"].as_f64().unwrap()
+}
+
 fn estimate(summary: &serde_json::Value, name: &str) -> f64 {
     let p = summary["parameters"].as_array().unwrap().iter().find(|p| p["name"] == name);
     p.unwrap_or_else(|| panic!("{name} not estimated"))["estimate"].as_f64().unwrap()
@@ -232,6 +237,10 @@ fn errors_model_auto_arguments() {
     let e = run(&[d, "--model", "auto", "--candidates", "alpha,bogus"]);
     assert!(e.contains("`bogus`"), "{e}");
     assert!(run(&[d, "--model", "auto", "--candidates", "0"]).contains("`0`"));
+    let e = run(&[d, "--model", "longitudinal", "--knots-deg", "5"]);
+    assert!(e.contains("knots") && e.contains("`auto`"), "{e}");
+    let e = run(&[d, "--model", "auto", "--knots-deg", "5,3"]);
+    assert!(e.contains("α knots") && e.contains("ascending"), "{e}");
 }
 
 /// A scope the record cannot measure says what the mapping lacks: the HFB-320 record is
@@ -278,6 +287,64 @@ fn val_f16_default_flight_selects_the_shipped_structure() {
             .unwrap();
     assert_eq!(model.structure, shipped.structure, "{}", s["structure_selection"]);
     assert!(strings(&selected(&s, "Cl")["kept"]).contains(&"alpha_beta"));
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// An F-16 flight whose α crosses the tables' 5° breakpoint
+/// (`scenarios/sim/breakpoint_crossing_measured.toml`, 3.3–9.2°, sensor noise, turbulence).
+/// `--knots-deg 5` offers `alpha_k1` at that knot to the longitudinal coefficients. With the
+/// spline in the model (`models/f16_breakpoint_spline.toml`), RLS puts `Cm_alpha` (the slope
+/// below the knot) and `Cm_alpha_k1` (the slope's jump there) within 3σ of the tables' own
+/// values (`aircraft::truth`, finite differences each side of the breakpoint: −0.138 and
+/// −0.051). The preset's single `Cm_alpha` misses the local slope at the trim by more than
+/// 3σ: its σ does not show the structure's bias.
+#[test]
+fn val_f16_spline_at_a_table_breakpoint() {
+    use aeroident_estimators::vocabulary::{AlphaKnots, ModelStructure, Param};
+    use aeroident_models::f16::{AeroIncrements, F16};
+    use aeroident_models::trim::{TrimCondition, trim};
+    let out = std::env::temp_dir().join(format!("aeroident-f16-spline-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let sim = bin()
+        .args(["f16", "sim"])
+        .arg(workspace().join("scenarios/sim/breakpoint_crossing_measured.toml"))
+        .arg("--out")
+        .arg(out.join("sim"))
+        .output()
+        .unwrap();
+    assert!(sim.status.success(), "{}", String::from_utf8_lossy(&sim.stderr));
+    let data = out.join("sim/timeseries.csv");
+    let map = "aeroident-sim-measured.toml";
+    let args = ["--model", "auto:longitudinal", "--knots-deg", "5"];
+    let (s, _) = auto_replay(&data, map, &args, "f16-knots");
+    assert_eq!(s["structure_selection"]["alpha_knots_deg"][0].as_f64(), Some(5.0));
+    assert!(strings(&selected(&s, "Cm")["candidates"]).contains(&"alpha_k1"));
+
+    let f16 = F16::new(0.30).unwrap();
+    let t = trim(&f16, &TrimCondition::level(20_000.0, 480.0)).unwrap();
+    let ld = aeroident_pipelines::aircraft::truth::local_derivatives(
+        &f16,
+        &t.state,
+        &t.controls,
+        &AeroIncrements::zero(),
+    )
+    .unwrap();
+    let spline_model = workspace().join("models/f16_breakpoint_spline.toml");
+    let (s, ..) = replay_out(&data, map, &["--model", spline_model.to_str().unwrap()], "spline");
+    let st = ModelStructure::longitudinal()
+        .with(Coefficient::Cm, &[Term::AlphaK1])
+        .with_knots(AlphaKnots::new(&[5f64.to_radians()]).unwrap());
+    for name in ["Cm_alpha", "Cm_alpha_k1"] {
+        let truth = ld.truth(&st, Param::from_name(name).unwrap()).unwrap();
+        let (e, sd) = (estimate(&s, name), sigma(&s, name));
+        eprintln!("{name}: {e:.4} ± {sd:.4}, truth {truth:.4}");
+        assert!((e - truth).abs() < 3.0 * sd, "{name}: {e} ± {sd} vs truth {truth}");
+    }
+    let (s, ..) = replay_out(&data, map, &["--model", "longitudinal"], "preset");
+    let local = ld.derivative(Param::from_name("Cm_alpha").unwrap()).unwrap();
+    let (e, sd) = (estimate(&s, "Cm_alpha"), sigma(&s, "Cm_alpha"));
+    eprintln!("preset Cm_alpha: {e:.4} ± {sd:.4}, local truth {local:.4}");
+    assert!((e - local).abs() > 3.0 * sd, "the preset's Cm_alpha {e} ± {sd} vs {local}");
     let _ = std::fs::remove_dir_all(&out);
 }
 

@@ -72,7 +72,7 @@ fn matrix(v: Vec<f64>, rows: usize, cols: usize) -> PyResult<Array2<f64>> {
 /// (documentation:
 /// `aeroident.fit` in python/aeroident/__init__.py).
 #[pyfunction]
-#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None, max_iterations=None, process_noise=None, compat=None, windows=None, also=None, select="swr", candidates=None, band_hz=None))]
+#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None, max_iterations=None, process_noise=None, compat=None, windows=None, also=None, select="swr", candidates=None, band_hz=None, knots_deg=None))]
 #[allow(clippy::too_many_arguments)]
 fn fit_file<'py>(
     py: Python<'py>,
@@ -91,8 +91,10 @@ fn fit_file<'py>(
     select: &str,
     candidates: Option<Vec<String>>,
     band_hz: Option<(f64, f64)>,
+    knots_deg: Option<Vec<f64>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (select, candidates) = (select.to_owned(), candidates.unwrap_or_default());
+    let knots_deg = knots_deg.unwrap_or_default();
     let windows = crate::record::time_windows("fit", windows)?;
     let also = also.unwrap_or_default();
     let compat = compat
@@ -128,6 +130,7 @@ fn fit_file<'py>(
             model.as_deref(),
             &select,
             &candidates,
+            &knots_deg,
             open,
             &mapping,
             compat.as_ref(),

@@ -187,7 +187,7 @@ fn derivative_source(s: &str) -> PyResult<DerivativeSource> {
 /// Replays a record file exactly as `aeroident replay DATA --map MAPPING` (module doc of the
 /// Python package).
 #[pyfunction]
-#[pyo3(signature = (path, mapping, estimator="rls", model=None, forgetting=1.0, derivatives="auto", diff_window=5, compat=None, windows=None, cross_check=false, select="swr", candidates=None))]
+#[pyo3(signature = (path, mapping, estimator="rls", model=None, forgetting=1.0, derivatives="auto", diff_window=5, compat=None, windows=None, cross_check=false, select="swr", candidates=None, knots_deg=None))]
 #[allow(clippy::too_many_arguments)]
 fn replay_file<'py>(
     py: Python<'py>,
@@ -203,8 +203,10 @@ fn replay_file<'py>(
     cross_check: bool,
     select: &str,
     candidates: Option<Vec<String>>,
+    knots_deg: Option<Vec<f64>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (select, candidates) = (select.to_owned(), candidates.unwrap_or_default());
+    let knots_deg = knots_deg.unwrap_or_default();
     let kind = estimator_kind(estimator)?;
     let windows = time_windows("replay", windows)?;
     let compat = compat.map(str::to_owned);
@@ -228,6 +230,7 @@ fn replay_file<'py>(
             model.as_deref(),
             &select,
             &candidates,
+            &knots_deg,
             open,
             &mapping,
             compat.as_ref(),

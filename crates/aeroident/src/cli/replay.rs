@@ -4,7 +4,7 @@
 //! aeroident replay <data.csv|.asc|.mat|-> --map <map.toml> [--format csv|asc|mat|ulog|dataflash]
 //!                  [--out <dir>]
 //!                  [--model longitudinal|lateral|six-axis|FILE|auto[:longitudinal|lateral|six-axis]]
-//!                  [--select swr|mof] [--candidates TERM,…]
+//!                  [--select swr|mof] [--candidates TERM,…] [--knots-deg K,…]
 //!                  [--estimator rls|rls-iv|ftr|ekf|smpe|smpe-corrected|smpe-finite-time|gradient|oe|fem|fdoe]
 //!                  [--band-hz F_MIN:F_MAX]
 //!                  [--forgetting λ] [--instrument-delay N]
@@ -104,11 +104,17 @@ pub struct ReplayArgs {
     pub select: String,
     /// `--model auto`: the candidate terms of every coefficient, comma-separated (vocabulary
     /// names: alpha, q, alphadot, de, V, alpha2, alpha_de, alpha_q, beta, p, r, da, dr,
-    /// alpha_beta, alpha_p, alpha_r, alpha_da, alpha_dr).
+    /// alpha_beta, alpha_p, alpha_r, alpha_da, alpha_dr, alpha_k1…alpha_k4, mach, mach2).
     /// Default: per coefficient, its preset's terms and the usual nonlinear ones; `alphadot`
     /// only when listed here (it also stands in for a lag of the α channel).
     #[arg(long, value_delimiter = ',')]
     pub candidates: Vec<String>,
+    /// `--model auto`: the α knots of the spline candidates, degrees, ascending,
+    /// comma-separated (at most four; e.g. a table's breakpoints). With the default candidates
+    /// it offers `alpha_k1…alpha_kn` to the longitudinal coefficients. Default: knots at the
+    /// record's α quantiles, as many as the highest `alpha_k<n>` in `--candidates`.
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub knots_deg: Vec<f64>,
     /// The estimator.
     #[arg(long, value_parser = super::named::<EstimatorKind>(), default_value = "rls")]
     pub estimator: EstimatorKind,
@@ -817,6 +823,7 @@ fn resolve_model(
         args.model.as_deref(),
         &args.select,
         &args.candidates,
+        &args.knots_deg,
         open,
         mapping,
         compat,

@@ -86,6 +86,11 @@ pub struct AutoModel {
     pub method: Method,
     /// The candidates of every coefficient; `None`: the defaults.
     pub candidates: Option<Vec<Term>>,
+    /// The α knots of the spline candidates, given by the user (e.g. at a table's
+    /// breakpoints); `None`: at the record's α quantiles ([`alpha_quantile_knots`]). Given
+    /// knots with the default candidates add `alpha_k1…alpha_kn` to every longitudinal
+    /// coefficient's.
+    pub knots: Option<AlphaKnots>,
 }
 
 impl AutoModel {
@@ -106,7 +111,66 @@ impl AutoModel {
                 )));
             }
         };
-        Some(Ok(Self { scope, method, candidates: None }))
+        Some(Ok(Self { scope, method, candidates: None, knots: None }))
+    }
+
+    /// This selection with the spline knots `knots_deg` (degrees, ascending) given; empty
+    /// leaves the knots to the record's α quantiles.
+    ///
+    /// # Errors
+    /// Knots [`AlphaKnots::new`] refuses (unsorted, repeated, beyond ±90°, more than four).
+    pub fn with_knots_deg(self, knots_deg: &[f64]) -> Result<Self, String> {
+        if knots_deg.is_empty() {
+            return Ok(self);
+        }
+        let rad: Vec<f64> = knots_deg.iter().map(|k| k.to_radians()).collect();
+        let knots = AlphaKnots::new(&rad).map_err(|e| format!("α knots {knots_deg:?}°: {e}"))?;
+        Ok(Self { knots: Some(knots), ..self })
+    }
+
+    /// The candidates offered to coefficient `c`: the given ones, else the defaults and, with
+    /// given knots, one spline per knot for the longitudinal coefficients (a symmetric
+    /// aircraft's `CY`, `Cl`, `Cn` are odd in β: their α-dependence enters through the α
+    /// products).
+    fn offered(&self, c: Coefficient) -> Vec<Term> {
+        if let Some(given) = &self.candidates {
+            return given.clone();
+        }
+        let mut terms = Scope::default_candidates(c);
+        if !matches!(c, Coefficient::CY | Coefficient::Cl | Coefficient::Cn) {
+            let n = self.knots.map_or(0, |k| k.len());
+            terms.extend((0..n).filter_map(Term::spline));
+        }
+        terms
+    }
+
+    /// The knots of the spline candidates: the given ones, checked against the candidates and
+    /// the record's α range, else the record's α quantiles.
+    fn knots_on(
+        &self,
+        manoeuvres: &[&[AirDataSample]],
+        candidates: &[Term],
+    ) -> Result<AlphaKnots, String> {
+        let Some(knots) = self.knots else {
+            return alpha_quantile_knots(manoeuvres, candidates);
+        };
+        let splines = candidates.iter().filter_map(|t| t.knot());
+        if let Some(i) = splines.clone().find(|&i| i >= knots.len()) {
+            return Err(format!(
+                "candidate `{}` needs {} α knots; {} given",
+                Term::spline(i).map_or("", |t| t.name()),
+                i + 1,
+                knots.len()
+            ));
+        }
+        if splines.count() == 0 {
+            return Err(
+                "α knots are given but no spline (`alpha_k1` …) is among the candidates".into()
+            );
+        }
+        let probe = ModelStructure::empty().with_knots(knots);
+        super::check_knots_in_range(&probe, manoeuvres, "the given α knots")?;
+        Ok(knots)
     }
 
     /// The faces' arguments: a `--model` value, the method's name ([`Method::from_name`]) and
@@ -179,7 +243,7 @@ pub fn select_model<R: Read>(
 ) -> Result<AutoSelection, ReplayError> {
     let file = readers.first().map_or(String::new(), |r| r.file().to_string());
     let (raw, first) = read_for_selection(readers, compat, windows)?;
-    let offered = |c| auto.candidates.clone().unwrap_or_else(|| Scope::default_candidates(c));
+    let offered = |c| auto.offered(c);
     let scope = auto.scope.unwrap_or_else(|| richest_scope(&first));
     let coefficients = scope.coefficients();
     let candidates: Vec<Term> = coefficients.iter().flat_map(|&c| offered(c)).collect();
@@ -192,7 +256,8 @@ pub fn select_model<R: Read>(
         ))
     })?;
     let slices = rec.slices();
-    let knots = alpha_quantile_knots(&slices, &candidates)
+    let knots = auto
+        .knots_on(&slices, &candidates)
         .map_err(|e| ReplayError::Model(format!("{file}: {e}")))?;
     let mut unavailable = Vec::new();
     let mut selections = Vec::new();
@@ -229,7 +294,8 @@ pub fn select_model<R: Read>(
     })
 }
 
-/// The model of a face's arguments (`--model`, `--select`, `--candidates`): a preset or a
+/// The model of a face's arguments (`--model`, `--select`, `--candidates`, `--knots-deg`): a
+/// preset or a
 /// model file as [`ModelSpec::from_arg`] reads it, or, for `auto…`, the structure
 /// [`select_model`] chooses on the records `open` gives (`None` and `None`: no model given).
 ///
@@ -241,6 +307,7 @@ pub fn model_from_args<R: Read>(
     model: Option<&str>,
     method: &str,
     candidates: &[String],
+    alpha_knots_deg: &[f64],
     open: impl FnOnce() -> Result<Vec<FlightDataReader<R>>, aeroident_io::FlightDataError>,
     mapping: &Mapping,
     compat: Option<&crate::compat::Corrections>,
@@ -249,16 +316,18 @@ pub fn model_from_args<R: Read>(
 ) -> Result<(Option<ModelSpec>, Option<AutoSelection>), ReplayError> {
     let arg = model.unwrap_or_default();
     let Some(auto) = AutoModel::from_args(arg, method, candidates) else {
-        if !candidates.is_empty() || method != "swr" {
+        if !candidates.is_empty() || !alpha_knots_deg.is_empty() || method != "swr" {
             return Err(ReplayError::Option {
                 option: "select",
-                reason: "a selection method and candidates apply to the model `auto`".into(),
+                reason: "a selection method, candidates and knots apply to the model `auto`".into(),
             });
         }
         let spec = model.map(ModelSpec::from_arg).transpose();
         return Ok((spec.map_err(|e| ReplayError::Model(e.to_string()))?, None));
     };
-    let auto = auto.map_err(|e| ReplayError::Model(format!("model `{arg}`: {e}")))?;
+    let auto = auto
+        .and_then(|a| a.with_knots_deg(alpha_knots_deg))
+        .map_err(|e| ReplayError::Model(format!("model `{arg}`: {e}")))?;
     let selection = select_model(open()?, mapping, &auto, compat, windows, diff_window)?;
     Ok((Some(selection.model.clone()), Some(selection)))
 }
@@ -384,7 +453,7 @@ pub struct StructureReport {
     pub f_out: Option<f64>,
     /// The coefficients covered.
     pub scope: &'static str,
-    /// The α knots of the spline candidates, degrees (the record's α quantiles,
+    /// The α knots of the spline candidates, degrees (given, or the record's α quantiles,
     /// [`super::alpha_quantile_knots`]); empty when no spline was offered.
     pub alpha_knots_deg: Vec<f64>,
     /// Candidates the record cannot evaluate, left out.

@@ -155,6 +155,7 @@ def replay(
     cross_check: bool = False,
     select: str = "swr",
     candidates: Optional[Sequence[str]] = None,
+    knots_deg: Optional[Sequence[float]] = None,
 ) -> dict[str, Any]:
     """Replays a whole record through an estimator, every sample in Rust (no Python loop).
 
@@ -166,8 +167,9 @@ def replay(
     ``model="auto"`` (or ``"auto:longitudinal"``, ``"auto:lateral"``, ``"auto:six-axis"``; a
     record file): each coefficient's terms chosen from the record by equation error
     (``select="swr"`` stepwise regression or ``"mof"`` orthogonal functions; ``candidates``: the
-    terms offered, e.g. ``["alpha", "q", "alphadot", "de"]``), as ``--model auto --select …
-    --candidates …``: ``summary["structure_selection"]`` holds the selection path and
+    terms offered, e.g. ``["alpha", "q", "alphadot", "de"]``; ``knots_deg``: the α knots of the
+    spline candidates ``alpha_k1…``, degrees, else the record's α quantiles), as ``--model auto
+    --select … --candidates … --knots-deg …``: ``summary["structure_selection"]`` holds the selection path and
     ``selected_model`` the chosen model as model-file TOML (``None`` otherwise).
     ``compat``: a record file's ``compat.json`` (``aeroident compat``) whose corrections are
     applied to every sample first (``--compat FILE``). ``windows``: ``[(start_s, end_s), …]``
@@ -209,6 +211,7 @@ def replay(
             cross_check,
             select,
             None if candidates is None else list(candidates),
+            None if knots_deg is None else [float(k) for k in knots_deg],
         )
     keys = set(_core.sample_keys())
     arrays = {k: np.ascontiguousarray(v, dtype=np.float64) for k, v in data.items() if k in keys}
@@ -234,6 +237,7 @@ def fit(
     select: str = "swr",
     candidates: Optional[Sequence[str]] = None,
     band_hz: Optional[tuple[float, float]] = None,
+    knots_deg: Optional[Sequence[float]] = None,
 ) -> dict[str, Any]:
     """Fits a whole record by batch output error (``"oe"``), the filter-error method
     (``"fem"``: output error with process noise on the air-data states, for turbulent records)
@@ -263,8 +267,8 @@ def fit(
     record-time windows, each its own manoeuvre, the rest not used (``--window START:END``).
     ``also``: further records of the same aircraft (same mapping), fitted together with
     ``data``, each file a manoeuvre of its own (``--and FILE``). ``model="auto[:scope]"``,
-    ``select`` and ``candidates``: the structure chosen from the records first, as in
-    :func:`replay` (``--model auto --select … --candidates …``). ``band_hz`` (``fdoe`` only):
+    ``select``, ``candidates`` and ``knots_deg``: the structure chosen from the records first,
+    as in :func:`replay` (``--model auto --select … --candidates … --knots-deg …``). ``band_hz`` (``fdoe`` only):
     the band fitted, ``(f_min_hz, f_max_hz)`` (``--band-hz F0:F1``; default 0.1–1.5 Hz).
 
     A fit that does not meet both convergence criteria is returned all the same:
@@ -316,6 +320,7 @@ def fit(
         select,
         None if candidates is None else list(candidates),
         None if band_hz is None else (float(band_hz[0]), float(band_hz[1])),
+        None if knots_deg is None else [float(k) for k in knots_deg],
     )
 
 

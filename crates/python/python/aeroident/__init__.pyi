@@ -107,6 +107,7 @@ def replay(
     cross_check: bool = False,
     select: Literal["swr", "mof"] = "swr",
     candidates: Optional[Sequence[str]] = None,
+    knots_deg: Optional[Sequence[float]] = None,
 ) -> ReplayResult: ...
 class FitTrace(TypedDict):
     t_s: npt.NDArray[np.float64]
@@ -143,6 +144,8 @@ def fit(
     also: Optional[Sequence[PathLike]] = None,
     select: Literal["swr", "mof"] = "swr",
     candidates: Optional[Sequence[str]] = None,
+    band_hz: Optional[tuple[float, float]] = None,
+    knots_deg: Optional[Sequence[float]] = None,
 ) -> FitResult: ...
 def freqresp(
     data: PathLike,

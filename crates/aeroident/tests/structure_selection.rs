@@ -131,6 +131,22 @@ fn auto_replay(
     (summary, model.expect("model.toml written"))
 }
 
+/// `f16 sim scenarios/sim/SCENARIO --out DIR/sim` through the binary, in a fresh temporary
+/// `DIR` (returned) named after `name`.
+fn simulate(scenario: &str, name: &str) -> std::path::PathBuf {
+    let out = std::env::temp_dir().join(format!("aeroident-f16-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let sim = bin()
+        .args(["f16", "sim"])
+        .arg(workspace().join("scenarios/sim").join(scenario))
+        .arg("--out")
+        .arg(out.join("sim"))
+        .output()
+        .unwrap();
+    assert!(sim.status.success(), "{}", String::from_utf8_lossy(&sim.stderr));
+    out
+}
+
 /// One coefficient's entry of `structure_selection`.
 fn selected<'a>(summary: &'a serde_json::Value, coefficient: &str) -> &'a serde_json::Value {
     summary["structure_selection"]["coefficients"]
@@ -269,16 +285,7 @@ fn val_model_auto_lateral_on_a_longitudinal_record_names_what_is_missing() {
 /// differ from a linear model: `Cl` keeps `alpha_beta` (the α-dependence of `Cl_β`).
 #[test]
 fn val_f16_default_flight_selects_the_shipped_structure() {
-    let out = std::env::temp_dir().join(format!("aeroident-f16-select-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&out);
-    let sim = bin()
-        .args(["f16", "sim"])
-        .arg(workspace().join("scenarios/sim/default_excitation_measured.toml"))
-        .arg("--out")
-        .arg(out.join("sim"))
-        .output()
-        .unwrap();
-    assert!(sim.status.success(), "{}", String::from_utf8_lossy(&sim.stderr));
+    let out = simulate("default_excitation_measured.toml", "select");
     let args = ["--model", "auto:six-axis", "--estimator", "rls"];
     let (s, model) =
         auto_replay(&out.join("sim/timeseries.csv"), "aeroident-sim-measured.toml", &args, "f16");
@@ -303,16 +310,7 @@ fn val_f16_spline_at_a_table_breakpoint() {
     use aeroident_estimators::vocabulary::{AlphaKnots, ModelStructure, Param};
     use aeroident_models::f16::{AeroIncrements, F16};
     use aeroident_models::trim::{TrimCondition, trim};
-    let out = std::env::temp_dir().join(format!("aeroident-f16-spline-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&out);
-    let sim = bin()
-        .args(["f16", "sim"])
-        .arg(workspace().join("scenarios/sim/breakpoint_crossing_measured.toml"))
-        .arg("--out")
-        .arg(out.join("sim"))
-        .output()
-        .unwrap();
-    assert!(sim.status.success(), "{}", String::from_utf8_lossy(&sim.stderr));
+    let out = simulate("breakpoint_crossing_measured.toml", "spline");
     let data = out.join("sim/timeseries.csv");
     let map = "aeroident-sim-measured.toml";
     let args = ["--model", "auto:longitudinal", "--knots-deg", "5"];

@@ -2,8 +2,10 @@
 """Import cycles between the modules of each workspace crate.
 
 A module is one source file (`src/a/b.rs` or `src/a/b/mod.rs` is `a::b`); it imports every
-module it names through `crate::…`, `super::…` or `self::…` paths outside its own
-`#[cfg(test)]` block and doc comments. Prints each strongly connected component of more than
+module it names through `crate::…`, `super::…` or `self::…` paths, and through bare paths
+whose first segment is one of its own child modules (`outliers::SpikeScreen` in the module
+that declares `mod outliers;`, `cli::run` in `main.rs`), outside its own `#[cfg(test)]` block
+and comments. Prints each strongly connected component of more than
 one module (a cycle) and exits 1 if there is any.
 
 Usage: scripts/import_cycles.py [CRATE_DIR …]   (default: every crates/*)
@@ -72,12 +74,25 @@ def graph(crate: Path):
     edges = {m: set() for m in modules}
     pat = re.compile(r"\b((?:crate|super|self)(?:::\w+)+)")
     group = re.compile(r"\b((?:crate|super|self)(?:::\w+)*)::\{([^}]*)\}")
+    # A bare path not preceded by `::`, a letter or a digit (so not a tail of `a::b::c`).
+    bare = re.compile(r"(?<![:\w])([a-z_]\w*(?:::\w+)+)")
+    bare_group = re.compile(r"(?<![:\w])([a-z_]\w*(?:::\w+)*)::\{([^}]*)\}")
     for m, f in files.items():
         # Module files named `tests` hold the parent's unit tests.
         if m and m[-1] == "tests":
             continue
         text = "\n".join(code_lines(f.read_text()))
         paths = [p.split("::") for p in pat.findall(text)]
+        children = {c[-1] for c in modules if len(c) == len(m) + 1 and c[: len(m)] == m}
+        for p in bare.findall(text):
+            segs = p.split("::")
+            if segs[0] in children:
+                paths.append(["self"] + segs)
+        for prefix, items in bare_group.findall(text):
+            segs = prefix.split("::")
+            if segs[0] in children:
+                paths.extend(["self"] + segs + i.strip().split(" as ")[0].split("::")
+                             for i in items.split(",") if i.strip() and i.strip() != "self")
         for prefix, items in group.findall(text):
             for item in items.split(","):
                 item = item.strip().split(" as ")[0]

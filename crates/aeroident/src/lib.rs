@@ -7,6 +7,7 @@
 /// Outputs of the closed-loop experiment: files, console table, figures.
 pub mod aircraft;
 pub mod cli;
+pub mod console;
 pub mod interrupt;
 pub mod live;
 pub mod outdir;

@@ -16,7 +16,8 @@ use aeroident_io::{Mapping, open_log};
 use aeroident_models::f16::{AeroIncrements, F16};
 use aeroident_pipelines::aircraft::truth::local_derivatives;
 use aeroident_pipelines::compat::{Corrections, check_record};
-use aeroident_pipelines::replay::batch::{FitOptions, fit_record};
+use aeroident_pipelines::replay::batch::FitOptions;
+use aeroident_pipelines::replay::fit::fit_record;
 use aeroident_pipelines::sim::{load_scenario, run};
 use std::path::PathBuf;
 

@@ -6,7 +6,8 @@
 
 mod common;
 use aeroident_io::{Mapping, open_log};
-use aeroident_pipelines::replay::batch::{BatchSummary, FitOptions, fit_record, fit_records};
+use aeroident_pipelines::replay::batch::{BatchSummary, FitOptions};
+use aeroident_pipelines::replay::fit::{fit_record, fit_records};
 use aeroident_pipelines::window::TimeWindow;
 use common::{shared, workspace};
 use std::path::Path;

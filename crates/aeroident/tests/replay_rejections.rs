@@ -5,7 +5,8 @@
 
 mod common;
 use aeroident_io::{FlightDataReader, Mapping, RejectionLog};
-use aeroident_pipelines::replay::batch::{FitOptions, fit_record};
+use aeroident_pipelines::replay::batch::FitOptions;
+use aeroident_pipelines::replay::fit::fit_record;
 use aeroident_pipelines::replay::{ReplayOptions, replay};
 
 /// Longitudinal channels; the record's interval is 0.1 s but every other row is rejected, so

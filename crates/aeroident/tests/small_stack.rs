@@ -16,7 +16,8 @@ use aeroident_pipelines::aircraft::scenario::DEFAULT_SCENARIO;
 use aeroident_pipelines::aircraft::{Scenario, run};
 use aeroident_pipelines::estimators::EstimatorKind;
 use aeroident_pipelines::montecarlo::campaign;
-use aeroident_pipelines::replay::batch::{BatchMethod, FitOptions, fit_record};
+use aeroident_pipelines::replay::batch::{BatchMethod, FitOptions};
+use aeroident_pipelines::replay::fit::fit_record;
 use aeroident_pipelines::replay::{ReplayOptions, replay};
 use std::path::{Path, PathBuf};
 

@@ -8,8 +8,9 @@
 mod common;
 use aeroident_io::{Mapping, ModelSpec, RecordEvent, open_log};
 use aeroident_pipelines::estimators::EstimatorKind;
-use aeroident_pipelines::replay::batch::{BatchSummary, FitOptions, fit_record};
-use aeroident_pipelines::replay::outliers::{Screened, SpikeScreen};
+use aeroident_pipelines::record::outliers::{Screened, SpikeScreen};
+use aeroident_pipelines::replay::batch::{BatchSummary, FitOptions};
+use aeroident_pipelines::replay::fit::fit_record;
 use aeroident_pipelines::replay::{ReplayOptions, ReplayOutcome, replay};
 use common::{shared, workspace};
 use std::path::Path;

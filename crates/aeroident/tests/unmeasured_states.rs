@@ -6,7 +6,8 @@
 mod common;
 use aeroident_io::{Mapping, open_log};
 use aeroident_pipelines::estimators::EstimatorKind;
-use aeroident_pipelines::replay::batch::{BatchSummary, FitOptions, fit_record};
+use aeroident_pipelines::replay::batch::{BatchSummary, FitOptions};
+use aeroident_pipelines::replay::fit::fit_record;
 use aeroident_pipelines::replay::{ReplayOptions, replay};
 use common::{shared, workspace};
 use std::path::Path;

@@ -12,57 +12,19 @@
 //! accelerometers, as every shift is. The `*_sigma` keys are the coloured-residual σ where it was formed (`sigma =
 //! "coloured"`), else the Cramér–Rao σ (`"cramer_rao"`); findings are judged against them.
 
-mod apply;
+pub use crate::record::corrections::{
+    ChannelSummary, Corrected, Corrections, ReconstructedSummary,
+};
 
-pub use apply::{Corrected, Corrections};
-
-use crate::replay::ReplayError;
-use crate::replay::batch::{OutputTrace, read_manoeuvres};
+use crate::record::{RecordError, read_manoeuvres};
+use crate::results::OutputTrace;
 use aeroident_estimators::compat::{self, Channel, CompatConfig, CompatResult, Unknown};
 use aeroident_estimators::flight_model::G0_MPS2;
 use aeroident_estimators::output_error::Termination;
 use aeroident_io::{FlightDataReader, Rejection};
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::Read;
-
-/// One channel's corrections: `measured = scale · true + bias`, read `time_shift_s` late (a
-/// `compat.json` row, written and read back by `replay --compat`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ChannelSummary {
-    /// The sample field (`ax_mps2`, `alpha_rad` …).
-    pub name: String,
-    /// Its unit.
-    #[serde(default)]
-    pub unit: String,
-    /// Bias, channel units.
-    pub bias: Option<f64>,
-    /// Its reported σ (`compat.json` `sigma`: coloured-residual where formed, else Cramér–Rao).
-    pub bias_sigma: Option<f64>,
-    /// Scale factor `1 + k`.
-    pub scale: Option<f64>,
-    /// Its reported σ (`compat.json` `sigma`: coloured-residual where formed, else Cramér–Rao).
-    pub scale_sigma: Option<f64>,
-    /// Time shift, s (> 0: the channel lags the kinematics).
-    pub time_shift_s: Option<f64>,
-    /// Its reported σ, s (as `bias_sigma`).
-    pub time_shift_sigma_s: Option<f64>,
-}
-
-/// One manoeuvre's reconstructed air data at its sample times.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ReconstructedSummary {
-    /// Manoeuvre, from 1.
-    pub manoeuvre: usize,
-    /// Sample times, s.
-    pub t_s: Vec<f64>,
-    /// Airspeed, m/s.
-    pub vt_mps: Vec<f64>,
-    /// Angle of attack, rad.
-    pub alpha_rad: Vec<f64>,
-    /// Sideslip, rad.
-    pub beta_rad: Vec<f64>,
-}
 
 /// `compat.json` (module doc).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -97,21 +59,32 @@ pub struct CompatSummary {
     pub reconstructed: Vec<ReconstructedSummary>,
 }
 
+impl Corrections {
+    /// The corrections of a check's summary (`--compat auto`).
+    ///
+    /// # Errors
+    /// As [`Corrections::from_json`].
+    pub fn from_summary(s: &CompatSummary) -> Result<Self, RecordError> {
+        Self::of_rows(&s.channels, &s.reconstructed)
+            .map_err(|reason| RecordError::Option { option: "compat", reason })
+    }
+}
+
 /// Checks the compatibility of the record `reader` reads with `config`.
 ///
 /// # Errors
 /// Fatal data errors, no usable sample, and the check's own errors (a missing channel, a
-/// singular information matrix: [`ReplayError::Model`] with the reason).
+/// singular information matrix: [`RecordError::Model`] with the reason).
 pub fn check_record<R: Read>(
     reader: FlightDataReader<R>,
     config: &CompatConfig,
-) -> Result<(CompatSummary, CompatResult), ReplayError> {
+) -> Result<(CompatSummary, CompatResult), RecordError> {
     let file = reader.file().to_string();
     let rec = read_manoeuvres(reader, None, &[])?;
     let slices: Vec<&[aeroident_estimators::AirDataSample]> =
         rec.manoeuvres.iter().map(Vec::as_slice).collect();
     let result = compat::check(&slices, config)
-        .map_err(|e| ReplayError::Model(format!("compatibility check of {file}: {e}")))?;
+        .map_err(|e| RecordError::Model(format!("compatibility check of {file}: {e}")))?;
     let (rejections, unlisted) = rec.rejections.finish();
     let mut warnings = result.notes.clone();
     warnings.extend(unlisted);

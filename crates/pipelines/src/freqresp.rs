@@ -22,8 +22,8 @@
 //! multiple_coherence[], random_error[], magnitude_error_db[], phase_error_deg[]}],
 //! fits[…] (see [`FitSummary`]), warnings[]`; a value not identified is `null`.
 
-use crate::replay::ReplayError;
-use crate::replay::batch::read_records;
+use crate::record::RecordError;
+use crate::record::read_records;
 use crate::window::TimeWindow;
 use aeroident_estimators::AirDataSample;
 use aeroident_estimators::sample::MEASURED_FIELDS;
@@ -110,13 +110,13 @@ pub fn channels() -> Vec<&'static str> {
 /// Frequency responses (and fits) of the record `reader` reads (module doc).
 ///
 /// # Errors
-/// [`ReplayError::Option`] naming `input`/`output` for a channel that is not known or not in
+/// [`RecordError::Option`] naming `input`/`output` for a channel that is not known or not in
 /// the record, `window` for bad time windows, and the spectral stage's errors (window too long,
 /// an input not excited, frequency range) naming their option or channel; fatal data errors.
 pub fn freqresp<R: Read>(
     reader: FlightDataReader<R>,
     opts: &FreqRespOptions,
-) -> Result<FreqRespOutcome, ReplayError> {
+) -> Result<FreqRespOutcome, RecordError> {
     check_channels(opts)?;
     let file = reader.file().to_string();
     let rec = read_records(vec![reader], None, None, &opts.windows)?;
@@ -169,15 +169,15 @@ pub fn freqresp<R: Read>(
     })
 }
 
-fn check_channels(opts: &FreqRespOptions) -> Result<(), ReplayError> {
+fn check_channels(opts: &FreqRespOptions) -> Result<(), RecordError> {
     for (option, list) in [("input", &opts.inputs), ("output", &opts.outputs)] {
         if list.is_empty() {
-            return Err(ReplayError::Option { option, reason: "give at least one channel".into() });
+            return Err(RecordError::Option { option, reason: "give at least one channel".into() });
         }
         if list.iter().any(|k| k == INJECTED)
             && opts.excitation.as_ref().is_none_or(|e| e.t_s.is_empty())
         {
-            return Err(ReplayError::Option {
+            return Err(RecordError::Option {
                 option,
                 reason: format!(
                     "`{INJECTED}` is the injected waveform of an ArduPilot SYSID log: give --window sysid on a log with SIDS and SIDD messages"
@@ -185,14 +185,14 @@ fn check_channels(opts: &FreqRespOptions) -> Result<(), ReplayError> {
             });
         }
         if let Some(bad) = list.iter().find(|k| *k != INJECTED && sample_field(k).is_none()) {
-            return Err(ReplayError::Option {
+            return Err(RecordError::Option {
                 option,
                 reason: format!("`{bad}` is not a channel; one of {}", channels().join(", ")),
             });
         }
     }
     if let Some(dup) = opts.inputs.iter().find(|k| opts.outputs.contains(k)) {
-        return Err(ReplayError::Option {
+        return Err(RecordError::Option {
             option: "output",
             reason: format!("`{dup}` is also an input"),
         });
@@ -200,12 +200,12 @@ fn check_channels(opts: &FreqRespOptions) -> Result<(), ReplayError> {
     Ok(())
 }
 
-fn spectral_error(e: aeroident_signals::spectral::SpectralError) -> ReplayError {
+fn spectral_error(e: aeroident_signals::spectral::SpectralError) -> RecordError {
     use aeroident_signals::spectral::SpectralError as E;
     match e {
-        E::Option { option, reason } => ReplayError::Option { option, reason },
-        E::NotExcited { .. } => ReplayError::Option { option: "input", reason: e.to_string() },
-        E::Data(m) => ReplayError::Model(m),
+        E::Option { option, reason } => RecordError::Option { option, reason },
+        E::NotExcited { .. } => RecordError::Option { option: "input", reason: e.to_string() },
+        E::Data(m) => RecordError::Model(m),
     }
 }
 
@@ -245,9 +245,9 @@ struct Dropped {
 fn stretches(
     manoeuvres: &[Vec<AirDataSample>],
     src: &Sources,
-) -> Result<(Vec<Stretch>, f64, Dropped), ReplayError> {
+) -> Result<(Vec<Stretch>, f64, Dropped), RecordError> {
     let dt = median_dt(manoeuvres)
-        .ok_or_else(|| ReplayError::Model("fewer than two samples: no sample interval".into()))?;
+        .ok_or_else(|| RecordError::Model("fewer than two samples: no sample interval".into()))?;
     // Resolved once: the keys were checked by `check_channels`.
     let fields: Vec<&str> = src.names.iter().map(|k| sample_field(k).unwrap_or("")).collect();
     let hold = src.excitation.map_or(0.0, |e| aeroident_io::align::hold_interval_s(&e.t_s));
@@ -286,7 +286,7 @@ fn row_of(
     src: &Sources,
     fields: &[&str],
     hold: f64,
-) -> Result<Option<Vec<f64>>, ReplayError> {
+) -> Result<Option<Vec<f64>>, RecordError> {
     let mut row = Vec::with_capacity(fields.len());
     for (c, (key, field)) in src.names.iter().zip(fields).enumerate() {
         if key == INJECTED {
@@ -296,7 +296,7 @@ fn row_of(
             }
             continue;
         }
-        let v = s.field(field).ok_or_else(|| ReplayError::Option {
+        let v = s.field(field).ok_or_else(|| RecordError::Option {
             option: if c < src.n_inputs { "input" } else { "output" },
             reason: format!(
                 "channel `{key}` is not in the record at t = {} s (map it in the mapping's [channels])",
@@ -325,9 +325,9 @@ fn fit_one(
     spec: &TfSpec,
     pairs: &[PairResponse],
     opts: &FitOptions,
-) -> Result<FitSummary, ReplayError> {
+) -> Result<FitSummary, RecordError> {
     let p = pairs.iter().find(|p| p.input == spec.input && p.output == spec.output).ok_or_else(
-        || ReplayError::Option {
+        || RecordError::Option {
             option: "fit",
             reason: format!(
                 "`{}`: no response of `{}` to `{}` (give them as --output and --input)",
@@ -335,7 +335,7 @@ fn fit_one(
             ),
         },
     )?;
-    let fit = fit_transfer_function(p, spec, opts).map_err(|e| ReplayError::Option {
+    let fit = fit_transfer_function(p, spec, opts).map_err(|e| RecordError::Option {
         option: "fit",
         reason: format!("`{}`: {e}", spec.text),
     })?;

@@ -11,6 +11,8 @@
 //! - [`poc`]: the thesis's proof-of-concept systems; [`sim`]: open-loop F-16 simulation.
 //! - [`export`]: input design and the JSBSim `<aerodynamics>` export.
 //! - [`freqresp`]: frequency responses (composite windows, coherence) and transfer-function fits.
+//! - [`record`]: the record stage below every job (read → map → screen → correct → window →
+//!   manoeuvres), with its own error type.
 //! - [`condition`]: the conditioning stage every pipeline shares (derivatives, alignment);
 //!   [`window`]: the time windows of a long record, each a manoeuvre.
 //! - [`estimators`]: the estimator kinds, their options and `build`.
@@ -29,6 +31,7 @@ pub mod montecarlo;
 pub mod named;
 /// Proof-of-concept experiments (thesis §4.1): scenarios and the simulation loop.
 pub mod poc;
+pub mod record;
 pub mod replay;
 pub mod results;
 pub mod sample_log;

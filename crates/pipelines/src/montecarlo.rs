@@ -508,11 +508,11 @@ pub fn crb_sensors_for(structure: &ModelStructure, scale: f64) -> Vec<Sensor> {
 
 /// Outputs of the Cramér–Rao prediction and their white-noise σ at the scenario's sensor
 /// scale: the raw sensor levels the air-data path flies with
-/// ([`crate::aircraft::air_data::sensed_channels`]: airspeed 11 ft/s, vanes 0.1°, gyros
+/// ([`crate::aircraft::sensors::sensed_channels`]: airspeed 11 ft/s, vanes 0.1°, gyros
 /// 0.14°/s, attitude 0.573°, accelerometers 0.98 ft/s²) before the matched smoother, which
 /// cannot add information; ψ, which no flight-model output predicts, is left out.
 pub fn crb_sensors(scale: f64) -> Vec<Sensor> {
-    crate::aircraft::air_data::sensed_channels()
+    crate::aircraft::sensors::sensed_channels()
         .into_iter()
         .filter_map(|(name, sigma)| {
             let output = Output::ALL.into_iter().find(|o| o.name() == name)?;

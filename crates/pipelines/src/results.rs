@@ -218,6 +218,28 @@ impl Results {
     }
 }
 
+/// One output of a batch fit over the record: measured `z` and the model's simulated `ŷ`
+/// (`z − e`, the fit's residual `e`) against time. A NaN point separates manoeuvres; long
+/// records keep every `stride`th sample (at most [`OutputTrace::MAX_POINTS`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct OutputTrace {
+    /// Output name (`alpha`, `q`, `vt` … as the output-error fit names them).
+    pub name: String,
+    /// Record time, s.
+    pub t_s: Vec<f64>,
+    /// Measured output (the unit of the output: rad, rad/s, m/s …).
+    pub measured: Vec<f64>,
+    /// Simulated output with the estimated parameters, same unit.
+    pub simulated: Vec<f64>,
+    /// Every `stride`th sample kept.
+    pub stride: usize,
+}
+
+impl OutputTrace {
+    /// The most points a trace keeps (figures draw at most a few thousand anyway).
+    pub const MAX_POINTS: usize = 20_000;
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -13,7 +13,7 @@ pub use auto::{
 };
 
 use crate::condition::{Alignment, Conditioner, Conditioning, Derivative};
-use crate::replay::ReplayError;
+use crate::record::RecordError;
 use aeroident_estimators::structure::{
     self, Candidates, Ranking, Selection, StepwiseConfig, StructureError,
 };
@@ -127,7 +127,7 @@ pub fn select_on_samples(
         return Err(if measured.is_none() {
             format!(
                 "{who}: the record does not measure it: it {} (see the mapping)",
-                crate::replay::coefficient_needs(coefficient)
+                crate::record::needs::coefficient_needs(coefficient)
             )
         } else {
             format!(
@@ -181,22 +181,22 @@ fn check_candidates(candidates: &[Term]) -> Result<(), String> {
 /// [`alpha_quantile_knots`]).
 ///
 /// # Errors
-/// Reading errors, no usable samples, and [`select_on_samples`]'s ([`ReplayError::Model`]).
+/// Reading errors, no usable samples, and [`select_on_samples`]'s ([`RecordError::Model`]).
 pub fn select_structure<R: Read>(
     reader: FlightDataReader<R>,
     coefficients: &[Coefficient],
     candidates: &[Term],
     method: Method,
-) -> Result<Vec<CoefficientSelection>, ReplayError> {
+) -> Result<Vec<CoefficientSelection>, RecordError> {
     let (rec, first) = read_for_selection(vec![reader], None, &[])?;
     let supplied = to_supply(&Wanted { coefficients, candidates }, &first);
     let rec = condition(&rec, supplied, DIFF_WINDOW, None)?;
     let slices = rec.slices();
-    let knots = alpha_quantile_knots(&slices, candidates).map_err(ReplayError::Model)?;
+    let knots = alpha_quantile_knots(&slices, candidates).map_err(RecordError::Model)?;
     coefficients
         .iter()
         .map(|&c| {
-            select_on_samples(&slices, c, candidates, &knots, method).map_err(ReplayError::Model)
+            select_on_samples(&slices, c, candidates, &knots, method).map_err(RecordError::Model)
         })
         .collect()
 }
@@ -312,12 +312,12 @@ fn read_for_selection<R: Read>(
     readers: Vec<FlightDataReader<R>>,
     compat: Option<&crate::compat::Corrections>,
     windows: &[crate::window::TimeWindow],
-) -> Result<(crate::replay::batch::Manoeuvres, AirDataSample), ReplayError> {
+) -> Result<(crate::record::Manoeuvres, AirDataSample), RecordError> {
     let file = readers.first().map_or(String::new(), |r| r.file().to_string());
-    let screen = Some(crate::replay::outliers::SpikeScreen::default());
-    let rec = crate::replay::batch::read_records(readers, screen, compat, windows)?;
+    let screen = Some(crate::record::outliers::SpikeScreen::default());
+    let rec = crate::record::read_records(readers, screen, compat, windows)?;
     let first = rec.manoeuvres.iter().flatten().next().copied().ok_or_else(|| {
-        ReplayError::Model(format!("{file}: no usable sample to select a structure on"))
+        RecordError::Model(format!("{file}: no usable sample to select a structure on"))
     })?;
     Ok((rec, first))
 }
@@ -335,12 +335,12 @@ fn to_supply(wanted: &Wanted, first: &AirDataSample) -> Vec<Derivative> {
 /// same filter); only then are the other channels smoothed. The first and last `(N−1)/2`
 /// samples of each manoeuvre get no centred derivative and are left out.
 fn condition(
-    rec: &crate::replay::batch::Manoeuvres,
+    rec: &crate::record::Manoeuvres,
     supplied: Vec<Derivative>,
     diff_window: usize,
     nominal_dt_s: Option<f64>,
-) -> Result<Conditioned, ReplayError> {
-    let diff_err = |e: aeroident_signals::differentiate::DifferentiateError| ReplayError::Option {
+) -> Result<Conditioned, RecordError> {
+    let diff_err = |e: aeroident_signals::differentiate::DifferentiateError| RecordError::Option {
         option: "diff-window",
         reason: e.to_string(),
     };

@@ -1,7 +1,7 @@
 //! `fit`: the batch output-error, filter-error and frequency-domain output-error fits of a
 //! whole record, exactly as `aeroident replay DATA --map MAPPING --estimator oe|fem|fdoe`
 //! (the post-flight reference fit,
-//! `aeroident_pipelines::replay::batch::fit_record`), with the estimates, their σ and correlation, the
+//! `aeroident_pipelines::replay::fit::fit_record`), with the estimates, their σ and correlation, the
 //! residuals and the model-vs-measured traces as numpy arrays.
 
 use std::path::Path;
@@ -11,8 +11,9 @@ use aeroident_estimators::output_error::InitialStates;
 use aeroident_io::{Mapping, open_log_with_notes, open_log_with_report};
 use aeroident_pipelines::estimators::EstimatorKind;
 use aeroident_pipelines::replay::batch::{
-    BatchMethod, BatchOutcome, FitOptions, fit_records, parse_process_noise_states, validate_on,
+    BatchMethod, BatchOutcome, FitOptions, parse_process_noise_states, validate_on,
 };
+use aeroident_pipelines::replay::fit::fit_records;
 use aeroident_pipelines::structure::{AutoSelection, model_from_args};
 use numpy::IntoPyArray;
 use numpy::ndarray::Array2;

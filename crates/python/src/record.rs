@@ -6,10 +6,9 @@ use std::path::Path;
 use aeroident_estimators::{AirDataSample, ModelStructure};
 use aeroident_io::{Mapping, ModelSpec, RecordEvent, open_log_with_notes, open_log_with_report};
 use aeroident_pipelines::estimators::{EstimatorKind, EstimatorOptions, build};
+use aeroident_pipelines::record::unsupported;
 use aeroident_pipelines::replay::arrays::{EstimateArrays, replay_arrays_observed, replay_samples};
-use aeroident_pipelines::replay::{
-    DerivativeSource, Pacing, ReplayObserver, ReplayOptions, unsupported,
-};
+use aeroident_pipelines::replay::{DerivativeSource, Pacing, ReplayObserver, ReplayOptions};
 use aeroident_pipelines::structure::{AutoSelection, model_from_args};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyReadonlyArray1};

@@ -102,19 +102,8 @@ where
         .map(|s| T::from_name(&s).expect("the parser accepts only the listed names"))
 }
 
-/// Writes `text` and a newline to standard output, returning the write error instead of
-/// panicking as `println!` does on a closed pipe (`aeroident f16 trim | head -1`); `main`
-/// ends quietly on a broken pipe.
-///
-/// # Errors
-/// The I/O error of the write or flush.
-pub fn print_stdout(text: &str) -> std::io::Result<()> {
-    use std::io::Write;
-    let mut out = std::io::stdout().lock();
-    out.write_all(text.as_bytes())?;
-    out.write_all(b"\n")?;
-    out.flush()
-}
+/// [`crate::console::print_stdout`], where every command prints from.
+pub use crate::console::print_stdout;
 
 /// The error and its causes on one line ("file:line: field: reason"), as the CLI prints it
 /// after `error: ` and the Python bindings raise it, with no backtrace whatever RUST_BACKTRACE

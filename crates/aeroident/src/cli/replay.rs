@@ -38,7 +38,7 @@
 //!
 //! Before any estimator, rows with an isolated one-sample spike in a measured channel, or a run
 //! of up to 3 on a channel other than a control input, are rejected and listed
-//! (`aeroident_pipelines::replay::outliers`; `--no-spike-screen` turns it off); runs of 4–5
+//! (`aeroident_pipelines::record::outliers`; `--no-spike-screen` turns it off); runs of 4–5
 //! are warned of in `summary.json`, for every estimator. A batch fit also warns when one
 //! sample dominates it; `--robust` fits output error with Huber's weights.
 //!
@@ -191,7 +191,7 @@ pub struct ReplayArgs {
     pub compat: Option<String>,
     /// Do not screen the record for spikes before estimating (by default a row whose channel
     /// jumps far out of its neighbours and back, alone or in a run of up to 3 rows, is
-    /// rejected and listed; `aeroident_pipelines::replay::outliers`). For records whose inputs
+    /// rejected and listed; `aeroident_pipelines::record::outliers`). For records whose inputs
     /// are genuine one-sample pulses on an otherwise constant channel.
     #[arg(long)]
     pub no_spike_screen: bool,
@@ -302,7 +302,7 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
         compat,
         windows: args.windows.clone(),
         spike_screen: (!args.no_spike_screen)
-            .then(aeroident_pipelines::replay::outliers::SpikeScreen::default),
+            .then(aeroident_pipelines::record::outliers::SpikeScreen::default),
     };
     if args.estimator.is_batch() {
         let given = (opts.model, opts.compat);
@@ -977,7 +977,7 @@ impl BatchInput {
             readers.push(reader);
             reports.push(report);
         }
-        let fit = aeroident_pipelines::replay::batch::fit_records(
+        let fit = aeroident_pipelines::replay::fit::fit_records(
             readers,
             &self.mapping,
             self.model,
@@ -1258,7 +1258,7 @@ fn fit_options(
         compat,
         windows: args.windows.clone(),
         spike_screen: (!args.no_spike_screen)
-            .then(aeroident_pipelines::replay::outliers::SpikeScreen::default),
+            .then(aeroident_pipelines::record::outliers::SpikeScreen::default),
         robust: args.robust.then(aeroident_estimators::output_error::Huber::default),
         stop: None,
     })

@@ -7,7 +7,7 @@ use super::batch::measured_vs;
 use super::{Report, Source, common_settings, write_figure};
 use crate::outdir::OutputDir;
 use aeroident_pipelines::compat::{ChannelSummary, CompatSummary};
-use aeroident_pipelines::replay::batch::OutputTrace;
+use aeroident_pipelines::results::OutputTrace;
 use aeroident_pipelines::results::{ParameterRow, Results};
 
 /// One row per estimated bias, scale factor and time shift (the scale as its departure from 1).

@@ -166,7 +166,7 @@ pub fn execute(args: SimArgs) -> anyhow::Result<()> {
     let r = run(&sc, base)?;
     write_outputs(&r, &mut od)?;
     od.finish();
-    crate::cli::print_stdout(&format!(
+    crate::console::print_stdout(&format!(
         "simulated {:.2} s ({} rows, {} columns) from trim: throttle {:.4}, elevator {:.4} deg, alpha {:.4} deg (trim cost {:.1e})\nwrote {}/timeseries.csv, report.html, states and controls_wind (.png, .svg)",
         r.data[0].last().copied().unwrap_or(0.0),
         r.data[0].len(),

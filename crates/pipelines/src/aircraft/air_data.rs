@@ -50,12 +50,9 @@ use aeroident_signals::SensorModel;
 use aeroident_signals::differentiate::CausalDifferentiator;
 
 use super::scenario::SensorSpec;
-use super::sensors::{channel_seed, state_sigma, white_noise_sensors};
+use super::sensors::{channel_seed, sensed_channels, white_noise_sensors};
 use crate::condition::{Conditioner, Conditioning, Derivative};
 use aeroident_physics::units::{KG_PER_SLUG, KGM2_PER_SLUGFT2, M_PER_FT, N_PER_LBF, PA_PER_PSF};
-
-/// σ of the accelerometers, ft/s² (ISRN 2014 Table 3, as [`super::sensors`]).
-pub const ACCEL_SIGMA_FPS2: f64 = 0.98;
 
 /// The F-16's constants in the sample's SI form; `v0_mps` the reference airspeed of `V/V0`.
 pub fn f16_constants(f16: &F16, v0_mps: f64) -> AircraftConstants {
@@ -94,28 +91,6 @@ pub fn exact_sample(
     s.rdot_rad_s2 = Some(xdot[f16::R]);
     s.alphadot_rad_s = Some(xdot[f16::ALPHA]);
     s
-}
-
-/// The twelve sensed channels of a sample, in the order of their sensors: the name of
-/// [`AirDataSample`]'s field and the white-noise σ at `scale = 1` (SI units and rad; the cited
-/// levels of [`super::sensors`] converted, the accelerometers [`ACCEL_SIGMA_FPS2`]).
-pub fn sensed_channels() -> [(&'static str, f64); 12] {
-    let s = state_sigma();
-    let accel = ACCEL_SIGMA_FPS2 * M_PER_FT;
-    [
-        ("vt_mps", s[f16::VT] * M_PER_FT),
-        ("alpha_rad", s[f16::ALPHA]),
-        ("beta_rad", s[f16::BETA]),
-        ("p_rad_s", s[f16::P]),
-        ("q_rad_s", s[f16::Q]),
-        ("r_rad_s", s[f16::R]),
-        ("phi_rad", s[f16::PHI]),
-        ("theta_rad", s[f16::THETA]),
-        ("psi_rad", s[f16::PSI]),
-        ("ax_mps2", accel),
-        ("ay_mps2", accel),
-        ("az_mps2", accel),
-    ]
 }
 
 /// All channels except the angular accelerations and α̇ (set by the caller); each of the

@@ -220,7 +220,7 @@ pub struct SensorSpec {
 
 /// One `[[sensors.channel]]` entry: bias, lag, Gauss–Markov drift, transport delay and
 /// quantisation on one of the air-data channels of the sample-driven estimators
-/// ([`super::air_data::sensed_channels`]), in that channel's SI units (rad, m/s, m/s²) and
+/// ([`super::sensors::sensed_channels`]), in that channel's SI units (rad, m/s, m/s²) and
 /// seconds; the keys and their meaning are those of [`aeroident_signals::SensorConfig`]. The
 /// white noise, sample rate (`1/dt_s`) and seed stay the experiment's, so the white draws are
 /// the same with or without the entry. The two-aircraft estimators' sensors do not read it.
@@ -799,7 +799,7 @@ impl Scenario {
     /// Each `[[sensors.channel]]` names a distinct air-data channel and builds; the error is
     /// the key (`sensors.channel[k]` or its `.channel`) and why.
     fn validate_channel_sensors(&self) -> Result<(), (String, String)> {
-        let known = super::air_data::sensed_channels().map(|(name, _)| name);
+        let known = super::sensors::sensed_channels().map(|(name, _)| name);
         for (k, c) in self.sensors.channel.iter().enumerate() {
             let key = format!("sensors.channel[{k}]");
             if !known.contains(&c.channel.as_str()) {

@@ -25,10 +25,36 @@
 //! the engine model).
 
 use aeroident_models::f16::{self, F16State, N_STATES};
+use aeroident_physics::units::M_PER_FT;
 use aeroident_signals::{SensorModel, SensorParameters, SignalError};
 
 /// Window of the smoothing differentiator assumed for the derivative noise, samples.
 pub const DIFFERENTIATOR_WINDOW: usize = 11;
+
+/// σ of the accelerometers, ft/s² (ISRN 2014 Table 3, as the other levels here).
+pub const ACCEL_SIGMA_FPS2: f64 = 0.98;
+
+/// The twelve sensed channels of a sample, in the order of their sensors: the name of
+/// [`AirDataSample`](aeroident_estimators::AirDataSample)'s field and the white-noise σ at `scale = 1` (SI units and rad; the cited
+/// levels of this module converted, the accelerometers [`ACCEL_SIGMA_FPS2`]).
+pub fn sensed_channels() -> [(&'static str, f64); 12] {
+    let s = state_sigma();
+    let accel = ACCEL_SIGMA_FPS2 * M_PER_FT;
+    [
+        ("vt_mps", s[f16::VT] * M_PER_FT),
+        ("alpha_rad", s[f16::ALPHA]),
+        ("beta_rad", s[f16::BETA]),
+        ("p_rad_s", s[f16::P]),
+        ("q_rad_s", s[f16::Q]),
+        ("r_rad_s", s[f16::R]),
+        ("phi_rad", s[f16::PHI]),
+        ("theta_rad", s[f16::THETA]),
+        ("psi_rad", s[f16::PSI]),
+        ("ax_mps2", accel),
+        ("ay_mps2", accel),
+        ("az_mps2", accel),
+    ]
+}
 
 /// σ of the measured states at `scale = 1`, state units (module docs give the source).
 pub fn state_sigma() -> F16State {

@@ -6,7 +6,7 @@
 //! injected waveform itself, the channel [`INJECTED`] (`SIDD.Targ` in SI: rad for attitude
 //! axes, rad/s for rate axes, mixer units for mixer axes).
 
-use crate::replay::ReplayError;
+use crate::record::RecordError;
 use crate::window::TimeWindow;
 use aeroident_io::excitation::{Axis, Excitation, Sweep};
 use aeroident_io::{Channel, Mapping};
@@ -54,14 +54,14 @@ impl From<&Sweep> for SweepSummary {
 /// The sweeps of `excitation` on `axis` (every sweep with `None`), and their spans as windows.
 ///
 /// # Errors
-/// [`ReplayError::Option`] `window` when the log has no sweep, or none on `axis` (listing the
+/// [`RecordError::Option`] `window` when the log has no sweep, or none on `axis` (listing the
 /// axes it has).
 pub fn choose_sweeps(
     excitation: &Excitation,
     axis: Option<&Axis>,
     file: &str,
-) -> Result<(Vec<Sweep>, Vec<TimeWindow>), ReplayError> {
-    let bad = |reason: String| ReplayError::Option { option: "window", reason };
+) -> Result<(Vec<Sweep>, Vec<TimeWindow>), RecordError> {
+    let bad = |reason: String| RecordError::Option { option: "window", reason };
     if excitation.sweeps.is_empty() {
         return Err(bad(format!(
             "`sysid`: {file} has no SIDS message (no ArduPilot SYSID sweep); give the windows as START:END"
@@ -88,8 +88,8 @@ pub fn choose_sweeps(
 /// The input of a response to `sweeps` when none is given (module doc).
 ///
 /// # Errors
-/// [`ReplayError::Option`] `input` for sweeps on more than one axis.
-pub fn default_input(sweeps: &[Sweep], mapping: &Mapping) -> Result<String, ReplayError> {
+/// [`RecordError::Option`] `input` for sweeps on more than one axis.
+pub fn default_input(sweeps: &[Sweep], mapping: &Mapping) -> Result<String, RecordError> {
     let first = sweeps.first().map(|s| s.axis);
     if let Some(a) = first
         && sweeps.iter().all(|s| s.axis.number == a.number)
@@ -98,7 +98,7 @@ pub fn default_input(sweeps: &[Sweep], mapping: &Mapping) -> Result<String, Repl
             a.surface.filter(|key| Channel::ALL.iter().any(|c| c.key() == *key && mapping.has(*c)));
         return Ok(mapped.unwrap_or(INJECTED).to_string());
     }
-    Err(ReplayError::Option {
+    Err(RecordError::Option {
         option: "input",
         reason: format!(
             "the sweeps excite several axes ({}): choose one with --window sysid:AXIS, or name the input",

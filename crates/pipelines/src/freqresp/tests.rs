@@ -37,7 +37,7 @@ fn record() -> String {
     csv
 }
 
-fn run(opts: &FreqRespOptions) -> Result<FreqRespOutcome, ReplayError> {
+fn run(opts: &FreqRespOptions) -> Result<FreqRespOutcome, RecordError> {
     let m = Mapping::from_toml_str(MAP, "m.toml").unwrap();
     let csv = record();
     let reader = FlightDataReader::new(csv.as_bytes(), "r.csv", &m).unwrap();

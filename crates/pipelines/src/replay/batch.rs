@@ -19,6 +19,8 @@
 use super::ReplayError;
 use super::diagnostics::{self, Identifiability};
 use super::prediction::{Recorder, ValidationReport, validate_coefficients};
+use crate::record::Manoeuvres;
+pub use crate::results::OutputTrace;
 use crate::validation::{OutputData, validate};
 use aeroident_estimators::Term;
 use aeroident_estimators::flight_model::FlightModel;
@@ -29,7 +31,7 @@ use aeroident_estimators::output_error::{
     OeConfig, OeError, OeResult, StopFlag, Termination, fit, fit_to_end,
 };
 use aeroident_estimators::{AirDataSample, ModelStructure};
-use aeroident_io::{FlightDataReader, Mapping, ModelSpec, RecordEvent, Rejection, RejectionLog};
+use aeroident_io::{FlightDataReader, Mapping, ModelSpec, Rejection};
 use serde::Serialize;
 use std::io::Read;
 
@@ -48,28 +50,6 @@ pub struct BatchOutcome {
     /// `fdoe`: the frequency-domain fit itself (`result` is then the time-domain simulation
     /// at its estimates, with its σ and iteration log); `None` for `oe`, `fem`.
     pub frequency: Option<aeroident_estimators::output_error::frequency::FdoeResult>,
-}
-
-/// One output of a batch fit over the record: measured `z` and the model's simulated `ŷ`
-/// (`z − e`, the fit's residual `e`) against time. A NaN point separates manoeuvres; long
-/// records keep every `stride`th sample (at most [`OutputTrace::MAX_POINTS`]).
-#[derive(Debug, Clone, PartialEq)]
-pub struct OutputTrace {
-    /// Output name (`alpha`, `q`, `vt` … as the output-error fit names them).
-    pub name: String,
-    /// Record time, s.
-    pub t_s: Vec<f64>,
-    /// Measured output (the unit of the output: rad, rad/s, m/s …).
-    pub measured: Vec<f64>,
-    /// Simulated output with the estimated parameters, same unit.
-    pub simulated: Vec<f64>,
-    /// Every `stride`th sample kept.
-    pub stride: usize,
-}
-
-impl OutputTrace {
-    /// The most points a trace keeps (figures draw at most a few thousand anyway).
-    pub const MAX_POINTS: usize = 20_000;
 }
 
 /// The [`OutputTrace`]s of `result` over `manoeuvres` (outputs not measured in every sample,
@@ -166,6 +146,28 @@ impl From<&aeroident_estimators::output_error::OeIteration> for BatchIteration {
     }
 }
 
+/// The frequency-domain part of an `fdoe` summary (`summary.json` `frequency_domain`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FrequencyDomainSummary {
+    /// The band fitted, Hz.
+    pub band_hz: (f64, f64),
+    /// Frequencies fitted per manoeuvre: count, lowest and highest, Hz.
+    pub frequencies: Vec<(usize, f64, f64)>,
+    /// The linear model's states (sample field names).
+    pub states: Vec<String>,
+    /// Its measured inputs (model-input names: `de_rad`, `thrust_n`, `vt_mps` …).
+    pub inputs: Vec<String>,
+    /// Outputs fitted.
+    pub outputs: Vec<String>,
+    /// Per output, the residual spectral variance `S_jj` (output unit² · samples², the
+    /// transform being the plain sum `Σ x_i z^{−i}`).
+    pub residual_spectral_variance: Vec<(String, f64)>,
+    /// Per manoeuvre, the linearisation's mean airspeed (m/s) and dynamic pressure (Pa).
+    pub flight_conditions: Vec<(f64, f64)>,
+    /// The parameters not estimated (reported `null`), held at their equation-error values.
+    pub not_estimated: Vec<String>,
+}
+
 /// `summary.json` of a batch fit.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BatchSummary {
@@ -187,7 +189,7 @@ pub struct BatchSummary {
     pub samples_read: usize,
     /// Rows rejected (listed in `rejections`).
     pub samples_rejected: usize,
-    /// The rejected rows and gaps: the first [`RejectionLog::DEFAULT_LIMIT`] and the last; the
+    /// The rejected rows and gaps: the first [`RejectionLog::DEFAULT_LIMIT`](aeroident_io::RejectionLog::DEFAULT_LIMIT) and the last; the
     /// others are counted per kind in `warnings`.
     pub rejections: Vec<Rejection>,
     /// Manoeuvres (separate initial conditions), split at the record's gaps.
@@ -235,7 +237,7 @@ pub struct BatchSummary {
     pub bootstrap: Option<BootstrapSummary>,
     /// `fdoe`: the band, frequencies, linear model and residual spectra; absent for `oe`, `fem`.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub frequency_domain: Option<super::frequency::FrequencyDomainSummary>,
+    pub frequency_domain: Option<FrequencyDomainSummary>,
 }
 
 /// The richest preset the flight model can integrate from the record's first sample.
@@ -296,140 +298,6 @@ fn as_mapped(e: &aeroident_estimators::EstimatorError, mapping: &Mapping) -> Str
         }
         None => e.to_string(),
     }
-}
-
-/// A whole record, split into manoeuvres at its gaps.
-pub(crate) struct Manoeuvres {
-    pub(crate) manoeuvres: Vec<Vec<AirDataSample>>,
-    pub(crate) rejections: RejectionLog,
-    pub(crate) read: usize,
-    pub(crate) rejected: usize,
-    /// What the time windows did and the runs the spike screen saw but did not reject
-    /// (`super::RecordEvents::notes`), one warning each.
-    pub(crate) notes: Vec<String>,
-}
-
-/// Reads the whole record, splitting it into manoeuvres at the reader's gap events, with a
-/// compatibility check's corrections applied when given.
-///
-/// # Errors
-/// Fatal data errors; no usable sample.
-pub(crate) fn read_manoeuvres<R: Read>(
-    reader: FlightDataReader<R>,
-    compat: Option<&crate::compat::Corrections>,
-    windows: &[crate::window::TimeWindow],
-) -> Result<Manoeuvres, ReplayError> {
-    read_records(vec![reader], Some(super::outliers::SpikeScreen::default()), compat, windows)
-}
-
-/// [`read_manoeuvres`] over several records of one aircraft (same mapping), each file starting
-/// a manoeuvre of its own; with more than one file every rejection names its file.
-///
-/// # Errors
-/// As [`read_manoeuvres`]; no usable sample in any file.
-pub(crate) fn read_records<R: Read>(
-    readers: Vec<FlightDataReader<R>>,
-    screen: Option<super::outliers::SpikeScreen>,
-    compat: Option<&crate::compat::Corrections>,
-    windows: &[crate::window::TimeWindow],
-) -> Result<Manoeuvres, ReplayError> {
-    crate::window::check_windows(windows)
-        .map_err(|reason| ReplayError::Option { option: "window", reason })?;
-    super::check_spike_screen(screen.as_ref())?;
-    let files: Vec<String> = readers.iter().map(|r| r.file().to_string()).collect();
-    let named = files.len() > 1;
-    let mut manoeuvres: Vec<Vec<AirDataSample>> = vec![Vec::new()];
-    // Each manoeuvre's first row and file prefix, to name a manoeuvre too short to simulate.
-    let mut starts: Vec<(u64, String)> = vec![(0, String::new())];
-    let mut rejections = RejectionLog::default();
-    let (mut read, mut rejected) = (0usize, 0usize);
-    let mut notes = Vec::new();
-    let mut missed = Vec::new();
-    for (reader, file) in readers.into_iter().zip(&files) {
-        let prefix = if named { format!("{file}: ") } else { String::new() };
-        let mut events = super::record_events(reader, screen, compat, windows);
-        for event in events.by_ref() {
-            match event? {
-                RecordEvent::Sample { row, sample } => {
-                    read += 1;
-                    if let (Some(m), Some(start)) = (manoeuvres.last_mut(), starts.last_mut()) {
-                        if m.is_empty() {
-                            *start = (row, prefix.clone());
-                        }
-                        m.push(sample);
-                    }
-                }
-                RecordEvent::Rejected { row, problem } => {
-                    read += 1;
-                    rejected += 1;
-                    let reason = format!("{prefix}{problem}");
-                    rejections.push(problem.kind(), Rejection { row, reason });
-                }
-                RecordEvent::Gap { row, dt_s, nominal_dt_s } => {
-                    rejections.push("gap", Rejection {
-                        row,
-                        reason: format!(
-                            "{prefix}gap: {dt_s} s before this row (nominal {nominal_dt_s} s); a new manoeuvre with its own initial state"
-                        ),
-                    });
-                    manoeuvres.push(Vec::new());
-                    starts.push((row, prefix.clone()));
-                }
-            }
-        }
-        notes.extend(events.notes().into_iter().map(|n| format!("{prefix}{n}")));
-        missed.push(events.windows_missed().map(|why| format!("{file}: {why}")));
-        manoeuvres.push(Vec::new());
-        starts.push((0, String::new()));
-    }
-    let lone = reject_lone_samples(&mut manoeuvres, &starts, &mut rejections);
-    rejected += lone.len();
-    if manoeuvres.is_empty()
-        && let Some(why) = missed.into_iter().collect::<Option<Vec<String>>>()
-    {
-        // Every file's samples all lie outside the windows: the windows are the cause.
-        return Err(ReplayError::Option { option: "window", reason: why.join("; ") });
-    }
-    if manoeuvres.is_empty() {
-        // Lone samples first: the gaps before them say nothing of why nothing is left.
-        let mut first = lone;
-        first.extend(rejections.first(3));
-        first.truncate(3);
-        return Err(aeroident_io::FlightDataError::NoSamples {
-            file: files.join(", "),
-            rejected,
-            first,
-        }
-        .into());
-    }
-    Ok(Manoeuvres { manoeuvres, rejections, read, rejected, notes })
-}
-
-/// Removes the empty manoeuvres and rejects each manoeuvre of one sample (a lone sample between
-/// two gaps, or alone in a time window): output error simulates every manoeuvre from its first
-/// sample, so one sample holds nothing to fit. Each is listed in `rejections` by its row and file
-/// prefix (`starts`, parallel to `manoeuvres`). Returns the rejections (row, reason).
-fn reject_lone_samples(
-    manoeuvres: &mut Vec<Vec<AirDataSample>>,
-    starts: &[(u64, String)],
-    rejections: &mut RejectionLog,
-) -> Vec<(u64, String)> {
-    let mut lone = Vec::new();
-    let mut kept = Vec::with_capacity(manoeuvres.len());
-    for (m, (row, prefix)) in manoeuvres.drain(..).zip(starts) {
-        if m.len() == 1 {
-            let reason = format!(
-                "{prefix}a manoeuvre of one sample (alone between gaps or in its time window): output error simulates each manoeuvre from its first sample and needs at least two"
-            );
-            rejections
-                .push("one-sample manoeuvre", Rejection { row: *row, reason: reason.clone() });
-            lone.push((*row, reason));
-        } else if !m.is_empty() {
-            kept.push(m);
-        }
-    }
-    *manoeuvres = kept;
-    lone
 }
 
 /// The output-error configuration of a post-flight fit of `structure` (`replay --estimator
@@ -847,12 +715,12 @@ pub struct FitOptions {
     pub gain_constraint: bool,
     /// A compatibility check's corrections, applied to every sample before the fit
     /// ([`crate::compat::Corrected`]); the summary's warnings list them.
-    pub compat: Option<crate::compat::Corrections>,
+    pub compat: Option<crate::record::Corrections>,
     /// The time windows of the record fitted, each its own manoeuvre ([`crate::window`]);
     /// empty: the whole record.
     pub windows: Vec<crate::window::TimeWindow>,
-    /// The spike screen before the fit ([`super::outliers`]); `None`: off. Default on.
-    pub spike_screen: Option<super::outliers::SpikeScreen>,
+    /// The spike screen before the fit ([`crate::record::outliers`]); `None`: off. Default on.
+    pub spike_screen: Option<crate::record::outliers::SpikeScreen>,
     /// `oe` only: Huber's robust weights on the normalised residuals
     /// ([`OeConfig::robust`]); `None`: the Gaussian maximum-likelihood fit. Default off.
     pub robust: Option<aeroident_estimators::output_error::Huber>,
@@ -875,83 +743,27 @@ impl Default for FitOptions {
             gain_constraint: true,
             compat: None,
             windows: Vec::new(),
-            spike_screen: Some(super::outliers::SpikeScreen::default()),
+            spike_screen: Some(crate::record::outliers::SpikeScreen::default()),
             robust: None,
             stop: None,
         }
     }
 }
 
-/// Reads the whole record, splits it at gaps and fits it by output error (`fem`: by the
-/// filter-error method with [`FemConfig::new`]'s defaults on [`oe_config`]) as `options` say.
-/// A fit that does not meet both convergence criteria is reported all the same, its status
-/// (`converged_in_cost`, `not_converged`) and [`termination_note`] in the summary; the
-/// bootstrap is not run on a fit that did not converge.
+/// The time-domain batch fits (output error, filter error) of the record `rec`, read and split
+/// by the caller ([`super::fit::fit_records`], which has checked `options`): the model given,
+/// else the richest preset the first sample can drive; `file` names the record(s).
 ///
 /// # Errors
-/// Fatal data errors, no usable samples, no supported model, a fit that fails
-/// ([`ReplayError::Model`] with the reason), a bootstrap that fails ([`bootstrap_sigma`]), and a
-/// bootstrap asked of `fem` ([`ReplayError::Option`]).
-pub fn fit_record<R: Read>(
-    reader: FlightDataReader<R>,
+/// No supported model, a fit that fails ([`ReplayError::Model`] with the reason), a bootstrap
+/// that fails ([`bootstrap_sigma`]).
+pub(crate) fn fit_time_domain(
+    rec: Manoeuvres,
+    file: &str,
     mapping: &Mapping,
     model: Option<ModelSpec>,
-    options: FitOptions,
+    options: &FitOptions,
 ) -> Result<BatchOutcome, ReplayError> {
-    fit_records(vec![reader], mapping, model, options)
-}
-
-/// [`fit_record`] over several records of one aircraft read with the same mapping (`replay A
-/// --and B --and C`): each file is a manoeuvre of its own (or several, at its gaps and
-/// windows), all fitted together; the time windows and the compatibility corrections apply to
-/// every file, and with more than one file each rejection names its file.
-///
-/// # Errors
-/// As [`fit_record`].
-pub fn fit_records<R: Read>(
-    readers: Vec<FlightDataReader<R>>,
-    mapping: &Mapping,
-    model: Option<ModelSpec>,
-    options: FitOptions,
-) -> Result<BatchOutcome, ReplayError> {
-    if options.method != BatchMethod::Fem && options.process_noise.is_some() {
-        return Err(ReplayError::Option {
-            option: "process-noise",
-            reason: "process noise is the filter-error method's (`--estimator fem`); output error has none".into(),
-        });
-    }
-    if options.method != BatchMethod::Fem && !options.gain_constraint {
-        return Err(ReplayError::Option {
-            option: "no-gain-constraint",
-            reason: "the gain constraint is the filter-error method's (`--estimator fem`); output error has no filter".into(),
-        });
-    }
-    if options.method == BatchMethod::Fem && options.robust.is_some() {
-        return Err(ReplayError::Option {
-            option: "robust",
-            reason: "Huber's robust weights are of output error (`--estimator oe`), not of the filter-error method".into(),
-        });
-    }
-    if options.method == BatchMethod::Fem && options.bootstrap_refits.is_some() {
-        return Err(ReplayError::Option {
-            option: "bootstrap",
-            reason: "the parametric bootstrap is of output error (`--estimator oe`); the filter-error method's own σ accounts for the process noise".into(),
-        });
-    }
-    if let BatchMethod::Fdoe { .. } = options.method {
-        check_fdoe_options(&options)?;
-    }
-    if let Some(n) = options.bootstrap_refits {
-        // Before the record is read: the replicas' storage and time grow with the count.
-        check_bootstrap_refits(n)
-            .map_err(|reason| ReplayError::Option { option: "bootstrap", reason })?;
-    }
-    let file = readers.iter().map(|r| r.file()).collect::<Vec<_>>().join(", ");
-    let rec =
-        read_records(readers, options.spike_screen, options.compat.as_ref(), &options.windows)?;
-    if let BatchMethod::Fdoe { band_hz } = options.method {
-        return super::frequency::fit_fdoe(rec, &file, mapping, model, band_hz, &options);
-    }
     let model = match model {
         Some(m) => m,
         None => default_model(&rec.manoeuvres[0][0], mapping)?,
@@ -961,7 +773,7 @@ pub fn fit_records<R: Read>(
     let slices: Vec<&[AirDataSample]> = rec.manoeuvres.iter().map(Vec::as_slice).collect();
     crate::structure::check_knots_in_range(&model.structure, &slices, &model.name)
         .map_err(ReplayError::Model)?;
-    let fitted = fit_slices(&slices, model.structure, &options)?;
+    let fitted = fit_slices(&slices, model.structure, options)?;
     let sigmas = sigma_stage(&slices, &fitted, options.bootstrap_refits)?;
     let st = model.structure;
     let result = &fitted.result;
@@ -983,7 +795,7 @@ pub fn fit_records<R: Read>(
         }
         None => result.clone(),
     };
-    let validation = simulated_validation(&simulated, &slices, &file, None);
+    let validation = simulated_validation(&simulated, &slices, file, None);
     let traces = output_traces(&simulated, &slices);
     let (rejections, unlisted) = rec.rejections.finish();
     let mut summary =
@@ -1009,7 +821,7 @@ pub fn fit_records<R: Read>(
 }
 
 /// Refuses the time-domain fits' options on a frequency-domain fit.
-fn check_fdoe_options(options: &FitOptions) -> Result<(), ReplayError> {
+pub(crate) fn check_fdoe_options(options: &FitOptions) -> Result<(), ReplayError> {
     let refuse = |option: &'static str, what: &str| {
         Err(ReplayError::Option {
             option,
@@ -1397,7 +1209,7 @@ pub fn validate_on<R: Read>(
     fitted: &BatchOutcome,
 ) -> Result<ValidationReport, ReplayError> {
     let file = reader.file().to_string();
-    let rec = read_manoeuvres(reader, None, &[])?;
+    let rec = crate::record::read_manoeuvres(reader, None, &[])?;
     let slices: Vec<&[AirDataSample]> = rec.manoeuvres.iter().map(Vec::as_slice).collect();
     let r = &fitted.result;
     let np = r.n_params;
@@ -1443,7 +1255,12 @@ mod tests {
         }
         for model in [None, ModelSpec::from_arg("longitudinal").ok()] {
             let reader = FlightDataReader::new(csv.as_bytes(), "r.csv", &mapping).unwrap();
-            let Err(e) = fit_records(vec![reader], &mapping, model, FitOptions::default()) else {
+            let Err(e) = crate::replay::fit::fit_records(
+                vec![reader],
+                &mapping,
+                model,
+                FitOptions::default(),
+            ) else {
                 panic!("fitted without the chord and the inertia");
             };
             let text = e.to_string();
@@ -1468,7 +1285,7 @@ mod tests {
             let map = "[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"V\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nrho = { value = 1.0, unit = \"kg/m3\" }\nmass = { value = 1000.0, unit = \"kg\" }\nS = { value = 10.0, unit = \"m2\" }\n";
             let mapping = Mapping::from_toml_str(map, "m.toml").unwrap();
             let readers: Vec<FlightDataReader<&[u8]>> = Vec::new();
-            let Err(e) = fit_records(readers, &mapping, None, options) else {
+            let Err(e) = crate::replay::fit::fit_records(readers, &mapping, None, options) else {
                 panic!("{n} refits accepted");
             };
             let ReplayError::Option { option: "bootstrap", reason } = &e else {

@@ -12,39 +12,17 @@
 
 use super::ReplayError;
 use super::batch::{
-    BatchIteration, BatchOutcome, BatchParameter, BatchSummary, FitOptions, Manoeuvres,
+    BatchIteration, BatchOutcome, BatchParameter, BatchSummary, FitOptions, FrequencyDomainSummary,
     default_model, output_traces, simulate_at, simulated_validation,
 };
 use super::diagnostics;
 use super::prediction::Recorder;
+use crate::record::Manoeuvres;
 use aeroident_estimators::AirDataSample;
 use aeroident_estimators::flight_model::STATE_NAMES;
 use aeroident_estimators::output_error::OeResult;
 use aeroident_estimators::output_error::frequency::{FdoeConfig, FdoeResult, fit};
 use aeroident_io::{Mapping, ModelSpec};
-use serde::Serialize;
-
-/// The frequency-domain part of an `fdoe` summary (`summary.json` `frequency_domain`).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct FrequencyDomainSummary {
-    /// The band fitted, Hz.
-    pub band_hz: (f64, f64),
-    /// Frequencies fitted per manoeuvre: count, lowest and highest, Hz.
-    pub frequencies: Vec<(usize, f64, f64)>,
-    /// The linear model's states (sample field names).
-    pub states: Vec<String>,
-    /// Its measured inputs (model-input names: `de_rad`, `thrust_n`, `vt_mps` …).
-    pub inputs: Vec<String>,
-    /// Outputs fitted.
-    pub outputs: Vec<String>,
-    /// Per output, the residual spectral variance `S_jj` (output unit² · samples², the
-    /// transform being the plain sum `Σ x_i z^{−i}`).
-    pub residual_spectral_variance: Vec<(String, f64)>,
-    /// Per manoeuvre, the linearisation's mean airspeed (m/s) and dynamic pressure (Pa).
-    pub flight_conditions: Vec<(f64, f64)>,
-    /// The parameters not estimated (reported `null`), held at their equation-error values.
-    pub not_estimated: Vec<String>,
-}
 
 /// Fits the record `rec` (read and split by the caller) by frequency-domain output error over
 /// `band_hz` with `model` (else the default preset) and reports it as a batch fit.

@@ -14,7 +14,7 @@
 //! (derivatives the stage will supply count as present). A `V/V0` term without a mapped `v0`
 //! uses the first sample's V as V0.
 //!
-//! **Gaps.** At a [`RecordEvent::Gap`] the differentiator restarts and the estimator is told
+//! **Gaps.** At a [`RecordEvent::Gap`](aeroident_io::RecordEvent::Gap) the differentiator restarts and the estimator is told
 //! that a new manoeuvre starts ([`Estimator::new_manoeuvre`]: model states re-initialised,
 //! parameters kept); nothing is bridged.
 //!
@@ -44,19 +44,20 @@ pub mod constant;
 pub mod cross_check;
 pub mod diagnostics;
 pub mod explain;
+pub mod fit;
 pub mod frequency;
 pub mod kinematics;
 mod online;
-pub mod outliers;
 pub mod precision;
 pub mod prediction;
 
 use crate::condition::Derivative;
 use crate::estimators::{BuildError, EstimatorKind, EstimatorOptions, build};
+use crate::record::{RecordError, check_spike_screen, outliers, record_events, unsupported};
 use aeroident_estimators::{AirDataSample, Coefficient, Estimator, ModelStructure, Status, Term};
 use aeroident_io::mapping::{Channel, Mapping};
 use aeroident_io::replay_output::ReplaySummary;
-use aeroident_io::{FlightDataError, FlightDataReader, ModelSpec, ReaderReport, RecordEvent};
+use aeroident_io::{FlightDataError, FlightDataReader, ModelSpec, ReaderReport};
 use prediction::{Frozen, Recorder, ValidationReport, validate_coefficients};
 use std::io::{Read, Write};
 use std::time::{Duration, Instant};
@@ -99,7 +100,7 @@ pub struct ReplayOptions {
     pub pacing: Pacing,
     /// A compatibility check's corrections, applied to every sample before the conditioning
     /// stage ([`crate::compat::Corrected`]); the summary's warnings list them.
-    pub compat: Option<crate::compat::Corrections>,
+    pub compat: Option<crate::record::Corrections>,
     /// The time windows of the record used, each its own manoeuvre ([`crate::window`]); empty:
     /// the whole record.
     pub windows: Vec<crate::window::TimeWindow>,
@@ -289,6 +290,16 @@ pub enum ReplayError {
         /// Rows read until then.
         samples_read: usize,
     },
+}
+
+impl From<RecordError> for ReplayError {
+    fn from(e: RecordError) -> Self {
+        match e {
+            RecordError::Data(e) => ReplayError::Data(e),
+            RecordError::Option { option, reason } => ReplayError::Option { option, reason },
+            RecordError::Model(m) => ReplayError::Model(m),
+        }
+    }
 }
 
 /// Kind of the rejections of samples the differentiator could not centre (warm-up, gaps, end).
@@ -561,82 +572,6 @@ pub(crate) fn sideslip_level(
     (model.without(cy0), Some(note.into()))
 }
 
-/// What the model needs that sample `s` lacks, as readable items (empty: supported). Terms
-/// are checked for every estimator, measured coefficients for those that use them.
-/// Derivatives in `supplied` count as present. The estimators that do not use measured
-/// coefficients integrate the model's states themselves (EKF, output error, filter error), so
-/// for them a state the record does not measure (β without a sideslip vane) is not missing:
-/// they carry it as a state.
-pub fn unsupported(
-    structure: &ModelStructure,
-    s: &AirDataSample,
-    uses_measured: bool,
-    supplied: &[Derivative],
-) -> Vec<String> {
-    let mut probe = *s;
-    for d in supplied {
-        if d.source(&probe).is_some() {
-            d.set(&mut probe, Some(0.0));
-        }
-    }
-    if !uses_measured && let Ok(set) = aeroident_estimators::StateSet::of(structure) {
-        for &i in set.states() {
-            let o = aeroident_estimators::Output::ALL[i];
-            if o.measured(&probe).is_none() {
-                o.set_measured(&mut probe, 0.0);
-            }
-        }
-    }
-    let mut out = Vec::new();
-    for t in Term::ALL {
-        if structure.params().any(|p| p.term == t) && structure.value(t, &probe).is_none() {
-            out.push(format!("term `{}` ({})", t.name(), term_needs(t)));
-        }
-    }
-    if uses_measured {
-        let m = probe.measured_coefficients();
-        for c in structure.coefficients() {
-            if m[c.index()].is_none() {
-                out.push(format!("coefficient `{}` ({})", c.name(), coefficient_needs(c)));
-            }
-        }
-    }
-    out
-}
-
-fn term_needs(t: Term) -> &'static str {
-    match t {
-        Term::Beta | Term::AlphaBeta => "needs beta",
-        Term::P | Term::AlphaP => "needs p and the span b",
-        Term::Q | Term::AlphaQ => "needs q and cbar",
-        Term::Q0 => "needs q, cbar and v0",
-        Term::R | Term::AlphaR => "needs r and the span b",
-        Term::Alphadot => "needs alphadot or alpha to differentiate, and cbar",
-        Term::De | Term::AlphaDe => "needs de",
-        Term::Da | Term::AlphaDa => "needs da",
-        Term::Dr | Term::AlphaDr => "needs dr",
-        Term::V => "needs v0",
-        Term::Mach | Term::Mach2 => "needs a density within the standard atmosphere (-1 to 20 km)",
-        Term::AlphaK1 | Term::AlphaK2 | Term::AlphaK3 | Term::AlphaK4 => {
-            "needs its alpha knot in the model"
-        }
-        Term::Bias | Term::Alpha | Term::Alpha2 => "always available",
-    }
-}
-
-/// What the record must map for coefficient `c` to be measured from its accelerations (in
-/// the mapping's channel and constant names).
-pub(crate) fn coefficient_needs(c: Coefficient) -> &'static str {
-    match c {
-        Coefficient::CX | Coefficient::CZ | Coefficient::CL | Coefficient::CD => "needs ax and az",
-        Coefficient::CY => "needs ay",
-        Coefficient::Cm => "needs q (or qdot), Iyy and cbar",
-        Coefficient::Cl | Coefficient::Cn => {
-            "needs p, q, r (or their derivatives), Ixx, Iyy, Izz, Ixz and the span b"
-        }
-    }
-}
-
 /// The derivatives the stage must supply for `structure` with estimator `kind`, given what the
 /// mapping records and the source option.
 fn derivatives_to_supply(
@@ -732,7 +667,10 @@ pub fn replay_with<R: Read>(
         }
     }
     let file = events_file;
-    let mut out = run.finish().map_err(|e| events.explain_no_samples(&file, e))?;
+    let mut out = run.finish().map_err(|e| match e {
+        ReplayError::Data(d) => events.explain_no_samples(&file, RecordError::Data(d)).into(),
+        e => e,
+    })?;
     if !out.diverged() {
         out.summary.warnings.extend(precision::warning(&out.summary.parameters));
     }
@@ -760,7 +698,7 @@ pub fn cross_check_record<R: Read>(
         spike_screen: opts.spike_screen,
         ..batch::FitOptions::default()
     };
-    match batch::fit_record(reader, mapping, Some(outcome.model.clone()), options) {
+    match fit::fit_record(reader, mapping, Some(outcome.model.clone()), options) {
         Ok(fit) => {
             let check = cross_check::cross_check(
                 opts.estimator,
@@ -776,82 +714,6 @@ pub fn cross_check_record<R: Read>(
             .warnings
             .push(format!("cross-check: the output-error fit of the record failed: {e}")),
     }
-}
-
-/// The events of a record as the estimators see them: read, screened for isolated spikes when
-/// `screen` is given ([`outliers`]), corrected by a compatibility check's corrections when
-/// given ([`crate::compat::Corrected`], over the whole record: its time shifts reach across
-/// window edges), then cut to the time windows ([`crate::window`]).
-pub(crate) fn record_events<'a, R: Read + 'a>(
-    reader: FlightDataReader<R>,
-    screen: Option<outliers::SpikeScreen>,
-    compat: Option<&crate::compat::Corrections>,
-    windows: &[crate::window::TimeWindow],
-) -> RecordEvents<'a> {
-    let reader_notes = reader.notes();
-    let mapping = reader.mapping();
-    let screened = outliers::Screened::new(reader, screen).named_by(mapping);
-    let screen_notes = screened.notes();
-    let events: Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a> = match compat {
-        Some(c) => Box::new(crate::compat::Corrected::new(screened, c.clone())),
-        None => Box::new(screened),
-    };
-    let events = crate::window::Windowed::new(events, windows.to_vec());
-    RecordEvents { events, notes: [reader_notes, screen_notes] }
-}
-
-/// [`record_events`]: the events, and the notes of the stages they went through.
-pub(crate) struct RecordEvents<'a> {
-    events: crate::window::Windowed<
-        Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a>,
-    >,
-    /// The warnings of the reader ([`FlightDataReader::notes`]) and of the spike screen.
-    notes: [outliers::ScreenNotes; 2],
-}
-
-impl RecordEvents<'_> {
-    /// The warnings of the stages so far: the reader's (an implausible time unit), what the
-    /// time windows did, the runs the spike screen saw but did not reject.
-    pub(crate) fn notes(&self) -> Vec<String> {
-        let [reader, screen] = &self.notes;
-        let get = |n: &outliers::ScreenNotes| n.lock().map(|n| n.clone()).unwrap_or_default();
-        get(reader).into_iter().chain(self.events.note()).chain(get(screen)).collect()
-    }
-}
-
-impl RecordEvents<'_> {
-    /// `error` (the end of a replay of `file`), or in place of a "no usable samples" one the
-    /// `--window` error saying that the windows missed the record ([`crate::window::Windowed::missed`]).
-    pub(crate) fn explain_no_samples(&self, file: &str, error: ReplayError) -> ReplayError {
-        match (&error, self.events.missed()) {
-            (ReplayError::Data(FlightDataError::NoSamples { .. }), Some(why)) => {
-                ReplayError::Option { option: "window", reason: format!("{file}: {why}") }
-            }
-            _ => error,
-        }
-    }
-
-    /// [`crate::window::Windowed::missed`] of these events.
-    pub(crate) fn windows_missed(&self) -> Option<String> {
-        self.events.missed()
-    }
-}
-
-impl Iterator for RecordEvents<'_> {
-    type Item = Result<RecordEvent, FlightDataError>;
-
-    fn next(&mut self) -> Option<Self::Item> {
-        self.events.next()
-    }
-}
-
-/// The spike screen's settings must be sane ([`outliers::SpikeScreen::check`]).
-pub(crate) fn check_spike_screen(
-    screen: Option<&outliers::SpikeScreen>,
-) -> Result<(), ReplayError> {
-    screen
-        .map_or(Ok(()), outliers::SpikeScreen::check)
-        .map_err(|reason| ReplayError::Option { option: "spike-screen", reason })
 }
 
 /// The numeric options of a replay, checked before anything is read or built, each error

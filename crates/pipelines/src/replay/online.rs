@@ -8,10 +8,11 @@ use super::prediction::{Recorder, validate_coefficients};
 use super::{
     History, KIND_NOT_CENTRED, Pacer, Pacing, ReplayError, ReplayObserver, ReplayOptions,
     ReplayOutcome, choose_model, derivatives_to_supply, diagnostics, explain, model_line,
-    settle_time_s, unsupported,
+    settle_time_s,
 };
 use crate::condition::{Alignment, Conditioner, Conditioning};
 use crate::estimators::{BuildError, EstimatorKind};
+use crate::record::unsupported;
 use crate::sample_log::SampleLog;
 use aeroident_estimators::{AirDataSample, Estimator, Status};
 use aeroident_io::mapping::{Channel, Mapping};

@@ -14,7 +14,7 @@ use super::{
     select_on_samples, to_supply,
 };
 use crate::condition::Derivative;
-use crate::replay::ReplayError;
+use crate::record::RecordError;
 use aeroident_estimators::structure::StepAction;
 use aeroident_estimators::{
     AirDataSample, AlphaKnots, Coefficient, ModelStructure, Param, Priors, Term,
@@ -240,7 +240,7 @@ pub fn select_model<R: Read>(
     compat: Option<&crate::compat::Corrections>,
     windows: &[crate::window::TimeWindow],
     diff_window: usize,
-) -> Result<AutoSelection, ReplayError> {
+) -> Result<AutoSelection, RecordError> {
     let file = readers.first().map_or(String::new(), |r| r.file().to_string());
     let (raw, first) = read_for_selection(readers, compat, windows)?;
     let offered = |c| auto.offered(c);
@@ -251,14 +251,14 @@ pub fn select_model<R: Read>(
         to_supply(&Wanted { coefficients: &coefficients, candidates: &candidates }, &first);
     let rec = condition(&raw, supplied, diff_window, mapping.nominal_dt_s)?;
     let probe = rec.first().copied().ok_or_else(|| {
-        ReplayError::Model(format!(
+        RecordError::Model(format!(
             "{file}: every manoeuvre is shorter than the differentiator window ({diff_window} samples)"
         ))
     })?;
     let slices = rec.slices();
     let knots = auto
         .knots_on(&slices, &candidates)
-        .map_err(|e| ReplayError::Model(format!("{file}: {e}")))?;
+        .map_err(|e| RecordError::Model(format!("{file}: {e}")))?;
     let mut unavailable = Vec::new();
     let mut selections = Vec::new();
     for &c in &coefficients {
@@ -270,7 +270,7 @@ pub fn select_model<R: Read>(
             }
         }
         if usable.is_empty() {
-            return Err(ReplayError::Model(format!(
+            return Err(RecordError::Model(format!(
                 "{file}: {}: no candidate term can be evaluated on this record (unmapped: {})",
                 c.name(),
                 names(&unavailable)
@@ -278,7 +278,7 @@ pub fn select_model<R: Read>(
         }
         selections.push(
             select_on_samples(&slices, c, &usable, &knots, auto.method)
-                .map_err(ReplayError::Model)?,
+                .map_err(RecordError::Model)?,
         );
     }
     let model = model_of(&selections, knots, scope, auto.method, &file)?;
@@ -313,21 +313,21 @@ pub fn model_from_args<R: Read>(
     compat: Option<&crate::compat::Corrections>,
     windows: &[crate::window::TimeWindow],
     diff_window: usize,
-) -> Result<(Option<ModelSpec>, Option<AutoSelection>), ReplayError> {
+) -> Result<(Option<ModelSpec>, Option<AutoSelection>), RecordError> {
     let arg = model.unwrap_or_default();
     let Some(auto) = AutoModel::from_args(arg, method, candidates) else {
         if !candidates.is_empty() || !alpha_knots_deg.is_empty() || method != "swr" {
-            return Err(ReplayError::Option {
+            return Err(RecordError::Option {
                 option: "select",
                 reason: "a selection method, candidates and knots apply to the model `auto`".into(),
             });
         }
         let spec = model.map(ModelSpec::from_arg).transpose();
-        return Ok((spec.map_err(|e| ReplayError::Model(e.to_string()))?, None));
+        return Ok((spec.map_err(|e| RecordError::Model(e.to_string()))?, None));
     };
     let auto = auto
         .and_then(|a| a.with_knots_deg(alpha_knots_deg))
-        .map_err(|e| ReplayError::Model(format!("model `{arg}`: {e}")))?;
+        .map_err(|e| RecordError::Model(format!("model `{arg}`: {e}")))?;
     let selection = select_model(open()?, mapping, &auto, compat, windows, diff_window)?;
     Ok((Some(selection.model.clone()), Some(selection)))
 }
@@ -358,7 +358,7 @@ fn model_of(
     scope: Scope,
     method: Method,
     file: &str,
-) -> Result<ModelSpec, ReplayError> {
+) -> Result<ModelSpec, RecordError> {
     let mut structure = ModelStructure::empty().with_knots(knots);
     for s in selections {
         structure.insert(Param::new(s.coefficient, Term::Bias));
@@ -367,7 +367,7 @@ fn model_of(
         }
     }
     let structure = structure.validated().map_err(|e| {
-        ReplayError::Model(format!(
+        RecordError::Model(format!(
             "{file}: the selected model is not usable: {e} (offer fewer candidates with --candidates, select one scope at a time, or select with --select mof)"
         ))
     })?;

@@ -8,14 +8,51 @@
 //! Not applied: the airspeed bias (in still air it is the wind along the flight path, and the
 //! aerodynamics need the airspeed, not the inertial speed).
 
-use super::{ChannelSummary, ReconstructedSummary};
-use crate::replay::ReplayError;
+use super::RecordError;
 use aeroident_estimators::AirDataSample;
 use aeroident_estimators::compat::{Channel, interpolate, wrap};
 use aeroident_io::{FlightDataError, RecordEvent};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 use std::path::Path;
+
+/// One channel's corrections: `measured = scale · true + bias`, read `time_shift_s` late (a
+/// `compat.json` row, written and read back by `replay --compat`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ChannelSummary {
+    /// The sample field (`ax_mps2`, `alpha_rad` …).
+    pub name: String,
+    /// Its unit.
+    #[serde(default)]
+    pub unit: String,
+    /// Bias, channel units.
+    pub bias: Option<f64>,
+    /// Its reported σ (`compat.json` `sigma`: coloured-residual where formed, else Cramér–Rao).
+    pub bias_sigma: Option<f64>,
+    /// Scale factor `1 + k`.
+    pub scale: Option<f64>,
+    /// Its reported σ (`compat.json` `sigma`: coloured-residual where formed, else Cramér–Rao).
+    pub scale_sigma: Option<f64>,
+    /// Time shift, s (> 0: the channel lags the kinematics).
+    pub time_shift_s: Option<f64>,
+    /// Its reported σ, s (as `bias_sigma`).
+    pub time_shift_sigma_s: Option<f64>,
+}
+
+/// One manoeuvre's reconstructed air data at its sample times.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ReconstructedSummary {
+    /// Manoeuvre, from 1.
+    pub manoeuvre: usize,
+    /// Sample times, s.
+    pub t_s: Vec<f64>,
+    /// Airspeed, m/s.
+    pub vt_mps: Vec<f64>,
+    /// Angle of attack, rad.
+    pub alpha_rad: Vec<f64>,
+    /// Sideslip, rad.
+    pub beta_rad: Vec<f64>,
+}
 
 /// The corrections of a compatibility check (from its `compat.json`, or its summary).
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -52,10 +89,10 @@ impl Corrections {
     /// The corrections of a `compat.json` file.
     ///
     /// # Errors
-    /// [`ReplayError::Option`] naming the file: unreadable, not a compat.json, an unknown
+    /// [`RecordError::Option`] naming the file: unreadable, not a compat.json, an unknown
     /// channel, a scale that is not positive, or a non-finite number.
-    pub fn from_json(path: &Path) -> Result<Self, ReplayError> {
-        let bad = |reason: String| ReplayError::Option {
+    pub fn from_json(path: &Path) -> Result<Self, RecordError> {
+        let bad = |reason: String| RecordError::Option {
             option: "compat",
             reason: format!("{}: {reason}", path.display()),
         };
@@ -64,17 +101,11 @@ impl Corrections {
         Self::of_rows(&file.channels, &file.reconstructed).map_err(bad)
     }
 
-    /// The corrections of a check's summary (`--compat auto`).
-    ///
-    /// # Errors
-    /// As [`Corrections::from_json`].
-    pub fn from_summary(s: &super::CompatSummary) -> Result<Self, ReplayError> {
-        Self::of_rows(&s.channels, &s.reconstructed)
-            .map_err(|reason| ReplayError::Option { option: "compat", reason })
-    }
-
     /// The corrections of a check's channel rows and reconstructed air data.
-    fn of_rows(rows: &[ChannelSummary], rec: &[ReconstructedSummary]) -> Result<Self, String> {
+    pub(crate) fn of_rows(
+        rows: &[ChannelSummary],
+        rec: &[ReconstructedSummary],
+    ) -> Result<Self, String> {
         let mut entries = Vec::new();
         for c in rows {
             let ch = Channel::from_name(&c.name)

@@ -1,0 +1,261 @@
+//! The record stage, below every job: a recorded flight from its reader to the samples the
+//! estimators, the batch fits, the compatibility check and the structure selection see.
+//!
+//! `read → map → screen → correct → window → manoeuvres`:
+//! - **read, map**: an [`aeroident_io::FlightDataReader`] (any log format, through the
+//!   mapping) yields [`RecordEvent`]s: SI samples at the CG, counted rejections and gaps;
+//! - **screen**: isolated spikes rejected ([`outliers`]);
+//! - **correct**: a compatibility check's biases, scale factors and time shifts undone, a
+//!   missing sideslip filled ([`corrections`]);
+//! - **window**: the time windows of the record, each a manoeuvre ([`crate::window`]);
+//! - **manoeuvres**: for the whole-record consumers, the events gathered into manoeuvres split
+//!   at the gaps ([`read_records`]).
+//!
+//! [`needs`] says what a model structure needs from a record's samples. Every error of the
+//! stage is a [`RecordError`], naming the file, the option as the command line spells it, or
+//! the model.
+
+pub mod corrections;
+pub mod needs;
+pub mod outliers;
+
+pub use corrections::{Corrected, Corrections};
+pub use needs::unsupported;
+
+use aeroident_estimators::AirDataSample;
+use aeroident_io::{FlightDataError, FlightDataReader, RecordEvent, Rejection, RejectionLog};
+use std::io::Read;
+
+/// Errors of the record stage and of the whole-record analyses on it (compatibility check,
+/// structure selection).
+#[derive(Debug, thiserror::Error)]
+pub enum RecordError {
+    /// Reading the record failed fatally, or it has no usable sample.
+    #[error(transparent)]
+    Data(#[from] FlightDataError),
+    /// An option is invalid; `option` is its name as the command line spells it, without the
+    /// leading `--`.
+    #[error("option `--{option}`: {reason}")]
+    Option {
+        /// Option name.
+        option: &'static str,
+        /// Why.
+        reason: String,
+    },
+    /// The record does not support what is asked of it (a model, a selection, a check).
+    #[error("{0}")]
+    Model(String),
+}
+
+/// The events of a record as the estimators see them: read, screened for isolated spikes when
+/// `screen` is given ([`outliers`]), corrected by a compatibility check's corrections when
+/// given ([`Corrected`], over the whole record: its time shifts reach across
+/// window edges), then cut to the time windows ([`crate::window`]).
+pub fn record_events<'a, R: Read + 'a>(
+    reader: FlightDataReader<R>,
+    screen: Option<outliers::SpikeScreen>,
+    compat: Option<&Corrections>,
+    windows: &[crate::window::TimeWindow],
+) -> RecordEvents<'a> {
+    let reader_notes = reader.notes();
+    let mapping = reader.mapping();
+    let screened = outliers::Screened::new(reader, screen).named_by(mapping);
+    let screen_notes = screened.notes();
+    let events: Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a> = match compat {
+        Some(c) => Box::new(Corrected::new(screened, c.clone())),
+        None => Box::new(screened),
+    };
+    let events = crate::window::Windowed::new(events, windows.to_vec());
+    RecordEvents { events, notes: [reader_notes, screen_notes] }
+}
+
+/// [`record_events`]: the events, and the notes of the stages they went through.
+pub struct RecordEvents<'a> {
+    events: crate::window::Windowed<
+        Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a>,
+    >,
+    /// The warnings of the reader ([`FlightDataReader::notes`]) and of the spike screen.
+    notes: [outliers::ScreenNotes; 2],
+}
+
+impl RecordEvents<'_> {
+    /// The warnings of the stages so far: the reader's (an implausible time unit), what the
+    /// time windows did, the runs the spike screen saw but did not reject.
+    pub fn notes(&self) -> Vec<String> {
+        let [reader, screen] = &self.notes;
+        let get = |n: &outliers::ScreenNotes| n.lock().map(|n| n.clone()).unwrap_or_default();
+        get(reader).into_iter().chain(self.events.note()).chain(get(screen)).collect()
+    }
+}
+
+impl RecordEvents<'_> {
+    /// `error` (the end of a replay of `file`), or in place of a "no usable samples" one the
+    /// `--window` error saying that the windows missed the record ([`crate::window::Windowed::missed`]).
+    pub fn explain_no_samples(&self, file: &str, error: RecordError) -> RecordError {
+        match (&error, self.events.missed()) {
+            (RecordError::Data(FlightDataError::NoSamples { .. }), Some(why)) => {
+                RecordError::Option { option: "window", reason: format!("{file}: {why}") }
+            }
+            _ => error,
+        }
+    }
+
+    /// [`crate::window::Windowed::missed`] of these events.
+    pub fn windows_missed(&self) -> Option<String> {
+        self.events.missed()
+    }
+}
+
+impl Iterator for RecordEvents<'_> {
+    type Item = Result<RecordEvent, FlightDataError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        self.events.next()
+    }
+}
+
+/// The spike screen's settings must be sane ([`outliers::SpikeScreen::check`]).
+pub fn check_spike_screen(screen: Option<&outliers::SpikeScreen>) -> Result<(), RecordError> {
+    screen
+        .map_or(Ok(()), outliers::SpikeScreen::check)
+        .map_err(|reason| RecordError::Option { option: "spike-screen", reason })
+}
+
+/// A whole record, split into manoeuvres at its gaps.
+#[derive(Debug)]
+pub struct Manoeuvres {
+    /// The samples of each manoeuvre, in time order; none empty, none of one sample.
+    pub manoeuvres: Vec<Vec<AirDataSample>>,
+    /// The rejected rows, gaps and one-sample manoeuvres (bounded, counted per kind).
+    pub rejections: RejectionLog,
+    /// Rows read (accepted and rejected).
+    pub read: usize,
+    /// Rows rejected (gaps count none).
+    pub rejected: usize,
+    /// What the time windows did and the runs the spike screen saw but did not reject
+    /// ([`RecordEvents::notes`]), one warning each.
+    pub notes: Vec<String>,
+}
+
+/// Reads the whole record, splitting it into manoeuvres at the reader's gap events, with a
+/// compatibility check's corrections applied when given.
+///
+/// # Errors
+/// Fatal data errors; no usable sample.
+pub fn read_manoeuvres<R: Read>(
+    reader: FlightDataReader<R>,
+    compat: Option<&Corrections>,
+    windows: &[crate::window::TimeWindow],
+) -> Result<Manoeuvres, RecordError> {
+    read_records(vec![reader], Some(outliers::SpikeScreen::default()), compat, windows)
+}
+
+/// [`read_manoeuvres`] over several records of one aircraft (same mapping), each file starting
+/// a manoeuvre of its own; with more than one file every rejection names its file.
+///
+/// # Errors
+/// As [`read_manoeuvres`]; no usable sample in any file.
+pub fn read_records<R: Read>(
+    readers: Vec<FlightDataReader<R>>,
+    screen: Option<outliers::SpikeScreen>,
+    compat: Option<&Corrections>,
+    windows: &[crate::window::TimeWindow],
+) -> Result<Manoeuvres, RecordError> {
+    crate::window::check_windows(windows)
+        .map_err(|reason| RecordError::Option { option: "window", reason })?;
+    check_spike_screen(screen.as_ref())?;
+    let files: Vec<String> = readers.iter().map(|r| r.file().to_string()).collect();
+    let named = files.len() > 1;
+    let mut manoeuvres: Vec<Vec<AirDataSample>> = vec![Vec::new()];
+    // Each manoeuvre's first row and file prefix, to name a manoeuvre too short to simulate.
+    let mut starts: Vec<(u64, String)> = vec![(0, String::new())];
+    let mut rejections = RejectionLog::default();
+    let (mut read, mut rejected) = (0usize, 0usize);
+    let mut notes = Vec::new();
+    let mut missed = Vec::new();
+    for (reader, file) in readers.into_iter().zip(&files) {
+        let prefix = if named { format!("{file}: ") } else { String::new() };
+        let mut events = record_events(reader, screen, compat, windows);
+        for event in events.by_ref() {
+            match event? {
+                RecordEvent::Sample { row, sample } => {
+                    read += 1;
+                    if let (Some(m), Some(start)) = (manoeuvres.last_mut(), starts.last_mut()) {
+                        if m.is_empty() {
+                            *start = (row, prefix.clone());
+                        }
+                        m.push(sample);
+                    }
+                }
+                RecordEvent::Rejected { row, problem } => {
+                    read += 1;
+                    rejected += 1;
+                    let reason = format!("{prefix}{problem}");
+                    rejections.push(problem.kind(), Rejection { row, reason });
+                }
+                RecordEvent::Gap { row, dt_s, nominal_dt_s } => {
+                    rejections.push("gap", Rejection {
+                        row,
+                        reason: format!(
+                            "{prefix}gap: {dt_s} s before this row (nominal {nominal_dt_s} s); a new manoeuvre with its own initial state"
+                        ),
+                    });
+                    manoeuvres.push(Vec::new());
+                    starts.push((row, prefix.clone()));
+                }
+            }
+        }
+        notes.extend(events.notes().into_iter().map(|n| format!("{prefix}{n}")));
+        missed.push(events.windows_missed().map(|why| format!("{file}: {why}")));
+        manoeuvres.push(Vec::new());
+        starts.push((0, String::new()));
+    }
+    let lone = reject_lone_samples(&mut manoeuvres, &starts, &mut rejections);
+    rejected += lone.len();
+    if manoeuvres.is_empty()
+        && let Some(why) = missed.into_iter().collect::<Option<Vec<String>>>()
+    {
+        // Every file's samples all lie outside the windows: the windows are the cause.
+        return Err(RecordError::Option { option: "window", reason: why.join("; ") });
+    }
+    if manoeuvres.is_empty() {
+        // Lone samples first: the gaps before them say nothing of why nothing is left.
+        let mut first = lone;
+        first.extend(rejections.first(3));
+        first.truncate(3);
+        return Err(aeroident_io::FlightDataError::NoSamples {
+            file: files.join(", "),
+            rejected,
+            first,
+        }
+        .into());
+    }
+    Ok(Manoeuvres { manoeuvres, rejections, read, rejected, notes })
+}
+
+/// Removes the empty manoeuvres and rejects each manoeuvre of one sample (a lone sample between
+/// two gaps, or alone in a time window): output error simulates every manoeuvre from its first
+/// sample, so one sample holds nothing to fit. Each is listed in `rejections` by its row and file
+/// prefix (`starts`, parallel to `manoeuvres`). Returns the rejections (row, reason).
+fn reject_lone_samples(
+    manoeuvres: &mut Vec<Vec<AirDataSample>>,
+    starts: &[(u64, String)],
+    rejections: &mut RejectionLog,
+) -> Vec<(u64, String)> {
+    let mut lone = Vec::new();
+    let mut kept = Vec::with_capacity(manoeuvres.len());
+    for (m, (row, prefix)) in manoeuvres.drain(..).zip(starts) {
+        if m.len() == 1 {
+            let reason = format!(
+                "{prefix}a manoeuvre of one sample (alone between gaps or in its time window): output error simulates each manoeuvre from its first sample and needs at least two"
+            );
+            rejections
+                .push("one-sample manoeuvre", Rejection { row: *row, reason: reason.clone() });
+            lone.push((*row, reason));
+        } else if !m.is_empty() {
+            kept.push(m);
+        }
+    }
+    *manoeuvres = kept;
+    lone
+}

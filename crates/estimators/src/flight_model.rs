@@ -454,6 +454,27 @@ struct Needs {
     mach: bool,
 }
 
+impl Needs {
+    /// Adds what term `t` reads besides the states ([`Term::inputs`]).
+    fn add(&mut self, t: Term) {
+        use crate::vocabulary::TermInput as I;
+        for input in t.inputs() {
+            match input {
+                I::De => self.de = true,
+                I::Da => self.da = true,
+                I::Dr => self.dr = true,
+                I::Cbar => self.cbar = true,
+                I::Span => self.b = true,
+                I::V0 => self.v0 = true,
+                I::Alphadot => self.alphadot = true,
+                I::Density => self.mach = true,
+                // States of the model, or the structure's own knots.
+                I::Alpha | I::Beta | I::P | I::Q | I::R | I::Vt | I::Knot => {}
+            }
+        }
+    }
+}
+
 /// The model's derivatives and predicted specific forces at one point.
 #[derive(Debug, Clone, Copy)]
 pub struct Derivatives<T> {
@@ -498,24 +519,9 @@ impl FlightModel {
             for (k, t) in structure.terms_of(c).enumerate() {
                 terms[k] = t;
                 n = k + 1;
-                match t {
-                    Term::De | Term::AlphaDe => needs.de = true,
-                    Term::Da | Term::AlphaDa => needs.da = true,
-                    Term::Dr | Term::AlphaDr => needs.dr = true,
-                    Term::Q | Term::AlphaQ => needs.cbar = true,
-                    Term::P | Term::R | Term::AlphaP | Term::AlphaR => needs.b = true,
-                    Term::V => needs.v0 = true,
-                    Term::Mach | Term::Mach2 => needs.mach = true,
-                    Term::Q0 => {
-                        needs.cbar = true;
-                        needs.v0 = true;
-                    }
-                    Term::Alphadot => {
-                        needs.cbar = true;
-                        needs.alphadot = true;
-                        alphadot = Some(first + k);
-                    }
-                    _ => {}
+                needs.add(t);
+                if t == Term::Alphadot {
+                    alphadot = Some(first + k);
                 }
             }
             coefs[c.index()] = Some(CoefModel { coefficient: c, first, n, terms, alphadot });

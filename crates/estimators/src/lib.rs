@@ -74,7 +74,7 @@ pub use iv::{IvConfig, RlsIv};
 pub use prior::{ParamPrior, Priors};
 pub use rls::{Rls, RlsConfig};
 pub use sample::{AirDataSample, AircraftConstants, CoefficientValues};
-pub use vocabulary::{AlphaKnots, Coefficient, MAX_PARAMS, ModelStructure, Param, Term};
+pub use vocabulary::{AlphaKnots, Coefficient, MAX_PARAMS, ModelStructure, Param, Term, TermInput};
 /// Model-reference gradient estimator of thesis (3.3), the comparison of thesis §4.2.5.
 pub mod mrac;
 

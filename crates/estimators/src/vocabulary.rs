@@ -109,6 +109,90 @@ const COEFFICIENT_NAMES: [&str; 8] = ["CX", "CY", "CZ", "CL", "CD", "Cl", "Cm", 
 /// Number of terms in the vocabulary.
 pub const N_TERMS: usize = 26;
 
+/// One quantity a term's regressor is formed from ([`Term::inputs`]): a sample channel, an
+/// aircraft constant, the structure's α knot, or the air density.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TermInput {
+    /// Angle of attack α (always in a sample).
+    Alpha,
+    /// Sideslip β.
+    Beta,
+    /// Roll rate p.
+    P,
+    /// Pitch rate q.
+    Q,
+    /// Yaw rate r.
+    R,
+    /// α̇, recorded or differentiated from α.
+    Alphadot,
+    /// Elevator δe.
+    De,
+    /// Aileron δa.
+    Da,
+    /// Rudder δr.
+    Dr,
+    /// Airspeed V (always in a sample).
+    Vt,
+    /// Mean aerodynamic chord c̄ (constant).
+    Cbar,
+    /// Wing span b (constant).
+    Span,
+    /// Reference airspeed V0 (constant).
+    V0,
+    /// The structure's α knot of a spline term.
+    Knot,
+    /// Air density ρ (from the sample, or from q̄ and V), for the speed of sound.
+    Density,
+}
+
+impl TermInput {
+    /// The sample field it is read from (`alpha_rad` …; [`AirDataSample::field`]'s names),
+    /// `None` for a constant, the knot and the density.
+    pub fn field(self) -> Option<&'static str> {
+        Some(match self {
+            TermInput::Alpha => "alpha_rad",
+            TermInput::Beta => "beta_rad",
+            TermInput::P => "p_rad_s",
+            TermInput::Q => "q_rad_s",
+            TermInput::R => "r_rad_s",
+            TermInput::Alphadot => "alphadot_rad_s",
+            TermInput::De => "de_rad",
+            TermInput::Da => "da_rad",
+            TermInput::Dr => "dr_rad",
+            TermInput::Vt => "vt_mps",
+            TermInput::Cbar | TermInput::Span | TermInput::V0 => return None,
+            TermInput::Knot | TermInput::Density => return None,
+        })
+    }
+
+    /// Whether every sample has it (α and V are required channels), so that no record lacks
+    /// it.
+    pub fn always_present(self) -> bool {
+        matches!(self, TermInput::Alpha | TermInput::Vt)
+    }
+
+    /// What a record must give for it, in the mapping's words.
+    pub fn needs(self) -> &'static str {
+        match self {
+            TermInput::Alpha => "alpha",
+            TermInput::Beta => "beta",
+            TermInput::P => "p",
+            TermInput::Q => "q",
+            TermInput::R => "r",
+            TermInput::Alphadot => "alphadot (or alpha to differentiate)",
+            TermInput::De => "de",
+            TermInput::Da => "da",
+            TermInput::Dr => "dr",
+            TermInput::Vt => "vt",
+            TermInput::Cbar => "cbar",
+            TermInput::Span => "the span b",
+            TermInput::V0 => "v0",
+            TermInput::Knot => "its alpha knot in the model",
+            TermInput::Density => "a density within the standard atmosphere (-1 to 20 km)",
+        }
+    }
+}
+
 /// One regressor of a linear coefficient model (table in the module doc).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Term {
@@ -278,6 +362,37 @@ impl Term {
             _ => return None,
         };
         Some((Alpha, other))
+    }
+
+    /// What the term's regressor ([`Term::value`]) is formed from: the sample channels and
+    /// aircraft constants it reads, besides the airspeed that normalises a rate
+    /// (`p̂ = p b / 2V`). The one statement of what a term needs from a record: the replay's
+    /// model check, the constant-channel warning and the flight model's inputs read it.
+    pub fn inputs(self) -> &'static [TermInput] {
+        use TermInput as I;
+        match self {
+            Term::Bias => &[],
+            Term::Alpha | Term::Alpha2 => &[I::Alpha],
+            Term::Beta => &[I::Beta],
+            Term::P => &[I::P, I::Span],
+            Term::Q => &[I::Q, I::Cbar],
+            Term::R => &[I::R, I::Span],
+            Term::Alphadot => &[I::Alphadot, I::Cbar],
+            Term::De => &[I::De],
+            Term::Da => &[I::Da],
+            Term::Dr => &[I::Dr],
+            Term::V => &[I::Vt, I::V0],
+            Term::Q0 => &[I::Q, I::Cbar, I::V0],
+            Term::AlphaK1 | Term::AlphaK2 | Term::AlphaK3 | Term::AlphaK4 => &[I::Alpha, I::Knot],
+            Term::Mach | Term::Mach2 => &[I::Vt, I::Density],
+            Term::AlphaDe => &[I::Alpha, I::De],
+            Term::AlphaBeta => &[I::Alpha, I::Beta],
+            Term::AlphaP => &[I::Alpha, I::P, I::Span],
+            Term::AlphaQ => &[I::Alpha, I::Q, I::Cbar],
+            Term::AlphaR => &[I::Alpha, I::R, I::Span],
+            Term::AlphaDa => &[I::Alpha, I::Da],
+            Term::AlphaDr => &[I::Alpha, I::Dr],
+        }
     }
 
     /// The knot number (0-based, in [`AlphaKnots`]) of an α spline term, `None` for the others.
@@ -713,6 +828,107 @@ mod tests {
         let mixed = lon.with(Coefficient::CX, &[Term::Alpha]);
         assert!(matches!(mixed.validated(), Err(StructureError::MixedAxes("CX", "CL"))));
         assert_eq!(ModelStructure::empty().validated(), Err(StructureError::Empty));
+    }
+
+    /// `Term::inputs` is what `Term::value` reads: with every input present each term has a
+    /// value, and taking one quantity away leaves a term without one exactly when the
+    /// quantity is among its inputs (α and V are never absent; a change of either changes the
+    /// value of exactly the terms that list it, spline terms above their knot).
+    #[test]
+    fn term_inputs_are_what_the_value_reads() {
+        let full = AirDataSample {
+            vt_mps: 100.0,
+            alpha_rad: 0.3,
+            qbar_pa: 5_000.0,
+            beta_rad: Some(0.02),
+            p_rad_s: Some(0.4),
+            q_rad_s: Some(0.05),
+            r_rad_s: Some(-0.1),
+            alphadot_rad_s: Some(0.2),
+            de_rad: Some(-0.03),
+            da_rad: Some(0.01),
+            dr_rad: Some(0.02),
+            constants: crate::sample::AircraftConstants {
+                cbar_m: Some(3.0),
+                b_m: Some(10.0),
+                v0_mps: Some(80.0),
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let knots = AlphaKnots::new(&[0.0, 0.05, 0.1, 0.2]).unwrap();
+        use TermInput as I;
+        let without = |i: I| -> (AirDataSample, AlphaKnots) {
+            let (mut s, mut k) = (full, knots);
+            match i {
+                I::Beta => s.beta_rad = None,
+                I::P => s.p_rad_s = None,
+                I::Q => s.q_rad_s = None,
+                I::R => s.r_rad_s = None,
+                I::Alphadot => s.alphadot_rad_s = None,
+                I::De => s.de_rad = None,
+                I::Da => s.da_rad = None,
+                I::Dr => s.dr_rad = None,
+                I::Cbar => s.constants.cbar_m = None,
+                I::Span => s.constants.b_m = None,
+                I::V0 => s.constants.v0_mps = None,
+                I::Knot => k = AlphaKnots::NONE,
+                // q̄ = 0: a density of 0, beyond the standard atmosphere's 20 km.
+                I::Density => s.qbar_pa = 0.0,
+                I::Alpha | I::Vt => unreachable!("never absent"),
+            }
+            (s, k)
+        };
+        let removable = [
+            I::Beta,
+            I::P,
+            I::Q,
+            I::R,
+            I::Alphadot,
+            I::De,
+            I::Da,
+            I::Dr,
+            I::Cbar,
+            I::Span,
+            I::V0,
+            I::Knot,
+            I::Density,
+        ];
+        for t in Term::ALL {
+            assert!(t.value(&full, &knots).is_some(), "{}", t.name());
+            for i in removable {
+                let (s, k) = without(i);
+                let lost = t.value(&s, &k).is_none();
+                assert_eq!(lost, t.inputs().contains(&i), "{} without {i:?}", t.name());
+            }
+            for (i, moved) in [
+                (I::Alpha, AirDataSample { alpha_rad: 0.31, ..full }),
+                (I::Vt, AirDataSample { vt_mps: 101.0, ..full }),
+            ] {
+                let normalised =
+                    matches!(i, I::Vt) && t.value(&moved, &knots) != t.value(&full, &knots);
+                let listed = t.inputs().contains(&i);
+                // V also normalises the rates (p̂ = p b / 2V), which inputs() leaves out.
+                let rate = t.inputs().iter().any(|x| matches!(x, I::P | I::Q | I::R | I::Alphadot));
+                match i {
+                    I::Alpha => assert_eq!(
+                        t.value(&moved, &knots) != t.value(&full, &knots),
+                        listed,
+                        "{} with α moved",
+                        t.name()
+                    ),
+                    _ => assert_eq!(
+                        normalised,
+                        listed || (rate && t != Term::Q0),
+                        "{} with V moved",
+                        t.name()
+                    ),
+                }
+            }
+        }
+        assert!(I::Alpha.always_present() && I::Vt.always_present() && !I::Beta.always_present());
+        assert_eq!(I::Span.field(), None);
+        assert_eq!(I::De.field(), Some("de_rad"));
     }
 
     #[test]

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use aeroident_estimators::{AirDataSample, ModelStructure};
+use aeroident_estimators::AirDataSample;
 use aeroident_io::{Mapping, ModelSpec, RecordEvent, open_log_with_notes, open_log_with_report};
 use aeroident_pipelines::estimators::{EstimatorKind, EstimatorOptions, build};
 use aeroident_pipelines::record::unsupported;
@@ -306,19 +306,15 @@ impl Source for RowSource<'_> {
 /// The richest preset (`six-axis`, `longitudinal`, `lateral`) the first sample supports, as the
 /// CLI chooses one (no derivative is differentiated for arrays).
 fn default_model(first: &AirDataSample, uses_measured: bool) -> PyResult<ModelSpec> {
-    let mut why = Vec::new();
-    for name in ModelStructure::PRESETS {
-        let Some(spec) = ModelSpec::preset(name) else { continue };
+    let supports = |spec: &ModelSpec| {
         let missing = unsupported(&spec.structure, first, uses_measured, &[]);
-        if missing.is_empty() {
-            return Ok(spec);
-        }
-        why.push(format!("`{name}`: {}", missing.join("; ")));
-    }
-    Err(err(format!(
-        "no preset model is supported by the arrays' channels ({}); give the missing channels or model=",
-        why.join(" | ")
-    )))
+        if missing.is_empty() { Ok(()) } else { Err(missing.join("; ")) }
+    };
+    aeroident_pipelines::record::needs::richest_preset(supports).map_err(|why| {
+        err(format!(
+            "no preset model is supported by the arrays' channels ({why}); give the missing channels or model="
+        ))
+    })
 }
 
 /// Replays samples given as arrays (one float64 array per key of `sample_keys()`).

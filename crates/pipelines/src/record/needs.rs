@@ -3,6 +3,7 @@
 
 use crate::condition::Derivative;
 use aeroident_estimators::{AirDataSample, Coefficient, ModelStructure, Term};
+use aeroident_io::ModelSpec;
 
 /// What the model needs that sample `s` lacks, as readable items (empty: supported). Terms
 /// are checked for every estimator, measured coefficients for those that use them.
@@ -47,23 +48,15 @@ pub fn unsupported(
     out
 }
 
-fn term_needs(t: Term) -> &'static str {
-    match t {
-        Term::Beta | Term::AlphaBeta => "needs beta",
-        Term::P | Term::AlphaP => "needs p and the span b",
-        Term::Q | Term::AlphaQ => "needs q and cbar",
-        Term::Q0 => "needs q, cbar and v0",
-        Term::R | Term::AlphaR => "needs r and the span b",
-        Term::Alphadot => "needs alphadot or alpha to differentiate, and cbar",
-        Term::De | Term::AlphaDe => "needs de",
-        Term::Da | Term::AlphaDa => "needs da",
-        Term::Dr | Term::AlphaDr => "needs dr",
-        Term::V => "needs v0",
-        Term::Mach | Term::Mach2 => "needs a density within the standard atmosphere (-1 to 20 km)",
-        Term::AlphaK1 | Term::AlphaK2 | Term::AlphaK3 | Term::AlphaK4 => {
-            "needs its alpha knot in the model"
-        }
-        Term::Bias | Term::Alpha | Term::Alpha2 => "always available",
+/// What term `t` needs that a record may lack, in the mapping's words ([`Term::inputs`]
+/// without the channels every sample has): `needs p and the span b`, or `always available`.
+fn term_needs(t: Term) -> String {
+    let words: Vec<&str> =
+        t.inputs().iter().filter(|i| !i.always_present()).map(|i| i.needs()).collect();
+    match words.as_slice() {
+        [] => "always available".into(),
+        [one] => format!("needs {one}"),
+        [init @ .., last] => format!("needs {} and {last}", init.join(", ")),
     }
 }
 
@@ -78,4 +71,26 @@ pub(crate) fn coefficient_needs(c: Coefficient) -> &'static str {
             "needs p, q, r (or their derivatives), Ixx, Iyy, Izz, Ixz and the span b"
         }
     }
+}
+
+/// The default model, chosen in one place for every job: the richest preset
+/// ([`ModelStructure::PRESETS`]'s order: six-axis, longitudinal, lateral) that `supports`
+/// accepts. Each estimator family says what supporting means (the online estimators: every
+/// term and measured coefficient formed, [`unsupported`]; the batch fits: a flight model the
+/// first sample can drive).
+///
+/// # Errors
+/// Why none is supported: `` `name`: reason `` per preset, joined by ` | `.
+pub fn richest_preset(
+    supports: impl Fn(&ModelSpec) -> Result<(), String>,
+) -> Result<ModelSpec, String> {
+    let mut why = Vec::new();
+    for name in ModelStructure::PRESETS {
+        let Some(spec) = ModelSpec::preset(name) else { continue };
+        match supports(&spec) {
+            Ok(()) => return Ok(spec),
+            Err(reason) => why.push(format!("`{name}`: {reason}")),
+        }
+    }
+    Err(why.join(" | "))
 }

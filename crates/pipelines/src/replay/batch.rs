@@ -245,19 +245,17 @@ pub(super) fn default_model(
     first: &AirDataSample,
     mapping: &Mapping,
 ) -> Result<ModelSpec, ReplayError> {
-    let mut why = Vec::new();
-    for name in ModelStructure::PRESETS {
-        let Some(spec) = ModelSpec::preset(name) else { continue };
-        match FlightModel::new(spec.structure).and_then(|m| m.inputs(first).map(|_| ())) {
-            Ok(()) => return Ok(spec),
-            Err(e) => why.push(format!("`{name}`: {}", as_mapped(&e, mapping))),
-        }
-    }
-    Err(ReplayError::Model(format!(
-        "no preset model can be fitted by output error from the channels of {} ({})",
-        mapping.file,
-        why.join(" | ")
-    )))
+    let supports = |spec: &ModelSpec| {
+        FlightModel::new(spec.structure)
+            .and_then(|m| m.inputs(first).map(|_| ()))
+            .map_err(|e| as_mapped(&e, mapping))
+    };
+    crate::record::needs::richest_preset(supports).map_err(|why| {
+        ReplayError::Model(format!(
+            "no preset model can be fitted by output error from the channels of {} ({why})",
+            mapping.file
+        ))
+    })
 }
 
 /// Checks that the flight model of `model` can take the record's first sample, its error

@@ -25,30 +25,10 @@ const FIELDS: [&str; 10] = [
     "vt_mps",
 ];
 
-/// The fields whose variation term `t`'s regressor needs (a product needs both factors).
-fn term_fields(t: Term) -> &'static [&'static str] {
-    use Term as T;
-    match t {
-        T::Bias => &[],
-        T::Alpha | T::Alpha2 | T::AlphaK1 | T::AlphaK2 | T::AlphaK3 | T::AlphaK4 => &["alpha_rad"],
-        T::Beta => &["beta_rad"],
-        T::P => &["p_rad_s"],
-        T::Q | T::Q0 => &["q_rad_s"],
-        T::R => &["r_rad_s"],
-        T::Alphadot => &["alphadot_rad_s"],
-        T::De => &["de_rad"],
-        T::Da => &["da_rad"],
-        T::Dr => &["dr_rad"],
-        // Mach also moves with the density; a constant airspeed is what usually holds it.
-        T::V | T::Mach | T::Mach2 => &["vt_mps"],
-        T::AlphaDe => &["alpha_rad", "de_rad"],
-        T::AlphaBeta => &["alpha_rad", "beta_rad"],
-        T::AlphaP => &["alpha_rad", "p_rad_s"],
-        T::AlphaQ => &["alpha_rad", "q_rad_s"],
-        T::AlphaR => &["alpha_rad", "r_rad_s"],
-        T::AlphaDa => &["alpha_rad", "da_rad"],
-        T::AlphaDr => &["alpha_rad", "dr_rad"],
-    }
+/// Whether term `t`'s regressor varies with the sample field `name` ([`Term::inputs`]: a
+/// product needs both factors).
+fn term_reads(t: Term, name: &str) -> bool {
+    t.inputs().iter().any(|i| i.field() == Some(name))
 }
 
 /// The smallest and largest value of each of `FIELDS` over the samples pushed, and how many
@@ -99,7 +79,7 @@ impl Spread {
         out.extend(constant.filter_map(|(name, &(v, _, n))| {
                 let params: Vec<&str> = structure
                     .params()
-                    .filter(|p| term_fields(p.term).contains(name))
+                    .filter(|p| term_reads(p.term, name))
                     .map(|p| p.name())
                     .collect();
                 (!params.is_empty()).then(|| {

@@ -282,6 +282,10 @@ pub enum ReplayError {
     /// Writing the live output failed.
     #[error("writing estimates: {0}")]
     Output(#[from] std::io::Error),
+    /// Options or stages that do not go together (a whole-record step on a live feed, a batch
+    /// method in the online replay): the message says what to do instead.
+    #[error("{0}")]
+    Combination(String),
     /// The replay was stopped on request before any sample was estimated.
     #[error("{file}: interrupted before any sample was estimated ({samples_read} rows read)")]
     Interrupted {
@@ -808,22 +812,19 @@ fn choose_model(
     if let Some(m) = &opts.model {
         return Ok((m.clone(), false));
     }
-    let mut why = Vec::new();
-    for name in ModelStructure::PRESETS {
-        let Some(spec) = ModelSpec::preset(name) else { continue };
+    let supports = |spec: &ModelSpec| {
         let supply =
             derivatives_to_supply(&spec.structure, opts.estimator, mapping, opts.derivatives);
         let missing = unsupported(&spec.structure, first, uses_measured, &supply);
-        if missing.is_empty() {
-            return Ok((spec, true));
-        }
-        why.push(format!("`{name}`: {}", missing.join("; ")));
-    }
-    Err(ReplayError::Model(format!(
-        "no preset model is supported by the channels of {} ({}); map the missing channels or give --model FILE",
-        mapping.file,
-        why.join(" | ")
-    )))
+        if missing.is_empty() { Ok(()) } else { Err(missing.join("; ")) }
+    };
+    let spec = crate::record::needs::richest_preset(supports).map_err(|why| {
+        ReplayError::Model(format!(
+            "no preset model is supported by the channels of {} ({why}); map the missing channels or give --model FILE",
+            mapping.file
+        ))
+    })?;
+    Ok((spec, true))
 }
 
 fn model_line(spec: &ModelSpec, defaulted: bool, supply: &[Derivative], window: usize) -> String {

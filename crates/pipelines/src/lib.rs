@@ -4,6 +4,7 @@
 //! printing and no drawing: the command-line program (`aeroident`) and the Python module are
 //! two thin faces over this crate, and the reports and figures render its outcomes.
 //!
+//! - [`job`]: the replay job and the batch-fit job a face runs, from options to one outcome.
 //! - [`replay`]: a recorded (or streamed) flight through an estimator, online or as a batch
 //!   fit ([`replay::batch`]), with validation on a second record.
 //! - [`aircraft`]: the closed-loop experiment (trim → fly → sense → estimate → summarise).
@@ -25,6 +26,7 @@ pub mod error;
 pub mod estimators;
 pub mod export;
 pub mod freqresp;
+pub mod job;
 /// Convergence-time and error metrics of estimate histories.
 pub mod metrics;
 pub mod montecarlo;

@@ -1,0 +1,167 @@
+//! The batch-fit job: whole records fitted by output error, the filter-error method or
+//! frequency-domain output error (`aeroident replay --estimator oe|fem|fdoe`, Python
+//! `aeroident.fit`), with every stage a user can ask for ([module doc](super)).
+//!
+//! The face opens the records (stdin through its own reader) and may run the fit where it can
+//! stop it; the job sequences `compat → model → fit → validate on a second record` and forms
+//! `summary.json` ([`FitJobOutcome::document`]).
+
+use super::{
+    CompatSource, Guard, JobLog, ModelChoice, Ran, Records, Step, choose_model, corrections,
+};
+use crate::replay::batch::{BatchOutcome, FitOptions};
+use crate::replay::{ReplayError, STATUS_INTERRUPTED};
+use crate::structure::AutoSelection;
+use aeroident_io::{FlightDataReader, ModelSpec, ReaderReport};
+use std::io::Read;
+
+/// Everything a batch-fit job does, as one value.
+#[derive(Debug, Clone)]
+pub struct FitJob {
+    /// The records, each a manoeuvre of its own (or several, at gaps and windows).
+    pub records: Records,
+    /// How the model is chosen.
+    pub model: ModelChoice,
+    /// The compatibility corrections to apply, if any (checked on the main record with `auto`,
+    /// applied to all).
+    pub compat: Option<CompatSource>,
+    /// The fit's options; the job sets their `compat` from its own stage.
+    pub options: FitOptions,
+    /// A second record (same mapping) to validate the fitted model on.
+    pub validate_on: Option<String>,
+}
+
+/// The stages before the fit, done: the model (`None`: the fit's default) and the options
+/// (corrections set).
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    /// The model given or selected.
+    pub model: Option<ModelSpec>,
+    /// The options of the fit.
+    pub options: FitOptions,
+    /// The structure selection of `--model auto`.
+    pub selection: Option<AutoSelection>,
+}
+
+/// A batch-fit job's outcome: the fit (with its validation on the second record in
+/// `summary.validation_on`) and the structure selection.
+#[derive(Debug, Clone)]
+pub struct FitJobOutcome {
+    /// The fit.
+    pub outcome: BatchOutcome,
+    /// The structure selection of `--model auto`.
+    pub selection: Option<AutoSelection>,
+}
+
+impl FitJobOutcome {
+    /// `summary.json`: the fit's summary with the structure selection.
+    ///
+    /// # Errors
+    /// A summary that does not serialise (a bug).
+    pub fn document(&self) -> Result<serde_json::Value, serde_json::Error> {
+        super::document(&self.outcome.summary, self.selection.as_ref())
+    }
+}
+
+impl FitJob {
+    /// The stages before the fit: the compatibility corrections, then the model.
+    ///
+    /// # Errors
+    /// As [`corrections`] and [`choose_model`].
+    pub fn prepare(
+        &self,
+        guard: &mut impl Guard,
+        log: &mut dyn JobLog,
+    ) -> Result<Ran<Prepared>, ReplayError> {
+        let compat = match corrections(&self.records, self.compat.as_ref(), guard, log)? {
+            Ran::Done(c) => c,
+            Ran::Stopped(step) => return Ok(Ran::Stopped(step)),
+        };
+        let windows = &self.options.windows;
+        let chosen =
+            choose_model(&self.records, &self.model, compat.as_ref(), windows, guard, log)?;
+        let (model, selection) = match chosen {
+            Ran::Done(m) => m,
+            Ran::Stopped(step) => return Ok(Ran::Stopped(step)),
+        };
+        let options = FitOptions { compat, ..self.options.clone() };
+        Ok(Ran::Done(Prepared { model, options, selection }))
+    }
+
+    /// The fit of `readers` (the job's records, opened by the face) with the prepared model and
+    /// options; `reports` (what each reader left out) go into the summary.
+    ///
+    /// # Errors
+    /// As [`crate::replay::fit::fit_records`].
+    pub fn fit<R: Read>(
+        &self,
+        prepared: Prepared,
+        readers: Vec<FlightDataReader<R>>,
+        reports: Vec<ReaderReport>,
+    ) -> Result<(BatchOutcome, Option<AutoSelection>), ReplayError> {
+        let mapping = &self.records.mapping;
+        let mut outcome =
+            crate::replay::fit::fit_records(readers, mapping, prepared.model, prepared.options)?;
+        outcome.summary.reader = reports;
+        Ok((outcome, prepared.selection))
+    }
+
+    /// The stage after the fit: the validation on the second record, unless the fit was
+    /// interrupted (then a warning says it was not done). A validation a stop abandoned leaves
+    /// the run `interrupted`, with `stopped_why` as its warning and reason.
+    ///
+    /// # Errors
+    /// The second record cannot be opened or read.
+    pub fn finish(
+        &self,
+        mut outcome: BatchOutcome,
+        selection: Option<AutoSelection>,
+        guard: &mut impl Guard,
+        log: &mut dyn JobLog,
+        stopped_why: impl FnOnce() -> String,
+    ) -> Result<FitJobOutcome, ReplayError> {
+        let interrupted = outcome.summary.status == STATUS_INTERRUPTED;
+        match &self.validate_on {
+            Some(_) if interrupted => {
+                let w = "the run was interrupted: --validate-on not done".to_string();
+                outcome.summary.warnings.push(w);
+            }
+            Some(path) => self.validate(path, &mut outcome, guard, log, stopped_why)?,
+            None => {}
+        }
+        Ok(FitJobOutcome { outcome, selection })
+    }
+
+    /// `--validate-on`: the fitted model simulated on the record at `path`
+    /// ([`crate::replay::batch::validate_on`]), into `summary.validation_on`.
+    fn validate(
+        &self,
+        path: &str,
+        outcome: &mut BatchOutcome,
+        guard: &mut impl Guard,
+        log: &mut dyn JobLog,
+        stopped_why: impl FnOnce() -> String,
+    ) -> Result<(), ReplayError> {
+        let (path, mapping, fitted) =
+            (path.to_string(), self.records.mapping.clone(), outcome.clone());
+        let step = move || -> Result<_, ReplayError> {
+            let (reader, notes) = aeroident_io::open_log_with_notes(&path, None, &mapping)?;
+            Ok((crate::replay::batch::validate_on(reader, &fitted)?, notes))
+        };
+        match guard.run(Step::ValidateOn, step)? {
+            Some(done) => {
+                let (report, notes) = done?;
+                notes.iter().for_each(|n| log.reader_note(n));
+                outcome.summary.validation_on = Some(report);
+            }
+            None => {
+                let why = stopped_why();
+                let s = &mut outcome.summary;
+                s.warnings.push(why.clone());
+                s.status = STATUS_INTERRUPTED.to_string();
+                s.status_reason = Some(why);
+            }
+        }
+        Ok(())
+    }
+}

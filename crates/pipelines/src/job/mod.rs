@@ -1,0 +1,308 @@
+//! The jobs a face runs, each built from one options value and run by the library: the
+//! [replay job](replay::ReplayJob) (a record through an online estimator) and the
+//! [batch-fit job](fit::FitJob) (output error, filter error, frequency-domain output error).
+//!
+//! A job runs every stage a user can ask for, in this order:
+//! 1. **compat**: a compatibility check's corrections, from a `compat.json` or checked on the
+//!    record itself (`auto`) ([`corrections`]);
+//! 2. **model**: a preset, a model file, or the structure selected on the record (`auto`)
+//!    ([`choose_model`]);
+//! 3. **estimate**: the online replay, or the batch fit, over the record stage
+//!    ([`crate::record`]);
+//! 4. **check**: the cross-check of an online estimate against output error;
+//! 5. **validate**: the estimates applied to a second record (`validate_on`).
+//!
+//! The faces keep what is theirs: opening a live feed or stdin, showing progress, answering
+//! signals, writing files. Two hooks carry that: a [`Guard`] runs each step over a whole record
+//! (the CLI on a thread it can abandon on a signal; Python and tests in place, [`InPlace`]),
+//! and a [`JobLog`] receives the lines a user reads while the job runs (the CLI's stderr).
+
+pub mod fit;
+pub mod replay;
+
+use crate::record::Corrections;
+use crate::replay::ReplayError;
+use crate::structure::AutoSelection;
+use crate::window::TimeWindow;
+use aeroident_io::{
+    FlightDataError, LogFormat, LogReader, Mapping, ModelSpec, open_log_with_notes,
+};
+use std::path::PathBuf;
+
+/// The records of a job, as the faces name them.
+#[derive(Debug, Clone)]
+pub struct Records {
+    /// The main record: a file, or `-` (stdin; a live MAVLink address for the replay job).
+    pub data: String,
+    /// Further records of the same aircraft fitted with it (the batch fits' `--and`).
+    pub and: Vec<String>,
+    /// The log format; `None`: by each file's extension, else CSV
+    /// ([`aeroident_io::open_log_with_report`]).
+    pub format: Option<LogFormat>,
+    /// The channel mapping of every record.
+    pub mapping: Mapping,
+    /// Whether the main record is a live feed (stdin or MAVLink): whole-record steps refuse it.
+    pub live: bool,
+}
+
+impl Records {
+    /// Every file, the main record first.
+    pub fn files(&self) -> impl Iterator<Item = &String> {
+        std::iter::once(&self.data).chain(&self.and)
+    }
+
+    /// Opens every record anew for a step over the whole of them (what the reader left out is
+    /// the estimating step's to report, not this one's).
+    ///
+    /// # Errors
+    /// The first record that cannot be opened.
+    pub fn open_all(&self) -> Result<Vec<LogReader>, FlightDataError> {
+        self.files().map(|f| self.open(f)).collect()
+    }
+
+    /// Opens the record `file` with the job's format and mapping.
+    ///
+    /// # Errors
+    /// As [`aeroident_io::open_log_with_notes`].
+    pub fn open(&self, file: &str) -> Result<LogReader, FlightDataError> {
+        open_log_with_notes(file, self.format, &self.mapping).map(|(r, _)| r)
+    }
+}
+
+/// How the model is chosen (`--model`, `--select`, `--candidates`, `--knots-deg`).
+#[derive(Debug, Clone)]
+pub struct ModelChoice {
+    /// A preset name, a model file, or `auto[:scope]`; `None`: the richest preset the record
+    /// supports, chosen by the estimating step.
+    pub model: Option<String>,
+    /// `--model auto`'s method: `swr` (stepwise regression) or `mof` (orthogonal functions).
+    pub select: String,
+    /// `--model auto`'s candidate terms (vocabulary names); empty: the defaults.
+    pub candidates: Vec<String>,
+    /// `--model auto`'s α knots of the spline candidates, degrees, ascending.
+    pub knots_deg: Vec<f64>,
+    /// The differentiator window the selection differentiates with, samples (odd ≥ 3).
+    pub diff_window: usize,
+}
+
+impl Default for ModelChoice {
+    fn default() -> Self {
+        Self {
+            model: None,
+            select: "swr".into(),
+            candidates: Vec::new(),
+            knots_deg: Vec::new(),
+            diff_window: crate::structure::DIFF_WINDOW,
+        }
+    }
+}
+
+impl ModelChoice {
+    /// Whether the model is selected on the record (`auto…`).
+    pub fn is_auto(&self) -> bool {
+        self.model.as_deref().is_some_and(|m| m.starts_with("auto"))
+    }
+}
+
+/// Where a job's compatibility corrections come from (`--compat FILE|auto`).
+#[derive(Debug, Clone)]
+pub enum CompatSource {
+    /// Corrections already read (Python reads its `compat.json` itself).
+    Given(Corrections),
+    /// A `compat.json` written by `aeroident compat`.
+    File(PathBuf),
+    /// Checked on the main record before estimating.
+    Auto,
+}
+
+impl CompatSource {
+    /// `--compat`'s argument: `auto`, else a `compat.json` path.
+    pub fn from_arg(arg: &str) -> Self {
+        if arg == "auto" { CompatSource::Auto } else { CompatSource::File(arg.into()) }
+    }
+}
+
+/// A step of a job over a whole record, which a face may run where it can abandon it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Step {
+    /// The compatibility stage (a `compat.json` read, or the check on the record).
+    Compat,
+    /// The model stage (a preset or file read, or the structure selection on the record).
+    Model,
+    /// The validation on a second record.
+    ValidateOn,
+}
+
+impl Step {
+    /// The step as a user asked for it, for messages ("interrupted during …").
+    pub fn describe(self) -> &'static str {
+        match self {
+            Step::Compat => "--compat auto (the data compatibility check)",
+            Step::Model => "--model auto (the structure selection)",
+            Step::ValidateOn => "--validate-on",
+        }
+    }
+}
+
+/// Runs a job's steps over a whole record. The CLI runs each on a thread of its own and
+/// abandons it on a signal (nothing of such a step is worth keeping half done); [`InPlace`]
+/// runs it where it is called.
+pub trait Guard {
+    /// Runs `f`, the step `step`; `None` when the face abandoned it (a stop was requested).
+    ///
+    /// # Errors
+    /// The face could not run it (a thread that did not start, or ended without a result).
+    fn run<T: Send + 'static>(
+        &mut self,
+        step: Step,
+        f: impl FnOnce() -> T + Send + 'static,
+    ) -> Result<Option<T>, ReplayError>;
+}
+
+/// A [`Guard`] that runs every step in place and never abandons one.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct InPlace;
+
+impl Guard for InPlace {
+    fn run<T: Send + 'static>(
+        &mut self,
+        _step: Step,
+        f: impl FnOnce() -> T + Send + 'static,
+    ) -> Result<Option<T>, ReplayError> {
+        Ok(Some(f()))
+    }
+}
+
+/// The lines a user reads while a job runs (what it starts, what a step found); `()` drops
+/// them.
+pub trait JobLog {
+    /// One line.
+    fn note(&mut self, _line: &str) {}
+
+    /// A warning (also kept in the summary): by default the line `warning: {text}`.
+    fn warning(&mut self, text: &str) {
+        self.note(&format!("warning: {text}"));
+    }
+
+    /// What a log reader said of a record it opened (a step's second record): by default the
+    /// line `note: {text}`.
+    fn reader_note(&mut self, text: &str) {
+        self.note(&format!("note: {text}"));
+    }
+}
+
+impl JobLog for () {}
+
+/// A job's outcome, or the step a stop abandoned before it had one.
+#[derive(Debug)]
+pub enum Ran<T> {
+    /// The job ran to its end (its outcome may still say `interrupted`).
+    Done(T),
+    /// A stop abandoned this step before any estimate.
+    Stopped(Step),
+}
+
+/// The compatibility stage: the corrections `source` names, `None` without one. `auto` checks
+/// the main record with the default configuration, noting that it does and each finding.
+///
+/// # Errors
+/// `auto` on a live feed; an unreadable `compat.json`; the check's errors.
+pub fn corrections(
+    records: &Records,
+    source: Option<&CompatSource>,
+    guard: &mut impl Guard,
+    log: &mut dyn JobLog,
+) -> Result<Ran<Option<Corrections>>, ReplayError> {
+    let Some(source) = source else { return Ok(Ran::Done(None)) };
+    let auto = matches!(source, CompatSource::Auto);
+    if auto && records.live {
+        return Err(ReplayError::Combination(
+            "--compat auto needs the whole record; for a live feed give a compat.json".into(),
+        ));
+    }
+    if auto {
+        log.note("compat: checking the record's data compatibility (--compat auto)");
+    }
+    let (records, source) = (records.clone(), source.clone());
+    let step = move || -> Result<(Option<Corrections>, Vec<String>), ReplayError> {
+        match source {
+            CompatSource::Given(c) => Ok((Some(c), Vec::new())),
+            CompatSource::File(path) => Ok((Some(Corrections::from_json(&path)?), Vec::new())),
+            CompatSource::Auto => {
+                let reader = records.open(&records.data)?;
+                let config = aeroident_estimators::compat::CompatConfig::default();
+                let (summary, _) = crate::compat::check_record(reader, &config)?;
+                Ok((Some(Corrections::from_summary(&summary)?), summary.findings))
+            }
+        }
+    };
+    let Some(done) = guard.run(Step::Compat, step)? else { return Ok(Ran::Stopped(Step::Compat)) };
+    let (corrections, findings) = done?;
+    findings.iter().for_each(|f| log.note(&format!("compat: {f}")));
+    Ok(Ran::Done(corrections))
+}
+
+/// The model stage's outcome: the model (`None`: the estimating step's default) and the
+/// structure selection of `--model auto`.
+pub type ChosenModel = (Option<ModelSpec>, Option<AutoSelection>);
+
+/// The model stage: the preset or model file `choice` names, or the structure selected on the
+/// records (`auto…`, its selection path noted line by line); `(None, None)` without one.
+///
+/// # Errors
+/// `auto` on a live feed; a bad model argument or file; the selection's errors.
+pub fn choose_model(
+    records: &Records,
+    choice: &ModelChoice,
+    compat: Option<&Corrections>,
+    windows: &[TimeWindow],
+    guard: &mut impl Guard,
+    log: &mut dyn JobLog,
+) -> Result<Ran<ChosenModel>, ReplayError> {
+    if choice.is_auto() && records.live {
+        return Err(ReplayError::Combination(
+            "--model auto selects the terms on the whole record: give a file, not a live feed"
+                .into(),
+        ));
+    }
+    if choice.is_auto() {
+        log.note("structure: selecting the terms on the whole record (--model auto)");
+    }
+    let (records, choice) = (records.clone(), choice.clone());
+    let (compat, windows) = (compat.cloned(), windows.to_vec());
+    let step = move || {
+        crate::structure::model_from_args(
+            choice.model.as_deref(),
+            &choice.select,
+            &choice.candidates,
+            &choice.knots_deg,
+            || records.open_all(),
+            &records.mapping,
+            compat.as_ref(),
+            &windows,
+            choice.diff_window,
+        )
+    };
+    let Some(done) = guard.run(Step::Model, step)? else { return Ok(Ran::Stopped(Step::Model)) };
+    let (model, selection) = done?;
+    for line in selection.iter().flat_map(AutoSelection::path_lines) {
+        log.note(&line);
+    }
+    Ok(Ran::Done((model, selection)))
+}
+
+/// `summary.json`'s document: `summary` serialised, with `--model auto`'s structure selection
+/// under `structure_selection`.
+///
+/// # Errors
+/// A summary that does not serialise (a bug: every summary type is plain data).
+pub fn document(
+    summary: &impl serde::Serialize,
+    selection: Option<&AutoSelection>,
+) -> Result<serde_json::Value, serde_json::Error> {
+    let mut doc = serde_json::to_value(summary)?;
+    if let (Some(s), Some(map)) = (selection, doc.as_object_mut()) {
+        map.insert("structure_selection".into(), serde_json::to_value(s.report())?);
+    }
+    Ok(doc)
+}

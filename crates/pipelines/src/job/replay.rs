@@ -1,0 +1,201 @@
+//! The replay job: a record through an online estimator (`aeroident replay`, Python
+//! `aeroident.replay`), with every stage a user can ask for ([module doc](super)).
+//!
+//! The face opens the record (a file, stdin, a live feed) and drives the estimating step with
+//! its own observer ([`crate::replay::ReplayObserver`]); the job sequences the rest:
+//! `compat → model → estimate → cross-check → validate on a second record`, and forms
+//! `summary.json` ([`ReplayJobOutcome::document`]).
+
+use super::{
+    CompatSource, Guard, JobLog, ModelChoice, Ran, Records, Step, choose_model, corrections,
+};
+use crate::replay::prediction::ValidationReport;
+use crate::replay::{ReplayError, ReplayOptions, ReplayOutcome, STATUS_INTERRUPTED};
+use crate::structure::AutoSelection;
+
+/// Everything a replay job does, as one value.
+#[derive(Debug, Clone)]
+pub struct ReplayJob {
+    /// The record (its `and` list must be empty: an online replay reads one record).
+    pub records: Records,
+    /// How the model is chosen.
+    pub model: ModelChoice,
+    /// The compatibility corrections to apply, if any.
+    pub compat: Option<CompatSource>,
+    /// The replay's options; the job sets their `model` and `compat` from its own stages.
+    pub options: ReplayOptions,
+    /// Whether to fit the record by output error too and set the two side by side.
+    pub cross_check: bool,
+    /// A second record (same mapping) to validate the final estimates on.
+    pub validate_on: Option<String>,
+}
+
+/// The stages before the estimator, done: the options it runs with (model and corrections
+/// set) and the structure selection of `--model auto`.
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    /// The options of the estimating step.
+    pub options: ReplayOptions,
+    /// The selection, with `--model auto`.
+    pub selection: Option<AutoSelection>,
+}
+
+/// A replay job's outcome.
+#[derive(Debug, Clone)]
+pub struct ReplayJobOutcome {
+    /// The replay's outcome (with the cross-check when asked for).
+    pub outcome: ReplayOutcome,
+    /// The validation on the second record, when asked for and done.
+    pub validation_on: Option<ValidationReport>,
+    /// The structure selection of `--model auto`.
+    pub selection: Option<AutoSelection>,
+}
+
+impl ReplayJobOutcome {
+    /// `summary.json`: the replay's document ([`ReplayOutcome::document`]) with the structure
+    /// selection.
+    ///
+    /// # Errors
+    /// A summary that does not serialise (a bug).
+    pub fn document(&self) -> Result<serde_json::Value, serde_json::Error> {
+        super::document(
+            &self.outcome.document(self.validation_on.as_ref()),
+            self.selection.as_ref(),
+        )
+    }
+}
+
+impl ReplayJob {
+    /// Refuses what does not go together before anything is read: a batch estimator (the
+    /// batch-fit job's), more than one record, a cross-check of a live feed.
+    ///
+    /// # Errors
+    /// [`ReplayError::Combination`] saying what to do instead.
+    pub fn check(&self) -> Result<(), ReplayError> {
+        let kind = self.options.estimator;
+        if kind.is_batch() {
+            return Err(ReplayError::Combination(format!(
+                "estimator `{}` is a batch method with no per-sample estimates: run the batch-fit job",
+                kind.name()
+            )));
+        }
+        if self.cross_check && self.records.live {
+            return Err(ReplayError::Combination(
+                "--cross-check sets a real-time estimator beside the batch fit of a whole record: not for a live feed or a batch estimator".into(),
+            ));
+        }
+        if !self.records.and.is_empty() {
+            return Err(ReplayError::Combination(format!(
+                "--and fits several records together: it is for the batch fits (--estimator oe | fem); replay each record on its own with --estimator {}",
+                kind.name()
+            )));
+        }
+        Ok(())
+    }
+
+    /// The stages before the estimator: the compatibility corrections, then the model.
+    ///
+    /// # Errors
+    /// As [`corrections`] and [`choose_model`].
+    pub fn prepare(
+        &self,
+        guard: &mut impl Guard,
+        log: &mut dyn JobLog,
+    ) -> Result<Ran<Prepared>, ReplayError> {
+        let compat = match corrections(&self.records, self.compat.as_ref(), guard, log)? {
+            Ran::Done(c) => c,
+            Ran::Stopped(step) => return Ok(Ran::Stopped(step)),
+        };
+        let windows = &self.options.windows;
+        let chosen =
+            choose_model(&self.records, &self.model, compat.as_ref(), windows, guard, log)?;
+        let (model, selection) = match chosen {
+            Ran::Done(m) => m,
+            Ran::Stopped(step) => return Ok(Ran::Stopped(step)),
+        };
+        let options = ReplayOptions { model, compat, ..self.options.clone() };
+        Ok(Ran::Done(Prepared { options, selection }))
+    }
+
+    /// The stages after the estimator, on `outcome`: the cross-check (unless the replay was
+    /// interrupted), then the validation on the second record (unless it diverged or was
+    /// interrupted). A run interrupted before them says which it left out; a validation a
+    /// stop abandoned leaves the run `interrupted`, with `stopped_why` as its warning.
+    ///
+    /// # Errors
+    /// The second record cannot be opened or does not support the fitted model.
+    pub fn finish(
+        &self,
+        prepared: Prepared,
+        mut outcome: ReplayOutcome,
+        guard: &mut impl Guard,
+        log: &mut dyn JobLog,
+        stopped_why: impl FnOnce() -> String,
+    ) -> Result<ReplayJobOutcome, ReplayError> {
+        let interrupted = outcome.interrupted();
+        if interrupted && (self.validate_on.is_some() || self.cross_check) {
+            let w = "the run was interrupted: --validate-on / --cross-check not done".to_string();
+            log.warning(&w);
+            outcome.summary.warnings.push(w);
+        }
+        if self.cross_check && !interrupted {
+            self.cross_check(&prepared.options, &mut outcome, log)?;
+        }
+        let validation_on = match &self.validate_on {
+            Some(path) if !outcome.diverged() && !interrupted => {
+                self.validate(path, &prepared.options, &mut outcome, guard, log, stopped_why)?
+            }
+            _ => None,
+        };
+        Ok(ReplayJobOutcome { outcome, validation_on, selection: prepared.selection })
+    }
+
+    /// `--cross-check`: the record fitted by output error with the same model and set beside
+    /// the online estimates ([`crate::replay::cross_check_record`]).
+    fn cross_check(
+        &self,
+        options: &ReplayOptions,
+        outcome: &mut ReplayOutcome,
+        log: &mut dyn JobLog,
+    ) -> Result<(), ReplayError> {
+        let reader = self.records.open(&self.records.data)?;
+        log.note("cross-check: fitting the record by output error with the same model");
+        crate::replay::cross_check_record(outcome, reader, &self.records.mapping, options);
+        for w in outcome.cross_check.iter().flat_map(crate::replay::cross_check::warnings) {
+            log.warning(&w);
+        }
+        Ok(())
+    }
+
+    /// `--validate-on`: the final estimates applied to the record at `path`; `None` when a stop
+    /// abandoned it (the run is then `interrupted`, `stopped_why()` its warning).
+    fn validate(
+        &self,
+        path: &str,
+        options: &ReplayOptions,
+        outcome: &mut ReplayOutcome,
+        guard: &mut impl Guard,
+        log: &mut dyn JobLog,
+        stopped_why: impl FnOnce() -> String,
+    ) -> Result<Option<ValidationReport>, ReplayError> {
+        let (path, mapping) = (path.to_string(), self.records.mapping.clone());
+        let (options, fitted) = (options.clone(), outcome.clone());
+        let step = move || -> Result<_, ReplayError> {
+            let (reader, notes) = aeroident_io::open_log_with_notes(&path, None, &mapping)?;
+            let report = crate::replay::validate_on(reader, &mapping, &options, &fitted)?;
+            Ok((report, notes))
+        };
+        match guard.run(Step::ValidateOn, step)? {
+            Some(done) => {
+                let (report, notes) = done?;
+                notes.iter().for_each(|n| log.reader_note(n));
+                Ok(Some(report))
+            }
+            None => {
+                outcome.summary.status = STATUS_INTERRUPTED.to_string();
+                outcome.summary.warnings.push(stopped_why());
+                Ok(None)
+            }
+        }
+    }
+}

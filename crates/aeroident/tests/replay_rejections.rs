@@ -4,6 +4,7 @@
 //! in a warning, and `samples_rejected` still counts every rejected row.
 
 mod common;
+use aeroident_io::warning::{Warning, WarningKind, Warnings};
 use aeroident_io::{FlightDataReader, Mapping, RejectionLog};
 use aeroident_pipelines::replay::batch::FitOptions;
 use aeroident_pipelines::replay::fit::fit_record;
@@ -49,7 +50,7 @@ fn errors_many_rejected_rows_give_a_bounded_list_a_full_count_and_a_warning() {
     assert_eq!(last.row, ROWS as u64);
     assert!(last.reason.contains("end of record"), "{}", last.reason);
     // The other 501 entries (all blank `de`: rows 2003…3001) are counted in one warning.
-    let w: Vec<&String> = s.warnings.iter().filter(|w| w.contains("not listed")).collect();
+    let w: Vec<&Warning> = s.warnings.iter().filter(|w| w.contains("not listed")).collect();
     assert_eq!(w.len(), 1, "{:?}", s.warnings);
     assert!(w[0].starts_with("501 further rejections not listed"), "{}", w[0]);
     assert!(w[0].contains("501 × blank value"), "{}", w[0]);
@@ -75,8 +76,8 @@ fn errors_time_unit_off_by_1000_is_a_summary_warning() {
         let f = std::fs::File::open(&data).unwrap();
         FlightDataReader::new(std::io::BufReader::new(f), "hfb320.csv", &m).unwrap()
     };
-    let wanted = |warnings: &[String]| {
-        let w: Vec<&String> = warnings.iter().filter(|w| w.contains("time column")).collect();
+    let wanted = |warnings: &[Warning]| {
+        let w: Vec<&Warning> = warnings.iter().filter(|w| w.contains("time column")).collect();
         assert_eq!(w.len(), 1, "{warnings:?}");
         assert!(
             w[0].contains("`time_s` in `ms`") && w[0].contains("0.0001 s (10000 Hz)"),
@@ -148,8 +149,12 @@ fn errors_a_constant_channel_is_named_with_the_parameters_it_leaves_unidentified
         let o = replay(reader, &m, &ReplayOptions::default(), &mut ()).unwrap();
         o.summary.warnings
     };
-    let constant = |w: &Vec<String>| -> Vec<String> {
-        w.iter().filter(|w| w.starts_with("constant channel")).cloned().collect()
+    // Found by their kind, not their words.
+    let constant = |w: &Warnings| -> Vec<String> {
+        w.iter()
+            .filter(|w| w.kind == WarningKind::ConstantChannel)
+            .map(|w| w.text.clone())
+            .collect()
     };
     assert!(constant(&record(None, None)).is_empty());
     let w = constant(&record(Some(0.01), None));
@@ -177,8 +182,9 @@ fn errors_a_rate_in_the_wrong_unit_is_warned_of() {
         let open = || aeroident_io::open_log(&data.display().to_string(), None, &m).unwrap();
         let online = replay(open(), &m, &ReplayOptions::default(), &mut ()).unwrap();
         let batch = fit_record(open(), &m, None, FitOptions::default()).unwrap();
-        let units = |w: &[String]| -> Vec<String> {
-            w.iter().filter(|w| w.starts_with("unit mismatch")).cloned().collect()
+        let units = |w: &[Warning]| -> Vec<String> {
+            let kind = |w: &&Warning| w.kind == WarningKind::UnitMismatch;
+            w.iter().filter(kind).map(|w| w.text.clone()).collect()
         };
         (units(&online.summary.warnings), units(&batch.summary.warnings))
     };

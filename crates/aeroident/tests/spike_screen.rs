@@ -162,7 +162,8 @@ fn one_thrust_spike_is_rejected_and_the_fit_keeps_its_clean_values() {
     let thrown = fit(&spiked, off);
     let ((v, _), (v0, s0)) = (get(&thrown, "CD_0"), get(&base, "CD_0"));
     assert!((v - v0).abs() > 10.0 * s0, "without the screen the spike owns the fit: CD_0 {v}");
-    let warn: Vec<&String> = thrown.warnings.iter().filter(|w| w.contains("dominates")).collect();
+    let warn: Vec<&aeroident_io::warning::Warning> =
+        thrown.warnings.iter().filter(|w| w.contains("dominates")).collect();
     eprintln!("unscreened: CD_0 {v}, warnings {warn:?}");
     assert!(warn.iter().any(|w| w.contains("t = 30")), "{:?}", thrown.warnings);
     // The output is named as the mapping names it, not by the sample's SI field.

@@ -26,6 +26,7 @@ pub mod replay_output;
 pub mod table;
 pub mod ulog;
 pub mod units;
+pub mod warning;
 
 pub use error::{FlightDataError, RowProblem};
 pub use flight_data::{FlightDataReader, RecordEvent, Rejection};

@@ -192,8 +192,9 @@ pub struct ReplaySummary {
     /// restarts are also in `warnings`.
     pub events: EventsSummary,
     /// Warnings about the record or the run (e.g. the mapping's `nominal_dt_s` disagrees with
-    /// the measured interval; a time jump not slept across in real-time pacing).
-    pub warnings: Vec<String>,
+    /// the measured interval; a time jump not slept across in real-time pacing), each with its
+    /// kind ([`crate::warning`]); `summary.json` lists their texts.
+    pub warnings: crate::warning::Warnings,
 }
 
 impl ReplaySummary {

@@ -700,13 +700,7 @@ fn execute_online(
     }
     // The end-of-run diagnostics (sign plausibility, filter consistency, collinear
     // regressors); the record warnings were printed as they arose.
-    for w in outcome.summary.warnings.iter().filter(|w| {
-        w.contains("sign a conventional")
-            || w.starts_with("normalised innovation")
-            || w.starts_with("collinear regressors")
-            || w.starts_with("constant channel")
-            || w.starts_with("unit mismatch")
-    }) {
+    for w in outcome.summary.warnings.iter().filter(|w| w.kind.is_diagnostic()) {
         eprintln!("warning: {w}");
     }
     if let Some(e) = outcome.diverged_error(args.estimator.name()) {
@@ -889,7 +883,7 @@ fn begin_writing(
     interrupt: Option<&crate::interrupt::Interrupt>,
     interrupted: bool,
     samples_read: usize,
-    warnings: &mut Vec<String>,
+    warnings: &mut aeroident_io::warning::Warnings,
 ) -> bool {
     let summary_only = interrupt.is_some_and(crate::interrupt::Interrupt::begin_writing);
     if summary_only {

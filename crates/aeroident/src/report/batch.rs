@@ -264,7 +264,13 @@ pub fn write(
         settings,
         results,
         figures,
-        warnings: outcome.summary.warnings.iter().cloned().chain(reader_warnings).collect(),
+        warnings: outcome
+            .summary
+            .warnings
+            .texts()
+            .map(str::to_string)
+            .chain(reader_warnings)
+            .collect(),
         ..Default::default()
     }
     .write(od)?;

@@ -288,7 +288,13 @@ pub fn write(
         settings,
         results: vec![res.clone()],
         figures,
-        warnings: outcome.summary.warnings.iter().cloned().chain(reader_warnings).collect(),
+        warnings: outcome
+            .summary
+            .warnings
+            .texts()
+            .map(str::to_string)
+            .chain(reader_warnings)
+            .collect(),
         links: Vec::new(),
     };
     report.write(od)?;

@@ -209,8 +209,9 @@ pub struct BatchSummary {
     pub coefficients: Vec<aeroident_io::replay_output::CoefficientSummary>,
     /// Parameter pairs with Cramér–Rao `|ρ| > 0.9`.
     pub correlations: Vec<aeroident_io::replay_output::Correlation>,
-    /// Sign and collinearity warnings.
-    pub warnings: Vec<String>,
+    /// Sign and collinearity warnings, and the record's, each with its kind
+    /// ([`aeroident_io::warning`]); `summary.json` lists their texts.
+    pub warnings: aeroident_io::warning::Warnings,
     /// Validation of the simulated outputs on the fitted record.
     pub validation: ValidationReport,
     /// Validation on a second record (`--validate-on`), else `null`.
@@ -1090,8 +1091,9 @@ fn fit_warnings(
     sigmas: &Sigmas,
     identifiability: &Identifiability,
     values: &[Option<f64>],
-) -> Vec<String> {
-    let mut warnings: Vec<String> = termination_note(result).into_iter().collect();
+) -> aeroident_io::warning::Warnings {
+    let mut warnings: aeroident_io::warning::Warnings =
+        termination_note(result).into_iter().collect();
     let reported: Vec<Option<f64>> = sigmas.reported.iter().map(|s| Some(*s)).collect();
     warnings.extend(diagnostics::sign_warnings(&result.structure, values, &reported));
     warnings.extend(sigmas.bootstrap_skipped.clone());
@@ -1113,10 +1115,7 @@ fn fit_warnings(
         warnings.extend(bootstrap_shrink_warnings(&result.names, &sigmas.coloured, &b.sigma));
     }
     for c in &identifiability.collinear_regressors {
-        warnings.push(format!(
-            "collinear regressors {} and {} (sample correlation {:+.3}): the record cannot separate these terms whatever the method",
-            c.a, c.b, c.rho
-        ));
+        warnings.push(diagnostics::collinear_warning(c));
     }
     warnings
 }

@@ -9,6 +9,7 @@
 
 use aeroident_estimators::{AirDataSample, ModelStructure, Term};
 use aeroident_io::Mapping;
+use aeroident_io::warning::{Warning, WarningKind};
 
 /// The sample fields the regressors read, besides `V` (which every normalised rate reads and
 /// the `V` term itself).
@@ -61,7 +62,7 @@ impl Spread {
     /// Also one warning per α knot of `structure` outside the α range seen (a recursive replay
     /// cannot refuse such a knot before it has read the record, as the batch fits do): the
     /// spline term is then zero throughout, or `α − k`, which the constant and `alpha` span.
-    pub fn warnings(&self, structure: &ModelStructure, mapping: &Mapping) -> Vec<String> {
+    pub fn warnings(&self, structure: &ModelStructure, mapping: &Mapping) -> Vec<Warning> {
         let (lo, hi, n) = self.ranges[0];
         let knots = structure.knots().as_slice().iter().enumerate();
         let outside = knots.filter(|(_, k)| n > 0 && !(lo < **k && **k < hi)).map(|(i, k)| {
@@ -75,7 +76,7 @@ impl Spread {
             )
         });
         let constant = FIELDS.iter().zip(&self.ranges).filter(|(_, r)| r.2 >= 2 && r.0 == r.1);
-        let mut out: Vec<String> = outside.collect();
+        let mut out: Vec<Warning> = outside.map(Warning::from).collect();
         out.extend(constant.filter_map(|(name, &(v, _, n))| {
                 let params: Vec<&str> = structure
                     .params()
@@ -83,11 +84,12 @@ impl Spread {
                     .map(|p| p.name())
                     .collect();
                 (!params.is_empty()).then(|| {
-                    format!(
+                    let text = format!(
                         "constant channel: {} does not vary over the record ({v} in all {n} estimated samples), so the terms that need it cannot be identified: {}",
                         mapping.field_label(name),
                         params.join(", ")
-                    )
+                    );
+                    Warning::new(WarningKind::ConstantChannel, text)
                 })
         }));
         out

@@ -14,6 +14,7 @@
 use super::prediction::Recorder;
 use aeroident_estimators::{Coefficient, Estimator, ModelStructure, Term};
 use aeroident_io::replay_output::{CoefficientSummary, Correlation};
+use aeroident_io::warning::{Warning, WarningKind};
 use nalgebra::{DMatrix, SymmetricEigen};
 use serde::Serialize;
 
@@ -298,7 +299,7 @@ pub fn sign_warnings(
     st: &ModelStructure,
     values: &[Option<f64>],
     sigmas: &[Option<f64>],
-) -> Vec<String> {
+) -> Vec<Warning> {
     let mut out = Vec::new();
     for (i, v) in values.iter().enumerate() {
         let (Some(v), Some(param)) = (*v, st.param(i)) else { continue };
@@ -308,23 +309,35 @@ pub fn sign_warnings(
             && v * sign < 0.0
             && significant
         {
-            out.push(format!(
+            let text = format!(
                 "{} = {v:+.4} has the sign a conventional aircraft does not have under the mapping's convention for `{key}` ({convention}; expected {}): check the sign (`scale = -1`) of `{key}` in the mapping (docs/mapping.md)",
                 param.name(),
                 if *sign > 0.0 { "> 0" } else { "< 0" }
-            ));
+            );
+            out.push(Warning::new(WarningKind::Sign, text).about(param.name()));
         }
         if let Some(sign) = aeroident_estimators::prior::expected_sign(param)
             && v * sign < 0.0
         {
-            out.push(format!(
+            let text = format!(
                 "{} = {v:+.4} has the sign a conventional stable aircraft does not have (expected {}): check the record's sign conventions, the excitation and the correlations",
                 param.name(),
                 if sign > 0.0 { "> 0" } else { "< 0" }
-            ));
+            );
+            out.push(Warning::new(WarningKind::Sign, text).about(param.name()));
         }
     }
     out
+}
+
+/// The warning of two regressors the record cannot separate (the identifiability's
+/// collinear pair `c`).
+pub fn collinear_warning(c: &Correlation) -> Warning {
+    let text = format!(
+        "collinear regressors {} and {} (sample correlation {:+.3}): the record cannot separate these terms whatever the method",
+        c.a, c.b, c.rho
+    );
+    Warning::new(WarningKind::Collinear, text)
 }
 
 #[cfg(test)]

@@ -172,7 +172,7 @@ fn summarise(
         m.iter().for_each(|s| recorder.push(s));
     }
     let identifiability = diagnostics::identifiability(&st, &cov, &recorder, &values);
-    let mut warnings: Vec<String> =
+    let mut warnings: aeroident_io::warning::Warnings =
         super::batch::termination_note_of(fd.termination, &fd.iterations).into_iter().collect();
     warnings.extend(diagnostics::sign_warnings(&st, &values, &fd.sigma));
     let not_estimated: Vec<String> =

@@ -33,6 +33,7 @@
 
 use aeroident_estimators::AirDataSample;
 use aeroident_io::Mapping;
+use aeroident_io::warning::{Warning, WarningKind};
 use aeroident_physics::rigid_body::{SinCos, euler_rates};
 use nalgebra::{DMatrix, DVector};
 
@@ -208,7 +209,7 @@ impl Kinematics {
 
     /// One warning per rate channel whose gain says its unit (or the attitude's) disagrees
     /// (module doc), naming the channel as `mapping` does and the likely unit.
-    pub fn warnings(&self, mapping: &Mapping) -> Vec<String> {
+    pub fn warnings(&self, mapping: &Mapping) -> Vec<Warning> {
         let Some((gains, r2)) = self.gains() else { return Vec::new() };
         gains
             .into_iter()
@@ -227,10 +228,11 @@ impl Kinematics {
                 } else {
                     "check its unit and scale, and the attitude's"
                 };
-                Some(format!(
+                let text = format!(
                     "unit mismatch: {label} disagrees with the attitude it turns: the Euler kinematics give the attitude's measured rates with {} × this channel (1 when the units agree; R² {r2:.2}); {likely}",
                     three_decimals(k)
-                ))
+                );
+                Some(Warning::new(WarningKind::UnitMismatch, text))
             })
             .collect()
     }

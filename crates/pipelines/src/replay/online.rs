@@ -19,6 +19,7 @@ use aeroident_io::mapping::{Channel, Mapping};
 use aeroident_io::replay_output::{
     CoefficientSummary, Correlation, EventsSummary, ParameterSummary, ReplaySummary,
 };
+use aeroident_io::warning::{Warning, WarningKind};
 use aeroident_io::{FlightDataError, ModelSpec, RecordEvent, Rejection, RejectionLog};
 use std::time::{Duration, Instant};
 
@@ -76,7 +77,7 @@ pub(super) struct Replay<'a> {
     /// Time spent in the estimator's update (the throughput of the estimation stage).
     busy: Duration,
     pacer: Pacer,
-    warnings: Vec<String>,
+    warnings: aeroident_io::warning::Warnings,
     diverged: bool,
     /// The observer asked the replay to stop before the end of the record.
     interrupted: bool,
@@ -114,7 +115,7 @@ impl<'a> Replay<'a> {
             recorder: Recorder::default(),
             busy: Duration::ZERO,
             pacer: Pacer::default(),
-            warnings: Vec::new(),
+            warnings: Default::default(),
             diverged: false,
             interrupted: false,
             restarts_seen: 0,
@@ -391,10 +392,7 @@ impl<'a> Replay<'a> {
             );
             let id = diagnostics::identifiability(r.est.structure(), &cov, &self.recorder, &values);
             for c in &id.collinear_regressors {
-                summary.warnings.push(format!(
-                    "collinear regressors {} and {} (sample correlation {:+.3}): the record cannot separate these terms whatever the method",
-                    c.a, c.b, c.rho
-                ));
+                summary.warnings.push(super::diagnostics::collinear_warning(c));
             }
             (Some(v), Some(id))
         };
@@ -437,9 +435,10 @@ impl<'a> Replay<'a> {
             let sigmas: Vec<Option<f64>> = parameters.iter().map(|p| p.std_error).collect();
             warnings.extend(diagnostics::sign_warnings(r.est.structure(), &values, &sigmas));
             if let Some(nis) = r.est.nis() {
-                warnings.push(format!(
+                let text = format!(
                     "normalised innovation squared (mean e²/S) = {nis:.2} (1 for a consistent filter; > 2 means its σ are optimistic, < 0.5 pessimistic)"
-                ));
+                );
+                warnings.push(Warning::new(WarningKind::Consistency, text));
             }
         }
         // The estimator's events; its restarts were reported as they happened.

@@ -227,6 +227,50 @@ fn errors_numeric_options_name_the_cli_option_and_the_exact_value() {
     );
 }
 
+/// The estimator-option flags are checked by the estimator registry, which knows which kind
+/// takes which: `ekf` has no forgetting factor and `smpe` no instrument delay (refused naming
+/// the flag, the kind and the options it takes, not ignored), while `smpe-finite-time` takes
+/// `--forgetting` (the CLI refused it though the registry builds it with one) and the factor
+/// reaches the estimator. The second half skips without `../shared`.
+#[test]
+fn errors_forgetting_refused_by_ekf_taken_by_smpe_finite_time() {
+    let (ok, err) = replay_good(&["--estimator", "ekf", "--forgetting", "0.9"], "ekf-forget");
+    assert!(!ok, "{err}");
+    assert!(
+        err.contains("--forgetting is not an option of --estimator ekf, which takes `parameter_walk_per_sqrt_s` and `samples` (it would be ignored)"),
+        "{err}"
+    );
+    let (ok, err) = replay_good(&["--estimator", "smpe", "--instrument-delay", "8"], "smpe-delay");
+    assert!(!ok, "{err}");
+    assert!(
+        err.contains("--instrument-delay is not an option of --estimator smpe, which takes none"),
+        "{err}"
+    );
+    let Some(data) = common::shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let last_estimates = |extra: &[&str], name: &str| {
+        let out = tmp(name);
+        let o = bin()
+            .args(["replay"])
+            .arg(&data)
+            .arg("--map")
+            .arg(workspace().join("mappings/hfb320.toml"))
+            .args(["--estimator", "smpe-finite-time"])
+            .args(extra)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
+        let csv = std::fs::read_to_string(out.join("estimates.csv")).unwrap();
+        let _ = std::fs::remove_dir_all(&out);
+        csv.lines().last().unwrap().to_string()
+    };
+    let forgetting = last_estimates(&["--forgetting", "0.99"], "sft-forget");
+    let none = last_estimates(&[], "sft");
+    assert_eq!(forgetting.split(',').next(), none.split(',').next(), "the same last sample");
+    assert_ne!(forgetting, none, "--forgetting 0.99 did not reach the estimator");
+}
+
 /// Live mode: the HFB-320 record on stdin gives one estimates line per sample on stdout.
 #[test]
 fn val_live_stdin_one_line_per_sample() {

@@ -205,13 +205,14 @@ pub fn unknown_kind(kind: &str) -> String {
     )
 }
 
-/// The instrument delay of an `rls-iv` replay, samples: the option's, else the differentiator
-/// window `N` (twice the half-span `(N−1)/2` over which a differentiated rate's noise is
-/// correlated with the rate's) capped at [`MAX_INSTRUMENT_DELAY`]. Measured on a noisy F-16
-/// record (docs/real-data.md, "Instrumental variables"): with `N = 5` a delay of 1 or 2
-/// samples leaves `Cm_q` 60–130 % off, 3 and more agree with the noise-free fit.
-pub fn instrument_delay(opts: &crate::replay::ReplayOptions) -> usize {
-    opts.instrument_delay.unwrap_or(opts.diff_window.min(MAX_INSTRUMENT_DELAY))
+/// The instrument delay of an `rls-iv` replay, samples: `given` (the option), else the
+/// differentiator window `diff_window` = `N`, samples (twice the half-span `(N−1)/2` over which
+/// a differentiated rate's noise is correlated with the rate's), capped at
+/// [`MAX_INSTRUMENT_DELAY`]. Measured on a noisy F-16 record (docs/real-data.md, "Instrumental
+/// variables"): with `N = 5` a delay of 1 or 2 samples leaves `Cm_q` 60–130 % off, 3 and more
+/// agree with the noise-free fit.
+pub fn instrument_delay(given: Option<usize>, diff_window: usize) -> usize {
+    given.unwrap_or(diff_window.min(MAX_INSTRUMENT_DELAY))
 }
 
 /// Options of the estimators (each uses the ones that apply to it).
@@ -489,32 +490,107 @@ pub fn batch_kinds() -> Vec<&'static str> {
     kinds.iter().filter(|k| k.is_batch()).map(|k| k.name()).collect()
 }
 
-/// The message for option `key` that estimator `kind` does not take, listing those it takes
-/// ([`EstimatorKind::options`]).
-pub fn unknown_option(kind: EstimatorKind, key: &str) -> String {
-    let takes = match kind.options() {
-        [] => "it takes none".to_string(),
-        [one] => format!("it takes `{one}`"),
+/// The options estimator `kind` takes ([`EstimatorKind::options`]) for a message: "none",
+/// "`forgetting`", "`forgetting` and `grid_hz`", "`a`, `b` and `c`".
+pub fn option_list(kind: EstimatorKind) -> String {
+    match kind.options() {
+        [] => "none".to_string(),
+        [one] => format!("`{one}`"),
         [init @ .., last] => {
             let init: Vec<String> = init.iter().map(|o| format!("`{o}`")).collect();
-            format!("it takes {} and `{last}`", init.join(", "))
+            format!("{} and `{last}`", init.join(", "))
         }
-    };
-    format!("{}: unknown option `{key}` ({takes})", kind.name())
+    }
+}
+
+/// The message for option `key` that estimator `kind` does not take, listing those it takes
+/// ([`option_list`]).
+pub fn unknown_option(kind: EstimatorKind, key: &str) -> String {
+    format!("{}: unknown option `{key}` (it takes {})", kind.name(), option_list(kind))
+}
+
+/// An estimator option the registry refuses ([`parse_options`], [`EstimatorOptions::set`]).
+/// It carries the kind and the key, so a face can name the option as it spells it (the CLI's
+/// `--forgetting`, a Python keyword argument); its text names them as a scenario does.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum OptionError {
+    /// `kind` does not take option `key`: the text is [`unknown_option`]'s, listing the
+    /// options it takes.
+    #[error("{}", unknown_option(*kind, key))]
+    Unknown {
+        /// The estimator.
+        kind: EstimatorKind,
+        /// The option, as the registry names it ([`EstimatorKind::options`]).
+        key: String,
+    },
+    /// `kind` takes option `key`, but not the value given.
+    #[error("{}: `{key}` {reason}", kind.name())]
+    Invalid {
+        /// The estimator.
+        kind: EstimatorKind,
+        /// The option, as the registry names it.
+        key: String,
+        /// What the value must be and the value given ("must be a number, got \"x\"").
+        reason: String,
+    },
+}
+
+impl OptionError {
+    /// The estimator whose option was refused.
+    pub fn kind(&self) -> EstimatorKind {
+        match self {
+            OptionError::Unknown { kind, .. } | OptionError::Invalid { kind, .. } => *kind,
+        }
+    }
+
+    /// The refused option, as the registry names it ([`EstimatorKind::options`]).
+    pub fn key(&self) -> &str {
+        match self {
+            OptionError::Unknown { key, .. } | OptionError::Invalid { key, .. } => key,
+        }
+    }
+}
+
+/// The options of estimator `kind` from key/value pairs, each parsed and checked by
+/// [`EstimatorOptions::set`] over the defaults: the one place that knows which kind takes which
+/// option. A scenario's `[[estimator]]` entry, the CLI's flags and Python's keyword arguments
+/// all become such pairs (keys as [`EstimatorKind::options`] names them). A later pair of the
+/// same key replaces an earlier one. [`EstimatorOptions::sample_interval_s`] is not an option
+/// (it is the record's) and stays `None`.
+///
+/// # Errors
+/// [`OptionError::Unknown`] for the first key `kind` does not take (naming those it takes),
+/// [`OptionError::Invalid`] for the first value of the wrong type or out of the option's domain.
+pub fn parse_options<'a>(
+    kind: EstimatorKind,
+    pairs: impl IntoIterator<Item = (&'a str, toml::Value)>,
+) -> Result<EstimatorOptions, OptionError> {
+    let mut options = EstimatorOptions::default();
+    for (key, v) in pairs {
+        options.set(kind, key, &v)?;
+    }
+    Ok(options)
 }
 
 impl EstimatorOptions {
     /// Sets the scenario option `key` (one of [`EstimatorKind::options`] of `kind`) from its
     /// TOML value. `samples` is read by the experiment ([`SampleEstimatorSpec::raw_samples`])
-    /// and only checked here.
+    /// and only checked here. [`parse_options`] sets a whole list.
     ///
     /// # Errors
-    /// A message naming the option and what it must be, or [`unknown_option`].
-    pub fn set(&mut self, kind: EstimatorKind, key: &str, v: &toml::Value) -> Result<(), String> {
-        let number = |what: &str| {
+    /// [`OptionError::Invalid`] naming the option and what it must be, or
+    /// [`OptionError::Unknown`] for an option `kind` does not take.
+    pub fn set(
+        &mut self,
+        kind: EstimatorKind,
+        key: &str,
+        v: &toml::Value,
+    ) -> Result<(), OptionError> {
+        let invalid = |reason: String| OptionError::Invalid { kind, key: key.into(), reason };
+        let number = || {
             v.as_float()
                 .or_else(|| v.as_integer().map(|i| i as f64))
-                .ok_or_else(|| format!("{}: `{what}` must be a number, got {v}", kind.name()))
+                .ok_or_else(|| invalid(format!("must be a number, got {v}")))
         };
         match (key, kind) {
             (
@@ -524,27 +600,23 @@ impl EstimatorOptions {
                 | EstimatorKind::Ftr
                 | EstimatorKind::SmpeFiniteTime,
             ) => {
-                self.forgetting = number("forgetting")?;
+                self.forgetting = number()?;
             }
             ("sliding_gain_per_s", EstimatorKind::SmpeFiniteTime) => {
-                self.sliding_gain_per_s = number("sliding_gain_per_s")?;
+                self.sliding_gain_per_s = number()?;
             }
             ("reaching_rate_per_s", EstimatorKind::SmpeFiniteTime) => {
-                self.reaching_rate_per_s = number("reaching_rate_per_s")?;
+                self.reaching_rate_per_s = number()?;
             }
             ("instrument_delay", EstimatorKind::RlsIv) => {
                 let d = v.as_integer().filter(|d| *d >= 1).ok_or_else(|| {
-                    format!(
-                        "rls-iv: `instrument_delay` must be a whole number of samples ≥ 1, got {v}"
-                    )
+                    invalid(format!("must be a whole number of samples ≥ 1, got {v}"))
                 })?;
                 self.instrument_delay = Some(d as usize);
             }
             ("grid_hz", EstimatorKind::Ftr) => {
                 let bad = || {
-                    format!(
-                        "ftr: `grid_hz` must be [f_min, f_max, step] in Hz (three numbers), got {v}"
-                    )
+                    invalid(format!("must be [f_min, f_max, step] in Hz (three numbers), got {v}"))
                 };
                 let a = v.as_array().filter(|a| a.len() == 3).ok_or_else(bad)?;
                 let num = |x: &toml::Value| {
@@ -553,21 +625,21 @@ impl EstimatorOptions {
                 self.ftr_grid_hz = Some((num(&a[0])?, num(&a[1])?, num(&a[2])?));
             }
             ("parameter_walk_per_sqrt_s", EstimatorKind::Ekf) => {
-                self.parameter_walk_per_sqrt_s = number("parameter_walk_per_sqrt_s")?;
+                self.parameter_walk_per_sqrt_s = number()?;
             }
             ("samples", EstimatorKind::Ekf) => {
                 if !matches!(v.as_str(), Some("raw" | "smoothed")) {
-                    return Err(format!("ekf: `samples` must be \"raw\" or \"smoothed\", got {v}"));
+                    return Err(invalid(format!("must be \"raw\" or \"smoothed\", got {v}")));
                 }
             }
-            (other, _) => return Err(unknown_option(kind, other)),
+            (other, _) => return Err(OptionError::Unknown { kind, key: other.into() }),
         }
         Ok(())
     }
 }
 
 /// The sample-driven estimator of `spec`, built by the shared factory ([`build`]) with the
-/// generic priors and the entry's options ([`EstimatorOptions::set`]).
+/// generic priors and the entry's options ([`parse_options`]).
 ///
 /// An `rls-iv` entry must give `instrument_delay`: the closed-loop samples pass the matched
 /// smoother, which correlates the sensor noise over the whole differentiator window `N`
@@ -583,10 +655,8 @@ pub fn build_sample_estimator(spec: &SampleEstimatorSpec) -> Result<Box<dyn Esti
     let kind = EstimatorKind::from_name(&spec.kind).ok_or_else(|| {
         format!("unknown sample-driven estimator `{}` ({})", spec.kind, online_kinds().join(" | "))
     })?;
-    let mut options = EstimatorOptions::default();
-    for (key, v) in &spec.options {
-        options.set(kind, key, v)?;
-    }
+    let pairs = spec.options.iter().map(|(key, v)| (key.as_str(), v.clone()));
+    let options = parse_options(kind, pairs).map_err(|e| e.to_string())?;
     if kind == EstimatorKind::RlsIv && options.instrument_delay.is_none() {
         return Err("rls-iv: give `instrument_delay` (samples), at least `[sensors] differentiator_window`: the matched smoother correlates the noise over the whole window".into());
     }
@@ -621,7 +691,7 @@ mod tests {
                 o.set(k, key, &valid(key)).unwrap_or_else(|e| panic!("{}: {e}", k.name()));
             }
             let e = o.set(k, "no_such_option", &toml::Value::Float(1.0)).unwrap_err();
-            assert_eq!(e, unknown_option(k, "no_such_option"));
+            assert_eq!(e.to_string(), unknown_option(k, "no_such_option"));
         }
         assert_eq!(
             unknown_option(EstimatorKind::Ftr, "x"),
@@ -639,6 +709,29 @@ mod tests {
             unknown_option(EstimatorKind::Rls, "x"),
             "rls: unknown option `x` (it takes `forgetting`)"
         );
+    }
+
+    /// The registry refuses an option the kind does not take, naming the kind and the options
+    /// it takes (`ekf` has no forgetting factor: it was silently ignored from Python), and
+    /// gives every kind the options it does take (`smpe-finite-time` forgets: the CLI refused
+    /// it).
+    #[test]
+    fn errors_parse_options_refuses_what_the_kind_does_not_take() {
+        let e = parse_options(EstimatorKind::Ekf, [("forgetting", toml::Value::Float(0.9))])
+            .unwrap_err();
+        assert_eq!(e, OptionError::Unknown { kind: EstimatorKind::Ekf, key: "forgetting".into() });
+        let msg = e.to_string();
+        assert!(msg.starts_with("ekf: unknown option `forgetting`"), "{msg}");
+        assert!(msg.contains("parameter_walk_per_sqrt_s"), "{msg}");
+        let o =
+            parse_options(EstimatorKind::SmpeFiniteTime, [("forgetting", 0.99.into())]).unwrap();
+        assert_eq!(o.forgetting, 0.99);
+        assert_eq!(o, EstimatorOptions { forgetting: 0.99, ..Default::default() });
+        // A value of the wrong type names the option and carries its key.
+        let e = parse_options(EstimatorKind::SmpeFiniteTime, [("forgetting", "high".into())])
+            .unwrap_err();
+        assert_eq!((e.kind(), e.key()), (EstimatorKind::SmpeFiniteTime, "forgetting"));
+        assert_eq!(e.to_string(), "smpe-finite-time: `forgetting` must be a number, got \"high\"");
     }
 
     /// A scenario's `rls-iv` entry without `instrument_delay` is refused with what to give; with

@@ -15,7 +15,7 @@ use pyo3::types::PyDict;
 
 use crate::convert::{self, DictSource};
 use crate::err;
-use crate::record::{estimator_kind, model_spec};
+use crate::record::{estimator_kind, estimator_options, model_spec, number};
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Estimator>()?;
@@ -52,36 +52,37 @@ impl Estimator {
 
 #[pymethods]
 impl Estimator {
+    // The estimator options (`forgetting` … `reaching_rate_per_s`) default to `None`, "not
+    // given": the given ones are parsed by the estimator registry, which refuses one the kind
+    // does not take, and the others keep the estimator's defaults.
     #[new]
-    #[pyo3(signature = (kind, model="longitudinal", constants=None, forgetting=1.0, sample_interval_s=None, parameter_walk_per_sqrt_s=0.0, ftr_grid_hz=None, sliding_gain_per_s=None, reaching_rate_per_s=None))]
+    #[pyo3(signature = (kind, model="longitudinal", constants=None, forgetting=None, sample_interval_s=None, parameter_walk_per_sqrt_s=None, ftr_grid_hz=None, sliding_gain_per_s=None, reaching_rate_per_s=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         kind: &str,
         model: &str,
         constants: Option<&Bound<'_, PyDict>>,
-        forgetting: f64,
+        forgetting: Option<f64>,
         sample_interval_s: Option<f64>,
-        parameter_walk_per_sqrt_s: f64,
+        parameter_walk_per_sqrt_s: Option<f64>,
         ftr_grid_hz: Option<(f64, f64, f64)>,
         sliding_gain_per_s: Option<f64>,
         reaching_rate_per_s: Option<f64>,
     ) -> PyResult<Self> {
         let k = estimator_kind(kind)?;
+        let grid =
+            ftr_grid_hz.map(|(a, b, c)| toml::Value::Array(vec![a.into(), b.into(), c.into()]));
+        let given = vec![
+            ("forgetting", number(forgetting)),
+            ("parameter_walk_per_sqrt_s", number(parameter_walk_per_sqrt_s)),
+            ("grid_hz", grid),
+            ("sliding_gain_per_s", number(sliding_gain_per_s)),
+            ("reaching_rate_per_s", number(reaching_rate_per_s)),
+        ];
+        let options = estimator_options(k, given).map_err(err)?;
         let spec = model_spec(model)?;
         let constants = convert::constants_from(constants)?;
-        let opts = EstimatorOptions {
-            forgetting,
-            instrument_delay: None,
-            sample_interval_s,
-            parameter_walk_per_sqrt_s,
-            ftr_grid_hz,
-            ..EstimatorOptions::default()
-        };
-        let opts = EstimatorOptions {
-            sliding_gain_per_s: sliding_gain_per_s.unwrap_or(opts.sliding_gain_per_s),
-            reaching_rate_per_s: reaching_rate_per_s.unwrap_or(opts.reaching_rate_per_s),
-            ..opts
-        };
+        let opts = EstimatorOptions { sample_interval_s, ..options };
         let est = build(k, spec.structure, spec.priors, &opts).map_err(|e| err(e.to_string()))?;
         Ok(Self {
             state: Mutex::new(State { est, samples: 0 }),

@@ -55,6 +55,61 @@ pub fn estimator_kind(name: &str) -> PyResult<EstimatorKind> {
     })
 }
 
+/// The estimator options among the keyword arguments, each with the registry's key
+/// ([`EstimatorKind::options`]) and the keyword's name.
+const OPTION_KEYWORDS: [(&str, &str); 5] = [
+    ("forgetting", "forgetting"),
+    ("parameter_walk_per_sqrt_s", "parameter_walk_per_sqrt_s"),
+    ("grid_hz", "ftr_grid_hz"),
+    ("sliding_gain_per_s", "sliding_gain_per_s"),
+    ("reaching_rate_per_s", "reaching_rate_per_s"),
+];
+
+/// The keyword argument of the registry's option `key`.
+fn keyword(key: &str) -> &str {
+    OPTION_KEYWORDS.iter().find(|o| o.0 == key).map_or(key, |o| o.1)
+}
+
+/// The options of estimator `kind` from the keyword arguments given (`None`: not given), as
+/// (registry key, value) pairs: parsed by the estimator registry
+/// ([`aeroident_pipelines::estimators::parse_options`]), which refuses an option the kind does
+/// not take instead of ignoring it.
+///
+/// # Errors
+/// A message naming the kind, the keyword argument and the keyword arguments the kind takes,
+/// or what the value must be.
+pub fn estimator_options(
+    kind: EstimatorKind,
+    given: Vec<(&'static str, Option<toml::Value>)>,
+) -> Result<EstimatorOptions, String> {
+    use aeroident_pipelines::estimators::{OptionError, parse_options};
+    let pairs = given.into_iter().filter_map(|(key, v)| v.map(|v| (key, v)));
+    parse_options(kind, pairs).map_err(|e| match e {
+        OptionError::Unknown { kind, key } => {
+            let takes: Vec<String> = kind
+                .options()
+                .iter()
+                .filter(|o| OPTION_KEYWORDS.iter().any(|k| k.0 == **o))
+                .map(|o| format!("`{}`", keyword(o)))
+                .collect();
+            let takes = if takes.is_empty() { "none".to_string() } else { takes.join(", ") };
+            format!(
+                "estimator `{}`: unknown keyword argument `{}` (it takes {takes})",
+                kind.name(),
+                keyword(&key)
+            )
+        }
+        OptionError::Invalid { kind, key, reason } => {
+            format!("estimator `{}`: `{}` {reason}", kind.name(), keyword(&key))
+        }
+    })
+}
+
+/// A number keyword argument as an option value.
+pub fn number(v: Option<f64>) -> Option<toml::Value> {
+    v.map(toml::Value::Float)
+}
+
 /// A model argument as the CLI's `--model`: a preset name or a model file path.
 pub fn model_spec(model: &str) -> PyResult<ModelSpec> {
     ModelSpec::from_arg(model).map_err(to_py)
@@ -186,7 +241,7 @@ fn derivative_source(s: &str) -> PyResult<DerivativeSource> {
 /// Replays a record file exactly as `aeroident replay DATA --map MAPPING` (module doc of the
 /// Python package).
 #[pyfunction]
-#[pyo3(signature = (path, mapping, estimator="rls", model=None, forgetting=1.0, derivatives="auto", diff_window=5, compat=None, windows=None, cross_check=false, select="swr", candidates=None, knots_deg=None))]
+#[pyo3(signature = (path, mapping, estimator="rls", model=None, forgetting=None, derivatives="auto", diff_window=5, compat=None, windows=None, cross_check=false, select="swr", candidates=None, knots_deg=None))]
 #[allow(clippy::too_many_arguments)]
 fn replay_file<'py>(
     py: Python<'py>,
@@ -194,7 +249,7 @@ fn replay_file<'py>(
     mapping: &str,
     estimator: &str,
     model: Option<&str>,
-    forgetting: f64,
+    forgetting: Option<f64>,
     derivatives: &str,
     diff_window: usize,
     compat: Option<&str>,
@@ -224,6 +279,8 @@ fn replay_file<'py>(
                 kind.name()
             );
         }
+        let options = estimator_options(kind, vec![("forgetting", number(forgetting))])
+            .map_err(anyhow::Error::msg)?;
         let open = || open_log_with_notes(&path, None, &mapping).map(|(r, _)| vec![r]);
         let (model, selection) = model_from_args(
             model.as_deref(),
@@ -239,7 +296,7 @@ fn replay_file<'py>(
         let opts = ReplayOptions {
             estimator: kind,
             model,
-            forgetting,
+            forgetting: options.forgetting,
             derivatives,
             diff_window,
             instrument_delay: None,
@@ -319,14 +376,14 @@ fn default_model(first: &AirDataSample, uses_measured: bool) -> PyResult<ModelSp
 
 /// Replays samples given as arrays (one float64 array per key of `sample_keys()`).
 #[pyfunction]
-#[pyo3(name = "replay_arrays", signature = (arrays, estimator="rls", model=None, constants=None, forgetting=1.0, sample_interval_s=None))]
+#[pyo3(name = "replay_arrays", signature = (arrays, estimator="rls", model=None, constants=None, forgetting=None, sample_interval_s=None))]
 fn replay_arrays_py<'py>(
     py: Python<'py>,
     arrays: &Bound<'py, PyDict>,
     estimator: &str,
     model: Option<&str>,
     constants: Option<&Bound<'py, PyDict>>,
-    forgetting: f64,
+    forgetting: Option<f64>,
     sample_interval_s: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let kind = estimator_kind(estimator)?;
@@ -382,7 +439,8 @@ fn replay_arrays_py<'py>(
             missing.join("; ")
         )));
     }
-    let opts = EstimatorOptions { forgetting, sample_interval_s, ..EstimatorOptions::default() };
+    let options = estimator_options(kind, vec![("forgetting", number(forgetting))]).map_err(err)?;
+    let opts = EstimatorOptions { sample_interval_s, ..options };
     drop(slices);
     let first = *first;
     let (spec_structure, spec_priors) = (spec.structure, spec.priors);

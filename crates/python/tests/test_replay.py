@@ -169,6 +169,42 @@ def test_smpe_finite_time_recovers_known_derivatives_with_sigma_and_takes_its_op
         aeroident.Estimator("smpe-finite-time", reaching_rate_per_s=float("nan"))
 
 
+def test_estimator_options_are_checked_by_the_registry():
+    # An option the kind does not take is refused naming the kind and the options it takes (the
+    # EKF has no forgetting factor: it was silently ignored), from the estimator objects and the
+    # replay of arrays alike, as the CLI and a scenario refuse it.
+    with pytest.raises(aeroident.AeroidentError, match=r"estimator `ekf`: unknown keyword argument `forgetting` \(it takes `parameter_walk_per_sqrt_s`\)"):
+        aeroident.Estimator("ekf", forgetting=0.9)
+    with pytest.raises(aeroident.AeroidentError, match=r"estimator `ekf`: unknown keyword argument `forgetting`"):
+        aeroident.Ekf(model="longitudinal", forgetting=0.9)
+    with pytest.raises(aeroident.AeroidentError, match=r"estimator `rls`: unknown keyword argument `ftr_grid_hz` \(it takes `forgetting`\)"):
+        aeroident.Rls(model="longitudinal", ftr_grid_hz=(0.1, 1.5, 0.04))
+    with pytest.raises(aeroident.AeroidentError, match=r"estimator `smpe`: unknown keyword argument `sliding_gain_per_s` \(it takes none\)"):
+        aeroident.Estimator("smpe", sliding_gain_per_s=5.0)
+    arrays, constants = synthetic(50)
+    with pytest.raises(aeroident.AeroidentError, match=r"estimator `gradient`: unknown keyword argument `forgetting`"):
+        aeroident.replay(arrays, estimator="gradient", model="longitudinal", constants=constants, forgetting=0.99)
+    # Left out (None), an option keeps the estimator's default.
+    assert aeroident.Estimator("ekf", forgetting=None).method == "ekf"
+
+
+def test_smpe_finite_time_takes_forgetting_and_it_reaches_the_estimator():
+    # smpe-finite-time forgets (its memory is the forgotten information): the factor is taken,
+    # by the estimator object and by the replay of a record (the CLI refused it there), and
+    # changes the estimates.
+    est = aeroident.Estimator("smpe-finite-time", model="longitudinal", forgetting=0.99)
+    assert est.method == "smpe-finite-time"
+    data = shared(RECORDS[0][0])
+    mapping = ROOT / RECORDS[0][1]
+    plain = aeroident.replay(data, mapping=mapping, estimator="smpe-finite-time")
+    forgot = aeroident.replay(data, mapping=mapping, estimator="smpe-finite-time", forgetting=0.99)
+    np.testing.assert_array_equal(plain["t_s"], forgot["t_s"])
+    same = np.array_equal(plain["estimates"], forgot["estimates"], equal_nan=True) and np.array_equal(plain["sigma"], forgot["sigma"], equal_nan=True)
+    assert not same, "forgetting=0.99 did not reach the estimator"
+    with pytest.raises(aeroident.AeroidentError, match=r"estimator `ekf`: unknown keyword argument `forgetting`"):
+        aeroident.replay(data, mapping=mapping, estimator="ekf", forgetting=0.9)
+
+
 def test_ftr_grid_reaches_the_estimator():
     # 0.1-1.7 Hz in 0.04 Hz is 41 frequencies and builds; 0.1-3.0 Hz is 73, over the 64 the
     # real-time FTR holds (ftr::MAX_FREQUENCIES), and the error names the field.

@@ -62,7 +62,7 @@ use aeroident_estimators::output_error::{InitialStates, StopFlag};
 use aeroident_io::{
     FlightDataReader, LogFormat, Mapping, ModelSpec, open_log_with_notes, open_log_with_report,
 };
-use aeroident_pipelines::estimators::EstimatorKind;
+use aeroident_pipelines::estimators::{EstimatorKind, OptionError, option_list, parse_options};
 use aeroident_pipelines::replay::batch::BatchMethod;
 use aeroident_pipelines::replay::{
     DerivativeSource, EstimateRows, Pacing, ReplayObserver, ReplayOptions, replay,
@@ -118,8 +118,9 @@ pub struct ReplayArgs {
     /// The estimator.
     #[arg(long, value_parser = super::named::<EstimatorKind>(), default_value = "rls")]
     pub estimator: EstimatorKind,
-    /// Forgetting factor of `rls`, `rls-iv` and `ftr`, in (0, 1]; 1 (default) = ordinary
-    /// least squares. Refused with the other estimators, which have none.
+    /// Forgetting factor of `rls`, `rls-iv`, `ftr` and `smpe-finite-time`, in (0, 1]; 1
+    /// (default) = ordinary least squares. Refused with the other estimators, which have none
+    /// (the estimator registry says which take it).
     #[arg(long)]
     pub forgetting: Option<f64>,
     /// Source of ṗ, q̇, ṙ and α̇: the record's channels where mapped (else the causal
@@ -380,20 +381,7 @@ fn check_combination(args: &ReplayArgs, live: bool, mavlink: bool) -> anyhow::Re
             args.estimator.name()
         );
     }
-    let forgets =
-        matches!(args.estimator, EstimatorKind::Rls | EstimatorKind::RlsIv | EstimatorKind::Ftr);
-    if args.forgetting.is_some() && !forgets {
-        anyhow::bail!(
-            "--forgetting is the forgetting factor of rls, rls-iv and ftr; --estimator {} has none (it would be ignored)",
-            args.estimator.name()
-        );
-    }
-    if args.instrument_delay.is_some() && args.estimator != EstimatorKind::RlsIv {
-        anyhow::bail!(
-            "--instrument-delay applies to instrumental variables (--estimator rls-iv), not to --estimator {}",
-            args.estimator.name()
-        );
-    }
+    check_estimator_options(args)?;
     if args.band_hz.is_some() && args.estimator != EstimatorKind::Fdoe {
         anyhow::bail!(
             "--band-hz is the band of frequency-domain output error (--estimator fdoe), not of --estimator {}",
@@ -410,6 +398,45 @@ fn check_combination(args: &ReplayArgs, live: bool, mavlink: bool) -> anyhow::Re
         return Ok(());
     }
     check_online_combination(args, live)
+}
+
+/// The flags that are estimator options, each with the registry's key
+/// ([`EstimatorKind::options`]).
+const ESTIMATOR_OPTION_FLAGS: [(&str, &str); 2] =
+    [("forgetting", "--forgetting"), ("instrument_delay", "--instrument-delay")];
+
+/// The flag of the registry's option `key`, as typed.
+fn option_flag(key: &str) -> &str {
+    ESTIMATOR_OPTION_FLAGS.iter().find(|f| f.0 == key).map_or(key, |f| f.1)
+}
+
+/// The estimator-option flags given (`--forgetting`, `--instrument-delay`) parsed by the
+/// registry for `--estimator` ([`parse_options`]), which knows which kind takes which: one the
+/// kind does not take is refused (it would be ignored), naming the flag, the kind and the
+/// options it takes. The values' ranges are checked with the replay's other numbers, naming the
+/// value exactly as typed.
+fn check_estimator_options(args: &ReplayArgs) -> anyhow::Result<()> {
+    let mut pairs = Vec::new();
+    if let Some(f) = args.forgetting {
+        pairs.push(("forgetting", toml::Value::Float(f)));
+    }
+    if let Some(d) = args.instrument_delay {
+        // A delay beyond an i64 is out of range all the same; the range check names it.
+        pairs
+            .push(("instrument_delay", toml::Value::Integer(i64::try_from(d).unwrap_or(i64::MAX))));
+    }
+    match parse_options(args.estimator, pairs) {
+        Ok(_) => Ok(()),
+        Err(OptionError::Unknown { kind, key }) => anyhow::bail!(
+            "{} is not an option of --estimator {}, which takes {} (it would be ignored)",
+            option_flag(&key),
+            kind.name(),
+            option_list(kind)
+        ),
+        Err(OptionError::Invalid { key, reason, .. }) => {
+            anyhow::bail!("option `{}`: {reason}", option_flag(&key))
+        }
+    }
 }
 
 /// [`check_combination`] for the real-time estimators: the batch fits' options refused.

@@ -636,7 +636,10 @@ pub fn replay<R: Read>(
     let make = |model: &ModelSpec| {
         let o = EstimatorOptions {
             forgetting: opts.forgetting,
-            instrument_delay: Some(crate::estimators::instrument_delay(opts)),
+            instrument_delay: Some(crate::estimators::instrument_delay(
+                opts.instrument_delay,
+                opts.diff_window,
+            )),
             sample_interval_s: mapping.nominal_dt_s,
             ..EstimatorOptions::default()
         };

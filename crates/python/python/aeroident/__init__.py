@@ -93,10 +93,15 @@ def read(path: PathLike, mapping: PathLike) -> dict[str, Any]:
 class Estimator(_Estimator):
     """An online estimator over one model structure.
 
-    ``Estimator(kind, model="longitudinal", constants=None, forgetting=1.0,
-    sample_interval_s=None, parameter_walk_per_sqrt_s=0.0, ftr_grid_hz=None)`` with ``kind`` one of ``rls, rls-iv,
+    ``Estimator(kind, model="longitudinal", constants=None, forgetting=None,
+    sample_interval_s=None, parameter_walk_per_sqrt_s=None, ftr_grid_hz=None, sliding_gain_per_s=None,
+    reaching_rate_per_s=None)`` with ``kind`` one of ``rls, rls-iv,
     ftr, ekf, smpe, smpe-corrected, smpe-finite-time, gradient`` (the CLI's ``--estimator``) and ``model`` a preset
     (``longitudinal``, ``lateral``, ``six-axis``) or a model file (TOML, ``models/``).
+    The estimator options (``forgetting`` … ``reaching_rate_per_s``) left ``None`` keep the
+    estimator's defaults (no forgetting, no parameter walk); one the kind does not take (a
+    forgetting factor for ``ekf``) raises :class:`AeroidentError` naming the kind and the options
+    it takes, as the CLI and a scenario refuse it.
     ``constants``: the aircraft constants (keys as in :func:`sample_keys`) used for every sample
     that does not carry its own. ``ftr_grid_hz``: FTR's frequency grid ``(f_min, f_max, step)``
     in Hz (default Morelli's 0.1-1.5 Hz in 0.04 Hz); it must span the excitation. FTR's
@@ -145,7 +150,7 @@ def replay(
     estimator: str = "rls",
     model: Optional[PathLike] = None,
     *,
-    forgetting: float = 1.0,
+    forgetting: Optional[float] = None,
     derivatives: str = "auto",
     diff_window: int = 5,
     constants: Optional[Mapping[str, float]] = None,

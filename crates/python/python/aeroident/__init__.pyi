@@ -41,9 +41,9 @@ class EstimatorBase:
         kind: str,
         model: str = "longitudinal",
         constants: Optional[Constants] = None,
-        forgetting: float = 1.0,
+        forgetting: Optional[float] = None,
         sample_interval_s: Optional[float] = None,
-        parameter_walk_per_sqrt_s: float = 0.0,
+        parameter_walk_per_sqrt_s: Optional[float] = None,
         ftr_grid_hz: Optional[tuple[float, float, float]] = None,
         sliding_gain_per_s: Optional[float] = None,
         reaching_rate_per_s: Optional[float] = None,
@@ -66,16 +66,16 @@ class EstimatorBase:
 class Estimator(EstimatorBase): ...
 
 class Rls(Estimator):
-    def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, forgetting: float = 1.0, sample_interval_s: Optional[float] = None) -> Rls: ...
+    def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, forgetting: Optional[float] = None, sample_interval_s: Optional[float] = None) -> Rls: ...
 
 class RlsIv(Estimator):
-    def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, forgetting: float = 1.0, sample_interval_s: Optional[float] = None) -> RlsIv: ...
+    def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, forgetting: Optional[float] = None, sample_interval_s: Optional[float] = None) -> RlsIv: ...
 
 class Ftr(Estimator):
-    def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, forgetting: float = 1.0, sample_interval_s: Optional[float] = None, ftr_grid_hz: Optional[tuple[float, float, float]] = None) -> Ftr: ...
+    def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, forgetting: Optional[float] = None, sample_interval_s: Optional[float] = None, ftr_grid_hz: Optional[tuple[float, float, float]] = None) -> Ftr: ...
 
 class Ekf(Estimator):
-    def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, sample_interval_s: Optional[float] = None, parameter_walk_per_sqrt_s: float = 0.0) -> Ekf: ...
+    def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, sample_interval_s: Optional[float] = None, parameter_walk_per_sqrt_s: Optional[float] = None) -> Ekf: ...
 
 class Smpe(Estimator):
     def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, sample_interval_s: Optional[float] = None) -> Smpe: ...
@@ -84,7 +84,7 @@ class SmpeCorrected(Estimator):
     def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, sample_interval_s: Optional[float] = None) -> SmpeCorrected: ...
 
 class SmpeFiniteTime(Estimator):
-    def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, forgetting: float = 1.0, sample_interval_s: Optional[float] = None, sliding_gain_per_s: Optional[float] = None, reaching_rate_per_s: Optional[float] = None) -> SmpeFiniteTime: ...
+    def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, forgetting: Optional[float] = None, sample_interval_s: Optional[float] = None, sliding_gain_per_s: Optional[float] = None, reaching_rate_per_s: Optional[float] = None) -> SmpeFiniteTime: ...
 
 class Gradient(Estimator):
     def __new__(cls, model: PathLike = "longitudinal", constants: Optional[Constants] = None, *, sample_interval_s: Optional[float] = None) -> Gradient: ...
@@ -97,7 +97,7 @@ def replay(
     estimator: EstimatorName = "rls",
     model: Optional[PathLike] = None,
     *,
-    forgetting: float = 1.0,
+    forgetting: Optional[float] = None,
     derivatives: Literal["auto", "differentiate"] = "auto",
     diff_window: int = 5,
     constants: Optional[Constants] = None,

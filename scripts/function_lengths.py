@@ -79,7 +79,7 @@ def limit_of(crate: Path, f: Path) -> int:
 def main():
     args = sys.argv[1:]
     report = "--report" in args
-    crates = [Path(a) for a in args if a != "--report"] or sorted((ROOT / "crates").iterdir())
+    crates = [Path(a).resolve() for a in args if a != "--report"] or sorted((ROOT / "crates").iterdir())
     rows = []
     for c in crates:
         for f in sorted((c / "src").rglob("*.rs")):

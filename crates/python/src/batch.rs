@@ -8,13 +8,11 @@ use std::path::Path;
 
 use aeroident_estimators::flight_model::N_STATES;
 use aeroident_estimators::output_error::InitialStates;
-use aeroident_io::{Mapping, open_log_with_notes, open_log_with_report};
+use aeroident_io::{Mapping, open_log_with_report};
 use aeroident_pipelines::estimators::EstimatorKind;
-use aeroident_pipelines::replay::batch::{
-    BatchMethod, BatchOutcome, FitOptions, parse_process_noise_states, validate_on,
-};
-use aeroident_pipelines::replay::fit::fit_records;
-use aeroident_pipelines::structure::{AutoSelection, model_from_args};
+use aeroident_pipelines::job::fit::{FitJob, FitJobOutcome};
+use aeroident_pipelines::job::{CompatSource, InPlace, JobLog, Ran, Records};
+use aeroident_pipelines::replay::batch::{BatchMethod, FitOptions, parse_process_noise_states};
 use numpy::IntoPyArray;
 use numpy::ndarray::Array2;
 use pyo3::prelude::*;
@@ -52,6 +50,24 @@ fn batch_method(kind: EstimatorKind, band_hz: Option<(f64, f64)>) -> PyResult<Ba
         EstimatorKind::Fem => Ok(BatchMethod::Fem),
         _ => Ok(BatchMethod::Oe),
     }
+}
+
+/// The batch kind `estimator` names; a real-time kind is refused with where it belongs.
+fn batch_kind(estimator: &str) -> PyResult<EstimatorKind> {
+    let kind = estimator_kind(estimator)?;
+    if !kind.is_batch() {
+        return Err(err(format!(
+            "fit: estimator `{}` is a real-time method: use `aeroident.replay(..., estimator=\"{}\")` (fit takes `oe` or `fem`)",
+            kind.name(),
+            kind.name()
+        )));
+    }
+    Ok(kind)
+}
+
+/// `process_noise="V,alpha,…"` as the filter-error method's states (`--process-noise`).
+fn process_noise_states(states: Option<&str>) -> PyResult<Option<[bool; N_STATES]>> {
+    states.map(parse_process_noise_states).transpose().map_err(|e| err(format!("fit: {e}")))
 }
 
 /// The correlation matrix (row-major `n × n`) of a covariance whose entries may be absent
@@ -94,10 +110,7 @@ fn fit_file<'py>(
     band_hz: Option<(f64, f64)>,
     knots_deg: Option<Vec<f64>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let (select, candidates) = (select.to_owned(), candidates.unwrap_or_default());
-    let knots_deg = knots_deg.unwrap_or_default();
     let windows = crate::record::time_windows("fit", windows)?;
-    let also = also.unwrap_or_default();
     let compat = compat
         .map(|c| aeroident_pipelines::compat::Corrections::from_json(Path::new(c)))
         .transpose()
@@ -105,70 +118,70 @@ fn fit_file<'py>(
     if max_iterations == Some(0) {
         return Err(err("fit: max_iterations must be a positive integer, got 0".to_string()));
     }
-    let kind = estimator_kind(estimator)?;
-    if !kind.is_batch() {
-        return Err(err(format!(
-            "fit: estimator `{}` is a real-time method: use `aeroident.replay(..., estimator=\"{}\")` (fit takes `oe` or `fem`)",
-            kind.name(),
-            kind.name()
-        )));
-    }
-    let method = batch_method(kind, band_hz)?;
-    let setting = self::initial_states(initial_states)?;
-    let process_noise = process_noise
-        .map(parse_process_noise_states)
-        .transpose()
-        .map_err(|e| err(format!("fit: {e}")))?;
+    let kind = batch_kind(estimator)?;
+    let options = FitOptions {
+        method: batch_method(kind, band_hz)?,
+        initial_states: self::initial_states(initial_states)?,
+        bootstrap_refits: bootstrap,
+        max_iterations,
+        process_noise: process_noise_states(process_noise)?,
+        windows,
+        ..FitOptions::default()
+    };
+    let diff_window = aeroident_pipelines::structure::DIFF_WINDOW;
+    let model = crate::record::model_choice(model, select, candidates, knots_deg, diff_window);
     let (path, mapping) = (path.to_owned(), mapping.to_owned());
-    let (model, validate_with) = (model.map(str::to_owned), validate_with.map(str::to_owned));
-    let run = move || -> anyhow::Result<(BatchOutcome, Vec<String>, Option<AutoSelection>)> {
+    let also = also.unwrap_or_default();
+    let validate_on = validate_with.map(str::to_owned);
+    let run = move || -> anyhow::Result<(FitJobOutcome, Vec<String>)> {
         let mapping = Mapping::from_path(Path::new(&mapping))?;
-        let open = || {
-            let files = std::iter::once(&path).chain(&also);
-            files.map(|f| open_log_with_notes(f, None, &mapping).map(|(r, _)| r)).collect()
-        };
-        let (model, selection) = model_from_args(
-            model.as_deref(),
-            &select,
-            &candidates,
-            &knots_deg,
-            open,
-            &mapping,
-            compat.as_ref(),
-            &windows,
-            aeroident_pipelines::structure::DIFF_WINDOW,
-        )?;
-        let (mut readers, mut notes, mut reports) = (Vec::new(), Vec::new(), Vec::new());
-        for file in std::iter::once(&path).chain(&also) {
-            let (reader, report) = open_log_with_report(file, None, &mapping)?;
-            readers.push(reader);
-            notes.extend(report.notes());
-            reports.push(report);
-        }
-        let options = FitOptions {
-            method,
-            initial_states: setting,
-            bootstrap_refits: bootstrap,
-            max_iterations,
-            process_noise,
-            compat,
-            windows,
-            ..FitOptions::default()
-        };
-        let mut outcome = fit_records(readers, &mapping, model, options)?;
-        // What each reader left out, as the CLI's summary.json lists it.
-        outcome.summary.reader = reports;
-        if let Some(v) = &validate_with {
-            let (reader, more) = open_log_with_notes(v, None, &mapping)?;
-            notes.extend(more);
-            outcome.summary.validation_on = Some(validate_on(reader, &outcome)?);
-        }
-        Ok((outcome, notes, selection))
+        let records = Records { data: path, and: also, format: None, mapping, live: false };
+        let compat = compat.map(CompatSource::Given);
+        fit_job(&FitJob { records, model, compat, options, validate_on })
     };
     let signals = crate::Signals::new();
     let r = py.detach(run);
     signals.finish(py)?;
-    let (outcome, notes, selection) = r.map_err(to_py)?;
+    let (done, notes) = r.map_err(to_py)?;
+    fit_dict(py, done, notes)
+}
+
+/// The reader notes a job's steps give (its second record's), collected for Python.
+#[derive(Default)]
+struct Notes(Vec<String>);
+
+impl JobLog for Notes {
+    fn reader_note(&mut self, text: &str) {
+        self.0.push(text.to_string());
+    }
+}
+
+/// Runs `job` in place: its records opened (their readers' notes collected), fitted, and
+/// validated on the second record when asked.
+fn fit_job(job: &FitJob) -> anyhow::Result<(FitJobOutcome, Vec<String>)> {
+    let Ran::Done(prepared) = job.prepare(&mut InPlace, &mut ())? else {
+        anyhow::bail!("internal: a step run in place was abandoned");
+    };
+    let (mut readers, mut notes, mut reports) = (Vec::new(), Notes::default(), Vec::new());
+    for file in job.records.files() {
+        let (reader, report) = open_log_with_report(file, None, &job.records.mapping)?;
+        readers.push(reader);
+        notes.0.extend(report.notes());
+        reports.push(report);
+    }
+    let (outcome, selection) = job.fit(prepared, readers, reports)?;
+    let done = job.finish(outcome, selection, &mut InPlace, &mut notes, String::new)?;
+    Ok((done, notes.0))
+}
+
+/// The result dict of `fit` (module doc of the Python package).
+fn fit_dict(
+    py: Python<'_>,
+    done: FitJobOutcome,
+    notes: Vec<String>,
+) -> PyResult<Bound<'_, PyDict>> {
+    let summary = done.document().map_err(|e| err(e.to_string()))?;
+    let (outcome, selection) = (done.outcome, done.selection);
     let r = &outcome.result;
     let (n, np, ny) = (r.n(), r.n_params, r.outputs.len());
     let s = &outcome.summary;
@@ -204,8 +217,6 @@ fn fit_file<'py>(
     d.set_item("traces", traces)?;
     d.set_item("model", outcome.model.name.clone())?;
     d.set_item("notes", notes)?;
-    let summary = serde_json::to_value(s).map_err(|e| err(e.to_string()))?;
-    let summary = crate::record::with_selection(summary, selection.as_ref())?;
     d.set_item("summary", convert::json_to_py(py, &summary)?)?;
     d.set_item("selected_model", selection.map(|s| s.model.to_toml()))?;
     Ok(d)

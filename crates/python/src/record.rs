@@ -1,15 +1,16 @@
 //! `read` (a record as numpy arrays) and `replay` (a record or arrays through an estimator, all
 //! samples in Rust, the estimates as a time × parameter matrix).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use aeroident_estimators::AirDataSample;
 use aeroident_io::{Mapping, ModelSpec, RecordEvent, open_log_with_notes, open_log_with_report};
 use aeroident_pipelines::estimators::{EstimatorKind, EstimatorOptions, build};
+use aeroident_pipelines::job::replay::ReplayJob;
+use aeroident_pipelines::job::{CompatSource, InPlace, ModelChoice, Ran, Records};
 use aeroident_pipelines::record::unsupported;
 use aeroident_pipelines::replay::arrays::{EstimateArrays, replay_arrays_observed, replay_samples};
-use aeroident_pipelines::replay::{DerivativeSource, Pacing, ReplayObserver, ReplayOptions};
-use aeroident_pipelines::structure::{AutoSelection, model_from_args};
+use aeroident_pipelines::replay::{DerivativeSource, ReplayObserver, ReplayOptions};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyReadonlyArray1};
 use pyo3::prelude::*;
@@ -238,6 +239,24 @@ fn derivative_source(s: &str) -> PyResult<DerivativeSource> {
     })
 }
 
+/// The model choice of `replay`'s and `fit`'s keywords (`model`, `select`, `candidates`,
+/// `knots_deg`), the selection differentiating with `diff_window`.
+pub fn model_choice(
+    model: Option<&str>,
+    select: &str,
+    candidates: Option<Vec<String>>,
+    knots_deg: Option<Vec<f64>>,
+    diff_window: usize,
+) -> ModelChoice {
+    ModelChoice {
+        model: model.map(str::to_owned),
+        select: select.to_owned(),
+        candidates: candidates.unwrap_or_default(),
+        knots_deg: knots_deg.unwrap_or_default(),
+        diff_window,
+    }
+}
+
 /// Replays a record file exactly as `aeroident replay DATA --map MAPPING` (module doc of the
 /// Python package).
 #[pyfunction]
@@ -259,20 +278,14 @@ fn replay_file<'py>(
     candidates: Option<Vec<String>>,
     knots_deg: Option<Vec<f64>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let (select, candidates) = (select.to_owned(), candidates.unwrap_or_default());
-    let knots_deg = knots_deg.unwrap_or_default();
     let kind = estimator_kind(estimator)?;
     let windows = time_windows("replay", windows)?;
-    let compat = compat.map(str::to_owned);
     let derivatives = derivative_source(derivatives)?;
-    let (path, mapping, model) = (path.to_owned(), mapping.to_owned(), model.map(str::to_owned));
+    let choice = model_choice(model, select, candidates, knots_deg, diff_window);
+    let (path, mapping, compat) = (path.to_owned(), mapping.to_owned(), compat.map(PathBuf::from));
     let signals = Signals::new();
     let run = || -> anyhow::Result<_> {
         let mapping = Mapping::from_path(Path::new(&mapping))?;
-        let compat = compat
-            .as_deref()
-            .map(|c| aeroident_pipelines::compat::Corrections::from_json(Path::new(c)))
-            .transpose()?;
         if kind.is_batch() {
             anyhow::bail!(
                 "estimator `{0}` is a batch method with no per-sample estimates: use `aeroident.fit(path, mapping, estimator=\"{0}\")` (CLI: `aeroident replay --estimator {0}`)",
@@ -281,46 +294,19 @@ fn replay_file<'py>(
         }
         let options = estimator_options(kind, vec![("forgetting", number(forgetting))])
             .map_err(anyhow::Error::msg)?;
-        let open = || open_log_with_notes(&path, None, &mapping).map(|(r, _)| vec![r]);
-        let (model, selection) = model_from_args(
-            model.as_deref(),
-            &select,
-            &candidates,
-            &knots_deg,
-            open,
-            &mapping,
-            compat.as_ref(),
-            &windows,
-            diff_window,
-        )?;
-        let opts = ReplayOptions {
+        let options = ReplayOptions {
             estimator: kind,
-            model,
             forgetting: options.forgetting,
             derivatives,
             diff_window,
-            instrument_delay: None,
-            pacing: Pacing::Unpaced,
-            compat,
             windows,
             ..ReplayOptions::default()
         };
-        let (reader, report) = open_log_with_report(&path, None, &mapping)?;
-        let notes = report.notes();
-        let (mut outcome, arrays) =
-            replay_arrays_observed(reader, &mapping, &opts, &mut Interruptible(&signals))?;
-        outcome.reader.push(report);
-        if let Some(e) = outcome.diverged_error(kind.name()) {
-            anyhow::bail!(e);
-        }
-        if cross_check {
-            let (reader, _) = open_log_with_notes(&path, None, &mapping)?;
-            aeroident_pipelines::replay::cross_check_record(&mut outcome, reader, &mapping, &opts);
-        }
-        let summary =
-            with_selection(serde_json::to_value(outcome.document(None))?, selection.as_ref())?;
-        let toml = selection.map(|s| s.model.to_toml());
-        Ok((outcome.model.name, summary, arrays, notes, toml))
+        let records = Records { data: path, and: Vec::new(), format: None, mapping, live: false };
+        let compat = compat.map(CompatSource::File);
+        let job =
+            ReplayJob { records, model: choice, compat, options, cross_check, validate_on: None };
+        replay_job(&job, &signals)
     };
     let r = py.detach(run);
     signals.finish(py)?;
@@ -333,19 +319,28 @@ fn replay_file<'py>(
     Ok(d)
 }
 
-/// A summary as JSON with `--model auto`'s `structure_selection`, as the CLI's `summary.json`.
-///
-/// # Errors
-/// A report that does not serialise (a bug).
-pub fn with_selection(
-    mut doc: serde_json::Value,
-    selection: Option<&AutoSelection>,
-) -> PyResult<serde_json::Value> {
-    if let (Some(s), Some(map)) = (selection, doc.as_object_mut()) {
-        let report = serde_json::to_value(s.report()).map_err(|e| err(e.to_string()))?;
-        map.insert("structure_selection".into(), report);
+/// What [`replay_job`] gives Python: the model's name, `summary.json`, the estimate arrays,
+/// the reader's notes and the selected model's file text (`--model auto`).
+type ReplayResult = (String, serde_json::Value, EstimateArrays, Vec<String>, Option<String>);
+
+/// Runs `job` in place, its estimates collected as arrays and its replay stopped by a
+/// signal Python received ([`Interruptible`]); a diverged estimator is an error.
+fn replay_job(job: &ReplayJob, signals: &Signals) -> anyhow::Result<ReplayResult> {
+    let Ran::Done(prepared) = job.prepare(&mut InPlace, &mut ())? else {
+        anyhow::bail!("internal: a step run in place was abandoned");
+    };
+    let mapping = &job.records.mapping;
+    let (reader, report) = open_log_with_report(&job.records.data, None, mapping)?;
+    let notes = report.notes();
+    let (mut outcome, arrays) =
+        replay_arrays_observed(reader, mapping, &prepared.options, &mut Interruptible(signals))?;
+    outcome.reader.push(report);
+    if let Some(e) = outcome.diverged_error(job.options.estimator.name()) {
+        anyhow::bail!(e);
     }
-    Ok(doc)
+    let done = job.finish(prepared, outcome, &mut InPlace, &mut (), String::new)?;
+    let toml = done.selection.as_ref().map(|s| s.model.to_toml());
+    Ok((done.outcome.model.name.clone(), done.document()?, arrays, notes, toml))
 }
 
 /// Column arrays (read-only float64 views) as a per-row [`Source`].
@@ -374,20 +369,16 @@ fn default_model(first: &AirDataSample, uses_measured: bool) -> PyResult<ModelSp
     })
 }
 
-/// Replays samples given as arrays (one float64 array per key of `sample_keys()`).
-#[pyfunction]
-#[pyo3(name = "replay_arrays", signature = (arrays, estimator="rls", model=None, constants=None, forgetting=None, sample_interval_s=None))]
-fn replay_arrays_py<'py>(
-    py: Python<'py>,
+/// The samples of `arrays` (one float64 array per key of `sample_keys()`, other keys ignored)
+/// with the aircraft constants `consts`, row by row.
+///
+/// # Errors
+/// A required channel missing, an array that is not a contiguous 1-D float64 array, arrays of
+/// different lengths, or a row the sample refuses (naming the row).
+fn samples_of_arrays<'py>(
     arrays: &Bound<'py, PyDict>,
-    estimator: &str,
-    model: Option<&str>,
-    constants: Option<&Bound<'py, PyDict>>,
-    forgetting: Option<f64>,
-    sample_interval_s: Option<f64>,
-) -> PyResult<Bound<'py, PyDict>> {
-    let kind = estimator_kind(estimator)?;
-    let consts = convert::constants_from(constants)?;
+    consts: &aeroident_estimators::AircraftConstants,
+) -> PyResult<Vec<AirDataSample>> {
     let keys = convert::all_keys();
     let mut views: Vec<(String, PyReadonlyArray1<'py, f64>)> = Vec::new();
     for (k, v) in arrays.iter() {
@@ -400,10 +391,8 @@ fn replay_arrays_py<'py>(
             .map_err(|_| err(format!("arrays[`{k}`]: expected a 1-D float64 numpy array")))?;
         views.push((k, a));
     }
-    for r in REQUIRED {
-        if !views.iter().any(|v| v.0 == r) {
-            return Err(err(format!("arrays: required channel `{r}` is missing")));
-        }
+    if let Some(r) = REQUIRED.iter().find(|r| !views.iter().any(|v| v.0 == **r)) {
+        return Err(err(format!("arrays: required channel `{r}` is missing")));
     }
     let slices: Vec<(String, &[f64])> = views
         .iter()
@@ -419,14 +408,21 @@ fn replay_arrays_py<'py>(
             slices[0].0
         )));
     }
-    let mut samples = Vec::with_capacity(n);
-    for k in 0..n {
-        let src = RowSource { cols: &slices, k };
-        samples.push(convert::sample_from(&src, &consts, &|| format!("arrays row {k}"))?);
-    }
-    let Some(first) = samples.first() else {
-        return Err(err("arrays: no samples"));
-    };
+    (0..n)
+        .map(|k| {
+            let src = RowSource { cols: &slices, k };
+            convert::sample_from(&src, consts, &|| format!("arrays row {k}"))
+        })
+        .collect()
+}
+
+/// The model of `replay(arrays, model=…)`: the one named, else the richest preset the first
+/// sample supports; refused when the arrays cannot form it.
+fn arrays_model(
+    model: Option<&str>,
+    kind: EstimatorKind,
+    first: &AirDataSample,
+) -> PyResult<ModelSpec> {
     let spec = match model {
         Some(m) => model_spec(m)?,
         None => default_model(first, kind.uses_measured_coefficients())?,
@@ -439,9 +435,31 @@ fn replay_arrays_py<'py>(
             missing.join("; ")
         )));
     }
+    Ok(spec)
+}
+
+/// Replays samples given as arrays (one float64 array per key of `sample_keys()`).
+#[pyfunction]
+#[pyo3(name = "replay_arrays", signature = (arrays, estimator="rls", model=None, constants=None, forgetting=None, sample_interval_s=None))]
+fn replay_arrays_py<'py>(
+    py: Python<'py>,
+    arrays: &Bound<'py, PyDict>,
+    estimator: &str,
+    model: Option<&str>,
+    constants: Option<&Bound<'py, PyDict>>,
+    forgetting: Option<f64>,
+    sample_interval_s: Option<f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let kind = estimator_kind(estimator)?;
+    let consts = convert::constants_from(constants)?;
+    let samples = samples_of_arrays(arrays, &consts)?;
+    let n = samples.len();
+    let Some(first) = samples.first() else {
+        return Err(err("arrays: no samples"));
+    };
+    let spec = arrays_model(model, kind, first)?;
     let options = estimator_options(kind, vec![("forgetting", number(forgetting))]).map_err(err)?;
     let opts = EstimatorOptions { sample_interval_s, ..options };
-    drop(slices);
     let first = *first;
     let (spec_structure, spec_priors) = (spec.structure, spec.priors);
     let signals = Signals::new();

@@ -49,6 +49,8 @@ pub struct ReplayJobOutcome {
     pub validation_on: Option<ValidationReport>,
     /// The structure selection of `--model auto`.
     pub selection: Option<AutoSelection>,
+    /// The options the estimator ran with (model and corrections set).
+    pub options: ReplayOptions,
 }
 
 impl ReplayJobOutcome {
@@ -147,7 +149,8 @@ impl ReplayJob {
             }
             _ => None,
         };
-        Ok(ReplayJobOutcome { outcome, validation_on, selection: prepared.selection })
+        let (selection, options) = (prepared.selection, prepared.options);
+        Ok(ReplayJobOutcome { outcome, validation_on, selection, options })
     }
 
     /// `--cross-check`: the record fitted by output error with the same model and set beside

@@ -286,6 +286,9 @@ pub enum ReplayError {
     /// method in the online replay): the message says what to do instead.
     #[error("{0}")]
     Combination(String),
+    /// A face could not run a step (a thread that did not start, or ended without a result).
+    #[error("{0}")]
+    Step(String),
     /// The replay was stopped on request before any sample was estimated.
     #[error("{file}: interrupted before any sample was estimated ({samples_read} rows read)")]
     Interrupted {

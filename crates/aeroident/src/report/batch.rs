@@ -264,13 +264,7 @@ pub fn write(
         settings,
         results,
         figures,
-        warnings: outcome
-            .summary
-            .warnings
-            .texts()
-            .map(str::to_string)
-            .chain(reader_warnings)
-            .collect(),
+        warnings: super::warning_texts(&outcome.summary.warnings, reader_warnings),
         ..Default::default()
     }
     .write(od)?;

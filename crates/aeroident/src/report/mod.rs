@@ -293,6 +293,14 @@ impl Report {
     }
 }
 
+/// A report's warnings: the summary's texts, then what the log readers said.
+pub fn warning_texts(
+    warnings: &aeroident_io::warning::Warnings,
+    reader_warnings: Vec<String>,
+) -> Vec<String> {
+    warnings.texts().map(str::to_string).chain(reader_warnings).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -288,13 +288,7 @@ pub fn write(
         settings,
         results: vec![res.clone()],
         figures,
-        warnings: outcome
-            .summary
-            .warnings
-            .texts()
-            .map(str::to_string)
-            .chain(reader_warnings)
-            .collect(),
+        warnings: super::warning_texts(&outcome.summary.warnings, reader_warnings),
         links: Vec::new(),
     };
     report.write(od)?;

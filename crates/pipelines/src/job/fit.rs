@@ -6,9 +6,7 @@
 //! stop it; the job sequences `compat → model → fit → validate on a second record` and forms
 //! `summary.json` ([`FitJobOutcome::document`]).
 
-use super::{
-    CompatSource, Guard, JobLog, ModelChoice, Ran, Records, Step, choose_model, corrections,
-};
+use super::{CompatSource, Guard, JobLog, ModelChoice, Ran, Records, Step, prepare_stages};
 use crate::replay::batch::{BatchOutcome, FitOptions};
 use crate::replay::{ReplayError, STATUS_INTERRUPTED};
 use crate::structure::AutoSelection;
@@ -73,17 +71,13 @@ impl FitJob {
         guard: &mut impl Guard,
         log: &mut dyn JobLog,
     ) -> Result<Ran<Prepared>, ReplayError> {
-        let compat = match corrections(&self.records, self.compat.as_ref(), guard, log)? {
-            Ran::Done(c) => c,
-            Ran::Stopped(step) => return Ok(Ran::Stopped(step)),
-        };
-        let windows = &self.options.windows;
-        let chosen =
-            choose_model(&self.records, &self.model, compat.as_ref(), windows, guard, log)?;
-        let (model, selection) = match chosen {
-            Ran::Done(m) => m,
-            Ran::Stopped(step) => return Ok(Ran::Stopped(step)),
-        };
+        let (records, windows) = (&self.records, &self.options.windows);
+        let compat_source = self.compat.as_ref();
+        let (compat, (model, selection)) =
+            match prepare_stages(records, &self.model, compat_source, windows, guard, log)? {
+                Ran::Done(done) => done,
+                Ran::Stopped(step) => return Ok(Ran::Stopped(step)),
+            };
         let options = FitOptions { compat, ..self.options.clone() };
         Ok(Ran::Done(Prepared { model, options, selection }))
     }

@@ -291,6 +291,30 @@ pub fn choose_model(
     Ok(Ran::Done((model, selection)))
 }
 
+/// The stages before the estimator, shared by both jobs: the corrections `compat` names, then
+/// the model `choice` names (selected on the records with the corrections applied, over
+/// `windows`).
+///
+/// # Errors
+/// As [`corrections`] and [`choose_model`].
+pub fn prepare_stages(
+    records: &Records,
+    choice: &ModelChoice,
+    compat: Option<&CompatSource>,
+    windows: &[TimeWindow],
+    guard: &mut impl Guard,
+    log: &mut dyn JobLog,
+) -> Result<Ran<(Option<Corrections>, ChosenModel)>, ReplayError> {
+    let compat = match corrections(records, compat, guard, log)? {
+        Ran::Done(c) => c,
+        Ran::Stopped(step) => return Ok(Ran::Stopped(step)),
+    };
+    match choose_model(records, choice, compat.as_ref(), windows, guard, log)? {
+        Ran::Done(chosen) => Ok(Ran::Done((compat, chosen))),
+        Ran::Stopped(step) => Ok(Ran::Stopped(step)),
+    }
+}
+
 /// `summary.json`'s document: `summary` serialised, with `--model auto`'s structure selection
 /// under `structure_selection`.
 ///

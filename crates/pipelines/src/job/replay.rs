@@ -6,9 +6,7 @@
 //! `compat → model → estimate → cross-check → validate on a second record`, and forms
 //! `summary.json` ([`ReplayJobOutcome::document`]).
 
-use super::{
-    CompatSource, Guard, JobLog, ModelChoice, Ran, Records, Step, choose_model, corrections,
-};
+use super::{CompatSource, Guard, JobLog, ModelChoice, Ran, Records, Step, prepare_stages};
 use crate::replay::prediction::ValidationReport;
 use crate::replay::{ReplayError, ReplayOptions, ReplayOutcome, STATUS_INTERRUPTED};
 use crate::structure::AutoSelection;
@@ -104,17 +102,13 @@ impl ReplayJob {
         guard: &mut impl Guard,
         log: &mut dyn JobLog,
     ) -> Result<Ran<Prepared>, ReplayError> {
-        let compat = match corrections(&self.records, self.compat.as_ref(), guard, log)? {
-            Ran::Done(c) => c,
-            Ran::Stopped(step) => return Ok(Ran::Stopped(step)),
-        };
-        let windows = &self.options.windows;
-        let chosen =
-            choose_model(&self.records, &self.model, compat.as_ref(), windows, guard, log)?;
-        let (model, selection) = match chosen {
-            Ran::Done(m) => m,
-            Ran::Stopped(step) => return Ok(Ran::Stopped(step)),
-        };
+        let (records, windows) = (&self.records, &self.options.windows);
+        let compat_source = self.compat.as_ref();
+        let (compat, (model, selection)) =
+            match prepare_stages(records, &self.model, compat_source, windows, guard, log)? {
+                Ran::Done(done) => done,
+                Ran::Stopped(step) => return Ok(Ran::Stopped(step)),
+            };
         let options = ReplayOptions { model, compat, ..self.options.clone() };
         Ok(Ran::Done(Prepared { options, selection }))
     }

@@ -271,6 +271,49 @@ fn errors_forgetting_refused_by_ekf_taken_by_smpe_finite_time() {
     assert_ne!(forgetting, none, "--forgetting 0.99 did not reach the estimator");
 }
 
+/// Any estimator option reaches the registry by `--estimator-option KEY=VALUE`: one the kind
+/// does not take is refused naming the key, the kind and what it takes; a malformed one names
+/// the form; `rls-iv`'s instrument delay given that way reaches the estimator (the last
+/// estimates differ from the default delay's). The second half skips without `../shared`.
+#[test]
+fn errors_estimator_option_goes_through_the_registry() {
+    let opt = ["--estimator-option", "parameter_walk_per_sqrt_s=0.01"];
+    let (ok, err) = replay_good(&[&["--estimator", "rls"][..], &opt[..]].concat(), "rls-walk");
+    assert!(!ok, "{err}");
+    assert!(
+        err.contains("--estimator-option parameter_walk_per_sqrt_s is not an option of --estimator rls, which takes `forgetting`"),
+        "{err}"
+    );
+    let (ok, err) = replay_good(&["--estimator-option", "forgetting"], "no-equals");
+    assert!(!ok && err.contains("give KEY=VALUE"), "{err}");
+    let (ok, err) = replay_good(&["--estimator-option", "forgetting=\"x\""], "bad-type");
+    assert!(!ok && err.contains("`forgetting` must be a number"), "{err}");
+    let Some(data) = common::shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let last_estimates = |extra: &[&str], name: &str| {
+        let out = tmp(name);
+        let o = bin()
+            .args(["replay"])
+            .arg(&data)
+            .arg("--map")
+            .arg(workspace().join("mappings/hfb320.toml"))
+            .args(["--estimator", "rls-iv"])
+            .args(extra)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
+        let csv = std::fs::read_to_string(out.join("estimates.csv")).unwrap();
+        let _ = std::fs::remove_dir_all(&out);
+        csv.lines().last().unwrap().to_string()
+    };
+    let given = last_estimates(&["--estimator-option", "instrument_delay=12"], "iv-12");
+    let flag = last_estimates(&["--instrument-delay", "12"], "iv-flag-12");
+    let default = last_estimates(&[], "iv-default");
+    assert_eq!(given, flag, "the option and the flag are one setting");
+    assert_ne!(given, default, "instrument_delay=12 did not reach the estimator");
+}
+
 /// Live mode: the HFB-320 record on stdin gives one estimates line per sample on stdout.
 #[test]
 fn val_live_stdin_one_line_per_sample() {

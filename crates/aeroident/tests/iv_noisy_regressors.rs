@@ -183,7 +183,10 @@ fn errors_instrument_delay_within_the_differentiator_half_window() {
             model: Some(ModelSpec::from_arg("longitudinal").unwrap()),
             derivatives: aeroident_pipelines::replay::DerivativeSource::Differentiate,
             diff_window: 9,
-            instrument_delay,
+            estimator_options: aeroident_pipelines::estimators::EstimatorOptions {
+                instrument_delay,
+                ..Default::default()
+            },
             ..Default::default()
         };
         replay(reader, &mapping, &opts, &mut ())

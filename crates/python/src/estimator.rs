@@ -56,7 +56,7 @@ impl Estimator {
     // given": the given ones are parsed by the estimator registry, which refuses one the kind
     // does not take, and the others keep the estimator's defaults.
     #[new]
-    #[pyo3(signature = (kind, model="longitudinal", constants=None, forgetting=None, sample_interval_s=None, parameter_walk_per_sqrt_s=None, ftr_grid_hz=None, sliding_gain_per_s=None, reaching_rate_per_s=None))]
+    #[pyo3(signature = (kind, model="longitudinal", constants=None, forgetting=None, sample_interval_s=None, parameter_walk_per_sqrt_s=None, ftr_grid_hz=None, sliding_gain_per_s=None, reaching_rate_per_s=None, **options))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         kind: &str,
@@ -68,6 +68,7 @@ impl Estimator {
         ftr_grid_hz: Option<(f64, f64, f64)>,
         sliding_gain_per_s: Option<f64>,
         reaching_rate_per_s: Option<f64>,
+        options: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let k = estimator_kind(kind)?;
         let grid =
@@ -79,7 +80,7 @@ impl Estimator {
             ("sliding_gain_per_s", number(sliding_gain_per_s)),
             ("reaching_rate_per_s", number(reaching_rate_per_s)),
         ];
-        let options = estimator_options(k, given).map_err(err)?;
+        let options = estimator_options(k, given, options)?;
         let spec = model_spec(model)?;
         let constants = convert::constants_from(constants)?;
         let opts = EstimatorOptions { sample_interval_s, ..options };

@@ -82,28 +82,79 @@ fn keyword(key: &str) -> &str {
 pub fn estimator_options(
     kind: EstimatorKind,
     given: Vec<(&'static str, Option<toml::Value>)>,
-) -> Result<EstimatorOptions, String> {
+    more: Option<&Bound<'_, PyDict>>,
+) -> PyResult<EstimatorOptions> {
     use aeroident_pipelines::estimators::{OptionError, parse_options};
-    let pairs = given.into_iter().filter_map(|(key, v)| v.map(|v| (key, v)));
-    parse_options(kind, pairs).map_err(|e| match e {
-        OptionError::Unknown { kind, key } => {
-            let takes: Vec<String> = kind
-                .options()
-                .iter()
-                .filter(|o| OPTION_KEYWORDS.iter().any(|k| k.0 == **o))
-                .map(|o| format!("`{}`", keyword(o)))
-                .collect();
-            let takes = if takes.is_empty() { "none".to_string() } else { takes.join(", ") };
-            format!(
-                "estimator `{}`: unknown keyword argument `{}` (it takes {takes})",
-                kind.name(),
-                keyword(&key)
-            )
-        }
-        OptionError::Invalid { kind, key, reason } => {
-            format!("estimator `{}`: `{}` {reason}", kind.name(), keyword(&key))
-        }
+    let mut pairs: Vec<(String, toml::Value)> =
+        given.into_iter().filter_map(|(key, v)| v.map(|v| (key.to_string(), v))).collect();
+    pairs.extend(keyword_options(more)?);
+    let pairs = pairs.iter().map(|(k, v)| (k.as_str(), v.clone()));
+    parse_options(kind, pairs).map_err(|e| {
+        err(match e {
+            OptionError::Unknown { kind, key } => {
+                // `samples` is the closed-loop experiment's choice of feed, not an estimator's.
+                let takes: Vec<String> = kind
+                    .options()
+                    .iter()
+                    .filter(|o| **o != "samples")
+                    .map(|o| format!("`{}`", keyword(o)))
+                    .collect();
+                let takes = if takes.is_empty() { "none".to_string() } else { takes.join(", ") };
+                format!(
+                    "estimator `{}`: unknown keyword argument `{}` (it takes {takes})",
+                    kind.name(),
+                    keyword(&key)
+                )
+            }
+            OptionError::Invalid { kind, key, reason } => {
+                format!("estimator `{}`: `{}` {reason}", kind.name(), keyword(&key))
+            }
+        })
     })
+}
+
+/// The estimator options given as further keyword arguments (`**options`: any option the
+/// estimator registry knows, by its key, e.g. `instrument_delay=8`), as (registry key, value)
+/// pairs.
+///
+/// # Errors
+/// A value that is not a number, a string, a boolean or a list of them.
+fn keyword_options(more: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, toml::Value)>> {
+    let Some(more) = more else { return Ok(Vec::new()) };
+    let mut out = Vec::new();
+    for (k, v) in more.iter() {
+        let k: String = k.extract()?;
+        let key = OPTION_KEYWORDS.iter().find(|o| o.1 == k).map_or(k.clone(), |o| o.0.to_string());
+        out.push((key, toml_value(&v).map_err(|e| err(format!("`{k}`: {e}")))?));
+    }
+    Ok(out)
+}
+
+/// A Python value as an option value: a bool, an int, a float, a string, or a list or tuple
+/// of them.
+fn toml_value(v: &Bound<'_, PyAny>) -> Result<toml::Value, String> {
+    use pyo3::types::{PyBool, PyFloat, PyInt, PyList, PyString, PyTuple};
+    if v.is_instance_of::<PyBool>() {
+        return v.extract::<bool>().map(toml::Value::Boolean).map_err(|e| e.to_string());
+    }
+    if v.is_instance_of::<PyInt>() {
+        return v.extract::<i64>().map(toml::Value::Integer).map_err(|e| e.to_string());
+    }
+    if v.is_instance_of::<PyFloat>() {
+        return v.extract::<f64>().map(toml::Value::Float).map_err(|e| e.to_string());
+    }
+    if v.is_instance_of::<PyString>() {
+        return v.extract::<String>().map(toml::Value::String).map_err(|e| e.to_string());
+    }
+    if v.is_instance_of::<PyList>() || v.is_instance_of::<PyTuple>() {
+        let items: Vec<Bound<'_, PyAny>> = v
+            .try_iter()
+            .map_err(|e| e.to_string())?
+            .collect::<PyResult<_>>()
+            .map_err(|e| e.to_string())?;
+        return items.iter().map(toml_value).collect::<Result<_, _>>().map(toml::Value::Array);
+    }
+    Err(format!("expected a number, a string, a boolean or a list of them, got {}", v.get_type()))
 }
 
 /// A number keyword argument as an option value.
@@ -260,7 +311,7 @@ pub fn model_choice(
 /// Replays a record file exactly as `aeroident replay DATA --map MAPPING` (module doc of the
 /// Python package).
 #[pyfunction]
-#[pyo3(signature = (path, mapping, estimator="rls", model=None, forgetting=None, derivatives="auto", diff_window=5, compat=None, windows=None, cross_check=false, select="swr", candidates=None, knots_deg=None))]
+#[pyo3(signature = (path, mapping, estimator="rls", model=None, forgetting=None, derivatives="auto", diff_window=5, compat=None, windows=None, cross_check=false, select="swr", candidates=None, knots_deg=None, **options))]
 #[allow(clippy::too_many_arguments)]
 fn replay_file<'py>(
     py: Python<'py>,
@@ -277,9 +328,14 @@ fn replay_file<'py>(
     select: &str,
     candidates: Option<Vec<String>>,
     knots_deg: Option<Vec<f64>>,
+    options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let kind = estimator_kind(estimator)?;
     let windows = time_windows("replay", windows)?;
+    let estimator_options = (!kind.is_batch())
+        .then(|| estimator_options(kind, vec![("forgetting", number(forgetting))], options))
+        .transpose()?
+        .unwrap_or_default();
     let derivatives = derivative_source(derivatives)?;
     let choice = model_choice(model, select, candidates, knots_deg, diff_window);
     let (path, mapping, compat) = (path.to_owned(), mapping.to_owned(), compat.map(PathBuf::from));
@@ -292,11 +348,9 @@ fn replay_file<'py>(
                 kind.name()
             );
         }
-        let options = estimator_options(kind, vec![("forgetting", number(forgetting))])
-            .map_err(anyhow::Error::msg)?;
         let options = ReplayOptions {
             estimator: kind,
-            forgetting: options.forgetting,
+            estimator_options,
             derivatives,
             diff_window,
             windows,
@@ -440,7 +494,8 @@ fn arrays_model(
 
 /// Replays samples given as arrays (one float64 array per key of `sample_keys()`).
 #[pyfunction]
-#[pyo3(name = "replay_arrays", signature = (arrays, estimator="rls", model=None, constants=None, forgetting=None, sample_interval_s=None))]
+#[allow(clippy::too_many_arguments)]
+#[pyo3(name = "replay_arrays", signature = (arrays, estimator="rls", model=None, constants=None, forgetting=None, sample_interval_s=None, **options))]
 fn replay_arrays_py<'py>(
     py: Python<'py>,
     arrays: &Bound<'py, PyDict>,
@@ -449,6 +504,7 @@ fn replay_arrays_py<'py>(
     constants: Option<&Bound<'py, PyDict>>,
     forgetting: Option<f64>,
     sample_interval_s: Option<f64>,
+    options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let kind = estimator_kind(estimator)?;
     let consts = convert::constants_from(constants)?;
@@ -458,7 +514,7 @@ fn replay_arrays_py<'py>(
         return Err(err("arrays: no samples"));
     };
     let spec = arrays_model(model, kind, first)?;
-    let options = estimator_options(kind, vec![("forgetting", number(forgetting))]).map_err(err)?;
+    let options = estimator_options(kind, vec![("forgetting", number(forgetting))], options)?;
     let opts = EstimatorOptions { sample_interval_s, ..options };
     let first = *first;
     let (spec_structure, spec_priors) = (spec.structure, spec.priors);

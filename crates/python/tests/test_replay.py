@@ -188,6 +188,25 @@ def test_estimator_options_are_checked_by_the_registry():
     assert aeroident.Estimator("ekf", forgetting=None).method == "ekf"
 
 
+def test_any_estimator_option_goes_through_the_registry():
+    # Options without a keyword of their own are further keyword arguments by their scenario key:
+    # rls-iv's instrument delay reaches the estimator (the replay differs from the default
+    # delay's and equals the CLI's flag), and a key the kind does not take is refused naming what
+    # it takes.
+    assert aeroident.Estimator("rls-iv", model="longitudinal", instrument_delay=8).method == "rls-iv"
+    with pytest.raises(aeroident.AeroidentError, match=r"estimator `rls`: unknown keyword argument `instrument_delay` \(it takes `forgetting`\)"):
+        aeroident.Estimator("rls", instrument_delay=8)
+    with pytest.raises(aeroident.AeroidentError, match=r"`instrument_delay`: expected a number"):
+        aeroident.Estimator("rls-iv", instrument_delay={"a": 1})
+    data = shared(RECORDS[0][0])
+    mapping = ROOT / RECORDS[0][1]
+    default = aeroident.replay(data, mapping=mapping, estimator="rls-iv")
+    delayed = aeroident.replay(data, mapping=mapping, estimator="rls-iv", instrument_delay=12)
+    assert not np.array_equal(default["estimates"], delayed["estimates"], equal_nan=True)
+    with pytest.raises(aeroident.AeroidentError, match=r"unknown keyword argument `parameter_walk_per_sqrt_s`"):
+        aeroident.replay(data, mapping=mapping, estimator="rls", parameter_walk_per_sqrt_s=0.01)
+
+
 def test_smpe_finite_time_takes_forgetting_and_it_reaches_the_estimator():
     # smpe-finite-time forgets (its memory is the forgotten information): the factor is taken,
     # by the estimator object and by the replay of a record (the CLI refused it there), and

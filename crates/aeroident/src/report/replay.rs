@@ -216,7 +216,7 @@ pub fn settings(
         ),
         ("structure".into(), outcome.model.structure.names().collect::<Vec<_>>().join(", ")),
         ("estimator".into(), format!("{} ({})", opts.estimator.name(), outcome.summary.estimator)),
-        ("forgetting factor".into(), opts.forgetting.to_string()),
+        ("forgetting factor".into(), opts.estimator_options.forgetting.to_string()),
         (
             "derivatives".into(),
             format!(

@@ -26,7 +26,7 @@ use aeroident_estimators::{
 use aeroident_io::{FlightDataReader, Mapping, ModelSpec};
 
 use super::{ReplayError, ReplayOptions, ReplayOutcome, replay_with};
-use crate::estimators::{BuildError, EstimatorOptions, build};
+use crate::estimators::{BuildError, build};
 
 /// Every recorded sample's time, estimates and σ (module doc for the layout).
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -98,15 +98,6 @@ impl Estimator for Recorder {
     }
 }
 
-/// The options the CLI's [`super::replay`] builds its estimator with for `mapping`.
-fn estimator_options(mapping: &Mapping, opts: &ReplayOptions) -> EstimatorOptions {
-    EstimatorOptions {
-        forgetting: opts.forgetting,
-        sample_interval_s: mapping.nominal_dt_s,
-        ..EstimatorOptions::default()
-    }
-}
-
 /// [`super::replay`] (no sinks) with every accepted sample's estimates recorded as arrays.
 ///
 /// # Errors
@@ -131,7 +122,7 @@ pub fn replay_arrays_observed<R: Read>(
     observer: &mut dyn super::ReplayObserver,
 ) -> Result<(ReplayOutcome, EstimateArrays), ReplayError> {
     let out = Rc::new(RefCell::new(EstimateArrays::default()));
-    let eo = estimator_options(mapping, opts);
+    let eo = opts.built_estimator_options(mapping);
     let make = |model: &ModelSpec| -> Result<Box<dyn Estimator>, BuildError> {
         let inner = build(opts.estimator, model.structure, model.priors, &eo)?;
         Ok(Box::new(Recorder::new(inner, Rc::clone(&out))))
@@ -229,9 +220,13 @@ mod tests {
     #[test]
     fn replay_samples_records_every_accepted_sample_and_recovers_the_truth() {
         let spec = ModelSpec::preset("longitudinal").expect("preset");
-        let est =
-            build(EstimatorKind::Rls, spec.structure, spec.priors, &EstimatorOptions::default())
-                .expect("rls");
+        let est = build(
+            EstimatorKind::Rls,
+            spec.structure,
+            spec.priors,
+            &crate::estimators::EstimatorOptions::default(),
+        )
+        .expect("rls");
         let (a, refused, diverged, _) = replay_samples(est, samples());
         assert_eq!((refused, diverged), (0, None));
         let n = a.names.len();

@@ -87,15 +87,14 @@ pub struct ReplayOptions {
     pub estimator: EstimatorKind,
     /// Model structure and priors; `None`: the richest preset the first sample supports.
     pub model: Option<ModelSpec>,
-    /// RLS forgetting factor, (0, 1].
-    pub forgetting: f64,
+    /// The estimator's own options, as the registry parsed them from the face's key/value
+    /// pairs ([`crate::estimators::parse_options`]); an `instrument_delay` of `None` is the
+    /// differentiator window's ([`crate::estimators::instrument_delay`]).
+    pub estimator_options: EstimatorOptions,
     /// Source of the derivatives.
     pub derivatives: DerivativeSource,
     /// Differentiator window, samples (odd, ≥ 3).
     pub diff_window: usize,
-    /// `rls-iv`: delay of the instruments, samples; `None`:
-    /// [`crate::estimators::instrument_delay`] of the differentiator window.
-    pub instrument_delay: Option<usize>,
     /// Pacing.
     pub pacing: Pacing,
     /// A compatibility check's corrections, applied to every sample before the conditioning
@@ -241,15 +240,28 @@ impl ReplayObserver for EstimateRows<'_> {
     }
 }
 
+impl ReplayOptions {
+    /// The options the estimator is built with over a record of `mapping`: its own options,
+    /// the instrument delay the differentiator window implies when none is given, and the
+    /// record's nominal sample interval.
+    pub fn built_estimator_options(&self, mapping: &Mapping) -> EstimatorOptions {
+        let given = self.estimator_options.instrument_delay;
+        EstimatorOptions {
+            instrument_delay: Some(crate::estimators::instrument_delay(given, self.diff_window)),
+            sample_interval_s: mapping.nominal_dt_s,
+            ..self.estimator_options
+        }
+    }
+}
+
 impl Default for ReplayOptions {
     fn default() -> Self {
         Self {
             estimator: EstimatorKind::Rls,
             model: None,
-            forgetting: 1.0,
+            estimator_options: EstimatorOptions::default(),
             derivatives: DerivativeSource::Auto,
             diff_window: 5,
-            instrument_delay: None,
             pacing: Pacing::Unpaced,
             compat: None,
             windows: Vec::new(),
@@ -636,16 +648,8 @@ pub fn replay<R: Read>(
     opts: &ReplayOptions,
     observer: &mut dyn ReplayObserver,
 ) -> Result<ReplayOutcome, ReplayError> {
+    let o = opts.built_estimator_options(mapping);
     let make = |model: &ModelSpec| {
-        let o = EstimatorOptions {
-            forgetting: opts.forgetting,
-            instrument_delay: Some(crate::estimators::instrument_delay(
-                opts.instrument_delay,
-                opts.diff_window,
-            )),
-            sample_interval_s: mapping.nominal_dt_s,
-            ..EstimatorOptions::default()
-        };
         build(opts.estimator, model.structure, model.priors, &o).map(|e| e as Box<dyn Estimator>)
     };
     replay_with(reader, mapping, opts, make, observer)
@@ -732,16 +736,16 @@ pub fn cross_check_record<R: Read>(
 /// instruments' delay.
 fn check_numeric_options(opts: &ReplayOptions) -> Result<(), ReplayError> {
     check_diff_window(opts.diff_window)?;
-    if opts.estimator.options().contains(&"forgetting")
-        && !(opts.forgetting > 0.0 && opts.forgetting <= 1.0)
+    let forgetting = opts.estimator_options.forgetting;
+    if opts.estimator.options().contains(&"forgetting") && !(forgetting > 0.0 && forgetting <= 1.0)
     {
         return Err(ReplayError::Option {
             option: "forgetting",
-            reason: format!("must be in (0, 1] (1: no forgetting), got {}", opts.forgetting),
+            reason: format!("must be in (0, 1] (1: no forgetting), got {forgetting}"),
         });
     }
     let max = aeroident_estimators::iv::MAX_INSTRUMENT_DELAY;
-    match opts.instrument_delay {
+    match opts.estimator_options.instrument_delay {
         Some(d) if !(1..=max).contains(&d) => Err(ReplayError::Option {
             option: "instrument-delay",
             reason: format!("must be 1 to {max} samples, got {d}"),
@@ -1193,7 +1197,8 @@ mod tests {
         }
         let run = |forgetting: f64| {
             let r = FlightDataReader::new(csv.as_bytes(), "d.csv", &m).unwrap();
-            let opts = ReplayOptions { forgetting, diff_window: 3, ..Default::default() };
+            let estimator_options = EstimatorOptions { forgetting, ..Default::default() };
+            let opts = ReplayOptions { estimator_options, diff_window: 3, ..Default::default() };
             replay(r, &m, &opts, &mut ()).unwrap()
         };
         let ok = run(1.0);

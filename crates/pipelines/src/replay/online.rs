@@ -27,7 +27,8 @@ use std::time::{Duration, Instant};
 /// half-span `(N−1)/2`, or the rate's noise reaches both the instrument and the measured
 /// moment and the estimate is biased (`aeroident_estimators::iv`, "Instruments").
 fn check_instrument_delay(opts: &ReplayOptions, differentiates: bool) -> Result<(), ReplayError> {
-    let d = crate::estimators::instrument_delay(opts.instrument_delay, opts.diff_window);
+    let given = opts.estimator_options.instrument_delay;
+    let d = crate::estimators::instrument_delay(given, opts.diff_window);
     let half = (opts.diff_window - 1) / 2;
     if opts.estimator != EstimatorKind::RlsIv || !differentiates || d > half {
         return Ok(());

@@ -95,13 +95,14 @@ class Estimator(_Estimator):
 
     ``Estimator(kind, model="longitudinal", constants=None, forgetting=None,
     sample_interval_s=None, parameter_walk_per_sqrt_s=None, ftr_grid_hz=None, sliding_gain_per_s=None,
-    reaching_rate_per_s=None)`` with ``kind`` one of ``rls, rls-iv,
+    reaching_rate_per_s=None, **options)`` with ``kind`` one of ``rls, rls-iv,
     ftr, ekf, smpe, smpe-corrected, smpe-finite-time, gradient`` (the CLI's ``--estimator``) and ``model`` a preset
     (``longitudinal``, ``lateral``, ``six-axis``) or a model file (TOML, ``models/``).
     The estimator options (``forgetting`` … ``reaching_rate_per_s``) left ``None`` keep the
     estimator's defaults (no forgetting, no parameter walk); one the kind does not take (a
     forgetting factor for ``ekf``) raises :class:`AeroidentError` naming the kind and the options
-    it takes, as the CLI and a scenario refuse it.
+    it takes, as the CLI and a scenario refuse it. ``**options``: any other option of the
+    estimator by its scenario key (``instrument_delay=8`` for ``rls-iv``).
     ``constants``: the aircraft constants (keys as in :func:`sample_keys`) used for every sample
     that does not carry its own. ``ftr_grid_hz``: FTR's frequency grid ``(f_min, f_max, step)``
     in Hz (default Morelli's 0.1-1.5 Hz in 0.04 Hz); it must span the excitation. FTR's
@@ -161,6 +162,7 @@ def replay(
     select: str = "swr",
     candidates: Optional[Sequence[str]] = None,
     knots_deg: Optional[Sequence[float]] = None,
+    **options: Any,
 ) -> dict[str, Any]:
     """Replays a whole record through an estimator, every sample in Rust (no Python loop).
 
@@ -181,7 +183,10 @@ def replay(
     record-time windows, each its own manoeuvre, the rest not used (``--window START:END``).
     ``cross_check=True`` (a record file): the record is also fitted by output error with the
     same model and ``summary["cross_check"]`` lists the parameters further apart than 2
-    combined σ with the likely cause (``--cross-check``).
+    combined σ with the likely cause (``--cross-check``). Further keyword arguments are the
+    estimator's own options by their scenario keys (``instrument_delay=8`` for ``rls-iv``,
+    ``parameter_walk_per_sqrt_s=0.01`` for ``ekf``; ``--estimator-option KEY=VALUE``); one the
+    estimator does not take raises :class:`AeroidentError` naming those it takes.
 
     Returns a dict:
 
@@ -217,11 +222,12 @@ def replay(
             select,
             None if candidates is None else list(candidates),
             None if knots_deg is None else [float(k) for k in knots_deg],
+            **options,
         )
     keys = set(_core.sample_keys())
     arrays = {k: np.ascontiguousarray(v, dtype=np.float64) for k, v in data.items() if k in keys}
     return _core.replay_arrays(
-        arrays, estimator, None if model is None else os.fspath(model), _plain(constants), forgetting, sample_interval_s
+        arrays, estimator, None if model is None else os.fspath(model), _plain(constants), forgetting, sample_interval_s, **options
     )
 
 

@@ -47,6 +47,7 @@ class EstimatorBase:
         ftr_grid_hz: Optional[tuple[float, float, float]] = None,
         sliding_gain_per_s: Optional[float] = None,
         reaching_rate_per_s: Optional[float] = None,
+        **options: Any,
     ) -> EstimatorBase: ...
     @property
     def method(self) -> str: ...
@@ -108,6 +109,7 @@ def replay(
     select: Literal["swr", "mof"] = "swr",
     candidates: Optional[Sequence[str]] = None,
     knots_deg: Optional[Sequence[float]] = None,
+    **options: Any,
 ) -> ReplayResult: ...
 class FitTrace(TypedDict):
     t_s: npt.NDArray[np.float64]

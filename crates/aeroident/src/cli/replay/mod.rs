@@ -64,7 +64,9 @@ mod stop;
 use aeroident_estimators::flight_model::N_STATES;
 use aeroident_estimators::output_error::InitialStates;
 use aeroident_io::{LogFormat, Mapping};
-use aeroident_pipelines::estimators::{EstimatorKind, OptionError, option_list, parse_options};
+use aeroident_pipelines::estimators::{
+    EstimatorKind, EstimatorOptions, OptionError, option_list, parse_options,
+};
 use aeroident_pipelines::job::fit::FitJob;
 use aeroident_pipelines::job::replay::ReplayJob;
 use aeroident_pipelines::job::{CompatSource, ModelChoice, Ran, Records};
@@ -137,6 +139,11 @@ pub struct ReplayArgs {
     /// differentiated, the differentiator's half-window. Default: the differentiator window.
     #[arg(long, value_name = "N")]
     pub instrument_delay: Option<usize>,
+    /// Any option of the estimator as `KEY=VALUE` (the scenario file's keys, a TOML value:
+    /// `parameter_walk_per_sqrt_s=0.01`, `grid_hz=[0.1, 2.0, 0.04]`); repeat it for more. The
+    /// estimator registry refuses a key the estimator does not take, listing those it takes.
+    #[arg(long = "estimator-option", value_name = "KEY=VALUE", value_parser = parse_key_value)]
+    pub estimator_options: Vec<(String, toml::Value)>,
     /// Pace the replay at the record's own sample rate.
     #[arg(long)]
     pub realtime: bool,
@@ -248,6 +255,20 @@ impl ReplayObserver for Console<'_> {
     }
 }
 
+/// `KEY=VALUE` with a TOML value (a bare word is read as a string).
+fn parse_key_value(text: &str) -> Result<(String, toml::Value), String> {
+    let (key, value) = text
+        .split_once('=')
+        .ok_or_else(|| format!("`{text}`: give KEY=VALUE, e.g. parameter_walk_per_sqrt_s=0.01"))?;
+    let key = key.trim();
+    let value = value.trim();
+    let parsed = toml::from_str::<toml::Table>(&format!("v = {value}"))
+        .ok()
+        .and_then(|mut t| t.remove("v"))
+        .unwrap_or_else(|| toml::Value::String(value.to_string()));
+    Ok((key.to_string(), parsed))
+}
+
 fn parse_window(text: &str) -> Result<TimeWindow, String> {
     TimeWindow::parse(text)
 }
@@ -297,7 +318,7 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
             }
         };
     }
-    let job = replay_job(&args, records);
+    let job = replay_job(&args, records)?;
     let prepared = match job.prepare(&mut guard, &mut Stderr)? {
         Ran::Done(prepared) => prepared,
         Ran::Stopped(step) => {
@@ -328,28 +349,31 @@ fn model_choice(args: &ReplayArgs) -> ModelChoice {
 }
 
 /// The replay job of the real-time estimators' arguments.
-fn replay_job(args: &ReplayArgs, records: Records) -> ReplayJob {
+///
+/// # Errors
+/// An estimator option the estimator does not take, or of the wrong type.
+fn replay_job(args: &ReplayArgs, records: Records) -> anyhow::Result<ReplayJob> {
+    let estimator_options = estimator_options(args)?;
     let options = ReplayOptions {
         estimator: args.estimator,
         model: None,
-        forgetting: args.forgetting.unwrap_or(1.0),
+        estimator_options,
         derivatives: args.derivatives,
         diff_window: args.diff_window,
-        instrument_delay: args.instrument_delay,
         pacing: if args.realtime { Pacing::Realtime } else { Pacing::Unpaced },
         compat: None,
         windows: args.windows.clone(),
         spike_screen: (!args.no_spike_screen)
             .then(aeroident_pipelines::record::outliers::SpikeScreen::default),
     };
-    ReplayJob {
+    Ok(ReplayJob {
         records,
         model: model_choice(args),
         compat: args.compat.as_deref().map(CompatSource::from_arg),
         options,
         cross_check: args.cross_check,
         validate_on: args.validate_on.as_ref().map(|p| p.display().to_string()),
-    }
+    })
 }
 
 /// Refuses options that do not go together (the estimator's own options, a batch fit of a
@@ -361,7 +385,7 @@ fn check_combination(args: &ReplayArgs, live: bool, mavlink: bool) -> anyhow::Re
             args.estimator.name()
         );
     }
-    check_estimator_options(args)?;
+    estimator_options(args)?;
     if args.band_hz.is_some() && args.estimator != EstimatorKind::Fdoe {
         anyhow::bail!(
             "--band-hz is the band of frequency-domain output error (--estimator fdoe), not of --estimator {}",
@@ -385,18 +409,23 @@ fn check_combination(args: &ReplayArgs, live: bool, mavlink: bool) -> anyhow::Re
 const ESTIMATOR_OPTION_FLAGS: [(&str, &str); 2] =
     [("forgetting", "--forgetting"), ("instrument_delay", "--instrument-delay")];
 
-/// The flag of the registry's option `key`, as typed.
-fn option_flag(key: &str) -> &str {
-    ESTIMATOR_OPTION_FLAGS.iter().find(|f| f.0 == key).map_or(key, |f| f.1)
+/// The flag of the registry's option `key`, as typed (`--estimator-option KEY` for those
+/// without a flag of their own).
+fn option_flag(key: &str) -> String {
+    ESTIMATOR_OPTION_FLAGS
+        .iter()
+        .find(|f| f.0 == key)
+        .map_or_else(|| format!("--estimator-option {key}"), |f| f.1.to_string())
 }
 
-/// The estimator-option flags given (`--forgetting`, `--instrument-delay`) parsed by the
-/// registry for `--estimator` ([`parse_options`]), which knows which kind takes which: one the
-/// kind does not take is refused (it would be ignored), naming the flag, the kind and the
-/// options it takes. The values' ranges are checked with the replay's other numbers, naming the
-/// value exactly as typed.
-fn check_estimator_options(args: &ReplayArgs) -> anyhow::Result<()> {
-    let mut pairs = Vec::new();
+/// The estimator's options from the command line: `--forgetting`, `--instrument-delay` and
+/// every `--estimator-option KEY=VALUE`, parsed by the registry for `--estimator`
+/// ([`parse_options`]), which knows which kind takes which: one the kind does not take is
+/// refused (it would be ignored), naming the flag, the kind and the options it takes. The
+/// values' ranges are checked with the replay's other numbers, naming the value exactly as
+/// typed (the delay as given, past an i64).
+fn estimator_options(args: &ReplayArgs) -> anyhow::Result<EstimatorOptions> {
+    let mut pairs: Vec<(&str, toml::Value)> = Vec::new();
     if let Some(f) = args.forgetting {
         pairs.push(("forgetting", toml::Value::Float(f)));
     }
@@ -405,8 +434,12 @@ fn check_estimator_options(args: &ReplayArgs) -> anyhow::Result<()> {
         pairs
             .push(("instrument_delay", toml::Value::Integer(i64::try_from(d).unwrap_or(i64::MAX))));
     }
+    pairs.extend(args.estimator_options.iter().map(|(k, v)| (k.as_str(), v.clone())));
     match parse_options(args.estimator, pairs) {
-        Ok(_) => Ok(()),
+        Ok(options) => Ok(EstimatorOptions {
+            instrument_delay: args.instrument_delay.or(options.instrument_delay),
+            ..options
+        }),
         Err(OptionError::Unknown { kind, key }) => anyhow::bail!(
             "{} is not an option of --estimator {}, which takes {} (it would be ignored)",
             option_flag(&key),

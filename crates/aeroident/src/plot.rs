@@ -28,6 +28,7 @@
 //!   ±1, and its caption says so.
 
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::{FontStyle, register_font};
 use std::path::{Path, PathBuf};
@@ -395,146 +396,232 @@ fn validate(path: &Path, panels: &[Panel]) -> Result<(), PlotError> {
     Ok(())
 }
 
-/// Draws the panels on `root` (any plotters backend).
+/// Draws the panels on `root` (any plotters backend): one shared time axis over every panel,
+/// one legend column as wide as the longest label needs.
 fn draw_panels<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
     panels: &[Panel],
 ) -> Result<(), String> {
-    let e = |e: &dyn std::fmt::Display| e.to_string();
-    root.fill(&WHITE).map_err(|x| e(&x))?;
-    let root =
-        root.titled(title, (FONT, 22).into_font().style(FontStyle::Bold)).map_err(|x| e(&x))?;
+    root.fill(&WHITE).map_err(msg)?;
+    let root = root.titled(title, (FONT, 22).into_font().style(FontStyle::Bold)).map_err(msg)?;
     let areas = root.split_evenly((panels.len(), 1));
+    let t_range = time_range(panels);
+    let legend_w = legend_width(panels);
+    for (area, panel) in areas.iter().zip(panels) {
+        draw_panel(area, panel, t_range, legend_w)?;
+    }
+    root.present().map_err(msg)?;
+    Ok(())
+}
+
+/// A plotters error as the message [`PlotError::Backend`] carries.
+fn msg(x: impl std::fmt::Display) -> String {
+    x.to_string()
+}
+
+/// A panel's chart: time (s) against the panel's quantity.
+type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// The time range shared by all panels: the finite times of every series and band, or
+/// `0..1` when there is none (or a single instant).
+fn time_range(panels: &[Panel]) -> (f64, f64) {
     let (t_min, t_max) = panels
         .iter()
         .flat_map(|p| p.series.iter().map(|s| &s.t_s).chain(p.bands.iter().map(|b| &b.t_s)))
         .flat_map(|t| t.iter().copied())
         .filter(|t| t.is_finite())
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| (a.min(t), b.max(t)));
-    let (t_min, t_max) = if t_min < t_max { (t_min, t_max) } else { (0.0, 1.0) };
+    if t_min < t_max { (t_min, t_max) } else { (0.0, 1.0) }
+}
+
+/// The legend column's width, px: room for the longest label of any panel (about 8 px a
+/// character after a 34 px key), within 90–260 px.
+fn legend_width(panels: &[Panel]) -> u32 {
     let legend_chars = panels
         .iter()
         .flat_map(legend_entries)
         .map(|(l, _, _)| l.chars().count())
         .max()
         .unwrap_or(0);
-    let legend_w = (34 + 8 * legend_chars as u32).clamp(90, 260);
-    for (area, panel) in areas.iter().zip(panels) {
-        let noise = is_noise_panel(panel);
-        let (y_lo, y_hi) = y_range(panel, (t_min, t_max));
-        let (w, _) = area.dim_in_pixel();
-        let (chart_area, legend_area) = area.split_horizontally(w.saturating_sub(legend_w));
-        let y_span = y_hi - y_lo;
-        let y_mag = y_lo.abs().max(y_hi.abs());
-        let y_fmt = move |y: &f64| tick_label(*y, y_span, y_mag);
-        let x_span = t_max - t_min;
-        let x_mag = t_min.abs().max(t_max.abs());
-        let x_fmt = move |x: &f64| tick_label(*x, x_span, x_mag);
-        let widest = [y_lo, y_hi, 0.5 * (y_lo + y_hi)]
-            .iter()
-            .map(|y| y_fmt(y).chars().count())
-            .max()
-            .unwrap_or(4) as u32;
-        let caption = if noise {
-            format!("{}  (|values| < {ZERO_THRESHOLD:e} everywhere: drawn as 0)", panel.title)
-        } else {
-            panel.title.clone()
-        };
-        let mut chart = ChartBuilder::on(&chart_area)
-            .caption(caption, (FONT, 16))
-            .margin(8)
-            .margin_right(16)
-            .x_label_area_size(36)
-            .y_label_area_size(30 + 8 * widest)
-            .build_cartesian_2d(t_min..t_max, y_lo..y_hi)
-            .map_err(|x| e(&x))?;
-        chart
-            .configure_mesh()
-            .x_desc("t (s)")
-            .y_desc(panel.y_label.as_str())
-            .x_labels(10)
-            .y_labels(6)
-            .x_label_formatter(&x_fmt)
-            .y_label_formatter(&y_fmt)
-            .label_style((FONT, 13))
-            .axis_desc_style((FONT, 14))
-            .light_line_style(RGBColor(238, 238, 238))
-            .bold_line_style(RGBColor(215, 215, 215))
-            .draw()
-            .map_err(|x| e(&x))?;
-        for b in &panel.bands {
-            let color = series_color(b.series);
-            let stride = b.t_s.len().div_ceil(MAX_POINTS).max(1);
-            for poly in band_polygons(b, y_lo, y_hi, stride) {
-                chart
-                    .draw_series(std::iter::once(Polygon::new(poly, color.mix(0.14).filled())))
-                    .map_err(|x| e(&x))?;
-            }
-        }
-        for (i, h) in panel.hlines.iter().enumerate() {
-            let color = LINE_PALETTE[i % LINE_PALETTE.len()];
-            let v = if noise { 0.0 } else { h.value };
-            if (y_lo..=y_hi).contains(&v) {
-                chart
-                    .draw_series(DashedLineSeries::new(
-                        vec![(t_min, v), (t_max, v)],
-                        10,
-                        6,
-                        ShapeStyle::from(&color).stroke_width(2),
-                    ))
-                    .map_err(|x| e(&x))?;
-            }
-        }
-        for (i, s) in panel.series.iter().enumerate() {
-            let color = series_color(i);
-            let stride = s.t_s.len().div_ceil(MAX_POINTS).max(1);
-            let values: Vec<f64> = if noise {
-                s.values.iter().map(|v| if v.is_finite() { 0.0 } else { f64::NAN }).collect()
-            } else {
-                s.values.clone()
-            };
-            // Estimates 2 px, signals and dashed lines 1 px; plotters joins thick polylines
-            // with miters, which spike where a signal reverses sharply, so no thicker.
-            let width = if s.kind == LineKind::Solid && !panel.signals { 2 } else { 1 };
-            let style = ShapeStyle::from(&color).stroke_width(width);
-            for line in clip_polylines(&s.t_s, &values, y_lo, y_hi, stride) {
-                match s.kind {
-                    LineKind::Solid => chart.draw_series(LineSeries::new(line, style)),
-                    LineKind::Dashed => chart.draw_series(DashedLineSeries::new(line, 8, 5, style)),
-                }
-                .map_err(|x| e(&x))?;
-            }
-        }
-        // The legend, in its own column right of the chart.
-        let font = (FONT, 13).into_font().color(&BLACK);
-        for (k, (label, color, kind)) in legend_entries(panel).iter().enumerate() {
-            let y = 34 + 20 * k as i32;
-            let x = 6;
-            match kind {
-                2 => legend_area
-                    .draw(&Rectangle::new([(x, y - 6), (x + 22, y + 6)], color.mix(0.25).filled()))
-                    .map_err(|x| e(&x))?,
-                1 => {
-                    for seg in [(x, x + 6), (x + 9, x + 15), (x + 18, x + 22)] {
-                        legend_area
-                            .draw(&PathElement::new(
-                                vec![(seg.0, y), (seg.1, y)],
-                                color.stroke_width(2),
-                            ))
-                            .map_err(|x| e(&x))?;
-                    }
-                }
-                _ => legend_area
-                    .draw(&PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(2)))
-                    .map_err(|x| e(&x))?,
-            }
-            legend_area
-                .draw(&Text::new(label.clone(), (x + 28, y - 8), font.clone()))
-                .map_err(|x| e(&x))?;
+    (34 + 8 * legend_chars as u32).clamp(90, 260)
+}
+
+/// Draws one panel in `area`: the chart (bands, then reference lines, then series, so lines
+/// stay visible over the shading) and its legend in a column `legend_w` px wide on the right.
+/// A noise panel is drawn as 0 (module doc).
+fn draw_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    panel: &Panel,
+    t_range: (f64, f64),
+    legend_w: u32,
+) -> Result<(), String> {
+    let noise = is_noise_panel(panel);
+    let y_lims = y_range(panel, t_range);
+    let (w, _) = area.dim_in_pixel();
+    let (chart_area, legend_area) = area.split_horizontally(w.saturating_sub(legend_w));
+    let mut chart = build_chart(&chart_area, panel, noise, t_range, y_lims)?;
+    draw_bands(&mut chart, panel, y_lims)?;
+    draw_hlines(&mut chart, panel, noise, t_range, y_lims)?;
+    draw_series_lines(&mut chart, panel, noise, y_lims)?;
+    draw_panel_legend(&legend_area, panel)
+}
+
+/// The panel's chart on `chart_area` with its caption and mesh drawn; the y-label area is as
+/// wide as the widest tick label needs.
+fn build_chart<'a, DB: DrawingBackend>(
+    chart_area: &'a DrawingArea<DB, Shift>,
+    panel: &Panel,
+    noise: bool,
+    (t_min, t_max): (f64, f64),
+    (y_lo, y_hi): (f64, f64),
+) -> Result<Chart<'a, DB>, String> {
+    let y_span = y_hi - y_lo;
+    let y_mag = y_lo.abs().max(y_hi.abs());
+    let y_fmt = move |y: &f64| tick_label(*y, y_span, y_mag);
+    let x_span = t_max - t_min;
+    let x_mag = t_min.abs().max(t_max.abs());
+    let x_fmt = move |x: &f64| tick_label(*x, x_span, x_mag);
+    let widest = [y_lo, y_hi, 0.5 * (y_lo + y_hi)]
+        .iter()
+        .map(|y| y_fmt(y).chars().count())
+        .max()
+        .unwrap_or(4) as u32;
+    let caption = if noise {
+        format!("{}  (|values| < {ZERO_THRESHOLD:e} everywhere: drawn as 0)", panel.title)
+    } else {
+        panel.title.clone()
+    };
+    let mut chart = ChartBuilder::on(chart_area)
+        .caption(caption, (FONT, 16))
+        .margin(8)
+        .margin_right(16)
+        .x_label_area_size(36)
+        .y_label_area_size(30 + 8 * widest)
+        .build_cartesian_2d(t_min..t_max, y_lo..y_hi)
+        .map_err(msg)?;
+    chart
+        .configure_mesh()
+        .x_desc("t (s)")
+        .y_desc(panel.y_label.as_str())
+        .x_labels(10)
+        .y_labels(6)
+        .x_label_formatter(&x_fmt)
+        .y_label_formatter(&y_fmt)
+        .label_style((FONT, 13))
+        .axis_desc_style((FONT, 14))
+        .light_line_style(RGBColor(238, 238, 238))
+        .bold_line_style(RGBColor(215, 215, 215))
+        .draw()
+        .map_err(msg)?;
+    Ok(chart)
+}
+
+/// The panel's bands, shaded in their series's colour and clipped to the y-range.
+fn draw_bands<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    panel: &Panel,
+    (y_lo, y_hi): (f64, f64),
+) -> Result<(), String> {
+    for b in &panel.bands {
+        let color = series_color(b.series);
+        let stride = b.t_s.len().div_ceil(MAX_POINTS).max(1);
+        for poly in band_polygons(b, y_lo, y_hi, stride) {
+            chart
+                .draw_series(std::iter::once(Polygon::new(poly, color.mix(0.14).filled())))
+                .map_err(msg)?;
         }
     }
-    root.present().map_err(|x| e(&x))?;
+    Ok(())
+}
+
+/// The panel's horizontal reference lines (dashed) that fall in the y-range; at 0 in a noise
+/// panel, whose values are drawn as 0.
+fn draw_hlines<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    panel: &Panel,
+    noise: bool,
+    (t_min, t_max): (f64, f64),
+    (y_lo, y_hi): (f64, f64),
+) -> Result<(), String> {
+    for (i, h) in panel.hlines.iter().enumerate() {
+        let color = LINE_PALETTE[i % LINE_PALETTE.len()];
+        let v = if noise { 0.0 } else { h.value };
+        if (y_lo..=y_hi).contains(&v) {
+            chart
+                .draw_series(DashedLineSeries::new(
+                    vec![(t_min, v), (t_max, v)],
+                    10,
+                    6,
+                    ShapeStyle::from(&color).stroke_width(2),
+                ))
+                .map_err(msg)?;
+        }
+    }
+    Ok(())
+}
+
+/// The panel's series, thinned to at most [`MAX_POINTS`] points and clipped to the y-range
+/// (a noise panel's finite values drawn as 0).
+fn draw_series_lines<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    panel: &Panel,
+    noise: bool,
+    (y_lo, y_hi): (f64, f64),
+) -> Result<(), String> {
+    for (i, s) in panel.series.iter().enumerate() {
+        let color = series_color(i);
+        let stride = s.t_s.len().div_ceil(MAX_POINTS).max(1);
+        let values: Vec<f64> = if noise {
+            s.values.iter().map(|v| if v.is_finite() { 0.0 } else { f64::NAN }).collect()
+        } else {
+            s.values.clone()
+        };
+        // Estimates 2 px, signals and dashed lines 1 px; plotters joins thick polylines
+        // with miters, which spike where a signal reverses sharply, so no thicker.
+        let width = if s.kind == LineKind::Solid && !panel.signals { 2 } else { 1 };
+        let style = ShapeStyle::from(&color).stroke_width(width);
+        for line in clip_polylines(&s.t_s, &values, y_lo, y_hi, stride) {
+            match s.kind {
+                LineKind::Solid => chart.draw_series(LineSeries::new(line, style)),
+                LineKind::Dashed => chart.draw_series(DashedLineSeries::new(line, 8, 5, style)),
+            }
+            .map_err(msg)?;
+        }
+    }
+    Ok(())
+}
+
+/// The legend, in its own column right of the chart: a key (band swatch, dashed or solid
+/// line) and the label of each entry.
+fn draw_panel_legend<DB: DrawingBackend>(
+    legend_area: &DrawingArea<DB, Shift>,
+    panel: &Panel,
+) -> Result<(), String> {
+    let font = (FONT, 13).into_font().color(&BLACK);
+    for (k, (label, color, kind)) in legend_entries(panel).iter().enumerate() {
+        let y = 34 + 20 * k as i32;
+        let x = 6;
+        match kind {
+            2 => legend_area
+                .draw(&Rectangle::new([(x, y - 6), (x + 22, y + 6)], color.mix(0.25).filled()))
+                .map_err(msg)?,
+            1 => {
+                for seg in [(x, x + 6), (x + 9, x + 15), (x + 18, x + 22)] {
+                    legend_area
+                        .draw(&PathElement::new(
+                            vec![(seg.0, y), (seg.1, y)],
+                            color.stroke_width(2),
+                        ))
+                        .map_err(msg)?;
+                }
+            }
+            _ => legend_area
+                .draw(&PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(2)))
+                .map_err(msg)?,
+        }
+        legend_area.draw(&Text::new(label.clone(), (x + 28, y - 8), font.clone())).map_err(msg)?;
+    }
     Ok(())
 }
 

@@ -937,38 +937,16 @@ pub fn fit_to_end(manoeuvres: &[&[AirDataSample]], config: &OeConfig) -> Result<
 }
 
 /// [`fit`] on a prepared problem (`manoeuvres` only for the equation-error start).
+///
+/// Each iteration is one [`OeIterate`] pass: linearize at β, search the damping for a step
+/// that lowers the merit, try the parabolic step length after an undamped step, then accept
+/// the step or stop (module doc).
 fn fit_prepared(
     p: Problem,
     manoeuvres: &[&[AirDataSample]],
     config: &OeConfig,
 ) -> Result<OeResult, OeError> {
-    let nb = p.n_unknowns;
-    let ny = p.ny();
-    let mut y = Vec::new();
-    let mut e = Vec::new();
-    let (mut beta, start) =
-        first_start(&p, manoeuvres, config, |beta| p.simulate(beta, &mut y, None))?;
-    let robust = config.robust;
-    // The noise variances: the ML mean squares, or the robust (MAD) ones with Huber's weights.
-    let noise = |e: &[f64], r: Vec<f64>| match robust {
-        Some(_) => robust_variances(e, r),
-        None => r,
-    };
-    let ms = residuals(&p, &y, &mut e);
-    let mut r = noise(&e, ms);
-    let ln_det = |r: &[f64]| r.iter().map(|v| v.ln()).sum::<f64>();
-    let mut log = vec![OeIteration {
-        iteration: 0,
-        ln_det_r: ln_det(&r),
-        cost: 0.5 * (p.n_samples * ny) as f64,
-        lambda: 0.0,
-        max_step_sigma: f64::NAN,
-    }];
-    let mut s = Vec::new();
-    let mut y_try = Vec::new();
-    let mut e_try = Vec::new();
-    let mut e_ext = Vec::new();
-    let mut lambda = 0.0;
+    let (mut it, start) = OeIterate::new(&p, manoeuvres, config)?;
     let mut converged = false;
     let mut failure = None;
     for iteration in 1..=config.max_iterations {
@@ -976,24 +954,215 @@ fn fit_prepared(
             failure = Some(NotConverged::Stopped);
             break;
         }
-        if r.iter().any(|v| v.is_nan() || *v <= 0.0) {
+        let lin = it.linearize()?;
+        let mut accepted = it.damped_search(&lin);
+        // The undamped step was accepted (λ is left as it was on acceptance).
+        if it.lambda == 0.0
+            && let Some(trial) = accepted.as_mut()
+        {
+            it.try_parabolic_length(&lin, trial);
+        }
+        let Some(trial) = accepted else {
+            if stop_raised(config.stop.as_ref()) {
+                failure = Some(NotConverged::Stopped);
+                break;
+            }
+            // No descent: converged if the undamped step is already negligible.
+            if lin.undamped_step_below(config.step_tolerance_sigma) {
+                converged = true;
+            } else {
+                failure = Some(NotConverged::NoDescent);
+            }
+            break;
+        };
+        if it.accept(iteration, &lin, trial) {
+            converged = true;
+            break;
+        }
+    }
+    let termination = Termination::of(
+        &it.log,
+        converged,
+        failure.unwrap_or(NotConverged::MaxIterations),
+        config.cost_tolerance,
+    );
+    let OeIterate { beta, e, r, log, y, s, y_try, e_try, e_ext, .. } = it;
+    // The iterations' buffers go before `finish` simulates the sensitivities again: on a long
+    // record each sensitivity array is the largest allocation of the fit.
+    drop((s, y, y_try, e_try, e_ext));
+    Ok(finish(&p, &config.structure, &beta, &r, &e, log, start, termination, config)?)
+}
+
+/// `ln det R` of a diagonal `R` given as its variances.
+fn ln_det(r: &[f64]) -> f64 {
+    r.iter().map(|v| v.ln()).sum::<f64>()
+}
+
+/// The noise variances from the residuals `e` and their mean squares `ms`: the ML mean
+/// squares, or the robust (MAD) ones with Huber's weights.
+fn noise_variances(robust: Option<Huber>, e: &[f64], ms: Vec<f64>) -> Vec<f64> {
+    match robust {
+        Some(_) => robust_variances(e, ms),
+        None => ms,
+    }
+}
+
+/// `β + Δ`.
+fn offset(beta: &[f64], d: &DVector<f64>) -> Vec<f64> {
+    beta.iter().zip(d.iter()).map(|(b, d)| b + d).collect()
+}
+
+/// The merit a step must lower (module doc): `ln det R` for the concentrated step, Huber's
+/// cost at the fixed scale `sd` for the robust (IRLS) fit, else `J` at the fixed weights `w`.
+fn merit(
+    robust: Option<Huber>,
+    concentrated: bool,
+    w: &[f64],
+    sd: &[f64],
+    e: &[f64],
+    r: &[f64],
+) -> f64 {
+    match robust {
+        _ if concentrated => ln_det(r),
+        Some(h) => huber_cost(h, e, sd),
+        None => weighted_cost(e, w),
+    }
+}
+
+/// The output-error iteration's state: the iterate β with its residuals and noise variances,
+/// the Levenberg–Marquardt λ, the log, and the buffers every simulation reuses (allocated once
+/// for the whole fit, not per trial).
+struct OeIterate<'a> {
+    p: &'a Problem,
+    config: &'a OeConfig,
+    beta: Vec<f64>,
+    /// Residuals at β.
+    e: Vec<f64>,
+    /// Noise variances per output at β.
+    r: Vec<f64>,
+    lambda: f64,
+    log: Vec<OeIteration>,
+    /// Outputs at β.
+    y: Vec<f64>,
+    /// Output sensitivities at β.
+    s: Vec<f64>,
+    /// Outputs and residuals of the damped trials.
+    y_try: Vec<f64>,
+    e_try: Vec<f64>,
+    /// Residuals of the parabolic-length trial.
+    e_ext: Vec<f64>,
+}
+
+/// The iteration's linearization at β, fixed over its trials: weights `w = 1/R`, scale
+/// `sd = √R`, information matrix `M`, gradient `g`, step matrix `H`, `M⁻¹` (for the step in
+/// Cramér–Rao σ) and the merit at β.
+struct Linearization {
+    robust: Option<Huber>,
+    concentrated: bool,
+    w: Vec<f64>,
+    sd: Vec<f64>,
+    m: DMatrix<f64>,
+    g: DVector<f64>,
+    h: DMatrix<f64>,
+    minv: Option<DMatrix<f64>>,
+    merit0: f64,
+    /// d merit / dα along a step Δ is `merit_slope · gᵀΔ` (module doc, "Step length").
+    merit_slope: f64,
+}
+
+/// A step that lowered the merit: the new β, the step Δ, the noise variances and the merit at
+/// the new β (its residuals are in the iterate's `e_try`).
+struct Trial {
+    beta: Vec<f64>,
+    step: DVector<f64>,
+    r: Vec<f64>,
+    merit: f64,
+}
+
+impl Linearization {
+    /// [`merit`] at this linearization's weights.
+    fn merit(&self, e: &[f64], r: &[f64]) -> f64 {
+        merit(self.robust, self.concentrated, &self.w, &self.sd, e, r)
+    }
+
+    /// The largest component of `step` in Cramér–Rao σ of its unknown (∞ without `M⁻¹`).
+    fn step_sigma(&self, step: &DVector<f64>) -> f64 {
+        match &self.minv {
+            Some(mi) => {
+                (0..mi.nrows()).map(|i| step[i].abs() / mi[(i, i)].sqrt()).fold(0.0, f64::max)
+            }
+            None => f64::INFINITY,
+        }
+    }
+
+    /// Whether the undamped (Gauss–Newton) step exists and is below `tolerance_sigma`: a fit
+    /// with no descent left has then converged rather than failed.
+    fn undamped_step_below(&self, tolerance_sigma: f64) -> bool {
+        damped_step(&self.h, &self.m, &self.g, 0.0)
+            .is_some_and(|st| self.step_sigma(&st) < tolerance_sigma)
+    }
+}
+
+impl<'a> OeIterate<'a> {
+    /// The state at the first starting value that simulates ([`first_start`]), with its
+    /// log entry 0; also returns that start `θ0` (for the result).
+    fn new(
+        p: &'a Problem,
+        manoeuvres: &[&[AirDataSample]],
+        config: &'a OeConfig,
+    ) -> Result<(Self, Vec<f64>), OeError> {
+        let mut y = Vec::new();
+        let mut e = Vec::new();
+        let (beta, start) =
+            first_start(p, manoeuvres, config, |beta| p.simulate(beta, &mut y, None))?;
+        let ms = residuals(p, &y, &mut e);
+        let r = noise_variances(config.robust, &e, ms);
+        let log = vec![OeIteration {
+            iteration: 0,
+            ln_det_r: ln_det(&r),
+            cost: 0.5 * (p.n_samples * p.ny()) as f64,
+            lambda: 0.0,
+            max_step_sigma: f64::NAN,
+        }];
+        let it = Self {
+            p,
+            config,
+            beta,
+            e,
+            r,
+            lambda: 0.0,
+            log,
+            y,
+            s: Vec::new(),
+            y_try: Vec::new(),
+            e_try: Vec::new(),
+            e_ext: Vec::new(),
+        };
+        Ok((it, start))
+    }
+
+    /// Simulates β with its sensitivities and forms the normal equations and the step matrix
+    /// (module doc): the relaxation's `M` with `J` at fixed `R`, or the concentrated Hessian
+    /// (`M` where that is not positive definite) with `ln det R`. The robust fit is an IRLS
+    /// relaxation: the weights and the scale fixed over the step, which is accepted when
+    /// Huber's cost at that scale falls.
+    fn linearize(&mut self) -> Result<Linearization, OeError> {
+        let (p, config) = (self.p, self.config);
+        if self.r.iter().any(|v| v.is_nan() || *v <= 0.0) {
             return Err(EstimatorError::Numerical {
                 what: "an output's residuals are all zero: its noise variance cannot be estimated",
                 t_s: 0.0,
             }
             .into());
         }
-        let w: Vec<f64> = r.iter().map(|v| 1.0 / v).collect();
-        let u = robust.map_or_else(Vec::new, |h| huber_weights(h, &e, &r));
-        let sd: Vec<f64> = r.iter().map(|v| v.sqrt()).collect();
-        p.simulate(&beta, &mut y, Some(&mut s))?;
-        let (m, g, gj) = normal_equations_weighted(&s, &e, &w, &u, nb);
-        check_identifiable(&m, &p, &config.structure)?;
+        let robust = config.robust;
+        let w: Vec<f64> = self.r.iter().map(|v| 1.0 / v).collect();
+        let u = robust.map_or_else(Vec::new, |h| huber_weights(h, &self.e, &self.r));
+        let sd: Vec<f64> = self.r.iter().map(|v| v.sqrt()).collect();
+        p.simulate(&self.beta, &mut self.y, Some(&mut self.s))?;
+        let (m, g, gj) = normal_equations_weighted(&self.s, &self.e, &w, &u, p.n_unknowns);
+        check_identifiable(&m, p, &config.structure)?;
         let minv = spd_inverse(&m);
-        // Step matrix and merit (module doc): the relaxation's M with J at fixed R, or the
-        // concentrated Hessian (M where that is not positive definite) with ln det R.
-        // The robust fit is an IRLS relaxation: the weights and the scale fixed over the step,
-        // which is accepted when Huber's cost at that scale falls.
         let concentrated = config.step == StepKind::Concentrated && robust.is_none();
         let h = if concentrated {
             let h = concentrated_hessian(&m, &gj, p.n_samples);
@@ -1001,105 +1170,78 @@ fn fit_prepared(
         } else {
             m.clone()
         };
-        let merit = |e: &[f64], r: &[f64]| match robust {
-            _ if concentrated => ln_det(r),
-            Some(h) => huber_cost(h, e, &sd),
-            None => weighted_cost(e, &w),
-        };
-        let merit0 = merit(&e, &r);
-        // d merit / dα along a step Δ is `merit_slope · gᵀΔ` (module doc, "Step length").
+        let merit0 = merit(robust, concentrated, &w, &sd, &self.e, &self.r);
         let merit_slope = if concentrated { -2.0 / p.n_samples as f64 } else { -1.0 };
-        let offset = |d: &DVector<f64>| -> Vec<f64> {
-            beta.iter().zip(d.iter()).map(|(b, d)| b + d).collect()
-        };
-        let mut accepted = None;
-        // A stop asked for during the damping ends it too: each trial is a simulation of the
-        // whole record, and up to 14 of them may follow.
-        while !stop_raised(config.stop.as_ref()) {
-            if let Some(step) = damped_step(&h, &m, &g, lambda) {
-                let trial = offset(&step);
-                if p.simulate(&trial, &mut y_try, None).is_ok() {
-                    let ms = residuals(&p, &y_try, &mut e_try);
-                    let r_try = noise(&e_try, ms);
-                    let value = merit(&e_try, &r_try);
-                    if value.is_finite() && value < merit0 {
-                        accepted = Some((trial, step, r_try, value));
-                        break;
+        Ok(Linearization { robust, concentrated, w, sd, m, g, h, minv, merit0, merit_slope })
+    }
+
+    /// Levenberg–Marquardt: the first step from λ (raised ×10 from 10⁻³ up to 10¹⁰) that
+    /// simulates and lowers the merit, or `None`. A stop asked for during the damping ends it
+    /// too: each trial is a simulation of the whole record, and up to 14 of them may follow.
+    fn damped_search(&mut self, lin: &Linearization) -> Option<Trial> {
+        let p = self.p;
+        while !stop_raised(self.config.stop.as_ref()) {
+            if let Some(step) = damped_step(&lin.h, &lin.m, &lin.g, self.lambda) {
+                let trial = offset(&self.beta, &step);
+                if p.simulate(&trial, &mut self.y_try, None).is_ok() {
+                    let ms = residuals(p, &self.y_try, &mut self.e_try);
+                    let r_try = noise_variances(lin.robust, &self.e_try, ms);
+                    let value = lin.merit(&self.e_try, &r_try);
+                    if value.is_finite() && value < lin.merit0 {
+                        return Some(Trial { beta: trial, step, r: r_try, merit: value });
                     }
                 }
             }
-            lambda = if lambda == 0.0 { 1e-3 } else { lambda * 10.0 };
-            if lambda > 1e10 {
+            self.lambda = if self.lambda == 0.0 { 1e-3 } else { self.lambda * 10.0 };
+            if self.lambda > 1e10 {
                 break;
             }
         }
-        // The undamped step was accepted (λ is left as it was on acceptance): one more trial at
-        // the minimum of the parabola through the merit at 0 (value and slope) and at the full
-        // step (module doc, "Step length").
-        if let Some((_, step, _, value)) = accepted.as_ref().filter(|_| lambda == 0.0) {
-            let slope = merit_slope * g.dot(step);
-            if let Some(a) = parabolic_step(merit0, slope, *value) {
-                let scaled = step * a;
-                let trial = offset(&scaled);
-                if p.simulate(&trial, &mut y_try, None).is_ok() {
-                    let ms = residuals(&p, &y_try, &mut e_ext);
-                    let r_try = noise(&e_ext, ms);
-                    let v = merit(&e_ext, &r_try);
-                    if v.is_finite() && v < *value {
-                        core::mem::swap(&mut e_try, &mut e_ext);
-                        accepted = Some((trial, scaled, r_try, v));
-                    }
-                }
+        None
+    }
+
+    /// After an accepted undamped step: one more trial at the minimum of the parabola through
+    /// the merit at 0 (value and slope) and at the full step (module doc, "Step length"),
+    /// replacing `accepted` when it lowers the merit further.
+    fn try_parabolic_length(&mut self, lin: &Linearization, accepted: &mut Trial) {
+        let slope = lin.merit_slope * lin.g.dot(&accepted.step);
+        let Some(a) = parabolic_step(lin.merit0, slope, accepted.merit) else {
+            return;
+        };
+        let p = self.p;
+        let scaled = &accepted.step * a;
+        let trial = offset(&self.beta, &scaled);
+        if p.simulate(&trial, &mut self.y_try, None).is_ok() {
+            let ms = residuals(p, &self.y_try, &mut self.e_ext);
+            let r_try = noise_variances(lin.robust, &self.e_ext, ms);
+            let v = lin.merit(&self.e_ext, &r_try);
+            if v.is_finite() && v < accepted.merit {
+                core::mem::swap(&mut self.e_try, &mut self.e_ext);
+                *accepted = Trial { beta: trial, step: scaled, r: r_try, merit: v };
             }
         }
-        let step_sigma = |step: &DVector<f64>| match &minv {
-            Some(mi) => (0..nb).map(|i| step[i].abs() / mi[(i, i)].sqrt()).fold(0.0, f64::max),
-            None => f64::INFINITY,
-        };
-        let Some((trial, step, r_new, _)) = accepted else {
-            if stop_raised(config.stop.as_ref()) {
-                failure = Some(NotConverged::Stopped);
-                break;
-            }
-            // No descent: converged if the undamped step is already negligible.
-            let tiny = damped_step(&h, &m, &g, 0.0)
-                .is_some_and(|st| step_sigma(&st) < config.step_tolerance_sigma);
-            if tiny {
-                converged = true;
-            } else {
-                failure = Some(NotConverged::NoDescent);
-            }
-            break;
-        };
-        let max_step_sigma = step_sigma(&step);
-        let used_lambda = lambda;
-        lambda = if lambda < 1e-6 { 0.0 } else { lambda / 10.0 };
-        let rel = (ln_det(&r_new) - ln_det(&r)).exp_m1().abs();
-        beta = trial;
-        core::mem::swap(&mut e, &mut e_try);
-        r = r_new;
-        log.push(OeIteration {
+    }
+
+    /// Moves β to the accepted trial, relaxes λ (÷10, to 0 below 10⁻⁶) and logs the
+    /// iteration; `true` when both the relative change of `det R` and the step (in σ) are
+    /// below their tolerances.
+    fn accept(&mut self, iteration: usize, lin: &Linearization, trial: Trial) -> bool {
+        let max_step_sigma = lin.step_sigma(&trial.step);
+        let used_lambda = self.lambda;
+        self.lambda = if self.lambda < 1e-6 { 0.0 } else { self.lambda / 10.0 };
+        let rel = (ln_det(&trial.r) - ln_det(&self.r)).exp_m1().abs();
+        self.beta = trial.beta;
+        core::mem::swap(&mut self.e, &mut self.e_try);
+        self.r = trial.r;
+        self.log.push(OeIteration {
             iteration,
-            ln_det_r: ln_det(&r),
-            cost: weighted_cost(&e, &w),
+            ln_det_r: ln_det(&self.r),
+            cost: weighted_cost(&self.e, &lin.w),
             lambda: used_lambda,
             max_step_sigma,
         });
-        if rel < config.cost_tolerance && max_step_sigma < config.step_tolerance_sigma {
-            converged = true;
-            break;
-        }
+        rel < self.config.cost_tolerance && max_step_sigma < self.config.step_tolerance_sigma
     }
-    let termination = Termination::of(
-        &log,
-        converged,
-        failure.unwrap_or(NotConverged::MaxIterations),
-        config.cost_tolerance,
-    );
-    // The iterations' buffers go before `finish` simulates the sensitivities again: on a long
-    // record each sensitivity array is the largest allocation of the fit.
-    drop((s, y, y_try, e_try, e_ext));
-    Ok(finish(&p, &config.structure, &beta, &r, &e, log, start, termination, config)?)
 }
 
 /// The prepared problem of `config` over `manoeuvres` (outputs from the data by default).

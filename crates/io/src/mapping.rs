@@ -584,131 +584,14 @@ impl Mapping {
         let raw: MappingFile = toml::from_str(text).map_err(|e| {
             FlightDataError::MappingSyntax { file: file.to_string(), message: e.to_string() }
         })?;
-        if raw.time.scale == 0.0 {
-            return Err(FlightDataError::BadSpec {
-                file: file.to_string(),
-                channel: "time".into(),
-                reason: "[time]: `scale = 0`: scale must be non-zero (every row would have the same time)".into(),
-            });
-        }
-        check_time_spec(file, &raw.time)?;
-        let time = resolve(file, "time", &raw.time, Dimension::Time)?;
-        if matches!(time.source, Source::Constant(_)) {
-            return Err(FlightDataError::BadSpec {
-                file: file.to_string(),
-                channel: "time".into(),
-                reason: "time must come from a column".into(),
-            });
-        }
+        let time = time_map(file, &raw.time)?;
         let mut channels = BTreeMap::new();
         for (key, spec) in &raw.channels {
-            let Some(ch) = Channel::from_key(key.get_ref()) else {
-                return Err(FlightDataError::UnknownChannel {
-                    file: file.to_string(),
-                    line: line_of(text, key.span().start),
-                    channel: key.get_ref().clone(),
-                    valid: Channel::ALL.iter().map(|c| c.key()).collect::<Vec<_>>().join(", "),
-                });
-            };
-            if spec.scale == 0.0 {
-                // A zero scale makes the channel identically its offset: every regressor built
-                // on it is 0 and the parameters it feeds are never identified (issue 10 #10).
-                return Err(FlightDataError::BadSpec {
-                    file: file.to_string(),
-                    channel: ch.key().into(),
-                    reason: format!(
-                        "line {}: `scale = 0`: scale must be non-zero (it would make the channel the constant {} {}; map a constant with `value`)",
-                        line_of(text, key.span().start),
-                        spec.offset,
-                        spec.unit
-                    ),
-                });
-            }
-            let m = resolve(file, ch.key(), spec, ch.dimension())?;
-            if Channel::POSITIVE.contains(&ch)
-                && let Some(v) = m.constant()
-                && (v.is_nan() || v <= 0.0)
-            {
-                return Err(FlightDataError::BadSpec {
-                    file: file.to_string(),
-                    channel: ch.key().into(),
-                    reason: format!("must be > 0, got {v}"),
-                });
-            }
-            if let Some(v) = m.constant()
-                && let Err(reason) = check_constant_range(ch, v)
-            {
-                return Err(FlightDataError::BadSpec {
-                    file: file.to_string(),
-                    channel: ch.key().into(),
-                    reason: format!(
-                        "line {}: `value = {:?}` {}: {reason}",
-                        line_of(text, key.span().start),
-                        spec.value.unwrap_or(v),
-                        spec.unit
-                    ),
-                });
-            }
+            let (ch, m) = channel_map(text, file, key, spec)?;
             channels.insert(ch, m);
         }
-        for ch in Channel::REQUIRED {
-            if !channels.contains_key(&ch) {
-                return Err(FlightDataError::MissingChannel {
-                    file: file.to_string(),
-                    channel: ch.key().into(),
-                });
-            }
-        }
-        if !channels.contains_key(&Channel::Qbar) && !channels.contains_key(&Channel::Rho) {
-            return Err(FlightDataError::MissingChannel {
-                file: file.to_string(),
-                channel: "qbar or rho".into(),
-            });
-        }
-        // A vane correction needs the flow angle and the rate it is corrected with.
-        for (vane, needs) in [
-            (Channel::AlphaVaneX, [Channel::Q, Channel::Alpha]),
-            (Channel::BetaVaneX, [Channel::R, Channel::Beta]),
-            (Channel::BetaVaneZ, [Channel::P, Channel::Beta]),
-        ] {
-            if channels.contains_key(&vane) {
-                for n in needs {
-                    if !channels.contains_key(&n) {
-                        return Err(FlightDataError::BadSpec {
-                            file: file.to_string(),
-                            channel: vane.key().into(),
-                            reason: format!("the vane correction needs channel `{}`", n.key()),
-                        });
-                    }
-                }
-            }
-        }
-        if let Some(dt) = raw.nominal_dt_s
-            && !(dt.is_finite() && dt > 0.0)
-        {
-            return Err(FlightDataError::BadSpec {
-                file: file.to_string(),
-                channel: "nominal_dt_s".into(),
-                reason: format!("must be finite and > 0, got {dt}"),
-            });
-        }
-        if let Some(m0) = raw.inertia_reference_mass_kg {
-            if !(m0.is_finite() && m0 > 0.0) {
-                return Err(FlightDataError::BadSpec {
-                    file: file.to_string(),
-                    channel: "inertia_reference_mass_kg".into(),
-                    reason: format!("must be finite and > 0, got {m0}"),
-                });
-            }
-            if ![Channel::Ixx, Channel::Iyy, Channel::Izz].iter().any(|c| channels.contains_key(c))
-            {
-                return Err(FlightDataError::BadSpec {
-                    file: file.to_string(),
-                    channel: "inertia_reference_mass_kg".into(),
-                    reason: "no inertia (Ixx, Iyy, Izz) is mapped to scale".into(),
-                });
-            }
-        }
+        check_channel_set(file, &channels)?;
+        check_file_settings(file, &raw, &channels)?;
         let (align, quaternion, air_data) = resolve_log_tables(file, &raw, &channels)?;
         let column_names = raw.columns.map(|c| c.names);
         if let Some(names) = &column_names {
@@ -805,6 +688,165 @@ impl Mapping {
 }
 
 type LogTables = (Option<AlignSpec>, Option<[String; 4]>, Option<AirDataSpec>);
+
+/// The `[time]` table resolved to seconds: a non-zero scale (else every row would have the
+/// same time) and a column, never a constant.
+fn time_map(file: &str, spec: &ChannelSpec) -> Result<ChannelMap, FlightDataError> {
+    if spec.scale == 0.0 {
+        return Err(FlightDataError::BadSpec {
+            file: file.to_string(),
+            channel: "time".into(),
+            reason:
+                "[time]: `scale = 0`: scale must be non-zero (every row would have the same time)"
+                    .into(),
+        });
+    }
+    check_time_spec(file, spec)?;
+    let time = resolve(file, "time", spec, Dimension::Time)?;
+    if matches!(time.source, Source::Constant(_)) {
+        return Err(FlightDataError::BadSpec {
+            file: file.to_string(),
+            channel: "time".into(),
+            reason: "time must come from a column".into(),
+        });
+    }
+    Ok(time)
+}
+
+/// One `[channels]` entry `key` resolved to SI: a known channel with a non-zero scale, and a
+/// constant within the channel's physical range (positive where it must be). Errors carry
+/// the TOML line of `key` in `text`.
+fn channel_map(
+    text: &str,
+    file: &str,
+    key: &Spanned<String>,
+    spec: &ChannelSpec,
+) -> Result<(Channel, ChannelMap), FlightDataError> {
+    let Some(ch) = Channel::from_key(key.get_ref()) else {
+        return Err(FlightDataError::UnknownChannel {
+            file: file.to_string(),
+            line: line_of(text, key.span().start),
+            channel: key.get_ref().clone(),
+            valid: Channel::ALL.iter().map(|c| c.key()).collect::<Vec<_>>().join(", "),
+        });
+    };
+    if spec.scale == 0.0 {
+        // A zero scale makes the channel identically its offset: every regressor built
+        // on it is 0 and the parameters it feeds are never identified.
+        return Err(FlightDataError::BadSpec {
+            file: file.to_string(),
+            channel: ch.key().into(),
+            reason: format!(
+                "line {}: `scale = 0`: scale must be non-zero (it would make the channel the constant {} {}; map a constant with `value`)",
+                line_of(text, key.span().start),
+                spec.offset,
+                spec.unit
+            ),
+        });
+    }
+    let m = resolve(file, ch.key(), spec, ch.dimension())?;
+    if Channel::POSITIVE.contains(&ch)
+        && let Some(v) = m.constant()
+        && (v.is_nan() || v <= 0.0)
+    {
+        return Err(FlightDataError::BadSpec {
+            file: file.to_string(),
+            channel: ch.key().into(),
+            reason: format!("must be > 0, got {v}"),
+        });
+    }
+    if let Some(v) = m.constant()
+        && let Err(reason) = check_constant_range(ch, v)
+    {
+        return Err(FlightDataError::BadSpec {
+            file: file.to_string(),
+            channel: ch.key().into(),
+            reason: format!(
+                "line {}: `value = {:?}` {}: {reason}",
+                line_of(text, key.span().start),
+                spec.value.unwrap_or(v),
+                spec.unit
+            ),
+        });
+    }
+    Ok((ch, m))
+}
+
+/// The mapped channels are enough to build samples: every required channel, `qbar` or `rho`
+/// (the dynamic pressure or what it is computed from), and for a vane correction the flow
+/// angle and the rate it is corrected with.
+fn check_channel_set(
+    file: &str,
+    channels: &BTreeMap<Channel, ChannelMap>,
+) -> Result<(), FlightDataError> {
+    for ch in Channel::REQUIRED {
+        if !channels.contains_key(&ch) {
+            return Err(FlightDataError::MissingChannel {
+                file: file.to_string(),
+                channel: ch.key().into(),
+            });
+        }
+    }
+    if !channels.contains_key(&Channel::Qbar) && !channels.contains_key(&Channel::Rho) {
+        return Err(FlightDataError::MissingChannel {
+            file: file.to_string(),
+            channel: "qbar or rho".into(),
+        });
+    }
+    for (vane, needs) in [
+        (Channel::AlphaVaneX, [Channel::Q, Channel::Alpha]),
+        (Channel::BetaVaneX, [Channel::R, Channel::Beta]),
+        (Channel::BetaVaneZ, [Channel::P, Channel::Beta]),
+    ] {
+        if channels.contains_key(&vane) {
+            for n in needs {
+                if !channels.contains_key(&n) {
+                    return Err(FlightDataError::BadSpec {
+                        file: file.to_string(),
+                        channel: vane.key().into(),
+                        reason: format!("the vane correction needs channel `{}`", n.key()),
+                    });
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The file-level settings: a finite positive `nominal_dt_s`, and an
+/// `inertia_reference_mass_kg` that is finite, positive and has an inertia to scale.
+fn check_file_settings(
+    file: &str,
+    raw: &MappingFile,
+    channels: &BTreeMap<Channel, ChannelMap>,
+) -> Result<(), FlightDataError> {
+    if let Some(dt) = raw.nominal_dt_s
+        && !(dt.is_finite() && dt > 0.0)
+    {
+        return Err(FlightDataError::BadSpec {
+            file: file.to_string(),
+            channel: "nominal_dt_s".into(),
+            reason: format!("must be finite and > 0, got {dt}"),
+        });
+    }
+    if let Some(m0) = raw.inertia_reference_mass_kg {
+        if !(m0.is_finite() && m0 > 0.0) {
+            return Err(FlightDataError::BadSpec {
+                file: file.to_string(),
+                channel: "inertia_reference_mass_kg".into(),
+                reason: format!("must be finite and > 0, got {m0}"),
+            });
+        }
+        if ![Channel::Ixx, Channel::Iyy, Channel::Izz].iter().any(|c| channels.contains_key(c)) {
+            return Err(FlightDataError::BadSpec {
+                file: file.to_string(),
+                channel: "inertia_reference_mass_kg".into(),
+                reason: "no inertia (Ixx, Iyy, Izz) is mapped to scale".into(),
+            });
+        }
+    }
+    Ok(())
+}
 
 /// Validates `[align]`, `[attitude]` and `[air_data]`, and that derived columns used by
 /// channels have the table that makes them.

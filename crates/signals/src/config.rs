@@ -298,11 +298,61 @@ impl InputConfig {
     /// # Errors
     /// As [`InputConfig::build`], plus the file errors of [`RecordedInput::from_csv_path`].
     pub fn build_in(&self, base_dir: &Path) -> Result<Input, SignalError> {
-        let hz = |f: f64| core::f64::consts::TAU * f;
         Ok(match *self {
             InputConfig::ThreeTwoOneOne { amplitude: a, amplitude_deg, start_s, dt_s } => {
                 ThreeTwoOneOne::new(amplitude(a, amplitude_deg)?, start_s, dt_s)?.into()
             }
+            InputConfig::Recorded { ref path, ref time_column, ref value_column, unit } => {
+                RecordedInput::from_csv_path(
+                    &base_dir.join(path),
+                    time_column.as_deref(),
+                    value_column.as_deref(),
+                    unit,
+                )?
+                .into()
+            }
+            InputConfig::Step { amplitude: a, amplitude_deg, start_s } => {
+                Step::new(amplitude(a, amplitude_deg)?, start_s)?.into()
+            }
+            InputConfig::Pulse { amplitude: a, amplitude_deg, start_s, width_s } => {
+                Pulse::new(amplitude(a, amplitude_deg)?, start_s, width_s)?.into()
+            }
+            InputConfig::Doublet { amplitude: a, amplitude_deg, start_s, pulse_width_s } => {
+                Doublet::new(amplitude(a, amplitude_deg)?, start_s, pulse_width_s)?.into()
+            }
+            InputConfig::BandLimitedWhiteNoise {
+                noise_power,
+                noise_power_deg2_s,
+                sample_time_s,
+                seed,
+            } => BandLimitedWhiteNoise::new(
+                one_of(
+                    "noise_power",
+                    noise_power,
+                    "noise_power_deg2_s",
+                    noise_power_deg2_s,
+                    |p| p * (core::f64::consts::PI / 180.0).powi(2),
+                )?,
+                sample_time_s,
+                seed,
+            )?
+            .into(),
+            InputConfig::Sum { ref parts } => {
+                Sum::new(parts.iter().map(InputConfig::build).collect::<Result<Vec<_>, _>>()?)
+                    .into()
+            }
+            InputConfig::Sweep { .. }
+            | InputConfig::Multisine { .. }
+            | InputConfig::OrthogonalMultisine { .. }
+            | InputConfig::Sine { .. } => self.build_harmonic()?,
+        })
+    }
+
+    /// The harmonic inputs (sweep, Schroeder and orthogonal multisines, sine): the ones with
+    /// a frequency or a harmonic set, each frequency given in rad/s or Hz (`ω = 2π f`).
+    fn build_harmonic(&self) -> Result<Input, SignalError> {
+        let hz = |f: f64| core::f64::consts::TAU * f;
+        Ok(match *self {
             InputConfig::Sweep {
                 amplitude: a,
                 amplitude_deg,
@@ -370,24 +420,6 @@ impl InputConfig {
                 duration_s,
             )?
             .into(),
-            InputConfig::Recorded { ref path, ref time_column, ref value_column, unit } => {
-                RecordedInput::from_csv_path(
-                    &base_dir.join(path),
-                    time_column.as_deref(),
-                    value_column.as_deref(),
-                    unit,
-                )?
-                .into()
-            }
-            InputConfig::Step { amplitude: a, amplitude_deg, start_s } => {
-                Step::new(amplitude(a, amplitude_deg)?, start_s)?.into()
-            }
-            InputConfig::Pulse { amplitude: a, amplitude_deg, start_s, width_s } => {
-                Pulse::new(amplitude(a, amplitude_deg)?, start_s, width_s)?.into()
-            }
-            InputConfig::Doublet { amplitude: a, amplitude_deg, start_s, pulse_width_s } => {
-                Doublet::new(amplitude(a, amplitude_deg)?, start_s, pulse_width_s)?.into()
-            }
             InputConfig::Sine {
                 amplitude: a,
                 amplitude_deg,
@@ -407,27 +439,7 @@ impl InputConfig {
                 duration_s,
             )?
             .into(),
-            InputConfig::BandLimitedWhiteNoise {
-                noise_power,
-                noise_power_deg2_s,
-                sample_time_s,
-                seed,
-            } => BandLimitedWhiteNoise::new(
-                one_of(
-                    "noise_power",
-                    noise_power,
-                    "noise_power_deg2_s",
-                    noise_power_deg2_s,
-                    |p| p * (core::f64::consts::PI / 180.0).powi(2),
-                )?,
-                sample_time_s,
-                seed,
-            )?
-            .into(),
-            InputConfig::Sum { ref parts } => {
-                Sum::new(parts.iter().map(InputConfig::build).collect::<Result<Vec<_>, _>>()?)
-                    .into()
-            }
+            _ => unreachable!("build_in passes only the harmonic inputs"),
         })
     }
 }

@@ -47,8 +47,42 @@ fn plotted(out: &RunOutput) -> Vec<(Param, Quantity)> {
 /// [`ReportError::Output`] naming the file.
 pub fn write_figures(out: &RunOutput, od: &mut OutputDir) -> Result<Vec<Figure>, ReportError> {
     let mut figures = Vec::new();
-    let t = &out.t_s;
     let name = &out.scenario.name;
+    figures.push(write_figure::<ReportError>(
+        od,
+        "controls",
+        &format!("{name}: control commands"),
+        "Pilot commands and wind.",
+        &controls_panels(out),
+        (1000, 220),
+    )?);
+    let conv: Vec<Panel> =
+        plotted(out).into_iter().filter_map(|(p, q)| convergence_panel(out, p, q)).collect();
+    if !conv.is_empty() {
+        figures.push(write_figure::<ReportError>(
+            od,
+            "convergence",
+            &format!("{name}: parameter convergence"),
+            "Estimates against the truth (dashed): a gap until identified, shaded ±2σ where the method gives σ; y-range from the converged part.",
+            &conv,
+            (1000, 240),
+        )?);
+    }
+    figures.push(write_figure::<ReportError>(
+        od,
+        "tracking",
+        &format!("{name}: reference vs estimated aircraft"),
+        "Reference aircraft's states against the estimated aircraft's.",
+        &tracking_panels(out),
+        (1000, 220),
+    )?);
+    Ok(figures)
+}
+
+/// The panels of `controls`: the elevator always, aileron and rudder when they move (deg),
+/// throttle (0–1) and the wind (NED, ft/s), drawn as signals.
+fn controls_panels(out: &RunOutput) -> Vec<Panel> {
+    let t = &out.t_s;
     let deg = |v: f64| v.to_degrees();
     let mut controls = Vec::new();
     for (k, surface, sym) in [(1, "elevator", "δe"), (2, "aileron", "δa"), (3, "rudder", "δr")] {
@@ -89,71 +123,63 @@ pub fn write_figures(out: &RunOutput, od: &mut OutputDir) -> Result<Vec<Figure>,
     for p in &mut controls {
         p.signals = true;
     }
-    figures.push(write_figure::<ReportError>(
-        od,
-        "controls",
-        &format!("{name}: control commands"),
-        "Pilot commands and wind.",
-        &controls,
-        (1000, 220),
-    )?);
+    controls
+}
 
-    let mut conv = Vec::new();
-    for (p, q) in plotted(out) {
-        let chans: Vec<_> = out
-            .channels
-            .iter()
-            .filter(|c| c.quantity == q)
-            .filter_map(|c| c.param(p).map(|l| (c, l)))
-            .collect();
-        let Some((_, first)) = chans.first() else { continue };
-        let mut s = vec![series("truth", t, opt(&first.truth), LineKind::Dashed)];
-        let mut bands = Vec::new();
-        for (c, l) in &chans {
-            s.push(series(&c.label, t, opt(&l.estimate), LineKind::Solid));
-            if l.sigma.iter().any(Option::is_some) {
-                let bound = |sign: f64| -> Vec<f64> {
-                    l.estimate
-                        .iter()
-                        .zip(&l.sigma)
-                        .map(|(e, s)| match (e, s) {
-                            (Some(e), Some(s)) => e + sign * 2.0 * s,
-                            _ => f64::NAN,
-                        })
-                        .collect()
-                };
-                bands.push(Band {
-                    label: format!("{} ±2σ", c.label),
-                    series: s.len() - 1,
-                    t_s: t.to_vec(),
-                    lo: bound(-1.0),
-                    hi: bound(1.0),
-                });
-            }
+/// The `convergence` panel of parameter `p` as quantity `q`: the truth (dashed) and every
+/// channel's estimate, with its ±2σ band where the channel gives σ; `None` when no channel
+/// estimates it.
+fn convergence_panel(out: &RunOutput, p: Param, q: Quantity) -> Option<Panel> {
+    let t = &out.t_s;
+    let chans: Vec<_> = out
+        .channels
+        .iter()
+        .filter(|c| c.quantity == q)
+        .filter_map(|c| c.param(p).map(|l| (c, l)))
+        .collect();
+    let (_, first) = chans.first()?;
+    let mut s = vec![series("truth", t, opt(&first.truth), LineKind::Dashed)];
+    let mut bands = Vec::new();
+    for (c, l) in &chans {
+        s.push(series(&c.label, t, opt(&l.estimate), LineKind::Solid));
+        if l.sigma.iter().any(Option::is_some) {
+            let bound = |sign: f64| -> Vec<f64> {
+                l.estimate
+                    .iter()
+                    .zip(&l.sigma)
+                    .map(|(e, s)| match (e, s) {
+                        (Some(e), Some(s)) => e + sign * 2.0 * s,
+                        _ => f64::NAN,
+                    })
+                    .collect()
+            };
+            bands.push(Band {
+                label: format!("{} ±2σ", c.label),
+                series: s.len() - 1,
+                t_s: t.to_vec(),
+                lo: bound(-1.0),
+                hi: bound(1.0),
+            });
         }
-        let title = match q {
-            Quantity::Increment => format!("Δ{}", p.name()),
-            Quantity::Derivative => p.name().to_string(),
-        };
-        conv.push(Panel {
-            title: title.clone(),
-            y_label: format!("{title} (per rad)"),
-            series: s,
-            bands,
-            ..Default::default()
-        });
     }
-    if !conv.is_empty() {
-        figures.push(write_figure::<ReportError>(
-            od,
-            "convergence",
-            &format!("{name}: parameter convergence"),
-            "Estimates against the truth (dashed): a gap until identified, shaded ±2σ where the method gives σ; y-range from the converged part.",
-            &conv,
-            (1000, 240),
-        )?);
-    }
+    let title = match q {
+        Quantity::Increment => format!("Δ{}", p.name()),
+        Quantity::Derivative => p.name().to_string(),
+    };
+    Some(Panel {
+        title: title.clone(),
+        y_label: format!("{title} (per rad)"),
+        series: s,
+        bands,
+        ..Default::default()
+    })
+}
 
+/// The panels of `tracking`: each tracked state of the reference aircraft (dashed) against
+/// every estimated aircraft's (angles and rates in deg); β, p and r are left out of a run
+/// where the reference keeps them at zero (a longitudinal run).
+fn tracking_panels(out: &RunOutput) -> Vec<Panel> {
+    let t = &out.t_s;
     let scale = [
         1.0,
         57.29577951308232,
@@ -193,13 +219,5 @@ pub fn write_figures(out: &RunOutput, od: &mut OutputDir) -> Result<Vec<Figure>,
     for p in &mut track {
         p.signals = true;
     }
-    figures.push(write_figure::<ReportError>(
-        od,
-        "tracking",
-        &format!("{name}: reference vs estimated aircraft"),
-        "Reference aircraft's states against the estimated aircraft's.",
-        &track,
-        (1000, 220),
-    )?);
-    Ok(figures)
+    track
 }

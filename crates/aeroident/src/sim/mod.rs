@@ -26,6 +26,39 @@ pub struct SimArgs {
 /// # Errors
 /// I/O, CSV or plotting errors naming the file.
 pub fn write_outputs(run: &SimRun, od: &mut OutputDir) -> anyhow::Result<()> {
+    write_timeseries(run, od)?;
+    let states = write_figure::<anyhow::Error>(
+        od,
+        "states",
+        "F-16 open-loop response",
+        "The true states (solid) and the sensed channels (dashed, where the scenario has sensors).",
+        &states_panels(run),
+        (1000, 230),
+    )?;
+    let controls = write_figure::<anyhow::Error>(
+        od,
+        "controls_wind",
+        "F-16 controls and wind",
+        "Surface commands and positions, throttle and engine power, and the wind in body axes.",
+        &controls_panels(run),
+        (1000, 230),
+    )?;
+    Report {
+        title: "aeroident f16 sim".into(),
+        settings: report_settings(run),
+        figures: vec![states, controls],
+        ..Default::default()
+    }
+    .write(od)?;
+    Ok(())
+}
+
+/// Degrees per radian: the factor radian channels are drawn with.
+const DEG_PER_RAD: f64 = 180.0 / std::f64::consts::PI;
+
+/// `timeseries.csv`: the run's columns, one row per step, every value as `{:.10e}` (enough
+/// digits to replay the record without loss that matters to identification).
+fn write_timeseries(run: &SimRun, od: &mut OutputDir) -> anyhow::Result<()> {
     let mut file = od.create("timeseries.csv")?;
     let csv_path = file.path().to_path_buf();
     let mut w = csv::Writer::from_writer(&mut file);
@@ -38,64 +71,76 @@ pub fn write_outputs(run: &SimRun, od: &mut OutputDir) -> anyhow::Result<()> {
     w.flush().with_context(|| format!("writing `{}`", csv_path.display()))?;
     drop(w);
     file.commit()?;
+    Ok(())
+}
 
-    let t = run.data[0].clone();
-    let d = 180.0 / std::f64::consts::PI;
+/// A panel of the channels `chans` (name, factor to the plotted unit), each true channel solid
+/// and its sensed `meas_` channel dashed where the run has one. Measured signals: the whole
+/// record sets the range (a manoeuvre is not a transient).
+fn channel_panel(run: &SimRun, title: &str, y_label: &str, chans: &[(&str, f64)]) -> Panel {
     // Legend names say the plotted unit: radian channels are drawn in degrees.
     let shown = |name: &str, scale: f64| -> String {
-        if scale == d {
+        if scale == DEG_PER_RAD {
             name.replace("_rad_s", "_deg_s").replace("_rad", "_deg")
         } else {
             name.to_string()
         }
     };
-    let panel = |title: &str, y_label: &str, chans: &[(&str, f64)]| -> Panel {
-        let mut series = vec![];
-        for &(ch, scale) in chans {
-            if let Some(v) = run.column(ch) {
-                series.push(Series {
-                    label: shown(ch, scale),
-                    t_s: t.clone(),
-                    values: v.iter().map(|x| x * scale).collect(),
-                    kind: LineKind::Solid,
-                });
-            }
-            let m = format!("meas_{ch}");
-            if let Some(v) = run.column(&m) {
-                series.push(Series {
-                    label: shown(&m, scale),
-                    t_s: t.clone(),
-                    values: v.iter().map(|x| x * scale).collect(),
-                    kind: LineKind::Dashed,
-                });
-            }
+    let t = &run.data[0];
+    let mut series = vec![];
+    for &(ch, scale) in chans {
+        if let Some(v) = run.column(ch) {
+            series.push(Series {
+                label: shown(ch, scale),
+                t_s: t.clone(),
+                values: v.iter().map(|x| x * scale).collect(),
+                kind: LineKind::Solid,
+            });
         }
-        // Measured signals: the whole record sets the range (a manoeuvre is not a transient).
-        Panel {
-            title: title.to_string(),
-            y_label: y_label.to_string(),
-            series,
-            signals: true,
-            ..Default::default()
+        let m = format!("meas_{ch}");
+        if let Some(v) = run.column(&m) {
+            series.push(Series {
+                label: shown(&m, scale),
+                t_s: t.clone(),
+                values: v.iter().map(|x| x * scale).collect(),
+                kind: LineKind::Dashed,
+            });
         }
+    }
+    Panel {
+        title: title.to_string(),
+        y_label: y_label.to_string(),
+        series,
+        signals: true,
+        ..Default::default()
+    }
+}
+
+/// The panels of `states`: airspeed, flow angles, body rates, attitude, load factors and
+/// altitude (angles in deg).
+fn states_panels(run: &SimRun) -> [Panel; 6] {
+    let d = DEG_PER_RAD;
+    let panel = |title: &str, y_label: &str, chans: &[(&str, f64)]| {
+        channel_panel(run, title, y_label, chans)
     };
-    let states = [
+    [
         panel("true airspeed", "vt (ft/s)", &[("vt_fps", 1.0)]),
         panel("angle of attack and sideslip", "deg", &[("alpha_rad", d), ("beta_rad", d)]),
         panel("body rates", "deg/s", &[("p_rad_s", d), ("q_rad_s", d), ("r_rad_s", d)]),
         panel("attitude", "deg", &[("phi_rad", d), ("theta_rad", d)]),
         panel("load factors", "g", &[("nz_g", 1.0), ("ny_g", 1.0), ("nx_g", 1.0)]),
         panel("altitude", "alt (ft)", &[("alt_ft", 1.0)]),
-    ];
-    let states = write_figure::<anyhow::Error>(
-        od,
-        "states",
-        "F-16 open-loop response",
-        "The true states (solid) and the sensed channels (dashed, where the scenario has sensors).",
-        &states,
-        (1000, 230),
-    )?;
-    let controls = [
+    ]
+}
+
+/// The panels of `controls_wind`: surface commands and positions (deg), throttle and engine
+/// power, and the wind in body axes.
+fn controls_panels(run: &SimRun) -> [Panel; 4] {
+    let d = DEG_PER_RAD;
+    let panel = |title: &str, y_label: &str, chans: &[(&str, f64)]| {
+        channel_panel(run, title, y_label, chans)
+    };
+    [
         panel("elevator", "deg", &[("elevator_cmd_rad", d), ("elevator_rad", d)]),
         panel(
             "aileron and rudder",
@@ -112,15 +157,13 @@ pub fn write_outputs(run: &SimRun, od: &mut OutputDir) -> anyhow::Result<()> {
             "ft/s",
             &[("wind_body_x_fps", 1.0), ("wind_body_y_fps", 1.0), ("wind_body_z_fps", 1.0)],
         ),
-    ];
-    let controls = write_figure::<anyhow::Error>(
-        od,
-        "controls_wind",
-        "F-16 controls and wind",
-        "Surface commands and positions, throttle and engine power, and the wind in body axes.",
-        &controls,
-        (1000, 230),
-    )?;
+    ]
+}
+
+/// The report's settings: the common ones, the record's size, the trim the run started from
+/// and how to replay the record.
+fn report_settings(run: &SimRun) -> Vec<(String, String)> {
+    let t = &run.data[0];
     let mut settings = common_settings();
     settings.extend([
         (
@@ -144,14 +187,7 @@ pub fn write_outputs(run: &SimRun, od: &mut OutputDir) -> anyhow::Result<()> {
         ),
         ("replay it with".into(), "--map mappings/aeroident-sim.toml (docs/mapping.md)".into()),
     ]);
-    Report {
-        title: "aeroident f16 sim".into(),
-        settings,
-        figures: vec![states, controls],
-        ..Default::default()
-    }
-    .write(od)?;
-    Ok(())
+    settings
 }
 
 /// Runs `aeroident f16 sim`.

@@ -802,83 +802,158 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FdoeConfig) -> Result<FdoeR
         ));
     }
     let start = equation_error_start(&config.structure, manoeuvres);
-    let nb = ctx.n_unknowns();
-    let ny = ctx.outputs.len();
-    let mut beta: Vec<f64> = ctx.free.iter().map(|&i| start[i]).collect();
-    beta.resize(nb, 0.0);
-    let merit = |s: &[f64]| s.iter().map(|v| v.ln()).sum::<f64>();
-    let k_total: usize = ctx.man.iter().map(|m| m.z.len()).sum();
-    let (theta, xd) = ctx.split(&start, &beta);
-    let mut v = residuals(&ctx, &theta, &xd)?;
-    let mut s = spectral_variances(&v, ny);
-    let mut log = vec![OeIteration {
-        iteration: 0,
-        ln_det_r: merit(&s),
-        cost: 0.5 * (k_total * ny) as f64,
-        lambda: 0.0,
-        max_step_sigma: f64::NAN,
-    }];
-    let mut converged = false;
-    let mut failure = NotConverged::MaxIterations;
-    for iteration in 1..=config.max_iterations {
-        if config.stop.as_ref().is_some_and(StopFlag::raised) {
-            failure = NotConverged::Stopped;
-            break;
+    let mut it = FdIterate::new(&ctx, &start)?;
+    let (converged, failure) = it.iterate(&ctx, config, &start)?;
+    let termination = Termination::of(&it.log, converged, failure, config.cost_tolerance);
+    fd_result(&ctx, config, start, it, termination)
+}
+
+/// Per manoeuvre, per frequency, the output error `V_k`.
+type Residuals = Vec<Vec<DVector<C64>>>;
+
+/// `ln det S_vv` of the diagonal spectral variances: the merit the iteration lowers.
+fn ln_det(s: &[f64]) -> f64 {
+    s.iter().map(|v| v.ln()).sum::<f64>()
+}
+
+/// The frequency-domain iteration's state: the unknowns β (free parameters, then the
+/// transients), the residuals `V` and spectral variances `S_vv` at β, and the log.
+struct FdIterate {
+    beta: Vec<f64>,
+    v: Residuals,
+    s: Vec<f64>,
+    log: Vec<OeIteration>,
+}
+
+/// A step along the Gauss–Newton direction that lowered the merit: the new β, its residuals
+/// and variances, and the step length α it was found at.
+struct FdTrial {
+    beta: Vec<f64>,
+    v: Residuals,
+    s: Vec<f64>,
+    alpha: f64,
+}
+
+impl FdIterate {
+    /// The state at the equation-error start `start` (transients 0), with its log entry 0.
+    fn new(ctx: &Context, start: &[f64]) -> Result<Self, FdoeError> {
+        let nb = ctx.n_unknowns();
+        let ny = ctx.outputs.len();
+        let mut beta: Vec<f64> = ctx.free.iter().map(|&i| start[i]).collect();
+        beta.resize(nb, 0.0);
+        let k_total: usize = ctx.man.iter().map(|m| m.z.len()).sum();
+        let (theta, xd) = ctx.split(start, &beta);
+        let v = residuals(ctx, &theta, &xd)?;
+        let s = spectral_variances(&v, ny);
+        let log = vec![OeIteration {
+            iteration: 0,
+            ln_det_r: ln_det(&s),
+            cost: 0.5 * (k_total * ny) as f64,
+            lambda: 0.0,
+            max_step_sigma: f64::NAN,
+        }];
+        Ok(Self { beta, v, s, log })
+    }
+
+    /// Gauss–Newton iterations with step halving until converged, stopped or out of
+    /// iterations: `(converged, why not)` (the reason is only read when not converged).
+    fn iterate(
+        &mut self,
+        ctx: &Context,
+        config: &FdoeConfig,
+        start: &[f64],
+    ) -> Result<(bool, NotConverged), FdoeError> {
+        let nb = ctx.n_unknowns();
+        for iteration in 1..=config.max_iterations {
+            if config.stop.as_ref().is_some_and(StopFlag::raised) {
+                return Ok((false, NotConverged::Stopped));
+            }
+            let sens = ctx.sensitivities(start, &self.beta)?;
+            let (m, g) = normal_equations(&sens, &self.v, &self.s, nb);
+            let Some(minv) = spd_inverse(&m) else {
+                return Ok((false, NotConverged::Unidentifiable));
+            };
+            let step = &minv * &g;
+            let sigma: Vec<f64> = (0..nb).map(|i| (0.5 * minv[(i, i)]).sqrt()).collect();
+            let Some(trial) = self.line_search(ctx, start, &step) else {
+                // No descent along the Gauss–Newton direction: at the minimum to rounding when
+                // the step is already negligible.
+                let largest = (0..nb).map(|i| (step[i] / sigma[i]).abs()).fold(0.0, f64::max);
+                return Ok((largest < config.step_tolerance_sigma, NotConverged::NoDescent));
+            };
+            if self.accept(iteration, trial, &step, &sigma, config) {
+                return Ok((true, NotConverged::MaxIterations));
+            }
         }
-        let sens = ctx.sensitivities(&start, &beta)?;
-        let (m, g) = normal_equations(&sens, &v, &s, nb);
-        let Some(minv) = spd_inverse(&m) else {
-            failure = NotConverged::Unidentifiable;
-            break;
-        };
-        let step = &minv * &g;
-        let sigma: Vec<f64> = (0..nb).map(|i| (0.5 * minv[(i, i)]).sqrt()).collect();
+        Ok((false, NotConverged::MaxIterations))
+    }
+
+    /// The first of `β + α Δ`, α = 1, ½, … (11 lengths), whose residuals exist and lower
+    /// `ln det S_vv` with every variance positive; `None` when none does.
+    fn line_search(&self, ctx: &Context, start: &[f64], step: &DVector<f64>) -> Option<FdTrial> {
+        let ny = ctx.outputs.len();
         let mut alpha = 1.0;
-        let mut accepted = None;
         for _ in 0..11 {
             let trial: Vec<f64> =
-                beta.iter().zip(step.iter()).map(|(b, d)| b + alpha * d).collect();
-            let (theta, xd) = ctx.split(&start, &trial);
-            if let Ok(vt) = residuals(&ctx, &theta, &xd) {
+                self.beta.iter().zip(step.iter()).map(|(b, d)| b + alpha * d).collect();
+            let (theta, xd) = ctx.split(start, &trial);
+            if let Ok(vt) = residuals(ctx, &theta, &xd) {
                 let st = spectral_variances(&vt, ny);
-                if merit(&st) < merit(&s) && st.iter().all(|x| *x > 0.0) {
-                    accepted = Some((trial, vt, st));
-                    break;
+                if ln_det(&st) < ln_det(&self.s) && st.iter().all(|x| *x > 0.0) {
+                    return Some(FdTrial { beta: trial, v: vt, s: st, alpha });
                 }
             }
             alpha *= 0.5;
         }
-        let Some((trial, vt, st)) = accepted else {
-            // No descent along the Gauss–Newton direction: at the minimum to rounding when
-            // the step is already negligible.
-            let largest = (0..nb).map(|i| (step[i] / sigma[i]).abs()).fold(0.0, f64::max);
-            converged = largest < config.step_tolerance_sigma;
-            failure = NotConverged::NoDescent;
-            break;
-        };
-        let largest = (0..nb).map(|i| (alpha * step[i] / sigma[i]).abs()).fold(0.0, f64::max);
-        let wc: f64 = vt
+        None
+    }
+
+    /// Moves to the accepted trial and logs the iteration (its cost `½ Σ |V|²/S_vv` with the
+    /// variances the step was taken with); `true` when both the relative change of
+    /// `det S_vv` and the step (in σ of the unknowns, `sigma`) are below their tolerances.
+    fn accept(
+        &mut self,
+        iteration: usize,
+        trial: FdTrial,
+        step: &DVector<f64>,
+        sigma: &[f64],
+        config: &FdoeConfig,
+    ) -> bool {
+        let (nb, ny) = (sigma.len(), self.s.len());
+        let largest = (0..nb).map(|i| (trial.alpha * step[i] / sigma[i]).abs()).fold(0.0, f64::max);
+        let wc: f64 = trial
+            .v
             .iter()
             .flatten()
-            .map(|vk| (0..ny).map(|j| vk[j].norm_sqr() / s[j]).sum::<f64>())
+            .map(|vk| (0..ny).map(|j| vk[j].norm_sqr() / self.s[j]).sum::<f64>())
             .sum();
-        let change = (merit(&st) - merit(&s)).exp_m1().abs();
-        beta = trial;
-        v = vt;
-        s = st;
-        log.push(OeIteration {
+        let change = (ln_det(&trial.s) - ln_det(&self.s)).exp_m1().abs();
+        self.beta = trial.beta;
+        self.v = trial.v;
+        self.s = trial.s;
+        self.log.push(OeIteration {
             iteration,
-            ln_det_r: merit(&s),
+            ln_det_r: ln_det(&self.s),
             cost: 0.5 * wc,
             lambda: 0.0,
             max_step_sigma: largest,
         });
-        if change < config.cost_tolerance && largest < config.step_tolerance_sigma {
-            converged = true;
-            break;
-        }
+        change < config.cost_tolerance && largest < config.step_tolerance_sigma
     }
-    let termination = Termination::of(&log, converged, failure, config.cost_tolerance);
+}
+
+/// The result at the final iterate: Cramér–Rao covariance `(2M)⁻¹` of the free parameters
+/// (none for an unidentifiable fit, which is then not converged), the inputs seen, and the
+/// flight condition `(V, q̄)` of each manoeuvre's reference.
+fn fd_result(
+    ctx: &Context,
+    config: &FdoeConfig,
+    start: Vec<f64>,
+    it: FdIterate,
+    termination: Termination,
+) -> Result<FdoeResult, FdoeError> {
+    let FdIterate { beta, v, s, log } = it;
+    let nb = ctx.n_unknowns();
     let sens = ctx.sensitivities(&start, &beta)?;
     let (m, _) = normal_equations(&sens, &v, &s, nb);
     let cov = spd_inverse(&m).map(|mi| mi * 0.5);

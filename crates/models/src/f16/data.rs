@@ -466,6 +466,81 @@ fn table2<const R: usize, const C: usize>(
 
 const DAMPING_ORDER: [&str; 9] = ["CXq", "CYr", "CYp", "CZq", "Clr", "Clp", "Cmq", "Cnr", "Cnp"];
 
+/// The `[cz]` section: its 1-D α table and the β/elevator build-up constants (SLJ App. A,
+/// FUNCTION CZ).
+fn cz_model(raw: &RawCz) -> Result<CzModel, DataError> {
+    if raw.axes != ["alpha_deg"] {
+        return Err(invalid(
+            "cz",
+            "axes",
+            format!("expected [\"alpha_deg\"], found {:?}", raw.axes),
+        ));
+    }
+    Ok(CzModel {
+        table: Table1 {
+            x: axis::<12>("cz", "alpha_deg", &raw.alpha_deg)?,
+            y: array::<12>("cz", "values", &raw.values)?,
+        },
+        beta_scale_deg: finite("cz", "beta_scale_deg", raw.beta_scale_deg)?,
+        elevator_coefficient: finite("cz", "elevator_coefficient", raw.elevator_coefficient)?,
+        elevator_scale_deg: finite("cz", "elevator_scale_deg", raw.elevator_scale_deg)?,
+    })
+}
+
+/// The `[cy]` section: the linear CY formula's constants (SLJ App. A, FUNCTION CY), each
+/// required finite.
+fn cy_formula(raw: &RawCy) -> Result<CyFormula, DataError> {
+    Ok(CyFormula {
+        beta_coefficient_per_deg: finite(
+            "cy",
+            "beta_coefficient_per_deg",
+            raw.beta_coefficient_per_deg,
+        )?,
+        aileron_coefficient: finite("cy", "aileron_coefficient", raw.aileron_coefficient)?,
+        aileron_scale_deg: finite("cy", "aileron_scale_deg", raw.aileron_scale_deg)?,
+        rudder_coefficient: finite("cy", "rudder_coefficient", raw.rudder_coefficient)?,
+        rudder_scale_deg: finite("cy", "rudder_scale_deg", raw.rudder_scale_deg)?,
+    })
+}
+
+/// The `[damping]` section: nine rows vs α° in the textbook order [`DAMPING_ORDER`] (the model
+/// indexes them by position, so the order is checked, not just the count), all on one α axis.
+fn damping_tables(d: &RawDamping) -> Result<[Table1<12>; 9], DataError> {
+    if d.axes != ["coefficient", "alpha_deg"] {
+        return Err(invalid(
+            "damping",
+            "axes",
+            format!("expected [\"coefficient\", \"alpha_deg\"], found {:?}", d.axes),
+        ));
+    }
+    if d.coefficient != DAMPING_ORDER {
+        return Err(invalid(
+            "damping",
+            "coefficient",
+            format!("expected {DAMPING_ORDER:?}, found {:?}", d.coefficient),
+        ));
+    }
+    let alpha = axis::<12>("damping", "alpha_deg", &d.alpha_deg)?;
+    if d.values.len() != 9 {
+        return Err(invalid(
+            "damping",
+            "values",
+            format!("expected 9 rows, found {}", d.values.len()),
+        ));
+    }
+    let mut rows = Vec::with_capacity(9);
+    for (i, row) in d.values.iter().enumerate() {
+        let y = array::<12>("damping", "values", row).map_err(|e| match e {
+            DataError::Invalid { reason, .. } => {
+                invalid("damping", "values", format!("row {i} ({}): {reason}", DAMPING_ORDER[i]))
+            }
+            other => other,
+        })?;
+        rows.push(Table1 { x: alpha, y });
+    }
+    rows.try_into().map_err(|_| invalid("damping", "values", "expected 9 rows"))
+}
+
 impl F16Data {
     /// Parses the data file's text.
     ///
@@ -487,179 +562,11 @@ impl F16Data {
         let thrust_idle = table2::<6, 6>("thrust_idle", &raw.thrust_idle, "altitude_ft", "mach")?;
         let thrust_mil = table2::<6, 6>("thrust_mil", &raw.thrust_mil, "altitude_ft", "mach")?;
         let thrust_max = table2::<6, 6>("thrust_max", &raw.thrust_max, "altitude_ft", "mach")?;
+        let cz = cz_model(&raw.cz)?;
+        let cy = cy_formula(&raw.cy)?;
+        let damping = damping_tables(&raw.damping)?;
 
-        if raw.cz.axes != ["alpha_deg"] {
-            return Err(invalid(
-                "cz",
-                "axes",
-                format!("expected [\"alpha_deg\"], found {:?}", raw.cz.axes),
-            ));
-        }
-        let cz = CzModel {
-            table: Table1 {
-                x: axis::<12>("cz", "alpha_deg", &raw.cz.alpha_deg)?,
-                y: array::<12>("cz", "values", &raw.cz.values)?,
-            },
-            beta_scale_deg: finite("cz", "beta_scale_deg", raw.cz.beta_scale_deg)?,
-            elevator_coefficient: finite(
-                "cz",
-                "elevator_coefficient",
-                raw.cz.elevator_coefficient,
-            )?,
-            elevator_scale_deg: finite("cz", "elevator_scale_deg", raw.cz.elevator_scale_deg)?,
-        };
-        let cy = CyFormula {
-            beta_coefficient_per_deg: finite(
-                "cy",
-                "beta_coefficient_per_deg",
-                raw.cy.beta_coefficient_per_deg,
-            )?,
-            aileron_coefficient: finite("cy", "aileron_coefficient", raw.cy.aileron_coefficient)?,
-            aileron_scale_deg: finite("cy", "aileron_scale_deg", raw.cy.aileron_scale_deg)?,
-            rudder_coefficient: finite("cy", "rudder_coefficient", raw.cy.rudder_coefficient)?,
-            rudder_scale_deg: finite("cy", "rudder_scale_deg", raw.cy.rudder_scale_deg)?,
-        };
-
-        let d = &raw.damping;
-        if d.axes != ["coefficient", "alpha_deg"] {
-            return Err(invalid(
-                "damping",
-                "axes",
-                format!("expected [\"coefficient\", \"alpha_deg\"], found {:?}", d.axes),
-            ));
-        }
-        if d.coefficient != DAMPING_ORDER {
-            return Err(invalid(
-                "damping",
-                "coefficient",
-                format!("expected {DAMPING_ORDER:?}, found {:?}", d.coefficient),
-            ));
-        }
-        let alpha = axis::<12>("damping", "alpha_deg", &d.alpha_deg)?;
-        if d.values.len() != 9 {
-            return Err(invalid(
-                "damping",
-                "values",
-                format!("expected 9 rows, found {}", d.values.len()),
-            ));
-        }
-        let mut rows = Vec::with_capacity(9);
-        for (i, row) in d.values.iter().enumerate() {
-            let y = array::<12>("damping", "values", row).map_err(|e| match e {
-                DataError::Invalid { reason, .. } => invalid(
-                    "damping",
-                    "values",
-                    format!("row {i} ({}): {reason}", DAMPING_ORDER[i]),
-                ),
-                other => other,
-            })?;
-            rows.push(Table1 { x: alpha, y });
-        }
-        let damping: [Table1<12>; 9] =
-            rows.try_into().map_err(|_| invalid("damping", "values", "expected 9 rows"))?;
-
-        // All aerodynamic tables share one alpha axis (SLJ App. A: −10…45° by 5°); the model
-        // locates alpha once per evaluation, so insist on it here.
-        let alpha_axis = cx.r;
-        for (name, ax) in [
-            ("cm", &cm.r),
-            ("cl", &cl.r),
-            ("cn", &cn.r),
-            ("dlda", &dlda.r),
-            ("dldr", &dldr.r),
-            ("dnda", &dnda.r),
-            ("dndr", &dndr.r),
-            ("cz", &cz.table.x),
-            ("damping", &alpha),
-        ] {
-            if *ax != alpha_axis {
-                return Err(invalid(
-                    name,
-                    "alpha_deg",
-                    "must equal the alpha axis of cx (shared axis)",
-                ));
-            }
-        }
-        if cm.c != cx.c {
-            return Err(invalid(
-                "cm",
-                "elevator_deg",
-                "must equal the elevator axis of cx (shared axis)",
-            ));
-        }
-        if cn.c != cl.c {
-            return Err(invalid(
-                "cn",
-                "abs_beta_deg",
-                "must equal the |beta| axis of cl (shared axis)",
-            ));
-        }
-        for (name, ax) in [("dldr", &dldr.c), ("dnda", &dnda.c), ("dndr", &dndr.c)] {
-            if *ax != dlda.c {
-                return Err(invalid(
-                    name,
-                    "beta_deg",
-                    "must equal the beta axis of dlda (shared axis)",
-                ));
-            }
-        }
-        if thrust_mil.r != thrust_idle.r
-            || thrust_max.r != thrust_idle.r
-            || thrust_mil.c != thrust_idle.c
-            || thrust_max.c != thrust_idle.c
-        {
-            return Err(invalid(
-                "thrust_mil",
-                "altitude_ft",
-                "thrust tables must share the altitude and Mach axes of thrust_idle",
-            ));
-        }
-
-        let positive = |table: &'static str, field: &'static str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(v)
-            } else {
-                Err(invalid(table, field, format!("must be finite and > 0, got {v}")))
-            }
-        };
-        let m = &raw.mass;
-        positive("mass", "inverse_mass_per_slug", m.inverse_mass_per_slug)?;
-        positive("mass", "g_ft_per_s2", m.g_ft_per_s2)?;
-        positive("mass", "ixx_slug_ft2", m.ixx_slug_ft2)?;
-        positive("mass", "iyy_slug_ft2", m.iyy_slug_ft2)?;
-        positive("mass", "izz_slug_ft2", m.izz_slug_ft2)?;
-        let g = &raw.geometry;
-        positive("geometry", "wing_area_ft2", g.wing_area_ft2)?;
-        positive("geometry", "span_ft", g.span_ft)?;
-        positive("geometry", "cbar_ft", g.cbar_ft)?;
-        let a = &raw.atmosphere;
-        positive("atmosphere", "rho0_slug_per_ft3", a.rho0_slug_per_ft3)?;
-        positive("atmosphere", "t0_rankine", a.t0_rankine)?;
-        positive("atmosphere", "t_above_tropopause_rankine", a.t_above_tropopause_rankine)?;
-        positive("buildup", "aileron_scale_deg", raw.buildup.aileron_scale_deg)?;
-        positive("buildup", "rudder_scale_deg", raw.buildup.rudder_scale_deg)?;
-        let rg = &raw.ranges;
-        for (field, r) in [
-            ("alpha_deg", rg.alpha_deg),
-            ("beta_deg", rg.beta_deg),
-            ("elevator_deg", rg.elevator_deg),
-            ("aileron_deg", rg.aileron_deg),
-            ("rudder_deg", rg.rudder_deg),
-            ("throttle", rg.throttle),
-            ("power_percent", rg.power_percent),
-            ("altitude_ft", rg.altitude_ft),
-            ("mach", rg.mach),
-        ] {
-            if !(r[0].is_finite() && r[1].is_finite() && r[0] < r[1]) {
-                return Err(invalid(
-                    "ranges",
-                    field,
-                    format!("must be [min, max] with min < max, got {r:?}"),
-                ));
-            }
-        }
-
-        Ok(Self {
+        let data = Self {
             rad_to_deg,
             cx,
             cz,
@@ -683,7 +590,122 @@ impl F16Data {
             geometry: raw.geometry,
             moment: raw.moment_constants,
             ranges: raw.ranges,
-        })
+        };
+        data.check_shared_axes()?;
+        data.check_physical()?;
+        Ok(data)
+    }
+
+    /// Rejects tables whose breakpoints differ where the model assumes one shared axis.
+    ///
+    /// All aerodynamic tables share one alpha axis (SLJ App. A: −10…45° by 5°); the model
+    /// locates alpha once per evaluation, so insist on it here. Likewise for the elevator axis
+    /// of cx/cm, the |β| axis of cl/cn, the β axis of the four control-derivative tables and
+    /// the (altitude, Mach) grid of the three thrust tables.
+    fn check_shared_axes(&self) -> Result<(), DataError> {
+        let alpha_axis = self.cx.r;
+        for (name, ax) in [
+            ("cm", &self.cm.r),
+            ("cl", &self.cl.r),
+            ("cn", &self.cn.r),
+            ("dlda", &self.dlda.r),
+            ("dldr", &self.dldr.r),
+            ("dnda", &self.dnda.r),
+            ("dndr", &self.dndr.r),
+            ("cz", &self.cz.table.x),
+            ("damping", &self.damping[0].x),
+        ] {
+            if *ax != alpha_axis {
+                return Err(invalid(
+                    name,
+                    "alpha_deg",
+                    "must equal the alpha axis of cx (shared axis)",
+                ));
+            }
+        }
+        if self.cm.c != self.cx.c {
+            return Err(invalid(
+                "cm",
+                "elevator_deg",
+                "must equal the elevator axis of cx (shared axis)",
+            ));
+        }
+        if self.cn.c != self.cl.c {
+            return Err(invalid(
+                "cn",
+                "abs_beta_deg",
+                "must equal the |beta| axis of cl (shared axis)",
+            ));
+        }
+        for (name, ax) in [("dldr", &self.dldr.c), ("dnda", &self.dnda.c), ("dndr", &self.dndr.c)] {
+            if *ax != self.dlda.c {
+                return Err(invalid(
+                    name,
+                    "beta_deg",
+                    "must equal the beta axis of dlda (shared axis)",
+                ));
+            }
+        }
+        let (idle, mil, max) = (&self.thrust_idle, &self.thrust_mil, &self.thrust_max);
+        if mil.r != idle.r || max.r != idle.r || mil.c != idle.c || max.c != idle.c {
+            return Err(invalid(
+                "thrust_mil",
+                "altitude_ft",
+                "thrust tables must share the altitude and Mach axes of thrust_idle",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Rejects physically meaningless constants: masses, inertias, lengths, densities,
+    /// temperatures and control normalizations must be finite and positive (they divide or
+    /// scale the dynamics), and every intended range must be a finite `[min, max]` with
+    /// `min < max`.
+    fn check_physical(&self) -> Result<(), DataError> {
+        let positive = |table: &'static str, field: &'static str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(v)
+            } else {
+                Err(invalid(table, field, format!("must be finite and > 0, got {v}")))
+            }
+        };
+        let m = &self.mass;
+        positive("mass", "inverse_mass_per_slug", m.inverse_mass_per_slug)?;
+        positive("mass", "g_ft_per_s2", m.g_ft_per_s2)?;
+        positive("mass", "ixx_slug_ft2", m.ixx_slug_ft2)?;
+        positive("mass", "iyy_slug_ft2", m.iyy_slug_ft2)?;
+        positive("mass", "izz_slug_ft2", m.izz_slug_ft2)?;
+        let g = &self.geometry;
+        positive("geometry", "wing_area_ft2", g.wing_area_ft2)?;
+        positive("geometry", "span_ft", g.span_ft)?;
+        positive("geometry", "cbar_ft", g.cbar_ft)?;
+        let a = &self.atmosphere;
+        positive("atmosphere", "rho0_slug_per_ft3", a.rho0_slug_per_ft3)?;
+        positive("atmosphere", "t0_rankine", a.t0_rankine)?;
+        positive("atmosphere", "t_above_tropopause_rankine", a.t_above_tropopause_rankine)?;
+        positive("buildup", "aileron_scale_deg", self.aileron_scale_deg)?;
+        positive("buildup", "rudder_scale_deg", self.rudder_scale_deg)?;
+        let rg = &self.ranges;
+        for (field, r) in [
+            ("alpha_deg", rg.alpha_deg),
+            ("beta_deg", rg.beta_deg),
+            ("elevator_deg", rg.elevator_deg),
+            ("aileron_deg", rg.aileron_deg),
+            ("rudder_deg", rg.rudder_deg),
+            ("throttle", rg.throttle),
+            ("power_percent", rg.power_percent),
+            ("altitude_ft", rg.altitude_ft),
+            ("mach", rg.mach),
+        ] {
+            if !(r[0].is_finite() && r[1].is_finite() && r[0] < r[1]) {
+                return Err(invalid(
+                    "ranges",
+                    field,
+                    format!("must be [min, max] with min < max, got {r:?}"),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// The shipped data ([`EMBEDDED_TOML`]), parsed once on first use.

@@ -711,6 +711,83 @@ fn parse_estimator(
     }))
 }
 
+/// `v` must be finite and positive; the error is `field` and why.
+fn positive(field: &str, v: f64) -> Result<(), (String, String)> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err((field.into(), format!("must be finite and > 0, got {v}")))
+    }
+}
+
+impl IncrementEntry {
+    /// The `[increments.NAME]` table `name` is consistent: finite values within a prior's
+    /// range, bounds in pairs around the initial estimate, positive rates and gains, and a
+    /// sudden change either fully given (time and target) or not at all. The error is the key
+    /// and why.
+    fn validate(&self, name: &str) -> Result<(), (String, String)> {
+        let f = |k: &str| format!("increments.{name}.{k}");
+        self.validate_values(name)?;
+        positive(&f("lambda_per_s"), self.lambda_per_s)?;
+        positive(&f("eta"), self.eta)?;
+        if let Some(g) = self.gradient_gain {
+            positive(&f("gradient_gain"), g)?;
+        }
+        if let Some((lo, up)) = self.bounds() {
+            let init = self.initial_estimate();
+            if !(lo..=up).contains(&init) {
+                return Err((f("initial"), format!("{init} outside [lower, upper]")));
+            }
+        }
+        if self.step_to.is_some() && self.step_to_fraction.is_some() {
+            return Err((f("step_to"), "give step_to or step_to_fraction, not both".into()));
+        }
+        if (self.step_to.is_some() || self.step_to_fraction.is_some()) != self.step_at_s.is_some() {
+            return Err((f("step_at_s"), "step_at_s goes with step_to or step_to_fraction".into()));
+        }
+        if let Some(t0) = self.step_at_s
+            && !(t0.is_finite() && t0 >= 0.0)
+        {
+            return Err((f("step_at_s"), format!("must be finite and ≥ 0, got {t0}")));
+        }
+        Ok(())
+    }
+
+    /// The increment's values and bounds are finite and within a prior's limit, and `lower`
+    /// and `upper` come together with `lower < upper`. The increment of an aerodynamic
+    /// derivative and its bounds: beyond a prior's limit no parameter is that large (a typo),
+    /// and the flight would not stay finite.
+    fn validate_values(&self, name: &str) -> Result<(), (String, String)> {
+        let f = |k: &str| format!("increments.{name}.{k}");
+        let mut finite = vec![("truth", self.truth)];
+        finite.extend(self.lower.map(|v| ("lower", v)));
+        finite.extend(self.upper.map(|v| ("upper", v)));
+        finite.extend(self.step_to.map(|v| ("step_to", v)));
+        finite.extend(self.step_to_fraction.map(|v| ("step_to_fraction", v)));
+        finite.extend(self.initial.map(|v| ("initial", v)));
+        let max = aeroident_estimators::ParamPrior::MAX_ABS_VALUE;
+        for (k, v) in finite {
+            if !(v.is_finite() && v.abs() <= max) {
+                return Err((
+                    f(k),
+                    format!(
+                        "must be finite and within ±{max:e} (no aerodynamic parameter is that large), got {v}"
+                    ),
+                ));
+            }
+        }
+        match (self.lower, self.upper) {
+            (Some(lo), Some(up)) if lo >= up => {
+                Err((f("lower"), format!("must be below upper ({up})")))
+            }
+            (Some(_), None) | (None, Some(_)) => {
+                Err((f("lower"), "lower and upper go together".into()))
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
 impl Scenario {
     /// Parses and validates TOML text; `path` names the source in errors.
     ///
@@ -814,162 +891,134 @@ impl Scenario {
         Ok(())
     }
 
+    /// Every setting of the parsed file is usable, checked in file order (run, sensors,
+    /// increments, estimators, inputs, wind) so the first error is the first a reader meets;
+    /// [`ScenarioError::Invalid`] names the key of `path` and why.
     fn validate(&self, path: &str) -> Result<(), ScenarioError> {
-        let bad = |field: &str, reason: String| ScenarioError::Invalid {
+        let bad = |(field, reason): (String, String)| ScenarioError::Invalid {
             path: path.into(),
-            field: field.into(),
+            field,
             reason,
         };
-        let pos = |field: &str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(bad(field, format!("must be finite and > 0, got {v}")))
-            }
-        };
-        pos("duration_s", self.duration_s)?;
-        pos("dt_s", self.dt_s)?;
-        if self.duration_s / self.dt_s > 1e7 {
-            return Err(bad("duration_s", "more than 1e7 steps".into()));
+        self.validate_run().map_err(bad)?;
+        self.validate_channel_sensors().map_err(bad)?;
+        for (p, e) in &self.increments {
+            e.validate(p.name()).map_err(bad)?;
         }
-        pos("trim.vt_fps", self.trim.vt_fps)?;
+        self.validate_estimators().map_err(bad)?;
+        for (k, i) in self.input.iter().enumerate() {
+            i.signal.build().map_err(|e| bad((format!("input[{k}]"), e.to_string())))?;
+        }
+        self.validate_orthogonal_sets().map_err(|(k, r)| bad((format!("input[{k}]"), r)))?;
+        for (k, w) in self.wind.iter().enumerate() {
+            w.build().map_err(|e| bad((format!("wind[{k}]"), e.to_string())))?;
+        }
+        Ok(())
+    }
+
+    /// The run's own settings: positive duration and step (at most 1e7 steps, a run that
+    /// would not end otherwise), a positive trim airspeed at an altitude of the F-16 data
+    /// (0–60 000 ft), a non-negative sensor noise scale and an odd differentiator window of at
+    /// least 3 (a whole-sample lag). The error is the key and why.
+    fn validate_run(&self) -> Result<(), (String, String)> {
+        positive("duration_s", self.duration_s)?;
+        positive("dt_s", self.dt_s)?;
+        if self.duration_s / self.dt_s > 1e7 {
+            return Err(("duration_s".into(), "more than 1e7 steps".into()));
+        }
+        positive("trim.vt_fps", self.trim.vt_fps)?;
         if !(self.trim.alt_ft.is_finite() && (0.0..=60_000.0).contains(&self.trim.alt_ft)) {
-            return Err(bad(
-                "trim.alt_ft",
+            return Err((
+                "trim.alt_ft".into(),
                 format!("must be in [0, 60000], got {}", self.trim.alt_ft),
             ));
         }
         if !(self.sensors.scale.is_finite() && self.sensors.scale >= 0.0) {
-            return Err(bad("sensors.scale", format!("must be ≥ 0, got {}", self.sensors.scale)));
+            return Err((
+                "sensors.scale".into(),
+                format!("must be ≥ 0, got {}", self.sensors.scale),
+            ));
         }
         let w = self.sensors.differentiator_window;
         if w < 3 || w.is_multiple_of(2) {
-            return Err(bad(
-                "sensors.differentiator_window",
+            return Err((
+                "sensors.differentiator_window".into(),
                 format!("must be odd and ≥ 3 (a whole-sample lag), got {w}"),
             ));
         }
-        self.validate_channel_sensors().map_err(|(field, reason)| bad(&field, reason))?;
-        for (p, e) in &self.increments {
-            let name = p.name();
-            let f = |k: &str| format!("increments.{name}.{k}");
-            let mut finite = vec![("truth", e.truth)];
-            finite.extend(e.lower.map(|v| ("lower", v)));
-            finite.extend(e.upper.map(|v| ("upper", v)));
-            finite.extend(e.step_to.map(|v| ("step_to", v)));
-            finite.extend(e.step_to_fraction.map(|v| ("step_to_fraction", v)));
-            finite.extend(e.initial.map(|v| ("initial", v)));
-            // The increment of an aerodynamic derivative and its bounds: beyond a prior's
-            // limit no parameter is that large (a typo), and the flight would not stay finite.
-            let max = aeroident_estimators::ParamPrior::MAX_ABS_VALUE;
-            for (k, v) in finite {
-                if !(v.is_finite() && v.abs() <= max) {
-                    return Err(bad(
-                        &f(k),
-                        format!(
-                            "must be finite and within ±{max:e} (no aerodynamic parameter is that large), got {v}"
-                        ),
-                    ));
-                }
-            }
-            match (e.lower, e.upper) {
-                (Some(lo), Some(up)) if lo >= up => {
-                    return Err(bad(&f("lower"), format!("must be below upper ({up})")));
-                }
-                (Some(_), None) | (None, Some(_)) => {
-                    return Err(bad(&f("lower"), "lower and upper go together".into()));
-                }
-                _ => {}
-            }
-            pos(&f("lambda_per_s"), e.lambda_per_s)?;
-            pos(&f("eta"), e.eta)?;
-            if let Some(g) = e.gradient_gain {
-                pos(&f("gradient_gain"), g)?;
-            }
-            if let Some((lo, up)) = e.bounds() {
-                let init = e.initial_estimate();
-                if !(lo..=up).contains(&init) {
-                    return Err(bad(&f("initial"), format!("{init} outside [lower, upper]")));
-                }
-            }
-            if e.step_to.is_some() && e.step_to_fraction.is_some() {
-                return Err(bad(
-                    &f("step_to"),
-                    "give step_to or step_to_fraction, not both".into(),
-                ));
-            }
-            if (e.step_to.is_some() || e.step_to_fraction.is_some()) != e.step_at_s.is_some() {
-                return Err(bad(
-                    &f("step_at_s"),
-                    "step_at_s goes with step_to or step_to_fraction".into(),
-                ));
-            }
-            if let Some(t0) = e.step_at_s
-                && !(t0.is_finite() && t0 >= 0.0)
-            {
-                return Err(bad(&f("step_at_s"), format!("must be finite and ≥ 0, got {t0}")));
-            }
-        }
+        Ok(())
+    }
+
+    /// At least one `[[estimator]]`, each one that builds, with distinct labels; a
+    /// two-aircraft estimator's increments as [`Self::validate_estimator_params`] requires.
+    /// The error is the key and why.
+    fn validate_estimators(&self) -> Result<(), (String, String)> {
         if self.estimator.is_empty() {
-            return Err(bad("estimator", "at least one [[estimator]] is needed".into()));
+            return Err(("estimator".into(), "at least one [[estimator]] is needed".into()));
         }
         for (k, e) in self.estimator.iter().enumerate() {
             if let EstimatorSpec::Sample(s) = e {
                 if crate::estimators::is_batch_kind(&s.kind) {
-                    super::batch::config(s).map_err(|r| bad(&format!("estimator[{k}]"), r))?;
+                    super::batch::config(s).map_err(|r| (format!("estimator[{k}]"), r))?;
                 } else {
                     crate::estimators::build_sample_estimator(s)
-                        .map_err(|r| bad(&format!("estimator[{k}]"), r))?;
+                        .map_err(|r| (format!("estimator[{k}]"), r))?;
                 }
                 continue;
             }
-            let names = e.param_names();
-            if names.is_empty() || names.len() > 4 {
-                return Err(bad(&format!("estimator[{k}].params"), "1 to 4 increments".into()));
-            }
-            for p in names {
-                let n = p.name();
-                let Some(entry) = self.increment(*p) else {
-                    return Err(bad(
-                        &format!("estimator[{k}].params"),
-                        format!("`{n}` has no [increments.{n}] table"),
-                    ));
-                };
-                let Some((lo, up)) = entry.bounds() else {
-                    return Err(bad(
-                        &format!("increments.{n}.lower"),
-                        "a two-aircraft estimator needs the bounds lower and upper".into(),
-                    ));
-                };
-                if matches!(e, EstimatorSpec::MrGradient { .. }) && entry.gradient_gain.is_none() {
-                    return Err(bad(
-                        &format!("increments.{n}.gradient_gain"),
-                        "needed by the model-reference gradient estimator".into(),
-                    ));
-                }
-                if matches!(e, EstimatorSpec::Published { .. }) && lo * up <= 0.0 {
-                    return Err(bad(
-                        &format!("increments.{n}.lower"),
-                        "the published SMPE needs same-signed bounds (gain margin (3.124))".into(),
-                    ));
-                }
-            }
-            if names.iter().collect::<std::collections::BTreeSet<_>>().len() != names.len() {
-                return Err(bad(&format!("estimator[{k}].params"), "duplicate increment".into()));
-            }
+            self.validate_estimator_params(k, e)?;
         }
         let mut labels = std::collections::BTreeSet::new();
         for e in &self.estimator {
             if !labels.insert(e.label()) {
-                return Err(bad("estimator.label", format!("duplicate label `{}`", e.label())));
+                return Err(("estimator.label".into(), format!("duplicate label `{}`", e.label())));
             }
         }
-        for (k, i) in self.input.iter().enumerate() {
-            i.signal.build().map_err(|e| bad(&format!("input[{k}]"), e.to_string()))?;
+        Ok(())
+    }
+
+    /// The increments of the two-aircraft estimator `e` (`estimator[k]`): 1 to 4 distinct ones,
+    /// each with an `[increments.NAME]` table and bounds, a gradient gain for the
+    /// model-reference gradient estimator, and same-signed bounds for the published SMPE
+    /// (its gain margin, (3.124)). The error is the key and why.
+    fn validate_estimator_params(
+        &self,
+        k: usize,
+        e: &EstimatorSpec,
+    ) -> Result<(), (String, String)> {
+        let names = e.param_names();
+        if names.is_empty() || names.len() > 4 {
+            return Err((format!("estimator[{k}].params"), "1 to 4 increments".into()));
         }
-        self.validate_orthogonal_sets().map_err(|(k, r)| bad(&format!("input[{k}]"), r))?;
-        for (k, w) in self.wind.iter().enumerate() {
-            w.build().map_err(|e| bad(&format!("wind[{k}]"), e.to_string()))?;
+        for p in names {
+            let n = p.name();
+            let Some(entry) = self.increment(*p) else {
+                return Err((
+                    format!("estimator[{k}].params"),
+                    format!("`{n}` has no [increments.{n}] table"),
+                ));
+            };
+            let Some((lo, up)) = entry.bounds() else {
+                return Err((
+                    format!("increments.{n}.lower"),
+                    "a two-aircraft estimator needs the bounds lower and upper".into(),
+                ));
+            };
+            if matches!(e, EstimatorSpec::MrGradient { .. }) && entry.gradient_gain.is_none() {
+                return Err((
+                    format!("increments.{n}.gradient_gain"),
+                    "needed by the model-reference gradient estimator".into(),
+                ));
+            }
+            if matches!(e, EstimatorSpec::Published { .. }) && lo * up <= 0.0 {
+                return Err((
+                    format!("increments.{n}.lower"),
+                    "the published SMPE needs same-signed bounds (gain margin (3.124))".into(),
+                ));
+            }
+        }
+        if names.iter().collect::<std::collections::BTreeSet<_>>().len() != names.len() {
+            return Err((format!("estimator[{k}].params"), "duplicate increment".into()));
         }
         Ok(())
     }

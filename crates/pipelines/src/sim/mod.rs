@@ -36,9 +36,9 @@ use aeroident_models::f16::{
     STATE_NAMES,
 };
 use aeroident_models::integrate::rk4_step;
-use aeroident_models::trim::{TrimCondition, TrimManeuver, trim};
+use aeroident_models::trim::{F16Trim, TrimCondition, TrimManeuver, trim};
 use aeroident_signals::config::build_wind;
-use aeroident_signals::{Input, InputSignal, SensorModel, WindField};
+use aeroident_signals::{Input, InputSignal, SensorModel, Wind, WindField};
 use nalgebra::SVector;
 use scenario::{ActuatorChoice, Channel, SimScenario};
 use std::path::Path;
@@ -192,6 +192,38 @@ enum Plant {
 /// with the time or field it happened at.
 pub fn run(sc: &SimScenario, base_dir: &Path) -> Result<SimRun> {
     let r = &sc.run;
+    let n_steps = step_count(r)?;
+    let (f16, t0) = trimmed_airframe(sc)?;
+    let inputs = build_inputs(sc, base_dir)?;
+    let wind = build_wind(&sc.wind).context("[[wind]]")?;
+
+    let mut columns = vec!["t_s".to_string()];
+    let names = true_channel_names();
+    columns.extend(names.iter().cloned());
+    let mut sensors = build_sensors(sc, &names, &mut columns)?;
+
+    let plant = match sc.aircraft.actuators {
+        ActuatorChoice::Ideal => Plant::Ideal(f16),
+        ActuatorChoice::F16 => {
+            Plant::Actuated(F16WithActuators { airframe: f16, actuators: SurfaceActuators::f16() })
+        }
+    };
+    let mut flight = Flight::new(plant, &t0, columns.len(), n_steps);
+    for k in 0..=n_steps {
+        let t = k as f64 * r.dt_s;
+        let cmd = commands(&t0.controls, &inputs, &wind, t);
+        flight.record(t, &cmd, &mut sensors, names.len())?;
+        if k == n_steps {
+            break;
+        }
+        flight.advance(t, &cmd, r.dt_s)?;
+    }
+    Ok(SimRun { columns, data: flight.data, trim: t0 })
+}
+
+/// The number of RK4 steps of the run (`duration_s / dt_s`, rounded), after checking both are
+/// finite and positive and the run fits in memory ([`MAX_STEPS`]).
+fn step_count(r: &scenario::RunConfig) -> Result<usize> {
     if !(r.dt_s.is_finite() && r.dt_s > 0.0) {
         bail!("[run] dt_s = {} must be finite and > 0", r.dt_s);
     }
@@ -204,7 +236,13 @@ pub fn run(sc: &SimScenario, base_dir: &Path) -> Result<SimRun> {
             "[run] duration_s / dt_s = {n_steps} steps is too many (max {MAX_STEPS}: the run is held in memory for the figures, 8 bytes per column per step); shorten duration_s or raise dt_s"
         );
     }
+    Ok(n_steps)
+}
 
+/// The airframe of `[aircraft]`, trimmed wings-level at `[trim]`, and the trim: linearised
+/// about the trim when `aerodynamics = "linear"`, with the thesis increments of
+/// `[increments]` about the trim (from `onset_s`, else always) when given.
+fn trimmed_airframe(sc: &SimScenario) -> Result<(F16, F16Trim)> {
     let mut f16 = F16::new(sc.aircraft.xcg).context("[aircraft] xcg")?;
     let cond = TrimCondition {
         alt_ft: sc.trim.alt_ft,
@@ -244,9 +282,12 @@ pub fn run(sc: &SimScenario, base_dir: &Path) -> Result<SimRun> {
             schedule,
         );
     }
+    Ok((f16, t0))
+}
 
-    let inputs: Vec<(Channel, Input)> = sc
-        .input
+/// The `[[input]]` signals with their channels; recorded inputs resolve against `base_dir`.
+fn build_inputs(sc: &SimScenario, base_dir: &Path) -> Result<Vec<(Channel, Input)>> {
+    sc.input
         .iter()
         .enumerate()
         .map(|(k, ci)| {
@@ -257,12 +298,16 @@ pub fn run(sc: &SimScenario, base_dir: &Path) -> Result<SimRun> {
                     .with_context(|| format!("[[input]] #{} ({:?})", k + 1, ci.channel))?,
             ))
         })
-        .collect::<Result<_>>()?;
-    let wind = build_wind(&sc.wind).context("[[wind]]")?;
+        .collect::<Result<_>>()
+}
 
-    let mut columns = vec!["t_s".to_string()];
-    let names = true_channel_names();
-    columns.extend(names.iter().cloned());
+/// The `[[sensor]]` models, each with the index of the true channel (of `names`) it senses;
+/// appends each one's `meas_<channel>` column to `columns`.
+fn build_sensors(
+    sc: &SimScenario,
+    names: &[String],
+    columns: &mut Vec<String>,
+) -> Result<Vec<(usize, SensorModel)>> {
     let mut sensors: Vec<(usize, SensorModel)> = Vec::with_capacity(sc.sensor.len());
     for (k, s) in sc.sensor.iter().enumerate() {
         let Some(idx) = names.iter().position(|n| *n == s.channel) else {
@@ -275,73 +320,101 @@ pub fn run(sc: &SimScenario, base_dir: &Path) -> Result<SimRun> {
         };
         sensors.push((
             idx,
-            s.build(r.seed).with_context(|| format!("[[sensor]] #{} ({})", k + 1, s.channel))?,
+            s.build(sc.run.seed)
+                .with_context(|| format!("[[sensor]] #{} ({})", k + 1, s.channel))?,
         ));
         columns.push(format!("meas_{}", s.channel));
     }
+    Ok(sensors)
+}
 
-    let plant = match sc.aircraft.actuators {
-        ActuatorChoice::Ideal => Plant::Ideal(f16),
-        ActuatorChoice::F16 => {
-            Plant::Actuated(F16WithActuators { airframe: f16, actuators: SurfaceActuators::f16() })
+/// The commands at `t`: the trim controls plus every input of each channel (superposed), and
+/// the wind in body axes, both held over the step (zero-order hold).
+fn commands(trim: &F16Controls, inputs: &[(Channel, Input)], wind: &Wind, t: f64) -> F16Controls {
+    let mut cmd = *trim;
+    for (ch, inp) in inputs {
+        let v = inp.value(t);
+        match ch {
+            Channel::Throttle => cmd.throttle += v,
+            Channel::Elevator => cmd.elevator_rad += v,
+            Channel::Aileron => cmd.aileron_rad += v,
+            Channel::Rudder => cmd.rudder_rad += v,
         }
-    };
-    let g_fps2 = match &plant {
-        Plant::Ideal(m) => m.data().mass.g_ft_per_s2,
-        Plant::Actuated(m) => m.airframe.data().mass.g_ft_per_s2,
-    };
-    let mut data: Vec<Vec<f64>> = vec![Vec::with_capacity(n_steps + 1); columns.len()];
-    let mut xa: SVector<f64, 16> = F16WithActuators::state(&t0.state, &t0.controls);
-    let mut xi: F16State = t0.state;
+    }
+    let w = wind.wind_body_fps(t);
+    cmd.wind_body_fps = [w[0], w[1], w[2]];
+    cmd
+}
 
-    for k in 0..=n_steps {
-        let t = k as f64 * r.dt_s;
-        let mut cmd = t0.controls;
-        for (ch, inp) in &inputs {
-            let v = inp.value(t);
-            match ch {
-                Channel::Throttle => cmd.throttle += v,
-                Channel::Elevator => cmd.elevator_rad += v,
-                Channel::Aileron => cmd.aileron_rad += v,
-                Channel::Rudder => cmd.rudder_rad += v,
-            }
-        }
-        let w = wind.wind_body_fps(t);
-        cmd.wind_body_fps = [w[0], w[1], w[2]];
-        let (x13, applied, evaluated) = match &plant {
-            Plant::Ideal(m) => (xi, cmd, m.evaluate(&xi, &cmd, &m.increments_at(t))),
+/// The simulation loop's state: the plant and its state (the 13 airframe states when the
+/// surfaces are ideal, 16 with the actuator states), gravity for the accelerometer channels,
+/// and the columns recorded so far.
+struct Flight {
+    plant: Plant,
+    xi: F16State,
+    xa: SVector<f64, 16>,
+    g_fps2: f64,
+    data: Vec<Vec<f64>>,
+}
+
+impl Flight {
+    /// At the trim, with room for the `n_steps + 1` rows of each of `n_columns` columns.
+    fn new(plant: Plant, t0: &F16Trim, n_columns: usize, n_steps: usize) -> Self {
+        let g_fps2 = match &plant {
+            Plant::Ideal(m) => m.data().mass.g_ft_per_s2,
+            Plant::Actuated(m) => m.airframe.data().mass.g_ft_per_s2,
+        };
+        let data: Vec<Vec<f64>> = vec![Vec::with_capacity(n_steps + 1); n_columns];
+        let xa: SVector<f64, 16> = F16WithActuators::state(&t0.state, &t0.controls);
+        let xi: F16State = t0.state;
+        Self { plant, xi, xa, g_fps2, data }
+    }
+
+    /// Records the row at `t` under the commands `cmd`: time, the `n_true` true channels
+    /// (with the surfaces as applied through the actuators) and each sensor's measurement.
+    fn record(
+        &mut self,
+        t: f64,
+        cmd: &F16Controls,
+        sensors: &mut [(usize, SensorModel)],
+        n_true: usize,
+    ) -> Result<()> {
+        let (x13, applied, evaluated) = match &self.plant {
+            Plant::Ideal(m) => (self.xi, *cmd, m.evaluate(&self.xi, cmd, &m.increments_at(t))),
             Plant::Actuated(m) => {
-                let x13: F16State = xa.fixed_rows::<N_STATES>(0).into_owned();
-                let applied = F16WithActuators::surface_controls(&xa, &cmd);
+                let x13: F16State = self.xa.fixed_rows::<N_STATES>(0).into_owned();
+                let applied = F16WithActuators::surface_controls(&self.xa, cmd);
                 let af = &m.airframe;
                 (x13, applied, af.evaluate(&x13, &applied, &af.increments_at(t)))
             }
         };
         let (xdot, outputs) =
             evaluated.with_context(|| format!("model outputs at t = {t:.4} s"))?;
-        let row = true_row(&x13, &xdot, g_fps2, &applied, &cmd, &outputs);
-        data[0].push(t);
+        let row = true_row(&x13, &xdot, self.g_fps2, &applied, cmd, &outputs);
+        self.data[0].push(t);
         for (c, v) in row.iter().enumerate() {
-            data[c + 1].push(*v);
+            self.data[c + 1].push(*v);
         }
         for (j, (idx, sensor)) in sensors.iter_mut().enumerate() {
-            data[1 + names.len() + j].push(sensor.measure(t, row[*idx]));
+            self.data[1 + n_true + j].push(sensor.measure(t, row[*idx]));
         }
-        if k == n_steps {
-            break;
-        }
-        match &plant {
+        Ok(())
+    }
+
+    /// One RK4 step of `dt` s from `t` with the commands held.
+    fn advance(&mut self, t: f64, cmd: &F16Controls, dt: f64) -> Result<()> {
+        match &self.plant {
             Plant::Ideal(m) => {
-                xi = rk4_step(m, t, &xi, &cmd, r.dt_s)
+                self.xi = rk4_step(m, t, &self.xi, cmd, dt)
                     .with_context(|| format!("RK4 step at t = {t:.4} s"))?
             }
             Plant::Actuated(m) => {
-                xa = rk4_step(m, t, &xa, &cmd, r.dt_s)
+                self.xa = rk4_step(m, t, &self.xa, cmd, dt)
                     .with_context(|| format!("RK4 step at t = {t:.4} s"))?
             }
         }
+        Ok(())
     }
-    Ok(SimRun { columns, data, trim: t0 })
 }
 
 /// Most RK4 steps of one simulation: the run is held in memory for the figures (8 bytes per

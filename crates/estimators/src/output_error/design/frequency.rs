@@ -95,9 +95,10 @@
 //! bound. The unknowns, identifiability analysis and reported σ are those of
 //! [`super::predict_crb`].
 
+use super::super::simulation::Problem;
 use super::{DesignPlan, DesignResult, Prepared, analyse_and_report, condition_sample, prepare};
 use crate::EstimatorError;
-use crate::flight_model::{FlightModel, Linearisation, state};
+use crate::flight_model::{FlightModel, Linearisation, ModelInputs, state};
 use nalgebra::{Complex, DMatrix, DVector};
 use std::vec;
 use std::vec::Vec;
@@ -353,6 +354,29 @@ pub fn predict_crb_turbulent(
     plan: &DesignPlan,
     gusts: &GustModel,
 ) -> Result<DesignResult, EstimatorError> {
+    check_gust_filters(gusts)?;
+    let Prepared { problem: p, beta, weights } = prepare(plan)?;
+    let (nb, ny) = (p.n_unknowns, p.ny());
+    let (mut y, mut s) = (Vec::new(), Vec::new());
+    p.simulate(&beta, &mut y, Some(&mut s))?;
+    let noise = TurbulentNoise::new(plan, gusts, &p, &weights)?;
+    let mut info = DMatrix::<f64>::zeros(nb, nb);
+    let mut row0 = 0;
+    for (man, planned) in p.man.iter().zip(&plan.manoeuvres) {
+        let n = man.u.len();
+        let dt = planned.dt_s;
+        let block = &s[row0 * ny * nb..(row0 + n) * ny * nb];
+        info += noise.mean_information(n, dt, block, nb)?;
+        noise.add_covariance_information(n, dt, &mut info)?;
+        row0 += n;
+    }
+    info *= plan.repeats as f64;
+    analyse_and_report(plan, &p, beta, &y, info)
+}
+
+/// Refuses a shaping filter whose `a` is not square, whose `b`, `c` are not of its size, that
+/// is empty, or that has a non-finite entry: the noise model below assumes all of them.
+fn check_gust_filters(gusts: &GustModel) -> Result<(), EstimatorError> {
     for f in &gusts.filters {
         let n = f.a.nrows();
         if f.a.ncols() != n || f.b.len() != n || f.c.len() != n || n == 0 {
@@ -370,48 +394,56 @@ pub fn predict_crb_turbulent(
             });
         }
     }
-    let Prepared { problem: p, beta, weights } = prepare(plan)?;
-    let (nb, ny, np) = (p.n_unknowns, p.ny(), p.np);
-    let (mut y, mut s) = (Vec::new(), Vec::new());
-    p.simulate(&beta, &mut y, Some(&mut s))?;
-    // Linearisation at the condition (trim controls) and its θ-derivatives.
-    let model: FlightModel = p.model;
-    let set = model.state_set();
-    let states = set.states();
-    let nx = states.len();
-    let c = &plan.condition;
-    let trim = condition_sample(&plan.constants, c, set, 0.0, [c.de_rad, c.da_rad, c.dr_rad]);
-    let u = model.inputs(&trim)?;
-    let active = super::condition_states(c, set);
-    let out_idx: Vec<usize> = p.outputs.iter().map(|o| o.index()).collect();
-    let mut lin = Linearisation::default();
-    model.linearise(&plan.theta, &u, &active[..nx], &mut lin)?;
-    let (a, cm) = matrices(&lin, nx, &out_idx);
+    Ok(())
+}
+
+/// The θ-derivatives `(∂A/∂θ_j, ∂C/∂θ_j)` of the linearisation, by central differences with
+/// step `10⁻⁴ · max(|θ_j|, 1)`, for the first `np` of the `nb` unknowns (biases and initial
+/// states do not enter `A`, `C`); `None` where both vanish (a parameter the linear model does
+/// not see). `lin` is the linearisation buffer, overwritten.
+fn theta_derivatives(
+    model: &FlightModel,
+    theta: &[f64],
+    u: &ModelInputs,
+    active: &[f64],
+    out_idx: &[usize],
+    (nb, np): (usize, usize),
+    lin: &mut Linearisation,
+) -> Result<Vec<Option<(CMatrix, CMatrix)>>, EstimatorError> {
+    let nx = active.len();
     let mut da: Vec<Option<(CMatrix, CMatrix)>> = vec![None; nb];
     for (j, slot) in da.iter_mut().enumerate().take(np) {
-        let h = 1e-4 * plan.theta[j].abs().max(1.0);
-        let mut th = plan.theta.clone();
+        let h = 1e-4 * theta[j].abs().max(1.0);
+        let mut th = theta.to_vec();
         th[j] += h;
-        model.linearise(&th, &u, &active[..nx], &mut lin)?;
-        let (ap, cp) = matrices(&lin, nx, &out_idx);
+        model.linearise(&th, u, active, lin)?;
+        let (ap, cp) = matrices(lin, nx, out_idx);
         th[j] -= 2.0 * h;
-        model.linearise(&th, &u, &active[..nx], &mut lin)?;
-        let (am, cmm) = matrices(&lin, nx, &out_idx);
+        model.linearise(&th, u, active, lin)?;
+        let (am, cmm) = matrices(lin, nx, out_idx);
         let dam = (ap - am) / (2.0 * h);
         let dcm = (cp - cmm) / (2.0 * h);
         if dam.iter().chain(dcm.iter()).any(|v| *v != 0.0) {
             *slot = Some((to_c(&dam), to_c(&dcm)));
         }
     }
-    // Wings-level condition: β = 0.
-    let gamma = gust_input_matrix(states, c.vt_mps, c.alpha_rad, 0.0);
-    // Augmented continuous noise model z = (x, gust filter states):
-    // ẋ = A x − Γ ġ, ġ = Cg (Ag xg + Bg η), ẋg = Ag xg + Bg η.
+    Ok(da)
+}
+
+/// The augmented continuous noise model `(F_z, G_z)` over `z = (x, gust filter states)`
+/// (module doc): `ẋ = A x − Γ ġ`, `ġ = Cg (Ag xg + Bg η)`, `ẋg = Ag xg + Bg η`, one white
+/// `η` per gust component.
+fn augmented_noise_model(
+    a: &DMatrix<f64>,
+    gamma: &DMatrix<f64>,
+    gusts: &GustModel,
+) -> (DMatrix<f64>, DMatrix<f64>) {
+    let nx = a.nrows();
     let ng: usize = gusts.filters.iter().map(|f| f.a.nrows()).sum();
     let nz = nx + ng;
     let mut fz = DMatrix::<f64>::zeros(nz, nz);
     let mut gz = DMatrix::<f64>::zeros(nz, 3);
-    fz.view_mut((0, 0), (nx, nx)).copy_from(&a);
+    fz.view_mut((0, 0), (nx, nx)).copy_from(a);
     let mut off = nx;
     for (k, f) in gusts.filters.iter().enumerate() {
         let n = f.a.nrows();
@@ -429,33 +461,111 @@ pub fn predict_crb_turbulent(
         }
         off += n;
     }
-    let mut hz = DMatrix::<f64>::zeros(ny, nz);
-    hz.view_mut((0, 0), (ny, nx)).copy_from(&cm);
-    let r: Vec<f64> = weights.iter().map(|w| 1.0 / w).collect();
-    let rc = CMatrix::from_fn(ny, ny, |i, j| c64(if i == j { r[i] } else { 0.0 }));
-    let (ac, cc, gc) = (to_c(&a), to_c(&cm), to_c(&gamma));
-    let mut info = DMatrix::<f64>::zeros(nb, nb);
-    let mut row0 = 0;
-    for (man, planned) in p.man.iter().zip(&plan.manoeuvres) {
-        let n = man.u.len();
-        let dt = planned.dt_s;
-        // Mean term, exact: the flight states start known (as the output-error fit's initial
-        // state), the gust filters stationary.
-        let (phi, qd) = van_loan(&fz, &gz, dt);
+    (fz, gz)
+}
+
+/// The turbulent experiment's noise model at the condition, the same for every manoeuvre:
+/// the augmented model `(F_z, G_z, H_z)` for the exact mean term, the linearisation
+/// `(A, C, Γ)` and its θ-derivatives (complex) for the Whittle covariance term, and the
+/// sensors' white noise variances `R`.
+struct TurbulentNoise<'a> {
+    gusts: &'a GustModel,
+    nx: usize,
+    ng: usize,
+    fz: DMatrix<f64>,
+    gz: DMatrix<f64>,
+    hz: DMatrix<f64>,
+    r: Vec<f64>,
+    rc: CMatrix,
+    ac: CMatrix,
+    cc: CMatrix,
+    gc: CMatrix,
+    da: Vec<Option<(CMatrix, CMatrix)>>,
+}
+
+impl<'a> TurbulentNoise<'a> {
+    /// Linearises the flight model at the plan's condition (trim controls), differentiates the
+    /// linearisation in θ and builds the augmented noise model; `weights` are the sensors'
+    /// `1/R`.
+    fn new(
+        plan: &DesignPlan,
+        gusts: &'a GustModel,
+        p: &Problem,
+        weights: &[f64],
+    ) -> Result<Self, EstimatorError> {
+        let (nb, ny, np) = (p.n_unknowns, p.ny(), p.np);
+        // Linearisation at the condition (trim controls) and its θ-derivatives.
+        let model: FlightModel = p.model;
+        let set = model.state_set();
+        let states = set.states();
+        let nx = states.len();
+        let c = &plan.condition;
+        let trim = condition_sample(&plan.constants, c, set, 0.0, [c.de_rad, c.da_rad, c.dr_rad]);
+        let u = model.inputs(&trim)?;
+        let active = super::condition_states(c, set);
+        let out_idx: Vec<usize> = p.outputs.iter().map(|o| o.index()).collect();
+        let mut lin = Linearisation::default();
+        model.linearise(&plan.theta, &u, &active[..nx], &mut lin)?;
+        let (a, cm) = matrices(&lin, nx, &out_idx);
+        let da = theta_derivatives(
+            &model,
+            &plan.theta,
+            &u,
+            &active[..nx],
+            &out_idx,
+            (nb, np),
+            &mut lin,
+        )?;
+        // Wings-level condition: β = 0.
+        let gamma = gust_input_matrix(states, c.vt_mps, c.alpha_rad, 0.0);
+        let (fz, gz) = augmented_noise_model(&a, &gamma, gusts);
+        let ng = fz.nrows() - nx;
+        let mut hz = DMatrix::<f64>::zeros(ny, nx + ng);
+        hz.view_mut((0, 0), (ny, nx)).copy_from(&cm);
+        let r: Vec<f64> = weights.iter().map(|w| 1.0 / w).collect();
+        let rc = CMatrix::from_fn(ny, ny, |i, j| c64(if i == j { r[i] } else { 0.0 }));
+        let (ac, cc, gc) = (to_c(&a), to_c(&cm), to_c(&gamma));
+        Ok(Self { gusts, nx, ng, fz, gz, hz, r, rc, ac, cc, gc, da })
+    }
+
+    /// The mean term of one manoeuvre of `n` samples at interval `dt` (s), exact: the flight
+    /// states start known (as the output-error fit's initial state), the gust filters
+    /// stationary. `block` is the manoeuvre's output sensitivities.
+    fn mean_information(
+        &self,
+        n: usize,
+        dt: f64,
+        block: &[f64],
+        nb: usize,
+    ) -> Result<DMatrix<f64>, EstimatorError> {
+        let (nx, ng) = (self.nx, self.ng);
+        let nz = nx + ng;
+        let (phi, qd) = van_loan(&self.fz, &self.gz, dt);
         let mut p0 = DMatrix::<f64>::zeros(nz, nz);
         let pg = stationary_covariance(
             &phi.view((nx, nx), (ng, ng)).into_owned(),
             &qd.view((nx, nx), (ng, ng)).into_owned(),
         );
         p0.view_mut((nx, nx), (ng, ng)).copy_from(&pg);
-        let block = &s[row0 * ny * nb..(row0 + n) * ny * nb];
-        info += innovations_information(&phi, &qd, &hz, &r, &p0, block, n, nb)?;
-        // Covariance term, Whittle.
+        innovations_information(&phi, &qd, &self.hz, &self.r, &p0, block, n, nb)
+    }
+
+    /// Adds the covariance term of one manoeuvre of `n` samples at interval `dt` (s) to
+    /// `info`, Whittle: one DFT bin `k = 1…n/2` at a time, the output spectrum
+    /// `Φ_y = G Φ_g Gᴴ + R` and its θ-derivatives (the gusts through `X = −(sI − A)⁻¹ Γ s`,
+    /// states per unit gust, and `G = C X`).
+    fn add_covariance_information(
+        &self,
+        n: usize,
+        dt: f64,
+        info: &mut DMatrix<f64>,
+    ) -> Result<(), EstimatorError> {
+        let (nx, ac, cc) = (self.nx, &self.ac, &self.cc);
         for k in 1..=n / 2 {
             let omega = 2.0 * core::f64::consts::PI * k as f64 / (n as f64 * dt);
             let real_bin = 2 * k == n;
             let mut phi_g = CMatrix::zeros(3, 3);
-            for (i, f) in gusts.filters.iter().enumerate() {
+            for (i, f) in self.gusts.filters.iter().enumerate() {
                 phi_g[(i, i)] = c64(f.response(omega)?.norm_sqr() / dt);
             }
             let sc = Complex::new(0.0, omega);
@@ -463,25 +573,24 @@ pub fn predict_crb_turbulent(
                 CMatrix::from_fn(nx, nx, |i, j| (if i == j { sc } else { c64(0.0) }) - ac[(i, j)]);
             let hinv = si_a.lu().try_inverse().ok_or(singular())?;
             // X = −(sI − A)⁻¹ Γ s (states per unit gust), G = C X.
-            let x = (&hinv * &gc) * (-sc);
-            let g = &cc * &x;
-            let phi_y = &g * &phi_g * g.adjoint() + &rc;
-            let dphi: Vec<Option<CMatrix>> = da
+            let x = (&hinv * &self.gc) * (-sc);
+            let g = cc * &x;
+            let phi_y = &g * &phi_g * g.adjoint() + &self.rc;
+            let dphi: Vec<Option<CMatrix>> = self
+                .da
                 .iter()
                 .map(|d| {
                     d.as_ref().map(|(dai, dci)| {
-                        let dg = dci * &x + &cc * (&hinv * (dai * &x));
+                        let dg = dci * &x + cc * (&hinv * (dai * &x));
                         let t = &dg * &phi_g * g.adjoint();
                         &t + t.adjoint()
                     })
                 })
                 .collect();
-            add_bin_information(n, real_bin, &phi_y, &dphi, None, &mut info)?;
+            add_bin_information(n, real_bin, &phi_y, &dphi, None, info)?;
         }
-        row0 += n;
+        Ok(())
     }
-    info *= plan.repeats as f64;
-    analyse_and_report(plan, &p, beta, &y, info)
 }
 
 fn c64(v: f64) -> Complex<f64> {

@@ -1,22 +1,14 @@
 //! # aeroident
 //!
-//! The command-line face of aeroident: argument parsing ([`cli`]), rendering (reports, figures,
-//! tables) and printing, over the pipelines of [`aeroident_pipelines`]. `main.rs` only parses
-//! arguments; every command is a function here so tests can call it directly.
+//! The command-line face of aeroident: argument parsing ([`cli`]), signals ([`interrupt`]),
+//! the live MAVLink front end ([`live`]) and progress on the terminal ([`progress`]), over the
+//! jobs and pipelines of [`aeroident_pipelines`], rendered by [`aeroident_report`]. `main.rs`
+//! only parses arguments; every command is a function here so tests can call it directly.
 
-/// Outputs of the closed-loop experiment: files, console table, figures.
-pub mod aircraft;
 pub mod cli;
-pub mod console;
 pub mod interrupt;
 pub mod live;
-pub mod outdir;
-/// Stacked time-series panels rendered to PNG and SVG.
-pub mod plot;
-/// Proof-of-concept outputs: CSV, JSON, figures and the thesis-versus-ours report.
-pub mod poc;
 pub mod progress;
-pub mod report;
-/// `aeroident f16 sim`: the open-loop simulation's files and figures.
-pub mod sim;
-pub mod table;
+
+/// The rendering modules, under the paths the command line has always used for them.
+pub use aeroident_report::{aircraft, console, outdir, plot, poc, report, sim, table};

@@ -39,7 +39,7 @@ pub enum F16Command {
     /// Trim, then print A, B, eigenvalues and modes (SLJ §3.7–3.8).
     Linearize(TrimArgs),
     /// Open-loop simulation of a scenario from trim (format: `aeroident::sim::scenario`).
-    Sim(crate::sim::SimArgs),
+    Sim(SimArgs),
 }
 
 /// Arguments of `aeroident f16 xdot`.
@@ -110,7 +110,7 @@ pub fn execute(args: F16Args) -> anyhow::Result<()> {
         F16Command::Xdot(a) => super::print_stdout(&xdot(&a)?)?,
         F16Command::Trim(a) => super::print_stdout(&trim_report(&a)?)?,
         F16Command::Linearize(a) => super::print_stdout(&linearize_report(&a)?)?,
-        F16Command::Sim(a) => crate::sim::execute(a)?,
+        F16Command::Sim(a) => execute_sim(a)?,
     }
     Ok(())
 }
@@ -277,6 +277,42 @@ pub fn linearize_report(a: &TrimArgs) -> anyhow::Result<String> {
         ));
     }
     Ok(out)
+}
+
+/// Arguments of `aeroident f16 sim`.
+#[derive(Debug, clap::Args)]
+pub struct SimArgs {
+    /// Scenario TOML file (format: `aeroident_pipelines::sim::scenario`).
+    pub scenario: std::path::PathBuf,
+    /// Output directory (created if missing).
+    #[arg(long)]
+    pub out: std::path::PathBuf,
+}
+
+/// Runs `aeroident f16 sim`.
+///
+/// # Errors
+/// As [`load_scenario`](aeroident_pipelines::sim::load_scenario), [`run`](aeroident_pipelines::sim::run) and [`write_outputs`](crate::sim::write_outputs).
+pub fn execute_sim(args: SimArgs) -> anyhow::Result<()> {
+    let sc = aeroident_pipelines::sim::load_scenario(&args.scenario)?;
+    let base = args.scenario.parent().unwrap_or(std::path::Path::new("."));
+    // Lock and clear the directory first, so a failing run leaves no old outputs.
+    let mut od = crate::outdir::OutputDir::open(&args.out, "f16 sim", &[args.scenario.as_path()])?;
+    let r = aeroident_pipelines::sim::run(&sc, base)?;
+    crate::sim::write_outputs(&r, &mut od)?;
+    od.finish();
+    super::print_stdout(&format!(
+        "simulated {:.2} s ({} rows, {} columns) from trim: throttle {:.4}, elevator {:.4} deg, alpha {:.4} deg (trim cost {:.1e})\nwrote {}/timeseries.csv, report.html, states and controls_wind (.png, .svg)",
+        r.data[0].last().copied().unwrap_or(0.0),
+        r.data[0].len(),
+        r.columns.len(),
+        r.trim.controls.throttle,
+        r.trim.controls.elevator_rad.to_degrees(),
+        r.trim.state[aeroident_models::f16::ALPHA].to_degrees(),
+        r.trim.cost,
+        args.out.display()
+    ))?;
+    Ok(())
 }
 
 #[cfg(test)]

@@ -1,23 +1,12 @@
-//! `aeroident f16 sim`: runs an open-loop simulation ([`aeroident_pipelines::sim`]) and
-//! writes `timeseries.csv`, the figures and `report.html`.
+//! The files of an open-loop simulation ([`aeroident_pipelines::sim`], `aeroident f16 sim`):
+//! `timeseries.csv`, the figures and `report.html`.
 
 use crate::outdir::OutputDir;
 use crate::plot::{LineKind, Panel, Series};
 use crate::report::{Report, common_settings, write_figure};
 use aeroident_models::f16::ALPHA;
-use aeroident_pipelines::sim::{SimRun, load_scenario, run};
+use aeroident_pipelines::sim::SimRun;
 use anyhow::Context;
-use std::path::{Path, PathBuf};
-
-/// Arguments of `aeroident f16 sim`.
-#[derive(Debug, clap::Args)]
-pub struct SimArgs {
-    /// Scenario TOML file (format: `aeroident::sim::scenario`).
-    pub scenario: PathBuf,
-    /// Output directory (created if missing).
-    #[arg(long)]
-    pub out: PathBuf,
-}
 
 /// Writes `timeseries.csv`, `states.{png,svg}`, `controls_wind.{png,svg}` and `report.html`
 /// (the trim, the record's size and the figures) into the locked output directory `od`, each
@@ -190,35 +179,11 @@ fn report_settings(run: &SimRun) -> Vec<(String, String)> {
     settings
 }
 
-/// Runs `aeroident f16 sim`.
-///
-/// # Errors
-/// As [`load_scenario`], [`run`] and [`write_outputs`].
-pub fn execute(args: SimArgs) -> anyhow::Result<()> {
-    let sc = load_scenario(&args.scenario)?;
-    let base = args.scenario.parent().unwrap_or(Path::new("."));
-    // Lock and clear the directory first, so a failing run leaves no old outputs.
-    let mut od = OutputDir::open(&args.out, "f16 sim", &[args.scenario.as_path()])?;
-    let r = run(&sc, base)?;
-    write_outputs(&r, &mut od)?;
-    od.finish();
-    crate::console::print_stdout(&format!(
-        "simulated {:.2} s ({} rows, {} columns) from trim: throttle {:.4}, elevator {:.4} deg, alpha {:.4} deg (trim cost {:.1e})\nwrote {}/timeseries.csv, report.html, states and controls_wind (.png, .svg)",
-        r.data[0].last().copied().unwrap_or(0.0),
-        r.data[0].len(),
-        r.columns.len(),
-        r.trim.controls.throttle,
-        r.trim.controls.elevator_rad.to_degrees(),
-        r.trim.state[ALPHA].to_degrees(),
-        r.trim.cost,
-        args.out.display()
-    ))?;
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use aeroident_pipelines::sim::{load_scenario, run};
+    use std::path::Path;
 
     #[test]
     fn shipped_scenarios_run_and_write_outputs() {

@@ -342,5 +342,41 @@ fn fit_one(
     Ok(FitSummary { spec: spec.text.clone(), fit })
 }
 
+/// The coherence from which `aeroident freqresp`'s summary counts a frequency as identified
+/// (its `coherence ≥ 0.8` band, [`coherent_band`]).
+pub const GOOD_COHERENCE: f64 = 0.8;
+
+/// Where a pair's response is coherent: the first and last grid frequency with the coherence
+/// at or above a threshold, and how many grid points are.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CoherentBand {
+    /// The lowest such frequency, rad/s.
+    pub lo_rad_s: f64,
+    /// The highest such frequency, rad/s.
+    pub hi_rad_s: f64,
+    /// Grid points with the coherence at or above the threshold (not necessarily contiguous).
+    pub points: usize,
+    /// Grid points of the pair.
+    pub of: usize,
+}
+
+/// The band of `p`'s frequency grid (ascending, Hz) whose coherence is at least
+/// `min_coherence` (–), in rad/s; `None` when no frequency is.
+pub fn coherent_band(p: &PairResponse, min_coherence: f64) -> Option<CoherentBand> {
+    let good: Vec<f64> = p
+        .frequency_hz
+        .iter()
+        .zip(&p.coherence)
+        .filter(|(_, g)| **g >= min_coherence)
+        .map(|(f, _)| 2.0 * std::f64::consts::PI * f)
+        .collect();
+    Some(CoherentBand {
+        lo_rad_s: *good.first()?,
+        hi_rad_s: *good.last()?,
+        points: good.len(),
+        of: p.frequency_hz.len(),
+    })
+}
+
 #[cfg(test)]
 mod tests;

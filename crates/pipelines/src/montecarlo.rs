@@ -61,7 +61,11 @@ use crate::aircraft::air_data::f16_constants;
 use crate::aircraft::scenario::EstimatorSpec;
 use crate::aircraft::summary::{self, PRIMARY_DERIVATIVES};
 use crate::aircraft::{RunOutput, Scenario, run};
+use crate::metrics::ZERO_THRESHOLD;
 use aeroident_physics::units::{M_PER_FT, N_PER_LBF, PA_PER_PSF};
+
+mod from_json;
+pub use from_json::run_result_from_json;
 
 /// The golden-ratio increment of SplitMix64 (Steele, Lea & Flood, OOPSLA 2014).
 const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
@@ -837,6 +841,92 @@ pub fn json_summary(c: &Campaign) -> serde_json::Value {
             })).collect::<Vec<_>>(),
         })).collect::<Vec<_>>(),
     })
+}
+
+impl ParamStats {
+    /// The bias of the mean estimate in percent of |truth| (`100 · bias / |truth|`); `None`
+    /// without a bias or a truth, or when |truth| is below
+    /// [`ZERO_THRESHOLD`] (round-off of an exact zero).
+    pub fn bias_percent_of_truth(&self) -> Option<f64> {
+        match (self.bias, self.truth) {
+            (Some(b), Some(tr)) if tr.abs() > ZERO_THRESHOLD => Some(100.0 * b / tr.abs()),
+            _ => None,
+        }
+    }
+
+    /// The truth with a magnitude below [`ZERO_THRESHOLD`]
+    /// (round-off of an exact zero) as 0.
+    pub fn truth_or_zero(&self) -> Option<f64> {
+        self.truth.map(|x| if x.abs() < ZERO_THRESHOLD { 0.0 } else { x })
+    }
+
+    /// The scatter over the Cramér–Rao σ of the experiment flown (`scatter / crb_sigma`, –;
+    /// ≈ 1 for an efficient estimator); `None` without either.
+    pub fn scatter_over_crb(&self) -> Option<f64> {
+        self.scatter.zip(self.crb_sigma).map(|(a, b)| a / b)
+    }
+}
+
+impl EstimatorStats {
+    /// Whether the estimator is a post-flight (batch) fit: it has no estimate before the end,
+    /// so no time to ±10 % ([`EstimatorStats::mean_fit_wall_s`] is set).
+    pub fn is_batch(&self) -> bool {
+        self.mean_fit_wall_s.is_some()
+    }
+}
+
+impl Campaign {
+    /// The final estimates of the parameter named `param` of the estimator named `estimator`
+    /// over the runs whose experiment succeeded and in which that estimator neither failed
+    /// nor diverged, in run order (the sample of [`ParamStats::bias`] and
+    /// [`ParamStats::scatter`]; the parameter's position is its first in the estimator's
+    /// [`EstimatorStats::parameters`]). Empty for an unknown name.
+    pub fn final_estimates(&self, estimator: &str, param: &str) -> Vec<f64> {
+        let j = self
+            .estimators
+            .iter()
+            .find(|e| e.name == estimator)
+            .and_then(|e| e.parameters.iter().position(|q| q.name == param))
+            .unwrap_or(0);
+        self.results
+            .iter()
+            .filter_map(|r| r.outcome.as_ref().ok())
+            .filter_map(|ests| ests.iter().find(|x| x.name == estimator))
+            .filter(|x| x.failure.is_none())
+            .filter_map(|x| x.params.get(j).and_then(|q| q.r#final))
+            .collect()
+    }
+
+    /// The names of the primary derivatives ([`ParamStats::primary`]) any estimator has, in
+    /// the order they first appear (estimators in order).
+    pub fn primary_parameters(&self) -> Vec<String> {
+        let mut names: Vec<String> = Vec::new();
+        for p in self.estimators.iter().flat_map(|e| &e.parameters).filter(|p| p.primary) {
+            if !names.contains(&p.name) {
+                names.push(p.name.clone());
+            }
+        }
+        names
+    }
+
+    /// Per estimator with at least one ±2σ coverage, its name and its
+    /// [`ParamStats::coverage_2sigma`] (fraction of runs, 0–1) of each of `params` (`None`
+    /// where it has no such parameter or no coverage).
+    pub fn coverage_by_estimator(&self, params: &[String]) -> Vec<(String, Vec<Option<f64>>)> {
+        self.estimators
+            .iter()
+            .filter(|e| e.parameters.iter().any(|p| p.coverage_2sigma.is_some()))
+            .map(|e| {
+                let vals = params
+                    .iter()
+                    .map(|n| {
+                        e.parameters.iter().find(|p| &p.name == n).and_then(|p| p.coverage_2sigma)
+                    })
+                    .collect();
+                (e.name.clone(), vals)
+            })
+            .collect()
+    }
 }
 
 #[cfg(test)]

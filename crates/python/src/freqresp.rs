@@ -5,8 +5,8 @@
 use std::path::Path;
 
 use aeroident_io::{Mapping, open_log_with_notes};
-use aeroident_pipelines::freqresp::{FreqRespOptions, freqresp};
-use aeroident_signals::spectral::SpectralOptions;
+use aeroident_pipelines::freqresp::{FreqRespOptions, FreqRespOutcome, freqresp};
+use aeroident_signals::spectral::{PairResponse, SpectralOptions};
 use aeroident_signals::tf_fit::{FitOptions, TfSpec};
 use numpy::IntoPyArray;
 use pyo3::prelude::*;
@@ -70,7 +70,12 @@ fn freqresp_file<'py>(
     let signals = crate::Signals::new();
     let r = py.detach(run);
     signals.finish(py)?;
-    let o = r.map_err(to_py)?;
+    outcome_dict(py, r.map_err(to_py)?)
+}
+
+/// The outcome as the dict `aeroident.freqresp` documents: `freqresp.json`'s keys, each pair's
+/// arrays as numpy arrays (the sweeps left out).
+fn outcome_dict(py: Python<'_>, o: FreqRespOutcome) -> PyResult<Bound<'_, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("file", &o.file)?;
     d.set_item("samples", o.samples)?;
@@ -80,26 +85,31 @@ fn freqresp_file<'py>(
     d.set_item("overlap", o.overlap)?;
     let pairs = PyList::empty(py);
     for p in o.pairs {
-        let e = PyDict::new(py);
-        e.set_item("input", &p.input)?;
-        e.set_item("output", &p.output)?;
-        for (k, v) in [
-            ("frequency_hz", p.frequency_hz),
-            ("magnitude_db", p.magnitude_db),
-            ("phase_deg", p.phase_deg),
-            ("coherence", p.coherence),
-            ("multiple_coherence", p.multiple_coherence),
-            ("random_error", p.random_error),
-            ("magnitude_error_db", p.magnitude_error_db),
-            ("phase_error_deg", p.phase_error_deg),
-        ] {
-            e.set_item(k, v.into_pyarray(py))?;
-        }
-        pairs.append(e)?;
+        pairs.append(pair_dict(py, p)?)?;
     }
     d.set_item("pairs", pairs)?;
     let fits = serde_json::to_value(&o.fits).map_err(|e| err(format!("freqresp: {e}")))?;
     d.set_item("fits", convert::json_to_py(py, &fits)?)?;
     d.set_item("warnings", o.warnings)?;
     Ok(d)
+}
+
+/// One pair's response: `input`, `output` and its arrays (numpy).
+fn pair_dict(py: Python<'_>, p: PairResponse) -> PyResult<Bound<'_, PyDict>> {
+    let e = PyDict::new(py);
+    e.set_item("input", &p.input)?;
+    e.set_item("output", &p.output)?;
+    for (k, v) in [
+        ("frequency_hz", p.frequency_hz),
+        ("magnitude_db", p.magnitude_db),
+        ("phase_deg", p.phase_deg),
+        ("coherence", p.coherence),
+        ("multiple_coherence", p.multiple_coherence),
+        ("random_error", p.random_error),
+        ("magnitude_error_db", p.magnitude_error_db),
+        ("phase_error_deg", p.phase_error_deg),
+    ] {
+        e.set_item(k, v.into_pyarray(py))?;
+    }
+    Ok(e)
 }

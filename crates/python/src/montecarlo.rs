@@ -8,11 +8,10 @@
 use aeroident_pipelines::aircraft::Scenario;
 use aeroident_pipelines::aircraft::scenario::{DEFAULT_ORIGIN, DEFAULT_SCENARIO};
 use aeroident_pipelines::montecarlo::{
-    Campaign, EstimatorRun, ParamRun, RunResult, assemble, check_runs, json_summary, run_range,
+    Campaign, RunResult, assemble, check_runs, json_summary, run_range, run_result_from_json,
 };
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use serde_json::Value;
 
 use crate::convert::{json_to_py, py_to_json};
 use crate::{Signals, err, to_py};
@@ -186,8 +185,10 @@ fn montecarlo_reduce<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     check_runs(runs, "runs").map_err(err)?;
     let sc = parse(scenario_toml, origin)?;
-    let mut results: Vec<RunResult> =
-        per_run.iter().map(|o| run_from_json(&py_to_json(&o)?)).collect::<PyResult<_>>()?;
+    let mut results: Vec<RunResult> = per_run
+        .iter()
+        .map(|o| run_result_from_json(&py_to_json(&o)?).map_err(err))
+        .collect::<PyResult<_>>()?;
     results.sort_by_key(|r| r.index);
     if !results.iter().map(|r| r.index).eq(0..runs) {
         return Err(err(format!(
@@ -197,113 +198,4 @@ fn montecarlo_reduce<'py>(
     }
     let c = py.detach(move || assemble(&sc, seed, results, wall_s, threads));
     summary_dict(py, &c, keep_per_run)
-}
-
-fn field<'a>(v: &'a Value, k: &str) -> PyResult<&'a Value> {
-    v.get(k).ok_or_else(|| err(format!("per-run result: missing `{k}`")))
-}
-
-fn opt_f64(v: &Value, k: &str) -> PyResult<Option<f64>> {
-    match field(v, k)? {
-        Value::Null => Ok(None),
-        x => x
-            .as_f64()
-            .map(Some)
-            .ok_or_else(|| err(format!("per-run result: `{k}` is not a number"))),
-    }
-}
-
-/// An optional list of numbers (`None` when absent or `null`).
-fn opt_f64_list(v: &Value, k: &str) -> PyResult<Option<Vec<f64>>> {
-    match v.get(k) {
-        None | Some(Value::Null) => Ok(None),
-        Some(x) => x
-            .as_array()
-            .and_then(|a| a.iter().map(Value::as_f64).collect::<Option<Vec<f64>>>())
-            .map(Some)
-            .ok_or_else(|| err(format!("per-run result: `{k}` is not a list of numbers"))),
-    }
-}
-
-fn string(v: &Value, k: &str) -> PyResult<String> {
-    field(v, k)?
-        .as_str()
-        .map(str::to_owned)
-        .ok_or_else(|| err(format!("per-run result: `{k}` is not a string")))
-}
-
-fn u64_of(v: &Value, k: &str) -> PyResult<u64> {
-    field(v, k)?.as_u64().ok_or_else(|| err(format!("per-run result: `{k}` is not an integer")))
-}
-
-/// The inverse of `serde_json::to_value(&RunResult)` (floats are carried as Python floats, so
-/// exactly).
-fn run_from_json(v: &Value) -> PyResult<RunResult> {
-    let outcome = field(v, "outcome")?;
-    let outcome = if let Some(e) = outcome.get("Err") {
-        Err(e.as_str().unwrap_or_default().to_owned())
-    } else {
-        let ests = outcome
-            .get("Ok")
-            .and_then(Value::as_array)
-            .ok_or_else(|| err("per-run result: `outcome` is neither Ok nor Err"))?;
-        Ok(ests
-            .iter()
-            .map(|e| {
-                let params = field(e, "params")?
-                    .as_array()
-                    .ok_or_else(|| err("per-run result: `params` is not a list"))?
-                    .iter()
-                    .map(|p| {
-                        Ok(ParamRun {
-                            name: string(p, "name")?,
-                            primary: field(p, "primary")?.as_bool().unwrap_or(false),
-                            truth: opt_f64(p, "truth")?,
-                            truth_before: opt_f64(p, "truth_before")?,
-                            truth_after: opt_f64(p, "truth_after")?,
-                            r#final: opt_f64(p, "final")?,
-                            sigma: opt_f64(p, "sigma")?,
-                            time_to_10pct_s: opt_f64(p, "time_to_10pct_s")?,
-                            reconvergence_10pct_s: opt_f64(p, "reconvergence_10pct_s")?,
-                        })
-                    })
-                    .collect::<PyResult<Vec<_>>>()?;
-                Ok(EstimatorRun {
-                    name: string(e, "name")?,
-                    failure: field(e, "failure")?.as_str().map(str::to_owned),
-                    nis: opt_f64(e, "nis")?,
-                    restarts: match e.get("restarts") {
-                        None | Some(Value::Null) => 0,
-                        Some(x) => x
-                            .as_u64()
-                            .and_then(|v| u32::try_from(v).ok())
-                            .ok_or_else(|| err("per-run result: `restarts` is not a count"))?,
-                    },
-                    iterations: match field(e, "iterations")? {
-                        Value::Null => None,
-                        x => {
-                            Some(x.as_u64().ok_or_else(|| {
-                                err("per-run result: `iterations` is not an integer")
-                            })? as usize)
-                        }
-                    },
-                    fit_wall_s: opt_f64(e, "fit_wall_s")?,
-                    sigma_candidates: match e.get("sigma_candidates") {
-                        None | Some(Value::Null) => Vec::new(),
-                        Some(x) => serde_json::from_value(x.clone())
-                            .map_err(|e| err(format!("per-run result: `sigma_candidates`: {e}")))?,
-                    },
-                    bootstrap_failed: match e.get("bootstrap_failed") {
-                        None | Some(Value::Null) => None,
-                        Some(x) => Some(x.as_u64().ok_or_else(|| {
-                            err("per-run result: `bootstrap_failed` is not a count")
-                        })? as usize),
-                    },
-                    bootstrap_bias: opt_f64_list(e, "bootstrap_bias")?,
-                    params,
-                })
-            })
-            .collect::<PyResult<Vec<_>>>()?)
-    };
-    Ok(RunResult { index: u64_of(v, "index")?, sensor_seed: u64_of(v, "sensor_seed")?, outcome })
 }

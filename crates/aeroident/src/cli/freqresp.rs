@@ -19,11 +19,13 @@
 
 use aeroident_io::excitation::{Axis, Excitation, axis_by_name, read_sysid};
 use aeroident_io::{LogFormat, Mapping, open_log_with_notes};
-use aeroident_pipelines::freqresp::sysid::{choose_sweeps, default_input};
-use aeroident_pipelines::freqresp::{FreqRespOptions, FreqRespOutcome, freqresp};
+use aeroident_pipelines::freqresp::sysid::{SweepSummary, choose_sweeps, default_input};
+use aeroident_pipelines::freqresp::{
+    FitSummary, FreqRespOptions, FreqRespOutcome, GOOD_COHERENCE, coherent_band, freqresp,
+};
 use aeroident_pipelines::window::TimeWindow;
 use aeroident_signals::spectral::SpectralOptions;
-use aeroident_signals::tf_fit::{FitOptions, TfSpec};
+use aeroident_signals::tf_fit::{Factor, FitOptions, TfSpec};
 use anyhow::Context;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -255,72 +257,80 @@ fn render(o: &FreqRespOutcome) -> String {
         o.overlap
     );
     for s in &o.sweeps {
-        let _ = writeln!(
-            t,
-            "sweep {} ({}): {}–{} Hz, magnitude {} {}, {:.3}–{:.3} s ({} SIDD samples)",
-            s.axis_name,
-            s.axis,
-            s.band_hz.0,
-            s.band_hz.1,
-            s.magnitude,
-            s.injected_unit,
-            s.span_s.0,
-            s.span_s.1,
-            s.sidd_samples
-        );
+        t.push_str(&sweep_line(s));
     }
     for p in &o.pairs {
-        let good: Vec<f64> = p
-            .frequency_hz
-            .iter()
-            .zip(&p.coherence)
-            .filter(|(_, g)| **g >= 0.8)
-            .map(|(f, _)| 2.0 * std::f64::consts::PI * f)
-            .collect();
-        let band = match (good.first(), good.last()) {
-            (Some(a), Some(b)) => {
-                format!("{a:.3}–{b:.3} rad/s ({} of {} points)", good.len(), p.frequency_hz.len())
-            }
-            _ => "none".into(),
+        let band = match coherent_band(p, GOOD_COHERENCE) {
+            Some(b) => format!(
+                "{:.3}–{:.3} rad/s ({} of {} points)",
+                b.lo_rad_s, b.hi_rad_s, b.points, b.of
+            ),
+            None => "none".into(),
         };
         let _ = writeln!(t, "{}/{}: coherence ≥ 0.8 over {band}", p.output, p.input);
     }
     for f in &o.fits {
-        let _ = writeln!(
-            t,
-            "fit {}: J = {:.1} over {} frequencies ({:.3}–{:.3} rad/s), {}; K = {:.5}{}, τ = {:.4} s{}",
-            f.spec,
-            f.fit.cost,
-            f.fit.frequencies_used,
-            f.fit.band_rad_s.0,
-            f.fit.band_rad_s.1,
-            f.fit.status,
-            f.fit.gain,
-            pm(f.fit.gain_sigma),
-            f.fit.delay_s,
-            pm(f.fit.delay_sigma_s)
-        );
-        for (what, list) in [("pole", &f.fit.poles), ("zero", &f.fit.zeros)] {
-            for fac in list.iter() {
-                let roots: Vec<String> =
-                    fac.roots.iter().map(|r| format!("{:.4}{:+.4}j", r[0], r[1])).collect();
-                let modal = match (fac.wn_rad_s, fac.zeta) {
-                    (Some(w), Some(z)) => format!(
-                        "  ωn {w:.4}{} rad/s  ζ {z:.4}{}",
-                        pm(fac.wn_sigma_rad_s),
-                        pm(fac.zeta_sigma)
-                    ),
-                    (Some(w), None) => format!("  |root| {w:.4}{} rad/s", pm(fac.wn_sigma_rad_s)),
-                    _ => String::new(),
-                };
-                let _ = writeln!(t, "  {what} {}{modal}", roots.join(", "));
-            }
-        }
+        t.push_str(&fit_lines(f));
     }
     for w in &o.warnings {
         let _ = writeln!(t, "warning: {w}");
     }
     t
+}
+
+/// One SYSID sweep's line: its axis, band, magnitude, span and SIDD samples.
+fn sweep_line(s: &SweepSummary) -> String {
+    format!(
+        "sweep {} ({}): {}–{} Hz, magnitude {} {}, {:.3}–{:.3} s ({} SIDD samples)\n",
+        s.axis_name,
+        s.axis,
+        s.band_hz.0,
+        s.band_hz.1,
+        s.magnitude,
+        s.injected_unit,
+        s.span_s.0,
+        s.span_s.1,
+        s.sidd_samples
+    )
+}
+
+/// One fit's lines: its cost, band, gain and delay, then each pole and zero.
+fn fit_lines(f: &FitSummary) -> String {
+    let mut t = String::new();
+    let _ = writeln!(
+        t,
+        "fit {}: J = {:.1} over {} frequencies ({:.3}–{:.3} rad/s), {}; K = {:.5}{}, τ = {:.4} s{}",
+        f.spec,
+        f.fit.cost,
+        f.fit.frequencies_used,
+        f.fit.band_rad_s.0,
+        f.fit.band_rad_s.1,
+        f.fit.status,
+        f.fit.gain,
+        pm(f.fit.gain_sigma),
+        f.fit.delay_s,
+        pm(f.fit.delay_sigma_s)
+    );
+    for (what, list) in [("pole", &f.fit.poles), ("zero", &f.fit.zeros)] {
+        for fac in list {
+            let _ = writeln!(t, "  {what} {}", factor_text(fac));
+        }
+    }
+    t
+}
+
+/// A pole or zero factor: its roots, then ωn and ζ (complex pair) or |root| (real root).
+fn factor_text(fac: &Factor) -> String {
+    let roots: Vec<String> =
+        fac.roots.iter().map(|r| format!("{:.4}{:+.4}j", r[0], r[1])).collect();
+    let modal = match (fac.wn_rad_s, fac.zeta) {
+        (Some(w), Some(z)) => {
+            format!("  ωn {w:.4}{} rad/s  ζ {z:.4}{}", pm(fac.wn_sigma_rad_s), pm(fac.zeta_sigma))
+        }
+        (Some(w), None) => format!("  |root| {w:.4}{} rad/s", pm(fac.wn_sigma_rad_s)),
+        _ => String::new(),
+    };
+    format!("{}{modal}", roots.join(", "))
 }
 
 fn pm(s: Option<f64>) -> String {

@@ -18,7 +18,9 @@ use crate::outdir::OutputDir;
 use super::run::DEFAULT_SCENARIO;
 use crate::plot::{GroupedBars, HistogramPanel, render_histograms_png, render_histograms_svg};
 use aeroident_pipelines::aircraft::Scenario;
-use aeroident_pipelines::montecarlo::{Campaign, campaign_until, json_summary};
+use aeroident_pipelines::montecarlo::{
+    Campaign, EstimatorStats, ParamStats, campaign_until, json_summary,
+};
 
 /// Arguments of `aeroident montecarlo`.
 #[derive(Debug, clap::Args)]
@@ -47,7 +49,6 @@ pub struct MonteCarloArgs {
 /// bounds (of the experiment flown, turbulence included, and calm: white sensor noise only;
 /// `scat/CRB` against the first), the ±2σ coverage and the median time to ±10 %.
 pub fn table(c: &Campaign) -> String {
-    use crate::table::fmt_sig;
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -57,6 +58,22 @@ pub fn table(c: &Campaign) -> String {
     if let Some(why) = &c.status_reason {
         let _ = writeln!(s, "INTERRUPTED: {why}");
     }
+    let _ = writeln!(s, "{}", statistics_table(c));
+    for e in &c.estimators {
+        s.push_str(&estimator_lines(e));
+    }
+    for n in &c.crb_notes {
+        let _ = writeln!(s, "note: {n}");
+    }
+    let _ = writeln!(
+        s,
+        "* = primary derivative; error % = bias of the mean estimate / |truth|; t10 med = median time to stay within ±10 % (never: ≥ half the runs never do; batch: a post-flight fit, no estimate before the end)"
+    );
+    s
+}
+
+/// The statistics table: one row per estimator and parameter, numbers right-aligned.
+fn statistics_table(c: &Campaign) -> comfy_table::Table {
     let mut t = comfy_table::Table::new();
     t.load_preset(comfy_table::presets::UTF8_FULL_CONDENSED).set_header(vec![
         "estimator",
@@ -79,65 +96,59 @@ pub fn table(c: &Campaign) -> String {
     }
     for e in &c.estimators {
         for p in &e.parameters {
-            let err = match (p.bias, p.truth) {
-                (Some(b), Some(tr)) if tr.abs() > crate::plot::ZERO_THRESHOLD => {
-                    format!("{:+.1}", 100.0 * b / tr.abs())
-                }
-                _ => "—".into(),
-            };
-            t.add_row(vec![
-                e.name.clone(),
-                format!("{}{}", p.name, if p.primary { "*" } else { "" }),
-                fmt_sig(
-                    p.truth.map(|x| if x.abs() < crate::plot::ZERO_THRESHOLD { 0.0 } else { x }),
-                    4,
-                ),
-                fmt_sig(p.bias, 2),
-                err,
-                fmt_sig(p.scatter, 2),
-                fmt_sig(p.mean_sigma, 2),
-                fmt_sig(p.crb_sigma, 2),
-                fmt_sig(p.crb_sigma_calm, 2),
-                p.coverage_2sigma.map_or("—".into(), |x| format!("{:.0} %", 100.0 * x)),
-                p.scatter.zip(p.crb_sigma).map_or("—".into(), |(a, b)| format!("{:.1}", a / b)),
-                if e.mean_fit_wall_s.is_some() {
-                    "batch".into()
-                } else {
-                    p.median_time_to_10pct_s.map_or("never".into(), |t| format!("{t:.2} s"))
-                },
-            ]);
+            t.add_row(statistics_row(e, p));
         }
     }
-    let _ = writeln!(s, "{t}");
-    for e in &c.estimators {
-        let _ = write!(s, "{}: {} runs used, {} failed", e.name, e.runs_ok, e.failed_runs.len());
-        if !e.restarted_runs.is_empty() {
-            let runs: Vec<String> = e.restarted_runs.iter().map(u64::to_string).collect();
-            let _ = write!(
-                s,
-                ", {} restarted from the priors (runs {}; used)",
-                e.restarted_runs.len(),
-                runs.join(", ")
-            );
-        }
-        if let Some(nis) = e.mean_nis {
-            let _ = write!(s, "; mean NIS {nis:.2}");
-        }
-        if let (Some(it), Some(w)) = (e.mean_iterations, e.mean_fit_wall_s) {
-            let _ = write!(s, "; post-flight fit: mean {it:.1} iterations, {w:.2} s wall");
-        }
-        let _ = writeln!(s);
-        for f in &e.failed_runs {
-            let _ = writeln!(s, "  run {} failed: {}", f.run, f.reason);
-        }
+    t
+}
+
+/// The cells of one parameter's row of [`statistics_table`].
+fn statistics_row(e: &EstimatorStats, p: &ParamStats) -> Vec<String> {
+    use crate::table::fmt_sig;
+    vec![
+        e.name.clone(),
+        format!("{}{}", p.name, if p.primary { "*" } else { "" }),
+        fmt_sig(p.truth_or_zero(), 4),
+        fmt_sig(p.bias, 2),
+        p.bias_percent_of_truth().map_or("—".into(), |x| format!("{x:+.1}")),
+        fmt_sig(p.scatter, 2),
+        fmt_sig(p.mean_sigma, 2),
+        fmt_sig(p.crb_sigma, 2),
+        fmt_sig(p.crb_sigma_calm, 2),
+        p.coverage_2sigma.map_or("—".into(), |x| format!("{:.0} %", 100.0 * x)),
+        p.scatter_over_crb().map_or("—".into(), |x| format!("{x:.1}")),
+        if e.is_batch() {
+            "batch".into()
+        } else {
+            p.median_time_to_10pct_s.map_or("never".into(), |t| format!("{t:.2} s"))
+        },
+    ]
+}
+
+/// One estimator's lines under the table: runs used, failed and restarted, mean NIS, the
+/// post-flight fit's cost, then each failed run.
+fn estimator_lines(e: &EstimatorStats) -> String {
+    let mut s = String::new();
+    let _ = write!(s, "{}: {} runs used, {} failed", e.name, e.runs_ok, e.failed_runs.len());
+    if !e.restarted_runs.is_empty() {
+        let runs: Vec<String> = e.restarted_runs.iter().map(u64::to_string).collect();
+        let _ = write!(
+            s,
+            ", {} restarted from the priors (runs {}; used)",
+            e.restarted_runs.len(),
+            runs.join(", ")
+        );
     }
-    for n in &c.crb_notes {
-        let _ = writeln!(s, "note: {n}");
+    if let Some(nis) = e.mean_nis {
+        let _ = write!(s, "; mean NIS {nis:.2}");
     }
-    let _ = writeln!(
-        s,
-        "* = primary derivative; error % = bias of the mean estimate / |truth|; t10 med = median time to stay within ±10 % (never: ≥ half the runs never do; batch: a post-flight fit, no estimate before the end)"
-    );
+    if let (Some(it), Some(w)) = (e.mean_iterations, e.mean_fit_wall_s) {
+        let _ = write!(s, "; post-flight fit: mean {it:.1} iterations, {w:.2} s wall");
+    }
+    let _ = writeln!(s);
+    for f in &e.failed_runs {
+        let _ = writeln!(s, "  run {} failed: {}", f.run, f.reason);
+    }
     s
 }
 
@@ -151,76 +162,63 @@ pub fn write_outputs(c: &Campaign, od: &mut OutputDir, figures: bool) -> anyhow:
     if !figures {
         return Ok(());
     }
-    let mut categories: Vec<String> = Vec::new();
-    let mut coverage: Vec<(String, Vec<Option<f64>>)> = Vec::new();
     for e in &c.estimators {
-        let primaries: Vec<_> = e.parameters.iter().filter(|p| p.primary).collect();
-        for p in &primaries {
-            if !categories.contains(&p.name) {
-                categories.push(p.name.clone());
-            }
-        }
-        let k = c.estimators.iter().position(|x| x.name == e.name).unwrap_or(0);
-        let panels: Vec<HistogramPanel> = primaries
-            .iter()
-            .map(|p| {
-                let j = e.parameters.iter().position(|q| q.name == p.name).unwrap_or(0);
-                let values = c
-                    .results
-                    .iter()
-                    .filter_map(|r| r.outcome.as_ref().ok())
-                    .filter_map(|ests| ests.iter().find(|x| x.name == e.name))
-                    .filter(|x| x.failure.is_none())
-                    .filter_map(|x| x.params.get(j).and_then(|q| q.r#final))
-                    .collect();
-                HistogramPanel {
-                    title: p.name.clone(),
-                    x_label: p.name.clone(),
-                    values,
-                    bins: 20,
-                    line: p.truth,
-                    line_label: "truth".into(),
-                }
-            })
-            .collect();
-        if !panels.is_empty() {
-            let safe: String = e
-                .name
-                .chars()
-                .map(|ch| if ch.is_ascii_alphanumeric() { ch } else { '_' })
-                .collect();
-            let stem = format!("histograms_{k}_{safe}");
-            let title = format!("{}: final estimates over {} runs", e.name, e.runs_ok);
-            od.write_path(&format!("{stem}.png"), |p| {
-                render_histograms_png(p, &title, &panels, 4, (380, 260))
-            })?;
-            let svg =
-                render_histograms_svg(&format!("{stem}.svg"), &title, &panels, 4, (380, 260))?;
-            od.write_bytes(&format!("{stem}.svg"), svg.as_bytes())?;
-        }
+        write_histograms(c, e, od)?;
     }
-    for e in &c.estimators {
-        if e.parameters.iter().all(|p| p.coverage_2sigma.is_none()) {
-            continue;
-        }
-        let vals = categories
-            .iter()
-            .map(|n| e.parameters.iter().find(|p| &p.name == n).and_then(|p| p.coverage_2sigma))
-            .collect();
-        coverage.push((e.name.clone(), vals));
+    write_coverage(c, od)
+}
+
+/// `histograms_<k>_<estimator>.{png,svg}`: the final estimates of each of the estimator's
+/// primary derivatives with the truth line (`k`: the estimator's position); nothing without
+/// a primary derivative.
+fn write_histograms(c: &Campaign, e: &EstimatorStats, od: &mut OutputDir) -> anyhow::Result<()> {
+    let panels: Vec<HistogramPanel> = e
+        .parameters
+        .iter()
+        .filter(|p| p.primary)
+        .map(|p| HistogramPanel {
+            title: p.name.clone(),
+            x_label: p.name.clone(),
+            values: c.final_estimates(&e.name, &p.name),
+            bins: 20,
+            line: p.truth,
+            line_label: "truth".into(),
+        })
+        .collect();
+    if panels.is_empty() {
+        return Ok(());
     }
-    if !categories.is_empty() && !coverage.is_empty() {
-        let chart = GroupedBars {
-            title: format!("±2σ coverage of the truth over {} runs", c.runs),
-            y_label: "fraction of runs".into(),
-            categories,
-            series: coverage,
-            y_range: (0.0, 1.05),
-            reference: Some((0.95, "0.95 target".into())),
-        };
-        od.write_path("coverage.png", |p| chart.render_png(p, (1200, 500)))?;
-        od.write_bytes("coverage.svg", chart.render_svg("coverage.svg", (1200, 500))?.as_bytes())?;
+    let k = c.estimators.iter().position(|x| x.name == e.name).unwrap_or(0);
+    let safe: String =
+        e.name.chars().map(|ch| if ch.is_ascii_alphanumeric() { ch } else { '_' }).collect();
+    let stem = format!("histograms_{k}_{safe}");
+    let title = format!("{}: final estimates over {} runs", e.name, e.runs_ok);
+    od.write_path(&format!("{stem}.png"), |p| {
+        render_histograms_png(p, &title, &panels, 4, (380, 260))
+    })?;
+    let svg = render_histograms_svg(&format!("{stem}.svg"), &title, &panels, 4, (380, 260))?;
+    od.write_bytes(&format!("{stem}.svg"), svg.as_bytes())?;
+    Ok(())
+}
+
+/// `coverage.{png,svg}`: the ±2σ coverage of each primary derivative per estimator against the
+/// 0.95 target; nothing without a primary derivative or a coverage.
+fn write_coverage(c: &Campaign, od: &mut OutputDir) -> anyhow::Result<()> {
+    let categories = c.primary_parameters();
+    let coverage = c.coverage_by_estimator(&categories);
+    if categories.is_empty() || coverage.is_empty() {
+        return Ok(());
     }
+    let chart = GroupedBars {
+        title: format!("±2σ coverage of the truth over {} runs", c.runs),
+        y_label: "fraction of runs".into(),
+        categories,
+        series: coverage,
+        y_range: (0.0, 1.05),
+        reference: Some((0.95, "0.95 target".into())),
+    };
+    od.write_path("coverage.png", |p| chart.render_png(p, (1200, 500)))?;
+    od.write_bytes("coverage.svg", chart.render_svg("coverage.svg", (1200, 500))?.as_bytes())?;
     Ok(())
 }
 

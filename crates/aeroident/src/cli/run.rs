@@ -23,6 +23,7 @@ use rayon::prelude::*;
 
 use crate::aircraft::outputs as report;
 use crate::outdir::{OutputDir, safe_component};
+use aeroident_pipelines::aircraft::evidence::Variant;
 use aeroident_pipelines::aircraft::summary::{self, Summary};
 use aeroident_pipelines::aircraft::{RunOutput, Scenario, run};
 use aeroident_pipelines::scenario_kind::{ScenarioKind, shipped_dir};
@@ -241,81 +242,50 @@ pub fn overview(results: &[(Scenario, Summary)]) -> String {
 }
 
 /// Variants of thesis cases that decide the illegible λ of tables 4.7/4.8 and show the effect of
-/// the lost η (published-implicit and -explicit estimators only; no files written). Empty when
-/// the base scenarios `t4_7_case4`, `t4_8_case1`, `t4_10_case1` are not in the set.
+/// the lost η (published-implicit and -explicit estimators only; no files written,
+/// [`aeroident_pipelines::aircraft::evidence`]): a `report.md` section, one table row per
+/// variant, estimator and parameter. Empty when the base scenarios `t4_7_case4`,
+/// `t4_8_case1`, `t4_10_case1` are not in the set.
 ///
 /// # Errors
 /// A failed run.
 pub fn evidence(scenarios: &[Scenario]) -> anyhow::Result<String> {
-    use std::fmt::Write as _;
-    let base = |n: &str| scenarios.iter().find(|s| s.name == n).cloned();
-    // (base scenario, increment, field, value)
-    let mut variants: Vec<(Scenario, &str, &str, f64)> = Vec::new();
-    if let Some(sc) = base("t4_7_case4") {
-        for v in [1e-7, 1e7] {
-            variants.push((sc.clone(), "Cm_alpha", "lambda_per_s", v));
-        }
-        for v in [1e-12, 1e-10, 1e-8, 1e-6] {
-            variants.push((sc.clone(), "Cm_alpha", "eta", v));
-        }
-    }
-    if let Some(sc) = base("t4_8_case1") {
-        for v in [2e-4, 0.0625, 2e4] {
-            variants.push((sc.clone(), "Cm_q", "lambda_per_s", v));
-        }
-    }
-    if let Some(sc) = base("t4_10_case1") {
-        for v in [1e-12, 1e-10, 1e-8, 1e-6] {
-            variants.push((sc.clone(), "CD_alpha", "eta", v));
-        }
-    }
+    let variants = aeroident_pipelines::aircraft::evidence::variants(scenarios);
     if variants.is_empty() {
         return Ok(String::new());
     }
-    let rows: Vec<String> = variants
-        .into_par_iter()
-        .map(|(mut sc, param, field, v)| {
-            let key = aeroident_estimators::vocabulary::Param::from_name(param);
-            if let Some(p) = key.and_then(|k| sc.increments.get_mut(&k)) {
-                match field {
-                    "eta" => p.eta = v,
-                    _ => p.lambda_per_s = v,
-                }
-            }
-            sc.estimator.retain(|e| {
-                matches!(
-                    e,
-                    aeroident_pipelines::aircraft::scenario::EstimatorSpec::Published { .. }
-                )
-            });
-            let out = run(&sc).with_context(|| format!("variant of `{}`", sc.name))?;
-            let sm = summary::summarize(&out)?;
-            let mut row = String::new();
-            for p in &sm.parameters {
-                let _ = writeln!(
-                    row,
-                    "| {} | {} | {field} = {v:e} | {} | {} | {} | {} | {} |",
-                    sc.name,
-                    param,
-                    p.estimator,
-                    p.r#final.map_or("null".into(), |x| format!("{x:.4e}")),
-                    p.rel_error.map_or("—".into(), |e| format!("{:.1} %", 100.0 * e)),
-                    p.first_within_s.map_or("never".into(), |t| format!("{t:.2} s")),
-                    p.convergence_time_s.map_or("never".into(), |t| format!("{t:.2} s")),
-                );
-            }
-            Ok(row)
-        })
-        .collect::<anyhow::Result<_>>()?;
+    let runs = aeroident_pipelines::aircraft::evidence::run_variants(variants)?;
     let mut s = String::from(
         "\n### Evidence: illegible λ and lost η (published estimators, one setting changed)\n\n\
          | base scenario | param | setting | estimator | final | rel. err | first in ±5 % | settled |\n\
          |---|---|---|---|---|---|---|---|\n",
     );
-    for r in rows {
-        s.push_str(&r);
+    for (v, sm) in &runs {
+        s.push_str(&evidence_rows(v, sm));
     }
     Ok(s)
+}
+
+/// The `report.md` rows of one variant: one per estimator and parameter of its summary.
+fn evidence_rows(v: &Variant, sm: &Summary) -> String {
+    use std::fmt::Write as _;
+    let mut row = String::new();
+    for p in &sm.parameters {
+        let _ = writeln!(
+            row,
+            "| {} | {} | {} = {:e} | {} | {} | {} | {} | {} |",
+            v.scenario.name,
+            v.param,
+            v.setting,
+            v.value,
+            p.estimator,
+            p.r#final.map_or("null".into(), |x| format!("{x:.4e}")),
+            p.rel_error.map_or("—".into(), |e| format!("{:.1} %", 100.0 * e)),
+            p.first_within_s.map_or("never".into(), |t| format!("{t:.2} s")),
+            p.convergence_time_s.map_or("never".into(), |t| format!("{t:.2} s")),
+        );
+    }
+    row
 }
 
 /// Writes all outputs of one run into the locked output directory `od` (each file atomically)

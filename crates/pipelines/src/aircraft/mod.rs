@@ -14,6 +14,7 @@
 
 pub mod air_data;
 pub mod batch;
+pub mod evidence;
 pub mod experiment;
 pub mod increments;
 pub mod model;

@@ -94,3 +94,27 @@ fn bad_channels_and_windows_are_named() {
     let e = run(&o).unwrap_err().to_string();
     assert!(e.contains("--fit") && e.contains("no response of `r` to `dr`"), "{e}");
 }
+
+/// The coherent band runs from the first to the last frequency at or above the threshold (in
+/// rad/s), counting every such point; none without one.
+#[test]
+fn coherent_band_of_a_pair() {
+    let p = PairResponse {
+        input: "de".into(),
+        output: "q".into(),
+        frequency_hz: vec![0.1, 0.2, 0.3, 0.4, 0.5],
+        magnitude_db: vec![0.0; 5],
+        phase_deg: vec![0.0; 5],
+        coherence: vec![0.5, 0.8, 0.3, 0.9, 0.7],
+        multiple_coherence: vec![0.0; 5],
+        random_error: vec![0.0; 5],
+        magnitude_error_db: vec![0.0; 5],
+        phase_error_deg: vec![0.0; 5],
+        re: vec![0.0; 5],
+        im: vec![0.0; 5],
+    };
+    let b = coherent_band(&p, GOOD_COHERENCE).unwrap();
+    assert_eq!((b.lo_rad_s, b.hi_rad_s), (2.0 * PI * 0.2, 2.0 * PI * 0.4));
+    assert_eq!((b.points, b.of), (2, 5));
+    assert_eq!(coherent_band(&p, 0.95), None);
+}

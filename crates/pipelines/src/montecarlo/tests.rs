@@ -285,3 +285,75 @@ fn run_counts_are_limited_before_allocating() {
     let (start, stop) = (7, 3);
     assert_eq!(run_range(&sc, 1, start..stop), Ok(Vec::new()));
 }
+
+/// `run_result_from_json` inverts the serialisation exactly (the distributed reduce), accepts
+/// the keys older versions lack, and names a bad key.
+#[test]
+fn run_results_round_trip_through_json() {
+    let mut ok = result(3, Some(-0.9), Some(0.1), Some(1.0), None);
+    if let Ok(e) = &mut ok.outcome {
+        e[0].restarts = 2;
+        e[0].iterations = Some(7);
+        e[0].fit_wall_s = Some(0.25);
+        e[0].sigma_candidates = vec![("crb".into(), vec![0.1])];
+        e[0].bootstrap_failed = Some(1);
+        e[0].bootstrap_bias = Some(vec![1e-3]);
+    }
+    let failed = RunResult { index: 4, sensor_seed: 9, outcome: Err("trim failed".into()) };
+    for r in [ok, failed, result(5, None, None, None, Some("diverged"))] {
+        let v = serde_json::to_value(&r).unwrap();
+        assert_eq!(run_result_from_json(&v).unwrap(), r);
+    }
+    let mut v = serde_json::to_value(result(0, Some(-1.0), None, None, None)).unwrap();
+    let e = &mut v["outcome"]["Ok"][0];
+    for k in ["restarts", "sigma_candidates", "bootstrap_failed", "bootstrap_bias"] {
+        e.as_object_mut().unwrap().remove(k);
+    }
+    assert_eq!(run_result_from_json(&v).unwrap(), result(0, Some(-1.0), None, None, None));
+    v["outcome"]["Ok"][0]["params"][0]["final"] = "x".into();
+    assert_eq!(run_result_from_json(&v).unwrap_err(), "per-run result: `final` is not a number");
+}
+
+/// The campaign's derived views: error % of |truth|, scatter over the CRB, the final estimates
+/// of the good runs, the primary derivatives and the coverage series.
+#[test]
+fn campaign_views() {
+    let runs = vec![
+        result(0, Some(-0.9), Some(0.1), Some(1.0), None),
+        result(1, Some(100.0), Some(0.1), None, Some("diverged")),
+        RunResult { index: 2, sensor_seed: 2, outcome: Err("trim failed".into()) },
+        result(3, Some(-1.3), Some(0.1), None, None),
+    ];
+    let mut crb = CrbTable::default();
+    crb.sigma.entry("rls".into()).or_default().insert("Cm_alpha".into(), 0.1);
+    let estimators = statistics(&runs, &["rls".into()], &crb);
+    let p = estimators[0].parameters[0].clone();
+    assert!((p.bias_percent_of_truth().unwrap() - 100.0 * -0.1).abs() < 1e-9);
+    assert!((p.scatter_over_crb().unwrap() - p.scatter.unwrap() / 0.1).abs() < 1e-12);
+    assert_eq!(p.truth_or_zero(), Some(-1.0));
+    let zero = ParamStats { truth: Some(1e-15), ..p.clone() };
+    assert_eq!((zero.truth_or_zero(), zero.bias_percent_of_truth()), (Some(0.0), None));
+    assert!(!estimators[0].is_batch());
+    let c = Campaign {
+        scenario: "s".into(),
+        runs: 4,
+        runs_requested: 4,
+        status: "complete",
+        status_reason: None,
+        seed: 1,
+        seed_rule: SEED_RULE,
+        failed_runs: Vec::new(),
+        estimators,
+        crb_notes: Vec::new(),
+        wall_s: 0.0,
+        threads: 1,
+        results: runs,
+    };
+    assert_eq!(c.final_estimates("rls", "Cm_alpha"), vec![-0.9, -1.3]);
+    assert!(c.final_estimates("ekf", "Cm_alpha").is_empty());
+    assert_eq!(c.primary_parameters(), vec!["Cm_alpha".to_string()]);
+    assert_eq!(
+        c.coverage_by_estimator(&["Cm_alpha".into(), "Cm_q".into()]),
+        vec![("rls".to_string(), vec![p.coverage_2sigma, None])]
+    );
+}

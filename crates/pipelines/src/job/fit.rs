@@ -65,7 +65,7 @@ impl FitJob {
     /// The stages before the fit: the compatibility corrections, then the model.
     ///
     /// # Errors
-    /// As [`corrections`] and [`choose_model`].
+    /// As [`super::corrections`] and [`super::choose_model`].
     pub fn prepare(
         &self,
         guard: &mut impl Guard,

@@ -96,7 +96,7 @@ impl ReplayJob {
     /// The stages before the estimator: the compatibility corrections, then the model.
     ///
     /// # Errors
-    /// As [`corrections`] and [`choose_model`].
+    /// As [`super::corrections`] and [`super::choose_model`].
     pub fn prepare(
         &self,
         guard: &mut impl Guard,

@@ -227,6 +227,25 @@ fn errors_numeric_options_name_the_cli_option_and_the_exact_value() {
     );
 }
 
+/// The last line of `estimates.csv` of the HFB-320 record `data` replayed with `args`.
+fn last_estimates_line(data: &std::path::Path, args: &[&str], name: &str) -> String {
+    let out = tmp(name);
+    let o = bin()
+        .args(["replay"])
+        .arg(data)
+        .arg("--map")
+        .arg(workspace().join("mappings/hfb320.toml"))
+        .args(args)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("estimates.csv")).unwrap();
+    let _ = std::fs::remove_dir_all(&out);
+    csv.lines().last().unwrap().to_string()
+}
+
 /// The estimator-option flags are checked by the estimator registry, which knows which kind
 /// takes which: `ekf` has no forgetting factor and `smpe` no instrument delay (refused naming
 /// the flag, the kind and the options it takes, not ignored), while `smpe-finite-time` takes
@@ -248,22 +267,11 @@ fn errors_forgetting_refused_by_ekf_taken_by_smpe_finite_time() {
     );
     let Some(data) = common::shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
     let last_estimates = |extra: &[&str], name: &str| {
-        let out = tmp(name);
-        let o = bin()
-            .args(["replay"])
-            .arg(&data)
-            .arg("--map")
-            .arg(workspace().join("mappings/hfb320.toml"))
-            .args(["--estimator", "smpe-finite-time"])
-            .args(extra)
-            .arg("--out")
-            .arg(&out)
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
-        let csv = std::fs::read_to_string(out.join("estimates.csv")).unwrap();
-        let _ = std::fs::remove_dir_all(&out);
-        csv.lines().last().unwrap().to_string()
+        last_estimates_line(
+            &data,
+            &[&["--estimator", "smpe-finite-time"][..], extra].concat(),
+            name,
+        )
     };
     let forgetting = last_estimates(&["--forgetting", "0.99"], "sft-forget");
     let none = last_estimates(&[], "sft");
@@ -290,22 +298,7 @@ fn errors_estimator_option_goes_through_the_registry() {
     assert!(!ok && err.contains("forgetting") && err.contains("must be a number"), "{err}");
     let Some(data) = common::shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
     let last_estimates = |extra: &[&str], name: &str| {
-        let out = tmp(name);
-        let o = bin()
-            .args(["replay"])
-            .arg(&data)
-            .arg("--map")
-            .arg(workspace().join("mappings/hfb320.toml"))
-            .args(["--estimator", "rls-iv"])
-            .args(extra)
-            .arg("--out")
-            .arg(&out)
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
-        let csv = std::fs::read_to_string(out.join("estimates.csv")).unwrap();
-        let _ = std::fs::remove_dir_all(&out);
-        csv.lines().last().unwrap().to_string()
+        last_estimates_line(&data, &[&["--estimator", "rls-iv"][..], extra].concat(), name)
     };
     let given = last_estimates(&["--estimator-option", "instrument_delay=12"], "iv-12");
     let flag = last_estimates(&["--instrument-delay", "12"], "iv-flag-12");

@@ -307,6 +307,28 @@ fn errors_estimator_option_goes_through_the_registry() {
     assert_ne!(given, default, "instrument_delay=12 did not reach the estimator");
 }
 
+/// A batch fit's options from the command line go through the one parser of a batch fit's
+/// options: `--estimator-option` names any of them, a real-time estimator's option is refused
+/// naming what the fit takes, and an option of the other method names whose it is.
+#[test]
+fn errors_batch_fit_options_go_through_one_parser() {
+    let (ok, err) = replay_good(&["--estimator", "oe", "--forgetting", "0.9"], "oe-forget");
+    assert!(!ok, "{err}");
+    assert!(
+        err.contains("--forgetting is not an option of --estimator oe, which takes `initial_states`, `bootstrap_refits`, `max_iterations` and `robust`"),
+        "{err}"
+    );
+    let (ok, err) =
+        replay_good(&["--estimator", "fem", "--estimator-option", "robust=true"], "fem-robust");
+    assert!(!ok && err.contains("`--robust`") && err.contains("output error"), "{err}");
+    let (ok, err) =
+        replay_good(&["--estimator", "oe", "--estimator-option", "max_iterations=0"], "oe-zero");
+    assert!(
+        !ok && err.contains("option `--max-iterations`: must be an integer of at least 1"),
+        "{err}"
+    );
+}
+
 /// Live mode: the HFB-320 record on stdin gives one estimates line per sample on stdout.
 #[test]
 fn val_live_stdin_one_line_per_sample() {

@@ -6,13 +6,13 @@
 
 use std::path::Path;
 
-use aeroident_estimators::flight_model::N_STATES;
-use aeroident_estimators::output_error::InitialStates;
 use aeroident_io::{Mapping, open_log_with_report};
 use aeroident_pipelines::estimators::EstimatorKind;
+use aeroident_pipelines::estimators::OptionError;
 use aeroident_pipelines::job::fit::{FitJob, FitJobOutcome};
 use aeroident_pipelines::job::{CompatSource, InPlace, JobLog, Ran, Records};
-use aeroident_pipelines::replay::batch::{BatchMethod, FitOptions, parse_process_noise_states};
+use aeroident_pipelines::replay::batch::FitOptions;
+use aeroident_pipelines::replay::fit::fit_options_of;
 use numpy::IntoPyArray;
 use numpy::ndarray::Array2;
 use pyo3::prelude::*;
@@ -26,30 +26,39 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
-/// The initial-state setting by its CLI name (`--initial-states`).
-fn initial_states(name: &str) -> PyResult<InitialStates> {
-    match name {
-        "first-sample" => Ok(InitialStates::FirstSample),
-        "estimate" => Ok(InitialStates::Estimate([true; N_STATES])),
-        _ => Err(err(format!("initial_states: `{name}` is not `first-sample` or `estimate`"))),
-    }
-}
-
-/// The batch method of `kind` (`oe`, `fem`, `fdoe`); `band_hz` is fdoe's band (`--band-hz`),
-/// refused with the other methods as the CLI refuses it.
-fn batch_method(kind: EstimatorKind, band_hz: Option<(f64, f64)>) -> PyResult<BatchMethod> {
-    match kind {
-        EstimatorKind::Fdoe => Ok(BatchMethod::Fdoe {
-            band_hz: band_hz
-                .unwrap_or(aeroident_estimators::output_error::frequency::DEFAULT_BAND_HZ),
-        }),
-        _ if band_hz.is_some() => Err(err(format!(
-            "fit: band_hz is the band of frequency-domain output error (estimator=\"fdoe\"), not of estimator `{}`",
-            kind.name()
-        ))),
-        EstimatorKind::Fem => Ok(BatchMethod::Fem),
-        _ => Ok(BatchMethod::Oe),
-    }
+/// The fit's options from the keyword arguments given (`None`: not given) and any further
+/// ones (`**options`, by their keys), parsed by the one parser of a batch fit's options
+/// ([`FitOptions::from_pairs`]).
+///
+/// # Errors
+/// A message naming the keyword and what it must be, or the keywords the method takes.
+fn fit_options(
+    kind: EstimatorKind,
+    given: Vec<(&'static str, Option<toml::Value>)>,
+    more: Option<&Bound<'_, PyDict>>,
+) -> PyResult<FitOptions> {
+    let keyword = |key: &str| {
+        if key == "bootstrap_refits" { "bootstrap".to_string() } else { key.to_string() }
+    };
+    let mut pairs: Vec<(String, toml::Value)> =
+        given.into_iter().filter_map(|(k, v)| v.map(|v| (k.to_string(), v))).collect();
+    pairs.extend(crate::record::keyword_options(more)?);
+    let pairs = pairs.iter().map(|(k, v)| (k.as_str(), v.clone()));
+    FitOptions::from_pairs(kind, pairs).map_err(|e| match e {
+        OptionError::Unknown { kind, key } => {
+            let takes: Vec<String> =
+                fit_options_of(kind).iter().map(|k| format!("`{}`", keyword(k))).collect();
+            err(format!(
+                "fit: estimator `{}`: unknown keyword argument `{}` (it takes {})",
+                kind.name(),
+                keyword(&key),
+                takes.join(", ")
+            ))
+        }
+        OptionError::Invalid { key, reason, .. } => {
+            err(format!("fit: {}: {reason}", keyword(&key)))
+        }
+    })
 }
 
 /// The batch kind `estimator` names; a real-time kind is refused with where it belongs.
@@ -63,11 +72,6 @@ fn batch_kind(estimator: &str) -> PyResult<EstimatorKind> {
         )));
     }
     Ok(kind)
-}
-
-/// `process_noise="V,alpha,…"` as the filter-error method's states (`--process-noise`).
-fn process_noise_states(states: Option<&str>) -> PyResult<Option<[bool; N_STATES]>> {
-    states.map(parse_process_noise_states).transpose().map_err(|e| err(format!("fit: {e}")))
 }
 
 /// The correlation matrix (row-major `n × n`) of a covariance whose entries may be absent
@@ -89,7 +93,7 @@ fn matrix(v: Vec<f64>, rows: usize, cols: usize) -> PyResult<Array2<f64>> {
 /// (documentation:
 /// `aeroident.fit` in python/aeroident/__init__.py).
 #[pyfunction]
-#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None, max_iterations=None, process_noise=None, compat=None, windows=None, also=None, select="swr", candidates=None, band_hz=None, knots_deg=None))]
+#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None, max_iterations=None, process_noise=None, compat=None, windows=None, also=None, select="swr", candidates=None, band_hz=None, knots_deg=None, **options))]
 #[allow(clippy::too_many_arguments)]
 fn fit_file<'py>(
     py: Python<'py>,
@@ -109,25 +113,22 @@ fn fit_file<'py>(
     candidates: Option<Vec<String>>,
     band_hz: Option<(f64, f64)>,
     knots_deg: Option<Vec<f64>>,
+    options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let windows = crate::record::time_windows("fit", windows)?;
     let compat = compat
         .map(|c| aeroident_pipelines::compat::Corrections::from_json(Path::new(c)))
         .transpose()
         .map_err(|e| err(format!("fit: {e}")))?;
-    if max_iterations == Some(0) {
-        return Err(err("fit: max_iterations must be a positive integer, got 0".to_string()));
-    }
     let kind = batch_kind(estimator)?;
-    let options = FitOptions {
-        method: batch_method(kind, band_hz)?,
-        initial_states: self::initial_states(initial_states)?,
-        bootstrap_refits: bootstrap,
-        max_iterations,
-        process_noise: process_noise_states(process_noise)?,
-        windows,
-        ..FitOptions::default()
-    };
+    let given = vec![
+        ("initial_states", Some(toml::Value::String(initial_states.to_owned()))),
+        ("bootstrap_refits", bootstrap.map(|n| toml::Value::Integer(n as i64))),
+        ("max_iterations", max_iterations.map(|n| toml::Value::Integer(n as i64))),
+        ("process_noise", process_noise.map(|s| toml::Value::String(s.to_owned()))),
+        ("band_hz", band_hz.map(|(a, b)| toml::Value::Array(vec![a.into(), b.into()]))),
+    ];
+    let options = FitOptions { windows, ..fit_options(kind, given, options)? };
     let diff_window = aeroident_pipelines::structure::DIFF_WINDOW;
     let model = crate::record::model_choice(model, select, candidates, knots_deg, diff_window);
     let (path, mapping) = (path.to_owned(), mapping.to_owned());

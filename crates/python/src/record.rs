@@ -119,7 +119,7 @@ pub fn estimator_options(
 ///
 /// # Errors
 /// A value that is not a number, a string, a boolean or a list of them.
-fn keyword_options(more: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, toml::Value)>> {
+pub fn keyword_options(more: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, toml::Value)>> {
     let Some(more) = more else { return Ok(Vec::new()) };
     let mut out = Vec::new();
     for (k, v) in more.iter() {

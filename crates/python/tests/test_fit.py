@@ -99,12 +99,26 @@ def test_fit_refuses_what_it_cannot_do():
         aeroident.replay(data, mapping=HFB_MAP, estimator="oe")
     with pytest.raises(aeroident.AeroidentError, match="nothing_here.csv"):
         aeroident.fit(ROOT / "nothing_here.csv", HFB_MAP, "oe")
-    with pytest.raises(aeroident.AeroidentError, match="max_iterations must be a positive"):
+    with pytest.raises(aeroident.AeroidentError, match="max_iterations: must be an integer of at least 1, got 0"):
         aeroident.fit(data, HFB_MAP, "oe", max_iterations=0)
     with pytest.raises(aeroident.AeroidentError, match="`gamma` unknown"):
         aeroident.fit(data, HFB_MAP, "fem", process_noise="V,gamma")
     with pytest.raises(aeroident.AeroidentError, match="filter-error method"):
         aeroident.fit(data, HFB_MAP, "oe", process_noise="V")
+
+
+def test_fit_options_go_through_one_parser():
+    # Further keywords are the fit's other options by their keys, parsed as the CLI's flags:
+    # Huber's weights reach output error (the estimates move), a real-time estimator's option is
+    # refused naming what the fit takes, and the other method's option names whose it is.
+    data = shared(HFB)
+    plain = aeroident.fit(data, HFB_MAP, "oe", model=BOOK_MODEL)
+    robust = aeroident.fit(data, HFB_MAP, "oe", model=BOOK_MODEL, robust=True)
+    assert not np.array_equal(plain["values"], robust["values"])
+    with pytest.raises(aeroident.AeroidentError, match=r"unknown keyword argument `forgetting` \(it takes `initial_states`, `bootstrap`, `max_iterations`, `robust`\)"):
+        aeroident.fit(data, HFB_MAP, "oe", forgetting=0.9)
+    with pytest.raises(aeroident.AeroidentError, match="filter-error method"):
+        aeroident.fit(data, HFB_MAP, "oe", gain_constraint=False)
 
 
 def test_fit_past_the_iteration_limit_is_the_last_iterate(tmp_path):

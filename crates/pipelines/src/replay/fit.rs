@@ -6,8 +6,13 @@
 use super::ReplayError;
 use super::batch::{
     BatchMethod, BatchOutcome, FitOptions, check_bootstrap_refits, check_fdoe_options,
+    parse_process_noise_states,
 };
+use crate::estimators::{EstimatorKind, OptionError};
 use crate::record::read_records;
+use aeroident_estimators::flight_model::N_STATES;
+use aeroident_estimators::output_error::InitialStates;
+use aeroident_estimators::output_error::frequency::DEFAULT_BAND_HZ;
 use aeroident_io::{FlightDataReader, Mapping, ModelSpec};
 use std::io::Read;
 
@@ -43,38 +48,7 @@ pub fn fit_records<R: Read>(
     model: Option<ModelSpec>,
     options: FitOptions,
 ) -> Result<BatchOutcome, ReplayError> {
-    if options.method != BatchMethod::Fem && options.process_noise.is_some() {
-        return Err(ReplayError::Option {
-            option: "process-noise",
-            reason: "process noise is the filter-error method's (`--estimator fem`); output error has none".into(),
-        });
-    }
-    if options.method != BatchMethod::Fem && !options.gain_constraint {
-        return Err(ReplayError::Option {
-            option: "no-gain-constraint",
-            reason: "the gain constraint is the filter-error method's (`--estimator fem`); output error has no filter".into(),
-        });
-    }
-    if options.method == BatchMethod::Fem && options.robust.is_some() {
-        return Err(ReplayError::Option {
-            option: "robust",
-            reason: "Huber's robust weights are of output error (`--estimator oe`), not of the filter-error method".into(),
-        });
-    }
-    if options.method == BatchMethod::Fem && options.bootstrap_refits.is_some() {
-        return Err(ReplayError::Option {
-            option: "bootstrap",
-            reason: "the parametric bootstrap is of output error (`--estimator oe`); the filter-error method's own σ accounts for the process noise".into(),
-        });
-    }
-    if let BatchMethod::Fdoe { .. } = options.method {
-        check_fdoe_options(&options)?;
-    }
-    if let Some(n) = options.bootstrap_refits {
-        // Before the record is read: the replicas' storage and time grow with the count.
-        check_bootstrap_refits(n)
-            .map_err(|reason| ReplayError::Option { option: "bootstrap", reason })?;
-    }
+    options.check()?;
     let file = readers.iter().map(|r| r.file()).collect::<Vec<_>>().join(", ");
     let rec =
         read_records(readers, options.spike_screen, options.compat.as_ref(), &options.windows)?;
@@ -82,4 +56,232 @@ pub fn fit_records<R: Read>(
         return super::frequency::fit_fdoe(rec, &file, mapping, model, band_hz, &options);
     }
     super::batch::fit_time_domain(rec, &file, mapping, model, &options)
+}
+
+/// The options a batch fit of a recorded flight takes, as key/value pairs (the CLI's flags,
+/// `--estimator-option KEY=VALUE`, Python's keywords): [`FitOptions::from_pairs`] parses
+/// them, [`FitOptions::check`] refuses those the method does not have.
+pub const FIT_OPTION_KEYS: [&str; 7] = [
+    "initial_states",
+    "bootstrap_refits",
+    "max_iterations",
+    "process_noise",
+    "gain_constraint",
+    "robust",
+    "band_hz",
+];
+
+/// The options of [`FIT_OPTION_KEYS`] the batch method `kind` has, for messages.
+pub fn fit_options_of(kind: EstimatorKind) -> &'static [&'static str] {
+    match kind {
+        EstimatorKind::Oe => &["initial_states", "bootstrap_refits", "max_iterations", "robust"],
+        EstimatorKind::Fem => {
+            &["initial_states", "max_iterations", "process_noise", "gain_constraint"]
+        }
+        EstimatorKind::Fdoe => &["band_hz"],
+        _ => &[],
+    }
+}
+
+impl FitOptions {
+    /// The batch fit `kind` (`oe`, `fem`, `fdoe`) with the options `pairs` give, every other
+    /// one at [`FitOptions::default`]; the one parser of a batch fit's options, which the
+    /// faces translate their flags and keywords into. Which option the method has is then
+    /// [`FitOptions::check`]'s (the fit checks again before reading).
+    ///
+    /// # Errors
+    /// [`OptionError::Unknown`] for a key that is no batch fit's option; [`OptionError::Invalid`]
+    /// for a value of the wrong type or range, or a band given to a method other than `fdoe`.
+    pub fn from_pairs<'a>(
+        kind: EstimatorKind,
+        pairs: impl IntoIterator<Item = (&'a str, toml::Value)>,
+    ) -> Result<Self, OptionError> {
+        let method = match kind {
+            EstimatorKind::Fem => BatchMethod::Fem,
+            EstimatorKind::Fdoe => BatchMethod::Fdoe { band_hz: DEFAULT_BAND_HZ },
+            _ => BatchMethod::Oe,
+        };
+        let mut options = FitOptions { method, ..FitOptions::default() };
+        for (key, v) in pairs {
+            options.set(kind, key, &v)?;
+        }
+        Ok(options)
+    }
+
+    /// Sets option `key` of [`FIT_OPTION_KEYS`] from its value.
+    fn set(&mut self, kind: EstimatorKind, key: &str, v: &toml::Value) -> Result<(), OptionError> {
+        let invalid = |reason: String| OptionError::Invalid { kind, key: key.into(), reason };
+        let count = |min: i64| {
+            v.as_integer()
+                .filter(|n| *n >= min)
+                .and_then(|n| usize::try_from(n).ok())
+                .ok_or_else(|| invalid(format!("must be an integer of at least {min}, got {v}")))
+        };
+        let flag = || v.as_bool().ok_or_else(|| invalid(format!("must be true or false, got {v}")));
+        match key {
+            "initial_states" => self.initial_states = initial_states(v).map_err(invalid)?,
+            "bootstrap_refits" => {
+                let n = count(2)?;
+                check_bootstrap_refits(n).map_err(invalid)?;
+                self.bootstrap_refits = Some(n);
+            }
+            "max_iterations" => self.max_iterations = Some(count(1)?),
+            "process_noise" => {
+                let list = v.as_str().ok_or_else(|| {
+                    invalid(format!("must be a list of states such as \"V,alpha,beta\", got {v}"))
+                })?;
+                self.process_noise = Some(parse_process_noise_states(list).map_err(invalid)?);
+            }
+            "gain_constraint" => self.gain_constraint = flag()?,
+            "robust" => {
+                self.robust = flag()?.then(aeroident_estimators::output_error::Huber::default)
+            }
+            "band_hz" => {
+                self.method = BatchMethod::Fdoe { band_hz: band(kind, v).map_err(invalid)? }
+            }
+            _ => return Err(OptionError::Unknown { kind, key: key.into() }),
+        }
+        Ok(())
+    }
+
+    /// Refuses the options the method does not have (process noise, the gain constraint and
+    /// the bootstrap where output error or the filter-error method has none, the time-domain
+    /// options for `fdoe`) and a bootstrap count out of range, naming the option as the
+    /// command line spells it.
+    ///
+    /// # Errors
+    /// [`ReplayError::Option`] saying whose option it is.
+    pub fn check(&self) -> Result<(), ReplayError> {
+        if self.method != BatchMethod::Fem && self.process_noise.is_some() {
+            return Err(ReplayError::Option {
+                option: "process-noise",
+                reason: "process noise is the filter-error method's (`--estimator fem`); output error has none".into(),
+            });
+        }
+        if self.method != BatchMethod::Fem && !self.gain_constraint {
+            return Err(ReplayError::Option {
+                option: "no-gain-constraint",
+                reason: "the gain constraint is the filter-error method's (`--estimator fem`); output error has no filter".into(),
+            });
+        }
+        if self.method == BatchMethod::Fem && self.robust.is_some() {
+            return Err(ReplayError::Option {
+                option: "robust",
+                reason: "Huber's robust weights are of output error (`--estimator oe`), not of the filter-error method".into(),
+            });
+        }
+        if self.method == BatchMethod::Fem && self.bootstrap_refits.is_some() {
+            return Err(ReplayError::Option {
+                option: "bootstrap",
+                reason: "the parametric bootstrap is of output error (`--estimator oe`); the filter-error method's own σ accounts for the process noise".into(),
+            });
+        }
+        if let BatchMethod::Fdoe { .. } = self.method {
+            check_fdoe_options(self)?;
+        }
+        if let Some(n) = self.bootstrap_refits {
+            // Before the record is read: the replicas' storage and time grow with the count.
+            check_bootstrap_refits(n)
+                .map_err(|reason| ReplayError::Option { option: "bootstrap", reason })?;
+        }
+        Ok(())
+    }
+}
+
+/// `initial_states`: `"first-sample"` (each manoeuvre starts at its first sample's states) or
+/// `"estimate"` (every integrated state estimated).
+fn initial_states(v: &toml::Value) -> Result<InitialStates, String> {
+    match v.as_str() {
+        Some("first-sample") => Ok(InitialStates::FirstSample),
+        Some("estimate") => Ok(InitialStates::Estimate([true; N_STATES])),
+        _ => Err(format!(
+            "`{}` is not `first-sample` or `estimate`",
+            v.as_str().map_or_else(|| v.to_string(), str::to_string)
+        )),
+    }
+}
+
+/// `band_hz`: `[f_min, f_max]` in Hz of `fdoe`; refused for the other methods.
+fn band(kind: EstimatorKind, v: &toml::Value) -> Result<(f64, f64), String> {
+    if kind != EstimatorKind::Fdoe {
+        return Err(format!(
+            "is the band of frequency-domain output error (fdoe), not of `{}`",
+            kind.name()
+        ));
+    }
+    let num = |x: &toml::Value| x.as_float().or_else(|| x.as_integer().map(|i| i as f64));
+    match v.as_array().map(|a| a.iter().map(num).collect::<Option<Vec<f64>>>()) {
+        Some(Some(b)) if b.len() == 2 => Ok((b[0], b[1])),
+        _ => Err(format!("must be [f_min, f_max] in Hz, got {v}")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use toml::Value as V;
+
+    /// Every batch fit option parses to its field from the value a face gives; a key no batch
+    /// fit has is refused naming it; a value of the wrong type or range names what it must be;
+    /// the band is fdoe's alone; and an option the method does not have is refused by
+    /// `check`, naming whose it is.
+    #[test]
+    fn errors_fit_options_are_parsed_once_and_refused_by_name() {
+        let oe = FitOptions::from_pairs(
+            EstimatorKind::Oe,
+            [
+                ("initial_states", V::String("estimate".into())),
+                ("bootstrap_refits", V::Integer(7)),
+                ("max_iterations", V::Integer(9)),
+                ("robust", V::Boolean(true)),
+            ],
+        )
+        .unwrap();
+        assert_eq!(oe.method, BatchMethod::Oe);
+        assert_eq!(oe.initial_states, InitialStates::Estimate([true; N_STATES]));
+        assert_eq!((oe.bootstrap_refits, oe.max_iterations), (Some(7), Some(9)));
+        assert!(oe.robust.is_some() && oe.check().is_ok());
+        let fem = FitOptions::from_pairs(
+            EstimatorKind::Fem,
+            [
+                ("process_noise", V::String("V,alpha,q".into())),
+                ("gain_constraint", V::Boolean(false)),
+            ],
+        )
+        .unwrap();
+        assert_eq!(fem.method, BatchMethod::Fem);
+        assert_eq!(fem.process_noise, Some(parse_process_noise_states("V,alpha,q").unwrap()));
+        assert!(!fem.gain_constraint && fem.check().is_ok());
+        let band = V::Array(vec![0.2.into(), 2.0.into()]);
+        let fdoe =
+            FitOptions::from_pairs(EstimatorKind::Fdoe, [("band_hz", band.clone())]).unwrap();
+        assert_eq!(fdoe.method, BatchMethod::Fdoe { band_hz: (0.2, 2.0) });
+        let plain = FitOptions::from_pairs(EstimatorKind::Fdoe, []).unwrap();
+        assert_eq!(plain.method, BatchMethod::Fdoe { band_hz: DEFAULT_BAND_HZ });
+
+        let e = FitOptions::from_pairs(EstimatorKind::Oe, [("forgetting", V::Float(0.9))]);
+        assert_eq!(
+            e.unwrap_err(),
+            OptionError::Unknown { kind: EstimatorKind::Oe, key: "forgetting".into() }
+        );
+        let e = FitOptions::from_pairs(EstimatorKind::Oe, [("band_hz", band)]).unwrap_err();
+        assert!(e.to_string().contains("band of frequency-domain output error"), "{e}");
+        let e = FitOptions::from_pairs(EstimatorKind::Oe, [("max_iterations", V::Integer(0))]);
+        assert!(e.unwrap_err().to_string().contains("at least 1, got 0"));
+        let e = FitOptions::from_pairs(EstimatorKind::Oe, [("bootstrap_refits", V::Integer(1))]);
+        assert!(e.unwrap_err().to_string().contains("at least 2"));
+        let e =
+            FitOptions::from_pairs(EstimatorKind::Oe, [("initial_states", V::String("x".into()))]);
+        assert!(e.unwrap_err().to_string().contains("`x` is not `first-sample` or `estimate`"));
+        let e = FitOptions::from_pairs(EstimatorKind::Fem, [("robust", V::String("yes".into()))]);
+        assert!(e.unwrap_err().to_string().contains("must be true or false"));
+
+        let robust_fem = FitOptions::from_pairs(EstimatorKind::Fem, [("robust", V::Boolean(true))]);
+        let e = robust_fem.unwrap().check().unwrap_err().to_string();
+        assert!(e.contains("`--robust`") && e.contains("output error"), "{e}");
+        let noise_oe =
+            FitOptions::from_pairs(EstimatorKind::Oe, [("process_noise", V::String("V".into()))]);
+        let e = noise_oe.unwrap().check().unwrap_err().to_string();
+        assert!(e.contains("filter-error method"), "{e}");
+    }
 }

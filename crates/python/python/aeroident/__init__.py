@@ -249,6 +249,7 @@ def fit(
     candidates: Optional[Sequence[str]] = None,
     band_hz: Optional[tuple[float, float]] = None,
     knots_deg: Optional[Sequence[float]] = None,
+    **options: Any,
 ) -> dict[str, Any]:
     """Fits a whole record by batch output error (``"oe"``), the filter-error method
     (``"fem"``: output error with process noise on the air-data states, for turbulent records)
@@ -281,6 +282,9 @@ def fit(
     ``select``, ``candidates`` and ``knots_deg``: the structure chosen from the records first,
     as in :func:`replay` (``--model auto --select … --candidates … --knots-deg …``). ``band_hz`` (``fdoe`` only):
     the band fitted, ``(f_min_hz, f_max_hz)`` (``--band-hz F0:F1``; default 0.1–1.5 Hz).
+    Further keyword arguments are the fit's other options by their keys (``robust=True`` for
+    Huber's weights in ``oe``, ``gain_constraint=False`` for ``fem``;
+    ``--estimator-option KEY=VALUE``), parsed by the same parser as the CLI's flags.
 
     A fit that does not meet both convergence criteria is returned all the same:
     ``summary["status"]`` is ``"converged"``, ``"converged_in_cost"`` (the cost stopped
@@ -332,6 +336,7 @@ def fit(
         None if candidates is None else list(candidates),
         None if band_hz is None else (float(band_hz[0]), float(band_hz[1])),
         None if knots_deg is None else [float(k) for k in knots_deg],
+        **options,
     )
 
 

@@ -148,6 +148,7 @@ def fit(
     candidates: Optional[Sequence[str]] = None,
     band_hz: Optional[tuple[float, float]] = None,
     knots_deg: Optional[Sequence[float]] = None,
+    **options: Any,
 ) -> FitResult: ...
 def freqresp(
     data: PathLike,

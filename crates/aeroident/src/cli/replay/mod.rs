@@ -70,7 +70,8 @@ use aeroident_pipelines::estimators::{
 use aeroident_pipelines::job::fit::FitJob;
 use aeroident_pipelines::job::replay::ReplayJob;
 use aeroident_pipelines::job::{CompatSource, ModelChoice, Ran, Records};
-use aeroident_pipelines::replay::batch::BatchMethod;
+use aeroident_pipelines::replay::batch::FitOptions;
+use aeroident_pipelines::replay::fit::fit_options_of;
 use aeroident_pipelines::replay::{DerivativeSource, Pacing, ReplayObserver, ReplayOptions};
 use aeroident_pipelines::window::TimeWindow;
 use anyhow::Context;
@@ -385,7 +386,11 @@ fn check_combination(args: &ReplayArgs, live: bool, mavlink: bool) -> anyhow::Re
             args.estimator.name()
         );
     }
-    estimator_options(args)?;
+    if args.estimator.is_batch() {
+        fit_options(args)?.check()?;
+    } else {
+        estimator_options(args)?;
+    }
     if args.band_hz.is_some() && args.estimator != EstimatorKind::Fdoe {
         anyhow::bail!(
             "--band-hz is the band of frequency-domain output error (--estimator fdoe), not of --estimator {}",
@@ -404,10 +409,19 @@ fn check_combination(args: &ReplayArgs, live: bool, mavlink: bool) -> anyhow::Re
     check_online_combination(args, live)
 }
 
-/// The flags that are estimator options, each with the registry's key
-/// ([`EstimatorKind::options`]).
-const ESTIMATOR_OPTION_FLAGS: [(&str, &str); 2] =
-    [("forgetting", "--forgetting"), ("instrument_delay", "--instrument-delay")];
+/// The flags that are options of the estimator ([`EstimatorKind::options`]) or of the batch
+/// fit ([`aeroident_pipelines::replay::fit::FIT_OPTION_KEYS`]), each with its key.
+const ESTIMATOR_OPTION_FLAGS: [(&str, &str); 9] = [
+    ("forgetting", "--forgetting"),
+    ("instrument_delay", "--instrument-delay"),
+    ("initial_states", "--initial-states"),
+    ("bootstrap_refits", "--bootstrap"),
+    ("max_iterations", "--max-iterations"),
+    ("process_noise", "--process-noise"),
+    ("gain_constraint", "--no-gain-constraint"),
+    ("robust", "--robust"),
+    ("band_hz", "--band-hz"),
+];
 
 /// The flag of the registry's option `key`, as typed (`--estimator-option KEY` for those
 /// without a flag of their own).
@@ -575,35 +589,52 @@ fn open_out(args: &ReplayArgs) -> anyhow::Result<Option<crate::outdir::OutputDir
         .transpose()?)
 }
 
-/// The batch fit's options from the command line (the job sets the corrections).
-fn fit_options(
-    args: &ReplayArgs,
-) -> anyhow::Result<aeroident_pipelines::replay::batch::FitOptions> {
-    Ok(aeroident_pipelines::replay::batch::FitOptions {
-        method: match args.estimator {
-            EstimatorKind::Fem => BatchMethod::Fem,
-            EstimatorKind::Fdoe => BatchMethod::Fdoe {
-                band_hz: args
-                    .band_hz
-                    .unwrap_or(aeroident_estimators::output_error::frequency::DEFAULT_BAND_HZ),
-            },
-            _ => BatchMethod::Oe,
-        },
-        initial_states: args.initial_states.unwrap_or(InitialStatesArg::FirstSample).to_config(),
-        bootstrap_refits: args.bootstrap.map(|n| n as usize),
-        max_iterations: args.max_iterations.map(|n| n as usize),
-        process_noise: args
-            .process_noise
-            .as_deref()
-            .map(aeroident_pipelines::replay::batch::parse_process_noise_states)
-            .transpose()
-            .map_err(|e| anyhow::anyhow!("--process-noise: {e}"))?,
-        gain_constraint: !args.no_gain_constraint,
-        compat: None,
-        windows: args.windows.clone(),
-        spike_screen: (!args.no_spike_screen)
-            .then(aeroident_pipelines::record::outliers::SpikeScreen::default),
-        robust: args.robust.then(aeroident_estimators::output_error::Huber::default),
-        stop: None,
-    })
+/// The batch fit's options from the command line (the job sets the corrections): its flags and
+/// every `--estimator-option KEY=VALUE` as key/value pairs, parsed by the one parser of a batch
+/// fit's options ([`FitOptions::from_pairs`]), which refuses a key no batch fit has; the time
+/// windows and the spike screen are the record's.
+fn fit_options(args: &ReplayArgs) -> anyhow::Result<FitOptions> {
+    use toml::Value as V;
+    let mut pairs: Vec<(&str, V)> = Vec::new();
+    let states = args.initial_states.map(|s| match s {
+        InitialStatesArg::FirstSample => "first-sample",
+        InitialStatesArg::Estimate => "estimate",
+    });
+    pairs.extend(states.map(|s| ("initial_states", V::String(s.into()))));
+    pairs.extend(args.bootstrap.map(|n| ("bootstrap_refits", V::Integer(n.into()))));
+    pairs.extend(args.max_iterations.map(|n| ("max_iterations", V::Integer(n.into()))));
+    pairs.extend(args.process_noise.clone().map(|s| ("process_noise", V::String(s))));
+    pairs.extend(args.no_gain_constraint.then_some(("gain_constraint", V::Boolean(false))));
+    pairs.extend(args.robust.then_some(("robust", V::Boolean(true))));
+    pairs.extend(args.band_hz.map(|(a, b)| ("band_hz", V::Array(vec![a.into(), b.into()]))));
+    pairs.extend(args.forgetting.map(|f| ("forgetting", V::Float(f))));
+    let delay = args.instrument_delay.map(|d| i64::try_from(d).unwrap_or(i64::MAX));
+    pairs.extend(delay.map(|d| ("instrument_delay", V::Integer(d))));
+    pairs.extend(args.estimator_options.iter().map(|(k, v)| (k.as_str(), v.clone())));
+    let options = FitOptions::from_pairs(args.estimator, pairs).map_err(|e| match e {
+        OptionError::Unknown { kind, key } => anyhow::anyhow!(
+            "{} is not an option of --estimator {}, which takes {} (it would be ignored)",
+            option_flag(&key),
+            kind.name(),
+            quoted_list(fit_options_of(kind))
+        ),
+        OptionError::Invalid { key, reason, .. } => {
+            anyhow::anyhow!("option `{}`: {reason}", option_flag(&key))
+        }
+    })?;
+    let spike_screen =
+        (!args.no_spike_screen).then(aeroident_pipelines::record::outliers::SpikeScreen::default);
+    Ok(FitOptions { windows: args.windows.clone(), spike_screen, ..options })
+}
+
+/// `` `a`, `b` and `c` `` (or `none`).
+fn quoted_list(items: &[&str]) -> String {
+    match items {
+        [] => "none".into(),
+        [one] => format!("`{one}`"),
+        [init @ .., last] => {
+            let init: Vec<String> = init.iter().map(|o| format!("`{o}`")).collect();
+            format!("{} and `{last}`", init.join(", "))
+        }
+    }
 }

@@ -329,6 +329,29 @@ fn errors_batch_fit_options_go_through_one_parser() {
     );
 }
 
+/// The replay job refuses what does not go together before the output directory is touched:
+/// several records for a real-time estimator (a batch fit's `--and`).
+#[test]
+fn errors_replay_job_refuses_and_for_a_real_time_estimator() {
+    let out = tmp("and-online");
+    let _ = std::fs::remove_dir_all(&out);
+    let io_data = workspace().join("crates/io/tests/data");
+    let o = bin()
+        .args(["replay"])
+        .arg(io_data.join("good.csv"))
+        .arg("--map")
+        .arg(io_data.join("min.toml"))
+        .arg("--and")
+        .arg(io_data.join("good.csv"))
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("--and fits several records together"), "{err}");
+    assert!(!out.exists(), "the output directory was created before the refusal");
+}
+
 /// Live mode: the HFB-320 record on stdin gives one estimates line per sample on stdout.
 #[test]
 fn val_live_stdin_one_line_per_sample() {

@@ -380,6 +380,7 @@ type ReplayResult = (String, serde_json::Value, EstimateArrays, Vec<String>, Opt
 /// Runs `job` in place, its estimates collected as arrays and its replay stopped by a
 /// signal Python received ([`Interruptible`]); a diverged estimator is an error.
 fn replay_job(job: &ReplayJob, signals: &Signals) -> anyhow::Result<ReplayResult> {
+    job.check()?;
     let Ran::Done(prepared) = job.prepare(&mut InPlace, &mut ())? else {
         anyhow::bail!("internal: a step run in place was abandoned");
     };

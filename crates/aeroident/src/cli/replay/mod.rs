@@ -296,15 +296,21 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     let mapping = Mapping::from_path(&args.map)?;
     let mavlink = crate::live::is_mavlink(&args.data);
     let live = args.data == "-" || mavlink;
-    check_combination(&args, live, mavlink)?;
+    check_combination(&args, mavlink)?;
+    let records = records(&args, mapping, live);
+    // The replay job refuses what does not go together (a cross-check of a live feed, --and)
+    // before the output directory is touched.
+    let online =
+        if args.estimator.is_batch() { None } else { Some(replay_job(&args, records.clone())?) };
+    online.as_ref().map(ReplayJob::check).transpose()?;
     // Lock the directory and clear the previous run's files before reading anything: a
     // directory that cannot take the results is refused before a long fit, not after it.
     let mut out_dir = open_out(&args)?;
     // From here a signal ends the run gracefully (crate::interrupt): the steps over the whole
     // record before the estimator too, with a summary saying so.
     let interrupt = crate::interrupt::Interrupt::install().context("installing signal handlers")?;
-    let (mut guard, records) = (Watched(&interrupt), records(&args, mapping, live));
-    if args.estimator.is_batch() {
+    let mut guard = Watched(&interrupt);
+    let Some(job) = online else {
         let job = FitJob {
             records,
             model: model_choice(&args),
@@ -318,8 +324,7 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
                 Err(stopped_before_fit(&args, &interrupt, out_dir.as_mut(), step))
             }
         };
-    }
-    let job = replay_job(&args, records)?;
+    };
     let prepared = match job.prepare(&mut guard, &mut Stderr)? {
         Ran::Done(prepared) => prepared,
         Ran::Stopped(step) => {
@@ -379,7 +384,7 @@ fn replay_job(args: &ReplayArgs, records: Records) -> anyhow::Result<ReplayJob> 
 
 /// Refuses options that do not go together (the estimator's own options, a batch fit of a
 /// live feed), before anything is opened.
-fn check_combination(args: &ReplayArgs, live: bool, mavlink: bool) -> anyhow::Result<()> {
+fn check_combination(args: &ReplayArgs, mavlink: bool) -> anyhow::Result<()> {
     if args.robust && args.estimator != EstimatorKind::Oe {
         anyhow::bail!(
             "--robust is Huber's output-error fit (--estimator oe), not --estimator {}",
@@ -406,7 +411,7 @@ fn check_combination(args: &ReplayArgs, live: bool, mavlink: bool) -> anyhow::Re
     if args.estimator.is_batch() {
         return Ok(());
     }
-    check_online_combination(args, live)
+    check_online_combination(args)
 }
 
 /// The flags that are options of the estimator ([`EstimatorKind::options`]) or of the batch
@@ -467,18 +472,7 @@ fn estimator_options(args: &ReplayArgs) -> anyhow::Result<EstimatorOptions> {
 }
 
 /// [`check_combination`] for the real-time estimators: the batch fits' options refused.
-fn check_online_combination(args: &ReplayArgs, live: bool) -> anyhow::Result<()> {
-    if args.cross_check && (live || args.estimator.is_batch()) {
-        anyhow::bail!(
-            "--cross-check sets a real-time estimator beside the batch fit of a whole record: not for a live feed or a batch estimator"
-        );
-    }
-    if !args.and.is_empty() {
-        anyhow::bail!(
-            "--and fits several records together: it is for the batch fits (--estimator oe | fem); replay each record on its own with --estimator {}",
-            args.estimator.name()
-        );
-    }
+fn check_online_combination(args: &ReplayArgs) -> anyhow::Result<()> {
     if args.initial_states.is_some() {
         anyhow::bail!(
             "--initial-states applies to the batch fits (--estimator oe or fem), not to --estimator {}",

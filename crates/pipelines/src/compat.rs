@@ -16,8 +16,9 @@ pub use crate::record::corrections::{
     ChannelSummary, Corrected, Corrections, ReconstructedSummary,
 };
 
-use crate::record::{RecordError, read_manoeuvres};
+use crate::record::{RecordError, read_records};
 use crate::results::OutputTrace;
+use crate::window::TimeWindow;
 use aeroident_estimators::compat::{self, Channel, CompatConfig, CompatResult, Unknown};
 use aeroident_estimators::flight_model::G0_MPS2;
 use aeroident_estimators::output_error::Termination;
@@ -70,17 +71,36 @@ impl Corrections {
     }
 }
 
-/// Checks the compatibility of the record `reader` reads with `config`.
+/// Checks the compatibility of the record `reader` reads with `config`, over the whole record
+/// ([`check_records`] with no window).
 ///
 /// # Errors
-/// Fatal data errors, no usable sample, and the check's own errors (a missing channel, a
-/// singular information matrix: [`RecordError::Model`] with the reason).
+/// As [`check_records`].
 pub fn check_record<R: Read>(
     reader: FlightDataReader<R>,
     config: &CompatConfig,
 ) -> Result<(CompatSummary, CompatResult), RecordError> {
-    let file = reader.file().to_string();
-    let rec = read_manoeuvres(reader, None, &[])?;
+    check_records(vec![reader], &[], config)
+}
+
+/// Checks the compatibility of the records `readers` read (one aircraft, one mapping) with
+/// `config`, over exactly the data a fit of them uses: the time windows `windows` of each
+/// (empty: the whole record), each window and each file a manoeuvre of its own, every
+/// manoeuvre in one joint fit (one set of biases, scale factors and shifts per flight). A
+/// taxi segment or a ground run outside the windows does not enter it.
+///
+/// # Errors
+/// Fatal data errors, no usable sample, windows that miss the records, and the check's own
+/// errors (a missing channel, a singular information matrix: [`RecordError::Model`] with the
+/// reason).
+pub fn check_records<R: Read>(
+    readers: Vec<FlightDataReader<R>>,
+    windows: &[TimeWindow],
+    config: &CompatConfig,
+) -> Result<(CompatSummary, CompatResult), RecordError> {
+    let file = readers.iter().map(|r| r.file()).collect::<Vec<_>>().join(", ");
+    let screen = Some(crate::record::outliers::SpikeScreen::default());
+    let rec = read_records(readers, screen, None, windows)?;
     let slices: Vec<&[aeroident_estimators::AirDataSample]> =
         rec.manoeuvres.iter().map(Vec::as_slice).collect();
     let result = compat::check(&slices, config)

@@ -2,15 +2,17 @@
 //! attitudes and air data consistent, and with which biases, scale factors and time shifts).
 //!
 //! ```text
-//! aeroident compat <log> --map <map.toml> [--format …] [--out DIR] [--no-time-shifts]
-//!                  [--gyro-time-shifts] [--inertial-scale-factors] [--max-iterations N]
+//! aeroident compat <log> --map <map.toml> [--format …] [--out DIR] [--window START:END …]
+//!                  [--and <more> …] [--no-time-shifts] [--gyro-time-shifts]
+//!                  [--inertial-scale-factors] [--max-iterations N]
 //! ```
 //! Prints the corrections per channel and the findings; with `--out`, writes
 //! `DIR/compat.json` ([`aeroident_pipelines::compat`] documents its keys).
 
 use aeroident_estimators::compat::CompatConfig;
 use aeroident_io::{LogFormat, Mapping, open_log_with_notes};
-use aeroident_pipelines::compat::{ChannelSummary, CompatSummary, check_record};
+use aeroident_pipelines::compat::{ChannelSummary, CompatSummary, check_records};
+use aeroident_pipelines::window::TimeWindow;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -29,6 +31,15 @@ pub struct CompatArgs {
     /// Output directory for `compat.json`.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// A time window `START:END` (record seconds) to check, as `replay --window` fits it;
+    /// repeat it for several manoeuvres. Default: the whole record (taxi and ground runs
+    /// included: give the fit's windows to check the data the fit uses).
+    #[arg(long = "window", value_name = "START:END", value_parser = TimeWindow::parse)]
+    pub windows: Vec<TimeWindow>,
+    /// A further record of the same aircraft (same mapping and format), checked jointly with
+    /// the first (one set of corrections per flight), as `replay --and` fits it.
+    #[arg(long = "and", value_name = "FILE")]
+    pub and: Vec<String>,
     /// Do not estimate the outputs' time shifts.
     #[arg(long)]
     pub no_time_shifts: bool,
@@ -51,9 +62,11 @@ pub struct CompatArgs {
 /// Unreadable mapping or record, a missing channel, a check that fails, an unwritable output.
 pub fn execute(args: CompatArgs) -> anyhow::Result<()> {
     let mapping = Mapping::from_path(&args.map)?;
-    let (reader, notes) = open_log_with_notes(&args.data, args.format, &mapping)?;
-    for n in &notes {
-        eprintln!("note: {n}");
+    let mut readers = Vec::new();
+    for file in std::iter::once(&args.data).chain(&args.and) {
+        let (reader, notes) = open_log_with_notes(file, args.format, &mapping)?;
+        notes.iter().for_each(|n| eprintln!("note: {n}"));
+        readers.push(reader);
     }
     let mut config = CompatConfig {
         time_shifts: !args.no_time_shifts,
@@ -64,10 +77,12 @@ pub fn execute(args: CompatArgs) -> anyhow::Result<()> {
     if let Some(n) = args.max_iterations {
         config.max_iterations = n as usize;
     }
-    let (summary, result) = check_record(reader, &config)?;
+    let (summary, result) = check_records(readers, &args.windows, &config)?;
     super::print_stdout(&render(&summary))?;
     if let Some(dir) = &args.out {
-        let inputs = [Path::new(&args.data), args.map.as_path()];
+        let mut inputs: Vec<&Path> =
+            std::iter::once(&args.data).chain(&args.and).map(Path::new).collect();
+        inputs.push(args.map.as_path());
         let mut out = crate::outdir::OutputDir::open(dir, "compat", &inputs)?;
         out.write_bytes("compat.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
         let source = crate::report::Source { data: &args.data, mapping: &args.map };

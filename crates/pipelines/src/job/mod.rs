@@ -203,13 +203,16 @@ pub enum Ran<T> {
 }
 
 /// The compatibility stage: the corrections `source` names, `None` without one. `auto` checks
-/// the main record with the default configuration, noting that it does and each finding.
+/// the records over exactly the data the fit uses (their time `windows`, every file of `--and`;
+/// [`crate::compat::check_records`]) with the default configuration, noting that it does and
+/// each finding.
 ///
 /// # Errors
 /// `auto` on a live feed; an unreadable `compat.json`; the check's errors.
 pub fn corrections(
     records: &Records,
     source: Option<&CompatSource>,
+    windows: &[TimeWindow],
     guard: &mut impl Guard,
     log: &mut dyn JobLog,
 ) -> Result<Ran<Option<Corrections>>, ReplayError> {
@@ -223,15 +226,15 @@ pub fn corrections(
     if auto {
         log.note("compat: checking the record's data compatibility (--compat auto)");
     }
-    let (records, source) = (records.clone(), source.clone());
+    let (records, source, windows) = (records.clone(), source.clone(), windows.to_vec());
     let step = move || -> Result<(Option<Corrections>, Vec<String>), ReplayError> {
         match source {
             CompatSource::Given(c) => Ok((Some(c), Vec::new())),
             CompatSource::File(path) => Ok((Some(Corrections::from_json(&path)?), Vec::new())),
             CompatSource::Auto => {
-                let reader = records.open(&records.data)?;
                 let config = aeroident_estimators::compat::CompatConfig::default();
-                let (summary, _) = crate::compat::check_record(reader, &config)?;
+                let readers = records.open_all()?;
+                let (summary, _) = crate::compat::check_records(readers, &windows, &config)?;
                 Ok((Some(Corrections::from_summary(&summary)?), summary.findings))
             }
         }
@@ -305,7 +308,7 @@ pub fn prepare_stages(
     guard: &mut impl Guard,
     log: &mut dyn JobLog,
 ) -> Result<Ran<(Option<Corrections>, ChosenModel)>, ReplayError> {
-    let compat = match corrections(records, compat, guard, log)? {
+    let compat = match corrections(records, compat, windows, guard, log)? {
         Ran::Done(c) => c,
         Ran::Stopped(step) => return Ok(Ran::Stopped(step)),
     };

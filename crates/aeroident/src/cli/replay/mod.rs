@@ -155,7 +155,8 @@ pub struct ReplayArgs {
     pub windows: Vec<TimeWindow>,
     /// `--estimator oe | fem`: a further record of the same aircraft (same mapping and
     /// format), fitted together with the first, each file a manoeuvre of its own; repeat it
-    /// for more. `--compat auto` is checked on the first record and applied to all.
+    /// for more. `--compat auto` is checked on all of them (within `--window`) jointly and
+    /// applied to all.
     #[arg(long = "and", value_name = "FILE")]
     pub and: Vec<String>,
     /// Real-time estimators: also fit the record by output error with the same model and set

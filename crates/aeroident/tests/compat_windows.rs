@@ -1,0 +1,59 @@
+//! The data compatibility check on exactly the data a fit uses (../shared/flightdata; skipped
+//! with a message when absent, a failure under CI): `compat --window … --and …` and the
+//! replay's `--compat auto` check the fit's time windows jointly, not the whole record with its
+//! taxi and ground runs.
+
+mod common;
+use aeroident_estimators::compat::CompatConfig;
+use aeroident_io::{Mapping, open_log};
+use aeroident_pipelines::compat::{Corrections, check_records};
+use aeroident_pipelines::job::{CompatSource, InPlace, Ran, Records, corrections};
+use aeroident_pipelines::window::TimeWindow;
+use common::{shared, workspace};
+use std::process::Command;
+
+/// The HFB-320 record (10 Hz, 60 s) checked over two windows: the samples checked are the
+/// record's rows inside the windows (counted here from its time column), each window a
+/// manoeuvre of one joint fit; the replay's `--compat auto` stage gives exactly the
+/// corrections of that check, not those of the whole record; and `aeroident compat --window`
+/// writes the same `compat.json` numbers.
+#[test]
+fn val_compat_checks_the_windows_the_fit_uses() {
+    let Some(data) = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let map = workspace().join("mappings/hfb320.toml");
+    let m = Mapping::from_path(&map).unwrap();
+    let path = data.display().to_string();
+    let open = || open_log(&path, None, &m).unwrap();
+    let windows = vec![TimeWindow::parse("5:25").unwrap(), TimeWindow::parse("30:55").unwrap()];
+    let config = CompatConfig::default();
+    let (whole, _) = check_records(vec![open()], &[], &config).unwrap();
+    let (within, _) = check_records(vec![open()], &windows, &config).unwrap();
+    let text = std::fs::read_to_string(&data).unwrap();
+    let times = text.lines().skip(1).map(|l| l.split(',').next().unwrap().parse::<f64>().unwrap());
+    let inside = times.filter(|t| (5.0..=25.0).contains(t) || (30.0..=55.0).contains(t)).count();
+    assert_eq!((whole.samples_read, whole.manoeuvres), (601, 1));
+    assert_eq!((within.samples_read, within.manoeuvres), (inside, 2));
+
+    let records =
+        Records { data: path.clone(), and: vec![], format: None, mapping: m.clone(), live: false };
+    let ran =
+        corrections(&records, Some(&CompatSource::Auto), &windows, &mut InPlace, &mut ()).unwrap();
+    let Ran::Done(Some(auto)) = ran else { panic!("the auto stage gave no corrections") };
+    assert_eq!(auto, Corrections::from_summary(&within).unwrap());
+    assert_ne!(auto, Corrections::from_summary(&whole).unwrap(), "the whole record was checked");
+
+    let out = std::env::temp_dir().join(format!("aeroident-compat-windows-{}", std::process::id()));
+    let o = Command::new(env!("CARGO_BIN_EXE_aeroident"))
+        .args(["compat", &path, "--map", &map.display().to_string()])
+        .args(["--window", "5:25", "--window", "30:55", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("compat.json")).unwrap()).unwrap();
+    let _ = std::fs::remove_dir_all(&out);
+    assert_eq!(json["samples_read"], inside);
+    assert_eq!(json["manoeuvres"], 2);
+    assert_eq!(json["channels"], serde_json::to_value(&within.channels).unwrap());
+}

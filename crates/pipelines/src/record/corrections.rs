@@ -54,6 +54,65 @@ pub struct ReconstructedSummary {
     pub beta_rad: Vec<f64>,
 }
 
+/// The largest correction of each kind a channel of kind `ch` plausibly needs: physical limits
+/// of a sensor's installation and of air-data and attitude-system errors, set wide, never
+/// fitted to a record. A correction beyond them says more about the record than the sensor
+/// (a taxi segment in the check, a dead or mis-mapped channel, a typing error in a
+/// hand-edited `compat.json`): the channel's corrections are then not applied, and the summary
+/// says why.
+/// - bias: 2 m/s² for an accelerometer (0.2 g; a load factor mapped as specific force is 1 g
+///   off), 0.05 rad/s for a gyro (2.9°/s, beyond any navigation-grade or MEMS rate sensor's),
+///   0.175 rad (10°) for a flow angle (vane misalignment and upwash offset) or an attitude;
+///   the airspeed's bias is never applied (in still air it is the wind);
+/// - scale: within 0.7–1.4 for a flow angle (local upwash and sidewash factors), 0.8–1.25
+///   for the others;
+/// - time shift: 0.5 s either way (vane and AHRS lags are tenths of a second).
+///
+/// # Errors
+/// Which limit the correction passes, in words.
+pub fn plausible(ch: Channel, bias: f64, scale: f64, shift_s: Option<f64>) -> Result<(), String> {
+    let (max_bias, scale_range) = match ch {
+        Channel::Ax | Channel::Ay | Channel::Az => (2.0, (0.8, 1.25)),
+        Channel::P | Channel::Q | Channel::R => (0.05, (0.8, 1.25)),
+        Channel::Alpha | Channel::Beta => (0.175, (0.7, 1.4)),
+        Channel::Vt => (f64::INFINITY, (0.8, 1.25)),
+        _ => (0.175, (0.8, 1.25)),
+    };
+    const MAX_SHIFT_S: f64 = 0.5;
+    if bias.abs() > max_bias {
+        return Err(format!(
+            "bias {bias:+.4e} {} beyond the ±{max_bias} a {} plausibly has: not applied (check the record's segment and the channel's mapping)",
+            ch.unit(),
+            kind_name(ch)
+        ));
+    }
+    if !(scale_range.0..=scale_range.1).contains(&scale) {
+        return Err(format!(
+            "scale {scale:.4} outside the {}–{} a {} plausibly has: not applied",
+            scale_range.0,
+            scale_range.1,
+            kind_name(ch)
+        ));
+    }
+    match shift_s {
+        Some(t) if t.abs() > MAX_SHIFT_S => Err(format!(
+            "time shift {t:+.3} s beyond the ±{MAX_SHIFT_S} s a sensor's lag plausibly reaches: not applied"
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// The kind of sensor of channel `ch`, for messages.
+fn kind_name(ch: Channel) -> &'static str {
+    match ch {
+        Channel::Ax | Channel::Ay | Channel::Az => "accelerometer",
+        Channel::P | Channel::Q | Channel::R => "gyro",
+        Channel::Alpha | Channel::Beta => "flow angle",
+        Channel::Vt => "airspeed",
+        _ => "attitude",
+    }
+}
+
 /// The corrections of a compatibility check (from its `compat.json`, or its summary).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Corrections {
@@ -65,6 +124,8 @@ pub struct Corrections {
     beta: Vec<(Vec<f64>, Vec<f64>)>,
     /// What the stage applies, in words (for the summary).
     pub applied: Vec<String>,
+    /// The channels whose corrections are not applied, each with why ([`plausible`]).
+    pub refused: Vec<String>,
 }
 
 /// What `replay --compat` reads of a `compat.json`: its channel rows and reconstructed air
@@ -83,7 +144,8 @@ impl Corrections {
     /// The summary warnings that say what was applied (`compat applied: …`), one per item of
     /// [`Corrections::applied`].
     pub fn warnings(&self) -> impl Iterator<Item = String> + '_ {
-        self.applied.iter().map(|a| format!("compat applied: {a}"))
+        let applied = self.applied.iter().map(|a| format!("compat applied: {a}"));
+        applied.chain(self.refused.iter().map(|r| format!("compat refused: {r}")))
     }
 
     /// The corrections of a `compat.json` file.
@@ -125,6 +187,10 @@ impl Corrections {
                     "{}: bias, scale and time shift must be finite, the scale > 0",
                     ch.name()
                 ));
+            }
+            if let Err(why) = plausible(ch, b, k, shift) {
+                c.refused.push(format!("{}: {why}", ch.name()));
+                continue;
             }
             if ch != Channel::Vt && (b != 0.0 || k != 1.0) {
                 c.affine.push((ch, b, k));
@@ -301,6 +367,51 @@ mod tests {
             .enumerate()
             .map(|(i, &t)| Ok(RecordEvent::Sample { row: first_row + i as u64, sample: sample(t) }))
             .collect()
+    }
+
+    /// Corrections beyond what a sensor plausibly needs are not applied, channel by channel,
+    /// and the warnings say which and why: a 92° α bias (a check that took in a taxi segment), a
+    /// 30-s α shift (0.30 mistyped in a hand-edited compat.json), a 1 g a_z bias (load factor
+    /// mapped as specific force), a gyro scale of 2; the plausible ones beside them (an
+    /// accelerometer bias of 0.15 m/s², a 0.2-s vane lag, a gyro bias of 0.003 rad/s) are.
+    #[test]
+    fn errors_implausible_corrections_are_refused_not_applied() {
+        let c = Corrections::new(
+            vec![
+                (Channel::Alpha, Some(1.6), None, None),
+                (Channel::Beta, None, None, Some(30.0)),
+                (Channel::Az, Some(9.81), None, None),
+                (Channel::P, None, Some(2.0), None),
+                (Channel::Ax, Some(0.15), None, None),
+                (Channel::Theta, None, None, Some(0.2)),
+                (Channel::Q, Some(0.003), None, None),
+            ],
+            Vec::new(),
+        )
+        .unwrap();
+        let applied: Vec<Channel> = c.affine.iter().map(|a| a.0).collect();
+        assert_eq!(applied, [Channel::Ax, Channel::Q]);
+        assert_eq!(c.shifts, [(Channel::Theta, 0.2)]);
+        let refused: Vec<&str> = c.refused.iter().map(|r| r.split(':').next().unwrap()).collect();
+        assert_eq!(refused, ["alpha_rad", "beta_rad", "az_mps2", "p_rad_s"]);
+        assert!(
+            c.refused[0].contains("bias +1.6000e0 rad beyond the ±0.175 a flow angle"),
+            "{}",
+            c.refused[0]
+        );
+        assert!(
+            c.refused[1].contains("time shift +30.000 s beyond the ±0.5 s"),
+            "{}",
+            c.refused[1]
+        );
+        assert!(
+            c.refused[3].contains("scale 2.0000 outside the 0.8–1.25 a gyro"),
+            "{}",
+            c.refused[3]
+        );
+        let warnings: Vec<String> = c.warnings().collect();
+        assert_eq!(warnings.iter().filter(|w| w.starts_with("compat refused: ")).count(), 4);
+        assert_eq!(warnings.iter().filter(|w| w.starts_with("compat applied: ")).count(), 3);
     }
 
     /// A heading that turns through ±π, read 0.05 s later: each sample between two of a 0.1 s

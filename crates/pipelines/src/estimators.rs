@@ -490,10 +490,16 @@ pub fn batch_kinds() -> Vec<&'static str> {
     kinds.iter().filter(|k| k.is_batch()).map(|k| k.name()).collect()
 }
 
-/// The options estimator `kind` takes ([`EstimatorKind::options`]) for a message: "none",
-/// "`forgetting`", "`forgetting` and `grid_hz`", "`a`, `b` and `c`".
+/// The options estimator `kind` takes ([`EstimatorKind::options`]) for a message
+/// ([`quoted_list`]).
 pub fn option_list(kind: EstimatorKind) -> String {
-    match kind.options() {
+    quoted_list(kind.options())
+}
+
+/// Option names for a message: "none", "`forgetting`", "`forgetting` and `grid_hz`",
+/// "`a`, `b` and `c`".
+pub fn quoted_list(items: &[&str]) -> String {
+    match items {
         [] => "none".to_string(),
         [one] => format!("`{one}`"),
         [init @ .., last] => {

@@ -65,7 +65,7 @@ use aeroident_estimators::flight_model::N_STATES;
 use aeroident_estimators::output_error::InitialStates;
 use aeroident_io::{LogFormat, Mapping};
 use aeroident_pipelines::estimators::{
-    EstimatorKind, EstimatorOptions, OptionError, option_list, parse_options,
+    EstimatorKind, EstimatorOptions, OptionError, option_list, parse_options, quoted_list,
 };
 use aeroident_pipelines::job::fit::FitJob;
 use aeroident_pipelines::job::replay::ReplayJob;
@@ -299,11 +299,17 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     let live = args.data == "-" || mavlink;
     check_combination(&args, mavlink)?;
     let records = records(&args, mapping, live);
-    // The replay job refuses what does not go together (a cross-check of a live feed, --and)
-    // before the output directory is touched.
-    let online =
-        if args.estimator.is_batch() { None } else { Some(replay_job(&args, records.clone())?) };
-    online.as_ref().map(ReplayJob::check).transpose()?;
+    // The options are parsed and the job checks what does not go together before the output
+    // directory is touched.
+    let (online, fit) = if args.estimator.is_batch() {
+        let fit = fit_options(&args)?;
+        fit.check()?;
+        (None, Some(fit))
+    } else {
+        let job = replay_job(&args, records.clone())?;
+        job.check()?;
+        (Some(job), None)
+    };
     // Lock the directory and clear the previous run's files before reading anything: a
     // directory that cannot take the results is refused before a long fit, not after it.
     let mut out_dir = open_out(&args)?;
@@ -316,7 +322,7 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
             records,
             model: model_choice(&args),
             compat: args.compat.as_deref().map(CompatSource::from_arg),
-            options: fit_options(&args)?,
+            options: fit.context("internal: no batch fit options")?,
             validate_on: args.validate_on.as_ref().map(|p| p.display().to_string()),
         };
         return match job.prepare(&mut guard, &mut Stderr)? {
@@ -383,26 +389,10 @@ fn replay_job(args: &ReplayArgs, records: Records) -> anyhow::Result<ReplayJob> 
     })
 }
 
-/// Refuses options that do not go together (the estimator's own options, a batch fit of a
-/// live feed), before anything is opened.
+/// Refuses flags that do not go together (a batch fit of a live feed, a batch fit's flag with
+/// a real-time estimator), before anything is opened; which batch method takes which option is
+/// the batch fit's parser's ([`fit_options`]).
 fn check_combination(args: &ReplayArgs, mavlink: bool) -> anyhow::Result<()> {
-    if args.robust && args.estimator != EstimatorKind::Oe {
-        anyhow::bail!(
-            "--robust is Huber's output-error fit (--estimator oe), not --estimator {}",
-            args.estimator.name()
-        );
-    }
-    if args.estimator.is_batch() {
-        fit_options(args)?.check()?;
-    } else {
-        estimator_options(args)?;
-    }
-    if args.band_hz.is_some() && args.estimator != EstimatorKind::Fdoe {
-        anyhow::bail!(
-            "--band-hz is the band of frequency-domain output error (--estimator fdoe), not of --estimator {}",
-            args.estimator.name()
-        );
-    }
     if args.estimator.is_batch() && mavlink {
         anyhow::bail!(
             "--estimator {} is a batch fit of a whole record, not for a live MAVLink feed",
@@ -474,6 +464,18 @@ fn estimator_options(args: &ReplayArgs) -> anyhow::Result<EstimatorOptions> {
 
 /// [`check_combination`] for the real-time estimators: the batch fits' options refused.
 fn check_online_combination(args: &ReplayArgs) -> anyhow::Result<()> {
+    if args.robust {
+        anyhow::bail!(
+            "--robust is Huber's output-error fit (--estimator oe), not --estimator {}",
+            args.estimator.name()
+        );
+    }
+    if args.band_hz.is_some() {
+        anyhow::bail!(
+            "--band-hz is the band of frequency-domain output error (--estimator fdoe), not of --estimator {}",
+            args.estimator.name()
+        );
+    }
     if args.initial_states.is_some() {
         anyhow::bail!(
             "--initial-states applies to the batch fits (--estimator oe or fem), not to --estimator {}",
@@ -620,16 +622,4 @@ fn fit_options(args: &ReplayArgs) -> anyhow::Result<FitOptions> {
     let spike_screen =
         (!args.no_spike_screen).then(aeroident_pipelines::record::outliers::SpikeScreen::default);
     Ok(FitOptions { windows: args.windows.clone(), spike_screen, ..options })
-}
-
-/// `` `a`, `b` and `c` `` (or `none`).
-fn quoted_list(items: &[&str]) -> String {
-    match items {
-        [] => "none".into(),
-        [one] => format!("`{one}`"),
-        [init @ .., last] => {
-            let init: Vec<String> = init.iter().map(|o| format!("`{o}`")).collect();
-            format!("{} and `{last}`", init.join(", "))
-        }
-    }
 }

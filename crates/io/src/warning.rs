@@ -24,12 +24,14 @@ pub enum WarningKind {
     ConstantChannel,
     /// A channel whose unit disagrees with the kinematics.
     UnitMismatch,
+    /// A compatibility correction beyond what a sensor plausibly needs, not applied.
+    RefusedCorrection,
 }
 
 impl WarningKind {
     /// Whether a face repeats it at the end of a run, after the results: the judgments of the
-    /// answer (sign, consistency, collinearity, constant channels, units), which a user reads
-    /// beside the table rather than among the record's notes.
+    /// answer and its data (sign, consistency, collinearity, constant channels, units, refused
+    /// corrections), which a user reads beside the table rather than among the record's notes.
     pub fn is_diagnostic(self) -> bool {
         !matches!(self, WarningKind::Run)
     }

@@ -242,9 +242,6 @@ pub fn corrections(
     let Some(done) = guard.run(Step::Compat, step)? else { return Ok(Ran::Stopped(Step::Compat)) };
     let (corrections, findings) = done?;
     findings.iter().for_each(|f| log.note(&format!("compat: {f}")));
-    for r in corrections.iter().flat_map(|c| &c.refused) {
-        log.warning(&format!("compat refused: {r}"));
-    }
     Ok(Ran::Done(corrections))
 }
 

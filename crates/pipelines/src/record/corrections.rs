@@ -11,6 +11,7 @@
 use super::RecordError;
 use aeroident_estimators::AirDataSample;
 use aeroident_estimators::compat::{Channel, interpolate, wrap};
+use aeroident_io::warning::{Warning, WarningKind};
 use aeroident_io::{FlightDataError, RecordEvent};
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
@@ -141,11 +142,16 @@ struct CompatFile {
 type Entry = (Channel, Option<f64>, Option<f64>, Option<f64>);
 
 impl Corrections {
-    /// The summary warnings that say what was applied (`compat applied: …`), one per item of
-    /// [`Corrections::applied`].
-    pub fn warnings(&self) -> impl Iterator<Item = String> + '_ {
-        let applied = self.applied.iter().map(|a| format!("compat applied: {a}"));
-        applied.chain(self.refused.iter().map(|r| format!("compat refused: {r}")))
+    /// The summary warnings that say what was applied (`compat applied: …`, one per item of
+    /// [`Corrections::applied`]) and what was refused (`compat refused: …`, a
+    /// [`WarningKind::RefusedCorrection`] a face repeats after the results).
+    pub fn warnings(&self) -> impl Iterator<Item = Warning> + '_ {
+        let applied = self.applied.iter().map(|a| Warning::from(format!("compat applied: {a}")));
+        let refused = self
+            .refused
+            .iter()
+            .map(|r| Warning::new(WarningKind::RefusedCorrection, format!("compat refused: {r}")));
+        applied.chain(refused)
     }
 
     /// The corrections of a `compat.json` file.
@@ -409,7 +415,9 @@ mod tests {
             "{}",
             c.refused[3]
         );
-        let warnings: Vec<String> = c.warnings().collect();
+        let refused_kind = c.warnings().filter(|w| w.kind == WarningKind::RefusedCorrection);
+        assert_eq!(refused_kind.count(), 4, "the refusals are repeated after the results");
+        let warnings: Vec<String> = c.warnings().map(|w| w.text).collect();
         assert_eq!(warnings.iter().filter(|w| w.starts_with("compat refused: ")).count(), 4);
         assert_eq!(warnings.iter().filter(|w| w.starts_with("compat applied: ")).count(), 3);
     }

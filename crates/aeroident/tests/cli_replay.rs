@@ -12,10 +12,14 @@ fn bin() -> Command {
 }
 
 fn tmp(name: &str) -> PathBuf {
-    let d =
-        std::env::temp_dir().join(format!("aeroident-cli-replay-{}-{name}", std::process::id()));
+    let d = tmp_path(name);
     let _ = std::fs::remove_dir_all(&d);
     d
+}
+
+/// The scratch directory of `name`, as it is (not cleared).
+fn tmp_path(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("aeroident-cli-replay-{}-{name}", std::process::id()))
 }
 
 /// `replay DATA --map mappings/MAP ARGS --out DIR` through the binary (a batch fit): asserts
@@ -333,23 +337,13 @@ fn errors_batch_fit_options_go_through_one_parser() {
 /// several records for a real-time estimator (a batch fit's `--and`).
 #[test]
 fn errors_replay_job_refuses_and_for_a_real_time_estimator() {
-    let out = tmp("and-online");
-    let _ = std::fs::remove_dir_all(&out);
-    let io_data = workspace().join("crates/io/tests/data");
-    let o = bin()
-        .args(["replay"])
-        .arg(io_data.join("good.csv"))
-        .arg("--map")
-        .arg(io_data.join("min.toml"))
-        .arg("--and")
-        .arg(io_data.join("good.csv"))
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && err.contains("--and fits several records together"), "{err}");
-    assert!(!out.exists(), "the output directory was created before the refusal");
+    let good = workspace().join("crates/io/tests/data/good.csv").display().to_string();
+    let (ok, err) = replay_good(&["--and", &good], "and-online");
+    assert!(!ok && err.contains("--and fits several records together"), "{err}");
+    assert!(
+        !tmp_path("and-online").exists(),
+        "the output directory was created before the refusal"
+    );
 }
 
 /// Live mode: the HFB-320 record on stdin gives one estimates line per sample on stdout.

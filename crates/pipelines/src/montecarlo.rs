@@ -882,12 +882,14 @@ impl Campaign {
     /// [`ParamStats::scatter`]; the parameter's position is its first in the estimator's
     /// [`EstimatorStats::parameters`]). Empty for an unknown name.
     pub fn final_estimates(&self, estimator: &str, param: &str) -> Vec<f64> {
-        let j = self
+        let Some(j) = self
             .estimators
             .iter()
             .find(|e| e.name == estimator)
             .and_then(|e| e.parameters.iter().position(|q| q.name == param))
-            .unwrap_or(0);
+        else {
+            return Vec::new();
+        };
         self.results
             .iter()
             .filter_map(|r| r.outcome.as_ref().ok())

@@ -351,6 +351,10 @@ fn campaign_views() {
     };
     assert_eq!(c.final_estimates("rls", "Cm_alpha"), vec![-0.9, -1.3]);
     assert!(c.final_estimates("ekf", "Cm_alpha").is_empty());
+    assert!(
+        c.final_estimates("rls", "Cm_nope").is_empty(),
+        "an unknown parameter is not the first one"
+    );
     assert_eq!(c.primary_parameters(), vec!["Cm_alpha".to_string()]);
     assert_eq!(
         c.coverage_by_estimator(&["Cm_alpha".into(), "Cm_q".into()]),

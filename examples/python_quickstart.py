@@ -31,7 +31,7 @@ if HFB.exists():
     print("alpha range, deg:", np.degrees([np.nanmin(data["alpha_rad"]), np.nanmax(data["alpha_rad"])]))
     r = aeroident.replay(HFB, mapping=MAPPING, estimator="rls", model="longitudinal")
     final = dict(zip(r["names"], r["estimates"][-1]))
-    sigma = dict(zip(r["names"], r["sigma"][-1]))
+    sigma = dict(zip(r["names"], r["std_error"][-1]))
     for name in ("CL_alpha", "Cm_alpha", "Cm_q", "Cm_de"):
         print(f"{name:9s} = {final[name]:+9.4f} ± {sigma[name]:.4f}")
     # estimates is (time × parameter); NaN until a parameter is identified.
@@ -49,7 +49,7 @@ else:
 # %%
 if HFB.exists():
     oe = aeroident.fit(HFB, MAPPING, "oe", model=ROOT / "models/hfb320_book_q0.toml")
-    for name, v, s in zip(oe["names"], oe["values"], oe["sigma"]):
+    for name, v, s in zip(oe["names"], oe["estimate"], oe["std_error"]):
         print(f"{name:9s} = {v:+9.4f} ± {s:.4f}")
     print(f"{len(oe['summary']['iterations']) - 1} iterations in {oe['summary']['fit_wall_s']:.2f} s;",
           "residual RMS:", dict(oe["summary"]["residual_rms"]))
@@ -74,7 +74,7 @@ for k in range(len(t)):
         az_mps2=qbar * S * (-cd[k] * np.sin(alpha[k]) - cl[k] * np.cos(alpha[k])) / m,
     ))
 e = est.estimates()
-print({n: round(v, 4) for n, v in zip(e["names"], e["values"]) if n.startswith("Cm")}, e["status"])
+print({n: round(v, 4) for n, v in zip(e["names"], e["estimate"]) if n.startswith("Cm")}, e["estimator_status"])
 
 # %% [markdown]
 # ## 3. The F-16: trim, linear model, a simulation
@@ -99,4 +99,4 @@ print("simulated", len(sim["t_s"]), "steps; columns:", ", ".join(list(sim)[:6]),
 mc = aeroident.montecarlo(ROOT / "scenarios/montecarlo/short.toml", runs=4, seed=1, backend="local")
 for est_stats in mc["estimators"]:
     p = next(p for p in est_stats["parameters"] if p["name"] == "Cm_alpha")
-    print(f"{est_stats['name']}: Cm_alpha bias {p['bias']:+.2e}, scatter {p['scatter']:.2e}, CRB σ {p['crb_sigma']}")
+    print(f"{est_stats['name']}: Cm_alpha bias {p['bias']:+.2e}, scatter {p['scatter']:.2e}, CRB σ {p['crb_std_error']}")

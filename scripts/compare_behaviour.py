@@ -6,6 +6,11 @@ every number of every `summary.json` (estimates, sigma, ...) to a relative toler
 Usage:
     scripts/compare_behaviour.py --base BIN_BEFORE --new BIN_AFTER [--base-root CHECKOUT]
         [--out DIR] [--rtol 1e-9] [--flip Cl_da,Cn_da,CY_da] [--only run,poc,replay]
+        [--base-schema 1]
+
+`--base-schema 1` reads the base's `summary.json` in the key set before `schema_version: 2`
+(docs/output-schema.md): its renamed keys are compared under their new names, and the keys
+schema 2 added (the per-parameter verdict and its σ source) are not compared.
 
 `--flip NAMES` expects those parameters (and their reference values) to change sign exactly on
 the replays whose mapping convention changed; every other number must agree within `--rtol`
@@ -72,6 +77,35 @@ IGNORED_KEYS = {
 }
 
 
+# Schema 1 → 2: the per-parameter keys renamed (docs/output-schema.md).
+RENAMED_1_TO_2 = {
+    "final": "estimate", "sigma": "std_error", "truth": "reference",
+    "crb_sigma": "crb_std_error", "coloured_sigma": "coloured_std_error",
+    "prewhitened_sigma": "prewhitened_std_error", "bootstrap_sigma": "bootstrap_std_error",
+    "mean_sigma": "mean_std_error", "crb_sigma_calm": "crb_std_error_calm",
+}
+# Keys schema 2 added, absent from a schema-1 base.
+ADDED_IN_2 = {
+    "schema_version", "std_error", "std_error_source", "crb_std_error", "reference", "flags",
+}
+
+
+def upgrade(v, in_parameters=False):
+    """A schema-1 document in schema-2 keys: renamed keys; a run entry's estimator `status` is
+    `estimator_status` (schema 2's `status` is the verdict)."""
+    if isinstance(v, list):
+        return [upgrade(x, in_parameters) for x in v]
+    if not isinstance(v, dict):
+        return v
+    out = {}
+    for k, x in v.items():
+        k2 = RENAMED_1_TO_2.get(k, k) if in_parameters else k
+        if in_parameters and k == "status" and "quantity" in v:
+            k2 = "estimator_status"
+        out[k2] = upgrade(x, in_parameters or k in ("parameters", "params"))
+    return out
+
+
 # Substrings of keys that measure the machine, not the estimate.
 VOLATILE = ("wall", "realtime_factor", "real_time_factor", "throughput", "elapsed", "_per_s")
 
@@ -91,6 +125,10 @@ def flip_matrix(m, names, flipped):
 
 def compare(a, b, path, rtol, flip, diffs):
     if isinstance(a, dict) and isinstance(b, dict):
+        if flip.get("base_schema") == 1:
+            # A schema-1 base has no verdict, σ source or version: those keys are new ones.
+            b = {k: v for k, v in b.items()
+                 if k in a or (k not in ADDED_IN_2 and k != "status")}
         names = flip.get("names", ())
         if names and isinstance(b.get("names"), list) and isinstance(b.get("rho"), list):
             b = dict(b, rho=flip_matrix(b["rho"], b["names"], names))
@@ -142,6 +180,8 @@ def main():
     ap.add_argument("--rtol", type=float, default=1e-9)
     ap.add_argument("--flip", default="", help="parameter names that flip sign on replays")
     ap.add_argument("--only", default="run,poc,replay")
+    ap.add_argument("--base-schema", type=int, default=2,
+                    help="1: the base writes the key set before schema_version 2")
     ap.add_argument("--base-root", default=str(ROOT),
                     help="checkout the base binary runs in (its own mappings, models, scenarios)")
     a = ap.parse_args()
@@ -180,7 +220,9 @@ def main():
         for f in set(files_b) & set(files_n):
             jb = json.loads((db / f).read_text())
             jn = json.loads((dn / f).read_text())
-            compare(jb, jn, str(f), a.rtol, flip, diffs)
+            if a.base_schema == 1:
+                jb = upgrade(jb)
+            compare(jb, jn, str(f), a.rtol, dict(flip, base_schema=a.base_schema), diffs)
         status = "same" if not diffs else f"{len(diffs)} differences"
         print(f"{name:24s} exit {rb}/{rn}  {len(files_b)} json  {status}", flush=True)
         for d in diffs[:15]:

@@ -143,8 +143,8 @@ fn main() -> Result<(), String> {
                 f(p.median_time_to_10pct_s, 2),
                 f(p.median_reconvergence_10pct_s, 2),
                 f(p.coverage_2sigma.map(|c| 100.0 * c), 1),
-                f(p.scatter.zip(p.crb_sigma).map(|(s, c)| s / c), 2),
-                f(p.mean_sigma.zip(p.scatter).map(|(m, s)| m / s), 2),
+                f(p.scatter.zip(p.crb_std_error).map(|(s, c)| s / c), 2),
+                f(p.mean_std_error.zip(p.scatter).map(|(m, s)| m / s), 2),
             );
         }
         println!(

@@ -460,7 +460,7 @@ fn every_scenario_file_parses_and_runs_shortened() {
         assert_finite(&out);
         let sm = aeroident_pipelines::aircraft::summary::summarize(&out).unwrap();
         for p in &sm.parameters {
-            for v in [p.truth, p.r#final, p.sigma, p.rel_error].into_iter().flatten() {
+            for v in [p.reference, p.estimate, p.std_error, p.rel_error].into_iter().flatten() {
                 assert!(v.is_finite(), "{}: {} {}", f.display(), p.estimator, p.name);
             }
         }
@@ -499,6 +499,7 @@ fn default_scenario_writes_outputs_with_exact_summary_keys() {
         k
     };
     let mut want = vec![
+        "schema_version",
         "scenario",
         "estimator",
         "solver",
@@ -524,14 +525,18 @@ fn default_scenario_writes_outputs_with_exact_summary_keys() {
     let mut want_p = vec![
         "estimator",
         "name",
+        "estimate",
+        "std_error",
+        "std_error_source",
+        "crb_std_error",
+        "reference",
+        "status",
+        "flags",
         "quantity",
         "primary",
-        "truth",
         "truth_before",
         "truth_after",
         "step_at_s",
-        "final",
-        "sigma",
         "rel_error",
         "covers_truth_2sigma",
         "convergence_time_s",
@@ -543,7 +548,7 @@ fn default_scenario_writes_outputs_with_exact_summary_keys() {
         "reconvergence_10pct_s",
         "meets_targets",
         "failure",
-        "status",
+        "estimator_status",
         "batch",
     ];
     want_p.sort();
@@ -588,7 +593,7 @@ fn val_rls_closed_loop_noise_free_recovers_true_derivatives() {
     let primary: Vec<_> = s.parameters.iter().filter(|p| p.primary).collect();
     assert_eq!(primary.len(), 11);
     for p in primary {
-        let (f, t) = (p.r#final.unwrap(), p.truth.unwrap());
+        let (f, t) = (p.estimate.unwrap(), p.reference.unwrap());
         assert!(((f - t) / t).abs() < 0.01, "{}: {f} vs truth {t}", p.name);
     }
     assert!(out.channels[0].failure.is_none());

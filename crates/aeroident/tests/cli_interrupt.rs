@@ -520,8 +520,8 @@ fn check_stopped_bootstrap(v: &serde_json::Value) {
     assert!((2..10_000).contains(&done), "{done} replicas done");
     assert!(warnings.contains(&format!("after {done} of 10000 replicas")), "{warnings}");
     for p in v["parameters"].as_array().unwrap() {
-        assert_eq!(p["std_error"], p["bootstrap_sigma"], "{p}");
-        assert!(p["bootstrap_sigma"].as_f64().unwrap() > 0.0, "{p}");
+        assert_eq!(p["std_error"], p["bootstrap_std_error"], "{p}");
+        assert!(p["bootstrap_std_error"].as_f64().unwrap() > 0.0, "{p}");
     }
 }
 

@@ -31,7 +31,7 @@ fn montecarlo_four_runs_end_to_end() {
         let cm = ps.iter().find(|p| p["name"] == "Cm_alpha").unwrap();
         let cov = cm["coverage_2sigma"].as_f64().unwrap();
         assert!((0.0..=1.0).contains(&cov));
-        let crb = cm["crb_sigma"].as_f64().unwrap();
+        let crb = cm["crb_std_error"].as_f64().unwrap();
         assert!(crb.is_finite() && crb > 0.0);
         assert!(cm["scatter"].as_f64().unwrap() > 0.0);
     }

@@ -80,6 +80,7 @@ fn errors_bad_corpus_counted_in_summary_with_exact_keys() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let keys: Vec<&str> = v.as_object().unwrap().keys().map(|k| k.as_str()).collect();
     let mut expect = [
+        "schema_version",
         "estimator",
         "model",
         "status",
@@ -118,8 +119,21 @@ fn errors_bad_corpus_counted_in_summary_with_exact_keys() {
     for p in params {
         let mut keys: Vec<&str> = p.as_object().unwrap().keys().map(|k| k.as_str()).collect();
         keys.sort_unstable();
-        assert_eq!(keys, ["estimate", "name", "settle_time_s", "std_error"]);
+        let mut want = [
+            "name",
+            "estimate",
+            "std_error",
+            "std_error_source",
+            "crb_std_error",
+            "reference",
+            "status",
+            "flags",
+            "settle_time_s",
+        ];
+        want.sort_unstable();
+        assert_eq!(keys, want);
         assert!(p["estimate"].is_null() && p["std_error"].is_null(), "{p}");
+        assert_eq!(p["status"], "not identified", "{p}");
     }
     let coefs = v["coefficients"].as_array().unwrap();
     let names: Vec<&str> = coefs.iter().map(|c| c["name"].as_str().unwrap()).collect();
@@ -413,7 +427,7 @@ fn val_output_error_reproduces_the_hfb320_reference_through_the_cli() {
     assert_eq!(v["status"], "converged");
     let get = |name: &str| {
         let p = v["parameters"].as_array().unwrap().iter().find(|p| p["name"] == name).unwrap();
-        (p["estimate"].as_f64().unwrap(), p["crb_sigma"].as_f64().unwrap())
+        (p["estimate"].as_f64().unwrap(), p["crb_std_error"].as_f64().unwrap())
     };
     for (name, value, sigma) in [
         ("Cm_alpha", -1.002, 0.009),
@@ -428,8 +442,8 @@ fn val_output_error_reproduces_the_hfb320_reference_through_the_cli() {
     // The record's residuals are coloured: both coloured-residual σ (the reported spectral one
     // and the prewhitened diagnostic) exceed the Cramér–Rao σ of every parameter.
     for p in v["parameters"].as_array().unwrap() {
-        let crb = p["crb_sigma"].as_f64().unwrap();
-        for key in ["coloured_sigma", "prewhitened_sigma"] {
+        let crb = p["crb_std_error"].as_f64().unwrap();
+        for key in ["coloured_std_error", "prewhitened_std_error"] {
             let c = p[key].as_f64().unwrap_or_else(|| panic!("{key} missing: {p}"));
             assert!(c > crb, "{}: {key} {c} ≤ Cramér–Rao σ {crb}", p["name"]);
         }
@@ -811,11 +825,12 @@ fn val_output_error_bootstrap_sigma_on_request() {
     for ((p, q), r) in params(&plain).iter().zip(params(&boot)).zip(params(&again)) {
         assert_eq!(p["name"], q["name"]);
         assert_eq!(p["estimate"], q["estimate"], "the bootstrap changed the estimate");
-        assert!(p["bootstrap_sigma"].is_null());
-        let (sb, crb) = (q["bootstrap_sigma"].as_f64().unwrap(), q["crb_sigma"].as_f64().unwrap());
+        assert!(p["bootstrap_std_error"].is_null());
+        let (sb, crb) =
+            (q["bootstrap_std_error"].as_f64().unwrap(), q["crb_std_error"].as_f64().unwrap());
         assert_eq!(q["std_error"].as_f64(), Some(sb), "{}: reported σ", q["name"]);
         assert!(sb > 0.65 * crb, "{}: bootstrap σ {sb} vs Cramér–Rao {crb}", q["name"]);
-        assert_eq!(q["bootstrap_sigma"], r["bootstrap_sigma"], "not reproducible");
+        assert_eq!(q["bootstrap_std_error"], r["bootstrap_std_error"], "not reproducible");
         // The bias estimate is the refits' mean less the estimate: within 2σ of zero (20
         // replicas of a fit near its optimum; their mean scatters 0.22σ), never the mean itself.
         assert!(p["bootstrap_bias"].is_null());

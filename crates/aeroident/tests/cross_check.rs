@@ -1,7 +1,9 @@
 //! `replay --cross-check` on the HFB-320 record (../shared/flightdata; skipped with a message
 //! when absent, a failure under CI): equation error's Cm_q (−42.6, the α channel lagging the
 //! kinematics by ~0.2 s) is flagged against output error's (−27.9) with a time skew as the
-//! likely cause, and every flag is more than 2 combined σ by the summaries' own numbers.
+//! likely cause, and every flag is more than 2 combined σ by the summaries' own numbers. The
+//! verdicts in the summary follow: the flagged parameter's status names the disagreement and
+//! its flags carry the warning; a batch fit's references are the model file's, judged ±2σ.
 
 mod common;
 use aeroident_io::{Mapping, ModelSpec, open_log};
@@ -31,4 +33,44 @@ fn val_hfb320_equation_error_pitch_damping_is_flagged_against_output_error() {
     }
     let warned = o.summary.warnings.iter().filter(|w| w.starts_with("cross-check:")).count();
     assert_eq!(warned, c.flagged.len());
+    for p in &o.summary.parameters {
+        let flagged = c.flagged.iter().find(|d| d.parameter == p.name);
+        match flagged {
+            Some(d) => {
+                let want = format!("differs from oe by {:.1}σ", d.combined_sigmas);
+                assert_eq!(p.status, want, "{p:?}");
+                assert!(p.flags.iter().any(|f| f.starts_with("cross-check: ")), "{p:?}");
+            }
+            None => assert!(!p.status.starts_with("differs"), "{p:?}"),
+        }
+    }
+}
+
+/// The batch fit's verdicts: each reference is the model file's `[reference.X]` value (read
+/// here from the TOML itself), the status is `outside ±2σ` exactly when that value lies more
+/// than 2 reported σ from the estimate, and σ's source and the Cramér–Rao σ are named.
+#[test]
+fn val_hfb320_output_error_verdicts_against_the_model_files_references() {
+    let Some(data) = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let m = Mapping::from_path(&workspace().join("mappings/hfb320.toml")).unwrap();
+    let path = workspace().join("models/hfb320_book_q0.toml");
+    let model = ModelSpec::from_path(&path).unwrap();
+    let text: toml::Value = toml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let published = text["reference"].as_table().unwrap();
+    let reader = open_log(&data.display().to_string(), None, &m).unwrap();
+    let options = aeroident_pipelines::replay::batch::FitOptions::default();
+    let fit =
+        aeroident_pipelines::replay::fit::fit_record(reader, &m, Some(model), options).unwrap();
+    let mut judged = 0;
+    for p in &fit.summary.parameters {
+        let want = published.get(&p.name).map(|r| r["value"].as_float().unwrap());
+        assert_eq!(p.reference, want, "{}", p.name);
+        let (e, s) = (p.estimate.unwrap(), p.std_error.unwrap());
+        assert!(p.crb_std_error.is_some_and(|c| c > 0.0), "{p:?}");
+        assert!(p.std_error_source.is_some(), "{p:?}");
+        let outside = want.is_some_and(|r| (e - r).abs() > 2.0 * s);
+        assert_eq!(p.status, if outside { "outside ±2σ" } else { "ok" }, "{p:?}");
+        judged += usize::from(want.is_some());
+    }
+    assert_eq!(judged, published.len(), "every published value is set beside its estimate");
 }

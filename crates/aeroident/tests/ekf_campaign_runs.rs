@@ -136,7 +136,7 @@ fn start_up_lock_out_restarts_once_reports_it_and_runs_to_the_end() {
     let runs = result.outcome.unwrap();
     assert_eq!(runs[0].restarts, 1);
     for p in summary.parameters.iter().filter(|p| PRIMARY_DERIVATIVES.contains(&p.name.as_str())) {
-        let (f, t, s) = (p.r#final.unwrap(), p.truth.unwrap(), p.sigma.unwrap());
+        let (f, t, s) = (p.estimate.unwrap(), p.reference.unwrap(), p.std_error.unwrap());
         let z = (f - t) / s;
         println!("{:>9} final {f:9.4} truth {t:9.4} σ {s:.2e} z {z:+.2}", p.name);
         assert!(z.abs() < 5.0, "{}: {f} vs {t} ({z:+.1} σ)", p.name);

@@ -51,10 +51,10 @@ fn fem_in_a_turbulent_run_converges_with_process_noise_on_the_air_data_states() 
     };
     let s = summarize(&out).unwrap();
     let reported: Vec<f64> =
-        s.parameters.iter().filter(|p| p.estimator == "fem").filter_map(|p| p.sigma).collect();
+        s.parameters.iter().filter(|p| p.estimator == "fem").filter_map(|p| p.std_error).collect();
     assert_eq!(reported, expected, "the reported σ is the coloured candidate where formed");
     for p in s.parameters.iter().filter(|p| p.primary && p.estimator == "fem") {
-        let (f, t) = (p.r#final.unwrap(), p.truth.unwrap());
+        let (f, t) = (p.estimate.unwrap(), p.reference.unwrap());
         assert!(((f - t) / t).abs() < 0.15, "{}: {f} vs truth {t}", p.name);
     }
 }

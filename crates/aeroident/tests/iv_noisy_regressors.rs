@@ -65,7 +65,9 @@ fn online(
     let out = replay(reader, mapping, &opts, &mut ()).unwrap();
     assert_eq!(out.summary.status, "running", "{}", estimator.name());
     let params = out.summary.parameters.into_iter();
-    params.map(|p| (p.name, p.estimate.unwrap(), p.std_error.unwrap())).collect()
+    params
+        .map(|p| (p.result.name, p.result.estimate.unwrap(), p.result.std_error.unwrap()))
+        .collect()
 }
 
 fn get(rows: &[(String, f64, f64)], name: &str) -> (f64, f64) {

@@ -50,7 +50,7 @@ fn primaries(sc: &Scenario, runs: u64, name: &str) -> (Vec<ParamStats>, Option<f
 /// `(scatter / σ_CRB, mean reported σ / scatter)` of one parameter's campaign statistics.
 fn efficiency(p: &ParamStats) -> (f64, f64) {
     let scatter = p.scatter.unwrap();
-    (scatter / p.crb_sigma.unwrap(), p.mean_sigma.unwrap() / scatter)
+    (scatter / p.crb_std_error.unwrap(), p.mean_std_error.unwrap() / scatter)
 }
 
 /// Calm air (sensor noise the only random input), OE fitted to the raw samples with its

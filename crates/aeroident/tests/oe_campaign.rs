@@ -58,9 +58,9 @@ fn val_oe_in_run_noise_free_recovers_true_derivatives() {
     let primary: Vec<_> = s.parameters.iter().filter(|p| p.primary).collect();
     assert_eq!(primary.len(), 11);
     for p in primary {
-        let (f, t) = (p.r#final.unwrap(), p.truth.unwrap());
+        let (f, t) = (p.estimate.unwrap(), p.reference.unwrap());
         assert!(((f - t) / t).abs() < 0.01, "{}: {f} vs truth {t}", p.name);
-        assert!(p.sigma.is_some_and(|s| s.is_finite() && s > 0.0), "{}: σ", p.name);
+        assert!(p.std_error.is_some_and(|s| s.is_finite() && s > 0.0), "{}: σ", p.name);
         assert!(p.batch);
         assert_eq!(p.time_to_10pct_s, None);
         assert_eq!(p.meets_targets, None);
@@ -95,7 +95,7 @@ fn oe_fits_the_window_after_the_damage() {
     let cm = s.parameters.iter().find(|p| p.name == "Cm_alpha").unwrap();
     let (b, a) = (cm.truth_before.unwrap(), cm.truth_after.unwrap());
     assert!((a - 0.7 * b).abs() < 1e-12);
-    let f = cm.r#final.unwrap();
+    let f = cm.estimate.unwrap();
     assert!(((f - a) / a).abs() < 0.01, "Cm_alpha {f} vs post-damage truth {a}");
     let crb = crb_sigmas(&sc).unwrap();
     assert!(crb.sigma["oe"]["Cm_alpha"] > 0.0);
@@ -120,10 +120,10 @@ fn short_campaign_with_oe_has_finite_entries() {
     assert_eq!(primary.len(), 11);
     for p in primary {
         assert_eq!(p.n_estimates, 4, "{}", p.name);
-        for v in [p.bias, p.scatter, p.mean_sigma, p.crb_sigma] {
+        for v in [p.bias, p.scatter, p.mean_std_error, p.crb_std_error] {
             assert!(v.is_some_and(f64::is_finite), "{}: {p:?}", p.name);
         }
-        let (sig, crb) = (p.mean_sigma.unwrap(), p.crb_sigma.unwrap());
+        let (sig, crb) = (p.mean_std_error.unwrap(), p.crb_std_error.unwrap());
         assert!(sig > 0.5 * crb, "{}: mean σ {sig} vs CRB {crb}", p.name);
         assert!(p.coverage_2sigma.is_some_and(|x| (0.0..=1.0).contains(&x)));
         assert_eq!(p.median_time_to_10pct_s, None);
@@ -131,7 +131,7 @@ fn short_campaign_with_oe_has_finite_entries() {
     for r in &c.results {
         let e = r.outcome.as_ref().unwrap().iter().find(|e| e.name == "oe").unwrap();
         assert!(e.iterations.is_some() && e.fit_wall_s.is_some());
-        assert!(e.params.iter().all(|p| p.r#final.is_some_and(f64::is_finite)));
+        assert!(e.params.iter().all(|p| p.estimate.is_some_and(f64::is_finite)));
     }
 }
 
@@ -147,7 +147,7 @@ fn failed_oe_fit_is_a_failed_run_with_its_reason() {
     assert_eq!(ch.status, Some("failed"));
     let s = summarize(&out).unwrap();
     for p in s.parameters.iter().filter(|p| p.estimator == "oe") {
-        assert_eq!(p.r#final, None);
+        assert_eq!(p.estimate, None);
         assert!(p.failure.as_deref().is_some_and(|f| f.contains("0 samples after")));
     }
     let c = campaign(&sc, 2, 1).unwrap();
@@ -217,7 +217,7 @@ fn turbulent_run_66_converges_to_the_optimum_both_steps_agree_on() {
         let est: Vec<(String, f64, f64)> = s
             .parameters
             .iter()
-            .map(|p| (p.name.clone(), p.r#final.unwrap(), p.sigma.unwrap()))
+            .map(|p| (p.name.clone(), p.estimate.unwrap(), p.std_error.unwrap()))
             .collect();
         (iterations, est)
     };

@@ -147,12 +147,27 @@ fn cli_single_run_writes_outputs_with_exact_summary_keys() {
         k.sort();
         k
     };
-    assert_eq!(keys(&v), ["estimator", "parameters", "realtime_factor", "scenario", "solver"]);
+    assert_eq!(
+        keys(&v),
+        ["estimator", "parameters", "realtime_factor", "scenario", "schema_version", "solver"]
+    );
     assert_eq!(v["solver"], "explicit");
     assert_eq!(v["estimator"], "published");
     assert_eq!(
         keys(&v["parameters"][0]),
-        ["convergence_time_s", "final", "name", "rel_error", "thesis_convergence_time_s", "truth"]
+        [
+            "convergence_time_s",
+            "crb_std_error",
+            "estimate",
+            "flags",
+            "name",
+            "reference",
+            "rel_error",
+            "status",
+            "std_error",
+            "std_error_source",
+            "thesis_convergence_time_s"
+        ]
     );
     assert_eq!(v["parameters"][0]["thesis_convergence_time_s"], 0.5);
     let csv = std::fs::read_to_string(dir.join("timeseries.csv")).unwrap();

@@ -4,31 +4,40 @@
 //! field means the value is not identified yet, or the method gives no standard error there —
 //! never a made-up number.
 //!
-//! `summary.json` keys: `estimator, model, status, samples_read, samples_rejected,
-//! rejections[{row, reason}], throughput_samples_per_s, parameters[{name, estimate, std_error,
-//! settle_time_s}], coefficients[{name, condition_number}], correlations[{a, b, rho}],
+//! `summary.json` keys: `schema_version, estimator, model, status, samples_read,
+//! samples_rejected, rejections[{row, reason}], throughput_samples_per_s, parameters[{name,
+//! estimate, std_error, std_error_source, crb_std_error, reference, status, flags,
+//! settle_time_s}] ([`crate::parameter`]), coefficients[{name, condition_number}], correlations[{a, b, rho}],
 //! events{listed[{t_s, kind, subject}], counts{restart, reanchor, change_detected},
 //! not_listed}, warnings[]`.
 //! `estimate`, `std_error`, `settle_time_s` and `condition_number` are `null` where undefined
 //! (not identified, no covariance from the method).
 
 use crate::flight_data::Rejection;
+use crate::parameter::ParameterResult;
 use aeroident_estimators::{EventKind, EventLog};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::Write;
 
-/// One parameter's final result.
+/// One parameter's final result: the common keys ([`ParameterResult`]) and its settling time,
+/// in one `summary.json` object.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ParameterSummary {
-    /// Parameter name, e.g. `Cm_alpha` (per rad) or `Cm_q` (per unit q̂).
-    pub name: String,
-    /// Final estimate; `null` until identified (and when the estimator diverged).
-    pub estimate: Option<f64>,
-    /// Final standard error, if the method gives one and the parameter is identified.
-    pub std_error: Option<f64>,
+    /// Name, estimate (`null` until identified and after a divergence), σ (the estimator's
+    /// covariance, where it gives one), reference (the model file's), status and flags.
+    #[serde(flatten)]
+    pub result: ParameterResult,
     /// Settling time, s (see `aeroident_pipelines::replay::settle_time_s` for the definition).
     pub settle_time_s: Option<f64>,
+}
+
+impl std::ops::Deref for ParameterSummary {
+    type Target = ParameterResult;
+
+    fn deref(&self) -> &ParameterResult {
+        &self.result
+    }
 }
 
 /// One modelled coefficient's diagnostics.
@@ -159,6 +168,8 @@ pub const NOTE_EVENTS: usize = 6;
 /// The `summary.json` document.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ReplaySummary {
+    /// The key set's version, [`crate::SCHEMA_VERSION`].
+    pub schema_version: u32,
     /// Estimator name (`rls`, `ekf`, …).
     pub estimator: String,
     /// The model: a preset name (`longitudinal`, `lateral`, `six-axis`) or the model file.

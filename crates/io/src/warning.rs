@@ -26,12 +26,14 @@ pub enum WarningKind {
     UnitMismatch,
     /// A compatibility correction beyond what a sensor plausibly needs, not applied.
     RefusedCorrection,
+    /// An estimate that disagrees with another method's on the same record.
+    CrossCheck,
 }
 
 impl WarningKind {
     /// Whether a face repeats it at the end of a run, after the results: the judgments of the
     /// answer and its data (sign, consistency, collinearity, constant channels, units, refused
-    /// corrections), which a user reads beside the table rather than among the record's notes.
+    /// corrections, cross-checks), which a user reads beside the table rather than among the record's notes.
     pub fn is_diagnostic(self) -> bool {
         !matches!(self, WarningKind::Run)
     }

@@ -7,7 +7,7 @@
 
 /// Values of magnitude below this are numerical noise around 0 (a reference that small is
 /// round-off of an exact zero; a figure panel that small everywhere is drawn as 0).
-pub const ZERO_THRESHOLD: f64 = 1e-12;
+pub use aeroident_io::parameter::ZERO_THRESHOLD;
 
 /// Errors of the metric functions.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -19,11 +19,11 @@
 //! the whole experiment or of one estimator is counted and listed, never averaged in; a run in
 //! which it restarted from its priors and then ran to the end is listed in `restarted_runs` and
 //! kept):
-//! - `truth`: the reference's true value at the end (after the damage, if any);
-//! - `bias`: mean of the final estimates − `truth`;
+//! - `reference`: the reference aircraft's true value at the end (after the damage, if any);
+//! - `bias`: mean of the final estimates − `reference`;
 //! - `scatter`: sample standard deviation (`n − 1`) of the final estimates;
-//! - `mean_sigma`: mean of the final reported σ (`null` when the method reports none);
-//! - `coverage_2sigma`: fraction of `runs_ok` whose final `|estimate − truth| ≤ 2σ` (a run with
+//! - `mean_std_error`: mean of the final reported σ (`null` when the method reports none);
+//! - `coverage_2sigma`: fraction of `runs_ok` whose final `|estimate − reference| ≤ 2σ` (a run with
 //!   no estimate or no σ for the parameter does not cover); `null` for methods without σ;
 //! - `median_time_to_10pct_s`: median over `runs_ok` of the time from the start of the
 //!   excitation until the estimate stays within ±10 % of the truth up to the damage (or the end)
@@ -31,14 +31,14 @@
 //!   `null` when at least half never settle; always `null` for a batch estimator (output
 //!   error, [`crate::aircraft::batch`]: no estimate before the end of the flight), which
 //!   reports `mean_iterations` and `mean_fit_wall_s` instead;
-//! - `crb_sigma`: [`crb_sigmas`], the Cramér–Rao σ of the experiment flown, for the data since
+//! - `crb_std_error`: [`crb_sigmas`], the Cramér–Rao σ of the experiment flown, for the data since
 //!   the last change of the truth: with the scenario's Dryden turbulence as process noise
 //!   ([`aeroident_estimators::output_error::design::predict_crb_turbulent`]) when it has one
 //!   `dryden` wind entry, else the calm-air bound (module docs there; Klein & Morelli 2006
 //!   ch. 6); `crb_notes` say which;
-//! - `crb_sigma_calm`: the calm-air bound of the same flight, white sensor noise only
+//! - `crb_std_error_calm`: the calm-air bound of the same flight, white sensor noise only
 //!   ([`aeroident_estimators::output_error::design::predict_crb`]; the bound reported as
-//!   `crb_sigma` before the turbulent one existed).
+//!   `crb_std_error` before the turbulent one existed).
 
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -51,6 +51,7 @@ use aeroident_estimators::output_error::design::{
     trim_biases,
 };
 use aeroident_estimators::vocabulary::ModelStructure;
+use aeroident_io::ParameterResult;
 use aeroident_models::f16::{self, AeroIncrements, F16};
 use aeroident_signals::config::WindConfig;
 use aeroident_signals::turbulence::{DrydenComponent, DrydenParameters, dryden_shaping_filter};
@@ -99,27 +100,32 @@ pub fn seeded_scenario(sc: &Scenario, campaign_seed: u64, run: u64) -> Scenario 
     s
 }
 
-/// One parameter's final result in one run.
+/// One parameter's final result in one run: the common keys ([`ParameterResult`]: `name`,
+/// `estimate` (`null`: not identified), `std_error`, `reference` (the true value at the end),
+/// status, flags …) and the run's own.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ParamRun {
-    /// Vocabulary name.
-    pub name: String,
+    /// The run's result of the parameter, as its `summary.json` gives it.
+    #[serde(flatten)]
+    pub result: ParameterResult,
     /// Whether it is one of [`PRIMARY_DERIVATIVES`].
     pub primary: bool,
-    /// True value at the end of the run.
-    pub truth: Option<f64>,
     /// True value before the damage.
     pub truth_before: Option<f64>,
     /// True value after the damage.
     pub truth_after: Option<f64>,
-    /// Final estimate (`None`: not identified).
-    pub r#final: Option<f64>,
-    /// Final reported σ.
-    pub sigma: Option<f64>,
     /// Time from the excitation until within ±10 % to the damage (or the end), s.
     pub time_to_10pct_s: Option<f64>,
     /// Time from the damage until within ±10 % of the new truth to the end, s.
     pub reconvergence_10pct_s: Option<f64>,
+}
+
+impl std::ops::Deref for ParamRun {
+    type Target = ParameterResult;
+
+    fn deref(&self) -> &ParameterResult {
+        &self.result
+    }
 }
 
 /// One estimator's result in one run.
@@ -170,7 +176,7 @@ pub fn run_result(index: u64, sensor_seed: u64, out: &RunOutput) -> RunResult {
         let mut ests: Vec<EstimatorRun> = Vec::new();
         for p in &sm.parameters {
             if ests.last().is_none_or(|e| e.name != p.estimator) {
-                let diverged = p.status == Some("diverged");
+                let diverged = p.estimator_status == Some("diverged");
                 let ch = out.channels.iter().find(|c| c.label == p.estimator);
                 let nis = ch.and_then(|c| c.nis).filter(|v| v.is_finite());
                 let fit = ch.and_then(|c| c.batch.as_ref());
@@ -199,19 +205,16 @@ pub fn run_result(index: u64, sensor_seed: u64, out: &RunOutput) -> RunResult {
                 });
             }
             let e = ests.last_mut().expect("pushed above");
-            if let Some(f) = p.r#final.filter(|f| !f.is_finite()) {
+            if let Some(f) = p.estimate.filter(|f| !f.is_finite()) {
                 e.failure
                     .get_or_insert_with(|| format!("{}: non-finite final estimate {f}", p.name));
             }
             e.params.push(ParamRun {
-                name: p.name.clone(),
+                result: p.result.clone(),
                 primary: PRIMARY_DERIVATIVES.contains(&p.name.as_str())
                     && p.quantity == "derivative",
-                truth: p.truth,
                 truth_before: p.truth_before,
                 truth_after: p.truth_after,
-                r#final: p.r#final,
-                sigma: p.sigma,
                 time_to_10pct_s: p.time_to_10pct_s,
                 reconvergence_10pct_s: p.reconvergence_10pct_s,
             });
@@ -306,7 +309,7 @@ pub struct ParamStats {
     /// Whether it is one of [`PRIMARY_DERIVATIVES`].
     pub primary: bool,
     /// True value at the end.
-    pub truth: Option<f64>,
+    pub reference: Option<f64>,
     /// True value before the damage.
     pub truth_before: Option<f64>,
     /// True value after the damage.
@@ -318,13 +321,13 @@ pub struct ParamStats {
     /// Sample standard deviation of the final estimates.
     pub scatter: Option<f64>,
     /// Mean final reported σ.
-    pub mean_sigma: Option<f64>,
+    pub mean_std_error: Option<f64>,
     /// Fraction of the estimator's good runs whose ±2σ covers the truth.
     pub coverage_2sigma: Option<f64>,
     /// Predicted Cramér–Rao σ of the experiment flown, turbulence included ([`crb_sigmas`]).
-    pub crb_sigma: Option<f64>,
+    pub crb_std_error: Option<f64>,
     /// Predicted Cramér–Rao σ in calm air, white sensor noise only ([`crb_sigmas`]).
-    pub crb_sigma_calm: Option<f64>,
+    pub crb_std_error_calm: Option<f64>,
     /// Median time to within ±10 %, s (module doc).
     pub median_time_to_10pct_s: Option<f64>,
     /// Median time from the damage to within ±10 % of the new truth, s.
@@ -459,13 +462,13 @@ fn param_stats(
     crb: Option<f64>,
     crb_calm: Option<f64>,
 ) -> ParamStats {
-    let finals: Vec<f64> = ps.iter().filter_map(|p| p.r#final).collect();
-    let sigmas: Vec<f64> = ps.iter().filter_map(|p| p.sigma).collect();
-    let truth = p0.truth;
+    let finals: Vec<f64> = ps.iter().filter_map(|p| p.estimate).collect();
+    let sigmas: Vec<f64> = ps.iter().filter_map(|p| p.std_error).collect();
+    let truth = p0.reference;
     let coverage = (!sigmas.is_empty() && truth.is_some()).then(|| {
         let covered = ps
             .iter()
-            .filter(|p| match (p.r#final, p.sigma, p.truth) {
+            .filter(|p| match (p.estimate, p.std_error, p.reference) {
                 (Some(f), Some(s), Some(t)) => (f - t).abs() <= 2.0 * s,
                 _ => false,
             })
@@ -478,16 +481,16 @@ fn param_stats(
     ParamStats {
         name: p0.name.clone(),
         primary: p0.primary,
-        truth,
+        reference: truth,
         truth_before: p0.truth_before,
         truth_after: p0.truth_after,
         n_estimates: finals.len(),
         bias: mean(&finals).zip(truth).map(|(m, t)| m - t),
         scatter: sample_std(&finals),
-        mean_sigma: mean(&sigmas),
+        mean_std_error: mean(&sigmas),
         coverage_2sigma: coverage,
-        crb_sigma: crb,
-        crb_sigma_calm: crb_calm,
+        crb_std_error: crb,
+        crb_std_error_calm: crb_calm,
         median_time_to_10pct_s: median_with_never(&times),
         median_reconvergence_10pct_s: if changes { median_with_never(&reconv) } else { None },
     }
@@ -545,18 +548,20 @@ pub fn crb_sigmas(sc: &Scenario) -> Result<CrbTable, String> {
     let gusts = match gust_model(sc) {
         Ok(Some(g)) => {
             table.notes.push(
-                "crb_sigma: the bound of the experiment flown, the scenario's Dryden turbulence as process noise (linearised about trim, frozen turbulence); crb_sigma_calm: white sensor noise only".into(),
+                "crb_std_error: the bound of the experiment flown, the scenario's Dryden turbulence as process noise (linearised about trim, frozen turbulence); crb_std_error_calm: white sensor noise only".into(),
             );
             Some(g)
         }
         Ok(None) => {
             table.notes.push(
-                "crb_sigma: no Dryden turbulence in the scenario, the calm-air bound (= crb_sigma_calm)".into(),
+                "crb_std_error: no Dryden turbulence in the scenario, the calm-air bound (= crb_std_error_calm)".into(),
             );
             None
         }
         Err(e) => {
-            table.notes.push(format!("crb_sigma: the calm-air bound (= crb_sigma_calm): {e}"));
+            table
+                .notes
+                .push(format!("crb_std_error: the calm-air bound (= crb_std_error_calm): {e}"));
             None
         }
     };
@@ -706,6 +711,8 @@ fn crb_for(
 /// A finished campaign.
 #[derive(Debug, Clone, Serialize)]
 pub struct Campaign {
+    /// The key set's version, [`aeroident_io::SCHEMA_VERSION`].
+    pub schema_version: u32,
     /// Scenario name.
     pub scenario: String,
     /// Number of runs done (the statistics are over them).
@@ -725,7 +732,7 @@ pub struct Campaign {
     pub failed_runs: Vec<FailedRun>,
     /// Per estimator.
     pub estimators: Vec<EstimatorStats>,
-    /// Why some `crb_sigma` are `null`.
+    /// Why some `crb_std_error` are `null`.
     pub crb_notes: Vec<String>,
     /// Wall-clock time of the runs (parallel), s.
     pub wall_s: f64,
@@ -798,6 +805,7 @@ pub fn assemble(
         })
         .collect();
     Campaign {
+        schema_version: aeroident_io::SCHEMA_VERSION,
         scenario: sc.name.clone(),
         runs: results.len() as u64,
         runs_requested: results.len() as u64,
@@ -814,14 +822,16 @@ pub fn assemble(
     }
 }
 
-/// The `--json` document: exactly `{"status", "status_reason", "runs", "runs_requested",
+/// The `--json` document: exactly `{"schema_version", "status", "status_reason", "runs", "runs_requested",
 /// "estimators": [{"name", "parameters": [{"name",
-/// "truth", "bias", "scatter", "mean_sigma", "coverage_2sigma", "crb_sigma", "crb_sigma_calm",
-/// "median_time_to_10pct_s"}]}]}` (`crb_sigma`: the bound of the experiment flown;
-/// `crb_sigma_calm`: white sensor noise only, [`crb_sigmas`]). `status` is `complete`, or
+/// "reference", "bias", "scatter", "mean_std_error", "coverage_2sigma", "crb_std_error",
+/// "crb_std_error_calm", "median_time_to_10pct_s"}]}]}` (`reference`: the truth at the end;
+/// `crb_std_error`: the bound of the experiment flown; `crb_std_error_calm`: white sensor noise
+/// only, [`crb_sigmas`]). `status` is `complete`, or
 /// `interrupted` when a stop ended the campaign after `runs` of `runs_requested`.
 pub fn json_summary(c: &Campaign) -> serde_json::Value {
     serde_json::json!({
+        "schema_version": c.schema_version,
         "status": c.status,
         "status_reason": c.status_reason,
         "runs": c.runs,
@@ -830,13 +840,13 @@ pub fn json_summary(c: &Campaign) -> serde_json::Value {
             "name": e.name,
             "parameters": e.parameters.iter().map(|p| serde_json::json!({
                 "name": p.name,
-                "truth": p.truth,
+                "reference": p.reference,
                 "bias": p.bias,
                 "scatter": p.scatter,
-                "mean_sigma": p.mean_sigma,
+                "mean_std_error": p.mean_std_error,
                 "coverage_2sigma": p.coverage_2sigma,
-                "crb_sigma": p.crb_sigma,
-                "crb_sigma_calm": p.crb_sigma_calm,
+                "crb_std_error": p.crb_std_error,
+                "crb_std_error_calm": p.crb_std_error_calm,
                 "median_time_to_10pct_s": p.median_time_to_10pct_s,
             })).collect::<Vec<_>>(),
         })).collect::<Vec<_>>(),
@@ -848,7 +858,7 @@ impl ParamStats {
     /// without a bias or a truth, or when |truth| is below
     /// [`ZERO_THRESHOLD`] (round-off of an exact zero).
     pub fn bias_percent_of_truth(&self) -> Option<f64> {
-        match (self.bias, self.truth) {
+        match (self.bias, self.reference) {
             (Some(b), Some(tr)) if tr.abs() > ZERO_THRESHOLD => Some(100.0 * b / tr.abs()),
             _ => None,
         }
@@ -857,13 +867,13 @@ impl ParamStats {
     /// The truth with a magnitude below [`ZERO_THRESHOLD`]
     /// (round-off of an exact zero) as 0.
     pub fn truth_or_zero(&self) -> Option<f64> {
-        self.truth.map(|x| if x.abs() < ZERO_THRESHOLD { 0.0 } else { x })
+        self.reference.map(|x| if x.abs() < ZERO_THRESHOLD { 0.0 } else { x })
     }
 
-    /// The scatter over the Cramér–Rao σ of the experiment flown (`scatter / crb_sigma`, –;
+    /// The scatter over the Cramér–Rao σ of the experiment flown (`scatter / crb_std_error`, –;
     /// ≈ 1 for an efficient estimator); `None` without either.
     pub fn scatter_over_crb(&self) -> Option<f64> {
-        self.scatter.zip(self.crb_sigma).map(|(a, b)| a / b)
+        self.scatter.zip(self.crb_std_error).map(|(a, b)| a / b)
     }
 }
 
@@ -895,7 +905,7 @@ impl Campaign {
             .filter_map(|r| r.outcome.as_ref().ok())
             .filter_map(|ests| ests.iter().find(|x| x.name == estimator))
             .filter(|x| x.failure.is_none())
-            .filter_map(|x| x.params.get(j).and_then(|q| q.r#final))
+            .filter_map(|x| x.params.get(j).and_then(|q| q.estimate))
             .collect()
     }
 

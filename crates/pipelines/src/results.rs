@@ -16,72 +16,7 @@
 use aeroident_estimators::vocabulary::coefficient_value;
 use aeroident_estimators::{AirDataSample, Coefficient, ModelStructure};
 
-/// One parameter's row.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ParameterRow {
-    /// Vocabulary name, e.g. `Cm_alpha` (may carry a suffix such as `*` for primaries).
-    pub name: String,
-    /// Final estimate; `None` if not identified.
-    pub estimate: Option<f64>,
-    /// Its standard error, the one the status is judged against; `None` where the method
-    /// gives none.
-    pub sigma: Option<f64>,
-    /// The Cramér–Rao σ beside it, where `sigma` is another (coloured-residual or bootstrap)
-    /// σ of a batch fit; `None` otherwise.
-    pub crb_sigma: Option<f64>,
-    /// Reference (published value) or truth; `None` if there is none.
-    pub reference: Option<f64>,
-    /// Status text (e.g. `ok`, `not identified`, `diverged`, `outside ±2σ`).
-    pub status: String,
-}
-
-impl ParameterRow {
-    /// A row whose status is derived from the numbers: `not identified` without an estimate,
-    /// `outside ±2σ` when a reference lies further than 2σ from the estimate, else `ok`. A
-    /// `failure` (e.g. `diverged`) overrides.
-    pub fn new(
-        name: impl Into<String>,
-        estimate: Option<f64>,
-        sigma: Option<f64>,
-        reference: Option<f64>,
-        failure: Option<&str>,
-    ) -> Self {
-        let status = match (failure, estimate) {
-            (Some(f), _) => f.to_string(),
-            (None, None) => "not identified".into(),
-            (None, Some(e)) => match (reference, sigma) {
-                (Some(r), Some(s)) if (e - r).abs() > 2.0 * s => "outside ±2σ".into(),
-                _ => "ok".into(),
-            },
-        };
-        Self { name: name.into(), estimate, sigma, crb_sigma: None, reference, status }
-            .with_reference_noise_as_zero()
-    }
-
-    /// The row with the Cramér–Rao σ `crb` shown beside its σ.
-    pub fn with_crb_sigma(mut self, crb: f64) -> Self {
-        self.crb_sigma = Some(crb);
-        self
-    }
-
-    /// A reference of magnitude below [`crate::metrics::ZERO_THRESHOLD`] is round-off of an exact
-    /// 0 (e.g. a simulator's 1e-44 truth): it is 0, and no error % is formed against it.
-    fn with_reference_noise_as_zero(mut self) -> Self {
-        if self.reference.is_some_and(|r| r.abs() < crate::metrics::ZERO_THRESHOLD) {
-            self.reference = Some(0.0);
-        }
-        self
-    }
-
-    /// `100 (estimate − reference) / |reference|`, %; `None` without both or for a zero
-    /// reference.
-    pub fn error_pct(&self) -> Option<f64> {
-        match (self.estimate, self.reference) {
-            (Some(e), Some(r)) if r != 0.0 && r.is_finite() => Some(100.0 * (e - r) / r.abs()),
-            _ => None,
-        }
-    }
-}
+pub use aeroident_io::parameter::ParameterResult;
 
 /// Fit quality of one coefficient (module doc).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -204,7 +139,7 @@ pub struct Results {
     /// Header of the reference column: `reference` (published) or `truth` (simulation).
     pub reference_label: String,
     /// One row per parameter.
-    pub rows: Vec<ParameterRow>,
+    pub rows: Vec<ParameterResult>,
     /// Fit quality per coefficient (may be empty).
     pub fit: Vec<FitQuality>,
     /// Lines printed under the tables (sources, caveats).
@@ -213,8 +148,8 @@ pub struct Results {
 
 impl Results {
     /// Whether any row carries a Cramér–Rao σ beside its σ (the tables then show that column).
-    pub fn has_crb_sigma(&self) -> bool {
-        self.rows.iter().any(|r| r.crb_sigma.is_some())
+    pub fn has_crb_std_error(&self) -> bool {
+        self.rows.iter().any(|r| r.crb_std_error.is_some())
     }
 }
 
@@ -266,25 +201,6 @@ mod tests {
         assert_eq!(fit_quality("CD", &[2.0, 2.0], &[1.0, 3.0]).unwrap().r_squared, None);
         assert!(fit_quality("CD", &[f64::NAN], &[1.0]).is_none());
         assert!(fit_quality("CD", &[1.0], &[1.0, 2.0]).is_none());
-    }
-
-    #[test]
-    fn row_status_and_error() {
-        let r = ParameterRow::new("Cm_alpha", Some(-1.1), Some(0.01), Some(-1.0), None);
-        assert!((r.error_pct().unwrap() + 10.0).abs() < 1e-9, "signed: estimate below");
-        assert_eq!(r.status, "outside ±2σ");
-        let r = ParameterRow::new("Cm_alpha", Some(-1.01), Some(0.01), Some(-1.0), None);
-        assert_eq!(r.status, "ok");
-        assert!((r.error_pct().unwrap() + 1.0).abs() < 1e-9, "sign: estimate more negative");
-        let r = ParameterRow::new("Cm_q", None, None, Some(-20.0), None);
-        assert_eq!((r.status.as_str(), r.error_pct()), ("not identified", None));
-        assert_eq!(ParameterRow::new("x", Some(1.0), None, Some(0.0), None).error_pct(), None);
-        let r = ParameterRow::new("Cl_0", Some(6e-5), None, Some(3.4e-44), None);
-        assert_eq!((r.reference, r.error_pct()), (Some(0.0), None));
-        assert_eq!(
-            ParameterRow::new("x", Some(1.0), None, None, Some("diverged")).status,
-            "diverged"
-        );
     }
 
     /// The prediction is Σ θ ξ on each sample: with Cm = 0.1 − 0.5 α and samples generated

@@ -4,6 +4,7 @@
 //! `aeroident_pipelines::replay::fit::fit_record`), with the estimates, their σ and correlation, the
 //! residuals and the model-vs-measured traces as numpy arrays.
 
+use aeroident_io::ParameterResult;
 use std::path::Path;
 
 use aeroident_io::{Mapping, open_log_with_report};
@@ -191,12 +192,16 @@ fn fit_dict(
     // The summary's numbers, NaN where it has `null` (a parameter fdoe's linear model cannot
     // see); for `oe` and `fem` they are the fit's own.
     let nan = |v: Option<f64>| v.unwrap_or(f64::NAN);
-    let values: Vec<f64> = s.parameters.iter().map(|p| nan(p.estimate)).collect();
-    d.set_item("values", values.into_pyarray(py))?;
-    let sigma: Vec<f64> = s.parameters.iter().map(|p| nan(p.std_error)).collect();
-    d.set_item("sigma", sigma.into_pyarray(py))?;
-    let crb: Vec<f64> = s.parameters.iter().map(|p| nan(p.crb_sigma)).collect();
-    d.set_item("crb_sigma", crb.into_pyarray(py))?;
+    // The keys are the summary's per-parameter keys (aeroident_io::parameter).
+    let column = |f: fn(&ParameterResult) -> Option<f64>| -> Vec<f64> {
+        s.parameters.iter().map(|p| nan(f(p))).collect()
+    };
+    d.set_item("estimate", column(|p| p.estimate).into_pyarray(py))?;
+    d.set_item("std_error", column(|p| p.std_error).into_pyarray(py))?;
+    d.set_item("crb_std_error", column(|p| p.crb_std_error).into_pyarray(py))?;
+    d.set_item("reference", column(|p| p.reference).into_pyarray(py))?;
+    d.set_item("status", s.parameters.iter().map(|p| p.status.clone()).collect::<Vec<_>>())?;
+    d.set_item("flags", s.parameters.iter().map(|p| p.flags.clone()).collect::<Vec<_>>())?;
     let corr: Vec<f64> = match &outcome.frequency {
         Some(fd) => correlation_of(&fd.covariance, np),
         None => (0..np).flat_map(|i| (0..np).map(move |j| r.correlation[i * n + j])).collect(),

@@ -140,8 +140,8 @@ impl Estimator {
         }
     }
 
-    /// The current estimates: dict with `names`, `values` (None = not identified), `sigma`
-    /// (None = none reported) and `status`.
+    /// The current estimates: dict with `names`, `estimate` (None = not identified),
+    /// `std_error` (None = none reported) and `estimator_status` (the keys of `summary.json`).
     fn estimates<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let (names, values, sigma, status) = {
             let st = self.state()?;
@@ -154,9 +154,9 @@ impl Estimator {
         };
         let d = PyDict::new(py);
         d.set_item("names", names)?;
-        d.set_item("values", values)?;
-        d.set_item("sigma", sigma)?;
-        d.set_item("status", status)?;
+        d.set_item("estimate", values)?;
+        d.set_item("std_error", sigma)?;
+        d.set_item("estimator_status", status)?;
         Ok(d)
     }
 

@@ -268,7 +268,7 @@ impl ReplayObserver for Interruptible<'_> {
     }
 }
 
-/// The result dict of a replay: names, t_s, estimates and sigma (time × parameter).
+/// The result dict of a replay: names, t_s, estimates and std_error (time × parameter).
 fn arrays_dict<'py>(py: Python<'py>, a: EstimateArrays) -> PyResult<Bound<'py, PyDict>> {
     let n = a.names.len();
     let k = a.t_s.len();
@@ -279,7 +279,7 @@ fn arrays_dict<'py>(py: Python<'py>, a: EstimateArrays) -> PyResult<Bound<'py, P
     d.set_item("names", a.names.iter().map(|s| s.to_string()).collect::<Vec<_>>())?;
     d.set_item("t_s", a.t_s.into_pyarray(py))?;
     d.set_item("estimates", shape(a.values)?.into_pyarray(py))?;
-    d.set_item("sigma", shape(a.sigmas)?.into_pyarray(py))?;
+    d.set_item("std_error", shape(a.sigmas)?.into_pyarray(py))?;
     Ok(d)
 }
 

@@ -35,15 +35,15 @@ def test_fit_equals_cli(tmp_path, estimator):
     assert without_wall_time(py["summary"]) == without_wall_time(expected)
     params = expected["parameters"]
     assert py["names"] == [p["name"] for p in params]
-    np.testing.assert_array_equal(py["values"], [p["estimate"] for p in params])
-    np.testing.assert_array_equal(py["sigma"], [p["std_error"] for p in params])
-    np.testing.assert_array_equal(py["crb_sigma"], [p["crb_sigma"] for p in params])
+    np.testing.assert_array_equal(py["estimate"], [p["estimate"] for p in params])
+    np.testing.assert_array_equal(py["std_error"], [p["std_error"] for p in params])
+    np.testing.assert_array_equal(py["crb_std_error"], [p["crb_std_error"] for p in params])
 
 
 def test_fit_reproduces_the_published_hfb320_output_error_result():
     py = aeroident.fit(shared(HFB), HFB_MAP, "oe", model=BOOK_MODEL)
     for name, published in PUBLISHED.items():
-        est = py["values"][py["names"].index(name)]
+        est = py["estimate"][py["names"].index(name)]
         assert abs(est / published - 1.0) < 0.01, (name, est, published)
 
 
@@ -71,7 +71,7 @@ def test_fit_arrays_agree_with_each_other():
         assert tr["t_s"].shape == tr["measured"].shape == tr["simulated"].shape == (e.shape[0],)
         np.testing.assert_allclose(tr["measured"] - tr["simulated"], e[:, j], rtol=0, atol=1e-12)
     # The coloured-residual σ is reported and exceeds the Cramér–Rao σ on this record.
-    assert np.all(py["sigma"] > py["crb_sigma"])
+    assert np.all(py["std_error"] > py["crb_std_error"])
 
 
 def test_fit_with_the_initial_state_estimated():
@@ -114,7 +114,7 @@ def test_fit_options_go_through_one_parser():
     data = shared(HFB)
     plain = aeroident.fit(data, HFB_MAP, "oe", model=BOOK_MODEL)
     robust = aeroident.fit(data, HFB_MAP, "oe", model=BOOK_MODEL, robust=True)
-    assert not np.array_equal(plain["values"], robust["values"])
+    assert not np.array_equal(plain["estimate"], robust["estimate"])
     with pytest.raises(aeroident.AeroidentError, match=r"unknown keyword argument `forgetting` \(it takes `initial_states`, `bootstrap`, `max_iterations`, `robust`\)"):
         aeroident.fit(data, HFB_MAP, "oe", forgetting=0.9)
     with pytest.raises(aeroident.AeroidentError, match="filter-error method"):
@@ -133,7 +133,7 @@ def test_fit_past_the_iteration_limit_is_the_last_iterate(tmp_path):
     assert without_wall_time(py["summary"]) == without_wall_time(expected)
     assert py["summary"]["status"] == "not_converged"
     assert "iteration limit" in py["summary"]["status_reason"]
-    assert np.all(np.isfinite(py["values"]))
+    assert np.all(np.isfinite(py["estimate"]))
 
 
 def test_fit_bootstrap_sigma():
@@ -143,9 +143,9 @@ def test_fit_bootstrap_sigma():
     assert plain["summary"]["bootstrap"] is None
     assert b["refits"] == 10 and b["failed"] == 0
     # The bootstrap changes the σ, not the estimates; the reported σ is the bootstrap's.
-    np.testing.assert_array_equal(boot["values"], plain["values"])
-    np.testing.assert_array_equal(boot["sigma"], [p["bootstrap_sigma"] for p in boot["summary"]["parameters"]])
-    assert np.all(boot["sigma"] > 0.5 * boot["crb_sigma"])
+    np.testing.assert_array_equal(boot["estimate"], plain["estimate"])
+    np.testing.assert_array_equal(boot["std_error"], [p["bootstrap_std_error"] for p in boot["summary"]["parameters"]])
+    assert np.all(boot["std_error"] > 0.5 * boot["crb_std_error"])
     with pytest.raises(aeroident.AeroidentError, match="bootstrap"):
         aeroident.fit(shared(HFB), HFB_MAP, "fem", model=BOOK_MODEL, bootstrap=10)
     with pytest.raises(aeroident.AeroidentError, match="at least 2"):
@@ -176,7 +176,7 @@ def test_fit_of_two_records_equals_the_joined_record():
     together = aeroident.fit(rel("fAttasAil1"), mapping, "oe", also=[rel("fAttasRud1")])
     joined = aeroident.fit(rel("fAttasAilRud1"), mapping, "oe")
     assert together["summary"]["manoeuvres"] == 2
-    np.testing.assert_array_equal(together["values"], joined["values"])
+    np.testing.assert_array_equal(together["estimate"], joined["estimate"])
 
 
 C172 = "jsbsim_samples/c172x_elevator_3211_15s_60Hz.csv"
@@ -233,9 +233,9 @@ def test_fdoe_fit_equals_cli_on_the_twin_otter(tmp_path, band):
     assert py["names"] == [p["name"] for p in params]
     # fdoe leaves the parameters its linear model cannot see `null`: NaN in the arrays.
     assert any(p["estimate"] is None for p in params) and any(p["estimate"] is not None for p in params)
-    np.testing.assert_array_equal(py["values"], null_as_nan(p["estimate"] for p in params))
-    np.testing.assert_array_equal(py["sigma"], null_as_nan(p["std_error"] for p in params))
-    np.testing.assert_array_equal(py["crb_sigma"], null_as_nan(p["crb_sigma"] for p in params))
+    np.testing.assert_array_equal(py["estimate"], null_as_nan(p["estimate"] for p in params))
+    np.testing.assert_array_equal(py["std_error"], null_as_nan(p["std_error"] for p in params))
+    np.testing.assert_array_equal(py["crb_std_error"], null_as_nan(p["crb_std_error"] for p in params))
     # The correlation of the estimated parameters, from the same covariance as their σ.
     est = [i for i, p in enumerate(params) if p["estimate"] is not None]
     rho = py["correlation"][np.ix_(est, est)]

@@ -79,7 +79,7 @@ def test_estimator_updated_from_a_thread_pool_equals_one_thread():
         assert pool.submit(lambda: shared_est.samples).result() == 300
         from_thread = pool.submit(shared_est.estimates).result()
     assert from_thread == alone.estimates()
-    assert from_thread["values"][from_thread["names"].index("Cm_alpha")] == pytest.approx(-0.6, rel=1e-6)
+    assert from_thread["estimate"][from_thread["names"].index("Cm_alpha")] == pytest.approx(-0.6, rel=1e-6)
 
 
 def test_estimator_updated_concurrently_takes_every_sample_whole():

@@ -39,7 +39,7 @@ def test_replay_equals_cli(tmp_path, record, mapping, estimator):
     assert py["estimates"].shape == (len(t), len(names))
     np.testing.assert_array_equal(py["t_s"], t)
     assert_equal_nan(py["estimates"], est)
-    assert_equal_nan(py["sigma"], sig)
+    assert_equal_nan(py["std_error"], sig)
     # The summary is the CLI's summary.json, except the measured throughput.
     expected = json.loads((out / "summary.json").read_text())
     got = dict(py["summary"])
@@ -59,12 +59,12 @@ def test_estimator_objects_equal_vectorised_replay():
     values = []
     for k in range(n):
         est.update({key: float(arrays[key][k]) for key in keys})
-        values.append([np.nan if v is None else v for v in est.estimates()["values"]])
+        values.append([np.nan if v is None else v for v in est.estimates()["estimate"]])
     assert est.samples == n and vec["estimates"].shape == (n, 12)
     np.testing.assert_array_equal(np.array(values), vec["estimates"])
     e = est.estimates()
-    assert e["names"] == vec["names"] and e["status"] == "running"
-    np.testing.assert_array_equal([np.nan if s is None else s for s in e["sigma"]], vec["sigma"][-1])
+    assert e["names"] == vec["names"] and e["estimator_status"] == "running"
+    np.testing.assert_array_equal([np.nan if s is None else s for s in e["std_error"]], vec["std_error"][-1])
 
 
 def synthetic(n: int = 400) -> tuple[dict[str, np.ndarray], dict[str, float]]:
@@ -159,10 +159,10 @@ def test_smpe_finite_time_recovers_known_derivatives_with_sigma_and_takes_its_op
     for k in range(len(arrays["t_s"])):
         est.update({key: v[k] for key, v in arrays.items()})
     e = est.estimates()
-    last = dict(zip(e["names"], e["values"]))
+    last = dict(zip(e["names"], e["estimate"]))
     for name, truth in [("Cm_alpha", -0.6), ("Cm_q", -12.0), ("CL_alpha", 5.0)]:
         assert abs(last[name] - truth) < 1e-6 * max(1.0, abs(truth)), (name, last[name])
-    assert all(s is not None for s in e["sigma"])
+    assert all(s is not None for s in e["std_error"])
     with pytest.raises(aeroident.AeroidentError, match="sliding_gain_per_s"):
         aeroident.SmpeFiniteTime(model="longitudinal", sliding_gain_per_s=-1.0)
     with pytest.raises(aeroident.AeroidentError, match="reaching_rate_per_s"):
@@ -218,7 +218,7 @@ def test_smpe_finite_time_takes_forgetting_and_it_reaches_the_estimator():
     plain = aeroident.replay(data, mapping=mapping, estimator="smpe-finite-time")
     forgot = aeroident.replay(data, mapping=mapping, estimator="smpe-finite-time", forgetting=0.99)
     np.testing.assert_array_equal(plain["t_s"], forgot["t_s"])
-    same = np.array_equal(plain["estimates"], forgot["estimates"], equal_nan=True) and np.array_equal(plain["sigma"], forgot["sigma"], equal_nan=True)
+    same = np.array_equal(plain["estimates"], forgot["estimates"], equal_nan=True) and np.array_equal(plain["std_error"], forgot["std_error"], equal_nan=True)
     assert not same, "forgetting=0.99 did not reach the estimator"
     with pytest.raises(aeroident.AeroidentError, match=r"estimator `ekf`: unknown keyword argument `forgetting`"):
         aeroident.replay(data, mapping=mapping, estimator="ekf", forgetting=0.9)

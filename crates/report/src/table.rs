@@ -66,14 +66,14 @@ fn table_with(header: &[&str], numeric_to: usize) -> Table {
 /// The parameter table and (if any) the fit-quality table of `r`, with the title above and
 /// the notes below, as text for the console.
 pub fn render(r: &Results) -> String {
-    let crb = r.has_crb_sigma();
+    let crb = r.has_crb_std_error();
     let mut header = vec!["parameter", "estimate ± σ"];
     header.extend(crb.then_some("Cramér–Rao σ"));
     header.extend([r.reference_label.as_str(), "error %", "status"]);
     let mut t = table_with(&header, header.len() - 1);
     for row in &r.rows {
-        let mut cells = vec![row.name.clone(), fmt_estimate(row.estimate, row.sigma)];
-        cells.extend(crb.then(|| fmt_sig(row.crb_sigma, 2)));
+        let mut cells = vec![row.name.clone(), fmt_estimate(row.estimate, row.std_error)];
+        cells.extend(crb.then(|| fmt_sig(row.crb_std_error, 2)));
         cells.extend([
             fmt_sig(row.reference, 4),
             fmt_error_pct(row.error_pct()),
@@ -114,7 +114,7 @@ mod tests {
         assert_eq!(fmt_error_pct(Some(33.333)), "+33.3");
         assert_eq!(fmt_error_pct(None), "—");
     }
-    use aeroident_pipelines::results::{FitQuality, ParameterRow};
+    use aeroident_pipelines::results::{FitQuality, ParameterResult};
 
     #[test]
     fn numbers_have_no_negative_zero_and_sensible_precision() {
@@ -135,8 +135,8 @@ mod tests {
     /// and the column appears only when a row has one.
     #[test]
     fn the_status_follows_the_reported_sigma_and_the_bound_stands_beside_it() {
-        let row = ParameterRow::new("Cm_alpha", Some(-1.1), Some(0.1), Some(-1.0), None)
-            .with_crb_sigma(0.01);
+        let row = ParameterResult::new("Cm_alpha", Some(-1.1), Some(0.1), Some(-1.0), None)
+            .with_crb_std_error(Some(0.01));
         assert_eq!(row.status, "ok");
         let r = Results {
             title: "rec — oe".into(),
@@ -152,7 +152,7 @@ mod tests {
             assert!(a.contains(want), "{want} in {a}");
         }
         let plain = Results {
-            rows: vec![ParameterRow::new("Cm_alpha", Some(-1.1), Some(0.1), None, None)],
+            rows: vec![ParameterResult::new("Cm_alpha", Some(-1.1), Some(0.1), None, None)],
             ..r
         };
         assert!(!render(&plain).contains("Cramér–Rao σ"));
@@ -165,8 +165,8 @@ mod tests {
             title: "rec — rls — longitudinal".into(),
             reference_label: "reference".into(),
             rows: vec![
-                ParameterRow::new("Cm_alpha", Some(-1.1), Some(0.01), Some(-1.0), None),
-                ParameterRow::new("Cm_q", None, None, None, None),
+                ParameterResult::new("Cm_alpha", Some(-1.1), Some(0.01), Some(-1.0), None),
+                ParameterResult::new("Cm_q", None, None, None, None),
             ],
             fit: vec![FitQuality {
                 coefficient: "Cm".into(),

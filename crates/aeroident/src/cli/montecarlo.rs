@@ -112,9 +112,9 @@ fn statistics_row(e: &EstimatorStats, p: &ParamStats) -> Vec<String> {
         fmt_sig(p.bias, 2),
         p.bias_percent_of_truth().map_or("—".into(), |x| format!("{x:+.1}")),
         fmt_sig(p.scatter, 2),
-        fmt_sig(p.mean_sigma, 2),
-        fmt_sig(p.crb_sigma, 2),
-        fmt_sig(p.crb_sigma_calm, 2),
+        fmt_sig(p.mean_std_error, 2),
+        fmt_sig(p.crb_std_error, 2),
+        fmt_sig(p.crb_std_error_calm, 2),
         p.coverage_2sigma.map_or("—".into(), |x| format!("{:.0} %", 100.0 * x)),
         p.scatter_over_crb().map_or("—".into(), |x| format!("{x:.1}")),
         if e.is_batch() {
@@ -181,7 +181,7 @@ fn write_histograms(c: &Campaign, e: &EstimatorStats, od: &mut OutputDir) -> any
             x_label: p.name.clone(),
             values: c.final_estimates(&e.name, &p.name),
             bins: 20,
-            line: p.truth,
+            line: p.reference,
             line_label: "truth".into(),
         })
         .collect();

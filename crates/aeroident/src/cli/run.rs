@@ -279,7 +279,7 @@ fn evidence_rows(v: &Variant, sm: &Summary) -> String {
             v.setting,
             v.value,
             p.estimator,
-            p.r#final.map_or("null".into(), |x| format!("{x:.4e}")),
+            p.estimate.map_or("null".into(), |x| format!("{x:.4e}")),
             p.rel_error.map_or("—".into(), |e| format!("{:.1} %", 100.0 * e)),
             p.first_within_s.map_or("never".into(), |t| format!("{t:.2} s")),
             p.convergence_time_s.map_or("never".into(), |t| format!("{t:.2} s")),

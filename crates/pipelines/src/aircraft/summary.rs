@@ -13,6 +13,8 @@
 //! "Stays within" is the strict settling definition of [`crate::metrics`]: a later excursion
 //! out of the band moves the time to after it.
 
+use aeroident_io::parameter::STATUS_OK;
+use aeroident_io::{ParameterResult, StdErrorSource};
 use serde::Serialize;
 
 use super::experiment::{ChannelLog, ParamLog, Quantity, RunOutput};
@@ -37,28 +39,28 @@ pub const PRIMARY_DERIVATIVES: [&str; 11] = [
 pub struct ParamSummary {
     /// Estimator label.
     pub estimator: String,
-    /// Vocabulary name, e.g. `Cm_alpha`.
-    pub name: String,
+    /// The common keys ([`ParameterResult`]): `name` (vocabulary name, e.g. `Cm_alpha`),
+    /// `estimate` (the final one; `null` if never identified or the estimator diverged),
+    /// `std_error` (the final σ where the method gives one) and its source, `crb_std_error`
+    /// (a batch fit's Cramér–Rao σ), `reference` (the true value at the end of the run; after
+    /// a step, the new value; `null` if none exists), `status` ([`ParamSummary::judge`]) and
+    /// `flags`.
+    #[serde(flatten)]
+    pub result: ParameterResult,
     /// `increment` (two-aircraft estimators: ΔC over the F-16) or `derivative` (the reference
     /// aircraft's total local derivative).
     pub quantity: &'static str,
     /// Whether it is one of [`PRIMARY_DERIVATIVES`] (derivatives only).
     pub primary: bool,
-    /// True value at the end of the run (after a step, the new value); `null` if none exists.
-    pub truth: Option<f64>,
     /// True value before the damage.
     pub truth_before: Option<f64>,
     /// True value after the damage (= `truth_before` without damage).
     pub truth_after: Option<f64>,
     /// Time the truth of this entry changes, s (`null`: constant).
     pub step_at_s: Option<f64>,
-    /// Final estimate; `null` if never identified or the estimator diverged.
-    pub r#final: Option<f64>,
-    /// Final standard error where the method gives one.
-    pub sigma: Option<f64>,
-    /// `(final − truth)/|truth|`.
+    /// `(estimate − reference)/|reference|`.
     pub rel_error: Option<f64>,
-    /// Whether `|final − truth| ≤ 2σ` at the end (`null` without σ).
+    /// Whether `|estimate − reference| ≤ 2σ` at the end (`null` without σ).
     pub covers_truth_2sigma: Option<bool>,
     /// First time after which the estimate stays within ±5 % of the truth (before the entry's
     /// step), s; `null` if it never settles.
@@ -83,14 +85,22 @@ pub struct ParamSummary {
     pub meets_targets: Option<bool>,
     /// Estimator failure (time and message), if any; estimates were held from then on.
     pub failure: Option<String>,
-    /// Sample-driven estimators: the final status (`initialising`, `running`, `diverged`;
-    /// batch: `converged`, `converged_in_cost`, `not_converged` (the last iterate) or
-    /// `failed`).
-    pub status: Option<&'static str>,
+    /// Sample-driven estimators: the estimator's final status (`initialising`, `running`,
+    /// `diverged`; batch: `converged`, `converged_in_cost`, `not_converged` (the last iterate)
+    /// or `failed`). Schema 1 called it `status`.
+    pub estimator_status: Option<&'static str>,
     /// Whether the estimator is a batch (post-flight) fit ([`super::batch`]): its estimate
     /// exists only at the end, so every time metric (`convergence_time_s`, `time_to_10pct_s`,
     /// …) and `meets_targets` are `null`, not "never converged".
     pub batch: bool,
+}
+
+impl std::ops::Deref for ParamSummary {
+    type Target = ParameterResult;
+
+    fn deref(&self) -> &ParameterResult {
+        &self.result
+    }
 }
 
 /// How many primary derivatives of one estimator meet the issue-8 targets.
@@ -109,6 +119,8 @@ pub struct TargetSummary {
 /// `summary.json`.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct Summary {
+    /// The key set's version, [`aeroident_io::SCHEMA_VERSION`].
+    pub schema_version: u32,
     /// Scenario name.
     pub scenario: String,
     /// Estimator labels joined with `+`.
@@ -200,7 +212,12 @@ fn settle(
     .map(|s| s - t0))
 }
 
-fn entry(out: &RunOutput, ch: &ChannelLog, l: &ParamLog) -> Result<ParamSummary, MetricsError> {
+fn entry(
+    out: &RunOutput,
+    ch: &ChannelLog,
+    index: usize,
+    l: &ParamLog,
+) -> Result<ParamSummary, MetricsError> {
     let sc = &out.scenario;
     let t = &out.t_s;
     let n = t.len();
@@ -273,17 +290,17 @@ fn entry(out: &RunOutput, ch: &ChannelLog, l: &ParamLog) -> Result<ParamSummary,
         }
         None => before,
     };
-    Ok(ParamSummary {
+    let result = ParameterResult::new(l.param.name(), fin, sig, tru, None)
+        .with_source(std_error_source(ch))
+        .with_crb_std_error(crb_std_error(ch, index));
+    let mut entry = ParamSummary {
         estimator: ch.label.clone(),
-        name: l.param.name().into(),
+        result,
         quantity: ch.quantity.name(),
         primary,
-        truth: tru,
         truth_before: before,
         truth_after: after,
         step_at_s: step,
-        r#final: fin,
-        sigma: sig,
         rel_error: fin.zip(tru).map(|(f, tr)| metrics::rel_error(f, tr)),
         covers_truth_2sigma: covers,
         convergence_time_s: conv,
@@ -295,9 +312,59 @@ fn entry(out: &RunOutput, ch: &ChannelLog, l: &ParamLog) -> Result<ParamSummary,
         reconvergence_10pct_s: r10,
         meets_targets: meets,
         failure: ch.failure.as_ref().map(|(t, m)| format!("t = {t:.2} s: {m}")),
-        status: ch.status,
+        estimator_status: ch.status,
         batch: ch.is_batch(),
-    })
+    };
+    entry.judge();
+    Ok(entry)
+}
+
+/// Which σ the estimator of `ch` reports: a batch fit's bootstrap, coloured-residual or
+/// Cramér–Rao σ ([`super::batch::BatchFit`]), else the recursive estimator's covariance.
+fn std_error_source(ch: &ChannelLog) -> StdErrorSource {
+    match &ch.batch {
+        Some(b) if b.bootstrap_failed.is_some() => StdErrorSource::Bootstrap,
+        Some(b) if b.coloured_sigma => StdErrorSource::Coloured,
+        Some(_) => StdErrorSource::CramerRao,
+        None => StdErrorSource::Covariance,
+    }
+}
+
+/// A batch fit's Cramér–Rao σ of structure parameter `index` (its `cramer_rao` candidate),
+/// else `None`.
+fn crb_std_error(ch: &ChannelLog, index: usize) -> Option<f64> {
+    let b = ch.batch.as_ref()?;
+    let (_, crb) = b.sigma_candidates.iter().find(|(k, _)| k == "cramer_rao")?;
+    crb.get(index).copied()
+}
+
+impl ParamSummary {
+    /// Sets the status, first rule that applies: `failed` (the estimator failed) or
+    /// `diverged`; `not identified` without an estimate; `outside ±2σ` when the truth lies
+    /// further than 2σ from the estimate; `targets missed` (a primary derivative of a real-time
+    /// estimator missing a target of [`TARGET_TOL_REL`] within [`TARGET_WINDOW_S`]); without
+    /// a σ, `not within 5 %` when the final estimate is further than 5 % from the truth; else
+    /// `ok`. The flags say which target or failure.
+    pub fn judge(&mut self) {
+        let failure = self
+            .failure
+            .as_deref()
+            .map(|_| "failed")
+            .or(self.estimator_status.filter(|s| *s == "diverged"));
+        let r = &mut self.result;
+        r.judge(failure);
+        if r.status == STATUS_OK && self.meets_targets == Some(false) {
+            r.status = "targets missed".into();
+        }
+        // Without a σ the status says how close the final value is (the overview's 5 %).
+        if r.status == STATUS_OK
+            && r.std_error.is_none()
+            && r.error_pct().is_some_and(|e| e.abs() > 100.0 * CONVERGENCE_TOL_REL)
+        {
+            r.status = "not within 5 %".into();
+        }
+        r.flags.extend(self.failure.clone());
+    }
 }
 
 /// Computes the summary of a run.
@@ -310,8 +377,8 @@ pub fn summarize(out: &RunOutput) -> Result<Summary, MetricsError> {
     let mut targets = Vec::new();
     for ch in &out.channels {
         let first = parameters.len();
-        for l in &ch.params {
-            parameters.push(entry(out, ch, l)?);
+        for (index, l) in ch.params.iter().enumerate() {
+            parameters.push(entry(out, ch, index, l)?);
         }
         if ch.quantity == Quantity::Derivative && !ch.is_batch() {
             let mine: Vec<&ParamSummary> =
@@ -340,6 +407,7 @@ pub fn summarize(out: &RunOutput) -> Result<Summary, MetricsError> {
     };
     let has_sample = out.channels.iter().any(|c| c.quantity == Quantity::Derivative);
     Ok(Summary {
+        schema_version: aeroident_io::SCHEMA_VERSION,
         scenario: sc.name.clone(),
         estimator: out.channels.iter().map(|c| c.label.as_str()).collect::<Vec<_>>().join("+"),
         solver: format!("rk4, dt = {} s", sc.dt_s),

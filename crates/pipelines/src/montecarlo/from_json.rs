@@ -4,6 +4,7 @@
 use serde_json::Value;
 
 use super::{EstimatorRun, ParamRun, RunResult};
+use aeroident_io::ParameterResult;
 
 /// The inverse of `serde_json::to_value(&RunResult)`: floats are carried exactly; `restarts`,
 /// `sigma_candidates`, `bootstrap_failed` and `bootstrap_bias` may be absent (results of older
@@ -65,14 +66,28 @@ fn estimator_run(e: &Value) -> Result<EstimatorRun, String> {
 }
 
 fn param_run(p: &Value) -> Result<ParamRun, String> {
-    Ok(ParamRun {
+    let result = ParameterResult {
         name: string(p, "name")?,
+        estimate: opt_f64(p, "estimate")?,
+        std_error: opt_f64(p, "std_error")?,
+        std_error_source: match field(p, "std_error_source")? {
+            Value::Null => None,
+            x => Some(
+                serde_json::from_value(x.clone())
+                    .map_err(|e| format!("per-run result: `std_error_source`: {e}"))?,
+            ),
+        },
+        crb_std_error: opt_f64(p, "crb_std_error")?,
+        reference: opt_f64(p, "reference")?,
+        status: string(p, "status")?,
+        flags: serde_json::from_value(field(p, "flags")?.clone())
+            .map_err(|e| format!("per-run result: `flags`: {e}"))?,
+    };
+    Ok(ParamRun {
+        result,
         primary: field(p, "primary")?.as_bool().unwrap_or(false),
-        truth: opt_f64(p, "truth")?,
         truth_before: opt_f64(p, "truth_before")?,
         truth_after: opt_f64(p, "truth_after")?,
-        r#final: opt_f64(p, "final")?,
-        sigma: opt_f64(p, "sigma")?,
         time_to_10pct_s: opt_f64(p, "time_to_10pct_s")?,
         reconvergence_10pct_s: opt_f64(p, "reconvergence_10pct_s")?,
     })

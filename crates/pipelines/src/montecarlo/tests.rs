@@ -1,4 +1,5 @@
 use super::*;
+use aeroident_io::ParameterResult;
 
 fn prun(
     name: &str,
@@ -8,13 +9,10 @@ fn prun(
     t10: Option<f64>,
 ) -> ParamRun {
     ParamRun {
-        name: name.into(),
+        result: ParameterResult::new(name, fin, sigma, Some(truth), None),
         primary: true,
-        truth: Some(truth),
         truth_before: Some(truth),
         truth_after: Some(truth),
-        r#final: fin,
-        sigma,
         time_to_10pct_s: t10,
         reconvergence_10pct_s: None,
     }
@@ -71,10 +69,10 @@ fn statistics_by_hand() {
     let p = &e.parameters[0];
     assert!((p.bias.unwrap() - 0.05).abs() < 1e-12);
     assert!((p.scatter.unwrap() - (0.35f64 / 3.0).sqrt()).abs() < 1e-12);
-    assert!((p.mean_sigma.unwrap() - 0.125).abs() < 1e-12);
+    assert!((p.mean_std_error.unwrap() - 0.125).abs() < 1e-12);
     assert_eq!(p.coverage_2sigma, Some(0.5));
-    assert_eq!(p.crb_sigma, Some(0.07));
-    assert_eq!(p.crb_sigma_calm, Some(0.03));
+    assert_eq!(p.crb_std_error, Some(0.07));
+    assert_eq!(p.crb_std_error_calm, Some(0.03));
     assert_eq!(p.median_time_to_10pct_s, Some(2.5));
     assert_eq!(p.n_estimates, 4);
     assert!(e.restarted_runs.is_empty());
@@ -112,8 +110,8 @@ fn statistics_nulls() {
     let st = statistics(&runs, &["rls".into()], &CrbTable::default());
     let p = &st[0].parameters[0];
     assert_eq!(p.coverage_2sigma, None);
-    assert_eq!(p.mean_sigma, None);
-    assert_eq!(p.crb_sigma, None);
+    assert_eq!(p.mean_std_error, None);
+    assert_eq!(p.crb_std_error, None);
     assert_eq!(p.median_time_to_10pct_s, None);
     let runs =
         vec![result(0, Some(-1.0), Some(0.1), None, None), result(1, None, None, None, None)];
@@ -183,7 +181,7 @@ fn runs_identical_across_thread_counts() {
     let b = pool(2).install(|| run_range(&sc, 11, 0..3)).unwrap();
     assert_eq!(a, b);
     let fin = |r: &RunResult| -> Vec<Option<u64>> {
-        r.outcome.as_ref().unwrap()[0].params.iter().map(|p| p.r#final.map(f64::to_bits)).collect()
+        r.outcome.as_ref().unwrap()[0].params.iter().map(|p| p.estimate.map(f64::to_bits)).collect()
     };
     assert!(fin(&a[0]).iter().any(Option::is_some));
     assert_ne!(fin(&a[0]), fin(&a[1]));
@@ -223,6 +221,7 @@ fn turbulent_and_calm_bounds() {
 fn json_keys_exact() {
     let runs = vec![result(0, Some(-0.9), Some(0.1), Some(1.0), None)];
     let c = Campaign {
+        schema_version: aeroident_io::SCHEMA_VERSION,
         scenario: "x".into(),
         runs: 1,
         runs_requested: 1,
@@ -243,25 +242,29 @@ fn json_keys_exact() {
         k.sort_unstable();
         k
     };
-    assert_eq!(keys(&v), ["estimators", "runs", "runs_requested", "status", "status_reason"]);
+    assert_eq!(
+        keys(&v),
+        ["estimators", "runs", "runs_requested", "schema_version", "status", "status_reason"]
+    );
+    assert_eq!(v["schema_version"], 2);
     assert_eq!((v["status"].as_str(), v["runs_requested"].as_u64()), (Some("complete"), Some(1)));
     let e = &v["estimators"][0];
     assert_eq!(keys(e), ["name", "parameters"]);
     let mut want = vec![
         "name",
-        "truth",
+        "reference",
         "bias",
         "scatter",
-        "mean_sigma",
+        "mean_std_error",
         "coverage_2sigma",
-        "crb_sigma",
-        "crb_sigma_calm",
+        "crb_std_error",
+        "crb_std_error_calm",
         "median_time_to_10pct_s",
     ];
     want.sort_unstable();
     assert_eq!(keys(&e["parameters"][0]), want);
     assert_eq!(v["runs"], 1);
-    assert!(e["parameters"][0]["crb_sigma"].is_null());
+    assert!(e["parameters"][0]["crb_std_error"].is_null());
 }
 
 /// A campaign's run count is checked before any run or allocation: 0 and more than
@@ -310,8 +313,8 @@ fn run_results_round_trip_through_json() {
         e.as_object_mut().unwrap().remove(k);
     }
     assert_eq!(run_result_from_json(&v).unwrap(), result(0, Some(-1.0), None, None, None));
-    v["outcome"]["Ok"][0]["params"][0]["final"] = "x".into();
-    assert_eq!(run_result_from_json(&v).unwrap_err(), "per-run result: `final` is not a number");
+    v["outcome"]["Ok"][0]["params"][0]["estimate"] = "x".into();
+    assert_eq!(run_result_from_json(&v).unwrap_err(), "per-run result: `estimate` is not a number");
 }
 
 /// The campaign's derived views: error % of |truth|, scatter over the CRB, the final estimates
@@ -331,10 +334,11 @@ fn campaign_views() {
     assert!((p.bias_percent_of_truth().unwrap() - 100.0 * -0.1).abs() < 1e-9);
     assert!((p.scatter_over_crb().unwrap() - p.scatter.unwrap() / 0.1).abs() < 1e-12);
     assert_eq!(p.truth_or_zero(), Some(-1.0));
-    let zero = ParamStats { truth: Some(1e-15), ..p.clone() };
+    let zero = ParamStats { reference: Some(1e-15), ..p.clone() };
     assert_eq!((zero.truth_or_zero(), zero.bias_percent_of_truth()), (Some(0.0), None));
     assert!(!estimators[0].is_batch());
     let c = Campaign {
+        schema_version: aeroident_io::SCHEMA_VERSION,
         scenario: "s".into(),
         runs: 4,
         runs_requested: 4,

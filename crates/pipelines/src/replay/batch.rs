@@ -31,7 +31,9 @@ use aeroident_estimators::output_error::{
     OeConfig, OeError, OeResult, StopFlag, Termination, fit, fit_to_end,
 };
 use aeroident_estimators::{AirDataSample, ModelStructure};
-use aeroident_io::{FlightDataReader, Mapping, ModelSpec, Rejection};
+use aeroident_io::{
+    FlightDataReader, Mapping, ModelSpec, ParameterResult, Rejection, StdErrorSource,
+};
 use serde::Serialize;
 use std::io::Read;
 
@@ -95,34 +97,66 @@ pub(super) fn output_traces(
     out
 }
 
-/// One parameter of the batch summary.
+/// One parameter of the batch summary: the common keys ([`ParameterResult`]) and the σ of
+/// each source, in one `summary.json` object.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BatchParameter {
-    /// Name (`Cm_alpha` …).
-    pub name: String,
-    /// Estimate; `null` for a parameter the method does not estimate (`fdoe`: those its
-    /// linear model cannot see, [`aeroident_estimators::output_error::frequency`]).
-    pub estimate: Option<f64>,
-    /// Reported σ (`null` where the estimate is): the bootstrap σ when asked for (`--bootstrap`), else the coloured-residual
-    /// σ where available, else Cramér–Rao. The console table, `report.html` and their ±2σ
-    /// status use it.
-    pub std_error: Option<f64>,
-    /// Which σ `std_error` is: `bootstrap`, `coloured` or `cramer_rao`.
-    pub std_error_source: &'static str,
-    /// Cramér–Rao σ (`sqrt(diag M⁻¹)`), `null` where the estimate is.
-    pub crb_sigma: Option<f64>,
+    /// Name; estimate (`null` for a parameter the method does not estimate — `fdoe`: those
+    /// its linear model cannot see, [`aeroident_estimators::output_error::frequency`]); the
+    /// reported σ (`std_error`: the bootstrap σ when asked for (`--bootstrap`), else the
+    /// coloured-residual σ where available, else Cramér–Rao; the console table, `report.html`
+    /// and their ±2σ status use it) and its source; the Cramér–Rao σ (`sqrt(diag M⁻¹)`,
+    /// `crb_std_error`); the model file's reference; status and flags.
+    #[serde(flatten)]
+    pub result: ParameterResult,
     /// Coloured-residual σ (the spectral form), when the correction is positive.
-    pub coloured_sigma: Option<f64>,
+    pub coloured_std_error: Option<f64>,
     /// Diagnostic: the prewhitened (vector-autoregression) coloured-residual σ
     /// ([`OeResult::sigma_coloured_prewhitened`]), when positive; a large disagreement with
-    /// `coloured_sigma` says the residual spectrum is poorly estimated (docs/uncertainty.md,
+    /// `coloured_std_error` says the residual spectrum is poorly estimated (docs/uncertainty.md,
     /// "Output error: the spectral coloured-residual σ").
-    pub prewhitened_sigma: Option<f64>,
+    pub prewhitened_std_error: Option<f64>,
     /// The parametric bootstrap σ (`--bootstrap N`, `oe`), else `null`.
-    pub bootstrap_sigma: Option<f64>,
+    pub bootstrap_std_error: Option<f64>,
     /// The parametric bootstrap's bias estimate (the refits' mean less `estimate`; its sampling
-    /// error is `bootstrap_sigma/√replicas`), else `null`. Not subtracted from `estimate`.
+    /// error is `bootstrap_std_error/√replicas`), else `null`. Not subtracted from `estimate`.
     pub bootstrap_bias: Option<f64>,
+}
+
+impl std::ops::Deref for BatchParameter {
+    type Target = ParameterResult;
+
+    fn deref(&self) -> &ParameterResult {
+        &self.result
+    }
+}
+
+impl BatchSummary {
+    /// Sets every parameter's reference (the `model` file's), status and flags (the warnings
+    /// about it): `not identified` with the reason for a parameter the method does not
+    /// estimate, `outside ±2σ` when the reference lies further than 2σ from the estimate,
+    /// else `ok`.
+    pub fn judge(&mut self, model: &ModelSpec) {
+        for p in &mut self.parameters {
+            let r = &mut p.result;
+            r.reference = model.references.iter().find(|x| x.param.name() == r.name).map(|x| {
+                if x.value.abs() < crate::metrics::ZERO_THRESHOLD { 0.0 } else { x.value }
+            });
+            r.judge(None);
+            r.flags = self
+                .warnings
+                .iter()
+                .filter(|w| w.parameter.as_deref() == Some(r.name.as_str()))
+                .map(|w| w.text.clone())
+                .collect();
+            if r.estimate.is_none() {
+                r.flags.push(format!(
+                    "not estimated: {} cannot see it from the record's outputs",
+                    self.estimator
+                ));
+            }
+        }
+    }
 }
 
 /// One iteration of the batch summary.
@@ -171,7 +205,9 @@ pub struct FrequencyDomainSummary {
 /// `summary.json` of a batch fit.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BatchSummary {
-    /// `oe`.
+    /// The key set's version, [`aeroident_io::SCHEMA_VERSION`].
+    pub schema_version: u32,
+    /// `oe`, `fem` or `fdoe`.
     pub estimator: String,
     /// The model's name.
     pub model: String,
@@ -198,7 +234,7 @@ pub struct BatchSummary {
     pub fit_wall_s: f64,
     /// Iteration log.
     pub iterations: Vec<BatchIteration>,
-    /// The structure's parameters.
+    /// The structure's parameters ([`BatchParameter`]).
     pub parameters: Vec<BatchParameter>,
     /// Residual RMS per fitted output (`name`, value in the output's unit).
     pub residual_rms: Vec<(String, f64)>,
@@ -1009,20 +1045,28 @@ fn summarise(
         .map(|(i, n)| (n.clone(), result.values[i], reported[i]))
         .collect();
     let parameters = (0..result.n_params)
-        .map(|i| BatchParameter {
-            name: result.names[i].clone(),
-            estimate: Some(result.values[i]),
-            std_error: Some(reported[i]),
-            std_error_source: match (spread, sigmas.coloured[i]) {
-                (Some(_), _) => "bootstrap",
-                (None, Some(_)) => "coloured",
-                (None, None) => "cramer_rao",
-            },
-            crb_sigma: Some(result.sigma[i]),
-            coloured_sigma: sigmas.coloured[i],
-            bootstrap_sigma: spread.map(|b| b.sigma[i]),
-            bootstrap_bias: spread.map(|b| b.bias[i]),
-            prewhitened_sigma: result.sigma_coloured_prewhitened.as_ref().map(|c| c[i]),
+        .map(|i| {
+            let source = match (spread, sigmas.coloured[i]) {
+                (Some(_), _) => StdErrorSource::Bootstrap,
+                (None, Some(_)) => StdErrorSource::Coloured,
+                (None, None) => StdErrorSource::CramerRao,
+            };
+            let name = result.names[i].clone();
+            BatchParameter {
+                result: ParameterResult::new(
+                    name,
+                    Some(result.values[i]),
+                    Some(reported[i]),
+                    None,
+                    None,
+                )
+                .with_source(source)
+                .with_crb_std_error(Some(result.sigma[i])),
+                coloured_std_error: sigmas.coloured[i],
+                bootstrap_std_error: spread.map(|b| b.sigma[i]),
+                bootstrap_bias: spread.map(|b| b.bias[i]),
+                prewhitened_std_error: result.sigma_coloured_prewhitened.as_ref().map(|c| c[i]),
+            }
         })
         .collect();
     let np = result.n_params;
@@ -1037,6 +1081,7 @@ fn summarise(
     let identifiability = diagnostics::identifiability(&st, &cov, &recorder, &values);
     let warnings = fit_warnings(result, sigmas, &identifiability, &values);
     BatchSummary {
+        schema_version: aeroident_io::SCHEMA_VERSION,
         estimator: if fitted.fem.is_some() { "fem" } else { "oe" }.into(),
         model: model.name.clone(),
         alpha_knots_rad: model.structure.knots().as_slice().to_vec(),

@@ -25,6 +25,7 @@
 use super::batch::BatchSummary;
 use crate::estimators::EstimatorKind;
 use aeroident_io::replay_output::ReplaySummary;
+use aeroident_io::warning::{Warning, WarningKind};
 use serde::Serialize;
 
 /// A parameter is flagged when the two estimates differ by more than this many combined σ.
@@ -147,20 +148,21 @@ fn likely_cause(
     }
 }
 
-/// The summary warnings of `check`: one per flagged parameter, and one when nothing could be
-/// compared.
-pub fn warnings(check: &CrossCheck) -> Vec<String> {
+/// The summary warnings of `check` ([`WarningKind::CrossCheck`]): one per flagged parameter
+/// (about it), and one when nothing could be compared.
+pub fn warnings(check: &CrossCheck) -> Vec<Warning> {
     if check.compared == 0 {
-        return vec![format!(
+        let text = format!(
             "cross-check: no parameter has an estimate and a σ from both this estimator and {}",
             check.batch_estimator
-        )];
+        );
+        return vec![Warning::new(WarningKind::CrossCheck, text)];
     }
     check
         .flagged
         .iter()
         .map(|d| {
-            format!(
+            let text = format!(
                 "cross-check: {} = {:.4} ± {:.2e} differs from {} {:.4} ± {:.2e} by {:.1} combined σ; likely cause: {}",
                 d.parameter,
                 d.estimate,
@@ -170,7 +172,8 @@ pub fn warnings(check: &CrossCheck) -> Vec<String> {
                 d.batch_std_error,
                 d.combined_sigmas,
                 d.likely_cause
-            )
+            );
+            Warning::new(WarningKind::CrossCheck, text).about(&d.parameter)
         })
         .collect()
 }

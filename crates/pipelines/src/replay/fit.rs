@@ -52,10 +52,14 @@ pub fn fit_records<R: Read>(
     let file = readers.iter().map(|r| r.file()).collect::<Vec<_>>().join(", ");
     let rec =
         read_records(readers, options.spike_screen, options.compat.as_ref(), &options.windows)?;
-    if let BatchMethod::Fdoe { band_hz } = options.method {
-        return super::frequency::fit_fdoe(rec, &file, mapping, model, band_hz, &options);
-    }
-    super::batch::fit_time_domain(rec, &file, mapping, model, &options)
+    let mut out = match options.method {
+        BatchMethod::Fdoe { band_hz } => {
+            super::frequency::fit_fdoe(rec, &file, mapping, model, band_hz, &options)?
+        }
+        _ => super::batch::fit_time_domain(rec, &file, mapping, model, &options)?,
+    };
+    out.summary.judge(&out.model);
+    Ok(out)
 }
 
 /// The options a batch fit of a recorded flight takes, as key/value pairs (the CLI's flags,

@@ -22,7 +22,7 @@ use aeroident_estimators::AirDataSample;
 use aeroident_estimators::flight_model::STATE_NAMES;
 use aeroident_estimators::output_error::OeResult;
 use aeroident_estimators::output_error::frequency::{FdoeConfig, FdoeResult, fit};
-use aeroident_io::{Mapping, ModelSpec};
+use aeroident_io::{Mapping, ModelSpec, ParameterResult, StdErrorSource};
 
 /// Fits the record `rec` (read and split by the caller) by frequency-domain output error over
 /// `band_hz` with `model` (else the default preset) and reports it as a batch fit.
@@ -154,14 +154,12 @@ fn summarise(
         (0..np).map(|i| fd.estimated[i].then_some(fd.values[i])).collect();
     let parameters = (0..np)
         .map(|i| BatchParameter {
-            name: fd.names[i].clone(),
-            estimate: values[i],
-            std_error: fd.sigma[i],
-            std_error_source: "cramer_rao",
-            crb_sigma: fd.sigma[i],
-            coloured_sigma: None,
-            prewhitened_sigma: None,
-            bootstrap_sigma: None,
+            result: ParameterResult::new(fd.names[i].clone(), values[i], fd.sigma[i], None, None)
+                .with_source(StdErrorSource::CramerRao)
+                .with_crb_std_error(fd.sigma[i]),
+            coloured_std_error: None,
+            prewhitened_std_error: None,
+            bootstrap_std_error: None,
             bootstrap_bias: None,
         })
         .collect();
@@ -178,6 +176,7 @@ fn summarise(
     let not_estimated: Vec<String> =
         (0..np).filter(|&i| !fd.estimated[i]).map(|i| fd.names[i].clone()).collect();
     BatchSummary {
+        schema_version: aeroident_io::SCHEMA_VERSION,
         estimator: "fdoe".into(),
         model: model.name.clone(),
         alpha_knots_rad: model.structure.knots().as_slice().to_vec(),

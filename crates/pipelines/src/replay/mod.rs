@@ -50,6 +50,7 @@ pub mod kinematics;
 mod online;
 pub mod precision;
 pub mod prediction;
+pub mod verdict;
 
 use crate::condition::Derivative;
 use crate::estimators::{BuildError, EstimatorKind, EstimatorOptions, build};
@@ -686,12 +687,15 @@ pub fn replay_with<R: Read>(
         e => e,
     })?;
     if !out.diverged() {
-        out.summary.warnings.extend(precision::warning(&out.summary.parameters));
+        out.summary
+            .warnings
+            .extend(precision::warning(out.summary.parameters.iter().map(|p| &p.result)));
     }
     if let Some(c) = &opts.compat {
         out.summary.warnings.extend(c.warnings());
     }
     out.summary.warnings.extend(events.notes());
+    verdict::judge(&mut out);
     Ok(out)
 }
 
@@ -722,6 +726,7 @@ pub fn cross_check_record<R: Read>(
             );
             outcome.summary.warnings.extend(cross_check::warnings(&check));
             outcome.cross_check = Some(check);
+            verdict::judge(outcome);
         }
         Err(e) => outcome
             .summary

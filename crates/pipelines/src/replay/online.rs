@@ -20,7 +20,10 @@ use aeroident_io::replay_output::{
     CoefficientSummary, Correlation, EventsSummary, ParameterSummary, ReplaySummary,
 };
 use aeroident_io::warning::{Warning, WarningKind};
-use aeroident_io::{FlightDataError, ModelSpec, RecordEvent, Rejection, RejectionLog};
+use aeroident_io::{
+    FlightDataError, ModelSpec, ParameterResult, RecordEvent, Rejection, RejectionLog,
+    StdErrorSource,
+};
 use std::time::{Duration, Instant};
 
 /// `rls-iv` on differentiated rates: the instruments must lie beyond the differentiator's
@@ -417,7 +420,7 @@ impl<'a> Replay<'a> {
     /// sign and consistency checks, its restarts, the rejections not listed).
     fn summary(&mut self, r: &Running) -> ReplaySummary {
         let status = if self.diverged { Status::Diverged } else { r.est.estimates().status };
-        let parameters = self.parameter_summaries();
+        let parameters = self.parameter_summaries(&r.spec);
         let (coefficients, correlations) = self.conditioning(r);
         let mut warnings = std::mem::take(&mut self.warnings);
         let status = if self.interrupted && !self.diverged {
@@ -451,6 +454,7 @@ impl<'a> Replay<'a> {
         let (rejections, unlisted) = std::mem::take(&mut self.rejections).finish();
         warnings.extend(unlisted);
         ReplaySummary {
+            schema_version: aeroident_io::SCHEMA_VERSION,
             estimator: r.est.method().to_string(),
             model: r.spec.name.clone(),
             alpha_knots_rad: r.spec.structure.knots().as_slice().to_vec(),
@@ -467,8 +471,10 @@ impl<'a> Replay<'a> {
         }
     }
 
-    /// Each parameter's final estimate, σ and settling time (all `null` after a divergence).
-    fn parameter_summaries(&self) -> Vec<ParameterSummary> {
+    /// Each parameter's final estimate, σ (the estimator's covariance), the model file's
+    /// reference and settling time (estimate, σ and settling time `null` after a divergence);
+    /// the statuses are judged once the run is complete ([`super::verdict`]).
+    fn parameter_summaries(&self, spec: &ModelSpec) -> Vec<ParameterSummary> {
         let h = &self.history;
         let last = if self.diverged { None } else { h.values.last() };
         h.names
@@ -479,10 +485,12 @@ impl<'a> Replay<'a> {
                     Some(v) => (v[i], h.sigmas.last().and_then(|s| s[i])),
                     None => (None, None),
                 };
+                let reference =
+                    spec.references.iter().find(|r| r.param.name() == *name).map(|r| r.value);
+                let result = ParameterResult::new(*name, estimate, std_error, reference, None)
+                    .with_source(StdErrorSource::Covariance);
                 ParameterSummary {
-                    name: (*name).to_string(),
-                    estimate,
-                    std_error,
+                    result,
                     settle_time_s: if self.diverged { None } else { settle_time_s(h, i) },
                 }
             })

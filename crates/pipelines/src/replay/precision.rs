@@ -7,7 +7,7 @@
 //! Constant terms (`CY_0`, `Cm_0` …) are left out: their size is the trim's and the axes', not
 //! a property the σ can be weighed against.
 
-use aeroident_io::replay_output::ParameterSummary;
+use aeroident_io::ParameterResult;
 
 /// Relative standard error `σ/|θ|` above which an estimate is flagged as imprecise (10 %: the
 /// accuracy a stability derivative is wanted to in a flight-test report).
@@ -34,9 +34,9 @@ pub fn status(relative: f64) -> String {
 }
 
 /// One summary warning listing every imprecise estimate of `parameters`, or none.
-pub fn warning(parameters: &[ParameterSummary]) -> Option<String> {
+pub fn warning<'a>(parameters: impl IntoIterator<Item = &'a ParameterResult>) -> Option<String> {
     let list: Vec<String> = parameters
-        .iter()
+        .into_iter()
         .filter_map(|p| {
             let r = imprecise(&p.name, p.estimate, p.std_error)?;
             Some(format!(
@@ -59,8 +59,8 @@ pub fn warning(parameters: &[ParameterSummary]) -> Option<String> {
 mod tests {
     use super::*;
 
-    fn p(name: &str, estimate: Option<f64>, std_error: Option<f64>) -> ParameterSummary {
-        ParameterSummary { name: name.into(), estimate, std_error, settle_time_s: None }
+    fn p(name: &str, estimate: Option<f64>, std_error: Option<f64>) -> ParameterResult {
+        ParameterResult::new(name, estimate, std_error, None, None)
     }
 
     /// The rule by hand: −0.37 ± 0.18 is 49 %, −0.43 ± 0.02 is 4.7 %; constant terms, nulls

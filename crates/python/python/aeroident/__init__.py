@@ -112,8 +112,9 @@ class Estimator(_Estimator):
     - ``update(sample)``: one sample, a dict of SI channels (``None``/``NaN`` = absent). Raises
       :class:`AeroidentError` if the estimator refuses it (its state is then unchanged) or
       diverges.
-    - ``estimates()``: dict with ``names``, ``values`` (``None`` = not identified), ``sigma``
-      (``None`` = not reported) and ``status`` (``initialising``, ``running``, ``diverged``).
+    - ``estimates()``: dict with ``names``, ``estimate`` (``None`` = not identified),
+      ``std_error`` (``None`` = not reported) and ``estimator_status`` (``initialising``,
+      ``running``, ``diverged``): the names of ``summary.json`` (docs/output-schema.md).
     - ``covariance(i, j)``, ``nis()``, ``new_manoeuvre()``; properties ``names``, ``method``,
       ``model``, ``samples``.
 
@@ -195,7 +196,7 @@ def replay(
       ``estimates.csv`` (samples the reader or estimator rejected have none);
     - ``estimates``: (k, n) float64; ``NaN`` where the parameter is not yet identified (the
       CLI's empty field, ``None`` elsewhere in this API);
-    - ``sigma``: (k, n) float64 standard errors; ``NaN`` where none is reported;
+    - ``std_error``: (k, n) float64 standard errors; ``NaN`` where none is reported;
     - ``model``: the model's name; for a file also ``summary`` (the CLI's ``summary.json`` as a
       dict) and ``notes`` (what the reader left out, as :func:`read`), for arrays
       ``samples_refused``.
@@ -268,9 +269,9 @@ def fit(
     refit): the parametric bootstrap σ from N replicas of the record
     flown through the fitted model with the process and measurement noise a filter-error fit
     of the same record estimates, each refitted (``--bootstrap N``; docs/uncertainty.md,
-    "Output error: the parametric bootstrap"); it becomes ``sigma`` and ``summary["bootstrap"]``
+    "Output error: the parametric bootstrap"); it becomes ``std_error`` and ``summary["bootstrap"]``
     says how it was made. Each ``summary["parameters"]`` entry then also carries
-    ``bootstrap_bias``, the refits' mean less the estimate (not subtracted from ``values``).
+    ``bootstrap_bias``, the refits' mean less the estimate (not subtracted from ``estimate``).
     ``max_iterations``: most Gauss–Newton iterations (``--max-iterations``; default 50 for
     ``oe``, 250 for ``fem``). ``process_noise`` (``fem``): the states with process noise,
     comma-separated (``"V,alpha,theta,q"``; ``--process-noise``; default ``V,alpha,beta``).
@@ -294,10 +295,13 @@ def fit(
     Returns a dict:
 
     - ``names``: the ``n`` structure parameters (``Cm_alpha`` …);
-    - ``values``: (n,) estimates; ``sigma``: (n,) the reported σ (the bootstrap's when asked
-      for, else coloured-residual where formed, else Cramér–Rao: docs/uncertainty.md); ``crb_sigma``: (n,) the Cramér–Rao σ;
-      ``fdoe``: NaN where the summary has ``null`` (parameters the linear model cannot see:
-      CD, zero-order, V and product terms);
+    - ``estimate``: (n,) estimates; ``std_error``: (n,) the reported σ (the bootstrap's when
+      asked for, else coloured-residual where formed, else Cramér–Rao: docs/uncertainty.md);
+      ``crb_std_error``: (n,) the Cramér–Rao σ; ``reference``: (n,) the model file's
+      published values (NaN without one); ``fdoe``: NaN where the summary has ``null``
+      (parameters the linear model cannot see: CD, zero-order, V and product terms);
+    - ``status``, ``flags``: per parameter the summary's verdict and the warnings about it
+      (docs/output-schema.md);
     - ``correlation``: (n, n) Cramér–Rao correlation of the estimates (``fdoe``: of its
       frequency-domain fit, NaN rows and columns for the parameters not estimated);
     - ``outputs``: the ``m`` fitted outputs; ``residuals``: (N, m) measured − model (``fem``:
@@ -453,9 +457,10 @@ def montecarlo(
 
     ``scenario``: a scenario file, or ``None`` for the built-in default scenario. Returns the
     same dict as ``aeroident montecarlo SCENARIO --runs RUNS --seed SEED --json``: ``runs`` and
-    per estimator its ``parameters`` with ``truth, bias, scatter, mean_sigma, coverage_2sigma,
-    crb_sigma, crb_sigma_calm, median_time_to_10pct_s`` (``None`` where the CLI prints null;
-    ``crb_sigma`` is the bound of the experiment flown, turbulence included).
+    per estimator its ``parameters`` with ``reference, bias, scatter, mean_std_error,
+    coverage_2sigma, crb_std_error, crb_std_error_calm, median_time_to_10pct_s`` (``None`` where
+    the CLI prints null; ``reference`` is the truth at the end; ``crb_std_error`` is the bound of
+    the experiment flown, turbulence included).
     ``per_run=True`` adds ``per_run`` (every run's final results, the CLI's ``runs.json``) and
     ``wall_s``. ``runs`` is at most :data:`MAX_RUNS` (every run's results are kept for the
     statistics; the sampling error of a σ at that many runs is already 0.7 %).

@@ -19,15 +19,15 @@ class AeroidentError(Exception): ...
 
 class EstimatesDict(TypedDict):
     names: list[str]
-    values: list[Optional[float]]
-    sigma: list[Optional[float]]
-    status: Literal["initialising", "running", "diverged"]
+    estimate: list[Optional[float]]
+    std_error: list[Optional[float]]
+    estimator_status: Literal["initialising", "running", "diverged"]
 
 class ReplayResult(TypedDict, total=False):
     names: list[str]
     t_s: npt.NDArray[np.float64]
     estimates: npt.NDArray[np.float64]
-    sigma: npt.NDArray[np.float64]
+    std_error: npt.NDArray[np.float64]
     model: str
     summary: dict[str, Any]
     samples_refused: int
@@ -118,9 +118,12 @@ class FitTrace(TypedDict):
 
 class FitResult(TypedDict):
     names: list[str]
-    values: npt.NDArray[np.float64]
-    sigma: npt.NDArray[np.float64]
-    crb_sigma: npt.NDArray[np.float64]
+    estimate: npt.NDArray[np.float64]
+    std_error: npt.NDArray[np.float64]
+    crb_std_error: npt.NDArray[np.float64]
+    reference: npt.NDArray[np.float64]
+    status: list[str]
+    flags: list[list[str]]
     correlation: npt.NDArray[np.float64]
     outputs: list[str]
     residuals: npt.NDArray[np.float64]

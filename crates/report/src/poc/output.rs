@@ -7,22 +7,21 @@ use crate::report::{Figure, Report, common_settings, write_figure};
 use aeroident_pipelines::metrics::{CONVERGENCE_TOL_REL, convergence_time_s, rel_error};
 use aeroident_pipelines::poc::run::{EstimatorKind, RunOutput, SolverReading};
 use aeroident_pipelines::poc::scenario::PocScenario;
-use aeroident_pipelines::results::{ParameterRow, Results};
+use aeroident_pipelines::results::{ParameterResult, Results};
 use anyhow::Context;
 use serde::Serialize;
 use std::path::Path;
 
-/// Per-parameter entry of `summary.json` (keys fixed by issue 2).
+/// Per-parameter entry of `summary.json`: the common keys ([`ParameterResult`]: `name`,
+/// `estimate` (at the last sample), `reference` (the truth), `status` (`ok` within the
+/// convergence tolerance, ±5 %, else `not within 5 %`), `flags`; no σ: the thesis's
+/// estimators report none) and the thesis's metrics.
 #[derive(Debug, Clone, Serialize)]
 pub struct ParamSummary {
-    /// Parameter name.
-    pub name: String,
-    /// True value.
-    pub truth: f64,
-    /// Estimate at the last sample.
-    #[serde(rename = "final")]
-    pub final_value: f64,
-    /// `(final − truth)/|truth|`.
+    /// The common keys.
+    #[serde(flatten)]
+    pub result: ParameterResult,
+    /// `(estimate − truth)/|truth|`.
     pub rel_error: f64,
     /// First time after which the estimate stays within ±5 % of truth, s; `null` if never.
     pub convergence_time_s: Option<f64>,
@@ -30,9 +29,19 @@ pub struct ParamSummary {
     pub thesis_convergence_time_s: Option<f64>,
 }
 
-/// `summary.json` (keys fixed by issue 2).
+impl std::ops::Deref for ParamSummary {
+    type Target = ParameterResult;
+
+    fn deref(&self) -> &ParameterResult {
+        &self.result
+    }
+}
+
+/// `summary.json`.
 #[derive(Debug, Clone, Serialize)]
 pub struct Summary {
+    /// The key set's version, [`aeroident_io::SCHEMA_VERSION`].
+    pub schema_version: u32,
     /// Scenario name.
     pub scenario: String,
     /// `published` or `corrected`.
@@ -57,16 +66,26 @@ pub fn summarize(sc: &PocScenario, out: &RunOutput) -> anyhow::Result<Summary> {
         let final_value = *est.last().context("empty run")?;
         // Over the simulated record; a run that stopped early says so in its notes.
         let tc = convergence_time_s(&out.t_s, est, truth, CONVERGENCE_TOL_REL)?;
+        let rel = rel_error(final_value, truth);
+        // A NaN error (no truth to compare with) is not within the tolerance either.
+        let within = rel.abs() <= CONVERGENCE_TOL_REL;
+        let failure = format!("not within {:.0} %", 100.0 * CONVERGENCE_TOL_REL);
+        let result = ParameterResult::new(
+            *name,
+            Some(final_value),
+            None,
+            Some(truth),
+            (!within).then_some(failure.as_str()),
+        );
         parameters.push(ParamSummary {
-            name: (*name).to_string(),
-            truth,
-            final_value,
-            rel_error: rel_error(final_value, truth),
+            result,
+            rel_error: rel,
             convergence_time_s: tc,
             thesis_convergence_time_s: sc.parameters[j].thesis_convergence_time_s,
         });
     }
     Ok(Summary {
+        schema_version: aeroident_io::SCHEMA_VERSION,
         scenario: out.scenario.clone(),
         estimator: out.estimator,
         solver: out.solver,
@@ -195,20 +214,7 @@ pub fn write_figures(
 /// The results of a run: the final estimate of each parameter against its truth; status `ok`
 /// within the convergence tolerance (±5 %), else `not within 5 %`.
 pub fn results(summary: &Summary, title: &str) -> Results {
-    let rows = summary
-        .parameters
-        .iter()
-        .map(|p| {
-            let mut row =
-                ParameterRow::new(p.name.clone(), Some(p.final_value), None, Some(p.truth), None);
-            // A NaN error (no truth to compare with) is not within the tolerance either.
-            let within = p.rel_error.abs() <= CONVERGENCE_TOL_REL;
-            if !within {
-                row.status = format!("not within {:.0} %", 100.0 * CONVERGENCE_TOL_REL);
-            }
-            row
-        })
-        .collect();
+    let rows = summary.parameters.iter().map(|p| p.result.clone()).collect();
     let notes = summary
         .parameters
         .iter()

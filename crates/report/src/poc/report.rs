@@ -35,7 +35,7 @@ fn cell(s: &Summary, j: usize) -> String {
     format!(
         "{} / {:.4} ({:+.1} %)",
         fmt_t(p.convergence_time_s),
-        p.final_value,
+        p.estimate.unwrap_or(f64::NAN),
         100.0 * p.rel_error
     )
 }
@@ -122,7 +122,7 @@ pub fn render(results: &[CaseResult], wall_s: f64) -> String {
                     "| {} | {} | {} | {} | {} | {} | {} {} | {} |",
                     if j == 0 { r.scenario.case.thesis_case.to_string() } else { String::new() },
                     p.name,
-                    p.truth,
+                    p.reference.unwrap_or(f64::NAN),
                     fmt_t(p.thesis_convergence_time_s),
                     cell(&r.implicit.0, j),
                     cell(&r.explicit.0, j),

@@ -9,21 +9,19 @@ use super::{Report, common_settings, write_figure};
 use crate::outdir::OutputDir;
 use crate::plot::{HLine, LineKind, Panel, Series};
 use crate::table::fmt_sig;
+use aeroident_io::StdErrorSource;
 use aeroident_pipelines::replay::batch::{BatchOutcome, OutputTrace};
-use aeroident_pipelines::results::{FitQuality, ParameterRow, Results};
+use aeroident_pipelines::results::{FitQuality, Results};
 
 /// What the summary's `std_error` is, in words: one source, or the parameters of each.
 fn sigma_sources(s: &aeroident_pipelines::replay::batch::BatchSummary) -> String {
-    let word = |k: &str| match k {
-        "bootstrap" => "parametric bootstrap",
-        "coloured" => "coloured-residual",
-        _ => "Cramér–Rao",
-    };
-    let mut kinds: Vec<&str> = s.parameters.iter().map(|p| p.std_error_source).collect();
+    let word = |k: Option<StdErrorSource>| k.map_or("none", StdErrorSource::words);
+    let mut kinds: Vec<Option<StdErrorSource>> =
+        s.parameters.iter().map(|p| p.std_error_source).collect();
     kinds.dedup();
     match kinds.as_slice() {
         [] => "none".into(),
-        [k] => word(k).into(),
+        [k] => word(*k).into(),
         _ => s
             .parameters
             .iter()
@@ -38,18 +36,7 @@ fn sigma_sources(s: &aeroident_pipelines::replay::batch::BatchSummary) -> String
 /// one fit-quality row per validated output.
 pub fn results(outcome: &BatchOutcome, title: &str, references: &[Reference]) -> Results {
     let s = &outcome.summary;
-    let rows = s
-        .parameters
-        .iter()
-        .map(|p| {
-            let reference = references.iter().find(|r| r.name == p.name).map(|r| r.value);
-            let row = ParameterRow::new(p.name.clone(), p.estimate, p.std_error, reference, None);
-            match p.crb_sigma {
-                Some(c) => row.with_crb_sigma(c),
-                None => row,
-            }
-        })
-        .collect();
+    let rows = s.parameters.iter().map(|p| p.result.clone()).collect();
     let v = &s.validation;
     let fit = v.outputs.iter().map(FitQuality::from).collect();
     let mut notes = vec![format!(
@@ -60,7 +47,7 @@ pub fn results(outcome: &BatchOutcome, title: &str, references: &[Reference]) ->
     let coloured: Vec<String> = s
         .parameters
         .iter()
-        .filter_map(|p| p.coloured_sigma.map(|c| format!("{} {}", p.name, fmt_sig(Some(c), 2))))
+        .filter_map(|p| p.coloured_std_error.map(|c| format!("{} {}", p.name, fmt_sig(Some(c), 2))))
         .collect();
     if !coloured.is_empty() && s.bootstrap.is_some() {
         notes.push(format!("coloured-residual σ: {}", coloured.join(", ")));
@@ -70,7 +57,7 @@ pub fn results(outcome: &BatchOutcome, title: &str, references: &[Reference]) ->
             .parameters
             .iter()
             .filter_map(|p| {
-                p.bootstrap_sigma.map(|c| format!("{} {}", p.name, fmt_sig(Some(c), 2)))
+                p.bootstrap_std_error.map(|c| format!("{} {}", p.name, fmt_sig(Some(c), 2)))
             })
             .collect();
         notes.push(format!(
@@ -83,7 +70,7 @@ pub fn results(outcome: &BatchOutcome, title: &str, references: &[Reference]) ->
             .parameters
             .iter()
             .filter_map(|p| {
-                let (b, sb) = (p.bootstrap_bias?, p.bootstrap_sigma?);
+                let (b, sb) = (p.bootstrap_bias?, p.bootstrap_std_error?);
                 (sb > 0.0).then(|| format!("{} {:+.2}σ", p.name, b / sb))
             })
             .collect();

@@ -8,16 +8,16 @@ use super::{Report, Source, common_settings, write_figure};
 use crate::outdir::OutputDir;
 use aeroident_pipelines::compat::{ChannelSummary, CompatSummary};
 use aeroident_pipelines::results::OutputTrace;
-use aeroident_pipelines::results::{ParameterRow, Results};
+use aeroident_pipelines::results::{ParameterResult, Results};
 
 /// One row per estimated bias, scale factor and time shift (the scale as its departure from 1).
-fn rows(channels: &[ChannelSummary]) -> Vec<ParameterRow> {
+fn rows(channels: &[ChannelSummary]) -> Vec<ParameterResult> {
     let mut rows = Vec::new();
     for c in channels {
         let unit = &c.unit;
         let mut add = |what: String, v: Option<f64>, s: Option<f64>| {
             if v.is_some() {
-                rows.push(ParameterRow::new(what, v, s, None, None));
+                rows.push(ParameterResult::new(what, v, s, None, None));
             }
         };
         add(format!("{} bias ({unit})", c.name), c.bias, c.bias_sigma);

@@ -6,7 +6,7 @@
 use super::{Figure, Report, Source, common_settings};
 use crate::outdir::OutputDir;
 use aeroident_pipelines::freqresp::{FitSummary, FreqRespOutcome};
-use aeroident_pipelines::results::{ParameterRow, Results};
+use aeroident_pipelines::results::{ParameterResult, Results};
 use aeroident_signals::spectral::PairResponse;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -75,9 +75,9 @@ pub fn write(source: &Source, o: &FreqRespOutcome, od: &mut OutputDir) -> anyhow
 /// A fit's numbers as a results table.
 fn fit_table(f: &FitSummary) -> Results {
     let mut rows =
-        vec![ParameterRow::new("gain K", Some(f.fit.gain), f.fit.gain_sigma, None, None)];
+        vec![ParameterResult::new("gain K", Some(f.fit.gain), f.fit.gain_sigma, None, None)];
     if f.fit.delay_sigma_s.is_some() || f.fit.delay_s != 0.0 {
-        rows.push(ParameterRow::new(
+        rows.push(ParameterResult::new(
             "delay τ (s)",
             Some(f.fit.delay_s),
             f.fit.delay_sigma_s,
@@ -87,7 +87,7 @@ fn fit_table(f: &FitSummary) -> Results {
     }
     for (what, list) in [("pole", &f.fit.poles), ("zero", &f.fit.zeros)] {
         for (i, fac) in list.iter().enumerate() {
-            rows.push(ParameterRow::new(
+            rows.push(ParameterResult::new(
                 format!("{what} factor {} ωn (rad/s)", i + 1),
                 fac.wn_rad_s,
                 fac.wn_sigma_rad_s,
@@ -95,7 +95,7 @@ fn fit_table(f: &FitSummary) -> Results {
                 None,
             ));
             if fac.zeta.is_some() {
-                rows.push(ParameterRow::new(
+                rows.push(ParameterResult::new(
                     format!("{what} factor {} ζ", i + 1),
                     fac.zeta,
                     fac.zeta_sigma,

@@ -183,7 +183,7 @@ fn results_html(r: &Results, h: &mut String) {
 }
 
 fn params_html(r: &Results, h: &mut String) {
-    let crb = r.has_crb_sigma();
+    let crb = r.has_crb_std_error();
     let _ = writeln!(
         h,
         "<table class=\"params\"><tr><th>parameter</th><th>estimate ± σ</th>{}<th>{}</th><th>error %</th><th>status</th></tr>",
@@ -197,7 +197,7 @@ fn params_html(r: &Results, h: &mut String) {
             _ => "bad",
         };
         let crb_cell = if crb {
-            format!("<td class=\"n\">{}</td>", escape(&fmt_sig(row.crb_sigma, 2)))
+            format!("<td class=\"n\">{}</td>", escape(&fmt_sig(row.crb_std_error, 2)))
         } else {
             String::new()
         };
@@ -205,7 +205,7 @@ fn params_html(r: &Results, h: &mut String) {
             h,
             "<tr><td>{}</td><td class=\"n\">{}</td>{crb_cell}<td class=\"n\">{}</td><td class=\"n\">{}</td><td class=\"{class}\">{}</td></tr>",
             escape(&row.name),
-            escape(&fmt_estimate(row.estimate, row.sigma)),
+            escape(&fmt_estimate(row.estimate, row.std_error)),
             escape(&fmt_sig(row.reference, 4)),
             fmt_error_pct(row.error_pct()),
             escape(&row.status)
@@ -304,7 +304,7 @@ pub fn warning_texts(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use aeroident_pipelines::results::{FitQuality, ParameterRow};
+    use aeroident_pipelines::results::{FitQuality, ParameterResult};
 
     #[test]
     fn page_is_self_contained_and_escaped() {
@@ -314,7 +314,13 @@ mod tests {
             results: vec![Results {
                 title: "params".into(),
                 reference_label: "truth".into(),
-                rows: vec![ParameterRow::new("Cm_q", Some(-27.0), Some(0.7), Some(-27.06), None)],
+                rows: vec![ParameterResult::new(
+                    "Cm_q",
+                    Some(-27.0),
+                    Some(0.7),
+                    Some(-27.06),
+                    None,
+                )],
                 fit: vec![FitQuality {
                     coefficient: "Cm".into(),
                     samples: 3,

@@ -5,7 +5,7 @@
 use super::{Figure, Report, common_settings, png_figure};
 use crate::outdir::{OutputDir, OutputError};
 use aeroident_pipelines::montecarlo::Campaign;
-use aeroident_pipelines::results::{ParameterRow, Results};
+use aeroident_pipelines::results::{ParameterResult, Results};
 
 /// One [`Results`] per estimator: the mean final estimate (truth + bias) ± the scatter (the
 /// standard deviation over the runs), the truth, the error of the mean and whether the truth
@@ -26,9 +26,9 @@ pub fn results(c: &Campaign) -> Vec<Results> {
                 .parameters
                 .iter()
                 .map(|p| {
-                    let mean = p.truth.zip(p.bias).map(|(t, b)| t + b);
+                    let mean = p.reference.zip(p.bias).map(|(t, b)| t + b);
                     let name = format!("{}{}", p.name, if p.primary { "*" } else { "" });
-                    ParameterRow::new(name, mean, p.scatter, p.truth, None)
+                    ParameterResult::new(name, mean, p.scatter, p.reference, None)
                 })
                 .collect(),
             fit: Vec::new(),

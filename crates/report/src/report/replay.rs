@@ -7,9 +7,9 @@
 use super::{Report, common_settings, write_figure};
 use crate::outdir::OutputDir;
 use crate::plot::{Band, HLine, LineKind, Panel, Series};
-use aeroident_pipelines::replay::{History, ReplayOutcome, precision};
+use aeroident_pipelines::replay::{History, ReplayOutcome};
 use aeroident_pipelines::replay::{Pacing, ReplayOptions};
-use aeroident_pipelines::results::{CoefficientFit, ParameterRow, Results, coefficient_fits};
+use aeroident_pipelines::results::{CoefficientFit, Results, coefficient_fits};
 
 /// A published reference value of a parameter (from the model file's `[reference.X]`).
 #[derive(Debug, Clone, PartialEq)]
@@ -43,28 +43,8 @@ pub fn spec_references(model: &aeroident_io::ModelSpec) -> Vec<Reference> {
 /// The results of `outcome`: one row per parameter and the fit quality per coefficient.
 pub fn results(outcome: &ReplayOutcome, title: &str, references: &[Reference]) -> Results {
     let diverged = outcome.diverged();
-    let rows = outcome
-        .summary
-        .parameters
-        .iter()
-        .map(|p| {
-            let reference = references.iter().find(|r| r.name == p.name).map(|r| r.value);
-            let flag = cross_check_status(outcome, &p.name).or_else(|| {
-                let outside = reference
-                    .zip(p.estimate.zip(p.std_error))
-                    .is_some_and(|(r, (e, s))| (e - r).abs() > 2.0 * s);
-                let relative = precision::imprecise(&p.name, p.estimate, p.std_error);
-                relative.filter(|_| !outside).map(precision::status)
-            });
-            ParameterRow::new(
-                p.name.clone(),
-                p.estimate,
-                p.std_error,
-                reference,
-                if diverged { Some("diverged") } else { flag.as_deref() },
-            )
-        })
-        .collect();
+    // The verdicts are the library's (aeroident_pipelines::replay::verdict), judged once.
+    let rows = outcome.summary.parameters.iter().map(|p| p.result.clone()).collect();
     let fit = if diverged {
         Vec::new()
     } else {
@@ -90,13 +70,6 @@ pub fn results(outcome: &ReplayOutcome, title: &str, references: &[Reference]) -
         ));
     }
     Results { title: title.to_string(), reference_label: "reference".into(), rows, fit, notes }
-}
-
-/// `differs from oe by 3.1σ` for a parameter `--cross-check` flagged, else `None`.
-fn cross_check_status(outcome: &ReplayOutcome, name: &str) -> Option<String> {
-    let c = outcome.cross_check.as_ref()?;
-    let d = c.flagged.iter().find(|d| d.parameter == name)?;
-    Some(format!("differs from {} by {:.1}σ", c.batch_estimator, d.combined_sigmas))
 }
 
 fn fits(outcome: &ReplayOutcome) -> Vec<CoefficientFit> {

@@ -6,7 +6,7 @@ use super::{Figure, Report, common_settings};
 use crate::outdir::{OutputDir, OutputError};
 use aeroident_pipelines::aircraft::RunOutput;
 use aeroident_pipelines::aircraft::summary::Summary;
-use aeroident_pipelines::results::{ParameterRow, Results};
+use aeroident_pipelines::results::Results;
 use std::path::Path;
 
 /// One [`Results`] per estimator of `summary`, in order of appearance; the reference column is
@@ -15,20 +15,9 @@ pub fn results(summary: &Summary) -> Vec<Results> {
     let mut out: Vec<Results> = Vec::new();
     for p in &summary.parameters {
         let title = format!("{} — {} ({}s)", summary.scenario, p.estimator, p.quantity);
-        let failure =
-            p.failure.as_deref().map(|_| "failed").or(p.status.filter(|s| *s == "diverged"));
-        let name = format!("{}{}", p.name, if p.primary { "*" } else { "" });
-        let mut row = ParameterRow::new(name, p.r#final, p.sigma, p.truth, failure);
-        if row.status == "ok" && p.meets_targets == Some(false) {
-            row.status = "targets missed".into();
-        }
-        // Without a σ the status says how close the final value is (the overview's 5 %).
-        if row.status == "ok"
-            && row.sigma.is_none()
-            && row.error_pct().is_some_and(|e| e.abs() > 5.0)
-        {
-            row.status = "not within 5 %".into();
-        }
+        // The status is the library's (ParamSummary::judge); the table marks primaries.
+        let mut row = p.result.clone();
+        row.name = format!("{}{}", p.name, if p.primary { "*" } else { "" });
         match out.iter_mut().find(|r| r.title == title) {
             Some(r) => r.rows.push(row),
             None => out.push(Results {

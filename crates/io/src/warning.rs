@@ -121,6 +121,15 @@ impl Warnings {
     pub fn texts(&self) -> impl Iterator<Item = &str> {
         self.0.iter().map(|w| w.text.as_str())
     }
+
+    /// The texts of the warnings about `parameter`, in order (a parameter's `flags`).
+    pub fn about(&self, parameter: &str) -> Vec<String> {
+        self.0
+            .iter()
+            .filter(|w| w.parameter.as_deref() == Some(parameter))
+            .map(|w| w.text.clone())
+            .collect()
+    }
 }
 
 impl<W: Into<Warning>> Extend<W> for Warnings {
@@ -168,6 +177,8 @@ mod tests {
         assert_eq!(json, r#"["gap: 2 s","Cm_alpha = +0.3 …","one","two"]"#);
         assert_eq!(w[0].kind, WarningKind::Run);
         assert_eq!(w[1].parameter.as_deref(), Some("Cm_alpha"));
+        assert_eq!(w.about("Cm_alpha"), [w[1].text.clone()]);
+        assert!(w.about("Cm_q").is_empty());
         let diagnostic: Vec<&str> =
             w.iter().filter(|w| w.kind.is_diagnostic()).map(|w| &w.text[..]).collect();
         assert_eq!(diagnostic, ["Cm_alpha = +0.3 …"]);

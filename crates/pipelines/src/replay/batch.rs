@@ -143,12 +143,7 @@ impl BatchSummary {
                 if x.value.abs() < crate::metrics::ZERO_THRESHOLD { 0.0 } else { x.value }
             });
             r.judge(None);
-            r.flags = self
-                .warnings
-                .iter()
-                .filter(|w| w.parameter.as_deref() == Some(r.name.as_str()))
-                .map(|w| w.text.clone())
-                .collect();
+            r.flags = self.warnings.about(&r.name);
             if r.estimate.is_none() {
                 r.flags.push(format!(
                     "not estimated: {} cannot see it from the record's outputs",

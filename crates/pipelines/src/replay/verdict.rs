@@ -42,11 +42,6 @@ pub fn judge(outcome: &mut ReplayOutcome) {
             relative.filter(|_| !r.outside_2sigma()).map(precision::status)
         };
         r.judge(failure.as_deref());
-        r.flags = summary
-            .warnings
-            .iter()
-            .filter(|w| w.parameter.as_deref() == Some(r.name.as_str()))
-            .map(|w| w.text.clone())
-            .collect();
+        r.flags = summary.warnings.about(&r.name);
     }
 }

@@ -576,7 +576,7 @@ fn val_f16_sim_output_replays_through_the_cli_with_the_shipped_mapping() {
         serde_json::from_str(&std::fs::read_to_string(out.join("replay/summary.json")).unwrap())
             .unwrap();
     assert_eq!(v["samples_rejected"], 0);
-    assert_eq!(v["status"], "running");
+    assert_eq!(v["status"], "complete");
     let params = v["parameters"].as_array().unwrap();
     assert_eq!(params.len(), 30);
     assert!(params.iter().all(|p| p["estimate"].is_f64()), "all identified");
@@ -641,7 +641,7 @@ fn formats_by_flag_and_extension_through_the_cli() {
     };
     let (a, c) = (summary("asc"), summary("csv"));
     assert_eq!(a["samples_read"], 60, "{a}");
-    assert_eq!(a["status"], "running", "identified: {a}");
+    assert_eq!(a["status"], "complete", "identified: {a}");
     for key in ["samples_read", "samples_rejected", "status", "parameters"] {
         assert_eq!(a[key], c[key], "{key}");
     }

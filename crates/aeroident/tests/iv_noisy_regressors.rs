@@ -63,7 +63,7 @@ fn online(
         ..Default::default()
     };
     let out = replay(reader, mapping, &opts, &mut ()).unwrap();
-    assert_eq!(out.summary.status, "running", "{}", estimator.name());
+    assert_eq!(out.summary.status, "complete", "{}", estimator.name());
     let params = out.summary.parameters.into_iter();
     params
         .map(|p| (p.result.name, p.result.estimate.unwrap(), p.result.std_error.unwrap()))

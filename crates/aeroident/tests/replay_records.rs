@@ -73,7 +73,7 @@ fn val_hfb320_readme_equation_error_cm_q_is_biased() {
     );
     assert_eq!(o.summary.samples_read, 601);
     assert_eq!(o.summary.samples_rejected, 0);
-    assert_eq!(o.summary.status, "running");
+    assert_eq!(o.summary.status, "complete");
     // docs/real-data.md, HFB-320 table, "RLS equation error ± σ" column (coloured-residual σ).
     for (name, doc, doc_sigma) in [
         ("Cm_alpha", -0.958, 0.0137),
@@ -163,7 +163,7 @@ fn val_jsbsim_f16_lateral_rls_within_5pct_of_truth() {
         ReplayOptions { model: model("lateral"), ..Default::default() },
     );
     assert_eq!(o.summary.samples_rejected, 0, "{:?}", o.summary.rejections.first());
-    assert_eq!(o.summary.status, "running");
+    assert_eq!(o.summary.status, "complete");
     let st = o.model.structure;
     let mut checked = 0;
     for c in [Coefficient::CY, Coefficient::Cl, Coefficient::Cn] {
@@ -206,7 +206,7 @@ fn val_attas_aileron_rudder_lateral_signs_across_the_gap() {
         assert_eq!((o.model.name.as_str(), o.model_defaulted), ("lateral", true));
         assert_eq!(o.summary.samples_read, 1502);
         assert_eq!(o.summary.samples_rejected, 0, "{rel}: {:?}", o.summary.rejections);
-        assert_eq!(o.summary.status, "running");
+        assert_eq!(o.summary.status, "complete");
         let gaps: Vec<_> =
             o.summary.rejections.iter().filter(|r| r.reason.starts_with("gap")).collect();
         assert_eq!(gaps.len(), 1, "{rel}");
@@ -445,7 +445,7 @@ fn val_every_estimator_runs_on_every_record() {
             "{rel}: {:?}",
             o.summary.rejections.first()
         );
-        assert_eq!(o.summary.status, "running", "{rel}");
+        assert_eq!(o.summary.status, "complete", "{rel}");
         for p in &o.summary.parameters {
             assert!(p.estimate.is_some_and(f64::is_finite), "{rel} {}", p.name);
         }

@@ -164,9 +164,78 @@ pub fn expected_sign(p: Param) -> Option<f64> {
     })
 }
 
+/// The range a conventional subsonic aircraft's parameter `p` lies in, `(min, max)` in the
+/// parameter's unit (per rad, per unit p̂ q̂ r̂), where experience bounds it; `None` elsewhere.
+/// Deliberately wide: a value outside is not a property of any conventional aircraft but of
+/// the data or the set-up (a unit, a sign, a mass or inertia constant, missing thrust, a
+/// correlated pair, no excitation). The bounds enclose the typical values of Roskam (Airplane
+/// Design VI, ch. 10; Airplane Flight Dynamics, appendix B), Etkin & Reid (1996, tables 6.x),
+/// Klein & Morelli (2006, ch. 3) and Stevens & Lewis (2016, F-16 tables) with margin: a lift
+/// slope of 1.5 to 8 per rad, a zero-lift drag above 0, damping and control power of the
+/// conventional sign and at least the magnitude a surface in degrees mapped as radians (÷57.3)
+/// falls below. A model file's `[plausible.X]` replaces the range for an unconventional
+/// aircraft.
+pub fn plausible_range(p: Param) -> Option<(f64, f64)> {
+    Some(match (p.coefficient, p.term) {
+        (C::CL, T::Bias) => (-0.5, 1.5),
+        (C::CL, T::Alpha) => (1.5, 8.0),
+        (C::CZ, T::Alpha) => (-8.0, -1.5),
+        (C::CD, T::Bias) => (0.0, 0.3),
+        (C::CD, T::Alpha) => (-0.2, 3.0),
+        (C::Cm, T::Alpha) => (-5.0, 1.0),
+        (C::Cm, T::Q | T::Q0) => (-100.0, 0.0),
+        (C::Cm, T::De) => (-5.0, -0.1),
+        (C::CY, T::Beta) => (-2.0, 0.0),
+        (C::Cl, T::Beta) => (-0.5, 0.05),
+        (C::Cl, T::P) => (-1.5, 0.0),
+        (C::Cl, T::Da) => (-1.0, -0.02),
+        (C::Cn, T::Beta) => (-0.05, 0.5),
+        (C::Cn, T::R) => (-1.0, 0.0),
+        (C::Cn, T::Dr) => (-0.5, -0.01),
+        _ => return None,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The ranges enclose the F-16's own values at the thesis condition (Stevens & Lewis
+    /// tables at α ≈ 2.6°: CL_α ≈ 4.1, Cm_q ≈ −5.4, Cl_p ≈ −0.34, Cn_r ≈ −0.37 per unit rate)
+    /// and the HFB-320 book values (CL_α 4.2, Cm_α −1.0, Cm_q −27, Cm_δe −1.44); a surface in
+    /// degrees mapped as radians (Cm_δe −1.44/57.3) and a negative drag are outside.
+    #[test]
+    fn the_ranges_hold_published_aircraft_and_refuse_unit_slips() {
+        let inside = |c, t, v: f64| {
+            let (lo, hi) = plausible_range(Param::new(c, t)).unwrap();
+            lo <= v && v <= hi
+        };
+        for (c, t, v) in [
+            (C::CL, T::Alpha, 4.1),
+            (C::Cm, T::Q, -5.4),
+            (C::Cl, T::P, -0.34),
+            (C::Cn, T::R, -0.37),
+            (C::CL, T::Alpha, 4.2),
+            (C::Cm, T::Alpha, -1.0),
+            (C::Cm, T::Q0, -27.0),
+            (C::Cm, T::De, -1.44),
+        ] {
+            assert!(inside(c, t, v), "{c:?} {t:?} {v}");
+        }
+        assert!(!inside(C::Cm, T::De, -1.44 / 57.3));
+        assert!(!inside(C::CD, T::Bias, -0.068));
+        assert!(!inside(C::CL, T::Bias, 6.86));
+        assert!(plausible_range(Param::new(C::Cl, T::R)).is_none());
+        // Every range agrees with the expected sign where physics fixes one.
+        for c in C::ALL {
+            for t in T::ALL {
+                let p = Param::new(c, t);
+                if let (Some((lo, hi)), Some(sign)) = (plausible_range(p), expected_sign(p)) {
+                    assert!(lo < hi && (sign > 0.0 || lo < 0.0) && (sign < 0.0 || hi > 0.0));
+                }
+            }
+        }
+    }
 
     /// `q0` is q̂ at the reference speed: the same prior and the same expected sign.
     #[test]

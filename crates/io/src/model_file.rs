@@ -19,6 +19,10 @@
 //! [reference.Cm_alpha]                # optional: a published value, shown beside the estimate
 //! value = -1.002
 //! source = "Jategaonkar 2015, test case 4, output error"
+//!
+//! [plausible.Cm_alpha]                # optional: this aircraft's range, replacing a conventional one's
+//! min = -2.0
+//! max = 0.5
 //! ```
 //!
 //! - Coefficients: `CX CY CZ CL CD Cl Cm Cn` (case-sensitive: `CL` lift, `Cl` rolling moment).
@@ -65,6 +69,33 @@ pub struct ModelSpec {
     pub priors: Priors,
     /// Published reference values (`[reference.<param>]`), in file order of the names.
     pub references: Vec<ParamReference>,
+    /// Plausible ranges that replace the conventional aircraft's
+    /// ([`aeroident_estimators::prior::plausible_range`]) for this aircraft
+    /// (`[plausible.<param>]` with `min` and `max`).
+    pub plausible: Vec<PlausibleRange>,
+}
+
+/// A parameter's plausible range for one aircraft, `[plausible.<param>]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlausibleRange {
+    /// The parameter.
+    pub param: Param,
+    /// Smallest plausible value, units of the parameter.
+    pub min: f64,
+    /// Largest plausible value.
+    pub max: f64,
+}
+
+impl ModelSpec {
+    /// The range parameter `p` of this aircraft is plausible in: the model file's
+    /// `[plausible.X]` if it gives one, else a conventional aircraft's
+    /// ([`aeroident_estimators::prior::plausible_range`]); `None` where neither bounds it.
+    pub fn plausible_range(&self, p: Param) -> Option<(f64, f64)> {
+        match self.plausible.iter().find(|r| r.param == p) {
+            Some(r) => Some((r.min, r.max)),
+            None => aeroident_estimators::prior::plausible_range(p),
+        }
+    }
 }
 
 /// Errors of reading a model file. Each names the file (and line and key where they apply).
@@ -161,6 +192,18 @@ pub enum ModelFileError {
         /// Why.
         reason: String,
     },
+    /// A `[plausible.X]` range that is not usable.
+    #[error("{file}: line {line}: plausible range `{name}`: {reason}")]
+    BadPlausible {
+        /// File path.
+        file: String,
+        /// Line of the key.
+        line: usize,
+        /// The key.
+        name: String,
+        /// Why.
+        reason: String,
+    },
     /// A coefficient declared with no terms (`CL = []`): it would be left out of the model
     /// without a word, though the file names it.
     #[error(
@@ -205,7 +248,16 @@ struct ModelFile {
     prior: BTreeMap<Spanned<String>, PriorEntry>,
     #[serde(default)]
     reference: BTreeMap<Spanned<String>, ReferenceEntry>,
+    #[serde(default)]
+    plausible: BTreeMap<Spanned<String>, PlausibleEntry>,
     knots: Option<Spanned<KnotsEntry>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PlausibleEntry {
+    min: f64,
+    max: f64,
 }
 
 #[derive(Debug, Deserialize)]
@@ -260,6 +312,7 @@ impl ModelSpec {
             structure,
             priors: Priors::generic(&structure),
             references: Vec::new(),
+            plausible: Vec::new(),
         })
     }
 
@@ -273,6 +326,7 @@ impl ModelSpec {
         self.priors.n = kept.len();
         self.priors.prior[..kept.len()].copy_from_slice(&kept);
         self.references.retain(|r| r.param != p);
+        self.plausible.retain(|r| r.param != p);
         self.name = format!("{} without {}", self.name, p.name());
         self
     }
@@ -409,14 +463,46 @@ impl ModelSpec {
                 source: entry.source.clone(),
             });
         }
+        let plausible = plausible_of(&raw.plausible, &structure, text, file)?;
         Ok(Self {
             name: file.to_string(),
             description: raw.description.unwrap_or_default(),
             structure,
             priors,
             references,
+            plausible,
         })
     }
+}
+
+/// The `[plausible.X]` ranges: each of a parameter of the model, `min < max`, both finite.
+fn plausible_of(
+    raw: &BTreeMap<Spanned<String>, PlausibleEntry>,
+    structure: &ModelStructure,
+    text: &str,
+    file: &str,
+) -> Result<Vec<PlausibleRange>, ModelFileError> {
+    let mut out = Vec::new();
+    for (key, entry) in raw {
+        let bad = |reason: String| ModelFileError::BadPlausible {
+            file: file.to_string(),
+            line: line_of(text, key.span().start),
+            name: key.get_ref().clone(),
+            reason,
+        };
+        let p = Param::from_name(key.get_ref()).ok_or_else(|| {
+            bad("not a parameter name `<coefficient>_<term>` of the vocabulary".into())
+        })?;
+        if structure.index_of(p).is_none() {
+            return Err(bad(format!("`{}` is not in the model", p.name())));
+        }
+        let (min, max) = (entry.min, entry.max);
+        if !(min.is_finite() && max.is_finite() && min < max) {
+            return Err(bad(format!("min = {min:e} and max = {max:e}: both finite, min < max")));
+        }
+        out.push(PlausibleRange { param: p, min, max });
+    }
+    Ok(out)
 }
 
 /// The α knots of a `[knots]` table, rad (none without one).
@@ -626,6 +712,34 @@ sigma = 1.5
         }
         let edge = format!("{GOOD}[reference.Cm_q]\nvalue = -1e4\nsource = \"x\"\n");
         assert_eq!(ModelSpec::from_toml_str(&edge, "r.toml").unwrap().references[0].value, -1e4);
+    }
+
+    /// `[plausible.X]` replaces the conventional range of one parameter; a reversed or
+    /// non-finite range, or a parameter outside the model, is refused naming the line.
+    #[test]
+    fn plausible_ranges_are_read_and_checked() {
+        let text = format!("{GOOD}[plausible.Cm_q]\nmin = -200.0\nmax = -1.0\n");
+        let m = ModelSpec::from_toml_str(&text, "r.toml").unwrap();
+        let cmq = Param::from_name("Cm_q").unwrap();
+        assert_eq!(m.plausible_range(cmq), Some((-200.0, -1.0)));
+        let cma = Param::from_name("Cm_alpha").unwrap();
+        assert_eq!(m.plausible_range(cma), aeroident_estimators::prior::plausible_range(cma));
+        for bad in ["min = 1.0\nmax = -1.0", "min = nan\nmax = 1.0", "min = 1.0"] {
+            let e = ModelSpec::from_toml_str(&format!("{GOOD}[plausible.Cm_q]\n{bad}\n"), "r.toml")
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("r.toml"), "{bad}: {e}");
+        }
+        let e = ModelSpec::from_toml_str(
+            &format!("{GOOD}[plausible.Cn_r]\nmin = -1.0\nmax = 0.0\n"),
+            "r.toml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("line 9") && e.contains("`Cn_r`") && e.contains("not in the model"),
+            "{e}"
+        );
     }
 
     #[test]

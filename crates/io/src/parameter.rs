@@ -16,15 +16,21 @@ pub const SCHEMA_VERSION: u32 = 2;
 /// round-off of an exact zero (e.g. a simulator's 1e-44 truth) and is reported as 0.
 pub const ZERO_THRESHOLD: f64 = 1e-12;
 
-/// The status of an estimate with no verdict against it: identified, σ (if any) not too large,
-/// no reference outside ±2σ, no flag.
-pub const STATUS_OK: &str = "ok";
+/// The status of an estimate nothing speaks against: identified, and no flag.
+pub const STATUS_IDENTIFIED: &str = "identified";
 
-/// The status of a parameter the run gave no estimate of.
+/// The status of an estimate with at least one flag (its `flags` say which).
+pub const STATUS_FLAGGED: &str = "flagged";
+
+/// The status of a parameter the run gave no estimate of (its `flags` say why, where known).
 pub const STATUS_NOT_IDENTIFIED: &str = "not identified";
 
-/// The status of an estimate whose reference lies further than 2σ from it.
-pub const STATUS_OUTSIDE_2SIGMA: &str = "outside ±2σ";
+/// The status of a batch fit's estimate that its last iterations still moved by more than its
+/// σ.
+pub const STATUS_NOT_CONVERGED: &str = "not converged";
+
+/// The status of every estimate of an estimator that diverged (none is a result).
+pub const STATUS_DIVERGED: &str = "diverged";
 
 /// Which standard error `std_error` is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -82,17 +88,15 @@ pub struct ParameterResult {
     /// The truth (simulation) or a published value (a model file's `[reference.X]`); `null`
     /// without one. Below [`ZERO_THRESHOLD`] in magnitude it is 0.
     pub reference: Option<f64>,
-    /// The verdict: `ok`, `not identified`, `outside ±2σ`, or a failure or flag the run put in
-    /// its place (`diverged`, `differs from oe by 3.1σ`, `σ 32 % of |estimate|` …).
+    /// The verdict: `identified` (no flag), `flagged` (see `flags`), `not identified`,
+    /// `not converged` or `diverged` (module doc of the judging stage: docs/output-schema.md).
     pub status: String,
     /// Every warning of the run about this parameter, in its words (empty without one).
     pub flags: Vec<String>,
 }
 
 impl ParameterResult {
-    /// A result whose status is derived from the numbers: `failure` if given (e.g.
-    /// `diverged`), else `not identified` without an estimate, `outside ±2σ` when the
-    /// reference lies further than 2σ from the estimate, else `ok`.
+    /// A result whose status is derived from the numbers ([`ParameterResult::judge`]).
     pub fn new(
         name: impl Into<String>,
         estimate: Option<f64>,
@@ -115,14 +119,46 @@ impl ParameterResult {
         result
     }
 
-    /// Sets the status by the rule of [`ParameterResult::new`] from the current numbers.
+    /// Sets the status from the current numbers and flags: `failure` if given (`diverged`,
+    /// `not converged`), else `not identified` without an estimate; otherwise a reference
+    /// further than 2σ from the estimate is one more flag, and the status is `flagged` with any
+    /// flag, else `identified`.
     pub fn judge(&mut self, failure: Option<&str>) {
-        self.status = match (failure, self.estimate) {
-            (Some(f), _) => f.to_string(),
-            (None, None) => STATUS_NOT_IDENTIFIED.into(),
-            (None, Some(_)) if self.outside_2sigma() => STATUS_OUTSIDE_2SIGMA.into(),
-            (None, Some(_)) => STATUS_OK.into(),
-        };
+        if let Some(f) = failure {
+            self.status = f.to_string();
+            return;
+        }
+        if self.estimate.is_none() {
+            self.status = STATUS_NOT_IDENTIFIED.into();
+            return;
+        }
+        if let (true, Some(r), Some(e), Some(s)) =
+            (self.outside_2sigma(), self.reference, self.estimate, self.std_error)
+        {
+            self.flag(format!(
+                "the reference {r:.4} lies {:.1}σ from the estimate (outside ±2σ)",
+                (e - r).abs() / s
+            ));
+        }
+        self.status =
+            if self.flags.is_empty() { STATUS_IDENTIFIED } else { STATUS_FLAGGED }.to_string();
+    }
+
+    /// Adds `text` to the flags, once.
+    pub fn flag(&mut self, text: impl Into<String>) {
+        let text = text.into();
+        if !self.flags.contains(&text) {
+            self.flags.push(text);
+        }
+    }
+
+    /// The result with its estimate and σ withdrawn (`null`), status `not identified` and
+    /// `why` its flag: a number the record cannot support is not reported.
+    pub fn withdraw(&mut self, why: impl Into<String>) {
+        (self.estimate, self.std_error, self.std_error_source, self.crb_std_error) =
+            (None, None, None, None);
+        self.flag(why);
+        self.judge(None);
     }
 
     /// The result with `source` named as its σ's (none without a σ).
@@ -169,16 +205,27 @@ mod tests {
     fn status_from_the_numbers() {
         let r = ParameterResult::new("Cm_alpha", Some(-1.1), Some(0.01), Some(-1.0), None);
         assert!((r.error_pct().unwrap() + 10.0).abs() < 1e-9, "signed: estimate below");
-        assert_eq!(r.status, STATUS_OUTSIDE_2SIGMA);
+        assert_eq!(r.status, STATUS_FLAGGED);
         assert!(r.outside_2sigma());
-        let r = ParameterResult::new("Cm_alpha", Some(-1.01), Some(0.01), Some(-1.0), None);
-        assert_eq!(r.status, STATUS_OK);
+        assert_eq!(r.flags, ["the reference -1.0000 lies 10.0σ from the estimate (outside ±2σ)"]);
+        let mut r = ParameterResult::new("Cm_alpha", Some(-1.01), Some(0.01), Some(-1.0), None);
+        assert_eq!((r.status.as_str(), r.flags.len()), (STATUS_IDENTIFIED, 0));
+        // Judging again adds no second copy of a flag.
+        r.flag("x");
+        r.flag("x");
+        r.judge(None);
+        assert_eq!((r.status.as_str(), r.flags.len()), (STATUS_FLAGGED, 1));
+        r.withdraw("thrust is not mapped");
+        assert_eq!(
+            (r.estimate, r.std_error, r.status.as_str()),
+            (None, None, STATUS_NOT_IDENTIFIED)
+        );
         assert!((r.error_pct().unwrap() + 1.0).abs() < 1e-9, "sign: estimate more negative");
         let r = ParameterResult::new("Cm_q", None, None, Some(-20.0), None);
         assert_eq!((r.status.as_str(), r.error_pct()), (STATUS_NOT_IDENTIFIED, None));
         let r = ParameterResult::new("Cl_0", Some(6e-5), None, Some(3.4e-44), None);
         assert_eq!((r.reference, r.error_pct()), (Some(0.0), None));
-        let r = ParameterResult::new("x", Some(1.0), None, None, Some("diverged"));
+        let r = ParameterResult::new("x", Some(1.0), None, None, Some(STATUS_DIVERGED));
         assert_eq!(r.status, "diverged");
     }
 

@@ -178,9 +178,10 @@ pub struct ReplaySummary {
     /// export forms the splines from them.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub alpha_knots_rad: Vec<f64>,
-    /// Estimator status at the end: `running`, `initialising` or `diverged`; `interrupted` when
-    /// a signal stopped the replay before the end of its record (the warnings give the
-    /// estimator's own status then).
+    /// How the run ended: `complete` (the estimator ran to the end of the record with every
+    /// parameter identified), `initialising` (some never were) or `diverged`; `interrupted`
+    /// when a signal stopped the replay before the end of its record (the warnings give the
+    /// estimator's own status then). Each parameter's own `status` says whether to trust it.
     pub status: String,
     /// Data rows read (accepted + rejected).
     pub samples_read: usize,

@@ -31,6 +31,7 @@ pub mod job;
 pub mod metrics;
 pub mod montecarlo;
 pub mod named;
+pub mod plausibility;
 /// Proof-of-concept experiments (thesis §4.1): scenarios and the simulation loop.
 pub mod poc;
 pub mod record;

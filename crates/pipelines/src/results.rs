@@ -147,6 +147,25 @@ pub struct Results {
 }
 
 impl Results {
+    /// Each row's flags as `name: flag` lines, in row order, at most `limit` of them and then
+    /// one line counting the rest (the tables print them under the status column, which says
+    /// only `flagged`).
+    pub fn flag_lines(&self, limit: usize) -> Vec<String> {
+        let all: Vec<String> = self
+            .rows
+            .iter()
+            .flat_map(|r| r.flags.iter().map(move |f| format!("{}: {f}", r.name)))
+            .collect();
+        let mut out: Vec<String> = all.iter().take(limit).cloned().collect();
+        if all.len() > limit {
+            out.push(format!(
+                "… and {} more flags (summary.json: parameters[].flags)",
+                all.len() - limit
+            ));
+        }
+        out
+    }
+
     /// Whether any row carries a Cramér–Rao σ beside its σ (the tables then show that column).
     pub fn has_crb_std_error(&self) -> bool {
         self.rows.iter().any(|r| r.crb_std_error.is_some())
@@ -179,6 +198,28 @@ impl OutputTrace {
 mod tests {
     use super::*;
     use aeroident_estimators::{AircraftConstants, Term};
+
+    /// The flag lines name their parameter, keep the rows' order and count what the limit
+    /// leaves out.
+    #[test]
+    fn flag_lines_are_listed_then_counted() {
+        let mut a = ParameterResult::new("Cm_q", Some(-5.0), Some(1.0), None, None);
+        a.flag("one");
+        a.flag("two");
+        let mut b = ParameterResult::new("Cl_p", Some(-0.4), Some(0.1), None, None);
+        b.flag("three");
+        let r = Results {
+            title: String::new(),
+            reference_label: String::new(),
+            rows: vec![a, b],
+            fit: Vec::new(),
+            notes: Vec::new(),
+        };
+        assert_eq!(r.flag_lines(5), ["Cm_q: one", "Cm_q: two", "Cl_p: three"]);
+        let short = r.flag_lines(1);
+        assert_eq!(short[0], "Cm_q: one");
+        assert!(short[1].starts_with("… and 2 more flags"), "{short:?}");
+    }
 
     /// Hand-computed values: z = [1, 2, 3, 4], y = [1, 2, 3, 5]: SS_res = 1, SS_tot = 5,
     /// RMS = 1/2, R² = 0.8, U = 0.5 / (√7.5 + √9.75).

@@ -38,6 +38,12 @@ def test_fit_equals_cli(tmp_path, estimator):
     np.testing.assert_array_equal(py["estimate"], [p["estimate"] for p in params])
     np.testing.assert_array_equal(py["std_error"], [p["std_error"] for p in params])
     np.testing.assert_array_equal(py["crb_std_error"], [p["crb_std_error"] for p in params])
+    # The verdict is the summary's, under the summary's names (docs/output-schema.md).
+    assert py["status"] == [p["status"] for p in params]
+    assert py["flags"] == [p["flags"] for p in params]
+    refs = [np.nan if p["reference"] is None else p["reference"] for p in params]
+    np.testing.assert_array_equal(py["reference"], refs)
+    assert set(py["status"]) <= {"identified", "flagged", "not identified", "not converged"}
 
 
 def test_fit_reproduces_the_published_hfb320_output_error_result():

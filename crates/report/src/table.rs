@@ -63,8 +63,11 @@ fn table_with(header: &[&str], numeric_to: usize) -> Table {
     t
 }
 
+/// Most flags the console lists under a table; `summary.json` and `report.html` have all.
+pub const CONSOLE_FLAGS: usize = 20;
+
 /// The parameter table and (if any) the fit-quality table of `r`, with the title above and
-/// the notes below, as text for the console.
+/// the flags and notes below, as text for the console.
 pub fn render(r: &Results) -> String {
     let crb = r.has_crb_std_error();
     let mut header = vec!["parameter", "estimate ± σ"];
@@ -94,6 +97,11 @@ pub fn render(r: &Results) -> String {
             ]);
         }
         s.push_str(&format!("fit quality (measured vs model from the final estimates)\n{f}\n"));
+    }
+    let flags = r.flag_lines(CONSOLE_FLAGS);
+    if !flags.is_empty() {
+        s.push_str("flags:\n");
+        flags.iter().for_each(|f| s.push_str(&format!("  {f}\n")));
     }
     for n in &r.notes {
         s.push_str(n);
@@ -131,13 +139,13 @@ mod tests {
     }
 
     /// A batch fit's row: the status is judged against its σ (here a coloured σ of 0.1, the
-    /// reference 1σ away: ok), not against the Cramér–Rao σ shown beside it (0.01: 10σ away),
+    /// reference 1σ away: identified), not against the Cramér–Rao σ shown beside it (0.01: 10σ away),
     /// and the column appears only when a row has one.
     #[test]
     fn the_status_follows_the_reported_sigma_and_the_bound_stands_beside_it() {
         let row = ParameterResult::new("Cm_alpha", Some(-1.1), Some(0.1), Some(-1.0), None)
             .with_crb_std_error(Some(0.01));
-        assert_eq!(row.status, "ok");
+        assert_eq!(row.status, "identified");
         let r = Results {
             title: "rec — oe".into(),
             reference_label: "reference".into(),
@@ -148,7 +156,7 @@ mod tests {
         let s = render(&r);
         assert!(s.contains("Cramér–Rao σ"), "{s}");
         let a = s.lines().find(|l| l.contains("Cm_alpha")).unwrap();
-        for want in ["-1.100 ± 0.10", "0.010", "ok"] {
+        for want in ["-1.100 ± 0.10", "0.010", "identified"] {
             assert!(a.contains(want), "{want} in {a}");
         }
         let plain = Results {
@@ -180,9 +188,11 @@ mod tests {
         let s = render(&r);
         let line = |name: &str| s.lines().find(|l| l.contains(name)).unwrap().to_string();
         let a = line("Cm_alpha");
-        for want in ["-1.100 ± 0.010", "-1.000", "-10.0", "outside ±2σ"] {
+        for want in ["-1.100 ± 0.010", "-1.000", "-10.0", "flagged"] {
             assert!(a.contains(want), "{want} in {a}");
         }
+        // The flag is listed under the table, naming its parameter.
+        assert!(s.contains("flags:\n  Cm_alpha: the reference -1.0000 lies 10.0σ"), "{s}");
         let q = line("Cm_q ");
         assert!(q.contains("not identified") && !q.contains(" 0 "), "{q}");
         let f = line("│ Cm ");

@@ -13,7 +13,7 @@
 //! "Stays within" is the strict settling definition of [`crate::metrics`]: a later excursion
 //! out of the band moves the time to after it.
 
-use aeroident_io::parameter::STATUS_OK;
+use aeroident_io::parameter::STATUS_DIVERGED;
 use aeroident_io::{ParameterResult, StdErrorSource};
 use serde::Serialize;
 
@@ -315,7 +315,7 @@ fn entry(
         estimator_status: ch.status,
         batch: ch.is_batch(),
     };
-    entry.judge();
+    entry.judge(damage);
     Ok(entry)
 }
 
@@ -339,31 +339,59 @@ fn crb_std_error(ch: &ChannelLog, index: usize) -> Option<f64> {
 }
 
 impl ParamSummary {
-    /// Sets the status, first rule that applies: `failed` (the estimator failed) or
-    /// `diverged`; `not identified` without an estimate; `outside ±2σ` when the truth lies
-    /// further than 2σ from the estimate; `targets missed` (a primary derivative of a real-time
-    /// estimator missing a target of [`TARGET_TOL_REL`] within [`TARGET_WINDOW_S`]); without
-    /// a σ, `not within 5 %` when the final estimate is further than 5 % from the truth; else
-    /// `ok`. The flags say which target or failure.
-    pub fn judge(&mut self) {
-        let failure = self
-            .failure
-            .as_deref()
-            .map(|_| "failed")
-            .or(self.estimator_status.filter(|s| *s == "diverged"));
+    /// Sets the flags and status: `diverged` (the estimator diverged); `not identified`
+    /// without an estimate (a failed fit, its failure the flag); otherwise the flags are an
+    /// estimator failure (estimates held from then on), each missed target of a primary
+    /// derivative of a real-time estimator ([`ParamSummary::missed_targets`]), a final value
+    /// without σ further than 5 % from the truth, a truth outside ±2σ; `flagged` with any,
+    /// `identified` without.
+    pub fn judge(&mut self, damage_at_s: Option<f64>) {
         let r = &mut self.result;
-        r.judge(failure);
-        if r.status == STATUS_OK && self.meets_targets == Some(false) {
-            r.status = "targets missed".into();
+        r.flags.extend(self.failure.iter().map(|f| format!("estimator failed at {f}")));
+        if self.estimator_status == Some(STATUS_DIVERGED) {
+            r.judge(Some(STATUS_DIVERGED));
+            return;
         }
-        // Without a σ the status says how close the final value is (the overview's 5 %).
-        if r.status == STATUS_OK
-            && r.std_error.is_none()
-            && r.error_pct().is_some_and(|e| e.abs() > 100.0 * CONVERGENCE_TOL_REL)
+        let misses = self.missed_targets(damage_at_s);
+        let r = &mut self.result;
+        misses.into_iter().for_each(|m| r.flag(m));
+        // Without a σ the verdict is how close the final value is (the overview's 5 %).
+        if let (None, Some(e)) = (r.std_error, r.error_pct())
+            && e.abs() > 100.0 * CONVERGENCE_TOL_REL
         {
-            r.status = "not within 5 %".into();
+            r.flag(format!("no σ, and the final value is {e:+.1} % from the truth"));
         }
-        r.flags.extend(self.failure.clone());
+        r.judge(None);
+    }
+
+    /// Which of the targets a primary derivative of a real-time estimator missed, and by how
+    /// much (empty when it met them or has none): within ±10 % of the truth within
+    /// [`TARGET_WINDOW_S`] of the excitation and of the damage (at `damage_at_s`, if any),
+    /// ±2σ covering the truth.
+    pub fn missed_targets(&self, damage_at_s: Option<f64>) -> Vec<String> {
+        if self.meets_targets != Some(false) {
+            return Vec::new();
+        }
+        let w = TARGET_WINDOW_S;
+        let late = |t: Option<f64>, from: &str| match t {
+            Some(t) if t <= w => None,
+            Some(t) => {
+                Some(format!("target missed: within ±10 % {t:.1} s after {from} (target {w} s)"))
+            }
+            None => Some(format!("target missed: never stays within ±10 % after {from}")),
+        };
+        let mut out: Vec<String> =
+            late(self.time_to_10pct_s, "the excitation").into_iter().collect();
+        if damage_at_s.is_some() {
+            out.extend(late(self.reconvergence_10pct_s, "the damage"));
+        }
+        if self.covers_truth_2sigma != Some(true) {
+            out.push(match self.covers_truth_2sigma {
+                Some(false) => "target missed: ±2σ does not cover the truth at the end".into(),
+                _ => "target missed: no σ to cover the truth with".into(),
+            });
+        }
+        out
     }
 }
 

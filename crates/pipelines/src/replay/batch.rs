@@ -31,6 +31,7 @@ use aeroident_estimators::output_error::{
     OeConfig, OeError, OeResult, StopFlag, Termination, fit, fit_to_end,
 };
 use aeroident_estimators::{AirDataSample, ModelStructure};
+use aeroident_io::parameter::STATUS_NOT_CONVERGED;
 use aeroident_io::{
     FlightDataReader, Mapping, ModelSpec, ParameterResult, Rejection, StdErrorSource,
 };
@@ -132,25 +133,38 @@ impl std::ops::Deref for BatchParameter {
 }
 
 impl BatchSummary {
-    /// Sets every parameter's reference (the `model` file's), status and flags (the warnings
-    /// about it): `not identified` with the reason for a parameter the method does not
-    /// estimate, `outside ±2σ` when the reference lies further than 2σ from the estimate,
-    /// else `ok`.
-    pub fn judge(&mut self, model: &ModelSpec) {
+    /// Sets every parameter's reference (the `model` file's), flags and status: the warnings
+    /// about it, the plausibility check ([`crate::plausibility`]; the drag terms withdrawn
+    /// unless `thrust_mapped`), a reference outside ±2σ; `not identified` with the reason for
+    /// a parameter the method does not estimate; `not converged` for every parameter of a
+    /// fit that ended at its iteration limit with its last step still above 1 σ
+    /// ([`BatchSummary::still_moving`]); else `flagged` or `identified`.
+    pub fn judge(&mut self, model: &ModelSpec, thrust_mapped: bool) {
+        let moving = self.still_moving();
         for p in &mut self.parameters {
             let r = &mut p.result;
             r.reference = model.references.iter().find(|x| x.param.name() == r.name).map(|x| {
                 if x.value.abs() < crate::metrics::ZERO_THRESHOLD { 0.0 } else { x.value }
             });
-            r.judge(None);
             r.flags = self.warnings.about(&r.name);
             if r.estimate.is_none() {
-                r.flags.push(format!(
+                r.flag(format!(
                     "not estimated: {} cannot see it from the record's outputs",
                     self.estimator
                 ));
             }
+            crate::plausibility::check(model, thrust_mapped, std::iter::once(&mut *r));
+            r.judge(moving.then_some(STATUS_NOT_CONVERGED));
         }
+    }
+
+    /// Whether the fit ended unconverged with its last iteration still moving some estimate
+    /// by more than its Cramér–Rao σ: only then are the estimates not yet the fit's (an
+    /// iteration limit reached with steps below σ leaves numbers more iterations would not
+    /// change beyond their σ).
+    pub fn still_moving(&self) -> bool {
+        self.status == "not_converged"
+            && self.iterations.last().is_some_and(|it| it.max_step_sigma > 1.0)
     }
 }
 

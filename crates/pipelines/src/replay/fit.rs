@@ -58,7 +58,7 @@ pub fn fit_records<R: Read>(
         }
         _ => super::batch::fit_time_domain(rec, &file, mapping, model, &options)?,
     };
-    out.summary.judge(&out.model);
+    out.summary.judge(&out.model, crate::plausibility::thrust_mapped(mapping));
     Ok(out)
 }
 

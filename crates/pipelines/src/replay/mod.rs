@@ -160,6 +160,11 @@ pub trait ReplayObserver {
 /// the end of its record: its estimates are those of the samples read until then.
 pub const STATUS_INTERRUPTED: &str = "interrupted";
 
+/// `summary.status` of a replay whose estimator ran to the end of its record, every
+/// parameter identified at least once: the run is over (a recursive estimator's own status
+/// would still say `running`); whether each estimate can be trusted is its own `status`.
+pub const STATUS_COMPLETE: &str = "complete";
+
 impl ReplayObserver for () {}
 
 /// Two observers, each told everything in turn (the first, then the second).
@@ -695,7 +700,7 @@ pub fn replay_with<R: Read>(
         out.summary.warnings.extend(c.warnings());
     }
     out.summary.warnings.extend(events.notes());
-    verdict::judge(&mut out);
+    verdict::judge(&mut out, crate::plausibility::thrust_mapped(mapping));
     Ok(out)
 }
 
@@ -726,7 +731,7 @@ pub fn cross_check_record<R: Read>(
             );
             outcome.summary.warnings.extend(cross_check::warnings(&check));
             outcome.cross_check = Some(check);
-            verdict::judge(outcome);
+            verdict::judge(outcome, crate::plausibility::thrust_mapped(mapping));
         }
         Err(e) => outcome
             .summary
@@ -1209,7 +1214,7 @@ mod tests {
         let ok = run(1.0);
         assert!(ok.summary.parameters.iter().all(|p| p.estimate.is_some()), "{:?}", ok.summary);
         let out = run(1e-300);
-        assert_ne!(out.summary.status, "running");
+        assert_ne!(out.summary.status, STATUS_COMPLETE);
         assert!(!out.summary.parameters.is_empty());
         for p in &out.summary.parameters {
             assert_eq!(p.estimate, None, "{}", p.name);

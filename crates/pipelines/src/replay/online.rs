@@ -431,6 +431,8 @@ impl<'a> Replay<'a> {
                 status.name()
             ));
             super::STATUS_INTERRUPTED.to_string()
+        } else if status == Status::Running {
+            super::STATUS_COMPLETE.to_string()
         } else {
             status.name().to_string()
         };

@@ -2,46 +2,39 @@
 //! and the flags that explain it, judged once here for every face (the console table,
 //! `report.html`, Python).
 //!
-//! The status, first rule that applies:
-//! 1. `diverged`: the estimator diverged (no estimate is a result);
-//! 2. `differs from oe by 3.1σ`: `--cross-check` flagged the estimate ([`super::cross_check`]);
-//! 3. `outside ±2σ`: the model file's reference lies further than 2σ from the estimate;
-//! 4. `σ 32 % of |estimate|`: the record does not determine it ([`super::precision`]);
-//! 5. `not identified` without an estimate, else `ok`.
-//!
-//! The flags are the texts of every warning of the run about the parameter (sign checks,
-//! cross-check disagreements).
+//! The flags: every warning of the run about the parameter (sign checks, cross-check
+//! disagreements), an imprecise estimate ([`super::precision`]), a value a conventional
+//! aircraft cannot have ([`crate::plausibility`]), a reference outside ±2σ. The status:
+//! `diverged` when the estimator diverged; `not identified` without an estimate (a drag term
+//! of a record without thrust is withdrawn, with the reason); else `flagged` with any flag and
+//! `identified` without one (docs/output-schema.md).
 
 use super::{ReplayOutcome, precision};
+use aeroident_io::parameter::STATUS_DIVERGED;
 
-/// Sets the status and flags of every parameter of `outcome` (module doc); judging again after
-/// a later stage (the cross-check) replaces the earlier verdict.
-pub fn judge(outcome: &mut ReplayOutcome) {
+/// Sets the status and flags of every parameter of `outcome` (module doc), the drag terms
+/// withdrawn unless `thrust_mapped`; judging again after a later stage (the cross-check)
+/// replaces the earlier verdict.
+pub fn judge(outcome: &mut ReplayOutcome, thrust_mapped: bool) {
     let diverged = outcome.diverged();
-    let flagged: Vec<(String, String)> = match &outcome.cross_check {
-        Some(c) => c
-            .flagged
-            .iter()
-            .map(|d| {
-                let status =
-                    format!("differs from {} by {:.1}σ", c.batch_estimator, d.combined_sigmas);
-                (d.parameter.clone(), status)
-            })
-            .collect(),
-        None => Vec::new(),
-    };
+    let model = &outcome.model;
     let summary = &mut outcome.summary;
     for p in &mut summary.parameters {
         let r = &mut p.result;
-        let failure = if diverged {
-            Some("diverged".to_string())
-        } else if let Some((_, s)) = flagged.iter().find(|(n, _)| *n == r.name) {
-            Some(s.clone())
-        } else {
-            let relative = precision::imprecise(&r.name, r.estimate, r.std_error);
-            relative.filter(|_| !r.outside_2sigma()).map(precision::status)
-        };
-        r.judge(failure.as_deref());
         r.flags = summary.warnings.about(&r.name);
+        if diverged {
+            r.judge(Some(STATUS_DIVERGED));
+            continue;
+        }
+        // A withdrawn drag term is judged by its reason alone.
+        crate::plausibility::check(model, thrust_mapped, std::iter::once(&mut *r));
+        if let Some(relative) = precision::imprecise(&r.name, r.estimate, r.std_error) {
+            r.flag(format!(
+                "{}: the record does not determine it to {:.0} %",
+                precision::status(relative),
+                100.0 * precision::RELATIVE_SIGMA_LIMIT
+            ));
+        }
+        r.judge(None);
     }
 }

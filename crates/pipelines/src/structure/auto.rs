@@ -383,6 +383,7 @@ fn model_of(
         priors: Priors::generic(&structure),
         structure,
         references: Vec::new(),
+        plausible: Vec::new(),
     })
 }
 

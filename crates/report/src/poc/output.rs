@@ -13,8 +13,8 @@ use serde::Serialize;
 use std::path::Path;
 
 /// Per-parameter entry of `summary.json`: the common keys ([`ParameterResult`]: `name`,
-/// `estimate` (at the last sample), `reference` (the truth), `status` (`ok` within the
-/// convergence tolerance, ±5 %, else `not within 5 %`), `flags`; no σ: the thesis's
+/// `estimate` (at the last sample), `reference` (the truth), `status` (`identified` within the
+/// convergence tolerance, ±5 %, else `flagged`, the flag saying how far), `flags`; no σ: the thesis's
 /// estimators report none) and the thesis's metrics.
 #[derive(Debug, Clone, Serialize)]
 pub struct ParamSummary {
@@ -67,16 +67,17 @@ pub fn summarize(sc: &PocScenario, out: &RunOutput) -> anyhow::Result<Summary> {
         // Over the simulated record; a run that stopped early says so in its notes.
         let tc = convergence_time_s(&out.t_s, est, truth, CONVERGENCE_TOL_REL)?;
         let rel = rel_error(final_value, truth);
+        let mut result = ParameterResult::new(*name, Some(final_value), None, Some(truth), None);
         // A NaN error (no truth to compare with) is not within the tolerance either.
         let within = rel.abs() <= CONVERGENCE_TOL_REL;
-        let failure = format!("not within {:.0} %", 100.0 * CONVERGENCE_TOL_REL);
-        let result = ParameterResult::new(
-            *name,
-            Some(final_value),
-            None,
-            Some(truth),
-            (!within).then_some(failure.as_str()),
-        );
+        if !within {
+            result.flag(format!(
+                "the final value is {:+.1} % from the truth (not within {:.0} %)",
+                100.0 * rel,
+                100.0 * CONVERGENCE_TOL_REL
+            ));
+            result.judge(None);
+        }
         parameters.push(ParamSummary {
             result,
             rel_error: rel,
@@ -212,7 +213,7 @@ pub fn write_figures(
 }
 
 /// The results of a run: the final estimate of each parameter against its truth; status `ok`
-/// within the convergence tolerance (±5 %), else `not within 5 %`.
+/// within the convergence tolerance (±5 %), else `flagged` (its flag says how far).
 pub fn results(summary: &Summary, title: &str) -> Results {
     let rows = summary.parameters.iter().map(|p| p.result.clone()).collect();
     let notes = summary

@@ -192,7 +192,7 @@ fn params_html(r: &Results, h: &mut String) {
     );
     for row in &r.rows {
         let class = match row.status.as_str() {
-            "ok" => "ok",
+            "identified" => "ok",
             "not identified" => "na",
             _ => "bad",
         };
@@ -212,6 +212,14 @@ fn params_html(r: &Results, h: &mut String) {
         );
     }
     h.push_str("</table>\n");
+    let flags = r.flag_lines(usize::MAX);
+    if !flags.is_empty() {
+        h.push_str("<p>Flags (why a parameter is not simply identified):</p>\n<ul>\n");
+        for f in flags {
+            let _ = writeln!(h, "<li class=\"warn\">{}</li>", escape(&f));
+        }
+        h.push_str("</ul>\n");
+    }
 }
 
 fn fit_html(r: &Results, h: &mut String) {

@@ -289,7 +289,7 @@ fn end(
         if let Some(e) = interrupt.error(what) {
             return Err(e.into());
         }
-    } else if outcome.summary.status != "running" {
+    } else if outcome.summary.status != aeroident_pipelines::replay::STATUS_COMPLETE {
         eprintln!(
             "warning: estimator status `{}`: not every parameter was identified (null in the summary)",
             outcome.summary.status

@@ -1,0 +1,146 @@
+//! Physical plausibility of an identified parameter: whether a conventional aircraft (or the
+//! aircraft the model file describes, `[plausible.X]`) can have the value, and what most
+//! likely made it otherwise. A record nobody prepared carries unit slips, reversed signs,
+//! absurd constants and missing thrust that no fit statistic reveals: a lift slope of 0.7, a
+//! negative drag, an elevator power 57 times too small are each a good fit of bad data.
+//!
+//! Two verdicts, both in the parameter's `flags` ([`aeroident_io::ParameterResult`]):
+//! - a value outside [`ModelSpec::plausible_range`] by more than 2σ (any amount without a σ):
+//!   flagged, with the likely cause of its kind of term ([`implausible`]);
+//! - drag and axial-force terms (`CD_*`, `CX_*`) of a record without thrust: withdrawn
+//!   (`null`, not identified), since they are then drag minus thrust ([`without_thrust`]).
+
+use aeroident_estimators::{Coefficient, Param, Term};
+use aeroident_io::{Channel, Mapping, ModelSpec, ParameterResult};
+
+/// The flag of parameter `p` = `estimate` ± `std_error` when it lies outside the aircraft's
+/// plausible range by more than 2σ (module doc), naming the range and the likely cause; else
+/// `None`. A value whose sign the sign check already warned about is left to that warning.
+pub fn implausible(
+    model: &ModelSpec,
+    p: Param,
+    estimate: f64,
+    std_error: Option<f64>,
+) -> Option<String> {
+    let (lo, hi) = model.plausible_range(p)?;
+    let outside = if estimate < lo { lo - estimate } else { estimate - hi };
+    let margin = 2.0 * std_error.unwrap_or(0.0);
+    if outside <= margin || !estimate.is_finite() {
+        return None;
+    }
+    let whose = if model.plausible.iter().any(|r| r.param == p) {
+        "this aircraft's range (the model file's)"
+    } else {
+        "the range of a conventional aircraft"
+    };
+    Some(format!(
+        "{} = {estimate:+.4} lies outside {whose} [{lo}, {hi}]: likely {}; a model file's [plausible.{}] sets an unconventional aircraft's range",
+        p.name(),
+        likely_cause(p),
+        p.name()
+    ))
+}
+
+/// What most often puts a term of `p`'s kind out of range.
+fn likely_cause(p: Param) -> &'static str {
+    match (p.coefficient, p.term) {
+        (_, Term::De | Term::Da | Term::Dr) => {
+            "a surface in degrees mapped as radians (÷57.3), a reversed surface, or a surface that barely moved"
+        }
+        (Coefficient::Cm, Term::Q | Term::Q0)
+        | (Coefficient::Cl, Term::P)
+        | (Coefficient::Cn, Term::R) => {
+            "a time skew or lag between the rate and the other channels (run compat), or too little excitation"
+        }
+        (Coefficient::CD | Coefficient::CX, _) => {
+            "the thrust model, or an axial accelerometer mapped with gravity removed or the wrong sign"
+        }
+        _ => {
+            "an angle in the wrong unit or with an offset, the mass, inertia or reference geometry constants, or a correlated pair (see the correlations)"
+        }
+    }
+}
+
+/// Whether the record's mapping gives thrust: without it the measured drag and axial force
+/// are drag minus thrust.
+pub fn thrust_mapped(mapping: &Mapping) -> bool {
+    mapping.channels.contains_key(&Channel::Thrust)
+}
+
+/// Withdraws `r` (a drag or axial-force term, `CD_*` or `CX_*`) when the record has no thrust
+/// (module doc); other parameters are left as they are. Returns whether it withdrew it.
+pub fn without_thrust(r: &mut ParameterResult, thrust_mapped: bool) -> bool {
+    let drag = Param::from_name(&r.name)
+        .is_some_and(|p| matches!(p.coefficient, Coefficient::CD | Coefficient::CX));
+    if thrust_mapped || !drag {
+        return false;
+    }
+    r.withdraw(
+        "thrust is not mapped: the record's drag is drag minus thrust, so a drag term is not identified (map thrust_n)",
+    );
+    true
+}
+
+/// Flags every parameter of `results` the plausibility check refuses ([`implausible`]) and
+/// withdraws the drag terms of a record without thrust ([`without_thrust`]); the caller judges
+/// the status afterwards.
+pub fn check<'a>(
+    model: &ModelSpec,
+    thrust_mapped: bool,
+    results: impl IntoIterator<Item = &'a mut ParameterResult>,
+) {
+    for r in results {
+        if without_thrust(r, thrust_mapped) {
+            continue;
+        }
+        let (Some(p), Some(e)) = (Param::from_name(&r.name), r.estimate) else { continue };
+        if let Some(flag) = implausible(model, p, e, r.std_error) {
+            r.flag(flag);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn model() -> ModelSpec {
+        ModelSpec::preset("six-axis").unwrap()
+    }
+
+    /// The 2σ margin: CD_0 = −0.068 ± 0.015 is 4.5σ below 0 (flagged); −0.02 ± 0.015 is within
+    /// 2σ of the range (not flagged); a surface in degrees mapped as radians (Cm_de −1.53/57.3
+    /// with a small σ) is flagged with the unit named as the likely cause.
+    #[test]
+    fn outside_by_more_than_two_sigma_is_flagged_with_its_cause() {
+        let m = ModelSpec::preset("longitudinal").unwrap();
+        let cd0 = Param::from_name("CD_0").unwrap();
+        assert!(implausible(&m, cd0, -0.068, Some(0.015)).is_some());
+        assert!(implausible(&m, cd0, -0.02, Some(0.015)).is_none());
+        let de = Param::from_name("Cm_de").unwrap();
+        let f = implausible(&m, de, -1.53 / 57.3, Some(0.001)).unwrap();
+        assert!(f.contains("degrees mapped as radians") && f.contains("[-5, -0.1]"), "{f}");
+        assert!(implausible(&m, de, -1.53, Some(0.1)).is_none());
+        // An override replaces the conventional range.
+        let mut m = m;
+        m.plausible.push(aeroident_io::PlausibleRange { param: de, min: 0.2, max: 2.0 });
+        assert!(implausible(&m, de, -1.53, Some(0.1)).unwrap().contains("this aircraft's"));
+        assert!(implausible(&m, de, 1.0, None).is_none());
+    }
+
+    /// Without thrust the drag terms are withdrawn with the reason, the others untouched.
+    #[test]
+    fn drag_terms_without_thrust_are_not_identified() {
+        let mut rs = [
+            ParameterResult::new("CD_0", Some(-0.07), Some(0.01), None, None),
+            ParameterResult::new("Cl_p", Some(-0.4), Some(0.01), None, None),
+        ];
+        check(&model(), false, rs.iter_mut());
+        assert_eq!((rs[0].estimate, rs[0].status.as_str()), (None, "not identified"));
+        assert!(rs[0].flags[0].starts_with("thrust is not mapped"));
+        assert_eq!((rs[1].estimate, rs[1].flags.len()), (Some(-0.4), 0));
+        let mut cd = ParameterResult::new("CD_0", Some(0.03), Some(0.01), None, None);
+        check(&model(), true, std::iter::once(&mut cd));
+        assert_eq!((cd.estimate, cd.flags.len()), (Some(0.03), 0));
+    }
+}

@@ -396,7 +396,7 @@ fn val_live_stdin_one_line_per_sample() {
     // Without --out the summary goes to stderr as JSON.
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("\"samples_read\": 601"), "{err}");
-    assert!(err.contains("\"status\": \"running\""), "{err}");
+    assert!(err.contains("\"status\": \"complete\""), "{err}");
 }
 
 /// `replay --estimator oe` on the HFB-320 with the book's model (`models/hfb320_book_q0.toml`)

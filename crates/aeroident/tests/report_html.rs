@@ -80,6 +80,7 @@ qdot = { column = "qdot", unit = "rad/s2" }
 ax = { column = "ax", unit = "m/s2" }
 az = { column = "az", unit = "m/s2" }
 de = { column = "de", unit = "rad" }
+thrust = { value = 0.0, unit = "N" }
 rho = { value = 1.0, unit = "kg/m3" }
 mass = { value = 1000.0, unit = "kg" }
 S = { value = 10.0, unit = "m2" }

@@ -57,7 +57,7 @@
 //! | `de` | angle | elevator, > 0 trailing edge down (nose-down moment) |
 //! | `da` | angle | aileron, > 0 right aileron trailing edge down: negative rolling moment (Cl_da < 0) |
 //! | `dr` | angle | rudder, > 0 trailing edge left (nose-left moment, Cn_dr < 0) |
-//! | `thrust` | force | total thrust (absent: 0, a glider or thrust-in-trim record) |
+//! | `thrust` | force | total thrust (absent: 0 in the equations, but the drag and axial-force terms are then drag minus thrust and are reported not identified; a glider declares `thrust = { value = 0.0, unit = "N" }`) |
 //! | `throttle` | dimensionless | throttle position, 0–1 |
 //! | `thrust_moment` | moment | thrust pitching moment about the CG, > 0 nose up |
 //! | `qbar`, `rho` | pressure, density | dynamic pressure, air density — **one required**; the other is formed from V |

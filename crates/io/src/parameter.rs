@@ -215,12 +215,12 @@ mod tests {
         r.flag("x");
         r.judge(None);
         assert_eq!((r.status.as_str(), r.flags.len()), (STATUS_FLAGGED, 1));
+        assert!((r.error_pct().unwrap() + 1.0).abs() < 1e-9, "sign: estimate more negative");
         r.withdraw("thrust is not mapped");
         assert_eq!(
             (r.estimate, r.std_error, r.status.as_str()),
             (None, None, STATUS_NOT_IDENTIFIED)
         );
-        assert!((r.error_pct().unwrap() + 1.0).abs() < 1e-9, "sign: estimate more negative");
         let r = ParameterResult::new("Cm_q", None, None, Some(-20.0), None);
         assert_eq!((r.status.as_str(), r.error_pct()), (STATUS_NOT_IDENTIFIED, None));
         let r = ParameterResult::new("Cl_0", Some(6e-5), None, Some(3.4e-44), None);

@@ -350,7 +350,7 @@ mod tests {
         assert!(h.starts_with("<!DOCTYPE html>") && h.trim_end().ends_with("</html>"));
         assert!(h.contains("<title>run &lt;x&gt; &amp; y</title>"));
         assert!(h.contains("a&quot;b.toml") && h.contains("w &lt;1&gt;"));
-        assert!(h.contains("-27.00 ± 0.70") && h.contains("<td class=\"ok\">ok</td>"));
+        assert!(h.contains("-27.00 ± 0.70") && h.contains("<td class=\"ok\">identified</td>"));
         assert!(h.contains("<figure><svg xmlns") && !h.contains("<?xml"));
         for external in ["<script", "src=", "href=", "@import", "url("] {
             assert!(!h.contains(external), "{external}");

@@ -406,6 +406,27 @@ impl Term {
         }
     }
 
+    /// The lower-order terms a power or product term is built from (`alpha2` → `alpha`,
+    /// `alpha_de` → `alpha`, `de`, a spline → `alpha`, `mach2` → `mach`); empty for the others.
+    /// A structure keeps a term's parents beside it (the model hierarchy of Klein & Morelli
+    /// 2006 §5.4 and SIDPAC's `swr`): `α²` without `α` makes the curvature carry the slope.
+    pub fn parents(self) -> &'static [Term] {
+        match self {
+            Term::Alpha2 | Term::AlphaK1 | Term::AlphaK2 | Term::AlphaK3 | Term::AlphaK4 => {
+                &[Term::Alpha]
+            }
+            Term::AlphaDe => &[Term::Alpha, Term::De],
+            Term::AlphaBeta => &[Term::Alpha, Term::Beta],
+            Term::AlphaP => &[Term::Alpha, Term::P],
+            Term::AlphaQ => &[Term::Alpha, Term::Q],
+            Term::AlphaR => &[Term::Alpha, Term::R],
+            Term::AlphaDa => &[Term::Alpha, Term::Da],
+            Term::AlphaDr => &[Term::Alpha, Term::Dr],
+            Term::Mach2 => &[Term::Mach],
+            _ => &[],
+        }
+    }
+
     /// The α spline term of knot `i` (0-based), `None` past [`MAX_KNOTS`].
     pub fn spline(i: usize) -> Option<Term> {
         [Term::AlphaK1, Term::AlphaK2, Term::AlphaK3, Term::AlphaK4].get(i).copied()

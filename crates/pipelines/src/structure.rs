@@ -95,6 +95,8 @@ pub fn select_on_samples(
 ) -> Result<CoefficientSelection, String> {
     let who = coefficient.name();
     check_candidates(candidates).map_err(|e| format!("{who}: {e}"))?;
+    let offered = candidates.len();
+    let candidates = &with_parents(candidates);
     let mut rows = Vec::new();
     let mut z = Vec::new();
     let mut skipped = 0;
@@ -141,7 +143,15 @@ pub fn select_on_samples(
         columns: DMatrix::from_row_slice(z.len(), candidates.len(), &rows),
         z: DVector::from_vec(z),
     };
-    let selection = run(&c, method).map_err(|e| format!("{who}: {e}"))?;
+    // The parents not offered are not selected, only kept beside a child.
+    let offered = Candidates {
+        names: c.names[..offered].to_vec(),
+        columns: c.columns.columns(0, offered).into_owned(),
+        z: c.z.clone(),
+    };
+    let mut selection = run(&offered, method).map_err(|e| format!("{who}: {e}"))?;
+    selection.names.clone_from(&c.names);
+    let selection = keep_hierarchy(&c, candidates, selection);
     let std_error_coloured = structure::coloured_std_error(&c, &selection.fit, &lengths);
     Ok(CoefficientSelection {
         coefficient,
@@ -151,6 +161,46 @@ pub fn select_on_samples(
         samples: c.z.len(),
         skipped,
     })
+}
+
+/// `candidates` with the parents of each power or product term among them ([`Term::parents`];
+/// appended after the given ones, never offered to the selection itself), so that the
+/// hierarchy can be kept.
+fn with_parents(candidates: &[Term]) -> Vec<Term> {
+    let mut out = candidates.to_vec();
+    for t in candidates {
+        for p in t.parents() {
+            if !out.contains(p) {
+                out.push(*p);
+            }
+        }
+    }
+    out
+}
+
+/// `selection` with every parent of a kept power or product term kept too ([`Term::parents`],
+/// the model hierarchy), refitted; the terms added are named in its `stopped` reason.
+fn keep_hierarchy(c: &Candidates, candidates: &[Term], mut selection: Selection) -> Selection {
+    let mut terms = selection.fit.terms.clone();
+    let mut added = Vec::new();
+    for &k in &selection.fit.terms {
+        for p in candidates[k].parents() {
+            if let Some(j) = candidates.iter().position(|t| t == p)
+                && !terms.contains(&j)
+            {
+                terms.push(j);
+                added.push(format!("{} (parent of {})", p.name(), candidates[k].name()));
+            }
+        }
+    }
+    if added.is_empty() {
+        return selection;
+    }
+    terms.sort_unstable();
+    selection.fit = structure::fit(c, &terms);
+    selection.stopped =
+        format!("{}; kept for the model hierarchy: {}", selection.stopped, added.join(", "));
+    selection
 }
 
 fn run(c: &Candidates, method: Method) -> Result<Selection, StructureError> {
@@ -370,6 +420,36 @@ mod tests {
     use rand_distr::{Distribution, Normal};
 
     const BREAK_DEG: f64 = 8.0;
+
+    /// The model hierarchy: `z = 3 α²` over α in [0.1, 0.3] rad, with a small deterministic
+    /// noise, is fitted by `alpha2` alone, and stepwise regression stops there; the kept model has `alpha` beside it
+    /// (refitted to ≈ 0, `alpha2` still 3), and the reason names the parent. A parent never
+    /// offered is offered.
+    #[test]
+    fn a_power_term_keeps_its_parent() {
+        let candidates = with_parents(&[Term::Alpha2]);
+        assert_eq!(candidates, [Term::Alpha2, Term::Alpha]);
+        let alpha: Vec<f64> = (0..200).map(|i| 0.1 + 0.001 * i as f64).collect();
+        let mut rows = Vec::new();
+        for a in &alpha {
+            rows.extend([a * a, *a]);
+        }
+        let c = Candidates {
+            names: vec!["alpha2".into(), "alpha".into()],
+            columns: DMatrix::from_row_slice(alpha.len(), 2, &rows),
+            z: DVector::from_iterator(
+                alpha.len(),
+                alpha.iter().enumerate().map(|(i, a)| 3.0 * a * a + 1e-3 * (37.0 * i as f64).sin()),
+            ),
+        };
+        let plain = structure::stepwise(&c, StepwiseConfig::default()).unwrap();
+        assert_eq!(plain.fit.terms, [0], "{:?}", plain.stopped);
+        let kept = keep_hierarchy(&c, &candidates, plain);
+        assert_eq!(kept.fit.terms, [0, 1]);
+        let (alpha2, alpha) = (kept.fit.theta[0], kept.fit.theta[1]);
+        assert!((alpha2 - 3.0).abs() < 0.2 && alpha.abs() < 0.1, "{:?}", kept.fit.theta);
+        assert!(kept.stopped.ends_with("kept for the model hierarchy: alpha (parent of alpha2)"));
+    }
 
     /// 40 s at 50 Hz of a record whose lift slope breaks at 8°: `CL = 0.2 + 4.5 α + 6 q̂ +
     /// 0.4 δe + dcla (α − 8°)₊` plus white noise of σ 0.01, `CD = 0.05 + 0.5 α²`, written

@@ -118,6 +118,7 @@ pub fn freqresp<R: Read>(
     opts: &FreqRespOptions,
 ) -> Result<FreqRespOutcome, RecordError> {
     check_channels(opts)?;
+    check_options(opts)?;
     let file = reader.file().to_string();
     let rec = read_records(vec![reader], None, None, &opts.windows)?;
     let mut warnings = rec.notes.clone();
@@ -200,10 +201,37 @@ fn check_channels(opts: &FreqRespOptions) -> Result<(), RecordError> {
     Ok(())
 }
 
+/// Checks what the options alone decide before the record is read, so that a value out of
+/// range (a points-per-decade that would size a grid of terabytes, a NaN coherence that no
+/// frequency passes) is named at once rather than after the read or not at all.
+fn check_options(opts: &FreqRespOptions) -> Result<(), RecordError> {
+    opts.spectral.check().map_err(spectral_error)?;
+    let c = opts.fit.min_coherence;
+    if !(0.0..=1.0).contains(&c) {
+        return Err(RecordError::Option {
+            option: "min-coherence",
+            reason: format!("{c} is not a coherence in [0, 1]"),
+        });
+    }
+    Ok(())
+}
+
+/// The command-line spelling of a [`SpectralOptions`] field, as [`RecordError::Option`] names
+/// options (the Python keywords are the same words with underscores).
+fn spectral_flag(field: &'static str) -> &'static str {
+    match field {
+        "window_lengths_s" => "windows-s",
+        "f_min_hz" => "f-min-hz",
+        "f_max_hz" => "f-max-hz",
+        "points_per_decade" => "points-per-decade",
+        other => other,
+    }
+}
+
 fn spectral_error(e: aeroident_signals::spectral::SpectralError) -> RecordError {
     use aeroident_signals::spectral::SpectralError as E;
     match e {
-        E::Option { option, reason } => RecordError::Option { option, reason },
+        E::Option { option, reason } => RecordError::Option { option: spectral_flag(option), reason },
         E::NotExcited { .. } => RecordError::Option { option: "input", reason: e.to_string() },
         E::Data(m) => RecordError::Model(m),
     }

@@ -223,6 +223,20 @@ def test_mass_must_be_positive_message():
         aeroident.replay(arrays, estimator="rls", model="longitudinal", constants=dict(constants, mass_kg=-1))
 
 
+def test_array_replay_past_the_memory_limit_is_refused_with_an_estimate():
+    # Ten million samples: zeroed arrays are not resident until written, so only the first
+    # sample (the one the refusal reads) costs memory here.
+    small, constants = synthetic(2)
+    n = 10_000_000
+    arrays = {}
+    for k, v in small.items():
+        a = np.zeros(n)
+        a[0] = v[0]
+        arrays[k] = a
+    with pytest.raises(aeroident.AeroidentError, match=r"1\.000e7 samples × \d+ parameters: .*about \d+ MB.*limit of 2147 MB"):
+        aeroident.replay(arrays, estimator="rls", model="longitudinal", constants=constants)
+
+
 def test_arrays_whose_every_sample_is_refused_raise():
     arrays, constants = synthetic(30)
     arrays = dict(arrays, vt_mps=-np.abs(arrays["vt_mps"]))

@@ -11,6 +11,7 @@
 
 use aeroident_estimators::compat::CompatConfig;
 use aeroident_io::{LogFormat, Mapping, open_log_with_notes};
+use aeroident_estimators::compat::CompatResult;
 use aeroident_pipelines::compat::{ChannelSummary, CompatSummary, check_records};
 use aeroident_pipelines::window::TimeWindow;
 use std::fmt::Write as _;
@@ -56,18 +57,15 @@ pub struct CompatArgs {
     pub max_iterations: Option<u32>,
 }
 
-/// Runs `aeroident compat`.
+/// Runs `aeroident compat`: `--out` is locked and checked before the record is read, and a
+/// signal during the check writes `summary.json` marked `interrupted`
+/// ([`super::whole_record`]).
 ///
 /// # Errors
-/// Unreadable mapping or record, a missing channel, a check that fails, an unwritable output.
+/// Unreadable mapping or record, a missing channel, a check that fails, an unwritable output,
+/// a signal.
 pub fn execute(args: CompatArgs) -> anyhow::Result<()> {
     let mapping = Mapping::from_path(&args.map)?;
-    let mut readers = Vec::new();
-    for file in std::iter::once(&args.data).chain(&args.and) {
-        let (reader, notes) = open_log_with_notes(file, args.format, &mapping)?;
-        notes.iter().for_each(|n| eprintln!("note: {n}"));
-        readers.push(reader);
-    }
     let mut config = CompatConfig {
         time_shifts: !args.no_time_shifts,
         gyro_time_shifts: args.gyro_time_shifts,
@@ -77,21 +75,45 @@ pub fn execute(args: CompatArgs) -> anyhow::Result<()> {
     if let Some(n) = args.max_iterations {
         config.max_iterations = n as usize;
     }
-    let (summary, result) = check_records(readers, &args.windows, &config)?;
+    let mut inputs: Vec<&Path> =
+        std::iter::once(&args.data).chain(&args.and).map(Path::new).collect();
+    inputs.push(args.map.as_path());
+    let mut run = super::whole_record::WholeRecord::begin(
+        "compat",
+        &args.data,
+        args.out.as_deref(),
+        &inputs,
+    )?;
+    let files: Vec<String> = std::iter::once(&args.data).chain(&args.and).cloned().collect();
+    let (format, windows) = (args.format, args.windows.clone());
+    let (summary, result) = run.run(move || check(&files, format, &mapping, &windows, &config))?;
     super::print_stdout(&render(&summary))?;
-    if let Some(dir) = &args.out {
-        let mut inputs: Vec<&Path> =
-            std::iter::once(&args.data).chain(&args.and).map(Path::new).collect();
-        inputs.push(args.map.as_path());
-        let mut out = crate::outdir::OutputDir::open(dir, "compat", &inputs)?;
+    if let (Some(out), Some(dir)) = (run.writing(), &args.out) {
         out.write_bytes("compat.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
         let source = crate::report::Source { data: &args.data, mapping: &args.map };
         let traces = aeroident_pipelines::compat::traces(&result);
-        crate::report::compat::write(&source, &summary, &traces, &mut out)?;
+        crate::report::compat::write(&source, &summary, &traces, out)?;
         out.finish();
         eprintln!("wrote {} and report.html", dir.join("compat.json").display());
     }
     Ok(())
+}
+
+/// Reads `files` (the record, then each `--and`) and checks them jointly.
+fn check(
+    files: &[String],
+    format: Option<LogFormat>,
+    mapping: &Mapping,
+    windows: &[TimeWindow],
+    config: &CompatConfig,
+) -> anyhow::Result<(CompatSummary, CompatResult)> {
+    let mut readers = Vec::new();
+    for file in files {
+        let (reader, notes) = open_log_with_notes(file, format, mapping)?;
+        notes.iter().for_each(|n| eprintln!("note: {n}"));
+        readers.push(reader);
+    }
+    Ok(check_records(readers, windows, config)?)
 }
 
 /// The console text: status, the channel table, residuals, findings and warnings.

@@ -1,7 +1,7 @@
 //! `read` (a record as numpy arrays) and `replay` (a record or arrays through an estimator, all
 //! samples in Rust, the estimates as a time × parameter matrix).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use aeroident_estimators::AirDataSample;
 use aeroident_io::{Mapping, ModelSpec, RecordEvent, open_log_with_notes, open_log_with_report};
@@ -340,7 +340,8 @@ fn replay_file<'py>(
         .unwrap_or_default();
     let derivatives = derivative_source(derivatives)?;
     let choice = model_choice(model, select, candidates, knots_deg, diff_window);
-    let (path, mapping, compat) = (path.to_owned(), mapping.to_owned(), compat.map(PathBuf::from));
+    let (path, mapping) = (path.to_owned(), mapping.to_owned());
+    let compat = compat.map(CompatSource::from_arg);
     let signals = Signals::new();
     let run = || -> anyhow::Result<_> {
         let mapping = Mapping::from_path(Path::new(&mapping))?;
@@ -358,8 +359,14 @@ fn replay_file<'py>(
             windows,
             ..ReplayOptions::default()
         };
-        let records = Records { data: path, and: Vec::new(), format: None, mapping, live: false };
-        let compat = compat.map(CompatSource::File);
+        let records = Records {
+            data: path,
+            and: Vec::new(),
+            format: None,
+            mapping,
+            live: false,
+            allow_duplicates: false,
+        };
         let job =
             ReplayJob { records, model: choice, compat, options, cross_check, validate_on: None };
         replay_job(&job, &signals)

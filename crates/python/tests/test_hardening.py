@@ -273,3 +273,49 @@ def test_bad_input_is_a_python_exception_never_a_panic(call):
     except BaseException as e:  # noqa: BLE001 - the type is what is tested
         assert isinstance(e, (aeroident.AeroidentError, TypeError, ValueError, OverflowError, IndexError)), repr(e)
         assert type(e).__name__ != "PanicException", repr(e)
+
+
+# --- records and lists given the wrong way ----------------------------------------------------
+
+GOOD = ROOT / "crates/io/tests/data/good.csv"
+MIN_MAP = ROOT / "crates/io/tests/data/min.toml"
+
+
+def test_a_record_given_twice_to_fit_is_refused_unless_asked(tmp_path):
+    copy = tmp_path / "copy.csv"
+    copy.write_bytes(GOOD.read_bytes())
+    with pytest.raises(aeroident.AeroidentError, match=r"copy\.csv` has the same content as .*good\.csv.*--allow-duplicate-records"):
+        aeroident.fit(GOOD, MIN_MAP, also=[copy])
+    with pytest.raises(aeroident.AeroidentError, match="is the same file as"):
+        aeroident.fit(GOOD, MIN_MAP, also=[GOOD.parent / "." / "good.csv"])
+    # Asked for: the duplicate check lets it through (whatever the fit then makes of it).
+    try:
+        aeroident.fit(GOOD, MIN_MAP, also=[copy], allow_duplicate_records=True)
+    except aeroident.AeroidentError as e:
+        assert "same content" not in str(e), e
+
+
+@pytest.mark.parametrize(
+    "call, message",
+    [
+        (lambda: aeroident.fit(GOOD, MIN_MAP, also="copy.csv"), "also must be a list"),
+        (lambda: aeroident.fit(GOOD, MIN_MAP, also=Path("copy.csv")), "also must be a list"),
+        (lambda: aeroident.fit(GOOD, MIN_MAP, knots_deg="57"), "knots_deg must be a list"),
+        (lambda: aeroident.fit(GOOD, MIN_MAP, candidates="alpha"), "candidates must be a list"),
+        (lambda: aeroident.replay(GOOD, MIN_MAP, knots_deg="5"), "knots_deg must be a list"),
+        (lambda: aeroident.replay(GOOD, MIN_MAP, candidates="q"), "candidates must be a list"),
+        (lambda: aeroident.fit(GOOD, MIN_MAP, band_hz=(1,)), r"band_hz must be \(f_min_hz, f_max_hz\), two numbers; got 1"),
+        (lambda: aeroident.fit(GOOD, MIN_MAP, band_hz="1:5"), "band_hz must be a list"),
+        (lambda: aeroident.fit(GOOD, MIN_MAP, windows=[(1.0,)]), r"windows entries must be \(start_s, end_s\)"),
+    ],
+)
+def test_a_lone_string_where_a_list_belongs_is_refused(call, message):
+    # Once iterated character by character: knots 5° and 7°, records `c`, `o`, `p` …
+    with pytest.raises((TypeError, ValueError), match=message):
+        call()
+
+
+def test_compat_auto_is_the_check_not_a_file_name():
+    r = aeroident.replay(shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv"), ROOT / "mappings/hfb320.toml", compat="auto")
+    applied = [w for w in r["summary"]["warnings"] if w.startswith("compat applied")]
+    assert applied, r["summary"]["warnings"]

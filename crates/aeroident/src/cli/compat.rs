@@ -13,6 +13,7 @@ use aeroident_estimators::compat::CompatConfig;
 use aeroident_io::{LogFormat, Mapping, open_log_with_notes};
 use aeroident_estimators::compat::CompatResult;
 use aeroident_pipelines::compat::{ChannelSummary, CompatSummary, check_records};
+use aeroident_pipelines::record::duplicates::check_distinct;
 use aeroident_pipelines::window::TimeWindow;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -41,6 +42,10 @@ pub struct CompatArgs {
     /// the first (one set of corrections per flight), as `replay --and` fits it.
     #[arg(long = "and", value_name = "FILE")]
     pub and: Vec<String>,
+    /// Check a record given twice (the same file, or two files of the same content) as if new
+    /// data; without it such a record is refused, as it would be weighted twice.
+    #[arg(long)]
+    pub allow_duplicate_records: bool,
     /// Do not estimate the outputs' time shifts.
     #[arg(long)]
     pub no_time_shifts: bool,
@@ -75,6 +80,8 @@ pub fn execute(args: CompatArgs) -> anyhow::Result<()> {
     if let Some(n) = args.max_iterations {
         config.max_iterations = n as usize;
     }
+    let files: Vec<String> = std::iter::once(&args.data).chain(&args.and).cloned().collect();
+    check_distinct(files.iter().map(String::as_str), args.allow_duplicate_records)?;
     let mut inputs: Vec<&Path> =
         std::iter::once(&args.data).chain(&args.and).map(Path::new).collect();
     inputs.push(args.map.as_path());
@@ -84,7 +91,6 @@ pub fn execute(args: CompatArgs) -> anyhow::Result<()> {
         args.out.as_deref(),
         &inputs,
     )?;
-    let files: Vec<String> = std::iter::once(&args.data).chain(&args.and).cloned().collect();
     let (format, windows) = (args.format, args.windows.clone());
     let (summary, result) = run.run(move || check(&files, format, &mapping, &windows, &config))?;
     super::print_stdout(&render(&summary))?;

@@ -159,6 +159,10 @@ pub struct ReplayArgs {
     /// applied to all.
     #[arg(long = "and", value_name = "FILE")]
     pub and: Vec<String>,
+    /// Fit a record given twice (the same file, or two files of the same content) as if new
+    /// data; without it such a record is refused, as it would shrink every σ by √2.
+    #[arg(long)]
+    pub allow_duplicate_records: bool,
     /// Real-time estimators: also fit the record by output error with the same model and set
     /// the two side by side; a parameter further apart than 2 combined σ is flagged in the
     /// table, the warnings and `summary.json` `cross_check`, with its likely cause.
@@ -312,6 +316,7 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     };
     // Lock the directory and clear the previous run's files before reading anything: a
     // directory that cannot take the results is refused before a long fit, not after it.
+    records.check_distinct()?;
     let mut out_dir = open_out(&args)?;
     // From here a signal ends the run gracefully (crate::interrupt): the steps over the whole
     // record before the estimator too, with a summary saying so.
@@ -346,7 +351,14 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
 
 /// The records of the command line: `DATA` and `--and`, in `--format`, through `mapping`.
 fn records(args: &ReplayArgs, mapping: Mapping, live: bool) -> Records {
-    Records { data: args.data.clone(), and: args.and.clone(), format: args.format, mapping, live }
+    Records {
+        data: args.data.clone(),
+        and: args.and.clone(),
+        format: args.format,
+        mapping,
+        live,
+        allow_duplicates: args.allow_duplicate_records,
+    }
 }
 
 /// How the model is chosen: `--model`, `--select`, `--candidates`, `--knots-deg` (the

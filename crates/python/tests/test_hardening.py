@@ -319,3 +319,24 @@ def test_compat_auto_is_the_check_not_a_file_name():
     r = aeroident.replay(shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv"), ROOT / "mappings/hfb320.toml", compat="auto")
     applied = [w for w in r["summary"]["warnings"] if w.startswith("compat applied")]
     assert applied, r["summary"]["warnings"]
+
+
+@pytest.mark.parametrize(
+    "change, status",
+    [(("xcg = 0.30", "xcg = 5.0"), "failed"), (("duration_s = 10.0", "duration_s = 0.005"), "no_estimates")],
+)
+def test_a_campaign_without_any_estimate_says_so(tmp_path, change, status):
+    text = SHORT.read_text()
+    assert change[0] in text
+    path = tmp_path / "s.toml"
+    path.write_text(text.replace(change[0], change[1], 1))
+    r = aeroident.montecarlo(path, runs=2)
+    assert r["status"] == status, r
+    assert "2 runs" in r["status_reason"], r
+
+
+def test_scenario_harmonics_past_the_limit_are_refused_at_parse(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text(SHORT.read_text().replace("harmonics = [2, 3, 4,", "harmonics = [2000000000, 3, 4,", 1))
+    with pytest.raises(aeroident.AeroidentError, match=r"input\[0\].*2\.000e9.*10000"):
+        aeroident.montecarlo(path, runs=1)

@@ -36,7 +36,7 @@ pub struct CompatArgs {
     /// A time window `START:END` (record seconds) to check, as `replay --window` fits it;
     /// repeat it for several manoeuvres. Default: the whole record (taxi and ground runs
     /// included: give the fit's windows to check the data the fit uses).
-    #[arg(long = "window", value_name = "START:END", value_parser = TimeWindow::parse)]
+    #[arg(long = "window", value_name = "START:END", value_parser = TimeWindow::parse, allow_hyphen_values = true)]
     pub windows: Vec<TimeWindow>,
     /// A further record of the same aircraft (same mapping and format), checked jointly with
     /// the first (one set of corrections per flight), as `replay --and` fits it.

@@ -53,7 +53,7 @@ pub struct FreqRespArgs {
     /// Time window `START:END` of the record, s; several allowed (each its own stretch). Or
     /// `sysid[:AXIS]`: the spans of an ArduPilot log's SYSID sweeps (on `SID_AXIS` AXIS,
     /// number or name), found from its SIDS and SIDD messages.
-    #[arg(long = "window", value_parser = parse_window)]
+    #[arg(long = "window", value_parser = parse_window, allow_hyphen_values = true)]
     pub windows: Vec<WindowArg>,
     /// Spectral window lengths, s, comma-separated; default five from half the longest
     /// stretch down to an eighth of that.

@@ -151,7 +151,7 @@ pub struct ReplayArgs {
     /// A time window `START:END` (record seconds) of the record to use; repeat it for several
     /// manoeuvres of one flight, each window its own manoeuvre (own initial state). Default:
     /// the whole record.
-    #[arg(long = "window", value_name = "START:END", value_parser = parse_window)]
+    #[arg(long = "window", value_name = "START:END", value_parser = parse_window, allow_hyphen_values = true)]
     pub windows: Vec<TimeWindow>,
     /// `--estimator oe | fem`: a further record of the same aircraft (same mapping and
     /// format), fitted together with the first, each file a manoeuvre of its own; repeat it

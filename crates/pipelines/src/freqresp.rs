@@ -144,6 +144,16 @@ pub fn freqresp<R: Read>(
             dropped.uncovered
         ));
     }
+    if stretches.is_empty() {
+        return Err(RecordError::Option {
+            option: "window",
+            reason: format!(
+                "no uniformly sampled stretch of 4 or more samples in the record{} ({} samples in shorter ones): nothing to transform",
+                if opts.windows.is_empty() { "" } else { "'s windows" },
+                dropped.short
+            ),
+        });
+    }
     let samples = stretches.iter().map(|s| s[0].len()).sum();
     let r = frequency_responses(&stretches, &opts.inputs, &opts.outputs, dt_s, &opts.spectral)
         .map_err(spectral_error)?;
@@ -189,6 +199,16 @@ fn check_channels(opts: &FreqRespOptions) -> Result<(), RecordError> {
             return Err(RecordError::Option {
                 option,
                 reason: format!("`{bad}` is not a channel; one of {}", channels().join(", ")),
+            });
+        }
+    }
+    for (option, list) in [("input", &opts.inputs), ("output", &opts.outputs)] {
+        if let Some((_, dup)) = list.iter().enumerate().find(|(k, c)| list[..*k].contains(c)) {
+            return Err(RecordError::Option {
+                option,
+                reason: format!(
+                    "`{dup}` is given twice (a channel conditioned on itself leaves nothing to excite it)"
+                ),
             });
         }
     }

@@ -317,6 +317,14 @@ impl Plan {
             opts.window_lengths_s.clone()
         };
         let mut windows = Vec::new();
+        if opts.window_lengths_s.is_empty() && longest < 64 {
+            // The shortest default window is T/16; below 64 samples it would hold fewer than 4,
+            // and an error naming the window lengths would name an option nobody gave.
+            return Err(SpectralError::Data(format!(
+                "the longest contiguous stretch of data holds {longest} samples ({} s): the default spectral windows (half of it down to a sixteenth) need at least 64; give longer time windows or a longer record",
+                short(longest_s)
+            )));
+        }
         for &t in &lengths {
             let n = (t / dt_s).round();
             if !(n.is_finite() && n >= 4.0) {

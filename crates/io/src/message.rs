@@ -4,16 +4,9 @@
 
 /// `v` in a short form: plain with at most four decimals when its magnitude lies in
 /// `[10⁻³, 10⁶)` (or it is 0), otherwise scientific with four significant digits (`1.000e12`);
-/// `NaN`, `inf` and `-inf` as Rust writes them.
+/// `NaN`, `inf` and `-inf` as Rust writes them ([`aeroident_physics::text::Short`]).
 pub fn short(v: f64) -> String {
-    if !v.is_finite() {
-        return format!("{v}");
-    }
-    if v == 0.0 || (1e-3..1e6).contains(&v.abs()) {
-        format!("{}", (v * 1e4).round() / 1e4)
-    } else {
-        format!("{v:.3e}")
-    }
+    aeroident_physics::text::Short(v).to_string()
 }
 
 /// A count in the short form of [`short`]: in full below 10⁶, else scientific.

@@ -107,13 +107,9 @@ impl SpectralOptions {
     }
 }
 
-/// `v` in a short form for messages: plain when moderate, else scientific with four digits.
+/// `v` in a short form for messages ([`aeroident_physics::text::Short`]).
 fn short(v: f64) -> String {
-    if v == 0.0 || (1e-3..1e6).contains(&v.abs()) {
-        format!("{}", (v * 1e4).round() / 1e4)
-    } else {
-        format!("{v:.3e}")
-    }
+    aeroident_physics::text::Short(v).to_string()
 }
 
 impl Default for SpectralOptions {

@@ -298,8 +298,12 @@ fn exit_design_refuses_out_of_range_options() {
 fn exit_a_window_with_a_negative_start_is_a_value() {
     use aeroident::cli::{Cli, Command};
     let window = |cmd: &[&str]| {
-        let args: Vec<&str> =
-            ["aeroident"].iter().chain(cmd).chain(&["--window", "-10:5", "--window", "-2.5:-1"]).copied().collect();
+        let args: Vec<&str> = ["aeroident"]
+            .iter()
+            .chain(cmd)
+            .chain(&["--window", "-10:5", "--window", "-2.5:-1"])
+            .copied()
+            .collect();
         Cli::try_parse_args(args).unwrap_or_else(|e| panic!("{cmd:?}: {e}")).command
     };
     match window(&["replay", "r.csv", "--map", "m.toml"]) {

@@ -86,7 +86,10 @@ fn bad_input_names_the_option() {
             vec!["--input", "de", "--output", "q", "--points-per-decade", "18446744073709551615"],
             "`--points-per-decade`: 1.845e19 is outside [1, 1000]",
         ),
-        (vec!["--input", "de", "--output", "q", "--min-coherence", "nan"], "`--min-coherence`: NaN"),
+        (
+            vec!["--input", "de", "--output", "q", "--min-coherence", "nan"],
+            "`--min-coherence`: NaN",
+        ),
         (vec!["--input", "de", "--input", "de", "--output", "q"], "`--input`: `de` is given twice"),
         (
             vec!["--input", "de", "--output", "q", "--window", "1:1.05"],

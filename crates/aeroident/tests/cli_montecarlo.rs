@@ -119,7 +119,13 @@ fn montecarlo_without_any_estimate_is_not_complete() {
     std::fs::create_dir_all(&dir).unwrap();
     for (tag, from, to, status, says) in [
         ("trim", "xcg = 0.30", "xcg = 5.0", "failed", "every one of the 2 runs failed (run 0"),
-        ("dt", "duration_s = 10.0", "duration_s = 0.005", "no_estimates", "none of the 2 runs gave an estimate"),
+        (
+            "dt",
+            "duration_s = 10.0",
+            "duration_s = 0.005",
+            "no_estimates",
+            "none of the 2 runs gave an estimate",
+        ),
     ] {
         assert!(text.contains(from), "short.toml changed: no `{from}`");
         let path = dir.join(format!("{tag}.toml"));

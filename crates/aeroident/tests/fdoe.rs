@@ -152,7 +152,8 @@ fn fdoe_band_above_nyquist_is_recorded_and_warned() {
     let v = fit(&data, "twin_otter.toml", "fdoe", &["--band-hz", "0.5:100"], "nyquist");
     let f = &v["frequency_domain"];
     assert_eq!(f["band_hz"], serde_json::json!([0.5, 100.0]));
-    let (lo, hi) = (f["band_fitted_hz"][0].as_f64().unwrap(), f["band_fitted_hz"][1].as_f64().unwrap());
+    let (lo, hi) =
+        (f["band_fitted_hz"][0].as_f64().unwrap(), f["band_fitted_hz"][1].as_f64().unwrap());
     assert!(lo >= 0.5 && (hi - top).abs() < 1e-9 * top && hi < 25.0, "{lo} {hi} vs {top}");
     let warned = v["warnings"].as_array().unwrap().iter().any(|w| {
         let w = w.as_str().unwrap();
@@ -161,7 +162,8 @@ fn fdoe_band_above_nyquist_is_recorded_and_warned() {
     assert!(warned, "{}", v["warnings"]);
     let v = fit(&data, "twin_otter.toml", "fdoe", &["--band-hz", "0.2:1.5"], "inside");
     let f = &v["frequency_domain"];
-    let (lo, hi) = (f["band_fitted_hz"][0].as_f64().unwrap(), f["band_fitted_hz"][1].as_f64().unwrap());
+    let (lo, hi) =
+        (f["band_fitted_hz"][0].as_f64().unwrap(), f["band_fitted_hz"][1].as_f64().unwrap());
     assert!(0.2 <= lo && lo < hi && hi <= 1.5, "{lo} {hi}");
     assert!(!v["warnings"].to_string().contains("Nyquist"), "{}", v["warnings"]);
 }

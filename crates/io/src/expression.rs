@@ -81,8 +81,9 @@ impl Expression {
     /// parser's message, for other text that is not an expression of this grammar.
     pub fn parse(text: &str) -> Result<Self, String> {
         check_functions(text)?;
-        let flat = FlatEx::<f64, ChannelOps, ChannelNumber>::parse(text)
-            .map_err(|e| format!("not an expression of the mapping grammar (docs/mapping.md): {e}"))?;
+        let flat = FlatEx::<f64, ChannelOps, ChannelNumber>::parse(text).map_err(|e| {
+            format!("not an expression of the mapping grammar (docs/mapping.md): {e}")
+        })?;
         let columns = flat.var_names().iter().map(|n| unbraced(n).to_string()).collect();
         Ok(Self { text: text.to_string(), flat, columns })
     }
@@ -142,7 +143,9 @@ fn check_functions(text: &str) -> Result<(), String> {
 fn functions() -> Vec<String> {
     let mut names: Vec<String> = ChannelOps::make()
         .iter()
-        .filter(|o| o.has_unary() && o.repr().chars().all(|c| c.is_ascii_alphanumeric() || c == '_'))
+        .filter(|o| {
+            o.has_unary() && o.repr().chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+        })
         .map(|o| o.repr().to_string())
         .collect();
     names.sort();

@@ -251,7 +251,9 @@ fn spectral_flag(field: &'static str) -> &'static str {
 fn spectral_error(e: aeroident_signals::spectral::SpectralError) -> RecordError {
     use aeroident_signals::spectral::SpectralError as E;
     match e {
-        E::Option { option, reason } => RecordError::Option { option: spectral_flag(option), reason },
+        E::Option { option, reason } => {
+            RecordError::Option { option: spectral_flag(option), reason }
+        }
         E::NotExcited { .. } => RecordError::Option { option: "input", reason: e.to_string() },
         E::Data(m) => RecordError::Model(m),
     }

@@ -844,8 +844,7 @@ pub fn assemble(
             r.outcome.as_ref().err().map(|e| FailedRun { run: r.index, reason: e.clone() })
         })
         .collect();
-    let (status, status_reason) = match outcome_status(results.len(), &failed_runs, &estimators)
-    {
+    let (status, status_reason) = match outcome_status(results.len(), &failed_runs, &estimators) {
         Some((status, why)) => (status, Some(why)),
         None => (STATUS_COMPLETE, None),
     };

@@ -359,14 +359,7 @@ fn replay_file<'py>(
             windows,
             ..ReplayOptions::default()
         };
-        let records = Records {
-            data: path,
-            and: Vec::new(),
-            format: None,
-            mapping,
-            live: false,
-            allow_duplicates: false,
-        };
+        let records = Records::one(path, mapping);
         let job =
             ReplayJob { records, model: choice, compat, options, cross_check, validate_on: None };
         replay_job(&job, &signals)

@@ -88,7 +88,10 @@ impl SpectralOptions {
             ));
         }
         if let Some(t) = self.window_lengths_s.iter().find(|t| !(t.is_finite() && **t > 0.0)) {
-            return Err(opt("window_lengths_s", format!("{} s is not a positive length", short(*t))));
+            return Err(opt(
+                "window_lengths_s",
+                format!("{} s is not a positive length", short(*t)),
+            ));
         }
         for (option, f) in [("f_min_hz", self.f_min_hz), ("f_max_hz", self.f_max_hz)] {
             if let Some(f) = f.filter(|f| !(f.is_finite() && *f > 0.0)) {

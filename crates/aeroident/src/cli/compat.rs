@@ -10,8 +10,8 @@
 //! `DIR/compat.json` ([`aeroident_pipelines::compat`] documents its keys).
 
 use aeroident_estimators::compat::CompatConfig;
-use aeroident_io::{LogFormat, Mapping, open_log_with_notes};
 use aeroident_estimators::compat::CompatResult;
+use aeroident_io::{LogFormat, Mapping, open_log_with_notes};
 use aeroident_pipelines::compat::{ChannelSummary, CompatSummary, check_records};
 use aeroident_pipelines::record::duplicates::check_distinct;
 use aeroident_pipelines::window::TimeWindow;

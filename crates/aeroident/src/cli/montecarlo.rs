@@ -272,7 +272,9 @@ pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
             super::print_stdout(&format!("{}wrote {}", table(&c), dir.display()))?;
         }
     }
-    if let Some(e) = interrupt.error("the outputs over the runs done were written, status `interrupted`") {
+    if let Some(e) =
+        interrupt.error("the outputs over the runs done were written, status `interrupted`")
+    {
         return Err(e.into());
     }
     // Empty statistics are written (they say why), but are not a result to go on from.

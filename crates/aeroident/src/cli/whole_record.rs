@@ -33,8 +33,8 @@ impl WholeRecord {
         out: Option<&Path>,
         inputs: &[&Path],
     ) -> anyhow::Result<Self> {
-        let interrupt = Interrupt::install()
-            .map_err(|e| anyhow::anyhow!("installing signal handlers: {e}"))?;
+        let interrupt =
+            Interrupt::install().map_err(|e| anyhow::anyhow!("installing signal handlers: {e}"))?;
         let out = out.map(|d| OutputDir::open(d, command, inputs)).transpose()?;
         Ok(Self { command, data: data.to_string(), interrupt, out })
     }

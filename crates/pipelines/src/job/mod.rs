@@ -50,6 +50,12 @@ pub struct Records {
 }
 
 impl Records {
+    /// One record file `data` read through `mapping`, its format by its extension: no further
+    /// record, not live.
+    pub fn one(data: String, mapping: Mapping) -> Self {
+        Self { data, and: Vec::new(), format: None, mapping, live: false, allow_duplicates: false }
+    }
+
     /// Every file, the main record first.
     pub fn files(&self) -> impl Iterator<Item = &String> {
         std::iter::once(&self.data).chain(&self.and)

@@ -77,7 +77,9 @@ fn hash_of<'a>(file: &'a str, hashes: &mut HashMap<&'a str, u64>) -> Result<u64,
         return Ok(*h);
     }
     let io = |e: std::io::Error| {
-        RecordError::Model(format!("{file}: cannot be read to compare it with the other records: {e}"))
+        RecordError::Model(format!(
+            "{file}: cannot be read to compare it with the other records: {e}"
+        ))
     };
     let mut f = std::fs::File::open(file).map_err(io)?;
     let mut h = std::collections::hash_map::DefaultHasher::new();
@@ -99,8 +101,8 @@ mod tests {
     use super::*;
 
     fn scratch(tag: &str) -> std::path::PathBuf {
-        let d = std::env::temp_dir()
-            .join(format!("aeroident-duplicates-{}-{tag}", std::process::id()));
+        let d =
+            std::env::temp_dir().join(format!("aeroident-duplicates-{}-{tag}", std::process::id()));
         let _ = std::fs::remove_dir_all(&d);
         std::fs::create_dir_all(&d).unwrap();
         d

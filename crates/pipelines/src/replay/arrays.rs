@@ -211,7 +211,9 @@ mod tests {
         let e = check_array_size(10_000_000, 15).unwrap_err();
         let mb = (estimated_array_bytes(10_000_000, 15) / 1e6).round();
         assert!(
-            e.contains("1.000e7 samples") && e.contains(&format!("{mb} MB")) && e.contains("2147 MB"),
+            e.contains("1.000e7 samples")
+                && e.contains(&format!("{mb} MB"))
+                && e.contains("2147 MB"),
             "{e}"
         );
         assert!(mb > 2400.0, "{mb}");

@@ -55,7 +55,8 @@ pub(super) fn fit_fdoe(
     let t0 = std::time::Instant::now();
     let fd = fit(&slices, &config).map_err(|e| ReplayError::Model(e.to_string()))?;
     let wall = t0.elapsed().as_secs_f64();
-    let mut warnings: Vec<String> = band_clipped(band_hz, &slices, fitted_band(&fd)).into_iter().collect();
+    let mut warnings: Vec<String> =
+        band_clipped(band_hz, &slices, fitted_band(&fd)).into_iter().collect();
     let simulated = match simulate_at(&slices, model.structure, &fd.outputs, &fd.values) {
         Ok(r) => Some(r),
         Err(e) => {
@@ -230,14 +231,19 @@ fn summarise(
 
 /// The band fitted: the lowest and highest frequency any manoeuvre contributed, Hz.
 fn fitted_band(fd: &FdoeResult) -> (f64, f64) {
-    let lo = fd.frequencies_hz.iter().filter_map(|f| f.first()).fold(f64::INFINITY, |a, b| a.min(*b));
+    let lo =
+        fd.frequencies_hz.iter().filter_map(|f| f.first()).fold(f64::INFINITY, |a, b| a.min(*b));
     let hi = fd.frequencies_hz.iter().filter_map(|f| f.last()).fold(0.0, |a: f64, b| a.max(*b));
     (lo, hi)
 }
 
 /// The warning of a band asked above the record's Nyquist frequency (the highest of its
 /// manoeuvres'), where the fit could only stop short of it; `None` when it was not.
-fn band_clipped(asked: (f64, f64), slices: &[&[AirDataSample]], fitted: (f64, f64)) -> Option<String> {
+fn band_clipped(
+    asked: (f64, f64),
+    slices: &[&[AirDataSample]],
+    fitted: (f64, f64),
+) -> Option<String> {
     let nyquist = slices
         .iter()
         .filter(|m| m.len() > 1)

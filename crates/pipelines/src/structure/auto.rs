@@ -125,7 +125,8 @@ impl AutoModel {
         }
         let rad: Vec<f64> = knots_deg.iter().map(|k| k.to_radians()).collect();
         let knots = AlphaKnots::new(&rad).map_err(|e| {
-            let shown: Vec<String> = knots_deg.iter().map(|k| aeroident_io::message::short(*k)).collect();
+            let shown: Vec<String> =
+                knots_deg.iter().map(|k| aeroident_io::message::short(*k)).collect();
             format!("α knots [{}]°: {e}", aeroident_io::message::list(&shown, 8))
         })?;
         Ok(Self { knots: Some(knots), ..self })
@@ -618,7 +619,10 @@ mod tests {
         let auto = || AutoModel::from_args("auto", "swr", &[]).unwrap().unwrap();
         let many: Vec<f64> = (0..1_000_000).map(|k| k as f64 * 1e-4).collect();
         let e = auto().with_knots_deg(&many).unwrap_err();
-        assert!(e.len() < 300 && e.contains("… and 999992 more") && e.contains("1000000 α knots"), "{e}");
+        assert!(
+            e.len() < 300 && e.contains("… and 999992 more") && e.contains("1000000 α knots"),
+            "{e}"
+        );
         let huge: f64 = format!("1{}", "0".repeat(309)).parse().unwrap();
         for (knot, shown) in [(1e300, "1.000e300"), (huge, "inf"), (123.456_789, "123.4568")] {
             let e = auto().with_knots_deg(&[knot]).unwrap_err();

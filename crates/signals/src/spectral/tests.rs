@@ -210,7 +210,10 @@ fn bad_input_is_named() {
         &long,
     )
     .unwrap_err();
-    assert!(e.to_string().contains("`window_lengths_s`") && e.to_string().contains("longer"), "{e}");
+    assert!(
+        e.to_string().contains("`window_lengths_s`") && e.to_string().contains("longer"),
+        "{e}"
+    );
     let zero = vec![0.0; 2_000];
     let e =
         frequency_responses(&[vec![zero, y.clone()]], &names(&["de"]), &names(&["q"]), DT, &opts())
@@ -244,14 +247,15 @@ fn points_per_decade_beyond_the_limit_are_refused_before_any_grid_is_made() {
         let e = o.check().unwrap_err().to_string();
         assert!(e.contains("`points_per_decade`") && e.contains("1000"), "{e}");
         let zero = vec![0.0; 2_000];
-        let e = frequency_responses(&[vec![zero, y.clone()]], &names(&["de"]), &names(&["q"]), DT, &o)
-            .unwrap_err();
+        let e =
+            frequency_responses(&[vec![zero, y.clone()]], &names(&["de"]), &names(&["q"]), DT, &o)
+                .unwrap_err();
         assert!(matches!(e, SpectralError::Option { option: "points_per_decade", .. }), "{e}");
     }
     let at_limit = SpectralOptions { points_per_decade: MAX_POINTS_PER_DECADE, ..opts() };
     assert!(at_limit.check().is_ok());
-    let r = frequency_responses(&[vec![x, y]], &names(&["de"]), &names(&["q"]), DT, &at_limit)
-        .unwrap();
+    let r =
+        frequency_responses(&[vec![x, y]], &names(&["de"]), &names(&["q"]), DT, &at_limit).unwrap();
     // f_max 5 Hz, f_min 2/T_max: the grid holds decades × 1000 + 1 points.
     let p = &r.pairs[0];
     let decades = (p.frequency_hz[p.frequency_hz.len() - 1] / p.frequency_hz[0]).log10();

@@ -99,7 +99,8 @@ fn bad_channels_and_windows_are_named() {
 /// that exists), and the ones the options alone decide are refused before the record is read.
 #[test]
 fn options_out_of_range_are_named_by_their_flag() {
-    let cases: [(fn(&mut FreqRespOptions), &str); 6] = [
+    type Set = fn(&mut FreqRespOptions);
+    let cases: [(Set, &str); 6] = [
         (|o| o.spectral.points_per_decade = 1_000_000_000_000, "`--points-per-decade`"),
         (|o| o.spectral.points_per_decade = usize::MAX, "`--points-per-decade`"),
         (|o| o.spectral.f_max_hz = Some(30.0), "`--f-max-hz`"),

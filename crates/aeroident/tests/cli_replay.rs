@@ -381,6 +381,17 @@ fn errors_a_record_given_twice_is_refused_unless_asked() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `--cross-check` beside a batch fit of a file is refused (it sets a batch fit beside a
+/// real-time estimator, so with `oe` or `fdoe` it was silently ignored), as it is on stdin.
+#[test]
+fn errors_cross_check_with_a_batch_fit_is_refused() {
+    for est in ["oe", "fdoe"] {
+        let (ok, err) = replay_good(&["--estimator", est, "--cross-check"], "xc-batch");
+        assert!(!ok && err.contains("--cross-check") && err.contains(est), "{err}");
+        assert!(!tmp_path("xc-batch").exists(), "the output directory was touched first");
+    }
+}
+
 /// Live mode: the HFB-320 record on stdin gives one estimates line per sample on stdout.
 #[test]
 fn val_live_stdin_one_line_per_sample() {

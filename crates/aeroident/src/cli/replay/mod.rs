@@ -411,6 +411,13 @@ fn check_combination(args: &ReplayArgs, mavlink: bool) -> anyhow::Result<()> {
             args.estimator.name()
         );
     }
+    if args.estimator.is_batch() && args.cross_check {
+        // It would be ignored: the cross-check is a batch fit set beside a real-time estimator.
+        anyhow::bail!(
+            "--cross-check sets a batch output-error fit beside a real-time estimator; --estimator {} is a batch fit already: run the other estimator on the record to compare",
+            args.estimator.name()
+        );
+    }
     if args.estimator.is_batch() {
         return Ok(());
     }

@@ -340,3 +340,12 @@ def test_scenario_harmonics_past_the_limit_are_refused_at_parse(tmp_path):
     path.write_text(SHORT.read_text().replace("harmonics = [2, 3, 4,", "harmonics = [2000000000, 3, 4,", 1))
     with pytest.raises(aeroident.AeroidentError, match=r"input\[0\].*2\.000e9.*10000"):
         aeroident.montecarlo(path, runs=1)
+
+
+@pytest.mark.parametrize("keyword", [dict(compat="compat.json"), dict(compat="auto"), dict(windows=[(0.0, 1.0)]), dict(cross_check=True), dict(mapping="m.toml")])
+def test_file_only_keywords_with_arrays_are_refused(keyword):
+    # Once compat= on arrays was ignored without a word.
+    arrays, constants = synthetic(30)
+    name = next(iter(keyword))
+    with pytest.raises(aeroident.AeroidentError, match=f"replay of arrays: {name} apply to a record file"):
+        aeroident.replay(arrays, estimator="rls", model="longitudinal", constants=constants, **keyword)

@@ -261,6 +261,13 @@ def replay(
             None if knots_deg is None else [float(k) for k in _sequence("knots_deg", knots_deg)],
             **options,
         )
+    # What only a record file has a use for would be ignored for arrays: refused instead.
+    file_only = dict(mapping=mapping, compat=compat, windows=windows, cross_check=cross_check or None, candidates=candidates, knots_deg=knots_deg)
+    given = [k for k, v in file_only.items() if v is not None]
+    if given:
+        raise AeroidentError(
+            f"replay of arrays: {', '.join(given)} apply to a record file (read, corrected and windowed by the pipeline); the arrays go to the estimator as they are"
+        )
     keys = set(_core.sample_keys())
     arrays = {k: np.ascontiguousarray(v, dtype=np.float64) for k, v in data.items() if k in keys}
     return _core.replay_arrays(

@@ -365,7 +365,7 @@ pub const MAX_HARMONIC: u32 = 10_000;
 pub(crate) fn harmonic_too_high(i: usize, k: u32) -> String {
     let shown = if k < 1_000_000 { k.to_string() } else { format!("{:.3e}", f64::from(k)) };
     format!(
-        "entry {i} = {shown} is above the highest harmonic {MAX_HARMONIC} (harmonic k is k periods per base period: lengthen base_period_s instead)"
+        "entry {i} = {shown} is above the highest harmonic {MAX_HARMONIC} (harmonic k is k periods per base period: for a higher frequency shorten base_period_s)"
     )
 }
 

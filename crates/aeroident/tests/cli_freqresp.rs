@@ -111,3 +111,32 @@ fn bad_input_names_the_option() {
         assert!(err.contains(needle), "{args:?}: `{needle}` not in {err}");
     }
 }
+
+/// An option out of range is refused before the output directory is opened (which clears the
+/// previous run's files): the previous results stay.
+#[test]
+fn a_bad_option_leaves_the_previous_results() {
+    let d = scratch("keep");
+    write_record(&d);
+    let out = d.join("out");
+    let run = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_aeroident"))
+            .args(["freqresp", "r.csv", "--map", "m.toml", "--input", "de", "--output", "q"])
+            .args(extra)
+            .arg("--out")
+            .arg(&out)
+            .current_dir(&d)
+            .output()
+            .unwrap()
+    };
+    let o = run(&[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for bad in
+        [&["--points-per-decade", "0"][..], &["--min-coherence", "2"], &["--input", "elevator"]]
+    {
+        let o = run(bad);
+        assert!(!o.status.success(), "{bad:?}");
+        assert!(out.join("freqresp.json").exists(), "{bad:?} removed the previous results");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -117,8 +117,7 @@ pub fn freqresp<R: Read>(
     reader: FlightDataReader<R>,
     opts: &FreqRespOptions,
 ) -> Result<FreqRespOutcome, RecordError> {
-    check_channels(opts)?;
-    check_options(opts)?;
+    check(opts)?;
     let file = reader.file().to_string();
     let rec = read_records(vec![reader], None, None, &opts.windows)?;
     let mut warnings = rec.notes.clone();
@@ -178,6 +177,17 @@ pub fn freqresp<R: Read>(
         fits,
         warnings,
     })
+}
+
+/// Checks what the options alone decide ([`freqresp`] does it first): the channels known and
+/// distinct, the spectral options and the coherence in range. A face calls it before it
+/// touches its output, so that a bad option leaves the previous results in place.
+///
+/// # Errors
+/// [`RecordError::Option`] naming the option as the command line spells it.
+pub fn check(opts: &FreqRespOptions) -> Result<(), RecordError> {
+    check_channels(opts)?;
+    check_options(opts)
 }
 
 fn check_channels(opts: &FreqRespOptions) -> Result<(), RecordError> {

@@ -182,6 +182,8 @@ pub fn execute(args: FreqRespArgs) -> anyhow::Result<()> {
     let mapping = Mapping::from_path(&args.map)?;
     // The options first: a `--window sysid` on a log that cannot have sweeps is named as such.
     let options = args.options(&mapping)?;
+    // Before the output directory is opened (which clears the previous run's results).
+    aeroident_pipelines::freqresp::check(&options)?;
     let inputs = [Path::new(&args.data), args.map.as_path()];
     let mut run = super::whole_record::WholeRecord::begin(
         "freqresp",

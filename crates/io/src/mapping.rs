@@ -1107,12 +1107,7 @@ fn resolve(
         });
     }
     if !spec.scale.is_finite() || !spec.offset.is_finite() {
-        let short = aeroident_physics::text::Short;
-        return Err(bad(format!(
-            "scale {} and offset {} must be finite",
-            short(spec.scale),
-            short(spec.offset)
-        )));
+        return Err(bad(not_finite(spec.scale, spec.offset)));
     }
     if spec.weights.is_some() && spec.columns.is_none() {
         return Err(bad("`weights` needs `columns`".into()));
@@ -1203,6 +1198,12 @@ fn resolve(
         calibration,
         expression,
     })
+}
+
+/// The message of a scale or offset that is not finite, both shown short.
+fn not_finite(scale: f64, offset: f64) -> String {
+    use aeroident_physics::text::Short;
+    format!("scale {} and offset {} must be finite", Short(scale), Short(offset))
 }
 
 #[cfg(test)]

@@ -117,6 +117,40 @@ impl Interrupt {
         self.requested().then(|| signal_name(self.shared.signal.load(Ordering::SeqCst) as i32))
     }
 
+    /// Runs `work`, a step over a whole record with no safe point to stop at (replay's
+    /// `--compat auto`, `--model auto`; `compat`; `freqresp`), on a thread of its own while
+    /// answering the signals: a signal abandons it at once, `None` (the thread ends with the
+    /// process, which writes its summary and exits).
+    ///
+    /// # Errors
+    /// The thread could not start or ended without a result (a panic).
+    pub fn watched<T: Send + 'static>(
+        &self,
+        work: impl FnOnce() -> T + Send + 'static,
+    ) -> anyhow::Result<Option<T>> {
+        if self.requested() {
+            return Ok(None);
+        }
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::Builder::new()
+            .name("whole-record".into())
+            .stack_size(aeroident_pipelines::WORKER_STACK_BYTES)
+            .spawn(move || {
+                let _ = tx.send(work());
+            })
+            .map_err(|e| anyhow::anyhow!("starting a thread: {e}"))?;
+        loop {
+            match rx.recv_timeout(Duration::from_millis(50)) {
+                Ok(r) => return Ok(Some(r)),
+                Err(RecvTimeoutError::Disconnected) => {
+                    anyhow::bail!("internal: a step over the whole record ended without a result")
+                }
+                Err(RecvTimeoutError::Timeout) if self.requested() => return Ok(None),
+                Err(RecvTimeoutError::Timeout) => {}
+            }
+        }
+    }
+
     /// The error that ends an interrupted run, if a signal arrived; `outcome` tells what was
     /// written (it follows the signal's name in the message).
     pub fn error(&self, outcome: &str) -> Option<Interrupted> {

@@ -290,3 +290,35 @@ fn exit_design_refuses_out_of_range_options() {
     expect(&["design", "--duration-s", "1e9"], 1, &["--duration-s", "samples"]);
     expect(&["design", "--alt-ft", "1e6"], 1, &["--alt-ft", "1000000", "altitudes"]);
 }
+
+/// A window starting before the record's time zero (`--window -10:5`) is a window, for every
+/// command that takes one; it once failed with "unexpected argument '-1'" (a negative number
+/// is a value, but `-10:5` is not a number).
+#[test]
+fn exit_a_window_with_a_negative_start_is_a_value() {
+    use aeroident::cli::{Cli, Command};
+    let window = |cmd: &[&str]| {
+        let args: Vec<&str> = ["aeroident"]
+            .iter()
+            .chain(cmd)
+            .chain(&["--window", "-10:5", "--window", "-2.5:-1"])
+            .copied()
+            .collect();
+        Cli::try_parse_args(args).unwrap_or_else(|e| panic!("{cmd:?}: {e}")).command
+    };
+    match window(&["replay", "r.csv", "--map", "m.toml"]) {
+        Command::Replay(a) => {
+            let w: Vec<(f64, f64)> = a.windows.iter().map(|w| (w.start_s, w.end_s)).collect();
+            assert_eq!(w, [(-10.0, 5.0), (-2.5, -1.0)]);
+        }
+        c => panic!("{c:?}"),
+    }
+    match window(&["compat", "r.csv", "--map", "m.toml"]) {
+        Command::Compat(a) => assert_eq!((a.windows[0].start_s, a.windows[1].end_s), (-10.0, -1.0)),
+        c => panic!("{c:?}"),
+    }
+    match window(&["freqresp", "r.csv", "--map", "m.toml", "--input", "de", "--output", "q"]) {
+        Command::Freqresp(a) => assert_eq!(a.windows.len(), 2),
+        c => panic!("{c:?}"),
+    }
+}

@@ -74,8 +74,31 @@ fn bad_input_names_the_option() {
     write_record(&d);
     for (args, needle) in [
         (vec!["--input", "de", "--output", "r"], "`r` is not in the record"),
-        (vec!["--input", "de", "--output", "q", "--windows-s", "500"], "--window"),
+        (vec!["--input", "de", "--output", "q", "--windows-s", "500"], "`--windows-s`: 500 s"),
         (vec!["--input", "de", "--output", "q", "--fit", "q/de:3/2"], "--fit"),
+        // Options named as they are spelled, never `--f_max` or `--points_per_decade`.
+        (vec!["--input", "de", "--output", "q", "--f-max-hz", "30"], "`--f-max-hz`: 30 Hz"),
+        (
+            vec!["--input", "de", "--output", "q", "--points-per-decade", "1000000000000"],
+            "`--points-per-decade`: 1.000e12 is outside [1, 1000]",
+        ),
+        (
+            vec!["--input", "de", "--output", "q", "--points-per-decade", "18446744073709551615"],
+            "`--points-per-decade`: 1.845e19 is outside [1, 1000]",
+        ),
+        (
+            vec!["--input", "de", "--output", "q", "--min-coherence", "nan"],
+            "`--min-coherence`: NaN",
+        ),
+        (vec!["--input", "de", "--input", "de", "--output", "q"], "`--input`: `de` is given twice"),
+        (
+            vec!["--input", "de", "--output", "q", "--window", "1:1.05"],
+            "`--window`: no uniformly sampled stretch of 4 or more samples",
+        ),
+        (
+            vec!["--input", "de", "--output", "q", "--window", "1:1.5"],
+            "holds 26 samples (0.52 s): the default spectral windows",
+        ),
     ] {
         let o = Command::new(env!("CARGO_BIN_EXE_aeroident"))
             .args(["freqresp", "r.csv", "--map", "m.toml"])
@@ -87,4 +110,33 @@ fn bad_input_names_the_option() {
         assert!(!o.status.success() && !err.contains("panicked"), "{args:?}: {err}");
         assert!(err.contains(needle), "{args:?}: `{needle}` not in {err}");
     }
+}
+
+/// An option out of range is refused before the output directory is opened (which clears the
+/// previous run's files): the previous results stay.
+#[test]
+fn a_bad_option_leaves_the_previous_results() {
+    let d = scratch("keep");
+    write_record(&d);
+    let out = d.join("out");
+    let run = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_aeroident"))
+            .args(["freqresp", "r.csv", "--map", "m.toml", "--input", "de", "--output", "q"])
+            .args(extra)
+            .arg("--out")
+            .arg(&out)
+            .current_dir(&d)
+            .output()
+            .unwrap()
+    };
+    let o = run(&[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for bad in
+        [&["--points-per-decade", "0"][..], &["--min-coherence", "2"], &["--input", "elevator"]]
+    {
+        let o = run(bad);
+        assert!(!o.status.success(), "{bad:?}");
+        assert!(out.join("freqresp.json").exists(), "{bad:?} removed the previous results");
+    }
+    let _ = std::fs::remove_dir_all(&d);
 }

@@ -694,3 +694,122 @@ fn sigint_during_compat_auto_or_model_auto_writes_an_interrupted_summary() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+// --- compat and freqresp: the whole-record commands ---------------------------------------
+
+const LAG_MAP: &str = "nominal_dt_s = 0.02\n[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"V\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nq = { column = \"q\", unit = \"rad/s\" }\nde = { column = \"de\", unit = \"rad\" }\nrho = { value = 1.0, unit = \"kg/m3\" }\nmass = { value = 1000.0, unit = \"kg\" }\nS = { value = 10.0, unit = \"m2\" }\ncbar = { value = 1.5, unit = \"m\" }\nIyy = { value = 2000.0, unit = \"kg*m2\" }\n";
+
+/// `DIR/r.csv` as a record that never ends: a named pipe holding a header and two rows, kept
+/// open for writing by the returned handle, so a command reading it waits in its read (its
+/// whole-record analysis under way) until the handle is dropped. `DIR/m.toml` maps it.
+fn endless_record(dir: &Path) -> std::fs::File {
+    let fifo = dir.join("r.csv");
+    let made = Command::new("mkfifo").arg(&fifo).status().unwrap();
+    assert!(made.success());
+    // Read and write: opening a pipe so does not wait for a reader (Linux, the BSDs).
+    let mut w = std::fs::OpenOptions::new().read(true).write(true).open(&fifo).unwrap();
+    w.write_all(b"t,V,a,q,de\n0,50,0.05,0,0\n0.02,50,0.05,0,0.01\n").unwrap();
+    std::fs::write(dir.join("m.toml"), LAG_MAP).unwrap();
+    w
+}
+
+/// `aeroident ARGS` in `dir` with its stderr collected by a thread.
+fn spawn_in(dir: &Path, args: &[&str]) -> (Child, Arc<Stderr>) {
+    let mut child = bin()
+        .args(args)
+        .current_dir(dir)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let err = Arc::new(Stderr::default());
+    let sink = Arc::clone(&err);
+    let stderr = child.stderr.take().unwrap();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            let mut s = sink.text.lock().unwrap();
+            s.push_str(&line);
+            s.push('\n');
+        }
+        sink.closed.store(true, Ordering::SeqCst);
+    });
+    (child, err)
+}
+
+/// Waits until `out` is locked by a run (the lock file exists; the run installs its signal
+/// handlers before it locks), at most 60 s.
+fn wait_for_lock(out: &Path, err: &Stderr) {
+    let start = Instant::now();
+    while !out.join(".aeroident.lock").exists() {
+        assert!(start.elapsed() < Duration::from_secs(60), "no lock: {}", err.text());
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+const FREQRESP: [&str; 8] =
+    ["freqresp", "r.csv", "--map", "m.toml", "--input", "de", "--output", "q"];
+const COMPAT: [&str; 4] = ["compat", "r.csv", "--map", "m.toml"];
+
+/// A signal while `compat` or `freqresp` reads and analyses its record ends it with
+/// `summary.json` alone, status `interrupted`, naming the signal and the command, and exit
+/// 128 + signal (once they wrote nothing at all).
+#[test]
+fn a_signal_during_compat_or_freqresp_writes_an_interrupted_summary() {
+    for (tag, cmd, sig, code) in
+        [("fr-int", &FREQRESP[..], "INT", 130), ("co-term", &COMPAT[..], "TERM", 143)]
+    {
+        let d = scratch(tag);
+        let writer = endless_record(&d);
+        let args: Vec<&str> = cmd.iter().copied().chain(["--out", "out"]).collect();
+        let (mut child, err) = spawn_in(&d, &args);
+        let out = d.join("out");
+        wait_for_lock(&out, &err);
+        signal(&child, &format!("-{sig}"));
+        let got = exit_code(&mut child, &err);
+        drop(writer);
+        let text = err.text();
+        assert_eq!(got, code, "{tag}: {text}");
+        let v = summary(&out);
+        assert_eq!(v["status"], "interrupted", "{v}");
+        let reason = v["status_reason"].as_str().unwrap();
+        assert!(reason.contains(&format!("SIG{sig} during `{}`", cmd[0])), "{reason}");
+        let files: Vec<String> = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| !n.starts_with('.'))
+            .collect();
+        assert_eq!(files, ["summary.json"], "{tag}");
+        let _ = std::fs::remove_dir_all(&d);
+    }
+}
+
+/// A second `compat` or `freqresp` into a directory a first one is still working for is
+/// refused at once, naming the directory, before it reads anything (it would otherwise wait on
+/// the same endless record); so is an `--out` that cannot be a directory. Once both exited 0
+/// and the later silently replaced the other's results.
+#[test]
+fn compat_and_freqresp_lock_and_check_their_output_before_the_work() {
+    for (tag, cmd) in [("fr-busy", &FREQRESP[..]), ("co-busy", &COMPAT[..])] {
+        let d = scratch(tag);
+        let writer = endless_record(&d);
+        let args: Vec<&str> = cmd.iter().copied().chain(["--out", "out"]).collect();
+        let (mut first, first_err) = spawn_in(&d, &args);
+        wait_for_lock(&d.join("out"), &first_err);
+        let (mut second, err) = spawn_in(&d, &args);
+        let code = exit_code(&mut second, &err);
+        let text = err.text();
+        assert_eq!(code, 1, "{tag}: {text}");
+        assert!(text.contains("is in use by another aeroident run"), "{tag}: {text}");
+        std::fs::write(d.join("file"), "not a directory").unwrap();
+        let args: Vec<&str> = cmd.iter().copied().chain(["--out", "file"]).collect();
+        let (mut third, err) = spawn_in(&d, &args);
+        let code = exit_code(&mut third, &err);
+        assert_eq!(code, 1, "{tag}: {}", err.text());
+        assert!(err.text().contains("output directory `file`"), "{tag}: {}", err.text());
+        signal(&first, "-TERM");
+        assert_eq!(exit_code(&mut first, &first_err), 143, "{}", first_err.text());
+        drop(writer);
+        let _ = std::fs::remove_dir_all(&d);
+    }
+}

@@ -108,3 +108,40 @@ fn montecarlo_sigint_writes_the_runs_done_marked_interrupted() {
     assert!(dir.join("report.html").is_file());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A campaign whose every run fails at trim (a centre of gravity far aft of any trim), or whose
+/// runs give no estimate (a run shorter than one step), writes its empty statistics with a
+/// status saying so and exits 1; once both exited 0 with status `complete`.
+#[test]
+fn montecarlo_without_any_estimate_is_not_complete() {
+    let text = std::fs::read_to_string(scenario()).unwrap();
+    let dir = std::env::temp_dir().join(format!("aeroident_mc_fail_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (tag, from, to, status, says) in [
+        ("trim", "xcg = 0.30", "xcg = 5.0", "failed", "every one of the 2 runs failed (run 0"),
+        (
+            "dt",
+            "duration_s = 10.0",
+            "duration_s = 0.005",
+            "no_estimates",
+            "none of the 2 runs gave an estimate",
+        ),
+    ] {
+        assert!(text.contains(from), "short.toml changed: no `{from}`");
+        let path = dir.join(format!("{tag}.toml"));
+        std::fs::write(&path, text.replacen(from, to, 1)).unwrap();
+        let out = Command::new(env!("CARGO_BIN_EXE_aeroident"))
+            .args(["montecarlo"])
+            .arg(&path)
+            .args(["--runs", "2", "--json"])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{tag}: {stderr}");
+        assert!(stderr.contains(&format!("{status}: {says}")), "{tag}: {stderr}");
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(v["status"], status, "{tag}: {v}");
+        assert!(v["status_reason"].as_str().unwrap().contains(says), "{tag}: {v}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

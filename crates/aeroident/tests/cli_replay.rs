@@ -360,6 +360,52 @@ fn errors_replay_job_refuses_and_for_a_real_time_estimator() {
     );
 }
 
+/// A record given twice to a batch fit, or to `compat` (the same file under another path, or a
+/// copy of it), is refused naming both, before the output directory is touched; once it was
+/// fitted as new data, every σ shrunk by √2. `--allow-duplicate-records` lets it through.
+#[test]
+fn errors_a_record_given_twice_is_refused_unless_asked() {
+    let io_data = workspace().join("crates/io/tests/data");
+    let good = io_data.join("good.csv").display().to_string();
+    let dir = tmp_path("dup-records");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let copy = dir.join("copy.csv");
+    std::fs::copy(&good, &copy).unwrap();
+    let copy = copy.display().to_string();
+    let respelled = io_data.join(".").join("good.csv").display().to_string();
+    for (and, how) in [(&respelled, "is the same file as"), (&copy, "has the same content as")] {
+        let (ok, err) = replay_good(&["--estimator", "oe", "--and", and], "dup-out");
+        assert!(!ok && err.contains(&format!("`{and}` {how} `{good}`")), "{err}");
+        assert!(err.contains("--allow-duplicate-records"), "{err}");
+        assert!(!tmp_path("dup-out").exists(), "the output directory was touched first");
+    }
+    let (_, err) =
+        replay_good(&["--estimator", "oe", "--and", &copy, "--allow-duplicate-records"], "dup-ok");
+    assert!(!err.contains("has the same content"), "{err}");
+    let _ = std::fs::remove_dir_all(tmp_path("dup-ok"));
+    let o = bin()
+        .args(["compat", &good, "--map"])
+        .arg(io_data.join("min.toml"))
+        .args(["--and", &copy, "--and", &good])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("has the same content as"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `--cross-check` beside a batch fit of a file is refused (it sets a batch fit beside a
+/// real-time estimator, so with `oe` or `fdoe` it was silently ignored), as it is on stdin.
+#[test]
+fn errors_cross_check_with_a_batch_fit_is_refused() {
+    for est in ["oe", "fdoe"] {
+        let (ok, err) = replay_good(&["--estimator", est, "--cross-check"], "xc-batch");
+        assert!(!ok && err.contains("--cross-check") && err.contains(est), "{err}");
+        assert!(!tmp_path("xc-batch").exists(), "the output directory was touched first");
+    }
+}
+
 /// Live mode: the HFB-320 record on stdin gives one estimates line per sample on stdout.
 #[test]
 fn val_live_stdin_one_line_per_sample() {

@@ -34,8 +34,7 @@ fn val_compat_checks_the_windows_the_fit_uses() {
     assert_eq!((whole.samples_read, whole.manoeuvres), (601, 1));
     assert_eq!((within.samples_read, within.manoeuvres), (inside, 2));
 
-    let records =
-        Records { data: path.clone(), and: vec![], format: None, mapping: m.clone(), live: false };
+    let records = Records::one(path.clone(), m.clone());
     let ran =
         corrections(&records, Some(&CompatSource::Auto), &windows, &mut InPlace, &mut ()).unwrap();
     let Ran::Done(Some(auto)) = ran else { panic!("the auto stage gave no corrections") };

@@ -136,3 +136,34 @@ fn errors_fdoe_band() {
     let o = run(&["--estimator", "fdoe", "--band-hz", "2:1"]);
     assert!(!o.status.success());
 }
+
+/// A band reaching above the record's Nyquist frequency (25 Hz at 50 Hz) is fitted up to the
+/// highest transform frequency below it, and summary.json says so: `band_fitted_hz` holds what
+/// was fitted, a warning names the clip. Within the Nyquist frequency the fitted band lies
+/// inside the band asked and nothing is warned.
+#[test]
+fn fdoe_band_above_nyquist_is_recorded_and_warned() {
+    let Some(data) = common::shared("sidpac_twin_otter/csv/totter_lon_020213f1_018.csv") else {
+        return;
+    };
+    let rows = std::fs::read_to_string(&data).unwrap().lines().count() - 1;
+    // The highest transform bin of one manoeuvre of n samples at 0.02 s: (⌊n/2⌋ − 1)/(n·0.02).
+    let top = (rows / 2 - 1) as f64 / (rows as f64 * 0.02);
+    let v = fit(&data, "twin_otter.toml", "fdoe", &["--band-hz", "0.5:100"], "nyquist");
+    let f = &v["frequency_domain"];
+    assert_eq!(f["band_hz"], serde_json::json!([0.5, 100.0]));
+    let (lo, hi) =
+        (f["band_fitted_hz"][0].as_f64().unwrap(), f["band_fitted_hz"][1].as_f64().unwrap());
+    assert!(lo >= 0.5 && (hi - top).abs() < 1e-9 * top && hi < 25.0, "{lo} {hi} vs {top}");
+    let warned = v["warnings"].as_array().unwrap().iter().any(|w| {
+        let w = w.as_str().unwrap();
+        w.contains("--band-hz 0.5:100") && w.contains("Nyquist frequency 25 Hz")
+    });
+    assert!(warned, "{}", v["warnings"]);
+    let v = fit(&data, "twin_otter.toml", "fdoe", &["--band-hz", "0.2:1.5"], "inside");
+    let f = &v["frequency_domain"];
+    let (lo, hi) =
+        (f["band_fitted_hz"][0].as_f64().unwrap(), f["band_fitted_hz"][1].as_f64().unwrap());
+    assert!(0.2 <= lo && lo < hi && hi <= 1.5, "{lo} {hi}");
+    assert!(!v["warnings"].to_string().contains("Nyquist"), "{}", v["warnings"]);
+}

@@ -493,7 +493,7 @@ pub enum KnotError {
     #[error("{0} α knots; at most {MAX_KNOTS} are supported")]
     TooMany(usize),
     /// A knot that is not finite or beyond ±90°.
-    #[error("α knot {index} ({value} rad) is not a finite angle within ±90°")]
+    #[error("α knot {index} ({} rad) is not a finite angle within ±90°", aeroident_physics::text::Short(*value))]
     NotAnAngle {
         /// 0-based position in the list.
         index: usize,
@@ -502,7 +502,8 @@ pub enum KnotError {
     },
     /// A knot not above the one before it (unsorted or repeated).
     #[error(
-        "α knot {index} ({value} rad) is not above the one before it: list the knots ascending, each once"
+        "α knot {index} ({} rad) is not above the one before it: list the knots ascending, each once",
+        aeroident_physics::text::Short(*value)
     )]
     NotAscending {
         /// 0-based position in the list.

@@ -8,7 +8,8 @@
 //! de   = { expr = "({elev.left} + {elev.right}) / 2", unit = "deg" }
 //! ```
 //!
-//! Arithmetic `+ − * / ^`, parentheses, numbers (all `f64`: `1/2` is 0.5), the functions of
+//! Arithmetic `+ − * / ^`, parentheses, numbers (all `f64`: `1/2` is 0.5; exponents as
+//! `1e-3`, `1.5E2`), the functions of
 //! exmex's float operators (`sqrt`, `sin`, `cos`, `tan`, `exp`, `ln`, `log10`, `abs`, `atan`,
 //! …; `PI`), and the standard-atmosphere functions of [`aeroident_physics::isa`]:
 //!
@@ -25,7 +26,7 @@
 
 use aeroident_physics::isa;
 use exmex::prelude::*;
-use exmex::{FloatOpsFactory, MakeOperators, Operator};
+use exmex::{FloatOpsFactory, MakeOperators, MatchLiteral, Operator};
 
 /// The operators of a channel expression: exmex's float operators and the standard atmosphere.
 #[derive(Clone, Debug)]
@@ -53,11 +54,16 @@ fn isa_density(h_m: f64) -> f64 {
     isa_pressure(h_m) / (isa::R_AIR_J_PER_KG_K * isa_temperature(h_m))
 }
 
+// Numbers as a mapping writes them: exmex's own form (`12`, `1.5`, `.5`) with an optional
+// exponent (`1e-3`, `1.5E2`), which its default matcher would split into a number and a column
+// `e` and then refuse with an internal message about its operator and node counts.
+exmex::literal_matcher_from_pattern!(ChannelNumber, r"^(\.?[0-9]+(\.[0-9]+)?([eE][+-]?[0-9]+)?)");
+
 /// A parsed channel expression: its text and the columns it reads.
 #[derive(Debug, Clone)]
 pub struct Expression {
     text: String,
-    flat: FlatEx<f64, ChannelOps>,
+    flat: FlatEx<f64, ChannelOps, ChannelNumber>,
     columns: Vec<String>,
 }
 
@@ -71,9 +77,13 @@ impl Expression {
     /// Parses `text` (module doc).
     ///
     /// # Errors
-    /// The parser's message, for text that is not an expression of this grammar.
+    /// A name called as a function that is none, naming it and the functions there are; the
+    /// parser's message, for other text that is not an expression of this grammar.
     pub fn parse(text: &str) -> Result<Self, String> {
-        let flat = FlatEx::<f64, ChannelOps>::parse(text).map_err(|e| e.to_string())?;
+        check_functions(text)?;
+        let flat = FlatEx::<f64, ChannelOps, ChannelNumber>::parse(text).map_err(|e| {
+            format!("not an expression of the mapping grammar (docs/mapping.md): {e}")
+        })?;
         let columns = flat.var_names().iter().map(|n| unbraced(n).to_string()).collect();
         Ok(Self { text: text.to_string(), flat, columns })
     }
@@ -94,6 +104,53 @@ impl Expression {
     pub fn eval(&self, values: &[f64]) -> f64 {
         self.flat.eval(values).unwrap_or(f64::NAN)
     }
+}
+
+/// Refuses a name followed by `(` that is not a function of [`ChannelOps`]: exmex would read it
+/// as a column and answer about a parenthesis instead of the unknown function.
+fn check_functions(text: &str) -> Result<(), String> {
+    let chars: Vec<char> = text.chars().collect();
+    let mut k = 0;
+    while k < chars.len() {
+        if chars[k] == '{' {
+            // A braced column name: anything up to its closing brace.
+            k = chars[k..].iter().position(|c| *c == '}').map_or(chars.len(), |p| k + p + 1);
+            continue;
+        }
+        let starts = chars[k].is_ascii_alphabetic() || chars[k] == '_';
+        let after_number = k > 0 && (chars[k - 1].is_ascii_digit() || chars[k - 1] == '.');
+        if !starts || after_number {
+            k += 1;
+            continue;
+        }
+        let end = (k..chars.len())
+            .find(|&j| !(chars[j].is_ascii_alphanumeric() || chars[j] == '_'))
+            .unwrap_or(chars.len());
+        let name: String = chars[k..end].iter().collect();
+        let next = chars[end..].iter().find(|c| !c.is_whitespace());
+        if next == Some(&'(') && !functions().contains(&name) {
+            return Err(format!(
+                "`{name}(…)` calls no function of a channel expression: they are {}",
+                functions().join(", ")
+            ));
+        }
+        k = end;
+    }
+    Ok(())
+}
+
+/// The names of the unary functions a channel expression can call.
+fn functions() -> Vec<String> {
+    let mut names: Vec<String> = ChannelOps::make()
+        .iter()
+        .filter(|o| {
+            o.has_unary() && o.repr().chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+        })
+        .map(|o| o.repr().to_string())
+        .collect();
+    names.sort();
+    names.dedup();
+    names
 }
 
 fn unbraced(name: &str) -> &str {
@@ -118,5 +175,38 @@ mod tests {
         assert!(std.eval(&[30_000.0]).is_nan());
         assert!(Expression::parse("a b").is_err());
         assert!(Expression::parse("(a + b").is_err());
+    }
+
+    /// Numbers with an exponent are numbers (against the same numbers written out), not a
+    /// number and a column `e`; a column whose name starts with `e` still is one.
+    #[test]
+    fn exponent_notation_is_a_number() {
+        for (text, value) in [
+            ("x * 1e-3", 2.0e-3),
+            ("1.5E2 + x", 152.0),
+            ("x / 2.5e+1", 0.08),
+            (".5e1 * x", 10.0),
+            ("2E0 ^ x", 4.0),
+        ] {
+            let e = Expression::parse(text).unwrap_or_else(|m| panic!("{text}: {m}"));
+            assert_eq!(e.columns(), ["x"], "{text}");
+            assert!((e.eval(&[2.0]) - value).abs() < 1e-12, "{text}: {}", e.eval(&[2.0]));
+        }
+        let e = Expression::parse("e1 + exp_x").unwrap();
+        assert_eq!(e.columns(), ["e1", "exp_x"]);
+    }
+
+    /// A call of a function that does not exist names it and the functions there are (a
+    /// known function, a braced column followed by a parenthesised factor, and a column
+    /// times a parenthesis are not calls of an unknown function).
+    #[test]
+    fn unknown_function_is_named() {
+        let e = Expression::parse("isa_presure(h) / 2").unwrap_err();
+        assert!(e.starts_with("`isa_presure(…)` calls no function"), "{e}");
+        assert!(e.contains("isa_pressure") && e.contains("sqrt"), "{e}");
+        let e = Expression::parse("3 * foo (x)").unwrap_err();
+        assert!(e.contains("`foo(…)`"), "{e}");
+        assert!(Expression::parse("sqrt(x) + isa_density(h)").is_ok());
+        assert!(Expression::parse("{a(b)} * (x + 1)").is_ok());
     }
 }

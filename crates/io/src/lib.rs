@@ -18,6 +18,7 @@ pub mod log_contents;
 pub mod mapping;
 mod mat5;
 pub mod mavlink;
+pub mod message;
 pub mod model_file;
 pub mod multirate;
 pub mod parameter;

@@ -672,10 +672,10 @@ impl Mapping {
     fn adjustment(m: &ChannelMap) -> String {
         let mut parts = Vec::new();
         if m.scale != 1.0 {
-            parts.push(format!("scale {}", m.scale));
+            parts.push(format!("scale {}", aeroident_physics::text::Short(m.scale)));
         }
         if m.offset != 0.0 {
-            parts.push(format!("offset {}", m.offset));
+            parts.push(format!("offset {}", aeroident_physics::text::Short(m.offset)));
         }
         if m.calibration.is_some() {
             parts.push("calibration table".to_string());
@@ -1107,7 +1107,7 @@ fn resolve(
         });
     }
     if !spec.scale.is_finite() || !spec.offset.is_finite() {
-        return Err(bad(format!("scale {} and offset {} must be finite", spec.scale, spec.offset)));
+        return Err(bad(not_finite(spec.scale, spec.offset)));
     }
     if spec.weights.is_some() && spec.columns.is_none() {
         return Err(bad("`weights` needs `columns`".into()));
@@ -1200,6 +1200,12 @@ fn resolve(
     })
 }
 
+/// The message of a scale or offset that is not finite, both shown short.
+fn not_finite(scale: f64, offset: f64) -> String {
+    use aeroident_physics::text::Short;
+    format!("scale {} and offset {} must be finite", Short(scale), Short(offset))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1220,6 +1226,19 @@ mod tests {
         // Any non-zero scale (a sign flip) is still accepted.
         let text = format!("{HEAD}q = {{ column = \"q\", unit = \"deg/s\", scale = -1e-300 }}\n");
         assert!(Mapping::from_toml_str(&text, "m.toml").is_ok());
+    }
+
+    /// A channel's scale and offset are shown short where a message describes the channel
+    /// (a scale of 1e300 was written out in its 301 digits).
+    #[test]
+    fn a_channel_is_described_with_its_scale_short() {
+        let text = format!(
+            "{HEAD}q = {{ column = \"q\", unit = \"rad/s\", scale = 1e300, offset = -2.5e-7 }}\n"
+        );
+        let m = Mapping::from_toml_str(&text, "m.toml").unwrap();
+        let d = m.field_label("q_rad_s");
+        assert!(d.contains("scale 1.000e300") && d.contains("offset -2.500e-7"), "{d}");
+        assert!(d.len() < 120, "{d}");
     }
 
     #[test]

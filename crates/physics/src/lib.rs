@@ -16,6 +16,7 @@
 pub mod isa;
 pub mod rigid_body;
 pub mod scalar;
+pub mod text;
 pub mod units;
 
 pub use scalar::Scalar;

@@ -117,7 +117,7 @@ pub fn freqresp<R: Read>(
     reader: FlightDataReader<R>,
     opts: &FreqRespOptions,
 ) -> Result<FreqRespOutcome, RecordError> {
-    check_channels(opts)?;
+    check(opts)?;
     let file = reader.file().to_string();
     let rec = read_records(vec![reader], None, None, &opts.windows)?;
     let mut warnings = rec.notes.clone();
@@ -142,6 +142,16 @@ pub fn freqresp<R: Read>(
             "{} samples outside the injected waveform's samples (SIDD) were not used",
             dropped.uncovered
         ));
+    }
+    if stretches.is_empty() {
+        return Err(RecordError::Option {
+            option: "window",
+            reason: format!(
+                "no uniformly sampled stretch of 4 or more samples in the record{} ({} samples in shorter ones): nothing to transform",
+                if opts.windows.is_empty() { "" } else { "'s windows" },
+                dropped.short
+            ),
+        });
     }
     let samples = stretches.iter().map(|s| s[0].len()).sum();
     let r = frequency_responses(&stretches, &opts.inputs, &opts.outputs, dt_s, &opts.spectral)
@@ -169,6 +179,17 @@ pub fn freqresp<R: Read>(
     })
 }
 
+/// Checks what the options alone decide ([`freqresp`] does it first): the channels known and
+/// distinct, the spectral options and the coherence in range. A face calls it before it
+/// touches its output, so that a bad option leaves the previous results in place.
+///
+/// # Errors
+/// [`RecordError::Option`] naming the option as the command line spells it.
+pub fn check(opts: &FreqRespOptions) -> Result<(), RecordError> {
+    check_channels(opts)?;
+    check_options(opts)
+}
+
 fn check_channels(opts: &FreqRespOptions) -> Result<(), RecordError> {
     for (option, list) in [("input", &opts.inputs), ("output", &opts.outputs)] {
         if list.is_empty() {
@@ -191,6 +212,16 @@ fn check_channels(opts: &FreqRespOptions) -> Result<(), RecordError> {
             });
         }
     }
+    for (option, list) in [("input", &opts.inputs), ("output", &opts.outputs)] {
+        if let Some((_, dup)) = list.iter().enumerate().find(|(k, c)| list[..*k].contains(c)) {
+            return Err(RecordError::Option {
+                option,
+                reason: format!(
+                    "`{dup}` is given twice (a channel conditioned on itself leaves nothing to excite it)"
+                ),
+            });
+        }
+    }
     if let Some(dup) = opts.inputs.iter().find(|k| opts.outputs.contains(k)) {
         return Err(RecordError::Option {
             option: "output",
@@ -200,10 +231,39 @@ fn check_channels(opts: &FreqRespOptions) -> Result<(), RecordError> {
     Ok(())
 }
 
+/// Checks what the options alone decide before the record is read, so that a value out of
+/// range (a points-per-decade that would size a grid of terabytes, a NaN coherence that no
+/// frequency passes) is named at once rather than after the read or not at all.
+fn check_options(opts: &FreqRespOptions) -> Result<(), RecordError> {
+    opts.spectral.check().map_err(spectral_error)?;
+    let c = opts.fit.min_coherence;
+    if !(0.0..=1.0).contains(&c) {
+        return Err(RecordError::Option {
+            option: "min-coherence",
+            reason: format!("{c} is not a coherence in [0, 1]"),
+        });
+    }
+    Ok(())
+}
+
+/// The command-line spelling of a [`SpectralOptions`] field, as [`RecordError::Option`] names
+/// options (the Python keywords are the same words with underscores).
+fn spectral_flag(field: &'static str) -> &'static str {
+    match field {
+        "window_lengths_s" => "windows-s",
+        "f_min_hz" => "f-min-hz",
+        "f_max_hz" => "f-max-hz",
+        "points_per_decade" => "points-per-decade",
+        other => other,
+    }
+}
+
 fn spectral_error(e: aeroident_signals::spectral::SpectralError) -> RecordError {
     use aeroident_signals::spectral::SpectralError as E;
     match e {
-        E::Option { option, reason } => RecordError::Option { option, reason },
+        E::Option { option, reason } => {
+            RecordError::Option { option: spectral_flag(option), reason }
+        }
         E::NotExcited { .. } => RecordError::Option { option: "input", reason: e.to_string() },
         E::Data(m) => RecordError::Model(m),
     }

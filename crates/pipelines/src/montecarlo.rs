@@ -720,9 +720,11 @@ pub struct Campaign {
     /// Number of runs asked for: more than [`Campaign::runs`] when a stop ended the campaign
     /// early ([`campaign_until`]).
     pub runs_requested: u64,
-    /// `complete`, or `interrupted` when a stop ended the campaign before every run was done.
+    /// `complete`; `interrupted` when a stop ended the campaign before every run was done;
+    /// `failed` when every run failed, `no_estimates` when no run gave an estimate (then the
+    /// statistics are empty, not a result).
     pub status: &'static str,
-    /// Why the campaign is `interrupted`, else `null`.
+    /// Why the campaign is not `complete`, else `null`.
     pub status_reason: Option<String>,
     /// Campaign seed.
     pub seed: u64,
@@ -785,6 +787,51 @@ pub fn campaign_until(
 /// [`Campaign::status`] of a campaign a stop ended early.
 pub const STATUS_INTERRUPTED: &str = "interrupted";
 
+/// [`Campaign::status`] of a campaign whose every run ran and at least one estimate came of it.
+pub const STATUS_COMPLETE: &str = "complete";
+
+/// [`Campaign::status`] of a campaign whose every run failed as a whole (no trim, no
+/// simulation): its statistics are empty, not a result.
+pub const STATUS_FAILED: &str = "failed";
+
+/// [`Campaign::status`] of a campaign whose runs ran but no estimator gave an estimate in any of
+/// them (every one failed, diverged, or identified nothing): its statistics are empty.
+pub const STATUS_NO_ESTIMATES: &str = "no_estimates";
+
+/// The status and its reason of a campaign of `runs` runs that is not a result (every run
+/// failed, or no estimate in any), `None` for one that is; the reason quotes the first
+/// failure and counts the others.
+fn outcome_status(
+    runs: usize,
+    failed: &[FailedRun],
+    estimators: &[EstimatorStats],
+) -> Option<(&'static str, String)> {
+    if runs == 0 {
+        return None;
+    }
+    if failed.len() == runs {
+        let first = &failed[0];
+        return Some((
+            STATUS_FAILED,
+            format!("every one of the {runs} runs failed (run {}: {})", first.run, first.reason),
+        ));
+    }
+    let estimated =
+        estimators.iter().any(|e| e.runs_ok > 0 && e.parameters.iter().any(|p| p.n_estimates > 0));
+    if estimated {
+        return None;
+    }
+    let first = estimators.iter().find_map(|e| e.failed_runs.first().map(|f| (e, f)));
+    let why = match first {
+        Some((e, f)) => format!(" (`{}` in run {}: {})", e.name, f.run, f.reason),
+        None => " (no parameter was identified by the end of any run)".to_string(),
+    };
+    Some((
+        STATUS_NO_ESTIMATES,
+        format!("none of the {runs} runs gave an estimate of any estimator{why}"),
+    ))
+}
+
 /// The campaign document from per-run results (any order of computation; `results` sorted by
 /// index, one per run): the Cramér–Rao prediction, [`statistics`] and the failed runs. Shared
 /// by [`campaign`] and the Python bindings' distributed reduce.
@@ -798,19 +845,23 @@ pub fn assemble(
     let crb = crb_sigmas(sc).unwrap_or_else(|e| CrbTable { notes: vec![e], ..Default::default() });
     let names: Vec<String> = sc.estimator.iter().map(EstimatorSpec::label).collect();
     let estimators = statistics(&results, &names, &crb);
-    let failed_runs = results
+    let failed_runs: Vec<FailedRun> = results
         .iter()
         .filter_map(|r| {
             r.outcome.as_ref().err().map(|e| FailedRun { run: r.index, reason: e.clone() })
         })
         .collect();
+    let (status, status_reason) = match outcome_status(results.len(), &failed_runs, &estimators) {
+        Some((status, why)) => (status, Some(why)),
+        None => (STATUS_COMPLETE, None),
+    };
     Campaign {
         schema_version: aeroident_io::SCHEMA_VERSION,
         scenario: sc.name.clone(),
         runs: results.len() as u64,
         runs_requested: results.len() as u64,
-        status: "complete",
-        status_reason: None,
+        status,
+        status_reason,
         seed,
         seed_rule: SEED_RULE,
         failed_runs,
@@ -827,8 +878,8 @@ pub fn assemble(
 /// "reference", "bias", "scatter", "mean_std_error", "coverage_2sigma", "crb_std_error",
 /// "crb_std_error_calm", "median_time_to_10pct_s"}]}]}` (`reference`: the truth at the end;
 /// `crb_std_error`: the bound of the experiment flown; `crb_std_error_calm`: white sensor noise
-/// only, [`crb_sigmas`]). `status` is `complete`, or
-/// `interrupted` when a stop ended the campaign after `runs` of `runs_requested`.
+/// only, [`crb_sigmas`]). `status` is `complete`, `interrupted` when a stop ended the campaign
+/// after `runs` of `runs_requested`, `failed` or `no_estimates` ([`Campaign::status`]).
 pub fn json_summary(c: &Campaign) -> serde_json::Value {
     serde_json::json!({
         "schema_version": c.schema_version,

@@ -94,7 +94,7 @@ fn matrix(v: Vec<f64>, rows: usize, cols: usize) -> PyResult<Array2<f64>> {
 /// (documentation:
 /// `aeroident.fit` in python/aeroident/__init__.py).
 #[pyfunction]
-#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None, max_iterations=None, process_noise=None, compat=None, windows=None, also=None, select="swr", candidates=None, band_hz=None, knots_deg=None, **options))]
+#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None, max_iterations=None, process_noise=None, compat=None, windows=None, also=None, select="swr", candidates=None, band_hz=None, knots_deg=None, allow_duplicate_records=false, **options))]
 #[allow(clippy::too_many_arguments)]
 fn fit_file<'py>(
     py: Python<'py>,
@@ -114,13 +114,11 @@ fn fit_file<'py>(
     candidates: Option<Vec<String>>,
     band_hz: Option<(f64, f64)>,
     knots_deg: Option<Vec<f64>>,
+    allow_duplicate_records: bool,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let windows = crate::record::time_windows("fit", windows)?;
-    let compat = compat
-        .map(|c| aeroident_pipelines::compat::Corrections::from_json(Path::new(c)))
-        .transpose()
-        .map_err(|e| err(format!("fit: {e}")))?;
+    let compat = compat_source(compat)?;
     let kind = batch_kind(estimator)?;
     let given = vec![
         ("initial_states", Some(toml::Value::String(initial_states.to_owned()))),
@@ -137,8 +135,14 @@ fn fit_file<'py>(
     let validate_on = validate_with.map(str::to_owned);
     let run = move || -> anyhow::Result<(FitJobOutcome, Vec<String>)> {
         let mapping = Mapping::from_path(Path::new(&mapping))?;
-        let records = Records { data: path, and: also, format: None, mapping, live: false };
-        let compat = compat.map(CompatSource::Given);
+        let records = Records {
+            data: path,
+            and: also,
+            format: None,
+            mapping,
+            live: false,
+            allow_duplicates: allow_duplicate_records,
+        };
         fit_job(&FitJob { records, model, compat, options, validate_on })
     };
     let signals = crate::Signals::new();
@@ -146,6 +150,18 @@ fn fit_file<'py>(
     signals.finish(py)?;
     let (done, notes) = r.map_err(to_py)?;
     fit_dict(py, done, notes)
+}
+
+/// `compat=`: `"auto"` (checked on the records, as `--compat auto`), else a `compat.json`
+/// read now, so that a bad file is named before the record is read.
+fn compat_source(compat: Option<&str>) -> PyResult<Option<CompatSource>> {
+    match compat {
+        None => Ok(None),
+        Some("auto") => Ok(Some(CompatSource::Auto)),
+        Some(c) => aeroident_pipelines::compat::Corrections::from_json(Path::new(c))
+            .map(|c| Some(CompatSource::Given(c)))
+            .map_err(|e| err(format!("fit: {e}"))),
+    }
 }
 
 /// The reader notes a job's steps give (its second record's), collected for Python.

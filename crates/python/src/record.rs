@@ -1,7 +1,7 @@
 //! `read` (a record as numpy arrays) and `replay` (a record or arrays through an estimator, all
 //! samples in Rust, the estimates as a time × parameter matrix).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use aeroident_estimators::AirDataSample;
 use aeroident_io::{Mapping, ModelSpec, RecordEvent, open_log_with_notes, open_log_with_report};
@@ -9,7 +9,9 @@ use aeroident_pipelines::estimators::{EstimatorKind, EstimatorOptions, build};
 use aeroident_pipelines::job::replay::ReplayJob;
 use aeroident_pipelines::job::{CompatSource, InPlace, ModelChoice, Ran, Records};
 use aeroident_pipelines::record::unsupported;
-use aeroident_pipelines::replay::arrays::{EstimateArrays, replay_arrays_observed, replay_samples};
+use aeroident_pipelines::replay::arrays::{
+    EstimateArrays, check_array_size, replay_arrays_observed, replay_samples,
+};
 use aeroident_pipelines::replay::{DerivativeSource, ReplayObserver, ReplayOptions};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyReadonlyArray1};
@@ -338,7 +340,8 @@ fn replay_file<'py>(
         .unwrap_or_default();
     let derivatives = derivative_source(derivatives)?;
     let choice = model_choice(model, select, candidates, knots_deg, diff_window);
-    let (path, mapping, compat) = (path.to_owned(), mapping.to_owned(), compat.map(PathBuf::from));
+    let (path, mapping) = (path.to_owned(), mapping.to_owned());
+    let compat = compat.map(CompatSource::from_arg);
     let signals = Signals::new();
     let run = || -> anyhow::Result<_> {
         let mapping = Mapping::from_path(Path::new(&mapping))?;
@@ -356,8 +359,7 @@ fn replay_file<'py>(
             windows,
             ..ReplayOptions::default()
         };
-        let records = Records { data: path, and: Vec::new(), format: None, mapping, live: false };
-        let compat = compat.map(CompatSource::File);
+        let records = Records::one(path, mapping);
         let job =
             ReplayJob { records, model: choice, compat, options, cross_check, validate_on: None };
         replay_job(&job, &signals)
@@ -425,15 +427,18 @@ fn default_model(first: &AirDataSample, uses_measured: bool) -> PyResult<ModelSp
 }
 
 /// The samples of `arrays` (one float64 array per key of `sample_keys()`, other keys ignored)
-/// with the aircraft constants `consts`, row by row.
+/// with the aircraft constants `consts`, row by row, and what `first` makes of their count and
+/// first sample before the others are made (the model, once the memory they would take is
+/// known to fit: [`arrays_model`]).
 ///
 /// # Errors
 /// A required channel missing, an array that is not a contiguous 1-D float64 array, arrays of
-/// different lengths, or a row the sample refuses (naming the row).
-fn samples_of_arrays<'py>(
+/// different lengths or empty, a row the sample refuses (naming the row), `first`'s error.
+fn samples_of_arrays<'py, T>(
     arrays: &Bound<'py, PyDict>,
     consts: &aeroident_estimators::AircraftConstants,
-) -> PyResult<Vec<AirDataSample>> {
+    first: impl FnOnce(usize, &AirDataSample) -> PyResult<T>,
+) -> PyResult<(Vec<AirDataSample>, T)> {
     let keys = convert::all_keys();
     let mut views: Vec<(String, PyReadonlyArray1<'py, f64>)> = Vec::new();
     for (k, v) in arrays.iter() {
@@ -463,19 +468,24 @@ fn samples_of_arrays<'py>(
             slices[0].0
         )));
     }
-    (0..n)
-        .map(|k| {
-            let src = RowSource { cols: &slices, k };
-            convert::sample_from(&src, consts, &|| format!("arrays row {k}"))
-        })
-        .collect()
+    if n == 0 {
+        return Err(err("arrays: no samples"));
+    }
+    let row = |k: usize| {
+        let src = RowSource { cols: &slices, k };
+        convert::sample_from(&src, consts, &|| format!("arrays row {k}"))
+    };
+    let made = first(n, &row(0)?)?;
+    Ok(((0..n).map(row).collect::<PyResult<_>>()?, made))
 }
 
-/// The model of `replay(arrays, model=…)`: the one named, else the richest preset the first
-/// sample supports; refused when the arrays cannot form it.
+/// The model of `replay(arrays, model=…)` for `n` samples: the one named, else the richest
+/// preset the first sample supports; refused when the arrays cannot form it, or when the
+/// samples and their estimates would not fit in memory (the estimate in the message).
 fn arrays_model(
     model: Option<&str>,
     kind: EstimatorKind,
+    n: usize,
     first: &AirDataSample,
 ) -> PyResult<ModelSpec> {
     let spec = match model {
@@ -490,6 +500,7 @@ fn arrays_model(
             missing.join("; ")
         )));
     }
+    check_array_size(n, spec.structure.n_params()).map_err(|e| err(format!("arrays: {e}")))?;
     Ok(spec)
 }
 
@@ -509,15 +520,12 @@ fn replay_arrays_py<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let kind = estimator_kind(estimator)?;
     let consts = convert::constants_from(constants)?;
-    let samples = samples_of_arrays(arrays, &consts)?;
+    let (samples, spec) =
+        samples_of_arrays(arrays, &consts, |n, first| arrays_model(model, kind, n, first))?;
     let n = samples.len();
-    let Some(first) = samples.first() else {
-        return Err(err("arrays: no samples"));
-    };
-    let spec = arrays_model(model, kind, first)?;
     let options = estimator_options(kind, vec![("forgetting", number(forgetting))], options)?;
     let opts = EstimatorOptions { sample_interval_s, ..options };
-    let first = *first;
+    let first = samples[0];
     let (spec_structure, spec_priors) = (spec.structure, spec.priors);
     let signals = Signals::new();
     let (result, model_name) = py.detach(|| {

@@ -60,3 +60,20 @@ def test_unmapped_channel_is_named(record):
     data, mapping = record
     with pytest.raises(aeroident.AeroidentError, match="`p` is not in the record"):
         aeroident.freqresp(data, map=mapping, input="de", output="p")
+
+
+@pytest.mark.parametrize(
+    "keywords, message",
+    [
+        (dict(points_per_decade=10**12), r"`--points-per-decade`: 1\.000e12 is outside \[1, 1000\]"),
+        (dict(points_per_decade=2**64 - 1), r"`--points-per-decade`: 1\.845e19 is outside"),
+        (dict(min_coherence=float("nan")), r"`--min-coherence`: NaN is not a coherence"),
+        (dict(f_max_hz=30.0), r"`--f-max-hz`: 30 Hz must lie above"),
+        (dict(windows_s=[500.0]), r"`--windows-s`: 500 s is longer"),
+    ],
+)
+def test_options_out_of_range_are_refused_naming_them(record, keywords, message):
+    # 10^12 points per decade once aborted the interpreter on a 24.7 TB allocation.
+    data, mapping = record
+    with pytest.raises(aeroident.AeroidentError, match=message):
+        aeroident.freqresp(data, map=mapping, input="de", output="q", **keywords)

@@ -223,6 +223,20 @@ def test_mass_must_be_positive_message():
         aeroident.replay(arrays, estimator="rls", model="longitudinal", constants=dict(constants, mass_kg=-1))
 
 
+def test_array_replay_past_the_memory_limit_is_refused_with_an_estimate():
+    # Ten million samples: zeroed arrays are not resident until written, so only the first
+    # sample (the one the refusal reads) costs memory here.
+    small, constants = synthetic(2)
+    n = 10_000_000
+    arrays = {}
+    for k, v in small.items():
+        a = np.zeros(n)
+        a[0] = v[0]
+        arrays[k] = a
+    with pytest.raises(aeroident.AeroidentError, match=r"1\.000e7 samples × \d+ parameters: .*about \d+ MB.*limit of 2147 MB"):
+        aeroident.replay(arrays, estimator="rls", model="longitudinal", constants=constants)
+
+
 def test_arrays_whose_every_sample_is_refused_raise():
     arrays, constants = synthetic(30)
     arrays = dict(arrays, vt_mps=-np.abs(arrays["vt_mps"]))
@@ -259,3 +273,79 @@ def test_bad_input_is_a_python_exception_never_a_panic(call):
     except BaseException as e:  # noqa: BLE001 - the type is what is tested
         assert isinstance(e, (aeroident.AeroidentError, TypeError, ValueError, OverflowError, IndexError)), repr(e)
         assert type(e).__name__ != "PanicException", repr(e)
+
+
+# --- records and lists given the wrong way ----------------------------------------------------
+
+GOOD = ROOT / "crates/io/tests/data/good.csv"
+MIN_MAP = ROOT / "crates/io/tests/data/min.toml"
+
+
+def test_a_record_given_twice_to_fit_is_refused_unless_asked(tmp_path):
+    copy = tmp_path / "copy.csv"
+    copy.write_bytes(GOOD.read_bytes())
+    with pytest.raises(aeroident.AeroidentError, match=r"copy\.csv` has the same content as .*good\.csv.*--allow-duplicate-records"):
+        aeroident.fit(GOOD, MIN_MAP, also=[copy])
+    with pytest.raises(aeroident.AeroidentError, match="is the same file as"):
+        aeroident.fit(GOOD, MIN_MAP, also=[GOOD.parent / "." / "good.csv"])
+    # Asked for: the duplicate check lets it through (whatever the fit then makes of it).
+    try:
+        aeroident.fit(GOOD, MIN_MAP, also=[copy], allow_duplicate_records=True)
+    except aeroident.AeroidentError as e:
+        assert "same content" not in str(e), e
+
+
+@pytest.mark.parametrize(
+    "call, message",
+    [
+        (lambda: aeroident.fit(GOOD, MIN_MAP, also="copy.csv"), "also must be a list"),
+        (lambda: aeroident.fit(GOOD, MIN_MAP, also=Path("copy.csv")), "also must be a list"),
+        (lambda: aeroident.fit(GOOD, MIN_MAP, knots_deg="57"), "knots_deg must be a list"),
+        (lambda: aeroident.fit(GOOD, MIN_MAP, candidates="alpha"), "candidates must be a list"),
+        (lambda: aeroident.replay(GOOD, MIN_MAP, knots_deg="5"), "knots_deg must be a list"),
+        (lambda: aeroident.replay(GOOD, MIN_MAP, candidates="q"), "candidates must be a list"),
+        (lambda: aeroident.fit(GOOD, MIN_MAP, band_hz=(1,)), r"band_hz must be \(f_min_hz, f_max_hz\), two numbers; got 1"),
+        (lambda: aeroident.fit(GOOD, MIN_MAP, band_hz="1:5"), "band_hz must be a list"),
+        (lambda: aeroident.fit(GOOD, MIN_MAP, windows=[(1.0,)]), r"windows entries must be \(start_s, end_s\)"),
+    ],
+)
+def test_a_lone_string_where_a_list_belongs_is_refused(call, message):
+    # Once iterated character by character: knots 5° and 7°, records `c`, `o`, `p` …
+    with pytest.raises((TypeError, ValueError), match=message):
+        call()
+
+
+def test_compat_auto_is_the_check_not_a_file_name():
+    r = aeroident.replay(shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv"), ROOT / "mappings/hfb320.toml", compat="auto")
+    applied = [w for w in r["summary"]["warnings"] if w.startswith("compat applied")]
+    assert applied, r["summary"]["warnings"]
+
+
+@pytest.mark.parametrize(
+    "change, status",
+    [(("xcg = 0.30", "xcg = 5.0"), "failed"), (("duration_s = 10.0", "duration_s = 0.005"), "no_estimates")],
+)
+def test_a_campaign_without_any_estimate_says_so(tmp_path, change, status):
+    text = SHORT.read_text()
+    assert change[0] in text
+    path = tmp_path / "s.toml"
+    path.write_text(text.replace(change[0], change[1], 1))
+    r = aeroident.montecarlo(path, runs=2)
+    assert r["status"] == status, r
+    assert "2 runs" in r["status_reason"], r
+
+
+def test_scenario_harmonics_past_the_limit_are_refused_at_parse(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text(SHORT.read_text().replace("harmonics = [2, 3, 4,", "harmonics = [2000000000, 3, 4,", 1))
+    with pytest.raises(aeroident.AeroidentError, match=r"input\[0\].*2\.000e9.*10000"):
+        aeroident.montecarlo(path, runs=1)
+
+
+@pytest.mark.parametrize("keyword", [dict(compat="compat.json"), dict(compat="auto"), dict(windows=[(0.0, 1.0)]), dict(cross_check=True), dict(mapping="m.toml")])
+def test_file_only_keywords_with_arrays_are_refused(keyword):
+    # Once compat= on arrays was ignored without a word.
+    arrays, constants = synthetic(30)
+    name = next(iter(keyword))
+    with pytest.raises(aeroident.AeroidentError, match=f"replay of arrays: {name} apply to a record file"):
+        aeroident.replay(arrays, estimator="rls", model="longitudinal", constants=constants, **keyword)

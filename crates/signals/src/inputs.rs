@@ -353,6 +353,22 @@ impl InputSignal for Sweep {
     }
 }
 
+/// The highest harmonic number a multisine accepts. A harmonic is `k` periods per base period;
+/// the peak of an orthogonal set is measured on a grid of 64 points per period of its highest
+/// harmonic ([`crate::orthogonal`]), so `k` alone sizes that grid (10⁹ would ask for half a
+/// terabyte). 10⁴ periods per base period is beyond any manoeuvre a simulation step can
+/// sample (a 100-s period at 100 Hz holds 5·10³ periods below Nyquist) and keeps the grid at
+/// 640 k points.
+pub const MAX_HARMONIC: u32 = 10_000;
+
+/// The message refusing harmonic `k`, entry `i` of a list, above [`MAX_HARMONIC`].
+pub(crate) fn harmonic_too_high(i: usize, k: u32) -> String {
+    let shown = if k < 1_000_000 { k.to_string() } else { format!("{:.3e}", f64::from(k)) };
+    format!(
+        "entry {i} = {shown} is above the highest harmonic {MAX_HARMONIC} (harmonic k is k periods per base period: for a higher frequency shorten base_period_s)"
+    )
+}
+
 /// Schroeder-phased multisine: `amplitude · Σᵢ cos(kᵢ·ω₀·τ + φᵢ)`, `ω₀ = 2π / base_period_s`,
 /// for `τ = t − start_s ≥ 0` (and `τ < duration_s` if given), 0 otherwise.
 ///
@@ -387,7 +403,8 @@ impl Multisine {
     ///
     /// # Errors
     /// [`SignalError::InvalidParameter`] for non-finite values or non-positive period/duration;
-    /// [`SignalError::InvalidList`] for an empty list, a zero or a repeated harmonic.
+    /// [`SignalError::InvalidList`] for an empty list, a zero or a repeated harmonic, a
+    /// harmonic above [`MAX_HARMONIC`].
     pub fn schroeder(
         amplitude: f64,
         base_period_s: f64,
@@ -429,6 +446,12 @@ impl Multisine {
             });
         }
         for (i, &k) in harmonics.iter().enumerate() {
+            if k > MAX_HARMONIC {
+                return Err(SignalError::InvalidList {
+                    field: "harmonics",
+                    reason: harmonic_too_high(i, k),
+                });
+            }
             if k == 0 {
                 return Err(SignalError::InvalidList {
                     field: "harmonics",

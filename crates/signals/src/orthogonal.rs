@@ -43,8 +43,9 @@ fn grid_points(k_max: u32) -> usize {
 /// (sorted ascending first): every `inputs`-th entry starting at `index`.
 ///
 /// # Errors
-/// [`SignalError::InvalidList`] for an empty pool, a zero or repeated harmonic, `inputs = 0`,
-/// `index ≥ inputs`, or a member left without any harmonic.
+/// [`SignalError::InvalidList`] for an empty pool, a zero or repeated harmonic, one above
+/// [`MAX_HARMONIC`](crate::inputs::MAX_HARMONIC), `inputs = 0`, `index ≥ inputs`, or a member
+/// left without any harmonic.
 pub fn orthogonal_harmonics(
     pool: &[u32],
     inputs: usize,
@@ -56,6 +57,10 @@ pub fn orthogonal_harmonics(
     }
     if index >= inputs {
         return Err(bad("index", format!("{index} is not below inputs = {inputs}")));
+    }
+    if let Some((i, &k)) = pool.iter().enumerate().find(|(_, k)| **k > crate::inputs::MAX_HARMONIC)
+    {
+        return Err(bad("harmonics", crate::inputs::harmonic_too_high(i, k)));
     }
     let mut sorted = pool.to_vec();
     sorted.sort_unstable();

@@ -60,6 +60,61 @@ pub struct SpectralOptions {
     pub points_per_decade: usize,
 }
 
+/// The most grid points per decade [`SpectralOptions::check`] accepts: far finer than the FFT
+/// bins of any window a record holds (a decade of a 10⁶-sample window has about 10⁶ bins only at
+/// its top), while the cells' spectral matrices stay a few megabytes; a larger value would size
+/// the grid, and the memory, by the option alone.
+pub const MAX_POINTS_PER_DECADE: usize = 1_000;
+
+impl SpectralOptions {
+    /// Checks what the options alone decide, before any data is read: the overlap in
+    /// `[0, 0.95]`, the points per decade in `1..=`[`MAX_POINTS_PER_DECADE`], the window
+    /// lengths and the frequency bounds finite and positive, `f_min_hz < f_max_hz`.
+    ///
+    /// # Errors
+    /// [`SpectralError::Option`] naming the field.
+    pub fn check(&self) -> Result<(), SpectralError> {
+        let opt = |option: &'static str, reason: String| SpectralError::Option { option, reason };
+        if !(0.0..=0.95).contains(&self.overlap) {
+            return Err(opt("overlap", format!("{} is outside [0, 0.95]", short(self.overlap))));
+        }
+        if !(1..=MAX_POINTS_PER_DECADE).contains(&self.points_per_decade) {
+            return Err(opt(
+                "points_per_decade",
+                format!(
+                    "{} is outside [1, {MAX_POINTS_PER_DECADE}]",
+                    short(self.points_per_decade as f64)
+                ),
+            ));
+        }
+        if let Some(t) = self.window_lengths_s.iter().find(|t| !(t.is_finite() && **t > 0.0)) {
+            return Err(opt(
+                "window_lengths_s",
+                format!("{} s is not a positive length", short(*t)),
+            ));
+        }
+        for (option, f) in [("f_min_hz", self.f_min_hz), ("f_max_hz", self.f_max_hz)] {
+            if let Some(f) = f.filter(|f| !(f.is_finite() && *f > 0.0)) {
+                return Err(opt(option, format!("{} Hz is not a positive frequency", short(f))));
+            }
+        }
+        if let (Some(lo), Some(hi)) = (self.f_min_hz, self.f_max_hz)
+            && lo >= hi
+        {
+            return Err(opt(
+                "f_max_hz",
+                format!("{} Hz is not above f_min_hz {} Hz", short(hi), short(lo)),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// `v` in a short form for messages ([`aeroident_physics::text::Short`]).
+fn short(v: f64) -> String {
+    aeroident_physics::text::Short(v).to_string()
+}
+
 impl Default for SpectralOptions {
     fn default() -> Self {
         Self {
@@ -161,9 +216,15 @@ pub fn default_window_lengths(longest_stretch_s: f64) -> Vec<f64> {
 }
 
 /// The log-spaced grid from `f_min_hz` to `f_max_hz` with `ppd` points per decade, Hz.
+///
+/// Empty when the bounds are not finite, positive and ordered, or `ppd` is 0; the points are
+/// counted without overflow (the callers bound `ppd`, [`SpectralOptions::check`]).
 pub fn log_grid(f_min_hz: f64, f_max_hz: f64, ppd: usize) -> Vec<f64> {
     let decades = (f_max_hz / f_min_hz).log10();
-    let n = (decades * ppd as f64).floor() as usize + 1;
+    if !(decades.is_finite() && decades >= 0.0 && f_min_hz > 0.0) || ppd == 0 {
+        return Vec::new();
+    }
+    let n = ((decades * ppd as f64).floor() as usize).saturating_add(1);
     (0..n).map(|k| f_min_hz * 10f64.powf(k as f64 / ppd as f64)).collect()
 }
 
@@ -211,8 +272,8 @@ pub fn frequency_responses(
             return Err(SpectralError::NotExcited {
                 input: input.clone(),
                 why,
-                f_lo_hz: plan.grid[0],
-                f_hi_hz: *plan.grid.last().unwrap_or(&plan.grid[0]),
+                f_lo_hz: plan.grid.first().copied().unwrap_or(f64::NAN),
+                f_hi_hz: plan.grid.last().copied().unwrap_or(f64::NAN),
             });
         }
     }
@@ -245,12 +306,7 @@ impl Plan {
         if !(dt_s.is_finite() && dt_s > 0.0) {
             return Err(SpectralError::Data(format!("sample interval {dt_s} s is not positive")));
         }
-        if !(0.0..=0.95).contains(&opts.overlap) {
-            return Err(opt("overlap", format!("{} is outside [0, 0.95]", opts.overlap)));
-        }
-        if opts.points_per_decade == 0 {
-            return Err(opt("points_per_decade", "must be at least 1".into()));
-        }
+        opts.check()?;
         check_stretches(stretches, channels)?;
         let longest = stretches.iter().map(|s| s[0].len()).max().unwrap_or(0);
         let longest_s = longest as f64 * dt_s;
@@ -260,14 +316,25 @@ impl Plan {
             opts.window_lengths_s.clone()
         };
         let mut windows = Vec::new();
+        if opts.window_lengths_s.is_empty() && longest < 64 {
+            // The shortest default window is T/16; below 64 samples it would hold fewer than 4,
+            // and an error naming the window lengths would name an option nobody gave.
+            return Err(SpectralError::Data(format!(
+                "the longest contiguous stretch of data holds {longest} samples ({} s): the default spectral windows (half of it down to a sixteenth) need at least 64; give longer time windows or a longer record",
+                short(longest_s)
+            )));
+        }
         for &t in &lengths {
             let n = (t / dt_s).round();
             if !(n.is_finite() && n >= 4.0) {
-                return Err(opt("window", format!("{t} s is shorter than 4 samples of {dt_s} s")));
+                return Err(opt(
+                    "window_lengths_s",
+                    format!("{} s is shorter than 4 samples of {} s", short(t), short(dt_s)),
+                ));
             }
             if n as usize > longest {
                 return Err(opt(
-                    "window",
+                    "window_lengths_s",
                     format!(
                         "{t} s is longer than the longest contiguous stretch of data ({longest_s:.3} s)"
                     ),
@@ -282,26 +349,37 @@ impl Plan {
         let f_min = opts.f_min_hz.unwrap_or(2.0 / t_max);
         let f_max = opts.f_max_hz.unwrap_or(0.2 / dt_s);
         if !(f_min > 0.0 && f_min.is_finite()) {
-            return Err(opt("f_min", format!("{f_min} Hz is not positive")));
+            return Err(opt("f_min_hz", format!("{} Hz is not positive", short(f_min))));
         }
         if f_min < 2.0 / t_max * (1.0 - 1e-9) {
             return Err(opt(
-                "f_min",
+                "f_min_hz",
                 format!(
-                    "{f_min} Hz is below 2/T of the longest window ({:.4} Hz for {t_max} s): a window must hold two periods of the lowest frequency",
-                    2.0 / t_max
+                    "{} Hz is below 2/T of the longest window ({} Hz for {} s): a window must hold two periods of the lowest frequency",
+                    short(f_min),
+                    short(2.0 / t_max),
+                    short(t_max)
                 ),
             ));
         }
         if !(f_max > f_min && f_max < f_nyq) {
             return Err(opt(
-                "f_max",
+                "f_max_hz",
                 format!(
-                    "{f_max} Hz must lie above f_min {f_min} Hz and below the Nyquist frequency {f_nyq} Hz"
+                    "{} Hz must lie above the lowest frequency {} Hz and below the Nyquist frequency {} Hz",
+                    short(f_max),
+                    short(f_min),
+                    short(f_nyq)
                 ),
             ));
         }
         let grid = log_grid(f_min, f_max, opts.points_per_decade);
+        if grid.is_empty() {
+            return Err(opt(
+                "points_per_decade",
+                format!("no grid frequency from {} to {} Hz", short(f_min), short(f_max)),
+            ));
+        }
         Ok(Self {
             windows,
             grid,

@@ -10,8 +10,10 @@
 //! `DIR/compat.json` ([`aeroident_pipelines::compat`] documents its keys).
 
 use aeroident_estimators::compat::CompatConfig;
+use aeroident_estimators::compat::CompatResult;
 use aeroident_io::{LogFormat, Mapping, open_log_with_notes};
 use aeroident_pipelines::compat::{ChannelSummary, CompatSummary, check_records};
+use aeroident_pipelines::record::duplicates::check_distinct;
 use aeroident_pipelines::window::TimeWindow;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -34,12 +36,16 @@ pub struct CompatArgs {
     /// A time window `START:END` (record seconds) to check, as `replay --window` fits it;
     /// repeat it for several manoeuvres. Default: the whole record (taxi and ground runs
     /// included: give the fit's windows to check the data the fit uses).
-    #[arg(long = "window", value_name = "START:END", value_parser = TimeWindow::parse)]
+    #[arg(long = "window", value_name = "START:END", value_parser = TimeWindow::parse, allow_hyphen_values = true)]
     pub windows: Vec<TimeWindow>,
     /// A further record of the same aircraft (same mapping and format), checked jointly with
     /// the first (one set of corrections per flight), as `replay --and` fits it.
     #[arg(long = "and", value_name = "FILE")]
     pub and: Vec<String>,
+    /// Check a record given twice (the same file, or two files of the same content) as if new
+    /// data; without it such a record is refused, as it would be weighted twice.
+    #[arg(long)]
+    pub allow_duplicate_records: bool,
     /// Do not estimate the outputs' time shifts.
     #[arg(long)]
     pub no_time_shifts: bool,
@@ -56,18 +62,15 @@ pub struct CompatArgs {
     pub max_iterations: Option<u32>,
 }
 
-/// Runs `aeroident compat`.
+/// Runs `aeroident compat`: `--out` is locked and checked before the record is read, and a
+/// signal during the check writes `summary.json` marked `interrupted`
+/// ([`super::whole_record`]).
 ///
 /// # Errors
-/// Unreadable mapping or record, a missing channel, a check that fails, an unwritable output.
+/// Unreadable mapping or record, a missing channel, a check that fails, an unwritable output,
+/// a signal.
 pub fn execute(args: CompatArgs) -> anyhow::Result<()> {
     let mapping = Mapping::from_path(&args.map)?;
-    let mut readers = Vec::new();
-    for file in std::iter::once(&args.data).chain(&args.and) {
-        let (reader, notes) = open_log_with_notes(file, args.format, &mapping)?;
-        notes.iter().for_each(|n| eprintln!("note: {n}"));
-        readers.push(reader);
-    }
     let mut config = CompatConfig {
         time_shifts: !args.no_time_shifts,
         gyro_time_shifts: args.gyro_time_shifts,
@@ -77,21 +80,46 @@ pub fn execute(args: CompatArgs) -> anyhow::Result<()> {
     if let Some(n) = args.max_iterations {
         config.max_iterations = n as usize;
     }
-    let (summary, result) = check_records(readers, &args.windows, &config)?;
+    let files: Vec<String> = std::iter::once(&args.data).chain(&args.and).cloned().collect();
+    check_distinct(files.iter().map(String::as_str), args.allow_duplicate_records)?;
+    let mut inputs: Vec<&Path> =
+        std::iter::once(&args.data).chain(&args.and).map(Path::new).collect();
+    inputs.push(args.map.as_path());
+    let mut run = super::whole_record::WholeRecord::begin(
+        "compat",
+        &args.data,
+        args.out.as_deref(),
+        &inputs,
+    )?;
+    let (format, windows) = (args.format, args.windows.clone());
+    let (summary, result) = run.run(move || check(&files, format, &mapping, &windows, &config))?;
     super::print_stdout(&render(&summary))?;
-    if let Some(dir) = &args.out {
-        let mut inputs: Vec<&Path> =
-            std::iter::once(&args.data).chain(&args.and).map(Path::new).collect();
-        inputs.push(args.map.as_path());
-        let mut out = crate::outdir::OutputDir::open(dir, "compat", &inputs)?;
+    if let (Some(out), Some(dir)) = (run.writing(), &args.out) {
         out.write_bytes("compat.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
         let source = crate::report::Source { data: &args.data, mapping: &args.map };
         let traces = aeroident_pipelines::compat::traces(&result);
-        crate::report::compat::write(&source, &summary, &traces, &mut out)?;
+        crate::report::compat::write(&source, &summary, &traces, out)?;
         out.finish();
         eprintln!("wrote {} and report.html", dir.join("compat.json").display());
     }
     Ok(())
+}
+
+/// Reads `files` (the record, then each `--and`) and checks them jointly.
+fn check(
+    files: &[String],
+    format: Option<LogFormat>,
+    mapping: &Mapping,
+    windows: &[TimeWindow],
+    config: &CompatConfig,
+) -> anyhow::Result<(CompatSummary, CompatResult)> {
+    let mut readers = Vec::new();
+    for file in files {
+        let (reader, notes) = open_log_with_notes(file, format, mapping)?;
+        notes.iter().for_each(|n| eprintln!("note: {n}"));
+        readers.push(reader);
+    }
+    Ok(check_records(readers, windows, config)?)
 }
 
 /// The console text: status, the channel table, residuals, findings and warnings.

@@ -53,7 +53,7 @@ pub struct FreqRespArgs {
     /// Time window `START:END` of the record, s; several allowed (each its own stretch). Or
     /// `sysid[:AXIS]`: the spans of an ArduPilot log's SYSID sweeps (on `SID_AXIS` AXIS,
     /// number or name), found from its SIDS and SIDD messages.
-    #[arg(long = "window", value_parser = parse_window)]
+    #[arg(long = "window", value_parser = parse_window, allow_hyphen_values = true)]
     pub windows: Vec<WindowArg>,
     /// Spectral window lengths, s, comma-separated; default five from half the longest
     /// stretch down to an eighth of that.
@@ -171,28 +171,40 @@ impl FreqRespArgs {
     }
 }
 
-/// Runs `aeroident freqresp`.
+/// Runs `aeroident freqresp`: `--out` is locked and checked before the record is read, and a
+/// signal during the analysis writes `summary.json` marked `interrupted`
+/// ([`super::whole_record`]).
 ///
 /// # Errors
 /// Unreadable mapping or record, a channel not mapped or not excited, a bad window or fit
-/// spec, an unwritable output.
+/// spec, an unwritable output, a signal.
 pub fn execute(args: FreqRespArgs) -> anyhow::Result<()> {
     let mapping = Mapping::from_path(&args.map)?;
     // The options first: a `--window sysid` on a log that cannot have sweeps is named as such.
     let options = args.options(&mapping)?;
-    let (reader, notes) = open_log_with_notes(&args.data, args.format, &mapping)?;
-    for n in &notes {
-        eprintln!("note: {n}");
-    }
-    let outcome = freqresp(reader, &options)?;
+    // Before the output directory is opened (which clears the previous run's results).
+    aeroident_pipelines::freqresp::check(&options)?;
+    let inputs = [Path::new(&args.data), args.map.as_path()];
+    let mut run = super::whole_record::WholeRecord::begin(
+        "freqresp",
+        &args.data,
+        args.out.as_deref(),
+        &inputs,
+    )?;
+    let (data, format) = (args.data.clone(), args.format);
+    let outcome = run.run(move || {
+        let (reader, notes) = open_log_with_notes(&data, format, &mapping)?;
+        for n in &notes {
+            eprintln!("note: {n}");
+        }
+        Ok(freqresp(reader, &options)?)
+    })?;
     super::print_stdout(&render(&outcome))?;
-    if let Some(dir) = &args.out {
-        let inputs = [Path::new(&args.data), args.map.as_path()];
-        let mut out = crate::outdir::OutputDir::open(dir, "freqresp", &inputs)?;
+    if let (Some(out), Some(dir)) = (run.writing(), &args.out) {
         out.write_bytes("freqresp.json", serde_json::to_string_pretty(&outcome)?.as_bytes())?;
         out.write_bytes("freqresp.csv", csv_text(&outcome)?.as_bytes())?;
         let source = crate::report::Source { data: &args.data, mapping: &args.map };
-        crate::report::freqresp::write(&source, &outcome, &mut out)?;
+        crate::report::freqresp::write(&source, &outcome, out)?;
         out.finish();
         eprintln!("wrote {} and report.html", dir.join("freqresp.json").display());
     }

@@ -12,6 +12,7 @@ pub mod montecarlo;
 pub mod poc;
 pub mod replay;
 pub mod run;
+pub mod whole_record;
 
 /// aeroident: real-time aerodynamic parameter identification and an F-16 testbed.
 #[derive(Debug, Parser)]

@@ -56,7 +56,7 @@ pub fn table(c: &Campaign) -> String {
         c.scenario, c.runs, c.seed, c.wall_s, c.threads
     );
     if let Some(why) = &c.status_reason {
-        let _ = writeln!(s, "INTERRUPTED: {why}");
+        let _ = writeln!(s, "{}: {why}", c.status.to_uppercase());
     }
     let _ = writeln!(s, "{}", statistics_table(c));
     for e in &c.estimators {
@@ -227,11 +227,13 @@ fn write_coverage(c: &Campaign, od: &mut OutputDir) -> anyhow::Result<()> {
 /// SIGINT, SIGTERM or SIGHUP stops the campaign (crate::interrupt): no further run starts, the
 /// runs under way finish, and the outputs are written over the runs done with `montecarlo.json`
 /// status `interrupted`; a second signal before then leaves the figures and the report out.
-/// The exit code is then 128 + signal.
+/// The exit code is then 128 + signal. A campaign whose every run failed, or none gave an
+/// estimate, writes its (empty) statistics with that status and exits 1.
 ///
 /// # Errors
 /// An unreadable or invalid scenario, `--runs` 0 or above
-/// [`aeroident_pipelines::montecarlo::MAX_RUNS`], unwritable outputs, an interruption.
+/// [`aeroident_pipelines::montecarlo::MAX_RUNS`], unwritable outputs, an interruption, a
+/// campaign `failed` or with `no_estimates`.
 pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
     let sc = match &args.scenario {
         Some(p) => Scenario::from_path(p)?,
@@ -254,8 +256,8 @@ pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
     let c = campaign_until(&sc, args.runs, args.seed, Some(&flag));
     spin.finish_and_clear();
     let c = c.map_err(anyhow::Error::msg)?;
-    if let Some(why) = &c.status_reason {
-        eprintln!("{}: {why}", interrupt.signal_name().unwrap_or_default());
+    if let (Some(why), Some(signal)) = (&c.status_reason, interrupt.signal_name()) {
+        eprintln!("{signal}: {why}");
     }
     // From here further signals are ignored until the outputs are written.
     let summary_only = interrupt.begin_writing();
@@ -270,9 +272,17 @@ pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
             super::print_stdout(&format!("{}wrote {}", table(&c), dir.display()))?;
         }
     }
-    match interrupt.error("the outputs over the runs done were written, status `interrupted`") {
-        Some(e) => Err(e.into()),
-        None => Ok(()),
+    if let Some(e) =
+        interrupt.error("the outputs over the runs done were written, status `interrupted`")
+    {
+        return Err(e.into());
+    }
+    // Empty statistics are written (they say why), but are not a result to go on from.
+    match &c.status_reason {
+        Some(why) if c.status != "complete" => {
+            anyhow::bail!("campaign `{}` {}: {why}", sc.name, c.status)
+        }
+        _ => Ok(()),
     }
 }
 

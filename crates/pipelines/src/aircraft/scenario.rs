@@ -1117,6 +1117,28 @@ mod tests {
         assert_eq!(s.increments.values().next().map(|e| e.truth), Some(-1e4));
     }
 
+    /// A harmonic number past the highest a multisine takes is refused when the scenario is
+    /// parsed, naming the input and the limit, before an orthogonal set's peak grid (64 points
+    /// per period of the highest harmonic) is sized by it; the limit itself is accepted.
+    #[test]
+    fn harmonics_beyond_the_limit_are_refused_at_parse() {
+        let huge = DEFAULT_SCENARIO.replacen(
+            "harmonics = [5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31]",
+            "harmonics = [5, 7, 4000000000, 11]",
+            1,
+        );
+        assert_ne!(huge, DEFAULT_SCENARIO, "the default scenario's harmonics changed");
+        let e = Scenario::from_toml(&huge, "d.toml").unwrap_err().to_string();
+        assert!(e.contains("input[0]") && e.contains("4.000e9") && e.contains("10000"), "{e}");
+        let plain = "kind = \"multisine\"\namplitude_deg = 1.0\nbase_period_s = 10.0\n";
+        for (k, ok) in [(10_001u64, false), (1_000_000_000, false), (10_000, true)] {
+            let text = format!("{plain}harmonics = [1, {k}]\n");
+            let c: aeroident_signals::InputConfig = toml::from_str(&text).unwrap();
+            let r = c.build();
+            assert_eq!(r.is_ok(), ok, "{k}: {:?}", r.err());
+        }
+    }
+
     /// `model = "….toml"` reads a model file relative to the scenario's directory (the
     /// `model.toml` `replay --model auto` writes), and a missing or bad one is refused naming
     /// the estimator's key and the file.

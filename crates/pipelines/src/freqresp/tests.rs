@@ -84,7 +84,7 @@ fn bad_channels_and_windows_are_named() {
     o.spectral.window_lengths_s = vec![100.0];
     let e = run(&o).unwrap_err().to_string();
     assert!(
-        e.contains("--window") && e.contains("longer than the longest contiguous stretch"),
+        e.contains("`--windows-s`") && e.contains("longer than the longest contiguous stretch"),
         "{e}"
     );
     let e = run(&opts(&["vt"], &["q"])).unwrap_err().to_string();
@@ -93,6 +93,34 @@ fn bad_channels_and_windows_are_named() {
     o.fits = vec![TfSpec::parse("r/dr:0/2").unwrap()];
     let e = run(&o).unwrap_err().to_string();
     assert!(e.contains("--fit") && e.contains("no response of `r` to `dr`"), "{e}");
+}
+
+/// Each spectral or fit option out of range is named as the command line spells it (an option
+/// that exists), and the ones the options alone decide are refused before the record is read.
+#[test]
+fn options_out_of_range_are_named_by_their_flag() {
+    type Set = fn(&mut FreqRespOptions);
+    let cases: [(Set, &str); 6] = [
+        (|o| o.spectral.points_per_decade = 1_000_000_000_000, "`--points-per-decade`"),
+        (|o| o.spectral.points_per_decade = usize::MAX, "`--points-per-decade`"),
+        (|o| o.spectral.f_max_hz = Some(30.0), "`--f-max-hz`"),
+        (|o| o.spectral.f_min_hz = Some(1e-4), "`--f-min-hz`"),
+        (|o| o.fit.min_coherence = f64::NAN, "`--min-coherence`"),
+        (|o| o.fit.min_coherence = 1.5, "`--min-coherence`"),
+    ];
+    for (set, flag) in cases {
+        let mut o = opts(&["de"], &["q"]);
+        set(&mut o);
+        let e = run(&o).unwrap_err().to_string();
+        assert!(e.contains(flag), "{flag}: {e}");
+    }
+    // Refused before reading: a record that could not be read gives the option's error.
+    let mut o = opts(&["de"], &["q"]);
+    o.spectral.points_per_decade = 1_000_000;
+    let m = Mapping::from_toml_str(MAP, "m.toml").unwrap();
+    let reader = FlightDataReader::new("t,V,a,q,de\n".as_bytes(), "r.csv", &m).unwrap();
+    let e = freqresp(reader, &o).unwrap_err().to_string();
+    assert!(e.contains("`--points-per-decade`") && e.contains("1000"), "{e}");
 }
 
 /// The coherent band runs from the first to the last frequency at or above the threshold (in

@@ -62,15 +62,19 @@ impl FitJobOutcome {
 }
 
 impl FitJob {
-    /// The stages before the fit: the compatibility corrections, then the model.
+    /// The stages before the fit: the records checked to be distinct, the compatibility
+    /// corrections, then the model.
     ///
     /// # Errors
-    /// As [`super::corrections`] and [`super::choose_model`].
+    /// A record given twice ([`Records::check_distinct`]); as [`super::corrections`] and
+    /// [`super::choose_model`].
     pub fn prepare(
         &self,
         guard: &mut impl Guard,
         log: &mut dyn JobLog,
     ) -> Result<Ran<Prepared>, ReplayError> {
+        // Before any step reads a record: one given twice would be fitted as new data.
+        self.records.check_distinct()?;
         let (records, windows) = (&self.records, &self.options.windows);
         let compat_source = self.compat.as_ref();
         let (compat, (model, selection)) =

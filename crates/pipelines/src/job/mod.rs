@@ -43,12 +43,34 @@ pub struct Records {
     pub mapping: Mapping,
     /// Whether the main record is a live feed (stdin or MAVLink): whole-record steps refuse it.
     pub live: bool,
+    /// Whether a record may be given twice (the same file, or the same content) on purpose
+    /// (`--allow-duplicate-records`); otherwise it is refused
+    /// ([`crate::record::duplicates`]).
+    pub allow_duplicates: bool,
 }
 
 impl Records {
+    /// One record file `data` read through `mapping`, its format by its extension: no further
+    /// record, not live.
+    pub fn one(data: String, mapping: Mapping) -> Self {
+        Self { data, and: Vec::new(), format: None, mapping, live: false, allow_duplicates: false }
+    }
+
     /// Every file, the main record first.
     pub fn files(&self) -> impl Iterator<Item = &String> {
         std::iter::once(&self.data).chain(&self.and)
+    }
+
+    /// Refuses a record given twice, unless [`Records::allow_duplicates`]
+    /// ([`crate::record::duplicates::check_distinct`]).
+    ///
+    /// # Errors
+    /// [`RecordError`](crate::record::RecordError) naming both files.
+    pub fn check_distinct(&self) -> Result<(), crate::record::RecordError> {
+        crate::record::duplicates::check_distinct(
+            self.files().map(String::as_str),
+            self.allow_duplicates,
+        )
     }
 
     /// Opens every record anew for a step over the whole of them (what the reader left out is

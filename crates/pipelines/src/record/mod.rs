@@ -11,11 +11,13 @@
 //! - **manoeuvres**: for the whole-record consumers, the events gathered into manoeuvres split
 //!   at the gaps ([`read_records`]).
 //!
+//! [`duplicates`] refuses a record given twice (same file or same content) unless asked.
 //! [`needs`] says what a model structure needs from a record's samples. Every error of the
 //! stage is a [`RecordError`], naming the file, the option as the command line spells it, or
 //! the model.
 
 pub mod corrections;
+pub mod duplicates;
 pub mod needs;
 pub mod outliers;
 

@@ -132,6 +132,40 @@ pub fn replay_arrays_observed<R: Read>(
     Ok((outcome, arrays))
 }
 
+/// Most memory, bytes, the dense arrays of a replay of samples may be estimated to need
+/// ([`estimated_array_bytes`]): 2 GiB, the limit of a batch fit
+/// (`aeroident_estimators::output_error::MAX_FIT_BYTES`), checked before the samples are made.
+pub const MAX_ARRAY_BYTES: f64 = 2.0 * (1u64 << 30) as f64;
+
+/// The memory, bytes, of replaying `samples` samples of a structure of `params` parameters into
+/// dense arrays: the samples themselves (an [`AirDataSample`] each), the recorded time, estimate
+/// and σ of every parameter ([`EstimateArrays`]), and the copy of those the caller makes to hand
+/// them on (a numpy matrix).
+pub fn estimated_array_bytes(samples: usize, params: usize) -> f64 {
+    let sample = std::mem::size_of::<AirDataSample>() as f64;
+    let row = 8.0 * (1.0 + 2.0 * params as f64);
+    samples as f64 * (sample + 2.0 * row)
+}
+
+/// Refuses a replay of `samples` samples into dense arrays of `params` parameters whose
+/// estimated memory ([`estimated_array_bytes`]) is over [`MAX_ARRAY_BYTES`], with the estimate:
+/// such a replay would abort the process (and a Python interpreter with it) on the allocation.
+///
+/// # Errors
+/// The message, with the sample count, the estimate and the limit.
+pub fn check_array_size(samples: usize, params: usize) -> Result<(), String> {
+    let bytes = estimated_array_bytes(samples, params);
+    if bytes <= MAX_ARRAY_BYTES {
+        return Ok(());
+    }
+    Err(format!(
+        "{} samples × {params} parameters: the replay would need about {} MB for the samples and their estimates, more than the limit of {} MB; replay slices of the arrays (each its own call) or the record file with windows",
+        aeroident_io::message::short_count(samples),
+        (bytes / 1e6).round(),
+        (MAX_ARRAY_BYTES / 1e6).round()
+    ))
+}
+
 /// Drives estimator `est` with `samples` in order (module doc) and records its estimates.
 /// Refused samples (input errors) are skipped and counted; a divergence stops the run.
 ///
@@ -166,6 +200,26 @@ pub fn replay_samples(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Ten million samples of a 15-parameter structure are refused with the estimate (at least
+    /// the bytes of the estimate and σ matrices alone, 2.4 GB) and the limit; a short record
+    /// is not.
+    #[test]
+    fn arrays_past_the_memory_limit_are_refused_with_the_estimate() {
+        let matrices = |n: f64, p: f64| n * 2.0 * 8.0 * p;
+        assert!(estimated_array_bytes(10_000_000, 15) >= matrices(1e7, 15.0));
+        let e = check_array_size(10_000_000, 15).unwrap_err();
+        let mb = (estimated_array_bytes(10_000_000, 15) / 1e6).round();
+        assert!(
+            e.contains("1.000e7 samples")
+                && e.contains(&format!("{mb} MB"))
+                && e.contains("2147 MB"),
+            "{e}"
+        );
+        assert!(mb > 2400.0, "{mb}");
+        assert!(check_array_size(400, 15).is_ok());
+        assert!(check_array_size(0, 15).is_ok());
+    }
     use crate::estimators::EstimatorKind;
     use aeroident_estimators::AircraftConstants;
 

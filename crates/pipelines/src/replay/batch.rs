@@ -192,8 +192,11 @@ impl From<&aeroident_estimators::output_error::OeIteration> for BatchIteration {
 /// The frequency-domain part of an `fdoe` summary (`summary.json` `frequency_domain`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct FrequencyDomainSummary {
-    /// The band fitted, Hz.
+    /// The band asked for (`--band-hz`), Hz.
     pub band_hz: (f64, f64),
+    /// The band actually fitted: the lowest and highest frequency of any manoeuvre, Hz (inside
+    /// `band_hz`, and below each manoeuvre's Nyquist frequency).
+    pub band_fitted_hz: (f64, f64),
     /// Frequencies fitted per manoeuvre: count, lowest and highest, Hz.
     pub frequencies: Vec<(usize, f64, f64)>,
     /// The linear model's states (sample field names).

@@ -22,6 +22,7 @@ use aeroident_estimators::AirDataSample;
 use aeroident_estimators::flight_model::STATE_NAMES;
 use aeroident_estimators::output_error::OeResult;
 use aeroident_estimators::output_error::frequency::{FdoeConfig, FdoeResult, fit};
+use aeroident_io::message::short;
 use aeroident_io::{Mapping, ModelSpec, ParameterResult, StdErrorSource};
 
 /// Fits the record `rec` (read and split by the caller) by frequency-domain output error over
@@ -54,7 +55,8 @@ pub(super) fn fit_fdoe(
     let t0 = std::time::Instant::now();
     let fd = fit(&slices, &config).map_err(|e| ReplayError::Model(e.to_string()))?;
     let wall = t0.elapsed().as_secs_f64();
-    let mut warnings = Vec::new();
+    let mut warnings: Vec<String> =
+        band_clipped(band_hz, &slices, fitted_band(&fd)).into_iter().collect();
     let simulated = match simulate_at(&slices, model.structure, &fd.outputs, &fd.values) {
         Ok(r) => Some(r),
         Err(e) => {
@@ -205,6 +207,7 @@ fn summarise(
         bootstrap: None,
         frequency_domain: Some(FrequencyDomainSummary {
             band_hz: fd.band_hz,
+            band_fitted_hz: fitted_band(fd),
             frequencies: fd
                 .frequencies_hz
                 .iter()
@@ -223,4 +226,35 @@ fn summarise(
             not_estimated,
         }),
     }
+}
+
+/// The band fitted: the lowest and highest frequency any manoeuvre contributed, Hz.
+fn fitted_band(fd: &FdoeResult) -> (f64, f64) {
+    let lo =
+        fd.frequencies_hz.iter().filter_map(|f| f.first()).fold(f64::INFINITY, |a, b| a.min(*b));
+    let hi = fd.frequencies_hz.iter().filter_map(|f| f.last()).fold(0.0, |a: f64, b| a.max(*b));
+    (lo, hi)
+}
+
+/// The warning of a band asked above the record's Nyquist frequency (the highest of its
+/// manoeuvres'), where the fit could only stop short of it; `None` when it was not.
+fn band_clipped(
+    asked: (f64, f64),
+    slices: &[&[AirDataSample]],
+    fitted: (f64, f64),
+) -> Option<String> {
+    let nyquist = slices
+        .iter()
+        .filter(|m| m.len() > 1)
+        .map(|m| 0.5 * (m.len() - 1) as f64 / (m[m.len() - 1].t_s - m[0].t_s))
+        .fold(0.0, f64::max);
+    (asked.1 >= nyquist).then(|| {
+        format!(
+            "--band-hz {}:{} reaches above the record's Nyquist frequency {} Hz: the fit stopped at {} Hz (band_fitted_hz in summary.json); lower the band's upper edge",
+            short(asked.0),
+            short(asked.1),
+            short(nyquist),
+            short(fitted.1)
+        )
+    })
 }

@@ -124,7 +124,11 @@ impl AutoModel {
             return Ok(self);
         }
         let rad: Vec<f64> = knots_deg.iter().map(|k| k.to_radians()).collect();
-        let knots = AlphaKnots::new(&rad).map_err(|e| format!("α knots {knots_deg:?}°: {e}"))?;
+        let knots = AlphaKnots::new(&rad).map_err(|e| {
+            let shown: Vec<String> =
+                knots_deg.iter().map(|k| aeroident_io::message::short(*k)).collect();
+            format!("α knots [{}]°: {e}", aeroident_io::message::list(&shown, 8))
+        })?;
         Ok(Self { knots: Some(knots), ..self })
     }
 
@@ -608,6 +612,24 @@ fn coefficient_report(s: &CoefficientSelection) -> CoefficientReport {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Refused knots are shown short whatever was typed: a million knots as the first eight and
+    /// a count (once a 9.9 MB message), 1e300° and a 310-digit number in scientific form.
+    #[test]
+    fn refused_knots_are_shown_short() {
+        let auto = || AutoModel::from_args("auto", "swr", &[]).unwrap().unwrap();
+        let many: Vec<f64> = (0..1_000_000).map(|k| k as f64 * 1e-4).collect();
+        let e = auto().with_knots_deg(&many).unwrap_err();
+        assert!(
+            e.len() < 300 && e.contains("… and 999992 more") && e.contains("1000000 α knots"),
+            "{e}"
+        );
+        let huge: f64 = format!("1{}", "0".repeat(309)).parse().unwrap();
+        for (knot, shown) in [(1e300, "1.000e300"), (huge, "inf"), (123.456_789, "123.4568")] {
+            let e = auto().with_knots_deg(&[knot]).unwrap_err();
+            assert!(e.len() < 200 && e.contains(&format!("[{shown}]°")), "{e}");
+        }
+    }
 
     #[test]
     fn from_args_reads_scope_method_and_candidates() {

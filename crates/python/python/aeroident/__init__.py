@@ -134,6 +134,42 @@ def _plain(constants: Optional[Mapping[str, float]]) -> Optional[dict[str, Optio
     return None if constants is None else {str(k): (None if v is None else float(v)) for k, v in constants.items()}
 
 
+def _sequence(name: str, value: Any) -> Optional[list[Any]]:
+    """``value`` as a list, refusing a lone string or path: iterating ``"57"`` would give the
+    knots 5 and 7, ``"rec.csv"`` the records ``r``, ``e``, ``c`` …, without a word."""
+    if value is None:
+        return None
+    if isinstance(value, (str, bytes, os.PathLike)):
+        raise TypeError(f"{name} must be a list (e.g. [{value!r}]), not a single {type(value).__name__}: {value!r}")
+    try:
+        return list(value)
+    except TypeError:
+        raise TypeError(f"{name} must be a list, got {type(value).__name__}: {value!r}") from None
+
+
+def _band(value: Any) -> Optional[tuple[float, float]]:
+    """``band_hz`` as ``(f_min_hz, f_max_hz)``: exactly two numbers."""
+    items = _sequence("band_hz", value)
+    if items is None:
+        return None
+    if len(items) != 2:
+        raise ValueError(f"band_hz must be (f_min_hz, f_max_hz), two numbers; got {len(items)}: {value!r}")
+    return (float(items[0]), float(items[1]))
+
+
+def _windows(value: Any) -> Optional[list[tuple[float, float]]]:
+    items = _sequence("windows", value)
+    if items is None:
+        return None
+    out = []
+    for w in items:
+        pair = _sequence("windows entry", w)
+        if len(pair) != 2:
+            raise ValueError(f"windows entries must be (start_s, end_s), two numbers; got {w!r}")
+        out.append((float(pair[0]), float(pair[1])))
+    return out
+
+
 Rls = _subclass("rls", "Recursive least squares (equation error) on every modelled coefficient. ``Rls(model, constants, forgetting=1.0)``.")
 RlsIv = _subclass("rls-iv", "Recursive instrumental variables: equation error whose estimates regressor noise does not pull towards zero; the state regressors' instruments are their values 5 samples earlier (in :func:`replay` of a file, the differentiator window). ``RlsIv(model, constants, forgetting=1.0)``.")
 Ftr = _subclass("ftr", "Real-time Fourier-transform regression (Morelli 2000). ``Ftr(model, constants, forgetting=1.0, sample_interval_s=None, ftr_grid_hz=None)``.")
@@ -180,7 +216,8 @@ def replay(
     --select … --candidates … --knots-deg …``: ``summary["structure_selection"]`` holds the selection path and
     ``selected_model`` the chosen model as model-file TOML (``None`` otherwise).
     ``compat``: a record file's ``compat.json`` (``aeroident compat``) whose corrections are
-    applied to every sample first (``--compat FILE``). ``windows``: ``[(start_s, end_s), …]``
+    applied to every sample first (``--compat FILE``), or ``"auto"``: checked on the record
+    first (``--compat auto``). ``windows``: ``[(start_s, end_s), …]``
     record-time windows, each its own manoeuvre, the rest not used (``--window START:END``).
     ``cross_check=True`` (a record file): the record is also fitted by output error with the
     same model and ``summary["cross_check"]`` lists the parameters further apart than 2
@@ -218,12 +255,19 @@ def replay(
             derivatives,
             diff_window,
             None if compat is None else os.fspath(compat),
-            None if windows is None else [(float(a), float(b)) for a, b in windows],
+            _windows(windows),
             cross_check,
             select,
-            None if candidates is None else list(candidates),
-            None if knots_deg is None else [float(k) for k in knots_deg],
+            _sequence("candidates", candidates),
+            None if knots_deg is None else [float(k) for k in _sequence("knots_deg", knots_deg)],
             **options,
+        )
+    # What only a record file has a use for would be ignored for arrays: refused instead.
+    file_only = dict(mapping=mapping, compat=compat, windows=windows, cross_check=cross_check or None, candidates=candidates, knots_deg=knots_deg)
+    given = [k for k, v in file_only.items() if v is not None]
+    if given:
+        raise AeroidentError(
+            f"replay of arrays: {', '.join(given)} apply to a record file (read, corrected and windowed by the pipeline); the arrays go to the estimator as they are"
         )
     keys = set(_core.sample_keys())
     arrays = {k: np.ascontiguousarray(v, dtype=np.float64) for k, v in data.items() if k in keys}
@@ -250,6 +294,7 @@ def fit(
     candidates: Optional[Sequence[str]] = None,
     band_hz: Optional[tuple[float, float]] = None,
     knots_deg: Optional[Sequence[float]] = None,
+    allow_duplicate_records: bool = False,
     **options: Any,
 ) -> dict[str, Any]:
     """Fits a whole record by batch output error (``"oe"``), the filter-error method
@@ -276,10 +321,13 @@ def fit(
     ``oe``, 250 for ``fem``). ``process_noise`` (``fem``): the states with process noise,
     comma-separated (``"V,alpha,theta,q"``; ``--process-noise``; default ``V,alpha,beta``).
     ``compat``: a ``compat.json`` (``aeroident compat``) whose corrections are applied to every
-    sample before the fit (``--compat FILE``). ``windows``: ``[(start_s, end_s), …]``
+    sample before the fit (``--compat FILE``), or ``"auto"`` (``--compat auto``). ``windows``: ``[(start_s, end_s), …]``
     record-time windows, each its own manoeuvre, the rest not used (``--window START:END``).
     ``also``: further records of the same aircraft (same mapping), fitted together with
-    ``data``, each file a manoeuvre of its own (``--and FILE``). ``model="auto[:scope]"``,
+    ``data``, each file a manoeuvre of its own (``--and FILE``); a list, never a lone path. A
+    record given twice (the same file, or the same content) is refused, as it would shrink
+    every σ by √2, unless ``allow_duplicate_records=True`` (``--allow-duplicate-records``).
+    ``compat="auto"`` checks the records' compatibility first, as ``--compat auto``. ``model="auto[:scope]"``,
     ``select``, ``candidates`` and ``knots_deg``: the structure chosen from the records first,
     as in :func:`replay` (``--model auto --select … --candidates … --knots-deg …``). ``band_hz`` (``fdoe`` only):
     the band fitted, ``(f_min_hz, f_max_hz)`` (``--band-hz F0:F1``; default 0.1–1.5 Hz).
@@ -334,12 +382,13 @@ def fit(
         max_iterations,
         process_noise,
         None if compat is None else os.fspath(compat),
-        None if windows is None else [(float(a), float(b)) for a, b in windows],
-        None if also is None else [os.fspath(p) for p in also],
+        _windows(windows),
+        None if also is None else [os.fspath(p) for p in _sequence("also", also)],
         select,
-        None if candidates is None else list(candidates),
-        None if band_hz is None else (float(band_hz[0]), float(band_hz[1])),
-        None if knots_deg is None else [float(k) for k in knots_deg],
+        _sequence("candidates", candidates),
+        _band(band_hz),
+        None if knots_deg is None else [float(k) for k in _sequence("knots_deg", knots_deg)],
+        allow_duplicate_records=bool(allow_duplicate_records),
         **options,
     )
 

@@ -210,7 +210,10 @@ fn bad_input_is_named() {
         &long,
     )
     .unwrap_err();
-    assert!(e.to_string().contains("`window`") && e.to_string().contains("longer"), "{e}");
+    assert!(
+        e.to_string().contains("`window_lengths_s`") && e.to_string().contains("longer"),
+        "{e}"
+    );
     let zero = vec![0.0; 2_000];
     let e =
         frequency_responses(&[vec![zero, y.clone()]], &names(&["de"]), &names(&["q"]), DT, &opts())
@@ -225,12 +228,66 @@ fn bad_input_is_named() {
         &low,
     )
     .unwrap_err();
-    assert!(e.to_string().contains("`f_min`"), "{e}");
+    assert!(e.to_string().contains("`f_min_hz`"), "{e}");
     let mut bad = y;
     bad[7] = f64::NAN;
     let e = frequency_responses(&[vec![x, bad]], &names(&["de"]), &names(&["q"]), DT, &opts())
         .unwrap_err();
     assert!(e.to_string().contains("sample 7"), "{e}");
+}
+
+#[test]
+fn points_per_decade_beyond_the_limit_are_refused_before_any_grid_is_made() {
+    let x = white(2_000, 1.0, 3);
+    let y = x.clone();
+    // The largest value, whose grid count once wrapped to an empty grid (and an index panic),
+    // a value that would allocate terabytes, and one just above the limit.
+    for ppd in [usize::MAX, 1_000_000_000_000, MAX_POINTS_PER_DECADE + 1] {
+        let o = SpectralOptions { points_per_decade: ppd, ..opts() };
+        let e = o.check().unwrap_err().to_string();
+        assert!(e.contains("`points_per_decade`") && e.contains("1000"), "{e}");
+        let zero = vec![0.0; 2_000];
+        let e =
+            frequency_responses(&[vec![zero, y.clone()]], &names(&["de"]), &names(&["q"]), DT, &o)
+                .unwrap_err();
+        assert!(matches!(e, SpectralError::Option { option: "points_per_decade", .. }), "{e}");
+    }
+    let at_limit = SpectralOptions { points_per_decade: MAX_POINTS_PER_DECADE, ..opts() };
+    assert!(at_limit.check().is_ok());
+    let r =
+        frequency_responses(&[vec![x, y]], &names(&["de"]), &names(&["q"]), DT, &at_limit).unwrap();
+    // f_max 5 Hz, f_min 2/T_max: the grid holds decades × 1000 + 1 points.
+    let p = &r.pairs[0];
+    let decades = (p.frequency_hz[p.frequency_hz.len() - 1] / p.frequency_hz[0]).log10();
+    assert_eq!(p.frequency_hz.len(), (decades * 1000.0).round() as usize + 1);
+}
+
+#[test]
+fn log_grid_of_bounds_that_give_no_decade_is_empty_instead_of_wrapping() {
+    assert!(log_grid(1.0, f64::INFINITY, 40).is_empty());
+    assert!(log_grid(0.0, 10.0, 40).is_empty());
+    assert!(log_grid(10.0, 1.0, 40).is_empty());
+    assert!(log_grid(1.0, 10.0, 0).is_empty());
+    let g = log_grid(1.0, 100.0, 2);
+    assert_eq!(g.len(), 5);
+    assert!((g[1] - 10f64.sqrt()).abs() < 1e-12 && (g[4] - 100.0).abs() < 1e-9, "{g:?}");
+}
+
+#[test]
+fn options_that_are_not_finite_are_named() {
+    let cases: [(SpectralOptions, &str); 5] = [
+        (SpectralOptions { overlap: f64::NAN, ..opts() }, "overlap"),
+        (SpectralOptions { window_lengths_s: vec![10.0, -1.0], ..opts() }, "window_lengths_s"),
+        (SpectralOptions { f_min_hz: Some(f64::NAN), ..opts() }, "f_min_hz"),
+        (SpectralOptions { f_max_hz: Some(f64::INFINITY), ..opts() }, "f_max_hz"),
+        (SpectralOptions { f_min_hz: Some(3.0), f_max_hz: Some(2.0), ..opts() }, "f_max_hz"),
+    ];
+    for (o, name) in cases {
+        match o.check() {
+            Err(SpectralError::Option { option, .. }) => assert_eq!(option, name),
+            other => panic!("{name}: {other:?}"),
+        }
+    }
 }
 
 #[test]

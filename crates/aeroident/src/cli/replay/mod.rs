@@ -151,7 +151,7 @@ pub struct ReplayArgs {
     /// A time window `START:END` (record seconds) of the record to use; repeat it for several
     /// manoeuvres of one flight, each window its own manoeuvre (own initial state). Default:
     /// the whole record.
-    #[arg(long = "window", value_name = "START:END", value_parser = parse_window)]
+    #[arg(long = "window", value_name = "START:END", value_parser = parse_window, allow_hyphen_values = true)]
     pub windows: Vec<TimeWindow>,
     /// `--estimator oe | fem`: a further record of the same aircraft (same mapping and
     /// format), fitted together with the first, each file a manoeuvre of its own; repeat it
@@ -159,6 +159,10 @@ pub struct ReplayArgs {
     /// applied to all.
     #[arg(long = "and", value_name = "FILE")]
     pub and: Vec<String>,
+    /// Fit a record given twice (the same file, or two files of the same content) as if new
+    /// data; without it such a record is refused, as it would shrink every σ by √2.
+    #[arg(long)]
+    pub allow_duplicate_records: bool,
     /// Real-time estimators: also fit the record by output error with the same model and set
     /// the two side by side; a parameter further apart than 2 combined σ is flagged in the
     /// table, the warnings and `summary.json` `cross_check`, with its likely cause.
@@ -312,6 +316,7 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
     };
     // Lock the directory and clear the previous run's files before reading anything: a
     // directory that cannot take the results is refused before a long fit, not after it.
+    records.check_distinct()?;
     let mut out_dir = open_out(&args)?;
     // From here a signal ends the run gracefully (crate::interrupt): the steps over the whole
     // record before the estimator too, with a summary saying so.
@@ -346,7 +351,14 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
 
 /// The records of the command line: `DATA` and `--and`, in `--format`, through `mapping`.
 fn records(args: &ReplayArgs, mapping: Mapping, live: bool) -> Records {
-    Records { data: args.data.clone(), and: args.and.clone(), format: args.format, mapping, live }
+    Records {
+        data: args.data.clone(),
+        and: args.and.clone(),
+        format: args.format,
+        mapping,
+        live,
+        allow_duplicates: args.allow_duplicate_records,
+    }
 }
 
 /// How the model is chosen: `--model`, `--select`, `--candidates`, `--knots-deg` (the
@@ -396,6 +408,13 @@ fn check_combination(args: &ReplayArgs, mavlink: bool) -> anyhow::Result<()> {
     if args.estimator.is_batch() && mavlink {
         anyhow::bail!(
             "--estimator {} is a batch fit of a whole record, not for a live MAVLink feed",
+            args.estimator.name()
+        );
+    }
+    if args.estimator.is_batch() && args.cross_check {
+        // It would be ignored: the cross-check is a batch fit set beside a real-time estimator.
+        anyhow::bail!(
+            "--cross-check sets a batch output-error fit beside a real-time estimator; --estimator {} is a batch fit already: run the other estimator on the record to compare",
             args.estimator.name()
         );
     }

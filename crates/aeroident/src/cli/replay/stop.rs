@@ -5,7 +5,6 @@
 use super::ReplayArgs;
 use aeroident_pipelines::job::{Guard, JobLog, Step};
 use aeroident_pipelines::replay::ReplayError;
-use anyhow::Context;
 
 /// The jobs' [`Guard`] of the command line: each step over a whole record on a thread of its
 /// own, abandoned on a signal ([`stage_watched`]).
@@ -52,10 +51,9 @@ pub(super) fn stopped_before_fit(
 }
 
 /// Runs `stage`, a step over a whole record that no estimator watches (`--compat auto`,
-/// `--model auto`, `--validate-on`), on a thread of its own while answering the signals
-/// (crate::interrupt): a signal abandons it at once, `None` (the thread ends with the process,
-/// which writes its summary and exits). Such a step has no safe point to stop at and nothing
-/// of it is worth keeping half done.
+/// `--model auto`, `--validate-on`), abandoned at once on a signal
+/// ([`crate::interrupt::Interrupt::watched`]): such a step has no safe point to stop at and
+/// nothing of it is worth keeping half done.
 ///
 /// # Errors
 /// The thread could not start or ended without a result (a panic).
@@ -63,28 +61,7 @@ pub(super) fn stage_watched<T: Send + 'static>(
     interrupt: &crate::interrupt::Interrupt,
     stage: impl FnOnce() -> T + Send + 'static,
 ) -> anyhow::Result<Option<T>> {
-    use std::sync::mpsc::RecvTimeoutError;
-    if interrupt.requested() {
-        return Ok(None);
-    }
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::Builder::new()
-        .name("whole-record".into())
-        .stack_size(aeroident_pipelines::WORKER_STACK_BYTES)
-        .spawn(move || {
-            let _ = tx.send(stage());
-        })
-        .context("starting a thread")?;
-    loop {
-        match rx.recv_timeout(std::time::Duration::from_millis(50)) {
-            Ok(r) => return Ok(Some(r)),
-            Err(RecvTimeoutError::Disconnected) => {
-                anyhow::bail!("internal: a step over the whole record ended without a result")
-            }
-            Err(RecvTimeoutError::Timeout) if interrupt.requested() => return Ok(None),
-            Err(RecvTimeoutError::Timeout) => {}
-        }
-    }
+    interrupt.watched(stage)
 }
 
 /// The warning of a run that a signal stopped during `--validate-on`.

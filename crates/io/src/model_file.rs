@@ -442,12 +442,7 @@ impl ModelSpec {
                 name: key.get_ref().clone(),
                 reason,
             };
-            let p = Param::from_name(key.get_ref()).ok_or_else(|| {
-                bad("not a parameter name `<coefficient>_<term>` of the vocabulary".into())
-            })?;
-            if structure.index_of(p).is_none() {
-                return Err(bad(format!("`{}` is not in the model", p.name())));
-            }
+            let p = param_in(key.get_ref(), &structure).map_err(bad)?;
             // A reference is compared with the estimate (its difference in σ): a value no
             // aerodynamic parameter can take is a typo, refused as a prior's is.
             let v = entry.value;
@@ -475,6 +470,16 @@ impl ModelSpec {
     }
 }
 
+/// The parameter a table key names, when it is one of `structure`'s; else why not.
+fn param_in(key: &str, structure: &ModelStructure) -> Result<Param, String> {
+    let p = Param::from_name(key)
+        .ok_or("not a parameter name `<coefficient>_<term>` of the vocabulary")?;
+    match structure.index_of(p) {
+        Some(_) => Ok(p),
+        None => Err(format!("`{}` is not in the model", p.name())),
+    }
+}
+
 /// The `[plausible.X]` ranges: each of a parameter of the model, `min < max`, both finite.
 fn plausible_of(
     raw: &BTreeMap<Spanned<String>, PlausibleEntry>,
@@ -490,12 +495,7 @@ fn plausible_of(
             name: key.get_ref().clone(),
             reason,
         };
-        let p = Param::from_name(key.get_ref()).ok_or_else(|| {
-            bad("not a parameter name `<coefficient>_<term>` of the vocabulary".into())
-        })?;
-        if structure.index_of(p).is_none() {
-            return Err(bad(format!("`{}` is not in the model", p.name())));
-        }
+        let p = param_in(key.get_ref(), structure).map_err(bad)?;
         let (min, max) = (entry.min, entry.max);
         if !(min.is_finite() && max.is_finite() && min < max) {
             return Err(bad(format!("min = {min:e} and max = {max:e}: both finite, min < max")));

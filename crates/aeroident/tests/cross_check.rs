@@ -79,3 +79,34 @@ fn val_hfb320_output_error_verdicts_against_the_model_files_references() {
     }
     assert_eq!(judged, published.len(), "every published value is set beside its estimate");
 }
+
+/// A filter-error fit whose measurement-noise variance collapsed is flagged: the HFB-320 `fem`
+/// fit is healthy (every noise variance 0.2–0.9 of its innovation variance, measured), so
+/// nothing is said; with one variance set to a millionth of its innovation variance, as a
+/// degenerate filter ends, every estimate is flagged and a consistency warning names the output.
+#[test]
+fn val_hfb320_filter_error_with_a_collapsed_noise_variance_is_flagged() {
+    let Some(data) = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let m = Mapping::from_path(&workspace().join("mappings/hfb320.toml")).unwrap();
+    let model = ModelSpec::from_path(&workspace().join("models/hfb320_book_q0.toml")).unwrap();
+    let reader = open_log(&data.display().to_string(), None, &m).unwrap();
+    let options = aeroident_pipelines::replay::batch::FitOptions {
+        method: aeroident_pipelines::replay::batch::BatchMethod::Fem,
+        ..Default::default()
+    };
+    let mut fit =
+        aeroident_pipelines::replay::fit::fit_record(reader, &m, Some(model.clone()), options)
+            .unwrap();
+    let s = &mut fit.summary;
+    assert_eq!(s.collapsed_noise(), None, "{:?}", s.measurement_noise_var);
+    assert!(s.parameters.iter().all(|p| !p.flags.iter().any(|f| f.contains("degenerate"))));
+    let (name, rms) = s.residual_rms[1].clone();
+    let k = s.measurement_noise_var.iter().position(|(n, _)| *n == name).unwrap();
+    s.measurement_noise_var[k].1 = 1e-6 * rms * rms;
+    s.judge(&model, true);
+    for p in &s.parameters {
+        assert_eq!(p.status, "flagged", "{p:?}");
+        assert!(p.flags.iter().any(|f| f.starts_with("degenerate filter") && f.contains(&name)));
+    }
+    assert!(s.warnings.iter().any(|w| w.starts_with("degenerate filter")));
+}

@@ -32,6 +32,7 @@ use aeroident_estimators::output_error::{
 };
 use aeroident_estimators::{AirDataSample, ModelStructure};
 use aeroident_io::parameter::STATUS_NOT_CONVERGED;
+use aeroident_io::warning::{Warning, WarningKind};
 use aeroident_io::{
     FlightDataReader, Mapping, ModelSpec, ParameterResult, Rejection, StdErrorSource,
 };
@@ -132,15 +133,26 @@ impl std::ops::Deref for BatchParameter {
     }
 }
 
+/// The share of an output's innovation variance below which `fem`'s measurement-noise variance
+/// has collapsed ([`BatchSummary::collapsed_noise`]). In a filter that is not degenerate the
+/// noise is a sizeable part of the innovation (0.2 to 3.5 on the HFB-320 and ATTAS records);
+/// a thousandth means the filter follows the output as if it were exact.
+pub const COLLAPSED_NOISE_SHARE: f64 = 1e-3;
+
 impl BatchSummary {
     /// Sets every parameter's reference (the `model` file's), flags and status: the warnings
     /// about it, the plausibility check ([`crate::plausibility`]; the drag terms withdrawn
-    /// unless `thrust_mapped`), a reference outside ±2σ; `not identified` with the reason for
+    /// unless `thrust_mapped`), a reference outside ±2σ, a collapsed `fem` noise variance
+    /// ([`BatchSummary::collapsed_noise`]); `not identified` with the reason for
     /// a parameter the method does not estimate; `not converged` for every parameter of a
     /// fit that ended at its iteration limit with its last step still above 1 σ
     /// ([`BatchSummary::still_moving`]); else `flagged` or `identified`.
     pub fn judge(&mut self, model: &ModelSpec, thrust_mapped: bool) {
         let moving = self.still_moving();
+        let degenerate = self.collapsed_noise();
+        if let Some(text) = &degenerate {
+            self.warnings.push(Warning::new(WarningKind::Consistency, text.clone()));
+        }
         for p in &mut self.parameters {
             let r = &mut p.result;
             r.reference = model.references.iter().find(|x| x.param.name() == r.name).map(|x| {
@@ -154,8 +166,34 @@ impl BatchSummary {
                 ));
             }
             crate::plausibility::check(model, thrust_mapped, std::iter::once(&mut *r));
+            if r.estimate.is_some() {
+                degenerate.iter().for_each(|d| r.flag(d.clone()));
+            }
             r.judge(moving.then_some(STATUS_NOT_CONVERGED));
         }
+    }
+
+    /// `fem`: the warning of a measurement-noise variance that collapsed, below
+    /// [`COLLAPSED_NOISE_SHARE`] of its output's innovation variance (the filter then takes
+    /// that output as exact and follows it: its estimates and σ are those of a degenerate
+    /// filter); `None` for `oe`, `fdoe` and a healthy filter.
+    pub fn collapsed_noise(&self) -> Option<String> {
+        let collapsed: Vec<String> = self
+            .measurement_noise_var
+            .iter()
+            .filter_map(|(name, var)| {
+                let (_, rms) = self.residual_rms.iter().find(|(n, _)| n == name)?;
+                (*var < COLLAPSED_NOISE_SHARE * rms * rms)
+                    .then(|| format!("{name} {var:.1e} against {:.1e}", rms * rms))
+            })
+            .collect();
+        (!collapsed.is_empty()).then(|| {
+            format!(
+                "degenerate filter: the measurement-noise variance of {} collapsed below {:.0e} of the innovation variance: the filter takes that output as exact, so its estimates and σ are not a filter-error result (compare with oe)",
+                collapsed.join(", "),
+                COLLAPSED_NOISE_SHARE
+            )
+        })
     }
 
     /// Whether the fit ended unconverged with its last iteration still moving some estimate

@@ -471,3 +471,66 @@ pub fn summarize(out: &RunOutput) -> Result<Summary, MetricsError> {
             .collect(),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A primary derivative at −0.95 ± 0.01 against a truth of −1 (5 % off, the truth 5σ away).
+    fn entry(meets: Option<bool>, t10: Option<f64>, r10: Option<f64>) -> ParamSummary {
+        ParamSummary {
+            estimator: "rls".into(),
+            result: ParameterResult::new("Cm_alpha", Some(-0.95), Some(0.01), Some(-1.0), None),
+            quantity: "derivative",
+            primary: true,
+            truth_before: Some(-1.0),
+            truth_after: Some(-1.0),
+            step_at_s: None,
+            rel_error: Some(0.05),
+            covers_truth_2sigma: Some(false),
+            convergence_time_s: None,
+            first_within_s: None,
+            thesis_convergence_time_s: None,
+            thesis_note: None,
+            reconvergence_time_s: None,
+            time_to_10pct_s: t10,
+            reconvergence_10pct_s: r10,
+            meets_targets: meets,
+            failure: None,
+            estimator_status: Some("running"),
+            batch: false,
+        }
+    }
+
+    /// Each missed target is named with its number: late after the excitation (7.3 s against
+    /// 5 s), never back after the damage, ±2σ not covering the truth; the truth 5σ away is a
+    /// flag of its own; the status is `flagged`. Without damage the damage target is not named;
+    /// a diverged estimator is `diverged` whatever its numbers.
+    #[test]
+    fn a_missed_target_says_which_and_by_how_much() {
+        let mut e = entry(Some(false), Some(7.3), None);
+        e.judge(Some(20.0));
+        assert_eq!(e.status, "flagged");
+        assert_eq!(
+            e.flags,
+            [
+                "the reference -1.0000 lies 5.0σ from the estimate (outside ±2σ)",
+                "target missed: within ±10 % 7.3 s after the excitation (target 5 s)",
+                "target missed: never stays within ±10 % after the damage",
+                "target missed: ±2σ does not cover the truth at the end",
+            ]
+        );
+        let mut e = entry(Some(false), Some(2.0), None);
+        e.judge(None);
+        assert_eq!(e.flags.len(), 2, "{:?}", e.flags);
+        let mut e = entry(Some(true), Some(2.0), Some(1.0));
+        e.covers_truth_2sigma = Some(true);
+        e.result = ParameterResult::new("Cm_alpha", Some(-0.99), Some(0.01), Some(-1.0), None);
+        e.judge(Some(20.0));
+        assert_eq!((e.status.as_str(), e.flags.len()), ("identified", 0));
+        let mut e = entry(Some(false), None, None);
+        e.estimator_status = Some("diverged");
+        e.judge(None);
+        assert_eq!(e.status, "diverged");
+    }
+}

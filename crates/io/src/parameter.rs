@@ -32,6 +32,11 @@ pub const STATUS_NOT_CONVERGED: &str = "not converged";
 /// The status of every estimate of an estimator that diverged (none is a result).
 pub const STATUS_DIVERGED: &str = "diverged";
 
+/// The flag of an estimate without a standard error: `identified` would claim what nothing
+/// measured.
+pub const NO_STD_ERROR: &str =
+    "no σ: the method gives no standard error, so nothing says how well the record determines it";
+
 /// Which standard error `std_error` is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -104,25 +109,32 @@ impl ParameterResult {
         reference: Option<f64>,
         failure: Option<&str>,
     ) -> Self {
-        let reference = reference.map(|r| if r.abs() < ZERO_THRESHOLD { 0.0 } else { r });
         let mut result = Self {
             name: name.into(),
             estimate,
             std_error,
             std_error_source: None,
             crb_std_error: None,
-            reference,
+            reference: None,
             status: String::new(),
             flags: Vec::new(),
         };
+        result.set_reference(reference);
         result.judge(failure);
         result
     }
 
+    /// Sets the reference, a magnitude below [`ZERO_THRESHOLD`] as 0 (round-off of an exact
+    /// zero, against which no error % is formed).
+    pub fn set_reference(&mut self, reference: Option<f64>) {
+        self.reference = reference.map(|r| if r.abs() < ZERO_THRESHOLD { 0.0 } else { r });
+    }
+
     /// Sets the status from the current numbers and flags: `failure` if given (`diverged`,
     /// `not converged`), else `not identified` without an estimate; otherwise a reference
-    /// further than 2σ from the estimate is one more flag, and the status is `flagged` with any
-    /// flag, else `identified`.
+    /// further than 2σ from the estimate is one more flag, an estimate without any σ is one
+    /// (nothing says how well the record determines it, [`NO_STD_ERROR`]), and the status is
+    /// `flagged` with any flag, else `identified`.
     pub fn judge(&mut self, failure: Option<&str>) {
         if let Some(f) = failure {
             self.status = f.to_string();
@@ -139,6 +151,9 @@ impl ParameterResult {
                 "the reference {r:.4} lies {:.1}σ from the estimate (outside ±2σ)",
                 (e - r).abs() / s
             ));
+        }
+        if self.std_error.is_none() && !self.flags.iter().any(|f| f.starts_with("no σ")) {
+            self.flag(NO_STD_ERROR);
         }
         self.status =
             if self.flags.is_empty() { STATUS_IDENTIFIED } else { STATUS_FLAGGED }.to_string();
@@ -225,6 +240,10 @@ mod tests {
         assert_eq!((r.status.as_str(), r.error_pct()), (STATUS_NOT_IDENTIFIED, None));
         let r = ParameterResult::new("Cl_0", Some(6e-5), None, Some(3.4e-44), None);
         assert_eq!((r.reference, r.error_pct()), (Some(0.0), None));
+        assert_eq!(
+            (r.status.as_str(), r.flags.clone()),
+            (STATUS_FLAGGED, vec![NO_STD_ERROR.to_string()])
+        );
         let r = ParameterResult::new("x", Some(1.0), None, None, Some(STATUS_DIVERGED));
         assert_eq!(r.status, "diverged");
     }

@@ -87,6 +87,11 @@ pub struct PlausibleRange {
 }
 
 impl ModelSpec {
+    /// The published reference value of the parameter named `name` (`[reference.X]`), if any.
+    pub fn reference(&self, name: &str) -> Option<f64> {
+        self.references.iter().find(|r| r.param.name() == name).map(|r| r.value)
+    }
+
     /// The range parameter `p` of this aircraft is plausible in: the model file's
     /// `[plausible.X]` if it gives one, else a conventional aircraft's
     /// ([`aeroident_estimators::prior::plausible_range`]); `None` where neither bounds it.

@@ -155,9 +155,7 @@ impl BatchSummary {
         }
         for p in &mut self.parameters {
             let r = &mut p.result;
-            r.reference = model.references.iter().find(|x| x.param.name() == r.name).map(|x| {
-                if x.value.abs() < crate::metrics::ZERO_THRESHOLD { 0.0 } else { x.value }
-            });
+            r.set_reference(model.reference(&r.name));
             r.flags = self.warnings.about(&r.name);
             if r.estimate.is_none() {
                 r.flag(format!(

@@ -487,10 +487,9 @@ impl<'a> Replay<'a> {
                     Some(v) => (v[i], h.sigmas.last().and_then(|s| s[i])),
                     None => (None, None),
                 };
-                let reference =
-                    spec.references.iter().find(|r| r.param.name() == *name).map(|r| r.value);
-                let result = ParameterResult::new(*name, estimate, std_error, reference, None)
-                    .with_source(StdErrorSource::Covariance);
+                let result =
+                    ParameterResult::new(*name, estimate, std_error, spec.reference(name), None)
+                        .with_source(StdErrorSource::Covariance);
                 ParameterSummary {
                     result,
                     settle_time_s: if self.diverged { None } else { settle_time_s(h, i) },

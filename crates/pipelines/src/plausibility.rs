@@ -15,7 +15,8 @@ use aeroident_io::{Channel, Mapping, ModelSpec, ParameterResult};
 
 /// The flag of parameter `p` = `estimate` ± `std_error` when it lies outside the aircraft's
 /// plausible range by more than 2σ (module doc), naming the range and the likely cause; else
-/// `None`. A value whose sign the sign check already warned about is left to that warning.
+/// `None`. A wrong sign may also carry the sign check's warning: the two say different things
+/// (which convention, which range).
 pub fn implausible(
     model: &ModelSpec,
     p: Param,

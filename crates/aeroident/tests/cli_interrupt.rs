@@ -70,6 +70,12 @@ fn spawn_replay_of(data: &std::ffi::OsStr, args: &[OsString], out: &Path) -> (Ch
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
+    let err = collect_stderr(&mut child);
+    (child, err)
+}
+
+/// Starts the thread that collects `child`'s (piped) stderr line by line until it closes.
+fn collect_stderr(child: &mut Child) -> Arc<Stderr> {
     let err = Arc::new(Stderr::default());
     let sink = Arc::clone(&err);
     let stderr = child.stderr.take().unwrap();
@@ -81,7 +87,7 @@ fn spawn_replay_of(data: &std::ffi::OsStr, args: &[OsString], out: &Path) -> (Ch
         }
         sink.closed.store(true, Ordering::SeqCst);
     });
-    (child, err)
+    err
 }
 
 /// A child's stderr, collected line by line by a thread until it closes.
@@ -723,17 +729,7 @@ fn spawn_in(dir: &Path, args: &[&str]) -> (Child, Arc<Stderr>) {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let err = Arc::new(Stderr::default());
-    let sink = Arc::clone(&err);
-    let stderr = child.stderr.take().unwrap();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-            let mut s = sink.text.lock().unwrap();
-            s.push_str(&line);
-            s.push('\n');
-        }
-        sink.closed.store(true, Ordering::SeqCst);
-    });
+    let err = collect_stderr(&mut child);
     (child, err)
 }
 

@@ -4,6 +4,19 @@
 
 use std::path::PathBuf;
 
+/// The keys every per-parameter entry of a `summary.json` has (schema version 2,
+/// docs/output-schema.md), written out here as the schema states them.
+pub const PARAMETER_KEYS: [&str; 8] = [
+    "name",
+    "estimate",
+    "std_error",
+    "std_error_source",
+    "crb_std_error",
+    "reference",
+    "status",
+    "flags",
+];
+
 /// The workspace root.
 pub fn workspace() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")

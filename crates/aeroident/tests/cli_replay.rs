@@ -386,15 +386,34 @@ fn errors_a_record_given_twice_is_refused_unless_asked() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// `--cross-check` beside a batch fit of a file is refused (it sets a batch fit beside a
-/// real-time estimator, so with `oe` or `fdoe` it was silently ignored), as it is on stdin.
+/// `--cross-check` beside a batch fit runs the record's other methods: `summary.json`
+/// `cross_check` names the fit's method first, then the panel's others, and judges every
+/// estimate with a σ; on stdin (read once) it is refused before the output directory is made.
 #[test]
-fn errors_cross_check_with_a_batch_fit_is_refused() {
-    for est in ["oe", "fdoe"] {
-        let (ok, err) = replay_good(&["--estimator", est, "--cross-check"], "xc-batch");
-        assert!(!ok && err.contains("--cross-check") && err.contains(est), "{err}");
-        assert!(!tmp_path("xc-batch").exists(), "the output directory was touched first");
-    }
+fn cross_check_with_a_batch_fit_runs_the_other_methods() {
+    let (ok, err) = replay_good(&["--estimator", "oe", "--cross-check"], "xc-batch");
+    assert!(ok, "{err}");
+    let text = std::fs::read_to_string(tmp_path("xc-batch").join("summary.json")).unwrap();
+    let s: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let c = &s["cross_check"];
+    let methods: Vec<&str> =
+        c["methods"].as_array().unwrap().iter().map(|m| m["method"].as_str().unwrap()).collect();
+    assert_eq!(methods, ["oe", "rls", "rls-iv", "ekf", "fem"]);
+    let with_sigma =
+        s["parameters"].as_array().unwrap().iter().filter(|p| p["std_error"].is_f64()).count();
+    assert_eq!(c["compared"].as_u64().unwrap() as usize, with_sigma);
+    std::fs::remove_dir_all(tmp_path("xc-batch")).unwrap();
+    let o = bin()
+        .args(["replay", "-", "--map"])
+        .arg(workspace().join("crates/io/tests/data/min.toml"))
+        .args(["--estimator", "oe", "--cross-check", "--out"])
+        .arg(tmp_path("xc-stdin"))
+        .stdin(std::process::Stdio::null())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("--cross-check") && err.contains("stdin"), "{err}");
+    assert!(!tmp_path("xc-stdin").exists(), "the output directory was touched first");
 }
 
 /// Live mode: the HFB-320 record on stdin gives one estimates line per sample on stdout.

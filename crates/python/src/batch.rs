@@ -143,7 +143,7 @@ fn fit_file<'py>(
             live: false,
             allow_duplicates: allow_duplicate_records,
         };
-        fit_job(&FitJob { records, model, compat, options, validate_on })
+        fit_job(&FitJob { records, model, compat, options, cross_check: false, validate_on })
     };
     let signals = crate::Signals::new();
     let r = py.detach(run);

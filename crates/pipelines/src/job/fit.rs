@@ -25,6 +25,8 @@ pub struct FitJob {
     pub compat: Option<CompatSource>,
     /// The fit's options; the job sets their `compat` from its own stage.
     pub options: FitOptions,
+    /// Whether to run the record's other methods beside the fit (`--cross-check`).
+    pub cross_check: bool,
     /// A second record (same mapping) to validate the fitted model on.
     pub validate_on: Option<String>,
 }
@@ -104,9 +106,10 @@ impl FitJob {
         Ok((outcome, prepared.selection))
     }
 
-    /// The stage after the fit: the validation on the second record, unless the fit was
-    /// interrupted (then a warning says it was not done). A validation a stop abandoned leaves
-    /// the run `interrupted`, with `stopped_why` as its warning and reason.
+    /// The stages after the fit: the cross-check, then the validation on the second record,
+    /// unless the fit was interrupted (then a warning says they were not done). A validation a
+    /// stop abandoned leaves the run `interrupted`, with `stopped_why` as its warning and
+    /// reason.
     ///
     /// # Errors
     /// The second record cannot be opened or read.
@@ -119,6 +122,12 @@ impl FitJob {
         stopped_why: impl FnOnce() -> String,
     ) -> Result<FitJobOutcome, ReplayError> {
         let interrupted = outcome.summary.status == STATUS_INTERRUPTED;
+        if self.cross_check && interrupted {
+            let w = "the run was interrupted: --cross-check not done".to_string();
+            outcome.summary.warnings.push(w);
+        } else if self.cross_check {
+            self.cross_check(&mut outcome, guard, log)?;
+        }
         match &self.validate_on {
             Some(_) if interrupted => {
                 let w = "the run was interrupted: --validate-on not done".to_string();
@@ -128,6 +137,53 @@ impl FitJob {
             None => {}
         }
         Ok(FitJobOutcome { outcome, selection })
+    }
+
+    /// `--cross-check`: the record's other methods run with the fitted model
+    /// ([`super::cross_check::run_panel`]) and the fit judged beside them
+    /// ([`crate::replay::cross_check`]), its verdicts judged again with the panel's flags.
+    fn cross_check(
+        &self,
+        outcome: &mut BatchOutcome,
+        guard: &mut impl Guard,
+        log: &mut dyn JobLog,
+    ) -> Result<(), ReplayError> {
+        log.note("cross-check: running the record's other methods with the same model");
+        let kind = <crate::estimators::EstimatorKind as crate::Named>::from_name(
+            &outcome.summary.estimator,
+        )
+        .unwrap_or(crate::estimators::EstimatorKind::Oe);
+        let s = &outcome.summary;
+        let own = super::cross_check::own_estimates(
+            kind,
+            &s.status,
+            s.parameters.iter().map(|p| &p.result),
+        );
+        let base = crate::replay::ReplayOptions {
+            estimator: kind,
+            model: Some(outcome.model.clone()),
+            compat: self.options.compat.clone(),
+            windows: self.options.windows.clone(),
+            spike_screen: self.options.spike_screen,
+            ..Default::default()
+        };
+        let records = self.records.clone();
+        let step = move || super::cross_check::run_panel(&records, kind, &base);
+        let Some(others) = guard.run(Step::CrossCheck, step)? else {
+            let w = "the run was interrupted: --cross-check not done".to_string();
+            log.warning(&w);
+            outcome.summary.warnings.push(w);
+            return Ok(());
+        };
+        let check = crate::replay::cross_check::judge(&own, &others);
+        for w in crate::replay::cross_check::warnings(&check) {
+            log.warning(&w);
+            outcome.summary.warnings.push(w);
+        }
+        outcome.summary.cross_check = Some(check);
+        let thrust = crate::plausibility::thrust_mapped(&self.records.mapping);
+        outcome.summary.judge(&outcome.model, thrust);
+        Ok(())
     }
 
     /// `--validate-on`: the fitted model simulated on the record at `path`

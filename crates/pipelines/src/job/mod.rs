@@ -9,7 +9,8 @@
 //!    ([`choose_model`]);
 //! 3. **estimate**: the online replay, or the batch fit, over the record stage
 //!    ([`crate::record`]);
-//! 4. **check**: the cross-check of an online estimate against output error;
+//! 4. **check**: the cross-check, the record's other methods beside the estimate
+//!    ([`cross_check`], judged by [`crate::replay::cross_check`]);
 //! 5. **validate**: the estimates applied to a second record (`validate_on`).
 //!
 //! The faces keep what is theirs: opening a live feed or stdin, showing progress, answering
@@ -17,6 +18,7 @@
 //! (the CLI on a thread it can abandon on a signal; Python and tests in place, [`InPlace`]),
 //! and a [`JobLog`] receives the lines a user reads while the job runs (the CLI's stderr).
 
+pub mod cross_check;
 pub mod fit;
 pub mod replay;
 
@@ -153,6 +155,8 @@ pub enum Step {
     Model,
     /// The validation on a second record.
     ValidateOn,
+    /// The cross-check: the record's other methods.
+    CrossCheck,
 }
 
 impl Step {
@@ -162,6 +166,7 @@ impl Step {
             Step::Compat => "--compat auto (the data compatibility check)",
             Step::Model => "--model auto (the structure selection)",
             Step::ValidateOn => "--validate-on",
+            Step::CrossCheck => "--cross-check (the record's other methods)",
         }
     }
 }

@@ -135,7 +135,7 @@ impl ReplayJob {
             outcome.summary.warnings.push(w);
         }
         if self.cross_check && !interrupted {
-            self.cross_check(&prepared.options, &mut outcome, log)?;
+            self.cross_check(&prepared.options, &mut outcome, guard, log)?;
         }
         let validation_on = match &self.validate_on {
             Some(path) if !outcome.diverged() && !interrupted => {
@@ -147,20 +147,40 @@ impl ReplayJob {
         Ok(ReplayJobOutcome { outcome, validation_on, selection, options })
     }
 
-    /// `--cross-check`: the record fitted by output error with the same model and set beside
-    /// the online estimates ([`crate::replay::cross_check_record`]).
+    /// `--cross-check`: the record's other methods run with the same model
+    /// ([`super::cross_check::run_panel`]) and the online estimates judged beside them
+    /// ([`crate::replay::cross_check`]); the verdicts are judged again with its flags. A stop
+    /// abandons it with a warning (the online result stands on its own).
     fn cross_check(
         &self,
         options: &ReplayOptions,
         outcome: &mut ReplayOutcome,
+        guard: &mut impl Guard,
         log: &mut dyn JobLog,
     ) -> Result<(), ReplayError> {
-        let reader = self.records.open(&self.records.data)?;
-        log.note("cross-check: fitting the record by output error with the same model");
-        crate::replay::cross_check_record(outcome, reader, &self.records.mapping, options);
-        for w in outcome.cross_check.iter().flat_map(crate::replay::cross_check::warnings) {
+        log.note("cross-check: running the record's other methods with the same model");
+        let own = super::cross_check::own_estimates(
+            options.estimator,
+            &outcome.summary.status,
+            outcome.summary.parameters.iter().map(|p| &p.result),
+        );
+        let base = ReplayOptions { model: Some(outcome.model.clone()), ..options.clone() };
+        let records = self.records.clone();
+        let step = move || super::cross_check::run_panel(&records, base.estimator, &base);
+        let Some(others) = guard.run(Step::CrossCheck, step)? else {
+            let w = "the run was interrupted: --cross-check not done".to_string();
             log.warning(&w);
+            outcome.summary.warnings.push(w);
+            return Ok(());
+        };
+        let check = crate::replay::cross_check::judge(&own, &others);
+        for w in crate::replay::cross_check::warnings(&check) {
+            log.warning(&w);
+            outcome.summary.warnings.push(w);
         }
+        outcome.cross_check = Some(check);
+        let thrust = crate::plausibility::thrust_mapped(&self.records.mapping);
+        crate::replay::verdict::judge(outcome, thrust);
         Ok(())
     }
 

@@ -143,14 +143,17 @@ impl BatchSummary {
     /// Sets every parameter's reference (the `model` file's), flags and status: the warnings
     /// about it, the plausibility check ([`crate::plausibility`]; the drag terms withdrawn
     /// unless `thrust_mapped`), a reference outside ±2σ, a collapsed `fem` noise variance
-    /// ([`BatchSummary::collapsed_noise`]); `not identified` with the reason for
+    /// ([`BatchSummary::collapsed_noise`]), an imprecise estimate ([`super::precision`], as
+    /// the online replays' verdict); `not identified` with the reason for
     /// a parameter the method does not estimate; `not converged` for every parameter of a
     /// fit that ended at its iteration limit with its last step still above 1 σ
     /// ([`BatchSummary::still_moving`]); else `flagged` or `identified`.
     pub fn judge(&mut self, model: &ModelSpec, thrust_mapped: bool) {
         let moving = self.still_moving();
         let degenerate = self.collapsed_noise();
-        if let Some(text) = &degenerate {
+        if let Some(text) =
+            degenerate.as_ref().filter(|t| !self.warnings.iter().any(|w| w.text == **t))
+        {
             self.warnings.push(Warning::new(WarningKind::Consistency, text.clone()));
         }
         for p in &mut self.parameters {
@@ -166,6 +169,9 @@ impl BatchSummary {
             crate::plausibility::check(model, thrust_mapped, std::iter::once(&mut *r));
             if r.estimate.is_some() {
                 degenerate.iter().for_each(|d| r.flag(d.clone()));
+            }
+            if let Some(relative) = super::precision::imprecise(&r.name, r.estimate, r.std_error) {
+                r.flag(super::precision::flag(relative));
             }
             r.judge(moving.then_some(STATUS_NOT_CONVERGED));
         }
@@ -323,6 +329,10 @@ pub struct BatchSummary {
     /// `fdoe`: the band, frequencies, linear model and residual spectra; absent for `oe`, `fem`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub frequency_domain: Option<FrequencyDomainSummary>,
+    /// The record's other methods beside this fit (`--cross-check`,
+    /// [`super::cross_check`]); absent without it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cross_check: Option<super::cross_check::CrossCheck>,
 }
 
 /// The richest preset the flight model can integrate from the record's first sample.
@@ -1173,6 +1183,7 @@ fn summarise(
         estimated_initial_states,
         bootstrap: sigmas.bootstrap.clone(),
         frequency_domain: None,
+        cross_check: None,
     }
 }
 

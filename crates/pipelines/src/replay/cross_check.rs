@@ -1,215 +1,303 @@
-//! Whether a real-time estimate can be trusted: the online (equation-error or EKF) estimates of
-//! a record set beside the batch output-error fit of the same record and model (`replay
-//! --cross-check`).
+//! Whether an estimate can be trusted without a reference: the record's other applicable
+//! methods run on the same data and model, and each estimate set beside theirs (`replay
+//! --cross-check`). No method is the truth: a derivative on which the methods agree is
+//! confirmed; one on which they split is flagged with the camps, and a split is explained
+//! only by a cause the panel *tested*.
 //!
-//! Output error is the reference a flight-test engineer compares to (Jategaonkar 2015 ch. 4;
-//! Klein & Morelli 2006 ch. 6): it simulates the outputs from the inputs, so noise on the
-//! measured states does not enter its regressors. A parameter whose online estimate is more
-//! than [`FLAG_SIGMAS`] combined σ from the batch one is flagged with the likely cause:
-//! - **equation error** (`rls`, `ftr`) with the estimate nearer zero than the batch one:
-//!   regressor noise, the errors-in-variables bias of least squares towards zero (Klein &
-//!   Morelli 2006 ch. 5 on equation error with noisy regressors);
-//! - **equation error** otherwise: a time skew or bias between channels (the regressors and the
-//!   measured coefficient are not of one instant), which `aeroident compat` measures;
-//! - **instrumental variables** (`rls-iv`), which removes the regressor-noise bias: a time skew
-//!   or bias as above, or, nearer zero, noise correlated over more than the instrument delay;
-//! - **EKF**: its process- and measurement-noise model (unmodelled process noise moves both its
-//!   estimates and its σ; the batch fit's do not depend on them);
-//! - other estimators: their own bias (docs/smpe-corrected.md, docs/model-reference.md);
-//! - a constant term (`Cm_0` …), whatever the estimator: it takes up the others' differences.
+//! The methods (Klein & Morelli 2006 ch. 5–7; Jategaonkar 2015 ch. 4–5): equation error (`rls`,
+//! least squares on the measured states), instrumental variables (`rls-iv`, the same without
+//! the regressor-noise bias), the EKF (recursive output error with a process-noise model),
+//! output error (`oe`, no process noise) and the filter-error method (`fem`, process noise
+//! estimated). Two estimates **agree** when they differ by at most [`FLAG_SIGMAS`] combined σ
+//! (`√(σ_a² + σ_b²)`, each method's reported σ; the errors of two fits of one record are
+//! correlated, so the test is conservative) or by at most [`AGREE_RELATIVE`] of the larger
+//! magnitude (a difference no user of a derivative acts on).
 //!
-//! The combined σ is `√(σ_online² + σ_batch²)`, each estimator's reported σ (the batch one the
-//! coloured-residual σ): the two estimates come from the same record, so their errors are
-//! correlated and the test is conservative.
+//! The tested causes, each of which sets a method's estimate aside for that derivative:
+//! - **regressor noise**: least squares (`rls`, `ftr`) disagrees with instrumental variables,
+//!   which remove the errors-in-variables bias, and the instrumental-variables estimate lies
+//!   nearer the output-error methods' (`oe`, `fem`, `ekf`, whose regressors are simulated, not
+//!   measured): the least-squares estimate is biased. Where it lies further from them, the
+//!   instruments are (noise correlated over more than their delay, or a time skew) and the
+//!   instrumental-variables estimate is set aside instead;
+//! - **the EKF's noise model**: the EKF disagrees with `oe` while `fem`, which estimates the
+//!   process noise, agrees with `oe`: process noise does not move the answer, the EKF's
+//!   assumed noise does;
+//! - **process noise**: `fem` and the EKF agree with each other and not with `oe`: turbulence
+//!   in the record biases output error, which has no process noise.
+//!
+//! The verdict on the run's own estimate: set aside by a tested cause → flagged with it; else
+//! confirmed when more than half of the methods left (at least two) agree with it; else flagged
+//! with the camps (a split whose cause these tests do not find, or an estimate no other method
+//! gives).
 
-use super::batch::BatchSummary;
-use crate::estimators::EstimatorKind;
-use aeroident_io::replay_output::ReplaySummary;
 use aeroident_io::warning::{Warning, WarningKind};
 use serde::Serialize;
 
-/// A parameter is flagged when the two estimates differ by more than this many combined σ.
+/// Two estimates further apart than this many combined σ (and [`AGREE_RELATIVE`]) disagree.
 pub const FLAG_SIGMAS: f64 = 2.0;
 
-/// The comparison (`summary.json` `cross_check`).
+/// Two estimates within this fraction of the larger magnitude agree whatever their σ: the
+/// accuracy a derivative is wanted to, the precision rule's
+/// ([`super::precision::RELATIVE_SIGMA_LIMIT`]). Each method's σ covers its random error
+/// only; the methods' own biases (a few per cent between output error and the filter-error
+/// method on a record with little turbulence) would split every well-determined derivative.
+pub const AGREE_RELATIVE: f64 = super::precision::RELATIVE_SIGMA_LIMIT;
+
+/// One method's result on the record: its name, how it ended, and its `(name, estimate, σ)`
+/// rows (estimates without a finite σ left out).
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct CrossCheck {
-    /// The batch fit compared with (`oe`).
-    pub batch_estimator: String,
-    /// How the batch fit ended (`converged`, `converged_in_cost`, `not_converged`).
-    pub batch_status: String,
-    /// Parameters with an estimate and a σ from both.
-    pub compared: usize,
-    /// Those further apart than [`FLAG_SIGMAS`] combined σ.
-    pub flagged: Vec<Disagreement>,
+pub struct MethodEstimates {
+    /// The estimator (`oe`, `rls-iv` …).
+    pub method: String,
+    /// How it ended (`converged`, `complete`, `failed: …`); a failed method has no rows.
+    pub status: String,
+    /// `(parameter, estimate, σ)`.
+    #[serde(skip)]
+    pub estimates: Vec<(String, f64, f64)>,
 }
 
-/// One flagged parameter.
+impl MethodEstimates {
+    /// A method that ran, with its rows (those without a finite, positive σ dropped).
+    pub fn new(
+        method: &str,
+        status: &str,
+        rows: impl IntoIterator<Item = (String, f64, f64)>,
+    ) -> Self {
+        let estimates =
+            rows.into_iter().filter(|r| r.1.is_finite() && r.2.is_finite() && r.2 > 0.0).collect();
+        Self { method: method.into(), status: status.into(), estimates }
+    }
+
+    /// A method that could not run on the record, with why.
+    pub fn failed(method: &str, why: &str) -> Self {
+        Self { method: method.into(), status: format!("failed: {why}"), estimates: Vec::new() }
+    }
+
+    fn get(&self, name: &str) -> Option<Estimate> {
+        self.estimates.iter().find(|r| r.0 == name).map(|r| Estimate {
+            method: self.method.clone(),
+            estimate: r.1,
+            std_error: r.2,
+        })
+    }
+}
+
+/// One method's estimate of a parameter.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Disagreement {
-    /// Parameter name (`Cm_alpha` …).
-    pub parameter: String,
-    /// The online estimate and its σ.
+pub struct Estimate {
+    /// The method.
+    pub method: String,
+    /// Its estimate.
     pub estimate: f64,
     /// Its reported σ.
     pub std_error: f64,
-    /// The batch estimate.
-    pub batch_estimate: f64,
-    /// The batch fit's reported σ.
-    pub batch_std_error: f64,
-    /// `|estimate − batch_estimate| / √(std_error² + batch_std_error²)`.
-    pub combined_sigmas: f64,
-    /// The likely cause (module doc).
-    pub likely_cause: String,
 }
 
-/// Compares `online` (estimator `kind`; `compat_applied` when compatibility corrections were
-/// applied) with `batch`, parameter by parameter, by name.
-pub fn cross_check(
-    kind: EstimatorKind,
-    online: &ReplaySummary,
-    batch: &BatchSummary,
-    compat_applied: bool,
-) -> CrossCheck {
-    let rows: Vec<(&str, Option<f64>, Option<f64>)> =
-        online.parameters.iter().map(|p| (p.name.as_str(), p.estimate, p.std_error)).collect();
-    let reference: Vec<(&str, f64, f64)> = batch
-        .parameters
-        .iter()
-        .filter_map(|p| Some((p.name.as_str(), p.estimate?, p.std_error?)))
-        .collect();
-    let mut check = compare(kind, &rows, &reference, compat_applied);
-    check.batch_estimator.clone_from(&batch.estimator);
-    check.batch_status.clone_from(&batch.status);
-    check
+impl Estimate {
+    /// Whether the two agree (module doc).
+    pub fn agrees(&self, other: &Estimate) -> bool {
+        let d = (self.estimate - other.estimate).abs();
+        d <= FLAG_SIGMAS * self.std_error.hypot(other.std_error)
+            || d <= AGREE_RELATIVE * self.estimate.abs().max(other.estimate.abs())
+    }
 }
 
-/// [`cross_check`] on `(name, estimate, σ)` rows (the batch's names and status left empty).
-fn compare(
-    kind: EstimatorKind,
-    online: &[(&str, Option<f64>, Option<f64>)],
-    batch: &[(&str, f64, f64)],
-    compat_applied: bool,
-) -> CrossCheck {
-    let mut compared = 0;
-    let mut flagged = Vec::new();
-    for &(name, est, sigma) in online {
-        let (Some(est), Some(sigma)) = (est, sigma) else { continue };
-        let Some(&(_, b, b_sigma)) = batch.iter().find(|b| b.0 == name) else { continue };
-        compared += 1;
-        let z = (est - b).abs() / sigma.hypot(b_sigma);
-        if z > FLAG_SIGMAS {
-            flagged.push(Disagreement {
-                parameter: name.to_string(),
-                estimate: est,
-                std_error: sigma,
-                batch_estimate: b,
-                batch_std_error: b_sigma,
-                combined_sigmas: z,
-                likely_cause: likely_cause(kind, name, est, b, compat_applied).into(),
-            });
+/// A method's estimate set aside for one parameter, with the tested cause.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SetAside {
+    /// The method.
+    pub method: String,
+    /// The cause, with the numbers that showed it.
+    pub cause: String,
+}
+
+/// The panel on one parameter.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Agreement {
+    /// Parameter name (`Cm_alpha` …).
+    pub parameter: String,
+    /// Every method's estimate, the run's own first.
+    pub estimates: Vec<Estimate>,
+    /// Estimates set aside by a tested cause.
+    pub set_aside: Vec<SetAside>,
+    /// The other estimates grouped into camps of mutual agreement, by method, ascending.
+    pub camps: Vec<Vec<String>>,
+    /// Whether the run's own estimate is confirmed (module doc).
+    pub confirmed: bool,
+    /// Why not, in words (the parameter's flag); `None` when confirmed.
+    pub flag: Option<String>,
+}
+
+/// The panel (`summary.json` `cross_check`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CrossCheck {
+    /// The run's own estimator.
+    pub estimator: String,
+    /// Every method run, with how it ended.
+    pub methods: Vec<MethodEstimates>,
+    /// Parameters of the run with an estimate and a σ.
+    pub compared: usize,
+    /// Those not confirmed.
+    pub flagged: usize,
+    /// Per parameter.
+    pub parameters: Vec<Agreement>,
+}
+
+/// The panel's verdict on every parameter of `own` (the run's method) against `others`.
+pub fn judge(own: &MethodEstimates, others: &[MethodEstimates]) -> CrossCheck {
+    let parameters: Vec<Agreement> =
+        own.estimates.iter().map(|(name, ..)| agreement(own, others, name)).collect();
+    let mut methods = vec![own.clone()];
+    methods.extend(others.iter().cloned());
+    CrossCheck {
+        estimator: own.method.clone(),
+        compared: parameters.len(),
+        flagged: parameters.iter().filter(|a| !a.confirmed).count(),
+        parameters,
+        methods,
+    }
+}
+
+/// The panel on `name` (module doc).
+fn agreement(own: &MethodEstimates, others: &[MethodEstimates], name: &str) -> Agreement {
+    let estimates: Vec<Estimate> =
+        std::iter::once(own).chain(others).filter_map(|m| m.get(name)).collect();
+    let set_aside = tested_causes(&estimates);
+    let kept = |e: &&Estimate| !set_aside.iter().any(|s| s.method == e.method);
+    let left: Vec<&Estimate> = estimates.iter().filter(kept).collect();
+    let camps = camps(&left);
+    let mine = &estimates[0];
+    let flag = if let Some(s) = set_aside.iter().find(|s| s.method == mine.method) {
+        Some(format!("cross-check: {} set aside: {}; {}", mine.method, s.cause, describe(&left)))
+    } else {
+        let with_me = left.iter().filter(|e| e.agrees(mine)).count();
+        if left.len() < 2 {
+            Some(format!("cross-check: no other method gives {name}, so nothing confirms it"))
+        } else if 2 * with_me > left.len() && with_me >= 2 {
+            None
+        } else {
+            Some(format!(
+                "cross-check: the methods split on {name}: {}; the tests run (instrumental variables, filter error) do not explain it: a time skew, an input lag or the model structure may",
+                describe(&left)
+            ))
         }
+    };
+    Agreement {
+        parameter: name.to_string(),
+        confirmed: flag.is_none(),
+        flag,
+        estimates,
+        set_aside,
+        camps,
     }
-    CrossCheck { batch_estimator: String::new(), batch_status: String::new(), compared, flagged }
 }
 
-fn likely_cause(
-    kind: EstimatorKind,
-    name: &str,
-    online: f64,
-    batch: f64,
-    compat_applied: bool,
-) -> &'static str {
-    if name.ends_with("_0") {
-        return "a constant term: it takes up the other parameters' differences";
-    }
-    match kind {
-        EstimatorKind::Rls | EstimatorKind::Ftr | EstimatorKind::RlsIv => {
-            let shrunk = online.signum() == batch.signum() && online.abs() < batch.abs();
-            match (shrunk, compat_applied) {
-                (true, _) if kind == EstimatorKind::RlsIv => {
-                    "regressor noise correlated over more than the instrument delay (raise `instrument_delay`), or a time skew between channels"
+/// The causes the panel can test on one parameter's estimates (module doc).
+fn tested_causes(estimates: &[Estimate]) -> Vec<SetAside> {
+    let by = |m: &str| estimates.iter().find(|e| e.method == m);
+    let mut out = Vec::new();
+    let set = |method: &str, cause: String, out: &mut Vec<SetAside>| {
+        out.push(SetAside { method: method.into(), cause });
+    };
+    if let Some(iv) = by("rls-iv") {
+        // The output-error family's mean, which noise on the measured states does not bias.
+        let others: Vec<f64> =
+            ["oe", "fem", "ekf"].iter().filter_map(|m| by(m)).map(|e| e.estimate).collect();
+        let reference =
+            (!others.is_empty()).then(|| others.iter().sum::<f64>() / others.len() as f64);
+        for ls in ["rls", "ftr"].iter().filter_map(|m| by(m)) {
+            if ls.agrees(iv) {
+                continue;
+            }
+            match reference {
+                Some(r) if (iv.estimate - r).abs() > (ls.estimate - r).abs() => {
+                    let cause = format!(
+                        "its instruments: instrumental variables move {} to {}, away from the output-error methods' {r:.4} (noise correlated over more than the instrument delay, or a time skew)",
+                        short(ls),
+                        short(iv)
+                    );
+                    set(&iv.method, cause, &mut out);
                 }
-                (true, _) => {
-                    "regressor noise: least squares on noisy measured states is biased towards zero (errors in variables)"
-                }
-                (false, false) => {
-                    "a time skew or bias between channels: run `aeroident compat` (or `--compat auto`) to measure them"
-                }
-                (false, true) => {
-                    "model structure, or a channel error the compatibility check does not correct"
+                _ => {
+                    let cause = format!(
+                        "regressor noise: instrumental variables move {} to {}",
+                        short(ls),
+                        short(iv)
+                    );
+                    set(&ls.method, cause, &mut out);
                 }
             }
         }
-        EstimatorKind::Ekf => {
-            "the EKF's noise model: unmodelled process noise moves its estimates and its σ, the batch fit's do not depend on it"
-        }
-        _ => "the estimator's own bias (see its documentation)",
     }
+    if let (Some(oe), Some(fem), Some(ekf)) = (by("oe"), by("fem"), by("ekf")) {
+        if !ekf.agrees(oe) && fem.agrees(oe) {
+            let cause = format!(
+                "the EKF's noise model: fem ({}), which estimates the process noise, agrees with oe ({})",
+                short(fem),
+                short(oe)
+            );
+            set("ekf", cause, &mut out);
+        } else if !fem.agrees(oe) && ekf.agrees(fem) {
+            let cause = format!(
+                "process noise: fem ({}) and the EKF ({}), which model it, agree with each other and not with oe",
+                short(fem),
+                short(ekf)
+            );
+            set("oe", cause, &mut out);
+        }
+    }
+    out
 }
 
-/// The summary warnings of `check` ([`WarningKind::CrossCheck`]): one per flagged parameter
-/// (about it), and one when nothing could be compared.
-pub fn warnings(check: &CrossCheck) -> Vec<Warning> {
-    if check.compared == 0 {
-        let text = format!(
-            "cross-check: no parameter has an estimate and a σ from both this estimator and {}",
-            check.batch_estimator
-        );
-        return vec![Warning::new(WarningKind::CrossCheck, text)];
+/// The estimates grouped into camps of mutual agreement, ascending (each joins the current
+/// camp when it agrees with every member).
+fn camps(estimates: &[&Estimate]) -> Vec<Vec<String>> {
+    let mut sorted: Vec<&Estimate> = estimates.to_vec();
+    sorted.sort_by(|a, b| a.estimate.total_cmp(&b.estimate));
+    let mut out: Vec<Vec<&Estimate>> = Vec::new();
+    for e in sorted {
+        match out.last_mut() {
+            Some(camp) if camp.iter().all(|m| m.agrees(e)) => camp.push(e),
+            _ => out.push(vec![e]),
+        }
     }
-    check
-        .flagged
+    out.iter().map(|c| c.iter().map(|e| e.method.clone()).collect()).collect()
+}
+
+/// `oe −0.438 ± 0.013, fem −0.411 ± 0.006 | rls −0.364 ± 0.024`: the estimates by camp.
+fn describe(estimates: &[&Estimate]) -> String {
+    let all = camps(estimates);
+    let text: Vec<String> = all
         .iter()
-        .map(|d| {
-            let text = format!(
-                "cross-check: {} = {:.4} ± {:.2e} differs from {} {:.4} ± {:.2e} by {:.1} combined σ; likely cause: {}",
-                d.parameter,
-                d.estimate,
-                d.std_error,
-                check.batch_estimator,
-                d.batch_estimate,
-                d.batch_std_error,
-                d.combined_sigmas,
-                d.likely_cause
-            );
-            Warning::new(WarningKind::CrossCheck, text).about(&d.parameter)
+        .map(|camp| {
+            camp.iter()
+                .filter_map(|m| estimates.iter().find(|e| &e.method == m))
+                .map(|e| format!("{} {}", e.method, short(e)))
+                .collect::<Vec<_>>()
+                .join(", ")
         })
-        .collect()
+        .collect();
+    if text.is_empty() { "no other estimate".into() } else { text.join(" | ") }
+}
+
+fn short(e: &Estimate) -> String {
+    format!("{:.4} ± {:.2e}", e.estimate, e.std_error)
+}
+
+/// The summary warnings of `check` ([`WarningKind::CrossCheck`]): one per parameter not
+/// confirmed (about it), and one per method that failed.
+pub fn warnings(check: &CrossCheck) -> Vec<Warning> {
+    let failed = check.methods.iter().filter(|m| m.status.starts_with("failed")).map(|m| {
+        Warning::new(WarningKind::CrossCheck, format!("cross-check: {} {}", m.method, m.status))
+    });
+    let flags = check.parameters.iter().filter_map(|a| {
+        a.flag
+            .as_ref()
+            .map(|f| Warning::new(WarningKind::CrossCheck, f.clone()).about(&a.parameter))
+    });
+    failed.chain(flags).collect()
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// 3 × 0.05 vs 2.5 ± 0.1 is 4.47 combined σ: flagged, nearer zero, so regressor noise for
-    /// least squares; 1.0 ± 0.1 vs 1.2 ± 0.1 (1.41 σ) is not; a parameter without σ or absent
-    /// from the batch fit is not compared.
-    #[test]
-    fn differences_beyond_two_combined_sigma_are_flagged_with_a_cause() {
-        let online = [
-            ("Cm_q", Some(-2.0), Some(0.05)),
-            ("Cm_alpha", Some(1.0), Some(0.1)),
-            ("Cm_de", Some(1.0), None),
-            ("Cm_0", Some(0.0), Some(0.1)),
-        ];
-        let batch = [("Cm_q", -2.5, 0.1), ("Cm_alpha", 1.2, 0.1), ("Cm_de", 3.0, 0.1)];
-        let c = compare(EstimatorKind::Rls, &online, &batch, false);
-        assert_eq!(c.compared, 2);
-        assert_eq!(c.flagged.len(), 1);
-        let d = &c.flagged[0];
-        assert_eq!(d.parameter, "Cm_q");
-        assert!((d.combined_sigmas - 0.5 / 0.05f64.hypot(0.1)).abs() < 1e-12);
-        assert!(d.likely_cause.starts_with("regressor noise"));
-        let away = compare(EstimatorKind::Ftr, &[("Cm_q", Some(-3.0), Some(0.05))], &batch, false);
-        assert!(away.flagged[0].likely_cause.contains("aeroident compat"));
-        let iv = compare(EstimatorKind::RlsIv, &online[..1], &batch, false);
-        assert!(iv.flagged[0].likely_cause.contains("instrument delay"));
-        let ekf = compare(EstimatorKind::Ekf, &[("Cm_q", Some(-3.0), Some(0.05))], &batch, true);
-        assert!(ekf.flagged[0].likely_cause.starts_with("the EKF's noise model"));
-        let bias = [("Cm_0", Some(1.0), Some(0.05))];
-        let bias = compare(EstimatorKind::Rls, &bias, &[("Cm_0", 0.0, 0.1)], false);
-        assert!(bias.flagged[0].likely_cause.starts_with("a constant term"));
-        c.flagged.iter().for_each(|d| assert!(d.combined_sigmas > FLAG_SIGMAS));
-    }
-}
+mod tests;

@@ -205,6 +205,7 @@ fn summarise(
         initial_states: "transient terms (x_Δ per manoeuvre)".into(),
         estimated_initial_states: Vec::new(),
         bootstrap: None,
+        cross_check: None,
         frequency_domain: Some(FrequencyDomainSummary {
             band_hz: fd.band_hz,
             band_fitted_hz: fitted_band(fd),

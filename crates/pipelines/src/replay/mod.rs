@@ -485,7 +485,7 @@ pub struct ReplayOutcome {
     /// The samples fed to the estimator (bounded), for the fit quality and the
     /// model-vs-measured figure.
     pub samples: crate::sample_log::SampleLog<AirDataSample>,
-    /// The comparison with the batch fit of the same record ([`cross_check_record`]), when
+    /// The record's other methods beside this one ([`cross_check`], `--cross-check`), when
     /// asked for.
     pub cross_check: Option<cross_check::CrossCheck>,
     /// What reading the record left out before its rows (a multi-rate log's dropped
@@ -509,7 +509,7 @@ pub struct SummaryDocument<'a> {
     pub validation: Option<&'a ValidationReport>,
     /// Validation on a second record.
     pub validation_on: Option<&'a ValidationReport>,
-    /// The comparison with the batch fit (`--cross-check`), else `null`.
+    /// The record's other methods beside this one (`--cross-check`), else `null`.
     pub cross_check: Option<&'a cross_check::CrossCheck>,
     /// What the log reader left out, per file read ([`ReplayOutcome::reader`]).
     pub reader: &'a [ReaderReport],
@@ -702,42 +702,6 @@ pub fn replay_with<R: Read>(
     out.summary.warnings.extend(events.notes());
     verdict::judge(&mut out, crate::plausibility::thrust_mapped(mapping));
     Ok(out)
-}
-
-/// Sets the online replay `outcome` beside the batch output-error fit of the same record
-/// (`reader`, a second reading of it) and model, with `opts`' compatibility corrections and
-/// windows (`replay --cross-check`): `outcome.cross_check` and one warning per flagged
-/// parameter ([`cross_check`]). A batch fit that fails is a warning, not an error (the online
-/// result stands on its own).
-pub fn cross_check_record<R: Read>(
-    outcome: &mut ReplayOutcome,
-    reader: FlightDataReader<R>,
-    mapping: &Mapping,
-    opts: &ReplayOptions,
-) {
-    let options = batch::FitOptions {
-        compat: opts.compat.clone(),
-        windows: opts.windows.clone(),
-        spike_screen: opts.spike_screen,
-        ..batch::FitOptions::default()
-    };
-    match fit::fit_record(reader, mapping, Some(outcome.model.clone()), options) {
-        Ok(fit) => {
-            let check = cross_check::cross_check(
-                opts.estimator,
-                &outcome.summary,
-                &fit.summary,
-                opts.compat.is_some(),
-            );
-            outcome.summary.warnings.extend(cross_check::warnings(&check));
-            outcome.cross_check = Some(check);
-            verdict::judge(outcome, crate::plausibility::thrust_mapped(mapping));
-        }
-        Err(e) => outcome
-            .summary
-            .warnings
-            .push(format!("cross-check: the output-error fit of the record failed: {e}")),
-    }
 }
 
 /// The numeric options of a replay, checked before anything is read or built, each error

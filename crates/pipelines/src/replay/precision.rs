@@ -24,6 +24,16 @@ pub fn imprecise(name: &str, estimate: Option<f64>, std_error: Option<f64>) -> O
     (relative > RELATIVE_SIGMA_LIMIT).then_some(relative)
 }
 
+/// The verdict's flag on an imprecise estimate of σ/|θ| = `relative`: `σ 32 % of |estimate|:
+/// the record does not determine it to 10 %`.
+pub fn flag(relative: f64) -> String {
+    format!(
+        "{}: the record does not determine it to {:.0} %",
+        status(relative),
+        100.0 * RELATIVE_SIGMA_LIMIT
+    )
+}
+
 /// The table status of an imprecise estimate: `σ 32 % of |estimate|`.
 pub fn status(relative: f64) -> String {
     if relative.is_finite() {

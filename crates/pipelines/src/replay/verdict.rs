@@ -29,11 +29,7 @@ pub fn judge(outcome: &mut ReplayOutcome, thrust_mapped: bool) {
         // A withdrawn drag term is judged by its reason alone.
         crate::plausibility::check(model, thrust_mapped, std::iter::once(&mut *r));
         if let Some(relative) = precision::imprecise(&r.name, r.estimate, r.std_error) {
-            r.flag(format!(
-                "{}: the record does not determine it to {:.0} %",
-                precision::status(relative),
-                100.0 * precision::RELATIVE_SIGMA_LIMIT
-            ));
+            r.flag(precision::flag(relative));
         }
         r.judge(None);
     }

@@ -219,9 +219,10 @@ def replay(
     applied to every sample first (``--compat FILE``), or ``"auto"``: checked on the record
     first (``--compat auto``). ``windows``: ``[(start_s, end_s), …]``
     record-time windows, each its own manoeuvre, the rest not used (``--window START:END``).
-    ``cross_check=True`` (a record file): the record is also fitted by output error with the
-    same model and ``summary["cross_check"]`` lists the parameters further apart than 2
-    combined σ with the likely cause (``--cross-check``). Further keyword arguments are the
+    ``cross_check=True`` (a record file): the record's other methods (rls, rls-iv, ekf, oe,
+    fem) run with the same model and ``summary["cross_check"]`` judges each estimate beside
+    theirs, a parameter they do not confirm flagged with the camps and the tested cause
+    (``--cross-check``). Further keyword arguments are the
     estimator's own options by their scenario keys (``instrument_delay=8`` for ``rls-iv``,
     ``parameter_walk_per_sqrt_s=0.01`` for ``ekf``; ``--estimator-option KEY=VALUE``); one the
     estimator does not take raises :class:`AeroidentError` naming those it takes.

@@ -163,9 +163,11 @@ pub struct ReplayArgs {
     /// data; without it such a record is refused, as it would shrink every σ by √2.
     #[arg(long)]
     pub allow_duplicate_records: bool,
-    /// Real-time estimators: also fit the record by output error with the same model and set
-    /// the two side by side; a parameter further apart than 2 combined σ is flagged in the
-    /// table, the warnings and `summary.json` `cross_check`, with its likely cause.
+    /// Also run the record's other methods (rls, rls-iv, ekf, oe, fem; the real-time ones
+    /// only without --and) with the same model and judge each estimate beside theirs: one
+    /// the methods do not confirm is flagged with the camps and the tested cause (regressor
+    /// noise, the EKF's noise model, process noise), in the table, the warnings and
+    /// `summary.json` `cross_check`.
     #[arg(long)]
     pub cross_check: bool,
     /// A second record (same mapping) not used for the fit: the final estimates are applied
@@ -328,6 +330,7 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
             model: model_choice(&args),
             compat: args.compat.as_deref().map(CompatSource::from_arg),
             options: fit.context("internal: no batch fit options")?,
+            cross_check: args.cross_check,
             validate_on: args.validate_on.as_ref().map(|p| p.display().to_string()),
         };
         return match job.prepare(&mut guard, &mut Stderr)? {
@@ -411,11 +414,10 @@ fn check_combination(args: &ReplayArgs, mavlink: bool) -> anyhow::Result<()> {
             args.estimator.name()
         );
     }
-    if args.estimator.is_batch() && args.cross_check {
-        // It would be ignored: the cross-check is a batch fit set beside a real-time estimator.
+    if args.estimator.is_batch() && args.cross_check && args.data == "-" {
+        // The other methods read the record again: stdin can be read once.
         anyhow::bail!(
-            "--cross-check sets a batch output-error fit beside a real-time estimator; --estimator {} is a batch fit already: run the other estimator on the record to compare",
-            args.estimator.name()
+            "--cross-check runs the record's other methods on it again: give a file, not stdin"
         );
     }
     if args.estimator.is_batch() {

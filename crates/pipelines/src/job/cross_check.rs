@@ -1,0 +1,117 @@
+//! The check step of both jobs (`--cross-check`): the record's other applicable methods run
+//! on the same data, model, corrections and windows, for the panel of
+//! [`crate::replay::cross_check`] to judge.
+//!
+//! The panel: equation error (`rls`), instrumental variables (`rls-iv`) and the EKF, which
+//! read one record sample by sample (so only without `--and`), and output error and the
+//! filter-error method over every record. `fdoe` is left out: its cost grows with the square
+//! of the record, and its band-limited fit answers a different question (a method chosen for
+//! it is still compared with the panel).
+
+use super::Records;
+use crate::estimators::EstimatorKind;
+use crate::replay::batch::{BatchMethod, FitOptions};
+use crate::replay::cross_check::MethodEstimates;
+use crate::replay::{ReplayOptions, STATUS_INTERRUPTED};
+use aeroident_io::parameter::STATUS_NOT_CONVERGED;
+
+/// The panel's real-time methods (one record only).
+pub const ONLINE_METHODS: [EstimatorKind; 3] =
+    [EstimatorKind::Rls, EstimatorKind::RlsIv, EstimatorKind::Ekf];
+
+/// The panel's batch methods.
+pub const BATCH_METHODS: [EstimatorKind; 2] = [EstimatorKind::Oe, EstimatorKind::Fem];
+
+/// Every panel method but `own`, each run on `records` with `base`'s model, corrections,
+/// windows, spike screen and differentiation (each estimator with its own default options).
+/// A method that fails, diverges, ends at its iteration limit still moving, or whose filter
+/// degenerates is listed as failed, with why.
+pub fn run_panel(
+    records: &Records,
+    own: EstimatorKind,
+    base: &ReplayOptions,
+) -> Vec<MethodEstimates> {
+    let online = ONLINE_METHODS.iter().filter(|_| records.and.is_empty());
+    let mut out: Vec<MethodEstimates> =
+        online.filter(|&&k| k != own).map(|&k| run_online(records, k, base)).collect();
+    out.extend(BATCH_METHODS.iter().filter(|&&k| k != own).map(|&k| run_batch(records, k, base)));
+    out
+}
+
+fn run_online(records: &Records, kind: EstimatorKind, base: &ReplayOptions) -> MethodEstimates {
+    let name = kind.name();
+    let opts = ReplayOptions {
+        estimator: kind,
+        estimator_options: crate::estimators::EstimatorOptions::default(),
+        ..base.clone()
+    };
+    let reader = match records.open(&records.data) {
+        Ok(r) => r,
+        Err(e) => return MethodEstimates::failed(name, &e.to_string()),
+    };
+    match crate::replay::replay(reader, &records.mapping, &opts, &mut ()) {
+        Ok(o) if o.diverged() => MethodEstimates::failed(name, "diverged"),
+        Ok(o) => {
+            let rows = o
+                .summary
+                .parameters
+                .iter()
+                .filter_map(|p| Some((p.name.clone(), p.estimate?, p.std_error?)));
+            MethodEstimates::new(name, &o.summary.status, rows)
+        }
+        Err(e) => MethodEstimates::failed(name, &e.to_string()),
+    }
+}
+
+fn run_batch(records: &Records, kind: EstimatorKind, base: &ReplayOptions) -> MethodEstimates {
+    let name = kind.name();
+    let method = if kind == EstimatorKind::Fem { BatchMethod::Fem } else { BatchMethod::Oe };
+    let options = FitOptions {
+        method,
+        compat: base.compat.clone(),
+        windows: base.windows.clone(),
+        spike_screen: base.spike_screen,
+        ..FitOptions::default()
+    };
+    let readers = match records.open_all() {
+        Ok(r) => r,
+        Err(e) => return MethodEstimates::failed(name, &e.to_string()),
+    };
+    let fit = match crate::replay::fit::fit_records(
+        readers,
+        &records.mapping,
+        base.model.clone(),
+        options,
+    ) {
+        Ok(fit) => fit,
+        Err(e) => return MethodEstimates::failed(name, &e.to_string()),
+    };
+    let s = &fit.summary;
+    if s.status == STATUS_INTERRUPTED
+        || s.parameters.iter().any(|p| p.status == STATUS_NOT_CONVERGED)
+    {
+        return MethodEstimates::failed(
+            name,
+            "not converged (its last iterations still move the estimates)",
+        );
+    }
+    if s.collapsed_noise().is_some() {
+        return MethodEstimates::failed(
+            name,
+            "degenerate filter (a measurement-noise variance collapsed)",
+        );
+    }
+    let rows =
+        s.parameters.iter().filter_map(|p| Some((p.name.clone(), p.estimate?, p.std_error?)));
+    MethodEstimates::new(name, &s.status, rows)
+}
+
+/// The run's own estimates as the panel reads them: `(name, estimate, σ)` of `rows`.
+pub fn own_estimates<'a>(
+    kind: EstimatorKind,
+    status: &str,
+    rows: impl Iterator<Item = &'a aeroident_io::parameter::ParameterResult>,
+) -> MethodEstimates {
+    let rows = rows.filter_map(|p| Some((p.name.clone(), p.estimate?, p.std_error?)));
+    MethodEstimates::new(kind.name(), status, rows)
+}

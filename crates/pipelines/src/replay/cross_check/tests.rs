@@ -1,0 +1,91 @@
+use super::*;
+
+fn method(name: &str, rows: &[(&str, f64, f64)]) -> MethodEstimates {
+    MethodEstimates::new(name, "complete", rows.iter().map(|&(n, e, s)| (n.to_string(), e, s)))
+}
+
+fn panel(own: &str, all: &[(&str, f64, f64)]) -> Agreement {
+    let mine = all.iter().find(|m| m.0 == own).unwrap();
+    let others: Vec<MethodEstimates> =
+        all.iter().filter(|m| m.0 != own).map(|m| method(m.0, &[("Cl_p", m.1, m.2)])).collect();
+    let c = judge(&method(own, &[("Cl_p", mine.1, mine.2)]), &others);
+    assert_eq!((c.compared, c.flagged), (1, usize::from(!c.parameters[0].confirmed)));
+    c.parameters[0].clone()
+}
+
+/// 1.0 ± 0.1 against 1.3 ± 0.1: 0.3 > 2·0.1414 and 23 % apart, so they disagree; 1.0 ± 0.01
+/// against 1.08 ± 0.01 is 5.7 combined σ but 7.4 % apart, within the relative floor; 1.0 ± 0.1
+/// against 1.25 ± 0.1 is 1.77 combined σ; −1.0 ± 0.01 against −1.15 ± 0.01 is 13 % and 10.6 σ.
+#[test]
+fn agreement_is_two_combined_sigma_or_ten_per_cent() {
+    let e = |x: f64, s: f64| Estimate { method: "m".into(), estimate: x, std_error: s };
+    assert!(!e(1.0, 0.1).agrees(&e(1.3, 0.1)));
+    assert!(e(1.0, 0.01).agrees(&e(1.08, 0.01)));
+    assert!(e(1.0, 0.1).agrees(&e(1.25, 0.1)));
+    assert!(!e(-1.0, 0.01).agrees(&e(-1.15, 0.01)));
+}
+
+/// Least squares pulled towards zero (0.6) while instrumental variables, output error and the
+/// EKF agree near 1.0: rls is set aside for regressor noise, output error is confirmed by the
+/// three left, and rls's own verdict names the cause.
+#[test]
+fn regressor_noise_is_tested_by_instrumental_variables() {
+    let all = [("rls", 0.6, 0.02), ("rls-iv", 1.0, 0.05), ("oe", 1.02, 0.03), ("ekf", 0.99, 0.02)];
+    let oe = panel("oe", &all);
+    assert!(oe.confirmed && oe.flag.is_none(), "{oe:?}");
+    assert_eq!(oe.set_aside.len(), 1);
+    assert_eq!(oe.set_aside[0].method, "rls");
+    assert!(oe.set_aside[0].cause.starts_with("regressor noise"), "{oe:?}");
+    let rls = panel("rls", &all);
+    let flag = rls.flag.unwrap();
+    assert!(flag.contains("rls set aside: regressor noise"), "{flag}");
+    // IV moving away from the output-error methods: the instruments are set aside, not rls.
+    let away = [("rls", 1.0, 0.02), ("rls-iv", 0.6, 0.05), ("oe", 1.02, 0.03), ("ekf", 0.99, 0.02)];
+    let rls = panel("rls", &away);
+    assert!(rls.confirmed, "{rls:?}");
+    assert_eq!(rls.set_aside[0].method, "rls-iv");
+    assert!(rls.set_aside[0].cause.starts_with("its instruments"));
+    // rls agreeing with IV is not set aside, and then out-voted (1 of 4 agree with it).
+    let close = [("rls", 0.6, 0.02), ("rls-iv", 0.7, 0.3), ("oe", 1.02, 0.03), ("ekf", 0.99, 0.02)];
+    let rls = panel("rls", &close);
+    assert!(rls.set_aside.is_empty() && !rls.confirmed, "{rls:?}");
+    assert!(rls.flag.unwrap().contains("split"));
+}
+
+/// The EKF apart while fem agrees with oe: the EKF's noise model; fem and the EKF together
+/// apart from oe: process noise, and oe is set aside.
+#[test]
+fn process_noise_is_tested_by_the_filter_error_method() {
+    let ekf_off = [("oe", -0.44, 0.01), ("fem", -0.43, 0.01), ("ekf", -0.30, 0.01)];
+    let ekf = panel("ekf", &ekf_off);
+    assert!(ekf.flag.unwrap().contains("the EKF's noise model"));
+    assert!(panel("oe", &ekf_off).confirmed);
+    let oe_off = [("oe", -0.30, 0.01), ("fem", -0.44, 0.01), ("ekf", -0.43, 0.01)];
+    let oe = panel("oe", &oe_off);
+    assert!(!oe.confirmed && oe.flag.as_ref().unwrap().contains("process noise"), "{oe:?}");
+    let fem = panel("fem", &oe_off);
+    assert!(fem.confirmed, "{fem:?}");
+}
+
+/// Two methods that disagree with no test explaining it: a split, with both camps named; an
+/// estimate no other method gives is not confirmed either.
+#[test]
+fn an_unexplained_split_and_a_lone_estimate_are_flagged() {
+    let a = panel("oe", &[("oe", 1.0, 0.01), ("rls", 2.0, 0.01)]);
+    assert!(!a.confirmed);
+    assert_eq!(a.camps, vec![vec!["oe".to_string()], vec!["rls".to_string()]]);
+    let flag = a.flag.unwrap();
+    assert!(
+        flag.contains("split") && flag.contains("oe 1.0000") && flag.contains(" | rls 2.0000"),
+        "{flag}"
+    );
+    let alone = panel("oe", &[("oe", 1.0, 0.01)]);
+    assert!(alone.flag.unwrap().contains("no other method gives Cl_p"));
+    // Rows without a finite positive σ are not compared; a failed method gives a warning.
+    let m = MethodEstimates::new("ekf", "complete", [("Cl_p".to_string(), 1.0, f64::NAN)]);
+    assert!(m.estimates.is_empty());
+    let c = judge(&method("oe", &[("Cl_p", 1.0, 0.1)]), &[MethodEstimates::failed("fem", "no β")]);
+    let w = warnings(&c);
+    assert_eq!(w.len(), 2);
+    assert!(w[0].text.contains("fem failed: no β"), "{:?}", w[0]);
+}

@@ -10,7 +10,7 @@ exists is counted by its status and its error against the JSBSim truth (docs/out
 
 Usage:
     scripts/verdict_audit.py --python PY_WITH_JSBSIM [--bin target/release/aeroident]
-        [--out /tmp/aeroident-verdict-audit] [--estimators rls,ekf,oe]
+        [--out /tmp/aeroident-verdict-audit] [--estimators rls,ekf,oe] [--cross-check]
 
 Exit 0 always; prints one line per case and the totals, and writes `audit.json` in `--out`.
 """
@@ -66,22 +66,51 @@ def variants(text):
     return out
 
 
-def truth_of(path):
-    """The JSBSim truth under the vocabulary's names and signs (δa flips). The presets have no
-    `alphadot` term; where the truth's `_alphadot` is more than 10 % of its `_q`, a preset's
-    `_q` estimate lies between `_q` and `_q + _alphadot` depending on how far the record's
-    inputs separate q̂ from α̇ (Klein & Morelli 2006 §3.5): it has no one truth and is left out."""
+def truth_of(path, csv):
+    """The JSBSim truth under the vocabulary's names and signs (δa flips).
+
+    The presets have no `alphadot` term. Where the truth's `_alphadot` is more than 10 % of its
+    `_q`, a preset's estimates of that coefficient are the structure's *equivalent* derivatives:
+    in the short period α̇ ≈ q − Z_α α − Z_δe δe, so the α̇ moment is shared out over q̂, α and
+    δe by how the record's inputs move them (Klein & Morelli 2006 §3.5). Their truth is then the
+    least-squares projection of JSBSim's own noise-free coefficient onto the preset's regressors
+    [1, α, q̂, δe] over the record (`equivalent`), not the full model's derivatives."""
     d = json.loads(Path(path).read_text())["derivatives"]
     out = {}
     for k, v in d.items():
         name = (k.replace("_phat", "_p").replace("_qhat", "_q").replace("_rhat", "_r")
                 .replace("_adothat", "_alphadot"))
         out[name] = -v if name.endswith("_da") else v
-    for c in ("CL", "CD", "Cm", "CX", "CZ"):
+    for c in ("CL", "Cm"):
         q, ad = out.get(f"{c}_q"), out.get(f"{c}_alphadot")
         if q is not None and ad is not None and abs(ad) > 0.1 * abs(q):
-            del out[f"{c}_q"]
+            for term, value in zip(("0", "alpha", "q", "de"), equivalent(csv, c)):
+                out[f"{c}_{term}"] = value
     return out
+
+
+def equivalent(csv, coefficient):
+    """Least squares of the record's noise-free `coefficient` column on [1, α, q̂, δe] (the
+    clean columns; q̂ = q c̄ / 2V), by the normal equations."""
+    import csv as csvmod
+    rows = list(csvmod.DictReader(open(csv)))
+    x, y = [], []
+    for r in rows:
+        v, cbar = float(r["vt_fps"]), float(r["cbar_ft"])
+        x.append([1.0, float(r["alpha_rad"]), float(r["q"]) * cbar / (2 * v),
+                  float(r["elevator_rad"])])
+        y.append(float(r[coefficient]))
+    n = len(x[0])
+    a = [[sum(xi[i] * xi[j] for xi in x) for j in range(n)] + [sum(xi[i] * yi for xi, yi in zip(x, y))]
+         for i in range(n)]
+    for i in range(n):
+        p = max(range(i, n), key=lambda k: abs(a[k][i]))
+        a[i], a[p] = a[p], a[i]
+        for k in range(n):
+            if k != i:
+                f = a[k][i] / a[i][i]
+                a[k] = [ak - f * ai for ak, ai in zip(a[k], a[i])]
+    return [a[i][n] / a[i][i] for i in range(n)]
 
 
 def main():
@@ -90,6 +119,8 @@ def main():
     ap.add_argument("--bin", default=str(ROOT / "target/release/aeroident"))
     ap.add_argument("--out", default="/tmp/aeroident-verdict-audit")
     ap.add_argument("--estimators", default="rls,ekf,oe")
+    ap.add_argument("--cross-check", action="store_true",
+                    help="replay with --cross-check (the record's other methods beside each)")
     a = ap.parse_args()
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -100,14 +131,15 @@ def main():
         if not csv.exists():
             subprocess.run([a.python, str(TOOL), *args, *COMMON, "--out", str(csv),
                             "--derivs-json", str(tj)], check=True, capture_output=True)
-        truth = truth_of(tj)
+        truth = truth_of(tj, csv)
         for vname, text in variants(base_map):
             mp = out / f"map_{vname}.toml"
             mp.write_text(text)
             for est in a.estimators.split(","):
                 d = out / f"{name}-{vname}-{est}"
                 p = subprocess.run([a.bin, "replay", str(csv), "--map", str(mp), "--model", model,
-                                    "--estimator", est, "--out", str(d)],
+                                    "--estimator", est, "--out", str(d),
+                                    *(["--cross-check"] if a.cross_check else [])],
                                    capture_output=True, text=True)
                 if p.returncode != 0:
                     print(f"{name:20s} {vname:18s} {est:4s} exit {p.returncode}: "

@@ -259,8 +259,9 @@ def test_estimator_events_name_a_stuck_vane():
 
 
 def test_cross_check_equals_cli(tmp_path):
-    # The HFB-320 record with Jategaonkar's model: RLS beside output error, as the CLI's
-    # --cross-check; equation error's Cm_q (α lagging the kinematics) is flagged.
+    # The HFB-320 record with Jategaonkar's model: RLS beside the record's other methods, as
+    # the CLI's --cross-check; equation error's Cm_q (α lagging the kinematics) is not
+    # confirmed, and its flag is the parameter's.
     data = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv")
     mapping, model = ROOT / "mappings/hfb320.toml", ROOT / "models/hfb320_jategaonkar.toml"
     out = tmp_path / "out"
@@ -269,5 +270,8 @@ def test_cross_check_equals_cli(tmp_path):
     expected = json.loads((out / "summary.json").read_text())["cross_check"]
     py = aeroident.replay(data, mapping=mapping, model=model, cross_check=True)
     assert py["summary"]["cross_check"] == expected
-    assert "Cm_q" in [d["parameter"] for d in expected["flagged"]]
+    q = next(a for a in expected["parameters"] if a["parameter"] == "Cm_q")
+    assert not q["confirmed"] and "split" in q["flag"], q
+    cm_q = next(p for p in py["summary"]["parameters"] if p["name"] == "Cm_q")
+    assert cm_q["status"] == "flagged" and q["flag"] in cm_q["flags"]
     assert aeroident.replay(data, mapping=mapping, model=model)["summary"]["cross_check"] is None

@@ -8,9 +8,11 @@
 //! of the record, and its band-limited fit answers a different question (a method chosen for
 //! it is still compared with the panel).
 
-use super::Records;
+use super::{Guard, JobLog, Records, Step};
 use crate::estimators::EstimatorKind;
+use crate::replay::ReplayError;
 use crate::replay::batch::{BatchMethod, FitOptions};
+use crate::replay::cross_check::CrossCheck;
 use crate::replay::cross_check::MethodEstimates;
 use crate::replay::{ReplayOptions, STATUS_INTERRUPTED};
 use aeroident_io::parameter::STATUS_NOT_CONVERGED;
@@ -114,4 +116,35 @@ pub fn own_estimates<'a>(
 ) -> MethodEstimates {
     let rows = rows.filter_map(|p| Some((p.name.clone(), p.estimate?, p.std_error?)));
     MethodEstimates::new(kind.name(), status, rows)
+}
+
+/// The check step on a run whose own estimates are `own`: the panel ([`run_panel`], options
+/// `base`) under `guard`, judged ([`crate::replay::cross_check::judge`]), its warnings to `log`
+/// and `warnings`. `None` when a stop abandoned it (a warning says so).
+///
+/// # Errors
+/// The face could not run the step.
+pub fn check(
+    records: &Records,
+    own: &MethodEstimates,
+    base: ReplayOptions,
+    guard: &mut impl Guard,
+    log: &mut dyn JobLog,
+    warnings: &mut aeroident_io::warning::Warnings,
+) -> Result<Option<CrossCheck>, ReplayError> {
+    log.note("cross-check: running the record's other methods with the same model");
+    let records = records.clone();
+    let step = move || run_panel(&records, base.estimator, &base);
+    let Some(others) = guard.run(Step::CrossCheck, step)? else {
+        let w = "the run was interrupted: --cross-check not done".to_string();
+        log.warning(&w);
+        warnings.push(w);
+        return Ok(None);
+    };
+    let check = crate::replay::cross_check::judge(own, &others);
+    for w in crate::replay::cross_check::warnings(&check) {
+        log.warning(&w);
+        warnings.push(w);
+    }
+    Ok(Some(check))
 }

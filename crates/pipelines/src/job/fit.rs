@@ -148,7 +148,6 @@ impl FitJob {
         guard: &mut impl Guard,
         log: &mut dyn JobLog,
     ) -> Result<(), ReplayError> {
-        log.note("cross-check: running the record's other methods with the same model");
         let kind = <crate::estimators::EstimatorKind as crate::Named>::from_name(
             &outcome.summary.estimator,
         )
@@ -167,19 +166,12 @@ impl FitJob {
             spike_screen: self.options.spike_screen,
             ..Default::default()
         };
-        let records = self.records.clone();
-        let step = move || super::cross_check::run_panel(&records, kind, &base);
-        let Some(others) = guard.run(Step::CrossCheck, step)? else {
-            let w = "the run was interrupted: --cross-check not done".to_string();
-            log.warning(&w);
-            outcome.summary.warnings.push(w);
+        let warnings = &mut outcome.summary.warnings;
+        let Some(check) =
+            super::cross_check::check(&self.records, &own, base, guard, log, warnings)?
+        else {
             return Ok(());
         };
-        let check = crate::replay::cross_check::judge(&own, &others);
-        for w in crate::replay::cross_check::warnings(&check) {
-            log.warning(&w);
-            outcome.summary.warnings.push(w);
-        }
         outcome.summary.cross_check = Some(check);
         let thrust = crate::plausibility::thrust_mapped(&self.records.mapping);
         outcome.summary.judge(&outcome.model, thrust);

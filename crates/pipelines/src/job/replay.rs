@@ -158,26 +158,18 @@ impl ReplayJob {
         guard: &mut impl Guard,
         log: &mut dyn JobLog,
     ) -> Result<(), ReplayError> {
-        log.note("cross-check: running the record's other methods with the same model");
         let own = super::cross_check::own_estimates(
             options.estimator,
             &outcome.summary.status,
             outcome.summary.parameters.iter().map(|p| &p.result),
         );
         let base = ReplayOptions { model: Some(outcome.model.clone()), ..options.clone() };
-        let records = self.records.clone();
-        let step = move || super::cross_check::run_panel(&records, base.estimator, &base);
-        let Some(others) = guard.run(Step::CrossCheck, step)? else {
-            let w = "the run was interrupted: --cross-check not done".to_string();
-            log.warning(&w);
-            outcome.summary.warnings.push(w);
+        let warnings = &mut outcome.summary.warnings;
+        let Some(check) =
+            super::cross_check::check(&self.records, &own, base, guard, log, warnings)?
+        else {
             return Ok(());
         };
-        let check = crate::replay::cross_check::judge(&own, &others);
-        for w in crate::replay::cross_check::warnings(&check) {
-            log.warning(&w);
-            outcome.summary.warnings.push(w);
-        }
         outcome.cross_check = Some(check);
         let thrust = crate::plausibility::thrust_mapped(&self.records.mapping);
         crate::replay::verdict::judge(outcome, thrust);

@@ -94,7 +94,7 @@ fn matrix(v: Vec<f64>, rows: usize, cols: usize) -> PyResult<Array2<f64>> {
 /// (documentation:
 /// `aeroident.fit` in python/aeroident/__init__.py).
 #[pyfunction]
-#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None, max_iterations=None, process_noise=None, compat=None, windows=None, also=None, select="swr", candidates=None, band_hz=None, knots_deg=None, allow_duplicate_records=false, **options))]
+#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None, max_iterations=None, process_noise=None, compat=None, windows=None, also=None, select="swr", candidates=None, band_hz=None, knots_deg=None, allow_duplicate_records=false, cross_check=false, **options))]
 #[allow(clippy::too_many_arguments)]
 fn fit_file<'py>(
     py: Python<'py>,
@@ -115,6 +115,7 @@ fn fit_file<'py>(
     band_hz: Option<(f64, f64)>,
     knots_deg: Option<Vec<f64>>,
     allow_duplicate_records: bool,
+    cross_check: bool,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let windows = crate::record::time_windows("fit", windows)?;
@@ -143,7 +144,7 @@ fn fit_file<'py>(
             live: false,
             allow_duplicates: allow_duplicate_records,
         };
-        fit_job(&FitJob { records, model, compat, options, cross_check: false, validate_on })
+        fit_job(&FitJob { records, model, compat, options, cross_check, validate_on })
     };
     let signals = crate::Signals::new();
     let r = py.detach(run);

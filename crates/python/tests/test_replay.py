@@ -275,3 +275,25 @@ def test_cross_check_equals_cli(tmp_path):
     cm_q = next(p for p in py["summary"]["parameters"] if p["name"] == "Cm_q")
     assert cm_q["status"] == "flagged" and q["flag"] in cm_q["flags"]
     assert aeroident.replay(data, mapping=mapping, model=model)["summary"]["cross_check"] is None
+
+
+def test_fit_cross_check_equals_cli(tmp_path):
+    # The HFB-320 record by output error with the record's other methods beside it: the
+    # same panel as the CLI's `--estimator oe --cross-check`, whose verdicts the parameters
+    # carry; `fem` and the EKF, which model the record's turbulence, give CL_alpha above oe.
+    data = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv")
+    mapping, model = ROOT / "mappings/hfb320.toml", ROOT / "models/hfb320_jategaonkar.toml"
+    out = tmp_path / "out"
+    r = cli("replay", data, "--map", mapping, "--model", model, "--estimator", "oe",
+            "--cross-check", "--out", out)
+    assert r.returncode == 0, r.stderr
+    expected = json.loads((out / "summary.json").read_text())["cross_check"]
+    py = aeroident.fit(data, mapping, model=model, cross_check=True)
+    assert py["summary"]["cross_check"] == expected
+    a = next(a for a in expected["parameters"] if a["parameter"] == "CL_alpha")
+    by = {e["method"]: e["estimate"] for e in a["estimates"]}
+    assert by["fem"] > by["oe"] and by["ekf"] > by["oe"], by
+    for a in expected["parameters"]:
+        i = list(py["names"]).index(a["parameter"])
+        assert (a["flag"] is None) or (py["status"][i] == "flagged" and a["flag"] in py["flags"][i])
+    assert "cross_check" not in aeroident.fit(data, mapping, model=model)["summary"]

@@ -296,6 +296,7 @@ def fit(
     band_hz: Optional[tuple[float, float]] = None,
     knots_deg: Optional[Sequence[float]] = None,
     allow_duplicate_records: bool = False,
+    cross_check: bool = False,
     **options: Any,
 ) -> dict[str, Any]:
     """Fits a whole record by batch output error (``"oe"``), the filter-error method
@@ -335,6 +336,9 @@ def fit(
     Further keyword arguments are the fit's other options by their keys (``robust=True`` for
     Huber's weights in ``oe``, ``gain_constraint=False`` for ``fem``;
     ``--estimator-option KEY=VALUE``), parsed by the same parser as the CLI's flags.
+    ``cross_check=True``: the record's other methods (rls, rls-iv, ekf without ``also``; oe
+    or fem) run with the fitted model and ``summary["cross_check"]`` judges each estimate
+    beside theirs, one they do not confirm flagged (``--cross-check``).
 
     A fit that does not meet both convergence criteria is returned all the same:
     ``summary["status"]`` is ``"converged"``, ``"converged_in_cost"`` (the cost stopped
@@ -390,6 +394,7 @@ def fit(
         _band(band_hz),
         None if knots_deg is None else [float(k) for k in _sequence("knots_deg", knots_deg)],
         allow_duplicate_records=bool(allow_duplicate_records),
+        cross_check=bool(cross_check),
         **options,
     )
 

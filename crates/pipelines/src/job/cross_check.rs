@@ -11,10 +11,10 @@
 use super::{Guard, JobLog, Records, Step};
 use crate::estimators::EstimatorKind;
 use crate::replay::ReplayError;
+use crate::replay::ReplayOptions;
 use crate::replay::batch::{BatchMethod, FitOptions};
 use crate::replay::cross_check::CrossCheck;
 use crate::replay::cross_check::MethodEstimates;
-use crate::replay::{ReplayOptions, STATUS_INTERRUPTED};
 use aeroident_io::parameter::STATUS_NOT_CONVERGED;
 
 /// The panel's real-time methods (one record only).
@@ -89,9 +89,7 @@ fn run_batch(records: &Records, kind: EstimatorKind, base: &ReplayOptions) -> Me
         Err(e) => return MethodEstimates::failed(name, &e.to_string()),
     };
     let s = &fit.summary;
-    if s.status == STATUS_INTERRUPTED
-        || s.parameters.iter().any(|p| p.status == STATUS_NOT_CONVERGED)
-    {
+    if s.parameters.iter().any(|p| p.status == STATUS_NOT_CONVERGED) {
         return MethodEstimates::failed(
             name,
             "not converged (its last iterations still move the estimates)",

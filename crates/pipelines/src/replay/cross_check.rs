@@ -169,7 +169,12 @@ fn agreement(own: &MethodEstimates, others: &[MethodEstimates], name: &str) -> A
     let camps = camps(&left);
     let mine = &estimates[0];
     let flag = if let Some(s) = set_aside.iter().find(|s| s.method == mine.method) {
-        Some(format!("cross-check: {} set aside: {}; {}", mine.method, s.cause, describe(&left)))
+        Some(format!(
+            "cross-check: {} set aside: {}; {}",
+            mine.method,
+            s.cause,
+            describe(&left, &camps)
+        ))
     } else {
         let with_me = left.iter().filter(|e| e.agrees(mine)).count();
         if left.len() < 2 {
@@ -179,7 +184,7 @@ fn agreement(own: &MethodEstimates, others: &[MethodEstimates], name: &str) -> A
         } else {
             Some(format!(
                 "cross-check: the methods split on {name}: {}; the tests run (instrumental variables, filter error) do not explain it: a time skew, an input lag or the model structure may",
-                describe(&left)
+                describe(&left, &camps)
             ))
         }
     };
@@ -266,9 +271,8 @@ fn camps(estimates: &[&Estimate]) -> Vec<Vec<String>> {
 }
 
 /// `oe −0.438 ± 0.013, fem −0.411 ± 0.006 | rls −0.364 ± 0.024`: the estimates by camp.
-fn describe(estimates: &[&Estimate]) -> String {
-    let all = camps(estimates);
-    let text: Vec<String> = all
+fn describe(estimates: &[&Estimate], camps: &[Vec<String>]) -> String {
+    let text: Vec<String> = camps
         .iter()
         .map(|camp| {
             camp.iter()

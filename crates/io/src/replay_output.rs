@@ -165,6 +165,61 @@ impl EventsSummary {
 /// How many events [`EventsSummary::note`] names before it counts the rest.
 pub const NOTE_EVENTS: usize = 6;
 
+/// What a sign test found for one surface or accelerometer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SignVerdict {
+    /// The record's response has the sign the mapping's convention gives.
+    Consistent,
+    /// The record's response has the opposite sign, by more than the test's σ margin.
+    Reversed,
+    /// The record cannot decide: too little excitation or too much noise against the response.
+    Undecided,
+}
+
+/// One sign test of a surface or accelerometer channel from the record's own kinematics and
+/// responses (computed by `aeroident_pipelines::replay::sign_tests`, which documents each test).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SignTest {
+    /// The mapping key tested (`de`, `da`, `dr`, `ax`, `ay`, `az`).
+    pub channel: String,
+    /// Consistent, reversed or undecided.
+    pub verdict: SignVerdict,
+    /// The measured response (a surface's angular acceleration per rad, rad/s² per rad; an
+    /// accelerometer's gain against the kinematics, 1 when consistent); `null` when the test
+    /// could not be run (the evidence says why).
+    pub gain: Option<f64>,
+    /// Its σ (least squares, widened for coloured residuals); `null` with the gain.
+    pub sigma: Option<f64>,
+    /// The evidence in words: what was regressed, the value and what was expected.
+    pub evidence: String,
+}
+
+impl SignTest {
+    /// `de consistent`, `dr reversed`, `ay cannot be decided from this record`.
+    pub fn short(&self) -> String {
+        let v = match self.verdict {
+            SignVerdict::Consistent => "consistent",
+            SignVerdict::Reversed => "REVERSED",
+            SignVerdict::Undecided => "cannot be decided from this record",
+        };
+        format!("{} {v}", self.channel)
+    }
+}
+
+/// The one-line account of `tests` the faces print (`None` when there are none):
+/// `sign tests (the record's own responses): de consistent, ay cannot be decided …`.
+pub fn sign_tests_line(tests: &[SignTest]) -> Option<String> {
+    if tests.is_empty() {
+        return None;
+    }
+    let items: Vec<String> = tests.iter().map(SignTest::short).collect();
+    Some(format!(
+        "sign tests (from the record's own kinematics and responses; summary.json `sign_tests`): {}",
+        items.join(", ")
+    ))
+}
+
 /// The `summary.json` document.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ReplaySummary {
@@ -207,6 +262,9 @@ pub struct ReplaySummary {
     /// the measured interval; a time jump not slept across in real-time pacing), each with its
     /// kind ([`crate::warning`]); `summary.json` lists their texts.
     pub warnings: crate::warning::Warnings,
+    /// Per surface and accelerometer mapped, its sign as the record's own responses decide it
+    /// ([`SignTest`]); empty when the record maps none.
+    pub sign_tests: Vec<SignTest>,
 }
 
 impl ReplaySummary {

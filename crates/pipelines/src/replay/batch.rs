@@ -333,6 +333,9 @@ pub struct BatchSummary {
     /// [`super::cross_check`]); absent without it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub cross_check: Option<super::cross_check::CrossCheck>,
+    /// Per surface and accelerometer mapped, its sign as the record's own responses decide it
+    /// ([`super::sign_tests`]); empty when the record maps none.
+    pub sign_tests: Vec<aeroident_io::replay_output::SignTest>,
 }
 
 /// The richest preset the flight model can integrate from the record's first sample.
@@ -907,6 +910,9 @@ pub(crate) fn fit_time_domain(
     summary
         .warnings
         .extend(super::kinematics::Kinematics::of_manoeuvres(&slices).warnings(mapping));
+    let (sign_tests, sign_warnings) = super::sign_tests::checked(&slices, mapping);
+    summary.sign_tests = sign_tests;
+    summary.warnings.extend(sign_warnings);
     if let Some(c) = &options.compat {
         summary.warnings.extend(c.warnings());
     }
@@ -1184,6 +1190,7 @@ fn summarise(
         bootstrap: sigmas.bootstrap.clone(),
         frequency_domain: None,
         cross_check: None,
+        sign_tests: Vec::new(),
     }
 }
 

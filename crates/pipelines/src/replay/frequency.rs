@@ -87,6 +87,9 @@ pub(super) fn fit_fdoe(
     summary.warnings.extend(warnings);
     summary.warnings.extend(level_note);
     summary.warnings.extend(rec.notes.iter().cloned());
+    let (sign_tests, sign_warnings) = super::sign_tests::checked(&slices, mapping);
+    summary.sign_tests = sign_tests;
+    summary.warnings.extend(sign_warnings);
     if let Some(c) = &options.compat {
         summary.warnings.extend(c.warnings());
     }
@@ -206,6 +209,7 @@ fn summarise(
         estimated_initial_states: Vec::new(),
         bootstrap: None,
         cross_check: None,
+        sign_tests: Vec::new(),
         frequency_domain: Some(FrequencyDomainSummary {
             band_hz: fd.band_hz,
             band_fitted_hz: fitted_band(fd),

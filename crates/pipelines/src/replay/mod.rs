@@ -50,6 +50,7 @@ pub mod kinematics;
 mod online;
 pub mod precision;
 pub mod prediction;
+pub mod sign_tests;
 pub mod verdict;
 
 use crate::condition::Derivative;

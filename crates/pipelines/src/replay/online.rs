@@ -377,6 +377,9 @@ impl<'a> Replay<'a> {
         let mut summary = self.summary(&r);
         summary.warnings.extend(self.spread.warnings(r.est.structure(), self.mapping));
         summary.warnings.extend(self.kinematics.warnings(self.mapping));
+        let (sign_tests, sign_warnings) = super::sign_tests::checked_log(&self.fed, self.mapping);
+        summary.sign_tests = sign_tests;
+        summary.warnings.extend(sign_warnings);
         let differentiated = r.stage.supplies().to_vec();
         let n = r.est.structure().n_params();
         let final_covariance: Vec<Option<f64>> =
@@ -470,6 +473,7 @@ impl<'a> Replay<'a> {
             correlations,
             events,
             warnings,
+            sign_tests: Vec::new(),
         }
     }
 

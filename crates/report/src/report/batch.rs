@@ -246,6 +246,7 @@ pub fn write(
     let (reader_settings, reader_warnings) = super::reader_rows(&outcome.summary.reader);
     let mut settings = settings(source, outcome);
     settings.extend(reader_settings);
+    settings.extend(super::sign_tests_row(&outcome.summary.sign_tests));
     Report {
         title: format!("aeroident replay — {title}"),
         settings,

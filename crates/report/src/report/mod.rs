@@ -72,6 +72,15 @@ pub struct Figure {
     pub svg: String,
 }
 
+/// The report's row of the record's sign tests (`None` when there are none): each channel's
+/// verdict and its evidence.
+pub fn sign_tests_row(tests: &[aeroident_io::replay_output::SignTest]) -> Option<(String, String)> {
+    let items: Vec<String> =
+        tests.iter().map(|t| format!("{}: {}", t.short(), t.evidence)).collect();
+    (!items.is_empty())
+        .then(|| ("sign tests (the record's own responses)".into(), items.join("; ")))
+}
+
 /// The content of one `report.html`.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Report {

@@ -256,6 +256,7 @@ pub fn write(
     let (reader_settings, reader_warnings) = super::reader_rows(&outcome.reader);
     let mut settings = settings(source, opts, outcome);
     settings.extend(reader_settings);
+    settings.extend(super::sign_tests_row(&outcome.summary.sign_tests));
     let report = Report {
         title: format!("aeroident replay — {title}"),
         settings,

@@ -287,6 +287,9 @@ fn write(
     for v in std::iter::once(&s.validation).chain(s.validation_on.iter()) {
         eprint!("{}", validation_block(v));
     }
+    if let Some(line) = aeroident_io::replay_output::sign_tests_line(&s.sign_tests) {
+        eprintln!("{line}");
+    }
     for w in &s.warnings {
         eprintln!("warning: {w}");
     }

@@ -262,6 +262,9 @@ fn print_diagnostics(done: &ReplayJobOutcome) {
     for v in done.outcome.validation.iter().chain(done.validation_on.iter()) {
         eprint!("{}", validation_block(v));
     }
+    if let Some(line) = aeroident_io::replay_output::sign_tests_line(&s.sign_tests) {
+        eprintln!("{line}");
+    }
     for w in s.warnings.iter().filter(|w| w.kind.is_diagnostic()) {
         eprintln!("warning: {w}");
     }

@@ -1,0 +1,121 @@
+//! Sign tests of surfaces and accelerometers on real and simulated records
+//! (../shared/flightdata; skipped with a message when absent, a failure under CI). The
+//! reference is physics and the record's documentation, not the code: the ATTAS lateral flight
+//! (Jategaonkar 2015 test case) is mapped with aeroident's conventions and the book's output
+//! error gives it L_δa, N_δr < 0 there; a channel mapped with the opposite sign must then read
+//! reversed, named on that channel, whatever the estimator.
+
+mod common;
+use common::{shared, workspace};
+use std::path::Path;
+use std::process::Command;
+
+/// `replay DATA --map MAP ARGS --out DIR` through the binary: asserts success, returns the
+/// parsed `summary.json`, stderr and `report.html`.
+fn replay(
+    data: &Path,
+    map: &Path,
+    args: &[&str],
+    name: &str,
+) -> (serde_json::Value, String, String) {
+    let out = std::env::temp_dir().join(format!("aeroident-sign-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let o = Command::new(env!("CARGO_BIN_EXE_aeroident"))
+        .arg("replay")
+        .arg(data)
+        .arg("--map")
+        .arg(map)
+        .args(args)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(o.status.success(), "{name}: {err}");
+    let v = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap());
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    let _ = std::fs::remove_dir_all(&out);
+    (v.unwrap(), err, html)
+}
+
+/// The verdict of `channel` in a summary's `sign_tests`.
+fn verdict<'a>(v: &'a serde_json::Value, channel: &str) -> &'a serde_json::Value {
+    v["sign_tests"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|t| t["channel"] == channel)
+        .unwrap_or_else(|| panic!("{channel} not tested: {}", v["sign_tests"]))
+}
+
+/// `mappings/NAME` with each `(line start, replacement line)` swapped in, written to a
+/// scratch file.
+fn edited_mapping(name: &str, edits: &[(&str, &str)], tag: &str) -> std::path::PathBuf {
+    let text = std::fs::read_to_string(workspace().join("mappings").join(name)).unwrap();
+    let lines: Vec<String> = text
+        .lines()
+        .map(|l| match edits.iter().find(|(start, _)| l.starts_with(start)) {
+            Some((_, new)) => new.to_string(),
+            None => l.to_string(),
+        })
+        .collect();
+    let path =
+        std::env::temp_dir().join(format!("aeroident-sign-{}-{tag}.toml", std::process::id()));
+    std::fs::write(&path, lines.join("\n")).unwrap();
+    path
+}
+
+/// As mapped, every surface and accelerometer of the ATTAS aileron–rudder flight is
+/// consistent (online RLS: the test reads the replay's fed samples). With the rudder and the
+/// lateral accelerometer mapped reversed, an output-error fit names both reversed, flags
+/// Cn_dr with the test's evidence, prints the verdicts and puts them in the report; the
+/// aileron stays consistent.
+#[test]
+fn val_attas_reversed_rudder_and_lateral_accelerometer_are_named() {
+    let Some(data) = shared("jategaonkar_hfb320_attas/csv/fAttasAilRud1.csv") else { return };
+    let map = workspace().join("mappings/attas_lateral.toml");
+    let (v, _, _) = replay(&data, &map, &["--estimator", "rls"], "attas-rls");
+    for ch in ["da", "dr", "ay", "az"] {
+        assert_eq!(verdict(&v, ch)["verdict"], "consistent", "{ch}: {}", v["sign_tests"]);
+    }
+    let flipped = edited_mapping(
+        "attas_lateral.toml",
+        &[
+            ("dr = ", "dr = { column = \"rudder_deg\", unit = \"deg\", scale = -1.0 }"),
+            ("ay = ", "ay = { column = \"ay_cg_mps2\", unit = \"m/s2\", scale = -1.0 }"),
+        ],
+        "attas-flipped",
+    );
+    let (v, err, html) = replay(&data, &flipped, &["--estimator", "oe"], "attas-oe-flipped");
+    assert_eq!(verdict(&v, "dr")["verdict"], "reversed", "{}", v["sign_tests"]);
+    assert_eq!(verdict(&v, "ay")["verdict"], "reversed", "{}", v["sign_tests"]);
+    assert_eq!(verdict(&v, "da")["verdict"], "consistent", "{}", v["sign_tests"]);
+    let g = verdict(&v, "dr")["gain"].as_f64().unwrap();
+    assert!(g > 4.0 * verdict(&v, "dr")["sigma"].as_f64().unwrap(), "N_δr {g}");
+    let cn_dr = v["parameters"].as_array().unwrap().iter().find(|p| p["name"] == "Cn_dr").unwrap();
+    let flags = cn_dr["flags"].to_string();
+    assert!(cn_dr["status"] == "flagged" && flags.contains("sign test: `dr`"), "{cn_dr}");
+    assert!(err.contains("dr REVERSED") && err.contains("ay REVERSED"), "{err}");
+    assert!(html.contains("sign tests") && html.contains("REVERSED"));
+    let _ = std::fs::remove_file(flipped);
+}
+
+/// A JSBSim F-16 lateral record without its β channel: the lateral accelerometer cannot be
+/// decided and says it needs β; the surfaces are still judged (β's place taken by a_y), and
+/// the elevator, which does not move, cannot be decided.
+#[test]
+fn val_without_beta_the_lateral_accelerometer_cannot_be_decided() {
+    let Some(data) = shared("jsbsim_samples/f16_ail_rud_doublets_20s_60Hz.csv") else { return };
+    let map = edited_mapping("jsbsim.toml", &[("beta = ", "")], "jsbsim-no-beta");
+    let (v, err, _) = replay(&data, &map, &["--estimator", "rls"], "f16-no-beta");
+    let ay = verdict(&v, "ay");
+    assert_eq!(ay["verdict"], "undecided");
+    assert!(
+        ay["gain"].is_null() && ay["evidence"].as_str().unwrap().contains("`beta` is not mapped")
+    );
+    assert_eq!(verdict(&v, "da")["verdict"], "consistent", "{}", v["sign_tests"]);
+    assert_eq!(verdict(&v, "dr")["verdict"], "consistent", "{}", v["sign_tests"]);
+    assert_eq!(verdict(&v, "de")["verdict"], "undecided", "{}", v["sign_tests"]);
+    assert!(err.contains("ay cannot be decided from this record"), "{err}");
+    let _ = std::fs::remove_file(map);
+}

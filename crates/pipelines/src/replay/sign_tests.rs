@@ -1,0 +1,456 @@
+//! Sign tests of the surfaces and the accelerometers from the record's own kinematics and
+//! responses: independent of the model file, the estimator and its priors, so a reversed
+//! channel is named where it is, not where a derivative happens to come out with the wrong sign.
+//!
+//! **Surfaces.** The angular accelerations (central differences of the rates) are regressed by
+//! least squares on the states and the surfaces, the dimensional equation-error model
+//! (Klein & Morelli, *Aircraft System Identification*, 2006, §5.2):
+//!
+//! ```text
+//! q̇ = M₀ + M_α α + M_q q + M_δe δe
+//! ṗ = L₀ + L_β β + L_p p + L_r r + L_δa δa + L_δr δr
+//! ṙ = N₀ + N_β β + N_p p + N_r r + N_δa δa + N_δr δr
+//! ```
+//!
+//! with `a_y` standing in for β where β is not mapped (side force is mostly `Y_β β`), and the
+//! terms of channels not mapped left out. Under the mapping's conventions (docs/mapping.md:
+//! δe > 0 trailing edge down, δa > 0 a negative rolling moment, δr > 0 trailing edge left) a
+//! conventional aircraft has `M_δe`, `L_δa`, `N_δr` < 0 (Stevens & Lewis, *Aircraft Control
+//! and Simulation*, 2nd ed., §2.3; a canard reverses `M_δe`).
+//!
+//! **Accelerometers.** The flat-earth body-axis force equations (Stevens & Lewis, 2nd ed.,
+//! Table 2.5-1) give the specific force the accelerometers measure at the CG:
+//!
+//! ```text
+//! a_x = u̇ − r v + q w + g sinθ
+//! a_y = v̇ + r u − p w − g cosθ sinφ
+//! a_z = ẇ − q u + p v − g cosθ cosφ
+//! ```
+//!
+//! with `(u, v, w) = V (cosα cosβ, sinβ, sinα cosβ)` (a steady wind moves them by a constant,
+//! which the regression's bias takes). The right side, from the air data, attitude and rates, is
+//! regressed on the channel with a bias: its gain is 1 when the channel is consistent and −1
+//! when it is reversed. `a_y` needs β (the side velocity), `a_x` and `a_z` need θ; without them
+//! the test says so instead of guessing.
+//!
+//! **Decision.** The sign is decided when the gain is more than [`DECIDE_SIGMAS`] σ from 0, σ
+//! the least-squares one widened by `√((1 + ρ)/(1 − ρ))` for the residuals' lag-1
+//! autocorrelation ρ > 0 (an AR(1) account of the fewer independent samples; Bartlett 1946).
+//! Otherwise the channel "cannot be decided from this record", with the numbers.
+//!
+//! **Differences.** Each derivative is a central difference across ±0.05 s (at least
+//! one sample each side), the mean of the derivative over that span, so every other term is
+//! averaged over the same span (trapezoidal). Differences stay within one manoeuvre and within
+//! contiguous samples (each interval at most 2.5 × the shortest: none across a gap).
+
+use aeroident_estimators::AirDataSample;
+use aeroident_io::Mapping;
+use aeroident_io::replay_output::{SignTest, SignVerdict};
+use aeroident_io::warning::{Warning, WarningKind};
+use aeroident_physics::units::G0_MPS2;
+use nalgebra::{DMatrix, DVector};
+
+/// The gain must be this many (widened) σ from 0 for its sign to be decided.
+pub const DECIDE_SIGMAS: f64 = 4.0;
+
+/// Half the span of the central differences, s: wide enough that sensor noise at 50–100 Hz
+/// does not swamp the derivative, narrow against a short period or Dutch roll (a difference
+/// over ±0.05 s passes 2 Hz with 3 % loss, and the regressors are averaged the same way).
+const HALF_SPAN_S: f64 = 0.05;
+
+/// Fewest differenced samples before a sign is decided.
+const MIN_ROWS: usize = 50;
+
+/// A test's regressand and regressors at one stencil (`None` where a field is missing).
+type RowFn = fn(&Stencil, &Present) -> Option<(f64, Vec<f64>)>;
+
+/// One sample's field, read from an [`AirDataSample`].
+type Field = fn(&AirDataSample) -> Option<f64>;
+
+/// The fields a test may use, by name (as `AirDataSample` and the mapping's keys name them).
+const FIELDS: [(&str, Field); 11] = [
+    ("p", |s| s.p_rad_s),
+    ("q", |s| s.q_rad_s),
+    ("r", |s| s.r_rad_s),
+    ("beta", |s| s.beta_rad),
+    ("phi", |s| s.phi_rad),
+    ("theta", |s| s.theta_rad),
+    ("ax", |s| s.ax_mps2),
+    ("ay", |s| s.ay_mps2),
+    ("az", |s| s.az_mps2),
+    ("da", |s| s.da_rad),
+    ("dr", |s| s.dr_rad),
+];
+
+/// The samples `i − m … i + m` around one sample, contiguous in time.
+struct Stencil<'a> {
+    window: &'a [AirDataSample],
+    span_s: f64,
+}
+
+impl Stencil<'_> {
+    /// The central difference of `f` across the stencil (unit per s): the derivative of `f`
+    /// averaged over the stencil.
+    fn rate(&self, f: impl Fn(&AirDataSample) -> Option<f64>) -> Option<f64> {
+        let (first, last) = (self.window.first()?, self.window.last()?);
+        Some((f(last)? - f(first)?) / self.span_s)
+    }
+
+    /// `f` averaged over the stencil (trapezoidal), to match the difference's averaging.
+    fn mean(&self, f: impl Fn(&AirDataSample) -> Option<f64>) -> Option<f64> {
+        let mut sum = 0.0;
+        for w in self.window.windows(2) {
+            sum += 0.5 * (f(&w[0])? + f(&w[1])?) * (w[1].t_s - w[0].t_s);
+        }
+        Some(sum / self.span_s)
+    }
+}
+
+/// The mapped fields of the record: those more than half of its samples carry.
+#[derive(Debug, Clone, Default)]
+struct Present(Vec<&'static str>);
+
+impl Present {
+    fn has(&self, name: &str) -> bool {
+        self.0.contains(&name)
+    }
+}
+
+/// One test: the channel, the sign a consistent one gives, the fields it needs beyond the
+/// channel, its regression and what that is in words.
+struct Test {
+    channel: &'static str,
+    expected: f64,
+    needs: &'static [&'static str],
+    /// The regressand and the regressors (the tested one first; the bias is added) at one
+    /// stencil, or `None` where a field is missing.
+    row: RowFn,
+    what: &'static str,
+    unit: &'static str,
+}
+
+const TESTS: [Test; 6] = [
+    Test {
+        channel: "de",
+        expected: -1.0,
+        needs: &["q"],
+        row: pitch,
+        what: "q̇ per δe (least squares on δe, α, q)",
+        unit: " rad/s² per rad",
+    },
+    Test {
+        channel: "da",
+        expected: -1.0,
+        needs: &["p"],
+        row: roll,
+        what: "ṗ per δa (least squares on δa, β or a_y, p, r, δr where mapped)",
+        unit: " rad/s² per rad",
+    },
+    Test {
+        channel: "dr",
+        expected: -1.0,
+        needs: &["r"],
+        row: yaw,
+        what: "ṙ per δr (least squares on δr, β or a_y, p, r, δa where mapped)",
+        unit: " rad/s² per rad",
+    },
+    Test {
+        channel: "ax",
+        expected: 1.0,
+        needs: &["theta", "q"],
+        row: specific_force_x,
+        what: "a_x's gain against u̇ − r v + q w + g sinθ",
+        unit: "",
+    },
+    Test {
+        channel: "ay",
+        expected: 1.0,
+        needs: &["beta", "phi", "theta", "p", "r"],
+        row: specific_force_y,
+        what: "a_y's gain against v̇ + r u − p w − g cosθ sinφ",
+        unit: "",
+    },
+    Test {
+        channel: "az",
+        expected: 1.0,
+        needs: &["theta", "q"],
+        row: specific_force_z,
+        what: "a_z's gain against ẇ − q u + p v − g cosθ cosφ",
+        unit: "",
+    },
+];
+
+/// Body-axis air-relative velocity `(u, v, w)`, m/s, with β = 0 where it is not mapped.
+fn velocity(s: &AirDataSample) -> (f64, f64, f64) {
+    let (a, b) = (s.alpha_rad, s.beta_rad.unwrap_or(0.0));
+    (s.vt_mps * a.cos() * b.cos(), s.vt_mps * b.sin(), s.vt_mps * a.sin() * b.cos())
+}
+
+fn specific_force_x(s: &Stencil, _: &Present) -> Option<(f64, Vec<f64>)> {
+    let u_dot = s.rate(|x| Some(velocity(x).0))?;
+    let rest = s.mean(|c| {
+        let (_, v, w) = velocity(c);
+        Some(-c.r_rad_s.unwrap_or(0.0) * v + c.q_rad_s? * w + G0_MPS2 * c.theta_rad?.sin())
+    })?;
+    Some((u_dot + rest, vec![s.mean(|c| c.ax_mps2)?]))
+}
+
+fn specific_force_y(s: &Stencil, _: &Present) -> Option<(f64, Vec<f64>)> {
+    let v_dot = s.rate(|x| Some(velocity(x).1))?;
+    let rest = s.mean(|c| {
+        let (u, _, w) = velocity(c);
+        let gravity = G0_MPS2 * c.theta_rad?.cos() * c.phi_rad?.sin();
+        Some(c.r_rad_s? * u - c.p_rad_s? * w - gravity)
+    })?;
+    Some((v_dot + rest, vec![s.mean(|c| c.ay_mps2)?]))
+}
+
+fn specific_force_z(s: &Stencil, _: &Present) -> Option<(f64, Vec<f64>)> {
+    let w_dot = s.rate(|x| Some(velocity(x).2))?;
+    let rest = s.mean(|c| {
+        let (u, v, _) = velocity(c);
+        let gravity = G0_MPS2 * c.theta_rad?.cos() * c.phi_rad.unwrap_or(0.0).cos();
+        Some(-c.q_rad_s? * u + c.p_rad_s.unwrap_or(0.0) * v - gravity)
+    })?;
+    Some((w_dot + rest, vec![s.mean(|c| c.az_mps2)?]))
+}
+
+fn pitch(s: &Stencil, _: &Present) -> Option<(f64, Vec<f64>)> {
+    let x = vec![s.mean(|c| c.de_rad)?, s.mean(|c| Some(c.alpha_rad))?, s.mean(|c| c.q_rad_s)?];
+    Some((s.rate(|x| x.q_rad_s)?, x))
+}
+
+/// The lateral regressors after the tested surface: β (or `a_y` without it), p, r and the
+/// other surface, each where the record maps it, averaged over the stencil.
+fn lateral(s: &Stencil, on: &Present, other: &str) -> Option<Vec<f64>> {
+    let side = if on.has("beta") { "beta" } else { "ay" };
+    let mut x = Vec::with_capacity(5);
+    for (name, f) in FIELDS {
+        if on.has(name) && [side, "p", "r", other].contains(&name) {
+            x.push(s.mean(f)?);
+        }
+    }
+    Some(x)
+}
+
+fn roll(s: &Stencil, on: &Present) -> Option<(f64, Vec<f64>)> {
+    let mut x = vec![s.mean(|c| c.da_rad)?];
+    x.extend(lateral(s, on, "dr")?);
+    Some((s.rate(|x| x.p_rad_s)?, x))
+}
+
+fn yaw(s: &Stencil, on: &Present) -> Option<(f64, Vec<f64>)> {
+    let mut x = vec![s.mean(|c| c.dr_rad)?];
+    x.extend(lateral(s, on, "da")?);
+    Some((s.rate(|x| x.r_rad_s)?, x))
+}
+
+/// The sign tests of every surface and accelerometer the record maps, over the samples of each
+/// manoeuvre (no difference across two), in the order `de, da, dr, ax, ay, az`.
+pub fn sign_tests<M: AsRef<[AirDataSample]>>(manoeuvres: &[M]) -> Vec<SignTest> {
+    let present = present_fields(manoeuvres);
+    let mapped = |name: &str| name == "de" && present.has_de || present.fields.has(name);
+    TESTS
+        .iter()
+        .filter(|t| mapped(t.channel))
+        .map(|t| match t.needs.iter().find(|n| !present.fields.has(n)) {
+            Some(missing) => undecided(t, format!("`{missing}` is not mapped")),
+            None => run(t, manoeuvres, &present.fields),
+        })
+        .collect()
+}
+
+/// The record's mapped fields, and whether it maps δe (not among [`FIELDS`]: no test uses it
+/// as another's regressor).
+struct Mapped {
+    fields: Present,
+    has_de: bool,
+}
+
+fn present_fields<M: AsRef<[AirDataSample]>>(manoeuvres: &[M]) -> Mapped {
+    let all = || manoeuvres.iter().flat_map(|m| m.as_ref().iter());
+    let n = all().count();
+    let carried = |f: Field| 2 * all().filter(|s| f(s).is_some()).count() > n;
+    Mapped {
+        fields: Present(FIELDS.iter().filter(|(_, f)| carried(*f)).map(|(k, _)| *k).collect()),
+        has_de: n > 0 && carried(|s| s.de_rad),
+    }
+}
+
+/// A test that could not be run, with why.
+fn undecided(t: &Test, why: String) -> SignTest {
+    SignTest {
+        channel: t.channel.into(),
+        verdict: SignVerdict::Undecided,
+        gain: None,
+        sigma: None,
+        evidence: format!("{}: {why}", t.what),
+    }
+}
+
+/// The rows of `t` over the manoeuvres: (regressand, regressors with the bias last, manoeuvre).
+fn rows<M: AsRef<[AirDataSample]>>(
+    t: &Test,
+    manoeuvres: &[M],
+    on: &Present,
+) -> Vec<(f64, Vec<f64>, usize)> {
+    let dt_min = manoeuvres
+        .iter()
+        .flat_map(|m| m.as_ref().windows(2).map(|w| w[1].t_s - w[0].t_s))
+        .filter(|d| *d > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    // Half-width m: about HALF_SPAN_S each side, at least one sample.
+    let m = ((HALF_SPAN_S / dt_min).round() as usize).max(1);
+    let mut out = Vec::new();
+    for (k, man) in manoeuvres.iter().enumerate() {
+        for w in man.as_ref().windows(2 * m + 1) {
+            let contiguous = w.windows(2).all(|p| {
+                let d = p[1].t_s - p[0].t_s;
+                d > 0.0 && d <= 2.5 * dt_min
+            });
+            if !contiguous {
+                continue;
+            }
+            let st = Stencil { window: w, span_s: w[2 * m].t_s - w[0].t_s };
+            if let Some((y, mut x)) = (t.row)(&st, on)
+                && y.is_finite()
+                && x.iter().all(|v| v.is_finite())
+            {
+                x.push(1.0);
+                out.push((y, x, k));
+            }
+        }
+    }
+    out
+}
+
+/// Runs `t`: the gain of its channel, its widened σ and the verdict.
+fn run<M: AsRef<[AirDataSample]>>(t: &Test, manoeuvres: &[M], on: &Present) -> SignTest {
+    let rows = rows(t, manoeuvres, on);
+    if rows.len() < MIN_ROWS {
+        return undecided(t, format!("{} differenced samples, fewer than {MIN_ROWS}", rows.len()));
+    }
+    let Some((gain, sigma)) = regress(&rows) else {
+        return undecided(t, "the regressors are not independent (is the channel excited?)".into());
+    };
+    let verdict = if gain.abs() <= DECIDE_SIGMAS * sigma {
+        SignVerdict::Undecided
+    } else if gain * t.expected > 0.0 {
+        SignVerdict::Consistent
+    } else {
+        SignVerdict::Reversed
+    };
+    let expected = if t.expected > 0.0 {
+        "+1 when consistent, −1 reversed"
+    } else {
+        "< 0 for a conventional aircraft under the mapping's convention"
+    };
+    let mut evidence =
+        format!("{} {gain:+.4} ± {sigma:.2e}{} (expected {expected})", t.what, t.unit);
+    if verdict == SignVerdict::Undecided {
+        evidence.push_str(&format!("; within {DECIDE_SIGMAS} σ of 0"));
+    }
+    SignTest { channel: t.channel.into(), verdict, gain: Some(gain), sigma: Some(sigma), evidence }
+}
+
+/// Least squares of the rows: the first regressor's coefficient and its σ, widened for the
+/// residuals' lag-1 autocorrelation within each manoeuvre (module doc); `None` when the
+/// normal equations are singular.
+fn regress(rows: &[(f64, Vec<f64>, usize)]) -> Option<(f64, f64)> {
+    let (m, k) = (rows.len(), rows[0].1.len());
+    // Columns scaled to unit RMS so the normal equations are well conditioned.
+    let scale: Vec<f64> = (0..k)
+        .map(|j| (rows.iter().map(|r| r.1[j] * r.1[j]).sum::<f64>() / m as f64).sqrt())
+        .collect();
+    if scale.iter().any(|s| s.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)) {
+        return None;
+    }
+    let x = DMatrix::from_fn(m, k, |i, j| rows[i].1[j] / scale[j]);
+    let y = DVector::from_fn(m, |i, _| rows[i].0);
+    let xtx = x.tr_mul(&x);
+    let inv = xtx.clone().cholesky()?.inverse();
+    let beta = &inv * x.tr_mul(&y);
+    let e = &y - &x * &beta;
+    let dof = m.checked_sub(k).filter(|d| *d > 0)?;
+    let s2 = e.norm_squared() / dof as f64;
+    let lagged: f64 = (1..m).filter(|&i| rows[i].2 == rows[i - 1].2).map(|i| e[i] * e[i - 1]).sum();
+    let rho = (lagged / e.norm_squared()).clamp(0.0, 0.98);
+    let widen = ((1.0 + rho) / (1.0 - rho)).sqrt();
+    let sigma = (s2 * inv[(0, 0)]).sqrt() * widen / scale[0];
+    let gain = beta[0] / scale[0];
+    (gain.is_finite() && sigma.is_finite() && inv[(0, 0)] < 1e12).then_some((gain, sigma))
+}
+
+/// The tests over `manoeuvres` and the warnings of the reversed channels (labels from `mapping`).
+pub fn checked<M: AsRef<[AirDataSample]>>(
+    manoeuvres: &[M],
+    mapping: &Mapping,
+) -> (Vec<SignTest>, Vec<Warning>) {
+    let tests = sign_tests(manoeuvres);
+    let w = warnings(&tests, mapping);
+    (tests, w)
+}
+
+/// [`checked`] over a sample log's segments (a replay's fed samples: a gap or a decimation
+/// starts a segment, and no difference is taken across one).
+pub fn checked_log(
+    log: &crate::sample_log::SampleLog<AirDataSample>,
+    mapping: &Mapping,
+) -> (Vec<SignTest>, Vec<Warning>) {
+    let (items, segs) = (log.items(), log.segments());
+    let mut parts: Vec<&[AirDataSample]> = Vec::new();
+    let mut start = 0;
+    for i in 1..=items.len() {
+        if i == items.len() || segs[i] != segs[i - 1] {
+            parts.push(&items[start..i]);
+            start = i;
+        }
+    }
+    checked(&parts, mapping)
+}
+
+/// The derivative whose sign a reversed surface turns, for the warning's parameter.
+fn derivative_of(channel: &str) -> Option<&'static str> {
+    match channel {
+        "de" => Some("Cm_de"),
+        "da" => Some("Cl_da"),
+        "dr" => Some("Cn_dr"),
+        _ => None,
+    }
+}
+
+/// A warning per reversed channel, naming its mapping source and the fix.
+pub fn warnings(tests: &[SignTest], mapping: &Mapping) -> Vec<Warning> {
+    tests
+        .iter()
+        .filter(|t| t.verdict == SignVerdict::Reversed)
+        .map(|t| {
+            let label = mapping.field_label(sample_field(&t.channel));
+            let layout = if t.channel == "de" { " (or the aircraft has a canard)" } else { "" };
+            let text = format!(
+                "sign test: `{}` ({label}) looks reversed{layout}: {}; check its sign (`scale = -1`) in the mapping (docs/mapping.md, Channels)",
+                t.channel, t.evidence
+            );
+            let w = Warning::new(WarningKind::Sign, text);
+            match derivative_of(&t.channel) {
+                Some(d) => w.about(d),
+                None => w,
+            }
+        })
+        .collect()
+}
+
+/// The sample field of a tested channel's mapping key.
+fn sample_field(channel: &str) -> &'static str {
+    match channel {
+        "de" => "de_rad",
+        "da" => "da_rad",
+        "dr" => "dr_rad",
+        "ax" => "ax_mps2",
+        "ay" => "ay_mps2",
+        _ => "az_mps2",
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,208 @@
+//! Tests of the sign tests on linear aircraft integrated from known derivatives, where the
+//! accelerometers are formed from the force equations by their analytic state derivatives (an
+//! independent computation from the finite differences the tests use).
+use super::*;
+
+/// A mapping naming the surface and accelerometer columns (only the labels are used).
+fn mapping() -> Mapping {
+    Mapping::from_toml_str(
+        "nominal_dt_s = 0.02\n[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"v\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nde = { column = \"elev\", unit = \"rad\" }\ndr = { column = \"rud\", unit = \"rad\" }\naz = { column = \"nz\", unit = \"m/s2\" }\nqbar = { value = 1000.0, unit = \"Pa\" }\nmass = { value = 1000.0, unit = \"kg\" }\nS = { value = 10.0, unit = \"m2\" }\n",
+        "m.toml",
+    )
+    .unwrap()
+}
+
+/// A deterministic ±1 pattern standing in for sensor noise (no generator needed).
+fn wiggle(k: usize, amp: f64) -> f64 {
+    amp * [0.9, -0.4, -1.0, 0.3, 0.7, -0.8, 0.1][k % 7]
+}
+
+/// A 3-2-1-1 of `amp` rad starting at `t0`, 0.5-s unit.
+fn input_3211(t: f64, t0: f64, amp: f64) -> f64 {
+    let u = (t - t0) / 0.5;
+    match u {
+        u if (0.0..3.0).contains(&u) => amp,
+        u if (3.0..5.0).contains(&u) => -amp,
+        u if (5.0..6.0).contains(&u) => amp,
+        u if (6.0..7.0).contains(&u) => -amp,
+        _ => 0.0,
+    }
+}
+
+const V: f64 = 80.0;
+
+/// 30 s at 50 Hz of a short period (Euler, 20 substeps) driven by a 3-2-1-1 elevator, with
+/// M_δe = −8 rad/s² per rad; the accelerometers from the force equations at the analytic α̇;
+/// `de_sign` and `az_sign` flip the recorded channels as a reversed mapping would.
+fn pitch_record(de_sign: f64, az_sign: f64) -> Vec<AirDataSample> {
+    let (za, zde, ma, mq, mde) = (-1.2, -0.1, -6.0, -2.0, -8.0);
+    let (dt, sub) = (0.02, 20);
+    let (mut alpha, mut q, mut theta) = (0.05_f64, 0.0, 0.05_f64);
+    let mut out = Vec::new();
+    for k in 0..1500 {
+        let t = k as f64 * dt;
+        let de = input_3211(t, 2.0, 0.03) + input_3211(t, 15.0, -0.02);
+        let alpha_dot = za * (alpha - 0.05) + q + zde * de;
+        let (u, w) = (V * alpha.cos(), V * alpha.sin());
+        let w_dot = V * alpha.cos() * alpha_dot;
+        let u_dot = -V * alpha.sin() * alpha_dot;
+        let az = w_dot - q * u - G0_MPS2 * theta.cos();
+        let ax = u_dot + q * w + G0_MPS2 * theta.sin();
+        out.push(AirDataSample {
+            t_s: t,
+            vt_mps: V,
+            alpha_rad: alpha + wiggle(k, 1e-4),
+            q_rad_s: Some(q + wiggle(k + 3, 2e-4)),
+            theta_rad: Some(theta),
+            ax_mps2: Some(ax + wiggle(k + 1, 0.02)),
+            az_mps2: Some(az_sign * (az + wiggle(k + 2, 0.05))),
+            de_rad: Some(de_sign * de),
+            ..Default::default()
+        });
+        for _ in 0..sub {
+            let h = dt / sub as f64;
+            let a_dot = za * (alpha - 0.05) + q + zde * de;
+            let q_dot = ma * (alpha - 0.05) + mq * q + mde * de;
+            alpha += h * a_dot;
+            q += h * q_dot;
+            theta += h * q;
+        }
+    }
+    out
+}
+
+fn verdict(tests: &[SignTest], channel: &str) -> SignTest {
+    tests.iter().find(|t| t.channel == channel).unwrap_or_else(|| panic!("{tests:?}")).clone()
+}
+
+/// The elevator and both accelerometers of a consistent record are consistent, the elevator's
+/// response near its true M_δe; reversed channels are named reversed, with a warning on Cm_de
+/// naming the column.
+#[test]
+fn pitch_record_consistent_and_reversed() {
+    let t = sign_tests(&[pitch_record(1.0, 1.0)]);
+    let de = verdict(&t, "de");
+    assert_eq!(de.verdict, SignVerdict::Consistent, "{de:?}");
+    let g = de.gain.unwrap();
+    assert!((g + 8.0).abs() < 0.8, "M_δe {g}");
+    for ch in ["ax", "az"] {
+        let a = verdict(&t, ch);
+        assert_eq!(a.verdict, SignVerdict::Consistent, "{a:?}");
+        assert!((a.gain.unwrap() - 1.0).abs() < 0.1, "{a:?}");
+    }
+    assert!(warnings(&t, &mapping()).is_empty());
+    let t = sign_tests(&[pitch_record(-1.0, -1.0)]);
+    assert_eq!(verdict(&t, "de").verdict, SignVerdict::Reversed);
+    assert_eq!(verdict(&t, "az").verdict, SignVerdict::Reversed);
+    let w = warnings(&t, &mapping());
+    assert_eq!(w.len(), 2, "{w:?}");
+    assert_eq!(w[0].parameter.as_deref(), Some("Cm_de"));
+    assert!(w[0].text.contains("`elev`") && w[0].text.contains("scale = -1"), "{}", w[0].text);
+    assert!(w[1].parameter.is_none() && w[1].text.contains("`nz`"), "{}", w[1].text);
+}
+
+/// An elevator that never moves, and accelerometers without θ, cannot be decided, and say why.
+#[test]
+fn unexcited_or_unsupported_channels_cannot_be_decided() {
+    let mut rec = pitch_record(1.0, 1.0);
+    rec.iter_mut().for_each(|s| {
+        s.de_rad = Some(0.0);
+        s.theta_rad = None;
+    });
+    let t = sign_tests(&[rec]);
+    let de = verdict(&t, "de");
+    assert_eq!(de.verdict, SignVerdict::Undecided);
+    assert!(de.gain.is_none() && de.evidence.contains("excited"), "{de:?}");
+    let az = verdict(&t, "az");
+    assert_eq!(az.verdict, SignVerdict::Undecided);
+    assert!(az.evidence.contains("`theta` is not mapped"), "{az:?}");
+}
+
+/// 40 s at 50 Hz of a lateral-directional model (Euler, 20 substeps) with an aileron doublet at
+/// 3 s and a rudder doublet at 15 s; L_δa = −12, N_δr = −3 rad/s² per rad under aeroident's
+/// conventions; β mapped or not; `dr_sign` flips the recorded rudder.
+fn lateral_record(dr_sign: f64, with_beta: bool) -> Vec<AirDataSample> {
+    let (yb, lb, lp, lr, nb, np, nr) = (-0.2, -10.0, -2.5, 0.8, 4.0, -0.1, -0.5);
+    let (lda, ldr, nda, ndr) = (-12.0, 1.0, -0.3, -3.0);
+    let (dt, sub) = (0.02, 20);
+    let (mut beta, mut p, mut r, mut phi) = (0.0_f64, 0.0, 0.0, 0.0_f64);
+    let mut out = Vec::new();
+    for k in 0..2000 {
+        let t = k as f64 * dt;
+        let doublet = |t0: f64, amp: f64| {
+            if (t0..t0 + 1.0).contains(&t) {
+                amp
+            } else if (t0 + 1.0..t0 + 2.0).contains(&t) {
+                -amp
+            } else {
+                0.0
+            }
+        };
+        let (da, dr) = (doublet(3.0, 0.05) + doublet(25.0, -0.03), doublet(15.0, 0.08));
+        let beta_dot = yb * beta - r + G0_MPS2 / V * phi;
+        let ay = V * beta_dot + r * V - G0_MPS2 * phi.sin();
+        out.push(AirDataSample {
+            t_s: t,
+            vt_mps: V,
+            beta_rad: with_beta.then_some(beta + wiggle(k, 2e-4)),
+            p_rad_s: Some(p + wiggle(k + 1, 5e-4)),
+            r_rad_s: Some(r + wiggle(k + 2, 5e-4)),
+            phi_rad: Some(phi),
+            theta_rad: Some(0.0),
+            ay_mps2: Some(ay + wiggle(k + 4, 0.03)),
+            da_rad: Some(da),
+            dr_rad: Some(dr_sign * dr),
+            ..Default::default()
+        });
+        for _ in 0..sub {
+            let h = dt / sub as f64;
+            let b_dot = yb * beta - r + G0_MPS2 / V * phi;
+            let p_dot = lb * beta + lp * p + lr * r + lda * da + ldr * dr;
+            let r_dot = nb * beta + np * p + nr * r + nda * da + ndr * dr;
+            beta += h * b_dot;
+            p += h * p_dot;
+            r += h * r_dot;
+            phi += h * p;
+        }
+    }
+    out
+}
+
+/// Both surfaces of a lateral record are consistent with or without β; a reversed rudder is
+/// named on the rudder, and `a_y` is consistent with β mapped and cannot be decided without.
+#[test]
+fn lateral_record_names_a_reversed_rudder() {
+    for with_beta in [true, false] {
+        let t = sign_tests(&[lateral_record(1.0, with_beta)]);
+        assert_eq!(verdict(&t, "da").verdict, SignVerdict::Consistent, "{t:?}");
+        assert_eq!(verdict(&t, "dr").verdict, SignVerdict::Consistent, "{t:?}");
+        let n_dr = verdict(&t, "dr").gain.unwrap();
+        assert!((n_dr + 3.0).abs() < 0.6, "N_δr {n_dr} (β {with_beta})");
+        let reversed = sign_tests(&[lateral_record(-1.0, with_beta)]);
+        assert_eq!(verdict(&reversed, "dr").verdict, SignVerdict::Reversed, "{reversed:?}");
+        assert_eq!(verdict(&reversed, "da").verdict, SignVerdict::Consistent);
+        let w = warnings(&reversed, &mapping());
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert_eq!(w[0].parameter.as_deref(), Some("Cn_dr"));
+        assert!(w[0].text.contains("`rud`"), "{}", w[0].text);
+        let ay = verdict(&t, "ay");
+        if with_beta {
+            assert_eq!(ay.verdict, SignVerdict::Consistent, "{ay:?}");
+        } else {
+            assert_eq!(ay.verdict, SignVerdict::Undecided);
+            assert!(ay.evidence.contains("`beta` is not mapped"), "{ay:?}");
+        }
+    }
+}
+
+/// No difference is taken across two manoeuvres: a record cut in two gives the same verdicts
+/// and a gain within its σ of the whole record's.
+#[test]
+fn manoeuvres_are_differenced_separately() {
+    let rec = pitch_record(1.0, 1.0);
+    let whole = verdict(&sign_tests(std::slice::from_ref(&rec)), "de");
+    let (a, b) = rec.split_at(700);
+    let cut = verdict(&sign_tests(&[a, b]), "de");
+    assert_eq!(cut.verdict, whole.verdict);
+    assert!((cut.gain.unwrap() - whole.gain.unwrap()).abs() < whole.sigma.unwrap());
+}

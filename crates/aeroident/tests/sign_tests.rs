@@ -94,7 +94,7 @@ fn val_attas_reversed_rudder_and_lateral_accelerometer_are_named() {
     assert!(g > 4.0 * verdict(&v, "dr")["sigma"].as_f64().unwrap(), "N_δr {g}");
     let cn_dr = v["parameters"].as_array().unwrap().iter().find(|p| p["name"] == "Cn_dr").unwrap();
     let flags = cn_dr["flags"].to_string();
-    assert!(cn_dr["status"] == "flagged" && flags.contains("sign test: `dr`"), "{cn_dr}");
+    assert!(cn_dr["status"] == "flagged" && flags.contains("sign test: channel `dr`"), "{cn_dr}");
     assert!(err.contains("dr REVERSED") && err.contains("ay REVERSED"), "{err}");
     assert!(html.contains("sign tests") && html.contains("REVERSED"));
     let _ = std::fs::remove_file(flipped);
@@ -118,4 +118,53 @@ fn val_without_beta_the_lateral_accelerometer_cannot_be_decided() {
     assert_eq!(verdict(&v, "de")["verdict"], "undecided", "{}", v["sign_tests"]);
     assert!(err.contains("ay cannot be decided from this record"), "{err}");
     let _ = std::fs::remove_file(map);
+}
+
+/// The F-16 simulation (Stevens & Lewis airframe with its NASA TP-1538 actuators: first-order
+/// lags of 0.0495 s with rate and position limits) writes both the surfaces and the commands.
+/// Mapped to the surfaces, no surface leads its response (within 0.005 s) and no timing warning
+/// is given; mapped to the commands, each surface leads by the actuator's lag within 0.01 s,
+/// and a warning names it as commanded, on its control derivative.
+#[test]
+fn commanded_surfaces_lead_by_the_actuator_lag() {
+    let dir = std::env::temp_dir().join(format!("aeroident-sign-{}-sim", std::process::id()));
+    let o = Command::new(env!("CARGO_BIN_EXE_aeroident"))
+        .args(["f16", "sim"])
+        .arg(workspace().join("scenarios/sim/six_axis_excitation.toml"))
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let data = dir.join("timeseries.csv");
+    let map = workspace().join("mappings/aeroident-sim.toml");
+    let (v, err, _) = replay(&data, &map, &["--estimator", "oe"], "sim-surfaces");
+    for ch in ["de", "da", "dr"] {
+        let lead = verdict(&v, ch)["lead_s"].as_f64().unwrap();
+        assert!(lead.abs() < 0.005, "{ch}: {lead}");
+    }
+    assert!(!err.contains("input timing"), "{err}");
+    let commanded = edited_mapping(
+        "aeroident-sim.toml",
+        &[
+            ("de = ", "de = { column = \"elevator_cmd_rad\", unit = \"rad\" }"),
+            ("da = ", "da = { column = \"aileron_cmd_rad\", unit = \"rad\" }"),
+            ("dr = ", "dr = { column = \"rudder_cmd_rad\", unit = \"rad\" }"),
+        ],
+        "sim-commanded",
+    );
+    let (v, err, _) = replay(&data, &commanded, &["--estimator", "oe"], "sim-commands");
+    for (ch, derivative) in [("de", "Cm_de"), ("da", "Cl_da"), ("dr", "Cn_dr")] {
+        let lead = verdict(&v, ch)["lead_s"].as_f64().unwrap();
+        assert!((lead - 0.0495).abs() < 0.01, "{ch}: {lead}");
+        let p = v["parameters"].as_array().unwrap().iter().find(|p| p["name"] == derivative);
+        let flags = p.unwrap()["flags"].to_string();
+        assert!(
+            flags.contains(&format!("channel `{ch}`")) && flags.contains("commanded"),
+            "{flags}"
+        );
+    }
+    assert!(err.contains("warning: input timing"), "{err}");
+    let _ = std::fs::remove_dir_all(dir);
+    let _ = std::fs::remove_file(commanded);
 }

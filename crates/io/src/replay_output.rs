@@ -193,6 +193,12 @@ pub struct SignTest {
     pub sigma: Option<f64>,
     /// The evidence in words: what was regressed, the value and what was expected.
     pub evidence: String,
+    /// A surface whose sign is decided: the time the recorded surface leads the response it
+    /// drives, s (> 0: a commanded surface, or one recorded early; < 0: recorded late); `null`
+    /// for an accelerometer or an undecided surface.
+    pub lead_s: Option<f64>,
+    /// Its 95 % interval `[lo, hi]`, s (at the search's edge, ±0.3 s, when not closed there).
+    pub lead_interval_s: Option<(f64, f64)>,
 }
 
 impl SignTest {

@@ -28,12 +28,15 @@ pub enum WarningKind {
     RefusedCorrection,
     /// An estimate that disagrees with another method's on the same record.
     CrossCheck,
+    /// A surface channel whose timing disagrees with the response it drives (a commanded
+    /// surface, or a channel recorded early or late).
+    InputTiming,
 }
 
 impl WarningKind {
     /// Whether a face repeats it at the end of a run, after the results: the judgments of the
     /// answer and its data (sign, consistency, collinearity, constant channels, units, refused
-    /// corrections, cross-checks), which a user reads beside the table rather than among the record's notes.
+    /// corrections, cross-checks, input timing), which a user reads beside the table rather than among the record's notes.
     pub fn is_diagnostic(self) -> bool {
         !matches!(self, WarningKind::Run)
     }

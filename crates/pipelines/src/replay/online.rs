@@ -60,6 +60,11 @@ struct Running {
     defaulted: bool,
 }
 
+/// Samples the sign tests keep of a long replay (about 20 MB), in contiguous blocks of
+/// [`SIGN_TEST_BLOCK`] (5 s at 100 Hz: many central differences per block).
+const SIGN_TEST_SAMPLES: usize = 32_768;
+const SIGN_TEST_BLOCK: usize = 512;
+
 /// One online replay in progress: what has been read, rejected, estimated and warned of.
 pub(super) struct Replay<'a> {
     mapping: &'a Mapping,
@@ -77,6 +82,9 @@ pub(super) struct Replay<'a> {
     /// Each regressor channel's range over the estimated samples ([`super::constant`]).
     spread: super::constant::Spread,
     kinematics: super::kinematics::Kinematics,
+    /// The samples of the sign tests: contiguous blocks, so a long record decimated to fit
+    /// still has central differences ([`super::sign_tests`]).
+    sign_log: SampleLog<AirDataSample>,
     recorder: Recorder,
     /// Time spent in the estimator's update (the throughput of the estimation stage).
     busy: Duration,
@@ -116,6 +124,7 @@ impl<'a> Replay<'a> {
             fed: SampleLog::new(crate::results::MAX_FIT_SAMPLES, 1),
             spread: super::constant::Spread::default(),
             kinematics: super::kinematics::Kinematics::default(),
+            sign_log: SampleLog::new(SIGN_TEST_SAMPLES, SIGN_TEST_BLOCK),
             recorder: Recorder::default(),
             busy: Duration::ZERO,
             pacer: Pacer::default(),
@@ -184,6 +193,7 @@ impl<'a> Replay<'a> {
             self.recorder.new_segment();
         }
         self.kinematics.new_segment();
+        self.sign_log.new_segment();
     }
 
     /// The first sample: chooses the model, checks the record supports it, builds the
@@ -321,6 +331,7 @@ impl<'a> Replay<'a> {
         self.fed.push(*s);
         self.spread.push(s);
         self.kinematics.push(s);
+        self.sign_log.push(*s);
         Ok(true)
     }
 
@@ -377,7 +388,8 @@ impl<'a> Replay<'a> {
         let mut summary = self.summary(&r);
         summary.warnings.extend(self.spread.warnings(r.est.structure(), self.mapping));
         summary.warnings.extend(self.kinematics.warnings(self.mapping));
-        let (sign_tests, sign_warnings) = super::sign_tests::checked_log(&self.fed, self.mapping);
+        let (sign_tests, sign_warnings) =
+            super::sign_tests::checked_log(&self.sign_log, self.mapping);
         summary.sign_tests = sign_tests;
         summary.warnings.extend(sign_warnings);
         let differentiated = r.stage.supplies().to_vec();

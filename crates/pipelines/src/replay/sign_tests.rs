@@ -246,8 +246,18 @@ fn yaw(s: &Stencil, on: &Present) -> Option<(f64, Vec<f64>)> {
 }
 
 /// The sign tests of every surface and accelerometer the record maps, over the samples of each
-/// manoeuvre (no difference across two), in the order `de, da, dr, ax, ay, az`.
+/// manoeuvre (no difference across two), in the order `de, da, dr, ax, ay, az`, each decided
+/// surface's timing searched.
 pub fn sign_tests<M: AsRef<[AirDataSample]>>(manoeuvres: &[M]) -> Vec<SignTest> {
+    sign_tests_timed(manoeuvres, None)
+}
+
+/// [`sign_tests`], with the timing search left out for the reason `no_timing` when given (it
+/// is added to each decided surface's evidence).
+fn sign_tests_timed<M: AsRef<[AirDataSample]>>(
+    manoeuvres: &[M],
+    no_timing: Option<&str>,
+) -> Vec<SignTest> {
     let present = present_fields(manoeuvres);
     let mapped = |name: &str| name == "de" && present.has_de || present.fields.has(name);
     TESTS
@@ -255,7 +265,7 @@ pub fn sign_tests<M: AsRef<[AirDataSample]>>(manoeuvres: &[M]) -> Vec<SignTest> 
         .filter(|t| mapped(t.channel))
         .map(|t| match t.needs.iter().find(|n| !present.fields.has(n)) {
             Some(missing) => undecided(t, format!("`{missing}` is not mapped")),
-            None => run(t, manoeuvres, &present.fields),
+            None => run(t, manoeuvres, &present.fields, no_timing),
         })
         .collect()
 }
@@ -284,26 +294,24 @@ fn undecided(t: &Test, why: String) -> SignTest {
         verdict: SignVerdict::Undecided,
         gain: None,
         sigma: None,
+        lead_s: None,
+        lead_interval_s: None,
         evidence: format!("{}: {why}", t.what),
     }
 }
 
-/// The rows of `t` over the manoeuvres: (regressand, regressors with the bias last, manoeuvre).
-fn rows<M: AsRef<[AirDataSample]>>(
-    t: &Test,
-    manoeuvres: &[M],
-    on: &Present,
-) -> Vec<(f64, Vec<f64>, usize)> {
-    let dt_min = manoeuvres
-        .iter()
-        .flat_map(|m| m.as_ref().windows(2).map(|w| w[1].t_s - w[0].t_s))
-        .filter(|d| *d > 0.0)
-        .fold(f64::INFINITY, f64::min);
+/// One row of a test: regressand, regressors (the tested one first, the bias last), and where
+/// it is: (manoeuvre, index of the stencil's centre sample).
+type Row = (f64, Vec<f64>, (usize, usize));
+
+/// The rows of `t` over the manoeuvres.
+fn rows<M: AsRef<[AirDataSample]>>(t: &Test, manoeuvres: &[M], on: &Present) -> Vec<Row> {
+    let dt_min = shortest_interval(manoeuvres);
     // Half-width m: about HALF_SPAN_S each side, at least one sample.
     let m = ((HALF_SPAN_S / dt_min).round() as usize).max(1);
     let mut out = Vec::new();
     for (k, man) in manoeuvres.iter().enumerate() {
-        for w in man.as_ref().windows(2 * m + 1) {
+        for (i, w) in man.as_ref().windows(2 * m + 1).enumerate() {
             let contiguous = w.windows(2).all(|p| {
                 let d = p[1].t_s - p[0].t_s;
                 d > 0.0 && d <= 2.5 * dt_min
@@ -317,20 +325,35 @@ fn rows<M: AsRef<[AirDataSample]>>(
                 && x.iter().all(|v| v.is_finite())
             {
                 x.push(1.0);
-                out.push((y, x, k));
+                out.push((y, x, (k, i + m)));
             }
         }
     }
     out
 }
 
-/// Runs `t`: the gain of its channel, its widened σ and the verdict.
-fn run<M: AsRef<[AirDataSample]>>(t: &Test, manoeuvres: &[M], on: &Present) -> SignTest {
+/// The shortest positive sample interval of the manoeuvres, s.
+fn shortest_interval<M: AsRef<[AirDataSample]>>(manoeuvres: &[M]) -> f64 {
+    manoeuvres
+        .iter()
+        .flat_map(|m| m.as_ref().windows(2).map(|w| w[1].t_s - w[0].t_s))
+        .filter(|d| *d > 0.0)
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Runs `t`: the gain of its channel, its widened σ and the verdict; for a surface whose sign
+/// is decided, its lead over the response ([`timing`]).
+fn run<M: AsRef<[AirDataSample]>>(
+    t: &Test,
+    manoeuvres: &[M],
+    on: &Present,
+    no_timing: Option<&str>,
+) -> SignTest {
     let rows = rows(t, manoeuvres, on);
     if rows.len() < MIN_ROWS {
         return undecided(t, format!("{} differenced samples, fewer than {MIN_ROWS}", rows.len()));
     }
-    let Some((gain, sigma)) = regress(&rows) else {
+    let Some(LsFit { gain, sigma, .. }) = regress(&rows) else {
         return undecided(t, "the regressors are not independent (is the channel excited?)".into());
     };
     let verdict = if gain.abs() <= DECIDE_SIGMAS * sigma {
@@ -350,13 +373,47 @@ fn run<M: AsRef<[AirDataSample]>>(t: &Test, manoeuvres: &[M], on: &Present) -> S
     if verdict == SignVerdict::Undecided {
         evidence.push_str(&format!("; within {DECIDE_SIGMAS} σ of 0"));
     }
-    SignTest { channel: t.channel.into(), verdict, gain: Some(gain), sigma: Some(sigma), evidence }
+    let surface_decided = t.expected < 0.0 && verdict != SignVerdict::Undecided;
+    if let (true, Some(why)) = (surface_decided, no_timing) {
+        evidence.push_str(&format!("; its timing is not searched: {why}"));
+    }
+    let lead = (surface_decided && no_timing.is_none())
+        .then(|| timing::lead(t, manoeuvres, on, shortest_interval(manoeuvres)))
+        .flatten();
+    if let Some(l) = lead {
+        evidence.push_str(&format!(
+            "; leads the response by {:+.3} s (95 % {:+.3} … {:+.3} s; the same regression with δ shifted in time)",
+            l.lead_s, l.lo_s, l.hi_s
+        ));
+    }
+    SignTest {
+        channel: t.channel.into(),
+        verdict,
+        gain: Some(gain),
+        sigma: Some(sigma),
+        evidence,
+        lead_s: lead.map(|l| l.lead_s),
+        lead_interval_s: lead.map(|l| (l.lo_s, l.hi_s)),
+    }
+}
+
+/// A least-squares fit of one test's rows.
+#[derive(Debug, Clone, Copy)]
+struct LsFit {
+    /// The first regressor's coefficient and its widened σ.
+    gain: f64,
+    sigma: f64,
+    /// Residual sum of squares and its degrees of freedom.
+    rss: f64,
+    dof: usize,
+    /// The σ widening for the residuals' colour, `√((1 + ρ)/(1 − ρ))`.
+    widen: f64,
 }
 
 /// Least squares of the rows: the first regressor's coefficient and its σ, widened for the
 /// residuals' lag-1 autocorrelation within each manoeuvre (module doc); `None` when the
 /// normal equations are singular.
-fn regress(rows: &[(f64, Vec<f64>, usize)]) -> Option<(f64, f64)> {
+fn regress(rows: &[Row]) -> Option<LsFit> {
     let (m, k) = (rows.len(), rows[0].1.len());
     // Columns scaled to unit RMS so the normal equations are well conditioned.
     let scale: Vec<f64> = (0..k)
@@ -372,13 +429,20 @@ fn regress(rows: &[(f64, Vec<f64>, usize)]) -> Option<(f64, f64)> {
     let beta = &inv * x.tr_mul(&y);
     let e = &y - &x * &beta;
     let dof = m.checked_sub(k).filter(|d| *d > 0)?;
-    let s2 = e.norm_squared() / dof as f64;
-    let lagged: f64 = (1..m).filter(|&i| rows[i].2 == rows[i - 1].2).map(|i| e[i] * e[i - 1]).sum();
-    let rho = (lagged / e.norm_squared()).clamp(0.0, 0.98);
+    let rss = e.norm_squared();
+    let lagged: f64 =
+        (1..m).filter(|&i| rows[i].2.0 == rows[i - 1].2.0).map(|i| e[i] * e[i - 1]).sum();
+    let rho = (lagged / rss).clamp(0.0, 0.98);
     let widen = ((1.0 + rho) / (1.0 - rho)).sqrt();
-    let sigma = (s2 * inv[(0, 0)]).sqrt() * widen / scale[0];
+    let sigma = (rss / dof as f64 * inv[(0, 0)]).sqrt() * widen / scale[0];
     let gain = beta[0] / scale[0];
-    (gain.is_finite() && sigma.is_finite() && inv[(0, 0)] < 1e12).then_some((gain, sigma))
+    (gain.is_finite() && sigma.is_finite() && inv[(0, 0)] < 1e12).then_some(LsFit {
+        gain,
+        sigma,
+        rss,
+        dof,
+        widen,
+    })
 }
 
 /// The tests over `manoeuvres` and the warnings of the reversed channels (labels from `mapping`).
@@ -386,13 +450,23 @@ pub fn checked<M: AsRef<[AirDataSample]>>(
     manoeuvres: &[M],
     mapping: &Mapping,
 ) -> (Vec<SignTest>, Vec<Warning>) {
-    let tests = sign_tests(manoeuvres);
-    let w = warnings(&tests, mapping);
+    checked_timed(manoeuvres, mapping, None)
+}
+
+fn checked_timed<M: AsRef<[AirDataSample]>>(
+    manoeuvres: &[M],
+    mapping: &Mapping,
+    no_timing: Option<&str>,
+) -> (Vec<SignTest>, Vec<Warning>) {
+    let tests = sign_tests_timed(manoeuvres, no_timing);
+    let w = warnings(&tests, mapping, shortest_interval(manoeuvres));
     (tests, w)
 }
 
 /// [`checked`] over a sample log's segments (a replay's fed samples: a gap or a decimation
-/// starts a segment, and no difference is taken across one).
+/// starts a segment, and no difference is taken across one). A log that dropped blocks of a
+/// long record has lost whichever manoeuvres fell in them, and a surface's timing from what is
+/// left can be far off (a doublet cut at a block's edge): the timing is not searched then.
 pub fn checked_log(
     log: &crate::sample_log::SampleLog<AirDataSample>,
     mapping: &Mapping,
@@ -406,11 +480,15 @@ pub fn checked_log(
             start = i;
         }
     }
-    checked(&parts, mapping)
+    let why = format!(
+        "the replay kept one block of samples in {} of this long record; replay its manoeuvres with --window",
+        log.stride()
+    );
+    checked_timed(&parts, mapping, (log.dropped() > 0).then_some(why.as_str()))
 }
 
 /// The derivative whose sign a reversed surface turns, for the warning's parameter.
-fn derivative_of(channel: &str) -> Option<&'static str> {
+pub(crate) fn derivative_of(channel: &str) -> Option<&'static str> {
     match channel {
         "de" => Some("Cm_de"),
         "da" => Some("Cl_da"),
@@ -419,8 +497,15 @@ fn derivative_of(channel: &str) -> Option<&'static str> {
     }
 }
 
-/// A warning per reversed channel, naming its mapping source and the fix.
-pub fn warnings(tests: &[SignTest], mapping: &Mapping) -> Vec<Warning> {
+/// A warning per reversed channel, naming its mapping source and the fix, and per surface
+/// whose lead over its response is determined and at least a sample and 0.02 s ([`timing`]).
+pub fn warnings(tests: &[SignTest], mapping: &Mapping, dt_s: f64) -> Vec<Warning> {
+    let mut out = reversed_warnings(tests, mapping);
+    out.extend(tests.iter().filter_map(|t| timing::warning(t, mapping, dt_s)));
+    out
+}
+
+fn reversed_warnings(tests: &[SignTest], mapping: &Mapping) -> Vec<Warning> {
     tests
         .iter()
         .filter(|t| t.verdict == SignVerdict::Reversed)
@@ -428,8 +513,8 @@ pub fn warnings(tests: &[SignTest], mapping: &Mapping) -> Vec<Warning> {
             let label = mapping.field_label(sample_field(&t.channel));
             let layout = if t.channel == "de" { " (or the aircraft has a canard)" } else { "" };
             let text = format!(
-                "sign test: `{}` ({label}) looks reversed{layout}: {}; check its sign (`scale = -1`) in the mapping (docs/mapping.md, Channels)",
-                t.channel, t.evidence
+                "sign test: {label} looks reversed{layout}: {}; check its sign (`scale = -1`) in the mapping (docs/mapping.md, Channels)",
+                t.evidence
             );
             let w = Warning::new(WarningKind::Sign, text);
             match derivative_of(&t.channel) {
@@ -441,7 +526,7 @@ pub fn warnings(tests: &[SignTest], mapping: &Mapping) -> Vec<Warning> {
 }
 
 /// The sample field of a tested channel's mapping key.
-fn sample_field(channel: &str) -> &'static str {
+pub(crate) fn sample_field(channel: &str) -> &'static str {
     match channel {
         "de" => "de_rad",
         "da" => "da_rad",
@@ -451,6 +536,8 @@ fn sample_field(channel: &str) -> &'static str {
         _ => "az_mps2",
     }
 }
+
+pub mod timing;
 
 #[cfg(test)]
 mod tests;

@@ -35,13 +35,27 @@ const V: f64 = 80.0;
 /// M_δe = −8 rad/s² per rad; the accelerometers from the force equations at the analytic α̇;
 /// `de_sign` and `az_sign` flip the recorded channels as a reversed mapping would.
 fn pitch_record(de_sign: f64, az_sign: f64) -> Vec<AirDataSample> {
+    pitch_record_with_servo(de_sign, az_sign, None, 0.03)
+}
+
+/// [`pitch_record`] with 3-2-1-1 amplitude `amp` rad, and with `servo` = (τ s, rate limit
+/// rad/s): the surface follows the command through a rate-limited first-order actuator and the
+/// record holds the command.
+fn pitch_record_with_servo(
+    de_sign: f64,
+    az_sign: f64,
+    servo: Option<(f64, f64)>,
+    amp: f64,
+) -> Vec<AirDataSample> {
     let (za, zde, ma, mq, mde) = (-1.2, -0.1, -6.0, -2.0, -8.0);
     let (dt, sub) = (0.02, 20);
     let (mut alpha, mut q, mut theta) = (0.05_f64, 0.0, 0.05_f64);
+    let mut surface = 0.0;
     let mut out = Vec::new();
     for k in 0..1500 {
         let t = k as f64 * dt;
-        let de = input_3211(t, 2.0, 0.03) + input_3211(t, 15.0, -0.02);
+        let cmd = input_3211(t, 2.0, amp) + input_3211(t, 15.0, -amp * 2.0 / 3.0);
+        let de = if servo.is_some() { surface } else { cmd };
         let alpha_dot = za * (alpha - 0.05) + q + zde * de;
         let (u, w) = (V * alpha.cos(), V * alpha.sin());
         let w_dot = V * alpha.cos() * alpha_dot;
@@ -56,11 +70,18 @@ fn pitch_record(de_sign: f64, az_sign: f64) -> Vec<AirDataSample> {
             theta_rad: Some(theta),
             ax_mps2: Some(ax + wiggle(k + 1, 0.02)),
             az_mps2: Some(az_sign * (az + wiggle(k + 2, 0.05))),
-            de_rad: Some(de_sign * de),
+            de_rad: Some(de_sign * cmd),
             ..Default::default()
         });
         for _ in 0..sub {
             let h = dt / sub as f64;
+            let de = match servo {
+                Some((tau, rate)) => {
+                    surface += h * ((cmd - surface) / tau).clamp(-rate, rate);
+                    surface
+                }
+                None => cmd,
+            };
             let a_dot = za * (alpha - 0.05) + q + zde * de;
             let q_dot = ma * (alpha - 0.05) + mq * q + mde * de;
             alpha += h * a_dot;
@@ -90,11 +111,11 @@ fn pitch_record_consistent_and_reversed() {
         assert_eq!(a.verdict, SignVerdict::Consistent, "{a:?}");
         assert!((a.gain.unwrap() - 1.0).abs() < 0.1, "{a:?}");
     }
-    assert!(warnings(&t, &mapping()).is_empty());
+    assert!(warnings(&t, &mapping(), 0.02).is_empty());
     let t = sign_tests(&[pitch_record(-1.0, -1.0)]);
     assert_eq!(verdict(&t, "de").verdict, SignVerdict::Reversed);
     assert_eq!(verdict(&t, "az").verdict, SignVerdict::Reversed);
-    let w = warnings(&t, &mapping());
+    let w = warnings(&t, &mapping(), 0.02);
     assert_eq!(w.len(), 2, "{w:?}");
     assert_eq!(w[0].parameter.as_deref(), Some("Cm_de"));
     assert!(w[0].text.contains("`elev`") && w[0].text.contains("scale = -1"), "{}", w[0].text);
@@ -181,7 +202,7 @@ fn lateral_record_names_a_reversed_rudder() {
         let reversed = sign_tests(&[lateral_record(-1.0, with_beta)]);
         assert_eq!(verdict(&reversed, "dr").verdict, SignVerdict::Reversed, "{reversed:?}");
         assert_eq!(verdict(&reversed, "da").verdict, SignVerdict::Consistent);
-        let w = warnings(&reversed, &mapping());
+        let w = warnings(&reversed, &mapping(), 0.02);
         assert_eq!(w.len(), 1, "{w:?}");
         assert_eq!(w[0].parameter.as_deref(), Some("Cn_dr"));
         assert!(w[0].text.contains("`rud`"), "{}", w[0].text);
@@ -205,4 +226,36 @@ fn manoeuvres_are_differenced_separately() {
     let cut = verdict(&sign_tests(&[a, b]), "de");
     assert_eq!(cut.verdict, whole.verdict);
     assert!((cut.gain.unwrap() - whole.gain.unwrap()).abs() < whole.sigma.unwrap());
+}
+
+/// The simulation holds each recorded input over its 0.02-s interval (a zero-order hold: the
+/// surface acts half a sample after its record, on average). A measured elevator leads by that
+/// half sample (within 0.003 s) and gets no timing warning; a commanded one through a
+/// first-order actuator limited to 3.5 rad/s (a 0.15-rad step hits the limit) leads by the
+/// actuator's lag more, within 0.01 s, and the warning names it on Cm_de.
+#[test]
+fn commanded_elevator_leads_by_its_actuator_lag() {
+    let half_sample = 0.01;
+    let t = sign_tests(&[pitch_record(1.0, 1.0)]);
+    let de = verdict(&t, "de");
+    let lead = de.lead_s.unwrap();
+    assert!((lead - half_sample).abs() < 0.003, "{de:?}");
+    assert!(timing::warning(&de, &mapping(), 0.02).is_none());
+    for (tau, amp) in [(0.04, 0.15), (0.025, 0.05)] {
+        let t = sign_tests(&[pitch_record_with_servo(1.0, 1.0, Some((tau, 3.5)), amp)]);
+        let de = verdict(&t, "de");
+        let lead = de.lead_s.unwrap();
+        let (lo, hi) = de.lead_interval_s.unwrap();
+        assert!(
+            (lead - half_sample - tau).abs() < 0.01 && lo < lead && lead < hi,
+            "τ {tau}: {de:?}"
+        );
+        let w = timing::warning(&de, &mapping(), 0.02).expect("a lead warning");
+        assert_eq!(w.parameter.as_deref(), Some("Cm_de"));
+        assert!(
+            w.text.contains("channel `de` (column `elev`) leads") && w.text.contains("commanded"),
+            "{}",
+            w.text
+        );
+    }
 }

@@ -165,6 +165,55 @@ fn commanded_surfaces_lead_by_the_actuator_lag() {
         );
     }
     assert!(err.contains("warning: input timing"), "{err}");
+    // The commands through the F-16's actuators declared in the mapping (values of
+    // `SurfaceActuators::f16`: τ = 1/20.2 s, 60/80/120 °/s, ±25/21.5/30°): no lead is left, no
+    // timing warning, the summary says what was done, and output error's control and damping
+    // derivatives equal the fit on the true surfaces within 0.5 %.
+    let actuator = |rate_deg_s: f64, limit_deg: f64| {
+        format!(
+            "actuator = {{ tau_s = {}, rate_limit_rad_s = {}, position_limits_rad = [{}, {}] }}",
+            1.0 / 20.2,
+            rate_deg_s.to_radians(),
+            -limit_deg.to_radians(),
+            limit_deg.to_radians()
+        )
+    };
+    let lines = [
+        format!(
+            "de = {{ column = \"elevator_cmd_rad\", unit = \"rad\", {} }}",
+            actuator(60.0, 25.0)
+        ),
+        format!(
+            "da = {{ column = \"aileron_cmd_rad\", unit = \"rad\", {} }}",
+            actuator(80.0, 21.5)
+        ),
+        format!(
+            "dr = {{ column = \"rudder_cmd_rad\", unit = \"rad\", {} }}",
+            actuator(120.0, 30.0)
+        ),
+    ];
+    let declared = edited_mapping(
+        "aeroident-sim.toml",
+        &[("de = ", &lines[0]), ("da = ", &lines[1]), ("dr = ", &lines[2])],
+        "sim-actuated",
+    );
+    let (truth, _, _) = replay(&data, &map, &["--estimator", "oe"], "sim-surfaces-oe");
+    let (v, err, _) = replay(&data, &declared, &["--estimator", "oe"], "sim-actuated");
+    for ch in ["de", "da", "dr"] {
+        let lead = verdict(&v, ch)["lead_s"].as_f64().unwrap();
+        assert!(lead.abs() < 0.005, "{ch}: {lead}");
+        assert!(err.contains(&format!("`{ch}` is mapped as a command")), "{err}");
+    }
+    assert!(!err.contains("input timing"), "{err}");
+    let estimate = |v: &serde_json::Value, name: &str| {
+        let p = v["parameters"].as_array().unwrap().iter().find(|p| p["name"] == name);
+        p.unwrap()["estimate"].as_f64().unwrap()
+    };
+    for name in ["Cm_de", "Cm_q", "Cl_da", "Cl_p", "Cn_dr", "Cn_r"] {
+        let (want, got) = (estimate(&truth, name), estimate(&v, name));
+        assert!(((got - want) / want).abs() < 0.005, "{name}: {got} vs {want}");
+    }
     let _ = std::fs::remove_dir_all(dir);
     let _ = std::fs::remove_file(commanded);
+    let _ = std::fs::remove_file(declared);
 }

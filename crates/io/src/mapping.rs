@@ -378,10 +378,78 @@ pub struct ChannelSpec {
     pub calibration: Option<Vec<[f64; 2]>>,
     /// Free-text provenance note (ignored by the reader).
     pub note: Option<String>,
+    /// A surface (`de`, `da`, `dr`) whose column is the *command*: the actuator between it and
+    /// the surface ([`Actuator`]); the record stage passes the command through it.
+    pub actuator: Option<ActuatorSpec>,
 }
 
 fn one() -> f64 {
     1.0
+}
+
+/// `actuator = { tau_s = …, rate_limit_rad_s = …, position_limits_rad = [min, max] }` of a
+/// commanded surface, as written.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ActuatorSpec {
+    /// First-order time constant, s.
+    pub tau_s: f64,
+    /// Rate limit, rad/s (none: unlimited).
+    pub rate_limit_rad_s: Option<f64>,
+    /// Position limits `[min, max]`, rad (none: unlimited).
+    pub position_limits_rad: Option<[f64; 2]>,
+}
+
+/// The actuator of a commanded surface: a first-order lag `τ δ̇ = u − δ` with its rate and
+/// position limits (the model of Stevens & Lewis 2nd ed. §3.4 and NASA TP-1538 for the F-16:
+/// τ 0.0495 s, 60°/s, ±25° on the elevator), checked: τ in (0, 1] s, the limits positive and
+/// ordered, all finite.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Actuator {
+    /// Time constant, s.
+    pub tau_s: f64,
+    /// Rate limit, rad/s (`f64::INFINITY`: unlimited).
+    pub rate_limit_rad_s: f64,
+    /// Position limits, rad (`(−∞, ∞)`: unlimited).
+    pub position_limits_rad: (f64, f64),
+}
+
+impl Actuator {
+    /// The spec checked (module doc of [`Actuator`]); `Err` with the reason.
+    fn from_spec(a: &ActuatorSpec) -> Result<Self, String> {
+        if !(a.tau_s > 0.0 && a.tau_s <= 1.0) {
+            return Err(format!(
+                "actuator `tau_s = {}`: a time constant must be in (0, 1] s",
+                a.tau_s
+            ));
+        }
+        let rate = a.rate_limit_rad_s.unwrap_or(f64::INFINITY);
+        let usable = rate > 0.0 && (rate.is_finite() || a.rate_limit_rad_s.is_none());
+        if !usable {
+            return Err(format!(
+                "actuator `rate_limit_rad_s = {rate}`: must be positive and finite"
+            ));
+        }
+        let (lo, hi) = match a.position_limits_rad {
+            Some([lo, hi]) if lo.is_finite() && hi.is_finite() && lo < hi => (lo, hi),
+            Some([lo, hi]) => {
+                return Err(format!(
+                    "actuator `position_limits_rad = [{lo}, {hi}]`: must be finite with min < max"
+                ));
+            }
+            None => (f64::NEG_INFINITY, f64::INFINITY),
+        };
+        Ok(Self { tau_s: a.tau_s, rate_limit_rad_s: rate, position_limits_rad: (lo, hi) })
+    }
+
+    /// The surface one step `dt_s` after `surface` under the command `command` held over the
+    /// step (zero-order hold): the exact discrete lag, then the rate and position limits.
+    pub fn step(&self, surface: f64, command: f64, dt_s: f64) -> f64 {
+        let lag = (command - surface) * (1.0 - (-dt_s / self.tau_s).exp());
+        let max_move = self.rate_limit_rad_s * dt_s;
+        let (lo, hi) = self.position_limits_rad;
+        (surface + lag.clamp(-max_move, max_move)).clamp(lo, hi)
+    }
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -555,6 +623,9 @@ pub struct Mapping {
     /// (a whitespace `.asc`, a `.mat` matrix); `None` names them `"1"`, `"2"`, … (see
     /// [`crate::log`]). A CSV has its own header and ignores this list.
     pub column_names: Option<Vec<String>>,
+    /// The actuators of the surfaces mapped as commands (`actuator = { … }` on `de`, `da`,
+    /// `dr`): the record stage passes each command through its actuator.
+    pub actuators: BTreeMap<Channel, Actuator>,
 }
 
 /// 1-based line of byte offset `at` in `text`.
@@ -586,8 +657,12 @@ impl Mapping {
         })?;
         let time = time_map(file, &raw.time)?;
         let mut channels = BTreeMap::new();
+        let mut actuators = BTreeMap::new();
         for (key, spec) in &raw.channels {
             let (ch, m) = channel_map(text, file, key, spec)?;
+            if let Some(a) = actuator_of(text, file, key, spec, ch, &m)? {
+                actuators.insert(ch, a);
+            }
             channels.insert(ch, m);
         }
         check_channel_set(file, &channels)?;
@@ -608,6 +683,7 @@ impl Mapping {
             quaternion,
             air_data,
             column_names,
+            actuators,
         })
     }
 
@@ -716,6 +792,33 @@ fn time_map(file: &str, spec: &ChannelSpec) -> Result<ChannelMap, FlightDataErro
 /// One `[channels]` entry `key` resolved to SI: a known channel with a non-zero scale, and a
 /// constant within the channel's physical range (positive where it must be). Errors carry
 /// the TOML line of `key` in `text`.
+/// The checked actuator of channel `ch` when its spec declares one: only a surface read from
+/// columns can be commanded. Errors name the file, the channel and the line.
+fn actuator_of(
+    text: &str,
+    file: &str,
+    key: &Spanned<String>,
+    spec: &ChannelSpec,
+    ch: Channel,
+    m: &ChannelMap,
+) -> Result<Option<Actuator>, FlightDataError> {
+    let Some(a) = &spec.actuator else { return Ok(None) };
+    let bad = |reason: String| FlightDataError::BadSpec {
+        file: file.to_string(),
+        channel: ch.key().into(),
+        reason: format!("line {}: {reason}", line_of(text, key.span().start)),
+    };
+    if !matches!(ch, Channel::De | Channel::Da | Channel::Dr) {
+        return Err(bad("`actuator` applies to the surfaces `de`, `da`, `dr` only".into()));
+    }
+    if matches!(m.source, Source::Constant(_)) {
+        return Err(bad(
+            "`actuator` applies to a commanded surface read from columns, not to a `value`".into(),
+        ));
+    }
+    Actuator::from_spec(a).map(Some).map_err(bad)
+}
+
 fn channel_map(
     text: &str,
     file: &str,
@@ -1211,6 +1314,39 @@ mod tests {
     use super::*;
 
     const HEAD: &str = "[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"V\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nmass = { value = 1.0, unit = \"kg\" }\nS = { value = 1.0, unit = \"m2\" }\nrho = { value = 1.0, unit = \"kg/m3\" }\n";
+
+    /// A commanded surface's actuator is read with its units; one on a channel that is not a
+    /// surface, on a constant, with a time constant of 0 or limits out of order is refused,
+    /// naming file, channel and line.
+    #[test]
+    fn actuator_of_a_commanded_surface_is_checked() {
+        let act = "actuator = { tau_s = 0.05, rate_limit_rad_s = 1.0, position_limits_rad = [-0.4, 0.4] }";
+        let text = format!("{HEAD}de = {{ column = \"cmd\", unit = \"rad\", {act} }}\n");
+        let m = Mapping::from_toml_str(&text, "m.toml").unwrap();
+        let a = m.actuators[&Channel::De];
+        assert_eq!((a.tau_s, a.rate_limit_rad_s, a.position_limits_rad), (0.05, 1.0, (-0.4, 0.4)));
+        let plain = format!(
+            "{HEAD}de = {{ column = \"cmd\", unit = \"rad\", actuator = {{ tau_s = 0.05 }} }}\n"
+        );
+        let a = Mapping::from_toml_str(&plain, "m.toml").unwrap().actuators[&Channel::De];
+        assert!(a.rate_limit_rad_s.is_infinite() && a.position_limits_rad.0.is_infinite());
+        for (line, want) in [
+            (format!("q = {{ column = \"q\", unit = \"rad/s\", {act} }}"), "surfaces `de`, `da`, `dr` only"),
+            (format!("de = {{ value = 0.0, unit = \"rad\", {act} }}"), "not to a `value`"),
+            ("de = { column = \"c\", unit = \"rad\", actuator = { tau_s = 0.0 } }".into(), "(0, 1] s"),
+            (
+                "de = { column = \"c\", unit = \"rad\", actuator = { tau_s = 0.05, position_limits_rad = [0.4, -0.4] } }".into(),
+                "min < max",
+            ),
+            (
+                "de = { column = \"c\", unit = \"rad\", actuator = { tau_s = 0.05, rate_limit_rad_s = -1.0 } }".into(),
+                "positive and finite",
+            ),
+        ] {
+            let e = Mapping::from_toml_str(&format!("{HEAD}{line}\n"), "m.toml").unwrap_err().to_string();
+            assert!(e.starts_with("m.toml: channel `") && e.contains("line 10") && e.contains(want), "{e}");
+        }
+    }
 
     /// Issue 10 #10: a channel with `scale = 0` is identically its offset, so the parameters it
     /// feeds could never be identified; the mapping is refused, naming file, line and key.

@@ -5,6 +5,8 @@
 //! - **read, map**: an [`aeroident_io::FlightDataReader`] (any log format, through the
 //!   mapping) yields [`RecordEvent`]s: SI samples at the CG, counted rejections and gaps;
 //! - **screen**: isolated spikes rejected ([`outliers`]);
+//! - **actuate**: a surface mapped as a command passed through its declared actuator
+//!   ([`actuated`]);
 //! - **correct**: a compatibility check's biases, scale factors and time shifts undone, a
 //!   missing sideslip filled ([`corrections`]);
 //! - **window**: the time windows of the record, each a manoeuvre ([`crate::window`]);
@@ -16,6 +18,7 @@
 //! stage is a [`RecordError`], naming the file, the option as the command line spells it, or
 //! the model.
 
+pub mod actuated;
 pub mod corrections;
 pub mod duplicates;
 pub mod needs;
@@ -50,7 +53,8 @@ pub enum RecordError {
 }
 
 /// The events of a record as the estimators see them: read, screened for isolated spikes when
-/// `screen` is given ([`outliers`]), corrected by a compatibility check's corrections when
+/// `screen` is given ([`outliers`]), commanded surfaces passed through their actuators
+/// ([`actuated`]), corrected by a compatibility check's corrections when
 /// given ([`Corrected`], over the whole record: its time shifts reach across
 /// window edges), then cut to the time windows ([`crate::window`]).
 pub fn record_events<'a, R: Read + 'a>(
@@ -61,14 +65,22 @@ pub fn record_events<'a, R: Read + 'a>(
 ) -> RecordEvents<'a> {
     let reader_notes = reader.notes();
     let mapping = reader.mapping();
+    let actuators: Vec<_> = mapping.actuators.iter().map(|(c, a)| (*c, *a)).collect();
+    let actuator_notes = actuators.iter().map(|(c, a)| actuated::note(*c, a)).collect();
     let screened = outliers::Screened::new(reader, screen).named_by(mapping);
     let screen_notes = screened.notes();
+    let actuated: Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a> =
+        if actuators.is_empty() {
+            Box::new(screened)
+        } else {
+            Box::new(actuated::Actuated::new(screened, actuators))
+        };
     let events: Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a> = match compat {
-        Some(c) => Box::new(Corrected::new(screened, c.clone())),
-        None => Box::new(screened),
+        Some(c) => Box::new(Corrected::new(actuated, c.clone())),
+        None => actuated,
     };
     let events = crate::window::Windowed::new(events, windows.to_vec());
-    RecordEvents { events, notes: [reader_notes, screen_notes] }
+    RecordEvents { events, notes: [reader_notes, screen_notes], actuator_notes }
 }
 
 /// [`record_events`]: the events, and the notes of the stages they went through.
@@ -78,15 +90,24 @@ pub struct RecordEvents<'a> {
     >,
     /// The warnings of the reader ([`FlightDataReader::notes`]) and of the spike screen.
     notes: [outliers::ScreenNotes; 2],
+    /// What the actuator stage does, one line per commanded surface.
+    actuator_notes: Vec<String>,
 }
 
 impl RecordEvents<'_> {
     /// The warnings of the stages so far: the reader's (an implausible time unit), what the
-    /// time windows did, the runs the spike screen saw but did not reject.
+    /// time windows did, the runs the spike screen saw but did not reject, and the commanded
+    /// surfaces passed through their actuators.
     pub fn notes(&self) -> Vec<String> {
         let [reader, screen] = &self.notes;
         let get = |n: &outliers::ScreenNotes| n.lock().map(|n| n.clone()).unwrap_or_default();
-        get(reader).into_iter().chain(self.events.note()).chain(get(screen)).collect()
+        let actuated = self.actuator_notes.iter().cloned();
+        get(reader)
+            .into_iter()
+            .chain(self.events.note())
+            .chain(get(screen))
+            .chain(actuated)
+            .collect()
     }
 }
 

@@ -119,7 +119,7 @@ fn fit_file<'py>(
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let windows = crate::record::time_windows("fit", windows)?;
-    let compat = compat_source(compat)?;
+    let compat = compat_source(compat);
     let kind = batch_kind(estimator)?;
     let given = vec![
         ("initial_states", Some(toml::Value::String(initial_states.to_owned()))),
@@ -153,16 +153,10 @@ fn fit_file<'py>(
     fit_dict(py, done, notes)
 }
 
-/// `compat=`: `"auto"` (checked on the records, as `--compat auto`), else a `compat.json`
-/// read now, so that a bad file is named before the record is read.
-fn compat_source(compat: Option<&str>) -> PyResult<Option<CompatSource>> {
-    match compat {
-        None => Ok(None),
-        Some("auto") => Ok(Some(CompatSource::Auto)),
-        Some(c) => aeroident_pipelines::compat::Corrections::from_json(Path::new(c))
-            .map(|c| Some(CompatSource::Given(c)))
-            .map_err(|e| err(format!("fit: {e}"))),
-    }
+/// `compat=`: `"auto"` (checked on the records, as `--compat auto`), else a `compat.json`,
+/// read and checked against the records by the job's first step, before any record is read.
+fn compat_source(compat: Option<&str>) -> Option<CompatSource> {
+    compat.map(CompatSource::from_arg)
 }
 
 /// The reader notes a job's steps give (its second record's), collected for Python.

@@ -257,7 +257,14 @@ pub fn corrections(
     let step = move || -> Result<(Option<Corrections>, Vec<String>), ReplayError> {
         match source {
             CompatSource::Given(c) => Ok((Some(c), Vec::new())),
-            CompatSource::File(path) => Ok((Some(Corrections::from_json(&path)?), Vec::new())),
+            CompatSource::File(path) => {
+                let files = if records.live || records.data == "-" {
+                    Vec::new()
+                } else {
+                    std::iter::once(records.data.clone()).chain(records.and.clone()).collect()
+                };
+                Ok((Some(Corrections::from_json_for(&path, &files)?), Vec::new()))
+            }
             CompatSource::Auto => {
                 let config = aeroident_estimators::compat::CompatConfig::default();
                 let readers = records.open_all()?;

@@ -67,7 +67,8 @@ pub struct ReconstructedSummary {
 ///   the airspeed's bias is never applied (in still air it is the wind);
 /// - scale: within 0.7–1.4 for a flow angle (local upwash and sidewash factors), 0.8–1.25
 ///   for the others;
-/// - time shift: 0.5 s either way (vane and AHRS lags are tenths of a second).
+/// - time shift: 0.5 s either way (vane and AHRS lags are tenths of a second), and no lead
+///   of a gyro or an attitude beyond [`MAX_AHRS_LEAD_S`] (an AHRS's filters only delay).
 ///
 /// # Errors
 /// Which limit the correction passes, in words.
@@ -95,13 +96,26 @@ pub fn plausible(ch: Channel, bias: f64, scale: f64, shift_s: Option<f64>) -> Re
             kind_name(ch)
         ));
     }
+    let ahrs = matches!(
+        ch,
+        Channel::P | Channel::Q | Channel::R | Channel::Phi | Channel::Theta | Channel::Psi
+    );
     match shift_s {
         Some(t) if t.abs() > MAX_SHIFT_S => Err(format!(
             "time shift {t:+.3} s beyond the ±{MAX_SHIFT_S} s a sensor's lag plausibly reaches: not applied"
         )),
+        Some(t) if ahrs && t < -MAX_AHRS_LEAD_S => Err(format!(
+            "time shift {t:+.3} s: the {} would lead the kinematics by {:.3} s, which an attitude and heading system's filters cannot (they only delay; a lead says the accelerometers, the time reference, are late, or the fit traded it for another unknown): not applied",
+            kind_name(ch),
+            -t
+        )),
         _ => Ok(()),
     }
 }
+
+/// The largest lead of a gyro or attitude over the kinematics taken as timing noise, s (a
+/// sample at 50 Hz): beyond it a lead is refused ([`plausible`]).
+pub const MAX_AHRS_LEAD_S: f64 = 0.02;
 
 /// The kind of sensor of channel `ch`, for messages.
 fn kind_name(ch: Channel) -> &'static str {
@@ -127,15 +141,71 @@ pub struct Corrections {
     pub applied: Vec<String>,
     /// The channels whose corrections are not applied, each with why ([`plausible`]).
     pub refused: Vec<String>,
+    /// The corrections the record does not determine, left out ([`undetermined`]).
+    pub left_out: Vec<String>,
 }
+
+/// A correction is applied only where the check determines it: its distance from no
+/// correction (bias 0, scale 1, shift 0) at least [`DETERMINED_SIGMAS`] of its σ. One within
+/// that is indistinguishable from none on this record; applying it would add the check's noise
+/// to the data. Rows without a σ (a hand-written `compat.json`) are taken as given. Clears
+/// each undetermined value in `entries` and returns them in words (`q_rad_s bias +1.0e-4 ±
+/// 2.0e-4`).
+fn undetermined(rows: &[ChannelSummary], entries: &mut [Entry]) -> Vec<String> {
+    let mut out = Vec::new();
+    for (row, e) in rows.iter().zip(entries.iter_mut()) {
+        let parts = [
+            ("bias", &mut e.1, row.bias_sigma, 0.0),
+            ("scale", &mut e.2, row.scale_sigma, 1.0),
+            ("time shift", &mut e.3, row.time_shift_sigma_s, 0.0),
+        ];
+        for (what, value, sigma, none) in parts {
+            if let (Some(v), Some(s)) = (*value, sigma)
+                && (v - none).abs() < DETERMINED_SIGMAS * s
+            {
+                out.push(format!("{} {what} {v:+.2e} ± {s:.1e}", row.name));
+                *value = None;
+            }
+        }
+    }
+    out
+}
+
+/// A correction must lie this many σ from none to be applied ([`undetermined`]).
+pub const DETERMINED_SIGMAS: f64 = 2.0;
 
 /// What `replay --compat` reads of a `compat.json`: its channel rows and reconstructed air
 /// data (the other keys are for people).
 #[derive(Deserialize)]
 struct CompatFile {
+    /// The record(s) the check was made on, as `compat` writes them (`a.csv, b.csv`).
+    #[serde(default)]
+    file: Option<String>,
     channels: Vec<ChannelSummary>,
     #[serde(default)]
     reconstructed: Vec<ReconstructedSummary>,
+}
+
+/// The file name of a path as given (`dir/a.csv` → `a.csv`).
+fn base_name(path: &str) -> &str {
+    Path::new(path.trim()).file_name().and_then(|n| n.to_str()).unwrap_or(path.trim())
+}
+
+/// Whether a check made on `made_on` (its `file` key) belongs to `records`: one of their file
+/// names among the check's. `Err` with why not, naming the key.
+fn check_provenance(made_on: Option<&str>, records: &[String]) -> Result<(), String> {
+    let Some(made_on) = made_on else {
+        return Err("it has no `file` key, so nothing says which record it was made on: run `aeroident compat` on this record (its biases, time shifts and reconstructed sideslip are one record's)".into());
+    };
+    let theirs: Vec<&str> = made_on.split(", ").map(base_name).collect();
+    if records.iter().any(|r| theirs.contains(&base_name(r))) {
+        return Ok(());
+    }
+    let ours: Vec<&str> = records.iter().map(|r| base_name(r)).collect();
+    Err(format!(
+        "its `file` is `{made_on}`, not this record ({}): a check's biases, time shifts and reconstructed sideslip are its own record's; run `aeroident compat` on this record (or, for the same record renamed, edit `file`)",
+        ours.join(", ")
+    ))
 }
 
 /// One channel's row: `(channel, bias, scale, time shift)`.
@@ -151,7 +221,13 @@ impl Corrections {
             .refused
             .iter()
             .map(|r| Warning::new(WarningKind::RefusedCorrection, format!("compat refused: {r}")));
-        applied.chain(refused)
+        let left_out = (!self.left_out.is_empty()).then(|| {
+            Warning::from(format!(
+                "compat left out, not determined by the record (within {DETERMINED_SIGMAS} σ of none): {}",
+                self.left_out.join(", ")
+            ))
+        });
+        applied.chain(refused).chain(left_out)
     }
 
     /// The corrections of a `compat.json` file.
@@ -160,13 +236,41 @@ impl Corrections {
     /// [`RecordError::Option`] naming the file: unreadable, not a compat.json, an unknown
     /// channel, a scale that is not positive, or a non-finite number.
     pub fn from_json(path: &Path) -> Result<Self, RecordError> {
-        let bad = |reason: String| RecordError::Option {
+        let (file, bad) = Self::read_json(path)?;
+        Self::of_rows(&file.channels, &file.reconstructed).map_err(bad)
+    }
+
+    /// The corrections of a `compat.json` for the records `records` (file names as given):
+    /// refused when its `file` names none of them ([`check_provenance`]). For a live feed or
+    /// stdin (`records` empty) the channel corrections apply (a sensor's biases carry to the
+    /// next flight) but the reconstructed sideslip, another record's time series, does not.
+    ///
+    /// # Errors
+    /// As [`Corrections::from_json`], and a check made on another record.
+    pub fn from_json_for(path: &Path, records: &[String]) -> Result<Self, RecordError> {
+        let (file, bad) = Self::read_json(path)?;
+        if records.is_empty() {
+            let mut c = Self::of_rows(&file.channels, &[]).map_err(bad)?;
+            if file.reconstructed.iter().any(|r| !r.t_s.is_empty()) {
+                c.refused.push("beta_rad: the sideslip reconstructed on the check's record is that record's time series: not applied to a live feed".into());
+            }
+            return Ok(c);
+        }
+        check_provenance(file.file.as_deref(), records).map_err(&bad)?;
+        Self::of_rows(&file.channels, &file.reconstructed).map_err(bad)
+    }
+
+    /// A `compat.json` parsed, and the error maker naming it.
+    fn read_json(
+        path: &Path,
+    ) -> Result<(CompatFile, impl Fn(String) -> RecordError + '_), RecordError> {
+        let bad = move |reason: String| RecordError::Option {
             option: "compat",
             reason: format!("{}: {reason}", path.display()),
         };
         let text = std::fs::read_to_string(path).map_err(|e| bad(e.to_string()))?;
         let file: CompatFile = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
-        Self::of_rows(&file.channels, &file.reconstructed).map_err(bad)
+        Ok((file, bad))
     }
 
     /// The corrections of a check's channel rows and reconstructed air data.
@@ -174,14 +278,31 @@ impl Corrections {
         rows: &[ChannelSummary],
         rec: &[ReconstructedSummary],
     ) -> Result<Self, String> {
-        let mut entries = Vec::new();
+        let mut entries: Vec<Entry> = Vec::new();
         for c in rows {
             let ch = Channel::from_name(&c.name)
                 .ok_or_else(|| format!("unknown channel `{}`", c.name))?;
+            if !c.unit.is_empty() && c.unit != ch.unit() {
+                return Err(format!(
+                    "`{}` has `unit` `{}`: a check's corrections are in the channel's SI unit `{}`, and a changed unit is not converted",
+                    c.name,
+                    c.unit,
+                    ch.unit()
+                ));
+            }
+            if entries.iter().any(|e| e.0 == ch) {
+                return Err(format!(
+                    "`{}` has two rows: each channel's corrections are one row",
+                    c.name
+                ));
+            }
             entries.push((ch, c.bias, c.scale, c.time_shift_s));
         }
         let beta = rec.iter().map(|r| (r.t_s.clone(), r.beta_rad.clone())).collect();
-        Self::new(entries, beta)
+        let left_out = undetermined(rows, &mut entries);
+        let mut c = Self::new(entries, beta)?;
+        c.left_out = left_out;
+        Ok(c)
     }
 
     fn new(entries: Vec<Entry>, beta: Vec<(Vec<f64>, Vec<f64>)>) -> Result<Self, String> {
@@ -545,7 +666,8 @@ mod tests {
         let path = dir.join("compat.json");
         let row = |name: &str, b: &str, k: &str, t: &str| {
             format!(
-                r#"{{"name": "{name}", "unit": "rad", "bias": {b}, "bias_sigma": 0.001, "scale": {k}, "scale_sigma": null, "time_shift_s": {t}, "time_shift_sigma_s": null}}"#
+                r#"{{"name": "{name}", "unit": "{}", "bias": {b}, "bias_sigma": 0.001, "scale": {k}, "scale_sigma": null, "time_shift_s": {t}, "time_shift_sigma_s": null}}"#,
+                Channel::from_name(name).unwrap().unit()
             )
         };
         let text = format!(
@@ -567,6 +689,99 @@ mod tests {
         std::fs::write(&path, r#"{"channels": [{"name": "gamma_rad", "bias": 0.1}]}"#).unwrap();
         let e = Corrections::from_json(&path).unwrap_err().to_string();
         assert!(e.contains("compat.json") && e.contains("gamma_rad"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// A correction within 2σ of none is left out and listed; one beyond is applied; a row
+    /// without σ (hand-written) is taken as given. A gyro or attitude leading the kinematics by
+    /// more than 0.02 s is refused; a lag, and a lead of α (a vane, not an AHRS), are not.
+    #[test]
+    fn undetermined_corrections_and_ahrs_leads_are_not_applied() {
+        let row = |name: &str, bias: f64, sigma: Option<f64>, shift: Option<f64>| ChannelSummary {
+            name: name.into(),
+            unit: Channel::from_name(name).unwrap().unit().into(),
+            bias: Some(bias),
+            bias_sigma: sigma,
+            scale: None,
+            scale_sigma: None,
+            time_shift_s: shift,
+            time_shift_sigma_s: shift.map(|_| 0.005),
+        };
+        let rows = [
+            row("q_rad_s", 1e-4, Some(2e-4), None),
+            row("p_rad_s", 1e-3, Some(2e-4), None),
+            row("r_rad_s", 1e-4, None, None),
+            row("theta_rad", 0.0, None, Some(-0.09)),
+            row("phi_rad", 0.0, None, Some(0.12)),
+            row("alpha_rad", 0.0, None, Some(-0.05)),
+        ];
+        let c = Corrections::of_rows(&rows, &[]).unwrap();
+        assert_eq!(c.left_out, ["q_rad_s bias +1.00e-4 ± 2.0e-4"]);
+        let applied = c.applied.join("; ");
+        assert!(
+            applied.contains("p_rad_s: bias") && applied.contains("r_rad_s: bias"),
+            "{applied}"
+        );
+        assert!(
+            applied.contains("phi_rad: read +0.120 s")
+                && applied.contains("alpha_rad: read -0.050 s"),
+            "{applied}"
+        );
+        assert_eq!(c.refused.len(), 1, "{:?}", c.refused);
+        assert!(
+            c.refused[0].starts_with("theta_rad: time shift -0.090 s")
+                && c.refused[0].contains("lead")
+        );
+        let w: Vec<String> = c.warnings().map(|w| w.text).collect();
+        assert!(
+            w.iter()
+                .any(|w| w.starts_with("compat left out, not determined") && w.contains("q_rad_s")),
+            "{w:?}"
+        );
+    }
+
+    /// A check applies to the record it was made on: its `file` must name one of the records
+    /// (by file name, whatever the directory); another record's check, one without `file`, a
+    /// changed `unit` and a channel given twice are refused naming the key. On a live feed the
+    /// channel corrections apply and the reconstructed sideslip is refused.
+    #[test]
+    fn a_compat_json_applies_to_its_own_record_only() {
+        let dir =
+            std::env::temp_dir().join(format!("aeroident-compat-prov-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("compat.json");
+        let row = |name: &str, unit: &str| {
+            format!(
+                r#"{{"name": "{name}", "unit": "{unit}", "bias": 0.01, "scale": null, "time_shift_s": null}}"#
+            )
+        };
+        let rec = r#""reconstructed": [{"manoeuvre": 1, "t_s": [0.0, 1.0], "vt_mps": [50.0, 50.0], "alpha_rad": [0.1, 0.1], "beta_rad": [0.0, 0.02]}]"#;
+        let write = |file: &str, rows: &[String]| {
+            std::fs::write(&path, format!(r#"{{{file}"channels": [{}], {rec}}}"#, rows.join(", ")))
+                .unwrap();
+        };
+        let ours = vec!["data/flight_a.csv".to_string()];
+        write(r#""file": "/elsewhere/flight_a.csv", "#, &[row("alpha_rad", "rad")]);
+        let c = Corrections::from_json_for(&path, &ours).unwrap();
+        assert!(c.refused.is_empty() && c.applied.len() == 2, "{c:?}");
+        let two = vec!["b.csv".to_string(), "flight_a.csv".to_string()];
+        write(r#""file": "x/flight_a.csv, x/c.csv", "#, &[row("alpha_rad", "rad")]);
+        assert!(Corrections::from_json_for(&path, &two).is_ok());
+        write(r#""file": "flight_b.csv", "#, &[row("alpha_rad", "rad")]);
+        let e = Corrections::from_json_for(&path, &ours).unwrap_err().to_string();
+        assert!(e.contains("`file` is `flight_b.csv`, not this record (flight_a.csv)"), "{e}");
+        write("", &[row("alpha_rad", "rad")]);
+        let e = Corrections::from_json_for(&path, &ours).unwrap_err().to_string();
+        assert!(e.contains("no `file` key"), "{e}");
+        let live = Corrections::from_json_for(&path, &[]).unwrap();
+        assert!(live.beta.is_empty() && live.applied.len() == 1, "{live:?}");
+        assert!(live.refused[0].contains("not applied to a live feed"), "{live:?}");
+        write(r#""file": "flight_a.csv", "#, &[row("alpha_rad", "deg")]);
+        let e = Corrections::from_json_for(&path, &ours).unwrap_err().to_string();
+        assert!(e.contains("`alpha_rad` has `unit` `deg`"), "{e}");
+        write(r#""file": "flight_a.csv", "#, &[row("q_rad_s", "rad/s"), row("q_rad_s", "rad/s")]);
+        let e = Corrections::from_json_for(&path, &ours).unwrap_err().to_string();
+        assert!(e.contains("`q_rad_s` has two rows"), "{e}");
         std::fs::remove_dir_all(&dir).ok();
     }
 

@@ -133,7 +133,8 @@ fn fit_file<'py>(
     let model = crate::record::model_choice(model, select, candidates, knots_deg, diff_window);
     let (path, mapping) = (path.to_owned(), mapping.to_owned());
     let also = also.unwrap_or_default();
-    let validate_on = validate_with.map(str::to_owned);
+    let validate_on = validate_with
+        .map(|p| aeroident_pipelines::job::ValidateOn { path: p.to_owned(), windows: Vec::new() });
     let run = move || -> anyhow::Result<(FitJobOutcome, Vec<String>)> {
         let mapping = Mapping::from_path(Path::new(&mapping))?;
         let records = Records {

@@ -28,7 +28,7 @@ pub struct FitJob {
     /// Whether to run the record's other methods beside the fit (`--cross-check`).
     pub cross_check: bool,
     /// A second record (same mapping) to validate the fitted model on.
-    pub validate_on: Option<String>,
+    pub validate_on: Option<super::ValidateOn>,
 }
 
 /// The stages before the fit, done: the model (`None`: the fit's default) and the options
@@ -133,7 +133,7 @@ impl FitJob {
                 let w = "the run was interrupted: --validate-on not done".to_string();
                 outcome.summary.warnings.push(w);
             }
-            Some(path) => self.validate(path, &mut outcome, guard, log, stopped_why)?,
+            Some(v) => self.validate(v, &mut outcome, guard, log, stopped_why)?,
             None => {}
         }
         Ok(FitJobOutcome { outcome, selection })
@@ -178,21 +178,23 @@ impl FitJob {
         Ok(())
     }
 
-    /// `--validate-on`: the fitted model simulated on the record at `path`
-    /// ([`crate::replay::batch::validate_on`]), into `summary.validation_on`.
+    /// `--validate-on`: the fitted model simulated on the record `v` names, within its windows
+    /// ([`crate::replay::batch::validate_on`]), into `summary.validation_on`; a warning when
+    /// those are data the fit used.
     fn validate(
         &self,
-        path: &str,
+        v: &super::ValidateOn,
         outcome: &mut BatchOutcome,
         guard: &mut impl Guard,
         log: &mut dyn JobLog,
         stopped_why: impl FnOnce() -> String,
     ) -> Result<(), ReplayError> {
-        let (path, mapping, fitted) =
-            (path.to_string(), self.records.mapping.clone(), outcome.clone());
+        let overlap = v.overlap_warning(&self.records.data, &self.options.windows);
+        outcome.summary.warnings.extend(overlap);
+        let (v, mapping, fitted) = (v.clone(), self.records.mapping.clone(), outcome.clone());
         let step = move || -> Result<_, ReplayError> {
-            let (reader, notes) = aeroident_io::open_log_with_notes(&path, None, &mapping)?;
-            Ok((crate::replay::batch::validate_on(reader, &fitted)?, notes))
+            let (reader, notes) = aeroident_io::open_log_with_notes(&v.path, None, &mapping)?;
+            Ok((crate::replay::batch::validate_on(reader, &fitted, &v.windows)?, notes))
         };
         match guard.run(Step::ValidateOn, step)? {
             Some(done) => {

@@ -128,6 +128,43 @@ impl ModelChoice {
     }
 }
 
+/// The record a fit is validated on (`--validate-on FILE`, `--validate-window START:END …`):
+/// a second record, or held-out windows of the same one.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ValidateOn {
+    /// The record (the fitted one for held-out windows of it).
+    pub path: String,
+    /// Its windows, each a manoeuvre; empty: the whole record.
+    pub windows: Vec<TimeWindow>,
+}
+
+impl ValidateOn {
+    /// A second record `path` (if given) and validation windows (`windows`, of `path` or, without
+    /// it, of the fitted record `data`); `None` when neither is given.
+    pub fn from_args(path: Option<String>, windows: Vec<TimeWindow>, data: &str) -> Option<Self> {
+        let path = path.or_else(|| (!windows.is_empty()).then(|| data.to_string()))?;
+        Some(Self { path, windows })
+    }
+
+    /// The warning when this validation reuses data the fit used: the fitted record `data`
+    /// with fit windows `fitted` (empty: the whole record) overlapping the validation's.
+    pub fn overlap_warning(&self, data: &str, fitted: &[TimeWindow]) -> Option<String> {
+        if self.path != data {
+            return None;
+        }
+        let whole = TimeWindow { start_s: f64::NEG_INFINITY, end_s: f64::INFINITY };
+        let fit: &[TimeWindow] =
+            if fitted.is_empty() { std::slice::from_ref(&whole) } else { fitted };
+        let mine: &[TimeWindow] =
+            if self.windows.is_empty() { std::slice::from_ref(&whole) } else { &self.windows };
+        let overlap =
+            mine.iter().any(|v| fit.iter().any(|f| v.start_s < f.end_s && f.start_s < v.end_s));
+        overlap.then(|| {
+            "--validate-on: the validation data overlap the fitted data (the same record, overlapping windows or the whole record): `validation_on` is then no independent check; validate on held-out windows (`--validate-window`) or another record".to_string()
+        })
+    }
+}
+
 /// Where a job's compatibility corrections come from (`--compat FILE|auto`).
 #[derive(Debug, Clone)]
 pub enum CompatSource {

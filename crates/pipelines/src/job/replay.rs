@@ -25,7 +25,7 @@ pub struct ReplayJob {
     /// Whether to fit the record by output error too and set the two side by side.
     pub cross_check: bool,
     /// A second record (same mapping) to validate the final estimates on.
-    pub validate_on: Option<String>,
+    pub validate_on: Option<super::ValidateOn>,
 }
 
 /// The stages before the estimator, done: the options it runs with (model and corrections
@@ -138,8 +138,8 @@ impl ReplayJob {
             self.cross_check(&prepared.options, &mut outcome, guard, log)?;
         }
         let validation_on = match &self.validate_on {
-            Some(path) if !outcome.diverged() && !interrupted => {
-                self.validate(path, &prepared.options, &mut outcome, guard, log, stopped_why)?
+            Some(v) if !outcome.diverged() && !interrupted => {
+                self.validate(v, &prepared.options, &mut outcome, guard, log, stopped_why)?
             }
             _ => None,
         };
@@ -176,21 +176,28 @@ impl ReplayJob {
         Ok(())
     }
 
-    /// `--validate-on`: the final estimates applied to the record at `path`; `None` when a stop
-    /// abandoned it (the run is then `interrupted`, `stopped_why()` its warning).
+    /// `--validate-on`: the final estimates applied to the record `v` names, within its windows
+    /// (not the fit's); `None` when a stop abandoned it (the run is then `interrupted`,
+    /// `stopped_why()` its warning). A warning when those are data the fit used.
     fn validate(
         &self,
-        path: &str,
+        v: &super::ValidateOn,
         options: &ReplayOptions,
         outcome: &mut ReplayOutcome,
         guard: &mut impl Guard,
         log: &mut dyn JobLog,
         stopped_why: impl FnOnce() -> String,
     ) -> Result<Option<ValidationReport>, ReplayError> {
-        let (path, mapping) = (path.to_string(), self.records.mapping.clone());
-        let (options, fitted) = (options.clone(), outcome.clone());
+        let overlap = v.overlap_warning(&self.records.data, &options.windows);
+        if let Some(w) = overlap {
+            log.warning(&w);
+            outcome.summary.warnings.push(w);
+        }
+        let (v, mapping) = (v.clone(), self.records.mapping.clone());
+        let options = ReplayOptions { windows: v.windows.clone(), ..options.clone() };
+        let fitted = outcome.clone();
         let step = move || -> Result<_, ReplayError> {
-            let (reader, notes) = aeroident_io::open_log_with_notes(&path, None, &mapping)?;
+            let (reader, notes) = aeroident_io::open_log_with_notes(&v.path, None, &mapping)?;
             let report = crate::replay::validate_on(reader, &mapping, &options, &fitted)?;
             Ok((report, notes))
         };

@@ -141,7 +141,7 @@ pub struct Corrections {
     pub applied: Vec<String>,
     /// The channels whose corrections are not applied, each with why ([`plausible`]).
     pub refused: Vec<String>,
-    /// The corrections the record does not determine, left out ([`undetermined`]).
+    /// The corrections the record does not determine, left out: within [`DETERMINED_SIGMAS`] of none.
     pub left_out: Vec<String>,
 }
 
@@ -171,7 +171,7 @@ fn undetermined(rows: &[ChannelSummary], entries: &mut [Entry]) -> Vec<String> {
     out
 }
 
-/// A correction must lie this many σ from none to be applied ([`undetermined`]).
+/// A correction must lie this many σ from none to be applied (closer, it is indistinguishable from none on the record and is left out).
 pub const DETERMINED_SIGMAS: f64 = 2.0;
 
 /// What `replay --compat` reads of a `compat.json`: its channel rows and reconstructed air
@@ -241,7 +241,7 @@ impl Corrections {
     }
 
     /// The corrections of a `compat.json` for the records `records` (file names as given):
-    /// refused when its `file` names none of them ([`check_provenance`]). For a live feed or
+    /// refused when its `file` names none of them (by file name). For a live feed or
     /// stdin (`records` empty) the channel corrections apply (a sensor's biases carry to the
     /// next flight) but the reconstructed sideslip, another record's time series, does not.
     ///

@@ -1303,8 +1303,9 @@ pub(super) fn simulated_validation(
     }
 }
 
-/// Applies a batch fit's parameters to a second record (prediction interval with the fit's
-/// noise variances `R`) (`--validate-on`): its manoeuvres are
+/// Applies a batch fit's parameters to a second record, or held-out `windows` of one (empty:
+/// the whole record), with the prediction interval of the fit's noise variances `R`
+/// (`--validate-on`, `--validate-window`): its manoeuvres are
 /// simulated with the parameters fixed (initial states from each manoeuvre's first sample, no
 /// re-estimation; the same outputs), and the simulated outputs validated. If the model cannot
 /// be simulated on that record, the measured coefficients are predicted by equation error
@@ -1315,9 +1316,10 @@ pub(super) fn simulated_validation(
 pub fn validate_on<R: Read>(
     reader: FlightDataReader<R>,
     fitted: &BatchOutcome,
+    windows: &[crate::window::TimeWindow],
 ) -> Result<ValidationReport, ReplayError> {
     let file = reader.file().to_string();
-    let rec = crate::record::read_manoeuvres(reader, None, &[])?;
+    let rec = crate::record::read_manoeuvres(reader, None, windows)?;
     let slices: Vec<&[AirDataSample]> = rec.manoeuvres.iter().map(Vec::as_slice).collect();
     let r = &fitted.result;
     let np = r.n_params;

@@ -9,7 +9,8 @@
 //!                  [--band-hz F_MIN:F_MAX]
 //!                  [--forgetting λ] [--instrument-delay N]
 //!                  [--derivatives auto|differentiate] [--diff-window N] [--realtime]
-//!                  [--validate-on <data2.csv>] [--window START:END …] [--and <more.csv> …]
+//!                  [--validate-on <data2.csv>] [--validate-window START:END …]
+//!                  [--window START:END …] [--and <more.csv> …]
 //!                  [--cross-check] [--no-spike-screen] [--robust]
 //! ```
 //! Writes `<dir>/estimates.csv`, `<dir>/summary.json`, `<dir>/estimates.{png,svg}` (estimates
@@ -69,7 +70,7 @@ use aeroident_pipelines::estimators::{
 };
 use aeroident_pipelines::job::fit::FitJob;
 use aeroident_pipelines::job::replay::ReplayJob;
-use aeroident_pipelines::job::{CompatSource, ModelChoice, Ran, Records};
+use aeroident_pipelines::job::{CompatSource, ModelChoice, Ran, Records, ValidateOn};
 use aeroident_pipelines::replay::batch::FitOptions;
 use aeroident_pipelines::replay::fit::fit_options_of;
 use aeroident_pipelines::replay::{DerivativeSource, Pacing, ReplayObserver, ReplayOptions};
@@ -174,6 +175,11 @@ pub struct ReplayArgs {
     /// to it and the validation metrics reported under `validation_on` in the summary.
     #[arg(long, value_name = "FILE2")]
     pub validate_on: Option<PathBuf>,
+    /// A time window `START:END` of the validation record (`--validate-on`, else the fitted
+    /// record itself: held-out manoeuvres of the same flight); repeat it for several. A window
+    /// that overlaps the fitted data is validated with a warning that it is no independent check.
+    #[arg(long = "validate-window", value_name = "START:END", value_parser = parse_window, allow_hyphen_values = true)]
+    pub validate_windows: Vec<TimeWindow>,
     /// `oe`, `fem`: each manoeuvre's initial state fixed at its first sample's measurements
     /// (default; Jategaonkar's `parFlagX0 = 0`) or estimated with the parameters (every
     /// integrated state of the model, per manoeuvre; `estimate`).
@@ -331,7 +337,7 @@ pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
             compat: args.compat.as_deref().map(CompatSource::from_arg),
             options: fit.context("internal: no batch fit options")?,
             cross_check: args.cross_check,
-            validate_on: args.validate_on.as_ref().map(|p| p.display().to_string()),
+            validate_on: validate_on(&args),
         };
         return match job.prepare(&mut guard, &mut Stderr)? {
             Ran::Done(prepared) => batch::execute(&args, job, prepared, &interrupt, out_dir),
@@ -400,8 +406,14 @@ fn replay_job(args: &ReplayArgs, records: Records) -> anyhow::Result<ReplayJob> 
         compat: args.compat.as_deref().map(CompatSource::from_arg),
         options,
         cross_check: args.cross_check,
-        validate_on: args.validate_on.as_ref().map(|p| p.display().to_string()),
+        validate_on: validate_on(args),
     })
+}
+
+/// The validation record and windows of `--validate-on` and `--validate-window`.
+fn validate_on(args: &ReplayArgs) -> Option<ValidateOn> {
+    let path = args.validate_on.as_ref().map(|p| p.display().to_string());
+    ValidateOn::from_args(path, args.validate_windows.clone(), &args.data)
 }
 
 /// Refuses flags that do not go together (a batch fit of a live feed, a batch fit's flag with

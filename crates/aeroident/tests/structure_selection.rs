@@ -63,9 +63,9 @@ fn val_twin_otter_018_keeps_alpha_q_de_alpha2() {
 }
 
 /// HFB-320 (hfb320_1_10) with candidates α, q̂, δe, V/V0, α², α·δe: stepwise regression keeps
-/// α, q̂, δe, V for the lift (CL and CZ); orthogonal functions keep the same for Cm, where
-/// stepwise regression takes α² for α (the record's α spans 0.086–0.126 rad, where the two are
-/// 0.9988 correlated) and V stays at partial F 15.1, under the cut-off.
+/// α, q̂, δe, V for the lift (CL and CZ) and, with α² offered only once α is in (the record's
+/// α spans 0.086–0.126 rad, where the two are 0.9988 correlated), for Cm too; orthogonal
+/// functions keep the same for Cm.
 #[test]
 fn val_hfb320_keeps_alpha_q_de_v() {
     let candidates = [Term::Alpha, Term::Q, Term::De, Term::V, Term::Alpha2, Term::AlphaDe];
@@ -79,6 +79,8 @@ fn val_hfb320_keeps_alpha_q_de_v() {
         assert_eq!(s, ["alpha", "q", "de", "V"]);
     }
     let pitch = kept(rel, "hfb320.toml", &[Coefficient::Cm], &candidates, MOF).unwrap();
+    assert_eq!(pitch[0], ["alpha", "q", "de", "V"]);
+    let pitch = kept(rel, "hfb320.toml", &[Coefficient::Cm], &candidates, SWR).unwrap();
     assert_eq!(pitch[0], ["alpha", "q", "de", "V"]);
 }
 
@@ -201,6 +203,31 @@ fn val_c172x_auto_selects_alphadot_and_brings_cm_q_within_20_percent() {
         let q = estimate(&s, "Cm_q");
         assert!((q - cm_q).abs() < 0.2 * cm_q.abs(), "{est}: Cm_q {q} vs JSBSim {cm_q}");
     }
+}
+
+/// The same record with the default candidates: without a compatibility check α̇ is not
+/// offered and the selection says why; with `--compat auto` (which times α against the
+/// kinematics) it is offered to CL and Cm, Cm keeps it, and output error's Cm_q is within
+/// 20 % of JSBSim's (measured: −12.38 against −12.27).
+#[test]
+fn val_c172x_alphadot_is_offered_once_alpha_is_timed() {
+    let Some(data) = shared("jsbsim_samples/c172x_elevator_3211_15s_60Hz.csv") else { return };
+    let truth_file = data.with_file_name("c172x_elevator_3211_truth.json");
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(truth_file).unwrap()).unwrap();
+    let cm_q = truth["derivatives"]["Cm_qhat"].as_f64().unwrap();
+    let plain = ["--model", "auto:longitudinal", "--estimator", "rls"];
+    let (s, _) = auto_replay(&data, "jsbsim_clean.toml", &plain, "c172-untimed");
+    let note = s["structure_selection"]["alphadot"].as_str().unwrap();
+    assert!(note.starts_with("alphadot not offered") && note.contains("--compat auto"), "{note}");
+    assert!(!strings(&selected(&s, "Cm")["candidates"]).contains(&"alphadot"));
+    let timed = ["--model", "auto:longitudinal", "--compat", "auto", "--estimator", "oe"];
+    let (s, _) = auto_replay(&data, "jsbsim_clean.toml", &timed, "c172-timed");
+    let note = s["structure_selection"]["alphadot"].as_str().unwrap();
+    assert!(note.starts_with("alphadot offered"), "{note}");
+    assert!(strings(&selected(&s, "Cm")["kept"]).contains(&"alphadot"), "{}", selected(&s, "Cm"));
+    let q = estimate(&s, "Cm_q");
+    assert!((q - cm_q).abs() < 0.2 * cm_q.abs(), "Cm_q {q} vs JSBSim {cm_q}");
 }
 
 /// Twin Otter 018 (SIDPAC), `--model auto --estimator oe --validate-on 019`: the default

@@ -296,14 +296,37 @@ fn partial_correlations2(c: &Candidates, terms: &[usize]) -> Vec<(usize, f64)> {
 /// # Errors
 /// [`Candidates::check`]'s.
 pub fn stepwise(c: &Candidates, config: StepwiseConfig) -> Result<Selection, StructureError> {
+    stepwise_in_hierarchy(c, config, &[])
+}
+
+/// [`stepwise`] keeping the model hierarchy as SIDPAC's practice does (Morelli, "Global
+/// nonlinear aerodynamic modeling using multivariate orthogonal functions", J. Aircraft 1995;
+/// Klein & Morelli 2006 §5.4): a power or product term enters only once its parents are in the
+/// model, and a parent leaves only when none of its children is in. `parents[k]` lists the
+/// candidates that are parents of candidate `k` (empty, or shorter than the candidates: none).
+/// Without that, a nonlinear term collinear with its parent (α² and α over a small α range,
+/// ρ 0.999) can enter first and stand in for it.
+///
+/// # Errors
+/// [`Candidates::check`]'s.
+pub fn stepwise_in_hierarchy(
+    c: &Candidates,
+    config: StepwiseConfig,
+    parents: &[Vec<usize>],
+) -> Result<Selection, StructureError> {
     c.check()?;
+    let parents_of = |k: usize| parents.get(k).map_or(&[][..], Vec::as_slice);
+    let eligible = |j: usize, terms: &[usize]| parents_of(j).iter().all(|p| terms.contains(p));
+    let removable = |t: usize, terms: &[usize]| !terms.iter().any(|&k| parents_of(k).contains(&t));
     let mut terms: Vec<usize> = Vec::new();
     let mut current = fit(c, &terms);
     let mut path = Vec::new();
     let mut seen: Vec<Vec<usize>> = vec![terms.clone()];
     let stopped = loop {
-        let weakest =
-            (0..terms.len()).map(|k| (k, current.partial_f(k))).min_by(|a, b| a.1.total_cmp(&b.1));
+        let weakest = (0..terms.len())
+            .filter(|&k| removable(terms[k], &terms))
+            .map(|k| (k, current.partial_f(k)))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
         if let Some((k, f)) = weakest.filter(|&(_, f)| f < config.f_out) {
             let candidate = terms.remove(k);
             current = fit(c, &terms);
@@ -315,8 +338,10 @@ pub fn stepwise(c: &Candidates, config: StepwiseConfig) -> Result<Selection, Str
                 r2: current.r2,
             });
         } else {
-            let best =
-                partial_correlations2(c, &terms).into_iter().max_by(|a, b| a.1.total_cmp(&b.1));
+            let best = partial_correlations2(c, &terms)
+                .into_iter()
+                .filter(|&(j, _)| eligible(j, &terms))
+                .max_by(|a, b| a.1.total_cmp(&b.1));
             let Some((j, r2)) = best.filter(|&(_, r2)| r2 > 0.0) else {
                 break "every candidate is in the model or explained by it".to_string();
             };

@@ -149,7 +149,15 @@ pub fn select_on_samples(
         columns: c.columns.columns(0, offered).into_owned(),
         z: c.z.clone(),
     };
-    let mut selection = run(&offered, method).map_err(|e| format!("{who}: {e}"))?;
+    // A power or product term is offered once its offered parents are in the model.
+    let parents: Vec<Vec<usize>> = candidates[..offered.names.len()]
+        .iter()
+        .map(|t| {
+            let here = |p: &Term| candidates[..offered.names.len()].iter().position(|c| c == p);
+            t.parents().iter().filter_map(here).collect()
+        })
+        .collect();
+    let mut selection = run(&offered, method, &parents).map_err(|e| format!("{who}: {e}"))?;
     selection.names.clone_from(&c.names);
     let selection = keep_hierarchy(&c, candidates, selection);
     let std_error_coloured = structure::coloured_std_error(&c, &selection.fit, &lengths);
@@ -203,9 +211,13 @@ fn keep_hierarchy(c: &Candidates, candidates: &[Term], mut selection: Selection)
     selection
 }
 
-fn run(c: &Candidates, method: Method) -> Result<Selection, StructureError> {
+fn run(
+    c: &Candidates,
+    method: Method,
+    parents: &[Vec<usize>],
+) -> Result<Selection, StructureError> {
     match method {
-        Method::Stepwise(config) => structure::stepwise(c, config),
+        Method::Stepwise(config) => structure::stepwise_in_hierarchy(c, config, parents),
         Method::Orthogonal(ranking) => structure::orthogonal(c, ranking).map(|o| o.selection),
     }
 }

@@ -207,3 +207,29 @@ fn analytic_coloured_std_error_matches_the_exact_covariance_of_ar1_residuals() {
     let c = candidates(&["x1"], std::slice::from_ref(&x1), x1.clone());
     assert!(coloured_std_error(&c, &fit(&c, &[0]), &[n - 1]).is_none());
 }
+
+/// The model hierarchy in the selection: `z = 3 α²` (plus 1 % noise) over α in [0.1, 0.3] rad,
+/// where α² and α are collinear (ρ ≈ 0.99). Plain stepwise enters α² alone (it fits z
+/// exactly); in the hierarchy α² may enter only after α, so α enters first and α² after it
+/// (its partial F is large: z is exactly quadratic), and α is never removed while α² is in.
+#[test]
+fn analytic_power_term_enters_only_after_its_parent() {
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+    let n = 400;
+    let alpha: Vec<f64> =
+        (0..n).map(|k| 0.2 + 0.1 * (k as f64 * 0.05).sin() * (k as f64 * 0.011).cos()).collect();
+    let alpha2: Vec<f64> = alpha.iter().map(|a| a * a).collect();
+    let y: Vec<f64> = alpha2.iter().map(|a2| 3.0 * a2).collect();
+    let z = buzz(&y, 0.01, &mut rng);
+    let c = candidates(&["alpha2", "alpha"], &[alpha2, alpha], z);
+    let plain = stepwise(&c, StepwiseConfig::default()).unwrap();
+    assert_eq!(plain.path[0].candidate, 0, "{:?}", plain.path);
+    let parents = [vec![1], vec![]];
+    let h = stepwise_in_hierarchy(&c, StepwiseConfig::default(), &parents).unwrap();
+    let entered: Vec<usize> = h.path.iter().map(|s| s.candidate).collect();
+    assert_eq!(entered, [1, 0], "{:?} ({})", h.path, h.stopped);
+    assert!(h.path.iter().all(|s| s.action == StepAction::Enter));
+    assert_eq!(h.kept_names(), ["alpha2", "alpha"]);
+    let a2 = h.fit.terms.iter().position(|&t| t == 0).unwrap();
+    assert!((h.fit.theta[a2] - 3.0).abs() < 5.0 * h.fit.std_error[a2], "{:?}", h.fit.theta);
+}

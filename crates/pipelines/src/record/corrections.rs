@@ -143,6 +143,10 @@ pub struct Corrections {
     pub refused: Vec<String>,
     /// The corrections the record does not determine, left out: within [`DETERMINED_SIGMAS`] of none.
     pub left_out: Vec<String>,
+    /// The channels whose corrections were refused.
+    pub refused_channels: Vec<Channel>,
+    /// The channels whose time shift the check estimated.
+    pub checked: Vec<Channel>,
 }
 
 /// A correction is applied only where the check determines it: its distance from no
@@ -299,9 +303,11 @@ impl Corrections {
             entries.push((ch, c.bias, c.scale, c.time_shift_s));
         }
         let beta = rec.iter().map(|r| (r.t_s.clone(), r.beta_rad.clone())).collect();
+        let checked = entries.iter().filter(|e| e.3.is_some()).map(|e| e.0).collect();
         let left_out = undetermined(rows, &mut entries);
         let mut c = Self::new(entries, beta)?;
         c.left_out = left_out;
+        c.checked = checked;
         Ok(c)
     }
 
@@ -317,6 +323,7 @@ impl Corrections {
             }
             if let Err(why) = plausible(ch, b, k, shift) {
                 c.refused.push(format!("{}: {why}", ch.name()));
+                c.refused_channels.push(ch);
                 continue;
             }
             if ch != Channel::Vt && (b != 0.0 || k != 1.0) {
@@ -340,6 +347,12 @@ impl Corrections {
             c.applied.push("beta_rad: the reconstructed sideslip where the record has none".into());
         }
         Ok(c)
+    }
+
+    /// Whether the check judged channel `ch`'s timing and its result stands (its time shift
+    /// was estimated, applied or found indistinguishable from none, and not refused).
+    pub fn timing_checked(&self, ch: Channel) -> bool {
+        self.checked.contains(&ch) && !self.refused_channels.contains(&ch)
     }
 
     /// The largest lag the stage undoes (its delay), s.

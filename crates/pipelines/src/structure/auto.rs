@@ -136,11 +136,14 @@ impl AutoModel {
     /// given knots, one spline per knot for the longitudinal coefficients (a symmetric
     /// aircraft's `CY`, `Cl`, `Cn` are odd in β: their α-dependence enters through the α
     /// products).
-    fn offered(&self, c: Coefficient) -> Vec<Term> {
+    fn offered(&self, c: Coefficient, alphadot: bool) -> Vec<Term> {
         if let Some(given) = &self.candidates {
             return given.clone();
         }
         let mut terms = Scope::default_candidates(c);
+        if alphadot && matches!(c, Coefficient::CL | Coefficient::Cm) {
+            terms.push(Term::Alphadot);
+        }
         if !matches!(c, Coefficient::CY | Coefficient::Cl | Coefficient::Cn) {
             let n = self.knots.map_or(0, |k| k.len());
             terms.extend((0..n).filter_map(Term::spline));
@@ -230,6 +233,23 @@ pub struct AutoSelection {
     /// Samples with their derivatives, over all manoeuvres (the derivative stage leaves out
     /// each manoeuvre's ends).
     pub samples_used: usize,
+    /// Whether and why `alphadot` was offered by default (`None`: the candidates were given,
+    /// or the scope has no `CL`, `Cm`).
+    pub alphadot: Option<String>,
+}
+
+/// Why α̇ is or is not among the default candidates of `CL` and `Cm`: offered once α's timing
+/// is checked (a compatibility check estimated α's time shift and it stands), since α̇ also
+/// stands in for a lag of the α channel behind the kinematics ([`Scope::default_candidates`]).
+fn alphadot_note(auto: &AutoModel, scope: Scope, alpha_timed: bool) -> Option<String> {
+    if auto.candidates.is_some() || scope == Scope::Lateral {
+        return None;
+    }
+    Some(if alpha_timed {
+        "alphadot offered to CL and Cm: the compatibility check timed the α channel against the kinematics".into()
+    } else {
+        "alphadot not offered: the α channel's timing is unchecked, and α̇ would also absorb a lag of α behind the kinematics; run with --compat auto (or a compat.json that estimated α's time shift), or list alphadot in --candidates".into()
+    })
 }
 
 /// Reads the records and selects each coefficient's terms (module doc).
@@ -247,7 +267,9 @@ pub fn select_model<R: Read>(
 ) -> Result<AutoSelection, RecordError> {
     let file = readers.first().map_or(String::new(), |r| r.file().to_string());
     let (raw, first) = read_for_selection(readers, compat, windows)?;
-    let offered = |c| auto.offered(c);
+    let alpha_timed =
+        compat.is_some_and(|c| c.timing_checked(aeroident_estimators::compat::Channel::Alpha));
+    let offered = |c| auto.offered(c, alpha_timed);
     let scope = auto.scope.unwrap_or_else(|| richest_scope(&first));
     let coefficients = scope.coefficients();
     let candidates: Vec<Term> = coefficients.iter().flat_map(|&c| offered(c)).collect();
@@ -286,7 +308,9 @@ pub fn select_model<R: Read>(
         );
     }
     let model = model_of(&selections, knots, scope, auto.method, &file)?;
+    let alphadot = alphadot_note(auto, scope, alpha_timed);
     Ok(AutoSelection {
+        alphadot,
         model,
         scope,
         method: auto.method,
@@ -473,6 +497,10 @@ pub struct StructureReport {
     pub coefficients: Vec<CoefficientReport>,
     /// What the selection's reader should doubt ([`AutoSelection::warnings`]).
     pub warnings: Vec<String>,
+    /// Whether and why `alphadot` was offered by default ([`AutoSelection::alphadot`]);
+    /// absent when the candidates were given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub alphadot: Option<String>,
 }
 
 /// Fewest samples per term of the largest regression (the candidates and the constant) for
@@ -508,6 +536,7 @@ impl AutoSelection {
             samples_used: self.samples_used,
             coefficients: self.selections.iter().map(coefficient_report).collect(),
             warnings: self.warnings(),
+            alphadot: self.alphadot.clone(),
         }
     }
 
@@ -527,7 +556,14 @@ impl AutoSelection {
 
     /// The selection path for people: per coefficient, one line per step and the result.
     pub fn path_lines(&self) -> Vec<String> {
-        let mut lines = vec![format!(
+        let mut lines = self.path_head();
+        lines.extend(self.alphadot.iter().map(|n| format!("  {n}")));
+        lines.extend(self.coefficient_lines());
+        lines
+    }
+
+    fn path_head(&self) -> Vec<String> {
+        vec![format!(
             "structure: {} on {} samples, {} coefficients{}",
             self.method.name(),
             self.samples_used,
@@ -537,7 +573,11 @@ impl AutoSelection {
             } else {
                 format!(" (not in the record: {})", names(&self.unavailable))
             }
-        )];
+        )]
+    }
+
+    fn coefficient_lines(&self) -> Vec<String> {
+        let mut lines = Vec::new();
         for r in self.selections.iter().map(coefficient_report) {
             let steps: Vec<String> = r
                 .path

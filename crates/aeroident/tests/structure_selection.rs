@@ -228,6 +228,20 @@ fn val_c172x_alphadot_is_offered_once_alpha_is_timed() {
     assert!(strings(&selected(&s, "Cm")["kept"]).contains(&"alphadot"), "{}", selected(&s, "Cm"));
     let q = estimate(&s, "Cm_q");
     assert!((q - cm_q).abs() < 0.2 * cm_q.abs(), "Cm_q {q} vs JSBSim {cm_q}");
+    // Each candidate is kept or left out with its reason; stepwise stopped, so no term that
+    // was offered would pass the cut-off against the final model.
+    for c in s["structure_selection"]["coefficients"].as_array().unwrap() {
+        let left = c["left_out"].as_array().unwrap();
+        let mut all: Vec<&str> = strings(&c["kept"]);
+        all.extend(left.iter().map(|l| l["term"].as_str().unwrap()));
+        all.sort_unstable();
+        let mut offered = strings(&c["candidates"]);
+        offered.sort_unstable();
+        assert_eq!(all, offered, "{c}");
+        for l in left.iter().filter(|l| l.get("waiting_for").is_none()) {
+            assert!(l["partial_f"].as_f64().is_none_or(|f| f <= 20.0), "{l}");
+        }
+    }
 }
 
 /// Twin Otter 018 (SIDPAC), `--model auto --estimator oe --validate-on 019`: the default

@@ -71,6 +71,34 @@ pub struct CoefficientSelection {
     pub samples: usize,
     /// Samples left out (coefficient or a candidate not measured).
     pub skipped: usize,
+    /// Each offered candidate not kept, with its partial F were it added to the final model
+    /// (`None`: the model already explains it, a collinear term) and the offered parent it
+    /// waited for, if one is not in the model (the hierarchy).
+    pub left_out: Vec<(Term, Option<f64>, Option<Term>)>,
+}
+
+/// The offered candidates (`c`'s first `offered`) not in `fit`, each with its partial F when
+/// added to it: why each term was left out, not only the last one tried.
+fn left_out(
+    c: &Candidates,
+    offered: usize,
+    fit: &structure::Fit,
+    terms: &[Term],
+) -> Vec<(Term, Option<f64>, Option<Term>)> {
+    let kept = |t: &Term| fit.terms.iter().any(|&k| terms[k] == *t);
+    let offered_terms = &terms[..offered];
+    (0..offered)
+        .filter(|j| !fit.terms.contains(j))
+        .map(|j| {
+            let mut trial = fit.terms.clone();
+            trial.push(j);
+            trial.sort_unstable();
+            let f = structure::fit(c, &trial)
+                .partial_f(trial.iter().position(|&t| t == j).unwrap_or(0));
+            let waiting = terms[j].parents().iter().find(|p| offered_terms.contains(p) && !kept(p));
+            (terms[j], f.is_finite().then_some(f), waiting.copied())
+        })
+        .collect()
 }
 
 impl CoefficientSelection {
@@ -161,6 +189,7 @@ pub fn select_on_samples(
     selection.names.clone_from(&c.names);
     let selection = keep_hierarchy(&c, candidates, selection);
     let std_error_coloured = structure::coloured_std_error(&c, &selection.fit, &lengths);
+    let left_out = left_out(&c, offered.names.len(), &selection.fit, candidates);
     Ok(CoefficientSelection {
         coefficient,
         candidates: candidates.to_vec(),
@@ -168,6 +197,7 @@ pub fn select_on_samples(
         std_error_coloured,
         samples: c.z.len(),
         skipped,
+        left_out,
     })
 }
 

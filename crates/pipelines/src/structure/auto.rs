@@ -469,6 +469,22 @@ pub struct CoefficientReport {
     pub samples: usize,
     /// Samples left out.
     pub skipped: usize,
+    /// Each candidate not kept, with its partial F were it added to the final model (`null`:
+    /// the model already explains it).
+    pub left_out: Vec<LeftOut>,
+}
+
+/// A candidate the selection left out, and its partial F against the final model.
+#[derive(Debug, Clone, Serialize)]
+pub struct LeftOut {
+    /// The candidate.
+    pub term: &'static str,
+    /// Its partial F were it added (`null`: collinear with the model).
+    pub partial_f: Option<f64>,
+    /// The parent it waited for, not in the model (a power or product term enters only after
+    /// its parents); `null` when it was offered.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub waiting_for: Option<&'static str>,
 }
 
 /// `structure_selection` of `summary.json`.
@@ -601,10 +617,32 @@ impl AutoSelection {
                 r.r2,
                 r.stopped
             ));
+            if !r.left_out.is_empty() {
+                lines.push(format!("    left out: {}", left_out_text(&r.left_out, self.method)));
+            }
         }
         lines.extend(self.warnings().into_iter().map(|w| format!("warning: {w}")));
         lines
     }
+}
+
+/// `alpha_de (F 2.8 ≤ 20), alpha_q (explained by the kept terms)`: each term left out and why.
+fn left_out_text(left: &[LeftOut], method: Method) -> String {
+    let cut = match method {
+        Method::Stepwise(c) => format!(" ≤ {}", c.f_in),
+        Method::Orthogonal(_) => " against the kept terms; the PSE minimum".to_string(),
+    };
+    let items: Vec<String> = left
+        .iter()
+        .map(|l| match (l.partial_f, l.waiting_for) {
+            (_, Some(p)) => {
+                format!("{} (not offered: its parent `{p}` is not in the model)", l.term)
+            }
+            (Some(f), None) => format!("{} (partial F {f:.1}{cut})", l.term),
+            (None, None) => format!("{} (explained by the kept terms)", l.term),
+        })
+        .collect();
+    items.join(", ")
 }
 
 fn coefficient_report(s: &CoefficientSelection) -> CoefficientReport {
@@ -646,6 +684,15 @@ fn coefficient_report(s: &CoefficientSelection) -> CoefficientReport {
         pse: fit.pse,
         samples: s.samples,
         skipped: s.skipped,
+        left_out: s
+            .left_out
+            .iter()
+            .map(|(t, f, p)| LeftOut {
+                term: t.name(),
+                partial_f: *f,
+                waiting_for: p.map(|p| p.name()),
+            })
+            .collect(),
     }
 }
 

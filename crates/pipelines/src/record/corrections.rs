@@ -312,7 +312,8 @@ impl Corrections {
     }
 
     fn new(entries: Vec<Entry>, beta: Vec<(Vec<f64>, Vec<f64>)>) -> Result<Self, String> {
-        let mut c = Corrections { beta, ..Self::default() };
+        let checked = entries.iter().filter(|e| e.3.is_some()).map(|e| e.0).collect();
+        let mut c = Corrections { beta, checked, ..Self::default() };
         for (ch, bias, scale, shift) in entries {
             let (b, k) = (bias.unwrap_or(0.0), scale.unwrap_or(1.0));
             if !(b.is_finite() && k.is_finite() && k > 0.0 && shift.is_none_or(f64::is_finite)) {

@@ -25,7 +25,9 @@ pub fn implausible(
 ) -> Option<String> {
     let (lo, hi) = model.plausible_range(p)?;
     let outside = if estimate < lo { lo - estimate } else { estimate - hi };
-    let margin = 2.0 * std_error.unwrap_or(0.0);
+    // A σ that is not a number (a parameter held at its prior) gives no margin, not a NaN
+    // one that every comparison fails.
+    let margin = 2.0 * std_error.filter(|s| s.is_finite()).unwrap_or(0.0);
     if outside <= margin || !estimate.is_finite() {
         return None;
     }
@@ -127,6 +129,12 @@ mod tests {
         m.plausible.push(aeroident_io::PlausibleRange { param: de, min: 0.2, max: 2.0 });
         assert!(implausible(&m, de, -1.53, Some(0.1)).unwrap().contains("this aircraft's"));
         assert!(implausible(&m, de, 1.0, None).is_none());
+        // A parameter held at its prior has a NaN σ: inside the range it is not flagged,
+        // outside it is (no margin).
+        let cy_beta = Param::from_name("CY_beta").unwrap();
+        let six = model();
+        assert!(implausible(&six, cy_beta, -0.5, Some(f64::NAN)).is_none());
+        assert!(implausible(&six, cy_beta, 0.5, Some(f64::NAN)).is_some());
     }
 
     /// Without thrust the drag terms are withdrawn with the reason, the others untouched.

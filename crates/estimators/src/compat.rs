@@ -436,7 +436,7 @@ fn solve_without_beta_fallback(
                     exclude.push(u);
                 }
             }
-            let note = "no sideslip channel and too little roll to determine the initial side velocity and the ay bias: both fixed at 0 (and the ay scale factor at 1), so the reconstructed sideslip carries their error";
+            let note = SIDESLIP_PINNED_NOTE;
             if !notes.iter().any(|n| n == note) {
                 notes.push(note.into());
             }
@@ -444,6 +444,11 @@ fn solve_without_beta_fallback(
         }
     }
 }
+
+/// The note of a check without a sideslip channel whose record does not determine the initial
+/// side velocity and the `ay` bias: both are fixed at 0, so its reconstructed sideslip is not
+/// a measurement (the corrections do not use it).
+pub const SIDESLIP_PINNED_NOTE: &str = "no sideslip channel and too little roll to determine the initial side velocity and the ay bias: both fixed at 0 (and the ay scale factor at 1), so the reconstructed sideslip carries their error";
 
 /// The largest Gauss–Newton step, in Cramér–Rao σ, that counts as converged when no damped step
 /// lowers the cost: the central-difference sensitivities leave steps of order 10⁻³–10⁻² σ at

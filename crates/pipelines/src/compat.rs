@@ -6,7 +6,9 @@
 //! `compat.json` keys: `file, sigma, status, status_reason, iterations, samples_read,
 //! samples_rejected, manoeuvres, channels[{name, unit, bias, bias_sigma, scale, scale_sigma,
 //! time_shift_s, time_shift_sigma_s}], residual_rms{output: value}, findings[], warnings[],
-//! reconstructed[{manoeuvre, t_s[], vt_mps[], alpha_rad[], beta_rad[]}]`. `scale` is the
+//! reconstructed[{manoeuvre, t_s[], vt_mps[], alpha_rad[], beta_rad[], beta_determined}]`
+//! (`beta_determined` false: the side velocity and the ay bias were fixed at 0, and `replay
+//! --compat` does not use that sideslip). `scale` is the
 //! factor the channel reads the truth with (`1 + k`); a number the check did not estimate is
 //! `null`. A gyro's `time_shift_s` (`CompatConfig::gyro_time_shifts`) is against the
 //! accelerometers, as every shift is. The `*_sigma` keys are the coloured-residual σ where it was formed (`sigma =
@@ -109,6 +111,7 @@ pub fn check_records<R: Read>(
     let mut warnings = result.notes.clone();
     warnings.extend(unlisted);
     let dt = median_interval(&rec.manoeuvres);
+    let pinned = result.notes.iter().any(|n| n == compat::SIDESLIP_PINNED_NOTE);
     let summary = CompatSummary {
         file,
         sigma: if result.sigma_coloured.is_some() { "coloured" } else { "cramer_rao" },
@@ -139,6 +142,7 @@ pub fn check_records<R: Read>(
                 vt_mps: r.vt_mps.clone(),
                 alpha_rad: r.alpha_rad.clone(),
                 beta_rad: r.beta_rad.clone(),
+                beta_determined: !pinned,
             })
             .collect(),
     };

@@ -53,6 +53,15 @@ pub struct ReconstructedSummary {
     pub alpha_rad: Vec<f64>,
     /// Sideslip, rad.
     pub beta_rad: Vec<f64>,
+    /// Whether the check determined the sideslip (its initial side velocity and the `ay` bias
+    /// estimated, not fixed at 0); only then does `replay --compat` use it as a measurement.
+    /// Absent in older files: taken as determined.
+    #[serde(default = "determined")]
+    pub beta_determined: bool,
+}
+
+fn determined() -> bool {
+    true
 }
 
 /// The largest correction of each kind a channel of kind `ch` plausibly needs: physical limits
@@ -302,10 +311,15 @@ impl Corrections {
             }
             entries.push((ch, c.bias, c.scale, c.time_shift_s));
         }
-        let beta = rec.iter().map(|r| (r.t_s.clone(), r.beta_rad.clone())).collect();
+        let usable = |r: &&ReconstructedSummary| r.beta_determined;
+        let beta = rec.iter().filter(usable).map(|r| (r.t_s.clone(), r.beta_rad.clone())).collect();
         let checked = entries.iter().filter(|e| e.3.is_some()).map(|e| e.0).collect();
         let left_out = undetermined(rows, &mut entries);
         let mut c = Self::new(entries, beta)?;
+        if rec.iter().any(|r| !r.beta_determined && !r.t_s.is_empty()) {
+            c.refused_channels.push(Channel::Beta);
+            c.refused.push("beta_rad: the reconstructed sideslip is not used: without a sideslip channel the check could not determine its initial side velocity and the ay bias (too little roll) and fixed them at 0; the fits keep β as an unmeasured state".into());
+        }
         c.left_out = left_out;
         c.checked = checked;
         Ok(c)
@@ -752,6 +766,32 @@ mod tests {
                 .any(|w| w.starts_with("compat left out, not determined") && w.contains("q_rad_s")),
             "{w:?}"
         );
+    }
+
+    /// A reconstructed sideslip whose side velocity and ay bias the check fixed at 0 is not used
+    /// as a measurement: it is refused with why, and β stays unmeasured; a determined one is
+    /// used (and a file without the key is taken as determined).
+    #[test]
+    fn a_pinned_reconstructed_sideslip_is_not_a_measurement() {
+        let rec = |determined: bool| ReconstructedSummary {
+            manoeuvre: 1,
+            t_s: vec![0.0, 1.0],
+            vt_mps: vec![50.0, 50.0],
+            alpha_rad: vec![0.1, 0.1],
+            beta_rad: vec![0.0, 0.02],
+            beta_determined: determined,
+        };
+        let pinned = Corrections::of_rows(&[], &[rec(false)]).unwrap();
+        assert!(pinned.beta.is_empty() && pinned.beta_at(0.5).is_none());
+        assert!(pinned.refused[0].contains("unmeasured state"), "{:?}", pinned.refused);
+        assert!(!pinned.applied.iter().any(|a| a.contains("reconstructed")));
+        let used = Corrections::of_rows(&[], &[rec(true)]).unwrap();
+        assert!(used.refused.is_empty() && (used.beta_at(0.5).unwrap() - 0.01).abs() < 1e-12);
+        let old: ReconstructedSummary = serde_json::from_str(
+            r#"{"manoeuvre": 1, "t_s": [0.0], "vt_mps": [50.0], "alpha_rad": [0.1], "beta_rad": [0.0]}"#,
+        )
+        .unwrap();
+        assert!(old.beta_determined);
     }
 
     /// A check applies to the record it was made on: its `file` must name one of the records

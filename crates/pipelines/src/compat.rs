@@ -110,6 +110,7 @@ pub fn check_records<R: Read>(
     let (rejections, unlisted) = rec.rejections.finish();
     let mut warnings = result.notes.clone();
     warnings.extend(unlisted);
+    let disagreements = consistency(&slices, config, &result);
     let dt = median_interval(&rec.manoeuvres);
     let pinned = result.notes.iter().any(|n| n == compat::SIDESLIP_PINNED_NOTE);
     let summary = CompatSummary {
@@ -130,7 +131,7 @@ pub fn check_records<R: Read>(
             .map(|c| c.name())
             .zip(result.residual_rms.iter().copied())
             .collect(),
-        findings: findings(&result, dt),
+        findings: findings(&result, dt).into_iter().chain(disagreements).collect(),
         warnings,
         reconstructed: result
             .reconstructed
@@ -147,6 +148,101 @@ pub fn check_records<R: Read>(
             .collect(),
     };
     Ok((summary, result))
+}
+
+/// A manoeuvre's correction disagrees with the others' beyond this many of its own σ.
+pub const CONSISTENCY_SIGMAS: f64 = 3.0;
+
+/// The per-manoeuvre consistency test: each manoeuvre checked alone, and each correction the
+/// joint check estimated compared across them. A manoeuvre whose own value lies more than
+/// [`CONSISTENCY_SIGMAS`] of its σ, and more than a sensor drifts by ([`tolerance`]), from the
+/// manoeuvres' median is named: one set of
+/// corrections per flight assumes the sensors did not change between manoeuvres, and one that
+/// disagrees holds a taxi segment, another configuration or a failed channel. The median, not
+/// the joint value, is the reference, since the joint fit is pulled towards the odd manoeuvre
+/// (with two manoeuvres that disagree both are named: the record cannot tell which changed).
+/// A manoeuvre the check cannot fit alone is said so, not compared. Nothing with one manoeuvre.
+fn consistency(
+    slices: &[&[aeroident_estimators::AirDataSample]],
+    config: &CompatConfig,
+    joint: &CompatResult,
+) -> Vec<String> {
+    if slices.len() < 2 {
+        return Vec::new();
+    }
+    let mut out = Vec::new();
+    let alone: Vec<Option<CompatResult>> = slices
+        .iter()
+        .enumerate()
+        .map(|(k, m)| match compat::check(std::slice::from_ref(m), config) {
+            Ok(r) => Some(r),
+            Err(e) => {
+                out.push(format!("manoeuvre {}: not checked alone ({e}): its consistency with the others is not tested", k + 1));
+                None
+            }
+        })
+        .collect();
+    let corrections = joint.unknowns.iter().filter(|&&u| tolerance(u).is_some());
+    let mut differs: Vec<Vec<String>> = vec![Vec::new(); slices.len()];
+    for &u in corrections {
+        let own: Vec<Option<(f64, f64)>> =
+            alone.iter().map(|r| r.as_ref().and_then(|r| r.reported(u))).collect();
+        let mut values: Vec<f64> = own.iter().flatten().map(|v| v.0).collect();
+        if values.len() < 2 {
+            continue;
+        }
+        values.sort_by(f64::total_cmp);
+        let n = values.len();
+        let median =
+            if n % 2 == 1 { values[n / 2] } else { 0.5 * (values[n / 2 - 1] + values[n / 2]) };
+        for (k, v) in own.iter().enumerate() {
+            if let Some((v, s)) = *v
+                && (v - median).abs() > (CONSISTENCY_SIGMAS * s).max(tolerance(u).unwrap_or(0.0))
+            {
+                differs[k].push(format!(
+                    "{} {v:+.4} ± {s:.4} (manoeuvres' median {median:+.4})",
+                    unknown_name(u)
+                ));
+            }
+        }
+    }
+    for (k, d) in differs.iter().enumerate().filter(|(_, d)| !d.is_empty()) {
+        out.push(format!(
+            "manoeuvre {} disagrees with the other manoeuvres beyond {CONSISTENCY_SIGMAS} of its own σ and what a sensor drifts by: {}; the joint check assumes one set of corrections for all (check this one for a taxi segment, another configuration or a failed channel)",
+            k + 1,
+            d.join(", ")
+        ));
+    }
+    out
+}
+
+/// The smallest difference between manoeuvres that says a sensor changed, in the unknown's unit:
+/// a tenth of the largest correction a sensor of that kind plausibly needs
+/// ([`crate::record::corrections::plausible`]): 0.2 m/s² for an accelerometer's bias, 0.005
+/// rad/s for a gyro's, 0.05 for a scale-factor error, 0.05 s for a time shift. Below it a
+/// difference between manoeuvres is within what real sensors drift by. `None` for the biases of
+/// the airspeed and the flow angles: in the check's still air they also hold each manoeuvre's
+/// steady wind, which changes with the heading, so they are not compared.
+fn tolerance(u: Unknown) -> Option<f64> {
+    match u {
+        Unknown::Bias(Channel::Ax | Channel::Ay | Channel::Az) => Some(0.2),
+        Unknown::Bias(Channel::P | Channel::Q | Channel::R) => Some(0.005),
+        Unknown::Bias(Channel::Vt | Channel::Alpha | Channel::Beta) => None,
+        Unknown::Bias(_) => Some(0.0175),
+        Unknown::Scale(_) => Some(0.05),
+        Unknown::TimeShift(_) => Some(0.05),
+        _ => None,
+    }
+}
+
+/// `alpha_rad time shift`, `ax_mps2 bias`, `beta_rad scale`: an unknown in words.
+fn unknown_name(u: Unknown) -> String {
+    match u {
+        Unknown::Bias(c) => format!("{} bias", c.name()),
+        Unknown::Scale(c) => format!("{} scale-factor error k", c.name()),
+        Unknown::TimeShift(c) => format!("{} time shift", c.name()),
+        _ => "initial state".into(),
+    }
 }
 
 /// Per fitted channel, the measured and modelled time histories of a check (`report.html`'s

@@ -4,17 +4,15 @@
 //! named. A third flight with its α vane on time: that manoeuvre alone is named, with the α
 //! shift (its own ≈ 0 against the others' 0.2 s; the joint fit lies between).
 
+mod common;
 use aeroident::outdir::OutputDir;
 use aeroident::sim::write_outputs;
 use aeroident_estimators::compat::CompatConfig;
 use aeroident_io::{Mapping, open_log};
 use aeroident_pipelines::compat::check_records;
 use aeroident_pipelines::sim::{parse_scenario, run};
-use std::path::{Path, PathBuf};
-
-fn workspace() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+use common::workspace;
+use std::path::Path;
 
 /// The degraded record flown with `seed` and the α vane `alpha_delay_s` late, written to
 /// `dir/name/timeseries.csv`.
@@ -33,17 +31,10 @@ fn fly(dir: &Path, name: &str, seed: u64, alpha_delay_s: f64) -> String {
     out.join("timeseries.csv").display().to_string()
 }
 
-/// The sim's mapping pointed at the sensors' columns, without the sideslip vane (as
-/// `compat_degraded.rs` maps them).
+/// The sim's mapping pointed at the sensors' columns, without the sideslip vane.
 fn measured_mapping(dir: &Path) -> Mapping {
-    let shipped = std::fs::read_to_string(workspace().join("mappings/aeroident-sim.toml")).unwrap();
-    let mut text: String =
-        shipped.lines().filter(|l| !l.starts_with("beta =")).collect::<Vec<_>>().join("\n");
-    for c in ["alpha_air_rad", "ax_fps2", "az_fps2", "q_rad_s", "p_rad_s", "theta_rad", "phi_rad"] {
-        text = text.replace(&format!("column = \"{c}\""), &format!("column = \"meas_{c}\""));
-    }
     let path = dir.join("measured.toml");
-    std::fs::write(&path, text).unwrap();
+    std::fs::write(&path, common::sim_measured_without_beta()).unwrap();
     Mapping::from_path(&path).unwrap()
 }
 

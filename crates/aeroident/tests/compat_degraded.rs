@@ -7,6 +7,7 @@
 //! gets the lift-curve slope the uncorrected one misses, and with the reconstructed sideslip
 //! fits the six-axis model the record alone cannot start.
 
+mod common;
 use aeroident::outdir::OutputDir;
 use aeroident::sim::write_outputs;
 use aeroident_estimators::compat::CompatConfig;
@@ -38,12 +39,7 @@ fn val_compat_recovers_the_injected_biases_and_time_shifts_of_a_degraded_record(
     od.finish();
     // The shipped mapping of the sim's true channels, pointed at what the sensors measured,
     // without the sideslip vane.
-    let shipped = std::fs::read_to_string(workspace().join("mappings/aeroident-sim.toml")).unwrap();
-    let mut text: String =
-        shipped.lines().filter(|l| !l.starts_with("beta =")).collect::<Vec<_>>().join("\n");
-    for c in ["alpha_air_rad", "ax_fps2", "az_fps2", "q_rad_s", "p_rad_s", "theta_rad", "phi_rad"] {
-        text = text.replace(&format!("column = \"{c}\""), &format!("column = \"meas_{c}\""));
-    }
+    let text = common::sim_measured_without_beta();
     let map_path = dir.join("measured.toml");
     std::fs::write(&map_path, text).unwrap();
     let mapping = Mapping::from_path(&map_path).unwrap();

@@ -54,3 +54,16 @@ pub fn with_former_default_inputs(text: &str) -> String {
     assert_eq!(text.matches(now).count(), 3, "the default's three odd-harmonic inputs");
     text.replace(now, former)
 }
+
+/// `mappings/aeroident-sim.toml` pointed at the simulated sensors' columns (`meas_…`) of α, the
+/// accelerometers, q, p, θ and φ, without the sideslip vane: the degraded records of the
+/// compatibility tests (`scenarios/sim/degraded_compat.toml`).
+pub fn sim_measured_without_beta() -> String {
+    let shipped = std::fs::read_to_string(workspace().join("mappings/aeroident-sim.toml")).unwrap();
+    let mut text: String =
+        shipped.lines().filter(|l| !l.starts_with("beta =")).collect::<Vec<_>>().join("\n");
+    for c in ["alpha_air_rad", "ax_fps2", "az_fps2", "q_rad_s", "p_rad_s", "theta_rad", "phi_rad"] {
+        text = text.replace(&format!("column = \"{c}\""), &format!("column = \"meas_{c}\""));
+    }
+    text
+}

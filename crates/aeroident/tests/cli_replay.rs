@@ -420,15 +420,10 @@ fn cross_check_with_a_batch_fit_runs_the_other_methods() {
 /// Live mode: the HFB-320 record on stdin gives one estimates line per sample on stdout.
 #[test]
 fn val_live_stdin_one_line_per_sample() {
-    let data =
-        workspace().join("../shared/flightdata/jategaonkar_hfb320_attas/csv/hfb320_1_10.csv");
-    if !data.exists() {
-        eprintln!(
-            "SKIPPED: {} is absent (CI provides ../shared beside the repository)",
-            data.display()
-        );
+    // Absent: skipped with a message, a failure under CI (`common::shared`).
+    let Some(data) = common::shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else {
         return;
-    }
+    };
     let mut child = bin()
         .args(["replay", "-", "--estimator", "rls", "--map"])
         .arg(workspace().join("mappings/hfb320.toml"))

@@ -726,7 +726,15 @@ impl Mapping {
     /// `elevator_rad`, the mapping's offset 3 applied)`` or ``channel `qdot` (derived, not a
     /// column)``. A name that is no sample field is given as it is, in backticks.
     pub fn field_label(&self, field: &str) -> String {
-        let Some(ch) = Channel::of_sample_field(field) else { return format!("`{field}`") };
+        match Channel::of_sample_field(field) {
+            Some(ch) => self.channel_label(ch),
+            None => format!("`{field}`"),
+        }
+    }
+
+    /// Channel `ch` as a message names it: ``channel `de` (column `elevator_rad`, …)``, or
+    /// ``channel `qdot` (derived, not a column)`` when the mapping has no source for it.
+    pub fn channel_label(&self, ch: Channel) -> String {
         let key = ch.key();
         let Some(m) = self.channels.get(&ch) else {
             return format!("channel `{key}` (derived, not a column)");

@@ -283,7 +283,7 @@ pub fn identifiability(
 /// gives `Cm_de` < 0, `da` > 0 right aileron trailing edge down gives `Cl_da` < 0, `dr` > 0
 /// trailing edge left gives `Cn_dr` < 0: each positive deflection a negative moment (Stevens &
 /// Lewis, Jategaonkar). (parameter, expected sign, surface key, its convention).
-const CONTROL_SIGNS: [(&str, f64, &str, &str); 3] = [
+pub(crate) const CONTROL_SIGNS: [(&str, f64, &str, &str); 3] = [
     ("Cm_de", -1.0, "de", "> 0 trailing edge down"),
     ("Cl_da", -1.0, "da", "> 0 right aileron trailing edge down, rolling left"),
     ("Cn_dr", -1.0, "dr", "> 0 trailing edge left"),

@@ -44,9 +44,10 @@
 //! contiguous samples (each interval at most 2.5 × the shortest: none across a gap).
 
 use aeroident_estimators::AirDataSample;
-use aeroident_io::Mapping;
 use aeroident_io::replay_output::{SignTest, SignVerdict};
 use aeroident_io::warning::{Warning, WarningKind};
+use aeroident_io::{Channel, Mapping};
+use aeroident_physics::rigid_body::{SinCos, body_acceleration, body_velocity, gravity_body};
 use aeroident_physics::units::G0_MPS2;
 use nalgebra::{DMatrix, DVector};
 
@@ -61,14 +62,11 @@ const HALF_SPAN_S: f64 = 0.05;
 /// Fewest differenced samples before a sign is decided.
 const MIN_ROWS: usize = 50;
 
-/// A test's regressand and regressors at one stencil (`None` where a field is missing).
-type RowFn = fn(&Stencil, &Present) -> Option<(f64, Vec<f64>)>;
-
 /// One sample's field, read from an [`AirDataSample`].
 type Field = fn(&AirDataSample) -> Option<f64>;
 
 /// The fields a test may use, by name (as `AirDataSample` and the mapping's keys name them).
-const FIELDS: [(&str, Field); 11] = [
+const FIELDS: [(&str, Field); 12] = [
     ("p", |s| s.p_rad_s),
     ("q", |s| s.q_rad_s),
     ("r", |s| s.r_rad_s),
@@ -78,6 +76,7 @@ const FIELDS: [(&str, Field); 11] = [
     ("ax", |s| s.ax_mps2),
     ("ay", |s| s.ay_mps2),
     ("az", |s| s.az_mps2),
+    ("de", |s| s.de_rad),
     ("da", |s| s.da_rad),
     ("dr", |s| s.dr_rad),
 ];
@@ -122,9 +121,8 @@ struct Test {
     channel: &'static str,
     expected: f64,
     needs: &'static [&'static str],
-    /// The regressand and the regressors (the tested one first; the bias is added) at one
-    /// stencil, or `None` where a field is missing.
-    row: RowFn,
+    /// What is regressed on what.
+    regression: Regression,
     what: &'static str,
     unit: &'static str,
 }
@@ -134,7 +132,7 @@ const TESTS: [Test; 6] = [
         channel: "de",
         expected: -1.0,
         needs: &["q"],
-        row: pitch,
+        regression: Regression::Pitch,
         what: "q̇ per δe (least squares on δe, α, q)",
         unit: " rad/s² per rad",
     },
@@ -142,7 +140,7 @@ const TESTS: [Test; 6] = [
         channel: "da",
         expected: -1.0,
         needs: &["p"],
-        row: roll,
+        regression: Regression::Roll,
         what: "ṗ per δa (least squares on δa, β or a_y, p, r, δr where mapped)",
         unit: " rad/s² per rad",
     },
@@ -150,7 +148,7 @@ const TESTS: [Test; 6] = [
         channel: "dr",
         expected: -1.0,
         needs: &["r"],
-        row: yaw,
+        regression: Regression::Yaw,
         what: "ṙ per δr (least squares on δr, β or a_y, p, r, δa where mapped)",
         unit: " rad/s² per rad",
     },
@@ -158,7 +156,7 @@ const TESTS: [Test; 6] = [
         channel: "ax",
         expected: 1.0,
         needs: &["theta", "q"],
-        row: specific_force_x,
+        regression: Regression::SpecificForce(0),
         what: "a_x's gain against u̇ − r v + q w + g sinθ",
         unit: "",
     },
@@ -166,7 +164,7 @@ const TESTS: [Test; 6] = [
         channel: "ay",
         expected: 1.0,
         needs: &["beta", "phi", "theta", "p", "r"],
-        row: specific_force_y,
+        regression: Regression::SpecificForce(1),
         what: "a_y's gain against v̇ + r u − p w − g cosθ sinφ",
         unit: "",
     },
@@ -174,48 +172,60 @@ const TESTS: [Test; 6] = [
         channel: "az",
         expected: 1.0,
         needs: &["theta", "q"],
-        row: specific_force_z,
+        regression: Regression::SpecificForce(2),
         what: "a_z's gain against ẇ − q u + p v − g cosθ cosφ",
         unit: "",
     },
 ];
 
-/// Body-axis air-relative velocity `(u, v, w)`, m/s, with β = 0 where it is not mapped.
-fn velocity(s: &AirDataSample) -> (f64, f64, f64) {
-    let (a, b) = (s.alpha_rad, s.beta_rad.unwrap_or(0.0));
-    (s.vt_mps * a.cos() * b.cos(), s.vt_mps * b.sin(), s.vt_mps * a.sin() * b.cos())
+/// What a test regresses: an angular acceleration on the states and surfaces, or the
+/// kinematics' specific force along body axis 0, 1, 2 on that accelerometer.
+#[derive(Debug, Clone, Copy)]
+enum Regression {
+    Pitch,
+    Roll,
+    Yaw,
+    SpecificForce(usize),
 }
 
-fn specific_force_x(s: &Stencil, _: &Present) -> Option<(f64, Vec<f64>)> {
-    let u_dot = s.rate(|x| Some(velocity(x).0))?;
-    let rest = s.mean(|c| {
-        let (_, v, w) = velocity(c);
-        Some(-c.r_rad_s.unwrap_or(0.0) * v + c.q_rad_s? * w + G0_MPS2 * c.theta_rad?.sin())
+impl Test {
+    /// The regressand and the regressors (the tested one first; the bias is added) at one
+    /// stencil, or `None` where a field is missing.
+    fn row(&self, s: &Stencil, on: &Present) -> Option<(f64, Vec<f64>)> {
+        match self.regression {
+            Regression::Pitch => pitch(s),
+            Regression::Roll => roll(s, on),
+            Regression::Yaw => yaw(s, on),
+            Regression::SpecificForce(axis) => specific_force(s, axis, self.needs),
+        }
+    }
+}
+
+/// The specific force along body axis `axis` that the force equations give from the air data,
+/// attitude and rates ([`body_acceleration`] with no specific force, taken from the body
+/// velocity's rate), and the accelerometer's reading, both over the stencil. Each sample must
+/// carry the `needs` fields; β, φ and the rates not among them count as 0 where missing.
+fn specific_force(s: &Stencil, axis: usize, needs: &[&str]) -> Option<(f64, Vec<f64>)> {
+    let field = |c: &AirDataSample, name: &str| FIELDS.iter().find(|f| f.0 == name)?.1(c);
+    let or_zero = |v: Option<f64>| v.unwrap_or(0.0);
+    let v_body = |c: &AirDataSample| {
+        body_velocity(c.vt_mps, SinCos::of(c.alpha_rad), SinCos::of(or_zero(c.beta_rad)))
+    };
+    let v_dot = s.rate(|c| Some(v_body(c)[axis]))?;
+    let kinematic = s.mean(|c| {
+        if !needs.iter().all(|n| field(c, n).is_some()) {
+            return None;
+        }
+        let omega = [or_zero(c.p_rad_s), or_zero(c.q_rad_s), or_zero(c.r_rad_s)];
+        let (phi, theta) = (SinCos::of(or_zero(c.phi_rad)), SinCos::of(or_zero(c.theta_rad)));
+        let g = gravity_body(G0_MPS2, phi, theta);
+        Some(body_acceleration(v_body(c), omega, g, [0.0; 3])[axis])
     })?;
-    Some((u_dot + rest, vec![s.mean(|c| c.ax_mps2)?]))
+    let reading = s.mean(|c| [c.ax_mps2, c.ay_mps2, c.az_mps2][axis])?;
+    Some((v_dot - kinematic, vec![reading]))
 }
 
-fn specific_force_y(s: &Stencil, _: &Present) -> Option<(f64, Vec<f64>)> {
-    let v_dot = s.rate(|x| Some(velocity(x).1))?;
-    let rest = s.mean(|c| {
-        let (u, _, w) = velocity(c);
-        let gravity = G0_MPS2 * c.theta_rad?.cos() * c.phi_rad?.sin();
-        Some(c.r_rad_s? * u - c.p_rad_s? * w - gravity)
-    })?;
-    Some((v_dot + rest, vec![s.mean(|c| c.ay_mps2)?]))
-}
-
-fn specific_force_z(s: &Stencil, _: &Present) -> Option<(f64, Vec<f64>)> {
-    let w_dot = s.rate(|x| Some(velocity(x).2))?;
-    let rest = s.mean(|c| {
-        let (u, v, _) = velocity(c);
-        let gravity = G0_MPS2 * c.theta_rad?.cos() * c.phi_rad.unwrap_or(0.0).cos();
-        Some(-c.q_rad_s? * u + c.p_rad_s.unwrap_or(0.0) * v - gravity)
-    })?;
-    Some((w_dot + rest, vec![s.mean(|c| c.az_mps2)?]))
-}
-
-fn pitch(s: &Stencil, _: &Present) -> Option<(f64, Vec<f64>)> {
+fn pitch(s: &Stencil) -> Option<(f64, Vec<f64>)> {
     let x = vec![s.mean(|c| c.de_rad)?, s.mean(|c| Some(c.alpha_rad))?, s.mean(|c| c.q_rad_s)?];
     Some((s.rate(|x| x.q_rad_s)?, x))
 }
@@ -259,32 +269,22 @@ fn sign_tests_timed<M: AsRef<[AirDataSample]>>(
     no_timing: Option<&str>,
 ) -> Vec<SignTest> {
     let present = present_fields(manoeuvres);
-    let mapped = |name: &str| name == "de" && present.has_de || present.fields.has(name);
     TESTS
         .iter()
-        .filter(|t| mapped(t.channel))
-        .map(|t| match t.needs.iter().find(|n| !present.fields.has(n)) {
+        .filter(|t| present.has(t.channel))
+        .map(|t| match t.needs.iter().find(|n| !present.has(n)) {
             Some(missing) => undecided(t, format!("`{missing}` is not mapped")),
-            None => run(t, manoeuvres, &present.fields, no_timing),
+            None => run(t, manoeuvres, &present, no_timing),
         })
         .collect()
 }
 
-/// The record's mapped fields, and whether it maps δe (not among [`FIELDS`]: no test uses it
-/// as another's regressor).
-struct Mapped {
-    fields: Present,
-    has_de: bool,
-}
-
-fn present_fields<M: AsRef<[AirDataSample]>>(manoeuvres: &[M]) -> Mapped {
+/// The record's mapped fields: those more than half of its samples carry.
+fn present_fields<M: AsRef<[AirDataSample]>>(manoeuvres: &[M]) -> Present {
     let all = || manoeuvres.iter().flat_map(|m| m.as_ref().iter());
     let n = all().count();
-    let carried = |f: Field| 2 * all().filter(|s| f(s).is_some()).count() > n;
-    Mapped {
-        fields: Present(FIELDS.iter().filter(|(_, f)| carried(*f)).map(|(k, _)| *k).collect()),
-        has_de: n > 0 && carried(|s| s.de_rad),
-    }
+    let carried = |f: Field| n > 0 && 2 * all().filter(|s| f(s).is_some()).count() > n;
+    Present(FIELDS.iter().filter(|(_, f)| carried(*f)).map(|(k, _)| *k).collect())
 }
 
 /// A test that could not be run, with why.
@@ -320,7 +320,7 @@ fn rows<M: AsRef<[AirDataSample]>>(t: &Test, manoeuvres: &[M], on: &Present) -> 
                 continue;
             }
             let st = Stencil { window: w, span_s: w[2 * m].t_s - w[0].t_s };
-            if let Some((y, mut x)) = (t.row)(&st, on)
+            if let Some((y, mut x)) = t.row(&st, on)
                 && y.is_finite()
                 && x.iter().all(|v| v.is_finite())
             {
@@ -487,14 +487,15 @@ pub fn checked_log(
     checked_timed(&parts, mapping, (log.dropped() > 0).then_some(why.as_str()))
 }
 
-/// The derivative whose sign a reversed surface turns, for the warning's parameter.
-pub(crate) fn derivative_of(channel: &str) -> Option<&'static str> {
-    match channel {
-        "de" => Some("Cm_de"),
-        "da" => Some("Cl_da"),
-        "dr" => Some("Cn_dr"),
-        _ => None,
-    }
+/// The control derivative whose sign surface `key` fixes ([`super::diagnostics::CONTROL_SIGNS`]).
+pub(crate) fn derivative_of(key: &str) -> Option<&'static str> {
+    super::diagnostics::CONTROL_SIGNS.iter().find(|c| c.2 == key).map(|c| c.0)
+}
+
+/// A tested channel as the mapping gives it (``channel `dr` (column `rudder_deg`)``).
+pub(crate) fn label(mapping: &Mapping, key: &str) -> String {
+    let channel = Channel::ALL.iter().find(|c| c.key() == key);
+    channel.map_or_else(|| format!("`{key}`"), |c| mapping.channel_label(*c))
 }
 
 /// A warning per reversed channel, naming its mapping source and the fix, and per surface
@@ -510,7 +511,7 @@ fn reversed_warnings(tests: &[SignTest], mapping: &Mapping) -> Vec<Warning> {
         .iter()
         .filter(|t| t.verdict == SignVerdict::Reversed)
         .map(|t| {
-            let label = mapping.field_label(sample_field(&t.channel));
+            let label = label(mapping, &t.channel);
             let layout = if t.channel == "de" { " (or the aircraft has a canard)" } else { "" };
             let text = format!(
                 "sign test: {label} looks reversed{layout}: {}; check its sign (`scale = -1`) in the mapping (docs/mapping.md, Channels)",
@@ -523,18 +524,6 @@ fn reversed_warnings(tests: &[SignTest], mapping: &Mapping) -> Vec<Warning> {
             }
         })
         .collect()
-}
-
-/// The sample field of a tested channel's mapping key.
-pub(crate) fn sample_field(channel: &str) -> &'static str {
-    match channel {
-        "de" => "de_rad",
-        "da" => "da_rad",
-        "dr" => "dr_rad",
-        "ax" => "ax_mps2",
-        "ay" => "ay_mps2",
-        _ => "az_mps2",
-    }
 }
 
 pub mod timing;

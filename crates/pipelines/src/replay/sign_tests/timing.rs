@@ -130,7 +130,7 @@ pub fn warning(t: &SignTest, mapping: &Mapping, dt_s: f64) -> Option<Warning> {
     if lead.abs() < WARN_LEAD_S.max(dt_s) || (lo <= 0.0 && hi >= 0.0) {
         return None;
     }
-    let label = mapping.field_label(super::sample_field(&t.channel));
+    let label = super::label(mapping, &t.channel);
     let interval = format!("95 % {lo:.3} … {hi:.3} s");
     let text = if lead > 0.0 {
         format!(

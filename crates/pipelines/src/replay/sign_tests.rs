@@ -378,7 +378,7 @@ fn run<M: AsRef<[AirDataSample]>>(
         evidence.push_str(&format!("; its timing is not searched: {why}"));
     }
     let lead = (surface_decided && no_timing.is_none())
-        .then(|| timing::lead(t, manoeuvres, on, shortest_interval(manoeuvres)))
+        .then(|| timing::lead(&rows, shortest_interval(manoeuvres)))
         .flatten();
     if let Some(l) = lead {
         evidence.push_str(&format!(

@@ -14,8 +14,7 @@
 //! channel recorded late. Every shift uses the same rows: those whose surface exists at every
 //! shift (the first and last 0.3 s of each stretch are left out for all of them).
 
-use super::{LsFit, Present, Row, Test, regress, rows};
-use aeroident_estimators::AirDataSample;
+use super::{LsFit, Row, regress};
 use aeroident_io::Mapping;
 use aeroident_io::replay_output::SignTest;
 use aeroident_io::warning::{Warning, WarningKind};
@@ -43,17 +42,12 @@ pub struct Lead {
     pub hi_s: f64,
 }
 
-/// The lead of `t`'s surface over its response, `dt_s` the sample interval; `None` when a
-/// shift cannot be fitted. The rows are formed once; a shift `j` takes each row's surface from
-/// the row `j` samples earlier, over the rows whose every shift exists (the same rows for all).
-pub(super) fn lead<M: AsRef<[AirDataSample]>>(
-    t: &Test,
-    manoeuvres: &[M],
-    on: &Present,
-    dt_s: f64,
-) -> Option<Lead> {
+/// The lead of a surface over its response from its sign test's rows `all` (the surface the
+/// first regressor), `dt_s` the sample interval; `None` when a shift cannot be fitted. A shift
+/// `j` takes each row's surface from the row `j` samples earlier, over the rows whose every
+/// shift exists (the same rows for all).
+pub(super) fn lead(all: &[Row], dt_s: f64) -> Option<Lead> {
     let k = ((MAX_LEAD_S / dt_s).round() as usize).max(1) as isize;
-    let all = rows(t, manoeuvres, on);
     let at_sample: HashMap<(usize, usize), usize> =
         all.iter().enumerate().map(|(r, row)| (row.2, r)).collect();
     let source = |row: &Row, j: isize| {

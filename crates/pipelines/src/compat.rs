@@ -217,20 +217,21 @@ fn consistency(
 }
 
 /// The smallest difference between manoeuvres that says a sensor changed, in the unknown's unit:
-/// a tenth of the largest correction a sensor of that kind plausibly needs
-/// ([`crate::record::corrections::plausible`]): 0.2 m/s² for an accelerometer's bias, 0.005
-/// rad/s for a gyro's, 0.05 for a scale-factor error, 0.05 s for a time shift. Below it a
-/// difference between manoeuvres is within what real sensors drift by. `None` for the biases of
-/// the airspeed and the flow angles: in the check's still air they also hold each manoeuvre's
-/// steady wind, which changes with the heading, so they are not compared.
+/// a tenth of the largest bias or time shift a sensor of that kind plausibly needs
+/// ([`crate::record::corrections::limits`]: 0.2 m/s² for an accelerometer, 0.005 rad/s for a
+/// gyro, 0.05 s for a shift), and a scale-factor error of 5 % (between the 2 % the findings
+/// call significant and the 20–25 % limits). Below it a difference between manoeuvres is within
+/// what real sensors drift by. `None` for the biases of the airspeed and the flow angles: in the
+/// check's still air they also hold each manoeuvre's steady wind, which changes with the
+/// heading, so they are not compared.
 fn tolerance(u: Unknown) -> Option<f64> {
+    use crate::record::corrections::{MAX_SHIFT_S, limits};
+    const DRIFT: f64 = 0.1;
     match u {
-        Unknown::Bias(Channel::Ax | Channel::Ay | Channel::Az) => Some(0.2),
-        Unknown::Bias(Channel::P | Channel::Q | Channel::R) => Some(0.005),
         Unknown::Bias(Channel::Vt | Channel::Alpha | Channel::Beta) => None,
-        Unknown::Bias(_) => Some(0.0175),
+        Unknown::Bias(c) => Some(DRIFT * limits(c).0),
         Unknown::Scale(_) => Some(0.05),
-        Unknown::TimeShift(_) => Some(0.05),
+        Unknown::TimeShift(_) => Some(DRIFT * MAX_SHIFT_S),
         _ => None,
     }
 }

@@ -82,14 +82,7 @@ fn determined() -> bool {
 /// # Errors
 /// Which limit the correction passes, in words.
 pub fn plausible(ch: Channel, bias: f64, scale: f64, shift_s: Option<f64>) -> Result<(), String> {
-    let (max_bias, scale_range) = match ch {
-        Channel::Ax | Channel::Ay | Channel::Az => (2.0, (0.8, 1.25)),
-        Channel::P | Channel::Q | Channel::R => (0.05, (0.8, 1.25)),
-        Channel::Alpha | Channel::Beta => (0.175, (0.7, 1.4)),
-        Channel::Vt => (f64::INFINITY, (0.8, 1.25)),
-        _ => (0.175, (0.8, 1.25)),
-    };
-    const MAX_SHIFT_S: f64 = 0.5;
+    let (max_bias, scale_range) = limits(ch);
     if bias.abs() > max_bias {
         return Err(format!(
             "bias {bias:+.4e} {} beyond the ±{max_bias} a {} plausibly has: not applied (check the record's segment and the channel's mapping)",
@@ -125,6 +118,20 @@ pub fn plausible(ch: Channel, bias: f64, scale: f64, shift_s: Option<f64>) -> Re
 /// The largest lead of a gyro or attitude over the kinematics taken as timing noise, s (a
 /// sample at 50 Hz): beyond it a lead is refused ([`plausible`]).
 pub const MAX_AHRS_LEAD_S: f64 = 0.02;
+
+/// The largest time shift a sensor's lag plausibly reaches, either way, s ([`plausible`]).
+pub const MAX_SHIFT_S: f64 = 0.5;
+
+/// Channel `ch`'s largest plausible bias (its unit) and scale range ([`plausible`]).
+pub fn limits(ch: Channel) -> (f64, (f64, f64)) {
+    match ch {
+        Channel::Ax | Channel::Ay | Channel::Az => (2.0, (0.8, 1.25)),
+        Channel::P | Channel::Q | Channel::R => (0.05, (0.8, 1.25)),
+        Channel::Alpha | Channel::Beta => (0.175, (0.7, 1.4)),
+        Channel::Vt => (f64::INFINITY, (0.8, 1.25)),
+        _ => (0.175, (0.8, 1.25)),
+    }
+}
 
 /// The kind of sensor of channel `ch`, for messages.
 fn kind_name(ch: Channel) -> &'static str {

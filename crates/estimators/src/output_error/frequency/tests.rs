@@ -93,3 +93,26 @@ fn errors_name_the_band_and_the_sampling() {
         "{e}"
     );
 }
+
+/// The fast transform equals the defining sum `Σ_i x_i e^{−j2πki/N}` at every bin, on a length
+/// with a large prime factor (rustfft's slowest path) and on a power of two.
+#[test]
+fn dft_equals_the_defining_sum() {
+    for n in [97usize, 256] {
+        let x: Vec<f64> = (0..n).map(|i| ((i * i) % 13) as f64 - 0.3 * (i as f64).sin()).collect();
+        let bins: Vec<usize> = (1..n / 2).step_by(7).collect();
+        let fft = rustfft::FftPlanner::<f64>::new().plan_fft_forward(n);
+        let fast = dft(&*fft, &x, &bins);
+        for (&k, got) in bins.iter().zip(&fast) {
+            let w = -2.0 * core::f64::consts::PI * k as f64 / n as f64;
+            let direct = x
+                .iter()
+                .enumerate()
+                .fold(C64::new(0.0, 0.0), |a, (i, v)| a + C64::from_polar(*v, w * i as f64));
+            assert!(
+                (got - direct).norm() < 1e-9 * (1.0 + direct.norm()),
+                "n {n} k {k}: {got} vs {direct}"
+            );
+        }
+    }
+}

@@ -39,10 +39,14 @@
 //! [`MavlinkError::NothingReceived`]. Datagrams with no valid MAVLink frame are counted and
 //! the first few are reported on stderr with their first bytes ([`LinkStats::unparseable`]).
 //! Sequence numbers are per sender (system, component), mod 256: a gap counts its missing
-//! messages as lost ([`LinkStats::lost`]); a repeat of the last number is a duplicate
-//! ([`LinkStats::duplicates`]) and a number behind it a late message
-//! ([`LinkStats::out_of_order`]), neither used again (the held values stay the newest; three
-//! in a row behind mean the sender restarted its count, and are used). A late message a gap
+//! messages as lost ([`LinkStats::lost`]); a repeat of the last number with the same bytes
+//! (message id and payload) is a duplicate, the same datagram received twice
+//! ([`LinkStats::duplicates`]). A repeat with other bytes is a new message from a sender that
+//! does not number its messages (one that always sends 0, say): it is used, and counted per sender
+//! ([`LinkStats::stuck_sequence`], named in the link line). A number behind the last is a
+//! late message ([`LinkStats::out_of_order`]). Neither duplicates nor late messages are used
+//! (the held values stay the newest; three in a row behind mean the sender restarted its
+//! count, and are used). A late message a gap
 //! had skipped (two neighbours swapped on the link) was not lost: it is taken off the lost
 //! count and counted late only. The receive queue is
 //! bounded and drops the oldest datagrams when full ([`LinkStats::dropped`]; see
@@ -55,7 +59,7 @@ mod rows;
 mod udp;
 
 pub use rows::RowBuilder;
-pub use udp::{LinkStats, MavlinkRows, QUEUE_BYTES, QUEUE_DATAGRAMS};
+pub use udp::{LinkStats, MavlinkRows, NOTED_SENDERS, QUEUE_BYTES, QUEUE_DATAGRAMS, StuckSender};
 
 /// Name of the `NAMED_VALUE_FLOAT` that ends a feed cleanly (≤ 10 characters, the field size).
 pub const END_OF_STREAM_NAME: &str = "aid_end";

@@ -172,6 +172,58 @@ fn analytic_duplicated_datagrams_are_duplicates_not_losses() {
     assert!(events.iter().all(|e| matches!(e, RecordEvent::Sample { .. })), "{events:?}");
 }
 
+/// A sender that numbers every message 0 (it does not keep a sequence count) and sends each
+/// clock message twice: consecutive messages differ, so only the repeated clock messages (same
+/// number, same bytes) are duplicates; the other 80 are used, counted as not advancing the
+/// sequence number, and the link line says so. 20 frames, 20 rows.
+#[test]
+fn analytic_sender_whose_sequence_number_never_advances_is_used_and_noted() {
+    let (rows, to, stats, url) = open();
+    let m = mapping();
+    let reader = std::thread::spawn(move || {
+        FlightDataReader::new(rows, &url, &m).unwrap().map(|e| e.unwrap()).collect::<Vec<_>>()
+    });
+    let mut link = Link::new(to);
+    for k in 1..=20 {
+        let f = frame(k);
+        for msg in &f[..3] {
+            link.seq = 0;
+            link.send(msg, 1);
+        }
+        link.seq = 0;
+        link.send(&f[3], 2);
+        wait_taken(&stats, link.sent);
+    }
+    link.seq = 0;
+    link.send(&end_of_stream(), 1);
+    let events = reader.join().unwrap();
+    let s = stats.lock().unwrap().clone();
+    assert_eq!(
+        (s.datagrams, s.messages, s.duplicates, s.lost, s.out_of_order, s.rows),
+        (101, 101, 20, 0, 0, 20),
+        "{s:?}"
+    );
+    assert_eq!(s.stuck_sequence, 80, "{s:?}");
+    assert!(
+        s.line().contains(
+            "system 1 component 1: its sequence number did not advance over 80 differing messages (the sender does not number its messages); they were used"
+        ),
+        "{}",
+        s.line()
+    );
+    let times: Vec<f64> = events
+        .iter()
+        .map(|e| match e {
+            RecordEvent::Sample { sample, .. } => sample.t_s,
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    assert_eq!(times.len(), 20, "{times:?}");
+    for (k, t) in (1..=20).zip(&times) {
+        assert!((t - f64::from(k) / 100.0).abs() < 1e-12, "frame {k}: {t} s");
+    }
+}
+
 /// 30 frames, each led by an unmapped value sent after its successor (sequence n + 1, then n):
 /// 30 late messages, none lost, and every frame's row with its own values (the late ones are
 /// not used, and mapped nothing).

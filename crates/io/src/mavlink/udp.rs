@@ -17,11 +17,12 @@
 
 use super::{END_OF_STREAM_NAME, MavlinkError, MavlinkUrl, RowBuilder};
 use crate::mapping::Mapping;
-use mavlink::MavlinkReader;
 use mavlink::dialects::ardupilotmega::MavMessage;
 use mavlink::error::MessageReadError;
+use mavlink::{MavHeader, MavlinkReader, Message};
 use std::collections::HashMap;
 use std::collections::VecDeque;
+use std::hash::{BuildHasher, RandomState};
 use std::io::Read;
 use std::net::UdpSocket;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -43,6 +44,22 @@ pub const QUEUE_BYTES: usize = 4 << 20;
 /// have restarted its count (and its messages are used again).
 const RESYNC_AFTER: u8 = 3;
 
+/// Senders whose sequence number does not advance that [`LinkStats::stuck_senders`] lists one
+/// by one (the others are counted together).
+pub const NOTED_SENDERS: usize = 8;
+
+/// A sender (system, component) whose sequence number did not advance across messages that
+/// differ: one that does not number its messages.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
+pub struct StuckSender {
+    /// MAVLink system id.
+    pub system: u32,
+    /// MAVLink component id.
+    pub component: u8,
+    /// Its messages used although they repeated its last sequence number.
+    pub messages: u64,
+}
+
 /// What a feed received, shared with the caller while the reader owns the feed.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct LinkStats {
@@ -60,9 +77,15 @@ pub struct LinkStats {
     /// later (within 128 numbers) is taken back off and counted in
     /// [`LinkStats::out_of_order`] only.
     pub lost: u64,
-    /// Messages repeating their sender's last sequence number: the same message delivered
-    /// twice, not used again.
+    /// Messages repeating their sender's last sequence number and its bytes (message id and
+    /// payload): the same message delivered twice, not used again.
     pub duplicates: u64,
+    /// Messages repeating their sender's last sequence number with other bytes: a new message
+    /// from a sender that does not advance its count (not a datagram received twice), used.
+    pub stuck_sequence: u64,
+    /// The senders of [`LinkStats::stuck_sequence`], the first [`NOTED_SENDERS`] of them, each
+    /// with its count.
+    pub stuck_senders: Vec<StuckSender>,
     /// Messages behind their sender's sequence number (late or reordered, e.g. arriving after
     /// their successor): older than what was already used, so not used.
     pub out_of_order: u64,
@@ -84,10 +107,45 @@ pub struct LinkStats {
 }
 
 impl LinkStats {
+    /// Counts a message of sender (`system`, `component`) used although its sequence number
+    /// did not advance.
+    fn count_stuck(&mut self, system: u32, component: u8) {
+        self.stuck_sequence += 1;
+        let full = self.stuck_senders.len() >= NOTED_SENDERS;
+        let listed =
+            self.stuck_senders.iter_mut().find(|s| (s.system, s.component) == (system, component));
+        match listed {
+            Some(s) => s.messages += 1,
+            None if !full => {
+                self.stuck_senders.push(StuckSender { system, component, messages: 1 });
+            }
+            None => {}
+        }
+    }
+
+    /// The senders that do not number their messages, in words (empty when none).
+    fn stuck_notes(&self) -> String {
+        let mut notes = String::new();
+        for s in &self.stuck_senders {
+            notes.push_str(&format!(
+                "; system {} component {}: its sequence number did not advance over {} differing messages (the sender does not number its messages); they were used",
+                s.system, s.component, s.messages
+            ));
+        }
+        let listed: u64 = self.stuck_senders.iter().map(|s| s.messages).sum();
+        if self.stuck_sequence > listed {
+            notes.push_str(&format!(
+                "; {} more such messages from other senders, used",
+                self.stuck_sequence - listed
+            ));
+        }
+        notes
+    }
+
     /// The statistics in one line, for stderr and the summary's warnings.
     pub fn line(&self) -> String {
         format!(
-            "mavlink: {} datagrams, {} messages, {} rows; {} unparseable datagrams, {} undecodable frames, {} messages lost (sequence gaps), {} duplicates and {} out-of-order messages not used, {} datagrams dropped (receive queue full at {QUEUE_DATAGRAMS} datagrams or {QUEUE_BYTES} bytes), {} of {} clock messages before every column had arrived; ended: {}",
+            "mavlink: {} datagrams, {} messages, {} rows; {} unparseable datagrams, {} undecodable frames, {} messages lost (sequence gaps), {} duplicates and {} out-of-order messages not used, {} datagrams dropped (receive queue full at {QUEUE_DATAGRAMS} datagrams or {QUEUE_BYTES} bytes), {} of {} clock messages before every column had arrived{}; ended: {}",
             self.datagrams,
             self.messages,
             self.rows,
@@ -99,6 +157,7 @@ impl LinkStats {
             self.dropped,
             self.clock_without_row,
             self.clock_messages,
+            self.stuck_notes(),
             self.end
         )
     }
@@ -177,12 +236,14 @@ impl Queue {
     }
 }
 
-/// A sender's sequence numbers: the last used and how many messages in a row were behind it.
+/// A sender's sequence numbers so far, and a fingerprint of its last message used.
 #[derive(Debug, Clone, Copy)]
-/// A sender's sequence numbers so far.
 struct Sequence {
     /// The last number used.
     last: u8,
+    /// Hash of the id and payload of the last message used: a repeat of `last` is a
+    /// duplicate only with these bytes.
+    bytes: u64,
     /// Messages behind `last` in a row (a restart after [`RESYNC_AFTER`]).
     behind: u8,
     /// Bit `k` set: number `last - 1 - k` was skipped (counted lost) and has not arrived since.
@@ -197,6 +258,9 @@ enum SeqVerdict {
         missing: u8,
     },
     Duplicate,
+    /// The last number used again, with other bytes: a new message from a sender that does
+    /// not advance its count.
+    NotAdvanced,
     /// Behind the last number used; `was_lost` if it is one of the numbers a gap skipped
     /// (counted lost then, late now).
     OutOfOrder {
@@ -205,19 +269,26 @@ enum SeqVerdict {
 }
 
 impl Sequence {
-    fn new(first: u8) -> Self {
-        Self { last: first, behind: 0, gaps: 0 }
+    fn new(first: u8, bytes: u64) -> Self {
+        Self { last: first, bytes, behind: 0, gaps: 0 }
     }
 
-    /// Judges sequence number `seq` (mod 256) against the last one used: equal is a duplicate;
-    /// up to 128 ahead is new (the numbers between are missing); further ahead is behind
-    /// (late). A late number a gap skipped was not lost after all (two messages swapped on
-    /// the link); [`RESYNC_AFTER`] other late ones in a row mean the sender restarted its
-    /// count.
-    fn judge(&mut self, seq: u8) -> SeqVerdict {
+    /// Judges sequence number `seq` (mod 256) of a message whose id and payload hash to
+    /// `bytes` against the last one used: equal with equal bytes is a duplicate (a datagram
+    /// received twice, e.g. over two links), equal with other bytes a new message from a
+    /// sender that does not number its messages; up to 128 ahead is new (the numbers between
+    /// are missing); further ahead is behind (late). A late number a gap skipped was not lost
+    /// after all (two messages swapped on the link); [`RESYNC_AFTER`] other late ones in a row
+    /// mean the sender restarted its count.
+    fn judge(&mut self, seq: u8, bytes: u64) -> SeqVerdict {
         let delta = seq.wrapping_sub(self.last);
         if delta == 0 {
-            return SeqVerdict::Duplicate;
+            if bytes == self.bytes {
+                return SeqVerdict::Duplicate;
+            }
+            self.bytes = bytes;
+            self.behind = 0;
+            return SeqVerdict::NotAdvanced;
         }
         if delta > 128 {
             let bit = 1u128 << (self.last.wrapping_sub(seq) - 1);
@@ -229,7 +300,7 @@ impl Sequence {
             if self.behind < RESYNC_AFTER {
                 return SeqVerdict::OutOfOrder { was_lost: false };
             }
-            *self = Self::new(seq);
+            *self = Self::new(seq, bytes);
             return SeqVerdict::Use { missing: 0 };
         }
         // The old gaps move `delta` further behind; the `delta - 1` numbers skipped now are
@@ -237,6 +308,7 @@ impl Sequence {
         let skipped = (1u128 << (delta - 1)) - 1;
         self.gaps = self.gaps.checked_shl(u32::from(delta)).unwrap_or(0) | skipped;
         self.last = seq;
+        self.bytes = bytes;
         self.behind = 0;
         SeqVerdict::Use { missing: delta - 1 }
     }
@@ -256,6 +328,9 @@ pub struct MavlinkRows {
     pos: usize,
     stats: Arc<Mutex<LinkStats>>,
     seq: HashMap<(u32, u8), Sequence>,
+    /// Keys the hash of [`Sequence::bytes`]: chosen per feed, so a sender cannot aim two
+    /// different messages at one hash (8 bytes per sender, where the bytes would be up to 259).
+    hasher: RandomState,
     dropped_seen: u64,
     done: bool,
     on_problem: Option<fn(&str)>,
@@ -325,6 +400,7 @@ impl MavlinkRows {
             pos: 0,
             stats: Arc::new(Mutex::new(LinkStats::default())),
             seq: HashMap::new(),
+            hasher: RandomState::new(),
             dropped_seen: 0,
             done: false,
             on_problem,
@@ -355,16 +431,21 @@ impl MavlinkRows {
         }
     }
 
-    /// Whether a message is used, by its sender's sequence number (counted in `stats`).
-    fn in_sequence(&mut self, stats: &mut LinkStats, header: &mavlink::MavHeader) -> bool {
+    /// Whether a message is used, by its sender's sequence number and, when that repeats,
+    /// `bytes` (the hash of its id and payload); counted in `stats`.
+    fn in_sequence(&mut self, stats: &mut LinkStats, header: &MavHeader, bytes: u64) -> bool {
         let key = (header.system_id, header.component_id);
         let Some(seq) = self.seq.get_mut(&key) else {
-            self.seq.insert(key, Sequence::new(header.sequence));
+            self.seq.insert(key, Sequence::new(header.sequence, bytes));
             return true;
         };
-        match seq.judge(header.sequence) {
+        match seq.judge(header.sequence, bytes) {
             SeqVerdict::Use { missing } => {
                 stats.lost += u64::from(missing);
+                true
+            }
+            SeqVerdict::NotAdvanced => {
+                stats.count_stuck(header.system_id, header.component_id);
                 true
             }
             SeqVerdict::Duplicate => {
@@ -389,32 +470,38 @@ impl MavlinkRows {
         let mut reader = MavlinkReader::new(bytes);
         let mut decoded = 0u64;
         let mut undecodable = 0u64;
-        loop {
-            match reader.read_any_message::<MavMessage>() {
-                Ok((header, msg)) => {
-                    decoded += 1;
-                    if !self.in_sequence(&mut stats, &header) {
-                        continue;
-                    }
-                    if let MavMessage::NAMED_VALUE_FLOAT(d) = &msg
-                        && d.name.to_str() == Ok(END_OF_STREAM_NAME)
-                    {
-                        self.done = true;
-                        stats.end = format!(
-                            "end-of-stream message NAMED_VALUE_FLOAT `{END_OF_STREAM_NAME}`"
-                        );
-                        break;
-                    }
-                    if self.builder.push(&msg, &mut self.buf) {
-                        stats.rows += 1;
-                    }
-                }
-                Err(MessageReadError::Parse(e)) => {
+        // The reader ends (an error) at the end of the datagram or where no frame follows.
+        while let Ok(raw) = reader.read_any_raw_message::<MavMessage>() {
+            let (id, payload) = (raw.message_id(), raw.payload());
+            let msg = match MavMessage::parse(raw.version(), id, payload) {
+                Ok(msg) => msg,
+                Err(e) => {
                     undecodable += 1;
-                    let n = stats.datagrams;
+                    let (n, e) = (stats.datagrams, MessageReadError::Parse(e));
                     self.problem(&mut stats, format!("datagram {n}: frame does not decode: {e}"));
+                    continue;
                 }
-                Err(_) => break,
+            };
+            decoded += 1;
+            let header = MavHeader {
+                system_id: raw.system_id(),
+                component_id: raw.component_id(),
+                sequence: raw.sequence(),
+            };
+            let bytes = self.hasher.hash_one((id, payload));
+            if !self.in_sequence(&mut stats, &header, bytes) {
+                continue;
+            }
+            if let MavMessage::NAMED_VALUE_FLOAT(d) = &msg
+                && d.name.to_str() == Ok(END_OF_STREAM_NAME)
+            {
+                self.done = true;
+                stats.end =
+                    format!("end-of-stream message NAMED_VALUE_FLOAT `{END_OF_STREAM_NAME}`");
+                break;
+            }
+            if self.builder.push(&msg, &mut self.buf) {
+                stats.rows += 1;
             }
         }
         stats.messages += decoded;
@@ -525,48 +612,82 @@ mod tests {
     #[test]
     fn analytic_sequence_numbers_count_gaps_duplicates_and_late_messages() {
         let late = |was_lost| SeqVerdict::OutOfOrder { was_lost };
-        let mut s = Sequence::new(10);
-        assert_eq!(s.judge(11), SeqVerdict::Use { missing: 0 });
-        assert_eq!(s.judge(11), SeqVerdict::Duplicate);
-        assert_eq!(s.judge(14), SeqVerdict::Use { missing: 2 });
+        let mut s = Sequence::new(10, 0);
+        assert_eq!(s.judge(11, 0), SeqVerdict::Use { missing: 0 });
+        assert_eq!(s.judge(11, 0), SeqVerdict::Duplicate);
+        assert_eq!(s.judge(14, 0), SeqVerdict::Use { missing: 2 });
         // 13 and 12 were counted missing: each arrives late once, then is only behind.
-        assert_eq!(s.judge(13), late(true));
-        assert_eq!(s.judge(13), late(false));
-        assert_eq!(s.judge(15), SeqVerdict::Use { missing: 0 });
-        assert_eq!(s.judge(12), late(true));
-        assert_eq!(s.judge(11), late(false));
-        let mut s = Sequence::new(254);
-        assert_eq!(s.judge(255), SeqVerdict::Use { missing: 0 });
-        assert_eq!(s.judge(0), SeqVerdict::Use { missing: 0 });
-        assert_eq!(s.judge(0), SeqVerdict::Duplicate);
-        assert_eq!(s.judge(3), SeqVerdict::Use { missing: 2 });
+        assert_eq!(s.judge(13, 0), late(true));
+        assert_eq!(s.judge(13, 0), late(false));
+        assert_eq!(s.judge(15, 0), SeqVerdict::Use { missing: 0 });
+        assert_eq!(s.judge(12, 0), late(true));
+        assert_eq!(s.judge(11, 0), late(false));
+        let mut s = Sequence::new(254, 0);
+        assert_eq!(s.judge(255, 0), SeqVerdict::Use { missing: 0 });
+        assert_eq!(s.judge(0, 0), SeqVerdict::Use { missing: 0 });
+        assert_eq!(s.judge(0, 0), SeqVerdict::Duplicate);
+        assert_eq!(s.judge(3, 0), SeqVerdict::Use { missing: 2 });
         // A restart (from 100 back to 0, 156 "ahead" mod 256, so behind): two messages are not
         // used, the third resyncs.
-        let mut s = Sequence::new(100);
-        assert_eq!(s.judge(0), late(false));
-        assert_eq!(s.judge(1), late(false));
-        assert_eq!(s.judge(2), SeqVerdict::Use { missing: 0 });
-        assert_eq!(s.judge(3), SeqVerdict::Use { missing: 0 });
+        let mut s = Sequence::new(100, 0);
+        assert_eq!(s.judge(0, 0), late(false));
+        assert_eq!(s.judge(1, 0), late(false));
+        assert_eq!(s.judge(2, 0), SeqVerdict::Use { missing: 0 });
+        assert_eq!(s.judge(3, 0), SeqVerdict::Use { missing: 0 });
+    }
+
+    /// A repeated number is a duplicate only with the bytes of the last message used: with
+    /// other bytes it is a new message (the sender does not advance its count), used, and the
+    /// next repeat is judged against it; a number that moves on is judged as before.
+    #[test]
+    fn analytic_a_repeated_number_with_other_bytes_is_a_new_message() {
+        let (a, b, c) = (1, 2, 3);
+        let mut s = Sequence::new(0, a);
+        assert_eq!(s.judge(0, b), SeqVerdict::NotAdvanced);
+        assert_eq!(s.judge(0, b), SeqVerdict::Duplicate);
+        assert_eq!(s.judge(0, a), SeqVerdict::NotAdvanced);
+        assert_eq!(s.judge(0, a), SeqVerdict::Duplicate);
+        assert_eq!(s.judge(2, c), SeqVerdict::Use { missing: 1 });
+        assert_eq!(s.judge(2, c), SeqVerdict::Duplicate);
+        assert_eq!(s.judge(2, a), SeqVerdict::NotAdvanced);
+        // Behind stays behind whatever its bytes: 1 was counted missing, arrives late.
+        assert_eq!(s.judge(1, b), SeqVerdict::OutOfOrder { was_lost: true });
+        // The line names each sender that did not advance, with its count.
+        let mut stats = LinkStats::default();
+        for _ in 0..3 {
+            stats.count_stuck(7, 1);
+        }
+        stats.count_stuck(9, 200);
+        let line = stats.line();
+        assert_eq!(stats.stuck_sequence, 4);
+        assert!(line.contains("; system 7 component 1: its sequence number did not advance over 3 differing messages (the sender does not number its messages); they were used; system 9 component 200: its sequence number did not advance over 1 differing messages"), "{line}");
+        // Past the senders listed one by one, the rest are counted together.
+        let mut stats = LinkStats::default();
+        for sys in 0..NOTED_SENDERS as u32 + 2 {
+            stats.count_stuck(sys, 1);
+        }
+        assert_eq!(stats.stuck_senders.len(), NOTED_SENDERS);
+        assert!(stats.line().contains("; 2 more such messages from other senders, used"));
     }
 
     /// A gap is remembered across the wrap for as long as its number counts as behind (127).
     #[test]
     fn analytic_a_late_message_is_matched_to_its_gap_within_128_numbers() {
         let late = |was_lost| SeqVerdict::OutOfOrder { was_lost };
-        let mut s = Sequence::new(250);
-        assert_eq!(s.judge(253), SeqVerdict::Use { missing: 2 }); // 251, 252 skipped
+        let mut s = Sequence::new(250, 0);
+        assert_eq!(s.judge(253, 0), SeqVerdict::Use { missing: 2 }); // 251, 252 skipped
         for k in 254..=255 + 124 {
-            assert_eq!(s.judge((k % 256) as u8), SeqVerdict::Use { missing: 0 });
+            assert_eq!(s.judge((k % 256) as u8, 0), SeqVerdict::Use { missing: 0 });
         }
         // 252 is 127 behind 123 (mod 256), 251 128 behind: as far ahead, so new.
-        assert_eq!((s.last, s.judge(252), s.judge(252)), (123, late(true), late(false)));
-        assert_eq!(s.judge(251), SeqVerdict::Use { missing: 127 });
+        assert_eq!((s.last, s.judge(252, 0), s.judge(252, 0)), (123, late(true), late(false)));
+        assert_eq!(s.judge(251, 0), SeqVerdict::Use { missing: 127 });
         // A gap of 128 (the most ahead that counts as new).
-        let mut s = Sequence::new(0);
-        assert_eq!(s.judge(128), SeqVerdict::Use { missing: 127 });
-        assert_eq!(s.judge(1), late(true));
-        assert_eq!(s.judge(127), late(true));
-        assert_eq!(s.judge(1), late(false));
+        let mut s = Sequence::new(0, 0);
+        assert_eq!(s.judge(128, 0), SeqVerdict::Use { missing: 127 });
+        assert_eq!(s.judge(1, 0), late(true));
+        assert_eq!(s.judge(127, 0), late(true));
+        assert_eq!(s.judge(1, 0), late(false));
     }
 
     /// The queue keeps the newest [`QUEUE_DATAGRAMS`], counting the oldest it drops, and

@@ -4,8 +4,9 @@
 //! reader: pyulog `core.py`): a 16-byte header (`ULog` magic, version, start time), then
 //! messages `u16 size, u8 type, payload`. Read here: `B` flag bits (appended-data offsets,
 //! incompatible flags), `F` formats (`name:type field;…`, nested types and fixed arrays), `P`
-//! parameters, `A` subscriptions (`multi_id`, `msg_id`, format name) and `D` data; every other
-//! type (`I`, `M`, `Q`, `L`, `C`, `S`, `O`, `R`, unknown) is skipped as the format requires.
+//! parameters, `A` subscriptions (`multi_id`, `msg_id`, format name), `R` removals of a
+//! subscription and `D` data; every other type (`I`, `M`, `Q`, `L`, `C`, `S`, `O`, unknown) is
+//! skipped as the format requires.
 //!
 //! Topics:
 //! - One topic per subscription `(message name, multi_id)`. Instance 0 is named by the message
@@ -23,6 +24,13 @@
 //! - Samples whose timestamps break the increasing order are left out, the fewest that must
 //!   go ([`crate::log_contents`]), and counted in [`LogContents::dropped`] (never silently).
 //! - Parameters (`PWM_MAIN_REV2`, …) are kept in [`LogContents::parameters`] (last value wins).
+//! - A `msg_id` names one subscription until an `R` message removes it. Subscribing it again
+//!   to the same format name and instance (a repeated `A`) goes on filling that topic;
+//!   subscribing it to another topic or instance while it is still subscribed is an error
+//!   naming the byte, the id and both topics: the data after it could be either topic's. After
+//!   an `R` the id may be subscribed to anything (the spec asks writers not to re-use an id
+//!   even then, but the `R` tells the topics apart), and data for it before that are an error.
+//!   An `R` for an id not subscribed removes nothing.
 //!
 //! Sizes are checked before anything is allocated for them: a format whose struct (arrays of
 //! nested formats included) would exceed the 65 533 bytes a data message can carry, nests
@@ -417,6 +425,17 @@ struct Subscription {
     compiled: Compiled,
     /// For each kept field of the topic, in the topic's order, the leaf that holds it here.
     columns: Vec<usize>,
+    /// The format name and instance subscribed, and the byte of the `A` message.
+    name: String,
+    multi: u8,
+    at: u64,
+}
+
+/// A subscription an `R` message removed: what it was, and the byte of the `R`.
+struct Removed {
+    at: u64,
+    name: String,
+    multi: u8,
 }
 
 /// The reader's state between messages.
@@ -425,6 +444,9 @@ struct Decoder<'a> {
     out: LogContents,
     formats: BTreeMap<String, Vec<FieldDef>>,
     subs: BTreeMap<u16, Subscription>,
+    /// Ids whose subscription an `R` removed and that are not subscribed again (at most one
+    /// entry per `u16`).
+    removed: BTreeMap<u16, Removed>,
     builders: Vec<TopicBuilder>,
     /// `(message name, multi_id, sorted field names)` → its builder, and the layouts seen
     /// per `(message name, multi_id)` (a format redefined with other fields is a topic
@@ -445,8 +467,9 @@ struct Decoder<'a> {
 /// # Errors
 /// [`FlightDataError::LogDecode`] naming `file`, the byte offset of the offending message and
 /// what is wrong: not a ULog file, unknown incompatible flags, a malformed format definition
-/// (or one whose declared size or nesting no data message can hold), subscription or
-/// parameter, a data message for an unknown subscription or shorter than its format.
+/// (or one whose declared size or nesting no data message can hold), subscription, removal or
+/// parameter, a `msg_id` subscribed to a second topic without an `R` removing the first, a data
+/// message for an unknown or removed subscription or shorter than its format.
 pub fn parse_ulog(bytes: &[u8], file: &str) -> Result<LogContents, FlightDataError> {
     decode_ulog(bytes, file, &TopicFilter::all())
 }
@@ -478,6 +501,7 @@ pub fn decode_ulog<R: Read>(
         out: LogContents::default(),
         formats: BTreeMap::new(),
         subs: BTreeMap::new(),
+        removed: BTreeMap::new(),
         builders: Vec::new(),
         layouts: HashMap::new(),
         layout_count: HashMap::new(),
@@ -585,16 +609,11 @@ impl Decoder<'_> {
                         payload.len()
                     )));
                 }
-                let multi = payload[0];
-                let id = u16::from_le_bytes([payload[1], payload[2]]);
                 let name = text(&payload[3..], "the subscription's format name")?;
-                let replaced = self.subs.get(&id).map_or(0, |s| s.compiled.leaves.len());
-                let budget = MAX_FIELDS.saturating_sub(self.fields_held - replaced);
-                let compiled =
-                    compile_topic(&self.formats, &name, budget, &mut self.name_work_left)
-                        .map_err(|m| err(format!("subscription {id} (`{name}`): {m}")))?;
-                self.subscribe(id, multi, name, compiled);
+                self.add_logged(payload[0], u16::from_le_bytes([payload[1], payload[2]]), name, at)
+                    .map_err(err)?;
             }
+            b'R' => self.remove_logged(payload, at).map_err(err)?,
             b'D' => self.data(payload, at).map_err(err)?,
             _ => {}
         }
@@ -627,13 +646,49 @@ impl Decoder<'_> {
         Ok(())
     }
 
-    /// Subscription `id` to format `name`, instance `multi`: the topic of that field layout
-    /// (a new one `name#k` for a layout not seen before under this name), and which leaves
-    /// fill its kept fields.
-    fn subscribe(&mut self, id: u16, multi: u8, name: String, compiled: Compiled) {
+    /// The `A` message at byte `at`: subscription `id` to format `name`, instance `multi`.
+    /// `Err` when `id` is still subscribed to another topic or instance (module doc), or the
+    /// format does not compile.
+    fn add_logged(&mut self, multi: u8, id: u16, name: String, at: u64) -> Result<(), String> {
+        if let Some(old) = self.subs.get(&id)
+            && (old.name != name || old.multi != multi)
+        {
+            return Err(format!(
+                "the subscription at byte {at} re-uses msg_id {id} of topic `{}` (instance {}, \
+                 subscribed at byte {}) for `{name}` (instance {multi}) without removing it \
+                 first (an `R` message): the data after it could be either topic's",
+                old.name, old.multi, old.at
+            ));
+        }
+        let replaced = self.subs.get(&id).map_or(0, |s| s.compiled.leaves.len());
+        let budget = MAX_FIELDS.saturating_sub(self.fields_held - replaced);
+        let compiled = compile_topic(&self.formats, &name, budget, &mut self.name_work_left)
+            .map_err(|m| format!("subscription {id} (`{name}`): {m}"))?;
+        self.removed.remove(&id);
+        self.subscribe(id, multi, name, compiled, at);
+        Ok(())
+    }
+
+    /// The `R` message at byte `at`: subscription `msg_id` ends, its id free for another.
+    fn remove_logged(&mut self, payload: &[u8], at: u64) -> Result<(), String> {
+        let [lo, hi, ..] = *payload else {
+            return Err(format!("remove-subscription message of {} bytes (< 2)", payload.len()));
+        };
+        let id = u16::from_le_bytes([lo, hi]);
+        if let Some(old) = self.subs.remove(&id) {
+            self.fields_held -= old.compiled.leaves.len();
+            self.removed.insert(id, Removed { at, name: old.name, multi: old.multi });
+        }
+        Ok(())
+    }
+
+    /// Subscription `id` (its `A` message at byte `at`) to format `name`, instance `multi`:
+    /// the topic of that field layout (a new one `name#k` for a layout not seen before under
+    /// this name), and which leaves fill its kept fields.
+    fn subscribe(&mut self, id: u16, multi: u8, name: String, compiled: Compiled, at: u64) {
         let mut sorted: Vec<String> = compiled.leaves.iter().map(|l| l.name.clone()).collect();
         sorted.sort_unstable();
-        let key = (name, multi, sorted);
+        let key = (name.clone(), multi, sorted);
         let topic = match self.layouts.get(&key) {
             Some(&i) => i,
             None => {
@@ -661,7 +716,8 @@ impl Decoder<'_> {
             .filter_map(|n| index.get(n.as_str()).copied())
             .collect();
         self.fields_held += compiled.leaves.len();
-        if let Some(old) = self.subs.insert(id, Subscription { topic, compiled, columns }) {
+        let sub = Subscription { topic, compiled, columns, name, multi, at };
+        if let Some(old) = self.subs.insert(id, sub) {
             self.fields_held -= old.compiled.leaves.len();
         }
     }
@@ -673,10 +729,14 @@ impl Decoder<'_> {
         }
         let id = u16::from_le_bytes([payload[0], payload[1]]);
         let data = &payload[2..];
-        let sub = self
-            .subs
-            .get(&id)
-            .ok_or_else(|| format!("data message for unknown subscription {id}"))?;
+        let sub = self.subs.get(&id).ok_or_else(|| match self.removed.get(&id) {
+            Some(r) => format!(
+                "data message for msg_id {id}, whose subscription to `{}` (instance {}) was \
+                 removed at byte {}",
+                r.name, r.multi, r.at
+            ),
+            None => format!("data message for unknown subscription {id}"),
+        })?;
         let b = &mut self.builders[sub.topic];
         let c = &sub.compiled;
         if data.len() < c.min_len {

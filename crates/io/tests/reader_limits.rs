@@ -438,3 +438,80 @@ fn errors_every_topics_first_sample_a_day_early_is_dropped_and_counted() {
     assert_eq!(samples.len(), 1001);
     assert_eq!(samples[0], 50.0);
 }
+
+/// An `R` (remove logged message) message for `msg_id` `id`.
+fn remove_subscription(u: &mut Ulog, id: u16) {
+    u.msg(b'R', &id.to_le_bytes());
+}
+
+/// A `msg_id` still subscribed to topic `a` and subscribed again to `b` (another format, another
+/// instance) with no `R` between: the data after it could be either topic's, so the log is
+/// refused at that subscription, naming the id and both topics (the reader used to hand every
+/// later sample of the id to `b`).
+#[test]
+fn errors_ulog_msg_id_reused_for_another_topic_without_removal_is_refused() {
+    let mut u = Ulog::new();
+    u.format("a:uint64_t timestamp;float x;");
+    u.format("b:uint64_t timestamp;float y;");
+    let first = u.0.len() as u64;
+    u.subscribe(0, 3, "a");
+    u.data_f32(3, 1_000, &[1.0]);
+    let second = u.0.len() as u64;
+    u.subscribe(1, 3, "b");
+    u.data_f32(3, 2_000, &[2.0]);
+    let e = parse_ulog(&u.0, "reuse.ulg").unwrap_err();
+    let text = e.to_string();
+    let (offset, msg) = decode_error(e);
+    assert_eq!(offset, second);
+    assert!(text.starts_with(&format!("reuse.ulg: byte {second}: ")), "{text}");
+    assert!(
+        msg.contains(&format!(
+            "the subscription at byte {second} re-uses msg_id 3 of topic `a` (instance 0, subscribed at byte {first}) for `b` (instance 1) without removing it first"
+        )),
+        "{msg}"
+    );
+    // The same topic and instance under another format is still another subscription.
+    let mut u = Ulog::new();
+    u.format("a:uint64_t timestamp;float x;");
+    u.subscribe(0, 3, "a");
+    u.subscribe(1, 3, "a");
+    let (_, msg) = decode_error(parse_ulog(&u.0, "reuse.ulg").unwrap_err());
+    assert!(
+        msg.contains("msg_id 3 of topic `a` (instance 0") && msg.contains("for `a` (instance 1)")
+    );
+}
+
+/// An `R` frees its `msg_id`: the data before it are `a`'s, the data after a new subscription
+/// `b`'s; a data message between the two (the id subscribed to nothing) is refused naming the
+/// id and where it was removed, where the reader used to give it to `a`.
+#[test]
+fn val_ulog_removed_msg_id_may_be_subscribed_again() {
+    let mut u = Ulog::new();
+    u.format("a:uint64_t timestamp;float x;");
+    u.format("b:uint64_t timestamp;float y;float z;");
+    u.subscribe(0, 3, "a");
+    u.data_f32(3, 1_000, &[1.0]);
+    u.data_f32(3, 2_000, &[2.0]);
+    let removed = u.0.len() as u64;
+    remove_subscription(&mut u, 3);
+    let mut stray = Ulog(u.0.clone());
+    u.subscribe(0, 3, "b");
+    u.data_f32(3, 3_000, &[3.0, 4.0]);
+    let c = parse_ulog(&u.0, "removed.ulg").unwrap();
+    let topic = |n: &str| c.topics.iter().find(|t| t.name == n).unwrap();
+    assert_eq!(topic("a").t_s, [0.001, 0.002]);
+    assert_eq!(topic("a").fields, [("x".to_string(), vec![1.0, 2.0])]);
+    assert_eq!(topic("b").t_s, [0.003]);
+    assert_eq!(topic("b").fields, [("y".to_string(), vec![3.0]), ("z".to_string(), vec![4.0])]);
+    // Data for the removed id before it is subscribed again.
+    let at = stray.0.len() as u64;
+    stray.data_f32(3, 3_000, &[3.0]);
+    let (offset, msg) = decode_error(parse_ulog(&stray.0, "stray.ulg").unwrap_err());
+    assert_eq!(offset, at);
+    assert!(
+        msg.contains(&format!(
+            "data message for msg_id 3, whose subscription to `a` (instance 0) was removed at byte {removed}"
+        )),
+        "{msg}"
+    );
+}

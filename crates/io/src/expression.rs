@@ -77,13 +77,14 @@ impl Expression {
     /// Parses `text` (module doc).
     ///
     /// # Errors
-    /// A name called as a function that is none, naming it and the functions there are; the
-    /// parser's message, for other text that is not an expression of this grammar.
+    /// A name called as a function that is none, naming it and the functions there are; for
+    /// other text that is not an expression of this grammar, what is wrong and where, in the
+    /// grammar's terms (the number that is not one, the operator without a value, the
+    /// parenthesis not closed, with its character).
     pub fn parse(text: &str) -> Result<Self, String> {
         check_functions(text)?;
-        let flat = FlatEx::<f64, ChannelOps, ChannelNumber>::parse(text).map_err(|e| {
-            format!("not an expression of the mapping grammar (docs/mapping.md): {e}")
-        })?;
+        let flat = FlatEx::<f64, ChannelOps, ChannelNumber>::parse(text)
+            .map_err(|_| cause_of_failure(text))?;
         let columns = flat.var_names().iter().map(|n| unbraced(n).to_string()).collect();
         Ok(Self { text: text.to_string(), flat, columns })
     }
@@ -107,14 +108,19 @@ impl Expression {
 }
 
 /// Refuses a name followed by `(` that is not a function of [`ChannelOps`]: exmex would read it
-/// as a column and answer about a parenthesis instead of the unknown function.
+/// as a column and answer about a parenthesis instead of the unknown function. Refuses a `{`
+/// that is not closed.
 fn check_functions(text: &str) -> Result<(), String> {
     let chars: Vec<char> = text.chars().collect();
     let mut k = 0;
     while k < chars.len() {
         if chars[k] == '{' {
-            // A braced column name: anything up to its closing brace.
-            k = chars[k..].iter().position(|c| *c == '}').map_or(chars.len(), |p| k + p + 1);
+            // A braced column name: anything up to its closing brace. Without one, exmex would
+            // take the rest of the text for a column name (`{x + 1` reading a column `x + 1`).
+            let Some(p) = chars[k..].iter().position(|c| *c == '}') else {
+                return Err(format!("the `{{` at character {} has no closing `}}`", k + 1));
+            };
+            k += p + 1;
             continue;
         }
         let starts = chars[k].is_ascii_alphabetic() || chars[k] == '_';
@@ -151,6 +157,199 @@ fn functions() -> Vec<String> {
     names.sort();
     names.dedup();
     names
+}
+
+/// What a token of a channel expression is, for [`cause_of_failure`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Kind {
+    /// A number, a column or a named constant (`PI`).
+    Value,
+    /// A function of one argument (`sqrt`).
+    Function,
+    /// `*`, `/`, `^` or a named binary operator (`min`).
+    Binary,
+    /// `+` or `-`: binary after a value, a sign before one.
+    Sign,
+    /// `(`
+    Open,
+    /// `)`
+    Close,
+}
+
+/// One token: its kind, its text and the 1-based character it starts at.
+struct Token {
+    kind: Kind,
+    text: String,
+    at: usize,
+}
+
+/// Why `text` is not a channel expression, in the mapping's terms: what is wrong and at which
+/// character. Called when the parser refused `text`: its own messages speak of its internals
+/// ("we have 1 ops and 3 node"), which tell a user nothing about `2e * x`.
+fn cause_of_failure(text: &str) -> String {
+    match tokens(text).and_then(|t| check_order(&t)) {
+        Err(cause) => cause,
+        // Every token in its place, yet the parser refused: say so without its internals.
+        Ok(()) => format!(
+            "cannot parse `{text}` as an expression of the mapping grammar (docs/mapping.md): \
+             arithmetic `+ - * / ^`, parentheses, numbers, columns and functions"
+        ),
+    }
+}
+
+/// The end of the number starting at `chars[k]` (the form of [`ChannelNumber`]), or why the
+/// word there is not one (`2e`, `3.`, `2x`).
+fn number_end(chars: &[char], k: usize) -> Result<usize, String> {
+    let word = |from: usize, to: usize| chars[from..to].iter().collect::<String>();
+    let digits = |mut j: usize| {
+        while j < chars.len() && chars[j].is_ascii_digit() {
+            j += 1;
+        }
+        j
+    };
+    let mut j = digits(k);
+    if j < chars.len() && chars[j] == '.' {
+        let after = digits(j + 1);
+        if after == j + 1 {
+            return Err(format!(
+                "`{}` is not a number: a decimal point needs digits after it, as in `{}0`",
+                word(k, j + 1),
+                word(k, j + 1)
+            ));
+        }
+        j = after;
+    }
+    if j < chars.len() && matches!(chars[j], 'e' | 'E') {
+        let mut m = j + 1;
+        if m < chars.len() && matches!(chars[m], '+' | '-') {
+            m += 1;
+        }
+        let end = digits(m);
+        if end == m {
+            return Err(format!(
+                "`{}` is not a number: exponent notation needs digits after `{}`, as in `2e-3`",
+                word(k, m),
+                chars[j]
+            ));
+        }
+        j = end;
+    }
+    let word_char = |c: char| c.is_alphanumeric() || c == '_' || c == '.';
+    if j < chars.len() && word_char(chars[j]) {
+        let end = (j..chars.len()).find(|&e| !word_char(chars[e])).unwrap_or(chars.len());
+        let w = word(k, end);
+        if w.matches('.').count() > 1 {
+            return Err(format!("`{w}` is not a number: it has more than one decimal point"));
+        }
+        return Err(format!(
+            "`{w}` is not a number, nor a column name (a column name starts with a letter or `_`; \
+             a product needs `*`, as in `2 * x`)"
+        ));
+    }
+    Ok(j)
+}
+
+/// The tokens of `text`, or why a character or word there is no token of the grammar.
+fn tokens(text: &str) -> Result<Vec<Token>, String> {
+    let ops = ChannelOps::make();
+    let chars: Vec<char> = text.chars().collect();
+    let mut out = Vec::new();
+    let mut k = 0;
+    while k < chars.len() {
+        let c = chars[k];
+        let (kind, end) = match c {
+            _ if c.is_whitespace() => {
+                k += 1;
+                continue;
+            }
+            '{' => match chars[k..].iter().position(|c| *c == '}') {
+                Some(p) => (Kind::Value, k + p + 1),
+                None => return Err(format!("the `{{` at character {} has no closing `}}`", k + 1)),
+            },
+            '0'..='9' => (Kind::Value, number_end(&chars, k)?),
+            '.' if chars.get(k + 1).is_some_and(char::is_ascii_digit) => {
+                (Kind::Value, number_end(&chars, k)?)
+            }
+            '+' | '-' => (Kind::Sign, k + 1),
+            '*' | '/' | '^' => (Kind::Binary, k + 1),
+            '(' => (Kind::Open, k + 1),
+            ')' => (Kind::Close, k + 1),
+            _ if c.is_alphabetic() || c == '_' => {
+                let end = (k..chars.len())
+                    .find(|&e| !(chars[e].is_alphanumeric() || chars[e] == '_'))
+                    .unwrap_or(chars.len());
+                let name: String = chars[k..end].iter().collect();
+                let kind = match ops.iter().find(|o| o.repr() == name) {
+                    Some(o) if o.constant().is_some() => Kind::Value,
+                    Some(o) if o.has_bin() => Kind::Binary,
+                    Some(_) => Kind::Function,
+                    None => Kind::Value,
+                };
+                (kind, end)
+            }
+            _ => {
+                return Err(format!(
+                    "`{c}` (character {}) is not part of an expression: arithmetic `+ - * / ^`, \
+                     parentheses, numbers, columns (`{{…}}` for a name with other characters) \
+                     and functions",
+                    k + 1
+                ));
+            }
+        };
+        out.push(Token { kind, text: chars[k..end].iter().collect(), at: k + 1 });
+        k = end;
+    }
+    Ok(out)
+}
+
+/// Checks that values and operators alternate and parentheses pair up, naming the first token
+/// out of place.
+fn check_order(tokens: &[Token]) -> Result<(), String> {
+    let mut want_value = true;
+    let mut open: Vec<usize> = Vec::new();
+    let mut prev: Option<&Token> = None;
+    for t in tokens {
+        match t.kind {
+            Kind::Value | Kind::Function | Kind::Open if !want_value => {
+                let before = prev.map_or("", |p| p.text.as_str());
+                return Err(format!(
+                    "no operator between `{before}` and `{}` (character {}): a product needs \
+                     `*`, as in `2 * x`",
+                    t.text, t.at
+                ));
+            }
+            Kind::Value | Kind::Close => want_value = false,
+            Kind::Function | Kind::Sign => want_value = true,
+            Kind::Open => open.push(t.at),
+            Kind::Binary if want_value => {
+                return Err(format!("`{}` at character {} has no value on its left", t.text, t.at));
+            }
+            Kind::Binary => want_value = true,
+        }
+        if t.kind == Kind::Close {
+            if prev.is_some_and(|p| p.kind == Kind::Open) {
+                return Err(format!("the `()` at character {} holds no value", t.at - 1));
+            }
+            if let Some(p) = prev.filter(|p| p.kind != Kind::Value && p.kind != Kind::Close) {
+                return Err(format!(
+                    "the `)` at character {} follows `{}`: a value is missing",
+                    t.at, p.text
+                ));
+            }
+            if open.pop().is_none() {
+                return Err(format!("the `)` at character {} closes no `(`", t.at));
+            }
+        }
+        prev = Some(t);
+    }
+    match (prev, open.last()) {
+        (None, _) => Err("the expression is empty".into()),
+        (Some(p), _) if want_value => {
+            Err(format!("the expression ends with `{}`: a value is missing after it", p.text))
+        }
+        (_, Some(at)) => Err(format!("the `(` at character {at} is not closed")),
+        _ => Ok(()),
+    }
 }
 
 fn unbraced(name: &str) -> &str {
@@ -194,6 +393,25 @@ mod tests {
         }
         let e = Expression::parse("e1 + exp_x").unwrap();
         assert_eq!(e.columns(), ["e1", "exp_x"]);
+    }
+
+    /// Text the parser refuses is explained token by token: a constant and a function are
+    /// told from a column, an empty pair of parentheses and a missing argument are named, and
+    /// nothing of the parser's own wording remains.
+    #[test]
+    fn refused_text_is_explained_in_the_grammar_s_terms() {
+        for (text, cause) in [
+            ("2 PI", "no operator between `2` and `PI` (character 3)"),
+            ("x * sqrt", "the expression ends with `sqrt`: a value is missing after it"),
+            ("sqrt() + x", "the `()` at character 5 holds no value"),
+            ("(x +) * 2", "the `)` at character 5 follows `+`: a value is missing"),
+            ("   ", "the expression is empty"),
+            ("x min", "the expression ends with `min`"),
+            (".5.5 * x", "`.5.5` is not a number: it has more than one decimal point"),
+        ] {
+            let e = Expression::parse(text).unwrap_err();
+            assert!(e.contains(cause), "{text}: {e}");
+        }
     }
 
     /// A call of a function that does not exist names it and the functions there are (a

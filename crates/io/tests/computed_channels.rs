@@ -100,3 +100,46 @@ fn errors_bad_expressions_name_the_file_and_channel() {
     let e = Mapping::from_toml_str(&bad, "computed.toml").unwrap_err().to_string();
     assert!(e.contains("inertia_reference_mass_kg") && e.contains("> 0"), "{e}");
 }
+
+/// Expressions that do not parse: the error names the file, the channel and the expression,
+/// and says what is wrong in the mapping's terms (the parser's own wording, about its counts of
+/// operators and nodes, is not what a user can act on).
+#[test]
+fn errors_malformed_expressions_say_what_is_wrong_in_plain_words() {
+    let with = |expr: &str| {
+        MAPPING.replace(
+            "de = { expr = \"({elev.left} + {elev.right}) / 2\", unit = \"deg\", offset = 1.0 }",
+            &format!("de = {{ expr = \"{expr}\", unit = \"deg\" }}"),
+        )
+    };
+    for (expr, cause) in [
+        (
+            "2e * elevator_rad",
+            "`2e` is not a number: exponent notation needs digits after `e`, as in `2e-3`",
+        ),
+        (
+            "1.5E+ * x",
+            "`1.5E+` is not a number: exponent notation needs digits after `E`, as in `2e-3`",
+        ),
+        ("2x + 1", "`2x` is not a number"),
+        ("3. * x", "`3.` is not a number: a decimal point needs digits after it, as in `3.0`"),
+        ("x y", "no operator between `x` and `y`"),
+        ("2 (x + 1)", "no operator between `2` and `(`"),
+        ("(x + 1", "the `(` at character 1 is not closed"),
+        ("x + 1)", "the `)` at character 6 closes no `(`"),
+        ("x * / y", "`/` at character 5 has no value on its left"),
+        ("x *", "the expression ends with `*`: a value is missing after it"),
+        ("x $ y", "`$` (character 3) is not part of an expression"),
+        ("{x + 1", "the `{` at character 1 has no closing `}`"),
+    ] {
+        let e = Mapping::from_toml_str(&with(expr), "computed.toml").unwrap_err();
+        let text = e.to_string();
+        assert!(matches!(e, FlightDataError::BadSpec { .. }), "{expr}: {text}");
+        assert!(
+            text.starts_with(&format!("computed.toml: channel `de`: expr `{expr}`: ")),
+            "{expr}: {text}"
+        );
+        assert!(text.contains(cause), "{expr}: {text}");
+        assert!(!text.contains("node") && !text.contains("wlog"), "{expr}: {text}");
+    }
+}

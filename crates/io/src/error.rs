@@ -1,5 +1,10 @@
 //! Errors of flight-data reading. Every variant names the file, and where it applies the row
-//! (line number in the file, header = line 1), the column and the channel.
+//! (line number in the file, header = line 1), the column and the channel. Values are shown
+//! exact when short, else in short scientific form ([`crate::message::exact_or_short`]): a
+//! corrupt value or an absurd mapping scale (1e300) would otherwise be written out in hundreds
+//! of digits.
+
+use crate::message::{exact_or_short, short};
 
 /// A flight-data or mapping error.
 #[derive(Debug, thiserror::Error)]
@@ -242,7 +247,7 @@ pub enum RowProblem {
         text: String,
     },
     /// A finite raw value that is not finite after the unit conversion (overflow).
-    #[error("column `{column}`: `{text}` is not finite in SI (`{channel}` = {value})")]
+    #[error("column `{column}`: `{text}` is not finite in SI (`{channel}` = {})", short(*value))]
     NonFiniteSi {
         /// Column name(s).
         column: String,
@@ -254,7 +259,7 @@ pub enum RowProblem {
         value: f64,
     },
     /// Time equal to the previous accepted sample's.
-    #[error("column `{column}`: repeated time {t_s} s")]
+    #[error("column `{column}`: repeated time {} s", exact_or_short(*t_s))]
     RepeatedTime {
         /// Time column name.
         column: String,
@@ -262,7 +267,11 @@ pub enum RowProblem {
         t_s: f64,
     },
     /// Time earlier than the previous accepted sample's.
-    #[error("column `{column}`: time {t_s} s goes backwards (previous {prev_t_s} s)")]
+    #[error(
+        "column `{column}`: time {} s goes backwards (previous {} s)",
+        exact_or_short(*t_s),
+        exact_or_short(*prev_t_s)
+    )]
     NonMonotonicTime {
         /// Time column name.
         column: String,
@@ -275,7 +284,10 @@ pub enum RowProblem {
     /// [`crate::flight_data::IMPLAUSIBLE_JUMP_FACTOR`] × the nominal interval): the row is
     /// rejected and the previous time kept, so one corrupt time does not reject every later row.
     #[error(
-        "column `{column}`: time {t_s} s jumps implausibly far ahead of the previous {prev_t_s} s (more than {factor:e} × the nominal interval {nominal_dt_s} s)"
+        "column `{column}`: time {} s jumps implausibly far ahead of the previous {} s (more than {factor:e} × the nominal interval {} s)",
+        exact_or_short(*t_s),
+        exact_or_short(*prev_t_s),
+        exact_or_short(*nominal_dt_s)
     )]
     ImplausibleTimeJump {
         /// Time column name.
@@ -295,7 +307,8 @@ pub enum RowProblem {
     /// later). A corrupt time stamp, not a gap: the run alone is rejected and the record goes
     /// on from the previous time.
     #[error(
-        "column `{column}`: time {t_s} s is ahead of {}: a bad time stamp, not a gap",
+        "column `{column}`: time {} s is ahead of {}: a bad time stamp, not a gap",
+        exact_or_short(*t_s),
         outlier_neighbours(*prev_t_s, *next_t_s)
     )]
     TimeOutlier {
@@ -325,7 +338,11 @@ pub enum RowProblem {
     /// A finite value outside the plausibility limits every estimator applies
     /// (`aeroident_estimators::sample::PLAUSIBILITY`, e.g. V > 5000 m/s, |α| > 10 rad): a
     /// corrupt record, rejected here so that no sample the reader yields is refused later.
-    #[error("{field} = {value} is implausible (limit {limit}; SI, after the mapping's conversion)")]
+    #[error(
+        "{field} = {} is implausible (limit {}; SI, after the mapping's conversion)",
+        exact_or_short(*value),
+        exact_or_short(*limit)
+    )]
     Implausible {
         /// The channel as the mapping names it, and its source
         /// ([`crate::Mapping::field_label`], e.g. ``channel `vt` (column `V`)``).
@@ -339,7 +356,11 @@ pub enum RowProblem {
     /// pipelines' spike screen): an isolated sample (`samples` = 1), or one of a short run of
     /// `samples` consecutive gross outliers with the channel back at its level on both sides.
     /// The row is not used.
-    #[error("{field} = {value} is {}", spike_detail(*samples, *median, *threshold))]
+    #[error(
+        "{field} = {} is {}",
+        exact_or_short(*value),
+        spike_detail(*samples, *median, *threshold)
+    )]
     Spike {
         /// The channel as the mapping names it, and its source
         /// ([`crate::Mapping::field_label`], e.g. ``channel `thrust` (column `thrust_N`)``).
@@ -365,6 +386,7 @@ pub enum RowProblem {
 
 /// What a [`RowProblem::Spike`] is, for its message.
 fn spike_detail(samples: usize, median: f64, threshold: f64) -> String {
+    let (median, threshold) = (exact_or_short(median), exact_or_short(threshold));
     match samples {
         1 => format!(
             "an isolated spike (median of its neighbours {median}, more than {threshold} away)"
@@ -377,9 +399,12 @@ fn spike_detail(samples: usize, median: f64, threshold: f64) -> String {
 
 /// The rows a [`RowProblem::TimeOutlier`] is ahead of, for its message.
 fn outlier_neighbours(prev_t_s: Option<f64>, next_t_s: f64) -> String {
+    let next = exact_or_short(next_t_s);
     match prev_t_s {
-        Some(p) => format!("both the previous row ({p} s) and the next ({next_t_s} s)"),
-        None => format!("the rows after it (next {next_t_s} s) at the record's start"),
+        Some(p) => {
+            format!("both the previous row ({} s) and the next ({next} s)", exact_or_short(p))
+        }
+        None => format!("the rows after it (next {next} s) at the record's start"),
     }
 }
 
@@ -405,5 +430,68 @@ impl RowProblem {
             Self::Spike { .. } => "spike run",
             Self::Domain { .. } => "value outside its domain",
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every row problem holding a value: with values no record holds (1e300, 1e-300, which
+    /// Rust writes out in over 300 characters) its message stays a line and gives them in
+    /// short scientific form; ordinary values stay exact.
+    #[test]
+    fn row_problems_show_huge_and_tiny_values_short() {
+        let column = || "t".to_string();
+        let field = || "channel `q` (column `Q`)".to_string();
+        let (big, tiny) = (1e300, -1e-300);
+        let problems = [
+            RowProblem::NonFiniteSi {
+                column: column(),
+                channel: "q".into(),
+                text: "1e300".into(),
+                value: f64::INFINITY,
+            },
+            RowProblem::RepeatedTime { column: column(), t_s: big },
+            RowProblem::NonMonotonicTime { column: column(), t_s: tiny, prev_t_s: big },
+            RowProblem::ImplausibleTimeJump {
+                column: column(),
+                t_s: big,
+                prev_t_s: tiny,
+                nominal_dt_s: tiny,
+                factor: 1e6,
+            },
+            RowProblem::TimeOutlier {
+                column: column(),
+                t_s: big,
+                prev_t_s: Some(tiny),
+                next_t_s: big,
+            },
+            RowProblem::TimeOutlier { column: column(), t_s: big, prev_t_s: None, next_t_s: tiny },
+            RowProblem::Implausible { field: field(), value: big, limit: tiny },
+            RowProblem::Spike {
+                field: field(),
+                value: big,
+                median: tiny,
+                threshold: big,
+                samples: 1,
+            },
+            RowProblem::Spike {
+                field: field(),
+                value: tiny,
+                median: big,
+                threshold: big,
+                samples: 3,
+            },
+        ];
+        for p in &problems {
+            let m = p.to_string();
+            assert!(m.len() < 300, "{} bytes: {m}", m.len());
+            assert!(m.contains("1.000e300") || m.contains("inf"), "{m}");
+        }
+        // A value just past its limit (π/2, written out as Rust writes it) stays told apart.
+        let limit = std::f64::consts::FRAC_PI_2;
+        let m = RowProblem::Implausible { field: field(), value: 1.57081, limit }.to_string();
+        assert!(m.contains("= 1.57081 is implausible (limit 1.5707963267948966;"), "{m}");
     }
 }

@@ -109,6 +109,7 @@
 //! as not finite (naming the column). Servo PWM → surface deflection is the intended use.
 
 use crate::FlightDataError;
+use crate::message::exact_or_short;
 use crate::table::Interpolation;
 use crate::units::{Dimension, Unit};
 use serde::Deserialize;
@@ -420,21 +421,24 @@ impl Actuator {
         if !(a.tau_s > 0.0 && a.tau_s <= 1.0) {
             return Err(format!(
                 "actuator `tau_s = {}`: a time constant must be in (0, 1] s",
-                a.tau_s
+                exact_or_short(a.tau_s)
             ));
         }
         let rate = a.rate_limit_rad_s.unwrap_or(f64::INFINITY);
         let usable = rate > 0.0 && (rate.is_finite() || a.rate_limit_rad_s.is_none());
         if !usable {
             return Err(format!(
-                "actuator `rate_limit_rad_s = {rate}`: must be positive and finite"
+                "actuator `rate_limit_rad_s = {}`: must be positive and finite",
+                exact_or_short(rate)
             ));
         }
         let (lo, hi) = match a.position_limits_rad {
             Some([lo, hi]) if lo.is_finite() && hi.is_finite() && lo < hi => (lo, hi),
             Some([lo, hi]) => {
                 return Err(format!(
-                    "actuator `position_limits_rad = [{lo}, {hi}]`: must be finite with min < max"
+                    "actuator `position_limits_rad = [{}, {}]`: must be finite with min < max",
+                    exact_or_short(lo),
+                    exact_or_short(hi)
                 ));
             }
             None => (f64::NEG_INFINITY, f64::INFINITY),
@@ -863,7 +867,7 @@ fn channel_map(
         return Err(FlightDataError::BadSpec {
             file: file.to_string(),
             channel: ch.key().into(),
-            reason: format!("must be > 0, got {v}"),
+            reason: format!("must be > 0, got {}", exact_or_short(v)),
         });
     }
     if let Some(v) = m.constant()
@@ -937,7 +941,7 @@ fn check_file_settings(
         return Err(FlightDataError::BadSpec {
             file: file.to_string(),
             channel: "nominal_dt_s".into(),
-            reason: format!("must be finite and > 0, got {dt}"),
+            reason: format!("must be finite and > 0, got {}", exact_or_short(dt)),
         });
     }
     if let Some(m0) = raw.inertia_reference_mass_kg {
@@ -987,7 +991,10 @@ fn resolve_log_tables(
             let clock = match (a.rate_hz, &a.clock) {
                 (Some(r), None) if r.is_finite() && r > 0.0 => Clock::RateHz(r),
                 (Some(r), None) => {
-                    return Err(bad("align.rate_hz", format!("must be finite and > 0, got {r}")));
+                    return Err(bad(
+                        "align.rate_hz",
+                        format!("must be finite and > 0, got {}", exact_or_short(r)),
+                    ));
                 }
                 (None, Some(c)) if !c.is_empty() => Clock::Topic(c.clone()),
                 _ => {
@@ -1035,7 +1042,7 @@ fn resolve_log_tables(
             if !(min_vt_mps.is_finite() && min_vt_mps > 0.0) {
                 return Err(bad(
                     "air_data.min_vt_mps",
-                    format!("must be finite and > 0, got {min_vt_mps}"),
+                    format!("must be finite and > 0, got {}", exact_or_short(min_vt_mps)),
                 ));
             }
             Some(AirDataSpec { ned_velocity, wind_ne, min_vt_mps })
@@ -1173,21 +1180,47 @@ fn check_gain(spec: &ChannelSpec, unit: &Unit, source: &Source) -> Result<(), St
     Ok(())
 }
 
+/// A calibration table `[raw, value]`: at least 2 finite points, raw values increasing
+/// strictly, values running one way ([`check_calibration_values`]).
+fn check_calibration(t: &[(f64, f64)]) -> Result<(), String> {
+    if t.len() < 2 {
+        return Err(format!("calibration needs at least 2 points, got {}", t.len()));
+    }
+    if let Some((r, v)) = t.iter().find(|(r, v)| !(r.is_finite() && v.is_finite())) {
+        return Err(format!(
+            "calibration point [{}, {}] is not finite",
+            exact_or_short(*r),
+            exact_or_short(*v)
+        ));
+    }
+    if let Some(w) = t.windows(2).find(|w| w[1].0 <= w[0].0) {
+        return Err(format!(
+            "calibration raw values must increase strictly: {} then {}",
+            exact_or_short(w[0].0),
+            exact_or_short(w[1].0)
+        ));
+    }
+    check_calibration_values(t)
+}
+
 /// A calibration's values must not all be equal (a constant channel) and must run one way
 /// (non-decreasing or non-increasing; flat stretches are dead bands): a table that rises and
 /// falls maps two raw values to one deflection.
 fn check_calibration_values(table: &[(f64, f64)]) -> Result<(), String> {
     let first = table[0].1;
     if table.iter().all(|(_, v)| *v == first) {
-        return Err(format!("calibration values are all {first}: the channel would be constant"));
+        return Err(format!(
+            "calibration values are all {}: the channel would be constant",
+            exact_or_short(first)
+        ));
     }
     let rises = table.windows(2).any(|w| w[1].1 > w[0].1);
     let falls = table.windows(2).any(|w| w[1].1 < w[0].1);
     if rises && falls {
-        let values: Vec<String> = table.iter().map(|(_, v)| v.to_string()).collect();
+        let values: Vec<String> = table.iter().map(|(_, v)| exact_or_short(*v)).collect();
         return Err(format!(
             "calibration values rise and fall ({}): two raw values would give the same value; the values must run one way",
-            values.join(", ")
+            crate::message::list(&values, 12)
         ));
     }
     Ok(())
@@ -1254,14 +1287,14 @@ fn resolve(
                 )));
             }
             if let Some(w) = weights.iter().find(|w| !w.is_finite()) {
-                return Err(bad(format!("weight {w} is not finite")));
+                return Err(bad(format!("weight {} is not finite", exact_or_short(*w))));
             }
             Source::Columns(cs.iter().cloned().zip(weights).collect())
         }
         (None, None, Some(v)) => {
             let si = (v * spec.scale + spec.offset) * unit.to_si;
             if !si.is_finite() {
-                return Err(bad(format!("value {v} is not finite in SI ({si})")));
+                return Err(bad(format!("value {} is not finite in SI ({si})", exact_or_short(v))));
             }
             Source::Constant(si)
         }
@@ -1284,19 +1317,7 @@ fn resolve(
         }
         Some(points) => {
             let t: Vec<(f64, f64)> = points.iter().map(|[r, v]| (*r, *v)).collect();
-            if t.len() < 2 {
-                return Err(bad(format!("calibration needs at least 2 points, got {}", t.len())));
-            }
-            if let Some((r, v)) = t.iter().find(|(r, v)| !(r.is_finite() && v.is_finite())) {
-                return Err(bad(format!("calibration point [{r}, {v}] is not finite")));
-            }
-            if let Some(w) = t.windows(2).find(|w| w[1].0 <= w[0].0) {
-                return Err(bad(format!(
-                    "calibration raw values must increase strictly: {} then {}",
-                    w[0].0, w[1].0
-                )));
-            }
-            check_calibration_values(&t).map_err(bad)?;
+            check_calibration(&t).map_err(bad)?;
             Some(t)
         }
     };

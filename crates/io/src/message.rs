@@ -9,6 +9,20 @@ pub fn short(v: f64) -> String {
     aeroident_physics::text::Short(v).to_string()
 }
 
+/// Longest text [`exact_or_short`] keeps exact: room for the 17 significant digits of any
+/// `f64`, a sign, a point and a few zeros (`-0.000012345678901234568`).
+pub const EXACT_MAX: usize = 24;
+
+/// `v` as Rust writes it (the shortest text that reads back as `v`) when that takes at most
+/// [`EXACT_MAX`] characters, else in the [`short`] form. For values a message compares (a time
+/// and the previous one, a value and its limit), which must stay told apart: `1.5708` would
+/// hide that `1.57081` passes the limit `1.5707963267948966`, while Rust writes `1e300` out in
+/// 301 digits.
+pub fn exact_or_short(v: f64) -> String {
+    let exact = v.to_string();
+    if exact.len() <= EXACT_MAX { exact } else { short(v) }
+}
+
 /// A count in the short form of [`short`]: in full below 10⁶, else scientific.
 pub fn short_count(n: usize) -> String {
     if n < 1_000_000 { n.to_string() } else { format!("{:.3e}", n as f64) }
@@ -39,6 +53,17 @@ mod tests {
         assert_eq!(short(f64::MAX), "1.798e308");
         assert_eq!(short_count(999_999), "999999");
         assert_eq!(short_count(10_000_000), "1.000e7");
+    }
+
+    #[test]
+    fn values_are_exact_unless_their_text_is_long() {
+        assert_eq!(exact_or_short(std::f64::consts::FRAC_PI_2), "1.5707963267948966");
+        assert_eq!(exact_or_short(1234.567891), "1234.567891");
+        assert_eq!(exact_or_short(-0.000012345678901234568), "-0.000012345678901234568");
+        assert_eq!(exact_or_short(1e300), "1.000e300");
+        assert_eq!(exact_or_short(-1e-300), "-1.000e-300");
+        assert_eq!(exact_or_short(1e308), "1.000e308");
+        assert_eq!(exact_or_short(f64::INFINITY), "inf");
     }
 
     #[test]

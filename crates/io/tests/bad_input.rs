@@ -261,6 +261,42 @@ fn errors_one_absurd_time_rejects_only_its_row() {
     }
 }
 
+/// A mapping scale of 1e300 makes `de` 1e300 rad, and a time of 1e308 s jumps ahead: each
+/// message gives the value in short scientific form (Rust writes such a value out in 301 and 309
+/// digits), so it stays a line.
+#[test]
+fn errors_huge_values_are_shown_short_in_row_messages() {
+    let text = std::fs::read_to_string(data("min.toml")).unwrap().replace(
+        "de = { column = \"de\", unit = \"deg\", scale = -1.0, offset = 0.5 }",
+        "de = { column = \"de\", unit = \"rad\", scale = 1e300 }",
+    );
+    let m = Mapping::from_toml_str(&text, "huge.toml").unwrap();
+    // `row` writes de = 1.0: 1e300 rad once scaled.
+    let mut csv = HEADER.to_string();
+    csv.push_str(&row("0.0"));
+    let ev: Vec<RecordEvent> = FlightDataReader::new(csv.as_bytes(), "huge.csv", &m)
+        .unwrap()
+        .map(|e| e.unwrap())
+        .collect();
+    let RecordEvent::Rejected { problem, .. } = &ev[0] else { panic!("{ev:?}") };
+    let msg = problem.to_string();
+    assert!(matches!(problem, RowProblem::Implausible { .. }), "{msg}");
+    assert!(msg.contains("= 1.000e300 is implausible"), "{msg}");
+    assert!(msg.len() < 300, "{} bytes: {msg}", msg.len());
+    let mut csv = HEADER.to_string();
+    for t in ["0.0", "0.1", "1e308", "0.2"] {
+        csv.push_str(&row(t));
+    }
+    let ev = events_str(&csv);
+    let RecordEvent::Rejected { problem, .. } = &ev[2] else { panic!("{:?}", ev[2]) };
+    let msg = problem.to_string();
+    assert!(
+        msg.contains("time 1.000e308 s jumps implausibly far ahead of the previous 0.1 s"),
+        "{msg}"
+    );
+    assert!(msg.len() < 300, "{} bytes: {msg}", msg.len());
+}
+
 /// A semicolon- or tab-delimited file: the missing-column error says so.
 #[test]
 fn errors_semicolon_or_tab_file_gets_a_delimiter_hint() {

@@ -13,7 +13,9 @@
 //! - **manoeuvres**: for the whole-record consumers, the events gathered into manoeuvres split
 //!   at the gaps ([`read_records`]).
 //!
-//! [`duplicates`] refuses a record given twice (same file or same content) unless asked.
+//! [`duplicates`] refuses a record given twice (same file or same content) unless asked;
+//! [`tally`] names a file of several that gives no sample, and warns of one most of whose rows
+//! were rejected.
 //! [`needs`] says what a model structure needs from a record's samples. Every error of the
 //! stage is a [`RecordError`], naming the file, the option as the command line spells it, or
 //! the model.
@@ -23,6 +25,7 @@ pub mod corrections;
 pub mod duplicates;
 pub mod needs;
 pub mod outliers;
+pub mod tally;
 
 pub use corrections::{Corrected, Corrections};
 pub use needs::unsupported;
@@ -199,10 +202,12 @@ pub fn read_records<R: Read>(
     for (reader, file) in readers.into_iter().zip(&files) {
         let prefix = if named { format!("{file}: ") } else { String::new() };
         let mut events = record_events(reader, screen, compat, windows);
+        let mut tally = tally::FileTally::default();
         for event in events.by_ref() {
             match event? {
                 RecordEvent::Sample { row, sample } => {
                     read += 1;
+                    tally.sample();
                     if let (Some(m), Some(start)) = (manoeuvres.last_mut(), starts.last_mut()) {
                         if m.is_empty() {
                             *start = (row, prefix.clone());
@@ -213,6 +218,7 @@ pub fn read_records<R: Read>(
                 RecordEvent::Rejected { row, problem } => {
                     read += 1;
                     rejected += 1;
+                    tally.rejected(row, &problem);
                     let reason = format!("{prefix}{problem}");
                     rejections.push(problem.kind(), Rejection { row, reason });
                 }
@@ -229,6 +235,13 @@ pub fn read_records<R: Read>(
             }
         }
         notes.extend(events.notes().into_iter().map(|n| format!("{prefix}{n}")));
+        if named && let Some(why) = tally.empty_reason(file) {
+            return Err(RecordError::Option {
+                option: "and",
+                reason: format!("{why}: fix its mapping or leave it out"),
+            });
+        }
+        notes.extend(tally.warning(file));
         missed.push(events.windows_missed().map(|why| format!("{file}: {why}")));
         manoeuvres.push(Vec::new());
         starts.push((0, String::new()));

@@ -367,6 +367,72 @@ pub fn check(
     manoeuvres: &[&[AirDataSample]],
     config: &CompatConfig,
 ) -> Result<CompatResult, EstimatorError> {
+    match wings_level_without_ay(manoeuvres)? {
+        Some(planar) => {
+            let slices: Vec<&[AirDataSample]> = planar.iter().map(Vec::as_slice).collect();
+            let mut r = check_as_given(&slices, config)?;
+            r.notes.insert(0, VERTICAL_PLANE_NOTE.into());
+            Ok(r)
+        }
+        None => check_as_given(manoeuvres, config),
+    }
+}
+
+/// Largest bank angle, rad, and roll and yaw rates, rad/s, of a record without `ay` that is
+/// still checked in the vertical plane: there `θ̇ = q cosφ − r sinφ` is off by at most
+/// `r sinφ` < 0.005 rad/s and gravity's share along `z` by `1 − cos 5°` = 0.4 % (0.04 m/s²,
+/// mostly taken up by the `az` bias). ATTAS's elevator records stay within 4.4° and 2°/s.
+const WINGS_LEVEL_PHI_RAD: f64 = 5.0 * core::f64::consts::PI / 180.0;
+const WINGS_LEVEL_RATE_RAD_S: f64 = 3.0 * core::f64::consts::PI / 180.0;
+
+/// The note of a record checked in the vertical plane although it maps some lateral channels.
+pub const VERTICAL_PLANE_NOTE: &str = "no ay channel and the record flies wings level (|φ| within 5°, |p| and |r| within 3°/s): checked in the vertical plane, the p, r and φ channels left out";
+
+/// A record without `ay` that maps some of `p, r, φ`: copies of its manoeuvres without them
+/// when it flies wings level ([`WINGS_LEVEL_PHI_RAD`]), to be checked in the vertical plane;
+/// `None` for a record with `ay` or with none of them.
+///
+/// # Errors
+/// [`EstimatorError::InvalidConfig`] on `ay` when the record rolls: the side motion then enters
+/// `α` through `p v`, which needs `ay`.
+fn wings_level_without_ay(
+    manoeuvres: &[&[AirDataSample]],
+) -> Result<Option<Vec<Vec<AirDataSample>>>, EstimatorError> {
+    let samples = || manoeuvres.iter().flat_map(|m| m.iter());
+    let lateral = [Channel::P, Channel::R, Channel::Phi];
+    if samples().any(|s| s.ay_mps2.is_some())
+        || samples().all(|s| lateral.iter().all(|c| c.of(s).is_none()))
+    {
+        return Ok(None);
+    }
+    let within =
+        |c: Channel, bound: f64| samples().all(|s| c.of(s).is_none_or(|v| v.abs() <= bound));
+    if !(within(Channel::Phi, WINGS_LEVEL_PHI_RAD)
+        && within(Channel::P, WINGS_LEVEL_RATE_RAD_S)
+        && within(Channel::R, WINGS_LEVEL_RATE_RAD_S))
+    {
+        return Err(EstimatorError::InvalidConfig {
+            field: "ay_mps2",
+            value: f64::NAN,
+            reason: "the record rolls (|φ| above 5° or |p|, |r| above 3°/s) and maps no ay: the side motion then enters α through p v, so the check needs ay; map it, or check a wings-level window",
+        });
+    }
+    let planar = manoeuvres
+        .iter()
+        .map(|m| {
+            m.iter()
+                .map(|s| AirDataSample { p_rad_s: None, r_rad_s: None, phi_rad: None, ..*s })
+                .collect()
+        })
+        .collect();
+    Ok(Some(planar))
+}
+
+/// [`check`] of manoeuvres as they are.
+fn check_as_given(
+    manoeuvres: &[&[AirDataSample]],
+    config: &CompatConfig,
+) -> Result<CompatResult, EstimatorError> {
     let first = Problem::new(manoeuvres, config, Vec::new())?;
     let (mut exclude, mut notes) = first.undetermined()?;
     loop {

@@ -402,3 +402,36 @@ fn the_gyro_shift_caveats_name_a_coarse_record_without_a_vane_and_missing_scale_
         assert!(!scales(&r), "{:?}", r.notes);
     }
 }
+
+/// A record without ay that rolls (p up to 10°/s) is refused naming ay and why; the same record
+/// with its rates within 3°/s and bank within 5° is not refused for ay.
+#[test]
+fn errors_a_rolling_record_without_ay_names_ay() {
+    let record = |p_amplitude: f64| -> Vec<AirDataSample> {
+        (0..40)
+            .map(|i| {
+                let t = i as f64 * 0.1;
+                AirDataSample {
+                    t_s: t,
+                    vt_mps: 100.0,
+                    alpha_rad: 0.05,
+                    theta_rad: Some(0.05),
+                    phi_rad: Some(0.01),
+                    p_rad_s: Some(p_amplitude * t.sin()),
+                    q_rad_s: Some(0.0),
+                    r_rad_s: Some(0.0),
+                    ax_mps2: Some(0.49),
+                    az_mps2: Some(-9.79),
+                    ..AirDataSample::default()
+                }
+            })
+            .collect()
+    };
+    let rolling = record(10f64.to_radians());
+    let e = check(&[&rolling], &CompatConfig::default()).unwrap_err().to_string();
+    assert!(e.contains("ay_mps2") && e.contains("the record rolls"), "{e}");
+    let level = record(2f64.to_radians());
+    if let Err(e) = check(&[&level], &CompatConfig::default()) {
+        assert!(!e.to_string().contains("the record rolls"), "{e}");
+    }
+}

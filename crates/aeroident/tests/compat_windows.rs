@@ -67,3 +67,74 @@ fn val_compat_checks_the_windows_the_fit_uses() {
         assert!(close(&j["bias"], c.bias) && close(&j["time_shift_s"], c.time_shift_s), "{j}");
     }
 }
+
+/// The HFB-320 record with one channel mapped in the wrong unit, each against the physics of the
+/// others: the check refuses before fitting and names the channel and the likely unit (fitted,
+/// a q read in deg/s as rad/s came out as a −669 m/s airspeed bias and a 3.1-s α lag,
+/// "converged"). The true mapping passes the same screen.
+#[test]
+fn errors_a_channel_in_the_wrong_unit_is_named_before_the_check() {
+    let Some(data) = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let text = std::fs::read_to_string(workspace().join("mappings/hfb320.toml")).unwrap();
+    let path = data.display().to_string();
+    let check = |from: &str, to: &str| {
+        assert!(text.contains(from), "the mapping no longer has {from}");
+        let m = Mapping::from_toml_str(&text.replace(from, to), "wrong.toml").unwrap();
+        check_records(vec![open_log(&path, None, &m).unwrap()], &[], &CompatConfig::default())
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+    };
+    let cases = [
+        (
+            "q_radps\", unit = \"rad/s\"",
+            "q_radps\", unit = \"deg/s\"",
+            "channel `q`",
+            "57.3 times too small",
+        ),
+        (
+            "alpha_rad\", unit = \"rad\"",
+            "alpha_rad\", unit = \"deg\"",
+            "channel `alpha`",
+            "radians mapped as degrees",
+        ),
+        (
+            "az_mps2\", unit = \"m/s2\"",
+            "az_mps2\", unit = \"g\"",
+            "channel `az`",
+            "m/s² data mapped in g",
+        ),
+    ];
+    for (from, to, channel, likely) in cases {
+        let e = check(from, to).unwrap_err();
+        assert!(e.contains("unit mismatch") && e.contains(channel) && e.contains(likely), "{e}");
+    }
+    check("", "").unwrap();
+}
+
+/// ATTAS's elevator records with the shipped longitudinal mapping (p, r, φ mapped, no ay): they
+/// fly within 4.4° of bank, so each is checked in the vertical plane with a note, where both
+/// were refused for want of ay. The two flights' α-vane biases (one vane, two records) agree
+/// within three combined σ, and neither needs an α scale factor beyond 3 σ.
+#[test]
+fn val_a_wings_level_record_without_ay_is_checked_in_the_vertical_plane() {
+    use aeroident_estimators::compat::{Channel, Unknown, VERTICAL_PLANE_NOTE};
+    let m = Mapping::from_path(&workspace().join("mappings/attas.toml")).unwrap();
+    let mut biases = Vec::new();
+    for name in ["fAttasElv1.csv", "fAttasElv2.csv"] {
+        let Some(data) = shared(&format!("jategaonkar_hfb320_attas/csv/{name}")) else { return };
+        let log = open_log(&data.display().to_string(), None, &m).unwrap();
+        let (summary, result) = check_records(vec![log], &[], &CompatConfig::default()).unwrap();
+        assert!(
+            summary.warnings.iter().any(|w| w == VERTICAL_PLANE_NOTE),
+            "{:?}",
+            summary.warnings
+        );
+        assert!(result.get(Unknown::Bias(Channel::P)).is_none());
+        assert!(!result.outputs.contains(&Channel::Phi));
+        let (k, s) = result.get(Unknown::Scale(Channel::Alpha)).expect("α scale factor");
+        assert!(k.abs() < 3.0 * s, "{name}: α scale error {k} ± {s}");
+        biases.push(result.reported(Unknown::Bias(Channel::Alpha)).expect("α bias"));
+    }
+    let ((b1, s1), (b2, s2)) = (biases[0], biases[1]);
+    assert!((b1 - b2).abs() < 3.0 * s1.hypot(s2), "α bias {b1} ± {s1} vs {b2} ± {s2}");
+}

@@ -29,6 +29,8 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::Read;
 
+mod sensors;
+
 /// `compat.json` (module doc).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct CompatSummary {
@@ -101,10 +103,15 @@ pub fn check_records<R: Read>(
     config: &CompatConfig,
 ) -> Result<(CompatSummary, CompatResult), RecordError> {
     let file = readers.iter().map(|r| r.file()).collect::<Vec<_>>().join(", ");
+    let mapping = readers.first().map(FlightDataReader::mapping);
     let screen = Some(crate::record::outliers::SpikeScreen::default());
     let rec = read_records(readers, screen, None, windows)?;
     let slices: Vec<&[aeroident_estimators::AirDataSample]> =
         rec.manoeuvres.iter().map(Vec::as_slice).collect();
+    if let Some(m) = &mapping {
+        sensors::believable(&slices, m)
+            .map_err(|why| RecordError::Model(format!("compatibility check of {file}: {why}")))?;
+    }
     let result = compat::check(&slices, config)
         .map_err(|e| RecordError::Model(format!("compatibility check of {file}: {e}")))?;
     let (rejections, unlisted) = rec.rejections.finish();

@@ -1,0 +1,197 @@
+//! Before the check fits anything: are the sensors believable at all? A channel that holds one
+//! value throughout (a dead or stuck sensor) or reads in the wrong unit is misread by the fit as
+//! biases, time shifts and winds (a q in deg/s mapped as rad/s gave a −669 m/s airspeed bias
+//! and a 3.1-s α lag, "converged"; an α in the wrong unit, "information matrix singular"). Each
+//! test compares a channel with the physics of the others, so it names the channel and the
+//! likely unit instead.
+
+use aeroident_estimators::AirDataSample;
+use aeroident_io::Mapping;
+use aeroident_io::message::short;
+use aeroident_physics::rigid_body::{SinCos, body_acceleration, body_velocity, gravity_body};
+use aeroident_physics::units::G0_MPS2;
+
+/// The sensor channels the check corrects, as sample fields.
+const SENSOR_FIELDS: [&str; 12] = [
+    "ax_mps2",
+    "ay_mps2",
+    "az_mps2",
+    "p_rad_s",
+    "q_rad_s",
+    "r_rad_s",
+    "vt_mps",
+    "alpha_rad",
+    "beta_rad",
+    "phi_rad",
+    "theta_rad",
+    "psi_rad",
+];
+
+/// A gain is judged only when it lies outside [1/`BOUND`, `BOUND`]: a vane's calibration
+/// (upwash, position) moves it by tens of per cent, a unit by a factor 57.3.
+const BOUND: f64 = 2.0;
+
+/// … and more than this many of its σ from 1.
+const MIN_SIGMAS: f64 = 10.0;
+
+/// Fewest differenced samples before the α vane's gain is judged.
+const MIN_ROWS: usize = 50;
+
+/// Refuses a record whose sensors the check would misread (module doc): a constant channel;
+/// a gyro or attitude in the wrong unit (the Euler kinematics, [`crate::replay::kinematics`]);
+/// an accelerometer in the wrong unit (the force equations,
+/// [`crate::replay::sign_tests::accelerometer_scale_warnings`]); an α vane in the wrong unit
+/// ([`alpha_gain`]). The error names the channel as `mapping` does.
+pub(super) fn believable(slices: &[&[AirDataSample]], mapping: &Mapping) -> Result<(), String> {
+    for name in SENSOR_FIELDS {
+        let values: Vec<f64> =
+            slices.iter().flat_map(|m| m.iter()).filter_map(|s| s.field(name)).collect();
+        if values.len() >= 2 && values.iter().all(|v| *v == values[0]) {
+            return Err(format!(
+                "{} holds {} in all {} samples: a dead or stuck sensor; leave it out of the mapping or fix the record",
+                mapping.field_label(name),
+                short(values[0]),
+                values.len()
+            ));
+        }
+    }
+    let kinematics = crate::replay::kinematics::Kinematics::of_manoeuvres(slices);
+    let mut misread: Vec<String> =
+        kinematics.warnings(mapping).into_iter().map(|w| w.text).collect();
+    misread.extend(
+        crate::replay::sign_tests::accelerometer_scale_warnings(slices, mapping)
+            .into_iter()
+            .map(|w| w.text),
+    );
+    misread.extend(alpha_misread(slices, mapping));
+    match misread.first() {
+        Some(w) => Err(format!(
+            "{w}; the check would turn it into biases, time shifts and winds: fix the mapping first"
+        )),
+        None => Ok(()),
+    }
+}
+
+/// The α vane's unit-mismatch text when its gain ([`alpha_gain`]) is judged off.
+fn alpha_misread(slices: &[&[AirDataSample]], mapping: &Mapping) -> Option<String> {
+    let (k, sigma) = alpha_gain(slices)?;
+    let off = !(1.0 / BOUND..=BOUND).contains(&k);
+    if !off || (k - 1.0).abs() <= MIN_SIGMAS * sigma {
+        return None;
+    }
+    let deg = 180.0 / core::f64::consts::PI;
+    let near = |target: f64| (k - target).abs() <= (0.2 * target).max(3.0 * sigma);
+    let likely = if near(1.0 / deg) {
+        "likely radians mapped as degrees"
+    } else if near(deg) {
+        "likely degrees mapped as radians"
+    } else {
+        "check its unit and scale in the mapping"
+    };
+    Some(format!(
+        "unit mismatch: {} moves {} ± {} times as fast as the angle of attack the rates, accelerometers and attitude give (1 when its unit agrees); {likely}",
+        mapping.field_label("alpha_rad"),
+        short(k),
+        short(sigma)
+    ))
+}
+
+/// The gain `(k, σ)` of the least-squares fit `α̇_m = k α̇ + b`, where `α̇_m` is the vane's
+/// central difference and `α̇ = (u ẇ − w u̇)/(u² + w²)` the kinematic rate from the force
+/// equations (Stevens & Lewis, 2nd ed., Table 2.5-1) with `(u, v, w)` from the air data and the
+/// measured specific forces: dominated by `q`, so a vane in the wrong unit shows as a factor 57.3.
+/// `None` without the channels or with too few samples.
+pub(super) fn alpha_gain(slices: &[&[AirDataSample]]) -> Option<(f64, f64)> {
+    let mut rows: Vec<(f64, f64)> = Vec::new();
+    for m in slices {
+        for w in m.windows(3) {
+            let span = w[2].t_s - w[0].t_s;
+            if span.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+                continue;
+            }
+            let measured = (w[2].alpha_rad - w[0].alpha_rad) / span;
+            if let Some(kinematic) = alpha_rate(&w[1]) {
+                rows.push((measured, kinematic));
+            }
+        }
+    }
+    if rows.len() < MIN_ROWS {
+        return None;
+    }
+    let n = rows.len() as f64;
+    let (my, mx) =
+        (rows.iter().map(|r| r.0).sum::<f64>() / n, rows.iter().map(|r| r.1).sum::<f64>() / n);
+    let sxx: f64 = rows.iter().map(|r| (r.1 - mx).powi(2)).sum();
+    let sxy: f64 = rows.iter().map(|r| (r.1 - mx) * (r.0 - my)).sum();
+    if sxx.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return None;
+    }
+    let k = sxy / sxx;
+    let sse: f64 = rows.iter().map(|r| (r.0 - my - k * (r.1 - mx)).powi(2)).sum();
+    let sigma = (sse / (n - 2.0) / sxx).sqrt();
+    (k.is_finite() && sigma.is_finite()).then_some((k, sigma))
+}
+
+/// `α̇` of one sample from the force equations (see [`alpha_gain`]).
+fn alpha_rate(s: &AirDataSample) -> Option<f64> {
+    let a = [s.ax_mps2?, s.ay_mps2.unwrap_or(0.0), s.az_mps2?];
+    let omega = [s.p_rad_s.unwrap_or(0.0), s.q_rad_s?, s.r_rad_s.unwrap_or(0.0)];
+    let (phi, theta) = (SinCos::of(s.phi_rad.unwrap_or(0.0)), SinCos::of(s.theta_rad?));
+    let v = body_velocity(s.vt_mps, SinCos::of(s.alpha_rad), SinCos::of(s.beta_rad.unwrap_or(0.0)));
+    let d = body_acceleration(v, omega, gravity_body(G0_MPS2, phi, theta), a);
+    let uw = v[0] * v[0] + v[2] * v[2];
+    (uw > 0.0).then(|| (v[0] * d[2] - v[2] * d[0]) / uw)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A pull-up at 100 m/s, q = 0.1 sin(2t) rad/s, with α following the kinematics exactly
+    /// (α̇ = q + (a_z + g cosθ)/V with the specific force chosen so): the gain is 1; the same
+    /// α divided by 57.3 (radians mapped as degrees) gives 1/57.3 and names it.
+    #[test]
+    fn the_alpha_vane_gain_is_one_on_consistent_data_and_names_a_unit() {
+        let (vt, dt) = (100.0, 0.02);
+        let mut samples = Vec::new();
+        for i in 0..1000 {
+            let t = i as f64 * dt;
+            let q = 0.1 * (2.0 * t).sin();
+            let alpha = 0.05 + 0.02 * (1.3 * t).sin();
+            let alpha_dot = 0.026 * (1.3 * t).cos();
+            let theta: f64 = 0.05;
+            // ẇ − q u = a_z + g cosθ cosφ with w = V sinα, u = V cosα, V constant: choose a_z so
+            // that (u ẇ − w u̇)/V² = α̇, with u̇ from a_x = g sinθ + q w (u̇ = −V sinα α̇).
+            let (u, w) = (vt * alpha.cos(), vt * alpha.sin());
+            let (u_dot, w_dot) = (-w * alpha_dot, u * alpha_dot);
+            let ax = u_dot + G0_MPS2 * theta.sin() + q * w;
+            let az = w_dot - q * u - G0_MPS2 * theta.cos();
+            samples.push(AirDataSample {
+                t_s: t,
+                vt_mps: vt,
+                alpha_rad: alpha,
+                q_rad_s: Some(q),
+                theta_rad: Some(theta),
+                ax_mps2: Some(ax),
+                az_mps2: Some(az),
+                ..AirDataSample::default()
+            });
+        }
+        let (k, sigma) = alpha_gain(&[&samples]).unwrap();
+        assert!((k - 1.0).abs() < 1e-3 && sigma < 1e-3, "{k} ± {sigma}");
+        let mapping = Mapping::from_toml_str(
+            "[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"v\", unit = \"m/s\" }\nalpha = { column = \"aoa\", unit = \"deg\" }\nq = { column = \"q\", unit = \"rad/s\" }\ntheta = { column = \"th\", unit = \"rad\" }\nax = { column = \"ax\", unit = \"m/s2\" }\naz = { column = \"az\", unit = \"m/s2\" }\nqbar = { value = 1000.0, unit = \"Pa\" }\nmass = { value = 1000.0, unit = \"kg\" }\nS = { value = 10.0, unit = \"m2\" }\n",
+            "m.toml",
+        )
+        .unwrap();
+        assert!(alpha_misread(&[&samples], &mapping).is_none());
+        for s in &mut samples {
+            s.alpha_rad /= 180.0 / core::f64::consts::PI;
+        }
+        let (k, _) = alpha_gain(&[&samples]).unwrap();
+        assert!((k * 57.2958 - 1.0).abs() < 0.05, "{k}");
+        let text = alpha_misread(&[&samples], &mapping).unwrap();
+        assert!(text.contains("likely radians mapped as degrees"), "{text}");
+        assert!(text.contains("column `aoa`"), "{text}");
+    }
+}

@@ -352,8 +352,8 @@ fn errors_replay_job_refuses_and_for_a_real_time_estimator() {
     );
 }
 
-/// A record given twice to a batch fit, or to `compat` (the same file under another path, or a
-/// copy of it), is refused naming both, before the output directory is touched; once it was
+/// A record given twice to a batch fit, or to `compat` (the same file under another path, a
+/// copy of it, or its rows with other line endings), is refused naming both, before the output directory is touched; once it was
 /// fitted as new data, every σ shrunk by √2. `--allow-duplicate-records` lets it through.
 #[test]
 fn errors_a_record_given_twice_is_refused_unless_asked() {
@@ -384,6 +384,14 @@ fn errors_a_record_given_twice_is_refused_unless_asked() {
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("has the same content as"), "{err}");
+    // The same rows with CRLF line endings: other bytes, the same samples.
+    let crlf = dir.join("crlf.csv");
+    let text = std::fs::read_to_string(&good).unwrap();
+    std::fs::write(&crlf, text.replace('\n', "\r\n")).unwrap();
+    let crlf = crlf.display().to_string();
+    let (ok, err) = replay_good(&["--estimator", "oe", "--and", &crlf], "dup-crlf");
+    assert!(!ok && err.contains(&format!("`{crlf}` holds the same samples as `{good}`")), "{err}");
+    assert!(!tmp_path("dup-crlf").exists(), "the output directory was touched first");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

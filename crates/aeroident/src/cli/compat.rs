@@ -13,7 +13,7 @@ use aeroident_estimators::compat::CompatConfig;
 use aeroident_estimators::compat::CompatResult;
 use aeroident_io::{LogFormat, Mapping, open_log_with_notes};
 use aeroident_pipelines::compat::{ChannelSummary, CompatSummary, check_records};
-use aeroident_pipelines::record::duplicates::check_distinct;
+use aeroident_pipelines::job::Records;
 use aeroident_pipelines::window::TimeWindow;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -81,7 +81,13 @@ pub fn execute(args: CompatArgs) -> anyhow::Result<()> {
         config.max_iterations = n as usize;
     }
     let files: Vec<String> = std::iter::once(&args.data).chain(&args.and).cloned().collect();
-    check_distinct(files.iter().map(String::as_str), args.allow_duplicate_records)?;
+    let records = Records {
+        and: args.and.clone(),
+        format: args.format,
+        allow_duplicates: args.allow_duplicate_records,
+        ..Records::one(args.data.clone(), mapping.clone())
+    };
+    records.check_distinct()?;
     let mut inputs: Vec<&Path> =
         std::iter::once(&args.data).chain(&args.and).map(Path::new).collect();
     inputs.push(args.map.as_path());

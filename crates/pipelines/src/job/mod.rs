@@ -63,8 +63,9 @@ impl Records {
         std::iter::once(&self.data).chain(&self.and)
     }
 
-    /// Refuses a record given twice, unless [`Records::allow_duplicates`]
-    /// ([`crate::record::duplicates::check_distinct`]).
+    /// Refuses a record given twice, unless [`Records::allow_duplicates`]: the same file or
+    /// bytes ([`crate::record::duplicates::check_distinct`]), or the same samples in other
+    /// bytes ([`crate::record::duplicates::check_distinct_samples`]).
     ///
     /// # Errors
     /// [`RecordError`](crate::record::RecordError) naming both files.
@@ -72,7 +73,13 @@ impl Records {
         crate::record::duplicates::check_distinct(
             self.files().map(String::as_str),
             self.allow_duplicates,
-        )
+        )?;
+        if self.allow_duplicates || self.live || self.and.is_empty() {
+            return Ok(());
+        }
+        let opened: Vec<(&str, LogReader)> =
+            self.files().filter_map(|f| Some((f.as_str(), self.open(f).ok()?))).collect();
+        crate::record::duplicates::check_distinct_samples(opened)
     }
 
     /// Opens every record anew for a step over the whole of them (what the reader left out is

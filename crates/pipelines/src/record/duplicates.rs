@@ -54,6 +54,66 @@ pub fn check_distinct<'a>(
     Ok(())
 }
 
+/// Samples compared between two records of different bytes: two flights differ within their
+/// first samples (noise alone), while a copy in another format or line ending repeats them all.
+pub const COMPARED_SAMPLES: usize = 1000;
+
+/// Refuses a record of `records` (name and its events, the main record first) whose first
+/// [`COMPARED_SAMPLES`] samples, as the mapping reads them, equal an earlier record's: the same
+/// flight in another format (`.asc` and its CSV) or with other line endings, which
+/// [`check_distinct`] cannot see in the bytes. A record that cannot be read is skipped (the
+/// estimating step reports it).
+///
+/// # Errors
+/// [`RecordError::Option`] naming `--and` and both records.
+pub fn check_distinct_samples<I>(records: Vec<(&str, I)>) -> Result<(), RecordError>
+where
+    I: Iterator<Item = Result<aeroident_io::RecordEvent, aeroident_io::FlightDataError>>,
+{
+    let mut seen: Vec<(&str, u64, usize)> = Vec::new();
+    for (file, events) in records {
+        let (hash, n) = samples_hash(events);
+        if n == 0 {
+            continue;
+        }
+        if let Some((earlier, ..)) = seen.iter().find(|(_, h, m)| (*h, *m) == (hash, n)) {
+            return Err(RecordError::Option {
+                option: "and",
+                reason: format!(
+                    "`{file}` holds the same samples as `{earlier}` (the first {n}, as the mapping reads them): the same flight in another format or copy, which counts its samples twice and shrinks every σ by √2; give it once, or --{ALLOW_FLAG} to fit it again on purpose"
+                ),
+            });
+        }
+        seen.push((file, hash, n));
+    }
+    Ok(())
+}
+
+/// A hash of the first [`COMPARED_SAMPLES`] samples of `events` (every field, exactly) and
+/// how many there were; a read error ends them.
+fn samples_hash<I>(events: I) -> (u64, usize)
+where
+    I: Iterator<Item = Result<aeroident_io::RecordEvent, aeroident_io::FlightDataError>>,
+{
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    let mut n = 0;
+    for e in events {
+        match e {
+            Ok(aeroident_io::RecordEvent::Sample { sample, .. }) => {
+                // Debug writes each f64 as its shortest round trip: equal text, equal values.
+                h.write(format!("{sample:?}").as_bytes());
+                n += 1;
+                if n == COMPARED_SAMPLES {
+                    break;
+                }
+            }
+            Ok(_) => {}
+            Err(_) => break,
+        }
+    }
+    (h.finish(), n)
+}
+
 /// Device, inode and size of the regular file at `p` (links followed); `None` otherwise.
 fn regular_file(p: &Path) -> Option<(u64, u64, u64)> {
     let m = std::fs::metadata(p).ok().filter(std::fs::Metadata::is_file)?;
@@ -134,5 +194,40 @@ mod tests {
         assert!(check_distinct(ten.iter().copied(), true).is_ok());
         check_distinct([a.as_str(), &s("other.csv"), "-", "-", &s("missing.csv")], false).unwrap();
         let _ = std::fs::remove_dir_all(&d);
+    }
+
+    /// The same samples in two files of other bytes (CRLF line endings, another number format)
+    /// are refused naming both; one differing value in a later sample is not.
+    #[test]
+    fn the_same_samples_in_other_bytes_are_refused() {
+        use aeroident_estimators::AirDataSample;
+        use aeroident_io::RecordEvent;
+        let flight = |last_q: f64| -> Vec<Result<RecordEvent, aeroident_io::FlightDataError>> {
+            (0..20)
+                .map(|i| {
+                    let q = if i == 19 { last_q } else { 0.01 * i as f64 };
+                    let sample = AirDataSample {
+                        t_s: 0.1 * i as f64,
+                        vt_mps: 100.0,
+                        q_rad_s: Some(q),
+                        ..AirDataSample::default()
+                    };
+                    Ok(RecordEvent::Sample { row: i + 2, sample })
+                })
+                .collect()
+        };
+        let e = check_distinct_samples(vec![
+            ("a.csv", flight(0.5).into_iter()),
+            ("b.csv", flight(0.6).into_iter()),
+            ("a.asc", flight(0.5).into_iter()),
+        ])
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("`a.asc` holds the same samples as `a.csv` (the first 20"), "{e}");
+        check_distinct_samples(vec![
+            ("a.csv", flight(0.5).into_iter()),
+            ("b.csv", flight(0.6).into_iter()),
+        ])
+        .unwrap();
     }
 }

@@ -93,6 +93,7 @@ use serde::Deserialize;
 use super::increments::{self, parse_increment};
 use crate::Named;
 pub use crate::estimators::SampleEstimatorSpec;
+use aeroident_io::message::short;
 
 /// The default scenario (`scenarios/default.toml`), embedded so the main job runs from any
 /// directory.
@@ -917,7 +918,8 @@ impl Scenario {
     }
 
     /// The run's own settings: positive duration and step (at most 1e7 steps, a run that
-    /// would not end otherwise), a positive trim airspeed at an altitude of the F-16 data
+    /// would not end otherwise; a step no longer than the run), a cg in the F-16 model's range
+    /// (the trim fails outside it, once per Monte Carlo run), a positive trim airspeed at an altitude of the F-16 data
     /// (0–60 000 ft), a non-negative sensor noise scale and an odd differentiator window of at
     /// least 3 (a whole-sample lag). The error is the key and why.
     fn validate_run(&self) -> Result<(), (String, String)> {
@@ -926,7 +928,27 @@ impl Scenario {
         if self.duration_s / self.dt_s > 1e7 {
             return Err(("duration_s".into(), "more than 1e7 steps".into()));
         }
+        if self.dt_s > self.duration_s {
+            return Err((
+                "dt_s".into(),
+                format!(
+                    "{} s is longer than duration_s {} s: the run would hold no step",
+                    short(self.dt_s),
+                    short(self.duration_s)
+                ),
+            ));
+        }
         positive("trim.vt_fps", self.trim.vt_fps)?;
+        let (lo, hi) = (aeroident_models::f16::XCG_MIN, aeroident_models::f16::XCG_MAX);
+        if !(lo..=hi).contains(&self.trim.xcg) {
+            return Err((
+                "trim.xcg".into(),
+                format!(
+                    "{} is outside the F-16 model's cg range {lo}–{hi} (fraction of c̄)",
+                    short(self.trim.xcg)
+                ),
+            ));
+        }
         if !(self.trim.alt_ft.is_finite() && (0.0..=60_000.0).contains(&self.trim.alt_ft)) {
             return Err((
                 "trim.alt_ft".into(),
@@ -1136,6 +1158,29 @@ mod tests {
             let c: aeroident_signals::InputConfig = toml::from_str(&text).unwrap();
             let r = c.build();
             assert_eq!(r.is_ok(), ok, "{k}: {:?}", r.err());
+        }
+    }
+
+    /// A step longer than the run, and a cg outside the F-16 model's range (where its trim
+    /// fails, once for every Monte Carlo run), are refused when the scenario is parsed naming
+    /// the key; the range's ends are accepted.
+    #[test]
+    fn a_step_longer_than_the_run_and_a_cg_out_of_range_are_refused_at_parse() {
+        let set = |from: &str, to: &str| {
+            assert!(DEFAULT_SCENARIO.contains(from), "the default scenario has no `{from}`");
+            Scenario::from_toml(&DEFAULT_SCENARIO.replacen(from, to, 1), "d.toml")
+        };
+        let e = set("dt_s = 0.01", "dt_s = 1000.0").unwrap_err().to_string();
+        assert!(e.contains("`dt_s`") && e.contains("longer than duration_s"), "{e}");
+        for (xcg, ok) in [("5.0", false), ("0.05", false), ("0.1", true), ("0.5", true)] {
+            let r = set("xcg = 0.30", &format!("xcg = {xcg}"));
+            assert_eq!(r.is_ok(), ok, "xcg {xcg}: {:?}", r.as_ref().err().map(ToString::to_string));
+            if let Err(e) = r {
+                assert!(
+                    e.to_string().contains("`trim.xcg`") && e.to_string().contains("0.1–0.5"),
+                    "{e}"
+                );
+            }
         }
     }
 

@@ -175,7 +175,7 @@ fn on_signal(sig: i32, requested: &AtomicBool, shared: &Shared) {
     } else {
         match shared.phase.compare_exchange(RUNNING, STOP_NOW, Ordering::SeqCst, Ordering::SeqCst) {
             Ok(_) => {
-                eprintln!(
+                aeroident_report::note!(
                     "{name} again: stopping at once; summary.json is written, the report and figures are not"
                 );
                 return;
@@ -184,10 +184,10 @@ fn on_signal(sig: i32, requested: &AtomicBool, shared: &Shared) {
         }
     };
     match phase {
-        WRITING => eprintln!(
+        WRITING => aeroident_report::note!(
             "{name}: ignored while the results are written, so that none is left half-written (they take seconds at most; SIGKILL ends at once)"
         ),
-        STOP_NOW => eprintln!("{name}: already stopping"),
+        STOP_NOW => aeroident_report::note!("{name}: already stopping"),
         _ => {}
     }
 }

@@ -9,7 +9,7 @@ use aeroident_io::{FlightDataReader, Mapping};
 use std::sync::{Arc, Mutex};
 
 fn problem(line: &str) {
-    eprintln!("warning: {line}");
+    aeroident_report::note!("warning: {line}");
 }
 
 /// Whether a replay source names a MAVLink feed.
@@ -34,7 +34,7 @@ pub fn open_mavlink(
         Source::Columns(c) => c.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join("+"),
         Source::Constant(_) => String::new(),
     };
-    eprintln!(
+    aeroident_report::note!(
         "listening on {} (clock {}, ends after {} s without a datagram or on NAMED_VALUE_FLOAT `{}`)",
         rows.local_addr(),
         clock,
@@ -55,7 +55,7 @@ pub fn link_line(s: &LinkStats) -> String {
 pub fn report_failure(stats: &Mutex<LinkStats>) {
     let s = stats.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
     if s.rows > 0 {
-        eprintln!("{}", s.line());
+        aeroident_report::note!("{}", s.line());
     }
 }
 
@@ -63,11 +63,11 @@ pub fn report_failure(stats: &Mutex<LinkStats>) {
 pub fn finish(summary: &mut ReplaySummary, stats: &Mutex<LinkStats>) {
     let s = stats.lock().unwrap_or_else(std::sync::PoisonError::into_inner).clone();
     let line = link_line(&s);
-    eprintln!("{line}");
+    aeroident_report::note!("{line}");
     summary.warnings.push(line);
     if !s.never_received.is_empty() {
         let w = format!("mavlink: never received: {}", s.never_received.join(", "));
-        eprintln!("warning: {w}");
+        aeroident_report::note!("warning: {w}");
         summary.warnings.push(w);
     }
     summary.warnings.extend(s.problems.iter().map(|p| format!("mavlink: {p}")));

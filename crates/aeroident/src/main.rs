@@ -10,7 +10,7 @@ fn main() -> ExitCode {
         // The reader of our output went away (`| head`): end quietly, as a filter should.
         Err(e) if aeroident::cli::is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", aeroident::cli::error_chain(&e));
+            aeroident_report::note!("error: {}", aeroident::cli::error_chain(&e));
             // A run ended by a signal exits as the shell expects of one (128 + signal).
             e.downcast_ref::<aeroident::interrupt::Interrupted>()
                 .map_or(ExitCode::FAILURE, |i| ExitCode::from(i.exit_code()))

@@ -1,6 +1,7 @@
 //! Exit codes and messages of the CLI end to end: a closed output pipe ends quietly (no panic),
 //! bad numbers and states outside the model's domain are errors naming the argument.
 
+mod common;
 use std::process::{Command, Stdio};
 
 fn bin() -> Command {
@@ -33,6 +34,35 @@ fn errors_closed_pipe_ends_quietly() {
         assert!(!err.contains("panicked"), "{args:?}: {err}");
         assert!(out.status.success(), "{args:?}: {:?} {err}", out.status);
     }
+}
+
+/// `aeroident compat … 2>&1 | head` on the HFB-320 record (../shared), the reader gone: the notes and the "wrote" line on a
+/// closed stderr must not panic (exit 101) after the results are written; the run exits 0 with
+/// its files.
+#[test]
+fn errors_closed_stderr_ends_quietly_with_the_results_written() {
+    let Some(data) = common::shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let out_dir =
+        std::env::temp_dir().join(format!("aeroident-closed-stderr-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out_dir);
+    let mut child = bin()
+        .arg("compat")
+        .arg(data)
+        .arg("--map")
+        .arg(common::workspace().join("mappings/hfb320.toml"))
+        .arg("--out")
+        .arg(&out_dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stderr.take()); // every write to stderr gets EPIPE
+    drop(child.stdout.take());
+    let status = child.wait().unwrap();
+    let wrote = out_dir.join("compat.json").exists() || out_dir.join("summary.json").exists();
+    let _ = std::fs::remove_dir_all(&out_dir);
+    assert_ne!(status.code(), Some(101), "panicked on the closed pipe");
+    assert!(wrote, "no results written ({status:?})");
 }
 
 /// A state the model cannot evaluate (V = 1e308) is an error naming the derivative, not NaN

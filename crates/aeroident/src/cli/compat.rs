@@ -99,14 +99,21 @@ pub fn execute(args: CompatArgs) -> anyhow::Result<()> {
     )?;
     let (format, windows) = (args.format, args.windows.clone());
     let (summary, result) = run.run(move || check(&files, format, &mapping, &windows, &config))?;
+    // The files first: a console reader that has gone away (`| head`) must not cost them.
+    let wrote = match (run.writing(), &args.out) {
+        (Some(out), Some(dir)) => {
+            out.write_bytes("compat.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
+            let source = crate::report::Source { data: &args.data, mapping: &args.map };
+            let traces = aeroident_pipelines::compat::traces(&result);
+            crate::report::compat::write(&source, &summary, &traces, out)?;
+            out.finish();
+            Some(dir.join("compat.json"))
+        }
+        _ => None,
+    };
     super::print_stdout(&render(&summary))?;
-    if let (Some(out), Some(dir)) = (run.writing(), &args.out) {
-        out.write_bytes("compat.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
-        let source = crate::report::Source { data: &args.data, mapping: &args.map };
-        let traces = aeroident_pipelines::compat::traces(&result);
-        crate::report::compat::write(&source, &summary, &traces, out)?;
-        out.finish();
-        eprintln!("wrote {} and report.html", dir.join("compat.json").display());
+    if let Some(json) = wrote {
+        aeroident_report::note!("wrote {} and report.html", json.display());
     }
     Ok(())
 }
@@ -122,7 +129,7 @@ fn check(
     let mut readers = Vec::new();
     for file in files {
         let (reader, notes) = open_log_with_notes(file, format, mapping)?;
-        notes.iter().for_each(|n| eprintln!("note: {n}"));
+        notes.iter().for_each(|n| aeroident_report::note!("note: {n}"));
         readers.push(reader);
     }
     Ok(check_records(readers, windows, config)?)

@@ -156,7 +156,7 @@ pub fn execute(a: DesignArgs) -> anyhow::Result<()> {
     crate::cli::print_stdout(&report(&a, &d))?;
     let large = large_excursions(&d);
     if !large.is_empty() {
-        eprintln!(
+        aeroident_report::note!(
             "warning: the open-loop response is not a small perturbation ({}): the bound assumes the derivatives hold over it; reduce --amplitude-deg or --duration-s, or fly it with the stability augmentation on",
             large.join(", ")
         );
@@ -166,7 +166,10 @@ pub fn execute(a: DesignArgs) -> anyhow::Result<()> {
         o.write_bytes("injection.csv", injection_table(&d).as_bytes())?;
         o.write_bytes("design.json", serde_json::to_string_pretty(&json(&a, &d))?.as_bytes())?;
         o.finish();
-        eprintln!("wrote input.csv, injection.csv, design.json to {}", o.path().display());
+        aeroident_report::note!(
+            "wrote input.csv, injection.csv, design.json to {}",
+            o.path().display()
+        );
     }
     Ok(())
 }

@@ -81,7 +81,7 @@ fn jsbsim(a: JsbsimArgs) -> anyhow::Result<()> {
     match &a.out {
         Some(path) => {
             write_atomically(path, xml.as_bytes())?;
-            eprintln!(
+            aeroident_report::note!(
                 "{}: {exported} derivatives exported, {omitted} omitted (see the comments); wrote {}",
                 a.summary.display(),
                 path.display()

@@ -169,7 +169,7 @@ pub fn xdot(a: &XdotArgs) -> anyhow::Result<String> {
 pub fn trim_at(a: &TrimArgs) -> anyhow::Result<(F16, aeroident_models::trim::F16Trim)> {
     let (f16, t) = trim::trim_at(&a.request())?;
     for w in &t.out_of_range {
-        eprintln!("warning: {}", trim::out_of_range_warning(w));
+        aeroident_report::note!("warning: {}", trim::out_of_range_warning(w));
     }
     Ok((f16, t))
 }

@@ -195,18 +195,25 @@ pub fn execute(args: FreqRespArgs) -> anyhow::Result<()> {
     let outcome = run.run(move || {
         let (reader, notes) = open_log_with_notes(&data, format, &mapping)?;
         for n in &notes {
-            eprintln!("note: {n}");
+            aeroident_report::note!("note: {n}");
         }
         Ok(freqresp(reader, &options)?)
     })?;
+    // The files first: a console reader that has gone away (`| head`) must not cost them.
+    let wrote = match (run.writing(), &args.out) {
+        (Some(out), Some(dir)) => {
+            out.write_bytes("freqresp.json", serde_json::to_string_pretty(&outcome)?.as_bytes())?;
+            out.write_bytes("freqresp.csv", csv_text(&outcome)?.as_bytes())?;
+            let source = crate::report::Source { data: &args.data, mapping: &args.map };
+            crate::report::freqresp::write(&source, &outcome, out)?;
+            out.finish();
+            Some(dir.join("freqresp.json"))
+        }
+        _ => None,
+    };
     super::print_stdout(&render(&outcome))?;
-    if let (Some(out), Some(dir)) = (run.writing(), &args.out) {
-        out.write_bytes("freqresp.json", serde_json::to_string_pretty(&outcome)?.as_bytes())?;
-        out.write_bytes("freqresp.csv", csv_text(&outcome)?.as_bytes())?;
-        let source = crate::report::Source { data: &args.data, mapping: &args.map };
-        crate::report::freqresp::write(&source, &outcome, out)?;
-        out.finish();
-        eprintln!("wrote {} and report.html", dir.join("freqresp.json").display());
+    if let Some(json) = wrote {
+        aeroident_report::note!("wrote {} and report.html", json.display());
     }
     Ok(())
 }

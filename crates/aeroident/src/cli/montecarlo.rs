@@ -257,7 +257,7 @@ pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
     spin.finish_and_clear();
     let c = c.map_err(anyhow::Error::msg)?;
     if let (Some(why), Some(signal)) = (&c.status_reason, interrupt.signal_name()) {
-        eprintln!("{signal}: {why}");
+        aeroident_report::note!("{signal}: {why}");
     }
     // From here further signals are ignored until the outputs are written.
     let summary_only = interrupt.begin_writing();
@@ -290,10 +290,10 @@ pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
 fn print_json(c: &Campaign) -> anyhow::Result<()> {
     for e in &c.estimators {
         for f in &e.failed_runs {
-            eprintln!("{}: run {} failed: {}", e.name, f.run, f.reason);
+            aeroident_report::note!("{}: run {} failed: {}", e.name, f.run, f.reason);
         }
         for r in &e.restarted_runs {
-            eprintln!("{}: run {r} restarted from the priors (used)", e.name);
+            aeroident_report::note!("{}: run {r} restarted from the priors (used)", e.name);
         }
     }
     super::print_stdout(&serde_json::to_string_pretty(&json_summary(c))?).map_err(Into::into)

@@ -88,7 +88,7 @@ impl WholeRecord {
             (None, _) => "nothing written (no --out)".to_string(),
             (_, Err(e)) => return e.into(),
         };
-        eprintln!("{why}");
+        aeroident_report::note!("{why}");
         self.interrupt
             .error(&written)
             .map_or_else(|| anyhow::anyhow!("internal: stopped without a signal"), Into::into)

@@ -86,7 +86,7 @@ pub(super) fn execute(
 /// Says on stderr that a batch method reads the whole record first, and what a bootstrap
 /// adds.
 fn announce(estimator: EstimatorKind, options: &FitOptions) {
-    eprintln!(
+    aeroident_report::note!(
         "{} is a batch method: reading the whole record before fitting (not real time)",
         match estimator {
             EstimatorKind::Fem => "the filter-error method",
@@ -95,7 +95,9 @@ fn announce(estimator: EstimatorKind, options: &FitOptions) {
         }
     );
     if let Some(n) = options.bootstrap_refits.filter(|_| estimator == EstimatorKind::Oe) {
-        eprintln!("bootstrap: a filter-error fit for the noise levels, then {n} replicas refitted");
+        aeroident_report::note!(
+            "bootstrap: a filter-error fit for the noise levels, then {n} replicas refitted"
+        );
     }
 }
 
@@ -113,7 +115,7 @@ fn read_and_fit(
             Some(s) => open_stdin(s, records.format, &records.mapping)?,
             None => open_log_with_report(file, records.format, &records.mapping)?,
         };
-        report.notes().iter().for_each(|n| eprintln!("note: {n}"));
+        report.notes().iter().for_each(|n| aeroident_report::note!("note: {n}"));
         readers.push(reader);
         reports.push(report);
     }
@@ -214,19 +216,21 @@ impl FitWatch {
             match (end, stdin.is_some()) {
                 (StdinEnd::Cut, _) => {
                     self.answered = true;
-                    eprintln!(
+                    aeroident_report::note!(
                         "{}: stdin read ended after {lines} lines; fitting the samples read ({again})",
                         sig()
                     );
                 }
-                (StdinEnd::Closed, true) => eprintln!("stdin closed after {lines} lines: fitting"),
+                (StdinEnd::Closed, true) => {
+                    aeroident_report::note!("stdin closed after {lines} lines: fitting")
+                }
                 (StdinEnd::Closed, false) => {}
             }
         }
         if !self.answered && interrupt.requested() {
             self.answered = true;
             stop.raise();
-            eprintln!(
+            aeroident_report::note!(
                 "{}: stopping the fit at its next iteration (a bootstrap before its next replica), its last iterate reported; {again}",
                 sig()
             );
@@ -282,16 +286,16 @@ fn write(
     out: Option<crate::outdir::OutputDir>,
 ) -> anyhow::Result<()> {
     let interrupted = done.outcome.summary.status == STATUS_INTERRUPTED;
-    eprintln!("model: {}", done.outcome.model.name);
+    aeroident_report::note!("model: {}", done.outcome.model.name);
     let s = &done.outcome.summary;
     for v in std::iter::once(&s.validation).chain(s.validation_on.iter()) {
         eprint!("{}", validation_block(v));
     }
     if let Some(line) = aeroident_io::replay_output::sign_tests_line(&s.sign_tests) {
-        eprintln!("{line}");
+        aeroident_report::note!("{line}");
     }
     for w in &s.warnings {
-        eprintln!("warning: {w}");
+        aeroident_report::note!("warning: {w}");
     }
     let s = &mut done.outcome.summary;
     let summary_only = begin_writing(Some(interrupt), interrupted, s.samples_read, &mut s.warnings);
@@ -304,7 +308,7 @@ fn write(
             }
             if summary_only {
                 out.finish();
-                eprintln!("wrote {}", path.display());
+                aeroident_report::note!("wrote {}", path.display());
             } else {
                 write_batch_report(args, &done.outcome, &mut out)?;
             }
@@ -315,7 +319,7 @@ fn write(
                 None => done.outcome.result.to_string(),
             };
             crate::cli::print_stdout(&table)?;
-            eprintln!("{text}");
+            aeroident_report::note!("{text}");
         }
     }
     if summary_only {
@@ -342,7 +346,7 @@ fn write_batch_report(
     let results = crate::report::batch::write(&source, outcome, &title, out)?;
     out.finish();
     crate::cli::print_stdout(&crate::table::render(&results))?;
-    eprintln!(
+    aeroident_report::note!(
         "{}: {} samples in {} manoeuvre(s), {} rejected, {} iterations in {:.3} s; wrote {}",
         args.data,
         outcome.summary.samples_read,

@@ -261,11 +261,11 @@ impl ReplayObserver for Console<'_> {
     }
 
     fn model(&mut self, line: &str) {
-        eprintln!("{line}");
+        aeroident_report::note!("{line}");
     }
 
     fn warning(&mut self, text: &str) {
-        eprintln!("warning: {text}");
+        aeroident_report::note!("warning: {text}");
     }
 }
 

@@ -143,7 +143,7 @@ fn replay_record(
         (FlightDataReader::new(read, &args.data, mapping)?, report)
     } else {
         let (reader, report) = open_log_with_report(&args.data, Some(format), mapping)?;
-        report.notes().iter().for_each(|n| eprintln!("note: {n}"));
+        report.notes().iter().for_each(|n| aeroident_report::note!("note: {n}"));
         (reader, report)
     };
     Ok(replay(reader, mapping, opts, console).map(|mut outcome| {
@@ -196,11 +196,11 @@ fn write(
             o.write_bytes("summary.json", summary_text.as_bytes())?;
             o.finish();
             let (csv, json) = (dir.join("estimates.csv"), dir.join("summary.json"));
-            eprintln!("wrote {} and {}", csv.display(), json.display());
+            aeroident_report::note!("wrote {} and {}", csv.display(), json.display());
         }
         (Some(dir), Some(o)) => write_results(args, &done, &summary_text, dir, o)?,
         (Some(_), None) => anyhow::bail!("internal: output directory not open"),
-        (None, _) => eprintln!("{summary_text}"),
+        (None, _) => aeroident_report::note!("{summary_text}"),
     }
     print_diagnostics(&done);
     end(args, &done.outcome, interrupt, interrupted, summary_only)
@@ -234,7 +234,7 @@ fn write_results(
         crate::cli::print_stdout(&crate::table::render(&results))?;
     }
     let s = &outcome.summary;
-    eprintln!(
+    aeroident_report::note!(
         "{}: {} samples read, {} rejected, {:.0} samples/s, status {}; wrote {}",
         args.data,
         s.samples_read,
@@ -254,7 +254,7 @@ fn print_diagnostics(done: &ReplayJobOutcome) {
     if !s.correlations.is_empty() {
         let pairs: Vec<String> =
             s.correlations.iter().map(|c| format!("{}/{} ({:+.3})", c.a, c.b, c.rho)).collect();
-        eprintln!(
+        aeroident_report::note!(
             "warning: strongly correlated estimates (|ρ| > 0.9; the data do not separate them): {}",
             pairs.join(", ")
         );
@@ -263,10 +263,10 @@ fn print_diagnostics(done: &ReplayJobOutcome) {
         eprint!("{}", validation_block(v));
     }
     if let Some(line) = aeroident_io::replay_output::sign_tests_line(&s.sign_tests) {
-        eprintln!("{line}");
+        aeroident_report::note!("{line}");
     }
     for w in s.warnings.iter().filter(|w| w.kind.is_diagnostic()) {
-        eprintln!("warning: {w}");
+        aeroident_report::note!("warning: {w}");
     }
 }
 
@@ -293,7 +293,7 @@ fn end(
             return Err(e.into());
         }
     } else if outcome.summary.status != aeroident_pipelines::replay::STATUS_COMPLETE {
-        eprintln!(
+        aeroident_report::note!(
             "warning: estimator status `{}`: not every parameter was identified (null in the summary)",
             outcome.summary.status
         );

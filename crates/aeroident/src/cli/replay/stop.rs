@@ -25,7 +25,7 @@ pub(super) struct Stderr;
 
 impl JobLog for Stderr {
     fn note(&mut self, line: &str) {
-        eprintln!("{line}");
+        aeroident_report::note!("{line}");
     }
 }
 
@@ -85,7 +85,7 @@ pub(super) fn begin_writing(
     if summary_only {
         warnings.push(SUMMARY_ONLY.to_string());
     } else if interrupted {
-        eprintln!(
+        aeroident_report::note!(
             "interrupted: writing the results of the {samples_read} samples read; a further signal is ignored until they are written"
         );
     }
@@ -129,9 +129,9 @@ pub(super) fn write_stopped_summary(
         Some(o) => {
             let path = o.write_bytes("summary.json", text.as_bytes())?;
             o.finish();
-            eprintln!("{why}; wrote {}", path.display());
+            aeroident_report::note!("{why}; wrote {}", path.display());
         }
-        None => eprintln!("{text}"),
+        None => aeroident_report::note!("{text}"),
     }
     Ok(())
 }

@@ -282,6 +282,37 @@ fn amplitude(a: Option<f64>, a_deg: Option<f64>) -> Result<f64, SignalError> {
 }
 
 impl InputConfig {
+    /// The highest frequency the input is built of, Hz, where it has one: a sine's, a sweep's
+    /// higher end, a multisine's highest harmonic over its base period; `None` for the pulse
+    /// inputs (broadband) and recorded ones. A scenario compares it with its sample rate's
+    /// Nyquist frequency: a component above it is aliased to a lower one in the sampled run.
+    pub fn highest_frequency_hz(&self) -> Option<f64> {
+        let hz = |f_hz: Option<f64>, f_rad_s: Option<f64>| {
+            f_hz.or(f_rad_s.map(|w| w / (2.0 * core::f64::consts::PI)))
+        };
+        match self {
+            InputConfig::Sine { frequency_hz, frequency_rad_s, .. } => {
+                hz(*frequency_hz, *frequency_rad_s)
+            }
+            InputConfig::Sweep {
+                start_frequency_hz,
+                start_frequency_rad_s,
+                end_frequency_hz,
+                end_frequency_rad_s,
+                ..
+            } => {
+                let a = hz(*start_frequency_hz, *start_frequency_rad_s)?;
+                let b = hz(*end_frequency_hz, *end_frequency_rad_s)?;
+                Some(a.max(b))
+            }
+            InputConfig::Multisine { base_period_s, harmonics, .. }
+            | InputConfig::OrthogonalMultisine { base_period_s, harmonics, .. } => {
+                harmonics.iter().max().map(|k| f64::from(*k) / base_period_s)
+            }
+            _ => None,
+        }
+    }
+
     /// Builds the signal, converting every `_deg`/`_hz` value to radians / rad/s exactly once.
     /// Relative recorded-input paths are resolved against the current directory; use
     /// [`InputConfig::build_in`] to resolve them against the scenario file's directory.

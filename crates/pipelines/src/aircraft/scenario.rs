@@ -909,12 +909,29 @@ impl Scenario {
         self.validate_estimators().map_err(bad)?;
         for (k, i) in self.input.iter().enumerate() {
             i.signal.build().map_err(|e| bad((format!("input[{k}]"), e.to_string())))?;
+            self.below_nyquist(&i.signal).map_err(|r| bad((format!("input[{k}]"), r)))?;
         }
         self.validate_orthogonal_sets().map_err(|(k, r)| bad((format!("input[{k}]"), r)))?;
         for (k, w) in self.wind.iter().enumerate() {
             w.build().map_err(|e| bad((format!("wind[{k}]"), e.to_string())))?;
         }
         Ok(())
+    }
+
+    /// An input's highest frequency ([`InputConfig::highest_frequency_hz`]) below the Nyquist
+    /// frequency of the run's step: above it the sampled input is another, lower frequency, and
+    /// the experiment is not the one written.
+    fn below_nyquist(&self, input: &InputConfig) -> Result<(), String> {
+        let nyquist = 0.5 / self.dt_s;
+        match input.highest_frequency_hz() {
+            Some(f) if f >= nyquist => Err(format!(
+                "its highest frequency {} Hz is at or above the Nyquist frequency {} Hz of dt_s = {} s: sampled, it becomes a lower frequency; lower it or shorten dt_s",
+                short(f),
+                short(nyquist),
+                short(self.dt_s)
+            )),
+            _ => Ok(()),
+        }
     }
 
     /// The run's own settings: positive duration and step (at most 1e7 steps, a run that
@@ -1182,6 +1199,22 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// An input reaching the Nyquist frequency of the step is refused naming the input and both
+    /// frequencies: the default's highest harmonic, 31 over its base period, against dt_s = 0.5 s
+    /// (Nyquist 1 Hz); a sine given in rad/s is converted before the comparison.
+    #[test]
+    fn an_input_above_the_nyquist_frequency_is_refused_at_parse() {
+        let coarse = DEFAULT_SCENARIO.replacen("dt_s = 0.01", "dt_s = 0.5", 1);
+        let e = Scenario::from_toml(&coarse, "d.toml").unwrap_err().to_string();
+        assert!(e.contains("input[0]") && e.contains("Nyquist frequency 1 Hz"), "{e}");
+        let sine = |w: f64| -> aeroident_signals::InputConfig {
+            toml::from_str(&format!("kind = \"sine\"\namplitude = 1.0\nfrequency_rad_s = {w}\n"))
+                .unwrap()
+        };
+        let f = sine(2.0 * core::f64::consts::PI * 3.0).highest_frequency_hz().unwrap();
+        assert!((f - 3.0).abs() < 1e-12, "{f}");
     }
 
     /// `model = "….toml"` reads a model file relative to the scenario's directory (the

@@ -8,9 +8,11 @@ use common::workspace;
 use std::path::Path;
 use std::process::Command;
 
-/// `replay DATA --map MAP --estimator EST ARGS --out DIR`: the parsed `summary.json`.
+/// `replay DATA --map MAP --estimator EST ARGS --out DIR` (`MAP` a shipped mapping's name or
+/// a path): the parsed `summary.json`.
 fn fit(data: &Path, map: &str, estimator: &str, args: &[&str], name: &str) -> serde_json::Value {
     let out = std::env::temp_dir().join(format!("aeroident-fdoe-{}-{name}", std::process::id()));
+    // An absolute `map` replaces the directory it is joined to.
     let o = Command::new(env!("CARGO_BIN_EXE_aeroident"))
         .arg("replay")
         .arg(data)
@@ -29,7 +31,7 @@ fn fit(data: &Path, map: &str, estimator: &str, args: &[&str], name: &str) -> se
     v
 }
 
-/// Per parameter fdoe estimated: `(name, |Δ| / combined σ)` against `oe`.
+/// Per parameter fdoe estimated: `(name, |Δ| / combined σ)` against `oe` (or another fit).
 fn combined_sigmas(fd: &serde_json::Value, oe: &serde_json::Value) -> Vec<(String, f64)> {
     let oe_params = oe["parameters"].as_array().unwrap();
     let mut out = Vec::new();
@@ -85,29 +87,48 @@ fn val_fdoe_agrees_with_output_error_on_the_twin_otter() {
 }
 
 /// HFB-320 (the book's model, `models/hfb320_book_q0.toml`): the pitching-moment derivatives
-/// agree within 2 combined σ (measured 0.03, 0.55, 0.45 for Cm_alpha, Cm_de, Cm_q0); CL_alpha
-/// does not (4.4 combined σ: fdoe 4.28 ± 0.16, oe 3.21 ± 0.19). Within the band the az channel
-/// asks for a lift slope of about 4.3 where α asks for 3.3–3.5 (fitted on α, q, q̇ alone fdoe
-/// gives 3.47 ± 0.29); the time-domain fit weights az by its whole-record residual, which the
-/// slow airspeed/attitude model error makes large, so the α channel sets its CL_alpha; the
-/// filter-error method and the EKF, which model that error as process noise, give 4.39 and
-/// 4.38 (README, "Compare the estimators"), as fdoe does (docs/fdoe.md).
-/// The test holds that finding: it fails if CL_alpha comes within 2σ or a Cm leaves it.
+/// agree with output error's within 2 combined σ (measured 0.03, 0.55, 0.45 for Cm_alpha,
+/// Cm_de, Cm_q0). CL_alpha is a documented known gap (fdoe 4.28 ± 0.16, oe 3.21 ± 0.19; 4.4
+/// combined σ) with a stated cause, and the test checks the cause, not the gap: the
+/// time-domain fit weights az by its whole-record residual, which the slow airspeed/attitude
+/// model error makes large, so its α channel sets CL_alpha, where the band excludes that slow
+/// error and az asks for about 4.3 (docs/fdoe.md). Hence (1) the filter-error method, which
+/// models that slow error as process noise, agrees with fdoe within 2 combined σ (measured
+/// fem 4.39 ± 0.10, 0.61), and (2) fdoe fitted without az (α, q, q̇ alone) agrees with output
+/// error within 2 combined σ (measured 3.48 ± 0.29, 0.78). Either fails if fdoe's CL_alpha
+/// moves away from what the physics of the record says, in either direction.
 #[test]
-fn val_fdoe_on_the_hfb320_pitching_moment_agrees_lift_slope_does_not() {
+fn val_fdoe_on_the_hfb320_agrees_where_the_slow_model_error_is_out_of_the_fit() {
     let Some(data) = common::shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else {
         return;
     };
     let model = workspace().join("models/hfb320_book_q0.toml");
-    let ratios = compare(&data, "hfb320.toml", &["--model", model.to_str().unwrap()], "hfb320");
+    let args = ["--model", model.to_str().unwrap()];
+    let ratios = compare(&data, "hfb320.toml", &args, "hfb320");
     assert_eq!(ratios.len(), 4, "{ratios:?}");
-    for (n, r) in ratios {
-        if n == "CL_alpha" {
-            assert!(r > 2.0, "CL_alpha now within {r:.2} combined σ: update docs/fdoe.md");
-        } else {
-            assert!(r <= 2.0, "{n}: {r:.2} combined σ");
-        }
+    for (n, r) in ratios.iter().filter(|(n, _)| n != "CL_alpha") {
+        assert!(*r <= 2.0, "{n}: {r:.2} combined σ from oe");
     }
+    let fd = fit(&data, "hfb320.toml", "fdoe", &args, "hfb320-fdoe-again");
+    let fem = fit(&data, "hfb320.toml", "fem", &args, "hfb320-fem");
+    assert_eq!(fem["status"], "converged", "{}", fem["status_reason"]);
+    let lift = |r: Vec<(String, f64)>| r.into_iter().find(|(n, _)| n == "CL_alpha").unwrap().1;
+    let r = lift(combined_sigmas(&fd, &fem));
+    assert!(r <= 2.0, "fdoe CL_alpha {r:.2} combined σ from fem's");
+    // The same mapping without its az channel: fdoe's outputs are then α, q and q̇ only.
+    let text = std::fs::read_to_string(workspace().join("mappings/hfb320.toml")).unwrap();
+    let no_az: String =
+        text.lines().filter(|l| !l.starts_with("az =")).map(|l| l.to_owned() + "\n").collect();
+    let map =
+        std::env::temp_dir().join(format!("aeroident-fdoe-{}-no-az.toml", std::process::id()));
+    std::fs::write(&map, no_az).unwrap();
+    let fd = fit(&data, map.to_str().unwrap(), "fdoe", &args, "hfb320-fdoe-no-az");
+    let oe = fit(&data, "hfb320.toml", "oe", &args, "hfb320-oe-again");
+    std::fs::remove_file(&map).ok();
+    let outputs = &fd["frequency_domain"]["outputs"];
+    assert_eq!(outputs, &serde_json::json!(["alpha_rad", "q_rad_s", "qdot_rad_s2"]));
+    let r = lift(combined_sigmas(&fd, &oe));
+    assert!(r <= 2.0, "fdoe on α, q, q̇: CL_alpha {r:.2} combined σ from oe's");
 }
 
 /// A band without frequencies of the record is refused naming it, and `--band-hz` is only for

@@ -11,6 +11,8 @@ use aeroident_io::{FlightDataReader, Mapping, ModelSpec, RecordEvent};
 use aeroident_pipelines::estimators::EstimatorKind;
 use aeroident_pipelines::replay::{DerivativeSource, ReplayOptions, ReplayOutcome, replay};
 use common::{shared, workspace};
+use nalgebra::{DMatrix, DVector};
+use std::collections::HashMap;
 use std::path::Path;
 
 fn mapping(map: &str) -> Mapping {
@@ -61,8 +63,122 @@ fn basic() -> Option<ModelSpec> {
     Some(ModelSpec::from_toml_str(BASIC, "basic").unwrap())
 }
 
-/// The statement: equation error on real data is biased (Cm_q near −43 vs −27…−29),
-/// and RLS with Jategaonkar's model reproduces `docs/real-data.md` (HFB-320 RLS column).
+/// The columns of a CSV record with one header row, by name.
+fn csv_columns(path: &Path) -> HashMap<String, Vec<f64>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let names: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let mut cols = vec![Vec::new(); names.len()];
+    for line in lines.filter(|l| !l.trim().is_empty()) {
+        for (col, v) in cols.iter_mut().zip(line.split(',')) {
+            col.push(v.trim().parse::<f64>().unwrap());
+        }
+    }
+    names.into_iter().map(str::to_owned).zip(cols).collect()
+}
+
+/// Batch ordinary least squares `y ≈ Σ_k θ_k x_k` over the regressor columns `x` (nalgebra's
+/// SVD, independent of the crate's recursion): θ and the residuals.
+fn ols(x: &[Vec<f64>], y: &[f64]) -> (DVector<f64>, DMatrix<f64>, DVector<f64>) {
+    let a = DMatrix::from_fn(y.len(), x.len(), |i, k| x[k][i]);
+    let b = DVector::from_column_slice(y);
+    let theta = a.clone().svd(true, true).solve(&b, 1e-12).unwrap();
+    let residuals = &b - &a * &theta;
+    (theta, a, residuals)
+}
+
+/// Morelli & Klein's (J. Guid. Control Dyn. 20(1), 1997) coloured-residual standard errors of a
+/// least-squares fit: `(XᵀX)⁻¹ [Σ_i Σ_j x_i R(i − j) x_jᵀ] (XᵀX)⁻¹`, the residual
+/// autocovariance `R` summed up to the last lag before the first whose correlation lies inside
+/// the white band ±2/√N (Klein & Morelli 2006 §5.2).
+fn coloured_sigmas(a: &DMatrix<f64>, v: &DVector<f64>) -> Vec<f64> {
+    let n = v.len();
+    let r = |k: usize| (0..n - k).map(|i| v[i] * v[i + k]).sum::<f64>() / n as f64;
+    let last = (1..=40).take_while(|&k| (r(k) / r(0)).abs() >= 2.0 / (n as f64).sqrt()).count();
+    let p = a.ncols();
+    let mut m = DMatrix::<f64>::zeros(p, p);
+    for k in 0..=last {
+        let rows = a.rows(k, n - k).transpose() * a.rows(0, n - k);
+        m += if k == 0 { rows * r(0) } else { (&rows + rows.transpose()) * r(k) };
+    }
+    let inv = (a.transpose() * a).try_inverse().unwrap();
+    let cov = &inv * m * &inv;
+    (0..p).map(|k| cov[(k, k)].sqrt()).collect()
+}
+
+/// One coefficient's least-squares problem: the parameter names, their regressor columns and
+/// the measured coefficient.
+type Fit = (Vec<&'static str>, Vec<Vec<f64>>, Vec<f64>);
+
+/// `f` applied row by row to the columns `names` of `c`.
+fn per_row<const K: usize>(
+    c: &HashMap<String, Vec<f64>>,
+    names: [&str; K],
+    f: impl Fn([f64; K]) -> f64,
+) -> Vec<f64> {
+    let cols = names.map(|k| &c[k]);
+    (0..cols[0].len()).map(|i| f(cols.map(|col| col[i]))).collect()
+}
+
+/// The HFB-320 record's measured coefficients and Jategaonkar's model (11 parameters), from the
+/// book's constants (Jategaonkar 2015, chapter04/xdot_TC04_hfb_lon.m, in the shared README):
+/// S·c̄/Iy = 8.0027e-4, thrust moment/Iy = −7.0153e-6 T, S/m = 4.028e-3, σT = 0.0524 rad,
+/// m = 7472 kg, V0 = 104.67 m/s, c̄/2 = 1.215 m; thrust inclined by σT in the body x–z plane.
+fn hfb320_fits(c: &HashMap<String, Vec<f64>>) -> Vec<Fit> {
+    let cm = per_row(c, ["qdot_radps2", "thrust_N", "qbar_Pa"], |[qd, t, qb]| {
+        (qd + 7.0153e-6 * t) / (qb * 8.0027e-4)
+    });
+    let force = ["ax_mps2", "az_mps2", "thrust_N", "qbar_Pa"];
+    let cx =
+        per_row(c, force, |[ax, _, t, qb]| (ax - t / 7472.0 * 0.0524f64.cos()) / (qb * 4.028e-3));
+    let cz =
+        per_row(c, force, |[_, az, t, qb]| (az + t / 7472.0 * 0.0524f64.sin()) / (qb * 4.028e-3));
+    let (cl, cd) = lift_drag(&cx, &cz, &c["alpha_rad"]);
+    let one = vec![1.0; cm.len()];
+    let alpha = c["alpha_rad"].clone();
+    let v = per_row(c, ["vtas_mps"], |[v]| v / 104.67);
+    let qhat = per_row(c, ["q_radps", "vtas_mps"], |[q, v]| q * 1.215 / v);
+    let de = c["elevator_rad"].clone();
+    vec![
+        (
+            vec!["Cm_0", "Cm_alpha", "Cm_q", "Cm_de", "Cm_V"],
+            vec![one.clone(), alpha.clone(), qhat, de, v.clone()],
+            cm,
+        ),
+        (vec!["CL_0", "CL_alpha", "CL_V"], vec![one.clone(), alpha.clone(), v.clone()], cl),
+        (vec!["CD_0", "CD_alpha", "CD_V"], vec![one, alpha, v], cd),
+    ]
+}
+
+/// Each parameter of `fits` against the replay's: the same estimate to rounding, and, with a
+/// `band`, σ within it relative to Morelli & Klein's coloured-residual σ of the same fit.
+fn assert_least_squares(o: &ReplayOutcome, fits: Vec<Fit>, band: Option<(f64, f64)>, what: &str) {
+    for (names, x, y) in fits {
+        let (theta, a, residuals) = ols(&x, &y);
+        let sigmas = coloured_sigmas(&a, &residuals);
+        for (k, name) in names.iter().enumerate() {
+            let (est, sigma) = param(o, name);
+            let want = theta[k];
+            assert!(
+                (est - want).abs() <= 1e-7 * want.abs() + 1e-9,
+                "{what} {name}: {est} vs {want}"
+            );
+            let Some((lo, hi)) = band else { continue };
+            let ratio = sigma / sigmas[k];
+            assert!(lo <= ratio && ratio <= hi, "{what} {name}: σ {sigma} vs {}", sigmas[k]);
+        }
+    }
+}
+
+/// The statement: equation error on real data is biased (Cm_q near −43 against output
+/// error's −27…−29). RLS (λ = 1) with Jategaonkar's model is the batch least-squares fit of
+/// the measured coefficients, computed here from the record's columns with the book's
+/// constants: the same estimates to 10⁻⁷, and σ within 0.75–1.33 of Morelli & Klein's
+/// coloured-residual σ of that fit (the crate sums the autocorrelation through its last
+/// significant lobe with finite-memory corrections, not up to the first insignificant lag:
+/// measured 0.79–1.12; a σ doubled or halved leaves the band). Cm_q's σ then puts both
+/// published output-error values (the README's reproduction of the book −27.06, dimasad's
+/// independent −28.65) beyond 5σ: the bias is not noise.
 #[test]
 fn val_hfb320_readme_equation_error_cm_q_is_biased() {
     let Some(data) = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
@@ -74,22 +190,12 @@ fn val_hfb320_readme_equation_error_cm_q_is_biased() {
     assert_eq!(o.summary.samples_read, 601);
     assert_eq!(o.summary.samples_rejected, 0);
     assert_eq!(o.summary.status, "complete");
-    // docs/real-data.md, HFB-320 table, "RLS equation error ± σ" column (coloured-residual σ).
-    for (name, doc, doc_sigma) in [
-        ("Cm_alpha", -0.958, 0.0137),
-        ("Cm_q", -42.63, 1.094),
-        ("Cm_de", -1.589, 0.0268),
-        ("CL_alpha", 4.236, 0.1114),
-        ("CD_alpha", 0.322, 0.0051),
-    ] {
-        let (est, sigma) = param(&o, name);
-        assert!((est - doc).abs() < 0.001 * doc.abs() + 5e-4, "{name}: {est} vs docs {doc}");
-        assert!((sigma - doc_sigma).abs() < 0.05 * doc_sigma + 5e-4, "{name} σ {sigma}");
-    }
+    assert_least_squares(&o, hfb320_fits(&csv_columns(&data)), Some((0.75, 1.33)), "HFB-320");
     let (cmq, sigma) = param(&o, "Cm_q");
     assert!(cmq < -35.0, "equation-error Cm_q = {cmq}");
-    // Its own σ does not cover the output-error value: the bias is not noise.
-    assert!((cmq - -27.06).abs() > 5.0 * sigma);
+    for published in [-27.06, -28.65] {
+        assert!((cmq - published).abs() > 5.0 * sigma, "{cmq} ± {sigma} vs {published}");
+    }
     // The default model on this record is the longitudinal preset (no lateral constants).
     let d = run(&data, "hfb320.toml", ReplayOptions::default());
     assert_eq!((d.model.name.as_str(), d.model_defaulted), ("longitudinal", true));
@@ -223,48 +329,113 @@ fn val_attas_aileron_rudder_lateral_signs_across_the_gap() {
     }
 }
 
-/// ATTAS elevator and Twin Otter records: RLS reproduces `docs/real-data.md` (the RLS rows of
-/// the Twin Otter / ATTAS table, the old `basic` model) to its printed digits.
-#[test]
-fn val_attas_elevator_and_twin_otter_rls_as_documented() {
-    let table: [(&str, &str, [f64; 5]); 5] = [
-        (
-            "sidpac_twin_otter/csv/totter_lon_020213f1_017.csv",
-            "twin_otter.toml",
-            [-1.486, -35.8, -1.867, 6.54, 0.106],
-        ),
-        (
-            "sidpac_twin_otter/csv/totter_lon_020213f1_018.csv",
-            "twin_otter.toml",
-            [-1.476, -36.4, -1.869, 6.46, 0.114],
-        ),
-        (
-            "sidpac_twin_otter/csv/totter_lon_020213f1_019.csv",
-            "twin_otter.toml",
-            [-1.469, -36.8, -1.877, 6.50, 0.118],
-        ),
-        (
-            "jategaonkar_hfb320_attas/csv/fAttasElv1.csv",
-            "attas.toml",
-            [-1.033, -24.4, -1.467, 5.42, 0.281],
-        ),
-        (
-            "jategaonkar_hfb320_attas/csv/fAttasElv2.csv",
-            "attas.toml",
-            [-0.992, -25.3, -1.464, 5.37, 0.313],
-        ),
+/// Body-axis force coefficients to lift and drag: `CL = −CZ cos α + CX sin α`,
+/// `CD = −CX cos α − CZ sin α` (Klein & Morelli 2006 ch. 3).
+fn lift_drag(cx: &[f64], cz: &[f64], alpha: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let row = |i: usize| (cx[i], cz[i], alpha[i]);
+    let cl = (0..alpha.len()).map(row).map(|(x, z, a)| -z * a.cos() + x * a.sin()).collect();
+    let cd = (0..alpha.len()).map(row).map(|(x, z, a)| -x * a.cos() - z * a.sin()).collect();
+    (cl, cd)
+}
+
+/// The old `basic` model's three fits (Cm: 0, α, q̂, δe; CL, CD: 0, α) of measured
+/// `[α, q̂, δe, Cm, CX, CZ]`.
+fn basic_fits([alpha, qhat, de, cm, cx, cz]: [Vec<f64>; 6]) -> Vec<Fit> {
+    let (cl, cd) = lift_drag(&cx, &cz, &alpha);
+    let one = vec![1.0; alpha.len()];
+    let lon = vec![one.clone(), alpha.clone()];
+    vec![
+        (vec!["Cm_0", "Cm_alpha", "Cm_q", "Cm_de"], vec![one, alpha, qhat, de], cm),
+        (vec!["CL_0", "CL_alpha"], lon.clone(), cl),
+        (vec!["CD_0", "CD_alpha"], lon, cd),
+    ]
+}
+
+/// Twin Otter (SIDPAC, US units, angles in degrees) from its raw columns: thrust along the body
+/// x axis, no thrust moment, `Cm = (Iyy q̇ + (Ixx − Izz) p r + Ixz (p² − r²))/(q̄ S c̄)`
+/// (Stevens & Lewis eq. 2.5-24). SIDPAC's own stored Cm is not used: on 019 it is 0.73 times
+/// this one (on 017 and 018 the two agree to 10⁻¹⁰).
+fn twin_otter_fits(c: &HashMap<String, Vec<f64>>) -> Vec<Fit> {
+    let g = 9.806_65 / 0.3048;
+    let inertial = [
+        "Ixx_slugft2",
+        "Iyy_slugft2",
+        "Izz_slugft2",
+        "Ixz_slugft2",
+        "p_degps",
+        "qdot_degps2",
+        "r_degps",
+        "qbar_psf",
+        "sarea_ft2",
+        "cbar_ft",
     ];
-    for (rel, map, doc) in table {
+    let cm = per_row(c, inertial, |[ix, iy, iz, ixz, p, qd, r, qb, s, cb]| {
+        let (p, qd, r) = (p.to_radians(), qd.to_radians(), r.to_radians());
+        (iy * qd + (ix - iz) * p * r + ixz * (p * p - r * r)) / (qb * s * cb)
+    });
+    let force = ["mass_slug", "ax_g", "az_g", "thrust_lbf", "thrust2_lbf", "qbar_psf", "sarea_ft2"];
+    let cx = per_row(c, force, |[m, ax, _, t1, t2, qb, s]| (m * ax * g - t1 - t2) / (qb * s));
+    let cz = per_row(c, force, |[m, _, az, _, _, qb, s]| m * az * g / (qb * s));
+    let alpha = per_row(c, ["alpha_deg"], |[a]| a.to_radians());
+    let qhat = per_row(c, ["q_degps", "cbar_ft", "airspeed_fps"], |[q, cb, v]| {
+        q.to_radians() * cb / (2.0 * v)
+    });
+    let de = per_row(c, ["elevator_deg"], |[d]| d.to_radians());
+    basic_fits([alpha, qhat, de, cm, cx, cz])
+}
+
+/// ATTAS (SI, angles in degrees) from its raw columns with the constants of
+/// `mappings/attas.toml` (Jategaonkar's ATTAS code): the rate and accelerometer biases removed,
+/// α moved from the vane 13.08 m ahead of the CG (`α + x q/V`), q̄ = ½ρV², both engines'
+/// thrust along the body x axis, no thrust moment, Cm as [`twin_otter_fits`].
+fn attas_fits(c: &HashMap<String, Vec<f64>>) -> Vec<Fit> {
+    let (m, s, cbar) = (17631.0, 64.0, 3.159);
+    let (ixx, iyy, izz, ixz) = (1.33367e5, 2.52687e5, 3.59593e5, 1.1442e4);
+    let less = |k: &str, bias: f64| per_row(c, [k], |[x]| x - bias);
+    let rad = |k: &str, bias: f64| per_row(c, [k], |[x]| (x - bias).to_radians());
+    let (p, q, r) =
+        (rad("p_degps", 0.05875969), rad("q_degps", 0.19531616), rad("r_degps", 0.0570776));
+    let (qdot, de) = (rad("qdot_degps2", 0.0), rad("elevator_deg", 0.0));
+    let (ax, az) = (less("ax_cg_mps2", 6.76242e-3), less("az_cg_mps2", 8.39892e-2));
+    let (v, alpha) = (&c["vtas_mps"], rad("alpha_deg", 0.0));
+    let qbar = per_row(c, ["rho_kgpm3", "vtas_mps"], |[rho, v]| 0.5 * rho * v * v);
+    let thrust = per_row(c, ["thrust_left_N", "thrust_right_N"], |[l, r]| l + r);
+    let rows = 0..v.len();
+    let cm: Vec<f64> = rows
+        .clone()
+        .map(|i| {
+            let (p, r) = (p[i], r[i]);
+            let inertial = iyy * qdot[i] + (ixx - izz) * p * r + ixz * (p * p - r * r);
+            inertial / (qbar[i] * s * cbar)
+        })
+        .collect();
+    let cx = rows.clone().map(|i| (m * ax[i] - thrust[i]) / (qbar[i] * s)).collect();
+    let cz = rows.clone().map(|i| m * az[i] / (qbar[i] * s)).collect();
+    let alpha_cg = rows.clone().map(|i| alpha[i] + 13.080 * q[i] / v[i]).collect();
+    let qhat = rows.map(|i| q[i] * cbar / (2.0 * v[i])).collect();
+    basic_fits([alpha_cg, qhat, de, cm, cx, cz])
+}
+
+/// ATTAS elevator and Twin Otter records: RLS (λ = 1) with the old `basic` model is the batch
+/// least-squares fit of each record's measured coefficients, computed here from its raw columns
+/// (the same estimates to 10⁻⁷; `docs/real-data.md` prints them). Their σ is checked on the
+/// HFB-320 only: on these short records the simple first-insignificant-lag truncation and the
+/// crate's lobe rule differ by up to 2.4× (Twin Otter 018 CD_0), so that σ is no reference.
+#[test]
+fn val_attas_elevator_and_twin_otter_rls_is_batch_least_squares() {
+    type Fits = fn(&HashMap<String, Vec<f64>>) -> Vec<Fit>;
+    let table: [(&str, &str, Fits); 5] = [
+        ("sidpac_twin_otter/csv/totter_lon_020213f1_017.csv", "twin_otter.toml", twin_otter_fits),
+        ("sidpac_twin_otter/csv/totter_lon_020213f1_018.csv", "twin_otter.toml", twin_otter_fits),
+        ("sidpac_twin_otter/csv/totter_lon_020213f1_019.csv", "twin_otter.toml", twin_otter_fits),
+        ("jategaonkar_hfb320_attas/csv/fAttasElv1.csv", "attas.toml", attas_fits),
+        ("jategaonkar_hfb320_attas/csv/fAttasElv2.csv", "attas.toml", attas_fits),
+    ];
+    for (rel, map, fits) in table {
         let Some(data) = shared(rel) else { return };
         let o = run(&data, map, ReplayOptions { model: basic(), ..Default::default() });
         assert_eq!(o.summary.samples_rejected, 0);
-        // Printed to 3 decimals (Cm_q to 1, CL_alpha to 2): half a unit of the last digit.
-        let names = ["Cm_alpha", "Cm_q", "Cm_de", "CL_alpha", "CD_alpha"];
-        let tol = [6e-4, 0.06, 6e-4, 6e-3, 6e-4];
-        for ((name, d), tol) in names.iter().zip(doc).zip(tol) {
-            let (est, _) = param(&o, name);
-            assert!((est - d).abs() <= tol, "{rel} {name}: {est} vs docs {d}");
-        }
+        assert_least_squares(&o, fits(&csv_columns(&data)), None, rel);
         let d = run(&data, map, ReplayOptions::default());
         assert_eq!(d.model.name, "longitudinal", "{rel}");
     }
@@ -415,8 +586,9 @@ fn val_differentiated_qdot_reproduces_record_qdot_regression() {
 }
 
 /// RLS runs on every shipped mapping's record without rejecting a sample the differentiator
-/// could centre, identifies every parameter of the default model with a finite value, and the
-/// estimators not in this build are refused with a clear error.
+/// could centre and identifies every parameter of the default model with a finite value; every
+/// other real-time estimator gives a result whose status has its stated cause
+/// ([`assert_other_estimator`]).
 #[test]
 fn val_every_estimator_runs_on_every_record() {
     // The F-16 elevator doublet is purely longitudinal: its default (six-axis) model would
@@ -449,9 +621,6 @@ fn val_every_estimator_runs_on_every_record() {
         for p in &o.summary.parameters {
             assert!(p.estimate.is_some_and(f64::is_finite), "{rel} {}", p.name);
         }
-        // Every other estimator over the same structure: a result with finite published
-        // values, or an error naming the estimator (e.g. the gradient law (3.3) diverges on
-        // multi-term coefficients, docs/model-reference.md) — never a panic or a silent NaN.
         for kind in [
             EstimatorKind::Ftr,
             EstimatorKind::Ekf,
@@ -464,27 +633,39 @@ fn val_every_estimator_runs_on_every_record() {
             let reader = FlightDataReader::new(file, rel, &m).unwrap();
             let opts =
                 ReplayOptions { estimator: kind, model: model.clone(), ..Default::default() };
-            match replay(reader, &m, &opts, &mut ()) {
-                Ok(o) => {
-                    // A diverged estimator's numbers are not a result: all null.
-                    if o.summary.status == "diverged" {
-                        assert!(
-                            o.summary.parameters.iter().all(|p| p.estimate.is_none()),
-                            "{rel} {}: diverged with estimates",
-                            kind.name()
-                        );
-                    }
-                    for p in &o.summary.parameters {
-                        assert!(p.estimate.is_none_or(f64::is_finite), "{rel} {}", p.name);
-                        assert!(p.std_error.is_none_or(|s| s.is_finite() && s >= 0.0));
-                    }
-                }
-                Err(e) => {
-                    let e = e.to_string();
-                    assert!(e.contains(kind.name()), "{rel}: {e}");
-                }
-            }
+            let o = replay(reader, &m, &opts, &mut ())
+                .unwrap_or_else(|e| panic!("{rel} {}: {e}", kind.name()));
+            let held_elevator = rel.contains("ail_rud_doublets");
+            assert_other_estimator(&o, kind, held_elevator, rel);
         }
+    }
+}
+
+/// Another estimator over a record's structure: a result with finite values, never an error,
+/// a panic or a silent NaN. The gradient law (3.3) diverges on multi-term coefficients
+/// (docs/model-reference.md: the estimated model runs away from the measured state within
+/// seconds on every record), reported as `diverged` with every estimate null and that cause in
+/// its rejection. The others complete, except where the elevator is held (the aileron-rudder
+/// doublets): there a method that waits for excitation may leave terms `not identified`
+/// (status `initialising`), never diverged.
+fn assert_other_estimator(o: &ReplayOutcome, kind: EstimatorKind, held_elevator: bool, rel: &str) {
+    let what = format!("{rel} {}", kind.name());
+    for p in &o.summary.parameters {
+        assert!(p.estimate.is_none_or(f64::is_finite), "{what} {}", p.name);
+        assert!(p.std_error.is_none_or(|s| s.is_finite() && s >= 0.0), "{what} {}", p.name);
+    }
+    if kind == EstimatorKind::Gradient {
+        assert_eq!(o.summary.status, "diverged", "{what}");
+        assert!(o.summary.parameters.iter().all(|p| p.estimate.is_none()), "{what}");
+        let cause = "numerical failure in `estimated model ran away from the measured state`";
+        let why = o.summary.rejections.iter().find(|r| r.reason.contains("diverged at t ="));
+        assert!(why.is_some_and(|r| r.reason.contains(cause)), "{what}: {:?}", why);
+        return;
+    }
+    let waiting = held_elevator && o.summary.status == "initialising";
+    assert!(o.summary.status == "complete" || waiting, "{what}: {}", o.summary.status);
+    for p in o.summary.parameters.iter().filter(|p| p.estimate.is_none()) {
+        assert_eq!(p.status, "not identified", "{what} {}", p.name);
     }
 }
 

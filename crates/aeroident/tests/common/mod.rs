@@ -39,6 +39,33 @@ pub fn shared(rel: &str) -> Option<PathBuf> {
     None
 }
 
+/// Two-sided 99.9 % range of a Binomial(n, p) count: the largest `lo` with P(X < lo) ≤ 0.0005
+/// and the smallest `hi` with P(X > hi) ≤ 0.0005, by summing the exact probabilities
+/// (Binomial(44, 0.9545): 36–44; Binomial(44, 0.6827): 19–39).
+pub fn binomial_range(n: usize, p: f64) -> (usize, usize) {
+    let mut pmf = vec![(1.0 - p).powi(n as i32)];
+    for k in 1..=n {
+        let prev = pmf[k - 1];
+        pmf.push(prev * (n - k + 1) as f64 / k as f64 * p / (1.0 - p));
+    }
+    let (mut lo, mut below) = (0, 0.0);
+    while below + pmf[lo] <= 0.0005 {
+        below += pmf[lo];
+        lo += 1;
+    }
+    let (mut hi, mut above) = (n, 0.0);
+    while above + pmf[hi] <= 0.0005 {
+        above += pmf[hi];
+        hi -= 1;
+    }
+    (lo, hi)
+}
+
+/// The normal mass within ±1 and ±2 standard deviations: the nominal coverage of honest ±1σ
+/// and ±2σ intervals.
+pub const NORMAL_1SIGMA: f64 = 0.682_689;
+pub const NORMAL_2SIGMA: f64 = 0.954_500;
+
 /// `text` (a scenario) with the default scenario's orthogonal multisines put back to the
 /// former design: base period 10 s, harmonics 2–16 dealt out in turn, instead of the odd
 /// harmonics 5–31 over 20 s (docs/uncertainty.md, "Odd-harmonic inputs"). The campaign runs

@@ -95,12 +95,8 @@ fn hfb320_output_error_reproduces_the_published_result() {
     for ((name, c), s) in res.names.iter().zip(sc).zip(&res.sigma) {
         assert!(c > s, "{name}: coloured σ {c} ≤ CR σ {s}");
     }
-    // ≤ 1 s on one core including the relaxation (optimised builds; a debug build only reports).
-    if cfg!(debug_assertions) {
-        println!("debug build: wall-time target checked in optimised builds only");
-    } else {
-        assert!(wall_s < 1.0, "wall time {wall_s} s");
-    }
+    // The speed target (≤ 1 s on one core) is the benchmark's, crates/estimators/benches/
+    // crit_output_error.rs: a test's wall clock depends on the machine's load.
 }
 
 #[test]

@@ -169,18 +169,90 @@ fn errors_bad_mappings_name_file_and_channel() {
     assert!(matches!(e, FlightDataError::Io { .. }));
 }
 
+/// The row a record event belongs to.
+fn event_row(e: &RecordEvent) -> u64 {
+    match e {
+        RecordEvent::Sample { row, .. } | RecordEvent::Rejected { row, .. } => *row,
+        RecordEvent::Gap { row, .. } => *row,
+    }
+}
+
+/// The reader's items in order: rows strictly increasing after the header (line 1), one sample
+/// or rejection per row, a gap only just before the sample of its own row, and nothing after
+/// a fatal error.
+fn check_event_order(items: &[Result<RecordEvent, FlightDataError>]) -> Result<(), String> {
+    let mut last_row = 1;
+    for (k, item) in items.iter().enumerate() {
+        let e = match item {
+            Ok(e) => e,
+            Err(_) if k + 1 == items.len() => return Ok(()),
+            Err(err) => return Err(format!("item {k} after the fatal error {err}")),
+        };
+        let row = event_row(e);
+        if let RecordEvent::Gap { .. } = e {
+            let next = items.get(k + 1).and_then(|n| n.as_ref().ok());
+            if !matches!(next, Some(RecordEvent::Sample { row: r, .. }) if *r == row) {
+                return Err(format!("gap on row {row} not followed by its sample: {next:?}"));
+            }
+        } else if row <= last_row {
+            return Err(format!("row {row} after row {last_row}"));
+        } else {
+            last_row = row;
+        }
+    }
+    Ok(())
+}
+
+/// Bytes whose lines a reader need not be trusted to find: no quote and no carriage return,
+/// so a line is what lies between two `\n`; numbers, separators, letters, a tab, a space and a
+/// byte that is not UTF-8.
+const PLAIN: &[u8] = b"0123456789.,-+eEaVnNiI \t\n\n\n\xe9";
+
+/// A line of spaces and tabs only, or empty.
+fn blank(line: &[u8]) -> bool {
+    line.iter().all(|b| matches!(b, b' ' | b'\t'))
+}
+
 proptest! {
-    /// Arbitrary bytes after a valid header never panic and every row yields one event.
+    /// Arbitrary bytes after a valid header never panic, and the events keep row order
+    /// ([`check_event_order`]).
     #[test]
     fn prop_random_rows_never_panic(body in proptest::collection::vec(any::<u8>(), 0..400)) {
-        let mut text = b"t,V,a,q,ax,az,de,qbar,qd\n".to_vec();
+        let mut text = HEADER.as_bytes().to_vec();
         text.extend(body);
         let m = mapping();
-        if let Ok(r) = FlightDataReader::new(&text[..], "fuzz", &m) {
-            for e in r {
-                let _ = e;
-            }
+        let items: Vec<_> = FlightDataReader::new(&text[..], "fuzz", &m).unwrap().collect();
+        prop_assert_eq!(check_event_order(&items), Ok(()));
+    }
+
+    /// Every row yields one event: on lines found without the reader (no quotes, no carriage
+    /// returns), each line after the header that is not blank (empty, or spaces and tabs: the
+    /// fields are trimmed), the last one with or without its `\n`,
+    /// gives exactly one sample or rejection on its own line number, and nothing else does;
+    /// without such a line the record is refused as empty.
+    #[test]
+    fn prop_every_line_yields_one_event(body in proptest::collection::vec(proptest::sample::select(PLAIN), 0..400)) {
+        let mut text = HEADER.as_bytes().to_vec();
+        text.extend(&body);
+        let lines = body.split(|b| *b == b'\n');
+        let want: Vec<u64> =
+            (2..).zip(lines).filter(|(_, l)| !blank(l)).map(|(row, _)| row).collect();
+        let m = mapping();
+        let items: Vec<_> = FlightDataReader::new(&text[..], "fuzz", &m).unwrap().collect();
+        prop_assert_eq!(check_event_order(&items), Ok(()));
+        if want.is_empty() {
+            // A header and no row is no record.
+            let no_data = matches!(&items[..], [Err(FlightDataError::NoData { .. })]);
+            prop_assert!(no_data, "{:?}", items);
+            return Ok(());
         }
+        let got: Vec<u64> = items
+            .iter()
+            .map(|e| e.as_ref().unwrap())
+            .filter(|e| !matches!(e, RecordEvent::Gap { .. }))
+            .map(event_row)
+            .collect();
+        prop_assert_eq!(got, want);
     }
 }
 
@@ -469,10 +541,11 @@ fn errors_invalid_utf8_field_rejects_only_its_row() {
     assert!(matches!(ev.last(), Some(RecordEvent::Sample { row: 4, sample }) if sample.t_s == 0.2));
 }
 
-/// A header of 200,000 columns (and rows as wide) is read in linear time: the duplicate check
-/// and the column look-up are hashed (a pairwise check took minutes at this width).
+/// A header of 200,000 columns (and rows as wide) is read: both rows are samples, on their
+/// lines. The duplicate check and the column look-up are hashed (a pairwise check took minutes
+/// at this width); the speed is measured in docs/reliability.md, not asserted by a clock here.
 #[test]
-fn errors_very_wide_header_is_read_in_linear_time() {
+fn errors_very_wide_header_is_read() {
     let n = 200_000;
     let extra: String = (0..n).map(|i| format!(",x{i}")).collect();
     let zeros = ",0".repeat(n);
@@ -480,9 +553,13 @@ fn errors_very_wide_header_is_read_in_linear_time() {
     for t in ["0.0", "0.1"] {
         csv.push_str(&format!("{}{zeros}\n", row(t).trim_end()));
     }
-    let started = std::time::Instant::now();
     let ev = events_str(&csv);
-    let took = started.elapsed().as_secs_f64();
-    assert!(matches!(&ev[..], [RecordEvent::Sample { .. }, RecordEvent::Sample { .. }]));
-    assert!(took < 5.0, "{took} s for {n} extra columns");
+    let times: Vec<(u64, f64)> = ev
+        .iter()
+        .map(|e| match e {
+            RecordEvent::Sample { row, sample } => (*row, sample.t_s),
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    assert_eq!(times, [(2, 0.0), (3, 0.1)]);
 }

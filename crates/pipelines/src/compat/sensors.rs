@@ -39,8 +39,7 @@ const MIN_ROWS: usize = 50;
 
 /// Refuses a record whose sensors the check would misread (module doc): a constant channel;
 /// a gyro or attitude in the wrong unit (the Euler kinematics, [`crate::replay::kinematics`]);
-/// an accelerometer in the wrong unit (the force equations,
-/// [`crate::replay::sign_tests::accelerometer_scale_warnings`]); an α vane in the wrong unit
+/// a normal accelerometer in the wrong unit ([`az_misread`]); an α vane in the wrong unit
 /// ([`alpha_gain`]). The error names the channel as `mapping` does.
 pub(super) fn believable(slices: &[&[AirDataSample]], mapping: &Mapping) -> Result<(), String> {
     for name in SENSOR_FIELDS {
@@ -58,11 +57,7 @@ pub(super) fn believable(slices: &[&[AirDataSample]], mapping: &Mapping) -> Resu
     let kinematics = crate::replay::kinematics::Kinematics::of_manoeuvres(slices);
     let mut misread: Vec<String> =
         kinematics.warnings(mapping).into_iter().map(|w| w.text).collect();
-    misread.extend(
-        crate::replay::sign_tests::accelerometer_scale_warnings(slices, mapping)
-            .into_iter()
-            .map(|w| w.text),
-    );
+    misread.extend(az_misread(slices, mapping));
     misread.extend(alpha_misread(slices, mapping));
     match misread.first() {
         Some(w) => Err(format!(
@@ -70,6 +65,43 @@ pub(super) fn believable(slices: &[&[AirDataSample]], mapping: &Mapping) -> Resu
         )),
         None => Ok(()),
     }
+}
+
+/// The unit mix-ups the normal accelerometer's mean magnitude over `g` points to.
+const AZ_UNIT_FACTORS: [(f64, &str); 4] = [
+    (G0_MPS2, "likely m/s² data mapped in g: map it with `unit = \"m/s2\"`"),
+    (1.0 / G0_MPS2, "likely a reading in g mapped as m/s²: map it with `unit = \"g\"`"),
+    (1.0 / 0.3048, "likely ft/s² data mapped as m/s²: map it with `unit = \"ft/s2\"`"),
+    (0.3048, "likely m/s² data mapped in ft/s²: map it with `unit = \"m/s2\"`"),
+];
+
+/// The normal accelerometer's unit-mismatch text when its mean magnitude over the record is
+/// more than a factor [`BOUND`] from `g`: in flight `a_z` carries the load factor, whose mean
+/// over any manoeuvre a flight record holds is near 1 g (a 2-g turn held throughout is the
+/// rare exception). The mean does not depend on the sensors' lags, which bias a regression
+/// against the force equations (a degraded record with the α vane 0.2 s late read a_z 2.7 times
+/// its kinematic value).
+fn az_misread(slices: &[&[AirDataSample]], mapping: &Mapping) -> Option<String> {
+    let values: Vec<f64> = slices.iter().flat_map(|m| m.iter()).filter_map(|s| s.az_mps2).collect();
+    if values.len() < MIN_ROWS {
+        return None;
+    }
+    let mean = values.iter().map(|v| v.abs()).sum::<f64>() / values.len() as f64;
+    let factor = mean / G0_MPS2;
+    if (1.0 / BOUND..=BOUND).contains(&factor) {
+        return None;
+    }
+    let likely = AZ_UNIT_FACTORS
+        .iter()
+        .filter(|(f, _)| (factor / f).ln().abs() < 1.5f64.ln())
+        .min_by(|a, b| (factor / a.0).ln().abs().total_cmp(&(factor / b.0).ln().abs()))
+        .map_or("check its unit and scale in the mapping", |u| u.1);
+    Some(format!(
+        "unit mismatch: {} has a mean magnitude of {} m/s² over the record, {} g, where flight holds about 1 g; {likely}",
+        mapping.field_label("az_mps2"),
+        short(mean),
+        short(factor)
+    ))
 }
 
 /// The α vane's unit-mismatch text when its gain ([`alpha_gain`]) is judged off.
@@ -193,5 +225,18 @@ mod tests {
         let text = alpha_misread(&[&samples], &mapping).unwrap();
         assert!(text.contains("likely radians mapped as degrees"), "{text}");
         assert!(text.contains("column `aoa`"), "{text}");
+        // The normal accelerometer: about −1 g in m/s² passes; the same in g (−1) or in
+        // ft/s² mapped as m/s² (−32.2) is named with its likely unit.
+        assert!(az_misread(&[&samples], &mapping).is_none());
+        for (scale, likely) in
+            [(1.0 / G0_MPS2, "a reading in g"), (1.0 / 0.3048, "ft/s² data mapped as m/s²")]
+        {
+            let scaled: Vec<AirDataSample> = samples
+                .iter()
+                .map(|s| AirDataSample { az_mps2: s.az_mps2.map(|a| a * scale), ..*s })
+                .collect();
+            let text = az_misread(&[&scaled], &mapping).unwrap();
+            assert!(text.contains(likely) && text.contains("column `az`"), "{text}");
+        }
     }
 }

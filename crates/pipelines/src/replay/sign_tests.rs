@@ -332,22 +332,6 @@ fn rows<M: AsRef<[AirDataSample]>>(t: &Test, manoeuvres: &[M], on: &Present) -> 
     out
 }
 
-/// The unit-mismatch warnings of the accelerometers alone ([`scale_warning`]), without the
-/// surfaces' regressions and timing searches: what a check of the sensors needs before it
-/// trusts them.
-pub fn accelerometer_scale_warnings<M: AsRef<[AirDataSample]>>(
-    manoeuvres: &[M],
-    mapping: &Mapping,
-) -> Vec<Warning> {
-    let present = present_fields(manoeuvres);
-    TESTS
-        .iter()
-        .filter(|t| t.expected > 0.0 && present.has(t.channel))
-        .filter(|t| t.needs.iter().all(|n| present.has(n)))
-        .filter_map(|t| scale_warning(&run(t, manoeuvres, &present, Some("")), mapping))
-        .collect()
-}
-
 /// The shortest positive sample interval of the manoeuvres, s.
 fn shortest_interval<M: AsRef<[AirDataSample]>>(manoeuvres: &[M]) -> f64 {
     manoeuvres
@@ -514,55 +498,12 @@ pub(crate) fn label(mapping: &Mapping, key: &str) -> String {
     channel.map_or_else(|| format!("`{key}`"), |c| mapping.channel_label(*c))
 }
 
-/// A warning per reversed channel, naming its mapping source and the fix, per accelerometer
-/// whose scale is off ([`scale_warning`]), and per surface whose lead over its response is
-/// determined and at least a sample and 0.02 s ([`timing`]).
+/// A warning per reversed channel, naming its mapping source and the fix, and per surface
+/// whose lead over its response is determined and at least a sample and 0.02 s ([`timing`]).
 pub fn warnings(tests: &[SignTest], mapping: &Mapping, dt_s: f64) -> Vec<Warning> {
     let mut out = reversed_warnings(tests, mapping);
-    out.extend(tests.iter().filter_map(|t| scale_warning(t, mapping)));
     out.extend(tests.iter().filter_map(|t| timing::warning(t, mapping, dt_s)));
     out
-}
-
-/// An accelerometer reads its specific force times `1 / gain`: judged when that factor is
-/// outside [1/`SCALE_BOUND`, `SCALE_BOUND`] and more than [`DECIDE_SIGMAS`] σ from 1. A scale
-/// error of a real accelerometer is a few per cent; a factor this far off is a unit.
-pub const SCALE_BOUND: f64 = 2.0;
-
-/// The unit mix-ups an accelerometer's factor (reading over specific force) points to.
-const UNIT_FACTORS: [(f64, &str); 4] = [
-    (G0_MPS2, "likely m/s² data mapped in g: map it with `unit = \"m/s2\"`"),
-    (1.0 / G0_MPS2, "likely a reading in g mapped as m/s²: map it with `unit = \"g\"`"),
-    (1.0 / 0.3048, "likely ft/s² data mapped as m/s²: map it with `unit = \"ft/s2\"`"),
-    (0.3048, "likely m/s² data mapped in ft/s²: map it with `unit = \"m/s2\"`"),
-];
-
-/// The unit-mismatch warning of an accelerometer test whose gain says the channel reads its
-/// specific force times a factor far from 1 ([`SCALE_BOUND`]), naming the likely unit.
-pub fn scale_warning(t: &SignTest, mapping: &Mapping) -> Option<Warning> {
-    if !["ax", "ay", "az"].contains(&t.channel.as_str()) || t.verdict == SignVerdict::Undecided {
-        return None;
-    }
-    let (gain, sigma) = (t.gain?, t.sigma?);
-    let (factor, factor_sigma) = (1.0 / gain, sigma / (gain * gain));
-    let off = factor.abs() > SCALE_BOUND || factor.abs() < 1.0 / SCALE_BOUND;
-    if !off || (factor.abs() - 1.0).abs() <= DECIDE_SIGMAS * factor_sigma {
-        return None;
-    }
-    // The nearest unit factor within 20 % or three of the factor's σ (a weakly excited record
-    // reads an accelerometer in g as 14.6 ± 2.4).
-    let likely = UNIT_FACTORS
-        .iter()
-        .filter(|(f, _)| (factor.abs() - f).abs() <= (0.2 * f).max(3.0 * factor_sigma))
-        .min_by(|a, b| (factor.abs() / a.0).ln().abs().total_cmp(&(factor.abs() / b.0).ln().abs()))
-        .map_or("check its unit and scale in the mapping", |u| u.1);
-    let text = format!(
-        "unit mismatch: {} reads {} ± {} times the specific force the force equations give from the air data, attitude and rates (1 when its unit agrees); {likely}",
-        label(mapping, &t.channel),
-        aeroident_io::message::short(factor),
-        aeroident_io::message::short(factor_sigma)
-    );
-    Some(Warning::new(WarningKind::UnitMismatch, text))
 }
 
 fn reversed_warnings(tests: &[SignTest], mapping: &Mapping) -> Vec<Warning> {

@@ -103,7 +103,11 @@ impl SpectralOptions {
         {
             return Err(opt(
                 "f_max_hz",
-                format!("{} Hz is not above f_min_hz {} Hz", short(hi), short(lo)),
+                format!(
+                    "{} Hz is not above the lowest frequency asked for, {} Hz",
+                    short(hi),
+                    short(lo)
+                ),
             ));
         }
         Ok(())

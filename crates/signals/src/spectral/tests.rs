@@ -308,3 +308,19 @@ fn log_chirp_drive_recovers_the_response() {
     let (db, deg) = deviation_where(&r.pairs[0], |f| response(&bq, f), 0.8);
     assert!(db < 1.0 && deg < 5.0, "{db} dB {deg} deg");
 }
+
+/// An upper bound not above the lower one names the upper bound's field and says why in words
+/// any face can show: no other field's spelling in the reason (a CLI user once read the
+/// Python keyword `f_min_hz` there).
+#[test]
+fn errors_an_upper_bound_not_above_the_lower_names_it_in_plain_words() {
+    let o =
+        SpectralOptions { f_min_hz: Some(10.0), f_max_hz: Some(1.0), ..SpectralOptions::default() };
+    match o.check() {
+        Err(SpectralError::Option { option, reason }) => {
+            assert_eq!(option, "f_max_hz");
+            assert_eq!(reason, "1 Hz is not above the lowest frequency asked for, 10 Hz");
+        }
+        other => panic!("{other:?}"),
+    }
+}

@@ -332,7 +332,8 @@ def test_a_record_given_twice_to_fit_is_refused_unless_asked(tmp_path):
         (lambda: aeroident.replay(GOOD, MIN_MAP, knots_deg="5"), "knots_deg must be a list"),
         (lambda: aeroident.replay(GOOD, MIN_MAP, candidates="q"), "candidates must be a list"),
         (lambda: aeroident.fit(GOOD, MIN_MAP, band_hz=(1,)), r"band_hz must be \(f_min_hz, f_max_hz\), two numbers; got 1"),
-        (lambda: aeroident.fit(GOOD, MIN_MAP, band_hz="1:5"), "band_hz must be a list"),
+        (lambda: aeroident.fit(GOOD, MIN_MAP, band_hz="1:5"), r"band_hz must be a list \(e\.g\. \[1\.0, 5\.0\]\)"),
+        (lambda: aeroident.fit(GOOD, MIN_MAP, knots_deg="5,7"), r"knots_deg must be a list \(e\.g\. \[5\.0, 7\.0\]\)"),
         (lambda: aeroident.fit(GOOD, MIN_MAP, windows=[(1.0,)]), r"windows entries must be \(start_s, end_s\)"),
     ],
 )

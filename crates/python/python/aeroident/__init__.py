@@ -140,11 +140,24 @@ def _sequence(name: str, value: Any) -> Optional[list[Any]]:
     if value is None:
         return None
     if isinstance(value, (str, bytes, os.PathLike)):
-        raise TypeError(f"{name} must be a list (e.g. [{value!r}]), not a single {type(value).__name__}: {value!r}")
+        raise TypeError(f"{name} must be a list (e.g. {_list_hint(value)}), not a single {type(value).__name__}: {value!r}")
     try:
         return list(value)
     except TypeError:
         raise TypeError(f"{name} must be a list, got {type(value).__name__}: {value!r}") from None
+
+
+def _list_hint(value: Any) -> str:
+    """The list a lone string most likely meant: its parts when it holds separators (``'5,7'``
+    and ``'0.1:1.5'`` are two numbers, where ``['5,7']`` would be refused again), else itself."""
+    if isinstance(value, str):
+        parts = [p.strip() for p in value.replace(":", ",").split(",") if p.strip()]
+        if len(parts) > 1:
+            try:
+                return repr([float(p) for p in parts])
+            except ValueError:
+                return repr(parts)
+    return f"[{value!r}]"
 
 
 def _band(value: Any) -> Optional[tuple[float, float]]:

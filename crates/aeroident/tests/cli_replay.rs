@@ -395,6 +395,43 @@ fn errors_a_record_given_twice_is_refused_unless_asked() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A record most of whose rows are rejected (here 30 of 40 with a negative airspeed) says so in
+/// the summary's warnings, with the share and the cause, in the real-time replay as in the batch
+/// fits: once the estimator ran on the 10 left and only the rejection count told.
+#[test]
+fn most_rows_rejected_is_a_warning_naming_the_share_and_cause() {
+    let dir = tmp_path("most-rejected");
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut csv = String::from("t,V,a,q,ax,az,de,qbar,qd\n");
+    for i in 0..40 {
+        let v = if i % 4 == 0 { 200 } else { -5 };
+        csv.push_str(&format!("{:.1},{v},2.0,0.5,0.01,-1.0,1.0,100,0.1\n", i as f64 * 0.1));
+    }
+    std::fs::write(dir.join("r.csv"), csv).unwrap();
+    let out = dir.join("out");
+    let o = bin()
+        .arg("replay")
+        .arg(dir.join("r.csv"))
+        .arg("--map")
+        .arg(workspace().join("crates/io/tests/data/min.toml"))
+        .args(["--estimator", "rls", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let text = std::fs::read_to_string(out.join("summary.json")).unwrap_or_default();
+    let _ = std::fs::remove_dir_all(&dir);
+    let s: serde_json::Value = serde_json::from_str(&text)
+        .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&o.stderr)));
+    let warned = s["warnings"].as_array().unwrap().iter().filter_map(|w| w.as_str());
+    let w: Vec<&str> = warned.filter(|w| w.contains("rows (75 %) were rejected")).collect();
+    assert!(
+        w.len() == 1
+            && w[0].contains("30 of 40 rows")
+            && w[0].contains("the fit uses the other 10"),
+        "{s}"
+    );
+}
+
 /// `--cross-check` beside a batch fit runs the record's other methods: `summary.json`
 /// `cross_check` names the fit's method first, then the panel's others, and judges every
 /// estimate with a σ; on stdin (read once) it is refused before the output directory is made.

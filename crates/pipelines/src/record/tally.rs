@@ -39,6 +39,15 @@ impl FileTally {
         self.causes.entry(cause).or_insert_with(|| (0, format!("row {row}: {problem}"))).0 += 1;
     }
 
+    /// Counts one record event: a sample, a rejected row, or nothing for a gap.
+    pub fn count(&mut self, event: &aeroident_io::RecordEvent) {
+        match event {
+            aeroident_io::RecordEvent::Sample { .. } => self.sample(),
+            aeroident_io::RecordEvent::Rejected { row, problem } => self.rejected(*row, problem),
+            aeroident_io::RecordEvent::Gap { .. } => {}
+        }
+    }
+
     /// Rows rejected.
     pub fn rejected_rows(&self) -> usize {
         self.causes.values().map(|(n, _)| n).sum()

@@ -681,8 +681,11 @@ pub fn replay_with<R: Read>(
     let mut run = online::Replay::new(events_file.clone(), mapping, opts, observer);
     check_spike_screen(opts.spike_screen.as_ref())?;
     let mut events = record_events(reader, opts.spike_screen, opts.compat.as_ref(), &opts.windows);
+    let mut tally = crate::record::tally::FileTally::default();
     for item in events.by_ref() {
-        run.event(item?, &make)?;
+        let event = item?;
+        tally.count(&event);
+        run.event(event, &make)?;
         if run.diverged() || run.stop_requested() {
             break;
         }
@@ -701,6 +704,7 @@ pub fn replay_with<R: Read>(
         out.summary.warnings.extend(c.warnings());
     }
     out.summary.warnings.extend(events.notes());
+    out.summary.warnings.extend(tally.warning(&file));
     verdict::judge(&mut out, crate::plausibility::thrust_mapped(mapping));
     Ok(out)
 }

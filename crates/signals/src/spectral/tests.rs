@@ -324,3 +324,18 @@ fn errors_an_upper_bound_not_above_the_lower_names_it_in_plain_words() {
         other => panic!("{other:?}"),
     }
 }
+
+/// The composite of two windows' spectra at one frequency is their average weighted by
+/// `1/ε² = 2 n_d γ²/(1 − γ²)` (Tischler & Remple §8.6): a window of coherence 0.99 giving
+/// H = 1 and one of coherence 0.5 giving H = 2, each of 10 averages, compose to
+/// (w₁·1 + w₂·2)/(w₁ + w₂) = 1.0099…, where an unweighted average would give 1.5.
+#[test]
+fn analytic_composite_weights_each_window_by_its_random_error() {
+    let c = |re: f64| Complex64::new(re, 0.0);
+    // Single input: S = [Gxx, Gxy; Gyx, Gyy], H = Gxy/Gxx, γ² = |Gxy|²/(Gxx Gyy).
+    let window = |h: f64, coherence: f64| (vec![c(1.0), c(h), c(h), c(h * h / coherence)], 10.0);
+    let weight = |coherence: f64| 2.0 * 10.0 * coherence / (1.0 - coherence);
+    let expected = (weight(0.99) * 1.0 + weight(0.5) * 2.0) / (weight(0.99) + weight(0.5));
+    let solved = composite([window(1.0, 0.99), window(2.0, 0.5)].into_iter(), 1).unwrap();
+    assert!((solved.h[0] - c(expected)).norm() < 1e-12, "{} vs {expected}", solved.h[0]);
+}

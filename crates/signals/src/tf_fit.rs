@@ -564,6 +564,25 @@ mod tests {
         }
     }
 
+    /// The cost at the true parameters of a response 1 dB above them everywhere, coherence 0.7:
+    /// every point contributes `(20/n) W_γ (1 dB)²` with `W_γ = [1.58 (1 − e^{−0.7})]²`
+    /// (MIL-STD-1797A; Tischler & Remple eq. 11.12), so `J = 20 W_γ` = 13.0, where an unweighted
+    /// cost would be 20.
+    #[test]
+    fn analytic_cost_weights_each_point_by_its_coherence() {
+        let l = Layout { num: 0, den: 2, delay: false };
+        let truth = [4.0, 2.0 * 0.3 * 2.0, 4.0];
+        let mut resp = exact(&l, &truth);
+        let up = 10f64.powf(1.0 / 20.0);
+        resp.re.iter_mut().chain(resp.im.iter_mut()).for_each(|v| *v *= up);
+        resp.coherence.iter_mut().for_each(|g| *g = 0.7);
+        let pts = points(&resp, (0.0, f64::INFINITY), 0.6);
+        assert_eq!(pts.len(), 80);
+        let w_gamma = (1.58 * (1.0 - (-0.7f64).exp())).powi(2);
+        let j = cost(&residuals(&l, &truth, &pts));
+        assert!((j - 20.0 * w_gamma).abs() < 1e-9, "J {j} vs {}", 20.0 * w_gamma);
+    }
+
     #[test]
     fn short_period_form_with_delay_is_recovered_exactly() {
         // q/de = K (s + 1/Tθ2) e^{−τs} / (s² + 2ζω s + ω²): ω = 3 rad/s, ζ = 0.45, 1/Tθ2 = 1.2,

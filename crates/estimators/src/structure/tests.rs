@@ -233,3 +233,25 @@ fn analytic_power_term_enters_only_after_its_parent() {
     let a2 = h.fit.terms.iter().position(|&t| t == 0).unwrap();
     assert!((h.fit.theta[a2] - 3.0).abs() < 5.0 * h.fit.std_error[a2], "{:?}", h.fit.theta);
 }
+
+/// The partial F of one term is the square of its t ratio (Klein & Morelli eq. 5.63): on a
+/// two-point-per-level design `z = 1 + 0.5 x + e` with `e` = ±0.1 alternating, the slope's t
+/// ratio computed by hand is θ̂/σ(θ̂) and its partial F that squared, not the t ratio itself,
+/// against which a cut-off of 20 would let in terms of t ≈ 4.5 only.
+#[test]
+fn analytic_partial_f_is_the_squared_t_ratio() {
+    // x = 0, 0, 1, 1, 2, 2, …; e alternates so each level's pair averages the line exactly.
+    let n = 40;
+    let x: Vec<f64> = (0..n).map(|i| (i / 2) as f64).collect();
+    let z: Vec<f64> =
+        (0..n).map(|i| 1.0 + 0.5 * x[i] + if i % 2 == 0 { 0.1 } else { -0.1 }).collect();
+    let c = candidates(&["x"], &[x.clone()], z);
+    let f = fit(&c, &[0]);
+    // By hand: slope 0.5, residuals ±0.1, s² = n·0.01/(n − 2), var(slope) = s²/Σ(x − x̄)².
+    let mean = x.iter().sum::<f64>() / n as f64;
+    let sxx: f64 = x.iter().map(|v| (v - mean).powi(2)).sum();
+    let s2 = n as f64 * 0.01 / (n as f64 - 2.0);
+    let t = 0.5 / (s2 / sxx).sqrt();
+    assert!((f.theta[0] - 0.5).abs() < 1e-12, "{:?}", f.theta);
+    assert!((f.partial_f(0) - t * t).abs() < 1e-6 * t * t, "F {} vs t² {}", f.partial_f(0), t * t);
+}

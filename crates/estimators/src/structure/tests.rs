@@ -245,7 +245,7 @@ fn analytic_partial_f_is_the_squared_t_ratio() {
     let x: Vec<f64> = (0..n).map(|i| (i / 2) as f64).collect();
     let z: Vec<f64> =
         (0..n).map(|i| 1.0 + 0.5 * x[i] + if i % 2 == 0 { 0.1 } else { -0.1 }).collect();
-    let c = candidates(&["x"], &[x.clone()], z);
+    let c = candidates(&["x"], std::slice::from_ref(&x), z);
     let f = fit(&c, &[0]);
     // By hand: slope 0.5, residuals ±0.1, s² = n·0.01/(n − 2), var(slope) = s²/Σ(x − x̄)².
     let mean = x.iter().sum::<f64>() / n as f64;

@@ -90,7 +90,14 @@ fn bad_input_names_the_option() {
             vec!["--input", "de", "--output", "q", "--min-coherence", "nan"],
             "`--min-coherence`: NaN",
         ),
-        (vec!["--input", "de", "--input", "de", "--output", "q"], "`--input`: `de` is given twice"),
+        (
+            vec!["--input", "de", "--input", "de", "--output", "q"],
+            "`--input`: `de` is given twice (an input conditioned on itself",
+        ),
+        (
+            vec!["--input", "de", "--output", "q", "--output", "q"],
+            "`--output`: `q` is given twice (each output's responses are computed once",
+        ),
         (
             vec!["--input", "de", "--output", "q", "--window", "1:1.05"],
             "`--window`: no uniformly sampled stretch of 4 or more samples",

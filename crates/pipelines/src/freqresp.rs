@@ -212,13 +212,19 @@ fn check_channels(opts: &FreqRespOptions) -> Result<(), RecordError> {
             });
         }
     }
-    for (option, list) in [("input", &opts.inputs), ("output", &opts.outputs)] {
+    let lists = [
+        ("input", &opts.inputs, "an input conditioned on itself leaves nothing to excite it"),
+        (
+            "output",
+            &opts.outputs,
+            "each output's responses are computed once; the second would repeat them",
+        ),
+    ];
+    for (option, list, why) in lists {
         if let Some((_, dup)) = list.iter().enumerate().find(|(k, c)| list[..*k].contains(c)) {
             return Err(RecordError::Option {
                 option,
-                reason: format!(
-                    "`{dup}` is given twice (a channel conditioned on itself leaves nothing to excite it)"
-                ),
+                reason: format!("`{dup}` is given twice ({why})"),
             });
         }
     }

@@ -69,7 +69,7 @@ impl FileTally {
         }
         let (cause, n, first) = self.main_cause()?;
         Some(format!(
-            "{file}: {rejected} of {} rows ({:.0} %) were rejected, {n} of them as {cause} (first, {first}); the fit uses the other {}: check the mapping's units, scales and columns",
+            "{file}: {rejected} of {} rows ({:.0} %) were rejected, {n} of them as {cause} (first, {first}); the fit uses the other {}: check the mapping's units, scales and columns, or leave a taxi or ground segment out with --window",
             self.read,
             100.0 * rejected as f64 / self.read as f64,
             self.samples

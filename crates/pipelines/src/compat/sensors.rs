@@ -1,6 +1,6 @@
 //! Before the check fits anything: are the sensors believable at all? A channel that holds one
 //! value throughout (a dead or stuck sensor) or reads in the wrong unit is misread by the fit as
-//! biases, time shifts and winds (a q in deg/s mapped as rad/s gave a −669 m/s airspeed bias
+//! biases, time shifts and winds (q in rad/s mapped as deg/s gave a −669 m/s airspeed bias
 //! and a 3.1-s α lag, "converged"; an α in the wrong unit, "information matrix singular"). Each
 //! test compares a channel with the physics of the others, so it names the channel and the
 //! likely unit instead.

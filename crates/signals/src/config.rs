@@ -282,6 +282,27 @@ fn amplitude(a: Option<f64>, a_deg: Option<f64>) -> Result<f64, SignalError> {
 }
 
 impl InputConfig {
+    /// Refuses an input whose highest frequency ([`InputConfig::highest_frequency_hz`]) reaches
+    /// the Nyquist frequency of sampling it every `dt_s` (s): sampled, it becomes another, lower
+    /// frequency, and the experiment is not the one written. The error says so with both
+    /// frequencies.
+    ///
+    /// # Errors
+    /// The reason, for the caller to prefix with the input's name.
+    pub fn check_sampled_every(&self, dt_s: f64) -> Result<(), String> {
+        let nyquist = 0.5 / dt_s;
+        let short = |v: f64| aeroident_physics::text::Short(v).to_string();
+        match self.highest_frequency_hz() {
+            Some(f) if f >= nyquist => Err(format!(
+                "its highest frequency {} Hz is at or above the Nyquist frequency {} Hz of dt_s = {} s: sampled, it becomes a lower frequency; lower it or shorten dt_s",
+                short(f),
+                short(nyquist),
+                short(dt_s)
+            )),
+            _ => Ok(()),
+        }
+    }
+
     /// The highest frequency the input is built of, Hz, where it has one: a sine's, a sweep's
     /// higher end, a multisine's highest harmonic over its base period; `None` for the pulse
     /// inputs (broadband) and recorded ones. A scenario compares it with its sample rate's

@@ -909,29 +909,13 @@ impl Scenario {
         self.validate_estimators().map_err(bad)?;
         for (k, i) in self.input.iter().enumerate() {
             i.signal.build().map_err(|e| bad((format!("input[{k}]"), e.to_string())))?;
-            self.below_nyquist(&i.signal).map_err(|r| bad((format!("input[{k}]"), r)))?;
+            i.signal.check_sampled_every(self.dt_s).map_err(|r| bad((format!("input[{k}]"), r)))?;
         }
         self.validate_orthogonal_sets().map_err(|(k, r)| bad((format!("input[{k}]"), r)))?;
         for (k, w) in self.wind.iter().enumerate() {
             w.build().map_err(|e| bad((format!("wind[{k}]"), e.to_string())))?;
         }
         Ok(())
-    }
-
-    /// An input's highest frequency ([`InputConfig::highest_frequency_hz`]) below the Nyquist
-    /// frequency of the run's step: above it the sampled input is another, lower frequency, and
-    /// the experiment is not the one written.
-    fn below_nyquist(&self, input: &InputConfig) -> Result<(), String> {
-        let nyquist = 0.5 / self.dt_s;
-        match input.highest_frequency_hz() {
-            Some(f) if f >= nyquist => Err(format!(
-                "its highest frequency {} Hz is at or above the Nyquist frequency {} Hz of dt_s = {} s: sampled, it becomes a lower frequency; lower it or shorten dt_s",
-                short(f),
-                short(nyquist),
-                short(self.dt_s)
-            )),
-            _ => Ok(()),
-        }
     }
 
     /// The run's own settings: positive duration and step (at most 1e7 steps, a run that

@@ -28,7 +28,6 @@ use crate::aircraft::scenario::AerodynamicsSpec;
 use crate::aircraft::truth::{linearised, local_derivatives};
 use crate::bail;
 use crate::error::{Context, Result};
-use aeroident_io::message::short;
 use aeroident_models::actuator::{F16WithActuators, SurfaceActuators};
 use aeroident_models::f16::AeroIncrements;
 use aeroident_models::f16::{ALPHA, P, Q, R};
@@ -287,25 +286,17 @@ fn trimmed_airframe(sc: &SimScenario) -> Result<(F16, F16Trim)> {
 }
 
 /// The `[[input]]` signals with their channels; recorded inputs resolve against `base_dir`.
-/// An input whose highest frequency ([`aeroident_signals::InputConfig::highest_frequency_hz`])
-/// reaches the Nyquist frequency of the run's step is refused: sampled, it is another, lower
-/// frequency, and the experiment is not the one written.
+/// An input that reaches the Nyquist frequency of the run's step is refused
+/// ([`aeroident_signals::InputConfig::check_sampled_every`]).
 fn build_inputs(sc: &SimScenario, base_dir: &Path) -> Result<Vec<(Channel, Input)>> {
-    let nyquist = 0.5 / sc.run.dt_s;
     sc.input
         .iter()
         .enumerate()
         .map(|(k, ci)| {
             let what = || format!("[[input]] #{} ({:?})", k + 1, ci.channel);
             let input = ci.input.build_in(base_dir).with_context(what)?;
-            if let Some(f) = ci.input.highest_frequency_hz().filter(|f| *f >= nyquist) {
-                bail!(
-                    "{}: its highest frequency {} Hz is at or above the Nyquist frequency {} Hz of [run] dt_s = {} s: sampled, it becomes a lower frequency; lower it or shorten dt_s",
-                    what(),
-                    short(f),
-                    short(nyquist),
-                    short(sc.run.dt_s)
-                );
+            if let Err(why) = ci.input.check_sampled_every(sc.run.dt_s) {
+                bail!("{}: {why}", what());
             }
             Ok((ci.channel, input))
         })

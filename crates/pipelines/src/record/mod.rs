@@ -204,10 +204,11 @@ pub fn read_records<R: Read>(
         let mut events = record_events(reader, screen, compat, windows);
         let mut tally = tally::FileTally::default();
         for event in events.by_ref() {
-            match event? {
+            let event = event?;
+            tally.count(&event);
+            match event {
                 RecordEvent::Sample { row, sample } => {
                     read += 1;
-                    tally.sample();
                     if let (Some(m), Some(start)) = (manoeuvres.last_mut(), starts.last_mut()) {
                         if m.is_empty() {
                             *start = (row, prefix.clone());
@@ -218,7 +219,6 @@ pub fn read_records<R: Read>(
                 RecordEvent::Rejected { row, problem } => {
                     read += 1;
                     rejected += 1;
-                    tally.rejected(row, &problem);
                     let reason = format!("{prefix}{problem}");
                     rejections.push(problem.kind(), Rejection { row, reason });
                 }

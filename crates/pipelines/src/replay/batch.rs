@@ -30,7 +30,7 @@ use aeroident_estimators::output_error::{InitialStates, Start};
 use aeroident_estimators::output_error::{
     OeConfig, OeError, OeResult, StopFlag, Termination, fit, fit_to_end,
 };
-use aeroident_estimators::{AirDataSample, ModelStructure};
+use aeroident_estimators::{AirDataSample, ModelStructure, Param};
 use aeroident_io::parameter::STATUS_NOT_CONVERGED;
 use aeroident_io::warning::{Warning, WarningKind};
 use aeroident_io::{
@@ -125,6 +125,21 @@ pub struct BatchParameter {
     pub bootstrap_bias: Option<f64>,
 }
 
+impl BatchParameter {
+    /// The row of a parameter the fit held out (no estimate, no σ of any source), `why` its
+    /// flag.
+    fn held(name: &str, why: &str) -> Self {
+        Self {
+            result: ParameterResult::new(name.to_string(), None, None, None, None)
+                .with_flags([why.to_string()]),
+            coloured_std_error: None,
+            prewhitened_std_error: None,
+            bootstrap_std_error: None,
+            bootstrap_bias: None,
+        }
+    }
+}
+
 impl std::ops::Deref for BatchParameter {
     type Target = ParameterResult;
 
@@ -140,6 +155,25 @@ impl std::ops::Deref for BatchParameter {
 pub const COLLAPSED_NOISE_SHARE: f64 = 1e-3;
 
 impl BatchSummary {
+    /// Puts back, as `not identified` rows, the parameters `held` that the fit left out of
+    /// `full` (a term reading a constant channel, [`super::constant::without_constant_terms`]):
+    /// every parameter of `full` then has its row, in `full`'s order, each held one flagged with
+    /// its reason (kept by [`Self::judge`]).
+    pub fn insert_held(&mut self, full: &ModelStructure, held: &[(Param, String)]) {
+        if held.is_empty() {
+            return;
+        }
+        let mut fitted = std::mem::take(&mut self.parameters).into_iter();
+        for p in full.params() {
+            if let Some((_, why)) = held.iter().find(|(q, _)| *q == p) {
+                self.parameters.push(BatchParameter::held(p.name(), why));
+            } else if let Some(row) = fitted.next() {
+                self.parameters.push(row);
+            }
+        }
+        self.parameters.extend(fitted);
+    }
+
     /// Sets every parameter's reference (the `model` file's), flags and status: the warnings
     /// about it, the plausibility check ([`crate::plausibility`]; the drag terms withdrawn
     /// unless `thrust_mapped`), a reference outside ±2σ, a collapsed `fem` noise variance
@@ -159,8 +193,11 @@ impl BatchSummary {
         for p in &mut self.parameters {
             let r = &mut p.result;
             r.set_reference(model.reference(&r.name));
-            r.flags = self.warnings.about(&r.name);
-            if r.estimate.is_none() {
+            // A row the fit held out keeps the reason it was given (Self::insert_held).
+            let held = if r.estimate.is_none() { std::mem::take(&mut r.flags) } else { Vec::new() };
+            r.flags = held;
+            r.flags.extend(self.warnings.about(&r.name));
+            if r.estimate.is_none() && r.flags.is_empty() {
                 r.flag(format!(
                     "not estimated: {} cannot see it from the record's outputs",
                     self.estimator
@@ -904,9 +941,6 @@ pub(crate) fn fit_time_domain(
     summary.warnings.extend(level_note);
     summary.warnings.extend(rec.notes.iter().cloned());
     summary.warnings.extend(dominance_warnings(&fitted.result, &slices, mapping));
-    let mut spread = super::constant::Spread::default();
-    slices.iter().flat_map(|m| m.iter()).for_each(|s| spread.push(s));
-    summary.warnings.extend(spread.warnings(&st, mapping));
     summary
         .warnings
         .extend(super::kinematics::Kinematics::of_manoeuvres(&slices).warnings(mapping));

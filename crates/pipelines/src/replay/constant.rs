@@ -2,14 +2,18 @@
 //! zero or a multiple of another's (the bias, for a constant channel), so its parameters are
 //! not identifiable whatever the method: an estimator leaves them (and, for a recursive one,
 //! possibly the whole model) unidentified, and the user is told which channel is the cause.
+//! The batch fits (output error, filter error, frequency-domain output error) fit the model
+//! without those terms ([`without_constant_terms`]) and report them `null` with the channel,
+//! instead of stopping at the first unknown that has no effect on any output.
 //!
 //! "Does not vary" is judged without physics: every estimated sample holds exactly the same
 //! value. (A held or stuck sensor, a channel set to a constant in the data, a surface not
 //! moved during the manoeuvre.)
 
-use aeroident_estimators::{AirDataSample, ModelStructure, Term};
-use aeroident_io::Mapping;
+use aeroident_estimators::prior::Priors;
+use aeroident_estimators::{AirDataSample, ModelStructure, Param, Term};
 use aeroident_io::warning::{Warning, WarningKind};
+use aeroident_io::{Mapping, ModelSpec};
 
 /// The sample fields the regressors read, besides `V` (which every normalised rate reads and
 /// the `V` term itself).
@@ -55,6 +59,26 @@ impl Spread {
         }
     }
 
+    /// The sample fields that held one value in every sample (at least 2).
+    fn constant_fields(&self) -> impl Iterator<Item = (&'static str, f64, usize)> + '_ {
+        FIELDS
+            .iter()
+            .zip(&self.ranges)
+            .filter(|(_, r)| r.2 >= 2 && r.0 == r.1)
+            .map(|(name, &(v, _, n))| (*name, v, n))
+    }
+
+    /// The parameters of `structure` whose term reads a channel that held one value in every
+    /// sample, each with that channel's sample field (the first, for a product of two): no
+    /// method can identify them.
+    pub fn constant_terms(&self, structure: &ModelStructure) -> Vec<(Param, &'static str)> {
+        let fields: Vec<&'static str> = self.constant_fields().map(|(name, _, _)| name).collect();
+        structure
+            .params()
+            .filter_map(|p| fields.iter().find(|f| term_reads(p.term, f)).map(|f| (p, *f)))
+            .collect()
+    }
+
     /// One warning per channel that held one value in every sample (at least 2) and that a
     /// term of `structure` needs, naming the channel as `mapping` does and the parameters it
     /// leaves unidentifiable.
@@ -75,9 +99,8 @@ impl Spread {
                 Term::spline(i).map_or("", |t| t.name())
             )
         });
-        let constant = FIELDS.iter().zip(&self.ranges).filter(|(_, r)| r.2 >= 2 && r.0 == r.1);
         let mut out: Vec<Warning> = outside.map(Warning::from).collect();
-        out.extend(constant.filter_map(|(name, &(v, _, n))| {
+        out.extend(self.constant_fields().filter_map(|(name, v, n)| {
                 let params: Vec<&str> = structure
                     .params()
                     .filter(|p| term_reads(p.term, name))
@@ -94,4 +117,39 @@ impl Spread {
         }));
         out
     }
+}
+
+/// `model` without the parameters a batch fit cannot identify on the samples `spread` has seen
+/// ([`Spread::constant_terms`]), and those parameters, each with the reason (the channel named
+/// as `mapping` names it). Fitting without a term holds it at 0:
+/// a surface held at one value then contributes through the coefficient's constant term, which
+/// absorbs it. The reduced model keeps the name, description, references and plausible ranges
+/// of `model`, and each kept parameter its prior. When every parameter would go, `model` is
+/// returned whole (the fit then names what it cannot identify).
+pub fn without_constant_terms(
+    model: ModelSpec,
+    spread: &Spread,
+    mapping: &Mapping,
+) -> (ModelSpec, Vec<(Param, String)>) {
+    let held = spread.constant_terms(&model.structure);
+    if held.is_empty() || held.len() == model.structure.n_params() {
+        return (model, Vec::new());
+    }
+    let mut structure = model.structure;
+    held.iter().for_each(|(p, _)| structure.remove(*p));
+    let held = held.into_iter().map(|(p, field)| {
+        let why = format!(
+            "not identified: {} does not vary over the record, so no method can tell this term from the constant; the fit held it at 0",
+            mapping.field_label(field)
+        );
+        (p, why)
+    });
+    let held = held.collect();
+    let mut priors = Priors::generic(&structure);
+    for (i, p) in structure.params().enumerate() {
+        if let Some(j) = model.structure.params().position(|q| q == p) {
+            priors.set(i, model.priors.prior[j]);
+        }
+    }
+    (ModelSpec { structure, priors, ..model }, held)
 }

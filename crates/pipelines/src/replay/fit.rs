@@ -52,12 +52,22 @@ pub fn fit_records<R: Read>(
     let file = readers.iter().map(|r| r.file()).collect::<Vec<_>>().join(", ");
     let rec =
         read_records(readers, options.spike_screen, options.compat.as_ref(), &options.windows)?;
+    let model = match model {
+        Some(m) => m,
+        None => super::batch::default_model(&rec.manoeuvres[0][0], mapping)?,
+    };
+    let mut spread = super::constant::Spread::default();
+    rec.manoeuvres.iter().flatten().for_each(|s| spread.push(s));
+    let full = model.structure;
+    let (model, held) = super::constant::without_constant_terms(model, &spread, mapping);
     let mut out = match options.method {
         BatchMethod::Fdoe { band_hz } => {
-            super::frequency::fit_fdoe(rec, &file, mapping, model, band_hz, &options)?
+            super::frequency::fit_fdoe(rec, &file, mapping, Some(model), band_hz, &options)?
         }
-        _ => super::batch::fit_time_domain(rec, &file, mapping, model, &options)?,
+        _ => super::batch::fit_time_domain(rec, &file, mapping, Some(model), &options)?,
     };
+    out.summary.warnings.extend(spread.warnings(&full, mapping));
+    out.summary.insert_held(&full, &held);
     out.summary.judge(&out.model, crate::plausibility::thrust_mapped(mapping));
     Ok(out)
 }

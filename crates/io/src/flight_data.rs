@@ -514,6 +514,15 @@ impl<R: Read> FlightDataReader<R> {
         Ok(())
     }
 
+    /// The row's thrust, N: the `thrust` channel, or the mapping's `[thrust_model]` law at
+    /// density `rho_kgpm3` and airspeed `vt_mps` (`None` when neither is mapped).
+    fn thrust(&self, rho_kgpm3: f64, vt_mps: f64) -> Result<Option<f64>, RowProblem> {
+        let Some(law) = &self.mapping.thrust_model else { return self.get(Channel::Thrust) };
+        // The mapping refuses a law without its input channel (Mapping::from_toml_str).
+        let input = self.required(crate::mapping::law_input(law))?;
+        Ok(Some(law.thrust_n(rho_kgpm3, vt_mps, input)))
+    }
+
     /// The sample of the current row at time `t_s` (already read and checked).
     fn parse_row(&self, t_s: f64) -> Result<AirDataSample, RowProblem> {
         let g = |ch: Channel| self.get(ch);
@@ -588,7 +597,7 @@ impl<R: Read> FlightDataReader<R> {
             de_rad: g(Channel::De)?,
             da_rad: g(Channel::Da)?,
             dr_rad: g(Channel::Dr)?,
-            thrust_n: g(Channel::Thrust)?,
+            thrust_n: self.thrust(rho.unwrap_or(2.0 * qbar_pa / v2), vt_mps)?,
             throttle: g(Channel::Throttle)?,
             thrust_moment_nm: g(Channel::ThrustMoment)?,
             rho_kgpm3: Some(rho.unwrap_or(2.0 * qbar_pa / v2)),

@@ -26,6 +26,7 @@ pub mod reader_report;
 pub mod rejection_log;
 pub mod replay_output;
 pub mod table;
+pub mod thrust_model;
 pub mod ulog;
 pub mod units;
 pub mod warning;

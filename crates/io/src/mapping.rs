@@ -111,6 +111,7 @@
 use crate::FlightDataError;
 use crate::message::exact_or_short;
 use crate::table::Interpolation;
+use crate::thrust_model::{LawInput, ThrustModel, ThrustModelFile};
 use crate::units::{Dimension, Unit};
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -245,6 +246,8 @@ channels! {
     Thrust = "thrust": Force,
     /// Throttle position, 0–1.
     Throttle = "throttle": Dimensionless,
+    /// Propeller shaft speed (the `propeller` law of `[thrust_model]`).
+    PropSpeed = "prop_speed": AngularRate,
     /// Thrust pitching moment about the CG (positive nose-up).
     ThrustMoment = "thrust_moment": Moment,
     /// Dynamic pressure.
@@ -468,6 +471,7 @@ struct MappingFile {
     align: Option<AlignFile>,
     attitude: Option<AttitudeFile>,
     air_data: Option<AirDataFile>,
+    thrust_model: Option<ThrustModelFile>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -630,6 +634,44 @@ pub struct Mapping {
     /// The actuators of the surfaces mapped as commands (`actuator = { … }` on `de`, `da`,
     /// `dr`): the record stage passes each command through its actuator.
     pub actuators: BTreeMap<Channel, Actuator>,
+    /// `[thrust_model]`: thrust from a law of the throttle or the propeller speed, for a
+    /// record without a `thrust` channel ([`crate::thrust_model`]).
+    pub thrust_model: Option<ThrustModel>,
+}
+
+/// The channel thrust law `law` reads besides ρ and V.
+pub fn law_input(law: &ThrustModel) -> Channel {
+    match law.input() {
+        LawInput::PropSpeed => Channel::PropSpeed,
+        LawInput::Throttle => Channel::Throttle,
+    }
+}
+
+/// `[thrust_model]` resolved and checked against the channels: refused beside a `thrust`
+/// channel (two sources of one force), without the channel its law reads, or with a
+/// constant no propeller has (the reason names the key).
+fn thrust_model_of(
+    file: &str,
+    spec: Option<&ThrustModelFile>,
+    channels: &BTreeMap<Channel, ChannelMap>,
+) -> Result<Option<ThrustModel>, FlightDataError> {
+    let Some(spec) = spec else { return Ok(None) };
+    let bad = |reason: String| FlightDataError::MappingSyntax {
+        file: file.to_string(),
+        message: format!("[thrust_model]: {reason}"),
+    };
+    let model = spec.resolve().map_err(bad)?;
+    if channels.contains_key(&Channel::Thrust) {
+        return Err(bad(
+            "the mapping also has a `thrust` channel: give one source of thrust".into()
+        ));
+    }
+    let input = law_input(&model);
+    if !channels.contains_key(&input) {
+        let key = input.key();
+        return Err(bad(format!("its law reads channel `{key}`, which is not mapped")));
+    }
+    Ok(Some(model))
 }
 
 /// 1-based line of byte offset `at` in `text`.
@@ -672,6 +714,7 @@ impl Mapping {
         check_channel_set(file, &channels)?;
         check_file_settings(file, &raw, &channels)?;
         let (align, quaternion, air_data) = resolve_log_tables(file, &raw, &channels)?;
+        let thrust_model = thrust_model_of(file, raw.thrust_model.as_ref(), &channels)?;
         let column_names = raw.columns.map(|c| c.names);
         if let Some(names) = &column_names {
             check_column_names(file, names)?;
@@ -688,6 +731,7 @@ impl Mapping {
             air_data,
             column_names,
             actuators,
+            thrust_model,
         })
     }
 

@@ -49,7 +49,7 @@ impl fmt::Display for Dimension {
         let s = match self {
             Dimension::Time => "time (s, ms, us)",
             Dimension::Angle => "angle (rad, deg)",
-            Dimension::AngularRate => "angular rate (rad/s, deg/s)",
+            Dimension::AngularRate => "angular rate (rad/s, deg/s, rpm, rev/s)",
             Dimension::AngularAcceleration => "angular acceleration (rad/s2, deg/s2)",
             Dimension::Length => "length (m, ft, in)",
             Dimension::Speed => "speed (m/s, ft/s, kt, km/h)",
@@ -117,6 +117,8 @@ impl Unit {
             "deg" => (D::Angle, core::f64::consts::PI / 180.0),
             "rad/s" | "radps" => (D::AngularRate, 1.0),
             "deg/s" | "degps" => (D::AngularRate, core::f64::consts::PI / 180.0),
+            "rpm" => (D::AngularRate, core::f64::consts::TAU / 60.0),
+            "rev/s" | "rps" => (D::AngularRate, core::f64::consts::TAU),
             "rad/s2" | "radps2" => (D::AngularAcceleration, 1.0),
             "deg/s2" | "degps2" => (D::AngularAcceleration, core::f64::consts::PI / 180.0),
             "m" => (D::Length, 1.0),

@@ -64,10 +64,10 @@ fn likely_cause(p: Param) -> &'static str {
     }
 }
 
-/// Whether the record's mapping gives thrust: without it the measured drag and axial force
-/// are drag minus thrust.
+/// Whether the record's mapping gives thrust (a `thrust` channel or a `[thrust_model]` law):
+/// without it the measured drag and axial force are drag minus thrust.
 pub fn thrust_mapped(mapping: &Mapping) -> bool {
-    mapping.channels.contains_key(&Channel::Thrust)
+    mapping.channels.contains_key(&Channel::Thrust) || mapping.thrust_model.is_some()
 }
 
 /// Withdraws `r` (a drag or axial-force term, `CD_*` or `CX_*`) when the record has no thrust
@@ -79,7 +79,7 @@ pub fn without_thrust(r: &mut ParameterResult, thrust_mapped: bool) -> bool {
         return false;
     }
     r.withdraw(
-        "thrust is not mapped: the record's drag is drag minus thrust, so a drag term is not identified (map thrust_n)",
+        "thrust is not mapped: the record's drag is drag minus thrust, so a drag term is not identified (map `thrust`, or give `[thrust_model]` a law of the throttle or the propeller speed: docs/mapping.md)",
     );
     true
 }

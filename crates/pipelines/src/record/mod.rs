@@ -69,7 +69,14 @@ pub fn record_events<'a, R: Read + 'a>(
     let reader_notes = reader.notes();
     let mapping = reader.mapping();
     let actuators: Vec<_> = mapping.actuators.iter().map(|(c, a)| (*c, *a)).collect();
-    let actuator_notes = actuators.iter().map(|(c, a)| actuated::note(*c, a)).collect();
+    let mut actuator_notes: Vec<String> =
+        actuators.iter().map(|(c, a)| actuated::note(*c, a)).collect();
+    // Thrust from a law is an input every estimator takes as measured: the summary says so.
+    actuator_notes.extend(
+        mapping.thrust_model.map(|law| {
+            format!("{}: every estimator sees this thrust as if measured", law.describe())
+        }),
+    );
     let screened = outliers::Screened::new(reader, screen).named_by(mapping);
     let screen_notes = screened.notes();
     let actuated: Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a> =
@@ -93,7 +100,8 @@ pub struct RecordEvents<'a> {
     >,
     /// The warnings of the reader ([`FlightDataReader::notes`]) and of the spike screen.
     notes: [outliers::ScreenNotes; 2],
-    /// What the actuator stage does, one line per commanded surface.
+    /// What the actuator stage does, one line per commanded surface, and the thrust law when
+    /// the mapping gives one.
     actuator_notes: Vec<String>,
 }
 

@@ -1,0 +1,236 @@
+//! Identified derivatives as ArduPilot SITL's plane coefficient file: the JSON `SIM_Plane`
+//! loads with `--model plane:FILE.json` (`Plane::load_coeffs`, keys named as the
+//! `coefficient` fields of `libraries/SITL/SIM_Plane.h`, ArduPilot/ardupilot). Documented with
+//! its formula in `docs/export.md`.
+//!
+//! SITL's plane (`Plane::getForce`, `Plane::getTorque`, `libraries/SITL/SIM_Plane.cpp`) works
+//! in body axes (x forward, y right, z down) about the CG (`CGOffset` 0), with `α = atan2(w, u)`,
+//! `β = atan2(v, u)`, gyro rates normalised `p b/2V`, `q c/2V`, `r b/2V`, and `q̄ = ½ρV²S`:
+//!
+//! ```text
+//! CL = (1−σ)(c_lift_0 + c_lift_a α) + σ·2 sign(α) sin²α cos α  + c_lift_q q̂ + c_lift_deltae u_e
+//! CD = c_drag_p + (c_lift_0 + c_lift_a α)²/(π oswald b²/s) + c_drag_q q̂ + c_drag_deltae |u_e|
+//! X = q̄(−CD cos α + CL sin α)     Z = q̄(−CD sin α − CL cos α)
+//! Y = q̄(c_y_0 + c_y_b β + c_y_p p̂ + c_y_r r̂ + c_y_deltaa u_a + c_y_deltar u_r)
+//! L = q̄ b (c_l_0 + c_l_b β + c_l_p p̂ + c_l_r r̂ + c_l_deltaa u_a + c_l_deltar u_r)
+//! M = q̄ c (c_m_0 + c_m_a α + c_m_q q̂ + c_m_deltae u_e)
+//! N = q̄ b (c_n_0 + c_n_b β + c_n_p p̂ + c_n_r r̂ + c_n_deltaa u_a + c_n_deltar u_r)
+//! ```
+//!
+//! `σ` is the stall blend of `mcoeff` and `alpha_stall`. The surface inputs `u` are the servo
+//! commands normalised to ±1 (`(pwm − 1500)/500`), each positive for a positive body moment
+//! (aileron: right wing down, elevator: nose up, rudder: nose right), so for aeroident's
+//! deflections (δe > 0 trailing edge down, δa > 0 rolling left, δr > 0 nose left) `u = −δ/δmax`
+//! with `δmax` the surface's full throw (`deltaa_max` … in the file): every control derivative
+//! is written as `−C_δ · δmax`.
+
+use super::jsbsim::SummaryParameters;
+use super::uav::{self, Exported, Geometry};
+use aeroident_estimators::vocabulary::{Coefficient, Param, Term};
+use std::fmt::Write as _;
+
+/// Full throw of each surface, rad: the deflection at a servo command of ±1.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Throws {
+    /// Aileron, rad (`deltaa_max`).
+    pub aileron_rad: f64,
+    /// Elevator, rad (`deltae_max`).
+    pub elevator_rad: f64,
+    /// Rudder, rad (`deltar_max`).
+    pub rudder_rad: f64,
+}
+
+impl Default for Throws {
+    /// SITL's own: 0.3491 rad (20°) each.
+    fn default() -> Self {
+        Self { aileron_rad: 0.3491, elevator_rad: 0.3491, rudder_rad: 0.3491 }
+    }
+}
+
+/// What the summary does not give.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArdupilotOptions {
+    /// Reference geometry (`s`, `b`, `c`).
+    pub geometry: Geometry,
+    /// Surface throws.
+    pub throws: Throws,
+    /// Stall angle of the lift blend, rad (`alpha_stall`; SITL's default 0.4712).
+    pub alpha_stall_rad: f64,
+    /// Sharpness of the lift blend, 1/rad (`mcoeff`; SITL's default 50).
+    pub mcoeff: f64,
+    /// Write terms SITL cannot represent as its formula allows (0, or the polar's value) with
+    /// a warning each, instead of refusing.
+    pub drop_unrepresentable: bool,
+}
+
+/// The coefficient keys: aeroident's parameter and SITL's key. The control derivatives are
+/// scaled by `−δmax` (module doc); the drag terms come from [`uav::drag_polar`].
+const KEYS: [(Coefficient, Term, &str); 27] = {
+    use Coefficient::*;
+    use Term::*;
+    [
+        (CL, Bias, "c_lift_0"),
+        (CL, De, "c_lift_deltae"),
+        (CL, Alpha, "c_lift_a"),
+        (CL, Q, "c_lift_q"),
+        (CD, Q, "c_drag_q"),
+        (CY, Bias, "c_y_0"),
+        (CY, Beta, "c_y_b"),
+        (CY, P, "c_y_p"),
+        (CY, R, "c_y_r"),
+        (CY, Da, "c_y_deltaa"),
+        (CY, Dr, "c_y_deltar"),
+        (Cl, Bias, "c_l_0"),
+        (Cl, P, "c_l_p"),
+        (Cl, Beta, "c_l_b"),
+        (Cl, R, "c_l_r"),
+        (Cl, Da, "c_l_deltaa"),
+        (Cl, Dr, "c_l_deltar"),
+        (Cm, Bias, "c_m_0"),
+        (Cm, Alpha, "c_m_a"),
+        (Cm, Q, "c_m_q"),
+        (Cm, De, "c_m_deltae"),
+        (Cn, Bias, "c_n_0"),
+        (Cn, Beta, "c_n_b"),
+        (Cn, P, "c_n_p"),
+        (Cn, R, "c_n_r"),
+        (Cn, Da, "c_n_deltaa"),
+        (Cn, Dr, "c_n_deltar"),
+    ]
+};
+
+/// Why SITL's plane cannot represent `p`, `None` if it can.
+fn why_not(p: Param) -> Option<String> {
+    use Coefficient::*;
+    let drag_polar = matches!(p.term, Term::Bias | Term::Alpha | Term::Alpha2);
+    if p.coefficient == CD && drag_polar {
+        return None;
+    }
+    if KEYS.iter().any(|(c, t, _)| *c == p.coefficient && *t == p.term) {
+        return None;
+    }
+    Some(match (p.coefficient, p.term) {
+        (CX | CZ, _) => "SITL's plane takes lift and drag, not body-axis CX/CZ".into(),
+        (CD, Term::De) => {
+            "SITL's elevator drag is c_drag_deltae·|δe| (even in δe), not linear".into()
+        }
+        (_, t) => uav::beyond_linear(t).unwrap_or_else(|| {
+            format!("SITL's {} has no `{}` term", p.coefficient.name(), t.name())
+        }),
+    })
+}
+
+/// The surface throw scaling a derivative of `term` to SITL's ±1 command: `−δmax` for the
+/// surfaces (module doc), 1 otherwise.
+fn command_scale(term: Term, throws: &Throws) -> f64 {
+    match term {
+        Term::De => -throws.elevator_rad,
+        Term::Da => -throws.aileron_rad,
+        Term::Dr => -throws.rudder_rad,
+        _ => 1.0,
+    }
+}
+
+/// Checks the options SITL divides by or blends with.
+fn check_options(o: &ArdupilotOptions) -> crate::error::Result<()> {
+    o.geometry.check()?;
+    let t = &o.throws;
+    for (name, v) in [
+        ("aileron throw", t.aileron_rad),
+        ("elevator throw", t.elevator_rad),
+        ("rudder throw", t.rudder_rad),
+        ("alpha_stall", o.alpha_stall_rad),
+        ("mcoeff", o.mcoeff),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            crate::bail!("{name} must be a positive finite number, got {v}");
+        }
+    }
+    // SITL clamps α to alpha_stall ± 0.8 and evaluates exp(mcoeff (α + alpha_stall)) in
+    // double: beyond e^709 it overflows to inf and the lift becomes NaN.
+    if o.mcoeff * (2.0 * o.alpha_stall_rad + 0.8) > 700.0 {
+        crate::bail!(
+            "mcoeff {} with alpha_stall {} rad overflows SITL's stall blend (mcoeff·(2 alpha_stall + 0.8) must stay below 700)",
+            o.mcoeff,
+            o.alpha_stall_rad
+        );
+    }
+    Ok(())
+}
+
+/// Writes SITL's plane coefficient JSON for the identified parameters; `source` is named in
+/// the notes and messages.
+///
+/// # Errors
+/// An option out of range ([`Geometry::check`], a non-positive throw, stall angle or
+/// `mcoeff`, or a blend that overflows), nothing identified, or (without
+/// `drop_unrepresentable`) any identified term SITL's formula cannot hold, each named with why.
+pub fn ardupilot_json(
+    summary: &SummaryParameters,
+    source: &str,
+    o: &ArdupilotOptions,
+) -> crate::error::Result<Exported> {
+    check_options(o)?;
+    uav::require_identified(summary, source)?;
+    let sorted = uav::sort(summary, why_not);
+    let (polar, problems) = uav::drag_polar(&sorted);
+    let mut warnings = uav::warnings_or_refuse(
+        source,
+        "ArduPilot SITL",
+        &sorted,
+        problems,
+        o.drop_unrepresentable,
+    )?;
+    warnings.push(
+        "SITL's plane applies the moments as angular accelerations (unit inertia) and blends the lift into a flat plate towards alpha_stall; see docs/export.md".into(),
+    );
+    let g = &o.geometry;
+    let mut entries: Vec<(String, String)> = vec![
+        ("s".into(), num(g.area_m2)),
+        ("b".into(), num(g.span_m)),
+        ("c".into(), num(g.chord_m)),
+        ("mcoeff".into(), num(o.mcoeff)),
+        ("oswald".into(), num(polar.oswald(g.aspect_ratio()))),
+        ("alpha_stall".into(), num(o.alpha_stall_rad)),
+        ("c_drag_p".into(), num(polar.parasitic)),
+        // Only |δe| drag exists in SITL; aeroident's vocabulary has none.
+        ("c_drag_deltae".into(), num(0.0)),
+    ];
+    for (c, t, key) in KEYS {
+        entries.push((key.into(), num(sorted.value(c, t) * command_scale(t, &o.throws))));
+    }
+    let th = &o.throws;
+    for (key, v) in [
+        ("deltaa_max", th.aileron_rad),
+        ("deltae_max", th.elevator_rad),
+        ("deltar_max", th.rudder_rad),
+    ] {
+        entries.push((key.into(), num(v)));
+    }
+    entries.push(("CGOffset".into(), "[0.0, 0.0, 0.0]".into()));
+    let header = format!(
+        "Generated by `aeroident export ardupilot` from {source} (estimator {}, model {}). Derivatives per rad and per normalised rate; control derivatives per unit servo command (±1 = ±delta*_max rad, positive = positive body moment); moments about the CG (CGOffset 0). Formula and signs: docs/export.md.",
+        summary.estimator, summary.model
+    );
+    Ok(Exported { text: render(&header, &entries, &warnings), warnings })
+}
+
+/// `v` as a JSON number that reads back to the same f64.
+fn num(v: f64) -> String {
+    format!("{v:?}")
+}
+
+/// The JSON object: the notes first (a key SITL does not read), then the entries in order.
+fn render(header: &str, entries: &[(String, String)], warnings: &[String]) -> String {
+    let quoted = |s: &str| serde_json::Value::String(s.to_string()).to_string();
+    let mut x = String::from("{\n");
+    let notes: Vec<String> =
+        std::iter::once(header).chain(warnings.iter().map(String::as_str)).map(quoted).collect();
+    let _ =
+        writeln!(x, "    \"aeroident_notes\": [\n        {}\n    ],", notes.join(",\n        "));
+    let body: Vec<String> =
+        entries.iter().map(|(k, v)| format!("    {}: {v}", quoted(k))).collect();
+    x.push_str(&body.join(",\n"));
+    x.push_str("\n}\n");
+    x
+}

@@ -1,0 +1,309 @@
+//! Identified derivatives as the `<plugin>` element of Gazebo's `AdvancedLiftDrag` system
+//! (gz-sim `src/systems/advanced_lift_drag/AdvancedLiftDrag.cc`, gazebosim/gz-sim; the same
+//! elements as PX4-SITL_gazebo-classic `src/liftdrag_plugin/advanced_liftdrag_plugin.cpp`,
+//! which names the reference point `ref_pt` instead of `cp`). Documented with its formula in
+//! `docs/export.md`.
+//!
+//! The plugin works on the link's frame, forward `1 0 0` and upward `0 0 1` (a FLU link, as
+//! PX4's models): body axes x forward, y right, z down; `α = atan2(w, u)`, `β = atan2(v, u)`,
+//! and it normalises with the speed in the body x–z plane `V_xz = √(u² + w²)`:
+//! `q̄ = ½ρV_xz²`, rate terms `C_p · p b/(2V_xz)` (b = √(area·AR)), `C_q · q mac/(2V_xz)`.
+//! Lift along −z and drag along −x of the stability axes, side force along body y, moments
+//! about body x, y, z; rates and moments of the link's FLU axes are flipped to FRD by the
+//! plugin. With the blend `σ` of `alpha_stall` (sharpness M = 15, not configurable):
+//!
+//! ```text
+//! CL = (1−σ)(CL0 + CLa α) + σ·flat plate + CLb β + Σ CL_ctrl θ°·dir           (+ CLp p̂ + CLq q̂ + CLr r̂)
+//! CD = (1−σ)(CD0 + CL²/(π AR eff)) + σ·flat plate + Σ CD_ctrl θ°·dir           (+ CDp p̂ …)
+//! CY = CYa α + CYb β + Σ CY_ctrl θ°·dir (+ CYp p̂ …);  Cl, Cn alike (Cella, Cellb …; Cena, Cenb …)
+//! Cm = Cemb β + Σ Cem_ctrl θ°·dir (+ Cemp p̂ + Cemq q̂ + Cemr r̂)
+//! ```
+//!
+//! The plugin computes `Cem0 + Cema α` and then overwrites it with `Cemb β` (`Cem = ` where
+//! `Cem += ` was meant, in both sources as read), so `Cm_0` and `Cm_alpha` cannot be
+//! represented. The control terms take the joint angle θ in degrees times a per-degree
+//! derivative and the element's `direction`: with `direction` d the export writes
+//! `C_ctrl = C_δ · π/180`, and aeroident's deflection is `δ = d · θ`.
+
+use super::jsbsim::SummaryParameters;
+use super::uav::{self, Exported, Geometry};
+use aeroident_estimators::vocabulary::{Coefficient, Param, Term};
+use std::fmt::Write as _;
+
+/// One control surface: the model's joint and how its angle relates to aeroident's
+/// deflection.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ControlJoint {
+    /// The surface's term: [`Term::De`], [`Term::Da`] or [`Term::Dr`].
+    pub surface: Term,
+    /// Joint name in the model (`<name>`).
+    pub joint: String,
+    /// `<direction>`: +1 when the joint's positive angle is aeroident's positive deflection
+    /// (δe trailing edge down, δa right aileron trailing edge down, δr trailing edge left),
+    /// −1 when it is the opposite.
+    pub direction: f64,
+}
+
+/// What the summary does not give.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GazeboOptions {
+    /// Reference geometry (`area`, `AR = b²/S`, `mac`).
+    pub geometry: Geometry,
+    /// The control surfaces (only those with a derivative in the summary are written).
+    pub joints: Vec<ControlJoint>,
+    /// `link_name`: the aircraft body link.
+    pub link_name: String,
+    /// `air_density`, kg/m³ (the plugin uses this constant, not an atmosphere).
+    pub air_density_kgpm3: f64,
+    /// `alpha_stall`, rad. The plugin's blend width is fixed (M = 15): at 90° the flat-plate
+    /// share is below 1e-8 for |α| < 20°, at 15° it is about 4 % at α = 0.
+    pub alpha_stall_rad: f64,
+    /// Write terms the plugin cannot represent as its formula allows, with a warning each,
+    /// instead of refusing.
+    pub drop_unrepresentable: bool,
+}
+
+/// The scalar elements: aeroident's parameter and the plugin's element. `Cem0` and `Cema` are
+/// last: the plugin discards them (module doc).
+const ELEMENTS: [(Coefficient, Term, &str); 29] = {
+    use Coefficient::*;
+    use Term::*;
+    [
+        (CL, Bias, "CL0"),
+        (CL, Alpha, "CLa"),
+        (CY, Alpha, "CYa"),
+        (Cl, Alpha, "Cella"),
+        (Cn, Alpha, "Cena"),
+        (CL, Beta, "CLb"),
+        (CY, Beta, "CYb"),
+        (Cl, Beta, "Cellb"),
+        (Cm, Beta, "Cemb"),
+        (Cn, Beta, "Cenb"),
+        (CD, P, "CDp"),
+        (CY, P, "CYp"),
+        (CL, P, "CLp"),
+        (Cl, P, "Cellp"),
+        (Cm, P, "Cemp"),
+        (Cn, P, "Cenp"),
+        (CD, Q, "CDq"),
+        (CY, Q, "CYq"),
+        (CL, Q, "CLq"),
+        (Cl, Q, "Cellq"),
+        (Cm, Q, "Cemq"),
+        (Cn, Q, "Cenq"),
+        (CD, R, "CDr"),
+        (CY, R, "CYr"),
+        (CL, R, "CLr"),
+        (Cl, R, "Cellr"),
+        (Cm, R, "Cemr"),
+        (Cn, R, "Cenr"),
+        (Cm, Bias, "Cem0"),
+    ]
+};
+
+/// The per-surface derivative elements, in the plugin's order.
+const CONTROL_ELEMENTS: [(Coefficient, &str); 6] = [
+    (Coefficient::CD, "CD_ctrl"),
+    (Coefficient::CY, "CY_ctrl"),
+    (Coefficient::CL, "CL_ctrl"),
+    (Coefficient::Cl, "Cell_ctrl"),
+    (Coefficient::Cm, "Cem_ctrl"),
+    (Coefficient::Cn, "Cen_ctrl"),
+];
+
+/// Why the plugin cannot represent `p`, `None` if it can.
+fn why_not(p: Param) -> Option<String> {
+    use Coefficient::*;
+    let (c, t) = (p.coefficient, p.term);
+    if matches!((c, t), (Cm, Term::Bias | Term::Alpha)) {
+        return Some(
+            "the plugin overwrites Cem0 + Cema·α with Cemb·β (AdvancedLiftDrag.cc as read); written to Cem0/Cema for a corrected plugin".into(),
+        );
+    }
+    let surface = matches!(t, Term::De | Term::Da | Term::Dr) && c != CX && c != CZ;
+    let polar = c == CD && matches!(t, Term::Bias | Term::Alpha | Term::Alpha2);
+    if surface || polar || ELEMENTS.iter().any(|(ec, et, _)| *ec == c && *et == t) {
+        return None;
+    }
+    Some(match (c, t) {
+        (CX | CZ, _) => "the plugin takes lift and drag, not body-axis CX/CZ".into(),
+        (CY | Cl | Cn, Term::Bias) => format!("the plugin has no zero-α {} term", c.name()),
+        (CD, Term::Beta) => "the plugin's drag has no β term".into(),
+        _ => uav::beyond_linear(t)
+            .unwrap_or_else(|| format!("the plugin's {} has no `{}` term", c.name(), t.name())),
+    })
+}
+
+/// The plugin squares its whole static lift in the induced drag: with induced drag, a lift
+/// term in β or a surface adds β² or δ² drag the model does not have.
+fn squared_lift_problems(s: &uav::Sorted, polar: &uav::Polar) -> Vec<String> {
+    if polar.inv_k == 0.0 {
+        return Vec::new();
+    }
+    [Term::Beta, Term::De, Term::Da, Term::Dr]
+        .into_iter()
+        .filter(|t| s.has(Coefficient::CL, *t))
+        .map(|t| {
+            format!(
+                "CL_{} = {}: with induced drag (CD_alpha2) the plugin's CL²/(π AR eff) squares it into a {}² drag term the model does not have",
+                t.name(),
+                s.value(Coefficient::CL, t),
+                t.name()
+            )
+        })
+        .collect()
+}
+
+/// Checks the options the plugin divides by.
+fn check_options(o: &GazeboOptions) -> crate::error::Result<()> {
+    o.geometry.check()?;
+    for (name, v) in [("air density", o.air_density_kgpm3), ("alpha_stall", o.alpha_stall_rad)] {
+        if !(v.is_finite() && v > 0.0) {
+            crate::bail!("{name} must be a positive finite number, got {v}");
+        }
+    }
+    for j in &o.joints {
+        if j.direction.abs() != 1.0 {
+            crate::bail!("joint `{}`: direction must be 1 or -1, got {}", j.joint, j.direction);
+        }
+    }
+    Ok(())
+}
+
+/// Writes the `AdvancedLiftDrag` `<plugin>` element for the identified parameters; `source`
+/// is named in the notes and messages.
+///
+/// # Errors
+/// An option out of range ([`Geometry::check`], density, stall angle, a direction not ±1),
+/// nothing identified, a surface derivative without its joint in `o.joints`, or (without
+/// `drop_unrepresentable`) any identified term the plugin cannot hold, each named with why.
+pub fn gazebo_plugin_sdf(
+    summary: &SummaryParameters,
+    source: &str,
+    o: &GazeboOptions,
+) -> crate::error::Result<Exported> {
+    check_options(o)?;
+    uav::require_identified(summary, source)?;
+    let sorted = uav::sort(summary, why_not);
+    let (polar, mut problems) = uav::drag_polar(&sorted);
+    problems.extend(squared_lift_problems(&sorted, &polar));
+    let joints = used_joints(&sorted, o, source)?;
+    let mut warnings = uav::warnings_or_refuse(
+        source,
+        "Gazebo AdvancedLiftDrag",
+        &sorted,
+        problems,
+        o.drop_unrepresentable,
+    )?;
+    warnings.push(
+        "the plugin normalises with the speed in the body x-z plane, √(u²+w²) = V cos β: at β ≠ 0 its forces and moments differ from the model's by that factor; see docs/export.md".into(),
+    );
+    let header = format!(
+        "Generated by `aeroident export gazebo` from {source} (estimator {}, model {}). Derivatives per rad and per normalised rate; control derivatives per degree of joint angle; formula and signs: docs/export.md.",
+        summary.estimator, summary.model
+    );
+    let mut x = String::new();
+    x.push_str("<plugin filename=\"gz-sim-advanced-lift-drag-system\" name=\"gz::sim::systems::AdvancedLiftDrag\">\n");
+    for note in std::iter::once(&header).chain(&warnings) {
+        let _ = writeln!(x, "  <!-- {} -->", comment(note));
+    }
+    write_scalars(&mut x, &with_pitch_terms(&sorted, summary), &polar, o);
+    let _ = writeln!(x, "  <num_ctrl_surfaces>{}</num_ctrl_surfaces>", joints.len());
+    for j in joints {
+        write_surface(&mut x, &sorted, j);
+    }
+    x.push_str("</plugin>\n");
+    Ok(Exported { text: x, warnings })
+}
+
+/// `s` with `Cm_0` and `Cm_alpha` (unrepresentable, reached only when dropping them is asked
+/// for): written to `Cem0` and `Cema`, which the plugin as read discards but a corrected one
+/// uses.
+fn with_pitch_terms(s: &uav::Sorted, summary: &SummaryParameters) -> uav::Sorted {
+    let mut written = s.clone();
+    for p in &summary.parameters {
+        let pitch = p.param.coefficient == Coefficient::Cm
+            && matches!(p.param.term, Term::Bias | Term::Alpha);
+        if let (true, Some(v)) = (pitch, p.value) {
+            written.values.insert(p.param, v);
+        }
+    }
+    written
+}
+
+/// The joints of the surfaces the summary has a derivative of.
+///
+/// # Errors
+/// A surface with a derivative and no joint in the options.
+fn used_joints<'a>(
+    s: &uav::Sorted,
+    o: &'a GazeboOptions,
+    source: &str,
+) -> crate::error::Result<Vec<&'a ControlJoint>> {
+    let mut used = Vec::new();
+    for surface in [Term::De, Term::Da, Term::Dr] {
+        if !s.values.keys().any(|p| p.term == surface) {
+            continue;
+        }
+        let j = o.joints.iter().find(|j| j.surface == surface).ok_or_else(|| {
+            crate::err!(
+                "{source}: the model has `{}` derivatives but no control joint is given for it (--{}-joint)",
+                surface.name(),
+                surface.name()
+            )
+        })?;
+        used.push(j);
+    }
+    Ok(used)
+}
+
+/// The model-wide elements.
+fn write_scalars(x: &mut String, s: &uav::Sorted, polar: &uav::Polar, o: &GazeboOptions) {
+    let g = &o.geometry;
+    let mut el = |name: &str, v: String| {
+        let _ = writeln!(x, "  <{name}>{v}</{name}>");
+    };
+    el("link_name", xml_text(&o.link_name));
+    el("area", num(g.area_m2));
+    el("AR", num(g.aspect_ratio()));
+    el("mac", num(g.chord_m));
+    el("eff", num(polar.oswald(g.aspect_ratio())));
+    el("air_density", num(o.air_density_kgpm3));
+    el("forward", "1 0 0".into());
+    el("upward", "0 0 1".into());
+    el("cp", "0 0 0".into());
+    el("alpha_stall", num(o.alpha_stall_rad));
+    el("Cema_stall", num(0.0));
+    el("CD0", num(polar.parasitic));
+    for (c, t, name) in ELEMENTS {
+        el(name, num(s.value(c, t)));
+    }
+    el("Cema", num(s.value(Coefficient::Cm, Term::Alpha)));
+}
+
+/// One `<control_surface>`: per-degree derivatives (module doc).
+fn write_surface(x: &mut String, s: &uav::Sorted, j: &ControlJoint) {
+    let _ = writeln!(x, "  <control_surface>");
+    let _ = writeln!(x, "    <name>{}</name>", xml_text(&j.joint));
+    let _ = writeln!(x, "    <direction>{}</direction>", num(j.direction));
+    for (c, name) in CONTROL_ELEMENTS {
+        let per_degree = s.value(c, j.surface) * std::f64::consts::PI / 180.0;
+        let _ = writeln!(x, "    <{name}>{}</{name}>", num(per_degree));
+    }
+    let _ = writeln!(x, "  </control_surface>");
+}
+
+/// `v` as text that reads back to the same f64.
+fn num(v: f64) -> String {
+    format!("{v:?}")
+}
+
+/// `s` as XML text: the markup characters escaped.
+fn xml_text(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+}
+
+/// `s` as comment content: as [`xml_text`], and `--` (not allowed in a comment) split.
+fn comment(s: &str) -> String {
+    xml_text(s).replace("--", "- -")
+}

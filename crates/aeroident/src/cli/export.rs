@@ -3,11 +3,23 @@
 //! ```text
 //! aeroident export jsbsim --summary DIR/summary.json [--out FILE] [--v0-mps V0]
 //!                  [--elevator-property P] [--aileron-property P] [--rudder-property P]
+//! aeroident export ardupilot --summary S (--mapping M | --area-m2 A --span-m B --chord-m C)
+//!                  [--out FILE] [--aileron-throw-deg 20 …] [--alpha-stall-deg 27] [--mcoeff 50]
+//!                  [--drop-unrepresentable]
+//! aeroident export gazebo --summary S (--mapping M | …) [--out FILE] [--elevator-joint J …]
+//!                  [--aileron-direction ±1 …] [--link-name base_link] [--drop-unrepresentable]
 //! ```
 //! Writes the identified derivatives of a `replay` summary as a JSBSim `<aerodynamics>`
-//! fragment to FILE (atomically: a temporary file beside it, renamed) or to stdout.
+//! fragment, an ArduPilot SITL plane coefficient JSON or a Gazebo `AdvancedLiftDrag`
+//! `<plugin>` element to FILE (atomically: a temporary file beside it, renamed) or to stdout;
+//! the conversions are in `aeroident_pipelines::export`.
 
+use aeroident_estimators::vocabulary::Term;
+use aeroident_io::{Channel, Mapping};
+use aeroident_pipelines::export::ardupilot::{ArdupilotOptions, Throws, ardupilot_json};
+use aeroident_pipelines::export::gazebo::{ControlJoint, GazeboOptions, gazebo_plugin_sdf};
 use aeroident_pipelines::export::jsbsim::{SurfaceProperties, aerodynamics_xml, read_summary};
+use aeroident_pipelines::export::uav::{Exported, Geometry};
 use anyhow::Context;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -25,6 +37,103 @@ pub struct ExportArgs {
 pub enum ExportWhat {
     /// Identified derivatives as a JSBSim `<aerodynamics>` fragment.
     Jsbsim(JsbsimArgs),
+    /// Identified derivatives as ArduPilot SITL's plane coefficient JSON (`--model plane:FILE`).
+    Ardupilot(ArdupilotArgs),
+    /// Identified derivatives as a Gazebo `AdvancedLiftDrag` `<plugin>` element (PX4 SITL).
+    Gazebo(GazeboArgs),
+}
+
+/// Where the reference geometry comes from: the mapping's constants, or the options (which
+/// take precedence).
+#[derive(Debug, clap::Args)]
+pub struct GeometryArgs {
+    /// Mapping whose constants `S`, `b`, `cbar` give the reference geometry.
+    #[arg(long)]
+    pub mapping: Option<PathBuf>,
+    /// Wing reference area S, m² (overrides the mapping's).
+    #[arg(long)]
+    pub area_m2: Option<f64>,
+    /// Wing span b, m (overrides the mapping's).
+    #[arg(long)]
+    pub span_m: Option<f64>,
+    /// Mean aerodynamic chord c̄, m (overrides the mapping's).
+    #[arg(long)]
+    pub chord_m: Option<f64>,
+    /// Write the terms the target cannot represent as its formula allows (warning for each)
+    /// instead of refusing the export.
+    #[arg(long)]
+    pub drop_unrepresentable: bool,
+}
+
+/// Arguments of `aeroident export ardupilot`.
+#[derive(Debug, clap::Args)]
+pub struct ArdupilotArgs {
+    /// The `summary.json` of a replay (online estimator or `--estimator oe`).
+    #[arg(long)]
+    pub summary: PathBuf,
+    /// Output file (default: stdout).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Reference geometry and unrepresentable terms.
+    #[command(flatten)]
+    pub geometry: GeometryArgs,
+    /// Aileron deflection at full servo command, degrees (`deltaa_max`).
+    #[arg(long, default_value_t = 20.0)]
+    pub aileron_throw_deg: f64,
+    /// Elevator deflection at full servo command, degrees (`deltae_max`).
+    #[arg(long, default_value_t = 20.0)]
+    pub elevator_throw_deg: f64,
+    /// Rudder deflection at full servo command, degrees (`deltar_max`).
+    #[arg(long, default_value_t = 20.0)]
+    pub rudder_throw_deg: f64,
+    /// Stall angle of SITL's lift blend, degrees (`alpha_stall`).
+    #[arg(long, default_value_t = 27.0)]
+    pub alpha_stall_deg: f64,
+    /// Sharpness of SITL's lift blend, 1/rad (`mcoeff`).
+    #[arg(long, default_value_t = 50.0)]
+    pub mcoeff: f64,
+}
+
+/// Arguments of `aeroident export gazebo`.
+#[derive(Debug, clap::Args)]
+pub struct GazeboArgs {
+    /// The `summary.json` of a replay (online estimator or `--estimator oe`).
+    #[arg(long)]
+    pub summary: PathBuf,
+    /// Output file (default: stdout).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Reference geometry and unrepresentable terms.
+    #[command(flatten)]
+    pub geometry: GeometryArgs,
+    /// Elevator joint of the model.
+    #[arg(long, default_value = "elevator_joint")]
+    pub de_joint: String,
+    /// Aileron joint of the model.
+    #[arg(long, default_value = "aileron_joint")]
+    pub da_joint: String,
+    /// Rudder joint of the model.
+    #[arg(long, default_value = "rudder_joint")]
+    pub dr_joint: String,
+    /// +1 if the elevator joint's positive angle is trailing edge down, −1 if up.
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    pub de_direction: f64,
+    /// +1 if the aileron joint's positive angle rolls left (right aileron down), −1 if right.
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    pub da_direction: f64,
+    /// +1 if the rudder joint's positive angle is trailing edge left, −1 if right.
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    pub dr_direction: f64,
+    /// The aircraft body link.
+    #[arg(long, default_value = "base_link")]
+    pub link_name: String,
+    /// Air density the plugin uses, kg/m³ (a constant in the plugin).
+    #[arg(long, default_value_t = 1.2041)]
+    pub air_density: f64,
+    /// Stall angle of the plugin's lift blend, degrees (its blend width is fixed: a lower
+    /// angle blends flat-plate lift in at small α).
+    #[arg(long, default_value_t = 90.0)]
+    pub alpha_stall_deg: f64,
 }
 
 /// Arguments of `aeroident export jsbsim`.
@@ -60,7 +169,84 @@ pub struct JsbsimArgs {
 pub fn execute(args: ExportArgs) -> anyhow::Result<()> {
     match args.what {
         ExportWhat::Jsbsim(a) => jsbsim(a),
+        ExportWhat::Ardupilot(a) => ardupilot(a),
+        ExportWhat::Gazebo(a) => gazebo(a),
     }
+}
+
+/// The reference geometry: each option, else the mapping's constant.
+fn geometry(g: &GeometryArgs) -> anyhow::Result<Geometry> {
+    let mapping = g.mapping.as_deref().map(Mapping::from_path).transpose()?;
+    let pick = |given: Option<f64>, ch: Channel, flag: &str| -> anyhow::Result<f64> {
+        let mapped = || mapping.as_ref()?.channels.get(&ch)?.constant();
+        given.or_else(mapped).with_context(|| {
+            format!("no {flag}: give it, or a --mapping with a constant `{}`", ch.key())
+        })
+    };
+    Ok(Geometry {
+        area_m2: pick(g.area_m2, Channel::S, "--area-m2")?,
+        span_m: pick(g.span_m, Channel::B, "--span-m")?,
+        chord_m: pick(g.chord_m, Channel::Cbar, "--chord-m")?,
+    })
+}
+
+fn ardupilot(a: ArdupilotArgs) -> anyhow::Result<()> {
+    let summary = read_summary(&a.summary)?;
+    let options = ArdupilotOptions {
+        geometry: geometry(&a.geometry)?,
+        throws: Throws {
+            aileron_rad: a.aileron_throw_deg.to_radians(),
+            elevator_rad: a.elevator_throw_deg.to_radians(),
+            rudder_rad: a.rudder_throw_deg.to_radians(),
+        },
+        alpha_stall_rad: a.alpha_stall_deg.to_radians(),
+        mcoeff: a.mcoeff,
+        drop_unrepresentable: a.geometry.drop_unrepresentable,
+    };
+    let out = ardupilot_json(&summary, &a.summary.display().to_string(), &options)?;
+    write_exported(&a.summary, a.out.as_deref(), &out)
+}
+
+fn gazebo(a: GazeboArgs) -> anyhow::Result<()> {
+    let summary = read_summary(&a.summary)?;
+    let joint = |surface, joint: &str, direction| ControlJoint {
+        surface,
+        joint: joint.to_string(),
+        direction,
+    };
+    let options = GazeboOptions {
+        geometry: geometry(&a.geometry)?,
+        joints: vec![
+            joint(Term::De, &a.de_joint, a.de_direction),
+            joint(Term::Da, &a.da_joint, a.da_direction),
+            joint(Term::Dr, &a.dr_joint, a.dr_direction),
+        ],
+        link_name: a.link_name,
+        air_density_kgpm3: a.air_density,
+        alpha_stall_rad: a.alpha_stall_deg.to_radians(),
+        drop_unrepresentable: a.geometry.drop_unrepresentable,
+    };
+    let out = gazebo_plugin_sdf(&summary, &a.summary.display().to_string(), &options)?;
+    write_exported(&a.summary, a.out.as_deref(), &out)
+}
+
+/// Prints each warning, then writes the file to `out` or stdout.
+fn write_exported(summary: &Path, out: Option<&Path>, e: &Exported) -> anyhow::Result<()> {
+    for w in &e.warnings {
+        aeroident_report::note!("warning: {}: {w}", summary.display());
+    }
+    match out {
+        Some(path) => {
+            write_atomically(path, e.text.as_bytes())?;
+            aeroident_report::note!("{}: wrote {}", summary.display(), path.display());
+        }
+        None => {
+            let mut stdout = std::io::stdout().lock();
+            stdout.write_all(e.text.as_bytes())?;
+            stdout.flush()?;
+        }
+    }
+    Ok(())
 }
 
 fn jsbsim(a: JsbsimArgs) -> anyhow::Result<()> {

@@ -217,7 +217,8 @@ pub fn ardupilot_json(
 
 /// `v` as a JSON number that reads back to the same f64.
 fn num(v: f64) -> String {
-    format!("{v:?}")
+    // `+ 0.0` writes −0 (a negated zero derivative) as 0.
+    format!("{:?}", v + 0.0)
 }
 
 /// The JSON object: the notes first (a key SITL does not read), then the entries in order.

@@ -295,7 +295,8 @@ fn write_surface(x: &mut String, s: &uav::Sorted, j: &ControlJoint) {
 
 /// `v` as text that reads back to the same f64.
 fn num(v: f64) -> String {
-    format!("{v:?}")
+    // `+ 0.0` writes −0 (a negated zero derivative) as 0.
+    format!("{:?}", v + 0.0)
 }
 
 /// `s` as XML text: the markup characters escaped.

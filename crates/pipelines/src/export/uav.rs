@@ -7,7 +7,7 @@
 //! `CL_s`, the lift without rate terms), with no term of their own linear in α. aeroident's
 //! `CD_0 + CD_alpha α + CD_alpha2 α²` is that polar exactly when
 //! `1/(π e AR) = CD_alpha2 / CL_alpha²` and `CD_alpha = 2 CL_0 CD_alpha2 / CL_alpha` (without
-//! `CD_alpha2`: no induced drag, `CD_alpha = 0`); [`drag_polar`] checks it.
+//! `CD_alpha2`: no induced drag, `CD_alpha = 0`); the exporters check it.
 
 use super::jsbsim::SummaryParameters;
 use aeroident_estimators::vocabulary::{Coefficient, Param, Term};

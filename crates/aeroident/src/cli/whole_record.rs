@@ -48,7 +48,11 @@ impl WholeRecord {
         &mut self,
         work: impl FnOnce() -> anyhow::Result<T> + Send + 'static,
     ) -> anyhow::Result<T> {
-        match self.interrupt.watched(work)? {
+        // A long record takes tens of seconds: a terminal sees the work is alive.
+        let spin = crate::progress::spinner(&format!("{} {}", self.command, self.data));
+        let watched = self.interrupt.watched(work);
+        spin.finish_and_clear();
+        match watched? {
             Some(r) => r,
             None => Err(self.stopped()),
         }

@@ -173,6 +173,9 @@ fn fit_watched<T: Send + 'static>(
         })
         .context("starting the batch fit's thread")?;
     let mut watch = FitWatch::default();
+    // A long fit or bootstrap takes tens of seconds: a terminal sees the work is alive.
+    let spin = crate::progress::spinner("batch fit (read, fit, σ)");
+    let _clear = clear_on_drop(&spin);
     loop {
         match rx.recv_timeout(std::time::Duration::from_millis(50)) {
             Ok(r) => return Ok(Some(r)),
@@ -186,6 +189,17 @@ fn fit_watched<T: Send + 'static>(
         }
         watch.look(interrupt, stdin, stop);
     }
+}
+
+/// Clears `spin` when dropped, whichever way [`fit_watched`] returns.
+fn clear_on_drop(spin: &indicatif::ProgressBar) -> impl Drop {
+    struct Clear(indicatif::ProgressBar);
+    impl Drop for Clear {
+        fn drop(&mut self) {
+            self.0.finish_and_clear();
+        }
+    }
+    Clear(spin.clone())
 }
 
 /// What [`fit_watched`] has seen and said so far.

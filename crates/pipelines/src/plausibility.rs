@@ -7,6 +7,10 @@
 //! Two verdicts, both in the parameter's `flags` ([`aeroident_io::ParameterResult`]):
 //! - a value outside [`ModelSpec::plausible_range`] by more than 2σ (any amount without a σ):
 //!   flagged, with the likely cause of its kind of term ([`implausible`]);
+//! - a σ so large that ±2σ spans more than the whole plausible range: flagged, the record
+//!   does not determine the value whatever it is ([`undetermined`]). This catches what the
+//!   relative-σ precision check cannot see: a constant term (`CL_0`), exempt from it because
+//!   its value may be near 0, with σ 22 on a lift coefficient;
 //! - drag and axial-force terms (`CD_*`, `CX_*`) of a record without thrust: withdrawn
 //!   (`null`, not identified), since they are then drag minus thrust ([`without_thrust`]).
 
@@ -42,6 +46,20 @@ pub fn implausible(
         likely_cause(p),
         p.name()
     ))
+}
+
+/// The flag of parameter `p` whose ±2σ interval (width `4 std_error`) is wider than its whole
+/// plausible range (module doc): no value in or out of the range is supported; else `None`.
+pub fn undetermined(model: &ModelSpec, p: Param, std_error: Option<f64>) -> Option<String> {
+    let (lo, hi) = model.plausible_range(p)?;
+    let s = std_error.filter(|s| s.is_finite())?;
+    (4.0 * s > hi - lo).then(|| {
+        format!(
+            "{}: σ {} makes ±2σ wider than the whole plausible range [{lo}, {hi}]: the record does not determine it",
+            p.name(),
+            aeroident_io::message::short(s)
+        )
+    })
 }
 
 /// What most often puts a term of `p`'s kind out of range.
@@ -84,7 +102,8 @@ pub fn without_thrust(r: &mut ParameterResult, thrust_mapped: bool) -> bool {
     true
 }
 
-/// Flags every parameter of `results` the plausibility check refuses ([`implausible`]) and
+/// Flags every parameter of `results` the plausibility check refuses ([`implausible`],
+/// [`undetermined`]) and
 /// withdraws the drag terms of a record without thrust ([`without_thrust`]); the caller judges
 /// the status afterwards.
 pub fn check<'a>(
@@ -98,6 +117,9 @@ pub fn check<'a>(
         }
         let (Some(p), Some(e)) = (Param::from_name(&r.name), r.estimate) else { continue };
         if let Some(flag) = implausible(model, p, e, r.std_error) {
+            r.flag(flag);
+        }
+        if let Some(flag) = undetermined(model, p, r.std_error) {
             r.flag(flag);
         }
     }
@@ -135,6 +157,24 @@ mod tests {
         let six = model();
         assert!(implausible(&six, cy_beta, -0.5, Some(f64::NAN)).is_none());
         assert!(implausible(&six, cy_beta, 0.5, Some(f64::NAN)).is_some());
+    }
+
+    /// The PX4 template log's output-error CL_0 = −6.46 ± 22: ±2σ spans 88, the range of a
+    /// conventional aircraft's CL_0 is 2 wide: flagged though its relative σ is exempt (a
+    /// constant term) and the 2σ margin swallows the range check. CL_0 = 0.3 ± 0.4 (±2σ = 1.6
+    /// wide) is not; nor is a term without a range.
+    #[test]
+    fn a_sigma_wider_than_the_plausible_range_is_flagged() {
+        let m = ModelSpec::preset("longitudinal").unwrap();
+        let cl0 = Param::from_name("CL_0").unwrap();
+        assert!(implausible(&m, cl0, -6.457, Some(22.0)).is_none(), "the 2σ margin covers it");
+        let f = undetermined(&m, cl0, Some(22.0)).unwrap();
+        assert!(f.contains("[-0.5, 1.5]") && f.contains("does not determine"), "{f}");
+        let mut r = ParameterResult::new("CL_0", Some(-6.457), Some(22.0), None, None);
+        check(&m, true, std::iter::once(&mut r));
+        assert_eq!(r.flags.len(), 1, "{:?}", r.flags);
+        assert!(undetermined(&m, cl0, Some(0.4)).is_none());
+        assert!(undetermined(&m, Param::from_name("CL_q").unwrap(), Some(1e3)).is_none());
     }
 
     /// Without thrust the drag terms are withdrawn with the reason, the others untouched.

@@ -27,9 +27,13 @@
 //! φ_m = φ                θ_m = θ                          ψ_m = ψ
 //! ```
 //!
-//! with `V = |[u v w]|`, `α = atan2(w, u)`, `β = asin(v/V)`. Without a wind model the air data
-//! are compared with the inertial velocity: the check is for calm air (steady wind shows as
-//! biases, turbulence as residual).
+//! with `V = |[u v w]|`, `α = atan2(w, u)`, `β = asin(v/V)`. There is no wind model, and a
+//! steady wind needs none: a constant NED velocity seen in body axes obeys the same transport
+//! terms as the body velocity (`d/dt (C_bn W) = −ω × C_bn W`), so the estimated initial
+//! velocity absorbs it exactly, in a turn too (`tests::a_steady_wind_leaves_no_trace_in_the_check`).
+//! For the same reason a steady wind cannot be identified without a measured inertial
+//! velocity (GPS). A wind that changes during a manoeuvre (turbulence, shear, a climb through
+//! a wind gradient) shows as residual and, when slow, as air-data biases.
 //!
 //! # Estimation
 //! Output error with the noise covariance estimated (diagonal `R`, maximum likelihood;
@@ -676,8 +680,8 @@ fn unknowns_of(outputs: &[Channel], n_man: usize, config: &CompatConfig) -> Vec<
         u.extend(GYROS.map(Unknown::TimeShift));
     }
     if config.time_shifts {
-        // Not the airspeed's: it varies slowly, so its shift would absorb the wind and the
-        // slow model errors (the HFB-320 record: −2.7 s) instead of measuring a lag.
+        // Not the airspeed's: it varies slowly, so its shift would absorb a changing wind and
+        // the slow model errors (the HFB-320 record: −2.7 s) instead of measuring a lag.
         u.extend(outputs.iter().filter(|&&c| c != Channel::Vt).map(|&c| Unknown::TimeShift(c)));
     }
     for m in 0..n_man {

@@ -228,9 +228,10 @@ fn consistency(
 /// ([`crate::record::corrections::limits`]: 0.2 m/s² for an accelerometer, 0.005 rad/s for a
 /// gyro, 0.05 s for a shift), and a scale-factor error of 5 % (between the 2 % the findings
 /// call significant and the 20–25 % limits). Below it a difference between manoeuvres is within
-/// what real sensors drift by. `None` for the biases of the airspeed and the flow angles: in the
-/// check's still air they also hold each manoeuvre's steady wind, which changes with the
-/// heading, so they are not compared.
+/// what real sensors drift by. `None` for the biases of the airspeed and the flow angles: they
+/// also take up the wind's change over each manoeuvre (shear, a climb through a wind gradient;
+/// a steady wind does not reach them), which differs between manoeuvres, so they are not
+/// compared.
 fn tolerance(u: Unknown) -> Option<f64> {
     use crate::record::corrections::{MAX_SHIFT_S, limits};
     const DRIFT: f64 = 0.1;
@@ -350,7 +351,7 @@ fn findings(r: &CompatResult, dt_s: f64) -> Vec<String> {
                 s
             )),
             Unknown::Bias(Channel::Vt) if significant(v, s) => out.push(format!(
-                "vt_mps reads {v:+.2} ± {s:.2} m/s above the inertial speed (a steady wind shows here: the check compares the air data with the inertial velocity)"
+                "vt_mps reads {v:+.2} ± {s:.2} m/s above the reconstructed speed (a pitot bias or position error, or a wind that changed during the manoeuvre; a steady wind does not show here: the reconstructed initial velocity absorbs it)"
             )),
             Unknown::Bias(c) if significant(v, s) => {
                 out.push(format!("{} bias {v:+.4} ± {s:.4} {}", c.name(), c.unit()));

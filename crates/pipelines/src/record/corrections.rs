@@ -5,8 +5,8 @@
 //! once the record has reached its time plus the largest lag, so the stage delays the stream by
 //! that much and keeps every time stamp.
 //!
-//! Not applied: the airspeed bias (in still air it is the wind along the flight path, and the
-//! aerodynamics need the airspeed, not the inertial speed).
+//! Not applied: the airspeed bias (it also takes up any change of the wind over the manoeuvre,
+//! and the aerodynamics need the airspeed the pitot measures, not the reconstructed speed).
 
 use super::RecordError;
 use aeroident_estimators::AirDataSample;
@@ -73,7 +73,7 @@ fn determined() -> bool {
 /// - bias: 2 m/s² for an accelerometer (0.2 g; a load factor mapped as specific force is 1 g
 ///   off), 0.05 rad/s for a gyro (2.9°/s, beyond any navigation-grade or MEMS rate sensor's),
 ///   0.175 rad (10°) for a flow angle (vane misalignment and upwash offset) or an attitude;
-///   the airspeed's bias is never applied (in still air it is the wind);
+///   the airspeed's bias is never applied (it also takes up a changing wind);
 /// - scale: within 0.7–1.4 for a flow angle (local upwash and sidewash factors), 0.8–1.25
 ///   for the others;
 /// - time shift: 0.5 s either way (vane and AHRS lags are tenths of a second), and no lead

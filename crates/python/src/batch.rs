@@ -128,7 +128,9 @@ fn fit_file<'py>(
         ("process_noise", process_noise.map(|s| toml::Value::String(s.to_owned()))),
         ("band_hz", band_hz.map(|(a, b)| toml::Value::Array(vec![a.into(), b.into()]))),
     ];
-    let options = FitOptions { windows, ..fit_options(kind, given, options)? };
+    let stop = aeroident_estimators::output_error::StopFlag::default();
+    let options =
+        FitOptions { windows, stop: Some(stop.clone()), ..fit_options(kind, given, options)? };
     let diff_window = aeroident_pipelines::structure::DIFF_WINDOW;
     let model = crate::record::model_choice(model, select, candidates, knots_deg, diff_window);
     let (path, mapping) = (path.to_owned(), mapping.to_owned());
@@ -147,9 +149,7 @@ fn fit_file<'py>(
         };
         fit_job(&FitJob { records, model, compat, options, cross_check, validate_on })
     };
-    let signals = crate::Signals::new();
-    let r = py.detach(run);
-    signals.finish(py)?;
+    let r = crate::interruptible(py, Some(stop), run)?;
     let (done, notes) = r.map_err(to_py)?;
     fit_dict(py, done, notes)
 }

@@ -67,9 +67,7 @@ fn freqresp_file<'py>(
         let (reader, _) = open_log_with_notes(&path, None, &mapping)?;
         Ok(freqresp(reader, &opts)?)
     };
-    let signals = crate::Signals::new();
-    let r = py.detach(run);
-    signals.finish(py)?;
+    let r = crate::interruptible(py, None, run)?;
     outcome_dict(py, r.map_err(to_py)?)
 }
 

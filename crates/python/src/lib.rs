@@ -93,6 +93,55 @@ impl Signals {
     }
 }
 
+/// Runs `work` on a thread of its own while the caller's thread, with the GIL released, asks
+/// Python for a signal every [`Signals::INTERVAL`]: a call whose library work has no unit
+/// boundary to ask at (a fit's iterations, a structure selection, a spectral estimate) still
+/// answers Ctrl-C within a fraction of a second. On a signal `stop` is raised (a fit ends at
+/// its next iteration, its bootstrap before its next replica) and the call returns the
+/// handler's exception at once; the worker finishes on its own and its result is dropped.
+///
+/// # Errors
+/// The handler's exception (`KeyboardInterrupt`); a worker that could not be started or that
+/// panicked.
+pub(crate) fn interruptible<T: Send + 'static>(
+    py: Python<'_>,
+    stop: Option<aeroident_estimators::output_error::StopFlag>,
+    work: impl FnOnce() -> T + Send + 'static,
+) -> PyResult<T> {
+    use std::sync::mpsc::RecvTimeoutError;
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::Builder::new()
+        .name("aeroident-call".into())
+        .stack_size(aeroident_pipelines::WORKER_STACK_BYTES)
+        .spawn(move || {
+            let _ = tx.send(work());
+        })
+        .map_err(|e| err(format!("starting the call's worker thread: {e}")))?;
+    let signals = std::sync::Arc::new(Signals::new());
+    let asking = signals.clone();
+    let out = py.detach(move || {
+        loop {
+            match rx.recv_timeout(Signals::INTERVAL) {
+                Ok(r) => return Some(Ok(r)),
+                Err(RecvTimeoutError::Disconnected) => return Some(Err(())),
+                Err(RecvTimeoutError::Timeout) if asking.interrupted() => {
+                    stop.iter().for_each(|s| s.raise());
+                    return None;
+                }
+                Err(RecvTimeoutError::Timeout) => {}
+            }
+        }
+    });
+    // The worker never holds `signals`: the loop's clone is gone, so this is the last one.
+    let signals = std::sync::Arc::try_unwrap(signals).unwrap_or_else(|_| Signals::new());
+    signals.finish(py)?;
+    match out {
+        Some(Ok(r)) => Ok(r),
+        Some(Err(())) => Err(err("internal: the call's worker thread ended without a result")),
+        None => Err(err("interrupted")),
+    }
+}
+
 /// The library's check of a count against its limit, for a Python int of any size (one past
 /// 64 bits is checked as `u64::MAX` and shown as given).
 fn check_count<T: TryFrom<u64> + Copy + std::fmt::Display>(

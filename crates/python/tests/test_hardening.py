@@ -172,6 +172,17 @@ def test_ctrl_c_stops_a_long_array_replay_as_keyboard_interrupt(tmp_path):
     assert elapsed < 2.0, elapsed
 
 
+def test_ctrl_c_stops_a_long_fit_as_keyboard_interrupt():
+    # A watchdog, not a speed test: output error on the HFB-320 record with a bootstrap of
+    # 200 refits runs for tens of seconds (each refit is a whole fit); the fit runs on a
+    # worker thread while the call asks Python for a signal every 50 ms, so it ends soon
+    # after the signal at 0.3 s, where it used to run on for 10-34 s.
+    data = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv")
+    mapping = ROOT / "mappings/hfb320.toml"
+    _, elapsed = run_interrupted("", f'aeroident.fit({str(data)!r}, {str(mapping)!r}, "oe", bootstrap=200)')
+    assert elapsed < 2.0, elapsed
+
+
 def test_ctrl_c_stops_a_long_campaign_as_keyboard_interrupt():
     # MAX_RUNS runs would take hours: stopped after the chunk of runs under way.
     _, elapsed = run_interrupted("", f"aeroident.montecarlo({str(SHORT)!r}, runs=aeroident.MAX_RUNS)")

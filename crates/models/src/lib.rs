@@ -10,6 +10,9 @@ use nalgebra::SVector;
 
 /// Rate- and position-limited first-order surface actuators; the F-16 with actuators (16 states).
 pub mod actuator;
+/// One abstract aircraft (mass, geometry, controls, wings-level trim) over the shared rigid
+/// body; the F-16 is one implementation.
+pub mod aircraft;
 /// The textbook air-data computer of the F-16 model (SLJ §3.5, ADC).
 pub mod atmosphere;
 /// The Stevens–Lewis nonlinear F-16 (SLJ §3.5, App. A; NASA TP-1538).

@@ -170,6 +170,17 @@ fn pairs_and_reals(ev: &[Complex<f64>]) -> (Vec<Complex<f64>>, Vec<Complex<f64>>
 /// * lateral: one complex pair (Dutch roll) and two real roots (larger |λ| roll, smaller spiral);
 ///   two pairs → larger ωn Dutch roll, the other a roll–spiral oscillation.
 pub fn f16_modes(a: &SMatrix<f64, N_STATES, N_STATES>) -> Vec<Mode> {
+    rigid_body_modes(a)
+}
+
+/// The modes of any aircraft whose first 12 states follow the rigid-body layout of
+/// [`crate::rigid_body::STATE_NAMES`] (the F-16's 13 states, the 12 of a model-file aircraft):
+/// the rules of [`f16_modes`] on the longitudinal block (vt, α, θ, q) and the lateral block
+/// (β, φ, p, r) of the `N × N` matrix `a` about a wings-level trim. The length unit of `vt`
+/// (ft/s or m/s) does not change the eigenvalues (1/s).
+/// `N < 12` (no rigid-body layout) does not compile.
+pub fn rigid_body_modes<const N: usize>(a: &SMatrix<f64, N, N>) -> Vec<Mode> {
+    const { assert!(N >= crate::rigid_body::N_STATES, "the rigid-body layout has 12 states") };
     let block = |idx: [usize; 4]| {
         let mut m = SMatrix::<f64, 4, 4>::zeros();
         for i in 0..4 {

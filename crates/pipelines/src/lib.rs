@@ -8,6 +8,8 @@
 //! - [`replay`]: a recorded (or streamed) flight through an estimator, online or as a batch
 //!   fit ([`replay::batch`]), with validation on a second record.
 //! - [`aircraft`]: the closed-loop experiment (trim → fly → sense → estimate → summarise).
+//! - [`airframe`]: an aircraft built from identified derivatives (model file, summary,
+//!   mapping), trimmed, linearized and flown like the F-16.
 //! - [`montecarlo`]: seeded campaigns of the experiment and their statistics.
 //! - [`poc`]: the thesis's proof-of-concept systems; [`sim`]: open-loop F-16 simulation.
 //! - [`export`]: input design and the JSBSim `<aerodynamics>` export.
@@ -20,6 +22,8 @@
 
 /// Aircraft estimation experiments: two F-16s, sensors, estimators.
 pub mod aircraft;
+/// An aircraft flying identified derivatives (model file + summary + mapping).
+pub mod airframe;
 pub mod compat;
 pub mod condition;
 pub mod error;

@@ -1,0 +1,123 @@
+//! A [`ModelFileAircraft`] from files: the model file's structure, the parameter values of a
+//! replay summary (else the model file's `[reference.<param>]` values) and a mapping's
+//! constants. Every error names the file and the field.
+
+use super::{Airframe, ModelFileAircraft, Propulsion};
+use crate::export::jsbsim::{SummaryParameters, read_summary};
+use aeroident_io::mapping::{Channel, Mapping};
+use aeroident_io::model_file::ModelSpec;
+use aeroident_models::aircraft::{AircraftMass, ReferenceGeometry};
+use std::path::Path;
+
+/// The airframe constants of `mapping` (SI): the constants `mass`, `Ixx`, `Iyy`, `Izz`, `S`,
+/// `b`, `cbar` (required), `Ixz`, `thrust_arm`, `thrust_incidence` (0 when absent), `v0`; the
+/// inertias scaled by `mass / inertia_reference_mass_kg` when that is given (constant radii of
+/// gyration, as the records are). Thrust: the `[thrust_model]` law when there is one, else
+/// the command is the thrust itself ([`Propulsion`]).
+///
+/// # Errors
+/// A required constant that is absent or mapped to columns, naming the file and channel.
+pub fn airframe_from_mapping(m: &Mapping) -> crate::error::Result<Airframe> {
+    let file = &m.file;
+    let constant = |ch: Channel| -> crate::error::Result<Option<f64>> {
+        match m.channels.get(&ch) {
+            None => Ok(None),
+            Some(c) => c.constant().map(Some).ok_or_else(|| {
+                crate::err!(
+                    "{file}: `{}` is mapped to record columns; flying the aircraft needs a constant",
+                    ch.key()
+                )
+            }),
+        }
+    };
+    let required = |ch: Channel| -> crate::error::Result<f64> {
+        constant(ch)?.ok_or_else(|| {
+            crate::err!("{file}: no constant `{}`: flying the aircraft needs it", ch.key())
+        })
+    };
+    let mass_kg = required(Channel::Mass)?;
+    let scale = m.inertia_reference_mass_kg.map_or(1.0, |r| mass_kg / r);
+    let mass = AircraftMass {
+        mass_kg,
+        jx_kgm2: required(Channel::Ixx)? * scale,
+        jy_kgm2: required(Channel::Iyy)? * scale,
+        jz_kgm2: required(Channel::Izz)? * scale,
+        jxz_kgm2: constant(Channel::Ixz)?.unwrap_or(0.0) * scale,
+    };
+    let geometry = ReferenceGeometry {
+        wing_area_m2: required(Channel::S)?,
+        span_m: required(Channel::B)?,
+        chord_m: required(Channel::Cbar)?,
+    };
+    Ok(Airframe {
+        mass,
+        geometry,
+        thrust_arm_m: constant(Channel::ThrustArm)?.unwrap_or(0.0),
+        thrust_incidence_rad: constant(Channel::ThrustIncidence)?.unwrap_or(0.0),
+        v0_mps: constant(Channel::V0)?,
+        propulsion: m.thrust_model.map_or(Propulsion::Commanded, Propulsion::Law),
+    })
+}
+
+/// The value of every parameter of `spec`'s structure, in structure order: the summary's
+/// estimate when a summary is given (`summary_file` names it), else the model file's
+/// `[reference.<param>]` value.
+///
+/// # Errors
+/// A parameter with no value (absent from the summary, `null` there, or without a reference),
+/// or a summary parameter the model does not have; each naming the file and parameter.
+pub fn parameter_values(
+    spec: &ModelSpec,
+    model_file: &str,
+    summary: Option<(&SummaryParameters, &str)>,
+) -> crate::error::Result<Vec<f64>> {
+    if let Some((s, file)) = summary
+        && let Some(extra) = s.parameters.iter().find(|p| !spec.structure.contains(p.param))
+    {
+        crate::bail!(
+            "{file}: parameter `{}` is not in the model of {model_file}: the summary is of another model",
+            extra.param.name()
+        );
+    }
+    let value_of = |p: aeroident_estimators::vocabulary::Param| match summary {
+        Some((s, file)) => match s.parameters.iter().find(|i| i.param == p) {
+            Some(i) => i.value.ok_or_else(|| {
+                crate::err!("{file}: parameter `{}` was not identified (null)", p.name())
+            }),
+            None => Err(crate::err!("{file}: no parameter `{}` of {model_file}", p.name())),
+        },
+        None => spec.references.iter().find(|r| r.param == p).map(|r| r.value).ok_or_else(|| {
+            crate::err!(
+                "{model_file}: no [reference.{}] value (give a --summary with its estimate)",
+                p.name()
+            )
+        }),
+    };
+    spec.structure.params().map(value_of).collect()
+}
+
+/// The aircraft of model file `model`, summary `summary` (optional) and mapping `mapping`
+/// (see [`airframe_from_mapping`], [`parameter_values`]), in the standard atmosphere.
+///
+/// # Errors
+/// A file that cannot be read or parsed, or any error of the functions above and of
+/// [`ModelFileAircraft::new`], naming the file.
+pub fn load(
+    model: &Path,
+    summary: Option<&Path>,
+    mapping: &Path,
+) -> crate::error::Result<ModelFileAircraft> {
+    let model_file = model.display().to_string();
+    let spec = ModelSpec::from_path(model).map_err(|e| crate::err!("{e}"))?;
+    let summary_read = summary.map(read_summary).transpose()?;
+    let summary_file = summary.map(|p| p.display().to_string()).unwrap_or_default();
+    let theta = parameter_values(
+        &spec,
+        &model_file,
+        summary_read.as_ref().map(|s| (s, summary_file.as_str())),
+    )?;
+    let map = Mapping::from_path(mapping).map_err(|e| crate::err!("{e}"))?;
+    let airframe = airframe_from_mapping(&map)?;
+    ModelFileAircraft::new(&spec.name, spec.structure, theta, airframe)
+        .map_err(|e| crate::err!("{model_file} with {}: {e}", map.file))
+}

@@ -1,0 +1,241 @@
+//! The F-16 written as a model-file aircraft flies like the F-16.
+//!
+//! The F-16's own local derivatives at a trim (central differences of its table aerodynamics,
+//! [`local_derivatives`]: body-axis `CX CY CZ Cl Cm Cn` vs α, β, p̂, q̂, r̂, δe, δa, δr, with
+//! the tangent-plane biases) become the parameters of a [`ModelFileAircraft`] with the F-16's
+//! mass, inertia and geometry, in the F-16's textbook atmosphere. Trimmed at the same
+//! condition, it must reproduce (a) the short-period and Dutch-roll eigenvalues of the F-16's
+//! own linearization ([`linearize_f16`], independent of this module's code) within 2 %, and
+//! (b) the F-16's linear response (its A, B) to a small elevator and aileron doublet within 1 %
+//! of the response's peak, flying its own nonlinear equations.
+//!
+//! What the model-file aircraft does not have, and why the targets still hold (measured
+//! numbers in `docs/aircraft.md`): the F-16's thrust depends on Mach and altitude at a fixed
+//! throttle and lags it (an engine state), the commanded thrust here is constant: this moves
+//! the phugoid, not the short period or Dutch roll, and the doublets hold the throttle over
+//! 4 s. The F-16's moment constants c1…c9 are the textbook's rounded values, the flight model
+//! computes them from the inertias; its gravity is g0 = 9.80665 m/s², the F-16's 32.17 ft/s²;
+//! the engine's angular momentum couples the axes in the F-16 only. Together these leave
+//! ≈ 1e-4 on the eigenvalues.
+
+use super::*;
+use crate::aircraft::truth::local_derivatives;
+use aeroident_estimators::vocabulary::{Coefficient, Param, Term};
+use aeroident_models::aircraft::linearize_level;
+use aeroident_models::f16::{self, AeroIncrements, F16, F16State};
+use aeroident_models::integrate::rk4_step;
+use aeroident_models::linearize::{Linearization, Mode, ModeName, f16_modes, linearize_f16};
+use aeroident_models::trim::{F16Trim, TrimCondition, trim};
+use aeroident_physics::units::M_PER_FT;
+
+const ALT_FT: f64 = 20_000.0;
+const VT_FPS: f64 = 675.0;
+
+/// The F-16 at the thesis condition (xcg 0.30: open-loop stable) and its trim.
+fn f16_trim() -> (F16, F16Trim) {
+    let f = F16::new(0.30).unwrap();
+    let t = trim(&f, &TrimCondition::level(ALT_FT, VT_FPS)).unwrap();
+    (f, t)
+}
+
+/// The F-16's local derivatives at `t` as a model-file aircraft (module doc).
+fn as_model_file(f: &F16, t: &F16Trim) -> ModelFileAircraft {
+    let ld = local_derivatives(f, &t.state, &t.controls, &AeroIncrements::zero()).unwrap();
+    let terms = [
+        Term::Bias,
+        Term::Alpha,
+        Term::Beta,
+        Term::P,
+        Term::Q,
+        Term::R,
+        Term::De,
+        Term::Da,
+        Term::Dr,
+    ];
+    // The terms whose local derivative is not zero (the F-16's CX has no β, p, r, δa, δr,
+    // its Cl no α at β = 0, …): all 54 exceed a structure's capacity, and a zero term adds
+    // nothing.
+    let mut s = ModelStructure::empty();
+    let coefficients = [
+        Coefficient::CX,
+        Coefficient::CY,
+        Coefficient::CZ,
+        Coefficient::Cl,
+        Coefficient::Cm,
+        Coefficient::Cn,
+    ];
+    for c in coefficients {
+        let nonzero = |t: &Term| {
+            *t == Term::Bias || ld.derivative(Param::new(c, *t)).is_some_and(|d| d.abs() > 1e-12)
+        };
+        let used: Vec<Term> = terms.into_iter().filter(nonzero).collect();
+        s = s.with(c, &used);
+    }
+    let theta: Vec<f64> = s.params().map(|p| ld.truth(&s, p).unwrap()).collect();
+    let airframe = Airframe {
+        mass: f.mass(),
+        geometry: f.geometry(),
+        thrust_arm_m: 0.0,
+        thrust_incidence_rad: 0.0,
+        v0_mps: None,
+        propulsion: Propulsion::Commanded,
+    };
+    ModelFileAircraft::new("f16-local", s, theta, airframe)
+        .unwrap()
+        .with_atmosphere(Atmosphere::Textbook(f.data().atmosphere.clone()))
+}
+
+fn mode(modes: &[Mode], name: ModeName) -> Mode {
+    *modes.iter().find(|m| m.name == name).unwrap_or_else(|| panic!("no {name:?} in {modes:?}"))
+}
+
+#[test]
+fn f16_local_derivatives_trim_where_the_f16_trims() {
+    let (f, t) = f16_trim();
+    let m = as_model_file(&f, &t);
+    let mt = m.trim_level(VT_FPS * M_PER_FT, ALT_FT * M_PER_FT).unwrap();
+    let thrust_f16 = f.outputs(0.0, &t.state, &t.controls).unwrap().thrust_lbf;
+    let thrust_n = thrust_f16 * aeroident_physics::units::N_PER_LBF;
+    eprintln!(
+        "trim alpha {:.6} vs {:.6} rad, de {:.6} vs {:.6} rad, thrust {:.1} vs {:.1} N",
+        mt.state[rb::ALPHA],
+        t.state[f16::ALPHA],
+        mt.controls[1],
+        t.controls.elevator_rad,
+        mt.controls[0],
+        thrust_n
+    );
+    assert!((mt.state[rb::ALPHA] - t.state[f16::ALPHA]).abs() < 1e-4);
+    assert!((mt.controls[1] - t.controls.elevator_rad).abs() < 1e-4);
+    assert!((mt.controls[0] / thrust_n - 1.0).abs() < 2e-3);
+    assert!(mt.state[rb::BETA].abs() < 1e-9 && mt.controls[2].abs() < 1e-9);
+}
+
+#[test]
+fn f16_local_derivatives_have_the_f16_short_period_and_dutch_roll() {
+    let (f, t) = f16_trim();
+    let m = as_model_file(&f, &t);
+    let own = f16_modes(&linearize_f16(&f, &t.state, &t.controls).unwrap().a);
+    let lin = linearize_level(&m, VT_FPS * M_PER_FT, ALT_FT * M_PER_FT).unwrap();
+    for name in [ModeName::ShortPeriod, ModeName::DutchRoll, ModeName::Roll, ModeName::Spiral] {
+        let (a, b) = (mode(&own, name).eigenvalue, mode(&lin.modes, name).eigenvalue);
+        let rel = (a - b).norm() / a.norm();
+        eprintln!("{name:?}: F-16 {a:.5}, model file {b:.5}, relative {rel:.2e}");
+        if matches!(name, ModeName::ShortPeriod | ModeName::DutchRoll) {
+            assert!(rel < 0.02, "{name:?}: {rel}");
+        }
+    }
+}
+
+/// A doublet of `amplitude` rad on control `k` (1 s up, 1 s down from t = 0.5 s).
+fn doublet(k: usize, amplitude: f64, t_s: f64) -> ControlVector {
+    let mut u = ControlVector::zeros();
+    u[k] = if (0.5..1.5).contains(&t_s) {
+        amplitude
+    } else if (1.5..2.5).contains(&t_s) {
+        -amplitude
+    } else {
+        0.0
+    };
+    u
+}
+
+/// `δx` of the F-16's linear model under `du(t)` by RK4 (zero-order hold, step `dt`).
+fn linear_response(
+    lin: &Linearization<{ f16::N_STATES }, 4>,
+    du: impl Fn(f64) -> ControlVector,
+    dt: f64,
+    n: usize,
+) -> Vec<F16State> {
+    let f = |x: &F16State, u: &ControlVector| lin.a * x + lin.b * u;
+    let mut x = F16State::zeros();
+    let mut out = vec![x];
+    for i in 0..n {
+        let u = du(i as f64 * dt);
+        let k1 = f(&x, &u);
+        let k2 = f(&(x + k1 * (dt / 2.0)), &u);
+        let k3 = f(&(x + k2 * (dt / 2.0)), &u);
+        let k4 = f(&(x + k3 * dt), &u);
+        x += (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (dt / 6.0);
+        out.push(x);
+    }
+    out
+}
+
+/// `δx` of the F-16's own nonlinear equations from trim `t` under `du(t)` (throttle held).
+fn f16_response(
+    f: &F16,
+    t: &F16Trim,
+    du: impl Fn(f64) -> ControlVector,
+    dt: f64,
+    n: usize,
+) -> Vec<F16State> {
+    let mut x = t.state;
+    let mut out = vec![F16State::zeros()];
+    for i in 0..n {
+        let u = t.controls.with_vector(&(t.controls.to_vector() + du(i as f64 * dt)));
+        x = rk4_step(f, i as f64 * dt, &x, &u, dt).unwrap();
+        out.push(x - t.state);
+    }
+    out
+}
+
+/// Max error over the response relative to the response's peak, per state in `states`:
+/// the model-file aircraft's nonlinear `δx` against the F-16's linear one, or with
+/// `nonlinear_f16` its nonlinear one (its `vt` in ft/s).
+fn response_errors(
+    k: usize,
+    amplitude: f64,
+    states: &[usize],
+    nonlinear_f16: bool,
+) -> Vec<(usize, f64)> {
+    let (f, t) = f16_trim();
+    let m = as_model_file(&f, &t);
+    let mt = m.trim_level(VT_FPS * M_PER_FT, ALT_FT * M_PER_FT).unwrap();
+    let (dt, n) = (0.01, 400);
+    let du = |s: f64| doublet(k, amplitude, s);
+    let reference = if nonlinear_f16 {
+        f16_response(&f, &t, du, dt, n)
+    } else {
+        linear_response(&linearize_f16(&f, &t.state, &t.controls).unwrap(), du, dt, n)
+    };
+    let mut x = mt.state;
+    let mut err = vec![0.0f64; states.len()];
+    let mut peak = vec![0.0f64; states.len()];
+    for (i, r) in reference.iter().enumerate() {
+        for (j, &s) in states.iter().enumerate() {
+            let unit = if s == rb::VT { M_PER_FT } else { 1.0 };
+            peak[j] = peak[j].max((r[s] * unit).abs());
+            err[j] = err[j].max(((x[s] - mt.state[s]) - r[s] * unit).abs());
+        }
+        if i < n {
+            let u = mt.controls + du(i as f64 * dt);
+            x = rk4_step(&m, i as f64 * dt, &x, &u, dt).unwrap();
+        }
+    }
+    states.iter().zip(err.iter().zip(&peak)).map(|(s, (e, p))| (*s, e / p)).collect()
+}
+
+/// (b) of the module doc, with a 0.5° elevator and a 0.5° aileron doublet. The airspeed is
+/// compared with the F-16's nonlinear response, not its linear one: a doublet moves V by a
+/// few cm/s, and there the second-order terms the linear model drops are of the size of the
+/// linear response (its error scales with the amplitude: 35 % at 0.5°, 8.6 % at 0.125°,
+/// the same with the F-16's thrust frozen at trim, so it is not the thrust law). At 1° of
+/// aileron β is off the linear response by 1.2 % (0.30 % at 0.5°), the kinematic
+/// coupling, second order in the rates.
+#[test]
+fn f16_local_derivatives_follow_the_f16_linear_doublet_responses() {
+    let (lon, lat) = ([rb::ALPHA, rb::THETA, rb::Q], [rb::BETA, rb::PHI, rb::P, rb::R]);
+    let amplitude = 0.5f64.to_radians();
+    let cases = [
+        ("elevator doublet vs F-16 linear", response_errors(1, amplitude, &lon, false)),
+        ("aileron doublet vs F-16 linear", response_errors(2, amplitude, &lat, false)),
+        ("elevator doublet vs F-16 nonlinear", response_errors(1, amplitude, &[rb::VT], true)),
+    ];
+    for (what, errors) in &cases {
+        for (s, e) in errors {
+            eprintln!("{what}: {} max error / peak = {e:.2e}", STATE_NAMES[*s]);
+            assert!(*e < 0.01, "{what}: {}: {e}", STATE_NAMES[*s]);
+        }
+    }
+}

@@ -8,6 +8,7 @@ pub mod design;
 pub mod export;
 pub mod f16;
 pub mod freqresp;
+pub mod linearize;
 pub mod montecarlo;
 pub mod poc;
 pub mod replay;
@@ -46,6 +47,9 @@ pub enum Command {
     Freqresp(freqresp::FreqRespArgs),
     /// Design an orthogonal multisine input and predict its Cramér–Rao σ before flight.
     Design(design::DesignArgs),
+    /// Trim any aircraft wings-level (the F-16, or a model file flying identified
+    /// derivatives) and linearize it: A, B, eigenvalues and modes.
+    Linearize(linearize::LinearizeArgs),
     /// Measure simulation speed (one F-16 RK4 step, real-time factor).
     Bench(bench::BenchArgs),
 }
@@ -87,6 +91,7 @@ impl Cli {
             Command::Bench(a) => bench::execute(a),
             Command::Export(a) => export::execute(a),
             Command::Design(a) => design::execute(a),
+            Command::Linearize(a) => linearize::execute(a),
             Command::Freqresp(a) => freqresp::execute(a),
         }
     }

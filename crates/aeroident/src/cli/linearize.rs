@@ -1,0 +1,137 @@
+//! `aeroident linearize`: trim any aircraft wings-level and linearize it there — the F-16, or
+//! an aircraft flying identified derivatives (a model file with a summary's estimates or its
+//! reference values, and a mapping's constants). The work is the library's
+//! ([`aeroident_models::aircraft::linearize_level`], [`aeroident_pipelines::airframe`]); this
+//! module translates arguments and renders.
+//!
+//! ```text
+//! aeroident linearize --aircraft f16 --vt-mps 205.7 --alt-m 6096 [--xcg 0.35] [--json]
+//! aeroident linearize --aircraft models/my_uav.toml --summary out/summary.json \
+//!                     --map mappings/my_uav.toml --vt-mps 18 --alt-m 100 [--json]
+//! ```
+
+use aeroident_models::aircraft::{Aircraft, CONTROL_NAMES, LevelLinearization, linearize_level};
+use aeroident_models::f16::F16;
+use anyhow::Context;
+use serde_json::json;
+use std::path::PathBuf;
+
+/// Arguments of `aeroident linearize`.
+#[derive(Debug, clap::Args)]
+pub struct LinearizeArgs {
+    /// `f16`, or a model file (`models/*.toml`) whose derivatives the aircraft flies.
+    #[arg(long)]
+    pub aircraft: String,
+    /// A replay's `summary.json` giving the model's parameter values (default: the model
+    /// file's `[reference.<param>]` values).
+    #[arg(long)]
+    pub summary: Option<PathBuf>,
+    /// Mapping whose constants give mass, inertia, S, b, c̄, thrust line and thrust law
+    /// (required with a model file).
+    #[arg(long)]
+    pub map: Option<PathBuf>,
+    /// True airspeed of the trim, m/s.
+    #[arg(long)]
+    pub vt_mps: f64,
+    /// Altitude of the trim, m.
+    #[arg(long)]
+    pub alt_m: f64,
+    /// The F-16's cg, fraction of c̄ (`--aircraft f16` only).
+    #[arg(long, default_value_t = 0.35)]
+    pub xcg: f64,
+    /// JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `aeroident linearize`.
+///
+/// # Errors
+/// Files that cannot be read or do not describe a flyable aircraft, no trim, or a model error.
+pub fn execute(a: LinearizeArgs) -> anyhow::Result<()> {
+    Ok(super::print_stdout(&report(&a)?)?)
+}
+
+/// The report of `aeroident linearize` (text, or JSON with keys aircraft, trim, a, b,
+/// eigenvalues, modes).
+///
+/// # Errors
+/// As [`execute`].
+pub fn report(a: &LinearizeArgs) -> anyhow::Result<String> {
+    if a.aircraft == "f16" {
+        anyhow::ensure!(
+            a.summary.is_none() && a.map.is_none(),
+            "--summary and --map describe a model-file aircraft, not the F-16"
+        );
+        let f = F16::new(a.xcg)?;
+        return render(&f, &linearize_level(&f, a.vt_mps, a.alt_m)?, a.json);
+    }
+    let map = a
+        .map
+        .as_deref()
+        .context("--map is required with a model file (mass, inertia, S, b, cbar)")?;
+    let m = aeroident_pipelines::airframe::load(a.aircraft.as_ref(), a.summary.as_deref(), map)?;
+    let lin = linearize_level(&m, a.vt_mps, a.alt_m)
+        .with_context(|| format!("{} at {} m/s, {} m", a.aircraft, a.vt_mps, a.alt_m))?;
+    render(&m, &lin, a.json)
+}
+
+/// Renders a linearization of `aircraft` (SI trim values; A, B in the aircraft's state units).
+fn render<const N: usize, A: Aircraft<N>>(
+    aircraft: &A,
+    l: &LevelLinearization<N>,
+    json: bool,
+) -> anyhow::Result<String> {
+    let unit = aircraft.length_unit_m();
+    let (x, u) = (&l.trim.state, &l.trim.controls);
+    let mut controls: Vec<(String, f64)> = vec![(aircraft.engine_command().to_string(), u[0])];
+    controls.extend((1..4).map(|k| (CONTROL_NAMES[k].to_string(), u[k])));
+    let modes = l.modes.iter().map(|m| {
+        json!({"name": m.name.as_str(), "eigenvalue": [m.eigenvalue.re, m.eigenvalue.im],
+               "wn_radps": m.wn_rad_s, "zeta": m.zeta})
+    });
+    if json {
+        let rows = |m: &dyn Fn(usize, usize) -> f64, nc: usize| -> Vec<Vec<f64>> {
+            (0..N).map(|i| (0..nc).map(|j| m(i, j)).collect()).collect()
+        };
+        return Ok(json!({
+            "aircraft": aircraft.name(),
+            "trim": {"vt_mps": x[0] * unit, "alpha_rad": x[1], "theta_rad": x[4],
+                     "controls": controls.iter().map(|(n, v)| json!({"name": n, "value": v})).collect::<Vec<_>>(),
+                     "max_abs_residual": l.trim.max_abs_residual},
+            "a": rows(&|i, j| l.linear.a[(i, j)], N),
+            "b": rows(&|i, j| l.linear.b[(i, j)], 4),
+            "eigenvalues": l.eigenvalues.iter().map(|v| [v.re, v.im]).collect::<Vec<_>>(),
+            "modes": modes.collect::<Vec<_>>(),
+        })
+        .to_string());
+    }
+    let mut out = format!(
+        "{}: trim at {:.3} m/s, {:.1} m: alpha {:.4} deg, theta {:.4} deg (residual {:.1e})\n",
+        aircraft.name(),
+        x[0] * unit,
+        x[11] * unit,
+        x[1].to_degrees(),
+        x[4].to_degrees(),
+        l.trim.max_abs_residual
+    );
+    for (n, v) in &controls {
+        out.push_str(&format!("  {n:<32} {v:.6}\n"));
+    }
+    out.push_str(&format!("eigenvalues ({N}-state A):\n"));
+    for v in &l.eigenvalues {
+        out.push_str(&format!("  {:>12.6} {:+12.6}j\n", v.re, v.im));
+    }
+    out.push_str("modes (longitudinal / lateral blocks, SLJ §3.7–3.8):\n");
+    for m in &l.modes {
+        out.push_str(&format!(
+            "  {:<18} {:>10.5} {:+10.5}j   wn {:8.4} rad/s   zeta {:7.4}\n",
+            m.name.as_str(),
+            m.eigenvalue.re,
+            m.eigenvalue.im,
+            m.wn_rad_s,
+            m.zeta
+        ));
+    }
+    Ok(out)
+}

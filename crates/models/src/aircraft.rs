@@ -4,15 +4,15 @@
 //!
 //! The design follows the layering of flight-mechanics simulators (e.g. FlightMechanicsSimulator.jl:
 //! an aircraft is mass and inertia, reference geometry, aerodynamics and an engine on top of a
-//! shared rigid body; SLJ 3rd ed. §2.5, §3.5). Here an aircraft is a [`Dynamics`] model whose
+//! shared rigid body; SLJ 3rd ed. §2.5, §3.5). Here an aircraft is a [`Dynamics`](crate::Dynamics) model whose
 //! first 12 states follow the rigid-body layout of [`crate::rigid_body::STATE_NAMES`]
 //! (`vt, α, β, φ, θ, ψ, p, q, r, north, east, alt`; further states such as the F-16's engine
-//! power follow), with four controls ([`CONTROL_NAMES`]: engine command, elevator, aileron,
-//! rudder, rad), and the [`Aircraft`] trait adds its mass, geometry and a wings-level trim.
+//! power follow), with four controls ([`CONTROL_NAMES`](crate::aircraft::CONTROL_NAMES): engine command, elevator, aileron,
+//! rudder, rad), and the [`Aircraft`](crate::aircraft::Aircraft) trait adds its mass, geometry and a wings-level trim.
 //!
 //! # Units
 //! Everything this module's API takes and returns is SI and radians. The state vectors are the
-//! aircraft's own: the F-16 keeps its English units (ft, ft/s: [`Aircraft::length_unit_m`]
+//! aircraft's own: the F-16 keeps its English units (ft, ft/s: [`Aircraft::length_unit_m`](crate::aircraft::Aircraft::length_unit_m)
 //! converts), a model-file aircraft is SI. Eigenvalues (1/s) do not depend on the unit.
 
 use crate::f16::{self, F16, F16Controls};

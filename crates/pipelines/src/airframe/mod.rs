@@ -14,13 +14,13 @@
 //! `q̄Sb Cn` about the CG, an α̇ term solved exactly, thrust along the thrust line (incidence
 //! `σT`) with pitching moment `arm · T`, gravity `g0` = 9.80665 m/s². This module adds the
 //! heading and navigation equations (`ψ̇ = (q sinφ + r cosφ)/cosθ`, `[ṅ, ė, −ḣ] = Cᵀ v_body`,
-//! SLJ §1.3, §2.5), the atmosphere ([`Atmosphere`]) and the engine ([`Propulsion`]).
+//! SLJ §1.3, §2.5), the atmosphere ([`Atmosphere`](crate::airframe::Atmosphere)) and the engine ([`Propulsion`](crate::airframe::Propulsion)).
 //!
 //! # States and controls (SI)
-//! [`STATE_NAMES`]: the rigid-body layout of [`aeroident_models::rigid_body`] in metres:
+//! [`STATE_NAMES`](crate::airframe::STATE_NAMES): the rigid-body layout of [`aeroident_models::rigid_body`] in metres:
 //! `vt_mps, alpha_rad, beta_rad, phi_rad, theta_rad, psi_rad, p_rad_s, q_rad_s, r_rad_s,
 //! north_m, east_m, alt_m` (altitude up). Controls
-//! [`aeroident_models::aircraft::CONTROL_NAMES`]: engine command (per [`Propulsion`]),
+//! [`aeroident_models::aircraft::CONTROL_NAMES`]: engine command (per [`Propulsion`](crate::airframe::Propulsion)),
 //! elevator, aileron, rudder, rad. Still air; no rotor momentum, no engine lag.
 
 mod files;

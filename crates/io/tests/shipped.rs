@@ -31,6 +31,7 @@ fn shipped_mappings_parse_and_map_what_their_records_are_for() {
         "px4-fixedwing.toml",
         "arduplane.toml",
         "arduplane-minimal.toml",
+        "uav_oat.toml",
     ] {
         assert!(maps.iter().any(|p| p.ends_with(want)), "{want} missing: {maps:?}");
     }
@@ -48,7 +49,8 @@ fn shipped_mappings_parse_and_map_what_their_records_are_for() {
             | "jsbsim_clean.toml"
             | "mavlink-aeroident.toml"
             | "px4-fixedwing.toml"
-            | "arduplane.toml" => {
+            | "arduplane.toml"
+            | "uav_oat.toml" => {
                 assert!(has_lateral, "{name}")
             }
             // Longitudinal records (and arduplane-minimal.toml, which has no surfaces): the

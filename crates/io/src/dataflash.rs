@@ -315,6 +315,11 @@ struct Decoder<'a> {
     fields_held: usize,
     row: Vec<f64>,
     flat: Vec<f64>,
+    /// What the log says of units: `UNIT` id → label, `MULT` id → multiplier, `FMTU` type →
+    /// (unit ids, multiplier ids), one id character per field of the type.
+    unit_labels: HashMap<u8, String>,
+    multipliers: HashMap<u8, f64>,
+    unit_ids: HashMap<u8, (Vec<u8>, Vec<u8>)>,
 }
 
 /// Decodes a DataFlash stream keeping what `filter` names; `file` names it in errors.
@@ -345,6 +350,9 @@ pub fn decode_dataflash<R: Read>(
         fields_held: 0,
         row: Vec::new(),
         flat: Vec::new(),
+        unit_labels: HashMap::new(),
+        multipliers: HashMap::new(),
+        unit_ids: HashMap::new(),
     };
     let mut skip_start: Option<u64> = None;
     let mut messages = 0usize;
@@ -399,14 +407,77 @@ pub fn decode_dataflash<R: Read>(
             "no DataFlash message found (no `A3 95` header with a known type)".into(),
         ));
     }
+    d.out.units = d.units();
     let Decoder { mut out, builders, .. } = d;
     out.add_topics(builders);
     Ok(out)
 }
 
 impl Decoder<'_> {
+    /// Keeps what a `UNIT` (id, label), `MULT` (id, multiplier) or `FMTU` (type, unit ids,
+    /// multiplier ids) message of type `ty` says; a message without those fields says nothing.
+    fn unit_message(&mut self, ty: u8, p: &[u8]) {
+        let f = &self.formats[&ty];
+        let name = f.name.as_str();
+        let get = |col: &str| f.fields.iter().find(|(c, _, _)| c == col).map(|&(_, k, o)| (k, o));
+        let num = |col: &str| get(col).map(|(k, o)| read_num(k, &p[o..o + size(k)]));
+        let txt = |col: &str| get(col).map(|(k, o)| text(&p[o..o + size(k)]));
+        match name {
+            "UNIT" => {
+                if let (Some(id), Some(label)) = (num("Id"), txt("Label")) {
+                    self.unit_labels.insert(id as u8, label);
+                }
+            }
+            "MULT" => {
+                if let (Some(id), Some(m)) = (num("Id"), num("Mult")) {
+                    self.multipliers.insert(id as u8, m);
+                }
+            }
+            _ => {
+                if let (Some(t), Some(u), Some(m)) =
+                    (num("FmtType"), txt("UnitIds"), txt("MultIds"))
+                {
+                    self.unit_ids.insert(t as u8, (u.into_bytes(), m.into_bytes()));
+                }
+            }
+        }
+    }
+
+    /// The units of every defined type's numeric fields that `FMTU` names with a `UNIT`
+    /// label, by type name then field. A multiplier is part of the unit only for a field whose
+    /// format character does not scale it already (`c`, `C`, `e`, `E`, `L` are read scaled, the
+    /// module doc): `"m ×0.01"` means raw × 0.01 is in metres.
+    fn units(&self) -> BTreeMap<String, BTreeMap<String, String>> {
+        let mut out: BTreeMap<String, BTreeMap<String, String>> = BTreeMap::new();
+        for (ty, (uids, mids)) in &self.unit_ids {
+            let Some(f) = self.formats.get(ty) else { continue };
+            for (i, (col, k, _)) in f.fields.iter().enumerate() {
+                let Some(label) = uids.get(i).and_then(|u| self.unit_labels.get(u)) else {
+                    continue;
+                };
+                let Kind::Num { scale, .. } = k else { continue };
+                let mult = mids.get(i).and_then(|m| self.multipliers.get(m)).copied();
+                let unit = match mult {
+                    // `MULT` values are logged as single floats (1e-3 reads 0.0010000000474…):
+                    // shown at single precision.
+                    Some(m) if *scale == 1.0 && m != 0.0 && m != 1.0 => {
+                        format!("{label} ×{:e}", m as f32)
+                    }
+                    _ => label.clone(),
+                };
+                if !unit.is_empty() {
+                    out.entry(f.name.clone()).or_default().insert(col.clone(), unit);
+                }
+            }
+        }
+        out
+    }
+
     /// A message of defined type `ty` (not `FMT`) at byte `at` with payload `p`.
     fn message(&mut self, ty: u8, p: &[u8], at: u64) -> Result<(), String> {
+        if matches!(self.formats[&ty].name.as_str(), "UNIT" | "MULT" | "FMTU") {
+            self.unit_message(ty, p);
+        }
         let f = &self.formats[&ty];
         let field = |i: usize| {
             let (_, k, o) = f.fields[i];

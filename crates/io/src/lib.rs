@@ -12,6 +12,7 @@ pub mod error;
 pub mod excitation;
 pub mod expression;
 pub mod flight_data;
+pub mod inspect;
 mod line_ends;
 pub mod log;
 pub mod log_contents;

@@ -42,7 +42,16 @@ pub struct TopicFilter {
     /// `None`: every topic and field. Otherwise topic name → fields kept (an empty set keeps
     /// the timestamps only, for an `[align] clock` topic).
     only: Option<BTreeMap<String, BTreeSet<String>>>,
+    /// Topics (by base name: without `[instance]` and `#layout`) kept with every field, on
+    /// top of `only`.
+    whole: BTreeSet<String>,
+    /// Keep the timestamps of every topic `only` and `whole` do not name (for a catalogue
+    /// with rates and gaps, [`TopicFilter::times_and`]).
+    every_topic_times: bool,
 }
+
+/// The field set of a topic kept for its timestamps only.
+static NO_FIELDS: BTreeSet<String> = BTreeSet::new();
 
 impl TopicFilter {
     /// Keeps every topic and field.
@@ -66,7 +75,22 @@ impl TopicFilter {
         for t in clock_topics {
             only.entry(t.strip_suffix("[0]").unwrap_or(t).to_string()).or_default();
         }
-        Self { only: Some(only) }
+        Self { only: Some(only), ..Self::default() }
+    }
+
+    /// Keeps the timestamps of every topic (8 bytes a message: what rates and gaps need), the
+    /// `<topic>.<field>` `columns` named, and every field of the topics in `whole` (base names,
+    /// `actuator_outputs` keeps `actuator_outputs[1]` too). For `aeroident inspect`: the
+    /// values of a log are not held, only those of the channels asked for.
+    pub fn times_and<'a>(
+        columns: impl IntoIterator<Item = &'a str>,
+        whole: impl IntoIterator<Item = &'a str>,
+    ) -> Self {
+        Self {
+            whole: whole.into_iter().map(str::to_string).collect(),
+            every_topic_times: true,
+            ..Self::columns(columns, [])
+        }
     }
 
     /// The columns `mapping` reads from a log ([`crate::multirate::needed_columns`]: channels,
@@ -83,11 +107,25 @@ impl TopicFilter {
     /// Is topic `name` kept, and which fields: `None` not kept, `Some(None)` every field,
     /// `Some(Some(set))` the fields in `set`.
     pub(crate) fn topic(&self, name: &str) -> Option<Option<&BTreeSet<String>>> {
+        if self.whole.contains(base_topic(name)) {
+            return Some(None);
+        }
         match &self.only {
             None => Some(None),
-            Some(m) => m.get(name).map(Some),
+            Some(m) => match m.get(name) {
+                Some(set) => Some(Some(set)),
+                None if self.every_topic_times => Some(Some(&NO_FIELDS)),
+                None => None,
+            },
         }
     }
+}
+
+/// A topic's name without its `[instance]` and `#layout` suffixes (`XKF1[1]#2` → `XKF1`): the
+/// message type it was defined as.
+pub fn base_topic(name: &str) -> &str {
+    let end = name.find(['[', '#']).unwrap_or(name.len());
+    &name[..end]
 }
 
 /// One topic of a log as read: its name, every field it has and how many messages it had,
@@ -112,6 +150,10 @@ pub struct LogContents {
     pub catalogue: Vec<TopicInfo>,
     /// Parameters by name, as logged (the last value of a parameter changed in flight).
     pub parameters: BTreeMap<String, f64>,
+    /// Units of fields as the log states them (DataFlash `FMTU` with `UNIT` and `MULT`): message
+    /// type name (no instance suffix) → field → unit label. Empty for a format that states
+    /// none (ULog).
+    pub units: BTreeMap<String, BTreeMap<String, String>>,
     /// Samples left out because their timestamp broke the topic's increasing order (module
     /// doc): topic name → count. Kept topics only.
     pub dropped: BTreeMap<String, usize>,

@@ -14,6 +14,7 @@
 //! - [`poc`]: the thesis's proof-of-concept systems; [`sim`]: open-loop F-16 simulation.
 //! - [`export`]: input design and the JSBSim `<aerodynamics>` export.
 //! - [`freqresp`]: frequency responses (composite windows, coherence) and transfer-function fits.
+//! - [`inspect`]: what a log holds and its candidate manoeuvres (`aeroident inspect`).
 //! - [`record`]: the record stage below every job (read → map → screen → correct → window →
 //!   manoeuvres), with its own error type.
 //! - [`condition`]: the conditioning stage every pipeline shares (derivatives, alignment);
@@ -30,6 +31,7 @@ pub mod error;
 pub mod estimators;
 pub mod export;
 pub mod freqresp;
+pub mod inspect;
 pub mod job;
 /// Convergence-time and error metrics of estimate histories.
 pub mod metrics;

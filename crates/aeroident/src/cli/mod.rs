@@ -8,6 +8,7 @@ pub mod design;
 pub mod export;
 pub mod f16;
 pub mod freqresp;
+pub mod inspect;
 pub mod linearize;
 pub mod montecarlo;
 pub mod poc;
@@ -45,6 +46,9 @@ pub enum Command {
     /// Frequency responses of a sweep or chirp record (composite windows, coherence, random
     /// error) and low-order transfer-function fits.
     Freqresp(freqresp::FreqRespArgs),
+    /// Look at a log before mapping it: topics, fields, units, rates, gaps, parameters and
+    /// candidate manoeuvres as `--window` arguments; `--plot` draws raw channels.
+    Inspect(inspect::InspectArgs),
     /// Design an orthogonal multisine input and predict its Cramér–Rao σ before flight.
     Design(design::DesignArgs),
     /// Trim any aircraft wings-level (the F-16, or a model file flying identified
@@ -93,6 +97,7 @@ impl Cli {
             Command::Design(a) => design::execute(a),
             Command::Linearize(a) => linearize::execute(a),
             Command::Freqresp(a) => freqresp::execute(a),
+            Command::Inspect(a) => inspect::execute(a),
         }
     }
 }

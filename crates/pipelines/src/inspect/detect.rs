@@ -3,8 +3,10 @@
 //!
 //! # The rule ([`DetectionRule`], defaults in brackets)
 //!
-//! 1. **Slow trend out.** The trend is the centred moving mean over `trend_s` [20 s]; the
-//!    detector works on the deviation from it. Trim changes, a phugoid (periods of 10–60 s)
+//! 1. **Slow trend out.** The trend is the centred moving straight-line fit over `trend_s`
+//!    [20 s] (a moving mean in the record's middle; at its ends, where the window is
+//!    one-sided, the line follows a drift that a mean would lag); the detector works on the
+//!    deviation from it. Trim changes, a phugoid (periods of 10–60 s)
 //!    and a pilot's slow corrections live below ~0.05 Hz; the inputs that excite the short
 //!    period and Dutch roll (0.2–5 Hz: 1–3 Hz on a small UAV, 0.3–1 Hz on a transport) and a
 //!    3-2-1-1 or doublet built on them (pulses of 0.3–3 s) pass. A 20 s mean removes a slow
@@ -148,7 +150,7 @@ pub fn detect(
     if t.len() < MIN_SAMPLES {
         return out;
     }
-    let trend = moving_mean(&t, &v, rule.trend_s);
+    let trend = moving_line(&t, &v, rule.trend_s);
     let dev: Vec<f64> = v.iter().zip(&trend).map(|(v, m)| v - m).collect();
     let sq: Vec<f64> = dev.iter().map(|d| d * d).collect();
     let rms: Vec<f64> =
@@ -180,10 +182,32 @@ fn threshold(v: &[f64], quiet: f64, rule: &DetectionRule) -> f64 {
         .filter(|d| *d > 0.0)
         .fold(f64::INFINITY, f64::min);
     let step = if step.is_finite() { step } else { 0.0 };
+    // The last floor is round-off: a channel that never changes deviates from its fitted
+    // trend by rounding alone.
+    let size = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     (rule.threshold_ratio * quiet)
         .min(rule.cap_fraction * range)
         .max(rule.range_fraction * range)
         .max(3.0 * step)
+        .max(1e-9 * size)
+}
+
+/// The centred moving straight-line fit of `v` over `width_s` of time `t` (one-sided at the
+/// ends), evaluated at each sample, by prefix sums: O(n). Times are taken from the first so
+/// that the sums of squares keep their precision.
+fn moving_line(t: &[f64], v: &[f64], width_s: f64) -> Vec<f64> {
+    let t: Vec<f64> = t.iter().map(|x| x - t[0]).collect();
+    let tt: Vec<f64> = t.iter().map(|x| x * x).collect();
+    let tv: Vec<f64> = t.iter().zip(v).map(|(a, b)| a * b).collect();
+    let (m_t, m_v) = (moving_mean(&t, &t, width_s), moving_mean(&t, v, width_s));
+    let (m_tt, m_tv) = (moving_mean(&t, &tt, width_s), moving_mean(&t, &tv, width_s));
+    (0..t.len())
+        .map(|k| {
+            let var = m_tt[k] - m_t[k] * m_t[k];
+            let slope = if var > 1e-12 { (m_tv[k] - m_t[k] * m_v[k]) / var } else { 0.0 };
+            m_v[k] + slope * (t[k] - m_t[k])
+        })
+        .collect()
 }
 
 /// The centred moving mean of `v` over `width_s` of time `t` (one-sided at the ends), by

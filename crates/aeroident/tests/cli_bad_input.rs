@@ -306,15 +306,22 @@ fn exit_a_window_with_a_negative_start_is_a_value() {
             .collect();
         Cli::try_parse_args(args).unwrap_or_else(|e| panic!("{cmd:?}: {e}")).command
     };
+    use aeroident::cli::auto_window::WindowSpec;
+    let spans = |specs: &[WindowSpec]| -> Vec<(f64, f64)> {
+        specs
+            .iter()
+            .map(|s| match s {
+                WindowSpec::Span(w) => (w.start_s, w.end_s),
+                WindowSpec::Auto => panic!("{specs:?}"),
+            })
+            .collect()
+    };
     match window(&["replay", "r.csv", "--map", "m.toml"]) {
-        Command::Replay(a) => {
-            let w: Vec<(f64, f64)> = a.windows.iter().map(|w| (w.start_s, w.end_s)).collect();
-            assert_eq!(w, [(-10.0, 5.0), (-2.5, -1.0)]);
-        }
+        Command::Replay(a) => assert_eq!(spans(&a.window_specs), [(-10.0, 5.0), (-2.5, -1.0)]),
         c => panic!("{c:?}"),
     }
     match window(&["compat", "r.csv", "--map", "m.toml"]) {
-        Command::Compat(a) => assert_eq!((a.windows[0].start_s, a.windows[1].end_s), (-10.0, -1.0)),
+        Command::Compat(a) => assert_eq!(spans(&a.windows), [(-10.0, 5.0), (-2.5, -1.0)]),
         c => panic!("{c:?}"),
     }
     match window(&["freqresp", "r.csv", "--map", "m.toml", "--input", "de", "--output", "q"]) {

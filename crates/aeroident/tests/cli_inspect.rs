@@ -269,3 +269,44 @@ fn dataflash_without_surfaces_says_how_to_name_one() {
     assert!(stdout.contains("--map MAPPING.toml"));
     assert!(stdout.contains("SERVO2_FUNCTION = 19"));
 }
+
+/// A mapping of the synthetic record: `elevator_deg` is `de` (the constants only make it a
+/// valid mapping).
+const RECORD_MAPPING: &str = r#"
+[time]
+column = "time_s"
+unit = "s"
+[channels]
+vt = { value = 20.0, unit = "m/s" }
+alpha = { column = "q", unit = "rad" }
+de = { column = "elevator_deg", unit = "deg" }
+rho = { value = 1.2, unit = "kg/m3" }
+mass = { value = 3.0, unit = "kg" }
+S = { value = 0.4, unit = "m2" }
+"#;
+
+/// `--window auto` of replay and compat: the windows are the manoeuvres found, each holding
+/// an input the record has; `auto` beside a span, with stdin or with `--and` is refused.
+#[test]
+fn window_auto_resolves_to_windows_holding_the_inputs() {
+    use aeroident::cli::auto_window::{WindowSpec, parse, resolve};
+    let data = record();
+    let d = data.to_str().unwrap();
+    let mapping = aeroident_io::Mapping::from_toml_str(RECORD_MAPPING, "m.toml").unwrap();
+    let w = resolve(&[parse("auto").unwrap()], d, None, &mapping, false).unwrap();
+    assert_eq!(w.len(), 2, "{w:?}");
+    for (w, (t0, t1)) in w.iter().zip([(30.0, 32.0), (60.0, 63.5)]) {
+        assert!(w.start_s <= t0 && w.end_s >= t1, "{w:?}");
+        assert!((w.start_s * 100.0).fract().abs() < 1e-6, "rounded to 0.01 s: {w:?}");
+    }
+    let span = parse("1:2").unwrap();
+    assert!(matches!(span, WindowSpec::Span(_)));
+    let e = |specs: &[WindowSpec], data: &str, more: bool| {
+        resolve(specs, data, None, &mapping, more).unwrap_err().to_string()
+    };
+    assert!(e(&[WindowSpec::Auto, span], d, false).contains("give `auto` once"));
+    assert!(e(&[WindowSpec::Auto], "-", false).contains("give a file"));
+    assert!(e(&[WindowSpec::Auto], d, true).contains("with --and"));
+    assert!(parse("soon").unwrap_err().contains("or `auto`"));
+    std::fs::remove_file(&data).ok();
+}

@@ -2,7 +2,7 @@
 //! attitudes and air data consistent, and with which biases, scale factors and time shifts).
 //!
 //! ```text
-//! aeroident compat <log> --map <map.toml> [--format …] [--out DIR] [--window START:END …]
+//! aeroident compat <log> --map <map.toml> [--format …] [--out DIR] [--window START:END … | auto]
 //!                  [--and <more> …] [--no-time-shifts] [--gyro-time-shifts]
 //!                  [--inertial-scale-factors] [--max-iterations N]
 //! ```
@@ -34,10 +34,11 @@ pub struct CompatArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// A time window `START:END` (record seconds) to check, as `replay --window` fits it;
-    /// repeat it for several manoeuvres. Default: the whole record (taxi and ground runs
-    /// included: give the fit's windows to check the data the fit uses).
-    #[arg(long = "window", value_name = "START:END", value_parser = TimeWindow::parse, allow_hyphen_values = true)]
-    pub windows: Vec<TimeWindow>,
+    /// repeat it for several manoeuvres; or `auto`, the manoeuvres `aeroident inspect` finds
+    /// on the mapping's surfaces. Default: the whole record (taxi and ground runs included:
+    /// give the fit's windows to check the data the fit uses).
+    #[arg(long = "window", value_name = "START:END|auto", value_parser = super::auto_window::parse, allow_hyphen_values = true)]
+    pub windows: Vec<super::auto_window::WindowSpec>,
     /// A further record of the same aircraft (same mapping and format), checked jointly with
     /// the first (one set of corrections per flight), as `replay --and` fits it.
     #[arg(long = "and", value_name = "FILE")]
@@ -97,7 +98,14 @@ pub fn execute(args: CompatArgs) -> anyhow::Result<()> {
         args.out.as_deref(),
         &inputs,
     )?;
-    let (format, windows) = (args.format, args.windows.clone());
+    let windows = super::auto_window::resolve(
+        &args.windows,
+        &args.data,
+        args.format,
+        &mapping,
+        !args.and.is_empty(),
+    )?;
+    let format = args.format;
     let (summary, result) = run.run(move || check(&files, format, &mapping, &windows, &config))?;
     // The files first: a console reader that has gone away (`| head`) must not cost them.
     let wrote = match (run.writing(), &args.out) {

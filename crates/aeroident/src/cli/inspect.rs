@@ -11,6 +11,8 @@
 
 mod render;
 
+pub use render::{ceil2, floor2};
+
 use aeroident_io::LogFormat;
 use aeroident_io::inspect::{InspectOptions, Signal};
 use aeroident_io::mapping::Mapping;

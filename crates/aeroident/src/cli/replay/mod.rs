@@ -10,7 +10,7 @@
 //!                  [--forgetting λ] [--instrument-delay N]
 //!                  [--derivatives auto|differentiate] [--diff-window N] [--realtime]
 //!                  [--validate-on <data2.csv>] [--validate-window START:END …]
-//!                  [--window START:END …] [--and <more.csv> …]
+//!                  [--window START:END … | --window auto] [--and <more.csv> …]
 //!                  [--cross-check] [--no-spike-screen] [--robust]
 //! ```
 //! Writes `<dir>/estimates.csv`, `<dir>/summary.json`, `<dir>/estimates.{png,svg}` (estimates
@@ -150,9 +150,13 @@ pub struct ReplayArgs {
     #[arg(long)]
     pub realtime: bool,
     /// A time window `START:END` (record seconds) of the record to use; repeat it for several
-    /// manoeuvres of one flight, each window its own manoeuvre (own initial state). Default:
-    /// the whole record.
-    #[arg(long = "window", value_name = "START:END", value_parser = parse_window, allow_hyphen_values = true)]
+    /// manoeuvres of one flight, each window its own manoeuvre (own initial state). Or `auto`:
+    /// the manoeuvres `aeroident inspect` finds on the mapping's surfaces (docs/inspect.md),
+    /// printed as the windows chosen. Default: the whole record.
+    #[arg(long = "window", value_name = "START:END|auto", value_parser = super::auto_window::parse, allow_hyphen_values = true)]
+    pub window_specs: Vec<super::auto_window::WindowSpec>,
+    /// The time windows used: `--window`'s, with `auto` resolved by [`execute`].
+    #[arg(skip)]
     pub windows: Vec<TimeWindow>,
     /// `--estimator oe | fem`: a further record of the same aircraft (same mapping and
     /// format), fitted together with the first, each file a manoeuvre of its own; repeat it
@@ -305,8 +309,15 @@ fn parse_band(text: &str) -> Result<(f64, f64), String> {
 /// # Errors
 /// Mapping, model-file or data errors (naming file, row or line, and column or key),
 /// estimator errors (not available, bad option, diverged), and output I/O errors.
-pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
+pub fn execute(mut args: ReplayArgs) -> anyhow::Result<()> {
     let mapping = Mapping::from_path(&args.map)?;
+    args.windows = super::auto_window::resolve(
+        &args.window_specs,
+        &args.data,
+        args.format,
+        &mapping,
+        !args.and.is_empty(),
+    )?;
     let mavlink = crate::live::is_mavlink(&args.data);
     let live = args.data == "-" || mavlink;
     check_combination(&args, mavlink)?;

@@ -1,5 +1,6 @@
-//! What a log holds, before any mapping is written (`aeroident inspect`): its topics (or
-//! columns) with their fields and units, per topic the sample count, time span, rate and gaps,
+//! What a log holds, before any mapping is written (`aeroident inspect`) — CSV, `.asc`, `.mat`,
+//! ULog, DataFlash, and MAVLink telemetry `.tlog` ([`crate::tlog`], by its extension): its
+//! topics (or columns) with their fields and units, per topic the sample count, time span, rate and gaps,
 //! the parameters of a ULog or DataFlash log, and the values of the few channels asked for
 //! (the surfaces the manoeuvre detector reads, the channels a plot draws).
 //!
@@ -153,7 +154,7 @@ pub struct TimeColumn {
 pub struct LogSummary {
     /// The file as given.
     pub file: String,
-    /// Its format ([`LogFormat::name`]).
+    /// Its format ([`LogFormat::name`], or `tlog`).
     pub format: String,
     /// A table's time column; `None` for a multi-rate log (each topic has its timestamps).
     pub time_column: Option<TimeColumn>,
@@ -232,8 +233,16 @@ pub fn inspect_log(path: &str, options: &InspectOptions) -> Result<Inspection, F
         .format
         .or_else(|| LogFormat::from_extension(Path::new(path)))
         .unwrap_or(LogFormat::Csv);
+    let tlog = options.format.is_none()
+        && Path::new(path).extension().is_some_and(|e| e.eq_ignore_ascii_case("tlog"));
     let inspection = match format {
-        LogFormat::Ulog | LogFormat::Dataflash => inspect_multirate(path, format, options)?,
+        _ if tlog => inspect_multirate(path, "tlog", options, crate::tlog::read_tlog_filtered)?,
+        LogFormat::Ulog => inspect_multirate(path, format.name(), options, |p, f| {
+            crate::ulog::read_ulog_filtered(p, f).map(|c| (c, None))
+        })?,
+        LogFormat::Dataflash => inspect_multirate(path, format.name(), options, |p, f| {
+            crate::dataflash::read_dataflash_filtered(p, f).map(|c| (c, None))
+        })?,
         _ => text::inspect_table(path, format, options)?,
     };
     for c in &options.keep {
@@ -277,17 +286,19 @@ fn no_channel(summary: &LogSummary, c: &str) -> String {
     }
 }
 
-/// A ULog or DataFlash log: streamed, keeping every topic's timestamps and the values of
-/// `options.keep`, the mapping's surface columns and the known actuator topics.
+/// A ULog, DataFlash or `.tlog` log (`format` its name), read by `read` streaming, keeping
+/// every topic's timestamps and the values of `options.keep`, the mapping's surface columns
+/// and the known actuator topics; `read` also returns a note of its own, if any.
 fn inspect_multirate(
     path: &str,
-    format: LogFormat,
+    format: &str,
     options: &InspectOptions,
+    read: impl FnOnce(&Path, &TopicFilter) -> Result<(LogContents, Option<String>), FlightDataError>,
 ) -> Result<Inspection, FlightDataError> {
     if path == "-" {
         return Err(FlightDataError::Format {
             file: path.to_string(),
-            message: format!("a {} log is read from a file, not from stdin", format.name()),
+            message: format!("a {format} log is read from a file, not from stdin"),
         });
     }
     let mut keep = options.keep.clone();
@@ -298,11 +309,9 @@ fn inspect_multirate(
         keep.iter().map(String::as_str),
         surfaces::KNOWN_SURFACE_TOPICS.iter().copied(),
     );
-    let contents = match format {
-        LogFormat::Ulog => crate::ulog::read_ulog_filtered(Path::new(path), &filter)?,
-        _ => crate::dataflash::read_dataflash_filtered(Path::new(path), &filter)?,
-    };
-    let summary = multirate_summary(path, format, &contents);
+    let (contents, note) = read(Path::new(path), &filter)?;
+    let mut summary = multirate_summary(path, format, &contents);
+    summary.notes.extend(note);
     let surfaces = surfaces::choose(&summary, options.mapping);
     keep.extend(surfaces.iter().map(|s| s.column.clone()));
     let signals = multirate_signals(contents, &keep, &summary);
@@ -310,7 +319,7 @@ fn inspect_multirate(
 }
 
 /// The summary of a multi-rate log's contents (every topic's timestamps kept).
-fn multirate_summary(path: &str, format: LogFormat, contents: &LogContents) -> LogSummary {
+fn multirate_summary(path: &str, format: &str, contents: &LogContents) -> LogSummary {
     let by_name: HashMap<&str, usize> =
         contents.topics.iter().enumerate().map(|(i, t)| (t.name.as_str(), i)).collect();
     let topics = contents
@@ -331,7 +340,7 @@ fn multirate_summary(path: &str, format: LogFormat, contents: &LogContents) -> L
         .collect();
     LogSummary {
         file: path.to_string(),
-        format: format.name().to_string(),
+        format: format.to_string(),
         time_column: None,
         gap_multiple: GAP_MULTIPLE,
         topics,

@@ -28,6 +28,7 @@ pub mod rejection_log;
 pub mod replay_output;
 pub mod table;
 pub mod thrust_model;
+pub mod tlog;
 pub mod ulog;
 pub mod units;
 pub mod warning;

@@ -180,6 +180,13 @@ fn errors_not_a_log_names_the_file_and_byte() {
         .to_string();
     std::fs::remove_file(&path).ok();
     assert!(e.contains("garbage.bin: byte 0: no DataFlash message"), "{e}");
+    let path = temp("garbage.tlog");
+    std::fs::write(&path, b"no MAVLink here either, just text").unwrap();
+    let e = inspect_log(&path.display().to_string(), &InspectOptions::default())
+        .unwrap_err()
+        .to_string();
+    std::fs::remove_file(&path).ok();
+    assert!(e.contains("garbage.tlog: byte 0: no MAVLink telemetry record found"), "{e}");
 }
 
 /// One inventory line: name, count, mean rate, fields (ULog) or format and columns
@@ -316,4 +323,75 @@ fn dataflash_types_counts_rates_fields_and_units_match_pymavlink() {
     assert_eq!(unit("GPS", "Spd").as_deref(), Some("m/s"));
     assert_eq!(ins.summary.parameters.get("SERVO2_FUNCTION"), Some(&19.0));
     assert!(ins.surfaces.is_empty(), "the log has no AETR, RCOU or SIDD: {:?}", ins.surfaces);
+}
+
+/// One `.tlog` record: the big-endian µs timestamp and the frame the `mavlink` crate writes.
+fn tlog_record(
+    out: &mut Vec<u8>,
+    t_us: u64,
+    version: mavlink::MavlinkVersion,
+    msg: &mavlink::dialects::ardupilotmega::MavMessage,
+) {
+    out.extend(t_us.to_be_bytes());
+    mavlink::write_versioned_msg(out, version, mavlink::MavHeader::default(), msg).unwrap();
+}
+
+/// A MAVLink telemetry log written with the `mavlink` crate's own encoder: `ATTITUDE` at 50 Hz
+/// (v2 frames) with a 0.5 s hole, `SERVO_OUTPUT_RAW` at 10 Hz (v1 frames) whose `servo2_raw`
+/// is the elevator by `SERVO2_FUNCTION = 19` in a `PARAM_VALUE`, and six corrupt bytes: the
+/// counts, the gap, ATTITUDE's fields as the MAVLink definition has them, the parameter, the
+/// surface and the skipped bytes are what was written.
+#[test]
+fn tlog_topics_times_fields_parameters_and_corrupt_bytes_are_as_written() {
+    use mavlink::MavlinkVersion::{V1, V2};
+    use mavlink::dialects::ardupilotmega::{
+        ATTITUDE_DATA, MavMessage, PARAM_VALUE_DATA, SERVO_OUTPUT_RAW_DATA,
+    };
+    let mut b = Vec::new();
+    let t0 = 1_700_000_000_000_000u64;
+    let param = PARAM_VALUE_DATA {
+        param_id: "SERVO2_FUNCTION".into(),
+        param_value: 19.0,
+        ..Default::default()
+    };
+    tlog_record(&mut b, t0, V2, &MavMessage::PARAM_VALUE(param));
+    let kept: Vec<u64> = (0..500).filter(|k| !(200..225).contains(k)).collect();
+    let mut garbage_at = 0;
+    for &k in &kept {
+        let t = t0 + 1000 + k * 20_000;
+        let att = ATTITUDE_DATA { time_boot_ms: k as u32 * 20, roll: 0.1, ..Default::default() };
+        tlog_record(&mut b, t, V2, &MavMessage::ATTITUDE(att));
+        if k % 5 == 0 {
+            let raw =
+                SERVO_OUTPUT_RAW_DATA { servo2_raw: 1500 + (k % 2) as u16, ..Default::default() };
+            tlog_record(&mut b, t + 10, V1, &MavMessage::SERVO_OUTPUT_RAW(raw));
+        }
+        if k == 300 {
+            garbage_at = b.len();
+            b.extend([0x00, 0x11, 0x22, 0x33, 0x44, 0x55]);
+        }
+    }
+    let path = temp("link.tlog");
+    std::fs::write(&path, &b).unwrap();
+    let ins = inspect(&path, &["ATTITUDE.roll"]);
+    std::fs::remove_file(&path).ok();
+    assert_eq!(ins.summary.format, "tlog");
+    let att = ins.summary.topics.iter().find(|t| t.name == "ATTITUDE").unwrap();
+    let fields: Vec<&str> = att.fields.iter().map(|f| f.name.as_str()).collect();
+    assert_eq!(
+        fields,
+        ["pitch", "pitchspeed", "roll", "rollspeed", "time_boot_ms", "yaw", "yawspeed"]
+    );
+    assert_eq!(att.time.samples, kept.len());
+    assert!((att.time.longest_gap_s.unwrap() - 0.52).abs() < 1e-6, "{:?}", att.time);
+    assert_eq!(att.time.gaps, 1);
+    let servo = ins.summary.topics.iter().find(|t| t.name == "SERVO_OUTPUT_RAW").unwrap();
+    assert_eq!(servo.time.samples, kept.iter().filter(|k| *k % 5 == 0).count());
+    assert_eq!(ins.summary.parameters.get("SERVO2_FUNCTION"), Some(&19.0));
+    assert_eq!(ins.surfaces.len(), 1);
+    assert_eq!(ins.surfaces[0].column, "SERVO_OUTPUT_RAW.servo2_raw");
+    let notes = ins.summary.notes.join("\n");
+    assert!(notes.contains(&format!("byte {garbage_at}: 6 corrupt bytes skipped")), "{notes}");
+    let roll = ins.signals.iter().find(|s| s.column == "ATTITUDE.roll").unwrap();
+    assert!(roll.values.iter().all(|v| (*v - 0.1).abs() < 1e-7));
 }

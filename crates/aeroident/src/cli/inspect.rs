@@ -27,7 +27,8 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, clap::Args)]
 pub struct InspectArgs {
     /// The log: CSV (one header row), whitespace `.asc`, MATLAB `.mat`, PX4 ULog `.ulg`,
-    /// ArduPilot DataFlash `.bin`; `-` for a CSV (or `--format asc`) on stdin.
+    /// ArduPilot DataFlash `.bin`, MAVLink telemetry `.tlog` (by its extension); `-` for a CSV
+    /// (or `--format asc`) on stdin.
     pub data: String,
     /// Log format (csv, asc, mat, ulog, dataflash); default: by the file's extension, else CSV.
     #[arg(long)]

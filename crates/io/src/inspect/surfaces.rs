@@ -12,7 +12,8 @@
 //!    (PX4 ≥ 1.14); ArduPilot `AETR` `Ail`/`Elev`/`Rudd` (normalised outputs, ±4500), its
 //!    `SIDD.Targ` (the SYSID mode's waveform), and — when the log has no `AETR` — the `RCOU`
 //!    channels whose `SERVOn_FUNCTION` is a surface (4 aileron, 19 elevator, 21 rudder, 24/25
-//!    flaperon, 77/78 elevon, 79/80 V-tail).
+//!    flaperon, 77/78 elevon, 79/80 V-tail); in a MAVLink `.tlog`, the `SERVO_OUTPUT_RAW`
+//!    `servoN_raw` by the same parameters.
 //!
 //! PX4's `actuator_outputs` are not used unmapped: which output drives which surface is in the
 //! airframe's mixer, not in the log, and a motor output would read as a manoeuvre.
@@ -24,8 +25,15 @@ use serde::Serialize;
 
 /// Topics kept whole by `inspect` (small: a few fields at the control rate) because they may
 /// hold the surfaces.
-pub const KNOWN_SURFACE_TOPICS: [&str; 6] =
-    ["actuator_controls_0", "actuator_controls_1", "actuator_servos", "AETR", "RCOU", "SIDD"];
+pub const KNOWN_SURFACE_TOPICS: [&str; 7] = [
+    "actuator_controls_0",
+    "actuator_controls_1",
+    "actuator_servos",
+    "AETR",
+    "RCOU",
+    "SIDD",
+    "SERVO_OUTPUT_RAW",
+];
 
 /// ArduPilot `SERVOn_FUNCTION` values of surfaces and what they drive.
 const SERVO_FUNCTIONS: [(f64, &str); 9] = [
@@ -142,6 +150,11 @@ pub fn known_surfaces(summary: &LogSummary) -> Vec<Surface> {
             "RCOU" if !has_aetr => {
                 for (n, role) in servo_surfaces(summary) {
                     add(&format!("C{n}"), role.to_string());
+                }
+            }
+            "SERVO_OUTPUT_RAW" => {
+                for (n, role) in servo_surfaces(summary) {
+                    add(&format!("servo{n}_raw"), role.to_string());
                 }
             }
             _ => {}

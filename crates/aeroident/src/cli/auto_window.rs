@@ -53,17 +53,7 @@ pub fn resolve(
     if spans.len() == specs.len() {
         return Ok(spans);
     }
-    if specs.len() > 1 {
-        bail!("option `--window`: give `auto` once, and not beside START:END windows");
-    }
-    if data == "-" || crate::live::is_mavlink(data) {
-        bail!("--window auto reads the record twice (to find the manoeuvres first): give a file");
-    }
-    if more_records {
-        bail!(
-            "--window auto finds the manoeuvres of one record: with --and, give START:END windows"
-        );
-    }
+    check_auto(specs, data, more_records)?;
     let options = InspectOptions { format, mapping: Some(mapping), keep: Vec::new() };
     let outcome = inspect(data, &options, &DetectionRule::default())?;
     let report = &outcome.report;
@@ -98,4 +88,20 @@ pub fn resolve(
         args.join(" ")
     );
     Ok(windows)
+}
+
+/// `auto` goes alone, on a file, for one record.
+fn check_auto(specs: &[WindowSpec], data: &str, more_records: bool) -> anyhow::Result<()> {
+    if specs.len() > 1 {
+        bail!("option `--window`: give `auto` once, and not beside START:END windows");
+    }
+    if data == "-" || crate::live::is_mavlink(data) {
+        bail!("--window auto reads the record twice (to find the manoeuvres first): give a file");
+    }
+    if more_records {
+        bail!(
+            "--window auto finds the manoeuvres of one record: with --and, give START:END windows"
+        );
+    }
+    Ok(())
 }

@@ -24,8 +24,9 @@ fn temp(name: &str) -> PathBuf {
 }
 
 /// A 50 Hz record of 100 s: a doublet (±3°, 1 s halves) from 30 s and a 3-2-1-1 (±2°, 0.5 s
-/// unit) from 60 s on `elevator_deg`, small noise, and a `q` column.
-fn record() -> PathBuf {
+/// unit) from 60 s on `elevator_deg`, small noise, and a `q` column; in a file of its own
+/// for each test (`tag`: tests run in parallel).
+fn record(tag: &str) -> PathBuf {
     let mut text = String::from("time_s,elevator_deg,q\n");
     for k in 0..5000u64 {
         let t = k as f64 * 0.02;
@@ -44,7 +45,7 @@ fn record() -> PathBuf {
         let noise = 0.02 * (((k * 7919) % 97) as f64 / 48.5 - 1.0);
         text += &format!("{t},{},{}\n", -1.0 + doublet + multistep + noise, 0.1 * t.sin());
     }
-    let p = temp("record.csv");
+    let p = temp(&format!("{tag}.csv"));
     std::fs::write(&p, text).unwrap();
     p
 }
@@ -117,7 +118,7 @@ fn sorted<const N: usize>(mut k: [&'static str; N]) -> Vec<&'static str> {
 
 #[test]
 fn windows_printed_hold_the_inputs_and_the_json_has_the_documented_keys() {
-    let (data, json) = (record(), temp("out.json"));
+    let (data, json) = (record("r1"), temp("out.json"));
     let o = run(&[data.to_str().unwrap(), "--json", json.to_str().unwrap()]);
     let stdout = String::from_utf8_lossy(&o.stdout).to_string();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -147,7 +148,7 @@ fn windows_printed_hold_the_inputs_and_the_json_has_the_documented_keys() {
 
 #[test]
 fn plots_are_written_as_svg_and_png() {
-    let data = record();
+    let data = record("r2");
     for (ext, magic) in [("svg", &b"<svg"[..]), ("png", &b"\x89PNG"[..])] {
         let out = temp(&format!("plot.{ext}"));
         let o = run(&[
@@ -178,7 +179,7 @@ fn plots_are_written_as_svg_and_png() {
 
 #[test]
 fn errors_bad_arguments_and_input_are_named() {
-    let data = record();
+    let data = record("r3");
     let d = data.to_str().unwrap();
     let err = |args: &[&str]| {
         let o = run(args);
@@ -189,7 +190,7 @@ fn errors_bad_arguments_and_input_are_named() {
     assert!(err(&[d, "--plot", "q", "--out", "x.pdf"]).contains(".svg or .png"));
     assert!(err(&[d, "--window", "1:2"]).contains("--window is the time span of a plot"));
     let e = err(&[d, "--plot", "nope", "--out", "x.svg"]);
-    assert!(e.contains("record.csv: no column `nope` (columns: time_s, elevator_deg, q)"), "{e}");
+    assert!(e.contains(".csv: no column `nope` (columns: time_s, elevator_deg, q)"), "{e}");
     let e = err(&[d, "--plot", "q", "--window", "500:600", "--out", "x.svg"]);
     assert!(e.contains("channel `q` has no sample in it"), "{e}");
     assert!(err(&["/nonexistent/log.ulg"]).contains("/nonexistent/log.ulg"));
@@ -290,7 +291,7 @@ S = { value = 0.4, unit = "m2" }
 #[test]
 fn window_auto_resolves_to_windows_holding_the_inputs() {
     use aeroident::cli::auto_window::{WindowSpec, parse, resolve};
-    let data = record();
+    let data = record("r4");
     let d = data.to_str().unwrap();
     let mapping = aeroident_io::Mapping::from_toml_str(RECORD_MAPPING, "m.toml").unwrap();
     let w = resolve(&[parse("auto").unwrap()], d, None, &mapping, false).unwrap();

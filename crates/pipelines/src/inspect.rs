@@ -21,7 +21,8 @@ pub struct InspectReport {
     pub log: LogSummary,
     /// The surface channels read by the detector.
     pub surfaces: Vec<Surface>,
-    /// When no surface is known: how to name one.
+    /// When no surface is known: how to name one; when some surfaces (a mapping's) are not
+    /// in the log: which.
     pub surface_hint: Option<String>,
     /// The thresholds the detector used.
     pub detection_rule: DetectionRule,
@@ -57,7 +58,19 @@ pub fn inspect(
             Some(detect::detect(&s.column, &sig.t_s, &sig.values, rule))
         })
         .collect();
-    let surface_hint = ins.surfaces.is_empty().then(|| no_surface_hint(&ins.summary));
+    let missing: Vec<String> = ins
+        .surfaces
+        .iter()
+        .filter(|s| !ins.signals.iter().any(|g| g.column == s.column))
+        .map(|s| format!("`{}` ({})", s.column, s.role))
+        .collect();
+    let surface_hint = match (ins.surfaces.is_empty(), missing.is_empty()) {
+        (true, _) => Some(no_surface_hint(&ins.summary)),
+        (false, false) => {
+            Some(format!("surface column(s) not in the log, not judged: {}", missing.join(", ")))
+        }
+        (false, true) => None,
+    };
     let report = InspectReport {
         schema: INSPECT_SCHEMA,
         log: ins.summary,

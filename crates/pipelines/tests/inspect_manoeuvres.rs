@@ -64,6 +64,14 @@ fn inputs_are_found_where_they_were_put_and_a_twitch_is_not() {
     let bare = inspect(&file, &InspectOptions::default(), &rule).unwrap();
     assert!(bare.report.detections.is_empty());
     assert!(bare.report.surface_hint.as_deref().unwrap().contains("--map MAPPING.toml"));
+    // A mapping whose surface column the record lacks: said, not judged.
+    let elsewhere =
+        Mapping::from_toml_str(&MAPPING.replace("\"c1\"", "\"RCOU.C2\""), "t.toml").unwrap();
+    let options = InspectOptions { mapping: Some(&elsewhere), ..Default::default() };
+    let lacking = inspect(&file, &options, &rule).unwrap();
+    assert!(lacking.report.detections.is_empty());
+    let hint = lacking.report.surface_hint.unwrap();
+    assert!(hint.contains("not in the log, not judged: `RCOU.C2` (elevator (`de`))"), "{hint}");
     let mapping = Mapping::from_toml_str(MAPPING, "test.toml").unwrap();
     let options = InspectOptions { mapping: Some(&mapping), ..Default::default() };
     let out = inspect(&file, &options, &rule).unwrap();

@@ -129,7 +129,6 @@ fn manoeuvres(r: &InspectReport) -> String {
     let mut s = String::from("\ncandidate manoeuvres (detection rule: docs/inspect.md)\n");
     if let Some(h) = &r.surface_hint {
         let _ = writeln!(s, "  {h}");
-        return s;
     }
     for d in &r.detections {
         let role = r.surfaces.iter().find(|x| x.column == d.channel);

@@ -170,19 +170,6 @@ pub struct LogSummary {
     pub notes: Vec<String>,
 }
 
-impl LogSummary {
-    /// Is `column` (`topic.field`, or a table's column name) a field of this log?
-    pub fn has_column(&self, column: &str) -> bool {
-        self.topics.iter().any(|t| {
-            t.fields.iter().any(|f| {
-                column.strip_prefix(t.name.as_str()).and_then(|r| r.strip_prefix('.'))
-                    == Some(f.name.as_str())
-                    || (self.time_column.is_some() && f.name == column)
-            })
-        })
-    }
-}
-
 /// The values of one channel: `values[k]` at `t_s[k]` (s), in the log's own unit.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Signal {

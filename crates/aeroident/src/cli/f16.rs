@@ -261,21 +261,8 @@ pub fn linearize_report(a: &TrimArgs) -> anyhow::Result<String> {
         );
         out.push('\n');
     }
-    out.push_str("eigenvalues (13-state A):\n");
-    for l in &ev {
-        out.push_str(&format!("  {:>12.6} {:+12.6}j\n", l.re, l.im));
-    }
-    out.push_str("modes (4-state longitudinal / lateral blocks, SLJ §3.7–3.8):\n");
-    for m in &modes {
-        out.push_str(&format!(
-            "  {:<18} {:>10.5} {:+10.5}j   wn {:8.4} rad/s   zeta {:7.4}\n",
-            m.name.as_str(),
-            m.eigenvalue.re,
-            m.eigenvalue.im,
-            m.wn_rad_s,
-            m.zeta
-        ));
-    }
+    let ev: Vec<(f64, f64)> = ev.iter().map(|v| (v.re, v.im)).collect();
+    out.push_str(&super::linearize::eigen_text(&ev, &modes));
     Ok(out)
 }
 

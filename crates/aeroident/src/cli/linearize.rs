@@ -118,12 +118,24 @@ fn render<const N: usize, A: Aircraft<N>>(
     for (n, v) in &controls {
         out.push_str(&format!("  {n:<32} {v:.6}\n"));
     }
-    out.push_str(&format!("eigenvalues ({N}-state A):\n"));
-    for v in &l.eigenvalues {
-        out.push_str(&format!("  {:>12.6} {:+12.6}j\n", v.re, v.im));
+    let ev: Vec<(f64, f64)> = l.eigenvalues.iter().map(|v| (v.re, v.im)).collect();
+    out.push_str(&eigen_text(&ev, &l.modes));
+    Ok(out)
+}
+
+/// The eigenvalues `(re, im)` of an `n`-state A (`n` = `eigenvalues.len()`) and the modes of
+/// its longitudinal and lateral 4 × 4 blocks, one per line, as `linearize` and `f16 linearize`
+/// print them.
+pub fn eigen_text(
+    eigenvalues: &[(f64, f64)],
+    modes: &[aeroident_models::linearize::Mode],
+) -> String {
+    let mut out = format!("eigenvalues ({}-state A):\n", eigenvalues.len());
+    for (re, im) in eigenvalues {
+        out.push_str(&format!("  {re:>12.6} {im:+12.6}j\n"));
     }
-    out.push_str("modes (longitudinal / lateral blocks, SLJ §3.7–3.8):\n");
-    for m in &l.modes {
+    out.push_str("modes (4-state longitudinal / lateral blocks, SLJ §3.7–3.8):\n");
+    for m in modes {
         out.push_str(&format!(
             "  {:<18} {:>10.5} {:+10.5}j   wn {:8.4} rad/s   zeta {:7.4}\n",
             m.name.as_str(),
@@ -133,5 +145,5 @@ fn render<const N: usize, A: Aircraft<N>>(
             m.zeta
         ));
     }
-    Ok(out)
+    out
 }

@@ -13,6 +13,9 @@ use std::path::PathBuf;
 
 #[path = "common/log_writers.rs"]
 mod log_writers;
+#[path = "common/logs.rs"]
+#[allow(dead_code)]
+mod logs;
 #[path = "common/shared.rs"]
 mod shared_data;
 
@@ -394,4 +397,26 @@ fn tlog_topics_times_fields_parameters_and_corrupt_bytes_are_as_written() {
     assert!(notes.contains(&format!("byte {garbage_at}: 6 corrupt bytes skipped")), "{notes}");
     let roll = ins.signals.iter().find(|s| s.column == "ATTITUDE.roll").unwrap();
     assert!(roll.values.iter().all(|v| (*v - 0.1).abs() < 1e-7));
+}
+
+/// A compressed `.mat` whose deflate stream holds carriage-return bytes (0x0D; the test checks
+/// that it does) is read as it is: 400 rows of `time` and `x`. Inspect once passed `.mat`
+/// files through the text formats' line-end conversion, which turned those bytes into line
+/// feeds and the stream into "corrupt deflate stream" (the UAV-OAT team's `.mat` files).
+#[test]
+fn a_compressed_mat_with_carriage_return_bytes_is_read_as_it_is() {
+    let n = 400;
+    let time: Vec<f64> = (0..n).map(|k| k as f64 * 0.02).collect();
+    let x: Vec<f64> = (0..n).map(|k| (k as f64 * 0.37).sin() * 13.0 + 13.0).collect();
+    let vars = [
+        logs::mat_compressed(&logs::mat_matrix("time", &[n as i32, 1], &time)),
+        logs::mat_compressed(&logs::mat_matrix("x", &[n as i32, 1], &x)),
+    ];
+    assert!(vars.iter().any(|v| v[8..].contains(&b'\r')), "the test needs a CR byte in a stream");
+    let path = temp("cr.mat");
+    std::fs::write(&path, logs::mat_file(&vars)).unwrap();
+    let r = inspect(&path, &[]);
+    std::fs::remove_file(&path).ok();
+    assert_eq!(r.summary.topics.len(), 1);
+    assert_eq!(r.summary.topics[0].messages, n);
 }

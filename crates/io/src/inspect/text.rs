@@ -208,14 +208,15 @@ pub(super) fn inspect_table(
     } else {
         Box::new(BufReader::new(std::fs::File::open(path).map_err(io)?))
     };
+    if format == LogFormat::Mat {
+        // Binary: read as it is (a CR byte inside the compressed data is no line end).
+        let names = options.mapping.and_then(|m| m.column_names.as_deref());
+        let table = crate::log::read_mat(source, path, names)?;
+        return Ok(inspect_mat(table, options));
+    }
     let source = BufReader::new(crate::line_ends::BareCrAsLf::new(source));
     match format {
         LogFormat::Asc => inspect_asc(source, path, options),
-        LogFormat::Mat => {
-            let names = options.mapping.and_then(|m| m.column_names.as_deref());
-            let table = crate::log::read_mat(source, path, names)?;
-            Ok(inspect_mat(table, options))
-        }
         _ => inspect_csv(source, path, options),
     }
 }

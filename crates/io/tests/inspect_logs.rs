@@ -11,15 +11,12 @@ use aeroident_io::log_contents::base_topic;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-#[path = "common/log_writers.rs"]
-mod log_writers;
 #[path = "common/logs.rs"]
-#[allow(dead_code)]
 mod logs;
 #[path = "common/shared.rs"]
 mod shared_data;
 
-use log_writers::Dataflash;
+use logs::Dataflash;
 
 /// A file under the system's temp directory, unique to this test process.
 fn temp(name: &str) -> PathBuf {

@@ -65,6 +65,24 @@ pub struct DesignArgs {
     /// Output directory.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// The aircraft: `f16` (the Stevens & Lewis F-16 at `--alt-ft`, `--vt-fps`, `--xcg`), or a
+    /// model file (`models/*.toml`) whose derivatives a model-file aircraft flies, with
+    /// `--summary`, `--map`, `--vt-mps`, `--alt-m` (docs/aircraft.md).
+    #[arg(long, default_value = "f16")]
+    pub aircraft: String,
+    /// Model-file aircraft: a replay's `summary.json` whose estimates are the values (default:
+    /// the model file's `[reference.<param>]` values).
+    #[arg(long)]
+    pub summary: Option<PathBuf>,
+    /// Model-file aircraft: the mapping whose constants give mass, inertia, geometry, thrust.
+    #[arg(long)]
+    pub map: Option<PathBuf>,
+    /// Model-file aircraft: trim true airspeed, m/s.
+    #[arg(long)]
+    pub vt_mps: Option<f64>,
+    /// Model-file aircraft: trim altitude, m.
+    #[arg(long, allow_negative_numbers = true)]
+    pub alt_m: Option<f64>,
 }
 
 /// `--signal` values.
@@ -152,7 +170,10 @@ pub fn execute(a: DesignArgs) -> anyhow::Result<()> {
         signal: a.waveform(),
     };
     let mut out = a.out.as_deref().map(|d| OutputDir::open(d, "design", &[])).transpose()?;
-    let d = design(&spec)?;
+    let d = match a.aircraft.as_str() {
+        "f16" => design(&spec)?,
+        model => model_file_design(&a, &spec, model)?,
+    };
     crate::cli::print_stdout(&report(&a, &d))?;
     let large = large_excursions(&d);
     if !large.is_empty() {
@@ -172,6 +193,29 @@ pub fn execute(a: DesignArgs) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// The design for a model-file aircraft (`--aircraft MODEL.toml`): its options checked, the
+/// aircraft loaded, the library's design run.
+fn model_file_design(a: &DesignArgs, spec: &DesignSpec, model: &str) -> anyhow::Result<Design> {
+    let (Some(map), Some(vt), Some(alt)) = (&a.map, a.vt_mps, a.alt_m) else {
+        anyhow::bail!(
+            "--aircraft {model}: give --map (the constants), --vt-mps and --alt-m (the trim)"
+        );
+    };
+    let aircraft = aeroident_pipelines::airframe::load(model.as_ref(), a.summary.as_deref(), map)?;
+    Ok(aeroident_pipelines::export::design::design_for_aircraft(spec, &aircraft, vt, alt)?)
+}
+
+/// The flight condition in words.
+fn condition_text(a: &DesignArgs) -> String {
+    match (a.aircraft.as_str(), a.vt_mps, a.alt_m) {
+        ("f16", ..) => {
+            format!("F-16 trimmed wings level at {} ft, {} ft/s, xcg {}", a.alt_ft, a.vt_fps, a.xcg)
+        }
+        (m, Some(v), Some(h)) => format!("{m} trimmed wings level at {h} m, {v} m/s"),
+        (m, ..) => m.to_string(),
+    }
 }
 
 /// The autopilot injection table: `t_ms` (integer ms from the start of the manoeuvre) and, per
@@ -212,16 +256,14 @@ fn report(a: &DesignArgs, d: &Design) -> String {
     };
     let mut s = format!(
         "{}: {} at ±{}°, {} s, {} Hz; {waveform}\n\
-         condition: F-16 trimmed wings level at {} ft, {} ft/s, xcg {}; model {}\n\
+         condition: {}; model {}\n\
          predicted Cramér–Rao σ (white sensor noise at the simulator's levels{}, one record):\n",
         a.signal_name(),
         a.surfaces.iter().map(|s| s.name()).collect::<Vec<_>>().join(","),
         a.amplitude_deg,
         a.duration_s,
         a.rate_hz,
-        a.alt_ft,
-        a.vt_fps,
-        a.xcg,
+        condition_text(a),
         model_name(d),
         a.turbulence.map_or(String::new(), |t| format!(
             " and {} Dryden turbulence as process noise",
@@ -280,7 +322,11 @@ fn json(a: &DesignArgs, d: &Design) -> serde_json::Value {
         "rate_hz": a.rate_hz,
         "band_hz": a.band_hz,
         "harmonics": d.harmonics,
-        "condition": {"aircraft": "F-16 (Stevens & Lewis)", "alt_ft": a.alt_ft, "vt_fps": a.vt_fps, "xcg": a.xcg},
+        "condition": if a.aircraft == "f16" {
+            serde_json::json!({"aircraft": "F-16 (Stevens & Lewis)", "alt_ft": a.alt_ft, "vt_fps": a.vt_fps, "xcg": a.xcg})
+        } else {
+            serde_json::json!({"aircraft": a.aircraft, "summary": a.summary, "map": a.map, "alt_m": a.alt_m, "vt_mps": a.vt_mps})
+        },
         "model": model_name(d),
         "turbulence": a.turbulence.map(turbulence_name),
         "condition_number": if r.condition_number.is_finite() { Some(r.condition_number) } else { None },
@@ -296,6 +342,34 @@ fn json(a: &DesignArgs, d: &Design) -> serde_json::Value {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A model-file aircraft without its mapping or trim is refused naming the options, before
+    /// any file is read.
+    #[test]
+    fn errors_a_model_file_aircraft_needs_its_mapping_and_trim() {
+        use clap::Parser;
+        #[derive(clap::Parser)]
+        struct Wrap {
+            #[command(flatten)]
+            args: DesignArgs,
+        }
+        let a = Wrap::try_parse_from(["design", "--aircraft", "models/x.toml", "--vt-mps", "16"]);
+        let a = a.unwrap().args;
+        let spec = DesignSpec {
+            surfaces: vec![Surface::De],
+            amplitude_rad: 0.01,
+            duration_s: 10.0,
+            rate_hz: 50.0,
+            band_hz: (0.1, 1.5),
+            alt_ft: 0.0,
+            vt_fps: 0.0,
+            xcg: 0.3,
+            turbulence: None,
+            signal: Waveform::Multisine,
+        };
+        let e = model_file_design(&a, &spec, "models/x.toml").unwrap_err().to_string();
+        assert!(e.contains("--map") && e.contains("--alt-m"), "{e}");
+    }
 
     #[test]
     fn writes_the_tables_and_the_prediction() {
@@ -315,6 +389,11 @@ mod tests {
             sweep: SweepKind::Logarithmic,
             fade_s: 1.0,
             out: Some(dir.clone()),
+            aircraft: "f16".into(),
+            summary: None,
+            map: None,
+            vt_mps: None,
+            alt_m: None,
         };
         execute(args).unwrap();
         let input = std::fs::read_to_string(dir.join("input.csv")).unwrap();

@@ -79,10 +79,11 @@ pub fn parameter_values(
             extra.param.name()
         );
     }
-    let value_of = |p: aeroident_estimators::vocabulary::Param| match summary {
+    let value_of = |p: aeroident_estimators::vocabulary::Param| {
+        match summary {
         Some((s, file)) => match s.parameters.iter().find(|i| i.param == p) {
             Some(i) => i.value.ok_or_else(|| {
-                crate::err!("{file}: parameter `{}` was not identified (null)", p.name())
+                crate::err!("{file}: parameter `{}` was not identified (null): the aircraft cannot fly without it (identify it, e.g. with thrust mapped for a drag term, or fit a model without that term)", p.name())
             }),
             None => Err(crate::err!("{file}: no parameter `{}` of {model_file}", p.name())),
         },
@@ -92,6 +93,7 @@ pub fn parameter_values(
                 p.name()
             )
         }),
+    }
     };
     spec.structure.params().map(value_of).collect()
 }

@@ -399,6 +399,89 @@ pub fn design(spec: &DesignSpec) -> crate::error::Result<Design> {
     Ok(Design { t_s, inputs, harmonics, crb, structure, plan })
 }
 
+/// Designs `spec`'s input (its surfaces, amplitude, duration, rate, band and waveform; its
+/// F-16 condition and turbulence are not used) for `aircraft`, a model-file aircraft, trimmed
+/// wings-level at `vt_mps` (m/s) and `alt_m` (m), and predicts its Cramér–Rao σ as
+/// [`design`] does, with the aircraft's own structure and values restricted to the excited
+/// axes (longitudinal coefficients for the elevator, lateral for aileron and rudder) and the
+/// simulator's sensor noise levels ([`crate::montecarlo::crb_sensors_for`]; the σ scale with
+/// the noise, so they compare designs).
+///
+/// # Errors
+/// As [`multisine`]; turbulence asked for (not modelled for a model-file aircraft); no trim
+/// at the condition; a prediction error.
+pub fn design_for_aircraft(
+    spec: &DesignSpec,
+    aircraft: &crate::airframe::ModelFileAircraft,
+    vt_mps: f64,
+    alt_m: f64,
+) -> crate::error::Result<Design> {
+    if spec.turbulence.is_some() {
+        crate::bail!(
+            "--turbulence: the Dryden model is flown for the F-16 only; design in calm air"
+        );
+    }
+    let Multisines { t_s, inputs, harmonics } = excitation(spec)?;
+    use aeroident_models::aircraft::Aircraft;
+    let tr = aircraft.trim_level(vt_mps, alt_m)?;
+    use aeroident_models::rigid_body as rb;
+    let (rho, _) = aircraft.air(alt_m)?;
+    let (x, u) = (tr.state, tr.controls);
+    let condition = FlightCondition {
+        vt_mps,
+        alpha_rad: x[rb::ALPHA],
+        theta_rad: x[rb::THETA],
+        rho_kgpm3: rho,
+        thrust_n: aircraft.thrust_n(rho, vt_mps, u[0]),
+        de_rad: u[1],
+        da_rad: u[2],
+        dr_rad: u[3],
+    };
+    let (structure, theta) = excited_part(aircraft, &spec.surfaces);
+    let column = |s: Surface| {
+        spec.surfaces.iter().position(|x| *x == s).map_or_else(Vec::new, |i| inputs[i].clone())
+    };
+    let planned = PlannedInputs {
+        dt_s: 1.0 / spec.rate_hz,
+        de_rad: column(Surface::De),
+        da_rad: column(Surface::Da),
+        dr_rad: column(Surface::Dr),
+    };
+    let sensors = crate::montecarlo::crb_sensors_for(&structure, 1.0);
+    let constants = aircraft.constants();
+    let mut plan = DesignPlan::new(structure, theta, constants, condition, vec![planned], sensors);
+    plan.initial_states = InitialStates::Estimate([true; N_STATES]);
+    let crb = predict_crb(&plan)?;
+    let inputs = spec.surfaces.iter().copied().zip(inputs).collect();
+    Ok(Design { t_s, inputs, harmonics, crb, structure, plan })
+}
+
+/// The aircraft's structure and values restricted to the axes `surfaces` excite
+/// ([`structure_for`]'s choice of axes).
+fn excited_part(
+    aircraft: &crate::airframe::ModelFileAircraft,
+    surfaces: &[Surface],
+) -> (ModelStructure, Vec<f64>) {
+    use aeroident_estimators::vocabulary::Coefficient as C;
+    let lon = surfaces.contains(&Surface::De);
+    let lat = surfaces.iter().any(|s| *s != Surface::De);
+    let keep = |c: C| match c {
+        C::CY | C::Cl | C::Cn => lat,
+        _ => lon,
+    };
+    let full = aircraft.structure();
+    let mut structure = full;
+    let mut theta = Vec::new();
+    for (p, v) in full.params().zip(aircraft.theta()) {
+        if keep(p.coefficient) {
+            theta.push(*v);
+        } else {
+            structure.remove(p);
+        }
+    }
+    (structure, theta)
+}
+
 /// Checks the flight condition is within the F-16 model's range before trimming (a trim
 /// outside it fails without saying why).
 fn check_condition(spec: &DesignSpec) -> crate::error::Result<()> {

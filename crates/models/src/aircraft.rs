@@ -85,6 +85,8 @@ pub trait Aircraft<const N: usize>: Dynamics<N> {
     fn engine_command(&self) -> &'static str;
     /// Metres per length unit of the states `vt` (per second), `north`, `east`, `alt`.
     fn length_unit_m(&self) -> f64;
+    /// The states' names with their units, in state order (`vt_fps` or `vt_mps`, `alpha_rad`, …).
+    fn state_names(&self) -> &'static [&'static str; N];
     /// The model's input for the control vector `u` (still air).
     fn input(&self, u: &ControlVector) -> Self::Input;
     /// Steady wings-level, level flight at true airspeed `vt_mps` (m/s) and altitude `alt_m` (m).
@@ -163,6 +165,10 @@ impl Aircraft<{ f16::N_STATES }> for F16 {
 
     fn length_unit_m(&self) -> f64 {
         M_PER_FT
+    }
+
+    fn state_names(&self) -> &'static [&'static str; f16::N_STATES] {
+        &f16::STATE_NAMES
     }
 
     fn input(&self, u: &ControlVector) -> F16Controls {

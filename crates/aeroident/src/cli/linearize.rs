@@ -52,8 +52,9 @@ pub fn execute(a: LinearizeArgs) -> anyhow::Result<()> {
     Ok(super::print_stdout(&report(&a)?)?)
 }
 
-/// The report of `aeroident linearize` (text, or JSON with keys aircraft, trim, a, b,
-/// eigenvalues, modes).
+/// The report of `aeroident linearize` (text, or JSON with keys aircraft, trim, states,
+/// inputs, a, b, c, d, eigenvalues, modes: the state-space model `ẋ = A x + B u`, `y = C x + D u`
+/// of the perturbations about the trim, every state an output).
 ///
 /// # Errors
 /// As [`execute`].
@@ -99,8 +100,12 @@ fn render<const N: usize, A: Aircraft<N>>(
             "trim": {"vt_mps": x[0] * unit, "alpha_rad": x[1], "theta_rad": x[4],
                      "controls": controls.iter().map(|(n, v)| json!({"name": n, "value": v})).collect::<Vec<_>>(),
                      "max_abs_residual": l.trim.max_abs_residual},
+            "states": aircraft.state_names().as_slice(),
+            "inputs": controls.iter().map(|(n, _)| n).collect::<Vec<_>>(),
             "a": rows(&|i, j| l.linear.a[(i, j)], N),
             "b": rows(&|i, j| l.linear.b[(i, j)], 4),
+            "c": rows(&|i, j| if i == j { 1.0 } else { 0.0 }, N),
+            "d": rows(&|_, _| 0.0, 4),
             "eigenvalues": l.eigenvalues.iter().map(|v| [v.re, v.im]).collect::<Vec<_>>(),
             "modes": modes.collect::<Vec<_>>(),
         })

@@ -414,6 +414,10 @@ impl Aircraft<N_STATES> for ModelFileAircraft {
         1.0
     }
 
+    fn state_names(&self) -> &'static [&'static str; N_STATES] {
+        &STATE_NAMES
+    }
+
     fn input(&self, u: &ControlVector) -> ControlVector {
         *u
     }

@@ -375,19 +375,7 @@ pub fn design(spec: &DesignSpec) -> crate::error::Result<Design> {
         .collect::<crate::error::Result<_>>()?;
     let constants = f16_constants(&f16m, vt);
     let theta = trim_biases(&structure, &theta, &constants, &condition)?;
-    let column = |s: Surface| {
-        spec.surfaces.iter().position(|x| *x == s).map_or_else(Vec::new, |i| inputs[i].clone())
-    };
-    let planned = PlannedInputs {
-        dt_s: 1.0 / spec.rate_hz,
-        de_rad: column(Surface::De),
-        da_rad: column(Surface::Da),
-        dr_rad: column(Surface::Dr),
-    };
-    let sensors = crate::montecarlo::crb_sensors_for(&structure, 1.0);
-    let mut plan = DesignPlan::new(structure, theta, constants, condition, vec![planned], sensors);
-    // Initial states estimated with the parameters, as a fit of the record would.
-    plan.initial_states = InitialStates::Estimate([true; N_STATES]);
+    let plan = plan_of(spec, &inputs, structure, theta, constants, condition);
     let crb = match spec.turbulence {
         None => predict_crb(&plan)?,
         Some(sev) => {
@@ -438,6 +426,23 @@ pub fn design_for_aircraft(
         dr_rad: u[3],
     };
     let (structure, theta) = excited_part(aircraft, &spec.surfaces);
+    let plan = plan_of(spec, &inputs, structure, theta, aircraft.constants(), condition);
+    let crb = predict_crb(&plan)?;
+    let inputs = spec.surfaces.iter().copied().zip(inputs).collect();
+    Ok(Design { t_s, inputs, harmonics, crb, structure, plan })
+}
+
+/// The plan of `spec`'s `inputs` (one per surface of `spec`, rad) for `structure` with values
+/// `theta` on `constants` at `condition`: the simulator's sensors, initial states estimated
+/// with the parameters as a fit of the record would.
+fn plan_of(
+    spec: &DesignSpec,
+    inputs: &[Vec<f64>],
+    structure: ModelStructure,
+    theta: Vec<f64>,
+    constants: aeroident_estimators::AircraftConstants,
+    condition: FlightCondition,
+) -> DesignPlan {
     let column = |s: Surface| {
         spec.surfaces.iter().position(|x| *x == s).map_or_else(Vec::new, |i| inputs[i].clone())
     };
@@ -448,12 +453,9 @@ pub fn design_for_aircraft(
         dr_rad: column(Surface::Dr),
     };
     let sensors = crate::montecarlo::crb_sensors_for(&structure, 1.0);
-    let constants = aircraft.constants();
     let mut plan = DesignPlan::new(structure, theta, constants, condition, vec![planned], sensors);
     plan.initial_states = InitialStates::Estimate([true; N_STATES]);
-    let crb = predict_crb(&plan)?;
-    let inputs = spec.surfaces.iter().copied().zip(inputs).collect();
-    Ok(Design { t_s, inputs, harmonics, crb, structure, plan })
+    plan
 }
 
 /// The aircraft's structure and values restricted to the axes `surfaces` excite

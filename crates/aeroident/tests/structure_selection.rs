@@ -8,7 +8,7 @@ mod common;
 use aeroident_estimators::structure::{Ranking, StepwiseConfig};
 use aeroident_estimators::{Coefficient, Term};
 use aeroident_io::{Mapping, open_log};
-use aeroident_pipelines::structure::{Method, select_structure};
+use aeroident_pipelines::structure::{AutoModel, Method, Scope, select_model, select_structure};
 use common::{shared, workspace};
 
 const SWR: Method = Method::Stepwise(StepwiseConfig { f_in: 20.0, f_out: 20.0 });
@@ -452,4 +452,59 @@ fn a_selection_on_few_samples_warns() {
         }
     }
     std::fs::remove_file(&short).ok();
+}
+
+/// The scope plain `--model auto` settles on, or `None` when the record is absent.
+fn auto_scope(rel: &str, mapping: &str) -> Option<(Scope, Option<String>)> {
+    let data = shared(rel)?;
+    let m = Mapping::from_path(&workspace().join("mappings").join(mapping)).unwrap();
+    let reader = open_log(&data.display().to_string(), None, &m).unwrap();
+    let auto = AutoModel::parse("auto", SWR).unwrap().unwrap();
+    let s = select_model(vec![reader], &m, &auto, None, &[], 5).unwrap();
+    Some((s.scope, s.scope_reason))
+}
+
+/// Plain `--model auto` fits the axes a record excites, on records whose inputs are known:
+/// JSBSim's c172x flown with an elevator 3-2-1-1 alone (ailerons and rudder held) is
+/// longitudinal, its F-16 flown with aileron and rudder doublets alone (elevator held) is
+/// lateral, each with the partial F of the idle surfaces in the reason; the ATTAS lateral
+/// mapping (no `q`) is lateral, where it used to be taken for longitudinal and refused.
+#[test]
+fn val_model_auto_fits_the_axes_the_record_excites() {
+    let Some((c172, why)) =
+        auto_scope("jsbsim_samples/c172x_elevator_3211_15s_60Hz.csv", "jsbsim.toml")
+    else {
+        return;
+    };
+    assert_eq!(c172, Scope::Longitudinal);
+    let why = why.unwrap();
+    assert!(
+        why.contains("Cl: da") && why.contains("Cn: da") && why.contains("auto:six-axis"),
+        "{why}"
+    );
+    let (f16, why) =
+        auto_scope("jsbsim_samples/f16_ail_rud_doublets_20s_60Hz.csv", "jsbsim.toml").unwrap();
+    assert_eq!(f16, Scope::Lateral);
+    assert!(why.unwrap().contains("Cm: de"));
+    let (attas, why) =
+        auto_scope("jategaonkar_hfb320_attas/csv/fAttasAilRud1.csv", "attas_lateral.toml").unwrap();
+    assert_eq!((attas, why), (Scope::Lateral, None));
+}
+
+/// The second reading guards the first: UAV-OAT's 11-13 `el_3` is an elevator 3-2-1-1 whose
+/// `Cm_δe` falls just short of the cut-off (partial F 20.0) while the autopilot's aileron
+/// corrections pass it in `Cl`; the elevator moved most, so neither axis is dropped. Its
+/// `el_1` of 2023 (the elevator's the only surface term kept) is longitudinal.
+#[test]
+fn val_model_auto_keeps_both_axes_when_the_two_readings_disagree() {
+    let dir = "uav_oat/csv/uavoat_";
+    let Some((el3, why)) =
+        auto_scope(&format!("{dir}2022_05_07_11_13_57_el_3.csv"), "uav_oat.toml")
+    else {
+        return;
+    };
+    assert_eq!((el3, why), (Scope::SixAxis, None));
+    let (el1, _) =
+        auto_scope(&format!("{dir}2023_02_01_14_21_28_el_1.csv"), "uav_oat.toml").unwrap();
+    assert_eq!(el1, Scope::Longitudinal);
 }

@@ -9,6 +9,8 @@
 //! conditioning stage with the matched smoother ([`crate::condition::Alignment::Matched`]), so
 //! both sides of the regression see the same filter.
 
+mod excited;
+
 use super::{
     CoefficientSelection, Method, Wanted, alpha_quantile_knots, condition, read_for_selection,
     select_on_samples, to_supply,
@@ -218,8 +220,11 @@ impl AutoModel {
 pub struct AutoSelection {
     /// The model: each coefficient's constant and kept terms, generic priors.
     pub model: ModelSpec,
-    /// The scope used (given, or the richest the record supports).
+    /// The scope used (given; else the richest the record supports, narrowed to the axes
+    /// the record excites, [`excited::excited_scope`]).
     pub scope: Scope,
+    /// Why the scope is narrower than the record supports (`None`: it is not).
+    pub scope_reason: Option<String>,
     /// The method.
     pub method: Method,
     /// Each coefficient's selection.
@@ -307,12 +312,19 @@ pub fn select_model<R: Read>(
                 .map_err(RecordError::Model)?,
         );
     }
+    let (scope, scope_reason) = match (auto.scope, scope) {
+        (None, Scope::SixAxis) => excited::excited_scope(&selections, &slices),
+        _ => (scope, None),
+    };
+    let coefficients = scope.coefficients();
+    selections.retain(|s| coefficients.contains(&s.coefficient));
     let model = model_of(&selections, knots, scope, auto.method, &file)?;
     let alphadot = alphadot_note(auto, scope, alpha_timed);
     Ok(AutoSelection {
         alphadot,
         model,
         scope,
+        scope_reason,
         method: auto.method,
         selections,
         unavailable,
@@ -360,8 +372,10 @@ pub fn model_from_args<R: Read>(
     Ok((Some(selection.model.clone()), Some(selection)))
 }
 
-/// Six-axis when the record measures the lateral coefficients (β, and the rates whose
-/// derivatives the conditioning stage would supply), else longitudinal.
+/// Six-axis when the record measures every coefficient (the lateral ones with β; the rates
+/// whose derivatives the conditioning stage would supply count as measured), lateral when it
+/// measures only the lateral ones (a lateral mapping without `q`), else longitudinal (whose
+/// own gaps the selection then names).
 fn richest_scope(first: &AirDataSample) -> Scope {
     let mut s = *first;
     for d in Derivative::ALL {
@@ -370,8 +384,12 @@ fn richest_scope(first: &AirDataSample) -> Scope {
         }
     }
     let measured = s.measured_coefficients();
-    let lateral = Scope::Lateral.coefficients().iter().all(|c| measured[c.index()].is_some());
-    if lateral && s.beta_rad.is_some() { Scope::SixAxis } else { Scope::Longitudinal }
+    let all = |scope: Scope| scope.coefficients().iter().all(|c| measured[c.index()].is_some());
+    match (all(Scope::Longitudinal), all(Scope::Lateral) && s.beta_rad.is_some()) {
+        (true, true) => Scope::SixAxis,
+        (false, true) => Scope::Lateral,
+        _ => Scope::Longitudinal,
+    }
 }
 
 fn names(terms: &[Term]) -> String {
@@ -498,6 +516,10 @@ pub struct StructureReport {
     pub f_out: Option<f64>,
     /// The coefficients covered.
     pub scope: &'static str,
+    /// Why the scope is narrower than the record's channels support: an axis whose moment
+    /// equations keep no surface term is not excited ([`AutoSelection::scope_reason`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scope_reason: Option<String>,
     /// The α knots of the spline candidates, degrees (given, or the record's α quantiles,
     /// [`super::alpha_quantile_knots`]); empty when no spline was offered.
     pub alpha_knots_deg: Vec<f64>,
@@ -538,6 +560,7 @@ impl AutoSelection {
             f_in,
             f_out,
             scope: self.scope.name(),
+            scope_reason: self.scope_reason.clone(),
             alpha_knots_deg: self
                 .model
                 .structure
@@ -573,6 +596,7 @@ impl AutoSelection {
     /// The selection path for people: per coefficient, one line per step and the result.
     pub fn path_lines(&self) -> Vec<String> {
         let mut lines = self.path_head();
+        lines.extend(self.scope_reason.iter().map(|n| format!("  {n}")));
         lines.extend(self.alphadot.iter().map(|n| format!("  {n}")));
         lines.extend(self.coefficient_lines());
         lines

@@ -24,11 +24,13 @@
 //! elevator, aileron, rudder, rad. Still air; no rotor momentum, no engine lag.
 
 mod files;
+mod handle;
 #[cfg(test)]
 mod tests;
 mod trim;
 
 pub use files::{airframe_from_mapping, load, parameter_values};
+pub use handle::{AnyAircraft, Linear, Trim};
 pub use trim::{MAX_TRIM_ANGLE_RAD, trim_wings_level};
 
 use aeroident_estimators::flight_model::{self as fm, FlightModel, ModelInputs, StateSet};

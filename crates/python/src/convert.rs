@@ -297,3 +297,26 @@ pub fn py_to_json(o: &Bound<'_, PyAny>) -> PyResult<serde_json::Value> {
         o.get_type().name()?
     )))
 }
+
+/// Sample `s` as a dict of its channels and constants by field name (absent ones left out):
+/// the form [`sample_from`] reads back.
+///
+/// # Errors
+/// A Python error while filling the dict.
+pub fn sample_to_dict<'py>(py: Python<'py>, s: &AirDataSample) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    for (k, v) in REQUIRED.iter().zip([s.t_s, s.vt_mps, s.alpha_rad, s.qbar_pa]) {
+        d.set_item(k, v)?;
+    }
+    for (k, get, _) in OPTIONAL {
+        if let Some(v) = get(s) {
+            d.set_item(k, v)?;
+        }
+    }
+    for (k, get, _) in CONSTANTS {
+        if let Some(v) = get(&s.constants).filter(|v| v.is_finite()) {
+            d.set_item(k, v)?;
+        }
+    }
+    Ok(d)
+}

@@ -15,6 +15,7 @@ use std::time::{Duration, Instant};
 
 use pyo3::prelude::*;
 
+mod aircraft;
 mod batch;
 mod convert;
 mod estimator;
@@ -206,6 +207,7 @@ fn _aeroident(m: &Bound<'_, PyModule>) -> PyResult<()> {
     batch::register(m)?;
     estimator::register(m)?;
     f16::register(m)?;
+    aircraft::register(m)?;
     montecarlo::register(m)?;
     freqresp::register(m)?;
     Ok(())

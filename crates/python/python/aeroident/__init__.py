@@ -13,6 +13,8 @@ seconds, unless a name says otherwise (``alt_ft``, ``elevator_deg`` …).
 - :func:`fit`: the post-flight batch fit of a record by output error or the filter-error
   method (estimates, σ, correlation, residuals, model-vs-measured traces, validation).
 - :func:`trim`, :func:`linearize`, :func:`simulate`: the F-16 model.
+- :class:`Aircraft`: the F-16 or a model-file aircraft to close your own loop around (trim,
+  derivatives, one RK4 step, the linear model, the air-data sample an estimator takes, damage).
 - :func:`montecarlo`: seeded closed-loop campaigns, locally (rayon) or on a Ray cluster.
 
 Errors are raised as :class:`AeroidentError` with the message the CLI prints after ``error:``.
@@ -31,12 +33,14 @@ import numpy as np
 
 from . import _aeroident as _core
 from ._aeroident import MAX_BOOTSTRAP_REFITS, MAX_RUNS, AeroidentError, __version__
+from ._aeroident import Aircraft
 from ._aeroident import EstimatorBase as _Estimator
 
 PathLike = Union[str, "os.PathLike[str]"]
 
 __all__ = [
     "AeroidentError",
+    "Aircraft",
     "Estimator",
     "Rls",
     "RlsIv",

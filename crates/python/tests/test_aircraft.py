@@ -131,3 +131,8 @@ def test_the_adaptive_example_restores_the_tracking_after_the_damage():
     # The damage degrades the fixed loop; the adaptive one tracks better after it.
     assert after_fixed > 1.2 * before, (before, after_fixed)
     assert after_adaptive < 0.9 * after_fixed, (after_adaptive, after_fixed)
+
+
+def test_a_model_file_aircraft_without_values_is_refused_by_name():
+    with pytest.raises(aeroident.AeroidentError, match=r"no \[reference.CL_0\] value"):
+        aeroident.Aircraft.from_model(str(ROOT / "models/hfb320_jategaonkar.toml"), str(ROOT / "mappings/hfb320.toml"))

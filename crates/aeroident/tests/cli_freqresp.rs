@@ -147,3 +147,54 @@ fn a_bad_option_leaves_the_previous_results() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// `--window auto`: a record quiet for 20 s, excited 20–60 s, quiet again to 80 s. The window
+/// chosen brackets the excitation (the detector's 1 s lead-in and 3 s tail), and the analysis
+/// equals the one given that window by hand.
+#[test]
+fn window_auto_finds_the_excitation_and_equals_the_window_given_by_hand() {
+    let d = scratch("auto");
+    let mut csv = String::from("t,V,a,q,de\n");
+    let (mut q, mut prev, mut seed) = (0.0f64, 0.0f64, 11u64);
+    for k in 0..4000 {
+        let t = k as f64 * DT;
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        let u = (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+        let de = if (20.0..60.0).contains(&t) { u } else { 1e-4 * u };
+        q = A * q + (1.0 - A) * prev;
+        prev = de;
+        csv.push_str(&format!("{t:.2},50,0.05,{q:.12e},{de:.12e}\n"));
+    }
+    std::fs::write(d.join("r.csv"), csv).unwrap();
+    std::fs::write(d.join("m.toml"), MAP).unwrap();
+    let run = |window: &str, out: &str| {
+        let o = Command::new(env!("CARGO_BIN_EXE_aeroident"))
+            .args(["freqresp", "r.csv", "--map", "m.toml", "--input", "de", "--output", "q"])
+            .args(["--window", window, "--out", out])
+            .current_dir(&d)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let err = run("auto", "auto");
+    let chosen = err
+        .lines()
+        .find_map(|l| l.strip_prefix("--window auto: ").and_then(|r| r.split("--window ").nth(1)))
+        .unwrap_or_else(|| panic!("no window printed: {err}"))
+        .trim()
+        .to_string();
+    let (a, b) = chosen.split_once(':').unwrap();
+    let (a, b): (f64, f64) = (a.parse().unwrap(), b.parse().unwrap());
+    assert!((18.5..=20.0).contains(&a) && (60.0..=63.5).contains(&b), "{chosen}");
+    run(&chosen, "by_hand");
+    let json = |dir: &str| {
+        let v: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(d.join(dir).join("freqresp.json")).unwrap(),
+        )
+        .unwrap();
+        v["pairs"].clone()
+    };
+    assert!(!json("auto").is_null());
+    assert_eq!(json("auto"), json("by_hand"));
+}

@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! aeroident freqresp <log> --map M --input de --output q [--input da …] [--output …]
-//!                    [--window a:b … | --window sysid[:AXIS]] [--windows-s 60,30,15]
+//!                    [--window a:b … | --window sysid[:AXIS] | --window auto] [--windows-s 60,30,15]
 //!                    [--overlap 0.8] [--f-min-hz F] [--f-max-hz F]
 //!                    [--fit "q/de:1/2+delay@1:10" …] [--min-coherence 0.6] [--out DIR]
 //! ```
@@ -52,7 +52,8 @@ pub struct FreqRespArgs {
     pub outputs: Vec<String>,
     /// Time window `START:END` of the record, s; several allowed (each its own stretch). Or
     /// `sysid[:AXIS]`: the spans of an ArduPilot log's SYSID sweeps (on `SID_AXIS` AXIS,
-    /// number or name), found from its SIDS and SIDD messages.
+    /// number or name), found from its SIDS and SIDD messages. Or `auto`: the manoeuvres
+    /// `aeroident inspect` finds on the mapping's surfaces (printed as the windows chosen).
     #[arg(long = "window", value_parser = parse_window, allow_hyphen_values = true)]
     pub windows: Vec<WindowArg>,
     /// Spectral window lengths, s, comma-separated; default five from half the longest
@@ -90,10 +91,16 @@ pub enum WindowArg {
     Span(TimeWindow),
     /// `sysid[:AXIS]`.
     Sysid(Option<&'static Axis>),
+    /// `auto`: the manoeuvres `aeroident inspect` finds on the mapping's surfaces
+    /// ([`super::auto_window`]).
+    Auto,
 }
 
 fn parse_window(text: &str) -> Result<WindowArg, String> {
     let t = text.trim();
+    if t.eq_ignore_ascii_case("auto") {
+        return Ok(WindowArg::Auto);
+    }
     if !t.eq_ignore_ascii_case("sysid") && !t.to_ascii_lowercase().starts_with("sysid:") {
         return TimeWindow::parse(t).map(WindowArg::Span);
     }
@@ -115,7 +122,7 @@ impl FreqRespArgs {
     /// `sysid` beside time windows or twice, on a log that is not DataFlash, a log without a
     /// sweep (on the axis), the reader's errors, sweeps on several axes without `--input`.
     pub fn options(&self, mapping: &Mapping) -> anyhow::Result<FreqRespOptions> {
-        let (windows, excitation) = self.resolve_windows()?;
+        let (windows, excitation) = self.resolve_windows(mapping)?;
         let mut inputs = self.inputs.clone();
         if let (true, Some(e)) = (inputs.is_empty(), &excitation) {
             inputs.push(default_input(&e.sweeps, mapping)?);
@@ -139,7 +146,20 @@ impl FreqRespArgs {
 
     /// The time windows and, with `--window sysid`, the chosen sweeps and the injected
     /// waveform.
-    fn resolve_windows(&self) -> anyhow::Result<(Vec<TimeWindow>, Option<Excitation>)> {
+    fn resolve_windows(
+        &self,
+        mapping: &Mapping,
+    ) -> anyhow::Result<(Vec<TimeWindow>, Option<Excitation>)> {
+        if self.windows.iter().any(|w| matches!(w, WindowArg::Auto)) {
+            anyhow::ensure!(
+                self.windows.len() == 1,
+                "option `--window`: give `auto` alone (not beside START:END or sysid windows)"
+            );
+            let auto = [super::auto_window::WindowSpec::Auto];
+            let windows =
+                super::auto_window::resolve(&auto, &self.data, self.format, mapping, false)?;
+            return Ok((windows, None));
+        }
         let spans: Vec<TimeWindow> = self
             .windows
             .iter()

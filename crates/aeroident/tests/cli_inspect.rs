@@ -311,3 +311,67 @@ fn window_auto_resolves_to_windows_holding_the_inputs() {
     assert!(parse("soon").unwrap_err().contains("or `auto`"));
     std::fs::remove_file(&data).ok();
 }
+
+/// The figure `Plotly.newPlot` draws in an `--html` page: its `data` and `layout`.
+fn plotly_figure(page: &str) -> Value {
+    // The last call: the embedded library mentions `Plotly.newPlot(` in its own messages.
+    let at = page.rfind("Plotly.newPlot(").expect("no Plotly.newPlot call");
+    let start = at + page[at..].find('{').unwrap();
+    let mut stream = serde_json::Deserializer::from_str(&page[start..]).into_iter::<Value>();
+    stream.next().unwrap().unwrap()
+}
+
+/// `--html`: one self-contained page (no script loaded from elsewhere) whose rows hold the
+/// record's own samples on one shared time axis, the two manoeuvres shaded where the listing
+/// puts them; it renders in headless Chromium with no network.
+#[test]
+fn html_page_holds_the_records_samples_and_shades_the_manoeuvres() {
+    let data = record("html");
+    let page = temp("page.html");
+    let o = run(&[
+        data.to_str().unwrap(),
+        "--plot",
+        "elevator_deg,q",
+        "--html",
+        page.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&page).unwrap();
+    assert!(!text.contains("<script src=\"http"), "a script loaded from the network");
+    let fig = plotly_figure(&text);
+    let csv = std::fs::read_to_string(&data).unwrap();
+    let rows: Vec<Vec<f64>> =
+        csv.lines().skip(1).map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
+    for (i, (col, y)) in [(1, "y"), (2, "y2")].into_iter().enumerate() {
+        let trace = &fig["data"][i];
+        assert_eq!((trace["xaxis"].as_str(), trace["yaxis"].as_str()), (Some("x"), Some(y)));
+        let (xs, ys) = (trace["x"].as_array().unwrap(), trace["y"].as_array().unwrap());
+        assert_eq!(xs.len(), rows.len());
+        for (k, r) in rows.iter().enumerate() {
+            assert!((xs[k].as_f64().unwrap() - r[0]).abs() < 1e-9);
+            assert!((ys[k].as_f64().unwrap() - r[col]).abs() < 1e-9 * (1.0 + r[col].abs()));
+        }
+    }
+    let spans: Vec<(f64, f64)> = fig["layout"]["shapes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| (s["x0"].as_f64().unwrap(), s["x1"].as_f64().unwrap()))
+        .collect();
+    assert_eq!(spans.len(), 2, "{spans:?}");
+    assert!(spans[0].0 < 30.0 && spans[0].1 > 32.0 && spans[1].0 < 60.0 && spans[1].1 > 63.5);
+    let Some(chrome) = common::browser::chromium() else {
+        assert!(std::env::var("CI").as_deref() != Ok("true"), "CI=true but no chromium on PATH");
+        eprintln!("SKIPPED the render of the inspect page: no chromium on PATH");
+        return;
+    };
+    let (ok, dom, err) = common::browser::headless(
+        &chrome,
+        &page,
+        &temp("profile"),
+        &["--dump-dom", "--virtual-time-budget=5000"],
+    );
+    assert!(ok, "chromium failed: {err}");
+    assert!(dom.contains("main-svg"), "the plot did not render");
+    assert!(common::browser::console_lines(&err).is_empty(), "{err}");
+}

@@ -7,6 +7,9 @@
 //! Needs the `chromium` binary (Debian package `chromium`; `.ci/run` installs it). Without it
 //! the test is skipped with a message — and fails when `CI=true`.
 
+mod common;
+
+use common::browser::{chromium, console_lines, headless};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -19,53 +22,6 @@ fn scratch(tag: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
-}
-
-/// The Chromium binary on PATH, if any.
-fn chromium() -> Option<PathBuf> {
-    let path = std::env::var_os("PATH")?;
-    for dir in std::env::split_paths(&path) {
-        for name in ["chromium", "chromium-browser", "google-chrome"] {
-            let p = dir.join(name);
-            if p.is_file() {
-                return Some(p);
-            }
-        }
-    }
-    None
-}
-
-/// Runs headless Chromium on `page` with `extra` arguments and a fresh profile; returns
-/// (exit ok, stdout, stderr).
-fn headless(chrome: &Path, page: &Path, profile: &Path, extra: &[&str]) -> (bool, String, String) {
-    let o = Command::new(chrome)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--disable-quic",
-            "--no-first-run",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--enable-logging=stderr",
-            "--v=0",
-        ])
-        .arg(format!("--user-data-dir={}", profile.display()))
-        .args(extra)
-        .arg(format!("file://{}", page.display()))
-        .output()
-        .expect("starting chromium");
-    (
-        o.status.success(),
-        String::from_utf8_lossy(&o.stdout).into_owned(),
-        String::from_utf8_lossy(&o.stderr).into_owned(),
-    )
-}
-
-/// Console messages in Chromium's log (`…:CONSOLE(…)` lines and uncaught exceptions).
-fn console_lines(stderr: &str) -> Vec<&str> {
-    stderr.lines().filter(|l| l.contains("CONSOLE") || l.contains("Uncaught")).collect()
 }
 
 const MAP: &str = r#"nominal_dt_s = 0.02

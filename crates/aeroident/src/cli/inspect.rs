@@ -2,12 +2,13 @@
 //!
 //! ```text
 //! aeroident inspect <log> [--format …] [--map MAPPING.toml] [--json FILE]
-//!                   [--plot CH,CH,… [--window START:END] --out FILE.svg|png]
+//!                   [--plot CH,CH,… [--window START:END] --out FILE.svg|png] [--html FILE.html]
 //! ```
 //! Prints the topics (or columns) with their fields, units, sample counts, rates, spans and
 //! gaps, the parameters of a ULog or DataFlash log, and the candidate manoeuvres found on the
 //! surface channels as `--window START:END` arguments; `--json` writes the same as one
-//! document; `--plot` draws raw channels against time.
+//! document; `--plot` draws raw channels against time; `--html` writes them (or the surfaces)
+//! as one page of zoomable, linked time plots with the manoeuvres shaded.
 
 mod render;
 
@@ -19,6 +20,7 @@ use aeroident_io::mapping::Mapping;
 use aeroident_pipelines::inspect::detect::DetectionRule;
 use aeroident_pipelines::inspect::{InspectOutcome, inspect};
 use aeroident_pipelines::window::TimeWindow;
+use aeroident_report::interactive::{Span, TimeChannel, linked_time_plots_html};
 use aeroident_report::plot::{LineKind, Panel, Series, render_panels_png, render_panels_svg};
 use anyhow::{Context as _, bail};
 use std::path::{Path, PathBuf};
@@ -51,6 +53,10 @@ pub struct InspectArgs {
     /// The plot file: `.svg` or `.png`.
     #[arg(long, value_name = "FILE.svg|png")]
     pub out: Option<PathBuf>,
+    /// Write one self-contained page of zoomable, linked time plots (one row per `--plot`
+    /// channel, else per surface channel, at most 8) with the manoeuvres found shaded.
+    #[arg(long, value_name = "FILE.html")]
+    pub html: Option<PathBuf>,
 }
 
 /// Runs `aeroident inspect`.
@@ -75,11 +81,14 @@ pub fn execute(args: InspectArgs) -> anyhow::Result<()> {
     if let Some(out) = &args.out {
         plot(&outcome, &options.keep, args.window, out)?;
     }
+    if let Some(path) = &args.html {
+        html(&outcome, &options.keep, args.window, path)?;
+    }
     super::print_stdout(&render::render(&outcome.report))?;
     if let Some(path) = &args.json {
         aeroident_report::note!("wrote {}", path.display());
     }
-    if let Some(path) = &args.out {
+    for path in [&args.out, &args.html].into_iter().flatten() {
         aeroident_report::note!("wrote {}", path.display());
     }
     Ok(())
@@ -89,15 +98,17 @@ pub fn execute(args: InspectArgs) -> anyhow::Result<()> {
 /// with `--plot`.
 fn check_args(args: &InspectArgs) -> anyhow::Result<()> {
     match (args.plot.is_empty(), &args.out) {
-        (false, None) => bail!("--plot needs --out FILE.svg or FILE.png"),
+        (false, None) if args.html.is_none() => {
+            bail!("--plot needs --out FILE.svg or FILE.png, or --html FILE.html")
+        }
         (true, Some(_)) => bail!("--out is the file of a plot: give the channels with --plot"),
         (false, Some(out)) if plot_kind(out).is_none() => {
             bail!("--out {}: give a file ending in .svg or .png", out.display())
         }
         _ => {}
     }
-    if args.window.is_some() && args.plot.is_empty() {
-        bail!("--window is the time span of a plot: give the channels with --plot");
+    if args.window.is_some() && args.plot.is_empty() && args.html.is_none() {
+        bail!("--window is the time span of a plot: give the channels with --plot or --html");
     }
     Ok(())
 }
@@ -133,6 +144,63 @@ fn plot(
     }
     Ok(())
 }
+
+/// Writes the page of linked time plots of `channels` (else the surface channels) within
+/// `window`, the manoeuvres found shaded.
+///
+/// # Errors
+/// No channel to draw, more than [`MAX_HTML_ROWS`], a window without samples, an unwritable
+/// file.
+fn html(
+    outcome: &InspectOutcome,
+    channels: &[String],
+    window: Option<TimeWindow>,
+    path: &Path,
+) -> anyhow::Result<()> {
+    let names: Vec<String> = if channels.is_empty() {
+        outcome.report.surfaces.iter().map(|s| s.column.clone()).collect()
+    } else {
+        channels.to_vec()
+    };
+    if names.is_empty() {
+        bail!("--html: no surface channel is known in this log; name the channels with --plot");
+    }
+    if names.len() > MAX_HTML_ROWS {
+        bail!("--html draws at most {MAX_HTML_ROWS} channels; {} given", names.len());
+    }
+    let panels: Vec<Panel> = names
+        .iter()
+        .filter_map(|c| outcome.signals.iter().find(|s| &s.column == c))
+        .map(|s| panel(s, window))
+        .collect::<anyhow::Result<_>>()?;
+    let rows: Vec<TimeChannel> = panels
+        .iter()
+        .map(|p| TimeChannel {
+            name: &p.title,
+            label: &p.y_label,
+            t_s: &p.series[0].t_s,
+            values: &p.series[0].values,
+        })
+        .collect();
+    let spans: Vec<Span> = outcome
+        .report
+        .detections
+        .iter()
+        .flat_map(|d| d.manoeuvres.iter())
+        .map(|m| Span {
+            start_s: m.start_s,
+            end_s: m.end_s,
+            label: format!("{} manoeuvre, --window {:.2}:{:.2}", m.channel, m.start_s, m.end_s),
+        })
+        .collect();
+    let title =
+        format!("{} (raw values; drag to zoom, double-click to reset)", outcome.report.log.file);
+    let page = linked_time_plots_html(&title, &rows, &spans);
+    std::fs::write(path, page).with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// Most rows of the `--html` page (the plotting library's y axes 1–8).
+const MAX_HTML_ROWS: usize = 8;
 
 /// One channel's panel within `window`.
 ///

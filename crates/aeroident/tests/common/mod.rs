@@ -2,6 +2,8 @@
 //! `mod common;`; not every binary uses every helper).
 #![allow(dead_code)]
 
+pub mod browser;
+
 use std::path::PathBuf;
 
 /// The keys every per-parameter entry of a `summary.json` has (schema version 2,

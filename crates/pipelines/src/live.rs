@@ -29,6 +29,7 @@ pub mod phase;
 
 use crate::replay::ReplayObserver;
 use aeroident_estimators::{AirDataSample, Param};
+use aeroident_io::mavlink::LinkStats;
 use aeroident_io::replay_output::ReplaySummary;
 use aeroident_io::{ModelSpec, RecordEvent};
 use pace::Pace;
@@ -153,8 +154,8 @@ pub struct Update<'a> {
     pub excitation: [Option<f64>; 3],
     /// The feed's counts.
     pub stats: FeedStats,
-    /// The link's line (a live MAVLink feed), from the face.
-    pub link: Option<&'a str>,
+    /// The link's line (a live MAVLink feed).
+    pub link: Option<String>,
     /// New warnings.
     pub warnings: &'a [String],
     /// Warnings beyond those kept.
@@ -187,7 +188,7 @@ pub struct LiveState {
     stats: FeedStats,
     warnings: Vec<String>,
     warnings_dropped: usize,
-    link: Option<String>,
+    link: Option<Arc<Mutex<LinkStats>>>,
     ended: bool,
     status: Option<String>,
     verdicts: Option<Vec<Verdict>>,
@@ -305,7 +306,10 @@ impl LiveState {
             states: self.states(),
             excitation: self.excitation(),
             stats: self.stats,
-            link: self.link.as_deref(),
+            link: self
+                .link
+                .as_ref()
+                .map(|l| l.lock().unwrap_or_else(PoisonError::into_inner).line()),
             warnings,
             warnings_dropped: self.warnings_dropped,
             stride: self.stride,
@@ -315,9 +319,10 @@ impl LiveState {
         }
     }
 
-    /// The face's line on the link (a live MAVLink feed's counts).
-    pub fn set_link(&mut self, line: String) {
-        self.link = Some(line);
+    /// A live MAVLink feed's link statistics, read at each update (datagrams, messages lost,
+    /// dropped by a full queue, duplicates …: [`LinkStats::line`]).
+    pub fn watch_link(&mut self, stats: Arc<Mutex<LinkStats>>) {
+        self.link = Some(stats);
     }
 
     /// The end of the job: the summary's status, each derivative's verdict and reference,
@@ -422,6 +427,11 @@ impl LiveObserver {
     /// An observer pushing into `shared`, at `pace` when given.
     pub fn new(shared: SharedLive, pace: Option<Pace>) -> Self {
         Self { shared, pace, inputs: [None; 3], seq: 0 }
+    }
+
+    /// The state it pushes into.
+    pub fn shared(&self) -> SharedLive {
+        self.shared.clone()
     }
 }
 

@@ -309,7 +309,26 @@ fn parse_band(text: &str) -> Result<(f64, f64), String> {
 /// # Errors
 /// Mapping, model-file or data errors (naming file, row or line, and column or key),
 /// estimator errors (not available, bad option, diverged), and output I/O errors.
-pub fn execute(mut args: ReplayArgs) -> anyhow::Result<()> {
+pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
+    execute_with(args, None)
+}
+
+/// [`execute`] with a live view watching the real-time estimator (`aeroident live`): `view`
+/// sees every sample beside the console, and gets the final summary before the results are
+/// written. A batch fit is refused with it.
+///
+/// # Errors
+/// As [`execute`].
+pub fn execute_with(
+    mut args: ReplayArgs,
+    view: Option<&mut aeroident_pipelines::live::LiveObserver>,
+) -> anyhow::Result<()> {
+    if view.is_some() && args.estimator.is_batch() {
+        anyhow::bail!(
+            "the live view watches a real-time estimator; --estimator {} is a batch fit of the whole record (use `aeroident replay`)",
+            args.estimator.name()
+        );
+    }
     let mapping = Mapping::from_path(&args.map)?;
     args.windows = super::auto_window::resolve(
         &args.window_specs,
@@ -366,7 +385,7 @@ pub fn execute(mut args: ReplayArgs) -> anyhow::Result<()> {
     if !live && args.out.is_none() {
         anyhow::bail!("give --out <dir> (or read `-` from stdin for a live feed on stdout)");
     }
-    online::execute(&args, &job, prepared, &interrupt, out_dir)
+    online::execute(&args, &job, prepared, (&interrupt, view), out_dir)
 }
 
 /// The records of the command line: `DATA` and `--and`, in `--format`, through `mapping`.

@@ -1,11 +1,12 @@
 //! How far the live view lags a 100 Hz MAVLink feed: the JSBSim F-16 doublets (../shared),
 //! 1,200 samples sent over UDP loopback at 100 samples a second (each sample's frame of
 //! messages, the clock last) to `aeroident live mavlink:udp:…`, while this test reads the
-//! page's event stream (`/events`) as the page does. For each update, the lag is the wall
-//! time from sending the sample the update shows as latest to the update's arrival: the
-//! differentiator's half window (2 samples), the estimator, the server's tick (0.1 s) and the
-//! stream. The view must stay within 0.5 s of the feed at every update after the first
-//! sample; the numbers are printed (docs/live.md quotes them).
+//! page's event stream (`/events`) as the page does. For each update, its lag is the wall
+//! time from sending the sample the update shows as latest to the update's arrival (the
+//! record stage's look-ahead: the spike screen's 8 samples and the differentiator's 2, the
+//! estimator, the stream); the page is furthest behind just before the next update arrives
+//! (one server tick, 0.1 s, later). That worst case must stay below 0.5 s at every update;
+//! the numbers are printed (docs/live.md quotes them).
 
 mod common;
 use aeroident_estimators::AirDataSample;
@@ -113,28 +114,37 @@ fn live_view_keeps_within_half_a_second_of_a_100_hz_feed() {
     let updates = reader.join().unwrap();
     assert!(child.wait().unwrap().success());
     let sent = sent.lock().unwrap();
-    let mut lags: Vec<f64> = updates
+    // When each update's latest sample was sent.
+    let shown: Vec<(Instant, Instant)> = updates
         .iter()
         .filter_map(|(at, t)| {
             let k = sent.partition_point(|(ts, _)| ts < &(t - 5e-4));
             let (ts, when) = sent.get(k)?;
             assert!((ts - t).abs() < 1e-3, "update shows t = {t}, nearest sent {ts}");
-            Some(at.saturating_duration_since(*when).as_secs_f64())
+            Some((*at, *when))
         })
         .collect();
-    assert!(lags.len() > 50, "{} updates", lags.len());
+    assert!(shown.len() > 50, "{} updates", shown.len());
+    let secs = |a: Instant, b: Instant| a.saturating_duration_since(b).as_secs_f64();
+    // The lag as an update arrives, and the most the page is behind: just before the next
+    // update arrives, it still shows this one's sample.
+    let mut lags: Vec<f64> = shown.iter().map(|(at, when)| secs(*at, *when)).collect();
+    let mut behind: Vec<f64> = shown.windows(2).map(|w| secs(w[1].0, w[0].1)).collect();
     lags.sort_by(f64::total_cmp);
-    let q = |p: f64| lags[((lags.len() - 1) as f64 * p).round() as usize];
+    behind.sort_by(f64::total_cmp);
+    let q = |v: &[f64], p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
     let rate = samples.len() as f64 / feed_s;
     eprintln!(
-        "live view lag behind a {rate:.0} Hz MAVLink feed over {} updates: median {:.3} s, 95 % {:.3} s, max {:.3} s",
-        lags.len(),
-        q(0.5),
-        q(0.95),
-        q(1.0)
+        "live view behind a {rate:.0} Hz MAVLink feed over {} updates: on arrival median {:.3} s, max {:.3} s; at most (before the next update) median {:.3} s, 95 % {:.3} s, max {:.3} s",
+        shown.len(),
+        q(&lags, 0.5),
+        q(&lags, 1.0),
+        q(&behind, 0.5),
+        q(&behind, 0.95),
+        q(&behind, 1.0)
     );
     assert!(rate > 90.0, "the feed ran at {rate} Hz");
-    assert!(q(1.0) < 0.5, "the view lagged the feed by up to {} s", q(1.0));
+    assert!(q(&behind, 1.0) < 0.5, "the view was behind the feed by up to {} s", q(&behind, 1.0));
     let summary: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["samples_read"], samples.len());

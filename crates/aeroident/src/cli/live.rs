@@ -11,7 +11,7 @@
 //! gives one), its state (waiting for excitation / converging / identified / flagged with the
 //! reason, [`aeroident_pipelines::live::phase`]), the control inputs and their excitation, and
 //! the feed's counts (rows read and rejected, gaps; a MAVLink link's datagrams, losses and
-//! drops), updated ten times a second ([`server`]). A browser that connects late gets the
+//! drops), updated ten times a second (`live/server.rs`). A browser that connects late gets the
 //! whole history first. The bound address is printed on stderr (`--serve 127.0.0.1:0` takes
 //! any free port). A recorded file is paced at `--speed` × real time (default 1); stdin and a
 //! MAVLink feed come at their own pace. Ctrl-C or the feed's end writes the usual outputs of

@@ -25,7 +25,7 @@ pub(super) fn execute(
     args: &ReplayArgs,
     job: &ReplayJob,
     prepared: Prepared,
-    (interrupt, mut view): (&crate::interrupt::Interrupt, Option<&mut LiveObserver>),
+    (interrupt, view): (&crate::interrupt::Interrupt, Option<&mut LiveObserver>),
     mut out_dir: Option<crate::outdir::OutputDir>,
 ) -> anyhow::Result<()> {
     let live = job.records.live;
@@ -46,7 +46,7 @@ pub(super) fn execute(
             sinks.push(&mut status);
         }
         let mut none = ();
-        let view: &mut dyn ReplayObserver = match view.as_deref_mut() {
+        let view: &mut dyn ReplayObserver = match view {
             Some(v) => v,
             None => &mut none,
         };

@@ -5,6 +5,8 @@
 //! two thin faces over this crate, and the reports and figures render its outcomes.
 //!
 //! - [`job`]: the replay job and the batch-fit job a face runs, from options to one outcome.
+//! - [`live`]: the live view of a replay (per-derivative states, history, the feed's counts)
+//!   that a server streams to a browser.
 //! - [`replay`]: a recorded (or streamed) flight through an estimator, online or as a batch
 //!   fit ([`replay::batch`]), with validation on a second record.
 //! - [`aircraft`]: the closed-loop experiment (trim → fly → sense → estimate → summarise).
@@ -33,6 +35,7 @@ pub mod export;
 pub mod freqresp;
 pub mod inspect;
 pub mod job;
+pub mod live;
 /// Convergence-time and error metrics of estimate histories.
 pub mod metrics;
 pub mod montecarlo;

@@ -11,6 +11,7 @@ pub mod f16;
 pub mod freqresp;
 pub mod inspect;
 pub mod linearize;
+pub mod live;
 pub mod montecarlo;
 pub mod poc;
 pub mod replay;
@@ -39,6 +40,8 @@ pub enum Command {
     Montecarlo(montecarlo::MonteCarloArgs),
     /// Replay a recorded flight through an estimator, sample by sample.
     Replay(Box<replay::ReplayArgs>),
+    /// The replay with a live control-room view in the browser (a loopback address).
+    Live(Box<live::LiveArgs>),
     /// Check a record's data compatibility: the biases, scale factors and time shifts that
     /// make its accelerations, rates, attitudes and air data consistent.
     Compat(compat::CompatArgs),
@@ -92,6 +95,7 @@ impl Cli {
             Command::Run(a) => run::execute(a),
             Command::Montecarlo(a) => montecarlo::execute(a),
             Command::Replay(a) => replay::execute(*a),
+            Command::Live(a) => live::execute(*a),
             Command::Compat(a) => compat::execute(a),
             Command::Bench(a) => bench::execute(a),
             Command::Export(a) => export::execute(a),

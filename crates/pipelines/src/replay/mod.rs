@@ -141,6 +141,15 @@ pub trait ReplayObserver {
     /// A warning, the moment it arises (those about the data are also kept in the summary).
     fn warning(&mut self, _text: &str) {}
 
+    /// Each record event as it is read (a sample, a rejected row, a gap), before the replay
+    /// acts on it: what a live view counts of the feed.
+    fn record_event(&mut self, _event: &aeroident_io::RecordEvent) {}
+
+    /// The conditioned sample fed to the estimator, just before the
+    /// [`estimate`](Self::estimate) it gives (a sample the estimator refuses gives none): its
+    /// inputs are what a live view draws beside the estimates.
+    fn sample(&mut self, _sample: &AirDataSample) {}
+
     /// Once at the end of the record.
     ///
     /// # Errors
@@ -195,6 +204,16 @@ impl<A: ReplayObserver, B: ReplayObserver> ReplayObserver for (A, B) {
         self.1.warning(text);
     }
 
+    fn record_event(&mut self, event: &aeroident_io::RecordEvent) {
+        self.0.record_event(event);
+        self.1.record_event(event);
+    }
+
+    fn sample(&mut self, sample: &AirDataSample) {
+        self.0.sample(sample);
+        self.1.sample(sample);
+    }
+
     fn finish(&mut self) -> std::io::Result<()> {
         self.0.finish()?;
         self.1.finish()
@@ -202,6 +221,47 @@ impl<A: ReplayObserver, B: ReplayObserver> ReplayObserver for (A, B) {
 
     fn stop_requested(&mut self) -> bool {
         self.0.stop_requested() || self.1.stop_requested()
+    }
+}
+
+/// An observer borrowed (`&mut dyn ReplayObserver` too): a face that may or may not add an
+/// observer of its own pairs it with the others without owning it.
+impl<T: ReplayObserver + ?Sized> ReplayObserver for &mut T {
+    fn model(&mut self, line: &str) {
+        (**self).model(line);
+    }
+
+    fn start(&mut self, names: &[&str]) -> std::io::Result<()> {
+        (**self).start(names)
+    }
+
+    fn estimate(
+        &mut self,
+        t_s: f64,
+        values: &[Option<f64>],
+        sigmas: &[Option<f64>],
+    ) -> std::io::Result<()> {
+        (**self).estimate(t_s, values, sigmas)
+    }
+
+    fn warning(&mut self, text: &str) {
+        (**self).warning(text);
+    }
+
+    fn record_event(&mut self, event: &aeroident_io::RecordEvent) {
+        (**self).record_event(event);
+    }
+
+    fn sample(&mut self, sample: &AirDataSample) {
+        (**self).sample(sample);
+    }
+
+    fn finish(&mut self) -> std::io::Result<()> {
+        (**self).finish()
+    }
+
+    fn stop_requested(&mut self) -> bool {
+        (**self).stop_requested()
     }
 }
 

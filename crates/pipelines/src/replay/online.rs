@@ -159,6 +159,7 @@ impl<'a> Replay<'a> {
     ) -> Result<(), ReplayError> {
         self.ready.clear();
         self.unused.clear();
+        self.observer.record_event(&event);
         match event {
             RecordEvent::Rejected { row, problem } => {
                 self.samples_read += 1;
@@ -325,6 +326,7 @@ impl<'a> Replay<'a> {
         let values: Vec<Option<f64>> = (0..n).map(|i| e.value(i)).collect();
         let sigmas: Vec<Option<f64>> = (0..n).map(|i| e.sigma(i)).collect();
         self.pace(s.t_s);
+        self.observer.sample(s);
         self.observer.estimate(s.t_s, &values, &sigmas)?;
         self.recorder.push(s);
         self.history.push(s.t_s, values, sigmas);

@@ -309,7 +309,20 @@ fn parse_band(text: &str) -> Result<(f64, f64), String> {
 /// # Errors
 /// Mapping, model-file or data errors (naming file, row or line, and column or key),
 /// estimator errors (not available, bad option, diverged), and output I/O errors.
-pub fn execute(mut args: ReplayArgs) -> anyhow::Result<()> {
+pub fn execute(args: ReplayArgs) -> anyhow::Result<()> {
+    execute_with(args, None)
+}
+
+/// [`execute`] with a live view watching the real-time estimator (`aeroident live`): `view`
+/// sees every sample beside the console, and gets the final summary before the results are
+/// written. A batch fit is refused with it.
+///
+/// # Errors
+/// As [`execute`].
+pub fn execute_with(
+    mut args: ReplayArgs,
+    view: Option<&mut aeroident_pipelines::live::LiveObserver>,
+) -> anyhow::Result<()> {
     let mapping = Mapping::from_path(&args.map)?;
     args.windows = super::auto_window::resolve(
         &args.window_specs,
@@ -320,7 +333,7 @@ pub fn execute(mut args: ReplayArgs) -> anyhow::Result<()> {
     )?;
     let mavlink = crate::live::is_mavlink(&args.data);
     let live = args.data == "-" || mavlink;
-    check_combination(&args, mavlink)?;
+    check_combination(&args, mavlink, view.is_some())?;
     let records = records(&args, mapping, live);
     // The options are parsed and the job checks what does not go together before the output
     // directory is touched.
@@ -342,14 +355,7 @@ pub fn execute(mut args: ReplayArgs) -> anyhow::Result<()> {
     let interrupt = crate::interrupt::Interrupt::install().context("installing signal handlers")?;
     let mut guard = Watched(&interrupt);
     let Some(job) = online else {
-        let job = FitJob {
-            records,
-            model: model_choice(&args),
-            compat: args.compat.as_deref().map(CompatSource::from_arg),
-            options: fit.context("internal: no batch fit options")?,
-            cross_check: args.cross_check,
-            validate_on: validate_on(&args),
-        };
+        let job = fit_job(&args, records, fit.context("internal: no batch fit options")?);
         return match job.prepare(&mut guard, &mut Stderr)? {
             Ran::Done(prepared) => batch::execute(&args, job, prepared, &interrupt, out_dir),
             Ran::Stopped(step) => {
@@ -366,7 +372,19 @@ pub fn execute(mut args: ReplayArgs) -> anyhow::Result<()> {
     if !live && args.out.is_none() {
         anyhow::bail!("give --out <dir> (or read `-` from stdin for a live feed on stdout)");
     }
-    online::execute(&args, &job, prepared, &interrupt, out_dir)
+    online::execute(&args, &job, prepared, (&interrupt, view), out_dir)
+}
+
+/// The batch-fit job of the command line's records and the fit's options.
+fn fit_job(args: &ReplayArgs, records: Records, options: FitOptions) -> FitJob {
+    FitJob {
+        records,
+        model: model_choice(args),
+        compat: args.compat.as_deref().map(CompatSource::from_arg),
+        options,
+        cross_check: args.cross_check,
+        validate_on: validate_on(args),
+    }
 }
 
 /// The records of the command line: `DATA` and `--and`, in `--format`, through `mapping`.
@@ -427,10 +445,16 @@ fn validate_on(args: &ReplayArgs) -> Option<ValidateOn> {
     ValidateOn::from_args(path, args.validate_windows.clone(), &args.data)
 }
 
-/// Refuses flags that do not go together (a batch fit of a live feed, a batch fit's flag with
-/// a real-time estimator), before anything is opened; which batch method takes which option is
-/// the batch fit's parser's ([`fit_options`]).
-fn check_combination(args: &ReplayArgs, mavlink: bool) -> anyhow::Result<()> {
+/// Refuses flags that do not go together (a batch fit of a live feed or under a live view, a
+/// batch fit's flag with a real-time estimator), before anything is opened; which batch method
+/// takes which option is the batch fit's parser's ([`fit_options`]).
+fn check_combination(args: &ReplayArgs, mavlink: bool, view: bool) -> anyhow::Result<()> {
+    if view && args.estimator.is_batch() {
+        anyhow::bail!(
+            "the live view watches a real-time estimator; --estimator {} is a batch fit of the whole record (use `aeroident replay`)",
+            args.estimator.name()
+        );
+    }
     if args.estimator.is_batch() && mavlink {
         anyhow::bail!(
             "--estimator {} is a batch fit of a whole record, not for a live MAVLink feed",

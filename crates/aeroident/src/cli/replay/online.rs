@@ -10,6 +10,7 @@ use super::stop::{
 use super::{Console, ReplayArgs, validation_block};
 use aeroident_io::{FlightDataReader, LogFormat, open_log_with_report};
 use aeroident_pipelines::job::replay::{Prepared, ReplayJob, ReplayJobOutcome};
+use aeroident_pipelines::live::{LiveObserver, SharedLive};
 use aeroident_pipelines::replay::{
     EstimateRows, ReplayError, ReplayObserver, ReplayOptions, ReplayOutcome, replay,
 };
@@ -24,10 +25,11 @@ pub(super) fn execute(
     args: &ReplayArgs,
     job: &ReplayJob,
     prepared: Prepared,
-    interrupt: &crate::interrupt::Interrupt,
+    (interrupt, view): (&crate::interrupt::Interrupt, Option<&mut LiveObserver>),
     mut out_dir: Option<crate::outdir::OutputDir>,
 ) -> anyhow::Result<()> {
     let live = job.records.live;
+    let shared = view.as_ref().map(|v| v.shared());
     let mut csv_file = out_dir.as_mut().map(|o| o.create("estimates.csv")).transpose()?;
     let bar = progress_bar(args, live);
     let outcome = {
@@ -43,9 +45,15 @@ pub(super) fn execute(
         if crate::progress::enabled() {
             sinks.push(&mut status);
         }
+        let mut none = ();
+        let view: &mut dyn ReplayObserver = match view {
+            Some(v) => v,
+            None => &mut none,
+        };
         let mut console =
-            (Console { interrupt }, EstimateRows { sinks, flush_each: args.realtime });
-        replay_record(args, job, &prepared.options, interrupt, &bar, &mut console)?
+            ((Console { interrupt }, EstimateRows { sinks, flush_each: args.realtime }), view);
+        let opened = (interrupt, shared.as_ref());
+        replay_record(args, job, &prepared.options, opened, &bar, &mut console)?
     };
     bar.finish_and_clear();
     let outcome = match outcome {
@@ -60,6 +68,9 @@ pub(super) fn execute(
     };
     let stopped_why = || validation_stopped(interrupt);
     let done = job.finish(prepared, outcome, &mut Watched(interrupt), &mut Stderr, stopped_why)?;
+    if let Some(v) = &shared {
+        v.lock().unwrap_or_else(std::sync::PoisonError::into_inner).conclude(&done.outcome.summary);
+    }
     if let Some(f) = csv_file {
         f.commit()?;
     }
@@ -98,7 +109,7 @@ fn replay_record(
     args: &ReplayArgs,
     job: &ReplayJob,
     opts: &ReplayOptions,
-    interrupt: &crate::interrupt::Interrupt,
+    (interrupt, view): (&crate::interrupt::Interrupt, Option<&SharedLive>),
     bar: &indicatif::ProgressBar,
     console: &mut dyn ReplayObserver,
 ) -> anyhow::Result<Result<ReplayOutcome, ReplayError>> {
@@ -109,6 +120,9 @@ fn replay_record(
         .unwrap_or(LogFormat::Csv);
     if crate::live::is_mavlink(&args.data) {
         let (reader, stats) = crate::live::open_mavlink(&args.data, mapping)?;
+        if let Some(v) = view {
+            v.lock().unwrap_or_else(std::sync::PoisonError::into_inner).watch_link(stats.clone());
+        }
         return Ok(replay(reader, mapping, opts, console)
             .map(|mut outcome| {
                 crate::live::finish(&mut outcome.summary, &stats);

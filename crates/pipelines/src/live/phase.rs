@@ -1,0 +1,174 @@
+//! The state of one derivative in the live view, from its estimate and σ over time.
+//!
+//! - **waiting** (for excitation): the estimator has no estimate yet. A recursive estimator
+//!   gives none until the inputs have excited the parameter enough to separate it from the
+//!   others (RLS: until its information matrix has full rank).
+//! - **converging**: an estimate, but its σ is above the set fraction of its magnitude, or it
+//!   has been below it for less than the hold time, or the estimator gives no σ.
+//! - **identified**: σ ≤ `sigma_fraction` × |estimate| continuously for `hold_s`, and over that
+//!   time the estimate stayed within a band of width `sigma_fraction` × |estimate| (it is
+//!   stable, not merely confident while it drifts).
+//! - **flagged**, with the reason: while running, the estimate lies outside the aircraft's
+//!   plausible range by more than 2σ ([`crate::plausibility::implausible`]); at the end, any
+//!   flag of the final summary (cross-check, plausibility, compatibility, precision).
+
+/// The thresholds of the states.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PhaseRule {
+    /// Largest σ / |estimate| of an identified derivative (default 0.1: 10 %).
+    pub sigma_fraction: f64,
+    /// How long the σ must stay below the fraction, and the estimate in its band, s
+    /// (default 2 s).
+    pub hold_s: f64,
+}
+
+impl Default for PhaseRule {
+    fn default() -> Self {
+        Self { sigma_fraction: 0.1, hold_s: 2.0 }
+    }
+}
+
+/// One derivative's state (module doc).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Phase {
+    /// No estimate yet: waiting for excitation.
+    Waiting,
+    /// An estimate, not yet precise or stable enough.
+    Converging,
+    /// Precise and stable for the hold time.
+    Identified,
+    /// Flagged; the reason is beside it.
+    Flagged,
+}
+
+/// Since when a derivative has met the σ rule, and the band its estimate spanned since.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Since {
+    t_s: f64,
+    lo: f64,
+    hi: f64,
+}
+
+/// The state machine of one derivative (module doc).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Tracker {
+    since: Option<Since>,
+    phase: Option<Phase>,
+    reason: Option<String>,
+}
+
+impl Tracker {
+    /// The state now (waiting before the first step).
+    pub fn phase(&self) -> Phase {
+        self.phase.unwrap_or(Phase::Waiting)
+    }
+
+    /// Why it is flagged (`None` unless [`Phase::Flagged`]).
+    pub fn reason(&self) -> Option<&str> {
+        self.reason.as_deref()
+    }
+
+    /// One sample at `t_s`: the estimate, its σ and the plausibility flag of that estimate.
+    pub fn step(
+        &mut self,
+        rule: &PhaseRule,
+        t_s: f64,
+        value: Option<f64>,
+        sigma: Option<f64>,
+        flag: Option<String>,
+    ) {
+        self.reason = None;
+        let Some(v) = value.filter(|v| v.is_finite()) else {
+            self.since = None;
+            self.phase = Some(Phase::Waiting);
+            return;
+        };
+        if let Some(f) = flag {
+            self.since = None;
+            self.phase = Some(Phase::Flagged);
+            self.reason = Some(f);
+            return;
+        }
+        let limit = rule.sigma_fraction * v.abs();
+        let tight = sigma.is_some_and(|s| s.is_finite() && s <= limit);
+        if !tight {
+            self.since = None;
+            self.phase = Some(Phase::Converging);
+            return;
+        }
+        let since = match self.since {
+            Some(s) if s.hi.max(v) - s.lo.min(v) <= limit => {
+                Since { t_s: s.t_s, lo: s.lo.min(v), hi: s.hi.max(v) }
+            }
+            // First time within the rule, or the estimate left its band: the hold restarts.
+            _ => Since { t_s, lo: v, hi: v },
+        };
+        self.since = Some(since);
+        let held = t_s - since.t_s >= rule.hold_s;
+        self.phase = Some(if held { Phase::Identified } else { Phase::Converging });
+    }
+
+    /// The end of the run: the final summary's flags, if any, flag the derivative with them
+    /// as the reason; without any the last state stays.
+    pub fn conclude(&mut self, flags: &[String]) {
+        if !flags.is_empty() {
+            self.phase = Some(Phase::Flagged);
+            self.reason = Some(flags.join("; "));
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const RULE: PhaseRule = PhaseRule { sigma_fraction: 0.1, hold_s: 2.0 };
+
+    /// Waiting without an estimate; converging while σ is above 10 % of |estimate|; identified
+    /// only once σ ≤ 10 % has held for 2 s with the estimate inside a band of 10 % of its
+    /// magnitude; a jump out of that band restarts the hold.
+    #[test]
+    fn states_follow_the_sigma_rule_and_the_hold_time() {
+        let mut k = Tracker::default();
+        assert_eq!(k.phase(), Phase::Waiting);
+        k.step(&RULE, 0.0, None, None, None);
+        assert_eq!(k.phase(), Phase::Waiting);
+        // σ = 0.2 on an estimate of −1: 20 % > 10 %.
+        k.step(&RULE, 0.1, Some(-1.0), Some(0.2), None);
+        assert_eq!(k.phase(), Phase::Converging);
+        // No σ: never identified.
+        k.step(&RULE, 0.2, Some(-1.0), None, None);
+        assert_eq!(k.phase(), Phase::Converging);
+        // σ 5 % from t = 1 s: identified at t = 3 s, not before.
+        for i in 0..20 {
+            let t = 1.0 + 0.1 * f64::from(i);
+            k.step(&RULE, t, Some(-1.0 + 0.001 * f64::from(i)), Some(0.05), None);
+            assert_eq!(k.phase(), Phase::Converging, "t = {t}");
+        }
+        k.step(&RULE, 3.0, Some(-0.98), Some(0.05), None);
+        assert_eq!(k.phase(), Phase::Identified);
+        // A jump by 0.15 (> 10 % of 0.83) restarts the hold although σ stays small.
+        k.step(&RULE, 3.1, Some(-0.83), Some(0.05), None);
+        assert_eq!(k.phase(), Phase::Converging);
+        k.step(&RULE, 5.0, Some(-0.83), Some(0.05), None);
+        assert_eq!(k.phase(), Phase::Converging);
+        k.step(&RULE, 5.2, Some(-0.83), Some(0.05), None);
+        assert_eq!(k.phase(), Phase::Identified);
+    }
+
+    /// A plausibility flag flags the derivative with its reason while it holds; the final
+    /// summary's flags flag it at the end, and no flag leaves the last state.
+    #[test]
+    fn flags_carry_their_reason() {
+        let mut k = Tracker::default();
+        k.step(&RULE, 0.0, Some(5.0), Some(0.1), Some("outside".into()));
+        assert_eq!((k.phase(), k.reason()), (Phase::Flagged, Some("outside")));
+        k.step(&RULE, 0.1, Some(-1.0), Some(0.01), None);
+        assert_eq!((k.phase(), k.reason()), (Phase::Converging, None));
+        k.conclude(&[]);
+        assert_eq!(k.phase(), Phase::Converging);
+        k.conclude(&["cross-check: a".into(), "b".into()]);
+        assert_eq!((k.phase(), k.reason()), (Phase::Flagged, Some("cross-check: a; b")));
+    }
+}

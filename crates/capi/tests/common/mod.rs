@@ -1,0 +1,101 @@
+//! Helpers of the C-ABI integration tests (each test binary includes this module; not every
+//! binary uses every helper).
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The workspace root.
+pub fn workspace() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// The record at `../shared/flightdata/<rel>` beside the workspace root, or `None` with a
+/// SKIPPED message when the shared data are absent. Under CI (`CI=true`) a missing record is a
+/// failure: CI always has `../shared`, so a skip there would hide a broken path.
+pub fn shared(rel: &str) -> Option<PathBuf> {
+    let p = workspace().join("../shared/flightdata").join(rel);
+    if p.exists() {
+        return Some(p);
+    }
+    assert!(!under_ci(), "{} is absent under CI", p.display());
+    eprintln!("SKIPPED: {} is absent (CI provides ../shared beside the repository)", p.display());
+    None
+}
+
+/// Whether the tests run under CI (`CI=true`).
+pub fn under_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| v == "true")
+}
+
+/// `target/<profile>`: where this test binary's profile puts the libraries and binaries.
+pub fn profile_dir() -> PathBuf {
+    let exe = std::env::current_exe().expect("the test binary's path");
+    // target/<profile>/deps/<test binary>
+    exe.parent().and_then(Path::parent).expect("target/<profile>/deps").to_path_buf()
+}
+
+/// Builds `package` (its `--bin` `bin` if given) in this test binary's target directory and
+/// profile with the cargo that runs the tests, so that what the test uses is current (a no-op
+/// when it is; `cargo test --workspace` has already built it).
+pub fn cargo_build(package: &str, bin: Option<&str>) {
+    let dir = profile_dir();
+    let profile = dir.file_name().and_then(|n| n.to_str()).expect("a profile directory");
+    let target = dir.parent().expect("the target directory");
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let mut c = Command::new(cargo);
+    c.current_dir(workspace()).args(["build", "-q", "-p", package]).arg("--target-dir").arg(target);
+    match profile {
+        "debug" => {}
+        "release" => {
+            c.arg("--release");
+        }
+        other => {
+            c.args(["--profile", other]);
+        }
+    }
+    if let Some(b) = bin {
+        c.args(["--bin", b]);
+    }
+    let out = c.output().expect("running cargo");
+    assert!(
+        out.status.success(),
+        "cargo build -p {package}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// A fresh scratch directory under the target directory.
+pub fn scratch(name: &str) -> PathBuf {
+    let d = profile_dir().join("capi-tests").join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Whether `gcc` runs; `false` with a SKIPPED message, a failure under CI (it has gcc).
+pub fn have_gcc() -> bool {
+    if Command::new("gcc").arg("--version").output().is_ok_and(|o| o.status.success()) {
+        return true;
+    }
+    assert!(!under_ci(), "gcc is absent under CI");
+    eprintln!("SKIPPED: gcc is not installed");
+    false
+}
+
+/// Compiles the C program `source` (relative to the workspace) against the committed header
+/// and the static library of this profile (built first) into `out`.
+pub fn compile_c(source: &str, out: &Path) {
+    cargo_build("aeroident-capi", None);
+    let lib = profile_dir().join("libaeroident_capi.a");
+    let o = Command::new("gcc")
+        .args(["-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic", "-I"])
+        .arg(workspace().join("crates/capi/include"))
+        .arg(workspace().join(source))
+        .arg(&lib)
+        .args(["-lpthread", "-ldl", "-lm", "-o"])
+        .arg(out)
+        .output()
+        .expect("running gcc");
+    assert!(o.status.success(), "gcc {source}: {}", String::from_utf8_lossy(&o.stderr));
+}

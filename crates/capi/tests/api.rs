@@ -149,10 +149,13 @@ fn rls_through_the_c_abi_recovers_the_coefficients_put_into_the_samples() {
     }
 }
 
+/// A creation that must fail: kind, model, options, the code, words of the message.
+type Case<'a> = (&'a str, &'a str, Option<&'a str>, AeroidentResult, &'a [&'a str]);
+
 /// Each wrong argument gives its code and a message naming it; nothing panics.
 #[test]
 fn errors_are_codes_with_a_message_naming_what_was_wrong() {
-    let cases: [(&str, &str, Option<&str>, AeroidentResult, &[&str]); 6] = [
+    let cases: [Case; 6] = [
         (
             "kalman",
             "longitudinal",

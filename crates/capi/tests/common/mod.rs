@@ -93,7 +93,7 @@ pub fn compile_c(source: &str, out: &Path) {
         .arg(workspace().join("crates/capi/include"))
         .arg(workspace().join(source))
         .arg(&lib)
-        .args(["-lpthread", "-ldl", "-lm", "-o"])
+        .args(["-lpthread", "-ldl", "-lm", "-Wl,--gc-sections", "-o"])
         .arg(out)
         .output()
         .expect("running gcc");

@@ -15,7 +15,7 @@ use aeroident_io::{Mapping, ModelSpec, open_log};
 use aeroident_pipelines::Named;
 use aeroident_pipelines::estimators::{EstimatorKind, parse_options};
 use aeroident_pipelines::replay::ReplayOptions;
-use common::{cargo_build, compile_c, have_gcc, profile_dir, scratch, shared, workspace};
+use common::{cli_binary, compile_c, have_gcc, scratch, shared, workspace};
 use std::path::Path;
 use std::process::Command;
 
@@ -25,8 +25,14 @@ const MODEL: &str = "models/hfb320_jategaonkar.toml";
 
 /// `aeroident replay` of the record with `kind` and `options` (`--estimator-option` pairs):
 /// its `estimates.csv` and `summary.json`.
-fn cli(record: &Path, kind: &str, options: &[&str], out: &Path) -> (String, serde_json::Value) {
-    let mut c = Command::new(profile_dir().join("aeroident"));
+fn cli(
+    bin: &Path,
+    record: &Path,
+    kind: &str,
+    options: &[&str],
+    out: &Path,
+) -> (String, serde_json::Value) {
+    let mut c = Command::new(bin);
     c.arg("replay").arg(record).arg("--map").arg(workspace().join(MAPPING));
     c.arg("--model").arg(workspace().join(MODEL)).args(["--estimator", kind]);
     for o in options {
@@ -124,7 +130,7 @@ fn c_example_replays_hfb320_with_the_command_lines_estimates() {
     if !have_gcc() {
         return;
     }
-    cargo_build("aeroident", Some("aeroident"));
+    let bin = cli_binary();
     let dir = scratch("hfb320");
     let program = dir.join("replay_samples");
     compile_c("examples/c/replay_samples.c", &program);
@@ -132,7 +138,8 @@ fn c_example_replays_hfb320_with_the_command_lines_estimates() {
         let cli_options: Vec<String> =
             options.split_terminator('\n').map(|l| l.replace(" = ", "=")).collect();
         let cli_options: Vec<&str> = cli_options.iter().map(String::as_str).collect();
-        let (csv, summary) = cli(&record, kind, &cli_options, &dir.join(format!("cli-{kind}")));
+        let (csv, summary) =
+            cli(&bin, &record, kind, &cli_options, &dir.join(format!("cli-{kind}")));
         let fed = dir.join(format!("samples-{kind}.csv"));
         let n = samples(&record, kind, options, &fed);
         assert!(n > 500, "{kind}: {n} samples fed");

@@ -35,9 +35,59 @@ pub fn profile_dir() -> PathBuf {
     exe.parent().and_then(Path::parent).expect("target/<profile>/deps").to_path_buf()
 }
 
+/// The command line's binary, current: `AEROIDENT_BIN` if set; else this profile's
+/// `aeroident` when it is newer than every source file of the workspace (as after `cargo test
+/// --workspace`, which builds it with the tests); else built first with the cargo that runs the
+/// tests (`cargo test -p aeroident-capi` alone).
+pub fn cli_binary() -> PathBuf {
+    if let Ok(p) = std::env::var("AEROIDENT_BIN") {
+        return PathBuf::from(p);
+    }
+    let bin = profile_dir().join("aeroident");
+    let built = std::fs::metadata(&bin).and_then(|m| m.modified()).ok();
+    if built.is_none_or(|b| newest_source().is_none_or(|s| s > b)) {
+        cargo_build("aeroident", Some("aeroident"));
+    }
+    bin
+}
+
+/// The latest modification time of the sources and manifests the command line is built from.
+fn newest_source() -> Option<std::time::SystemTime> {
+    fn walk(dir: &Path, newest: &mut Option<std::time::SystemTime>) {
+        let Ok(entries) = std::fs::read_dir(dir) else { return };
+        for e in entries.flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                walk(&p, newest);
+            } else if let Ok(t) = e.metadata().and_then(|m| m.modified()) {
+                *newest = (*newest).max(Some(t));
+            }
+        }
+    }
+    let root = workspace();
+    let mut newest = None;
+    for f in ["Cargo.toml", "Cargo.lock"] {
+        walk_file(&root.join(f), &mut newest);
+    }
+    // The command line depends on every crate but this one and the Python bindings.
+    for krate in std::fs::read_dir(root.join("crates")).ok()?.flatten() {
+        if ["capi", "python"].iter().any(|c| krate.file_name() == *c) {
+            continue;
+        }
+        walk(&krate.path().join("src"), &mut newest);
+        walk_file(&krate.path().join("Cargo.toml"), &mut newest);
+    }
+    newest
+}
+
+fn walk_file(p: &Path, newest: &mut Option<std::time::SystemTime>) {
+    if let Ok(t) = std::fs::metadata(p).and_then(|m| m.modified()) {
+        *newest = (*newest).max(Some(t));
+    }
+}
+
 /// Builds `package` (its `--bin` `bin` if given) in this test binary's target directory and
-/// profile with the cargo that runs the tests, so that what the test uses is current (a no-op
-/// when it is; `cargo test --workspace` has already built it).
+/// profile with the cargo that runs the tests.
 pub fn cargo_build(package: &str, bin: Option<&str>) {
     let dir = profile_dir();
     let profile = dir.file_name().and_then(|n| n.to_str()).expect("a profile directory");
@@ -83,11 +133,22 @@ pub fn have_gcc() -> bool {
     false
 }
 
-/// Compiles the C program `source` (relative to the workspace) against the committed header
-/// and the static library of this profile (built first) into `out`.
-pub fn compile_c(source: &str, out: &Path) {
+/// The static library of this build: the one `cargo test` made beside the test binaries with
+/// the crate's other library kinds (`deps/`, the same build as the tests link), else
+/// `target/<profile>/libaeroident_capi.a` built first.
+pub fn static_library() -> PathBuf {
+    let made = profile_dir().join("deps/libaeroident_capi.a");
+    if made.exists() {
+        return made;
+    }
     cargo_build("aeroident-capi", None);
-    let lib = profile_dir().join("libaeroident_capi.a");
+    profile_dir().join("libaeroident_capi.a")
+}
+
+/// Compiles the C program `source` (relative to the workspace) against the committed header
+/// and [`static_library`] into `out`.
+pub fn compile_c(source: &str, out: &Path) {
+    let lib = static_library();
     let o = Command::new("gcc")
         .args(["-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic", "-I"])
         .arg(workspace().join("crates/capi/include"))

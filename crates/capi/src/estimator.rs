@@ -221,8 +221,8 @@ fn create(
 /// - `out`: receives the handle on success, NULL on failure.
 ///
 /// The estimator is built exactly as `aeroident replay` builds it (the same registry), so the
-/// same samples give the same estimates. Allocates (the estimator, 10 kB – 1 MB by kind and
-/// model); [`aeroident_estimator_update`] then never does.
+/// same samples give the same estimates. Allocates the estimator (fixed capacity over the whole
+/// vocabulary: an RLS is about 0.2 MB); [`aeroident_estimator_update`] then never allocates.
 ///
 /// # Safety
 /// `kind` and `model` are NUL-terminated strings; `options` is one or NULL; `out` points to

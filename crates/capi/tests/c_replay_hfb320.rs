@@ -1,7 +1,8 @@
 //! The C example (`examples/c/replay_samples.c`, compiled with gcc against the committed header
-//! and `libaeroident_capi.a`) replays the HFB-320 record (Jategaonkar 2015, test case 4)
-//! through the C library and prints the same estimates, row for row, as the command line's
-//! `estimates.csv` and `summary.json`, to 1e-12, for `rls`, `ftr` and `ekf`.
+//! and `libaeroident_capi.a`, and again against `libaeroident_capi.so`) replays the HFB-320
+//! record (Jategaonkar 2015, test case 4) through the C library and prints the same estimates,
+//! row for row, as the command line's `estimates.csv` and `summary.json`, to 1e-12, for `rls`,
+//! `ftr` and `ekf`.
 //!
 //! The C program is fed the samples the command line's estimator is fed
 //! (`aeroident_capi::replayed::replay_samples`, written as CSV): the record's reading, mapping,
@@ -15,7 +16,7 @@ use aeroident_io::{Mapping, ModelSpec, open_log};
 use aeroident_pipelines::Named;
 use aeroident_pipelines::estimators::{EstimatorKind, parse_options};
 use aeroident_pipelines::replay::ReplayOptions;
-use common::{cli_binary, compile_c, have_gcc, scratch, shared, workspace};
+use common::{cli_binary, compile_c, compile_c_shared, have_gcc, scratch, shared, workspace};
 use std::path::Path;
 use std::process::Command;
 
@@ -134,6 +135,8 @@ fn c_example_replays_hfb320_with_the_command_lines_estimates() {
     let dir = scratch("hfb320");
     let program = dir.join("replay_samples");
     compile_c("examples/c/replay_samples.c", &program);
+    let shared_program = dir.join("replay_samples_shared");
+    compile_c_shared("examples/c/replay_samples.c", &shared_program);
     for (kind, options) in [("rls", ""), ("ftr", "forgetting = 0.999"), ("ekf", "")] {
         let cli_options: Vec<String> =
             options.split_terminator('\n').map(|l| l.replace(" = ", "=")).collect();
@@ -148,6 +151,8 @@ fn c_example_replays_hfb320_with_the_command_lines_estimates() {
         eprintln!("{kind}: {} rows, largest relative difference {worst:e}", csv.lines().count());
         assert!(worst <= 1e-12, "{kind}: {worst:e}");
         check_summary(kind, &from_c, &summary);
+        // Linked against the shared library instead: the same output.
+        assert_eq!(c_estimates(&shared_program, kind, &fed, options), from_c, "{kind}: shared");
         // The comparison sees a difference: another forgetting factor (RLS) or no option
         // (FTR) moves the estimates by far more than 1e-12.
         if kind != "ekf" {

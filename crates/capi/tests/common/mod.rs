@@ -160,3 +160,27 @@ pub fn compile_c(source: &str, out: &Path) {
         .expect("running gcc");
     assert!(o.status.success(), "gcc {source}: {}", String::from_utf8_lossy(&o.stderr));
 }
+
+/// Compiles the C program `source` against the committed header and the shared library
+/// `cargo test` built beside [`static_library`] (linked by path, found at run time by rpath)
+/// into `out`.
+pub fn compile_c_shared(source: &str, out: &Path) {
+    let lib_dir = static_library().parent().expect("the library's directory").to_path_buf();
+    assert!(
+        lib_dir.join("libaeroident_capi.so").exists(),
+        "no shared library in {}",
+        lib_dir.display()
+    );
+    let o = Command::new("gcc")
+        .args(["-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic", "-I"])
+        .arg(workspace().join("crates/capi/include"))
+        .arg(workspace().join(source))
+        .arg(format!("-L{}", lib_dir.display()))
+        .arg("-laeroident_capi")
+        .arg(format!("-Wl,-rpath,{}", lib_dir.display()))
+        .arg("-o")
+        .arg(out)
+        .output()
+        .expect("running gcc");
+    assert!(o.status.success(), "gcc {source} (shared): {}", String::from_utf8_lossy(&o.stderr));
+}

@@ -595,3 +595,39 @@ pub unsafe extern "C" fn aeroident_estimator_new_manoeuvre(
 pub extern "C" fn aeroident_version() -> *const c_char {
     concat!(env!("CARGO_PKG_VERSION"), "\0").as_ptr().cast()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn message() -> String {
+        // SAFETY: never NULL, NUL-terminated.
+        let m = unsafe { CStr::from_ptr(crate::error::aeroident_last_error_message()) };
+        m.to_str().unwrap().to_string()
+    }
+
+    /// A panic inside a call comes back as `PANIC` with its message instead of unwinding; the
+    /// handle it happened in refuses further use until it is reset, which makes it usable again.
+    #[test]
+    fn a_panic_inside_a_call_is_a_code_and_poisons_the_handle() {
+        assert_eq!(guarded(|| panic!("boom {}", 1)), AeroidentResult::Panic);
+        assert!(message().contains("internal error (a bug in aeroident): boom 1"), "{}", message());
+        let spec = ModelSpec::preset("longitudinal").unwrap();
+        let h = create(EstimatorKind::Rls, &spec, EstimatorOptions::default()).unwrap();
+        let e = Box::into_raw(Box::new(h));
+        // SAFETY: a live handle, used by this thread only, freed once at the end.
+        unsafe {
+            let r = with_handle(e, |_| panic!("inside the estimator"));
+            assert_eq!(r, AeroidentResult::Panic);
+            assert!(message().contains("inside the estimator"), "{}", message());
+            let s = AeroidentSample::default();
+            assert_eq!(aeroident_estimator_update(e, &s), AeroidentResult::Panic);
+            assert!(message().contains("reset or free it"), "{}", message());
+            assert_eq!(aeroident_estimator_n_params(e), 0);
+            assert_eq!(aeroident_estimator_reset(e), AeroidentResult::Ok);
+            assert_eq!(aeroident_estimator_n_params(e), 12);
+            assert_eq!(aeroident_estimator_update(e, &s), AeroidentResult::SampleRefused);
+            aeroident_estimator_free(e);
+        }
+    }
+}

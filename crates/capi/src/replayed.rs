@@ -1,0 +1,316 @@
+//! The samples `aeroident replay` feeds its estimator, for a caller of the C library that wants
+//! to feed the same ones (Rust only; not part of the C ABI).
+//!
+//! The C library estimates from conditioned samples: what the record stage and the
+//! conditioning stage of a replay make of a log's rows (mapping and units, the spike screen,
+//! the compatibility corrections, the causal differentiator's `ṗ q̇ ṙ α̇` and the delay of the
+//! other channels to match, `V0`). Those stages live in `aeroident-pipelines` and run on whole
+//! records; [`replay_samples`] runs the very replay the command line runs, with a recorder
+//! between the pipeline and its estimator, and returns every sample the estimator was given
+//! (and where a new manoeuvre started), in order. [`write_samples_csv`] writes them with the
+//! field names of [`crate::AeroidentSample`], each number so that it reads back to the same `double`.
+
+use aeroident_estimators::{
+    AirDataSample, Estimates, Estimator, EstimatorError, EventLog, ModelStructure,
+};
+use aeroident_io::Mapping;
+use aeroident_pipelines::estimators::build;
+use aeroident_pipelines::replay::{ReplayError, ReplayOptions, ReplayOutcome, replay_with};
+use std::cell::RefCell;
+use std::io::Write;
+use std::rc::Rc;
+
+/// One sample an estimator was given, and the manoeuvre it belongs to (numbered from 0; the
+/// replay starts a new one at each gap in the record, `aeroident_estimator_new_manoeuvre`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FedSample {
+    /// Manoeuvre number.
+    pub manoeuvre: u32,
+    /// The sample, as the estimator's `update` received it.
+    pub sample: AirDataSample,
+}
+
+/// Passes every call to the estimator the replay built and records what it is fed.
+struct Recorder {
+    inner: Box<dyn Estimator + Send>,
+    log: Rc<RefCell<Vec<FedSample>>>,
+    manoeuvre: u32,
+}
+
+impl Estimator for Recorder {
+    fn method(&self) -> &'static str {
+        self.inner.method()
+    }
+
+    fn structure(&self) -> &ModelStructure {
+        self.inner.structure()
+    }
+
+    fn update(&mut self, sample: &AirDataSample) -> Result<&Estimates, EstimatorError> {
+        self.log.borrow_mut().push(FedSample { manoeuvre: self.manoeuvre, sample: *sample });
+        self.inner.update(sample)
+    }
+
+    fn estimates(&self) -> &Estimates {
+        self.inner.estimates()
+    }
+
+    fn covariance(&self, i: usize, j: usize) -> Option<f64> {
+        self.inner.covariance(i, j)
+    }
+
+    fn nis(&self) -> Option<f64> {
+        self.inner.nis()
+    }
+
+    fn events(&self) -> &EventLog {
+        self.inner.events()
+    }
+
+    fn new_manoeuvre(&mut self) {
+        self.manoeuvre += 1;
+        self.inner.new_manoeuvre();
+    }
+}
+
+/// Replays `reader` through `mapping` with `opts`, as `aeroident_pipelines::replay::replay`
+/// (what `aeroident replay` runs: the same stages, the same estimator built by the same
+/// registry with the same options), and returns the samples its estimator was given, in
+/// order, with the replay's outcome.
+///
+/// # Errors
+/// As `aeroident_pipelines::replay::replay`.
+pub fn replay_samples<R: std::io::Read>(
+    reader: aeroident_io::FlightDataReader<R>,
+    mapping: &Mapping,
+    opts: &ReplayOptions,
+) -> Result<(Vec<FedSample>, ReplayOutcome), ReplayError> {
+    let log = Rc::new(RefCell::new(Vec::new()));
+    let built = opts.built_estimator_options(mapping);
+    let make = |model: &aeroident_io::ModelSpec| {
+        let inner = build(opts.estimator, model.structure, model.priors, &built)?;
+        Ok(Box::new(Recorder { inner, log: Rc::clone(&log), manoeuvre: 0 }) as Box<dyn Estimator>)
+    };
+    let outcome = replay_with(reader, mapping, opts, make, &mut ())?;
+    let samples = log.borrow().clone();
+    Ok((samples, outcome))
+}
+
+/// The columns of [`write_samples_csv`]: `manoeuvre`, then the fields of [`crate::AeroidentSample`]
+/// in its order (without `present`: an absent field is an empty cell).
+pub const SAMPLE_COLUMNS: [&str; 37] = [
+    "manoeuvre",
+    "t_s",
+    "vt_mps",
+    "alpha_rad",
+    "qbar_pa",
+    "beta_rad",
+    "p_rad_s",
+    "q_rad_s",
+    "r_rad_s",
+    "pdot_rad_s2",
+    "qdot_rad_s2",
+    "rdot_rad_s2",
+    "alphadot_rad_s",
+    "phi_rad",
+    "theta_rad",
+    "psi_rad",
+    "ax_mps2",
+    "ay_mps2",
+    "az_mps2",
+    "de_rad",
+    "da_rad",
+    "dr_rad",
+    "thrust_n",
+    "throttle",
+    "thrust_moment_nm",
+    "rho_kgpm3",
+    "mass_kg",
+    "S_m2",
+    "cbar_m",
+    "b_m",
+    "Ixx_kgm2",
+    "Iyy_kgm2",
+    "Izz_kgm2",
+    "Ixz_kgm2",
+    "thrust_arm_m",
+    "thrust_incidence_rad",
+    "v0_mps",
+];
+
+/// Writes `samples` as CSV: a header of [`SAMPLE_COLUMNS`], then one row per sample, each
+/// number in the shortest form that reads back (`strtod`, Rust's `parse`) to the same
+/// `double`, an absent field empty.
+///
+/// # Errors
+/// A failed write.
+pub fn write_samples_csv(w: &mut dyn Write, samples: &[FedSample]) -> std::io::Result<()> {
+    writeln!(w, "{}", SAMPLE_COLUMNS.join(","))?;
+    for f in samples {
+        let s = f.sample;
+        let k = s.constants;
+        let required = [s.t_s, s.vt_mps, s.alpha_rad, s.qbar_pa];
+        let measured = [
+            s.beta_rad,
+            s.p_rad_s,
+            s.q_rad_s,
+            s.r_rad_s,
+            s.pdot_rad_s2,
+            s.qdot_rad_s2,
+            s.rdot_rad_s2,
+            s.alphadot_rad_s,
+            s.phi_rad,
+            s.theta_rad,
+            s.psi_rad,
+            s.ax_mps2,
+            s.ay_mps2,
+            s.az_mps2,
+            s.de_rad,
+            s.da_rad,
+            s.dr_rad,
+            s.thrust_n,
+            s.throttle,
+            s.thrust_moment_nm,
+            s.rho_kgpm3,
+        ];
+        let constants = [k.cbar_m, k.b_m, k.Ixx_kgm2, k.Iyy_kgm2, k.Izz_kgm2, k.Ixz_kgm2];
+        write!(w, "{}", f.manoeuvre)?;
+        required.iter().try_for_each(|v| write!(w, ",{v}"))?;
+        measured.iter().try_for_each(|v| cell(w, *v))?;
+        write!(w, ",{},{}", k.mass_kg, k.S_m2)?;
+        constants.iter().try_for_each(|v| cell(w, *v))?;
+        write!(w, ",{},{}", k.thrust_arm_m, k.thrust_incidence_rad)?;
+        cell(w, k.v0_mps)?;
+        writeln!(w)?;
+    }
+    Ok(())
+}
+
+/// `,value` or `,` for an absent one.
+fn cell(w: &mut dyn Write, v: Option<f64>) -> std::io::Result<()> {
+    match v {
+        Some(v) => write!(w, ",{v}"),
+        None => write!(w, ","),
+    }
+}
+
+/// Reads what [`write_samples_csv`] wrote back (for tests and tools).
+///
+/// # Errors
+/// A header that is not [`SAMPLE_COLUMNS`], or a cell that is not a number, naming the line
+/// and column.
+pub fn read_samples_csv(text: &str) -> Result<Vec<FedSample>, String> {
+    let mut lines = text.lines().enumerate();
+    let header = lines.next().map(|(_, h)| h).unwrap_or("");
+    if header != SAMPLE_COLUMNS.join(",") {
+        return Err(format!("line 1: the header is not `{}`", SAMPLE_COLUMNS.join(",")));
+    }
+    lines.map(|(i, line)| sample_row(line).map_err(|e| format!("line {}: {e}", i + 1))).collect()
+}
+
+/// One row of [`read_samples_csv`].
+fn sample_row(line: &str) -> Result<FedSample, String> {
+    let cells: Vec<&str> = line.split(',').collect();
+    if cells.len() != SAMPLE_COLUMNS.len() {
+        return Err(format!("{} cells, expected {}", cells.len(), SAMPLE_COLUMNS.len()));
+    }
+    let num = |k: usize| -> Result<Option<f64>, String> {
+        let c = cells[k];
+        if c.is_empty() {
+            return Ok(None);
+        }
+        c.parse()
+            .map(Some)
+            .map_err(|_| format!("column `{}`: `{c}` is not a number", SAMPLE_COLUMNS[k]))
+    };
+    let req = |k: usize| num(k)?.ok_or_else(|| format!("column `{}` is empty", SAMPLE_COLUMNS[k]));
+    let manoeuvre = cells[0].parse().map_err(|_| format!("manoeuvre `{}`", cells[0]))?;
+    let constants = aeroident_estimators::AircraftConstants {
+        mass_kg: req(26)?,
+        S_m2: req(27)?,
+        cbar_m: num(28)?,
+        b_m: num(29)?,
+        Ixx_kgm2: num(30)?,
+        Iyy_kgm2: num(31)?,
+        Izz_kgm2: num(32)?,
+        Ixz_kgm2: num(33)?,
+        thrust_arm_m: req(34)?,
+        thrust_incidence_rad: req(35)?,
+        v0_mps: num(36)?,
+    };
+    let sample = AirDataSample {
+        t_s: req(1)?,
+        vt_mps: req(2)?,
+        alpha_rad: req(3)?,
+        qbar_pa: req(4)?,
+        beta_rad: num(5)?,
+        p_rad_s: num(6)?,
+        q_rad_s: num(7)?,
+        r_rad_s: num(8)?,
+        pdot_rad_s2: num(9)?,
+        qdot_rad_s2: num(10)?,
+        rdot_rad_s2: num(11)?,
+        alphadot_rad_s: num(12)?,
+        phi_rad: num(13)?,
+        theta_rad: num(14)?,
+        psi_rad: num(15)?,
+        ax_mps2: num(16)?,
+        ay_mps2: num(17)?,
+        az_mps2: num(18)?,
+        de_rad: num(19)?,
+        da_rad: num(20)?,
+        dr_rad: num(21)?,
+        thrust_n: num(22)?,
+        throttle: num(23)?,
+        thrust_moment_nm: num(24)?,
+        rho_kgpm3: num(25)?,
+        constants,
+    };
+    Ok(FedSample { manoeuvre, sample })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use aeroident_estimators::AircraftConstants;
+
+    /// What [`write_samples_csv`] writes reads back bit for bit (the shortest round-trip form of
+    /// awkward doubles, absent fields empty, the manoeuvre numbers), and a bad cell is refused
+    /// naming its line and column.
+    #[test]
+    fn samples_csv_round_trips_every_bit() {
+        let s = AirDataSample {
+            t_s: 0.1 + 0.2,
+            vt_mps: 106.0321,
+            alpha_rad: 1e-300,
+            qbar_pa: 4467.594,
+            q_rad_s: Some(-0.0),
+            qdot_rad_s2: Some(f64::MIN_POSITIVE),
+            de_rad: Some(-1.0 / 3.0),
+            constants: AircraftConstants {
+                mass_kg: 7472.0,
+                S_m2: 30.097216,
+                Iyy_kgm2: Some(91389.45),
+                thrust_arm_m: -0.6411244,
+                v0_mps: Some(104.67),
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let fed = [FedSample { manoeuvre: 0, sample: s }, FedSample { manoeuvre: 3, sample: s }];
+        let mut text = Vec::new();
+        write_samples_csv(&mut text, &fed).unwrap();
+        let text = String::from_utf8(text).unwrap();
+        let back = read_samples_csv(&text).unwrap();
+        assert_eq!(back.len(), 2);
+        for (a, b) in back.iter().zip(&fed) {
+            assert_eq!(a.manoeuvre, b.manoeuvre);
+            assert_eq!(format!("{:?}", a.sample), format!("{:?}", b.sample));
+            assert_eq!(a.sample.q_rad_s.unwrap().to_bits(), (-0.0f64).to_bits());
+            assert_eq!(a.sample.t_s.to_bits(), (0.1f64 + 0.2).to_bits());
+        }
+        let bad = text.replacen("106.0321", "1O6", 1);
+        let e = read_samples_csv(&bad).unwrap_err();
+        assert!(e.starts_with("line 2: column `vt_mps`"), "{e}");
+    }
+}

@@ -1,0 +1,165 @@
+//! The C example (`examples/c/replay_samples.c`, compiled with gcc against the committed header
+//! and `libaeroident_capi.a`, and again against `libaeroident_capi.so`) replays the HFB-320
+//! record (Jategaonkar 2015, test case 4) through the C library and prints the same estimates,
+//! row for row, as the command line's `estimates.csv` and `summary.json`, to 1e-12, for `rls`,
+//! `ftr` and `ekf`.
+//!
+//! The C program is fed the samples the command line's estimator is fed
+//! (`aeroident_capi::replayed::replay_samples`, written as CSV): the record's reading, mapping,
+//! spike screen and conditioning stay in the library, the C caller feeds their output.
+//! Skips without `../shared` (fails under `CI=true`).
+
+mod common;
+
+use aeroident_capi::replayed::{replay_samples, write_samples_csv};
+use aeroident_io::{Mapping, ModelSpec, open_log};
+use aeroident_pipelines::Named;
+use aeroident_pipelines::estimators::{EstimatorKind, parse_options};
+use aeroident_pipelines::replay::ReplayOptions;
+use common::{cli_binary, compile_c, compile_c_shared, have_gcc, scratch, shared, workspace};
+use std::path::Path;
+use std::process::Command;
+
+const RECORD: &str = "jategaonkar_hfb320_attas/csv/hfb320_1_10.csv";
+const MAPPING: &str = "mappings/hfb320.toml";
+const MODEL: &str = "models/hfb320_jategaonkar.toml";
+
+/// `aeroident replay` of the record with `kind` and `options` (`--estimator-option` pairs):
+/// its `estimates.csv` and `summary.json`.
+fn cli(
+    bin: &Path,
+    record: &Path,
+    kind: &str,
+    options: &[&str],
+    out: &Path,
+) -> (String, serde_json::Value) {
+    let mut c = Command::new(bin);
+    c.arg("replay").arg(record).arg("--map").arg(workspace().join(MAPPING));
+    c.arg("--model").arg(workspace().join(MODEL)).args(["--estimator", kind]);
+    for o in options {
+        c.args(["--estimator-option", o]);
+    }
+    let o = c.arg("--out").arg(out).output().unwrap();
+    assert!(o.status.success(), "aeroident replay: {}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("estimates.csv")).unwrap();
+    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    (csv, serde_json::from_str(&summary).unwrap())
+}
+
+/// The samples the command line's estimator is fed for the same replay, written to `path`.
+fn samples(record: &Path, kind: &str, options: &str, path: &Path) -> usize {
+    let mapping = Mapping::from_path(&workspace().join(MAPPING)).unwrap();
+    let kind = EstimatorKind::from_name(kind).unwrap();
+    let table: toml::Table = options.parse().unwrap();
+    let estimator_options =
+        parse_options(kind, table.iter().map(|(k, v)| (k.as_str(), v.clone()))).unwrap();
+    let model = ModelSpec::from_path(&workspace().join(MODEL)).unwrap();
+    let opts = ReplayOptions {
+        estimator: kind,
+        model: Some(model),
+        estimator_options,
+        ..Default::default()
+    };
+    let reader = open_log(record.to_str().unwrap(), None, &mapping).unwrap();
+    let (fed, _) = replay_samples(reader, &mapping, &opts).unwrap();
+    let mut file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+    write_samples_csv(&mut file, &fed).unwrap();
+    fed.len()
+}
+
+/// The C program's estimates for `kind` with `options` over the samples in `samples`.
+fn c_estimates(program: &Path, kind: &str, samples: &Path, options: &str) -> String {
+    let o = Command::new(program)
+        .arg(kind)
+        .arg(workspace().join(MODEL))
+        .arg(samples)
+        .arg(options)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{kind}: {}", String::from_utf8_lossy(&o.stderr));
+    String::from_utf8(o.stdout).unwrap()
+}
+
+/// The largest difference between two estimates tables, relative to max(1, |value|), with the
+/// header, the number of rows and the identified (non-empty) cells required equal.
+fn largest_difference(c: &str, cli: &str) -> Result<f64, String> {
+    let (c, cli): (Vec<&str>, Vec<&str>) = (c.lines().collect(), cli.lines().collect());
+    if c.first() != cli.first() {
+        return Err(format!("headers differ:\n{:?}\n{:?}", c.first(), cli.first()));
+    }
+    if c.len() != cli.len() {
+        return Err(format!("{} rows against the command line's {}", c.len(), cli.len()));
+    }
+    let mut worst = 0.0f64;
+    for (row, (a, b)) in c.iter().zip(&cli).enumerate().skip(1) {
+        for (col, (x, y)) in a.split(',').zip(b.split(',')).enumerate() {
+            match (x.parse::<f64>(), y.parse::<f64>()) {
+                (Ok(x), Ok(y)) => worst = worst.max((x - y).abs() / y.abs().max(1.0)),
+                _ if x.is_empty() && y.is_empty() => {}
+                _ => return Err(format!("row {row}, column {col}: `{x}` against `{y}`")),
+            }
+        }
+    }
+    Ok(worst)
+}
+
+/// The summary's final estimates and σ against the last row of the C program's estimates.
+fn check_summary(kind: &str, c: &str, summary: &serde_json::Value) {
+    let header: Vec<&str> = c.lines().next().unwrap().split(',').collect();
+    let last: Vec<&str> = c.lines().last().unwrap().split(',').collect();
+    let params = summary["parameters"].as_array().unwrap();
+    let n = params.len();
+    assert_eq!(header.len(), 1 + 2 * n, "{kind}");
+    for (i, p) in params.iter().enumerate() {
+        assert_eq!(p["name"].as_str().unwrap(), header[1 + i], "{kind}");
+        for (key, cell) in [("estimate", last[1 + i]), ("std_error", last[1 + n + i])] {
+            let from_c: Option<f64> = cell.parse().ok();
+            let from_cli = p[key].as_f64();
+            match (from_c, from_cli) {
+                (Some(a), Some(b)) => {
+                    assert!((a - b).abs() <= 1e-12 * b.abs().max(1.0), "{kind} {key} {a} {b}")
+                }
+                (a, b) => assert_eq!(a, b, "{kind}: {} {key}", header[1 + i]),
+            }
+        }
+    }
+}
+
+#[test]
+fn c_example_replays_hfb320_with_the_command_lines_estimates() {
+    let Some(record) = shared(RECORD) else { return };
+    if !have_gcc() {
+        return;
+    }
+    let bin = cli_binary();
+    let dir = scratch("hfb320");
+    let program = dir.join("replay_samples");
+    compile_c("examples/c/replay_samples.c", &program);
+    let shared_program = dir.join("replay_samples_shared");
+    compile_c_shared("examples/c/replay_samples.c", &shared_program);
+    for (kind, options) in [("rls", ""), ("ftr", "forgetting = 0.999"), ("ekf", "")] {
+        let cli_options: Vec<String> =
+            options.split_terminator('\n').map(|l| l.replace(" = ", "=")).collect();
+        let cli_options: Vec<&str> = cli_options.iter().map(String::as_str).collect();
+        let (csv, summary) =
+            cli(&bin, &record, kind, &cli_options, &dir.join(format!("cli-{kind}")));
+        let fed = dir.join(format!("samples-{kind}.csv"));
+        let n = samples(&record, kind, options, &fed);
+        assert!(n > 500, "{kind}: {n} samples fed");
+        let from_c = c_estimates(&program, kind, &fed, options);
+        let worst = largest_difference(&from_c, &csv).unwrap_or_else(|e| panic!("{kind}: {e}"));
+        eprintln!("{kind}: {} rows, largest relative difference {worst:e}", csv.lines().count());
+        assert!(worst <= 1e-12, "{kind}: {worst:e}");
+        check_summary(kind, &from_c, &summary);
+        // Linked against the shared library instead: the same output.
+        assert_eq!(c_estimates(&shared_program, kind, &fed, options), from_c, "{kind}: shared");
+        // The comparison sees a difference: another forgetting factor (RLS) or no option
+        // (FTR) moves the estimates by far more than 1e-12.
+        if kind != "ekf" {
+            let other = if options.is_empty() { "forgetting = 0.99" } else { "" };
+            let moved = c_estimates(&program, kind, &fed, other);
+            let d = largest_difference(&moved, &csv);
+            assert!(d.as_ref().is_err() || *d.as_ref().unwrap() > 1e-6, "{kind}: {d:?}");
+        }
+    }
+}

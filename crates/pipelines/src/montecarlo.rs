@@ -266,7 +266,7 @@ pub fn run_range(
     if n > 0 {
         check_runs(n, "runs")?;
     }
-    Ok(run_range_until(sc, campaign_seed, runs, None))
+    Ok(run_range_until(sc, campaign_seed, runs, None, &|| {}))
 }
 
 /// [`run_range`] (its count checked by the caller) that starts no run once `stop` is set: the
@@ -276,6 +276,7 @@ fn run_range_until(
     campaign_seed: u64,
     runs: std::ops::Range<u64>,
     stop: Option<&AtomicBool>,
+    on_run: &(dyn Fn() + Sync),
 ) -> Vec<RunResult> {
     runs.into_par_iter()
         .filter_map(|i| {
@@ -283,12 +284,14 @@ fn run_range_until(
                 return None;
             }
             let s = seeded_scenario(sc, campaign_seed, i);
-            Some(match run(&s) {
+            let result = match run(&s) {
                 Ok(out) => run_result(i, s.sensors.seed, &out),
                 Err(e) => {
                     RunResult { index: i, sensor_seed: s.sensors.seed, outcome: Err(e.to_string()) }
                 }
-            })
+            };
+            on_run();
+            Some(result)
         })
         .collect()
 }
@@ -769,9 +772,24 @@ pub fn campaign_until(
     seed: u64,
     stop: Option<&AtomicBool>,
 ) -> Result<Campaign, String> {
+    campaign_watched(sc, runs, seed, stop, &|| {})
+}
+
+/// [`campaign_until`] that calls `on_run` as each run ends (from the worker that ran it), so a
+/// face can count the runs done.
+///
+/// # Errors
+/// As [`campaign`].
+pub fn campaign_watched(
+    sc: &Scenario,
+    runs: u64,
+    seed: u64,
+    stop: Option<&AtomicBool>,
+    on_run: &(dyn Fn() + Sync),
+) -> Result<Campaign, String> {
     check_runs(runs, "runs")?;
     let start = Instant::now();
-    let results = run_range_until(sc, seed, 0..runs, stop);
+    let results = run_range_until(sc, seed, 0..runs, stop, on_run);
     let wall_s = start.elapsed().as_secs_f64();
     let mut c = assemble(sc, seed, results, wall_s, rayon::current_num_threads());
     c.runs_requested = runs;

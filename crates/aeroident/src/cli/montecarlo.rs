@@ -19,7 +19,7 @@ use super::run::DEFAULT_SCENARIO;
 use crate::plot::{GroupedBars, HistogramPanel, render_histograms_png, render_histograms_svg};
 use aeroident_pipelines::aircraft::Scenario;
 use aeroident_pipelines::montecarlo::{
-    Campaign, EstimatorStats, ParamStats, campaign_until, json_summary,
+    Campaign, EstimatorStats, ParamStats, campaign_watched, json_summary,
 };
 
 /// Arguments of `aeroident montecarlo`.
@@ -248,13 +248,10 @@ pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
     // Refused before the runs, not after them.
     let od = (!args.json).then(|| OutputDir::open(&dir, "montecarlo", &inputs)).transpose()?;
     let interrupt = crate::interrupt::Interrupt::install()?;
-    let spin = crate::progress::spinner(&format!(
-        "Monte Carlo `{}`: {} runs in parallel",
-        sc.name, args.runs
-    ));
+    let bar = crate::progress::count_bar(args.runs, &format!("Monte Carlo `{}`: runs", sc.name));
     let flag = interrupt.flag();
-    let c = campaign_until(&sc, args.runs, args.seed, Some(&flag));
-    spin.finish_and_clear();
+    let c = campaign_watched(&sc, args.runs, args.seed, Some(&flag), &|| bar.inc(1));
+    bar.finish_and_clear();
     let c = c.map_err(anyhow::Error::msg)?;
     if let (Some(why), Some(signal)) = (&c.status_reason, interrupt.signal_name()) {
         aeroident_report::note!("{signal}: {why}");

@@ -365,3 +365,24 @@ fn campaign_views() {
         vec![("rls".to_string(), vec![p.coverage_2sigma, None])]
     );
 }
+
+/// `campaign_watched` tells its watcher once per run ended, from whichever worker ran it, and a
+/// campaign stopped before its start runs nothing and tells nothing.
+#[test]
+fn the_watcher_hears_each_run_once() {
+    use std::sync::atomic::{AtomicBool, AtomicU64};
+    let sc = short_scenario();
+    let done = AtomicU64::new(0);
+    let c = campaign_watched(&sc, 3, 5, None, &|| {
+        done.fetch_add(1, Ordering::SeqCst);
+    })
+    .unwrap();
+    assert_eq!((done.load(Ordering::SeqCst), c.runs), (3, 3));
+    let stop = AtomicBool::new(true);
+    let done = AtomicU64::new(0);
+    let c = campaign_watched(&sc, 3, 5, Some(&stop), &|| {
+        done.fetch_add(1, Ordering::SeqCst);
+    })
+    .unwrap();
+    assert_eq!((done.load(Ordering::SeqCst), c.runs), (0, 0));
+}

@@ -367,7 +367,7 @@ fn html_page_holds_the_records_samples_and_shades_the_manoeuvres() {
     };
     let (ok, dom, err) = common::browser::headless(
         &chrome,
-        &page,
+        &common::browser::page_url(&page),
         &temp("profile"),
         &["--dump-dom", "--virtual-time-budget=5000"],
     );

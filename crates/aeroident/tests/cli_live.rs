@@ -11,46 +11,18 @@
 
 mod common;
 use std::io::{BufRead, BufReader, Read};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-/// The Chromium binary on PATH, if any.
-fn chromium() -> Option<PathBuf> {
-    let path = std::env::var_os("PATH")?;
-    std::env::split_paths(&path)
-        .flat_map(|d| ["chromium", "chromium-browser", "google-chrome"].map(|n| d.join(n)))
-        .find(|p| p.is_file())
-}
+use common::browser::{chromium, console_lines};
 
 /// Headless Chromium on `url` with `extra` arguments and a fresh profile in `profile`;
 /// returns (stdout, stderr), failing the test when it fails.
 fn headless(chrome: &Path, url: &str, profile: &Path, extra: &[&str]) -> (String, String) {
-    let o = Command::new(chrome)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--no-first-run",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--enable-logging=stderr",
-            "--v=0",
-        ])
-        .arg(format!("--user-data-dir={}", profile.display()))
-        .args(extra)
-        .arg(url)
-        .output()
-        .expect("starting chromium");
-    let err = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert!(o.status.success(), "chromium failed on {url}: {err}");
-    (String::from_utf8_lossy(&o.stdout).into_owned(), err)
-}
-
-/// Console messages in Chromium's log (`…:CONSOLE(…)` lines and uncaught exceptions).
-fn console_lines(stderr: &str) -> Vec<&str> {
-    stderr.lines().filter(|l| l.contains("CONSOLE") || l.contains("Uncaught")).collect()
+    let (ok, out, err) = common::browser::headless(chrome, url, profile, extra);
+    assert!(ok, "chromium failed on {url}: {err}");
+    (out, err)
 }
 
 /// The value of attribute `name` in the first tag of `html` after `at`.

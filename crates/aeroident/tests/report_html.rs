@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::browser::{chromium, console_lines, headless};
+use common::browser::{chromium, console_lines, headless, page_url};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -131,7 +131,7 @@ fn report_html_renders_in_headless_chromium_without_console_errors() {
     let shot = dir.join("screenshot.png");
     let (ok, _, err) = headless(
         &chrome,
-        &page,
+        &page_url(&page),
         &dir.join("profile1"),
         &[&format!("--screenshot={}", shot.display()), "--window-size=1280,1800"],
     );
@@ -150,7 +150,8 @@ fn report_html_renders_in_headless_chromium_without_console_errors() {
 
     // 2. The rendered DOM: the table's estimates equal the generating derivatives (noise-free
     // record: RLS is exact to rounding), the fit is perfect, the figures are inline SVG.
-    let (ok, dom, err) = headless(&chrome, &page, &dir.join("profile2"), &["--dump-dom"]);
+    let (ok, dom, err) =
+        headless(&chrome, &page_url(&page), &dir.join("profile2"), &["--dump-dom"]);
     assert!(ok, "chromium --dump-dom failed: {err}");
     assert!(console_lines(&err).is_empty(), "{:?}", console_lines(&err));
     for (name, value) in TRUTH {
@@ -177,7 +178,7 @@ fn report_html_renders_in_headless_chromium_without_console_errors() {
         "<!DOCTYPE html><html><body><script>undefinedFunction();</script></body></html>",
     )
     .unwrap();
-    let (_, _, err) = headless(&chrome, &bad, &dir.join("profile3"), &["--dump-dom"]);
+    let (_, _, err) = headless(&chrome, &page_url(&bad), &dir.join("profile3"), &["--dump-dom"]);
     assert!(!console_lines(&err).is_empty(), "a script error must show in the log: {err}");
 }
 
@@ -217,14 +218,15 @@ fn run_all_index_report_renders_and_links_every_scenario() {
     let shot = dir.join("screenshot.png");
     let (ok, _, err) = headless(
         &chrome,
-        &page,
+        &page_url(&page),
         &dir.join("profile1"),
         &[&format!("--screenshot={}", shot.display()), "--window-size=1280,1400"],
     );
     assert!(ok, "chromium failed: {err}");
     assert!(console_lines(&err).is_empty(), "console messages: {:?}", console_lines(&err));
     assert!(std::fs::metadata(&shot).unwrap().len() > 20_000, "blank screenshot?");
-    let (ok, dom, err) = headless(&chrome, &page, &dir.join("profile2"), &["--dump-dom"]);
+    let (ok, dom, err) =
+        headless(&chrome, &page_url(&page), &dir.join("profile2"), &["--dump-dom"]);
     assert!(ok && console_lines(&err).is_empty(), "{err}");
     for name in ["t4_7_case4", "t4_8_case1"] {
         let href = format!("{name}/report.html");

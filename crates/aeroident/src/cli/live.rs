@@ -74,6 +74,9 @@ pub fn execute(args: LiveArgs) -> anyhow::Result<()> {
             args.serve
         );
     }
+    // Refused before the server starts and prints its address.
+    let mavlink = crate::live::is_mavlink(&args.replay.data);
+    super::replay::check_combination(&args.replay, mavlink, true)?;
     let spec = model_spec(&args.replay);
     let shared = LiveState::new(LiveConfig { rule, ..Default::default() }, spec).shared();
     let addr = server::start(args.serve, shared.clone())

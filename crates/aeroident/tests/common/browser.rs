@@ -18,11 +18,16 @@ pub fn chromium() -> Option<PathBuf> {
     None
 }
 
-/// Runs headless Chromium on `page` with `extra` arguments and a fresh profile; returns
-/// (exit ok, stdout, stderr).
+/// The `file://` address of the page at `path`.
+pub fn page_url(path: &Path) -> String {
+    format!("file://{}", path.display())
+}
+
+/// Runs headless Chromium on `url` (a page's [`page_url`], or a server's address) with `extra`
+/// arguments and a fresh profile; returns (exit ok, stdout, stderr).
 pub fn headless(
     chrome: &Path,
-    page: &Path,
+    url: &str,
     profile: &Path,
     extra: &[&str],
 ) -> (bool, String, String) {
@@ -41,7 +46,7 @@ pub fn headless(
         ])
         .arg(format!("--user-data-dir={}", profile.display()))
         .args(extra)
-        .arg(format!("file://{}", page.display()))
+        .arg(url)
         .output()
         .expect("starting chromium");
     (

@@ -448,7 +448,11 @@ fn validate_on(args: &ReplayArgs) -> Option<ValidateOn> {
 /// Refuses flags that do not go together (a batch fit of a live feed or under a live view, a
 /// batch fit's flag with a real-time estimator), before anything is opened; which batch method
 /// takes which option is the batch fit's parser's ([`fit_options`]).
-fn check_combination(args: &ReplayArgs, mavlink: bool, view: bool) -> anyhow::Result<()> {
+pub(super) fn check_combination(
+    args: &ReplayArgs,
+    mavlink: bool,
+    view: bool,
+) -> anyhow::Result<()> {
     if view && args.estimator.is_batch() {
         anyhow::bail!(
             "the live view watches a real-time estimator; --estimator {} is a batch fit of the whole record (use `aeroident replay`)",

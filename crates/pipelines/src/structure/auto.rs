@@ -221,7 +221,8 @@ pub struct AutoSelection {
     /// The model: each coefficient's constant and kept terms, generic priors.
     pub model: ModelSpec,
     /// The scope used (given; else the richest the record supports, narrowed to the axes
-    /// the record excites, [`excited::excited_scope`]).
+    /// the record excites: an axis whose moment equations keep a surface term and whose
+    /// surfaces moved most; docs/structure.md).
     pub scope: Scope,
     /// Why the scope is narrower than the record supports (`None`: it is not).
     pub scope_reason: Option<String>,

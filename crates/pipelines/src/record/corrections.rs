@@ -1015,4 +1015,55 @@ mod tests {
             .unwrap_err();
         assert!(e.contains("ax_mps2"), "{e}");
     }
+
+    /// An AHRS lag of τ = 0.15 s: the stage passes every other channel through the filter
+    /// and leaves the AHRS's own as read. A ramp `α = 0.01 t` (sampled at 10 Hz) comes out,
+    /// once the start's transient has died away (e^{−8/0.15}), as `0.01 (t − τ)`, the steady
+    /// response of `τ ẏ + y = u` to a ramp; q passes unchanged; after a gap the filter starts
+    /// again from the first sample. A lag beyond 0.5 s or below 0 is refused, one within 2σ of
+    /// none left out, and neither filters.
+    #[test]
+    fn an_ahrs_lag_filters_every_other_channel() {
+        let lagged = |tau: f64, sigma: Option<f64>| {
+            let mut c = Corrections::default();
+            c.set_lag(tau, sigma).unwrap();
+            c
+        };
+        let ramp = |t: f64| AirDataSample {
+            t_s: t,
+            vt_mps: 50.0,
+            alpha_rad: 0.01 * t,
+            q_rad_s: Some((0.5 * t).cos()),
+            ..Default::default()
+        };
+        let mut input: Vec<_> = (0..100)
+            .map(|k| Ok(RecordEvent::Sample { row: k, sample: ramp(0.1 * k as f64) }))
+            .collect();
+        input.push(Ok(RecordEvent::Gap { row: 100, dt_s: 1.1, nominal_dt_s: 0.1 }));
+        input.push(Ok(RecordEvent::Sample { row: 100, sample: ramp(11.0) }));
+        let corr = lagged(0.15, Some(0.01));
+        assert!(corr.applied.iter().any(|a| a.contains("τ = 0.150 s")), "{:?}", corr.applied);
+        let out: Vec<AirDataSample> = Corrected::new(input.into_iter(), corr)
+            .filter_map(|e| match e.unwrap() {
+                RecordEvent::Sample { sample, .. } => Some(sample),
+                _ => None,
+            })
+            .collect();
+        for s in &out[80..100] {
+            assert!((s.alpha_rad - 0.01 * (s.t_s - 0.15)).abs() < 1e-12, "{s:?}");
+            assert_eq!(s.q_rad_s, ramp(s.t_s).q_rad_s);
+            assert_eq!(s.vt_mps, 50.0);
+        }
+        assert!((out[100].alpha_rad - 0.11).abs() < 1e-15, "restarted in steady state");
+        for (tau, why) in [(0.6, "beyond the 0.5 s"), (-0.05, "is not negative")] {
+            let c = lagged(tau, Some(0.01));
+            assert!(
+                c.lag_s.is_none() && c.refused.iter().any(|r| r.contains(why)),
+                "{:?}",
+                c.refused
+            );
+        }
+        let c = lagged(0.01, Some(0.01));
+        assert!(c.lag_s.is_none() && c.left_out[0].starts_with("AHRS lag"), "{:?}", c.left_out);
+    }
 }

@@ -116,7 +116,50 @@
 //! change this picture: `degraded_raw.toml` itself (sensors at 10 Hz, every 10th row) reads
 //! the gyros 0.17–0.20 s for the lag's 0.158 s and the α vane 0.26 s for 0.2 s (before the
 //! scale factors were held to σ 0.02, the same flight kept at every row read every shift
-//! 0.58–0.63 s, the accelerometers' scale factors having run off).
+//! 0.58–0.63 s, the accelerometers' scale factors having run off). A delay has the gain 1 at
+//! every frequency and a lag does not (0.8 at 5 rad/s for τ = 0.15 s): on the synthetic
+//! record of the tests with fast pitch and roll content the shifts read the lag's delay about
+//! right (0.145–0.150 s for τ = 0.15 s) but leave α's residual 1.6 times its noise. Hence the
+//! lag as its own unknown (next section).
+//!
+//! # The AHRS's lag
+//! On request ([`CompatConfig::ahrs_lag`], `aeroident compat --ahrs-lag`) the gyros and the
+//! attitudes come through one first-order filter `L(τ)`, `τ ẏ + y = u`, whose time constant
+//! is an unknown ([`Unknown::AhrsLag`]) in place of the gyros' time shifts. The kinematics are
+//! driven by the gyros as measured (lagged) and by the accelerometers passed through the same
+//! filter ([`lag_step`], exact for their linear interpolation, from steady state at each
+//! manoeuvre's start). For a linear system that makes the integrated state the lagged state
+//! `x_L = L(τ) x`; the kinematics are not linear (products `q w`, `g sin θ`), so it is that to
+//! first order in the motion. The attitudes compare with `x_L` directly, and the air data with
+//! the unlagged state `x = x_L + τ ẋ_L` (`L⁻¹ = 1 + τ s`), `ẋ_L` from the state equation at
+//! each sample, so nothing measured is differentiated or filtered (filtering the measured
+//! outputs would colour their noise and bias the likelihood towards a large τ). The vanes keep
+//! their own time shifts, biases and scale factors, against the unlagged kinematics; the
+//! attitudes keep their shifts too, which then measure only how much later than the gyros they
+//! come (0 for one filter). A negative τ, which no filter has but which the central
+//! differences at 0 visit, reads the accelerometers `|τ|` later instead: the same to first
+//! order, so the cost is smooth through 0. The fit starts from τ = 0, 0.1 and 0.2 s and keeps
+//! the best (`Problem::solve`). `replay --compat` then passes every other channel through
+//! the same filter rather than undoing it (`aeroident_pipelines::record::corrections`).
+//!
+//! Measured (`cargo test --release -p aeroident-estimators compat::tests::an_ahrs` and
+//! `cargo test --release -p aeroident --test compat_ahrs_lag -- --nocapture`):
+//! - the synthetic record of the tests, τ = 0.15 s on the gyros and attitudes filtered on the
+//!   generator's fine steps: 0.1495 ± 0.0004 s at 50 Hz with a β vane, 0.1511 ± 0.0008 s at
+//!   10 Hz without, α's residual at its noise; the second-order error of the model leaves the
+//!   accelerometer biases up to 0.003 m/s² and a gyro's 5·10⁻⁵ rad/s off (a few σ there);
+//! - `scenarios/sim/ahrs_lag_degraded.toml` (τ = 0.15 s, AHRS at 100 Hz, so a low-frequency
+//!   delay of 0.155 s; the α vane 0.2 s late; biases and 2–5 % scale factors; no β vane; light
+//!   turbulence) with the inertial scale factors: 0.168 ± 0.017 s kept at 10 Hz, 0.163 ± 0.016 s
+//!   at 20 Hz, the α vane 0.236 and 0.227 ± 0.021 s; without the scale factors 0.182 and
+//!   0.186 s (their 3–5 % pass for a lag, as for the shifts). The gyros' shifts on the same 10 Hz
+//!   record: p, q, φ, θ 0.200 s, r, ψ 0.154 s, α 0.279 s.
+//!
+//! Off by default: on that record the corrected six-axis output error gets the longitudinal
+//! primary derivatives and Cl_p, Cl_δa, Cn_β, Cn_δr within 10 % (uncorrected up to 35 % off),
+//! but the reconstructed sideslip it then fits puts CY_β 24 %, Cl_β 12 % and Cn_r 19 % off,
+//! where the uncorrected fit, β a state, had them within 4.3, 4.8 and 19.5 %; so it is not
+//! never worse than no correction, which `--compat auto` must be.
 
 use crate::EstimatorError;
 use crate::flight_model::{G0_MPS2, Output};

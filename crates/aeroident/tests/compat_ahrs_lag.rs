@@ -19,6 +19,7 @@ use aeroident_pipelines::sim::{load_scenario, run};
 use common::workspace;
 use std::fmt::Write as _;
 use std::path::PathBuf;
+use std::process::Command;
 
 /// The simulator's sensed channels.
 const SENSED: [&str; 14] = [
@@ -43,6 +44,7 @@ const SENSED: [&str; 14] = [
 struct Record {
     dir: PathBuf,
     csv: String,
+    map: PathBuf,
     mapping: Mapping,
     truth: aeroident_pipelines::aircraft::truth::LocalDerivatives,
 }
@@ -82,7 +84,7 @@ impl Record {
             local_derivatives(&f16, &sim.trim.state, &sim.trim.controls, &AeroIncrements::zero())
                 .unwrap();
         let mapping = Mapping::from_path(&map).unwrap();
-        Self { dir, csv: csv_path.display().to_string(), mapping, truth }
+        Self { dir, csv: csv_path.display().to_string(), map, mapping, truth }
     }
 
     fn check(&self, config: CompatConfig) -> CompatSummary {
@@ -177,4 +179,46 @@ fn val_the_ahrs_lag_is_measured_and_its_filter_shared_by_every_channel() {
             }
         }
     }
+    cli(&rec, tau);
+}
+
+/// The same through the binary: `compat --ahrs-lag --inertial-scale-factors --out` writes the
+/// lag the library found to `compat.json` and prints it, and `replay --compat compat.json
+/// --estimator oe` says in its summary that it filtered the other channels with it.
+fn cli(rec: &Record, tau: f64) {
+    let bin = || Command::new(env!("CARGO_BIN_EXE_aeroident"));
+    let out = rec.dir.join("compat");
+    let o = bin()
+        .args(["compat", &rec.csv, "--ahrs-lag", "--inertial-scale-factors", "--map"])
+        .arg(&rec.map)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let printed = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        printed.contains(&format!("AHRS lag (first-order time constant): {tau:.3}")),
+        "{printed}"
+    );
+    let json = out.join("compat.json");
+    let file: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(file["ahrs_lag_tau_s"].as_f64(), Some(tau));
+    let fit = rec.dir.join("fit");
+    let o = bin()
+        .args(["replay", &rec.csv, "--model", "six-axis", "--estimator", "oe", "--map"])
+        .arg(&rec.map)
+        .arg("--compat")
+        .arg(&json)
+        .arg("--out")
+        .arg(&fit)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary = std::fs::read_to_string(fit.join("summary.json")).unwrap();
+    assert!(
+        summary.contains(&format!("compat applied: every channel not from the AHRS (accelerometers, air data, surfaces, thrust) passed through the AHRS's first-order filter, τ = {tau:.3} s")),
+        "{summary}"
+    );
 }

@@ -5,13 +5,16 @@
 //!
 //! `compat.json` keys: `file, sigma, status, status_reason, iterations, samples_read,
 //! samples_rejected, manoeuvres, channels[{name, unit, bias, bias_sigma, scale, scale_sigma,
-//! time_shift_s, time_shift_sigma_s}], residual_rms{output: value}, findings[], warnings[],
+//! time_shift_s, time_shift_sigma_s}], ahrs_lag_tau_s, ahrs_lag_tau_sigma_s, residual_rms{output: value}, findings[], warnings[],
 //! reconstructed[{manoeuvre, t_s[], vt_mps[], alpha_rad[], beta_rad[], beta_determined}]`
 //! (`beta_determined` false: the side velocity and the ay bias were fixed at 0, and `replay
 //! --compat` does not use that sideslip). `scale` is the
 //! factor the channel reads the truth with (`1 + k`); a number the check did not estimate is
 //! `null`. A gyro's `time_shift_s` (`CompatConfig::gyro_time_shifts`) is against the
-//! accelerometers, as every shift is. The `*_sigma` keys are the coloured-residual σ where it was formed (`sigma =
+//! accelerometers, as every shift is. `ahrs_lag_tau_s` is the time constant of the AHRS's
+//! first-order filter on the gyros and attitudes (`CompatConfig::ahrs_lag`, `aeroident compat
+//! --ahrs-lag`; `null` when not estimated); `replay --compat` then passes every other channel
+//! through the same filter (`crate::record::corrections`). The `*_sigma` keys are the coloured-residual σ where it was formed (`sigma =
 //! "coloured"`), else the Cramér–Rao σ (`"cramer_rao"`); findings are judged against them.
 
 pub use crate::record::corrections::{
@@ -54,6 +57,11 @@ pub struct CompatSummary {
     pub manoeuvres: usize,
     /// Per channel, its corrections.
     pub channels: Vec<ChannelSummary>,
+    /// The time constant of the AHRS's first-order filter on the gyros and attitudes, s, when
+    /// estimated.
+    pub ahrs_lag_tau_s: Option<f64>,
+    /// Its reported σ, s.
+    pub ahrs_lag_tau_sigma_s: Option<f64>,
     /// Residual RMS per fitted output, its unit.
     pub residual_rms: BTreeMap<&'static str, f64>,
     /// What the numbers say, in words.
@@ -70,7 +78,8 @@ impl Corrections {
     /// # Errors
     /// As [`Corrections::from_json`].
     pub fn from_summary(s: &CompatSummary) -> Result<Self, RecordError> {
-        Self::of_rows(&s.channels, &s.reconstructed)
+        let lag = s.ahrs_lag_tau_s.map(|t| (t, s.ahrs_lag_tau_sigma_s));
+        Self::of_rows(&s.channels, lag, &s.reconstructed)
             .map_err(|reason| RecordError::Option { option: "compat", reason })
     }
 }
@@ -132,6 +141,8 @@ pub fn check_records<R: Read>(
         rejections,
         manoeuvres: slices.len(),
         channels: channels(&result),
+        ahrs_lag_tau_s: result.reported(Unknown::AhrsLag).map(|l| l.0),
+        ahrs_lag_tau_sigma_s: result.reported(Unknown::AhrsLag).map(|l| l.1),
         residual_rms: result
             .outputs
             .iter()
@@ -239,7 +250,7 @@ fn tolerance(u: Unknown) -> Option<f64> {
         Unknown::Bias(Channel::Vt | Channel::Alpha | Channel::Beta) => None,
         Unknown::Bias(c) => Some(DRIFT * limits(c).0),
         Unknown::Scale(_) => Some(0.05),
-        Unknown::TimeShift(_) => Some(DRIFT * MAX_SHIFT_S),
+        Unknown::TimeShift(_) | Unknown::AhrsLag => Some(DRIFT * MAX_SHIFT_S),
         _ => None,
     }
 }
@@ -250,6 +261,7 @@ fn unknown_name(u: Unknown) -> String {
         Unknown::Bias(c) => format!("{} bias", c.name()),
         Unknown::Scale(c) => format!("{} scale-factor error k", c.name()),
         Unknown::TimeShift(c) => format!("{} time shift", c.name()),
+        Unknown::AhrsLag => "AHRS lag".into(),
         _ => "initial state".into(),
     }
 }
@@ -349,6 +361,9 @@ fn findings(r: &CompatResult, dt_s: f64) -> Vec<String> {
                 if v > 0.0 { "lags" } else { "leads" },
                 v.abs(),
                 s
+            )),
+            Unknown::AhrsLag if significant(v, s) => out.push(format!(
+                "the AHRS filters its rates and attitudes with a first-order lag of time constant {v:.3} ± {s:.3} s"
             )),
             Unknown::Bias(Channel::Vt) if significant(v, s) => out.push(format!(
                 "vt_mps reads {v:+.2} ± {s:.2} m/s above the reconstructed speed (a pitot bias or position error, or a wind that changed during the manoeuvre; a steady wind does not show here: the reconstructed initial velocity absorbs it)"

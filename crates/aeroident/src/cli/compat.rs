@@ -4,7 +4,7 @@
 //! ```text
 //! aeroident compat <log> --map <map.toml> [--format …] [--out DIR] [--window START:END … | auto]
 //!                  [--and <more> …] [--no-time-shifts] [--gyro-time-shifts]
-//!                  [--inertial-scale-factors] [--max-iterations N]
+//!                  [--inertial-scale-factors] [--ahrs-lag] [--max-iterations N]
 //! ```
 //! Prints the corrections per channel and the findings; with `--out`, writes
 //! `DIR/compat.json` ([`aeroident_pipelines::compat`] documents its keys).
@@ -58,6 +58,11 @@ pub struct CompatArgs {
     /// manoeuvres).
     #[arg(long)]
     pub inertial_scale_factors: bool,
+    /// Model the AHRS's first-order filter on the gyros and attitudes, its time constant an
+    /// unknown (instead of the gyros' time shifts); `replay --compat` then passes every other
+    /// channel through the same filter.
+    #[arg(long)]
+    pub ahrs_lag: bool,
     /// Most Gauss–Newton iterations (default 50); past it the last iterate is reported.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub max_iterations: Option<u32>,
@@ -76,6 +81,7 @@ pub fn execute(args: CompatArgs) -> anyhow::Result<()> {
         time_shifts: !args.no_time_shifts,
         gyro_time_shifts: args.gyro_time_shifts,
         inertial_scale_factors: args.inertial_scale_factors,
+        ahrs_lag: args.ahrs_lag,
         ..CompatConfig::default()
     };
     if let Some(n) = args.max_iterations {
@@ -162,6 +168,9 @@ fn render(s: &CompatSummary) -> String {
     );
     for c in &s.channels {
         let _ = writeln!(t, "{}", row(c));
+    }
+    if let (Some(tau), Some(sigma)) = (s.ahrs_lag_tau_s, s.ahrs_lag_tau_sigma_s) {
+        let _ = writeln!(t, "AHRS lag (first-order time constant): {tau:.3} ± {sigma:.3} s");
     }
     let rms: Vec<String> = s.residual_rms.iter().map(|(k, v)| format!("{k} {v:.3e}")).collect();
     let _ = writeln!(t, "residual RMS: {}", rms.join(", "));

@@ -46,19 +46,23 @@ impl Problem<'_> {
         Ok((out, notes))
     }
 
-    /// The time shifts whose σ alone is above [`MAX_SHIFT_SIGMA_S`].
+    /// The time shifts and the AHRS lag whose σ alone is above [`MAX_SHIFT_SIGMA_S`].
     fn undetermined_shifts(&self) -> Result<(Vec<Unknown>, Vec<String>), EstimatorError> {
         let beta = self.start();
         let r = self.noise_variances();
         let mut out = (Vec::new(), Vec::new());
         for (i, &u) in self.unknowns.iter().enumerate() {
-            let Unknown::TimeShift(c) = u else { continue };
+            let name = match u {
+                Unknown::TimeShift(c) => format!("time shift of {}", c.name()),
+                Unknown::AhrsLag => "AHRS lag".into(),
+                _ => continue,
+            };
             let s = sensitivity(self, &beta, i)?;
             let info: f64 = s.iter().enumerate().map(|(row, v)| v * v / r[row % r.len()]).sum();
             let sigma = 1.0 / info.sqrt();
             if sigma.is_nan() || sigma >= MAX_SHIFT_SIGMA_S {
                 out.0.push(u);
-                out.1.push(format!("time shift of {} not estimated: the channel hardly varies (its σ alone would be {sigma:.2} s)", c.name()));
+                out.1.push(format!("{name} not estimated: the channel hardly varies (its σ alone would be {sigma:.2} s)"));
             }
         }
         Ok(out)

@@ -63,9 +63,20 @@ impl Problem<'_> {
     /// estimated, the same with the shifts of the gyros and attitudes all at a common offset
     /// `k·h`, `h` the first whole number of median sample intervals ≥ [`AHRS_START_STEP_S`],
     /// up to [`AHRS_START_MAX_S`] (module doc, "Time shifts": the local minima a whole sample
-    /// apart).
+    /// apart); with an AHRS lag instead, the same with its time constant at each of
+    /// [`AHRS_LAG_STARTS_S`].
     fn starts(&self) -> Vec<Vec<f64>> {
         let base = self.start();
+        if let Some(i) = self.unknowns.iter().position(|u| *u == Unknown::AhrsLag) {
+            return AHRS_LAG_STARTS_S
+                .iter()
+                .map(|&tau| {
+                    let mut b = base.clone();
+                    b[i] = tau;
+                    b
+                })
+                .collect();
+        }
         let gyro = |u: &Unknown| matches!(u, Unknown::TimeShift(c) if GYROS.contains(c));
         let dt = self.median_interval();
         if !(self.unknowns.iter().any(gyro) && dt > 0.0) {
@@ -108,3 +119,9 @@ const AHRS_START_STEP_S: f64 = 0.1;
 
 /// The largest common starting shift of the AHRS channels, s.
 const AHRS_START_MAX_S: f64 = 0.3;
+
+/// The starting time constants of an AHRS lag, s: none and the filters of the AHRS of a UAV or
+/// a business jet, 0.1–0.2 s. The filter is smooth in `τ`, so these are not against local
+/// minima of the interpolation but of the trade between the lag and the α vane's shift and
+/// scale factor.
+const AHRS_LAG_STARTS_S: [f64; 3] = [0.0, 0.1, 0.2];

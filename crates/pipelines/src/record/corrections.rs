@@ -5,6 +5,13 @@
 //! once the record has reached its time plus the largest lag, so the stage delays the stream by
 //! that much and keeps every time stamp.
 //!
+//! An AHRS's first-order lag (`compat --ahrs-lag`) is not undone: inverting a filter
+//! differentiates the gyros' noise. Every channel not from the AHRS (the accelerometers, the air
+//! data, the surfaces, thrust and density) is instead passed through the same filter
+//! ([`aeroident_estimators::compat::lag_step`], from steady state at each manoeuvre's first
+//! sample), after its own corrections, so that all channels share one lag: a linear system
+//! whose every input and output passes through one linear filter keeps its parameters.
+//!
 //! Not applied: the airspeed bias (it also takes up any change of the wind over the manoeuvre,
 //! and the aerodynamics need the airspeed the pitot measures, not the reconstructed speed).
 
@@ -122,6 +129,29 @@ pub const MAX_AHRS_LEAD_S: f64 = 0.02;
 /// The largest time shift a sensor's lag plausibly reaches, either way, s ([`plausible`]).
 pub const MAX_SHIFT_S: f64 = 0.5;
 
+/// The largest time constant of an AHRS's first-order filter, s ([`plausible_lag`]): the
+/// filters of the AHRS of a UAV or a business jet are 0.05–0.2 s.
+pub const MAX_AHRS_LAG_S: f64 = 0.5;
+
+/// Whether an AHRS lag of time constant `tau_s` is one a filter has: within 0 (less the timing
+/// noise [`MAX_AHRS_LEAD_S`]) and [`MAX_AHRS_LAG_S`].
+///
+/// # Errors
+/// Which limit it passes, in words.
+pub fn plausible_lag(tau_s: f64) -> Result<(), String> {
+    if tau_s < -MAX_AHRS_LEAD_S {
+        return Err(format!(
+            "time constant {tau_s:+.3} s: a filter's time constant is not negative (the gyros and attitudes would lead the accelerometers, the time reference): not applied"
+        ));
+    }
+    if tau_s > MAX_AHRS_LAG_S {
+        return Err(format!(
+            "time constant {tau_s:.3} s beyond the {MAX_AHRS_LAG_S} s an attitude and heading system's filter plausibly has: not applied"
+        ));
+    }
+    Ok(())
+}
+
 /// Channel `ch`'s largest plausible bias (its unit) and scale range ([`plausible`]).
 pub fn limits(ch: Channel) -> (f64, (f64, f64)) {
     match ch {
@@ -151,6 +181,8 @@ pub struct Corrections {
     affine: Vec<(Channel, f64, f64)>,
     /// `(channel, τ)`: the stage reads the channel `τ` later.
     shifts: Vec<(Channel, f64)>,
+    /// The AHRS's time constant, s: the stage passes every other channel through its filter.
+    lag_s: Option<f64>,
     /// Per manoeuvre, the reconstructed sideslip `(t_s, β)`, for records without one.
     beta: Vec<(Vec<f64>, Vec<f64>)>,
     /// What the stage applies, in words (for the summary).
@@ -204,6 +236,19 @@ struct CompatFile {
     channels: Vec<ChannelSummary>,
     #[serde(default)]
     reconstructed: Vec<ReconstructedSummary>,
+    /// The AHRS's time constant, s, when the check estimated it.
+    #[serde(default)]
+    ahrs_lag_tau_s: Option<f64>,
+    /// Its σ, s.
+    #[serde(default)]
+    ahrs_lag_tau_sigma_s: Option<f64>,
+}
+
+impl CompatFile {
+    /// The AHRS lag and its σ, when the file has one.
+    fn lag(&self) -> Option<(f64, Option<f64>)> {
+        self.ahrs_lag_tau_s.map(|t| (t, self.ahrs_lag_tau_sigma_s))
+    }
 }
 
 /// The file name of a path as given (`dir/a.csv` → `a.csv`).
@@ -257,7 +302,7 @@ impl Corrections {
     /// channel, a scale that is not positive, or a non-finite number.
     pub fn from_json(path: &Path) -> Result<Self, RecordError> {
         let (file, bad) = Self::read_json(path)?;
-        Self::of_rows(&file.channels, &file.reconstructed).map_err(bad)
+        Self::of_rows(&file.channels, file.lag(), &file.reconstructed).map_err(bad)
     }
 
     /// The corrections of a `compat.json` for the records `records` (file names as given):
@@ -270,14 +315,14 @@ impl Corrections {
     pub fn from_json_for(path: &Path, records: &[String]) -> Result<Self, RecordError> {
         let (file, bad) = Self::read_json(path)?;
         if records.is_empty() {
-            let mut c = Self::of_rows(&file.channels, &[]).map_err(bad)?;
+            let mut c = Self::of_rows(&file.channels, file.lag(), &[]).map_err(bad)?;
             if file.reconstructed.iter().any(|r| !r.t_s.is_empty()) {
                 c.refused.push("beta_rad: the sideslip reconstructed on the check's record is that record's time series: not applied to a live feed".into());
             }
             return Ok(c);
         }
         check_provenance(file.file.as_deref(), records).map_err(&bad)?;
-        Self::of_rows(&file.channels, &file.reconstructed).map_err(bad)
+        Self::of_rows(&file.channels, file.lag(), &file.reconstructed).map_err(bad)
     }
 
     /// A `compat.json` parsed, and the error maker naming it.
@@ -293,9 +338,11 @@ impl Corrections {
         Ok((file, bad))
     }
 
-    /// The corrections of a check's channel rows and reconstructed air data.
+    /// The corrections of a check's channel rows, AHRS lag `(τ, σ)` and reconstructed air
+    /// data.
     pub(crate) fn of_rows(
         rows: &[ChannelSummary],
+        lag: Option<(f64, Option<f64>)>,
         rec: &[ReconstructedSummary],
     ) -> Result<Self, String> {
         let mut entries: Vec<Entry> = Vec::new();
@@ -329,7 +376,31 @@ impl Corrections {
         }
         c.left_out = left_out;
         c.checked = checked;
+        if let Some((tau, sigma)) = lag {
+            c.set_lag(tau, sigma)?;
+        }
         Ok(c)
+    }
+
+    /// The AHRS lag `tau` (s) with its σ: applied when determined ([`DETERMINED_SIGMAS`]) and
+    /// plausible ([`plausible_lag`]), else said why not.
+    fn set_lag(&mut self, tau: f64, sigma: Option<f64>) -> Result<(), String> {
+        if !tau.is_finite() {
+            return Err("ahrs_lag_tau_s must be finite".into());
+        }
+        if let Some(s) = sigma.filter(|s| tau.abs() < DETERMINED_SIGMAS * s) {
+            self.left_out.push(format!("AHRS lag {tau:+.2e} ± {s:.1e} s"));
+            return Ok(());
+        }
+        match plausible_lag(tau) {
+            Err(why) => self.refused.push(format!("AHRS lag: {why}")),
+            Ok(()) if tau > 0.0 => {
+                self.lag_s = Some(tau);
+                self.applied.push(format!("every channel not from the AHRS (accelerometers, air data, surfaces, thrust) passed through the AHRS's first-order filter, τ = {tau:.3} s, so that all share its lag"));
+            }
+            Ok(()) => {}
+        }
+        Ok(())
     }
 
     fn new(entries: Vec<Entry>, beta: Vec<(Vec<f64>, Vec<f64>)>) -> Result<Self, String> {
@@ -408,12 +479,22 @@ pub struct Corrected<I> {
     next: usize,
     out: VecDeque<Result<RecordEvent, FlightDataError>>,
     done: bool,
+    /// The AHRS lag's filter of the other channels.
+    lag: LagFilter,
 }
 
 impl<I> Corrected<I> {
     /// The stage over the events `inner`.
     pub fn new(inner: I, corr: Corrections) -> Self {
-        Self { inner, corr, window: VecDeque::new(), next: 0, out: VecDeque::new(), done: false }
+        Self {
+            inner,
+            corr,
+            window: VecDeque::new(),
+            next: 0,
+            out: VecDeque::new(),
+            done: false,
+            lag: LagFilter::default(),
+        }
     }
 
     /// Emits every sample the record has gone far enough past (all of them with `flush`), and
@@ -423,7 +504,10 @@ impl<I> Corrected<I> {
         while self.next < self.window.len()
             && (flush || self.window[self.next].1.t_s + self.corr.lead_s() <= newest)
         {
-            let (row, sample) = (self.window[self.next].0, self.corrected(self.next));
+            let (row, mut sample) = (self.window[self.next].0, self.corrected(self.next));
+            if let Some(tau) = self.corr.lag_s {
+                self.lag.apply(&mut sample, tau);
+            }
             self.out.push_back(Ok(RecordEvent::Sample { row, sample }));
             self.next += 1;
         }
@@ -501,11 +585,72 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Iterator for Corr
                     self.emit(true);
                     self.window.clear();
                     self.next = 0;
+                    self.lag = LagFilter::default();
                     self.out.push_back(Ok(gap));
                 }
                 Some(other) => self.out.push_back(other),
             }
         }
+    }
+}
+
+/// The AHRS lag's first-order filter of every channel not from the AHRS (module doc), one
+/// state per field: `(time, input, output)` of its last sample, `None` before a manoeuvre's
+/// first sample with the field (where it starts in steady state).
+#[derive(Default)]
+struct LagFilter {
+    state: [Option<(f64, f64, f64)>; LAGGED_FIELDS],
+}
+
+/// How many fields [`other_channels`] visits.
+const LAGGED_FIELDS: usize = 15;
+
+impl LagFilter {
+    /// Sample `s` with its non-AHRS channels through the filter of time constant `tau_s`.
+    fn apply(&mut self, s: &mut AirDataSample, tau_s: f64) {
+        let t = s.t_s;
+        let state = &mut self.state;
+        other_channels(s, |i, v| {
+            let Some(x) = v else {
+                state[i] = None;
+                return;
+            };
+            let y = match state[i] {
+                Some((t0, u0, y0)) if t > t0 => {
+                    aeroident_estimators::compat::lag_step(y0, u0, *x, t - t0, tau_s)
+                }
+                Some((_, _, y0)) => y0,
+                None => *x,
+            };
+            state[i] = Some((t, *x, y));
+            *x = y;
+        });
+    }
+}
+
+/// Calls `f` with an index and each channel of `s` that does not come from an AHRS (the rates,
+/// their derivatives and the attitudes do): airspeed, α, q̄, β, α̇, the accelerometers, the
+/// surfaces, thrust, throttle, thrust moment and density (`None` where not recorded).
+fn other_channels(s: &mut AirDataSample, mut f: impl FnMut(usize, Option<&mut f64>)) {
+    f(0, Some(&mut s.vt_mps));
+    f(1, Some(&mut s.alpha_rad));
+    f(2, Some(&mut s.qbar_pa));
+    let optional = [
+        &mut s.beta_rad,
+        &mut s.alphadot_rad_s,
+        &mut s.ax_mps2,
+        &mut s.ay_mps2,
+        &mut s.az_mps2,
+        &mut s.de_rad,
+        &mut s.da_rad,
+        &mut s.dr_rad,
+        &mut s.thrust_n,
+        &mut s.throttle,
+        &mut s.thrust_moment_nm,
+        &mut s.rho_kgpm3,
+    ];
+    for (i, v) in optional.into_iter().enumerate() {
+        f(3 + i, v.as_mut());
     }
 }
 
@@ -750,7 +895,7 @@ mod tests {
             row("phi_rad", 0.0, None, Some(0.12)),
             row("alpha_rad", 0.0, None, Some(-0.05)),
         ];
-        let c = Corrections::of_rows(&rows, &[]).unwrap();
+        let c = Corrections::of_rows(&rows, None, &[]).unwrap();
         assert_eq!(c.left_out, ["q_rad_s bias +1.00e-4 ± 2.0e-4"]);
         let applied = c.applied.join("; ");
         assert!(
@@ -788,11 +933,11 @@ mod tests {
             beta_rad: vec![0.0, 0.02],
             beta_determined: determined,
         };
-        let pinned = Corrections::of_rows(&[], &[rec(false)]).unwrap();
+        let pinned = Corrections::of_rows(&[], None, &[rec(false)]).unwrap();
         assert!(pinned.beta.is_empty() && pinned.beta_at(0.5).is_none());
         assert!(pinned.refused[0].contains("unmeasured state"), "{:?}", pinned.refused);
         assert!(!pinned.applied.iter().any(|a| a.contains("reconstructed")));
-        let used = Corrections::of_rows(&[], &[rec(true)]).unwrap();
+        let used = Corrections::of_rows(&[], None, &[rec(true)]).unwrap();
         assert!(used.refused.is_empty() && (used.beta_at(0.5).unwrap() - 0.01).abs() < 1e-12);
         let old: ReconstructedSummary = serde_json::from_str(
             r#"{"manoeuvre": 1, "t_s": [0.0], "vt_mps": [50.0], "alpha_rad": [0.1], "beta_rad": [0.0]}"#,
@@ -869,5 +1014,56 @@ mod tests {
         let e = Corrections::new(vec![(Channel::Ax, Some(0.1), Some(0.0), None)], Vec::new())
             .unwrap_err();
         assert!(e.contains("ax_mps2"), "{e}");
+    }
+
+    /// An AHRS lag of τ = 0.15 s: the stage passes every other channel through the filter
+    /// and leaves the AHRS's own as read. A ramp `α = 0.01 t` (sampled at 10 Hz) comes out,
+    /// once the start's transient has died away (e^{−8/0.15}), as `0.01 (t − τ)`, the steady
+    /// response of `τ ẏ + y = u` to a ramp; q passes unchanged; after a gap the filter starts
+    /// again from the first sample. A lag beyond 0.5 s or below 0 is refused, one within 2σ of
+    /// none left out, and neither filters.
+    #[test]
+    fn an_ahrs_lag_filters_every_other_channel() {
+        let lagged = |tau: f64, sigma: Option<f64>| {
+            let mut c = Corrections::default();
+            c.set_lag(tau, sigma).unwrap();
+            c
+        };
+        let ramp = |t: f64| AirDataSample {
+            t_s: t,
+            vt_mps: 50.0,
+            alpha_rad: 0.01 * t,
+            q_rad_s: Some((0.5 * t).cos()),
+            ..Default::default()
+        };
+        let mut input: Vec<_> = (0..100)
+            .map(|k| Ok(RecordEvent::Sample { row: k, sample: ramp(0.1 * k as f64) }))
+            .collect();
+        input.push(Ok(RecordEvent::Gap { row: 100, dt_s: 1.1, nominal_dt_s: 0.1 }));
+        input.push(Ok(RecordEvent::Sample { row: 100, sample: ramp(11.0) }));
+        let corr = lagged(0.15, Some(0.01));
+        assert!(corr.applied.iter().any(|a| a.contains("τ = 0.150 s")), "{:?}", corr.applied);
+        let out: Vec<AirDataSample> = Corrected::new(input.into_iter(), corr)
+            .filter_map(|e| match e.unwrap() {
+                RecordEvent::Sample { sample, .. } => Some(sample),
+                _ => None,
+            })
+            .collect();
+        for s in &out[80..100] {
+            assert!((s.alpha_rad - 0.01 * (s.t_s - 0.15)).abs() < 1e-12, "{s:?}");
+            assert_eq!(s.q_rad_s, ramp(s.t_s).q_rad_s);
+            assert_eq!(s.vt_mps, 50.0);
+        }
+        assert!((out[100].alpha_rad - 0.11).abs() < 1e-15, "restarted in steady state");
+        for (tau, why) in [(0.6, "beyond the 0.5 s"), (-0.05, "is not negative")] {
+            let c = lagged(tau, Some(0.01));
+            assert!(
+                c.lag_s.is_none() && c.refused.iter().any(|r| r.contains(why)),
+                "{:?}",
+                c.refused
+            );
+        }
+        let c = lagged(0.01, Some(0.01));
+        assert!(c.lag_s.is_none() && c.left_out[0].starts_with("AHRS lag"), "{:?}", c.left_out);
     }
 }

@@ -480,6 +480,32 @@ fn a_fit_that_does_not_converge_is_an_error_with_the_last_iterate() {
     assert_eq!(last.termination, Termination::NotConverged(NotConverged::MaxIterations));
 }
 
+/// A fit from the equation-error start that does not converge is fitted again from the
+/// generic priors, and the one with the lower `det R` is returned, both endings told; a fit
+/// that converges from the first start is not fitted again.
+#[test]
+fn a_fit_that_fails_from_the_equation_error_start_is_started_again_from_the_priors() {
+    let st = lon();
+    let th = trimmed_truth(&st);
+    let data = simulate(&st, &th, 20.0, 12.0, 1.0, 9, [0.0; N_STATES]);
+    let mut cfg = OeConfig::new(st.clone());
+    cfg.max_iterations = 1;
+    let last = fit_to_end(&[&data], &cfg).unwrap();
+    let restart = last.restart.expect("a second start after the first did not converge");
+    let priors = priors_start(&st);
+    assert_ne!(priors, equation_error_start(&st, &[&data]), "the two starts must differ");
+    for (t, _) in [restart.first, restart.second] {
+        assert_eq!(t, Termination::NotConverged(NotConverged::MaxIterations));
+    }
+    let kept_ln = last.iterations.last().unwrap().ln_det_r;
+    assert_eq!(kept_ln, restart.first.1.min(restart.second.1));
+    assert_eq!(restart.kept_second, restart.second.1 < restart.first.1);
+    assert_eq!(last.start == priors, restart.kept_second);
+    let whole = fit_to_end(&[&data], &OeConfig::new(st)).unwrap();
+    assert_eq!(whole.termination, Termination::Converged);
+    assert!(whole.restart.is_none());
+}
+
 /// A step tolerance no fit can meet: the fit still ends with a result once the cost stops
 /// changing (`ml_oem2`'s criterion), at the estimates of the fit that converged on both.
 #[test]

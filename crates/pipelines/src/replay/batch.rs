@@ -513,6 +513,27 @@ pub fn termination_note_of(
     ))
 }
 
+/// The words for a fit started twice ([`OeResult::restart`]): how the fit from the
+/// equation-error start ended, how the one from the generic priors did, and which is
+/// reported; `None` for a fit started once.
+pub fn restart_note(result: &OeResult) -> Option<String> {
+    let r = result.restart?;
+    let ending = |(t, ln): (Termination, f64)| format!("{}, ln det R {ln:.3}", t.status());
+    let kept = if r.kept_second { "the second" } else { "the first" };
+    Some(format!(
+        "started twice: the fit from the equation-error start ended {}, the fit from the \
+         generic priors {}; reported: {kept} ({}). Two starts reaching different answers mean \
+         the cost has more than one valley: check the excitation and any unmeasured state",
+        ending(r.first),
+        ending(r.second),
+        if r.first.0.is_converged() == r.second.0.is_converged() {
+            "the lower det R"
+        } else {
+            "the converged one"
+        }
+    ))
+}
+
 /// The model's simulated outputs over `manoeuvres` with parameters `theta` (no fit: output
 /// error's simulation at the given values, initial states at each manoeuvre's first sample),
 /// as a result whose residuals are `z − y` (for the validation of a filter-error fit, whose
@@ -1238,7 +1259,7 @@ fn fit_warnings(
     values: &[Option<f64>],
 ) -> aeroident_io::warning::Warnings {
     let mut warnings: aeroident_io::warning::Warnings =
-        termination_note(result).into_iter().collect();
+        termination_note(result).into_iter().chain(restart_note(result)).collect();
     let reported: Vec<Option<f64>> = sigmas.reported.iter().map(|s| Some(*s)).collect();
     warnings.extend(diagnostics::sign_warnings(&result.structure, values, &reported));
     warnings.extend(sigmas.bootstrap_skipped.clone());

@@ -139,6 +139,7 @@ fn bare_result(fd: &FdoeResult) -> OeResult {
         manoeuvre_lengths: Vec::new(),
         iterations: fd.iterations.clone(),
         start: fd.start.clone(),
+        restart: None,
         termination: fd.termination,
         unmeasured_states: Vec::new(),
         dominance: None,

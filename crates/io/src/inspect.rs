@@ -220,10 +220,10 @@ pub fn inspect_log(path: &str, options: &InspectOptions) -> Result<Inspection, F
         .format
         .or_else(|| LogFormat::from_extension(Path::new(path)))
         .unwrap_or(LogFormat::Csv);
-    let tlog = options.format.is_none()
-        && Path::new(path).extension().is_some_and(|e| e.eq_ignore_ascii_case("tlog"));
     let inspection = match format {
-        _ if tlog => inspect_multirate(path, "tlog", options, crate::tlog::read_tlog_filtered)?,
+        LogFormat::Tlog => {
+            inspect_multirate(path, format.name(), options, crate::tlog::read_tlog_filtered)?
+        }
         LogFormat::Ulog => inspect_multirate(path, format.name(), options, |p, f| {
             crate::ulog::read_ulog_filtered(p, f).map(|c| (c, None))
         })?,

@@ -10,6 +10,7 @@
 //! | MATLAB v5 ([`LogFormat::Mat`]) | `.mat` | one matrix: as `.asc`; several variables: each vector is a column named by its variable | row of the record (1-based) |
 //! | PX4 ULog ([`LogFormat::Ulog`]) | `.ulg` | `<topic>.<field>` after alignment ([`crate::table`]) | row of the aligned table |
 //! | ArduPilot DataFlash ([`LogFormat::Dataflash`]) | `.bin` | `<message>.<field>` after alignment | row of the aligned table |
+//! | MAVLink telemetry ([`LogFormat::Tlog`]) | `.tlog` | `<MESSAGE>.<field>` after alignment; times in Unix seconds ([`crate::tlog`]) | row of the aligned table |
 //!
 //! How the formats meet: a whitespace file is converted line by line to comma-separated text
 //! (streaming, so `-` works for a live feed too), and a [`Table`] — what the `.mat` reader and
@@ -22,7 +23,7 @@
 //! holding the same numbers. Non-finite values are written `NaN`/`inf` and rejected by the row
 //! checks like a non-finite CSV field.
 //!
-//! The multi-rate readers ([`crate::ulog`], [`crate::dataflash`]) produce topics; they are
+//! The multi-rate readers ([`crate::ulog`], [`crate::dataflash`], [`crate::tlog`]) produce topics; they are
 //! aligned to one time base by the mapping's `[align]` ([`crate::multirate::log_table`]) into a
 //! [`Table`] and handed to [`table_reader`] like a `.mat` record.
 
@@ -53,12 +54,20 @@ pub enum LogFormat {
     Ulog,
     /// ArduPilot DataFlash `.bin`.
     Dataflash,
+    /// MAVLink telemetry log `.tlog` (Mission Planner, MAVProxy, QGroundControl).
+    Tlog,
 }
 
 impl LogFormat {
     /// Every format, in the order of the table in the module doc.
-    pub const ALL: [LogFormat; 5] =
-        [LogFormat::Csv, LogFormat::Asc, LogFormat::Mat, LogFormat::Ulog, LogFormat::Dataflash];
+    pub const ALL: [LogFormat; 6] = [
+        LogFormat::Csv,
+        LogFormat::Asc,
+        LogFormat::Mat,
+        LogFormat::Ulog,
+        LogFormat::Dataflash,
+        LogFormat::Tlog,
+    ];
 
     /// The name used by `--format`.
     pub fn name(self) -> &'static str {
@@ -68,11 +77,12 @@ impl LogFormat {
             LogFormat::Mat => "mat",
             LogFormat::Ulog => "ulog",
             LogFormat::Dataflash => "dataflash",
+            LogFormat::Tlog => "tlog",
         }
     }
 
     /// The format a file's extension names (case-insensitive): `.asc` whitespace
-    /// text, `.mat`, `.ulg`, `.bin` DataFlash; `None` for any other (read as CSV by
+    /// text, `.mat`, `.ulg`, `.bin` DataFlash, `.tlog`; `None` for any other (read as CSV by
     /// [`open_log`]).
     pub fn from_extension(path: &Path) -> Option<Self> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
@@ -82,6 +92,7 @@ impl LogFormat {
             "mat" => Some(LogFormat::Mat),
             "ulg" | "ulog" => Some(LogFormat::Ulog),
             "bin" => Some(LogFormat::Dataflash),
+            "tlog" => Some(LogFormat::Tlog),
             _ => None,
         }
     }
@@ -128,7 +139,7 @@ pub fn open_log(
 }
 
 /// [`open_log`], and one line per thing the reading or alignment of a multi-rate log (ULog,
-/// DataFlash) left out ([`ReaderReport::notes`]). Empty for CSV, `.asc`, `.mat`.
+/// DataFlash, `.tlog`) left out ([`ReaderReport::notes`]). Empty for CSV, `.asc`, `.mat`.
 ///
 /// # Errors
 /// As [`open_log_with_report`].
@@ -182,7 +193,7 @@ pub fn open_log_with_report(
             let table = read_mat(open()?, path, mapping.column_names.as_deref())?;
             Ok((table_reader(table, mapping)?, empty))
         }
-        LogFormat::Ulog | LogFormat::Dataflash => {
+        LogFormat::Ulog | LogFormat::Dataflash | LogFormat::Tlog => {
             if path == "-" {
                 return Err(FlightDataError::Format {
                     file: path.to_string(),
@@ -192,6 +203,7 @@ pub fn open_log_with_report(
             let filter = TopicFilter::for_mapping(mapping);
             let contents = match format {
                 LogFormat::Ulog => crate::ulog::read_ulog_filtered(Path::new(path), &filter)?,
+                LogFormat::Tlog => crate::tlog::read_tlog_filtered(Path::new(path), &filter)?.0,
                 _ => crate::dataflash::read_dataflash_filtered(Path::new(path), &filter)?,
             };
             let mut report = ReaderReport::from_contents(path, format.name(), &contents);

@@ -180,6 +180,9 @@ pub struct LogContents {
     pub skipped: Vec<(u64, u64)>,
     /// All skipped stretches: `(count, total bytes)`, listed or not.
     pub skipped_total: (u64, u64),
+    /// A `.tlog`'s frames skipped whole because the dialect does not know their message id:
+    /// id → count (empty for the other formats).
+    pub unknown_messages: BTreeMap<u32, usize>,
 }
 
 impl LogContents {

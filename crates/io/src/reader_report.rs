@@ -1,11 +1,12 @@
-//! What reading a multi-rate log (ULog, DataFlash) left out before the first row reached the
+//! What reading a multi-rate log (ULog, DataFlash, MAVLink `.tlog`) left out before the first row reached the
 //! estimators, as data: counted per kind and per topic with where it began, for `summary.json`
 //! (`reader`) and the report, as well as the `note:` lines a command prints.
 //!
 //! Kinds ([`DropKind`]): samples whose timestamp broke their topic's increasing order, the
 //! message a cut file ends inside, corrupt bytes skipped to resynchronise, and aligned rows
 //! dropped because a topic had no value there ([`crate::align`]), and the far-early first or
-//! far-late last samples of a topic left out as time outliers.
+//! far-late last samples of a topic left out as time outliers, and a `.tlog`'s frames of
+//! message ids its dialect does not know.
 
 use crate::log_contents::LogContents;
 use serde::Serialize;
@@ -26,6 +27,10 @@ pub enum DropKind {
     /// ([`LogContents::time_outliers`]), or its first samples before a jump longer than its
     /// span after ([`LogContents::early_time_outliers`]; `first_sample` 0); unit: samples.
     TimeOutlier,
+    /// A `.tlog`'s frames of one message id the MAVLink dialect does not know, so that neither
+    /// their CRC nor their fields can be read ([`LogContents::unknown_messages`]; topic
+    /// `message id N`; unit: messages).
+    UnknownMessage,
 }
 
 /// One kind of loss, for one topic where it has one.
@@ -129,6 +134,18 @@ impl ReaderReport {
                 first_time_s: None,
             });
         }
+        for (id, &n) in &contents.unknown_messages {
+            dropped.push(Dropped {
+                kind: DropKind::UnknownMessage,
+                topic: Some(format!("message id {id}")),
+                count: n as u64,
+                unit: "messages",
+                of: None,
+                first_byte: None,
+                first_sample: None,
+                first_time_s: None,
+            });
+        }
         Self { file: file.to_string(), format: format.to_string(), dropped }
     }
 
@@ -197,6 +214,10 @@ impl ReaderReport {
                             d.first_sample.unwrap_or(0) as usize,
                             d.first_time_s.unwrap_or(f64::NAN)
                         )
+                    ),
+                    DropKind::UnknownMessage => format!(
+                        "{f}: {} frames of {topic} skipped: the ardupilotmega dialect does not know it",
+                        d.count
                     ),
                     DropKind::Alignment => format!(
                         "{f}: {} of {} aligned rows dropped: topic `{topic}` had no value there (before its first sample or past its hold interval)",

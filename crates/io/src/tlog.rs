@@ -1,5 +1,6 @@
 //! MAVLink telemetry logs (`.tlog`, as Mission Planner, MAVProxy and QGroundControl write
-//! them): for `aeroident inspect` only (replay reads a live MAVLink feed, docs/mavlink.md).
+//! them), for `aeroident inspect` and, aligned by the mapping's `[align]` as a ULog or
+//! DataFlash log is, for `replay` ([`crate::log::open_log`]; a live feed: docs/mavlink.md).
 //!
 //! The file is a sequence of records: a big-endian `u64` timestamp (µs since the Unix epoch,
 //! when the ground station received the message) and one MAVLink frame, v1 (`0xFE`, 6-byte
@@ -212,6 +213,7 @@ impl Decoder<'_> {
     fn finish(self, file: &str) -> (LogContents, Option<String>) {
         let Decoder { mut out, builders, unknown_ids, .. } = self;
         out.add_topics(builders);
+        out.unknown_messages = unknown_ids.clone();
         let note = (!unknown_ids.is_empty()).then(|| {
             let ids: Vec<String> =
                 unknown_ids.iter().map(|(id, n)| format!("{id} ({n}×)")).collect();

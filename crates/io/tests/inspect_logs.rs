@@ -16,7 +16,7 @@ mod logs;
 #[path = "common/shared.rs"]
 mod shared_data;
 
-use logs::Dataflash;
+use logs::{Dataflash, tlog_record};
 
 /// A file under the system's temp directory, unique to this test process.
 fn temp(name: &str) -> PathBuf {
@@ -323,17 +323,6 @@ fn dataflash_types_counts_rates_fields_and_units_match_pymavlink() {
     assert_eq!(unit("GPS", "Spd").as_deref(), Some("m/s"));
     assert_eq!(ins.summary.parameters.get("SERVO2_FUNCTION"), Some(&19.0));
     assert!(ins.surfaces.is_empty(), "the log has no AETR, RCOU or SIDD: {:?}", ins.surfaces);
-}
-
-/// One `.tlog` record: the big-endian µs timestamp and the frame the `mavlink` crate writes.
-fn tlog_record(
-    out: &mut Vec<u8>,
-    t_us: u64,
-    version: mavlink::MavlinkVersion,
-    msg: &mavlink::dialects::ardupilotmega::MavMessage,
-) {
-    out.extend(t_us.to_be_bytes());
-    mavlink::write_versioned_msg(out, version, mavlink::MavHeader::default(), msg).unwrap();
 }
 
 /// A MAVLink telemetry log written with the `mavlink` crate's own encoder: `ATTITUDE` at 50 Hz

@@ -515,3 +515,62 @@ fn val_ulog_removed_msg_id_may_be_subscribed_again() {
         "{msg}"
     );
 }
+
+/// A MAVLink telemetry log replays through a mapping as a ULog does: `ATTITUDE` (v2 frames)
+/// and `VFR_HUD` (v1) at 50 Hz, aligned on their common 50-Hz grid, give at every row the
+/// values written at that time (Unix seconds), and a frame of a message id the dialect does
+/// not know is skipped and counted in the reader's report.
+#[test]
+fn val_a_tlog_replays_its_messages_at_their_times() {
+    use mavlink::MavlinkVersion::{V1, V2};
+    use mavlink::dialects::ardupilotmega::{ATTITUDE_DATA, MavMessage, VFR_HUD_DATA};
+    let unknown_id = 16_000u32;
+    use mavlink::Message as _;
+    let known = MavMessage::default_message_from_id(unknown_id);
+    assert!(known.is_none(), "the test needs an unknown id");
+    let t0_us = 1_700_000_000_000_000u64;
+    let w = std::f64::consts::PI;
+    let roll = |t: f64| 0.1 * (w * t).sin();
+    let vt = |t: f64| 20.0 + 0.5 * t;
+    let mut b = Vec::new();
+    let n = 200u64;
+    for k in 0..n {
+        let (t_us, t) = (t0_us + k * 20_000, k as f64 * 0.02);
+        let att = ATTITUDE_DATA {
+            roll: roll(t) as f32,
+            rollspeed: (0.1 * w * (w * t).cos()) as f32,
+            pitch: 0.05,
+            ..Default::default()
+        };
+        logs::tlog_record(&mut b, t_us, V2, &MavMessage::ATTITUDE(att));
+        let hud = VFR_HUD_DATA { airspeed: vt(t) as f32, ..Default::default() };
+        logs::tlog_record(&mut b, t_us, V1, &MavMessage::VFR_HUD(hud));
+        if k == 50 {
+            b.extend((t_us + 1).to_be_bytes());
+            let id = unknown_id.to_le_bytes();
+            b.extend([0xFD, 1, 0, 0, 0, 1, 1, id[0], id[1], id[2], 7, 0x12, 0x34]);
+        }
+    }
+    let path = temp_file("link.tlog", &b);
+    let text = "nominal_dt_s = 0.02\n[time]\ncolumn = \"time_s\"\nunit = \"s\"\n[align]\nrate_hz = 50.0\nmethod = \"linear\"\n[channels]\nvt = { column = \"VFR_HUD.airspeed\", unit = \"m/s\" }\nalpha = { column = \"ATTITUDE.pitch\", unit = \"rad\" }\np = { column = \"ATTITUDE.rollspeed\", unit = \"rad/s\" }\nphi = { column = \"ATTITUDE.roll\", unit = \"rad\" }\nmass = { value = 1.0, unit = \"kg\" }\nS = { value = 1.0, unit = \"m2\" }\nrho = { value = 1.0, unit = \"kg/m3\" }\n";
+    let m = Mapping::from_toml_str(text, "m.toml").unwrap();
+    let (reader, report) = open_log_with_report(path.to_str().unwrap(), None, &m).unwrap();
+    assert_eq!(report.format, "tlog");
+    let d: Vec<_> = report.dropped.iter().filter(|d| d.kind == DropKind::UnknownMessage).collect();
+    assert_eq!(d.len(), 1, "{:?}", report.dropped);
+    assert_eq!((d[0].topic.as_deref(), d[0].count), (Some("message id 16000"), 1));
+    assert!(report.notes().iter().any(|l| l.contains("1 frames of message id 16000 skipped")));
+    let t0 = t0_us as f64 * 1e-6;
+    let mut rows = 0;
+    for e in reader {
+        let Ok(RecordEvent::Sample { sample, .. }) = e else { continue };
+        let t = sample.t_s - t0;
+        assert!((-1e-6..=3.98 + 1e-6).contains(&t), "t {t}");
+        assert!((sample.phi_rad.unwrap() - roll(t)).abs() < 1e-4, "φ at {t}");
+        assert!((sample.p_rad_s.unwrap() - 0.1 * w * (w * t).cos()).abs() < 1e-3, "p at {t}");
+        assert!((sample.vt_mps - vt(t)).abs() < 1e-4, "V at {t}");
+        assert!((sample.alpha_rad - 0.05).abs() < 1e-7);
+        rows += 1;
+    }
+    assert!((n - 1..=n).contains(&rows), "{rows} rows");
+}

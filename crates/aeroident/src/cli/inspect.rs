@@ -32,7 +32,7 @@ pub struct InspectArgs {
     /// ArduPilot DataFlash `.bin`, MAVLink telemetry `.tlog` (by its extension); `-` for a CSV
     /// (or `--format asc`) on stdin.
     pub data: String,
-    /// Log format (csv, asc, mat, ulog, dataflash); default: by the file's extension, else CSV.
+    /// Log format (csv, asc, mat, ulog, dataflash, tlog); default: by the file's extension, else CSV.
     #[arg(long)]
     pub format: Option<LogFormat>,
     /// A channel mapping (`replay`'s, docs/mapping.md): its `de`, `da`, `dr` columns are the

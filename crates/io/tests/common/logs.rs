@@ -70,3 +70,14 @@ pub fn mat_compressed(element: &[u8]) -> Vec<u8> {
     out.extend(c);
     out
 }
+
+/// One `.tlog` record: the big-endian µs timestamp and the frame the `mavlink` crate writes.
+pub fn tlog_record(
+    out: &mut Vec<u8>,
+    t_us: u64,
+    version: mavlink::MavlinkVersion,
+    msg: &mavlink::dialects::ardupilotmega::MavMessage,
+) {
+    out.extend(t_us.to_be_bytes());
+    mavlink::write_versioned_msg(out, version, mavlink::MavHeader::default(), msg).unwrap();
+}

@@ -90,7 +90,7 @@ pub struct ReplayArgs {
     /// Channel mapping TOML (see `mappings/*.toml` and `docs/mapping.md`).
     #[arg(long)]
     pub map: PathBuf,
-    /// Log format (csv, asc, mat, ulog, dataflash); default: by the file's extension
+    /// Log format (csv, asc, mat, ulog, dataflash, tlog); default: by the file's extension
     /// (`.asc`, `.mat`, `.ulg`, `.bin`), else CSV.
     #[arg(long)]
     pub format: Option<LogFormat>,

@@ -19,6 +19,7 @@ use serde::Serialize;
 
 use super::experiment::{ChannelLog, ParamLog, Quantity, RunOutput};
 use crate::metrics::{self, CONVERGENCE_TOL_REL, MetricsError};
+use crate::replay::precision;
 
 /// Tolerance of the issue-8 targets: ±10 % of the truth.
 pub const TARGET_TOL_REL: f64 = 0.10;
@@ -343,8 +344,9 @@ impl ParamSummary {
     /// without an estimate (a failed fit, its failure the flag); otherwise the flags are an
     /// estimator failure (estimates held from then on), each missed target of a primary
     /// derivative of a real-time estimator ([`ParamSummary::missed_targets`]), a final value
-    /// without σ further than 5 % from the truth, a truth outside ±2σ; `flagged` with any,
-    /// `identified` without.
+    /// without σ further than 5 % from the truth, a truth outside ±2σ, an estimate whose σ is
+    /// more than 10 % of itself (the replay's rule, [`crate::replay::precision`]: a truth
+    /// inside a wide ±2σ does not make it known); `flagged` with any, `identified` without.
     pub fn judge(&mut self, damage_at_s: Option<f64>) {
         let r = &mut self.result;
         r.flags.extend(self.failure.iter().map(|f| format!("estimator failed at {f}")));
@@ -360,6 +362,9 @@ impl ParamSummary {
             && e.abs() > 100.0 * CONVERGENCE_TOL_REL
         {
             r.flag(format!("no σ, and the final value is {e:+.1} % from the truth"));
+        }
+        if let Some(relative) = precision::imprecise(&r.name, r.estimate, r.std_error) {
+            r.flag(precision::flag(relative));
         }
         r.judge(None);
     }
@@ -528,6 +533,12 @@ mod tests {
         e.result = ParameterResult::new("Cm_alpha", Some(-0.99), Some(0.01), Some(-1.0), None);
         e.judge(Some(20.0));
         assert_eq!((e.status.as_str(), e.flags.len()), ("identified", 0));
+        // Within ±2σ of the truth but σ 42 % of itself (the default job's CD_q): not known.
+        let mut e = entry(None, None, None);
+        e.result = ParameterResult::new("CD_q", Some(2.839), Some(1.2), Some(0.4536), None);
+        e.judge(None);
+        assert_eq!(e.status, "flagged");
+        assert_eq!(e.flags, ["σ 42 % of |estimate|: the record does not determine it to 10 %"]);
         let mut e = entry(Some(false), None, None);
         e.estimator_status = Some("diverged");
         e.judge(None);

@@ -444,7 +444,7 @@ fn cross_check_with_a_batch_fit_runs_the_other_methods() {
     let c = &s["cross_check"];
     let methods: Vec<&str> =
         c["methods"].as_array().unwrap().iter().map(|m| m["method"].as_str().unwrap()).collect();
-    assert_eq!(methods, ["oe", "rls", "rls-iv", "ekf", "fem"]);
+    assert_eq!(methods, ["oe", "rls", "rls-iv", "ekf", "fem", "fdoe"]);
     let with_sigma =
         s["parameters"].as_array().unwrap().iter().filter(|p| p["std_error"].is_f64()).count();
     assert_eq!(c["compared"].as_u64().unwrap() as usize, with_sigma);

@@ -38,7 +38,7 @@ fn val_hfb320_every_method_cross_checks_equation_error() {
     let done = job.finish(prepared, o, &mut InPlace, &mut (), String::new).unwrap();
     let (o, c) = (&done.outcome, done.outcome.cross_check.as_ref().unwrap());
     let methods: Vec<&str> = c.methods.iter().map(|m| m.method.as_str()).collect();
-    assert_eq!(methods, ["rls", "rls-iv", "ekf", "oe", "fem"]);
+    assert_eq!(methods, ["rls", "rls-iv", "ekf", "oe", "fem", "fdoe"]);
     assert!(c.methods.iter().all(|m| !m.status.starts_with("failed")), "{:?}", c.methods);
     let at = |p: &str, method: &str| {
         let a = c.parameters.iter().find(|a| a.parameter == p).unwrap();

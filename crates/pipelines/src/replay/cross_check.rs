@@ -7,8 +7,9 @@
 //! The methods (Klein & Morelli 2006 ch. 5–7; Jategaonkar 2015 ch. 4–5): equation error (`rls`,
 //! least squares on the measured states), instrumental variables (`rls-iv`, the same without
 //! the regressor-noise bias), the EKF (recursive output error with a process-noise model),
-//! output error (`oe`, no process noise) and the filter-error method (`fem`, process noise
-//! estimated). Two estimates **agree** when they differ by at most [`FLAG_SIGMAS`] combined σ
+//! output error (`oe`, no process noise), the filter-error method (`fem`, process noise
+//! estimated) and frequency-domain output error (`fdoe`, the same model fitted to the
+//! Fourier transforms over a band). Two estimates **agree** when they differ by at most [`FLAG_SIGMAS`] combined σ
 //! (`√(σ_a² + σ_b²)`, each method's reported σ; the errors of two fits of one record are
 //! correlated, so the test is conservative) or by at most [`AGREE_RELATIVE`] of the larger
 //! magnitude (a difference no user of a derivative acts on).

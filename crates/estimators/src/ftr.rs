@@ -96,8 +96,24 @@
 //! The solve costs `O(p m²)` more per pass (`1 + FITTED_SHARE_ITERATIONS` passes), spread
 //! over the samples as below.
 //!
-//! The coefficients are solved one per sample in turn once a solve is due, so the extra cost of
-//! a solve is spread over the samples rather than landing on one.
+//! ## Cost per update
+//!
+//! Once a solve is due the coefficients are solved one at a time in turn. A coefficient's
+//! estimate is the cheap part (`O(p² m)`); its σ is not: four noise moments of `q m²` terms
+//! each, about 60,000 for a six-axis coefficient on 41 frequencies, some 40 µs, against under
+//! 1 µs for the rest of an update. Done in the update that solves, it made one update in eight
+//! of the six-axis estimator 47 times slower than the median (docs/c-abi.md), which a flight
+//! computer's scheduler must budget for. So the σ's inputs are copied when the coefficient is
+//! solved and its σ is computed over the following updates ([`sigma`]), each update doing an
+//! equal share of the round's work: the round's inner-sum terms over the updates one solve
+//! interval holds at the current sample interval ([`FtrConfig::spread_sigma`]), so a round
+//! ends within the interval at any rate. The estimate and its σ are published together when
+//! the σ is done; the previous solution stands until then. The arithmetic is that of one pass
+//! in the same order, so the σ is the one of the solve's data however it is split; what
+//! changes is when a solution appears: up to one solve interval after its solve instead of up
+//! to one update per coefficient. Without spreading (`spread_sigma = false`, or an interval
+//! that holds no more than three updates per coefficient) each σ is computed in the update that
+//! solves its coefficient, one coefficient per update.
 
 use crate::EstimatorError;
 use crate::estimator::{
@@ -107,6 +123,9 @@ use crate::linalg::{Square, cholesky, cholesky_inverse, cholesky_solve, well_con
 use crate::sample::AirDataSample;
 use crate::vocabulary::{Coefficient, ModelStructure, N_TERMS, Term};
 use core::f64::consts::PI;
+use sigma::{SigmaJob, SigmaStart};
+
+mod sigma;
 
 /// Half-width, in grid frequencies, of the Daniell smoothing of the residual spectrum (σ).
 pub const SPECTRUM_HALF_WIDTH: usize = 3;
@@ -129,6 +148,9 @@ pub struct FtrConfig {
     pub forgetting: f64,
     /// Interval between solves, s (≥ 0; 0 = every sample).
     pub solve_interval_s: f64,
+    /// Spread each round of solves' σ evenly over the solve interval (module doc, "Cost per
+    /// update"); `false`: each σ in the update that solves its coefficient.
+    pub spread_sigma: bool,
 }
 
 impl Default for FtrConfig {
@@ -141,6 +163,7 @@ impl Default for FtrConfig {
             f_step_hz: 0.04,
             forgetting: 1.0,
             solve_interval_s: 1.0,
+            spread_sigma: true,
         }
     }
 }
@@ -197,6 +220,11 @@ pub struct Ftr {
     t0: f64,
     next_solve_t: f64,
     pending: u8,
+    /// The σ of the last coefficient solved, while it is computed (module doc, "Cost per
+    /// update").
+    sigma: SigmaJob,
+    /// Inner-sum terms of σ work per update in the current round (`usize::MAX`: all at once).
+    sigma_budget: usize,
     solutions: [Solution; 8],
     est: Estimates,
 }
@@ -267,6 +295,8 @@ impl Ftr {
             t0: 0.0,
             next_solve_t: f64::NEG_INFINITY,
             pending: 0,
+            sigma: SigmaJob::idle(),
+            sigma_budget: usize::MAX,
             solutions: [Solution {
                 theta: [0.0; N_TERMS],
                 cov: [[0.0; N_TERMS]; N_TERMS],
@@ -323,6 +353,7 @@ impl Ftr {
                 p += 1;
             }
         }
+        let was_identified = self.solutions[c.index()].identified;
         self.solutions[c.index()].identified = false;
         let m = self.n_freq;
         // Columns: the p terms, then the offset D̃.
@@ -380,155 +411,70 @@ impl Ftr {
         if !finite {
             return;
         }
-        let Some(cov) = self.sandwich(&terms, p, &inv, &resid, rss) else {
-            return;
-        };
-        let sol = &mut self.solutions[c.index()];
         theta[p] = 0.0;
-        sol.theta = theta;
-        sol.cov = cov;
-        sol.identified = true;
+        // Field by field (not through `column`): the job is written while these are read.
+        let (x, offset) = (&self.x.terms, &self.offset);
+        let cols: [&[C64; MAX_FREQUENCIES]; N_TERMS] =
+            core::array::from_fn(|i| if i < p { &x[terms[i].index()] } else { offset });
+        let start = SigmaStart {
+            m,
+            p,
+            cols,
+            w_diff: &self.w_diff,
+            w_sum: &self.w_sum,
+            inv: &inv,
+            resid: &resid,
+            rss,
+        };
+        // The previous solution stands until this one's σ is done.
+        self.solutions[c.index()].identified = was_identified;
+        if !self.sigma.start(c.index(), &theta, &start) {
+            self.solutions[c.index()].identified = false;
+        }
+    }
+
+    /// The σ work per update that finishes a round of solves within the solve interval at a
+    /// sample interval `dt` (module doc, "Cost per update"): the round's inner-sum terms (as
+    /// [`sigma`] counts them, each coefficient with its `q = p + 1` columns) over the updates of
+    /// one interval, less two per coefficient (the update that solves it, and the part of its
+    /// σ's last update left unused); `usize::MAX` when not spread, when the interval holds no
+    /// more than three updates per coefficient, or before `dt` is known.
+    fn round_budget(&self, dt: f64) -> usize {
+        let n = self.structure.coefficients().count();
+        let updates = self.cfg.solve_interval_s / dt;
+        if !self.cfg.spread_sigma || !(updates.is_finite() && updates > 3.0 * n as f64) {
+            return usize::MAX;
+        }
+        let (m, passes) = (self.n_freq, FITTED_SHARE_ITERATIONS);
+        let work: usize = self
+            .structure
+            .coefficients()
+            .map(|c| {
+                let q = self.structure.terms_of(c).filter(|t| *t != Term::Bias).count() + 1;
+                (1 + passes) * (q * m * m + q * q * m) + passes * 2 * m * q * q
+            })
+            .sum();
+        work.div_ceil(updates as usize - 2 * n).max(1)
+    }
+
+    /// Advances the σ in progress by the configured work and, when it is done, publishes the
+    /// coefficient's solution with it (or marks it not identified when no σ could be formed).
+    fn advance_sigma(&mut self) {
+        let Some(cov) = self.sigma.advance(self.sigma_budget) else { return };
+        let sol = &mut self.solutions[self.sigma.coefficient];
+        match cov {
+            Some(cov) => {
+                sol.theta = self.sigma.theta;
+                sol.cov = cov;
+                sol.identified = true;
+            }
+            None => sol.identified = false,
+        }
     }
 
     /// Column `i` of a coefficient's regression: term `terms[i]` for `i < p`, else the offset.
     fn column(&self, terms: &[Term; N_TERMS], p: usize, i: usize) -> &[C64; MAX_FREQUENCIES] {
         if i < p { &self.x.terms[terms[i].index()] } else { &self.offset }
-    }
-
-    /// The covariance `κ A⁻¹ M A⁻¹` of a solved coefficient (module doc, σ): `terms`/`p` its
-    /// non-bias terms (the offset is column `p`), `inv = A⁻¹` (`(p+1)²`), `resid` the residual
-    /// transforms, `rss = Σ|ε̃_f|²`. `None` when the residual has no degrees of freedom left or a
-    /// variance is not positive.
-    fn sandwich(
-        &self,
-        terms: &[Term; N_TERMS],
-        p: usize,
-        inv: &Square<N_TERMS>,
-        resid: &[C64; MAX_FREQUENCIES],
-        rss: f64,
-    ) -> Option<Square<N_TERMS>> {
-        let m = self.n_freq;
-        let q = p + 1;
-        let w0 = self.w_diff[0].0;
-        if w0.is_nan() || w0 <= 0.0 {
-            return None;
-        }
-        // Residual periodogram, Daniell-smoothed over ±SPECTRUM_HALF_WIDTH.
-        let mut raw = [0.0; MAX_FREQUENCIES];
-        for f in 0..m {
-            raw[f] = (resid[f].0 * resid[f].0 + resid[f].1 * resid[f].1) / w0;
-        }
-        let observed = daniell(&raw, m);
-        let mut level = observed;
-        let mut v = [[(0.0, 0.0); MAX_FREQUENCIES]; N_TERMS];
-        let mut mid = self.noise_moment(terms, p, &level, &mut v);
-        // Fitted share (module doc): the level whose expected smoothed residual periodogram
-        // matches the observed one.
-        for _ in 0..FITTED_SHARE_ITERATIONS {
-            let cov_all = sandwich_product(inv, &mid, q);
-            let mut expected = [0.0; MAX_FREQUENCIES];
-            for f in 0..m {
-                let mut cross = 0.0;
-                let mut fitted = 0.0;
-                for j in 0..q {
-                    let xj = self.column(terms, p, j)[f];
-                    for k in 0..q {
-                        let vk = v[k][f];
-                        cross += inv[j][k] * (xj.0 * vk.0 + xj.1 * vk.1);
-                        let xk = self.column(terms, p, k)[f];
-                        fitted += cov_all[j][k] * (xj.0 * xk.0 + xj.1 * xk.1);
-                    }
-                }
-                expected[f] = (level[f] - (cross - fitted) / w0).max(0.0);
-            }
-            let expected = daniell(&expected, m);
-            for f in 0..m {
-                let ratio = observed[f] / expected[f];
-                let ratio = if ratio.is_finite() { ratio.clamp(0.2, 5.0) } else { 1.0 };
-                level[f] *= ratio;
-            }
-            mid = self.noise_moment(terms, p, &level, &mut v);
-        }
-        // E[RSS] = tr C − tr(A⁻¹ M): the scale κ that makes the plug-in model reproduce the
-        // observed RSS.
-        let tr_c: f64 = (0..m).map(|f| level[f] * w0).sum();
-        let mut tr_am = 0.0;
-        for j in 0..q {
-            for k in 0..q {
-                tr_am += inv[j][k] * mid[k][j];
-            }
-        }
-        let dof = tr_c - tr_am;
-        if !(dof > 0.0 && tr_c > 0.0) {
-            return None;
-        }
-        let kappa = rss / dof;
-        let mut cov = sandwich_product(inv, &mid, q);
-        for row in cov.iter_mut().take(p) {
-            for c in row.iter_mut().take(p) {
-                *c *= kappa;
-            }
-        }
-        let ok = (0..p).all(|i| cov[i][i] > 0.0 && cov[i][i].is_finite());
-        ok.then_some(cov)
-    }
-
-    /// `M = E[u uᵀ]` for the residual spectral `level` (module doc, σ); also leaves in `v[k][f]`
-    /// the vector `Σ_g (C_fg X̃_kg + P_fg X̃_kg*)` of each column `k`.
-    fn noise_moment(
-        &self,
-        terms: &[Term; N_TERMS],
-        p: usize,
-        level: &[f64; MAX_FREQUENCIES],
-        v: &mut [[C64; MAX_FREQUENCIES]; N_TERMS],
-    ) -> Square<N_TERMS> {
-        let m = self.n_freq;
-        // M_jk = ½ Re Σ_f X̃_jf* Σ_g (C_fg X̃_kg + P_fg X̃_kg*),
-        // C_fg = ½(S_f + S_g) W(f − g), P_fg = ½(S_f + S_g) W⁺(f + g), W(−d) = W(d)*.
-        // The inner sums are the hot loop of a solve (run 1 + FITTED_SHARE_ITERATIONS times):
-        // W(f − g) X̃_kg + W⁺(f + g) X̃_kg* is expanded in real arithmetic, and the g ≤ f and
-        // g > f halves (W and W*) are separate loops.
-        let q = p + 1;
-        let mut mid = [[0.0; N_TERMS]; N_TERMS];
-        for k in 0..q {
-            let xk = self.column(terms, p, k);
-            for f in 0..m {
-                let lf = level[f];
-                let (mut re, mut im) = (0.0, 0.0);
-                for g in 0..=f {
-                    let (x, wd, ws) = (xk[g], self.w_diff[f - g], self.w_sum[f + g]);
-                    let s = lf + level[g];
-                    re += s * (x.0 * (wd.0 + ws.0) + x.1 * (ws.1 - wd.1));
-                    im += s * (x.0 * (wd.1 + ws.1) + x.1 * (wd.0 - ws.0));
-                }
-                for g in f + 1..m {
-                    // W(f − g) = W(g − f)*.
-                    let (x, wd, ws) = (xk[g], self.w_diff[g - f], self.w_sum[f + g]);
-                    let s = lf + level[g];
-                    re += s * (x.0 * (wd.0 + ws.0) + x.1 * (ws.1 + wd.1));
-                    im += s * (x.0 * (ws.1 - wd.1) + x.1 * (wd.0 - ws.0));
-                }
-                v[k][f] = (0.5 * re, 0.5 * im);
-            }
-            for j in 0..q {
-                let xj = self.column(terms, p, j);
-                let mut s = 0.0;
-                for f in 0..m {
-                    // Re(x* v) = x.re v.re + x.im v.im
-                    s += xj[f].0 * v[k][f].0 + xj[f].1 * v[k][f].1;
-                }
-                mid[j][k] = 0.5 * s;
-            }
-        }
-        // Symmetrise (the pseudo-covariance term is symmetric only up to rounding).
-        for j in 0..q {
-            for k in 0..j {
-                let a = 0.5 * (mid[j][k] + mid[k][j]);
-                mid[j][k] = a;
-                mid[k][j] = a;
-            }
-        }
-        mid
     }
 
     fn publish(&mut self, t_s: f64) {
@@ -556,36 +502,6 @@ impl Ftr {
 
 /// Passes of the fitted-share correction of the residual level (module doc, "The level").
 pub const FITTED_SHARE_ITERATIONS: usize = 3;
-
-/// Daniell smoothing over ±[`SPECTRUM_HALF_WIDTH`] of the first `m` values (fewer at the ends).
-fn daniell(x: &[f64; MAX_FREQUENCIES], m: usize) -> [f64; MAX_FREQUENCIES] {
-    let mut out = [0.0; MAX_FREQUENCIES];
-    for (f, o) in out.iter_mut().enumerate().take(m) {
-        let lo = f.saturating_sub(SPECTRUM_HALF_WIDTH);
-        let hi = (f + SPECTRUM_HALF_WIDTH).min(m - 1);
-        *o = x[lo..=hi].iter().sum::<f64>() / (hi - lo + 1) as f64;
-    }
-    out
-}
-
-/// `A⁻¹ M A⁻¹` over the first `q` rows and columns.
-fn sandwich_product(inv: &Square<N_TERMS>, mid: &Square<N_TERMS>, q: usize) -> Square<N_TERMS> {
-    let mut cov = [[0.0; N_TERMS]; N_TERMS];
-    for i in 0..q {
-        for j in 0..q {
-            let mut s = 0.0;
-            for a in 0..q {
-                let mut row = 0.0;
-                for b in 0..q {
-                    row += mid[a][b] * inv[b][j];
-                }
-                s += inv[i][a] * row;
-            }
-            cov[i][j] = s;
-        }
-    }
-    cov
-}
 
 impl Estimator for Ftr {
     fn method(&self) -> &'static str {
@@ -681,17 +597,24 @@ impl Estimator for Ftr {
             }
         }
         self.last_t = Some(s.t_s);
-        // Solves: when due, one coefficient per sample in turn.
-        if self.pending == 0 && s.t_s >= self.next_solve_t {
+        // Solves: when due, one coefficient at a time in turn, each σ over the updates its work
+        // takes (module doc, "Cost per update").
+        if self.pending == 0 && !self.sigma.active && s.t_s >= self.next_solve_t {
             self.pending = self.structure.coefficients().count() as u8;
             self.next_solve_t = s.t_s + self.cfg.solve_interval_s;
+            self.sigma_budget = self.round_budget(w);
         }
-        if self.pending > 0 {
+        if self.sigma.active {
+            self.advance_sigma();
+        } else if self.pending > 0 {
             let n = self.structure.coefficients().count();
             let k = n - self.pending as usize;
             let next = self.structure.coefficients().nth(k);
             if let Some(c) = next {
                 self.solve(c);
+                if self.sigma_budget == usize::MAX && self.sigma.active {
+                    self.advance_sigma();
+                }
             }
             self.pending -= 1;
         }
@@ -1073,9 +996,8 @@ mod tests {
         assert!(cholesky(&a, q, &mut l));
         let mut inv = [[0.0; N_TERMS]; N_TERMS];
         cholesky_inverse(&l, q, &mut inv);
-        let mut v = [[(0.0, 0.0); MAX_FREQUENCIES]; N_TERMS];
-        let mid = ftr.noise_moment(&terms, p, &[1.0; MAX_FREQUENCIES], &mut v);
-        let model = sandwich_product(&inv, &mid, q);
+        let mid = sigma_job(&ftr, &terms, p, &inv).flat_moment();
+        let model = sigma::sandwich_product(&inv, &mid, q);
         let mut exact = [[0.0; 4]; 4];
         for i in 1..n {
             let (t, wt) = (i as f64 * dt, lambda.powi((n - 1 - i) as i32) * dt);
@@ -1106,6 +1028,68 @@ mod tests {
                     model[r][c],
                     exact[r][c]
                 );
+            }
+        }
+    }
+
+    /// A σ job over `ftr`'s current columns of `terms` (`p` of them, then the offset), with
+    /// `inv` as `A⁻¹` and a unit residual.
+    fn sigma_job(ftr: &Ftr, terms: &[Term; N_TERMS], p: usize, inv: &Square<N_TERMS>) -> SigmaJob {
+        let cols = core::array::from_fn(|i| ftr.column(terms, p, i.min(p)));
+        let resid = core::array::from_fn(|f| (0.1 + 0.01 * f as f64, -0.05));
+        let start = SigmaStart {
+            m: ftr.n_freq,
+            p,
+            cols,
+            w_diff: &ftr.w_diff,
+            w_sum: &ftr.w_sum,
+            inv,
+            resid: &resid,
+            rss: 2.0,
+        };
+        let mut job = SigmaJob::idle();
+        assert!(job.start(0, &[0.0; N_TERMS], &start));
+        job
+    }
+
+    /// The σ spread over updates is the σ computed at once, bit for bit, however the work is
+    /// split (budgets of 1, 97 and 5,000 inner-sum terms per step against all at once), and a
+    /// budget of 1 takes one step per call: `(1 + passes) · q · (m + 1)` row and column steps
+    /// and one level correction per pass.
+    #[test]
+    fn the_sigma_does_not_depend_on_the_split() {
+        let st = ModelStructure::empty()
+            .with(Coefficient::Cm, &[Term::Bias, Term::Alpha, Term::Q, Term::De]);
+        let mut ftr = Ftr::new(st, FtrConfig { forgetting: 0.995, ..Default::default() }).unwrap();
+        for i in 0..1500 {
+            let t = i as f64 * 0.01;
+            let alpha = 0.06 + 0.02 * (1.3 * t).sin() + 0.01 * (4.1 * t + 1.0).sin();
+            let q = 0.1 * (2.1 * t).cos() + 0.05 * (6.0 * t).sin();
+            let de = -0.02 + 0.03 * (0.9 * t + 0.4).sin() + 0.01 * (5.3 * t).cos();
+            ftr.update(&pitch_sample(t, alpha, q, de, -0.8 * alpha - 1.1 * de)).unwrap();
+        }
+        let mut terms = [Term::Bias; N_TERMS];
+        terms[..3].copy_from_slice(&[Term::Alpha, Term::Q, Term::De]);
+        let (p, m) = (3, ftr.n_freq);
+        let mut inv = [[0.0; N_TERMS]; N_TERMS];
+        for (i, row) in inv.iter_mut().enumerate().take(p + 1) {
+            row[i] = 1.0 / (1.0 + i as f64);
+        }
+        let whole = sigma_job(&ftr, &terms, p, &inv).advance(usize::MAX).unwrap().unwrap();
+        for budget in [1, 97, 5000] {
+            let mut job = sigma_job(&ftr, &terms, p, &inv);
+            let mut calls = 1;
+            let split = loop {
+                match job.advance(budget) {
+                    Some(cov) => break cov.unwrap(),
+                    None => calls += 1,
+                }
+            };
+            assert_eq!(split, whole, "budget {budget}");
+            if budget == 1 {
+                let steps =
+                    (1 + FITTED_SHARE_ITERATIONS) * (p + 1) * (m + 1) + FITTED_SHARE_ITERATIONS;
+                assert_eq!(calls, steps + 1, "one step per call, and the last that finishes");
             }
         }
     }

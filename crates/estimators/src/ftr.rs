@@ -442,7 +442,7 @@ impl Ftr {
     fn round_budget(&self, dt: f64) -> usize {
         let n = self.structure.coefficients().count();
         let updates = self.cfg.solve_interval_s / dt;
-        if !self.cfg.spread_sigma || !(updates.is_finite() && updates > 3.0 * n as f64) {
+        if !(self.cfg.spread_sigma && updates.is_finite() && updates > 3.0 * n as f64) {
             return usize::MAX;
         }
         let (m, passes) = (self.n_freq, FITTED_SHARE_ITERATIONS);

@@ -488,7 +488,7 @@ fn a_fit_that_fails_from_the_equation_error_start_is_started_again_from_the_prio
     let st = lon();
     let th = trimmed_truth(&st);
     let data = simulate(&st, &th, 20.0, 12.0, 1.0, 9, [0.0; N_STATES]);
-    let mut cfg = OeConfig::new(st.clone());
+    let mut cfg = OeConfig::new(st);
     cfg.max_iterations = 1;
     let last = fit_to_end(&[&data], &cfg).unwrap();
     let restart = last.restart.expect("a second start after the first did not converge");

@@ -300,8 +300,7 @@ impl FiniteTimeSmpe {
         let config = config.validated()?;
         let equations = self.fits.iter().flatten().count();
         for f in self.fits.iter_mut().flatten() {
-            let h = config.threshold(equations, f.memory.regression().n);
-            f.memory.enable_change_test(config, h);
+            f.memory.enable_change_test(config, equations);
         }
         Ok(())
     }

@@ -59,7 +59,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::EstimatorError;
-use crate::change::{ChangeConfig, ChangeTest, Verdict};
+use crate::change::{ChangeConfig, ChangeTest, ShortMemory, Verdict};
 use crate::coloured::ColouredCovariance;
 use crate::estimator::{
     Estimates, Estimator, EventKind, EventLog, Status, check_finite, measured_coefficient,
@@ -171,14 +171,11 @@ pub(crate) trait CoefficientFit {
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Fit {
     reg: Regression,
-    /// Information form `Σ λ^{n−k} φφᵀ`, `Σ λ^{n−k} φy`, `Σ λ^{n−k} y²`: of every sample before
-    /// the exact initialisation; after it, with a change test, of the samples since the onset
-    /// of the test's current excursion (`crate::change`, "What an alarm does"), with their
-    /// λ-weighted count `run_n`.
+    /// Information form `Σ λ^{n−k} φφᵀ`, `Σ λ^{n−k} φy`, `Σ λ^{n−k} y²` of the samples before
+    /// the exact initialisation.
     info: Square<N_TERMS>,
     info_b: [f64; N_TERMS],
     info_yy: f64,
-    run_n: f64,
     change: Option<ChangeTest>,
     /// The statistic of an alarm of the last update, until taken.
     alarm: Option<f64>,
@@ -199,7 +196,6 @@ impl Fit {
             info: [[0.0; N_TERMS]; N_TERMS],
             info_b: [0.0; N_TERMS],
             info_yy: 0.0,
-            run_n: 0.0,
             change: None,
             alarm: None,
             p: [[0.0; N_TERMS]; N_TERMS],
@@ -212,9 +208,9 @@ impl Fit {
         }
     }
 
-    /// Adds a change test with threshold `h` (`crate::change`).
-    pub(crate) fn enable_change_test(&mut self, config: ChangeConfig, h: f64) {
-        self.change = Some(ChangeTest::new(config, h));
+    /// Adds a change test, one of `equations` tested at once (`crate::change`).
+    pub(crate) fn enable_change_test(&mut self, config: ChangeConfig, equations: usize) {
+        self.change = Some(ChangeTest::new(config, equations));
     }
 
     /// The change test, if any.
@@ -227,73 +223,35 @@ impl Fit {
         self.alarm.is_some()
     }
 
-    /// One sample through the change test, after the recursion took it: `e` the a-priori
-    /// residual, `reference` the memory's `σ̂² f` before the sample (`crate::change`). On an
-    /// alarm the memory is re-opened ([`Self::reopen`]) and the statistic kept for
+    /// One sample through the change test, after the recursion took it. On an alarm the
+    /// memory is re-opened ([`Self::reopen`]) and the statistic kept for
     /// [`CoefficientFit::take_change`].
     fn test_change(
         &mut self,
         phi: &[f64; N_TERMS],
         y: f64,
-        e: f64,
-        reference: Option<f64>,
         lambda: f64,
         t_s: f64,
     ) -> Result<(), EstimatorError> {
-        let Some(mut test) = self.change else { return Ok(()) };
-        let n = self.reg.n;
-        for i in 0..n {
-            for j in i..n {
-                let v = self.info[i][j] * lambda + phi[i] * phi[j];
-                self.info[i][j] = v;
-                self.info[j][i] = v;
+        let Some(mut test) = self.change.take() else { return Ok(()) };
+        let verdict = test.test(t_s, (phi, y), (self.reg.n, lambda), &self.theta, &self.p);
+        let reopened = match verdict {
+            Verdict::Alarm(statistic) => {
+                self.alarm = Some(statistic);
+                self.reopen(test.config.memory_kept, test.recent(), t_s)
             }
-            self.info_b[i] = self.info_b[i] * lambda + phi[i] * y;
-        }
-        self.info_yy = self.info_yy * lambda + y * y;
-        self.run_n = self.run_n * lambda + 1.0;
-        let ends = test.add(t_s, phi, n, e, lambda, reference);
-        let verdict = if ends { test.close_block(t_s, &self.info, n) } else { Verdict::Clear };
+            Verdict::Clear => Ok(()),
+        };
         self.change = Some(test);
-        if let Verdict::Alarm(statistic) = verdict {
-            self.reopen(test.config.memory_kept, t_s)?;
-            self.alarm = Some(statistic);
-        }
-        if ends {
-            self.clear_run();
-        }
-        Ok(())
+        reopened
     }
 
-    /// The change test's reference `σ̂² f` (`crate::change`, "The statistic"): the residual
-    /// variance times the window's variance factor `1 + 2 Σ_{k<W} (1 − k/W) ρ̂(k)`, floored;
-    /// `None` before `σ̂²` is defined.
-    fn change_reference(&self) -> Option<f64> {
-        let s2 = self.residual_variance()?;
-        let w =
-            self.change.and_then(|t| t.window_len()).unwrap_or(crate::coloured::MAX_LAG + 1) as f64;
-        let k_max = self.coloured.lag().min(w as usize - 1);
-        let mut f = 1.0;
-        for k in 1..=k_max {
-            f += 2.0 * (1.0 - k as f64 / w) * self.coloured.autocorrelation(k).unwrap_or(0.0);
-        }
-        Some(s2 * f.max(crate::change::MIN_COLOUR_FACTOR))
-    }
-
-    /// Forgets the onset information (a new excursion starts with the next block).
-    fn clear_run(&mut self) {
-        self.info = [[0.0; N_TERMS]; N_TERMS];
-        self.info_b = [0.0; N_TERMS];
-        self.info_yy = 0.0;
-        self.run_n = 0.0;
-    }
-
-    /// Re-opens the memory after an alarm: the samples before the onset kept with weight `w`,
-    /// those since with weight 1 (`crate::change`, "What an alarm does").
+    /// Re-opens the memory after an alarm: its samples from before the short memory kept with
+    /// weight `w`, the short memory's at full weight (`crate::change`, "What an alarm does").
     ///
     /// # Errors
     /// [`EstimatorError::Numerical`] when the memory's information is not positive definite.
-    fn reopen(&mut self, w: f64, t_s: f64) -> Result<(), EstimatorError> {
+    fn reopen(&mut self, w: f64, short: &ShortMemory, t_s: f64) -> Result<(), EstimatorError> {
         let n = self.reg.n;
         let fail = EstimatorError::Numerical { what: "re-opened RLS memory", t_s };
         let mut l = [[0.0; N_TERMS]; N_TERMS];
@@ -308,9 +266,9 @@ impl Fit {
         }
         for i in 0..n {
             for j in 0..n {
-                a[i][j] = w * (a[i][j] - self.info[i][j]) + self.info[i][j];
+                a[i][j] = w * (a[i][j] - short.a[i][j]) + short.a[i][j];
             }
-            b[i] = w * (b[i] - self.info_b[i]) + self.info_b[i];
+            b[i] = w * (b[i] - short.b[i]) + short.b[i];
         }
         if !cholesky(&a, n, &mut l) {
             return Err(fail);
@@ -320,11 +278,11 @@ impl Fit {
         let mut p = [[0.0; N_TERMS]; N_TERMS];
         cholesky_inverse(&l, n, &mut p);
         // The excursion's residual sum at the new estimate: yy − 2θᵀb_c + θᵀA_cθ.
-        let mut rss_run = self.info_yy;
+        let mut rss_run = short.yy;
         for i in 0..n {
-            rss_run -= 2.0 * theta[i] * self.info_b[i];
+            rss_run -= 2.0 * theta[i] * short.b[i];
             for j in 0..n {
-                rss_run += theta[i] * self.info[i][j] * theta[j];
+                rss_run += theta[i] * short.a[i][j] * theta[j];
             }
         }
         let ok = theta[..n]
@@ -337,8 +295,8 @@ impl Fit {
         self.theta = theta;
         self.p = p;
         self.rss = w * self.rss + rss_run.max(0.0);
-        self.n_eff = w * (self.n_eff - self.run_n) + self.run_n;
-        self.coloured.reopen(w, &self.info, self.run_n);
+        self.n_eff = w * (self.n_eff - short.count) + short.count;
+        self.coloured.reopen(w, &short.a, short.count);
         Ok(())
     }
 
@@ -394,14 +352,11 @@ impl CoefficientFit for Fit {
                         self.p = p;
                         self.rss = (self.info_yy - bt).max(0.0);
                         self.initialised = true;
-                        // From here the information form holds a change test's onset data.
-                        self.clear_run();
                     }
                 }
             }
             return Ok(());
         }
-        let reference = if self.change.is_some() { self.change_reference() } else { None };
         let mut e = y;
         let mut p_phi = [0.0; N_TERMS];
         for i in 0..n {
@@ -438,7 +393,7 @@ impl CoefficientFit for Fit {
         self.count += 1;
         // A-posteriori residual y − φᵀθ_n = e λ / denom.
         self.coloured.add(phi, Some((e * lambda / denom, &self.p)), lambda);
-        self.test_change(phi, y, e, reference, lambda, t_s)
+        self.test_change(phi, y, lambda, t_s)
     }
 
     fn initialised(&self) -> bool {
@@ -600,8 +555,7 @@ pub(crate) fn enable_change_tests(
     let config = config.validated()?;
     let equations = fits.iter().flatten().count();
     for f in fits.iter_mut().flatten() {
-        let h = config.threshold(equations, f.reg.n);
-        f.enable_change_test(config, h);
+        f.enable_change_test(config, equations);
     }
     Ok(())
 }
@@ -641,9 +595,9 @@ impl Rls {
         enable_change_tests(&mut self.fits, config)
     }
 
-    /// The change test's statistic of the last window and its threshold `(T, χ²_p(1 − α))` of
-    /// coefficient `c`'s equation,
-    /// `None` without change detection or without that coefficient.
+    /// The change test's normalised drift of the last sample and its threshold `(d/m₁,
+    /// χ²_ν(1 − α)/ν)` of coefficient `c`'s equation (`crate::change`), `None` without change
+    /// detection or without that coefficient.
     pub fn change_statistic(&self, c: Coefficient) -> Option<(f64, f64)> {
         let t = self.fits[c.index()].as_ref()?.change_test()?;
         Some((t.statistic(), t.threshold()))

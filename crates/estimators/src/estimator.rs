@@ -85,8 +85,8 @@ pub struct Event {
     /// The output (its sample field, e.g. `p_rad_s`), parameter (e.g. `Cl_p`), coefficient
     /// equation (e.g. `Cm`) or rule it concerns.
     pub subject: &'static str,
-    /// The test statistic that raised it, where there is one (the CUSUM `g` of the
-    /// equation-error change test, `crate::change`); `None` otherwise.
+    /// The test statistic that raised it, where there is one (the normalised drift `d/m₁` of
+    /// the equation-error change test, `crate::change`); `None` otherwise.
     pub statistic: Option<f64>,
 }
 

@@ -317,8 +317,8 @@ impl<const C: usize> ColouredCovariance<C> {
     }
 
     /// Re-opens the memory after a change test's alarm (`crate::change`): the rows before the
-    /// onset kept with weight `w` (`M` with `w²`, `N_eff` with `w`), the `n_run` λ-weighted rows
-    /// since, whose information is `a_run`, entered as white. The residual autocorrelation is
+    /// test's recent memory kept with weight `w` (`M` with `w²`, `N_eff` with `w`), the recent
+    /// memory's `n_run` weighted rows, whose information is `a_run`, entered as white. The residual autocorrelation is
     /// kept: a change of the parameters does not change the noise's colour.
     pub fn reopen(&mut self, w: f64, a_run: &Square<C>, n_run: f64) {
         let n = self.n;

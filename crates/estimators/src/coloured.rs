@@ -316,6 +316,20 @@ impl<const C: usize> ColouredCovariance<C> {
         self.filled += 1;
     }
 
+    /// Re-opens the memory after a change test's alarm (`crate::change`): the rows before the
+    /// test's recent memory kept with weight `w` (`M` with `w²`, `N_eff` with `w`), the recent
+    /// memory's `n_run` weighted rows, whose information is `a_run`, entered as white. The residual autocorrelation is
+    /// kept: a change of the parameters does not change the noise's colour.
+    pub fn reopen(&mut self, w: f64, a_run: &Square<C>, n_run: f64) {
+        let n = self.n;
+        for a in 0..n {
+            for b in 0..n {
+                self.m[a][b] = w * w * self.m[a][b] + a_run[a][b];
+            }
+        }
+        self.n_eff = w * (self.n_eff - n_run).max(0.0) + n_run;
+    }
+
     /// The lag `K` at which the last update truncated the sum (after the last significant lobe).
     pub fn lag(&self) -> usize {
         self.acf.last_significant_lag()

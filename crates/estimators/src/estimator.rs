@@ -82,8 +82,12 @@ pub struct Event {
     pub t_s: f64,
     /// What happened.
     pub kind: EventKind,
-    /// The output (its sample field, e.g. `p_rad_s`), parameter (e.g. `Cl_p`) or rule it concerns.
+    /// The output (its sample field, e.g. `p_rad_s`), parameter (e.g. `Cl_p`), coefficient
+    /// equation (e.g. `Cm`) or rule it concerns.
     pub subject: &'static str,
+    /// The test statistic that raised it, where there is one (the normalised drift `d/m₁` of
+    /// the equation-error change test, `crate::change`); `None` otherwise.
+    pub statistic: Option<f64>,
 }
 
 /// Capacity of an [`EventLog`]'s list: the first this many events are kept.
@@ -118,7 +122,8 @@ impl EventLog {
     /// An empty log.
     pub const fn new() -> Self {
         Self {
-            events: [Event { t_s: 0.0, kind: EventKind::Restart, subject: "" }; EVENT_LOG_CAPACITY],
+            events: [Event { t_s: 0.0, kind: EventKind::Restart, subject: "", statistic: None };
+                EVENT_LOG_CAPACITY],
             len: 0,
             counts: [0; 3],
         }
@@ -126,12 +131,29 @@ impl EventLog {
 
     /// Records `kind` at `t_s` about `subject`: listed while there is room, always counted.
     pub fn push(&mut self, t_s: f64, kind: EventKind, subject: &'static str) {
+        self.push_event(Event { t_s, kind, subject, statistic: None });
+    }
+
+    /// Records `kind` at `t_s` about `subject` raised by a test statistic `statistic`, as
+    /// [`Self::push`].
+    pub fn push_with_statistic(
+        &mut self,
+        t_s: f64,
+        kind: EventKind,
+        subject: &'static str,
+        statistic: f64,
+    ) {
+        self.push_event(Event { t_s, kind, subject, statistic: Some(statistic) });
+    }
+
+    fn push_event(&mut self, event: Event) {
+        let kind = event.kind;
         let room = match kind {
             EventKind::Restart => EVENT_LOG_CAPACITY,
             _ => EVENT_LOG_CAPACITY - EVENT_LOG_RESTART_RESERVE,
         };
         if self.len < room {
-            self.events[self.len] = Event { t_s, kind, subject };
+            self.events[self.len] = event;
             self.len += 1;
         }
         let c = &mut self.counts[kind.index()];

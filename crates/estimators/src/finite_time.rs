@@ -59,15 +59,18 @@
 //! distance still to slide is counted as error; it is 0 on the surface). Before the memory's
 //! exact initialisation a coefficient's parameters are not identified (`null`); a numerical
 //! failure is a divergence ([`crate::Status::Diverged`]). A sample whose time is not after the previous
-//! one is refused and nothing changes. There is no change detection: the memory horizon `τ`
-//! bounds how long a change takes to show, as for [`crate::Rls`].
+//! one is refused and nothing changes. Without change detection the memory horizon `τ` bounds
+//! how long a change takes to show, as for [`crate::Rls`]; with it
+//! ([`FiniteTimeSmpe::enable_change_detection`], `crate::change`) an alarm re-opens the memory
+//! and the estimate starts on the new memory's solution.
 
 // Index loops follow the recursion's equations line by line.
 #![allow(clippy::needless_range_loop)]
 
 use crate::EstimatorError;
-use crate::estimator::{Estimates, Estimator};
-use crate::linalg::Square;
+use crate::change::ChangeConfig;
+use crate::estimator::{Estimates, Estimator, EventLog};
+use crate::linalg::{Square, cholesky, cholesky_inverse};
 use crate::rls::{CoefficientFit, Fit, Regression, covariance, update_fits, validated};
 use crate::sample::AirDataSample;
 use crate::vocabulary::{Coefficient, ModelStructure, N_TERMS};
@@ -169,6 +172,19 @@ impl CoefficientFit for SlidingFit {
         let was_initialised = self.memory.initialised();
         self.memory.update(phi, y, lambda, init_samples, t_s)?;
         let n = self.memory.regression().n;
+        if self.memory.change_pending() {
+            // The memory was re-opened on a detected change: its information is no longer the
+            // running sum, and the estimate starts on the new memory's solution.
+            let mut l = [[0.0; N_TERMS]; N_TERMS];
+            if !cholesky(&self.memory.p, n, &mut l) {
+                return Err(EstimatorError::Numerical { what: "re-opened memory", t_s });
+            }
+            cholesky_inverse(&l, n, &mut self.info);
+            self.theta = *self.memory.theta();
+            self.offset = [0.0; N_TERMS];
+            self.last_t_s = Some(t_s);
+            return Ok(());
+        }
         for i in 0..n {
             for j in 0..=i {
                 let v = self.info[i][j] * lambda + phi[i] * phi[j];
@@ -217,6 +233,10 @@ impl CoefficientFit for SlidingFit {
     fn variance(&self, s2: f64, k: usize) -> f64 {
         self.memory.variance(s2, k) + self.offset[k] * self.offset[k]
     }
+
+    fn take_change(&mut self) -> Option<f64> {
+        self.memory.take_change()
+    }
 }
 
 /// The finite-time sliding-mode estimator on the forgotten information memory over every
@@ -229,6 +249,7 @@ pub struct FiniteTimeSmpe {
     init_samples: usize,
     last_t_s: Option<f64>,
     est: Estimates,
+    events: EventLog,
 }
 
 impl FiniteTimeSmpe {
@@ -262,11 +283,26 @@ impl FiniteTimeSmpe {
             init_samples: config.init_samples,
             last_t_s: None,
             est: Estimates::new(structure.n_params()),
+            events: EventLog::new(),
         };
         for c in structure.coefficients() {
             est.fits[c.index()] = Some(SlidingFit::new(&structure, c, &config));
         }
         Ok(est)
+    }
+
+    /// Adds change detection to every memory, as [`crate::Rls::enable_change_detection`]: on
+    /// an alarm the memory is re-opened and the estimate starts on its new solution.
+    ///
+    /// # Errors
+    /// [`EstimatorError::InvalidConfig`] naming a field of `config` out of range.
+    pub fn enable_change_detection(&mut self, config: ChangeConfig) -> Result<(), EstimatorError> {
+        let config = config.validated()?;
+        let equations = self.fits.iter().flatten().count();
+        for f in self.fits.iter_mut().flatten() {
+            f.memory.enable_change_test(config, equations);
+        }
+        Ok(())
     }
 
     /// Distance of coefficient `c`'s estimate from its memory's least-squares solution,
@@ -307,13 +343,17 @@ impl Estimator for FiniteTimeSmpe {
         }
         let (lambda, init) = (self.lambda, self.init_samples);
         let what = "the sliding-mode memory estimator has diverged";
-        update_fits(&mut self.fits, &mut self.est, lambda, init, s, what)?;
+        update_fits(&mut self.fits, &mut self.est, &mut self.events, lambda, init, s, what)?;
         self.last_t_s = Some(s.t_s);
         Ok(&self.est)
     }
 
     fn estimates(&self) -> &Estimates {
         &self.est
+    }
+
+    fn events(&self) -> &EventLog {
+        &self.events
     }
 
     fn covariance(&self, i: usize, j: usize) -> Option<f64> {

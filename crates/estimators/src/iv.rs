@@ -69,7 +69,7 @@
 
 use crate::EstimatorError;
 use crate::coloured::ColouredCovariance;
-use crate::estimator::{Estimates, Estimator};
+use crate::estimator::{Estimates, Estimator, EventLog};
 use crate::linalg::{Square, well_conditioned};
 use crate::rls::{
     CoefficientFit, INIT_MIN_SCALED_PIVOT, Regression, covariance, update_fits, validated,
@@ -442,6 +442,8 @@ pub struct RlsIv {
     lambda: f64,
     init_samples: usize,
     est: Estimates,
+    /// Always empty: instrumental variables have no change test.
+    events: EventLog,
 }
 
 impl RlsIv {
@@ -468,6 +470,7 @@ impl RlsIv {
             lambda: config.forgetting,
             init_samples: config.init_samples,
             est: Estimates::new(structure.n_params()),
+            events: EventLog::new(),
         };
         for c in structure.coefficients() {
             iv.fits[c.index()] = Some(IvFit::new(&structure, c, d));
@@ -497,7 +500,8 @@ impl Estimator for RlsIv {
 
     fn update(&mut self, s: &AirDataSample) -> Result<&Estimates, EstimatorError> {
         let (lambda, init) = (self.lambda, self.init_samples);
-        update_fits(&mut self.fits, &mut self.est, lambda, init, s, "RLS-IV has diverged")?;
+        let what = "RLS-IV has diverged";
+        update_fits(&mut self.fits, &mut self.est, &mut self.events, lambda, init, s, what)?;
         Ok(&self.est)
     }
 

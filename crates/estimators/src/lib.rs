@@ -36,6 +36,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
+pub mod change;
 pub mod coloured;
 #[cfg(feature = "std")]
 pub mod compat;
@@ -64,6 +65,7 @@ extern crate self as aeroident_estimators;
 #[cfg(test)]
 pub(crate) mod test_aircraft;
 
+pub use change::ChangeConfig;
 pub use dual::{Dual, Scalar};
 pub use ekf::{Ekf, EkfConfig, SigmaOption};
 pub use estimator::{Estimates, Estimator, Event, EventKind, EventLog, Status};

@@ -59,9 +59,11 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::EstimatorError;
+use crate::change::{ChangeConfig, ChangeTest, ShortMemory, Verdict};
 use crate::coloured::ColouredCovariance;
 use crate::estimator::{
-    Estimates, Estimator, Status, check_finite, measured_coefficient, regressor,
+    Estimates, Estimator, EventKind, EventLog, Status, check_finite, measured_coefficient,
+    regressor,
 };
 use crate::linalg::{Square, cholesky, cholesky_inverse, cholesky_solve, well_conditioned};
 use crate::sample::AirDataSample;
@@ -158,15 +160,25 @@ pub(crate) trait CoefficientFit {
     fn variance(&self, s2: f64, k: usize) -> f64 {
         self.cov(s2, k, k)
     }
+    /// The statistic of a change detected by the last update (`crate::change`), taken once;
+    /// `None` without one or without a change test.
+    fn take_change(&mut self) -> Option<f64> {
+        None
+    }
 }
 
 /// One coefficient's fit.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Fit {
     reg: Regression,
+    /// Information form `Σ λ^{n−k} φφᵀ`, `Σ λ^{n−k} φy`, `Σ λ^{n−k} y²` of the samples before
+    /// the exact initialisation.
     info: Square<N_TERMS>,
     info_b: [f64; N_TERMS],
     info_yy: f64,
+    change: Option<ChangeTest>,
+    /// The statistic of an alarm of the last update, until taken.
+    alarm: Option<f64>,
     pub(crate) p: Square<N_TERMS>,
     theta: [f64; N_TERMS],
     initialised: bool,
@@ -184,6 +196,8 @@ impl Fit {
             info: [[0.0; N_TERMS]; N_TERMS],
             info_b: [0.0; N_TERMS],
             info_yy: 0.0,
+            change: None,
+            alarm: None,
             p: [[0.0; N_TERMS]; N_TERMS],
             theta: [0.0; N_TERMS],
             initialised: false,
@@ -192,6 +206,98 @@ impl Fit {
             rss: 0.0,
             coloured: ColouredCovariance::new(reg.n),
         }
+    }
+
+    /// Adds a change test, one of `equations` tested at once (`crate::change`).
+    pub(crate) fn enable_change_test(&mut self, config: ChangeConfig, equations: usize) {
+        self.change = Some(ChangeTest::new(config, equations));
+    }
+
+    /// The change test, if any.
+    pub(crate) fn change_test(&self) -> Option<&ChangeTest> {
+        self.change.as_ref()
+    }
+
+    /// Whether the last update raised an alarm not yet taken (the memory was re-opened).
+    pub(crate) fn change_pending(&self) -> bool {
+        self.alarm.is_some()
+    }
+
+    /// One sample through the change test, after the recursion took it. On an alarm the
+    /// memory is re-opened ([`Self::reopen`]) and the statistic kept for
+    /// [`CoefficientFit::take_change`].
+    fn test_change(
+        &mut self,
+        phi: &[f64; N_TERMS],
+        y: f64,
+        lambda: f64,
+        t_s: f64,
+    ) -> Result<(), EstimatorError> {
+        let Some(mut test) = self.change.take() else { return Ok(()) };
+        let verdict = test.test(t_s, (phi, y), (self.reg.n, lambda), &self.theta, &self.p);
+        let reopened = match verdict {
+            Verdict::Alarm(statistic) => {
+                self.alarm = Some(statistic);
+                self.reopen(test.config.memory_kept, test.recent(), t_s)
+            }
+            Verdict::Clear => Ok(()),
+        };
+        self.change = Some(test);
+        reopened
+    }
+
+    /// Re-opens the memory after an alarm: its samples from before the short memory kept with
+    /// weight `w`, the short memory's at full weight (`crate::change`, "What an alarm does").
+    ///
+    /// # Errors
+    /// [`EstimatorError::Numerical`] when the memory's information is not positive definite.
+    fn reopen(&mut self, w: f64, short: &ShortMemory, t_s: f64) -> Result<(), EstimatorError> {
+        let n = self.reg.n;
+        let fail = EstimatorError::Numerical { what: "re-opened RLS memory", t_s };
+        let mut l = [[0.0; N_TERMS]; N_TERMS];
+        if !cholesky(&self.p, n, &mut l) {
+            return Err(fail);
+        }
+        let mut a = [[0.0; N_TERMS]; N_TERMS];
+        cholesky_inverse(&l, n, &mut a);
+        let mut b = [0.0; N_TERMS];
+        for i in 0..n {
+            b[i] = (0..n).map(|j| a[i][j] * self.theta[j]).sum();
+        }
+        for i in 0..n {
+            for j in 0..n {
+                a[i][j] = w * (a[i][j] - short.a[i][j]) + short.a[i][j];
+            }
+            b[i] = w * (b[i] - short.b[i]) + short.b[i];
+        }
+        if !cholesky(&a, n, &mut l) {
+            return Err(fail);
+        }
+        let mut theta = b;
+        cholesky_solve(&l, n, &mut theta);
+        let mut p = [[0.0; N_TERMS]; N_TERMS];
+        cholesky_inverse(&l, n, &mut p);
+        // The excursion's residual sum at the new estimate: yy − 2θᵀb_c + θᵀA_cθ.
+        let mut rss_run = short.yy;
+        for i in 0..n {
+            rss_run -= 2.0 * theta[i] * short.b[i];
+            for j in 0..n {
+                rss_run += theta[i] * short.a[i][j] * theta[j];
+            }
+        }
+        let ok = theta[..n]
+            .iter()
+            .chain(p[..n].iter().flat_map(|r| r[..n].iter()))
+            .all(|v| v.is_finite());
+        if !ok {
+            return Err(fail);
+        }
+        self.theta = theta;
+        self.p = p;
+        self.rss = w * self.rss + rss_run.max(0.0);
+        self.n_eff = w * (self.n_eff - short.count) + short.count;
+        self.coloured.reopen(w, &short.a, short.count);
+        Ok(())
     }
 
     /// `f_k` of [`Self::cov`]: the sandwich variance over the white one, 1 where the truncated
@@ -287,7 +393,7 @@ impl CoefficientFit for Fit {
         self.count += 1;
         // A-posteriori residual y − φᵀθ_n = e λ / denom.
         self.coloured.add(phi, Some((e * lambda / denom, &self.p)), lambda);
-        Ok(())
+        self.test_change(phi, y, lambda, t_s)
     }
 
     fn initialised(&self) -> bool {
@@ -310,6 +416,10 @@ impl CoefficientFit for Fit {
     /// floating point `√(f·f) = f` exactly, so the value is the same to the bit.
     fn variance(&self, s2: f64, k: usize) -> f64 {
         s2 * self.p[k][k] * self.variance_factor(s2, k)
+    }
+
+    fn take_change(&mut self) -> Option<f64> {
+        self.alarm.take()
     }
 
     fn residual_variance(&self) -> Option<f64> {
@@ -351,6 +461,7 @@ pub(crate) fn validated(
 pub(crate) fn update_fits<F: CoefficientFit>(
     fits: &mut [Option<F>; 8],
     est: &mut Estimates,
+    events: &mut EventLog,
     lambda: f64,
     init_samples: usize,
     s: &AirDataSample,
@@ -375,6 +486,10 @@ pub(crate) fn update_fits<F: CoefficientFit>(
         if let Err(e) = f.update(&phi, y, lambda, init_samples, s.t_s) {
             est.status = Status::Diverged;
             return Err(e);
+        }
+        if let Some(g) = f.take_change() {
+            let c = f.regression().coefficient;
+            events.push_with_statistic(s.t_s, EventKind::ChangeDetected, c.name(), g);
         }
     }
     publish(fits, est, s.t_s);
@@ -425,6 +540,24 @@ pub struct Rls {
     lambda: f64,
     init_samples: usize,
     est: Estimates,
+    events: EventLog,
+}
+
+/// Adds the change test of `config` to every fit of `fits` (`crate::change`), its threshold
+/// set for as many equations as there are fits.
+///
+/// # Errors
+/// [`EstimatorError::InvalidConfig`] naming a field out of range.
+pub(crate) fn enable_change_tests(
+    fits: &mut [Option<Fit>; 8],
+    config: ChangeConfig,
+) -> Result<(), EstimatorError> {
+    let config = config.validated()?;
+    let equations = fits.iter().flatten().count();
+    for f in fits.iter_mut().flatten() {
+        f.enable_change_test(config, equations);
+    }
+    Ok(())
 }
 
 impl Rls {
@@ -443,11 +576,31 @@ impl Rls {
             lambda: config.forgetting,
             init_samples: config.init_samples,
             est: Estimates::new(structure.n_params()),
+            events: EventLog::new(),
         };
         for c in structure.coefficients() {
             rls.fits[c.index()] = Some(Fit::new(&structure, c));
         }
         Ok(rls)
+    }
+
+    /// Adds change detection (`crate::change`): each coefficient's equation tested on its
+    /// normalised residuals, its memory re-opened on an alarm, which is an
+    /// [`EventKind::ChangeDetected`] event naming the coefficient ([`Estimator::events`]).
+    /// Without it (the default of [`Rls::new`]) the memory forgets only by `λ`.
+    ///
+    /// # Errors
+    /// [`EstimatorError::InvalidConfig`] naming a field of `config` out of range.
+    pub fn enable_change_detection(&mut self, config: ChangeConfig) -> Result<(), EstimatorError> {
+        enable_change_tests(&mut self.fits, config)
+    }
+
+    /// The change test's normalised drift of the last sample and its threshold `(d/m₁,
+    /// χ²_ν(1 − α)/ν)` of coefficient `c`'s equation (`crate::change`), `None` without change
+    /// detection or without that coefficient.
+    pub fn change_statistic(&self, c: Coefficient) -> Option<(f64, f64)> {
+        let t = self.fits[c.index()].as_ref()?.change_test()?;
+        Some((t.statistic(), t.threshold()))
     }
 
     /// Residual variance `σ̂²` of coefficient `c`'s fit, once defined.
@@ -482,12 +635,17 @@ impl Estimator for Rls {
 
     fn update(&mut self, s: &AirDataSample) -> Result<&Estimates, EstimatorError> {
         let (lambda, init) = (self.lambda, self.init_samples);
-        update_fits(&mut self.fits, &mut self.est, lambda, init, s, "RLS has diverged")?;
+        let what = "RLS has diverged";
+        update_fits(&mut self.fits, &mut self.est, &mut self.events, lambda, init, s, what)?;
         Ok(&self.est)
     }
 
     fn estimates(&self) -> &Estimates {
         &self.est
+    }
+
+    fn events(&self) -> &EventLog {
+        &self.events
     }
 
     fn covariance(&self, i: usize, j: usize) -> Option<f64> {

@@ -8,7 +8,7 @@
 //! samples_rejected, rejections[{row, reason}], throughput_samples_per_s, parameters[{name,
 //! estimate, std_error, std_error_source, crb_std_error, reference, status, flags,
 //! settle_time_s}] ([`crate::parameter`]), coefficients[{name, condition_number}], correlations[{a, b, rho}],
-//! events{listed[{t_s, kind, subject}], counts{restart, reanchor, change_detected},
+//! events{listed[{t_s, kind, subject, statistic?}], counts{restart, reanchor, change_detected},
 //! not_listed}, warnings[]`.
 //! `estimate`, `std_error`, `settle_time_s` and `condition_number` are `null` where undefined
 //! (not identified, no covariance from the method).
@@ -69,9 +69,13 @@ pub struct EventSummary {
     pub t_s: f64,
     /// `restart`, `reanchor` or `change_detected` ([`EventKind::name`]).
     pub kind: String,
-    /// The output (its sample field: `p_rad_s`, `alpha_rad` …), parameter (`Cl_p` …) or rule it
-    /// concerns.
+    /// The output (its sample field: `p_rad_s`, `alpha_rad` …), parameter (`Cl_p` …),
+    /// coefficient equation (`Cm` …) or rule it concerns.
     pub subject: String,
+    /// The test statistic that raised it, where there is one (the equation-error change test's
+    /// CUSUM `g`, `aeroident_estimators::change`); the key is absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub statistic: Option<f64>,
 }
 
 /// An estimator's events ([`aeroident_estimators::Estimator::events`]): the listed ones in
@@ -98,6 +102,7 @@ impl EventsSummary {
                     t_s: e.t_s,
                     kind: e.kind.name().into(),
                     subject: e.subject.into(),
+                    statistic: e.statistic,
                 })
                 .collect(),
             counts: EventKind::ALL.iter().map(|k| (k.name().to_string(), log.count(*k))).collect(),

@@ -17,7 +17,7 @@ use aeroident_estimators::model_reference::{
     CorrectedSmpeEstimator, GradientEstimator, ModelReferenceConfig, PublishedSmpeEstimator,
 };
 use aeroident_estimators::rls::{Rls, RlsConfig};
-use aeroident_estimators::{Estimator, EstimatorError, ModelStructure, Priors};
+use aeroident_estimators::{ChangeConfig, Estimator, EstimatorError, ModelStructure, Priors};
 
 use crate::Named;
 
@@ -110,13 +110,16 @@ impl EstimatorKind {
     /// `label` ([`EstimatorOptions::set`]; the batch kinds' in `aircraft::batch::config`).
     pub fn options(self) -> &'static [&'static str] {
         match self {
-            EstimatorKind::Rls => &["forgetting"],
+            EstimatorKind::Rls => &["forgetting", "change_false_alarm_interval_s"],
             EstimatorKind::RlsIv => &["forgetting", "instrument_delay"],
             EstimatorKind::Ftr => &["forgetting", "grid_hz"],
             EstimatorKind::Ekf => &["parameter_walk_per_sqrt_s", "samples"],
-            EstimatorKind::SmpeFiniteTime => {
-                &["forgetting", "sliding_gain_per_s", "reaching_rate_per_s"]
-            }
+            EstimatorKind::SmpeFiniteTime => &[
+                "forgetting",
+                "sliding_gain_per_s",
+                "reaching_rate_per_s",
+                "change_false_alarm_interval_s",
+            ],
             EstimatorKind::Oe => {
                 &["initial_states", "samples", "step", "bootstrap_refits", "max_iterations"]
             }
@@ -241,7 +244,14 @@ pub struct EstimatorOptions {
     /// `smpe-finite-time`: exponential reaching rate `q`, 1/s
     /// ([`FiniteTimeConfig::reaching_rate_per_s`]).
     pub reaching_rate_per_s: f64,
+    /// `rls`, `smpe-finite-time`: mean time between false alarms of the change test over all
+    /// equations, s ([`ChangeConfig::false_alarm_interval_s`]); 0 disables the test
+    /// (`aeroident_estimators::change`, docs/change-detection.md).
+    pub change_false_alarm_interval_s: f64,
 }
+
+/// Default of [`EstimatorOptions::change_false_alarm_interval_s`], s.
+pub const DEFAULT_CHANGE_FALSE_ALARM_INTERVAL_S: f64 = 0.0;
 
 impl Default for EstimatorOptions {
     fn default() -> Self {
@@ -253,6 +263,7 @@ impl Default for EstimatorOptions {
             ftr_grid_hz: None,
             sliding_gain_per_s: FiniteTimeConfig::default().sliding_gain_per_s,
             reaching_rate_per_s: FiniteTimeConfig::default().reaching_rate_per_s,
+            change_false_alarm_interval_s: DEFAULT_CHANGE_FALSE_ALARM_INTERVAL_S,
         }
     }
 }
@@ -337,7 +348,14 @@ pub fn build(
         // RLS and FTR start without a prior (exact initialisation / frequency-domain solve).
         EstimatorKind::Rls => {
             let cfg = RlsConfig { forgetting: options.forgetting, init_samples: 0 };
-            boxed(|| Rls::new(structure, cfg))
+            let change = change_config(options);
+            boxed(|| {
+                let mut rls = Rls::new(structure, cfg)?;
+                if let Some(c) = change {
+                    rls.enable_change_detection(c)?;
+                }
+                Ok(rls)
+            })
         }
         EstimatorKind::RlsIv => {
             let cfg = IvConfig {
@@ -373,7 +391,14 @@ pub fn build(
                 sliding_gain_per_s: options.sliding_gain_per_s,
                 reaching_rate_per_s: options.reaching_rate_per_s,
             };
-            boxed(|| FiniteTimeSmpe::new(structure, cfg))
+            let change = change_config(options);
+            boxed(|| {
+                let mut est = FiniteTimeSmpe::new(structure, cfg)?;
+                if let Some(c) = change {
+                    est.enable_change_detection(c)?;
+                }
+                Ok(est)
+            })
         }
         EstimatorKind::Gradient => {
             boxed(|| GradientEstimator::new(structure, &priors, ModelReferenceConfig::default()))
@@ -394,6 +419,13 @@ pub fn build(
 /// of stack, past the 2 MiB default of a spawned thread. Here only the chosen estimator is on
 /// the stack, once.
 #[inline(never)]
+/// The change test of [`EstimatorOptions::change_false_alarm_interval_s`], `None` when it is 0
+/// (a negative or non-finite interval reaches the estimator, which refuses it by name).
+fn change_config(options: &EstimatorOptions) -> Option<ChangeConfig> {
+    let t = options.change_false_alarm_interval_s;
+    (t != 0.0).then(|| ChangeConfig { false_alarm_interval_s: t, ..ChangeConfig::default() })
+}
+
 fn boxed<E: Estimator + Send + 'static>(
     make: impl FnOnce() -> Result<E, EstimatorError>,
 ) -> Result<Box<dyn Estimator + Send>, EstimatorError> {
@@ -614,6 +646,18 @@ impl EstimatorOptions {
             ("reaching_rate_per_s", EstimatorKind::SmpeFiniteTime) => {
                 self.reaching_rate_per_s = number()?;
             }
+            (
+                "change_false_alarm_interval_s",
+                EstimatorKind::Rls | EstimatorKind::SmpeFiniteTime,
+            ) => {
+                let t = number()?;
+                if !(t >= 0.0 && t.is_finite()) {
+                    return Err(invalid(format!(
+                        "must be a finite number of seconds ≥ 0 (0: no change test), got {v}"
+                    )));
+                }
+                self.change_false_alarm_interval_s = t;
+            }
             ("instrument_delay", EstimatorKind::RlsIv) => {
                 let d = v.as_integer().filter(|d| *d >= 1).ok_or_else(|| {
                     invalid(format!("must be a whole number of samples ≥ 1, got {v}"))
@@ -688,6 +732,7 @@ mod tests {
                 "parameter_walk_per_sqrt_s" => toml::Value::Float(0.01),
                 "samples" => "raw".into(),
                 "sliding_gain_per_s" | "reaching_rate_per_s" => toml::Value::Float(5.0),
+                "change_false_alarm_interval_s" => toml::Value::Float(3600.0),
                 other => panic!("no valid value for `{other}`"),
             }
         };
@@ -713,7 +758,7 @@ mod tests {
         );
         assert_eq!(
             unknown_option(EstimatorKind::Rls, "x"),
-            "rls: unknown option `x` (it takes `forgetting`)"
+            "rls: unknown option `x` (it takes `forgetting` and `change_false_alarm_interval_s`)"
         );
     }
 

@@ -177,7 +177,7 @@ def test_estimator_options_are_checked_by_the_registry():
         aeroident.Estimator("ekf", forgetting=0.9)
     with pytest.raises(aeroident.AeroidentError, match=r"estimator `ekf`: unknown keyword argument `forgetting`"):
         aeroident.Ekf(model="longitudinal", forgetting=0.9)
-    with pytest.raises(aeroident.AeroidentError, match=r"estimator `rls`: unknown keyword argument `ftr_grid_hz` \(it takes `forgetting`\)"):
+    with pytest.raises(aeroident.AeroidentError, match=r"estimator `rls`: unknown keyword argument `ftr_grid_hz` \(it takes `forgetting`, `change_false_alarm_interval_s`\)"):
         aeroident.Rls(model="longitudinal", ftr_grid_hz=(0.1, 1.5, 0.04))
     with pytest.raises(aeroident.AeroidentError, match=r"estimator `smpe`: unknown keyword argument `sliding_gain_per_s` \(it takes none\)"):
         aeroident.Estimator("smpe", sliding_gain_per_s=5.0)
@@ -194,7 +194,7 @@ def test_any_estimator_option_goes_through_the_registry():
     # delay's and equals the CLI's flag), and a key the kind does not take is refused naming what
     # it takes.
     assert aeroident.Estimator("rls-iv", model="longitudinal", instrument_delay=8).method == "rls-iv"
-    with pytest.raises(aeroident.AeroidentError, match=r"estimator `rls`: unknown keyword argument `instrument_delay` \(it takes `forgetting`\)"):
+    with pytest.raises(aeroident.AeroidentError, match=r"estimator `rls`: unknown keyword argument `instrument_delay` \(it takes `forgetting`, `change_false_alarm_interval_s`\)"):
         aeroident.Estimator("rls", instrument_delay=8)
     with pytest.raises(aeroident.AeroidentError, match=r"`instrument_delay`: expected a number"):
         aeroident.Estimator("rls-iv", instrument_delay={"a": 1})

@@ -914,7 +914,7 @@ pub fn settle_time_s(h: &History, i: usize) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use aeroident_estimators::{Estimates, EstimatorError};
+    use aeroident_estimators::{Estimates, EstimatorError, EventKind, EventLog};
     use std::cell::RefCell;
     use std::rc::Rc;
 
@@ -996,6 +996,7 @@ mod tests {
         model: Vec<String>,
         names: Vec<String>,
         estimates: Vec<(f64, Vec<Option<f64>>)>,
+        warnings: Vec<String>,
         finished: bool,
     }
 
@@ -1016,10 +1017,72 @@ mod tests {
             self.estimates.push((t_s, values.to_vec()));
             Ok(())
         }
+        fn warning(&mut self, text: &str) {
+            self.warnings.push(text.into());
+        }
         fn finish(&mut self) -> std::io::Result<()> {
             self.finished = true;
             Ok(())
         }
+    }
+
+    /// A [`Probe`] that raises one change alarm (`Cm`, statistic 13) at its `alarm_at`-th
+    /// sample, as the equation-error change test does (`aeroident_estimators::change`).
+    struct AlarmProbe {
+        inner: Probe,
+        events: EventLog,
+        fed: usize,
+        alarm_at: usize,
+    }
+
+    impl Estimator for AlarmProbe {
+        fn method(&self) -> &'static str {
+            "alarm-probe"
+        }
+        fn structure(&self) -> &ModelStructure {
+            self.inner.structure()
+        }
+        fn update(&mut self, s: &AirDataSample) -> Result<&Estimates, EstimatorError> {
+            self.fed += 1;
+            if self.fed == self.alarm_at {
+                self.events.push_with_statistic(s.t_s, EventKind::ChangeDetected, "Cm", 13.0);
+            }
+            self.inner.update(s)
+        }
+        fn estimates(&self) -> &Estimates {
+            self.inner.estimates()
+        }
+        fn events(&self) -> &EventLog {
+            &self.events
+        }
+    }
+
+    /// A change alarm reaches the live observer once, the moment it happens, naming the
+    /// equation and its statistic; the summary lists it among the events.
+    #[test]
+    fn change_alarm_is_told_to_the_observer_when_it_happens() {
+        let m = Mapping::from_toml_str(MAP, "probe.toml").unwrap();
+        let csv = record();
+        let reader = FlightDataReader::new(csv.as_bytes(), "probe.csv", &m).unwrap();
+        let make = |spec: &ModelSpec| -> Result<Box<dyn Estimator>, BuildError> {
+            let inner = Probe {
+                structure: spec.structure,
+                est: Estimates::new(spec.structure.n_params()),
+                seen: Rc::new(RefCell::new(Vec::new())),
+                diverge_at: usize::MAX,
+            };
+            Ok(Box::new(AlarmProbe { inner, events: EventLog::new(), fed: 0, alarm_at: 3 }))
+        };
+        let opts = ReplayOptions { diff_window: 3, ..Default::default() };
+        let mut told = Told::default();
+        replay_with(reader, &m, &opts, make, &mut told).unwrap();
+        let changes: Vec<&String> =
+            told.warnings.iter().filter(|w| w.contains("detected a change")).collect();
+        assert_eq!(changes.len(), 1, "{:?}", told.warnings);
+        let t3 = told.estimates[2].0;
+        assert!(changes[0].contains("of `Cm`"), "{}", changes[0]);
+        assert!(changes[0].contains("statistic 13.0"), "{}", changes[0]);
+        assert!(changes[0].contains(&format!("t = {t3} s")), "{} (third sample {t3})", changes[0]);
     }
 
     /// A pair of observers is told everything, each in full: the model once, the names, one

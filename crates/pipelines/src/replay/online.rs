@@ -96,6 +96,8 @@ pub(super) struct Replay<'a> {
     /// Restarts of the estimator seen so far: each is reported when it happens (on a live
     /// feed the estimates fall back to the priors then, not at the end).
     restarts_seen: u32,
+    /// Change alarms of the estimator seen so far, reported likewise as they happen.
+    changes_seen: u32,
     /// Samples the derivative stage released this event, and rows it could not centre.
     ready: Vec<(u64, AirDataSample)>,
     unused: Vec<u64>,
@@ -132,6 +134,7 @@ impl<'a> Replay<'a> {
             diverged: false,
             interrupted: false,
             restarts_seen: 0,
+            changes_seen: 0,
             ready: Vec::new(),
             unused: Vec::new(),
         }
@@ -284,6 +287,37 @@ impl<'a> Replay<'a> {
         Ok(())
     }
 
+    /// Reports the estimator's new restarts and change alarms the moment they happen, on the
+    /// live console and stream (the estimates jump then, not at the end of the record).
+    fn report_events(&mut self, row: u64, t_s: f64) {
+        use aeroident_estimators::EventKind;
+        let Some(r) = self.run.as_ref() else { return };
+        let (method, log) = (r.est.method(), r.est.events());
+        let (restarts, changes) =
+            (log.count(EventKind::Restart), log.count(EventKind::ChangeDetected));
+        let mut lines = Vec::new();
+        if restarts > self.restarts_seen {
+            lines.push(format!(
+                "estimator `{method}` restarted from its priors at t = {t_s} s (row {row}); its estimates come from the samples after it only"
+            ));
+        }
+        if changes > self.changes_seen {
+            // The event itself when the log still lists it (its subject and statistic).
+            let last = log.listed().iter().rev().find(|e| e.kind == EventKind::ChangeDetected);
+            let subject = last.map_or(String::new(), |e| format!(" of `{}`", e.subject));
+            let statistic = last
+                .and_then(|e| e.statistic)
+                .map_or(String::new(), |g| format!(", statistic {g:.1}"));
+            lines.push(format!(
+                "estimator `{method}` detected a change{subject} at t = {t_s} s (row {row}{statistic}); its memory of it was re-opened (docs/change-detection.md)"
+            ));
+        }
+        (self.restarts_seen, self.changes_seen) = (restarts, changes);
+        for line in lines {
+            self.observer.warning(&line);
+        }
+    }
+
     /// One estimator update; `false` when the estimator diverged (the replay stops). A
     /// numerical failure on valid input is a divergence (the estimator's status says so,
     /// with or without an error); any other error refuses this sample only.
@@ -304,15 +338,7 @@ impl<'a> Replay<'a> {
             self.diverged = true;
             return Ok(false);
         }
-        let restarts = r.est.events().count(aeroident_estimators::EventKind::Restart);
-        if restarts > self.restarts_seen {
-            self.restarts_seen = restarts;
-            self.observer.warning(&format!(
-                "estimator `{}` restarted from its priors at t = {} s (row {row}); its estimates come from the samples after it only",
-                r.est.method(),
-                s.t_s
-            ));
-        }
+        self.report_events(row, s.t_s);
         let e = match result {
             Ok(e) => e,
             Err(err) => {

@@ -1,0 +1,186 @@
+//! The measurements of `docs/change-detection.md`: `N` seeded runs of a scenario (the Monte
+//! Carlo seed rule of `aeroident_pipelines::montecarlo`) and, per estimator and primary
+//! derivative, the median time back within ±10 % after the damage (`montecarlo::statistics`,
+//! the definition of `reconvergence_10pct_s`), the ±2σ coverage just before the damage and at
+//! the end, and the change alarms: per equation, how many fired before the damage (false) and
+//! the median delay of the first after it.
+//!
+//! Run: `cargo run --release -p aeroident --example change_contest -- SCENARIO RUNS SEED
+//! [--no-damage] [--duration-s T]` (`--no-damage`: the scenario's increments removed, every
+//! alarm is false; `--duration-s`: the flight, and its turbulence, lengthened to `T`). Prints
+//! markdown tables.
+#![allow(missing_docs)]
+
+use aeroident_pipelines::aircraft::Scenario;
+use aeroident_pipelines::aircraft::summary::PRIMARY_DERIVATIVES;
+use aeroident_pipelines::aircraft::{RunOutput, run};
+use aeroident_pipelines::montecarlo::{
+    RunResult, crb_sigmas, run_result, run_seed, seeded_scenario, statistics,
+};
+use aeroident_signals::config::WindConfig;
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+
+/// Per (estimator, parameter): runs covered within ±2σ just before the damage, and runs with
+/// an estimate and σ there.
+type Before = BTreeMap<(String, String), (usize, usize)>;
+/// Per (estimator, equation): alarm times of one run.
+type Alarms = BTreeMap<(String, String), Vec<f64>>;
+
+fn before_of(out: &RunOutput, damage_s: f64) -> Before {
+    let mut acc = Before::new();
+    let Some(k) = out.t_s.iter().rposition(|&t| t < damage_s) else { return acc };
+    for ch in &out.channels {
+        for p in &ch.params {
+            let name = p.param.name();
+            if !PRIMARY_DERIVATIVES.contains(&name) {
+                continue;
+            }
+            let e = acc.entry((ch.label.clone(), name.to_string())).or_default();
+            if let (Some(v), Some(s), Some(t)) = (p.estimate[k], p.sigma[k], p.truth[k]) {
+                e.1 += 1;
+                e.0 += usize::from((v - t).abs() <= 2.0 * s);
+            }
+        }
+    }
+    acc
+}
+
+fn alarms_of(out: &RunOutput) -> Alarms {
+    let mut acc = Alarms::new();
+    for ch in &out.channels {
+        for e in ch.events.listed.iter().filter(|e| e.kind == "change_detected") {
+            acc.entry((ch.label.clone(), e.subject.clone())).or_default().push(e.t_s);
+        }
+    }
+    acc
+}
+
+fn median(mut v: Vec<f64>) -> Option<f64> {
+    v.sort_by(f64::total_cmp);
+    (!v.is_empty()).then(|| {
+        let n = v.len();
+        if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+    })
+}
+
+fn parse(args: &[String]) -> Result<(Scenario, u64, u64), String> {
+    let path = args
+        .get(1)
+        .ok_or("usage: change_contest SCENARIO RUNS SEED [--no-damage] [--duration-s T]")?;
+    let runs: u64 = args.get(2).and_then(|a| a.parse().ok()).ok_or("RUNS")?;
+    let seed: u64 = args.get(3).and_then(|a| a.parse().ok()).ok_or("SEED")?;
+    let mut sc = Scenario::from_path(std::path::Path::new(path)).map_err(|e| e.to_string())?;
+    let mut k = 4;
+    while k < args.len() {
+        match args[k].as_str() {
+            "--no-damage" => {
+                sc.increments.clear();
+                k += 1;
+            }
+            "--duration-s" => {
+                let t: f64 = args.get(k + 1).and_then(|a| a.parse().ok()).ok_or("T")?;
+                sc.duration_s = t;
+                for w in &mut sc.wind {
+                    if let WindConfig::Dryden { duration_s, .. } = w {
+                        *duration_s = t + 1.0;
+                    }
+                }
+                k += 2;
+            }
+            other => return Err(format!("unknown argument `{other}`")),
+        }
+    }
+    Ok((sc, runs, seed))
+}
+
+fn main() -> Result<(), String> {
+    let args: Vec<String> = std::env::args().collect();
+    let (sc, runs, seed) = parse(&args)?;
+    let damage_s = sc
+        .increments
+        .values()
+        .filter_map(|i| i.step_at_s)
+        .fold(f64::INFINITY, f64::min)
+        .min(sc.duration_s);
+    let crb = crb_sigmas(&sc)?;
+    let t0 = std::time::Instant::now();
+    type One = (RunResult, Option<(Before, Alarms)>);
+    let results: Vec<One> = (0..runs)
+        .into_par_iter()
+        .map(|i| {
+            let s = seeded_scenario(&sc, seed, i);
+            let seed_i = run_seed(seed, i, 0);
+            match run(&s) {
+                Ok(out) => (
+                    run_result(i, seed_i, &out),
+                    Some((before_of(&out, damage_s), alarms_of(&out))),
+                ),
+                Err(e) => {
+                    (RunResult { index: i, sensor_seed: seed_i, outcome: Err(e.to_string()) }, None)
+                }
+            }
+        })
+        .collect();
+    let wall = t0.elapsed().as_secs_f64();
+    let mut before = Before::new();
+    let mut alarms: BTreeMap<(String, String), Vec<Vec<f64>>> = BTreeMap::new();
+    for (b, a) in results.iter().filter_map(|r| r.1.as_ref()) {
+        for (key, v) in b {
+            let e = before.entry(key.clone()).or_default();
+            e.0 += v.0;
+            e.1 += v.1;
+        }
+        for (key, v) in a {
+            alarms.entry(key.clone()).or_default().push(v.clone());
+        }
+    }
+    let ok = results.iter().filter(|r| r.1.is_some()).count();
+    let runs_only: Vec<RunResult> = results.into_iter().map(|r| r.0).collect();
+    let names: Vec<String> = sc.estimator.iter().map(|e| e.label()).collect();
+    let stats = statistics(&runs_only, &names, &crb);
+    let hours = ok as f64 * sc.duration_s / 3600.0;
+    println!(
+        "{}: {runs} runs ({ok} ok), seed {seed}, {} s each ({hours:.2} h of flight), damage at {damage_s} s; {wall:.0} s wall",
+        args[1], sc.duration_s
+    );
+    println!("| estimator | derivative | re_10% s | ±2σ coverage before % | ±2σ coverage end % |");
+    println!("|---|---|---|---|---|");
+    let f = |v: Option<f64>, d: usize| v.map_or("—".to_string(), |v| format!("{v:.d$}"));
+    for est in &stats {
+        for p in est.parameters.iter().filter(|p| p.primary) {
+            let b = before.get(&(est.name.clone(), p.name.clone()));
+            let cb = b.filter(|b| b.1 > 0).map(|b| 100.0 * b.0 as f64 / b.1 as f64);
+            println!(
+                "| {} | {} | {} | {} | {} |",
+                est.name,
+                p.name,
+                f(p.median_reconvergence_10pct_s, 2),
+                f(cb, 1),
+                f(p.coverage_2sigma.map(|c| 100.0 * c), 1),
+            );
+        }
+    }
+    println!();
+    println!(
+        "| estimator | equation | alarms before the damage | per hour (before) | runs with an alarm after | median delay of the first after, s | alarms after |"
+    );
+    println!("|---|---|---|---|---|---|---|");
+    let pre_hours = ok as f64 * damage_s / 3600.0;
+    for ((est, eq), per_run) in &alarms {
+        let pre: usize = per_run.iter().map(|v| v.iter().filter(|&&t| t < damage_s).count()).sum();
+        let post: usize =
+            per_run.iter().map(|v| v.iter().filter(|&&t| t >= damage_s).count()).sum();
+        let delays: Vec<f64> = per_run
+            .iter()
+            .filter_map(|v| v.iter().find(|&&t| t >= damage_s).map(|t| t - damage_s))
+            .collect();
+        println!(
+            "| {est} | {eq} | {pre} | {:.2} | {} | {} | {post} |",
+            pre as f64 / pre_hours,
+            delays.len(),
+            f(median(delays.clone()), 2),
+        );
+    }
+    Ok(())
+}

@@ -46,18 +46,21 @@ fn main() {
     println!(
         "estimator        structure     p50 ns   p99 ns  p99.9 ns    max ns max/p50  max-of-min ns  /p50  refused"
     );
-    for (kind, st, label) in [
-        (EstimatorKind::Rls, ModelStructure::six_axis(), "six-axis"),
-        (EstimatorKind::Ftr, ModelStructure::six_axis(), "six-axis"),
-        (EstimatorKind::Ekf, ModelStructure::longitudinal(), "longitudinal"),
-        (EstimatorKind::Ekf, ModelStructure::lateral(), "lateral"),
-        (EstimatorKind::SmpeCorrected, ModelStructure::six_axis(), "six-axis"),
+    let spread = EstimatorOptions { ftr_spread_sigma: true, ..EstimatorOptions::default() };
+    let plain = EstimatorOptions::default();
+    for (kind, st, label, options) in [
+        (EstimatorKind::Rls, ModelStructure::six_axis(), "six-axis", &plain),
+        (EstimatorKind::Ftr, ModelStructure::six_axis(), "six-axis", &plain),
+        (EstimatorKind::Ftr, ModelStructure::six_axis(), "six, spread", &spread),
+        (EstimatorKind::Ekf, ModelStructure::longitudinal(), "longitudinal", &plain),
+        (EstimatorKind::Ekf, ModelStructure::lateral(), "lateral", &plain),
+        (EstimatorKind::SmpeCorrected, ModelStructure::six_axis(), "six-axis", &plain),
     ] {
         let mut all = Vec::with_capacity(REPEATS * data.len());
         let mut best = vec![u64::MAX; data.len() - WARMUP];
         let mut refused = 0usize;
         for _ in 0..REPEATS {
-            let mut e = match build(kind, st, Priors::generic(&st), &EstimatorOptions::default()) {
+            let mut e = match build(kind, st, Priors::generic(&st), options) {
                 Ok(e) => e,
                 Err(err) => {
                     println!("{:<16} {label:<12} not built: {err}", kind.name());

@@ -1,6 +1,6 @@
 //! The latency of one `aeroident_estimator_update` through the C ABI, update by update: RLS,
-//! FTR and the EKF over the six-axis preset, 10⁶ updates each, and the p50, p99, p99.99 and
-//! largest update time (docs/c-abi.md, "Timing").
+//! FTR (as it is, and with `spread_sigma = true`) and the EKF over the six-axis preset, 10⁶
+//! updates each, and the p50, p99, p99.99 and largest update time (docs/c-abi.md, "Timing").
 //!
 //! ```text
 //! cargo run --release -p aeroident-capi --example update_latency [-- UPDATES]
@@ -40,9 +40,13 @@ fn main() {
         "| estimator | timing | p50 | p99 | p99.99 | max | max / p50 | updates > 5 × p50 | slowest update |"
     );
     println!("|---|---|---:|---:|---:|---:|---:|---:|---:|");
-    for kind in ["rls", "ftr", "ekf"] {
+    for (kind, options) in [("rls", ""), ("ftr", ""), ("ftr", "spread_sigma = true"), ("ekf", "")] {
         let switches = involuntary_switches();
-        let passes: Vec<Vec<u64>> = (0..PASSES).map(|_| timed(kind, &stream, updates)).collect();
+        let passes: Vec<Vec<u64>> =
+            (0..PASSES).map(|_| timed(kind, options, &stream, updates)).collect();
+        let kind =
+            if options.is_empty() { kind.to_string() } else { format!("{kind} ({options})") };
+        let kind = kind.as_str();
         let switches = involuntary_switches().zip(switches).map(|(b, a)| b - a);
         let least: Vec<u64> =
             (0..updates).map(|i| passes.iter().map(|p| p[i]).min().unwrap()).collect();
@@ -79,12 +83,13 @@ fn involuntary_switches() -> Option<u64> {
     line.split_whitespace().last()?.parse().ok()
 }
 
-/// The time of each of `updates` updates of a new `kind` estimator, ns.
-fn timed(kind: &str, stream: &[AeroidentSample], updates: usize) -> Vec<u64> {
+/// The time of each of `updates` updates of a new `kind` estimator with `options` (TOML), ns.
+fn timed(kind: &str, options: &str, stream: &[AeroidentSample], updates: usize) -> Vec<u64> {
     let (k, m) = (CString::new(kind).unwrap(), CString::new("six-axis").unwrap());
+    let o = CString::new(options).unwrap();
     let mut e = std::ptr::null_mut();
     // SAFETY: valid strings and out pointer.
-    let r = unsafe { aeroident_estimator_new(k.as_ptr(), m.as_ptr(), std::ptr::null(), &mut e) };
+    let r = unsafe { aeroident_estimator_new(k.as_ptr(), m.as_ptr(), o.as_ptr(), &mut e) };
     assert_eq!(r, AeroidentResult::Ok, "{kind}");
     let mut ns = Vec::with_capacity(updates);
     let mut refused = 0;

@@ -112,7 +112,7 @@ impl EstimatorKind {
         match self {
             EstimatorKind::Rls => &["forgetting", "change_false_alarm_interval_s"],
             EstimatorKind::RlsIv => &["forgetting", "instrument_delay"],
-            EstimatorKind::Ftr => &["forgetting", "grid_hz"],
+            EstimatorKind::Ftr => &["forgetting", "grid_hz", "spread_sigma"],
             EstimatorKind::Ekf => &["parameter_walk_per_sqrt_s", "samples"],
             EstimatorKind::SmpeFiniteTime => &[
                 "forgetting",
@@ -238,6 +238,10 @@ pub struct EstimatorOptions {
     /// beyond 1.5 Hz must extend it: a harmonic outside the grid is seen only through the
     /// window's leakage (docs/uncertainty.md, "Equation-error coverage, continued").
     pub ftr_grid_hz: Option<(f64, f64, f64)>,
+    /// `ftr`: compute each solve's σ over the updates of the solve interval
+    /// ([`FtrConfig::spread_sigma`]): a bounded update for a flight computer, each solution
+    /// published up to one interval after its solve. Default off.
+    pub ftr_spread_sigma: bool,
     /// `smpe-finite-time`: sliding gain `γ`, standard errors per second
     /// ([`FiniteTimeConfig::sliding_gain_per_s`]).
     pub sliding_gain_per_s: f64,
@@ -261,6 +265,7 @@ impl Default for EstimatorOptions {
             parameter_walk_per_sqrt_s: 0.0,
             sample_interval_s: None,
             ftr_grid_hz: None,
+            ftr_spread_sigma: false,
             sliding_gain_per_s: FiniteTimeConfig::default().sliding_gain_per_s,
             reaching_rate_per_s: FiniteTimeConfig::default().reaching_rate_per_s,
             change_false_alarm_interval_s: DEFAULT_CHANGE_FALSE_ALARM_INTERVAL_S,
@@ -366,7 +371,11 @@ pub fn build(
             boxed(|| RlsIv::new(structure, cfg))
         }
         EstimatorKind::Ftr => {
-            let mut cfg = FtrConfig { forgetting: options.forgetting, ..FtrConfig::default() };
+            let mut cfg = FtrConfig {
+                forgetting: options.forgetting,
+                spread_sigma: options.ftr_spread_sigma,
+                ..FtrConfig::default()
+            };
             if let Some((f_min_hz, f_max_hz, f_step_hz)) = options.ftr_grid_hz {
                 cfg = FtrConfig { f_min_hz, f_max_hz, f_step_hz, ..cfg };
             }
@@ -674,6 +683,11 @@ impl EstimatorOptions {
                 };
                 self.ftr_grid_hz = Some((num(&a[0])?, num(&a[1])?, num(&a[2])?));
             }
+            ("spread_sigma", EstimatorKind::Ftr) => {
+                self.ftr_spread_sigma = v
+                    .as_bool()
+                    .ok_or_else(|| invalid(format!("must be true or false, got {v}")))?;
+            }
             ("parameter_walk_per_sqrt_s", EstimatorKind::Ekf) => {
                 self.parameter_walk_per_sqrt_s = number()?;
             }
@@ -733,6 +747,7 @@ mod tests {
                 "samples" => "raw".into(),
                 "sliding_gain_per_s" | "reaching_rate_per_s" => toml::Value::Float(5.0),
                 "change_false_alarm_interval_s" => toml::Value::Float(3600.0),
+                "spread_sigma" => toml::Value::Boolean(true),
                 other => panic!("no valid value for `{other}`"),
             }
         };

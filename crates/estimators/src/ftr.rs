@@ -608,7 +608,8 @@ impl Estimator for Ftr {
         if self.pending == 0 && !self.sigma.active && s.t_s >= self.next_solve_t {
             self.pending = self.structure.coefficients().count() as u8;
             self.next_solve_t = s.t_s + self.cfg.solve_interval_s;
-            self.sigma_budget = self.round_budget(w);
+            // The last known interval at a manoeuvre's first sample (which has none of its own).
+            self.sigma_budget = self.round_budget(if w > 0.0 { w } else { self.step_dt });
         }
         if self.sigma.active {
             self.advance_sigma();

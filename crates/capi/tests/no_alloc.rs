@@ -1,6 +1,7 @@
 //! No heap allocation in `aeroident_estimator_update` after creation: a counting global
 //! allocator counts every allocation, reallocation and release made on this test's thread
-//! while RLS, FTR and the EKF over the six-axis preset each take 2,000 samples through the C
+//! while RLS, FTR (also with `spread_sigma = true`) and the EKF over the six-axis preset each
+//! take 2,000 samples through the C
 //! ABI, with their estimates and state read after every sample, one refused sample and a new
 //! manoeuvre among them. Creation is outside the counted span (it allocates the estimator).
 
@@ -60,13 +61,14 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static ALLOCATOR: Counting = Counting;
 
-/// Feeds `samples` to a new `kind` over the six-axis preset with counting on: the calls to
-/// the allocator, and how many updates were accepted.
-fn counted(kind: &str, samples: &[AeroidentSample]) -> (usize, usize) {
+/// Feeds `samples` to a new `kind` with `options` (TOML) over the six-axis preset with
+/// counting on: the calls to the allocator, and how many updates were accepted.
+fn counted(kind: &str, options: &str, samples: &[AeroidentSample]) -> (usize, usize) {
     let (k, m) = (CString::new(kind).unwrap(), CString::new("six-axis").unwrap());
+    let o = CString::new(options).unwrap();
     let mut e = std::ptr::null_mut();
     // SAFETY: valid strings and out pointer.
-    let r = unsafe { aeroident_estimator_new(k.as_ptr(), m.as_ptr(), std::ptr::null(), &mut e) };
+    let r = unsafe { aeroident_estimator_new(k.as_ptr(), m.as_ptr(), o.as_ptr(), &mut e) };
     assert_eq!(r, AeroidentResult::Ok);
     // SAFETY: a live handle.
     let n = unsafe { aeroident_estimator_n_params(e) };
@@ -110,8 +112,9 @@ fn updates_allocate_nothing_after_creation() {
         .map(AeroidentSample::from_air_data)
         .collect();
     assert_eq!(samples[0].present & AEROIDENT_HAS_ALL, samples[0].present);
-    for kind in ["rls", "ftr", "ekf"] {
-        let (calls, accepted) = counted(kind, &samples);
+    // FTR's spread σ keeps a solve's inputs in place between updates (no copy, no buffer).
+    for (kind, options) in [("rls", ""), ("ftr", ""), ("ftr", "spread_sigma = true"), ("ekf", "")] {
+        let (calls, accepted) = counted(kind, options, &samples);
         assert_eq!(accepted, samples.len(), "{kind}: every sample is used");
         assert_eq!(calls, 0, "{kind}: {calls} allocator calls in {} updates", samples.len());
     }

@@ -105,7 +105,7 @@
 //! of the six-axis estimator 47 times slower than the median (docs/c-abi.md), which a flight
 //! computer's scheduler must budget for. With [`FtrConfig::spread_sigma`] (estimator option
 //! `spread_sigma = true`) the σ's inputs are copied when the coefficient is solved and its σ
-//! is computed over the following updates ([`sigma`]), each update doing an
+//! is computed over the following updates (`ftr/sigma.rs`), each update doing an
 //! equal share of the round's work: the round's inner-sum terms over the updates one solve
 //! interval holds at the current sample interval, so a round ends within the interval at any
 //! rate. The estimate and its σ are published together when
@@ -441,7 +441,7 @@ impl Ftr {
 
     /// The σ work per update that finishes a round of solves within the solve interval at a
     /// sample interval `dt` (module doc, "Cost per update"): the round's inner-sum terms (as
-    /// [`sigma`] counts them, each coefficient with its `q = p + 1` columns) over the updates of
+    /// `ftr/sigma.rs` counts them, each coefficient with its `q = p + 1` columns) over the updates of
     /// one interval, less two per coefficient (the update that solves it, and the part of its
     /// σ's last update left unused); `usize::MAX` when not spread, when the interval holds no
     /// more than three updates per coefficient, or before `dt` is known.

@@ -54,8 +54,12 @@ impl Record {
         let path = workspace().join("scenarios/sim/ahrs_lag_degraded.toml");
         let sc = load_scenario(&path).unwrap();
         let sim = run(&sc, path.parent().unwrap()).unwrap();
+        // One directory per record: the tests run in parallel in one process, and each
+        // record's directory goes when it is dropped.
+        static FLOWN: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let k = FLOWN.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let dir = std::env::temp_dir()
-            .join(format!("aeroident-compat-ahrs-lag-{stride}-{}", std::process::id()));
+            .join(format!("aeroident-compat-ahrs-lag-{stride}-{}-{k}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let mut csv = sim.columns.join(",") + "\n";
         for k in (0..sim.data[0].len()).step_by(stride) {

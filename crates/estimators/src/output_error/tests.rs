@@ -475,9 +475,11 @@ fn a_fit_that_does_not_converge_is_an_error_with_the_last_iterate() {
         }
         other => panic!("expected NotConverged, got {other:?}"),
     }
-    // The same fit run to its end is the last iterate, not an error.
+    // The same fit run to its end is the last iterate, not an error; started from the
+    // priors by request, it is not started again.
     let last = fit_to_end(&[&data], &cfg).unwrap();
     assert_eq!(last.termination, Termination::NotConverged(NotConverged::MaxIterations));
+    assert!(last.restart.is_none(), "a fit from given or prior starting values runs once");
 }
 
 /// A fit from the equation-error start that does not converge is fitted again from the

@@ -761,7 +761,7 @@ mod tests {
         }
         assert_eq!(
             unknown_option(EstimatorKind::Ftr, "x"),
-            "ftr: unknown option `x` (it takes `forgetting` and `grid_hz`)"
+            "ftr: unknown option `x` (it takes `forgetting`, `grid_hz` and `spread_sigma`)"
         );
         assert_eq!(
             unknown_option(EstimatorKind::Oe, "x"),

@@ -499,6 +499,8 @@ fn a_fit_that_fails_from_the_equation_error_start_is_started_again_from_the_prio
     for (t, _) in [restart.first, restart.second] {
         assert_eq!(t, Termination::NotConverged(NotConverged::MaxIterations));
     }
+    // The second fit is another start's: one iteration from each ends elsewhere.
+    assert_ne!(restart.first.1, restart.second.1, "the second fit must start from the priors");
     let kept_ln = last.iterations.last().unwrap().ln_det_r;
     assert_eq!(kept_ln, restart.first.1.min(restart.second.1));
     assert_eq!(restart.kept_second, restart.second.1 < restart.first.1);
@@ -506,6 +508,13 @@ fn a_fit_that_fails_from_the_equation_error_start_is_started_again_from_the_prio
     let whole = fit_to_end(&[&data], &OeConfig::new(st)).unwrap();
     assert_eq!(whole.termination, Termination::Converged);
     assert!(whole.restart.is_none());
+    // Given starting values are the caller's: a fit from them that fails is not restarted.
+    let mut given = OeConfig::new(st);
+    given.start = Start::Given(priors.iter().map(|v| 0.9 * v + 0.01).collect());
+    given.max_iterations = 1;
+    let from_given = fit_to_end(&[&data], &given).unwrap();
+    assert!(!from_given.termination.is_converged());
+    assert!(from_given.restart.is_none());
 }
 
 /// A step tolerance no fit can meet: the fit still ends with a result once the cost stops

@@ -517,6 +517,33 @@ fn a_fit_that_fails_from_the_equation_error_start_is_started_again_from_the_prio
     assert!(from_given.restart.is_none());
 }
 
+/// Of two fits the converged one is kept even when the other reached a lower det R (a fit
+/// stopped short of convergence may sit anywhere), and between two of one kind the lower det R.
+#[test]
+fn the_converged_fit_is_kept_before_the_lower_det_r() {
+    let st = lon();
+    let th = trimmed_truth(&st);
+    let data = simulate(&st, &th, 20.0, 12.0, 1.0, 9, [0.0; N_STATES]);
+    let mut cfg = OeConfig::new(st);
+    cfg.max_iterations = 1;
+    let base = fit_to_end(&[&data], &cfg).unwrap();
+    let with = |t: Termination, ln: f64| {
+        let mut r = base.clone();
+        r.termination = t;
+        r.iterations.last_mut().unwrap().ln_det_r = ln;
+        r
+    };
+    let (stopped, converged) =
+        (Termination::NotConverged(NotConverged::MaxIterations), Termination::Converged);
+    let r = keep_better(with(stopped, -10.0), with(converged, -5.0)).restart.unwrap();
+    assert!(r.kept_second, "the converged second fit, though its det R is higher");
+    let r = keep_better(with(converged, -5.0), with(stopped, -10.0)).restart.unwrap();
+    assert!(!r.kept_second, "the converged first fit, though its det R is higher");
+    let r = keep_better(with(stopped, -5.0), with(stopped, -10.0)).restart.unwrap();
+    assert!(r.kept_second, "the lower det R between two fits of one kind");
+    assert_eq!((r.first.1, r.second.1), (-5.0, -10.0));
+}
+
 /// A step tolerance no fit can meet: the fit still ends with a result once the cost stops
 /// changing (`ml_oem2`'s criterion), at the estimates of the fit that converged on both.
 #[test]

@@ -10,6 +10,7 @@
 //! (and where a new manoeuvre started), in order. [`write_samples_csv`] writes them with the
 //! field names of [`crate::AeroidentSample`], each number so that it reads back to the same `double`.
 
+use aeroident_estimators::sample::MEASURED_FIELDS;
 use aeroident_estimators::{
     AirDataSample, Estimates, Estimator, EstimatorError, EventLog, ModelStructure,
 };
@@ -97,7 +98,8 @@ pub fn replay_samples<R: std::io::Read>(
 }
 
 /// The columns of [`write_samples_csv`]: `manoeuvre`, then the fields of [`crate::AeroidentSample`]
-/// in its order (without `present`: an absent field is an empty cell).
+/// in its order (without `present`: an absent field is an empty cell): `t_s`, the sample's
+/// [`MEASURED_FIELDS`] (the writer reads them by name, `AirDataSample::field`), the constants.
 pub const SAMPLE_COLUMNS: [&str; 37] = [
     "manoeuvre",
     "t_s",
@@ -149,34 +151,9 @@ pub fn write_samples_csv(w: &mut dyn Write, samples: &[FedSample]) -> std::io::R
     for f in samples {
         let s = f.sample;
         let k = s.constants;
-        let required = [s.t_s, s.vt_mps, s.alpha_rad, s.qbar_pa];
-        let measured = [
-            s.beta_rad,
-            s.p_rad_s,
-            s.q_rad_s,
-            s.r_rad_s,
-            s.pdot_rad_s2,
-            s.qdot_rad_s2,
-            s.rdot_rad_s2,
-            s.alphadot_rad_s,
-            s.phi_rad,
-            s.theta_rad,
-            s.psi_rad,
-            s.ax_mps2,
-            s.ay_mps2,
-            s.az_mps2,
-            s.de_rad,
-            s.da_rad,
-            s.dr_rad,
-            s.thrust_n,
-            s.throttle,
-            s.thrust_moment_nm,
-            s.rho_kgpm3,
-        ];
         let constants = [k.cbar_m, k.b_m, k.Ixx_kgm2, k.Iyy_kgm2, k.Izz_kgm2, k.Ixz_kgm2];
-        write!(w, "{}", f.manoeuvre)?;
-        required.iter().try_for_each(|v| write!(w, ",{v}"))?;
-        measured.iter().try_for_each(|v| cell(w, *v))?;
+        write!(w, "{},{}", f.manoeuvre, s.t_s)?;
+        MEASURED_FIELDS.iter().try_for_each(|name| cell(w, s.field(name)))?;
         write!(w, ",{},{}", k.mass_kg, k.S_m2)?;
         constants.iter().try_for_each(|v| cell(w, *v))?;
         write!(w, ",{},{}", k.thrust_arm_m, k.thrust_incidence_rad)?;
@@ -312,5 +289,13 @@ mod tests {
         let bad = text.replacen("106.0321", "1O6", 1);
         let e = read_samples_csv(&bad).unwrap_err();
         assert!(e.starts_with("line 2: column `vt_mps`"), "{e}");
+    }
+
+    /// The header's measured columns are the sample's own list, in its order: the writer
+    /// fills them by those names and the reader by position.
+    #[test]
+    fn the_measured_columns_are_the_samples_list() {
+        assert_eq!(SAMPLE_COLUMNS[..2], ["manoeuvre", "t_s"]);
+        assert_eq!(SAMPLE_COLUMNS[2..2 + MEASURED_FIELDS.len()], MEASURED_FIELDS);
     }
 }

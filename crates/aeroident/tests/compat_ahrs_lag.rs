@@ -83,7 +83,7 @@ impl Record {
         }
         let map = dir.join("measured.toml");
         std::fs::write(&map, text).unwrap();
-        let f16 = F16::new(sc.aircraft.xcg).unwrap();
+        let f16 = F16::new(sc.aircraft.as_ref().unwrap().xcg).unwrap();
         let truth =
             local_derivatives(&f16, &sim.trim.state, &sim.trim.controls, &AeroIncrements::zero())
                 .unwrap();

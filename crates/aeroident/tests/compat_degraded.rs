@@ -80,7 +80,7 @@ fn val_compat_recovers_the_injected_biases_and_time_shifts_of_a_degraded_record(
     // F-16's 3.60); corrected it is within 1.5 % (measured 3.62). The moment derivatives are
     // 6–18 % off with or without (the linear structure against the F-16's tables at 10 Hz:
     // structure, not data), so they are printed, not scored.
-    let f16 = F16::new(sc.aircraft.xcg).unwrap();
+    let f16 = F16::new(sc.aircraft.as_ref().unwrap().xcg).unwrap();
     let truth =
         local_derivatives(&f16, &sim.trim.state, &sim.trim.controls, &AeroIncrements::zero())
             .unwrap();

@@ -87,7 +87,7 @@ fn simulate(toml: &str, tag: &str) -> (PathBuf, String, LocalDerivatives) {
     let mut od = OutputDir::open(&dir, "f16 sim", &[]).unwrap();
     write_outputs(&sim, &mut od).unwrap();
     od.finish();
-    let f16 = F16::new(sc.aircraft.xcg).unwrap();
+    let f16 = F16::new(sc.aircraft.as_ref().unwrap().xcg).unwrap();
     let truth =
         local_derivatives(&f16, &sim.trim.state, &sim.trim.controls, &AeroIncrements::zero())
             .unwrap();

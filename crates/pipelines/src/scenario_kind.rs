@@ -7,7 +7,7 @@
 //! |---|---|---|---|
 //! | `"run"` | `aeroident run`, `aeroident montecarlo` | [`crate::aircraft::scenario`] | `scenarios/default.toml`, `scenarios/f16/`, `scenarios/montecarlo/` |
 //! | `"poc"` | `aeroident poc` | [`crate::poc::scenario`] | `scenarios/poc/` |
-//! | `"sim"` | `aeroident f16 sim` | [`crate::sim::scenario`] | `scenarios/sim/` |
+//! | `"sim"` | `aeroident f16 sim`, `aeroident sim` | [`crate::sim::scenario`] | `scenarios/sim/` |
 //!
 //! ```toml
 //! kind = "run"      # first key of the file, before any [table]
@@ -28,7 +28,7 @@ pub enum ScenarioKind {
     Run,
     /// A proof-of-concept system of the thesis: `aeroident poc`.
     Poc,
-    /// An open-loop F-16 simulation: `aeroident f16 sim`.
+    /// An open-loop simulation: `aeroident f16 sim`, `aeroident sim` (any aircraft).
     Sim,
 }
 

@@ -26,7 +26,7 @@
 mod files;
 mod handle;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 mod trim;
 
 pub use files::{airframe_from_mapping, load, parameter_values};
@@ -345,16 +345,38 @@ fn check_point(x: &AirframeState, u: &ControlVector) -> Result<(), ModelError> {
     Ok(())
 }
 
-impl Dynamics<N_STATES> for ModelFileAircraft {
-    type Input = ControlVector;
+/// What the equations give at one point: the state derivative and the channels a record of
+/// the flight holds (SI).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AirframeOutputs {
+    /// `ẋ`, state units per second ([`STATE_NAMES`]).
+    pub xdot: AirframeState,
+    /// Specific force at the CG in body axes `(ax, ay, az)`, m/s² (an accelerometer's reading:
+    /// `az ≈ −g` in level flight).
+    pub accel_mps2: [f64; 3],
+    /// Thrust, N.
+    pub thrust_n: f64,
+    /// Dynamic pressure `½ρV²`, Pa.
+    pub qbar_pa: f64,
+    /// Density, kg/m³.
+    pub rho_kgpm3: f64,
+    /// Mach number (the speed of sound of [`ModelFileAircraft::air`]).
+    pub mach: f64,
+}
 
-    /// The module doc's equations at `x` (SI) with controls `u`.
-    fn derivatives(
+impl ModelFileAircraft {
+    /// The module doc's equations at `x` (SI) with controls `u`: the state derivative and the
+    /// record's channels.
+    ///
+    /// # Errors
+    /// A state or control that is not finite, `vt ≤ 0`, |θ| or |β| at 90°, an altitude outside
+    /// the atmosphere, or a flight-model evaluation error; each naming the field.
+    pub fn outputs(
         &self,
         t_s: f64,
         x: &AirframeState,
         u: &ControlVector,
-    ) -> Result<AirframeState, ModelError> {
+    ) -> Result<AirframeOutputs, ModelError> {
         check_point(x, u)?;
         let inputs = self.inputs(t_s, x, u)?;
         use fm::state as s;
@@ -378,20 +400,44 @@ impl Dynamics<N_STATES> for ModelFileAircraft {
         for (i8, i12) in pairs {
             xd[i12] = d.xdot[i8];
         }
-        let (sphi, cphi) = x[rb::PHI].sin_cos();
-        xd[rb::PSI] = (x[rb::Q] * sphi + x[rb::R] * cphi) / x[rb::THETA].cos();
-        let v_body = rb::VelocityAngles {
-            vt_fps: x[rb::VT],
-            alpha_rad: x[rb::ALPHA],
-            beta_rad: x[rb::BETA],
-        }
-        .to_body();
-        let ned: Vector3<f64> =
-            body_from_ned(x[rb::PHI], x[rb::THETA], x[rb::PSI]).transpose() * v_body;
-        xd[rb::NORTH] = ned[0];
-        xd[rb::EAST] = ned[1];
-        xd[rb::ALT] = -ned[2];
-        Ok(xd)
+        navigation(x, &mut xd);
+        let (rho, vt) = (inputs.rho_kgpm3, x[rb::VT]);
+        Ok(AirframeOutputs {
+            xdot: xd,
+            accel_mps2: d.accel,
+            thrust_n: inputs.thrust_n,
+            qbar_pa: 0.5 * rho * vt * vt,
+            rho_kgpm3: rho,
+            mach: vt / inputs.a_mps,
+        })
+    }
+}
+
+/// The heading and navigation rows of `xd` at `x` (module doc).
+fn navigation(x: &AirframeState, xd: &mut AirframeState) {
+    let (sphi, cphi) = x[rb::PHI].sin_cos();
+    xd[rb::PSI] = (x[rb::Q] * sphi + x[rb::R] * cphi) / x[rb::THETA].cos();
+    let v_body =
+        rb::VelocityAngles { vt_fps: x[rb::VT], alpha_rad: x[rb::ALPHA], beta_rad: x[rb::BETA] }
+            .to_body();
+    let ned: Vector3<f64> =
+        body_from_ned(x[rb::PHI], x[rb::THETA], x[rb::PSI]).transpose() * v_body;
+    xd[rb::NORTH] = ned[0];
+    xd[rb::EAST] = ned[1];
+    xd[rb::ALT] = -ned[2];
+}
+
+impl Dynamics<N_STATES> for ModelFileAircraft {
+    type Input = ControlVector;
+
+    /// The module doc's equations at `x` (SI) with controls `u` ([`ModelFileAircraft::outputs`]).
+    fn derivatives(
+        &self,
+        t_s: f64,
+        x: &AirframeState,
+        u: &ControlVector,
+    ) -> Result<AirframeState, ModelError> {
+        Ok(self.outputs(t_s, x, u)?.xdot)
     }
 }
 

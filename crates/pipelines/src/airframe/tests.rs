@@ -28,18 +28,18 @@ use aeroident_models::linearize::{Linearization, Mode, ModeName, f16_modes, line
 use aeroident_models::trim::{F16Trim, TrimCondition, trim};
 use aeroident_physics::units::M_PER_FT;
 
-const ALT_FT: f64 = 20_000.0;
-const VT_FPS: f64 = 675.0;
+pub(crate) const ALT_FT: f64 = 20_000.0;
+pub(crate) const VT_FPS: f64 = 675.0;
 
 /// The F-16 at the thesis condition (xcg 0.30: open-loop stable) and its trim.
-fn f16_trim() -> (F16, F16Trim) {
+pub(crate) fn f16_trim() -> (F16, F16Trim) {
     let f = F16::new(0.30).unwrap();
     let t = trim(&f, &TrimCondition::level(ALT_FT, VT_FPS)).unwrap();
     (f, t)
 }
 
 /// The F-16's local derivatives at `t` as a model-file aircraft (module doc).
-fn as_model_file(f: &F16, t: &F16Trim) -> ModelFileAircraft {
+pub(crate) fn as_model_file(f: &F16, t: &F16Trim) -> ModelFileAircraft {
     let ld = local_derivatives(f, &t.state, &t.controls, &AeroIncrements::zero()).unwrap();
     let terms = [
         Term::Bias,

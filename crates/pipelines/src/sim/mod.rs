@@ -21,6 +21,7 @@
 //! needs: ṗ, q̇, ṙ, α̇ from the state derivative and the accelerometer specific force
 //! `ax/ay/az_fps2` (`az ≈ −g` level), so `mappings/aeroident-sim.toml` replays the file as it is.
 
+pub mod model_file;
 pub mod scenario;
 pub mod trim;
 
@@ -202,7 +203,7 @@ pub fn run(sc: &SimScenario, base_dir: &Path) -> Result<SimRun> {
     columns.extend(names.iter().cloned());
     let mut sensors = build_sensors(sc, &names, &mut columns)?;
 
-    let plant = match sc.aircraft.actuators {
+    let plant = match f16_config(sc)?.actuators {
         ActuatorChoice::Ideal => Plant::Ideal(f16),
         ActuatorChoice::F16 => {
             Plant::Actuated(F16WithActuators { airframe: f16, actuators: SurfaceActuators::f16() })
@@ -243,16 +244,17 @@ fn step_count(r: &scenario::RunConfig) -> Result<usize> {
 /// about the trim when `aerodynamics = "linear"`, with the thesis increments of
 /// `[increments]` about the trim (from `onset_s`, else always) when given.
 fn trimmed_airframe(sc: &SimScenario) -> Result<(F16, F16Trim)> {
-    let mut f16 = F16::new(sc.aircraft.xcg).context("[aircraft] xcg")?;
+    let config = f16_config(sc)?;
+    let mut f16 = F16::new(config.xcg).context("[aircraft] xcg")?;
+    let (vt_fps, alt_ft) = sc.trim.english()?;
     let cond = TrimCondition {
-        alt_ft: sc.trim.alt_ft,
-        vt_fps: sc.trim.vt_fps,
+        alt_ft,
+        vt_fps,
         gamma_rad: sc.trim.gamma_deg.to_radians(),
         maneuver: TrimManeuver::WingsLevel,
     };
-    let t0 = trim(&f16, &cond)
-        .with_context(|| format!("[trim] at {} ft, {} ft/s", sc.trim.alt_ft, sc.trim.vt_fps))?;
-    if sc.aircraft.aerodynamics == AerodynamicsSpec::Linear {
+    let t0 = trim(&f16, &cond).with_context(|| format!("[trim] at {alt_ft} ft, {vt_fps} ft/s"))?;
+    if config.aerodynamics == AerodynamicsSpec::Linear {
         let ld = local_derivatives(&f16, &t0.state, &t0.controls, &AeroIncrements::zero())
             .context("[aircraft] aerodynamics = \"linear\": the derivatives at the trim")?;
         f16 = f16.with_linear_aero(linearised(&ld, &t0.state, &t0.controls));
@@ -283,6 +285,18 @@ fn trimmed_airframe(sc: &SimScenario) -> Result<(F16, F16Trim)> {
         );
     }
     Ok((f16, t0))
+}
+
+/// The scenario's `[aircraft]`, which the F-16 needs.
+///
+/// # Errors
+/// No `[aircraft]` section.
+fn f16_config(sc: &SimScenario) -> Result<&scenario::AircraftConfig> {
+    sc.aircraft.as_ref().ok_or_else(|| {
+        crate::err!(
+            "[aircraft] is missing: the F-16 needs its `xcg` (a model-file aircraft is given with `aeroident sim --aircraft MODEL.toml`)"
+        )
+    })
 }
 
 /// The `[[input]]` signals with their channels; recorded inputs resolve against `base_dir`.

@@ -3,15 +3,15 @@
 //! ```toml
 //! kind = "sim"                # the one scenario format's kind (crate::scenario_kind)
 //!
-//! [aircraft]
+//! [aircraft]                  # the F-16's; leave it out for `aeroident sim --aircraft MODEL.toml`
 //! xcg = 0.30                  # fraction of cbar; 0.30 is open-loop stable (data README §7)
 //! actuators = "f16"           # "f16" (20.2 rad/s lags, rate/position limits) | "ideal"
 //! aerodynamics = "tables"     # optional: "tables" (default) | "linear", the tables' first-
 //!                             # order expansion at the trim (the linear structure's truth)
 //!
 //! [trim]                      # steady wings-level trim the run starts from
-//! alt_ft = 20000.0
-//! vt_fps = 675.0
+//! alt_ft = 20000.0            # or alt_m
+//! vt_fps = 675.0              # or vt_mps
 //! gamma_deg = 0.0             # optional
 //!
 //! [run]
@@ -55,8 +55,9 @@ pub struct SimScenario {
     /// `kind = "sim"`, checked by [`crate::scenario_kind::check`] before this is parsed.
     #[serde(rename = "kind")]
     _kind: crate::scenario_kind::ScenarioKind,
-    /// The aircraft.
-    pub aircraft: AircraftConfig,
+    /// The F-16's settings; absent for a model-file aircraft, which comes from the command
+    /// line (`aeroident sim --aircraft MODEL.toml`) and has no cg, actuator or table choice.
+    pub aircraft: Option<AircraftConfig>,
     /// The trim the run starts from.
     pub trim: TrimConfig,
     /// Run length and step.
@@ -101,17 +102,51 @@ pub enum ActuatorChoice {
     Ideal,
 }
 
-/// `[trim]`.
+/// `[trim]`: the altitude as `alt_ft` or `alt_m`, the airspeed as `vt_fps` or `vt_mps` (one
+/// of each pair).
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TrimConfig {
     /// Altitude, ft.
-    pub alt_ft: f64,
+    pub alt_ft: Option<f64>,
+    /// Altitude, m.
+    pub alt_m: Option<f64>,
     /// True airspeed, ft/s.
-    pub vt_fps: f64,
+    pub vt_fps: Option<f64>,
+    /// True airspeed, m/s.
+    pub vt_mps: Option<f64>,
     /// Flight-path angle, deg.
     #[serde(default)]
     pub gamma_deg: f64,
+}
+
+impl TrimConfig {
+    /// The trim's airspeed and altitude in SI: `(vt_mps, alt_m)`.
+    ///
+    /// # Errors
+    /// Neither or both of a pair given, naming the keys.
+    pub fn si(&self) -> crate::error::Result<(f64, f64)> {
+        let one = |si: Option<f64>, ft: Option<f64>, keys: &str| match (si, ft) {
+            (Some(v), None) => Ok(v),
+            (None, Some(v)) => Ok(v * aeroident_physics::units::M_PER_FT),
+            (None, None) => Err(crate::err!("[trim]: give {keys}")),
+            (Some(_), Some(_)) => Err(crate::err!("[trim]: give one of {keys}, not both")),
+        };
+        Ok((
+            one(self.vt_mps, self.vt_fps, "vt_mps or vt_fps")?,
+            one(self.alt_m, self.alt_ft, "alt_m or alt_ft")?,
+        ))
+    }
+
+    /// The trim's airspeed and altitude in the F-16's units: `(vt_fps, alt_ft)`.
+    ///
+    /// # Errors
+    /// As [`Self::si`].
+    pub fn english(&self) -> crate::error::Result<(f64, f64)> {
+        let (vt, alt) = self.si()?;
+        let f = aeroident_physics::units::FT_PER_M;
+        Ok((self.vt_fps.unwrap_or(vt * f), self.alt_ft.unwrap_or(alt * f)))
+    }
 }
 
 /// `[run]`.

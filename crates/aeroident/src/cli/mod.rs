@@ -16,6 +16,7 @@ pub mod montecarlo;
 pub mod poc;
 pub mod replay;
 pub mod run;
+pub mod sim;
 pub mod whole_record;
 
 /// aeroident: real-time aerodynamic parameter identification and an F-16 testbed.
@@ -36,6 +37,9 @@ pub enum Command {
     F16(f16::F16Args),
     /// Run an aircraft estimation scenario (no argument: the built-in default).
     Run(run::RunArgs),
+    /// Open-loop simulation of any aircraft from trim (the F-16, or a model file flying
+    /// identified derivatives): a record and the mapping that replays it.
+    Sim(sim::SimArgs),
     /// Monte Carlo campaign: N seeded noisy flights of a scenario, statistics per estimator.
     Montecarlo(montecarlo::MonteCarloArgs),
     /// Replay a recorded flight through an estimator, sample by sample.
@@ -93,6 +97,7 @@ impl Cli {
             Command::Poc(a) => poc::execute(a),
             Command::F16(a) => f16::execute(a),
             Command::Run(a) => run::execute(a),
+            Command::Sim(a) => sim::execute(a),
             Command::Montecarlo(a) => montecarlo::execute(a),
             Command::Replay(a) => replay::execute(*a),
             Command::Live(a) => live::execute(*a),

@@ -1,11 +1,18 @@
-//! The files of an open-loop simulation ([`aeroident_pipelines::sim`], `aeroident f16 sim`):
-//! `timeseries.csv`, the figures and `report.html`.
+//! The files of an open-loop simulation ([`aeroident_pipelines::sim`], `aeroident f16 sim`;
+//! [`aeroident_pipelines::sim::model_file`], `aeroident sim --aircraft MODEL.toml`):
+//! `timeseries.csv`, the figures and `report.html` (and the replay mapping of a model-file
+//! aircraft's record).
+
+mod aircraft;
+
+pub use aircraft::write_aircraft_outputs;
 
 use crate::outdir::OutputDir;
 use crate::plot::{LineKind, Panel, Series};
 use crate::report::{Report, common_settings, write_figure};
 use aeroident_models::f16::ALPHA;
 use aeroident_pipelines::sim::SimRun;
+use aeroident_pipelines::sim::model_file::AircraftSimRun;
 use anyhow::Context;
 
 /// Writes `timeseries.csv`, `states.{png,svg}`, `controls_wind.{png,svg}` and `report.html`
@@ -15,7 +22,7 @@ use anyhow::Context;
 /// # Errors
 /// I/O, CSV or plotting errors naming the file.
 pub fn write_outputs(run: &SimRun, od: &mut OutputDir) -> anyhow::Result<()> {
-    write_timeseries(run, od)?;
+    write_timeseries(run.into(), od)?;
     let states = write_figure::<anyhow::Error>(
         od,
         "states",
@@ -45,13 +52,38 @@ pub fn write_outputs(run: &SimRun, od: &mut OutputDir) -> anyhow::Result<()> {
 /// Degrees per radian: the factor radian channels are drawn with.
 const DEG_PER_RAD: f64 = 180.0 / std::f64::consts::PI;
 
+/// A simulation's record: column names (first `t_s`) and their data, of either aircraft.
+#[derive(Clone, Copy)]
+struct Table<'a> {
+    columns: &'a [String],
+    data: &'a [Vec<f64>],
+}
+
+impl<'a> Table<'a> {
+    fn column(&self, name: &str) -> Option<&'a [f64]> {
+        self.columns.iter().position(|c| c == name).map(|i| self.data[i].as_slice())
+    }
+}
+
+impl<'a> From<&'a SimRun> for Table<'a> {
+    fn from(r: &'a SimRun) -> Self {
+        Table { columns: &r.columns, data: &r.data }
+    }
+}
+
+impl<'a> From<&'a AircraftSimRun> for Table<'a> {
+    fn from(r: &'a AircraftSimRun) -> Self {
+        Table { columns: &r.columns, data: &r.data }
+    }
+}
+
 /// `timeseries.csv`: the run's columns, one row per step, every value as `{:.10e}` (enough
 /// digits to replay the record without loss that matters to identification).
-fn write_timeseries(run: &SimRun, od: &mut OutputDir) -> anyhow::Result<()> {
+fn write_timeseries(run: Table, od: &mut OutputDir) -> anyhow::Result<()> {
     let mut file = od.create("timeseries.csv")?;
     let csv_path = file.path().to_path_buf();
     let mut w = csv::Writer::from_writer(&mut file);
-    w.write_record(&run.columns).with_context(|| format!("writing `{}`", csv_path.display()))?;
+    w.write_record(run.columns).with_context(|| format!("writing `{}`", csv_path.display()))?;
     let n = run.data[0].len();
     for k in 0..n {
         w.write_record(run.data.iter().map(|c| format!("{:.10e}", c[k])))
@@ -66,7 +98,7 @@ fn write_timeseries(run: &SimRun, od: &mut OutputDir) -> anyhow::Result<()> {
 /// A panel of the channels `chans` (name, factor to the plotted unit), each true channel solid
 /// and its sensed `meas_` channel dashed where the run has one. Measured signals: the whole
 /// record sets the range (a manoeuvre is not a transient).
-fn channel_panel(run: &SimRun, title: &str, y_label: &str, chans: &[(&str, f64)]) -> Panel {
+fn channel_panel(run: Table, title: &str, y_label: &str, chans: &[(&str, f64)]) -> Panel {
     // Legend names say the plotted unit: radian channels are drawn in degrees.
     let shown = |name: &str, scale: f64| -> String {
         if scale == DEG_PER_RAD {
@@ -110,7 +142,7 @@ fn channel_panel(run: &SimRun, title: &str, y_label: &str, chans: &[(&str, f64)]
 fn states_panels(run: &SimRun) -> [Panel; 6] {
     let d = DEG_PER_RAD;
     let panel = |title: &str, y_label: &str, chans: &[(&str, f64)]| {
-        channel_panel(run, title, y_label, chans)
+        channel_panel(run.into(), title, y_label, chans)
     };
     [
         panel("true airspeed", "vt (ft/s)", &[("vt_fps", 1.0)]),
@@ -127,7 +159,7 @@ fn states_panels(run: &SimRun) -> [Panel; 6] {
 fn controls_panels(run: &SimRun) -> [Panel; 4] {
     let d = DEG_PER_RAD;
     let panel = |title: &str, y_label: &str, chans: &[(&str, f64)]| {
-        channel_panel(run, title, y_label, chans)
+        channel_panel(run.into(), title, y_label, chans)
     };
     [
         panel("elevator", "deg", &[("elevator_cmd_rad", d), ("elevator_rad", d)]),

@@ -14,22 +14,13 @@ use aeroident_models::aircraft::{Aircraft, CONTROL_NAMES, LevelLinearization, li
 use aeroident_models::f16::F16;
 use anyhow::Context;
 use serde_json::json;
-use std::path::PathBuf;
 
 /// Arguments of `aeroident linearize`.
 #[derive(Debug, clap::Args)]
 pub struct LinearizeArgs {
-    /// `f16`, or a model file (`models/*.toml`) whose derivatives the aircraft flies.
-    #[arg(long)]
-    pub aircraft: String,
-    /// A replay's `summary.json` giving the model's parameter values (default: the model
-    /// file's `[reference.<param>]` values).
-    #[arg(long)]
-    pub summary: Option<PathBuf>,
-    /// Mapping whose constants give mass, inertia, S, b, c̄, thrust line and thrust law
-    /// (required with a model file).
-    #[arg(long)]
-    pub map: Option<PathBuf>,
+    /// The aircraft.
+    #[command(flatten)]
+    pub aircraft: super::aircraft_args::AircraftArgs,
     /// True airspeed of the trim, m/s.
     #[arg(long)]
     pub vt_mps: f64,
@@ -59,21 +50,13 @@ pub fn execute(a: LinearizeArgs) -> anyhow::Result<()> {
 /// # Errors
 /// As [`execute`].
 pub fn report(a: &LinearizeArgs) -> anyhow::Result<String> {
-    if a.aircraft == "f16" {
-        anyhow::ensure!(
-            a.summary.is_none() && a.map.is_none(),
-            "--summary and --map describe a model-file aircraft, not the F-16"
-        );
+    if a.aircraft.is_f16()? {
         let f = F16::new(a.xcg)?;
         return render(&f, &linearize_level(&f, a.vt_mps, a.alt_m)?, a.json);
     }
-    let map = a
-        .map
-        .as_deref()
-        .context("--map is required with a model file (mass, inertia, S, b, cbar)")?;
-    let m = aeroident_pipelines::airframe::load(a.aircraft.as_ref(), a.summary.as_deref(), map)?;
+    let m = a.aircraft.model_file()?;
     let lin = linearize_level(&m, a.vt_mps, a.alt_m)
-        .with_context(|| format!("{} at {} m/s, {} m", a.aircraft, a.vt_mps, a.alt_m))?;
+        .with_context(|| format!("{} at {} m/s, {} m", a.aircraft.aircraft, a.vt_mps, a.alt_m))?;
     render(&m, &lin, a.json)
 }
 

@@ -2,6 +2,7 @@
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
+pub mod aircraft_args;
 pub mod auto_window;
 pub mod bench;
 pub mod compat;

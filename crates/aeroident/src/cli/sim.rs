@@ -20,17 +20,9 @@ pub struct SimArgs {
     /// Scenario TOML file (format: `aeroident_pipelines::sim::scenario`; without `[aircraft]`
     /// for a model file).
     pub scenario: PathBuf,
-    /// `f16`, or a model file (`models/*.toml`) whose derivatives the aircraft flies.
-    #[arg(long, default_value = "f16")]
-    pub aircraft: String,
-    /// A replay's `summary.json` giving the model's parameter values (default: the model
-    /// file's `[reference.<param>]` values).
-    #[arg(long)]
-    pub summary: Option<PathBuf>,
-    /// Mapping whose constants give mass, inertia, S, b, c̄, thrust line and thrust law
-    /// (required with a model file).
-    #[arg(long)]
-    pub map: Option<PathBuf>,
+    /// The aircraft.
+    #[command(flatten)]
+    pub aircraft: super::aircraft_args::AircraftArgs,
     /// Output directory (created if missing).
     #[arg(long)]
     pub out: PathBuf,
@@ -42,27 +34,18 @@ pub struct SimArgs {
 /// Files that cannot be read or do not describe a flyable aircraft or scenario, no trim, a
 /// model error during the run, or an output that cannot be written.
 pub fn execute(a: SimArgs) -> anyhow::Result<()> {
-    if a.aircraft == "f16" {
-        anyhow::ensure!(
-            a.summary.is_none() && a.map.is_none(),
-            "--summary and --map describe a model-file aircraft, not the F-16"
-        );
+    if a.aircraft.is_f16()? {
         return super::f16::execute_sim(super::f16::SimArgs { scenario: a.scenario, out: a.out });
     }
-    let map = a
-        .map
-        .as_deref()
-        .context("--map is required with a model file (mass, inertia, S, b, cbar)")?;
-    let mut inputs = vec![a.scenario.as_path(), a.aircraft.as_ref(), map];
-    inputs.extend(a.summary.as_deref());
+    let mut inputs = a.aircraft.files()?;
+    inputs.push(&a.scenario);
     // Lock and clear the directory first, so a failing run leaves no old outputs.
     let mut od = crate::outdir::OutputDir::open(&a.out, "sim", &inputs)?;
-    let aircraft =
-        aeroident_pipelines::airframe::load(a.aircraft.as_ref(), a.summary.as_deref(), map)?;
+    let aircraft = a.aircraft.model_file()?;
     let sc = aeroident_pipelines::sim::load_scenario(&a.scenario)?;
     let base = a.scenario.parent().unwrap_or(std::path::Path::new("."));
     let r = aeroident_pipelines::sim::model_file::run(&aircraft, &sc, base)
-        .with_context(|| format!("{} flying `{}`", a.aircraft, a.scenario.display()))?;
+        .with_context(|| format!("{} flying `{}`", a.aircraft.aircraft, a.scenario.display()))?;
     let mapping = aeroident_pipelines::sim::model_file::replay_mapping(&aircraft, &r);
     crate::sim::write_aircraft_outputs(&r, &mapping, &mut od)?;
     od.finish();

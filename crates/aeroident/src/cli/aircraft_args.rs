@@ -1,0 +1,72 @@
+//! `--aircraft f16|MODEL.toml [--summary S] [--map M]`: the aircraft a command flies, shared by
+//! the commands that take either (`sim`, `linearize`).
+
+use anyhow::Context;
+use std::path::{Path, PathBuf};
+
+/// The aircraft options (flattened into a command's arguments).
+#[derive(Debug, Clone, clap::Args)]
+pub struct AircraftArgs {
+    /// `f16`, or a model file (`models/*.toml`) whose derivatives the aircraft flies
+    /// (docs/aircraft.md).
+    #[arg(long, default_value = "f16")]
+    pub aircraft: String,
+    /// Model file: a replay's `summary.json` giving the parameter values (default: the model
+    /// file's `[reference.<param>]` values).
+    #[arg(long)]
+    pub summary: Option<PathBuf>,
+    /// Model file: the mapping whose constants give mass, inertia, S, b, c̄, thrust line and
+    /// thrust law (required with a model file).
+    #[arg(long)]
+    pub map: Option<PathBuf>,
+}
+
+impl AircraftArgs {
+    /// Whether the F-16 is asked for.
+    ///
+    /// # Errors
+    /// `--summary` or `--map` given with the F-16.
+    pub fn is_f16(&self) -> anyhow::Result<bool> {
+        if self.aircraft != "f16" {
+            return Ok(false);
+        }
+        anyhow::ensure!(
+            self.summary.is_none() && self.map.is_none(),
+            "--summary and --map describe a model-file aircraft, not the F-16"
+        );
+        Ok(true)
+    }
+
+    /// The mapping of a model-file aircraft.
+    ///
+    /// # Errors
+    /// No `--map`.
+    pub fn map(&self) -> anyhow::Result<&Path> {
+        self.map
+            .as_deref()
+            .context("--map is required with a model file (mass, inertia, S, b, cbar)")
+    }
+
+    /// The model-file aircraft these options name ([`aeroident_pipelines::airframe::load`]).
+    ///
+    /// # Errors
+    /// No `--map`, or files that do not describe a flyable aircraft (naming file and field).
+    pub fn model_file(&self) -> anyhow::Result<aeroident_pipelines::airframe::ModelFileAircraft> {
+        let map = self.map()?;
+        Ok(aeroident_pipelines::airframe::load(
+            self.aircraft.as_ref(),
+            self.summary.as_deref(),
+            map,
+        )?)
+    }
+
+    /// The files a model-file aircraft is read from (model, mapping, summary when given).
+    ///
+    /// # Errors
+    /// No `--map`.
+    pub fn files(&self) -> anyhow::Result<Vec<&Path>> {
+        let mut v = vec![Path::new(&self.aircraft), self.map()?];
+        v.extend(self.summary.as_deref());
+        Ok(v)
+    }
+}

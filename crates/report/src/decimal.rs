@@ -87,7 +87,10 @@ mod tests {
     #[test]
     fn tie_rounds_the_last_digit_to_even() {
         let mut s = String::new();
-        push_f64(&mut s, &mut ryu::Buffer::new(), 1308548795726862.25);
+        // 1308548795726862.25 exactly (the spacing of f64 there is 0.25).
+        let x = f64::from_bits(0x4312_9879_088f_f039);
+        assert_eq!(x - 1_308_548_795_726_862.0, 0.25);
+        push_f64(&mut s, &mut ryu::Buffer::new(), x);
         assert_eq!(s, "1308548795726862.2");
     }
 

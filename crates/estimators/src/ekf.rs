@@ -1070,6 +1070,10 @@ impl Ekf {
             }
             for k in 0..np {
                 let gik = g[i][k];
+                // Φxθ is sparse (a state sees few parameters); a zero adds nothing.
+                if gik == 0.0 {
+                    continue;
+                }
                 for (sj, pkj) in s[..n].iter_mut().zip(&p[nx + k][..n]) {
                     *sj += gik * pkj;
                 }

@@ -9,6 +9,7 @@
 /// Outputs of the closed-loop experiment: files, console table, figures.
 pub mod aircraft;
 pub mod console;
+pub mod decimal;
 pub mod interactive;
 pub mod outdir;
 /// Stacked time-series panels rendered to PNG and SVG.

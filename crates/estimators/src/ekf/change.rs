@@ -183,14 +183,28 @@ pub(super) fn p_times_row(
             ph[k]
         }
         None => {
+            // An output sees the states and the parameters of its own coefficient: most of
+            // `h` is exact zeros, whose products add nothing (the sums keep their order, so
+            // the result is the same to the bit; a non-finite `P` is caught by the divergence
+            // check of the step).
+            let mut nz = [0usize; MAX_AUG];
+            let mut m = 0;
+            for (j, &hj) in h[..n].iter().enumerate() {
+                if hj != 0.0 {
+                    nz[m] = j;
+                    m += 1;
+                }
+            }
+            let nz = &nz[..m];
             for i in 0..n {
+                let row = &p[i];
                 let mut acc = 0.0;
-                for j in 0..n {
-                    acc += p[i][j] * h[j];
+                for &j in nz {
+                    acc += row[j] * h[j];
                 }
                 ph[i] = acc;
             }
-            (0..n).map(|j| h[j] * ph[j]).sum()
+            nz.iter().map(|&j| h[j] * ph[j]).sum()
         }
     }
 }

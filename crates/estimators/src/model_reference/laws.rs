@@ -112,7 +112,8 @@ impl CoefficientLaw for CorrectedLaw {
             forgetting_per_s: c.forgetting_per_s,
         };
         // Validates the configuration now; the gains in state units are set at `start`.
-        let engine = CorrectedSmpe::new(CoefficientRate, config)?;
+        // The slots beyond the coefficient's terms have zero regressors (RateInput::phi).
+        let engine = CorrectedSmpe::new(CoefficientRate, config)?.with_active(spec.terms.len());
         Ok(Self {
             engine,
             config,
@@ -133,7 +134,8 @@ impl CoefficientLaw for CorrectedLaw {
         }
         self.config.information_per_s = kappa;
         self.config.tracking_weight = self.tracking_ratio * kappa * self.config.lambda_per_s;
-        self.engine = CorrectedSmpe::new(CoefficientRate, self.config)?;
+        let n = self.engine.active();
+        self.engine = CorrectedSmpe::new(CoefficientRate, self.config)?.with_active(n);
         Ok(())
     }
 

@@ -57,6 +57,9 @@ pub struct CorrectedSmpe<M, const N: usize, const P: usize> {
     surface: SVector<f64, N>,
     last_t_s: Option<f64>,
     estimate: Estimate<P>,
+    /// Parameters `0..active` are adapted; those beyond have zero sensitivity
+    /// ([`CorrectedSmpe::with_active`]) and are skipped.
+    active: usize,
 }
 
 impl<M, const N: usize, const P: usize> CorrectedSmpe<M, N, P>
@@ -110,7 +113,24 @@ where
             surface: SVector::zeros(),
             last_t_s: None,
             estimate: Estimate::new(0.0, theta),
+            active: P,
         })
+    }
+
+    /// Adapts only the leading `n` parameters (`n ≤ P`): the model promises that the
+    /// sensitivity to the others is zero at every sample (unused slots of a fixed-size
+    /// parameter vector), so they never move and their rows and columns of Γ stay diagonal.
+    /// The update then costs `O(n²)` instead of `O(P²)` with the same numbers for the leading
+    /// `n`: every skipped term is an exact zero, and the sums keep nalgebra's order
+    /// ([`dot_leading`]). The trailing gains are not forgotten (they are never used).
+    pub fn with_active(mut self, n: usize) -> Self {
+        self.active = n.min(P);
+        self
+    }
+
+    /// How many leading parameters are adapted ([`Self::with_active`]; `P` by default).
+    pub fn active(&self) -> usize {
+        self.active
     }
 
     /// The configuration.
@@ -137,6 +157,72 @@ where
     }
 }
 
+/// `xᵀy` over the leading `n` entries, bit-identical to nalgebra's `x.dot(y)` when the rest are
+/// zero: nalgebra sums whole blocks of 8 into 8 accumulators, adds them pairwise (0 + 4, 1 + 5,
+/// 2 + 6, 3 + 7), then the tail in order; adding the exact zeros beyond `n` changes nothing.
+/// Short vectors (`P ≤ 4`, nalgebra's special cases) and `n = P` go to nalgebra itself.
+fn dot_leading<const P: usize>(x: &SVector<f64, P>, y: &SVector<f64, P>, n: usize) -> f64 {
+    if P <= 4 || n >= P {
+        return x.dot(y);
+    }
+    let blocks = P / 8 * 8;
+    let mut acc = [0.0; 8];
+    for i in 0..n.min(blocks) {
+        acc[i % 8] += x[i] * y[i];
+    }
+    let mut res = 0.0;
+    for j in 0..4 {
+        res += acc[j] + acc[j + 4];
+    }
+    for i in blocks..n {
+        res += x[i] * y[i];
+    }
+    res
+}
+
+/// `Γ x` over the leading `n × n` block (zero beyond), in nalgebra's order (a column sweep:
+/// `y = Γ₀ x₀`, then `y += Γⱼ xⱼ`), so bit-identical to `Γ * x` when `x` is zero beyond `n`
+/// and Γ is block-diagonal between the leading `n` and the rest.
+fn mul_leading<const P: usize>(
+    g: &SMatrix<f64, P, P>,
+    x: &SVector<f64, P>,
+    n: usize,
+) -> SVector<f64, P> {
+    let mut y = SVector::<f64, P>::zeros();
+    if n == 0 {
+        return y;
+    }
+    for a in 0..n {
+        y[a] = g[(a, 0)] * x[0];
+    }
+    for b in 1..n {
+        for a in 0..n {
+            y[a] += g[(a, b)] * x[b];
+        }
+    }
+    y
+}
+
+/// Scales the leading `n × n` block of Γ by `f`.
+fn scale_leading<const P: usize>(g: &mut SMatrix<f64, P, P>, n: usize, f: f64) {
+    for b in 0..n {
+        for a in 0..n {
+            g[(a, b)] *= f;
+        }
+    }
+}
+
+/// `(Γ + Γᵀ)/2` on the leading `n × n` block (rounding keeps Γ symmetric).
+fn symmetrise_leading<const P: usize>(g: &mut SMatrix<f64, P, P>, n: usize) {
+    for b in 0..n {
+        for a in 0..=b {
+            let v = (g[(a, b)] + g[(b, a)]) * 0.5;
+            g[(a, b)] = v;
+            g[(b, a)] = v;
+        }
+    }
+}
+
 impl<M, const N: usize, const P: usize> ParametricEstimator<P> for CorrectedSmpe<M, N, P>
 where
     M: ParametricModel<N, P>,
@@ -153,7 +239,7 @@ where
         let theta0 = self.estimate.theta;
         let zdot = self.model.derivatives(s.t_s, &s.z_m, &s.u, &theta0)?;
         let sens = self.model.sensitivity(s.t_s, &s.z_m, &s.u, &theta0)?;
-        let cfg = &self.cfg;
+        let (cfg, n) = (&self.cfg, self.active);
         let lam = cfg.lambda_per_s;
         // Surface, exact for a held prediction error over dt.
         let decay = libm::exp(-lam * dt);
@@ -161,10 +247,10 @@ where
         let mut surface = self.surface;
         let mut gamma = self.gamma;
         if cfg.forgetting_per_s > 0.0 && dt > 0.0 {
-            gamma *= libm::exp(cfg.forgetting_per_s * dt);
-            let tr = gamma.trace();
+            scale_leading(&mut gamma, n, libm::exp(cfg.forgetting_per_s * dt));
+            let tr: f64 = (0..n).map(|a| gamma[(a, a)]).sum();
             if tr > self.gamma_trace0 {
-                gamma *= self.gamma_trace0 / tr;
+                scale_leading(&mut gamma, n, self.gamma_trace0 / tr);
             }
         }
         let mut theta = theta0;
@@ -181,17 +267,21 @@ where
             }
             let phi = sens.row(i).transpose();
             // Prediction error at the current (already partly updated) estimate.
-            let e = e0 + phi.dot(&(theta - theta0));
-            let gphi = gamma * phi;
-            let denom = 1.0 / weight + phi.dot(&gphi);
+            let e = e0 + dot_leading(&phi, &(theta - theta0), n);
+            let gphi = mul_leading(&gamma, &phi, n);
+            let denom = 1.0 / weight + dot_leading(&phi, &gphi, n);
             if !(denom.is_finite() && denom > 0.0) {
                 continue;
             }
             let k = gphi / denom;
             theta -= k * e;
-            gamma -= k * gphi.transpose();
+            for b in 0..n {
+                for a in 0..n {
+                    gamma[(a, b)] -= k[a] * gphi[b];
+                }
+            }
         }
-        gamma = (gamma + gamma.transpose()) * 0.5;
+        symmetrise_leading(&mut gamma, n);
         // Surface (tracking) term of the composite law, explicit Euler.
         if cfg.tracking_weight > 0.0 && dt > 0.0 {
             let mut phis = SVector::<f64, P>::zeros();
@@ -200,18 +290,20 @@ where
                     phis += sens.row(i).transpose() * (cfg.sliding[i] * surface[i]);
                 }
             }
-            theta -= gamma * phis * (cfg.tracking_weight * dt);
+            theta -= mul_leading(&gamma, &phis, n) * (cfg.tracking_weight * dt);
         }
         for j in 0..P {
             theta[j] = theta[j].clamp(cfg.params[j].lower, cfg.params[j].upper);
         }
-        if theta.iter().chain(gamma.iter()).chain(surface.iter()).any(|x| !x.is_finite()) {
+        let gamma_finite = (0..n).all(|b| (0..n).all(|a| gamma[(a, b)].is_finite()));
+        if !(gamma_finite && theta.iter().chain(surface.iter()).all(|x| x.is_finite())) {
             return Err(EstimatorError::Numerical { what: "corrected SMPE update", t_s: s.t_s });
         }
         self.gamma = gamma;
         self.surface = surface;
         self.last_t_s = Some(s.t_s);
-        self.estimate = Estimate::new(s.t_s, theta);
+        self.estimate.t_s = s.t_s;
+        self.estimate.theta = theta;
         Ok(&self.estimate)
     }
 

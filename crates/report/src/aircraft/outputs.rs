@@ -11,6 +11,8 @@ use aeroident_pipelines::aircraft::summary::{
 };
 use aeroident_pipelines::metrics;
 
+use crate::decimal::push_f64;
+
 /// Errors writing outputs. Each names the file.
 #[derive(Debug, thiserror::Error)]
 pub enum ReportError {
@@ -43,10 +45,6 @@ pub enum ReportError {
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> ReportError + '_ {
     move |source| ReportError::Io { path: path.display().to_string(), source }
-}
-
-fn cell(v: Option<f64>) -> String {
-    v.map_or(String::new(), |x| x.to_string())
 }
 
 /// Writes `timeseries.csv` into `w` (one row per sample; columns `t_s`, controls, wind,
@@ -96,44 +94,56 @@ pub fn write_timeseries_to(
     }
     writeln!(w, "{header}").map_err(io_err(path))?;
     let mut line = String::new();
+    let mut buf = ryu::Buffer::new();
     for k in 0..out.t_s.len() {
         line.clear();
-        let c = out.controls[k];
-        let wd = out.wind_ned_fps[k];
-        write!(
-            line,
-            "{},{},{},{},{},{},{},{}",
-            out.t_s[k], c[0], c[1], c[2], c[3], wd[0], wd[1], wd[2]
-        )
-        .ok();
-        for v in tracked(&out.reference[k]) {
-            write!(line, ",{v}").ok();
-        }
-        for r in &out.increments {
-            write!(line, ",{}", r.at(out.t_s[k])).ok();
-        }
-        for (ch, &ng) in out.channels.iter().zip(&ngroups) {
-            for l in &ch.params {
-                write!(line, ",{}", cell(l.estimate[k])).ok();
-                if ch.quantity == Quantity::Derivative {
-                    write!(line, ",{},{}", cell(l.sigma[k]), cell(l.truth[k])).ok();
-                }
-            }
-            if let Some(x) = ch.states.get(k) {
-                for v in tracked(x) {
-                    write!(line, ",{v}").ok();
-                }
-            }
-            for g in 0..ng {
-                match ch.diagnostics.get(k).and_then(|d| d.get(g)) {
-                    Some(d) => write!(line, ",{},{}", d.K, d.sdot).ok(),
-                    None => write!(line, ",,").ok(),
-                };
-            }
-        }
-        writeln!(w, "{line}").map_err(io_err(path))?;
+        timeseries_row(out, k, &ngroups, &mut buf, &mut line);
+        w.write_all(line.as_bytes()).map_err(io_err(path))?;
     }
     w.flush().map_err(io_err(path))
+}
+
+/// Row `k` of `timeseries.csv` (with its newline) appended to `line`, numbers as `{}` writes
+/// them ([`push_f64`]), an absent value as an empty cell.
+fn timeseries_row(
+    out: &RunOutput,
+    k: usize,
+    ngroups: &[usize],
+    buf: &mut ryu::Buffer,
+    line: &mut String,
+) {
+    push_f64(line, buf, out.t_s[k]);
+    let mut cell = |line: &mut String, v: Option<f64>| {
+        line.push(',');
+        if let Some(x) = v {
+            push_f64(line, buf, x);
+        }
+    };
+    let (c, wd) = (out.controls[k], out.wind_ned_fps[k]);
+    for x in c.into_iter().chain(wd).chain(tracked(&out.reference[k])) {
+        cell(line, Some(x));
+    }
+    for r in &out.increments {
+        cell(line, Some(r.at(out.t_s[k])));
+    }
+    for (ch, &ng) in out.channels.iter().zip(ngroups) {
+        for l in &ch.params {
+            cell(line, l.estimate[k]);
+            if ch.quantity == Quantity::Derivative {
+                cell(line, l.sigma[k]);
+                cell(line, l.truth[k]);
+            }
+        }
+        for v in ch.states.get(k).map(tracked).into_iter().flatten() {
+            cell(line, Some(v));
+        }
+        for g in 0..ng {
+            let d = ch.diagnostics.get(k).and_then(|d| d.get(g));
+            cell(line, d.map(|d| d.K));
+            cell(line, d.map(|d| d.sdot));
+        }
+    }
+    line.push('\n');
 }
 
 fn sec(v: Option<f64>) -> String {

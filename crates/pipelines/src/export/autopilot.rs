@@ -196,7 +196,9 @@ fn description(d: &Design, o: &AutopilotOptions) -> String {
     let throws: Vec<String> = d
         .inputs
         .iter()
-        .filter_map(|(s, _)| throw_of(o, *s).ok().map(|t| format!("{} {}°", s.name(), t.to_degrees())))
+        .filter_map(|(s, _)| {
+            throw_of(o, *s).ok().map(|t| format!("{} {}°", s.name(), t.to_degrees()))
+        })
         .collect();
     format!(
         "Design: {} rows at {} Hz ({} s), surfaces {}; full throws {} (SIGN -1, servo functions {}).",

@@ -8,7 +8,8 @@ use mlua::{Function, Lua, Table};
 use std::sync::OnceLock;
 
 /// Throws of the tests, degrees.
-const THROWS_DEG: [(Surface, f64); 3] = [(Surface::De, 25.0), (Surface::Da, 20.0), (Surface::Dr, 30.0)];
+const THROWS_DEG: [(Surface, f64); 3] =
+    [(Surface::De, 25.0), (Surface::Da, 20.0), (Surface::Dr, 30.0)];
 
 /// A three-surface F-16 design, 3 s at 25 Hz, 2° (computed once).
 fn three_surfaces() -> &'static Design {

@@ -291,6 +291,21 @@ fn exit_design_refuses_out_of_range_options() {
     expect(&["design", "--alt-ft", "1e6"], 1, &["--alt-ft", "1000000", "altitudes"]);
 }
 
+/// `design --throw-deg` refuses a design that moves a surface beyond its throw, naming the
+/// surface and the option; a malformed throw and `--arm-rc` without throws are refused too.
+#[test]
+fn exit_design_refuses_a_design_beyond_a_surface_throw() {
+    let args = ["design", "--surfaces", "da", "--duration-s", "4", "--throw-deg", "da=1.5"];
+    expect(&args, 1, &["--throw-deg da=1.5", "`da`", "beyond its throw"]);
+    expect(&["design", "--throw-deg", "dx=3"], 2, &[]);
+    expect(&["design", "--throw-deg", "de"], 2, &[]);
+    expect(
+        &["design", "--surfaces", "de", "--duration-s", "4", "--arm-rc", "7"],
+        1,
+        &["--arm-rc", "--throw-deg"],
+    );
+}
+
 /// A window starting before the record's time zero (`--window -10:5`) is a window, for every
 /// command that takes one; it once failed with "unexpected argument '-1'" (a negative number
 /// is a value, but `-10:5` is not a number).

@@ -6,14 +6,22 @@
 //!                  [--band-hz 0.1,1.5] [--alt-ft 20000 --vt-fps 675 --xcg 0.35]
 //!                  [--turbulence light|moderate|severe]
 //!                  [--signal multisine|chirp [--sweep logarithmic|linear] [--fade-s 1]] --out DIR
+//!                  [--throw-deg de=25,da=20,dr=25 [--arm-rc 7]]
 //! ```
 //! Writes `DIR/input.csv` (t_s, per surface rad and deg), `DIR/injection.csv` (the autopilot
 //! table: t_ms and per surface the offset from trim in centidegrees) and `DIR/design.json`
-//! (harmonics, condition, predicted σ), and prints σ, σ/|θ| and the response excursions.
+//! (harmonics, condition, predicted σ), and prints σ, σ/|θ| and the response excursions. With
+//! `--throw-deg`, also the autopilot forms of the table: `DIR/ardupilot_sysid.lua` (an
+//! ArduPlane script) and `DIR/px4_torque.csv` (normalised torque offsets for a PX4 offboard
+//! node), both made and checked against the throws by
+//! `aeroident_pipelines::export::autopilot`.
 
 use crate::outdir::OutputDir;
+use aeroident_pipelines::export::autopilot::{
+    AutopilotOptions, Start, ardupilot_lua, px4_torque_table,
+};
 use aeroident_pipelines::export::design::{
-    Design, DesignSpec, Surface, Waveform, csv_table, design, large_excursions,
+    Design, DesignSpec, Surface, Waveform, csv_table, design, injection_table, large_excursions,
 };
 use aeroident_signals::inputs::SweepLaw;
 use aeroident_signals::turbulence::TurbulenceSeverity;
@@ -83,6 +91,27 @@ pub struct DesignArgs {
     /// Model-file aircraft: trim altitude, m.
     #[arg(long, allow_negative_numbers = true)]
     pub alt_m: Option<f64>,
+    /// Full throw of each designed surface, degrees (the deflection at a full servo command):
+    /// `de=25,da=20,dr=25`. With it, also writes the autopilot forms (`ardupilot_sysid.lua`,
+    /// `px4_torque.csv`), refusing a design that moves a surface beyond its throw.
+    #[arg(long, value_delimiter = ',', value_parser = parse_throw, allow_negative_numbers = true)]
+    pub throw_deg: Vec<(Surface, f64)>,
+    /// RC input channel (1–16) whose switch starts (high) and stops (low) the ArduPlane
+    /// script; default: the parameter `SCR_USER1` (1 starts, 0 stops).
+    #[arg(long)]
+    pub arm_rc: Option<u8>,
+}
+
+/// One `--throw-deg` entry, `<surface>=<degrees>`.
+fn parse_throw(text: &str) -> Result<(Surface, f64), String> {
+    use aeroident_pipelines::Named as _;
+    let (name, deg) = text
+        .split_once('=')
+        .ok_or_else(|| format!("`{text}`: give <surface>=<degrees>, e.g. de=25"))?;
+    let s = Surface::from_name(name.trim())
+        .ok_or_else(|| format!("`{name}`: not a surface (de, da, dr)"))?;
+    let deg = deg.trim().parse::<f64>().map_err(|e| format!("`{deg}`: {e}"))?;
+    Ok((s, deg))
 }
 
 /// `--signal` values.
@@ -182,17 +211,39 @@ pub fn execute(a: DesignArgs) -> anyhow::Result<()> {
             large.join(", ")
         );
     }
+    let forms = autopilot_forms(&a, &d)?;
     if let Some(o) = out.as_mut() {
         o.write_bytes("input.csv", csv_table(&d).as_bytes())?;
         o.write_bytes("injection.csv", injection_table(&d).as_bytes())?;
         o.write_bytes("design.json", serde_json::to_string_pretty(&json(&a, &d))?.as_bytes())?;
+        let mut names = vec!["input.csv", "injection.csv", "design.json"];
+        for (name, text) in &forms {
+            o.write_bytes(name, text.as_bytes())?;
+            names.push(name);
+        }
         o.finish();
-        aeroident_report::note!(
-            "wrote input.csv, injection.csv, design.json to {}",
-            o.path().display()
-        );
+        aeroident_report::note!("wrote {} to {}", names.join(", "), o.path().display());
     }
     Ok(())
+}
+
+/// The autopilot forms (file name, text) when `--throw-deg` is given, made and checked by the
+/// library; none without it.
+fn autopilot_forms(a: &DesignArgs, d: &Design) -> anyhow::Result<Vec<(&'static str, String)>> {
+    if a.throw_deg.is_empty() {
+        if a.arm_rc.is_some() {
+            anyhow::bail!("--arm-rc: give --throw-deg too (the script needs the surfaces' throws)");
+        }
+        return Ok(Vec::new());
+    }
+    let o = AutopilotOptions {
+        throws: a.throw_deg.iter().map(|(s, deg)| (*s, deg.to_radians())).collect(),
+        start: a.arm_rc.map_or(Start::ScrUser1, Start::RcChannel),
+    };
+    Ok(vec![
+        ("ardupilot_sysid.lua", ardupilot_lua(d, &o)?),
+        ("px4_torque.csv", px4_torque_table(d, &o)?),
+    ])
 }
 
 /// The design for a model-file aircraft (`--aircraft MODEL.toml`): its options checked, the
@@ -216,25 +267,6 @@ fn condition_text(a: &DesignArgs) -> String {
         (m, Some(v), Some(h)) => format!("{m} trimmed wings level at {h} m, {v} m/s"),
         (m, ..) => m.to_string(),
     }
-}
-
-/// The autopilot injection table: `t_ms` (integer ms from the start of the manoeuvre) and, per
-/// surface, `<s>_cdeg`: the offset from the trim deflection in centidegrees (rounded), sign
-/// convention of the surface (docs/export.md).
-pub fn injection_table(d: &Design) -> String {
-    let mut out = String::from("t_ms");
-    for (s, _) in &d.inputs {
-        out.push_str(&format!(",{}_cdeg", s.name()));
-    }
-    out.push('\n');
-    for (k, t) in d.t_s.iter().enumerate() {
-        out.push_str(&format!("{}", (t * 1000.0).round() as i64));
-        for (_, v) in &d.inputs {
-            out.push_str(&format!(",{}", (v[k].to_degrees() * 100.0).round() as i64));
-        }
-        out.push('\n');
-    }
-    out
 }
 
 fn report(a: &DesignArgs, d: &Design) -> String {
@@ -394,6 +426,8 @@ mod tests {
             map: None,
             vt_mps: None,
             alt_m: None,
+            throw_deg: Vec::new(),
+            arm_rc: None,
         };
         execute(args).unwrap();
         let input = std::fs::read_to_string(dir.join("input.csv")).unwrap();
@@ -420,6 +454,41 @@ mod tests {
         assert_eq!(params.len(), six);
         let cm_q = params.iter().find(|p| p["name"] == "Cm_q").unwrap();
         assert!(cm_q["crb_sigma"].as_f64().unwrap() > 0.0);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// With `--throw-deg`, the autopilot forms are written beside the tables: the script holds
+    /// the injection table's centidegrees per surface, the PX4 table one row per sample.
+    #[test]
+    fn writes_the_autopilot_forms_with_throws() {
+        use clap::Parser;
+        #[derive(clap::Parser)]
+        struct Wrap {
+            #[command(flatten)]
+            args: DesignArgs,
+        }
+        let dir = std::env::temp_dir().join(format!("aeroident-design-ap-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let argv = ["design", "--surfaces", "de", "--duration-s", "4", "--rate-hz", "20"];
+        let mut args = Wrap::try_parse_from(argv.iter().copied().chain([
+            "--throw-deg",
+            "de=20,dr=30",
+            "--arm-rc",
+            "8",
+        ]))
+        .unwrap()
+        .args;
+        args.out = Some(dir.clone());
+        execute(args).unwrap();
+        let inj = std::fs::read_to_string(dir.join("injection.csv")).unwrap();
+        let column: Vec<&str> = inj.lines().skip(1).map(|l| l.split(',').nth(1).unwrap()).collect();
+        let lua = std::fs::read_to_string(dir.join("ardupilot_sysid.lua")).unwrap();
+        let table = lua.split("offsets_cdeg = {").nth(1).unwrap().split('}').next().unwrap();
+        let embedded: Vec<&str> = table.split(',').map(str::trim).collect();
+        assert_eq!(embedded, column);
+        assert!(lua.contains("local ARM_RC = 8"));
+        let px4 = std::fs::read_to_string(dir.join("px4_torque.csv")).unwrap();
+        assert_eq!(px4.lines().count(), 1 + column.len());
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -517,6 +517,30 @@ pub fn csv_table(d: &Design) -> String {
     out
 }
 
+/// A deflection in integer centidegrees (rounded): the unit of the injection table.
+pub fn centidegrees(rad: f64) -> i64 {
+    (rad.to_degrees() * 100.0).round() as i64
+}
+
+/// The autopilot injection table: `t_ms` (integer ms from the start of the manoeuvre) and, per
+/// surface, `<s>_cdeg`: the offset from the trim deflection in integer centidegrees
+/// ([`centidegrees`]), in aeroident's sign convention ([`Surface`]).
+pub fn injection_table(d: &Design) -> String {
+    let mut out = String::from("t_ms");
+    for (s, _) in &d.inputs {
+        out.push_str(&format!(",{}_cdeg", s.name()));
+    }
+    out.push('\n');
+    for (k, t) in d.t_s.iter().enumerate() {
+        out.push_str(&format!("{}", (t * 1000.0).round() as i64));
+        for (_, v) in &d.inputs {
+            out.push_str(&format!(",{}", centidegrees(v[k])));
+        }
+        out.push('\n');
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -122,7 +122,7 @@ where
     /// parameter vector), so they never move and their rows and columns of Γ stay diagonal.
     /// The update then costs `O(n²)` instead of `O(P²)` with the same numbers for the leading
     /// `n`: every skipped term is an exact zero, and the sums keep nalgebra's order
-    /// ([`dot_leading`]). The trailing gains are not forgotten (they are never used).
+    /// (`dot_leading`). The trailing gains are not forgotten (they are never used).
     pub fn with_active(mut self, n: usize) -> Self {
         self.active = n.min(P);
         self

@@ -247,7 +247,7 @@ fn vector<const N: usize>(state: &[f64]) -> Result<SVector<f64, N>> {
     Ok(SVector::from_column_slice(state))
 }
 
-fn plain_trim<const N: usize>(t: &aeroident_models::aircraft::AircraftTrim<N>) -> Trim {
+pub(crate) fn plain_trim<const N: usize>(t: &aeroident_models::aircraft::AircraftTrim<N>) -> Trim {
     Trim {
         state: t.state.iter().copied().collect(),
         controls: core::array::from_fn(|i| t.controls[i]),

@@ -24,7 +24,7 @@
 //! elevator, aileron, rudder, rad. Still air; no rotor momentum, no engine lag.
 
 mod files;
-mod handle;
+pub(crate) mod handle;
 #[cfg(test)]
 pub(crate) mod tests;
 mod trim;

@@ -167,11 +167,7 @@ pub fn run(
             u = u1;
         }
     }
-    let trim = Trim {
-        state: t0.state.iter().copied().collect(),
-        controls: core::array::from_fn(|i| t0.controls[i]),
-        max_abs_residual: t0.max_abs_residual,
-    };
+    let trim = crate::airframe::handle::plain_trim(&t0);
     let engine_column = engine_column(aircraft);
     Ok(AircraftSimRun { aircraft: aircraft.name(), columns, data, trim, engine_column })
 }

@@ -31,6 +31,9 @@ pub enum WarningKind {
     /// A surface channel whose timing disagrees with the response it drives (a commanded
     /// surface, or a channel recorded early or late).
     InputTiming,
+    /// A force or moment the record does not give (thrust unmapped) that can be inside the
+    /// measured coefficient.
+    UnmodelledForce,
 }
 
 impl WarningKind {
@@ -47,7 +50,8 @@ impl WarningKind {
 pub struct Warning {
     /// What it is about.
     pub kind: WarningKind,
-    /// The vocabulary name of the parameter it is about (`Cm_alpha`), if one.
+    /// The vocabulary name of the parameter it is about (`Cm_alpha`), or of the coefficient
+    /// (`Cm`: every parameter of it), if one.
     pub parameter: Option<String>,
     /// The text a user reads.
     pub text: String,
@@ -59,7 +63,8 @@ impl Warning {
         Self { kind, parameter: None, text: text.into() }
     }
 
-    /// The same warning, about `parameter`.
+    /// The same warning, about `parameter` (`Cm_alpha`), or about every parameter of a
+    /// coefficient when given the coefficient's name (`Cm`).
     pub fn about(mut self, parameter: impl Into<String>) -> Self {
         self.parameter = Some(parameter.into());
         self
@@ -125,11 +130,16 @@ impl Warnings {
         self.0.iter().map(|w| w.text.as_str())
     }
 
-    /// The texts of the warnings about `parameter`, in order (a parameter's `flags`).
+    /// The texts of the warnings about `parameter` or its coefficient (`Cm` for `Cm_alpha`),
+    /// in order (a parameter's `flags`).
     pub fn about(&self, parameter: &str) -> Vec<String> {
+        let coefficient = parameter.split_once('_').map(|(c, _)| c);
         self.0
             .iter()
-            .filter(|w| w.parameter.as_deref() == Some(parameter))
+            .filter(|w| {
+                let subject = w.parameter.as_deref();
+                subject == Some(parameter) || (subject.is_some() && subject == coefficient)
+            })
             .map(|w| w.text.clone())
             .collect()
     }
@@ -182,6 +192,12 @@ mod tests {
         assert_eq!(w[1].parameter.as_deref(), Some("Cm_alpha"));
         assert_eq!(w.about("Cm_alpha"), [w[1].text.clone()]);
         assert!(w.about("Cm_q").is_empty());
+        // About a coefficient: each of its parameters, not another coefficient's.
+        w.push(Warning::new(WarningKind::UnmodelledForce, "thrust …").about("Cm"));
+        assert_eq!(w.about("Cm_q"), ["thrust …"]);
+        assert_eq!(w.about("Cm_alpha").len(), 2);
+        assert!(w.about("CL_q").is_empty() && w.about("Cmx").is_empty());
+        w.0.pop();
         let diagnostic: Vec<&str> =
             w.iter().filter(|w| w.kind.is_diagnostic()).map(|w| &w.text[..]).collect();
         assert_eq!(diagnostic, ["Cm_alpha = +0.3 …"]);

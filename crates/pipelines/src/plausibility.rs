@@ -12,7 +12,9 @@
 //!   relative-σ precision check cannot see: a constant term (`CL_0`), exempt from it because
 //!   its value may be near 0, with σ 22 on a lift coefficient;
 //! - drag and axial-force terms (`CD_*`, `CX_*`) of a record without thrust: withdrawn
-//!   (`null`, not identified), since they are then drag minus thrust ([`without_thrust`]).
+//!   (`null`, not identified), since they are then drag minus thrust ([`without_thrust`]);
+//! - pitching-moment terms (`Cm_*`) of a record without thrust whose speed or throttle
+//!   varied: flagged, since they may carry the engine's moment ([`unmapped_thrust_moment`]).
 
 use aeroident_estimators::{Coefficient, Param, Term};
 use aeroident_io::{Channel, Mapping, ModelSpec, ParameterResult};
@@ -86,6 +88,56 @@ fn likely_cause(p: Param) -> &'static str {
 /// without it the measured drag and axial force are drag minus thrust.
 pub fn thrust_mapped(mapping: &Mapping) -> bool {
     mapping.channels.contains_key(&Channel::Thrust) || mapping.thrust_model.is_some()
+}
+
+/// The change of airspeed (peak to peak over its mid value) or of throttle (of its 0–1
+/// travel) over the estimated samples beyond which an unmapped engine's moment can move the
+/// `Cm` terms by the accuracy a derivative is wanted to
+/// ([`crate::replay::precision::RELATIVE_SIGMA_LIMIT`], 10 %): a propeller's thrust at a held
+/// throttle goes about as 1/V (constant power), so a 10 % change of speed moves it, and any
+/// moment it has about the CG, by about 10 %.
+pub const THRUST_VARIATION_LIMIT: f64 = 0.10;
+
+/// A warning about every `Cm` parameter of `structure` when `mapping` gives neither thrust
+/// ([`thrust_mapped`]) nor its pitching moment (`thrust_moment`) and the record shows the
+/// thrust can have changed: `airspeed_mps` or `throttle`, each the `(smallest, largest)`
+/// value of the estimated samples, varied beyond [`THRUST_VARIATION_LIMIT`]. The engine's
+/// moment about the CG (a thrust line off the CG, the propeller's normal force) is then part
+/// of the measured pitching moment and follows the flight condition, and every method fits
+/// it into the airframe's terms alike, so no cross-check can see it (a JSBSim Cessna 172
+/// whose speed varied 27 %: Cm_q 13 % off in oe, the EKF and least squares together). `None`
+/// otherwise: with the speed held, the engine's moment is about constant and `Cm_0` takes it.
+pub fn unmapped_thrust_moment(
+    structure: &aeroident_estimators::ModelStructure,
+    mapping: &Mapping,
+    airspeed_mps: Option<(f64, f64)>,
+    throttle: Option<(f64, f64)>,
+) -> Option<aeroident_io::warning::Warning> {
+    let moment_given =
+        thrust_mapped(mapping) || mapping.channels.contains_key(&Channel::ThrustMoment);
+    let has_cm = structure.params().any(|p| p.coefficient == Coefficient::Cm);
+    if moment_given || !has_cm {
+        return None;
+    }
+    let speed = airspeed_mps
+        .map(|(lo, hi)| (hi - lo) / (0.5 * (hi + lo)))
+        .filter(|v| *v > THRUST_VARIATION_LIMIT)
+        .map(|v| format!("the airspeed varied {:.0} % over the record", 100.0 * v));
+    let lever = throttle
+        .map(|(lo, hi)| hi - lo)
+        .filter(|v| *v > THRUST_VARIATION_LIMIT)
+        .map(|v| format!("the throttle moved {:.0} % of its travel", 100.0 * v));
+    let why = [speed, lever].into_iter().flatten().collect::<Vec<_>>().join(" and ");
+    (!why.is_empty()).then(|| {
+        let text = format!(
+            "thrust is not mapped and {why}: the pitching moment then includes the engine's (a thrust line off the CG, the propeller's normal force), which every method fits into the Cm terms alike (map `thrust` and `thrust_moment`, or `[thrust_model]`: docs/mapping.md)"
+        );
+        aeroident_io::warning::Warning::new(
+            aeroident_io::warning::WarningKind::UnmodelledForce,
+            text,
+        )
+        .about("Cm")
+    })
 }
 
 /// Withdraws `r` (a drag or axial-force term, `CD_*` or `CX_*`) when the record has no thrust
@@ -191,5 +243,40 @@ mod tests {
         let mut cd = ParameterResult::new("CD_0", Some(0.03), Some(0.01), None, None);
         check(&model(), true, std::iter::once(&mut cd));
         assert_eq!((cd.estimate, cd.flags.len()), (Some(0.03), 0));
+    }
+
+    /// Without thrust, a 27 % speed change (the JSBSim Cessna 172 multisine record) or a
+    /// throttle moved 15 % of its travel flags every `Cm` term, through a warning about the
+    /// coefficient; 4 % (its 3-2-1-1 record) does not, nor any change with `thrust` or
+    /// `thrust_moment` mapped, nor a structure without `Cm`.
+    #[test]
+    fn cm_terms_without_thrust_are_flagged_when_the_speed_or_throttle_varied() {
+        use aeroident_estimators::ModelStructure;
+        let base = "[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"V\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nrho = { value = 1.0, unit = \"kg/m3\" }\nmass = { value = 1000.0, unit = \"kg\" }\nS = { value = 10.0, unit = \"m2\" }\n";
+        let no_thrust = Mapping::from_toml_str(base, "m.toml").unwrap();
+        let lon = ModelStructure::preset("longitudinal").unwrap();
+        let w = unmapped_thrust_moment(&lon, &no_thrust, Some((48.7, 63.3)), None).unwrap();
+        assert!(w.text.contains("airspeed varied 26 %") && w.text.contains("`thrust_moment`"));
+        let mut ws = aeroident_io::warning::Warnings::new();
+        ws.push(w);
+        assert_eq!(
+            (ws.about("Cm_q").len(), ws.about("Cm_0").len(), ws.about("CL_alpha").len()),
+            (1, 1, 0)
+        );
+        assert!(unmapped_thrust_moment(&lon, &no_thrust, Some((57.9, 60.3)), None).is_none());
+        let w = unmapped_thrust_moment(&lon, &no_thrust, Some((57.9, 60.3)), Some((0.5, 0.65)));
+        assert!(w.unwrap().text.contains("throttle moved 15 %"));
+        for channel in [
+            "thrust = { column = \"T\", unit = \"N\" }",
+            "thrust_moment = { column = \"M\", unit = \"N*m\" }",
+        ] {
+            let m = Mapping::from_toml_str(&format!("{base}{channel}\n"), "m.toml").unwrap();
+            assert!(
+                unmapped_thrust_moment(&lon, &m, Some((48.7, 63.3)), None).is_none(),
+                "{channel}"
+            );
+        }
+        let lat = ModelStructure::preset("lateral").unwrap();
+        assert!(unmapped_thrust_moment(&lat, &no_thrust, Some((48.7, 63.3)), None).is_none());
     }
 }

@@ -15,9 +15,10 @@ use aeroident_estimators::{AirDataSample, ModelStructure, Param, Term};
 use aeroident_io::warning::{Warning, WarningKind};
 use aeroident_io::{Mapping, ModelSpec};
 
-/// The sample fields the regressors read, besides `V` (which every normalised rate reads and
-/// the `V` term itself).
-const FIELDS: [&str; 10] = [
+/// The sample fields the regressors read (`vt_mps`: every normalised rate and the `V` term),
+/// and the throttle, which no term reads but whose travel says whether the thrust changed
+/// ([`crate::plausibility::unmapped_thrust_moment`]).
+const FIELDS: [&str; 11] = [
     "alpha_rad",
     "beta_rad",
     "p_rad_s",
@@ -28,6 +29,7 @@ const FIELDS: [&str; 10] = [
     "da_rad",
     "dr_rad",
     "vt_mps",
+    "throttle",
 ];
 
 /// Whether term `t`'s regressor varies with the sample field `name` ([`Term::inputs`]: a
@@ -59,6 +61,14 @@ impl Spread {
         }
     }
 
+    /// The `(smallest, largest)` value of sample field `name` (one of `FIELDS`) over the
+    /// samples pushed; `None` when none held it.
+    fn range(&self, name: &str) -> Option<(f64, f64)> {
+        let i = FIELDS.iter().position(|f| *f == name)?;
+        let (lo, hi, n) = self.ranges[i];
+        (n > 0).then_some((lo, hi))
+    }
+
     /// The sample fields that held one value in every sample (at least 2).
     fn constant_fields(&self) -> impl Iterator<Item = (&'static str, f64, usize)> + '_ {
         FIELDS
@@ -86,6 +96,8 @@ impl Spread {
     /// Also one warning per α knot of `structure` outside the α range seen (a recursive replay
     /// cannot refuse such a knot before it has read the record, as the batch fits do): the
     /// spline term is then zero throughout, or `α − k`, which the constant and `alpha` span.
+    /// And the warning about the `Cm` terms of a record without thrust whose speed or
+    /// throttle varied ([`crate::plausibility::unmapped_thrust_moment`]).
     pub fn warnings(&self, structure: &ModelStructure, mapping: &Mapping) -> Vec<Warning> {
         let (lo, hi, n) = self.ranges[0];
         let knots = structure.knots().as_slice().iter().enumerate();
@@ -115,6 +127,12 @@ impl Spread {
                     Warning::new(WarningKind::ConstantChannel, text)
                 })
         }));
+        out.extend(crate::plausibility::unmapped_thrust_moment(
+            structure,
+            mapping,
+            self.range("vt_mps"),
+            self.range("throttle"),
+        ));
         out
     }
 }

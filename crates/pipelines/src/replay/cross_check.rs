@@ -20,7 +20,10 @@
 //!   nearer the output-error methods' (`oe`, `fem`, `ekf`, whose regressors are simulated, not
 //!   measured): the least-squares estimate is biased. Where it lies further from them, the
 //!   instruments are (noise correlated over more than their delay, or a time skew) and the
-//!   instrumental-variables estimate is set aside instead;
+//!   instrumental-variables estimate is set aside instead. Once that is shown on one term
+//!   of an equation (`Cl_β`), the other least-squares terms of the same equation share the
+//!   bias: each is set aside where instrumental variables move it by more than
+//!   [`AGREE_RELATIVE`] towards the output-error methods, whatever the σ;
 //! - **the EKF's noise model**: the EKF disagrees with `oe` while `fem`, which estimates the
 //!   process noise, agrees with `oe`: process noise does not move the answer, the EKF's
 //!   assumed noise does;
@@ -147,8 +150,16 @@ pub struct CrossCheck {
 
 /// The panel's verdict on every parameter of `own` (the run's method) against `others`.
 pub fn judge(own: &MethodEstimates, others: &[MethodEstimates]) -> CrossCheck {
-    let parameters: Vec<Agreement> =
-        own.estimates.iter().map(|(name, ..)| agreement(own, others, name)).collect();
+    let first: Vec<Agreement> =
+        own.estimates.iter().map(|(name, ..)| agreement(own, others, name, None)).collect();
+    let noisy = noisy_equations(&first);
+    let parameters: Vec<Agreement> = first
+        .into_iter()
+        .map(|a| match shared_bias(&a, &noisy) {
+            Some(cause) => agreement(own, others, &a.parameter, Some(cause)),
+            None => a,
+        })
+        .collect();
     let mut methods = vec![own.clone()];
     methods.extend(others.iter().cloned());
     CrossCheck {
@@ -161,10 +172,17 @@ pub fn judge(own: &MethodEstimates, others: &[MethodEstimates]) -> CrossCheck {
 }
 
 /// The panel on `name` (module doc).
-fn agreement(own: &MethodEstimates, others: &[MethodEstimates], name: &str) -> Agreement {
+/// `extra` is a cause found on the equation rather than on this parameter ([`shared_bias`]).
+fn agreement(
+    own: &MethodEstimates,
+    others: &[MethodEstimates],
+    name: &str,
+    extra: Option<SetAside>,
+) -> Agreement {
     let estimates: Vec<Estimate> =
         std::iter::once(own).chain(others).filter_map(|m| m.get(name)).collect();
-    let set_aside = tested_causes(&estimates);
+    let mut set_aside = tested_causes(&estimates);
+    set_aside.extend(extra);
     let kept = |e: &&Estimate| !set_aside.iter().any(|s| s.method == e.method);
     let left: Vec<&Estimate> = estimates.iter().filter(kept).collect();
     let camps = camps(&left);
@@ -207,12 +225,8 @@ fn tested_causes(estimates: &[Estimate]) -> Vec<SetAside> {
         out.push(SetAside { method: method.into(), cause });
     };
     if let Some(iv) = by("rls-iv") {
-        // The output-error family's mean, which noise on the measured states does not bias.
-        let others: Vec<f64> =
-            ["oe", "fem", "ekf"].iter().filter_map(|m| by(m)).map(|e| e.estimate).collect();
-        let reference =
-            (!others.is_empty()).then(|| others.iter().sum::<f64>() / others.len() as f64);
-        for ls in ["rls", "ftr"].iter().filter_map(|m| by(m)) {
+        let reference = output_error_mean(estimates);
+        for ls in LEAST_SQUARES.iter().filter_map(|m| by(m)) {
             if ls.agrees(iv) {
                 continue;
             }
@@ -227,7 +241,7 @@ fn tested_causes(estimates: &[Estimate]) -> Vec<SetAside> {
                 }
                 _ => {
                     let cause = format!(
-                        "regressor noise: instrumental variables move {} to {}",
+                        "{REGRESSOR_NOISE}: instrumental variables move {} to {}",
                         short(ls),
                         short(iv)
                     );
@@ -254,6 +268,72 @@ fn tested_causes(estimates: &[Estimate]) -> Vec<SetAside> {
         }
     }
     out
+}
+
+/// The least-squares methods, which noise on the measured regressors biases.
+const LEAST_SQUARES: [&str; 2] = ["rls", "ftr"];
+
+/// How a regressor-noise cause begins (the panel reads its own causes back by it).
+const REGRESSOR_NOISE: &str = "regressor noise";
+
+/// The output-error family's mean (`oe`, `fem`, `ekf`), which noise on the measured states
+/// does not bias; `None` when none of them gives the parameter.
+fn output_error_mean(estimates: &[Estimate]) -> Option<f64> {
+    let values: Vec<f64> = estimates
+        .iter()
+        .filter(|e| ["oe", "fem", "ekf"].contains(&e.method.as_str()))
+        .map(|e| e.estimate)
+        .collect();
+    (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
+}
+
+/// The coefficient a parameter belongs to (`Cl` of `Cl_p`): one least-squares equation.
+fn coefficient(parameter: &str) -> &str {
+    parameter.split('_').next().unwrap_or(parameter)
+}
+
+/// `(coefficient, least-squares method, parameter it was shown on)` for every equation in
+/// which the panel set a least-squares estimate aside for regressor noise.
+fn noisy_equations(first: &[Agreement]) -> Vec<(String, String, String)> {
+    let mut out: Vec<(String, String, String)> = Vec::new();
+    for a in first {
+        for s in a.set_aside.iter().filter(|s| s.cause.starts_with(REGRESSOR_NOISE)) {
+            let c = coefficient(&a.parameter).to_string();
+            if !out.iter().any(|(oc, om, _)| *oc == c && *om == s.method) {
+                out.push((c, s.method.clone(), a.parameter.clone()));
+            }
+        }
+    }
+    out
+}
+
+/// Noise on one regressor biases every term of its least-squares equation that correlates
+/// with it, not only its own (Klein & Morelli 2006 §5.1). Once the panel has shown the bias in
+/// an equation, the σ test is no longer the question for the other terms: the bias exists, and
+/// what matters is whether it is large enough to act on. A least-squares estimate of another
+/// term of that equation is set aside when instrumental variables move it by more than
+/// [`AGREE_RELATIVE`] and towards the output-error methods. `None` when that does not hold or
+/// the estimate is set aside already.
+fn shared_bias(a: &Agreement, noisy: &[(String, String, String)]) -> Option<SetAside> {
+    let by = |m: &str| a.estimates.iter().find(|e| e.method == m);
+    let iv = by("rls-iv")?;
+    let reference = output_error_mean(&a.estimates)?;
+    noisy.iter().find_map(|(c, method, shown_on)| {
+        let ls = by(method)?;
+        let already = a.set_aside.iter().any(|s| s.method == *method);
+        let moved = (iv.estimate - ls.estimate).abs()
+            > AGREE_RELATIVE * iv.estimate.abs().max(ls.estimate.abs());
+        let towards = (iv.estimate - reference).abs() < (ls.estimate - reference).abs();
+        (coefficient(&a.parameter) == c && !already && moved && towards).then(|| SetAside {
+            method: method.clone(),
+            cause: format!(
+                "{REGRESSOR_NOISE} in the {c} equation (shown on {shown_on}): instrumental variables move {} to {}, more than {:.0} % and towards the output-error methods' {reference:.4}",
+                short(ls),
+                short(iv),
+                100.0 * AGREE_RELATIVE
+            ),
+        })
+    })
 }
 
 /// The estimates grouped into camps of mutual agreement, ascending (each joins the current

@@ -61,9 +61,10 @@ impl Record {
         let dir = std::env::temp_dir()
             .join(format!("aeroident-compat-ahrs-lag-{stride}-{}-{k}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let mut csv = sim.columns.join(",") + "\n";
-        for k in (0..sim.data[0].len()).step_by(stride) {
-            let row: Vec<String> = sim.data.iter().map(|c| format!("{:.10e}", c[k])).collect();
+        let mut csv = sim.table.columns.join(",") + "\n";
+        for k in (0..sim.table.data[0].len()).step_by(stride) {
+            let row: Vec<String> =
+                sim.table.data.iter().map(|c| format!("{:.10e}", c[k])).collect();
             let _ = writeln!(csv, "{}", row.join(","));
         }
         let csv_path = dir.join("timeseries.csv");

@@ -58,10 +58,11 @@ impl Record {
         let dir = std::env::temp_dir()
             .join(format!("aeroident-compat-gyro-{scenario}-{stride}-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let rows: Vec<usize> = (0..sim.data[0].len()).step_by(stride).collect();
-        let mut csv = sim.columns.join(",") + "\n";
+        let rows: Vec<usize> = (0..sim.table.data[0].len()).step_by(stride).collect();
+        let mut csv = sim.table.columns.join(",") + "\n";
         for &k in &rows {
-            let row: Vec<String> = sim.data.iter().map(|c| format!("{:.10e}", c[k])).collect();
+            let row: Vec<String> =
+                sim.table.data.iter().map(|c| format!("{:.10e}", c[k])).collect();
             let _ = writeln!(csv, "{}", row.join(","));
         }
         let csv_path = dir.join("timeseries.csv");
@@ -76,8 +77,8 @@ impl Record {
         }
         let map = dir.join("measured.toml");
         std::fs::write(&map, text).unwrap();
-        let q = sim.columns.iter().position(|c| c == "q_rad_s").unwrap();
-        let q_true = rows.iter().map(|&k| sim.data[q][k]).collect();
+        let q = sim.table.columns.iter().position(|c| c == "q_rad_s").unwrap();
+        let q_true = rows.iter().map(|&k| sim.table.data[q][k]).collect();
         Self { dir, csv: csv_path.display().to_string(), map, q_true }
     }
 

@@ -38,7 +38,7 @@ fn val_f16_sim_output_replays_with_the_shipped_mapping_to_the_true_derivatives()
     };
     let out = replay(reader, &mapping, &opts, &mut ()).unwrap();
     assert_eq!(out.summary.samples_rejected, 0);
-    assert_eq!(out.summary.samples_read, sim.data[0].len());
+    assert_eq!(out.summary.samples_read, sim.table.data[0].len());
     assert!(out.differentiated.is_empty(), "the sim writes ṗ, q̇, ṙ, α̇: nothing differentiated");
 
     let f16 = F16::new(sc.aircraft.as_ref().unwrap().xcg).unwrap();

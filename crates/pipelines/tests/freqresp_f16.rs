@@ -28,10 +28,10 @@ fn simulate(name: &str) -> SimRun {
 }
 
 fn csv(run: &SimRun) -> String {
-    let mut t = run.columns.join(",");
+    let mut t = run.table.columns.join(",");
     t.push('\n');
-    for k in 0..run.data[0].len() {
-        let row: Vec<String> = run.data.iter().map(|c| format!("{:.12e}", c[k])).collect();
+    for k in 0..run.table.data[0].len() {
+        let row: Vec<String> = run.table.data.iter().map(|c| format!("{:.12e}", c[k])).collect();
         t.push_str(&row.join(","));
         t.push('\n');
     }
@@ -241,15 +241,15 @@ fn q_de_above_the_short_period_follows_the_dynamic_pressure_the_flight_holds() {
     let a = DMatrix::from_fn(N_STATES, N_STATES, |i, j| Complex64::new(lin.a[(i, j)], 0.0));
     let b: Vec<f64> = (0..N_STATES).map(|i| lin.b[(i, 1)]).collect();
     let h = |w: f64| analytic(&a, &b, Q, w);
-    let (dt, de) = (sc.run.dt_s, sim.column("elevator_rad").unwrap());
-    let flown = deviations(de, sim.column("q_rad_s").unwrap(), dt, h);
+    let (dt, de) = (sc.run.dt_s, sim.table.column("elevator_rad").unwrap());
+    let flown = deviations(de, sim.table.column("q_rad_s").unwrap(), dt, h);
     let y_lin = linear_truth(&lin, de, sim.trim.controls.elevator_rad, 1, Q, dt);
     let exact = deviations(de, &y_lin, dt, h);
     let Input::Sweep(sweep) = sc.input[0].input.build_in(&root()).unwrap() else {
         panic!("chirp_elevator's input is a sweep")
     };
-    let t = sim.column("t_s").unwrap();
-    let qbar = sim.column("qbar_psf").unwrap();
+    let t = sim.table.column("t_s").unwrap();
+    let qbar = sim.table.column("qbar_psf").unwrap();
     let mut largest = 0.0f64;
     for (f, e) in flown.iter().zip(&exact).filter(|(f, _)| (3.0..=10.0).contains(&f[0])) {
         // The first sample at which the sweep has reached ω.
@@ -298,9 +298,9 @@ fn resolution_cause(h: &impl Fn(f64) -> Complex64, w: f64, t_w: f64) -> bool {
 /// averaged over `half` steps either side (the chirp's own oscillation averages out, the
 /// drift from trim stays).
 fn local_linearisation(run: &SimRun, k: usize, half: usize) -> Linearization<N_STATES, 4> {
-    let (lo, hi) = (k.saturating_sub(half), (k + half).min(run.data[0].len() - 1));
+    let (lo, hi) = (k.saturating_sub(half), (k + half).min(run.table.data[0].len() - 1));
     let mean = |name: &str| {
-        let c = run.column(name).unwrap();
+        let c = run.table.column(name).unwrap();
         c[lo..=hi].iter().sum::<f64>() / (hi - lo + 1) as f64
     };
     let x = SVector::<f64, N_STATES>::from_fn(|i, _| mean(STATE_NAMES[i]));
@@ -336,10 +336,10 @@ fn three_ways(name: &str, surface: &str, rate: &str, state: usize, control: usiz
     let h = response(&lin, control, state);
     let dt = sc.run.dt_s;
     let u_trim = flown.trim.controls.to_vector()[control];
-    let (u, u_calm) = (flown.column(surface).unwrap(), calm.column(surface).unwrap());
+    let (u, u_calm) = (flown.table.column(surface).unwrap(), calm.table.column(surface).unwrap());
     let truth = deviations(u, &linear_truth(&lin, u, u_trim, control, state, dt), dt, &h);
-    let calm_d = deviations(u_calm, calm.column(rate).unwrap(), dt, &h);
-    let st = vec![vec![u.to_vec(), flown.column(&format!("meas_{rate}")).unwrap().to_vec()]];
+    let calm_d = deviations(u_calm, calm.table.column(rate).unwrap(), dt, &h);
+    let st = vec![vec![u.to_vec(), flown.table.column(&format!("meas_{rate}")).unwrap().to_vec()]];
     let r =
         frequency_responses(&st, &["u".into()], &["y".into()], dt, &Default::default()).unwrap();
     let Input::Sweep(sweep) = sc.input[0].input.build_in(&root()).unwrap() else {
@@ -374,7 +374,7 @@ fn unexplained_parts(f: &ThreeWays, k: usize, w: f64, control: usize, state: usi
     let h = response(&f.lin, control, state);
     let (truth, calm) = (&f.truth[k], &f.calm_d[k]);
     let mut missing = Vec::new();
-    let t = f.calm.column("t_s").unwrap();
+    let t = f.calm.table.column("t_s").unwrap();
     if beyond(truth) && !resolution_cause(&h, w, 0.5 * t[t.len() - 1]) {
         missing.push(format!("the linear truth misses ({truth:.2?}) where the response is flat"));
     }

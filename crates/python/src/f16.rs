@@ -135,7 +135,7 @@ fn simulate<'py>(py: Python<'py>, scenario: &str) -> PyResult<Bound<'py, PyDict>
     py.check_signals()?;
     let r = r.map_err(to_py)?;
     let d = PyDict::new(py);
-    for (name, col) in r.columns.iter().zip(r.data) {
+    for (name, col) in r.table.columns.iter().zip(r.table.data) {
         d.set_item(name, col.into_pyarray(py))?;
     }
     Ok(d)

@@ -290,9 +290,9 @@ pub fn execute_sim(args: SimArgs) -> anyhow::Result<()> {
     od.finish();
     super::print_stdout(&format!(
         "simulated {:.2} s ({} rows, {} columns) from trim: throttle {:.4}, elevator {:.4} deg, alpha {:.4} deg (trim cost {:.1e})\nwrote {}/timeseries.csv, report.html, states and controls_wind (.png, .svg)",
-        r.data[0].last().copied().unwrap_or(0.0),
-        r.data[0].len(),
-        r.columns.len(),
+        r.table.data[0].last().copied().unwrap_or(0.0),
+        r.table.data[0].len(),
+        r.table.columns.len(),
         r.trim.controls.throttle,
         r.trim.controls.elevator_rad.to_degrees(),
         r.trim.state[aeroident_models::f16::ALPHA].to_degrees(),

@@ -53,9 +53,9 @@ pub fn execute(a: SimArgs) -> anyhow::Result<()> {
     super::print_stdout(&format!(
         "{}: simulated {:.2} s ({} rows, {} columns) from trim at {:.3} m/s, {:.1} m: alpha {:.4} deg, elevator {:.4} deg, {} {:.6}\nwrote {}/timeseries.csv, mapping.toml (replays it), report.html, states and controls (.png, .svg)",
         r.aircraft,
-        r.data[0].last().copied().unwrap_or(0.0),
-        r.data[0].len(),
-        r.columns.len(),
+        r.table.data[0].last().copied().unwrap_or(0.0),
+        r.table.data[0].len(),
+        r.table.columns.len(),
         x[0],
         x[11],
         x[1].to_degrees(),

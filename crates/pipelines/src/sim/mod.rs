@@ -15,7 +15,7 @@
 //! * Sensors sample the true channels (ZOH at their rate, noise, bias, delay, quantisation).
 //!
 //! # Output
-//! `timeseries.csv`: one row per step, columns [`crate::sim::SimRun::columns`] (units in the names), the
+//! `timeseries.csv`: one row per step, columns [`crate::sim::SimTable::columns`] (units in the names), the
 //! sensed channels as `meas_<channel>`; `states.png` and `controls_wind.png`. Besides the state,
 //! surfaces, wind, load factors and coefficients, the true channels include what identification
 //! needs: ṗ, q̇, ṙ, α̇ from the state derivative and the accelerometer specific force
@@ -142,22 +142,48 @@ fn true_row(
     v
 }
 
-/// A finished run: column names (first `t_s`) and column data of equal length.
-#[derive(Debug, Clone)]
-pub struct SimRun {
-    /// Column names, units in the names; sensed channels are `meas_<channel>`.
+/// A simulation's record, of either aircraft: column names (first `t_s`, units in the names;
+/// sensed channels are `meas_<channel>`) and column data of equal length.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SimTable {
+    /// Column names.
     pub columns: Vec<String>,
     /// `data[c][k]`: column `c` at step `k`.
     pub data: Vec<Vec<f64>>,
-    /// The trim the run started from.
-    pub trim: aeroident_models::trim::F16Trim,
 }
 
-impl SimRun {
+impl SimTable {
+    /// No rows yet, with room for `rows` of each of `columns`.
+    pub fn with_capacity(columns: Vec<String>, rows: usize) -> Self {
+        let data = vec![Vec::with_capacity(rows); columns.len()];
+        Self { columns, data }
+    }
+
     /// The column called `name`, if any.
     pub fn column(&self, name: &str) -> Option<&[f64]> {
         self.columns.iter().position(|c| c == name).map(|i| self.data[i].as_slice())
     }
+
+    /// Appends the row at `t`: the time, the true channels `row`, then each sensor's
+    /// measurement of the true channel it reads (`(index in row, sensor)`), in column order.
+    fn push_row(&mut self, t: f64, row: &[f64], sensors: &mut [(usize, SensorModel)]) {
+        self.data[0].push(t);
+        for (c, v) in row.iter().enumerate() {
+            self.data[c + 1].push(*v);
+        }
+        for (j, (idx, sensor)) in sensors.iter_mut().enumerate() {
+            self.data[1 + row.len() + j].push(sensor.measure(t, row[*idx]));
+        }
+    }
+}
+
+/// A finished run of the F-16.
+#[derive(Debug, Clone)]
+pub struct SimRun {
+    /// The record.
+    pub table: SimTable,
+    /// The trim the run started from.
+    pub trim: aeroident_models::trim::F16Trim,
 }
 
 /// Reads and parses a scenario file.
@@ -209,17 +235,17 @@ pub fn run(sc: &SimScenario, base_dir: &Path) -> Result<SimRun> {
             Plant::Actuated(F16WithActuators { airframe: f16, actuators: SurfaceActuators::f16() })
         }
     };
-    let mut flight = Flight::new(plant, &t0, columns.len(), n_steps);
+    let mut flight = Flight::new(plant, &t0, SimTable::with_capacity(columns, n_steps + 1));
     for k in 0..=n_steps {
         let t = k as f64 * r.dt_s;
         let cmd = commands(&t0.controls, &inputs, &wind, t);
-        flight.record(t, &cmd, &mut sensors, names.len())?;
+        flight.record(t, &cmd, &mut sensors)?;
         if k == n_steps {
             break;
         }
         flight.advance(t, &cmd, r.dt_s)?;
     }
-    Ok(SimRun { columns, data: flight.data, trim: t0 })
+    Ok(SimRun { table: flight.table, trim: t0 })
 }
 
 /// The number of RK4 steps of the run (`duration_s / dt_s`, rounded), after checking both are
@@ -370,30 +396,28 @@ struct Flight {
     xi: F16State,
     xa: SVector<f64, 16>,
     g_fps2: f64,
-    data: Vec<Vec<f64>>,
+    table: SimTable,
 }
 
 impl Flight {
-    /// At the trim, with room for the `n_steps + 1` rows of each of `n_columns` columns.
-    fn new(plant: Plant, t0: &F16Trim, n_columns: usize, n_steps: usize) -> Self {
+    /// At the trim, recording into `table`.
+    fn new(plant: Plant, t0: &F16Trim, table: SimTable) -> Self {
         let g_fps2 = match &plant {
             Plant::Ideal(m) => m.data().mass.g_ft_per_s2,
             Plant::Actuated(m) => m.airframe.data().mass.g_ft_per_s2,
         };
-        let data: Vec<Vec<f64>> = vec![Vec::with_capacity(n_steps + 1); n_columns];
         let xa: SVector<f64, 16> = F16WithActuators::state(&t0.state, &t0.controls);
         let xi: F16State = t0.state;
-        Self { plant, xi, xa, g_fps2, data }
+        Self { plant, xi, xa, g_fps2, table }
     }
 
-    /// Records the row at `t` under the commands `cmd`: time, the `n_true` true channels
-    /// (with the surfaces as applied through the actuators) and each sensor's measurement.
+    /// Records the row at `t` under the commands `cmd`: time, the true channels (with the
+    /// surfaces as applied through the actuators) and each sensor's measurement.
     fn record(
         &mut self,
         t: f64,
         cmd: &F16Controls,
         sensors: &mut [(usize, SensorModel)],
-        n_true: usize,
     ) -> Result<()> {
         let (x13, applied, evaluated) = match &self.plant {
             Plant::Ideal(m) => (self.xi, *cmd, m.evaluate(&self.xi, cmd, &m.increments_at(t))),
@@ -407,13 +431,7 @@ impl Flight {
         let (xdot, outputs) =
             evaluated.with_context(|| format!("model outputs at t = {t:.4} s"))?;
         let row = true_row(&x13, &xdot, self.g_fps2, &applied, cmd, &outputs);
-        self.data[0].push(t);
-        for (c, v) in row.iter().enumerate() {
-            self.data[c + 1].push(*v);
-        }
-        for (j, (idx, sensor)) in sensors.iter_mut().enumerate() {
-            self.data[1 + n_true + j].push(sensor.measure(t, row[*idx]));
-        }
+        self.table.push_row(t, &row, sensors);
         Ok(())
     }
 
@@ -453,14 +471,14 @@ mod tests {
     #[test]
     fn analytic_no_input_stays_at_trim() {
         let r = run(&scenario("", "f16", 10.0), Path::new(".")).unwrap();
-        assert_eq!(r.columns.len(), r.data.len());
-        assert_eq!(r.data[0].len(), 1001);
-        let vt = r.column("vt_fps").unwrap();
-        let a = r.column("alpha_rad").unwrap();
+        assert_eq!(r.table.columns.len(), r.table.data.len());
+        assert_eq!(r.table.data[0].len(), 1001);
+        let vt = r.table.column("vt_fps").unwrap();
+        let a = r.table.column("alpha_rad").unwrap();
         assert!(vt.iter().all(|v| (v - 675.0).abs() < 1e-6));
         assert!(a.iter().all(|v| (v - r.trim.state[ALPHA]).abs() < 1e-9));
         // Level-flight force balance along the vertical: nz·cosα + nx·sinα = 1 g (θ = α, γ = 0).
-        let (nz, nx) = (r.column("nz_g").unwrap()[0], r.column("nx_g").unwrap()[0]);
+        let (nz, nx) = (r.table.column("nz_g").unwrap()[0], r.table.column("nx_g").unwrap()[0]);
         let al = r.trim.state[ALPHA];
         assert!((nz * al.cos() + nx * al.sin() - 1.0).abs() < 1e-9);
     }
@@ -471,7 +489,7 @@ mod tests {
         let one = "[[input]]\nchannel = \"elevator\"\nkind = \"step\"\namplitude_deg = 0.5\nstart_s = 1.0\n";
         let a = run(&scenario(two, "f16", 3.0), Path::new(".")).unwrap();
         let b = run(&scenario(one, "f16", 3.0), Path::new(".")).unwrap();
-        let (qa, qb) = (a.column("q_rad_s").unwrap(), b.column("q_rad_s").unwrap());
+        let (qa, qb) = (a.table.column("q_rad_s").unwrap(), b.table.column("q_rad_s").unwrap());
         assert!(qa.iter().zip(qb).all(|(x, y)| (x - y).abs() < 1e-12));
         assert!(qa.iter().any(|x| x.abs() > 1e-3), "the step must move the aircraft");
     }
@@ -485,13 +503,13 @@ mod tests {
         let r = run(&scenario(doublet, "ideal", 6.0), Path::new(".")).unwrap();
         let f16 = F16::new(0.30).unwrap();
         let lin = linearize_f16(&f16, &r.trim.state, &r.trim.controls).unwrap();
-        let de = r.column("elevator_cmd_rad").unwrap();
+        let de = r.table.column("elevator_cmd_rad").unwrap();
         let dt = 0.01;
         let mut dx = SVector::<f64, 13>::zeros();
         let mut worst = 0.0f64;
         let mut peak = 0.0f64;
-        let alpha = r.column("alpha_rad").unwrap();
-        let q = r.column("q_rad_s").unwrap();
+        let alpha = r.table.column("alpha_rad").unwrap();
+        let q = r.table.column("q_rad_s").unwrap();
         for k in 0..alpha.len() {
             let da_nl = alpha[k] - r.trim.state[ALPHA];
             worst = worst.max((da_nl - dx[ALPHA]).abs()).max((q[k] - dx[Q]).abs() * 0.2);

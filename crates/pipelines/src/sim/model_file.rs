@@ -32,7 +32,7 @@
 //! each sensor's `meas_<channel>`.
 
 use super::scenario::{Channel, SimScenario};
-use super::{build_inputs, build_sensors, step_count};
+use super::{SimTable, build_inputs, build_sensors, step_count};
 use crate::airframe::{
     AirframeOutputs, AirframeState, ModelFileAircraft, Propulsion, STATE_NAMES, Trim,
 };
@@ -42,7 +42,7 @@ use aeroident_io::thrust_model::LawInput;
 use aeroident_models::aircraft::{Aircraft, ControlVector};
 use aeroident_models::integrate::rk4_step_varying;
 use aeroident_models::rigid_body as rb;
-use aeroident_signals::{Input, InputSignal, SensorModel};
+use aeroident_signals::{Input, InputSignal};
 use std::path::Path;
 
 /// A finished run of a model-file aircraft.
@@ -50,21 +50,12 @@ use std::path::Path;
 pub struct AircraftSimRun {
     /// The aircraft's name (its model file's description).
     pub aircraft: String,
-    /// Column names (module doc), first `t_s`; sensed channels are `meas_<channel>`.
-    pub columns: Vec<String>,
-    /// `data[c][k]`: column `c` at step `k`.
-    pub data: Vec<Vec<f64>>,
+    /// The record (module doc).
+    pub table: SimTable,
     /// The trim the run started from (SI states, controls as [`ControlVector`]).
     pub trim: Trim,
     /// The engine command's column name, with its unit.
     pub engine_column: &'static str,
-}
-
-impl AircraftSimRun {
-    /// The column called `name`, if any.
-    pub fn column(&self, name: &str) -> Option<&[f64]> {
-        self.columns.iter().position(|c| c == name).map(|i| self.data[i].as_slice())
-    }
 }
 
 /// The engine command's column: the command with its unit ([`Propulsion`]).
@@ -147,7 +138,7 @@ pub fn run(
     let names = true_channel_names(aircraft);
     columns.extend(names.iter().cloned());
     let mut sensors = build_sensors(sc, &names, &mut columns)?;
-    let mut data: Vec<Vec<f64>> = vec![Vec::with_capacity(n_steps + 1); columns.len()];
+    let mut table = SimTable::with_capacity(columns, n_steps + 1);
     let (mut x, dt) = (t0.state, sc.run.dt_s);
     // Each step's commands are evaluated once, at the step's own time k·dt: the ramp towards
     // the next step must end on the value that step records (t + dt may round to the other
@@ -158,7 +149,7 @@ pub fn run(
         let o = aircraft
             .outputs(t, &x, &u)
             .with_context(|| format!("model outputs at t = {t:.4} s"))?;
-        record(&mut data, t, &true_row(&x, &u, &o), &mut sensors);
+        table.push_row(t, &true_row(&x, &u, &o), &mut sensors);
         if k < n_steps {
             let u1 = commands(&t0.controls, &inputs, (k + 1) as f64 * dt);
             let between = |s: f64| u + (u1 - u) * ((s - t) / dt);
@@ -169,7 +160,7 @@ pub fn run(
     }
     let trim = crate::airframe::handle::plain_trim(&t0);
     let engine_column = engine_column(aircraft);
-    Ok(AircraftSimRun { aircraft: aircraft.name(), columns, data, trim, engine_column })
+    Ok(AircraftSimRun { aircraft: aircraft.name(), table, trim, engine_column })
 }
 
 /// Refuses what a model-file aircraft cannot fly, naming the section.
@@ -214,17 +205,6 @@ fn commands(trim: &ControlVector, inputs: &[(Channel, Input)], t: f64) -> Contro
     u
 }
 
-/// Appends time, the true `row` and each sensor's measurement of its channel to `data`.
-fn record(data: &mut [Vec<f64>], t: f64, row: &[f64], sensors: &mut [(usize, SensorModel)]) {
-    data[0].push(t);
-    for (c, v) in row.iter().enumerate() {
-        data[c + 1].push(*v);
-    }
-    for (j, (idx, sensor)) in sensors.iter_mut().enumerate() {
-        data[1 + row.len() + j].push(sensor.measure(t, row[*idx]));
-    }
-}
-
 /// A mapping (TOML text) that replays `run`'s `timeseries.csv` with the aircraft's constants:
 /// each channel's sensed `meas_` column where the scenario has a sensor on it, else the true
 /// column; thrust as a channel (so drag is drag whatever the engine law), the thrust line's arm
@@ -232,7 +212,7 @@ fn record(data: &mut [Vec<f64>], t: f64, row: &[f64], sensors: &mut [(usize, Sen
 pub fn replay_mapping(aircraft: &ModelFileAircraft, run: &AircraftSimRun) -> String {
     let pick = |col: &str| -> String {
         let m = format!("meas_{col}");
-        if run.column(&m).is_some() { m } else { col.to_string() }
+        if run.table.column(&m).is_some() { m } else { col.to_string() }
     };
     let mut s = format!(
         "# Written by `aeroident sim` for {}: replays its timeseries.csv.\ndescription = \"aeroident sim output ({})\"\n\n[time]\ncolumn = \"t_s\"\nunit = \"s\"\n\n[channels]\n",
@@ -317,17 +297,17 @@ mod tests {
     #[test]
     fn analytic_no_input_holds_the_trim_and_reads_gravity() {
         let r = run(&aircraft(), &scenario("", "", ""), Path::new(".")).unwrap();
-        assert_eq!(r.columns.len(), r.data.len());
-        assert_eq!(r.data[0].len(), 501);
-        let (vt, alpha) = (r.column("vt_mps").unwrap(), r.column("alpha_rad").unwrap());
+        assert_eq!(r.table.columns.len(), r.table.data.len());
+        assert_eq!(r.table.data[0].len(), 501);
+        let (vt, alpha) = (r.table.column("vt_mps").unwrap(), r.table.column("alpha_rad").unwrap());
         assert!(vt.iter().all(|v| (v / (VT_FPS * M_PER_FT) - 1.0).abs() < 1e-6), "{vt:?}");
         assert!(alpha.iter().all(|a| (a - r.trim.state[rb::ALPHA]).abs() < 1e-6));
         let g = 9.80665;
-        let theta = r.column("theta_rad").unwrap()[0];
+        let theta = r.table.column("theta_rad").unwrap()[0];
         let (ax, ay, az) = (
-            r.column("ax_mps2").unwrap(),
-            r.column("ay_mps2").unwrap(),
-            r.column("az_mps2").unwrap(),
+            r.table.column("ax_mps2").unwrap(),
+            r.table.column("ay_mps2").unwrap(),
+            r.table.column("az_mps2").unwrap(),
         );
         assert!(
             (ax[0] - g * theta.sin()).abs() < 1e-6 && ay[0].abs() < 1e-9,
@@ -336,9 +316,13 @@ mod tests {
             ay[0]
         );
         assert!((az[0] + g * theta.cos()).abs() < 1e-6, "{}", az[0]);
-        let (qbar, rho) = (r.column("qbar_pa").unwrap()[0], r.column("rho_kgpm3").unwrap()[0]);
+        let (qbar, rho) =
+            (r.table.column("qbar_pa").unwrap()[0], r.table.column("rho_kgpm3").unwrap()[0]);
         assert!((qbar - 0.5 * rho * vt[0] * vt[0]).abs() < 1e-9 * qbar);
-        assert_eq!(r.column("thrust_cmd_n").unwrap()[0], r.column("thrust_n").unwrap()[0]);
+        assert_eq!(
+            r.table.column("thrust_cmd_n").unwrap()[0],
+            r.table.column("thrust_n").unwrap()[0]
+        );
     }
 
     /// The largest difference between the responses `(v_k − v_0)` of column `theirs` of `f16`
@@ -348,7 +332,7 @@ mod tests {
         ours: &AircraftSimRun,
         (theirs, mine, scale): (&str, &str, f64),
     ) -> f64 {
-        let (a, b) = (f16.column(theirs).unwrap(), ours.column(mine).unwrap());
+        let (a, b) = (f16.table.column(theirs).unwrap(), ours.table.column(mine).unwrap());
         let delta = |v: &[f64], k: usize, s: f64| (v[k] - v[0]) * s;
         let peak = (0..a.len()).map(|k| delta(a, k, scale).abs()).fold(0.0, f64::max);
         let worst =
@@ -406,7 +390,7 @@ mod tests {
             "[[sensor]]\nchannel = \"q_rad_s\"\nwhite_sigma = 0.001\nsample_rate_hz = 100.0\n";
         let a = aircraft();
         let r = run(&a, &scenario("", "", sensor), Path::new(".")).unwrap();
-        let (q, m) = (r.column("q_rad_s").unwrap(), r.column("meas_q_rad_s").unwrap());
+        let (q, m) = (r.table.column("q_rad_s").unwrap(), r.table.column("meas_q_rad_s").unwrap());
         let sd =
             (q.iter().zip(m).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / q.len() as f64).sqrt();
         assert!((sd / 0.001 - 1.0).abs() < 0.2, "noise σ {sd}");

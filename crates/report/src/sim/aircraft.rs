@@ -2,10 +2,11 @@
 //! `timeseries.csv` (SI), `mapping.toml` that replays it, `states` and `controls` figures and
 //! `report.html`.
 
-use super::{DEG_PER_RAD, Table, channel_panel, write_timeseries};
+use super::{DEG_PER_RAD, channel_panel, write_timeseries};
 use crate::outdir::OutputDir;
 use crate::plot::Panel;
 use crate::report::{Report, common_settings, write_figure};
+use aeroident_pipelines::sim::SimTable;
 use aeroident_pipelines::sim::model_file::AircraftSimRun;
 
 /// Writes `timeseries.csv`, `mapping.toml` (the text `mapping`), `states.{png,svg}`,
@@ -19,14 +20,14 @@ pub fn write_aircraft_outputs(
     mapping: &str,
     od: &mut OutputDir,
 ) -> anyhow::Result<()> {
-    write_timeseries(run.into(), od)?;
+    write_timeseries(&run.table, od)?;
     od.write_bytes("mapping.toml", mapping.as_bytes())?;
     let states = write_figure::<anyhow::Error>(
         od,
         "states",
         &format!("{}: open-loop response", run.aircraft),
         "The true states (solid) and the sensed channels (dashed, where the scenario has sensors).",
-        &states_panels(run.into()),
+        &states_panels(&run.table),
         (1000, 230),
     )?;
     let controls = write_figure::<anyhow::Error>(
@@ -48,7 +49,7 @@ pub fn write_aircraft_outputs(
 }
 
 /// Airspeed, flow angles, body rates, attitude, accelerometers and altitude (angles in deg).
-fn states_panels(run: Table) -> [Panel; 6] {
+fn states_panels(run: &SimTable) -> [Panel; 6] {
     let d = DEG_PER_RAD;
     let panel = |title: &str, y_label: &str, chans: &[(&str, f64)]| {
         channel_panel(run, title, y_label, chans)
@@ -70,7 +71,7 @@ fn states_panels(run: Table) -> [Panel; 6] {
 /// The surfaces (deg) and the engine command with the thrust.
 fn controls_panels(run: &AircraftSimRun) -> [Panel; 3] {
     let d = DEG_PER_RAD;
-    let t = Table::from(run);
+    let t = &run.table;
     [
         channel_panel(t, "elevator", "deg", &[("elevator_rad", d)]),
         channel_panel(t, "aileron and rudder", "deg", &[("aileron_rad", d), ("rudder_rad", d)]),
@@ -85,7 +86,7 @@ fn controls_panels(run: &AircraftSimRun) -> [Panel; 3] {
 
 /// The report's settings: the aircraft, the record's size, the trim and how to replay it.
 fn settings(run: &AircraftSimRun) -> Vec<(String, String)> {
-    let t = &run.data[0];
+    let t = &run.table.data[0];
     let (x, u) = (&run.trim.state, &run.trim.controls);
     let mut s = common_settings();
     s.extend([
@@ -96,7 +97,7 @@ fn settings(run: &AircraftSimRun) -> Vec<(String, String)> {
                 "{:.2} s, {} rows × {} columns (timeseries.csv)",
                 t.last().copied().unwrap_or(0.0),
                 t.len(),
-                run.columns.len()
+                run.table.columns.len()
             ),
         ),
         (

@@ -11,8 +11,7 @@ use crate::outdir::OutputDir;
 use crate::plot::{LineKind, Panel, Series};
 use crate::report::{Report, common_settings, write_figure};
 use aeroident_models::f16::ALPHA;
-use aeroident_pipelines::sim::SimRun;
-use aeroident_pipelines::sim::model_file::AircraftSimRun;
+use aeroident_pipelines::sim::{SimRun, SimTable};
 use anyhow::Context;
 
 /// Writes `timeseries.csv`, `states.{png,svg}`, `controls_wind.{png,svg}` and `report.html`
@@ -22,7 +21,7 @@ use anyhow::Context;
 /// # Errors
 /// I/O, CSV or plotting errors naming the file.
 pub fn write_outputs(run: &SimRun, od: &mut OutputDir) -> anyhow::Result<()> {
-    write_timeseries(run.into(), od)?;
+    write_timeseries(&run.table, od)?;
     let states = write_figure::<anyhow::Error>(
         od,
         "states",
@@ -52,38 +51,13 @@ pub fn write_outputs(run: &SimRun, od: &mut OutputDir) -> anyhow::Result<()> {
 /// Degrees per radian: the factor radian channels are drawn with.
 const DEG_PER_RAD: f64 = 180.0 / std::f64::consts::PI;
 
-/// A simulation's record: column names (first `t_s`) and their data, of either aircraft.
-#[derive(Clone, Copy)]
-struct Table<'a> {
-    columns: &'a [String],
-    data: &'a [Vec<f64>],
-}
-
-impl<'a> Table<'a> {
-    fn column(&self, name: &str) -> Option<&'a [f64]> {
-        self.columns.iter().position(|c| c == name).map(|i| self.data[i].as_slice())
-    }
-}
-
-impl<'a> From<&'a SimRun> for Table<'a> {
-    fn from(r: &'a SimRun) -> Self {
-        Table { columns: &r.columns, data: &r.data }
-    }
-}
-
-impl<'a> From<&'a AircraftSimRun> for Table<'a> {
-    fn from(r: &'a AircraftSimRun) -> Self {
-        Table { columns: &r.columns, data: &r.data }
-    }
-}
-
 /// `timeseries.csv`: the run's columns, one row per step, every value as `{:.10e}` (enough
 /// digits to replay the record without loss that matters to identification).
-fn write_timeseries(run: Table, od: &mut OutputDir) -> anyhow::Result<()> {
+fn write_timeseries(run: &SimTable, od: &mut OutputDir) -> anyhow::Result<()> {
     let mut file = od.create("timeseries.csv")?;
     let csv_path = file.path().to_path_buf();
     let mut w = csv::Writer::from_writer(&mut file);
-    w.write_record(run.columns).with_context(|| format!("writing `{}`", csv_path.display()))?;
+    w.write_record(&run.columns).with_context(|| format!("writing `{}`", csv_path.display()))?;
     let n = run.data[0].len();
     for k in 0..n {
         w.write_record(run.data.iter().map(|c| format!("{:.10e}", c[k])))
@@ -98,7 +72,7 @@ fn write_timeseries(run: Table, od: &mut OutputDir) -> anyhow::Result<()> {
 /// A panel of the channels `chans` (name, factor to the plotted unit), each true channel solid
 /// and its sensed `meas_` channel dashed where the run has one. Measured signals: the whole
 /// record sets the range (a manoeuvre is not a transient).
-fn channel_panel(run: Table, title: &str, y_label: &str, chans: &[(&str, f64)]) -> Panel {
+fn channel_panel(run: &SimTable, title: &str, y_label: &str, chans: &[(&str, f64)]) -> Panel {
     // Legend names say the plotted unit: radian channels are drawn in degrees.
     let shown = |name: &str, scale: f64| -> String {
         if scale == DEG_PER_RAD {
@@ -142,7 +116,7 @@ fn channel_panel(run: Table, title: &str, y_label: &str, chans: &[(&str, f64)]) 
 fn states_panels(run: &SimRun) -> [Panel; 6] {
     let d = DEG_PER_RAD;
     let panel = |title: &str, y_label: &str, chans: &[(&str, f64)]| {
-        channel_panel(run.into(), title, y_label, chans)
+        channel_panel(&run.table, title, y_label, chans)
     };
     [
         panel("true airspeed", "vt (ft/s)", &[("vt_fps", 1.0)]),
@@ -159,7 +133,7 @@ fn states_panels(run: &SimRun) -> [Panel; 6] {
 fn controls_panels(run: &SimRun) -> [Panel; 4] {
     let d = DEG_PER_RAD;
     let panel = |title: &str, y_label: &str, chans: &[(&str, f64)]| {
-        channel_panel(run.into(), title, y_label, chans)
+        channel_panel(&run.table, title, y_label, chans)
     };
     [
         panel("elevator", "deg", &[("elevator_cmd_rad", d), ("elevator_rad", d)]),
@@ -184,7 +158,7 @@ fn controls_panels(run: &SimRun) -> [Panel; 4] {
 /// The report's settings: the common ones, the record's size, the trim the run started from
 /// and how to replay the record.
 fn report_settings(run: &SimRun) -> Vec<(String, String)> {
-    let t = &run.data[0];
+    let t = &run.table.data[0];
     let mut settings = common_settings();
     settings.extend([
         (
@@ -193,7 +167,7 @@ fn report_settings(run: &SimRun) -> Vec<(String, String)> {
                 "{:.2} s, {} rows × {} columns (timeseries.csv)",
                 t.last().copied().unwrap_or(0.0),
                 t.len(),
-                run.columns.len()
+                run.table.columns.len()
             ),
         ),
         (
@@ -229,7 +203,11 @@ mod tests {
             let mut sc = load_scenario(&p).unwrap();
             sc.run.duration_s = sc.run.duration_s.min(3.0);
             let r = run(&sc, &dir).unwrap_or_else(|e| panic!("{}: {e:#}", p.display()));
-            assert!(r.data.iter().all(|c| c.iter().all(|v| v.is_finite())), "{}", p.display());
+            assert!(
+                r.table.data.iter().all(|c| c.iter().all(|v| v.is_finite())),
+                "{}",
+                p.display()
+            );
             n += 1;
             if n == 1 {
                 let out =
@@ -238,7 +216,7 @@ mod tests {
                 write_outputs(&r, &mut od).unwrap();
                 od.finish();
                 let csv = std::fs::read_to_string(out.join("timeseries.csv")).unwrap();
-                assert_eq!(csv.lines().count(), r.data[0].len() + 1);
+                assert_eq!(csv.lines().count(), r.table.data[0].len() + 1);
                 assert!(out.join("states.png").exists() && out.join("controls_wind.png").exists());
                 let _ = std::fs::remove_dir_all(&out);
             }

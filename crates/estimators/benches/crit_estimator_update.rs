@@ -9,6 +9,8 @@ mod test_aircraft;
 
 use aeroident_estimators::finite_time::{FiniteTimeConfig, FiniteTimeSmpe};
 use aeroident_estimators::ftr::{Ftr, FtrConfig};
+use aeroident_estimators::model_reference::{CorrectedSmpeEstimator, ModelReferenceConfig};
+use aeroident_estimators::prior::Priors;
 use aeroident_estimators::rls::{Rls as StructureRls, RlsConfig as StructureRlsConfig};
 use aeroident_estimators::vocabulary::ModelStructure;
 use aeroident_estimators::{Ekf, Estimator};
@@ -17,7 +19,8 @@ use criterion::{Criterion, Throughput, black_box, criterion_group, criterion_mai
 const N: usize = 1000;
 
 /// The new EKF over the longitudinal (4 states + 12 parameters), lateral (4 + 18) and six-axis
-/// (the default job's filter) presets, and the new RLS over the six-axis preset (30 parameters in six fits).
+/// (the default job's filter) presets, the new RLS over the six-axis preset (30 parameters in
+/// six fits), and the corrected sliding-mode estimator over the six-axis preset.
 fn bench_structure_estimators(c: &mut Criterion) {
     // 1000 samples at 50 Hz; the doublets (1, 6, 12 s) fall inside the 20 s record.
     let data = test_aircraft::six_axis_stream(N, 0.02, 20.0);
@@ -56,6 +59,24 @@ fn bench_structure_estimators(c: &mut Criterion) {
                     .unwrap();
             for s in &data {
                 black_box(rls.update(black_box(s)).unwrap());
+            }
+        })
+    });
+    // The corrected sliding-mode estimator as the default job runs it (generic priors here):
+    // one adaptation law per coefficient, all stepped or none per sample.
+    let priors = Priors::generic(&ModelStructure::six_axis());
+    g.bench_function("smpe_corrected_six_axis_1000_samples", |b| {
+        b.iter(|| {
+            let mut e = Box::new(
+                CorrectedSmpeEstimator::new(
+                    ModelStructure::six_axis(),
+                    &priors,
+                    ModelReferenceConfig::default(),
+                )
+                .unwrap(),
+            );
+            for s in &data {
+                black_box(e.update(black_box(s)).unwrap());
             }
         })
     });

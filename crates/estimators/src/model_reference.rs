@@ -97,7 +97,7 @@ pub mod rigid_body;
 
 pub use laws::{
     ANGLE_REF_RAD, CorrectedLaw, CorrectedLawConfig, GradientLaw, GradientLawConfig, PublishedLaw,
-    PublishedLawConfig, RATE_REF_RAD_S, SPEED_REF_FRACTION,
+    PublishedLawConfig, PublishedLawStep, RATE_REF_RAD_S, SPEED_REF_FRACTION,
 };
 pub use rigid_body::{SlidingState, StateRate, state_rate};
 
@@ -183,6 +183,8 @@ pub trait CoefficientLaw: Clone {
     const METHOD: &'static str;
     /// The law's own configuration.
     type Config: Copy;
+    /// One update computed but not applied ([`CoefficientLaw::propose`]).
+    type Step;
 
     /// The law for one coefficient.
     ///
@@ -208,11 +210,19 @@ pub trait CoefficientLaw: Clone {
         true
     }
 
-    /// One update with the estimated state `s.z`, measured `s.z_m`, `s.zdot_m`, input `s.u`.
+    /// One update with the estimated state `s.z`, measured `s.z_m`, `s.zdot_m`, input `s.u`,
+    /// computed without changing the law: [`ModelReference`] commits it only once every
+    /// coefficient's update has succeeded.
     ///
     /// # Errors
-    /// As the engine's; on error the caller discards the law's state.
-    fn update(&mut self, s: &SmpeSample<1, RateInput>) -> Result<(), EstimatorError>;
+    /// As the engine's; the law is unchanged.
+    fn propose(&self, s: &SmpeSample<1, RateInput>) -> Result<Self::Step, EstimatorError>;
+
+    /// The `j`-th parameter's estimate once `step` is committed.
+    fn theta_after(&self, step: &Self::Step, j: usize) -> f64;
+
+    /// Applies a step proposed from the law's current state.
+    fn commit(&mut self, step: Self::Step);
 
     /// A new manoeuvre starts with the next sample: no time step to it; keep θ̂.
     fn new_manoeuvre(&mut self);
@@ -263,21 +273,33 @@ struct Channel<L> {
     excited: bool,
 }
 
+/// A channel's step computed but not applied: the estimated state at the sample and the law's
+/// step.
+struct Pending<S> {
+    z: f64,
+    law: S,
+}
+
 impl<L: CoefficientLaw> Channel<L> {
-    /// One sample's step of this channel (module doc): the estimated model integrated over the
-    /// interval `dt` (`None`: restart from the measured state), the law's update, the
-    /// excitation bookkeeping. On an error the channel may be part-updated: the caller restores
-    /// it.
-    fn step(
-        &mut self,
-        s: &AirDataSample,
-        input: &RateInput,
-        dt: Option<f64>,
-    ) -> Result<(), StepFailure> {
+    /// Sets the law's gains from the first accepted sample, once. This changes the channel
+    /// before the sample is known to be accepted: the caller restores it if the update fails.
+    fn start(&mut self, s: &AirDataSample, input: &RateInput) -> Result<(), StepFailure> {
         if !self.started {
             self.law.start(input, s).map_err(StepFailure::Refused)?;
             self.started = true;
         }
+        Ok(())
+    }
+
+    /// One sample's step of this channel (module doc), computed without changing it: the
+    /// estimated model integrated over the interval `dt` (`None`: restart from the measured
+    /// state) and the law's update. `commit` applies it.
+    fn propose(
+        &self,
+        s: &AirDataSample,
+        input: &RateInput,
+        dt: Option<f64>,
+    ) -> Result<Pending<L::Step>, StepFailure> {
         let z = match (dt, &self.prev) {
             (Some(dt), Some(prev)) => integrate(self.z_est, prev, input, &self.theta(), dt),
             _ => input.rate.z_m,
@@ -293,17 +315,22 @@ impl<L: CoefficientLaw> Channel<L> {
             zdot_m: SVector::<f64, 1>::new(input.rate.zdot_m),
             u: *input,
         };
-        match self.law.update(&sample) {
-            Ok(()) => {}
-            Err(EstimatorError::Numerical { what, .. }) => {
-                return Err(StepFailure::Diverged(what));
-            }
+        let step = match self.law.propose(&sample) {
+            Ok(step) => step,
+            Err(EstimatorError::Numerical { what, .. }) => return Err(StepFailure::Diverged(what)),
             Err(e) => return Err(StepFailure::Refused(e)),
-        }
-        if self.theta()[..self.n].iter().any(|x| !x.is_finite()) {
+        };
+        if (0..self.n).any(|j| !self.law.theta_after(&step, j).is_finite()) {
             return Err(StepFailure::Diverged("non-finite parameter estimate"));
         }
-        self.z_est = z;
+        Ok(Pending { z, law: step })
+    }
+
+    /// Applies a step proposed from the channel's current state, and the excitation
+    /// bookkeeping.
+    fn commit(&mut self, input: &RateInput, step: Pending<L::Step>) {
+        self.law.commit(step.law);
+        self.z_est = step.z;
         self.z_m = input.rate.z_m;
         self.prev = Some(*input);
         let phi = &input.phi;
@@ -317,7 +344,6 @@ impl<L: CoefficientLaw> Channel<L> {
             self.excited =
                 well_conditioned(&self.info, self.n, self.count as f64, INIT_MIN_SCALED_PIVOT);
         }
-        Ok(())
     }
 
     fn theta(&self) -> [f64; N_TERMS] {
@@ -494,6 +520,23 @@ impl<L: CoefficientLaw> ModelReference<L> {
         self.channels[c.index()].as_ref().map(|ch| &ch.law)
     }
 
+    /// Every channel's step, computed before any is applied (all or nothing); only a first
+    /// sample's `start` changes a channel here.
+    fn propose(
+        &mut self,
+        s: &AirDataSample,
+        inputs: &[RateInput; 8],
+        dt: Option<f64>,
+    ) -> Result<[Option<Pending<L::Step>>; 8], StepFailure> {
+        let mut pending: [Option<Pending<L::Step>>; 8] = Default::default();
+        for (slot, (ch, input)) in pending.iter_mut().zip(self.channels.iter_mut().zip(inputs)) {
+            let Some(ch) = ch.as_mut() else { continue };
+            ch.start(s, input)?;
+            *slot = Some(ch.propose(s, input, dt)?);
+        }
+        Ok(pending)
+    }
+
     fn publish(&mut self, t_s: f64) {
         self.est.t_s = t_s;
         let mut all = true;
@@ -560,23 +603,25 @@ impl<L: CoefficientLaw> Estimator for ModelReference<L> {
         for ch in self.channels.iter().flatten() {
             inputs[ch.coefficient.index()] = ch.input(s, &measured, self.lambda_per_s)?;
         }
-        // Each channel is backed up before it steps, and every stepped channel is restored
-        // when a later one fails: one copy per update instead of a copy of all and a move back.
-        let mut backup: [Option<Channel<L>>; 8] = Default::default();
-        for k in 0..self.channels.len() {
-            let Some(ch) = self.channels[k].as_mut() else { continue };
-            backup[k] = Some(ch.clone());
-            let input = inputs[ch.coefficient.index()];
-            if let Err(fail) = ch.step(s, &input, dt) {
-                for (slot, saved) in self.channels.iter_mut().zip(backup.iter_mut()) {
-                    if let Some(saved) = saved.take() {
-                        *slot = Some(saved);
-                    }
+        // The first accepted sample starts the laws (their gains come from it), which cannot
+        // be proposed: the channels are copied then, and only then, to be restored on failure.
+        let unstarted = self.channels.iter().flatten().any(|ch| !ch.started);
+        let saved = unstarted.then(|| self.channels.clone());
+        let pending = match self.propose(s, &inputs, dt) {
+            Ok(pending) => pending,
+            Err(fail) => {
+                if let Some(saved) = saved {
+                    self.channels = saved;
                 }
                 return Err(match fail {
                     StepFailure::Diverged(what) => self.diverge(what, s.t_s),
                     StepFailure::Refused(e) => e,
                 });
+            }
+        };
+        for ((slot, step), input) in self.channels.iter_mut().zip(pending).zip(&inputs) {
+            if let (Some(ch), Some(step)) = (slot.as_mut(), step) {
+                ch.commit(input, step);
             }
         }
         self.last_t_s = Some(s.t_s);

@@ -47,6 +47,22 @@ pub struct GradientStats {
     pub clamped: u64,
 }
 
+/// One update of [`ModelReferenceGradient`] computed but not applied
+/// ([`ModelReferenceGradient::propose`]): the new estimate and how many parameters were clamped.
+#[derive(Debug, Clone, Copy)]
+pub struct GradientStep<const P: usize> {
+    t_s: f64,
+    theta: SVector<f64, P>,
+    clamped: u64,
+}
+
+impl<const P: usize> GradientStep<P> {
+    /// The estimate θ̂ once the step is committed.
+    pub fn theta(&self) -> &SVector<f64, P> {
+        &self.theta
+    }
+}
+
 /// The model-reference gradient estimator (3.3). `N` model states, `P` parameters.
 ///
 /// Sample: [`SmpeSample`] with `z` the estimated model's state, `z_m`, `ż_m` the measured
@@ -115,6 +131,41 @@ where
         self.last_t_s = None;
     }
 
+    /// One update computed from the current state without changing it, counters included,
+    /// so that a caller updating several estimators can apply all of them or none
+    /// ([`ParametricEstimator::update`] is this and [`ModelReferenceGradient::commit`]).
+    ///
+    /// # Errors
+    /// As [`ParametricEstimator::update`].
+    pub fn propose(&self, s: &SmpeSample<N, M::Input>) -> Result<GradientStep<P>, EstimatorError> {
+        s.check_finite()?;
+        let dt = sample_interval_s(self.last_t_s, s.t_s)?;
+        let rate = self.cost_rate(s)?;
+        let mut theta = self.estimate.theta;
+        let mut clamped = 0;
+        for j in 0..P {
+            let p = &self.cfg.params[j];
+            let v = theta[j] - p.lambda * rate[j] * dt;
+            if !v.is_finite() {
+                return Err(EstimatorError::Numerical { what: "gradient update", t_s: s.t_s });
+            }
+            if v < p.lower || v > p.upper {
+                clamped += 1;
+            }
+            theta[j] = v.clamp(p.lower, p.upper);
+        }
+        Ok(GradientStep { t_s: s.t_s, theta, clamped })
+    }
+
+    /// Applies a step proposed from the current state ([`ModelReferenceGradient::propose`]; a
+    /// step proposed before another update changed the state must be dropped, not committed).
+    pub fn commit(&mut self, step: GradientStep<P>) {
+        self.stats.samples += 1;
+        self.stats.clamped += step.clamped;
+        self.last_t_s = Some(step.t_s);
+        self.estimate = Estimate::new(step.t_s, step.theta);
+    }
+
     /// The bracket of (3.3) for each parameter, `Σ_i w_ji (z_i ż_i(θ̂) − z_m,i ż_m,i)`, at
     /// the current estimate (`dJ/dt` of (3.2) restricted to the parameter's states).
     ///
@@ -144,26 +195,8 @@ where
     }
 
     fn update(&mut self, s: &Self::Sample) -> Result<&Estimate<P>, EstimatorError> {
-        s.check_finite()?;
-        let dt = sample_interval_s(self.last_t_s, s.t_s)?;
-        let rate = self.cost_rate(s)?;
-        let mut theta = self.estimate.theta;
-        let mut clamped = 0;
-        for j in 0..P {
-            let p = &self.cfg.params[j];
-            let v = theta[j] - p.lambda * rate[j] * dt;
-            if !v.is_finite() {
-                return Err(EstimatorError::Numerical { what: "gradient update", t_s: s.t_s });
-            }
-            if v < p.lower || v > p.upper {
-                clamped += 1;
-            }
-            theta[j] = v.clamp(p.lower, p.upper);
-        }
-        self.stats.samples += 1;
-        self.stats.clamped += clamped;
-        self.last_t_s = Some(s.t_s);
-        self.estimate = Estimate::new(s.t_s, theta);
+        let step = self.propose(s)?;
+        self.commit(step);
         Ok(&self.estimate)
     }
 

@@ -36,8 +36,8 @@ use nalgebra::{SMatrix, SVector};
 mod corrected;
 mod published;
 
-pub use corrected::{CorrectedConfig, CorrectedSmpe};
-pub use published::{GainForm, PublishedSmpe, Reading, SmpeConfig, SolveStats};
+pub use corrected::{CorrectedConfig, CorrectedSmpe, CorrectedStep};
+pub use published::{GainForm, PublishedSmpe, PublishedStep, Reading, SmpeConfig, SolveStats};
 
 /// An estimation model `ż = f(t, z, u; θ)` with `N` states and `P` unknown parameters.
 ///

@@ -4,11 +4,11 @@
 use super::{CoefficientLaw, CoefficientRate, CoefficientSpec, RateInput, SlidingState};
 use crate::EstimatorError;
 use crate::ParametricEstimator;
-use crate::mrac::{GradientConfig, ModelReferenceGradient};
+use crate::mrac::{GradientConfig, GradientStep, ModelReferenceGradient};
 use crate::sample::AirDataSample;
 use crate::smpe::{
-    CorrectedConfig, CorrectedSmpe, GainForm, ParamSpec, PublishedSmpe, Reading, SlidingSurface,
-    SmpeConfig, SmpeSample,
+    CorrectedConfig, CorrectedSmpe, CorrectedStep, GainForm, ParamSpec, PublishedSmpe,
+    PublishedStep, Reading, SlidingSurface, SmpeConfig, SmpeSample,
 };
 use crate::vocabulary::{N_TERMS, Param, Term};
 
@@ -98,6 +98,7 @@ impl CorrectedLaw {
 impl CoefficientLaw for CorrectedLaw {
     const METHOD: &'static str = "smpe-corrected";
     type Config = CorrectedLawConfig;
+    type Step = CorrectedStep<1, N_TERMS>;
 
     fn new(spec: &CoefficientSpec<'_>, c: &CorrectedLawConfig) -> Result<Self, EstimatorError> {
         if !(c.tracking_ratio.is_finite() && c.tracking_ratio >= 0.0) {
@@ -143,8 +144,16 @@ impl CoefficientLaw for CorrectedLaw {
         self.engine.estimate().theta[j]
     }
 
-    fn update(&mut self, s: &SmpeSample<1, RateInput>) -> Result<(), EstimatorError> {
-        self.engine.update(s).map(|_| ())
+    fn propose(&self, s: &SmpeSample<1, RateInput>) -> Result<Self::Step, EstimatorError> {
+        self.engine.propose(s)
+    }
+
+    fn theta_after(&self, step: &Self::Step, j: usize) -> f64 {
+        step.theta()[j]
+    }
+
+    fn commit(&mut self, step: Self::Step) {
+        self.engine.commit(step);
     }
 
     fn new_manoeuvre(&mut self) {
@@ -258,6 +267,7 @@ fn state_reference(state: SlidingState, z0: f64, vt_mps: f64) -> f64 {
 impl CoefficientLaw for GradientLaw {
     const METHOD: &'static str = "gradient";
     type Config = GradientLawConfig;
+    type Step = GradientStep<N_TERMS>;
 
     fn new(spec: &CoefficientSpec<'_>, c: &GradientLawConfig) -> Result<Self, EstimatorError> {
         if !(c.loop_gain.is_finite() && c.loop_gain > 0.0) {
@@ -301,8 +311,16 @@ impl CoefficientLaw for GradientLaw {
         self.engine.estimate().theta[j]
     }
 
-    fn update(&mut self, s: &SmpeSample<1, RateInput>) -> Result<(), EstimatorError> {
-        self.engine.update(s).map(|_| ())
+    fn propose(&self, s: &SmpeSample<1, RateInput>) -> Result<Self::Step, EstimatorError> {
+        self.engine.propose(s)
+    }
+
+    fn theta_after(&self, step: &Self::Step, j: usize) -> f64 {
+        step.theta()[j]
+    }
+
+    fn commit(&mut self, step: Self::Step) {
+        self.engine.commit(step);
     }
 
     fn new_manoeuvre(&mut self) {
@@ -341,6 +359,18 @@ macro_rules! published_engines {
             $($variant(PublishedSmpe<CoefficientRate, 1, $p>)),*
         }
 
+        /// A step of [`PublishedEngine`], of the same size.
+        #[derive(Debug, Clone, Copy)]
+        enum PublishedEngineStep {
+            $($variant(PublishedStep<$p>)),*
+        }
+
+        impl PublishedEngineStep {
+            fn theta(&self, e: usize) -> f64 {
+                match self { $(Self::$variant(s) => s.theta()[e]),* }
+            }
+        }
+
         impl PublishedEngine {
             fn new(params: &[ParamSpec], c: &PublishedLawConfig) -> Result<Self, EstimatorError> {
                 let surface = SlidingSurface::first_order(&[0])?;
@@ -360,8 +390,19 @@ macro_rules! published_engines {
                 match self { $(Self::$variant(e) => e.estimate().theta[j]),* }
             }
 
-            fn update(&mut self, s: &SmpeSample<1, RateInput>) -> Result<(), EstimatorError> {
-                match self { $(Self::$variant(e) => e.update(s).map(|_| ())),* }
+            fn propose(
+                &self,
+                s: &SmpeSample<1, RateInput>,
+            ) -> Result<PublishedEngineStep, EstimatorError> {
+                match self { $(Self::$variant(e) => e.propose(s).map(PublishedEngineStep::$variant)),* }
+            }
+
+            fn commit(&mut self, step: PublishedEngineStep) {
+                match (self, step) {
+                    $((Self::$variant(e), PublishedEngineStep::$variant(step)) => e.commit(step),)*
+                    // Only a law's own engine proposes its steps, so the sizes match.
+                    _ => unreachable!("a published step committed to another engine"),
+                }
             }
 
             fn stats(&self) -> crate::smpe::SolveStats {
@@ -405,6 +446,10 @@ pub struct PublishedLaw {
     n: usize,
 }
 
+/// One update of [`PublishedLaw`] computed but not applied ([`CoefficientLaw::propose`]).
+#[derive(Debug, Clone, Copy)]
+pub struct PublishedLawStep(Option<PublishedEngineStep>);
+
 impl PublishedLaw {
     /// Counters of the engine's per-sample solve (no root, clamped …), if any parameter is
     /// estimated.
@@ -416,6 +461,7 @@ impl PublishedLaw {
 impl CoefficientLaw for PublishedLaw {
     const METHOD: &'static str = "smpe";
     type Config = PublishedLawConfig;
+    type Step = PublishedLawStep;
 
     fn new(spec: &CoefficientSpec<'_>, c: &PublishedLawConfig) -> Result<Self, EstimatorError> {
         let mut params = [UNUSED; N_TERMS];
@@ -459,8 +505,8 @@ impl CoefficientLaw for PublishedLaw {
         self.index[j].is_some()
     }
 
-    fn update(&mut self, s: &SmpeSample<1, RateInput>) -> Result<(), EstimatorError> {
-        let Some(engine) = self.engine.as_mut() else { return Ok(()) };
+    fn propose(&self, s: &SmpeSample<1, RateInput>) -> Result<Self::Step, EstimatorError> {
+        let Some(engine) = self.engine.as_ref() else { return Ok(PublishedLawStep(None)) };
         // Re-pack the regressors to the engine's parameters; held terms are known inputs.
         let mut u = s.u;
         u.phi = [0.0; N_TERMS];
@@ -470,7 +516,20 @@ impl CoefficientLaw for PublishedLaw {
                 None => u.c_m -= self.held[j] * s.u.phi[j],
             }
         }
-        engine.update(&SmpeSample { u, ..*s })
+        engine.propose(&SmpeSample { u, ..*s }).map(|step| PublishedLawStep(Some(step)))
+    }
+
+    fn theta_after(&self, step: &Self::Step, j: usize) -> f64 {
+        match (self.index[j], &step.0) {
+            (Some(e), Some(step)) => step.theta(e),
+            _ => self.held[j],
+        }
+    }
+
+    fn commit(&mut self, step: Self::Step) {
+        if let (Some(engine), Some(step)) = (self.engine.as_mut(), step.0) {
+            engine.commit(step);
+        }
     }
 
     fn new_manoeuvre(&mut self) {}

@@ -383,16 +383,13 @@ fn bad_configuration_is_an_error() {
     assert_eq!(Param::new(Coefficient::Cm, Term::Alpha).name(), "Cm_alpha");
 }
 
-/// A failure in a later channel restores the channels already stepped: with `Cl` (stepped
-/// first) and `Cm` (runs away on a glitch in q), the run that met the glitch and started a new
-/// manoeuvre equals, bit for bit, the run that skipped that sample and started one.
-#[test]
-fn a_failing_channel_restores_the_channels_stepped_before_it() {
+/// `Cl` (on `p`) and `Cm` (on `α`, `q`), and 300 samples exciting both.
+fn roll_pitch() -> (ModelStructure, std::vec::Vec<AirDataSample>) {
     let st = ModelStructure::empty()
         .with(Coefficient::Cl, &[Term::Bias, Term::P])
         .with(Coefficient::Cm, &[Term::Bias, Term::Alpha, Term::Q]);
     assert!(Coefficient::Cl.index() < Coefficient::Cm.index(), "Cl steps first");
-    let samples: std::vec::Vec<_> = excited_run()
+    let samples = excited_run()
         .map(|mut s| {
             let p = 0.2 * (1.7 * s.t_s).sin();
             s.p_rad_s = Some(p);
@@ -402,6 +399,15 @@ fn a_failing_channel_restores_the_channels_stepped_before_it() {
             s
         })
         .collect();
+    (st, samples)
+}
+
+/// A failure in a later channel restores the channels already stepped: with `Cl` (stepped
+/// first) and `Cm` (runs away on a glitch in q), the run that met the glitch and started a new
+/// manoeuvre equals, bit for bit, the run that skipped that sample and started one.
+#[test]
+fn a_failing_channel_restores_the_channels_stepped_before_it() {
+    let (st, samples) = roll_pitch();
     let priors = Priors::generic(&st);
     let cfg = ModelReferenceConfig::default();
     let mut skipped = CorrectedSmpeEstimator::new(st, &priors, cfg).unwrap();
@@ -421,4 +427,63 @@ fn a_failing_channel_restores_the_channels_stepped_before_it() {
     }
     assert_eq!(glitched.estimates(), skipped.estimates());
     assert_eq!(glitched.estimated_state(Coefficient::Cl), skipped.estimated_state(Coefficient::Cl));
+}
+
+/// The same, seen at once and whole, for every law: right after `Cm` runs away, every channel
+/// (`Cl`'s law with its gain and counters, estimated state, accumulated excitation, and `Cm`'s)
+/// is exactly as before the sample — also on the first sample, where the laws start.
+#[test]
+fn a_later_channels_failure_leaves_every_channel_as_it_was() {
+    fn check<L: CoefficientLaw + core::fmt::Debug>()
+    where
+        L::Config: Default,
+    {
+        let (st, samples) = roll_pitch();
+        let priors = Priors::generic(&st);
+        let mut e = ModelReference::<L>::new(st, &priors, ModelReferenceConfig::default()).unwrap();
+        // The published and gradient laws run away by themselves later in this run.
+        for s in &samples[..30] {
+            e.update(s).unwrap();
+        }
+        let before = format!("{:?}", e.channels);
+        let mut glitch = samples[30];
+        glitch.q_rad_s = Some(5.0);
+        assert!(
+            matches!(e.update(&glitch), Err(EstimatorError::Numerical { .. })),
+            "{}",
+            L::METHOD
+        );
+        assert_eq!(format!("{:?}", e.channels), before, "{}", L::METHOD);
+        assert_eq!(e.last_t_s, Some(samples[29].t_s));
+    }
+    check::<CorrectedLaw>();
+    check::<PublishedLaw>();
+    check::<GradientLaw>();
+}
+
+/// On the first sample the laws start (their gains come from it): when `Cm`'s start refuses
+/// the sample (a `c̄` of 1e-300 m makes `(∂q̇/∂Cm)²` underflow), `Cl`, started before it, is
+/// unstarted again, and
+/// the next good sample starts both as if the refused one had never come.
+#[test]
+fn a_later_channels_refused_start_leaves_every_channel_unstarted() {
+    let (st, samples) = roll_pitch();
+    let priors = Priors::generic(&st);
+    let cfg = ModelReferenceConfig::default();
+    let mut clean = CorrectedSmpeEstimator::new(st, &priors, cfg).unwrap();
+    let mut refused = clean.clone();
+    let before = format!("{:?}", refused.channels);
+    let mut flat = samples[0];
+    flat.constants.cbar_m = Some(1e-300);
+    let r = refused.update(&flat).map(|_| ());
+    assert!(
+        matches!(r, Err(EstimatorError::InvalidConfig { field: "information_per_s", .. })),
+        "{r:?}"
+    );
+    assert_eq!(format!("{:?}", refused.channels), before);
+    for s in &samples[..50] {
+        clean.update(s).unwrap();
+        refused.update(s).unwrap();
+    }
+    assert_eq!(format!("{:?}", refused.channels), format!("{:?}", clean.channels));
 }

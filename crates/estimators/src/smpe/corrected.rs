@@ -182,9 +182,10 @@ fn dot_leading<const P: usize>(x: &SVector<f64, P>, y: &SVector<f64, P>, n: usiz
 
 /// `Γ x` over the leading `n × n` block (zero beyond), in nalgebra's order (a column sweep:
 /// `y = Γ₀ x₀`, then `y += Γⱼ xⱼ`), so bit-identical to `Γ * x` when `x` is zero beyond `n`
-/// and Γ is block-diagonal between the leading `n` and the rest.
+/// and Γ is block-diagonal between the leading `n` and the rest. Γ is given entry by entry,
+/// `g(a, b)`, because the Γ of a proposed step exists only as Γ before and its change.
 fn mul_leading<const P: usize>(
-    g: &SMatrix<f64, P, P>,
+    g: impl Fn(usize, usize) -> f64,
     x: &SVector<f64, P>,
     n: usize,
 ) -> SVector<f64, P> {
@@ -193,64 +194,116 @@ fn mul_leading<const P: usize>(
         return y;
     }
     for a in 0..n {
-        y[a] = g[(a, 0)] * x[0];
+        y[a] = g(a, 0) * x[0];
     }
     for b in 1..n {
         for a in 0..n {
-            y[a] += g[(a, b)] * x[b];
+            y[a] += g(a, b) * x[b];
         }
     }
     y
 }
 
-/// Scales the leading `n × n` block of Γ by `f`.
-fn scale_leading<const P: usize>(g: &mut SMatrix<f64, P, P>, n: usize, f: f64) {
-    for b in 0..n {
-        for a in 0..n {
-            g[(a, b)] *= f;
+/// Γ's change over one update, kept as what produces it rather than as a new Γ, so that a
+/// proposed step is a few vectors instead of a `P × P` copy. Each leading entry is scaled by
+/// the forgetting factor and by the trace cap, then loses the rank-one term `k_i[a] (Γφ_i)[b]`
+/// of each sliding state in order, then the block is symmetrised: the operations, in the
+/// order, of the in-place update, so the entries are bit-identical to it.
+#[derive(Debug, Clone, Copy)]
+struct GainChange<const N: usize, const P: usize> {
+    forget: Option<f64>,
+    cap: Option<f64>,
+    used: [bool; N],
+    k: [SVector<f64, P>; N],
+    gphi: [SVector<f64, P>; N],
+}
+
+impl<const N: usize, const P: usize> GainChange<N, P> {
+    fn none() -> Self {
+        Self {
+            forget: None,
+            cap: None,
+            used: [false; N],
+            k: [SVector::zeros(); N],
+            gphi: [SVector::zeros(); N],
         }
+    }
+
+    /// Entry `(a, b)` after the scaling and the first `upto` sliding states' updates, from
+    /// `g` = Γ before the step.
+    fn entry(&self, g: &SMatrix<f64, P, P>, a: usize, b: usize, upto: usize) -> f64 {
+        let mut v = g[(a, b)];
+        if let Some(f) = self.forget {
+            v *= f;
+        }
+        if let Some(f) = self.cap {
+            v *= f;
+        }
+        for i in 0..upto {
+            if self.used[i] {
+                v -= self.k[i][a] * self.gphi[i][b];
+            }
+        }
+        v
+    }
+
+    /// Entry `(a, b)` of the new Γ: `(Γ + Γᵀ)/2` of the updated block (rounding keeps Γ
+    /// symmetric).
+    fn symmetric(&self, g: &SMatrix<f64, P, P>, a: usize, b: usize) -> f64 {
+        let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
+        (self.entry(g, lo, hi, N) + self.entry(g, hi, lo, N)) * 0.5
     }
 }
 
-/// `(Γ + Γᵀ)/2` on the leading `n × n` block (rounding keeps Γ symmetric).
-fn symmetrise_leading<const P: usize>(g: &mut SMatrix<f64, P, P>, n: usize) {
-    for b in 0..n {
-        for a in 0..=b {
-            let v = (g[(a, b)] + g[(b, a)]) * 0.5;
-            g[(a, b)] = v;
-            g[(b, a)] = v;
-        }
+/// One update of [`CorrectedSmpe`] computed but not applied ([`CorrectedSmpe::propose`]):
+/// the new estimate and surface, and the change of the adaptation gain.
+#[derive(Debug, Clone, Copy)]
+pub struct CorrectedStep<const N: usize, const P: usize> {
+    t_s: f64,
+    theta: SVector<f64, P>,
+    surface: SVector<f64, N>,
+    gain: GainChange<N, P>,
+}
+
+impl<const N: usize, const P: usize> CorrectedStep<N, P> {
+    /// The estimate θ̂ once the step is committed.
+    pub fn theta(&self) -> &SVector<f64, P> {
+        &self.theta
     }
 }
 
-impl<M, const N: usize, const P: usize> ParametricEstimator<P> for CorrectedSmpe<M, N, P>
+impl<M, const N: usize, const P: usize> CorrectedSmpe<M, N, P>
 where
     M: ParametricModel<N, P>,
 {
-    type Sample = SmpeSample<N, M::Input>;
-
-    fn param_names(&self) -> [&'static str; P] {
-        self.cfg.params.map(|p| p.name)
-    }
-
-    fn update(&mut self, s: &Self::Sample) -> Result<&Estimate<P>, EstimatorError> {
+    /// One update computed from the current state without changing it, so that a caller
+    /// updating several estimators can apply all of them or none
+    /// ([`ParametricEstimator::update`] is this and [`CorrectedSmpe::commit`]).
+    ///
+    /// # Errors
+    /// As [`ParametricEstimator::update`].
+    pub fn propose(
+        &self,
+        s: &SmpeSample<N, M::Input>,
+    ) -> Result<CorrectedStep<N, P>, EstimatorError> {
         s.check_finite()?;
         let dt = sample_interval_s(self.last_t_s, s.t_s)?;
         let theta0 = self.estimate.theta;
         let zdot = self.model.derivatives(s.t_s, &s.z_m, &s.u, &theta0)?;
         let sens = self.model.sensitivity(s.t_s, &s.z_m, &s.u, &theta0)?;
-        let (cfg, n) = (&self.cfg, self.active);
+        let (cfg, n, g0) = (&self.cfg, self.active, &self.gamma);
         let lam = cfg.lambda_per_s;
         // Surface, exact for a held prediction error over dt.
         let decay = libm::exp(-lam * dt);
         let gain_in = if lam * dt > 1e-12 { (1.0 - decay) / lam } else { dt };
         let mut surface = self.surface;
-        let mut gamma = self.gamma;
+        let mut change = GainChange::<N, P>::none();
         if cfg.forgetting_per_s > 0.0 && dt > 0.0 {
-            scale_leading(&mut gamma, n, libm::exp(cfg.forgetting_per_s * dt));
-            let tr: f64 = (0..n).map(|a| gamma[(a, a)]).sum();
+            let f = libm::exp(cfg.forgetting_per_s * dt);
+            change.forget = Some(f);
+            let tr: f64 = (0..n).map(|a| g0[(a, a)] * f).sum();
             if tr > self.gamma_trace0 {
-                scale_leading(&mut gamma, n, self.gamma_trace0 / tr);
+                change.cap = Some(self.gamma_trace0 / tr);
             }
         }
         let mut theta = theta0;
@@ -268,20 +321,15 @@ where
             let phi = sens.row(i).transpose();
             // Prediction error at the current (already partly updated) estimate.
             let e = e0 + dot_leading(&phi, &(theta - theta0), n);
-            let gphi = mul_leading(&gamma, &phi, n);
+            let gphi = mul_leading(|a, b| change.entry(g0, a, b, i), &phi, n);
             let denom = 1.0 / weight + dot_leading(&phi, &gphi, n);
             if !(denom.is_finite() && denom > 0.0) {
                 continue;
             }
             let k = gphi / denom;
             theta -= k * e;
-            for b in 0..n {
-                for a in 0..n {
-                    gamma[(a, b)] -= k[a] * gphi[b];
-                }
-            }
+            (change.used[i], change.k[i], change.gphi[i]) = (true, k, gphi);
         }
-        symmetrise_leading(&mut gamma, n);
         // Surface (tracking) term of the composite law, explicit Euler.
         if cfg.tracking_weight > 0.0 && dt > 0.0 {
             let mut phis = SVector::<f64, P>::zeros();
@@ -290,20 +338,51 @@ where
                     phis += sens.row(i).transpose() * (cfg.sliding[i] * surface[i]);
                 }
             }
-            theta -= mul_leading(&gamma, &phis, n) * (cfg.tracking_weight * dt);
+            let gamma = |a, b| change.symmetric(g0, a, b);
+            theta -= mul_leading(gamma, &phis, n) * (cfg.tracking_weight * dt);
         }
         for j in 0..P {
             theta[j] = theta[j].clamp(cfg.params[j].lower, cfg.params[j].upper);
         }
-        let gamma_finite = (0..n).all(|b| (0..n).all(|a| gamma[(a, b)].is_finite()));
+        let gamma_finite = (0..n).all(|b| (0..=b).all(|a| change.symmetric(g0, a, b).is_finite()));
         if !(gamma_finite && theta.iter().chain(surface.iter()).all(|x| x.is_finite())) {
             return Err(EstimatorError::Numerical { what: "corrected SMPE update", t_s: s.t_s });
         }
-        self.gamma = gamma;
-        self.surface = surface;
-        self.last_t_s = Some(s.t_s);
-        self.estimate.t_s = s.t_s;
-        self.estimate.theta = theta;
+        Ok(CorrectedStep { t_s: s.t_s, theta, surface, gain: change })
+    }
+
+    /// Applies a step proposed from the current state ([`CorrectedSmpe::propose`]; a step
+    /// proposed before another update changed the state must be dropped, not committed). Γ
+    /// is updated in place: each pair `(a, b)`, `(b, a)` is read before it is written, and
+    /// by no other pair.
+    pub fn commit(&mut self, step: CorrectedStep<N, P>) {
+        for b in 0..self.active {
+            for a in 0..=b {
+                let v = step.gain.symmetric(&self.gamma, a, b);
+                self.gamma[(a, b)] = v;
+                self.gamma[(b, a)] = v;
+            }
+        }
+        self.surface = step.surface;
+        self.last_t_s = Some(step.t_s);
+        self.estimate.t_s = step.t_s;
+        self.estimate.theta = step.theta;
+    }
+}
+
+impl<M, const N: usize, const P: usize> ParametricEstimator<P> for CorrectedSmpe<M, N, P>
+where
+    M: ParametricModel<N, P>,
+{
+    type Sample = SmpeSample<N, M::Input>;
+
+    fn param_names(&self) -> [&'static str; P] {
+        self.cfg.params.map(|p| p.name)
+    }
+
+    fn update(&mut self, s: &Self::Sample) -> Result<&Estimate<P>, EstimatorError> {
+        let step = self.propose(s)?;
+        self.commit(step);
         Ok(&self.estimate)
     }
 

@@ -86,6 +86,22 @@ pub struct PublishedSmpe<M, const N: usize, const P: usize> {
     stats: SolveStats,
 }
 
+/// One update of [`PublishedSmpe`] computed but not applied ([`PublishedSmpe::propose`]): the
+/// new estimate and counters.
+#[derive(Debug, Clone, Copy)]
+pub struct PublishedStep<const P: usize> {
+    t_s: f64,
+    theta: SVector<f64, P>,
+    stats: SolveStats,
+}
+
+impl<const P: usize> PublishedStep<P> {
+    /// The estimate θ̂ once the step is committed.
+    pub fn theta(&self) -> &SVector<f64, P> {
+        &self.theta
+    }
+}
+
 /// The per-sample residual, affine-in-θ pieces precomputed.
 struct Residual<const N: usize, const P: usize> {
     cfg: SmpeConfig<N, P>,
@@ -176,6 +192,38 @@ where
         self.stats
     }
 
+    /// One update computed from the current state without changing it, counters included,
+    /// so that a caller updating several estimators can apply all of them or none
+    /// ([`ParametricEstimator::update`] is this and [`PublishedSmpe::commit`]).
+    ///
+    /// # Errors
+    /// As [`ParametricEstimator::update`].
+    pub fn propose(
+        &self,
+        sample: &SmpeSample<N, M::Input>,
+    ) -> Result<PublishedStep<P>, EstimatorError> {
+        sample.check_finite()?;
+        let res = self.residual(sample)?;
+        let mut stats = self.stats;
+        let theta = match (self.cfg.reading, P) {
+            (Reading::Explicit, _) => self.solve_explicit(&res, &mut stats),
+            (Reading::Implicit, 1) => self.solve_scalar(&res, &mut stats),
+            (Reading::Implicit, _) => self.solve_newton(&res, &mut stats),
+        };
+        if theta.iter().any(|x| !x.is_finite()) {
+            return Err(EstimatorError::Numerical { what: "SMPE estimate", t_s: sample.t_s });
+        }
+        stats.samples += 1;
+        Ok(PublishedStep { t_s: sample.t_s, theta, stats })
+    }
+
+    /// Applies a step proposed from the current state ([`PublishedSmpe::propose`]; a step
+    /// proposed before another update changed the state must be dropped, not committed).
+    pub fn commit(&mut self, step: PublishedStep<P>) {
+        self.stats = step.stats;
+        self.estimate = Estimate::new(step.t_s, step.theta);
+    }
+
     fn residual(&self, s: &SmpeSample<N, M::Input>) -> Result<Residual<N, P>, EstimatorError> {
         let theta0 = self.estimate.theta;
         let zdot0 = self.model.derivatives(s.t_s, &s.z, &s.u, &theta0)?;
@@ -199,7 +247,7 @@ where
         })
     }
 
-    fn solve_explicit(&mut self, res: &Residual<N, P>) -> SVector<f64, P> {
+    fn solve_explicit(&self, res: &Residual<N, P>, stats: &mut SolveStats) -> SVector<f64, P> {
         let theta0 = res.theta0;
         let (r, l, b) = res.parts(&theta0);
         let k = res.gains(&theta0);
@@ -209,20 +257,20 @@ where
             let mut d = k[j] * b + eta;
             if libm::fabs(d) < eta || d.is_nan() {
                 d = if d < 0.0 { -eta } else { eta };
-                self.stats.guarded += 1;
+                stats.guarded += 1;
             }
             let p = &self.cfg.params[j];
             let raw = (r + p.lambda * l) / d;
             let v = if raw.is_finite() { raw } else { theta0[j] };
             if v < p.lower || v > p.upper {
-                self.stats.clamped += 1;
+                stats.clamped += 1;
             }
             out[j] = v.clamp(p.lower, p.upper);
         }
         out
     }
 
-    fn solve_scalar(&mut self, res: &Residual<N, P>) -> SVector<f64, P> {
+    fn solve_scalar(&self, res: &Residual<N, P>, stats: &mut SolveStats) -> SVector<f64, P> {
         const GRID: usize = 128;
         let p = &self.cfg.params[0];
         let (lo, hi) = (p.lower, p.upper);
@@ -290,14 +338,14 @@ where
                 }
             }
             None => {
-                self.stats.no_root += 1;
+                stats.no_root += 1;
                 best.1
             }
         };
         SVector::<f64, P>::from_element(root.clamp(lo, hi))
     }
 
-    fn solve_newton(&mut self, res: &Residual<N, P>) -> SVector<f64, P> {
+    fn solve_newton(&self, res: &Residual<N, P>, stats: &mut SolveStats) -> SVector<f64, P> {
         let params = &self.cfg.params;
         let scale = 1.0 + libm::fabs(res.r0) + libm::fabs(res.l0) + libm::fabs(res.b0);
         let tol = 1e-10 * scale;
@@ -352,7 +400,7 @@ where
             }
         }
         if best.0.is_nan() || best.0 >= tol {
-            self.stats.no_root += 1;
+            stats.no_root += 1;
         }
         best.1
     }
@@ -369,18 +417,8 @@ where
     }
 
     fn update(&mut self, sample: &Self::Sample) -> Result<&Estimate<P>, EstimatorError> {
-        sample.check_finite()?;
-        let res = self.residual(sample)?;
-        let theta = match (self.cfg.reading, P) {
-            (Reading::Explicit, _) => self.solve_explicit(&res),
-            (Reading::Implicit, 1) => self.solve_scalar(&res),
-            (Reading::Implicit, _) => self.solve_newton(&res),
-        };
-        if theta.iter().any(|x| !x.is_finite()) {
-            return Err(EstimatorError::Numerical { what: "SMPE estimate", t_s: sample.t_s });
-        }
-        self.stats.samples += 1;
-        self.estimate = Estimate::new(sample.t_s, theta);
+        let step = self.propose(sample)?;
+        self.commit(step);
         Ok(&self.estimate)
     }
 

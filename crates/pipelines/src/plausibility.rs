@@ -105,7 +105,7 @@ pub const THRUST_VARIATION_LIMIT: f64 = 0.10;
 /// moment about the CG (a thrust line off the CG, the propeller's normal force) is then part
 /// of the measured pitching moment and follows the flight condition, and every method fits
 /// it into the airframe's terms alike, so no cross-check can see it (a JSBSim Cessna 172
-/// whose speed varied 27 %: Cm_q 13 % off in oe, the EKF and least squares together). `None`
+/// whose speed varied 27 %: Cm_q 13 % off in oe and 12 % in the EKF, Cm_α 14 % in least squares). `None`
 /// otherwise: with the speed held, the engine's moment is about constant and `Cm_0` takes it.
 pub fn unmapped_thrust_moment(
     structure: &aeroident_estimators::ModelStructure,
@@ -245,7 +245,7 @@ mod tests {
         assert_eq!((cd.estimate, cd.flags.len()), (Some(0.03), 0));
     }
 
-    /// Without thrust, a 27 % speed change (the JSBSim Cessna 172 multisine record) or a
+    /// Without thrust, a 26 % speed change (about the JSBSim Cessna 172 multisine record's 27 %) or a
     /// throttle moved 15 % of its travel flags every `Cm` term, through a warning about the
     /// coefficient; 4 % (its 3-2-1-1 record) does not, nor any change with `thrust` or
     /// `thrust_moment` mapped, nor a structure without `Cm`.

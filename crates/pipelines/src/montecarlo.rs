@@ -66,6 +66,7 @@ use crate::metrics::ZERO_THRESHOLD;
 use aeroident_physics::units::{M_PER_FT, N_PER_LBF, PA_PER_PSF};
 
 mod from_json;
+pub mod model_file;
 pub use from_json::run_result_from_json;
 
 /// The golden-ratio increment of SplitMix64 (Steele, Lea & Flood, OOPSLA 2014).
@@ -820,7 +821,7 @@ pub const STATUS_NO_ESTIMATES: &str = "no_estimates";
 /// The status and its reason of a campaign of `runs` runs that is not a result (every run
 /// failed, or no estimate in any), `None` for one that is; the reason quotes the first
 /// failure and counts the others.
-fn outcome_status(
+pub(crate) fn outcome_status(
     runs: usize,
     failed: &[FailedRun],
     estimators: &[EstimatorStats],

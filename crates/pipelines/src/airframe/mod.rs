@@ -243,6 +243,39 @@ impl ModelFileAircraft {
         Ok((rho, isa::speed_of_sound_mps(t)))
     }
 
+    /// The flight condition an experiment design starts from
+    /// ([`aeroident_estimators::output_error::design::FlightCondition`]): the trim `state` (SI,
+    /// [`STATE_NAMES`] order) and `controls` (engine command, elevator, aileron, rudder, rad),
+    /// with the density at the trim's altitude and the thrust the command gives there.
+    ///
+    /// # Errors
+    /// As [`Self::air`]; a state or control vector too short.
+    pub fn flight_condition(
+        &self,
+        state: &[f64],
+        controls: &[f64],
+    ) -> Result<aeroident_estimators::output_error::design::FlightCondition, ModelError> {
+        if state.len() < N_STATES || controls.len() < 4 {
+            return Err(ModelError::InvalidValue {
+                field: "trim",
+                value: state.len() as f64,
+                reason: "a trim needs every state and the four controls",
+            });
+        }
+        let (rho, _) = self.air(state[rb::ALT])?;
+        let vt_mps = state[rb::VT];
+        Ok(aeroident_estimators::output_error::design::FlightCondition {
+            vt_mps,
+            alpha_rad: state[rb::ALPHA],
+            theta_rad: state[rb::THETA],
+            rho_kgpm3: rho,
+            thrust_n: self.thrust_n(rho, vt_mps, controls[0]),
+            de_rad: controls[1],
+            da_rad: controls[2],
+            dr_rad: controls[3],
+        })
+    }
+
     /// Thrust, N, at density `rho_kgpm3`, airspeed `vt_mps` and engine command `command`.
     pub fn thrust_n(&self, rho_kgpm3: f64, vt_mps: f64, command: f64) -> f64 {
         match &self.airframe.propulsion {

@@ -412,19 +412,7 @@ pub fn design_for_aircraft(
     let Multisines { t_s, inputs, harmonics } = excitation(spec)?;
     use aeroident_models::aircraft::Aircraft;
     let tr = aircraft.trim_level(vt_mps, alt_m)?;
-    use aeroident_models::rigid_body as rb;
-    let (rho, _) = aircraft.air(alt_m)?;
-    let (x, u) = (tr.state, tr.controls);
-    let condition = FlightCondition {
-        vt_mps,
-        alpha_rad: x[rb::ALPHA],
-        theta_rad: x[rb::THETA],
-        rho_kgpm3: rho,
-        thrust_n: aircraft.thrust_n(rho, vt_mps, u[0]),
-        de_rad: u[1],
-        da_rad: u[2],
-        dr_rad: u[3],
-    };
+    let condition = aircraft.flight_condition(tr.state.as_slice(), tr.controls.as_slice())?;
     let (structure, theta) = excited_part(aircraft, &spec.surfaces);
     let plan = plan_of(spec, &inputs, structure, theta, aircraft.constants(), condition);
     let crb = predict_crb(&plan)?;

@@ -209,7 +209,27 @@ fn commands(trim: &ControlVector, inputs: &[(Channel, Input)], t: f64) -> Contro
 /// each channel's sensed `meas_` column where the scenario has a sensor on it, else the true
 /// column; thrust as a channel (so drag is drag whatever the engine law), the thrust line's arm
 /// and incidence and `v0` as the aircraft has them.
+///
+/// A record with sensors is mapped as a flight record would be: the state derivatives
+/// (`pdot`, `qdot`, `rdot`, `alphadot`) only where a sensor measures them. No instrument
+/// system measures them exactly; left out, the estimators differentiate the sensed rates as on
+/// a flight record, and output error does not read an exact angular acceleration as an output
+/// (it would tell the moments without noise: over 16 noisy flights of the F-16's local
+/// derivatives the fits then scattered 10–100× below their Cramér–Rao bound). A noise-free
+/// record keeps them, for exact round trips.
 pub fn replay_mapping(aircraft: &ModelFileAircraft, run: &AircraftSimRun) -> String {
+    const DERIVATIVES: [&str; 4] = ["pdot_rad_s2", "qdot_rad_s2", "rdot_rad_s2", "alphadot_rad_s"];
+    let sensed = |col: &str| run.table.column(&format!("meas_{col}")).is_some();
+    let any_sensor = run.table.columns.iter().any(|c| c.starts_with("meas_"));
+    mapping_with(aircraft, run, |col| !any_sensor || !DERIVATIVES.contains(&col) || sensed(col))
+}
+
+/// [`replay_mapping`] with the channels whose true column `keep` refuses left out.
+fn mapping_with(
+    aircraft: &ModelFileAircraft,
+    run: &AircraftSimRun,
+    keep: impl Fn(&str) -> bool,
+) -> String {
     let pick = |col: &str| -> String {
         let m = format!("meas_{col}");
         if run.table.column(&m).is_some() { m } else { col.to_string() }
@@ -219,7 +239,7 @@ pub fn replay_mapping(aircraft: &ModelFileAircraft, run: &AircraftSimRun) -> Str
         aircraft.name(),
         aircraft.name().replace('"', "'")
     );
-    for (key, col, unit) in REPLAY_CHANNELS {
+    for (key, col, unit) in REPLAY_CHANNELS.into_iter().filter(|(_, col, _)| keep(col)) {
         s.push_str(&format!("{key} = {{ column = \"{}\", unit = \"{unit}\" }}\n", pick(col)));
     }
     let (af, m, g) =

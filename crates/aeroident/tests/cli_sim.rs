@@ -114,3 +114,139 @@ fn a_model_file_aircraft_s_record_replays_to_the_values_it_flew() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// White noise on every output, SI (a small air-data system and an AHRS).
+const SENSORS: [(&str, f64); 11] = [
+    ("vt_mps", 0.3),
+    ("alpha_rad", 0.0017),
+    ("beta_rad", 0.0017),
+    ("p_rad_s", 0.0025),
+    ("q_rad_s", 0.0025),
+    ("r_rad_s", 0.0025),
+    ("phi_rad", 0.005),
+    ("theta_rad", 0.005),
+    ("ax_mps2", 0.1),
+    ("ay_mps2", 0.1),
+    ("az_mps2", 0.1),
+];
+
+/// [`write_inputs`] with the scenario's outputs sensed ([`SENSORS`]).
+fn write_sensed_inputs(dir: &Path) -> (PathBuf, PathBuf, PathBuf) {
+    let (model, constants, scenario) = write_inputs(dir);
+    let mut text = std::fs::read_to_string(&scenario).unwrap();
+    for (ch, sigma) in SENSORS {
+        text.push_str(&format!(
+            "[[sensor]]\nchannel = \"{ch}\"\nwhite_sigma = {sigma}\nsample_rate_hz = 50.0\n"
+        ));
+    }
+    std::fs::write(&scenario, text).unwrap();
+    (model, constants, scenario)
+}
+
+fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
+}
+
+/// `run --aircraft MODEL.toml`: one noisy flight of the light single, `rls` and `oe` on its
+/// record. Every reference is the value flown, and every output-error estimate lies within
+/// 4σ of it (white noise: a fit whose σ or truth were wrong would not).
+#[test]
+fn a_model_file_aircraft_runs_its_estimation_experiment_against_the_values_flown() {
+    let dir = std::env::temp_dir().join(format!("aeroident-cli-run-mf-{}", std::process::id()));
+    let (model, constants, scenario) = write_sensed_inputs(&dir);
+    let out = dir.join("run");
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let said = run(&[
+        "run",
+        &s(&scenario),
+        "--aircraft",
+        &s(&model),
+        "--map",
+        &s(&constants),
+        "--estimator",
+        "rls,oe",
+        "--out",
+        &s(&out),
+    ]);
+    assert!(said.contains("rls") && said.contains("oe") && said.contains("flown"), "{said}");
+    for f in ["timeseries.csv", "mapping.toml", "report.html", "summary.json"] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    let summary = json(&out.join("summary.json"));
+    let estimators = summary["estimators"].as_array().unwrap();
+    assert_eq!(estimators.len(), 2);
+    let oe = estimators.iter().find(|e| e["name"] == "oe").unwrap();
+    for (name, flown) in VALUES {
+        let p = oe["params"].as_array().unwrap().iter().find(|p| p["name"] == name).unwrap();
+        assert_eq!(p["reference"].as_f64(), Some(flown), "{name}");
+        let (e, sigma) = (p["estimate"].as_f64().unwrap(), p["std_error"].as_f64().unwrap());
+        assert!((e - flown).abs() <= 4.0 * sigma, "{name}: {e} ± {sigma} against {flown}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `montecarlo --aircraft MODEL.toml`: eight noisy flights; output error's scatter of each
+/// primary derivative lies within [0.4, 2.0] × the Cramér–Rao σ of the flight (eight draws:
+/// the sample σ has a relative standard error of 27 %), and the campaign is complete.
+#[test]
+fn a_model_file_aircraft_s_monte_carlo_scatters_as_its_bound() {
+    let dir = std::env::temp_dir().join(format!("aeroident-cli-mc-mf-{}", std::process::id()));
+    let (model, constants, scenario) = write_sensed_inputs(&dir);
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let said = run(&[
+        "montecarlo",
+        &s(&scenario),
+        "--aircraft",
+        &s(&model),
+        "--map",
+        &s(&constants),
+        "--estimator",
+        "oe",
+        "--runs",
+        "8",
+        "--json",
+    ]);
+    let c: serde_json::Value = serde_json::from_str(&said).unwrap();
+    assert_eq!(c["status"], "complete", "{c}");
+    let oe = &c["estimators"][0];
+    assert_eq!(oe["name"], "oe");
+    let mut checked = 0;
+    for p in oe["parameters"].as_array().unwrap() {
+        let name = p["name"].as_str().unwrap();
+        let flown = VALUES.iter().find(|(n, _)| *n == name).unwrap().1;
+        assert_eq!(p["reference"].as_f64(), Some(flown), "{name}");
+        let ratio = p["scatter"].as_f64().unwrap() / p["crb_std_error"].as_f64().unwrap();
+        assert!((0.4..=2.0).contains(&ratio), "{name}: scatter / σ_CRB {ratio}");
+        checked += 1;
+    }
+    assert_eq!(checked, VALUES.len());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// What cannot make a model-file experiment is refused by name, before any flight.
+#[test]
+fn model_file_experiment_options_are_checked_by_name() {
+    let dir = std::env::temp_dir().join(format!("aeroident-cli-mf-bad-{}", std::process::id()));
+    let (model, constants, scenario) = write_inputs(&dir);
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let fails = |args: &[&str], needle: &str| {
+        let out = Command::new(env!("CARGO_BIN_EXE_aeroident")).args(args).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains(needle), "{args:?}: {err}");
+    };
+    let (m, c, sc) = (s(&model), s(&constants), s(&scenario));
+    let aircraft = ["--aircraft", m.as_str(), "--map", c.as_str()];
+    for (cmd, extra, needle) in [
+        ("run", ["--estimator", "nope"], "known: rls"),
+        ("run", ["--estimator", "oe,oe"], "named twice"),
+        ("montecarlo", ["--runs", "2"], "no [[sensor]] with white noise"),
+    ] {
+        let mut args = vec![cmd, sc.as_str()];
+        args.extend(aircraft);
+        args.extend(extra);
+        fails(&args, needle);
+    }
+    fails(&["montecarlo", "--estimator", "rls", "--runs", "2"], "--estimator is for a model-file");
+    fails(&["run", "--aircraft", &m, "--map", &c], "give its file");
+    let _ = std::fs::remove_dir_all(&dir);
+}

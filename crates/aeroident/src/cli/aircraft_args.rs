@@ -1,5 +1,5 @@
 //! `--aircraft f16|MODEL.toml [--summary S] [--map M]`: the aircraft a command flies, shared by
-//! the commands that take either (`sim`, `linearize`).
+//! the commands that take either (`sim`, `linearize`, `run`, `montecarlo`).
 
 use anyhow::Context;
 use std::path::{Path, PathBuf};
@@ -69,4 +69,26 @@ impl AircraftArgs {
         v.extend(self.summary.as_deref());
         Ok(v)
     }
+}
+
+/// The model-file experiment of `a` flying `scenario` with `estimators` (`run` and
+/// `montecarlo` with `--aircraft MODEL.toml`;
+/// [`aeroident_pipelines::montecarlo::model_file::ModelFileExperiment::load`]).
+///
+/// # Errors
+/// No `--map`; files that do not describe a flyable aircraft or scenario; an unknown
+/// estimator.
+pub fn experiment(
+    a: &AircraftArgs,
+    scenario: &Path,
+    estimators: &[String],
+) -> anyhow::Result<aeroident_pipelines::montecarlo::model_file::ModelFileExperiment> {
+    use aeroident_pipelines::montecarlo::model_file::{ExperimentFiles, ModelFileExperiment};
+    let files = ExperimentFiles {
+        model: Path::new(&a.aircraft),
+        summary: a.summary.as_deref(),
+        map: a.map()?,
+        scenario,
+    };
+    Ok(ModelFileExperiment::load(files, estimators)?)
 }

@@ -17,6 +17,7 @@ pub mod montecarlo;
 pub mod poc;
 pub mod replay;
 pub mod run;
+pub mod run_model_file;
 pub mod sim;
 pub mod whole_record;
 

@@ -18,6 +18,7 @@ use crate::outdir::OutputDir;
 use super::run::DEFAULT_SCENARIO;
 use crate::plot::{GroupedBars, HistogramPanel, render_histograms_png, render_histograms_svg};
 use aeroident_pipelines::aircraft::Scenario;
+use aeroident_pipelines::montecarlo::model_file::ModelFileExperiment;
 use aeroident_pipelines::montecarlo::{
     Campaign, EstimatorStats, ParamStats, campaign_watched, json_summary,
 };
@@ -42,6 +43,74 @@ pub struct MonteCarloArgs {
     /// Skip the PNG figures.
     #[arg(long)]
     pub no_figures: bool,
+    /// The aircraft: `f16` (the scenario's `kind = "run"` experiment), or a model file flying
+    /// a `kind = "sim"` scenario (docs/aircraft.md).
+    #[command(flatten)]
+    pub aircraft: super::aircraft_args::AircraftArgs,
+    /// Model-file aircraft: the estimators run on every record, comma-separated (`rls,oe`;
+    /// default `oe`). The F-16's come from its scenario's `[[estimator]]` entries.
+    #[arg(long, value_delimiter = ',')]
+    pub estimator: Option<Vec<String>>,
+}
+
+/// The campaign a `montecarlo` command runs: the F-16's `run` experiment or a model-file
+/// aircraft's ([`aeroident_pipelines::montecarlo::model_file`]).
+enum Experiment {
+    F16(Box<Scenario>),
+    ModelFile(Box<ModelFileExperiment>),
+}
+
+impl Experiment {
+    /// The experiment `args` name (the F-16's default scenario without one).
+    fn of(args: &MonteCarloArgs) -> anyhow::Result<Self> {
+        if args.aircraft.is_f16()? {
+            anyhow::ensure!(
+                args.estimator.is_none(),
+                "--estimator is for a model-file aircraft: the F-16 scenario's [[estimator]] entries name its estimators"
+            );
+            return Ok(Self::F16(Box::new(match &args.scenario {
+                Some(p) => Scenario::from_path(p)?,
+                None => Scenario::from_toml(
+                    DEFAULT_SCENARIO,
+                    aeroident_pipelines::aircraft::scenario::DEFAULT_ORIGIN,
+                )?,
+            })));
+        }
+        let scenario = args.scenario.as_deref().ok_or_else(|| {
+            anyhow::anyhow!(
+                "a model-file aircraft flies a `kind = \"sim\"` scenario: give its file"
+            )
+        })?;
+        let x = super::aircraft_args::experiment(
+            &args.aircraft,
+            scenario,
+            args.estimator.as_deref().unwrap_or(&["oe".to_string()]),
+        )?;
+        x.check_campaign(args.runs).map_err(anyhow::Error::msg)?;
+        Ok(Self::ModelFile(Box::new(x)))
+    }
+
+    fn name(&self) -> String {
+        match self {
+            Self::F16(sc) => sc.name.clone(),
+            Self::ModelFile(x) => {
+                use aeroident_models::aircraft::Aircraft as _;
+                x.aircraft.name()
+            }
+        }
+    }
+
+    fn campaign(
+        &self,
+        args: &MonteCarloArgs,
+        stop: &std::sync::atomic::AtomicBool,
+        on_run: &(dyn Fn() + Sync),
+    ) -> Result<Campaign, String> {
+        match self {
+            Self::F16(sc) => campaign_watched(sc, args.runs, args.seed, Some(stop), on_run),
+            Self::ModelFile(x) => x.campaign_watched(args.runs, args.seed, Some(stop), on_run),
+        }
+    }
 }
 
 /// The readable table of a campaign (`comfy-table`): per estimator and parameter the truth,
@@ -235,22 +304,20 @@ fn write_coverage(c: &Campaign, od: &mut OutputDir) -> anyhow::Result<()> {
 /// [`aeroident_pipelines::montecarlo::MAX_RUNS`], unwritable outputs, an interruption, a
 /// campaign `failed` or with `no_estimates`.
 pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
-    let sc = match &args.scenario {
-        Some(p) => Scenario::from_path(p)?,
-        None => Scenario::from_toml(
-            DEFAULT_SCENARIO,
-            aeroident_pipelines::aircraft::scenario::DEFAULT_ORIGIN,
-        )?,
-    };
     aeroident_pipelines::montecarlo::check_runs(args.runs, "--runs").map_err(anyhow::Error::msg)?;
+    let experiment = Experiment::of(&args)?;
+    let name = experiment.name();
     let dir = args.out.clone().unwrap_or_else(|| PathBuf::from("aeroident-out").join("montecarlo"));
-    let inputs: Vec<&Path> = args.scenario.iter().map(PathBuf::as_path).collect();
+    let mut inputs: Vec<&Path> = args.scenario.iter().map(PathBuf::as_path).collect();
+    if !args.aircraft.is_f16()? {
+        inputs.extend(args.aircraft.files()?);
+    }
     // Refused before the runs, not after them.
     let od = (!args.json).then(|| OutputDir::open(&dir, "montecarlo", &inputs)).transpose()?;
     let interrupt = crate::interrupt::Interrupt::install()?;
-    let bar = crate::progress::count_bar(args.runs, &format!("Monte Carlo `{}`: runs", sc.name));
+    let bar = crate::progress::count_bar(args.runs, &format!("Monte Carlo `{name}`: runs"));
     let flag = interrupt.flag();
-    let c = campaign_watched(&sc, args.runs, args.seed, Some(&flag), &|| bar.inc(1));
+    let c = experiment.campaign(&args, &flag, &|| bar.inc(1));
     bar.finish_and_clear();
     let c = c.map_err(anyhow::Error::msg)?;
     if let (Some(why), Some(signal)) = (&c.status_reason, interrupt.signal_name()) {
@@ -277,7 +344,7 @@ pub fn execute(args: MonteCarloArgs) -> anyhow::Result<()> {
     // Empty statistics are written (they say why), but are not a result to go on from.
     match &c.status_reason {
         Some(why) if c.status != "complete" => {
-            anyhow::bail!("campaign `{}` {}: {why}", sc.name, c.status)
+            anyhow::bail!("campaign `{name}` {}: {why}", c.status)
         }
         _ => Ok(()),
     }

@@ -45,6 +45,15 @@ pub struct RunArgs {
     /// Skip the PNG figures (faster).
     #[arg(long)]
     pub no_figures: bool,
+    /// The aircraft: `f16` (a `kind = "run"` scenario), or a model file flying a
+    /// `kind = "sim"` scenario with its sensor noise, scored against the values flown
+    /// (docs/aircraft.md).
+    #[command(flatten)]
+    pub aircraft: super::aircraft_args::AircraftArgs,
+    /// Model-file aircraft: the estimators run on the record, comma-separated (`rls,oe`;
+    /// default `oe`). The F-16's come from its scenario's `[[estimator]]` entries.
+    #[arg(long, value_delimiter = ',')]
+    pub estimator: Option<Vec<String>>,
 }
 
 /// Runs one scenario (read from `inputs`, never removed or overwritten) and writes its outputs
@@ -92,6 +101,23 @@ pub fn check_names<'a>(named: impl IntoIterator<Item = (&'a str, &'a Path)>) -> 
 /// # Errors
 /// Unreadable or invalid scenarios (file, line, field), failed runs, unwritable outputs.
 pub fn execute(args: RunArgs) -> anyhow::Result<()> {
+    if !args.aircraft.is_f16()? {
+        anyhow::ensure!(
+            args.all.is_none(),
+            "--all runs the F-16's scenarios: leave out --aircraft"
+        );
+        let scenario = args.scenario.as_deref().ok_or_else(|| {
+            anyhow::anyhow!(
+                "a model-file aircraft flies a `kind = \"sim\"` scenario: give its file"
+            )
+        })?;
+        let estimators = args.estimator.as_deref();
+        return super::run_model_file::execute(&args.aircraft, scenario, estimators, args.out);
+    }
+    anyhow::ensure!(
+        args.estimator.is_none(),
+        "--estimator is for a model-file aircraft: the F-16 scenario's [[estimator]] entries name its estimators"
+    );
     if let Some(dir) = &args.all {
         let dir = dir.clone().unwrap_or_else(|| shipped_dir(ScenarioKind::Run));
         let out = args.out.clone().unwrap_or_else(|| PathBuf::from("aeroident-out"));

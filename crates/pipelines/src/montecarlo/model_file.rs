@@ -36,7 +36,7 @@
 //! design's engine is held). Notes say what was left out.
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -52,6 +52,7 @@ use super::{
     Campaign, CrbTable, EstimatorRun, FailedRun, ParamRun, RunResult, STATUS_COMPLETE,
     STATUS_INTERRUPTED, outcome_status, run_seed, statistics,
 };
+use crate::Named as _;
 use crate::aircraft::summary::PRIMARY_DERIVATIVES;
 use crate::airframe::ModelFileAircraft;
 use crate::estimators::EstimatorKind;
@@ -86,6 +87,66 @@ pub struct FlownRun {
     pub mapping: String,
     /// Per estimator, in [`ModelFileExperiment::estimators`] order.
     pub estimators: Vec<EstimatorRun>,
+}
+
+/// The files of a model-file experiment, as a face names them.
+#[derive(Debug, Clone, Copy)]
+pub struct ExperimentFiles<'a> {
+    /// The model file (`models/*.toml`): the structure flown and fitted.
+    pub model: &'a Path,
+    /// A replay's `summary.json` giving the values flown (default: the model file's
+    /// `[reference.<param>]` values).
+    pub summary: Option<&'a Path>,
+    /// The mapping whose constants give mass, inertia, geometry, thrust line and law.
+    pub map: &'a Path,
+    /// The scenario (`kind = "sim"`).
+    pub scenario: &'a Path,
+}
+
+impl ModelFileExperiment {
+    /// The experiment of `files` with the estimators named in `estimators` (e.g. `rls`, `oe`).
+    ///
+    /// # Errors
+    /// Files that do not describe a flyable aircraft or a scenario (naming file and field),
+    /// an unknown estimator (listing the known ones), and [`Self::check`]'s.
+    pub fn load(files: ExperimentFiles<'_>, estimators: &[String]) -> crate::error::Result<Self> {
+        let aircraft = crate::airframe::load(files.model, files.summary, files.map)?;
+        let model = ModelSpec::from_path(files.model).map_err(|e| crate::err!("{e}"))?;
+        let scenario = crate::sim::load_scenario(files.scenario)?;
+        let base_dir = files.scenario.parent().unwrap_or(Path::new(".")).to_path_buf();
+        let estimators = estimators
+            .iter()
+            .map(|e| {
+                EstimatorKind::from_name(e).ok_or_else(|| {
+                    crate::err!(
+                        "--estimator `{e}`: no such estimator (known: {})",
+                        EstimatorKind::names().join(", ")
+                    )
+                })
+            })
+            .collect::<crate::error::Result<Vec<_>>>()?;
+        let x = Self { aircraft, model, scenario, base_dir, estimators };
+        x.check()?;
+        Ok(x)
+    }
+}
+
+impl FlownRun {
+    /// The run's `summary.json`: `{"schema_version", "aircraft", "run_seed", "trim": {"state",
+    /// "controls"}, "estimators": [{"name", "failure", "restarts", "iterations",
+    /// "fit_wall_s", "params": [{ParameterResult keys (`reference`: the value flown),
+    /// "primary", "time_to_10pct_s", …}]}]}` (SI; the trim's state in
+    /// [`crate::airframe::STATE_NAMES`] order, its controls engine command, elevator, aileron,
+    /// rudder).
+    pub fn document(&self, run_seed: u64) -> serde_json::Value {
+        serde_json::json!({
+            "schema_version": aeroident_io::SCHEMA_VERSION,
+            "aircraft": self.sim.aircraft,
+            "run_seed": run_seed,
+            "trim": {"state": self.sim.trim.state, "controls": self.sim.trim.controls},
+            "estimators": self.estimators,
+        })
+    }
 }
 
 impl ModelFileExperiment {
@@ -389,12 +450,25 @@ fn output_of(channel: &str) -> Option<Output> {
 }
 
 impl ModelFileExperiment {
-    /// A campaign of `runs` seeded flights (module doc) in parallel, starting no further run
-    /// once `stop` is set, calling `on_run` as each run ends.
+    /// Refuses a campaign that cannot be one before anything is flown.
     ///
     /// # Errors
     /// As [`Self::check`]; `runs` = 0 or above [`super::MAX_RUNS`]; a scenario with no sensor
     /// noise (every run would be the same flight).
+    pub fn check_campaign(&self, runs: u64) -> Result<(), String> {
+        self.check().map_err(|e| e.to_string())?;
+        super::check_runs(runs, "runs")?;
+        if !self.scenario.sensor.iter().any(|s| s.white_sigma > 0.0) {
+            return Err("the scenario has no [[sensor]] with white noise: every run would fly the same record (add sensors, docs/aircraft.md)".into());
+        }
+        Ok(())
+    }
+
+    /// A campaign of `runs` seeded flights (module doc) in parallel, starting no further run
+    /// once `stop` is set, calling `on_run` as each run ends.
+    ///
+    /// # Errors
+    /// As [`Self::check_campaign`].
     pub fn campaign_watched(
         &self,
         runs: u64,
@@ -402,11 +476,7 @@ impl ModelFileExperiment {
         stop: Option<&AtomicBool>,
         on_run: &(dyn Fn() + Sync),
     ) -> Result<Campaign, String> {
-        self.check().map_err(|e| e.to_string())?;
-        super::check_runs(runs, "runs")?;
-        if !self.scenario.sensor.iter().any(|s| s.white_sigma > 0.0) {
-            return Err("the scenario has no [[sensor]] with white noise: every run would fly the same record (add sensors, docs/aircraft.md)".into());
-        }
+        self.check_campaign(runs)?;
         let start = Instant::now();
         let results: Vec<RunResult> = (0..runs)
             .into_par_iter()
@@ -469,7 +539,6 @@ impl ModelFileExperiment {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Named as _;
     use crate::airframe::tests::{ALT_FT, VT_FPS, as_model_file, f16_trim};
     use aeroident_estimators::prior::Priors;
 

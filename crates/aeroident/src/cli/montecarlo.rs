@@ -1,6 +1,9 @@
 //! `aeroident montecarlo [scenario.toml] --runs N [--out DIR] [--json] [--seed S]`: N seeded
 //! noisy closed-loop flights of the `run` experiment in parallel and their statistics per
 //! estimator and parameter ([`aeroident_pipelines::montecarlo`]; the seed rule is there).
+//! With `--aircraft MODEL.toml --map M [--summary S] [--estimator LIST]` the flights are a
+//! model-file aircraft's through a `kind = "sim"` scenario
+//! ([`aeroident_pipelines::montecarlo::model_file`]).
 //!
 //! - default: a table on stdout, `DIR/montecarlo.json` (statistics, failed runs, CRB notes),
 //!   `DIR/runs.json` (every run's final results), `DIR/histograms_<estimator>.png` (final

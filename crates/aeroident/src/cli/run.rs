@@ -12,6 +12,8 @@
 //!   shipped `scenarios/f16/`, found from any working directory) in parallel, one
 //!   sub-directory each, plus `DIR/report.md` (thesis versus ours); prints a one-screen
 //!   overview, one line per scenario.
+//! - `aeroident run SCENARIO --aircraft MODEL.toml --map M [--estimator LIST]` — a model-file
+//!   aircraft's flight ([`super::run_model_file`]).
 //!
 //! Scenario files have `kind = "run"` ([`aeroident_pipelines::scenario_kind`]).
 

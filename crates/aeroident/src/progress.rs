@@ -39,6 +39,23 @@ pub fn count_bar(len: u64, msg: &str) -> ProgressBar {
     pb
 }
 
+/// Turns `pb` (a [`spinner`]) into a [`count_bar`] over `len` items with `msg` once `done` > 0,
+/// and sets its position to `done`. Work whose count starts after a first phase of unknown
+/// length (a bootstrap's replicas after its fit) spins, then counts.
+pub fn count_on(pb: &ProgressBar, len: usize, done: usize, msg: &str) {
+    if done == 0 {
+        return;
+    }
+    pb.set_position(done as u64);
+    if pb.length() != Some(len as u64) {
+        pb.set_length(len as u64);
+        if let Ok(style) = ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} {elapsed}") {
+            pb.set_style(style.progress_chars("=> "));
+        }
+        pb.set_message(msg.to_string());
+    }
+}
+
 /// A spinner with the elapsed time, ticking by itself (hidden unless [`enabled`]).
 pub fn spinner(msg: &str) -> ProgressBar {
     let pb = ProgressBar::with_draw_target(None, target());

@@ -320,7 +320,7 @@ pub fn fit_window(
                 let seed = BOOTSTRAP_SEED
                     ^ first.alpha_rad.to_bits()
                     ^ first.vt_mps.to_bits().rotate_left(29);
-                let (b, summary) = bootstrap_sigma(&[window], c, &result, n, seed)
+                let (b, summary) = bootstrap_sigma(&[window], c, &result, n, seed, None)
                     .map_err(|e| format!("oe: {e}"))?;
                 failed = Some(summary.failed);
                 sigma.copy_from_slice(&b.sigma);

@@ -652,6 +652,27 @@ mod tests {
         assert_eq!(q(&fa), q(&x.fly(&c).unwrap()));
     }
 
+    /// The bootstrap's replica count a face shows: after an output-error fit with a bootstrap of
+    /// 6 replicas on a flown record, the counter has counted each of them, and the summary says
+    /// 6 were refitted.
+    #[test]
+    fn a_bootstrap_counts_its_replicas_as_they_end() {
+        let x = experiment(&["oe"]);
+        let flown = x.fly(&x.scenario).unwrap();
+        let mapping = Mapping::from_toml_str(&flown.mapping, "mapping.toml").unwrap();
+        let counter = crate::replay::batch::ReplicaCounter::default();
+        let options = FitOptions {
+            bootstrap_refits: Some(6),
+            bootstrap_done: Some(counter.clone()),
+            ..FitOptions::default()
+        };
+        let reader = reader_of(&flown.sim, &mapping).unwrap();
+        let model = Some(x.model.clone());
+        let out = crate::replay::fit::fit_records(vec![reader], &mapping, model, options).unwrap();
+        assert_eq!(out.summary.bootstrap.as_ref().map(|b| b.refits), Some(6));
+        assert_eq!(counter.done(), 6);
+    }
+
     /// What cannot make an experiment is refused before a flight, naming the cause.
     #[test]
     fn no_estimator_a_repeated_one_or_a_noise_free_scenario_is_refused() {

@@ -701,7 +701,8 @@ pub fn bootstrap_shrink_warnings(
 ///
 /// A stop raised on `config` ([`OeConfig::stop`]) starts no further replica and drops the
 /// refits it interrupts: the σ is then the spread of the replicas done
-/// ([`BootstrapSummary::refits`] of [`BootstrapSummary::requested`]).
+/// ([`BootstrapSummary::refits`] of [`BootstrapSummary::requested`]). `counter`, when given,
+/// counts each replica as it ends.
 ///
 /// # Errors
 /// A message when `refits` is outside 2 to [`MAX_BOOTSTRAP_REFITS`] (before any fit), the
@@ -713,6 +714,7 @@ pub fn bootstrap_sigma(
     fitted: &OeResult,
     refits: usize,
     seed: u64,
+    counter: Option<&ReplicaCounter>,
 ) -> Result<(BootstrapSpread, BootstrapSummary), String> {
     use aeroident_estimators::output_error::bootstrap::{self, BootstrapNoise};
     check_bootstrap_refits(refits).map_err(|e| format!("bootstrap: {e}"))?;
@@ -728,7 +730,7 @@ pub fn bootstrap_sigma(
         return Err(format!("{noise_source}, which did not converge: {why}"));
     }
     let noise = BootstrapNoise::from_fem(&fem);
-    let draws = replicas(manoeuvres, config, fitted, &noise, refits, seed);
+    let draws = replicas(manoeuvres, config, fitted, &noise, (refits, seed), counter);
     let done = draws.len();
     let failed = draws.iter().filter(|d| d.is_err()).count();
     if 2 * failed > done {
@@ -767,8 +769,8 @@ fn replicas(
     config: &OeConfig,
     fitted: &OeResult,
     noise: &aeroident_estimators::output_error::bootstrap::BootstrapNoise,
-    refits: usize,
-    seed: u64,
+    (refits, seed): (usize, u64),
+    counter: Option<&ReplicaCounter>,
 ) -> Vec<Result<Vec<f64>, String>> {
     use aeroident_estimators::output_error::{NotConverged, bootstrap};
     use rand::{Rng, SeedableRng};
@@ -782,7 +784,9 @@ fn replicas(
             }
             let mut rng = rand_pcg::Pcg64::seed_from_u64(seed.wrapping_add(b as u64));
             let mut normal = || rng.sample::<f64, _>(rand_distr::StandardNormal);
-            match bootstrap::refit(manoeuvres, config, fitted, noise, &mut normal) {
+            let refit = bootstrap::refit(manoeuvres, config, fitted, noise, &mut normal);
+            counter.inspect(|c| c.add_one());
+            match refit {
                 Err(OeError::NotConverged { reason: NotConverged::Stopped, .. }) => None,
                 r => Some(r.map_err(|e| fit_error(&format!("bootstrap replica {b}"), e))),
             }
@@ -846,6 +850,29 @@ pub enum BatchMethod {
     },
 }
 
+/// The bootstrap replicas done so far, shared with a face that shows them (a progress bar):
+/// [`bootstrap_sigma`] adds one as each replica ends. Clones share the count.
+#[derive(Debug, Clone, Default)]
+pub struct ReplicaCounter(std::sync::Arc<std::sync::atomic::AtomicUsize>);
+
+impl ReplicaCounter {
+    /// Replicas done (refitted, failed or abandoned by a stop).
+    pub fn done(&self) -> usize {
+        self.0.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    fn add_one(&self) {
+        self.0.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    }
+}
+
+impl PartialEq for ReplicaCounter {
+    /// Equal when shared: the same count.
+    fn eq(&self, other: &Self) -> bool {
+        std::sync::Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+
 /// What a batch fit of a record fits and how (`replay --estimator oe|fem
 /// [--initial-states …] [--bootstrap N]`).
 #[derive(Debug, Clone, PartialEq)]
@@ -857,6 +884,8 @@ pub struct FitOptions {
     /// `oe` only: the parametric bootstrap with this many refits ([`bootstrap_sigma`], seed
     /// [`BOOTSTRAP_SEED`]); its σ is then the reported one.
     pub bootstrap_refits: Option<usize>,
+    /// Counts the bootstrap's replicas as they end, for a face's progress; `None`: uncounted.
+    pub bootstrap_done: Option<ReplicaCounter>,
     /// Most Gauss–Newton iterations; `None`: [`OeConfig::new`]'s 50 for output error,
     /// [`MAX_ITERATIONS`] for the filter-error method. A fit stopped by it reports its last
     /// iterate ([`termination_note`]).
@@ -892,6 +921,7 @@ impl Default for FitOptions {
             method: BatchMethod::Oe,
             initial_states: InitialStates::FirstSample,
             bootstrap_refits: None,
+            bootstrap_done: None,
             max_iterations: None,
             process_noise: None,
             gain_constraint: true,
@@ -928,7 +958,8 @@ pub(crate) fn fit_time_domain(
     crate::structure::check_knots_in_range(&model.structure, &slices, &model.name)
         .map_err(ReplayError::Model)?;
     let fitted = fit_slices(&slices, model.structure, options)?;
-    let sigmas = sigma_stage(&slices, &fitted, options.bootstrap_refits)?;
+    let sigmas =
+        sigma_stage(&slices, &fitted, options.bootstrap_refits, options.bootstrap_done.as_ref())?;
     let st = model.structure;
     let result = &fitted.result;
     // A filter-error fit is validated (and drawn) by simulating the model at its estimates;
@@ -1098,6 +1129,7 @@ fn sigma_stage(
     slices: &[&[AirDataSample]],
     fitted: &FittedRecord,
     refits: Option<usize>,
+    counter: Option<&ReplicaCounter>,
 ) -> Result<Sigmas, ReplayError> {
     let result = &fitted.result;
     let (mut reported, coloured) = match &fitted.fem {
@@ -1119,7 +1151,7 @@ fn sigma_stage(
                 "bootstrap not run: a stop was asked for during the fit (the reported σ is the fit's own)".into(),
             );
         } else if result.termination.is_converged() {
-            match bootstrap_sigma(slices, config, result, n, BOOTSTRAP_SEED) {
+            match bootstrap_sigma(slices, config, result, n, BOOTSTRAP_SEED, counter) {
                 Ok((spread, summary)) => {
                     reported.copy_from_slice(&spread.sigma);
                     out.bootstrap = Some(summary);

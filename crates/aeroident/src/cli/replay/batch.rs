@@ -12,7 +12,7 @@ use aeroident_io::{FlightDataReader, LogFormat, Mapping, open_log_with_report};
 use aeroident_pipelines::estimators::EstimatorKind;
 use aeroident_pipelines::job::fit::{FitJob, FitJobOutcome, Prepared};
 use aeroident_pipelines::replay::STATUS_INTERRUPTED;
-use aeroident_pipelines::replay::batch::{BatchOutcome, FitOptions};
+use aeroident_pipelines::replay::batch::{BatchOutcome, FitOptions, ReplicaCounter};
 use aeroident_pipelines::structure::AutoSelection;
 use anyhow::Context;
 use std::path::Path;
@@ -34,7 +34,13 @@ pub(super) fn execute(
     mut out: Option<crate::outdir::OutputDir>,
 ) -> anyhow::Result<()> {
     let stop = StopFlag::default();
-    let options = FitOptions { stop: Some(stop.clone()), ..prepared.options };
+    let replicas = ReplicaCounter::default();
+    let options = FitOptions {
+        stop: Some(stop.clone()),
+        bootstrap_done: Some(replicas.clone()),
+        ..prepared.options
+    };
+    let bootstrap = options.bootstrap_refits.map(|n| (n, replicas));
     announce(args.estimator, &options);
     let prepared = Prepared { options, ..prepared };
     let stdin =
@@ -42,7 +48,8 @@ pub(super) fn execute(
     let progress = stdin.as_ref().map(crate::interrupt::InterruptibleStdin::progress);
     let fit_job = job.clone();
     let fit = move || read_and_fit(&fit_job, prepared, stdin);
-    let Some(fitted) = fit_watched(fit, interrupt, progress.as_deref(), &stop)? else {
+    let watched = FitWatched { interrupt, stdin: progress.as_deref(), stop: &stop, bootstrap };
+    let Some(fitted) = fit_watched(fit, &watched)? else {
         interrupt.begin_writing();
         let why = format!(
             "a second {} stopped the fit before it ended: no estimates",
@@ -159,9 +166,7 @@ fn open_stdin(
 /// The fit's thread could not start or ended without a result (a panic).
 fn fit_watched<T: Send + 'static>(
     fit: impl FnOnce() -> T + Send + 'static,
-    interrupt: &crate::interrupt::Interrupt,
-    stdin: Option<&crate::interrupt::StdinProgress>,
-    stop: &StopFlag,
+    w: &FitWatched<'_>,
 ) -> anyhow::Result<Option<T>> {
     use std::sync::mpsc::RecvTimeoutError;
     let (tx, rx) = std::sync::mpsc::channel();
@@ -184,11 +189,23 @@ fn fit_watched<T: Send + 'static>(
             }
             Err(RecvTimeoutError::Timeout) => {}
         }
-        if interrupt.stop_now() {
+        if w.interrupt.stop_now() {
             return Ok(None);
         }
-        watch.look(interrupt, stdin, stop);
+        watch.look(w.interrupt, w.stdin, w.stop);
+        if let Some((n, replicas)) = &w.bootstrap {
+            crate::progress::count_on(&spin, *n, replicas.done(), "bootstrap replicas");
+        }
     }
+}
+
+/// What [`fit_watched`] watches while the fit runs: the signals, the read of stdin, the stop it
+/// raises, and the bootstrap's replicas (count asked for, count done) when one was asked for.
+struct FitWatched<'a> {
+    interrupt: &'a crate::interrupt::Interrupt,
+    stdin: Option<&'a crate::interrupt::StdinProgress>,
+    stop: &'a StopFlag,
+    bootstrap: Option<(usize, ReplicaCounter)>,
 }
 
 /// Clears `spin` when dropped, whichever way [`fit_watched`] returns.

@@ -33,14 +33,7 @@ pub(super) fn execute(
     interrupt: &crate::interrupt::Interrupt,
     mut out: Option<crate::outdir::OutputDir>,
 ) -> anyhow::Result<()> {
-    let stop = StopFlag::default();
-    let replicas = ReplicaCounter::default();
-    let options = FitOptions {
-        stop: Some(stop.clone()),
-        bootstrap_done: Some(replicas.clone()),
-        ..prepared.options
-    };
-    let bootstrap = options.bootstrap_refits.map(|n| (n, replicas));
+    let (options, stop, bootstrap) = watched_options(prepared.options);
     announce(args.estimator, &options);
     let prepared = Prepared { options, ..prepared };
     let stdin =
@@ -88,6 +81,16 @@ pub(super) fn execute(
     let stopped_why = || validation_stopped(interrupt);
     let done = job.finish(outcome, selection, &mut Watched(interrupt), &mut Stderr, stopped_why)?;
     write(args, done, interrupt, out)
+}
+
+/// `options` with a stop the signals raise and a count of the bootstrap's replicas; the stop,
+/// and the count with the replicas asked for (when a bootstrap is).
+fn watched_options(options: FitOptions) -> (FitOptions, StopFlag, Option<(usize, ReplicaCounter)>) {
+    let (stop, replicas) = (StopFlag::default(), ReplicaCounter::default());
+    let options =
+        FitOptions { stop: Some(stop.clone()), bootstrap_done: Some(replicas.clone()), ..options };
+    let bootstrap = options.bootstrap_refits.map(|n| (n, replicas));
+    (options, stop, bootstrap)
 }
 
 /// Says on stderr that a batch method reads the whole record first, and what a bootstrap

@@ -431,22 +431,10 @@ fn crb_sensors(sc: &SimScenario, notes: &mut Vec<String>) -> Vec<Sensor> {
     sensors
 }
 
-/// The flight-model output a simulated channel measures.
+/// The flight-model output a simulated channel measures (the output's own name is the
+/// simulation's column name, SI units in it).
 fn output_of(channel: &str) -> Option<Output> {
-    Some(match channel {
-        "vt_mps" => Output::Vt,
-        "alpha_rad" => Output::Alpha,
-        "beta_rad" => Output::Beta,
-        "p_rad_s" => Output::P,
-        "q_rad_s" => Output::Q,
-        "r_rad_s" => Output::R,
-        "phi_rad" => Output::Phi,
-        "theta_rad" => Output::Theta,
-        "ax_mps2" => Output::Ax,
-        "ay_mps2" => Output::Ay,
-        "az_mps2" => Output::Az,
-        _ => return None,
-    })
+    Output::ALL.into_iter().find(|o| o.name() == channel)
 }
 
 impl ModelFileExperiment {
@@ -673,6 +661,59 @@ mod tests {
         assert_eq!(counter.done(), 6);
     }
 
+    /// The bound's outputs: every flight-model output of [`SENSORS`] once, with its σ; a
+    /// sensor with anything but white noise (bias, scale, Gauss–Markov, lag, delay, quantum), a
+    /// noise-free one and a second sensor on one output are left out with a note; a channel no
+    /// output predicts (`psi_rad`) is passed over.
+    #[test]
+    fn the_bound_counts_each_output_s_white_sensor_once_and_notes_the_others() {
+        let mut sc = experiment(&["oe"]).scenario;
+        let mut notes = Vec::new();
+        let sensors = crb_sensors(&sc, &mut notes);
+        assert!(notes.is_empty(), "{notes:?}");
+        assert_eq!(sensors.len(), SENSORS.len());
+        for ((ch, sigma), s) in SENSORS.iter().zip(&sensors) {
+            assert_eq!(s.sigma, *sigma, "{ch}");
+            assert_eq!(sensors.iter().filter(|x| x.output == s.output).count(), 1, "{ch}");
+            assert_eq!(s.output.name(), *ch);
+        }
+        let base = sc.sensor[0].clone();
+        let variants: [(&str, Box<dyn Fn(&mut aeroident_signals::SensorConfig)>); 9] = [
+            ("bias", Box::new(|s| s.bias = 0.1)),
+            ("scale", Box::new(|s| s.scale = 1.1)),
+            ("gauss_markov", Box::new(|s| s.gauss_markov_sigma = Some(0.1))),
+            ("lag", Box::new(|s| s.lag_tau_s = Some(0.1))),
+            ("delay", Box::new(|s| s.delay_s = Some(0.1))),
+            ("delay_samples", Box::new(|s| s.delay_samples = Some(2))),
+            ("quantum", Box::new(|s| s.quantum = Some(0.01))),
+            ("noise-free", Box::new(|s| s.white_sigma = 0.0)),
+            ("second", Box::new(|_| ())),
+        ];
+        for (what, change) in variants {
+            let mut extra = base.clone();
+            change(&mut extra);
+            sc.sensor = vec![base.clone(), extra];
+            let mut notes = Vec::new();
+            assert_eq!(crb_sensors(&sc, &mut notes).len(), 1, "{what}");
+            assert_eq!(notes.len(), 1, "{what}: {notes:?}");
+        }
+        sc.sensor[1].channel = "psi_rad".into();
+        let mut notes = Vec::new();
+        assert_eq!((crb_sensors(&sc, &mut notes).len(), notes.len()), (1, 0));
+    }
+
+    /// A campaign stopped before its first run is `interrupted` with no run done, not
+    /// `complete`; replica counters are equal when shared.
+    #[test]
+    fn a_campaign_stopped_before_it_starts_is_interrupted() {
+        let x = experiment(&["rls"]);
+        let stop = AtomicBool::new(true);
+        let c = x.campaign_watched(3, 1, Some(&stop), &|| {}).unwrap();
+        assert_eq!((c.status, c.runs, c.runs_requested), (STATUS_INTERRUPTED, 0, 3));
+        let a = crate::replay::batch::ReplicaCounter::default();
+        assert!(a == a.clone() && a != crate::replay::batch::ReplicaCounter::default());
+    }
+
     /// What cannot make an experiment is refused before a flight, naming the cause.
     #[test]
     fn no_estimator_a_repeated_one_or_a_noise_free_scenario_is_refused() {
@@ -681,7 +722,7 @@ mod tests {
         x.estimators = vec![EstimatorKind::Rls, EstimatorKind::Rls];
         assert!(x.check().unwrap_err().to_string().contains("named twice"));
         x.estimators = vec![EstimatorKind::Rls];
-        x.scenario.sensor.clear();
+        x.scenario.sensor.iter_mut().for_each(|s| s.white_sigma = 0.0);
         assert!(x.campaign_watched(2, 1, None, &|| {}).unwrap_err().contains("no [[sensor]]"));
     }
 }

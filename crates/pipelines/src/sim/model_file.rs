@@ -448,4 +448,28 @@ mod tests {
             assert!(e.contains(needle), "{needle}: {e}");
         }
     }
+
+    /// The written mapping maps the exact state derivatives of a noise-free record (an exact
+    /// round trip), and of a sensed one only those a sensor measures; the sensed channels read
+    /// their `meas_` column.
+    #[test]
+    fn a_sensed_record_s_mapping_has_no_exact_state_derivative() {
+        let a = aircraft();
+        let mapped = |extra: &str| {
+            let r = run(&a, &scenario("", "", extra), Path::new(".")).unwrap();
+            let m = aeroident_io::Mapping::from_toml_str(&replay_mapping(&a, &r), "m").unwrap();
+            let column = |c: aeroident_io::Channel| m.channels.get(&c).map(|x| format!("{x:?}"));
+            use aeroident_io::Channel as C;
+            [C::Pdot, C::Qdot, C::Rdot, C::Alphadot, C::Q].map(column)
+        };
+        assert!(mapped("").iter().all(|c| c.as_ref().is_some_and(|c| !c.contains("meas_"))));
+        let sensor = |ch: &str| {
+            format!("[[sensor]]\nchannel = \"{ch}\"\nwhite_sigma = 0.01\nsample_rate_hz = 100.0\n")
+        };
+        let [p, q, r, alpha, rate] = mapped(&sensor("q_rad_s"));
+        assert_eq!((p, q, r, alpha), (None, None, None, None));
+        assert!(rate.is_some_and(|c| c.contains("meas_q_rad_s")));
+        let [_, q, ..] = mapped(&format!("{}{}", sensor("q_rad_s"), sensor("qdot_rad_s2")));
+        assert!(q.is_some_and(|c| c.contains("meas_qdot_rad_s2")));
+    }
 }

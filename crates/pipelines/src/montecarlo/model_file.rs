@@ -678,16 +678,16 @@ mod tests {
             assert_eq!(s.output.name(), *ch);
         }
         let base = sc.sensor[0].clone();
-        let variants: [(&str, Box<dyn Fn(&mut aeroident_signals::SensorConfig)>); 9] = [
-            ("bias", Box::new(|s| s.bias = 0.1)),
-            ("scale", Box::new(|s| s.scale = 1.1)),
-            ("gauss_markov", Box::new(|s| s.gauss_markov_sigma = Some(0.1))),
-            ("lag", Box::new(|s| s.lag_tau_s = Some(0.1))),
-            ("delay", Box::new(|s| s.delay_s = Some(0.1))),
-            ("delay_samples", Box::new(|s| s.delay_samples = Some(2))),
-            ("quantum", Box::new(|s| s.quantum = Some(0.01))),
-            ("noise-free", Box::new(|s| s.white_sigma = 0.0)),
-            ("second", Box::new(|_| ())),
+        let variants: [(&str, fn(&mut aeroident_signals::SensorConfig)); 9] = [
+            ("bias", |s| s.bias = 0.1),
+            ("scale", |s| s.scale = 1.1),
+            ("gauss_markov", |s| s.gauss_markov_sigma = Some(0.1)),
+            ("lag", |s| s.lag_tau_s = Some(0.1)),
+            ("delay", |s| s.delay_s = Some(0.1)),
+            ("delay_samples", |s| s.delay_samples = Some(2)),
+            ("quantum", |s| s.quantum = Some(0.01)),
+            ("noise-free", |s| s.white_sigma = 0.0),
+            ("second", |_| ()),
         ];
         for (what, change) in variants {
             let mut extra = base.clone();

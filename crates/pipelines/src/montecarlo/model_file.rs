@@ -678,7 +678,8 @@ mod tests {
             assert_eq!(s.output.name(), *ch);
         }
         let base = sc.sensor[0].clone();
-        let variants: [(&str, fn(&mut aeroident_signals::SensorConfig)); 9] = [
+        type Change = fn(&mut aeroident_signals::SensorConfig);
+        let variants: [(&str, Change); 9] = [
             ("bias", |s| s.bias = 0.1),
             ("scale", |s| s.scale = 1.1),
             ("gauss_markov", |s| s.gauss_markov_sigma = Some(0.1)),

@@ -71,8 +71,8 @@ impl AircraftArgs {
     }
 }
 
-/// The model-file experiment of `a` flying `scenario` with `estimators` (`run` and
-/// `montecarlo` with `--aircraft MODEL.toml`;
+/// The model-file experiment of `a` flying `scenario` with `estimators` (default `oe`; `run`
+/// and `montecarlo` with `--aircraft MODEL.toml`;
 /// [`aeroident_pipelines::montecarlo::model_file::ModelFileExperiment::load`]).
 ///
 /// # Errors
@@ -81,7 +81,7 @@ impl AircraftArgs {
 pub fn experiment(
     a: &AircraftArgs,
     scenario: &Path,
-    estimators: &[String],
+    estimators: Option<&[String]>,
 ) -> anyhow::Result<aeroident_pipelines::montecarlo::model_file::ModelFileExperiment> {
     use aeroident_pipelines::montecarlo::model_file::{ExperimentFiles, ModelFileExperiment};
     let files = ExperimentFiles {
@@ -90,5 +90,6 @@ pub fn experiment(
         map: a.map()?,
         scenario,
     };
-    Ok(ModelFileExperiment::load(files, estimators)?)
+    let default = ["oe".to_string()];
+    Ok(ModelFileExperiment::load(files, estimators.unwrap_or(&default))?)
 }

@@ -84,11 +84,8 @@ impl Experiment {
                 "a model-file aircraft flies a `kind = \"sim\"` scenario: give its file"
             )
         })?;
-        let x = super::aircraft_args::experiment(
-            &args.aircraft,
-            scenario,
-            args.estimator.as_deref().unwrap_or(&["oe".to_string()]),
-        )?;
+        let x =
+            super::aircraft_args::experiment(&args.aircraft, scenario, args.estimator.as_deref())?;
         x.check_campaign(args.runs).map_err(anyhow::Error::msg)?;
         Ok(Self::ModelFile(Box::new(x)))
     }

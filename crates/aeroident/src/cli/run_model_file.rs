@@ -3,7 +3,7 @@
 //! its record and scored against the values flown
 //! ([`aeroident_pipelines::montecarlo::model_file`]).
 //!
-//! Writes into `--out` (default `./aeroident-out/<aircraft>`): the record and its mapping, the
+//! Writes into `--out` (default `./aeroident-out/<model file's stem>`): the record and its mapping, the
 //! states and controls figures and `report.html` (as `aeroident sim`), and `summary.json`
 //! ([`aeroident_pipelines::montecarlo::model_file::FlownRun::document`]); prints one table per
 //! estimator: estimate ± σ, the value flown, the error %, the status and the time to ±10 %.
@@ -29,14 +29,15 @@ pub fn execute(
     estimators: Option<&[String]>,
     out: Option<PathBuf>,
 ) -> anyhow::Result<()> {
-    let default = ["oe".to_string()];
-    let x = super::aircraft_args::experiment(aircraft, scenario, estimators.unwrap_or(&default))?;
+    let x = super::aircraft_args::experiment(aircraft, scenario, estimators)?;
     let name = {
         use aeroident_models::aircraft::Aircraft as _;
         x.aircraft.name()
     };
+    let stem = Path::new(&aircraft.aircraft).file_stem().and_then(|s| s.to_str());
     let dir = out.unwrap_or_else(|| {
-        PathBuf::from("aeroident-out").join(crate::outdir::safe_component(&name).unwrap_or("run"))
+        let safe = stem.and_then(|s| crate::outdir::safe_component(s).ok()).unwrap_or("run");
+        PathBuf::from("aeroident-out").join(safe)
     });
     let mut inputs = aircraft.files()?;
     inputs.push(scenario);

@@ -159,6 +159,25 @@ pub struct EstimatorRun {
     pub params: Vec<ParamRun>,
 }
 
+impl EstimatorRun {
+    /// The result of the estimator `name` before anything is known: no failure, no restart,
+    /// no batch statistics, no parameter.
+    pub fn named(name: &str) -> Self {
+        Self {
+            name: name.to_string(),
+            failure: None,
+            nis: None,
+            restarts: 0,
+            iterations: None,
+            fit_wall_s: None,
+            sigma_candidates: Vec::new(),
+            bootstrap_failed: None,
+            bootstrap_bias: None,
+            params: Vec::new(),
+        }
+    }
+}
+
 /// One run of a campaign.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct RunResult {
@@ -793,14 +812,7 @@ pub fn campaign_watched(
     let results = run_range_until(sc, seed, 0..runs, stop, on_run);
     let wall_s = start.elapsed().as_secs_f64();
     let mut c = assemble(sc, seed, results, wall_s, rayon::current_num_threads());
-    c.runs_requested = runs;
-    if c.runs < runs {
-        c.status = STATUS_INTERRUPTED;
-        c.status_reason = Some(format!(
-            "stopped on request after {} of {runs} runs: the statistics are over those {}",
-            c.runs, c.runs
-        ));
-    }
+    c.asked_for(runs);
     Ok(c)
 }
 
@@ -821,7 +833,7 @@ pub const STATUS_NO_ESTIMATES: &str = "no_estimates";
 /// The status and its reason of a campaign of `runs` runs that is not a result (every run
 /// failed, or no estimate in any), `None` for one that is; the reason quotes the first
 /// failure and counts the others.
-pub(crate) fn outcome_status(
+fn outcome_status(
     runs: usize,
     failed: &[FailedRun],
     estimators: &[EstimatorStats],
@@ -864,7 +876,31 @@ pub fn assemble(
 ) -> Campaign {
     let crb = crb_sigmas(sc).unwrap_or_else(|e| CrbTable { notes: vec![e], ..Default::default() });
     let names: Vec<String> = sc.estimator.iter().map(EstimatorSpec::label).collect();
-    let estimators = statistics(&results, &names, &crb);
+    let ran = Ran { name: sc.name.clone(), seed, wall_s, threads };
+    document(ran, results, &names, crb)
+}
+
+/// What a campaign's document says of how it ran.
+pub(crate) struct Ran {
+    /// The scenario's (or aircraft's) name.
+    pub name: String,
+    /// The campaign seed.
+    pub seed: u64,
+    /// Wall time of the runs, s.
+    pub wall_s: f64,
+    /// Threads they ran on.
+    pub threads: usize,
+}
+
+/// The campaign document of `results` (sorted by index, one per run) of the estimators
+/// `names` with the bound `crb`: [`statistics`], the failed runs and the status.
+pub(crate) fn document(
+    ran: Ran,
+    results: Vec<RunResult>,
+    names: &[String],
+    crb: CrbTable,
+) -> Campaign {
+    let estimators = statistics(&results, names, &crb);
     let failed_runs: Vec<FailedRun> = results
         .iter()
         .filter_map(|r| {
@@ -877,18 +913,18 @@ pub fn assemble(
     };
     Campaign {
         schema_version: aeroident_io::SCHEMA_VERSION,
-        scenario: sc.name.clone(),
+        scenario: ran.name,
         runs: results.len() as u64,
         runs_requested: results.len() as u64,
         status,
         status_reason,
-        seed,
+        seed: ran.seed,
         seed_rule: SEED_RULE,
         failed_runs,
         estimators,
         crb_notes: crb.notes,
-        wall_s,
-        threads,
+        wall_s: ran.wall_s,
+        threads: ran.threads,
         results,
     }
 }
@@ -957,6 +993,19 @@ impl EstimatorStats {
 }
 
 impl Campaign {
+    /// Records that `runs` were asked for: a campaign that did fewer (a stop ended it) is
+    /// `interrupted`, its statistics over the runs done.
+    pub fn asked_for(&mut self, runs: u64) {
+        self.runs_requested = runs;
+        if self.runs < runs {
+            self.status = STATUS_INTERRUPTED;
+            self.status_reason = Some(format!(
+                "stopped on request after {} of {runs} runs: the statistics are over those {}",
+                self.runs, self.runs
+            ));
+        }
+    }
+
     /// The final estimates of the parameter named `param` of the estimator named `estimator`
     /// over the runs whose experiment succeeded and in which that estimator neither failed
     /// nor diverged, in run order (the sample of [`ParamStats::bias`] and

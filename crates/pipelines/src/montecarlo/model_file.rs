@@ -48,10 +48,7 @@ use aeroident_io::{Mapping, ModelSpec, ParameterResult};
 use aeroident_models::aircraft::Aircraft as _;
 use rayon::prelude::*;
 
-use super::{
-    Campaign, CrbTable, EstimatorRun, FailedRun, ParamRun, RunResult, STATUS_COMPLETE,
-    STATUS_INTERRUPTED, outcome_status, run_seed, statistics,
-};
+use super::{Campaign, CrbTable, EstimatorRun, ParamRun, Ran, RunResult, document, run_seed};
 use crate::Named as _;
 use crate::aircraft::summary::PRIMARY_DERIVATIVES;
 use crate::airframe::ModelFileAircraft;
@@ -210,18 +207,7 @@ impl ModelFileExperiment {
         sim: &AircraftSimRun,
         mapping: &Mapping,
     ) -> EstimatorRun {
-        let mut run = EstimatorRun {
-            name: kind.name().to_string(),
-            failure: None,
-            nis: None,
-            restarts: 0,
-            iterations: None,
-            fit_wall_s: None,
-            sigma_candidates: Vec::new(),
-            bootstrap_failed: None,
-            bootstrap_bias: None,
-            params: Vec::new(),
-        };
+        let mut run = EstimatorRun::named(kind.name());
         let done = if kind.is_batch() {
             self.fit(kind, sim, mapping, &mut run)
         } else {
@@ -482,45 +468,15 @@ impl ModelFileExperiment {
         Ok(self.assemble(results, runs, seed, wall_s))
     }
 
-    /// The campaign document of `results` (module doc of [`crate::montecarlo`]).
+    /// The campaign document of `results` (module doc of [`crate::montecarlo`]) of `runs`
+    /// asked for.
     fn assemble(&self, results: Vec<RunResult>, runs: u64, seed: u64, wall_s: f64) -> Campaign {
-        let crb = self.crb();
         let names: Vec<String> = self.estimators.iter().map(|e| e.name().to_string()).collect();
-        let estimators = statistics(&results, &names, &crb);
-        let failed_runs: Vec<FailedRun> = results
-            .iter()
-            .filter_map(|r| {
-                r.outcome.as_ref().err().map(|e| FailedRun { run: r.index, reason: e.clone() })
-            })
-            .collect();
-        let done = results.len() as u64;
-        let (status, status_reason) = match outcome_status(results.len(), &failed_runs, &estimators)
-        {
-            Some((status, why)) => (status, Some(why)),
-            None if done < runs => (
-                STATUS_INTERRUPTED,
-                Some(format!(
-                    "stopped on request after {done} of {runs} runs: the statistics are over those {done}"
-                )),
-            ),
-            None => (STATUS_COMPLETE, None),
-        };
-        Campaign {
-            schema_version: aeroident_io::SCHEMA_VERSION,
-            scenario: self.aircraft.name(),
-            runs: done,
-            runs_requested: runs,
-            status,
-            status_reason,
-            seed,
-            seed_rule: super::SEED_RULE,
-            failed_runs,
-            estimators,
-            crb_notes: crb.notes,
-            wall_s,
-            threads: rayon::current_num_threads(),
-            results,
-        }
+        let name = self.aircraft.name();
+        let ran = Ran { name, seed, wall_s, threads: rayon::current_num_threads() };
+        let mut c = document(ran, results, &names, self.crb());
+        c.asked_for(runs);
+        c
     }
 }
 
@@ -528,6 +484,7 @@ impl ModelFileExperiment {
 mod tests {
     use super::*;
     use crate::airframe::tests::{ALT_FT, VT_FPS, as_model_file, f16_trim};
+    use crate::montecarlo::{STATUS_COMPLETE, STATUS_INTERRUPTED};
     use aeroident_estimators::prior::Priors;
 
     /// White noise on every output the flight model predicts, SI: σ of a small air-data

@@ -29,16 +29,9 @@ fn result(
         index,
         sensor_seed: index,
         outcome: Ok(vec![EstimatorRun {
-            name: "rls".into(),
             failure: fail.map(Into::into),
-            nis: None,
-            restarts: 0,
-            iterations: None,
-            fit_wall_s: None,
-            sigma_candidates: Vec::new(),
-            bootstrap_failed: None,
-            bootstrap_bias: None,
             params: vec![prun("Cm_alpha", -1.0, fin, sigma, t10)],
+            ..EstimatorRun::named("rls")
         }]),
     }
 }

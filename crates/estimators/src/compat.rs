@@ -160,6 +160,13 @@
 //! but the reconstructed sideslip it then fits puts CY_β 24 %, Cl_β 12 % and Cn_r 19 % off,
 //! where the uncorrected fit, β a state, had them within 4.3, 4.8 and 19.5 %; so it is not
 //! never worse than no correction, which `--compat auto` must be.
+//!
+//! # Held out
+//! [`held_out`] judges each correction on data it was not fitted on: each manoeuvre (or each
+//! half of a single one) held out in turn, the check redone on the others, and each of their
+//! corrections applied to the held-out piece with only its initial state fitted. One the rest
+//! of the record contradicts beyond the noise fails (the `held_out` module doc, "When it
+//! fails"); `replay --compat` refuses it.
 
 use crate::EstimatorError;
 use crate::flight_model::{G0_MPS2, Output};
@@ -169,8 +176,11 @@ use aeroident_physics::rigid_body::{self as rb, SinCos};
 use nalgebra::{DMatrix, DVector};
 
 mod determined;
+mod held_out;
 mod inputs;
 mod starts;
+
+pub use held_out::{FAIL_SPREADS, HeldOut, HeldOutCorrection, PIECE_TOO_SHORT, held_out};
 
 use inputs::Inputs;
 
@@ -490,10 +500,21 @@ fn check_as_given(
     manoeuvres: &[&[AirDataSample]],
     config: &CompatConfig,
 ) -> Result<CompatResult, EstimatorError> {
+    check_warm(manoeuvres, config, &[])
+}
+
+/// [`check_as_given`] started from the corrections `warm` ([`Problem::warm`]; none: the usual
+/// starts).
+fn check_warm(
+    manoeuvres: &[&[AirDataSample]],
+    config: &CompatConfig,
+    warm: &[(Unknown, f64)],
+) -> Result<CompatResult, EstimatorError> {
     let first = Problem::new(manoeuvres, config, Vec::new())?;
     let (mut exclude, mut notes) = first.undetermined()?;
     loop {
-        let mut r = solve_without_beta_fallback(manoeuvres, config, &mut exclude, &mut notes)?;
+        let fit = Fit { manoeuvres, config, warm };
+        let mut r = fit.solve_without_beta_fallback(&mut exclude, &mut notes)?;
         match r.undetermined_scale() {
             Some((u, sigma)) => {
                 notes.push(determined::scale_note(u, sigma));
@@ -540,33 +561,48 @@ fn gyro_shift_caveats(
     out
 }
 
-/// The fit without the unknowns in `exclude`. Without a `β` channel, when the record does not
-/// determine the initial side velocities (or the fit fails), it is redone with them and the
-/// `ay` bias and scale factor fixed, which `exclude` and `notes` then record.
-fn solve_without_beta_fallback(
-    manoeuvres: &[&[AirDataSample]],
-    config: &CompatConfig,
-    exclude: &mut Vec<Unknown>,
-    notes: &mut Vec<String>,
-) -> Result<CompatResult, EstimatorError> {
-    let full = Problem::new(manoeuvres, config, exclude.clone())?;
-    let has_beta = full.outputs.contains(&Channel::Beta);
-    match full.solve(config) {
-        Ok(r) if has_beta || (r.termination.is_converged() && lateral_determined(&r)) => Ok(r),
-        Err(e) if has_beta => Err(e),
-        _ => {
-            let v0 = (0..manoeuvres.len()).map(|m| Unknown::Initial { manoeuvre: m, state: 1 });
-            let ay = [Unknown::Bias(Channel::Ay), Unknown::Scale(Channel::Ay)];
-            for u in ay.into_iter().chain(v0) {
-                if !exclude.contains(&u) {
-                    exclude.push(u);
+/// A check's record, configuration and starting corrections ([`check_warm`]).
+#[derive(Clone, Copy)]
+struct Fit<'a> {
+    manoeuvres: &'a [&'a [AirDataSample]],
+    config: &'a CompatConfig,
+    warm: &'a [(Unknown, f64)],
+}
+
+impl Fit<'_> {
+    /// The fit without the unknowns in `exclude`. Without a `β` channel, when the record does not
+    /// determine the initial side velocities (or the fit fails), it is redone with them and the
+    /// `ay` bias and scale factor fixed, which `exclude` and `notes` then record.
+    fn solve_without_beta_fallback(
+        self,
+        exclude: &mut Vec<Unknown>,
+        notes: &mut Vec<String>,
+    ) -> Result<CompatResult, EstimatorError> {
+        let Fit { manoeuvres, config, warm } = self;
+        let problem = |exclude: &[Unknown]| -> Result<Problem<'_>, EstimatorError> {
+            let mut p = Problem::new(manoeuvres, config, exclude.to_vec())?;
+            p.warm = warm.to_vec();
+            Ok(p)
+        };
+        let full = problem(exclude)?;
+        let has_beta = full.outputs.contains(&Channel::Beta);
+        match full.solve(config) {
+            Ok(r) if has_beta || (r.termination.is_converged() && lateral_determined(&r)) => Ok(r),
+            Err(e) if has_beta => Err(e),
+            _ => {
+                let v0 = (0..manoeuvres.len()).map(|m| Unknown::Initial { manoeuvre: m, state: 1 });
+                let ay = [Unknown::Bias(Channel::Ay), Unknown::Scale(Channel::Ay)];
+                for u in ay.into_iter().chain(v0) {
+                    if !exclude.contains(&u) {
+                        exclude.push(u);
+                    }
                 }
+                let note = SIDESLIP_PINNED_NOTE;
+                if !notes.iter().any(|n| n == note) {
+                    notes.push(note.into());
+                }
+                problem(exclude)?.solve(config)
             }
-            let note = SIDESLIP_PINNED_NOTE;
-            if !notes.iter().any(|n| n == note) {
-                notes.push(note.into());
-            }
-            Problem::new(manoeuvres, config, exclude.clone())?.solve(config)
         }
     }
 }
@@ -645,6 +681,12 @@ struct Problem<'a> {
     man: &'a [&'a [AirDataSample]],
     outputs: Vec<Channel>,
     unknowns: Vec<Unknown>,
+    /// Unknowns held at given values, not estimated (a held-out manoeuvre's corrections,
+    /// `held_out`); the other unknowns left out hold their starting values.
+    fixed: Vec<(Unknown, f64)>,
+    /// Starting values of corrections (a related check's estimates, `held_out`): the fit
+    /// then starts there alone, not from the several starts of [`Problem::starts`].
+    warm: Vec<(Unknown, f64)>,
 }
 
 /// Smallest samples in a manoeuvre: the initial state and a few steps beyond it.
@@ -695,7 +737,7 @@ impl<'a> Problem<'a> {
         let mut unknowns = unknowns_of(&outputs, man.len(), config);
         let dropped = |u: &Unknown| exclude.contains(u) || (longitudinal && is_lateral(*u));
         unknowns.retain(|u| !dropped(u));
-        Ok(Self { man, outputs, unknowns })
+        Ok(Self { man, outputs, unknowns, fixed: Vec::new(), warm: Vec::new() })
     }
 }
 
@@ -822,15 +864,17 @@ impl Problem<'_> {
         self.man.iter().map(|m| m.len()).sum()
     }
 
-    /// Starting values: no errors, each initial state from its manoeuvre's first sample.
+    /// Starting values: no errors (or the warm ones, [`Problem::warm`]), each initial state
+    /// from its manoeuvre's first sample.
     fn start(&self) -> Vec<f64> {
+        let warm = |u: &Unknown| self.warm.iter().find(|w| w.0 == *u).map_or(0.0, |w| w.1);
         self.unknowns
             .iter()
             .map(|u| match *u {
                 Unknown::Initial { manoeuvre, state } => {
                     measured_state(&self.man[manoeuvre][0])[state]
                 }
-                _ => 0.0,
+                _ => warm(u),
             })
             .collect()
     }
@@ -843,7 +887,8 @@ impl Problem<'_> {
             lag: 0.0,
             x0: self.man.iter().map(|m| measured_state(&m[0])).collect(),
         };
-        for (u, &b) in self.unknowns.iter().zip(beta) {
+        let fixed = self.fixed.iter().map(|(u, v)| (u, v));
+        for (u, &b) in fixed.chain(self.unknowns.iter().zip(beta)) {
             match *u {
                 Unknown::Bias(ch) => c.bias[ch as usize] = b,
                 Unknown::Scale(ch) => c.scale[ch as usize] = b,

@@ -53,7 +53,7 @@ impl Problem<'_> {
     }
 
     /// `ln det R` at `beta`.
-    fn cost(&self, beta: &[f64]) -> Result<f64, EstimatorError> {
+    pub(super) fn cost(&self, beta: &[f64]) -> Result<f64, EstimatorError> {
         let (mut y, mut e) = (Vec::new(), Vec::new());
         self.simulate(beta, &mut y)?;
         Ok(ln_det(&self.residuals(&y, &mut e)))
@@ -64,9 +64,12 @@ impl Problem<'_> {
     /// `k·h`, `h` the first whole number of median sample intervals ≥ [`AHRS_START_STEP_S`],
     /// up to [`AHRS_START_MAX_S`] (module doc, "Time shifts": the local minima a whole sample
     /// apart); with an AHRS lag instead, the same with its time constant at each of
-    /// [`AHRS_LAG_STARTS_S`].
+    /// [`AHRS_LAG_STARTS_S`]. With warm starting values ([`Problem::warm`]) only those.
     fn starts(&self) -> Vec<Vec<f64>> {
         let base = self.start();
+        if !self.warm.is_empty() {
+            return vec![base];
+        }
         if let Some(i) = self.unknowns.iter().position(|u| *u == Unknown::AhrsLag) {
             return AHRS_LAG_STARTS_S
                 .iter()

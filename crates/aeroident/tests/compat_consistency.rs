@@ -2,14 +2,16 @@
 //! record (`scenarios/sim/degraded_compat.toml`: 10 Hz, biases, the α vane 0.2 s late, no β)
 //! checked jointly. Two flights with the same sensors (another noise seed): no manoeuvre is
 //! named. A third flight with its α vane on time: that manoeuvre alone is named, with the α
-//! shift (its own ≈ 0 against the others' 0.2 s; the joint fit lies between).
+//! shift (its own ≈ 0 against the others' 0.2 s; the joint fit lies between), and the joint
+//! shift fails on the manoeuvres held out in turn, so `replay --compat` refuses it; with the
+//! two flights alike, no determined correction fails.
 
 mod common;
 use aeroident::outdir::OutputDir;
 use aeroident::sim::write_outputs;
 use aeroident_estimators::compat::CompatConfig;
 use aeroident_io::{Mapping, open_log};
-use aeroident_pipelines::compat::check_records;
+use aeroident_pipelines::compat::{CompatSummary, Corrections, check_records};
 use aeroident_pipelines::sim::{parse_scenario, run};
 use common::workspace;
 use std::path::Path;
@@ -38,11 +40,17 @@ fn measured_mapping(dir: &Path) -> Mapping {
     Mapping::from_path(&path).unwrap()
 }
 
-fn disagreements(files: &[&str], m: &Mapping) -> Vec<String> {
+fn check(files: &[&str], m: &Mapping) -> CompatSummary {
     let readers = files.iter().map(|f| open_log(f, None, m).unwrap()).collect();
-    let (s, _) = check_records(readers, &[], &CompatConfig::default()).unwrap();
-    s.findings.into_iter().filter(|f| f.contains("disagrees with the other manoeuvres")).collect()
+    check_records(readers, &[], &CompatConfig::default()).unwrap().0
 }
+
+fn findings<'a>(s: &'a CompatSummary, what: &str) -> Vec<&'a String> {
+    s.findings.iter().filter(|f| f.contains(what)).collect()
+}
+
+const DISAGREES: &str = "disagrees with the other manoeuvres";
+const HELD_OUT: &str = "held out in turn";
 
 #[test]
 fn a_manoeuvre_whose_sensor_changed_is_named() {
@@ -54,9 +62,19 @@ fn a_manoeuvre_whose_sensor_changed_is_named() {
     let late = fly(&dir, "late", 3, 0.2);
     let late_again = fly(&dir, "late-again", 11, 0.2);
     let on_time = fly(&dir, "on-time", 11, 0.0);
-    let same = disagreements(&[&late, &late_again], &m);
-    assert!(same.is_empty(), "{same:?}");
-    let changed = disagreements(&[&late, &late_again, &on_time], &m);
+    let same = check(&[&late, &late_again], &m);
+    assert!(findings(&same, DISAGREES).is_empty(), "{:?}", same.findings);
+    assert!(findings(&same, HELD_OUT).is_empty(), "{:?}", same.findings);
+    assert!(Corrections::from_summary(&same).unwrap().refused.is_empty());
+    let all = check(&[&late, &late_again, &on_time], &m);
+    let held = findings(&all, HELD_OUT);
+    assert!(held.len() == 1 && held[0].contains("alpha_rad time shift"), "{:?}", all.findings);
+    let refused = Corrections::from_summary(&all).unwrap().refused;
+    assert!(
+        refused.iter().any(|r| r.starts_with("alpha_rad time shift: applied to the manoeuvres")),
+        "{refused:?}"
+    );
+    let changed = findings(&all, DISAGREES);
     assert_eq!(changed.len(), 1, "{changed:?}");
     assert!(
         changed[0].starts_with("manoeuvre 3 disagrees")

@@ -6,7 +6,11 @@
 //! `compat.json` keys: `file, sigma, status, status_reason, iterations, samples_read,
 //! samples_rejected, manoeuvres, channels[{name, unit, bias, bias_sigma, scale, scale_sigma,
 //! time_shift_s, time_shift_sigma_s}], ahrs_lag_tau_s, ahrs_lag_tau_sigma_s, residual_rms{output: value}, findings[], warnings[],
-//! reconstructed[{manoeuvre, t_s[], vt_mps[], alpha_rad[], beta_rad[], beta_determined}]`
+//! reconstructed[{manoeuvre, t_s[], vt_mps[], alpha_rad[], beta_rad[], beta_determined}],
+//! held_out{by, pieces, corrections[{channel, correction, change_neg_log_likelihood, pieces,
+//! expected, spread, verdict}], notes[]}` (each correction applied to the manoeuvres, or
+//! halves, held out in turn: [`aeroident_estimators::compat::held_out`]; `replay --compat`
+//! refuses each whose `verdict` is `fails`, recomputed from its numbers)
 //! (`beta_determined` false: the side velocity and the ay bias were fixed at 0, and `replay
 //! --compat` does not use that sideslip). `scale` is the
 //! factor the channel reads the truth with (`1 + k`); a number the check did not estimate is
@@ -18,7 +22,7 @@
 //! "coloured"`), else the Cramér–Rao σ (`"cramer_rao"`); findings are judged against them.
 
 pub use crate::record::corrections::{
-    ChannelSummary, Corrected, Corrections, ReconstructedSummary,
+    ChannelSummary, Corrected, Corrections, HeldOutRow, HeldOutSummary, ReconstructedSummary,
 };
 
 use crate::record::{RecordError, read_records};
@@ -70,6 +74,9 @@ pub struct CompatSummary {
     pub warnings: Vec<String>,
     /// The reconstructed air data.
     pub reconstructed: Vec<ReconstructedSummary>,
+    /// Each correction applied to data it was not fitted on (`None` when the check could not
+    /// be split): `replay --compat` refuses each that fails.
+    pub held_out: Option<HeldOutSummary>,
 }
 
 impl Corrections {
@@ -79,7 +86,7 @@ impl Corrections {
     /// As [`Corrections::from_json`].
     pub fn from_summary(s: &CompatSummary) -> Result<Self, RecordError> {
         let lag = s.ahrs_lag_tau_s.map(|t| (t, s.ahrs_lag_tau_sigma_s));
-        Self::of_rows(&s.channels, lag, &s.reconstructed)
+        Self::of_rows(&s.channels, lag, &s.reconstructed, s.held_out.as_ref())
             .map_err(|reason| RecordError::Option { option: "compat", reason })
     }
 }
@@ -127,6 +134,9 @@ pub fn check_records<R: Read>(
     let mut warnings = result.notes.clone();
     warnings.extend(unlisted);
     let disagreements = consistency(&slices, config, &result);
+    let judged = compat::held_out(&slices, config, &result)
+        .map_err(|e| RecordError::Model(format!("compatibility check of {file}: {e}")))?;
+    let held_out = HeldOutSummary::of(&judged);
     let dt = median_interval(&rec.manoeuvres);
     let pinned = result.notes.iter().any(|n| n == compat::SIDESLIP_PINNED_NOTE);
     let summary = CompatSummary {
@@ -149,8 +159,12 @@ pub fn check_records<R: Read>(
             .map(|c| c.name())
             .zip(result.residual_rms.iter().copied())
             .collect(),
-        findings: findings(&result, dt).into_iter().chain(disagreements).collect(),
-        warnings,
+        findings: findings(&result, dt)
+            .into_iter()
+            .chain(disagreements)
+            .chain(held_out_finding(&judged, &result))
+            .collect(),
+        warnings: warnings.into_iter().chain(held_out.notes.iter().cloned()).collect(),
         reconstructed: result
             .reconstructed
             .iter()
@@ -164,8 +178,38 @@ pub fn check_records<R: Read>(
                 beta_determined: !pinned,
             })
             .collect(),
+        held_out: Some(held_out),
     };
     Ok((summary, result))
+}
+
+/// The finding of the held-out judgement `h`: the corrections of `r` determined beyond
+/// [`crate::record::corrections::DETERMINED_SIGMAS`] of their σ (so otherwise applied) that
+/// failed it ([`compat::HeldOutCorrection::fails`]), which `replay --compat` therefore refuses; `None` when none did. The airspeed's
+/// bias is not named: it is never applied.
+fn held_out_finding(h: &compat::HeldOut, r: &CompatResult) -> Option<String> {
+    let applied = |u: Unknown| {
+        u != Unknown::Bias(Channel::Vt)
+            && r.reported(u)
+                .is_some_and(|(v, s)| v.abs() >= crate::record::corrections::DETERMINED_SIGMAS * s)
+    };
+    let failed: Vec<String> = h
+        .corrections
+        .iter()
+        .filter(|c| c.fails() && applied(c.unknown))
+        .map(|c| {
+            let name = unknown_name(c.unknown);
+            format!("{name} (+{:.1}; a true one {:+.1} ± {:.1})", c.change, c.expected, c.spread)
+        })
+        .collect();
+    (!failed.is_empty()).then(|| {
+        let pieces = if h.by == "half" { "the record's two halves" } else { "its manoeuvres" };
+        format!(
+            "held out in turn ({pieces}), these corrections worsen the fit of the data they were not fitted on, beyond {} spreads of what a true correction would do (the change of that data's −ln L): {}; replay --compat does not apply them",
+            compat::FAIL_SPREADS,
+            failed.join(", ")
+        )
+    })
 }
 
 /// A manoeuvre's correction disagrees with the others' beyond this many of its own σ.

@@ -24,6 +24,10 @@ use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 use std::path::Path;
 
+mod held_out;
+
+pub use held_out::{HeldOutRow, HeldOutSummary};
+
 /// One channel's corrections: `measured = scale · true + bias`, read `time_shift_s` late (a
 /// `compat.json` row, written and read back by `replay --compat`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -191,7 +195,8 @@ pub struct Corrections {
     pub refused: Vec<String>,
     /// The corrections the record does not determine, left out: within [`DETERMINED_SIGMAS`] of none.
     pub left_out: Vec<String>,
-    /// The channels whose corrections were refused.
+    /// The channels whose corrections were refused, or whose time shift failed on held-out
+    /// data.
     pub refused_channels: Vec<Channel>,
     /// The channels whose time shift the check estimated.
     pub checked: Vec<Channel>,
@@ -242,6 +247,9 @@ struct CompatFile {
     /// Its σ, s.
     #[serde(default)]
     ahrs_lag_tau_sigma_s: Option<f64>,
+    /// Each correction judged on held-out data (absent in older files: none refused for it).
+    #[serde(default)]
+    held_out: Option<HeldOutSummary>,
 }
 
 impl CompatFile {
@@ -302,7 +310,8 @@ impl Corrections {
     /// channel, a scale that is not positive, or a non-finite number.
     pub fn from_json(path: &Path) -> Result<Self, RecordError> {
         let (file, bad) = Self::read_json(path)?;
-        Self::of_rows(&file.channels, file.lag(), &file.reconstructed).map_err(bad)
+        Self::of_rows(&file.channels, file.lag(), &file.reconstructed, file.held_out.as_ref())
+            .map_err(bad)
     }
 
     /// The corrections of a `compat.json` for the records `records` (file names as given):
@@ -315,14 +324,16 @@ impl Corrections {
     pub fn from_json_for(path: &Path, records: &[String]) -> Result<Self, RecordError> {
         let (file, bad) = Self::read_json(path)?;
         if records.is_empty() {
-            let mut c = Self::of_rows(&file.channels, file.lag(), &[]).map_err(bad)?;
+            let held = file.held_out.as_ref();
+            let mut c = Self::of_rows(&file.channels, file.lag(), &[], held).map_err(bad)?;
             if file.reconstructed.iter().any(|r| !r.t_s.is_empty()) {
                 c.refused.push("beta_rad: the sideslip reconstructed on the check's record is that record's time series: not applied to a live feed".into());
             }
             return Ok(c);
         }
         check_provenance(file.file.as_deref(), records).map_err(&bad)?;
-        Self::of_rows(&file.channels, file.lag(), &file.reconstructed).map_err(bad)
+        Self::of_rows(&file.channels, file.lag(), &file.reconstructed, file.held_out.as_ref())
+            .map_err(bad)
     }
 
     /// A `compat.json` parsed, and the error maker naming it.
@@ -339,11 +350,12 @@ impl Corrections {
     }
 
     /// The corrections of a check's channel rows, AHRS lag `(τ, σ)` and reconstructed air
-    /// data.
+    /// data; a correction that failed the held-out judgement `held` is refused with why.
     pub(crate) fn of_rows(
         rows: &[ChannelSummary],
         lag: Option<(f64, Option<f64>)>,
         rec: &[ReconstructedSummary],
+        held: Option<&HeldOutSummary>,
     ) -> Result<Self, String> {
         let mut entries: Vec<Entry> = Vec::new();
         for c in rows {
@@ -369,15 +381,20 @@ impl Corrections {
         let beta = rec.iter().filter(usable).map(|r| (r.t_s.clone(), r.beta_rad.clone())).collect();
         let checked = entries.iter().filter(|e| e.3.is_some()).map(|e| e.0).collect();
         let left_out = undetermined(rows, &mut entries);
+        let (failed, untimed) = held.map(|h| h.refuse(&mut entries)).unwrap_or_default();
         let mut c = Self::new(entries, beta)?;
+        c.refused.extend(failed);
+        c.refused_channels.extend(untimed);
         if rec.iter().any(|r| !r.beta_determined && !r.t_s.is_empty()) {
             c.refused_channels.push(Channel::Beta);
             c.refused.push("beta_rad: the reconstructed sideslip is not used: without a sideslip channel the check could not determine its initial side velocity and the ay bias (too little roll) and fixed them at 0; the fits keep β as an unmeasured state".into());
         }
         c.left_out = left_out;
         c.checked = checked;
-        if let Some((tau, sigma)) = lag {
-            c.set_lag(tau, sigma)?;
+        match (lag, held.and_then(HeldOutSummary::lag_refusal)) {
+            (Some((tau, _)), Some(why)) if tau.is_finite() => c.refused.push(why),
+            (Some((tau, sigma)), _) => c.set_lag(tau, sigma)?,
+            (None, _) => {}
         }
         Ok(c)
     }
@@ -895,7 +912,7 @@ mod tests {
             row("phi_rad", 0.0, None, Some(0.12)),
             row("alpha_rad", 0.0, None, Some(-0.05)),
         ];
-        let c = Corrections::of_rows(&rows, None, &[]).unwrap();
+        let c = Corrections::of_rows(&rows, None, &[], None).unwrap();
         assert_eq!(c.left_out, ["q_rad_s bias +1.00e-4 ± 2.0e-4"]);
         let applied = c.applied.join("; ");
         assert!(
@@ -920,6 +937,78 @@ mod tests {
         );
     }
 
+    /// A correction that failed the held-out judgement (a rise more than three spreads above a
+    /// true correction's mean) is
+    /// refused with why, whatever its σ, and its channel's other corrections stand; one within
+    /// its spread, or not judged, is applied; a failed time shift leaves the channel's timing
+    /// unchecked; a failed AHRS lag is not applied. A `compat.json` carries the judgement.
+    #[test]
+    fn corrections_that_fail_on_held_out_data_are_refused() {
+        let held =
+            |channel: Option<&str>, correction: &str, change: f64, pieces: usize| HeldOutRow {
+                channel: channel.map(str::to_string),
+                correction: correction.into(),
+                change_neg_log_likelihood: change,
+                pieces,
+                expected: -2.0,
+                spread: 3.0,
+                verdict: String::new(),
+            };
+        let summary = HeldOutSummary {
+            by: "half".into(),
+            pieces: 2,
+            corrections: vec![
+                held(Some("alpha_rad"), "time_shift", 8.5, 2),
+                held(Some("alpha_rad"), "bias", 6.5, 2),
+                held(Some("q_rad_s"), "bias", 40.0, 0),
+                held(None, "ahrs_lag", 11.0, 2),
+            ],
+            notes: Vec::new(),
+        };
+        let rows = [
+            ChannelSummary {
+                name: "alpha_rad".into(),
+                unit: "rad".into(),
+                bias: Some(0.02),
+                bias_sigma: Some(0.001),
+                scale: None,
+                scale_sigma: None,
+                time_shift_s: Some(0.2),
+                time_shift_sigma_s: Some(0.01),
+            },
+            ChannelSummary {
+                name: "q_rad_s".into(),
+                unit: "rad/s".into(),
+                bias: Some(0.003),
+                bias_sigma: Some(1e-4),
+                scale: None,
+                scale_sigma: None,
+                time_shift_s: None,
+                time_shift_sigma_s: None,
+            },
+        ];
+        let c = Corrections::of_rows(&rows, Some((0.15, Some(0.01))), &[], Some(&summary)).unwrap();
+        assert_eq!(c.refused.len(), 2, "{:?}", c.refused);
+        assert!(c.refused[0].starts_with("alpha_rad time shift: applied to the halves held out"));
+        assert!(c.refused[0].contains("rises by 8.5") && c.refused[0].contains("-2.0 ± 3.0"));
+        assert!(c.refused[1].starts_with("AHRS lag: applied to the halves"), "{:?}", c.refused);
+        assert_eq!(c.lag_s, None);
+        assert_eq!(c.shifts, []);
+        assert_eq!(c.affine, [(Channel::Alpha, 0.02, 1.0), (Channel::Q, 0.003, 1.0)]);
+        assert!(!c.timing_checked(Channel::Alpha));
+        let without = Corrections::of_rows(&rows, None, &[], None).unwrap();
+        assert_eq!(without.shifts, [(Channel::Alpha, 0.2)]);
+        assert!(without.timing_checked(Channel::Alpha));
+        let dir = std::env::temp_dir().join(format!("aeroident-held-out-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("compat.json");
+        let doc = serde_json::json!({"file": "a.csv", "channels": rows, "held_out": summary});
+        std::fs::write(&path, doc.to_string()).unwrap();
+        let read = Corrections::from_json_for(&path, &["a.csv".into()]).unwrap();
+        assert_eq!((read.shifts, read.refused.len()), (Vec::new(), 1));
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
     /// A reconstructed sideslip whose side velocity and ay bias the check fixed at 0 is not used
     /// as a measurement: it is refused with why, and β stays unmeasured; a determined one is
     /// used (and a file without the key is taken as determined).
@@ -933,11 +1022,11 @@ mod tests {
             beta_rad: vec![0.0, 0.02],
             beta_determined: determined,
         };
-        let pinned = Corrections::of_rows(&[], None, &[rec(false)]).unwrap();
+        let pinned = Corrections::of_rows(&[], None, &[rec(false)], None).unwrap();
         assert!(pinned.beta.is_empty() && pinned.beta_at(0.5).is_none());
         assert!(pinned.refused[0].contains("unmeasured state"), "{:?}", pinned.refused);
         assert!(!pinned.applied.iter().any(|a| a.contains("reconstructed")));
-        let used = Corrections::of_rows(&[], None, &[rec(true)]).unwrap();
+        let used = Corrections::of_rows(&[], None, &[rec(true)], None).unwrap();
         assert!(used.refused.is_empty() && (used.beta_at(0.5).unwrap() - 0.01).abs() < 1e-12);
         let old: ReconstructedSummary = serde_json::from_str(
             r#"{"manoeuvre": 1, "t_s": [0.0], "vt_mps": [50.0], "alpha_rad": [0.1], "beta_rad": [0.0]}"#,

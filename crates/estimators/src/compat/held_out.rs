@@ -1,10 +1,11 @@
 //! Each correction judged on data it was not fitted on: the record's manoeuvres held out in
 //! turn (the two halves of a record with one manoeuvre), the check redone on the others, and
 //! each of its corrections applied to the held-out piece, whose initial state alone is then
-//! fitted. A correction that does not lower the held-out pieces' negative log-likelihood is
-//! one the record does not support, however small its σ: it fitted something of the
-//! manoeuvres it was estimated on (a taxi segment, one manoeuvre's odd sensor, a model error
-//! of one part of the flight) that the rest of the flight does not share. This is the
+//! fitted. A correction that raises the held-out pieces' negative log-likelihood, beyond what
+//! their noise explains, is one the record does not support, however small its σ: it fitted
+//! something of the manoeuvres it was estimated on (a taxi segment, one manoeuvre's odd
+//! sensor, a model error of one part of the flight) that the rest of the flight does not
+//! share. This is the
 //! cross-validation of a model's terms on data not used for their fit, applied to the
 //! compatibility check's unknowns.
 //!
@@ -27,8 +28,9 @@
 //! [`HeldOutCorrection::expected`] and the square of [`HeldOutCorrection::spread`]. A
 //! correction **fails** when it does not improve the held-out data (the change is positive)
 //! and falls short of what it would do there were it true by more than [`FAIL_SPREADS`]
-//! spreads (three: see that constant): the rest of the record contradicts it beyond the noise. A positive change alone
-//! is not enough: a correction a few σ from none raises the held-out cost by chance often
+//! spreads (three: see that constant): the rest of the record contradicts it beyond the
+//! noise. A positive change alone is not enough: a correction a few σ from none raises the
+//! held-out cost by chance often
 //! (measured: the yaw gyro's scale factor on the simulated AHRS-lag record, 3.75 σ, +5.2 on
 //! halves; refusing it moved the filter-error method's Cl_p from −7 % to +12 % of the truth).
 //! The piece's own information matters: a gyro bias shows as a ramp in the attitude, and a
@@ -182,8 +184,8 @@ fn held_out_as_given(
         return out;
     }
     let pinned = joint.notes.iter().any(|n| n == SIDESLIP_PINNED_NOTE);
-    // The others' check starts from the joint corrections: near its optimum, in a few
-    // iterations rather than a fit from none and several starts.
+    // The others' check starts from the joint corrections, near its optimum, rather than from
+    // none at the several starts a check of unknown corrections needs.
     let warm: Vec<(Unknown, f64)> =
         judged.iter().filter_map(|&u| joint.get(u).map(|(v, _)| (u, v))).collect();
     for (k, piece) in pieces.iter().enumerate() {

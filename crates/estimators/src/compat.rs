@@ -180,7 +180,7 @@ mod held_out;
 mod inputs;
 mod starts;
 
-pub use held_out::{FAIL_SPREADS, HeldOut, HeldOutCorrection, PIECE_TOO_SHORT, held_out};
+pub use held_out::{FAIL_SPREADS, HeldOut, HeldOutCorrection, PIECE_TOO_SHORT, fails, held_out};
 
 use inputs::Inputs;
 

@@ -74,9 +74,9 @@ pub struct CompatSummary {
     pub warnings: Vec<String>,
     /// The reconstructed air data.
     pub reconstructed: Vec<ReconstructedSummary>,
-    /// Each correction applied to data it was not fitted on (`None` when the check could not
-    /// be split): `replay --compat` refuses each that fails.
-    pub held_out: Option<HeldOutSummary>,
+    /// Each correction applied to data it was not fitted on (a record too short to split
+    /// says so in its `notes`): `replay --compat` refuses each that fails.
+    pub held_out: HeldOutSummary,
 }
 
 impl Corrections {
@@ -86,7 +86,7 @@ impl Corrections {
     /// As [`Corrections::from_json`].
     pub fn from_summary(s: &CompatSummary) -> Result<Self, RecordError> {
         let lag = s.ahrs_lag_tau_s.map(|t| (t, s.ahrs_lag_tau_sigma_s));
-        Self::of_rows(&s.channels, lag, &s.reconstructed, s.held_out.as_ref())
+        Self::of_rows(&s.channels, lag, &s.reconstructed, Some(&s.held_out))
             .map_err(|reason| RecordError::Option { option: "compat", reason })
     }
 }
@@ -178,15 +178,15 @@ pub fn check_records<R: Read>(
                 beta_determined: !pinned,
             })
             .collect(),
-        held_out: Some(held_out),
+        held_out,
     };
     Ok((summary, result))
 }
 
 /// The finding of the held-out judgement `h`: the corrections of `r` determined beyond
 /// [`crate::record::corrections::DETERMINED_SIGMAS`] of their σ (so otherwise applied) that
-/// failed it ([`compat::HeldOutCorrection::fails`]), which `replay --compat` therefore refuses; `None` when none did. The airspeed's
-/// bias is not named: it is never applied.
+/// failed it ([`compat::HeldOutCorrection::fails`]), which `replay --compat` therefore
+/// refuses; `None` when none did. The airspeed's bias is not named: it is never applied.
 fn held_out_finding(h: &compat::HeldOut, r: &CompatResult) -> Option<String> {
     let applied = |u: Unknown| {
         u != Unknown::Bias(Channel::Vt)

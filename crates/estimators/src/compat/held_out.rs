@@ -35,6 +35,10 @@
 //! halves; refusing it moved the filter-error method's Cl_p from −7 % to +12 % of the truth).
 //! The piece's own information matters: a gyro bias shows as a ramp in the attitude, and a
 //! half with its own initial state holds a quarter of the ramp's information, not a half.
+//! Where the held-out cost shows no curvature along a correction (`Dₖ` ≤ 0: between 0 and
+//! `2ĉ` it has no minimum near `ĉ`), the expectation is `0 ± 0` and any rise fails: the two
+//! spurious α shifts measured (one manoeuvre's vane lag spread over three) failed that way,
+//! with +4,506 and +1,420.
 
 use super::{
     CompatConfig, CompatResult, MIN_SAMPLES, Problem, SIDESLIP_PINNED_NOTE, Unknown, check_warm,
@@ -65,10 +69,15 @@ impl HeldOutCorrection {
     /// Whether it was judged and failed: applying it raised the held-out cost, and by more
     /// than [`FAIL_SPREADS`] spreads above what a true correction would do.
     pub fn fails(&self) -> bool {
-        self.pieces > 0
-            && self.change > 0.0
-            && self.change - self.expected > FAIL_SPREADS * self.spread
+        fails(self.change, self.expected, self.spread, self.pieces)
     }
+}
+
+/// The failure rule of a held-out `change` whose mean and standard deviation were the
+/// correction true are `expected` and `spread`, over `pieces` pieces (module doc, "When it
+/// fails"): judged, a rise, and more than [`FAIL_SPREADS`] spreads above `expected`.
+pub fn fails(change: f64, expected: f64, spread: f64, pieces: usize) -> bool {
+    pieces > 0 && change > 0.0 && change - expected > FAIL_SPREADS * spread
 }
 
 /// A correction fails when its held-out change lies more than this many spreads above its

@@ -938,9 +938,8 @@ mod tests {
     }
 
     /// A correction that failed the held-out judgement (a rise more than three spreads above a
-    /// true correction's mean) is
-    /// refused with why, whatever its σ, and its channel's other corrections stand; one within
-    /// its spread, or not judged, is applied; a failed time shift leaves the channel's timing
+    /// true correction's mean) is refused with why, whatever its σ, and its channel's other
+    /// corrections stand; one within its spread, or not judged, is applied; a failed time shift leaves the channel's timing
     /// unchecked; a failed AHRS lag is not applied. A `compat.json` carries the judgement.
     #[test]
     fn corrections_that_fail_on_held_out_data_are_refused() {

@@ -2,7 +2,7 @@
 //! refusal of each correction that fails it ([`aeroident_estimators::compat::held_out`]).
 
 use super::Entry;
-use aeroident_estimators::compat::{Channel, FAIL_SPREADS, HeldOut, Unknown};
+use aeroident_estimators::compat::{self, Channel, HeldOut, Unknown};
 use serde::{Deserialize, Serialize};
 
 /// `compat.json` `held_out`: each correction applied to data it was not fitted on.
@@ -37,7 +37,7 @@ pub struct HeldOutRow {
     /// Its standard deviation then
     /// ([`aeroident_estimators::compat::HeldOutCorrection::spread`]).
     pub spread: f64,
-    /// `improves` (the change is negative), `stands` (positive, within [`FAIL_SPREADS`]
+    /// `improves` (the change is negative), `stands` (positive, within [`compat::FAIL_SPREADS`]
     /// spreads of what a true correction would do), `fails` (beyond: refused) or `not judged`.
     pub verdict: String,
 }
@@ -45,8 +45,7 @@ pub struct HeldOutRow {
 impl HeldOutRow {
     /// Whether it was judged and failed (recomputed from the numbers, not the verdict's word).
     pub fn fails(&self) -> bool {
-        let rise = self.change_neg_log_likelihood;
-        self.pieces > 0 && rise > 0.0 && rise - self.expected > FAIL_SPREADS * self.spread
+        compat::fails(self.change_neg_log_likelihood, self.expected, self.spread, self.pieces)
     }
 
     /// `alpha_rad time shift`, `AHRS lag`: the correction in words.

@@ -6,7 +6,9 @@
 //! derivative's state machine ([`phase`]: waiting for excitation / converging / identified /
 //! flagged, with the reason), counts the record's events (samples read, rejected rows, gaps)
 //! and keeps the warnings. With a [`pace::Pace`] it also holds a recorded file at N × real
-//! time. The lock is held for a push only (microseconds), so a view that nobody watches costs
+//! time. With a [`panel::Panel`] the record's other real-time methods follow the feed and the
+//! cross-check judges the estimates once a second of record time, flagging the derivatives the
+//! methods split on. The lock is held for a push only (microseconds), so a view that nobody watches costs
 //! the replay nothing measurable.
 //!
 //! A server reads the state with [`LiveState::hello`] (names, references, rule, model line)
@@ -25,14 +27,17 @@
 //! the manoeuvre while it is flown.
 
 pub mod pace;
+pub mod panel;
 pub mod phase;
 
 use crate::replay::ReplayObserver;
+use crate::replay::cross_check::CrossCheck;
 use aeroident_estimators::{AirDataSample, Param};
 use aeroident_io::mavlink::LinkStats;
 use aeroident_io::replay_output::ReplaySummary;
 use aeroident_io::{ModelSpec, RecordEvent};
 use pace::Pace;
+use panel::Panel;
 use phase::{Phase, PhaseRule, Tracker};
 use serde::Serialize;
 use std::collections::VecDeque;
@@ -156,6 +161,9 @@ pub struct Update<'a> {
     pub stats: FeedStats,
     /// The link's line (a live MAVLink feed).
     pub link: Option<String>,
+    /// The running cross-check's line: the methods following the feed and the last
+    /// judgement ([`panel`]); `None` without a panel.
+    pub cross_check: Option<&'a str>,
     /// New warnings.
     pub warnings: &'a [String],
     /// Warnings beyond those kept.
@@ -181,6 +189,10 @@ pub struct LiveState {
     params: Vec<Option<Param>>,
     references: Vec<Option<f64>>,
     trackers: Vec<Tracker>,
+    /// Each derivative's running flags: plausibility, then the panel's.
+    flags: Vec<[Option<String>; 2]>,
+    cross_check: Option<String>,
+    last_check: Option<CrossCheck>,
     points: Vec<Point>,
     stride: u64,
     latest: Option<Point>,
@@ -209,6 +221,9 @@ impl LiveState {
             params: Vec::new(),
             references: Vec::new(),
             trackers: Vec::new(),
+            flags: Vec::new(),
+            cross_check: None,
+            last_check: None,
             points: Vec::new(),
             stride: 1,
             latest: None,
@@ -310,6 +325,7 @@ impl LiveState {
                 .link
                 .as_ref()
                 .map(|l| l.lock().unwrap_or_else(PoisonError::into_inner).line()),
+            cross_check: self.cross_check.as_deref(),
             warnings,
             warnings_dropped: self.warnings_dropped,
             stride: self.stride,
@@ -323,6 +339,36 @@ impl LiveState {
     /// dropped by a full queue, duplicates …: [`LinkStats::line`]).
     pub fn watch_link(&mut self, stats: Arc<Mutex<LinkStats>>) {
         self.link = Some(stats);
+    }
+
+    /// The methods of a running cross-check ([`panel`]), named on the page until it judges.
+    pub fn watch_panel(&mut self, methods: &[&str]) {
+        self.cross_check = Some(format!("{} follow the feed; not judged yet", methods.join(", ")));
+    }
+
+    /// A judgement of the running cross-check at `t_s`: each derivative the panel disputes
+    /// ([`panel::disputed`]) is flagged with the panel's words until the next judgement.
+    pub fn cross_checked(&mut self, t_s: f64, check: &CrossCheck) {
+        let mut disputed = 0;
+        for (i, name) in self.names.iter().enumerate() {
+            let a = check.parameters.iter().find(|a| a.parameter == *name);
+            let flag = a.filter(|a| panel::disputed(a)).and_then(|a| a.flag.clone());
+            disputed += usize::from(flag.is_some());
+            self.flags[i][1] = flag;
+            self.trackers[i].flag(joined(&self.flags[i]));
+        }
+        let others: Vec<&str> = check.methods.iter().skip(1).map(|m| m.method.as_str()).collect();
+        self.cross_check = Some(format!(
+            "{} follow the feed; at t = {t_s:.1} s they dispute {disputed} of {} estimates",
+            others.join(", "),
+            check.compared
+        ));
+        self.last_check = Some(check.clone());
+    }
+
+    /// The running cross-check's last judgement (`None` before the first, or without one).
+    pub fn cross_check(&self) -> Option<&CrossCheck> {
+        self.last_check.as_ref()
     }
 
     /// The end of the job: the summary's status, each derivative's verdict and reference,
@@ -349,6 +395,7 @@ impl LiveState {
         self.params = names.iter().map(|n| Param::from_name(n)).collect();
         self.references = names.iter().map(|n| self.spec.reference(n)).collect();
         self.trackers = vec![Tracker::default(); names.len()];
+        self.flags = vec![[None, None]; names.len()];
         self.points.clear();
         self.stride = 1;
         self.latest = None;
@@ -357,11 +404,11 @@ impl LiveState {
     fn push(&mut self, point: Point) {
         for (i, k) in self.trackers.iter_mut().enumerate() {
             let (v, s) = (point.v[i], point.s[i]);
-            let flag = match (self.params[i], v) {
+            self.flags[i][0] = match (self.params[i], v) {
                 (Some(p), Some(v)) => crate::plausibility::implausible(&self.spec, p, v, s),
                 _ => None,
             };
-            k.step(&self.config.rule, point.t, v, s, flag);
+            k.step(&self.config.rule, point.t, v, s, joined(&self.flags[i]));
         }
         let window = self.config.excitation_window_s;
         self.recent_inputs.push_back((point.t, point.u));
@@ -403,6 +450,12 @@ impl LiveState {
     }
 }
 
+/// The running flags' reasons, joined (`None`: none).
+fn joined(flags: &[Option<String>; 2]) -> Option<String> {
+    let reasons: Vec<&str> = flags.iter().flatten().map(String::as_str).collect();
+    (!reasons.is_empty()).then(|| reasons.join("; "))
+}
+
 /// A model of no aircraft in particular: the conventional plausible ranges
 /// ([`ModelSpec::plausible_range`] without a model file's own), no references.
 fn conventional() -> ModelSpec {
@@ -419,6 +472,8 @@ fn lock(shared: &SharedLive) -> std::sync::MutexGuard<'_, LiveState> {
 pub struct LiveObserver {
     shared: SharedLive,
     pace: Option<Pace>,
+    panel_wanted: bool,
+    panel: Option<Panel>,
     inputs: [Option<f64>; 3],
     seq: u64,
 }
@@ -426,7 +481,32 @@ pub struct LiveObserver {
 impl LiveObserver {
     /// An observer pushing into `shared`, at `pace` when given.
     pub fn new(shared: SharedLive, pace: Option<Pace>) -> Self {
-        Self { shared, pace, inputs: [None; 3], seq: 0 }
+        Self { shared, pace, panel_wanted: false, panel: None, inputs: [None; 3], seq: 0 }
+    }
+
+    /// The observer with a running cross-check when `on` (module doc); the panel starts with
+    /// the feed's options ([`Self::start_panel`]).
+    pub fn with_cross_check(mut self, on: bool) -> Self {
+        self.panel_wanted = on;
+        self
+    }
+
+    /// Starts the running cross-check, if asked for ([`Self::with_cross_check`]): the other
+    /// real-time methods follow the events of `file`, read through `mapping` with the feed's
+    /// `opts` ([`Panel::start`]). Returns whether it started.
+    pub fn start_panel(
+        &mut self,
+        file: &str,
+        mapping: &aeroident_io::Mapping,
+        opts: &crate::replay::ReplayOptions,
+    ) -> bool {
+        if !self.panel_wanted || self.panel.is_some() {
+            return self.panel.is_some();
+        }
+        let panel = Panel::start(file, mapping, opts);
+        lock(&self.shared).watch_panel(&panel.methods());
+        self.panel = Some(panel);
+        true
     }
 
     /// The state it pushes into.
@@ -446,6 +526,9 @@ impl ReplayObserver for LiveObserver {
     }
 
     fn record_event(&mut self, event: &RecordEvent) {
+        if let Some(p) = self.panel.as_mut() {
+            p.forward(event);
+        }
         lock(&self.shared).count(event);
     }
 
@@ -469,6 +552,13 @@ impl ReplayObserver for LiveObserver {
             Point { seq: self.seq, t: t_s, v: values.to_vec(), s: sigmas.to_vec(), u: self.inputs };
         self.seq += 1;
         lock(&self.shared).push(point);
+        if let Some(p) = self.panel.as_mut()
+            && p.due(t_s)
+        {
+            let names = lock(&self.shared).names.clone();
+            let check = p.judge(&names, values, sigmas);
+            lock(&self.shared).cross_checked(t_s, &check);
+        }
         Ok(())
     }
 
@@ -476,7 +566,17 @@ impl ReplayObserver for LiveObserver {
         lock(&self.shared).warn(text);
     }
 
+    /// The feed's end; a panel's members finish what they were sent and judge once more,
+    /// on every method's estimates over the whole feed.
     fn finish(&mut self) -> std::io::Result<()> {
+        if let Some(p) = self.panel.as_mut() {
+            p.finish();
+            let mut live = lock(&self.shared);
+            if let Some(last) = live.latest.clone() {
+                let check = p.judge(&live.names, &last.v, &last.s);
+                live.cross_checked(last.t, &check);
+            }
+        }
         lock(&self.shared).ended = true;
         Ok(())
     }

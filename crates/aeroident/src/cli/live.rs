@@ -4,14 +4,16 @@
 //! ```text
 //! aeroident live <data|-|mavlink:udp:HOST:PORT> --map <map.toml> --out <dir>
 //!                [--serve 127.0.0.1:8321] [--speed N] [--linger-s S]
-//!                [--sigma-fraction F] [--hold-s T] [any option of `replay`]
+//!                [--sigma-fraction F] [--hold-s T] [--no-live-cross-check]
+//!                [any option of `replay`]
 //! ```
 //! While the feed runs through the real-time estimator, `http://ADDR/` shows each
 //! derivative's estimate with its ±2σ band over time (and the reference where a model file
 //! gives one), its state (waiting for excitation / converging / identified / flagged with the
 //! reason, [`aeroident_pipelines::live::phase`]), the control inputs and their excitation, and
 //! the feed's counts (rows read and rejected, gaps; a MAVLink link's datagrams, losses and
-//! drops), updated ten times a second (`live/server.rs`). A browser that connects late gets the
+//! drops) and the running cross-check (the record's other real-time methods following the
+//! feed, [`aeroident_pipelines::live::panel`]), updated ten times a second (`live/server.rs`). A browser that connects late gets the
 //! whole history first. The bound address is printed on stderr (`--serve 127.0.0.1:0` takes
 //! any free port). A recorded file is paced at `--speed` × real time (default 1); stdin and a
 //! MAVLink feed come at their own pace. Ctrl-C or the feed's end writes the usual outputs of
@@ -52,6 +54,11 @@ pub struct LiveArgs {
     /// … continuously for this long, s, with the estimate within that band.
     #[arg(long, value_name = "T", default_value_t = PhaseRule::default().hold_s)]
     pub hold_s: f64,
+    /// Do not run the record's other real-time methods beside the estimator while the feed
+    /// runs (by default they follow it and the cross-check flags, once a second of record
+    /// time, the derivatives they split on).
+    #[arg(long)]
+    pub no_live_cross_check: bool,
 }
 
 /// Runs `aeroident live` (module doc).
@@ -82,7 +89,7 @@ pub fn execute(args: LiveArgs) -> anyhow::Result<()> {
     let addr = server::start(args.serve, shared.clone())
         .with_context(|| format!("serving the live view on {}", args.serve))?;
     aeroident_report::note!("live view on http://{addr}/");
-    let mut observer = LiveObserver::new(shared, pace);
+    let mut observer = LiveObserver::new(shared, pace).with_cross_check(!args.no_live_cross_check);
     let result = super::replay::execute_with(args.replay, Some(&mut observer));
     let interrupted =
         result.as_ref().is_err_and(|e| e.downcast_ref::<crate::interrupt::Interrupted>().is_some());

@@ -9,8 +9,12 @@
 //!   time the estimate stayed within a band of width `sigma_fraction` × |estimate| (it is
 //!   stable, not merely confident while it drifts).
 //! - **flagged**, with the reason: while running, the estimate lies outside the aircraft's
-//!   plausible range by more than 2σ ([`crate::plausibility::implausible`]); at the end, any
-//!   flag of the final summary (cross-check, plausibility, compatibility, precision).
+//!   plausible range by more than 2σ ([`crate::plausibility::implausible`]), or the methods
+//!   following the feed split on it ([`super::panel`]); at the end, the final summary's flags
+//!   (cross-check, plausibility, compatibility, precision) and those only.
+//!
+//! A flag overlays the other three states without resetting them: the σ rule and its hold
+//! are followed throughout, so a derivative whose flag clears shows at once where it stands.
 
 /// The thresholds of the states.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -54,14 +58,16 @@ struct Since {
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Tracker {
     since: Option<Since>,
+    /// The state without the flag (none before the first step: waiting).
     phase: Option<Phase>,
+    /// The flag's reason.
     reason: Option<String>,
 }
 
 impl Tracker {
     /// The state now (waiting before the first step).
     pub fn phase(&self) -> Phase {
-        self.phase.unwrap_or(Phase::Waiting)
+        if self.reason.is_some() { Phase::Flagged } else { self.phase.unwrap_or(Phase::Waiting) }
     }
 
     /// Why it is flagged (`None` unless [`Phase::Flagged`]).
@@ -69,7 +75,8 @@ impl Tracker {
         self.reason.as_deref()
     }
 
-    /// One sample at `t_s`: the estimate, its σ and the plausibility flag of that estimate.
+    /// One sample at `t_s`: the estimate, its σ and the flag of that estimate now (the
+    /// reasons joined), which holds until the next step.
     pub fn step(
         &mut self,
         rule: &PhaseRule,
@@ -78,18 +85,13 @@ impl Tracker {
         sigma: Option<f64>,
         flag: Option<String>,
     ) {
-        self.reason = None;
         let Some(v) = value.filter(|v| v.is_finite()) else {
+            self.reason = None;
             self.since = None;
             self.phase = Some(Phase::Waiting);
             return;
         };
-        if let Some(f) = flag {
-            self.since = None;
-            self.phase = Some(Phase::Flagged);
-            self.reason = Some(f);
-            return;
-        }
+        self.reason = flag;
         let limit = rule.sigma_fraction * v.abs();
         let tight = sigma.is_some_and(|s| s.is_finite() && s <= limit);
         if !tight {
@@ -109,13 +111,18 @@ impl Tracker {
         self.phase = Some(if held { Phase::Identified } else { Phase::Converging });
     }
 
-    /// The end of the run: the final summary's flags, if any, flag the derivative with them
-    /// as the reason; without any the last state stays.
-    pub fn conclude(&mut self, flags: &[String]) {
-        if !flags.is_empty() {
-            self.phase = Some(Phase::Flagged);
-            self.reason = Some(flags.join("; "));
+    /// A flag set between steps (a judgement of the running cross-check), until the next
+    /// step; none while there is no estimate.
+    pub fn flag(&mut self, reason: Option<String>) {
+        if self.phase.is_some_and(|p| p != Phase::Waiting) {
+            self.reason = reason;
         }
+    }
+
+    /// The end of the run: the final summary's flags replace the running ones; without any,
+    /// the state is the σ rule's.
+    pub fn conclude(&mut self, flags: &[String]) {
+        self.reason = if flags.is_empty() { None } else { Some(flags.join("; ")) };
     }
 }
 
@@ -157,8 +164,9 @@ mod tests {
         assert_eq!(k.phase(), Phase::Identified);
     }
 
-    /// A plausibility flag flags the derivative with its reason while it holds; the final
-    /// summary's flags flag it at the end, and no flag leaves the last state.
+    /// A running flag flags the derivative with its reason while it holds, without resetting
+    /// the σ rule's hold underneath; the final summary's flags replace the running ones, and
+    /// none leaves the σ rule's state.
     #[test]
     fn flags_carry_their_reason() {
         let mut k = Tracker::default();
@@ -166,8 +174,18 @@ mod tests {
         assert_eq!((k.phase(), k.reason()), (Phase::Flagged, Some("outside")));
         k.step(&RULE, 0.1, Some(-1.0), Some(0.01), None);
         assert_eq!((k.phase(), k.reason()), (Phase::Converging, None));
+        // Flagged from 1 s to 2.1 s while σ stays at 1 %: identified at once when it clears,
+        // the hold having run from 0.1 s underneath.
+        for i in 0..=11 {
+            let t = 1.0 + 0.1 * f64::from(i);
+            k.step(&RULE, t, Some(-1.0), Some(0.01), Some("cross-check: split".into()));
+            assert_eq!(k.phase(), Phase::Flagged, "t = {t}");
+        }
+        k.step(&RULE, 2.2, Some(-1.0), Some(0.01), None);
+        assert_eq!((k.phase(), k.reason()), (Phase::Identified, None));
+        k.step(&RULE, 2.3, Some(-1.0), Some(0.01), Some("cross-check: split".into()));
         k.conclude(&[]);
-        assert_eq!(k.phase(), Phase::Converging);
+        assert_eq!((k.phase(), k.reason()), (Phase::Identified, None));
         k.conclude(&["cross-check: a".into(), "b".into()]);
         assert_eq!((k.phase(), k.reason()), (Phase::Flagged, Some("cross-check: a; b")));
     }

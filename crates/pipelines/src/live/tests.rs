@@ -181,3 +181,101 @@ fn an_implausible_estimate_is_flagged_live() {
     assert!(states[0].reason.as_deref().unwrap().contains("Cm_alpha"), "{states:?}");
     assert_eq!(states[1].phase, Phase::Converging, "{states:?}");
 }
+
+/// `replay`'s own final estimates of `kind` on the [`record`], as `(name, estimate, σ)`, or
+/// why it failed.
+fn replayed_alone(
+    kind: crate::estimators::EstimatorKind,
+) -> Result<Vec<(String, f64, f64)>, String> {
+    let m = Mapping::from_toml_str(MAP, "m.toml").unwrap();
+    let (csv, _) = record();
+    let reader = FlightDataReader::new(csv.as_bytes(), "d.csv", &m).unwrap();
+    let opts =
+        ReplayOptions { estimator: kind, diff_window: 3, spike_screen: None, ..Default::default() };
+    let out = replay(reader, &m, &opts, &mut ()).map_err(|e| e.to_string())?;
+    let rows = out.summary.parameters.iter().map(|p| &p.result);
+    Ok(rows.filter_map(|p| Some((p.name.clone(), p.estimate?, p.std_error?))).collect())
+}
+
+/// With the running cross-check, the other real-time methods follow the feed's own events:
+/// at the end each holds exactly the estimates a replay of its own of the record gives, and
+/// the last judgement is the panel's verdict on those and the feed's final estimates.
+#[test]
+fn the_running_cross_check_follows_the_feed_as_replays_of_their_own() {
+    use crate::estimators::EstimatorKind;
+    use crate::replay::cross_check::{MethodEstimates, judge};
+    let m = Mapping::from_toml_str(MAP, "m.toml").unwrap();
+    let (csv, _) = record();
+    let reader = FlightDataReader::new(csv.as_bytes(), "d.csv", &m).unwrap();
+    let shared = LiveState::new(LiveConfig::default(), None).shared();
+    let opts = ReplayOptions { diff_window: 3, spike_screen: None, ..Default::default() };
+    let mut o = LiveObserver::new(shared.clone(), None).with_cross_check(true);
+    assert!(o.start_panel("d.csv", &m, &opts));
+    let out = replay(reader, &m, &opts, &mut o).unwrap();
+    let live = shared.lock().unwrap();
+    let check = live.cross_check().expect("judged at the end of the feed").clone();
+    let methods: Vec<&str> = check.methods.iter().map(|m| m.method.as_str()).collect();
+    assert_eq!(methods, ["rls", "rls-iv", "ekf"]);
+    let mut with_estimates = 0;
+    for (kind, member) in [EstimatorKind::RlsIv, EstimatorKind::Ekf].iter().zip(&check.methods[1..])
+    {
+        match replayed_alone(*kind) {
+            Ok(rows) => {
+                assert_eq!(member.estimates, rows, "{}", member.method);
+                with_estimates += usize::from(!rows.is_empty());
+            }
+            Err(e) => assert_eq!(member.status, format!("failed: {e}"), "{}", member.method),
+        }
+    }
+    assert!(with_estimates >= 1, "{check:?}");
+    let own_rows = out.summary.parameters.iter().map(|p| &p.result);
+    let own_rows = own_rows.filter_map(|p| Some((p.name.clone(), p.estimate?, p.std_error?)));
+    let own = MethodEstimates::new("rls", "running", own_rows);
+    assert_eq!(check, judge(&own, &check.methods[1..]));
+    assert!(live.update(&mut Cursor::default()).cross_check.unwrap().starts_with("rls-iv, ekf"));
+}
+
+/// A judgement in which the methods split on a derivative flags it with the panel's words; one
+/// in which they agree, or in which no other method estimates it yet, does not; the summary's
+/// flags replace the running ones at the end.
+#[test]
+fn a_split_flags_the_derivative_while_it_lasts() {
+    use crate::replay::cross_check::{MethodEstimates, judge};
+    let shared = LiveState::new(LiveConfig::default(), None).shared();
+    let mut o = LiveObserver::new(shared.clone(), None);
+    o.start(&["Cm_q", "Cm_alpha"]).unwrap();
+    o.estimate(5.0, &[Some(-25.0), Some(-1.0)], &[Some(1.5), Some(0.02)]).unwrap();
+    let row = |n: &str, v: f64, s: f64| (n.to_string(), v, s);
+    let own = MethodEstimates::new(
+        "ekf",
+        "running",
+        [row("Cm_q", -25.0, 1.5), row("Cm_alpha", -1.0, 0.02)],
+    );
+    let split = [
+        MethodEstimates::new(
+            "rls",
+            "running",
+            [row("Cm_q", -43.0, 1.2), row("Cm_alpha", -1.01, 0.02)],
+        ),
+        MethodEstimates::new(
+            "rls-iv",
+            "running",
+            [row("Cm_q", -47.0, 1.4), row("Cm_alpha", -0.99, 0.03)],
+        ),
+    ];
+    let mut live = shared.lock().unwrap();
+    live.cross_checked(5.0, &judge(&own, &split));
+    let states = live.states();
+    assert_eq!(states[0].phase, Phase::Flagged);
+    let reason = states[0].reason.as_deref().unwrap();
+    assert!(reason.starts_with("cross-check: the methods split on Cm_q"), "{reason}");
+    assert!(reason.contains("rls -43") && reason.contains("ekf -25"), "{reason}");
+    assert_eq!(states[1].phase, Phase::Converging, "{states:?}");
+    // The others have no estimate yet: nothing disputes the feed's.
+    let waiting =
+        [MethodEstimates::new("rls", "running", []), MethodEstimates::new("rls-iv", "running", [])];
+    live.cross_checked(6.0, &judge(&own, &waiting));
+    assert!(live.states().iter().all(|s| s.phase != Phase::Flagged), "{:?}", live.states());
+    live.cross_checked(7.0, &judge(&own, &split));
+    assert!(live.update(&mut Cursor::default()).cross_check.unwrap().contains("dispute 1 of 2"));
+}

@@ -769,6 +769,36 @@ pub fn replay_with<R: Read>(
     Ok(out)
 }
 
+/// A second real-time estimator following events another replay has already read: `events`
+/// are that replay's [`ReplayObserver::record_event`]s, already screened for spikes,
+/// corrected and windowed, so `opts`' spike screen, corrections and windows are not applied
+/// again (nor listed in the outcome's warnings). What a live view's cross-check runs beside
+/// the feed's own estimator ([`crate::live::panel`]); `file` names the record in errors.
+///
+/// # Errors
+/// As [`replay`].
+pub fn follow(
+    events: impl IntoIterator<Item = aeroident_io::RecordEvent>,
+    file: &str,
+    mapping: &Mapping,
+    opts: &ReplayOptions,
+    observer: &mut dyn ReplayObserver,
+) -> Result<ReplayOutcome, ReplayError> {
+    check_numeric_options(opts)?;
+    let o = opts.built_estimator_options(mapping);
+    let make = |model: &ModelSpec| {
+        build(opts.estimator, model.structure, model.priors, &o).map(|e| e as Box<dyn Estimator>)
+    };
+    let mut run = online::Replay::new(file.to_string(), mapping, opts, observer);
+    for event in events {
+        run.event(event, &make)?;
+        if run.diverged() || run.stop_requested() {
+            break;
+        }
+    }
+    run.finish()
+}
+
 /// The numeric options of a replay, checked before anything is read or built, each error
 /// naming the option as the command line spells it and the value exactly as given: the
 /// differentiator window, the forgetting factor (of the estimators that take one) and the

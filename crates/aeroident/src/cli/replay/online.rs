@@ -29,6 +29,10 @@ pub(super) fn execute(
     mut out_dir: Option<crate::outdir::OutputDir>,
 ) -> anyhow::Result<()> {
     let live = job.records.live;
+    let mut view = view;
+    if let Some(v) = view.as_mut() {
+        v.start_panel(&args.data, &job.records.mapping, &prepared.options);
+    }
     let shared = view.as_ref().map(|v| v.shared());
     let mut csv_file = out_dir.as_mut().map(|o| o.create("estimates.csv")).transpose()?;
     let bar = progress_bar(args, live);

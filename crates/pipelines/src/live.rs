@@ -485,21 +485,27 @@ impl LiveObserver {
     }
 
     /// The observer with a running cross-check when `on` (module doc); the panel starts with
-    /// the feed's options ([`Self::start_panel`]).
+    /// the feed's options ([`Self::begin`]).
     pub fn with_cross_check(mut self, on: bool) -> Self {
         self.panel_wanted = on;
         self
     }
 
-    /// Starts the running cross-check, if asked for ([`Self::with_cross_check`]): the other
-    /// real-time methods follow the events of `file`, read through `mapping` with the feed's
-    /// `opts` ([`Panel::start`]). Returns whether it started.
-    pub fn start_panel(
+    /// The feed begins: the page lists the corrections the replay applies and refuses
+    /// (`--compat`, which the summary lists at the end) at once, and the running cross-check
+    /// starts if asked for ([`Self::with_cross_check`]): the other real-time methods follow
+    /// the events of `file`, read through `mapping` with the feed's `opts` ([`Panel::start`]).
+    /// Returns whether the cross-check runs.
+    pub fn begin(
         &mut self,
         file: &str,
         mapping: &aeroident_io::Mapping,
         opts: &crate::replay::ReplayOptions,
     ) -> bool {
+        if let Some(c) = &opts.compat {
+            let mut live = lock(&self.shared);
+            c.warnings().for_each(|w| live.warn(&w.to_string()));
+        }
         if !self.panel_wanted || self.panel.is_some() {
             return self.panel.is_some();
         }

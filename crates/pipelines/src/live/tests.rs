@@ -210,7 +210,7 @@ fn the_running_cross_check_follows_the_feed_as_replays_of_their_own() {
     let shared = LiveState::new(LiveConfig::default(), None).shared();
     let opts = ReplayOptions { diff_window: 3, spike_screen: None, ..Default::default() };
     let mut o = LiveObserver::new(shared.clone(), None).with_cross_check(true);
-    assert!(o.start_panel("d.csv", &m, &opts));
+    assert!(o.begin("d.csv", &m, &opts));
     let out = replay(reader, &m, &opts, &mut o).unwrap();
     let live = shared.lock().unwrap();
     let check = live.cross_check().expect("judged at the end of the feed").clone();
@@ -278,4 +278,26 @@ fn a_split_flags_the_derivative_while_it_lasts() {
     assert!(live.states().iter().all(|s| s.phase != Phase::Flagged), "{:?}", live.states());
     live.cross_checked(7.0, &judge(&own, &split));
     assert!(live.update(&mut Cursor::default()).cross_check.unwrap().contains("dispute 1 of 2"));
+}
+
+/// The corrections the replay applies and refuses are on the page from the feed's start, in
+/// the summary's words, before any sample (the summary lists them only at the end).
+#[test]
+fn the_corrections_are_listed_when_the_feed_begins() {
+    let m = Mapping::from_toml_str(MAP, "m.toml").unwrap();
+    let mut compat = crate::record::Corrections::default();
+    compat.applied.push("q_rad_s bias +3.0e-3 rad/s".into());
+    compat.refused.push("alpha_rad time shift: beyond its bounds".into());
+    let opts = ReplayOptions { compat: Some(compat.clone()), ..Default::default() };
+    let shared = LiveState::new(LiveConfig::default(), None).shared();
+    let mut o = LiveObserver::new(shared.clone(), None);
+    assert!(!o.begin("d.csv", &m, &opts), "no cross-check was asked for");
+    let live = shared.lock().unwrap();
+    assert!(live.latest().is_none());
+    let mut cursor = Cursor::default();
+    let shown: Vec<String> = live.update(&mut cursor).warnings.to_vec();
+    let summary: Vec<String> = compat.warnings().map(|w| w.to_string()).collect();
+    assert_eq!(shown, summary);
+    assert_eq!(shown.len(), 2);
+    assert!(shown[1].starts_with("compat refused: alpha_rad"), "{shown:?}");
 }

@@ -31,7 +31,7 @@ pub(super) fn execute(
     let live = job.records.live;
     let mut view = view;
     if let Some(v) = view.as_mut() {
-        v.start_panel(&args.data, &job.records.mapping, &prepared.options);
+        v.begin(&args.data, &job.records.mapping, &prepared.options);
     }
     let shared = view.as_ref().map(|v| v.shared());
     let mut csv_file = out_dir.as_mut().map(|o| o.create("estimates.csv")).transpose()?;

@@ -109,4 +109,26 @@ mod tests {
         assert_send_sync::<crate::SensorModel>();
         assert_send_sync::<crate::turbulence::DrydenGenerator>();
     }
+
+    /// A signal behind a reference or a box is the signal itself: the same value at every
+    /// time (a step whose value is known by hand, and one time on each side of it).
+    #[test]
+    fn a_borrowed_or_boxed_signal_is_the_signal() {
+        use crate::InputSignal;
+        struct Step;
+        impl InputSignal for Step {
+            fn value(&self, t_s: f64) -> f64 {
+                if t_s >= 1.0 { 0.05 } else { -0.02 }
+            }
+        }
+        fn through(s: impl InputSignal, t_s: f64) -> f64 {
+            s.value(t_s)
+        }
+        let boxed: Box<dyn InputSignal> = Box::new(Step);
+        for (t, want) in [(0.5, -0.02), (1.0, 0.05), (2.0, 0.05)] {
+            assert_eq!(through(&Step, t), want);
+            assert_eq!(through(&boxed, t), want);
+            assert_eq!(through(boxed.as_ref(), t), want);
+        }
+    }
 }

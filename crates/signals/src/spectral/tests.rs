@@ -339,3 +339,29 @@ fn analytic_composite_weights_each_window_by_its_random_error() {
     let solved = composite([window(1.0, 0.99), window(2.0, 0.5)].into_iter(), 1).unwrap();
     assert!((solved.h[0] - c(expected)).norm() < 1e-12, "{} vs {expected}", solved.h[0]);
 }
+
+/// The Gauss–Jordan inverse needs its row pivoting: a complex 3×3 matrix whose first two
+/// diagonal elements are zero, a row permutation of an upper-triangular one, so that each
+/// column has one usable pivot and the largest element of that column must be taken (another
+/// column's element would pick a zero pivot). `A · A⁻¹` must be the identity to rounding, and
+/// a singular matrix has none.
+#[test]
+fn analytic_inverse_pivots_on_the_largest_element_of_its_column() {
+    let c = |re: f64, im: f64| Complex64::new(re, im);
+    #[rustfmt::skip]
+    let a = [
+        c(0.0, 0.0), c(2.0, 1.0), c(1.0, 0.0),
+        c(0.0, 0.0), c(0.0, 0.0), c(3.0, -1.0),
+        c(1.5, 0.5), c(0.0, 0.0), c(4.0, 0.0),
+    ];
+    let inv = invert(&a, 3).expect("invertible (det = (1.5+0.5i)(2+i)(3−i))");
+    for i in 0..3 {
+        for j in 0..3 {
+            let p: Complex64 = (0..3).map(|k| a[i * 3 + k] * inv[k * 3 + j]).sum();
+            let want = if i == j { 1.0 } else { 0.0 };
+            assert!((p - c(want, 0.0)).norm() < 1e-12, "(A·A⁻¹)[{i}][{j}] = {p}");
+        }
+    }
+    let singular = [c(1.0, 0.0), c(2.0, 0.0), c(2.0, 0.0), c(4.0, 0.0)];
+    assert!(invert(&singular, 2).is_none());
+}

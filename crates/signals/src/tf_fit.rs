@@ -688,6 +688,12 @@ mod tests {
             let e = TfSpec::parse(bad).unwrap_err();
             assert!(e.contains(bad), "{e}");
         }
+        // Each order bound on its own: no denominator, and one past the largest.
+        for bad in ["q/de:0/0", "q/de:1/9"] {
+            let e = TfSpec::parse(bad).unwrap_err();
+            assert!(e.contains(bad) && e.contains("1 ≤ den ≤ 8"), "{e}");
+        }
+        assert_eq!(TfSpec::parse("q/de:0/8").unwrap().den_order, 8);
     }
 
     #[test]

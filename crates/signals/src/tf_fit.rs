@@ -599,6 +599,16 @@ mod tests {
         assert!((fit.delay_s - 0.06).abs() < 1e-5, "τ {}", fit.delay_s);
         assert!((fit.gain + 9.0).abs() < 1e-3, "K {}", fit.gain);
         assert!((fit.zeros[0].roots[0][0] + 1.2).abs() < 1e-4, "{:?}", fit.zeros);
+        // The fitted curve drawn over the data is the transfer function at each frequency of
+        // the response, written out here: K (jω + 1.2) e^{−jωτ} / ((jω)² + 2.7 jω + 9).
+        for (k, f) in resp.frequency_hz.iter().enumerate() {
+            let jw = Complex64::new(0.0, 2.0 * PI * f);
+            let h = -9.0 * (jw + 1.2) * (-jw * 0.06).exp() / (jw * jw + 2.7 * jw + 9.0);
+            let db = 20.0 * h.norm().log10();
+            assert!((fit.model_magnitude_db[k] - db).abs() < 1e-3, "{f} Hz: {db} dB");
+            let turns = (fit.model_phase_deg[k] - h.arg().to_degrees()) / 360.0;
+            assert!((turns - turns.round()).abs() * 360.0 < 1e-2, "{f} Hz: {turns} turns");
+        }
     }
 
     #[test]

@@ -235,3 +235,27 @@ pub trait ParametricEstimator<const P: usize> {
 
 /// Sliding-mode parameter estimators (thesis §3.2–§3.4): published and corrected.
 pub mod smpe;
+
+#[cfg(test)]
+mod tests {
+    use super::Estimate;
+    use nalgebra::{SMatrix, SVector};
+
+    /// The standard error is the square root of the covariance diagonal (σ² = 4, 0.25 → 2,
+    /// 0.5), a rounding-negative variance reads as 0, and an estimate without a covariance has
+    /// none.
+    #[test]
+    fn analytic_std_error_is_the_root_of_the_covariance_diagonal() {
+        let theta = SVector::<f64, 3>::new(1.0, -2.0, 0.5);
+        let mut e = Estimate::new(0.0, theta);
+        assert_eq!(e.std_error(0), None);
+        let mut c = SMatrix::<f64, 3, 3>::from_diagonal(&SVector::from([4.0, 0.25, -1e-18]));
+        c[(0, 1)] = 0.3;
+        c[(1, 0)] = 0.3;
+        e.covariance = Some(c);
+        assert_eq!(
+            [e.std_error(0), e.std_error(1), e.std_error(2)],
+            [Some(2.0), Some(0.5), Some(0.0)]
+        );
+    }
+}

@@ -80,6 +80,41 @@ fn analytic_noise_free_data_keep_the_true_terms() {
     assert!(o.selection.fit.r2 > 1.0 - 1e-12, "{:?}", o.selection.fit);
 }
 
+/// The selected structure does not depend on the unit of the coefficient: the same data with
+/// `z` in units 1000 times smaller or larger keep the same terms in every method, with
+/// parameters scaled by the same factor (the expansion's threshold is relative to z's rms).
+#[test]
+fn analytic_selection_is_invariant_to_the_scale_of_z() {
+    let n = 200;
+    let x1: Vec<f64> = (0..n).map(|k| (k as f64 * 0.1).sin()).collect();
+    let x2: Vec<f64> = (0..n).map(|k| (k as f64 * 0.37).cos()).collect();
+    let x3: Vec<f64> = (0..n).map(|k| ((k * 7919) % 101) as f64 / 50.0 - 1.0).collect();
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
+    let z: Vec<f64> = (0..n).map(|k| 1.5 * x1[k] - 0.7 * x3[k] + 0.2).collect();
+    let z = buzz(&z, 0.05, &mut rng);
+    let select = |scale: f64| {
+        let zs: Vec<f64> = z.iter().map(|v| v * scale).collect();
+        let c = candidates(&["x1", "x2", "x3"], &[x1.clone(), x2.clone(), x3.clone()], zs);
+        let s = stepwise(&c, StepwiseConfig::default()).unwrap().fit;
+        let g = orthogonal(&c, Ranking::Greedy).unwrap().selection.fit;
+        let o = orthogonal(&c, Ranking::Generation).unwrap().selection.fit;
+        [s, g, o].map(|f| (f.terms.clone(), f.theta.iter().map(|t| t / scale).collect::<Vec<_>>()))
+    };
+    let unit = select(1.0);
+    assert!(unit.iter().all(|(terms, _)| !terms.is_empty()), "{unit:?}");
+    for scale in [1e-3, 1e3] {
+        for (m, (a, b)) in unit.iter().zip(select(scale).iter()).enumerate() {
+            assert_eq!(a.0, b.0, "method {m}, z × {scale}");
+            for (x, y) in a.1.iter().zip(&b.1) {
+                assert!(
+                    (x - y).abs() <= 1e-9 * x.abs().max(1.0),
+                    "method {m}, z × {scale}: {x} vs {y}"
+                );
+            }
+        }
+    }
+}
+
 /// Orthogonal candidates (sines of distinct harmonics over whole periods, zero mean): the
 /// orthogonal functions are the candidates themselves and each cost reduction is
 /// `(zᵀx)²/xᵀx = a² N/2` for amplitude `a`, ranked by `|a|`.

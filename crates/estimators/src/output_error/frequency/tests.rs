@@ -116,3 +116,22 @@ fn dft_equals_the_defining_sum() {
         }
     }
 }
+
+/// The information matrix's inverse holds over any range of parameter units: a correlated
+/// 2×2 with standard deviations 10⁻¹⁴⁰ and 10¹⁴⁰ (ρ = 0.6) is inverted to its closed form
+/// `[[1/a², −ρ/(ab)], [−ρ/(ab), 1/b²]] / (1 − ρ²)`, which only the Jacobi scaling reaches
+/// (unscaled, or scaled the wrong way, its entries leave the floating-point range).
+#[test]
+fn analytic_spd_inverse_holds_over_any_range_of_units() {
+    let (a, b, rho) = (1e-140_f64, 1e140_f64, 0.6);
+    let m = nalgebra::DMatrix::from_row_slice(2, 2, &[a * a, rho * a * b, rho * a * b, b * b]);
+    let inv = spd_inverse(&m).expect("positive definite");
+    let k = 1.0 / (1.0 - rho * rho);
+    let want = [k / (a * a), -k * rho / (a * b), -k * rho / (a * b), k / (b * b)];
+    for (i, w) in want.iter().enumerate() {
+        let got = inv[(i / 2, i % 2)];
+        assert!((got - w).abs() <= 1e-12 * w.abs(), "[{}][{}]: {got} vs {w}", i / 2, i % 2);
+    }
+    let singular = nalgebra::DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 1.0, 1.0]);
+    assert!(spd_inverse(&singular).is_none());
+}

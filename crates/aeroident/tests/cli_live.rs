@@ -10,9 +10,9 @@
 //! the test is skipped with a message — and fails when `CI=true`.
 
 mod common;
-use std::io::{BufRead, BufReader, Read};
+use std::io::Read;
 use std::path::Path;
-use std::process::{Command, Stdio};
+use std::process::Command;
 use std::time::{Duration, Instant};
 
 use common::browser::{chromium, console_lines};
@@ -106,8 +106,8 @@ fn start_live(
     out: &Path,
 ) -> (std::process::Child, String, std::thread::JoinHandle<String>) {
     let ws = common::workspace();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_aeroident"))
-        .arg("live")
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_aeroident"));
+    cmd.arg("live")
         .arg(data)
         .arg("--map")
         .arg(ws.join("mappings/hfb320.toml"))
@@ -115,26 +115,8 @@ fn start_live(
         .arg(ws.join("models/hfb320_book_q0.toml"))
         .arg("--out")
         .arg(out)
-        .args(["--serve", "127.0.0.1:0", "--speed", "5", "--linger-s", "120"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut stderr = BufReader::new(child.stderr.take().unwrap());
-    let mut line = String::new();
-    let url = loop {
-        line.clear();
-        assert!(stderr.read_line(&mut line).unwrap() > 0, "no `live view on` line");
-        if let Some(rest) = line.trim().strip_prefix("live view on ") {
-            break rest.to_string();
-        }
-    };
-    let rest = std::thread::spawn(move || {
-        let mut s = String::new();
-        let _ = stderr.read_to_string(&mut s);
-        s
-    });
-    (child, url, rest)
+        .args(["--serve", "127.0.0.1:0", "--speed", "5", "--linger-s", "120"]);
+    common::live::spawn(cmd)
 }
 
 #[test]

@@ -6,8 +6,8 @@
 //! state must show. The stream is read as the page reads it (server-sent events), no browser.
 
 mod common;
-use std::io::{BufRead, BufReader, Read, Write};
-use std::process::{Command, Stdio};
+use std::io::{Read, Write};
+use std::process::Command;
 
 /// Starts `aeroident live` with `extra`; returns the child and the page's `host:port`.
 fn start(
@@ -16,8 +16,8 @@ fn start(
     extra: &[&str],
 ) -> (std::process::Child, String) {
     let ws = common::workspace();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_aeroident"))
-        .arg("live")
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_aeroident"));
+    cmd.arg("live")
         .arg(data)
         .arg("--map")
         .arg(ws.join("mappings/hfb320.toml"))
@@ -26,21 +26,9 @@ fn start(
         .args(["--estimator", "ekf", "--out"])
         .arg(out)
         .args(["--serve", "127.0.0.1:0", "--speed", "10"])
-        .args(extra)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut stderr = BufReader::new(child.stderr.take().unwrap());
-    let mut line = String::new();
-    let host = loop {
-        line.clear();
-        assert!(stderr.read_line(&mut line).unwrap() > 0, "no `live view on` line");
-        if let Some(rest) = line.trim().strip_prefix("live view on http://") {
-            break rest.trim_end_matches('/').to_string();
-        }
-    };
-    std::thread::spawn(move || std::io::copy(&mut stderr, &mut std::io::sink()));
+        .args(extra);
+    let (child, url, _rest) = common::live::spawn(cmd);
+    let host = url.trim_start_matches("http://").trim_end_matches('/').to_string();
     (child, host)
 }
 

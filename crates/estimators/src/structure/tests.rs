@@ -51,16 +51,24 @@ fn analytic_swr_demo_keeps_1_2_4_and_rejects_3() {
     }
 }
 
-/// Exact data, no noise, one irrelevant regressor uncorrelated with the rest: the constant
-/// model's PSE is `SST/N + 2σ²_max/N` by definition, and both methods keep exactly the true
-/// terms.
-#[test]
-fn analytic_noise_free_data_keep_the_true_terms() {
+/// 200 samples of three regressors (a sine, a cosine of another frequency, a pseudo-random
+/// sequence) and the exact `z = 1.5 x1 − 0.7 x3 + 0.2`, in which `x2` has no part.
+fn three_regressors() -> ([Vec<f64>; 3], Vec<f64>) {
     let n = 200;
     let x1: Vec<f64> = (0..n).map(|k| (k as f64 * 0.1).sin()).collect();
     let x2: Vec<f64> = (0..n).map(|k| (k as f64 * 0.37).cos()).collect();
     let x3: Vec<f64> = (0..n).map(|k| ((k * 7919) % 101) as f64 / 50.0 - 1.0).collect();
     let z: Vec<f64> = (0..n).map(|k| 1.5 * x1[k] - 0.7 * x3[k] + 0.2).collect();
+    ([x1, x2, x3], z)
+}
+
+/// Exact data, no noise, one irrelevant regressor uncorrelated with the rest: the constant
+/// model's PSE is `SST/N + 2σ²_max/N` by definition, and both methods keep exactly the true
+/// terms.
+#[test]
+fn analytic_noise_free_data_keep_the_true_terms() {
+    let ([x1, x2, x3], z) = three_regressors();
+    let n = z.len();
     let c = candidates(&["x1", "x2", "x3"], &[x1, x2, x3], z.clone());
     let mean = z.iter().sum::<f64>() / n as f64;
     let sst: f64 = z.iter().map(|v| (v - mean).powi(2)).sum();
@@ -85,13 +93,8 @@ fn analytic_noise_free_data_keep_the_true_terms() {
 /// parameters scaled by the same factor (the expansion's threshold is relative to z's rms).
 #[test]
 fn analytic_selection_is_invariant_to_the_scale_of_z() {
-    let n = 200;
-    let x1: Vec<f64> = (0..n).map(|k| (k as f64 * 0.1).sin()).collect();
-    let x2: Vec<f64> = (0..n).map(|k| (k as f64 * 0.37).cos()).collect();
-    let x3: Vec<f64> = (0..n).map(|k| ((k * 7919) % 101) as f64 / 50.0 - 1.0).collect();
-    let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
-    let z: Vec<f64> = (0..n).map(|k| 1.5 * x1[k] - 0.7 * x3[k] + 0.2).collect();
-    let z = buzz(&z, 0.05, &mut rng);
+    let ([x1, x2, x3], z) = three_regressors();
+    let z = buzz(&z, 0.05, &mut rand_pcg::Pcg64::seed_from_u64(11));
     let select = |scale: f64| {
         let zs: Vec<f64> = z.iter().map(|v| v * scale).collect();
         let c = candidates(&["x1", "x2", "x3"], &[x1.clone(), x2.clone(), x3.clone()], zs);

@@ -105,17 +105,8 @@ fn start_live(
     data: &Path,
     out: &Path,
 ) -> (std::process::Child, String, std::thread::JoinHandle<String>) {
-    let ws = common::workspace();
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_aeroident"));
-    cmd.arg("live")
-        .arg(data)
-        .arg("--map")
-        .arg(ws.join("mappings/hfb320.toml"))
-        .arg("--model")
-        .arg(ws.join("models/hfb320_book_q0.toml"))
-        .arg("--out")
-        .arg(out)
-        .args(["--serve", "127.0.0.1:0", "--speed", "5", "--linger-s", "120"]);
+    let mut cmd = common::live::hfb320(data, "hfb320_book_q0.toml", out);
+    cmd.args(["--speed", "5", "--linger-s", "120"]);
     common::live::spawn(cmd)
 }
 

@@ -7,7 +7,6 @@
 
 mod common;
 use std::io::{Read, Write};
-use std::process::Command;
 
 /// Starts `aeroident live` with `extra`; returns the child and the page's `host:port`.
 fn start(
@@ -15,18 +14,8 @@ fn start(
     out: &std::path::Path,
     extra: &[&str],
 ) -> (std::process::Child, String) {
-    let ws = common::workspace();
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_aeroident"));
-    cmd.arg("live")
-        .arg(data)
-        .arg("--map")
-        .arg(ws.join("mappings/hfb320.toml"))
-        .arg("--model")
-        .arg(ws.join("models/hfb320_jategaonkar.toml"))
-        .args(["--estimator", "ekf", "--out"])
-        .arg(out)
-        .args(["--serve", "127.0.0.1:0", "--speed", "10"])
-        .args(extra);
+    let mut cmd = common::live::hfb320(data, "hfb320_jategaonkar.toml", out);
+    cmd.args(["--estimator", "ekf", "--speed", "10"]).args(extra);
     let (child, url, _rest) = common::live::spawn(cmd);
     let host = url.trim_start_matches("http://").trim_end_matches('/').to_string();
     (child, host)

@@ -25,3 +25,20 @@ pub fn spawn(mut cmd: Command) -> (Child, String, JoinHandle<String>) {
     });
     (child, url, rest)
 }
+
+/// `aeroident live DATA --map mappings/hfb320.toml --model models/MODEL --out OUT --serve
+/// 127.0.0.1:0` (the HFB-320 record's view on any free port); the caller adds the rest.
+pub fn hfb320(data: &std::path::Path, model: &str, out: &std::path::Path) -> Command {
+    let ws = super::workspace();
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_aeroident"));
+    cmd.arg("live")
+        .arg(data)
+        .arg("--map")
+        .arg(ws.join("mappings/hfb320.toml"))
+        .arg("--model")
+        .arg(ws.join("models").join(model))
+        .arg("--out")
+        .arg(out)
+        .args(["--serve", "127.0.0.1:0"]);
+    cmd
+}

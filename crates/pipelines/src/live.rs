@@ -8,8 +8,8 @@
 //! and keeps the warnings. With a [`pace::Pace`] it also holds a recorded file at N × real
 //! time. With a [`panel::Panel`] the record's other real-time methods follow the feed and the
 //! cross-check judges the estimates once a second of record time, flagging the derivatives the
-//! methods split on. The lock is held for a push only (microseconds), so a view that nobody watches costs
-//! the replay nothing measurable.
+//! methods split on. The lock is held for a push only (microseconds), so a view that nobody
+//! watches costs the replay nothing measurable.
 //!
 //! A server reads the state with [`LiveState::hello`] (names, references, rule, model line)
 //! and [`LiveState::update`] from a [`Cursor`]: the points after the cursor, the latest sample
@@ -561,9 +561,9 @@ impl ReplayObserver for LiveObserver {
         if let Some(p) = self.panel.as_mut()
             && p.due(t_s)
         {
-            let names = lock(&self.shared).names.clone();
-            let check = p.judge(&names, values, sigmas);
-            lock(&self.shared).cross_checked(t_s, &check);
+            let mut live = lock(&self.shared);
+            let check = p.judge(&live.names, values, sigmas);
+            live.cross_checked(t_s, &check);
         }
         Ok(())
     }

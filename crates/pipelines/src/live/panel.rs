@@ -38,8 +38,8 @@ struct Latest {
     names: Vec<String>,
     values: Vec<Option<f64>>,
     sigmas: Vec<Option<f64>>,
-    /// `None` while it runs; then how it ended (`complete`, `failed: …`).
-    ended: Option<String>,
+    /// `None` while it runs; then its status (`complete` …), or why it failed.
+    ended: Option<Result<String, String>>,
 }
 
 /// The observer of a member's replay: keeps its latest estimates.
@@ -94,12 +94,15 @@ impl Member {
     /// Its estimates now (a member that failed or diverged: failed, with why).
     fn estimates(&self) -> MethodEstimates {
         let l = lock(&self.latest);
-        if let Some(why) = l.ended.as_deref().and_then(|e| e.strip_prefix("failed: ")) {
-            return MethodEstimates::failed(self.method, why);
+        match &l.ended {
+            Some(Err(why)) => MethodEstimates::failed(self.method, why),
+            Some(Ok(status)) => {
+                MethodEstimates::new(self.method, status, rows(&l.names, &l.values, &l.sigmas))
+            }
+            None => {
+                MethodEstimates::new(self.method, "running", rows(&l.names, &l.values, &l.sigmas))
+            }
         }
-        let rows = l.names.iter().zip(l.values.iter().zip(&l.sigmas));
-        let rows = rows.filter_map(|(n, (v, s))| Some((n.clone(), (*v)?, (*s)?)));
-        MethodEstimates::new(self.method, l.ended.as_deref().unwrap_or("running"), rows)
     }
 }
 
@@ -113,9 +116,9 @@ fn follow(
 ) {
     let mut observer = Keep(keep.clone());
     let ended = match crate::replay::follow(events, file, mapping, opts, &mut observer) {
-        Ok(o) if o.diverged() => "failed: diverged".to_string(),
-        Ok(o) => o.summary.status,
-        Err(e) => format!("failed: {e}"),
+        Ok(o) if o.diverged() => Err("diverged".to_string()),
+        Ok(o) => Ok(o.summary.status),
+        Err(e) => Err(e.to_string()),
     };
     lock(&keep).ended = Some(ended);
 }
@@ -185,9 +188,7 @@ impl Panel {
         values: &[Option<f64>],
         sigmas: &[Option<f64>],
     ) -> CrossCheck {
-        let rows = names.iter().zip(values.iter().zip(sigmas));
-        let rows = rows.filter_map(|(n, (v, s))| Some((n.clone(), (*v)?, (*s)?)));
-        let own = MethodEstimates::new(self.own, "running", rows);
+        let own = MethodEstimates::new(self.own, "running", rows(names, values, sigmas));
         let others: Vec<MethodEstimates> = self.members.iter().map(Member::estimates).collect();
         judge(&own, &others)
     }
@@ -200,7 +201,7 @@ impl Panel {
             if let Some(t) = m.thread.take()
                 && t.join().is_err()
             {
-                lock(&m.latest).ended = Some("failed: its thread panicked".into());
+                lock(&m.latest).ended = Some(Err("its thread panicked".into()));
             }
         }
     }
@@ -210,6 +211,16 @@ impl Drop for Panel {
     fn drop(&mut self) {
         self.finish();
     }
+}
+
+/// `(name, estimate, σ)` of the parameters with both.
+fn rows<'a>(
+    names: &'a [String],
+    values: &'a [Option<f64>],
+    sigmas: &'a [Option<f64>],
+) -> impl Iterator<Item = (String, f64, f64)> + 'a {
+    let all = names.iter().zip(values.iter().zip(sigmas));
+    all.filter_map(|(n, (v, s))| Some((n.clone(), (*v)?, (*s)?)))
 }
 
 /// Whether the panel disputes the feed's own estimate of a parameter: it is set aside by a

@@ -716,10 +716,18 @@ pub fn replay<R: Read>(
     observer: &mut dyn ReplayObserver,
 ) -> Result<ReplayOutcome, ReplayError> {
     let o = opts.built_estimator_options(mapping);
-    let make = |model: &ModelSpec| {
-        build(opts.estimator, model.structure, model.priors, &o).map(|e| e as Box<dyn Estimator>)
-    };
-    replay_with(reader, mapping, opts, make, observer)
+    replay_with(reader, mapping, opts, maker(opts, &o), observer)
+}
+
+/// How a replay builds its estimator once the first sample has chosen the model: `opts`'
+/// kind with the options `o` built for the mapping.
+fn maker<'a>(
+    opts: &'a ReplayOptions,
+    o: &'a EstimatorOptions,
+) -> impl Fn(&ModelSpec) -> Result<Box<dyn Estimator>, BuildError> + 'a {
+    move |model: &ModelSpec| {
+        build(opts.estimator, model.structure, model.priors, o).map(|e| e as Box<dyn Estimator>)
+    }
 }
 
 /// [`replay`] with the estimator made by `make` (for tests that need an estimator of their
@@ -786,9 +794,7 @@ pub fn follow(
 ) -> Result<ReplayOutcome, ReplayError> {
     check_numeric_options(opts)?;
     let o = opts.built_estimator_options(mapping);
-    let make = |model: &ModelSpec| {
-        build(opts.estimator, model.structure, model.priors, &o).map(|e| e as Box<dyn Estimator>)
-    };
+    let make = maker(opts, &o);
     let mut run = online::Replay::new(file.to_string(), mapping, opts, observer);
     for event in events {
         run.event(event, &make)?;

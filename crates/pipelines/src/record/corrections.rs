@@ -377,7 +377,10 @@ impl Corrections {
             }
             entries.push((ch, c.bias, c.scale, c.time_shift_s));
         }
-        let usable = |r: &&ReconstructedSummary| r.beta_determined;
+        // A check with a sideslip row fitted the record's own β: its reconstruction is for the
+        // report, and the stage fills nothing (saying so would claim a sideslip it adds).
+        let measured = rows.iter().any(|r| r.name == Channel::Beta.name());
+        let usable = |r: &&ReconstructedSummary| r.beta_determined && !measured;
         let beta = rec.iter().filter(usable).map(|r| (r.t_s.clone(), r.beta_rad.clone())).collect();
         let checked = entries.iter().filter(|e| e.3.is_some()).map(|e| e.0).collect();
         let left_out = undetermined(rows, &mut entries);
@@ -1010,7 +1013,8 @@ mod tests {
 
     /// A reconstructed sideslip whose side velocity and ay bias the check fixed at 0 is not used
     /// as a measurement: it is refused with why, and β stays unmeasured; a determined one is
-    /// used (and a file without the key is taken as determined).
+    /// used (and a file without the key is taken as determined), but not on a record with its
+    /// own sideslip channel.
     #[test]
     fn a_pinned_reconstructed_sideslip_is_not_a_measurement() {
         let rec = |determined: bool| ReconstructedSummary {
@@ -1027,6 +1031,20 @@ mod tests {
         assert!(!pinned.applied.iter().any(|a| a.contains("reconstructed")));
         let used = Corrections::of_rows(&[], None, &[rec(true)], None).unwrap();
         assert!(used.refused.is_empty() && (used.beta_at(0.5).unwrap() - 0.01).abs() < 1e-12);
+        // A record with its own sideslip channel (the check's `beta_rad` row) gets none.
+        let vane = ChannelSummary {
+            name: "beta_rad".into(),
+            unit: "rad".into(),
+            bias: None,
+            bias_sigma: None,
+            scale: None,
+            scale_sigma: None,
+            time_shift_s: Some(0.0),
+            time_shift_sigma_s: Some(0.01),
+        };
+        let own = Corrections::of_rows(&[vane], None, &[rec(true)], None).unwrap();
+        assert!(own.beta.is_empty() && own.beta_at(0.5).is_none());
+        assert!(!own.applied.iter().any(|a| a.contains("reconstructed")), "{:?}", own.applied);
         let old: ReconstructedSummary = serde_json::from_str(
             r#"{"manoeuvre": 1, "t_s": [0.0], "vt_mps": [50.0], "alpha_rad": [0.1], "beta_rad": [0.0]}"#,
         )

@@ -239,8 +239,9 @@ fn cli(rec: &Record, tau: f64) {
     );
 }
 
-/// `--compat auto`'s check (biases, no lag model) on the 10-Hz record: its corrections are
-/// right, and output error's six-axis fit of the corrected record without a β vane, which
+/// `--compat auto`'s check (biases, no lag model) on the 10-Hz record names the lag it does
+/// not model (τ within 0.02 s of the filter's 0.155-s delay) and the command that does; its
+/// corrections are right, and output error's six-axis fit of the corrected record without a β vane, which
 /// from the equation-error start crept for the whole iteration budget into a valley with
 /// Cn_β at a seventh of its value, is started again from the generic priors and keeps every
 /// lateral derivative within 5 points of the uncorrected fit's error (the AHRS lag, which this
@@ -250,6 +251,12 @@ fn cli(rec: &Record, tau: f64) {
 fn val_compat_auto_without_a_vane_keeps_the_lateral_axis() {
     let rec = Record::fly(10);
     let check = rec.check(CompatConfig::default());
+    // The lag it does not model is named, with τ as the lag check finds it, and not applied.
+    let delay = 0.01 / -(-0.01f64 / 0.15).exp_m1();
+    let named = check.findings.iter().find(|f| f.contains("look lagged")).expect("a lag finding");
+    let tau: f64 = named.split("τ = ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+    assert!((tau - delay).abs() < 0.02 && named.contains("--ahrs-lag"), "{named}");
+    assert_eq!(check.ahrs_lag_tau_s, None);
     let corrections = Corrections::from_summary(&check).unwrap();
     let raw = rec.errors(&rec.fit(BatchMethod::Oe, None));
     let fit = rec.fit(BatchMethod::Oe, Some(corrections));

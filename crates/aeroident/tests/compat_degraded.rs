@@ -74,6 +74,8 @@ fn val_compat_recovers_the_injected_biases_and_time_shifts_of_a_degraded_record(
         "{:?}",
         s.findings
     );
+    // The gyros are not filtered (only the attitudes are late): no AHRS lag is named.
+    assert!(!s.findings.iter().any(|f| f.contains("look lagged")), "{:?}", s.findings);
 
     // Output error on the longitudinal model, with and without the corrections: the α vane's
     // lag and the accelerometer biases pull the lift-curve slope 3 % low (3.49 against the

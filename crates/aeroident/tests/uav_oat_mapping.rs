@@ -112,3 +112,35 @@ fn val_a_surface_that_never_moves_leaves_its_terms_null_and_the_rest_fitted() {
         }
     }
 }
+
+/// The compatibility check on the UAV-OAT records, which have a sideslip channel (ArduPilot's,
+/// from the EKF wind): on the 2023-02-01 `el_1` multistep the check determines a β bias of
+/// −0.235 ± 0.031 rad (13.5°) and a heading lag of 1.0 ± 0.2 s, on the 2022-05-07 `ail_1` one
+/// a heading lead of 0.027 ± 0.013 s. Each is named as implausible for its channel (bounds
+/// ±0.175 rad, ±0.5 s, no AHRS lead beyond 0.02 s), and `replay --compat` applies none of them
+/// and says why; a record with its own sideslip gets no reconstructed one.
+#[test]
+fn val_uav_oat_compat_refuses_the_implausible_corrections_with_their_reason() {
+    use aeroident_estimators::compat::CompatConfig;
+    use aeroident_pipelines::compat::{Corrections, check_record};
+    let Some(dir) = shared("uav_oat/csv") else { return };
+    let cases = [
+        ("uavoat_2023_02_01_14_21_28_el_1.csv", &["beta_rad bias", "psi_rad time shift"][..]),
+        ("uavoat_2022_05_07_11_13_57_ail_1.csv", &["psi_rad time shift"][..]),
+    ];
+    for (name, implausible) in cases {
+        let m = mapping();
+        let reader = open_log(&dir.join(name).display().to_string(), None, &m).unwrap();
+        let s = check_record(reader, &CompatConfig::default()).unwrap().0;
+        let named: Vec<&String> = s.findings.iter().filter(|f| f.contains("implausible")).collect();
+        assert_eq!(named.len(), 1, "{name}: {:?}", s.findings);
+        let c = Corrections::from_summary(&s).unwrap();
+        for what in implausible {
+            assert!(named[0].contains(what), "{name}, {what}: {}", named[0]);
+            let channel = what.split(' ').next().unwrap();
+            assert!(!c.applied.iter().any(|a| a.starts_with(channel)), "{name}: {:?}", c.applied);
+            assert!(c.refused.iter().any(|r| r.starts_with(channel)), "{name}: {:?}", c.refused);
+        }
+        assert!(!c.applied.iter().any(|a| a.contains("reconstructed")), "{:?}", c.applied);
+    }
+}

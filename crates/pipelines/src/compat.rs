@@ -25,6 +25,7 @@ pub use crate::record::corrections::{
     ChannelSummary, Corrected, Corrections, HeldOutRow, HeldOutSummary, ReconstructedSummary,
 };
 
+use crate::record::corrections::{DETERMINED_SIGMAS, plausible, plausible_lag};
 use crate::record::{RecordError, read_records};
 use crate::results::OutputTrace;
 use crate::window::TimeWindow;
@@ -139,6 +140,8 @@ pub fn check_records<R: Read>(
     let held_out = HeldOutSummary::of(&judged);
     let dt = median_interval(&rec.manoeuvres);
     let pinned = result.notes.iter().any(|n| n == compat::SIDESLIP_PINNED_NOTE);
+    let rows = channels(&result);
+    let implausible = implausible_finding(&rows);
     let summary = CompatSummary {
         file,
         sigma: if result.sigma_coloured.is_some() { "coloured" } else { "cramer_rao" },
@@ -150,7 +153,7 @@ pub fn check_records<R: Read>(
         samples_rejected: rec.rejected,
         rejections,
         manoeuvres: slices.len(),
-        channels: channels(&result),
+        channels: rows,
         ahrs_lag_tau_s: result.reported(Unknown::AhrsLag).map(|l| l.0),
         ahrs_lag_tau_sigma_s: result.reported(Unknown::AhrsLag).map(|l| l.1),
         residual_rms: result
@@ -163,6 +166,8 @@ pub fn check_records<R: Read>(
             .into_iter()
             .chain(disagreements)
             .chain(held_out_finding(&judged, &result))
+            .chain(implausible)
+            .chain(unmodelled_lag(&slices, config))
             .collect(),
         warnings: warnings.into_iter().chain(held_out.notes.iter().cloned()).collect(),
         reconstructed: result
@@ -183,6 +188,60 @@ pub fn check_records<R: Read>(
     Ok((summary, result))
 }
 
+/// The finding that the record's rates and attitudes come through a first-order filter that
+/// `config` does not model: the check redone with the AHRS lag and the inertial scale factors
+/// as unknowns ([`compat::CompatConfig::ahrs_lag`]) converges to a time constant more than
+/// [`SIGNIFICANT_SIGMAS`] of its σ from 0 and within [`plausible_lag`]'s bounds; `None`
+/// otherwise, and when `config` models the lag already.
+///
+/// Said, not applied: on the simulated records of `crates/aeroident/tests/compat_ahrs_lag.rs`
+/// (τ = 0.15 s, 10 Hz) the lag's corrections bring output error's Cl_p, Cl_δa, Cm_q and Cm_δe
+/// from 19–35 % off to within 10 %, but move CY_β (−4 % to +11 % with a β vane, +24 % without),
+/// so applying it is not "never worse than no correction", which `--compat auto` must be. An
+/// unmodelled lag is what those 35 % are, so the user is told which check to run.
+fn unmodelled_lag(
+    slices: &[&[aeroident_estimators::AirDataSample]],
+    config: &CompatConfig,
+) -> Option<String> {
+    if config.ahrs_lag {
+        return None;
+    }
+    let lagged = CompatConfig { ahrs_lag: true, inertial_scale_factors: true, ..*config };
+    let r = compat::check(slices, &lagged).ok()?;
+    let (tau, sigma) = r.reported(Unknown::AhrsLag)?;
+    let determined = r.termination == Termination::Converged && tau > SIGNIFICANT_SIGMAS * sigma;
+    (determined && plausible_lag(tau).is_ok()).then(|| format!(
+        "the rates and attitudes look lagged: with the AHRS's first-order lag as an unknown (and the inertial scale factors) the check finds τ = {tau:.3} ± {sigma:.3} s, which this check does not model and does not correct; an unmodelled lag of that size biases the damping and control derivatives (Cl_p, Cm_q +35 % on a simulated 0.15-s lag): run `aeroident compat --ahrs-lag --inertial-scale-factors` and `replay --compat DIR/compat.json`, and compare the sideslip derivatives with the uncorrected fit's (CY_β moved by 16–28 points there)"
+    ))
+}
+
+/// The finding that names each correction of `rows` the record determines (at least
+/// [`DETERMINED_SIGMAS`] of its σ from none) but that lies outside its channel kind's bounds
+/// ([`plausible`]: a 13° sideslip-vane bias, a 1-s heading lag), which `replay --compat`
+/// therefore refuses; `None` when there is none. The airspeed's bias is not named: it is never
+/// applied.
+fn implausible_finding(rows: &[ChannelSummary]) -> Option<String> {
+    let determined = |v: Option<f64>, sigma: Option<f64>, none: f64| {
+        v.filter(|v| sigma.is_none_or(|s| (v - none).abs() >= DETERMINED_SIGMAS * s))
+    };
+    let mut named = Vec::new();
+    for row in rows {
+        let Some(ch) = Channel::from_name(&row.name) else { continue };
+        let bias = determined(row.bias, row.bias_sigma, 0.0).filter(|_| ch != Channel::Vt);
+        let judged = [
+            bias.map(|b| plausible(ch, b, 1.0, None)),
+            determined(row.scale, row.scale_sigma, 1.0).map(|k| plausible(ch, 0.0, k, None)),
+            determined(row.time_shift_s, row.time_shift_sigma_s, 0.0)
+                .map(|t| plausible(ch, 0.0, 1.0, Some(t))),
+        ];
+        let why = judged.into_iter().flatten().filter_map(Result::err);
+        named.extend(why.map(|w| format!("{} {w}", row.name)));
+    }
+    (!named.is_empty()).then(|| {
+        format!("implausible for its channel, so replay --compat refuses it: {}", named.join("; "))
+    })
+}
+
 /// The finding of the held-out judgement `h`: the corrections of `r` determined beyond
 /// [`crate::record::corrections::DETERMINED_SIGMAS`] of their σ (so otherwise applied) that
 /// failed it ([`compat::HeldOutCorrection::fails`]), which `replay --compat` therefore
@@ -190,8 +249,7 @@ pub fn check_records<R: Read>(
 fn held_out_finding(h: &compat::HeldOut, r: &CompatResult) -> Option<String> {
     let applied = |u: Unknown| {
         u != Unknown::Bias(Channel::Vt)
-            && r.reported(u)
-                .is_some_and(|(v, s)| v.abs() >= crate::record::corrections::DETERMINED_SIGMAS * s)
+            && r.reported(u).is_some_and(|(v, s)| v.abs() >= DETERMINED_SIGMAS * s)
     };
     let failed: Vec<String> = h
         .corrections
@@ -478,5 +536,43 @@ mod tests {
         let rows = channels(&r);
         let q = rows.iter().find(|c| c.name == "q_rad_s").unwrap();
         assert_eq!((q.time_shift_s, q.time_shift_sigma_s), (Some(0.15), Some(0.01)));
+    }
+
+    /// Each determined correction beyond its channel kind's bounds is named with the bound it
+    /// passes: a 13° β bias, a 1-s heading lag, a gyro scale of 1.5. Within bounds, within 2σ
+    /// of none, or the airspeed's bias (never applied): not named; none named: no finding.
+    #[test]
+    fn implausible_corrections_are_named_with_their_bound() {
+        let row = |name: &str, bias: (f64, f64), scale: (f64, f64), shift: (f64, f64)| {
+            let some = |v: f64| (v != 0.0).then_some(v);
+            ChannelSummary {
+                name: name.into(),
+                unit: String::new(),
+                bias: some(bias.0),
+                bias_sigma: some(bias.1),
+                scale: (scale.0 != 1.0).then_some(scale.0),
+                scale_sigma: some(scale.1),
+                time_shift_s: some(shift.0),
+                time_shift_sigma_s: some(shift.1),
+            }
+        };
+        let none = (0.0, 0.0);
+        let rows = [
+            row("beta_rad", (-0.235, 0.031), (1.0, 0.0), none),
+            row("psi_rad", none, (1.0, 0.0), (1.015, 0.21)),
+            row("q_rad_s", none, (1.5, 0.01), none),
+            row("alpha_rad", (0.3, 0.2), (1.0, 0.0), none),
+            row("vt_mps", (-500.0, 1.0), (1.0, 0.0), none),
+            row("ax_mps2", (0.5, 0.01), (1.0, 0.0), (0.1, 0.01)),
+        ];
+        let f = implausible_finding(&rows).unwrap();
+        for named in ["beta_rad bias", "±0.175", "psi_rad time shift +1.015 s", "q_rad_s scale 1.5"]
+        {
+            assert!(f.contains(named), "{named}: {f}");
+        }
+        for not in ["alpha_rad", "vt_mps", "ax_mps2"] {
+            assert!(!f.contains(not), "{not}: {f}");
+        }
+        assert_eq!(implausible_finding(&rows[3..]), None);
     }
 }

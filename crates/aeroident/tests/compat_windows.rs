@@ -111,6 +111,42 @@ fn errors_a_channel_in_the_wrong_unit_is_named_before_the_check() {
     check("", "").unwrap();
 }
 
+/// The HFB-320 record with its pitch gyro dead (every `q_radps` row the first row's value):
+/// the check refuses before fitting, naming the channel and its column as a dead or stuck
+/// sensor, instead of fitting the kinematics to it (a dead pitch gyro "converged" with a 3.1-s
+/// α lag and a 0.47-rad β bias).
+#[test]
+fn errors_a_dead_gyro_is_named_before_the_check() {
+    let Some(data) = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let text = std::fs::read_to_string(&data).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    let q = header.split(',').position(|c| c == "q_radps").expect("a q_radps column");
+    let lines: Vec<&str> = lines.collect();
+    let held = lines[0].split(',').nth(q).unwrap();
+    let rows: Vec<String> = lines
+        .iter()
+        .map(|l| {
+            let mut cells: Vec<&str> = l.split(',').collect();
+            cells[q] = held;
+            cells.join(",")
+        })
+        .collect();
+    let dir = std::env::temp_dir().join(format!("aeroident-dead-gyro-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("dead_q.csv");
+    std::fs::write(&csv, format!("{header}\n{}\n", rows.join("\n"))).unwrap();
+    let m = Mapping::from_path(&workspace().join("mappings/hfb320.toml")).unwrap();
+    let reader = open_log(&csv.display().to_string(), None, &m).unwrap();
+    let e = check_records(vec![reader], &[], &CompatConfig::default()).unwrap_err().to_string();
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(
+        e.contains("channel `q`") && e.contains("q_radps") && e.contains("dead or stuck sensor"),
+        "{e}"
+    );
+    assert!(e.contains(&format!("in all {} samples", rows.len())), "{e}");
+}
+
 /// ATTAS's elevator records with the shipped longitudinal mapping (p, r, φ mapped, no ay): they
 /// fly within 4.4° of bank, so each is checked in the vertical plane with a note, where both
 /// were refused for want of ay. The two flights' α-vane biases (one vane, two records) agree

@@ -439,12 +439,13 @@ impl Corrections {
                 c.refused_channels.push(ch);
                 continue;
             }
+            let k = c.flow_angle_scale(ch, k);
             if ch != Channel::Vt && (b != 0.0 || k != 1.0) {
                 c.affine.push((ch, b, k));
                 // Name only what is removed: a scale factor the check left out is not one.
                 let removed = format!("bias {b:+.4e} {} removed", ch.unit());
                 let divided = format!("scale {k:.4} divided out");
-                let what = match (b != 0.0, scale.is_some()) {
+                let what = match (b != 0.0, k != 1.0) {
                     (true, true) => format!("{removed}, {divided}"),
                     (true, false) => removed,
                     _ => divided,
@@ -460,6 +461,23 @@ impl Corrections {
             c.applied.push("beta_rad: the reconstructed sideslip where the record has none".into());
         }
         Ok(c)
+    }
+
+    /// The scale factor `k` of channel `ch` to divide out: 1 for a flow angle, whose scale
+    /// factor (local upwash or sidewash, the vane's calibration) would turn every α or β
+    /// derivative into one per radian of the kinematic angle instead of the vane's, which the
+    /// units of the results do not say; it is listed instead, with how to apply it on request
+    /// (the mapping's `scale`, which then defines the channel).
+    fn flow_angle_scale(&mut self, ch: Channel, k: f64) -> f64 {
+        if !matches!(ch, Channel::Alpha | Channel::Beta) || k == 1.0 {
+            return k;
+        }
+        self.refused.push(format!(
+            "{}: scale {k:.4} not divided out: a flow angle's scale factor (upwash, the vane's calibration) would make its derivatives per radian of the kinematic angle, not of the recorded one; to apply it, multiply the channel's `scale` in the mapping by {:.4}",
+            ch.name(),
+            1.0 / k
+        ));
+        1.0
     }
 
     /// Whether the check judged channel `ch`'s timing and its result stands (its time shift
@@ -774,20 +792,25 @@ mod tests {
         assert_eq!(got(6), None);
     }
 
-    /// The lag, bias and scale of α and the bias of q are undone (α within the linear
+    /// The lag and bias of α and the bias and scale of q are undone (α within the linear
     /// interpolation's error of the 0.1 s grid, 1e-4 rad, except the last 0.2 s, held), every
-    /// sample leaves once with its time stamp and row, and a gap flushes the manoeuvre.
+    /// sample leaves once with its time stamp and row, and a gap flushes the manoeuvre. α's
+    /// scale factor is not divided out (its derivatives would change unit) but listed with
+    /// the mapping's scale that applies it.
     #[test]
     fn lags_biases_and_scales_are_undone_sample_by_sample() {
         let corr = Corrections::new(
             vec![
                 (Channel::Alpha, Some(0.01), Some(1.05), Some(0.2)),
-                (Channel::Q, Some(0.003), None, None),
+                (Channel::Q, Some(0.003), Some(0.97), None),
             ],
             Vec::new(),
         )
         .unwrap();
         assert_eq!(corr.applied.len(), 3, "{:?}", corr.applied);
+        assert!(corr.applied[0].ends_with("removed"), "{:?}", corr.applied);
+        assert!(corr.applied[2].contains("scale 0.9700 divided out"), "{:?}", corr.applied);
+        assert!(corr.refused[0].contains("by 0.9524"), "{:?}", corr.refused);
         let ts: Vec<f64> = (0..100).map(|k| k as f64 * 0.1).collect();
         let mut input = events(&ts[..50], 0);
         input.push(Ok(RecordEvent::Gap { row: 50, dt_s: 1.0, nominal_dt_s: 0.1 }));
@@ -806,10 +829,10 @@ mod tests {
         for (k, (row, s)) in samples.iter().enumerate() {
             assert_eq!(*row, k as u64);
             assert_eq!(s.t_s, ts[k]);
-            assert!((s.q_rad_s.unwrap() - (0.5 * s.t_s).cos()).abs() < 1e-12);
+            assert!((s.q_rad_s.unwrap() - (0.5 * s.t_s).cos() / 0.97).abs() < 1e-12);
             let last_of_manoeuvre = if k < 50 { ts[49] } else { ts[99] };
             if s.t_s + 0.2 <= last_of_manoeuvre + 1e-9 {
-                let want = (0.5 * s.t_s).sin() * 0.1;
+                let want = 1.05 * (0.5 * s.t_s).sin() * 0.1;
                 assert!(
                     (s.alpha_rad - want).abs() < 1e-4,
                     "t {}: {} vs {want}",

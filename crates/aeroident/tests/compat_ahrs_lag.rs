@@ -16,6 +16,7 @@ use aeroident_pipelines::compat::{CompatSummary, Corrections, check_record};
 use aeroident_pipelines::replay::batch::{BatchMethod, BatchSummary, FitOptions};
 use aeroident_pipelines::replay::fit::fit_record;
 use aeroident_pipelines::sim::{load_scenario, run};
+use aeroident_signals::sensors::SensorConfig;
 use common::workspace;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -51,8 +52,19 @@ struct Record {
 
 impl Record {
     fn fly(stride: usize) -> Self {
+        Self::fly_with(stride, false)
+    }
+
+    /// The record, with a β vane (the α vane's noise, not late) when `vane`.
+    fn fly_with(stride: usize, vane: bool) -> Self {
         let path = workspace().join("scenarios/sim/ahrs_lag_degraded.toml");
-        let sc = load_scenario(&path).unwrap();
+        let mut sc = load_scenario(&path).unwrap();
+        if vane {
+            let alpha = sc.sensor.iter().find(|s| s.channel == "alpha_air_rad").unwrap();
+            let beta =
+                SensorConfig { channel: "beta_air_rad".into(), delay_s: None, ..alpha.clone() };
+            sc.sensor.push(beta);
+        }
         let sim = run(&sc, path.parent().unwrap()).unwrap();
         // One directory per record: the tests run in parallel in one process, and each
         // record's directory goes when it is dropped.
@@ -73,13 +85,14 @@ impl Record {
         // model's own state derivatives (a logger has neither).
         let shipped = std::fs::read_to_string(workspace().join("mappings/aeroident-sim.toml"));
         let skip = ["beta =", "pdot =", "qdot =", "rdot =", "alphadot ="];
+        let skip = if vane { &skip[1..] } else { &skip[..] };
         let mut text: String = shipped
             .unwrap()
             .lines()
             .filter(|l| !skip.iter().any(|s| l.starts_with(s)))
             .collect::<Vec<_>>()
             .join("\n");
-        for c in SENSED {
+        for c in SENSED.iter().chain(vane.then_some(&"beta_air_rad")) {
             text = text.replace(&format!("column = \"{c}\""), &format!("column = \"meas_{c}\""));
         }
         let map = dir.join("measured.toml");
@@ -266,5 +279,45 @@ fn val_compat_auto_without_a_vane_keeps_the_lateral_axis() {
         let before = raw.iter().find(|r| r.0 == name).map_or(f64::NAN, |r| r.1);
         eprintln!("auto {name}: {:+.1} % corrected, {:+.1} % raw", 100.0 * e, 100.0 * before);
         assert!(e.abs() <= before.abs() + 0.05, "{name}: {e} against raw {before}");
+    }
+}
+
+/// The evidence for leaving the lag out of `--compat auto`, with and without a β vane (the
+/// same flight with a β vane of white σ 0.0005 rad added): per primary derivative, % error of
+/// output error and the filter-error method uncorrected, with `--compat auto`'s corrections,
+/// and with the lag's (`--ahrs-lag --inertial-scale-factors`). A documented campaign (about
+/// 3 min): `cargo test --release -p aeroident --test compat_ahrs_lag -- --ignored --nocapture
+/// the_lag_against_auto`. Measured with the vane, oe: every primary derivative within 13 %
+/// with the lag (Cl_p −0.1, Cm_q −7.2, CY_β +11.3, Cn_δr +12.9 %), 35 % off uncorrected and
+/// with auto, but CY_β −4.6 % uncorrected; fem does not converge in any of the three
+/// (docs/real-data.md).
+#[test]
+#[ignore]
+fn the_lag_against_auto_with_and_without_a_vane() {
+    for vane in [false, true] {
+        let rec = Record::fly_with(10, vane);
+        let auto = Corrections::from_summary(&rec.check(CompatConfig::default())).unwrap();
+        let lagged = rec.check(CompatConfig {
+            ahrs_lag: true,
+            inertial_scale_factors: true,
+            ..CompatConfig::default()
+        });
+        let lag = Corrections::from_summary(&lagged).unwrap();
+        for method in [BatchMethod::Oe, BatchMethod::Fem] {
+            let fits = [None, Some(auto.clone()), Some(lag.clone())].map(|c| rec.fit(method, c));
+            let status: Vec<&str> = fits.iter().map(|f| f.status.as_str()).collect();
+            eprintln!("vane {vane}, {method:?} (none, auto, lag): {status:?}");
+            let errors: Vec<Vec<(String, f64)>> = fits.iter().map(|f| rec.errors(f)).collect();
+            for (name, _) in &errors[0] {
+                let e: Vec<f64> = errors
+                    .iter()
+                    .map(|x| x.iter().find(|y| &y.0 == name).map_or(f64::NAN, |y| 100.0 * y.1))
+                    .collect();
+                eprintln!("  {name:<9} {:+7.1} {:+7.1} {:+7.1}", e[0], e[1], e[2]);
+                if vane && method == BatchMethod::Oe {
+                    assert!(e[2].abs() < 13.0, "{name}: {e:?}");
+                }
+            }
+        }
     }
 }

@@ -111,40 +111,88 @@ fn errors_a_channel_in_the_wrong_unit_is_named_before_the_check() {
     check("", "").unwrap();
 }
 
-/// The HFB-320 record with its pitch gyro dead (every `q_radps` row the first row's value):
-/// the check refuses before fitting, naming the channel and its column as a dead or stuck
-/// sensor, instead of fitting the kinematics to it (a dead pitch gyro "converged" with a 3.1-s
-/// α lag and a 0.47-rad β bias).
-#[test]
-fn errors_a_dead_gyro_is_named_before_the_check() {
-    let Some(data) = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
-    let text = std::fs::read_to_string(&data).unwrap();
+/// A copy of the record `data` (CSV) in its own directory under `tag` with column `column` read
+/// `rows` rows late (each row holding the value `rows` rows before it, the first rows the first
+/// value): with `rows` beyond the record, a dead sensor. Returns the copy and its row count.
+fn late_column(data: &std::path::Path, column: &str, rows: usize, tag: &str) -> (String, usize) {
+    let text = std::fs::read_to_string(data).unwrap();
     let mut lines = text.lines();
     let header = lines.next().unwrap();
-    let q = header.split(',').position(|c| c == "q_radps").expect("a q_radps column");
-    let lines: Vec<&str> = lines.collect();
-    let held = lines[0].split(',').nth(q).unwrap();
-    let rows: Vec<String> = lines
-        .iter()
-        .map(|l| {
-            let mut cells: Vec<&str> = l.split(',').collect();
-            cells[q] = held;
+    let c = header.split(',').position(|h| h == column).expect("the column");
+    let lines: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let body: Vec<String> = (0..lines.len())
+        .map(|k| {
+            let mut cells = lines[k].clone();
+            cells[c] = lines[k.saturating_sub(rows)][c];
             cells.join(",")
         })
         .collect();
-    let dir = std::env::temp_dir().join(format!("aeroident-dead-gyro-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("aeroident-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let csv = dir.join("dead_q.csv");
-    std::fs::write(&csv, format!("{header}\n{}\n", rows.join("\n"))).unwrap();
-    let m = Mapping::from_path(&workspace().join("mappings/hfb320.toml")).unwrap();
-    let reader = open_log(&csv.display().to_string(), None, &m).unwrap();
-    let e = check_records(vec![reader], &[], &CompatConfig::default()).unwrap_err().to_string();
-    std::fs::remove_dir_all(&dir).ok();
+    let csv = dir.join("late.csv");
+    std::fs::write(&csv, format!("{header}\n{}\n", body.join("\n"))).unwrap();
+    (csv.display().to_string(), body.len())
+}
+
+/// The check of `csv` with mapping file `map` (of `mappings/`): its summary, or its error.
+fn check_file(csv: &str, map: &str) -> Result<aeroident_pipelines::compat::CompatSummary, String> {
+    let m = Mapping::from_path(&workspace().join("mappings").join(map)).unwrap();
+    let reader = open_log(csv, None, &m).unwrap();
+    let checked = check_records(vec![reader], &[], &CompatConfig::default());
+    std::fs::remove_dir_all(std::path::Path::new(csv).parent().unwrap()).ok();
+    checked.map(|c| c.0).map_err(|e| e.to_string())
+}
+
+/// The HFB-320 record with its pitch gyro dead (every `q_radps` row the first row's value):
+/// the check refuses before fitting, naming the channel and its column as a dead or stuck
+/// sensor, instead of fitting the kinematics to it (a dead pitch gyro "converged" with a 3.1-s
+/// α lag and a 0.47-rad β bias). Its α vane 1 s late moves against the kinematic α (gain
+/// −0.42 ± 0.05), 10 s late does not follow it (−0.01 ± 0.05): each is named as a channel
+/// misaligned in time, not as a unit (it was "likely radians mapped as degrees" at 10 s).
+#[test]
+fn errors_a_dead_gyro_or_a_late_vane_is_named_before_the_check() {
+    let Some(data) = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let (csv, n) = late_column(&data, "q_radps", usize::MAX, "dead-gyro");
+    let e = check_file(&csv, "hfb320.toml").unwrap_err();
     assert!(
         e.contains("channel `q`") && e.contains("q_radps") && e.contains("dead or stuck sensor"),
         "{e}"
     );
-    assert!(e.contains(&format!("in all {} samples", rows.len())), "{e}");
+    assert!(e.contains(&format!("in all {n} samples")), "{e}");
+    for (rows, how) in [(10, "moves against"), (100, "does not follow")] {
+        let (csv, _) = late_column(&data, "alpha_rad", rows, &format!("late-alpha-{rows}"));
+        let e = check_file(&csv, "hfb320.toml").unwrap_err();
+        assert!(e.contains("channel `alpha`") && e.contains(how), "{rows}: {e}");
+        assert!(e.contains("misaligned in time") && !e.contains("unit mismatch"), "{rows}: {e}");
+    }
+}
+
+/// ATTAS AilRud1 (25 Hz, two manoeuvres) with its β vane 3 s late: beyond the shifts a sensor
+/// plausibly has, the check settles at a shift of −0.74 s, and the channel is named with the
+/// delay at which it matches the kinematics (measured +3.1 s in both manoeuvres, correlation
+/// 0.99 against 0.6). The α screen, whose kinematic rate takes the side velocity from β, no
+/// longer blames α for it (gain 0.35, "unit mismatch", before). The record as flown has no
+/// such finding.
+#[test]
+fn val_a_channel_late_beyond_a_sensors_lag_is_named_with_its_delay() {
+    let Some(data) = shared("jategaonkar_hfb320_attas/csv/fAttasAilRud1.csv") else { return };
+    let misfit = |s: &aeroident_pipelines::compat::CompatSummary| {
+        s.findings.iter().find(|f| f.contains("does not fit the kinematics")).cloned()
+    };
+    let as_flown = check_file(&late_column(&data, "beta_deg", 0, "beta-0").0, "attas_lateral.toml");
+    assert_eq!(misfit(&as_flown.unwrap()), None);
+    let (csv, _) = late_column(&data, "beta_deg", 75, "beta-late");
+    let late = check_file(&csv, "attas_lateral.toml").unwrap();
+    let named = misfit(&late).expect("a misfit of β");
+    assert!(named.starts_with("beta_rad"), "{named}");
+    let delays: Vec<f64> = named
+        .split("by ")
+        .skip(1)
+        .chain(named.split("; ").skip(1))
+        .filter_map(|p| p.trim_start_matches('+').split(' ').next()?.parse().ok())
+        .collect();
+    assert_eq!(delays.len(), 2, "{named}");
+    assert!(delays.iter().all(|d| (d - 3.0).abs() < 0.2), "{delays:?}: {named}");
 }
 
 /// ATTAS's elevator records with the shipped longitudinal mapping (p, r, φ mapped, no ay): they

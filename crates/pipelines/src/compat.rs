@@ -37,6 +37,7 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::Read;
 
+mod misaligned;
 mod sensors;
 
 /// `compat.json` (module doc).
@@ -141,6 +142,7 @@ pub fn check_records<R: Read>(
     let dt = median_interval(&rec.manoeuvres);
     let pinned = result.notes.iter().any(|n| n == compat::SIDESLIP_PINNED_NOTE);
     let rows = channels(&result);
+    let lengths: Vec<usize> = slices.iter().map(|s| s.len()).collect();
     let implausible = implausible_finding(&rows);
     let summary = CompatSummary {
         file,
@@ -167,7 +169,8 @@ pub fn check_records<R: Read>(
             .chain(disagreements)
             .chain(held_out_finding(&judged, &result))
             .chain(implausible)
-            .chain(unmodelled_lag(&slices, config))
+            .chain(misaligned::misaligned(&lengths, &result, dt))
+            .chain(unmodelled_lag(&slices, config, &result))
             .collect(),
         warnings: warnings.into_iter().chain(held_out.notes.iter().cloned()).collect(),
         reconstructed: result
@@ -190,7 +193,8 @@ pub fn check_records<R: Read>(
 
 /// The finding that the record's rates and attitudes come through a first-order filter that
 /// `config` does not model: the check redone with the AHRS lag and the inertial scale factors
-/// as unknowns ([`compat::CompatConfig::ahrs_lag`]) converges to a time constant more than
+/// as unknowns from the corrections of `from`, the check under `config`
+/// ([`compat::check_with_ahrs_lag`]) converges to a time constant more than
 /// [`SIGNIFICANT_SIGMAS`] of its σ from 0 and within [`plausible_lag`]'s bounds; `None`
 /// otherwise, and when `config` models the lag already.
 ///
@@ -202,12 +206,12 @@ pub fn check_records<R: Read>(
 fn unmodelled_lag(
     slices: &[&[aeroident_estimators::AirDataSample]],
     config: &CompatConfig,
+    from: &CompatResult,
 ) -> Option<String> {
     if config.ahrs_lag {
         return None;
     }
-    let lagged = CompatConfig { ahrs_lag: true, inertial_scale_factors: true, ..*config };
-    let r = compat::check(slices, &lagged).ok()?;
+    let r = compat::check_with_ahrs_lag(slices, config, from).ok()?;
     let (tau, sigma) = r.reported(Unknown::AhrsLag)?;
     let determined = r.termination == Termination::Converged && tau > SIGNIFICANT_SIGMAS * sigma;
     (determined && plausible_lag(tau).is_ok()).then(|| format!(

@@ -61,7 +61,7 @@ pub(super) fn believable(slices: &[&[AirDataSample]], mapping: &Mapping) -> Resu
     misread.extend(alpha_misread(slices, mapping));
     match misread.first() {
         Some(w) => Err(format!(
-            "{w}; the check would turn it into biases, time shifts and winds: fix the mapping first"
+            "{w}; the check would turn it into biases, time shifts and winds: fix the mapping or the record first"
         )),
         None => Ok(()),
     }
@@ -104,12 +104,35 @@ fn az_misread(slices: &[&[AirDataSample]], mapping: &Mapping) -> Option<String> 
     ))
 }
 
-/// The α vane's unit-mismatch text when its gain ([`alpha_gain`]) is judged off.
+/// The α vane's unit-mismatch text when its gain ([`alpha_gain`]) is judged off, or the text
+/// of a vane that does not follow the kinematics at all (a gain within 3σ of 0).
 fn alpha_misread(slices: &[&[AirDataSample]], mapping: &Mapping) -> Option<String> {
-    let (k, sigma) = alpha_gain(slices)?;
+    // The kinematic rate takes the side velocity from β: a β channel that is late or wrong
+    // would be blamed on α (ATTAS with β 1 s late: gain 0.35). Judged with β and without
+    // (v = 0, the lateral terms lost), α is named only when both are off.
+    let with = alpha_gain(slices, true)?;
+    let (k, sigma) = match alpha_gain(slices, false) {
+        Some(without) if (without.0 - 1.0).abs() < (with.0 - 1.0).abs() => without,
+        _ => with,
+    };
     let off = !(1.0 / BOUND..=BOUND).contains(&k);
     if !off || (k - 1.0).abs() <= MIN_SIGMAS * sigma {
         return None;
+    }
+    // No relation, or one against the motion: a unit would scale the motion, not remove or
+    // reverse it.
+    let unrelated = if k.abs() <= 3.0 * sigma {
+        Some("does not follow")
+    } else {
+        (k < 0.0).then_some("moves against")
+    };
+    if let Some(how) = unrelated {
+        return Some(format!(
+            "{} {how} the angle of attack the rates, accelerometers and attitude give (its rate's gain on theirs {} ± {}, where 1 is a vane that agrees): a reversed sign (`scale = -1`), a channel delayed or misaligned in time (its time stamps), or another column or record",
+            mapping.field_label("alpha_rad"),
+            short(k),
+            short(sigma)
+        ));
     }
     let deg = 180.0 / core::f64::consts::PI;
     let near = |target: f64| (k - target).abs() <= (0.2 * target).max(3.0 * sigma);
@@ -130,10 +153,10 @@ fn alpha_misread(slices: &[&[AirDataSample]], mapping: &Mapping) -> Option<Strin
 
 /// The gain `(k, σ)` of the least-squares fit `α̇_m = k α̇ + b`, where `α̇_m` is the vane's
 /// central difference and `α̇ = (u ẇ − w u̇)/(u² + w²)` the kinematic rate from the force
-/// equations (Stevens & Lewis, 2nd ed., Table 2.5-1) with `(u, v, w)` from the air data and the
+/// equations (Stevens & Lewis, 2nd ed., Table 2.5-1) with `(u, v, w)` from the air data (`v` = 0 without `with_beta`) and the
 /// measured specific forces: dominated by `q`, so a vane in the wrong unit shows as a factor 57.3.
 /// `None` without the channels or with too few samples.
-pub(super) fn alpha_gain(slices: &[&[AirDataSample]]) -> Option<(f64, f64)> {
+pub(super) fn alpha_gain(slices: &[&[AirDataSample]], with_beta: bool) -> Option<(f64, f64)> {
     let mut rows: Vec<(f64, f64)> = Vec::new();
     for m in slices {
         for w in m.windows(3) {
@@ -142,7 +165,7 @@ pub(super) fn alpha_gain(slices: &[&[AirDataSample]]) -> Option<(f64, f64)> {
                 continue;
             }
             let measured = (w[2].alpha_rad - w[0].alpha_rad) / span;
-            if let Some(kinematic) = alpha_rate(&w[1]) {
+            if let Some(kinematic) = alpha_rate(&w[1], with_beta) {
                 rows.push((measured, kinematic));
             }
         }
@@ -164,12 +187,14 @@ pub(super) fn alpha_gain(slices: &[&[AirDataSample]]) -> Option<(f64, f64)> {
     (k.is_finite() && sigma.is_finite()).then_some((k, sigma))
 }
 
-/// `α̇` of one sample from the force equations (see [`alpha_gain`]).
-fn alpha_rate(s: &AirDataSample) -> Option<f64> {
+/// `α̇` of one sample from the force equations (see [`alpha_gain`]), the side velocity from
+/// its β (`with_beta`) or 0.
+fn alpha_rate(s: &AirDataSample, with_beta: bool) -> Option<f64> {
     let a = [s.ax_mps2?, s.ay_mps2.unwrap_or(0.0), s.az_mps2?];
     let omega = [s.p_rad_s.unwrap_or(0.0), s.q_rad_s?, s.r_rad_s.unwrap_or(0.0)];
     let (phi, theta) = (SinCos::of(s.phi_rad.unwrap_or(0.0)), SinCos::of(s.theta_rad?));
-    let v = body_velocity(s.vt_mps, SinCos::of(s.alpha_rad), SinCos::of(s.beta_rad.unwrap_or(0.0)));
+    let beta = s.beta_rad.filter(|_| with_beta).unwrap_or(0.0);
+    let v = body_velocity(s.vt_mps, SinCos::of(s.alpha_rad), SinCos::of(beta));
     let d = body_acceleration(v, omega, gravity_body(G0_MPS2, phi, theta), a);
     let uw = v[0] * v[0] + v[2] * v[2];
     (uw > 0.0).then(|| (v[0] * d[2] - v[2] * d[0]) / uw)
@@ -209,7 +234,7 @@ mod tests {
                 ..AirDataSample::default()
             });
         }
-        let (k, sigma) = alpha_gain(&[&samples]).unwrap();
+        let (k, sigma) = alpha_gain(&[&samples], true).unwrap();
         assert!((k - 1.0).abs() < 1e-3 && sigma < 1e-3, "{k} ± {sigma}");
         let mapping = Mapping::from_toml_str(
             "[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"v\", unit = \"m/s\" }\nalpha = { column = \"aoa\", unit = \"deg\" }\nq = { column = \"q\", unit = \"rad/s\" }\ntheta = { column = \"th\", unit = \"rad\" }\nax = { column = \"ax\", unit = \"m/s2\" }\naz = { column = \"az\", unit = \"m/s2\" }\nqbar = { value = 1000.0, unit = \"Pa\" }\nmass = { value = 1000.0, unit = \"kg\" }\nS = { value = 10.0, unit = \"m2\" }\n",
@@ -220,7 +245,7 @@ mod tests {
         for s in &mut samples {
             s.alpha_rad /= 180.0 / core::f64::consts::PI;
         }
-        let (k, _) = alpha_gain(&[&samples]).unwrap();
+        let (k, _) = alpha_gain(&[&samples], true).unwrap();
         assert!((k * 57.2958 - 1.0).abs() < 0.05, "{k}");
         let text = alpha_misread(&[&samples], &mapping).unwrap();
         assert!(text.contains("likely radians mapped as degrees"), "{text}");

@@ -1,0 +1,128 @@
+//! After the check: does each channel match the kinematics where the check aligned it? The
+//! check searches each time shift within ±[`MAX_SHIFT_S`] of none. A channel that is late by
+//! more (an α delayed 10 s by a logger, another record's column) is still fitted: the biases
+//! and scale factors take what they can, the check "converges", and the channel's residual is
+//! simply large (4.4 times the clean record's on the HFB-320 with α 10 s late, no finding).
+//!
+//! The test: per manoeuvre, the correlation of the measured channel with its reconstruction
+//! from the kinematics (the check's own model output, its fitted shift included), over lags up
+//! to three quarters of the manoeuvre. A channel whose best lag lies beyond the search range
+//! and leaves less than a quarter of the misfit `1 − c²` of the aligned one is named with that
+//! lag. The factor of four keeps a slow periodic motion (a phugoid), whose correlation returns
+//! near a period later, from passing for a delay: the aligned correlation of a channel that
+//! fits is near 1, and a wrong lag does not quarter its small misfit.
+
+use crate::record::corrections::MAX_SHIFT_S;
+use aeroident_estimators::compat::{CompatResult, Unknown};
+
+/// Fewest overlapping samples a lag is judged on, and its least share of the manoeuvre.
+const MIN_OVERLAP: usize = 20;
+
+/// The best lag must cut the misfit `1 − c²` to below this share of the aligned one's.
+const MISFIT_SHARE: f64 = 0.25;
+
+/// One finding per channel of `r` that matches the kinematics best at a lag beyond
+/// [`MAX_SHIFT_S`] in some manoeuvre (module doc); `lengths` are the manoeuvres' sample counts
+/// (in the order `r` concatenates them), `dt_s` their sample interval.
+pub(super) fn misaligned(lengths: &[usize], r: &CompatResult, dt_s: f64) -> Vec<String> {
+    let ny = r.outputs.len();
+    let mut out = Vec::new();
+    if lengths.iter().sum::<usize>() * ny != r.predicted.len() {
+        return out;
+    }
+    for (j, ch) in r.outputs.iter().enumerate() {
+        // The model output carries the check's own shift of the channel, so a lag found
+        // against it adds to that shift.
+        let shift = r.reported(Unknown::TimeShift(*ch)).map_or(0.0, |(v, _)| v);
+        let mut named = Vec::new();
+        let mut start = 0;
+        for (m, &n) in lengths.iter().enumerate() {
+            let rows = start..start + n;
+            start += n;
+            let y: Vec<f64> = rows.clone().map(|k| r.predicted[k * ny + j]).collect();
+            let z: Vec<f64> =
+                rows.map(|k| r.predicted[k * ny + j] + r.residuals[k * ny + j]).collect();
+            let Some((lag, best, aligned)) = best_lag(&z, &y) else { continue };
+            let late_s = lag as f64 * dt_s;
+            let misfit = |c: f64| 1.0 - c * c;
+            if late_s.abs() > MAX_SHIFT_S && misfit(best) < MISFIT_SHARE * misfit(aligned) {
+                named.push(format!(
+                    "{:+.1} s in manoeuvre {} (correlation {best:.2} there, {aligned:.2} at the check's {shift:+.3} s)",
+                    shift + late_s,
+                    m + 1,
+                ));
+            }
+        }
+        if !named.is_empty() {
+            out.push(format!(
+                "{} does not fit the kinematics where the check aligns it: it matches them best when read later by {}, beyond the ±{MAX_SHIFT_S} s a sensor's lag plausibly reaches; a delayed or misaligned channel (its time stamps, or another record's column), whose biases, scale factor and shift from this check mean nothing until it is aligned",
+                ch.name(),
+                named.join("; ")
+            ));
+        }
+    }
+    out
+}
+
+/// The lag `L` (samples; > 0: `z` lags `y`, `z[k] ≈ y[k − L]`) of the largest correlation of
+/// `z` with `y` over the overlaps of at least a quarter of their length (and [`MIN_OVERLAP`]),
+/// with that correlation and the one at lag 0; `None` for a series too short or constant.
+fn best_lag(z: &[f64], y: &[f64]) -> Option<(isize, f64, f64)> {
+    let n = z.len().min(y.len());
+    let min_overlap = (n / 4).max(MIN_OVERLAP);
+    if n < min_overlap {
+        return None;
+    }
+    let max_lag = (n - min_overlap) as isize;
+    let aligned = correlation(z, y)?;
+    let mut best = (0, aligned);
+    for lag in -max_lag..=max_lag {
+        let k = lag.unsigned_abs();
+        let c = if lag >= 0 {
+            correlation(&z[k..n], &y[..n - k])
+        } else {
+            correlation(&z[..n - k], &y[k..n])
+        };
+        if let Some(c) = c.filter(|c| *c > best.1) {
+            best = (lag, c);
+        }
+    }
+    Some((best.0, best.1, aligned))
+}
+
+/// Pearson's correlation of `a` with `b` (equal lengths); `None` when either is constant.
+fn correlation(a: &[f64], b: &[f64]) -> Option<f64> {
+    let n = a.len() as f64;
+    let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);
+    let (mut ab, mut aa, mut bb) = (0.0, 0.0, 0.0);
+    for (x, y) in a.iter().zip(b) {
+        let (dx, dy) = (x - ma, y - mb);
+        ab += dx * dy;
+        aa += dx * dx;
+        bb += dy * dy;
+    }
+    (aa > 0.0 && bb > 0.0).then(|| ab / (aa * bb).sqrt())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A chirp-like signal 10 s late (100 samples at 10 Hz) is found at lag +100 with a
+    /// correlation of 1; the aligned signal at lag 0; a constant gives nothing.
+    #[test]
+    fn the_best_lag_is_the_delay() {
+        let s = |k: isize| {
+            let t = k as f64 * 0.1;
+            (0.05 * t * t).sin() + 0.3 * (0.7 * t).cos()
+        };
+        let y: Vec<f64> = (0..600).map(s).collect();
+        let late: Vec<f64> = (0..600).map(|k| s(k - 100)).collect();
+        let (lag, best, aligned) = best_lag(&late, &y).unwrap();
+        assert_eq!(lag, 100);
+        assert!((best - 1.0).abs() < 1e-12 && aligned < 0.5, "{best} {aligned}");
+        let (lag, best, _) = best_lag(&y, &y).unwrap();
+        assert!(lag == 0 && (best - 1.0).abs() < 1e-12, "{lag} {best}");
+        assert_eq!(best_lag(&[1.0; 100], &y[..100]), None);
+    }
+}

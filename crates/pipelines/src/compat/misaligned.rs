@@ -1,8 +1,10 @@
 //! After the check: does each channel match the kinematics where the check aligned it? The
-//! check searches each time shift within ±[`MAX_SHIFT_S`] of none. A channel that is late by
-//! more (an α delayed 10 s by a logger, another record's column) is still fitted: the biases
-//! and scale factors take what they can, the check "converges", and the channel's residual is
-//! simply large (4.4 times the clean record's on the HFB-320 with α 10 s late, no finding).
+//! check's time shifts start at none and descend to the nearest minimum of its cost. A channel
+//! late by seconds (a logger's delay, another record's column) can stop in a minimum a motion's
+//! period away from its delay: the biases and scale factors take what they can, the check
+//! "converges", and the channel's residual is simply large (ATTAS with β 3 s late: a shift of
+//! −0.74 s and nothing more said; the HFB-320's α 10 s late, before the α screen: no finding).
+//! A shift beyond ±[`MAX_SHIFT_S`] is refused as implausible for a sensor in any case.
 //!
 //! The test: per manoeuvre, the correlation of the measured channel with its reconstruction
 //! from the kinematics (the check's own model output, its fitted shift included), over lags up
@@ -21,9 +23,10 @@ const MIN_OVERLAP: usize = 20;
 /// The best lag must cut the misfit `1 − c²` to below this share of the aligned one's.
 const MISFIT_SHARE: f64 = 0.25;
 
-/// One finding per channel of `r` that matches the kinematics best at a lag beyond
-/// [`MAX_SHIFT_S`] in some manoeuvre (module doc); `lengths` are the manoeuvres' sample counts
-/// (in the order `r` concatenates them), `dt_s` their sample interval.
+/// One finding per channel of `r` that matches the kinematics best at a lag more than
+/// [`MAX_SHIFT_S`] from the check's own shift in some manoeuvre (module doc); `lengths` are
+/// the manoeuvres' sample counts (in the order `r` concatenates them), `dt_s` their sample
+/// interval.
 pub(super) fn misaligned(lengths: &[usize], r: &CompatResult, dt_s: f64) -> Vec<String> {
     let ny = r.outputs.len();
     let mut out = Vec::new();

@@ -17,7 +17,7 @@
 use crate::record::corrections::MAX_SHIFT_S;
 use aeroident_estimators::compat::{CompatResult, Unknown};
 
-/// Fewest overlapping samples a lag is judged on, and its least share of the manoeuvre.
+/// Fewest overlapping samples a lag is judged on (and at least a quarter of the manoeuvre).
 const MIN_OVERLAP: usize = 20;
 
 /// The best lag must cut the misfit `1 − c²` to below this share of the aligned one's.

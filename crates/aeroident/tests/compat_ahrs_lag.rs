@@ -286,13 +286,13 @@ fn val_compat_auto_without_a_vane_keeps_the_lateral_axis() {
 /// same flight with a β vane of white σ 0.0005 rad added): per primary derivative, % error of
 /// output error and the filter-error method uncorrected, with `--compat auto`'s corrections,
 /// and with the lag's (`--ahrs-lag --inertial-scale-factors`). A documented campaign (about
-/// 3 min): `cargo test --release -p aeroident --test compat_ahrs_lag -- --ignored --nocapture
+/// 2 min): `cargo test --release -p aeroident --test compat_ahrs_lag -- --ignored --nocapture
 /// the_lag_against_auto`. Measured with the vane, oe: every primary derivative within 13 %
 /// with the lag (Cl_p −0.1, Cm_q −7.2, CY_β +11.3, Cn_δr +12.9 %), 35 % off uncorrected and
 /// with auto, but CY_β −4.6 % uncorrected; fem does not converge in any of the three
 /// (docs/real-data.md).
 #[test]
-#[ignore]
+#[ignore = "a documented campaign of about 2 min (docs/real-data.md); run with --ignored"]
 fn the_lag_against_auto_with_and_without_a_vane() {
     for vane in [false, true] {
         let rec = Record::fly_with(10, vane);

@@ -111,36 +111,51 @@ fn errors_a_channel_in_the_wrong_unit_is_named_before_the_check() {
     check("", "").unwrap();
 }
 
-/// A copy of the record `data` (CSV) in its own directory under `tag` with column `column` read
-/// `rows` rows late (each row holding the value `rows` rows before it, the first rows the first
-/// value): with `rows` beyond the record, a dead sensor. Returns the copy and its row count.
-fn late_column(data: &std::path::Path, column: &str, rows: usize, tag: &str) -> (String, usize) {
-    let text = std::fs::read_to_string(data).unwrap();
-    let mut lines = text.lines();
-    let header = lines.next().unwrap();
-    let c = header.split(',').position(|h| h == column).expect("the column");
-    let lines: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-    let body: Vec<String> = (0..lines.len())
-        .map(|k| {
-            let mut cells = lines[k].clone();
-            cells[c] = lines[k.saturating_sub(rows)][c];
-            cells.join(",")
-        })
-        .collect();
-    let dir = std::env::temp_dir().join(format!("aeroident-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let csv = dir.join("late.csv");
-    std::fs::write(&csv, format!("{header}\n{}\n", body.join("\n"))).unwrap();
-    (csv.display().to_string(), body.len())
+/// A copy of a CSV record in its own directory, removed when the copy is dropped.
+struct Late {
+    dir: std::path::PathBuf,
+    csv: String,
+    rows: usize,
 }
 
-/// The check of `csv` with mapping file `map` (of `mappings/`): its summary, or its error.
-fn check_file(csv: &str, map: &str) -> Result<aeroident_pipelines::compat::CompatSummary, String> {
-    let m = Mapping::from_path(&workspace().join("mappings").join(map)).unwrap();
-    let reader = open_log(csv, None, &m).unwrap();
-    let checked = check_records(vec![reader], &[], &CompatConfig::default());
-    std::fs::remove_dir_all(std::path::Path::new(csv).parent().unwrap()).ok();
-    checked.map(|c| c.0).map_err(|e| e.to_string())
+impl Late {
+    /// The record `data` with column `column` read `rows` rows late (each row holding the
+    /// value `rows` rows before it, the first rows the first value), under `tag`: with `rows`
+    /// beyond the record, a dead sensor.
+    fn column(data: &std::path::Path, column: &str, rows: usize, tag: &str) -> Self {
+        let text = std::fs::read_to_string(data).unwrap();
+        let mut lines = text.lines();
+        let header = lines.next().unwrap();
+        let c = header.split(',').position(|h| h == column).expect("the column");
+        let lines: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+        let body: Vec<String> = (0..lines.len())
+            .map(|k| {
+                let mut cells = lines[k].clone();
+                cells[c] = lines[k.saturating_sub(rows)][c];
+                cells.join(",")
+            })
+            .collect();
+        let dir = std::env::temp_dir().join(format!("aeroident-{tag}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let csv = dir.join("late.csv");
+        std::fs::write(&csv, format!("{header}\n{}\n", body.join("\n"))).unwrap();
+        Self { dir, csv: csv.display().to_string(), rows: body.len() }
+    }
+
+    /// The check of the copy with mapping file `map` (of `mappings/`): its summary, or its
+    /// error.
+    fn check(&self, map: &str) -> Result<aeroident_pipelines::compat::CompatSummary, String> {
+        let m = Mapping::from_path(&workspace().join("mappings").join(map)).unwrap();
+        let reader = open_log(&self.csv, None, &m).unwrap();
+        let checked = check_records(vec![reader], &[], &CompatConfig::default());
+        checked.map(|c| c.0).map_err(|e| e.to_string())
+    }
+}
+
+impl Drop for Late {
+    fn drop(&mut self) {
+        std::fs::remove_dir_all(&self.dir).ok();
+    }
 }
 
 /// The HFB-320 record with its pitch gyro dead (every `q_radps` row the first row's value):
@@ -152,16 +167,16 @@ fn check_file(csv: &str, map: &str) -> Result<aeroident_pipelines::compat::Compa
 #[test]
 fn errors_a_dead_gyro_or_a_late_vane_is_named_before_the_check() {
     let Some(data) = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
-    let (csv, n) = late_column(&data, "q_radps", usize::MAX, "dead-gyro");
-    let e = check_file(&csv, "hfb320.toml").unwrap_err();
+    let dead = Late::column(&data, "q_radps", usize::MAX, "dead-gyro");
+    let e = dead.check("hfb320.toml").unwrap_err();
     assert!(
         e.contains("channel `q`") && e.contains("q_radps") && e.contains("dead or stuck sensor"),
         "{e}"
     );
-    assert!(e.contains(&format!("in all {n} samples")), "{e}");
+    assert!(e.contains(&format!("in all {} samples", dead.rows)), "{e}");
     for (rows, how) in [(10, "moves against"), (100, "does not follow")] {
-        let (csv, _) = late_column(&data, "alpha_rad", rows, &format!("late-alpha-{rows}"));
-        let e = check_file(&csv, "hfb320.toml").unwrap_err();
+        let late = Late::column(&data, "alpha_rad", rows, &format!("late-alpha-{rows}"));
+        let e = late.check("hfb320.toml").unwrap_err();
         assert!(e.contains("channel `alpha`") && e.contains(how), "{rows}: {e}");
         assert!(e.contains("misaligned in time") && !e.contains("unit mismatch"), "{rows}: {e}");
     }
@@ -179,18 +194,15 @@ fn val_a_channel_late_beyond_a_sensors_lag_is_named_with_its_delay() {
     let misfit = |s: &aeroident_pipelines::compat::CompatSummary| {
         s.findings.iter().find(|f| f.contains("does not fit the kinematics")).cloned()
     };
-    let as_flown = check_file(&late_column(&data, "beta_deg", 0, "beta-0").0, "attas_lateral.toml");
+    let as_flown = Late::column(&data, "beta_deg", 0, "beta-0").check("attas_lateral.toml");
     assert_eq!(misfit(&as_flown.unwrap()), None);
-    let (csv, _) = late_column(&data, "beta_deg", 75, "beta-late");
-    let late = check_file(&csv, "attas_lateral.toml").unwrap();
+    let late =
+        Late::column(&data, "beta_deg", 75, "beta-late").check("attas_lateral.toml").unwrap();
     let named = misfit(&late).expect("a misfit of β");
     assert!(named.starts_with("beta_rad"), "{named}");
-    let delays: Vec<f64> = named
-        .split("by ")
-        .skip(1)
-        .chain(named.split("; ").skip(1))
-        .filter_map(|p| p.trim_start_matches('+').split(' ').next()?.parse().ok())
-        .collect();
+    // Each manoeuvre's delay is the number before " s in manoeuvre ".
+    let parts = named.split(" s in manoeuvre ");
+    let delays: Vec<f64> = parts.filter_map(|p| p.rsplit(' ').next()?.parse().ok()).collect();
     assert_eq!(delays.len(), 2, "{named}");
     assert!(delays.iter().all(|d| (d - 3.0).abs() < 0.2), "{delays:?}: {named}");
 }

@@ -437,14 +437,23 @@ pub fn check(
     manoeuvres: &[&[AirDataSample]],
     config: &CompatConfig,
 ) -> Result<CompatResult, EstimatorError> {
+    in_plane(manoeuvres, |m| check_as_given(m, config))
+}
+
+/// `fit` of the manoeuvres as the check takes them: a record without `ay` that flies wings
+/// level in the vertical plane, with [`VERTICAL_PLANE_NOTE`] (module doc), else as they are.
+fn in_plane(
+    manoeuvres: &[&[AirDataSample]],
+    fit: impl Fn(&[&[AirDataSample]]) -> Result<CompatResult, EstimatorError>,
+) -> Result<CompatResult, EstimatorError> {
     match wings_level_without_ay(manoeuvres)? {
         Some(planar) => {
             let slices: Vec<&[AirDataSample]> = planar.iter().map(Vec::as_slice).collect();
-            let mut r = check_as_given(&slices, config)?;
+            let mut r = fit(&slices)?;
             r.notes.insert(0, VERTICAL_PLANE_NOTE.into());
             Ok(r)
         }
-        None => check_as_given(manoeuvres, config),
+        None => fit(manoeuvres),
     }
 }
 
@@ -469,13 +478,7 @@ pub fn check_with_ahrs_lag(
     let mut warm: Vec<(Unknown, f64)> =
         from.unknowns.iter().copied().zip(from.values.iter().copied()).collect();
     warm.push((Unknown::AhrsLag, AHRS_LAG_PROBE_START_S));
-    match wings_level_without_ay(manoeuvres)? {
-        Some(planar) => {
-            let slices: Vec<&[AirDataSample]> = planar.iter().map(Vec::as_slice).collect();
-            check_warm(&slices, &lagged, &warm)
-        }
-        None => check_warm(manoeuvres, &lagged, &warm),
-    }
+    in_plane(manoeuvres, |m| check_warm(m, &lagged, &warm))
 }
 
 /// The time constant [`check_with_ahrs_lag`] starts from, s: the middle of an AHRS's 0.05–0.2 s.

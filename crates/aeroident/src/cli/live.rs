@@ -14,8 +14,8 @@
 //! the feed's counts (rows read and rejected, gaps; a MAVLink link's datagrams, losses and
 //! drops) and the running cross-check (the record's other real-time methods following the
 //! feed, [`aeroident_pipelines::live::panel`]), updated ten times a second
-//! (`live/server.rs`). A browser that connects late gets the whole history first. The bound address is printed on stderr (`--serve 127.0.0.1:0` takes
-//! any free port). A recorded file is paced at `--speed` × real time (default 1); stdin and a
+//! (`live/server.rs`). A browser that connects late gets the whole history first. The bound
+//! address is printed on stderr (`--serve 127.0.0.1:0` takes any free port). A recorded file is paced at `--speed` × real time (default 1); stdin and a
 //! MAVLink feed come at their own pace. Ctrl-C or the feed's end writes the usual outputs of
 //! `replay` into `--out`; `--linger-s` keeps the page served that long afterwards (Ctrl-C ends
 //! it sooner). The page is one self-contained HTML file with no external resource.

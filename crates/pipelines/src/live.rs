@@ -390,6 +390,18 @@ impl LiveState {
         self.verdicts = Some(verdicts);
     }
 
+    /// The end of a job that wrote no summary's verdicts (it failed, or a signal stopped it
+    /// before any): the feed is over with `status` (`failed`, `interrupted`) and `why` as a
+    /// warning. A view already concluded keeps the summary's status.
+    pub fn abandon(&mut self, status: &str, why: &str) {
+        if self.concluded() {
+            return;
+        }
+        self.ended = true;
+        self.status = Some(status.to_string());
+        self.warn(&format!("{status}: {why}"));
+    }
+
     fn start(&mut self, names: &[&str]) {
         self.names = names.iter().map(|n| n.to_string()).collect();
         self.params = names.iter().map(|n| Param::from_name(n)).collect();

@@ -17,15 +17,16 @@
 //! (`live/server.rs`). A browser that connects late gets the whole history first. The bound
 //! address is printed on stderr (`--serve 127.0.0.1:0` takes any free port). A recorded file is paced at `--speed` × real time (default 1); stdin and a
 //! MAVLink feed come at their own pace. Ctrl-C or the feed's end writes the usual outputs of
-//! `replay` into `--out`; `--linger-s` keeps the page served that long afterwards (Ctrl-C ends
-//! it sooner). The page is one self-contained HTML file with no external resource.
+//! `replay` into `--out`; every connected page then gets the final verdicts (or what stopped
+//! the job) before the server closes, and `--linger-s` keeps the page served that long
+//! afterwards (Ctrl-C ends it sooner). The page is one self-contained HTML file with no external resource.
 
 mod server;
 
 use super::replay::ReplayArgs;
 use aeroident_pipelines::live::pace::Pace;
 use aeroident_pipelines::live::phase::PhaseRule;
-use aeroident_pipelines::live::{LiveConfig, LiveObserver, LiveState};
+use aeroident_pipelines::live::{LiveConfig, LiveObserver, LiveState, SharedLive};
 use anyhow::Context;
 use std::net::SocketAddr;
 use std::time::{Duration, Instant};
@@ -86,17 +87,38 @@ pub fn execute(args: LiveArgs) -> anyhow::Result<()> {
     super::replay::check_combination(&args.replay, mavlink, true)?;
     let spec = model_spec(&args.replay);
     let shared = LiveState::new(LiveConfig { rule, ..Default::default() }, spec).shared();
-    let addr = server::start(args.serve, shared.clone())
+    let server = server::start(args.serve, shared.clone())
         .with_context(|| format!("serving the live view on {}", args.serve))?;
-    aeroident_report::note!("live view on http://{addr}/");
-    let mut observer = LiveObserver::new(shared, pace).with_cross_check(!args.no_live_cross_check);
+    aeroident_report::note!("live view on http://{}/", server.addr());
+    let mut observer = LiveObserver::new(shared.clone(), pace)
+        .with_cross_check(!args.no_live_cross_check);
     let result = super::replay::execute_with(args.replay, Some(&mut observer));
     let interrupted =
         result.as_ref().is_err_and(|e| e.downcast_ref::<crate::interrupt::Interrupted>().is_some());
+    if let Err(e) = &result {
+        // A job that ended without its summary's verdicts still ends the page's stream, with
+        // what stopped it; a concluded view keeps the summary's status.
+        let status = if interrupted { "interrupted" } else { "failed" };
+        lock(&shared).abandon(status, &format!("{e:#}"));
+    }
     if !interrupted {
         linger(args.linger_s)?;
     }
+    if !server.close(CLOSE_WAIT) {
+        aeroident_report::note!(
+            "warning: live view: a client did not take the final update within {} s",
+            CLOSE_WAIT.as_secs()
+        );
+    }
     result
+}
+
+/// How long the end waits for every connected page to take its final update: ample for a
+/// client on the loopback reading as it should, bounded for one that stopped reading.
+const CLOSE_WAIT: Duration = Duration::from_secs(10);
+
+fn lock(shared: &SharedLive) -> std::sync::MutexGuard<'_, LiveState> {
+    shared.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
 /// The pace of a recorded file (`--speed`, default 1×); none for stdin and a MAVLink feed.

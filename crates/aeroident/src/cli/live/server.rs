@@ -7,6 +7,12 @@
 //!   `hello` (names, references, rule) and the whole history, later ones what is new
 //!   ([`aeroident_pipelines::live::LiveState::update`]); after the final verdicts, one `end`
 //!   event, and the stream closes.
+//!
+//! The server lives until [`LiveServer::close`]: closing wakes every stream, sends it the
+//! state as it then is (the final verdicts once concluded, else the failure or interruption
+//! the job recorded) and its `end`, and waits for each connection to finish writing. A
+//! process that merely exited would cut the streams at whatever tick they were on, and a
+//! client could miss the verdicts the page exists to show.
 //! - `GET /latest`: the latest sample's time and the feed's counts as JSON (for a script
 //!   measuring how far the view lags the feed).
 
@@ -18,41 +24,90 @@ use axum::response::{Html, IntoResponse};
 use axum::routing::get;
 use std::convert::Infallible;
 use std::net::SocketAddr;
-use std::time::Duration;
+use std::time::{Duration, Instant};
+use tokio::sync::watch;
 
 /// How often a client gets an update (10 Hz).
 pub const TICK: Duration = Duration::from_millis(100);
 
 const PAGE: &str = include_str!("page.html");
 
-/// Binds `addr` and serves the view of `shared` on a thread of its own; returns the bound
-/// address (the port chosen when `addr`'s is 0).
+/// The running server of a live view ([`start`]): its address, and the handle that ends it.
+#[derive(Debug)]
+pub struct LiveServer {
+    addr: SocketAddr,
+    closing: watch::Sender<bool>,
+    thread: std::thread::JoinHandle<()>,
+}
+
+impl LiveServer {
+    /// The bound address (the port chosen when the asked one was 0).
+    pub fn addr(&self) -> SocketAddr {
+        self.addr
+    }
+
+    /// Ends the view: every connected client gets the state as it is now and the `end`
+    /// event, the listener stops accepting, and this waits at most `wait` for every
+    /// connection to finish writing. Returns whether they all did (a client that stops
+    /// reading can hold its connection open; the process then leaves it behind).
+    pub fn close(self, wait: Duration) -> bool {
+        // A send fails only when the server's thread has already ended.
+        let _ = self.closing.send(true);
+        let until = Instant::now() + wait;
+        while !self.thread.is_finished() {
+            if Instant::now() >= until {
+                return false;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        self.thread.join().is_ok()
+    }
+}
+
+/// Binds `addr` and serves the view of `shared` on a thread of its own until
+/// [`LiveServer::close`].
 ///
 /// # Errors
 /// The address cannot be bound, or the thread or runtime cannot start.
-pub fn start(addr: SocketAddr, shared: SharedLive) -> anyhow::Result<SocketAddr> {
+pub fn start(addr: SocketAddr, shared: SharedLive) -> anyhow::Result<LiveServer> {
     let listener = std::net::TcpListener::bind(addr)?;
     listener.set_nonblocking(true)?;
     let bound = listener.local_addr()?;
     let runtime = tokio::runtime::Builder::new_current_thread().enable_all().build()?;
-    std::thread::Builder::new().name("live-view".into()).spawn(move || {
-        runtime.block_on(async move {
-            let app = Router::new()
-                .route("/", get(page))
-                .route("/events", get(events))
-                .route("/latest", get(latest))
-                .with_state(shared);
-            match tokio::net::TcpListener::from_std(listener) {
-                Ok(l) => {
-                    if let Err(e) = axum::serve(l, app).await {
-                        aeroident_report::note!("warning: live view: server stopped: {e}");
-                    }
-                }
-                Err(e) => aeroident_report::note!("warning: live view: {e}"),
-            }
-        });
+    let (closing, closed) = watch::channel(false);
+    let thread = std::thread::Builder::new().name("live-view".into()).spawn(move || {
+        runtime.block_on(serve(listener, Served { shared, closing: closed }));
     })?;
-    Ok(bound)
+    Ok(LiveServer { addr: bound, closing, thread })
+}
+
+/// What every request sees: the view, and whether the server is closing.
+#[derive(Clone)]
+struct Served {
+    shared: SharedLive,
+    closing: watch::Receiver<bool>,
+}
+
+/// Serves until closing, then lets every open connection finish its response (axum's
+/// graceful shutdown): the event streams end by themselves once they see the close.
+async fn serve(listener: std::net::TcpListener, served: Served) {
+    let mut closed = served.closing.clone();
+    let app = Router::new()
+        .route("/", get(page))
+        .route("/events", get(events))
+        .route("/latest", get(latest))
+        .with_state(served);
+    let l = match tokio::net::TcpListener::from_std(listener) {
+        Ok(l) => l,
+        Err(e) => return aeroident_report::note!("warning: live view: {e}"),
+    };
+    let shutdown = async move {
+        // An error means the handle is gone: nobody can close it any more, so stop.
+        let _ = closed.wait_for(|c| *c).await;
+    };
+    if let Err(e) = axum::serve(l, app).with_graceful_shutdown(shutdown).await {
+        aeroident_report::note!("warning: live view: server stopped: {e}");
+    }
 }
 
 async fn page() -> Html<&'static str> {
@@ -66,16 +121,18 @@ fn lock(shared: &SharedLive) -> std::sync::MutexGuard<'_, aeroident_pipelines::l
 /// Where one client's stream is.
 struct Client {
     shared: SharedLive,
+    closing: watch::Receiver<bool>,
     cursor: Cursor,
     hello_sent: bool,
     first: bool,
-    /// The final verdicts were sent: the `end` event follows.
+    /// The last update was sent (final verdicts, or the server closing): `end` follows.
     ending: bool,
     done: bool,
 }
 
 /// The next event of a client: an `update` per tick (with the `hello` once the names are
-/// known), `end` after the final verdicts, then nothing.
+/// known), or at once when the server closes; `end` after the final verdicts or the close,
+/// then nothing.
 async fn next(mut c: Client) -> Option<(Result<Event, Infallible>, Client)> {
     if c.done {
         return None;
@@ -87,9 +144,13 @@ async fn next(mut c: Client) -> Option<(Result<Event, Infallible>, Client)> {
         return Some((Ok(Event::default().event("end").data("{}")), c));
     }
     if !c.first {
-        tokio::time::sleep(TICK).await;
+        tokio::select! {
+            () = tokio::time::sleep(TICK) => {}
+            _ = c.closing.wait_for(|closing| *closing) => {}
+        }
     }
     c.first = false;
+    let closing = *c.closing.borrow();
     let (data, concluded) = {
         let s = lock(&c.shared);
         if s.names().is_empty() {
@@ -108,14 +169,15 @@ async fn next(mut c: Client) -> Option<(Result<Event, Infallible>, Client)> {
         }
         None => Event::default().comment("waiting for the first sample"),
     };
-    // The update holding the final verdicts is the last one.
-    c.ending = concluded;
+    // The update holding the final verdicts, or the state when the server closes, is the last.
+    c.ending = concluded || closing;
     Some((Ok(event), c))
 }
 
-async fn events(State(shared): State<SharedLive>) -> impl IntoResponse {
+async fn events(State(served): State<Served>) -> impl IntoResponse {
     let client = Client {
-        shared,
+        shared: served.shared,
+        closing: served.closing,
         cursor: Cursor::default(),
         hello_sent: false,
         first: true,
@@ -126,8 +188,8 @@ async fn events(State(shared): State<SharedLive>) -> impl IntoResponse {
     Sse::new(stream).keep_alive(KeepAlive::default())
 }
 
-async fn latest(State(shared): State<SharedLive>) -> impl IntoResponse {
-    let s = lock(&shared);
+async fn latest(State(served): State<Served>) -> impl IntoResponse {
+    let s = lock(&served.shared);
     let body = serde_json::json!({
         "t": s.latest().map(|p| p.t),
         "seq": s.latest().map(|p| p.seq),
@@ -137,3 +199,6 @@ async fn latest(State(shared): State<SharedLive>) -> impl IntoResponse {
     });
     ([("content-type", "application/json")], body.to_string())
 }
+
+#[cfg(test)]
+mod tests;

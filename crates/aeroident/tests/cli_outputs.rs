@@ -290,3 +290,116 @@ fn outputs_batch_replay_checks_its_out_before_the_fit() {
     assert!(!err.contains("batch method"), "refused only after reading and fitting: {err}");
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// The stderr of `aeroident ARGS`, which must fail with exit 1.
+fn refused(args: &[&std::ffi::OsStr]) -> String {
+    let o = bin().args(args).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+    err
+}
+
+/// An `--out` that is a FIFO or a link to a device is refused by every export, by name and
+/// kind, and stays what it was: the atomic write's rename would have replaced the node with a
+/// regular file (as root, `--out /dev/full` replaced the system's). An `--out` naming the
+/// export's own `--summary` is refused and the summary kept.
+#[cfg(unix)]
+#[test]
+fn outputs_export_never_replaces_a_node_or_its_input() {
+    use std::ffi::OsStr;
+    use std::os::unix::fs::FileTypeExt;
+    let d = scratch("export-node");
+    let summary = d.join("summary.json");
+    let text = r#"{"estimator":"rls","model":"m","parameters":[{"name":"Cm_de","estimate":-1.2,"std_error":0.1}]}"#;
+    std::fs::write(&summary, text).unwrap();
+    let fifo = d.join("pipe");
+    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    let null_link = d.join("null");
+    std::os::unix::fs::symlink("/dev/null", &null_link).unwrap();
+    let geometry = ["--area-m2", "0.5", "--span-m", "2", "--chord-m", "0.25"];
+    for target in ["jsbsim", "ardupilot", "gazebo"] {
+        for (node, kind) in
+            [(&fifo, "is a FIFO (named pipe)"), (&null_link, "is a character device")]
+        {
+            let mut args: Vec<&OsStr> = vec!["export".as_ref(), target.as_ref()];
+            args.extend([
+                OsStr::new("--summary"),
+                summary.as_os_str(),
+                "--out".as_ref(),
+                node.as_os_str(),
+            ]);
+            if target != "jsbsim" {
+                args.extend(geometry.iter().map(OsStr::new));
+            }
+            let err = refused(&args);
+            let line = err.lines().find(|l| l.starts_with("error: ")).unwrap_or_default();
+            assert!(
+                line.contains(&format!("--out `{}` {kind}", node.display())),
+                "{target}: {err}"
+            );
+        }
+        assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo(), "{target}");
+        assert!(std::fs::symlink_metadata(&null_link).unwrap().file_type().is_symlink());
+        let mut args: Vec<&OsStr> = vec!["export".as_ref(), target.as_ref()];
+        args.extend([
+            OsStr::new("--summary"),
+            summary.as_os_str(),
+            "--out".as_ref(),
+            summary.as_os_str(),
+        ]);
+        if target != "jsbsim" {
+            args.extend(geometry.iter().map(OsStr::new));
+        }
+        let err = refused(&args);
+        assert!(err.contains("is this run's --summary"), "{target}: {err}");
+        assert_eq!(std::fs::read_to_string(&summary).unwrap(), text, "{target}");
+    }
+    assert!(std::fs::metadata("/dev/null").unwrap().file_type().is_char_device());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// `inspect` never writes over the log it reads (by another path too), nor writes two of its
+/// outputs into one file, nor into a FIFO; each is refused before the log is read, and the
+/// files stay as they were.
+#[cfg(unix)]
+#[test]
+fn outputs_inspect_never_overwrites_its_log_or_one_output_with_another() {
+    use std::ffi::OsStr;
+    let d = scratch("inspect-self");
+    let log = d.join("x.csv");
+    let mut text = String::from("t,de\n");
+    for k in 0..200 {
+        let t = f64::from(k) * 0.02;
+        text.push_str(&format!("{t:.2},{}\n", if (1.0..1.5).contains(&t) { 0.05 } else { 0.0 }));
+    }
+    std::fs::write(&log, &text).unwrap();
+    let same = d.join(".").join("x.csv");
+    for opt in ["--json", "--html"] {
+        let err = refused(&["inspect".as_ref(), log.as_os_str(), opt.as_ref(), same.as_os_str()]);
+        assert!(err.contains(&format!("{opt} `{}` is this run's log", same.display())), "{err}");
+        assert_eq!(std::fs::read_to_string(&log).unwrap(), text);
+    }
+    let f = d.join("both");
+    let args = ["inspect".as_ref(), log.as_os_str(), "--json".as_ref(), f.as_os_str()];
+    let err = refused(&[&args[..], &["--html".as_ref(), f.as_os_str()]].concat());
+    assert!(err.contains("name the same file"), "{err}");
+    assert!(!f.exists());
+    let fifo = d.join("pipe");
+    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    let err = refused(&["inspect".as_ref(), log.as_os_str(), "--json".as_ref(), fifo.as_os_str()]);
+    assert!(err.contains("is a FIFO"), "{err}");
+    // The same outputs, each its own regular file, are written.
+    let (json, html) = (d.join("x.json"), d.join("x.html"));
+    let o = bin()
+        .arg("inspect")
+        .arg(&log)
+        .arg("--json")
+        .arg(&json)
+        .args(["--html".as_ref(), html.as_os_str(), "--plot".as_ref(), "de".as_ref()])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(std::fs::read_to_string(&json).unwrap().starts_with('{'));
+    assert!(std::fs::read_to_string(&html).unwrap().contains("<html"));
+    let _ = std::fs::remove_dir_all(&d);
+}

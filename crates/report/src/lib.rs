@@ -12,6 +12,7 @@ pub mod console;
 pub mod decimal;
 pub mod interactive;
 pub mod outdir;
+pub mod outfile;
 /// Stacked time-series panels rendered to PNG and SVG.
 pub mod plot;
 /// Proof-of-concept outputs: CSV, JSON, figures and the thesis-versus-ours report.

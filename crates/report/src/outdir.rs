@@ -127,7 +127,7 @@ pub fn safe_component(name: &str) -> Result<&str, OutputError> {
 /// How a file is known whatever path names it: device and inode where the system has them,
 /// else the canonical path.
 #[derive(Debug, Clone, PartialEq, Eq)]
-enum Identity {
+pub(crate) enum Identity {
     #[cfg(unix)]
     Inode(u64, u64),
     #[cfg(not(unix))]
@@ -135,7 +135,7 @@ enum Identity {
 }
 
 /// The identity of the file at `p` (symbolic links followed), `None` if there is none.
-fn identity(p: &Path) -> Option<Identity> {
+pub(crate) fn identity(p: &Path) -> Option<Identity> {
     #[cfg(unix)]
     {
         use std::os::unix::fs::MetadataExt;

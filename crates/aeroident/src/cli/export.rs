@@ -20,6 +20,7 @@ use aeroident_pipelines::export::ardupilot::{ArdupilotOptions, Throws, ardupilot
 use aeroident_pipelines::export::gazebo::{ControlJoint, GazeboOptions, gazebo_plugin_sdf};
 use aeroident_pipelines::export::jsbsim::{SurfaceProperties, aerodynamics_xml, read_summary};
 use aeroident_pipelines::export::uav::{Exported, Geometry};
+use aeroident_report::outfile;
 use anyhow::Context;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -191,6 +192,7 @@ fn geometry(g: &GeometryArgs) -> anyhow::Result<Geometry> {
 }
 
 fn ardupilot(a: ArdupilotArgs) -> anyhow::Result<()> {
+    check_out(a.out.as_deref(), &a.summary, a.geometry.mapping.as_deref())?;
     let summary = read_summary(&a.summary)?;
     let options = ArdupilotOptions {
         geometry: geometry(&a.geometry)?,
@@ -208,6 +210,7 @@ fn ardupilot(a: ArdupilotArgs) -> anyhow::Result<()> {
 }
 
 fn gazebo(a: GazeboArgs) -> anyhow::Result<()> {
+    check_out(a.out.as_deref(), &a.summary, a.geometry.mapping.as_deref())?;
     let summary = read_summary(&a.summary)?;
     let joint = |surface, joint: &str, direction| ControlJoint {
         surface,
@@ -237,7 +240,7 @@ fn write_exported(summary: &Path, out: Option<&Path>, e: &Exported) -> anyhow::R
     }
     match out {
         Some(path) => {
-            write_atomically(path, e.text.as_bytes())?;
+            outfile::write_file("--out", path, e.text.as_bytes())?;
             aeroident_report::note!("{}: wrote {}", summary.display(), path.display());
         }
         None => {
@@ -255,6 +258,7 @@ fn jsbsim(a: JsbsimArgs) -> anyhow::Result<()> {
     {
         anyhow::bail!("--v0-mps must be a positive speed in m/s, got {v}");
     }
+    check_out(a.out.as_deref(), &a.summary, None)?;
     let summary = read_summary(&a.summary)?;
     let surfaces = SurfaceProperties {
         elevator: a.elevator_property,
@@ -266,7 +270,7 @@ fn jsbsim(a: JsbsimArgs) -> anyhow::Result<()> {
     let omitted = xml.matches("omitted").count();
     match &a.out {
         Some(path) => {
-            write_atomically(path, xml.as_bytes())?;
+            outfile::write_file("--out", path, xml.as_bytes())?;
             aeroident_report::note!(
                 "{}: {exported} derivatives exported, {omitted} omitted (see the comments); wrote {}",
                 a.summary.display(),
@@ -282,21 +286,11 @@ fn jsbsim(a: JsbsimArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Writes `bytes` to `path` through a temporary file beside it and a rename, so a failure
-/// leaves no partial file. (A single named file, not an output directory: the directory may
-/// hold another run's files, which `OutputDir` would clear.)
-fn write_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    let name =
-        path.file_name().with_context(|| format!("--out `{}` names no file", path.display()))?;
-    let tmp = path.with_file_name(format!(".{}.tmp", name.to_string_lossy()));
-    let write = || -> std::io::Result<()> {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    };
-    write().map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        anyhow::anyhow!("writing {}: {e}", path.display())
-    })
+/// Refuses, before the export reads anything, an `--out` that is not a regular file or that
+/// names one of its inputs (`--summary`, `--mapping`): the write would replace it.
+fn check_out(out: Option<&Path>, summary: &Path, mapping: Option<&Path>) -> anyhow::Result<()> {
+    let Some(out) = out else { return Ok(()) };
+    let mut inputs = vec![("--summary", summary)];
+    inputs.extend(mapping.map(|m| ("--mapping", m)));
+    Ok(outfile::check_outputs(&[("--out", out)], &inputs)?)
 }

@@ -21,8 +21,9 @@ use aeroident_pipelines::inspect::detect::DetectionRule;
 use aeroident_pipelines::inspect::{InspectOutcome, inspect};
 use aeroident_pipelines::window::TimeWindow;
 use aeroident_report::interactive::{Span, TimeChannel, linked_time_plots_html};
+use aeroident_report::outfile;
 use aeroident_report::plot::{LineKind, Panel, Series, render_panels_png, render_panels_svg};
-use anyhow::{Context as _, bail};
+use anyhow::bail;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `aeroident inspect`.
@@ -66,6 +67,7 @@ pub struct InspectArgs {
 /// row), a `--plot` channel the log lacks, an unwritable `--json` or `--out` file.
 pub fn execute(args: InspectArgs) -> anyhow::Result<()> {
     check_args(&args)?;
+    check_outputs(&args)?;
     let mapping = args.map.as_deref().map(Mapping::from_path).transpose()?;
     let options = InspectOptions {
         format: args.format,
@@ -75,8 +77,7 @@ pub fn execute(args: InspectArgs) -> anyhow::Result<()> {
     let outcome = inspect(&args.data, &options, &DetectionRule::default())?;
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&outcome.report)?;
-        std::fs::write(path, text + "\n")
-            .with_context(|| format!("cannot write {}", path.display()))?;
+        outfile::write_file("--json", path, (text + "\n").as_bytes())?;
     }
     if let Some(out) = &args.out {
         plot(&outcome, &options.keep, args.window, out)?;
@@ -113,6 +114,19 @@ fn check_args(args: &InspectArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Refuses, before the log is read, an output that is not a regular file, that names the
+/// log or the mapping, or that another output names too ([`outfile::check_outputs`]).
+fn check_outputs(args: &InspectArgs) -> anyhow::Result<()> {
+    let outputs: Vec<(&str, &Path)> =
+        [("--json", &args.json), ("--out", &args.out), ("--html", &args.html)]
+            .into_iter()
+            .filter_map(|(o, p)| Some((o, p.as_deref()?)))
+            .collect();
+    let mut inputs = vec![("log", Path::new(&args.data))];
+    inputs.extend(args.map.as_deref().map(|m| ("--map", m)));
+    Ok(outfile::check_outputs(&outputs, &inputs)?)
+}
+
 /// Whether `path` is an SVG (`true`) or a PNG (`false`) by its extension.
 fn plot_kind(path: &Path) -> Option<bool> {
     match path.extension()?.to_str()?.to_ascii_lowercase().as_str() {
@@ -138,9 +152,11 @@ fn plot(
     let (width, height) = (1100, 220);
     if plot_kind(out) == Some(true) {
         let svg = render_panels_svg(&out.display().to_string(), &title, &panels, width, height)?;
-        std::fs::write(out, svg).with_context(|| format!("cannot write {}", out.display()))?;
+        outfile::write_file("--out", out, svg.as_bytes())?;
     } else {
-        render_panels_png(out, &title, &panels, width, height)?;
+        outfile::write_file_with("--out", out, |tmp: &Path| {
+            render_panels_png(tmp, &title, &panels, width, height)
+        })?;
     }
     Ok(())
 }
@@ -196,7 +212,7 @@ fn html(
     let title =
         format!("{} (raw values; drag to zoom, double-click to reset)", outcome.report.log.file);
     let page = linked_time_plots_html(&title, &rows, &spans);
-    std::fs::write(path, page).with_context(|| format!("cannot write {}", path.display()))
+    Ok(outfile::write_file("--html", path, page.as_bytes())?)
 }
 
 /// Most rows of the `--html` page (the plotting library's y axes 1–8).

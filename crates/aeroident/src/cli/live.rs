@@ -90,8 +90,8 @@ pub fn execute(args: LiveArgs) -> anyhow::Result<()> {
     let server = server::start(args.serve, shared.clone())
         .with_context(|| format!("serving the live view on {}", args.serve))?;
     aeroident_report::note!("live view on http://{}/", server.addr());
-    let mut observer = LiveObserver::new(shared.clone(), pace)
-        .with_cross_check(!args.no_live_cross_check);
+    let mut observer =
+        LiveObserver::new(shared.clone(), pace).with_cross_check(!args.no_live_cross_check);
     let result = super::replay::execute_with(args.replay, Some(&mut observer));
     let interrupted =
         result.as_ref().is_err_and(|e| e.downcast_ref::<crate::interrupt::Interrupted>().is_some());

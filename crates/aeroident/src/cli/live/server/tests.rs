@@ -24,7 +24,8 @@ fn record() -> String {
     let mut csv = String::from("t,V,a,q,ax,az,de\n");
     for k in 0..100 {
         let t = f64::from(k) * 0.1;
-        let (a, q, d) = (0.05 + 0.02 * (1.3 * t).sin(), 0.1 * (0.7 * t).cos(), 0.03 * (2.9 * t).sin());
+        let (a, q, d) =
+            (0.05 + 0.02 * (1.3 * t).sin(), 0.1 * (0.7 * t).cos(), 0.03 * (2.9 * t).sin());
         let (ax, az) = (0.1 + 0.5 * a + 0.2 * d, -9.8 - 30.0 * a - 4.0 * d + q);
         csv.push_str(&format!("{t:.1},50,{a},{q},{ax},{az},{d}\n"));
     }

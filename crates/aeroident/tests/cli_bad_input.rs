@@ -344,3 +344,34 @@ fn exit_a_window_with_a_negative_start_is_a_value() {
         c => panic!("{c:?}"),
     }
 }
+
+/// Two settings of one thing are refused by name before any work, not resolved silently:
+/// `design` with a surface twice in `--throw-deg`, or with a model-file aircraft's options
+/// beside the default F-16 (it designed for the F-16 at its own condition); `compat` with the
+/// AHRS lag and the gyros' own shifts (the shifts were dropped); `live` with `--speed` and
+/// `--realtime` (paced at 1×). A throw beyond a right angle is a form error.
+#[test]
+fn exit_two_settings_of_one_thing_are_refused() {
+    expect(&["design", "--throw-deg", "de=25,da=20,de=30"], 1, &["--throw-deg gives de twice"]);
+    expect(&["design", "--vt-mps", "55", "--alt-m", "1200"], 1, &["--vt-mps, --alt-m", "F-16"]);
+    let err = expect(&["design", "--throw-deg", "de=1e9"], 2, &[]);
+    assert!(err.contains("at most 90°"), "{err}");
+    let (good, min) =
+        (repo("crates/io/tests/data/good.csv"), repo("crates/io/tests/data/min.toml"));
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let (good, min) = (s(&good), s(&min));
+    expect(
+        &["compat", &good, "--map", &min, "--ahrs-lag", "--gyro-time-shifts"],
+        1,
+        &["--ahrs-lag", "--gyro-time-shifts", "give one"],
+    );
+    let d = scratch("live-speed");
+    let out = s(&d.join("out"));
+    expect(
+        &["live", &good, "--map", &min, "--out", &out, "--speed", "100", "--realtime"],
+        1,
+        &["--speed 100", "--realtime", "give one"],
+    );
+    assert!(!d.join("out").exists());
+    let _ = std::fs::remove_dir_all(&d);
+}

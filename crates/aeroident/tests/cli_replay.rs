@@ -333,10 +333,15 @@ fn errors_batch_fit_options_go_through_one_parser() {
     assert!(!ok && err.contains("`--robust`") && err.contains("output error"), "{err}");
     let (ok, err) =
         replay_good(&["--estimator", "oe", "--estimator-option", "max_iterations=0"], "oe-zero");
+    // Named as typed: the same key by its flag names the flag.
     assert!(
-        !ok && err.contains("option `--max-iterations`: must be an integer of at least 1"),
+        !ok && err.contains(
+            "option `--estimator-option max_iterations`: must be an integer of at least 1"
+        ),
         "{err}"
     );
+    let (ok, err) = replay_good(&["--estimator", "oe", "--max-iterations", "0"], "oe-zero-flag");
+    assert!(!ok && err.contains("--max-iterations"), "{err}");
 }
 
 /// The replay job refuses what does not go together before the output directory is touched:
@@ -992,5 +997,42 @@ fn val_output_error_bootstrap_flags_a_sigma_far_below_the_coloured_one() {
             !flagged.iter().any(|w| w.contains(&format!(" of {name} is"))),
             "{name} flagged: {flagged:?}"
         );
+    }
+}
+
+/// One setting, one value: a key given by its flag and by `--estimator-option`, or by
+/// `--estimator-option` twice, is refused naming both as typed (the last one silently won:
+/// `--forgetting 0.98 --estimator-option forgetting=0.99` ran with 0.99, recorded nowhere); a
+/// second key smuggled after a newline, an empty key or an empty value is a form error, not
+/// dropped.
+#[test]
+fn errors_one_setting_has_one_value() {
+    let twice = ["--forgetting", "0.98", "--estimator-option", "forgetting=0.99"];
+    let (ok, err) = replay_good(&twice, "twice-flag");
+    assert!(!ok, "{err}");
+    assert!(
+        err.contains("`forgetting` is set twice, by --forgetting 0.98 and by --estimator-option forgetting=0.99"),
+        "{err}"
+    );
+    let rls_iv = ["--estimator", "rls-iv", "--instrument-delay", "5"];
+    let (ok, err) = replay_good(
+        &[&rls_iv[..], &["--estimator-option", "instrument_delay=7"][..]].concat(),
+        "twice-delay",
+    );
+    assert!(
+        !ok && err.contains("`instrument_delay` is set twice, by --instrument-delay 5"),
+        "{err}"
+    );
+    let opt = |v: &'static str| ["--estimator-option", v];
+    let (ok, err) =
+        replay_good(&[&opt("forgetting=0.98")[..], &opt("forgetting=0.99")[..]].concat(), "tw2");
+    assert!(!ok && err.contains("by --estimator-option forgetting=0.98 and by"), "{err}");
+    for (bad, needle) in [
+        ("forgetting=0.99\nmax_iterations=3", "one value after `forgetting=` on one line"),
+        ("=0.99", "the key must be a name"),
+        ("forgetting=", "one value after `forgetting=`"),
+    ] {
+        let (ok, err) = replay_good(&opt(bad), "form");
+        assert!(!ok && err.contains(needle), "{bad:?}: {err}");
     }
 }

@@ -53,11 +53,13 @@ impl AircraftArgs {
     /// No `--map`, or files that do not describe a flyable aircraft (naming file and field).
     pub fn model_file(&self) -> anyhow::Result<aeroident_pipelines::airframe::ModelFileAircraft> {
         let map = self.map()?;
-        Ok(aeroident_pipelines::airframe::load(
+        let aircraft = aeroident_pipelines::airframe::load(
             self.aircraft.as_ref(),
             self.summary.as_deref(),
             map,
-        )?)
+        )?;
+        warn_unfinished(self.summary.as_deref())?;
+        Ok(aircraft)
     }
 
     /// The files a model-file aircraft is read from (model, mapping, summary when given).
@@ -69,6 +71,20 @@ impl AircraftArgs {
         v.extend(self.summary.as_deref());
         Ok(v)
     }
+}
+
+/// Warns when `summary` is of a run that did not finish (an interrupted replay, a fit that did
+/// not converge): the aircraft flies where that run stopped
+/// ([`aeroident_pipelines::export::jsbsim::SummaryParameters::unfinished`]).
+///
+/// # Errors
+/// The summary cannot be read (naming the file).
+pub fn warn_unfinished(summary: Option<&Path>) -> anyhow::Result<()> {
+    let Some(path) = summary else { return Ok(()) };
+    if let Some(note) = aeroident_pipelines::export::jsbsim::read_summary(path)?.unfinished() {
+        aeroident_report::note!("warning: {}: {note}", path.display());
+    }
+    Ok(())
 }
 
 /// The model-file experiment of `a` flying `scenario` with `estimators` (default `oe`; `run`

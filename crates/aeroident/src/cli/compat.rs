@@ -76,6 +76,12 @@ pub struct CompatArgs {
 /// Unreadable mapping or record, a missing channel, a check that fails, an unwritable output,
 /// a signal.
 pub fn execute(args: CompatArgs) -> anyhow::Result<()> {
+    if args.ahrs_lag && args.gyro_time_shifts {
+        // The lag model replaces the gyros' shifts; with both, the shifts were dropped unsaid.
+        anyhow::bail!(
+            "--ahrs-lag models the gyros' delay as the AHRS filter, --gyro-time-shifts as shifts of their own: give one"
+        );
+    }
     let mapping = Mapping::from_path(&args.map)?;
     let mut config = CompatConfig {
         time_shifts: !args.no_time_shifts,

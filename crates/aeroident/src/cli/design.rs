@@ -102,6 +102,9 @@ pub struct DesignArgs {
     pub arm_rc: Option<u8>,
 }
 
+/// The largest `--throw-deg` taken, degrees.
+const MAX_THROW_DEG: f64 = 90.0;
+
 /// One `--throw-deg` entry, `<surface>=<degrees>`.
 fn parse_throw(text: &str) -> Result<(Surface, f64), String> {
     use aeroident_pipelines::Named as _;
@@ -111,6 +114,11 @@ fn parse_throw(text: &str) -> Result<(Surface, f64), String> {
     let s = Surface::from_name(name.trim())
         .ok_or_else(|| format!("`{name}`: not a surface (de, da, dr)"))?;
     let deg = deg.trim().parse::<f64>().map_err(|e| format!("`{deg}`: {e}"))?;
+    // A control surface's travel is a fraction of a right angle; a larger number is a typing
+    // or unit error (radians as degrees would be below it, so that is not caught here).
+    if !(deg > 0.0 && deg <= MAX_THROW_DEG) {
+        return Err(format!("`{text}`: a throw is > 0 and at most {MAX_THROW_DEG}°"));
+    }
     Ok((s, deg))
 }
 
@@ -186,6 +194,7 @@ pub fn execute(a: DesignArgs) -> anyhow::Result<()> {
     if a.band_hz.len() != 2 {
         anyhow::bail!("--band-hz: give two frequencies, low and high, Hz (`0.1,1.5` or `0.1 1.5`)");
     }
+    check_aircraft_options(&a)?;
     let spec = DesignSpec {
         surfaces: a.surfaces.clone(),
         amplitude_rad: a.amplitude_deg.to_radians(),
@@ -246,6 +255,38 @@ fn autopilot_forms(a: &DesignArgs, d: &Design) -> anyhow::Result<Vec<(&'static s
     ])
 }
 
+/// Refuses, before any work, what would be silently resolved: a surface given twice in
+/// `--throw-deg`, and a model-file aircraft's options (`--summary`, `--map`, `--vt-mps`,
+/// `--alt-m`) beside the F-16, which would be designed at its own condition instead.
+fn check_aircraft_options(a: &DesignArgs) -> anyhow::Result<()> {
+    for (k, (surface, deg)) in a.throw_deg.iter().enumerate() {
+        if let Some((_, first)) = a.throw_deg[..k].iter().find(|(s, _)| s == surface) {
+            anyhow::bail!(
+                "--throw-deg gives {} twice ({first}° and {deg}°): give each surface once",
+                surface.name()
+            );
+        }
+    }
+    if a.aircraft == "f16" {
+        let given: Vec<&str> = [
+            ("--summary", a.summary.is_some()),
+            ("--map", a.map.is_some()),
+            ("--vt-mps", a.vt_mps.is_some()),
+            ("--alt-m", a.alt_m.is_some()),
+        ]
+        .into_iter()
+        .filter_map(|(o, g)| g.then_some(o))
+        .collect();
+        if !given.is_empty() {
+            anyhow::bail!(
+                "{} describe a model-file aircraft (--aircraft MODEL.toml); the F-16 (the default --aircraft) is set by --alt-ft, --vt-fps and --xcg",
+                given.join(", ")
+            );
+        }
+    }
+    Ok(())
+}
+
 /// The design for a model-file aircraft (`--aircraft MODEL.toml`): its options checked, the
 /// aircraft loaded, the library's design run.
 fn model_file_design(a: &DesignArgs, spec: &DesignSpec, model: &str) -> anyhow::Result<Design> {
@@ -255,6 +296,7 @@ fn model_file_design(a: &DesignArgs, spec: &DesignSpec, model: &str) -> anyhow::
         );
     };
     let aircraft = aeroident_pipelines::airframe::load(model.as_ref(), a.summary.as_deref(), map)?;
+    super::aircraft_args::warn_unfinished(a.summary.as_deref())?;
     Ok(aeroident_pipelines::export::design::design_for_aircraft(spec, &aircraft, vt, alt)?)
 }
 

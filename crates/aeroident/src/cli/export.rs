@@ -194,6 +194,7 @@ fn geometry(g: &GeometryArgs) -> anyhow::Result<Geometry> {
 fn ardupilot(a: ArdupilotArgs) -> anyhow::Result<()> {
     check_out(a.out.as_deref(), &a.summary, a.geometry.mapping.as_deref())?;
     let summary = read_summary(&a.summary)?;
+    note_unfinished(&a.summary, &summary);
     let options = ArdupilotOptions {
         geometry: geometry(&a.geometry)?,
         throws: Throws {
@@ -212,6 +213,7 @@ fn ardupilot(a: ArdupilotArgs) -> anyhow::Result<()> {
 fn gazebo(a: GazeboArgs) -> anyhow::Result<()> {
     check_out(a.out.as_deref(), &a.summary, a.geometry.mapping.as_deref())?;
     let summary = read_summary(&a.summary)?;
+    note_unfinished(&a.summary, &summary);
     let joint = |surface, joint: &str, direction| ControlJoint {
         surface,
         joint: joint.to_string(),
@@ -260,6 +262,7 @@ fn jsbsim(a: JsbsimArgs) -> anyhow::Result<()> {
     }
     check_out(a.out.as_deref(), &a.summary, None)?;
     let summary = read_summary(&a.summary)?;
+    note_unfinished(&a.summary, &summary);
     let surfaces = SurfaceProperties {
         elevator: a.elevator_property,
         aileron: a.aileron_property,
@@ -284,6 +287,14 @@ fn jsbsim(a: JsbsimArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// Warns when the summary is of a run that did not finish (an interrupted replay, a fit that
+/// did not converge): what is exported is where it stopped.
+fn note_unfinished(path: &Path, summary: &aeroident_pipelines::export::jsbsim::SummaryParameters) {
+    if let Some(note) = summary.unfinished() {
+        aeroident_report::note!("warning: {}: {note}", path.display());
+    }
 }
 
 /// Refuses, before the export reads anything, an `--out` that is not a regular file or that

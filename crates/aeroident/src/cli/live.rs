@@ -129,6 +129,9 @@ fn pacing(args: &LiveArgs) -> anyhow::Result<Option<Pace>> {
             "--speed paces a recorded file; {} comes at its own pace",
             args.replay.data
         ),
+        Some(s) if args.replay.realtime => anyhow::bail!(
+            "--speed {s} paces the file at {s} × real time and --realtime at 1×: give one"
+        ),
         Some(s) => {
             Pace::new(s).map(Some).with_context(|| format!("--speed must be a number > 0, got {s}"))
         }

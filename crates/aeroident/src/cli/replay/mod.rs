@@ -273,13 +273,23 @@ impl ReplayObserver for Console<'_> {
     }
 }
 
-/// `KEY=VALUE` with a TOML value (a bare word is read as a string).
+/// `KEY=VALUE` with a TOML value (a bare word is read as a string). The key is a bare name
+/// (letters, digits, `_`), and the value one TOML value: text that would read as more than
+/// one (a newline and a second `KEY=VALUE`) is refused, not cut to its first.
 fn parse_key_value(text: &str) -> Result<(String, toml::Value), String> {
     let (key, value) = text
         .split_once('=')
         .ok_or_else(|| format!("`{text}`: give KEY=VALUE, e.g. parameter_walk_per_sqrt_s=0.01"))?;
     let key = key.trim();
     let value = value.trim();
+    if key.is_empty() || !key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+        return Err(format!("`{text}`: the key must be a name of letters, digits and `_`"));
+    }
+    if value.is_empty() || value.chars().any(char::is_control) {
+        return Err(format!(
+            "`{text}`: give one value after `{key}=` on one line (repeat --estimator-option for another key)"
+        ));
+    }
     let parsed = toml::from_str::<toml::Table>(&format!("v = {value}"))
         .ok()
         .and_then(|mut t| t.remove("v"))
@@ -507,30 +517,91 @@ fn option_flag(key: &str) -> String {
 /// values' ranges are checked with the replay's other numbers, naming the value exactly as
 /// typed (the delay as given, past an i64).
 fn estimator_options(args: &ReplayArgs) -> anyhow::Result<EstimatorOptions> {
-    let mut pairs: Vec<(&str, toml::Value)> = Vec::new();
-    if let Some(f) = args.forgetting {
-        pairs.push(("forgetting", toml::Value::Float(f)));
-    }
-    if let Some(d) = args.instrument_delay {
-        // A delay beyond an i64 is out of range all the same; the range check names it.
-        pairs
-            .push(("instrument_delay", toml::Value::Integer(i64::try_from(d).unwrap_or(i64::MAX))));
-    }
-    pairs.extend(args.estimator_options.iter().map(|(k, v)| (k.as_str(), v.clone())));
-    match parse_options(args.estimator, pairs) {
-        Ok(options) => Ok(EstimatorOptions {
-            instrument_delay: args.instrument_delay.or(options.instrument_delay),
-            ..options
-        }),
-        Err(OptionError::Unknown { kind, key }) => anyhow::bail!(
+    let typed = option_pairs(args)?;
+    let pairs: Vec<_> = typed.iter().map(|t| (t.key, t.value.clone())).collect();
+    let options = parse_options(args.estimator, pairs).map_err(|e| match e {
+        OptionError::Unknown { kind, key } => anyhow::anyhow!(
             "{} is not an option of --estimator {}, which takes {} (it would be ignored)",
-            option_flag(&key),
+            as_typed(&typed, &key),
             kind.name(),
             option_list(kind)
         ),
-        Err(OptionError::Invalid { key, reason, .. }) => {
-            anyhow::bail!("option `{}`: {reason}", option_flag(&key))
+        OptionError::Invalid { key, reason, .. } => {
+            anyhow::anyhow!("option `{}`: {reason}", as_typed(&typed, &key))
         }
+    })?;
+    // The delay as typed, past an i64: the replay's range check names it exactly.
+    Ok(EstimatorOptions {
+        instrument_delay: args.instrument_delay.or(options.instrument_delay),
+        ..options
+    })
+}
+
+/// One estimator or fit option from the command line: its registry key, its value, and the
+/// option as the user typed it (`--forgetting 0.98`, `--estimator-option forgetting=0.99`).
+struct TypedOption<'a> {
+    key: &'a str,
+    value: toml::Value,
+    typed: String,
+}
+
+/// Every estimator and batch-fit option given, from its own flag or `--estimator-option`, as
+/// [`TypedOption`]s. One setting has one value: a key given twice (a flag and an
+/// `--estimator-option` of the same key, or the same `--estimator-option` repeated) is refused
+/// naming both, instead of one silently winning.
+fn option_pairs(args: &ReplayArgs) -> anyhow::Result<Vec<TypedOption<'_>>> {
+    use toml::Value as V;
+    let states = args.initial_states.map(|s| match s {
+        InitialStatesArg::FirstSample => "first-sample",
+        InitialStatesArg::Estimate => "estimate",
+    });
+    // A delay beyond an i64 is out of range all the same; the range check names it.
+    let delay = args.instrument_delay.map(|d| i64::try_from(d).unwrap_or(i64::MAX));
+    let flags: [(&str, Option<V>); 9] = [
+        ("initial_states", states.map(|s| V::String(s.into()))),
+        ("bootstrap_refits", args.bootstrap.map(|n| V::Integer(n.into()))),
+        ("max_iterations", args.max_iterations.map(|n| V::Integer(n.into()))),
+        ("process_noise", args.process_noise.clone().map(V::String)),
+        ("gain_constraint", args.no_gain_constraint.then_some(V::Boolean(false))),
+        ("robust", args.robust.then_some(V::Boolean(true))),
+        ("band_hz", args.band_hz.map(|(a, b)| V::Array(vec![a.into(), b.into()]))),
+        ("forgetting", args.forgetting.map(V::Float)),
+        ("instrument_delay", delay.map(V::Integer)),
+    ];
+    let mut typed: Vec<TypedOption> = Vec::new();
+    for (key, value) in flags {
+        if let Some(value) = value {
+            let shown = match &value {
+                V::Boolean(_) => option_flag(key),
+                V::String(s) => format!("{} {s}", option_flag(key)),
+                v => format!("{} {v}", option_flag(key)),
+            };
+            typed.push(TypedOption { key, value, typed: shown });
+        }
+    }
+    for (key, value) in &args.estimator_options {
+        let shown = format!("--estimator-option {key}={value}");
+        typed.push(TypedOption { key: key.as_str(), value: value.clone(), typed: shown });
+    }
+    for (k, t) in typed.iter().enumerate() {
+        if let Some(first) = typed[..k].iter().find(|f| f.key == t.key) {
+            anyhow::bail!(
+                "`{}` is set twice, by {} and by {}: give it once",
+                t.key,
+                first.typed,
+                t.typed
+            );
+        }
+    }
+    Ok(typed)
+}
+
+/// The option of registry key `key` as the user typed it (its flag, or `--estimator-option
+/// KEY`), for an error about it.
+fn as_typed(typed: &[TypedOption], key: &str) -> String {
+    match typed.iter().find(|t| t.key == key) {
+        Some(t) if t.typed.starts_with("--estimator-option") => format!("--estimator-option {key}"),
+        _ => option_flag(key),
     }
 }
 
@@ -663,32 +734,17 @@ fn open_out(args: &ReplayArgs) -> anyhow::Result<Option<crate::outdir::OutputDir
 /// fit's options ([`FitOptions::from_pairs`]), which refuses a key no batch fit has; the time
 /// windows and the spike screen are the record's.
 fn fit_options(args: &ReplayArgs) -> anyhow::Result<FitOptions> {
-    use toml::Value as V;
-    let mut pairs: Vec<(&str, V)> = Vec::new();
-    let states = args.initial_states.map(|s| match s {
-        InitialStatesArg::FirstSample => "first-sample",
-        InitialStatesArg::Estimate => "estimate",
-    });
-    pairs.extend(states.map(|s| ("initial_states", V::String(s.into()))));
-    pairs.extend(args.bootstrap.map(|n| ("bootstrap_refits", V::Integer(n.into()))));
-    pairs.extend(args.max_iterations.map(|n| ("max_iterations", V::Integer(n.into()))));
-    pairs.extend(args.process_noise.clone().map(|s| ("process_noise", V::String(s))));
-    pairs.extend(args.no_gain_constraint.then_some(("gain_constraint", V::Boolean(false))));
-    pairs.extend(args.robust.then_some(("robust", V::Boolean(true))));
-    pairs.extend(args.band_hz.map(|(a, b)| ("band_hz", V::Array(vec![a.into(), b.into()]))));
-    pairs.extend(args.forgetting.map(|f| ("forgetting", V::Float(f))));
-    let delay = args.instrument_delay.map(|d| i64::try_from(d).unwrap_or(i64::MAX));
-    pairs.extend(delay.map(|d| ("instrument_delay", V::Integer(d))));
-    pairs.extend(args.estimator_options.iter().map(|(k, v)| (k.as_str(), v.clone())));
+    let typed = option_pairs(args)?;
+    let pairs = typed.iter().map(|t| (t.key, t.value.clone())).collect::<Vec<_>>();
     let options = FitOptions::from_pairs(args.estimator, pairs).map_err(|e| match e {
         OptionError::Unknown { kind, key } => anyhow::anyhow!(
             "{} is not an option of --estimator {}, which takes {} (it would be ignored)",
-            option_flag(&key),
+            as_typed(&typed, &key),
             kind.name(),
             quoted_list(fit_options_of(kind))
         ),
         OptionError::Invalid { key, reason, .. } => {
-            anyhow::anyhow!("option `{}`: {reason}", option_flag(&key))
+            anyhow::anyhow!("option `{}`: {reason}", as_typed(&typed, &key))
         }
     })?;
     let spike_screen =

@@ -65,6 +65,28 @@ pub struct SummaryParameters {
     pub parameters: Vec<Identified>,
     /// The model's α knots, rad (`alpha_knots_rad` of the summary; empty without one).
     pub alpha_knots_rad: Vec<f64>,
+    /// `status` of the summary (`complete`, `converged` …; `?` when it has none).
+    pub status: String,
+}
+
+/// Summary statuses of a run that finished: a real-time replay that reached the record's end
+/// with every parameter identified, or a batch fit that converged.
+const FINISHED: [&str; 3] = ["complete", "converged", "converged_in_cost"];
+
+impl SummaryParameters {
+    /// What a model made of this summary must be told when its run did not finish
+    /// (`interrupted`, `not_converged`, `diverged`, `initialising`): the estimates are a
+    /// partial result. `None` for a finished run, or a summary without a status.
+    pub fn unfinished(&self) -> Option<String> {
+        if FINISHED.contains(&self.status.as_str()) || self.status == "?" {
+            return None;
+        }
+        Some(format!(
+            "the summary's status is `{}`, not a finished run's ({}): its estimates are where the run stopped, not an identified model",
+            self.status,
+            FINISHED.join(", ")
+        ))
+    }
 }
 
 /// Reads `parameters[].{name, estimate, std_error}` (plus `estimator`, `model`) of a summary.
@@ -101,6 +123,12 @@ pub fn read_summary(path: &Path) -> crate::error::Result<SummaryParameters> {
         };
         let (value, sigma) = (number("estimate")?, number("std_error")?);
         check_identified(name, value, sigma).map_err(|why| crate::err!("{file}: {why}"))?;
+        if let Some(first) = parameters.iter().position(|q: &Identified| q.param == param) {
+            // Two values of one derivative: JSBSim would sum both, a linearisation take one.
+            return Err(crate::err!(
+                "{file}: parameter `{name}` is listed twice (parameters[{first}] and [{i}]): a model has each derivative once"
+            ));
+        }
         parameters.push(Identified { param, value, sigma });
     }
     let text_of = |k: &str| json[k].as_str().unwrap_or("?").to_string();
@@ -117,6 +145,7 @@ pub fn read_summary(path: &Path) -> crate::error::Result<SummaryParameters> {
         model: text_of("model"),
         parameters,
         alpha_knots_rad,
+        status: text_of("status"),
     })
 }
 
@@ -411,6 +440,7 @@ mod tests {
             model: "m".into(),
             parameters: ps,
             alpha_knots_rad: Vec::new(),
+            status: "complete".into(),
         }
     }
 
@@ -434,6 +464,47 @@ mod tests {
         assert!(e.contains("`CL_alpha`") && e.contains("1e308") && e.contains(".json"), "{e}");
         let e = read_one(4.4, -0.1).unwrap_err().to_string();
         assert!(e.contains("`CL_alpha`") && e.contains("negative"), "{e}");
+    }
+
+    /// A summary of `parameters` (name, estimate) with `status`, read back from a file.
+    fn read_doc(tag: &str, doc: &serde_json::Value) -> crate::error::Result<SummaryParameters> {
+        let dir = std::env::temp_dir().join(format!("aeroident-jsbsim-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join(format!("{tag}.json"));
+        std::fs::write(&path, doc.to_string()).unwrap();
+        let read = read_summary(&path);
+        std::fs::remove_file(&path).unwrap();
+        read
+    }
+
+    #[test]
+    fn a_parameter_listed_twice_is_refused_naming_both_places() {
+        let doc = serde_json::json!({"status": "converged", "parameters": [
+            {"name": "Cm_q", "estimate": -12.76}, {"name": "Cm_alpha", "estimate": -0.5},
+            {"name": "Cm_q", "estimate": 99.0}]});
+        let e = read_doc("twice", &doc).unwrap_err().to_string();
+        assert!(e.contains("`Cm_q` is listed twice (parameters[0] and [2])"), "{e}");
+        let doc = serde_json::json!({"parameters": [
+            {"name": "Cm_q", "estimate": -12.76}, {"name": "Cm_alpha", "estimate": -0.5}]});
+        assert_eq!(read_doc("once", &doc).unwrap().parameters.len(), 2);
+    }
+
+    #[test]
+    fn an_unfinished_run_is_named_and_a_finished_one_is_not() {
+        let of = |status: &str| {
+            let doc = serde_json::json!({"status": status, "parameters": [
+                {"name": "Cm_q", "estimate": -12.76}]});
+            read_doc(&format!("st-{status}"), &doc).unwrap().unfinished()
+        };
+        for finished in ["complete", "converged", "converged_in_cost"] {
+            assert_eq!(of(finished), None, "{finished}");
+        }
+        for partial in ["interrupted", "not_converged", "diverged", "initialising"] {
+            let note = of(partial).unwrap_or_else(|| panic!("{partial} not named"));
+            assert!(note.contains(&format!("`{partial}`")), "{note}");
+        }
+        let doc = serde_json::json!({"parameters": [{"name": "Cm_q", "estimate": -12.76}]});
+        assert_eq!(read_doc("st-none", &doc).unwrap().unfinished(), None);
     }
 
     #[test]

@@ -109,7 +109,7 @@
 //! as not finite (naming the column). Servo PWM → surface deflection is the intended use.
 
 use crate::FlightDataError;
-use crate::message::exact_or_short;
+use crate::message::{exact_or_short, short};
 use crate::table::Interpolation;
 use crate::thrust_model::{LawInput, ThrustModel, ThrustModelFile};
 use crate::units::{Dimension, Unit};
@@ -993,7 +993,7 @@ fn check_file_settings(
             return Err(FlightDataError::BadSpec {
                 file: file.to_string(),
                 channel: "inertia_reference_mass_kg".into(),
-                reason: format!("must be finite and > 0, got {m0}"),
+                reason: format!("must be finite and > 0, got {}", exact_or_short(m0)),
             });
         }
         if ![Channel::Ixx, Channel::Iyy, Channel::Izz].iter().any(|c| channels.contains_key(c)) {
@@ -1003,8 +1003,79 @@ fn check_file_settings(
                 reason: "no inertia (Ixx, Iyy, Izz) is mapped to scale".into(),
             });
         }
+        let mass = channels.get(&Channel::Mass).and_then(ChannelMap::constant);
+        if let Some(mass) =
+            mass.filter(|m| !(m / m0 <= MAX_LOADING_RATIO && m0 / m <= MAX_LOADING_RATIO))
+        {
+            return Err(FlightDataError::BadSpec {
+                file: file.to_string(),
+                channel: "inertia_reference_mass_kg".into(),
+                reason: format!(
+                    "{} kg beside the constant mass {} kg would scale the inertias by {}: no loading changes them that much (at most ×{MAX_LOADING_RATIO} either way); is it the same aircraft and unit?",
+                    exact_or_short(m0),
+                    exact_or_short(mass),
+                    short(mass / m0)
+                ),
+            });
+        }
     }
-    Ok(())
+    check_inertia_tensor(file, channels)
+}
+
+/// How far a sample's mass may lie from `inertia_reference_mass_kg`, either way: an empty
+/// aircraft weighs about half of its maximum take-off mass, so ×3 is ample for fuel burn and
+/// loading, and a larger ratio is a wrong unit or another aircraft.
+const MAX_LOADING_RATIO: f64 = 3.0;
+
+/// Checks constant inertias describe a body: each moment at most the sum of the other two
+/// (the triangle inequality every rigid body's moments satisfy, about any axes), and with a
+/// constant `Ixz`, `Ixx·Izz > Ixz²` (the tensor positive definite). A mapping that breaks it
+/// would make the moment equations of a body that cannot exist.
+fn check_inertia_tensor(
+    file: &str,
+    channels: &BTreeMap<Channel, ChannelMap>,
+) -> Result<(), FlightDataError> {
+    let constant = |c: Channel| channels.get(&c).and_then(ChannelMap::constant);
+    let bad = |channel: &str, reason: String| FlightDataError::BadSpec {
+        file: file.to_string(),
+        channel: channel.into(),
+        reason,
+    };
+    let (Some(ixx), Some(iyy), Some(izz)) =
+        (constant(Channel::Ixx), constant(Channel::Iyy), constant(Channel::Izz))
+    else {
+        return Ok(());
+    };
+    // A relative margin for moments rounded in the source (a flat plate has Izz = Ixx + Iyy).
+    let over = |a: f64, b: f64, c: f64| a > (b + c) * (1.0 + 1e-6);
+    for (name, a, b, c, others) in [
+        ("Ixx", ixx, iyy, izz, "Iyy + Izz"),
+        ("Iyy", iyy, ixx, izz, "Ixx + Izz"),
+        ("Izz", izz, ixx, iyy, "Ixx + Iyy"),
+    ] {
+        if over(a, b, c) {
+            return Err(bad(
+                name,
+                format!(
+                    "{name} = {} kg·m² exceeds {others} = {} kg·m²: no rigid body has such moments of inertia (a channel swapped, or a unit?)",
+                    exact_or_short(a),
+                    exact_or_short(b + c)
+                ),
+            ));
+        }
+    }
+    match constant(Channel::Ixz) {
+        Some(ixz) if ixz * ixz >= ixx * izz => Err(bad(
+            "Ixz",
+            format!(
+                "Ixz = {} kg·m² with Ixx = {} and Izz = {}: Ixz² must be below Ixx·Izz for a body's inertia tensor",
+                exact_or_short(ixz),
+                exact_or_short(ixx),
+                exact_or_short(izz)
+            ),
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// Validates `[align]`, `[attitude]` and `[air_data]`, and that derived columns used by

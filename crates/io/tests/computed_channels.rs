@@ -143,3 +143,53 @@ fn errors_malformed_expressions_say_what_is_wrong_in_plain_words() {
         assert!(!text.contains("node") && !text.contains("wlog"), "{expr}: {text}");
     }
 }
+
+/// A mapping whose constants describe no body is refused naming the file and the channel:
+/// moments of inertia that break the triangle inequality (each at most the sum of the other
+/// two), an `Ixz` with `Ixz² ≥ Ixx·Izz`, and an `inertia_reference_mass_kg` so far from the
+/// constant mass that the scaled inertias are a unit error (1 kg beside a 17,631-kg aircraft
+/// scaled them ×17,631 and gave Cm_α −17,817 "converged"). The edges pass: a flat plate's
+/// `Izz = Ixx + Iyy`, a ratio of exactly 3.
+#[test]
+fn errors_constants_of_a_body_that_cannot_exist() {
+    // The module's mapping without its mass, inertia and reference mass.
+    let base: String = MAPPING
+        .lines()
+        .filter(|l| !l.starts_with("Ixx") && !l.starts_with("inertia_"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let with = |extra: &str| Mapping::from_toml_str(&format!("{base}{extra}"), "body.toml");
+    let constant_mass = base.replace(
+        "mass = { expr = \"17631 - fuel_used_kg\", unit = \"kg\" }",
+        "mass = { value = 17631.0, unit = \"kg\" }",
+    );
+    assert_ne!(constant_mass, base);
+    let inertia = |ixx: f64, iyy: f64, izz: f64, ixz: f64| {
+        with(&format!(
+            "Ixx = {{ value = {ixx}, unit = \"kg*m2\" }}\nIyy = {{ value = {iyy}, unit = \"kg*m2\" }}\nIzz = {{ value = {izz}, unit = \"kg*m2\" }}\nIxz = {{ value = {ixz}, unit = \"kg*m2\" }}\n"
+        ))
+    };
+    inertia(133367.0, 252687.0, 359593.0, 11442.0).unwrap();
+    inertia(1.0, 2.0, 3.0, 0.0).unwrap();
+    let e = inertia(1.0, 2.0, 3.01, 0.0).unwrap_err().to_string();
+    assert!(e.contains("body.toml") && e.contains("Izz = 3.01 kg·m² exceeds Ixx + Iyy = 3"), "{e}");
+    let e = inertia(1.0, 5.0, 3.0, 0.0).unwrap_err().to_string();
+    assert!(e.contains("Iyy = 5 kg·m² exceeds Ixx + Izz = 4"), "{e}");
+    inertia(4.0, 5.0, 9.0, 5.99).unwrap();
+    let e = inertia(4.0, 5.0, 9.0, 6.0).unwrap_err().to_string();
+    assert!(e.contains("Ixz = 6 kg·m²") && e.contains("below Ixx·Izz"), "{e}");
+    let mass = |m0: f64| {
+        Mapping::from_toml_str(
+            &format!(
+                "inertia_reference_mass_kg = {m0}\n{constant_mass}Ixx = {{ value = 1.0, unit = \"kg*m2\" }}\n"
+            ),
+            "body.toml",
+        )
+    };
+    mass(17631.0 / 3.0).unwrap();
+    mass(17631.0 * 3.0).unwrap();
+    let e = mass(1.0).unwrap_err().to_string();
+    assert!(e.contains("inertia_reference_mass_kg") && e.contains("1 kg beside"), "{e}");
+    assert!(e.contains("scale the inertias by 17631:"), "{e}");
+    assert!(mass(17631.0 / 3.01).is_err() && mass(17631.0 * 3.01).is_err());
+}

@@ -79,18 +79,21 @@ pub fn record_events<'a, R: Read + 'a>(
     );
     let screened = outliers::Screened::new(reader, screen).named_by(mapping);
     let screen_notes = screened.notes();
+    let mut saturation = None;
     let actuated: Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a> =
         if actuators.is_empty() {
             Box::new(screened)
         } else {
-            Box::new(actuated::Actuated::new(screened, actuators))
+            let a = actuated::Actuated::new(screened, actuators);
+            saturation = Some(a.saturation());
+            Box::new(a)
         };
     let events: Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a> = match compat {
         Some(c) => Box::new(Corrected::new(actuated, c.clone())),
         None => actuated,
     };
     let events = crate::window::Windowed::new(events, windows.to_vec());
-    RecordEvents { events, notes: [reader_notes, screen_notes], actuator_notes }
+    RecordEvents { events, notes: [reader_notes, screen_notes], actuator_notes, saturation }
 }
 
 /// [`record_events`]: the events, and the notes of the stages they went through.
@@ -103,6 +106,8 @@ pub struct RecordEvents<'a> {
     /// What the actuator stage does, one line per commanded surface, and the thrust law when
     /// the mapping gives one.
     actuator_notes: Vec<String>,
+    /// How often each actuator held its surface ([`actuated::Saturation`]), when any is declared.
+    saturation: Option<actuated::SaturationCounts>,
 }
 
 impl RecordEvents<'_> {
@@ -113,11 +118,16 @@ impl RecordEvents<'_> {
         let [reader, screen] = &self.notes;
         let get = |n: &outliers::ScreenNotes| n.lock().map(|n| n.clone()).unwrap_or_default();
         let actuated = self.actuator_notes.iter().cloned();
+        let held: Vec<String> = self.saturation.as_ref().map_or_else(Vec::new, |c| {
+            let c = c.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+            c.iter().filter_map(|(ch, a, n)| n.warning(*ch, a)).collect()
+        });
         get(reader)
             .into_iter()
             .chain(self.events.note())
             .chain(get(screen))
             .chain(actuated)
+            .chain(held)
             .collect()
     }
 }

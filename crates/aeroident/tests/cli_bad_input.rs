@@ -375,3 +375,52 @@ fn exit_two_settings_of_one_thing_are_refused() {
     assert!(!d.join("out").exists());
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Finite but absurd options are refused with their physical bound, the number in short form
+/// (a 1e300 was printed in 301 digits, when it was refused at all): a reference speed, area,
+/// throws and stall angles of the exports, and the live view's σ fraction.
+#[test]
+fn exit_absurd_finite_options_are_bounded() {
+    let d = scratch("absurd");
+    let summary = d.join("summary.json");
+    std::fs::write(
+        &summary,
+        r#"{"estimator":"oe","model":"m","status":"converged","parameters":[{"name":"Cm_de","estimate":-1.2,"std_error":0.1}]}"#,
+    )
+    .unwrap();
+    let s = summary.to_str().unwrap();
+    let geometry = ["--area-m2", "0.5", "--span-m", "2", "--chord-m", "0.25"];
+    let export = |target: &str, extra: &[&str], needles: &[&str]| {
+        let mut args = vec!["export", target, "--summary", s];
+        if target != "jsbsim" {
+            args.extend(geometry);
+        }
+        args.extend(extra);
+        let err = expect(&args, 1, needles);
+        let line = err.lines().find(|l| l.starts_with("error: ")).unwrap();
+        assert!(line.len() < 200, "{line}");
+    };
+    export("jsbsim", &["--v0-mps", "1e300"], &["--v0-mps", "at most 1000 m/s", "got 1.000e300"]);
+    export(
+        "ardupilot",
+        &["--area-m2", "1e300"],
+        &["reference area S", "at most 2000 m²", "got 1.000e300"],
+    );
+    export("ardupilot", &["--aileron-throw-deg", "1e9"], &["--aileron-throw-deg", "at most 90°"]);
+    export("gazebo", &["--alpha-stall-deg", "1000"], &["--alpha-stall-deg", "got 1000"]);
+    export("gazebo", &["--air-density", "1e300"], &["air density", "at most 2 kg/m³"]);
+    let (good, min) =
+        (repo("crates/io/tests/data/good.csv"), repo("crates/io/tests/data/min.toml"));
+    let out = d.join("out");
+    let live = |extra: &[&str], needles: &[&str]| {
+        let mut args =
+            vec!["live", good.to_str().unwrap(), "--map", min.to_str().unwrap(), "--out"];
+        args.push(out.to_str().unwrap());
+        args.extend(extra);
+        expect(&args, 1, needles);
+    };
+    live(&["--sigma-fraction", "inf"], &["--sigma-fraction", "at most 1", "got inf"]);
+    live(&["--sigma-fraction", "1.5"], &["--sigma-fraction"]);
+    live(&["--hold-s", "inf"], &["--hold-s"]);
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -193,6 +193,14 @@ fn geometry(g: &GeometryArgs) -> anyhow::Result<Geometry> {
 
 fn ardupilot(a: ArdupilotArgs) -> anyhow::Result<()> {
     check_out(a.out.as_deref(), &a.summary, a.geometry.mapping.as_deref())?;
+    for (flag, deg) in [
+        ("--aileron-throw-deg", a.aileron_throw_deg),
+        ("--elevator-throw-deg", a.elevator_throw_deg),
+        ("--rudder-throw-deg", a.rudder_throw_deg),
+        ("--alpha-stall-deg", a.alpha_stall_deg),
+    ] {
+        at_most_right_angle(flag, deg)?;
+    }
     let summary = read_summary(&a.summary)?;
     note_unfinished(&a.summary, &summary);
     let options = ArdupilotOptions {
@@ -212,6 +220,7 @@ fn ardupilot(a: ArdupilotArgs) -> anyhow::Result<()> {
 
 fn gazebo(a: GazeboArgs) -> anyhow::Result<()> {
     check_out(a.out.as_deref(), &a.summary, a.geometry.mapping.as_deref())?;
+    at_most_right_angle("--alpha-stall-deg", a.alpha_stall_deg)?;
     let summary = read_summary(&a.summary)?;
     note_unfinished(&a.summary, &summary);
     let joint = |surface, joint: &str, direction| ControlJoint {
@@ -256,9 +265,12 @@ fn write_exported(summary: &Path, out: Option<&Path>, e: &Exported) -> anyhow::R
 
 fn jsbsim(a: JsbsimArgs) -> anyhow::Result<()> {
     if let Some(v) = a.v0_mps
-        && !(v.is_finite() && v > 0.0)
+        && !(v.is_finite() && v > 0.0 && v <= MAX_V0_MPS)
     {
-        anyhow::bail!("--v0-mps must be a positive speed in m/s, got {v}");
+        anyhow::bail!(
+            "--v0-mps must be a speed > 0 and at most {MAX_V0_MPS} m/s, got {}",
+            aeroident_io::message::short(v)
+        );
     }
     check_out(a.out.as_deref(), &a.summary, None)?;
     let summary = read_summary(&a.summary)?;
@@ -285,6 +297,21 @@ fn jsbsim(a: JsbsimArgs) -> anyhow::Result<()> {
             out.write_all(xml.as_bytes())?;
             out.flush()?;
         }
+    }
+    Ok(())
+}
+
+/// The largest `--v0-mps` taken: Mach 3 at altitude, beyond any aircraft a fit describes.
+const MAX_V0_MPS: f64 = 1000.0;
+
+/// Checks an angle option in degrees lies in (0, 90]: a throw or a stall angle beyond a right
+/// angle is a typing or unit error.
+fn at_most_right_angle(flag: &str, deg: f64) -> anyhow::Result<()> {
+    if !(deg.is_finite() && deg > 0.0 && deg <= 90.0) {
+        anyhow::bail!(
+            "{flag} must be > 0 and at most 90°, got {}",
+            aeroident_io::message::short(deg)
+        );
     }
     Ok(())
 }

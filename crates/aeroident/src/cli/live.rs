@@ -70,8 +70,18 @@ pub struct LiveArgs {
 pub fn execute(args: LiveArgs) -> anyhow::Result<()> {
     let pace = pacing(&args)?;
     let rule = PhaseRule { sigma_fraction: args.sigma_fraction, hold_s: args.hold_s };
-    if !(rule.sigma_fraction > 0.0 && rule.hold_s >= 0.0 && rule.hold_s.is_finite()) {
-        anyhow::bail!("--sigma-fraction must be > 0 and --hold-s ≥ 0 (finite)");
+    // A σ above the estimate itself says nothing is known: no fraction above 1 identifies.
+    if !(rule.sigma_fraction > 0.0 && rule.sigma_fraction <= 1.0) {
+        anyhow::bail!(
+            "--sigma-fraction must be > 0 and at most 1, got {}",
+            aeroident_io::message::short(rule.sigma_fraction)
+        );
+    }
+    if !(rule.hold_s >= 0.0 && rule.hold_s.is_finite()) {
+        anyhow::bail!(
+            "--hold-s must be ≥ 0 s (finite), got {}",
+            aeroident_io::message::short(rule.hold_s)
+        );
     }
     if !(args.linger_s >= 0.0 && args.linger_s.is_finite()) {
         anyhow::bail!("--linger-s must be ≥ 0 s (finite), got {}", args.linger_s);

@@ -27,6 +27,7 @@
 use super::jsbsim::SummaryParameters;
 use super::uav::{self, Exported, Geometry};
 use aeroident_estimators::vocabulary::{Coefficient, Param, Term};
+use aeroident_physics::text::Short;
 use std::fmt::Write as _;
 
 /// Full throw of each surface, rad: the deflection at a servo command of ±1.
@@ -133,26 +134,28 @@ fn command_scale(term: Term, throws: &Throws) -> f64 {
 
 /// Checks the options SITL divides by or blends with.
 fn check_options(o: &ArdupilotOptions) -> crate::error::Result<()> {
+    use super::uav::positive_at_most;
     o.geometry.check()?;
     let t = &o.throws;
+    let right_angle = std::f64::consts::FRAC_PI_2;
     for (name, v) in [
         ("aileron throw", t.aileron_rad),
         ("elevator throw", t.elevator_rad),
         ("rudder throw", t.rudder_rad),
         ("alpha_stall", o.alpha_stall_rad),
-        ("mcoeff", o.mcoeff),
     ] {
-        if !(v.is_finite() && v > 0.0) {
-            crate::bail!("{name} must be a positive finite number, got {v}");
-        }
+        positive_at_most(name, v, right_angle, "rad")?;
+    }
+    if !(o.mcoeff.is_finite() && o.mcoeff > 0.0) {
+        crate::bail!("mcoeff must be a positive finite number, got {}", Short(o.mcoeff));
     }
     // SITL clamps α to alpha_stall ± 0.8 and evaluates exp(mcoeff (α + alpha_stall)) in
     // double: beyond e^709 it overflows to inf and the lift becomes NaN.
     if o.mcoeff * (2.0 * o.alpha_stall_rad + 0.8) > 700.0 {
         crate::bail!(
             "mcoeff {} with alpha_stall {} rad overflows SITL's stall blend (mcoeff·(2 alpha_stall + 0.8) must stay below 700)",
-            o.mcoeff,
-            o.alpha_stall_rad
+            Short(o.mcoeff),
+            Short(o.alpha_stall_rad)
         );
     }
     Ok(())

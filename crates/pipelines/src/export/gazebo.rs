@@ -156,15 +156,18 @@ fn squared_lift_problems(s: &uav::Sorted, polar: &uav::Polar) -> Vec<String> {
 
 /// Checks the options the plugin divides by.
 fn check_options(o: &GazeboOptions) -> crate::error::Result<()> {
+    use super::uav::positive_at_most;
     o.geometry.check()?;
-    for (name, v) in [("air density", o.air_density_kgpm3), ("alpha_stall", o.alpha_stall_rad)] {
-        if !(v.is_finite() && v > 0.0) {
-            crate::bail!("{name} must be a positive finite number, got {v}");
-        }
-    }
+    // Sea-level air is 1.225 kg/m³; no flight condition reaches 2.
+    positive_at_most("air density", o.air_density_kgpm3, 2.0, "kg/m³")?;
+    positive_at_most("alpha_stall", o.alpha_stall_rad, std::f64::consts::FRAC_PI_2, "rad")?;
     for j in &o.joints {
         if j.direction.abs() != 1.0 {
-            crate::bail!("joint `{}`: direction must be 1 or -1, got {}", j.joint, j.direction);
+            crate::bail!(
+                "joint `{}`: direction must be 1 or -1, got {}",
+                j.joint,
+                aeroident_physics::text::Short(j.direction)
+            );
         }
     }
     Ok(())

@@ -25,26 +25,41 @@ pub struct Geometry {
     pub chord_m: f64,
 }
 
+/// The largest reference area taken, m²: above the largest wings flown (An-225 905 m², the
+/// H-4 Hercules 1,061 m²), so a larger number is a typing or unit error.
+pub const MAX_AREA_M2: f64 = 2000.0;
+/// The largest span or chord taken, m (the Stratolaunch spans 117 m).
+pub const MAX_LENGTH_M: f64 = 150.0;
+
 impl Geometry {
-    /// Checks every length and the area are finite and > 0.
+    /// Checks the area lies in (0, [`MAX_AREA_M2`]] and each length in (0, [`MAX_LENGTH_M`]].
     ///
     /// # Errors
-    /// The first that is not, naming it.
+    /// The first that does not, naming it and its value in short form.
     pub fn check(&self) -> crate::error::Result<()> {
-        for (name, v) in
-            [("area S", self.area_m2), ("span b", self.span_m), ("chord c̄", self.chord_m)]
-        {
-            if !(v.is_finite() && v > 0.0) {
-                crate::bail!("reference {name} must be a positive finite number, got {v}");
-            }
-        }
-        Ok(())
+        positive_at_most("reference area S", self.area_m2, MAX_AREA_M2, "m²")?;
+        positive_at_most("reference span b", self.span_m, MAX_LENGTH_M, "m")?;
+        positive_at_most("reference chord c̄", self.chord_m, MAX_LENGTH_M, "m")
     }
 
     /// Aspect ratio `b² / S`, –.
     pub fn aspect_ratio(&self) -> f64 {
         self.span_m * self.span_m / self.area_m2
     }
+}
+
+/// Checks an option lies in `(0, max]` (a physical bound: beyond it the number is a typing or
+/// unit error, and would reach the simulator as an aircraft no one flies).
+///
+/// # Errors
+/// Naming `name`, the value in short form ([`aeroident_physics::text::Short`]), the bound and
+/// its `unit`.
+pub fn positive_at_most(name: &str, v: f64, max: f64, unit: &str) -> crate::error::Result<()> {
+    use aeroident_physics::text::Short;
+    if !(v.is_finite() && v > 0.0 && v <= max) {
+        crate::bail!("{name} must be > 0 and at most {} {unit}, got {}", Short(max), Short(v));
+    }
+    Ok(())
 }
 
 /// The file an export writes and the warnings to print beside it (each also a note in the

@@ -183,7 +183,9 @@ mod held_out;
 mod inputs;
 mod starts;
 
-pub use held_out::{FAIL_SPREADS, HeldOut, HeldOutCorrection, PIECE_TOO_SHORT, fails, held_out};
+pub use held_out::{
+    FAIL_SPREADS, HeldOut, HeldOutCorrection, MIN_FAILING_RISE, PIECE_TOO_SHORT, fails, held_out,
+};
 
 use inputs::Inputs;
 
@@ -560,6 +562,11 @@ fn check_warm(
                 exclude.push(u);
             }
             None => {
+                if let Some(note) = lag_beyond_manoeuvres(&r, manoeuvres) {
+                    notes.push(note);
+                    exclude.push(Unknown::AhrsLag);
+                    continue;
+                }
                 notes.extend(gyro_shift_caveats(&r, config, manoeuvres));
                 r.notes = notes;
                 return Ok(r);
@@ -567,6 +574,27 @@ fn check_warm(
         }
     }
 }
+
+/// Why the AHRS lag of `r` is not a result when its time constant exceeds a quarter of the
+/// shortest manoeuvre (`None` otherwise, or without a lag): a first-order lag settles in about
+/// four time constants, so in a shorter manoeuvre its response never shows apart from a slow
+/// drift, which the biases and initial states fit as well. The check is then redone without
+/// it. (A 0.9-s record read 1.7 ± 0.6 s, "converged".)
+fn lag_beyond_manoeuvres(r: &CompatResult, manoeuvres: &[&[AirDataSample]]) -> Option<String> {
+    let (tau, sigma) = r.get(Unknown::AhrsLag)?;
+    let shortest =
+        manoeuvres.iter().map(|m| m[m.len() - 1].t_s - m[0].t_s).fold(f64::INFINITY, f64::min);
+    (tau > shortest / 4.0).then(|| {
+        format!(
+            "AHRS lag not estimated: its time constant came out {tau:.3} ± {sigma:.3} s, more than a quarter of the shortest manoeuvre ({shortest:.2} s), which cannot show a lag settle (about four time constants) apart from a drift; give manoeuvres of at least {:.1} s to estimate it",
+            4.0 * tau.min(LAG_PLAUSIBLE_MAX_S)
+        )
+    })
+}
+
+/// The longest AHRS time constant the advice asks manoeuvres for, s: attitude filters of
+/// flight-control AHRSs are below it.
+const LAG_PLAUSIBLE_MAX_S: f64 = 0.5;
 
 /// Sample interval above which the gyros' common shift was not always measured to 0.03 s
 /// without a sideslip vane, s (module doc, "What decides the common AHRS shift").
@@ -1208,7 +1236,7 @@ impl Problem<'_> {
         let (m, _) = information(&s, &e, &r);
         let n = m.nrows();
         let inv = m.clone().cholesky().map(|c| c.inverse()).ok_or(EstimatorError::Numerical {
-            what: "compatibility check: information matrix singular at the estimate",
+            what: "compatibility check: the information matrix is singular at the estimate, so the record does not determine every bias, scale factor, time shift and initial state asked for (too short, or too little motion in some axis); give longer or more varied manoeuvres, or ask for fewer unknowns (--no-time-shifts, no --inertial-scale-factors)",
             t_s: self.man[0][0].t_s,
         })?;
         // The residuals of a real record are coloured (turbulence, model error, sample-and-hold):

@@ -75,10 +75,18 @@ impl HeldOutCorrection {
 
 /// The failure rule of a held-out `change` whose mean and standard deviation were the
 /// correction true are `expected` and `spread`, over `pieces` pieces (module doc, "When it
-/// fails"): judged, a rise, and more than [`FAIL_SPREADS`] spreads above `expected`.
+/// fails"): judged, a rise above [`MIN_FAILING_RISE`], and more than [`FAIL_SPREADS`] spreads
+/// above `expected`.
 pub fn fails(change: f64, expected: f64, spread: f64, pieces: usize) -> bool {
-    pieces > 0 && change > 0.0 && change - expected > FAIL_SPREADS * spread
+    pieces > 0 && change > MIN_FAILING_RISE && change - expected > FAIL_SPREADS * spread
 }
+
+/// The smallest held-out rise that can fail, in the units of `N/2 · ln det R`: half the 95 %
+/// point of χ² with one degree of freedom (3.841 / 2), the likelihood-ratio test of one
+/// parameter. Below it the held-out data cannot tell the correction from none whatever its
+/// expectation; where that expectation is `0 ± 0` (no curvature, module doc) the rule would
+/// otherwise refuse a correction on any rise at all, rounding included.
+pub const MIN_FAILING_RISE: f64 = 3.841_458_820_694_124 / 2.0;
 
 /// A correction fails when its held-out change lies more than this many spreads above its
 /// expectation (module doc, "When it fails"). Three, not two: the spread leaves out the

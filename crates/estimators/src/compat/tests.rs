@@ -580,6 +580,30 @@ fn an_ahrs_first_order_lag_is_recovered_as_its_time_constant() {
     }
 }
 
+/// The AHRS lag's bound at its edge: a time constant up to a quarter of the shortest
+/// manoeuvre is a result, one beyond it is not (a lag never seen to settle), whichever
+/// manoeuvre is the short one; the note says what length would do.
+#[test]
+fn an_ahrs_lag_longer_than_a_quarter_of_a_manoeuvre_is_not_a_result() {
+    let faults = Faults { ahrs_tau_s: 0.15, fast: 1.0, ..NONE };
+    let (data, _) = record(10.0, 0.02, faults, 41);
+    let mut r = fit(&data, &with_lag());
+    assert!(lag_beyond_manoeuvres(&r, &[&data]).is_none(), "the true 0.15 s is a result");
+    let span = data[data.len() - 1].t_s - data[0].t_s;
+    let k = r.unknowns.iter().position(|u| *u == Unknown::AhrsLag).unwrap();
+    r.values[k] = span / 4.0 - 1e-9;
+    assert!(lag_beyond_manoeuvres(&r, &[&data]).is_none());
+    r.values[k] = span / 4.0 + 1e-9;
+    let note = lag_beyond_manoeuvres(&r, &[&data]).expect("past the edge");
+    assert!(
+        note.starts_with("AHRS lag not estimated") && note.contains("at least 2.0 s"),
+        "{note}"
+    );
+    r.values[k] = 0.205;
+    assert!(lag_beyond_manoeuvres(&r, &[&data, &data[..41]]).is_some(), "0.205 s > 0.80 s / 4");
+    assert!(lag_beyond_manoeuvres(&r, &[&data, &data[..43]]).is_none(), "0.205 s < 0.84 s / 4");
+}
+
 /// The held-out judgement of `unknown` in `h`.
 fn judged(h: &HeldOut, unknown: Unknown) -> &HeldOutCorrection {
     h.corrections.iter().find(|c| c.unknown == unknown).unwrap()

@@ -98,17 +98,28 @@ impl HeldOutSummary {
         self.failed(None, "ahrs_lag").map(|r| self.why(r))
     }
 
-    /// The reason a failed row gives in `compat refused: …`.
+    /// The reason a failed row gives in `compat refused: …`. Where the held-out pieces had no
+    /// curvature along the correction (`expected` and `spread` both 0), there is no true
+    /// correction's change to compare with, and the reason says it fails on the rise alone.
     fn why(&self, r: &HeldOutRow) -> String {
+        let pieces = if self.by == "half" { "halves" } else { "manoeuvres" };
+        let against = if r.expected == 0.0 && r.spread == 0.0 {
+            format!(
+                "beyond the {:.2} of a one-parameter likelihood-ratio test, and their cost does not curve along it, so no true correction's change could be formed to excuse it",
+                compat::MIN_FAILING_RISE
+            )
+        } else {
+            format!(
+                "where a true correction of its size would change it by {:+.1} ± {:.1}",
+                r.expected, r.spread
+            )
+        };
         format!(
-            "{}: applied to the {} held out in turn ({} of {}) it worsens their fit (their −ln L rises by {:.1}, where a true correction of its size would change it by {:+.1} ± {:.1}): the rest of the record contradicts it",
+            "{}: applied to the {pieces} held out in turn ({} of {}) it worsens their fit (their −ln L rises by {:.1}, {against}): the rest of the record contradicts it",
             r.label(),
-            if self.by == "half" { "halves" } else { "manoeuvres" },
             r.pieces,
             self.pieces,
             r.change_neg_log_likelihood,
-            r.expected,
-            r.spread
         )
     }
 
@@ -143,5 +154,65 @@ fn names(u: Unknown) -> (Option<&'static str>, &'static str) {
         Unknown::TimeShift(c) => (Some(c.name()), "time_shift"),
         Unknown::AhrsLag => (None, "ahrs_lag"),
         Unknown::Initial { .. } => (None, "initial_state"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(change: f64, expected: f64, spread: f64, pieces: usize) -> HeldOutRow {
+        HeldOutRow {
+            channel: Some("alpha_rad".into()),
+            correction: "time_shift".into(),
+            change_neg_log_likelihood: change,
+            pieces,
+            expected,
+            spread,
+            verdict: String::new(),
+        }
+    }
+
+    /// The failure rule on both sides of each of its thresholds, hand-set: the rise floor
+    /// (χ²₁ 95 % / 2 = 1.9207), the three spreads above the expectation, and judged pieces.
+    #[test]
+    fn the_failure_rule_at_each_edge() {
+        let floor = compat::MIN_FAILING_RISE;
+        assert!((floor - 1.920_729_410_347_062).abs() < 1e-12);
+        let e = 1e-9;
+        #[rustfmt::skip]
+        let table: [(f64, f64, f64, usize, bool, &str); 9] = [
+            (floor + e, 0.0, 0.0, 2, true, "0 ± 0: a rise past the floor fails"),
+            (floor - e, 0.0, 0.0, 2, false, "0 ± 0: a rise below the floor stands"),
+            (1e-12, 0.0, 0.0, 2, false, "0 ± 0: rounding is no rise"),
+            (10.0 + 3.0 * 2.0 + 1e-6, 10.0, 2.0, 3, true, "just past 3 spreads"),
+            (10.0 + 3.0 * 2.0 - 1e-6, 10.0, 2.0, 3, false, "just inside 3 spreads"),
+            (-5.0, -20.0, 1.0, 3, false, "an improvement never fails"),
+            (floor - e, -20.0, 0.1, 3, false, "far past 3 spreads, below the floor"),
+            (floor + e, -20.0, 0.1, 3, true, "far past 3 spreads, past the floor"),
+            (1e6, 0.0, 0.0, 0, false, "not judged"),
+        ];
+        for (change, expected, spread, pieces, failing, case) in table {
+            assert_eq!(row(change, expected, spread, pieces).fails(), failing, "{case}");
+        }
+    }
+
+    /// The reason of a row whose expectation could not be formed says so, and the others give
+    /// the expectation they were compared with.
+    #[test]
+    fn the_reason_names_a_comparison_that_could_not_be_formed() {
+        let summary = |r: HeldOutRow| HeldOutSummary {
+            by: "manoeuvre".into(),
+            pieces: 3,
+            corrections: vec![r],
+            notes: Vec::new(),
+        };
+        let s = summary(row(4506.0, 0.0, 0.0, 3));
+        let why = s.why(&s.corrections[0]);
+        assert!(why.contains("rises by 4506.0"), "{why}");
+        assert!(why.contains("does not curve along it") && !why.contains("± 0.0"), "{why}");
+        let s = summary(row(40.0, 2.0, 3.0, 3));
+        let why = s.why(&s.corrections[0]);
+        assert!(why.contains("would change it by +2.0 ± 3.0"), "{why}");
     }
 }

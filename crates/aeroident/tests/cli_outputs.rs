@@ -364,7 +364,6 @@ fn outputs_export_never_replaces_a_node_or_its_input() {
 #[cfg(unix)]
 #[test]
 fn outputs_inspect_never_overwrites_its_log_or_one_output_with_another() {
-    use std::ffi::OsStr;
     let d = scratch("inspect-self");
     let log = d.join("x.csv");
     let mut text = String::from("t,de\n");

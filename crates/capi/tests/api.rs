@@ -311,3 +311,65 @@ fn reset_gives_the_estimates_of_a_fresh_estimator() {
         aeroident_estimator_free(used);
     }
 }
+
+/// A full six-axis sample (every field set, plausible values) for sample `k`.
+fn six_axis(k: usize) -> AeroidentSample {
+    let t = k as f64 * 0.02;
+    let s = synthetic(k);
+    AeroidentSample {
+        beta_rad: 0.01 * (1.7 * t).sin(),
+        p_rad_s: 0.05 * (2.3 * t).sin(),
+        r_rad_s: 0.03 * (1.1 * t).cos(),
+        pdot_rad_s2: 0.1 * (2.3 * t).cos(),
+        rdot_rad_s2: -0.03 * (1.1 * t).sin(),
+        alphadot_rad_s: 0.0,
+        phi_rad: 0.02,
+        theta_rad: 0.08,
+        psi_rad: 0.0,
+        ay_mps2: 0.2 * (1.7 * t).sin(),
+        da_rad: 0.01 * (2.9 * t).sin(),
+        dr_rad: 0.01 * (1.9 * t).cos(),
+        rho_kgpm3: 1.0,
+        b_m: 12.0,
+        Ixx_kgm2: 20_000.0,
+        Izz_kgm2: 45_000.0,
+        Ixz_kgm2: 1_000.0,
+        v0_mps: 100.0,
+        present: AEROIDENT_HAS_ALL & !AEROIDENT_HAS_THRUST_MOMENT & !AEROIDENT_HAS_THROTTLE,
+        thrust_n: 0.0,
+        ..s
+    }
+}
+
+/// Every real-time kind refuses a six-axis sample without `Ixz` or `b` naming that field, as
+/// the EKF does and docs/c-abi.md promises (rls, rls-iv, ftr, smpe and gradient named the
+/// coefficient instead: "non-finite input `Cl` = NaN").
+#[test]
+fn errors_a_missing_constant_is_named_by_its_field() {
+    for kind in ["rls", "rls-iv", "ftr", "smpe", "smpe-corrected", "smpe-finite-time", "gradient"] {
+        for (bit, field) in [(AEROIDENT_HAS_IXZ, "Ixz_kgm2"), (AEROIDENT_HAS_B, "b_m")] {
+            let (r, e, msg) = new(kind, "six-axis", None);
+            if r != AeroidentResult::Ok {
+                // A kind without a six-axis form says so; that is another test's matter.
+                assert!(e.is_null(), "{kind}: {msg}");
+                continue;
+            }
+            let mut refused = None;
+            for k in 0..20 {
+                let s = AeroidentSample { present: six_axis(k).present & !bit, ..six_axis(k) };
+                // SAFETY: a live handle and a valid sample.
+                let r = unsafe { aeroident_estimator_update(e, &s) };
+                if r != AeroidentResult::Ok {
+                    refused = Some((r, message()));
+                    break;
+                }
+            }
+            // SAFETY: the handle from `new`, freed once.
+            unsafe { aeroident_estimator_free(e) };
+            let (r, msg) =
+                refused.unwrap_or_else(|| panic!("{kind}: a sample without {field} taken"));
+            assert_eq!(r, AeroidentResult::SampleRefused, "{kind}: {msg}");
+            assert!(msg.contains(&format!("`{field}`")), "{kind} without {field}: {msg}");
+        }
+    }
+}

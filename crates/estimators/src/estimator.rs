@@ -308,38 +308,40 @@ pub fn check_finite(s: &AirDataSample) -> Result<(), EstimatorError> {
     Ok(())
 }
 
-/// The measured value of coefficient `c` from `measured` (the sample's
+/// The measured value of coefficient `c` from `measured` (sample `s`'s
 /// [`AirDataSample::measured_coefficients`]), present and plausible: the dependent variable of
 /// the equation-error estimators (RLS, FTR).
 ///
 /// # Errors
-/// [`EstimatorError::NonFiniteInput`] naming the coefficient when a channel it needs is absent;
+/// [`EstimatorError::NonFiniteInput`] naming the channel or constant of `s` the coefficient
+/// needs and lacks ([`AirDataSample::missing_for`]; the coefficient itself only if none is);
 /// [`EstimatorError::ImplausibleInput`] beyond the coefficient limit.
 pub fn measured_coefficient(
+    s: &AirDataSample,
     measured: &crate::sample::CoefficientValues,
     c: crate::vocabulary::Coefficient,
-    t_s: f64,
 ) -> Result<f64, EstimatorError> {
-    let y = measured[c.index()].ok_or(EstimatorError::NonFiniteInput {
-        field: c.name(),
+    let y = measured[c.index()].ok_or_else(|| EstimatorError::NonFiniteInput {
+        field: s.missing_for(c).unwrap_or(c.name()),
         value: f64::NAN,
-        t_s,
+        t_s: s.t_s,
     })?;
-    check_coefficient(c.name(), y, t_s)
+    check_coefficient(c.name(), y, s.t_s)
 }
 
 /// The regressor of term `t` at sample `s` with the structure's α knots `knots`
 /// ([`crate::vocabulary::Term::value`]), present.
 ///
 /// # Errors
-/// [`EstimatorError::NonFiniteInput`] when a channel or constant the term needs is absent.
+/// [`EstimatorError::NonFiniteInput`] naming the channel or constant the term needs and `s`
+/// lacks ([`crate::vocabulary::Term::missing_field`]).
 pub fn regressor(
     t: crate::vocabulary::Term,
     s: &AirDataSample,
     knots: &crate::vocabulary::AlphaKnots,
 ) -> Result<f64, EstimatorError> {
-    t.value(s, knots).ok_or(EstimatorError::NonFiniteInput {
-        field: "regressor (a term's channel is absent)",
+    t.value(s, knots).ok_or_else(|| EstimatorError::NonFiniteInput {
+        field: t.missing_field(s).unwrap_or("regressor (a term's channel is absent)"),
         value: f64::NAN,
         t_s: s.t_s,
     })

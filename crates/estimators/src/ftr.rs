@@ -537,7 +537,7 @@ impl Estimator for Ftr {
         }
         let mut coef_values = [0.0; 8];
         for c in self.structure.coefficients() {
-            coef_values[c.index()] = measured_coefficient(&measured, c, s.t_s)?;
+            coef_values[c.index()] = measured_coefficient(s, &measured, c)?;
         }
         let dt = match self.last_t.filter(|_| !self.restart) {
             None => {

@@ -475,7 +475,7 @@ pub(crate) fn update_fits<F: CoefficientFit>(
     let mut rows = [([0.0; N_TERMS], 0.0); 8];
     for f in fits.iter().flatten() {
         let c = f.regression().coefficient;
-        let y = measured_coefficient(&measured, c, s.t_s)?;
+        let y = measured_coefficient(s, &measured, c)?;
         rows[c.index()] = (f.regression().regressors(s)?, y);
     }
     // Each fit's update is atomic (computed, checked, then committed). A numerical failure

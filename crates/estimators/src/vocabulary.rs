@@ -432,6 +432,37 @@ impl Term {
         [Term::AlphaK1, Term::AlphaK2, Term::AlphaK3, Term::AlphaK4].get(i).copied()
     }
 
+    /// The first sample field term `self`'s value ([`Self::value`]) needs that `s` lacks, by
+    /// its field name (`b_m`, `p_rad_s`, `v0_mps` …, as `AeroidentSample` spells it), so that
+    /// a refusal names what to supply; `None` when every field it reads is present (the value
+    /// may still be `None` for a knot the structure lacks, or a Mach without air data).
+    pub fn missing_field(self, s: &AirDataSample) -> Option<&'static str> {
+        let c = &s.constants;
+        let needs: &[(&'static str, bool)] = match self {
+            Term::Beta => &[("beta_rad", s.beta_rad.is_some())],
+            Term::P => &[("p_rad_s", s.p_rad_s.is_some()), ("b_m", c.b_m.is_some())],
+            Term::Q => &[("q_rad_s", s.q_rad_s.is_some()), ("cbar_m", c.cbar_m.is_some())],
+            Term::R => &[("r_rad_s", s.r_rad_s.is_some()), ("b_m", c.b_m.is_some())],
+            Term::Alphadot => {
+                &[("alphadot_rad_s", s.alphadot_rad_s.is_some()), ("cbar_m", c.cbar_m.is_some())]
+            }
+            Term::De => &[("de_rad", s.de_rad.is_some())],
+            Term::Da => &[("da_rad", s.da_rad.is_some())],
+            Term::Dr => &[("dr_rad", s.dr_rad.is_some())],
+            Term::V => &[("v0_mps", c.v0_mps.is_some())],
+            Term::Q0 => &[
+                ("q_rad_s", s.q_rad_s.is_some()),
+                ("cbar_m", c.cbar_m.is_some()),
+                ("v0_mps", c.v0_mps.is_some()),
+            ],
+            _ => match self.factors() {
+                Some((a, b)) => return a.missing_field(s).or_else(|| b.missing_field(s)),
+                None => &[],
+            },
+        };
+        needs.iter().find(|(_, present)| !present).map(|(field, _)| *field)
+    }
+
     /// The regressor value `ξ` of this term at sample `s` (module doc), with the α knots of the
     /// structure; `None` when a channel, constant or knot it needs is absent (e.g. `p̂` without
     /// `p` or the span, `alpha_k2` with one knot).

@@ -111,7 +111,7 @@ impl<const P: usize> Estimate<P> {
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 pub enum EstimatorError {
     /// An input sample value was not finite.
-    #[error("non-finite input `{field}` = {value} at t = {t_s} s")]
+    #[error("non-finite input `{field}` = {} at t = {t_s} s", aeroident_physics::text::ExactOrShort(*.value))]
     NonFiniteInput {
         /// Name of the offending sample field.
         field: &'static str,
@@ -122,7 +122,11 @@ pub enum EstimatorError {
     },
     /// An input value is finite but outside what any aircraft can produce (e.g. V = 1e308 m/s,
     /// |α| > 10 rad, a measured coefficient of 1e300): a corrupt record, never a data point.
-    #[error("implausible input `{field}` = {value} at t = {t_s} s (limit {limit})")]
+    #[error(
+        "implausible input `{field}` = {} at t = {t_s} s (limit {})",
+        aeroident_physics::text::ExactOrShort(*.value),
+        aeroident_physics::text::ExactOrShort(*.limit)
+    )]
     ImplausibleInput {
         /// Name of the offending sample field.
         field: &'static str,
@@ -134,7 +138,10 @@ pub enum EstimatorError {
         limit: f64,
     },
     /// A configuration value was out of its valid range.
-    #[error("invalid configuration `{field}` = {value}: {reason}")]
+    #[error(
+        "invalid configuration `{field}` = {}: {reason}",
+        aeroident_physics::text::ExactOrShort(*.value)
+    )]
     InvalidConfig {
         /// Name of the configuration field.
         field: &'static str,

@@ -30,7 +30,7 @@ pub mod trim;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ModelError {
     /// A state or input was not finite, or left the model's domain (e.g. vt ≤ 0).
-    #[error("invalid `{field}` = {value}: {reason}")]
+    #[error("invalid `{field}` = {}: {reason}", aeroident_physics::text::ExactOrShort(*.value))]
     InvalidValue {
         /// Name of the state or input.
         field: &'static str,

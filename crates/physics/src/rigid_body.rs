@@ -186,7 +186,13 @@ pub struct InertiaError {
 
 impl core::fmt::Display for InertiaError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        write!(f, "invalid `{}` = {}: {}", self.field, self.value, self.reason)
+        write!(
+            f,
+            "invalid `{}` = {}: {}",
+            self.field,
+            crate::text::ExactOrShort(self.value),
+            self.reason
+        )
     }
 }
 

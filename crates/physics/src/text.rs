@@ -22,3 +22,48 @@ impl fmt::Display for Short {
         }
     }
 }
+
+/// The longest text [`ExactOrShort`] keeps exact: room for the 17 significant digits of any
+/// `f64`, a sign, a point and a few zeros (`-0.000012345678901234568`).
+pub const EXACT_MAX: usize = 24;
+
+/// Displays its value as Rust writes it (the shortest text that reads back as the value) when
+/// that takes at most [`EXACT_MAX`] characters, else as [`Short`]: values a message compares
+/// stay told apart, while `1e300` is not written out in 301 digits.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ExactOrShort(pub f64);
+
+impl fmt::Display for ExactOrShort {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        /// Counts the characters written instead of keeping them.
+        struct Count(usize);
+        impl fmt::Write for Count {
+            fn write_str(&mut self, s: &str) -> fmt::Result {
+                self.0 += s.chars().count();
+                Ok(())
+            }
+        }
+        let mut n = Count(0);
+        fmt::Write::write_fmt(&mut n, format_args!("{}", self.0))?;
+        if n.0 <= EXACT_MAX { write!(f, "{}", self.0) } else { write!(f, "{}", Short(self.0)) }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    extern crate std;
+    use std::string::ToString;
+
+    /// Ordinary values exactly, 1e300 and 1e-300 short, non-finite values as Rust writes them.
+    #[test]
+    fn exact_when_short_else_short() {
+        assert_eq!(ExactOrShort(1.5707963267948966).to_string(), "1.5707963267948966");
+        assert_eq!(ExactOrShort(-40.0).to_string(), "-40");
+        assert_eq!(ExactOrShort(1e300).to_string(), "1.000e300");
+        assert_eq!(ExactOrShort(1e-300).to_string(), "1.000e-300");
+        assert_eq!(ExactOrShort(f64::NAN).to_string(), "NaN");
+        assert_eq!(ExactOrShort(1e20).to_string(), "100000000000000000000");
+        assert_eq!(ExactOrShort(1e24).to_string(), "1.000e24");
+    }
+}

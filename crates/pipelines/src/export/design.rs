@@ -472,18 +472,25 @@ fn excited_part(
     (structure, theta)
 }
 
+/// The fastest `--vt-fps` designed for, ft/s.
+const DESIGN_MAX_VT_FPS: f64 = 2600.0;
+
 /// Checks the flight condition is within the F-16 model's range before trimming (a trim
 /// outside it fails without saying why).
 fn check_condition(spec: &DesignSpec) -> crate::error::Result<()> {
     let (lo, hi) = DESIGN_ALT_RANGE_FT;
+    let short = aeroident_io::message::exact_or_short;
     if !(spec.alt_ft.is_finite() && (lo..=hi).contains(&spec.alt_ft)) {
         crate::bail!(
             "--alt-ft {}: the F-16 model's altitudes are {lo}–{hi} ft (its engine's thrust tables)",
-            spec.alt_ft
+            short(spec.alt_ft)
         );
     }
-    if !(spec.vt_fps.is_finite() && spec.vt_fps > 0.0) {
-        crate::bail!("--vt-fps {}: give a positive true airspeed, ft/s", spec.vt_fps);
+    if !(spec.vt_fps.is_finite() && spec.vt_fps > 0.0 && spec.vt_fps <= DESIGN_MAX_VT_FPS) {
+        crate::bail!(
+            "--vt-fps {}: give a true airspeed above 0 and at most {DESIGN_MAX_VT_FPS} ft/s (Mach 2.7 in the stratosphere, beyond the F-16 model's low-speed tables)",
+            short(spec.vt_fps)
+        );
     }
     Ok(())
 }

@@ -14,22 +14,27 @@ use aeroident_io::Mapping;
 /// non-finite value) said as absent; errors about the estimator's own configuration unchanged.
 pub fn estimator_error(e: &EstimatorError, mapping: &Mapping) -> String {
     use EstimatorError as E;
+    use aeroident_io::message::exact_or_short;
     let describe = |field: &str| mapping.describe_field(field);
     match *e {
         E::NonFiniteInput { field, value, t_s } => match describe(field) {
             Some(d) if value.is_nan() => {
                 format!("{d} has no value at t = {t_s} s, and the estimator needs it")
             }
-            Some(d) => format!("unusable input {d} = {value} at t = {t_s} s"),
+            Some(d) => format!("unusable input {d} = {} at t = {t_s} s", exact_or_short(value)),
             None => e.to_string(),
         },
         E::ImplausibleInput { field, value, t_s, limit } => match describe(field) {
-            Some(d) => format!("implausible input {d} = {value} at t = {t_s} s (limit {limit})"),
+            Some(d) => format!(
+                "implausible input {d} = {} at t = {t_s} s (limit {})",
+                exact_or_short(value),
+                exact_or_short(limit)
+            ),
             None => e.to_string(),
         },
         E::InvalidConfig { field, value, reason } => match describe(field) {
             Some(d) if value.is_nan() => format!("{d}: {reason}"),
-            Some(d) => format!("{d} = {value}: {reason}"),
+            Some(d) => format!("{d} = {}: {reason}", exact_or_short(value)),
             None => e.to_string(),
         },
         E::Numerical { .. } | E::IncompleteAxis { .. } | E::TooLarge { .. } => e.to_string(),

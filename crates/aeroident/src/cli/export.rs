@@ -197,10 +197,10 @@ fn ardupilot(a: ArdupilotArgs) -> anyhow::Result<()> {
         ("--aileron-throw-deg", a.aileron_throw_deg),
         ("--elevator-throw-deg", a.elevator_throw_deg),
         ("--rudder-throw-deg", a.rudder_throw_deg),
-        ("--alpha-stall-deg", a.alpha_stall_deg),
     ] {
-        at_most_right_angle(flag, deg)?;
+        positive_at_most_deg(flag, deg, 90.0)?;
     }
+    positive_at_most_deg("--alpha-stall-deg", a.alpha_stall_deg, 180.0)?;
     let summary = read_summary(&a.summary)?;
     note_unfinished(&a.summary, &summary);
     let options = ArdupilotOptions {
@@ -220,7 +220,7 @@ fn ardupilot(a: ArdupilotArgs) -> anyhow::Result<()> {
 
 fn gazebo(a: GazeboArgs) -> anyhow::Result<()> {
     check_out(a.out.as_deref(), &a.summary, a.geometry.mapping.as_deref())?;
-    at_most_right_angle("--alpha-stall-deg", a.alpha_stall_deg)?;
+    positive_at_most_deg("--alpha-stall-deg", a.alpha_stall_deg, 180.0)?;
     let summary = read_summary(&a.summary)?;
     note_unfinished(&a.summary, &summary);
     let joint = |surface, joint: &str, direction| ControlJoint {
@@ -304,12 +304,12 @@ fn jsbsim(a: JsbsimArgs) -> anyhow::Result<()> {
 /// The largest `--v0-mps` taken: Mach 3 at altitude, beyond any aircraft a fit describes.
 const MAX_V0_MPS: f64 = 1000.0;
 
-/// Checks an angle option in degrees lies in (0, 90]: a throw or a stall angle beyond a right
-/// angle is a typing or unit error.
-fn at_most_right_angle(flag: &str, deg: f64) -> anyhow::Result<()> {
-    if !(deg.is_finite() && deg > 0.0 && deg <= 90.0) {
+/// Checks an angle option in degrees lies in (0, `max`]: a throw beyond a right angle, or a
+/// stall angle beyond a half turn, is a typing or unit error.
+fn positive_at_most_deg(flag: &str, deg: f64, max: f64) -> anyhow::Result<()> {
+    if !(deg.is_finite() && deg > 0.0 && deg <= max) {
         anyhow::bail!(
-            "{flag} must be > 0 and at most 90°, got {}",
+            "{flag} must be > 0 and at most {max}°, got {}",
             aeroident_io::message::short(deg)
         );
     }

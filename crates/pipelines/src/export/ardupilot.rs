@@ -142,10 +142,10 @@ fn check_options(o: &ArdupilotOptions) -> crate::error::Result<()> {
         ("aileron throw", t.aileron_rad),
         ("elevator throw", t.elevator_rad),
         ("rudder throw", t.rudder_rad),
-        ("alpha_stall", o.alpha_stall_rad),
     ] {
         positive_at_most(name, v, right_angle, "rad")?;
     }
+    positive_at_most("alpha_stall", o.alpha_stall_rad, std::f64::consts::PI, "rad")?;
     if !(o.mcoeff.is_finite() && o.mcoeff > 0.0) {
         crate::bail!("mcoeff must be a positive finite number, got {}", Short(o.mcoeff));
     }

@@ -160,7 +160,9 @@ fn check_options(o: &GazeboOptions) -> crate::error::Result<()> {
     o.geometry.check()?;
     // Sea-level air is 1.225 kg/m³; no flight condition reaches 2.
     positive_at_most("air density", o.air_density_kgpm3, 2.0, "kg/m³")?;
-    positive_at_most("alpha_stall", o.alpha_stall_rad, std::f64::consts::FRAC_PI_2, "rad")?;
+    // An angle of attack lies within a half turn; a stall angle past 90° turns the plugin's
+    // stall blend off over every α flown, which the tests use.
+    positive_at_most("alpha_stall", o.alpha_stall_rad, std::f64::consts::PI, "rad")?;
     for j in &o.joints {
         if j.direction.abs() != 1.0 {
             crate::bail!(

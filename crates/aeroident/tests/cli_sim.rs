@@ -250,3 +250,28 @@ fn model_file_experiment_options_are_checked_by_name() {
     fails(&["run", "--aircraft", &m, "--map", &c], "give its file");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A scenario shorter than a few steps (`dt_s` above `duration_s`) is refused by `sim` and by
+/// `run --aircraft` naming both numbers: `sim` wrote a one-row record and `run` a flight on
+/// which every estimator failed, both with exit 0.
+#[test]
+fn a_run_of_fewer_than_ten_steps_is_refused() {
+    let dir = std::env::temp_dir().join(format!("aeroident-cli-sim-short-{}", std::process::id()));
+    let (model, constants, scenario) = write_inputs(&dir);
+    let text = std::fs::read_to_string(&scenario).unwrap();
+    std::fs::write(&scenario, text.replacen("duration_s = 16.0", "duration_s = 0.01", 1)).unwrap();
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    for cmd in ["sim", "run"] {
+        let out = Command::new(env!("CARGO_BIN_EXE_aeroident"))
+            .args([cmd, &s(&scenario), "--aircraft", &s(&model), "--map", &s(&constants)])
+            .arg("--out")
+            .arg(dir.join(cmd))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{cmd}: {err}");
+        assert!(err.contains("duration_s / dt_s = 0.01 / 0.02 gives 1 step(s)"), "{cmd}: {err}");
+        assert!(!dir.join(cmd).join("timeseries.csv").exists(), "{cmd}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

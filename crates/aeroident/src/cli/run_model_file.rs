@@ -52,6 +52,20 @@ pub fn execute(
     od.write_bytes("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
     od.finish();
     super::print_stdout(&format!("{}wrote {}", results_text(&flown), dir.display()))?;
+    all_failed(&flown)
+}
+
+/// A run whose every estimator failed has no result, whatever it wrote (the record, and the
+/// summary saying why): an error, as `montecarlo` gives for the same flight.
+fn all_failed(flown: &FlownRun) -> anyhow::Result<()> {
+    let failures: Vec<String> = flown
+        .estimators
+        .iter()
+        .filter_map(|e| e.failure.as_ref().map(|why| format!("{}: {why}", e.name)))
+        .collect();
+    if !failures.is_empty() && failures.len() == flown.estimators.len() {
+        anyhow::bail!("every estimator failed on the flight ({})", failures.join("; "));
+    }
     Ok(())
 }
 

@@ -248,8 +248,12 @@ pub fn run(sc: &SimScenario, base_dir: &Path) -> Result<SimRun> {
     Ok(SimRun { table: flight.table, trim: t0 })
 }
 
+/// The fewest steps a run takes: ten samples, the least a differentiator window and one
+/// estimator update of a record can use.
+const MIN_STEPS: usize = 10;
+
 /// The number of RK4 steps of the run (`duration_s / dt_s`, rounded), after checking both are
-/// finite and positive and the run fits in memory ([`MAX_STEPS`]).
+/// finite and positive, that the run has [`MIN_STEPS`] and fits in memory ([`MAX_STEPS`]).
 fn step_count(r: &scenario::RunConfig) -> Result<usize> {
     if !(r.dt_s.is_finite() && r.dt_s > 0.0) {
         bail!("[run] dt_s = {} must be finite and > 0", r.dt_s);
@@ -258,6 +262,14 @@ fn step_count(r: &scenario::RunConfig) -> Result<usize> {
         bail!("[run] duration_s = {} must be finite and > 0", r.duration_s);
     }
     let n_steps = (r.duration_s / r.dt_s).round() as usize;
+    if n_steps < MIN_STEPS {
+        // A record of one or two rows holds no motion any estimator or figure can use.
+        bail!(
+            "[run] duration_s / dt_s = {} / {} gives {n_steps} step(s): a run needs at least {MIN_STEPS}; lengthen duration_s or lower dt_s",
+            aeroident_physics::text::Short(r.duration_s),
+            aeroident_physics::text::Short(r.dt_s)
+        );
+    }
     if n_steps > MAX_STEPS {
         bail!(
             "[run] duration_s / dt_s = {n_steps} steps is too many (max {MAX_STEPS}: the run is held in memory for the figures, 8 bytes per column per step); shorten duration_s or raise dt_s"

@@ -127,3 +127,28 @@ fn errors_windows_outside_the_record_name_the_windows_and_its_span() {
     let opts = aeroident_pipelines::replay::ReplayOptions { windows, ..Default::default() };
     check(aeroident_pipelines::replay::replay(reader, &m, &opts, &mut ()).unwrap_err().to_string());
 }
+
+/// A record whose every row is rejected (the elevator NaN throughout), fitted or replayed in a
+/// window, is refused with the rejections counted and named, as without the window: the
+/// window stage dropped them unplaced and the error read "no usable samples (0 rows
+/// rejected)", hiding the column.
+#[test]
+fn errors_every_row_rejected_in_a_window_names_the_rejections() {
+    let map = "nominal_dt_s = 0.1\n[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"V\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nq = { column = \"q\", unit = \"rad/s\" }\nax = { column = \"ax\", unit = \"m/s2\" }\naz = { column = \"az\", unit = \"m/s2\" }\nde = { column = \"de\", unit = \"rad\" }\nthrust = { value = 0.0, unit = \"N\" }\nrho = { value = 1.0, unit = \"kg/m3\" }\nmass = { value = 1000.0, unit = \"kg\" }\nS = { value = 10.0, unit = \"m2\" }\ncbar = { value = 1.5, unit = \"m\" }\nIyy = { value = 2000.0, unit = \"kg*m2\" }\n";
+    let m = Mapping::from_toml_str(map, "m.toml").unwrap();
+    let mut csv = String::from("t,V,a,q,ax,az,de\n");
+    for k in 0..100 {
+        csv.push_str(&format!("{:.1},50,0.05,0.01,0.1,-9.8,NaN\n", f64::from(k) * 0.1));
+    }
+    let windows = vec![TimeWindow::parse("1:5").unwrap()];
+    let check = |e: String| {
+        assert!(e.contains("no usable samples (100 rows rejected"), "{e}");
+        assert!(e.contains("column `de`"), "{e}");
+    };
+    let reader = aeroident_io::FlightDataReader::new(csv.as_bytes(), "nan_de.csv", &m).unwrap();
+    let options = FitOptions { windows: windows.clone(), ..Default::default() };
+    check(fit_record(reader, &m, None, options).unwrap_err().to_string());
+    let reader = aeroident_io::FlightDataReader::new(csv.as_bytes(), "nan_de.csv", &m).unwrap();
+    let opts = aeroident_pipelines::replay::ReplayOptions { windows, ..Default::default() };
+    check(aeroident_pipelines::replay::replay(reader, &m, &opts, &mut ()).unwrap_err().to_string());
+}

@@ -84,7 +84,14 @@ pub struct Windowed<I> {
     /// Per window, the last sample's time before its start and the first after its end, s: a
     /// window that used no sample but has both lies in a gap of the record.
     around: Vec<(Option<f64>, Option<f64>)>,
+    /// Rejected rows not passed on (outside every window, or before any sample placed the
+    /// stage in one): their count and the first few (row, reason), for a record whose every
+    /// row was rejected, which otherwise reads "no usable samples (0 rows rejected)".
+    unplaced: (usize, Vec<(u64, String)>),
 }
+
+/// How many unplaced rejections [`Windowed::unplaced_rejections`] keeps the reasons of.
+const UNPLACED_KEPT: usize = 3;
 
 impl<I> Windowed<I> {
     /// The stage over `inner` with `windows` (checked with [`check_windows`] by the caller).
@@ -102,7 +109,17 @@ impl<I> Windowed<I> {
             per_window: vec![0; windows.len()],
             around: vec![(None, None); windows.len()],
             windows,
+            unplaced: (0, Vec::new()),
         }
+    }
+
+    /// The rejected rows this stage did not pass on, when no sample at all was read (every
+    /// row rejected): their count and the first few (row, reason). `None` when some sample was
+    /// read (the rejections then lay outside the windows, and [`Self::missed`] says why
+    /// nothing was used) or none was rejected.
+    pub fn unplaced_rejections(&self) -> Option<(usize, &[(u64, String)])> {
+        let (n, first) = &self.unplaced;
+        (self.first_seen_t_s.is_none() && *n > 0).then_some((*n, first.as_slice()))
     }
 
     /// Notes `t_s`, a sample's time, as before or after each window.
@@ -215,6 +232,12 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Iterator for Wind
             let RecordEvent::Sample { row, sample } = &event else {
                 if self.current.is_some() {
                     return Some(Ok(event));
+                }
+                if let RecordEvent::Rejected { row, problem } = &event {
+                    self.unplaced.0 += 1;
+                    if self.unplaced.1.len() < UNPLACED_KEPT {
+                        self.unplaced.1.push((*row, problem.to_string()));
+                    }
                 }
                 continue;
             };

@@ -496,6 +496,27 @@ impl Corrections {
         self.shifts.iter().map(|s| -s.1).fold(0.0, f64::max)
     }
 
+    /// The warning when the reconstructed sideslip, listed as applied, left samples without β:
+    /// `cover` is (samples without a sideslip of their own, those it gave one). The check's
+    /// manoeuvres are its time spans; a record replayed on other windows, or another record's
+    /// `compat.json`, falls outside them, and the fit then lacks β there. `None` when it
+    /// covered every such sample.
+    pub fn cover_warning(&self, cover: (usize, usize)) -> Option<String> {
+        let (wanted, filled) = cover;
+        if self.beta.is_empty() || filled == wanted {
+            return None;
+        }
+        let spans: Vec<String> = self
+            .beta
+            .iter()
+            .filter_map(|(t, _)| Some(format!("{:.2}–{:.2} s", t.first()?, t.last()?)))
+            .collect();
+        Some(format!(
+            "beta_rad: the reconstructed sideslip covers {filled} of the {wanted} samples without a sideslip (the check's manoeuvres span {}): the others have no β; run the check on the windows replayed",
+            spans.join(", ")
+        ))
+    }
+
     /// The reconstructed sideslip at `t_s`, if a manoeuvre of the check spans it.
     fn beta_at(&self, t_s: f64) -> Option<f64> {
         let (t, b) = self.beta.iter().find(|(t, b)| {
@@ -519,7 +540,14 @@ pub struct Corrected<I> {
     done: bool,
     /// The AHRS lag's filter of the other channels.
     lag: LagFilter,
+    /// Samples without a sideslip of their own, and how many of them the reconstruction gave
+    /// one ([`Corrected::sideslip_cover`]).
+    cover: SideslipCover,
 }
+
+/// Samples without a sideslip of their own, and how many of them the check's reconstructed
+/// sideslip gave one, shared with whoever reads the notes after the events.
+pub type SideslipCover = std::sync::Arc<std::sync::Mutex<(usize, usize)>>;
 
 impl<I> Corrected<I> {
     /// The stage over the events `inner`.
@@ -532,7 +560,14 @@ impl<I> Corrected<I> {
             out: VecDeque::new(),
             done: false,
             lag: LagFilter::default(),
+            cover: SideslipCover::default(),
         }
+    }
+
+    /// How much of the record the reconstructed sideslip covered so far (samples without β,
+    /// those given one), shared: read it after the events ([`Corrections::cover_warning`]).
+    pub fn sideslip_cover(&self) -> SideslipCover {
+        self.cover.clone()
     }
 
     /// Emits every sample the record has gone far enough past (all of them with `flush`), and
@@ -589,10 +624,12 @@ impl<I> Corrected<I> {
                 ch.set(&mut s, (x - b) / k);
             }
         }
-        if s.beta_rad.is_none()
-            && let Some(b) = self.corr.beta_at(s.t_s)
-        {
-            s.beta_rad = Some(b);
+        if s.beta_rad.is_none() && !self.corr.beta.is_empty() {
+            let filled = self.corr.beta_at(s.t_s);
+            s.beta_rad = filled;
+            let mut c = self.cover.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+            c.0 += 1;
+            c.1 += usize::from(filled.is_some());
         }
         s
     }
@@ -1073,6 +1110,50 @@ mod tests {
         )
         .unwrap();
         assert!(old.beta_determined);
+    }
+
+    /// A reconstructed sideslip over 0–1 s on a record of 0–2 s without β: the samples past
+    /// its span get none, and the stage counts 11 of 21 covered, which the warning states with
+    /// the span (it was listed as applied, and the fit then failed on `CL_beta`); a record
+    /// within the span is covered whole and warns of nothing.
+    #[test]
+    fn a_reconstructed_sideslip_that_misses_samples_says_how_many() {
+        let rec = ReconstructedSummary {
+            manoeuvre: 1,
+            t_s: vec![0.0, 1.0],
+            vt_mps: vec![50.0, 50.0],
+            alpha_rad: vec![0.1, 0.1],
+            beta_rad: vec![0.0, 0.02],
+            beta_determined: true,
+        };
+        let corr = Corrections::of_rows(&[], None, &[rec], None).unwrap();
+        let events = |n: u32| -> Vec<Result<RecordEvent, FlightDataError>> {
+            (0..n)
+                .map(|k| {
+                    let sample = AirDataSample { t_s: f64::from(k) * 0.1, ..Default::default() };
+                    Ok(RecordEvent::Sample { row: u64::from(k), sample })
+                })
+                .collect()
+        };
+        let stage = Corrected::new(events(21).into_iter(), corr.clone());
+        let cover = stage.sideslip_cover();
+        let with_beta = stage
+            .filter_map(|e| match e {
+                Ok(RecordEvent::Sample { sample, .. }) => Some(sample.beta_rad.is_some()),
+                _ => None,
+            })
+            .filter(|b| *b)
+            .count();
+        let counted = *cover.lock().unwrap();
+        assert_eq!((counted, with_beta), ((21, 11), 11));
+        let w = corr.cover_warning(counted).unwrap();
+        assert!(w.contains("covers 11 of the 21 samples") && w.contains("0.00–1.00 s"), "{w}");
+        let stage = Corrected::new(events(11).into_iter(), corr.clone());
+        let cover = stage.sideslip_cover();
+        stage.for_each(drop);
+        let counted = *cover.lock().unwrap();
+        assert_eq!(counted, (11, 11));
+        assert_eq!(corr.cover_warning(counted), None);
     }
 
     /// A check applies to the record it was made on: its `file` must name one of the records

@@ -88,12 +88,23 @@ pub fn record_events<'a, R: Read + 'a>(
             saturation = Some(a.saturation());
             Box::new(a)
         };
+    let mut sideslip = None;
     let events: Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a> = match compat {
-        Some(c) => Box::new(Corrected::new(actuated, c.clone())),
+        Some(c) => {
+            let corrected = Corrected::new(actuated, c.clone());
+            sideslip = Some((c.clone(), corrected.sideslip_cover()));
+            Box::new(corrected)
+        }
         None => actuated,
     };
     let events = crate::window::Windowed::new(events, windows.to_vec());
-    RecordEvents { events, notes: [reader_notes, screen_notes], actuator_notes, saturation }
+    RecordEvents {
+        events,
+        notes: [reader_notes, screen_notes],
+        actuator_notes,
+        saturation,
+        sideslip,
+    }
 }
 
 /// [`record_events`]: the events, and the notes of the stages they went through.
@@ -108,6 +119,9 @@ pub struct RecordEvents<'a> {
     actuator_notes: Vec<String>,
     /// How often each actuator held its surface ([`actuated::Saturation`]), when any is declared.
     saturation: Option<actuated::SaturationCounts>,
+    /// The corrections applied and how much of the record their reconstructed sideslip
+    /// covered ([`Corrections::cover_warning`]).
+    sideslip: Option<(Corrections, corrections::SideslipCover)>,
 }
 
 impl RecordEvents<'_> {
@@ -122,12 +136,16 @@ impl RecordEvents<'_> {
             let c = c.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
             c.iter().filter_map(|(ch, a, n)| n.warning(*ch, a)).collect()
         });
+        let uncovered = self.sideslip.as_ref().and_then(|(c, cover)| {
+            c.cover_warning(*cover.lock().unwrap_or_else(std::sync::PoisonError::into_inner))
+        });
         get(reader)
             .into_iter()
             .chain(self.events.note())
             .chain(get(screen))
             .chain(actuated)
             .chain(held)
+            .chain(uncovered)
             .collect()
     }
 }
@@ -135,11 +153,22 @@ impl RecordEvents<'_> {
 impl RecordEvents<'_> {
     /// `error` (the end of a replay of `file`), or in place of a "no usable samples" one the
     /// `--window` error saying that the windows missed the record ([`crate::window::Windowed::missed`]).
+    /// With windows and every row rejected, the error counts and names the rejections the
+    /// windows could not place, as it would without windows (not "0 rows rejected").
     pub fn explain_no_samples(&self, file: &str, error: RecordError) -> RecordError {
-        match (&error, self.events.missed()) {
-            (RecordError::Data(FlightDataError::NoSamples { .. }), Some(why)) => {
+        match (&error, self.events.missed(), self.events.unplaced_rejections()) {
+            (RecordError::Data(FlightDataError::NoSamples { .. }), Some(why), _) => {
                 RecordError::Option { option: "window", reason: format!("{file}: {why}") }
             }
+            (
+                RecordError::Data(FlightDataError::NoSamples { file, rejected: 0, .. }),
+                None,
+                Some((n, first)),
+            ) => RecordError::Data(FlightDataError::NoSamples {
+                file: file.clone(),
+                rejected: n,
+                first: first.to_vec(),
+            }),
             _ => error,
         }
     }
@@ -147,6 +176,11 @@ impl RecordEvents<'_> {
     /// [`crate::window::Windowed::missed`] of these events.
     pub fn windows_missed(&self) -> Option<String> {
         self.events.missed()
+    }
+
+    /// [`crate::window::Windowed::unplaced_rejections`] of these events.
+    pub fn unplaced_rejections(&self) -> Option<(usize, &[(u64, String)])> {
+        self.events.unplaced_rejections()
     }
 }
 
@@ -217,6 +251,7 @@ pub fn read_records<R: Read>(
     let (mut read, mut rejected) = (0usize, 0usize);
     let mut notes = Vec::new();
     let mut missed = Vec::new();
+    let mut unplaced: Vec<(u64, String)> = Vec::new();
     for (reader, file) in readers.into_iter().zip(&files) {
         let prefix = if named { format!("{file}: ") } else { String::new() };
         let mut events = record_events(reader, screen, compat, windows);
@@ -261,6 +296,11 @@ pub fn read_records<R: Read>(
         }
         notes.extend(tally.warning(file));
         missed.push(events.windows_missed().map(|why| format!("{file}: {why}")));
+        if let Some((n, first)) = events.unplaced_rejections() {
+            // Every row of this file rejected before a window could place it.
+            rejected += n;
+            unplaced.extend(first.iter().map(|(row, why)| (*row, format!("{prefix}{why}"))));
+        }
         manoeuvres.push(Vec::new());
         starts.push((0, String::new()));
     }
@@ -276,6 +316,7 @@ pub fn read_records<R: Read>(
         // Lone samples first: the gaps before them say nothing of why nothing is left.
         let mut first = lone;
         first.extend(rejections.first(3));
+        first.extend(unplaced);
         first.truncate(3);
         return Err(aeroident_io::FlightDataError::NoSamples {
             file: files.join(", "),

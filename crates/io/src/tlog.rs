@@ -9,7 +9,11 @@
 //! (mavlink.io, "Packet Serialization"). Frames are decoded with the `mavlink` crate's
 //! `ardupilotmega` dialect (which includes `common`).
 //!
-//! Topics: one per message name, times the records' timestamps in seconds (Unix time).
+//! Topics: one per message name, times the records' timestamps in seconds (Unix time); a
+//! message that carries a `name` (`NAMED_VALUE_FLOAT`, `NAMED_VALUE_INT`, `DEBUG_FLOAT_ARRAY`)
+//! is one topic per name, `NAMED_VALUE_FLOAT[de]`, as a live feed names it (docs/mavlink.md),
+//! so one mapping reads the recorded and the live traffic alike. (One topic for every name
+//! kept only the last name's value at each time.)
 //! Fields: the message's numeric fields as the crate names them, in alphabetical order, arrays
 //! as `field[i]`; enum, flag and text fields are not numeric and are left out; a float sent
 //! as NaN is NaN. `PARAM_VALUE` messages fill [`LogContents::parameters`].
@@ -87,7 +91,7 @@ struct Decoder<'a> {
     filter: &'a TopicFilter,
     out: LogContents,
     builders: Vec<TopicBuilder>,
-    by_name: HashMap<&'static str, usize>,
+    by_name: HashMap<String, usize>,
     unknown_ids: BTreeMap<u32, usize>,
 }
 
@@ -189,15 +193,15 @@ impl Decoder<'_> {
             let name = name.trim_end_matches('\0').to_string();
             self.out.parameters.insert(name, f64::from(p.param_value));
         }
-        let name = msg.message_name();
-        let b = match self.by_name.get(name) {
+        let name = topic_name(msg.message_name(), &obj);
+        let b = match self.by_name.get(&name) {
             Some(&b) => b,
             None => {
                 let all = numeric_fields(&obj).into_iter().map(|(f, _)| f).collect::<Vec<_>>();
-                let kept = self.filter.topic(name).map(|only| {
+                let kept = self.filter.topic(&name).map(|only| {
                     all.iter().filter(|f| only.is_none_or(|s| s.contains(*f))).cloned().collect()
                 });
-                self.builders.push(TopicBuilder::new(name.to_string(), all, kept));
+                self.builders.push(TopicBuilder::new(name.clone(), all, kept));
                 self.by_name.insert(name, self.builders.len() - 1);
                 self.builders.len() - 1
             }
@@ -223,6 +227,15 @@ impl Decoder<'_> {
             )
         });
         (out, note)
+    }
+}
+
+/// The topic of a message `message` serialised as `obj`: `MESSAGE[name]` when it carries a
+/// text `name` (trailing NULs dropped), else the message name (module doc).
+fn topic_name(message: &str, obj: &serde_json::Map<String, Value>) -> String {
+    match obj.get("name") {
+        Some(Value::String(n)) => format!("{message}[{}]", n.trim_end_matches('\0')),
+        _ => message.to_string(),
     }
 }
 

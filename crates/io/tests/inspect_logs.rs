@@ -385,6 +385,50 @@ fn tlog_topics_times_fields_parameters_and_corrupt_bytes_are_as_written() {
     assert!(roll.values.iter().all(|v| (*v - 0.1).abs() < 1e-7));
 }
 
+/// `NAMED_VALUE_FLOAT` messages of three names interleaved in a telemetry log (the live feed's
+/// surfaces and thrust) are three topics, `NAMED_VALUE_FLOAT[de]` …, each with every value
+/// written, as a live feed names them: one topic for all merged them, and 14 of 15 values of a
+/// time were lost, so the live mapping could not read the recorded traffic.
+#[test]
+fn tlog_named_values_are_one_topic_per_name() {
+    use mavlink::MavlinkVersion::V2;
+    use mavlink::dialects::ardupilotmega::{MavMessage, NAMED_VALUE_FLOAT_DATA};
+    let mut b = Vec::new();
+    let t0 = 1_700_000_000_000_000u64;
+    let names = ["de", "da", "thrust"];
+    for k in 0..100u64 {
+        for (j, name) in names.iter().enumerate() {
+            let value = k as f32 * 0.01 + j as f32;
+            let m =
+                NAMED_VALUE_FLOAT_DATA { time_boot_ms: k as u32 * 20, name: (*name).into(), value };
+            tlog_record(&mut b, t0 + k * 20_000 + j as u64, V2, &MavMessage::NAMED_VALUE_FLOAT(m));
+        }
+    }
+    let path = temp("named.tlog");
+    std::fs::write(&path, &b).unwrap();
+    let columns: Vec<String> =
+        names.iter().map(|n| format!("NAMED_VALUE_FLOAT[{n}].value")).collect();
+    let ins = inspect(&path, &columns.iter().map(String::as_str).collect::<Vec<_>>());
+    std::fs::remove_file(&path).ok();
+    for (j, name) in names.iter().enumerate() {
+        let topic = format!("NAMED_VALUE_FLOAT[{name}]");
+        let t = ins.summary.topics.iter().find(|t| t.name == topic).unwrap_or_else(|| {
+            panic!(
+                "no {topic}: {:?}",
+                ins.summary.topics.iter().map(|t| &t.name).collect::<Vec<_>>()
+            )
+        });
+        assert_eq!(t.time.samples, 100, "{topic}");
+        let column = format!("{topic}.value");
+        let s = ins.signals.iter().find(|s| s.column == column).unwrap();
+        for (k, v) in s.values.iter().enumerate() {
+            let want = f64::from(k as f32 * 0.01 + j as f32);
+            assert!((v - want).abs() < 1e-6, "{column}[{k}]: {v} vs {want}");
+        }
+    }
+    assert!(ins.summary.topics.iter().all(|t| t.name != "NAMED_VALUE_FLOAT"));
+}
+
 /// A compressed `.mat` whose deflate stream holds carriage-return bytes (0x0D; the test checks
 /// that it does) is read as it is: 400 rows of `time` and `x`. Inspect once passed `.mat`
 /// files through the text formats' line-end conversion, which turned those bytes into line

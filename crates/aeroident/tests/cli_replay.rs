@@ -599,8 +599,16 @@ fn val_a_batch_fit_stopped_by_the_iteration_limit_reports_its_last_iterate() {
         final_ln_det(&v),
         final_ln_det(&done)
     );
+    // The last iterate still moves by more than its σ after 2 iterations: every parameter's
+    // verdict is `not converged` (the fit's own status is not enough for a reader of one row).
+    let last = v["iterations"].as_array().unwrap().last().unwrap().clone();
+    assert!(last["max_step_sigma"].as_f64().unwrap() > 1.0, "{last}");
     for p in v["parameters"].as_array().unwrap() {
         assert!(p["estimate"].as_f64().is_some_and(f64::is_finite), "{p}");
+        assert_eq!(p["status"], "not converged", "{p}");
+    }
+    for p in done["parameters"].as_array().unwrap() {
+        assert_ne!(p["status"], "not converged", "{p}");
     }
     assert!(v["bootstrap"].is_null());
     let warnings: Vec<&str> =

@@ -307,7 +307,7 @@ fn val_attas_aileron_rudder_lateral_signs_across_the_gap() {
         "jategaonkar_hfb320_attas/csv/fAttasAilRud1.csv",
         "jategaonkar_hfb320_attas/csv/fAttasAilRud2.csv",
     ] {
-        let Some(data) = shared(rel) else { return };
+        let Some(data) = shared(rel) else { continue };
         let o = run(&data, "attas_lateral.toml", ReplayOptions::default());
         assert_eq!((o.model.name.as_str(), o.model_defaulted), ("lateral", true));
         assert_eq!(o.summary.samples_read, 1502);
@@ -432,7 +432,7 @@ fn val_attas_elevator_and_twin_otter_rls_is_batch_least_squares() {
         ("jategaonkar_hfb320_attas/csv/fAttasElv2.csv", "attas.toml", attas_fits),
     ];
     for (rel, map, fits) in table {
-        let Some(data) = shared(rel) else { return };
+        let Some(data) = shared(rel) else { continue };
         let o = run(&data, map, ReplayOptions { model: basic(), ..Default::default() });
         assert_eq!(o.summary.samples_rejected, 0);
         assert_least_squares(&o, fits(&csv_columns(&data)), None, rel);
@@ -514,7 +514,7 @@ fn val_stored_coefficients_sidpac_and_jsbsim() {
         ),
     ];
     for (rel, mapping, cols) in cases {
-        let Some(data) = shared(rel) else { return };
+        let Some(data) = shared(rel) else { continue };
         let mut raw = csv::Reader::from_path(&data).unwrap();
         let h = raw.headers().unwrap().clone();
         let idx: Vec<usize> =
@@ -609,7 +609,7 @@ fn val_every_estimator_runs_on_every_record() {
         ("jsbsim_samples/c172x_elevator_3211_15s_60Hz.csv", "jsbsim.toml", 4, None),
     ];
     for (rel, map, differentiator_edges, model) in records {
-        let Some(data) = shared(rel) else { return };
+        let Some(data) = shared(rel) else { continue };
         let o = run(&data, map, ReplayOptions { model: model.clone(), ..Default::default() });
         assert_eq!(
             o.summary.samples_rejected,

@@ -276,4 +276,28 @@ mod tests {
             .with_source(StdErrorSource::Bootstrap);
         assert_eq!(r.std_error_source, None);
     }
+
+    /// The reference rule at its edge, hand-set: a reference just inside ±2σ of the estimate
+    /// leaves it `identified`, just outside flags it (either side); no σ is its own flag.
+    #[test]
+    fn the_reference_rule_at_its_edge() {
+        let (e, s, d) = (-1.0, 0.05, 1e-9);
+        #[rustfmt::skip]
+        let table: [(f64, &str); 5] = [
+            (e + 2.0 * s - d, STATUS_IDENTIFIED), (e - 2.0 * s + d, STATUS_IDENTIFIED),
+            (e + 2.0 * s + d, STATUS_FLAGGED), (e - 2.0 * s - d, STATUS_FLAGGED),
+            (e + 2.5 * s, STATUS_FLAGGED),
+        ];
+        for (reference, status) in table {
+            let r = ParameterResult::new("Cm_alpha", Some(e), Some(s), Some(reference), None);
+            assert_eq!(r.status, status, "reference {reference}: {:?}", r.flags);
+            let outside = status == STATUS_FLAGGED;
+            assert_eq!(r.flags.iter().any(|f| f.contains("outside ±2σ")), outside);
+        }
+        let r = ParameterResult::new("Cm_alpha", Some(e), None, None, None);
+        assert_eq!(
+            (r.status.as_str(), r.flags.as_slice()),
+            (STATUS_FLAGGED, &[NO_STD_ERROR.to_string()][..])
+        );
+    }
 }

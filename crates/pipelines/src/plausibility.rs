@@ -279,4 +279,38 @@ mod tests {
         let lat = ModelStructure::preset("lateral").unwrap();
         assert!(unmapped_thrust_moment(&lat, &no_thrust, Some((48.7, 63.3)), None).is_none());
     }
+
+    /// Every conventional range at its edges, hand-set (the numbers of
+    /// `aeroident_estimators::prior::plausible_range`'s doc and table): a value just inside
+    /// either bound is not flagged, just outside is (no σ); and the 2σ margin at its edge: a
+    /// value outside by just under 2σ is not flagged, by just over is.
+    #[test]
+    fn every_range_and_the_margin_at_their_edges() {
+        let m = ModelSpec::preset("six-axis").unwrap();
+        #[rustfmt::skip]
+        let table: [(&str, f64, f64); 15] = [
+            ("CL_0", -0.5, 1.5), ("CL_alpha", 1.5, 8.0), ("CZ_alpha", -8.0, -1.5),
+            ("CD_0", 0.0, 0.3), ("CD_alpha", -0.2, 3.0), ("Cm_alpha", -5.0, 1.0),
+            ("Cm_q", -100.0, 0.0), ("Cm_de", -5.0, -0.1), ("CY_beta", -2.0, 0.0),
+            ("Cl_beta", -0.5, 0.05), ("Cl_p", -1.5, 0.0), ("Cl_da", -1.0, -0.02),
+            ("Cn_beta", -0.05, 0.5), ("Cn_r", -1.0, 0.0), ("Cn_dr", -0.5, -0.01),
+        ];
+        let e = 1e-9;
+        for (name, lo, hi) in table {
+            let p = Param::from_name(name).unwrap();
+            assert_eq!(m.plausible_range(p), Some((lo, hi)), "{name}");
+            for (v, flagged) in [(lo + e, false), (hi - e, false), (lo - e, true), (hi + e, true)] {
+                assert_eq!(implausible(&m, p, v, None).is_some(), flagged, "{name} = {v}");
+            }
+            let s = 0.01;
+            assert!(implausible(&m, p, hi + 2.0 * s - e, Some(s)).is_none(), "{name}");
+            assert!(implausible(&m, p, hi + 2.0 * s + e, Some(s)).is_some(), "{name}");
+            assert!(implausible(&m, p, lo - 2.0 * s + e, Some(s)).is_none(), "{name}");
+            assert!(implausible(&m, p, lo - 2.0 * s - e, Some(s)).is_some(), "{name}");
+        }
+        // The undetermined rule: ±2σ (4σ wide) just inside and just past the range's width.
+        let cl_alpha = Param::from_name("CL_alpha").unwrap();
+        assert!(undetermined(&m, cl_alpha, Some(6.5 / 4.0 - e)).is_none());
+        assert!(undetermined(&m, cl_alpha, Some(6.5 / 4.0 + e)).is_some());
+    }
 }

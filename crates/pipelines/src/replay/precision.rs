@@ -95,4 +95,16 @@ mod tests {
         assert!(w.ends_with(": Cn_r 49 %, Cl_r ∞"), "{w}");
         assert_eq!(warning(&[p("Cl_p", Some(-0.43), Some(0.02))]), None);
     }
+
+    /// The limit at its edge, hand-set: σ/|θ| just below 10 % is not imprecise, just above
+    /// is, for either sign of the estimate.
+    #[test]
+    fn the_limit_at_its_edge() {
+        let d = 1e-9;
+        for e in [-2.0, 2.0] {
+            assert_eq!(imprecise("Cm_q", Some(e), Some(0.2 - d)), None, "{e}");
+            let r = imprecise("Cm_q", Some(e), Some(0.2 + d)).unwrap();
+            assert!((r - 0.1).abs() < 1e-8, "{r}");
+        }
+    }
 }

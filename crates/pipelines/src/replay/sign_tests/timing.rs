@@ -142,3 +142,38 @@ pub fn warning(t: &SignTest, mapping: &Mapping, dt_s: f64) -> Option<Warning> {
         None => w,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+
+    /// The interval against its closed form: a response `y = β sin(ω(t − L))` plus white noise
+    /// σ, regressed on the surface `sin(ωt)`, determines the lead with the Cramér–Rao σ
+    /// `σ_L = σ / (β ω √(N/2))` (β and L are orthogonal for a sinusoid), so the 95 % interval's
+    /// half-width is `1.96 σ_L`. Measured within 25 % of it on 2,000 samples (the sample σ and
+    /// the widening scatter by a few %), the lead within 4 σ_L of its truth: an interval √10
+    /// wider (the audit's mutant) or narrower fails.
+    #[test]
+    fn the_interval_is_the_cramer_rao_bound_of_the_lead() {
+        let (dt, n, omega, beta, sigma, lead_true) = (0.02, 2000, 3.0, 1.0, 0.05, 0.1);
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+        let noise = Normal::new(0.0, sigma).unwrap();
+        let rows: Vec<Row> = (0..n)
+            .map(|i| {
+                let t = i as f64 * dt;
+                let y = beta * (omega * (t - lead_true)).sin() + noise.sample(&mut rng);
+                (y, vec![(omega * t).sin()], (0, i))
+            })
+            .collect();
+        let l = lead(&rows, dt).unwrap();
+        let kept = n - 2 * (MAX_LEAD_S / dt).round() as usize;
+        let sigma_l = sigma / (beta * omega * (kept as f64 / 2.0).sqrt());
+        let half = 0.5 * (l.hi_s - l.lo_s);
+        let ratio = half / (1.96 * sigma_l);
+        assert!((0.8..1.25).contains(&ratio), "half-width {half} s, {ratio} × the bound");
+        assert!((l.lead_s - lead_true).abs() < 4.0 * sigma_l, "{l:?}");
+        assert!(l.lo_s < l.lead_s && l.lead_s < l.hi_s, "{l:?}");
+    }
+}

@@ -317,21 +317,19 @@ fn outputs_export_never_replaces_a_node_or_its_input() {
     let null_link = d.join("null");
     std::os::unix::fs::symlink("/dev/null", &null_link).unwrap();
     let geometry = ["--area-m2", "0.5", "--span-m", "2", "--chord-m", "0.25"];
+    let export = |target: &str, out: &Path| {
+        let mut args: Vec<&OsStr> = vec!["export".as_ref(), target.as_ref(), "--summary".as_ref()];
+        args.extend([summary.as_os_str(), "--out".as_ref(), out.as_os_str()]);
+        if target != "jsbsim" {
+            args.extend(geometry.iter().map(OsStr::new));
+        }
+        refused(&args)
+    };
     for target in ["jsbsim", "ardupilot", "gazebo"] {
         for (node, kind) in
             [(&fifo, "is a FIFO (named pipe)"), (&null_link, "is a character device")]
         {
-            let mut args: Vec<&OsStr> = vec!["export".as_ref(), target.as_ref()];
-            args.extend([
-                OsStr::new("--summary"),
-                summary.as_os_str(),
-                "--out".as_ref(),
-                node.as_os_str(),
-            ]);
-            if target != "jsbsim" {
-                args.extend(geometry.iter().map(OsStr::new));
-            }
-            let err = refused(&args);
+            let err = export(target, node);
             let line = err.lines().find(|l| l.starts_with("error: ")).unwrap_or_default();
             assert!(
                 line.contains(&format!("--out `{}` {kind}", node.display())),
@@ -340,17 +338,7 @@ fn outputs_export_never_replaces_a_node_or_its_input() {
         }
         assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo(), "{target}");
         assert!(std::fs::symlink_metadata(&null_link).unwrap().file_type().is_symlink());
-        let mut args: Vec<&OsStr> = vec!["export".as_ref(), target.as_ref()];
-        args.extend([
-            OsStr::new("--summary"),
-            summary.as_os_str(),
-            "--out".as_ref(),
-            summary.as_os_str(),
-        ]);
-        if target != "jsbsim" {
-            args.extend(geometry.iter().map(OsStr::new));
-        }
-        let err = refused(&args);
+        let err = export(target, &summary);
         assert!(err.contains("is this run's --summary"), "{target}: {err}");
         assert_eq!(std::fs::read_to_string(&summary).unwrap(), text, "{target}");
     }

@@ -72,16 +72,22 @@ pub struct CompatArgs {
 /// signal during the check writes `summary.json` marked `interrupted`
 /// ([`super::whole_record`]).
 ///
-/// # Errors
-/// Unreadable mapping or record, a missing channel, a check that fails, an unwritable output,
-/// a signal.
-pub fn execute(args: CompatArgs) -> anyhow::Result<()> {
+/// Refuses unknowns that exclude each other: the lag model replaces the gyros' shifts, so with
+/// both the shifts were dropped without a word.
+fn check_unknowns(args: &CompatArgs) -> anyhow::Result<()> {
     if args.ahrs_lag && args.gyro_time_shifts {
-        // The lag model replaces the gyros' shifts; with both, the shifts were dropped unsaid.
         anyhow::bail!(
             "--ahrs-lag models the gyros' delay as the AHRS filter, --gyro-time-shifts as shifts of their own: give one"
         );
     }
+    Ok(())
+}
+
+/// # Errors
+/// Unreadable mapping or record, a missing channel, a check that fails, an unwritable output,
+/// a signal.
+pub fn execute(args: CompatArgs) -> anyhow::Result<()> {
+    check_unknowns(&args)?;
     let mapping = Mapping::from_path(&args.map)?;
     let mut config = CompatConfig {
         time_shifts: !args.no_time_shifts,

@@ -446,15 +446,9 @@ mod tests {
 
     /// A summary with `CL_alpha` = `estimate`, σ `std_error`, read back from a file.
     fn read_one(estimate: f64, std_error: f64) -> crate::error::Result<SummaryParameters> {
-        let dir = std::env::temp_dir().join(format!("aeroident-jsbsim-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join(format!("s{:x}.json", estimate.to_bits() ^ std_error.to_bits()));
         let json = serde_json::json!({"estimator": "oe", "model": "m", "parameters": [
             {"name": "CL_alpha", "estimate": estimate, "std_error": std_error}]});
-        std::fs::write(&path, json.to_string()).unwrap();
-        let read = read_summary(&path);
-        std::fs::remove_file(&path).unwrap();
-        read
+        read_doc(&format!("s{:x}", estimate.to_bits() ^ std_error.to_bits()), &json)
     }
 
     #[test]
@@ -466,7 +460,7 @@ mod tests {
         assert!(e.contains("`CL_alpha`") && e.contains("negative"), "{e}");
     }
 
-    /// A summary of `parameters` (name, estimate) with `status`, read back from a file.
+    /// The summary `doc`, written to a file named by `tag` and read back.
     fn read_doc(tag: &str, doc: &serde_json::Value) -> crate::error::Result<SummaryParameters> {
         let dir = std::env::temp_dir().join(format!("aeroident-jsbsim-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();

@@ -314,7 +314,7 @@ pub fn check_finite(s: &AirDataSample) -> Result<(), EstimatorError> {
 ///
 /// # Errors
 /// [`EstimatorError::NonFiniteInput`] naming the channel or constant of `s` the coefficient
-/// needs and lacks ([`AirDataSample::missing_for`]; the coefficient itself only if none is);
+/// needs and lacks ([`crate::vocabulary::Coefficient::missing_field`]; the coefficient itself only if none is);
 /// [`EstimatorError::ImplausibleInput`] beyond the coefficient limit.
 pub fn measured_coefficient(
     s: &AirDataSample,
@@ -322,7 +322,7 @@ pub fn measured_coefficient(
     c: crate::vocabulary::Coefficient,
 ) -> Result<f64, EstimatorError> {
     let y = measured[c.index()].ok_or_else(|| EstimatorError::NonFiniteInput {
-        field: s.missing_for(c).unwrap_or(c.name()),
+        field: c.missing_field(s).unwrap_or(c.name()),
         value: f64::NAN,
         t_s: s.t_s,
     })?;

@@ -363,7 +363,7 @@ impl<L: CoefficientLaw> Channel<L> {
         let missing = |field| EstimatorError::NonFiniteInput { field, value: f64::NAN, t_s: s.t_s };
         let rate = state_rate(self.coefficient, s).map_err(missing)?;
         let c_m = measured[self.coefficient.index()].ok_or_else(|| {
-            missing(s.missing_for(self.coefficient).unwrap_or(self.coefficient.name()))
+            missing(self.coefficient.missing_field(s).unwrap_or(self.coefficient.name()))
         })?;
         let mut phi = [0.0; N_TERMS];
         for (x, t) in phi.iter_mut().zip(&self.terms[..self.n]) {

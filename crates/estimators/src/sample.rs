@@ -363,48 +363,6 @@ impl AirDataSample {
         })
     }
 
-    /// The first channel or constant the measured value of coefficient `c`
-    /// ([`Self::measured_coefficients`]) needs that this sample lacks, by its field name
-    /// (`Ixz_kgm2`, `b_m`, `pdot_rad_s2` …, as `AeroidentSample` and the mapping's sample
-    /// fields spell it), so that a refusal names what to supply rather than the coefficient;
-    /// `None` when the value can be formed.
-    pub fn missing_for(&self, c: crate::vocabulary::Coefficient) -> Option<&'static str> {
-        use crate::vocabulary::Coefficient as C;
-        let k = &self.constants;
-        if !(self.qbar_pa > 0.0 && self.qbar_pa.is_finite()) {
-            return Some("qbar_pa");
-        }
-        if !(k.S_m2 > 0.0 && k.S_m2.is_finite()) {
-            return Some("S_m2");
-        }
-        let needs: &[(&'static str, bool)] = match c {
-            C::CX => &[("ax_mps2", self.ax_mps2.is_some())],
-            C::CY => &[("ay_mps2", self.ay_mps2.is_some())],
-            C::CZ => &[("az_mps2", self.az_mps2.is_some())],
-            C::CL | C::CD => {
-                &[("ax_mps2", self.ax_mps2.is_some()), ("az_mps2", self.az_mps2.is_some())]
-            }
-            C::Cm => &[
-                ("qdot_rad_s2", self.qdot_rad_s2.is_some()),
-                ("Iyy_kgm2", k.Iyy_kgm2.is_some()),
-                ("cbar_m", k.cbar_m.is_some()),
-            ],
-            C::Cl | C::Cn => &[
-                ("Ixx_kgm2", k.Ixx_kgm2.is_some()),
-                ("Iyy_kgm2", k.Iyy_kgm2.is_some()),
-                ("Izz_kgm2", k.Izz_kgm2.is_some()),
-                ("Ixz_kgm2", k.Ixz_kgm2.is_some()),
-                ("b_m", k.b_m.is_some()),
-                ("p_rad_s", self.p_rad_s.is_some()),
-                ("q_rad_s", self.q_rad_s.is_some()),
-                ("r_rad_s", self.r_rad_s.is_some()),
-                ("pdot_rad_s2", self.pdot_rad_s2.is_some()),
-                ("rdot_rad_s2", self.rdot_rad_s2.is_some()),
-            ],
-        };
-        needs.iter().find(|(_, present)| !present).map(|(field, _)| *field)
-    }
-
     /// The measured coefficients `CX CY CZ CL CD Cl Cm Cn` of this sample (module doc), each
     /// `None` when a channel or constant it needs is absent or `q̄ S ≤ 0`.
     pub fn measured_coefficients(&self) -> CoefficientValues {

@@ -75,6 +75,46 @@ pub enum Coefficient {
 }
 
 impl Coefficient {
+    /// The first channel or constant the measured value of this coefficient
+    /// ([`AirDataSample::measured_coefficients`]) needs that `s` lacks, by its field name
+    /// (`Ixz_kgm2`, `b_m`, `pdot_rad_s2` …, as `AeroidentSample` and the mapping's sample
+    /// fields spell it), so that a refusal names what to supply rather than the coefficient;
+    /// `None` when the value can be formed.
+    pub fn missing_field(self, s: &AirDataSample) -> Option<&'static str> {
+        use Coefficient as C;
+        let k = &s.constants;
+        if !(s.qbar_pa > 0.0 && s.qbar_pa.is_finite()) {
+            return Some("qbar_pa");
+        }
+        if !(k.S_m2 > 0.0 && k.S_m2.is_finite()) {
+            return Some("S_m2");
+        }
+        let needs: &[(&'static str, bool)] = match self {
+            C::CX => &[("ax_mps2", s.ax_mps2.is_some())],
+            C::CY => &[("ay_mps2", s.ay_mps2.is_some())],
+            C::CZ => &[("az_mps2", s.az_mps2.is_some())],
+            C::CL | C::CD => &[("ax_mps2", s.ax_mps2.is_some()), ("az_mps2", s.az_mps2.is_some())],
+            C::Cm => &[
+                ("qdot_rad_s2", s.qdot_rad_s2.is_some()),
+                ("Iyy_kgm2", k.Iyy_kgm2.is_some()),
+                ("cbar_m", k.cbar_m.is_some()),
+            ],
+            C::Cl | C::Cn => &[
+                ("Ixx_kgm2", k.Ixx_kgm2.is_some()),
+                ("Iyy_kgm2", k.Iyy_kgm2.is_some()),
+                ("Izz_kgm2", k.Izz_kgm2.is_some()),
+                ("Ixz_kgm2", k.Ixz_kgm2.is_some()),
+                ("b_m", k.b_m.is_some()),
+                ("p_rad_s", s.p_rad_s.is_some()),
+                ("q_rad_s", s.q_rad_s.is_some()),
+                ("r_rad_s", s.r_rad_s.is_some()),
+                ("pdot_rad_s2", s.pdot_rad_s2.is_some()),
+                ("rdot_rad_s2", s.rdot_rad_s2.is_some()),
+            ],
+        };
+        needs.iter().find(|(_, present)| !present).map(|(field, _)| *field)
+    }
+
     /// All eight, in parameter order (and the order of
     /// [`CoefficientValues`](crate::sample::CoefficientValues)).
     pub const ALL: [Coefficient; 8] = [

@@ -242,7 +242,12 @@ fn errors_refused_samples_leave_the_estimator_as_it_was() {
             ..synthetic(50)
         };
         assert_eq!(aeroident_estimator_update(e, &no_qdot), AeroidentResult::SampleRefused);
-        assert!(message().contains("Cm") && message().contains("t = 1 s"), "{}", message());
+        // Named by the field the coefficient lacks, not the coefficient (docs/c-abi.md).
+        assert!(
+            message().contains("`qdot_rad_s2`") && message().contains("t = 1 s"),
+            "{}",
+            message()
+        );
         let nan_alpha = AeroidentSample { alpha_rad: f64::NAN, ..synthetic(50) };
         assert_eq!(aeroident_estimator_update(e, &nan_alpha), AeroidentResult::SampleRefused);
         assert!(message().contains("alpha_rad"), "{}", message());

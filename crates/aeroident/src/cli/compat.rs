@@ -68,10 +68,6 @@ pub struct CompatArgs {
     pub max_iterations: Option<u32>,
 }
 
-/// Runs `aeroident compat`: `--out` is locked and checked before the record is read, and a
-/// signal during the check writes `summary.json` marked `interrupted`
-/// ([`super::whole_record`]).
-///
 /// Refuses unknowns that exclude each other: the lag model replaces the gyros' shifts, so with
 /// both the shifts were dropped without a word.
 fn check_unknowns(args: &CompatArgs) -> anyhow::Result<()> {
@@ -83,6 +79,10 @@ fn check_unknowns(args: &CompatArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Runs `aeroident compat`: `--out` is locked and checked before the record is read, and a
+/// signal during the check writes `summary.json` marked `interrupted`
+/// ([`super::whole_record`]).
+///
 /// # Errors
 /// Unreadable mapping or record, a missing channel, a check that fails, an unwritable output,
 /// a signal.

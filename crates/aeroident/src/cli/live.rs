@@ -26,7 +26,7 @@ mod server;
 use super::replay::ReplayArgs;
 use aeroident_pipelines::live::pace::Pace;
 use aeroident_pipelines::live::phase::PhaseRule;
-use aeroident_pipelines::live::{LiveConfig, LiveObserver, LiveState, SharedLive};
+use aeroident_pipelines::live::{LiveConfig, LiveObserver, LiveState};
 use anyhow::Context;
 use std::net::SocketAddr;
 use std::time::{Duration, Instant};
@@ -109,7 +109,7 @@ pub fn execute(args: LiveArgs) -> anyhow::Result<()> {
         // A job that ended without its summary's verdicts still ends the page's stream, with
         // what stopped it; a concluded view keeps the summary's status.
         let status = if interrupted { "interrupted" } else { "failed" };
-        lock(&shared).abandon(status, &format!("{e:#}"));
+        server::lock(&shared).abandon(status, &format!("{e:#}"));
     }
     if !interrupted {
         linger(args.linger_s)?;
@@ -126,10 +126,6 @@ pub fn execute(args: LiveArgs) -> anyhow::Result<()> {
 /// How long the end waits for every connected page to take its final update: ample for a
 /// client on the loopback reading as it should, bounded for one that stopped reading.
 const CLOSE_WAIT: Duration = Duration::from_secs(10);
-
-fn lock(shared: &SharedLive) -> std::sync::MutexGuard<'_, LiveState> {
-    shared.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
-}
 
 /// The pace of a recorded file (`--speed`, default 1×); none for stdin and a MAVLink feed.
 fn pacing(args: &LiveArgs) -> anyhow::Result<Option<Pace>> {

@@ -7,14 +7,14 @@
 //!   `hello` (names, references, rule) and the whole history, later ones what is new
 //!   ([`aeroident_pipelines::live::LiveState::update`]); after the final verdicts, one `end`
 //!   event, and the stream closes.
+//! - `GET /latest`: the latest sample's time and the feed's counts as JSON (for a script
+//!   measuring how far the view lags the feed).
 //!
 //! The server lives until [`LiveServer::close`]: closing wakes every stream, sends it the
 //! state as it then is (the final verdicts once concluded, else the failure or interruption
 //! the job recorded) and its `end`, and waits for each connection to finish writing. A
 //! process that merely exited would cut the streams at whatever tick they were on, and a
 //! client could miss the verdicts the page exists to show.
-//! - `GET /latest`: the latest sample's time and the feed's counts as JSON (for a script
-//!   measuring how far the view lags the feed).
 
 use aeroident_pipelines::live::{Cursor, SharedLive};
 use axum::Router;
@@ -114,7 +114,9 @@ async fn page() -> Html<&'static str> {
     Html(PAGE)
 }
 
-fn lock(shared: &SharedLive) -> std::sync::MutexGuard<'_, aeroident_pipelines::live::LiveState> {
+pub(super) fn lock(
+    shared: &SharedLive,
+) -> std::sync::MutexGuard<'_, aeroident_pipelines::live::LiveState> {
     shared.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 

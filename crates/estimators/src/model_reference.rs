@@ -367,29 +367,11 @@ impl<L: CoefficientLaw> Channel<L> {
         })?;
         let mut phi = [0.0; N_TERMS];
         for (x, t) in phi.iter_mut().zip(&self.terms[..self.n]) {
-            *x = t.value(s, &self.knots).ok_or(missing(term_channel(*t, s)))?;
+            *x = t
+                .value(s, &self.knots)
+                .ok_or_else(|| missing(t.missing_field(s).unwrap_or("regressor")))?;
         }
         Ok(RateInput { rate, c_m, phi, lambda_per_s })
-    }
-}
-
-/// The first channel or constant term `t` needs that sample `s` lacks.
-fn term_channel(t: Term, s: &AirDataSample) -> &'static str {
-    let k = &s.constants;
-    match t {
-        Term::Beta | Term::AlphaBeta => "beta_rad",
-        Term::P if s.p_rad_s.is_none() => "p_rad_s",
-        Term::R if s.r_rad_s.is_none() => "r_rad_s",
-        Term::P | Term::R => "b_m",
-        Term::Q if s.q_rad_s.is_none() => "q_rad_s",
-        Term::Alphadot if s.alphadot_rad_s.is_none() => "alphadot_rad_s",
-        Term::Q | Term::Alphadot if k.cbar_m.is_none() => "cbar_m",
-        Term::De | Term::AlphaDe => "de_rad",
-        Term::Da => "da_rad",
-        Term::Dr => "dr_rad",
-        Term::V => "v0_mps",
-        Term::Mach | Term::Mach2 => "rho_kgpm3 (density outside the standard atmosphere)",
-        _ => "regressor",
     }
 }
 

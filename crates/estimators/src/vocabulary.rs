@@ -211,6 +211,32 @@ impl TermInput {
         matches!(self, TermInput::Alpha | TermInput::Vt)
     }
 
+    /// Whether sample `s` has it (the knot is the structure's, not the sample's: present).
+    pub fn present(self, s: &AirDataSample) -> bool {
+        let c = &s.constants;
+        match self {
+            TermInput::Cbar => c.cbar_m.is_some(),
+            TermInput::Span => c.b_m.is_some(),
+            TermInput::V0 => c.v0_mps.is_some(),
+            TermInput::Knot => true,
+            TermInput::Density => s.speed_of_sound_mps().is_some(),
+            other => other.always_present() || other.field().is_some_and(|f| s.field(f).is_some()),
+        }
+    }
+
+    /// Its name among the sample's fields and constants (`p_rad_s`, `b_m`, `v0_mps` …, as
+    /// `AeroidentSample` spells them), for a refusal that names what to supply.
+    pub fn sample_name(self) -> &'static str {
+        match self {
+            TermInput::Cbar => "cbar_m",
+            TermInput::Span => "b_m",
+            TermInput::V0 => "v0_mps",
+            TermInput::Knot => "alpha knot",
+            TermInput::Density => "rho_kgpm3 (density outside the standard atmosphere)",
+            other => other.field().unwrap_or("regressor"),
+        }
+    }
+
     /// What a record must give for it, in the mapping's words.
     pub fn needs(self) -> &'static str {
         match self {
@@ -472,35 +498,11 @@ impl Term {
         [Term::AlphaK1, Term::AlphaK2, Term::AlphaK3, Term::AlphaK4].get(i).copied()
     }
 
-    /// The first sample field term `self`'s value ([`Self::value`]) needs that `s` lacks, by
-    /// its field name (`b_m`, `p_rad_s`, `v0_mps` …, as `AeroidentSample` spells it), so that
-    /// a refusal names what to supply; `None` when every field it reads is present (the value
-    /// may still be `None` for a knot the structure lacks, or a Mach without air data).
+    /// The first of its [`inputs`](Self::inputs) sample `s` lacks, by its sample name
+    /// ([`TermInput::sample_name`]), so that a refusal names what to supply; `None` when every
+    /// input is present.
     pub fn missing_field(self, s: &AirDataSample) -> Option<&'static str> {
-        let c = &s.constants;
-        let needs: &[(&'static str, bool)] = match self {
-            Term::Beta => &[("beta_rad", s.beta_rad.is_some())],
-            Term::P => &[("p_rad_s", s.p_rad_s.is_some()), ("b_m", c.b_m.is_some())],
-            Term::Q => &[("q_rad_s", s.q_rad_s.is_some()), ("cbar_m", c.cbar_m.is_some())],
-            Term::R => &[("r_rad_s", s.r_rad_s.is_some()), ("b_m", c.b_m.is_some())],
-            Term::Alphadot => {
-                &[("alphadot_rad_s", s.alphadot_rad_s.is_some()), ("cbar_m", c.cbar_m.is_some())]
-            }
-            Term::De => &[("de_rad", s.de_rad.is_some())],
-            Term::Da => &[("da_rad", s.da_rad.is_some())],
-            Term::Dr => &[("dr_rad", s.dr_rad.is_some())],
-            Term::V => &[("v0_mps", c.v0_mps.is_some())],
-            Term::Q0 => &[
-                ("q_rad_s", s.q_rad_s.is_some()),
-                ("cbar_m", c.cbar_m.is_some()),
-                ("v0_mps", c.v0_mps.is_some()),
-            ],
-            _ => match self.factors() {
-                Some((a, b)) => return a.missing_field(s).or_else(|| b.missing_field(s)),
-                None => &[],
-            },
-        };
-        needs.iter().find(|(_, present)| !present).map(|(field, _)| *field)
+        self.inputs().iter().find(|i| !i.present(s)).map(|i| i.sample_name())
     }
 
     /// The regressor value `ξ` of this term at sample `s` (module doc), with the α knots of the

@@ -9,18 +9,17 @@ pub fn short(v: f64) -> String {
     aeroident_physics::text::Short(v).to_string()
 }
 
-/// Longest text [`exact_or_short`] keeps exact: room for the 17 significant digits of any
-/// `f64`, a sign, a point and a few zeros (`-0.000012345678901234568`).
-pub const EXACT_MAX: usize = 24;
+/// Longest text [`exact_or_short`] keeps exact ([`aeroident_physics::text::EXACT_MAX`]).
+pub use aeroident_physics::text::EXACT_MAX;
 
 /// `v` as Rust writes it (the shortest text that reads back as `v`) when that takes at most
-/// [`EXACT_MAX`] characters, else in the [`short`] form. For values a message compares (a time
-/// and the previous one, a value and its limit), which must stay told apart: `1.5708` would
-/// hide that `1.57081` passes the limit `1.5707963267948966`, while Rust writes `1e300` out in
-/// 301 digits.
+/// [`EXACT_MAX`] characters, else in the [`short`] form
+/// ([`aeroident_physics::text::ExactOrShort`]). For values a message compares (a time and the
+/// previous one, a value and its limit), which must stay told apart: `1.5708` would hide that
+/// `1.57081` passes the limit `1.5707963267948966`, while Rust writes `1e300` out in 301
+/// digits.
 pub fn exact_or_short(v: f64) -> String {
-    let exact = v.to_string();
-    if exact.len() <= EXACT_MAX { exact } else { short(v) }
+    aeroident_physics::text::ExactOrShort(v).to_string()
 }
 
 /// A count in the short form of [`short`]: in full below 10⁶, else scientific.

@@ -452,10 +452,15 @@ impl Actuator {
     /// The surface one step `dt_s` after `surface` under the command `command` held over the
     /// step (zero-order hold): the exact discrete lag, then the rate and position limits.
     pub fn step(&self, surface: f64, command: f64, dt_s: f64) -> f64 {
+        self.step_limited(surface, command, dt_s).0
+    }
+
+    /// [`Self::step`], and whether the rate limit cut the step short.
+    pub fn step_limited(&self, surface: f64, command: f64, dt_s: f64) -> (f64, bool) {
         let lag = (command - surface) * (1.0 - (-dt_s / self.tau_s).exp());
         let max_move = self.rate_limit_rad_s * dt_s;
         let (lo, hi) = self.position_limits_rad;
-        (surface + lag.clamp(-max_move, max_move)).clamp(lo, hi)
+        ((surface + lag.clamp(-max_move, max_move)).clamp(lo, hi), lag.abs() > max_move)
     }
 }
 

@@ -101,7 +101,8 @@ struct Surface {
 }
 
 /// Each actuated surface's channel, actuator and [`Saturation`] so far, shared with whoever
-/// reads the notes after the events ([`Actuated::saturation`]).
+/// reads the notes after the events ([`Actuated::saturation`]). Counted as the samples pass,
+/// so a replay that stops early (a signal, a divergence) still reports what it saw.
 pub type SaturationCounts = Arc<Mutex<Vec<(Channel, Actuator, Saturation)>>>;
 
 /// The events of `inner` with each commanded surface replaced by its actuator's deflection.
@@ -138,17 +139,13 @@ impl<I> Actuated<I> {
                 continue;
             };
             let (lo, hi) = a.actuator.position_limits_rad;
-            let deflection = match a.last {
-                Some((t, held, d)) if t_s > t => {
-                    let dt = t_s - t;
-                    let lag = (held - d) * (1.0 - (-dt / a.actuator.tau_s).exp());
-                    n.rate_limited += usize::from(lag.abs() > a.actuator.rate_limit_rad_s * dt);
-                    a.actuator.step(d, held, dt)
-                }
-                Some((_, _, d)) => d,
-                None => command.clamp(lo, hi),
+            let (deflection, rate_limited) = match a.last {
+                Some((t, held, d)) if t_s > t => a.actuator.step_limited(d, held, t_s - t),
+                Some((_, _, d)) => (d, false),
+                None => (command.clamp(lo, hi), false),
             };
             n.samples += 1;
+            n.rate_limited += usize::from(rate_limited);
             n.at_limit += usize::from(deflection <= lo || deflection >= hi);
             *field = Some(deflection);
             a.last = Some((t_s, command, deflection));

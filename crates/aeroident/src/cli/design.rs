@@ -102,9 +102,6 @@ pub struct DesignArgs {
     pub arm_rc: Option<u8>,
 }
 
-/// The largest `--throw-deg` taken, degrees.
-const MAX_THROW_DEG: f64 = 90.0;
-
 /// One `--throw-deg` entry, `<surface>=<degrees>`.
 fn parse_throw(text: &str) -> Result<(Surface, f64), String> {
     use aeroident_pipelines::Named as _;
@@ -114,8 +111,8 @@ fn parse_throw(text: &str) -> Result<(Surface, f64), String> {
     let s = Surface::from_name(name.trim())
         .ok_or_else(|| format!("`{name}`: not a surface (de, da, dr)"))?;
     let deg = deg.trim().parse::<f64>().map_err(|e| format!("`{deg}`: {e}"))?;
-    // A control surface's travel is a fraction of a right angle; a larger number is a typing
-    // or unit error (radians as degrees would be below it, so that is not caught here).
+    // Radians typed as degrees would lie below the bound: that slip is not caught here.
+    use aeroident_pipelines::export::uav::MAX_THROW_DEG;
     if !(deg > 0.0 && deg <= MAX_THROW_DEG) {
         return Err(format!("`{text}`: a throw is > 0 and at most {MAX_THROW_DEG}°"));
     }

@@ -19,7 +19,7 @@ use aeroident_io::{Channel, Mapping};
 use aeroident_pipelines::export::ardupilot::{ArdupilotOptions, Throws, ardupilot_json};
 use aeroident_pipelines::export::gazebo::{ControlJoint, GazeboOptions, gazebo_plugin_sdf};
 use aeroident_pipelines::export::jsbsim::{SurfaceProperties, aerodynamics_xml, read_summary};
-use aeroident_pipelines::export::uav::{Exported, Geometry};
+use aeroident_pipelines::export::uav::{Exported, Geometry, MAX_STALL_DEG, MAX_THROW_DEG};
 use aeroident_report::outfile;
 use anyhow::Context;
 use std::io::Write;
@@ -198,9 +198,9 @@ fn ardupilot(a: ArdupilotArgs) -> anyhow::Result<()> {
         ("--elevator-throw-deg", a.elevator_throw_deg),
         ("--rudder-throw-deg", a.rudder_throw_deg),
     ] {
-        positive_at_most_deg(flag, deg, 90.0)?;
+        positive_at_most_deg(flag, deg, MAX_THROW_DEG)?;
     }
-    positive_at_most_deg("--alpha-stall-deg", a.alpha_stall_deg, 180.0)?;
+    positive_at_most_deg("--alpha-stall-deg", a.alpha_stall_deg, MAX_STALL_DEG)?;
     let summary = read_summary(&a.summary)?;
     note_unfinished(&a.summary, &summary);
     let options = ArdupilotOptions {
@@ -220,7 +220,7 @@ fn ardupilot(a: ArdupilotArgs) -> anyhow::Result<()> {
 
 fn gazebo(a: GazeboArgs) -> anyhow::Result<()> {
     check_out(a.out.as_deref(), &a.summary, a.geometry.mapping.as_deref())?;
-    positive_at_most_deg("--alpha-stall-deg", a.alpha_stall_deg, 180.0)?;
+    positive_at_most_deg("--alpha-stall-deg", a.alpha_stall_deg, MAX_STALL_DEG)?;
     let summary = read_summary(&a.summary)?;
     note_unfinished(&a.summary, &summary);
     let joint = |surface, joint: &str, direction| ControlJoint {

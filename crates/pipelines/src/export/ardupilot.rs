@@ -137,15 +137,15 @@ fn check_options(o: &ArdupilotOptions) -> crate::error::Result<()> {
     use super::uav::positive_at_most;
     o.geometry.check()?;
     let t = &o.throws;
-    let right_angle = std::f64::consts::FRAC_PI_2;
+    let max_throw = uav::MAX_THROW_DEG.to_radians();
     for (name, v) in [
         ("aileron throw", t.aileron_rad),
         ("elevator throw", t.elevator_rad),
         ("rudder throw", t.rudder_rad),
     ] {
-        positive_at_most(name, v, right_angle, "rad")?;
+        positive_at_most(name, v, max_throw, "rad")?;
     }
-    positive_at_most("alpha_stall", o.alpha_stall_rad, std::f64::consts::PI, "rad")?;
+    positive_at_most("alpha_stall", o.alpha_stall_rad, uav::MAX_STALL_DEG.to_radians(), "rad")?;
     if !(o.mcoeff.is_finite() && o.mcoeff > 0.0) {
         crate::bail!("mcoeff must be a positive finite number, got {}", Short(o.mcoeff));
     }

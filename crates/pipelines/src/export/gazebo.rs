@@ -160,9 +160,7 @@ fn check_options(o: &GazeboOptions) -> crate::error::Result<()> {
     o.geometry.check()?;
     // Sea-level air is 1.225 kg/m³; no flight condition reaches 2.
     positive_at_most("air density", o.air_density_kgpm3, 2.0, "kg/m³")?;
-    // An angle of attack lies within a half turn; a stall angle past 90° turns the plugin's
-    // stall blend off over every α flown, which the tests use.
-    positive_at_most("alpha_stall", o.alpha_stall_rad, std::f64::consts::PI, "rad")?;
+    positive_at_most("alpha_stall", o.alpha_stall_rad, uav::MAX_STALL_DEG.to_radians(), "rad")?;
     for j in &o.joints {
         if j.direction.abs() != 1.0 {
             crate::bail!(

@@ -30,6 +30,12 @@ pub struct Geometry {
 pub const MAX_AREA_M2: f64 = 2000.0;
 /// The largest span or chord taken, m (the Stratolaunch spans 117 m).
 pub const MAX_LENGTH_M: f64 = 150.0;
+/// The largest surface throw taken, degrees: a control surface travels a fraction of a right
+/// angle, so more is a typing or unit error.
+pub const MAX_THROW_DEG: f64 = 90.0;
+/// The largest stall angle taken, degrees: an angle of attack lies within a half turn (a
+/// stall angle past 90° turns a simulator's stall blend off over every α flown).
+pub const MAX_STALL_DEG: f64 = 180.0;
 
 impl Geometry {
     /// Checks the area lies in (0, [`MAX_AREA_M2`]] and each length in (0, [`MAX_LENGTH_M`]].

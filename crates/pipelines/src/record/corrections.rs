@@ -1071,20 +1071,26 @@ mod tests {
         std::fs::remove_dir_all(&dir).ok();
     }
 
-    /// A reconstructed sideslip whose side velocity and ay bias the check fixed at 0 is not used
-    /// as a measurement: it is refused with why, and β stays unmeasured; a determined one is
-    /// used (and a file without the key is taken as determined), but not on a record with its
-    /// own sideslip channel.
-    #[test]
-    fn a_pinned_reconstructed_sideslip_is_not_a_measurement() {
-        let rec = |determined: bool| ReconstructedSummary {
+    /// A check's reconstructed sideslip over 0–1 s (β from 0 to 0.02 rad), `determined` or
+    /// pinned at 0 by the check.
+    fn reconstructed(determined: bool) -> ReconstructedSummary {
+        ReconstructedSummary {
             manoeuvre: 1,
             t_s: vec![0.0, 1.0],
             vt_mps: vec![50.0, 50.0],
             alpha_rad: vec![0.1, 0.1],
             beta_rad: vec![0.0, 0.02],
             beta_determined: determined,
-        };
+        }
+    }
+
+    /// A reconstructed sideslip whose side velocity and ay bias the check fixed at 0 is not used
+    /// as a measurement: it is refused with why, and β stays unmeasured; a determined one is
+    /// used (and a file without the key is taken as determined), but not on a record with its
+    /// own sideslip channel.
+    #[test]
+    fn a_pinned_reconstructed_sideslip_is_not_a_measurement() {
+        let rec = reconstructed;
         let pinned = Corrections::of_rows(&[], None, &[rec(false)], None).unwrap();
         assert!(pinned.beta.is_empty() && pinned.beta_at(0.5).is_none());
         assert!(pinned.refused[0].contains("unmeasured state"), "{:?}", pinned.refused);
@@ -1118,15 +1124,7 @@ mod tests {
     /// within the span is covered whole and warns of nothing.
     #[test]
     fn a_reconstructed_sideslip_that_misses_samples_says_how_many() {
-        let rec = ReconstructedSummary {
-            manoeuvre: 1,
-            t_s: vec![0.0, 1.0],
-            vt_mps: vec![50.0, 50.0],
-            alpha_rad: vec![0.1, 0.1],
-            beta_rad: vec![0.0, 0.02],
-            beta_determined: true,
-        };
-        let corr = Corrections::of_rows(&[], None, &[rec], None).unwrap();
+        let corr = Corrections::of_rows(&[], None, &[reconstructed(true)], None).unwrap();
         let events = |n: u32| -> Vec<Result<RecordEvent, FlightDataError>> {
             (0..n)
                 .map(|k| {

@@ -2,15 +2,21 @@
 //! `replay`, the batch fits, `montecarlo`, `poc`), the console table, `report.html` and Python.
 //!
 //! Keys (schema version [`SCHEMA_VERSION`]): `name`, `estimate`, `std_error`,
-//! `std_error_source`, `crb_std_error`, `reference`, `status`, `flags`. A command adds its own
-//! keys beside them (a settling time, a bootstrap bias …) in the same object. Schema 1 called
-//! the estimate `final`, its σ `sigma` and the truth `truth` in `run`, `montecarlo` and `poc`,
-//! and `crb_sigma` in the batch fits (docs/output-schema.md lists every renamed key).
+//! `std_error_source`, `crb_std_error`, `reference`, `reference_check`, `status`, `flags`,
+//! `notes`. A command adds its own keys beside them (a settling time, a bootstrap bias …) in
+//! the same object. Schema 1 called the estimate `final`, its σ `sigma` and the truth `truth`
+//! in `run`, `montecarlo` and `poc`, and `crb_sigma` in the batch fits; schema 2 counted a
+//! reference outside ±2σ and a σ above 10 % among the `flags` (docs/output-schema.md lists
+//! every change).
+//!
+//! The reference (a simulation's truth, a model file's published value) is compared beside
+//! the verdict, in `reference_check`, and is never an input to it: a verdict that read the
+//! reference would measure the reference, not what the record supports.
 
 use serde::{Deserialize, Serialize};
 
 /// The version of the `summary.json` key set, written as `schema_version` in every summary.
-pub const SCHEMA_VERSION: u32 = 2;
+pub const SCHEMA_VERSION: u32 = 3;
 
 /// Values of magnitude below this are numerical noise around 0: a reference that small is
 /// round-off of an exact zero (e.g. a simulator's 1e-44 truth) and is reported as 0.
@@ -93,11 +99,35 @@ pub struct ParameterResult {
     /// The truth (simulation) or a published value (a model file's `[reference.X]`); `null`
     /// without one. Below [`ZERO_THRESHOLD`] in magnitude it is 0.
     pub reference: Option<f64>,
+    /// The estimate set beside the reference ([`ReferenceCheck`]); `null` without a
+    /// reference or an estimate. Never read by the verdict.
+    #[serde(default)]
+    pub reference_check: Option<ReferenceCheck>,
     /// The verdict: `identified` (no flag), `flagged` (see `flags`), `not identified`,
     /// `not converged` or `diverged` (module doc of the judging stage: docs/output-schema.md).
     pub status: String,
-    /// Every warning of the run about this parameter, in its words (empty without one).
+    /// Every doubt of the run about this parameter, in its words (empty without one): each
+    /// blocks `identified`.
     pub flags: Vec<String>,
+    /// What is worth knowing and is no doubt about the value (a σ above 10 % of the estimate
+    /// says imprecise, not wrong): never blocks `identified`.
+    #[serde(default)]
+    pub notes: Vec<String>,
+}
+
+/// An estimate set beside its reference: the comparison the verdict never reads.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ReferenceCheck {
+    /// `100 (estimate − reference) / |reference|`, %; `null` for a zero reference.
+    pub error_pct: Option<f64>,
+    /// `|estimate − reference| / σ`; `null` without a σ.
+    pub distance_sigma: Option<f64>,
+    /// Whether ±2σ of the estimate covers the reference; `null` without a σ.
+    pub within_2sigma: Option<bool>,
+    /// Further comparisons with the reference in words (`run`: a missed convergence target),
+    /// empty without any.
+    #[serde(default)]
+    pub findings: Vec<String>,
 }
 
 impl ParameterResult {
@@ -116,8 +146,10 @@ impl ParameterResult {
             std_error_source: None,
             crb_std_error: None,
             reference: None,
+            reference_check: None,
             status: String::new(),
             flags: Vec::new(),
+            notes: Vec::new(),
         };
         result.set_reference(reference);
         result.judge(failure);
@@ -131,11 +163,13 @@ impl ParameterResult {
     }
 
     /// Sets the status from the current numbers and flags: `failure` if given (`diverged`,
-    /// `not converged`), else `not identified` without an estimate; otherwise a reference
-    /// further than 2σ from the estimate is one more flag, an estimate without any σ is one
-    /// (nothing says how well the record determines it, [`NO_STD_ERROR`]), and the status is
-    /// `flagged` with any flag, else `identified`.
+    /// `not converged`), else `not identified` without an estimate; otherwise an estimate
+    /// without any σ is one more flag (nothing says how well the record determines it,
+    /// [`NO_STD_ERROR`]), and the status is `flagged` with any flag, else `identified`. Notes
+    /// never count. The reference is compared beside it ([`Self::check_reference`]), whatever
+    /// the status.
     pub fn judge(&mut self, failure: Option<&str>) {
+        self.check_reference();
         if let Some(f) = failure {
             self.status = f.to_string();
             return;
@@ -144,19 +178,50 @@ impl ParameterResult {
             self.status = STATUS_NOT_IDENTIFIED.into();
             return;
         }
-        if let (true, Some(r), Some(e), Some(s)) =
-            (self.outside_2sigma(), self.reference, self.estimate, self.std_error)
-        {
-            self.flag(format!(
-                "the reference {r:.4} lies {:.1}σ from the estimate (outside ±2σ)",
-                (e - r).abs() / s
-            ));
-        }
         if self.std_error.is_none() && !self.flags.iter().any(|f| f.starts_with("no σ")) {
             self.flag(NO_STD_ERROR);
         }
         self.status =
             if self.flags.is_empty() { STATUS_IDENTIFIED } else { STATUS_FLAGGED }.to_string();
+    }
+
+    /// Sets `reference_check` from the estimate, σ and reference (`None` without an estimate
+    /// or a reference), keeping the findings it already holds.
+    pub fn check_reference(&mut self) {
+        let (Some(e), Some(r)) = (self.estimate, self.reference) else {
+            self.reference_check = None;
+            return;
+        };
+        let findings = self.reference_check.take().map(|c| c.findings).unwrap_or_default();
+        let distance = self.std_error.filter(|s| *s > 0.0).map(|s| (e - r).abs() / s);
+        self.reference_check = Some(ReferenceCheck {
+            error_pct: self.error_pct(),
+            distance_sigma: distance,
+            within_2sigma: self.std_error.map(|_| !self.outside_2sigma()),
+            findings,
+        });
+    }
+
+    /// Adds `text` to the reference check's findings, once (a check is made for it when
+    /// there is an estimate and a reference; without them there is nothing to compare).
+    pub fn reference_finding(&mut self, text: impl Into<String>) {
+        if self.reference_check.is_none() {
+            self.check_reference();
+        }
+        let text = text.into();
+        if let Some(c) = &mut self.reference_check
+            && !c.findings.contains(&text)
+        {
+            c.findings.push(text);
+        }
+    }
+
+    /// Adds `text` to the notes, once.
+    pub fn note(&mut self, text: impl Into<String>) {
+        let text = text.into();
+        if !self.notes.contains(&text) {
+            self.notes.push(text);
+        }
     }
 
     /// Adds `text` to the flags, once.
@@ -220,21 +285,27 @@ mod tests {
     fn status_from_the_numbers() {
         let r = ParameterResult::new("Cm_alpha", Some(-1.1), Some(0.01), Some(-1.0), None);
         assert!((r.error_pct().unwrap() + 10.0).abs() < 1e-9, "signed: estimate below");
-        assert_eq!(r.status, STATUS_FLAGGED);
+        // The reference 10σ away is compared beside the verdict and does not change it.
+        assert_eq!((r.status.as_str(), r.flags.len()), (STATUS_IDENTIFIED, 0));
         assert!(r.outside_2sigma());
-        assert_eq!(r.flags, ["the reference -1.0000 lies 10.0σ from the estimate (outside ±2σ)"]);
+        let c = r.reference_check.clone().unwrap();
+        assert_eq!(c.within_2sigma, Some(false));
+        assert!((c.distance_sigma.unwrap() - 10.0).abs() < 1e-9);
+        assert!((c.error_pct.unwrap() + 10.0).abs() < 1e-9);
         let mut r = ParameterResult::new("Cm_alpha", Some(-1.01), Some(0.01), Some(-1.0), None);
         assert_eq!((r.status.as_str(), r.flags.len()), (STATUS_IDENTIFIED, 0));
-        // Judging again adds no second copy of a flag.
+        // Judging again adds no second copy of a flag; a note is no flag.
         r.flag("x");
         r.flag("x");
+        r.note("σ wide");
+        r.note("σ wide");
         r.judge(None);
-        assert_eq!((r.status.as_str(), r.flags.len()), (STATUS_FLAGGED, 1));
+        assert_eq!((r.status.as_str(), r.flags.len(), r.notes.len()), (STATUS_FLAGGED, 1, 1));
         assert!((r.error_pct().unwrap() + 1.0).abs() < 1e-9, "sign: estimate more negative");
         r.withdraw("thrust is not mapped");
         assert_eq!(
-            (r.estimate, r.std_error, r.status.as_str()),
-            (None, None, STATUS_NOT_IDENTIFIED)
+            (r.estimate, r.std_error, r.status.as_str(), r.reference_check.is_none()),
+            (None, None, STATUS_NOT_IDENTIFIED, true)
         );
         let r = ParameterResult::new("Cm_q", None, None, Some(-20.0), None);
         assert_eq!((r.status.as_str(), r.error_pct()), (STATUS_NOT_IDENTIFIED, None));
@@ -244,13 +315,21 @@ mod tests {
             (r.status.as_str(), r.flags.clone()),
             (STATUS_FLAGGED, vec![NO_STD_ERROR.to_string()])
         );
+        let c = r.reference_check.unwrap();
+        assert_eq!((c.error_pct, c.distance_sigma, c.within_2sigma), (None, None, None));
         let r = ParameterResult::new("x", Some(1.0), None, None, Some(STATUS_DIVERGED));
         assert_eq!(r.status, "diverged");
+        let mut r = ParameterResult::new("x", Some(1.0), Some(0.1), Some(2.0), None);
+        r.reference_finding("target missed");
+        r.reference_finding("target missed");
+        r.judge(None);
+        let c = r.reference_check.as_ref().unwrap();
+        assert_eq!((c.findings.len(), r.status.as_str()), (1, STATUS_IDENTIFIED));
     }
 
     #[test]
-    fn keys_of_schema_2() {
-        let r = ParameterResult::new("Cm_q", Some(-20.0), Some(1.0), None, None)
+    fn keys_of_schema_3() {
+        let r = ParameterResult::new("Cm_q", Some(-20.0), Some(1.0), Some(-21.0), None)
             .with_source(StdErrorSource::CramerRao)
             .with_crb_std_error(Some(0.5))
             .with_flags(["a flag".to_string()]);
@@ -263,36 +342,42 @@ mod tests {
             "std_error_source",
             "crb_std_error",
             "reference",
+            "reference_check",
             "status",
             "flags",
+            "notes",
         ];
         want.sort_unstable();
         let mut keys = keys;
         keys.sort_unstable();
         assert_eq!(keys, want);
         assert_eq!(v["std_error_source"], "cramer_rao");
+        assert_eq!(v["reference_check"]["within_2sigma"], true);
         // No σ: no source.
         let r = ParameterResult::new("x", Some(1.0), None, None, None)
             .with_source(StdErrorSource::Bootstrap);
         assert_eq!(r.std_error_source, None);
+        // A schema-2 object (no notes, no reference check) still reads.
+        let old = r#"{"name":"x","estimate":1.0,"std_error":null,"std_error_source":null,
+            "crb_std_error":null,"reference":null,"status":"flagged","flags":["f"]}"#;
+        let back: ParameterResult = serde_json::from_str(old).unwrap();
+        assert_eq!((back.notes.len(), back.reference_check), (0, None));
     }
 
-    /// The reference rule at its edge, hand-set: a reference just inside ±2σ of the estimate
-    /// leaves it `identified`, just outside flags it (either side); no σ is its own flag.
+    /// The reference check at its edge, hand-set: a reference just inside ±2σ of the
+    /// estimate is within, just outside is not (either side), and neither moves the status.
     #[test]
-    fn the_reference_rule_at_its_edge() {
+    fn the_reference_check_at_its_edge() {
         let (e, s, d) = (-1.0, 0.05, 1e-9);
         #[rustfmt::skip]
-        let table: [(f64, &str); 5] = [
-            (e + 2.0 * s - d, STATUS_IDENTIFIED), (e - 2.0 * s + d, STATUS_IDENTIFIED),
-            (e + 2.0 * s + d, STATUS_FLAGGED), (e - 2.0 * s - d, STATUS_FLAGGED),
-            (e + 2.5 * s, STATUS_FLAGGED),
+        let table: [(f64, bool); 5] = [
+            (e + 2.0 * s - d, true), (e - 2.0 * s + d, true),
+            (e + 2.0 * s + d, false), (e - 2.0 * s - d, false), (e + 2.5 * s, false),
         ];
-        for (reference, status) in table {
+        for (reference, within) in table {
             let r = ParameterResult::new("Cm_alpha", Some(e), Some(s), Some(reference), None);
-            assert_eq!(r.status, status, "reference {reference}: {:?}", r.flags);
-            let outside = status == STATUS_FLAGGED;
-            assert_eq!(r.flags.iter().any(|f| f.contains("outside ±2σ")), outside);
+            assert_eq!(r.status, STATUS_IDENTIFIED, "reference {reference}: {:?}", r.flags);
+            assert_eq!(r.reference_check.unwrap().within_2sigma, Some(within), "{reference}");
         }
         let r = ParameterResult::new("Cm_alpha", Some(e), None, None, None);
         assert_eq!(

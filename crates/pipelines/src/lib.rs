@@ -53,6 +53,7 @@ pub mod sim;
 pub mod structure;
 /// Model validation metrics: fit, residual whiteness, input correlation, prediction intervals.
 pub mod validation;
+pub mod verdict;
 pub mod window;
 
 pub use error::{Context, PipelineError};

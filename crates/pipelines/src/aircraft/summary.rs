@@ -19,7 +19,7 @@ use serde::Serialize;
 
 use super::experiment::{ChannelLog, ParamLog, Quantity, RunOutput};
 use crate::metrics::{self, CONVERGENCE_TOL_REL, MetricsError};
-use crate::replay::precision;
+use crate::verdict::Evidence;
 
 /// Tolerance of the issue-8 targets: ±10 % of the truth.
 pub const TARGET_TOL_REL: f64 = 0.10;
@@ -340,33 +340,30 @@ fn crb_std_error(ch: &ChannelLog, index: usize) -> Option<f64> {
 }
 
 impl ParamSummary {
-    /// Sets the flags and status: `diverged` (the estimator diverged); `not identified`
-    /// without an estimate (a failed fit, its failure the flag); otherwise the flags are an
-    /// estimator failure (estimates held from then on), each missed target of a primary
-    /// derivative of a real-time estimator ([`ParamSummary::missed_targets`]), a final value
-    /// without σ further than 5 % from the truth, a truth outside ±2σ, an estimate whose σ is
-    /// more than 10 % of itself (the replay's rule, [`crate::replay::precision`]: a truth
-    /// inside a wide ±2σ does not make it known); `flagged` with any, `identified` without.
+    /// Sets the flags, notes and status through the one judge ([`crate::verdict`]): an
+    /// estimator failure (estimates held from then on) and an estimator that ended
+    /// `initialising` are doubts; `diverged` replaces the verdict. The truth is compared
+    /// beside it (`reference_check`), with each missed target of a primary derivative of a
+    /// real-time estimator among its findings ([`ParamSummary::missed_targets`]) and, without
+    /// a σ, a final value further than 5 % from the truth: a verdict that read the truth
+    /// would not say what a flight without one supports.
     pub fn judge(&mut self, damage_at_s: Option<f64>) {
-        let r = &mut self.result;
-        r.flags.extend(self.failure.iter().map(|f| format!("estimator failed at {f}")));
-        if self.estimator_status == Some(STATUS_DIVERGED) {
-            r.judge(Some(STATUS_DIVERGED));
-            return;
-        }
         let misses = self.missed_targets(damage_at_s);
+        let status = self.estimator_status;
         let r = &mut self.result;
-        misses.into_iter().for_each(|m| r.flag(m));
-        // Without a σ the verdict is how close the final value is (the overview's 5 %).
+        let evidence = Evidence {
+            doubts: self.failure.iter().map(|f| format!("estimator failed at {f}")).collect(),
+            plausibility: None,
+            estimate_doubts: status.and_then(crate::verdict::unconverged).into_iter().collect(),
+            failure: (status == Some(STATUS_DIVERGED)).then_some(STATUS_DIVERGED),
+        };
+        crate::verdict::judge(r, &evidence);
+        misses.into_iter().for_each(|m| r.reference_finding(m));
         if let (None, Some(e)) = (r.std_error, r.error_pct())
             && e.abs() > 100.0 * CONVERGENCE_TOL_REL
         {
-            r.flag(format!("no σ, and the final value is {e:+.1} % from the truth"));
+            r.reference_finding(format!("no σ, and the final value is {e:+.1} % from the truth"));
         }
-        if let Some(relative) = precision::imprecise(&r.name, r.estimate, r.std_error) {
-            r.flag(precision::flag(relative));
-        }
-        r.judge(None);
     }
 
     /// Which of the targets a primary derivative of a real-time estimator missed, and by how
@@ -507,19 +504,23 @@ mod tests {
         }
     }
 
-    /// Each missed target is named with its number: late after the excitation (7.3 s against
-    /// 5 s), never back after the damage, ±2σ not covering the truth; the truth 5σ away is a
-    /// flag of its own; the status is `flagged`. Without damage the damage target is not named;
-    /// a diverged estimator is `diverged` whatever its numbers.
+    /// Each missed target is named with its number among the truth's findings, beside the
+    /// verdict: late after the excitation (7.3 s against 5 s), never back after the damage,
+    /// ±2σ not covering the truth; the truth 5σ away is in the same check. None is a flag: the
+    /// status is `identified`. Without damage the damage target is not named; σ 42 % of the
+    /// estimate is a note; an estimator that ended `initialising` flags the estimate; a
+    /// diverged estimator is `diverged` whatever its numbers.
     #[test]
-    fn a_missed_target_says_which_and_by_how_much() {
+    fn a_missed_target_is_compared_beside_the_verdict() {
         let mut e = entry(Some(false), Some(7.3), None);
         e.judge(Some(20.0));
-        assert_eq!(e.status, "flagged");
+        assert_eq!((e.status.as_str(), e.flags.len()), ("identified", 0), "{:?}", e.flags);
+        let check = e.reference_check.clone().unwrap();
+        assert_eq!(check.within_2sigma, Some(false));
+        assert!((check.distance_sigma.unwrap() - 5.0).abs() < 1e-9);
         assert_eq!(
-            e.flags,
+            check.findings,
             [
-                "the reference -1.0000 lies 5.0σ from the estimate (outside ±2σ)",
                 "target missed: within ±10 % 7.3 s after the excitation (target 5 s)",
                 "target missed: never stays within ±10 % after the damage",
                 "target missed: ±2σ does not cover the truth at the end",
@@ -527,18 +528,24 @@ mod tests {
         );
         let mut e = entry(Some(false), Some(2.0), None);
         e.judge(None);
-        assert_eq!(e.flags.len(), 2, "{:?}", e.flags);
+        assert_eq!(e.result.reference_check.unwrap().findings.len(), 1);
         let mut e = entry(Some(true), Some(2.0), Some(1.0));
         e.covers_truth_2sigma = Some(true);
         e.result = ParameterResult::new("Cm_alpha", Some(-0.99), Some(0.01), Some(-1.0), None);
         e.judge(Some(20.0));
         assert_eq!((e.status.as_str(), e.flags.len()), ("identified", 0));
-        // Within ±2σ of the truth but σ 42 % of itself (the default job's CD_q): not known.
+        assert!(e.result.reference_check.unwrap().findings.is_empty());
+        // Within ±2σ of the truth but σ 42 % of itself (the default job's CD_q): a note.
         let mut e = entry(None, None, None);
         e.result = ParameterResult::new("CD_q", Some(2.839), Some(1.2), Some(0.4536), None);
         e.judge(None);
+        assert_eq!(e.status, "identified");
+        assert_eq!(e.notes, ["σ 42 % of |estimate|: the record does not determine it to 10 %"]);
+        let mut e = entry(None, None, None);
+        e.estimator_status = Some("initialising");
+        e.judge(None);
         assert_eq!(e.status, "flagged");
-        assert_eq!(e.flags, ["σ 42 % of |estimate|: the record does not determine it to 10 %"]);
+        assert!(e.flags[0].contains("ended `initialising`"), "{:?}", e.flags);
         let mut e = entry(Some(false), None, None);
         e.estimator_status = Some("diverged");
         e.judge(None);

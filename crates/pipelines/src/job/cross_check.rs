@@ -30,8 +30,9 @@ pub const BATCH_METHODS: [EstimatorKind; 3] =
 
 /// Every panel method but `own`, each run on `records` with `base`'s model, corrections,
 /// windows, spike screen and differentiation (each estimator with its own default options).
-/// A method that fails, diverges, ends at its iteration limit still moving, or whose filter
-/// degenerates is listed as failed, with why.
+/// A method that fails, diverges, ends `initialising`, ends at its iteration limit still
+/// moving, or whose filter degenerates is listed as failed, with why: agreement with an
+/// estimator that has not converged confirms nothing.
 pub fn run_panel(
     records: &Records,
     own: EstimatorKind,
@@ -57,6 +58,9 @@ fn run_online(records: &Records, kind: EstimatorKind, base: &ReplayOptions) -> M
     };
     match crate::replay::replay(reader, &records.mapping, &opts, &mut ()) {
         Ok(o) if o.diverged() => MethodEstimates::failed(name, "diverged"),
+        Ok(o) if crate::verdict::unconverged(&o.summary.status).is_some() => {
+            MethodEstimates::failed(name, "ended initialising (not every parameter left its prior)")
+        }
         Ok(o) => {
             let rows = o
                 .summary

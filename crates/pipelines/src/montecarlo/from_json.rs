@@ -79,9 +79,21 @@ fn param_run(p: &Value) -> Result<ParamRun, String> {
         },
         crb_std_error: opt_f64(p, "crb_std_error")?,
         reference: opt_f64(p, "reference")?,
+        reference_check: match p.get("reference_check") {
+            None | Some(Value::Null) => None,
+            Some(x) => Some(
+                serde_json::from_value(x.clone())
+                    .map_err(|e| format!("per-run result: `reference_check`: {e}"))?,
+            ),
+        },
         status: string(p, "status")?,
         flags: serde_json::from_value(field(p, "flags")?.clone())
             .map_err(|e| format!("per-run result: `flags`: {e}"))?,
+        notes: match p.get("notes") {
+            None | Some(Value::Null) => Vec::new(),
+            Some(x) => serde_json::from_value(x.clone())
+                .map_err(|e| format!("per-run result: `notes`: {e}"))?,
+        },
     };
     Ok(ParamRun {
         result,

@@ -239,7 +239,7 @@ fn json_keys_exact() {
         keys(&v),
         ["estimators", "runs", "runs_requested", "schema_version", "status", "status_reason"]
     );
-    assert_eq!(v["schema_version"], 2);
+    assert_eq!(v["schema_version"], 3);
     assert_eq!((v["status"].as_str(), v["runs_requested"].as_u64()), (Some("complete"), Some(1)));
     let e = &v["estimators"][0];
     assert_eq!(keys(e), ["name", "parameters"]);

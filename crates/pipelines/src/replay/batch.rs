@@ -22,6 +22,7 @@ use super::prediction::{Recorder, ValidationReport, validate_coefficients};
 use crate::record::Manoeuvres;
 pub use crate::results::OutputTrace;
 use crate::validation::{OutputData, validate};
+use crate::verdict::Evidence;
 use aeroident_estimators::Term;
 use aeroident_estimators::flight_model::FlightModel;
 use aeroident_estimators::flight_model::{N_STATES, STATE_NAMES, state};
@@ -174,14 +175,13 @@ impl BatchSummary {
         self.parameters.extend(fitted);
     }
 
-    /// Sets every parameter's reference (the `model` file's), flags and status: the warnings
-    /// about it, the plausibility check ([`crate::plausibility`]; the drag terms withdrawn
-    /// unless `thrust_mapped`), a reference outside ±2σ, a collapsed `fem` noise variance
-    /// ([`BatchSummary::collapsed_noise`]), an imprecise estimate ([`super::precision`], as
-    /// the online replays' verdict); `not identified` with the reason for
-    /// a parameter the method does not estimate; `not converged` for every parameter of a
-    /// fit that ended at its iteration limit with its last step still above 1 σ
-    /// ([`BatchSummary::still_moving`]); else `flagged` or `identified`.
+    /// Sets every parameter's reference (the `model` file's, compared beside the verdict),
+    /// flags, notes and status through the one judge ([`crate::verdict`]): the warnings about
+    /// it, the plausibility check (the drag terms withdrawn unless `thrust_mapped`), a
+    /// collapsed `fem` noise variance ([`BatchSummary::collapsed_noise`]); `not identified`
+    /// with the reason for a parameter the method does not estimate; `not converged` for every
+    /// parameter of a fit that ended at its iteration limit with its last step still above
+    /// 1 σ ([`BatchSummary::still_moving`]).
     pub fn judge(&mut self, model: &ModelSpec, thrust_mapped: bool) {
         let moving = self.still_moving();
         let degenerate = self.collapsed_noise();
@@ -196,21 +196,20 @@ impl BatchSummary {
             // A row the fit held out keeps the reason it was given (Self::insert_held).
             let held = if r.estimate.is_none() { std::mem::take(&mut r.flags) } else { Vec::new() };
             r.flags = held;
-            r.flags.extend(self.warnings.about(&r.name));
-            if r.estimate.is_none() && r.flags.is_empty() {
-                r.flag(format!(
+            let mut doubts = self.warnings.about(&r.name);
+            if r.estimate.is_none() && r.flags.is_empty() && doubts.is_empty() {
+                doubts.push(format!(
                     "not estimated: {} cannot see it from the record's outputs",
                     self.estimator
                 ));
             }
-            crate::plausibility::check(model, thrust_mapped, std::iter::once(&mut *r));
-            if r.estimate.is_some() {
-                degenerate.iter().for_each(|d| r.flag(d.clone()));
-            }
-            if let Some(relative) = super::precision::imprecise(&r.name, r.estimate, r.std_error) {
-                r.flag(super::precision::flag(relative));
-            }
-            r.judge(moving.then_some(STATUS_NOT_CONVERGED));
+            let evidence = Evidence {
+                doubts,
+                plausibility: Some((model, thrust_mapped)),
+                estimate_doubts: degenerate.iter().cloned().collect(),
+                failure: moving.then_some(STATUS_NOT_CONVERGED),
+            };
+            crate::verdict::judge(r, &evidence);
         }
     }
 

@@ -27,13 +27,15 @@
 //! - **the EKF's noise model**: the EKF disagrees with `oe` while `fem`, which estimates the
 //!   process noise, agrees with `oe`: process noise does not move the answer, the EKF's
 //!   assumed noise does;
-//! - **process noise**: `fem` and the EKF agree with each other and not with `oe`: turbulence
-//!   in the record biases output error, which has no process noise.
+//! - **process noise**: `fem` and the EKF agree with each other and neither with `oe`:
+//!   turbulence in the record biases output error, which has no process noise.
 //!
-//! The verdict on the run's own estimate: set aside by a tested cause → flagged with it; else
-//! confirmed when more than half of the methods left (at least two) agree with it; else flagged
-//! with the camps (a split whose cause these tests do not find, or an estimate no other method
-//! gives).
+//! The verdict on the run's own estimate, with no vote (agreement among methods that share a
+//! bias is no confirmation, and a majority of them can outvote the one that is right):
+//! set aside by a tested cause → flagged with it; else any method left that disagrees with it
+//! → flagged as a disagreement no tested mechanism explains, with the camps; else confirmed
+//! when a method open to another bias ([`bias_family`]) agrees with it, and flagged as
+//! unconfirmed when only methods sharing its bias, or none, give it.
 
 use aeroident_io::warning::{Warning, WarningKind};
 use serde::Serialize;
@@ -195,17 +197,7 @@ fn agreement(
             describe(&left, &camps)
         ))
     } else {
-        let with_me = left.iter().filter(|e| e.agrees(mine)).count();
-        if left.len() < 2 {
-            Some(format!("cross-check: no other method gives {name}, so nothing confirms it"))
-        } else if 2 * with_me > left.len() && with_me >= 2 {
-            None
-        } else {
-            Some(format!(
-                "cross-check: the methods split on {name}: {}; the tests run (instrumental variables, filter error) do not explain it: a time skew, an input lag or the model structure may",
-                describe(&left, &camps)
-            ))
-        }
+        unexplained_or_unconfirmed(name, mine, &left, &camps)
     };
     Agreement {
         parameter: name.to_string(),
@@ -214,6 +206,54 @@ fn agreement(
         estimates,
         set_aside,
         camps,
+    }
+}
+
+/// The verdict on `mine`, kept by the tested causes, among the `left` estimates (its own
+/// first): a disagreement no tested cause explains, or no agreement from a method open to
+/// another bias; `None` when confirmed (module doc).
+fn unexplained_or_unconfirmed(
+    name: &str,
+    mine: &Estimate,
+    left: &[&Estimate],
+    camps: &[Vec<String>],
+) -> Option<String> {
+    let others = || left.iter().filter(|e| e.method != mine.method);
+    let against: Vec<&str> =
+        others().filter(|e| !e.agrees(mine)).map(|e| e.method.as_str()).collect();
+    if others().next().is_none() {
+        return Some(format!("cross-check: no other method gives {name}, so nothing confirms it"));
+    }
+    if !against.is_empty() {
+        return Some(format!(
+            "cross-check: the methods split on {name}: {} disagree with {} and no tested mechanism explains it (instrumental variables, filter error): {}; a time skew, an input lag or the model structure may",
+            against.join(", "),
+            mine.method,
+            describe(left, camps)
+        ));
+    }
+    let family = bias_family(&mine.method);
+    let independent = others().any(|e| bias_family(&e.method) != family);
+    (!independent).then(|| {
+        format!(
+            "cross-check: only methods open to the same bias as {} ({family}) give {name}: their agreement confirms nothing",
+            mine.method
+        )
+    })
+}
+
+/// The bias a method's estimate is open to, by which the panel groups methods that cannot
+/// confirm one another: least squares on measured regressors (`rls`, `ftr`, the sliding-mode
+/// and gradient estimators) share the regressor-noise bias; output error in time and frequency
+/// (`oe`, `fdoe`) shares the process-noise bias; instrumental variables, the filter-error
+/// method and the EKF (its assumed noise model) are each their own.
+pub fn bias_family(method: &str) -> &'static str {
+    match method {
+        "rls-iv" => "instrumental variables",
+        "oe" | "fdoe" => "output error: process noise",
+        "fem" => "filter error",
+        "ekf" => "the EKF's noise model",
+        _ => "equation error: regressor noise",
     }
 }
 
@@ -258,9 +298,9 @@ fn tested_causes(estimates: &[Estimate]) -> Vec<SetAside> {
                 short(oe)
             );
             set("ekf", cause, &mut out);
-        } else if !fem.agrees(oe) && ekf.agrees(fem) {
+        } else if !fem.agrees(oe) && !ekf.agrees(oe) && ekf.agrees(fem) {
             let cause = format!(
-                "process noise: fem ({}) and the EKF ({}), which model it, agree with each other and not with oe",
+                "process noise: fem ({}) and the EKF ({}), which model it, agree with each other and neither with oe",
                 short(fem),
                 short(ekf)
             );

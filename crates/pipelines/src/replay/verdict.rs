@@ -1,37 +1,28 @@
-//! The verdict on each parameter of a finished replay, in its `summary.json` entry: a status
-//! and the flags that explain it, judged once here for every face (the console table,
-//! `report.html`, Python).
-//!
-//! The flags: every warning of the run about the parameter (sign checks, cross-check
-//! disagreements), an imprecise estimate ([`super::precision`]), a value a conventional
-//! aircraft cannot have ([`crate::plausibility`]), a reference outside ±2σ. The status:
-//! `diverged` when the estimator diverged; `not identified` without an estimate (a drag term
-//! of a record without thrust is withdrawn, with the reason); else `flagged` with any flag and
-//! `identified` without one (docs/output-schema.md).
+//! The evidence of a finished replay for the one judge ([`crate::verdict`]): the run's warnings
+//! about each parameter, the plausibility check, the estimator's final state.
 
-use super::{ReplayOutcome, precision};
+use super::ReplayOutcome;
+use crate::verdict::{self, Evidence};
 use aeroident_io::parameter::STATUS_DIVERGED;
 
-/// Sets the status and flags of every parameter of `outcome` (module doc), the drag terms
-/// withdrawn unless `thrust_mapped`; judging again after a later stage (the cross-check)
-/// replaces the earlier verdict.
+/// Sets the status, flags and notes of every parameter of `outcome` ([`crate::verdict`]), the
+/// drag terms withdrawn unless `thrust_mapped`; judging again after a later stage (the
+/// cross-check) replaces the earlier verdict.
 pub fn judge(outcome: &mut ReplayOutcome, thrust_mapped: bool) {
     let diverged = outcome.diverged();
     let model = &outcome.model;
     let summary = &mut outcome.summary;
+    let unconverged = verdict::unconverged(&summary.status);
     for p in &mut summary.parameters {
         let r = &mut p.result;
-        r.flags = summary.warnings.about(&r.name);
-        if diverged {
-            r.judge(Some(STATUS_DIVERGED));
-            continue;
-        }
-        // A withdrawn drag term is judged by its reason alone.
-        crate::plausibility::check(model, thrust_mapped, std::iter::once(&mut *r));
-        if let Some(relative) = precision::imprecise(&r.name, r.estimate, r.std_error) {
-            r.flag(precision::flag(relative));
-        }
-        r.judge(None);
+        r.flags.clear();
+        let evidence = Evidence {
+            doubts: summary.warnings.about(&r.name),
+            plausibility: Some((model, thrust_mapped)),
+            estimate_doubts: unconverged.iter().cloned().collect(),
+            failure: diverged.then_some(STATUS_DIVERGED),
+        };
+        verdict::judge(r, &evidence);
     }
 }
 
@@ -60,11 +51,12 @@ mod tests {
         replay(reader, &m, &opts, &mut ()).unwrap()
     }
 
-    /// The verdict carries the precision rule: `CL_alpha` set to 4.0 ± 0.2 (5 %) is judged as
-    /// the rest of its flags say, and with σ 0.8 (20 %) gets the precision flag on top and is
-    /// `flagged`; a diverged run marks every parameter `diverged` whatever its numbers.
+    /// The precision rule is a note, never a flag: `CL_alpha` set to 4.0 ± 0.2 (5 %) has no
+    /// note, with σ 0.8 (20 %) it has the precision note and the same flags and status; an
+    /// estimator that ended `initialising` flags every estimate; a diverged run marks every
+    /// parameter `diverged` whatever its numbers.
     #[test]
-    fn the_verdict_adds_the_precision_flag_and_marks_a_divergence() {
+    fn precision_is_a_note_and_an_unfinished_or_diverged_estimator_is_judged() {
         let mut o = outcome();
         let i = o.summary.parameters.iter().position(|p| p.result.name == "CL_alpha").unwrap();
         let set = |o: &mut ReplayOutcome, sigma: f64| {
@@ -75,13 +67,18 @@ mod tests {
         };
         let precise = set(&mut o, 0.2);
         let imprecise = set(&mut o, 0.8);
-        let precision = precision::flag(0.2);
-        assert!(!precise.flags.contains(&precision), "{:?}", precise.flags);
-        assert_eq!(imprecise.flags.last(), Some(&precision), "{:?}", imprecise.flags);
-        assert_eq!(imprecise.flags.len(), precise.flags.len() + 1);
-        assert_eq!(imprecise.status, STATUS_FLAGGED);
+        let precision = crate::replay::precision::flag(0.2);
+        assert!(precise.notes.is_empty(), "{:?}", precise.notes);
+        assert_eq!(imprecise.notes, [precision]);
+        assert_eq!((&imprecise.flags, &imprecise.status), (&precise.flags, &precise.status));
         let status = if precise.flags.is_empty() { STATUS_IDENTIFIED } else { STATUS_FLAGGED };
         assert_eq!(precise.status, status);
+        o.summary.status = aeroident_estimators::Status::Initialising.name().into();
+        judge(&mut o, true);
+        let doubt = crate::verdict::unconverged("initialising").unwrap();
+        for p in o.summary.parameters.iter().filter(|p| p.estimate.is_some()) {
+            assert_eq!((p.status.as_str(), p.flags.contains(&doubt)), (STATUS_FLAGGED, true));
+        }
         o.summary.status = aeroident_estimators::Status::Diverged.name().into();
         assert!(o.diverged());
         judge(&mut o, true);

@@ -1,0 +1,76 @@
+//! The one judge of every estimate: the status and the flags that explain it, the same for
+//! every command (`replay` online and batch, `fit`, `run`, `montecarlo`, the live page,
+//! Python and the C ABI's final report all read the verdicts judged here).
+//!
+//! A flag is a doubt the run found about the value: a warning about the parameter or its
+//! coefficient (sign checks, the cross-check's tested disagreements, the thrust test), an
+//! estimator that ended before every parameter was identified, a value a conventional
+//! aircraft cannot have ([`crate::plausibility`]), a degenerate filter, no σ at all. Any flag
+//! makes the status `flagged`; without one it is `identified`. A note is no doubt (a σ above
+//! 10 % of the estimate says imprecise, not wrong, [`crate::replay::precision`]) and never
+//! blocks `identified`. A reference (a simulation's truth, a model file's published value) is
+//! never read here: it is set beside the verdict in `reference_check`
+//! ([`aeroident_io::ParameterResult::check_reference`]).
+//!
+//! The statuses (docs/output-schema.md): `diverged` when the estimator diverged; `not
+//! converged` for a batch fit still moving by more than σ at its iteration limit; `not
+//! identified` without an estimate (a withdrawn drag term, a term a batch method cannot see,
+//! a failed fit), each with its reason; else `flagged` or `identified`.
+
+use crate::replay::precision;
+use aeroident_estimators::Status;
+use aeroident_io::ModelSpec;
+use aeroident_io::ParameterResult;
+
+/// What a verdict weighs beside the parameter's own numbers.
+#[derive(Debug, Default)]
+pub struct Evidence<'a> {
+    /// The doubts about the parameter, in words (the warnings about it or its coefficient; an
+    /// estimator failure); each becomes a flag.
+    pub doubts: Vec<String>,
+    /// The model whose plausible ranges apply, and whether thrust is mapped (the drag terms are
+    /// withdrawn without it); `None`: the plausibility check is not made.
+    pub plausibility: Option<(&'a ModelSpec, bool)>,
+    /// A doubt about every estimate of the run that has one (a degenerate filter, an estimator
+    /// that has not converged), without touching a parameter without an estimate.
+    pub estimate_doubts: Vec<String>,
+    /// A status that replaces the verdict (`diverged`, `not converged`).
+    pub failure: Option<&'a str>,
+}
+
+/// Judges `r` on `evidence` (module doc): its flags are those `r` holds (a held or withdrawn
+/// parameter's reason) and the evidence's doubts; its notes are recomputed; a second call on
+/// new evidence replaces the first's notes, and the caller resets the flags it replaces.
+pub fn judge(r: &mut ParameterResult, evidence: &Evidence) {
+    for d in &evidence.doubts {
+        r.flag(d.clone());
+    }
+    r.notes.clear();
+    if let Some(f) = evidence.failure {
+        r.judge(Some(f));
+        return;
+    }
+    if r.estimate.is_some() {
+        evidence.estimate_doubts.iter().for_each(|d| r.flag(d.clone()));
+    }
+    if let Some((model, thrust_mapped)) = evidence.plausibility {
+        crate::plausibility::check(model, thrust_mapped, std::iter::once(&mut *r));
+    }
+    if let Some(relative) = precision::imprecise(&r.name, r.estimate, r.std_error) {
+        r.note(precision::flag(relative));
+    }
+    r.judge(None);
+}
+
+/// The doubt on every estimate of a recursive estimator that ended in `status` before every
+/// parameter was identified (`initialising`): its covariance has not yet shrunk from its
+/// priors for some parameter, and the others' σ is read off a filter that has not settled.
+/// `None` for a running or diverged estimator (a divergence is its own status).
+pub fn unconverged(status: &str) -> Option<String> {
+    (status == Status::Initialising.name()).then(|| {
+        "the estimator ended `initialising`: not every parameter left its prior, so no estimate of the run is settled".to_string()
+    })
+}
+
+#[cfg(test)]
+mod tests;

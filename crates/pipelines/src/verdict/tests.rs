@@ -1,0 +1,72 @@
+use super::*;
+use aeroident_io::parameter::{
+    NO_STD_ERROR, STATUS_DIVERGED, STATUS_FLAGGED, STATUS_IDENTIFIED, STATUS_NOT_IDENTIFIED,
+};
+
+fn result(name: &str, estimate: f64, sigma: f64, reference: Option<f64>) -> ParameterResult {
+    ParameterResult::new(name, Some(estimate), Some(sigma), reference, None)
+}
+
+/// The reference is never an input: the same numbers judged with the reference at the
+/// estimate and 10σ away get the same status, flags and notes; only `reference_check` differs.
+#[test]
+fn the_reference_is_compared_beside_the_verdict() {
+    let model = ModelSpec::preset("longitudinal").unwrap();
+    let evidence = Evidence { plausibility: Some((&model, true)), ..Default::default() };
+    let mut near = result("Cm_alpha", -1.0, 0.02, Some(-1.0));
+    let mut far = result("Cm_alpha", -1.0, 0.02, Some(-0.8));
+    judge(&mut near, &evidence);
+    judge(&mut far, &evidence);
+    assert_eq!((&near.status, &near.flags, &near.notes), (&far.status, &far.flags, &far.notes));
+    assert_eq!(near.status, STATUS_IDENTIFIED);
+    let (n, f) = (near.reference_check.unwrap(), far.reference_check.unwrap());
+    assert_eq!((n.within_2sigma, f.within_2sigma), (Some(true), Some(false)));
+    assert!((f.distance_sigma.unwrap() - 10.0).abs() < 1e-9);
+}
+
+/// σ 30 % of the estimate is a note, not a flag; a doubt is a flag; an estimate doubt flags an
+/// estimate and leaves a parameter without one alone; a failure replaces the verdict.
+#[test]
+fn notes_doubts_and_failures() {
+    let mut wide = result("Cm_q", -10.0, 3.0, None);
+    judge(&mut wide, &Evidence::default());
+    assert_eq!((wide.status.as_str(), wide.flags.len()), (STATUS_IDENTIFIED, 0));
+    assert_eq!(wide.notes, [precision::flag(0.3)]);
+    let unconverged = unconverged("initialising").unwrap();
+    let evidence = Evidence {
+        doubts: vec!["sign test: δe reversed".into()],
+        estimate_doubts: vec![unconverged.clone()],
+        ..Default::default()
+    };
+    let mut doubted = result("Cm_de", -1.0, 0.01, None);
+    judge(&mut doubted, &evidence);
+    assert_eq!(doubted.status, STATUS_FLAGGED);
+    assert_eq!(doubted.flags, ["sign test: δe reversed".to_string(), unconverged.clone()]);
+    let mut none = ParameterResult::new("Cm_q", None, None, None, None);
+    judge(&mut none, &Evidence { estimate_doubts: vec![unconverged], ..Default::default() });
+    assert_eq!((none.status.as_str(), none.flags.len()), (STATUS_NOT_IDENTIFIED, 0));
+    let mut failed = result("Cm_q", -10.0, 0.1, None);
+    judge(&mut failed, &Evidence { failure: Some(STATUS_DIVERGED), ..Default::default() });
+    assert_eq!(failed.status, STATUS_DIVERGED);
+    let mut no_sigma = ParameterResult::new("Cm_q", Some(-10.0), None, None, None);
+    judge(&mut no_sigma, &Evidence::default());
+    assert_eq!(
+        (no_sigma.status.as_str(), no_sigma.flags.as_slice()),
+        (STATUS_FLAGGED, &[NO_STD_ERROR.to_string()][..])
+    );
+    assert!(super::unconverged("running").is_none() && super::unconverged("diverged").is_none());
+}
+
+/// A value outside a conventional aircraft's range by more than 2σ is flagged (Cm_q > 0);
+/// judged again on the same evidence, nothing is added twice.
+#[test]
+fn plausibility_is_a_doubt_and_judging_twice_changes_nothing() {
+    let model = ModelSpec::preset("longitudinal").unwrap();
+    let evidence = Evidence { plausibility: Some((&model, true)), ..Default::default() };
+    let mut r = result("Cm_q", 8.0, 0.5, None);
+    judge(&mut r, &evidence);
+    let once = r.clone();
+    judge(&mut r, &evidence);
+    assert_eq!(r, once);
+    assert_eq!((r.status.as_str(), r.flags.len()), (STATUS_FLAGGED, 1), "{:?}", r.flags);
+}

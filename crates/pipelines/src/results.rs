@@ -151,15 +151,27 @@ impl Results {
     /// one line counting the rest (the tables print them under the status column, which says
     /// only `flagged`).
     pub fn flag_lines(&self, limit: usize) -> Vec<String> {
-        let all: Vec<String> = self
-            .rows
-            .iter()
-            .flat_map(|r| r.flags.iter().map(move |f| format!("{}: {f}", r.name)))
+        Self::lines(self.rows.iter().map(|r| (&r.name, &r.flags)), limit, "flags")
+    }
+
+    /// Each row's notes (no doubt about the value: a σ above 10 % of it) as `name: note`
+    /// lines, as [`Self::flag_lines`].
+    pub fn note_lines(&self, limit: usize) -> Vec<String> {
+        Self::lines(self.rows.iter().map(|r| (&r.name, &r.notes)), limit, "notes")
+    }
+
+    fn lines<'a>(
+        rows: impl Iterator<Item = (&'a String, &'a Vec<String>)>,
+        limit: usize,
+        key: &str,
+    ) -> Vec<String> {
+        let all: Vec<String> = rows
+            .flat_map(|(name, texts)| texts.iter().map(move |f| format!("{name}: {f}")))
             .collect();
         let mut out: Vec<String> = all.iter().take(limit).cloned().collect();
         if all.len() > limit {
             out.push(format!(
-                "… and {} more flags (summary.json: parameters[].flags)",
+                "… and {} more {key} (summary.json: parameters[].{key})",
                 all.len() - limit
             ));
         }

@@ -214,6 +214,10 @@ fn fit_dict(
     d.set_item("reference", column(|p| p.reference).into_pyarray(py))?;
     d.set_item("status", s.parameters.iter().map(|p| p.status.clone()).collect::<Vec<_>>())?;
     d.set_item("flags", s.parameters.iter().map(|p| p.flags.clone()).collect::<Vec<_>>())?;
+    d.set_item(
+        "parameter_notes",
+        s.parameters.iter().map(|p| p.notes.clone()).collect::<Vec<_>>(),
+    )?;
     let corr: Vec<f64> = match &outcome.frequency {
         Some(fd) => correlation_of(&fd.covariance, np),
         None => (0..np).flat_map(|i| (0..np).map(move |j| r.correlation[i * n + j])).collect(),

@@ -41,6 +41,7 @@ def test_fit_equals_cli(tmp_path, estimator):
     # The verdict is the summary's, under the summary's names (docs/output-schema.md).
     assert py["status"] == [p["status"] for p in params]
     assert py["flags"] == [p["flags"] for p in params]
+    assert py["parameter_notes"] == [p["notes"] for p in params]
     refs = [np.nan if p["reference"] is None else p["reference"] for p in params]
     np.testing.assert_array_equal(py["reference"], refs)
     assert set(py["status"]) <= {"identified", "flagged", "not identified", "not converged"}

@@ -63,6 +63,16 @@ fn table_with(header: &[&str], numeric_to: usize) -> Table {
     t
 }
 
+/// The reference check's cell: `yes` when ±2σ covers the reference, `no` when it does not,
+/// `—` without a reference or a σ (the verdict never reads it: docs/output-schema.md).
+pub fn fmt_within(row: &aeroident_io::ParameterResult) -> String {
+    match row.reference_check.as_ref().and_then(|c| c.within_2sigma) {
+        Some(true) => "yes".into(),
+        Some(false) => "no".into(),
+        None => "—".into(),
+    }
+}
+
 /// Most flags the console lists under a table; `summary.json` and `report.html` have all.
 pub const CONSOLE_FLAGS: usize = 20;
 
@@ -72,7 +82,7 @@ pub fn render(r: &Results) -> String {
     let crb = r.has_crb_std_error();
     let mut header = vec!["parameter", "estimate ± σ"];
     header.extend(crb.then_some("Cramér–Rao σ"));
-    header.extend([r.reference_label.as_str(), "error %", "status"]);
+    header.extend([r.reference_label.as_str(), "error %", "within ±2σ", "status"]);
     let mut t = table_with(&header, header.len() - 1);
     for row in &r.rows {
         let mut cells = vec![row.name.clone(), fmt_estimate(row.estimate, row.std_error)];
@@ -80,6 +90,7 @@ pub fn render(r: &Results) -> String {
         cells.extend([
             fmt_sig(row.reference, 4),
             fmt_error_pct(row.error_pct()),
+            fmt_within(row),
             row.status.clone(),
         ]);
         t.add_row(cells);
@@ -102,6 +113,11 @@ pub fn render(r: &Results) -> String {
     if !flags.is_empty() {
         s.push_str("flags:\n");
         flags.iter().for_each(|f| s.push_str(&format!("  {f}\n")));
+    }
+    let notes = r.note_lines(CONSOLE_FLAGS);
+    if !notes.is_empty() {
+        s.push_str("notes (no doubt about the value):\n");
+        notes.iter().for_each(|f| s.push_str(&format!("  {f}\n")));
     }
     for n in &r.notes {
         s.push_str(n);
@@ -138,8 +154,8 @@ mod tests {
         assert_eq!(fmt_estimate(None, Some(0.1)), "—");
     }
 
-    /// A batch fit's row: the status is judged against its σ (here a coloured σ of 0.1, the
-    /// reference 1σ away: identified), not against the Cramér–Rao σ shown beside it (0.01: 10σ away),
+    /// A batch fit's row: the reference check uses its σ (here a coloured σ of 0.1, the
+    /// reference 1σ away: within ±2σ), not the Cramér–Rao σ shown beside it (0.01: 10σ away),
     /// and the column appears only when a row has one.
     #[test]
     fn the_status_follows_the_reported_sigma_and_the_bound_stands_beside_it() {
@@ -156,7 +172,7 @@ mod tests {
         let s = render(&r);
         assert!(s.contains("Cramér–Rao σ"), "{s}");
         let a = s.lines().find(|l| l.contains("Cm_alpha")).unwrap();
-        for want in ["-1.100 ± 0.10", "0.010", "identified"] {
+        for want in ["-1.100 ± 0.10", "0.010", " yes ", "identified"] {
             assert!(a.contains(want), "{want} in {a}");
         }
         let plain = Results {
@@ -188,11 +204,10 @@ mod tests {
         let s = render(&r);
         let line = |name: &str| s.lines().find(|l| l.contains(name)).unwrap().to_string();
         let a = line("Cm_alpha");
-        for want in ["-1.100 ± 0.010", "-1.000", "-10.0", "flagged"] {
+        // The reference 10σ away is compared beside the verdict: `no`, and `identified`.
+        for want in ["-1.100 ± 0.010", "-1.000", "-10.0", " no ", "identified"] {
             assert!(a.contains(want), "{want} in {a}");
         }
-        // The flag is listed under the table, naming its parameter.
-        assert!(s.contains("flags:\n  Cm_alpha: the reference -1.0000 lies 10.0σ"), "{s}");
         let q = line("Cm_q ");
         assert!(q.contains("not identified") && !q.contains(" 0 "), "{q}");
         let f = line("│ Cm ");

@@ -16,7 +16,7 @@ pub mod run;
 
 use crate::outdir::{OutputDir, OutputError};
 use crate::plot::{Panel, PlotError, render_panels_png, render_panels_svg};
-use crate::table::{fmt_error_pct, fmt_estimate, fmt_sig};
+use crate::table::{fmt_error_pct, fmt_estimate, fmt_sig, fmt_within};
 use aeroident_pipelines::results::Results;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -195,7 +195,7 @@ fn params_html(r: &Results, h: &mut String) {
     let crb = r.has_crb_std_error();
     let _ = writeln!(
         h,
-        "<table class=\"params\"><tr><th>parameter</th><th>estimate ± σ</th>{}<th>{}</th><th>error %</th><th>status</th></tr>",
+        "<table class=\"params\"><tr><th>parameter</th><th>estimate ± σ</th>{}<th>{}</th><th>error %</th><th>within ±2σ</th><th>status</th></tr>",
         if crb { "<th>Cramér–Rao σ</th>" } else { "" },
         escape(&r.reference_label)
     );
@@ -212,11 +212,12 @@ fn params_html(r: &Results, h: &mut String) {
         };
         let _ = writeln!(
             h,
-            "<tr><td>{}</td><td class=\"n\">{}</td>{crb_cell}<td class=\"n\">{}</td><td class=\"n\">{}</td><td class=\"{class}\">{}</td></tr>",
+            "<tr><td>{}</td><td class=\"n\">{}</td>{crb_cell}<td class=\"n\">{}</td><td class=\"n\">{}</td><td>{}</td><td class=\"{class}\">{}</td></tr>",
             escape(&row.name),
             escape(&fmt_estimate(row.estimate, row.std_error)),
             escape(&fmt_sig(row.reference, 4)),
             fmt_error_pct(row.error_pct()),
+            fmt_within(row),
             escape(&row.status)
         );
     }
@@ -226,6 +227,14 @@ fn params_html(r: &Results, h: &mut String) {
         h.push_str("<p>Flags (why a parameter is not simply identified):</p>\n<ul>\n");
         for f in flags {
             let _ = writeln!(h, "<li class=\"warn\">{}</li>", escape(&f));
+        }
+        h.push_str("</ul>\n");
+    }
+    let notes = r.note_lines(usize::MAX);
+    if !notes.is_empty() {
+        h.push_str("<p>Notes (no doubt about the value; they do not block <em>identified</em>):</p>\n<ul>\n");
+        for n in notes {
+            let _ = writeln!(h, "<li>{}</li>", escape(&n));
         }
         h.push_str("</ul>\n");
     }

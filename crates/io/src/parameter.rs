@@ -56,16 +56,22 @@ pub enum StdErrorSource {
     Coloured,
     /// The parametric bootstrap's scatter of refits (`--bootstrap N`).
     Bootstrap,
+    /// The scatter of the record's manoeuvres fitted alone, where they do not repeat to their
+    /// own σ: the weighted mean's σ scaled by the Birge ratio (`aeroident_pipelines::replay::
+    /// repeatability`).
+    Repeatability,
 }
 
 impl StdErrorSource {
-    /// The key's value in `summary.json`: `covariance`, `cramer_rao`, `coloured`, `bootstrap`.
+    /// The key's value in `summary.json`: `covariance`, `cramer_rao`, `coloured`, `bootstrap`,
+    /// `repeatability`.
     pub fn name(self) -> &'static str {
         match self {
             Self::Covariance => "covariance",
             Self::CramerRao => "cramer_rao",
             Self::Coloured => "coloured",
             Self::Bootstrap => "bootstrap",
+            Self::Repeatability => "repeatability",
         }
     }
 
@@ -76,6 +82,7 @@ impl StdErrorSource {
             Self::CramerRao => "Cramér–Rao",
             Self::Coloured => "coloured-residual",
             Self::Bootstrap => "parametric bootstrap",
+            Self::Repeatability => "manoeuvre-to-manoeuvre scatter",
         }
     }
 }

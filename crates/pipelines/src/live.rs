@@ -118,6 +118,9 @@ pub struct Verdict {
     pub status: String,
     /// The summary's reference, if any.
     pub reference: Option<f64>,
+    /// Whether ±2σ covers the reference (the summary's `reference_check`), beside the verdict;
+    /// `None` without a reference or a σ.
+    pub within_2sigma: Option<bool>,
 }
 
 /// The first message to a client: what the view is about.
@@ -380,12 +383,14 @@ impl LiveState {
         for (i, name) in self.names.iter().enumerate() {
             let p = summary.parameters.iter().find(|p| p.result.name == *name);
             if let (Some(p), Some(k)) = (p, self.trackers.get_mut(i)) {
-                k.conclude(&p.result.flags);
+                k.conclude(&p.result.status, &p.result.flags);
             }
             let reference = p.and_then(|p| p.result.reference).or(self.references[i]);
             let status =
                 p.map_or_else(|| "not in summary".to_string(), |p| p.result.status.clone());
-            verdicts.push(Verdict { status, reference });
+            let within_2sigma =
+                p.and_then(|p| p.result.reference_check.as_ref()).and_then(|c| c.within_2sigma);
+            verdicts.push(Verdict { status, reference, within_2sigma });
         }
         self.verdicts = Some(verdicts);
     }

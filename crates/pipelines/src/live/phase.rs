@@ -10,8 +10,11 @@
 //!   stable, not merely confident while it drifts).
 //! - **flagged**, with the reason: while running, the estimate lies outside the aircraft's
 //!   plausible range by more than 2σ ([`crate::plausibility::implausible`]), or the methods
-//!   following the feed split on it ([`super::panel`]); at the end, the final summary's flags
-//!   (cross-check, plausibility, compatibility, precision) and those only.
+//!   following the feed split on it ([`super::panel`]).
+//!
+//! The σ rule is the running view's preview of how far a derivative has come. At the end the
+//! final verdict ([`crate::verdict`], the summary's status and flags) replaces it, so the page
+//! ends on the same verdict as `summary.json`.
 //!
 //! A flag overlays the other three states without resetting them: the σ rule and its hold
 //! are followed throughout, so a derivative whose flag clears shows at once where it stands.
@@ -119,10 +122,19 @@ impl Tracker {
         }
     }
 
-    /// The end of the run: the final summary's flags replace the running ones; without any,
-    /// the state is the σ rule's.
-    pub fn conclude(&mut self, flags: &[String]) {
-        self.reason = if flags.is_empty() { None } else { Some(flags.join("; ")) };
+    /// The end of the run: the final verdict ([`crate::verdict`]) replaces the running state.
+    /// `identified` is identified whatever the σ rule said (σ above its fraction is a note,
+    /// not a doubt); `flagged` is flagged with its flags; a parameter without an estimate is
+    /// waiting; any other status (`diverged`, `not converged`) is flagged with it.
+    pub fn conclude(&mut self, status: &str, flags: &[String]) {
+        use aeroident_io::parameter::{STATUS_IDENTIFIED, STATUS_NOT_IDENTIFIED};
+        self.since = None;
+        (self.phase, self.reason) = match status {
+            STATUS_IDENTIFIED => (Some(Phase::Identified), None),
+            STATUS_NOT_IDENTIFIED => (Some(Phase::Waiting), None),
+            _ if flags.is_empty() => (Some(Phase::Flagged), Some(status.to_string())),
+            _ => (Some(Phase::Flagged), Some(flags.join("; "))),
+        };
     }
 }
 
@@ -165,8 +177,8 @@ mod tests {
     }
 
     /// A running flag flags the derivative with its reason while it holds, without resetting
-    /// the σ rule's hold underneath; the final summary's flags replace the running ones, and
-    /// none leaves the σ rule's state.
+    /// the σ rule's hold underneath; the final verdict replaces the running state: identified
+    /// even where the σ rule still said converging, flagged with its flags, or with its status.
     #[test]
     fn flags_carry_their_reason() {
         let mut k = Tracker::default();
@@ -184,9 +196,18 @@ mod tests {
         k.step(&RULE, 2.2, Some(-1.0), Some(0.01), None);
         assert_eq!((k.phase(), k.reason()), (Phase::Identified, None));
         k.step(&RULE, 2.3, Some(-1.0), Some(0.01), Some("cross-check: split".into()));
-        k.conclude(&[]);
+        k.conclude("identified", &[]);
         assert_eq!((k.phase(), k.reason()), (Phase::Identified, None));
-        k.conclude(&["cross-check: a".into(), "b".into()]);
+        k.conclude("flagged", &["cross-check: a".into(), "b".into()]);
         assert_eq!((k.phase(), k.reason()), (Phase::Flagged, Some("cross-check: a; b")));
+        // σ 20 % (converging by the σ rule) but identified by the verdict: identified.
+        k.step(&RULE, 2.4, Some(-1.0), Some(0.2), None);
+        assert_eq!(k.phase(), Phase::Converging);
+        k.conclude("identified", &[]);
+        assert_eq!(k.phase(), Phase::Identified);
+        k.conclude("diverged", &[]);
+        assert_eq!((k.phase(), k.reason()), (Phase::Flagged, Some("diverged")));
+        k.conclude("not identified", &[]);
+        assert_eq!(k.phase(), Phase::Waiting);
     }
 }

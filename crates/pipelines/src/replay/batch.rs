@@ -19,6 +19,7 @@
 use super::ReplayError;
 use super::diagnostics::{self, Identifiability};
 use super::prediction::{Recorder, ValidationReport, validate_coefficients};
+use super::repeatability::{Repeatability, SoloFit};
 use crate::record::Manoeuvres;
 pub use crate::results::OutputTrace;
 use crate::validation::{OutputData, validate};
@@ -372,6 +373,10 @@ pub struct BatchSummary {
     /// Per surface and accelerometer mapped, its sign as the record's own responses decide it
     /// ([`super::sign_tests`]); empty when the record maps none.
     pub sign_tests: Vec<aeroident_io::replay_output::SignTest>,
+    /// With two or more manoeuvres (`oe`, `fem`): each fitted alone and every parameter's
+    /// values tested for agreement ([`super::repeatability`]); absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub repeatability: Option<super::repeatability::Repeatability>,
 }
 
 /// The richest preset the flight model can integrate from the record's first sample.
@@ -1001,7 +1006,78 @@ pub(crate) fn fit_time_domain(
     if let Some(c) = &options.compat {
         summary.warnings.extend(c.warnings());
     }
+    repeat_stage(&slices, st, options, &mut summary);
     Ok(BatchOutcome { model, result: fitted.result, summary, traces, frequency: None })
+}
+
+/// The repeatability stage ([`super::repeatability`]): with two or more manoeuvres, each fitted
+/// alone by the same method (no bootstrap), its estimates tested for agreement; a parameter
+/// that does not repeat gets the warning that flags it and the σ of its manoeuvres' spread
+/// where that is the larger (source `repeatability`).
+fn repeat_stage(
+    slices: &[&[AirDataSample]],
+    structure: ModelStructure,
+    options: &FitOptions,
+    summary: &mut BatchSummary,
+) {
+    use rayon::prelude::*;
+    if slices.len() < 2 {
+        return;
+    }
+    let solo = FitOptions { bootstrap_refits: None, bootstrap_done: None, ..options.clone() };
+    let fits: Vec<SoloFit> =
+        slices.par_iter().enumerate().map(|(k, m)| solo_fit(k, m, structure, &solo)).collect();
+    let names: Vec<String> = summary.parameters.iter().map(|p| p.name.clone()).collect();
+    let rep = Repeatability::assess(fits, &names);
+    summary.warnings.extend(rep.warnings());
+    for p in &mut summary.parameters {
+        let (Some(r), Some(sigma)) = (rep.failed(&p.name), p.std_error) else { continue };
+        if r.spread_sigma() > sigma {
+            p.result.std_error = Some(r.spread_sigma());
+            p.result.std_error_source = Some(StdErrorSource::Repeatability);
+        }
+    }
+    summary.repeatability = Some(rep);
+}
+
+/// Manoeuvre `k` fitted alone: its estimates and σ (the reported ones) when the fit converged.
+fn solo_fit(
+    k: usize,
+    m: &[AirDataSample],
+    structure: ModelStructure,
+    options: &FitOptions,
+) -> SoloFit {
+    let mut fit = SoloFit {
+        manoeuvre: k,
+        t_start_s: m.first().map_or(f64::NAN, |s| s.t_s),
+        t_end_s: m.last().map_or(f64::NAN, |s| s.t_s),
+        samples: m.len(),
+        status: String::new(),
+        estimates: Vec::new(),
+    };
+    let fitted = match fit_slices(&[m], structure, options) {
+        Ok(f) => f,
+        Err(e) => {
+            fit.status = format!("failed: {e}");
+            return fit;
+        }
+    };
+    if !matches!(fitted.result.termination, Termination::Converged | Termination::CostConverged(_))
+    {
+        fit.status = "not converged".into();
+        return fit;
+    }
+    let sigma = match &fitted.fem {
+        Some(f) => fem_reported_sigma(f).0,
+        None => reported_sigma(&fitted.result),
+    };
+    let r = &fitted.result;
+    fit.estimates = (0..r.n_params)
+        .filter(|&i| sigma[i].is_finite() && sigma[i] > 0.0)
+        .map(|i| (r.names[i].clone(), r.values[i], sigma[i]))
+        .collect();
+    fit.status = "converged".into();
+    fit
 }
 
 /// Refuses the time-domain fits' options on a frequency-domain fit.
@@ -1277,6 +1353,7 @@ fn summarise(
         frequency_domain: None,
         cross_check: None,
         sign_tests: Vec::new(),
+        repeatability: None,
     }
 }
 

@@ -211,6 +211,7 @@ fn summarise(
         bootstrap: None,
         cross_check: None,
         sign_tests: Vec::new(),
+        repeatability: None,
         frequency_domain: Some(FrequencyDomainSummary {
             band_hz: fd.band_hz,
             band_fitted_hz: fitted_band(fd),

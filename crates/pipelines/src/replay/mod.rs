@@ -50,6 +50,7 @@ pub mod kinematics;
 mod online;
 pub mod precision;
 pub mod prediction;
+pub mod repeatability;
 pub mod sign_tests;
 pub mod verdict;
 

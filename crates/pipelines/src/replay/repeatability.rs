@@ -1,0 +1,193 @@
+//! Whether an estimate repeats across the record's manoeuvres: the flight-test engineer's own
+//! test. A record with two or more manoeuvres (windows, gaps, `--and` files) is fitted by each
+//! manoeuvre alone beside the joint fit; each parameter's solo estimates are tested for
+//! agreement against their σ (Jategaonkar 2015 §4.20 and Klein & Morelli 2006 §5.6 compare
+//! estimates from repeated manoeuvres the same way).
+//!
+//! The statistic of one parameter over the `k` manoeuvres that determine it (solo σ at most
+//! [`MAX_RELATIVE_SIGMA`] of |estimate|, a fit that converged): the weighted mean
+//! `θ̄ = Σ θᵢ/σᵢ² / Σ 1/σᵢ²` and `χ² = Σ (θᵢ − θ̄)²/σᵢ²` with `k − 1` degrees of freedom. The
+//! manoeuvres are disjoint stretches of data, so their errors are independent and, if each σ
+//! covers its error and the aircraft is the same, `χ²` follows `χ²_{k−1}`. A p-value below
+//! [`SIGNIFICANCE`] says the values differ by more than their σ: a model that does not hold
+//! across the manoeuvres (a missing term, a nonlinearity over the flight envelope flown, a
+//! time skew), or σ that understate the error. Either way the joint estimate is a compromise
+//! the data do not support to its σ: it is flagged with the values, and its σ is scaled by the
+//! Birge ratio `√(χ²/(k−1))` (the Particle Data Group's scale factor, PDG 2024 §5.2) so that its
+//! ±2σ spans the manoeuvres' spread, the source then `repeatability`.
+
+use aeroident_io::warning::{Warning, WarningKind};
+use serde::Serialize;
+
+/// p-value of the χ² test below which a parameter does not repeat (one false flag in a
+/// hundred parameters whose σ are honest).
+pub const SIGNIFICANCE: f64 = 0.01;
+
+/// A manoeuvre whose solo σ exceeds this share of its |estimate| does not determine the
+/// parameter (it does not fix even its sign to 1σ) and is left out of its test.
+pub const MAX_RELATIVE_SIGMA: f64 = 1.0;
+
+/// One manoeuvre fitted alone.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SoloFit {
+    /// The manoeuvre's index in the record (from 0, in time order; files in `--and` order).
+    pub manoeuvre: usize,
+    /// Its first and last sample times, s.
+    pub t_start_s: f64,
+    /// Its last sample time, s.
+    pub t_end_s: f64,
+    /// Its samples.
+    pub samples: usize,
+    /// `converged`, `not converged` or `failed: why` (only a converged fit is compared).
+    pub status: String,
+    /// `(parameter, estimate, σ)` of a converged fit (σ finite and positive).
+    #[serde(skip)]
+    pub estimates: Vec<(String, f64, f64)>,
+}
+
+/// One manoeuvre's estimate of a parameter.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ManoeuvreValue {
+    /// The manoeuvre ([`SoloFit::manoeuvre`]).
+    pub manoeuvre: usize,
+    /// Its solo estimate.
+    pub estimate: f64,
+    /// Its solo σ.
+    pub std_error: f64,
+}
+
+/// The test of one parameter (module doc).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Repeat {
+    /// The parameter.
+    pub parameter: String,
+    /// The manoeuvres that determine it, with their values.
+    pub values: Vec<ManoeuvreValue>,
+    /// The weighted mean θ̄.
+    pub weighted_mean: f64,
+    /// `Σ (θᵢ − θ̄)²/σᵢ²`.
+    pub chi2: f64,
+    /// `k − 1`.
+    pub dof: usize,
+    /// `P(χ²_{k−1} > chi2)`.
+    pub p_value: f64,
+    /// Whether the values agree (`p_value ≥ SIGNIFICANCE`).
+    pub repeats: bool,
+}
+
+impl Repeat {
+    /// The test of `parameter` over `values` (those of the manoeuvres that determine it);
+    /// `None` with fewer than two.
+    pub fn of(parameter: &str, values: Vec<ManoeuvreValue>) -> Option<Self> {
+        if values.len() < 2 {
+            return None;
+        }
+        let w = |v: &ManoeuvreValue| 1.0 / (v.std_error * v.std_error);
+        let sum_w: f64 = values.iter().map(w).sum();
+        let mean = values.iter().map(|v| w(v) * v.estimate).sum::<f64>() / sum_w;
+        let chi2: f64 = values.iter().map(|v| w(v) * (v.estimate - mean).powi(2)).sum();
+        let dof = values.len() - 1;
+        let p_value = crate::validation::chi2_sf(chi2, dof as f64);
+        Some(Self {
+            parameter: parameter.to_string(),
+            weighted_mean: mean,
+            chi2,
+            dof,
+            p_value,
+            repeats: p_value >= SIGNIFICANCE,
+            values,
+        })
+    }
+
+    /// The σ of the weighted mean scaled by the Birge ratio `√(χ²/dof)` when that exceeds 1
+    /// (module doc): what the manoeuvres' spread says the joint estimate is known to.
+    pub fn spread_sigma(&self) -> f64 {
+        let sum_w: f64 = self.values.iter().map(|v| 1.0 / (v.std_error * v.std_error)).sum();
+        (self.chi2 / self.dof as f64).max(1.0).sqrt() / sum_w.sqrt()
+    }
+
+    /// The flag of a parameter that does not repeat, with the values.
+    pub fn flag(&self) -> String {
+        let values: Vec<String> = self
+            .values
+            .iter()
+            .map(|v| format!("#{} {:.4} ± {:.2e}", v.manoeuvre + 1, v.estimate, v.std_error))
+            .collect();
+        format!(
+            "does not repeat across manoeuvres: {} (χ² {:.1} on {} dof, p = {:.1e} < {SIGNIFICANCE}): the model does not hold across them or their σ understate the error; σ scaled to their spread",
+            values.join(", "),
+            self.chi2,
+            self.dof,
+            self.p_value
+        )
+    }
+}
+
+/// The repeatability of a fit (`summary.json` `repeatability`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Repeatability {
+    /// [`SIGNIFICANCE`].
+    pub significance: f64,
+    /// Each manoeuvre's solo fit.
+    pub fits: Vec<SoloFit>,
+    /// Each parameter determined by two or more manoeuvres.
+    pub parameters: Vec<Repeat>,
+}
+
+impl Repeatability {
+    /// The tests of `names` over the converged `fits` (module doc).
+    pub fn assess(fits: Vec<SoloFit>, names: &[String]) -> Self {
+        let parameters = names
+            .iter()
+            .filter_map(|name| {
+                let values = fits
+                    .iter()
+                    .filter(|f| f.status == "converged")
+                    .filter_map(|f| {
+                        let &(_, estimate, std_error) =
+                            f.estimates.iter().find(|(n, ..)| n == name)?;
+                        (std_error <= MAX_RELATIVE_SIGMA * estimate.abs()).then_some(
+                            ManoeuvreValue { manoeuvre: f.manoeuvre, estimate, std_error },
+                        )
+                    })
+                    .collect();
+                Repeat::of(name, values)
+            })
+            .collect();
+        Self { significance: SIGNIFICANCE, fits, parameters }
+    }
+
+    /// The test of `parameter` that failed, if any.
+    pub fn failed(&self, parameter: &str) -> Option<&Repeat> {
+        self.parameters.iter().find(|r| r.parameter == parameter && !r.repeats)
+    }
+
+    /// One warning per parameter that does not repeat (about it), and one naming the solo fits
+    /// that did not converge.
+    pub fn warnings(&self) -> Vec<Warning> {
+        let flags = self
+            .parameters
+            .iter()
+            .filter(|r| !r.repeats)
+            .map(|r| Warning::new(WarningKind::Consistency, r.flag()).about(&r.parameter));
+        let unfit: Vec<String> = self
+            .fits
+            .iter()
+            .filter(|f| f.status != "converged")
+            .map(|f| format!("#{} ({})", f.manoeuvre + 1, f.status))
+            .collect();
+        let note = (!unfit.is_empty()).then(|| {
+            Warning::new(
+                WarningKind::Consistency,
+                format!(
+                    "repeatability: manoeuvres fitted alone without a result, left out of the test: {}",
+                    unfit.join(", ")
+                ),
+            )
+        });
+        flags.chain(note).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -98,10 +98,18 @@ pub fn thrust_mapped(mapping: &Mapping) -> bool {
 /// moment it has about the CG, by about 10 %.
 pub const THRUST_VARIATION_LIMIT: f64 = 0.10;
 
+/// `(hi − lo)` over the mean of `lo` and `hi`: how much a speed varied, as a share of itself.
+pub fn relative_variation(lo: f64, hi: f64) -> f64 {
+    (hi - lo) / (0.5 * (hi + lo))
+}
+
 /// A warning about every `Cm` parameter of `structure` when `mapping` gives neither thrust
 /// ([`thrust_mapped`]) nor its pitching moment (`thrust_moment`) and the record shows the
-/// thrust can have changed: `airspeed_mps` or `throttle`, each the `(smallest, largest)`
-/// value of the estimated samples, varied beyond [`THRUST_VARIATION_LIMIT`]. The engine's
+/// thrust can have changed within a manoeuvre: `airspeed_mps` or `throttle`, each the
+/// `(smallest, largest)` value of the estimated samples of the manoeuvre where it varied most,
+/// varied beyond [`THRUST_VARIATION_LIMIT`] (across manoeuvres flown apart, each manoeuvre's
+/// own `Cm_0` would take a constant engine moment, but the fit has one `Cm_0`: that is the
+/// repeatability test's to see, per parameter). The engine's
 /// moment about the CG (a thrust line off the CG, the propeller's normal force) is then part
 /// of the measured pitching moment and follows the flight condition, and every method fits
 /// it into the airframe's terms alike, so no cross-check can see it (a JSBSim Cessna 172
@@ -120,13 +128,13 @@ pub fn unmapped_thrust_moment(
         return None;
     }
     let speed = airspeed_mps
-        .map(|(lo, hi)| (hi - lo) / (0.5 * (hi + lo)))
+        .map(|(lo, hi)| relative_variation(lo, hi))
         .filter(|v| *v > THRUST_VARIATION_LIMIT)
-        .map(|v| format!("the airspeed varied {:.0} % over the record", 100.0 * v));
+        .map(|v| format!("the airspeed varied {:.0} % within a manoeuvre", 100.0 * v));
     let lever = throttle
         .map(|(lo, hi)| hi - lo)
         .filter(|v| *v > THRUST_VARIATION_LIMIT)
-        .map(|v| format!("the throttle moved {:.0} % of its travel", 100.0 * v));
+        .map(|v| format!("the throttle moved {:.0} % of its travel within a manoeuvre", 100.0 * v));
     let why = [speed, lever].into_iter().flatten().collect::<Vec<_>>().join(" and ");
     (!why.is_empty()).then(|| {
         let text = format!(

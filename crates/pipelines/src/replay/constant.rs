@@ -38,16 +38,24 @@ fn term_reads(t: Term, name: &str) -> bool {
     t.inputs().iter().any(|i| i.field() == Some(name))
 }
 
+/// The fields whose range is also kept within each manoeuvre: what moves the thrust.
+const WITHIN: [&str; 2] = ["vt_mps", "throttle"];
+
+/// An empty range of one field: `(smallest, largest, samples)`.
+const EMPTY: (f64, f64, usize) = (f64::INFINITY, f64::NEG_INFINITY, 0);
+
 /// The smallest and largest value of each of `FIELDS` over the samples pushed, and how many
-/// held it.
+/// held it; and of the airspeed and throttle within each manoeuvre.
 #[derive(Debug, Clone)]
 pub struct Spread {
     ranges: [(f64, f64, usize); FIELDS.len()],
+    /// Per manoeuvre, the ranges of [`WITHIN`].
+    within: Vec<[(f64, f64, usize); WITHIN.len()]>,
 }
 
 impl Default for Spread {
     fn default() -> Self {
-        Self { ranges: [(f64::INFINITY, f64::NEG_INFINITY, 0); FIELDS.len()] }
+        Self { ranges: [EMPTY; FIELDS.len()], within: vec![[EMPTY; WITHIN.len()]] }
     }
 }
 
@@ -59,6 +67,32 @@ impl Spread {
                 *r = (r.0.min(v), r.1.max(v), r.2 + 1);
             }
         }
+        let current = self.within.last_mut().expect("one manoeuvre from the start");
+        for (name, r) in WITHIN.iter().zip(current) {
+            if let Some(v) = s.field(name) {
+                *r = (r.0.min(v), r.1.max(v), r.2 + 1);
+            }
+        }
+    }
+
+    /// The samples pushed from now on belong to a new manoeuvre (a gap, a window, another
+    /// file): a flight condition is judged within each, not across two manoeuvres flown
+    /// minutes apart at different speeds.
+    pub fn new_manoeuvre(&mut self) {
+        if self.within.last().is_some_and(|m| m.iter().any(|r| r.2 > 0)) {
+            self.within.push([EMPTY; WITHIN.len()]);
+        }
+    }
+
+    /// The `(smallest, largest)` of field `WITHIN[k]` in the manoeuvre where it varied most
+    /// (by `measure` of the range); `None` when no manoeuvre held it.
+    fn widest_within(&self, k: usize, measure: impl Fn(f64, f64) -> f64) -> Option<(f64, f64)> {
+        self.within
+            .iter()
+            .map(|m| m[k])
+            .filter(|r| r.2 > 0)
+            .map(|r| (r.0, r.1))
+            .max_by(|a, b| measure(a.0, a.1).total_cmp(&measure(b.0, b.1)))
     }
 
     /// The `(smallest, largest)` value of sample field `name` (one of `FIELDS`) over the
@@ -97,7 +131,7 @@ impl Spread {
     /// cannot refuse such a knot before it has read the record, as the batch fits do): the
     /// spline term is then zero throughout, or `α − k`, which the constant and `alpha` span.
     /// And the warning about the `Cm` terms of a record without thrust whose speed or
-    /// throttle varied ([`crate::plausibility::unmapped_thrust_moment`]).
+    /// throttle varied within a manoeuvre ([`crate::plausibility::unmapped_thrust_moment`]).
     pub fn warnings(&self, structure: &ModelStructure, mapping: &Mapping) -> Vec<Warning> {
         let (lo, hi, n) = self.ranges[0];
         let knots = structure.knots().as_slice().iter().enumerate();
@@ -130,8 +164,8 @@ impl Spread {
         out.extend(crate::plausibility::unmapped_thrust_moment(
             structure,
             mapping,
-            self.range("vt_mps"),
-            self.range("throttle"),
+            self.widest_within(0, crate::plausibility::relative_variation),
+            self.widest_within(1, |lo, hi| hi - lo),
         ));
         out
     }
@@ -170,4 +204,37 @@ pub fn without_constant_terms(
         }
     }
     (ModelSpec { structure, priors, ..model }, held)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two manoeuvres held at 50 and 60 m/s (each within 2 %) draw no thrust doubt, though the
+    /// record spans 18 %; one manoeuvre that itself goes from 50 to 60 m/s does, with its 18 %.
+    #[test]
+    fn the_thrust_doubt_is_judged_within_each_manoeuvre() {
+        let map = "[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"V\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nrho = { value = 1.0, unit = \"kg/m3\" }\nmass = { value = 1000.0, unit = \"kg\" }\nS = { value = 10.0, unit = \"m2\" }\n";
+        let mapping = Mapping::from_toml_str(map, "m.toml").unwrap();
+        let lon = ModelStructure::preset("longitudinal").unwrap();
+        let at = |v: f64| AirDataSample { vt_mps: v, ..AirDataSample::default() };
+        let doubt = |spread: &Spread| {
+            let w = spread.warnings(&lon, &mapping);
+            w.into_iter().find(|w| w.text.starts_with("thrust is not mapped")).map(|w| w.text)
+        };
+        let mut two = Spread::default();
+        [50.0, 50.5, 51.0].iter().for_each(|v| two.push(&at(*v)));
+        two.new_manoeuvre();
+        [60.0, 60.5, 61.0].iter().for_each(|v| two.push(&at(*v)));
+        assert_eq!(doubt(&two), None);
+        let mut one = Spread::default();
+        [50.0, 55.0, 60.0].iter().for_each(|v| one.push(&at(*v)));
+        let text = doubt(&one).unwrap();
+        assert!(text.contains("the airspeed varied 18 % within a manoeuvre"), "{text}");
+        // A new manoeuvre before any sample, or twice in a row, adds no empty one.
+        let mut s = Spread::default();
+        s.new_manoeuvre();
+        s.new_manoeuvre();
+        assert_eq!(s.within.len(), 1);
+    }
 }

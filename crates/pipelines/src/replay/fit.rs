@@ -57,7 +57,10 @@ pub fn fit_records<R: Read>(
         None => super::batch::default_model(&rec.manoeuvres[0][0], mapping)?,
     };
     let mut spread = super::constant::Spread::default();
-    rec.manoeuvres.iter().flatten().for_each(|s| spread.push(s));
+    for m in &rec.manoeuvres {
+        spread.new_manoeuvre();
+        m.iter().for_each(|s| spread.push(s));
+    }
     let full = model.structure;
     let (model, held) = super::constant::without_constant_terms(model, &spread, mapping);
     let mut out = match options.method {

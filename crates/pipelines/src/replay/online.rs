@@ -198,6 +198,7 @@ impl<'a> Replay<'a> {
         }
         self.kinematics.new_segment();
         self.sign_log.new_segment();
+        self.spread.new_manoeuvre();
     }
 
     /// The first sample: chooses the model, checks the record supports it, builds the

@@ -13,9 +13,10 @@ use serde::Serialize;
 use std::path::Path;
 
 /// Per-parameter entry of `summary.json`: the common keys ([`ParameterResult`]: `name`,
-/// `estimate` (at the last sample), `reference` (the truth), `status` (`identified` within the
-/// convergence tolerance, ±5 %, else `flagged`, the flag saying how far), `flags`; no σ: the thesis's
-/// estimators report none) and the thesis's metrics.
+/// `estimate` (at the last sample), `reference` (the truth) and `reference_check` (a final
+/// value outside the convergence tolerance, ±5 %, is among its findings, saying how far),
+/// `status` (`flagged`: the thesis's estimators report no σ, so nothing measured how well the
+/// record determines them), `flags`, `notes`) and the thesis's metrics.
 #[derive(Debug, Clone, Serialize)]
 pub struct ParamSummary {
     /// The common keys.
@@ -71,12 +72,11 @@ pub fn summarize(sc: &PocScenario, out: &RunOutput) -> anyhow::Result<Summary> {
         // A NaN error (no truth to compare with) is not within the tolerance either.
         let within = rel.abs() <= CONVERGENCE_TOL_REL;
         if !within {
-            result.flag(format!(
+            result.reference_finding(format!(
                 "the final value is {:+.1} % from the truth (not within {:.0} %)",
                 100.0 * rel,
                 100.0 * CONVERGENCE_TOL_REL
             ));
-            result.judge(None);
         }
         parameters.push(ParamSummary {
             result,
@@ -212,8 +212,8 @@ pub fn write_figures(
     Ok(vec![estimates, states])
 }
 
-/// The results of a run: the final estimate of each parameter against its truth; status `ok`
-/// within the convergence tolerance (±5 %), else `flagged` (its flag says how far).
+/// The results of a run: the final estimate of each parameter against its truth, the status
+/// beside it (module doc of [`ParamSummary`]).
 pub fn results(summary: &Summary, title: &str) -> Results {
     let rows = summary.parameters.iter().map(|p| p.result.clone()).collect();
     let notes = summary

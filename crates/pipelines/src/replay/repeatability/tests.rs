@@ -19,8 +19,9 @@ fn two_manoeuvres_against_the_analytic_chi_squared() {
     assert!((far.p_value - 4.0695e-4).abs() < 1e-7, "{}", far.p_value);
     assert!(!far.repeats);
     assert!((far.spread_sigma() - 0.25).abs() < 1e-12);
-    // Agreeing values keep the weighted mean's own σ (the ratio is not scaled below 1).
-    assert!((near.spread_sigma() - 0.1 / 2f64.sqrt() * 1.5).abs() < 1e-12);
+    // χ² 4.5 scales 0.1/√2 by √4.5: half the difference again; agreeing values keep the
+    // weighted mean's own σ (the ratio is not scaled below 1).
+    assert!((near.spread_sigma() - 0.15).abs() < 1e-12);
     let same = Repeat::of("x", vec![v(0, 1.0, 0.1), v(1, 1.0, 0.1)]).unwrap();
     assert!((same.spread_sigma() - 0.1 / 2f64.sqrt()).abs() < 1e-12);
     assert!(Repeat::of("x", vec![v(0, 1.0, 0.1)]).is_none());

@@ -95,14 +95,6 @@ impl Spread {
             .max_by(|a, b| measure(a.0, a.1).total_cmp(&measure(b.0, b.1)))
     }
 
-    /// The `(smallest, largest)` value of sample field `name` (one of `FIELDS`) over the
-    /// samples pushed; `None` when none held it.
-    fn range(&self, name: &str) -> Option<(f64, f64)> {
-        let i = FIELDS.iter().position(|f| *f == name)?;
-        let (lo, hi, n) = self.ranges[i];
-        (n > 0).then_some((lo, hi))
-    }
-
     /// The sample fields that held one value in every sample (at least 2).
     fn constant_fields(&self) -> impl Iterator<Item = (&'static str, f64, usize)> + '_ {
         FIELDS

@@ -24,7 +24,30 @@ pub fn imprecise(name: &str, estimate: Option<f64>, std_error: Option<f64>) -> O
     (relative > RELATIVE_SIGMA_LIMIT).then_some(relative)
 }
 
-/// The verdict's flag on an imprecise estimate of σ/|θ| = `relative`: `σ 32 % of |estimate|:
+/// The t-ratio `|θ|/σ` below which an estimate is not told from zero: its ±2σ (95 %) spans 0,
+/// so the record does not fix even its sign (the significance test of every regression table,
+/// Klein & Morelli 2006 §5.1; the structure selection drops such a term).
+pub const MIN_T_RATIO: f64 = 2.0;
+
+/// `|θ|/σ` of an estimate when it is below [`MIN_T_RATIO`], else `None` (also for a constant
+/// term, whose value 0 is a trim's, or a missing estimate or σ).
+pub fn insignificant(name: &str, estimate: Option<f64>, std_error: Option<f64>) -> Option<f64> {
+    if name.ends_with("_0") {
+        return None;
+    }
+    let (e, s) = (estimate?, std_error?);
+    let ratio = if s > 0.0 { e.abs() / s } else { f64::INFINITY };
+    (ratio < MIN_T_RATIO).then_some(ratio)
+}
+
+/// The verdict's flag on an estimate not told from zero, of t-ratio `ratio`.
+pub fn insignificant_flag(ratio: f64) -> String {
+    format!(
+        "not told from 0: |estimate|/σ = {ratio:.1} < {MIN_T_RATIO}, its ±2σ spans zero, so the record does not fix even its sign (excite it, or leave the term out)"
+    )
+}
+
+/// The verdict's note on an imprecise estimate of σ/|θ| = `relative`: `σ 32 % of |estimate|:
 /// the record does not determine it to 10 %`.
 pub fn flag(relative: f64) -> String {
     format!(

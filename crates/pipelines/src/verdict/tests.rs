@@ -24,7 +24,9 @@ fn the_reference_is_compared_beside_the_verdict() {
     assert!((f.distance_sigma.unwrap() - 10.0).abs() < 1e-9);
 }
 
-/// σ 30 % of the estimate is a note, not a flag; a doubt is a flag; an estimate doubt flags an
+/// σ 30 % of the estimate is a note, not a flag; σ 60 % (t-ratio 1.7: ±2σ spans zero) is a
+/// flag, and at a t-ratio of exactly 2 a note again; a constant term near 0 is neither; a
+/// doubt is a flag; an estimate doubt flags an
 /// estimate and leaves a parameter without one alone; a failure replaces the verdict.
 #[test]
 fn notes_doubts_and_failures() {
@@ -32,6 +34,20 @@ fn notes_doubts_and_failures() {
     judge(&mut wide, &Evidence::default());
     assert_eq!((wide.status.as_str(), wide.flags.len()), (STATUS_IDENTIFIED, 0));
     assert_eq!(wide.notes, [precision::flag(0.3)]);
+    let mut spans_zero = result("Cm_q", -10.0, 6.0, None);
+    judge(&mut spans_zero, &Evidence::default());
+    assert_eq!(spans_zero.status, STATUS_FLAGGED);
+    assert!(spans_zero.flags[0].starts_with("not told from 0: |estimate|/σ = 1.7 < 2"));
+    assert!(spans_zero.notes.is_empty());
+    let mut edge = result("Cm_q", -10.0, 5.0, None);
+    judge(&mut edge, &Evidence::default());
+    assert_eq!((edge.status.as_str(), edge.notes.len()), (STATUS_IDENTIFIED, 1));
+    let mut trim = result("Cm_0", 0.001, 0.01, None);
+    judge(&mut trim, &Evidence::default());
+    assert_eq!(
+        (trim.status.as_str(), trim.flags.len(), trim.notes.len()),
+        (STATUS_IDENTIFIED, 0, 0)
+    );
     let unconverged = unconverged("initialising").unwrap();
     let evidence = Evidence {
         doubts: vec!["sign test: δe reversed".into()],

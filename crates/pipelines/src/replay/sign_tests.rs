@@ -502,7 +502,7 @@ pub(crate) fn label(mapping: &Mapping, key: &str) -> String {
 /// whose lead over its response is determined and at least a sample and 0.02 s ([`timing`]).
 pub fn warnings(tests: &[SignTest], mapping: &Mapping, dt_s: f64) -> Vec<Warning> {
     let mut out = reversed_warnings(tests, mapping);
-    out.extend(tests.iter().filter_map(|t| timing::warning(t, mapping, dt_s)));
+    out.extend(tests.iter().flat_map(|t| timing::warnings(t, mapping, dt_s)));
     out
 }
 

@@ -250,8 +250,11 @@ fn commanded_elevator_leads_by_its_actuator_lag() {
             (lead - half_sample - tau).abs() < 0.01 && lo < lead && lead < hi,
             "τ {tau}: {de:?}"
         );
-        let w = timing::warning(&de, &mapping(), 0.02).expect("a lead warning");
-        assert_eq!(w.parameter.as_deref(), Some("Cm_de"));
+        let ws = timing::warnings(&de, &mapping(), 0.02);
+        let about: Vec<_> = ws.iter().map(|w| w.parameter.as_deref()).collect();
+        assert_eq!(about, [Some("Cm_de"), Some("Cm_q")]);
+        assert!(ws[1].text.contains("biases its damping derivative Cm_q"), "{}", ws[1].text);
+        let w = &ws[0];
         assert!(
             w.text.contains("channel `de` (column `elev`) leads") && w.text.contains("commanded"),
             "{}",

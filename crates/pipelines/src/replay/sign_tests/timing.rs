@@ -115,10 +115,38 @@ pub(super) fn lead(all: &[Row], dt_s: f64) -> Option<Lead> {
     Some(Lead { lead_s: at(best as f64), lo_s: crossing(-1), hi_s: crossing(1) })
 }
 
-/// The warning of a surface test whose lead is determined (its 95 % interval excludes 0) and at
-/// least [`WARN_LEAD_S`] and one sample interval `dt_s`, in words: a lead is a commanded
+/// The damping derivative of the axis a surface drives (`Cm_q` for `de`, `Cl_p` for `da`,
+/// `Cn_r` for `dr`): a time shift of the surface trades against it, since the response to a
+/// lagged input looks like a more damped response to a prompt one.
+fn damping_of(surface: &str) -> Option<&'static str> {
+    match surface {
+        "de" => Some("Cm_q"),
+        "da" => Some("Cl_p"),
+        "dr" => Some("Cn_r"),
+        _ => None,
+    }
+}
+
+/// The warnings of a surface test whose lead is determined (its 95 % interval excludes 0) and
+/// at least [`WARN_LEAD_S`] and one sample interval `dt_s`, in words: a lead is a commanded
 /// surface or one recorded early, a lag one recorded late; both bias the control and damping
-/// derivatives of every method.
+/// derivatives of every method, so one warning is about the control derivative and a second,
+/// pointing to it, about the damping derivative (empty without a determined lead).
+pub fn warnings(t: &SignTest, mapping: &Mapping, dt_s: f64) -> Vec<Warning> {
+    let Some(w) = warning(t, mapping, dt_s) else { return Vec::new() };
+    let damping = damping_of(&t.channel).zip(w.parameter.clone()).map(|(d, control)| {
+        let text = format!(
+            "input timing: the {} shift of `{}` named on {control} biases its damping derivative {d} too (a lagged input reads as extra damping)",
+            if t.lead_s.is_some_and(|l| l > 0.0) { "lead" } else { "lag" },
+            t.channel
+        );
+        Warning::new(WarningKind::InputTiming, text).about(d)
+    });
+    std::iter::once(w).chain(damping).collect()
+}
+
+/// The warning of a surface test whose lead is determined ([`warnings`]), about its control
+/// derivative.
 pub fn warning(t: &SignTest, mapping: &Mapping, dt_s: f64) -> Option<Warning> {
     let (lead, (lo, hi)) = (t.lead_s?, t.lead_interval_s?);
     if lead.abs() < WARN_LEAD_S.max(dt_s) || (lo <= 0.0 && hi >= 0.0) {

@@ -3,13 +3,14 @@
 //! Python and the C ABI's final report all read the verdicts judged here).
 //!
 //! A flag is a doubt the run found about the value: a warning about the parameter or its
-//! coefficient (sign checks, the cross-check's tested disagreements, the thrust test,
-//! repeatability), an estimator that ended before every parameter was identified, a value a
+//! coefficient (sign checks, input timing, the cross-check's tested disagreements, the thrust
+//! test), an estimator that ended before every parameter was identified, a value a
 //! conventional aircraft cannot have ([`crate::plausibility`]), a degenerate filter, no σ at
 //! all, an estimate whose ±2σ spans zero ([`precision::insignificant`]). Any flag
 //! makes the status `flagged`; without one it is `identified`. A note is no doubt (a σ between
-//! 10 % and half of the estimate says imprecise, not wrong, [`crate::replay::precision`]) and
-//! never blocks `identified`. A reference (a simulation's truth, a model file's published value) is
+//! 10 % and half of the estimate says imprecise, not wrong, [`crate::replay::precision`]; a value
+//! that does not repeat across manoeuvres, its σ scaled to their spread,
+//! [`crate::replay::repeatability`]) and never blocks `identified`. A reference (a simulation's truth, a model file's published value) is
 //! never read here: it is set beside the verdict in `reference_check`
 //! ([`aeroident_io::ParameterResult::check_reference`]).
 //!
@@ -37,6 +38,9 @@ pub struct Evidence<'a> {
     pub estimate_doubts: Vec<String>,
     /// A status that replaces the verdict (`diverged`, `not converged`).
     pub failure: Option<&'a str>,
+    /// What is worth knowing and no doubt about the value (a value that does not repeat
+    /// across manoeuvres, its σ scaled to their spread); each becomes a note.
+    pub notes: Vec<String>,
 }
 
 /// Judges `r` on `evidence` (module doc): its flags are those `r` holds (a held or withdrawn
@@ -57,6 +61,7 @@ pub fn judge(r: &mut ParameterResult, evidence: &Evidence) {
     if let Some((model, thrust_mapped)) = evidence.plausibility {
         crate::plausibility::check(model, thrust_mapped, std::iter::once(&mut *r));
     }
+    evidence.notes.iter().for_each(|n| r.note(n.clone()));
     if let Some(ratio) = precision::insignificant(&r.name, r.estimate, r.std_error) {
         r.flag(precision::insignificant_flag(ratio));
     } else if let Some(relative) = precision::imprecise(&r.name, r.estimate, r.std_error) {

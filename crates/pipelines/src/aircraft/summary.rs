@@ -356,6 +356,7 @@ impl ParamSummary {
             plausibility: None,
             estimate_doubts: status.and_then(crate::verdict::unconverged).into_iter().collect(),
             failure: (status == Some(STATUS_DIVERGED)).then_some(STATUS_DIVERGED),
+            notes: Vec::new(),
         };
         crate::verdict::judge(r, &evidence);
         misses.into_iter().for_each(|m| r.reference_finding(m));

@@ -179,7 +179,8 @@ impl BatchSummary {
     /// Sets every parameter's reference (the `model` file's, compared beside the verdict),
     /// flags, notes and status through the one judge ([`crate::verdict`]): the warnings about
     /// it, the plausibility check (the drag terms withdrawn unless `thrust_mapped`), a
-    /// collapsed `fem` noise variance ([`BatchSummary::collapsed_noise`]); `not identified`
+    /// collapsed `fem` noise variance ([`BatchSummary::collapsed_noise`]); a value that does
+    /// not repeat across manoeuvres as a note ([`super::repeatability`]); `not identified`
     /// with the reason for a parameter the method does not estimate; `not converged` for every
     /// parameter of a fit that ended at its iteration limit with its last step still above
     /// 1 σ ([`BatchSummary::still_moving`]).
@@ -204,11 +205,13 @@ impl BatchSummary {
                     self.estimator
                 ));
             }
+            let repeat = self.repeatability.as_ref().and_then(|rep| rep.failed(&r.name));
             let evidence = Evidence {
                 doubts,
                 plausibility: Some((model, thrust_mapped)),
                 estimate_doubts: degenerate.iter().cloned().collect(),
                 failure: moving.then_some(STATUS_NOT_CONVERGED),
+                notes: repeat.map(super::repeatability::Repeat::note).into_iter().collect(),
             };
             crate::verdict::judge(r, &evidence);
         }
@@ -1012,8 +1015,8 @@ pub(crate) fn fit_time_domain(
 
 /// The repeatability stage ([`super::repeatability`]): with two or more manoeuvres, each fitted
 /// alone by the same method (no bootstrap), its estimates tested for agreement; a parameter
-/// that does not repeat gets the warning that flags it and the σ of its manoeuvres' spread
-/// where that is the larger (source `repeatability`).
+/// that does not repeat gets a warning naming it (the judge's note) and the σ of its
+/// manoeuvres' spread where that is the larger (source `repeatability`).
 fn repeat_stage(
     slices: &[&[AirDataSample]],
     structure: ModelStructure,

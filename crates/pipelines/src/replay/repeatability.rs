@@ -11,10 +11,16 @@
 //! covers its error and the aircraft is the same, `χ²` follows `χ²_{k−1}`. A p-value below
 //! [`SIGNIFICANCE`] says the values differ by more than their σ: a model that does not hold
 //! across the manoeuvres (a missing term, a nonlinearity over the flight envelope flown, a
-//! time skew), or σ that understate the error. Either way the joint estimate is a compromise
-//! the data do not support to its σ: it is flagged with the values, and its σ is scaled by the
-//! Birge ratio `√(χ²/(k−1))` (the Particle Data Group's scale factor, PDG 2024 §5.2) so that its
-//! ±2σ spans the manoeuvres' spread, the source then `repeatability`.
+//! time skew), or σ that understate the error. Either way the joint estimate is known no better
+//! than the manoeuvres agree: its σ is scaled by the Birge ratio `√(χ²/(k−1))` (the Particle
+//! Data Group's scale factor, PDG 2024 §5.2) so that its ±2σ spans the manoeuvres' spread, the
+//! source then `repeatability`, and a note gives the values.
+//!
+//! A note, not a flag: on the calibration corpus's tune half (`scripts/verdict_corpus`, 82
+//! output-error estimates of primary derivatives that did not repeat) the joint value was no
+//! more often 10 % off the truth (29 %) than where the manoeuvres agreed (30 %), while the
+//! scaled σ covered the truth in 84 % of them against 58 %: the test says how well the value is
+//! known, not that it is wrong.
 
 use aeroident_io::warning::{Warning, WarningKind};
 use serde::Serialize;
@@ -106,15 +112,15 @@ impl Repeat {
         (self.chi2 / self.dof as f64).max(1.0).sqrt() / sum_w.sqrt()
     }
 
-    /// The flag of a parameter that does not repeat, with the values.
-    pub fn flag(&self) -> String {
+    /// The note of a parameter that does not repeat, with the values.
+    pub fn note(&self) -> String {
         let values: Vec<String> = self
             .values
             .iter()
             .map(|v| format!("#{} {:.4} ± {:.2e}", v.manoeuvre + 1, v.estimate, v.std_error))
             .collect();
         format!(
-            "does not repeat across manoeuvres: {} (χ² {:.1} on {} dof, p = {:.1e} < {SIGNIFICANCE}): the model does not hold across them or their σ understate the error; σ scaled to their spread",
+            "does not repeat across manoeuvres to their σ: {} (χ² {:.1} on {} dof, p = {:.1e} < {SIGNIFICANCE}): the model does not hold across them or their σ understate the error; σ scaled to their spread",
             values.join(", "),
             self.chi2,
             self.dof,
@@ -162,14 +168,13 @@ impl Repeatability {
         self.parameters.iter().find(|r| r.parameter == parameter && !r.repeats)
     }
 
-    /// One warning per parameter that does not repeat (about it), and one naming the solo fits
-    /// that did not converge.
+    /// One warning per parameter that does not repeat (naming it, not about it: the judge
+    /// takes it as a note, [`Self::failed`]), and one naming the solo fits that did not
+    /// converge.
     pub fn warnings(&self) -> Vec<Warning> {
-        let flags = self
-            .parameters
-            .iter()
-            .filter(|r| !r.repeats)
-            .map(|r| Warning::new(WarningKind::Consistency, r.flag()).about(&r.parameter));
+        let flags = self.parameters.iter().filter(|r| !r.repeats).map(|r| {
+            Warning::new(WarningKind::Consistency, format!("{}: {}", r.parameter, r.note()))
+        });
         let unfit: Vec<String> = self
             .fits
             .iter()

@@ -21,6 +21,7 @@ pub fn judge(outcome: &mut ReplayOutcome, thrust_mapped: bool) {
             plausibility: Some((model, thrust_mapped)),
             estimate_doubts: unconverged.iter().cloned().collect(),
             failure: diverged.then_some(STATUS_DIVERGED),
+            notes: Vec::new(),
         };
         verdict::judge(r, &evidence);
     }

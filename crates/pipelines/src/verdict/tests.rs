@@ -42,6 +42,10 @@ fn notes_doubts_and_failures() {
     let mut edge = result("Cm_q", -10.0, 5.0, None);
     judge(&mut edge, &Evidence::default());
     assert_eq!((edge.status.as_str(), edge.notes.len()), (STATUS_IDENTIFIED, 1));
+    let mut spread = result("Cm_q", -10.0, 0.5, None);
+    let note = "does not repeat across manoeuvres to their σ: …".to_string();
+    judge(&mut spread, &Evidence { notes: vec![note.clone()], ..Default::default() });
+    assert_eq!((spread.status.as_str(), spread.notes.clone()), (STATUS_IDENTIFIED, vec![note]));
     let mut trim = result("Cm_0", 0.001, 0.01, None);
     judge(&mut trim, &Evidence::default());
     assert_eq!(

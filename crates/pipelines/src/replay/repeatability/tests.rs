@@ -25,7 +25,7 @@ fn two_manoeuvres_against_the_analytic_chi_squared() {
     let same = Repeat::of("x", vec![v(0, 1.0, 0.1), v(1, 1.0, 0.1)]).unwrap();
     assert!((same.spread_sigma() - 0.1 / 2f64.sqrt()).abs() < 1e-12);
     assert!(Repeat::of("x", vec![v(0, 1.0, 0.1)]).is_none());
-    assert!(far.flag().contains("#1 1.0000 ± 1.00e-1, #2 1.5000 ± 1.00e-1"), "{}", far.flag());
+    assert!(far.note().contains("#1 1.0000 ± 1.00e-1, #2 1.5000 ± 1.00e-1"), "{}", far.note());
 }
 
 /// Values drawn from one truth with their σ (three manoeuvres, σ 0.05, 0.1 and 0.2): over
@@ -87,7 +87,9 @@ fn only_the_manoeuvres_that_determine_a_parameter_are_compared() {
     assert!(r.failed("Cl_p").is_none());
     let w = r.warnings();
     assert_eq!(w.len(), 2);
-    assert!(w[0].text.starts_with("does not repeat across manoeuvres: #1 -10.0000"));
-    assert_eq!(w[0].parameter.as_deref(), Some("Cm_q"));
+    assert!(
+        w[0].text.starts_with("Cm_q: does not repeat across manoeuvres to their σ: #1 -10.0000")
+    );
+    assert_eq!(w[0].parameter, None, "a note, not a flag");
     assert!(w[1].text.contains("#3 (not converged), #4 (failed: too short)"), "{}", w[1].text);
 }

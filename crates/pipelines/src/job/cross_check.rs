@@ -45,6 +45,40 @@ pub fn run_panel(
     out
 }
 
+/// The regressor-noise test of a least-squares replay (`rls`, `ftr`) whose own estimates are
+/// `own`: the record replayed by instrumental variables with `base`'s model, corrections and
+/// windows under `guard` ([`crate::replay::cross_check::regressor_noise`]), its warnings to
+/// `log` and `warnings`; nothing for another estimator, several records, a live feed (stdin
+/// or MAVLink: it cannot be read twice; a live view's running cross-check holds rls-iv), or a
+/// stop (a warning says the test was not done).
+///
+/// # Errors
+/// The face could not run the step.
+pub fn regressor_noise_test(
+    records: &Records,
+    own: &MethodEstimates,
+    base: ReplayOptions,
+    guard: &mut impl Guard,
+    log: &mut dyn JobLog,
+    warnings: &mut aeroident_io::warning::Warnings,
+) -> Result<(), ReplayError> {
+    let least_squares = matches!(base.estimator, EstimatorKind::Rls | EstimatorKind::Ftr);
+    if !least_squares || !records.and.is_empty() || records.live {
+        return Ok(());
+    }
+    let records = records.clone();
+    let step = move || run_online(&records, EstimatorKind::RlsIv, &base);
+    let Some(iv) = guard.run(Step::RegressorNoise, step)? else {
+        warnings.push("the run was interrupted: the regressor-noise test was not done".to_string());
+        return Ok(());
+    };
+    for w in crate::replay::cross_check::regressor_noise(own, &iv) {
+        log.warning(&w);
+        warnings.push(w);
+    }
+    Ok(())
+}
+
 fn run_online(records: &Records, kind: EstimatorKind, base: &ReplayOptions) -> MethodEstimates {
     let name = kind.name();
     let opts = ReplayOptions {

@@ -201,6 +201,8 @@ pub enum Step {
     ValidateOn,
     /// The cross-check: the record's other methods.
     CrossCheck,
+    /// Least squares' regressor-noise test: the record replayed by instrumental variables.
+    RegressorNoise,
 }
 
 impl Step {
@@ -211,6 +213,9 @@ impl Step {
             Step::Model => "--model auto (the structure selection)",
             Step::ValidateOn => "--validate-on",
             Step::CrossCheck => "--cross-check (the record's other methods)",
+            Step::RegressorNoise => {
+                "the regressor-noise test (the record replayed by instrumental variables)"
+            }
         }
     }
 }

@@ -136,6 +136,8 @@ impl ReplayJob {
         }
         if self.cross_check && !interrupted {
             self.cross_check(&prepared.options, &mut outcome, guard, log)?;
+        } else if !interrupted && !outcome.diverged() {
+            self.regressor_noise(&prepared.options, &mut outcome, guard, log)?;
         }
         let validation_on = match &self.validate_on {
             Some(v) if !outcome.diverged() && !interrupted => {
@@ -171,6 +173,29 @@ impl ReplayJob {
             return Ok(());
         };
         outcome.cross_check = Some(check);
+        let thrust = crate::plausibility::thrust_mapped(&self.records.mapping);
+        crate::replay::verdict::judge(outcome, thrust);
+        Ok(())
+    }
+
+    /// Without `--cross-check`, least squares' regressor-noise test
+    /// ([`super::cross_check::regressor_noise_test`]); the verdicts are judged again with its
+    /// doubts.
+    fn regressor_noise(
+        &self,
+        options: &ReplayOptions,
+        outcome: &mut ReplayOutcome,
+        guard: &mut impl Guard,
+        log: &mut dyn JobLog,
+    ) -> Result<(), ReplayError> {
+        let own = super::cross_check::own_estimates(
+            options.estimator,
+            &outcome.summary.status,
+            outcome.summary.parameters.iter().map(|p| &p.result),
+        );
+        let base = ReplayOptions { model: Some(outcome.model.clone()), ..options.clone() };
+        let warnings = &mut outcome.summary.warnings;
+        super::cross_check::regressor_noise_test(&self.records, &own, base, guard, log, warnings)?;
         let thrust = crate::plausibility::thrust_mapped(&self.records.mapping);
         crate::replay::verdict::judge(outcome, thrust);
         Ok(())

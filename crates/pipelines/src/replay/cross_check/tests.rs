@@ -167,3 +167,23 @@ fn regressor_noise_shown_on_one_term_sets_aside_the_terms_it_moves_in_that_equat
     let flag = lone.parameters[0].flag.as_deref().unwrap_or_default();
     assert!(flag.contains("oe disagree with rls"), "{:?}", lone.parameters[0]);
 }
+
+/// The default regressor-noise test of least squares: rls Cl_β −0.048 ± 0.005 against
+/// instrumental variables' −0.133 ± 0.02 (4.1 combined σ and 64 %) is doubted, with both
+/// values; Cl_p −0.40 ± 0.02 against −0.41 ± 0.02 (2.4 %) is not; a parameter IV does not give
+/// is not; a failed IV replay doubts nothing.
+#[test]
+fn least_squares_is_doubted_where_instrumental_variables_move_it() {
+    let own =
+        method("rls", &[("Cl_beta", -0.048, 0.005), ("Cl_p", -0.40, 0.02), ("Cl_r", 0.1, 0.01)]);
+    let iv = method("rls-iv", &[("Cl_beta", -0.133, 0.02), ("Cl_p", -0.41, 0.02)]);
+    let w = regressor_noise(&own, &iv);
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert_eq!(w[0].parameter.as_deref(), Some("Cl_beta"));
+    assert!(
+        w[0].text.starts_with("regressor noise: instrumental variables move rls -0.0480 ± 5.00e-3 to -0.1330 ± 2.00e-2"),
+        "{}",
+        w[0].text
+    );
+    assert!(regressor_noise(&own, &MethodEstimates::failed("rls-iv", "no β")).is_empty());
+}

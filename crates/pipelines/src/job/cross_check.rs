@@ -69,7 +69,7 @@ pub fn regressor_noise_test(
     let records = records.clone();
     let step = move || run_online(&records, EstimatorKind::RlsIv, &base);
     let Some(iv) = guard.run(Step::RegressorNoise, step)? else {
-        warnings.push("the run was interrupted: the regressor-noise test was not done".to_string());
+        abandoned("the regressor-noise test", log, warnings);
         return Ok(());
     };
     for w in crate::replay::cross_check::regressor_noise(own, &iv) {
@@ -77,6 +77,13 @@ pub fn regressor_noise_test(
         warnings.push(w);
     }
     Ok(())
+}
+
+/// The warning of a step a stop abandoned (`what` not done), to `log` and `warnings`.
+fn abandoned(what: &str, log: &mut dyn JobLog, warnings: &mut aeroident_io::warning::Warnings) {
+    let w = format!("the run was interrupted: {what} not done");
+    log.warning(&w);
+    warnings.push(w);
 }
 
 fn run_online(records: &Records, kind: EstimatorKind, base: &ReplayOptions) -> MethodEstimates {
@@ -182,9 +189,7 @@ pub fn check(
     let records = records.clone();
     let step = move || run_panel(&records, base.estimator, &base);
     let Some(others) = guard.run(Step::CrossCheck, step)? else {
-        let w = "the run was interrupted: --cross-check not done".to_string();
-        log.warning(&w);
-        warnings.push(w);
+        abandoned("--cross-check", log, warnings);
         return Ok(None);
     };
     let check = crate::replay::cross_check::judge(own, &others);

@@ -134,10 +134,8 @@ impl ReplayJob {
             log.warning(&w);
             outcome.summary.warnings.push(w);
         }
-        if self.cross_check && !interrupted {
-            self.cross_check(&prepared.options, &mut outcome, guard, log)?;
-        } else if !interrupted && !outcome.diverged() {
-            self.regressor_noise(&prepared.options, &mut outcome, guard, log)?;
+        if !interrupted && (self.cross_check || !outcome.diverged()) {
+            self.check_after_feed(&prepared.options, &mut outcome, guard, log)?;
         }
         let validation_on = match &self.validate_on {
             Some(v) if !outcome.diverged() && !interrupted => {
@@ -149,11 +147,13 @@ impl ReplayJob {
         Ok(ReplayJobOutcome { outcome, validation_on, selection, options })
     }
 
-    /// `--cross-check`: the record's other methods run with the same model
+    /// The check after the feed, the verdicts judged again with its doubts: with
+    /// `--cross-check` the record's other methods run with the same model
     /// ([`super::cross_check::run_panel`]) and the online estimates judged beside them
-    /// ([`crate::replay::cross_check`]); the verdicts are judged again with its flags. A stop
-    /// abandons it with a warning (the online result stands on its own).
-    fn cross_check(
+    /// ([`crate::replay::cross_check`]); without it, least squares' regressor-noise test
+    /// ([`super::cross_check::regressor_noise_test`]). A stop abandons either with a warning
+    /// (the online result stands on its own).
+    fn check_after_feed(
         &self,
         options: &ReplayOptions,
         outcome: &mut ReplayOutcome,
@@ -166,36 +166,13 @@ impl ReplayJob {
             outcome.summary.parameters.iter().map(|p| &p.result),
         );
         let base = ReplayOptions { model: Some(outcome.model.clone()), ..options.clone() };
-        let warnings = &mut outcome.summary.warnings;
-        let Some(check) =
-            super::cross_check::check(&self.records, &own, base, guard, log, warnings)?
-        else {
-            return Ok(());
-        };
-        outcome.cross_check = Some(check);
-        let thrust = crate::plausibility::thrust_mapped(&self.records.mapping);
-        crate::replay::verdict::judge(outcome, thrust);
-        Ok(())
-    }
-
-    /// Without `--cross-check`, least squares' regressor-noise test
-    /// ([`super::cross_check::regressor_noise_test`]); the verdicts are judged again with its
-    /// doubts.
-    fn regressor_noise(
-        &self,
-        options: &ReplayOptions,
-        outcome: &mut ReplayOutcome,
-        guard: &mut impl Guard,
-        log: &mut dyn JobLog,
-    ) -> Result<(), ReplayError> {
-        let own = super::cross_check::own_estimates(
-            options.estimator,
-            &outcome.summary.status,
-            outcome.summary.parameters.iter().map(|p| &p.result),
-        );
-        let base = ReplayOptions { model: Some(outcome.model.clone()), ..options.clone() };
-        let warnings = &mut outcome.summary.warnings;
-        super::cross_check::regressor_noise_test(&self.records, &own, base, guard, log, warnings)?;
+        let (records, warnings) = (&self.records, &mut outcome.summary.warnings);
+        if self.cross_check {
+            let check = super::cross_check::check(records, &own, base, guard, log, warnings)?;
+            outcome.cross_check = check;
+        } else {
+            super::cross_check::regressor_noise_test(records, &own, base, guard, log, warnings)?;
+        }
         let thrust = crate::plausibility::thrust_mapped(&self.records.mapping);
         crate::replay::verdict::judge(outcome, thrust);
         Ok(())

@@ -1079,7 +1079,7 @@ fn solo_fit(
         .filter(|&i| sigma[i].is_finite() && sigma[i] > 0.0)
         .map(|i| (r.names[i].clone(), r.values[i], sigma[i]))
         .collect();
-    fit.status = "converged".into();
+    fit.status = super::repeatability::CONVERGED.into();
     fit
 }
 

@@ -1,8 +1,8 @@
 //! Whether an estimate repeats across the record's manoeuvres: the flight-test engineer's own
 //! test. A record with two or more manoeuvres (windows, gaps, `--and` files) is fitted by each
 //! manoeuvre alone beside the joint fit; each parameter's solo estimates are tested for
-//! agreement against their σ (Jategaonkar 2015 §4.20 and Klein & Morelli 2006 §5.6 compare
-//! estimates from repeated manoeuvres the same way).
+//! agreement against their σ, as a flight-test report compares the estimates of repeated
+//! manoeuvres.
 //!
 //! The statistic of one parameter over the `k` manoeuvres that determine it (solo σ at most
 //! [`MAX_RELATIVE_SIGMA`] of |estimate|, a fit that converged): the weighted mean
@@ -13,7 +13,7 @@
 //! across the manoeuvres (a missing term, a nonlinearity over the flight envelope flown, a
 //! time skew), or σ that understate the error. Either way the joint estimate is known no better
 //! than the manoeuvres agree: its σ is scaled by the Birge ratio `√(χ²/(k−1))` (the Particle
-//! Data Group's scale factor, PDG 2024 §5.2) so that its ±2σ spans the manoeuvres' spread, the
+//! Data Group's scale factor for averages of measurements that disagree) so that its ±2σ spans the manoeuvres' spread, the
 //! source then `repeatability`, and a note gives the values.
 //!
 //! A note, not a flag: on the calibration corpus's tune half (`scripts/verdict_corpus`, 82
@@ -33,18 +33,21 @@ pub const SIGNIFICANCE: f64 = 0.01;
 /// parameter (it does not fix even its sign to 1σ) and is left out of its test.
 pub const MAX_RELATIVE_SIGMA: f64 = 1.0;
 
+/// The status of a solo fit that converged (the only one compared).
+pub const CONVERGED: &str = "converged";
+
 /// One manoeuvre fitted alone.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SoloFit {
     /// The manoeuvre's index in the record (from 0, in time order; files in `--and` order).
     pub manoeuvre: usize,
-    /// Its first and last sample times, s.
+    /// Its first sample time, s.
     pub t_start_s: f64,
     /// Its last sample time, s.
     pub t_end_s: f64,
     /// Its samples.
     pub samples: usize,
-    /// `converged`, `not converged` or `failed: why` (only a converged fit is compared).
+    /// [`CONVERGED`], `not converged` or `failed: why` (only a converged fit is compared).
     pub status: String,
     /// `(parameter, estimate, σ)` of a converged fit (σ finite and positive).
     #[serde(skip)]
@@ -148,7 +151,7 @@ impl Repeatability {
             .filter_map(|name| {
                 let values = fits
                     .iter()
-                    .filter(|f| f.status == "converged")
+                    .filter(|f| f.status == CONVERGED)
                     .filter_map(|f| {
                         let &(_, estimate, std_error) =
                             f.estimates.iter().find(|(n, ..)| n == name)?;
@@ -178,7 +181,7 @@ impl Repeatability {
         let unfit: Vec<String> = self
             .fits
             .iter()
-            .filter(|f| f.status != "converged")
+            .filter(|f| f.status != CONVERGED)
             .map(|f| format!("#{} ({})", f.manoeuvre + 1, f.status))
             .collect();
         let note = (!unfit.is_empty()).then(|| {

@@ -93,3 +93,28 @@ fn only_the_manoeuvres_that_determine_a_parameter_are_compared() {
     assert_eq!(w[0].parameter, None, "a note, not a flag");
     assert!(w[1].text.contains("#3 (not converged), #4 (failed: too short)"), "{}", w[1].text);
 }
+
+/// Both thresholds at their edge. Significance: two values of σ 0.1 apart by Δ give
+/// χ² = Δ²/0.02 on 1 dof, whose 1 % point is 6.6349 (tables): Δ = 0.3640 (χ² 6.625) repeats,
+/// Δ = 0.3650 (χ² 6.661) does not. Determination: a manoeuvre whose σ equals |estimate| takes
+/// part, one whose σ is 1 % larger does not.
+#[test]
+fn the_thresholds_at_their_edge() {
+    let pair = |d: f64| Repeat::of("Cm_q", vec![v(0, -1.0, 0.1), v(1, -1.0 + d, 0.1)]).unwrap();
+    let (inside, outside) = (pair(0.3640), pair(0.3650));
+    assert!(inside.repeats && inside.p_value > SIGNIFICANCE, "{inside:?}");
+    assert!(!outside.repeats && outside.p_value < SIGNIFICANCE, "{outside:?}");
+    let fit = |k: usize, e: f64, s: f64| SoloFit {
+        manoeuvre: k,
+        t_start_s: 0.0,
+        t_end_s: 1.0,
+        samples: 100,
+        status: CONVERGED.into(),
+        estimates: vec![("Cm_q".to_string(), e, s)],
+    };
+    let names = ["Cm_q".to_string()];
+    let at = Repeatability::assess(vec![fit(0, -1.0, 0.1), fit(1, -0.9, 0.9)], &names);
+    assert_eq!(at.parameters[0].values.len(), 2, "σ = |estimate| takes part");
+    let beyond = Repeatability::assess(vec![fit(0, -1.0, 0.1), fit(1, -0.9, 0.909)], &names);
+    assert!(beyond.parameters.is_empty(), "σ above |estimate| leaves one manoeuvre: no test");
+}

@@ -26,7 +26,7 @@ pub fn imprecise(name: &str, estimate: Option<f64>, std_error: Option<f64>) -> O
 
 /// The t-ratio `|θ|/σ` below which an estimate is not told from zero: its ±2σ (95 %) spans 0,
 /// so the record does not fix even its sign (the significance test of every regression table,
-/// Klein & Morelli 2006 §5.1; the structure selection drops such a term).
+/// Klein & Morelli 2006 ch. 5; the structure selection drops such a term).
 pub const MIN_T_RATIO: f64 = 2.0;
 
 /// `|θ|/σ` of an estimate when it is below [`MIN_T_RATIO`], else `None` (also for a constant

@@ -178,6 +178,41 @@ fn kind_name(ch: Channel) -> &'static str {
     }
 }
 
+/// A control surface an input shift moves ([`Corrections::with_input_shift`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Surface {
+    De,
+    Da,
+    Dr,
+}
+
+impl Surface {
+    fn from_key(key: &str) -> Option<Self> {
+        match key {
+            "de" => Some(Self::De),
+            "da" => Some(Self::Da),
+            "dr" => Some(Self::Dr),
+            _ => None,
+        }
+    }
+
+    fn get(self, s: &AirDataSample) -> Option<f64> {
+        match self {
+            Self::De => s.de_rad,
+            Self::Da => s.da_rad,
+            Self::Dr => s.dr_rad,
+        }
+    }
+
+    fn field(self, s: &mut AirDataSample) -> &mut Option<f64> {
+        match self {
+            Self::De => &mut s.de_rad,
+            Self::Da => &mut s.da_rad,
+            Self::Dr => &mut s.dr_rad,
+        }
+    }
+}
+
 /// The corrections of a compatibility check (from its `compat.json`, or its summary).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Corrections {
@@ -185,6 +220,9 @@ pub struct Corrections {
     affine: Vec<(Channel, f64, f64)>,
     /// `(channel, τ)`: the stage reads the channel `τ` later.
     shifts: Vec<(Channel, f64)>,
+    /// `(surface, τ)`: the stage reads the control surface `τ` later (a refit with a
+    /// measured input lead undone, [`Corrections::with_input_shift`]).
+    input_shifts: Vec<(Surface, f64)>,
     /// The AHRS's time constant, s: the stage passes every other channel through its filter.
     lag_s: Option<f64>,
     /// Per manoeuvre, the reconstructed sideslip `(t_s, β)`, for records without one.
@@ -488,12 +526,37 @@ impl Corrections {
 
     /// The largest lag the stage undoes (its delay), s.
     fn lead_s(&self) -> f64 {
-        self.shifts.iter().map(|s| s.1).fold(0.0, f64::max)
+        self.all_shifts().fold(0.0, f64::max)
     }
 
     /// The largest lead it undoes (the history it keeps), s.
     fn history_s(&self) -> f64 {
-        self.shifts.iter().map(|s| -s.1).fold(0.0, f64::max)
+        self.all_shifts().map(|t| -t).fold(0.0, f64::max)
+    }
+
+    fn all_shifts(&self) -> impl Iterator<Item = f64> + '_ {
+        self.shifts.iter().map(|s| s.1).chain(self.input_shifts.iter().map(|s| s.1))
+    }
+
+    /// The same corrections with control surface `key` (`de`, `da`, `dr`) read `shift_s`
+    /// later as well (`shift_s < 0`: earlier; linearly interpolated, held at a manoeuvre's
+    /// ends). Undoes a surface's measured lead over its response (a commanded surface: its
+    /// actuator's lag) for a refit that asks what the lead moves.
+    ///
+    /// # Errors
+    /// A key that is no control surface, or a shift that is not finite or beyond
+    /// ±[`MAX_SHIFT_S`], in words.
+    pub fn with_input_shift(mut self, key: &str, shift_s: f64) -> Result<Self, String> {
+        let surface = Surface::from_key(key)
+            .ok_or_else(|| format!("`{key}` is no control surface (de, da, dr)"))?;
+        if !shift_s.is_finite() || shift_s.abs() > MAX_SHIFT_S {
+            return Err(format!(
+                "an input shift of {shift_s} s is beyond the ±{MAX_SHIFT_S} s a lag plausibly reaches"
+            ));
+        }
+        self.input_shifts.push((surface, shift_s));
+        self.applied.push(format!("{key}: read {shift_s:+.3} s later (its measured lead undone)"));
+        Ok(self)
     }
 
     /// The warning when the reconstructed sideslip, listed as applied, left samples without β:
@@ -597,18 +660,28 @@ impl<I> Corrected<I> {
     /// ±π; `None` when a sample it needs lacks the channel (the sample is then left as read).
     /// Only the two neighbours are read: this runs for every sample and shifted channel.
     fn at(&self, ch: Channel, at_s: f64) -> Option<f64> {
-        let w = &self.window;
-        let k = w.partition_point(|s| s.1.t_s <= at_s);
-        if k == 0 || k >= w.len() {
-            return ch.of(&w[k.min(w.len() - 1)].1);
-        }
-        let (a, b) = (&w[k - 1].1, &w[k].1);
-        let (ya, yb) = (ch.of(a)?, ch.of(b)?);
-        let f = (at_s - a.t_s) / (b.t_s - a.t_s);
+        let (ya, yb, f) = self.around(at_s, |s| ch.of(s))?;
         Some(match ch {
             Channel::Psi => wrap(ya + f * wrap(yb - ya)),
             _ => ya + f * (yb - ya),
         })
+    }
+
+    /// `read` of the two samples of the window around `at_s` and the fraction of the way from
+    /// the first to the second (both the end sample, fraction 0, beyond the window's ends).
+    fn around(
+        &self,
+        at_s: f64,
+        read: impl Fn(&AirDataSample) -> Option<f64>,
+    ) -> Option<(f64, f64, f64)> {
+        let w = &self.window;
+        let k = w.partition_point(|s| s.1.t_s <= at_s);
+        if k == 0 || k >= w.len() {
+            let y = read(&w[k.min(w.len() - 1)].1)?;
+            return Some((y, y, 0.0));
+        }
+        let (a, b) = (&w[k - 1].1, &w[k].1);
+        Some((read(a)?, read(b)?, (at_s - a.t_s) / (b.t_s - a.t_s)))
     }
 
     /// Sample `k` of the window, corrected.
@@ -617,6 +690,12 @@ impl<I> Corrected<I> {
         for &(ch, tau) in &self.corr.shifts {
             if let Some(v) = self.at(ch, s.t_s + tau) {
                 ch.set(&mut s, v);
+            }
+        }
+        for &(surface, tau) in &self.corr.input_shifts {
+            let moved = self.around(s.t_s + tau, |x| surface.get(x));
+            if let Some((ya, yb, f)) = moved {
+                *surface.field(&mut s) = Some(ya + f * (yb - ya));
             }
         }
         for &(ch, b, k) in &self.corr.affine {
@@ -1273,5 +1352,39 @@ mod tests {
         }
         let c = lagged(0.01, Some(0.01));
         assert!(c.lag_s.is_none() && c.left_out[0].starts_with("AHRS lag"), "{:?}", c.left_out);
+    }
+
+    /// An input shift reads the surface earlier or later, by linear interpolation, and leaves
+    /// every other channel as read: a ramp `de = 0.1 t` read 0.05 s earlier is `0.1 (t − 0.05)`
+    /// inside the record and held at its first sample before it; the aileron it was not asked
+    /// for is untouched. A key that is no surface and a shift beyond 0.5 s are refused by name.
+    #[test]
+    fn an_input_shift_reads_the_surface_at_its_shifted_time() {
+        let ramp = |t: f64| AirDataSample { de_rad: Some(0.1 * t), da_rad: Some(t), ..sample(t) };
+        let ts: Vec<f64> = (0..21).map(|i| i as f64 * 0.02).collect();
+        let input: Vec<Result<RecordEvent, FlightDataError>> = ts
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| Ok(RecordEvent::Sample { row: i as u64, sample: ramp(t) }))
+            .collect();
+        let corr = Corrections::default().with_input_shift("de", -0.05).unwrap();
+        assert_eq!(corr.applied, ["de: read -0.050 s later (its measured lead undone)"]);
+        let out: Vec<AirDataSample> = Corrected::new(input.into_iter(), corr)
+            .filter_map(|e| match e.unwrap() {
+                RecordEvent::Sample { sample, .. } => Some(sample),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(out.len(), ts.len());
+        for (s, &t) in out.iter().zip(&ts) {
+            let want = 0.1 * (t - 0.05).max(0.0);
+            assert!((s.de_rad.unwrap() - want).abs() < 1e-12, "t {t}: {:?}", s.de_rad);
+            assert_eq!((s.t_s, s.da_rad, s.alpha_rad), (t, Some(t), sample(t).alpha_rad));
+        }
+        let e = Corrections::default().with_input_shift("ax", 0.01).unwrap_err();
+        assert!(e.contains("`ax` is no control surface"), "{e}");
+        let e = Corrections::default().with_input_shift("dr", 0.6).unwrap_err();
+        assert!(e.contains("0.6 s is beyond the ±0.5 s"), "{e}");
+        assert!(Corrections::default().with_input_shift("dr", f64::NAN).is_err());
     }
 }

@@ -123,8 +123,10 @@ fn val_without_beta_the_lateral_accelerometer_cannot_be_decided() {
 /// The F-16 simulation (Stevens & Lewis airframe with its NASA TP-1538 actuators: first-order
 /// lags of 0.0495 s with rate and position limits) writes both the surfaces and the commands.
 /// Mapped to the surfaces, no surface leads its response (within 0.005 s) and no timing warning
-/// is given; mapped to the commands, each surface leads by the actuator's lag within 0.01 s,
-/// and a warning names it as commanded, on its control derivative.
+/// is given; mapped to the commands, each surface leads by the actuator's lag within 0.01 s, a
+/// warning names it as commanded on its control derivative, and the refit with the lead undone
+/// flags that derivative with both values, the refitted one nearer the fit on the true
+/// surfaces.
 #[test]
 fn commanded_surfaces_lead_by_the_actuator_lag() {
     let dir = std::env::temp_dir().join(format!("aeroident-sign-{}-sim", std::process::id()));
@@ -138,12 +140,16 @@ fn commanded_surfaces_lead_by_the_actuator_lag() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let data = dir.join("timeseries.csv");
     let map = workspace().join("mappings/aeroident-sim.toml");
-    let (v, err, _) = replay(&data, &map, &["--estimator", "oe"], "sim-surfaces");
+    let (truth, err, _) = replay(&data, &map, &["--estimator", "oe"], "sim-surfaces");
     for ch in ["de", "da", "dr"] {
-        let lead = verdict(&v, ch)["lead_s"].as_f64().unwrap();
+        let lead = verdict(&truth, ch)["lead_s"].as_f64().unwrap();
         assert!(lead.abs() < 0.005, "{ch}: {lead}");
     }
     assert!(!err.contains("input timing"), "{err}");
+    let estimate = |v: &serde_json::Value, name: &str| {
+        let p = v["parameters"].as_array().unwrap().iter().find(|p| p["name"] == name);
+        p.unwrap()["estimate"].as_f64().unwrap()
+    };
     let commanded = edited_mapping(
         "aeroident-sim.toml",
         &[
@@ -163,8 +169,12 @@ fn commanded_surfaces_lead_by_the_actuator_lag() {
             flags.contains(&format!("channel `{ch}`")) && flags.contains("commanded"),
             "{flags}"
         );
+        let (from, to) = refit_values(&flags, derivative);
+        assert!(flags.contains(&format!("`{ch}` +0.0")), "{flags}");
+        let want = estimate(&truth, derivative);
+        assert!((to - want).abs() < (from - want).abs(), "{derivative}: {from} → {to}, {want}");
     }
-    assert!(err.contains("warning: input timing"), "{err}");
+    assert!(err.contains("warning: input timing") && err.contains("commanded"), "{err}");
     // The commands through the F-16's actuators declared in the mapping (values of
     // `SurfaceActuators::f16`: τ = 1/20.2 s, 60/80/120 °/s, ±25/21.5/30°): no lead is left, no
     // timing warning, the summary says what was done, and output error's control and damping
@@ -197,7 +207,6 @@ fn commanded_surfaces_lead_by_the_actuator_lag() {
         &[("de = ", &lines[0]), ("da = ", &lines[1]), ("dr = ", &lines[2])],
         "sim-actuated",
     );
-    let (truth, _, _) = replay(&data, &map, &["--estimator", "oe"], "sim-surfaces-oe");
     let (v, err, _) = replay(&data, &declared, &["--estimator", "oe"], "sim-actuated");
     for ch in ["de", "da", "dr"] {
         let lead = verdict(&v, ch)["lead_s"].as_f64().unwrap();
@@ -205,10 +214,6 @@ fn commanded_surfaces_lead_by_the_actuator_lag() {
         assert!(err.contains(&format!("`{ch}` is mapped as a command")), "{err}");
     }
     assert!(!err.contains("input timing"), "{err}");
-    let estimate = |v: &serde_json::Value, name: &str| {
-        let p = v["parameters"].as_array().unwrap().iter().find(|p| p["name"] == name);
-        p.unwrap()["estimate"].as_f64().unwrap()
-    };
     for name in ["Cm_de", "Cm_q", "Cl_da", "Cl_p", "Cn_dr", "Cn_r"] {
         let (want, got) = (estimate(&truth, name), estimate(&v, name));
         assert!(((got - want) / want).abs() < 0.005, "{name}: {got} vs {want}");
@@ -216,4 +221,16 @@ fn commanded_surfaces_lead_by_the_actuator_lag() {
     let _ = std::fs::remove_dir_all(dir);
     let _ = std::fs::remove_file(commanded);
     let _ = std::fs::remove_file(declared);
+}
+
+/// The two values of the timing refit's flag on `name` in `flags` (`… {name} moves from A to
+/// B (…`).
+fn refit_values(flags: &str, name: &str) -> (f64, f64) {
+    let key = format!("{name} moves from ");
+    let at = flags.find(&key).unwrap_or_else(|| panic!("no refit flag on {name}: {flags}"));
+    let rest = &flags[at + key.len()..];
+    let mut words = rest.split_whitespace();
+    let from = words.next().unwrap().parse().unwrap();
+    assert_eq!(words.next(), Some("to"), "{rest}");
+    (from, words.next().unwrap().parse().unwrap())
 }

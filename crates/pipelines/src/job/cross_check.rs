@@ -80,24 +80,34 @@ pub fn regressor_noise_test(
 }
 
 /// The warning of a step a stop abandoned (`what` not done), to `log` and `warnings`.
-fn abandoned(what: &str, log: &mut dyn JobLog, warnings: &mut aeroident_io::warning::Warnings) {
+pub(super) fn abandoned(
+    what: &str,
+    log: &mut dyn JobLog,
+    warnings: &mut aeroident_io::warning::Warnings,
+) {
     let w = format!("the run was interrupted: {what} not done");
     log.warning(&w);
     warnings.push(w);
 }
 
 fn run_online(records: &Records, kind: EstimatorKind, base: &ReplayOptions) -> MethodEstimates {
-    let name = kind.name();
     let opts = ReplayOptions {
         estimator: kind,
         estimator_options: crate::estimators::EstimatorOptions::default(),
         ..base.clone()
     };
+    online_estimates(records, &opts)
+}
+
+/// The record replayed with `opts` (its estimator and options as given), as the panel reads
+/// it: failed when the replay fails, diverges or ends `initialising`.
+pub(super) fn online_estimates(records: &Records, opts: &ReplayOptions) -> MethodEstimates {
+    let name = opts.estimator.name();
     let reader = match records.open(&records.data) {
         Ok(r) => r,
         Err(e) => return MethodEstimates::failed(name, &e.to_string()),
     };
-    match crate::replay::replay(reader, &records.mapping, &opts, &mut ()) {
+    match crate::replay::replay(reader, &records.mapping, opts, &mut ()) {
         Ok(o) if o.diverged() => MethodEstimates::failed(name, "diverged"),
         Ok(o) if crate::verdict::unconverged(&o.summary.status).is_some() => {
             MethodEstimates::failed(name, "ended initialising (not every parameter left its prior)")
@@ -115,7 +125,6 @@ fn run_online(records: &Records, kind: EstimatorKind, base: &ReplayOptions) -> M
 }
 
 fn run_batch(records: &Records, kind: EstimatorKind, base: &ReplayOptions) -> MethodEstimates {
-    let name = kind.name();
     let method = match kind {
         EstimatorKind::Fem => BatchMethod::Fem,
         EstimatorKind::Fdoe => BatchMethod::Fdoe {
@@ -130,16 +139,23 @@ fn run_batch(records: &Records, kind: EstimatorKind, base: &ReplayOptions) -> Me
         spike_screen: base.spike_screen,
         ..FitOptions::default()
     };
+    batch_estimates(records, kind, base.model.clone(), options)
+}
+
+/// Every record fitted by `kind` with `model` and `options`, as the panel reads it: failed
+/// when the fit fails, ends at its iteration limit still moving or its filter degenerates.
+pub(super) fn batch_estimates(
+    records: &Records,
+    kind: EstimatorKind,
+    model: Option<aeroident_io::ModelSpec>,
+    options: FitOptions,
+) -> MethodEstimates {
+    let name = kind.name();
     let readers = match records.open_all() {
         Ok(r) => r,
         Err(e) => return MethodEstimates::failed(name, &e.to_string()),
     };
-    let fit = match crate::replay::fit::fit_records(
-        readers,
-        &records.mapping,
-        base.model.clone(),
-        options,
-    ) {
+    let fit = match crate::replay::fit::fit_records(readers, &records.mapping, model, options) {
         Ok(fit) => fit,
         Err(e) => return MethodEstimates::failed(name, &e.to_string()),
     };

@@ -122,6 +122,9 @@ impl FitJob {
         stopped_why: impl FnOnce() -> String,
     ) -> Result<FitJobOutcome, ReplayError> {
         let interrupted = outcome.summary.status == STATUS_INTERRUPTED;
+        if !interrupted {
+            self.timing_refit(&mut outcome, guard, log)?;
+        }
         if self.cross_check && interrupted {
             let w = "the run was interrupted: --cross-check not done".to_string();
             outcome.summary.warnings.push(w);
@@ -148,22 +151,13 @@ impl FitJob {
         guard: &mut impl Guard,
         log: &mut dyn JobLog,
     ) -> Result<(), ReplayError> {
-        let kind = <crate::estimators::EstimatorKind as crate::Named>::from_name(
-            &outcome.summary.estimator,
-        )
-        .unwrap_or(crate::estimators::EstimatorKind::Oe);
-        let s = &outcome.summary;
-        let own = super::cross_check::own_estimates(
-            kind,
-            &s.status,
-            s.parameters.iter().map(|p| &p.result),
-        );
+        let (kind, own) = own(outcome);
         let base = crate::replay::ReplayOptions {
             estimator: kind,
             model: Some(outcome.model.clone()),
-            compat: self.options.compat.clone(),
-            windows: self.options.windows.clone(),
-            spike_screen: self.options.spike_screen,
+            compat: outcome.options.compat.clone(),
+            windows: outcome.options.windows.clone(),
+            spike_screen: outcome.options.spike_screen,
             ..Default::default()
         };
         let warnings = &mut outcome.summary.warnings;
@@ -175,6 +169,34 @@ impl FitJob {
         outcome.summary.cross_check = Some(check);
         let thrust = crate::plausibility::thrust_mapped(&self.records.mapping);
         outcome.summary.judge(&outcome.model, thrust);
+        Ok(())
+    }
+
+    /// The timing refit ([`super::timing::refit_step`]): the records fitted again by the same
+    /// method, model and options (no bootstrap) with a warned surface lead undone, the
+    /// verdicts judged again when it ran.
+    fn timing_refit(
+        &self,
+        outcome: &mut BatchOutcome,
+        guard: &mut impl Guard,
+        log: &mut dyn JobLog,
+    ) -> Result<(), ReplayError> {
+        let (kind, own) = own(outcome);
+        let (records, model) = (self.records.clone(), Some(outcome.model.clone()));
+        let mut options = outcome.options.clone();
+        options.bootstrap_refits = None;
+        let fit = move |compat: crate::record::Corrections| {
+            options.compat = Some(compat);
+            super::cross_check::batch_estimates(&records, kind, model, options)
+        };
+        let s = &mut outcome.summary;
+        let compat = outcome.options.compat.as_ref();
+        let (tests, warnings) = (&s.sign_tests, &mut s.warnings);
+        if super::timing::refit_step(&self.records, &own, tests, compat, fit, guard, log, warnings)?
+        {
+            let thrust = crate::plausibility::thrust_mapped(&self.records.mapping);
+            outcome.summary.judge(&outcome.model, thrust);
+        }
         Ok(())
     }
 
@@ -212,4 +234,15 @@ impl FitJob {
         }
         Ok(())
     }
+}
+
+/// The fit's method and its estimates as the panel reads them.
+fn own(
+    outcome: &BatchOutcome,
+) -> (crate::estimators::EstimatorKind, crate::replay::cross_check::MethodEstimates) {
+    let s = &outcome.summary;
+    let kind = <crate::estimators::EstimatorKind as crate::Named>::from_name(&s.estimator)
+        .unwrap_or(crate::estimators::EstimatorKind::Oe);
+    let rows = s.parameters.iter().map(|p| &p.result);
+    (kind, super::cross_check::own_estimates(kind, &s.status, rows))
 }

@@ -10,7 +10,9 @@
 //! 3. **estimate**: the online replay, or the batch fit, over the record stage
 //!    ([`crate::record`]);
 //! 4. **check**: the cross-check, the record's other methods beside the estimate
-//!    ([`cross_check`], judged by [`crate::replay::cross_check`]);
+//!    ([`cross_check`], judged by [`crate::replay::cross_check`]), or least squares'
+//!    regressor-noise test; and the timing refit where a surface leads its response
+//!    ([`timing`]);
 //! 5. **validate**: the estimates applied to a second record (`validate_on`).
 //!
 //! The faces keep what is theirs: opening a live feed or stdin, showing progress, answering
@@ -21,6 +23,7 @@
 pub mod cross_check;
 pub mod fit;
 pub mod replay;
+pub mod timing;
 
 use crate::record::Corrections;
 use crate::replay::ReplayError;
@@ -203,6 +206,8 @@ pub enum Step {
     CrossCheck,
     /// Least squares' regressor-noise test: the record replayed by instrumental variables.
     RegressorNoise,
+    /// The timing refit: the record fitted again with a surface's measured lead undone.
+    TimingRefit,
 }
 
 impl Step {
@@ -215,6 +220,9 @@ impl Step {
             Step::CrossCheck => "--cross-check (the record's other methods)",
             Step::RegressorNoise => {
                 "the regressor-noise test (the record replayed by instrumental variables)"
+            }
+            Step::TimingRefit => {
+                "the timing refit (the record fitted with the measured lead undone)"
             }
         }
     }

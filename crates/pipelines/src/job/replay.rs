@@ -151,8 +151,9 @@ impl ReplayJob {
     /// `--cross-check` the record's other methods run with the same model
     /// ([`super::cross_check::run_panel`]) and the online estimates judged beside them
     /// ([`crate::replay::cross_check`]); without it, least squares' regressor-noise test
-    /// ([`super::cross_check::regressor_noise_test`]). A stop abandons either with a warning
-    /// (the online result stands on its own).
+    /// ([`super::cross_check::regressor_noise_test`]); then the timing refit
+    /// ([`super::timing::refit_step`]). A stop abandons each with a warning (the online result
+    /// stands on its own).
     fn check_after_feed(
         &self,
         options: &ReplayOptions,
@@ -168,11 +169,21 @@ impl ReplayJob {
         let base = ReplayOptions { model: Some(outcome.model.clone()), ..options.clone() };
         let (records, warnings) = (&self.records, &mut outcome.summary.warnings);
         if self.cross_check {
-            let check = super::cross_check::check(records, &own, base, guard, log, warnings)?;
+            let check =
+                super::cross_check::check(records, &own, base.clone(), guard, log, warnings)?;
             outcome.cross_check = check;
         } else {
-            super::cross_check::regressor_noise_test(records, &own, base, guard, log, warnings)?;
+            let test = base.clone();
+            super::cross_check::regressor_noise_test(records, &own, test, guard, log, warnings)?;
         }
+        let again = records.clone();
+        let fit = move |compat| {
+            let opts = ReplayOptions { compat: Some(compat), ..base };
+            super::cross_check::online_estimates(&again, &opts)
+        };
+        let s = &mut outcome.summary;
+        let (tests, compat) = (&s.sign_tests, options.compat.as_ref());
+        super::timing::refit_step(records, &own, tests, compat, fit, guard, log, &mut s.warnings)?;
         let thrust = crate::plausibility::thrust_mapped(&self.records.mapping);
         crate::replay::verdict::judge(outcome, thrust);
         Ok(())

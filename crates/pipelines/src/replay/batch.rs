@@ -56,6 +56,9 @@ pub struct BatchOutcome {
     /// `fdoe`: the frequency-domain fit itself (`result` is then the time-domain simulation
     /// at its estimates, with its σ and iteration log); `None` for `oe`, `fem`.
     pub frequency: Option<aeroident_estimators::output_error::frequency::FdoeResult>,
+    /// The options the fit ran with (its corrections, windows and screen), for the steps
+    /// after it that fit the records again.
+    pub options: FitOptions,
 }
 
 /// The [`OutputTrace`]s of `result` over `manoeuvres` (outputs not measured in every sample,
@@ -1010,7 +1013,8 @@ pub(crate) fn fit_time_domain(
         summary.warnings.extend(c.warnings());
     }
     repeat_stage(&slices, st, options, &mut summary);
-    Ok(BatchOutcome { model, result: fitted.result, summary, traces, frequency: None })
+    let options = options.clone();
+    Ok(BatchOutcome { model, result: fitted.result, summary, traces, frequency: None, options })
 }
 
 /// The repeatability stage ([`super::repeatability`]): with two or more manoeuvres, each fitted

@@ -94,7 +94,8 @@ pub(super) fn fit_fdoe(
         summary.warnings.extend(c.warnings());
     }
     let result = simulated.map_or_else(|| bare_result(&fd), |r| with_estimates(r, &fd));
-    Ok(BatchOutcome { model, result, summary, traces, frequency: Some(fd) })
+    let options = options.clone();
+    Ok(BatchOutcome { model, result, summary, traces, frequency: Some(fd), options })
 }
 
 /// The time-domain simulation's result at the fdoe estimates, carrying the fdoe σ and

@@ -526,6 +526,7 @@ fn reversed_warnings(tests: &[SignTest], mapping: &Mapping) -> Vec<Warning> {
         .collect()
 }
 
+pub mod refit;
 pub mod timing;
 
 #[cfg(test)]

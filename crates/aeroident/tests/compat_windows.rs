@@ -234,3 +234,38 @@ fn val_a_wings_level_record_without_ay_is_checked_in_the_vertical_plane() {
     let ((b1, s1), (b2, s2)) = (biases[0], biases[1]);
     assert!((b1 - b2).abs() < 3.0 * s1.hypot(s2), "α bias {b1} ± {s1} vs {b2} ± {s2}");
 }
+
+/// The check's errors in the user's words: a manoeuvre too short by its number, time span and
+/// sample count (not the estimator's `manoeuvre` = 0), and a channel it needs by the mapping's
+/// channel and how many samples lack it (not `q_rad_s` = NaN).
+#[test]
+fn val_compat_errors_name_the_manoeuvre_and_the_channel() {
+    let Some(data) = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let map = workspace().join("mappings/hfb320.toml");
+    let m = Mapping::from_path(&map).unwrap();
+    let path = data.display().to_string();
+    let open = |m: &Mapping| open_log(&path, None, m).unwrap();
+    let config = CompatConfig::default();
+    let windows = vec![TimeWindow::parse("5:25").unwrap(), TimeWindow::parse("30:30.7").unwrap()];
+    let e = check_records(vec![open(&m)], &windows, &config).unwrap_err().to_string();
+    assert!(
+        e.contains("manoeuvre 2 of 2 (t = 30.00–30.70 s, 8 samples) is too short")
+            && !e.contains("`manoeuvre`"),
+        "{e}"
+    );
+    let text = std::fs::read_to_string(&map).unwrap();
+    let without: String =
+        text.lines().filter(|l| !l.starts_with("q = ")).collect::<Vec<_>>().join("\n");
+    assert_ne!(without, text.trim_end(), "the mapping's `q = ` line was not found");
+    let edited =
+        std::env::temp_dir().join(format!("aeroident-compat-noq-{}.toml", std::process::id()));
+    std::fs::write(&edited, without).unwrap();
+    let no_q = Mapping::from_path(&edited).unwrap();
+    let _ = std::fs::remove_file(&edited);
+    let e = check_records(vec![open(&no_q)], &[], &config).unwrap_err().to_string();
+    assert!(
+        e.contains("channel `q` (not in the mapping) is missing in 601 of 601 samples")
+            && !e.contains("q_rad_s"),
+        "{e}"
+    );
+}

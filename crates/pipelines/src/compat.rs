@@ -130,8 +130,10 @@ pub fn check_records<R: Read>(
         sensors::believable(&slices, m)
             .map_err(|why| RecordError::Model(format!("compatibility check of {file}: {why}")))?;
     }
-    let result = compat::check(&slices, config)
-        .map_err(|e| RecordError::Model(format!("compatibility check of {file}: {e}")))?;
+    let result = compat::check(&slices, config).map_err(|e| {
+        let why = in_user_terms(&e, &slices, mapping.as_deref());
+        RecordError::Model(format!("compatibility check of {file}: {why}"))
+    })?;
     let (rejections, unlisted) = rec.rejections.finish();
     let mut warnings = result.notes.clone();
     warnings.extend(unlisted);
@@ -205,6 +207,40 @@ pub fn check_records<R: Read>(
 /// from 19–35 % off to within 10 %, but move CY_β (−4 % to +11 % with a β vane, +24 % without),
 /// so applying it is not "never worse than no correction", which `--compat auto` must be. An
 /// unmodelled lag is what those 35 % are, so the user is told which check to run.
+/// The check's error `e` in the user's words: a manoeuvre too short by its number, time span
+/// and sample count; a channel the check needs by the mapping's channel (its column or
+/// expression, or "not in the mapping") and how many samples lack it; any other error as it is.
+fn in_user_terms(
+    e: &aeroident_estimators::EstimatorError,
+    slices: &[&[aeroident_estimators::AirDataSample]],
+    mapping: Option<&aeroident_io::Mapping>,
+) -> String {
+    use aeroident_estimators::EstimatorError as E;
+    let E::InvalidConfig { field, value, reason } = e else { return e.to_string() };
+    if *field == "manoeuvre" {
+        let k = *value as usize;
+        let Some(m) = slices.get(k).filter(|m| !m.is_empty()) else { return e.to_string() };
+        return format!(
+            "manoeuvre {} of {} (t = {:.2}–{:.2} s, {} samples) is too short: {reason}; each --window, each stretch between gaps and each --and record is a manoeuvre of its own: widen it or leave it out",
+            k + 1,
+            slices.len(),
+            m[0].t_s,
+            m[m.len() - 1].t_s,
+            m.len()
+        );
+    }
+    let Some(ch) = Channel::from_name(field) else { return e.to_string() };
+    let io_channel = aeroident_io::Channel::of_sample_field(field);
+    let label = match (mapping, io_channel) {
+        (Some(m), Some(c)) if m.channels.contains_key(&c) => m.field_label(field),
+        (_, Some(c)) => format!("channel `{}` (not in the mapping)", c.key()),
+        _ => format!("`{field}`"),
+    };
+    let total: usize = slices.iter().map(|m| m.len()).sum();
+    let missing = slices.iter().flat_map(|m| m.iter()).filter(|s| ch.of(s).is_none()).count();
+    format!("{label} is missing in {missing} of {total} samples: {reason}")
+}
+
 fn unmodelled_lag(
     slices: &[&[aeroident_estimators::AirDataSample]],
     config: &CompatConfig,

@@ -872,6 +872,8 @@ def cmd_run(a):
     out = Path(a.out)
     runs = out / ("runs" if not a.tag else "runs-" + a.tag)
     recs = sorted(p.parent for p in (out / "records").glob("*/meta.json"))
+    if a.half != "all":
+        recs = [r for r in recs if json.loads((r / "meta.json").read_text())["half"] == a.half]
     if a.limit:
         recs = recs[: a.limit]
     ests = [e for e in a.estimators.split(",") if e]
@@ -1127,6 +1129,8 @@ def main():
     r.add_argument("--extra-args", default="", help='more replay arguments, e.g. "--compat auto"')
     r.add_argument("--timeout", type=int, default=1200, help="s per replay")
     r.add_argument("--limit", type=int, default=0, help="only the first N records (by name)")
+    r.add_argument("--half", default="all", choices=("tune", "held-out", "all"),
+                   help="only the records of this half")
     r.add_argument("--keep-all", action="store_true",
                    help="keep report.html, figures and estimates.csv (default: summary.json)")
     p = sub.add_parser("report", help="join estimates with the truth")

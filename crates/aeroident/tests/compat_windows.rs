@@ -249,8 +249,9 @@ fn val_compat_errors_name_the_manoeuvre_and_the_channel() {
     let windows = vec![TimeWindow::parse("5:25").unwrap(), TimeWindow::parse("30:30.7").unwrap()];
     let e = check_records(vec![open(&m)], &windows, &config).unwrap_err().to_string();
     assert!(
-        e.contains("manoeuvre 2 of 2 (t = 30.00–30.70 s, 8 samples) is too short")
-            && !e.contains("`manoeuvre`"),
+        e.contains(&format!(
+            "manoeuvre 2 of 2 ({path} from row 302, t = 30.00–30.60 s, 7 samples) is too short"
+        )) && !e.contains("`manoeuvre`"),
         "{e}"
     );
     let text = std::fs::read_to_string(&map).unwrap();

@@ -131,7 +131,7 @@ pub fn check_records<R: Read>(
             .map_err(|why| RecordError::Model(format!("compatibility check of {file}: {why}")))?;
     }
     let result = compat::check(&slices, config).map_err(|e| {
-        let why = in_user_terms(&e, &slices, mapping.as_deref());
+        let why = in_user_terms(&e, &slices, &rec.origins, mapping.as_deref());
         RecordError::Model(format!("compatibility check of {file}: {why}"))
     })?;
     let (rejections, unlisted) = rec.rejections.finish();
@@ -207,12 +207,13 @@ pub fn check_records<R: Read>(
 /// from 19–35 % off to within 10 %, but move CY_β (−4 % to +11 % with a β vane, +24 % without),
 /// so applying it is not "never worse than no correction", which `--compat auto` must be. An
 /// unmodelled lag is what those 35 % are, so the user is told which check to run.
-/// The check's error `e` in the user's words: a manoeuvre too short by its number, time span
-/// and sample count; a channel the check needs by the mapping's channel (its column or
+/// The check's error `e` in the user's words: a manoeuvre too short by its number, record file
+/// and first row (`origins`, per manoeuvre), time span and sample count; a channel the check needs by the mapping's channel (its column or
 /// expression, or "not in the mapping") and how many samples lack it; any other error as it is.
 fn in_user_terms(
     e: &aeroident_estimators::EstimatorError,
     slices: &[&[aeroident_estimators::AirDataSample]],
+    origins: &[(String, u64)],
     mapping: Option<&aeroident_io::Mapping>,
 ) -> String {
     use aeroident_estimators::EstimatorError as E;
@@ -220,8 +221,10 @@ fn in_user_terms(
     if *field == "manoeuvre" {
         let k = *value as usize;
         let Some(m) = slices.get(k).filter(|m| !m.is_empty()) else { return e.to_string() };
+        let from =
+            origins.get(k).map_or_else(String::new, |(f, row)| format!("{f} from row {row}, "));
         return format!(
-            "manoeuvre {} of {} (t = {:.2}–{:.2} s, {} samples) is too short: {reason}; each --window, each stretch between gaps and each --and record is a manoeuvre of its own: widen it or leave it out",
+            "manoeuvre {} of {} ({from}t = {:.2}–{:.2} s, {} samples) is too short: {reason}; each --window, each stretch between gaps and each --and record is a manoeuvre of its own: widen it or leave it out",
             k + 1,
             slices.len(),
             m[0].t_s,

@@ -204,6 +204,8 @@ pub fn check_spike_screen(screen: Option<&outliers::SpikeScreen>) -> Result<(), 
 pub struct Manoeuvres {
     /// The samples of each manoeuvre, in time order; none empty, none of one sample.
     pub manoeuvres: Vec<Vec<AirDataSample>>,
+    /// Where each manoeuvre starts: its record file and first row (as the reader counts rows).
+    pub origins: Vec<(String, u64)>,
     /// The rejected rows, gaps and one-sample manoeuvres (bounded, counted per kind).
     pub rejections: RejectionLog,
     /// Rows read (accepted and rejected).
@@ -245,8 +247,9 @@ pub fn read_records<R: Read>(
     let files: Vec<String> = readers.iter().map(|r| r.file().to_string()).collect();
     let named = files.len() > 1;
     let mut manoeuvres: Vec<Vec<AirDataSample>> = vec![Vec::new()];
-    // Each manoeuvre's first row and file prefix, to name a manoeuvre too short to simulate.
-    let mut starts: Vec<(u64, String)> = vec![(0, String::new())];
+    // Each manoeuvre's first row, file prefix and file, to name a manoeuvre too short.
+    let first_file = files.first().cloned().unwrap_or_default();
+    let mut starts: Vec<(u64, String, String)> = vec![(0, String::new(), first_file)];
     let mut rejections = RejectionLog::default();
     let (mut read, mut rejected) = (0usize, 0usize);
     let mut notes = Vec::new();
@@ -264,7 +267,7 @@ pub fn read_records<R: Read>(
                     read += 1;
                     if let (Some(m), Some(start)) = (manoeuvres.last_mut(), starts.last_mut()) {
                         if m.is_empty() {
-                            *start = (row, prefix.clone());
+                            *start = (row, prefix.clone(), file.clone());
                         }
                         m.push(sample);
                     }
@@ -283,7 +286,7 @@ pub fn read_records<R: Read>(
                         ),
                     });
                     manoeuvres.push(Vec::new());
-                    starts.push((row, prefix.clone()));
+                    starts.push((row, prefix.clone(), file.clone()));
                 }
             }
         }
@@ -302,9 +305,9 @@ pub fn read_records<R: Read>(
             unplaced.extend(first.iter().map(|(row, why)| (*row, format!("{prefix}{why}"))));
         }
         manoeuvres.push(Vec::new());
-        starts.push((0, String::new()));
+        starts.push((0, String::new(), String::new()));
     }
-    let lone = reject_lone_samples(&mut manoeuvres, &starts, &mut rejections);
+    let (lone, origins) = reject_lone_samples(&mut manoeuvres, &starts, &mut rejections);
     rejected += lone.len();
     if manoeuvres.is_empty()
         && let Some(why) = missed.into_iter().collect::<Option<Vec<String>>>()
@@ -325,7 +328,7 @@ pub fn read_records<R: Read>(
         }
         .into());
     }
-    Ok(Manoeuvres { manoeuvres, rejections, read, rejected, notes })
+    Ok(Manoeuvres { manoeuvres, origins, rejections, read, rejected, notes })
 }
 
 /// Removes the empty manoeuvres and rejects each manoeuvre of one sample (a lone sample between
@@ -334,12 +337,13 @@ pub fn read_records<R: Read>(
 /// prefix (`starts`, parallel to `manoeuvres`). Returns the rejections (row, reason).
 fn reject_lone_samples(
     manoeuvres: &mut Vec<Vec<AirDataSample>>,
-    starts: &[(u64, String)],
+    starts: &[(u64, String, String)],
     rejections: &mut RejectionLog,
-) -> Vec<(u64, String)> {
+) -> (Vec<(u64, String)>, Vec<(String, u64)>) {
     let mut lone = Vec::new();
     let mut kept = Vec::with_capacity(manoeuvres.len());
-    for (m, (row, prefix)) in manoeuvres.drain(..).zip(starts) {
+    let mut origins = Vec::with_capacity(manoeuvres.len());
+    for (m, (row, prefix, file)) in manoeuvres.drain(..).zip(starts) {
         if m.len() == 1 {
             let reason = format!(
                 "{prefix}a manoeuvre of one sample (alone between gaps or in its time window): output error simulates each manoeuvre from its first sample and needs at least two"
@@ -349,8 +353,9 @@ fn reject_lone_samples(
             lone.push((*row, reason));
         } else if !m.is_empty() {
             kept.push(m);
+            origins.push((file.clone(), *row));
         }
     }
     *manoeuvres = kept;
-    lone
+    (lone, origins)
 }

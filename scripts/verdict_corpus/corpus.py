@@ -1098,6 +1098,54 @@ def markdown(rep):
 
 
 # ---------------------------------------------------------------------------------------
+# ---------------------------------------------------------------------------------------
+# real: the shipped real records against their published values
+# ---------------------------------------------------------------------------------------
+# (record, mapping, model file with [reference.X] tables): a model file's references are
+# compared beside the verdict (`reference_check`), never an input to it.
+REAL = [("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv", "mappings/hfb320.toml",
+         "models/hfb320_book_q0.toml")]
+
+
+def cmd_real(a):
+    """Every method on every real record with published values: the verdict against them."""
+    root = Path(__file__).resolve().parents[2]
+    shared = root.parent / "shared" / "flightdata"
+    rows = []
+    for rec, mapping, model in REAL:
+        for est in a.estimators.split(","):
+            odir = Path(a.out) / "real" / Path(rec).stem / est
+            cmd = [a.bin, "replay", str(shared / rec), "--map", str(root / mapping),
+                   "--model", str(root / model), "--estimator", est, "--out", str(odir)]
+            p = subprocess.run(cmd, capture_output=True, text=True)
+            if p.returncode != 0:
+                log("%s %s: exit %d: %s" % (rec, est, p.returncode, p.stderr.strip()[-200:]))
+                continue
+            s = json.loads((odir / "summary.json").read_text())
+            for q in s["parameters"]:
+                rc = q.get("reference_check")
+                if not rc or rc.get("error_pct") is None:
+                    continue
+                rows.append({"record": Path(rec).stem, "estimator": est, "name": q["name"],
+                             "status": q["status"], "error_pct": rc["error_pct"],
+                             "within_2sigma": rc.get("within_2sigma")})
+    idd = [r for r in rows if r["status"] == "identified"]
+    right = [r for r in idd if abs(r["error_pct"]) <= 10.0]
+    covered = [r for r in idd if r["within_2sigma"]]
+    every_right = [r for r in rows if abs(r["error_pct"]) <= 10.0]
+    print("| method | parameter | status | error vs published | within ±2σ |")
+    print("|---|---|---|---|---|")
+    for r in rows:
+        print("| %s | %s | %s | %+.1f %% | %s |" % (r["estimator"], r["name"], r["status"],
+                                                  r["error_pct"], r["within_2sigma"]))
+    print()
+    print("identified %d of %d; within 10 %%: %d (precision %.1f %%); recall %d of %d; "
+          "±2σ covers the published value in %d" % (
+              len(idd), len(rows), len(right), 100.0 * len(right) / max(len(idd), 1),
+              len([r for r in every_right if r["status"] == "identified"]), len(every_right),
+              len(covered)))
+
+
 def cmd_design(a):
     recs = design()[: a.limit] if a.limit else design()
     print("%d records, %d aircraft" % (len(recs), len({d["aircraft"] for d in recs})))
@@ -1143,8 +1191,13 @@ def main():
     d = sub.add_parser("design", help="print the design's counts (flies nothing)")
     d.add_argument("--limit", type=int, default=0)
     d.add_argument("--list", action="store_true")
+    q = sub.add_parser("real", help="the shipped real records against their published values")
+    q.add_argument("--out", required=True)
+    q.add_argument("--bin", default=DEFAULT_BIN)
+    q.add_argument("--estimators", default=ESTIMATORS)
     a = ap.parse_args()
-    {"make": cmd_make, "run": cmd_run, "report": cmd_report, "design": cmd_design}[a.cmd](a)
+    {"make": cmd_make, "run": cmd_run, "report": cmd_report, "design": cmd_design,
+     "real": cmd_real}[a.cmd](a)
 
 
 if __name__ == "__main__":

@@ -200,8 +200,15 @@ mod tests {
     fn outside_by_more_than_two_sigma_is_flagged_with_its_cause() {
         let m = ModelSpec::preset("longitudinal").unwrap();
         let cd0 = Param::from_name("CD_0").unwrap();
-        assert!(implausible(&m, cd0, -0.068, Some(0.015)).is_some());
+        let f = implausible(&m, cd0, -0.068, Some(0.015)).unwrap();
+        assert!(f.contains("likely the thrust model"), "{f}");
         assert!(implausible(&m, cd0, -0.02, Some(0.015)).is_none());
+        let cm_q = Param::from_name("Cm_q").unwrap();
+        let f = implausible(&m, cm_q, 5.0, Some(0.1)).unwrap();
+        assert!(f.contains("likely a time skew or lag between the rate"), "{f}");
+        let cl_alpha = Param::from_name("CL_alpha").unwrap();
+        let f = implausible(&m, cl_alpha, 0.5, Some(0.01)).unwrap();
+        assert!(f.contains("likely an angle in the wrong unit"), "{f}");
         let de = Param::from_name("Cm_de").unwrap();
         let f = implausible(&m, de, -1.53 / 57.3, Some(0.001)).unwrap();
         assert!(f.contains("degrees mapped as radians") && f.contains("[-5, -0.1]"), "{f}");
@@ -234,6 +241,9 @@ mod tests {
         check(&m, true, std::iter::once(&mut r));
         assert_eq!(r.flags.len(), 1, "{:?}", r.flags);
         assert!(undetermined(&m, cl0, Some(0.4)).is_none());
+        // At the edge: ±2σ exactly as wide as the range [-0.5, 1.5] is not wider.
+        assert!(undetermined(&m, cl0, Some(0.5)).is_none());
+        assert!(undetermined(&m, cl0, Some(0.500_001)).is_some());
         assert!(undetermined(&m, Param::from_name("CL_q").unwrap(), Some(1e3)).is_none());
     }
 
@@ -274,6 +284,12 @@ mod tests {
         assert!(unmapped_thrust_moment(&lon, &no_thrust, Some((57.9, 60.3)), None).is_none());
         let w = unmapped_thrust_moment(&lon, &no_thrust, Some((57.9, 60.3)), Some((0.5, 0.65)));
         assert!(w.unwrap().text.contains("throttle moved 15 %"));
+        // At the 10 % limit (exactly, in floating point) it is not exceeded; just past it is.
+        let at = |speed, throttle| unmapped_thrust_moment(&lon, &no_thrust, speed, throttle);
+        assert!(at(Some((95.0, 105.0)), None).is_none());
+        assert!(at(Some((94.999, 105.0)), None).is_some());
+        assert!(at(None, Some((0.0, 0.1))).is_none());
+        assert!(at(None, Some((0.0, 0.100_001))).is_some());
         for channel in [
             "thrust = { column = \"T\", unit = \"N\" }",
             "thrust_moment = { column = \"M\", unit = \"N*m\" }",

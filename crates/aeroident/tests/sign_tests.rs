@@ -124,9 +124,9 @@ fn val_without_beta_the_lateral_accelerometer_cannot_be_decided() {
 /// lags of 0.0495 s with rate and position limits) writes both the surfaces and the commands.
 /// Mapped to the surfaces, no surface leads its response (within 0.005 s) and no timing warning
 /// is given; mapped to the commands, each surface leads by the actuator's lag within 0.01 s, a
-/// warning names it as commanded on its control derivative, and the refit with the lead undone
-/// flags that derivative with both values, the refitted one nearer the fit on the true
-/// surfaces.
+/// warning names it as commanded on its control derivative, and where the refit with the lead
+/// undone moves that derivative beyond ±2σ (at least one of the three), its flag has both
+/// values, the refitted one nearer the fit on the true surfaces.
 #[test]
 fn commanded_surfaces_lead_by_the_actuator_lag() {
     let dir = std::env::temp_dir().join(format!("aeroident-sign-{}-sim", std::process::id()));
@@ -160,6 +160,7 @@ fn commanded_surfaces_lead_by_the_actuator_lag() {
         "sim-commanded",
     );
     let (v, err, _) = replay(&data, &commanded, &["--estimator", "oe"], "sim-commands");
+    let mut refitted = 0;
     for (ch, derivative) in [("de", "Cm_de"), ("da", "Cl_da"), ("dr", "Cn_dr")] {
         let lead = verdict(&v, ch)["lead_s"].as_f64().unwrap();
         assert!((lead - 0.0495).abs() < 0.01, "{ch}: {lead}");
@@ -169,11 +170,15 @@ fn commanded_surfaces_lead_by_the_actuator_lag() {
             flags.contains(&format!("channel `{ch}`")) && flags.contains("commanded"),
             "{flags}"
         );
-        let (from, to) = refit_values(&flags, derivative);
-        assert!(flags.contains(&format!("`{ch}` +0.0")), "{flags}");
-        let want = estimate(&truth, derivative);
-        assert!((to - want).abs() < (from - want).abs(), "{derivative}: {from} → {to}, {want}");
+        // Where the refit moved it beyond ±2σ, towards the fit on the true surfaces.
+        if let Some((from, to)) = refit_values(&flags, derivative) {
+            assert!(flags.contains(&format!("`{ch}` +0.0")), "{flags}");
+            let want = estimate(&truth, derivative);
+            assert!((to - want).abs() < (from - want).abs(), "{derivative}: {from} → {to}, {want}");
+            refitted += 1;
+        }
     }
+    assert!(refitted >= 1, "the refit moved no control derivative: {}", v["warnings"]);
     assert!(err.contains("warning: input timing") && err.contains("commanded"), "{err}");
     // The commands through the F-16's actuators declared in the mapping (values of
     // `SurfaceActuators::f16`: τ = 1/20.2 s, 60/80/120 °/s, ±25/21.5/30°): no lead is left, no
@@ -224,13 +229,12 @@ fn commanded_surfaces_lead_by_the_actuator_lag() {
 }
 
 /// The two values of the timing refit's flag on `name` in `flags` (`… {name} moves from A to
-/// B (…`).
-fn refit_values(flags: &str, name: &str) -> (f64, f64) {
+/// B (…`), if it has one.
+fn refit_values(flags: &str, name: &str) -> Option<(f64, f64)> {
     let key = format!("{name} moves from ");
-    let at = flags.find(&key).unwrap_or_else(|| panic!("no refit flag on {name}: {flags}"));
-    let rest = &flags[at + key.len()..];
+    let rest = &flags[flags.find(&key)? + key.len()..];
     let mut words = rest.split_whitespace();
-    let from = words.next().unwrap().parse().unwrap();
+    let from = words.next()?.parse().ok()?;
     assert_eq!(words.next(), Some("to"), "{rest}");
-    (from, words.next().unwrap().parse().unwrap())
+    Some((from, words.next()?.parse().ok()?))
 }

@@ -213,7 +213,7 @@ pub fn check_records<R: Read>(
 fn in_user_terms(
     e: &aeroident_estimators::EstimatorError,
     slices: &[&[aeroident_estimators::AirDataSample]],
-    origins: &[(String, u64)],
+    origins: &[crate::record::Origin],
     mapping: Option<&aeroident_io::Mapping>,
 ) -> String {
     use aeroident_estimators::EstimatorError as E;

@@ -178,8 +178,9 @@ impl ValidateOn {
 /// Where a job's compatibility corrections come from (`--compat FILE|auto`).
 #[derive(Debug, Clone)]
 pub enum CompatSource {
-    /// Corrections already read (Python reads its `compat.json` itself).
-    Given(Corrections),
+    /// Corrections already read (Python reads its `compat.json` itself); boxed, as the
+    /// other sources are small.
+    Given(Box<Corrections>),
     /// A `compat.json` written by `aeroident compat`.
     File(PathBuf),
     /// Checked on the main record before estimating.
@@ -313,7 +314,7 @@ pub fn corrections(
     let (records, source, windows) = (records.clone(), source.clone(), windows.to_vec());
     let step = move || -> Result<(Option<Corrections>, Vec<String>), ReplayError> {
         match source {
-            CompatSource::Given(c) => Ok((Some(c), Vec::new())),
+            CompatSource::Given(c) => Ok((Some(*c), Vec::new())),
             CompatSource::File(path) => {
                 let files = if records.live || records.data == "-" {
                     Vec::new()

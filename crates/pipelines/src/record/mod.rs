@@ -199,13 +199,17 @@ pub fn check_spike_screen(screen: Option<&outliers::SpikeScreen>) -> Result<(), 
         .map_err(|reason| RecordError::Option { option: "spike-screen", reason })
 }
 
+/// Where a manoeuvre starts: its record file and first row (as the reader counts rows, the
+/// header line 1).
+pub type Origin = (String, u64);
+
 /// A whole record, split into manoeuvres at its gaps.
 #[derive(Debug)]
 pub struct Manoeuvres {
     /// The samples of each manoeuvre, in time order; none empty, none of one sample.
     pub manoeuvres: Vec<Vec<AirDataSample>>,
-    /// Where each manoeuvre starts: its record file and first row (as the reader counts rows).
-    pub origins: Vec<(String, u64)>,
+    /// Where each manoeuvre starts.
+    pub origins: Vec<Origin>,
     /// The rejected rows, gaps and one-sample manoeuvres (bounded, counted per kind).
     pub rejections: RejectionLog,
     /// Rows read (accepted and rejected).
@@ -339,7 +343,7 @@ fn reject_lone_samples(
     manoeuvres: &mut Vec<Vec<AirDataSample>>,
     starts: &[(u64, String, String)],
     rejections: &mut RejectionLog,
-) -> (Vec<(u64, String)>, Vec<(String, u64)>) {
+) -> (Vec<(u64, String)>, Vec<Origin>) {
     let mut lone = Vec::new();
     let mut kept = Vec::with_capacity(manoeuvres.len());
     let mut origins = Vec::with_capacity(manoeuvres.len());

@@ -126,6 +126,26 @@ mod tests {
         assert_eq!(warned_leads(&tests, &warnings), [("de".to_string(), 0.08)]);
     }
 
+    /// The refit's corrections are the run's own with each warned surface read its lead
+    /// earlier (a shift of minus the lead); a lead beyond what a shift may undo is refused.
+    #[test]
+    fn the_refit_keeps_the_runs_corrections_and_undoes_each_lead() {
+        let base = Corrections::default().with_input_shift("dr", 0.01).unwrap();
+        let leads = [("de".to_string(), 0.08), ("da".to_string(), -0.03)];
+        let c = undone(Some(&base), &leads).unwrap();
+        let applied: Vec<&str> = c.applied.iter().map(String::as_str).collect();
+        assert_eq!(
+            applied,
+            [
+                "dr: read +0.010 s later (its measured lead undone)",
+                "de: read -0.080 s later (its measured lead undone)",
+                "da: read +0.030 s later (its measured lead undone)",
+            ]
+        );
+        assert_eq!(undone(None, &leads[..1]).unwrap().applied.len(), 1);
+        assert!(undone(None, &[("de".to_string(), 0.7)]).unwrap_err().contains("beyond"));
+    }
+
     /// The move rule at its edge: σ 0.1, a move of 0.199 is not flagged, 0.201 is, either way;
     /// the text gives both values, the percentage and the σ count; a parameter the refit lacks
     /// is not judged.

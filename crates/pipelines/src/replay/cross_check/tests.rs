@@ -187,3 +187,125 @@ fn least_squares_is_doubted_where_instrumental_variables_move_it() {
     );
     assert!(regressor_noise(&own, &MethodEstimates::failed("rls-iv", "no β")).is_empty());
 }
+
+fn est(method: &str, estimate: f64, std_error: f64) -> Estimate {
+    Estimate { method: method.into(), estimate, std_error }
+}
+
+fn agreement(parameter: &str, estimates: Vec<Estimate>, set_aside: &[(&str, &str)]) -> Agreement {
+    Agreement {
+        parameter: parameter.into(),
+        estimates,
+        set_aside: set_aside
+            .iter()
+            .map(|&(m, c)| SetAside { method: m.into(), cause: c.into() })
+            .collect(),
+        camps: Vec::new(),
+        confirmed: false,
+        flag: None,
+    }
+}
+
+/// The bias families: output error in time and frequency share one; instrumental variables,
+/// the filter-error method, the EKF and least squares are each their own, and the other
+/// equation-error estimators share least squares'.
+#[test]
+fn every_method_has_its_bias_family() {
+    let f = bias_family;
+    assert_eq!(
+        (f("oe"), f("fdoe")),
+        ("output error: process noise", "output error: process noise")
+    );
+    assert_eq!((f("fem"), f("ekf")), ("filter error", "the EKF's noise model"));
+    assert_eq!(
+        (f("rls-iv"), f("rls")),
+        ("instrumental variables", "equation error: regressor noise")
+    );
+    assert_eq!((f("ftr"), f("smpe")), (f("rls"), f("rls")));
+}
+
+/// The output-error mean is the mean of `oe`, `fem` and `ekf` only (1, 3 → 2, the rls value
+/// left out); none of them: `None`.
+#[test]
+fn the_output_error_mean_is_a_mean_of_those_methods() {
+    let all = [est("oe", 1.0, 0.1), est("fem", 3.0, 0.1), est("rls", 100.0, 0.1)];
+    assert_eq!(output_error_mean(&all), Some(2.0));
+    assert_eq!(output_error_mean(&all[..1]), Some(1.0));
+    assert_eq!(output_error_mean(&all[2..]), None);
+}
+
+/// Which of least squares and its instruments is set aside, at the edge: instruments exactly
+/// as far from the output-error value as least squares (0.5 either side of oe's 1.0) do not
+/// move it away, so least squares is set aside for regressor noise; a hair further and the
+/// instruments are.
+#[test]
+fn the_instruments_are_set_aside_only_when_strictly_further() {
+    let at = |iv: f64| {
+        tested_causes(&[est("oe", 1.0, 0.01), est("rls", 0.5, 0.01), est("rls-iv", iv, 0.01)])
+    };
+    let equal = at(1.5);
+    assert_eq!(equal.len(), 1);
+    assert_eq!(equal[0].method, "rls");
+    assert!(equal[0].cause.starts_with(REGRESSOR_NOISE), "{equal:?}");
+    let further = at(1.500_001);
+    assert_eq!(further[0].method, "rls-iv");
+    assert!(further[0].cause.starts_with("its instruments"), "{further:?}");
+}
+
+/// The equations where a least-squares method was set aside for regressor noise: one entry per
+/// coefficient and method, on the first parameter it was shown; another method in the same
+/// equation and the same method in another equation each add one; other causes none.
+#[test]
+fn each_noisy_equation_is_listed_once_per_method() {
+    let noise = "regressor noise: instrumental variables move …";
+    let first = [
+        agreement("Cl_beta", Vec::new(), &[("rls", noise)]),
+        agreement("Cl_p", Vec::new(), &[("rls", noise)]),
+        agreement("Cl_da", Vec::new(), &[("ftr", noise)]),
+        agreement("Cn_r", Vec::new(), &[("rls", noise)]),
+        agreement("Cm_q", Vec::new(), &[("rls", "its instruments: …")]),
+    ];
+    let got = noisy_equations(&first);
+    let want = [("Cl", "rls", "Cl_beta"), ("Cl", "ftr", "Cl_da"), ("Cn", "rls", "Cn_r")];
+    let want: Vec<(String, String, String)> =
+        want.iter().map(|&(c, m, p)| (c.into(), m.into(), p.into())).collect();
+    assert_eq!(got, want);
+}
+
+/// The shared-bias rule at its edges, regressor noise shown in the Cl equation: instruments
+/// that move rls by exactly 10 % of the larger value (10 → 9) do not set it aside, by more
+/// (10 → 8, towards oe's 10.5) do; equally far from the output-error value (10 and 8 about 9)
+/// is not towards it; 20 → 30 with oe at 40 is.
+#[test]
+fn the_shared_bias_rule_at_its_edges() {
+    let noisy = [("Cl".to_string(), "rls".to_string(), "Cl_beta".to_string())];
+    let at = |ls: f64, iv: f64, oe: f64| {
+        let a = agreement(
+            "Cl_p",
+            vec![est("rls", ls, 0.01), est("rls-iv", iv, 0.01), est("oe", oe, 0.01)],
+            &[],
+        );
+        shared_bias(&a, &noisy)
+    };
+    assert!(at(9.0, 10.0, 10.5).is_none(), "exactly 10 % is not more");
+    let s = at(8.0, 10.0, 10.5).unwrap();
+    assert!(
+        s.method == "rls" && s.cause.contains("in the Cl equation (shown on Cl_beta)"),
+        "{s:?}"
+    );
+    assert!(at(8.0, 10.0, 9.0).is_none(), "as far from oe is not towards it");
+    assert!(at(20.0, 30.0, 40.0).is_some());
+    let other = agreement(
+        "Cn_r",
+        vec![est("rls", 8.0, 0.01), est("rls-iv", 10.0, 0.01), est("oe", 10.5, 0.01)],
+        &[],
+    );
+    assert!(shared_bias(&other, &noisy).is_none(), "no bias shown in the Cn equation");
+}
+
+/// Camps of mutual agreement, ascending: 1.00 and 1.01 (± 0.01) agree, 2.0 stands alone.
+#[test]
+fn estimates_that_agree_share_a_camp() {
+    let (a, b, c) = (est("oe", 1.0, 0.01), est("fem", 1.01, 0.01), est("ekf", 2.0, 0.01));
+    assert_eq!(camps(&[&c, &a, &b]), [vec!["oe".to_string(), "fem".into()], vec!["ekf".into()]]);
+}

@@ -128,6 +128,8 @@ mod tests {
             assert_eq!(imprecise("Cm_q", Some(e), Some(0.2 - d)), None, "{e}");
             let r = imprecise("Cm_q", Some(e), Some(0.2 + d)).unwrap();
             assert!((r - 0.1).abs() < 1e-8, "{r}");
+            // Exactly at the limit (0.2/2 is 0.1 in floating point) is not above it.
+            assert_eq!(imprecise("Cm_q", Some(e), Some(0.2)), None, "{e}");
         }
     }
 }

@@ -25,6 +25,11 @@ fn two_manoeuvres_against_the_analytic_chi_squared() {
     let same = Repeat::of("x", vec![v(0, 1.0, 0.1), v(1, 1.0, 0.1)]).unwrap();
     assert!((same.spread_sigma() - 0.1 / 2f64.sqrt()).abs() < 1e-12);
     assert!(Repeat::of("x", vec![v(0, 1.0, 0.1)]).is_none());
+    // Three manoeuvres of σ 1 at 0, 3 and 6: θ̄ 3, χ² 18 on 2 dof, Birge ratio √9 = 3, the
+    // mean's own σ 1/√3 scaled to √3.
+    let three = Repeat::of("x", vec![v(0, 0.0, 1.0), v(1, 3.0, 1.0), v(2, 6.0, 1.0)]).unwrap();
+    assert!((three.chi2 - 18.0).abs() < 1e-12 && three.dof == 2);
+    assert!((three.spread_sigma() - 3f64.sqrt()).abs() < 1e-12, "{}", three.spread_sigma());
     assert!(far.note().contains("#1 1.0000 ± 1.00e-1, #2 1.5000 ± 1.00e-1"), "{}", far.note());
 }
 

@@ -182,6 +182,10 @@ mod tests {
         );
         assert_eq!(w[1].parameter.as_deref(), Some("Cm_de"));
         assert!(w[1].text.contains("+10 %"), "{}", w[1].text);
+        // Exactly 2σ (−1.0 → −1.5 at σ 0.25, exact in floating point) is not beyond it.
+        let own = MethodEstimates::new("oe", "converged", [("Cm_alpha".into(), -1.0, 0.25)]);
+        let refit = MethodEstimates::new("oe", "converged", [("Cm_alpha".into(), -1.5, 0.25)]);
+        assert!(moved(&own, &refit, &leads).is_empty());
     }
 
     /// Settling keeps the timing test's flags and adds the refit's; other kinds untouched.

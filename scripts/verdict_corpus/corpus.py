@@ -1146,6 +1146,45 @@ def cmd_real(a):
               len(covered)))
 
 
+def cmd_repeats(a):
+    """The uav_oat repeats: each file fitted alone by each method; every pair of `identified`
+    values of one derivative (constant terms aside: each flight has its own trim) compared
+    against 3 combined σ."""
+    import itertools
+    root = Path(__file__).resolve().parents[2]
+    data = root.parent / "shared" / "flightdata" / "uav_oat" / "csv"
+    rows = defaultdict(list)
+    for f in sorted(data.glob("*.csv")):
+        model = "longitudinal" if "_el_" in f.name else "lateral"
+        for est in a.estimators.split(","):
+            odir = Path(a.out) / "uav_oat" / f.stem / est
+            cmd = [a.bin, "replay", str(f), "--map", str(root / "mappings" / "uav_oat.toml"),
+                   "--model", model, "--estimator", est, "--out", str(odir)]
+            if subprocess.run(cmd, capture_output=True, text=True).returncode != 0:
+                log("%s %s: failed" % (f.stem, est))
+                continue
+            for q in json.loads((odir / "summary.json").read_text())["parameters"]:
+                if q.get("estimate") is None or q.get("std_error") is None or \
+                        q["name"].endswith("_0") or q["status"] != "identified":
+                    continue
+                rows[(est, q["name"])].append((f.stem, q["estimate"], q["std_error"]))
+    print("| method | pairs of identified values | beyond 3 combined σ |")
+    print("|---|---|---|")
+    total = [0, 0]
+    for est in a.estimators.split(","):
+        pairs = bad = 0
+        for (e, _), vs in rows.items():
+            if e != est:
+                continue
+            for x, y in itertools.combinations(vs, 2):
+                pairs += 1
+                bad += abs(x[1] - y[1]) > 3.0 * math.hypot(x[2], y[2])
+        total[0] += pairs
+        total[1] += bad
+        print("| %s | %d | %d |" % (est, pairs, bad))
+    print("| all | %d | %d |" % tuple(total))
+
+
 def cmd_design(a):
     recs = design()[: a.limit] if a.limit else design()
     print("%d records, %d aircraft" % (len(recs), len({d["aircraft"] for d in recs})))
@@ -1195,9 +1234,13 @@ def main():
     q.add_argument("--out", required=True)
     q.add_argument("--bin", default=DEFAULT_BIN)
     q.add_argument("--estimators", default=ESTIMATORS)
+    u = sub.add_parser("repeats", help="the uav_oat repeats: identified values across files")
+    u.add_argument("--out", required=True)
+    u.add_argument("--bin", default=DEFAULT_BIN)
+    u.add_argument("--estimators", default="oe,rls,ekf")
     a = ap.parse_args()
     {"make": cmd_make, "run": cmd_run, "report": cmd_report, "design": cmd_design,
-     "real": cmd_real}[a.cmd](a)
+     "real": cmd_real, "repeats": cmd_repeats}[a.cmd](a)
 
 
 if __name__ == "__main__":

@@ -193,23 +193,10 @@ pub fn check_records<R: Read>(
     Ok((summary, result))
 }
 
-/// The finding that the record's rates and attitudes come through a first-order filter that
-/// `config` does not model: the check redone with the AHRS lag and the inertial scale factors
-/// as unknowns from the corrections of `from`, the check under `config`
-/// ([`compat::check_with_ahrs_lag`]) converges to a time constant more than
-/// [`SIGNIFICANT_SIGMAS`] of its σ from 0 and within [`plausible_lag`]'s bounds; `None`
-/// otherwise, when `config` models the lag already, and when `from` finds φ or θ late against
-/// the gyros (an AHRS's filter delays both alike; attitudes alone late are their own delay,
-/// which `from`'s shifts undo).
-///
-/// Said, not applied: on the simulated records of `crates/aeroident/tests/compat_ahrs_lag.rs`
-/// (τ = 0.15 s, 10 Hz) the lag's corrections bring output error's Cl_p, Cl_δa, Cm_q and Cm_δe
-/// from 19–35 % off to within 10 %, but move CY_β (−4 % to +11 % with a β vane, +24 % without),
-/// so applying it is not "never worse than no correction", which `--compat auto` must be. An
-/// unmodelled lag is what those 35 % are, so the user is told which check to run.
 /// The check's error `e` in the user's words: a manoeuvre too short by its number, record file
-/// and first row (`origins`, per manoeuvre), time span and sample count; a channel the check needs by the mapping's channel (its column or
-/// expression, or "not in the mapping") and how many samples lack it; any other error as it is.
+/// and first row (`origins`, per manoeuvre), time span and sample count; a channel the check
+/// needs by the mapping's channel (its column or expression, or "not in the mapping") and how
+/// many samples lack it; any other error as it is.
 fn in_user_terms(
     e: &aeroident_estimators::EstimatorError,
     slices: &[&[aeroident_estimators::AirDataSample]],
@@ -244,6 +231,20 @@ fn in_user_terms(
     format!("{label} is missing in {missing} of {total} samples: {reason}")
 }
 
+/// The finding that the record's rates and attitudes come through a first-order filter that
+/// `config` does not model: the check redone with the AHRS lag and the inertial scale factors
+/// as unknowns from the corrections of `from`, the check under `config`
+/// ([`compat::check_with_ahrs_lag`]) converges to a time constant more than
+/// [`SIGNIFICANT_SIGMAS`] of its σ from 0 and within [`plausible_lag`]'s bounds; `None`
+/// otherwise, when `config` models the lag already, and when `from` finds φ or θ late against
+/// the gyros (an AHRS's filter delays both alike; attitudes alone late are their own delay,
+/// which `from`'s shifts undo).
+///
+/// Said, not applied: on the simulated records of `crates/aeroident/tests/compat_ahrs_lag.rs`
+/// (τ = 0.15 s, 10 Hz) the lag's corrections bring output error's Cl_p, Cl_δa, Cm_q and Cm_δe
+/// from 19–35 % off to within 10 %, but move CY_β (−4 % to +11 % with a β vane, +24 % without),
+/// so applying it is not "never worse than no correction", which `--compat auto` must be. An
+/// unmodelled lag is what those 35 % are, so the user is told which check to run.
 fn unmodelled_lag(
     slices: &[&[aeroident_estimators::AirDataSample]],
     config: &CompatConfig,

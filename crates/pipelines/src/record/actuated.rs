@@ -66,13 +66,28 @@ impl Saturation {
     }
 }
 
-/// The surface field of channel `ch` (`de`, `da`, `dr`).
-fn surface(s: &mut AirDataSample, ch: Channel) -> &mut Option<f64> {
+/// The surface field of channel `ch` (`de`, `da`, `dr`; any other is taken as `dr`: callers
+/// pass a surface, [`is_surface`]).
+pub(super) fn surface(s: &mut AirDataSample, ch: Channel) -> &mut Option<f64> {
     match ch {
         Channel::De => &mut s.de_rad,
         Channel::Da => &mut s.da_rad,
         _ => &mut s.dr_rad,
     }
+}
+
+/// The value of surface `ch` in `s` ([`surface`], read only).
+pub(super) fn surface_value(s: &AirDataSample, ch: Channel) -> Option<f64> {
+    match ch {
+        Channel::De => s.de_rad,
+        Channel::Da => s.da_rad,
+        _ => s.dr_rad,
+    }
+}
+
+/// Whether `ch` is a control surface (`de`, `da`, `dr`).
+pub(super) fn is_surface(ch: Channel) -> bool {
+    matches!(ch, Channel::De | Channel::Da | Channel::Dr)
 }
 
 /// The note a summary carries for commanded surface `ch`: what every estimator sees instead.

@@ -178,41 +178,6 @@ fn kind_name(ch: Channel) -> &'static str {
     }
 }
 
-/// A control surface an input shift moves ([`Corrections::with_input_shift`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Surface {
-    De,
-    Da,
-    Dr,
-}
-
-impl Surface {
-    fn from_key(key: &str) -> Option<Self> {
-        match key {
-            "de" => Some(Self::De),
-            "da" => Some(Self::Da),
-            "dr" => Some(Self::Dr),
-            _ => None,
-        }
-    }
-
-    fn get(self, s: &AirDataSample) -> Option<f64> {
-        match self {
-            Self::De => s.de_rad,
-            Self::Da => s.da_rad,
-            Self::Dr => s.dr_rad,
-        }
-    }
-
-    fn field(self, s: &mut AirDataSample) -> &mut Option<f64> {
-        match self {
-            Self::De => &mut s.de_rad,
-            Self::Da => &mut s.da_rad,
-            Self::Dr => &mut s.dr_rad,
-        }
-    }
-}
-
 /// The corrections of a compatibility check (from its `compat.json`, or its summary).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Corrections {
@@ -222,7 +187,7 @@ pub struct Corrections {
     shifts: Vec<(Channel, f64)>,
     /// `(surface, τ)`: the stage reads the control surface `τ` later (a refit with a
     /// measured input lead undone, [`Corrections::with_input_shift`]).
-    input_shifts: Vec<(Surface, f64)>,
+    input_shifts: Vec<(aeroident_io::Channel, f64)>,
     /// The AHRS's time constant, s: the stage passes every other channel through its filter.
     lag_s: Option<f64>,
     /// Per manoeuvre, the reconstructed sideslip `(t_s, β)`, for records without one.
@@ -547,7 +512,10 @@ impl Corrections {
     /// A key that is no control surface, or a shift that is not finite or beyond
     /// ±[`MAX_SHIFT_S`], in words.
     pub fn with_input_shift(mut self, key: &str, shift_s: f64) -> Result<Self, String> {
-        let surface = Surface::from_key(key)
+        let surface = aeroident_io::Channel::ALL
+            .iter()
+            .copied()
+            .find(|&c| c.key() == key && super::actuated::is_surface(c))
             .ok_or_else(|| format!("`{key}` is no control surface (de, da, dr)"))?;
         if !shift_s.is_finite() || shift_s.abs() > MAX_SHIFT_S {
             return Err(format!(
@@ -692,10 +660,10 @@ impl<I> Corrected<I> {
                 ch.set(&mut s, v);
             }
         }
-        for &(surface, tau) in &self.corr.input_shifts {
-            let moved = self.around(s.t_s + tau, |x| surface.get(x));
+        for &(ch, tau) in &self.corr.input_shifts {
+            let moved = self.around(s.t_s + tau, |x| super::actuated::surface_value(x, ch));
             if let Some((ya, yb, f)) = moved {
-                *surface.field(&mut s) = Some(ya + f * (yb - ya));
+                *super::actuated::surface(&mut s, ch) = Some(ya + f * (yb - ya));
             }
         }
         for &(ch, b, k) in &self.corr.affine {

@@ -12,7 +12,7 @@ use aeroident_io::replay_output::SignTest;
 use aeroident_io::warning::Warnings;
 
 /// The refit of a run whose own estimates are `own`, sign tests `tests`, corrections `compat`
-/// and summary warnings `warnings` (updated in place, [`refit::settle`]); `fit` runs the own
+/// and summary warnings `warnings` (the refit's flags added, [`refit::moved`]); `fit` runs the own
 /// estimator on the records with the corrections it is given. Nothing without a warned lead
 /// or on a live feed; a refit that fails or a stop leaves the timing warnings as they were,
 /// with a warning that says so. Returns whether the warnings changed (the verdicts are then to
@@ -47,7 +47,7 @@ pub fn refit_step(
     if again.estimates.is_empty() {
         return Ok(note(log, warnings, &format!("not done: {} {}", again.method, again.status)));
     }
-    refit::settle(warnings, refit::moved(own, &again, &leads));
+    warnings.extend(refit::moved(own, &again, &leads));
     Ok(true)
 }
 

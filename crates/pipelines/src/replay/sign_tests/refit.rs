@@ -10,7 +10,7 @@
 //! beyond its own ±2σ depends on the input's timing more than its σ says, and is flagged with
 //! both values (Klein & Morelli 2006, §10.2: the time delay as a model parameter; the refit is
 //! that model at the measured delay). The control and damping derivatives keep the timing
-//! test's own flag whether or not they move ([`settle`]).
+//! test's own flag whether or not they move ([`moved`]).
 //!
 //! The own σ, not the combined σ of the two fits: both read the same samples, so their noise
 //! is shared and a difference beyond ±2σ of one of them is not noise.
@@ -54,14 +54,18 @@ pub fn undone(base: Option<&Corrections>, leads: &[(String, f64)]) -> Result<Cor
     Ok(c)
 }
 
-/// The surfaces and their leads in words: `` `de` 0.080 s, `da` 0.050 s``.
+/// The surfaces and their leads in words: `` `de` +0.080 s, `da` -0.050 s``.
 fn describe(leads: &[(String, f64)]) -> String {
     let each = leads.iter().map(|(k, l)| format!("`{k}` {l:+.3} s"));
     each.collect::<Vec<_>>().join(", ")
 }
 
 /// One warning about each estimate of `own` that `refit` moves beyond [`MOVE_SIGMAS`] of its
-/// own σ, with both values.
+/// own σ, with both values. They are added beside the timing test's own flags on the control
+/// and damping derivatives, which stay: a commanded surface also carries its actuator's gain
+/// and rate limit, which a shift does not undo (on the calibration corpus's tune half, 62 of
+/// the estimates a shift left within ±2σ on records with a rate-limited servo were more than
+/// 10 % off).
 pub fn moved(
     own: &MethodEstimates,
     refit: &MethodEstimates,
@@ -83,15 +87,6 @@ pub fn moved(
             })
         })
         .collect()
-}
-
-/// The summary's warnings with the refit's `moved` added. The timing test's own flags on the
-/// control and damping derivatives stay: a commanded surface also carries its actuator's gain
-/// and rate limit, which a shift does not undo (on the calibration corpus's tune half, 62 of
-/// the estimates a shift left within ±2σ on records with a rate-limited servo were more than
-/// 10 % off).
-pub fn settle(warnings: &mut Warnings, moved: Vec<Warning>) {
-    warnings.extend(moved);
 }
 
 #[cfg(test)]
@@ -188,19 +183,30 @@ mod tests {
         assert!(moved(&own, &refit, &leads).is_empty());
     }
 
-    /// Settling keeps the timing test's flags and adds the refit's; other kinds untouched.
+    /// The refit's warnings go beside the timing test's: a parameter the refit moves carries
+    /// both, one it does not keeps the timing test's alone; other kinds untouched.
     #[test]
-    fn settling_adds_the_refit_flags_to_the_timing_tests() {
+    fn the_refit_flags_go_beside_the_timing_tests() {
         let mut warnings: Warnings = [
             Warning::new(WarningKind::InputTiming, "de leads").about("Cm_de"),
             Warning::new(WarningKind::Sign, "dr reversed").about("Cn_dr"),
         ]
         .into_iter()
         .collect();
-        let refit = Warning::new(WarningKind::InputTiming, "moves").about("Cm_alpha");
-        settle(&mut warnings, vec![refit]);
+        let own = MethodEstimates::new(
+            "oe",
+            "converged",
+            [("Cm_alpha".into(), -1.0, 0.01), ("Cm_de".into(), -2.0, 0.1)],
+        );
+        let refit = MethodEstimates::new(
+            "oe",
+            "converged",
+            [("Cm_alpha".into(), -1.2, 0.01), ("Cm_de".into(), -2.05, 0.1)],
+        );
+        warnings.extend(moved(&own, &refit, &[("de".to_string(), 0.08)]));
         assert_eq!(warnings.about("Cm_de"), ["de leads"]);
-        assert_eq!(warnings.about("Cm_alpha"), ["moves"]);
+        let alpha = warnings.about("Cm_alpha");
+        assert!(alpha.len() == 1 && alpha[0].contains("Cm_alpha moves from -1.0000 to -1.2000"));
         assert_eq!(warnings.about("Cn_dr"), ["dr reversed"]);
     }
 }

@@ -34,6 +34,10 @@ pub enum WarningKind {
     /// A force or moment the record does not give (thrust unmapped) that can be inside the
     /// measured coefficient.
     UnmodelledForce,
+    /// An estimate that a skew of half a sample between the rate gyros and the other channels
+    /// moves by more than an identified estimate claims (the record's time stamps cannot rule
+    /// such a skew out).
+    SampleTiming,
 }
 
 impl WarningKind {

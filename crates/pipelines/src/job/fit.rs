@@ -172,9 +172,10 @@ impl FitJob {
         Ok(())
     }
 
-    /// The timing refit ([`super::timing::refit_step`]): the records fitted again by the same
-    /// method, model and options (no bootstrap) with a warned surface lead undone, the
-    /// verdicts judged again when it ran.
+    /// The timing refit ([`super::timing::refit_step`]) and the sample-timing test
+    /// ([`super::timing::skew_step`]): the records fitted again by the same method, model and
+    /// options (no bootstrap) with a warned surface lead undone, and with the gyros skewed by
+    /// half a sample; the verdicts judged again when either flagged.
     fn timing_refit(
         &self,
         outcome: &mut BatchOutcome,
@@ -186,14 +187,15 @@ impl FitJob {
         let mut options = outcome.options.clone();
         options.bootstrap_refits = None;
         let fit = move |compat: crate::record::Corrections| {
-            options.compat = Some(compat);
-            super::cross_check::batch_estimates(&records, kind, model, options)
+            let options = FitOptions { compat: Some(compat), ..options.clone() };
+            super::cross_check::batch_estimates(&records, kind, model.clone(), options)
         };
         let s = &mut outcome.summary;
         let compat = outcome.options.compat.as_ref();
-        let (tests, warnings) = (&s.sign_tests, &mut s.warnings);
-        if super::timing::refit_step(&self.records, &own, tests, compat, fit, guard, log, warnings)?
-        {
+        let (tests, w, rec) = (&s.sign_tests, &mut s.warnings, &self.records);
+        let refit =
+            super::timing::refit_step(rec, &own, tests, compat, fit.clone(), guard, log, w)?;
+        if super::timing::skew_step(rec, &own, compat, fit, guard, log, w)? || refit {
             let thrust = crate::plausibility::thrust_mapped(&self.records.mapping);
             outcome.summary.judge(&outcome.model, thrust);
         }

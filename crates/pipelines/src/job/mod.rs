@@ -11,8 +11,8 @@
 //!    ([`crate::record`]);
 //! 4. **check**: the cross-check, the record's other methods beside the estimate
 //!    ([`cross_check`], judged by [`crate::replay::cross_check`]), or least squares'
-//!    regressor-noise test; and the timing refit where a surface leads its response
-//!    ([`timing`]);
+//!    regressor-noise test; the timing refit where a surface leads its response, and the
+//!    sample-timing test, the record fitted with the gyros skewed by half a sample ([`timing`]);
 //! 5. **validate**: the estimates applied to a second record (`validate_on`).
 //!
 //! The faces keep what is theirs: opening a live feed or stdin, showing progress, answering
@@ -30,9 +30,13 @@ use crate::replay::ReplayError;
 use crate::structure::AutoSelection;
 use crate::window::TimeWindow;
 use aeroident_io::{
-    FlightDataError, LogFormat, LogReader, Mapping, ModelSpec, open_log_with_notes,
+    FlightDataError, LogFormat, LogReader, Mapping, ModelSpec, RecordEvent, open_log_with_notes,
 };
 use std::path::PathBuf;
+
+/// How many samples [`Records::sample_interval_s`] reads: enough for a median that a few gaps
+/// do not move, few enough that a long record is not read twice for it.
+pub const INTERVAL_SAMPLES: usize = 1001;
 
 /// The records of a job, as the faces name them.
 #[derive(Debug, Clone)]
@@ -100,6 +104,24 @@ impl Records {
     /// As [`aeroident_io::open_log_with_notes`].
     pub fn open(&self, file: &str) -> Result<LogReader, FlightDataError> {
         open_log_with_notes(file, self.format, &self.mapping).map(|(r, _)| r)
+    }
+
+    /// The main record's sample interval, s: the median of the positive intervals between its
+    /// first [`INTERVAL_SAMPLES`] good samples (a gap or a rejected row does not move a
+    /// median). `None` for a live feed, a record that cannot be read again, or fewer than two
+    /// samples.
+    pub fn sample_interval_s(&self) -> Option<f64> {
+        if self.live {
+            return None;
+        }
+        let times = self.open(&self.data).ok()?.filter_map(|e| match e {
+            Ok(RecordEvent::Sample { sample, .. }) => Some(sample.t_s),
+            _ => None,
+        });
+        let t: Vec<f64> = times.take(INTERVAL_SAMPLES).collect();
+        let mut dt: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).filter(|d| *d > 0.0).collect();
+        dt.sort_by(f64::total_cmp);
+        dt.get(dt.len() / 2).copied()
     }
 }
 
@@ -209,6 +231,9 @@ pub enum Step {
     RegressorNoise,
     /// The timing refit: the record fitted again with a surface's measured lead undone.
     TimingRefit,
+    /// The sample-timing test: the record fitted again with the gyros half a sample late, and
+    /// half a sample early.
+    SampleTiming,
 }
 
 impl Step {
@@ -224,6 +249,9 @@ impl Step {
             }
             Step::TimingRefit => {
                 "the timing refit (the record fitted with the measured lead undone)"
+            }
+            Step::SampleTiming => {
+                "the sample-timing test (the record fitted with the gyros skewed by half a sample)"
             }
         }
     }

@@ -152,7 +152,8 @@ impl ReplayJob {
     /// ([`super::cross_check::run_panel`]) and the online estimates judged beside them
     /// ([`crate::replay::cross_check`]); without it, least squares' regressor-noise test
     /// ([`super::cross_check::regressor_noise_test`]); then the timing refit
-    /// ([`super::timing::refit_step`]). A stop abandons each with a warning (the online result
+    /// ([`super::timing::refit_step`]) and the sample-timing test
+    /// ([`super::timing::skew_step`]). A stop abandons each with a warning (the online result
     /// stands on its own).
     fn check_after_feed(
         &self,
@@ -178,12 +179,13 @@ impl ReplayJob {
         }
         let again = records.clone();
         let fit = move |compat| {
-            let opts = ReplayOptions { compat: Some(compat), ..base };
+            let opts = ReplayOptions { compat: Some(compat), ..base.clone() };
             super::cross_check::online_estimates(&again, &opts)
         };
         let s = &mut outcome.summary;
-        let (tests, compat) = (&s.sign_tests, options.compat.as_ref());
-        super::timing::refit_step(records, &own, tests, compat, fit, guard, log, &mut s.warnings)?;
+        let (tests, compat, w) = (&s.sign_tests, options.compat.as_ref(), &mut s.warnings);
+        super::timing::refit_step(records, &own, tests, compat, fit.clone(), guard, log, w)?;
+        super::timing::skew_step(records, &own, compat, fit, guard, log, w)?;
         let thrust = crate::plausibility::thrust_mapped(&self.records.mapping);
         crate::replay::verdict::judge(outcome, thrust);
         Ok(())

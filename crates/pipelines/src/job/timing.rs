@@ -1,12 +1,15 @@
-//! The timing refit of both jobs: when the record's timing test named a surface leading its
+//! The timing refits of both jobs. When the record's timing test named a surface leading its
 //! response, the record is fitted again by the run's own estimator, model and options with
 //! the lead undone, and each estimate that moves beyond its ±2σ is flagged with both values
-//! ([`crate::replay::sign_tests::refit`]). Not for a live feed (it cannot be read twice).
+//! ([`crate::replay::sign_tests::refit`]). Always, the record is fitted twice more with the
+//! gyros half a sample late and early, and each estimate such a skew moves by more than 10 %
+//! is flagged ([`crate::replay::sample_timing`]). Not for a live feed (it cannot be read twice).
 
 use super::{Guard, JobLog, Records, Step};
 use crate::record::Corrections;
 use crate::replay::ReplayError;
 use crate::replay::cross_check::MethodEstimates;
+use crate::replay::sample_timing;
 use crate::replay::sign_tests::refit;
 use aeroident_io::replay_output::SignTest;
 use aeroident_io::warning::Warnings;
@@ -49,6 +52,67 @@ pub fn refit_step(
     }
     warnings.extend(refit::moved(own, &again, &leads));
     Ok(true)
+}
+
+/// The sample-timing test of a run whose own estimates are `own` and corrections `compat`:
+/// `fit` runs the own estimator on the records with the corrections it is given, once with the
+/// gyros half a sample late and once early; each estimate the skew moves by more than 10 % is
+/// flagged in `warnings` ([`sample_timing::moved`]). Nothing on a live feed, a run without
+/// estimates, or a record whose sample interval cannot be read; a refit that fails or a stop
+/// leaves a warning that the test was not done. Returns whether the warnings gained a flag.
+///
+/// # Errors
+/// The face could not run the step.
+pub fn skew_step(
+    records: &Records,
+    own: &MethodEstimates,
+    compat: Option<&Corrections>,
+    fit: impl Fn(Corrections) -> MethodEstimates + Clone + Send + 'static,
+    guard: &mut impl Guard,
+    log: &mut dyn JobLog,
+    warnings: &mut Warnings,
+) -> Result<bool, ReplayError> {
+    if records.live || own.estimates.is_empty() {
+        return Ok(false);
+    }
+    let Some(skew) = records.sample_interval_s().and_then(sample_timing::skew_s) else {
+        return Ok(skew_note(
+            log,
+            warnings,
+            "not done: the record's sample interval could not be read",
+        ));
+    };
+    let skewed = |by: f64| compat.cloned().unwrap_or_default().with_rate_skew(by);
+    let (late, early) = match (skewed(skew), skewed(-skew)) {
+        (Ok(l), Ok(e)) => (l, e),
+        (Err(why), _) | (_, Err(why)) => {
+            return Ok(skew_note(log, warnings, &format!("not done: {why}")));
+        }
+    };
+    log.note("sample timing: fitting the record again with the gyros half a sample late and early");
+    let again = fit.clone();
+    let both = move || (fit(late), again(early));
+    let Some((late, early)) = guard.run(Step::SampleTiming, both)? else {
+        super::cross_check::abandoned("the sample-timing test", log, warnings);
+        return Ok(false);
+    };
+    if let Some(failed) = [&late, &early].into_iter().find(|m| m.estimates.is_empty()) {
+        let why = format!("not done: {} {}", failed.method, failed.status);
+        return Ok(skew_note(log, warnings, &why));
+    }
+    let flags = sample_timing::moved(own, &late, &early, skew);
+    let any = !flags.is_empty();
+    warnings.extend(flags);
+    Ok(any)
+}
+
+/// A warning that the sample-timing test was not done (`why`), to `log` and `warnings`;
+/// `false` (nothing to judge again).
+fn skew_note(log: &mut dyn JobLog, warnings: &mut Warnings, why: &str) -> bool {
+    let w = format!("sample timing: the refits with the gyros skewed by half a sample were {why}");
+    log.warning(&w);
+    warnings.push(w);
+    false
 }
 
 /// A warning that the refit was not done (the timing test's warnings stand), to `log` and

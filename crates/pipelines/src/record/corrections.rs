@@ -527,6 +527,32 @@ impl Corrections {
         Ok(self)
     }
 
+    /// The same corrections with the rate gyros (`p`, `q`, `r`) read `shift_s` later than
+    /// they already are (added to any time shift the corrections give them; `shift_s < 0`:
+    /// earlier). A skew between the gyros and the other channels, for a refit that asks what
+    /// a skew the record cannot rule out moves ([`crate::replay::sample_timing`]).
+    ///
+    /// # Errors
+    /// A shift that is not finite or, with the gyros' own, beyond ±[`MAX_SHIFT_S`], in words.
+    pub fn with_rate_skew(mut self, shift_s: f64) -> Result<Self, String> {
+        for ch in [Channel::P, Channel::Q, Channel::R] {
+            let own = self.shifts.iter().position(|s| s.0 == ch);
+            let total = own.map_or(0.0, |k| self.shifts[k].1) + shift_s;
+            if !total.is_finite() || total.abs() > MAX_SHIFT_S {
+                return Err(format!(
+                    "a gyro skew of {shift_s} s gives {} a shift of {total} s, beyond the ±{MAX_SHIFT_S} s a lag plausibly reaches",
+                    ch.name()
+                ));
+            }
+            match own {
+                Some(k) => self.shifts[k].1 = total,
+                None => self.shifts.push((ch, total)),
+            }
+        }
+        self.applied.push(format!("p, q, r: read {shift_s:+.4} s later (the sample-timing test)"));
+        Ok(self)
+    }
+
     /// The warning when the reconstructed sideslip, listed as applied, left samples without β:
     /// `cover` is (samples without a sideslip of their own, those it gave one). The check's
     /// manoeuvres are its time spans; a record replayed on other windows, or another record's
@@ -1354,5 +1380,48 @@ mod tests {
         let e = Corrections::default().with_input_shift("dr", 0.6).unwrap_err();
         assert!(e.contains("0.6 s is beyond the ±0.5 s"), "{e}");
         assert!(Corrections::default().with_input_shift("dr", f64::NAN).is_err());
+    }
+
+    /// A gyro skew reads p, q and r later by the skew, adds it to a gyro's own time shift
+    /// rather than replacing it, and leaves every other channel as read: ramps `p = t`,
+    /// `q = 2t`, `r = 3t` with a compat shift of +0.02 s on `q`, skewed by −0.01 s, read
+    /// `t − 0.01`, `2 (t + 0.01)` and `3 (t − 0.01)` inside the record. A skew that takes a
+    /// gyro's total beyond 0.5 s is refused by name.
+    #[test]
+    fn a_rate_skew_reads_every_gyro_at_its_shifted_time() {
+        let ramp = |t: f64| AirDataSample {
+            p_rad_s: Some(t),
+            q_rad_s: Some(2.0 * t),
+            r_rad_s: Some(3.0 * t),
+            de_rad: Some(t),
+            ..sample(t)
+        };
+        let ts: Vec<f64> = (0..41).map(|i| i as f64 * 0.01).collect();
+        let input: Vec<Result<RecordEvent, FlightDataError>> = ts
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| Ok(RecordEvent::Sample { row: i as u64, sample: ramp(t) }))
+            .collect();
+        let own = Corrections { shifts: vec![(Channel::Q, 0.02)], ..Default::default() };
+        let corr = own.with_rate_skew(-0.01).unwrap();
+        assert_eq!(corr.applied, ["p, q, r: read -0.0100 s later (the sample-timing test)"]);
+        let out: Vec<AirDataSample> = Corrected::new(input.into_iter(), corr)
+            .filter_map(|e| match e.unwrap() {
+                RecordEvent::Sample { sample, .. } => Some(sample),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(out.len(), ts.len());
+        for (s, &t) in out.iter().zip(&ts).skip(2).take(ts.len() - 4) {
+            let got = (s.p_rad_s.unwrap(), s.q_rad_s.unwrap(), s.r_rad_s.unwrap());
+            let want = (t - 0.01, 2.0 * (t + 0.01), 3.0 * (t - 0.01));
+            assert!((got.0 - want.0).abs() < 1e-12, "t {t}: p {got:?} {want:?}");
+            assert!((got.1 - want.1).abs() < 1e-12, "t {t}: q {got:?} {want:?}");
+            assert!((got.2 - want.2).abs() < 1e-12, "t {t}: r {got:?} {want:?}");
+            assert_eq!((s.t_s, s.de_rad), (t, Some(t)));
+        }
+        let e = Corrections::default().with_rate_skew(0.6).unwrap_err();
+        assert!(e.contains("gives p_rad_s a shift of 0.6 s, beyond the ±0.5 s"), "{e}");
+        assert!(Corrections::default().with_rate_skew(f64::NAN).is_err());
     }
 }

@@ -51,6 +51,7 @@ mod online;
 pub mod precision;
 pub mod prediction;
 pub mod repeatability;
+pub mod sample_timing;
 pub mod sign_tests;
 pub mod verdict;
 

@@ -1,0 +1,144 @@
+//! The sample-timing test: what a skew of half a sample between the rate gyros and the other
+//! channels moves.
+//!
+//! A record stamps each row with one time, but its channels are not sampled at one instant:
+//! an IMU and an air-data computer on separate clocks, a logger that samples its inputs in
+//! turn, a simulator whose integrator updates the rates half a step from the forces. Within
+//! a sample interval the record cannot tell those instants apart, so a skew of up to half a
+//! sample between the gyros and the flow angles and surfaces is always possible, and a
+//! compatibility check cannot resolve less than that either (Jategaonkar 2015, §10.3: time
+//! shifts are estimated to a fraction of the sample time, at best). The damping derivatives
+//! are the ones it moves: a small phase error of `r` against `β` projects the large stiffness
+//! term `Cn_β β` onto `r` (on a clean simulated A-4 record, a skew of 4 ms, a quarter sample
+//! at 60 Hz, moves `Cn_r` from −0.15 to −0.02).
+//!
+//! The test fits the record twice more by the run's own method, with the gyros read half a
+//! sample later and half a sample earlier ([`crate::record::Corrections::with_rate_skew`]).
+//! Half the difference of the two is what a half-sample skew moves each estimate. One it moves
+//! by more than [`MOVE_FRACTION`] of its value is flagged with the three values: `identified`
+//! claims more than the record's timing supports. The threshold is the precision an
+//! identified estimate claims, not fitted (decided on the calibration corpus's tune half
+//! against 5 % and ±2σ, docs/validation.md).
+
+use crate::replay::cross_check::MethodEstimates;
+use aeroident_io::warning::{Warning, WarningKind};
+
+/// The skew asked about, as a fraction of the record's sample interval: half a sample, the
+/// most a row's one time stamp hides.
+pub const SKEW_SAMPLES: f64 = 0.5;
+
+/// The largest move under the skew, as a fraction of the estimate, that is not flagged.
+pub const MOVE_FRACTION: f64 = 0.10;
+
+/// Only an estimate beyond this many of its σ from zero is judged: one whose ±2σ spans zero is
+/// flagged for that already ([`crate::replay::precision::insignificant`]), and a relative move
+/// of a value indistinguishable from zero says nothing.
+pub const SIGNIFICANT_SIGMAS: f64 = 2.0;
+
+/// One flag about each estimate of `own` that the skew of `skew_s` (s) moves by more than
+/// [`MOVE_FRACTION`] of its value: half the difference between `late` (the gyros read
+/// `skew_s` later) and `early` (`skew_s` earlier). An estimate within [`SIGNIFICANT_SIGMAS`]
+/// of zero, or a parameter either refit lacks, is not judged.
+pub fn moved(
+    own: &MethodEstimates,
+    late: &MethodEstimates,
+    early: &MethodEstimates,
+    skew_s: f64,
+) -> Vec<Warning> {
+    let value_in =
+        |m: &MethodEstimates, name: &str| m.estimates.iter().find(|r| r.0 == name).map(|r| r.1);
+    own.estimates
+        .iter()
+        .filter(|(_, value, sigma)| value.abs() > SIGNIFICANT_SIGMAS * sigma)
+        .filter_map(|(name, value, _)| {
+            let (l, e) = (value_in(late, name)?, value_in(early, name)?);
+            let half = 0.5 * (l - e);
+            (half.abs() > MOVE_FRACTION * value.abs()).then(|| {
+                let text = format!(
+                    "sample timing: a skew of ±{:.1} ms (half a sample) between the rate gyros and the other channels, which the record's time stamps cannot rule out, moves {name} from {} to {} (gyros early) and {} (gyros late), ±{:.0} % of its value: more than the {:.0} % an identified estimate claims",
+                    1e3 * skew_s,
+                    number(*value),
+                    number(e),
+                    number(l),
+                    100.0 * half.abs() / value.abs().max(f64::MIN_POSITIVE),
+                    100.0 * MOVE_FRACTION
+                );
+                Warning::new(WarningKind::SampleTiming, text).about(name)
+            })
+        })
+        .collect()
+}
+
+/// `v` to four significant figures, fixed-point where that reads well.
+fn number(v: f64) -> String {
+    if v == 0.0 || (1e-2..1e4).contains(&v.abs()) { format!("{v:.4}") } else { format!("{v:.3e}") }
+}
+
+/// The skew the test asks about for a record sampled every `interval_s`, s ([`SKEW_SAMPLES`]
+/// of it); `None` for an interval that is not finite and positive.
+pub fn skew_s(interval_s: f64) -> Option<f64> {
+    (interval_s.is_finite() && interval_s > 0.0).then_some(SKEW_SAMPLES * interval_s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn method(rows: &[(&str, f64)]) -> MethodEstimates {
+        MethodEstimates::new(
+            "oe",
+            "converged",
+            rows.iter().map(|&(n, v)| (n.to_string(), v, 0.001)),
+        )
+    }
+
+    /// The rule at its edge: Cn_r −0.15 moved ±0.0149 (9.9 %) is not flagged, ±0.0151 (10.1 %)
+    /// is, whichever way the skew moves it; a parameter a refit lacks is not judged; the text
+    /// gives the skew in ms and the three values.
+    #[test]
+    fn the_move_rule_at_its_edge() {
+        let own = method(&[("Cn_r", -0.15), ("Cn_beta", 0.12), ("Cl_p", -0.4), ("Cn_dr", -0.1)]);
+        let late = method(&[("Cn_r", -0.15 + 0.0149), ("Cn_beta", 0.12 - 0.0121), ("Cl_p", -0.5)]);
+        let early = method(&[("Cn_r", -0.15 - 0.0149), ("Cn_beta", 0.12 + 0.0121), ("Cl_p", -0.3)]);
+        let w = moved(&own, &late, &early, 0.008_333);
+        let about: Vec<_> = w.iter().map(|w| w.parameter.as_deref().unwrap()).collect();
+        assert_eq!(about, ["Cn_beta", "Cl_p"], "{w:?}");
+        assert!(w.iter().all(|w| w.kind == WarningKind::SampleTiming));
+        assert!(
+            w[1].text.contains("±8.3 ms (half a sample)")
+                && w[1].text.contains("moves Cl_p from -0.4000 to -0.3000 (gyros early) and -0.5000 (gyros late), ±25 % of its value"),
+            "{}",
+            w[1].text
+        );
+        let late = method(&[("Cn_r", -0.15 + 0.0151)]);
+        let early = method(&[("Cn_r", -0.15 - 0.0151)]);
+        assert_eq!(moved(&own, &late, &early, 0.008_333).len(), 1);
+        assert_eq!(moved(&own, &early, &late, 0.008_333).len(), 1);
+    }
+
+    /// An estimate within 2σ of zero is not judged (its own flag says it is not told from
+    /// zero), one just beyond is; a small value is written in exponent form.
+    #[test]
+    fn an_estimate_not_told_from_zero_is_not_judged() {
+        let own = |sigma| MethodEstimates::new("oe", "converged", [("Cl_0".into(), 2e-4, sigma)]);
+        let late = method(&[("Cl_0", 4e-4)]);
+        let early = method(&[("Cl_0", 0.0)]);
+        assert!(moved(&own(1e-4), &late, &early, 0.01).is_empty());
+        let w = moved(&own(0.99e-4), &late, &early, 0.01);
+        assert_eq!(w.len(), 1);
+        assert!(
+            w[0].text.contains("from 2.000e-4 to 0.0000 (gyros early) and 4.000e-4"),
+            "{}",
+            w[0].text
+        );
+    }
+
+    /// Half a sample of the interval; nothing for an interval that is not one.
+    #[test]
+    fn the_skew_is_half_the_sample_interval() {
+        assert_eq!(skew_s(0.02), Some(0.01));
+        assert_eq!(skew_s(0.0), None);
+        assert_eq!(skew_s(f64::NAN), None);
+        assert_eq!(skew_s(-0.01), None);
+    }
+}

@@ -905,7 +905,7 @@ fn val_output_error_estimates_the_initial_state_on_request() {
 
 /// `replay --estimator oe --bootstrap 20` on the HFB-320 (book model): the estimates are the
 /// plain fit's (the bootstrap changes the σ only); every parameter's reported σ is its
-/// bootstrap σ, positive and at least 0.65 of its Cramér–Rao σ (without process noise the
+/// bootstrap σ (with the sample-timing σ in quadrature), positive and at least 0.65 of its Cramér–Rao σ (without process noise the
 /// bootstrap of this model is the Cramér–Rao bound, estimators' unit test; process noise only
 /// adds); the summary names the replicas, the seed and the filter-error noise levels they were
 /// flown with (positive `F` on V and α); a second run gives the same σ (seeded); and the flag
@@ -938,7 +938,10 @@ fn val_output_error_bootstrap_sigma_on_request() {
         assert!(p["bootstrap_std_error"].is_null());
         let (sb, crb) =
             (q["bootstrap_std_error"].as_f64().unwrap(), q["crb_std_error"].as_f64().unwrap());
-        assert_eq!(q["std_error"].as_f64(), Some(sb), "{}: reported σ", q["name"]);
+        // The reported σ is the bootstrap's with the sample-timing σ in quadrature.
+        let timing = q["timing_std_error"].as_f64().unwrap();
+        let reported = q["std_error"].as_f64().unwrap();
+        assert!((reported - sb.hypot(timing)).abs() <= 1e-12 * reported, "{}: σ", q["name"]);
         assert!(sb > 0.65 * crb, "{}: bootstrap σ {sb} vs Cramér–Rao {crb}", q["name"]);
         assert_eq!(q["bootstrap_std_error"], r["bootstrap_std_error"], "not reproducible");
         // The bias estimate is the refits' mean less the estimate: within 2σ of zero (20

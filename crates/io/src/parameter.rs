@@ -103,6 +103,13 @@ pub struct ParameterResult {
     /// The Cramér–Rao σ of a batch fit, beside a `std_error` of another source (or equal to
     /// it); `null` for recursive estimators.
     pub crb_std_error: Option<f64>,
+    /// The σ of the record's sample timing, included in `std_error` in quadrature: what a skew
+    /// of half a sample between the rate gyros and the other channels moves the estimate,
+    /// taken as a uniform error over that range (the move / √3;
+    /// `aeroident_pipelines::replay::sample_timing`). `null` where the test was not made (a
+    /// live feed, `run`, `montecarlo`).
+    #[serde(default)]
+    pub timing_std_error: Option<f64>,
     /// The truth (simulation) or a published value (a model file's `[reference.X]`); `null`
     /// without one. Below [`ZERO_THRESHOLD`] in magnitude it is 0.
     pub reference: Option<f64>,
@@ -152,6 +159,7 @@ impl ParameterResult {
             std_error,
             std_error_source: None,
             crb_std_error: None,
+            timing_std_error: None,
             reference: None,
             reference_check: None,
             status: String::new(),
@@ -254,6 +262,21 @@ impl ParameterResult {
         self
     }
 
+    /// Adds the sample-timing σ `timing` (finite, ≥ 0) to `std_error` in quadrature and keeps
+    /// it in `timing_std_error`; a result without a σ keeps none. A second call replaces the
+    /// first's share, not adds to it.
+    pub fn add_timing_std_error(&mut self, timing: f64) {
+        if !(timing.is_finite() && timing >= 0.0) {
+            return;
+        }
+        let noise = self.std_error.map(|s| match self.timing_std_error {
+            Some(t) => (s * s - t * t).max(0.0).sqrt(),
+            None => s,
+        });
+        self.std_error = noise.map(|s| s.hypot(timing));
+        self.timing_std_error = noise.map(|_| timing);
+    }
+
     /// The result with the Cramér–Rao σ `crb` beside its σ.
     pub fn with_crb_std_error(mut self, crb: Option<f64>) -> Self {
         self.crb_std_error = crb;
@@ -348,6 +371,7 @@ mod tests {
             "std_error",
             "std_error_source",
             "crb_std_error",
+            "timing_std_error",
             "reference",
             "reference_check",
             "status",

@@ -38,6 +38,8 @@ def test_fit_equals_cli(tmp_path, estimator):
     np.testing.assert_array_equal(py["estimate"], [p["estimate"] for p in params])
     np.testing.assert_array_equal(py["std_error"], [p["std_error"] for p in params])
     np.testing.assert_array_equal(py["crb_std_error"], [p["crb_std_error"] for p in params])
+    timing = [np.nan if p["timing_std_error"] is None else p["timing_std_error"] for p in params]
+    np.testing.assert_array_equal(py["timing_std_error"], timing)
     # The verdict is the summary's, under the summary's names (docs/output-schema.md).
     assert py["status"] == [p["status"] for p in params]
     assert py["flags"] == [p["flags"] for p in params]

@@ -175,7 +175,8 @@ impl FitJob {
     /// The timing refit ([`super::timing::refit_step`]) and the sample-timing test
     /// ([`super::timing::skew_step`]): the records fitted again by the same method, model and
     /// options (no bootstrap) with a warned surface lead undone, and with the gyros skewed by
-    /// half a sample; the verdicts judged again when either flagged.
+    /// half a sample (its σ added to every estimate's); the verdicts judged again when either
+    /// ran.
     fn timing_refit(
         &self,
         outcome: &mut BatchOutcome,
@@ -195,7 +196,10 @@ impl FitJob {
         let (tests, w, rec) = (&s.sign_tests, &mut s.warnings, &self.records);
         let refit =
             super::timing::refit_step(rec, &own, tests, compat, fit.clone(), guard, log, w)?;
-        if super::timing::skew_step(rec, &own, compat, fit, guard, log, w)? || refit {
+        let spreads = super::timing::skew_step(rec, &own, compat, fit, guard, log, w)?;
+        let results = outcome.summary.parameters.iter_mut().map(|p| &mut p.result);
+        crate::replay::sample_timing::widen(results, &spreads);
+        if refit || !spreads.is_empty() {
             let thrust = crate::plausibility::thrust_mapped(&self.records.mapping);
             outcome.summary.judge(&outcome.model, thrust);
         }

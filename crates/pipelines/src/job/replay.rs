@@ -185,7 +185,9 @@ impl ReplayJob {
         let s = &mut outcome.summary;
         let (tests, compat, w) = (&s.sign_tests, options.compat.as_ref(), &mut s.warnings);
         super::timing::refit_step(records, &own, tests, compat, fit.clone(), guard, log, w)?;
-        super::timing::skew_step(records, &own, compat, fit, guard, log, w)?;
+        let spreads = super::timing::skew_step(records, &own, compat, fit, guard, log, w)?;
+        let results = outcome.summary.parameters.iter_mut().map(|p| &mut p.result);
+        crate::replay::sample_timing::widen(results, &spreads);
         let thrust = crate::plausibility::thrust_mapped(&self.records.mapping);
         crate::replay::verdict::judge(outcome, thrust);
         Ok(())

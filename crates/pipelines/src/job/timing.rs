@@ -57,9 +57,10 @@ pub fn refit_step(
 /// The sample-timing test of a run whose own estimates are `own` and corrections `compat`:
 /// `fit` runs the own estimator on the records with the corrections it is given, once with the
 /// gyros half a sample late and once early; each estimate the skew moves by more than 10 % is
-/// flagged in `warnings` ([`sample_timing::moved`]). Nothing on a live feed, a run without
-/// estimates, or a record whose sample interval cannot be read; a refit that fails or a stop
-/// leaves a warning that the test was not done. Returns whether the warnings gained a flag.
+/// flagged in `warnings` ([`sample_timing::moved`]). Returns each estimate's sample-timing σ
+/// ([`sample_timing::spreads`]), for the caller to add to its σ; empty on a live feed, a run
+/// without estimates, a record whose sample interval cannot be read, or a refit that failed or
+/// was stopped (each but the first two with a warning that the test was not done).
 ///
 /// # Errors
 /// The face could not run the step.
@@ -71,9 +72,9 @@ pub fn skew_step(
     guard: &mut impl Guard,
     log: &mut dyn JobLog,
     warnings: &mut Warnings,
-) -> Result<bool, ReplayError> {
+) -> Result<Vec<(String, f64)>, ReplayError> {
     if records.live || own.estimates.is_empty() {
-        return Ok(false);
+        return Ok(Vec::new());
     }
     let Some(skew) = records.sample_interval_s().and_then(sample_timing::skew_s) else {
         return Ok(skew_note(
@@ -94,25 +95,23 @@ pub fn skew_step(
     let both = move || (fit(late), again(early));
     let Some((late, early)) = guard.run(Step::SampleTiming, both)? else {
         super::cross_check::abandoned("the sample-timing test", log, warnings);
-        return Ok(false);
+        return Ok(Vec::new());
     };
     if let Some(failed) = [&late, &early].into_iter().find(|m| m.estimates.is_empty()) {
         let why = format!("not done: {} {}", failed.method, failed.status);
         return Ok(skew_note(log, warnings, &why));
     }
-    let flags = sample_timing::moved(own, &late, &early, skew);
-    let any = !flags.is_empty();
-    warnings.extend(flags);
-    Ok(any)
+    warnings.extend(sample_timing::moved(own, &late, &early, skew));
+    Ok(sample_timing::spreads(own, &late, &early))
 }
 
-/// A warning that the sample-timing test was not done (`why`), to `log` and `warnings`;
-/// `false` (nothing to judge again).
-fn skew_note(log: &mut dyn JobLog, warnings: &mut Warnings, why: &str) -> bool {
+/// A warning that the sample-timing test was not done (`why`), to `log` and `warnings`; no
+/// spreads.
+fn skew_note(log: &mut dyn JobLog, warnings: &mut Warnings, why: &str) -> Vec<(String, f64)> {
     let w = format!("sample timing: the refits with the gyros skewed by half a sample were {why}");
     log.warning(&w);
     warnings.push(w);
-    false
+    Vec::new()
 }
 
 /// A warning that the refit was not done (the timing test's warnings stand), to `log` and

@@ -78,6 +78,10 @@ fn param_run(p: &Value) -> Result<ParamRun, String> {
             ),
         },
         crb_std_error: opt_f64(p, "crb_std_error")?,
+        timing_std_error: match p.get("timing_std_error") {
+            None => None,
+            Some(_) => opt_f64(p, "timing_std_error")?,
+        },
         reference: opt_f64(p, "reference")?,
         reference_check: match p.get("reference_check") {
             None | Some(Value::Null) => None,

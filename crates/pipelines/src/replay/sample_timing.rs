@@ -18,9 +18,12 @@
 //! by more than [`MOVE_FRACTION`] of its value is flagged with the three values: `identified`
 //! claims more than the record's timing supports. The threshold is the precision an
 //! identified estimate claims, not fitted (decided on the calibration corpus's tune half
-//! against 5 % and ±2σ, docs/validation.md).
+//! against 5 % and ±2σ, docs/validation.md). The move also enters every estimate's σ, as a
+//! uniform error over ± the move ([`spreads`]): the σ then covers the timing the record cannot
+//! resolve, not only its noise.
 
 use crate::replay::cross_check::MethodEstimates;
+use aeroident_io::ParameterResult;
 use aeroident_io::warning::{Warning, WarningKind};
 
 /// The skew asked about, as a fraction of the record's sample interval: half a sample, the
@@ -45,28 +48,74 @@ pub fn moved(
     early: &MethodEstimates,
     skew_s: f64,
 ) -> Vec<Warning> {
-    let value_in =
-        |m: &MethodEstimates, name: &str| m.estimates.iter().find(|r| r.0 == name).map(|r| r.1);
-    own.estimates
-        .iter()
-        .filter(|(_, value, sigma)| value.abs() > SIGNIFICANT_SIGMAS * sigma)
-        .filter_map(|(name, value, _)| {
-            let (l, e) = (value_in(late, name)?, value_in(early, name)?);
-            let half = 0.5 * (l - e);
-            (half.abs() > MOVE_FRACTION * value.abs()).then(|| {
-                let text = format!(
-                    "sample timing: a skew of ±{:.1} ms (half a sample) between the rate gyros and the other channels, which the record's time stamps cannot rule out, moves {name} from {} to {} (gyros early) and {} (gyros late), ±{:.0} % of its value: more than the {:.0} % an identified estimate claims",
-                    1e3 * skew_s,
-                    number(*value),
-                    number(e),
-                    number(l),
-                    100.0 * half.abs() / value.abs().max(f64::MIN_POSITIVE),
-                    100.0 * MOVE_FRACTION
-                );
-                Warning::new(WarningKind::SampleTiming, text).about(name)
-            })
+    moves(own, late, early)
+        .filter(|m| m.value.abs() > SIGNIFICANT_SIGMAS * m.sigma)
+        .filter(|m| m.half.abs() > MOVE_FRACTION * m.value.abs())
+        .map(|m| {
+            let text = format!(
+                "sample timing: a skew of ±{:.1} ms (half a sample) between the rate gyros and the other channels, which the record's time stamps cannot rule out, moves {} from {} to {} (gyros early) and {} (gyros late), ±{:.0} % of its value: more than the {:.0} % an identified estimate claims",
+                1e3 * skew_s,
+                m.name,
+                number(m.value),
+                number(m.early),
+                number(m.late),
+                100.0 * m.half.abs() / m.value.abs().max(f64::MIN_POSITIVE),
+                100.0 * MOVE_FRACTION
+            );
+            Warning::new(WarningKind::SampleTiming, text).about(m.name)
         })
         .collect()
+}
+
+/// The sample-timing σ of each estimate of `own` that both refits give, `(parameter, σ)`:
+/// the skew is anywhere within ±half a sample, equally likely, so the estimate's error from
+/// it is uniform over ± the half-difference of the refits, whose σ is that half-difference
+/// over √3 (GUM 4.3.7).
+pub fn spreads(
+    own: &MethodEstimates,
+    late: &MethodEstimates,
+    early: &MethodEstimates,
+) -> Vec<(String, f64)> {
+    moves(own, late, early).map(|m| (m.name.to_string(), m.half.abs() / 3f64.sqrt())).collect()
+}
+
+/// Adds each parameter's sample-timing σ of `spreads` to its `std_error` in quadrature
+/// ([`ParameterResult::add_timing_std_error`]); a parameter without one is left as it is.
+pub fn widen<'a>(
+    results: impl IntoIterator<Item = &'a mut ParameterResult>,
+    spreads: &[(String, f64)],
+) {
+    for r in results {
+        if let Some((_, s)) = spreads.iter().find(|(n, _)| *n == r.name) {
+            r.add_timing_std_error(*s);
+        }
+    }
+}
+
+/// One estimate under the skew.
+struct Move<'a> {
+    name: &'a str,
+    value: f64,
+    sigma: f64,
+    early: f64,
+    late: f64,
+    /// Half the difference late − early: the move under a skew of half a sample.
+    half: f64,
+}
+
+/// Each estimate of `own` with both refits' values of it.
+fn moves<'a>(
+    own: &'a MethodEstimates,
+    late: &'a MethodEstimates,
+    early: &'a MethodEstimates,
+) -> impl Iterator<Item = Move<'a>> + 'a {
+    let value_in =
+        |m: &MethodEstimates, name: &str| m.estimates.iter().find(|r| r.0 == name).map(|r| r.1);
+    own.estimates.iter().filter_map(move |(name, value, sigma)| {
+        let (late, early) = (value_in(late, name)?, value_in(early, name)?);
+        let half = 0.5 * (late - early);
+        Some(Move { name, value: *value, sigma: *sigma, early, late, half })
+    })
 }
 
 /// `v` to four significant figures, fixed-point where that reads well.
@@ -131,6 +180,28 @@ mod tests {
             "{}",
             w[0].text
         );
+    }
+
+    /// The σ of a uniform error over ± the half-difference: Cl_p early −0.3, late −0.5, σ
+    /// 0.1/√3; added to a σ of 0.1 in quadrature it gives 0.1·√(4/3), and a second widening
+    /// replaces the first's share; a parameter a refit lacks has no spread.
+    #[test]
+    fn the_spread_is_a_uniform_error_over_the_move() {
+        let own = method(&[("Cl_p", -0.4), ("Cn_r", -0.15)]);
+        let s = spreads(&own, &method(&[("Cl_p", -0.5)]), &method(&[("Cl_p", -0.3)]));
+        assert_eq!(s.len(), 1);
+        assert!((s[0].1 - 0.1 / 3f64.sqrt()).abs() < 1e-15, "{s:?}");
+        let mut r = ParameterResult::new("Cl_p", Some(-0.4), Some(0.1), None, None);
+        let mut none = ParameterResult::new("Cn_r", Some(-0.15), Some(0.01), None, None);
+        widen([&mut r, &mut none], &s);
+        assert!((r.std_error.unwrap() - 0.1 * (4.0f64 / 3.0).sqrt()).abs() < 1e-15);
+        assert_eq!(r.timing_std_error, Some(s[0].1));
+        assert_eq!((none.std_error, none.timing_std_error), (Some(0.01), None));
+        r.add_timing_std_error(0.0);
+        assert!((r.std_error.unwrap() - 0.1).abs() < 1e-15, "{:?}", r.std_error);
+        let mut bare = ParameterResult::new("Cl_p", Some(-0.4), None, None, None);
+        bare.add_timing_std_error(0.05);
+        assert_eq!((bare.std_error, bare.timing_std_error), (None, None));
     }
 
     /// Half a sample of the interval; nothing for an interval that is not one.

@@ -146,6 +146,7 @@ class FitResult(TypedDict):
     estimate: npt.NDArray[np.float64]
     std_error: npt.NDArray[np.float64]
     crb_std_error: npt.NDArray[np.float64]
+    timing_std_error: npt.NDArray[np.float64]
     reference: npt.NDArray[np.float64]
     status: list[str]
     flags: list[list[str]]

@@ -163,6 +163,12 @@ mod tests {
         let early = method(&[("Cn_r", -0.15 - 0.0151)]);
         assert_eq!(moved(&own, &late, &early, 0.008_333).len(), 1);
         assert_eq!(moved(&own, &early, &late, 0.008_333).len(), 1);
+        // A move of exactly 10 % (0.5 · (0.2 − 0) against 0.1 · 1, equal in floating point) is
+        // not beyond it.
+        let one = method(&[("Cl_da", 1.0)]);
+        assert!(
+            moved(&one, &method(&[("Cl_da", 0.2)]), &method(&[("Cl_da", 0.0)]), 0.01).is_empty()
+        );
     }
 
     /// An estimate within 2σ of zero is not judged (its own flag says it is not told from

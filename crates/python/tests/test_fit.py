@@ -151,9 +151,12 @@ def test_fit_bootstrap_sigma():
     b = boot["summary"]["bootstrap"]
     assert plain["summary"]["bootstrap"] is None
     assert b["refits"] == 10 and b["failed"] == 0
-    # The bootstrap changes the σ, not the estimates; the reported σ is the bootstrap's.
+    # The bootstrap changes the σ, not the estimates; the reported σ is the bootstrap's with the
+    # sample-timing σ in quadrature.
     np.testing.assert_array_equal(boot["estimate"], plain["estimate"])
-    np.testing.assert_array_equal(boot["std_error"], [p["bootstrap_std_error"] for p in boot["summary"]["parameters"]])
+    params = boot["summary"]["parameters"]
+    want = np.hypot([p["bootstrap_std_error"] for p in params], [p["timing_std_error"] for p in params])
+    np.testing.assert_allclose(boot["std_error"], want, rtol=1e-12)
     assert np.all(boot["std_error"] > 0.5 * boot["crb_std_error"])
     with pytest.raises(aeroident.AeroidentError, match="bootstrap"):
         aeroident.fit(shared(HFB), HFB_MAP, "fem", model=BOOK_MODEL, bootstrap=10)

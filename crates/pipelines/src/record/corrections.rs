@@ -1348,6 +1348,25 @@ mod tests {
         assert!(c.lag_s.is_none() && c.left_out[0].starts_with("AHRS lag"), "{:?}", c.left_out);
     }
 
+    /// The samples `sample_at(t)` at the times `ts`, streamed through the stage applying `corr`.
+    fn corrected(
+        ts: &[f64],
+        sample_at: impl Fn(f64) -> AirDataSample,
+        corr: Corrections,
+    ) -> Vec<AirDataSample> {
+        let input: Vec<Result<RecordEvent, FlightDataError>> = ts
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| Ok(RecordEvent::Sample { row: i as u64, sample: sample_at(t) }))
+            .collect();
+        Corrected::new(input.into_iter(), corr)
+            .filter_map(|e| match e.unwrap() {
+                RecordEvent::Sample { sample, .. } => Some(sample),
+                _ => None,
+            })
+            .collect()
+    }
+
     /// An input shift reads the surface earlier or later, by linear interpolation, and leaves
     /// every other channel as read: a ramp `de = 0.1 t` read 0.05 s earlier is `0.1 (t − 0.05)`
     /// inside the record and held at its first sample before it; the aileron it was not asked
@@ -1356,19 +1375,9 @@ mod tests {
     fn an_input_shift_reads_the_surface_at_its_shifted_time() {
         let ramp = |t: f64| AirDataSample { de_rad: Some(0.1 * t), da_rad: Some(t), ..sample(t) };
         let ts: Vec<f64> = (0..21).map(|i| i as f64 * 0.02).collect();
-        let input: Vec<Result<RecordEvent, FlightDataError>> = ts
-            .iter()
-            .enumerate()
-            .map(|(i, &t)| Ok(RecordEvent::Sample { row: i as u64, sample: ramp(t) }))
-            .collect();
         let corr = Corrections::default().with_input_shift("de", -0.05).unwrap();
         assert_eq!(corr.applied, ["de: read -0.050 s later (its measured lead undone)"]);
-        let out: Vec<AirDataSample> = Corrected::new(input.into_iter(), corr)
-            .filter_map(|e| match e.unwrap() {
-                RecordEvent::Sample { sample, .. } => Some(sample),
-                _ => None,
-            })
-            .collect();
+        let out = corrected(&ts, ramp, corr);
         assert_eq!(out.len(), ts.len());
         for (s, &t) in out.iter().zip(&ts) {
             let want = 0.1 * (t - 0.05).max(0.0);
@@ -1397,20 +1406,10 @@ mod tests {
             ..sample(t)
         };
         let ts: Vec<f64> = (0..41).map(|i| i as f64 * 0.01).collect();
-        let input: Vec<Result<RecordEvent, FlightDataError>> = ts
-            .iter()
-            .enumerate()
-            .map(|(i, &t)| Ok(RecordEvent::Sample { row: i as u64, sample: ramp(t) }))
-            .collect();
         let own = Corrections { shifts: vec![(Channel::Q, 0.02)], ..Default::default() };
         let corr = own.with_rate_skew(-0.01).unwrap();
         assert_eq!(corr.applied, ["p, q, r: read -0.0100 s later (the sample-timing test)"]);
-        let out: Vec<AirDataSample> = Corrected::new(input.into_iter(), corr)
-            .filter_map(|e| match e.unwrap() {
-                RecordEvent::Sample { sample, .. } => Some(sample),
-                _ => None,
-            })
-            .collect();
+        let out = corrected(&ts, ramp, corr);
         assert_eq!(out.len(), ts.len());
         for (s, &t) in out.iter().zip(&ts).skip(2).take(ts.len() - 4) {
             let got = (s.p_rad_s.unwrap(), s.q_rad_s.unwrap(), s.r_rad_s.unwrap());

@@ -275,20 +275,6 @@ fn spectral_error(e: aeroident_signals::spectral::SpectralError) -> RecordError 
     }
 }
 
-/// The record's median sample interval, s.
-fn median_dt(manoeuvres: &[Vec<AirDataSample>]) -> Option<f64> {
-    let mut d: Vec<f64> = manoeuvres
-        .iter()
-        .flat_map(|m| m.windows(2).map(|w| w[1].t_s - w[0].t_s))
-        .filter(|v| *v > 0.0)
-        .collect();
-    if d.is_empty() {
-        return None;
-    }
-    let mid = d.len() / 2;
-    Some(*d.select_nth_unstable_by(mid, f64::total_cmp).1)
-}
-
 /// Where the channels of a response come from: the sample's fields, or the injected waveform.
 struct Sources<'a> {
     /// Inputs then outputs (mapping keys or [`INJECTED`]).
@@ -312,7 +298,7 @@ fn stretches(
     manoeuvres: &[Vec<AirDataSample>],
     src: &Sources,
 ) -> Result<(Vec<Stretch>, f64, Dropped), RecordError> {
-    let dt = median_dt(manoeuvres)
+    let dt = crate::record::median_interval_s(manoeuvres.iter().map(Vec::as_slice))
         .ok_or_else(|| RecordError::Model("fewer than two samples: no sample interval".into()))?;
     // Resolved once: the keys were checked by `check_channels`.
     let fields: Vec<&str> = src.names.iter().map(|k| sample_field(k).unwrap_or("")).collect();

@@ -114,14 +114,14 @@ impl Records {
         if self.live {
             return None;
         }
-        let times = self.open(&self.data).ok()?.filter_map(|e| match e {
-            Ok(RecordEvent::Sample { sample, .. }) => Some(sample.t_s),
-            _ => None,
-        });
-        let t: Vec<f64> = times.take(INTERVAL_SAMPLES).collect();
-        let mut dt: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).filter(|d| *d > 0.0).collect();
-        dt.sort_by(f64::total_cmp);
-        dt.get(dt.len() / 2).copied()
+        let samples: Vec<_> = (self.open(&self.data).ok()?)
+            .filter_map(|e| match e {
+                Ok(RecordEvent::Sample { sample, .. }) => Some(sample),
+                _ => None,
+            })
+            .take(INTERVAL_SAMPLES)
+            .collect();
+        crate::record::median_interval_s([samples.as_slice()])
     }
 }
 

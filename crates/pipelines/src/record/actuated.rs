@@ -78,11 +78,7 @@ pub(super) fn surface(s: &mut AirDataSample, ch: Channel) -> &mut Option<f64> {
 
 /// The value of surface `ch` in `s` ([`surface`], read only).
 pub(super) fn surface_value(s: &AirDataSample, ch: Channel) -> Option<f64> {
-    match ch {
-        Channel::De => s.de_rad,
-        Channel::Da => s.da_rad,
-        _ => s.dr_rad,
-    }
+    *surface(&mut s.clone(), ch)
 }
 
 /// Whether `ch` is a control surface (`de`, `da`, `dr`).

@@ -192,6 +192,23 @@ impl Iterator for RecordEvents<'_> {
     }
 }
 
+/// The median of the positive intervals between consecutive samples of each stretch of
+/// `stretches` (manoeuvres, or a record's first samples), s: a gap, a repeated time stamp or
+/// a rejected row does not move it. `None` without two samples in one stretch.
+pub fn median_interval_s<'a>(
+    stretches: impl IntoIterator<Item = &'a [AirDataSample]>,
+) -> Option<f64> {
+    let mut d: Vec<f64> = stretches
+        .into_iter()
+        .flat_map(|m| m.windows(2).map(|w| w[1].t_s - w[0].t_s))
+        .filter(|v| *v > 0.0)
+        .collect();
+    if d.is_empty() {
+        return None;
+    }
+    let mid = d.len() / 2;
+    Some(*d.select_nth_unstable_by(mid, f64::total_cmp).1)
+}
 /// The spike screen's settings must be sane ([`outliers::SpikeScreen::check`]).
 pub fn check_spike_screen(screen: Option<&outliers::SpikeScreen>) -> Result<(), RecordError> {
     screen

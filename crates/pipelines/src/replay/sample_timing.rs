@@ -10,7 +10,8 @@
 //! shifts are estimated to a fraction of the sample time, at best). The damping derivatives
 //! are the ones it moves: a small phase error of `r` against `β` projects the large stiffness
 //! term `Cn_β β` onto `r` (on a clean simulated A-4 record, a skew of 4 ms, a quarter sample
-//! at 60 Hz, moves `Cn_r` from −0.15 to −0.02).
+//! at 60 Hz, moves the least-squares `Cn_r` from −0.15 to −0.02, the output-error one to
+//! −0.10).
 //!
 //! The test fits the record twice more by the run's own method, with the gyros read half a
 //! sample later and half a sample earlier ([`crate::record::Corrections::with_rate_skew`]).

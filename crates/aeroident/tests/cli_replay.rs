@@ -938,10 +938,13 @@ fn val_output_error_bootstrap_sigma_on_request() {
         assert!(p["bootstrap_std_error"].is_null());
         let (sb, crb) =
             (q["bootstrap_std_error"].as_f64().unwrap(), q["crb_std_error"].as_f64().unwrap());
-        // The reported σ is the bootstrap's with the sample-timing σ in quadrature.
+        // The reported σ is the bootstrap's with the sample-timing and unmodelled σ in
+        // quadrature.
         let timing = q["timing_std_error"].as_f64().unwrap();
+        let unmodelled = q["unmodelled_std_error"].as_f64().unwrap_or(0.0);
         let reported = q["std_error"].as_f64().unwrap();
-        assert!((reported - sb.hypot(timing)).abs() <= 1e-12 * reported, "{}: σ", q["name"]);
+        let want = sb.hypot(timing).hypot(unmodelled);
+        assert!((reported - want).abs() <= 1e-12 * reported, "{}: σ", q["name"]);
         assert!(sb > 0.65 * crb, "{}: bootstrap σ {sb} vs Cramér–Rao {crb}", q["name"]);
         assert_eq!(q["bootstrap_std_error"], r["bootstrap_std_error"], "not reproducible");
         // The bias estimate is the refits' mean less the estimate: within 2σ of zero (20

@@ -169,7 +169,8 @@ fn cli_single_run_writes_outputs_with_exact_summary_keys() {
             "std_error",
             "std_error_source",
             "thesis_convergence_time_s",
-            "timing_std_error"
+            "timing_std_error",
+            "unmodelled_std_error"
         ]
     );
     assert_eq!(v["parameters"][0]["thesis_convergence_time_s"], 0.5);

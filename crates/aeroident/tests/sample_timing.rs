@@ -8,7 +8,9 @@
 //! of those two runs' estimates is what the skew moves each one; the summary's
 //! `timing_std_error` must be that move over √3 (a uniform error over ± the move), and a
 //! parameter must carry the "sample timing" flag exactly when the move exceeds 10 % of a
-//! significant estimate. On this record least squares' roll damping `Cl_p` is one such.
+//! significant estimate. On this record least squares' roll damping `Cl_p` is one such. The
+//! reported σ is the method's own (output error's coloured-residual σ, as its summary keeps
+//! it) with the timing σ and the unmodelled σ, 5.5 % of |estimate|, in quadrature.
 
 mod common;
 use common::{shared, workspace};
@@ -71,6 +73,30 @@ fn estimates(v: &Value) -> Vec<(String, Option<f64>)> {
     ps.iter().map(|p| (p["name"].as_str().unwrap().to_string(), p["estimate"].as_f64())).collect()
 }
 
+/// The unmodelled σ of a parameter of estimate `value`: 5.5 % of |value| but for a constant
+/// term, which has none (docs/output-schema.md).
+fn unmodelled_share(p: &Value, value: f64) -> f64 {
+    let share = p["unmodelled_std_error"].as_f64();
+    if p["name"].as_str().unwrap().ends_with("_0") {
+        assert_eq!(share, None, "{p}");
+        return 0.0;
+    }
+    let want = 0.055 * value.abs();
+    let share = share.unwrap_or_else(|| panic!("no unmodelled σ: {p}"));
+    assert!((share - want).abs() <= 1e-12 * want, "{p}: {share} against {want}");
+    share
+}
+
+/// A batch fit's noise σ from the key its source names (`coloured_std_error`,
+/// `crb_std_error`); `None` for a recursive estimator's covariance, kept nowhere else.
+fn noise_of_source(p: &Value) -> Option<f64> {
+    match p["std_error_source"].as_str()? {
+        "coloured" => p["coloured_std_error"].as_f64(),
+        "cramer_rao" => p["crb_std_error"].as_f64(),
+        _ => None,
+    }
+}
+
 /// The run of `estimator` against its refits through `compat.json`: returns the parameters
 /// flagged for sample timing.
 fn check(data: &Path, estimator: &str) -> Vec<String> {
@@ -90,7 +116,12 @@ fn check(data: &Path, estimator: &str) -> Vec<String> {
         let want = half.abs() / 3f64.sqrt();
         assert!((timing - want).abs() <= 1e-6 * want + 1e-12, "{name}: {timing} against {want}");
         let sigma = p["std_error"].as_f64().unwrap();
-        let noise = (sigma * sigma - timing * timing).max(0.0).sqrt();
+        let unmodelled = unmodelled_share(p, value);
+        let noise = (sigma * sigma - timing * timing - unmodelled * unmodelled).max(0.0).sqrt();
+        if let Some(own) = noise_of_source(p) {
+            let want = own.hypot(timing).hypot(unmodelled);
+            assert!((sigma - want).abs() <= 1e-12 * want, "{estimator} {name}: σ {sigma} {want}");
+        }
         let texts: Vec<&str> =
             p["flags"].as_array().unwrap().iter().filter_map(Value::as_str).collect();
         let flag = texts.iter().find(|f| f.starts_with("sample timing:"));

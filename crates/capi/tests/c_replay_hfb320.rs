@@ -104,7 +104,7 @@ fn largest_difference(c: &str, cli: &str) -> Result<f64, String> {
 }
 
 /// The summary's final estimates and σ against the last row of the C program's estimates (its
-/// σ with the summary's sample-timing σ added in quadrature).
+/// σ with the summary's sample-timing and unmodelled σ added in quadrature).
 fn check_summary(kind: &str, c: &str, summary: &serde_json::Value) {
     let header: Vec<&str> = c.lines().next().unwrap().split(',').collect();
     let last: Vec<&str> = c.lines().last().unwrap().split(',').collect();
@@ -113,10 +113,11 @@ fn check_summary(kind: &str, c: &str, summary: &serde_json::Value) {
     assert_eq!(header.len(), 1 + 2 * n, "{kind}");
     for (i, p) in params.iter().enumerate() {
         assert_eq!(p["name"].as_str().unwrap(), header[1 + i], "{kind}");
-        // The summary's σ holds the sample-timing test's σ in quadrature (the CLI refits the
-        // record; a live feed through the C ABI cannot be read twice), so the C σ is set
-        // beside it with that added.
+        // The summary's σ holds the sample-timing test's σ (the CLI refits the record; a live
+        // feed through the C ABI cannot be read twice) and the unmodelled σ in quadrature, so
+        // the C σ is set beside it with both added.
         let timing = p["timing_std_error"].as_f64().unwrap_or(0.0);
+        let timing = timing.hypot(p["unmodelled_std_error"].as_f64().unwrap_or(0.0));
         for (key, cell) in [("estimate", last[1 + i]), ("std_error", last[1 + n + i])] {
             let from_c: Option<f64> = cell.parse().ok();
             let from_c = from_c.map(|a| if key == "std_error" { a.hypot(timing) } else { a });

@@ -110,6 +110,13 @@ pub struct ParameterResult {
     /// live feed, `run`, `montecarlo`).
     #[serde(default)]
     pub timing_std_error: Option<f64>,
+    /// The σ of what the linear model of one record leaves unmodelled (biases beyond the noise
+    /// σ: structure, input and sensor errors no test named), included in `std_error` in
+    /// quadrature: a fixed share of `|estimate|` calibrated on simulated aircraft with a known
+    /// truth (`aeroident_pipelines::replay::unmodelled`). `null` for a constant term and where
+    /// it is not added (`run`, `montecarlo`: the simulation's own model).
+    #[serde(default)]
+    pub unmodelled_std_error: Option<f64>,
     /// The truth (simulation) or a published value (a model file's `[reference.X]`); `null`
     /// without one. Below [`ZERO_THRESHOLD`] in magnitude it is 0.
     pub reference: Option<f64>,
@@ -160,6 +167,7 @@ impl ParameterResult {
             std_error_source: None,
             crb_std_error: None,
             timing_std_error: None,
+            unmodelled_std_error: None,
             reference: None,
             reference_check: None,
             status: String::new(),
@@ -277,6 +285,24 @@ impl ParameterResult {
         self.timing_std_error = noise.map(|_| timing);
     }
 
+    /// Adds `fraction` (finite, ≥ 0) of `|estimate|` to `std_error` in quadrature as the σ of
+    /// what the model leaves unmodelled and keeps it in `unmodelled_std_error`; a constant term
+    /// (`…_0`: its size is the trim's) or a result without an estimate or a finite σ keeps none
+    /// (a NaN σ, written `null`, stays one). A second call replaces the first's share, not adds
+    /// to it.
+    pub fn add_unmodelled_std_error(&mut self, fraction: f64) {
+        let (Some(e), Some(s)) = (self.estimate, self.std_error) else { return };
+        if !(fraction.is_finite() && fraction >= 0.0 && s.is_finite()) || self.name.ends_with("_0")
+        {
+            return;
+        }
+        let before = self.unmodelled_std_error.unwrap_or(0.0);
+        let rest = (s * s - before * before).max(0.0).sqrt();
+        let share = fraction * e.abs();
+        self.std_error = Some(rest.hypot(share));
+        self.unmodelled_std_error = Some(share);
+    }
+
     /// The result with the Cramér–Rao σ `crb` beside its σ.
     pub fn with_crb_std_error(mut self, crb: Option<f64>) -> Self {
         self.crb_std_error = crb;
@@ -310,6 +336,34 @@ impl ParameterResult {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The shares in quadrature by hand: σ 0.1 and 5 % of |−2| give √0.02; a second call
+    /// replaces the share; the timing share and the unmodelled one replace only themselves;
+    /// a constant term and a result without σ keep none.
+    #[test]
+    fn unmodelled_share_in_quadrature() {
+        let mut r = ParameterResult::new("Cm_alpha", Some(-2.0), Some(0.1), None, None);
+        r.add_unmodelled_std_error(0.05);
+        assert!((r.std_error.unwrap() - 0.02f64.sqrt()).abs() < 1e-15);
+        assert_eq!(r.unmodelled_std_error, Some(0.1));
+        r.add_unmodelled_std_error(0.1);
+        assert!((r.std_error.unwrap() - 0.05f64.sqrt()).abs() < 1e-15);
+        r.add_timing_std_error(0.3);
+        assert!((r.std_error.unwrap() - 0.14f64.sqrt()).abs() < 1e-15);
+        r.add_unmodelled_std_error(0.0);
+        assert!((r.std_error.unwrap() - 0.1f64.hypot(0.3)).abs() < 1e-15);
+        r.add_timing_std_error(0.0);
+        assert!((r.std_error.unwrap() - 0.1).abs() < 1e-15);
+        let mut c = ParameterResult::new("Cm_0", Some(0.05), Some(0.001), None, None);
+        c.add_unmodelled_std_error(0.05);
+        assert_eq!((c.std_error, c.unmodelled_std_error), (Some(0.001), None));
+        let mut bare = ParameterResult::new("Cl_p", Some(-0.4), None, None, None);
+        bare.add_unmodelled_std_error(0.05);
+        assert_eq!((bare.std_error, bare.unmodelled_std_error), (None, None));
+        let mut singular = ParameterResult::new("Cl_p", Some(-0.4), Some(f64::NAN), None, None);
+        singular.add_unmodelled_std_error(0.05);
+        assert!(singular.std_error.unwrap().is_nan() && singular.unmodelled_std_error.is_none());
+    }
 
     #[test]
     fn status_from_the_numbers() {
@@ -372,6 +426,7 @@ mod tests {
             "std_error_source",
             "crb_std_error",
             "timing_std_error",
+            "unmodelled_std_error",
             "reference",
             "reference_check",
             "status",

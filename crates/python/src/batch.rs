@@ -212,6 +212,7 @@ fn fit_dict(
     d.set_item("std_error", column(|p| p.std_error).into_pyarray(py))?;
     d.set_item("crb_std_error", column(|p| p.crb_std_error).into_pyarray(py))?;
     d.set_item("timing_std_error", column(|p| p.timing_std_error).into_pyarray(py))?;
+    d.set_item("unmodelled_std_error", column(|p| p.unmodelled_std_error).into_pyarray(py))?;
     d.set_item("reference", column(|p| p.reference).into_pyarray(py))?;
     d.set_item("status", s.parameters.iter().map(|p| p.status.clone()).collect::<Vec<_>>())?;
     d.set_item("flags", s.parameters.iter().map(|p| p.flags.clone()).collect::<Vec<_>>())?;

@@ -40,6 +40,8 @@ def test_fit_equals_cli(tmp_path, estimator):
     np.testing.assert_array_equal(py["crb_std_error"], [p["crb_std_error"] for p in params])
     timing = [np.nan if p["timing_std_error"] is None else p["timing_std_error"] for p in params]
     np.testing.assert_array_equal(py["timing_std_error"], timing)
+    unmodelled = [np.nan if p["unmodelled_std_error"] is None else p["unmodelled_std_error"] for p in params]
+    np.testing.assert_array_equal(py["unmodelled_std_error"], unmodelled)
     # The verdict is the summary's, under the summary's names (docs/output-schema.md).
     assert py["status"] == [p["status"] for p in params]
     assert py["flags"] == [p["flags"] for p in params]
@@ -152,10 +154,11 @@ def test_fit_bootstrap_sigma():
     assert plain["summary"]["bootstrap"] is None
     assert b["refits"] == 10 and b["failed"] == 0
     # The bootstrap changes the σ, not the estimates; the reported σ is the bootstrap's with the
-    # sample-timing σ in quadrature.
+    # sample-timing and unmodelled σ in quadrature.
     np.testing.assert_array_equal(boot["estimate"], plain["estimate"])
     params = boot["summary"]["parameters"]
-    want = np.hypot([p["bootstrap_std_error"] for p in params], [p["timing_std_error"] for p in params])
+    noise = np.hypot([p["bootstrap_std_error"] for p in params], [p["timing_std_error"] for p in params])
+    want = np.hypot(noise, [p["unmodelled_std_error"] or 0.0 for p in params])
     np.testing.assert_allclose(boot["std_error"], want, rtol=1e-12)
     assert np.all(boot["std_error"] > 0.5 * boot["crb_std_error"])
     with pytest.raises(aeroident.AeroidentError, match="bootstrap"):

@@ -9,13 +9,14 @@ use std::path::PathBuf;
 
 /// The keys every per-parameter entry of a `summary.json` has (schema version 3,
 /// docs/output-schema.md), written out here as the schema states them.
-pub const PARAMETER_KEYS: [&str; 11] = [
+pub const PARAMETER_KEYS: [&str; 12] = [
     "name",
     "estimate",
     "std_error",
     "std_error_source",
     "crb_std_error",
     "timing_std_error",
+    "unmodelled_std_error",
     "reference",
     "reference_check",
     "status",

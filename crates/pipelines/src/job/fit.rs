@@ -175,8 +175,8 @@ impl FitJob {
     /// The timing refit ([`super::timing::refit_step`]) and the sample-timing test
     /// ([`super::timing::skew_step`]): the records fitted again by the same method, model and
     /// options (no bootstrap) with a warned surface lead undone, and with the gyros skewed by
-    /// half a sample (its σ added to every estimate's); the verdicts judged again when either
-    /// ran.
+    /// half a sample (its σ added to every estimate's); then the unmodelled σ added
+    /// ([`crate::replay::unmodelled`]) and the verdicts judged again.
     fn timing_refit(
         &self,
         outcome: &mut BatchOutcome,
@@ -194,15 +194,14 @@ impl FitJob {
         let s = &mut outcome.summary;
         let compat = outcome.options.compat.as_ref();
         let (tests, w, rec) = (&s.sign_tests, &mut s.warnings, &self.records);
-        let refit =
-            super::timing::refit_step(rec, &own, tests, compat, fit.clone(), guard, log, w)?;
+        super::timing::refit_step(rec, &own, tests, compat, fit.clone(), guard, log, w)?;
         let spreads = super::timing::skew_step(rec, &own, compat, fit, guard, log, w)?;
         let results = outcome.summary.parameters.iter_mut().map(|p| &mut p.result);
         crate::replay::sample_timing::widen(results, &spreads);
-        if refit || !spreads.is_empty() {
-            let thrust = crate::plausibility::thrust_mapped(&self.records.mapping);
-            outcome.summary.judge(&outcome.model, thrust);
-        }
+        let results = outcome.summary.parameters.iter_mut().map(|p| &mut p.result);
+        crate::replay::unmodelled::widen(results);
+        let thrust = crate::plausibility::thrust_mapped(&self.records.mapping);
+        outcome.summary.judge(&outcome.model, thrust);
         Ok(())
     }
 

@@ -153,7 +153,8 @@ impl ReplayJob {
     /// ([`crate::replay::cross_check`]); without it, least squares' regressor-noise test
     /// ([`super::cross_check::regressor_noise_test`]); then the timing refit
     /// ([`super::timing::refit_step`]) and the sample-timing test
-    /// ([`super::timing::skew_step`]). A stop abandons each with a warning (the online result
+    /// ([`super::timing::skew_step`]), and the unmodelled σ added
+    /// ([`crate::replay::unmodelled`]). A stop abandons each with a warning (the online result
     /// stands on its own).
     fn check_after_feed(
         &self,
@@ -188,6 +189,8 @@ impl ReplayJob {
         let spreads = super::timing::skew_step(records, &own, compat, fit, guard, log, w)?;
         let results = outcome.summary.parameters.iter_mut().map(|p| &mut p.result);
         crate::replay::sample_timing::widen(results, &spreads);
+        let results = outcome.summary.parameters.iter_mut().map(|p| &mut p.result);
+        crate::replay::unmodelled::widen(results);
         let thrust = crate::plausibility::thrust_mapped(&self.records.mapping);
         crate::replay::verdict::judge(outcome, thrust);
         Ok(())

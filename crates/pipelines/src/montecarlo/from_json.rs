@@ -82,6 +82,10 @@ fn param_run(p: &Value) -> Result<ParamRun, String> {
             None => None,
             Some(_) => opt_f64(p, "timing_std_error")?,
         },
+        unmodelled_std_error: match p.get("unmodelled_std_error") {
+            None => None,
+            Some(_) => opt_f64(p, "unmodelled_std_error")?,
+        },
         reference: opt_f64(p, "reference")?,
         reference_check: match p.get("reference_check") {
             None | Some(Value::Null) => None,

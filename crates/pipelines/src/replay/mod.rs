@@ -53,6 +53,7 @@ pub mod prediction;
 pub mod repeatability;
 pub mod sample_timing;
 pub mod sign_tests;
+pub mod unmodelled;
 pub mod verdict;
 
 use crate::condition::Derivative;

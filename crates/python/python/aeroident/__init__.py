@@ -368,7 +368,9 @@ def fit(
     - ``estimate``: (n,) estimates; ``std_error``: (n,) the reported σ (the bootstrap's when
       asked for, else coloured-residual where formed, else Cramér–Rao: docs/uncertainty.md);
       ``crb_std_error``: (n,) the Cramér–Rao σ; ``timing_std_error``: (n,) the sample-timing
-      σ inside ``std_error`` (NaN where the test was not made); ``reference``: (n,) the model file's
+      σ inside ``std_error`` (NaN where the test was not made); ``unmodelled_std_error``: (n,)
+      the unmodelled σ inside ``std_error`` (a share of ``|estimate|``, NaN for a constant
+      term); ``reference``: (n,) the model file's
       published values (NaN without one); ``fdoe``: NaN where the summary has ``null``
       (parameters the linear model cannot see: CD, zero-order, V and product terms);
     - ``status``, ``flags``: per parameter the summary's verdict and the warnings about it

@@ -147,6 +147,7 @@ class FitResult(TypedDict):
     std_error: npt.NDArray[np.float64]
     crb_std_error: npt.NDArray[np.float64]
     timing_std_error: npt.NDArray[np.float64]
+    unmodelled_std_error: npt.NDArray[np.float64]
     reference: npt.NDArray[np.float64]
     status: list[str]
     flags: list[list[str]]

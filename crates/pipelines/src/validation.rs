@@ -21,6 +21,7 @@
 //!
 //! Lagged sums (`ρ_k`, `ρ_eu`) never cross a segment boundary (a gap between manoeuvres).
 
+use aeroident_signals::lag_products::lag_products;
 use serde::Serialize;
 
 /// Largest number of lags in the Ljung–Box test and the residual–input cross-correlation.
@@ -179,20 +180,27 @@ fn for_lag(segments: &[usize], n: usize, k: usize, mut f: impl FnMut(usize, usiz
 /// Normalised autocorrelation `ρ_k`, `k = 0…max_lag`, of `e` (mean removed; `ρ_0 = 1`), lags
 /// within segments, normalised by the lag-0 sum over all samples (the standard biased
 /// estimate). All zeros when `e` is constant.
+/// The lag sums are formed per segment by [`aeroident_signals::lag_products`] (by the
+/// transform beyond its direct range), so a quarter-record of lags costs `O(n log n)`.
 pub fn autocorrelation(e: &[f64], segments: &[usize], max_lag: usize) -> Vec<f64> {
     let n = e.len();
     let mean = e.iter().sum::<f64>() / n.max(1) as f64;
-    let c0: f64 = e.iter().map(|v| (v - mean) * (v - mean)).sum();
-    (0..=max_lag)
-        .map(|k| {
-            if c0 <= 0.0 {
-                return 0.0;
-            }
-            let mut s = 0.0;
-            for_lag(segments, n, k, |a, b| s += (e[a] - mean) * (e[b] - mean));
-            s / c0
-        })
-        .collect()
+    let centred: Vec<f64> = e.iter().map(|v| v - mean).collect();
+    let c0: f64 = centred.iter().map(|v| v * v).sum();
+    if c0 <= 0.0 {
+        return vec![0.0; max_lag + 1];
+    }
+    let whole = [n];
+    let lengths = if segments.is_empty() { &whole[..] } else { segments };
+    let mut sums = vec![0.0; max_lag + 1];
+    let mut start = 0;
+    for &len in lengths {
+        let end = (start + len).min(n);
+        let products = lag_products(&centred[start.min(end)..end], max_lag);
+        sums.iter_mut().zip(products).for_each(|(s, p)| *s += p);
+        start = end;
+    }
+    sums.iter().map(|s| s / c0).collect()
 }
 
 /// The Ljung–Box test on residuals `e` with `h` lags (module doc).

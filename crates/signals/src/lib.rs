@@ -71,6 +71,8 @@ pub mod filters;
 pub mod gust;
 /// Deterministic pilot inputs: step, pulse, doublet, 3-2-1-1, sine, sweeps, multisine, sum.
 pub mod inputs;
+/// Lag products `Σ x_t x_{t+k}` by direct sums or by the transform (Wiener–Khinchin).
+pub mod lag_products;
 /// Simulink-style band-limited white noise.
 pub mod noise;
 /// Orthogonal phase-optimised multisines for simultaneous multi-surface excitation (Morelli).

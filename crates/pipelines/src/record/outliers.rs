@@ -154,11 +154,19 @@ fn channels(s: &AirDataSample) -> [(&'static str, Option<f64>); N_CHANNELS] {
 }
 
 /// The median of `v` and its robust standard deviation `1.4826 · MAD`.
+/// The screen asks this of every channel of every sample: one buffer per thread, not two
+/// allocations per call.
 fn robust(v: &[f64]) -> (f64, f64) {
-    let mut sorted = v.to_vec();
-    let med = median(&mut sorted);
-    let mut dev: Vec<f64> = v.iter().map(|x| (x - med).abs()).collect();
-    (med, 1.4826 * median(&mut dev))
+    thread_local! {
+        static SCRATCH: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+    }
+    SCRATCH.with_borrow_mut(|buf| {
+        buf.clear();
+        buf.extend_from_slice(v);
+        let med = median(buf);
+        buf.iter_mut().zip(v).for_each(|(d, x)| *d = (x - med).abs());
+        (med, 1.4826 * median(buf))
+    })
 }
 
 fn median(v: &mut [f64]) -> f64 {
@@ -190,13 +198,7 @@ impl SpikeScreen {
     /// `context` the channel's values around it that set its scale (the tested one left out).
     pub fn spike(&self, window: &[f64], centre: usize, context: &[f64]) -> Option<(f64, f64)> {
         let x = window[centre];
-        if window.len() < MIN_WINDOW {
-            return None;
-        }
-        let (med, scale) = robust(window);
-        if (x - med).abs() <= self.hampel_t * scale {
-            return None;
-        }
+        let (med, scale) = self.beyond_hampel(window, centre)?;
         let fellows = self.fellow_spikes(window, centre);
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
         for (k, &v) in window.iter().enumerate() {
@@ -213,6 +215,17 @@ impl SpikeScreen {
         let isolated = first.abs() > threshold
             && sides.all(|d| d.abs() > threshold && d.signum() == first.signum());
         isolated.then_some((med, threshold.max(self.hampel_t * scale)))
+    }
+
+    /// Test 1 alone (module doc): `Some((median, 1.4826 · MAD))` of `window` when
+    /// `window[centre]` is beyond the Hampel threshold of a window of at least [`MIN_WINDOW`]
+    /// samples, else `None` (and then [`Self::spike`] is `None` whatever the context).
+    pub fn beyond_hampel(&self, window: &[f64], centre: usize) -> Option<(f64, f64)> {
+        if window.len() < MIN_WINDOW {
+            return None;
+        }
+        let (med, scale) = robust(window);
+        ((window[centre] - med).abs() > self.hampel_t * scale).then_some((med, scale))
     }
 
     /// The other samples of `window` that look like `window[centre]` does as a spike
@@ -450,12 +463,18 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Screened<I> {
             self.past.len().min(2 * screen.half_width - future.len().min(2 * screen.half_width));
         let past = self.past.range(self.past.len() - from_past..);
         let here = channels(sample);
+        let mut window = Vec::with_capacity(2 * screen.half_width + 1);
         for (c, &(field, value)) in here.iter().enumerate() {
             let Some(value) = value else { continue };
-            let mut window: Vec<f64> = past.clone().filter_map(|v| v[c]).collect();
+            window.clear();
+            window.extend(past.clone().filter_map(|v| v[c]));
             let centre = window.len();
             window.push(value);
             window.extend(future.iter().filter_map(|v| v[c]));
+            // Most samples are within the Hampel threshold: no context is needed for them.
+            if screen.beyond_hampel(&window, centre).is_none() {
+                continue;
+            }
             // The spikes ahead are not yet screened: they must not set the scale.
             let fellows = screen.fellow_spikes(&window, centre);
             let ahead = window.iter().zip(&fellows).skip(centre + 1).filter(|f| !f.1);

@@ -189,6 +189,30 @@ static int replay(AeroidentEstimator *e, FILE *f) {
     return 0;
 }
 
+/* The final verdicts, one line per parameter on stderr: `verdict NAME STATUS`, then the
+ * parameter's flags, each on a line of its own indented by two spaces. */
+static void print_verdicts(AeroidentEstimator *e) {
+    static const char *const names[] = {"identified", "flagged", "not identified", "diverged"};
+    AeroidentVerdict verdicts[256];
+    size_t n = aeroident_estimator_n_params(e);
+    if (aeroident_estimator_verdicts(e, verdicts, sizeof verdicts / sizeof verdicts[0]) !=
+        AEROIDENT_RESULT_OK) {
+        fprintf(stderr, "verdicts: %s\n", aeroident_last_error_message());
+        return;
+    }
+    for (size_t i = 0; i < n; ++i) {
+        fprintf(stderr, "verdict %s %s\n", aeroident_estimator_param_name(e, i),
+                names[verdicts[i]]);
+        const char *flags = aeroident_estimator_flags(e, i);
+        for (const char *p = flags; p && *p;) {
+            const char *end = strchr(p, '\n');
+            int len = end ? (int)(end - p) : (int)strlen(p);
+            fprintf(stderr, "  %.*s\n", len, p);
+            p = end ? end + 1 : p + len;
+        }
+    }
+}
+
 int main(int argc, char **argv) {
     if (argc < 4 || argc > 5) {
         fprintf(stderr, "usage: %s KIND MODEL_FILE SAMPLES_CSV [OPTIONS]\n", argv[0]);
@@ -207,6 +231,7 @@ int main(int argc, char **argv) {
         return 1;
     }
     int failed = replay(e, samples);
+    print_verdicts(e);
     AeroidentState state;
     if (aeroident_estimator_state(e, &state) == AEROIDENT_RESULT_OK)
         fprintf(stderr, "%s: %llu samples accepted, %llu refused, %zu of %zu identified\n",

@@ -144,6 +144,19 @@ typedef enum AeroidentStatus {
   AEROIDENT_STATUS_DIVERGED = 2,
 } AeroidentStatus;
 
+// The verdict on one parameter ([`aeroident_estimator_verdicts`]), as `summary.json`'s
+// `status` names it.
+typedef enum AeroidentVerdict {
+  // No doubt found: the estimate is a result.
+  AEROIDENT_VERDICT_IDENTIFIED = 0,
+  // A doubt was found ([`aeroident_estimator_flags`] says which).
+  AEROIDENT_VERDICT_FLAGGED = 1,
+  // No estimate yet.
+  AEROIDENT_VERDICT_NOT_IDENTIFIED = 2,
+  // The estimator diverged: no estimate is a result.
+  AEROIDENT_VERDICT_DIVERGED = 3,
+} AeroidentVerdict;
+
 // An estimator over one model (opaque to C). Made by [`aeroident_estimator_new`], released by
 // [`aeroident_estimator_free`]. Not synchronised: use a handle from one thread at a time (it
 // may move between threads).
@@ -412,6 +425,32 @@ enum AeroidentResult aeroident_estimator_new_manoeuvre(struct AeroidentEstimator
 
 // The library's version (`0.1.0`), NUL-terminated, static.
 const char *aeroident_version(void);
+
+// Judges every current estimate by the judge of every `aeroident` command (the estimator's
+// state; the plausibility of the value for the model, drag terms withdrawn until a sample
+// carried thrust; whether ±2σ, 5.5 % of |estimate| added in quadrature, keeps it from zero;
+// the record-level tests of `aeroident replay` need the record and are not made) and writes
+// the verdicts, in the model's parameter order, into the caller's buffer of `len` elements;
+// each parameter's flags are kept for [`aeroident_estimator_flags`] until the next call.
+// Allocates (the flags' text): a call for the report at the end or at a low rate, not in the
+// update loop.
+//
+// # Safety
+// `e` is a live handle; `out` has room for `len` elements.
+//
+// # Errors
+// `NULL_POINTER`, `BUFFER_TOO_SMALL`, `PANIC`.
+enum AeroidentResult aeroident_estimator_verdicts(struct AeroidentEstimator *e,
+                                                  enum AeroidentVerdict *out,
+                                                  size_t len);
+
+// The flags of parameter `i` from the last [`aeroident_estimator_verdicts`], one per line
+// (`""` when it has none); NULL before any verdicts, when `i` is out of range or `e` is NULL.
+// The text lives until the next verdicts call, reset or free.
+//
+// # Safety
+// `e` is NULL or a live handle.
+const char *aeroident_estimator_flags(const struct AeroidentEstimator *e, size_t i);
 
 #ifdef __cplusplus
 }  // extern "C"

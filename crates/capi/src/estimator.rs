@@ -18,13 +18,20 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 /// [`aeroident_estimator_free`]. Not synchronised: use a handle from one thread at a time (it
 /// may move between threads).
 pub struct AeroidentEstimator {
-    est: Box<dyn Estimator + Send>,
+    pub(crate) est: Box<dyn Estimator + Send>,
     kind: EstimatorKind,
     structure: ModelStructure,
     priors: Priors,
     options: EstimatorOptions,
     method: CString,
-    names: Vec<CString>,
+    pub(crate) names: Vec<CString>,
+    /// The model, for the verdict's plausibility check.
+    pub(crate) spec: ModelSpec,
+    /// Whether an accepted sample carried thrust (the drag terms are withdrawn without it).
+    pub(crate) thrust_seen: bool,
+    /// Each parameter's flags from the last verdicts, one per line
+    /// ([`crate::verdict::aeroident_estimator_verdicts`]).
+    pub(crate) flags: Vec<CString>,
     accepted: u64,
     refused: u64,
     /// A panic happened inside a call on this handle: its state may be half-updated.
@@ -94,7 +101,7 @@ fn panicked(payload: &(dyn std::any::Any + Send)) -> AeroidentResult {
 ///
 /// # Safety
 /// `e` is NULL or a live handle of [`aeroident_estimator_new`] used by no other thread.
-unsafe fn with_handle(
+pub(crate) unsafe fn with_handle(
     e: *mut AeroidentEstimator,
     f: impl FnOnce(&mut AeroidentEstimator) -> AeroidentResult,
 ) -> AeroidentResult {
@@ -121,7 +128,7 @@ unsafe fn with_handle(
 ///
 /// # Safety
 /// As [`with_handle`].
-unsafe fn with_handle_ref(
+pub(crate) unsafe fn with_handle_ref(
     e: *const AeroidentEstimator,
     f: impl FnOnce(&AeroidentEstimator) -> AeroidentResult,
 ) -> AeroidentResult {
@@ -201,6 +208,9 @@ fn create(
         structure: spec.structure,
         priors: spec.priors,
         options,
+        spec: spec.clone(),
+        thrust_seen: false,
+        flags: Vec::new(),
         accepted: 0,
         refused: 0,
         poisoned: false,
@@ -364,6 +374,7 @@ impl AeroidentEstimator {
         match result {
             Ok(()) => {
                 self.accepted += 1;
+                self.thrust_seen |= s.thrust_n.is_some();
                 AeroidentResult::Ok
             }
             Err(err) => {
@@ -562,6 +573,8 @@ pub unsafe extern "C" fn aeroident_estimator_reset(e: *mut AeroidentEstimator) -
             }
             h.accepted = 0;
             h.refused = 0;
+            h.thrust_seen = false;
+            h.flags.clear();
             AeroidentResult::Ok
         })
     }

@@ -31,6 +31,7 @@ pub mod error;
 pub mod estimator;
 pub mod replayed;
 pub mod sample;
+pub mod verdict;
 
 pub use error::{AeroidentResult, aeroident_last_error_message};
 pub use estimator::{
@@ -41,3 +42,4 @@ pub use estimator::{
     aeroident_version,
 };
 pub use sample::AeroidentSample;
+pub use verdict::{AeroidentVerdict, aeroident_estimator_flags, aeroident_estimator_verdicts};

@@ -378,3 +378,54 @@ fn errors_a_missing_constant_is_named_by_its_field() {
         }
     }
 }
+
+/// The verdicts through the C ABI are the library's judge on the same numbers
+/// (`aeroident_pipelines::verdict::judge_estimate`, computed here from the estimates the C ABI
+/// gives): before a sample every parameter is `not identified`; after the synthetic flight,
+/// which carries no thrust, the lift and pitch terms are identified and the drag terms are
+/// not (withdrawn: without thrust the axial force is not the aircraft's drag), each with the
+/// flag saying so; a buffer too small is refused.
+#[test]
+fn verdicts_are_the_librarys_judge_on_the_c_estimates() {
+    use aeroident_pipelines::verdict::judge_estimate;
+    let (r, e, msg) = new("rls", "longitudinal", None);
+    assert_eq!(r, AeroidentResult::Ok, "{msg}");
+    let model = aeroident_io::ModelSpec::preset("longitudinal").unwrap();
+    // SAFETY: a live handle throughout; freed at the end.
+    unsafe {
+        let n = aeroident_estimator_n_params(e);
+        let mut out = vec![AeroidentVerdict::Identified; n];
+        assert!(aeroident_estimator_flags(e, 0).is_null(), "no flags before any verdicts");
+        assert_eq!(aeroident_estimator_verdicts(e, out.as_mut_ptr(), n), AeroidentResult::Ok);
+        assert!(out.iter().all(|v| *v == AeroidentVerdict::NotIdentified), "{out:?}");
+        for k in 0..400 {
+            assert_eq!(aeroident_estimator_update(e, &synthetic(k)), AeroidentResult::Ok);
+        }
+        let r = aeroident_estimator_verdicts(e, out.as_mut_ptr(), n - 1);
+        assert_eq!(r, AeroidentResult::BufferTooSmall, "{}", message());
+        assert_eq!(aeroident_estimator_verdicts(e, out.as_mut_ptr(), n), AeroidentResult::Ok);
+        let (v, s, _) = estimates(e, n);
+        for (i, (name, _)) in TRUE.iter().enumerate() {
+            let flags = CStr::from_ptr(aeroident_estimator_flags(e, i)).to_str().unwrap();
+            let value = v[i].is_finite().then_some(v[i]);
+            let sigma = s[i].is_finite().then_some(s[i]);
+            let lib = judge_estimate(name, value, sigma, "running", &model, false);
+            assert_eq!(flags, lib.flags.join("\n"), "{name}");
+            let want = match lib.status.as_str() {
+                "identified" => AeroidentVerdict::Identified,
+                "flagged" => AeroidentVerdict::Flagged,
+                "diverged" => AeroidentVerdict::Diverged,
+                _ => AeroidentVerdict::NotIdentified,
+            };
+            assert_eq!(out[i], want, "{name}: {flags}");
+            if name.starts_with("CD_") {
+                assert_ne!(out[i], AeroidentVerdict::Identified, "{name}: {flags}");
+                assert!(flags.contains("thrust"), "{name}: {flags}");
+            } else {
+                assert_eq!(out[i], AeroidentVerdict::Identified, "{name}: {flags}");
+            }
+        }
+        assert!(aeroident_estimator_flags(e, n).is_null());
+        aeroident_estimator_free(e);
+    }
+}

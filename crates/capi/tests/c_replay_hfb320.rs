@@ -80,6 +80,41 @@ fn c_estimates(program: &Path, kind: &str, samples: &Path, options: &str) -> Str
     String::from_utf8(o.stdout).unwrap()
 }
 
+/// The C program's final verdicts (`verdict NAME STATUS` lines on its stderr), in order.
+fn c_verdicts(program: &Path, kind: &str, samples: &Path, options: &str) -> Vec<(String, String)> {
+    let o = Command::new(program)
+        .arg(kind)
+        .arg(workspace().join(MODEL))
+        .arg(samples)
+        .arg(options)
+        .output()
+        .unwrap();
+    let err = String::from_utf8(o.stderr).unwrap();
+    err.lines()
+        .filter_map(|l| l.strip_prefix("verdict "))
+        .map(|l| {
+            let (name, status) = l.split_once(' ').unwrap();
+            (name.to_string(), status.to_string())
+        })
+        .collect()
+}
+
+/// The C verdicts against the command line's: the C caller's evidence is a subset of the
+/// command line's (no record-level tests, no sample-timing σ), so a parameter the command line
+/// identifies the C library identifies too, and one without an estimate is `not identified`
+/// in both.
+fn check_verdicts(kind: &str, c: &[(String, String)], summary: &serde_json::Value) {
+    let params = summary["parameters"].as_array().unwrap();
+    assert_eq!(c.len(), params.len(), "{kind}: {c:?}");
+    for ((name, status), p) in c.iter().zip(params) {
+        assert_eq!(p["name"].as_str().unwrap(), name, "{kind}");
+        let cli = p["status"].as_str().unwrap();
+        if cli == "identified" || cli == "not identified" {
+            assert_eq!(status, cli, "{kind} {name}: {p}");
+        }
+    }
+}
+
 /// The largest difference between two estimates tables, relative to max(1, |value|), with the
 /// header, the number of rows and the identified (non-empty) cells required equal.
 fn largest_difference(c: &str, cli: &str) -> Result<f64, String> {
@@ -158,6 +193,7 @@ fn c_example_replays_hfb320_with_the_command_lines_estimates() {
         eprintln!("{kind}: {} rows, largest relative difference {worst:e}", csv.lines().count());
         assert!(worst <= 1e-12, "{kind}: {worst:e}");
         check_summary(kind, &from_c, &summary);
+        check_verdicts(kind, &c_verdicts(&program, kind, &fed, options), &summary);
         // Linked against the shared library instead: the same output.
         assert_eq!(c_estimates(&shared_program, kind, &fed, options), from_c, "{kind}: shared");
         // The comparison sees a difference: another forgetting factor (RLS) or no option

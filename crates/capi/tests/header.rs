@@ -18,6 +18,8 @@ fn committed_header_is_cbindgens_output() {
         "aeroident_estimator_update(",
         "aeroident_estimator_estimates(",
         "aeroident_estimator_state(",
+        "aeroident_estimator_verdicts(",
+        "aeroident_estimator_flags(",
         "aeroident_estimator_reset(",
         "aeroident_estimator_free(",
         "aeroident_last_error_message(",

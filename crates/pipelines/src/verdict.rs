@@ -70,6 +70,36 @@ pub fn judge(r: &mut ParameterResult, evidence: &Evidence) {
     r.judge(None);
 }
 
+/// The verdict on one current estimate of a recursive estimator fed by a caller the library
+/// does not read the record for (the C ABI): `estimate` and `std_error` as the estimator
+/// gives them (`None` while not identified), `status` its state ([`Status::name`]). The
+/// evidence is what those numbers carry: the unmodelled σ added
+/// ([`crate::replay::unmodelled`]), the estimator's state ([`unconverged`]; `diverged`
+/// replaces the verdict), the plausibility check for `model` (drag terms withdrawn unless
+/// `thrust_mapped`) and the precision test. The record-level tests of a replay (sign tests,
+/// sample timing, the cross-check) need the record and are not made.
+pub fn judge_estimate(
+    name: &str,
+    estimate: Option<f64>,
+    std_error: Option<f64>,
+    status: &str,
+    model: &ModelSpec,
+    thrust_mapped: bool,
+) -> ParameterResult {
+    let mut r = ParameterResult::new(name, estimate, std_error, None, None);
+    r.add_unmodelled_std_error(crate::replay::unmodelled::UNMODELLED_FRACTION);
+    let diverged = status == Status::Diverged.name();
+    let evidence = Evidence {
+        doubts: Vec::new(),
+        plausibility: Some((model, thrust_mapped)),
+        estimate_doubts: unconverged(status).into_iter().collect(),
+        failure: diverged.then_some(aeroident_io::parameter::STATUS_DIVERGED),
+        notes: Vec::new(),
+    };
+    judge(&mut r, &evidence);
+    r
+}
+
 /// The doubt on every estimate of a recursive estimator that ended in `status` before every
 /// parameter was identified (`initialising`): its covariance has not yet shrunk from its
 /// priors for some parameter, and the others' σ is read off a filter that has not settled.

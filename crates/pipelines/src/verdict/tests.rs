@@ -90,3 +90,29 @@ fn plausibility_is_a_doubt_and_judging_twice_changes_nothing() {
     assert_eq!(r, once);
     assert_eq!((r.status.as_str(), r.flags.len()), (STATUS_FLAGGED, 1), "{:?}", r.flags);
 }
+
+/// A current estimate judged by its own numbers: σ 0.01 on −1 gains 5.5 % of |−1| in
+/// quadrature and is identified; an estimate whose total σ puts 0 inside ±2σ is flagged; a
+/// filter still `initialising` flags every estimate and leaves a parameter without one `not
+/// identified`; `diverged` replaces the verdict; without thrust a drag term is withdrawn.
+#[test]
+fn a_current_estimate_judged_by_its_own_numbers() {
+    let model = ModelSpec::preset("longitudinal").unwrap();
+    let running = Status::Running.name();
+    let r = judge_estimate("Cm_alpha", Some(-1.0), Some(0.01), running, &model, true);
+    assert_eq!(r.status, STATUS_IDENTIFIED);
+    assert!((r.std_error.unwrap() - 0.01f64.hypot(0.055)).abs() < 1e-15);
+    let r = judge_estimate("Cm_q", Some(-1.0), Some(0.52), running, &model, true);
+    assert_eq!(r.status, STATUS_FLAGGED, "t = 1/hypot(0.52, 0.055) < 2: {:?}", r.flags);
+    let init = Status::Initialising.name();
+    let r = judge_estimate("Cm_alpha", Some(-1.0), Some(0.01), init, &model, true);
+    assert_eq!(r.status, STATUS_FLAGGED);
+    assert!(r.flags[0].contains("initialising"), "{:?}", r.flags);
+    let r = judge_estimate("Cm_de", None, None, init, &model, true);
+    assert_eq!((r.status.as_str(), r.flags.len()), (STATUS_NOT_IDENTIFIED, 0));
+    let diverged = Status::Diverged.name();
+    let r = judge_estimate("Cm_alpha", Some(-1.0), Some(0.01), diverged, &model, true);
+    assert_eq!(r.status, STATUS_DIVERGED);
+    let r = judge_estimate("CD_alpha", Some(0.3), Some(0.01), running, &model, false);
+    assert_ne!(r.status, STATUS_IDENTIFIED, "drag without thrust: {:?}", r.flags);
+}

@@ -100,8 +100,10 @@ fn run_online(records: &Records, kind: EstimatorKind, base: &ReplayOptions) -> M
 }
 
 /// The record replayed with `opts` (its estimator and options as given), as the panel reads
-/// it: failed when the replay fails, diverges or ends `initialising`.
+/// it: failed when the replay fails, diverges or ends `initialising`. Only the estimates are
+/// formed ([`ReplayOptions::estimates_only`]): the panel and the refits read nothing else.
 pub(super) fn online_estimates(records: &Records, opts: &ReplayOptions) -> MethodEstimates {
+    let opts = &ReplayOptions { estimates_only: true, ..opts.clone() };
     let name = opts.estimator.name();
     let reader = match records.open(&records.data) {
         Ok(r) => r,

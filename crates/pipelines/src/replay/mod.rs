@@ -110,6 +110,10 @@ pub struct ReplayOptions {
     pub windows: Vec<crate::window::TimeWindow>,
     /// The spike screen before every estimator ([`outliers`]); `None`: off. Default on.
     pub spike_screen: Option<outliers::SpikeScreen>,
+    /// Only the estimates and their σ (a refit that reads nothing else: the panel, the
+    /// regressor-noise and timing tests): no residual validation, identifiability or sign
+    /// tests, and none of the samples they need kept. Default off.
+    pub estimates_only: bool,
 }
 
 /// What a face sees of a replay while it runs: the model once chosen, each identified sample's
@@ -336,6 +340,7 @@ impl Default for ReplayOptions {
             compat: None,
             windows: Vec::new(),
             spike_screen: Some(outliers::SpikeScreen::default()),
+            estimates_only: false,
         }
     }
 }

@@ -355,12 +355,14 @@ impl<'a> Replay<'a> {
         self.pace(s.t_s);
         self.observer.sample(s);
         self.observer.estimate(s.t_s, &values, &sigmas)?;
-        self.recorder.push(s);
         self.history.push(s.t_s, values, sigmas);
-        self.fed.push(*s);
-        self.spread.push(s);
-        self.kinematics.push(s);
-        self.sign_log.push(*s);
+        if !self.opts.estimates_only {
+            self.recorder.push(s);
+            self.fed.push(*s);
+            self.spread.push(s);
+            self.kinematics.push(s);
+            self.sign_log.push(*s);
+        }
         Ok(true)
     }
 
@@ -425,7 +427,7 @@ impl<'a> Replay<'a> {
         let n = r.est.structure().n_params();
         let final_covariance: Vec<Option<f64>> =
             (0..n * n).map(|k| r.est.covariance(k / n, k % n)).collect();
-        let (validation, identifiability) = if self.diverged {
+        let (validation, identifiability) = if self.diverged || self.opts.estimates_only {
             (None, None)
         } else {
             let values: Vec<Option<f64>> = summary.parameters.iter().map(|p| p.estimate).collect();

@@ -438,6 +438,7 @@ fn replay_job(args: &ReplayArgs, records: Records) -> anyhow::Result<ReplayJob> 
         windows: args.windows.clone(),
         spike_screen: (!args.no_spike_screen)
             .then(aeroident_pipelines::record::outliers::SpikeScreen::default),
+        estimates_only: false,
     };
     Ok(ReplayJob {
         records,

@@ -218,7 +218,7 @@ impl SpikeScreen {
     }
 
     /// Test 1 alone (module doc): `Some((median, 1.4826 · MAD))` of `window` when
-    /// `window[centre]` is beyond the Hampel threshold of a window of at least [`MIN_WINDOW`]
+    /// `window[centre]` is beyond the Hampel threshold of a window of at least 5 (`MIN_WINDOW`)
     /// samples, else `None` (and then [`Self::spike`] is `None` whatever the context).
     pub fn beyond_hampel(&self, window: &[f64], centre: usize) -> Option<(f64, f64)> {
         if window.len() < MIN_WINDOW {

@@ -6,8 +6,9 @@
 //! Wiener–Khinchin relation the same sums are the inverse transform of the periodogram of the
 //! series zero-padded to at least `n + max_lag` samples, so that the circular products do not
 //! wrap (Press et al., *Numerical Recipes* 3rd ed. §13.2): `O(m log m)` for `m ≥ n + max_lag`.
-//! Below `DIRECT_MAX_LAG` (64) lags the direct sums are cheaper and exact to the last bit; above it the
-//! transform's round-off is a few ulp of `c_0` (checked against the direct sums in the tests).
+//! Below `DIRECT_MAX_LAG` (64) lags the direct sums are cheaper and exact to the last bit;
+//! above it the transform's round-off is a few ulp of `c_0` (checked against the direct sums
+//! in the tests).
 
 use rustfft::FftPlanner;
 use rustfft::num_complex::Complex;

@@ -67,8 +67,8 @@ fn samples(record: &Path, kind: &str, options: &str, path: &Path) -> usize {
     fed.len()
 }
 
-/// The C program's estimates for `kind` with `options` over the samples in `samples`.
-fn c_estimates(program: &Path, kind: &str, samples: &Path, options: &str) -> String {
+/// The C program run for `kind` with `options` over the samples in `samples`, succeeded.
+fn run_c(program: &Path, kind: &str, samples: &Path, options: &str) -> std::process::Output {
     let o = Command::new(program)
         .arg(kind)
         .arg(workspace().join(MODEL))
@@ -77,19 +77,17 @@ fn c_estimates(program: &Path, kind: &str, samples: &Path, options: &str) -> Str
         .output()
         .unwrap();
     assert!(o.status.success(), "{kind}: {}", String::from_utf8_lossy(&o.stderr));
-    String::from_utf8(o.stdout).unwrap()
+    o
+}
+
+/// The C program's estimates for `kind` with `options` over the samples in `samples`.
+fn c_estimates(program: &Path, kind: &str, samples: &Path, options: &str) -> String {
+    String::from_utf8(run_c(program, kind, samples, options).stdout).unwrap()
 }
 
 /// The C program's final verdicts (`verdict NAME STATUS` lines on its stderr), in order.
 fn c_verdicts(program: &Path, kind: &str, samples: &Path, options: &str) -> Vec<(String, String)> {
-    let o = Command::new(program)
-        .arg(kind)
-        .arg(workspace().join(MODEL))
-        .arg(samples)
-        .arg(options)
-        .output()
-        .unwrap();
-    let err = String::from_utf8(o.stderr).unwrap();
+    let err = String::from_utf8(run_c(program, kind, samples, options).stderr).unwrap();
     err.lines()
         .filter_map(|l| l.strip_prefix("verdict "))
         .map(|l| {

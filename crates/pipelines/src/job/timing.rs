@@ -92,7 +92,8 @@ pub fn skew_step(
     };
     log.note("sample timing: fitting the record again with the gyros half a sample late and early");
     let again = fit.clone();
-    let both = move || (fit(late), again(early));
+    // The two refits are independent: on two cores they cost one.
+    let both = move || rayon::join(move || fit(late), move || again(early));
     let Some((late, early)) = guard.run(Step::SampleTiming, both)? else {
         super::cross_check::abandoned("the sample-timing test", log, warnings);
         return Ok(Vec::new());

@@ -1050,3 +1050,51 @@ fn errors_one_setting_has_one_value() {
         assert!(!ok && err.contains(needle), "{bad:?}: {err}");
     }
 }
+
+/// `--estimates-every 0.5` on the 10-Hz HFB-320 record: the rows are those of the full-rate
+/// `estimates.csv` that the rule picks, computed here from the full file (the first row, then
+/// each row at least 0.5 s after the last one kept, and the last row), character for
+/// character; a non-positive interval is refused naming the option.
+#[test]
+fn estimates_every_keeps_one_row_per_interval_and_the_last() {
+    let Some(data) = common::shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else {
+        return;
+    };
+    let read = |args: &[&str], name: &str| {
+        let out = tmp(name);
+        let o = bin()
+            .arg("replay")
+            .arg(&data)
+            .arg("--map")
+            .arg(workspace().join("mappings/hfb320.toml"))
+            .args(args)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
+        let csv = std::fs::read_to_string(out.join("estimates.csv")).unwrap();
+        let _ = std::fs::remove_dir_all(&out);
+        csv
+    };
+    let full = read(&[], "every-full");
+    let every = read(&["--estimates-every", "0.5"], "every-half");
+    let rows: Vec<&str> = full.lines().skip(1).collect();
+    let t = |row: &str| row.split(',').next().unwrap().parse::<f64>().unwrap();
+    let mut want = vec![full.lines().next().unwrap()];
+    let mut last: Option<f64> = None;
+    for (k, row) in rows.iter().enumerate() {
+        let keep = last.is_none_or(|l| t(row) - l >= 0.5 * (1.0 - 1e-9));
+        if keep {
+            last = Some(t(row));
+        }
+        if keep || k + 1 == rows.len() {
+            want.push(row);
+        }
+    }
+    assert_eq!(every.lines().collect::<Vec<_>>(), want);
+    assert!(want.len() < rows.len() / 4, "{} of {} rows", want.len(), rows.len());
+    let o = bin().args(["replay", "x.csv", "--map", "m.toml", "--estimates-every=0"]).output();
+    let err = String::from_utf8_lossy(&o.unwrap().stderr).to_string();
+    assert!(err.contains("--estimates-every") && err.contains("above 0"), "{err}");
+}

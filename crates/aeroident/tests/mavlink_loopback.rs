@@ -168,7 +168,11 @@ fn loopback_feed_equals_the_file_replay() {
             reader,
             &map,
             &opts,
-            &mut EstimateRows { sinks: vec![&mut file_out], flush_each: false },
+            &mut EstimateRows {
+                sinks: vec![&mut file_out],
+                flush_each: false,
+                rate: Default::default(),
+            },
         )
         .unwrap();
 
@@ -187,7 +191,11 @@ fn loopback_feed_equals_the_file_replay() {
             reader,
             &map,
             &opts,
-            &mut EstimateRows { sinks: vec![&mut live_out], flush_each: false },
+            &mut EstimateRows {
+                sinks: vec![&mut live_out],
+                flush_each: false,
+                rate: Default::default(),
+            },
         )
         .unwrap();
         sender.join().unwrap();

@@ -43,7 +43,7 @@ fn run(config: LiveConfig) -> (SharedLive, crate::replay::ReplayOutcome, String)
     let out = {
         let mut pair = (
             LiveObserver::new(shared.clone(), None),
-            EstimateRows { sinks: vec![&mut lines], flush_each: false },
+            EstimateRows { sinks: vec![&mut lines], flush_each: false, rate: Default::default() },
         );
         replay(reader, &m, &opts, &mut pair).unwrap()
     };

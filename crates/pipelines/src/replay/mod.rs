@@ -281,6 +281,50 @@ pub struct EstimateRows<'a> {
     pub sinks: Vec<&'a mut dyn Write>,
     /// Flush after every line.
     pub flush_each: bool,
+    /// Which rows are written ([`RowRate::every_s`]); default every one.
+    pub rate: RowRate,
+}
+
+/// How often [`EstimateRows`] writes a row: every estimate (default), or at most one per
+/// `every_s` seconds of record time, the first and the last always written (so the last row
+/// is the final estimate a summary reports). A long record's `estimates.csv` then holds what
+/// its figures and a reader need, not every sample.
+#[derive(Debug, Clone, Default)]
+pub struct RowRate {
+    every_s: Option<f64>,
+    last_written_s: Option<f64>,
+    held: Option<HeldRow>,
+}
+
+/// The last estimate seen and not yet written: time, values, σ.
+type HeldRow = (f64, Vec<Option<f64>>, Vec<Option<f64>>);
+
+impl RowRate {
+    /// At most one row per `every_s` seconds (positive and finite; otherwise every row).
+    pub fn every_s(every_s: f64) -> Self {
+        let every_s = (every_s.is_finite() && every_s > 0.0).then_some(every_s);
+        Self { every_s, ..Self::default() }
+    }
+
+    /// Whether the estimate at `t_s` is written now; else it is held as the last one seen.
+    fn due(&mut self, t_s: f64, values: &[Option<f64>], sigmas: &[Option<f64>]) -> bool {
+        let Some(every) = self.every_s else { return true };
+        // A relative tolerance, so that a grid of exactly `every_s` is not skipped by rounding.
+        if self.last_written_s.is_none_or(|last| t_s - last >= every * (1.0 - 1e-9)) {
+            self.last_written_s = Some(t_s);
+            self.held = None;
+            return true;
+        }
+        let (_, v, s) = self.held.get_or_insert_with(|| (t_s, Vec::new(), Vec::new()));
+        v.clear();
+        v.extend_from_slice(values);
+        s.clear();
+        s.extend_from_slice(sigmas);
+        if let Some(h) = &mut self.held {
+            h.0 = t_s;
+        }
+        false
+    }
 }
 
 impl ReplayObserver for EstimateRows<'_> {
@@ -297,18 +341,36 @@ impl ReplayObserver for EstimateRows<'_> {
         values: &[Option<f64>],
         sigmas: &[Option<f64>],
     ) -> std::io::Result<()> {
-        for s in self.sinks.iter_mut() {
-            aeroident_io::replay_output::write_estimates_row(s, t_s, values, sigmas)?;
-            if self.flush_each {
-                s.flush()?;
-            }
+        if self.rate.due(t_s, values, sigmas) {
+            self.write(t_s, values, sigmas)?;
         }
         Ok(())
     }
 
     fn finish(&mut self) -> std::io::Result<()> {
+        if let Some((t_s, values, sigmas)) = self.rate.held.take() {
+            self.write(t_s, &values, &sigmas)?;
+        }
         for s in self.sinks.iter_mut() {
             s.flush()?;
+        }
+        Ok(())
+    }
+}
+
+impl EstimateRows<'_> {
+    /// One row to every sink.
+    fn write(
+        &mut self,
+        t_s: f64,
+        values: &[Option<f64>],
+        sigmas: &[Option<f64>],
+    ) -> std::io::Result<()> {
+        for s in self.sinks.iter_mut() {
+            aeroident_io::replay_output::write_estimates_row(s, t_s, values, sigmas)?;
+            if self.flush_each {
+                s.flush()?;
+            }
         }
         Ok(())
     }
@@ -1147,8 +1209,10 @@ mod tests {
         };
         let opts = ReplayOptions { diff_window: 3, ..Default::default() };
         let mut lines = Vec::new();
-        let mut pair =
-            (Told::default(), EstimateRows { sinks: vec![&mut lines], flush_each: false });
+        let mut pair = (
+            Told::default(),
+            EstimateRows { sinks: vec![&mut lines], flush_each: false, rate: RowRate::default() },
+        );
         let o = replay_with(reader, &m, &opts, make, &mut pair).unwrap();
         let told = pair.0;
         assert_eq!(told.model.len(), 1);

@@ -12,7 +12,7 @@ use aeroident_io::{FlightDataReader, LogFormat, open_log_with_report};
 use aeroident_pipelines::job::replay::{Prepared, ReplayJob, ReplayJobOutcome};
 use aeroident_pipelines::live::{LiveObserver, SharedLive};
 use aeroident_pipelines::replay::{
-    EstimateRows, ReplayError, ReplayObserver, ReplayOptions, ReplayOutcome, replay,
+    EstimateRows, ReplayError, ReplayObserver, ReplayOptions, ReplayOutcome, RowRate, replay,
 };
 use anyhow::Context;
 use std::io::Write;
@@ -54,8 +54,9 @@ pub(super) fn execute(
             Some(v) => v,
             None => &mut none,
         };
-        let mut console =
-            ((Console { interrupt }, EstimateRows { sinks, flush_each: args.realtime }), view);
+        let rate = args.estimates_every_s.map(RowRate::every_s).unwrap_or_default();
+        let rows = EstimateRows { sinks, flush_each: args.realtime, rate };
+        let mut console = ((Console { interrupt }, rows), view);
         let opened = (interrupt, shared.as_ref());
         replay_record(args, job, &prepared.options, opened, &bar, &mut console)?
     };

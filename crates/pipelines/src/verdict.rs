@@ -10,7 +10,8 @@
 //! makes the status `flagged`; without one it is `identified`. A note is no doubt (a σ between
 //! 10 % and half of the estimate says imprecise, not wrong, [`crate::replay::precision`]; a value
 //! that does not repeat across manoeuvres, its σ scaled to their spread,
-//! [`crate::replay::repeatability`]) and never blocks `identified`. A reference (a simulation's truth, a model file's published value) is
+//! [`crate::replay::repeatability`]; a value the record fixes only in combination with
+//! another, [`combination_notes`]) and never blocks `identified`. A reference (a simulation's truth, a model file's published value) is
 //! never read here: it is set beside the verdict in `reference_check`
 //! ([`aeroident_io::ParameterResult::check_reference`]).
 //!
@@ -23,6 +24,7 @@ use crate::replay::precision;
 use aeroident_estimators::Status;
 use aeroident_io::ModelSpec;
 use aeroident_io::ParameterResult;
+use aeroident_io::replay_output::Correlation;
 
 /// What a verdict weighs beside the parameter's own numbers.
 #[derive(Debug, Default)]
@@ -98,6 +100,24 @@ pub fn judge_estimate(
     };
     judge(&mut r, &evidence);
     r
+}
+
+/// The notes on parameter `name` from the run's strongly correlated pairs (`correlations`,
+/// |ρ| > 0.9): one per partner, saying that the record fixes a combination of the two rather
+/// than each (Cm_q and Cm_α̇ in a short period; a constant and a speed term over a narrow
+/// speed range). A note, not a doubt: each value may be right, and its σ already carries the
+/// spread along the combination the record leaves free.
+pub fn combination_notes(name: &str, correlations: &[Correlation]) -> Vec<String> {
+    correlations
+        .iter()
+        .filter_map(|c| {
+            let other = if c.a == name { &c.b } else if c.b == name { &c.a } else { return None };
+            Some(format!(
+                "combines with {other} (ρ = {:+.2}): the record fixes a combination of the two, not each; excite them apart to separate them",
+                c.rho
+            ))
+        })
+        .collect()
 }
 
 /// The doubt on every estimate of a recursive estimator that ended in `status` before every

@@ -214,7 +214,11 @@ impl BatchSummary {
                 plausibility: Some((model, thrust_mapped)),
                 estimate_doubts: degenerate.iter().cloned().collect(),
                 failure: moving.then_some(STATUS_NOT_CONVERGED),
-                notes: repeat.map(super::repeatability::Repeat::note).into_iter().collect(),
+                notes: repeat
+                    .map(super::repeatability::Repeat::note)
+                    .into_iter()
+                    .chain(crate::verdict::combination_notes(&r.name, &self.correlations))
+                    .collect(),
             };
             crate::verdict::judge(r, &evidence);
         }

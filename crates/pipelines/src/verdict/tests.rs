@@ -116,3 +116,23 @@ fn a_current_estimate_judged_by_its_own_numbers() {
     let r = judge_estimate("CD_alpha", Some(0.3), Some(0.01), running, &model, false);
     assert_ne!(r.status, STATUS_IDENTIFIED, "drag without thrust: {:?}", r.flags);
 }
+
+/// A strongly correlated pair names each side's partner in a note, with ρ; a parameter in no
+/// pair gets none; a note never blocks `identified`.
+#[test]
+fn a_correlated_pair_is_a_combination_note_on_both() {
+    let pairs = [aeroident_io::replay_output::Correlation {
+        a: "Cm_q".into(),
+        b: "Cm_alphadot".into(),
+        rho: -0.97,
+    }];
+    let q = combination_notes("Cm_q", &pairs);
+    let ad = combination_notes("Cm_alphadot", &pairs);
+    assert_eq!(q.len(), 1);
+    assert!(q[0].starts_with("combines with Cm_alphadot (ρ = -0.97)"), "{q:?}");
+    assert!(ad[0].starts_with("combines with Cm_q (ρ = -0.97)"), "{ad:?}");
+    assert!(combination_notes("Cm_alpha", &pairs).is_empty());
+    let mut r = result("Cm_q", -10.0, 0.5, None);
+    judge(&mut r, &Evidence { notes: q, ..Default::default() });
+    assert_eq!((r.status.as_str(), r.notes.len()), (STATUS_IDENTIFIED, 1));
+}

@@ -239,6 +239,11 @@ fn errors_numeric_options_name_the_cli_option_and_the_exact_value() {
 
 /// The last line of `estimates.csv` of the HFB-320 record `data` replayed with `args`.
 fn last_estimates_line(data: &std::path::Path, args: &[&str], name: &str) -> String {
+    estimates_csv(data, args, name).lines().last().unwrap().to_string()
+}
+
+/// `replay DATA --map mappings/hfb320.toml ARGS` through the binary: its `estimates.csv`.
+fn estimates_csv(data: &std::path::Path, args: &[&str], name: &str) -> String {
     let out = tmp(name);
     let o = bin()
         .args(["replay"])
@@ -253,7 +258,7 @@ fn last_estimates_line(data: &std::path::Path, args: &[&str], name: &str) -> Str
     assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
     let csv = std::fs::read_to_string(out.join("estimates.csv")).unwrap();
     let _ = std::fs::remove_dir_all(&out);
-    csv.lines().last().unwrap().to_string()
+    csv
 }
 
 /// The estimator-option flags are checked by the estimator registry, which knows which kind
@@ -1060,25 +1065,8 @@ fn estimates_every_keeps_one_row_per_interval_and_the_last() {
     let Some(data) = common::shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else {
         return;
     };
-    let read = |args: &[&str], name: &str| {
-        let out = tmp(name);
-        let o = bin()
-            .arg("replay")
-            .arg(&data)
-            .arg("--map")
-            .arg(workspace().join("mappings/hfb320.toml"))
-            .args(args)
-            .arg("--out")
-            .arg(&out)
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
-        let csv = std::fs::read_to_string(out.join("estimates.csv")).unwrap();
-        let _ = std::fs::remove_dir_all(&out);
-        csv
-    };
-    let full = read(&[], "every-full");
-    let every = read(&["--estimates-every", "0.5"], "every-half");
+    let full = estimates_csv(&data, &[], "every-full");
+    let every = estimates_csv(&data, &["--estimates-every", "0.5"], "every-half");
     let rows: Vec<&str> = full.lines().skip(1).collect();
     let t = |row: &str| row.split(',').next().unwrap().parse::<f64>().unwrap();
     let mut want = vec![full.lines().next().unwrap()];

@@ -274,15 +274,10 @@ impl ParameterResult {
     /// it in `timing_std_error`; a result without a σ keeps none. A second call replaces the
     /// first's share, not adds to it.
     pub fn add_timing_std_error(&mut self, timing: f64) {
-        if !(timing.is_finite() && timing >= 0.0) {
-            return;
+        if let Some(s) = self.swapped_share(self.timing_std_error, timing) {
+            self.std_error = Some(s);
+            self.timing_std_error = Some(timing);
         }
-        let noise = self.std_error.map(|s| match self.timing_std_error {
-            Some(t) => (s * s - t * t).max(0.0).sqrt(),
-            None => s,
-        });
-        self.std_error = noise.map(|s| s.hypot(timing));
-        self.timing_std_error = noise.map(|_| timing);
     }
 
     /// Adds `fraction` (finite, ≥ 0) of `|estimate|` to `std_error` in quadrature as the σ of
@@ -291,16 +286,23 @@ impl ParameterResult {
     /// (a NaN σ, written `null`, stays one). A second call replaces the first's share, not adds
     /// to it.
     pub fn add_unmodelled_std_error(&mut self, fraction: f64) {
-        let (Some(e), Some(s)) = (self.estimate, self.std_error) else { return };
-        if !(fraction.is_finite() && fraction >= 0.0 && s.is_finite()) || self.name.ends_with("_0")
-        {
-            return;
-        }
-        let before = self.unmodelled_std_error.unwrap_or(0.0);
-        let rest = (s * s - before * before).max(0.0).sqrt();
+        let Some(e) = self.estimate.filter(|_| !self.name.ends_with("_0")) else { return };
         let share = fraction * e.abs();
-        self.std_error = Some(rest.hypot(share));
-        self.unmodelled_std_error = Some(share);
+        if let Some(s) = self.swapped_share(self.unmodelled_std_error, share) {
+            self.std_error = Some(s);
+            self.unmodelled_std_error = Some(share);
+        }
+    }
+
+    /// `std_error` with the share `old` taken out and `new` put in, in quadrature; `None`
+    /// without a finite σ or for a `new` that is not finite and ≥ 0 (nothing to change).
+    fn swapped_share(&self, old: Option<f64>, new: f64) -> Option<f64> {
+        let s = self.std_error.filter(|s| s.is_finite())?;
+        if !(new.is_finite() && new >= 0.0) {
+            return None;
+        }
+        let old = old.unwrap_or(0.0);
+        Some((s * s - old * old).max(0.0).sqrt().hypot(new))
     }
 
     /// The result with the Cramér–Rao σ `crb` beside its σ.

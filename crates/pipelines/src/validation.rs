@@ -180,6 +180,7 @@ fn for_lag(segments: &[usize], n: usize, k: usize, mut f: impl FnMut(usize, usiz
 /// Normalised autocorrelation `ρ_k`, `k = 0…max_lag`, of `e` (mean removed; `ρ_0 = 1`), lags
 /// within segments, normalised by the lag-0 sum over all samples (the standard biased
 /// estimate). All zeros when `e` is constant.
+///
 /// The lag sums are formed per segment by [`aeroident_signals::lag_products`] (by the
 /// transform beyond its direct range), so a quarter-record of lags costs `O(n log n)`.
 pub fn autocorrelation(e: &[f64], segments: &[usize], max_lag: usize) -> Vec<f64> {

@@ -197,9 +197,7 @@ impl FitJob {
         super::timing::refit_step(rec, &own, tests, compat, fit.clone(), guard, log, w)?;
         let spreads = super::timing::skew_step(rec, &own, compat, fit, guard, log, w)?;
         let results = outcome.summary.parameters.iter_mut().map(|p| &mut p.result);
-        crate::replay::sample_timing::widen(results, &spreads);
-        let results = outcome.summary.parameters.iter_mut().map(|p| &mut p.result);
-        crate::replay::unmodelled::widen(results);
+        super::timing::widen_sigma(results, &spreads);
         let thrust = crate::plausibility::thrust_mapped(&self.records.mapping);
         outcome.summary.judge(&outcome.model, thrust);
         Ok(())

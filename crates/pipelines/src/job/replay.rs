@@ -188,9 +188,7 @@ impl ReplayJob {
         super::timing::refit_step(records, &own, tests, compat, fit.clone(), guard, log, w)?;
         let spreads = super::timing::skew_step(records, &own, compat, fit, guard, log, w)?;
         let results = outcome.summary.parameters.iter_mut().map(|p| &mut p.result);
-        crate::replay::sample_timing::widen(results, &spreads);
-        let results = outcome.summary.parameters.iter_mut().map(|p| &mut p.result);
-        crate::replay::unmodelled::widen(results);
+        super::timing::widen_sigma(results, &spreads);
         let thrust = crate::plausibility::thrust_mapped(&self.records.mapping);
         crate::replay::verdict::judge(outcome, thrust);
         Ok(())

@@ -123,3 +123,16 @@ fn note(log: &mut dyn JobLog, warnings: &mut Warnings, why: &str) -> bool {
     warnings.push(w);
     false
 }
+
+/// The σ of a record's fit beyond its noise, added to every result of `results`: each
+/// estimate's sample-timing σ of `spreads` ([`sample_timing::widen`]), then the unmodelled σ
+/// ([`crate::replay::unmodelled`]). Both jobs call it before their last judgement.
+pub fn widen_sigma<'a>(
+    results: impl IntoIterator<Item = &'a mut aeroident_io::ParameterResult>,
+    spreads: &[(String, f64)],
+) {
+    for r in results {
+        sample_timing::widen([&mut *r], spreads);
+        r.add_unmodelled_std_error(crate::replay::unmodelled::UNMODELLED_FRACTION);
+    }
+}

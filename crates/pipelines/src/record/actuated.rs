@@ -76,9 +76,14 @@ pub(super) fn surface(s: &mut AirDataSample, ch: Channel) -> &mut Option<f64> {
     }
 }
 
-/// The value of surface `ch` in `s` ([`surface`], read only).
+/// The value of surface `ch` in `s` (the field [`surface`] names). Read per sample by the
+/// time-shift stage, so it reads the field rather than cloning the sample to borrow it.
 pub(super) fn surface_value(s: &AirDataSample, ch: Channel) -> Option<f64> {
-    *surface(&mut s.clone(), ch)
+    match ch {
+        Channel::De => s.de_rad,
+        Channel::Da => s.da_rad,
+        _ => s.dr_rad,
+    }
 }
 
 /// Whether `ch` is a control surface (`de`, `da`, `dr`).

@@ -154,6 +154,7 @@ fn channels(s: &AirDataSample) -> [(&'static str, Option<f64>); N_CHANNELS] {
 }
 
 /// The median of `v` and its robust standard deviation `1.4826 · MAD`.
+///
 /// The screen asks this of every channel of every sample: one buffer per thread, not two
 /// allocations per call.
 fn robust(v: &[f64]) -> (f64, f64) {

@@ -315,14 +315,12 @@ impl RowRate {
             self.held = None;
             return true;
         }
-        let (_, v, s) = self.held.get_or_insert_with(|| (t_s, Vec::new(), Vec::new()));
+        let (t, v, s) = self.held.get_or_insert_with(HeldRow::default);
+        *t = t_s;
         v.clear();
         v.extend_from_slice(values);
         s.clear();
         s.extend_from_slice(sigmas);
-        if let Some(h) = &mut self.held {
-            h.0 = t_s;
-        }
         false
     }
 }

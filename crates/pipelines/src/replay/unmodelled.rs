@@ -14,16 +14,6 @@
 //! `identified` primary derivatives covers the truth in at least 90 % (5.5 %: 90.8 %, from
 //! 68.2 % without); reported on the held-out aircraft (92.1 %, from 71.6 %).
 
-use aeroident_io::ParameterResult;
-
-/// The share of `|estimate|` added to every derivative's σ in quadrature (module doc).
+/// The share of `|estimate|` added to every derivative's σ in quadrature (module doc;
+/// `aeroident_io::ParameterResult::add_unmodelled_std_error`).
 pub const UNMODELLED_FRACTION: f64 = 0.055;
-
-/// Adds the unmodelled σ to every result of `results`
-/// ([`ParameterResult::add_unmodelled_std_error`] with [`UNMODELLED_FRACTION`]): constant terms
-/// and results without σ are left as they are.
-pub fn widen<'a>(results: impl IntoIterator<Item = &'a mut ParameterResult>) {
-    for r in results {
-        r.add_unmodelled_std_error(UNMODELLED_FRACTION);
-    }
-}

@@ -92,7 +92,9 @@ fn plausibility_is_a_doubt_and_judging_twice_changes_nothing() {
 }
 
 /// A current estimate judged by its own numbers: σ 0.01 on −1 gains 5.5 % of |−1| in
-/// quadrature and is identified; an estimate whose total σ puts 0 inside ±2σ is flagged; a
+/// quadrature and is identified; at the significance edge the unmodelled share decides: a
+/// noise σ of 0.4985 on −1 alone would be t = 2.006, with the share t = 1/0.5015 = 1.994
+/// (flagged), and 0.49 stays t = 2.03 (identified); a
 /// filter still `initialising` flags every estimate and leaves a parameter without one `not
 /// identified`; `diverged` replaces the verdict; without thrust a drag term is withdrawn.
 #[test]
@@ -102,8 +104,10 @@ fn a_current_estimate_judged_by_its_own_numbers() {
     let r = judge_estimate("Cm_alpha", Some(-1.0), Some(0.01), running, &model, true);
     assert_eq!(r.status, STATUS_IDENTIFIED);
     assert!((r.std_error.unwrap() - 0.01f64.hypot(0.055)).abs() < 1e-15);
-    let r = judge_estimate("Cm_q", Some(-1.0), Some(0.52), running, &model, true);
-    assert_eq!(r.status, STATUS_FLAGGED, "t = 1/hypot(0.52, 0.055) < 2: {:?}", r.flags);
+    let r = judge_estimate("Cm_q", Some(-1.0), Some(0.4985), running, &model, true);
+    assert_eq!(r.status, STATUS_FLAGGED, "t = 1/hypot(0.4985, 0.055) < 2: {:?}", r.flags);
+    let r = judge_estimate("Cm_q", Some(-1.0), Some(0.49), running, &model, true);
+    assert_eq!(r.status, STATUS_IDENTIFIED, "t = 1/hypot(0.49, 0.055) > 2: {:?}", r.flags);
     let init = Status::Initialising.name();
     let r = judge_estimate("Cm_alpha", Some(-1.0), Some(0.01), init, &model, true);
     assert_eq!(r.status, STATUS_FLAGGED);

@@ -391,13 +391,19 @@ fn exit_absurd_finite_options_are_bounded() {
     .unwrap();
     let s = summary.to_str().unwrap();
     let geometry = ["--area-m2", "0.5", "--span-m", "2", "--chord-m", "0.25"];
+    let inertia = ["--mass-kg", "3", "--ixx-kgm2", "0.2", "--iyy-kgm2", "0.3", "--izz-kgm2", "0.4"];
+    let mass = [&geometry[..], &inertia].concat();
     let export = |target: &str, extra: &[&str], needles: &[&str]| {
         let mut args = vec!["export", target, "--summary", s];
-        if target != "jsbsim" {
-            // The geometry, less any option the case gives itself (clap refuses it twice).
-            let kept = geometry.chunks(2).filter(|pair| !extra.contains(&pair[0]));
-            args.extend(kept.flatten());
-        }
+        let needed: &[&str] = match target {
+            "jsbsim" => &[],
+            "ardupilot" => &mass,
+            _ => &geometry,
+        };
+        // The geometry (and mass), less any option the case gives itself (clap refuses it
+        // twice).
+        let kept = needed.chunks(2).filter(|pair| !extra.contains(&pair[0]));
+        args.extend(kept.flatten());
         args.extend(extra);
         let err = expect(&args, 1, needles);
         let line = err.lines().find(|l| l.starts_with("error: ")).unwrap();
@@ -410,6 +416,8 @@ fn exit_absurd_finite_options_are_bounded() {
         &["reference area S", "at most 2000 m²", "got 1.000e300"],
     );
     export("ardupilot", &["--aileron-throw-deg", "1e9"], &["--aileron-throw-deg", "at most 90°"]);
+    export("ardupilot", &["--mass-kg", "1e300"], &["aircraft mass", "at most 1.000e6 kg"]);
+    export("ardupilot", &["--ixz-kgm2", "0.5"], &["aircraft inertia", "jxz"]);
     export("gazebo", &["--alpha-stall-deg", "1000"], &["--alpha-stall-deg", "got 1000"]);
     export("gazebo", &["--air-density", "1e300"], &["air density", "at most 2 kg/m³"]);
     let (good, min) =

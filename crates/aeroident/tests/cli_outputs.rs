@@ -390,3 +390,68 @@ fn outputs_inspect_never_overwrites_its_log_or_one_output_with_another() {
     assert!(std::fs::read_to_string(&html).unwrap().contains("<html"));
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// `export ardupilot --mapping M`: the aircraft's mass and inertia and the surface throws come
+/// from the mapping (an actuator's limits, a calibration's range, else SITL's 20° with a
+/// note), and the file holds the coefficients scaled to SITL's 2-kg, unit-inertia equations
+/// (values computed here from the mapping's numbers); without a mass the export is refused
+/// naming what is missing.
+#[test]
+fn outputs_ardupilot_export_scales_to_sitls_mass_and_inertia_from_the_mapping() {
+    let d = scratch("ardupilot-mass");
+    let summary = d.join("summary.json");
+    std::fs::write(
+        &summary,
+        r#"{"estimator":"oe","model":"m","status":"converged","parameters":[
+        {"name":"CL_alpha","estimate":4.8,"std_error":0.1},{"name":"Cm_alpha","estimate":-0.6,"std_error":0.01},
+        {"name":"Cm_de","estimate":-1.0,"std_error":0.01},{"name":"Cl_p","estimate":-0.45,"std_error":0.01},
+        {"name":"Cl_da","estimate":-0.25,"std_error":0.01}]}"#,
+    )
+    .unwrap();
+    let mapping = d.join("uav.toml");
+    let constants = "mass = { value = 3.3, unit = \"kg\" }\nIxx = { value = 0.17, unit = \"kg*m2\" }\nIyy = { value = 0.289, unit = \"kg*m2\" }\nIzz = { value = 0.443, unit = \"kg*m2\" }\nS = { value = 0.384, unit = \"m2\" }\nb = { value = 1.6, unit = \"m\" }\ncbar = { value = 0.24, unit = \"m\" }\n";
+    let surfaces = "de = { column = \"de\", unit = \"rad\", actuator = { tau_s = 0.05, position_limits_rad = [-0.4, 0.3] } }\nda = { column = \"da\", unit = \"deg\", calibration = [[-100.0, -25.0], [0.0, 0.0], [100.0, 25.0]] }\n";
+    let header = "description = \"uav\"\n[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"v\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nqbar = { column = \"qbar\", unit = \"Pa\" }\n";
+    std::fs::write(&mapping, format!("{header}{surfaces}{constants}")).unwrap();
+    let out = d.join("plane.json");
+    let o = bin()
+        .args(["export", "ardupilot", "--summary"])
+        .arg(&summary)
+        .arg("--mapping")
+        .arg(&mapping)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{said}");
+    let k: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let key = |n: &str| k[n].as_f64().unwrap();
+    let close = |n: &str, want: f64| {
+        assert!((key(n) - want).abs() <= 1e-12 * want.abs(), "{n}: {} vs {want}", key(n))
+    };
+    close("deltae_max", 0.35);
+    close("deltaa_max", 25f64.to_radians());
+    close("deltar_max", 0.3491);
+    close("c_lift_a", 4.8 * 2.0 / 3.3);
+    close("c_m_a", -0.6 / 0.289);
+    close("c_m_deltae", 1.0 / 0.289 * 0.35);
+    close("c_l_p", -0.45 / 0.17);
+    close("c_n_deltaa", 0.0);
+    for needle in ["mean is written", "calibration range", "SITL's 20°", "SITL mass"] {
+        assert!(said.contains(needle), "{needle}: {said}");
+    }
+    let o = bin()
+        .args(["export", "ardupilot", "--summary"])
+        .arg(&summary)
+        .args(["--area-m2", "0.384", "--span-m", "1.6", "--chord-m", "0.24"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("--mass-kg") && err.contains("unit inertia"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -10,10 +10,14 @@
 use aeroident_estimators::sample::{AirDataSample, AircraftConstants};
 use aeroident_estimators::vocabulary::Term;
 use aeroident_estimators::vocabulary::{AlphaKnots, Coefficient, Param};
+use aeroident_models::aircraft::AircraftMass;
 use aeroident_pipelines::export::ardupilot::{ArdupilotOptions, Throws, ardupilot_json};
 use aeroident_pipelines::export::gazebo::{ControlJoint, GazeboOptions, gazebo_plugin_sdf};
 use aeroident_pipelines::export::jsbsim::{SummaryParameters, read_summary};
 use aeroident_pipelines::export::uav::Geometry;
+
+#[path = "export_uav/flight.rs"]
+mod flight;
 
 const GEOMETRY: Geometry = Geometry { area_m2: 0.9, span_m: 1.95, chord_m: 0.47 };
 
@@ -214,6 +218,10 @@ fn ardupilot_params() -> Vec<(&'static str, Option<f64>)> {
     ]
 }
 
+/// A 5-kg UAV's mass and inertia (kg, kg·m²), with a product of inertia.
+const UAV_MASS: AircraftMass =
+    AircraftMass { mass_kg: 5.0, jx_kgm2: 0.8, jy_kgm2: 1.1, jz_kgm2: 1.7, jxz_kgm2: 0.09 };
+
 fn ardupilot_options(drop: bool) -> ArdupilotOptions {
     ArdupilotOptions {
         geometry: GEOMETRY,
@@ -221,7 +229,31 @@ fn ardupilot_options(drop: bool) -> ArdupilotOptions {
         alpha_stall_rad: 0.6,
         mcoeff: 50.0,
         drop_unrepresentable: drop,
+        mass: UAV_MASS,
+        sitl_mass_kg: 2.0,
+        throw_notes: vec![],
     }
+}
+
+/// The rigid body's accelerations from body forces and moments `fm`: `F/m` and `J⁻¹ M`
+/// without the rate products (Stevens & Lewis tensor `[[Jx,0,−Jxz],[0,Jy,0],[−Jxz,0,Jz]]`,
+/// its roll–yaw block solved by Cramer's rule).
+fn rigid_body_accelerations(fm: &[f64; 6], m: &AircraftMass) -> [f64; 6] {
+    let det = m.jx_kgm2 * m.jz_kgm2 - m.jxz_kgm2 * m.jxz_kgm2;
+    [
+        fm[0] / m.mass_kg,
+        fm[1] / m.mass_kg,
+        fm[2] / m.mass_kg,
+        (m.jz_kgm2 * fm[3] + m.jxz_kgm2 * fm[5]) / det,
+        fm[4] / m.jy_kgm2,
+        (m.jxz_kgm2 * fm[3] + m.jx_kgm2 * fm[5]) / det,
+    ]
+}
+
+/// SITL's accelerations from its force and moment (`Plane::calculate_forces`,
+/// `Aircraft::update_dynamics`): the force over its own mass, the moment as ω̇.
+fn sitl_accelerations(fm: &[f64; 6], sitl_mass_kg: f64) -> [f64; 6] {
+    [fm[0] / sitl_mass_kg, fm[1] / sitl_mass_kg, fm[2] / sitl_mass_kg, fm[3], fm[4], fm[5]]
 }
 
 /// The largest relative difference over 500 random states.
@@ -234,21 +266,29 @@ fn worst(model: impl Fn(&State) -> [f64; 6], target: impl Fn(&State) -> [f64; 6]
 }
 
 #[test]
-fn ardupilot_file_flies_aeroidents_forces_and_moments() {
+fn ardupilot_file_gives_the_aircrafts_accelerations_in_sitls_equations() {
     let params = ardupilot_params();
     let out =
         ardupilot_json(&summary("ap", &params), "ap.json", &ardupilot_options(false)).unwrap();
     let k: serde_json::Value = serde_json::from_str(&out.text).unwrap();
     let rho = 1.225;
-    let e = worst(|s| aeroident_model(&params, s, rho), |s| ardupilot_plane(&k, s, rho));
+    let model = |s: &State| rigid_body_accelerations(&aeroident_model(&params, s, rho), &UAV_MASS);
+    let sitl =
+        |k: &serde_json::Value, s: &State| sitl_accelerations(&ardupilot_plane(k, s, rho), 2.0);
+    let e = worst(model, |s| sitl(&k, s));
     assert!(e < 1e-9, "SITL's plane differs from the model by {e:e}\n{}", out.text);
+    // Unscaled (the aircraft's own coefficients), SITL's accelerations would be wrong.
+    let mut unit = k.clone();
+    unit["c_m_a"] = serde_json::json!(k["c_m_a"].as_f64().unwrap() * UAV_MASS.jy_kgm2);
+    assert!(worst(model, |s| sitl(&unit, s)) > 1e-3, "an unscaled c_m_a went unseen");
+    assert!(k["aeroident_notes"].to_string().contains("SITL mass"), "the scaling is not noted");
     // The unidentified derivative is named, in the warnings and in the file's notes.
     assert!(out.warnings.iter().any(|w| w.contains("Cm_alphadot")), "{:?}", out.warnings);
     assert!(k["aeroident_notes"].to_string().contains("Cm_alphadot"));
     // The comparison can fail: the aileron sign flipped is seen.
     let mut wrong = k.clone();
     wrong["c_l_deltaa"] = serde_json::json!(-k["c_l_deltaa"].as_f64().unwrap());
-    let e = worst(|s| aeroident_model(&params, s, rho), |s| ardupilot_plane(&wrong, s, rho));
+    let e = worst(model, |s| sitl(&wrong, s));
     assert!(e > 1e-3, "a flipped c_l_deltaa went unseen ({e:e})");
 }
 

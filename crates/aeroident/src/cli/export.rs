@@ -3,9 +3,9 @@
 //! ```text
 //! aeroident export jsbsim --summary DIR/summary.json [--out FILE] [--v0-mps V0]
 //!                  [--elevator-property P] [--aileron-property P] [--rudder-property P]
-//! aeroident export ardupilot --summary S (--mapping M | --area-m2 A --span-m B --chord-m C)
-//!                  [--out FILE] [--aileron-throw-deg 20 …] [--alpha-stall-deg 27] [--mcoeff 50]
-//!                  [--drop-unrepresentable]
+//! aeroident export ardupilot --summary S (--mapping M | --area-m2 A --span-m B --chord-m C
+//!                  --mass-kg M --ixx-kgm2 JX …) [--out FILE] [--aileron-throw-deg D …]
+//!                  [--sitl-mass-kg 2] [--alpha-stall-deg 27] [--mcoeff 50] [--drop-unrepresentable]
 //! aeroident export gazebo --summary S (--mapping M | …) [--out FILE] [--elevator-joint J …]
 //!                  [--aileron-direction ±1 …] [--link-name base_link] [--drop-unrepresentable]
 //! ```
@@ -16,7 +16,10 @@
 
 use aeroident_estimators::vocabulary::Term;
 use aeroident_io::{Channel, Mapping};
-use aeroident_pipelines::export::ardupilot::{ArdupilotOptions, Throws, ardupilot_json};
+use aeroident_models::aircraft::AircraftMass;
+use aeroident_pipelines::export::ardupilot::{
+    ArdupilotOptions, Throws, ardupilot_json, mapped_throw,
+};
 use aeroident_pipelines::export::gazebo::{ControlJoint, GazeboOptions, gazebo_plugin_sdf};
 use aeroident_pipelines::export::jsbsim::{SurfaceProperties, aerodynamics_xml, read_summary};
 use aeroident_pipelines::export::uav::{Exported, Geometry, MAX_STALL_DEG, MAX_THROW_DEG};
@@ -78,21 +81,53 @@ pub struct ArdupilotArgs {
     /// Reference geometry and unrepresentable terms.
     #[command(flatten)]
     pub geometry: GeometryArgs,
-    /// Aileron deflection at full servo command, degrees (`deltaa_max`).
-    #[arg(long, default_value_t = 20.0)]
-    pub aileron_throw_deg: f64,
-    /// Elevator deflection at full servo command, degrees (`deltae_max`).
-    #[arg(long, default_value_t = 20.0)]
-    pub elevator_throw_deg: f64,
-    /// Rudder deflection at full servo command, degrees (`deltar_max`).
-    #[arg(long, default_value_t = 20.0)]
-    pub rudder_throw_deg: f64,
+    /// Aileron deflection at full servo command, degrees (`deltaa_max`; default: the
+    /// mapping's `da` actuator limits or calibration range, else SITL's 20°).
+    #[arg(long)]
+    pub aileron_throw_deg: Option<f64>,
+    /// Elevator deflection at full servo command, degrees (`deltae_max`; default as the
+    /// aileron's, from `de`).
+    #[arg(long)]
+    pub elevator_throw_deg: Option<f64>,
+    /// Rudder deflection at full servo command, degrees (`deltar_max`; default as the
+    /// aileron's, from `dr`).
+    #[arg(long)]
+    pub rudder_throw_deg: Option<f64>,
+    /// The aircraft's mass and inertia (default: the mapping's constants).
+    #[command(flatten)]
+    pub mass: MassArgs,
+    /// The mass SITL's plane divides its forces by, kg: 2 for the default frame, 8 for
+    /// `-heavy`, 22 for `-jet`.
+    #[arg(long, default_value_t = aeroident_pipelines::export::ardupilot::SITL_MASS_KG)]
+    pub sitl_mass_kg: f64,
     /// Stall angle of SITL's lift blend, degrees (`alpha_stall`).
     #[arg(long, default_value_t = 27.0)]
     pub alpha_stall_deg: f64,
     /// Sharpness of SITL's lift blend, 1/rad (`mcoeff`).
     #[arg(long, default_value_t = 50.0)]
     pub mcoeff: f64,
+}
+
+/// The aircraft's mass and inertia: each option, else the mapping's constant (inertias
+/// scaled by the mapping's `inertia_reference_mass_kg` when it has one).
+#[derive(Debug, clap::Args)]
+pub struct MassArgs {
+    /// Aircraft mass, kg (overrides the mapping's `mass`).
+    #[arg(long)]
+    pub mass_kg: Option<f64>,
+    /// Roll inertia Jx, kg·m² (overrides the mapping's `Ixx`).
+    #[arg(long)]
+    pub ixx_kgm2: Option<f64>,
+    /// Pitch inertia Jy, kg·m² (overrides the mapping's `Iyy`).
+    #[arg(long)]
+    pub iyy_kgm2: Option<f64>,
+    /// Yaw inertia Jz, kg·m² (overrides the mapping's `Izz`).
+    #[arg(long)]
+    pub izz_kgm2: Option<f64>,
+    /// Product of inertia Jxz, kg·m², Stevens & Lewis sign (overrides the mapping's `Ixz`;
+    /// default 0).
+    #[arg(long, allow_negative_numbers = true)]
+    pub ixz_kgm2: Option<f64>,
 }
 
 /// Arguments of `aeroident export gazebo`.
@@ -191,28 +226,102 @@ fn geometry(g: &GeometryArgs) -> anyhow::Result<Geometry> {
     })
 }
 
+/// The aircraft's mass and inertia: each option, else the mapping's constant.
+fn mass(g: &GeometryArgs, a: &MassArgs) -> anyhow::Result<AircraftMass> {
+    let mapping = g.mapping.as_deref().map(Mapping::from_path).transpose()?;
+    let mapped = |ch: Channel| mapping.as_ref()?.channels.get(&ch)?.constant();
+    let need = |given: Option<f64>, ch: Channel, flag: &str| -> anyhow::Result<f64> {
+        given.or_else(|| mapped(ch)).with_context(|| {
+            format!(
+                "no {flag}: SITL applies its own mass and unit inertia, so the export needs the aircraft's; give it, or a --mapping with a constant `{}`",
+                ch.key()
+            )
+        })
+    };
+    let mass_kg = need(a.mass_kg, Channel::Mass, "--mass-kg")?;
+    // The mapping's inertias hold at its reference mass (constant radii of gyration).
+    let reference = mapping.as_ref().and_then(|m| m.inertia_reference_mass_kg);
+    let inertia = |given: Option<f64>, ch, flag| -> anyhow::Result<f64> {
+        match given {
+            Some(v) => Ok(v),
+            None => Ok(need(None, ch, flag)? * reference.map_or(1.0, |r| mass_kg / r)),
+        }
+    };
+    Ok(AircraftMass {
+        mass_kg,
+        jx_kgm2: inertia(a.ixx_kgm2, Channel::Ixx, "--ixx-kgm2")?,
+        jy_kgm2: inertia(a.iyy_kgm2, Channel::Iyy, "--iyy-kgm2")?,
+        jz_kgm2: inertia(a.izz_kgm2, Channel::Izz, "--izz-kgm2")?,
+        jxz_kgm2: match a.ixz_kgm2.or_else(|| mapped(Channel::Ixz)) {
+            Some(_) => inertia(a.ixz_kgm2, Channel::Ixz, "--ixz-kgm2")?,
+            None => 0.0,
+        },
+    })
+}
+
+/// Each surface's throw: the option, else the mapping's ([`mapped_throw`]), else SITL's
+/// default; the notes say where each came from when not given.
+fn throws(a: &ArdupilotArgs) -> anyhow::Result<(Throws, Vec<String>)> {
+    let mapping = a.geometry.mapping.as_deref().map(Mapping::from_path).transpose()?;
+    let default = Throws::default();
+    let mut notes = Vec::new();
+    let mut pick = |given: Option<f64>, ch: Channel, flag: &str, sitl: f64| {
+        if let Some(deg) = given {
+            positive_at_most_deg(flag, deg, MAX_THROW_DEG)?;
+            return anyhow::Ok(deg.to_radians());
+        }
+        let (rad, note) = match mapping.as_ref().and_then(|m| mapped_throw(m, ch)) {
+            Some(t) => (t.rad, t.note),
+            None => (
+                sitl,
+                format!(
+                    "no {flag} and no throw of `{}` in a mapping: SITL's {}° written",
+                    ch.key(),
+                    sitl.to_degrees().round()
+                ),
+            ),
+        };
+        notes.push(note);
+        Ok(rad)
+    };
+    let throws = Throws {
+        aileron_rad: pick(
+            a.aileron_throw_deg,
+            Channel::Da,
+            "--aileron-throw-deg",
+            default.aileron_rad,
+        )?,
+        elevator_rad: pick(
+            a.elevator_throw_deg,
+            Channel::De,
+            "--elevator-throw-deg",
+            default.elevator_rad,
+        )?,
+        rudder_rad: pick(
+            a.rudder_throw_deg,
+            Channel::Dr,
+            "--rudder-throw-deg",
+            default.rudder_rad,
+        )?,
+    };
+    Ok((throws, notes))
+}
+
 fn ardupilot(a: ArdupilotArgs) -> anyhow::Result<()> {
     check_out(a.out.as_deref(), &a.summary, a.geometry.mapping.as_deref())?;
-    for (flag, deg) in [
-        ("--aileron-throw-deg", a.aileron_throw_deg),
-        ("--elevator-throw-deg", a.elevator_throw_deg),
-        ("--rudder-throw-deg", a.rudder_throw_deg),
-    ] {
-        positive_at_most_deg(flag, deg, MAX_THROW_DEG)?;
-    }
+    let (throws, throw_notes) = throws(&a)?;
     positive_at_most_deg("--alpha-stall-deg", a.alpha_stall_deg, MAX_STALL_DEG)?;
     let summary = read_summary(&a.summary)?;
     note_unfinished(&a.summary, &summary);
     let options = ArdupilotOptions {
         geometry: geometry(&a.geometry)?,
-        throws: Throws {
-            aileron_rad: a.aileron_throw_deg.to_radians(),
-            elevator_rad: a.elevator_throw_deg.to_radians(),
-            rudder_rad: a.rudder_throw_deg.to_radians(),
-        },
+        throws,
         alpha_stall_rad: a.alpha_stall_deg.to_radians(),
         mcoeff: a.mcoeff,
         drop_unrepresentable: a.geometry.drop_unrepresentable,
+        mass: mass(&a.geometry, &a.mass)?,
+        sitl_mass_kg: a.sitl_mass_kg,
+        throw_notes,
     };
     let out = ardupilot_json(&summary, &a.summary.display().to_string(), &options)?;
     write_exported(&a.summary, a.out.as_deref(), &out)

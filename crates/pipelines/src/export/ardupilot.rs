@@ -23,10 +23,21 @@
 //! deflections (δe > 0 trailing edge down, δa > 0 rolling left, δr > 0 nose left) `u = −δ/δmax`
 //! with `δmax` the surface's full throw (`deltaa_max` … in the file): every control derivative
 //! is written as `−C_δ · δmax`.
+//!
+//! SITL's equations cannot hold the aircraft's mass and inertia: `calculate_forces` divides
+//! the force by the plane's own mass (2 kg; 8 kg with `-heavy`, 22 kg with `-jet`) and
+//! `Aircraft::update_dynamics` integrates `ω̇ = (L, M, N)`, unit inertia without the
+//! gyroscopic terms (`libraries/SITL/SIM_Aircraft.cpp`). So the coefficients are transformed
+//! to give the identified aircraft's accelerations ([`sitl_coefficient`]): force coefficients
+//! times `m_SITL / m`, moment coefficients through the inverse inertia tensor (Stevens &
+//! Lewis §2.5: `ṗ = c3 L + c4 N`, `q̇ = c7 M`, `ṙ = c4 L + c9 N` without the rate products).
 
 use super::jsbsim::SummaryParameters;
 use super::uav::{self, Exported, Geometry};
 use aeroident_estimators::vocabulary::{Coefficient, Param, Term};
+use aeroident_io::{Channel, Mapping};
+use aeroident_models::aircraft::AircraftMass;
+use aeroident_physics::rigid_body::InertiaConstants;
 use aeroident_physics::text::Short;
 use std::fmt::Write as _;
 
@@ -49,7 +60,7 @@ impl Default for Throws {
 }
 
 /// What the summary does not give.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct ArdupilotOptions {
     /// Reference geometry (`s`, `b`, `c`).
     pub geometry: Geometry,
@@ -62,7 +73,63 @@ pub struct ArdupilotOptions {
     /// Write terms SITL cannot represent as its formula allows (0, or the polar's value) with
     /// a warning each, instead of refusing.
     pub drop_unrepresentable: bool,
+    /// The identified aircraft's mass and inertia (SI, Stevens & Lewis `Jxz`): the
+    /// coefficients are scaled so that SITL's equations give its accelerations (module doc).
+    pub mass: AircraftMass,
+    /// The mass SITL's plane divides its forces by, kg ([`SITL_MASS_KG`] for the default
+    /// frame).
+    pub sitl_mass_kg: f64,
+    /// Where throws not given came from ([`mapped_throw`]), noted in the file and printed.
+    pub throw_notes: Vec<String>,
 }
+
+/// A surface's throw read from a mapping, and where it came from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MappedThrow {
+    /// The throw, rad: the mean of the two ends' magnitudes (SITL's is symmetric).
+    pub rad: f64,
+    /// Where it came from, and the two ends when they differ by more than 10 %.
+    pub note: String,
+}
+
+/// The throw of surface channel `ch` (`de`, `da`, `dr`) in mapping `m`: its actuator's
+/// position limits, else the ends of its calibration table; `None` when it has neither or
+/// they do not straddle 0.
+pub fn mapped_throw(m: &Mapping, ch: Channel) -> Option<MappedThrow> {
+    let (lo, hi, from) = match (m.actuators.get(&ch), m.channels.get(&ch)) {
+        (Some(a), _) if a.position_limits_rad.0.is_finite() => {
+            (a.position_limits_rad.0, a.position_limits_rad.1, "actuator position limits")
+        }
+        (_, Some(c)) if c.calibration.is_some() => {
+            let t = c.calibration.as_ref()?;
+            let ends = [t.first()?.0, t.last()?.0].map(|raw| c.to_si(raw));
+            (ends[0].min(ends[1]), ends[0].max(ends[1]), "calibration range")
+        }
+        _ => return None,
+    };
+    if !(lo < 0.0 && hi > 0.0) {
+        return None;
+    }
+    let rad = 0.5 * (hi - lo);
+    let mut note = format!(
+        "{} throw {}° from the mapping's {from} ({} to {}°)",
+        ch.key(),
+        Short(rad.to_degrees()),
+        Short(lo.to_degrees()),
+        Short(hi.to_degrees())
+    );
+    if (hi + lo).abs() > 0.1 * rad {
+        note.push_str(": the ends differ and SITL's throw is symmetric, so the mean is written");
+    }
+    Some(MappedThrow { rad, note })
+}
+
+/// SITL's plane mass, kg (`Plane::Plane`: 2 kg; the `-heavy` frame 8 kg, `-jet` 22 kg).
+pub const SITL_MASS_KG: f64 = 2.0;
+
+/// The largest aircraft mass taken, kg: above the heaviest aircraft flown (An-225, 640 t), so
+/// a larger number is a typing or unit error.
+pub const MAX_MASS_KG: f64 = 1.0e6;
 
 /// The coefficient keys: aeroident's parameter and SITL's key. The control derivatives are
 /// scaled by `−δmax` (module doc); the drag terms come from [`uav::drag_polar`].
@@ -132,6 +199,60 @@ fn command_scale(term: Term, throws: &Throws) -> f64 {
     }
 }
 
+/// The value SITL's key for `coefficient_term` gets (module doc): the force coefficients
+/// times `m_SITL / m`, the pitching moment's times `c7 = 1/Jy`, the rolling and yawing
+/// moments' mixed through `c3, c4, c9` (both are per `q̄ S b`), then the surface scaling
+/// ([`command_scale`]).
+fn sitl_coefficient(
+    sorted: &uav::Sorted,
+    (coefficient, term): (Coefficient, Term),
+    o: &ArdupilotOptions,
+    ic: &InertiaConstants,
+) -> f64 {
+    use Coefficient::*;
+    let v = |c| sorted.value(c, term);
+    let scaled = match coefficient {
+        Cm => ic.c7 * v(Cm),
+        Cl => ic.c3 * v(Cl) + ic.c4 * v(Cn),
+        Cn => ic.c4 * v(Cl) + ic.c9 * v(Cn),
+        _ => o.sitl_mass_kg / o.mass.mass_kg * v(coefficient),
+    };
+    scaled * command_scale(term, &o.throws)
+}
+
+/// The inertia constants of the aircraft, its mass and SITL's mass checked.
+///
+/// # Errors
+/// A mass outside `(0, MAX_MASS_KG]`, or an inertia that is not a body's
+/// ([`InertiaConstants::from_inertia`]), naming it.
+fn inertia_constants(o: &ArdupilotOptions) -> crate::error::Result<InertiaConstants> {
+    use super::uav::positive_at_most;
+    positive_at_most("aircraft mass", o.mass.mass_kg, MAX_MASS_KG, "kg")?;
+    positive_at_most("SITL's plane mass", o.sitl_mass_kg, MAX_MASS_KG, "kg")?;
+    let m = &o.mass;
+    InertiaConstants::from_inertia(m.jx_kgm2, m.jy_kgm2, m.jz_kgm2, m.jxz_kgm2)
+        .map_err(|e| crate::err!("aircraft inertia: {e}"))
+}
+
+/// What SITL's equations do not hold, noted in the file and printed: the transform and
+/// what is left out.
+fn transform_notes(o: &ArdupilotOptions) -> Vec<String> {
+    let m = &o.mass;
+    vec![
+        format!(
+            "scaled for SITL's equations: force coefficients (lift, drag, side force) × {} ({} kg SITL mass / {} kg aircraft), moment coefficients through the aircraft's inverse inertia (Jx {}, Jy {}, Jz {}, Jxz {} kg·m²; SITL applies the moment as the angular acceleration), so they are per kg·m²; see docs/export.md",
+            Short(o.sitl_mass_kg / m.mass_kg),
+            Short(o.sitl_mass_kg),
+            Short(m.mass_kg),
+            Short(m.jx_kgm2),
+            Short(m.jy_kgm2),
+            Short(m.jz_kgm2),
+            Short(m.jxz_kgm2)
+        ),
+        "not held by SITL's plane: the gyroscopic terms ω × Jω (SITL integrates ω̇ from the moment alone), the identified thrust (SITL's own: throttle × m_SITL·g / 1.2), and the lift beyond alpha_stall (SITL's flat plate, unscaled)".into(),
+    ]
+}
+
 /// Checks the options SITL divides by or blends with.
 fn check_options(o: &ArdupilotOptions) -> crate::error::Result<()> {
     use super::uav::positive_at_most;
@@ -166,7 +287,8 @@ fn check_options(o: &ArdupilotOptions) -> crate::error::Result<()> {
 ///
 /// # Errors
 /// An option out of range ([`Geometry::check`], a non-positive throw, stall angle or
-/// `mcoeff`, or a blend that overflows), nothing identified, or (without
+/// `mcoeff`, a blend that overflows, a mass out of range or an inertia no body has),
+/// nothing identified, or (without
 /// `drop_unrepresentable`) any identified term SITL's formula cannot hold, each named with why.
 pub fn ardupilot_json(
     summary: &SummaryParameters,
@@ -174,6 +296,7 @@ pub fn ardupilot_json(
     o: &ArdupilotOptions,
 ) -> crate::error::Result<Exported> {
     check_options(o)?;
+    let ic = inertia_constants(o)?;
     uav::require_identified(summary, source)?;
     let sorted = uav::sort(summary, why_not);
     let (polar, problems) = uav::drag_polar(&sorted);
@@ -184,23 +307,24 @@ pub fn ardupilot_json(
         problems,
         o.drop_unrepresentable,
     )?;
-    warnings.push(
-        "SITL's plane applies the moments as angular accelerations (unit inertia) and blends the lift into a flat plate towards alpha_stall; see docs/export.md".into(),
-    );
+    warnings.extend(transform_notes(o));
+    warnings.extend(o.throw_notes.iter().cloned());
     let g = &o.geometry;
+    let k = o.sitl_mass_kg / o.mass.mass_kg;
     let mut entries: Vec<(String, String)> = vec![
         ("s".into(), num(g.area_m2)),
         ("b".into(), num(g.span_m)),
         ("c".into(), num(g.chord_m)),
         ("mcoeff".into(), num(o.mcoeff)),
-        ("oswald".into(), num(polar.oswald(g.aspect_ratio()))),
+        // The induced drag is (k CL)² / (π e' AR) = k CL² / (π e AR) with e' = k e.
+        ("oswald".into(), num(k * polar.oswald(g.aspect_ratio()))),
         ("alpha_stall".into(), num(o.alpha_stall_rad)),
-        ("c_drag_p".into(), num(polar.parasitic)),
+        ("c_drag_p".into(), num(k * polar.parasitic)),
         // Only |δe| drag exists in SITL; aeroident's vocabulary has none.
         ("c_drag_deltae".into(), num(0.0)),
     ];
     for (c, t, key) in KEYS {
-        entries.push((key.into(), num(sorted.value(c, t) * command_scale(t, &o.throws))));
+        entries.push((key.into(), num(sitl_coefficient(&sorted, (c, t), o, &ic))));
     }
     let th = &o.throws;
     for (key, v) in [
@@ -212,7 +336,7 @@ pub fn ardupilot_json(
     }
     entries.push(("CGOffset".into(), "[0.0, 0.0, 0.0]".into()));
     let header = format!(
-        "Generated by `aeroident export ardupilot` from {source} (estimator {}, model {}). Derivatives per rad and per normalised rate; control derivatives per unit servo command (±1 = ±delta*_max rad, positive = positive body moment); moments about the CG (CGOffset 0). Formula and signs: docs/export.md.",
+        "Generated by `aeroident export ardupilot` from {source} (estimator {}, model {}). Derivatives per rad and per normalised rate, scaled to SITL's mass and unit inertia (notes below); control derivatives per unit servo command (±1 = ±delta*_max rad, positive = positive body moment); moments about the CG (CGOffset 0). Formula, scaling and signs: docs/export.md.",
         summary.estimator, summary.model
     );
     Ok(Exported { text: render(&header, &entries, &warnings), warnings })

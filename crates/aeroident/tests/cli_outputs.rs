@@ -455,3 +455,48 @@ fn outputs_ardupilot_export_scales_to_sitls_mass_and_inertia_from_the_mapping() 
     );
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// `export gazebo --mapping M`: PX4 `advanced_plane`'s joints by default (the aileron as the
+/// `servo_0`/`servo_1` pair with half the derivative each, the right one mirrored), the
+/// mapping's density, and the centre of pressure that holds `Cm_alpha` (`Cm_alpha c̄ /
+/// CL_alpha` behind the CG); a pair on the elevator is refused by name.
+#[test]
+fn outputs_gazebo_export_uses_px4_joints_the_fits_density_and_the_cp() {
+    let d = scratch("gazebo-cp");
+    let summary = d.join("summary.json");
+    std::fs::write(
+        &summary,
+        r#"{"estimator":"oe","model":"m","status":"converged","parameters":[
+        {"name":"CL_0","estimate":0.3,"std_error":0.01},{"name":"CL_alpha","estimate":4.8,"std_error":0.1},
+        {"name":"Cm_alpha","estimate":-0.6,"std_error":0.01},{"name":"Cl_da","estimate":-0.25,"std_error":0.01},
+        {"name":"Cm_de","estimate":-1.0,"std_error":0.01}]}"#,
+    )
+    .unwrap();
+    let mapping = d.join("uav.toml");
+    std::fs::write(&mapping, "description = \"uav\"\n[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"v\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nrho = { value = 1.2682, unit = \"kg/m3\" }\nmass = { value = 3.3, unit = \"kg\" }\nS = { value = 0.384, unit = \"m2\" }\nb = { value = 1.6, unit = \"m\" }\ncbar = { value = 0.24, unit = \"m\" }\n").unwrap();
+    let export = |extra: &[&str]| {
+        bin()
+            .args(["export", "gazebo", "--summary"])
+            .arg(&summary)
+            .arg("--mapping")
+            .arg(&mapping)
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let o = export(&[]);
+    let sdf = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(sdf.contains("<air_density>1.2682</air_density>"), "{sdf}");
+    let x = -0.6 * 0.24 / 4.8;
+    assert!(sdf.contains(&format!("<cp>{x:?} 0 0</cp>")), "cp {x}: {sdf}");
+    let half = -0.25 / 2.0 * std::f64::consts::PI / 180.0;
+    for (joint, cell) in [("servo_0", half), ("servo_1", -half)] {
+        let at = sdf.find(&format!("<name>{joint}</name>")).unwrap_or_else(|| panic!("{joint}"));
+        assert!(sdf[at..].contains(&format!("<Cell_ctrl>{cell:?}</Cell_ctrl>")), "{joint}: {sdf}");
+    }
+    let o = export(&["--de-joint", "a,b"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("--de-joint") && err.contains("aileron"), "{err}");
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -397,13 +397,16 @@ impl Sdf {
 }
 
 /// The plugin's `Update` (docs/export.md) on a link at the identity pose with the file's
-/// forward/upward: the state's air velocity and rates given in the link's FLU frame, the
-/// resulting force and torque returned in FRD body axes. `V` of the state is the plugin's
-/// speed in the body x–z plane; the joints are at `θ = direction · δ`.
-fn gazebo_plugin(sdf: &Sdf, s: &State, joints: &[(&str, f64)]) -> [f64; 6] {
+/// forward/upward: the state's air velocity at the link origin (the CG) and rates given in
+/// the link's FLU frame, the air velocity taken at `cp` as the source does, the resulting
+/// force and torque about the origin returned in FRD body axes. `V` of the state is the
+/// speed in the body x–z plane at the CG; the joints are at `θ = direction · δ` with `δ`
+/// given per joint. `fixed`: `Cem = Cem0 + Cema α + Cemb β` (a corrected plugin) instead of
+/// the source's overwrite `Cem = Cemb β`.
+fn gazebo_plugin(sdf: &Sdf, s: &State, joints: &[(&str, f64)], fixed: bool) -> [f64; 6] {
     let (u, w) = (s.v * s.alpha.cos(), s.v * s.alpha.sin());
-    let vel = [u, -u * s.beta.tan(), -w];
     let omega = [s.p, -s.q, -s.r];
+    let vel = add([u, -u * s.beta.tan(), -w], cross(omega, sdf.v("cp")));
     let bx = sdf.v("forward");
     let bz = scale(sdf.v("upward"), -1.0);
     let by = cross(bz, bx);
@@ -448,7 +451,8 @@ fn gazebo_plugin(sdf: &Sdf, s: &State, joints: &[(&str, f64)]) -> [f64; 6] {
     let cy = sdf.f("CYa") * alpha + sdf.f("CYb") * beta + c("CY_ctrl");
     let side = scale(by, (cy * dyn_pres + rates("CY")) * area);
     // As in the source: Cem0 + Cema α is computed, then replaced by Cemb β.
-    let cem = sdf.f("Cemb") * beta + c("Cem_ctrl");
+    let static_pitch = if fixed { sdf.f("Cem0") + sdf.f("Cema") * alpha } else { 0.0 };
+    let cem = static_pitch + sdf.f("Cemb") * beta + c("Cem_ctrl");
     let pm = scale(by, (cem * dyn_pres + rates("Cem")) * area * mac);
     let cell = sdf.f("Cella") * alpha + sdf.f("Cellb") * beta + c("Cell_ctrl");
     let rm = scale(bx, (cell * dyn_pres + rates("Cell")) * area * span);
@@ -459,8 +463,8 @@ fn gazebo_plugin(sdf: &Sdf, s: &State, joints: &[(&str, f64)]) -> [f64; 6] {
     [force[0], -force[1], -force[2], torque[0], -torque[1], -torque[2]]
 }
 
-/// A model the plugin holds but for Cm_0 and Cm_alpha (which it discards): no induced drag,
-/// since its lift has surface terms.
+/// A model the plugin holds (Cm_alpha through the centre of pressure): no induced drag, since
+/// its lift has surface terms.
 fn gazebo_params() -> Vec<(&'static str, Option<f64>)> {
     vec![
         ("CL_0", Some(0.31)),
@@ -499,14 +503,19 @@ fn gazebo_params() -> Vec<(&'static str, Option<f64>)> {
 }
 
 fn gazebo_options(drop: bool) -> GazeboOptions {
-    let joint =
-        |surface, joint: &str, direction| ControlJoint { surface, joint: joint.into(), direction };
+    let joint = |surface, joint: &str, direction, share| ControlJoint {
+        surface,
+        joint: joint.into(),
+        direction,
+        share,
+    };
     GazeboOptions {
         geometry: GEOMETRY,
         joints: vec![
-            joint(Term::De, "elevator_joint", 1.0),
-            joint(Term::Da, "aileron_joint", -1.0),
-            joint(Term::Dr, "rudder_joint", 1.0),
+            joint(Term::De, "servo_2", -1.0, 1.0),
+            joint(Term::Da, "servo_0", 1.0, 0.5),
+            joint(Term::Da, "servo_1", 1.0, -0.5),
+            joint(Term::Dr, "servo_3", -1.0, 1.0),
         ],
         link_name: "base_link".into(),
         air_density_kgpm3: 1.2041,
@@ -515,42 +524,68 @@ fn gazebo_options(drop: bool) -> GazeboOptions {
     }
 }
 
+/// The joints' deflections for state `st`: the elevator and rudder as the state's, the
+/// aileron pair as `δa` left and `−δa` right (`δa = (θ_L − θ_R)/2` with direction 1).
+fn gazebo_joints(st: &State) -> [(&'static str, f64); 4] {
+    [("servo_2", st.de), ("servo_0", st.da), ("servo_1", -st.da), ("servo_3", st.dr)]
+}
+
+/// With the force at the centre of pressure the plugin holds the model to first order in the
+/// flow angles: what is left (the lift's `1 − cos α`, the drag's `sin α`, the cp's own flow
+/// angles beyond first order, at |α| ≤ 0.12 rad, |q| ≤ 1 rad/s) stays within 2 % of the
+/// largest force or moment.
+const CP_SECOND_ORDER: f64 = 0.02;
+
 #[test]
-fn gazebo_plugin_flies_aeroidents_forces_and_moments_but_its_lost_pitch_terms() {
+fn gazebo_plugin_flies_aeroidents_forces_and_moments_with_static_stability_at_the_cp() {
     let params = gazebo_params();
-    let s = summary("gz", &params);
-    // Cm_0 and Cm_alpha are refused by name: the plugin discards them.
-    let e = gazebo_plugin_sdf(&s, "gz.json", &gazebo_options(false)).unwrap_err().to_string();
-    assert!(e.contains("Cm_0") && e.contains("Cm_alpha") && e.contains("Cemb"), "{e}");
-    let out = gazebo_plugin_sdf(&s, "gz.json", &gazebo_options(true)).unwrap();
+    let out =
+        gazebo_plugin_sdf(&summary("gz", &params), "gz.json", &gazebo_options(false)).unwrap();
     let sdf = Sdf::parse(&out.text);
-    assert_eq!(sdf.f("Cema"), -0.89, "Cm_alpha is kept for a corrected plugin");
-    let joints =
-        |st: &State| [("elevator_joint", st.de), ("aileron_joint", st.da), ("rudder_joint", st.dr)];
-    // The model the plugin flies: without the pitch terms it drops.
-    let flown: Vec<_> =
-        params.iter().copied().filter(|(n, _)| *n != "Cm_0" && *n != "Cm_alpha").collect();
+    let x = -0.89 * GEOMETRY.chord_m / 5.1;
+    assert!((sdf.v("cp")[0] - x).abs() < 1e-15 && sdf.f("Cema") == 0.0, "{}", out.text);
     let rho = 1.2041;
-    let e = worst(|st| aeroident_model(&flown, st, rho), |st| gazebo_plugin(&sdf, st, &joints(st)));
-    assert!(e < 1e-9, "the plugin differs from the model by {e:e}\n{}", out.text);
+    let model = |st: &State| aeroident_model(&params, st, rho);
+    let fixed = worst(model, |st| gazebo_plugin(&sdf, st, &gazebo_joints(st), true));
+    assert!(fixed < CP_SECOND_ORDER, "a corrected plugin differs by {fixed:e}\n{}", out.text);
+    // The plugin as read drops Cem0, the residual Cm_0 − (x/c̄) CL_0: it flies that Cm_0.
+    let held = x / GEOMETRY.chord_m * 0.31;
+    let flown: Vec<_> =
+        params.iter().map(|&(n, v)| if n == "Cm_0" { (n, Some(held)) } else { (n, v) }).collect();
+    let as_read = worst(
+        |st| aeroident_model(&flown, st, rho),
+        |st| gazebo_plugin(&sdf, st, &gazebo_joints(st), false),
+    );
+    assert!(as_read < CP_SECOND_ORDER, "the plugin as read differs by {as_read:e}");
+    assert!(
+        out.warnings.iter().any(|w| w.contains("Cem0") && w.contains("trim")),
+        "{:?}",
+        out.warnings
+    );
     assert!(out.warnings.iter().any(|w| w.contains("Cn_q")), "{:?}", out.warnings);
-    // The comparison can fail: the roll damping changed is seen.
+    // The comparison can fail: the roll damping changed, or the cp left at the CG, is seen.
     let mut wrong = Sdf::parse(&out.text);
     wrong.scalars.insert("Cellp".into(), "-0.3".into());
-    let e =
-        worst(|st| aeroident_model(&flown, st, rho), |st| gazebo_plugin(&wrong, st, &joints(st)));
-    assert!(e > 1e-3, "a changed Cellp went unseen ({e:e})");
+    let e = worst(model, |st| gazebo_plugin(&wrong, st, &gazebo_joints(st), true));
+    assert!(e > 5.0 * CP_SECOND_ORDER, "a changed Cellp went unseen ({e:e})");
+    let mut at_cg = Sdf::parse(&out.text);
+    at_cg.scalars.insert("cp".into(), "0 0 0".into());
+    let e = worst(model, |st| gazebo_plugin(&at_cg, st, &gazebo_joints(st), true));
+    assert!(e > 5.0 * CP_SECOND_ORDER, "the cp at the CG went unseen ({e:e})");
 }
 
 #[test]
 fn gazebo_refuses_squared_lift_terms_with_induced_drag() {
-    let mut params: Vec<_> =
-        gazebo_params().into_iter().filter(|(n, _)| *n != "Cm_0" && *n != "Cm_alpha").collect();
+    let mut params = gazebo_params();
     params.push(("CD_alpha2", Some(0.8)));
     params.push(("CD_alpha", Some(2.0 * 0.31 * 0.8 / 5.1)));
     let s = summary("gz-polar", &params);
     let e = gazebo_plugin_sdf(&s, "p.json", &gazebo_options(false)).unwrap_err().to_string();
     assert!(e.contains("CL_beta") && e.contains("CL_de") && !e.contains("CD_alpha ="), "{e}");
+    // Without a lift slope, no centre of pressure holds Cm_alpha.
+    let s = summary("gz-nolift", &[("CL_0", Some(0.3)), ("Cm_alpha", Some(-0.5))]);
+    let e = gazebo_plugin_sdf(&s, "l.json", &gazebo_options(false)).unwrap_err().to_string();
+    assert!(e.contains("Cm_alpha") && e.contains("centre of pressure"), "{e}");
     // A surface derivative needs its joint.
     let mut o = gazebo_options(false);
     o.joints.retain(|j| j.surface != Term::Dr);

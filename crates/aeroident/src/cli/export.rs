@@ -6,8 +6,9 @@
 //! aeroident export ardupilot --summary S (--mapping M | --area-m2 A --span-m B --chord-m C
 //!                  --mass-kg M --ixx-kgm2 JX …) [--out FILE] [--aileron-throw-deg D …]
 //!                  [--sitl-mass-kg 2] [--alpha-stall-deg 27] [--mcoeff 50] [--drop-unrepresentable]
-//! aeroident export gazebo --summary S (--mapping M | …) [--out FILE] [--elevator-joint J …]
-//!                  [--aileron-direction ±1 …] [--link-name base_link] [--drop-unrepresentable]
+//! aeroident export gazebo --summary S (--mapping M | …) [--out FILE] [--de-joint J …]
+//!                  [--da-joint LEFT,RIGHT] [--de-direction ±1 …] [--link-name base_link]
+//!                  [--air-density RHO] [--drop-unrepresentable]
 //! ```
 //! Writes the identified derivatives of a `replay` summary as a JSBSim `<aerodynamics>`
 //! fragment, an ArduPilot SITL plane coefficient JSON or a Gazebo `AdvancedLiftDrag`
@@ -142,30 +143,37 @@ pub struct GazeboArgs {
     /// Reference geometry and unrepresentable terms.
     #[command(flatten)]
     pub geometry: GeometryArgs,
-    /// Elevator joint of the model.
-    #[arg(long, default_value = "elevator_joint")]
+    /// Elevator joint of the model (PX4's `advanced_plane`: `servo_2`).
+    #[arg(long, default_value = "servo_2")]
     pub de_joint: String,
-    /// Aileron joint of the model.
-    #[arg(long, default_value = "aileron_joint")]
+    /// Aileron joint, or the left and right joints of an aileron pair as `LEFT,RIGHT` (PX4's
+    /// `advanced_plane`: `servo_0,servo_1`; each then carries half the derivative, the right
+    /// one mirrored).
+    #[arg(long, default_value = "servo_0,servo_1")]
     pub da_joint: String,
-    /// Rudder joint of the model.
-    #[arg(long, default_value = "rudder_joint")]
+    /// Rudder joint of the model (PX4's `advanced_plane`: `servo_3`).
+    #[arg(long, default_value = "servo_3")]
     pub dr_joint: String,
-    /// +1 if the elevator joint's positive angle is trailing edge down, −1 if up.
-    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    /// +1 if the elevator joint's positive angle is trailing edge down, −1 if up (PX4's
+    /// `servo_2`, axis `0 1 0` of a FLU model: −1).
+    #[arg(long, default_value_t = -1.0, allow_negative_numbers = true)]
     pub de_direction: f64,
-    /// +1 if the aileron joint's positive angle rolls left (right aileron down), −1 if right.
+    /// A single aileron joint: +1 if its positive angle rolls left (right aileron trailing
+    /// edge down), −1 if right. A pair: +1 if the left joint's positive angle is its trailing
+    /// edge up (PX4's `servo_0`/`servo_1`, axis `0 1 0`), −1 if down.
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub da_direction: f64,
-    /// +1 if the rudder joint's positive angle is trailing edge left, −1 if right.
-    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    /// +1 if the rudder joint's positive angle is trailing edge left, −1 if right (PX4's
+    /// `servo_3`, axis `0 0 1` of a FLU model: −1).
+    #[arg(long, default_value_t = -1.0, allow_negative_numbers = true)]
     pub dr_direction: f64,
     /// The aircraft body link.
     #[arg(long, default_value = "base_link")]
     pub link_name: String,
-    /// Air density the plugin uses, kg/m³ (a constant in the plugin).
-    #[arg(long, default_value_t = 1.2041)]
-    pub air_density: f64,
+    /// Air density the plugin uses, kg/m³ (a constant in the plugin; default: the mapping's
+    /// constant `rho`, else the plugin's 1.2041).
+    #[arg(long)]
+    pub air_density: Option<f64>,
     /// Stall angle of the plugin's lift blend, degrees (its blend width is fixed: a lower
     /// angle blends flat-plate lift in at small α).
     #[arg(long, default_value_t = 90.0)]
@@ -332,25 +340,69 @@ fn gazebo(a: GazeboArgs) -> anyhow::Result<()> {
     positive_at_most_deg("--alpha-stall-deg", a.alpha_stall_deg, MAX_STALL_DEG)?;
     let summary = read_summary(&a.summary)?;
     note_unfinished(&a.summary, &summary);
-    let joint = |surface, joint: &str, direction| ControlJoint {
-        surface,
-        joint: joint.to_string(),
-        direction,
-    };
+    let mut joints = Vec::new();
+    for (surface, names, direction, flag) in [
+        (Term::De, &a.de_joint, a.de_direction, "--de-joint"),
+        (Term::Da, &a.da_joint, a.da_direction, "--da-joint"),
+        (Term::Dr, &a.dr_joint, a.dr_direction, "--dr-joint"),
+    ] {
+        joints.extend(control_joints(surface, names, direction, flag)?);
+    }
     let options = GazeboOptions {
         geometry: geometry(&a.geometry)?,
-        joints: vec![
-            joint(Term::De, &a.de_joint, a.de_direction),
-            joint(Term::Da, &a.da_joint, a.da_direction),
-            joint(Term::Dr, &a.dr_joint, a.dr_direction),
-        ],
+        joints,
+        air_density_kgpm3: air_density(&a)?,
         link_name: a.link_name,
-        air_density_kgpm3: a.air_density,
         alpha_stall_rad: a.alpha_stall_deg.to_radians(),
         drop_unrepresentable: a.geometry.drop_unrepresentable,
     };
     let out = gazebo_plugin_sdf(&summary, &a.summary.display().to_string(), &options)?;
     write_exported(&a.summary, a.out.as_deref(), &out)
+}
+
+/// The joints of one surface from `names`: one joint (share 1), or an aileron pair
+/// `LEFT,RIGHT` (shares ½ and −½: the right joint mirrored).
+///
+/// # Errors
+/// An empty name, more than two, or a pair on the elevator or rudder, naming `flag`.
+fn control_joints(
+    surface: Term,
+    names: &str,
+    direction: f64,
+    flag: &str,
+) -> anyhow::Result<Vec<ControlJoint>> {
+    let parts: Vec<&str> = names.split(',').map(str::trim).collect();
+    if parts.iter().any(|p| p.is_empty()) || parts.len() > 2 {
+        anyhow::bail!("{flag} `{names}`: give one joint name, or LEFT,RIGHT for an aileron pair");
+    }
+    if parts.len() == 2 && surface != Term::Da {
+        anyhow::bail!("{flag} `{names}`: only the aileron takes a LEFT,RIGHT pair");
+    }
+    let shares: &[f64] = if parts.len() == 2 { &[0.5, -0.5] } else { &[1.0] };
+    Ok(parts
+        .iter()
+        .zip(shares)
+        .map(|(joint, &share)| ControlJoint { surface, joint: joint.to_string(), direction, share })
+        .collect())
+}
+
+/// The plugin's air density: the option, else the mapping's constant `rho`, else the
+/// plugin's default 1.2041 kg/m³ (with a note).
+fn air_density(a: &GazeboArgs) -> anyhow::Result<f64> {
+    if let Some(rho) = a.air_density {
+        return Ok(rho);
+    }
+    let mapping = a.geometry.mapping.as_deref().map(Mapping::from_path).transpose()?;
+    match mapping.as_ref().and_then(|m| m.channels.get(&Channel::Rho)?.constant()) {
+        Some(rho) => Ok(rho),
+        None => {
+            aeroident_report::note!(
+                "{}: no --air-density and no constant `rho` in a mapping: the plugin's 1.2041 kg/m³ written",
+                a.summary.display()
+            );
+            Ok(1.2041)
+        }
+    }
 }
 
 /// Prints each warning, then writes the file to `out` or stdout.

@@ -20,10 +20,14 @@
 //! ```
 //!
 //! The plugin computes `Cem0 + Cema α` and then overwrites it with `Cemb β` (`Cem = ` where
-//! `Cem += ` was meant, in both sources as read), so `Cm_0` and `Cm_alpha` cannot be
-//! represented. The control terms take the joint angle θ in degrees times a per-degree
-//! derivative and the element's `direction`: with `direction` d the export writes
-//! `C_ctrl = C_δ · π/180`, and aeroident's deflection is `δ = d · θ`.
+//! `Cem += ` was meant, in both sources as read), so `Cm_0` and `Cm_alpha` cannot be held by
+//! `Cem0`, `Cema`. What the plugin does apply is the force at the centre of pressure `cp`
+//! (`torque + cp × force`, the air velocity taken there): with `cp = (x, 0, 0)`,
+//! `x = Cm_alpha c̄ / CL_alpha`, the lift's moment about the CG is the static stability
+//! ([`at_centre_of_pressure`]). The control terms take the joint angle θ in degrees times a
+//! per-degree derivative and the element's `direction`: with `direction` d and share `k` the
+//! export writes `C_ctrl = k · C_δ · π/180`, and aeroident's deflection is `δ = d · θ` (one
+//! joint, `k = 1`), or `δa = (d_L θ_L − d_R θ_R)/2` for an aileron pair (`k = ±½`).
 
 use super::jsbsim::SummaryParameters;
 use super::uav::{self, Exported, Geometry};
@@ -42,6 +46,10 @@ pub struct ControlJoint {
     /// (δe trailing edge down, δa right aileron trailing edge down, δr trailing edge left),
     /// −1 when it is the opposite.
     pub direction: f64,
+    /// The share of aeroident's derivative this joint carries: 1 for a single surface, ½ and
+    /// −½ for the left and right joints of an aileron pair (each rotating the same way for the
+    /// same `direction`, as PX4's `advanced_plane` servos).
+    pub share: f64,
 }
 
 /// What the summary does not give.
@@ -115,14 +123,10 @@ const CONTROL_ELEMENTS: [(Coefficient, &str); 6] = [
 fn why_not(p: Param) -> Option<String> {
     use Coefficient::*;
     let (c, t) = (p.coefficient, p.term);
-    if matches!((c, t), (Cm, Term::Bias | Term::Alpha)) {
-        return Some(
-            "the plugin overwrites Cem0 + Cema·α with Cemb·β (AdvancedLiftDrag.cc as read); written to Cem0/Cema for a corrected plugin".into(),
-        );
-    }
     let surface = matches!(t, Term::De | Term::Da | Term::Dr) && c != CX && c != CZ;
     let polar = c == CD && matches!(t, Term::Bias | Term::Alpha | Term::Alpha2);
-    if surface || polar || ELEMENTS.iter().any(|(ec, et, _)| *ec == c && *et == t) {
+    let pitch = matches!((c, t), (Cm, Term::Alpha));
+    if surface || polar || pitch || ELEMENTS.iter().any(|(ec, et, _)| *ec == c && *et == t) {
         return None;
     }
     Some(match (c, t) {
@@ -154,6 +158,89 @@ fn squared_lift_problems(s: &uav::Sorted, polar: &uav::Polar) -> Vec<String> {
         .collect()
 }
 
+/// The centre of pressure, m ahead of the CG (negative: aft), at which the lift's moment
+/// gives `Cm_alpha`: `x = Cm_alpha c̄ / CL_alpha`; 0 without `Cm_alpha`.
+///
+/// # Errors
+/// `Cm_alpha` without `CL_alpha` (no lift slope to carry it), as a problem line.
+fn centre_of_pressure_m(s: &uav::Sorted, g: &Geometry) -> Result<f64, String> {
+    let (cm_a, cl_a) =
+        (s.value(Coefficient::Cm, Term::Alpha), s.value(Coefficient::CL, Term::Alpha));
+    match (cm_a, cl_a) {
+        (0.0, _) => Ok(0.0),
+        (_, 0.0) => Err(format!(
+            "Cm_alpha = {cm_a}: the plugin holds static stability only through the lift at its centre of pressure, and CL_alpha is not identified"
+        )),
+        _ => Ok(cm_a * g.chord_m / cl_a),
+    }
+}
+
+/// `value` into `w` as `coefficient_term`, unless it is 0 and absent.
+fn set(w: &mut uav::Sorted, coefficient: Coefficient, term: Term, value: f64) {
+    let p = Param::new(coefficient, term);
+    if value != 0.0 || w.values.contains_key(&p) {
+        w.values.insert(p, value);
+    }
+}
+
+/// The values to write so that the plugin, with its force at `cp = (x, 0, 0)`, gives the
+/// model about the CG to first order in the flow angles: the lift's and side force's moments
+/// about the CG taken out of `Cm` and `Cn` (`Cm_t − (x/c̄) CL_t`, `Cn_t − (x/b) CY_t`; so
+/// `Cm_alpha` becomes 0 and `Cm_0` the residual `Cm_0 − (x/c̄) CL_0`), then the flow angles
+/// at the cp (`α − (2x/c̄) q̂`, `β + (2x/b) r̂`) made up in the rate terms. Left out, second
+/// order: the lift's `1 − cos α` and the drag's `sin α` in the arm, `V_xz` at the cp.
+fn at_centre_of_pressure(s: &uav::Sorted, x_m: f64, g: &Geometry) -> uav::Sorted {
+    use Coefficient::*;
+    use Term::*;
+    let (kc, kb) = (x_m / g.chord_m, x_m / g.span_m);
+    let mut w = s.clone();
+    for t in [Bias, Alpha, Beta, P, Q, R, De, Da, Dr] {
+        set(&mut w, Cm, t, s.value(Cm, t) - kc * s.value(CL, t));
+        set(&mut w, Cn, t, s.value(Cn, t) - kb * s.value(CY, t));
+    }
+    // Exactly: x was chosen for it.
+    set(&mut w, Cm, Alpha, 0.0);
+    for c in [CL, CY, Cl, Cm, Cn] {
+        let (q, r) = (
+            w.value(c, Q) + 2.0 * kc * w.value(c, Alpha),
+            w.value(c, R) - 2.0 * kb * w.value(c, Beta),
+        );
+        set(&mut w, c, Q, q);
+        set(&mut w, c, R, r);
+    }
+    w
+}
+
+/// What the centre of pressure holds, and the `Cm_0` residual a plugin as read discards (with
+/// the trim elevator it shifts), as notes.
+fn pitch_notes(s: &uav::Sorted, w: &uav::Sorted, x_m: f64) -> Vec<String> {
+    use aeroident_physics::text::Short;
+    let mut notes = Vec::new();
+    if x_m != 0.0 {
+        notes.push(format!(
+            "static pitch stability through the centre of pressure: cp = {} m (Cm_alpha c̄ / CL_alpha), Cm and Cn terms corrected for the lift and side force acting there, rate terms for the flow angles there; Cema = 0",
+            Short(x_m)
+        ));
+    }
+    let residual = w.value(Coefficient::Cm, Term::Bias);
+    if residual != 0.0 {
+        let cm_de = s.value(Coefficient::Cm, Term::De);
+        let trim = if cm_de != 0.0 {
+            format!(
+                ": it trims with δe shifted by {} rad (residual / Cm_de)",
+                Short(residual / cm_de)
+            )
+        } else {
+            String::new()
+        };
+        notes.push(format!(
+            "Cm_0 − (x/c̄) CL_0 = {} written to Cem0, which a corrected plugin adds but the plugin as read (AdvancedLiftDrag.cc) discards{trim}",
+            Short(residual)
+        ));
+    }
+    notes
+}
+
 /// Checks the options the plugin divides by.
 fn check_options(o: &GazeboOptions) -> crate::error::Result<()> {
     use super::uav::positive_at_most;
@@ -167,6 +254,13 @@ fn check_options(o: &GazeboOptions) -> crate::error::Result<()> {
                 "joint `{}`: direction must be 1 or -1, got {}",
                 j.joint,
                 aeroident_physics::text::Short(j.direction)
+            );
+        }
+        if !(j.share.is_finite() && j.share != 0.0 && j.share.abs() <= 1.0) {
+            crate::bail!(
+                "joint `{}`: share must be in [-1, 1] and not 0, got {}",
+                j.joint,
+                aeroident_physics::text::Short(j.share)
             );
         }
     }
@@ -190,6 +284,10 @@ pub fn gazebo_plugin_sdf(
     let sorted = uav::sort(summary, why_not);
     let (polar, mut problems) = uav::drag_polar(&sorted);
     problems.extend(squared_lift_problems(&sorted, &polar));
+    let x_cp = centre_of_pressure_m(&sorted, &o.geometry).unwrap_or_else(|p| {
+        problems.push(p);
+        0.0
+    });
     let joints = used_joints(&sorted, o, source)?;
     let mut warnings = uav::warnings_or_refuse(
         source,
@@ -201,6 +299,8 @@ pub fn gazebo_plugin_sdf(
     warnings.push(
         "the plugin normalises with the speed in the body x-z plane, √(u²+w²) = V cos β: at β ≠ 0 its forces and moments differ from the model's by that factor; see docs/export.md".into(),
     );
+    let written = at_centre_of_pressure(&sorted, x_cp, &o.geometry);
+    warnings.extend(pitch_notes(&sorted, &written, x_cp));
     let header = format!(
         "Generated by `aeroident export gazebo` from {source} (estimator {}, model {}). Derivatives per rad and per normalised rate; control derivatives per degree of joint angle; formula and signs: docs/export.md.",
         summary.estimator, summary.model
@@ -210,28 +310,13 @@ pub fn gazebo_plugin_sdf(
     for note in std::iter::once(&header).chain(&warnings) {
         let _ = writeln!(x, "  <!-- {} -->", comment(note));
     }
-    write_scalars(&mut x, &with_pitch_terms(&sorted, summary), &polar, o);
+    write_scalars(&mut x, &written, &polar, o, x_cp);
     let _ = writeln!(x, "  <num_ctrl_surfaces>{}</num_ctrl_surfaces>", joints.len());
     for j in joints {
-        write_surface(&mut x, &sorted, j);
+        write_surface(&mut x, &written, j);
     }
     x.push_str("</plugin>\n");
     Ok(Exported { text: x, warnings })
-}
-
-/// `s` with `Cm_0` and `Cm_alpha` (unrepresentable, reached only when dropping them is asked
-/// for): written to `Cem0` and `Cema`, which the plugin as read discards but a corrected one
-/// uses.
-fn with_pitch_terms(s: &uav::Sorted, summary: &SummaryParameters) -> uav::Sorted {
-    let mut written = s.clone();
-    for p in &summary.parameters {
-        let pitch = p.param.coefficient == Coefficient::Cm
-            && matches!(p.param.term, Term::Bias | Term::Alpha);
-        if let (true, Some(v)) = (pitch, p.value) {
-            written.values.insert(p.param, v);
-        }
-    }
-    written
 }
 
 /// The joints of the surfaces the summary has a derivative of.
@@ -248,20 +333,27 @@ fn used_joints<'a>(
         if !s.values.keys().any(|p| p.term == surface) {
             continue;
         }
-        let j = o.joints.iter().find(|j| j.surface == surface).ok_or_else(|| {
-            crate::err!(
+        let before = used.len();
+        used.extend(o.joints.iter().filter(|j| j.surface == surface));
+        if used.len() == before {
+            crate::bail!(
                 "{source}: the model has `{}` derivatives but no control joint is given for it (--{}-joint)",
                 surface.name(),
                 surface.name()
-            )
-        })?;
-        used.push(j);
+            );
+        }
     }
     Ok(used)
 }
 
 /// The model-wide elements.
-fn write_scalars(x: &mut String, s: &uav::Sorted, polar: &uav::Polar, o: &GazeboOptions) {
+fn write_scalars(
+    x: &mut String,
+    s: &uav::Sorted,
+    polar: &uav::Polar,
+    o: &GazeboOptions,
+    x_cp: f64,
+) {
     let g = &o.geometry;
     let mut el = |name: &str, v: String| {
         let _ = writeln!(x, "  <{name}>{v}</{name}>");
@@ -274,7 +366,7 @@ fn write_scalars(x: &mut String, s: &uav::Sorted, polar: &uav::Polar, o: &Gazebo
     el("air_density", num(o.air_density_kgpm3));
     el("forward", "1 0 0".into());
     el("upward", "0 0 1".into());
-    el("cp", "0 0 0".into());
+    el("cp", format!("{} 0 0", num(x_cp)));
     el("alpha_stall", num(o.alpha_stall_rad));
     el("Cema_stall", num(0.0));
     el("CD0", num(polar.parasitic));
@@ -290,7 +382,7 @@ fn write_surface(x: &mut String, s: &uav::Sorted, j: &ControlJoint) {
     let _ = writeln!(x, "    <name>{}</name>", xml_text(&j.joint));
     let _ = writeln!(x, "    <direction>{}</direction>", num(j.direction));
     for (c, name) in CONTROL_ELEMENTS {
-        let per_degree = s.value(c, j.surface) * std::f64::consts::PI / 180.0;
+        let per_degree = j.share * s.value(c, j.surface) * std::f64::consts::PI / 180.0;
         let _ = writeln!(x, "    <{name}>{}</{name}>", num(per_degree));
     }
     let _ = writeln!(x, "  </control_surface>");

@@ -1,17 +1,22 @@
-//! The exported ArduPilot file flown in SITL's own equations against `sim` of the identified
-//! aircraft: a 3.3-kg UAV (uav_oat's mass, inertia and geometry, textbook-sized derivatives)
+//! The exported ArduPilot and Gazebo files flown in each simulator's own equations against
+//! `sim` of the identified aircraft: a 3.3-kg UAV (uav_oat's mass, inertia and geometry, textbook-sized derivatives)
 //! trims, then takes an elevator, an aileron and a rudder doublet. The oracle is SITL's plane
 //! written out here from its source, not through the exporter: `Plane::getForce`,
 //! `Plane::getTorque`, `Plane::calculate_forces` (`libraries/SITL/SIM_Plane.cpp`) and
 //! `Aircraft::update_dynamics` (`libraries/SITL/SIM_Aircraft.cpp`; ArduPilot/ardupilot at
 //! 05c3a9e33237ce913de44b5e96dc18b4e4590bb0): the force over SITL's mass, `gyro += moment · dt`,
 //! the attitude rotated by `gyro · dt`, `velocity_ef += (dcm · accel_body + g) · dt`, with
-//! `SIM_SERVO_SPEED = 0` (no servo model) and the thrust as the acceleration `sim` flew.
+//! `SIM_SERVO_SPEED = 0` (no servo model) and the thrust as the acceleration `sim` flew. For
+//! Gazebo, the `AdvancedLiftDrag` plugin of `super::gazebo_plugin` (its force at the centre of
+//! pressure, the air velocity taken there) on a rigid body with the aircraft's mass and
+//! inertia at the link origin, as Gazebo's physics integrates a link (Newton–Euler with
+//! `ω × Jω`).
 
-use super::{State, ardupilot_plane, summary};
+use super::{Sdf, State, ardupilot_plane, gazebo_joints, gazebo_plugin, summary};
 use aeroident_models::aircraft::AircraftMass;
 use aeroident_pipelines::airframe::load;
 use aeroident_pipelines::export::ardupilot::{ArdupilotOptions, Throws, ardupilot_json};
+use aeroident_pipelines::export::gazebo::{self, gazebo_plugin_sdf};
 use aeroident_pipelines::export::uav::Geometry;
 use aeroident_pipelines::sim::{SimTable, model_file, parse_scenario};
 
@@ -50,12 +55,15 @@ const MASS: AircraftMass =
 const GEOMETRY: Geometry = Geometry { area_m2: 0.384, span_m: 1.6, chord_m: 0.24 };
 
 /// The model file, the mapping of the constants and the doublet scenario, in `dir`.
-fn write_files(dir: &std::path::Path) -> (std::path::PathBuf, std::path::PathBuf, String) {
+fn write_files(
+    dir: &std::path::Path,
+    values: &[(&str, f64)],
+) -> (std::path::PathBuf, std::path::PathBuf, String) {
     std::fs::create_dir_all(dir).unwrap();
     let mut model = String::from(
         "description = \"uav (test)\"\n[coefficients]\nCL = [\"0\", \"alpha\", \"q\", \"de\"]\nCD = [\"0\", \"alpha\", \"alpha2\"]\nCY = [\"beta\", \"p\", \"r\", \"dr\"]\nCl = [\"beta\", \"p\", \"r\", \"da\", \"dr\"]\nCm = [\"0\", \"alpha\", \"q\", \"de\"]\nCn = [\"beta\", \"p\", \"r\", \"da\", \"dr\"]\n",
     );
-    for (name, v) in VALUES {
+    for (name, v) in values {
         model.push_str(&format!("[reference.{name}]\nvalue = {v}\nsource = \"test\"\n"));
     }
     let m = &MASS;
@@ -87,9 +95,9 @@ fn write_files(dir: &std::path::Path) -> (std::path::PathBuf, std::path::PathBuf
     (model_path, map_path, scenario)
 }
 
-/// `sim` of the identified aircraft through the doublets.
-fn fly_identified(dir: &std::path::Path) -> SimTable {
-    let (model, map, scenario) = write_files(dir);
+/// `sim` of the identified aircraft flying `values` through the doublets.
+fn fly_identified(dir: &std::path::Path, values: &[(&str, f64)]) -> SimTable {
+    let (model, map, scenario) = write_files(dir, values);
     let aircraft = load(&model, None, &map).unwrap();
     let sc = parse_scenario(&scenario, &dir.join("scenario.toml")).unwrap();
     model_file::run(&aircraft, &sc, dir).unwrap().table
@@ -155,51 +163,82 @@ fn gyroscopic(w: [f64; 3]) -> [f64; 3] {
     [(c1 * r + c2 * p) * q, c5 * p * r - c6 * (p * p - r * r), (c8 * p - c2 * r) * q]
 }
 
-/// SITL's plane in flight: the file, the surfaces and thrust `sim` recorded (interpolated
-/// in time), and its state (attitude body → NED, NED velocity, body rates).
-struct Sitl<'a> {
-    file: &'a serde_json::Value,
+/// Which simulator's equations fly the file.
+#[derive(Clone, Copy)]
+enum Target<'a> {
+    /// ArduPilot SITL's plane with its mass, kg, and whether the gyroscopic terms it leaves
+    /// out are added back.
+    Sitl { file: &'a serde_json::Value, sitl_mass_kg: f64, with_gyroscopic: bool },
+    /// Gazebo's `AdvancedLiftDrag` with `Cem0 + Cema α` kept (`fixed`) or overwritten.
+    Gazebo { sdf: &'a Sdf, fixed: bool },
+}
+
+/// `J⁻¹ M` of the aircraft (Stevens & Lewis `c3, c4, c7, c9` written out).
+fn inverse_inertia(m: [f64; 3]) -> [f64; 3] {
+    let AircraftMass { jx_kgm2: jx, jy_kgm2: jy, jz_kgm2: jz, jxz_kgm2: jxz, .. } = MASS;
+    let gamma = jx * jz - jxz * jxz;
+    [(jz * m[0] + jxz * m[2]) / gamma, m[1] / jy, (jxz * m[0] + jx * m[2]) / gamma]
+}
+
+/// A file in flight in its simulator's equations: the surfaces and thrust `sim` recorded
+/// (interpolated in time), and the state (attitude body → NED, NED velocity, body rates).
+struct Flight<'a> {
+    target: Target<'a>,
     sim: &'a SimTable,
-    sitl_mass_kg: f64,
-    /// Add the gyroscopic terms SITL leaves out.
-    with_gyroscopic: bool,
     att: [[f64; 3]; 3],
     v_ef: [f64; 3],
     gyro: [f64; 3],
 }
 
-impl Sitl<'_> {
+impl Flight<'_> {
     fn column(&self, name: &str, time: f64) -> f64 {
         let col = |n: &str| self.sim.column(n).unwrap_or_else(|| panic!("no column {n}"));
         at(col("t_s"), col(name), time)
     }
 
-    /// The specific force (body, m/s²) and the angular acceleration at `time`.
-    fn accelerations(&self, time: f64) -> ([f64; 3], [f64; 3]) {
+    /// The body state at `time`, the speed as the target normalises with.
+    fn state(&self, time: f64, v: f64) -> State {
         let vb = mul_t(&self.att, self.v_ef);
-        let s = State {
+        State {
             alpha: vb[2].atan2(vb[0]),
             beta: vb[1].atan2(vb[0]),
             p: self.gyro[0],
             q: self.gyro[1],
             r: self.gyro[2],
-            v: (vb[0] * vb[0] + vb[1] * vb[1] + vb[2] * vb[2]).sqrt(),
+            v,
             de: self.column("elevator_rad", time),
             da: self.column("aileron_rad", time),
             dr: self.column("rudder_rad", time),
-        };
-        let fm = ardupilot_plane(self.file, &s, self.column("rho_kgpm3", time));
-        let thrust = self.column("thrust_n", time) / MASS.mass_kg;
-        let m = self.sitl_mass_kg;
-        let specific = [fm[0] / m + thrust, fm[1] / m, fm[2] / m];
-        let extra = if self.with_gyroscopic { gyroscopic(self.gyro) } else { [0.0; 3] };
-        (specific, [0, 1, 2].map(|i| fm[3 + i] + extra[i]))
+        }
     }
 
-    /// One step of `update_dynamics`: rates, attitude, velocity (flat earth, g down).
+    /// The specific force (body, m/s²) and the angular acceleration at `time`.
+    fn accelerations(&self, time: f64) -> ([f64; 3], [f64; 3]) {
+        let vb = mul_t(&self.att, self.v_ef);
+        let thrust = self.column("thrust_n", time) / MASS.mass_kg;
+        let (fm, m, w_dot) = match self.target {
+            Target::Sitl { file, sitl_mass_kg, with_gyroscopic } => {
+                let speed = (vb[0] * vb[0] + vb[1] * vb[1] + vb[2] * vb[2]).sqrt();
+                let s = self.state(time, speed);
+                let fm = ardupilot_plane(file, &s, self.column("rho_kgpm3", time));
+                let extra = if with_gyroscopic { gyroscopic(self.gyro) } else { [0.0; 3] };
+                (fm, sitl_mass_kg, [0, 1, 2].map(|i| fm[3 + i] + extra[i]))
+            }
+            Target::Gazebo { sdf, fixed } => {
+                let s = self.state(time, (vb[0] * vb[0] + vb[2] * vb[2]).sqrt());
+                let fm = gazebo_plugin(sdf, &s, &gazebo_joints(&s), fixed);
+                let body = inverse_inertia([fm[3], fm[4], fm[5]]);
+                let gyro = gyroscopic(self.gyro);
+                (fm, MASS.mass_kg, [0, 1, 2].map(|i| body[i] + gyro[i]))
+            }
+        };
+        ([fm[0] / m + thrust, fm[1] / m, fm[2] / m], w_dot)
+    }
+
+    /// One explicit step (SITL's `update_dynamics`): rates, attitude, velocity (flat earth).
     fn step(&mut self, time: f64, dt: f64) {
-        let (specific, rot_accel) = self.accelerations(time);
-        self.gyro = [0, 1, 2].map(|i| self.gyro[i] + rot_accel[i] * dt);
+        let (specific, w_dot) = self.accelerations(time);
+        self.gyro = [0, 1, 2].map(|i| self.gyro[i] + w_dot[i] * dt);
         self.att = rotate(&self.att, self.gyro.map(|w| w * dt));
         let a_ef = mul(&self.att, specific);
         let g = [0.0, 0.0, 9.80665];
@@ -207,33 +246,38 @@ impl Sitl<'_> {
     }
 }
 
-/// SITL flying `file` from `sim`'s first row (trimmed, wings level): at each of `sim`'s
+/// `target` flying its file from `sim`'s first row (trimmed, wings level): at each of `sim`'s
 /// times, `[p, q, r, ṗ, q̇, ṙ, ax, ay, az]`.
+fn fly(target: Target, sim: &SimTable) -> Vec<[f64; 9]> {
+    const DT: f64 = 0.0005;
+    let first = |n: &str| sim.column(n).unwrap()[0];
+    let (v0, alpha0) = (first("vt_mps"), first("alpha_rad"));
+    let att = dcm(0.0, first("theta_rad"), 0.0);
+    let v_ef = mul(&att, [v0 * alpha0.cos(), 0.0, v0 * alpha0.sin()]);
+    let mut flight = Flight { target, sim, att, v_ef, gyro: [0.0; 3] };
+    let mut time = 0.0;
+    let mut out = Vec::new();
+    for &t_out in sim.column("t_s").unwrap() {
+        while time < t_out - DT / 2.0 {
+            flight.step(time, DT);
+            time += DT;
+        }
+        // The outputs at the row's own time: the surfaces ramp between rows.
+        let (f, w) = flight.accelerations(t_out);
+        let g = flight.gyro;
+        out.push([g[0], g[1], g[2], w[0], w[1], w[2], f[0], f[1], f[2]]);
+    }
+    out
+}
+
+/// SITL flying `file` ([`fly`]).
 fn fly_sitl(
     file: &serde_json::Value,
     sim: &SimTable,
     sitl_mass_kg: f64,
     with_gyroscopic: bool,
 ) -> Vec<[f64; 9]> {
-    const DT: f64 = 0.0005;
-    let first = |n: &str| sim.column(n).unwrap()[0];
-    let (v0, alpha0) = (first("vt_mps"), first("alpha_rad"));
-    let att = dcm(0.0, first("theta_rad"), 0.0);
-    let v_ef = mul(&att, [v0 * alpha0.cos(), 0.0, v0 * alpha0.sin()]);
-    let mut sitl = Sitl { file, sim, sitl_mass_kg, with_gyroscopic, att, v_ef, gyro: [0.0; 3] };
-    let mut time = 0.0;
-    let mut out = Vec::new();
-    for &t_out in sim.column("t_s").unwrap() {
-        while time < t_out - DT / 2.0 {
-            sitl.step(time, DT);
-            time += DT;
-        }
-        // The outputs at the row's own time: the surfaces ramp between rows.
-        let (f, w) = sitl.accelerations(t_out);
-        let g = sitl.gyro;
-        out.push([g[0], g[1], g[2], w[0], w[1], w[2], f[0], f[1], f[2]]);
-    }
-    out
+    fly(Target::Sitl { file, sitl_mass_kg, with_gyroscopic }, sim)
 }
 
 /// `sim`'s `[p, q, r, ṗ, q̇, ṙ, ax, ay, az]` at each row.
@@ -279,7 +323,7 @@ fn options(sitl_mass_kg: f64) -> ArdupilotOptions {
 #[test]
 fn ardupilot_file_flies_the_identified_doublets_in_sitls_equations() {
     let dir = std::env::temp_dir().join(format!("aeroident-export-flight-{}", std::process::id()));
-    let sim = fly_identified(&dir);
+    let sim = fly_identified(&dir, &VALUES);
     let reference = sim_channels(&sim);
     let params: Vec<(&str, Option<f64>)> = VALUES.iter().map(|(n, v)| (*n, Some(*v))).collect();
     let s = summary("flight", &params);
@@ -310,4 +354,33 @@ fn ardupilot_file_flies_the_identified_doublets_in_sitls_equations() {
         misses[1].is_nan() || misses[1] > 0.5,
         "a pitch moment at unit inertia went unseen: {misses:.3?}"
     );
+}
+
+#[test]
+fn gazebo_plugin_flies_the_identified_doublets_on_the_aircrafts_rigid_body() {
+    let dir = std::env::temp_dir().join(format!("aeroident-export-gz-{}", std::process::id()));
+    // No induced drag: the plugin squares its whole lift, the elevator's lift included.
+    let values: Vec<(&str, f64)> =
+        VALUES.iter().map(|&(n, v)| (n, if n.starts_with("CD_alpha") { 0.0 } else { v })).collect();
+    let sim = fly_identified(&dir, &values);
+    let reference = sim_channels(&sim);
+    let params: Vec<(&str, Option<f64>)> = values.iter().map(|(n, v)| (*n, Some(*v))).collect();
+    let o = gazebo::GazeboOptions {
+        geometry: GEOMETRY,
+        joints: super::gazebo_options(false).joints,
+        link_name: "base_link".into(),
+        air_density_kgpm3: sim.column("rho_kgpm3").unwrap()[0],
+        alpha_stall_rad: std::f64::consts::FRAC_PI_2,
+        drop_unrepresentable: false,
+    };
+    let out = gazebo_plugin_sdf(&summary("gz-flight", &params), "gz.json", &o).unwrap();
+    let sdf = Sdf::parse(&out.text);
+    let misses = relative_misses(&fly(Target::Gazebo { sdf: &sdf, fixed: true }, &sim), &reference);
+    assert!(misses.iter().all(|m| *m < 0.05), "Gazebo misses {misses:.4?}");
+    // The same file with its centre of pressure at the CG flies without static stability.
+    let mut at_cg = Sdf::parse(&out.text);
+    at_cg.scalars.insert("cp".into(), "0 0 0".into());
+    let misses =
+        relative_misses(&fly(Target::Gazebo { sdf: &at_cg, fixed: true }, &sim), &reference);
+    assert!(misses[1].is_nan() || misses[1] > 0.2, "the cp at the CG went unseen: {misses:.3?}");
 }

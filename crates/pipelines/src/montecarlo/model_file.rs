@@ -283,10 +283,14 @@ impl ModelFileExperiment {
         Ok(())
     }
 
-    /// A parameter's result with the flown value as its reference.
+    /// A parameter's result with the flown value as its reference: the check beside the
+    /// verdict is made again against it (the model file's reference, if the fit saw one, is
+    /// another aircraft's value: its findings go with it).
     fn param_run(&self, mut result: ParameterResult, t10: Option<f64>) -> ParamRun {
         let truth = self.truth(&result.name);
         result.reference = truth;
+        result.reference_check = None;
+        result.check_reference();
         ParamRun {
             primary: PRIMARY_DERIVATIVES.contains(&result.name.as_str()),
             truth_before: truth,
@@ -486,6 +490,7 @@ mod tests {
     use crate::airframe::tests::{ALT_FT, VT_FPS, as_model_file, f16_trim};
     use crate::montecarlo::{STATUS_COMPLETE, STATUS_INTERRUPTED};
     use aeroident_estimators::prior::Priors;
+    use aeroident_io::ParamReference;
 
     /// White noise on every output the flight model predicts, SI: σ of a small air-data
     /// system and an AHRS.
@@ -580,6 +585,32 @@ mod tests {
                 p.name
             );
             assert!((0.5..=2.0).contains(&(sigma / scatter)), "{}: σ {sigma}", p.name);
+        }
+    }
+
+    /// The model file's references (here twice the values flown, as a published aircraft's
+    /// would differ from a summary's) are neither the verdict's input nor the score: each
+    /// parameter's check is against the value flown, and the statuses are those of the same
+    /// fit without references.
+    #[test]
+    fn a_run_checks_against_the_values_flown_not_the_model_files_references() {
+        let plain = experiment(&["oe"]);
+        let mut x = experiment(&["oe"]);
+        let s = x.aircraft.structure();
+        x.model.references = s
+            .params()
+            .zip(x.aircraft.theta())
+            .map(|(param, v)| ParamReference { param, value: 2.0 * v, source: "test".into() })
+            .collect();
+        let (with, without) = (x.fly(&x.scenario).unwrap(), plain.fly(&plain.scenario).unwrap());
+        for (p, q) in with.estimators[0].params.iter().zip(&without.estimators[0].params) {
+            let r = &p.result;
+            let (e, truth, sigma) =
+                (r.estimate.unwrap(), r.reference.unwrap(), r.std_error.unwrap());
+            let check = r.reference_check.as_ref().unwrap();
+            let distance = check.distance_sigma.unwrap();
+            assert!((distance - (e - truth).abs() / sigma).abs() < 1e-9, "{}: {check:?}", r.name);
+            assert_eq!(r.status, q.result.status, "{}", r.name);
         }
     }
 

@@ -67,3 +67,76 @@ fn analytic_the_state_space_export_equals_the_f16s_own_linearization() {
     }
     assert!(d.len() == 13 && d.iter().flatten().all(|v| *v == 0.0));
 }
+
+/// A partial test card (elevator and aileron, no rudder derivative): `linearize` trims with
+/// the rudder held (said on stderr), its JSON carries a zero rudder column and the flag of a
+/// roll mode faster than any conventional roll damping gives (Cl_p −3.3 on a 0.17 kg·m² UAV:
+/// the bound is q̄ S b² · 1.5 / (2 V Jx) ≈ 47 1/s at 18 m/s); `design` refuses an input on
+/// the rudder it does not have.
+#[test]
+fn a_partial_test_card_linearizes_with_its_rudder_held_and_an_absurd_roll_mode_flagged() {
+    let d = std::env::temp_dir().join(format!("aeroident-partial-card-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    let mut model = String::from(
+        "description = \"uav\"\n[coefficients]\nCL = [\"0\", \"alpha\", \"de\"]\nCD = [\"0\"]\nCY = [\"beta\"]\nCl = [\"beta\", \"p\", \"da\"]\nCm = [\"0\", \"alpha\", \"q\", \"de\"]\nCn = [\"beta\", \"r\"]\n",
+    );
+    for (n, v) in [
+        ("CL_0", 0.3),
+        ("CL_alpha", 4.8),
+        ("CL_de", 0.3),
+        ("CD_0", 0.03),
+        ("CY_beta", -0.3),
+        ("Cl_beta", -0.08),
+        ("Cl_p", -3.3),
+        ("Cl_da", -0.25),
+        ("Cm_0", 0.02),
+        ("Cm_alpha", -0.6),
+        ("Cm_q", -9.0),
+        ("Cm_de", -1.0),
+        ("Cn_beta", 0.06),
+        ("Cn_r", -0.08),
+    ] {
+        model.push_str(&format!("[reference.{n}]\nvalue = {v}\nsource = \"t\"\n"));
+    }
+    let map = "description = \"c\"\n[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"v\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nqbar = { column = \"q\", unit = \"Pa\" }\nmass = { value = 3.3, unit = \"kg\" }\nIxx = { value = 0.17, unit = \"kg*m2\" }\nIyy = { value = 0.289, unit = \"kg*m2\" }\nIzz = { value = 0.443, unit = \"kg*m2\" }\nS = { value = 0.384, unit = \"m2\" }\nb = { value = 1.6, unit = \"m\" }\ncbar = { value = 0.24, unit = \"m\" }\n";
+    let (m, c) = (d.join("uav.toml"), d.join("c.toml"));
+    std::fs::write(&m, model).unwrap();
+    std::fs::write(&c, map).unwrap();
+    let (m, c) = (m.to_str().unwrap(), c.to_str().unwrap());
+    let out = Command::new(env!("CARGO_BIN_EXE_aeroident"))
+        .args([
+            "linearize",
+            "--aircraft",
+            m,
+            "--map",
+            c,
+            "--vt-mps",
+            "18",
+            "--alt-m",
+            "0",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success() && err.contains("no `dr` derivative"), "{err}");
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(matrix(&v["b"]).iter().all(|row| row[3] == 0.0), "rudder column not zero");
+    let flags = v["mode_flags"].as_array().unwrap();
+    assert!(flags.len() == 1 && flags[0].as_str().unwrap().contains("Cl_p = -3.3"), "{flags:?}");
+    let design = Command::new(env!("CARGO_BIN_EXE_aeroident"))
+        .args(["design", "--aircraft", m, "--map", c, "--vt-mps", "18", "--alt-m", "0"])
+        .args([
+            "--surfaces",
+            "de,da,dr",
+            "--rate-hz",
+            "25",
+            "--out",
+            d.join("des").to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&design.stderr);
+    assert!(!design.status.success() && err.contains("--surfaces dr"), "{err}");
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -59,6 +59,7 @@ impl AircraftArgs {
             map,
         )?;
         warn_unfinished(self.summary.as_deref())?;
+        note_held_surfaces(&aircraft);
         Ok(aircraft)
     }
 
@@ -87,6 +88,14 @@ pub fn warn_unfinished(summary: Option<&Path>) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Says which surfaces a model-file aircraft holds at 0 (its model has no derivative of
+/// them), if any.
+pub fn note_held_surfaces(aircraft: &aeroident_pipelines::airframe::ModelFileAircraft) {
+    if let Some(note) = aircraft.held_surfaces_note() {
+        aeroident_report::note!("note: {note}");
+    }
+}
+
 /// The model-file experiment of `a` flying `scenario` with `estimators` (default `oe`; `run`
 /// and `montecarlo` with `--aircraft MODEL.toml`;
 /// [`aeroident_pipelines::montecarlo::model_file::ModelFileExperiment::load`]).
@@ -107,5 +116,7 @@ pub fn experiment(
         scenario,
     };
     let default = ["oe".to_string()];
-    Ok(ModelFileExperiment::load(files, estimators.unwrap_or(&default))?)
+    let x = ModelFileExperiment::load(files, estimators.unwrap_or(&default))?;
+    note_held_surfaces(&x.aircraft);
+    Ok(x)
 }

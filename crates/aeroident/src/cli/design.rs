@@ -293,6 +293,7 @@ fn model_file_design(a: &DesignArgs, spec: &DesignSpec, model: &str) -> anyhow::
         );
     };
     let aircraft = aeroident_pipelines::airframe::load(model.as_ref(), a.summary.as_deref(), map)?;
+    super::aircraft_args::note_held_surfaces(&aircraft);
     super::aircraft_args::warn_unfinished(a.summary.as_deref())?;
     Ok(aeroident_pipelines::export::design::design_for_aircraft(spec, &aircraft, vt, alt)?)
 }

@@ -57,7 +57,19 @@ pub fn report(a: &LinearizeArgs) -> anyhow::Result<String> {
     let m = a.aircraft.model_file()?;
     let lin = linearize_level(&m, a.vt_mps, a.alt_m)
         .with_context(|| format!("{} at {} m/s, {} m", a.aircraft.aircraft, a.vt_mps, a.alt_m))?;
-    render(&m, &lin, a.json)
+    let flags =
+        aeroident_pipelines::airframe::modes::mode_flags(&m, lin.trim.state.as_slice(), &lin.modes);
+    let mut out = render(&m, &lin, a.json)?;
+    if a.json {
+        let mut v: serde_json::Value = serde_json::from_str(&out)?;
+        v["mode_flags"] = json!(flags);
+        out = v.to_string();
+    } else {
+        for f in &flags {
+            out.push_str(&format!("flag: {f}\n"));
+        }
+    }
+    Ok(out)
 }
 
 /// Renders a linearization of `aircraft` (SI trim values; A, B in the aircraft's state units).

@@ -25,6 +25,7 @@
 
 mod files;
 pub(crate) mod handle;
+pub mod modes;
 #[cfg(test)]
 pub(crate) mod tests;
 mod trim;
@@ -183,6 +184,30 @@ impl ModelFileAircraft {
     pub fn with_atmosphere(mut self, atmosphere: Atmosphere) -> Self {
         self.atmosphere = atmosphere;
         self
+    }
+
+    /// The surfaces (`de`, `da`, `dr`) the model has no derivative of: trimmed and flown held
+    /// at 0 (a partial test card, e.g. an elevator-and-aileron UAV).
+    pub fn held_surfaces(&self) -> Vec<&'static str> {
+        let held = trim::held_surfaces(self);
+        ["de", "da", "dr"]
+            .into_iter()
+            .zip(&held[3..])
+            .filter(|(_, h)| **h)
+            .map(|(n, _)| n)
+            .collect()
+    }
+
+    /// A note naming [`Self::held_surfaces`], `None` when the model has every surface.
+    pub fn held_surfaces_note(&self) -> Option<String> {
+        let held = self.held_surfaces();
+        (!held.is_empty()).then(|| {
+            format!(
+                "model `{}` has no `{}` derivative: that surface is held at 0 (trim, flight and the linear model's input column)",
+                self.name,
+                held.join("`, `")
+            )
+        })
     }
 
     /// The airframe constants.

@@ -46,13 +46,43 @@ fn residual(a: &ModelFileAircraft, z: &Z, vt: f64, alt: f64) -> Result<Z, ModelE
     Ok(Z::new(xd[rb::VT] / vt, xd[rb::ALPHA], xd[rb::BETA], xd[rb::P], xd[rb::Q], xd[rb::R]))
 }
 
+/// Which unknowns are held at 0: the surfaces the model has no derivative of (a partial test
+/// card: an elevator-and-aileron UAV has no rudder to trim with).
+pub fn held_surfaces(a: &ModelFileAircraft) -> [bool; 6] {
+    use aeroident_estimators::vocabulary::Term;
+    let has = |t: Term| {
+        let uses = |p: Term| p == t || p.factors().is_some_and(|(f, g)| f == t || g == t);
+        a.structure().params().any(|p| uses(p.term))
+    };
+    [false, false, false, !has(Term::De), !has(Term::Da), !has(Term::Dr)]
+}
+
+/// `Jz` solved for the step on the unknowns not `held` (those stay): a square system when
+/// nothing is held, else least squares (a symmetric aircraft without a rudder balances
+/// β̇, ṗ, ṙ with β and δa alone); `None` when the free columns are rank deficient.
+fn solve_free(j: &SMatrix<f64, 6, 6>, r: &Z, held: &[bool; 6]) -> Option<Z> {
+    let mut jf = *j;
+    for (k, h) in held.iter().enumerate() {
+        if *h {
+            jf.column_mut(k).fill(0.0);
+        }
+    }
+    let svd = jf.svd(true, true);
+    let largest = svd.singular_values.max();
+    let rank = svd.singular_values.iter().filter(|s| **s > 1e-10 * largest).count();
+    if rank < held.iter().filter(|h| !**h).count() {
+        return None;
+    }
+    svd.solve(&(-r), 1e-10 * largest).ok()
+}
+
 /// One Newton step from `z` with residual `r`: the new point and its residual.
 fn newton_step(
     a: &ModelFileAircraft,
     z: &Z,
     r: &Z,
-    vt: f64,
-    alt: f64,
+    (vt, alt): (f64, f64),
+    held: &[bool; 6],
 ) -> Result<(Z, Z), ModelError> {
     let mut j = SMatrix::<f64, 6, 6>::zeros();
     for k in 0..6 {
@@ -63,7 +93,7 @@ fn newton_step(
         let col = (residual(a, &zp, vt, alt)? - residual(a, &zm, vt, alt)?) / (2.0 * h);
         j.set_column(k, &col);
     }
-    let dz = j.lu().solve(&(-r)).ok_or_else(|| ModelError::NoConvergence {
+    let dz = solve_free(&j, r, held).ok_or_else(|| ModelError::NoConvergence {
         what: "wings-level trim",
         detail: "singular Jacobian: a control or state has no effect on the accelerations (missing derivative?)".into(),
     })?;
@@ -109,6 +139,7 @@ pub fn trim_wings_level(
         Propulsion::Law(law) if law.input() == LawInput::Throttle => 0.5,
         Propulsion::Law(_) => 300.0,
     };
+    let held = held_surfaces(aircraft);
     let mut z = Z::new(0.05, 0.0, command0, 0.0, 0.0, 0.0);
     let mut r = residual(aircraft, &z, vt_mps, alt_m)?;
     let mut it = 0;
@@ -119,7 +150,7 @@ pub fn trim_wings_level(
                 detail: format!("residual {:.3e} after {it} Newton steps", r.amax()),
             });
         }
-        (z, r) = newton_step(aircraft, &z, &r, vt_mps, alt_m)?;
+        (z, r) = newton_step(aircraft, &z, &r, (vt_mps, alt_m), &held)?;
         it += 1;
     }
     check_solution(aircraft, &z)?;

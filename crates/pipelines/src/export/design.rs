@@ -409,6 +409,14 @@ pub fn design_for_aircraft(
             "--turbulence: the Dryden model is flown for the F-16 only; design in calm air"
         );
     }
+    let held = aircraft.held_surfaces();
+    if let Some(s) = spec.surfaces.iter().find(|s| held.contains(&crate::Named::name(**s))) {
+        crate::bail!(
+            "--surfaces {}: the model has no `{}` derivative, so an input on it carries no information (leave it out, or fit a model with it)",
+            crate::Named::name(*s),
+            crate::Named::name(*s)
+        );
+    }
     let Multisines { t_s, inputs, harmonics } = excitation(spec)?;
     use aeroident_models::aircraft::Aircraft;
     let tr = aircraft.trim_level(vt_mps, alt_m)?;

@@ -180,6 +180,15 @@ fn check_bootstrap_refits(refits: &Bound<'_, pyo3::types::PyInt>) -> PyResult<()
     })
 }
 
+/// The `aeroident` command line on `argv` (the first element the program's name), the
+/// installed console script's body (`aeroident._cli:main`): the same program as the Rust
+/// binary ([`aeroident::run_main`]), with the GIL released while it runs. Returns the exit
+/// code.
+#[pyfunction]
+fn cli_main(py: Python<'_>, argv: Vec<String>) -> u8 {
+    py.detach(move || aeroident::run_main(argv))
+}
+
 #[pymodule]
 fn _aeroident(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("AeroidentError", m.py().get_type::<AeroidentError>())?;
@@ -203,6 +212,7 @@ fn _aeroident(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("MAX_BOOTSTRAP_REFITS", aeroident_pipelines::replay::batch::MAX_BOOTSTRAP_REFITS)?;
     m.add_function(wrap_pyfunction!(check_runs, m)?)?;
     m.add_function(wrap_pyfunction!(check_bootstrap_refits, m)?)?;
+    m.add_function(wrap_pyfunction!(cli_main, m)?)?;
     record::register(m)?;
     batch::register(m)?;
     estimator::register(m)?;

@@ -3,6 +3,7 @@
 //! ```text
 //! aeroident export jsbsim --summary DIR/summary.json [--out FILE] [--v0-mps V0]
 //!                  [--elevator-property P] [--aileron-property P] [--rudder-property P]
+//!                  [--mapping M [--name NAME]]
 //! aeroident export ardupilot --summary S (--mapping M | --area-m2 A --span-m B --chord-m C
 //!                  --mass-kg M --ixx-kgm2 JX …) [--out FILE] [--aileron-throw-deg D …]
 //!                  [--sitl-mass-kg 2] [--alpha-stall-deg 27] [--mcoeff 50] [--drop-unrepresentable]
@@ -203,6 +204,15 @@ pub struct JsbsimArgs {
     /// JSBSim property of the rudder deflection, rad, > 0 trailing edge left.
     #[arg(long, default_value = "fcs/rudder-pos-rad")]
     pub rudder_property: String,
+    /// A mapping whose constants (mass, inertia, S, b, c̄, thrust line, v0), thrust law and
+    /// actuators complete the aircraft: writes a whole JSBSim `<fdm_config>` instead of the
+    /// `<aerodynamics>` fragment (its surfaces are then the file's own properties).
+    #[arg(long)]
+    pub mapping: Option<PathBuf>,
+    /// With `--mapping`: the aircraft's name (JSBSim loads `aircraft/NAME/NAME.xml`; default:
+    /// the `--out` file's stem, else `identified`).
+    #[arg(long)]
+    pub name: Option<String>,
 }
 
 /// Runs `aeroident export`.
@@ -433,9 +443,12 @@ fn jsbsim(a: JsbsimArgs) -> anyhow::Result<()> {
             aeroident_io::message::short(v)
         );
     }
-    check_out(a.out.as_deref(), &a.summary, None)?;
+    check_out(a.out.as_deref(), &a.summary, a.mapping.as_deref())?;
     let summary = read_summary(&a.summary)?;
     note_unfinished(&a.summary, &summary);
+    if let Some(mapping) = &a.mapping {
+        return jsbsim_aircraft(&a, mapping, &summary);
+    }
     let surfaces = SurfaceProperties {
         elevator: a.elevator_property,
         aileron: a.aileron_property,
@@ -460,6 +473,32 @@ fn jsbsim(a: JsbsimArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// `export jsbsim --mapping`: the complete aircraft of `summary` with the mapping's airframe
+/// and actuators ([`aeroident_pipelines::export::jsbsim_aircraft`]).
+fn jsbsim_aircraft(
+    a: &JsbsimArgs,
+    mapping: &Path,
+    summary: &aeroident_pipelines::export::jsbsim::SummaryParameters,
+) -> anyhow::Result<()> {
+    if a.v0_mps.is_some() {
+        anyhow::bail!("--v0-mps: with --mapping the reference speed is the mapping's `v0`");
+    }
+    let m = Mapping::from_path(mapping)?;
+    let airframe = aeroident_pipelines::airframe::airframe_from_mapping(&m)?;
+    let stem = a.out.as_deref().and_then(|p| p.file_stem()).and_then(|s| s.to_str());
+    let name = a.name.as_deref().or(stem).unwrap_or("identified");
+    let source = a.summary.display().to_string();
+    let xml = aeroident_pipelines::export::jsbsim_aircraft::aircraft_xml(
+        summary,
+        &source,
+        name,
+        &airframe,
+        &m.actuators,
+    )?;
+    let e = Exported { text: xml, warnings: Vec::new() };
+    write_exported(&a.summary, a.out.as_deref(), &e)
 }
 
 /// The largest `--v0-mps` taken: Mach 3 at altitude, beyond any aircraft a fit describes.

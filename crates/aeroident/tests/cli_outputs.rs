@@ -439,7 +439,9 @@ fn outputs_ardupilot_export_scales_to_sitls_mass_and_inertia_from_the_mapping() 
     close("c_m_deltae", 1.0 / 0.289 * 0.35);
     close("c_l_p", -0.45 / 0.17);
     close("c_n_deltaa", 0.0);
-    for needle in ["mean is written", "calibration range", "SITL's 20°", "SITL mass"] {
+    for needle in
+        ["mean is written", "calibration range", "SITL's 20°", "SITL mass", "SIM_SERVO_SPEED"]
+    {
         assert!(said.contains(needle), "{needle}: {said}");
     }
     let o = bin()

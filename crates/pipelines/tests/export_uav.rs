@@ -231,7 +231,7 @@ fn ardupilot_options(drop: bool) -> ArdupilotOptions {
         drop_unrepresentable: drop,
         mass: UAV_MASS,
         sitl_mass_kg: 2.0,
-        throw_notes: vec![],
+        notes: vec![],
     }
 }
 
@@ -521,6 +521,7 @@ fn gazebo_options(drop: bool) -> GazeboOptions {
         air_density_kgpm3: 1.2041,
         alpha_stall_rad: 1.8,
         drop_unrepresentable: drop,
+        notes: vec![],
     }
 }
 

@@ -327,7 +327,11 @@ fn throws(a: &ArdupilotArgs) -> anyhow::Result<(Throws, Vec<String>)> {
 
 fn ardupilot(a: ArdupilotArgs) -> anyhow::Result<()> {
     check_out(a.out.as_deref(), &a.summary, a.geometry.mapping.as_deref())?;
-    let (throws, throw_notes) = throws(&a)?;
+    let (throws, mut notes) = throws(&a)?;
+    notes.extend(servo_notes(
+        a.geometry.mapping.as_deref(),
+        "SITL's servo model is its own (SIM_SERVO_SPEED, the time for 60° of servo travel; 0 = none), not this lag",
+    )?);
     positive_at_most_deg("--alpha-stall-deg", a.alpha_stall_deg, MAX_STALL_DEG)?;
     let summary = read_summary(&a.summary)?;
     note_unfinished(&a.summary, &summary);
@@ -339,7 +343,7 @@ fn ardupilot(a: ArdupilotArgs) -> anyhow::Result<()> {
         drop_unrepresentable: a.geometry.drop_unrepresentable,
         mass: mass(&a.geometry, &a.mass)?,
         sitl_mass_kg: a.sitl_mass_kg,
-        throw_notes,
+        notes,
     };
     let out = ardupilot_json(&summary, &a.summary.display().to_string(), &options)?;
     write_exported(&a.summary, a.out.as_deref(), &out)
@@ -365,6 +369,10 @@ fn gazebo(a: GazeboArgs) -> anyhow::Result<()> {
         link_name: a.link_name,
         alpha_stall_rad: a.alpha_stall_deg.to_radians(),
         drop_unrepresentable: a.geometry.drop_unrepresentable,
+        notes: servo_notes(
+            a.geometry.mapping.as_deref(),
+            "Gazebo's joints follow their JointPositionController (its p_gain), not this servo",
+        )?,
     };
     let out = gazebo_plugin_sdf(&summary, &a.summary.display().to_string(), &options)?;
     write_exported(&a.summary, a.out.as_deref(), &out)
@@ -393,6 +401,24 @@ fn control_joints(
         .iter()
         .zip(shares)
         .map(|(joint, &share)| ControlJoint { surface, joint: joint.to_string(), direction, share })
+        .collect())
+}
+
+/// A note per actuator the mapping declares (the surface the derivatives were fitted
+/// through), with what the target does instead (`instead`): the target's file cannot hold it.
+fn servo_notes(mapping: Option<&Path>, instead: &str) -> anyhow::Result<Vec<String>> {
+    let Some(path) = mapping else { return Ok(Vec::new()) };
+    let m = Mapping::from_path(path)?;
+    Ok(m.actuators
+        .iter()
+        .map(|(ch, a)| {
+            format!(
+                "the mapping's `{}` actuator (τ {} s, rate limit {} rad/s) is not in the file: {instead}; `export jsbsim --mapping` carries it",
+                ch.key(),
+                aeroident_io::message::short(a.tau_s),
+                aeroident_io::message::short(a.rate_limit_rad_s)
+            )
+        })
         .collect())
 }
 

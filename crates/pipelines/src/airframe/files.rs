@@ -13,7 +13,7 @@ use std::path::Path;
 /// `b`, `cbar` (required), `Ixz`, `thrust_arm`, `thrust_incidence` (0 when absent), `v0`; the
 /// inertias scaled by `mass / inertia_reference_mass_kg` when that is given (constant radii of
 /// gyration, as the records are). Thrust: the `[thrust_model]` law when there is one, else
-/// the command is the thrust itself ([`Propulsion`]).
+/// the command is the thrust itself ([`Propulsion`]); the actuators of the commanded surfaces.
 ///
 /// # Errors
 /// A required constant that is absent or mapped to columns, naming the file and channel.
@@ -56,6 +56,7 @@ pub fn airframe_from_mapping(m: &Mapping) -> crate::error::Result<Airframe> {
         thrust_incidence_rad: constant(Channel::ThrustIncidence)?.unwrap_or(0.0),
         v0_mps: constant(Channel::V0)?,
         propulsion: m.thrust_model.map_or(Propulsion::Commanded, Propulsion::Law),
+        actuators: [Channel::De, Channel::Da, Channel::Dr].map(|c| m.actuators.get(&c).copied()),
     })
 }
 

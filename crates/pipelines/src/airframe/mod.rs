@@ -118,6 +118,10 @@ pub struct Airframe {
     pub v0_mps: Option<f64>,
     /// The engine.
     pub propulsion: Propulsion,
+    /// The surfaces' actuators (elevator, aileron, rudder), from the mapping's commanded
+    /// surfaces: the surface follows its command through it in `sim` ([`crate::sim::model_file`])
+    /// and in the exports that hold one; `None` = the surface is the command.
+    pub actuators: [Option<aeroident_io::mapping::Actuator>; 3],
 }
 
 /// An aircraft flying identified derivatives (module doc).

@@ -79,6 +79,7 @@ pub(crate) fn as_model_file(f: &F16, t: &F16Trim) -> ModelFileAircraft {
         thrust_incidence_rad: 0.0,
         v0_mps: None,
         propulsion: Propulsion::Commanded,
+        actuators: [None; 3],
     };
     ModelFileAircraft::new("f16-local", s, theta, airframe)
         .unwrap()

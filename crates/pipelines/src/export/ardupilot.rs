@@ -79,8 +79,9 @@ pub struct ArdupilotOptions {
     /// The mass SITL's plane divides its forces by, kg ([`SITL_MASS_KG`] for the default
     /// frame).
     pub sitl_mass_kg: f64,
-    /// Where throws not given came from ([`mapped_throw`]), noted in the file and printed.
-    pub throw_notes: Vec<String>,
+    /// What the options' files say that the file cannot (where throws not given came from,
+    /// [`mapped_throw`]; a servo SITL models its own way), noted in the file and printed.
+    pub notes: Vec<String>,
 }
 
 /// A surface's throw read from a mapping, and where it came from.
@@ -308,7 +309,7 @@ pub fn ardupilot_json(
         o.drop_unrepresentable,
     )?;
     warnings.extend(transform_notes(o));
-    warnings.extend(o.throw_notes.iter().cloned());
+    warnings.extend(o.notes.iter().cloned());
     let g = &o.geometry;
     let k = o.sitl_mass_kg / o.mass.mass_kg;
     let mut entries: Vec<(String, String)> = vec![

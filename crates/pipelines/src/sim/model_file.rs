@@ -12,7 +12,12 @@
 //!   `[trim]` (level only: `gamma_deg` must be 0), in still air: `[[wind]]` and
 //!   `[increments]` are refused (the airframe has no wind input; change a derivative in its
 //!   summary instead).
-//! * Commands = trim + Σ inputs of the channel; the surfaces follow them (no actuator model);
+//! * Commands = trim + Σ inputs of the channel; each surface follows its command through the
+//!   mapping's actuator of that surface (`actuator = { … }` on `de`, `da`, `dr`:
+//!   [`aeroident_io::mapping::Actuator::step`], the command held from each step over it, as
+//!   the replay's record stage models a commanded surface; between steps the surface ramps
+//!   to the next step's value), or is the command without one; the record then also has
+//!   `elevator_cmd_rad aileron_cmd_rad rudder_cmd_rad`;
 //!   `throttle` inputs act on the engine command, in its own unit (thrust N, throttle 0–1 or
 //!   propeller speed rad/s, [`crate::airframe::Propulsion`]).
 //! * RK4 with step `dt_s`; between two steps the controls move linearly from one step's
@@ -92,11 +97,43 @@ pub fn true_channel_names(a: &ModelFileAircraft) -> Vec<String> {
         ]
         .map(String::from),
     );
+    if actuated(a) {
+        v.extend(["elevator_cmd_rad", "aileron_cmd_rad", "rudder_cmd_rad"].map(String::from));
+    }
     v
 }
 
-/// One row of [`true_channel_names`] at state `x` under controls `u`.
-fn true_row(x: &AirframeState, u: &ControlVector, o: &AirframeOutputs) -> Vec<f64> {
+/// Whether any surface of `a` has an actuator (the record then has the commands too).
+fn actuated(a: &ModelFileAircraft) -> bool {
+    a.airframe().actuators.iter().any(Option::is_some)
+}
+
+/// The controls one step `dt` after surfaces `u` under commands `cmd` (held over the step,
+/// the actuator's convention: [`aeroident_io::mapping::Actuator::step`]), the engine and
+/// the surfaces without an actuator at the next step's commands `cmd1`.
+fn next_controls(
+    a: &ModelFileAircraft,
+    u: &ControlVector,
+    (cmd, cmd1): (&ControlVector, &ControlVector),
+    dt: f64,
+) -> ControlVector {
+    let mut next = *cmd1;
+    for (i, act) in a.airframe().actuators.iter().enumerate() {
+        if let Some(act) = act {
+            next[1 + i] = act.step(u[1 + i], cmd[1 + i], dt);
+        }
+    }
+    next
+}
+
+/// One row of [`true_channel_names`] at state `x` under controls `u` (the surfaces), with the
+/// surface commands `cmd` when the aircraft has actuators.
+fn true_row(
+    x: &AirframeState,
+    u: &ControlVector,
+    o: &AirframeOutputs,
+    cmd: Option<&ControlVector>,
+) -> Vec<f64> {
     let mut v: Vec<f64> = x.iter().copied().collect();
     v.extend_from_slice(u.as_slice());
     v.extend_from_slice(&[
@@ -112,6 +149,9 @@ fn true_row(x: &AirframeState, u: &ControlVector, o: &AirframeOutputs) -> Vec<f6
         o.accel_mps2[1],
         o.accel_mps2[2],
     ]);
+    if let Some(c) = cmd {
+        v.extend_from_slice(&c.as_slice()[1..4]);
+    }
     v
 }
 
@@ -143,19 +183,22 @@ pub fn run(
     // Each step's commands are evaluated once, at the step's own time k·dt: the ramp towards
     // the next step must end on the value that step records (t + dt may round to the other
     // side of an input's edge).
-    let mut u = commands(&t0.controls, &inputs, 0.0);
+    let mut cmd = commands(&t0.controls, &inputs, 0.0);
+    let mut u = cmd;
+    let with_cmd = actuated(aircraft);
     for k in 0..=n_steps {
         let t = k as f64 * dt;
         let o = aircraft
             .outputs(t, &x, &u)
             .with_context(|| format!("model outputs at t = {t:.4} s"))?;
-        table.push_row(t, &true_row(&x, &u, &o), &mut sensors);
+        table.push_row(t, &true_row(&x, &u, &o, with_cmd.then_some(&cmd)), &mut sensors);
         if k < n_steps {
-            let u1 = commands(&t0.controls, &inputs, (k + 1) as f64 * dt);
+            let cmd1 = commands(&t0.controls, &inputs, (k + 1) as f64 * dt);
+            let u1 = next_controls(aircraft, &u, (&cmd, &cmd1), dt);
             let between = |s: f64| u + (u1 - u) * ((s - t) / dt);
             x = rk4_step_varying(aircraft, t, &x, between, dt)
                 .with_context(|| format!("RK4 step at t = {t:.4} s"))?;
-            u = u1;
+            (u, cmd) = (u1, cmd1);
         }
     }
     let trim = crate::airframe::handle::plain_trim(&t0);
@@ -310,6 +353,48 @@ mod tests {
     fn aircraft() -> ModelFileAircraft {
         let (f, t) = f16_trim();
         as_model_file(&f, &t)
+    }
+
+    /// An elevator actuator (τ 0.05 s, no limit reached) in the airframe: the record has the
+    /// command beside the surface, and the surface follows a held command step as the
+    /// continuous first-order lag `δ = δ0 + A (1 − e^(−t/τ))` at every sample (the discrete
+    /// step is exact for a held command); the aircraft responds to the lagged surface (its
+    /// pitch rate 0.05 s after the step is below the ideal surface's).
+    #[test]
+    fn analytic_a_surface_follows_its_command_through_the_actuator() {
+        use aeroident_io::mapping::Actuator;
+        let ideal = aircraft();
+        let mut airframe = *ideal.airframe();
+        let lag =
+            Actuator { tau_s: 0.05, rate_limit_rad_s: 10.0, position_limits_rad: (-0.5, 0.5) };
+        airframe.actuators[0] = Some(lag);
+        let lagged = ModelFileAircraft::new(
+            "f16-local",
+            ideal.structure(),
+            ideal.theta().to_vec(),
+            airframe,
+        )
+        .unwrap()
+        .with_atmosphere(crate::airframe::Atmosphere::Textbook(
+            f16_trim().0.data().atmosphere.clone(),
+        ));
+        let sc = scenario("", "", ELEVATOR);
+        let (r, i) =
+            (run(&lagged, &sc, Path::new(".")).unwrap(), run(&ideal, &sc, Path::new(".")).unwrap());
+        let col = |run: &AircraftSimRun, n: &str| run.table.column(n).unwrap().to_vec();
+        let (cmd, de) = (col(&r, "elevator_cmd_rad"), col(&r, "elevator_rad"));
+        let k0 = cmd.iter().position(|c| *c != cmd[0]).unwrap();
+        let step = cmd[k0] - cmd[0];
+        for k in k0..k0 + 40 {
+            let want = cmd[0] + step * (1.0 - (-((k - k0) as f64) * 0.01 / 0.05).exp());
+            assert!((de[k] - want).abs() < 1e-12 * step.abs(), "sample {k}: {} vs {want}", de[k]);
+        }
+        assert!(
+            i.table.column("elevator_cmd_rad").is_none(),
+            "an ideal aircraft records no command"
+        );
+        let (q_lag, q_ideal) = (col(&r, "q_rad_s")[k0 + 5], col(&i, "q_rad_s")[k0 + 5]);
+        assert!(q_lag.abs() < q_ideal.abs(), "{q_lag} vs {q_ideal}");
     }
 
     /// Level trim with no input: the record holds the trim, the accelerometer reads gravity

@@ -316,7 +316,7 @@ fn options(sitl_mass_kg: f64) -> ArdupilotOptions {
         drop_unrepresentable: false,
         mass: MASS,
         sitl_mass_kg,
-        throw_notes: vec![],
+        notes: vec![],
     }
 }
 
@@ -372,6 +372,7 @@ fn gazebo_plugin_flies_the_identified_doublets_on_the_aircrafts_rigid_body() {
         air_density_kgpm3: sim.column("rho_kgpm3").unwrap()[0],
         alpha_stall_rad: std::f64::consts::FRAC_PI_2,
         drop_unrepresentable: false,
+        notes: vec![],
     };
     let out = gazebo_plugin_sdf(&summary("gz-flight", &params), "gz.json", &o).unwrap();
     let sdf = Sdf::parse(&out.text);

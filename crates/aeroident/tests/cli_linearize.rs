@@ -138,5 +138,31 @@ fn a_partial_test_card_linearizes_with_its_rudder_held_and_an_absurd_roll_mode_f
         .unwrap();
     let err = String::from_utf8_lossy(&design.stderr);
     assert!(!design.status.success() && err.contains("--surfaces dr"), "{err}");
+    // At 25 Hz the −105 1/s roll mode is beyond what the design's RK4 resolves (|λ| dt 4.2):
+    // refused, naming the mode, the least rate and the derivative behind it.
+    let design = |rate: &str| {
+        Command::new(env!("CARGO_BIN_EXE_aeroident"))
+            .args(["design", "--aircraft", m, "--map", c, "--vt-mps", "18", "--alt-m", "0"])
+            .args([
+                "--surfaces",
+                "de,da",
+                "--rate-hz",
+                rate,
+                "--out",
+                d.join("des").to_str().unwrap(),
+            ])
+            .output()
+            .unwrap()
+    };
+    let out = design("25");
+    let err = String::from_utf8_lossy(&out.stderr);
+    for needle in ["--rate-hz 25", "roll mode", "Hz or more", "Cl_p = -3.3"] {
+        assert!(!out.status.success() && err.contains(needle), "{needle}: {err}");
+    }
+    // With a conventional roll damping the card designs at ArduPilot's Lua rates.
+    let text = std::fs::read_to_string(m).unwrap().replace("value = -3.3", "value = -0.45");
+    std::fs::write(m, text).unwrap();
+    let out = design("20");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let _ = std::fs::remove_dir_all(&d);
 }

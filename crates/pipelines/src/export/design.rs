@@ -418,6 +418,7 @@ pub fn design_for_aircraft(
         );
     }
     let Multisines { t_s, inputs, harmonics } = excitation(spec)?;
+    check_resolvable(aircraft, (vt_mps, alt_m), spec.rate_hz)?;
     use aeroident_models::aircraft::Aircraft;
     let tr = aircraft.trim_level(vt_mps, alt_m)?;
     let condition = aircraft.flight_condition(tr.state.as_slice(), tr.controls.as_slice())?;
@@ -426,6 +427,43 @@ pub fn design_for_aircraft(
     let crb = predict_crb(&plan)?;
     let inputs = spec.surfaces.iter().copied().zip(inputs).collect();
     Ok(Design { t_s, inputs, harmonics, crb, structure, plan })
+}
+
+/// RK4's stability bound on the negative real axis is |λ| dt ≈ 2.785; a margin below it.
+const RK4_STABLE_LAMBDA_DT: f64 = 2.5;
+
+/// Refuses a rate the aircraft's fastest mode outruns: the design simulates the flight at
+/// the input rate (as output error fits the record), and RK4 diverges once |λ| dt passes its
+/// bound. Names the mode, the least rate that resolves it, and the mode flags
+/// ([`crate::airframe::modes`]) that usually explain a mode that fast.
+///
+/// # Errors
+/// The trim or linearization's, or a mode with |λ| / rate above [`RK4_STABLE_LAMBDA_DT`].
+fn check_resolvable(
+    aircraft: &crate::airframe::ModelFileAircraft,
+    (vt_mps, alt_m): (f64, f64),
+    rate_hz: f64,
+) -> crate::error::Result<()> {
+    let l = aeroident_models::aircraft::linearize_level(aircraft, vt_mps, alt_m)?;
+    let Some(fastest) = l.modes.iter().max_by(|a, b| a.wn_rad_s.total_cmp(&b.wn_rad_s)) else {
+        return Ok(());
+    };
+    if fastest.wn_rad_s / rate_hz <= RK4_STABLE_LAMBDA_DT {
+        return Ok(());
+    }
+    let flags = crate::airframe::modes::mode_flags(aircraft, l.trim.state.as_slice(), &l.modes);
+    crate::bail!(
+        "--rate-hz {rate_hz}: the {} mode (|λ| {:.1} 1/s) is faster than a simulation at that rate resolves (|λ| dt {:.1} > {RK4_STABLE_LAMBDA_DT}); design at {:.0} Hz or more{}",
+        fastest.name.as_str(),
+        fastest.wn_rad_s,
+        fastest.wn_rad_s / rate_hz,
+        (fastest.wn_rad_s / RK4_STABLE_LAMBDA_DT).ceil(),
+        if flags.is_empty() {
+            String::new()
+        } else {
+            format!(", or check the model: {}", flags.join("; "))
+        }
+    )
 }
 
 /// The plan of `spec`'s `inputs` (one per surface of `spec`, rad) for `structure` with values

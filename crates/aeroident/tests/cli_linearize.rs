@@ -166,3 +166,99 @@ fn a_partial_test_card_linearizes_with_its_rudder_held_and_an_absurd_roll_mode_f
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// `--aircraft six-axis` (the preset `replay --model six-axis` fits) with a replay's summary:
+/// the aircraft flies the summary's values in the preset's structure, no model file needed.
+/// Its linear model equals that of the same values in a model file of the same terms
+/// (element by element), and a summary of another model is refused by name.
+#[test]
+fn the_six_axis_preset_flies_a_summary_without_a_model_file() {
+    let d = std::env::temp_dir().join(format!("aeroident-six-axis-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    let values = [
+        ("CY_beta", -0.3),
+        ("CY_p", -0.05),
+        ("CY_r", 0.2),
+        ("CY_dr", 0.15),
+        ("CL_0", 0.3),
+        ("CL_alpha", 4.8),
+        ("CL_q", 6.0),
+        ("CL_de", 0.35),
+        ("CD_0", 0.03),
+        ("CD_alpha", 0.1),
+        ("Cl_beta", -0.08),
+        ("Cl_p", -0.45),
+        ("Cl_r", 0.1),
+        ("Cl_da", -0.25),
+        ("Cm_0", 0.02),
+        ("Cm_alpha", -0.6),
+        ("Cm_q", -9.0),
+        ("Cm_de", -1.0),
+        ("Cn_beta", 0.06),
+        ("Cn_p", -0.03),
+        ("Cn_r", -0.08),
+        ("Cn_dr", -0.05),
+    ];
+    let preset = aeroident_io::ModelSpec::preset("six-axis").unwrap();
+    let names: Vec<&str> = preset.structure.names().collect();
+    let value = |n: &str| values.iter().find(|(m, _)| *m == n).map_or(0.0, |(_, v)| *v);
+    let params: Vec<_> = names
+        .iter()
+        .map(|n| serde_json::json!({"name": n, "estimate": value(n), "std_error": 0.01}))
+        .collect();
+    let summary = serde_json::json!({"estimator": "oe", "model": "six-axis", "status": "converged", "parameters": params});
+    std::fs::write(d.join("summary.json"), summary.to_string()).unwrap();
+    let mut model = String::from("description = \"same terms\"\n[coefficients]\n");
+    for c in ["CL", "CD", "CY", "Cl", "Cm", "Cn"] {
+        let terms: Vec<String> = names
+            .iter()
+            .filter_map(|n| n.strip_prefix(&format!("{c}_")).map(|t| format!("\"{t}\"")))
+            .collect();
+        model.push_str(&format!("{c} = [{}]\n", terms.join(", ")));
+    }
+    std::fs::write(d.join("same.toml"), model).unwrap();
+    std::fs::write(d.join("c.toml"), "description = \"c\"\n[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"v\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\nqbar = { column = \"q\", unit = \"Pa\" }\nmass = { value = 3.3, unit = \"kg\" }\nIxx = { value = 0.17, unit = \"kg*m2\" }\nIyy = { value = 0.289, unit = \"kg*m2\" }\nIzz = { value = 0.443, unit = \"kg*m2\" }\nS = { value = 0.384, unit = \"m2\" }\nb = { value = 1.6, unit = \"m\" }\ncbar = { value = 0.24, unit = \"m\" }\n").unwrap();
+    let s = |p: &str| d.join(p).to_str().unwrap().to_string();
+    let lin = |aircraft: &str| {
+        json(&[
+            "linearize",
+            "--aircraft",
+            aircraft,
+            "--summary",
+            &s("summary.json"),
+            "--map",
+            &s("c.toml"),
+            "--vt-mps",
+            "18",
+            "--alt-m",
+            "100",
+            "--json",
+        ])
+    };
+    let (preset_a, file_a) = (matrix(&lin("six-axis")["a"]), matrix(&lin(&s("same.toml"))["a"]));
+    assert_eq!(preset_a, file_a);
+    let other = serde_json::json!({"estimator": "oe", "model": "x", "parameters": [{"name": "Cm_alpha2", "estimate": -1.0, "std_error": 0.1}]});
+    std::fs::write(d.join("other.json"), other.to_string()).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_aeroident"))
+        .args([
+            "linearize",
+            "--aircraft",
+            "six-axis",
+            "--summary",
+            &s("other.json"),
+            "--map",
+            &s("c.toml"),
+            "--vt-mps",
+            "18",
+            "--alt-m",
+            "100",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("Cm_alpha2") && err.contains("six-axis"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}

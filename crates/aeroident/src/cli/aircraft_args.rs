@@ -7,8 +7,9 @@ use std::path::{Path, PathBuf};
 /// The aircraft options (flattened into a command's arguments).
 #[derive(Debug, Clone, clap::Args)]
 pub struct AircraftArgs {
-    /// `f16`, or a model file (`models/*.toml`) whose derivatives the aircraft flies
-    /// (docs/aircraft.md).
+    /// `f16`, or a model file (`models/*.toml`) whose derivatives the aircraft flies, or a
+    /// model preset's name (`six-axis`, as `replay --model`) with `--summary` giving the
+    /// values (docs/aircraft.md).
     #[arg(long, default_value = "f16")]
     pub aircraft: String,
     /// Model file: a replay's `summary.json` giving the parameter values (default: the model

@@ -99,7 +99,8 @@ pub fn parameter_values(
     spec.structure.params().map(value_of).collect()
 }
 
-/// The aircraft of model file `model`, summary `summary` (optional) and mapping `mapping`
+/// The aircraft of model file `model` (or a preset's name, [`ModelSpec::preset`]), summary
+/// `summary` (optional) and mapping `mapping`
 /// (see [`airframe_from_mapping`], [`parameter_values`]), in the standard atmosphere.
 ///
 /// # Errors
@@ -111,7 +112,12 @@ pub fn load(
     mapping: &Path,
 ) -> crate::error::Result<ModelFileAircraft> {
     let model_file = model.display().to_string();
-    let spec = ModelSpec::from_path(model).map_err(|e| crate::err!("{e}"))?;
+    // A preset's name (`six-axis`, as `replay --model` takes) where no such file exists: the
+    // values then come from the summary.
+    let spec = match ModelSpec::preset(&model_file) {
+        Some(preset) if !model.exists() => preset,
+        _ => ModelSpec::from_path(model).map_err(|e| crate::err!("{e}"))?,
+    };
     let summary_read = summary.map(read_summary).transpose()?;
     let summary_file = summary.map(|p| p.display().to_string()).unwrap_or_default();
     let theta = parameter_values(

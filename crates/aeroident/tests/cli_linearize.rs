@@ -170,7 +170,8 @@ fn a_partial_test_card_linearizes_with_its_rudder_held_and_an_absurd_roll_mode_f
 /// `--aircraft six-axis` (the preset `replay --model six-axis` fits) with a replay's summary:
 /// the aircraft flies the summary's values in the preset's structure, no model file needed.
 /// Its linear model equals that of the same values in a model file of the same terms
-/// (element by element), and a summary of another model is refused by name.
+/// (element by element); a partial card's missing values fly at the priors, said by name;
+/// a summary of another model is refused by name.
 #[test]
 fn the_six_axis_preset_flies_a_summary_without_a_model_file() {
     let d = std::env::temp_dir().join(format!("aeroident-six-axis-{}", std::process::id()));
@@ -237,6 +238,71 @@ fn the_six_axis_preset_flies_a_summary_without_a_model_file() {
     };
     let (preset_a, file_a) = (matrix(&lin("six-axis")["a"]), matrix(&lin(&s("same.toml"))["a"]));
     assert_eq!(preset_a, file_a);
+    // A partial card: the drag not identified (no thrust), the roll axis not flown. Those fly
+    // at the model's prior, said per parameter, and the aircraft is the one whose summary
+    // holds the priors' values.
+    let prior = |n: &str| {
+        let p = aeroident_estimators::vocabulary::Param::from_name(n).unwrap();
+        aeroident_estimators::prior::generic_prior(p).value
+    };
+    let partial: Vec<_> = names
+        .iter()
+        .filter(|n| !n.starts_with("Cl_"))
+        .map(|n| {
+            let v = if n.starts_with("CD_") { None } else { Some(value(n)) };
+            serde_json::json!({"name": n, "estimate": v, "std_error": 0.01})
+        })
+        .collect();
+    let filled: Vec<_> = names
+        .iter()
+        .map(|n| {
+            let v = if n.starts_with("CD_") || n.starts_with("Cl_") { prior(n) } else { value(n) };
+            serde_json::json!({"name": n, "estimate": v, "std_error": 0.01})
+        })
+        .collect();
+    for (file, params) in [("partial.json", partial), ("filled.json", filled)] {
+        let j = serde_json::json!({"estimator": "oe", "model": "six-axis", "parameters": params});
+        std::fs::write(d.join(file), j.to_string()).unwrap();
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_aeroident"))
+        .args([
+            "linearize",
+            "--aircraft",
+            "six-axis",
+            "--summary",
+            &s("partial.json"),
+            "--map",
+            &s("c.toml"),
+            "--vt-mps",
+            "18",
+            "--alt-m",
+            "100",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    for needle in ["`CD_0` is not identified (null)", "`Cl_p` is absent", "model's prior"] {
+        assert!(out.status.success() && err.contains(needle), "{needle}: {err}");
+    }
+    let partial_a = matrix(&serde_json::from_slice::<Value>(&out.stdout).unwrap()["a"]);
+    let filled_a = matrix(
+        &json(&[
+            "linearize",
+            "--aircraft",
+            "six-axis",
+            "--summary",
+            &s("filled.json"),
+            "--map",
+            &s("c.toml"),
+            "--vt-mps",
+            "18",
+            "--alt-m",
+            "100",
+            "--json",
+        ])["a"],
+    );
+    assert_eq!(partial_a, filled_a);
     let other = serde_json::json!({"estimator": "oe", "model": "x", "parameters": [{"name": "Cm_alpha2", "estimate": -1.0, "std_error": 0.1}]});
     std::fs::write(d.join("other.json"), other.to_string()).unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_aeroident"))

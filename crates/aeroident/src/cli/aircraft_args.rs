@@ -90,9 +90,9 @@ pub fn warn_unfinished(summary: Option<&Path>) -> anyhow::Result<()> {
 }
 
 /// Says which surfaces a model-file aircraft holds at 0 (its model has no derivative of
-/// them), if any.
+/// them) and which values it flies at the model's prior, if any.
 pub fn note_held_surfaces(aircraft: &aeroident_pipelines::airframe::ModelFileAircraft) {
-    if let Some(note) = aircraft.held_surfaces_note() {
+    for note in aircraft.notes().iter().cloned().chain(aircraft.held_surfaces_note()) {
         aeroident_report::note!("note: {note}");
     }
 }

@@ -60,18 +60,21 @@ pub fn airframe_from_mapping(m: &Mapping) -> crate::error::Result<Airframe> {
     })
 }
 
-/// The value of every parameter of `spec`'s structure, in structure order: the summary's
-/// estimate when a summary is given (`summary_file` names it), else the model file's
-/// `[reference.<param>]` value.
+/// The value of every parameter of `spec`'s structure, in structure order, with a note per
+/// value not identified: the summary's estimate when a summary is given (`summary_file` names
+/// it), else the model file's `[reference.<param>]` value; a parameter `null` in the summary
+/// or absent from it (a partial test card: no thrust, so no drag; one axis flown) is flown at
+/// the model's stated prior ([`ModelSpec::priors`]: the model file's `[prior.<param>]` or the
+/// conventional aircraft's), and the note says so.
 ///
 /// # Errors
-/// A parameter with no value (absent from the summary, `null` there, or without a reference),
-/// or a summary parameter the model does not have; each naming the file and parameter.
+/// A parameter without a reference when no summary is given, or a summary parameter the
+/// model does not have; each naming the file and parameter.
 pub fn parameter_values(
     spec: &ModelSpec,
     model_file: &str,
     summary: Option<(&SummaryParameters, &str)>,
-) -> crate::error::Result<Vec<f64>> {
+) -> crate::error::Result<(Vec<f64>, Vec<String>)> {
     if let Some((s, file)) = summary
         && let Some(extra) = s.parameters.iter().find(|p| !spec.structure.contains(p.param))
     {
@@ -80,23 +83,32 @@ pub fn parameter_values(
             extra.param.name()
         );
     }
-    let value_of = |p: aeroident_estimators::vocabulary::Param| {
-        match summary {
-        Some((s, file)) => match s.parameters.iter().find(|i| i.param == p) {
-            Some(i) => i.value.ok_or_else(|| {
-                crate::err!("{file}: parameter `{}` was not identified (null): the aircraft cannot fly without it (identify it, e.g. with thrust mapped for a drag term, or fit a model without that term)", p.name())
-            }),
-            None => Err(crate::err!("{file}: no parameter `{}` of {model_file}", p.name())),
-        },
-        None => spec.references.iter().find(|r| r.param == p).map(|r| r.value).ok_or_else(|| {
+    let mut notes = Vec::new();
+    let mut values = Vec::new();
+    for (i, p) in spec.structure.params().enumerate() {
+        let v = match summary {
+            Some((s, file)) => match s.parameters.iter().find(|q| q.param == p) {
+                Some(q) if q.value.is_some() => q.value,
+                found => {
+                    let prior = spec.priors.prior[i].value;
+                    let why = if found.is_some() { "not identified (null)" } else { "absent" };
+                    notes.push(format!(
+                        "`{}` is {why} in {file}: flown at the model's prior {prior}",
+                        p.name()
+                    ));
+                    Some(prior)
+                }
+            },
+            None => spec.references.iter().find(|r| r.param == p).map(|r| r.value),
+        };
+        values.push(v.ok_or_else(|| {
             crate::err!(
                 "{model_file}: no [reference.{}] value (give a --summary with its estimate)",
                 p.name()
             )
-        }),
+        })?);
     }
-    };
-    spec.structure.params().map(value_of).collect()
+    Ok((values, notes))
 }
 
 /// The aircraft of model file `model` (or a preset's name, [`ModelSpec::preset`]), summary
@@ -120,7 +132,7 @@ pub fn load(
     };
     let summary_read = summary.map(read_summary).transpose()?;
     let summary_file = summary.map(|p| p.display().to_string()).unwrap_or_default();
-    let theta = parameter_values(
+    let (theta, notes) = parameter_values(
         &spec,
         &model_file,
         summary_read.as_ref().map(|s| (s, summary_file.as_str())),
@@ -128,5 +140,6 @@ pub fn load(
     let map = Mapping::from_path(mapping).map_err(|e| crate::err!("{e}"))?;
     let airframe = airframe_from_mapping(&map)?;
     ModelFileAircraft::new(&spec.name, spec.structure, theta, airframe)
+        .map(|a| a.with_notes(notes))
         .map_err(|e| crate::err!("{model_file} with {}: {e}", map.file))
 }

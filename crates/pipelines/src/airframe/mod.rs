@@ -128,6 +128,8 @@ pub struct Airframe {
 #[derive(Debug, Clone)]
 pub struct ModelFileAircraft {
     name: String,
+    /// What the values' sources left out and how it was filled ([`files::parameter_values`]).
+    notes: Vec<String>,
     model: FlightModel,
     theta: Vec<f64>,
     airframe: Airframe,
@@ -181,13 +183,26 @@ impl ModelFileAircraft {
             }
         }
         check_airframe(&airframe, &structure)?;
-        Ok(Self { name: name.to_string(), model, theta, airframe, atmosphere: Atmosphere::Isa })
+        let atmosphere = Atmosphere::Isa;
+        Ok(Self { name: name.to_string(), notes: Vec::new(), model, theta, airframe, atmosphere })
     }
 
     /// The same aircraft in `atmosphere`.
     pub fn with_atmosphere(mut self, atmosphere: Atmosphere) -> Self {
         self.atmosphere = atmosphere;
         self
+    }
+
+    /// The same aircraft with `notes` on how its values were filled (each printed by the
+    /// faces beside the held surfaces, [`Self::held_surfaces_note`]).
+    pub fn with_notes(mut self, notes: Vec<String>) -> Self {
+        self.notes = notes;
+        self
+    }
+
+    /// The notes of [`Self::with_notes`].
+    pub fn notes(&self) -> &[String] {
+        &self.notes
     }
 
     /// The surfaces (`de`, `da`, `dr`) the model has no derivative of: trimmed and flown held

@@ -99,127 +99,23 @@ fn exported_fragment_loads_into_jsbsim_and_evaluates_our_derivatives() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// An aircraft flown: its model's values, its constants (mass kg; Ixx, Iyy, Izz, Ixz kg·m²;
-/// S m², b m, c̄ m) and its trim (m/s, m).
-struct Plane {
-    values: &'static [(&'static str, f64)],
-    constants: [f64; 8],
-    trim: (f64, f64),
-}
-
-/// A 3.3-kg UAV's six-axis model (uav_oat's mass, inertia and geometry), the drag an exact
-/// polar.
-const UAV: Plane = Plane {
-    values: &[
-        ("CL_0", 0.3),
-        ("CL_alpha", 4.8),
-        ("CL_q", 6.0),
-        ("CL_de", 0.35),
-        ("CD_0", 0.03),
-        ("CD_alpha", 2.0 * 0.3 * 0.9 / 4.8),
-        ("CD_alpha2", 0.9),
-        ("CY_beta", -0.3),
-        ("CY_p", -0.05),
-        ("CY_r", 0.2),
-        ("CY_dr", 0.15),
-        ("Cl_beta", -0.08),
-        ("Cl_p", -0.45),
-        ("Cl_r", 0.1),
-        ("Cl_da", -0.25),
-        ("Cl_dr", 0.005),
-        ("Cm_0", 0.02),
-        ("Cm_alpha", -0.6),
-        ("Cm_q", -9.0),
-        ("Cm_de", -1.0),
-        ("Cn_beta", 0.06),
-        ("Cn_p", -0.03),
-        ("Cn_r", -0.08),
-        ("Cn_da", 0.004),
-        ("Cn_dr", -0.05),
-    ],
-    constants: [3.3, 0.17, 0.289, 0.443, 0.019, 0.384, 1.6, 0.24],
-    trim: (18.0, 100.0),
-};
-
-/// The JSBSim c172x's XML coefficients (aeroident's aileron sign), mass and inertia
-/// (77.08 slug; ixx 2095.7, iyy 1505.0, izz 3150.4, ixz 13.55 slug·ft², JSBSim's element),
-/// geometry (174 ft², 36 ft, 4.9 ft), CL_alpha the wing-body slope, a drag polar; 55 m/s,
-/// 1524 m.
-const C172X: Plane = Plane {
-    values: &[
-        ("CL_0", 0.25),
-        ("CL_alpha", 5.33),
-        ("CL_q", 3.9),
-        ("CL_de", 0.347),
-        ("CD_0", 0.027),
-        ("CD_alpha", 2.0 * 0.25 * 0.3 / 5.33),
-        ("CD_alpha2", 0.3),
-        ("CY_beta", -0.309),
-        ("CY_p", -0.037),
-        ("CY_r", 0.21),
-        ("CY_da", 0.05),
-        ("CY_dr", 0.098),
-        ("Cl_beta", -0.0891),
-        ("Cl_p", -0.47),
-        ("Cl_r", 0.0972),
-        ("Cl_da", -0.23),
-        ("Cl_dr", 0.0147),
-        ("Cm_0", 0.06),
-        ("Cm_alpha", -1.8),
-        ("Cm_q", -12.4),
-        ("Cm_de", -1.28),
-        ("Cn_beta", 0.065),
-        ("Cn_p", -0.03),
-        ("Cn_r", -0.099),
-        ("Cn_da", -0.0053),
-        ("Cn_dr", -0.043),
-    ],
-    constants: [1124.9, 2841.4, 2040.5, 4271.4, -18.4, 16.165, 10.973, 1.4935],
-    trim: (55.0, 1524.0),
-};
+#[path = "../../pipelines/tests/export_uav/planes.rs"]
+mod planes;
+use planes::{C172X, Plane, UAV, mapping_toml, model_toml, scenario_toml};
 
 /// `plane`'s model file, mapping (its constants, and an elevator actuator line `de_line`),
 /// doublet scenario and summary of the same values, in `d`.
 fn write_plane(d: &std::path::Path, plane: &Plane, de_line: &str) {
     std::fs::create_dir_all(d).unwrap();
-    let mut model = String::from("description = \"test aircraft\"\n[coefficients]\n");
-    for c in ["CL", "CD", "CY", "Cl", "Cm", "Cn"] {
-        let terms: Vec<String> = plane
-            .values
-            .iter()
-            .filter_map(|(n, _)| n.strip_prefix(&format!("{c}_")).map(|t| format!("\"{t}\"")))
-            .collect();
-        model.push_str(&format!("{c} = [{}]\n", terms.join(", ")));
-    }
-    for (n, v) in plane.values {
-        model.push_str(&format!("[reference.{n}]\nvalue = {v}\nsource = \"test\"\n"));
-    }
-    let [m, ixx, iyy, izz, ixz, area, span, chord] = plane.constants;
-    let map = format!(
-        "description = \"test\"\n[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = {{ column = \"v\", unit = \"m/s\" }}\nalpha = {{ column = \"a\", unit = \"rad\" }}\nqbar = {{ column = \"qbar\", unit = \"Pa\" }}\n{de_line}mass = {{ value = {m}, unit = \"kg\" }}\nIxx = {{ value = {ixx}, unit = \"kg*m2\" }}\nIyy = {{ value = {iyy}, unit = \"kg*m2\" }}\nIzz = {{ value = {izz}, unit = \"kg*m2\" }}\nIxz = {{ value = {ixz}, unit = \"kg*m2\" }}\nS = {{ value = {area}, unit = \"m2\" }}\nb = {{ value = {span}, unit = \"m\" }}\ncbar = {{ value = {chord}, unit = \"m\" }}\n"
-    );
-    let doublet = |ch: &str, deg: f64, t0: f64| {
-        format!(
-            "[[input]]\nchannel = \"{ch}\"\nkind = \"doublet\"\namplitude_deg = {deg}\nstart_s = {t0}\npulse_width_s = 0.4\n"
-        )
-    };
-    let scenario = format!(
-        "kind = \"sim\"\n[trim]\nvt_mps = {}\nalt_m = {}\n[run]\nduration_s = 9.0\ndt_s = 0.005\n{}{}{}",
-        plane.trim.0,
-        plane.trim.1,
-        doublet("elevator", 2.0, 0.5),
-        doublet("aileron", 3.0, 3.5),
-        doublet("rudder", 4.0, 6.5)
-    );
     let params: Vec<_> = plane
         .values
         .iter()
         .map(|(n, v)| serde_json::json!({"name": n, "estimate": v, "std_error": 0.01}))
         .collect();
     let summary = serde_json::json!({"estimator": "oe", "model": "test", "status": "converged", "parameters": params});
-    std::fs::write(d.join("model.toml"), model).unwrap();
-    std::fs::write(d.join("map.toml"), map).unwrap();
-    std::fs::write(d.join("scenario.toml"), scenario).unwrap();
+    std::fs::write(d.join("model.toml"), model_toml(plane.values)).unwrap();
+    std::fs::write(d.join("map.toml"), mapping_toml(plane, de_line)).unwrap();
+    std::fs::write(d.join("scenario.toml"), scenario_toml(plane)).unwrap();
     std::fs::write(d.join("summary.json"), summary.to_string()).unwrap();
 }
 
@@ -263,6 +159,32 @@ fn misses(sim: &std::path::Path, jsb: &std::path::Path) -> Vec<(String, f64)> {
         .collect()
 }
 
+/// `plane` (with the elevator line `de_line`) flown by `sim` in `d`, exported as the complete
+/// aircraft `name` under `d/root`; returns the exported file.
+fn sim_and_export(d: &std::path::Path, plane: &Plane, de_line: &str, name: &str) -> PathBuf {
+    write_plane(d, plane, de_line);
+    let sim = ["sim", "scenario.toml", "--aircraft", "model.toml", "--map", "map.toml"];
+    cli(d, &[&sim[..], &["--out", "sim"]].concat());
+    std::fs::create_dir_all(d.join(format!("root/aircraft/{name}"))).unwrap();
+    let xml = d.join(format!("root/aircraft/{name}/{name}.xml"));
+    let export = ["export", "jsbsim", "--summary", "summary.json", "--mapping", "map.toml"];
+    cli(d, &[&export[..], &["--out", xml.to_str().unwrap()]].concat());
+    xml
+}
+
+/// JSBSim (`py`) flying aircraft `name` of `d/root` through `d/sim`'s record: the misses of
+/// [`misses`].
+fn fly_in_jsbsim(py: &str, d: &std::path::Path, name: &str) -> Vec<(String, f64)> {
+    let script = workspace().join("crates/aeroident/tests/jsbsim_fly.py");
+    let out = Command::new(py)
+        .current_dir(d)
+        .args([script.to_str().unwrap(), "root", name, "sim/timeseries.csv", "jsbsim.csv"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stdout));
+    misses(&d.join("sim/timeseries.csv"), &d.join("jsbsim.csv"))
+}
+
 /// `export jsbsim --mapping` writes a complete aircraft (metrics, mass and inertia, thrust,
 /// flight control, aerodynamics in JSBSim's stability axes) that the real JSBSim loads and
 /// flies through the doublets `sim` flew with the identified UAV: every rate, angular
@@ -274,37 +196,8 @@ fn a_complete_aircraft_flies_the_identified_doublets_in_jsbsim() {
     let Some(py) = python_with_jsbsim() else { return };
     let d = std::env::temp_dir().join(format!("aeroident-jsbsim-aircraft-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
-    write_plane(&d, &UAV, "");
-    cli(
-        &d,
-        &["sim", "scenario.toml", "--aircraft", "model.toml", "--map", "map.toml", "--out", "sim"],
-    );
-    std::fs::create_dir_all(d.join("root/aircraft/uav")).unwrap();
-    let xml = d.join("root/aircraft/uav/uav.xml");
-    let xml_arg = xml.to_str().unwrap();
-    cli(
-        &d,
-        &[
-            "export",
-            "jsbsim",
-            "--summary",
-            "summary.json",
-            "--mapping",
-            "map.toml",
-            "--out",
-            xml_arg,
-        ],
-    );
-    let fly = |name: &str| {
-        let script = workspace().join("crates/aeroident/tests/jsbsim_fly.py");
-        let out = Command::new(&py)
-            .current_dir(&d)
-            .args([script.to_str().unwrap(), "root", name, "sim/timeseries.csv", "jsbsim.csv"])
-            .output()
-            .unwrap();
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stdout));
-        misses(&d.join("sim/timeseries.csv"), &d.join("jsbsim.csv"))
-    };
+    let xml = sim_and_export(&d, &UAV, "", "uav");
+    let fly = |name: &str| fly_in_jsbsim(&py, &d, name);
     let m = fly("uav");
     assert!(m.iter().all(|(_, e)| *e < 0.05), "JSBSim misses {m:?}");
     let text = std::fs::read_to_string(&xml).unwrap();
@@ -318,20 +211,7 @@ fn a_complete_aircraft_flies_the_identified_doublets_in_jsbsim() {
     let m = fly("heavy");
     assert!(m[0].1 > 0.05, "a doubled roll inertia went unseen: {m:?}");
     let servo = "de = { column = \"de\", unit = \"rad\", actuator = { tau_s = 0.05, rate_limit_rad_s = 3.5, position_limits_rad = [-0.4, 0.3] } }\n";
-    write_plane(&d, &UAV, servo);
-    cli(
-        &d,
-        &[
-            "export",
-            "jsbsim",
-            "--summary",
-            "summary.json",
-            "--mapping",
-            "map.toml",
-            "--out",
-            xml_arg,
-        ],
-    );
+    sim_and_export(&d, &UAV, servo, "uav");
     let text = std::fs::read_to_string(&xml).unwrap();
     for needle in ["<lag>20</lag>", "<rate_limit>3.5</rate_limit>", "<min>-0.4</min><max>0.3</max>"]
     {
@@ -363,35 +243,8 @@ fn a_complete_c172x_flies_the_identified_doublets_in_jsbsim() {
     let Some(py) = python_with_jsbsim() else { return };
     let d = std::env::temp_dir().join(format!("aeroident-jsbsim-c172x-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
-    write_plane(&d, &C172X, "");
-    cli(
-        &d,
-        &["sim", "scenario.toml", "--aircraft", "model.toml", "--map", "map.toml", "--out", "sim"],
-    );
-    std::fs::create_dir_all(d.join("root/aircraft/c172")).unwrap();
-    let xml = d.join("root/aircraft/c172/c172.xml");
-    let xml_arg = xml.to_str().unwrap();
-    cli(
-        &d,
-        &[
-            "export",
-            "jsbsim",
-            "--summary",
-            "summary.json",
-            "--mapping",
-            "map.toml",
-            "--out",
-            xml_arg,
-        ],
-    );
-    let script = workspace().join("crates/aeroident/tests/jsbsim_fly.py");
-    let out = Command::new(&py)
-        .current_dir(&d)
-        .args([script.to_str().unwrap(), "root", "c172", "sim/timeseries.csv", "jsbsim.csv"])
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stdout));
-    let m = misses(&d.join("sim/timeseries.csv"), &d.join("jsbsim.csv"));
+    sim_and_export(&d, &C172X, "", "c172");
+    let m = fly_in_jsbsim(&py, &d, "c172");
     assert!(m.iter().all(|(_, e)| *e < 0.05), "JSBSim misses {m:?}");
     let _ = std::fs::remove_dir_all(&d);
 }

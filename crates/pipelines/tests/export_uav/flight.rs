@@ -14,6 +14,7 @@
 //! inertia at the link origin, as Gazebo's physics integrates a link (Newton–Euler with
 //! `ω × Jω`).
 
+use super::planes::{C172X, Plane, UAV, mapping_toml, model_toml, scenario_toml};
 use super::{Sdf, State, ardupilot_plane, gazebo_joints, gazebo_plugin, summary};
 use aeroident_models::aircraft::AircraftMass;
 use aeroident_pipelines::airframe::load;
@@ -22,139 +23,30 @@ use aeroident_pipelines::export::gazebo::{self, gazebo_plugin_sdf};
 use aeroident_pipelines::export::uav::Geometry;
 use aeroident_pipelines::sim::{SimTable, model_file, parse_scenario};
 
-/// An aircraft flown: its model's values (terms SITL's plane holds, the drag an exact polar,
-/// `CD_alpha = 2 CL_0 CD_alpha2 / CL_alpha`), mass and inertia, geometry and trim (m/s, m).
-struct Plane {
-    values: &'static [(&'static str, f64)],
-    mass: AircraftMass,
-    geometry: Geometry,
-    trim: (f64, f64),
+/// `plane`'s mass and inertia.
+fn mass_of(plane: &Plane) -> AircraftMass {
+    let [mass_kg, jx_kgm2, jy_kgm2, jz_kgm2, jxz_kgm2, ..] = plane.constants;
+    AircraftMass { mass_kg, jx_kgm2, jy_kgm2, jz_kgm2, jxz_kgm2 }
 }
 
-const UAV: Plane = Plane {
-    values: &[
-        ("CL_0", 0.3),
-        ("CL_alpha", 4.8),
-        ("CL_q", 6.0),
-        ("CL_de", 0.35),
-        ("CD_0", 0.03),
-        ("CD_alpha", 2.0 * 0.3 * 0.9 / 4.8),
-        ("CD_alpha2", 0.9),
-        ("CY_beta", -0.3),
-        ("CY_r", 0.2),
-        ("CY_dr", 0.15),
-        ("Cl_beta", -0.08),
-        ("Cl_p", -0.45),
-        ("Cl_r", 0.1),
-        ("Cl_da", -0.25),
-        ("Cl_dr", 0.005),
-        ("Cm_0", 0.02),
-        ("Cm_alpha", -0.6),
-        ("Cm_q", -9.0),
-        ("Cm_de", -1.0),
-        ("Cn_beta", 0.06),
-        ("Cn_p", -0.03),
-        ("Cn_r", -0.08),
-        ("Cn_da", 0.004),
-        ("Cn_dr", -0.05),
-        ("CY_p", -0.05),
-    ],
-    mass: AircraftMass {
-        mass_kg: 3.3,
-        jx_kgm2: 0.170,
-        jy_kgm2: 0.289,
-        jz_kgm2: 0.443,
-        jxz_kgm2: 0.019,
-    },
-    geometry: Geometry { area_m2: 0.384, span_m: 1.6, chord_m: 0.24 },
-    trim: (18.0, 100.0),
-};
+/// `plane`'s reference geometry.
+fn geometry_of(plane: &Plane) -> Geometry {
+    let [.., area_m2, span_m, chord_m] = plane.constants;
+    Geometry { area_m2, span_m, chord_m }
+}
 
-/// The c172x's XML coefficients (aeroident's aileron sign: the XML's Clda 0.23 is Cl_da
-/// −0.23), CL_alpha the wing-body slope 5.33, its CD0 0.027 with a polar; 77.08 slug
-/// (1124.9 kg), ixx 2095.7, iyy 1505.0, izz 3150.4 slug·ft² and ixz 13.55 (JSBSim's element:
-/// Jxz −18.4 kg·m²), S 174 ft², b 36 ft, c̄ 4.9 ft; at 55 m/s, 1524 m.
-const C172X: Plane = Plane {
-    values: &[
-        ("CL_0", 0.25),
-        ("CL_alpha", 5.33),
-        ("CL_q", 3.9),
-        ("CL_de", 0.347),
-        ("CD_0", 0.027),
-        ("CD_alpha", 2.0 * 0.25 * 0.3 / 5.33),
-        ("CD_alpha2", 0.3),
-        ("CY_beta", -0.309),
-        ("CY_p", -0.037),
-        ("CY_r", 0.21),
-        ("CY_da", 0.05),
-        ("CY_dr", 0.098),
-        ("Cl_beta", -0.0891),
-        ("Cl_p", -0.47),
-        ("Cl_r", 0.0972),
-        ("Cl_da", -0.23),
-        ("Cl_dr", 0.0147),
-        ("Cm_0", 0.06),
-        ("Cm_alpha", -1.8),
-        ("Cm_q", -12.4),
-        ("Cm_de", -1.28),
-        ("Cn_beta", 0.065),
-        ("Cn_p", -0.03),
-        ("Cn_r", -0.099),
-        ("Cn_da", -0.0053),
-        ("Cn_dr", -0.043),
-    ],
-    mass: AircraftMass {
-        mass_kg: 1124.9,
-        jx_kgm2: 2841.4,
-        jy_kgm2: 2040.5,
-        jz_kgm2: 4271.4,
-        jxz_kgm2: -18.4,
-    },
-    geometry: Geometry { area_m2: 16.165, span_m: 10.973, chord_m: 1.4935 },
-    trim: (55.0, 1524.0),
-};
-
-/// The model file, the mapping of the constants and the doublet scenario, in `dir`.
+/// The model file of `values`, the mapping of `plane`'s constants and the doublet scenario,
+/// in `dir`.
 fn write_files(
     dir: &std::path::Path,
     plane: &Plane,
     values: &[(&str, f64)],
 ) -> (std::path::PathBuf, std::path::PathBuf, String) {
     std::fs::create_dir_all(dir).unwrap();
-    // The model's terms are the values' names, per coefficient.
-    let mut model = String::from("description = \"test aircraft\"\n[coefficients]\n");
-    for c in ["CL", "CD", "CY", "Cl", "Cm", "Cn"] {
-        let terms: Vec<String> = values
-            .iter()
-            .filter_map(|(n, _)| n.strip_prefix(&format!("{c}_")).map(|t| format!("\"{t}\"")))
-            .collect();
-        model.push_str(&format!("{c} = [{}]\n", terms.join(", ")));
-    }
-    for (name, v) in values {
-        model.push_str(&format!("[reference.{name}]\nvalue = {v}\nsource = \"test\"\n"));
-    }
-    let (m, g) = (&plane.mass, &plane.geometry);
-    let map = format!(
-        "description = \"constants\"\n[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = {{ column = \"v\", unit = \"m/s\" }}\nalpha = {{ column = \"a\", unit = \"rad\" }}\nqbar = {{ column = \"qbar\", unit = \"Pa\" }}\nmass = {{ value = {}, unit = \"kg\" }}\nIxx = {{ value = {}, unit = \"kg*m2\" }}\nIyy = {{ value = {}, unit = \"kg*m2\" }}\nIzz = {{ value = {}, unit = \"kg*m2\" }}\nIxz = {{ value = {}, unit = \"kg*m2\" }}\nS = {{ value = {}, unit = \"m2\" }}\nb = {{ value = {}, unit = \"m\" }}\ncbar = {{ value = {}, unit = \"m\" }}\n",
-        m.mass_kg, m.jx_kgm2, m.jy_kgm2, m.jz_kgm2, m.jxz_kgm2, g.area_m2, g.span_m, g.chord_m
-    );
-    let doublet = |ch: &str, deg: f64, t0: f64| {
-        format!(
-            "[[input]]\nchannel = \"{ch}\"\nkind = \"doublet\"\namplitude_deg = {deg}\nstart_s = {t0}\npulse_width_s = 0.4\n"
-        )
-    };
-    let scenario = format!(
-        "kind = \"sim\"\n[trim]\nvt_mps = {}\nalt_m = {}\n[run]\nduration_s = 9.0\ndt_s = 0.005\n{}{}{}",
-        plane.trim.0,
-        plane.trim.1,
-        doublet("elevator", 2.0, 0.5),
-        doublet("aileron", 3.0, 3.5),
-        doublet("rudder", 4.0, 6.5)
-    );
     let (model_path, map_path) = (dir.join("model.toml"), dir.join("constants.toml"));
-    std::fs::write(&model_path, model).unwrap();
-    std::fs::write(&map_path, map).unwrap();
-    (model_path, map_path, scenario)
+    std::fs::write(&model_path, model_toml(values)).unwrap();
+    std::fs::write(&map_path, mapping_toml(plane, "")).unwrap();
+    (model_path, map_path, scenario_toml(plane))
 }
 
 /// `sim` of `plane` flying `values` through the doublets.
@@ -373,12 +265,12 @@ fn relative_misses(sitl: &[[f64; 9]], sim: &[[f64; 9]]) -> [f64; 9] {
 
 fn options(plane: &Plane, sitl_mass_kg: f64) -> ArdupilotOptions {
     ArdupilotOptions {
-        geometry: plane.geometry,
+        geometry: geometry_of(plane),
         throws: Throws { aileron_rad: 0.4, elevator_rad: 0.45, rudder_rad: 0.35 },
         alpha_stall_rad: 0.4712,
         mcoeff: 50.0,
         drop_unrepresentable: false,
-        mass: plane.mass,
+        mass: mass_of(plane),
         sitl_mass_kg,
         notes: vec![],
     }
@@ -398,7 +290,7 @@ fn sitl_flies(plane: &Plane, tag: &str) {
     for sitl_mass_kg in [2.0, 22.0] {
         let out = ardupilot_json(&s, "flight.json", &options(plane, sitl_mass_kg)).unwrap();
         let file: serde_json::Value = serde_json::from_str(&out.text).unwrap();
-        let fly = |gyroscopic| fly_sitl(&file, &sim, (sitl_mass_kg, gyroscopic), plane.mass);
+        let fly = |gyroscopic| fly_sitl(&file, &sim, (sitl_mass_kg, gyroscopic), mass_of(plane));
         let misses = relative_misses(&fly(true), &reference);
         assert!(misses.iter().all(|m| *m < 0.01), "{tag}: SITL+gyroscopic misses {misses:.4?}");
         let misses = relative_misses(&fly(false), &reference);
@@ -406,12 +298,12 @@ fn sitl_flies(plane: &Plane, tag: &str) {
         assert!(others.clone().all(|(_, m)| *m < 0.05), "{tag}: SITL misses {misses:.4?}");
         assert!(misses[1] < 0.07, "{tag}: SITL misses q by {misses:.4?}");
     }
-    let out = ardupilot_json(&s, "flight.json", &options(plane, plane.mass.mass_kg)).unwrap();
+    let out = ardupilot_json(&s, "flight.json", &options(plane, mass_of(plane).mass_kg)).unwrap();
     let mut unscaled: serde_json::Value = serde_json::from_str(&out.text).unwrap();
     for key in ["c_m_a", "c_m_q", "c_m_deltae", "c_m_0"] {
-        unscaled[key] = serde_json::json!(unscaled[key].as_f64().unwrap() * plane.mass.jy_kgm2);
+        unscaled[key] = serde_json::json!(unscaled[key].as_f64().unwrap() * mass_of(plane).jy_kgm2);
     }
-    let fly = fly_sitl(&unscaled, &sim, (plane.mass.mass_kg, false), plane.mass);
+    let fly = fly_sitl(&unscaled, &sim, (mass_of(plane).mass_kg, false), mass_of(plane));
     let misses = relative_misses(&fly, &reference);
     assert!(misses[1].is_nan() || misses[1] > 0.5, "{tag}: unit inertia went unseen: {misses:.3?}");
 }
@@ -442,7 +334,7 @@ fn gazebo_flies(plane: &Plane, tag: &str) {
     let reference = sim_channels(&sim);
     let params: Vec<(&str, Option<f64>)> = values.iter().map(|(n, v)| (*n, Some(*v))).collect();
     let o = gazebo::GazeboOptions {
-        geometry: plane.geometry,
+        geometry: geometry_of(plane),
         joints: super::gazebo_options(false).joints,
         link_name: "base_link".into(),
         air_density_kgpm3: sim.column("rho_kgpm3").unwrap()[0],
@@ -452,12 +344,12 @@ fn gazebo_flies(plane: &Plane, tag: &str) {
     };
     let out = gazebo_plugin_sdf(&summary(tag, &params), "gz.json", &o).unwrap();
     let sdf = Sdf::parse(&out.text);
-    let flown = fly(Target::Gazebo { sdf: &sdf, fixed: true }, &sim, plane.mass);
+    let flown = fly(Target::Gazebo { sdf: &sdf, fixed: true }, &sim, mass_of(plane));
     let misses = relative_misses(&flown, &reference);
     assert!(misses.iter().all(|m| *m < 0.05), "{tag}: Gazebo misses {misses:.4?}");
     let mut at_cg = Sdf::parse(&out.text);
     at_cg.scalars.insert("cp".into(), "0 0 0".into());
-    let flown = fly(Target::Gazebo { sdf: &at_cg, fixed: true }, &sim, plane.mass);
+    let flown = fly(Target::Gazebo { sdf: &at_cg, fixed: true }, &sim, mass_of(plane));
     let misses = relative_misses(&flown, &reference);
     assert!(
         misses[1].is_nan() || misses[1] > 0.2,

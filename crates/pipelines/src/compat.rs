@@ -629,4 +629,502 @@ mod tests {
         }
         assert_eq!(implausible_finding(&rows[3..]), None);
     }
+
+    fn with_values(pairs: &[(Unknown, f64, f64)]) -> CompatResult {
+        result(
+            pairs.iter().map(|p| p.0).collect(),
+            pairs.iter().map(|p| p.1).collect(),
+            pairs.iter().map(|p| p.2).collect(),
+        )
+    }
+
+    #[test]
+    fn findings_name_what_passes_each_edge_and_nothing_short_of_it() {
+        let named = findings(
+            &with_values(&[
+                (Unknown::Bias(Channel::Az), 1.09 * G0_MPS2, 5.0),
+                (Unknown::TimeShift(Channel::Alpha), 0.05, 0.01),
+                (Unknown::TimeShift(Channel::Beta), -0.06, 0.01),
+                (Unknown::AhrsLag, 0.15, 0.01),
+                (Unknown::Bias(Channel::Vt), 2.0, 0.5),
+                (Unknown::Bias(Channel::Ax), 0.76, 0.25),
+                (Unknown::Scale(Channel::Alpha), 0.02, 0.001),
+                (Unknown::Scale(Channel::Q), -0.03, 0.001),
+            ]),
+            0.1,
+        );
+        let expected = [
+            "az_mps2 looks like load factor − 1 g",
+            "alpha_rad lags the kinematics by 0.050 ± 0.010 s",
+            "beta_rad leads the kinematics by 0.060 ± 0.010 s",
+            "first-order lag of time constant 0.150 ± 0.010 s",
+            "vt_mps reads +2.00 ± 0.50 m/s above the reconstructed speed",
+            "ax_mps2 bias +0.7600 ± 0.2500 m/s^2",
+            "alpha_rad reads 1.020 ± 0.001 × the kinematic value (vane upwash or calibration)",
+            "q_rad_s reads 0.970 ± 0.001 × the kinematic value",
+        ];
+        for (text, f) in expected.iter().zip(&named) {
+            assert!(f.contains(text), "{text}: {named:?}");
+        }
+        assert!(!named[7].contains("vane"), "{named:?}");
+        let none = findings(
+            &with_values(&[
+                (Unknown::Bias(Channel::Az), 1.11 * G0_MPS2, 5.0),
+                (Unknown::TimeShift(Channel::Theta), 0.2, 0.1),
+                (Unknown::AhrsLag, 0.02, 0.01),
+                (Unknown::Bias(Channel::Vt), 0.5, 1.0),
+                (Unknown::Bias(Channel::Ay), 0.75, 0.25),
+                (Unknown::Scale(Channel::Beta), 0.015, 0.001),
+                (Unknown::Scale(Channel::Ax), 0.05, 0.02),
+            ]),
+            0.1,
+        );
+        assert!(none.is_empty(), "{none:?}");
+        let below = with_values(&[(Unknown::Bias(Channel::Az), 0.89 * G0_MPS2, 0.01)]);
+        let below = findings(&below, 0.1);
+        assert_eq!(below.len(), 1, "{below:?}");
+        assert!(below[0].starts_with("az_mps2 bias +8.7279"), "{below:?}");
+    }
+
+    #[test]
+    fn the_drift_tolerance_is_a_tenth_of_each_kinds_limit_and_none_for_air_data_biases() {
+        for c in [Channel::Vt, Channel::Alpha, Channel::Beta] {
+            assert_eq!(tolerance(Unknown::Bias(c)), None, "{c:?}");
+        }
+        assert_eq!(tolerance(Unknown::Initial { manoeuvre: 0, state: 0 }), None);
+        assert_eq!(tolerance(Unknown::Bias(Channel::Ay)), Some(0.2));
+        let gyro = tolerance(Unknown::Bias(Channel::R)).unwrap();
+        assert!((gyro - 0.005).abs() < 1e-15, "{gyro}");
+        let attitude = tolerance(Unknown::Bias(Channel::Theta)).unwrap();
+        assert!((attitude - 0.0175).abs() < 1e-15, "{attitude}");
+        assert_eq!(tolerance(Unknown::Scale(Channel::Alpha)), Some(0.05));
+        assert_eq!(tolerance(Unknown::TimeShift(Channel::Alpha)), Some(0.05));
+        assert_eq!(tolerance(Unknown::AhrsLag), Some(0.05));
+    }
+
+    #[test]
+    fn unknowns_are_named_in_words() {
+        let names = [
+            (Unknown::Bias(Channel::Ax), "ax_mps2 bias"),
+            (Unknown::Scale(Channel::Alpha), "alpha_rad scale-factor error k"),
+            (Unknown::TimeShift(Channel::Psi), "psi_rad time shift"),
+            (Unknown::AhrsLag, "AHRS lag"),
+            (Unknown::Initial { manoeuvre: 1, state: 2 }, "initial state"),
+        ];
+        for (u, name) in names {
+            assert_eq!(unknown_name(u), name);
+        }
+    }
+
+    #[test]
+    fn the_median_interval_is_the_middle_one_within_the_manoeuvres() {
+        let at = |t: &[f64]| -> Vec<aeroident_estimators::AirDataSample> {
+            t.iter()
+                .map(|&t_s| aeroident_estimators::AirDataSample { t_s, ..Default::default() })
+                .collect()
+        };
+        let manoeuvres = vec![at(&[0.0, 0.25, 0.75]), at(&[10.0, 11.0, 13.0])];
+        assert_eq!(median_interval(&manoeuvres), 1.0);
+        let odd = vec![at(&[1.0, 1.5, 2.5, 2.75])];
+        assert_eq!(median_interval(&odd), 0.5);
+        assert_eq!(median_interval(&[]), 0.0);
+    }
+
+    #[test]
+    fn channels_hold_every_channel_with_a_correction_and_the_scale_as_one_plus_k() {
+        let r = with_values(&[
+            (Unknown::Bias(Channel::Ax), 0.1, 0.01),
+            (Unknown::Scale(Channel::Alpha), 0.02, 0.001),
+            (Unknown::TimeShift(Channel::Theta), 0.05, 0.01),
+            (Unknown::Initial { manoeuvre: 0, state: 0 }, 60.0, 0.1),
+        ]);
+        let rows = channels(&r);
+        let names: Vec<&str> = rows.iter().map(|c| c.name.as_str()).collect();
+        assert_eq!(names, ["ax_mps2", "alpha_rad", "theta_rad"]);
+        assert_eq!(
+            (rows[0].bias, rows[0].bias_sigma, rows[0].scale),
+            (Some(0.1), Some(0.01), None)
+        );
+        assert_eq!(
+            (rows[1].scale, rows[1].scale_sigma, rows[1].bias),
+            (Some(1.02), Some(0.001), None)
+        );
+        assert_eq!(rows[2].time_shift_s, Some(0.05));
+    }
+
+    #[test]
+    fn implausible_corrections_are_judged_from_exactly_two_sigma_from_none() {
+        let row =
+            |name: &str, bias: Option<(f64, f64)>, scale: Option<(f64, f64)>| ChannelSummary {
+                name: name.into(),
+                unit: String::new(),
+                bias: bias.map(|b| b.0),
+                bias_sigma: bias.map(|b| b.1),
+                scale: scale.map(|s| s.0),
+                scale_sigma: scale.map(|s| s.1),
+                time_shift_s: None,
+                time_shift_sigma_s: None,
+            };
+        let at_two_sigma = [row("beta_rad", Some((0.2, 0.1)), None)];
+        let f = implausible_finding(&at_two_sigma).unwrap();
+        assert!(f.starts_with("implausible for its channel") && f.contains("beta_rad bias"), "{f}");
+        assert_eq!(implausible_finding(&[row("beta_rad", Some((0.2, 0.1001)), None)]), None);
+        let unsure_scale = [row("q_rad_s", None, Some((1.5, 0.3)))];
+        assert_eq!(implausible_finding(&unsure_scale), None);
+        let f = implausible_finding(&[row("q_rad_s", None, Some((1.5, 0.25)))]).unwrap();
+        assert!(f.contains("q_rad_s scale 1.5"), "{f}");
+        let f = implausible_finding(&[row("az_mps2", Some((3.0, 0.1)), None)]).unwrap();
+        assert!(f.contains("az_mps2 bias"), "{f}");
+    }
+
+    fn judged(unknown: Unknown, change: f64, pieces: usize) -> compat::HeldOutCorrection {
+        compat::HeldOutCorrection { unknown, change, pieces, expected: 0.0, spread: 1.0 }
+    }
+
+    #[test]
+    fn held_out_failures_are_named_only_for_applied_corrections() {
+        let r = with_values(&[
+            (Unknown::Bias(Channel::Q), 0.01, 0.005),
+            (Unknown::Bias(Channel::Vt), 5.0, 0.1),
+            (Unknown::Bias(Channel::Ax), 0.1, 0.1),
+            (Unknown::TimeShift(Channel::Alpha), 0.2, 0.01),
+        ]);
+        let mut h = compat::HeldOut {
+            by: "half",
+            pieces: 2,
+            corrections: vec![
+                judged(Unknown::Bias(Channel::Q), 10.0, 2),
+                judged(Unknown::Bias(Channel::Vt), 10.0, 2),
+                judged(Unknown::Bias(Channel::Ax), 10.0, 2),
+                judged(Unknown::TimeShift(Channel::Alpha), 1.0, 2),
+            ],
+            notes: Vec::new(),
+        };
+        let f = held_out_finding(&h, &r).unwrap();
+        assert!(f.starts_with("held out in turn (the record's two halves)"), "{f}");
+        assert!(
+            f.ends_with(
+                ": q_rad_s bias (+10.0; a true one +0.0 ± 1.0); replay --compat does not apply them"
+            ),
+            "{f}"
+        );
+        h.by = "manoeuvre";
+        let f = held_out_finding(&h, &r).unwrap();
+        assert!(f.starts_with("held out in turn (its manoeuvres)"), "{f}");
+        h.corrections[0].change = 1.0;
+        assert_eq!(held_out_finding(&h, &r), None);
+    }
+
+    #[test]
+    fn check_errors_name_the_short_manoeuvre_and_the_missing_channel_as_mapped() {
+        use aeroident_estimators::{AirDataSample, EstimatorError};
+        let at = |t_s: f64, q: Option<f64>| AirDataSample { t_s, q_rad_s: q, ..Default::default() };
+        let first = [at(0.0, Some(0.1)), at(0.5, None), at(1.0, Some(0.1))];
+        let second = [at(5.0, Some(0.1)), at(5.5, Some(0.1))];
+        let slices: [&[AirDataSample]; 2] = [&first, &second];
+        let origins = [("a.csv".to_string(), 2), ("b.csv".to_string(), 7)];
+        let short = EstimatorError::InvalidConfig {
+            field: "manoeuvre",
+            value: 1.0,
+            reason: "a manoeuvre needs at least 10 samples",
+        };
+        let text = in_user_terms(&short, &slices, &origins, None);
+        assert!(
+            text.starts_with("manoeuvre 2 of 2 (b.csv from row 7, t = 5.00–5.50 s, 2 samples) is too short: a manoeuvre needs at least 10 samples;"),
+            "{text}"
+        );
+        let mapping = aeroident_io::Mapping::from_toml_str(
+            "[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"v\", unit = \"m/s\" }\nalpha = { column = \"aoa\", unit = \"rad\" }\nq = { column = \"pitch_rate\", unit = \"rad/s\" }\nqbar = { value = 1000.0, unit = \"Pa\" }\nmass = { value = 1000.0, unit = \"kg\" }\nS = { value = 10.0, unit = \"m2\" }\n",
+            "m.toml",
+        )
+        .unwrap();
+        let missing = |field| EstimatorError::InvalidConfig { field, value: 0.0, reason: "needed" };
+        let q = in_user_terms(&missing("q_rad_s"), &slices, &origins, Some(&mapping));
+        assert_eq!(q, "channel `q` (column `pitch_rate`) is missing in 1 of 5 samples: needed");
+        let ay = in_user_terms(&missing("ay_mps2"), &slices, &origins, Some(&mapping));
+        assert_eq!(ay, "channel `ay` (not in the mapping) is missing in 5 of 5 samples: needed");
+        let other = EstimatorError::InvalidConfig { field: "steps", value: 0.0, reason: "needed" };
+        assert_eq!(in_user_terms(&other, &slices, &origins, None), other.to_string());
+    }
+
+    #[test]
+    fn traces_join_the_manoeuvres_with_a_break_and_add_the_residual_to_the_model() {
+        let mut r = result(Vec::new(), Vec::new(), Vec::new());
+        r.outputs = vec![Channel::Alpha, Channel::Theta];
+        let manoeuvre = |t_s: Vec<f64>| compat::Reconstructed { t_s, ..Default::default() };
+        r.reconstructed = vec![manoeuvre(vec![0.0, 1.0]), manoeuvre(vec![5.0])];
+        r.predicted = vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0];
+        r.residuals = vec![0.5, 0.25, -1.0, 1.0, 0.0, 2.0];
+        let t = traces(&r);
+        assert_eq!(t.len(), 2);
+        assert_eq!((t[0].name.as_str(), t[1].name.as_str()), ("alpha_rad", "theta_rad"));
+        let finite =
+            |v: &[f64]| v.iter().map(|x| if x.is_nan() { -99.0 } else { *x }).collect::<Vec<_>>();
+        assert_eq!(finite(&t[0].t_s), [0.0, 1.0, -99.0, 5.0]);
+        assert_eq!(finite(&t[0].simulated), [1.0, 3.0, -99.0, 5.0]);
+        assert_eq!(finite(&t[0].measured), [1.5, 2.0, -99.0, 5.0]);
+        assert_eq!(finite(&t[1].simulated), [2.0, 4.0, -99.0, 6.0]);
+        assert_eq!(finite(&t[1].measured), [2.25, 5.0, -99.0, 8.0]);
+        assert_eq!(t[0].stride, 1);
+        r.residuals.pop();
+        assert!(traces(&r).is_empty());
+    }
+
+    #[test]
+    fn traces_keep_every_stride_th_sample_of_a_long_record() {
+        let mut r = result(Vec::new(), Vec::new(), Vec::new());
+        r.outputs = vec![Channel::Alpha];
+        let n = 2 * OutputTrace::MAX_POINTS + 1;
+        let t_s: Vec<f64> = (0..n).map(|k| k as f64).collect();
+        r.reconstructed = vec![compat::Reconstructed { t_s: t_s.clone(), ..Default::default() }];
+        r.predicted = t_s.clone();
+        r.residuals = vec![0.0; n];
+        let t = traces(&r);
+        assert_eq!(t[0].stride, 3);
+        assert_eq!(t[0].t_s.len(), 13_334);
+        assert_eq!(&t[0].t_s[..3], [0.0, 3.0, 6.0]);
+        assert_eq!(t[0].measured[2], 6.0);
+    }
+
+    fn flown(t: f64) -> [f64; 6] {
+        flown_rolling(t, 1.0)
+    }
+
+    fn flown_rolling(t: f64, roll: f64) -> [f64; 6] {
+        [
+            60.0 + 2.0 * (0.7 * t).sin(),
+            2.0 * (1.1 * t).sin(),
+            4.0 + 2.0 * (1.3 * t).sin(),
+            roll * (0.3 * (0.6 * t).sin() + 0.1 * (1.7 * t).sin()),
+            0.05 + 0.08 * (0.9 * t).sin(),
+            0.3 + 0.2 * (0.4 * t).sin(),
+        ]
+    }
+
+    fn rates_and_forces(t: f64) -> ([f64; 3], [f64; 3]) {
+        rates_and_forces_rolling(t, 1.0)
+    }
+
+    fn rates_and_forces_rolling(t: f64, roll: f64) -> ([f64; 3], [f64; 3]) {
+        let h = 1e-4;
+        let at = |t| flown_rolling(t, roll);
+        let (x, ahead, behind) = (at(t), at(t + h), at(t - h));
+        let d: [f64; 6] = core::array::from_fn(|j| (ahead[j] - behind[j]) / (2.0 * h));
+        let [u, v, w, phi, theta, _] = x;
+        let (sf, cf, st, ct) = (phi.sin(), phi.cos(), theta.sin(), theta.cos());
+        let p = d[3] - d[5] * st;
+        let q = d[4] * cf + d[5] * sf * ct;
+        let r = -d[4] * sf + d[5] * cf * ct;
+        let a = [
+            d[0] + G0_MPS2 * st - (r * v - q * w),
+            d[1] - G0_MPS2 * ct * sf - (p * w - r * u),
+            d[2] - G0_MPS2 * ct * cf - (q * u - p * v),
+        ];
+        ([p, q, r], a)
+    }
+
+    fn manoeuvre(t0: f64, q_bias: f64, seed: u64) -> Vec<aeroident_estimators::AirDataSample> {
+        manoeuvre_rolling(t0, q_bias, seed, 1.0)
+    }
+
+    fn manoeuvre_rolling(
+        t0: f64,
+        q_bias: f64,
+        seed: u64,
+        roll: f64,
+    ) -> Vec<aeroident_estimators::AirDataSample> {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, Normal};
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+        let mut noise = |deg: f64| Normal::new(0.0, deg.to_radians()).unwrap().sample(&mut rng);
+        (0..150)
+            .map(|k| {
+                let t = t0 + 0.1 * k as f64;
+                let ([p, q, r], [ax, ay, az]) = rates_and_forces_rolling(t, roll);
+                let [u, v, w, phi, theta, psi] = flown_rolling(t, roll);
+                let vt = (u * u + v * v + w * w).sqrt();
+                aeroident_estimators::AirDataSample {
+                    t_s: t,
+                    vt_mps: vt + 2.0 * noise(0.05),
+                    alpha_rad: w.atan2(u) + noise(0.05),
+                    beta_rad: Some((v / vt).asin() + noise(0.05)),
+                    qbar_pa: 0.6 * vt * vt,
+                    p_rad_s: Some(p),
+                    q_rad_s: Some(q + q_bias),
+                    r_rad_s: Some(r),
+                    phi_rad: Some(phi + noise(0.1)),
+                    theta_rad: Some(theta + noise(0.1)),
+                    psi_rad: Some(psi + noise(0.1)),
+                    ax_mps2: Some(ax),
+                    ay_mps2: Some(ay),
+                    az_mps2: Some(az),
+                    ..Default::default()
+                }
+            })
+            .collect()
+    }
+
+    fn q_bias_named(text: &str) -> (f64, f64) {
+        let number = |after: &str| -> f64 {
+            let rest = &text[text.find(after).unwrap_or_else(|| panic!("{text}")) + after.len()..];
+            rest.split([' ', ')']).next().unwrap().parse().unwrap()
+        };
+        (number("q_rad_s bias "), number("manoeuvres' median "))
+    }
+
+    fn joint_unknowns() -> CompatResult {
+        with_values(&[
+            (Unknown::Bias(Channel::Q), 0.0, 1.0),
+            (Unknown::Bias(Channel::Alpha), 0.0, 1.0),
+            (Unknown::Scale(Channel::Ax), 0.0, 1.0),
+        ])
+    }
+
+    #[test]
+    fn consistency_names_the_manoeuvres_whose_gyro_bias_left_the_median_of_five() {
+        let biases = [0.0, 0.0, 0.02, 0.02, 0.02];
+        let flown: Vec<_> = biases
+            .iter()
+            .enumerate()
+            .map(|(k, &b)| manoeuvre(20.0 * k as f64, b, 3 + k as u64))
+            .collect();
+        let short = &manoeuvre(100.0, 0.0, 8)[..5];
+        let mut slices: Vec<&[aeroident_estimators::AirDataSample]> =
+            flown.iter().map(Vec::as_slice).collect();
+        slices.push(short);
+        let out = consistency(&slices, &CompatConfig::default(), &joint_unknowns());
+        assert_eq!(out.len(), 3, "{out:?}");
+        assert!(out[0].starts_with("manoeuvre 6: not checked alone ("), "{out:?}");
+        for (k, text) in out[1..].iter().enumerate() {
+            let head = format!(
+                "manoeuvre {} disagrees with the other manoeuvres beyond 3 of its own σ",
+                k + 1
+            );
+            assert!(text.starts_with(&head), "{out:?}");
+            let (own, median) = q_bias_named(text);
+            assert!(own.abs() < 0.002 && (median - 0.02).abs() < 0.002, "{out:?}");
+            assert!(!text.contains("alpha_rad"), "{out:?}");
+        }
+    }
+    #[test]
+    fn consistency_of_two_names_both_against_their_mean() {
+        let (a, c) = (manoeuvre(0.0, 0.0, 6), manoeuvre(20.0, 0.02, 7));
+        let out = consistency(&[&a, &c], &CompatConfig::default(), &joint_unknowns());
+        assert_eq!(out.len(), 2, "{out:?}");
+        for (k, text) in out.iter().enumerate() {
+            assert!(text.starts_with(&format!("manoeuvre {} disagrees", k + 1)), "{out:?}");
+            let (own, median) = q_bias_named(text);
+            assert!((median - 0.01).abs() < 0.001, "{out:?}");
+            assert!((own - 0.02 * k as f64).abs() < 0.002, "{out:?}");
+        }
+        let short = &a[..5];
+        assert!(consistency(&[short], &CompatConfig::default(), &joint_unknowns()).is_empty());
+    }
+
+    fn through_ahrs_filter(tau: f64) -> Vec<aeroident_estimators::AirDataSample> {
+        let raw = |t: f64| {
+            let ([p, q, r], _) = rates_and_forces(t);
+            let x = flown(t);
+            [p, q, r, x[3], x[4], x[5]]
+        };
+        let (h, fine) = (0.1 / 20.0, 20);
+        let a = (-h / tau).exp();
+        let mut y = raw(0.0);
+        let mut out = manoeuvre(0.0, 0.0, 9);
+        for (k, s) in out.iter_mut().enumerate() {
+            for i in (k.max(1) - 1) * fine..k * fine {
+                let (u0, u1) = (raw(i as f64 * h), raw((i + 1) as f64 * h));
+                y = core::array::from_fn(|j| a * y[j] + (1.0 - a) * 0.5 * (u0[j] + u1[j]));
+            }
+            let truth = flown(s.t_s);
+            (s.p_rad_s, s.q_rad_s, s.r_rad_s) = (Some(y[0]), Some(y[1]), Some(y[2]));
+            s.phi_rad = s.phi_rad.map(|m| m - truth[3] + y[3]);
+            s.theta_rad = s.theta_rad.map(|m| m - truth[4] + y[4]);
+            s.psi_rad = s.psi_rad.map(|m| m - truth[5] + y[5]);
+        }
+        out
+    }
+
+    #[test]
+    fn an_unmodelled_ahrs_lag_is_named_with_its_time_constant_unless_modelled_or_attitudes_late() {
+        let lagged = through_ahrs_filter(0.15);
+        let config = CompatConfig::default();
+        let from = compat::check(&[&lagged], &config).unwrap();
+        let text = unmodelled_lag(&[&lagged], &config, &from).expect("a 0.15-s lag is named");
+        let tau: f64 =
+            text.split("τ = ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+        assert!((tau - 0.15).abs() < 0.03, "{text}");
+        let modelled = CompatConfig { ahrs_lag: true, ..config };
+        assert_eq!(unmodelled_lag(&[&lagged], &modelled, &from), None);
+        let mut late = from.clone();
+        let theta =
+            late.unknowns.iter().position(|u| *u == Unknown::TimeShift(Channel::Theta)).unwrap();
+        late.values[theta] = 3.0 * late.reported_sigma()[theta];
+        assert!(unmodelled_lag(&[&lagged], &config, &late).is_some(), "θ 3σ late is not late");
+        late.values[theta] = 3.01 * late.reported_sigma()[theta];
+        assert_eq!(unmodelled_lag(&[&lagged], &config, &late), None);
+        let clean = manoeuvre(0.0, 0.0, 10);
+        let from = compat::check(&[&clean], &config).unwrap();
+        assert_eq!(unmodelled_lag(&[&clean], &config, &from), None);
+    }
+
+    fn checked_csv(samples: &[aeroident_estimators::AirDataSample], beta: bool) -> CompatSummary {
+        const KEYS: [(&str, &str, &str); 12] = [
+            ("vt", "m/s", "vt_mps"),
+            ("alpha", "rad", "alpha_rad"),
+            ("beta", "rad", "beta_rad"),
+            ("p", "rad/s", "p_rad_s"),
+            ("q", "rad/s", "q_rad_s"),
+            ("r", "rad/s", "r_rad_s"),
+            ("phi", "rad", "phi_rad"),
+            ("theta", "rad", "theta_rad"),
+            ("psi", "rad", "psi_rad"),
+            ("ax", "m/s2", "ax_mps2"),
+            ("ay", "m/s2", "ay_mps2"),
+            ("az", "m/s2", "az_mps2"),
+        ];
+        let keys: Vec<_> = KEYS.iter().filter(|k| beta || k.0 != "beta").collect();
+        let mut toml = String::from("[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\n");
+        for (key, unit, _) in &keys {
+            toml += &format!("{key} = {{ column = \"{key}\", unit = \"{unit}\" }}\n");
+        }
+        toml += "qbar = { value = 2000.0, unit = \"Pa\" }\nmass = { value = 1000.0, unit = \"kg\" }\nS = { value = 10.0, unit = \"m2\" }\n";
+        let mapping = aeroident_io::Mapping::from_toml_str(&toml, "m.toml").unwrap();
+        let mut csv = String::from("t");
+        keys.iter().for_each(|(key, _, _)| csv += &format!(",{key}"));
+        for s in samples {
+            csv += &format!("\n{}", s.t_s);
+            keys.iter().for_each(|(_, _, field)| csv += &format!(",{:?}", s.field(field).unwrap()));
+        }
+        let reader = FlightDataReader::new(csv.as_bytes(), "flown.csv", &mapping).unwrap();
+        check_record(reader, &CompatConfig::default()).unwrap().0
+    }
+
+    #[test]
+    fn a_checked_csv_record_summarises_its_gyro_bias_as_a_correction_replay_applies() {
+        let summary = checked_csv(&manoeuvre(0.0, 0.02, 11), true);
+        assert_eq!((summary.status, summary.status_reason.as_deref()), ("converged", None));
+        assert_eq!((summary.samples_read, summary.manoeuvres), (150, 1));
+        let m = &summary.reconstructed[0];
+        assert!(m.manoeuvre == 1 && m.beta_determined && m.t_s.len() == 150, "{m:?}");
+        let q = summary.channels.iter().find(|c| c.name == "q_rad_s").unwrap();
+        assert!((q.bias.unwrap() - 0.02).abs() < 3.0 * q.bias_sigma.unwrap(), "{q:?}");
+        assert!(
+            summary.findings.iter().any(|f| f.starts_with("q_rad_s bias +0.020")),
+            "{:?}",
+            summary.findings
+        );
+        let corrections = Corrections::from_summary(&summary).unwrap();
+        let applied: Vec<String> = corrections.warnings().map(|w| w.text).collect();
+        assert!(applied.iter().any(|w| w.contains("q_rad_s")), "{applied:?}");
+    }
+
+    #[test]
+    fn a_note_other_than_the_pinned_sideslip_leaves_the_sideslip_determined() {
+        let summary = checked_csv(&manoeuvre_rolling(0.0, 0.0, 12, 0.0), false);
+        let phi_note = "time shift of phi_rad not estimated: the channel hardly varies";
+        assert!(summary.warnings.iter().any(|w| w.starts_with(phi_note)), "{:?}", summary.warnings);
+        assert!(!summary.warnings.iter().any(|w| w == compat::SIDESLIP_PINNED_NOTE));
+        assert!(summary.reconstructed[0].beta_determined);
+    }
 }

@@ -237,7 +237,6 @@ mod tests {
     /// and its modes at 18 m/s are a conventional UAV's: none is flagged.
     #[test]
     fn an_elevator_and_aileron_model_trims_with_the_rudder_held_and_flies_conventional_modes() {
-        use aeroident_models::aircraft::Aircraft as _;
         let a = uav();
         assert_eq!(a.held_surfaces(), ["dr"]);
         assert!(a.held_surfaces_note().unwrap().contains("`dr`"));

@@ -110,6 +110,7 @@ fn correlation(a: &[f64], b: &[f64]) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use aeroident_estimators::compat::Channel;
 
     /// A chirp-like signal 10 s late (100 samples at 10 Hz) is found at lag +100 with a
     /// correlation of 1; the aligned signal at lag 0; a constant gives nothing.
@@ -127,5 +128,120 @@ mod tests {
         let (lag, best, _) = best_lag(&y, &y).unwrap();
         assert!(lag == 0 && (best - 1.0).abs() < 1e-12, "{lag} {best}");
         assert_eq!(best_lag(&[1.0; 100], &y[..100]), None);
+    }
+
+    fn chirp(k: isize) -> f64 {
+        let t = k as f64 * 0.1;
+        (0.05 * t * t).sin() + 0.3 * (0.7 * t).cos()
+    }
+
+    fn checked(
+        outputs: Vec<Channel>,
+        shift: Option<f64>,
+        rows: &[Vec<(f64, f64)>],
+    ) -> CompatResult {
+        let (unknowns, values, sigma) = match shift {
+            Some(v) => (vec![Unknown::TimeShift(outputs[outputs.len() - 1])], vec![v], vec![0.01]),
+            None => (Vec::new(), Vec::new(), Vec::new()),
+        };
+        let (mut predicted, mut residuals) = (Vec::new(), Vec::new());
+        for k in 0..rows[0].len() {
+            for channel in rows {
+                predicted.push(channel[k].0);
+                residuals.push(channel[k].1 - channel[k].0);
+            }
+        }
+        CompatResult {
+            unknowns,
+            values,
+            sigma,
+            sigma_coloured: None,
+            outputs,
+            residual_rms: Vec::new(),
+            residual_mean: Vec::new(),
+            predicted,
+            residuals,
+            reconstructed: Vec::new(),
+            termination: aeroident_estimators::output_error::Termination::Converged,
+            iterations: 1,
+            notes: Vec::new(),
+        }
+    }
+
+    fn late_by(samples: isize, n: isize, echo: f64) -> Vec<(f64, f64)> {
+        (0..n).map(|k| (chirp(k), chirp(k - samples) + echo * chirp(k))).collect()
+    }
+
+    #[test]
+    fn a_channel_ten_seconds_late_in_the_second_manoeuvre_is_named_there_with_the_checks_shift() {
+        let aligned = late_by(0, 1200, 0.0);
+        let mut beta = late_by(0, 600, 0.0);
+        beta.extend(late_by(100, 600, 0.0));
+        let r = checked(vec![Channel::Alpha, Channel::Beta], Some(0.1), &[aligned, beta]);
+        let out = misaligned(&[600, 600], &r, 0.1);
+        assert_eq!(out.len(), 1, "{out:?}");
+        assert!(out[0].starts_with("beta_rad does not fit the kinematics where the check aligns it: it matches them best when read later by +10.1 s in manoeuvre 2 (correlation 1.00 there, "), "{out:?}");
+        assert!(out[0].contains(" at the check's +0.100 s), beyond the ±0.5 s"), "{out:?}");
+        assert!(misaligned(&[600, 599], &r, 0.1).is_empty());
+    }
+
+    #[test]
+    fn a_lag_is_named_beyond_half_a_second_and_only_when_it_quarters_the_misfit() {
+        let named = |rows: Vec<(f64, f64)>| {
+            misaligned(&[600], &checked(vec![Channel::Alpha], None, &[rows]), 0.1)
+        };
+        assert!(named(late_by(5, 600, 0.0)).is_empty());
+        let out = named(late_by(6, 600, 0.0));
+        assert_eq!(out.len(), 1, "{out:?}");
+        assert!(
+            out[0].contains("read later by +0.6 s in manoeuvre 1 (correlation 1.00 there"),
+            "{out:?}"
+        );
+        assert!(named(late_by(100, 600, 0.6)).is_empty());
+        assert_eq!(named(late_by(100, 600, 0.0)).len(), 1);
+    }
+
+    #[test]
+    fn the_lag_search_reaches_back_and_forward_over_three_quarters_of_the_record() {
+        let y: Vec<f64> = (0..600).map(chirp).collect();
+        let shifted = |samples: isize| (0..600).map(|k| chirp(k - samples)).collect::<Vec<_>>();
+        assert_eq!(best_lag(&shifted(-100), &y).unwrap().0, -100);
+        assert_eq!(best_lag(&shifted(450), &y).unwrap().0, 450);
+        assert_ne!(best_lag(&shifted(460), &y).unwrap().0, 460);
+        let (lag, best, aligned) = best_lag(&y[..20], &y[..20]).unwrap();
+        assert_eq!((lag, best, aligned), (0, 1.0, 1.0));
+        assert_eq!(best_lag(&y[..19], &y[..19]), None);
+        assert_eq!(best_lag(&y[..100], &[2.0; 100]), None);
+    }
+
+    #[test]
+    fn of_equally_good_lags_the_aligned_one_is_kept() {
+        let square: Vec<f64> = (0..600).map(|k| if k % 40 < 20 { 1.0 } else { -1.0 }).collect();
+        assert_eq!(best_lag(&square, &square), Some((0, 1.0, 1.0)));
+    }
+
+    #[test]
+    fn the_correlation_is_pearsons() {
+        let c = correlation(&[1.0, 2.0, 3.0, 4.0], &[1.0, 3.0, 2.0, 4.0]).unwrap();
+        assert!((c - 0.8).abs() < 1e-15, "{c}");
+        assert_eq!(correlation(&[1.0, 2.0, 3.0, 4.0], &[8.0, 6.0, 4.0, 2.0]), Some(-1.0));
+        let c = correlation(&[2.0, 4.0, 4.0, 6.0], &[1.0, 1.0, 2.0, 4.0]).unwrap();
+        assert!((c - 3f64.sqrt() / 2.0).abs() < 1e-15, "{c}");
+        assert_eq!(correlation(&[1.0, 2.0, 3.0], &[5.0, 5.0, 5.0]), None);
+        assert_eq!(correlation(&[5.0, 5.0, 5.0], &[1.0, 2.0, 3.0]), None);
+    }
+
+    #[test]
+    fn a_reversed_channel_is_not_named_late_where_a_lag_fits_no_better_than_alignment() {
+        let square = |k: usize| if k % 40 < 20 { 1.0 } else { -1.0 };
+        let reversed: Vec<(f64, f64)> = (0..640).map(|k| (square(k), -square(k))).collect();
+        let (lag, best, aligned) = best_lag(
+            &reversed.iter().map(|r| r.1).collect::<Vec<_>>(),
+            &reversed.iter().map(|r| r.0).collect::<Vec<_>>(),
+        )
+        .unwrap();
+        assert!(lag.abs() > 5 && best == 1.0 && aligned == -1.0, "{lag} {best} {aligned}");
+        let r = checked(vec![Channel::Alpha], None, &[reversed]);
+        assert!(misaligned(&[640], &r, 0.1).is_empty());
     }
 }

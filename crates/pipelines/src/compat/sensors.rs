@@ -204,36 +204,119 @@ fn alpha_rate(s: &AirDataSample, with_beta: bool) -> Option<f64> {
 mod tests {
     use super::*;
 
-    /// A pull-up at 100 m/s, q = 0.1 sin(2t) rad/s, with α following the kinematics exactly
-    /// (α̇ = q + (a_z + g cosθ)/V with the specific force chosen so): the gain is 1; the same
-    /// α divided by 57.3 (radians mapped as degrees) gives 1/57.3 and names it.
-    #[test]
-    fn the_alpha_vane_gain_is_one_on_consistent_data_and_names_a_unit() {
-        let (vt, dt) = (100.0, 0.02);
+    fn pull_up() -> Vec<AirDataSample> {
+        let dt = 0.02;
         let mut samples = Vec::new();
         for i in 0..1000 {
             let t = i as f64 * dt;
+            let (vt, vt_dot) = (100.0 + 2.0 * (0.5 * t).sin(), (0.5 * t).cos());
             let q = 0.1 * (2.0 * t).sin();
+            let theta = 0.05 - 0.05 * (2.0 * t).cos();
             let alpha = 0.05 + 0.02 * (1.3 * t).sin();
             let alpha_dot = 0.026 * (1.3 * t).cos();
-            let theta: f64 = 0.05;
-            // ẇ − q u = a_z + g cosθ cosφ with w = V sinα, u = V cosα, V constant: choose a_z so
-            // that (u ẇ − w u̇)/V² = α̇, with u̇ from a_x = g sinθ + q w (u̇ = −V sinα α̇).
+            // u̇ = a_x − g sinθ − q w and ẇ = a_z + g cosθ + q u (wings level, no roll or yaw):
+            // choose a_x, a_z so that (u ẇ − w u̇)/V² = α̇, with u = V cosα, w = V sinα.
             let (u, w) = (vt * alpha.cos(), vt * alpha.sin());
-            let (u_dot, w_dot) = (-w * alpha_dot, u * alpha_dot);
-            let ax = u_dot + G0_MPS2 * theta.sin() + q * w;
-            let az = w_dot - q * u - G0_MPS2 * theta.cos();
+            let u_dot = vt_dot * alpha.cos() - w * alpha_dot;
+            let w_dot = vt_dot * alpha.sin() + u * alpha_dot;
             samples.push(AirDataSample {
                 t_s: t,
                 vt_mps: vt,
                 alpha_rad: alpha,
                 q_rad_s: Some(q),
                 theta_rad: Some(theta),
-                ax_mps2: Some(ax),
-                az_mps2: Some(az),
+                ax_mps2: Some(u_dot + G0_MPS2 * theta.sin() + q * w),
+                az_mps2: Some(w_dot - q * u - G0_MPS2 * theta.cos()),
                 ..AirDataSample::default()
             });
         }
+        samples
+    }
+
+    fn mapping() -> Mapping {
+        Mapping::from_toml_str(
+            "[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = { column = \"v\", unit = \"m/s\" }\nalpha = { column = \"aoa\", unit = \"deg\" }\nq = { column = \"q\", unit = \"rad/s\" }\ntheta = { column = \"th\", unit = \"rad\" }\nax = { column = \"ax\", unit = \"m/s2\" }\naz = { column = \"az\", unit = \"m/s2\" }\nqbar = { value = 1000.0, unit = \"Pa\" }\nmass = { value = 1000.0, unit = \"kg\" }\nS = { value = 10.0, unit = \"m2\" }\n",
+            "m.toml",
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn believable_refuses_a_stuck_channel_and_a_vane_in_the_wrong_unit_and_passes_a_flown_record() {
+        let samples = pull_up();
+        assert_eq!(believable(&[&samples], &mapping()), Ok(()));
+        assert_eq!(believable(&[&samples[..1]], &mapping()), Ok(()));
+        let stuck: Vec<AirDataSample> =
+            samples.iter().map(|s| AirDataSample { q_rad_s: Some(0.02), ..*s }).collect();
+        let e = believable(&[&stuck[..500], &stuck[500..]], &mapping()).unwrap_err();
+        assert!(
+            e.starts_with("channel `q` (column `q`")
+                && e.contains("holds 0.02 in all 1000 samples: a dead or stuck sensor"),
+            "{e}"
+        );
+        let radians: Vec<AirDataSample> = samples
+            .iter()
+            .map(|s| AirDataSample { alpha_rad: s.alpha_rad.to_radians(), ..*s })
+            .collect();
+        let e = believable(&[&radians], &mapping()).unwrap_err();
+        assert!(
+            e.contains("likely radians mapped as degrees; the check would turn it into biases"),
+            "{e}"
+        );
+    }
+
+    fn with_az(factor: f64, n: usize) -> Vec<AirDataSample> {
+        let az = |i: usize| {
+            if i.is_multiple_of(2) { -factor * G0_MPS2 } else { -factor * G0_MPS2 * 0.5 }
+        };
+        (0..n)
+            .map(|i| AirDataSample { az_mps2: Some(az(i) * 4.0 / 3.0), ..AirDataSample::default() })
+            .collect()
+    }
+
+    #[test]
+    fn the_normal_accelerometer_is_judged_by_its_mean_magnitude_from_fifty_rows() {
+        let text = |factor: f64, n: usize| az_misread(&[&with_az(factor, n)], &mapping());
+        assert_eq!(text(3.0, 49), None);
+        assert_eq!(text(1.99, 50), None);
+        assert_eq!(text(0.51, 50), None);
+        for (factor, likely) in [
+            (2.01, "check its unit and scale in the mapping"),
+            (0.49, "check its unit and scale in the mapping"),
+            (9.0, "likely m/s² data mapped in g: map it with `unit = \"m/s2\"`"),
+            (0.3048, "likely m/s² data mapped in ft/s²"),
+            (3.0, "likely ft/s² data mapped as m/s²"),
+            (0.1, "likely a reading in g mapped as m/s²"),
+        ] {
+            let t = text(factor, 50).unwrap_or_else(|| panic!("{factor}"));
+            assert!(
+                t.starts_with("unit mismatch: channel `az` (column `az`) has a mean magnitude of "),
+                "{t}"
+            );
+            assert!(
+                t.contains(likely) && t.contains(&format!(", {} g, ", short(factor))),
+                "{factor}: {t}"
+            );
+        }
+        let at_one_and_a_half: Vec<AirDataSample> = (0..50)
+            .map(|_| AirDataSample {
+                az_mps2: Some(-48.26107283464566),
+                ..AirDataSample::default()
+            })
+            .collect();
+        let t = az_misread(&[&at_one_and_a_half], &mapping()).unwrap();
+        assert!(
+            t.ends_with("check its unit and scale in the mapping"),
+            "exactly 1.5 × 1/0.3048: {t}"
+        );
+    }
+
+    /// A pull-up at 100 m/s, q = 0.1 sin(2t) rad/s, with α following the kinematics exactly
+    /// (α̇ = q + (a_z + g cosθ)/V with the specific force chosen so): the gain is 1; the same
+    /// α divided by 57.3 (radians mapped as degrees) gives 1/57.3 and names it.
+    #[test]
+    fn the_alpha_vane_gain_is_one_on_consistent_data_and_names_a_unit() {
+        let mut samples = pull_up();
         let (k, sigma) = alpha_gain(&[&samples], true).unwrap();
         assert!((k - 1.0).abs() < 1e-3 && sigma < 1e-3, "{k} ± {sigma}");
         let mapping = Mapping::from_toml_str(
@@ -263,5 +346,86 @@ mod tests {
             let text = az_misread(&[&scaled], &mapping).unwrap();
             assert!(text.contains(likely) && text.contains("column `az`"), "{text}");
         }
+    }
+
+    fn vane(rows: usize, gain: f64, wobble: f64, beta: Option<f64>) -> Vec<AirDataSample> {
+        let kinematic = |i: usize| 0.003 + if i.is_multiple_of(2) { 0.01 } else { -0.01 };
+        let measured = |i: usize| {
+            let e = if i % 4 < 2 { wobble } else { -wobble };
+            gain * kinematic(i) + 0.001 + e
+        };
+        let mut alpha = vec![0.05; rows + 2];
+        for i in 1..=rows {
+            alpha[i + 1] = alpha[i - 1] + 0.2 * measured(i - 1);
+        }
+        (0..rows + 2)
+            .map(|i| {
+                let target = if (1..=rows).contains(&i) { kinematic(i - 1) } else { 0.0 };
+                AirDataSample {
+                    t_s: 0.1 * i as f64,
+                    vt_mps: 100.0,
+                    alpha_rad: alpha[i],
+                    beta_rad: beta,
+                    q_rad_s: Some(0.0),
+                    theta_rad: Some(0.0),
+                    ax_mps2: Some(0.0),
+                    az_mps2: Some(target * 100.0 / alpha[i].cos() - G0_MPS2),
+                    ..AirDataSample::default()
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_alpha_gain_is_the_least_squares_slope_with_its_standard_error_from_fifty_rows() {
+        let (k, sigma) = alpha_gain(&[&vane(52, 2.0, 0.005, None)], true).unwrap();
+        let expected_sigma = (52.0 * 0.005f64.powi(2) / 50.0 / (52.0 * 1e-4)).sqrt();
+        assert!((k - 2.0).abs() < 1e-9, "{k}");
+        assert!((sigma / expected_sigma - 1.0).abs() < 1e-6, "{sigma} {expected_sigma}");
+        assert!(alpha_gain(&[&vane(50, 2.0, 0.005, None)], true).is_some());
+        assert_eq!(alpha_gain(&[&vane(49, 2.0, 0.005, None)], true), None);
+        let mut repeated = vane(50, 2.0, 0.005, None);
+        repeated[2].t_s = repeated[0].t_s;
+        assert_eq!(alpha_gain(&[&repeated], true), None);
+        let mut stopped = vane(52, 2.0, 0.005, None);
+        stopped[10].vt_mps = 0.0;
+        let (k, _) = alpha_gain(&[&stopped], true).expect("the row without a velocity is left out");
+        assert!((k - 2.0).abs() < 0.01, "{k}");
+        assert_eq!(alpha_gain(&[&vane(52, 1e160, 1e160, None)], true), None, "σ overflows");
+        let (k, _) = alpha_gain(&[&vane(52, 1.0, 0.0, Some(60f64.to_radians()))], true).unwrap();
+        assert!((k - 0.5).abs() < 1e-9, "with β the kinematic rate doubles: {k}");
+    }
+
+    #[test]
+    fn an_alpha_vane_is_named_outside_half_to_twice_beyond_ten_sigma_with_its_likely_cause() {
+        let text =
+            |gain: f64, wobble: f64| alpha_misread(&[&vane(52, gain, wobble, None)], &mapping());
+        for gain in [1.9, 0.6] {
+            assert_eq!(text(gain, 0.002), None, "{gain}");
+        }
+        assert_eq!(text(2.5, 0.015), None);
+        for (gain, wobble, cause) in [
+            (2.1, 0.005, "check its unit and scale in the mapping"),
+            (0.45, 0.002, "check its unit and scale in the mapping"),
+            (2.5, 0.005, "check its unit and scale in the mapping"),
+            (57.3 * 1.19, 0.005, "likely degrees mapped as radians"),
+            (57.3 * 1.21, 0.005, "check its unit and scale in the mapping"),
+            (-1.0, 0.005, "channel `alpha` (column `aoa`) moves against the angle of attack"),
+            (0.0, 0.0001, "channel `alpha` (column `aoa`) does not follow the angle of attack"),
+        ] {
+            let t = text(gain, wobble).unwrap_or_else(|| panic!("{gain}"));
+            assert!(t.contains(cause), "{gain}: {t}");
+        }
+    }
+
+    #[test]
+    fn the_alpha_vane_is_judged_by_the_gain_with_or_without_sideslip_nearer_one() {
+        let beta = Some(60f64.to_radians());
+        let text = |gain: f64| alpha_misread(&[&vane(52, gain, 0.001, beta)], &mapping());
+        assert_eq!(text(2.4), None);
+        assert_eq!(text(0.6), None);
+        assert_eq!(text(0.8), None);
+        let t = text(4.8).unwrap();
+        assert!(t.contains("moves 2.4 ± "), "{t}");
     }
 }

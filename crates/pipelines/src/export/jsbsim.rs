@@ -580,4 +580,92 @@ mod tests {
         assert!(texts.iter().any(|t| t == "fcs/elevator-pos-rad[1]"), "{texts:?}");
         assert!(texts.iter().any(|t| t == "fcs/rudder.pos_rad"), "{texts:?}");
     }
+
+    #[test]
+    fn each_product_term_is_its_properties_and_constant_factor() {
+        let s = SurfaceProperties::default();
+        let of = |term: &str| regressor_properties(Term::from_name(term).unwrap(), &s, Some(100.0));
+        let props = |names: &[&str]| names.iter().map(|n| n.to_string()).collect::<Vec<_>>();
+        let cases: [(&str, &[&str], f64); 8] = [
+            ("alpha2", &["aero/alpha-rad", "aero/alpha-rad"], 1.0),
+            ("alpha_beta", &["aero/alpha-rad", "aero/beta-rad"], 1.0),
+            ("da", &["fcs/left-aileron-pos-rad"], -1.0),
+            ("alpha_da", &["aero/alpha-rad", "fcs/left-aileron-pos-rad"], -1.0),
+            ("alpha_dr", &["aero/alpha-rad", "fcs/rudder-pos-rad"], 1.0),
+            ("alpha_p", &["aero/alpha-rad", "velocities/p-aero-rad_sec", "aero/bi2vel"], 1.0),
+            ("mach2", &["velocities/mach", "velocities/mach"], 1.0),
+            ("0", &[], 1.0),
+        ];
+        for (term, names, factor) in cases {
+            assert_eq!(of(term), Ok((props(names), factor)), "{term}");
+        }
+        let (names, factor) = of("V").unwrap();
+        assert_eq!(names, ["velocities/vt-fps"]);
+        assert!((factor - 0.3048 / 100.0).abs() < 1e-15, "{factor}");
+        let (names, factor) = of("q0").unwrap();
+        assert_eq!(names, ["velocities/q-aero-rad_sec", "metrics/cbarw-ft"]);
+        assert!((factor - 0.3048 / 200.0).abs() < 1e-15, "{factor}");
+        let e = regressor_properties(Term::V, &s, None).unwrap_err();
+        assert_eq!(e, "term `V` needs the reference speed V0: give --v0-mps");
+        assert!(of("alpha_k1").unwrap_err().contains("is a spline"));
+    }
+
+    #[test]
+    fn a_spline_term_is_the_excess_over_its_knot_and_needs_the_knot() {
+        let s = SurfaceProperties::default();
+        let k2 = Term::from_name("alpha_k2").unwrap();
+        let spline = "<max><difference><property>aero/alpha-rad</property><value>0.2</value></difference><value>0</value></max>";
+        assert_eq!(regressor(k2, &s, None, &[0.1, 0.2]), Ok((vec![spline.to_string()], 1.0)));
+        let e = regressor(k2, &s, None, &[0.1]).unwrap_err();
+        assert_eq!(e, "term `alpha_k2` needs its α knot; the summary gives 1");
+        let q = regressor(Term::Q, &s, None, &[]).unwrap();
+        let q_props =
+            ["<property>velocities/q-aero-rad_sec</property>", "<property>aero/ci2vel</property>"];
+        assert_eq!(q, (q_props.map(String::from).to_vec(), 1.0));
+    }
+
+    #[test]
+    fn each_coefficient_has_its_axis_and_scaling() {
+        let (f, b, c) = ("aero/qbar-area", "metrics/bw-ft", "metrics/cbarw-ft");
+        let cases: [(Coefficient, &str, &[&str]); 8] = [
+            (Coefficient::CL, "LIFT", &[f]),
+            (Coefficient::CD, "DRAG", &[f]),
+            (Coefficient::CX, "X", &[f]),
+            (Coefficient::CY, "SIDE", &[f]),
+            (Coefficient::CZ, "Z", &[f]),
+            (Coefficient::Cl, "ROLL", &[f, b]),
+            (Coefficient::Cm, "PITCH", &[f, c]),
+            (Coefficient::Cn, "YAW", &[f, b]),
+        ];
+        for (coefficient, name, scaling) in cases {
+            assert_eq!(axis(coefficient), (name, scaling), "{coefficient:?}");
+        }
+        let s = summary(vec![id("CL_alpha", Some(4.0)), id("CY_beta", Some(-0.5))]);
+        let x = aerodynamics_xml(&s, "s", &SurfaceProperties::default(), None).unwrap();
+        assert!(x.contains("<axis name=\"SIDE\">") && !x.contains("<axis name=\"Y\">"), "{x}");
+        let s = summary(vec![id("CD_alpha", Some(0.1)), id("CZ_alpha", Some(-4.0))]);
+        assert!(aerodynamics_xml(&s, "s", &SurfaceProperties::default(), None).is_err());
+    }
+
+    #[test]
+    fn estimates_up_to_the_limit_and_a_zero_sigma_are_accepted() {
+        assert_eq!(check_identified("CL_0", Some(1e4), Some(0.0)), Ok(()));
+        assert_eq!(check_identified("CL_0", Some(-1e4), None), Ok(()));
+        assert!(
+            check_identified("CL_0", Some(10_000.001), None).unwrap_err().contains("beyond ±1e4")
+        );
+        assert!(check_identified("CL_0", None, Some(-1e-300)).unwrap_err().contains("negative"));
+        assert_eq!(check_identified("CL_0", None, None), Ok(()));
+    }
+
+    #[test]
+    fn comment_and_text_escapes_cover_every_markup_character() {
+        assert_eq!(xml_text(r#"a&b<c>"d'"#), "a&amp;b&lt;c&gt;&quot;d&apos;");
+        assert_eq!(xml_escape("x--y<"), "x- -y&lt;");
+        let mut s = summary(vec![id("Cm_q", Some(-12.5))]);
+        s.status = "?".into();
+        assert_eq!(s.unfinished(), None);
+        s.status = "diverged".into();
+        assert!(s.unfinished().unwrap().starts_with("the summary's status is `diverged`"));
+    }
 }

@@ -385,9 +385,9 @@ mod tests {
         let (cmd, de) = (col(&r, "elevator_cmd_rad"), col(&r, "elevator_rad"));
         let k0 = cmd.iter().position(|c| *c != cmd[0]).unwrap();
         let step = cmd[k0] - cmd[0];
-        for k in k0..k0 + 40 {
-            let want = cmd[0] + step * (1.0 - (-((k - k0) as f64) * 0.01 / 0.05).exp());
-            assert!((de[k] - want).abs() < 1e-12 * step.abs(), "sample {k}: {} vs {want}", de[k]);
+        for (i, got) in de[k0..k0 + 40].iter().enumerate() {
+            let want = cmd[0] + step * (1.0 - (-(i as f64) * 0.01 / 0.05).exp());
+            assert!((got - want).abs() < 1e-12 * step.abs(), "sample {}: {got} vs {want}", k0 + i);
         }
         assert!(
             i.table.column("elevator_cmd_rad").is_none(),

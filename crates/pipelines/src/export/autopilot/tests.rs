@@ -365,3 +365,52 @@ fn the_px4_table_is_the_design_as_signed_fractions_of_the_throws() {
         assert!(!table.contains("-0.000000,") && !table.ends_with("-0.000000\n"));
     }
 }
+
+#[test]
+fn the_script_header_names_the_design_and_its_log_columns() {
+    let d = three_surfaces();
+    let lua = ardupilot_lua(d, &options(Start::ScrUser1)).unwrap();
+    let rows = d.t_s.len();
+    assert_eq!(rows, 101, "0 to 4 s at 25 Hz");
+    let header = format!(
+        "Design: 101 rows at 25 Hz ({} s), surfaces de, da, dr; full throws de ",
+        d.t_s[100]
+    );
+    assert!(lua.contains(&header), "{lua}");
+    assert!(lua.contains("(SIGN -1, servo functions de 19, da 4, dr 21)."), "{lua}");
+    assert!(lua.contains("local RATE_HZ = 25\n") && lua.contains("local ROWS = 101\n"), "{lua}");
+    assert!(lua.contains("local PERIOD_MS = 40\n") && lua.contains("local OVERRIDE_MS = 120\n"));
+    let log = "logger:write('AIDI', 'TMs,Row,DeC,DeS,DaC,DaS,DrC,DrS', 'Iiififif', ";
+    assert!(lua.contains(log), "{lua}");
+    let first = format!("offsets_cdeg = {{ {}", centidegrees(d.inputs[0].1[0]));
+    assert!(lua.contains(&first), "{lua}");
+    let lines: Vec<&str> = lua
+        .lines()
+        .filter(|l| l.trim_start().starts_with(|c: char| c == '-' || c.is_ascii_digit()))
+        .collect();
+    assert!(
+        lines.iter().any(|l| l.split(',').filter(|v| !v.trim().is_empty()).count() == 20),
+        "{lines:?}"
+    );
+}
+
+#[test]
+fn a_design_reaching_exactly_its_throw_is_accepted() {
+    let d = three_surfaces();
+    let trim = d.plan.condition.de_rad;
+    let peak = d.inputs[0].1.iter().map(|v| (trim + v).abs()).fold(0.0, f64::max);
+    let mut o = options(Start::ScrUser1);
+    o.throws[0].1 = peak;
+    assert!(check_limits(d, &o).is_ok());
+    o.throws[0].1 = 90f64.to_radians();
+    assert!(check_limits(d, &o).is_ok());
+    o.throws[0].1 = 0.0;
+    assert!(
+        check_limits(d, &o).unwrap_err().to_string().contains("--throw-deg de=0: give a positive")
+    );
+    o.throws[0].1 = 90.001f64.to_radians();
+    assert!(check_limits(d, &o).unwrap_err().to_string().contains("positive throw up to 90°"));
+    for c in [1, 16] {
+        assert!(check_limits(d, &options(Start::RcChannel(c))).is_ok(), "{c}");
+    }
+}

@@ -28,7 +28,7 @@
 //! the force by the plane's own mass (2 kg; 8 kg with `-heavy`, 22 kg with `-jet`) and
 //! `Aircraft::update_dynamics` integrates `ω̇ = (L, M, N)`, unit inertia without the
 //! gyroscopic terms (`libraries/SITL/SIM_Aircraft.cpp`). So the coefficients are transformed
-//! to give the identified aircraft's accelerations ([`sitl_coefficient`]): force coefficients
+//! to give the identified aircraft's accelerations (`sitl_coefficient`): force coefficients
 //! times `m_SITL / m`, moment coefficients through the inverse inertia tensor (Stevens &
 //! Lewis §2.5: `ṗ = c3 L + c4 N`, `q̇ = c7 M`, `ṙ = c4 L + c9 N` without the rate products).
 

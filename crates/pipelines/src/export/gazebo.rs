@@ -24,7 +24,7 @@
 //! `Cem0`, `Cema`. What the plugin does apply is the force at the centre of pressure `cp`
 //! (`torque + cp × force`, the air velocity taken there): with `cp = (x, 0, 0)`,
 //! `x = Cm_alpha c̄ / CL_alpha`, the lift's moment about the CG is the static stability
-//! ([`at_centre_of_pressure`]). The control terms take the joint angle θ in degrees times a
+//! (`at_centre_of_pressure`). The control terms take the joint angle θ in degrees times a
 //! per-degree derivative and the element's `direction`: with `direction` d and share `k` the
 //! export writes `C_ctrl = k · C_δ · π/180`, and aeroident's deflection is `δ = d · θ` (one
 //! joint, `k = 1`), or `δa = (d_L θ_L − d_R θ_R)/2` for an aileron pair (`k = ±½`).

@@ -363,3 +363,95 @@ fn render(header: &str, entries: &[(String, String)], warnings: &[String]) -> St
     x.push_str("\n}\n");
     x
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A mapping with the surface channel lines `surfaces` (mass 3 kg: the rest does not
+    /// matter here).
+    fn mapping(surfaces: &str) -> Mapping {
+        let text = format!(
+            "description = \"t\"\n[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = {{ column = \"v\", unit = \"m/s\" }}\nalpha = {{ column = \"a\", unit = \"rad\" }}\nqbar = {{ column = \"q\", unit = \"Pa\" }}\nmass = {{ value = 3.0, unit = \"kg\" }}\nS = {{ value = 0.4, unit = \"m2\" }}\n{surfaces}"
+        );
+        Mapping::from_toml_str(&text, "t.toml").unwrap()
+    }
+
+    #[test]
+    fn a_throw_from_the_actuator_limits_the_calibration_or_nothing() {
+        let act = |lo: f64, hi: f64| {
+            format!(
+                "de = {{ column = \"de\", unit = \"rad\", actuator = {{ tau_s = 0.05, position_limits_rad = [{lo}, {hi}] }} }}\n"
+            )
+        };
+        // The mean of the two ends' magnitudes; a note past 10 % of it apart.
+        let t = mapped_throw(&mapping(&act(-0.4, 0.3)), Channel::De).unwrap();
+        assert!((t.rad - 0.35).abs() < 1e-15 && t.note.contains("differ"), "{t:?}");
+        let t = mapped_throw(&mapping(&act(-0.3, 0.3)), Channel::De).unwrap();
+        assert!(t.rad == 0.3 && !t.note.contains("differ") && t.note.contains("actuator"), "{t:?}");
+        // |hi + lo| against 0.1 · rad on both sides of the edge (rad 0.5).
+        assert!(
+            !mapped_throw(&mapping(&act(-0.52, 0.48)), Channel::De)
+                .unwrap()
+                .note
+                .contains("differ")
+        );
+        assert!(
+            mapped_throw(&mapping(&act(-0.53, 0.47)), Channel::De).unwrap().note.contains("differ")
+        );
+        // Limits that do not straddle 0 are no throw; an actuator without limits falls to
+        // the calibration.
+        assert_eq!(mapped_throw(&mapping(&act(0.1, 0.3)), Channel::De), None);
+        assert_eq!(mapped_throw(&mapping(&act(-0.3, -0.1)), Channel::De), None);
+        assert_eq!(mapped_throw(&mapping(&act(0.0, 0.3)), Channel::De), None);
+        assert_eq!(mapped_throw(&mapping(&act(-0.3, 0.0)), Channel::De), None);
+        // Exactly 10 % apart (binary fractions: |hi + lo| 0.125 = 0.1 · 1.25): no note.
+        let t = mapped_throw(&mapping(&act(-1.1875, 1.3125)), Channel::De).unwrap();
+        assert!(t.rad == 1.25 && !t.note.contains("differ"), "{t:?}");
+        let cal = "da = { column = \"da\", unit = \"deg\", calibration = [[-100.0, -20.0], [0.0, 0.0], [100.0, 30.0]], actuator = { tau_s = 0.05 } }\n";
+        let t = mapped_throw(&mapping(cal), Channel::Da).unwrap();
+        assert!((t.rad - 25f64.to_radians()).abs() < 1e-15 && t.note.contains("calibration"));
+        assert_eq!(mapped_throw(&mapping(cal), Channel::De), None);
+        let plain = "dr = { column = \"dr\", unit = \"rad\" }\n";
+        assert_eq!(mapped_throw(&mapping(plain), Channel::Dr), None);
+    }
+
+    fn options() -> ArdupilotOptions {
+        ArdupilotOptions {
+            geometry: Geometry { area_m2: 0.4, span_m: 1.6, chord_m: 0.25 },
+            throws: Throws::default(),
+            alpha_stall_rad: 0.4,
+            mcoeff: 50.0,
+            drop_unrepresentable: false,
+            mass: AircraftMass {
+                mass_kg: 3.0,
+                jx_kgm2: 0.2,
+                jy_kgm2: 0.3,
+                jz_kgm2: 0.4,
+                jxz_kgm2: 0.0,
+            },
+            sitl_mass_kg: SITL_MASS_KG,
+            notes: vec![],
+        }
+    }
+
+    #[test]
+    fn the_stall_blend_at_its_overflow_edge_and_each_bound() {
+        assert!(check_options(&options()).is_ok());
+        // mcoeff (2 α_s + 0.8) = 700 exactly is taken; above it refused (α_s 0.3: 1.4).
+        let at = |mcoeff: f64| ArdupilotOptions { alpha_stall_rad: 0.3, mcoeff, ..options() };
+        assert!(check_options(&at(500.0)).is_ok());
+        let e = check_options(&at(500.1)).unwrap_err().to_string();
+        assert!(e.contains("overflows"), "{e}");
+        for bad in [0.0, -1.0, f64::NAN] {
+            assert!(check_options(&ArdupilotOptions { mcoeff: bad, ..options() }).is_err());
+        }
+        let throws = Throws { rudder_rad: 0.0, ..Throws::default() };
+        let e = check_options(&ArdupilotOptions { throws, ..options() }).unwrap_err();
+        assert!(e.to_string().contains("rudder throw"), "{e}");
+        let e = check_options(&ArdupilotOptions { alpha_stall_rad: 0.0, ..options() });
+        assert!(e.unwrap_err().to_string().contains("alpha_stall"));
+        let heavy = ArdupilotOptions { sitl_mass_kg: 2e6, ..options() };
+        assert!(inertia_constants(&heavy).unwrap_err().to_string().contains("SITL's plane mass"));
+    }
+}

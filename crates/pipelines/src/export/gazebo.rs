@@ -407,3 +407,82 @@ fn xml_text(s: &str) -> String {
 fn comment(s: &str) -> String {
     xml_text(s).replace("--", "- -")
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn param(name: &str) -> Param {
+        Param::from_name(name).unwrap()
+    }
+
+    #[test]
+    fn each_term_the_plugin_cannot_hold_says_why() {
+        for (name, why) in [
+            ("CX_alpha", "body-axis CX/CZ"),
+            ("CY_0", "no zero-α CY"),
+            ("Cl_0", "no zero-α Cl"),
+            ("Cn_0", "no zero-α Cn"),
+            ("CD_beta", "drag has no β"),
+            ("Cm_alphadot", "no α̇ term"),
+        ] {
+            let got = why_not(param(name)).unwrap_or_default();
+            assert!(got.contains(why), "{name}: {got}");
+        }
+        for held in ["Cm_alpha", "Cm_0", "CD_alpha2", "Cn_dr", "CL_beta"] {
+            assert_eq!(why_not(param(held)), None, "{held}");
+        }
+    }
+
+    fn options(direction: f64, share: f64) -> GazeboOptions {
+        GazeboOptions {
+            geometry: Geometry { area_m2: 0.4, span_m: 1.6, chord_m: 0.25 },
+            joints: vec![ControlJoint { surface: Term::Da, joint: "a".into(), direction, share }],
+            link_name: "base_link".into(),
+            air_density_kgpm3: 1.2,
+            alpha_stall_rad: 1.0,
+            drop_unrepresentable: false,
+            notes: vec![],
+        }
+    }
+
+    #[test]
+    fn a_joint_direction_and_share_at_their_bounds() {
+        for (d, s) in [(1.0, 1.0), (-1.0, -1.0), (1.0, 0.5), (1.0, -0.5)] {
+            assert!(check_options(&options(d, s)).is_ok(), "{d} {s}");
+        }
+        for (d, s, what) in [
+            (0.5, 1.0, "direction"),
+            (1.0, 0.0, "share"),
+            (1.0, 1.0001, "share"),
+            (1.0, -1.0001, "share"),
+            (1.0, f64::NAN, "share"),
+        ] {
+            let e = check_options(&options(d, s)).unwrap_err().to_string();
+            assert!(e.contains(what) && e.contains("joint `a`"), "{d} {s}: {e}");
+        }
+    }
+
+    #[test]
+    fn the_centre_of_pressure_needs_a_lift_slope_and_is_zero_without_cm_alpha() {
+        let g = Geometry { area_m2: 0.4, span_m: 1.6, chord_m: 0.25 };
+        let sorted = |pairs: &[(&str, f64)]| {
+            let mut s = uav::Sorted::default();
+            for (n, v) in pairs {
+                s.values.insert(param(n), *v);
+            }
+            s
+        };
+        assert_eq!(centre_of_pressure_m(&sorted(&[("CL_alpha", 5.0)]), &g), Ok(0.0));
+        assert_eq!(centre_of_pressure_m(&sorted(&[]), &g), Ok(0.0));
+        let x = centre_of_pressure_m(&sorted(&[("CL_alpha", 5.0), ("Cm_alpha", -1.0)]), &g);
+        assert_eq!(x, Ok(-0.25 / 5.0));
+        let e = centre_of_pressure_m(&sorted(&[("Cm_alpha", -1.0)]), &g).unwrap_err();
+        assert!(e.contains("CL_alpha is not identified"), "{e}");
+        // A zero value is not written where the term is absent, but kept where present.
+        let mut w = sorted(&[("Cn_r", -0.1)]);
+        set(&mut w, Coefficient::Cn, Term::P, 0.0);
+        set(&mut w, Coefficient::Cn, Term::R, 0.0);
+        assert!(!w.values.contains_key(&param("Cn_p")) && w.values[&param("Cn_r")] == 0.0);
+    }
+}

@@ -20,8 +20,6 @@ use aeroident_models::linearize::{Mode, ModeName};
 use aeroident_models::rigid_body as rb;
 use aeroident_physics::text::Short;
 
-/// Standard gravity, m/s² (the load factor's unit).
-const G_MPS2: f64 = 9.80665;
 /// MIL-F-8785C's Level 2 CAP bounds over its categories, 1/s².
 const CAP_RANGE: (f64, f64) = (0.038, 10.0);
 /// MIL-F-8785C's Level 3 least spiral time to double, s.
@@ -119,7 +117,7 @@ impl Trimmed<'_> {
         }
         let a = self.aircraft.airframe();
         let n_alpha = self.qbar * a.geometry.wing_area_m2 * self.value(CL, Term::Alpha)
-            / (a.mass.mass_kg * G_MPS2);
+            / (a.mass.mass_kg * aeroident_physics::units::G0_MPS2);
         let cap = m.wn_rad_s.powi(2) / n_alpha;
         let inside = n_alpha > 0.0 && (CAP_RANGE.0..=CAP_RANGE.1).contains(&cap);
         (!inside).then(|| {

@@ -418,9 +418,7 @@ pub fn design_for_aircraft(
         );
     }
     let Multisines { t_s, inputs, harmonics } = excitation(spec)?;
-    check_resolvable(aircraft, (vt_mps, alt_m), spec.rate_hz)?;
-    use aeroident_models::aircraft::Aircraft;
-    let tr = aircraft.trim_level(vt_mps, alt_m)?;
+    let tr = resolvable_trim(aircraft, (vt_mps, alt_m), spec.rate_hz)?;
     let condition = aircraft.flight_condition(tr.state.as_slice(), tr.controls.as_slice())?;
     let (structure, theta) = excited_part(aircraft, &spec.surfaces);
     let plan = plan_of(spec, &inputs, structure, theta, aircraft.constants(), condition);
@@ -437,20 +435,20 @@ const RK4_STABLE_LAMBDA_DT: f64 = 2.5;
 /// bound. Names the mode, the least rate that resolves it, and the mode flags
 /// ([`crate::airframe::modes`]) that usually explain a mode that fast.
 ///
+/// Returns the trim the linearization was taken about (the design's flight condition).
+///
 /// # Errors
 /// The trim or linearization's, or a mode with |λ| / rate above [`RK4_STABLE_LAMBDA_DT`].
-fn check_resolvable(
+fn resolvable_trim(
     aircraft: &crate::airframe::ModelFileAircraft,
     (vt_mps, alt_m): (f64, f64),
     rate_hz: f64,
-) -> crate::error::Result<()> {
+) -> crate::error::Result<aeroident_models::aircraft::AircraftTrim<{ crate::airframe::N_STATES }>> {
     let l = aeroident_models::aircraft::linearize_level(aircraft, vt_mps, alt_m)?;
-    let Some(fastest) = l.modes.iter().max_by(|a, b| a.wn_rad_s.total_cmp(&b.wn_rad_s)) else {
-        return Ok(());
+    let fastest = l.modes.iter().max_by(|a, b| a.wn_rad_s.total_cmp(&b.wn_rad_s));
+    let Some(fastest) = fastest.filter(|m| m.wn_rad_s / rate_hz > RK4_STABLE_LAMBDA_DT) else {
+        return Ok(l.trim);
     };
-    if fastest.wn_rad_s / rate_hz <= RK4_STABLE_LAMBDA_DT {
-        return Ok(());
-    }
     let flags = crate::airframe::modes::mode_flags(aircraft, l.trim.state.as_slice(), &l.modes);
     crate::bail!(
         "--rate-hz {rate_hz}: the {} mode (|λ| {:.1} 1/s) is faster than a simulation at that rate resolves (|λ| dt {:.1} > {RK4_STABLE_LAMBDA_DT}); design at {:.0} Hz or more{}",

@@ -330,17 +330,61 @@ fn axis(c: Coefficient) -> (&'static str, &'static [&'static str]) {
     }
 }
 
-/// Writes the `<aerodynamics>` fragment of the identified parameters. `source` is named in the
-/// header comment.
+/// The axes JSBSim takes lift, drag and side force in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ForceAxes {
+    /// `LIFT`, `DRAG`, `SIDE`: JSBSim's wind axes, rotated by α and β (aeroident's CL, CD
+    /// are rotated by α only: they differ at order β·CD). What an existing aircraft's
+    /// `<aerodynamics>` usually holds.
+    Wind,
+    /// `X`, `Y`, `Z` with `frame="STABILITY"`: drag, side force and lift positive aft, right
+    /// and up (`FGAerodynamics::Run`, atStability), rotated by α only: aeroident's CL, CD,
+    /// CY exactly.
+    Stability,
+}
+
+/// The opening `<axis>` element of coefficient `c` (`body`: the model is in body X/Z).
+fn axis_open(c: Coefficient, body: bool, axes: ForceAxes) -> String {
+    let (name, _) = axis(c);
+    let name = if c == Coefficient::CY && body { "Y" } else { name };
+    let stability = match (axes, body, name) {
+        (ForceAxes::Stability, false, "DRAG") => Some("X"),
+        (ForceAxes::Stability, false, "SIDE") => Some("Y"),
+        (ForceAxes::Stability, false, "LIFT") => Some("Z"),
+        _ => None,
+    };
+    match stability {
+        Some(s) => format!("  <axis name=\"{s}\" frame=\"STABILITY\">"),
+        None => format!("  <axis name=\"{name}\">"),
+    }
+}
+
+/// Writes the `<aerodynamics>` fragment of the identified parameters, forces in JSBSim's
+/// wind axes ([`aerodynamics_xml_in`]).
 ///
 /// # Errors
-/// A surface property JSBSim would not accept ([`SurfaceProperties::check`]), lift/drag
-/// mixed with body X/Z coefficients, or no identified parameter at all.
+/// As [`aerodynamics_xml_in`].
 pub fn aerodynamics_xml(
     summary: &SummaryParameters,
     source: &str,
     surfaces: &SurfaceProperties,
     v0_mps: Option<f64>,
+) -> crate::error::Result<String> {
+    aerodynamics_xml_in(summary, source, surfaces, v0_mps, ForceAxes::Wind)
+}
+
+/// Writes the `<aerodynamics>` fragment of the identified parameters, lift, drag and side
+/// force in `axes`. `source` is named in the header comment.
+///
+/// # Errors
+/// A surface property JSBSim would not accept ([`SurfaceProperties::check`]), lift/drag
+/// mixed with body X/Z coefficients, or no identified parameter at all.
+pub fn aerodynamics_xml_in(
+    summary: &SummaryParameters,
+    source: &str,
+    surfaces: &SurfaceProperties,
+    v0_mps: Option<f64>,
+    axes: ForceAxes,
 ) -> crate::error::Result<String> {
     surfaces.check()?;
     let coefs: Vec<Coefficient> = summary.parameters.iter().map(|p| p.param.coefficient).collect();
@@ -371,9 +415,8 @@ pub fn aerodynamics_xml(
         if of_c.is_empty() {
             continue;
         }
-        let (name, scale) = axis(c);
-        let name = if c == Coefficient::CY && body { "Y" } else { name };
-        let _ = writeln!(x, "  <axis name=\"{name}\">");
+        let (_, scale) = axis(c);
+        let _ = writeln!(x, "{}", axis_open(c, body, axes));
         for p in of_c {
             let pname = p.param.name();
             let Some(v) = p.value else {

@@ -1,7 +1,8 @@
 //! A complete JSBSim aircraft (`<fdm_config>`) flying the identified derivatives: the
 //! mapping's metrics, mass and inertia, its thrust (commanded, or its `[thrust_model]` law as
 //! a JSBSim function) as an external force along the thrust line, its actuators as JSBSim
-//! `<actuator>` components, and the [`super::jsbsim::aerodynamics_xml`] fragment. Written in SI
+//! `<actuator>` components, and the [`super::jsbsim::aerodynamics_xml_in`] fragment in
+//! JSBSim's stability axes. Written in SI
 //! with JSBSim's unit attributes (JSBSim converts them; JSBSim reference manual, "Metrics",
 //! "Mass Balance", "External Reactions", "Flight Control"). Documented in `docs/export.md`.
 //!
@@ -16,19 +17,14 @@
 //! at `z = −arm / cos i` (JSBSim's structural z is up) along `(cos i, 0, −sin i)` in body
 //! axes, so its pitching moment is `arm · T`.
 
-use super::jsbsim::{SummaryParameters, SurfaceProperties, aerodynamics_xml};
+use super::jsbsim::{ForceAxes, SummaryParameters, SurfaceProperties, aerodynamics_xml_in};
 use crate::airframe::{Airframe, Propulsion};
 use aeroident_io::mapping::{Actuator, Channel};
 use aeroident_io::thrust_model::ThrustModel;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-/// Newtons to JSBSim's pounds-force.
-const LBF_PER_N: f64 = 0.224_808_943_1;
-/// JSBSim's slug/ft³ to kg/m³.
-const KGPM3_PER_SLUGFT3: f64 = 515.378_818;
-/// JSBSim's ft/s to m/s.
-const MPS_PER_FPS: f64 = 0.3048;
+use aeroident_physics::units::{KGPM3_PER_SLUGPFT3, M_PER_FT, N_PER_LBF};
 
 /// The surfaces: command property, position property, the mapping channel of its actuator,
 /// and the gain from aeroident's deflection to the position property.
@@ -61,7 +57,10 @@ pub fn aircraft_xml(
         aileron: SURFACES[1].1.into(),
         rudder: SURFACES[2].1.into(),
     };
-    let aero = stability_axes(&aerodynamics_xml(summary, source, &surfaces, airframe.v0_mps)?);
+    // Stability axes: aeroident's CL, CD, CY exactly (the wind axes' β rotation made a_y 10 %
+    // off in a rudder doublet).
+    let aero =
+        aerodynamics_xml_in(summary, source, &surfaces, airframe.v0_mps, ForceAxes::Stability)?;
     let mut x = String::from("<?xml version=\"1.0\"?>\n");
     let _ = writeln!(
         x,
@@ -75,22 +74,6 @@ pub fn aircraft_xml(
     x.push_str(&aero);
     x.push_str("</fdm_config>\n");
     Ok(x)
-}
-
-/// The fragment's force axes as JSBSim's stability axes: `X`, `Y`, `Z` with
-/// `frame="STABILITY"` take drag, side force and lift (drag and lift positive aft and up,
-/// as in the wind axes; `FGAerodynamics::Run`, atStability), rotated by α only, which is
-/// aeroident's CL and CD exactly; the wind axes also rotate by β (a β·CD side force a
-/// rudder doublet makes 10 % of a_y).
-fn stability_axes(fragment: &str) -> String {
-    let mut s = fragment.to_string();
-    for (wind, stability) in [("DRAG", "X"), ("SIDE", "Y"), ("LIFT", "Z")] {
-        s = s.replace(
-            &format!("<axis name=\"{wind}\">"),
-            &format!("<axis name=\"{stability}\" frame=\"STABILITY\">"),
-        );
-    }
-    s
 }
 
 /// The engine command's property.
@@ -137,7 +120,8 @@ fn thrust(a: &Airframe) -> String {
         Propulsion::Law(law) => law_function(law),
     };
     format!(
-        "  <external_reactions>\n    <force name=\"thrust\" frame=\"BODY\">\n      <function>\n        <product>\n          <value>{LBF_PER_N}</value>\n          {magnitude}\n        </product>\n      </function>\n      <location unit=\"M\"><x>0</x><y>0</y><z>{}</z></location>\n      <direction><x>{ci}</x><y>0</y><z>{}</z></direction>\n    </force>\n  </external_reactions>\n",
+        "  <external_reactions>\n    <force name=\"thrust\" frame=\"BODY\">\n      <function>\n        <product>\n          <value>{}</value>\n          {magnitude}\n        </product>\n      </function>\n      <location unit=\"M\"><x>0</x><y>0</y><z>{}</z></location>\n      <direction><x>{ci}</x><y>0</y><z>{}</z></direction>\n    </force>\n  </external_reactions>\n",
+        1.0 / N_PER_LBF,
         -a.thrust_arm_m / ci + 0.0,
         -si + 0.0
     )
@@ -147,7 +131,7 @@ fn thrust(a: &Airframe) -> String {
 /// ([`ThrustModel`]).
 fn law_function(law: ThrustModel) -> String {
     let v = format!(
-        "<product><property>velocities/vt-fps</property><value>{MPS_PER_FPS}</value></product>"
+        "<product><property>velocities/vt-fps</property><value>{M_PER_FT}</value></product>"
     );
     match law {
         ThrustModel::Throttle { static_thrust_n, zero_thrust_speed_mps, exponent } => format!(
@@ -156,7 +140,7 @@ fn law_function(law: ThrustModel) -> String {
         ThrustModel::Propeller { diameter_m: d, ct0, ct_j } => {
             // T = ρ D⁴ n² ct0 + ρ D³ n V ct_j, n = ω / 2π rev/s.
             let rho = format!(
-                "<product><property>atmosphere/rho-slugs_ft3</property><value>{KGPM3_PER_SLUGFT3}</value></product>"
+                "<product><property>atmosphere/rho-slugs_ft3</property><value>{KGPM3_PER_SLUGPFT3}</value></product>"
             );
             let n = format!(
                 "<quotient><property>fcs/prop-speed-cmd-rad_sec</property><value>{}</value></quotient>",

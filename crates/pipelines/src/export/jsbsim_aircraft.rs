@@ -38,7 +38,7 @@ const SURFACES: [(&str, &str, Channel, f64); 3] = [
 /// the mapping's `actuators`; `source` is named in the header.
 ///
 /// # Errors
-/// As [`aerodynamics_xml`] (mixed axis systems, nothing identified), or a name JSBSim cannot
+/// As [`aerodynamics_xml_in`] (mixed axis systems, nothing identified), or a name JSBSim cannot
 /// load (empty, or not letters, digits, `_`, `-`).
 pub fn aircraft_xml(
     summary: &SummaryParameters,

@@ -93,7 +93,6 @@ def main():
     }
     for k, v in ic.items():
         fdm[k] = v
-    mass_kg = None
 
     def command(time):
         fdm["fcs/elevator-cmd-rad"] = at(t, r["elevator_rad"], time)

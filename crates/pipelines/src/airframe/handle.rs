@@ -13,7 +13,7 @@ use crate::aircraft::increments::{increment_matrix, parse_increment};
 use crate::error::{PipelineError, Result};
 use aeroident_estimators::{AirDataSample, Param};
 use aeroident_models::aircraft::{
-    Aircraft, CONTROL_NAMES, ControlVector, N_CONTROLS, linearize_level,
+    Aircraft, CONTROL_NAMES, ControlVector, LevelLinearization, N_CONTROLS, linearize_level,
 };
 use aeroident_models::f16::{self, F16, IncrementReference, IncrementSchedule};
 use aeroident_models::integrate::rk4_step;
@@ -50,10 +50,138 @@ pub struct Linear {
     pub a: Vec<Vec<f64>>,
     /// `B`, `n` rows of [`N_CONTROLS`].
     pub b: Vec<Vec<f64>>,
-    /// Eigenvalues of `A` as (real, imaginary), 1/s.
+    /// Eigenvalues of `A` as (real, imaginary), 1/s, sorted by real then imaginary part.
     pub eigenvalues: Vec<(f64, f64)>,
-    /// The rigid-body modes of the longitudinal and lateral blocks.
+    /// The rigid-body modes of the longitudinal and lateral blocks (never an actuator's pole:
+    /// those are [`Self::actuators`]).
     pub modes: Vec<Mode>,
+    /// The `n` states' names with their units: the aircraft's, then one per actuator.
+    pub states: Vec<String>,
+    /// The [`N_CONTROLS`] inputs' names: the engine command (its unit,
+    /// [`Aircraft::engine_command`]), then each surface's deflection (`elevator_rad` …), or its
+    /// command (`elevator_cmd_rad` …) where an actuator lies between them.
+    pub inputs: Vec<String>,
+    /// The actuator states appended by [`Self::with_actuators`], in state order; empty when
+    /// every surface is its command.
+    pub actuators: Vec<ActuatorState>,
+}
+
+/// One surface's actuator as a state of a [`Linear`] model: the first-order lag
+/// `τ δ̇ = u − δ` of [`aeroident_io::mapping::Actuator`] about the trim, so `ẋ = (u − x)/τ`
+/// with the command `u` as the input, its pole `−1/τ`. The rate and position limits are not
+/// in it: the linear model holds about the trim where neither acts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ActuatorState {
+    /// The surface: `de`, `da` or `dr`.
+    pub surface: &'static str,
+    /// The state's name: the deflection as `sim` records it (`elevator_rad`, `aileron_rad`,
+    /// `rudder_rad`).
+    pub state: &'static str,
+    /// The input driving it: the command as `sim` records it (`elevator_cmd_rad` …).
+    pub input: &'static str,
+    /// Row and column of the state in `A`.
+    pub index: usize,
+    /// Column of the command in `B` (1 elevator, 2 aileron, 3 rudder).
+    pub control: usize,
+    /// The mapping's actuator (τ s, rate limit rad/s, position limits rad).
+    pub actuator: aeroident_io::mapping::Actuator,
+    /// The surface's trim deflection, rad.
+    pub trim_rad: f64,
+}
+
+impl ActuatorState {
+    /// The pole `−1/τ`, 1/s.
+    pub fn pole(&self) -> f64 {
+        -1.0 / self.actuator.tau_s
+    }
+}
+
+/// The surfaces an actuator may drive: (name, deflection state, command input), in the order
+/// of [`aeroident_models::aircraft::CONTROL_NAMES`]' surfaces and of the airframe's
+/// actuators; the names are the columns `sim` records.
+const SURFACES: [(&str, &str, &str); 3] = [
+    ("de", "elevator_rad", "elevator_cmd_rad"),
+    ("da", "aileron_rad", "aileron_cmd_rad"),
+    ("dr", "rudder_rad", "rudder_cmd_rad"),
+];
+
+/// What a linear model with actuators leaves out, in words, for the faces to print.
+pub const ACTUATOR_NOTE: &str = "actuators are first-order lag states about the trim (the input is the command): rate limits and position limits are not in a linear model, which holds while neither acts";
+
+impl Linear {
+    /// The same model with each surface that has an actuator in `actuators` (elevator,
+    /// aileron, rudder: [`super::Airframe::actuators`]) driven through it: one state per
+    /// actuator appended after the aircraft's (named as `sim` records the surface,
+    /// `elevator_rad` …), `ẋ = (u − x)/τ` with the command `u` as the input (named
+    /// `elevator_cmd_rad` …), the surface's column of `B` moved into `A` as that state's
+    /// column. Rigid-body rows are unchanged, and the surfaces do not feed back, so the
+    /// eigenvalues are the aircraft's and `−1/τ` per actuator (computed from the whole `A`),
+    /// and [`Self::modes`] are unchanged. A model without actuators is returned as it is.
+    pub fn with_actuators(
+        mut self,
+        actuators: &[Option<aeroident_io::mapping::Actuator>; 3],
+    ) -> Self {
+        let n0 = self.a.len();
+        for (k, (act, (surface, state, input))) in actuators.iter().zip(SURFACES).enumerate() {
+            let Some(actuator) = act else { continue };
+            let (index, control) = (self.a.len(), 1 + k);
+            for (row_a, row_b) in self.a.iter_mut().zip(self.b.iter_mut()) {
+                row_a.push(std::mem::take(&mut row_b[control]));
+            }
+            let mut row = vec![0.0; index + 1];
+            row[index] = -1.0 / actuator.tau_s;
+            self.a.push(row);
+            let mut b = vec![0.0; N_CONTROLS];
+            b[control] = 1.0 / actuator.tau_s;
+            self.b.push(b);
+            self.states.push(state.to_string());
+            self.inputs[control] = input.to_string();
+            let trim_rad = self.trim.controls[control];
+            self.actuators.push(ActuatorState {
+                surface,
+                state,
+                input,
+                index,
+                control,
+                actuator: *actuator,
+                trim_rad,
+            });
+        }
+        if self.a.len() > n0 {
+            self.eigenvalues = eigenvalues_of(&self.a);
+        }
+        self
+    }
+
+    /// [`ACTUATOR_NOTE`], and a note per actuator whose trim deflection lies at or beyond
+    /// its position limits (the surface is then held there, and the linear model does not
+    /// hold); empty without actuators.
+    pub fn actuator_notes(&self) -> Vec<String> {
+        if self.actuators.is_empty() {
+            return Vec::new();
+        }
+        let mut notes = vec![ACTUATOR_NOTE.to_string()];
+        for s in &self.actuators {
+            let (lo, hi) = s.actuator.position_limits_rad;
+            if !(lo < s.trim_rad && s.trim_rad < hi) {
+                notes.push(format!(
+                    "{}: the trim deflection {:.4} rad is at or beyond the actuator's position limits [{lo}, {hi}] rad: the surface saturates there and the linear model does not hold",
+                    s.surface, s.trim_rad
+                ));
+            }
+        }
+        notes
+    }
+}
+
+/// Eigenvalues of the square `a` (rows), sorted by real then imaginary part, as
+/// [`aeroident_models::linearize::eigenvalues`] sorts them.
+fn eigenvalues_of(a: &[Vec<f64>]) -> Vec<(f64, f64)> {
+    let n = a.len();
+    let m = nalgebra::DMatrix::from_fn(n, n, |i, j| a[i][j]);
+    let mut v: Vec<(f64, f64)> = m.complex_eigenvalues().iter().map(|e| (e.re, e.im)).collect();
+    v.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.total_cmp(&y.1)));
+    v
 }
 
 impl AnyAircraft {
@@ -198,6 +326,20 @@ impl AnyAircraft {
         }
     }
 
+    /// [`Self::linearize_level`] with the mapping's actuators as states
+    /// ([`Linear::with_actuators`]: the surfaces' inputs become their commands); the F-16's
+    /// model, and a model-file aircraft without actuators, as [`Self::linearize_level`].
+    ///
+    /// # Errors
+    /// As [`Self::linearize_level`].
+    pub fn linearize_level_actuated(&self, vt_mps: f64, alt_m: f64) -> Result<Linear> {
+        let l = self.linearize_level(vt_mps, alt_m)?;
+        Ok(match self {
+            Self::F16(_) => l,
+            Self::ModelFile(a) => l.with_actuators(&a.airframe().actuators),
+        })
+    }
+
     /// The exact (noise-free) air-data sample of the F-16 at `t_s`, the one the sample-driven
     /// estimators take ([`exact_sample`]: SI, ṗ q̇ ṙ α̇ from the dynamics, thrust from the
     /// engine model); `v0_mps` is the reference airspeed of the `V/V0` term.
@@ -278,15 +420,31 @@ fn step_of<const N: usize, A: Aircraft<N>>(
 }
 
 fn linear_of<const N: usize, A: Aircraft<N>>(a: &A, vt_mps: f64, alt_m: f64) -> Result<Linear> {
-    let l = linearize_level(a, vt_mps, alt_m)?;
-    let rows = |m: &dyn Fn(usize, usize) -> f64, cols: usize| -> Vec<Vec<f64>> {
-        (0..N).map(|i| (0..cols).map(|j| m(i, j)).collect()).collect()
-    };
-    Ok(Linear {
-        trim: plain_trim(&l.trim),
-        a: rows(&|i, j| l.linear.a[(i, j)], N),
-        b: rows(&|i, j| l.linear.b[(i, j)], N_CONTROLS),
-        eigenvalues: l.eigenvalues.iter().map(|e| (e.re, e.im)).collect(),
-        modes: l.modes,
-    })
+    Ok(Linear::of_level(a, &linearize_level(a, vt_mps, alt_m)?))
+}
+
+impl Linear {
+    /// The plain-vector form of `l`, a linearization of `aircraft`: its state names, and the
+    /// inputs named as `linearize` prints them (the engine command with its unit, then the
+    /// surfaces of [`CONTROL_NAMES`]); no actuator ([`Self::with_actuators`] adds them).
+    pub fn of_level<const N: usize, A: Aircraft<N>>(
+        aircraft: &A,
+        l: &LevelLinearization<N>,
+    ) -> Self {
+        let rows = |m: &dyn Fn(usize, usize) -> f64, cols: usize| -> Vec<Vec<f64>> {
+            (0..N).map(|i| (0..cols).map(|j| m(i, j)).collect()).collect()
+        };
+        let mut inputs = vec![aircraft.engine_command().to_string()];
+        inputs.extend(CONTROL_NAMES[1..].iter().map(|n| n.to_string()));
+        Linear {
+            trim: plain_trim(&l.trim),
+            a: rows(&|i, j| l.linear.a[(i, j)], N),
+            b: rows(&|i, j| l.linear.b[(i, j)], N_CONTROLS),
+            eigenvalues: l.eigenvalues.iter().map(|e| (e.re, e.im)).collect(),
+            modes: l.modes.clone(),
+            states: aircraft.state_names().iter().map(|n| n.to_string()).collect(),
+            inputs,
+            actuators: Vec::new(),
+        }
+    }
 }

@@ -31,7 +31,7 @@ pub(crate) mod tests;
 mod trim;
 
 pub use files::{airframe_from_mapping, load, parameter_values};
-pub use handle::{AnyAircraft, Linear, Trim};
+pub use handle::{ACTUATOR_NOTE, ActuatorState, AnyAircraft, Linear, Trim};
 pub use trim::{MAX_TRIM_ANGLE_RAD, trim_wings_level};
 
 use aeroident_estimators::flight_model::{self as fm, FlightModel, ModelInputs, StateSet};

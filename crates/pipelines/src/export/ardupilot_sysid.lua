@@ -27,6 +27,19 @@ The row is the one due at the time since the start (millis): a late call plays t
 due, so the record never stretches. Logged at every call as AIDI: TMs (ms since the start),
 Row (0-based), and per surface its offset in centidegrees (<S>C) and the commanded scaled
 output (<S>S); RCOU holds the PWM actually sent.
+
+The rate is checked, since ArduPilot promises scripts no schedule: PERIOD_MS is the least
+delay before the next call, and a busy autopilot calls later, so rows are skipped and the
+record is a coarser manoeuvre than the one designed. While playing, the script counts the
+rows played against the rows due and keeps the largest gap between two calls. The record is
+not the designed manoeuvre when more than SKIP_FRACTION (5 %) of the ROWS rows are skipped, or
+when two calls are more than GAP_PERIODS (2) table periods apart (a hole of a whole row or
+more); then "aeroident: behind: ..." goes to the GCS at once as a warning, once per start. It
+keeps playing: the AIDI log says which rows were flown, and the record is still a usable
+manoeuvre, only not the designed one. At the end (finished, switched off or disarmed) the GCS
+gets "aeroident: played P of ROWS rows at H Hz" (H: calls per second while playing) and, when
+behind, "aeroident: not the designed manoeuvre"; the log gets one AIDR: Rows (ROWS), Due (rows
+due by the end), Played, Hz, GapMs (the largest gap) and Slow (1 when behind).
 ]]
 
 local RATE_HZ = @RATE_HZ@
@@ -38,6 +51,11 @@ local IDLE_MS = 100
 local SWITCH_HIGH_US = 1800
 local SCALED_FULL = 4500
 local MAV_INFO, MAV_WARNING = 6, 4
+-- behind the design (header): more than this fraction of the ROWS rows skipped (a fraction of
+-- the whole table, not of the rows due so far, which would call one early skip 33 %), ...
+local SKIP_FRACTION = 0.05
+-- ... or two calls more than this many table periods apart
+local GAP_PERIODS = 2
 
 local SURFACES = {
 @SURFACES@
@@ -47,6 +65,9 @@ local SURFACES = {
 -- the manoeuvre by itself); ready: for it to go high; playing; done: for it to go low again
 local state = 'waiting'
 local t0_ms = 0
+-- the calls' pace while playing: calls, rows played, the last row played, the first and last
+-- call's ms since the start, the largest gap between calls (ms), whether the warning was sent
+local pace = {}
 
 local function start_on()
   if ARM_RC > 0 then
@@ -128,11 +149,77 @@ local function play(row, elapsed_ms)
   logger:write('AIDI', @LOG_LABELS@, @LOG_FORMAT@, table.unpack(values))
 end
 
--- `after`: 'ready' when the switch is already off, else 'done' (it must go off first)
-local function stop(why, after)
+-- counts a call `elapsed_ms` after the start, the switch-off and the finishing calls too (a
+-- late one of those is a gap in the record as much as any)
+local function count_call(elapsed_ms)
+  if pace.calls > 0 then
+    pace.gap_ms = math.max(pace.gap_ms, elapsed_ms - pace.last_ms)
+  else
+    pace.first_ms = elapsed_ms
+  end
+  pace.calls = pace.calls + 1
+  pace.last_ms = elapsed_ms
+end
+
+local function count_row(row)
+  if row ~= pace.row then
+    pace.played = pace.played + 1
+    pace.row = row
+  end
+end
+
+-- calls per second while playing
+local function achieved_hz()
+  local span_ms = pace.last_ms - pace.first_ms
+  if pace.calls < 2 or span_ms <= 0 then
+    return 0.0
+  end
+  return (pace.calls - 1) * 1000 / span_ms
+end
+
+-- warns, once per start, when the calls fell behind the design (header), `due` rows being due
+local function check_pace(due)
+  local skipped = due - pace.played
+  local late = skipped > SKIP_FRACTION * ROWS or pace.gap_ms > GAP_PERIODS * 1000 / RATE_HZ
+  if late and not pace.warned then
+    pace.warned = true
+    gcs:send_text(MAV_WARNING, string.format('aeroident: behind: %d rows skipped, gap %d ms', skipped, pace.gap_ms))
+  end
+end
+
+-- the end of a played record: its pace to the log and the GCS, `due` rows having been due
+local function report(due)
+  check_pace(due)
+  local hz = achieved_hz()
+  logger:write('AIDR', 'Rows,Due,Played,Hz,GapMs,Slow', 'IIIfII', ROWS, due, pace.played, hz, pace.gap_ms,
+    pace.warned and 1 or 0)
+  local severity = pace.warned and MAV_WARNING or MAV_INFO
+  gcs:send_text(severity, string.format('aeroident: played %d of %d rows at %.1f Hz', pace.played, ROWS, hz))
+  if pace.warned then
+    gcs:send_text(MAV_WARNING, 'aeroident: not the designed manoeuvre')
+  end
+end
+
+-- `after`: 'ready' when the switch is already off, else 'done' (it must go off first); `due`:
+-- the rows due by now
+local function stop(why, after, due)
   release()
   gcs:send_text(MAV_INFO, 'aeroident: ' .. why)
+  report(due)
   state = after
+end
+
+-- the start switch on and armed: playing from now, or 'done' when an output is missing
+local function begin()
+  if not find_outputs() then
+    state = 'done'
+    return false
+  end
+  t0_ms = millis():tofloat()
+  pace = { calls = 0, played = 0, row = -1, first_ms = 0, last_ms = 0, gap_ms = 0, warned = false }
+  state = 'playing'
+  gcs:send_text(MAV_INFO, 'aeroident: manoeuvre started')
+  return true
 end
 
 local function update()
@@ -143,33 +230,27 @@ local function update()
     end
     return update, IDLE_MS
   end
-  if state == 'ready' then
-    if not on or not arming:is_armed() then
-      return update, IDLE_MS
-    end
-    if not find_outputs() then
-      state = 'done'
-      return update, IDLE_MS
-    end
-    t0_ms = millis():tofloat()
-    state = 'playing'
-    gcs:send_text(MAV_INFO, 'aeroident: manoeuvre started')
-  end
-  if not on then
-    stop('manoeuvre stopped by the switch', 'ready')
-    return update, IDLE_MS
-  end
-  if not arming:is_armed() then
-    stop('manoeuvre stopped: disarmed', 'done')
+  if state == 'ready' and not (on and arming:is_armed() and begin()) then
     return update, IDLE_MS
   end
   local elapsed_ms = math.floor(millis():tofloat() - t0_ms)
+  count_call(elapsed_ms)
   local row = math.floor(elapsed_ms * RATE_HZ / 1000 + 1e-9)
+  if not on then
+    stop('manoeuvre stopped by the switch', 'ready', math.min(row, ROWS))
+    return update, IDLE_MS
+  end
+  if not arming:is_armed() then
+    stop('manoeuvre stopped: disarmed', 'done', math.min(row, ROWS))
+    return update, IDLE_MS
+  end
   if row >= ROWS then
-    stop('manoeuvre finished', 'done')
+    stop('manoeuvre finished', 'done', ROWS)
     return update, IDLE_MS
   end
   play(row, elapsed_ms)
+  count_row(row)
+  check_pace(row + 1)
   return update, PERIOD_MS
 end
 

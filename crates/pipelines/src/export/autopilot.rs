@@ -32,6 +32,19 @@ pub const SCALED_FULL_THROW: f64 = 4500.0;
 /// Largest throw accepted, degrees: beyond it a "surface" is not a flap-type control.
 pub const MAX_THROW_DEG: f64 = 90.0;
 
+/// Highest table rate the ArduPlane script is written for, Hz: a row of at least a
+/// millisecond. ArduPilot's scripting scheduler counts in whole milliseconds: a script's
+/// returned delay becomes `next_run_ms = AP_HAL::millis64() + (uint64_t)luaL_checknumber(L,
+/// -1)`, waited with `hal.scheduler->delay(next_run_ms - now_ms)`, and the script reads the
+/// time as `millis()` (ArduPilot/ardupilot `libraries/AP_Scripting/lua_scripts.cpp`, commit
+/// 83eeca258621fe6efe14d0e5a1da432d8261be2f; later versions count the delay from the call's
+/// start, in milliseconds still), so a row shorter than 1 ms can be neither timed nor asked
+/// for. That is the only hard figure: the scheduler has no minimum delay, and ArduPilot
+/// documents no rate a script is called at (scripts "are not guaranteed to be run on a
+/// reliable schedule", ardupilot.org/dev/docs/common-lua-scripts.html); below this limit the
+/// script measures the rate it gets and warns (its header).
+pub const MAX_SCRIPT_RATE_HZ: f64 = 1000.0;
+
 /// How the pilot starts and stops the ArduPlane script.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Start {
@@ -115,17 +128,37 @@ pub fn check_limits(d: &Design, o: &AutopilotOptions) -> crate::error::Result<()
     Ok(())
 }
 
-/// The ArduPlane Lua script (module doc; how it flies is in the script's own header): the
-/// design's injection table (integer centidegrees, [`centidegrees`]) embedded per surface with
-/// its servo function, sign and throw.
+/// Checks the design's table rate against what ArduPilot's scripting can time: at most
+/// [`MAX_SCRIPT_RATE_HZ`].
 ///
 /// # Errors
-/// As [`check_limits`].
+/// A faster design, naming `--rate-hz` and the limit.
+pub fn check_script_rate(d: &Design) -> crate::error::Result<()> {
+    let rate = design_rate_hz(d);
+    if !(rate > 0.0 && rate <= MAX_SCRIPT_RATE_HZ) {
+        crate::bail!(
+            "--rate-hz {rate}: the ArduPlane script plays at most {MAX_SCRIPT_RATE_HZ} Hz (ArduPilot schedules scripts and reads the time in whole milliseconds): design at a lower rate"
+        );
+    }
+    Ok(())
+}
+
+/// The design's table rate, Hz: the spec's rate back from its period (1/(1/r) can miss r in
+/// the last bit, which would move the script's row boundaries by a row at exact multiples).
+fn design_rate_hz(d: &Design) -> f64 {
+    (1e6 / d.plan.manoeuvres[0].dt_s).round() / 1e6
+}
+
+/// The ArduPlane Lua script (module doc; how it flies and how it checks the rate it is called
+/// at are in the script's own header): the design's injection table (integer centidegrees,
+/// [`centidegrees`]) embedded per surface with its servo function, sign and throw.
+///
+/// # Errors
+/// As [`check_limits`] and [`check_script_rate`].
 pub fn ardupilot_lua(d: &Design, o: &AutopilotOptions) -> crate::error::Result<String> {
     check_limits(d, o)?;
-    // The spec's rate back from its period (1/(1/r) can miss r in the last bit, which would
-    // move the script's row boundaries by a row at exact multiples).
-    let rate = (1e6 / d.plan.manoeuvres[0].dt_s).round() / 1e6;
+    check_script_rate(d)?;
+    let rate = design_rate_hz(d);
     let period_ms = (1000.0 / rate).floor().max(1.0);
     let mut surfaces = String::new();
     let (mut labels, mut format) = (String::from("TMs,Row"), String::from("Ii"));
@@ -190,9 +223,10 @@ fn wrapped(values: &[String]) -> String {
     values.chunks(20).map(|c| c.join(", ")).collect::<Vec<_>>().join(",\n      ")
 }
 
-/// The script header's lines on the design: waveform, surfaces and throws, rows, rate.
+/// The script header's lines on the design: waveform, surfaces and throws, rows, the rate the
+/// table was designed at and what a slower call rate does to it.
 fn description(d: &Design, o: &AutopilotOptions) -> String {
-    let dt = d.plan.manoeuvres[0].dt_s;
+    let rate = design_rate_hz(d);
     let throws: Vec<String> = d
         .inputs
         .iter()
@@ -201,9 +235,10 @@ fn description(d: &Design, o: &AutopilotOptions) -> String {
         })
         .collect();
     format!(
-        "Design: {} rows at {} Hz ({} s), surfaces {}; full throws {} (SIGN -1, servo functions {}).",
+        "Design: {} rows at {rate} Hz ({} s), surfaces {}; full throws {} (SIGN -1, servo functions {}).\n\
+         The table was designed at {rate} Hz, a row every {} ms: ArduPilot does not promise to\n\
+         call a script that often, and called slower the script skips rows and warns (below).",
         d.t_s.len(),
-        1.0 / dt,
         d.t_s.last().copied().unwrap_or(0.0),
         d.inputs.iter().map(|(s, _)| s.name()).collect::<Vec<_>>().join(", "),
         throws.join(", "),
@@ -211,7 +246,8 @@ fn description(d: &Design, o: &AutopilotOptions) -> String {
             .iter()
             .map(|(s, _)| format!("{} {}", s.name(), servo_function(*s)))
             .collect::<Vec<_>>()
-            .join(", ")
+            .join(", "),
+        (1e6 / rate).round() / 1e3
     )
 }
 

@@ -55,7 +55,7 @@ params = {
   SERVO5_FUNCTION = 4, SERVO5_MIN = 1200, SERVO5_TRIM = 1510, SERVO5_MAX = 1800, SERVO5_REVERSED = 1,
 }
 base = { [4] = 120.0, [19] = -300.0, [21] = 45.0 }
-sets, logs, texts = {}, {}, {}
+sets, logs, texts, severities = {}, {}, {}, {}
 param = {}
 -- ArduPilot's param:get returns floats
 function param:get(name)
@@ -79,7 +79,10 @@ function logger:write(name, labels, format, ...)
   logs[#logs + 1] = { name = name, labels = labels, format = format, values = { ... } }
 end
 gcs = {}
-function gcs:send_text(severity, text) texts[#texts + 1] = text end
+function gcs:send_text(severity, text)
+  texts[#texts + 1] = text
+  severities[#severities + 1] = severity
+end
 "#;
 
 /// Output channels (0-based) of the stub: (servo function, min, trim, max, reversed).
@@ -120,13 +123,17 @@ fn load(lua: &Lua, script: &str) -> Function {
 
 /// Calls the script once at `now_ms` after clearing the recorded calls; the next function.
 fn step(lua: &Lua, f: &Function, now_ms: f64) -> Function {
+    step_delay(lua, f, now_ms).0
+}
+
+/// As [`step`], with the delay the script asks before its next call, ms.
+fn step_delay(lua: &Lua, f: &Function, now_ms: f64) -> (Function, i64) {
     let g = lua.globals();
     g.set("now", now_ms).unwrap();
     for t in ["sets", "logs"] {
         g.set(t, lua.create_table().unwrap()).unwrap();
     }
-    let (next, _): (Function, i64) = f.call(()).unwrap();
-    next
+    f.call(()).unwrap()
 }
 
 fn sets(lua: &Lua) -> Vec<(u8, i64, i64)> {
@@ -139,12 +146,18 @@ fn sets(lua: &Lua) -> Vec<(u8, i64, i64)> {
         .collect()
 }
 
+/// The AIDI records of the last call (one per played row).
 fn log_values(lua: &Lua) -> Vec<Vec<f64>> {
+    records(lua, "AIDI")
+}
+
+/// The values of the last call's log records named `name`.
+fn records(lua: &Lua, name: &str) -> Vec<Vec<f64>> {
     let t: Table = lua.globals().get("logs").unwrap();
     t.sequence_values::<Table>()
+        .map(|r| r.unwrap())
+        .filter(|r| r.get::<String>("name").unwrap() == name)
         .map(|r| {
-            let r = r.unwrap();
-            assert_eq!(r.get::<String>("name").unwrap(), "AIDI");
             let v: Table = r.get("values").unwrap();
             v.sequence_values::<f64>().map(|x| x.unwrap()).collect()
         })
@@ -378,6 +391,7 @@ fn the_script_header_names_the_design_and_its_log_columns() {
     );
     assert!(lua.contains(&header), "{lua}");
     assert!(lua.contains("(SIGN -1, servo functions de 19, da 4, dr 21)."), "{lua}");
+    assert!(lua.contains("The table was designed at 25 Hz, a row every 40 ms"), "{lua}");
     assert!(lua.contains("local RATE_HZ = 25\n") && lua.contains("local ROWS = 101\n"), "{lua}");
     assert!(lua.contains("local PERIOD_MS = 40\n") && lua.contains("local OVERRIDE_MS = 120\n"));
     let log = "logger:write('AIDI', 'TMs,Row,DeC,DeS,DaC,DaS,DrC,DrS', 'Iiififif', ";
@@ -413,4 +427,193 @@ fn a_design_reaching_exactly_its_throw_is_accepted() {
     for c in [1, 16] {
         assert!(check_limits(d, &options(Start::RcChannel(c))).is_ok(), "{c}");
     }
+}
+
+/// A 50 Hz design of 3 s (151 rows), elevator and aileron (computed once).
+fn fifty_hz() -> &'static Design {
+    static D: OnceLock<Design> = OnceLock::new();
+    D.get_or_init(|| {
+        design(&DesignSpec {
+            surfaces: vec![Surface::De, Surface::Da],
+            amplitude_rad: 2f64.to_radians(),
+            duration_s: 3.0,
+            rate_hz: 50.0,
+            band_hz: (0.25, 3.0),
+            alt_ft: 20000.0,
+            vt_fps: 675.0,
+            xcg: 0.3,
+            turbulence: None,
+            signal: Waveform::Multisine,
+        })
+        .unwrap()
+    })
+}
+
+/// A record played under the stub's clock: the ms since the start of every call while
+/// playing, the rows each played (`None`: none, the finishing call), the texts sent with
+/// their severity and the index of the call they came at, and the one AIDR record.
+struct Played {
+    calls_ms: Vec<f64>,
+    rows: Vec<Option<usize>>,
+    texts: Vec<(u8, String, usize)>,
+    aidr: Vec<f64>,
+}
+
+/// The millisecond the script is started at.
+const T0_MS: f64 = 1000.0;
+
+/// Plays `d` from `T0_MS` to its end, each call at `next(now_ms, asked_delay_ms)` (ArduPilot's
+/// scheduler as the test wants it: honouring the delay, or slower).
+fn play_scheduled(d: &Design, mut next: impl FnMut(f64, i64) -> f64) -> Played {
+    let lua = Lua::new();
+    let mut f = load(&lua, &ardupilot_lua(d, &options(Start::ScrUser1)).unwrap());
+    f = step(&lua, &f, 0.0);
+    set_param(&lua, "SCR_USER1", 1.0);
+    let mut p = Played { calls_ms: vec![], rows: vec![], texts: vec![], aidr: vec![] };
+    let mut now = T0_MS;
+    while p.aidr.is_empty() {
+        assert!(now < T0_MS + 60_000.0, "never finished");
+        let (g, delay) = step_delay(&lua, &f, now);
+        f = g;
+        let call = p.calls_ms.len();
+        p.calls_ms.push(now - T0_MS);
+        p.rows.push(log_values(&lua).first().map(|l| l[1] as usize));
+        p.aidr = records(&lua, "AIDR").pop().unwrap_or_default();
+        let texts: Table = lua.globals().get("texts").unwrap();
+        let severities: Table = lua.globals().get("severities").unwrap();
+        for i in p.texts.len() + 1..=texts.raw_len() {
+            p.texts.push((severities.get(i).unwrap(), texts.get(i).unwrap(), call));
+        }
+        now = next(now, delay);
+    }
+    p
+}
+
+impl Played {
+    /// The texts containing `word`.
+    fn with(&self, word: &str) -> Vec<&(u8, String, usize)> {
+        self.texts.iter().filter(|t| t.1.contains(word)).collect()
+    }
+
+    /// The played count and the rate of the end text "played P of N rows at H Hz".
+    fn end_text(&self, rows: usize) -> (usize, f64) {
+        let t = &self.with("played")[0].1;
+        let rest = t.split("played ").nth(1).unwrap();
+        let played = rest.split(' ').next().unwrap().parse().unwrap();
+        assert!(rest.contains(&format!(" of {rows} rows at ")), "{t}");
+        let hz = rest.split(" at ").nth(1).unwrap().trim_end_matches(" Hz").parse().unwrap();
+        (played, hz)
+    }
+}
+
+/// The distinct rows due at the calls (an independent count from the design's times): the
+/// rows a player that plays the row due at each call plays.
+fn distinct_due_rows(d: &Design, calls_ms: &[f64]) -> std::collections::BTreeSet<usize> {
+    calls_ms.iter().filter_map(|t| due_row(d, *t)).collect()
+}
+
+/// Called as often as it asks (the 25 Hz and 50 Hz designs, 40 and 20 ms), the script plays
+/// every row, sends no warning, and ends with "played N of N rows" at the design rate; its
+/// AIDR record says so. Every text fits MAVLink's 50-character STATUSTEXT.
+#[test]
+fn called_at_the_design_rate_every_row_is_played_and_nothing_is_warned() {
+    for (d, rate) in [(three_surfaces(), 25.0), (fifty_hz(), 50.0)] {
+        let rows = d.t_s.len();
+        let p = play_scheduled(d, |now, delay| now + delay as f64);
+        assert_eq!(distinct_due_rows(d, &p.calls_ms).len(), rows);
+        let (played, hz) = p.end_text(rows);
+        assert_eq!(played, rows, "{:?}", p.texts);
+        assert!((hz - rate).abs() < 0.05, "{hz} Hz");
+        assert!(p.texts.iter().all(|t| t.0 != 4), "no warning: {:?}", p.texts);
+        assert!(p.with("behind").is_empty() && p.with("not the designed").is_empty());
+        let (r, due, pl, gap, slow) = (p.aidr[0], p.aidr[1], p.aidr[2], p.aidr[4], p.aidr[5]);
+        assert_eq!((r, due, pl, slow), (rows as f64, rows as f64, rows as f64, 0.0));
+        assert!((p.aidr[3] - rate).abs() < 1e-9 * rate, "AIDR Hz {}", p.aidr[3]);
+        assert_eq!(gap, 1000.0 / rate, "largest gap one period");
+        assert!(p.texts.iter().all(|t| t.1.len() <= 50), "{:?}", p.texts);
+    }
+}
+
+/// Called at 30 Hz (a loaded autopilot, the millisecond clock read as an integer) for a 50 Hz
+/// design, rows are skipped: the warning comes once, at the first call at which more than
+/// 5 % of the 151 rows have been skipped (counted here from the design's times), and the
+/// script keeps playing to the end; the end text's count is the number of distinct rows due
+/// at the calls, AIDR's rate is 30 Hz within 1 %, and the end says it is not the design.
+#[test]
+fn called_at_30_hz_a_50_hz_design_warns_once_and_counts_the_rows_played() {
+    let d = fifty_hz();
+    let rows = d.t_s.len();
+    let mut k = 0.0;
+    let p = play_scheduled(d, |_, _| {
+        k += 1.0;
+        (T0_MS + k * 1000.0 / 30.0).floor()
+    });
+    let due = distinct_due_rows(d, &p.calls_ms);
+    let (played, hz) = p.end_text(rows);
+    assert_eq!(played, due.len(), "{:?}", p.texts);
+    assert!(played < rows * 2 / 3 && played > rows / 2, "{played}");
+    assert!((p.aidr[3] - 30.0).abs() <= 0.01 * 30.0, "AIDR Hz {}", p.aidr[3]);
+    assert!((hz - 30.0).abs() <= 0.3, "{hz}");
+    assert_eq!((p.aidr[0], p.aidr[1], p.aidr[2]), (rows as f64, rows as f64, played as f64));
+    assert_eq!(p.aidr[5], 1.0, "Slow");
+    let behind = p.with("behind");
+    assert_eq!(behind.len(), 1, "once: {:?}", p.texts);
+    assert_eq!(behind[0].0, 4, "MAV_WARNING");
+    assert_eq!(p.with("not the designed manoeuvre").len(), 1);
+    // The first call at which the rows due so far less those played exceed 5 % of all.
+    let mut seen = std::collections::BTreeSet::new();
+    let mut first_late = None;
+    for (i, t) in p.calls_ms.iter().enumerate() {
+        let Some(k) = due_row(d, *t) else { break };
+        seen.insert(k);
+        if (k + 1 - seen.len()) as f64 > 0.05 * rows as f64 {
+            first_late = Some(i);
+            break;
+        }
+    }
+    let first_late = first_late.expect("rows skipped at 30 Hz");
+    assert!(first_late < p.calls_ms.len() / 3, "{first_late}");
+    assert_eq!(behind[0].2, first_late, "at once");
+    assert!(p.rows.iter().rev().skip(1).all(Option::is_some), "kept playing to the end");
+    assert!(p.texts.iter().all(|t| t.1.len() <= 50), "{:?}", p.texts);
+}
+
+/// A single stall longer than two table periods warns, though it skips fewer than 5 % of the
+/// rows; one of exactly two periods does not (the rule is "more than two").
+#[test]
+fn one_gap_of_more_than_two_periods_warns_though_few_rows_are_skipped() {
+    let d = three_surfaces();
+    let rows = d.t_s.len();
+    for (stall_ms, warned) in [(81.0, true), (80.0, false), (120.0, true)] {
+        let mut calls = 0;
+        let p = play_scheduled(d, |now, delay| {
+            calls += 1;
+            now + if calls == 20 { stall_ms } else { delay as f64 }
+        });
+        let (played, _) = p.end_text(rows);
+        let skipped = rows - played;
+        assert!((skipped as f64) < 0.05 * rows as f64, "{stall_ms}: {skipped}");
+        assert_eq!(played, distinct_due_rows(d, &p.calls_ms).len());
+        assert_eq!(p.with("behind").len(), usize::from(warned), "{stall_ms}: {:?}", p.texts);
+        assert_eq!(p.aidr[4], stall_ms, "largest gap");
+        assert_eq!(p.aidr[5], f64::from(u8::from(warned)));
+    }
+}
+
+/// A design faster than the scripting scheduler's millisecond can time is refused, naming
+/// `--rate-hz` and the limit; 1000 Hz itself is accepted.
+#[test]
+fn a_design_faster_than_a_row_a_millisecond_is_refused() {
+    let mut d = three_surfaces().clone();
+    d.plan.manoeuvres[0].dt_s = 1.0 / 2000.0;
+    let e = ardupilot_lua(&d, &options(Start::ScrUser1)).unwrap_err().to_string();
+    for w in ["--rate-hz 2000", "1000 Hz"] {
+        assert!(e.contains(w), "{w:?} not in {e}");
+    }
+    assert!(check_script_rate(&d).is_err());
+    assert!(px4_torque_table(&d, &options(Start::ScrUser1)).is_ok(), "PX4 has no such limit");
+    d.plan.manoeuvres[0].dt_s = 1.0 / 1000.0;
+    assert!(check_script_rate(&d).is_ok());
+    let lua = ardupilot_lua(&d, &options(Start::ScrUser1)).unwrap();
+    assert!(lua.contains("local PERIOD_MS = 1\n"), "{lua}");
 }

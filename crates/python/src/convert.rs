@@ -224,6 +224,12 @@ pub fn constants_from(d: Option<&Bound<'_, PyDict>>) -> PyResult<AircraftConstan
     Ok(c)
 }
 
+/// Rows of equal length as a 2-D array (`rows.len() × rows[0].len()`; `0 × 0` for none).
+pub fn matrix(rows: &[Vec<f64>]) -> numpy::ndarray::Array2<f64> {
+    let cols = rows.first().map_or(0, Vec::len);
+    numpy::ndarray::Array2::from_shape_fn((rows.len(), cols), |(i, j)| rows[i][j])
+}
+
 /// A Python object's `repr` for an error message.
 fn describe(v: &Bound<'_, PyAny>) -> String {
     v.repr().map_or_else(|_| "?".into(), |r| r.to_string())

@@ -10,6 +10,8 @@ use std::sync::{Mutex, MutexGuard};
 
 use aeroident_estimators::{AircraftConstants, Status};
 use aeroident_pipelines::estimators::{EstimatorKind, EstimatorOptions, build};
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -38,6 +40,29 @@ struct State {
 }
 
 impl Estimator {
+    /// Why parameter's estimate (`value`) or σ (`sigma`) is absent, `None` when neither is.
+    fn reason(
+        &self,
+        value: Option<f64>,
+        sigma: Option<f64>,
+        status: Status,
+        samples: usize,
+    ) -> Option<String> {
+        match (value, sigma) {
+            (Some(_), Some(_)) => None,
+            (None, _) if status == Status::Diverged => {
+                Some("not identified: the estimator diverged".into())
+            }
+            (None, _) => Some(format!(
+                "not identified: the {samples} samples so far do not determine it (estimator {})",
+                status.name()
+            )),
+            (Some(_), None) => {
+                Some(format!("no standard error: `{}` reports none for it", self.kind.name()))
+            }
+        }
+    }
+
     /// The state, for one method call. A panic while it was held (a bug) leaves it poisoned:
     /// the estimator is then refused rather than used half-updated.
     fn state(&self) -> PyResult<MutexGuard<'_, State>> {
@@ -93,31 +118,36 @@ impl Estimator {
         })
     }
 
-    /// The method's name (`rls`, `rls-iv`, `ftr`, `ekf` …).
+    /// The method's name (str: ``rls``, ``rls-iv``, ``ftr``, ``ekf`` …).
     #[getter]
     fn method(&self) -> &'static str {
         self.kind.name()
     }
 
-    /// The model's name (preset or file path).
+    /// The model's name (str: a preset or a model file's path).
     #[getter]
     fn model(&self) -> &str {
         &self.model
     }
 
-    /// Parameter names, in order.
+    /// The ``n`` parameter names (list of str), the order of every estimate array.
     #[getter]
     fn names(&self) -> PyResult<Vec<&'static str>> {
         Ok(self.state()?.est.structure().names().collect())
     }
 
-    /// Samples accepted so far.
+    /// The samples accepted so far (int).
     #[getter]
     fn samples(&self) -> PyResult<usize> {
         Ok(self.state()?.samples)
     }
 
-    /// Consumes one sample (a dict of SI channels; see `sample_keys()`).
+    /// ``update(sample)``: consumes one sample, a dict of SI channels and constants by the
+    /// keys of ``sample_keys()`` (a number each; ``None`` or NaN: absent).
+    ///
+    /// Raises ``AeroidentError`` naming a missing required channel or constant, a value that
+    /// is not a number, a constant out of its physical range, a sample the estimator refuses
+    /// (its state is then unchanged) or a divergence.
     fn update(&self, sample: &Bound<'_, PyDict>) -> PyResult<()> {
         // The sample is converted first (it may run Python code: a number's `__float__`), and
         // the state taken after, so no Python code runs while it is held.
@@ -140,28 +170,44 @@ impl Estimator {
         }
     }
 
-    /// The current estimates: dict with `names`, `estimate` (None = not identified),
-    /// `std_error` (None = none reported) and `estimator_status` (the keys of `summary.json`).
+    /// ``estimates()``: the current estimates as a dict: ``names`` (list of ``n`` str),
+    /// ``estimate`` ``(n,)`` float64 (NaN: not identified), ``std_error`` ``(n,)`` float64
+    /// (NaN: none reported), ``reasons`` (dict: for each parameter with a NaN, why),
+    /// ``estimator_status`` (``initialising``, ``running``, ``diverged``) and ``samples`` (int).
+    /// The keys are those of ``summary.json``. Units: each parameter's own (per rad, or per
+    /// unit non-dimensional rate; dimensionless coefficients).
     fn estimates<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let (names, values, sigma, status) = {
+        let (names, values, sigma, status, samples) = {
             let st = self.state()?;
             let (e, structure) = (st.est.estimates(), st.est.structure());
             let n = structure.n_params();
             let names: Vec<&'static str> = structure.names().collect();
             let values: Vec<Option<f64>> = (0..n).map(|i| e.value(i)).collect();
             let sigma: Vec<Option<f64>> = (0..n).map(|i| e.sigma(i)).collect();
-            (names, values, sigma, e.status.name())
+            (names, values, sigma, e.status, st.samples)
         };
+        let reasons = PyDict::new(py);
+        for (i, name) in names.iter().enumerate() {
+            if let Some(why) = self.reason(values[i], sigma[i], status, samples) {
+                reasons.set_item(*name, why)?;
+            }
+        }
+        let nan =
+            |v: &[Option<f64>]| -> Vec<f64> { v.iter().map(|x| x.unwrap_or(f64::NAN)).collect() };
         let d = PyDict::new(py);
         d.set_item("names", names)?;
-        d.set_item("estimate", values)?;
-        d.set_item("std_error", sigma)?;
-        d.set_item("estimator_status", status)?;
+        d.set_item("estimate", nan(&values).into_pyarray(py))?;
+        d.set_item("std_error", nan(&sigma).into_pyarray(py))?;
+        d.set_item("reasons", reasons)?;
+        d.set_item("estimator_status", status.name())?;
+        d.set_item("samples", samples)?;
         Ok(d)
     }
 
-    /// Covariance of parameters `i` and `j` (None where the method gives none); an index past
-    /// the parameters is an `IndexError`.
+    /// ``covariance(i, j)``: the covariance of parameters ``i`` and ``j`` (float, the
+    /// parameters' units multiplied), ``None`` where the method gives none.
+    ///
+    /// Raises ``IndexError`` for an index past the parameters.
     fn covariance(&self, i: usize, j: usize) -> PyResult<Option<f64>> {
         let st = self.state()?;
         let n = st.est.structure().n_params();
@@ -174,12 +220,23 @@ impl Estimator {
         Ok(st.est.covariance(i, j))
     }
 
-    /// Mean normalised innovation squared (None for methods without innovations).
+    /// ``covariance_matrix()``: the parameters' covariance, ``(n, n)`` float64 in ``names``
+    /// order; NaN where the method gives none (a sliding-mode estimator, a parameter not yet
+    /// identified).
+    fn covariance_matrix<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let st = self.state()?;
+        let n = st.est.structure().n_params();
+        let c = |i: usize, j: usize| st.est.covariance(i, j).unwrap_or(f64::NAN);
+        Ok(Array2::from_shape_fn((n, n), |(i, j)| c(i, j)).into_pyarray(py))
+    }
+
+    /// ``nis()``: the mean normalised innovation squared (float, dimensionless), ``None`` for
+    /// a method without innovations.
     fn nis(&self) -> PyResult<Option<f64>> {
         Ok(self.state()?.est.nis())
     }
 
-    /// What the estimator did to itself so far: dict with `listed` (`[{t_s, kind, subject}]`,
+    /// ``events()``: what the estimator did to itself so far: dict with `listed` (`[{t_s, kind, subject}]`,
     /// kind `restart`, `reanchor` or `change_detected`), `counts` (per kind) and `not_listed`,
     /// as in the replay summary's `events`.
     fn events<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
@@ -188,7 +245,8 @@ impl Estimator {
         crate::convert::json_to_py(py, &v)
     }
 
-    /// A new manoeuvre starts with the next sample (model states re-initialised).
+    /// ``new_manoeuvre()``: a new manoeuvre starts with the next sample (the model's states
+    /// are re-initialised from it; the estimates are kept).
     fn new_manoeuvre(&self) -> PyResult<()> {
         self.state()?.est.new_manoeuvre();
         Ok(())

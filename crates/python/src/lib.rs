@@ -23,6 +23,7 @@ mod f16;
 mod freqresp;
 mod montecarlo;
 mod record;
+mod units;
 
 pyo3::create_exception!(
     _aeroident,

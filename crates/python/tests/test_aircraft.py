@@ -25,11 +25,11 @@ def f16():
 
 def test_a_trim_holds_under_step(f16):
     ac, t = f16
-    assert len(t["state"]) == len(ac.state_names) == 13 and t["state_names"][0] == "vt_fps"
+    assert len(t["state"]) == len(ac.state_names) == 13 and t["state_names"][0] == "vt_mps"
     x = t["state"]
     for k in range(200):
         x = ac.step(x, t["controls"], 0.01, t_s=k * 0.01)
-    # 2 s of flight at the trim: the airspeed (ft/s), alpha and q stay put.
+    # 2 s of flight at the trim: the airspeed (m/s), alpha and q stay put.
     assert abs(x[VT_I] - t["state"][VT_I]) < 1e-4
     assert abs(x[ALPHA] - t["state"][ALPHA]) < 1e-7 and abs(x[Q]) < 1e-7
 
@@ -100,7 +100,8 @@ def test_sample_feeds_an_estimator(f16):
     s = ac.sample(t["state"], t["controls"], t_s=1.5)
     xd = ac.derivatives(t["state"], t["controls"])
     assert s["t_s"] == 1.5 and s["qdot_rad_s2"] == pytest.approx(xd[Q], abs=1e-12)
-    assert s["vt_mps"] == pytest.approx(t["state"][VT_I] * 0.3048, rel=1e-12)
+    assert s["vt_mps"] == pytest.approx(t["state"][VT_I], rel=1e-12)
+    assert s["vt_mps"] == pytest.approx(t["state_textbook"][VT_I] * 0.3048, rel=1e-12)
     est = aeroident.Estimator("rls", model="longitudinal")
     est.update(s)
     assert est.samples == 1
@@ -136,3 +137,49 @@ def test_the_adaptive_example_restores_the_tracking_after_the_damage():
 def test_a_model_file_aircraft_without_values_is_refused_by_name():
     with pytest.raises(aeroident.AeroidentError, match=r"no \[reference.CL_0\] value"):
         aeroident.Aircraft.from_model(str(ROOT / "models/hfb320_jategaonkar.toml"), str(ROOT / "mappings/hfb320.toml"))
+
+
+FT = 0.3048  # exact; independent of aeroident's constant
+F16_FACTORS = np.array([FT, 1, 1, 1, 1, 1, 1, 1, 1, FT, FT, FT, 1])
+
+
+def test_the_f16_states_are_si_and_the_textbook_units_only_by_name(f16):
+    ac, t = f16
+    assert ac.state_names[0] == "vt_mps" and ac.state_names[9:12] == ["north_m", "east_m", "alt_m"]
+    assert ac.state_names_textbook[0] == "vt_fps" and ac.state_names_textbook[11] == "alt_ft"
+    for key, shape in (("state", (13,)), ("state_textbook", (13,)), ("controls", (4,))):
+        assert isinstance(t[key], np.ndarray) and t[key].dtype == np.float64 and t[key].shape == shape
+    np.testing.assert_array_equal(t["state"], t["state_textbook"] * F16_FACTORS)
+    assert t["state"][0] == pytest.approx(VT, rel=1e-9) and t["state"][11] == pytest.approx(ALT, rel=1e-9)
+    np.testing.assert_array_equal(ac.to_textbook(t["state"]), t["state"] / F16_FACTORS)
+    np.testing.assert_allclose(ac.from_textbook(ac.to_textbook(t["state"])), t["state"], rtol=1e-15)
+    # A derivative in SI is the textbook derivative times the same factors: a climb of 1 ft/s
+    # (the textbook's d alt_ft/dt) is 0.3048 m/s.
+    x = t["state"].copy()
+    x[4] += 0.01  # nose up: the aircraft climbs and slows
+    xd = ac.derivatives(x, t["controls"])
+    xd_ft = ac.derivatives(ac.from_textbook(ac.to_textbook(x)), t["controls"]) / F16_FACTORS
+    np.testing.assert_allclose(xd, xd_ft * F16_FACTORS, rtol=1e-12)
+    assert xd[11] > 0 and xd[0] < 0
+
+
+def test_state_and_controls_take_any_array_like(f16):
+    ac, t = f16
+    x, u = t["state"], t["controls"]
+    one = ac.step(x, u, 0.01)
+    np.testing.assert_array_equal(ac.step(list(x), tuple(u), 0.01), one)
+    np.testing.assert_array_equal(ac.step(x.tolist(), np.asarray(u).tolist(), 0.01), one)
+    # A strided view, not a contiguous array.
+    doubled = np.repeat(x, 2)[::2]
+    np.testing.assert_array_equal(ac.derivatives(doubled, u), ac.derivatives(x, u))
+    assert one.dtype == np.float64 and one.shape == (13,)
+
+
+def test_the_linear_model_in_si_is_the_textbook_one_scaled(f16):
+    ac, _ = f16
+    lin = ac.linearize(VT, ALT)
+    d = F16_FACTORS
+    assert lin["a"].shape == (13, 13) and lin["b"].shape == (13, 4) and lin["eigenvalues"].shape == (13, 2)
+    np.testing.assert_allclose(lin["a"], d[:, None] * lin["a_textbook"] / d[None, :], rtol=1e-14, atol=1e-300)
+    np.testing.assert_allclose(lin["b"], d[:, None] * lin["b_textbook"], rtol=1e-14, atol=1e-300)
+    assert lin["states"][0] == "vt_mps" and lin["states_textbook"][0] == "vt_fps"

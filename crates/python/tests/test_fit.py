@@ -251,6 +251,11 @@ def test_fdoe_fit_equals_cli_on_the_twin_otter(tmp_path, band):
     np.testing.assert_array_equal(py["estimate"], null_as_nan(p["estimate"] for p in params))
     np.testing.assert_array_equal(py["std_error"], null_as_nan(p["std_error"] for p in params))
     np.testing.assert_array_equal(py["crb_std_error"], null_as_nan(p["crb_std_error"] for p in params))
+    # Every NaN estimate carries its reason: the summary's verdict, never a bare NaN.
+    for p in params:
+        if p["estimate"] is None:
+            assert py["reasons"][p["name"]].startswith(p["status"]), (p["name"], py["reasons"])
+    assert py["estimate"].dtype == np.float64 and py["estimate"].shape == (len(params),)
     # The correlation of the estimated parameters, from the same covariance as their σ.
     est = [i for i, p in enumerate(params) if p["estimate"] is not None]
     rho = py["correlation"][np.ix_(est, est)]

@@ -2,7 +2,10 @@
 
 The numbers come from the Rust library behind the ``aeroident`` command line (same code paths,
 same results to the last bit, same error messages). Units are SI, angles in radians, times in
-seconds, unless a name says otherwise (``alt_ft``, ``elevator_deg`` …).
+seconds, unless a name says otherwise (``alt_ft``, ``elevator_deg`` …). Vectors and matrices
+(states, inputs, estimates, σ) are float64 numpy arrays whose shapes the docstrings give; a
+value that does not exist (a parameter not identified, a σ the method does not give) is
+``NaN``, and the result says why beside it (``reasons``). Array arguments take any array-like.
 
 - :func:`read`: a record + channel mapping → dict of numpy arrays (one per channel).
 - :class:`Estimator` and :class:`Rls`, :class:`RlsIv`, :class:`Ftr`, :class:`Ekf`,
@@ -12,7 +15,8 @@ seconds, unless a name says otherwise (``alt_ft``, ``elevator_deg`` …).
   estimates as a (time × parameter) numpy matrix.
 - :func:`fit`: the post-flight batch fit of a record by output error or the filter-error
   method (estimates, σ, correlation, residuals, model-vs-measured traces, validation).
-- :func:`trim`, :func:`linearize`, :func:`simulate`: the F-16 model.
+- :func:`trim`, :func:`linearize`, :func:`simulate`: the F-16 model, in SI (its textbook's ft
+  and ft/s only under ``*_textbook`` names and the keyword-only ``vt_fps``, ``alt_ft``).
 - :class:`Aircraft`: the F-16 or a model-file aircraft to close your own loop around (trim,
   derivatives, one RK4 step, the linear model, the air-data sample an estimator takes, damage).
 - :func:`montecarlo`: seeded closed-loop campaigns, locally (rayon) or on a Ray cluster.
@@ -116,11 +120,17 @@ class Estimator(_Estimator):
     - ``update(sample)``: one sample, a dict of SI channels (``None``/``NaN`` = absent). Raises
       :class:`AeroidentError` if the estimator refuses it (its state is then unchanged) or
       diverges.
-    - ``estimates()``: dict with ``names``, ``estimate`` (``None`` = not identified),
-      ``std_error`` (``None`` = not reported) and ``estimator_status`` (``initialising``,
-      ``running``, ``diverged``): the names of ``summary.json`` (docs/output-schema.md).
-    - ``covariance(i, j)``, ``nis()``, ``new_manoeuvre()``; properties ``names``, ``method``,
-      ``model``, ``samples``.
+    - ``estimates()``: dict with ``names`` (the ``n`` parameters), ``estimate`` (n,) float64
+      (``NaN`` = not identified), ``std_error`` (n,) float64 (``NaN`` = none reported),
+      ``reasons`` (``{name: why}`` for every parameter with a ``NaN``), ``estimator_status``
+      (``initialising``, ``running``, ``diverged``) and ``samples``: the names of
+      ``summary.json`` (docs/output-schema.md).
+    - ``covariance_matrix()``: (n, n) float64 (``NaN`` where the method gives none);
+      ``covariance(i, j)`` (``None`` where it gives none), ``nis()``, ``events()``,
+      ``new_manoeuvre()``; properties ``names``, ``method``, ``model``, ``samples``.
+
+    Raises :class:`AeroidentError` naming the option, the model or the constant that cannot be
+    used (an unknown kind, an option the kind does not take, a constant out of range).
 
     Unlike :func:`replay` on a file, nothing is differentiated: give ``qdot_rad_s2`` etc. when
     the method needs them (see ``aeroident replay``'s derivative stage).
@@ -250,11 +260,13 @@ def replay(
     - ``t_s``: (k,) sample times, s, one per sample whose estimates the CLI writes as a line of
       ``estimates.csv`` (samples the reader or estimator rejected have none);
     - ``estimates``: (k, n) float64; ``NaN`` where the parameter is not yet identified (the
-      CLI's empty field, ``None`` elsewhere in this API);
+      CLI's empty field);
     - ``std_error``: (k, n) float64 standard errors; ``NaN`` where none is reported;
+    - ``reasons``: ``{name: why}`` for every parameter whose last estimate or σ is ``NaN``
+      (for a file the summary's status and flags; ``NaN`` alone never says why);
     - ``model``: the model's name; for a file also ``summary`` (the CLI's ``summary.json`` as a
       dict) and ``notes`` (what the reader left out, as :func:`read`), for arrays
-      ``samples_refused``.
+      ``samples_refused`` and ``events``.
 
     A record file is read by the CLI's reader for its extension (CSV, ``.asc``, ``.mat``,
     ULog, DataFlash). Raises :class:`AeroidentError` with the CLI's message on bad input (a
@@ -264,7 +276,7 @@ def replay(
     if isinstance(data, (str, os.PathLike)):
         if mapping is None:
             raise AeroidentError("replay of a record file needs mapping= (the channel mapping TOML)")
-        return _core.replay_file(
+        r = _core.replay_file(
             os.fspath(data),
             os.fspath(mapping),
             estimator,
@@ -280,6 +292,9 @@ def replay(
             None if knots_deg is None else [float(k) for k in _sequence("knots_deg", knots_deg)],
             **options,
         )
+        last = lambda a: a[-1] if len(a) else np.full(len(r["names"]), np.nan)  # noqa: E731
+        r["reasons"] = _reasons(r["names"], last(r["estimates"]), last(r["std_error"]), r["summary"]["parameters"], estimator)
+        return r
     # What only a record file has a use for would be ignored for arrays: refused instead.
     file_only = dict(mapping=mapping, compat=compat, windows=windows, cross_check=cross_check or None, candidates=candidates, knots_deg=knots_deg)
     given = [k for k, v in file_only.items() if v is not None]
@@ -289,9 +304,30 @@ def replay(
         )
     keys = set(_core.sample_keys())
     arrays = {k: np.ascontiguousarray(v, dtype=np.float64) for k, v in data.items() if k in keys}
-    return _core.replay_arrays(
+    r = _core.replay_arrays(
         arrays, estimator, None if model is None else os.fspath(model), _plain(constants), forgetting, sample_interval_s, **options
     )
+    r["reasons"] = _reasons(r["names"], r["estimates"][-1], r["std_error"][-1], None, estimator)
+    return r
+
+
+def _reasons(names: Sequence[str], estimate: np.ndarray, std_error: np.ndarray, parameters: Optional[Sequence[Mapping[str, Any]]], method: str) -> dict[str, str]:
+    """Why each parameter with a ``NaN`` estimate or σ has one: the summary's verdict and flags
+    where there is a summary (``parameters``, its per-parameter entries), else what the arrays
+    tell (a replay of arrays has no verdict)."""
+    judged = {str(p["name"]).rstrip("*"): p for p in parameters or []}
+    out = {}
+    for name, e, s in zip(names, estimate, std_error):
+        if not (np.isnan(e) or np.isnan(s)):
+            continue
+        p = judged.get(name)
+        if not np.isnan(e):
+            out[name] = f"no standard error: `{method}` reports none for it"
+        elif p is not None:
+            out[name] = "; ".join([str(p["status"]), *p.get("flags", []), *p.get("notes", [])])
+        else:
+            out[name] = "not identified: the samples do not determine it"
+    return out
 
 
 def fit(
@@ -374,7 +410,8 @@ def fit(
       published values (NaN without one); ``fdoe``: NaN where the summary has ``null``
       (parameters the linear model cannot see: CD, zero-order, V and product terms);
     - ``status``, ``flags``: per parameter the summary's verdict and the warnings about it
-      (docs/output-schema.md);
+      (docs/output-schema.md); ``reasons``: ``{name: why}`` for every parameter whose
+      ``estimate`` or ``std_error`` is ``NaN`` (its verdict, flags and notes);
     - ``correlation``: (n, n) Cramér–Rao correlation of the estimates (``fdoe``: of its
       frequency-domain fit, NaN rows and columns for the parameters not estimated);
     - ``outputs``: the ``m`` fitted outputs; ``residuals``: (N, m) measured − model (``fem``:
@@ -396,7 +433,7 @@ def fit(
     if bootstrap is not None:
         # The library's check and message, before the record is read (counts past 64 bits too).
         _core.check_bootstrap_refits(bootstrap)
-    return _core.fit_file(
+    r = _core.fit_file(
         os.fspath(data),
         os.fspath(mapping),
         estimator,
@@ -417,6 +454,8 @@ def fit(
         cross_check=bool(cross_check),
         **options,
     )
+    r["reasons"] = _reasons(r["names"], r["estimate"], r["std_error"], r["summary"]["parameters"], estimator)
+    return r
 
 
 def freqresp(
@@ -472,51 +511,100 @@ def freqresp(
 
 
 def trim(
-    alt_ft: float,
-    vt_fps: float,
+    vt_mps: Optional[float] = None,
+    alt_m: Optional[float] = None,
     xcg: float = 0.35,
-    gamma_deg: float = 0.0,
+    gamma_rad: Optional[float] = None,
+    turn_rate_rad_s: Optional[float] = None,
+    pull_up_rad_s: Optional[float] = None,
+    *,
+    vt_fps: Optional[float] = None,
+    alt_ft: Optional[float] = None,
+    gamma_deg: Optional[float] = None,
     turn_rate_deg_s: Optional[float] = None,
     pull_up_deg_s: Optional[float] = None,
 ) -> dict[str, Any]:
     """Trims the F-16 (Stevens, Lewis & Johnson 3rd ed. §3.6), as ``aeroident f16 trim``.
 
-    Returns ``throttle, elevator_deg, aileron_deg, rudder_deg, alpha_deg, beta_deg, theta_deg,
-    cost`` (the CLI's ``--json`` keys) and ``state`` (13, SLJ order, ``state_names``),
-    ``controls`` (throttle 0–1, elevator/aileron/rudder in rad) and ``out_of_range`` (trim
-    quantities outside the data's ranges). Raises :class:`AeroidentError` when it does not
-    converge.
+    The condition in SI: true airspeed ``vt_mps`` (m/s), altitude ``alt_m`` (m), flight-path
+    angle ``gamma_rad`` (rad, default 0), and at most one of a coordinated turn
+    ``turn_rate_rad_s`` or a pull-up ``pull_up_rad_s`` (rad/s); ``xcg``: centre of gravity,
+    fraction of the mean aerodynamic chord. The textbook's units only by name, keyword-only:
+    ``vt_fps`` (ft/s), ``alt_ft`` (ft), ``gamma_deg``, ``turn_rate_deg_s``, ``pull_up_deg_s``
+    (the command line's flags) instead of their SI twins.
+
+    Returns a dict:
+
+    - ``state``: (13,) float64, SI (``state_names``: ``vt_mps``, angles in rad, rates in rad/s,
+      ``north_m``, ``east_m``, ``alt_m``, ``pow_pct``); ``state_textbook``: (13,) float64 in
+      the textbook's ft and ft/s (``state_names_textbook``, the model's own state);
+    - ``controls``: (4,) float64, ``control_names`` (throttle 0–1, elevator, aileron, rudder in
+      rad);
+    - ``alpha_rad``, ``beta_rad``, ``theta_rad``, ``elevator_rad``, ``aileron_rad``,
+      ``rudder_rad`` (float, rad), and the command line's ``--json`` keys ``throttle``,
+      ``elevator_deg``, ``aileron_deg``, ``rudder_deg``, ``alpha_deg``, ``beta_deg``,
+      ``theta_deg``, ``cost``;
+    - ``out_of_range``: list of str, the trim quantities outside the data's ranges.
+
+    Raises ``TypeError`` naming the keywords when the airspeed or altitude is missing or a
+    quantity is given in both units; :class:`AeroidentError` with the CLI's message when the
+    trim does not converge or the condition is out of range.
     """
-    return _core.trim(alt_ft, vt_fps, xcg, gamma_deg, turn_rate_deg_s, pull_up_deg_s)
+    # Every keyword goes to the one parser in Rust, which converts with the workspace's units.
+    return _core.trim(dict(locals()))
 
 
 def linearize(
-    alt_ft: float,
-    vt_fps: float,
+    vt_mps: Optional[float] = None,
+    alt_m: Optional[float] = None,
     xcg: float = 0.35,
-    gamma_deg: float = 0.0,
+    gamma_rad: Optional[float] = None,
+    turn_rate_rad_s: Optional[float] = None,
+    pull_up_rad_s: Optional[float] = None,
+    *,
+    vt_fps: Optional[float] = None,
+    alt_ft: Optional[float] = None,
+    gamma_deg: Optional[float] = None,
     turn_rate_deg_s: Optional[float] = None,
     pull_up_deg_s: Optional[float] = None,
 ) -> dict[str, Any]:
-    """Linearizes the F-16 about its trim (as ``aeroident f16 linearize``).
+    """Linearizes the F-16 about its trim, as ``aeroident f16 linearize``; the condition as in
+    :func:`trim` (SI, or the textbook's units by their keyword-only names).
 
-    Returns ``a`` (13×13) and ``b`` (13×4) numpy arrays (states ``state_names``, inputs
-    ``input_names``: throttle, elevator_rad, aileron_rad, rudder_rad), ``eigenvalues`` (13,
-    complex, sorted by real then imaginary part), ``modes`` (list of dicts: name, eigenvalue
-    (re, im), wn_radps, zeta) and ``trim`` (as :func:`trim`).
+    Returns a dict:
+
+    - ``a``: (13, 13) float64 and ``b``: (13, 4) float64, ẋ = A x + B u in SI (states
+      ``state_names``, inputs ``input_names``: throttle, elevator_rad, aileron_rad,
+      rudder_rad);
+    - ``a_textbook``, ``b_textbook``: the same model in the textbook's ft and ft/s
+      (``state_names_textbook``), exactly the command line's ``--json`` ``a`` and ``b``;
+    - ``eigenvalues``: (13,) complex128, 1/s, sorted by real then imaginary part (the same for
+      both unit systems);
+    - ``modes``: list of dicts (``name``, ``eigenvalue`` (re, im), ``wn_radps``, ``zeta``);
+    - ``trim``: as :func:`trim` returns.
+
+    Raises as :func:`trim`.
     """
-    d = _core.linearize(alt_ft, vt_fps, xcg, gamma_deg, turn_rate_deg_s, pull_up_deg_s)
+    d = _core.linearize(dict(locals()))
     ev = d["eigenvalues"]
     d["eigenvalues"] = ev[:, 0] + 1j * ev[:, 1]
     return d
 
 
-def simulate(scenario: PathLike) -> dict[str, np.ndarray]:
+def simulate(scenario: PathLike, *, textbook: bool = False) -> dict[str, np.ndarray]:
     """Runs an open-loop F-16 simulation scenario (TOML, ``scenarios/sim/``), as ``aeroident f16
-    sim`` does, and returns its ``timeseries.csv`` columns as arrays (first ``t_s``; sensed
-    channels are ``meas_<channel>``; units in the names). Relative paths in the scenario
-    resolve against its directory."""
-    return _core.simulate(os.fspath(scenario))
+    sim`` does. Relative paths in the scenario resolve against its directory.
+
+    Returns its ``timeseries.csv`` columns as (k,) float64 arrays, first ``t_s``; the unit is in
+    each name. In SI by default: a textbook column is converted and renamed by its unit
+    (``vt_fps`` → ``vt_mps``, ``alt_ft`` → ``alt_m``, ``ax_fps2`` → ``ax_mps2``, ``qbar_psf`` →
+    ``qbar_pa``, ``thrust_lbf`` → ``thrust_n``); load factors stay in g. ``textbook=True``: the
+    columns exactly as the command line writes them (ft, ft/s, psf, lbf). Sensed channels are
+    ``meas_<channel>``.
+
+    Raises :class:`AeroidentError` with the CLI's message for a missing or bad scenario.
+    """
+    return _core.simulate(os.fspath(scenario), bool(textbook))
 
 
 def montecarlo(

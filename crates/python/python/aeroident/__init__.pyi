@@ -14,14 +14,20 @@ MAX_BOOTSTRAP_REFITS: int
 PathLike = Union[str, os.PathLike[str]]
 EstimatorName = Literal["rls", "rls-iv", "ftr", "ekf", "smpe", "smpe-corrected", "smpe-finite-time", "gradient"]
 Constants = Mapping[str, Optional[float]]
+FloatArray = npt.NDArray[np.float64]
+"""A float64 numpy array; each docstring gives its shape and units. NaN: no value (``reasons``)."""
 
 class AeroidentError(Exception): ...
 
 class EstimatesDict(TypedDict):
     names: list[str]
-    estimate: list[Optional[float]]
-    std_error: list[Optional[float]]
+    estimate: FloatArray
+    """(n,) float64; NaN: not identified (``reasons`` says why)."""
+    std_error: FloatArray
+    """(n,) float64; NaN: no standard error (``reasons`` says why)."""
+    reasons: dict[str, str]
     estimator_status: Literal["initialising", "running", "diverged"]
+    samples: int
 
 class ReplayResult(TypedDict, total=False):
     names: list[str]
@@ -34,9 +40,24 @@ class ReplayResult(TypedDict, total=False):
     events: dict[str, Any]
     notes: list[str]
     selected_model: Optional[str]
+    reasons: dict[str, str]
+
+class AircraftTrim(TypedDict):
+    state: FloatArray
+    """(n,) float64, SI (``state_names``)."""
+    state_textbook: FloatArray
+    """(n,) float64, the library's units (``state_names_textbook``: the F-16's ft, ft/s)."""
+    controls: FloatArray
+    """(4,) float64: engine command, elevator_rad, aileron_rad, rudder_rad."""
+    state_names: list[str]
+    state_names_textbook: list[str]
+    control_names: list[str]
+    max_abs_residual: float
 
 class Aircraft:
-    """The F-16 (13 states, ft) or a model-file aircraft (12 states, SI) to close a loop around.
+    """The F-16 (13 states) or a model-file aircraft (12 states) to close a loop around; states
+    in SI (``state_names``), the F-16's textbook ft and ft/s only through ``to_textbook`` and the
+    ``*_textbook`` keys.
 
     Controls: engine command, elevator_rad, aileron_rad, rudder_rad (SLJ signs)."""
     @staticmethod
@@ -49,16 +70,20 @@ class Aircraft:
     @property
     def state_names(self) -> list[str]: ...
     @property
+    def state_names_textbook(self) -> list[str]: ...
+    @property
     def control_names(self) -> list[str]: ...
     @property
     def engine_command(self) -> str: ...
     @property
     def length_unit_m(self) -> float: ...
-    def trim(self, vt_mps: float, alt_m: float) -> dict[str, Any]: ...
-    def derivatives(self, state: np.ndarray, controls: Sequence[float], t_s: float = 0.0) -> np.ndarray: ...
-    def step(self, state: np.ndarray, controls: Sequence[float], dt_s: float, t_s: float = 0.0) -> np.ndarray: ...
+    def to_textbook(self, state: npt.ArrayLike) -> FloatArray: ...
+    def from_textbook(self, state: npt.ArrayLike) -> FloatArray: ...
+    def trim(self, vt_mps: float, alt_m: float) -> AircraftTrim: ...
+    def derivatives(self, state: npt.ArrayLike, controls: npt.ArrayLike, t_s: float = 0.0) -> FloatArray: ...
+    def step(self, state: npt.ArrayLike, controls: npt.ArrayLike, dt_s: float, t_s: float = 0.0) -> FloatArray: ...
     def linearize(self, vt_mps: float, alt_m: float) -> dict[str, Any]: ...
-    def sample(self, state: np.ndarray, controls: Sequence[float], t_s: float = 0.0, v0_mps: Optional[float] = None) -> dict[str, float]: ...
+    def sample(self, state: npt.ArrayLike, controls: npt.ArrayLike, t_s: float = 0.0, v0_mps: Optional[float] = None) -> dict[str, float]: ...
 
 class EstimatorBase:
     def __new__(
@@ -85,6 +110,7 @@ class EstimatorBase:
     def update(self, sample: Mapping[str, Optional[float]]) -> None: ...
     def estimates(self) -> EstimatesDict: ...
     def covariance(self, i: int, j: int) -> Optional[float]: ...
+    def covariance_matrix(self) -> FloatArray: ...
     def nis(self) -> Optional[float]: ...
     def events(self) -> dict[str, Any]: ...
     def new_manoeuvre(self) -> None: ...
@@ -159,11 +185,12 @@ class FitResult(TypedDict):
     notes: list[str]
     summary: dict[str, Any]
     selected_model: Optional[str]
+    reasons: dict[str, str]
 
 def fit(
     data: PathLike,
     mapping: PathLike,
-    estimator: Literal["oe", "fem"] = "oe",
+    estimator: Literal["oe", "fem", "fdoe"] = "oe",
     model: Optional[PathLike] = None,
     *,
     initial_states: Literal["first-sample", "estimate"] = "first-sample",
@@ -178,6 +205,8 @@ def fit(
     candidates: Optional[Sequence[str]] = None,
     band_hz: Optional[tuple[float, float]] = None,
     knots_deg: Optional[Sequence[float]] = None,
+    allow_duplicate_records: bool = False,
+    cross_check: bool = False,
     **options: Any,
 ) -> FitResult: ...
 def freqresp(
@@ -195,9 +224,75 @@ def freqresp(
     fit: Optional[Union[str, Sequence[str]]] = None,
     min_coherence: float = 0.6,
 ) -> dict[str, Any]: ...
-def trim(alt_ft: float, vt_fps: float, xcg: float = 0.35, gamma_deg: float = 0.0, turn_rate_deg_s: Optional[float] = None, pull_up_deg_s: Optional[float] = None) -> dict[str, Any]: ...
-def linearize(alt_ft: float, vt_fps: float, xcg: float = 0.35, gamma_deg: float = 0.0, turn_rate_deg_s: Optional[float] = None, pull_up_deg_s: Optional[float] = None) -> dict[str, Any]: ...
-def simulate(scenario: PathLike) -> dict[str, npt.NDArray[np.float64]]: ...
+class F16Trim(TypedDict):
+    state: FloatArray
+    """(13,) float64, SI: vt_mps, rad, rad/s, north_m, east_m, alt_m, pow_pct."""
+    state_textbook: FloatArray
+    """(13,) float64, the textbook's units: vt_fps, …, north_ft, east_ft, alt_ft, pow_pct."""
+    state_names: list[str]
+    state_names_textbook: list[str]
+    controls: FloatArray
+    """(4,) float64: throttle 0–1, elevator_rad, aileron_rad, rudder_rad."""
+    control_names: list[str]
+    alpha_rad: float
+    beta_rad: float
+    theta_rad: float
+    elevator_rad: float
+    aileron_rad: float
+    rudder_rad: float
+    throttle: float
+    elevator_deg: float
+    aileron_deg: float
+    rudder_deg: float
+    alpha_deg: float
+    beta_deg: float
+    theta_deg: float
+    cost: float
+    out_of_range: list[str]
+
+class F16Linear(TypedDict):
+    a: FloatArray
+    """(13, 13) float64, SI."""
+    b: FloatArray
+    """(13, 4) float64, SI."""
+    a_textbook: FloatArray
+    b_textbook: FloatArray
+    eigenvalues: npt.NDArray[np.complex128]
+    modes: list[dict[str, Any]]
+    state_names: list[str]
+    state_names_textbook: list[str]
+    input_names: list[str]
+    trim: F16Trim
+
+def trim(
+    vt_mps: Optional[float] = None,
+    alt_m: Optional[float] = None,
+    xcg: float = 0.35,
+    gamma_rad: Optional[float] = None,
+    turn_rate_rad_s: Optional[float] = None,
+    pull_up_rad_s: Optional[float] = None,
+    *,
+    vt_fps: Optional[float] = None,
+    alt_ft: Optional[float] = None,
+    gamma_deg: Optional[float] = None,
+    turn_rate_deg_s: Optional[float] = None,
+    pull_up_deg_s: Optional[float] = None,
+) -> F16Trim: ...
+def linearize(
+    vt_mps: Optional[float] = None,
+    alt_m: Optional[float] = None,
+    xcg: float = 0.35,
+    gamma_rad: Optional[float] = None,
+    turn_rate_rad_s: Optional[float] = None,
+    pull_up_rad_s: Optional[float] = None,
+    *,
+    vt_fps: Optional[float] = None,
+    alt_ft: Optional[float] = None,
+    gamma_deg: Optional[float] = None,
+    turn_rate_deg_s: Optional[float] = None,
+    pull_up_deg_s: Optional[float] = None,
+) -> F16Linear: ...
+def simulate(scenario: PathLike, *, textbook: bool = False) -> dict[str, FloatArray]: ...
 def montecarlo(
     scenario: Optional[PathLike] = None,
     runs: int = 100,

@@ -54,7 +54,7 @@ impl Estimator {
                 Some("not identified: the estimator diverged".into())
             }
             (None, _) => Some(format!(
-                "not identified: the {samples} samples so far do not determine it (estimator {})",
+                "not identified: the samples so far ({samples}) do not determine it (estimator {})",
                 status.name()
             )),
             (Some(_), None) => {

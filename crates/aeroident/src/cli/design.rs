@@ -21,7 +21,8 @@ use aeroident_pipelines::export::autopilot::{
     AutopilotOptions, Start, ardupilot_lua, px4_torque_table,
 };
 use aeroident_pipelines::export::design::{
-    Design, DesignSpec, Surface, Waveform, csv_table, design, injection_table, large_excursions,
+    Design, DesignSpec, Surface, Waveform, actuator_limit_flags, csv_table, design,
+    injection_table, large_excursions,
 };
 use aeroident_signals::inputs::SweepLaw;
 use aeroident_signals::turbulence::TurbulenceSeverity;
@@ -357,11 +358,68 @@ fn report(a: &DesignArgs, d: &Design) -> String {
             r.names[i], r.values[i], sigma, rel
         ));
     }
+    s.push_str(&actuation_text(d));
     s.push_str(&format!("condition number {:.3e}", r.condition_number));
     for (o, e) in r.outputs.iter().zip(&r.output_excursion) {
         s.push_str(&format!("; peak |Δ{o:?}| {e:.3e}"));
     }
     s
+}
+
+/// The lines saying the prediction is through the mapping's actuators (the table is the
+/// servo command) with each τ and limit, and the flags of the limits the design reaches
+/// ([`actuator_limit_flags`]); empty without actuators.
+fn actuation_text(d: &Design) -> String {
+    if d.actuation.is_empty() {
+        return String::new();
+    }
+    let mut s = String::from(
+        "prediction through the mapping's actuators (the table is the servo command; the σ are of the deflection the surface makes of it):\n",
+    );
+    for a in &d.actuation {
+        s.push_str(&format!(
+            "  {} tau {} s, rate limit {}, command slope up to {:.3} rad/s (amplitude × 2π f_max {:.3}), rate-limited {:.1} % of the samples\n",
+            a.surface.name(),
+            a.actuator.tau_s,
+            finite_or_none(a.actuator.rate_limit_rad_s).map_or("none".into(), |v| format!("{v} rad/s")),
+            a.peak_command_rate_rad_s,
+            a.nominal_rate_rad_s,
+            100.0 * a.rate_limited_fraction
+        ));
+    }
+    for f in actuator_limit_flags(d) {
+        s.push_str(&format!("flag: {f}\n"));
+    }
+    s
+}
+
+/// `v` when finite (JSON has no infinity: an unlimited actuator's limit is `null`).
+fn finite_or_none(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
+}
+
+/// The `actuators` entry of `design.json`: per actuated surface its τ, limits, command
+/// rates and the fractions of the samples limited, and the flags (written only for a design
+/// with actuators, so one without reads as before).
+fn actuation_json(d: &Design) -> serde_json::Value {
+    let surfaces = d.actuation.iter().map(|a| {
+        let (lo, hi) = a.actuator.position_limits_rad;
+        serde_json::json!({
+            "surface": a.surface.name(),
+            "tau_s": a.actuator.tau_s,
+            "rate_limit_rad_s": finite_or_none(a.actuator.rate_limit_rad_s),
+            "position_limits_rad": [finite_or_none(lo), finite_or_none(hi)],
+            "nominal_rate_rad_s": a.nominal_rate_rad_s,
+            "peak_command_rate_rad_s": a.peak_command_rate_rad_s,
+            "rate_limited_fraction": a.rate_limited_fraction,
+            "position_limited_fraction": a.position_limited_fraction,
+        })
+    });
+    serde_json::json!({
+        "prediction": "through the actuators: the table is the servo command, the prediction uses the deflection",
+        "surfaces": surfaces.collect::<Vec<_>>(),
+        "flags": actuator_limit_flags(d),
+    })
 }
 
 fn turbulence_name(t: Turbulence) -> &'static str {
@@ -385,7 +443,7 @@ fn model_name(d: &Design) -> &'static str {
 
 fn json(a: &DesignArgs, d: &Design) -> serde_json::Value {
     let r = &d.crb;
-    serde_json::json!({
+    let mut v = serde_json::json!({
         "signal": a.signal_name(),
         "fade_s": (a.signal == Signal::Chirp).then_some(a.fade_s),
         "surfaces": a.surfaces.iter().map(|s| s.name()).collect::<Vec<_>>(),
@@ -408,7 +466,11 @@ fn json(a: &DesignArgs, d: &Design) -> serde_json::Value {
             "crb_sigma": r.sigma[i],
             "relative_crb_sigma": r.relative_sigma[i],
         })).collect::<Vec<_>>(),
-    })
+    });
+    if !d.actuation.is_empty() {
+        v["actuators"] = actuation_json(d);
+    }
+    v
 }
 
 #[cfg(test)]

@@ -10,8 +10,9 @@
 //!                     --map mappings/my_uav.toml --vt-mps 18 --alt-m 100 [--json]
 //! ```
 
-use aeroident_models::aircraft::{Aircraft, CONTROL_NAMES, LevelLinearization, linearize_level};
+use aeroident_models::aircraft::{Aircraft, CONTROL_NAMES, linearize_level};
 use aeroident_models::f16::F16;
+use aeroident_pipelines::airframe::Linear;
 use anyhow::Context;
 use serde_json::json;
 
@@ -45,21 +46,28 @@ pub fn execute(a: LinearizeArgs) -> anyhow::Result<()> {
 
 /// The report of `aeroident linearize` (text, or JSON with keys aircraft, trim, states,
 /// inputs, a, b, c, d, eigenvalues, modes: the state-space model `ẋ = A x + B u`, `y = C x + D u`
-/// of the perturbations about the trim, every state an output).
+/// of the perturbations about the trim, every state an output). A model-file aircraft whose
+/// mapping gives a surface an actuator has one more state per actuator (the surface, named as
+/// `sim` records it) and that surface's input is its command
+/// ([`aeroident_pipelines::airframe::Linear::with_actuators`]); the JSON then also has
+/// `actuators` (surface, state, input, τ, pole, limits) and `notes`, the text an actuator
+/// line each and the note that rate limits are not in a linear model.
 ///
 /// # Errors
 /// As [`execute`].
 pub fn report(a: &LinearizeArgs) -> anyhow::Result<String> {
     if a.aircraft.is_f16()? {
         let f = F16::new(a.xcg)?;
-        return render(&f, &linearize_level(&f, a.vt_mps, a.alt_m)?, a.json);
+        let lin = Linear::of_level(&f, &linearize_level(&f, a.vt_mps, a.alt_m)?);
+        return render(&f.name(), f.length_unit_m(), &lin, a.json);
     }
     let m = a.aircraft.model_file()?;
     let lin = linearize_level(&m, a.vt_mps, a.alt_m)
         .with_context(|| format!("{} at {} m/s, {} m", a.aircraft.aircraft, a.vt_mps, a.alt_m))?;
     let flags =
         aeroident_pipelines::airframe::modes::mode_flags(&m, lin.trim.state.as_slice(), &lin.modes);
-    let mut out = render(&m, &lin, a.json)?;
+    let lin = Linear::of_level(&m, &lin).with_actuators(&m.airframe().actuators);
+    let mut out = render(&m.name(), m.length_unit_m(), &lin, a.json)?;
     if a.json {
         let mut v: serde_json::Value = serde_json::from_str(&out)?;
         v["mode_flags"] = json!(flags);
@@ -72,43 +80,17 @@ pub fn report(a: &LinearizeArgs) -> anyhow::Result<String> {
     Ok(out)
 }
 
-/// Renders a linearization of `aircraft` (SI trim values; A, B in the aircraft's state units).
-fn render<const N: usize, A: Aircraft<N>>(
-    aircraft: &A,
-    l: &LevelLinearization<N>,
-    json: bool,
-) -> anyhow::Result<String> {
-    let unit = aircraft.length_unit_m();
+/// Renders a linearization of the aircraft `name` whose length unit is `unit` m (SI trim
+/// values; A, B in the aircraft's state units).
+fn render(name: &str, unit: f64, l: &Linear, json: bool) -> anyhow::Result<String> {
     let (x, u) = (&l.trim.state, &l.trim.controls);
-    let mut controls: Vec<(String, f64)> = vec![(aircraft.engine_command().to_string(), u[0])];
+    let mut controls: Vec<(String, f64)> = vec![(l.inputs[0].clone(), u[0])];
     controls.extend((1..4).map(|k| (CONTROL_NAMES[k].to_string(), u[k])));
-    let modes = l.modes.iter().map(|m| {
-        json!({"name": m.name.as_str(), "eigenvalue": [m.eigenvalue.re, m.eigenvalue.im],
-               "wn_radps": m.wn_rad_s, "zeta": m.zeta})
-    });
     if json {
-        let rows = |m: &dyn Fn(usize, usize) -> f64, nc: usize| -> Vec<Vec<f64>> {
-            (0..N).map(|i| (0..nc).map(|j| m(i, j)).collect()).collect()
-        };
-        return Ok(json!({
-            "aircraft": aircraft.name(),
-            "trim": {"vt_mps": x[0] * unit, "alpha_rad": x[1], "theta_rad": x[4],
-                     "controls": controls.iter().map(|(n, v)| json!({"name": n, "value": v})).collect::<Vec<_>>(),
-                     "max_abs_residual": l.trim.max_abs_residual},
-            "states": aircraft.state_names().as_slice(),
-            "inputs": controls.iter().map(|(n, _)| n).collect::<Vec<_>>(),
-            "a": rows(&|i, j| l.linear.a[(i, j)], N),
-            "b": rows(&|i, j| l.linear.b[(i, j)], 4),
-            "c": rows(&|i, j| if i == j { 1.0 } else { 0.0 }, N),
-            "d": rows(&|_, _| 0.0, 4),
-            "eigenvalues": l.eigenvalues.iter().map(|v| [v.re, v.im]).collect::<Vec<_>>(),
-            "modes": modes.collect::<Vec<_>>(),
-        })
-        .to_string());
+        return Ok(render_json(name, unit, l, &controls).to_string());
     }
     let mut out = format!(
-        "{}: trim at {:.3} m/s, {:.1} m: alpha {:.4} deg, theta {:.4} deg (residual {:.1e})\n",
-        aircraft.name(),
+        "{name}: trim at {:.3} m/s, {:.1} m: alpha {:.4} deg, theta {:.4} deg (residual {:.1e})\n",
         x[0] * unit,
         x[11] * unit,
         x[1].to_degrees(),
@@ -118,9 +100,82 @@ fn render<const N: usize, A: Aircraft<N>>(
     for (n, v) in &controls {
         out.push_str(&format!("  {n:<32} {v:.6}\n"));
     }
-    let ev: Vec<(f64, f64)> = l.eigenvalues.iter().map(|v| (v.re, v.im)).collect();
-    out.push_str(&eigen_text(&ev, &l.modes));
+    out.push_str(&eigen_text(&l.eigenvalues, &l.modes));
+    out.push_str(&actuator_text(l));
     Ok(out)
+}
+
+/// The JSON document of [`render`] (keys of [`report`]); `actuators` and `notes` only when
+/// the model has actuators, so a model without them reads as before.
+fn render_json(name: &str, unit: f64, l: &Linear, controls: &[(String, f64)]) -> serde_json::Value {
+    let n = l.a.len();
+    let x = &l.trim.state;
+    let modes = l.modes.iter().map(|m| {
+        json!({"name": m.name.as_str(), "eigenvalue": [m.eigenvalue.re, m.eigenvalue.im],
+               "wn_radps": m.wn_rad_s, "zeta": m.zeta})
+    });
+    let rows = |m: &dyn Fn(usize, usize) -> f64, nc: usize| -> Vec<Vec<f64>> {
+        (0..n).map(|i| (0..nc).map(|j| m(i, j)).collect()).collect()
+    };
+    let mut v = json!({
+        "aircraft": name,
+        "trim": {"vt_mps": x[0] * unit, "alpha_rad": x[1], "theta_rad": x[4],
+                 "controls": controls.iter().map(|(n, v)| json!({"name": n, "value": v})).collect::<Vec<_>>(),
+                 "max_abs_residual": l.trim.max_abs_residual},
+        "states": l.states,
+        "inputs": l.inputs,
+        "a": l.a,
+        "b": l.b,
+        "c": rows(&|i, j| if i == j { 1.0 } else { 0.0 }, n),
+        "d": rows(&|_, _| 0.0, 4),
+        "eigenvalues": l.eigenvalues.iter().map(|&(re, im)| [re, im]).collect::<Vec<_>>(),
+        "modes": modes.collect::<Vec<_>>(),
+    });
+    if !l.actuators.is_empty() {
+        let finite = |v: f64| v.is_finite().then_some(v);
+        v["actuators"] = l
+            .actuators
+            .iter()
+            .map(|s| {
+                let (lo, hi) = s.actuator.position_limits_rad;
+                json!({"surface": s.surface, "state": s.state, "input": s.input,
+                       "tau_s": s.actuator.tau_s, "pole": [s.pole(), 0.0],
+                       "rate_limit_rad_s": finite(s.actuator.rate_limit_rad_s),
+                       "position_limits_rad": [finite(lo), finite(hi)], "trim_rad": s.trim_rad})
+            })
+            .collect();
+        v["notes"] = json!(l.actuator_notes());
+    }
+    v
+}
+
+/// One line per actuator state (its pole `−1/τ` and limits) and the notes of
+/// [`Linear::actuator_notes`]; empty without actuators.
+fn actuator_text(l: &Linear) -> String {
+    if l.actuators.is_empty() {
+        return String::new();
+    }
+    let mut out = String::from("actuators (one state each; the input is the command):\n");
+    let limit = |v: f64| if v.is_finite() { format!("{v}") } else { "none".into() };
+    for s in &l.actuators {
+        let (lo, hi) = s.actuator.position_limits_rad;
+        out.push_str(&format!(
+            "  actuator {:<9} {:>10.5} {:+10.5}j   tau {} s   {} <- {}   rate limit {} rad/s   position limits [{}, {}] rad\n",
+            s.surface,
+            s.pole(),
+            0.0,
+            s.actuator.tau_s,
+            s.state,
+            s.input,
+            limit(s.actuator.rate_limit_rad_s),
+            limit(lo),
+            limit(hi)
+        ));
+    }
+    for n in l.actuator_notes() {
+        out.push_str(&format!("note: {n}\n"));
+    }
+    out
 }
 
 /// The eigenvalues `(re, im)` of an `n`-state A (`n` = `eigenvalues.len()`) and the modes of

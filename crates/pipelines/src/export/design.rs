@@ -146,8 +146,113 @@ pub struct Design {
     /// The model structure predicted for.
     pub structure: ModelStructure,
     /// The plan the prediction is of (for a Monte Carlo check with
-    /// [`aeroident_estimators::output_error::design::simulate_plan`]).
+    /// [`aeroident_estimators::output_error::design::simulate_plan`]); a surface with an
+    /// actuator enters it as the deflection its actuator makes of the command
+    /// ([`Self::actuation`]).
     pub plan: DesignPlan,
+    /// The designed surfaces that reach the aircraft through an actuator of the mapping (a
+    /// model-file aircraft's, [`design_for_aircraft`]), in the order of [`Self::inputs`];
+    /// empty when every surface is its command (the F-16's design, a mapping without
+    /// actuators). `inputs` is then the servo command.
+    pub actuation: Vec<Actuation>,
+}
+
+/// A designed surface flown through its actuator: the command table passed through the
+/// mapping's first-order lag with its rate and position limits, the discrete model `sim`
+/// flies ([`aeroident_io::mapping::Actuator::step`]: the command held over each sample
+/// interval, the surface starting at its trim), and how often the limits acted.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Actuation {
+    /// The surface.
+    pub surface: Surface,
+    /// The mapping's actuator (τ s, rate limit rad/s, position limits rad).
+    pub actuator: aeroident_io::mapping::Actuator,
+    /// The deflection's perturbation from trim at every sample, rad: what the prediction uses.
+    pub surface_rad: Vec<f64>,
+    /// The nominal peak command rate, amplitude × 2π f_max (f_max the surface's highest
+    /// harmonic, or the chirp's upper band edge), rad/s.
+    pub nominal_rate_rad_s: f64,
+    /// The command table's steepest slope, `max |Δu| / dt`, rad/s.
+    pub peak_command_rate_rad_s: f64,
+    /// Fraction of the sample intervals over which the rate limit cut the surface's move
+    /// short, 0–1.
+    pub rate_limited_fraction: f64,
+    /// Fraction of the samples at which the surface sits on a position limit, 0–1.
+    pub position_limited_fraction: f64,
+}
+
+/// A surface's response to a command table through an actuator ([`through_actuator`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ActuatorResponse {
+    /// The deflection's perturbation from trim at every sample, rad.
+    pub surface_rad: Vec<f64>,
+    /// Sample intervals over which the rate limit acted.
+    pub rate_limited_steps: usize,
+    /// Samples at which the deflection sits on a position limit.
+    pub position_limited_samples: usize,
+}
+
+/// The deflection `actuator` makes of `command_rad` (perturbations from the trim deflection
+/// `trim_rad`, rad, one per sample `dt_s` apart) as `sim` flies it
+/// ([`crate::sim::model_file`]): the surface starts at trim, and each sample's command is
+/// held over the interval after it ([`aeroident_io::mapping::Actuator::step_limited`]), so
+/// even a vanishing τ puts the surface one sample behind the table. Limits act on the
+/// absolute deflection `trim + δ`.
+pub fn through_actuator(
+    actuator: &aeroident_io::mapping::Actuator,
+    trim_rad: f64,
+    command_rad: &[f64],
+    dt_s: f64,
+) -> ActuatorResponse {
+    let (lo, hi) = actuator.position_limits_rad;
+    // As `sim` starts it: at the trim deflection, the limits acting from the first step.
+    let mut surface = trim_rad;
+    let mut out = ActuatorResponse {
+        surface_rad: Vec::with_capacity(command_rad.len()),
+        rate_limited_steps: 0,
+        position_limited_samples: 0,
+    };
+    let mut held: Option<f64> = None;
+    for &u in command_rad {
+        if let Some(previous) = held {
+            let (next, limited) = actuator.step_limited(surface, trim_rad + previous, dt_s);
+            surface = next;
+            out.rate_limited_steps += usize::from(limited);
+        }
+        held = Some(u);
+        out.position_limited_samples += usize::from(surface <= lo || surface >= hi);
+        out.surface_rad.push(surface - trim_rad);
+    }
+    out
+}
+
+/// One flag per actuated surface of `d` whose rate limit the design reaches ([`Actuation`]:
+/// any sample interval rate-limited), naming the surface, the fraction of the samples
+/// limited, the command's slope and the limit; one per surface held on a position limit.
+/// Empty when no limit acts (always for a design without actuators).
+pub fn actuator_limit_flags(d: &Design) -> Vec<String> {
+    let mut flags = Vec::new();
+    for a in &d.actuation {
+        if a.rate_limited_fraction > 0.0 {
+            flags.push(format!(
+                "{}: the actuator's rate limit {:.3} rad/s is reached on {:.1} % of the samples (command slope up to {:.3} rad/s, amplitude × 2π f_max {:.3} rad/s): the surface lags the table beyond its τ; lower --amplitude-deg or the band's upper edge",
+                a.surface.name(),
+                a.actuator.rate_limit_rad_s,
+                100.0 * a.rate_limited_fraction,
+                a.peak_command_rate_rad_s,
+                a.nominal_rate_rad_s
+            ));
+        }
+        if a.position_limited_fraction > 0.0 {
+            let (lo, hi) = a.actuator.position_limits_rad;
+            flags.push(format!(
+                "{}: the surface sits on its position limits [{lo}, {hi}] rad on {:.1} % of the samples: lower --amplitude-deg",
+                a.surface.name(),
+                100.0 * a.position_limited_fraction
+            ));
+        }
+    }
+    flags
 }
 
 /// Most samples of a design's tables: checked before any is allocated (a sample count far
@@ -384,7 +489,7 @@ pub fn design(spec: &DesignSpec) -> crate::error::Result<Design> {
         }
     };
     let inputs = spec.surfaces.iter().copied().zip(inputs).collect();
-    Ok(Design { t_s, inputs, harmonics, crb, structure, plan })
+    Ok(Design { t_s, inputs, harmonics, crb, structure, plan, actuation: Vec::new() })
 }
 
 /// Designs `spec`'s input (its surfaces, amplitude, duration, rate, band and waveform; its
@@ -421,10 +526,55 @@ pub fn design_for_aircraft(
     let tr = resolvable_trim(aircraft, (vt_mps, alt_m), spec.rate_hz)?;
     let condition = aircraft.flight_condition(tr.state.as_slice(), tr.controls.as_slice())?;
     let (structure, theta) = excited_part(aircraft, &spec.surfaces);
-    let plan = plan_of(spec, &inputs, structure, theta, aircraft.constants(), condition);
+    let actuation = actuation_of(spec, aircraft, &tr.controls, &inputs, &harmonics);
+    let mut seen = inputs.clone();
+    for a in &actuation {
+        let i = spec.surfaces.iter().position(|s| *s == a.surface).unwrap_or_default();
+        seen[i].clone_from(&a.surface_rad);
+    }
+    let plan = plan_of(spec, &seen, structure, theta, aircraft.constants(), condition);
     let crb = predict_crb(&plan)?;
     let inputs = spec.surfaces.iter().copied().zip(inputs).collect();
-    Ok(Design { t_s, inputs, harmonics, crb, structure, plan })
+    Ok(Design { t_s, inputs, harmonics, crb, structure, plan, actuation })
+}
+
+/// Each designed surface of `spec` with an actuator in `aircraft`'s mapping: its command in
+/// `inputs` (spec order) through the actuator about the trim `controls` ([`Actuation`]).
+fn actuation_of(
+    spec: &DesignSpec,
+    aircraft: &crate::airframe::ModelFileAircraft,
+    controls: &aeroident_models::aircraft::ControlVector,
+    inputs: &[Vec<f64>],
+    harmonics: &[Vec<u32>],
+) -> Vec<Actuation> {
+    let dt = 1.0 / spec.rate_hz;
+    let mut out = Vec::new();
+    for (i, &surface) in spec.surfaces.iter().enumerate() {
+        let k = match surface {
+            Surface::De => 0,
+            Surface::Da => 1,
+            Surface::Dr => 2,
+        };
+        let Some(actuator) = aircraft.airframe().actuators[k] else { continue };
+        let command = &inputs[i];
+        let r = through_actuator(&actuator, controls[1 + k], command, dt);
+        let f_max = harmonics
+            .get(i)
+            .and_then(|h| h.last())
+            .map_or(spec.band_hz.1, |&h| f64::from(h) / spec.duration_s);
+        let slope = command.windows(2).fold(0f64, |m, w| m.max((w[1] - w[0]).abs() / dt));
+        let (samples, steps) = (command.len().max(1) as f64, command.len().max(2) as f64 - 1.0);
+        out.push(Actuation {
+            surface,
+            actuator,
+            surface_rad: r.surface_rad,
+            nominal_rate_rad_s: spec.amplitude_rad * std::f64::consts::TAU * f_max,
+            peak_command_rate_rad_s: slope,
+            rate_limited_fraction: r.rate_limited_steps as f64 / steps,
+            position_limited_fraction: r.position_limited_samples as f64 / samples,
+        });
+    }
+    out
 }
 
 /// RK4's stability bound on the negative real axis is |λ| dt ≈ 2.785; a margin below it.

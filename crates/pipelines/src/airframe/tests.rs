@@ -321,3 +321,110 @@ fn the_flight_condition_is_the_trim_s_with_the_air_at_its_altitude() {
         assert!(e.contains("trim"), "{e}");
     }
 }
+
+/// A first-order actuator of time constant `tau_s` without limits (no rate or position
+/// limit acts in a linear model or in a design that stays small).
+fn lag(tau_s: f64) -> aeroident_io::mapping::Actuator {
+    aeroident_io::mapping::Actuator {
+        tau_s,
+        rate_limit_rad_s: f64::INFINITY,
+        position_limits_rad: (f64::NEG_INFINITY, f64::INFINITY),
+    }
+}
+
+/// The F-16's local derivatives flown as a model-file aircraft with `actuators` (elevator,
+/// aileron, rudder) in its airframe.
+fn with_actuators(
+    actuators: [Option<aeroident_io::mapping::Actuator>; 3],
+) -> (ModelFileAircraft, ModelFileAircraft) {
+    let (f, t) = f16_trim();
+    let bare = as_model_file(&f, &t);
+    let mut actuated = bare.clone();
+    actuated.airframe.actuators = actuators;
+    (bare, actuated)
+}
+
+/// Elevator (τ 0.05 s) and rudder (τ 0.2 s) actuators become states 12 and 13: each row is
+/// `ẋ = (u − x)/τ`, its surface's old `B` column moved into `A`, the inputs the commands.
+/// The eigenvalues of the whole 14-state `A`, recomputed here from the matrix, hold −1/τ of
+/// each actuator to 1e-9 and every eigenvalue of the aircraft without actuators; the
+/// rigid-body modes are those of the aircraft without actuators. Without actuators the
+/// model is returned unchanged.
+#[test]
+fn analytic_an_actuator_state_has_the_pole_minus_one_over_tau() {
+    let (te, tr) = (0.05, 0.2);
+    let (bare, actuated) = with_actuators([Some(lag(te)), None, Some(lag(tr))]);
+    let (vt, alt) = (VT_FPS * M_PER_FT, ALT_FT * M_PER_FT);
+    let plain = AnyAircraft::ModelFile(Box::new(bare)).linearize_level_actuated(vt, alt).unwrap();
+    assert_eq!(plain.clone().with_actuators(&[None; 3]), plain, "no actuator: unchanged");
+    assert!(plain.actuators.is_empty() && plain.actuator_notes().is_empty());
+    let l = AnyAircraft::ModelFile(Box::new(actuated)).linearize_level_actuated(vt, alt).unwrap();
+    assert_eq!(l.a.len(), 14);
+    assert_eq!(&l.states[12..], ["elevator_rad", "rudder_rad"]);
+    assert_eq!(&l.inputs[1..], ["elevator_cmd_rad", "aileron_rad", "rudder_cmd_rad"]);
+    for (index, control, tau) in [(12, 1, te), (13, 3, tr)] {
+        for i in 0..12 {
+            assert_eq!(l.a[i][index], plain.b[i][control], "A[{i}][{index}]: the old B column");
+            assert_eq!(l.b[i][control], 0.0, "B[{i}][{control}]: the surface moved into A");
+        }
+        let row: Vec<f64> = (0..14).map(|j| if j == index { -1.0 / tau } else { 0.0 }).collect();
+        assert_eq!(l.a[index], row);
+        let b_row: Vec<f64> = (0..4).map(|j| if j == control { 1.0 / tau } else { 0.0 }).collect();
+        assert_eq!(l.b[index], b_row);
+    }
+    let m = nalgebra::DMatrix::from_fn(14, 14, |i, j| l.a[i][j]);
+    let ev = m.complex_eigenvalues();
+    for tau in [te, tr] {
+        let near = ev.iter().map(|e| (e - nalgebra::Complex::new(-1.0 / tau, 0.0)).norm());
+        let err = near.fold(f64::INFINITY, f64::min);
+        eprintln!("actuator tau {tau} s: nearest eigenvalue to -1/tau off by {err:.2e}");
+        assert!(err < 1e-9, "tau {tau}: {err}");
+        assert!(l.eigenvalues.iter().any(|&(re, im)| (re + 1.0 / tau).abs() < 1e-9 && im == 0.0));
+    }
+    // Rounding moves an eigenvalue by ~ε‖A‖ × its condition: the others are compared to
+    // 1e-9 of the spectrum's scale (the fastest root), except the integrators (ψ, north,
+    // east, altitude), a repeated root at 0 that rounding splits by ~√ε: 1e-5.
+    let scale = ev.iter().fold(0f64, |m, e| m.max(e.norm()));
+    for &(re, im) in &plain.eigenvalues {
+        let tol = if re.hypot(im) < 1e-3 { 1e-5 } else { 1e-9 * scale };
+        let off =
+            ev.iter().map(|e| (e.re - re).abs() + (e.im - im).abs()).fold(f64::INFINITY, f64::min);
+        eprintln!(
+            "rigid-body eigenvalue {re:.6} {im:+.6}j: off by {off:.1e} (tolerance {tol:.0e})"
+        );
+        let there = off < tol;
+        assert!(there, "rigid-body eigenvalue {re} {im}j lost");
+    }
+    assert_eq!(l.modes, plain.modes);
+    assert_eq!(l.actuators.iter().map(|s| s.pole()).collect::<Vec<_>>(), [-1.0 / te, -1.0 / tr]);
+    assert!(l.actuator_notes()[0].contains("rate limits"));
+}
+
+/// The transfer from a command to its surface state, `[(sI − A)⁻¹ B]` of the whole 13-state
+/// model solved here by LU: 1 at DC (s = 1e-8 1/s, to 1e-6) and `1/(1 + jωτ)` at the corner
+/// `ω = 1/τ` (|·| = 1/√2).
+#[test]
+fn analytic_a_command_reaches_its_surface_state_with_unit_dc_gain() {
+    use nalgebra::{Complex, DMatrix};
+    let tau = 0.08;
+    let (_, actuated) = with_actuators([None, Some(lag(tau)), None]);
+    let (vt, alt) = (VT_FPS * M_PER_FT, ALT_FT * M_PER_FT);
+    let l = AnyAircraft::ModelFile(Box::new(actuated)).linearize_level_actuated(vt, alt).unwrap();
+    let (n, k) = (l.a.len(), l.actuators[0].index);
+    assert_eq!(
+        (n, k, l.states[k].as_str(), l.inputs[2].as_str()),
+        (13, 12, "aileron_rad", "aileron_cmd_rad")
+    );
+    let transfer = |s: Complex<f64>| {
+        let m = DMatrix::from_fn(n, n, |i, j| {
+            Complex::new(if i == j { 1.0 } else { 0.0 }, 0.0) * s - Complex::new(l.a[i][j], 0.0)
+        });
+        let b = DMatrix::from_fn(n, 1, |i, _| Complex::new(l.b[i][2], 0.0));
+        m.lu().solve(&b).unwrap()[(k, 0)]
+    };
+    let dc = transfer(Complex::new(1e-8, 0.0));
+    let corner = transfer(Complex::new(0.0, 1.0 / tau));
+    eprintln!("command to surface: DC {dc:.9}, at 1/tau {corner:.6} (|.| {:.6})", corner.norm());
+    assert!((dc - Complex::new(1.0, 0.0)).norm() < 1e-6, "{dc}");
+    assert!((corner - Complex::new(0.5, -0.5)).norm() < 1e-9, "{corner}");
+}

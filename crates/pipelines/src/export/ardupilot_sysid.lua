@@ -183,7 +183,7 @@ local function check_pace(due)
   local late = skipped > SKIP_FRACTION * ROWS or pace.gap_ms > GAP_PERIODS * 1000 / RATE_HZ
   if late and not pace.warned then
     pace.warned = true
-    gcs:send_text(MAV_WARNING, string.format('aeroident: behind: %d rows skipped, gap %d ms', skipped, pace.gap_ms))
+    gcs:send_text(MAV_WARNING, string.format('aeroident: behind: rows skipped %d, gap %d ms', skipped, pace.gap_ms))
   end
 end
 

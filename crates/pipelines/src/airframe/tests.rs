@@ -428,3 +428,122 @@ fn analytic_a_command_reaches_its_surface_state_with_unit_dc_gain() {
     assert!((dc - Complex::new(1.0, 0.0)).norm() < 1e-6, "{dc}");
     assert!((corner - Complex::new(0.5, -0.5)).norm() < 1e-9, "{corner}");
 }
+
+/// An elevator design (1°, 10 s at 50 Hz, `band_hz`) for the F-16's local derivatives with
+/// elevator actuator `actuator` (or none).
+fn elevator_design(
+    actuator: Option<aeroident_io::mapping::Actuator>,
+    band_hz: (f64, f64),
+    amplitude_rad: f64,
+) -> crate::export::design::Design {
+    use crate::export::design::{DesignSpec, Surface, Waveform, design_for_aircraft};
+    let (_, aircraft) = with_actuators([actuator, None, None]);
+    let spec = DesignSpec {
+        surfaces: vec![Surface::De],
+        amplitude_rad,
+        duration_s: 10.0,
+        rate_hz: 50.0,
+        band_hz,
+        alt_ft: ALT_FT,
+        vt_fps: VT_FPS,
+        xcg: 0.30,
+        turbulence: None,
+        signal: Waveform::Multisine,
+    };
+    design_for_aircraft(&spec, &aircraft, VT_FPS * M_PER_FT, ALT_FT * M_PER_FT).unwrap()
+}
+
+/// σ of the structure's parameters of a prediction.
+fn sigmas(r: &aeroident_estimators::output_error::design::DesignResult) -> Vec<f64> {
+    r.sigma[..r.n_params].iter().map(|s| s.expect("identifiable")).collect()
+}
+
+/// A design whose band (1.5–4 Hz) lies well above an elevator actuator's corner
+/// `1/(2πτ)` = 0.32 Hz (τ 0.5 s): the surface moves a fraction of the command, so every
+/// derivative's predicted σ grows against the same table flown without the actuator. The
+/// deflection in the plan is the lag written out here, `δ[k+1] = δ[k] + (u[k] − δ[k])(1 −
+/// e^(−dt/τ))` from the trim (the command held over each interval, as `sim` flies it).
+#[test]
+fn analytic_a_design_above_the_actuator_corner_predicts_larger_sigma() {
+    let tau = 0.5;
+    let amplitude = 1f64.to_radians();
+    let bare = elevator_design(None, (1.5, 4.0), amplitude);
+    let lagged = elevator_design(Some(lag(tau)), (1.5, 4.0), amplitude);
+    let command = &lagged.inputs[0].1;
+    assert_eq!(command, &bare.inputs[0].1, "the table is the command either way");
+    let decay = 1.0 - (-0.02 / tau).exp();
+    let mut delta = vec![0.0];
+    for u in &command[..command.len() - 1] {
+        let d = *delta.last().unwrap();
+        delta.push(d + (u - d) * decay);
+    }
+    let seen = &lagged.plan.manoeuvres[0].de_rad;
+    let worst = seen.iter().zip(&delta).map(|(a, b)| (a - b).abs()).fold(0f64, f64::max);
+    assert!(worst < 1e-12, "the plan's deflection is the lag of the command: {worst}");
+    assert_eq!(lagged.actuation.len(), 1);
+    assert_eq!(lagged.actuation[0].rate_limited_fraction, 0.0);
+    for ((name, a), b) in lagged.structure.names().zip(sigmas(&lagged.crb)).zip(sigmas(&bare.crb)) {
+        eprintln!("{name:>9}: σ through the actuator / σ of the command {:.3}", a / b);
+        assert!(a > b, "{name}: {a} with the actuator, {b} without");
+    }
+}
+
+/// An actuator of vanishing τ (1e-7 s) makes the surface the command one sample later (the
+/// command held over each interval, `sim`'s model): the prediction equals, to 1e-6
+/// relative, the one without an actuator for the table delayed by one sample, predicted here
+/// from the bare design's own plan with that input shifted.
+#[test]
+fn analytic_a_vanishing_actuator_predicts_the_command_one_sample_late() {
+    use aeroident_estimators::output_error::design::predict_crb;
+    let amplitude = 1f64.to_radians();
+    let bare = elevator_design(None, (0.1, 1.5), amplitude);
+    let fast = elevator_design(Some(lag(1e-7)), (0.1, 1.5), amplitude);
+    let mut plan = bare.plan.clone();
+    let u = &bare.inputs[0].1;
+    plan.manoeuvres[0].de_rad =
+        std::iter::once(0.0).chain(u[..u.len() - 1].iter().copied()).collect();
+    let delayed = predict_crb(&plan).unwrap();
+    let names: Vec<String> = bare.structure.names().map(str::to_string).collect();
+    let (f, d, b) = (sigmas(&fast.crb), sigmas(&delayed), sigmas(&bare.crb));
+    for (k, name) in names.iter().enumerate() {
+        let (rel, undelayed) = (f[k] / d[k] - 1.0, f[k] / b[k] - 1.0);
+        eprintln!(
+            "{name:>9}: σ vs the delayed table {rel:+.1e}, vs the table itself {undelayed:+.2e}"
+        );
+        assert!(rel.abs() < 1e-6, "{name}: {rel}");
+        assert!(undelayed.abs() < 0.02, "{name}: one sample late moves σ by {undelayed}");
+    }
+}
+
+/// The rate-limit flag: a 2° elevator multisine up to 1.5 Hz through a τ 0.05 s actuator
+/// fires it when the limit is 0.3 × amplitude × 2π f_max (named, with the fraction of the
+/// samples limited), and not when the limit is twice the table's steepest slope (a
+/// first-order lag never moves faster than its command).
+#[test]
+fn the_rate_limit_flag_fires_above_the_limit_and_not_below() {
+    use crate::export::design::actuator_limit_flags;
+    let amplitude = 2f64.to_radians();
+    let bare = elevator_design(None, (0.1, 1.5), amplitude);
+    let f_max = f64::from(*bare.harmonics[0].last().unwrap()) / 10.0;
+    let nominal = amplitude * std::f64::consts::TAU * f_max;
+    let u = &bare.inputs[0].1;
+    let slope = u.windows(2).fold(0f64, |m, w| m.max((w[1] - w[0]).abs() * 50.0));
+    let limited =
+        |rate: f64| aeroident_io::mapping::Actuator { rate_limit_rad_s: rate, ..lag(0.05) };
+    let over = elevator_design(Some(limited(0.3 * nominal)), (0.1, 1.5), amplitude);
+    let flags = actuator_limit_flags(&over);
+    let a = &over.actuation[0];
+    eprintln!(
+        "limit {:.3} rad/s against A·2πf_max {nominal:.3}, slope {slope:.3}: {:.1} % of the samples limited; {flags:?}",
+        0.3 * nominal,
+        100.0 * a.rate_limited_fraction
+    );
+    assert!((a.nominal_rate_rad_s / nominal - 1.0).abs() < 1e-12);
+    assert!((a.peak_command_rate_rad_s / slope - 1.0).abs() < 1e-12);
+    assert!(a.rate_limited_fraction > 0.0 && flags.len() == 1, "{flags:?}");
+    let pct = format!("{:.1} %", 100.0 * a.rate_limited_fraction);
+    assert!(flags[0].starts_with("de:") && flags[0].contains(&pct), "{}", flags[0]);
+    let under = elevator_design(Some(limited(2.0 * slope)), (0.1, 1.5), amplitude);
+    assert_eq!(under.actuation[0].rate_limited_fraction, 0.0);
+    assert!(actuator_limit_flags(&under).is_empty());
+}

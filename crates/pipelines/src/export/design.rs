@@ -752,6 +752,31 @@ mod tests {
         }
     }
 
+    /// [`through_actuator`] of a 0.105 rad step command with a vanishing τ (1e-9 s): the
+    /// surface starts at trim, reaches each command one sample later, and a 1 rad/s limit at
+    /// 100 Hz lets it move 0.01 rad a sample, so it ramps 0.01 … 0.10 over 10 limited intervals
+    /// and then takes the last 0.005; with a position limit at 0.075 it stops there from the
+    /// 8th sample on and every interval is limited.
+    #[test]
+    fn analytic_a_step_through_a_rate_limited_actuator_ramps_at_the_limit() {
+        let act = aeroident_io::mapping::Actuator {
+            tau_s: 1e-9,
+            rate_limit_rad_s: 1.0,
+            position_limits_rad: (-1.0, 1.0),
+        };
+        let step = vec![0.105; 15];
+        let r = through_actuator(&act, 0.0, &step, 0.01);
+        for (k, v) in r.surface_rad.iter().enumerate() {
+            let expected = (0.01 * k as f64).min(0.105);
+            assert!((v - expected).abs() < 1e-12, "sample {k}: {v} against {expected}");
+        }
+        assert_eq!((r.rate_limited_steps, r.position_limited_samples), (10, 0));
+        let pinned = aeroident_io::mapping::Actuator { position_limits_rad: (-1.0, 0.075), ..act };
+        let r = through_actuator(&pinned, 0.0, &step, 0.01);
+        assert_eq!((r.rate_limited_steps, r.position_limited_samples), (14, 7));
+        assert_eq!(r.surface_rad[14], 0.075);
+    }
+
     /// `--turbulence`: the record flown in moderate Dryden turbulence has a different bound
     /// (the gusts are noise and excitation), finite for every parameter the calm plan
     /// identifies.

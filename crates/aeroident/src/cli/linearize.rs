@@ -156,20 +156,19 @@ fn actuator_text(l: &Linear) -> String {
         return String::new();
     }
     let mut out = String::from("actuators (one state each; the input is the command):\n");
-    let limit = |v: f64| if v.is_finite() { format!("{v}") } else { "none".into() };
     for s in &l.actuators {
         let (lo, hi) = s.actuator.position_limits_rad;
+        let rate = s.actuator.rate_limit_rad_s;
         out.push_str(&format!(
-            "  actuator {:<9} {:>10.5} {:+10.5}j   tau {} s   {} <- {}   rate limit {} rad/s   position limits [{}, {}] rad\n",
+            "  actuator {:<9} {:>10.5} {:+10.5}j   tau {} s   {} <- {}   rate limit {}   position limits {}\n",
             s.surface,
             s.pole(),
             0.0,
             s.actuator.tau_s,
             s.state,
             s.input,
-            limit(s.actuator.rate_limit_rad_s),
-            limit(lo),
-            limit(hi)
+            if rate.is_finite() { format!("{rate} rad/s") } else { "none".into() },
+            if lo.is_finite() { format!("[{lo}, {hi}] rad") } else { "none".into() },
         ));
     }
     for n in l.actuator_notes() {

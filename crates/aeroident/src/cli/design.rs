@@ -218,6 +218,9 @@ pub fn execute(a: DesignArgs) -> anyhow::Result<()> {
             large.join(", ")
         );
     }
+    for f in actuator_limit_flags(&d) {
+        aeroident_report::note!("warning: {f}");
+    }
     let forms = autopilot_forms(&a, &d)?;
     if let Some(o) = out.as_mut() {
         o.write_bytes("input.csv", csv_table(&d).as_bytes())?;

@@ -310,6 +310,11 @@ fn ardupilot_refuses_what_sitl_cannot_hold_unless_dropping_is_asked() {
         assert!(out.warnings.iter().any(|w| w.contains(name)), "{name}: {:?}", out.warnings);
         assert!(out.text.contains(name), "{name} not noted in the file");
     }
+    // The same terms at exactly 0 need nothing of SITL's formula.
+    let mut zero = ardupilot_params();
+    zero.extend([("Cm_alpha2", Some(0.0)), ("CD_de", Some(0.0))]);
+    let s = summary("ap-zero", &zero);
+    assert!(ardupilot_json(&s, "ap-zero.json", &ardupilot_options(false)).is_ok());
     // Body-axis coefficients are not SITL's.
     let s = summary("ap-body", &[("CX_alpha", Some(0.1)), ("CZ_alpha", Some(-4.0))]);
     let e = ardupilot_json(&s, "b.json", &ardupilot_options(false)).unwrap_err().to_string();

@@ -103,7 +103,7 @@ impl Sorted {
 }
 
 /// Sorts `summary`'s parameters: `why_not(param)` is `None` when the target represents it,
-/// else the reason it cannot.
+/// else the reason it cannot (not asked of a value of exactly 0, which needs no term).
 pub(crate) fn sort(
     summary: &SummaryParameters,
     why_not: impl Fn(Param) -> Option<String>,
@@ -113,7 +113,12 @@ pub(crate) fn sort(
         let name = p.param.name();
         match (p.value, why_not(p.param)) {
             (None, _) => sorted.not_identified.push(name.to_string()),
-            (Some(v), Some(why)) => sorted.unrepresentable.push(format!("{name} = {v}: {why}")),
+            // A term at exactly 0 adds nothing the target's formula would have to hold.
+            (Some(v), Some(why)) => {
+                if v != 0.0 {
+                    sorted.unrepresentable.push(format!("{name} = {v}: {why}"));
+                }
+            }
             (Some(v), None) => {
                 sorted.values.insert(p.param, v);
             }

@@ -101,19 +101,21 @@ fn exported_fragment_loads_into_jsbsim_and_evaluates_our_derivatives() {
 
 #[path = "../../pipelines/tests/export_uav/planes.rs"]
 mod planes;
-use planes::{C172X, Plane, UAV, mapping_toml, model_toml, scenario_toml};
+use planes::{
+    C172X, Plane, UAV, UAV_OAT_RECORDS, completed, mapping_toml, model_toml, scenario_toml,
+    uav_oat_dir,
+};
 
-/// `plane`'s model file, mapping (its constants, and an elevator actuator line `de_line`),
-/// doublet scenario and summary of the same values, in `d`.
-fn write_plane(d: &std::path::Path, plane: &Plane, de_line: &str) {
+/// `values`' model file, `plane`'s mapping (its constants, and an elevator actuator line
+/// `de_line`), doublet scenario and a summary of `values`, in `d`.
+fn write_plane(d: &std::path::Path, plane: &Plane, values: &[(&str, f64)], de_line: &str) {
     std::fs::create_dir_all(d).unwrap();
-    let params: Vec<_> = plane
-        .values
+    let params: Vec<_> = values
         .iter()
         .map(|(n, v)| serde_json::json!({"name": n, "estimate": v, "std_error": 0.01}))
         .collect();
     let summary = serde_json::json!({"estimator": "oe", "model": "test", "status": "converged", "parameters": params});
-    std::fs::write(d.join("model.toml"), model_toml(plane.values)).unwrap();
+    std::fs::write(d.join("model.toml"), model_toml(values)).unwrap();
     std::fs::write(d.join("map.toml"), mapping_toml(plane, de_line)).unwrap();
     std::fs::write(d.join("scenario.toml"), scenario_toml(plane)).unwrap();
     std::fs::write(d.join("summary.json"), summary.to_string()).unwrap();
@@ -159,10 +161,15 @@ fn misses(sim: &std::path::Path, jsb: &std::path::Path) -> Vec<(String, f64)> {
         .collect()
 }
 
-/// `plane` (with the elevator line `de_line`) flown by `sim` in `d`, exported as the complete
-/// aircraft `name` under `d/root`; returns the exported file.
-fn sim_and_export(d: &std::path::Path, plane: &Plane, de_line: &str, name: &str) -> PathBuf {
-    write_plane(d, plane, de_line);
+/// `values` on `plane` (with the elevator line `de_line`) flown by `sim` in `d`, exported as
+/// the complete aircraft `name` under `d/root`; returns the exported file.
+fn sim_and_export(
+    d: &std::path::Path,
+    (plane, values): (&Plane, &[(&str, f64)]),
+    de_line: &str,
+    name: &str,
+) -> PathBuf {
+    write_plane(d, plane, values, de_line);
     let sim = ["sim", "scenario.toml", "--aircraft", "model.toml", "--map", "map.toml"];
     cli(d, &[&sim[..], &["--out", "sim"]].concat());
     std::fs::create_dir_all(d.join(format!("root/aircraft/{name}"))).unwrap();
@@ -196,7 +203,7 @@ fn a_complete_aircraft_flies_the_identified_doublets_in_jsbsim() {
     let Some(py) = python_with_jsbsim() else { return };
     let d = std::env::temp_dir().join(format!("aeroident-jsbsim-aircraft-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
-    let xml = sim_and_export(&d, &UAV, "", "uav");
+    let xml = sim_and_export(&d, (&UAV, UAV.values), "", "uav");
     let fly = |name: &str| fly_in_jsbsim(&py, &d, name);
     let m = fly("uav");
     assert!(m.iter().all(|(_, e)| *e < 0.05), "JSBSim misses {m:?}");
@@ -211,7 +218,7 @@ fn a_complete_aircraft_flies_the_identified_doublets_in_jsbsim() {
     let m = fly("heavy");
     assert!(m[0].1 > 0.05, "a doubled roll inertia went unseen: {m:?}");
     let servo = "de = { column = \"de\", unit = \"rad\", actuator = { tau_s = 0.05, rate_limit_rad_s = 3.5, position_limits_rad = [-0.4, 0.3] } }\n";
-    sim_and_export(&d, &UAV, servo, "uav");
+    sim_and_export(&d, (&UAV, UAV.values), servo, "uav");
     let text = std::fs::read_to_string(&xml).unwrap();
     for needle in ["<lag>20</lag>", "<rate_limit>3.5</rate_limit>", "<min>-0.4</min><max>0.3</max>"]
     {
@@ -243,8 +250,45 @@ fn a_complete_c172x_flies_the_identified_doublets_in_jsbsim() {
     let Some(py) = python_with_jsbsim() else { return };
     let d = std::env::temp_dir().join(format!("aeroident-jsbsim-c172x-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
-    sim_and_export(&d, &C172X, "", "c172");
+    sim_and_export(&d, (&C172X, C172X.values), "", "c172");
     let m = fly_in_jsbsim(&py, &d, "c172");
     assert!(m.iter().all(|(_, e)| *e < 0.05), "JSBSim misses {m:?}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// uav_oat's identified model, as a user gets it: `replay --estimator oe --model six-axis` of
+/// [`UAV_OAT_RECORDS`] through `mappings/uav_oat.toml`, completed for flight ([`completed`]),
+/// exported as a complete aircraft and flown in the real JSBSim through `sim`'s doublets:
+/// every channel within 5 % of its excursion but a_x, within 10 % (8 % measured: 0.006 m/s²
+/// of a 0.07 m/s² excursion). JSBSim flies on a rotating round earth and `sim` on a flat one
+/// at rest; started at 0° or 89.9° latitude instead of 45° the same file misses a_x by 13 % and
+/// 17 %, so the remainder is the earth model, not the file.
+#[test]
+fn uav_oats_identified_model_flies_the_same_in_jsbsim() {
+    let Some(py) = python_with_jsbsim() else { return };
+    let Some(dir) = uav_oat_dir() else { return };
+    let d = std::env::temp_dir().join(format!("aeroident-jsbsim-uavoat-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    let [el, ail] = UAV_OAT_RECORDS.map(|f| dir.join(f).display().to_string());
+    let map = workspace().join("mappings/uav_oat.toml").display().to_string();
+    let fit = ["replay", &el, "--and", &ail, "--map", &map, "--model", "six-axis"];
+    cli(&d, &[&fit[..], &["--estimator", "oe", "--out", "fit"]].concat());
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("fit/summary.json")).unwrap())
+            .unwrap();
+    let identified: Vec<(String, Option<f64>)> = summary["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| (p["name"].as_str().unwrap().to_string(), p["estimate"].as_f64()))
+        .collect();
+    let (values, _) = completed(&identified);
+    let values: Vec<(&str, f64)> = values.iter().map(|(n, v)| (n.as_str(), *v)).collect();
+    sim_and_export(&d, (&UAV, &values), "", "uavoat");
+    let m = fly_in_jsbsim(&py, &d, "uavoat");
+    eprintln!("uav_oat's identified model in JSBSim, misses / excursion: {m:.4?}");
+    let bound = |n: &str| if n == "ax_mps2" { 0.10 } else { 0.05 };
+    assert!(m.iter().all(|(n, e)| *e < bound(n)), "JSBSim misses {m:?}");
     let _ = std::fs::remove_dir_all(&d);
 }

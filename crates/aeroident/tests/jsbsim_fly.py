@@ -5,7 +5,8 @@ Usage: python jsbsim_fly.py ROOT NAME TIMESERIES.csv OUT.csv
        python jsbsim_fly.py --step ROOT NAME   (the elevator's response to a command step)
 
 ROOT holds `aircraft/NAME/NAME.xml`. JSBSim starts at the record's first row (its trim: speed,
-alpha, pitch, altitude, wings level, no rates) with standard gravity (`simulation/gravity-model`
+alpha, sideslip, pitch, bank, altitude, no rates: the lateral constants of an identified
+aircraft, CY_0, Cl_0, Cn_0, are trimmed with a sideslip and surfaces) with standard gravity (`simulation/gravity-model`
 0, as the record's flat earth), is stepped at 5 kHz with the record's surfaces and thrust
 interpolated linearly in time (as `sim` ramps them between rows) into the aircraft's command
 properties, and at each of the record's times writes t_s, p, q, r (rad/s), their rates
@@ -87,8 +88,8 @@ def main():
     fdm["simulation/gravity-model"] = 0
     ic = {
         "ic/h-sl-ft": r["alt_m"][0] / FT, "ic/vt-fps": r["vt_mps"][0] / FT,
-        "ic/alpha-rad": r["alpha_rad"][0], "ic/beta-rad": 0.0, "ic/theta-rad": r["theta_rad"][0],
-        "ic/phi-rad": 0.0, "ic/psi-true-rad": 0.0, "ic/p-rad_sec": 0.0, "ic/q-rad_sec": 0.0,
+        "ic/alpha-rad": r["alpha_rad"][0], "ic/beta-rad": r["beta_rad"][0],
+        "ic/theta-rad": r["theta_rad"][0], "ic/phi-rad": r["phi_rad"][0], "ic/psi-true-rad": 0.0, "ic/p-rad_sec": 0.0, "ic/q-rad_sec": 0.0,
         "ic/r-rad_sec": 0.0, "ic/lat-geod-deg": 45.0,
     }
     for k, v in ic.items():

@@ -14,13 +14,20 @@
 //! inertia at the link origin, as Gazebo's physics integrates a link (Newton–Euler with
 //! `ω × Jω`).
 
-use super::planes::{C172X, Plane, UAV, mapping_toml, model_toml, scenario_toml};
+use super::planes::{
+    C172X, Plane, UAV, UAV_OAT_RECORDS, completed, mapping_toml, model_toml, scenario_toml,
+    uav_oat_dir,
+};
 use super::{Sdf, State, ardupilot_plane, gazebo_joints, gazebo_plugin, summary};
+use aeroident_io::{Mapping, ModelSpec};
 use aeroident_models::aircraft::AircraftMass;
 use aeroident_pipelines::airframe::load;
 use aeroident_pipelines::export::ardupilot::{ArdupilotOptions, Throws, ardupilot_json};
 use aeroident_pipelines::export::gazebo::{self, gazebo_plugin_sdf};
 use aeroident_pipelines::export::uav::Geometry;
+use aeroident_pipelines::job::Records;
+use aeroident_pipelines::replay::batch::FitOptions;
+use aeroident_pipelines::replay::fit::fit_records;
 use aeroident_pipelines::sim::{SimTable, model_file, parse_scenario};
 
 /// `plane`'s mass and inertia.
@@ -207,9 +214,12 @@ impl Flight<'_> {
 fn fly(target: Target, sim: &SimTable, mass: AircraftMass) -> Vec<[f64; 9]> {
     const DT: f64 = 0.0005;
     let first = |n: &str| sim.column(n).unwrap()[0];
-    let (v0, alpha0) = (first("vt_mps"), first("alpha_rad"));
-    let att = dcm(0.0, first("theta_rad"), 0.0);
-    let v_ef = mul(&att, [v0 * alpha0.cos(), 0.0, v0 * alpha0.sin()]);
+    let (v0, alpha0, beta0) = (first("vt_mps"), first("alpha_rad"), first("beta_rad"));
+    // An identified aircraft's lateral constants (CY_0, Cl_0, Cn_0) are trimmed with a
+    // sideslip and surfaces; start where the trim is.
+    let att = dcm(first("phi_rad"), first("theta_rad"), first("psi_rad"));
+    let (sb, cb) = beta0.sin_cos();
+    let v_ef = mul(&att, [v0 * alpha0.cos() * cb, v0 * sb, v0 * alpha0.sin() * cb]);
     let mut flight = Flight { target, sim, mass, att, v_ef, gyro: [0.0; 3] };
     let mut time = 0.0;
     let mut out = Vec::new();
@@ -276,16 +286,15 @@ fn options(plane: &Plane, sitl_mass_kg: f64) -> ArdupilotOptions {
     }
 }
 
-/// SITL flying `plane`'s export against `sim`: for SITL's default frame (2 kg) and its
-/// `-jet` frame (22 kg), with the gyroscopic terms SITL leaves out restored (the transform
-/// itself: within 1 %) and as SITL is (q within 7 %, the rest within 5 %); the pitch
-/// coefficients left at unit inertia miss q by more than 50 %.
-fn sitl_flies(plane: &Plane, tag: &str) {
+/// SITL flying `values` on `plane`'s constants, exported, against `sim`: for SITL's default
+/// frame (2 kg) and its `-jet` frame (22 kg), with the gyroscopic terms SITL leaves out
+/// restored (the transform itself: within 1 %) and as SITL is (within `as_is`: q, then every
+/// other channel); the pitch coefficients left at unit inertia miss q by more than 50 %.
+fn sitl_flies(plane: &Plane, values: &[(&str, f64)], tag: &str, as_is: (f64, f64)) {
     let dir = std::env::temp_dir().join(format!("aeroident-flight-{tag}-{}", std::process::id()));
-    let sim = fly_identified(&dir, plane, plane.values);
+    let sim = fly_identified(&dir, plane, values);
     let reference = sim_channels(&sim);
-    let params: Vec<(&str, Option<f64>)> =
-        plane.values.iter().map(|(n, v)| (*n, Some(*v))).collect();
+    let params: Vec<(&str, Option<f64>)> = values.iter().map(|(n, v)| (*n, Some(*v))).collect();
     let s = summary(tag, &params);
     for sitl_mass_kg in [2.0, 22.0] {
         let out = ardupilot_json(&s, "flight.json", &options(plane, sitl_mass_kg)).unwrap();
@@ -295,8 +304,8 @@ fn sitl_flies(plane: &Plane, tag: &str) {
         assert!(misses.iter().all(|m| *m < 0.01), "{tag}: SITL+gyroscopic misses {misses:.4?}");
         let misses = relative_misses(&fly(false), &reference);
         let others = misses.iter().enumerate().filter(|(i, _)| *i != 1);
-        assert!(others.clone().all(|(_, m)| *m < 0.05), "{tag}: SITL misses {misses:.4?}");
-        assert!(misses[1] < 0.07, "{tag}: SITL misses q by {misses:.4?}");
+        assert!(others.clone().all(|(_, m)| *m < as_is.1), "{tag}: SITL misses {misses:.4?}");
+        assert!(misses[1] < as_is.0, "{tag}: SITL misses q by {misses:.4?}");
     }
     let out = ardupilot_json(&s, "flight.json", &options(plane, mass_of(plane).mass_kg)).unwrap();
     let mut unscaled: serde_json::Value = serde_json::from_str(&out.text).unwrap();
@@ -312,24 +321,29 @@ fn sitl_flies(plane: &Plane, tag: &str) {
 /// q by 5.5 % of its excursion in SITL as it is.
 #[test]
 fn ardupilot_file_flies_the_identified_uav_in_sitls_equations() {
-    sitl_flies(&UAV, "uav");
+    sitl_flies(&UAV, UAV.values, "uav", (0.07, 0.05));
 }
 
 #[test]
 fn ardupilot_file_flies_the_c172x_in_sitls_equations() {
-    sitl_flies(&C172X, "c172x");
+    sitl_flies(&C172X, C172X.values, "c172x", (0.07, 0.05));
 }
 
-/// Gazebo's plugin flying `plane`'s export (without induced drag: the plugin squares its
-/// whole lift, the elevator's lift included) on the aircraft's rigid body: every channel
-/// within 5 %; the cp put back at the CG misses q by more than 20 %.
-fn gazebo_flies(plane: &Plane, tag: &str) {
+/// What the plugin cannot hold, flown as 0 on both sides: the induced drag (the plugin squares
+/// its whole lift, the elevator's included) and the lateral constants (it has no zero-α side
+/// force, rolling or yawing moment; the export refuses them by name unless told to drop them).
+fn unheld_by_gazebo(name: &str) -> bool {
+    name.starts_with("CD_alpha") || matches!(name, "CY_0" | "Cl_0" | "Cn_0")
+}
+
+/// Gazebo's plugin flying `values` on `plane`'s constants, exported (without what it cannot
+/// hold, [`unheld_by_gazebo`]), on the aircraft's rigid body: every channel within 5 % but
+/// the specific forces (within `forces`: a_x, then a_y and a_z); the cp put back at the CG
+/// misses q by more than 20 %.
+fn gazebo_flies(plane: &Plane, values: &[(&str, f64)], tag: &str, forces: (f64, f64)) {
     let dir = std::env::temp_dir().join(format!("aeroident-gz-{tag}-{}", std::process::id()));
-    let values: Vec<(&str, f64)> = plane
-        .values
-        .iter()
-        .map(|&(n, v)| (n, if n.starts_with("CD_alpha") { 0.0 } else { v }))
-        .collect();
+    let values: Vec<(&str, f64)> =
+        values.iter().map(|&(n, v)| (n, if unheld_by_gazebo(n) { 0.0 } else { v })).collect();
     let sim = fly_identified(&dir, plane, &values);
     let reference = sim_channels(&sim);
     let params: Vec<(&str, Option<f64>)> = values.iter().map(|(n, v)| (*n, Some(*v))).collect();
@@ -346,7 +360,8 @@ fn gazebo_flies(plane: &Plane, tag: &str) {
     let sdf = Sdf::parse(&out.text);
     let flown = fly(Target::Gazebo { sdf: &sdf, fixed: true }, &sim, mass_of(plane));
     let misses = relative_misses(&flown, &reference);
-    assert!(misses.iter().all(|m| *m < 0.05), "{tag}: Gazebo misses {misses:.4?}");
+    let bounds = [0.05, 0.05, 0.05, 0.05, 0.05, 0.05, forces.0, forces.1, forces.1];
+    assert!(misses.iter().zip(bounds).all(|(m, b)| *m < b), "{tag}: Gazebo misses {misses:.4?}");
     let mut at_cg = Sdf::parse(&out.text);
     at_cg.scalars.insert("cp".into(), "0 0 0".into());
     let flown = fly(Target::Gazebo { sdf: &at_cg, fixed: true }, &sim, mass_of(plane));
@@ -359,10 +374,62 @@ fn gazebo_flies(plane: &Plane, tag: &str) {
 
 #[test]
 fn gazebo_plugin_flies_the_identified_uav_on_its_rigid_body() {
-    gazebo_flies(&UAV, "uav");
+    gazebo_flies(&UAV, UAV.values, "uav", (0.05, 0.05));
 }
 
 #[test]
 fn gazebo_plugin_flies_the_c172x_on_its_rigid_body() {
-    gazebo_flies(&C172X, "c172x");
+    gazebo_flies(&C172X, C172X.values, "c172x", (0.05, 0.05));
+}
+
+/// uav_oat's identified model ([`UAV_OAT_RECORDS`] fitted by six-axis output error through
+/// `mappings/uav_oat.toml`, as `replay --estimator oe --model six-axis … --and …` fits them),
+/// completed for flight ([`completed`]); `None` without `../shared`.
+fn uav_oat_identified() -> Option<Vec<(String, f64)>> {
+    let dir = uav_oat_dir()?;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let text = std::fs::read_to_string(root.join("mappings/uav_oat.toml")).unwrap();
+    let mapping = Mapping::from_toml_str(&text, "uav_oat.toml").unwrap();
+    let files: Vec<String> =
+        UAV_OAT_RECORDS.iter().map(|f| dir.join(f).display().to_string()).collect();
+    let records =
+        Records { and: files[1..].to_vec(), ..Records::one(files[0].clone(), mapping.clone()) };
+    let model = ModelSpec::preset("six-axis");
+    let fit = fit_records(records.open_all().unwrap(), &mapping, model, FitOptions::default());
+    let summary = fit.unwrap().summary;
+    assert_eq!(summary.status, "converged", "uav_oat's fit: {:?}", summary.status_reason);
+    let identified: Vec<(String, Option<f64>)> =
+        summary.parameters.iter().map(|p| (p.result.name.clone(), p.result.estimate)).collect();
+    let (values, filled) = completed(&identified);
+    // What the record cannot give, and only that, is filled: the drag and the rudder terms.
+    let expected = ["CY_dr", "CD_0", "CD_alpha", "CD_q", "CD_de", "Cl_dr", "Cn_dr"];
+    assert_eq!(filled, expected, "filled from the prior");
+    Some(values)
+}
+
+/// `values` as the tables' `(&str, f64)`.
+fn borrowed(values: &[(String, f64)]) -> Vec<(&str, f64)> {
+    values.iter().map(|(n, v)| (n.as_str(), *v)).collect()
+}
+
+/// The UAV identified from uav_oat's real elevator and aileron multisteps (Cl_p −0.12,
+/// Cm_α −0.09; its drag and rudder terms from the prior; its lateral constants trimmed with a
+/// sideslip) flies the same in SITL's equations with the gyroscopic terms
+/// restored (within 1 %). SITL as it is misses q by 9 % and a_x by 19 % of their excursions:
+/// its weak roll damping lets p and r grow until the `(Jz − Jx)/Jy · p r` SITL leaves out
+/// moves the pitch, which no coefficient of SITL's file can hold.
+#[test]
+fn ardupilot_file_flies_uav_oats_identified_model_in_sitls_equations() {
+    let Some(values) = uav_oat_identified() else { return };
+    sitl_flies(&UAV, &borrowed(&values), "uav-oat", (0.12, 0.25));
+}
+
+/// The same identified UAV through Gazebo's plugin: the rates and angular accelerations within
+/// 1 %, a_z 2 % and a_x 12 % of its 0.07 m/s² excursion (0.008 m/s²): the plugin takes lift
+/// and drag from the speed in the plane of symmetry (about half of it), and this aircraft
+/// sideslips in the rudder doublet.
+#[test]
+fn gazebo_plugin_flies_uav_oats_identified_model_on_its_rigid_body() {
+    let Some(values) = uav_oat_identified() else { return };
+    gazebo_flies(&UAV, &borrowed(&values), "uav-oat", (0.15, 0.05));
 }

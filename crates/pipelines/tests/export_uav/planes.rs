@@ -124,3 +124,43 @@ pub fn scenario_toml(plane: &Plane) -> String {
         doublet("rudder", 4.0, 6.5)
     )
 }
+
+/// The uav_oat records (`../shared/flightdata/uav_oat/csv`) the identified UAV is fitted from
+/// with `mappings/uav_oat.toml`, six-axis output error: the 2023 flight's elevator and aileron
+/// multisteps jointly (that flight's pair converges; its rudder was not excited).
+pub const UAV_OAT_RECORDS: [&str; 2] =
+    ["uavoat_2023_02_01_14_21_28_el_1.csv", "uavoat_2023_02_01_14_21_28_ail_1.csv"];
+
+/// The uav_oat records' directory, `None` with a message when `../shared` is absent (a
+/// failure under `CI=true`, where the data must be there).
+pub fn uav_oat_dir() -> Option<std::path::PathBuf> {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/flightdata/uav_oat/csv");
+    if dir.is_dir() {
+        return Some(dir);
+    }
+    assert!(
+        std::env::var("CI").map_or(true, |v| v != "true"),
+        "{} is absent under CI",
+        dir.display()
+    );
+    eprintln!("SKIPPED: {} is absent (CI provides ../shared beside the repository)", dir.display());
+    None
+}
+
+/// uav_oat's identified values completed for flight: each parameter the fit left `null` (the
+/// drag, as thrust is not mapped; the rudder terms, not excited) takes the textbook UAV's value
+/// of [`UAV`] (0 for a term it lacks), the stated prior a partial test card flies with — except
+/// the drag's α terms, 0: [`UAV`]'s belong to a polar of its own lift, not the identified one,
+/// so the filled drag is its parasitic `CD_0` alone.
+/// Returns the values and the names filled.
+pub fn completed(identified: &[(String, Option<f64>)]) -> (Vec<(String, f64)>, Vec<String>) {
+    let prior = |n: &str| {
+        let own = UAV.values.iter().find(|(p, _)| *p == n && !p.starts_with("CD_alpha"));
+        own.map_or(0.0, |(_, v)| *v)
+    };
+    let filled = identified.iter().filter(|(_, v)| v.is_none()).map(|(n, _)| n.clone()).collect();
+    let values =
+        identified.iter().map(|(n, v)| (n.clone(), v.unwrap_or_else(|| prior(n)))).collect();
+    (values, filled)
+}

@@ -164,6 +164,10 @@ fn a_partial_test_card_linearizes_with_its_rudder_held_and_an_absurd_roll_mode_f
     std::fs::write(m, text).unwrap();
     let out = design("20");
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // An elevator and an aileron excite both axes: the design's model is named for both.
+    let json = std::fs::read_to_string(d.join("des/design.json")).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(json["model"], "six-axis", "{json}");
     let _ = std::fs::remove_dir_all(&d);
 }
 

@@ -433,14 +433,15 @@ fn turbulence_name(t: Turbulence) -> &'static str {
     }
 }
 
+/// The axes the design's model holds: a model-file aircraft's own terms restricted to the
+/// excited axes are no preset, so the name is read from its coefficients.
 fn model_name(d: &Design) -> &'static str {
-    use aeroident_estimators::vocabulary::ModelStructure as M;
-    if d.structure == M::six_axis() {
-        "six-axis"
-    } else if d.structure == M::lateral() {
-        "lateral"
-    } else {
-        "longitudinal"
+    use aeroident_estimators::vocabulary::Coefficient as C;
+    let has = |cs: &[C]| d.structure.params().any(|p| cs.contains(&p.coefficient));
+    match (has(&[C::CL, C::CD, C::CX, C::CZ, C::Cm]), has(&[C::CY, C::Cl, C::Cn])) {
+        (true, true) => "six-axis",
+        (false, true) => "lateral",
+        _ => "longitudinal",
     }
 }
 

@@ -74,7 +74,7 @@ for k in range(len(t)):
         az_mps2=qbar * S * (-cd[k] * np.sin(alpha[k]) - cl[k] * np.cos(alpha[k])) / m,
     ))
 e = est.estimates()
-print({n: round(v, 4) for n, v in zip(e["names"], e["estimate"]) if n.startswith("Cm")}, e["estimator_status"])
+print({n: round(float(v), 4) for n, v in zip(e["names"], e["estimate"]) if n.startswith("Cm")}, e["estimator_status"])
 
 # %% [markdown]
 # ## 3. The F-16: trim, linear model, a simulation

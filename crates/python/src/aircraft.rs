@@ -237,7 +237,12 @@ impl Aircraft {
     /// ``c`` ``(n, n)`` (identity), ``d`` ``(n, 4)`` float64 in SI (``states``);
     /// ``a_textbook``, ``b_textbook`` in the library's units (``states_textbook``); ``inputs``;
     /// ``eigenvalues`` ``(n, 2)`` float64 (real, imaginary; 1/s); ``modes`` (dicts: ``name``,
-    /// ``eigenvalue``, ``wn_radps``, ``zeta``); ``trim`` (as :meth:`trim`).
+    /// ``eigenvalue``, ``wn_radps``, ``zeta``); ``trim`` (as :meth:`trim`). A model-file
+    /// aircraft whose mapping declares surface actuators has one more state per actuator
+    /// (``elevator_rad`` …, ẋ = (u − x)/τ, after the rigid body's) and their commands as inputs
+    /// (``elevator_cmd_rad`` …); ``actuators`` lists them (dicts: ``surface``, ``state``,
+    /// ``input``, ``tau_s``, ``trim_rad``), empty otherwise. Rate and position limits are not
+    /// in a linear model.
     ///
     /// Raises ``AeroidentError`` when no trim is found.
     fn linearize<'py>(
@@ -246,7 +251,7 @@ impl Aircraft {
         vt_mps: f64,
         alt_m: f64,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let l = self.inner.linearize_level(vt_mps, alt_m).map_err(to_py)?;
+        let l = self.inner.linearize_level_actuated(vt_mps, alt_m).map_err(to_py)?;
         let n = l.a.len();
         let units = StateUnits::of(&l.states);
         let array = |m: &[Vec<f64>]| -> Bound<'py, PyArray2<f64>> { matrix(m).into_pyarray(py) };
@@ -259,7 +264,8 @@ impl Aircraft {
         d.set_item("b_textbook", array(&l.b))?;
         d.set_item("states", units.si.clone())?;
         d.set_item("states_textbook", units.textbook.clone())?;
-        d.set_item("inputs", self.inner.control_names().0.to_vec())?;
+        d.set_item("inputs", l.inputs.clone())?;
+        d.set_item("actuators", actuator_list(py, &l.actuators)?)?;
         let ev: Vec<Vec<f64>> = l.eigenvalues.iter().map(|&(re, im)| vec![re, im]).collect();
         d.set_item("eigenvalues", array(&ev))?;
         d.set_item("modes", crate::f16::modes_list(py, &l.modes)?)?;
@@ -291,4 +297,22 @@ impl Aircraft {
     fn __repr__(&self) -> String {
         format!("Aircraft({:?})", self.inner.name())
     }
+}
+
+/// The actuator states of a linear model as a list of dicts (``Aircraft.linearize``).
+fn actuator_list<'py>(
+    py: Python<'py>,
+    actuators: &[aeroident_pipelines::airframe::ActuatorState],
+) -> PyResult<Bound<'py, pyo3::types::PyList>> {
+    let list = pyo3::types::PyList::empty(py);
+    for a in actuators {
+        let d = PyDict::new(py);
+        d.set_item("surface", a.surface)?;
+        d.set_item("state", a.state)?;
+        d.set_item("input", a.input)?;
+        d.set_item("tau_s", a.actuator.tau_s)?;
+        d.set_item("trim_rad", a.trim_rad)?;
+        list.append(d)?;
+    }
+    Ok(list)
 }

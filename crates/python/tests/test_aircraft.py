@@ -5,6 +5,7 @@ worked by hand) and against the closed-loop example's physical outcome."""
 from __future__ import annotations
 
 import importlib.util
+import json
 import math
 
 import numpy as np
@@ -183,3 +184,60 @@ def test_the_linear_model_in_si_is_the_textbook_one_scaled(f16):
     np.testing.assert_allclose(lin["a"], d[:, None] * lin["a_textbook"] / d[None, :], rtol=1e-14, atol=1e-300)
     np.testing.assert_allclose(lin["b"], d[:, None] * lin["b_textbook"], rtol=1e-14, atol=1e-300)
     assert lin["states"][0] == "vt_mps" and lin["states_textbook"][0] == "vt_fps"
+
+
+UAV_VALUES = {
+    "CL_0": 0.3, "CL_alpha": 4.8, "CL_q": 6.0, "CL_de": 0.35, "CD_0": 0.03, "CD_alpha": 0.1125,
+    "CD_alpha2": 0.9, "CY_beta": -0.3, "CY_p": -0.05, "CY_r": 0.2, "CY_dr": 0.15,
+    "Cl_beta": -0.08, "Cl_p": -0.45, "Cl_r": 0.1, "Cl_da": -0.25, "Cl_dr": 0.005, "Cm_0": 0.02,
+    "Cm_alpha": -0.6, "Cm_q": -9.0, "Cm_de": -1.0, "Cn_beta": 0.06, "Cn_p": -0.03,
+    "Cn_r": -0.08, "Cn_da": 0.004, "Cn_dr": -0.05,
+}
+
+
+def write_uav(tmp_path, de_line):
+    """A 3.3-kg UAV's model file (references = values) and mapping with elevator line de_line."""
+    model = ['description = "test UAV"', "[coefficients]"]
+    for c in ("CL", "CD", "CY", "Cl", "Cm", "Cn"):
+        terms = [n.split("_", 1)[1] for n in UAV_VALUES if n.split("_", 1)[0] == c]
+        model.append(f"{c} = {json.dumps(terms)}")
+    for n, v in UAV_VALUES.items():
+        model += [f"[reference.{n}]", f"value = {v}", 'source = "test"']
+    (tmp_path / "model.toml").write_text("\n".join(model) + "\n")
+    consts = {"mass": (3.3, "kg"), "Ixx": (0.17, "kg*m2"), "Iyy": (0.289, "kg*m2"),
+              "Izz": (0.443, "kg*m2"), "Ixz": (0.019, "kg*m2"), "S": (0.384, "m2"),
+              "b": (1.6, "m"), "cbar": (0.24, "m")}
+    mapping = ['description = "test"', "[time]", 'column = "t"', 'unit = "s"', "[channels]",
+               'vt = { column = "v", unit = "m/s" }', 'alpha = { column = "a", unit = "rad" }',
+               'qbar = { column = "qbar", unit = "Pa" }', de_line]
+    mapping += [f'{k} = {{ value = {v}, unit = "{u}" }}' for k, (v, u) in consts.items()]
+    (tmp_path / "map.toml").write_text("\n".join(mapping) + "\n")
+    return str(tmp_path / "model.toml"), str(tmp_path / "map.toml")
+
+
+def test_an_actuator_is_a_state_of_the_linear_model(tmp_path):
+    """The mapping's elevator servo (tau 0.05 s) adds the state elevator_rad with pole -1/tau and
+    unit DC gain from its command; the rigid-body eigenvalues are those without it."""
+    servo = ('de = { column = "de", unit = "rad", actuator = { tau_s = 0.05, '
+             'rate_limit_rad_s = 3.5 } }')
+    plain = aeroident.Aircraft.from_model(*write_uav(tmp_path, 'de = { column = "de", unit = "rad" }'))
+    bare = plain.linearize(18.0, 100.0)
+    served = aeroident.Aircraft.from_model(*write_uav(tmp_path, servo)).linearize(18.0, 100.0)
+    n = bare["a"].shape[0]
+    assert served["a"].shape == (n + 1, n + 1) and served["b"].shape == (n + 1, 4)
+    assert served["states"][-1] == "elevator_rad" and served["inputs"][1] == "elevator_cmd_rad"
+    assert bare["actuators"] == [] and served["actuators"][0]["tau_s"] == 0.05
+    a, b = served["a"], served["b"]
+    assert a[n, n] == pytest.approx(-1 / 0.05) and b[n, 1] == pytest.approx(1 / 0.05)
+    # The surface state drives the rigid body as the surface column of B did without the servo.
+    np.testing.assert_allclose(a[:n, n], bare["b"][:, 1], rtol=1e-9, atol=1e-12)
+    assert np.all(b[:n, 1] == 0.0)
+    ev = served["eigenvalues"]
+    assert np.min(np.abs(ev[:, 0] + 20.0) + np.abs(ev[:, 1])) < 1e-9
+    # Every rigid-body eigenvalue is kept (the repeated zero roots of the integrators to their
+    # conditioning, 1e-5).
+    kept = list(ev[:, 0] + 1j * ev[:, 1])
+    kept.pop(int(np.argmin(np.abs(np.array(kept) + 20.0))))
+    for lam in bare["eigenvalues"][:, 0] + 1j * bare["eigenvalues"][:, 1]:
+        k = int(np.argmin(np.abs(np.array(kept) - lam)))
+        assert abs(kept.pop(k) - lam) < 1e-5, lam

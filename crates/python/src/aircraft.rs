@@ -185,7 +185,8 @@ impl Aircraft {
     /// altitude ``alt_m`` (m). Returns a dict: ``state`` ``(n,)`` float64 SI, ``controls``
     /// ``(4,)`` float64 (engine command, rad), ``state_textbook`` ``(n,)`` (library units),
     /// ``state_names``, ``state_names_textbook``, ``control_names`` and ``max_abs_residual``
-    /// (the largest state derivative left, SI per s).
+    /// (the largest of ``[V̇, α̇, β̇, ṗ, q̇, ṙ]`` left, in the library's units per s: ft/s² for
+    /// the F-16's V̇, rad/s and rad/s² for the rest).
     ///
     /// Raises ``AeroidentError`` when no trim is found (the condition is named).
     fn trim<'py>(&self, py: Python<'py>, vt_mps: f64, alt_m: f64) -> PyResult<Bound<'py, PyDict>> {

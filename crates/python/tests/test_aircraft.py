@@ -162,6 +162,10 @@ def test_the_f16_states_are_si_and_the_textbook_units_only_by_name(f16):
     xd_ft = ac.derivatives(ac.from_textbook(ac.to_textbook(x)), t["controls"]) / F16_FACTORS
     np.testing.assert_allclose(xd, xd_ft * F16_FACTORS, rtol=1e-12)
     assert xd[11] > 0 and xd[0] < 0
+    # Independently of the conversion: wings level without sideslip the climb rate is
+    # V sin(θ − α) in the state's own units, m/s here (ft/s would be 3.28 times larger).
+    assert abs(x[2]) < 1e-9 and abs(x[3]) < 1e-9
+    assert xd[11] == pytest.approx(x[0] * math.sin(x[4] - x[1]), rel=1e-9)
 
 
 def test_state_and_controls_take_any_array_like(f16):

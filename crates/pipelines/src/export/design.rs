@@ -217,7 +217,8 @@ pub fn through_actuator(
         if let Some(previous) = held {
             let (next, limited) = actuator.step_limited(surface, trim_rad + previous, dt_s);
             surface = next;
-            out.rate_limited_steps += usize::from(limited);
+            // A step that ends on a position limit was decided by that limit, not the rate's.
+            out.rate_limited_steps += usize::from(limited && next > lo && next < hi);
         }
         held = Some(u);
         out.position_limited_samples += usize::from(surface <= lo || surface >= hi);
@@ -755,8 +756,9 @@ mod tests {
     /// [`through_actuator`] of a 0.105 rad step command with a vanishing τ (1e-9 s): the
     /// surface starts at trim, reaches each command one sample later, and a 1 rad/s limit at
     /// 100 Hz lets it move 0.01 rad a sample, so it ramps 0.01 … 0.10 over 10 limited intervals
-    /// and then takes the last 0.005; with a position limit at 0.075 it stops there from the
-    /// 8th sample on and every interval is limited.
+    /// and then takes the last 0.005; with a position limit at 0.075 it stops there from
+    /// sample 8 (0-based) on: the 7 intervals before are rate-limited, the rest held by the
+    /// position limit, not the rate's.
     #[test]
     fn analytic_a_step_through_a_rate_limited_actuator_ramps_at_the_limit() {
         let act = aeroident_io::mapping::Actuator {
@@ -773,7 +775,7 @@ mod tests {
         assert_eq!((r.rate_limited_steps, r.position_limited_samples), (10, 0));
         let pinned = aeroident_io::mapping::Actuator { position_limits_rad: (-1.0, 0.075), ..act };
         let r = through_actuator(&pinned, 0.0, &step, 0.01);
-        assert_eq!((r.rate_limited_steps, r.position_limited_samples), (14, 7));
+        assert_eq!((r.rate_limited_steps, r.position_limited_samples), (7, 7));
         assert_eq!(r.surface_rad[14], 0.075);
     }
 

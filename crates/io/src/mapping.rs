@@ -385,7 +385,17 @@ pub struct ChannelSpec {
     /// A surface (`de`, `da`, `dr`) whose column is the *command*: the actuator between it and
     /// the surface ([`Actuator`]); the record stage passes the command through it.
     pub actuator: Option<ActuatorSpec>,
+    /// A surface (`de`, `da`, `dr`) recorded early or late against the response it causes:
+    /// the record stage reads it this many seconds later (> 0: the value used at time `t` is
+    /// the logged one at `t − shift_s`; < 0: at `t + |shift_s|`), interpolated linearly.
+    /// Checked: finite, within ±[`MAX_INPUT_SHIFT_S`] ([`Mapping::input_shifts`]).
+    pub shift_s: Option<f64>,
 }
+
+/// The largest input time shift, s, a mapping's `shift_s` may declare either way: the
+/// compatibility stage's bound on any time shift it undoes (a lag or a lead beyond it is a
+/// mislabelled column or time base, not a timing error to interpolate away).
+pub const MAX_INPUT_SHIFT_S: f64 = 0.5;
 
 fn one() -> f64 {
     1.0
@@ -642,6 +652,9 @@ pub struct Mapping {
     /// `[thrust_model]`: thrust from a law of the throttle or the propeller speed, for a
     /// record without a `thrust` channel ([`crate::thrust_model`]).
     pub thrust_model: Option<ThrustModel>,
+    /// The surfaces' time shifts (`shift_s` on `de`, `da`, `dr`), s, checked
+    /// ([`Mapping::input_shifts`]).
+    shifts: BTreeMap<Channel, f64>,
 }
 
 /// The channel thrust law `law` reads besides ρ and V.
@@ -708,11 +721,14 @@ impl Mapping {
         })?;
         let time = time_map(file, &raw.time)?;
         let mut channels = BTreeMap::new();
-        let mut actuators = BTreeMap::new();
+        let (mut actuators, mut shifts) = (BTreeMap::new(), BTreeMap::new());
         for (key, spec) in &raw.channels {
             let (ch, m) = channel_map(text, file, key, spec)?;
             if let Some(a) = actuator_of(text, file, key, spec, ch, &m)? {
                 actuators.insert(ch, a);
+            }
+            if let Some(t) = shift_of(text, file, key, spec, ch, &m)? {
+                shifts.insert(ch, t);
             }
             channels.insert(ch, m);
         }
@@ -737,7 +753,18 @@ impl Mapping {
             column_names,
             actuators,
             thrust_model,
+            shifts,
         })
+    }
+
+    /// The surfaces' time shifts the mapping declares (`shift_s` on `de`, `da`, `dr`), in
+    /// seconds, each non-zero: the record stage reads surface `ch` `shift_s` later, so that
+    /// the value used at time `t` is the logged one at `t − shift_s` (a PX4 log's commands,
+    /// one 50-Hz sample late against the servos, take `shift_s = -0.02`). Applied by the jobs
+    /// with any compatibility corrections, before the estimators see the record
+    /// (`docs/mapping.md`, "Surfaces recorded early or late").
+    pub fn input_shifts(&self) -> Vec<(Channel, f64)> {
+        self.shifts.iter().map(|(c, t)| (*c, *t)).filter(|(_, t)| *t != 0.0).collect()
     }
 
     /// Whether channel `ch` is mapped (to a column or a constant).
@@ -850,9 +877,6 @@ fn time_map(file: &str, spec: &ChannelSpec) -> Result<ChannelMap, FlightDataErro
     Ok(time)
 }
 
-/// One `[channels]` entry `key` resolved to SI: a known channel with a non-zero scale, and a
-/// constant within the channel's physical range (positive where it must be). Errors carry
-/// the TOML line of `key` in `text`.
 /// The checked actuator of channel `ch` when its spec declares one: only a surface read from
 /// columns can be commanded. Errors name the file, the channel and the line.
 fn actuator_of(
@@ -880,6 +904,40 @@ fn actuator_of(
     Actuator::from_spec(a).map(Some).map_err(bad)
 }
 
+/// The checked `shift_s` of channel `ch` when its spec declares one: only a surface read from
+/// columns, finite and within ±[`MAX_INPUT_SHIFT_S`]. Errors name the file, the channel, the
+/// line and the key.
+fn shift_of(
+    text: &str,
+    file: &str,
+    key: &Spanned<String>,
+    spec: &ChannelSpec,
+    ch: Channel,
+    m: &ChannelMap,
+) -> Result<Option<f64>, FlightDataError> {
+    let Some(t) = spec.shift_s else { return Ok(None) };
+    let bad = |reason: String| FlightDataError::BadSpec {
+        file: file.to_string(),
+        channel: ch.key().into(),
+        reason: format!("line {}: `shift_s = {}`: {reason}", line_of(text, key.span().start), t),
+    };
+    if !matches!(ch, Channel::De | Channel::Da | Channel::Dr) {
+        return Err(bad("a time shift applies to the surfaces `de`, `da`, `dr` only".into()));
+    }
+    if matches!(m.source, Source::Constant(_)) {
+        return Err(bad("a constant surface has no timing to shift".into()));
+    }
+    if !t.is_finite() || t.abs() > MAX_INPUT_SHIFT_S {
+        return Err(bad(format!(
+            "must be finite and within ±{MAX_INPUT_SHIFT_S} s (a larger offset is a wrong column or time base, not a timing error)"
+        )));
+    }
+    Ok(Some(t))
+}
+
+/// One `[channels]` entry `key` resolved to SI: a known channel with a non-zero scale, and a
+/// constant within the channel's physical range (positive where it must be). Errors carry
+/// the TOML line of `key` in `text`.
 fn channel_map(
     text: &str,
     file: &str,
@@ -1245,6 +1303,9 @@ fn check_time_spec(file: &str, spec: &ChannelSpec) -> Result<(), FlightDataError
     if spec.calibration.is_some() {
         return Err(bad("`calibration` does not apply to the time channel".into()));
     }
+    if spec.shift_s.is_some() {
+        return Err(bad("`shift_s` applies to the surfaces `de`, `da`, `dr` only".into()));
+    }
     Ok(())
 }
 
@@ -1495,6 +1556,38 @@ mod tests {
             let e = Mapping::from_toml_str(&format!("{HEAD}{line}\n"), "m.toml").unwrap_err().to_string();
             assert!(e.starts_with("m.toml: channel `") && e.contains("line 10") && e.contains(want), "{e}");
         }
+    }
+
+    /// A surface's `shift_s` is kept as declared; one on a channel that is not a surface (`q`),
+    /// on a constant, not finite, beyond ±0.5 s, or on the time channel is refused, naming
+    /// file, channel, line and key.
+    #[test]
+    fn shift_of_a_surface_is_checked() {
+        let text = format!(
+            "{HEAD}de = {{ column = \"c\", unit = \"rad\", shift_s = -0.02 }}\nda = {{ column = \"a\", unit = \"rad\", shift_s = 0.0 }}\n"
+        );
+        let m = Mapping::from_toml_str(&text, "m.toml").unwrap();
+        assert_eq!(m.input_shifts(), [(Channel::De, -0.02)]);
+        for (line, want) in [
+            (
+                "q = { column = \"q\", unit = \"rad/s\", shift_s = 0.02 }",
+                "surfaces `de`, `da`, `dr` only",
+            ),
+            ("de = { value = 0.0, unit = \"rad\", shift_s = 0.02 }", "constant surface"),
+            ("de = { column = \"c\", unit = \"rad\", shift_s = nan }", "finite and within ±0.5 s"),
+            ("dr = { column = \"c\", unit = \"rad\", shift_s = -inf }", "finite and within ±0.5 s"),
+            ("da = { column = \"c\", unit = \"rad\", shift_s = 0.6 }", "finite and within ±0.5 s"),
+        ] {
+            let e = Mapping::from_toml_str(&format!("{HEAD}{line}\n"), "m.toml")
+                .unwrap_err()
+                .to_string();
+            let channel = &line[..2];
+            assert!(e.starts_with(&format!("m.toml: channel `{}", channel.trim())), "{e}");
+            assert!(e.contains("line 10") && e.contains("`shift_s = ") && e.contains(want), "{e}");
+        }
+        let time = HEAD.replace("unit = \"s\"\n", "unit = \"s\"\nshift_s = 0.1\n");
+        let e = Mapping::from_toml_str(&time, "m.toml").unwrap_err().to_string();
+        assert!(e.starts_with("m.toml: channel `time`") && e.contains("`shift_s`"), "{e}");
     }
 
     /// Issue 10 #10: a channel with `scale = 0` is identically its offset, so the parameters it

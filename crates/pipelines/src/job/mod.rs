@@ -315,13 +315,15 @@ pub enum Ran<T> {
     Stopped(Step),
 }
 
-/// The compatibility stage: the corrections `source` names, `None` without one. `auto` checks
-/// the records over exactly the data the fit uses (their time `windows`, every file of `--and`;
-/// [`crate::compat::check_records`]) with the default configuration, noting that it does and
-/// each finding.
+/// The compatibility stage: the corrections `source` names with the surfaces' time shifts the
+/// mapping declares ([`Corrections::with_mapping`]); the shifts alone without a source, `None`
+/// with neither. Every later step (the fit, the model selection, the refits, the cross-check,
+/// the validation) takes these corrections, so all see the same surfaces; the check itself
+/// runs on the record as logged (it judges the sensors, not the surfaces). Each shift is noted.
 ///
 /// # Errors
-/// `auto` on a live feed; an unreadable `compat.json`; the check's errors.
+/// `auto` on a live feed; an unreadable `compat.json`; the check's errors; a mapped shift the
+/// corrections cannot take.
 pub fn corrections(
     records: &Records,
     source: Option<&CompatSource>,
@@ -329,7 +331,9 @@ pub fn corrections(
     guard: &mut impl Guard,
     log: &mut dyn JobLog,
 ) -> Result<Ran<Option<Corrections>>, ReplayError> {
-    let Some(source) = source else { return Ok(Ran::Done(None)) };
+    let Some(source) = source else {
+        return with_mapped_shifts(&records.mapping, None, log).map(Ran::Done);
+    };
     let auto = matches!(source, CompatSource::Auto);
     if auto && records.live {
         return Err(ReplayError::Combination(
@@ -339,6 +343,7 @@ pub fn corrections(
     if auto {
         log.note("compat: checking the record's data compatibility (--compat auto)");
     }
+    let mapping = records.mapping.clone();
     let (records, source, windows) = (records.clone(), source.clone(), windows.to_vec());
     let step = move || -> Result<(Option<Corrections>, Vec<String>), ReplayError> {
         match source {
@@ -362,7 +367,26 @@ pub fn corrections(
     let Some(done) = guard.run(Step::Compat, step)? else { return Ok(Ran::Stopped(Step::Compat)) };
     let (corrections, findings) = done?;
     findings.iter().for_each(|f| log.note(&format!("compat: {f}")));
-    Ok(Ran::Done(corrections))
+    with_mapped_shifts(&mapping, corrections, log).map(Ran::Done)
+}
+
+/// `corrections` (none: none) with the surfaces' time shifts `mapping` declares, each noted;
+/// as given when it declares none.
+///
+/// # Errors
+/// [`ReplayError::Combination`]: a shift the corrections cannot take, naming the mapping.
+fn with_mapped_shifts(
+    mapping: &Mapping,
+    corrections: Option<Corrections>,
+    log: &mut dyn JobLog,
+) -> Result<Option<Corrections>, ReplayError> {
+    if mapping.input_shifts().is_empty() {
+        return Ok(corrections);
+    }
+    let c =
+        corrections.unwrap_or_default().with_mapping(mapping).map_err(ReplayError::Combination)?;
+    c.mapped.iter().for_each(|m| log.note(&format!("mapping: {m}")));
+    Ok(Some(c))
 }
 
 /// The model stage's outcome: the model (`None`: the estimating step's default) and the

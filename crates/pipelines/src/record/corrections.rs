@@ -194,6 +194,9 @@ pub struct Corrections {
     beta: Vec<(Vec<f64>, Vec<f64>)>,
     /// What the stage applies, in words (for the summary).
     pub applied: Vec<String>,
+    /// What it applies because the mapping declares it (a surface's `shift_s`), in words (the
+    /// summary's `mapping applied: …` warnings, [`Corrections::with_mapping`]).
+    pub mapped: Vec<String>,
     /// The channels whose corrections are not applied, each with why ([`plausible`]).
     pub refused: Vec<String>,
     /// The corrections the record does not determine, left out: within [`DETERMINED_SIGMAS`] of none.
@@ -288,10 +291,12 @@ fn check_provenance(made_on: Option<&str>, records: &[String]) -> Result<(), Str
 type Entry = (Channel, Option<f64>, Option<f64>, Option<f64>);
 
 impl Corrections {
-    /// The summary warnings that say what was applied (`compat applied: …`, one per item of
+    /// The summary warnings that say what was applied (`mapping applied: …`, one per item of
+    /// [`Corrections::mapped`]; `compat applied: …`, one per item of
     /// [`Corrections::applied`]) and what was refused (`compat refused: …`, a
     /// [`WarningKind::RefusedCorrection`] a face repeats after the results).
     pub fn warnings(&self) -> impl Iterator<Item = Warning> + '_ {
+        let mapped = self.mapped.iter().map(|a| Warning::from(format!("mapping applied: {a}")));
         let applied = self.applied.iter().map(|a| Warning::from(format!("compat applied: {a}")));
         let refused = self
             .refused
@@ -303,7 +308,7 @@ impl Corrections {
                 self.left_out.join(", ")
             ))
         });
-        applied.chain(refused).chain(left_out)
+        mapped.chain(applied).chain(refused).chain(left_out)
     }
 
     /// The corrections of a `compat.json` file.
@@ -517,13 +522,66 @@ impl Corrections {
             .copied()
             .find(|&c| c.key() == key && super::actuated::is_surface(c))
             .ok_or_else(|| format!("`{key}` is no control surface (de, da, dr)"))?;
-        if !shift_s.is_finite() || shift_s.abs() > MAX_SHIFT_S {
+        self.add_input_shift(surface, shift_s)?;
+        self.applied.push(format!("{key}: read {shift_s:+.3} s later (its measured lead undone)"));
+        Ok(self)
+    }
+
+    /// Surface `surface` read `shift_s` later than it already is: added to its shift, so a
+    /// refit's measured lead adds to the mapping's `shift_s` rather than replacing it (the lead
+    /// was measured on the shifted record).
+    ///
+    /// # Errors
+    /// A total that is not finite or beyond ±[`MAX_SHIFT_S`], in words.
+    fn add_input_shift(
+        &mut self,
+        surface: aeroident_io::Channel,
+        shift_s: f64,
+    ) -> Result<(), String> {
+        let own = self.input_shifts.iter().position(|s| s.0 == surface);
+        let total = own.map_or(0.0, |k| self.input_shifts[k].1) + shift_s;
+        if !total.is_finite() || total.abs() > MAX_SHIFT_S {
             return Err(format!(
-                "an input shift of {shift_s} s is beyond the ±{MAX_SHIFT_S} s a lag plausibly reaches"
+                "an input shift of {shift_s} s gives `{}` a shift of {total} s, beyond the ±{MAX_SHIFT_S} s a lag plausibly reaches",
+                surface.key()
             ));
         }
-        self.input_shifts.push((surface, shift_s));
-        self.applied.push(format!("{key}: read {shift_s:+.3} s later (its measured lead undone)"));
+        match own {
+            Some(k) => self.input_shifts[k].1 = total,
+            None => self.input_shifts.push((surface, total)),
+        }
+        Ok(())
+    }
+
+    /// The same corrections with the surfaces' time shifts `mapping` declares
+    /// ([`aeroident_io::Mapping::input_shifts`]: surface `ch` with `shift_s = S` is used at
+    /// time `t` as logged at `t − S`), each said in [`Corrections::mapped`]. A job applies
+    /// them with any compatibility corrections, so every fit of the record, its model
+    /// selection and its refits (timing, sample timing, cross-check, validation) see the
+    /// same surfaces.
+    ///
+    /// The stage comes after the actuator of a commanded surface (`actuator = { … }`), so the
+    /// deflection is shifted, not the command. The actuator is time-invariant (its lag and
+    /// limits do not depend on t) and steps on the record's own samples, so the two orders
+    /// agree exactly for a shift of whole samples, and for any shift without rate or position
+    /// limits (both linear), except over the first and last `|S|` of each manoeuvre, where
+    /// the actuator's start and the held ends differ (see the test
+    /// `a_mapped_shift_after_the_actuator_is_the_shift_of_the_command`).
+    ///
+    /// # Errors
+    /// A total shift beyond ±[`MAX_SHIFT_S`] (the mapping's own is checked against the same
+    /// bound, [`aeroident_io::mapping::MAX_INPUT_SHIFT_S`]), in words naming the mapping.
+    pub fn with_mapping(mut self, mapping: &aeroident_io::Mapping) -> Result<Self, String> {
+        for (ch, shift_s) in mapping.input_shifts() {
+            // The stage reads a channel `τ` later at `t + τ`; the mapping's S means `t − S`.
+            self.add_input_shift(ch, -shift_s).map_err(|e| format!("{}: {e}", mapping.file))?;
+            let (moved, sign) = if shift_s > 0.0 { ("delayed", '−') } else { ("advanced", '+') };
+            let by = shift_s.abs();
+            self.mapped.push(format!(
+                "{}: shift_s = {shift_s:+.4} s, the surface {moved} by {by:.4} s (the value used at t is the logged one at t {sign} {by:.4} s)",
+                ch.key()
+            ));
+        }
         Ok(self)
     }
 
@@ -1387,7 +1445,7 @@ mod tests {
         let e = Corrections::default().with_input_shift("ax", 0.01).unwrap_err();
         assert!(e.contains("`ax` is no control surface"), "{e}");
         let e = Corrections::default().with_input_shift("dr", 0.6).unwrap_err();
-        assert!(e.contains("0.6 s is beyond the ±0.5 s"), "{e}");
+        assert!(e.contains("gives `dr` a shift of 0.6 s, beyond the ±0.5 s"), "{e}");
         assert!(Corrections::default().with_input_shift("dr", f64::NAN).is_err());
     }
 
@@ -1422,5 +1480,109 @@ mod tests {
         let e = Corrections::default().with_rate_skew(0.6).unwrap_err();
         assert!(e.contains("gives p_rad_s a shift of 0.6 s, beyond the ±0.5 s"), "{e}");
         assert!(Corrections::default().with_rate_skew(f64::NAN).is_err());
+    }
+
+    /// A mapping of `de` (with `shift_s`) over constant air data.
+    fn shifted_mapping(shift_s: f64) -> aeroident_io::Mapping {
+        let text = format!(
+            "[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\nvt = {{ column = \"V\", unit = \"m/s\" }}\nalpha = {{ column = \"a\", unit = \"rad\" }}\nmass = {{ value = 1.0, unit = \"kg\" }}\nS = {{ value = 1.0, unit = \"m2\" }}\nrho = {{ value = 1.0, unit = \"kg/m3\" }}\nde = {{ column = \"c\", unit = \"rad\", shift_s = {shift_s:?} }}\n"
+        );
+        aeroident_io::Mapping::from_toml_str(&text, "m.toml").unwrap()
+    }
+
+    /// The mapping's `shift_s = -0.02` on `de` advances it: a ramp `de = 0.1 t` is read
+    /// `0.1 (t + 0.02)` (held at the record's end), said as `mapping applied: …`; a refit's
+    /// measured lead of +0.05 s on the same surface adds to it (`0.1 (t − 0.03)`), and a total
+    /// beyond ±0.5 s is refused.
+    #[test]
+    fn a_mapped_shift_reads_the_surface_as_declared_and_adds_to_a_refit() {
+        let ramp = |t: f64| AirDataSample { de_rad: Some(0.1 * t), ..sample(t) };
+        let ts: Vec<f64> = (0..21).map(|i| i as f64 * 0.02).collect();
+        let corr = Corrections::default().with_mapping(&shifted_mapping(-0.02)).unwrap();
+        let said: Vec<String> = corr.warnings().map(|w| w.text).collect();
+        assert_eq!(
+            said,
+            [
+                "mapping applied: de: shift_s = -0.0200 s, the surface advanced by 0.0200 s (the value used at t is the logged one at t + 0.0200 s)"
+            ]
+        );
+        let out = corrected(&ts, ramp, corr.clone());
+        for (s, &t) in out.iter().zip(&ts) {
+            let want = 0.1 * (t + 0.02).min(0.4);
+            assert!((s.de_rad.unwrap() - want).abs() < 1e-12, "t {t}: {:?}", s.de_rad);
+        }
+        let refit = corr.with_input_shift("de", -0.05).unwrap();
+        let out = corrected(&ts, ramp, refit.clone());
+        for (s, &t) in out.iter().zip(&ts) {
+            let want = 0.1 * (t - 0.03).max(0.0);
+            assert!((s.de_rad.unwrap() - want).abs() < 1e-12, "t {t}: {:?}", s.de_rad);
+        }
+        assert_eq!(MAX_SHIFT_S, aeroident_io::mapping::MAX_INPUT_SHIFT_S);
+        let e = refit.with_input_shift("de", -0.48).unwrap_err();
+        assert!(e.contains("gives `de` a shift of -0.51"), "{e}");
+    }
+
+    /// A commanded surface's actuator and the mapping's shift commute: the deflection shifted
+    /// (the record stage's order: actuator, then corrections) equals the actuator driven by
+    /// the shifted command, exactly for a delay of whole samples with a rate limit and for a
+    /// delay of 1.5 samples without one; an advance differs only by the actuator's start
+    /// transient (τ) and over the held last samples.
+    #[test]
+    fn a_mapped_shift_after_the_actuator_is_the_shift_of_the_command() {
+        use super::super::actuated::Actuated;
+        let dt = 0.01;
+        let ts: Vec<f64> = (0..300).map(|i| i as f64 * dt).collect();
+        let command = |t: f64| AirDataSample {
+            de_rad: Some(0.1 * (7.0 * t).sin() + if t > 1.0 { 0.05 } else { 0.0 }),
+            ..sample(t)
+        };
+        let de = |events: Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>>>| {
+            let v: Vec<f64> = events
+                .filter_map(|e| match e.unwrap() {
+                    RecordEvent::Sample { sample, .. } => sample.de_rad,
+                    _ => None,
+                })
+                .collect();
+            v
+        };
+        let cases = [
+            (0.03, 2.0, 0.05, 0, 0),
+            (0.015, f64::INFINITY, 0.05, 0, 0),
+            (-0.02, f64::INFINITY, 0.02, 60, 2),
+        ];
+        for (shift_s, rate, tau_s, skip, tail) in cases {
+            let a = aeroident_io::mapping::Actuator {
+                tau_s,
+                rate_limit_rad_s: rate,
+                position_limits_rad: (f64::NEG_INFINITY, f64::INFINITY),
+            };
+            let corr = Corrections::default().with_mapping(&shifted_mapping(shift_s)).unwrap();
+            let raw = || {
+                ts.iter()
+                    .enumerate()
+                    .map(|(i, &t)| Ok(RecordEvent::Sample { row: i as u64, sample: command(t) }))
+            };
+            let after = de(Box::new(Corrected::new(
+                Actuated::new(raw(), [(aeroident_io::Channel::De, a)]),
+                corr.clone(),
+            )));
+            let before = de(Box::new(Actuated::new(
+                Corrected::new(raw(), corr),
+                [(aeroident_io::Channel::De, a)],
+            )));
+            assert_eq!(after.len(), ts.len());
+            for k in skip..ts.len() - tail {
+                assert!(
+                    (after[k] - before[k]).abs() < 1e-9,
+                    "shift {shift_s}, k {k}: {} vs {}",
+                    after[k],
+                    before[k]
+                );
+            }
+            assert!(
+                after.iter().zip(&before).any(|(x, y)| (x - y).abs() > 1e-6) == (skip > 0),
+                "shift {shift_s}"
+            );
+        }
     }
 }

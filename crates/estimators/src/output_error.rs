@@ -99,6 +99,9 @@
 //! A fit from the equation-error start that ends without converging (the iteration limit, or
 //! no descent) is fitted again from the generic priors ([`fit_to_end`]), and the converged one,
 //! else the one with the lower `det R`, is kept; [`OeResult::restart`] says what both did.
+//! A second start that cannot be flown at all (the priors' model leaves the physical domain
+//! on the record) keeps the first fit, not converged, with the reason in the restart: a fit
+//! that ran is never lost to the start that did not.
 //! Gauss–Newton converges to the minimum whose basin holds the start, and a start that is
 //! right on the measured axes but generic on the others (a record without a sideslip vane:
 //! every lateral coefficient needs β) can lie in a valley that leads to a worse local minimum
@@ -206,8 +209,10 @@ pub enum InitialStates {
 pub struct Restart {
     /// How the fit from the equation-error start ended, and its last `ln det R`.
     pub first: (Termination, f64),
-    /// How the fit from the generic priors ended, and its last `ln det R`.
-    pub second: (Termination, f64),
+    /// How the fit from the generic priors ended, and its last `ln det R`; the error when it
+    /// could not run at all (the priors' model left the physical domain on the record): the
+    /// first fit is then kept, as it was.
+    pub second: Result<(Termination, f64), EstimatorError>,
     /// Whether the fit returned is the second (from the generic priors).
     pub kept_second: bool,
 }
@@ -970,8 +975,19 @@ pub fn fit_to_end(manoeuvres: &[&[AirDataSample]], config: &OeConfig) -> Result<
         return Ok(first);
     }
     let again = OeConfig { start: Start::Priors, ..config.clone() };
-    let second = fit_prepared(prepare(manoeuvres, &again)?, manoeuvres, &again)?;
-    Ok(keep_better(first, second))
+    match prepare(manoeuvres, &again).and_then(|p| fit_prepared(p, manoeuvres, &again)) {
+        Ok(second) => Ok(keep_better(first, second)),
+        // A start that cannot be flown is no reason to lose the fit that ran: its last iterate
+        // is still the answer, reported not converged.
+        Err(OeError::Estimator(e)) => {
+            let mut kept = first;
+            let ln_det = kept.iterations.last().map_or(f64::INFINITY, |i| i.ln_det_r);
+            let first = (kept.termination, ln_det);
+            kept.restart = Some(Restart { first, second: Err(e), kept_second: false });
+            Ok(kept)
+        }
+        Err(e) => Err(e),
+    }
 }
 
 /// Of two fits of one problem, the converged one, else the one with the lower last `ln det R`
@@ -986,7 +1002,7 @@ fn keep_better(first: OeResult, second: OeResult) -> OeResult {
         _ => b.1 < a.1,
     };
     let mut kept = if kept_second { second } else { first };
-    kept.restart = Some(Restart { first: a, second: b, kept_second });
+    kept.restart = Some(Restart { first: a, second: Ok(b), kept_second });
     kept
 }
 

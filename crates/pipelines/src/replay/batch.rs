@@ -531,16 +531,26 @@ pub fn termination_note_of(
 /// equation-error start ended, how the one from the generic priors did, and which is
 /// reported; `None` for a fit started once.
 pub fn restart_note(result: &OeResult) -> Option<String> {
-    let r = result.restart?;
+    let r = result.restart.as_ref()?;
     let ending = |(t, ln): (Termination, f64)| format!("{}, ln det R {ln:.3}", t.status());
+    let second = match &r.second {
+        Ok(second) => *second,
+        Err(e) => {
+            return Some(format!(
+                "started twice: the fit from the equation-error start ended {}; the fit from \
+                 the generic priors could not run ({e}), so the first is reported",
+                ending(r.first)
+            ));
+        }
+    };
     let kept = if r.kept_second { "the second" } else { "the first" };
     Some(format!(
         "started twice: the fit from the equation-error start ended {}, the fit from the \
          generic priors {}; reported: {kept} ({}). Two starts reaching different answers mean \
          the cost has more than one valley: check the excitation and any unmeasured state",
         ending(r.first),
-        ending(r.second),
-        if r.first.0.is_converged() == r.second.0.is_converged() {
+        ending(second),
+        if r.first.0.is_converged() == second.0.is_converged() {
             "the lower det R"
         } else {
             "the converged one"

@@ -8,6 +8,7 @@
 pub mod align;
 mod byte_window;
 pub mod dataflash;
+pub mod decimal;
 pub mod error;
 pub mod excitation;
 pub mod expression;

@@ -303,7 +303,8 @@ pub fn write_estimates_header<W: Write>(w: &mut W, names: &[&str]) -> std::io::R
     writeln!(w)
 }
 
-/// Writes one estimates line; `None` values become empty fields.
+/// Writes one estimates line: each number as `{}` (`Display`) writes it
+/// ([`crate::decimal::push_f64`]), `None` values as empty fields.
 ///
 /// # Errors
 /// I/O errors of `w`.
@@ -313,25 +314,39 @@ pub fn write_estimates_row<W: Write>(
     values: &[Option<f64>],
     sigmas: &[Option<f64>],
 ) -> std::io::Result<()> {
-    write!(w, "{t_s}")?;
-    for v in values {
-        match v {
-            Some(v) => write!(w, ",{v}")?,
-            None => write!(w, ",")?,
+    // The row is formed in one buffer and written once: the per-number `write!` calls were
+    // most of a long replay's writing time.
+    let mut line = String::with_capacity(24 * (1 + values.len() + sigmas.len()));
+    let mut digits = ryu::Buffer::new();
+    crate::decimal::push_f64(&mut line, &mut digits, t_s);
+    for v in values.iter().chain(sigmas) {
+        line.push(',');
+        if let Some(v) = v {
+            crate::decimal::push_f64(&mut line, &mut digits, *v);
         }
     }
-    for s in sigmas {
-        match s {
-            Some(s) => write!(w, ",{s}")?,
-            None => write!(w, ",")?,
-        }
-    }
-    writeln!(w)
+    line.push('\n');
+    w.write_all(line.as_bytes())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A row is the `Display` text of each number joined by commas, an empty field for `None`:
+    /// tiny, huge, negative, integral and NaN values alike.
+    #[test]
+    fn an_estimates_row_is_the_display_text_of_its_numbers() {
+        let values = [Some(-0.000_012_5), None, Some(1.5e20), Some(3.0)];
+        let sigmas = [Some(f64::NAN), Some(0.1 + 0.2), None, Some(-7.25e-9)];
+        let mut out = Vec::new();
+        write_estimates_row(&mut out, 12.34, &values, &sigmas).unwrap();
+        let field = |v: &Option<f64>| v.map_or(String::new(), |v| format!("{v}"));
+        let expected: Vec<String> = std::iter::once("12.34".to_string())
+            .chain(values.iter().chain(&sigmas).map(field))
+            .collect();
+        assert_eq!(String::from_utf8(out).unwrap(), format!("{}\n", expected.join(",")));
+    }
 
     /// A log with one restart and eight other events: the restart is a warning naming its time
     /// and output; the note names the first [`NOTE_EVENTS`] others and counts the two left;

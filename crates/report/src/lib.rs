@@ -9,7 +9,6 @@
 /// Outputs of the closed-loop experiment: files, console table, figures.
 pub mod aircraft;
 pub mod console;
-pub mod decimal;
 pub mod interactive;
 pub mod outdir;
 pub mod outfile;

@@ -11,7 +11,7 @@ use aeroident_pipelines::aircraft::summary::{
 };
 use aeroident_pipelines::metrics;
 
-use crate::decimal::push_f64;
+use aeroident_io::decimal::push_f64;
 
 /// Errors writing outputs. Each names the file.
 #[derive(Debug, thiserror::Error)]

@@ -1,7 +1,7 @@
-//! Fast plain-decimal text of `f64` for the large CSV files: the layout of `{}` (`Display`),
-//! written from Ryu's shortest round-trip digits (the `ryu` crate) into a reused buffer instead
-//! of `core::fmt`'s machinery, which was a third of `aeroident run`'s wall time on the time
-//! series.
+//! Fast plain-decimal text of `f64` for the large CSV files (`aeroident run`'s time series, a
+//! replay's `estimates.csv`): the layout of `{}` (`Display`), written from Ryu's shortest
+//! round-trip digits (the `ryu` crate) into a reused buffer instead of `core::fmt`'s machinery,
+//! which was a third of `aeroident run`'s wall time on the time series.
 //!
 //! `Display` and Ryu both print the shortest digit string that reads back to the same `f64`
 //! (the nearest one when several are that short). They differ in layout, which [`push_f64`]

@@ -893,15 +893,24 @@ fn actuator_of(
         channel: ch.key().into(),
         reason: format!("line {}: {reason}", line_of(text, key.span().start)),
     };
-    if !matches!(ch, Channel::De | Channel::Da | Channel::Dr) {
-        return Err(bad("`actuator` applies to the surfaces `de`, `da`, `dr` only".into()));
-    }
-    if matches!(m.source, Source::Constant(_)) {
-        return Err(bad(
-            "`actuator` applies to a commanded surface read from columns, not to a `value`".into(),
-        ));
+    if let Some(why) = not_a_logged_surface("actuator", ch, m) {
+        return Err(bad(why));
     }
     Actuator::from_spec(a).map(Some).map_err(bad)
+}
+
+/// Why the surface key `key` (`actuator`, `shift_s`) does not apply to channel `ch` read
+/// through `m`, `None` if it does: only a surface (`de`, `da`, `dr`) read from columns has a
+/// logged command to lag or a timing to shift.
+fn not_a_logged_surface(key: &str, ch: Channel, m: &ChannelMap) -> Option<String> {
+    if !matches!(ch, Channel::De | Channel::Da | Channel::Dr) {
+        return Some(format!("`{key}` applies to the surfaces `de`, `da`, `dr` only"));
+    }
+    matches!(m.source, Source::Constant(_)).then(|| {
+        format!(
+            "`{key}` applies to a surface read from columns, not to a `value` (a constant surface)"
+        )
+    })
 }
 
 /// The checked `shift_s` of channel `ch` when its spec declares one: only a surface read from
@@ -921,11 +930,8 @@ fn shift_of(
         channel: ch.key().into(),
         reason: format!("line {}: `shift_s = {}`: {reason}", line_of(text, key.span().start), t),
     };
-    if !matches!(ch, Channel::De | Channel::Da | Channel::Dr) {
-        return Err(bad("a time shift applies to the surfaces `de`, `da`, `dr` only".into()));
-    }
-    if matches!(m.source, Source::Constant(_)) {
-        return Err(bad("a constant surface has no timing to shift".into()));
+    if let Some(why) = not_a_logged_surface("shift_s", ch, m) {
+        return Err(bad(why));
     }
     if !t.is_finite() || t.abs() > MAX_INPUT_SHIFT_S {
         return Err(bad(format!(

@@ -139,8 +139,16 @@ impl Mode {
 /// Eigenvalues of a square matrix (real Schur form, nalgebra), sorted by real part then
 /// imaginary part.
 pub fn eigenvalues<const N: usize>(a: &SMatrix<f64, N, N>) -> Vec<Complex<f64>> {
-    let d = DMatrix::from_iterator(N, N, a.iter().copied());
-    let mut v: Vec<Complex<f64>> = d.complex_eigenvalues().iter().copied().collect();
+    eigenvalues_dyn(DMatrix::from_iterator(N, N, a.iter().copied()))
+}
+
+/// [`eigenvalues`] of a square matrix whose size is known at run time only (a linear model
+/// grown by actuator states).
+///
+/// # Panics
+/// `a` not square (nalgebra's own check).
+pub fn eigenvalues_dyn(a: DMatrix<f64>) -> Vec<Complex<f64>> {
+    let mut v: Vec<Complex<f64>> = a.complex_eigenvalues().iter().copied().collect();
     v.sort_by(|x, y| x.re.total_cmp(&y.re).then(x.im.total_cmp(&y.im)));
     v
 }

@@ -174,14 +174,12 @@ impl Linear {
     }
 }
 
-/// Eigenvalues of the square `a` (rows), sorted by real then imaginary part, as
+/// Eigenvalues of the square `a` (rows) as (real, imaginary), sorted as
 /// [`aeroident_models::linearize::eigenvalues`] sorts them.
 fn eigenvalues_of(a: &[Vec<f64>]) -> Vec<(f64, f64)> {
     let n = a.len();
     let m = nalgebra::DMatrix::from_fn(n, n, |i, j| a[i][j]);
-    let mut v: Vec<(f64, f64)> = m.complex_eigenvalues().iter().map(|e| (e.re, e.im)).collect();
-    v.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.total_cmp(&y.1)));
-    v
+    aeroident_models::linearize::eigenvalues_dyn(m).iter().map(|e| (e.re, e.im)).collect()
 }
 
 impl AnyAircraft {

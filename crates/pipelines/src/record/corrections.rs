@@ -130,8 +130,10 @@ pub fn plausible(ch: Channel, bias: f64, scale: f64, shift_s: Option<f64>) -> Re
 /// sample at 50 Hz): beyond it a lead is refused ([`plausible`]).
 pub const MAX_AHRS_LEAD_S: f64 = 0.02;
 
-/// The largest time shift a sensor's lag plausibly reaches, either way, s ([`plausible`]).
-pub const MAX_SHIFT_S: f64 = 0.5;
+/// The largest time shift a sensor's lag plausibly reaches, either way, s ([`plausible`]):
+/// the bound a mapping's `shift_s` is checked against too, defined once where the mapping is
+/// read.
+pub const MAX_SHIFT_S: f64 = aeroident_io::mapping::MAX_INPUT_SHIFT_S;
 
 /// The largest time constant of an AHRS's first-order filter, s ([`plausible_lag`]): the
 /// filters of the AHRS of a UAV or a business jet are 0.05–0.2 s.
@@ -1517,7 +1519,6 @@ mod tests {
             let want = 0.1 * (t - 0.03).max(0.0);
             assert!((s.de_rad.unwrap() - want).abs() < 1e-12, "t {t}: {:?}", s.de_rad);
         }
-        assert_eq!(MAX_SHIFT_S, aeroident_io::mapping::MAX_INPUT_SHIFT_S);
         let e = refit.with_input_shift("de", -0.48).unwrap_err();
         assert!(e.contains("gives `de` a shift of -0.51"), "{e}");
     }

@@ -88,6 +88,15 @@
 //! a descent. Otherwise it is returned as [`OeError::NotConverged`] carrying the last iterate
 //! (never silently as a result).
 //!
+//! **Numerical failure.** A step is accepted only once the model has been flown at it, but its
+//! sensitivities (each iteration's linearization, and the accuracy at the end) are formed
+//! afterwards. When they cannot be ([`EstimatorError::Numerical`]: the state left the physical
+//! domain, a singular equation), the fit is not lost: it goes back to the last iterate whose
+//! outputs and sensitivities were both formed, its log ends there, and it ends as
+//! [`NotConverged::NumericalFailure`] (what failed, and at which sample time), judged by the
+//! criteria above like any other stop, so a caller writes its estimates and summary with the
+//! reason. Only a starting point that cannot be flown or linearized is an error.
+//!
 //! # Starting values ([`Start`])
 //!
 //! By default the equation-error (least-squares) fit of each coefficient to the measured
@@ -96,8 +105,8 @@
 //! from the records (e.g. `Cl` without `ṗ`) starts at its generic prior ([`Priors::generic`]).
 //! If the model diverges from these values the generic priors are tried before giving up.
 //!
-//! A fit from the equation-error start that ends without converging (the iteration limit, or
-//! no descent) is fitted again from the generic priors ([`fit_to_end`]), and the converged one,
+//! A fit from the equation-error start that ends without converging (the iteration limit, no
+//! descent, or a numerical failure) is fitted again from the generic priors ([`fit_to_end`]), and the converged one,
 //! else the one with the lower `det R`, is kept; [`OeResult::restart`] says what both did.
 //! A second start that cannot be flown at all (the priors' model leaves the physical domain
 //! on the record) keeps the first fit, not converged, with the reason in the restart: a fit
@@ -165,9 +174,11 @@
 //! or fewer measurements than unknowns; [`EstimatorError::NonFiniteInput`] naming a missing or
 //! non-finite channel (a selected output or a model input must be present in every sample; an
 //! unmeasured state is not an error);
-//! [`EstimatorError::Numerical`] when the model diverges at every starting point tried. An
-//! information matrix singular at the last iterate is not an error: the iterate is returned as
-//! [`NotConverged::Unidentifiable`] with NaN σ.
+//! [`EstimatorError::Numerical`] when the model diverges at every starting point tried (or
+//! cannot be linearized at the one that flew). A numerical failure at a later iterate is not an
+//! error: the last good iterate is returned as [`NotConverged::NumericalFailure`] ("Numerical
+//! failure" above). An information matrix singular at the last iterate is not an error either:
+//! the iterate is returned as [`NotConverged::Unidentifiable`] with NaN σ.
 
 use crate::coloured::batch as coloured;
 pub mod bootstrap;
@@ -419,7 +430,7 @@ pub struct OeIteration {
 }
 
 /// Why a fit stopped without converging.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum NotConverged {
     /// [`OeConfig::max_iterations`] reached.
     MaxIterations,
@@ -430,26 +441,51 @@ pub enum NotConverged {
     Unidentifiable,
     /// A stop was asked for ([`OeConfig::stop`]) before the fit converged.
     Stopped,
+    /// The model could not be flown, or its sensitivities not formed, at an iterate after the
+    /// start ([`EstimatorError::Numerical`]: what failed, and at which sample time): the
+    /// result is the last iterate whose outputs and sensitivities were both formed (module
+    /// doc, "Numerical failure").
+    NumericalFailure {
+        /// What failed.
+        what: &'static str,
+        /// Sample time of the failure, s.
+        t_s: f64,
+    },
 }
 
 impl NotConverged {
     /// A sentence for people: what stopped the fit.
-    pub fn describe(self) -> &'static str {
+    pub fn describe(self) -> String {
         match self {
-            NotConverged::MaxIterations => "the iteration limit was reached",
+            NotConverged::MaxIterations => "the iteration limit was reached".into(),
             NotConverged::NoDescent => {
-                "no step reduced the cost while the Gauss–Newton step was still large"
+                "no step reduced the cost while the Gauss–Newton step was still large".into()
             }
             NotConverged::Unidentifiable => {
-                "the information matrix is singular at the last iterate: the unknowns are not all identifiable from this record, so no σ is given"
+                "the information matrix is singular at the last iterate: the unknowns are not all identifiable from this record, so no σ is given".into()
             }
-            NotConverged::Stopped => "a stop was asked for before it converged",
+            NotConverged::Stopped => "a stop was asked for before it converged".into(),
+            NotConverged::NumericalFailure { what, t_s } => format!(
+                "the model could not be flown at the next iterate (numerical failure in `{what}` at t = {t_s} s); the last good iterate is reported"
+            ),
+        }
+    }
+
+    /// The reason a fit ends with when `err` struck at an iterate after the start: a
+    /// numerical failure ([`NotConverged::NumericalFailure`]); `None` for any other error
+    /// (invalid data or configuration), which stays an error.
+    pub fn numerical(err: &EstimatorError) -> Option<Self> {
+        match *err {
+            EstimatorError::Numerical { what, t_s } => {
+                Some(NotConverged::NumericalFailure { what, t_s })
+            }
+            _ => None,
         }
     }
 }
 
 /// How a batch fit's iterations ended (module doc, "Convergence").
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Termination {
     /// Both criteria met: the cost stopped changing and the last step was negligible.
     Converged,
@@ -968,7 +1004,11 @@ pub fn fit_to_end(manoeuvres: &[&[AirDataSample]], config: &OeConfig) -> Result<
     let first = fit_prepared(p, manoeuvres, config)?;
     let failed = matches!(
         first.termination,
-        Termination::NotConverged(NotConverged::MaxIterations | NotConverged::NoDescent)
+        Termination::NotConverged(
+            NotConverged::MaxIterations
+                | NotConverged::NoDescent
+                | NotConverged::NumericalFailure { .. }
+        )
     );
     let priors = priors_start(&config.structure);
     if !failed || config.start != Start::EquationError || first.start == priors {
@@ -1008,59 +1048,71 @@ fn keep_better(first: OeResult, second: OeResult) -> OeResult {
 
 /// [`fit`] on a prepared problem (`manoeuvres` only for the equation-error start).
 ///
-/// Each iteration is one [`OeIterate`] pass: linearize at β, search the damping for a step
-/// that lowers the merit, try the parabolic step length after an undamped step, then accept
-/// the step or stop (module doc).
+/// Each iteration is one [`OeIterate`] pass ([`OeIterate::run`]): linearize at β, search the
+/// damping for a step that lowers the merit, try the parabolic step length after an undamped
+/// step, then accept the step or stop (module doc); then the result at the final iterate
+/// ([`OeIterate::conclude`]).
 fn fit_prepared(
     p: Problem,
     manoeuvres: &[&[AirDataSample]],
     config: &OeConfig,
 ) -> Result<OeResult, OeError> {
     let (mut it, start) = OeIterate::new(&p, manoeuvres, config)?;
-    let mut converged = false;
-    let mut failure = None;
-    for iteration in 1..=config.max_iterations {
-        if stop_raised(config.stop.as_ref()) {
-            failure = Some(NotConverged::Stopped);
-            break;
-        }
-        let lin = it.linearize()?;
-        let mut accepted = it.damped_search(&lin);
-        // The undamped step was accepted (λ is left as it was on acceptance).
-        if it.lambda == 0.0
-            && let Some(trial) = accepted.as_mut()
-        {
-            it.try_parabolic_length(&lin, trial);
-        }
-        let Some(trial) = accepted else {
-            if stop_raised(config.stop.as_ref()) {
-                failure = Some(NotConverged::Stopped);
-                break;
-            }
-            // No descent: converged if the undamped step is already negligible.
-            if lin.undamped_step_below(config.step_tolerance_sigma) {
-                converged = true;
-            } else {
-                failure = Some(NotConverged::NoDescent);
-            }
-            break;
-        };
-        if it.accept(iteration, &lin, trial) {
-            converged = true;
-            break;
-        }
+    let (converged, failure) = it.run()?;
+    it.conclude(start, converged, failure)
+}
+
+/// Simulates `beta` with its sensitivities: outputs into `y`, `∂y/∂β` into `s`.
+fn simulate_sensitivities(
+    p: &Problem,
+    beta: &[f64],
+    y: &mut Vec<f64>,
+    s: &mut Vec<f64>,
+) -> Result<(), EstimatorError> {
+    #[cfg(test)]
+    fault::check()?;
+    p.simulate(beta, y, Some(s))
+}
+
+/// Fault injection for the tests of the fall-back to the last good iterate (module doc,
+/// "Numerical failure"). No record can exercise it: an iterate is accepted only after its
+/// simulation succeeded, and its sensitivities follow that same trajectory, so the failure
+/// that path guards against cannot be provoked through the data.
+#[cfg(test)]
+pub(crate) mod fault {
+    use crate::EstimatorError;
+    use core::cell::Cell;
+
+    std::thread_local! {
+        /// Sensitivity computations of this thread that succeed before one fails.
+        static LEFT: Cell<Option<usize>> = const { Cell::new(None) };
     }
-    let termination = Termination::of(
-        &it.log,
-        converged,
-        failure.unwrap_or(NotConverged::MaxIterations),
-        config.cost_tolerance,
-    );
-    let OeIterate { beta, e, r, log, y, s, y_try, e_try, e_ext, .. } = it;
-    // The iterations' buffers go before `finish` simulates the sensitivities again: on a long
-    // record each sensitivity array is the largest allocation of the fit.
-    drop((s, y, y_try, e_try, e_ext));
-    Ok(finish(&p, &config.structure, &beta, &r, &e, log, start, termination, config)?)
+
+    /// What an injected failure says it was.
+    pub(crate) const WHAT: &str = "injected failure";
+    /// The sample time an injected failure reports, s.
+    pub(crate) const T_S: f64 = 7.25;
+
+    /// The next `n` sensitivity computations of this thread succeed, the one after fails
+    /// (once).
+    pub(crate) fn fail_after(n: usize) {
+        LEFT.with(|c| c.set(Some(n)));
+    }
+
+    /// Counts one sensitivity computation: the failure when it is the one chosen.
+    pub(crate) fn check() -> Result<(), EstimatorError> {
+        LEFT.with(|c| match c.get() {
+            Some(0) => {
+                c.set(None);
+                Err(EstimatorError::Numerical { what: WHAT, t_s: T_S })
+            }
+            Some(n) => {
+                c.set(Some(n - 1));
+                Ok(())
+            }
+            None => Ok(()),
+        })
+    }
 }
 
 /// `ln det R` of a diagonal `R` given as its variances.
@@ -1121,6 +1173,9 @@ struct OeIterate<'a> {
     e_try: Vec<f64>,
     /// Residuals of the parabolic-length trial.
     e_ext: Vec<f64>,
+    /// The last iterate whose outputs and sensitivities were both formed: β and the length
+    /// of the log up to it (`None` before the first linearization).
+    good: Option<(Vec<f64>, usize)>,
 }
 
 /// The iteration's linearization at β, fixed over its trials: weights `w = 1/R`, scale
@@ -1207,8 +1262,108 @@ impl<'a> OeIterate<'a> {
             y_try: Vec::new(),
             e_try: Vec::new(),
             e_ext: Vec::new(),
+            good: None,
         };
         Ok((it, start))
+    }
+
+    /// The iterations until convergence, no descent, a stop, a numerical failure or the
+    /// iteration limit: whether both criteria were met and, if not, why.
+    ///
+    /// # Errors
+    /// When the starting point cannot be linearized, or on a failure that is not numerical.
+    fn run(&mut self) -> Result<(bool, Option<NotConverged>), OeError> {
+        let config = self.config;
+        for iteration in 1..=config.max_iterations {
+            if stop_raised(config.stop.as_ref()) {
+                return Ok((false, Some(NotConverged::Stopped)));
+            }
+            let lin = match self.linearize() {
+                Ok(lin) => lin,
+                Err(err) => return Ok((false, Some(self.fall_back(err)?))),
+            };
+            self.good = Some((self.beta.clone(), self.log.len()));
+            let mut accepted = self.damped_search(&lin);
+            // The undamped step was accepted (λ is left as it was on acceptance).
+            if self.lambda == 0.0
+                && let Some(trial) = accepted.as_mut()
+            {
+                self.try_parabolic_length(&lin, trial);
+            }
+            let Some(trial) = accepted else {
+                if stop_raised(config.stop.as_ref()) {
+                    return Ok((false, Some(NotConverged::Stopped)));
+                }
+                // No descent: converged if the undamped step is already negligible.
+                return Ok(if lin.undamped_step_below(config.step_tolerance_sigma) {
+                    (true, None)
+                } else {
+                    (false, Some(NotConverged::NoDescent))
+                });
+            };
+            if self.accept(iteration, &lin, trial) {
+                return Ok((true, None));
+            }
+        }
+        Ok((false, Some(NotConverged::MaxIterations)))
+    }
+
+    /// After `err` at the current iterate: back to the last iterate whose sensitivities were
+    /// formed (its outputs simulated again, its log entry the last), returning the reason the
+    /// fit then ends with. An accepted iterate was flown, so only its sensitivities can fail;
+    /// the iterations' work up to it is kept rather than lost to the step after.
+    ///
+    /// # Errors
+    /// `err` itself when it is not numerical or no earlier iterate was linearized (the start
+    /// cannot be flown).
+    fn fall_back(&mut self, err: OeError) -> Result<NotConverged, OeError> {
+        let why = match &err {
+            OeError::Estimator(e) => NotConverged::numerical(e),
+            OeError::NotConverged { .. } => None,
+        };
+        let (Some(why), Some((beta, log_len))) = (why, self.good.take()) else {
+            return Err(err);
+        };
+        if beta == self.beta {
+            return Err(err);
+        }
+        self.p.simulate(&beta, &mut self.y, None)?;
+        let ms = residuals(self.p, &self.y, &mut self.e);
+        self.r = noise_variances(self.config.robust, &self.e, ms);
+        self.beta = beta;
+        self.log.truncate(log_len);
+        Ok(why)
+    }
+
+    /// The result at the final iterate, or at the last good one when the final iterate's
+    /// sensitivities cannot be formed ([`OeIterate::fall_back`]).
+    fn conclude(
+        mut self,
+        start: Vec<f64>,
+        converged: bool,
+        failure: Option<NotConverged>,
+    ) -> Result<OeResult, OeError> {
+        let (p, config) = (self.p, self.config);
+        let tolerance = config.cost_tolerance;
+        let failure = failure.unwrap_or(NotConverged::MaxIterations);
+        let termination = Termination::of(&self.log, converged, failure, tolerance);
+        // The iterations' buffers go before `finish` simulates the sensitivities again: on a
+        // long record each sensitivity array is the largest allocation of the fit.
+        for buffer in [&mut self.s, &mut self.y, &mut self.y_try, &mut self.e_try, &mut self.e_ext]
+        {
+            *buffer = Vec::new();
+        }
+        let (beta, r, e) = (&self.beta, &self.r, &self.e);
+        let log = self.log.clone();
+        match finish(p, &config.structure, beta, r, e, log, start.clone(), termination, config) {
+            Ok(result) => Ok(result),
+            Err(err) => {
+                let why = self.fall_back(err.into())?;
+                let termination = Termination::of(&self.log, false, why, tolerance);
+                let (beta, r, e, log) = (&self.beta, &self.r, &self.e, self.log);
+                Ok(finish(p, &config.structure, beta, r, e, log, start, termination, config)?)
+            }
+        }
     }
 
     /// Simulates β with its sensitivities and forms the normal equations and the step matrix
@@ -1229,7 +1384,7 @@ impl<'a> OeIterate<'a> {
         let w: Vec<f64> = self.r.iter().map(|v| 1.0 / v).collect();
         let u = robust.map_or_else(Vec::new, |h| huber_weights(h, &self.e, &self.r));
         let sd: Vec<f64> = self.r.iter().map(|v| v.sqrt()).collect();
-        p.simulate(&self.beta, &mut self.y, Some(&mut self.s))?;
+        simulate_sensitivities(p, &self.beta, &mut self.y, &mut self.s)?;
         let (m, g, gj) = normal_equations_weighted(&self.s, &self.e, &w, &u, p.n_unknowns);
         check_identifiable(&m, p, &config.structure)?;
         let minv = spd_inverse(&m);
@@ -1449,7 +1604,7 @@ fn finish(
     let u = config.robust.map_or_else(Vec::new, |h| huber_weights(h, e, r));
     let mut y = Vec::new();
     let mut s = Vec::new();
-    p.simulate(beta, &mut y, Some(&mut s))?;
+    simulate_sensitivities(p, beta, &mut y, &mut s)?;
     let fit = Fitted { beta, s: &s, e, w: &w, u: &u, r, names: unknown_names(p, structure) };
     assemble(p, structure, fit, iterations, start, termination, config)
 }

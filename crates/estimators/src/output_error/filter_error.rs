@@ -117,6 +117,9 @@
 //! non-finite, `V ≤ 0`, `|α|` or `|β|` over 1.5 rad, no stabilising Riccati solution) or whose
 //! likelihood is not finite is rejected and the step shortened by more damping; only when no
 //! damping up to 10¹⁰ gives a lower cost does the fit stop ([`NotConverged::NoDescent`]).
+//! An accepted iterate's sensitivities that cannot be formed (both passes of a difference
+//! failing, at the next iteration or at the end) end the fit at the last iterate whose were,
+//! as [`NotConverged::NumericalFailure`] (output error's module doc, "Numerical failure").
 //!
 //! **Sensitivities** `S = ∂ŷ/∂β` and `D_j = ∂b_j/∂β` by central differences of the **whole
 //! filter**, as `ml_fem.m`: each unknown (`ln R` included) perturbed by
@@ -467,6 +470,8 @@ impl Filter<'_> {
         cols: usize,
         s: &mut Vec<f64>,
     ) -> Result<GainDerivatives, EstimatorError> {
+        #[cfg(test)]
+        super::fault::check()?;
         let nb = self.nb;
         let (nx, ny) = (self.p.nx, self.p.ny());
         let rows = self.p.n_samples * ny;
@@ -620,12 +625,16 @@ pub fn fit_to_end(
     let fem = Fem::new(&p, config)?;
     let (mut it, start) = fem.start(manoeuvres, oe)?;
     let (converged, failure) = fem.iterate(&mut it, oe)?;
-    let termination = Termination::of(
-        &it.log,
-        converged,
-        failure.unwrap_or(NotConverged::MaxIterations),
-        oe.cost_tolerance,
-    );
+    let failure = failure.unwrap_or(NotConverged::MaxIterations);
+    let mut termination = Termination::of(&it.log, converged, failure, oe.cost_tolerance);
+    // The final iterate was flown but, unless the fit stopped where it linearized, its
+    // sensitivities were never formed: when they cannot be, the last iterate whose were is
+    // the answer.
+    if let Err(err) = fem.filter.sensitivities(&it.beta, fem.nb, &mut it.s) {
+        let why = fem.fall_back(&mut it, err.into())?;
+        termination = Termination::of(&it.log, false, why, oe.cost_tolerance);
+        fem.filter.sensitivities(&it.beta, fem.nb, &mut it.s)?;
+    }
     fem.finish(it, start, termination, oe)
 }
 
@@ -674,6 +683,9 @@ struct Iterate {
     /// held at a bound), from the last normal equations.
     dkc: Vec<f64>,
     log: Vec<OeIteration>,
+    /// The last iterate whose innovations and sensitivities were both formed: all unknowns
+    /// and the length of the log up to it (`None` before the first normal equations).
+    good: Option<(Vec<f64>, usize)>,
 }
 
 /// A trial that lowered the likelihood cost.
@@ -828,7 +840,8 @@ impl<'a> Fem<'a> {
         }];
         let (s, y_try, e_try, dkc) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let kc = st.kc_diag;
-        let it = Iterate { beta, bf, b, y, e, s, y_try, e_try, lambda: 0.0, kc, dkc, log };
+        let good = None;
+        let it = Iterate { beta, bf, b, y, e, s, y_try, e_try, lambda: 0.0, kc, dkc, log, good };
         Ok((it, start))
     }
 
@@ -867,11 +880,39 @@ impl<'a> Fem<'a> {
             if super::stop_raised(oe.stop.as_ref()) {
                 return Ok((false, Some(NotConverged::Stopped)));
             }
-            if let Some(stop) = self.step(it, iteration, oe)? {
-                return Ok(stop);
+            match self.step(it, iteration, oe) {
+                Ok(Some(stop)) => return Ok(stop),
+                Ok(None) => {}
+                Err(err) => return Ok((false, Some(self.fall_back(it, err)?))),
             }
         }
         Ok((false, Some(NotConverged::MaxIterations)))
+    }
+
+    /// After `err` at the current iterate: back to the last iterate whose sensitivities were
+    /// formed (its filter run again, its log entry the last), returning the reason the fit
+    /// then ends with (output error's module doc, "Numerical failure").
+    ///
+    /// # Errors
+    /// `err` itself when it is not numerical or no earlier iterate was linearized.
+    fn fall_back(&self, it: &mut Iterate, err: OeError) -> Result<NotConverged, OeError> {
+        let why = match &err {
+            OeError::Estimator(e) => NotConverged::numerical(e),
+            OeError::NotConverged { .. } => None,
+        };
+        let (Some(why), Some((beta, log_len))) = (why, it.good.take()) else {
+            return Err(err);
+        };
+        if beta == it.beta {
+            return Err(err);
+        }
+        let st = self.filter.pass(&beta[..self.nb], &self.r_of(&beta), &mut it.y)?;
+        it.b = residuals(self.p, &it.y, &mut it.e);
+        it.bf = self.innovation_var(&st, &beta);
+        it.kc = st.kc_diag;
+        it.beta = beta;
+        it.log.truncate(log_len);
+        Ok(why)
     }
 
     /// One iteration: the normal equations with the variance terms, a damped step that
@@ -885,6 +926,7 @@ impl<'a> Fem<'a> {
             .into());
         }
         let (m, g) = self.normal_equations(it, oe)?;
+        it.good = Some((it.beta.clone(), it.log.len()));
         let minv = spd_inverse(&m);
         let nfull = self.nb + self.ny;
         let step_sigma = |step: &nalgebra::DVector<f64>| match &minv {
@@ -1074,11 +1116,11 @@ impl<'a> Fem<'a> {
     }
 
     /// The result at the final iterate, converged or not ([`Termination`]): accuracy from the
-    /// sensitivities of β recomputed there with B and R final, the diagnostic σ, `F` back from
-    /// its logarithm.
+    /// sensitivities of β (in `it.s`, formed there by the caller) with B and R final, the
+    /// diagnostic σ, `F` back from its logarithm.
     fn finish(
         &self,
-        mut it: Iterate,
+        it: Iterate,
         start: Vec<f64>,
         termination: Termination,
         oe: &OeConfig,
@@ -1086,7 +1128,6 @@ impl<'a> Fem<'a> {
         let (nb, first_f) = (self.nb, self.first_f);
         let states = self.p.model.state_set().states();
         let w: Vec<f64> = it.b.iter().map(|v| 1.0 / v).collect();
-        self.filter.sensitivities(&it.beta, nb, &mut it.s)?;
         let r = self.r_of(&it.beta);
         let mut beta = it.beta;
         beta.truncate(nb);

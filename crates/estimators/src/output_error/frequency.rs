@@ -59,7 +59,9 @@
 //! of Klein & Morelli ch. 6–7 and Jategaonkar 2015 ch. 4 with a step-halving safeguard).
 //! Convergence as the time-domain fit: relative change of `det S` below
 //! [`FdoeConfig::cost_tolerance`] and largest step below [`FdoeConfig::step_tolerance_sigma`]
-//! Cramér–Rao σ.
+//! Cramér–Rao σ. An accepted iterate whose sensitivities cannot be formed (the flight model
+//! fails at a perturbed parameter) ends the fit at the last iterate whose were, as
+//! [`NotConverged::NumericalFailure`] (output error's module doc, "Numerical failure").
 //!
 //! # Accuracy
 //!
@@ -653,6 +655,8 @@ impl Context {
         let ny = self.outputs.len();
         let nx = self.states.len();
         let nf = self.free.len();
+        #[cfg(test)]
+        super::fault::check()?;
         let (theta, xd) = self.split(theta0, beta);
         let mut out: Vec<Vec<DMatrix<C64>>> =
             self.man.iter().map(|m| vec![DMatrix::zeros(ny, nb); m.z.len()]).collect();
@@ -803,8 +807,18 @@ pub fn fit(manoeuvres: &[&[AirDataSample]], config: &FdoeConfig) -> Result<FdoeR
     let start = equation_error_start(&config.structure, manoeuvres);
     let mut it = FdIterate::new(&ctx, &start)?;
     let (converged, failure) = it.iterate(&ctx, config, &start)?;
-    let termination = Termination::of(&it.log, converged, failure, config.cost_tolerance);
-    fd_result(&ctx, config, start, it, termination)
+    let mut termination = Termination::of(&it.log, converged, failure, config.cost_tolerance);
+    // The final iterate's sensitivities were never formed unless the fit stopped where it
+    // linearized: when they cannot be, the last iterate whose were is the answer.
+    let sens = match ctx.sensitivities(&start, &it.beta) {
+        Ok(sens) => sens,
+        Err(err) => {
+            let why = it.fall_back(err)?;
+            termination = Termination::of(&it.log, false, why, config.cost_tolerance);
+            ctx.sensitivities(&start, &it.beta)?
+        }
+    };
+    fd_result(&ctx, config, start, it, &sens, termination)
 }
 
 /// Per manoeuvre, per frequency, the output error `V_k`.
@@ -822,6 +836,9 @@ struct FdIterate {
     v: Residuals,
     s: Vec<f64>,
     log: Vec<OeIteration>,
+    /// The last iterate whose residuals and sensitivities were both formed: β, `V`, `S_vv`
+    /// and the length of the log up to it (`None` before the first sensitivities).
+    good: Option<(Vec<f64>, Residuals, Vec<f64>, usize)>,
 }
 
 /// A step along the Gauss–Newton direction that lowered the merit: the new β, its residuals
@@ -851,7 +868,30 @@ impl FdIterate {
             lambda: 0.0,
             max_step_sigma: f64::NAN,
         }];
-        Ok(Self { beta, v, s, log })
+        Ok(Self { beta, v, s, log, good: None })
+    }
+
+    /// After `err` at the current iterate: back to the last iterate whose sensitivities were
+    /// formed, returning the reason the fit then ends with (output error's module doc,
+    /// "Numerical failure").
+    ///
+    /// # Errors
+    /// `err` itself when it is not a numerical failure of the flight model or no earlier
+    /// iterate was linearized.
+    fn fall_back(&mut self, err: FdoeError) -> Result<NotConverged, FdoeError> {
+        let why = match &err {
+            FdoeError::Model(e) => NotConverged::numerical(e),
+            FdoeError::Invalid(_) => None,
+        };
+        let (Some(why), Some((beta, v, s, log_len))) = (why, self.good.take()) else {
+            return Err(err);
+        };
+        if beta == self.beta {
+            return Err(err);
+        }
+        (self.beta, self.v, self.s) = (beta, v, s);
+        self.log.truncate(log_len);
+        Ok(why)
     }
 
     /// Gauss–Newton iterations with step halving until converged, stopped or out of
@@ -867,7 +907,12 @@ impl FdIterate {
             if config.stop.as_ref().is_some_and(StopFlag::raised) {
                 return Ok((false, NotConverged::Stopped));
             }
-            let sens = ctx.sensitivities(start, &self.beta)?;
+            let sens = match ctx.sensitivities(start, &self.beta) {
+                Ok(sens) => sens,
+                Err(err) => return Ok((false, self.fall_back(err)?)),
+            };
+            let good = (self.beta.clone(), self.v.clone(), self.s.clone(), self.log.len());
+            self.good = Some(good);
             let (m, g) = normal_equations(&sens, &self.v, &self.s, nb);
             let Some(minv) = spd_inverse(&m) else {
                 return Ok((false, NotConverged::Unidentifiable));
@@ -941,7 +986,8 @@ impl FdIterate {
     }
 }
 
-/// The result at the final iterate: Cramér–Rao covariance `(2M)⁻¹` of the free parameters
+/// The result at the final iterate, whose sensitivities are `sens`: Cramér–Rao covariance
+/// `(2M)⁻¹` of the free parameters
 /// (none for an unidentifiable fit, which is then not converged), the inputs seen, and the
 /// flight condition `(V, q̄)` of each manoeuvre's reference.
 fn fd_result(
@@ -949,12 +995,12 @@ fn fd_result(
     config: &FdoeConfig,
     start: Vec<f64>,
     it: FdIterate,
+    sens: &[Vec<DMatrix<C64>>],
     termination: Termination,
 ) -> Result<FdoeResult, FdoeError> {
-    let FdIterate { beta, v, s, log } = it;
+    let FdIterate { beta, v, s, log, .. } = it;
     let nb = ctx.n_unknowns();
-    let sens = ctx.sensitivities(&start, &beta)?;
-    let (m, _) = normal_equations(&sens, &v, &s, nb);
+    let (m, _) = normal_equations(sens, &v, &s, nb);
     let cov = spd_inverse(&m).map(|mi| mi * 0.5);
     let (theta, xd) = ctx.split(&start, &beta);
     let np = config.structure.n_params();

@@ -1135,3 +1135,76 @@ fn a_lift_slope_break_at_a_known_knot_is_recovered_by_oe_and_rls() {
         }
     }
 }
+
+/// The reason an injected sensitivity failure ([`fault`]) ends a fit with.
+fn injected() -> NotConverged {
+    NotConverged::NumericalFailure { what: fault::WHAT, t_s: fault::T_S }
+}
+
+/// A fit whose sensitivities cannot be formed at its second iterate (the third linearization
+/// fails) keeps its first iterate, whose were: its estimates, σ and iteration log are those of
+/// the same fit stopped after one iteration, and it ends not converged with the failure named
+/// (what, and at which time), carried by [`OeError::NotConverged`] as the iteration limit is.
+/// Before, the whole fit was an error and the iterations' work was lost.
+#[test]
+fn a_numerical_failure_at_a_later_iterate_keeps_the_last_good_one() {
+    let st = lon();
+    let th = trimmed_truth(&st);
+    let data = simulate(&st, &th, 20.0, 12.0, 1.0, 9, [0.0; N_STATES]);
+    let mut cfg = OeConfig::new(st);
+    // One start: the fall-back is this fit's, not a restart's.
+    cfg.start = Start::Priors;
+    cfg.max_iterations = 1;
+    let one = fit_to_end(&[&data], &cfg).unwrap();
+    assert_eq!(one.termination, Termination::NotConverged(NotConverged::MaxIterations));
+    cfg.max_iterations = 50;
+    fault::fail_after(2);
+    let Err(OeError::NotConverged { reason, result }) = fit(&[&data], &cfg) else {
+        panic!("a fit that ran must end not converged with its last good iterate");
+    };
+    assert_eq!(reason, injected());
+    assert_eq!(result.termination, Termination::NotConverged(injected()));
+    assert_eq!(result.values, one.values);
+    assert_eq!(result.sigma, one.sigma);
+    // Debug text: the start's step in σ is NaN, which `==` never equals.
+    assert_eq!(format!("{:?}", result.iterations), format!("{:?}", one.iterations));
+    assert_eq!(result.n_iterations(), 1);
+    assert!(result.values.iter().chain(&result.sigma).all(|v| v.is_finite()));
+    let text = result.termination.describe();
+    for part in ["NOT CONVERGED", "could not be flown", "`injected failure`", "t = 7.25 s"] {
+        assert!(text.contains(part), "{text}");
+    }
+    assert!(text.contains("the last good iterate is reported"), "{text}");
+}
+
+/// The final iterate's sensitivities are formed only when the result is assembled: when they
+/// cannot be, the result is the iterate before it (the last linearized), not converged; a fit
+/// from the equation-error start that ends so is started again from the priors, as one that
+/// reaches its iteration limit. Only a start that cannot be linearized is still an error.
+#[test]
+fn a_final_iterate_without_sensitivities_falls_back_and_only_the_start_is_an_error() {
+    let st = lon();
+    let th = trimmed_truth(&st);
+    let data = simulate(&st, &th, 20.0, 12.0, 1.0, 9, [0.0; N_STATES]);
+    let mut cfg = OeConfig::new(st);
+    cfg.start = Start::Priors;
+    cfg.max_iterations = 1;
+    let one = fit_to_end(&[&data], &cfg).unwrap();
+    cfg.max_iterations = 2;
+    fault::fail_after(2);
+    let kept = fit_to_end(&[&data], &cfg).unwrap();
+    assert_eq!(kept.termination, Termination::NotConverged(injected()));
+    assert_eq!(kept.values, one.values);
+    assert_eq!(format!("{:?}", kept.iterations), format!("{:?}", one.iterations));
+    fault::fail_after(0);
+    let e = fit_to_end(&[&data], &cfg).unwrap_err();
+    let at_start = EstimatorError::Numerical { what: fault::WHAT, t_s: fault::T_S };
+    assert_eq!(e, OeError::Estimator(at_start));
+    cfg.start = Start::EquationError;
+    cfg.max_iterations = 50;
+    fault::fail_after(2);
+    let restarted = fit_to_end(&[&data], &cfg).unwrap();
+    let restart = restarted.restart.expect("a fit ended by a numerical failure is restarted");
+    assert_eq!(restart.first.0, Termination::NotConverged(injected()));
+    assert!(restart.second.is_ok());
+}

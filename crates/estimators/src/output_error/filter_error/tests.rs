@@ -376,3 +376,29 @@ fn the_fit_starts_from_the_output_error_fit_of_the_record() {
         assert!((a - b).abs() < 0.1 * s, "{i}: {a} vs {b} (σ {s})");
     }
 }
+
+/// A filter-error fit whose sensitivities cannot be formed at its second iterate keeps the
+/// first (the same fit stopped after one iteration), not converged with the failure named.
+#[test]
+fn a_numerical_failure_at_a_later_iterate_keeps_the_last_good_one() {
+    let data = alpha_noise_record(3);
+    let mut cfg = FemConfig::new(lon());
+    cfg.process_noise = process_alpha(1.0).map(|v| v > 0.0);
+    // The output-error start would count its own linearizations.
+    cfg.start_from_output_error = false;
+    cfg.oe.max_iterations = 1;
+    let one = fit_to_end(&[&data], &cfg).unwrap();
+    cfg.oe.max_iterations = 50;
+    crate::output_error::fault::fail_after(2);
+    let kept = fit_to_end(&[&data], &cfg).unwrap();
+    let why = NotConverged::NumericalFailure {
+        what: crate::output_error::fault::WHAT,
+        t_s: crate::output_error::fault::T_S,
+    };
+    assert_eq!(kept.result.termination, Termination::NotConverged(why));
+    assert_eq!(kept.result.values, one.result.values);
+    // Debug text: the start's step in σ is NaN, which `==` never equals.
+    let log = |r: &FemResult| format!("{:?}", r.result.iterations);
+    assert_eq!(log(&kept), log(&one));
+    assert!(kept.result.values.iter().all(|v| v.is_finite()));
+}

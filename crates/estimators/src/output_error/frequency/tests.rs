@@ -135,3 +135,25 @@ fn analytic_spd_inverse_holds_over_any_range_of_units() {
     let singular = nalgebra::DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 1.0, 1.0]);
     assert!(spd_inverse(&singular).is_none());
 }
+
+/// A frequency-domain fit whose sensitivities cannot be formed at its second iterate keeps the
+/// first (the same fit stopped after one iteration), not converged with the failure named.
+#[test]
+fn a_numerical_failure_at_a_later_iterate_keeps_the_last_good_one() {
+    let rec = record(1.0, 3);
+    let mut cfg = config();
+    cfg.max_iterations = 1;
+    let one = fit(&[&rec], &cfg).unwrap();
+    cfg.max_iterations = 50;
+    crate::output_error::fault::fail_after(2);
+    let kept = fit(&[&rec], &cfg).unwrap();
+    let why = NotConverged::NumericalFailure {
+        what: crate::output_error::fault::WHAT,
+        t_s: crate::output_error::fault::T_S,
+    };
+    assert_eq!(kept.termination, Termination::NotConverged(why));
+    assert_eq!(kept.values, one.values);
+    // Debug text: the start's step in σ is NaN, which `==` never equals.
+    assert_eq!(format!("{:?}", kept.iterations), format!("{:?}", one.iterations));
+    assert!(kept.sigma.iter().flatten().all(|v| v.is_finite()));
+}

@@ -70,28 +70,108 @@ pub(super) fn misaligned(lengths: &[usize], r: &CompatResult, dt_s: f64) -> Vec<
 /// The lag `L` (samples; > 0: `z` lags `y`, `z[k] ≈ y[k − L]`) of the largest correlation of
 /// `z` with `y` over the overlaps of at least a quarter of their length (and [`MIN_OVERLAP`]),
 /// with that correlation and the one at lag 0; `None` for a series too short or constant.
+///
+/// Every lag's correlation comes from sums over its overlap ([`Lagged`]), its cross products
+/// by the transform of [`aeroident_signals::lag_products::cross_lag_products`]: a whole
+/// flight's manoeuvre of 48,000 samples has 72,000 lags, and their direct sums cost a
+/// product per lag and sample. A lag replaces the best so far only when it beats it by more
+/// than [`TIE`], the sums' round-off, so of equally good lags the aligned one (else the
+/// earliest) is kept, as exact sums keep it; the two correlations returned are formed
+/// directly over their overlaps.
 fn best_lag(z: &[f64], y: &[f64]) -> Option<(isize, f64, f64)> {
     let n = z.len().min(y.len());
     let min_overlap = (n / 4).max(MIN_OVERLAP);
     if n < min_overlap {
         return None;
     }
-    let max_lag = (n - min_overlap) as isize;
+    let (z, y) = (&z[..n], &y[..n]);
+    let max_lag = n - min_overlap;
     let aligned = correlation(z, y)?;
+    let lagged = Lagged::new(z, y, max_lag);
     let mut best = (0, aligned);
-    for lag in -max_lag..=max_lag {
-        let k = lag.unsigned_abs();
-        let c = if lag >= 0 {
-            correlation(&z[k..n], &y[..n - k])
-        } else {
-            correlation(&z[..n - k], &y[k..n])
-        };
-        if let Some(c) = c.filter(|c| *c > best.1) {
+    for lag in -(max_lag as isize)..=max_lag as isize {
+        if let Some(c) = lagged.correlation(lag).filter(|c| *c > best.1 + TIE) {
             best = (lag, c);
         }
     }
-    Some((best.0, best.1, aligned))
+    let (za, ya) = overlap(z, y, best.0);
+    Some((best.0, correlation(za, ya).unwrap_or(best.1), aligned))
 }
+
+/// The parts of `z` and `y` (equal lengths) that pair at lag `lag` (`z[k]` with `y[k − lag]`).
+fn overlap<'a>(z: &'a [f64], y: &'a [f64], lag: isize) -> (&'a [f64], &'a [f64]) {
+    let (n, k) = (z.len(), lag.unsigned_abs().min(z.len()));
+    if lag >= 0 { (&z[k..n], &y[..n - k]) } else { (&z[..n - k], &y[k..n]) }
+}
+
+/// How much a lag's correlation must exceed the best so far to replace it: far above the
+/// round-off of the sums (about 1e-13 on the tests' series), far below any difference that
+/// decides a finding.
+const TIE: f64 = 1e-9;
+
+/// Sums from which the correlation of two series at every lag follows in `O(1)`: prefix sums
+/// of each series and of its square, and the cross products at each lag both ways. The series
+/// are centred on their own means first: a correlation does not change with an offset, and
+/// centred sums do not lose the overlap's variance to cancellation against a large mean (an
+/// airspeed of 200 m/s that varies by 1).
+struct Lagged {
+    /// Prefix sums of `z`, `z²`, `y`, `y²` (`n + 1` each).
+    z: Vec<f64>,
+    zz: Vec<f64>,
+    y: Vec<f64>,
+    yy: Vec<f64>,
+    /// `Σ_t y_t z_{t+L}` at `L = 0…max_lag` (z late), and `Σ_t z_t y_{t+L}` (z early).
+    late: Vec<f64>,
+    early: Vec<f64>,
+}
+
+impl Lagged {
+    fn new(z: &[f64], y: &[f64], max_lag: usize) -> Self {
+        use aeroident_signals::lag_products::cross_lag_products;
+        let centred = |v: &[f64]| {
+            let mean = v.iter().sum::<f64>() / v.len() as f64;
+            v.iter().map(|x| x - mean).collect::<Vec<f64>>()
+        };
+        let (zc, yc) = (centred(z), centred(y));
+        let prefix = |v: &[f64], f: fn(f64) -> f64| {
+            let mut out = Vec::with_capacity(v.len() + 1);
+            out.push(0.0);
+            v.iter().fold(0.0, |acc, &x| {
+                out.push(acc + f(x));
+                acc + f(x)
+            });
+            out
+        };
+        Self {
+            z: prefix(&zc, |x| x),
+            zz: prefix(&zc, |x| x * x),
+            y: prefix(&yc, |x| x),
+            yy: prefix(&yc, |x| x * x),
+            late: cross_lag_products(&yc, &zc, max_lag),
+            early: cross_lag_products(&zc, &yc, max_lag),
+        }
+    }
+
+    /// Pearson's correlation at `lag` (as [`best_lag`]'s) from the sums; `None` where either
+    /// overlap is constant to the sums' round-off, or beyond the lags formed.
+    fn correlation(&self, lag: isize) -> Option<f64> {
+        let k = lag.unsigned_abs();
+        let (cross, z_from, y_from) =
+            if lag >= 0 { (self.late.get(k)?, k, 0) } else { (self.early.get(k)?, 0, k) };
+        let len = (self.z.len() - 1).checked_sub(k)?;
+        let sum = |p: &[f64], from: usize| p[from + len] - p[from];
+        let (sz, szz) = (sum(&self.z, z_from), sum(&self.zz, z_from));
+        let (sy, syy) = (sum(&self.y, y_from), sum(&self.yy, y_from));
+        let m = len as f64;
+        let (ab, aa, bb) = (cross - sz * sy / m, szz - sz * sz / m, syy - sy * sy / m);
+        let constant = |var: f64, squares: f64| var <= VARIANCE_FLOOR * squares;
+        (!constant(aa, szz) && !constant(bb, syy)).then(|| ab / (aa * bb).sqrt())
+    }
+}
+
+/// An overlap whose sum of squared deviations is below this share of its sum of squares is
+/// constant to the round-off of the prefix sums.
+const VARIANCE_FLOOR: f64 = 1e-10;
 
 /// Pearson's correlation of `a` with `b` (equal lengths); `None` when either is constant.
 fn correlation(a: &[f64], b: &[f64]) -> Option<f64> {
@@ -218,6 +298,49 @@ mod tests {
     fn of_equally_good_lags_the_aligned_one_is_kept() {
         let square: Vec<f64> = (0..600).map(|k| if k % 40 < 20 { 1.0 } else { -1.0 }).collect();
         assert_eq!(best_lag(&square, &square), Some((0, 1.0, 1.0)));
+    }
+
+    /// A random walk of `n` samples about `mean` from seed `s`, with white noise on it.
+    fn noisy(n: usize, mut s: u64, mean: f64) -> Vec<f64> {
+        let mut next = || {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let mut walk = 0.0;
+        (0..n)
+            .map(|_| {
+                walk = 0.98 * walk + next();
+                mean + walk + 0.3 * next()
+            })
+            .collect()
+    }
+
+    /// Every lag's correlation from the sums and the transform equals Pearson's formed
+    /// directly over its overlap, to 1e-12, on random series 3,000 samples long about an
+    /// airspeed's mean (200) and a vane's (0.05), both ways; and the best lag found is the
+    /// direct search's.
+    #[test]
+    fn the_correlation_at_every_lag_is_the_direct_ones() {
+        let (z, y) = (noisy(3000, 11, 200.0), noisy(3000, 29, 0.05));
+        let late: Vec<f64> = (0..3000).map(|k| y[(k + 2960) % 3000] + 0.5 * z[k] / 200.0).collect();
+        for (a, b) in [(&z, &y), (&y, &z), (&late, &y)] {
+            let max_lag = 3000 - 750;
+            let lagged = Lagged::new(a, b, max_lag);
+            let mut direct_best = (0, correlation(a, b).unwrap());
+            for lag in -(max_lag as isize)..=max_lag as isize {
+                let (za, ya) = overlap(a, b, lag);
+                let direct = correlation(za, ya).unwrap();
+                let fast = lagged.correlation(lag).unwrap();
+                assert!((fast - direct).abs() < 1e-12, "lag {lag}: {fast} against {direct}");
+                if direct > direct_best.1 + TIE {
+                    direct_best = (lag, direct);
+                }
+            }
+            let (lag, best, _) = best_lag(a, b).unwrap();
+            assert_eq!((lag, best), direct_best);
+        }
+        assert_eq!(best_lag(&late, &y).unwrap().0, 40);
+        assert_eq!(Lagged::new(&z, &y, 10).correlation(11), None);
     }
 
     #[test]

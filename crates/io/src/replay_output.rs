@@ -180,6 +180,10 @@ pub enum SignVerdict {
     Reversed,
     /// The record cannot decide: too little excitation or too much noise against the response.
     Undecided,
+    /// An accelerometer whose gain against the force equations is decided and far from ±1: it
+    /// does not read the specific force as mapped (gravity removed, another unit, a load
+    /// factor); the evidence names the likely form.
+    NotASpecificForce,
 }
 
 /// One sign test of a surface or accelerometer channel from the record's own kinematics and
@@ -213,6 +217,7 @@ impl SignTest {
             SignVerdict::Consistent => "consistent",
             SignVerdict::Reversed => "REVERSED",
             SignVerdict::Undecided => "cannot be decided from this record",
+            SignVerdict::NotASpecificForce => "NOT A SPECIFIC FORCE as mapped",
         };
         format!("{} {v}", self.channel)
     }

@@ -12,8 +12,10 @@
 //! ṙ = N₀ + N_β β + N_p p + N_r r + N_δa δa + N_δr δr
 //! ```
 //!
-//! with `a_y` standing in for β where β is not mapped (side force is mostly `Y_β β`), and the
-//! terms of channels not mapped left out. Under the mapping's conventions (docs/mapping.md:
+//! with β from the kinematics where the record maps none ([`sideslip`]: `a_y` standing in for it
+//! moves the rudder's coefficient by the rudder's own side force), and the terms of channels
+//! not mapped left out. Without β or the kinematics to give it, the aileron's test takes `a_y`
+//! (an aileron's side force is small) and the rudder's cannot be decided. Under the mapping's conventions (docs/mapping.md:
 //! δe > 0 trailing edge down, δa > 0 a negative rolling moment, δr > 0 trailing edge left) a
 //! conventional aircraft has `M_δe`, `L_δa`, `N_δr` < 0 (Stevens & Lewis, *Aircraft Control
 //! and Simulation*, 2nd ed., §2.3; a canard reverses `M_δe`).
@@ -32,6 +34,12 @@
 //! regressed on the channel with a bias: its gain is 1 when the channel is consistent and −1
 //! when it is reversed. `a_y` needs β (the side velocity), `a_x` and `a_z` need θ; without them
 //! the test says so instead of guessing.
+//!
+//! An accelerometer whose gain is decided beyond [`DECIDE_SIGMAS`] σ from +1 and −1 (a gain
+//! near 0 with a small σ is a channel that does not carry the motion's force) and lies outside [1/[`SCALE_BOUND`], [`SCALE_BOUND`]] does not read the specific force as
+//! mapped: it is `not_a_specific_force`, with the likely form ([`likely_form`]): gravity
+//! removed (the force equations' gravity term, added as a second regressor, takes a gain near
+//! −1), a reading in g or ft/s², or a load factor.
 //!
 //! **Decision.** The sign is decided when the gain is more than [`DECIDE_SIGMAS`] σ from 0, σ
 //! the least-squares one widened by `√((1 + ρ)/(1 − ρ))` for the residuals' lag-1
@@ -53,6 +61,11 @@ use nalgebra::{DMatrix, DVector};
 
 /// The gain must be this many (widened) σ from 0 for its sign to be decided.
 pub const DECIDE_SIGMAS: f64 = 4.0;
+
+/// An accelerometer's gain within [1/`SCALE_BOUND`, `SCALE_BOUND`] of ±1 is read as a specific
+/// force's with calibration and timing errors (an α vane 0.2 s late moved a normal
+/// accelerometer's kinematic gain to 2.7), beyond it as another quantity.
+pub const SCALE_BOUND: f64 = 3.0;
 
 /// Half the span of the central differences, s: wide enough that sensor noise at 50–100 Hz
 /// does not swamp the derivative, narrow against a short period or Dutch roll (a difference
@@ -117,6 +130,7 @@ impl Present {
 
 /// One test: the channel, the sign a consistent one gives, the fields it needs beyond the
 /// channel, its regression and what that is in words.
+#[derive(Clone, Copy)]
 struct Test {
     channel: &'static str,
     expected: f64,
@@ -141,7 +155,7 @@ const TESTS: [Test; 6] = [
         expected: -1.0,
         needs: &["p"],
         regression: Regression::Roll,
-        what: "ṗ per δa (least squares on δa, β or a_y, p, r, δr where mapped)",
+        what: "ṗ per δa (least squares on δa, β (else a_y), p, r, δr where mapped)",
         unit: " rad/s² per rad",
     },
     Test {
@@ -149,7 +163,7 @@ const TESTS: [Test; 6] = [
         expected: -1.0,
         needs: &["r"],
         regression: Regression::Yaw,
-        what: "ṙ per δr (least squares on δr, β or a_y, p, r, δa where mapped)",
+        what: "ṙ per δr (least squares on δr, β, p, r, δa where mapped)",
         unit: " rad/s² per rad",
     },
     Test {
@@ -186,6 +200,8 @@ enum Regression {
     Roll,
     Yaw,
     SpecificForce(usize),
+    /// The kinematics' specific force on the body-axis gravity term and the accelerometer.
+    Gravity(usize),
 }
 
 impl Test {
@@ -197,6 +213,14 @@ impl Test {
             Regression::Roll => roll(s, on),
             Regression::Yaw => yaw(s, on),
             Regression::SpecificForce(axis) => specific_force(s, axis, self.needs),
+            Regression::Gravity(axis) => {
+                let (y, reading) = specific_force(s, axis, self.needs)?;
+                let g = s.mean(|c| {
+                    let (phi, theta) = (c.phi_rad.unwrap_or(0.0), c.theta_rad.unwrap_or(0.0));
+                    Some(gravity_body(G0_MPS2, SinCos::of(phi), SinCos::of(theta))[axis])
+                })?;
+                Some((y, vec![g, reading[0]]))
+            }
         }
     }
 }
@@ -269,14 +293,46 @@ fn sign_tests_timed<M: AsRef<[AirDataSample]>>(
     no_timing: Option<&str>,
 ) -> Vec<SignTest> {
     let present = present_fields(manoeuvres);
+    let kinematic = (!present.has("beta"))
+        .then(|| sideslip::filled(manoeuvres, 2.5 * shortest_interval(manoeuvres)))
+        .flatten();
     TESTS
         .iter()
         .filter(|t| present.has(t.channel))
         .map(|t| match t.needs.iter().find(|n| !present.has(n)) {
             Some(missing) => undecided(t, format!("`{missing}` is not mapped")),
-            None => run(t, manoeuvres, &present, no_timing),
+            None if !matches!(t.regression, Regression::Roll | Regression::Yaw) => {
+                run(t, manoeuvres, &present, no_timing)
+            }
+            None => lateral_test(t, manoeuvres, kinematic.as_deref(), &present, no_timing),
         })
         .collect()
+}
+
+/// A lateral moment test: on β as mapped, else on the kinematics' β (said in the evidence),
+/// else the aileron's on `a_y` and the rudder's undecided (module doc).
+fn lateral_test<M: AsRef<[AirDataSample]>>(
+    t: &Test,
+    manoeuvres: &[M],
+    kinematic: Option<&[Vec<AirDataSample>]>,
+    present: &Present,
+    no_timing: Option<&str>,
+) -> SignTest {
+    if present.has("beta") {
+        return run(t, manoeuvres, present, no_timing);
+    }
+    match kinematic {
+        Some(k) => {
+            let mut test = run(t, k, &present_fields(k), no_timing);
+            test.evidence.push_str(&format!("; β not mapped: {}", sideslip::HOW));
+            test
+        }
+        None if matches!(t.regression, Regression::Yaw) => undecided(
+            t,
+            "β is not mapped and the kinematics cannot give it (a_y, r and φ are needed); a_y cannot stand in for it here, since the rudder's own side force would move the rudder's coefficient".into(),
+        ),
+        None => run(t, manoeuvres, present, no_timing),
+    }
 }
 
 /// The record's mapped fields: those more than half of its samples carry.
@@ -356,13 +412,7 @@ fn run<M: AsRef<[AirDataSample]>>(
     let Some(LsFit { gain, sigma, .. }) = regress(&rows) else {
         return undecided(t, "the regressors are not independent (is the channel excited?)".into());
     };
-    let verdict = if gain.abs() <= DECIDE_SIGMAS * sigma {
-        SignVerdict::Undecided
-    } else if gain * t.expected > 0.0 {
-        SignVerdict::Consistent
-    } else {
-        SignVerdict::Reversed
-    };
+    let verdict = decide(t, gain, sigma);
     let expected = if t.expected > 0.0 {
         "+1 when consistent, −1 reversed"
     } else {
@@ -372,6 +422,12 @@ fn run<M: AsRef<[AirDataSample]>>(
         format!("{} {gain:+.4} ± {sigma:.2e}{} (expected {expected})", t.what, t.unit);
     if verdict == SignVerdict::Undecided {
         evidence.push_str(&format!("; within {DECIDE_SIGMAS} σ of 0"));
+    }
+    if verdict == SignVerdict::NotASpecificForce {
+        evidence.push_str(&format!(
+            "; more than {DECIDE_SIGMAS} σ from ±1 and outside 1/{SCALE_BOUND}–{SCALE_BOUND}, so not the specific force as mapped: {}",
+            likely_form(t, manoeuvres, on, gain)
+        ));
     }
     let surface_decided = t.expected < 0.0 && verdict != SignVerdict::Undecided;
     if let (true, Some(why)) = (surface_decided, no_timing) {
@@ -395,6 +451,67 @@ fn run<M: AsRef<[AirDataSample]>>(
         lead_s: lead.map(|l| l.lead_s),
         lead_interval_s: lead.map(|l| (l.lo_s, l.hi_s)),
     }
+}
+
+/// The verdict on a gain and its σ (module doc, "Decision").
+fn decide(t: &Test, gain: f64, sigma: f64) -> SignVerdict {
+    let beyond = |target: f64| (gain - target).abs() > DECIDE_SIGMAS * sigma;
+    let off_scale = !(1.0 / SCALE_BOUND..=SCALE_BOUND).contains(&gain.abs());
+    if t.expected > 0.0 && off_scale && beyond(1.0) && beyond(-1.0) {
+        SignVerdict::NotASpecificForce
+    } else if !beyond(0.0) {
+        SignVerdict::Undecided
+    } else if gain * t.expected > 0.0 {
+        SignVerdict::Consistent
+    } else {
+        SignVerdict::Reversed
+    }
+}
+
+/// The gains of the accelerometer forms a mapping mix-up gives, with the form in words: the
+/// specific force `f` regressed on a reading `k f` has gain `1/k`.
+const ACCELEROMETER_FORMS: [(f64, &str); 5] = [
+    (G0_MPS2, "likely a reading in g mapped as m/s² (`unit = \"g\"`)"),
+    (1.0 / G0_MPS2, "likely m/s² data mapped in g (`unit = \"m/s2\"`)"),
+    (0.3048, "likely ft/s² data mapped as m/s² (`unit = \"ft/s2\"`)"),
+    (
+        -G0_MPS2,
+        "likely a load factor (n = −a/g, or n − 1) mapped as the specific force (`unit = \"g\"`, `scale = -1`)",
+    ),
+    (
+        -1.0,
+        "likely a load factor in m/s² or a reversed channel (`scale = -1`) with a gain off by more than 3",
+    ),
+];
+
+/// The likely form of an accelerometer whose gain is `gain` ([`decide`]): gravity removed when
+/// the force equations' gravity term takes a gain within 0.2 of −1 beside the reading, else the
+/// form of [`ACCELEROMETER_FORMS`] within a factor 1.5 of the gain.
+fn likely_form<M: AsRef<[AirDataSample]>>(
+    t: &Test,
+    manoeuvres: &[M],
+    on: &Present,
+    gain: f64,
+) -> String {
+    let Regression::SpecificForce(axis) = t.regression else {
+        return "check its unit, sign and what it measures".into();
+    };
+    let with_gravity = Test { regression: Regression::Gravity(axis), ..*t };
+    let fit = regress(&rows(&with_gravity, manoeuvres, on));
+    if let Some(LsFit { gain: g, sigma, .. }) = fit
+        && (g + 1.0).abs() < 0.2
+        && sigma < 0.1
+    {
+        let term = ["g sinθ", "g cosθ sinφ", "g cosθ cosφ"][axis];
+        return format!(
+            "likely gravity removed (the gravity term beside it takes {g:+.3} ± {sigma:.1e}, −1 when the channel reads the specific force less gravity, {term}): map the raw accelerometer, or leave the channel out"
+        );
+    }
+    let near = |f: f64| gain / f > 0.0 && (gain / f).ln().abs() < 1.5f64.ln();
+    ACCELEROMETER_FORMS
+        .iter()
+        .find(|(f, _)| near(*f))
+        .map_or_else(|| "check its unit, sign and what it measures".into(), |f| f.1.to_string())
 }
 
 /// A least-squares fit of one test's rows.
@@ -509,14 +626,18 @@ pub fn warnings(tests: &[SignTest], mapping: &Mapping, dt_s: f64) -> Vec<Warning
 fn reversed_warnings(tests: &[SignTest], mapping: &Mapping) -> Vec<Warning> {
     tests
         .iter()
-        .filter(|t| t.verdict == SignVerdict::Reversed)
+        .filter(|t| matches!(t.verdict, SignVerdict::Reversed | SignVerdict::NotASpecificForce))
         .map(|t| {
             let label = label(mapping, &t.channel);
             let layout = if t.channel == "de" { " (or the aircraft has a canard)" } else { "" };
-            let text = format!(
-                "sign test: {label} looks reversed{layout}: {}; check its sign (`scale = -1`) in the mapping (docs/mapping.md, Channels)",
-                t.evidence
-            );
+            let text = if t.verdict == SignVerdict::Reversed {
+                format!(
+                    "sign test: {label} looks reversed{layout}: {}; check its sign (`scale = -1`) in the mapping (docs/mapping.md, Channels)",
+                    t.evidence
+                )
+            } else {
+                format!("sign test: {label} is not a specific force as mapped: {}", t.evidence)
+            };
             let w = Warning::new(WarningKind::Sign, text);
             match derivative_of(&t.channel) {
                 Some(d) => w.about(d),
@@ -527,6 +648,7 @@ fn reversed_warnings(tests: &[SignTest], mapping: &Mapping) -> Vec<Warning> {
 }
 
 pub mod refit;
+mod sideslip;
 pub mod timing;
 
 #[cfg(test)]

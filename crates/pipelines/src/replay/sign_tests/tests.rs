@@ -143,7 +143,13 @@ fn unexcited_or_unsupported_channels_cannot_be_decided() {
 /// 3 s and a rudder doublet at 15 s; L_δa = −12, N_δr = −3 rad/s² per rad under aeroident's
 /// conventions; β mapped or not; `dr_sign` flips the recorded rudder.
 fn lateral_record(dr_sign: f64, with_beta: bool) -> Vec<AirDataSample> {
-    let (yb, lb, lp, lr, nb, np, nr) = (-0.2, -10.0, -2.5, 0.8, 4.0, -0.1, -0.5);
+    lateral_record_with(dr_sign, with_beta, -0.2, 0.0)
+}
+
+/// [`lateral_record`] with the side force's `Y_β` (`yb`, 1/s) and `Y_δr` (`ydr`, 1/s per rad)
+/// in the sideslip equation.
+fn lateral_record_with(dr_sign: f64, with_beta: bool, yb: f64, ydr: f64) -> Vec<AirDataSample> {
+    let (lb, lp, lr, nb, np, nr) = (-10.0, -2.5, 0.8, 4.0, -0.1, -0.5);
     let (lda, ldr, nda, ndr) = (-12.0, 1.0, -0.3, -3.0);
     let (dt, sub) = (0.02, 20);
     let (mut beta, mut p, mut r, mut phi) = (0.0_f64, 0.0, 0.0, 0.0_f64);
@@ -160,7 +166,7 @@ fn lateral_record(dr_sign: f64, with_beta: bool) -> Vec<AirDataSample> {
             }
         };
         let (da, dr) = (doublet(3.0, 0.05) + doublet(25.0, -0.03), doublet(15.0, 0.08));
-        let beta_dot = yb * beta - r + G0_MPS2 / V * phi;
+        let beta_dot = yb * beta + ydr * dr - r + G0_MPS2 / V * phi;
         let ay = V * beta_dot + r * V - G0_MPS2 * phi.sin();
         out.push(AirDataSample {
             t_s: t,
@@ -177,7 +183,7 @@ fn lateral_record(dr_sign: f64, with_beta: bool) -> Vec<AirDataSample> {
         });
         for _ in 0..sub {
             let h = dt / sub as f64;
-            let b_dot = yb * beta - r + G0_MPS2 / V * phi;
+            let b_dot = yb * beta + ydr * dr - r + G0_MPS2 / V * phi;
             let p_dot = lb * beta + lp * p + lr * r + lda * da + ldr * dr;
             let r_dot = nb * beta + np * p + nr * r + nda * da + ndr * dr;
             beta += h * b_dot;
@@ -261,4 +267,83 @@ fn commanded_elevator_leads_by_its_actuator_lag() {
             w.text
         );
     }
+}
+
+/// A rudder with a side force of its own on an aircraft whose `Y_β` is small: `a_y` standing
+/// in for β would put `−N_β Y_δr / Y_β` = +4 into `N_δr` = −3 and call the consistent rudder
+/// reversed. Without β the test takes β from the kinematics and finds `N_δr` within 10 %, says
+/// so, and names the reversed rudder; without φ it cannot decide, and says why.
+#[test]
+fn a_rudder_with_its_own_side_force_is_decided_on_the_kinematic_sideslip() {
+    let (yb, ydr) = (-0.05, 0.05);
+    let t = sign_tests(&[lateral_record_with(1.0, false, yb, ydr)]);
+    let dr = verdict(&t, "dr");
+    assert_eq!(dr.verdict, SignVerdict::Consistent, "{dr:?}");
+    assert!((dr.gain.unwrap() + 3.0).abs() < 0.3, "{dr:?}");
+    assert!(dr.evidence.contains("β from the kinematics"), "{}", dr.evidence);
+    assert_eq!(verdict(&t, "da").verdict, SignVerdict::Consistent, "{t:?}");
+    let reversed = sign_tests(&[lateral_record_with(-1.0, false, yb, ydr)]);
+    assert_eq!(verdict(&reversed, "dr").verdict, SignVerdict::Reversed, "{reversed:?}");
+    let no_phi: Vec<AirDataSample> = lateral_record_with(1.0, false, yb, ydr)
+        .into_iter()
+        .map(|s| AirDataSample { phi_rad: None, ..s })
+        .collect();
+    let dr = verdict(&sign_tests(&[no_phi]), "dr");
+    assert_eq!(dr.verdict, SignVerdict::Undecided, "{dr:?}");
+    assert!(dr.evidence.contains("a_y cannot stand in"), "{}", dr.evidence);
+}
+
+/// 300 s at 10 Hz of a phugoid at constant α: θ = 0.05 sin(0.15 t), the speed trading with
+/// height (`V̇ = −g sinθ` plus a small thrust wave) and the specific force along x from the
+/// force equations; `ax_of` maps that force to the recorded channel.
+fn phugoid_record(ax_of: impl Fn(f64, f64) -> f64) -> Vec<AirDataSample> {
+    let (alpha, w_rate) = (0.05_f64, 0.15);
+    let theta = |t: f64| 0.05 * (w_rate * t).sin();
+    let v_dot = |t: f64| -G0_MPS2 * theta(t).sin() + 0.2 * (w_rate * t + 1.0).sin();
+    let mut v = V;
+    let mut out = Vec::new();
+    for k in 0..3000 {
+        let t = 0.1 * k as f64;
+        let q = 0.05 * w_rate * (w_rate * t).cos();
+        let fx = v_dot(t) * alpha.cos() + q * v * alpha.sin() + G0_MPS2 * theta(t).sin();
+        let fz = v_dot(t) * alpha.sin() - q * v * alpha.cos() - G0_MPS2 * theta(t).cos();
+        out.push(AirDataSample {
+            t_s: t,
+            vt_mps: v,
+            alpha_rad: alpha,
+            q_rad_s: Some(q + wiggle(k, 1e-4)),
+            theta_rad: Some(theta(t)),
+            ax_mps2: Some(ax_of(fx + wiggle(k + 1, 0.01), theta(t))),
+            az_mps2: Some(fz + wiggle(k + 2, 0.02)),
+            ..Default::default()
+        });
+        // Midpoint steps of 0.01 s: the speed to 1e-6 m/s over the record.
+        for j in 0..10 {
+            v += 0.01 * v_dot(t + 0.01 * (j as f64 + 0.5));
+        }
+    }
+    out
+}
+
+/// A gravity-compensated `a_x` in a phugoid regresses on the kinematics with a gain near 0
+/// (the speed change is mostly gravity's), decided, and is named with its form, as is a
+/// reading in g; the raw specific force is consistent with a gain near 1.
+#[test]
+fn an_accelerometer_that_is_not_a_specific_force_is_named_with_its_form() {
+    let ax = |t: &[SignTest]| verdict(t, "ax");
+    let raw = ax(&sign_tests(&[phugoid_record(|f, _| f)]));
+    assert_eq!(raw.verdict, SignVerdict::Consistent, "{raw:?}");
+    assert!((raw.gain.unwrap() - 1.0).abs() < 0.05, "{raw:?}");
+    let compensated = sign_tests(&[phugoid_record(|f, theta| f - G0_MPS2 * theta.sin())]);
+    let a = ax(&compensated);
+    assert_eq!(a.verdict, SignVerdict::NotASpecificForce, "{a:?}");
+    assert!(a.gain.unwrap().abs() < 1.0 / SCALE_BOUND, "{a:?}");
+    assert!(a.evidence.contains("likely gravity removed"), "{}", a.evidence);
+    let w = warnings(&compensated, &mapping(), 0.1);
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(w[0].text.contains("is not a specific force as mapped"), "{}", w[0].text);
+    assert_eq!(verdict(&compensated, "az").verdict, SignVerdict::Consistent);
+    let in_g = ax(&sign_tests(&[phugoid_record(|f, _| f / G0_MPS2)]));
+    assert_eq!(in_g.verdict, SignVerdict::NotASpecificForce, "{in_g:?}");
+    assert!(in_g.evidence.contains("a reading in g mapped as m/s²"), "{}", in_g.evidence);
 }

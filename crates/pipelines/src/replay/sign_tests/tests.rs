@@ -149,7 +149,20 @@ fn lateral_record(dr_sign: f64, with_beta: bool) -> Vec<AirDataSample> {
 /// [`lateral_record`] with the side force's `Y_β` (`yb`, 1/s) and `Y_δr` (`ydr`, 1/s per rad)
 /// in the sideslip equation.
 fn lateral_record_with(dr_sign: f64, with_beta: bool, yb: f64, ydr: f64) -> Vec<AirDataSample> {
+    lateral_record_servo(dr_sign, with_beta, (yb, ydr), None)
+}
+
+/// [`lateral_record_with`] (`side` = (Y_β, Y_δr)) with `servo` = (τ s, rate limit rad/s): both
+/// surfaces follow their commands through a rate-limited first-order actuator and the record
+/// holds the commands.
+fn lateral_record_servo(
+    dr_sign: f64,
+    with_beta: bool,
+    (yb, ydr): (f64, f64),
+    servo: Option<(f64, f64)>,
+) -> Vec<AirDataSample> {
     let (lb, lp, lr, nb, np, nr) = (-10.0, -2.5, 0.8, 4.0, -0.1, -0.5);
+    let mut surfaces = [0.0_f64; 2];
     let (lda, ldr, nda, ndr) = (-12.0, 1.0, -0.3, -3.0);
     let (dt, sub) = (0.02, 20);
     let (mut beta, mut p, mut r, mut phi) = (0.0_f64, 0.0, 0.0, 0.0_f64);
@@ -165,7 +178,8 @@ fn lateral_record_with(dr_sign: f64, with_beta: bool, yb: f64, ydr: f64) -> Vec<
                 0.0
             }
         };
-        let (da, dr) = (doublet(3.0, 0.05) + doublet(25.0, -0.03), doublet(15.0, 0.08));
+        let cmd = [doublet(3.0, 0.05) + doublet(25.0, -0.03), doublet(15.0, 0.08)];
+        let [da, dr] = if servo.is_some() { surfaces } else { cmd };
         let beta_dot = yb * beta + ydr * dr - r + G0_MPS2 / V * phi;
         let ay = V * beta_dot + r * V - G0_MPS2 * phi.sin();
         out.push(AirDataSample {
@@ -177,12 +191,21 @@ fn lateral_record_with(dr_sign: f64, with_beta: bool, yb: f64, ydr: f64) -> Vec<
             phi_rad: Some(phi),
             theta_rad: Some(0.0),
             ay_mps2: Some(ay + wiggle(k + 4, 0.03)),
-            da_rad: Some(da),
-            dr_rad: Some(dr_sign * dr),
+            da_rad: Some(cmd[0]),
+            dr_rad: Some(dr_sign * cmd[1]),
             ..Default::default()
         });
         for _ in 0..sub {
             let h = dt / sub as f64;
+            let [da, dr] = match servo {
+                Some((tau, rate)) => {
+                    for (x, c) in surfaces.iter_mut().zip(cmd) {
+                        *x += h * ((c - *x) / tau).clamp(-rate, rate);
+                    }
+                    surfaces
+                }
+                None => cmd,
+            };
             let b_dot = yb * beta + ydr * dr - r + G0_MPS2 / V * phi;
             let p_dot = lb * beta + lp * p + lr * r + lda * da + ldr * dr;
             let r_dot = nb * beta + np * p + nr * r + nda * da + ndr * dr;
@@ -346,4 +369,23 @@ fn an_accelerometer_that_is_not_a_specific_force_is_named_with_its_form() {
     let in_g = ax(&sign_tests(&[phugoid_record(|f, _| f / G0_MPS2)]));
     assert_eq!(in_g.verdict, SignVerdict::NotASpecificForce, "{in_g:?}");
     assert!(in_g.evidence.contains("a reading in g mapped as m/s²"), "{}", in_g.evidence);
+}
+
+/// Commanded aileron and rudder through a 0.04-s servo, on a record without β: each lead is
+/// found (half a sample of hold plus τ, within 0.01 s) and warned on the surface's control and
+/// damping derivatives, as the elevator's is.
+#[test]
+fn commanded_aileron_and_rudder_lead_by_their_actuator_lag() {
+    let tau = 0.04;
+    let rec = lateral_record_servo(1.0, false, (-0.2, 0.0), Some((tau, 3.5)));
+    let t = sign_tests(&[rec]);
+    for (ch, about) in [("da", ["Cl_da", "Cl_p"]), ("dr", ["Cn_dr", "Cn_r"])] {
+        let s = verdict(&t, ch);
+        assert_eq!(s.verdict, SignVerdict::Consistent, "{s:?}");
+        let lead = s.lead_s.unwrap();
+        assert!((lead - 0.01 - tau).abs() < 0.01, "{ch}: {s:?}");
+        let ws = timing::warnings(&s, &mapping(), 0.02);
+        let named: Vec<_> = ws.iter().map(|w| w.parameter.as_deref()).collect();
+        assert_eq!(named, about.map(Some), "{ch}: {ws:?}");
+    }
 }

@@ -1014,18 +1014,29 @@ impl Problem<'_> {
     fn simulate(&self, beta: &[f64], y: &mut Vec<f64>) -> Result<(), EstimatorError> {
         let c = self.decode(beta);
         y.clear();
-        for (m, man) in self.man.iter().enumerate() {
-            let raw = self.states(&c, m)?;
-            let t: Vec<f64> = man.iter().map(|s| s.t_s).collect();
-            let series: Vec<Vec<f64>> =
-                (0..6).map(|j| raw.iter().map(|r| r[j]).collect()).collect();
-            for &tk in &t {
-                for &ch in &self.outputs {
-                    let j = output_index(ch);
-                    let i = ch as usize;
-                    let h = interpolate(&t, &series[j], tk - c.shift[i]);
-                    y.push((1.0 + c.scale[i]) * h + c.bias[i]);
-                }
+        for m in 0..self.man.len() {
+            self.simulate_manoeuvre(&c, m, y)?;
+        }
+        Ok(())
+    }
+
+    /// The model outputs of manoeuvre `m` under the corrections `c`, appended to `y` (`N_m ×
+    /// ny` row-major).
+    fn simulate_manoeuvre(
+        &self,
+        c: &Corrections,
+        m: usize,
+        y: &mut Vec<f64>,
+    ) -> Result<(), EstimatorError> {
+        let raw = self.states(c, m)?;
+        let t: Vec<f64> = self.man[m].iter().map(|s| s.t_s).collect();
+        let series: Vec<Vec<f64>> = (0..6).map(|j| raw.iter().map(|r| r[j]).collect()).collect();
+        for &tk in &t {
+            for &ch in &self.outputs {
+                let j = output_index(ch);
+                let i = ch as usize;
+                let h = interpolate(&t, &series[j], tk - c.shift[i]);
+                y.push((1.0 + c.scale[i]) * h + c.bias[i]);
             }
         }
         Ok(())
@@ -1118,6 +1129,9 @@ fn sensitivities(p: &Problem<'_>, beta: &[f64]) -> Result<DMatrix<f64>, Estimato
 
 /// `∂y/∂β_i` at `beta` by a central difference of [`delta`], `N·ny` row-major.
 fn sensitivity(p: &Problem<'_>, beta: &[f64], i: usize) -> Result<Vec<f64>, EstimatorError> {
+    if let Unknown::Initial { manoeuvre, .. } = p.unknowns[i] {
+        return initial_sensitivity(p, beta, i, manoeuvre);
+    }
     let d = delta(p.unknowns[i]);
     let (mut yp, mut ym) = (Vec::new(), Vec::new());
     let mut trial = beta.to_vec();
@@ -1126,6 +1140,32 @@ fn sensitivity(p: &Problem<'_>, beta: &[f64], i: usize) -> Result<Vec<f64>, Esti
     trial[i] = beta[i] - d;
     p.simulate(&trial, &mut ym)?;
     Ok(yp.iter().zip(&ym).map(|(a, b)| (a - b) / (2.0 * d)).collect())
+}
+
+/// [`sensitivity`] of the initial state `beta[i]` of manoeuvre `m`, which moves that
+/// manoeuvre's outputs alone: only it is simulated, and every other row is the 0 that the
+/// central difference of their unchanged outputs gives exactly. Simulating every manoeuvre
+/// for each of the six initial states of each made a joint check of `M` manoeuvres cost `M`
+/// times a whole-record pass per state, quadratic in the windows of a flight.
+fn initial_sensitivity(
+    p: &Problem<'_>,
+    beta: &[f64],
+    i: usize,
+    m: usize,
+) -> Result<Vec<f64>, EstimatorError> {
+    let d = delta(p.unknowns[i]);
+    let (mut yp, mut ym) = (Vec::new(), Vec::new());
+    let mut trial = beta.to_vec();
+    trial[i] = beta[i] + d;
+    p.simulate_manoeuvre(&p.decode(&trial), m, &mut yp)?;
+    trial[i] = beta[i] - d;
+    p.simulate_manoeuvre(&p.decode(&trial), m, &mut ym)?;
+    let before = p.man[..m].iter().map(|s| s.len()).sum::<usize>() * p.ny();
+    let mut column = vec![0.0; p.n_samples() * p.ny()];
+    for (c, (a, b)) in column[before..].iter_mut().zip(yp.iter().zip(&ym)) {
+        *c = (a - b) / (2.0 * d);
+    }
+    Ok(column)
 }
 
 /// `(M + λ diag M)⁻¹ g`, Jacobi-scaled (Cholesky); `None` when not positive definite.

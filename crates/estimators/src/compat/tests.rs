@@ -723,3 +723,39 @@ fn held_out_scatter(q_bias: f64) {
     assert!((0.6..2.0).contains(&(sd / want_sd)), "sd {sd} vs {want_sd}");
     assert!(failed <= 2, "{failed} of 40 true corrections failed");
 }
+
+/// An initial state's sensitivity, formed on its own manoeuvre alone, is the central
+/// difference over every manoeuvre to the last bit (zeros elsewhere), and the whole
+/// sensitivity matrix of three manoeuvres is what the columns formed by simulating the
+/// whole record give.
+#[test]
+fn an_initial_states_sensitivity_is_its_own_manoeuvres_alone() {
+    let (data, _) = record(30.0, 0.02, NONE, 5);
+    let man = [&data[..500], &data[500..1000], &data[1000..]];
+    let p = Problem::new(&man, &CompatConfig::default(), Vec::new()).unwrap();
+    let beta = p.start();
+    let whole = |i: usize| {
+        let d = delta(p.unknowns[i]);
+        let (mut yp, mut ym) = (Vec::new(), Vec::new());
+        let mut trial = beta.clone();
+        trial[i] = beta[i] + d;
+        p.simulate(&trial, &mut yp).unwrap();
+        trial[i] = beta[i] - d;
+        p.simulate(&trial, &mut ym).unwrap();
+        yp.iter().zip(&ym).map(|(a, b)| (a - b) / (2.0 * d)).collect::<Vec<f64>>()
+    };
+    let s = sensitivities(&p, &beta).unwrap();
+    let mut initial = 0;
+    for (i, u) in p.unknowns.iter().enumerate() {
+        let column: Vec<f64> = s.column(i).iter().copied().collect();
+        assert_eq!(column, whole(i), "{u:?}");
+        if let Unknown::Initial { manoeuvre, .. } = *u {
+            let rows = 500 * manoeuvre * p.ny()..500 * (manoeuvre + 1) * p.ny();
+            let outside = column.iter().enumerate().filter(|(k, _)| !rows.contains(k));
+            assert!(outside.into_iter().all(|(_, v)| *v == 0.0), "{u:?}");
+            assert!(column[rows].iter().any(|v| *v != 0.0), "{u:?}");
+            initial += 1;
+        }
+    }
+    assert_eq!(initial, 18);
+}

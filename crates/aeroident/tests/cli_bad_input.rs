@@ -327,7 +327,7 @@ fn exit_a_window_with_a_negative_start_is_a_value() {
             .iter()
             .map(|s| match s {
                 WindowSpec::Span(w) => (w.start_s, w.end_s),
-                WindowSpec::Auto => panic!("{specs:?}"),
+                WindowSpec::Auto | WindowSpec::AutoBest(_) => panic!("{specs:?}"),
             })
             .collect()
     };

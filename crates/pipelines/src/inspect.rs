@@ -1,14 +1,22 @@
 //! `aeroident inspect`: what a log holds (the catalogue of [`aeroident_io::inspect`]) and its
 //! candidate manoeuvres ([`detect`]), as one report the faces render as text, as the
-//! `--json` document (docs/inspect.md) and as a plot.
+//! `--json` document (docs/inspect.md) and as a plot. With a mapping, the record is also read
+//! as air-data samples and its candidates judged in flight terms ([`rank`]): the ground and
+//! taxi left out ([`envelope`]), phugoids added ([`phugoid`]), each candidate ranked per axis
+//! by the information it holds ([`information`]).
 
 pub mod detect;
+pub mod envelope;
+pub mod information;
+pub mod phugoid;
+pub mod rank;
 
 use crate::error::PipelineError;
 use crate::window::TimeWindow;
 use aeroident_io::inspect::surfaces::Surface;
 use aeroident_io::inspect::{INSPECT_SCHEMA, InspectOptions, LogSummary, Signal, inspect_log};
 use detect::{ChannelDetection, DetectionRule};
+use rank::Ranking;
 use serde::Serialize;
 
 /// The report of one log (the `--json` document).
@@ -26,8 +34,14 @@ pub struct InspectReport {
     pub surface_hint: Option<String>,
     /// The thresholds the detector used.
     pub detection_rule: DetectionRule,
-    /// Per surface: quiet level, threshold and manoeuvres.
+    /// Per surface: quiet level, threshold and manoeuvres (with a mapping whose record has
+    /// ground spans, of the flight part: the ground part's are `flight.ground_detections`).
     pub detections: Vec<ChannelDetection>,
+    /// With a mapping: the ground spans, phugoids, ranks and window sets ([`rank`]).
+    pub flight: Option<Ranking>,
+    /// Why there is no `flight` judgement (no mapping, or the record could not be read as
+    /// air-data samples through it).
+    pub flight_note: Option<String>,
 }
 
 /// The report and the values of the channels read (surfaces and `--plot` channels).
@@ -40,7 +54,8 @@ pub struct InspectOutcome {
 }
 
 /// Reads `path` as `options` say, lists it and detects the manoeuvres of its surfaces by
-/// `rule`.
+/// `rule`; with a mapping, judges them in flight terms with sets of
+/// [`rank::DEFAULT_SET_SIZE`] windows per axis ([`inspect_ranked`]).
 ///
 /// # Errors
 /// The reader's error ([`inspect_log`]: file, byte or row, field), passed through.
@@ -49,15 +64,47 @@ pub fn inspect(
     options: &InspectOptions,
     rule: &DetectionRule,
 ) -> Result<InspectOutcome, PipelineError> {
+    inspect_ranked(path, options, rule, rank::DEFAULT_SET_SIZE)
+}
+
+/// [`inspect`] with window sets of `set_size` windows per axis.
+///
+/// # Errors
+/// As [`inspect`]. A record the mapping cannot read as air-data samples is not an error: the
+/// report's `flight_note` says why it is not judged.
+pub fn inspect_ranked(
+    path: &str,
+    options: &InspectOptions,
+    rule: &DetectionRule,
+    set_size: usize,
+) -> Result<InspectOutcome, PipelineError> {
     let ins = inspect_log(path, options).map_err(|e| PipelineError::Source(Box::new(e)))?;
-    let detections = ins
+    let samples = read_samples(path, options);
+    let envelope = samples
+        .as_ref()
+        .ok()
+        .and_then(|s| envelope::envelope(s, &envelope::EnvelopeRule::default()));
+    let ground = envelope.as_ref().map_or(&[][..], |e| e.ground.as_slice());
+    // The flight and the ground are judged apart, each by its own levels: a taxi's control
+    // check would otherwise set the flight's range and threshold.
+    let (detections, ground_detections): (Vec<ChannelDetection>, Vec<ChannelDetection>) = ins
         .surfaces
         .iter()
         .filter_map(|s| {
             let sig = ins.signals.iter().find(|g| g.column == s.column)?;
-            Some(detect::detect(&s.column, &sig.t_s, &sig.values, rule))
+            let on_ground = |t: f64| ground.iter().any(|g| (g.start_s..=g.end_s).contains(&t));
+            let part = |ground: bool| {
+                let (t, v): (Vec<f64>, Vec<f64>) = sig
+                    .t_s
+                    .iter()
+                    .zip(&sig.values)
+                    .filter(|(t, _)| on_ground(**t) == ground)
+                    .unzip();
+                detect::detect(&s.column, &t, &v, rule)
+            };
+            Some((part(false), part(true)))
         })
-        .collect();
+        .unzip();
     let missing: Vec<String> = ins
         .surfaces
         .iter()
@@ -71,6 +118,14 @@ pub fn inspect(
         }
         (false, true) => None,
     };
+    let (flight, flight_note) = match samples {
+        Ok(samples) => {
+            let inputs = [&detections, &ground_detections].map(|d| windows_of(d));
+            let ranking = rank::rank(&samples, envelope, &inputs, set_size);
+            (Some(rank::Ranking { ground_detections, ..ranking }), None)
+        }
+        Err(why) => (None, Some(why)),
+    };
     let report = InspectReport {
         schema: INSPECT_SCHEMA,
         log: ins.summary,
@@ -78,8 +133,35 @@ pub fn inspect(
         surface_hint,
         detection_rule: *rule,
         detections,
+        flight,
+        flight_note,
     };
     Ok(InspectOutcome { report, signals: ins.signals })
+}
+
+/// The suggested windows of `detections`, `(start, end, channel)`.
+fn windows_of(detections: &[ChannelDetection]) -> Vec<(f64, f64, String)> {
+    detections
+        .iter()
+        .flat_map(|d| d.manoeuvres.iter().map(|m| (m.start_s, m.end_s, m.channel.clone())))
+        .collect()
+}
+
+/// The record at `path` as air-data samples through the mapping of `options`, or why not.
+fn read_samples(
+    path: &str,
+    options: &InspectOptions,
+) -> Result<Vec<aeroident_estimators::AirDataSample>, String> {
+    let mapping = options.mapping.ok_or(
+        "no mapping: give `--map MAPPING.toml` to leave out the ground and taxi and to rank the \
+         candidates by the information they hold",
+    )?;
+    let not_read = |e: &dyn std::fmt::Display| {
+        format!("the record could not be read as air-data samples through the mapping: {e}")
+    };
+    let reader = aeroident_io::open_log(path, options.format, mapping).map_err(|e| not_read(&e))?;
+    let record = crate::record::read_manoeuvres(reader, None, &[]).map_err(|e| not_read(&e))?;
+    Ok(record.manoeuvres.into_iter().flatten().collect())
 }
 
 /// How to name a surface when none is known.

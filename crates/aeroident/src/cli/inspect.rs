@@ -3,10 +3,13 @@
 //! ```text
 //! aeroident inspect <log> [--format …] [--map MAPPING.toml] [--json FILE]
 //!                   [--plot CH,CH,… [--window START:END] --out FILE.svg|png] [--html FILE.html]
+//!                   [--best N]
 //! ```
 //! Prints the topics (or columns) with their fields, units, sample counts, rates, spans and
 //! gaps, the parameters of a ULog or DataFlash log, and the candidate manoeuvres found on the
-//! surface channels as `--window START:END` arguments; `--json` writes the same as one
+//! surface channels as `--window START:END` arguments — with `--map`, also the ground spans
+//! left out, phugoids, the candidates ranked per axis and the best `N` of each as a window set;
+//! `--json` writes the same as one
 //! document; `--plot` draws raw channels against time; `--html` writes them (or the surfaces)
 //! as one page of zoomable, linked time plots with the manoeuvres shaded.
 
@@ -18,7 +21,8 @@ use aeroident_io::LogFormat;
 use aeroident_io::inspect::{InspectOptions, Signal};
 use aeroident_io::mapping::Mapping;
 use aeroident_pipelines::inspect::detect::DetectionRule;
-use aeroident_pipelines::inspect::{InspectOutcome, inspect};
+use aeroident_pipelines::inspect::rank::DEFAULT_SET_SIZE;
+use aeroident_pipelines::inspect::{InspectOutcome, inspect_ranked};
 use aeroident_pipelines::window::TimeWindow;
 use aeroident_report::interactive::{Span, TimeChannel, linked_time_plots_html};
 use aeroident_report::outfile;
@@ -58,6 +62,18 @@ pub struct InspectArgs {
     /// channel, else per surface channel, at most 8) with the manoeuvres found shaded.
     #[arg(long, value_name = "FILE.html")]
     pub html: Option<PathBuf>,
+    /// With `--map`: the window sets listed take the best N candidates per axis (what
+    /// `--window auto:N` fits).
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_SET_SIZE, value_parser = parse_best)]
+    pub best: usize,
+}
+
+/// `--best N`: a whole number from 1.
+fn parse_best(text: &str) -> Result<usize, String> {
+    match text.trim().parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err(format!("`{text}`: give a whole number from 1")),
+    }
 }
 
 /// Runs `aeroident inspect`.
@@ -74,7 +90,7 @@ pub fn execute(args: InspectArgs) -> anyhow::Result<()> {
         mapping: mapping.as_ref(),
         keep: args.plot.iter().map(|c| c.trim().to_string()).collect(),
     };
-    let outcome = inspect(&args.data, &options, &DetectionRule::default())?;
+    let outcome = inspect_ranked(&args.data, &options, &DetectionRule::default(), args.best)?;
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&outcome.report)?;
         outfile::write_file("--json", path, (text + "\n").as_bytes())?;

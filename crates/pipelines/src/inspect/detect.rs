@@ -195,7 +195,7 @@ fn threshold(v: &[f64], quiet: f64, rule: &DetectionRule) -> f64 {
 /// The centred moving straight-line fit of `v` over `width_s` of time `t` (one-sided at the
 /// ends), evaluated at each sample, by prefix sums: O(n). Times are taken from the first so
 /// that the sums of squares keep their precision.
-fn moving_line(t: &[f64], v: &[f64], width_s: f64) -> Vec<f64> {
+pub(super) fn moving_line(t: &[f64], v: &[f64], width_s: f64) -> Vec<f64> {
     let t: Vec<f64> = t.iter().map(|x| x - t[0]).collect();
     let tt: Vec<f64> = t.iter().map(|x| x * x).collect();
     let tv: Vec<f64> = t.iter().zip(v).map(|(a, b)| a * b).collect();
@@ -212,7 +212,7 @@ fn moving_line(t: &[f64], v: &[f64], width_s: f64) -> Vec<f64> {
 
 /// The centred moving mean of `v` over `width_s` of time `t` (one-sided at the ends), by
 /// prefix sums: O(n).
-fn moving_mean(t: &[f64], v: &[f64], width_s: f64) -> Vec<f64> {
+pub(super) fn moving_mean(t: &[f64], v: &[f64], width_s: f64) -> Vec<f64> {
     let mut prefix = Vec::with_capacity(v.len() + 1);
     prefix.push(0.0);
     for x in v {
@@ -234,7 +234,7 @@ fn moving_mean(t: &[f64], v: &[f64], width_s: f64) -> Vec<f64> {
 }
 
 /// The `q`-quantile (0–1, nearest rank) of `v` (sorted or not).
-fn quantile(v: &[f64], q: f64) -> f64 {
+pub(super) fn quantile(v: &[f64], q: f64) -> f64 {
     let mut s = v.to_vec();
     let k = ((s.len() - 1) as f64 * q).round() as usize;
     let (_, x, _) = s.select_nth_unstable_by(k, f64::total_cmp);

@@ -103,6 +103,12 @@ fn errors_a_channel_in_the_wrong_unit_is_named_before_the_check() {
             "channel `az`",
             "m/s² data mapped in g",
         ),
+        (
+            "az_mps2\", unit = \"m/s2\"",
+            "az_mps2\", unit = \"m/s2\", offset = 9.80665",
+            "channel `az`",
+            "likely gravity removed",
+        ),
     ];
     for (from, to, channel, likely) in cases {
         let e = check(from, to).unwrap_err();

@@ -126,16 +126,18 @@ pub fn check_records<R: Read>(
     let rec = read_records(readers, screen, None, windows)?;
     let slices: Vec<&[aeroident_estimators::AirDataSample]> =
         rec.manoeuvres.iter().map(Vec::as_slice).collect();
-    if let Some(m) = &mapping {
-        sensors::believable(&slices, m)
-            .map_err(|why| RecordError::Model(format!("compatibility check of {file}: {why}")))?;
-    }
+    let not_judged = match &mapping {
+        Some(m) => sensors::believable(&slices, m)
+            .map_err(|why| RecordError::Model(format!("compatibility check of {file}: {why}")))?,
+        None => Vec::new(),
+    };
     let result = compat::check(&slices, config).map_err(|e| {
         let why = in_user_terms(&e, &slices, &rec.origins, mapping.as_deref());
         RecordError::Model(format!("compatibility check of {file}: {why}"))
     })?;
     let (rejections, unlisted) = rec.rejections.finish();
     let mut warnings = result.notes.clone();
+    warnings.extend(not_judged);
     warnings.extend(unlisted);
     let disagreements = consistency(&slices, config, &result);
     let judged = compat::held_out(&slices, config, &result)

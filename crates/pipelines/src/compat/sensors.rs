@@ -37,11 +37,22 @@ const MIN_SIGMAS: f64 = 10.0;
 /// Fewest differenced samples before the α vane's gain is judged.
 const MIN_ROWS: usize = 50;
 
+/// A manoeuvre judges the α vane's scale only where the kinematics move α by at least this
+/// much, rad (1°; a short period moves it by several): a roll or a Dutch roll barely moves α,
+/// and what is left of the kinematic α̇ there is the terms the screen leaves out (β, the
+/// accelerometer's offset from the CG), which once read a vane as 0.27× the kinematics on a
+/// roll window and 1.109× on the short period of the same flight.
+const MIN_ALPHA_EXCURSION_RAD: f64 = 0.0175;
+
 /// Refuses a record whose sensors the check would misread (module doc): a constant channel;
 /// a gyro or attitude in the wrong unit (the Euler kinematics, [`crate::replay::kinematics`]);
 /// a normal accelerometer in the wrong unit ([`az_misread`]); an α vane in the wrong unit
-/// ([`alpha_gain`]). The error names the channel as `mapping` does.
-pub(super) fn believable(slices: &[&[AirDataSample]], mapping: &Mapping) -> Result<(), String> {
+/// ([`alpha_gain`]), judged on the manoeuvres that move α ([`MIN_ALPHA_EXCURSION_RAD`]). The
+/// error names the channel as `mapping` does; `Ok` holds what was not judged, and why.
+pub(super) fn believable(
+    slices: &[&[AirDataSample]],
+    mapping: &Mapping,
+) -> Result<Vec<String>, String> {
     for name in SENSOR_FIELDS {
         let values: Vec<f64> =
             slices.iter().flat_map(|m| m.iter()).filter_map(|s| s.field(name)).collect();
@@ -57,14 +68,210 @@ pub(super) fn believable(slices: &[&[AirDataSample]], mapping: &Mapping) -> Resu
     let kinematics = crate::replay::kinematics::Kinematics::of_manoeuvres(slices);
     let mut misread: Vec<String> =
         kinematics.warnings(mapping).into_iter().map(|w| w.text).collect();
-    misread.extend(az_misread(slices, mapping));
-    misread.extend(alpha_misread(slices, mapping));
+    // Each spoils the other's kinematics: a_z enters the vane's kinematic α̇, the vane enters
+    // a_z's spread through ẇ. The accelerometer's mean needs no vane, so a mean that no
+    // specific force has is named first; a spread that disagrees, only after the vane passes.
+    let az = az_misread(slices, mapping);
+    let by_mean = AzLevels::of(slices).is_none_or(|l| !l.fits_mean(1.0, 0.0));
+    misread.extend(az.clone().filter(|_| by_mean));
+    let (moving, not_judged) = moving_alpha(slices, mapping);
+    misread.extend(alpha_misread(&moving, mapping));
+    misread.extend(az.filter(|_| !by_mean));
     match misread.first() {
         Some(w) => Err(format!(
             "{w}; the check would turn it into biases, time shifts and winds: fix the mapping or the record first"
         )),
-        None => Ok(()),
+        None => Ok(not_judged.into_iter().collect()),
     }
+}
+
+/// The manoeuvres whose kinematic α moves by [`MIN_ALPHA_EXCURSION_RAD`] or more, and the note
+/// naming those left out of the vane's judgement (`None` when none is).
+fn moving_alpha<'a>(
+    slices: &[&'a [AirDataSample]],
+    mapping: &Mapping,
+) -> (Vec<&'a [AirDataSample]>, Option<String>) {
+    let excursions: Vec<Option<f64>> = slices.iter().map(|m| alpha_excursion(m)).collect();
+    let moving: Vec<&[AirDataSample]> = slices
+        .iter()
+        .zip(&excursions)
+        .filter(|(_, e)| e.is_some_and(|e| e >= MIN_ALPHA_EXCURSION_RAD))
+        .map(|(m, _)| *m)
+        .collect();
+    let still: Vec<String> = excursions
+        .iter()
+        .enumerate()
+        .filter_map(|(i, e)| e.filter(|e| *e < MIN_ALPHA_EXCURSION_RAD).map(|e| (i, e)))
+        .map(|(i, e)| format!("manoeuvre {} ({:.2}°)", i + 1, e.to_degrees()))
+        .collect();
+    let note = (!still.is_empty()).then(|| {
+        format!(
+            "{}'s scale is not judged on {}: the kinematics move α by less than {:.1}° there, too little to fix a vane's scale (a roll or a Dutch roll); the check runs",
+            mapping.field_label("alpha_rad"),
+            still.join(", "),
+            MIN_ALPHA_EXCURSION_RAD.to_degrees()
+        )
+    });
+    (moving, note)
+}
+
+/// The excursion (max − min) of the kinematic α over one manoeuvre, rad: `α̇` ([`alpha_rate`],
+/// with β where mapped) integrated (trapezoidal) over its samples, less the line an
+/// accelerometer bias integrates to. `None` without the channels on every sample.
+fn alpha_excursion(slice: &[AirDataSample]) -> Option<f64> {
+    let rated: Vec<(f64, f64)> =
+        slice.iter().filter_map(|s| Some((s.t_s, alpha_rate(s, true)?))).collect();
+    if rated.len() < 3 {
+        return None;
+    }
+    let mut alpha = vec![0.0; rated.len()];
+    for i in 1..rated.len() {
+        let dt = rated[i].0 - rated[i - 1].0;
+        alpha[i] = alpha[i - 1] + 0.5 * (rated[i].1 + rated[i - 1].1) * dt;
+    }
+    let n = rated.len() as f64;
+    let (tm, am) = (rated.iter().map(|r| r.0).sum::<f64>() / n, alpha.iter().sum::<f64>() / n);
+    let stt: f64 = rated.iter().map(|r| (r.0 - tm).powi(2)).sum();
+    let sta: f64 = rated.iter().zip(&alpha).map(|(r, a)| (r.0 - tm) * (a - am)).sum();
+    let slope = if stt > 0.0 { sta / stt } else { 0.0 };
+    let left = rated.iter().zip(&alpha).map(|(r, a)| a - slope * (r.0 - tm));
+    let (lo, hi) = left.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), a| (l.min(a), h.max(a)));
+    (hi - lo).is_finite().then_some(hi - lo)
+}
+
+/// The forms a normal accelerometer's reading takes, `reading = k a_z + b` (`k`, `b` m/s²), with
+/// what each is in words: the specific force itself first.
+const AZ_FORMS: [(f64, f64, &str); 8] = [
+    (1.0, 0.0, "the specific force"),
+    (1.0 / G0_MPS2, 0.0, "likely a reading in g mapped as m/s²: map it with `unit = \"g\"`"),
+    (G0_MPS2, 0.0, "likely m/s² data mapped in g: map it with `unit = \"m/s2\"`"),
+    (1.0 / 0.3048, 0.0, "likely ft/s² data mapped as m/s²: map it with `unit = \"ft/s2\"`"),
+    (0.3048, 0.0, "likely m/s² data mapped in ft/s²: map it with `unit = \"m/s2\"`"),
+    (
+        1.0,
+        G0_MPS2,
+        "likely gravity removed (a_z + 1 g, a load factor − 1 g reading 0 in level flight): map it with `offset = -1` in g (or `-9.80665` in m/s²)",
+    ),
+    (
+        -1.0,
+        -G0_MPS2,
+        "likely a load factor − 1 g (n − 1, 0 in level flight, positive up): map it with `unit = \"g\"`, `scale = -1`, `offset = -1`",
+    ),
+    (
+        -1.0,
+        0.0,
+        "likely a load factor (n = −a_z/g, +1 in level flight) or a reversed sign: map it with `scale = -1`",
+    ),
+];
+
+/// A mean differs from a form's by at most this, m/s² (0.35 g: a gyro bias of 0.01 rad/s at
+/// 200 m/s moves the kinematic mean by 2 m/s²; the forms lie 8 m/s² or more apart).
+const AZ_MEAN_TOLERANCE_MPS2: f64 = 0.35 * G0_MPS2;
+
+/// The normal accelerometer's spread is compared with the kinematics' only above this, m/s²
+/// (about 0.03 g: a manoeuvre, not a steady segment).
+const AZ_MIN_SPREAD_MPS2: f64 = 0.3;
+
+/// A reading's spread may differ from a form's by this factor: √(1/0.3048), halfway (in ratio)
+/// between the nearest two forms, m/s² and ft/s², so that a spread fits one of them.
+const AZ_SPREAD_FACTOR: f64 = 1.811;
+
+/// The normal accelerometer's reading against the force equations,
+/// `a_z = ẇ − q u + p v − g cosθ cosφ` (Stevens & Lewis, 2nd ed., Table 2.5-1), compared by
+/// mean and spread, which a sensor's lag does not move as it moves a regression's gain.
+#[derive(Debug, Clone, Copy)]
+struct AzLevels {
+    /// Mean and standard deviation of the reading, m/s².
+    mean: f64,
+    sd: f64,
+    /// The same of the kinematic value, m/s².
+    kin_mean: f64,
+    kin_sd: f64,
+    /// Their covariance's sign.
+    sign: f64,
+}
+
+impl AzLevels {
+    /// The levels over the samples that carry `a_z`, `q` and `θ` ([`kinematic_az`]); `None`
+    /// with fewer than [`MIN_ROWS`].
+    fn of(slices: &[&[AirDataSample]]) -> Option<Self> {
+        let pairs: Vec<(f64, f64)> = slices
+            .iter()
+            .flat_map(|m| m.windows(3))
+            .filter_map(|w| Some((w[1].az_mps2?, kinematic_az(w)?)))
+            .collect();
+        if pairs.len() < MIN_ROWS {
+            return None;
+        }
+        let n = pairs.len() as f64;
+        let (mean, kin_mean) = (
+            pairs.iter().map(|p| p.0).sum::<f64>() / n,
+            pairs.iter().map(|p| p.1).sum::<f64>() / n,
+        );
+        let var = |f: &dyn Fn(&(f64, f64)) -> f64| pairs.iter().map(f).sum::<f64>() / n;
+        let sd = var(&|p| (p.0 - mean).powi(2)).sqrt();
+        let kin_sd = var(&|p| (p.1 - kin_mean).powi(2)).sqrt();
+        let sign = var(&|p| (p.0 - mean) * (p.1 - kin_mean)).signum();
+        Some(Self { mean, sd, kin_mean, kin_sd, sign })
+    }
+
+    /// Does the reading take the form `k a_z + b`: its mean within [`AZ_MEAN_TOLERANCE_MPS2`]
+    /// (times |k| above 1), and where both spread beyond [`AZ_MIN_SPREAD_MPS2`], its spread
+    /// within a factor [`AZ_SPREAD_FACTOR`] of |k| times the kinematics' and its covariance of
+    /// k's sign?
+    fn fits(&self, k: f64, b: f64) -> bool {
+        let mean_ok = self.fits_mean(k, b);
+        let spread = self.kin_sd > AZ_MIN_SPREAD_MPS2
+            && self.sd.max(k.abs() * self.kin_sd) > AZ_MIN_SPREAD_MPS2;
+        let sd_ok =
+            !spread || (self.sd / (k.abs() * self.kin_sd)).ln().abs() <= AZ_SPREAD_FACTOR.ln();
+        let sign_ok = !spread || self.sign * k > 0.0;
+        mean_ok && sd_ok && sign_ok
+    }
+
+    /// Does the reading's mean take the form `k a_z + b` ([`AzLevels::fits`])?
+    fn fits_mean(&self, k: f64, b: f64) -> bool {
+        (self.mean - (k * self.kin_mean + b)).abs() <= AZ_MEAN_TOLERANCE_MPS2 * k.abs().max(1.0)
+    }
+
+    /// `None` when the reading is the specific force; else the mismatch in words, naming every
+    /// form it fits (the same words on any window of one flight that a form explains).
+    fn finding(&self, label: &str) -> Option<String> {
+        if self.fits(AZ_FORMS[0].0, AZ_FORMS[0].1) {
+            return None;
+        }
+        let fitting: Vec<&str> =
+            AZ_FORMS[1..].iter().filter(|f| self.fits(f.0, f.1)).map(|f| f.2).collect();
+        let likely = if fitting.is_empty() {
+            "check its unit, sign and offset in the mapping".to_string()
+        } else {
+            fitting.join("; or ")
+        };
+        Some(format!(
+            "unit mismatch: {label} reads {} ± {} m/s² (mean ± spread) where the rates and attitude give {} ± {} m/s² (−q u + p v − g cosθ cosφ); {likely}",
+            short(self.mean),
+            short(self.sd),
+            short(self.kin_mean),
+            short(self.kin_sd)
+        ))
+    }
+}
+
+/// `a_z` from the force equations at the middle of three samples: `ẇ` the central difference
+/// of `w = V sinα cosβ`, the rest at the middle sample; `p`, `φ` and β count as 0 where
+/// missing; `None` without `q` or `θ`, or with a span that is not positive.
+fn kinematic_az(w: &[AirDataSample]) -> Option<f64> {
+    let span = w[2].t_s - w[0].t_s;
+    let vel = |s: &AirDataSample| {
+        body_velocity(s.vt_mps, SinCos::of(s.alpha_rad), SinCos::of(s.beta_rad.unwrap_or(0.0)))
+    };
+    let s = &w[1];
+    let v = vel(s);
+    let (phi, theta) = (s.phi_rad.unwrap_or(0.0), s.theta_rad?);
+    let w_dot = (vel(&w[2])[2] - vel(&w[0])[2]) / span;
+    let az = w_dot - s.q_rad_s? * v[0] + s.p_rad_s.unwrap_or(0.0) * v[1]
+        - G0_MPS2 * theta.cos() * phi.cos();
+    (span > 0.0 && az.is_finite()).then_some(az)
 }
 
 /// The unit mix-ups the normal accelerometer's mean magnitude over `g` points to.
@@ -75,13 +282,17 @@ const AZ_UNIT_FACTORS: [(f64, &str); 4] = [
     (0.3048, "likely m/s² data mapped in ft/s²: map it with `unit = \"m/s2\"`"),
 ];
 
-/// The normal accelerometer's unit-mismatch text when its mean magnitude over the record is
+/// The normal accelerometer's unit-mismatch text: against the force equations where the record
+/// maps `q` and `θ` ([`AzLevels`]), else when its mean magnitude over the record is
 /// more than a factor [`BOUND`] from `g`: in flight `a_z` carries the load factor, whose mean
 /// over any manoeuvre a flight record holds is near 1 g (a 2-g turn held throughout is the
 /// rare exception). The mean does not depend on the sensors' lags, which bias a regression
 /// against the force equations (a degraded record with the α vane 0.2 s late read a_z 2.7 times
 /// its kinematic value).
 fn az_misread(slices: &[&[AirDataSample]], mapping: &Mapping) -> Option<String> {
+    if let Some(levels) = AzLevels::of(slices) {
+        return levels.finding(&mapping.field_label("az_mps2"));
+    }
     let values: Vec<f64> = slices.iter().flat_map(|m| m.iter()).filter_map(|s| s.az_mps2).collect();
     if values.len() < MIN_ROWS {
         return None;
@@ -244,8 +455,8 @@ mod tests {
     #[test]
     fn believable_refuses_a_stuck_channel_and_a_vane_in_the_wrong_unit_and_passes_a_flown_record() {
         let samples = pull_up();
-        assert_eq!(believable(&[&samples], &mapping()), Ok(()));
-        assert_eq!(believable(&[&samples[..1]], &mapping()), Ok(()));
+        assert_eq!(believable(&[&samples], &mapping()), Ok(vec![]));
+        assert_eq!(believable(&[&samples[..1]], &mapping()), Ok(vec![]));
         let stuck: Vec<AirDataSample> =
             samples.iter().map(|s| AirDataSample { q_rad_s: Some(0.02), ..*s }).collect();
         let e = believable(&[&stuck[..500], &stuck[500..]], &mapping()).unwrap_err();
@@ -427,5 +638,82 @@ mod tests {
         assert_eq!(text(0.8), None);
         let t = text(4.8).unwrap();
         assert!(t.contains("moves 2.4 ± "), "{t}");
+    }
+
+    /// 20 s of a wings-level roll-free "lateral" window at 100 m/s: the kinematics move α by
+    /// 0.1° (q = 0.002 sin 2t), and the vane wobbles 0.06° on its own, so its gain against the
+    /// kinematics is far from 1 without saying anything about its scale.
+    fn still_alpha() -> Vec<AirDataSample> {
+        (0..1000)
+            .map(|i| {
+                let t = 0.02 * i as f64;
+                let (theta, q) = (0.05 - 0.001 * (2.0 * t).cos(), 0.002 * (2.0 * t).sin());
+                AirDataSample {
+                    t_s: t,
+                    vt_mps: 100.0 + 0.1 * (0.2 * t).sin(),
+                    alpha_rad: 0.05 + 0.001 * (0.7 * t).sin(),
+                    q_rad_s: Some(q),
+                    theta_rad: Some(theta),
+                    ax_mps2: Some(G0_MPS2 * theta.sin()),
+                    az_mps2: Some(-G0_MPS2 * theta.cos()),
+                    ..AirDataSample::default()
+                }
+            })
+            .collect()
+    }
+
+    /// A window whose kinematics barely move α does not judge the vane's scale: alone or beside
+    /// a pull-up it is named in a note and the check runs; the pull-up still judges a vane in
+    /// the wrong unit.
+    #[test]
+    fn a_window_that_barely_moves_alpha_does_not_judge_the_vane() {
+        let (pull, still) = (pull_up(), still_alpha());
+        assert!(alpha_misread(&[&still], &mapping()).is_some(), "the gain alone would refuse it");
+        let notes = believable(&[&pull, &still], &mapping()).unwrap();
+        assert_eq!(notes.len(), 1, "{notes:?}");
+        assert!(
+            notes[0].starts_with(
+                "channel `alpha` (column `aoa`)'s scale is not judged on manoeuvre 2 (0."
+            ) && notes[0].contains("the check runs"),
+            "{}",
+            notes[0]
+        );
+        assert_eq!(believable(&[&still], &mapping()).map(|n| n.len()), Ok(1));
+        let radians: Vec<AirDataSample> = pull
+            .iter()
+            .map(|s| AirDataSample { alpha_rad: s.alpha_rad.to_radians(), ..*s })
+            .collect();
+        let e = believable(&[&radians, &still], &mapping()).unwrap_err();
+        assert!(e.contains("likely radians mapped as degrees"), "{e}");
+    }
+
+    /// A normal accelerometer that reads the load factor − 1 g is named as such on a pull-up,
+    /// and on a steady window (no spread to judge) among the forms a mean near 0 allows: the
+    /// same finding, never a unit the mapping already has as the only advice. The specific
+    /// force itself passes on both, and a reading in g is named on the pull-up alone.
+    #[test]
+    fn the_normal_accelerometer_form_is_the_one_that_explains_every_window() {
+        let (pull, still) = (pull_up(), still_alpha());
+        let with = |rec: &[AirDataSample], f: &dyn Fn(f64) -> f64| -> Vec<AirDataSample> {
+            rec.iter().map(|s| AirDataSample { az_mps2: s.az_mps2.map(f), ..*s }).collect()
+        };
+        assert_eq!(az_misread(&[&pull], &mapping()), None);
+        assert_eq!(az_misread(&[&still], &mapping()), None);
+        let n_minus_one = |a: f64| -a / G0_MPS2 - 1.0;
+        let load = |a: f64| G0_MPS2 * n_minus_one(a);
+        let texts: Vec<String> = [&pull, &still]
+            .iter()
+            .map(|rec| az_misread(&[&with(rec, &load)], &mapping()).unwrap())
+            .collect();
+        let form = "likely a load factor − 1 g (n − 1, 0 in level flight, positive up)";
+        for t in &texts {
+            assert!(t.contains(form) && t.contains("channel `az`"), "{t}");
+        }
+        assert!(!texts[0].contains("; or "), "the pull-up fixes the form: {}", texts[0]);
+        let in_g = az_misread(&[&with(&pull, &|a| a / G0_MPS2)], &mapping()).unwrap();
+        assert!(
+            in_g.contains("a reading in g mapped as m/s²") && !in_g.contains("; or "),
+            "{in_g}"
+        );
     }
 }

@@ -64,7 +64,7 @@ fn windows(stdout: &str) -> Vec<(f64, f64)> {
 }
 
 /// The keys docs/inspect.md lists for the document and for each topic and manoeuvre.
-const TOP_KEYS: [&str; 12] = [
+const TOP_KEYS: [&str; 14] = [
     "schema",
     "file",
     "format",
@@ -77,6 +77,8 @@ const TOP_KEYS: [&str; 12] = [
     "surface_hint",
     "detection_rule",
     "detections",
+    "flight",
+    "flight_note",
 ];
 const TOPIC_KEYS: [&str; 13] = [
     "name",

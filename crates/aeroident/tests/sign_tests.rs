@@ -238,3 +238,51 @@ fn refit_values(flags: &str, name: &str) -> Option<(f64, f64)> {
     assert_eq!(words.next(), Some("to"), "{rest}");
     Some((from, words.next()?.parse().ok()?))
 }
+
+/// `--compat auto` on the F-16 simulation mapped to its surface commands (no actuator
+/// declared): the check measures each surface's lead on the record as logged and delays the
+/// surface by it, says so, and leaves a lead under 0.02 s for the fit's own sign tests; output
+/// error's control derivatives move towards the fit on the true surfaces.
+#[test]
+fn compat_auto_delays_a_commanded_surface_by_its_measured_lead() {
+    let dir = std::env::temp_dir().join(format!("aeroident-sign-{}-auto", std::process::id()));
+    let o = Command::new(env!("CARGO_BIN_EXE_aeroident"))
+        .args(["f16", "sim"])
+        .arg(workspace().join("scenarios/sim/six_axis_excitation.toml"))
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let data = dir.join("timeseries.csv");
+    let truth_map = workspace().join("mappings/aeroident-sim.toml");
+    let (truth, _, _) = replay(&data, &truth_map, &["--estimator", "oe"], "auto-surfaces");
+    let commanded = edited_mapping(
+        "aeroident-sim.toml",
+        &[
+            ("de = ", "de = { column = \"elevator_cmd_rad\", unit = \"rad\" }"),
+            ("da = ", "da = { column = \"aileron_cmd_rad\", unit = \"rad\" }"),
+            ("dr = ", "dr = { column = \"rudder_cmd_rad\", unit = \"rad\" }"),
+        ],
+        "auto-commanded",
+    );
+    let (plain, _, _) = replay(&data, &commanded, &["--estimator", "oe"], "auto-plain");
+    let args = ["--estimator", "oe", "--compat", "auto"];
+    let (auto, err, _) = replay(&data, &commanded, &args, "auto-compat");
+    let estimate = |v: &serde_json::Value, name: &str| {
+        let p = v["parameters"].as_array().unwrap().iter().find(|p| p["name"] == name);
+        p.unwrap()["estimate"].as_f64().unwrap()
+    };
+    for (ch, derivative) in [("de", "Cm_de"), ("da", "Cl_da"), ("dr", "Cn_dr")] {
+        assert!(
+            err.contains(&format!("`{ch}` leads its response by +0.0"))
+                && err.contains("delayed by it (--compat auto)"),
+            "{ch}: {err}"
+        );
+        let lead = verdict(&auto, ch)["lead_s"].as_f64().unwrap();
+        assert!(lead.abs() < 0.02, "{ch}: {lead}");
+        let want = estimate(&truth, derivative);
+        let (from, to) = (estimate(&plain, derivative), estimate(&auto, derivative));
+        assert!((to - want).abs() < (from - want).abs(), "{derivative}: {from} → {to}, {want}");
+    }
+}

@@ -79,6 +79,41 @@ pub struct CompatSummary {
     /// Each correction applied to data it was not fitted on (a record too short to split
     /// says so in its `notes`): `replay --compat` refuses each that fails.
     pub held_out: HeldOutSummary,
+    /// Each surface the sign tests' timing search found leading its response by a determined
+    /// 0.02 s and a sample or more (a commanded surface, or one recorded early:
+    /// [`crate::replay::sign_tests::timing`]), measured on the record as logged; `--compat
+    /// auto` reads each that much later unless the mapping declares the surface's `shift_s`.
+    pub input_leads: Vec<InputLead>,
+}
+
+/// A surface's measured lead over the response it drives (`compat.json` `input_leads`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct InputLead {
+    /// The surface's mapping key (`de`, `da`, `dr`).
+    pub channel: String,
+    /// The lead, s (> 0: the recorded surface acts later than recorded).
+    pub lead_s: f64,
+    /// Its σ, s: the 95 % interval's half-width over 1.96 (the timing search's Cramér–Rao
+    /// bound).
+    pub lead_sigma_s: f64,
+}
+
+/// The surfaces the sign tests find leading their response on `slices` ([`InputLead`]).
+fn input_leads(
+    slices: &[&[aeroident_estimators::AirDataSample]],
+    m: &aeroident_io::Mapping,
+) -> Vec<InputLead> {
+    let (tests, warned) = crate::replay::sign_tests::checked(slices, m);
+    let warnings: aeroident_io::warning::Warnings = warned.into_iter().collect();
+    let leads = crate::replay::sign_tests::refit::warned_leads(&tests, &warnings);
+    leads
+        .into_iter()
+        .map(|(channel, lead_s)| {
+            let test = tests.iter().find(|t| t.channel == channel);
+            let (lo, hi) = test.and_then(|t| t.lead_interval_s).unwrap_or((f64::NAN, f64::NAN));
+            InputLead { channel, lead_s, lead_sigma_s: (hi - lo) / (2.0 * 1.96) }
+        })
+        .collect()
 }
 
 impl Corrections {
@@ -148,6 +183,7 @@ pub fn check_records<R: Read>(
     let rows = channels(&result);
     let lengths: Vec<usize> = slices.iter().map(|s| s.len()).collect();
     let implausible = implausible_finding(&rows);
+    let input_leads = mapping.as_deref().map_or_else(Vec::new, |m| input_leads(&slices, m));
     let summary = CompatSummary {
         file,
         sigma: if result.sigma_coloured.is_some() { "coloured" } else { "cramer_rao" },
@@ -191,6 +227,7 @@ pub fn check_records<R: Read>(
             })
             .collect(),
         held_out,
+        input_leads,
     };
     Ok((summary, result))
 }

@@ -360,7 +360,9 @@ pub fn corrections(
                 let config = aeroident_estimators::compat::CompatConfig::default();
                 let readers = records.open_all()?;
                 let (summary, _) = crate::compat::check_records(readers, &windows, &config)?;
-                Ok((Some(Corrections::from_summary(&summary)?), summary.findings))
+                let c = Corrections::from_summary(&summary)?;
+                let (c, notes) = with_leads_undone(c, &summary.input_leads, &records.mapping);
+                Ok((Some(c), summary.findings.into_iter().chain(notes).collect()))
             }
         }
     };
@@ -368,6 +370,40 @@ pub fn corrections(
     let (corrections, findings) = done?;
     findings.iter().for_each(|f| log.note(&format!("compat: {f}")));
     with_mapped_shifts(&mapping, corrections, log).map(Ran::Done)
+}
+
+/// `c` with each surface of `leads` delayed by its measured lead (a commanded surface acts
+/// about its actuator's lag after its record), and a note per lead: applied, or left to the
+/// `shift_s` the mapping declares for that surface, or beyond what a shift may undo.
+fn with_leads_undone(
+    mut c: Corrections,
+    leads: &[crate::compat::InputLead],
+    mapping: &Mapping,
+) -> (Corrections, Vec<String>) {
+    let declared = mapping.input_shifts();
+    let mut notes = Vec::new();
+    for l in leads {
+        let what = format!(
+            "`{}` leads its response by {:+.3} ± {:.3} s",
+            l.channel, l.lead_s, l.lead_sigma_s
+        );
+        if declared.iter().any(|(ch, _)| ch.key() == l.channel) {
+            notes.push(format!("{what}: not applied, the mapping declares its `shift_s`"));
+            continue;
+        }
+        // The stage reads a surface τ later at t + τ: a lead is undone at τ = −lead.
+        match c.clone().with_input_shift(&l.channel, -l.lead_s) {
+            Ok(shifted) => {
+                c = shifted;
+                notes.push(format!(
+                    "{what}: delayed by it (--compat auto), as `shift_s = {:+.3}` in the mapping would",
+                    l.lead_s
+                ));
+            }
+            Err(why) => notes.push(format!("{what}: not applied ({why})")),
+        }
+    }
+    (c, notes)
 }
 
 /// `corrections` (none: none) with the surfaces' time shifts `mapping` declares, each noted;

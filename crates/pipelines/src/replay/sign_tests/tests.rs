@@ -179,7 +179,7 @@ fn lateral_record_servo(
             }
         };
         let cmd = [doublet(3.0, 0.05) + doublet(25.0, -0.03), doublet(15.0, 0.08)];
-        let [da, dr] = if servo.is_some() { surfaces } else { cmd };
+        let dr = if servo.is_some() { surfaces[1] } else { cmd[1] };
         let beta_dot = yb * beta + ydr * dr - r + G0_MPS2 / V * phi;
         let ay = V * beta_dot + r * V - G0_MPS2 * phi.sin();
         out.push(AirDataSample {

@@ -63,10 +63,9 @@ fn with_taxi(
             set(&mut row, t, v.min(v_flight_mps), k);
         } else {
             for (name, value) in &mut row {
-                if name.starts_with('p') || name.starts_with('q') || name.starts_with('r') {
-                    if !name.starts_with("qbar") && !name.starts_with("rudder") {
-                        *value += 1e-3 * noise(k * 31 + name.len() as u64);
-                    }
+                let rate = name.starts_with('p') || name.starts_with('q') || name.starts_with('r');
+                if rate && !name.starts_with("qbar") && !name.starts_with("rudder") {
+                    *value += 1e-3 * noise(k * 31 + name.len() as u64);
                 }
             }
         }

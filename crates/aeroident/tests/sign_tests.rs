@@ -38,6 +38,34 @@ fn replay(
     (v.unwrap(), err, html)
 }
 
+/// The F-16's six-axis excitation flown by `f16 sim` into its own directory (under `tag`):
+/// its `timeseries.csv`.
+fn six_axis_sim(tag: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("aeroident-sign-{}-{tag}", std::process::id()));
+    let o = Command::new(env!("CARGO_BIN_EXE_aeroident"))
+        .args(["f16", "sim"])
+        .arg(workspace().join("scenarios/sim/six_axis_excitation.toml"))
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    dir.join("timeseries.csv")
+}
+
+/// The simulation's mapping with the three surfaces read from their commands (no actuator).
+fn commanded_mapping(tag: &str) -> std::path::PathBuf {
+    edited_mapping(
+        "aeroident-sim.toml",
+        &[
+            ("de = ", "de = { column = \"elevator_cmd_rad\", unit = \"rad\" }"),
+            ("da = ", "da = { column = \"aileron_cmd_rad\", unit = \"rad\" }"),
+            ("dr = ", "dr = { column = \"rudder_cmd_rad\", unit = \"rad\" }"),
+        ],
+        tag,
+    )
+}
+
 /// The verdict of `channel` in a summary's `sign_tests`.
 fn verdict<'a>(v: &'a serde_json::Value, channel: &str) -> &'a serde_json::Value {
     v["sign_tests"]
@@ -129,16 +157,7 @@ fn val_without_beta_the_lateral_accelerometer_cannot_be_decided() {
 /// values, the refitted one nearer the fit on the true surfaces.
 #[test]
 fn commanded_surfaces_lead_by_the_actuator_lag() {
-    let dir = std::env::temp_dir().join(format!("aeroident-sign-{}-sim", std::process::id()));
-    let o = Command::new(env!("CARGO_BIN_EXE_aeroident"))
-        .args(["f16", "sim"])
-        .arg(workspace().join("scenarios/sim/six_axis_excitation.toml"))
-        .arg("--out")
-        .arg(&dir)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let data = dir.join("timeseries.csv");
+    let data = six_axis_sim("sim");
     let map = workspace().join("mappings/aeroident-sim.toml");
     let (truth, err, _) = replay(&data, &map, &["--estimator", "oe"], "sim-surfaces");
     for ch in ["de", "da", "dr"] {
@@ -150,15 +169,7 @@ fn commanded_surfaces_lead_by_the_actuator_lag() {
         let p = v["parameters"].as_array().unwrap().iter().find(|p| p["name"] == name);
         p.unwrap()["estimate"].as_f64().unwrap()
     };
-    let commanded = edited_mapping(
-        "aeroident-sim.toml",
-        &[
-            ("de = ", "de = { column = \"elevator_cmd_rad\", unit = \"rad\" }"),
-            ("da = ", "da = { column = \"aileron_cmd_rad\", unit = \"rad\" }"),
-            ("dr = ", "dr = { column = \"rudder_cmd_rad\", unit = \"rad\" }"),
-        ],
-        "sim-commanded",
-    );
+    let commanded = commanded_mapping("sim-commanded");
     let (v, err, _) = replay(&data, &commanded, &["--estimator", "oe"], "sim-commands");
     let mut refitted = 0;
     for (ch, derivative) in [("de", "Cm_de"), ("da", "Cl_da"), ("dr", "Cn_dr")] {
@@ -223,7 +234,7 @@ fn commanded_surfaces_lead_by_the_actuator_lag() {
         let (want, got) = (estimate(&truth, name), estimate(&v, name));
         assert!(((got - want) / want).abs() < 0.005, "{name}: {got} vs {want}");
     }
-    let _ = std::fs::remove_dir_all(dir);
+    let _ = std::fs::remove_dir_all(data.parent().unwrap());
     let _ = std::fs::remove_file(commanded);
     let _ = std::fs::remove_file(declared);
 }
@@ -245,27 +256,10 @@ fn refit_values(flags: &str, name: &str) -> Option<(f64, f64)> {
 /// error's control derivatives move towards the fit on the true surfaces.
 #[test]
 fn compat_auto_delays_a_commanded_surface_by_its_measured_lead() {
-    let dir = std::env::temp_dir().join(format!("aeroident-sign-{}-auto", std::process::id()));
-    let o = Command::new(env!("CARGO_BIN_EXE_aeroident"))
-        .args(["f16", "sim"])
-        .arg(workspace().join("scenarios/sim/six_axis_excitation.toml"))
-        .arg("--out")
-        .arg(&dir)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let data = dir.join("timeseries.csv");
+    let data = six_axis_sim("auto");
     let truth_map = workspace().join("mappings/aeroident-sim.toml");
     let (truth, _, _) = replay(&data, &truth_map, &["--estimator", "oe"], "auto-surfaces");
-    let commanded = edited_mapping(
-        "aeroident-sim.toml",
-        &[
-            ("de = ", "de = { column = \"elevator_cmd_rad\", unit = \"rad\" }"),
-            ("da = ", "da = { column = \"aileron_cmd_rad\", unit = \"rad\" }"),
-            ("dr = ", "dr = { column = \"rudder_cmd_rad\", unit = \"rad\" }"),
-        ],
-        "auto-commanded",
-    );
+    let commanded = commanded_mapping("auto-commanded");
     let (plain, _, _) = replay(&data, &commanded, &["--estimator", "oe"], "auto-plain");
     let args = ["--estimator", "oe", "--compat", "auto"];
     let (auto, err, _) = replay(&data, &commanded, &args, "auto-compat");
@@ -285,4 +279,6 @@ fn compat_auto_delays_a_commanded_surface_by_its_measured_lead() {
         let (from, to) = (estimate(&plain, derivative), estimate(&auto, derivative));
         assert!((to - want).abs() < (from - want).abs(), "{derivative}: {from} → {to}, {want}");
     }
+    let _ = std::fs::remove_dir_all(data.parent().unwrap());
+    let _ = std::fs::remove_file(commanded);
 }

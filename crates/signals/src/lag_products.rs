@@ -10,7 +10,7 @@
 //! above it the transform's round-off is a few ulp of `c_0` (checked against the direct sums
 //! in the tests).
 //!
-//! The cross products `c_k = Σ_t x_t y_{t+k}` of two series ([`cross_lag_products`]) are the
+//! The cross products `c_k = Σ_t x_t y_{t+k}` of two series ([`cross_lag_products`](crate::lag_products::cross_lag_products)) are the
 //! inverse transform of the cross periodogram `conj(X)·Y` under the same padding: the sums a
 //! cross-correlation over lags is built from (the search for a channel's delay against
 //! another), `O(m log m)` where the direct sums over every lag of a record are quadratic.

@@ -5,7 +5,7 @@
 //!
 //! A sample is on the ground (or rolling) when either
 //! 1. its airspeed is below `speed_fraction` [0.6] of the record's airborne speed: the median
-//!    airspeed of the samples faster than `airborne_share` [½] of the record's
+//!    airspeed of the samples faster than `airborne_share` (½) of the record's
 //!    `reference_quantile` [95 %] airspeed. A taxi (5–15 m/s) and a take-off or landing roll
 //!    are far below any cruise or manoeuvring speed (an approach at 1.3 stall speeds is about
 //!    0.5–0.7 of a cruise speed of 2–2.5 stall speeds, so an approach may be left out too; a

@@ -10,7 +10,7 @@
 //!    3-2-1-1's speed ripple, at 0.2 Hz and above, go out].
 //! 2. **Energy.** Its RMS over a centred `rms_window_s` [60 s] window, airborne samples only
 //!    (the ground spans of [`super::envelope`] are not flight).
-//! 3. **Threshold.** Active where that RMS exceeds `threshold_ratio` [4] times the record's
+//! 3. **Threshold.** Active where that RMS exceeds `threshold_ratio` (4) times the record's
 //!    10 % quantile of it and `min_fraction` [0.5 %] of the airborne speed (turbulence and a
 //!    trimmed aircraft's drift stay below it: 0.5 m/s at 100 m/s).
 //! 4. **An oscillation.** Active spans closer than 10 s are one; a span is a phugoid when its

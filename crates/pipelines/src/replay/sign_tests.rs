@@ -12,7 +12,7 @@
 //! ṙ = N₀ + N_β β + N_p p + N_r r + N_δa δa + N_δr δr
 //! ```
 //!
-//! with β from the kinematics where the record maps none ([`sideslip`]: `a_y` standing in for it
+//! with β from the kinematics where the record maps none (module `sideslip`: `a_y` standing in for it
 //! moves the rudder's coefficient by the rudder's own side force), and the terms of channels
 //! not mapped left out. Without β or the kinematics to give it, the aileron's test takes `a_y`
 //! (an aileron's side force is small) and the rudder's cannot be decided. Under the mapping's conventions (docs/mapping.md:
@@ -37,7 +37,7 @@
 //!
 //! An accelerometer whose gain is decided beyond [`DECIDE_SIGMAS`] σ from +1 and −1 (a gain
 //! near 0 with a small σ is a channel that does not carry the motion's force) and lies outside [1/[`SCALE_BOUND`], [`SCALE_BOUND`]] does not read the specific force as
-//! mapped: it is `not_a_specific_force`, with the likely form ([`likely_form`]): gravity
+//! mapped: it is `not_a_specific_force`, with the likely form (`likely_form`): gravity
 //! removed (the force equations' gravity term, added as a second regressor, takes a gain near
 //! −1), a reading in g or ft/s², or a load factor.
 //!

@@ -68,15 +68,10 @@ pub(super) fn believable(
     let kinematics = crate::replay::kinematics::Kinematics::of_manoeuvres(slices);
     let mut misread: Vec<String> =
         kinematics.warnings(mapping).into_iter().map(|w| w.text).collect();
-    // Each spoils the other's kinematics: a_z enters the vane's kinematic α̇, the vane enters
-    // a_z's spread through ẇ. The accelerometer's mean needs no vane, so a mean that no
-    // specific force has is named first; a spread that disagrees, only after the vane passes.
-    let az = az_misread(slices, mapping);
-    let by_mean = AzLevels::of(slices).is_none_or(|l| !l.fits_mean(1.0, 0.0));
-    misread.extend(az.clone().filter(|_| by_mean));
+    // The accelerometer first: it enters the vane's kinematic α̇, and its mean needs no vane.
+    misread.extend(az_misread(slices, mapping));
     let (moving, not_judged) = moving_alpha(slices, mapping);
     misread.extend(alpha_misread(&moving, mapping));
-    misread.extend(az.filter(|_| !by_mean));
     match misread.first() {
         Some(w) => Err(format!(
             "{w}; the check would turn it into biases, time shifts and winds: fix the mapping or the record first"
@@ -172,13 +167,17 @@ const AZ_MEAN_TOLERANCE_MPS2: f64 = 0.35 * G0_MPS2;
 /// (about 0.03 g: a manoeuvre, not a steady segment).
 const AZ_MIN_SPREAD_MPS2: f64 = 0.3;
 
-/// A reading's spread may differ from a form's by this factor: √(1/0.3048), halfway (in ratio)
-/// between the nearest two forms, m/s² and ft/s², so that a spread fits one of them.
-const AZ_SPREAD_FACTOR: f64 = 1.811;
+/// A reading's spread may differ from a form's by this factor: the kinematic spread without
+/// `ẇ` is up to about twice the specific force's, and the g forms lie a factor 9.8 apart
+/// (the m/s² and ft/s² forms, 3.3 apart, may both fit).
+const AZ_SPREAD_FACTOR: f64 = 2.5;
 
 /// The normal accelerometer's reading against the force equations,
-/// `a_z = ẇ − q u + p v − g cosθ cosφ` (Stevens & Lewis, 2nd ed., Table 2.5-1), compared by
-/// mean and spread, which a sensor's lag does not move as it moves a regression's gain.
+/// `a_z = ẇ − q u + p v − g cosθ cosφ` (Stevens & Lewis, 2nd ed., Table 2.5-1) without `ẇ`
+/// ([`kinematic_az`]), compared by mean and spread, which a sensor's lag does not move as it
+/// moves a regression's gain. Only the mean decides whether the reading is the specific force
+/// (the spread without `ẇ` is the short period's `q u`, up to about twice the specific
+/// force's); the spread and sign then choose among the other forms.
 #[derive(Debug, Clone, Copy)]
 struct AzLevels {
     /// Mean and standard deviation of the reading, m/s².
@@ -197,8 +196,8 @@ impl AzLevels {
     fn of(slices: &[&[AirDataSample]]) -> Option<Self> {
         let pairs: Vec<(f64, f64)> = slices
             .iter()
-            .flat_map(|m| m.windows(3))
-            .filter_map(|w| Some((w[1].az_mps2?, kinematic_az(w)?)))
+            .flat_map(|m| m.iter())
+            .filter_map(|s| Some((s.az_mps2?, kinematic_az(s)?)))
             .collect();
         if pairs.len() < MIN_ROWS {
             return None;
@@ -234,10 +233,10 @@ impl AzLevels {
         (self.mean - (k * self.kin_mean + b)).abs() <= AZ_MEAN_TOLERANCE_MPS2 * k.abs().max(1.0)
     }
 
-    /// `None` when the reading is the specific force; else the mismatch in words, naming every
+    /// `None` when the reading's mean is the specific force's; else the mismatch in words, naming every
     /// form it fits (the same words on any window of one flight that a form explains).
     fn finding(&self, label: &str) -> Option<String> {
-        if self.fits(AZ_FORMS[0].0, AZ_FORMS[0].1) {
+        if self.fits_mean(AZ_FORMS[0].0, AZ_FORMS[0].1) {
             return None;
         }
         let fitting: Vec<&str> =
@@ -248,7 +247,7 @@ impl AzLevels {
             fitting.join("; or ")
         };
         Some(format!(
-            "unit mismatch: {label} reads {} ± {} m/s² (mean ± spread) where the rates and attitude give {} ± {} m/s² (−q u + p v − g cosθ cosφ); {likely}",
+            "unit mismatch: {label} reads {} ± {} m/s² (mean ± spread) where the rates and attitude give {} ± {} m/s² (−q u + p v − g cosθ cosφ, ẇ left out); {likely}",
             short(self.mean),
             short(self.sd),
             short(self.kin_mean),
@@ -257,21 +256,16 @@ impl AzLevels {
     }
 }
 
-/// `a_z` from the force equations at the middle of three samples: `ẇ` the central difference
-/// of `w = V sinα cosβ`, the rest at the middle sample; `p`, `φ` and β count as 0 where
-/// missing; `None` without `q` or `θ`, or with a span that is not positive.
-fn kinematic_az(w: &[AirDataSample]) -> Option<f64> {
-    let span = w[2].t_s - w[0].t_s;
-    let vel = |s: &AirDataSample| {
-        body_velocity(s.vt_mps, SinCos::of(s.alpha_rad), SinCos::of(s.beta_rad.unwrap_or(0.0)))
-    };
-    let s = &w[1];
-    let v = vel(s);
+/// `a_z` from the force equations without `ẇ`: `−q u + p v − g cosθ cosφ` at one sample,
+/// `p`, `φ` and β 0 where missing; `None` without `q` or `θ`. `ẇ` is left out: its mean over a
+/// manoeuvre is the change of `w` over its length, and its difference of a noisy vane has a
+/// spread of its own (0.001 rad at 100 Hz and 200 m/s: 14 m/s²), which no accelerometer has.
+fn kinematic_az(s: &AirDataSample) -> Option<f64> {
+    let v = body_velocity(s.vt_mps, SinCos::of(s.alpha_rad), SinCos::of(s.beta_rad.unwrap_or(0.0)));
     let (phi, theta) = (s.phi_rad.unwrap_or(0.0), s.theta_rad?);
-    let w_dot = (vel(&w[2])[2] - vel(&w[0])[2]) / span;
-    let az = w_dot - s.q_rad_s? * v[0] + s.p_rad_s.unwrap_or(0.0) * v[1]
-        - G0_MPS2 * theta.cos() * phi.cos();
-    (span > 0.0 && az.is_finite()).then_some(az)
+    let az =
+        -s.q_rad_s? * v[0] + s.p_rad_s.unwrap_or(0.0) * v[1] - G0_MPS2 * theta.cos() * phi.cos();
+    az.is_finite().then_some(az)
 }
 
 /// The unit mix-ups the normal accelerometer's mean magnitude over `g` points to.

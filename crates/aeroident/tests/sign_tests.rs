@@ -270,7 +270,7 @@ fn compat_auto_delays_a_commanded_surface_by_its_measured_lead() {
     for (ch, derivative) in [("de", "Cm_de"), ("da", "Cl_da"), ("dr", "Cn_dr")] {
         assert!(
             err.contains(&format!("`{ch}` leads its response by +0.0"))
-                && err.contains("delayed by it (--compat auto)"),
+                && err.contains("delayed by it (--compat)"),
             "{ch}: {err}"
         );
         let lead = verdict(&auto, ch)["lead_s"].as_f64().unwrap();
@@ -278,6 +278,25 @@ fn compat_auto_delays_a_commanded_surface_by_its_measured_lead() {
         let want = estimate(&truth, derivative);
         let (from, to) = (estimate(&plain, derivative), estimate(&auto, derivative));
         assert!((to - want).abs() < (from - want).abs(), "{derivative}: {from} → {to}, {want}");
+    }
+    // The same leads from the check's compat.json: the same estimates.
+    let checked = data.parent().unwrap().join("compat");
+    let o = Command::new(env!("CARGO_BIN_EXE_aeroident"))
+        .arg("compat")
+        .arg(&data)
+        .arg("--map")
+        .arg(&commanded)
+        .arg("--out")
+        .arg(&checked)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let file = checked.join("compat.json").display().to_string();
+    let args = ["--estimator", "oe", "--compat", file.as_str()];
+    let (from_file, err, _) = replay(&data, &commanded, &args, "auto-file");
+    assert!(err.contains("delayed by it (--compat)"), "{err}");
+    for derivative in ["Cm_de", "Cl_da", "Cn_dr", "Cm_q", "Cl_p", "Cn_r"] {
+        assert_eq!(estimate(&from_file, derivative), estimate(&auto, derivative), "{derivative}");
     }
     let _ = std::fs::remove_dir_all(data.parent().unwrap());
     let _ = std::fs::remove_file(commanded);

@@ -22,7 +22,8 @@
 //! "coloured"`), else the Cramér–Rao σ (`"cramer_rao"`); findings are judged against them.
 
 pub use crate::record::corrections::{
-    ChannelSummary, Corrected, Corrections, HeldOutRow, HeldOutSummary, ReconstructedSummary,
+    ChannelSummary, Corrected, Corrections, HeldOutRow, HeldOutSummary, InputLead,
+    ReconstructedSummary,
 };
 
 use crate::record::corrections::{DETERMINED_SIGMAS, plausible, plausible_lag};
@@ -86,18 +87,6 @@ pub struct CompatSummary {
     pub input_leads: Vec<InputLead>,
 }
 
-/// A surface's measured lead over the response it drives (`compat.json` `input_leads`).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct InputLead {
-    /// The surface's mapping key (`de`, `da`, `dr`).
-    pub channel: String,
-    /// The lead, s (> 0: the recorded surface acts later than recorded).
-    pub lead_s: f64,
-    /// Its σ, s: the 95 % interval's half-width over 1.96 (the timing search's Cramér–Rao
-    /// bound).
-    pub lead_sigma_s: f64,
-}
-
 /// The surfaces the sign tests find leading their response on `slices` ([`InputLead`]).
 fn input_leads(
     slices: &[&[aeroident_estimators::AirDataSample]],
@@ -123,8 +112,10 @@ impl Corrections {
     /// As [`Corrections::from_json`].
     pub fn from_summary(s: &CompatSummary) -> Result<Self, RecordError> {
         let lag = s.ahrs_lag_tau_s.map(|t| (t, s.ahrs_lag_tau_sigma_s));
-        Self::of_rows(&s.channels, lag, &s.reconstructed, Some(&s.held_out))
-            .map_err(|reason| RecordError::Option { option: "compat", reason })
+        let mut c = Self::of_rows(&s.channels, lag, &s.reconstructed, Some(&s.held_out))
+            .map_err(|reason| RecordError::Option { option: "compat", reason })?;
+        c.leads = s.input_leads.clone();
+        Ok(c)
     }
 }
 

@@ -360,29 +360,28 @@ pub fn corrections(
                 let config = aeroident_estimators::compat::CompatConfig::default();
                 let readers = records.open_all()?;
                 let (summary, _) = crate::compat::check_records(readers, &windows, &config)?;
-                let c = Corrections::from_summary(&summary)?;
-                let (c, notes) = with_leads_undone(c, &summary.input_leads, &records.mapping);
-                Ok((Some(c), summary.findings.into_iter().chain(notes).collect()))
+                Ok((Some(Corrections::from_summary(&summary)?), summary.findings))
             }
         }
     };
     let Some(done) = guard.run(Step::Compat, step)? else { return Ok(Ran::Stopped(Step::Compat)) };
-    let (corrections, findings) = done?;
+    let (corrections, mut findings) = done?;
+    let corrections = corrections.map(|c| {
+        let (c, notes) = with_leads_undone(c, &mapping);
+        findings.extend(notes);
+        c
+    });
     findings.iter().for_each(|f| log.note(&format!("compat: {f}")));
     with_mapped_shifts(&mapping, corrections, log).map(Ran::Done)
 }
 
-/// `c` with each surface of `leads` delayed by its measured lead (a commanded surface acts
+/// `c` with each surface of its `leads` delayed by its measured lead (a commanded surface acts
 /// about its actuator's lag after its record), and a note per lead: applied, or left to the
 /// `shift_s` the mapping declares for that surface, or beyond what a shift may undo.
-fn with_leads_undone(
-    mut c: Corrections,
-    leads: &[crate::compat::InputLead],
-    mapping: &Mapping,
-) -> (Corrections, Vec<String>) {
+fn with_leads_undone(mut c: Corrections, mapping: &Mapping) -> (Corrections, Vec<String>) {
     let declared = mapping.input_shifts();
     let mut notes = Vec::new();
-    for l in leads {
+    for l in std::mem::take(&mut c.leads) {
         let what = format!(
             "`{}` leads its response by {:+.3} ± {:.3} s",
             l.channel, l.lead_s, l.lead_sigma_s
@@ -396,7 +395,7 @@ fn with_leads_undone(
             Ok(shifted) => {
                 c = shifted;
                 notes.push(format!(
-                    "{what}: delayed by it (--compat auto), as `shift_s = {:+.3}` in the mapping would",
+                    "{what}: delayed by it (--compat), as `shift_s = {:+.3}` in the mapping would",
                     l.lead_s
                 ));
             }

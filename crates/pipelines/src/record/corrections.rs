@@ -208,6 +208,21 @@ pub struct Corrections {
     pub refused_channels: Vec<Channel>,
     /// The channels whose time shift the check estimated.
     pub checked: Vec<Channel>,
+    /// The surfaces the check found leading their response (`compat.json` `input_leads`), for
+    /// the job to undo where the mapping declares no shift of its own.
+    pub leads: Vec<InputLead>,
+}
+
+/// A surface's measured lead over the response it drives (`compat.json` `input_leads`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct InputLead {
+    /// The surface's mapping key (`de`, `da`, `dr`).
+    pub channel: String,
+    /// The lead, s (> 0: the recorded surface acts later than recorded).
+    pub lead_s: f64,
+    /// Its σ, s: the 95 % interval's half-width over 1.96 (the timing search's Cramér–Rao
+    /// bound).
+    pub lead_sigma_s: f64,
 }
 
 /// A correction is applied only where the check determines it: its distance from no
@@ -258,6 +273,9 @@ struct CompatFile {
     /// Each correction judged on held-out data (absent in older files: none refused for it).
     #[serde(default)]
     held_out: Option<HeldOutSummary>,
+    /// The surfaces' measured leads (absent in older files: none).
+    #[serde(default)]
+    input_leads: Vec<InputLead>,
 }
 
 impl CompatFile {
@@ -320,8 +338,11 @@ impl Corrections {
     /// channel, a scale that is not positive, or a non-finite number.
     pub fn from_json(path: &Path) -> Result<Self, RecordError> {
         let (file, bad) = Self::read_json(path)?;
-        Self::of_rows(&file.channels, file.lag(), &file.reconstructed, file.held_out.as_ref())
-            .map_err(bad)
+        let mut c =
+            Self::of_rows(&file.channels, file.lag(), &file.reconstructed, file.held_out.as_ref())
+                .map_err(bad)?;
+        c.leads = file.input_leads;
+        Ok(c)
     }
 
     /// The corrections of a `compat.json` for the records `records` (file names as given):
@@ -336,14 +357,18 @@ impl Corrections {
         if records.is_empty() {
             let held = file.held_out.as_ref();
             let mut c = Self::of_rows(&file.channels, file.lag(), &[], held).map_err(bad)?;
+            c.leads = file.input_leads.clone();
             if file.reconstructed.iter().any(|r| !r.t_s.is_empty()) {
                 c.refused.push("beta_rad: the sideslip reconstructed on the check's record is that record's time series: not applied to a live feed".into());
             }
             return Ok(c);
         }
         check_provenance(file.file.as_deref(), records).map_err(&bad)?;
-        Self::of_rows(&file.channels, file.lag(), &file.reconstructed, file.held_out.as_ref())
-            .map_err(bad)
+        let mut c =
+            Self::of_rows(&file.channels, file.lag(), &file.reconstructed, file.held_out.as_ref())
+                .map_err(bad)?;
+        c.leads = file.input_leads;
+        Ok(c)
     }
 
     /// A `compat.json` parsed, and the error maker naming it.

@@ -22,6 +22,8 @@
 //! - [`condition`]: the conditioning stage every pipeline shares (derivatives, alignment);
 //!   [`window`]: the time windows of a long record, each a manoeuvre.
 //! - [`estimators`]: the estimator kinds, their options and `build`.
+//! - [`summary_file`]: a replay's `summary.json` read back (what the exports and the airframe
+//!   take).
 
 /// Aircraft estimation experiments: two F-16s, sensors, estimators.
 pub mod aircraft;
@@ -51,6 +53,7 @@ pub mod scenario_kind;
 /// Open-loop F-16 simulation: trim → inputs, gusts, turbulence → sensors.
 pub mod sim;
 pub mod structure;
+pub mod summary_file;
 /// Model validation metrics: fit, residual whiteness, input correlation, prediction intervals.
 pub mod validation;
 pub mod verdict;

@@ -13,8 +13,8 @@ use aeroident_estimators::vocabulary::{AlphaKnots, Coefficient, Param};
 use aeroident_models::aircraft::AircraftMass;
 use aeroident_pipelines::export::ardupilot::{ArdupilotOptions, Throws, ardupilot_json};
 use aeroident_pipelines::export::gazebo::{ControlJoint, GazeboOptions, gazebo_plugin_sdf};
-use aeroident_pipelines::export::jsbsim::{SummaryParameters, read_summary};
 use aeroident_pipelines::export::uav::Geometry;
+use aeroident_pipelines::summary_file::{SummaryParameters, read_summary};
 
 #[path = "export_uav/flight.rs"]
 mod flight;

@@ -77,13 +77,13 @@ impl AircraftArgs {
 
 /// Warns when `summary` is of a run that did not finish (an interrupted replay, a fit that did
 /// not converge): the aircraft flies where that run stopped
-/// ([`aeroident_pipelines::export::jsbsim::SummaryParameters::unfinished`]).
+/// ([`aeroident_pipelines::summary_file::SummaryParameters::unfinished`]).
 ///
 /// # Errors
 /// The summary cannot be read (naming the file).
 pub fn warn_unfinished(summary: Option<&Path>) -> anyhow::Result<()> {
     let Some(path) = summary else { return Ok(()) };
-    if let Some(note) = aeroident_pipelines::export::jsbsim::read_summary(path)?.unfinished() {
+    if let Some(note) = aeroident_pipelines::summary_file::read_summary(path)?.unfinished() {
         aeroident_report::note!("warning: {}: {note}", path.display());
     }
     Ok(())

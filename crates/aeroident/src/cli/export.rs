@@ -23,8 +23,9 @@ use aeroident_pipelines::export::ardupilot::{
     ArdupilotOptions, Throws, ardupilot_json, mapped_throw,
 };
 use aeroident_pipelines::export::gazebo::{ControlJoint, GazeboOptions, gazebo_plugin_sdf};
-use aeroident_pipelines::export::jsbsim::{SurfaceProperties, aerodynamics_xml, read_summary};
+use aeroident_pipelines::export::jsbsim::{SurfaceProperties, aerodynamics_xml};
 use aeroident_pipelines::export::uav::{Exported, Geometry, MAX_STALL_DEG, MAX_THROW_DEG};
+use aeroident_pipelines::summary_file::{SummaryParameters, read_summary};
 use aeroident_report::outfile;
 use anyhow::Context;
 use std::io::Write;
@@ -506,7 +507,7 @@ fn jsbsim(a: JsbsimArgs) -> anyhow::Result<()> {
 fn jsbsim_aircraft(
     a: &JsbsimArgs,
     mapping: &Path,
-    summary: &aeroident_pipelines::export::jsbsim::SummaryParameters,
+    summary: &SummaryParameters,
 ) -> anyhow::Result<()> {
     if a.v0_mps.is_some() {
         anyhow::bail!("--v0-mps: with --mapping the reference speed is the mapping's `v0`");
@@ -544,7 +545,7 @@ fn positive_at_most_deg(flag: &str, deg: f64, max: f64) -> anyhow::Result<()> {
 
 /// Warns when the summary is of a run that did not finish (an interrupted replay, a fit that
 /// did not converge): what is exported is where it stopped.
-fn note_unfinished(path: &Path, summary: &aeroident_pipelines::export::jsbsim::SummaryParameters) {
+fn note_unfinished(path: &Path, summary: &SummaryParameters) {
     if let Some(note) = summary.unfinished() {
         aeroident_report::note!("warning: {}: {note}", path.display());
     }

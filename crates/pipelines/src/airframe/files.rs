@@ -3,7 +3,7 @@
 //! constants. Every error names the file and the field.
 
 use super::{Airframe, ModelFileAircraft, Propulsion};
-use crate::export::jsbsim::{SummaryParameters, read_summary};
+use crate::summary_file::{SummaryParameters, read_summary};
 use aeroident_io::mapping::{Channel, Mapping};
 use aeroident_io::model_file::ModelSpec;
 use aeroident_models::aircraft::{AircraftMass, ReferenceGeometry};

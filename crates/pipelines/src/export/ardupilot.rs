@@ -32,8 +32,8 @@
 //! times `m_SITL / m`, moment coefficients through the inverse inertia tensor (Stevens &
 //! Lewis §2.5: `ṗ = c3 L + c4 N`, `q̇ = c7 M`, `ṙ = c4 L + c9 N` without the rate products).
 
-use super::jsbsim::SummaryParameters;
 use super::uav::{self, Exported, Geometry};
+use crate::summary_file::SummaryParameters;
 use aeroident_estimators::vocabulary::{Coefficient, Param, Term};
 use aeroident_io::{Channel, Mapping};
 use aeroident_models::aircraft::AircraftMass;

@@ -29,8 +29,8 @@
 //! export writes `C_ctrl = k · C_δ · π/180`, and aeroident's deflection is `δ = d · θ` (one
 //! joint, `k = 1`), or `δa = (d_L θ_L − d_R θ_R)/2` for an aileron pair (`k = ±½`).
 
-use super::jsbsim::SummaryParameters;
 use super::uav::{self, Exported, Geometry};
+use crate::summary_file::SummaryParameters;
 use aeroident_estimators::vocabulary::{Coefficient, Param, Term};
 use std::fmt::Write as _;
 

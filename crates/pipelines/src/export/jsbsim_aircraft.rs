@@ -17,8 +17,9 @@
 //! at `z = −arm / cos i` (JSBSim's structural z is up) along `(cos i, 0, −sin i)` in body
 //! axes, so its pitching moment is `arm · T`.
 
-use super::jsbsim::{ForceAxes, SummaryParameters, SurfaceProperties, aerodynamics_xml_in};
+use super::jsbsim::{ForceAxes, SurfaceProperties, aerodynamics_xml_in};
 use crate::airframe::{Airframe, Propulsion};
+use crate::summary_file::SummaryParameters;
 use aeroident_io::mapping::{Actuator, Channel};
 use aeroident_io::thrust_model::ThrustModel;
 use std::collections::BTreeMap;

@@ -9,7 +9,7 @@
 //! `1/(π e AR) = CD_alpha2 / CL_alpha²` and `CD_alpha = 2 CL_0 CD_alpha2 / CL_alpha` (without
 //! `CD_alpha2`: no induced drag, `CD_alpha = 0`); the exporters check it.
 
-use super::jsbsim::SummaryParameters;
+use crate::summary_file::SummaryParameters;
 use aeroident_estimators::vocabulary::{Coefficient, Param, Term};
 use std::collections::BTreeMap;
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Bounded memory and steady throughput of `aeroident replay` over a long record (issue 10:
+# Bounded memory and steady throughput of `aeroident replay` over a long record (target:
 # 24 h at 100 Hz through `replay -` and `replay FILE --out DIR`, peak RSS ≤ 64 MB, throughput of
 # the last hour within 20 % of the first). See docs/reliability.md for the measured numbers.
 #

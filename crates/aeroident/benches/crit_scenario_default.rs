@@ -3,8 +3,8 @@
 //! six-axis preset), set-up included (trim, multisine design, turbulence generation, truth
 //! derivatives); and 1 s of the combined run with every two-aircraft estimator
 //! (`scenarios/f16/combined.toml`: published implicit and explicit, corrected; four aircraft).
-//! Target (issues 4 and 8): ≥ 500× real time, i.e. ≤ 80 ms for the 40 s main job and ≤ 2 ms per
-//! simulated second of the combined run excluding the trim (benchmarked as `trim_only`).
+//! Target: ≥ 500× real time, i.e. ≤ 80 ms for the 40 s main job and ≤ 2 ms per simulated
+//! second of the combined run excluding the trim (benchmarked as `trim_only`).
 
 #![allow(missing_docs)] // criterion_group! generates an undocumented pub fn.
 

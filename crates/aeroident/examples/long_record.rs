@@ -1,5 +1,5 @@
 //! A long synthetic six-axis flight record as CSV on stdout, for the bounded-memory check of
-//! `aeroident replay` (issue 10 target: 24 h of 100 Hz through `replay -` and `replay FILE
+//! `aeroident replay` (target: 24 h of 100 Hz through `replay -` and `replay FILE
 //! --out DIR` with peak RSS ≤ 64 MB and the throughput of the last hour within 20 % of the
 //! first).
 //!

@@ -1,4 +1,4 @@
-//! Per-sample update-time distribution of the real-time estimators (issue 10 target: worst
+//! Per-sample update-time distribution of the real-time estimators (target: worst
 //! case ≤ 5× the median for RLS and FTR, ≤ 10× for the EKF).
 //!
 //! Flies the synthetic six-axis test aircraft (the update bench's generator,

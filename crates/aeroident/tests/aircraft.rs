@@ -1,4 +1,4 @@
-//! Issue 4 and issue 8 tests: the two-aircraft experiment, the F-16 adapter of the SMPE
+//! The closed-loop experiment's tests: the two-aircraft experiment, the F-16 adapter of the SMPE
 //! engine, the thesis's gains, every scenario file, a never-NaN property, and the
 //! sample-driven estimators in the closed loop (RLS against the true derivatives), the summary
 //! keys and the scenario syntax.
@@ -485,8 +485,9 @@ fn val_thesis_table_4_7_case_4_full_run_corrected_converges() {
     );
 }
 
-/// The exact key sets of `summary.json` and of its parameter entries (issue 8 keys added to
-/// the issue-4 ones), on the shortened default run; the default is six-axis RLS.
+/// The exact key sets of `summary.json` and of its parameter entries (the target metrics beside
+/// the convergence times), on the shortened default run; the default is six-axis RLS. A key
+/// renamed or dropped breaks every reader of the summary, so the set is pinned.
 #[test]
 fn default_scenario_writes_outputs_with_exact_summary_keys() {
     let sc = Scenario::from_toml(aeroident::cli::run::DEFAULT_SCENARIO, "default").unwrap();

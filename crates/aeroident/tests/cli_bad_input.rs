@@ -1,6 +1,6 @@
-//! Exit codes of every subcommand on bad input, end to end through the binary (issue 10:
-//! "exit codes of every subcommand on bad input are tested end to end"), and the one scenario
-//! format's `kind` errors (issue 11 item 4).
+//! Exit codes of every subcommand on bad input, end to end through the binary (a script
+//! calling it judges by the exit code alone, so each must be the documented one), and the one
+//! scenario format's `kind` errors.
 //!
 //! The contract (`src/main.rs`): 0 on success (and on a closed output pipe), 1 on an error of
 //! the input or the run with one `error: …` line naming the file/row/key and the cause, 2 on a
@@ -149,7 +149,7 @@ fn errors_missing_files_exit_1_naming_the_file() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-/// Issue 10 #10, second half: a mapping channel with `scale = 0` would make every parameter
+/// A mapping channel with `scale = 0` would make every parameter
 /// fed by it unidentifiable and printed as if estimated; the replay refuses the mapping,
 /// naming file, line and key, before reading data (exit 1, no outputs).
 #[test]

@@ -8,7 +8,8 @@ fn scenario() -> String {
     concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/montecarlo/short.toml").into()
 }
 
-/// `--json` prints exactly the document: 4 runs, both estimators, every six-axis
+/// `--json` prints exactly the document its readers rely on (Python's
+/// `montecarlo` returns it): 4 runs, both estimators, every six-axis
 /// parameter, a finite positive Cramér–Rao σ for the primary derivatives; the default mode
 /// writes `montecarlo.json`, `runs.json` and PNG figures. Each primary derivative's
 /// `coverage_2sigma` is the fraction of the runs in `runs.json` whose ±2σ interval covers the

@@ -1,4 +1,4 @@
-//! Output directories end to end (issue 10, #11–#14): a failing run leaves no old outputs beside
+//! Output directories end to end: a failing run leaves no old outputs beside
 //! it, scenario names cannot escape `--out`, and two scenarios with one name are an error naming
 //! both files.
 
@@ -22,7 +22,7 @@ fn repo(p: &str) -> PathBuf {
 
 const SIM: &str = "kind = \"sim\"\n[aircraft]\nxcg = 0.30\nactuators = \"f16\"\n[trim]\nalt_ft = 20000.0\nvt_fps = 675.0\n[run]\nduration_s = 0.5\ndt_s = 0.01\nseed = 1\n";
 
-/// #11: a second `f16 sim` into the same `--out` that fails must not leave the first run's
+/// A second `f16 sim` into the same `--out` that fails must not leave the first run's
 /// `timeseries.csv` and figures beside its error.
 #[test]
 fn outputs_failing_run_removes_the_previous_runs_files() {
@@ -62,7 +62,7 @@ fn poc_with_name(dir: &Path, file: &str, name: &str) {
     std::fs::write(dir.join(file), text).unwrap();
 }
 
-/// #13: a scenario named `../../x` is refused (nothing written outside `--out`), for `poc --all`
+/// A scenario named `../../x` is refused (nothing written outside `--out`), for `poc --all`
 /// and `run --all`.
 #[test]
 fn outputs_scenario_name_cannot_escape_out() {
@@ -99,7 +99,7 @@ fn outputs_scenario_name_cannot_escape_out() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-/// #13: two scenario files with the same name are an error naming both files.
+/// Two scenario files with the same name are an error naming both files.
 #[test]
 fn outputs_duplicate_scenario_names_name_both_files() {
     let d = scratch("dup");

@@ -1,5 +1,5 @@
 //! `replay --estimator fdoe` (frequency-domain output error) against the time-domain output
-//! error on the same records and models: the target "within 2 combined σ"
+//! error on the same records and models: the target "within 2 combined σ"
 //! (`|Δ| ≤ 2 √(σ_fdoe² + σ_oe²)`, each method's reported σ) per shared parameter
 //! (docs/fdoe.md has the table). Skip without `../shared`, fail under CI if it is missing.
 

@@ -1,7 +1,8 @@
-//! Fuzzing of the scenario parsers (issue 10): the aircraft scenario (`Scenario::from_toml`),
-//! the proof-of-concept scenario (`PocScenario::from_str_at`) and the F-16 simulation scenario
-//! (`sim::parse_scenario`), on arbitrary text and on mutated shipped files: never a panic, and
-//! every error names the file. Bounded for CI by `PROPTEST_CASES` (default 64).
+//! Fuzzing of the scenario parsers (a scenario is text a user wrote, so no input may panic): the
+//! aircraft scenario (`Scenario::from_toml`), the proof-of-concept scenario
+//! (`PocScenario::from_str_at`) and the F-16 simulation scenario (`sim::parse_scenario`), on
+//! arbitrary text and on mutated shipped files: never a panic, and every error names the file.
+//! Bounded for CI by `PROPTEST_CASES` (default 64).
 
 use aeroident_pipelines::aircraft::scenario::Scenario;
 use aeroident_pipelines::poc::PocScenario;

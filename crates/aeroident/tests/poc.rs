@@ -1,4 +1,4 @@
-//! Integration tests of the proof-of-concept experiments (issue 2).
+//! Integration tests of the proof-of-concept experiments.
 
 use aeroident_pipelines::poc::{EstimatorKind, PocScenario, SolverReading, run};
 use std::path::{Path, PathBuf};
@@ -81,7 +81,7 @@ fn analytic_published_second_order_estimates_are_forced_equal() {
     assert_ne!(sc.parameters[0].name, sc.parameters[1].name);
 }
 
-/// The corrected estimator meets the issue's target on a first-order, a nonlinear and a
+/// The corrected estimator meets its target on a first-order, a nonlinear and a
 /// second-order case: final within 2 % of the scenario's truth.
 #[test]
 fn corrected_estimator_identifies_truth() {
@@ -112,7 +112,7 @@ fn noise_cases_reproducible_from_seed() {
 }
 
 /// `aeroident poc <file> --out <dir>` writes the four files, and `summary.json` has exactly
-/// the keys issue 2 prescribes.
+/// its keys (a reader of the summary relies on them).
 #[test]
 fn cli_single_run_writes_outputs_with_exact_summary_keys() {
     let dir = std::env::temp_dir().join(format!("aeroident_poc_cli_{}", std::process::id()));
@@ -233,7 +233,7 @@ fn corrected_on_table(table: &str) -> Vec<(String, &'static str, f64, Option<f64
     rows
 }
 
-/// Headline of docs/reproduction-poc.md: the corrected estimator meets the issue-2 target on
+/// Headline of docs/reproduction-poc.md: the corrected estimator meets its target on
 /// 27/27 parameters of thesis tables 4.1–4.4 — final estimate within 2 % of the truth and
 /// settled no later than 2× the convergence time the thesis reports (where it reports one).
 /// About 1 s in release mode (18 noise-free cases, 1 ms RK4 steps).

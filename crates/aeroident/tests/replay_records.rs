@@ -170,7 +170,7 @@ fn assert_least_squares(o: &ReplayOutcome, fits: Vec<Fit>, band: Option<(f64, f6
     }
 }
 
-/// The statement: equation error on real data is biased (Cm_q near −43 against output
+/// Equation error on real data is biased (Cm_q near −43 against output
 /// error's −27…−29). RLS (λ = 1) with Jategaonkar's model is the batch least-squares fit of
 /// the measured coefficients, computed here from the record's columns with the book's
 /// constants: the same estimates to 10⁻⁷, and σ within 0.75–1.33 of Morelli & Klein's
@@ -254,7 +254,7 @@ fn truth(path: &Path) -> Vec<(String, f64)> {
         .collect()
 }
 
-/// The target on the JSBSim F-16 aileron-rudder sample: RLS with the lateral preset
+/// The accuracy target on the JSBSim F-16 aileron-rudder sample: RLS with the lateral preset
 /// within 5 % of the true derivative for every term whose true value is above 5 % of its
 /// coefficient's largest term. Clean columns with JSBSim's own ṗ, ṙ (jsbsim_clean.toml); the
 /// noisy columns with differentiated rates are far off (equation-error bias, docs/real-data.md).

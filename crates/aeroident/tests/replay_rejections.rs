@@ -1,4 +1,4 @@
-//! The replay summary's `rejections` list is bounded (issue 10: it grew by ≈ 100 bytes per
+//! The replay summary's `rejections` list is bounded (it grew by ≈ 100 bytes per
 //! rejected row, without bound in a 24 h live feed): the first
 //! [`RejectionLog::DEFAULT_LIMIT`] entries and the last are listed, the rest counted per kind
 //! in a warning, and `samples_rejected` still counts every rejected row.

@@ -39,7 +39,7 @@ fn estimate(s: &BatchSummary, name: &str) -> (f64, f64) {
 
 /// Output error without β: converged, β's initial value estimated per manoeuvre and said so,
 /// `CY_0` left out, and the primary roll and yaw derivatives within 2 combined σ of the
-/// β-measured fit of the same record (the target: Cl_p, Cl_da, Cn_β, Cn_r, Cn_dr).
+/// β-measured fit of the same record (the target: Cl_p, Cl_da, Cn_β, Cn_r, Cn_dr).
 #[test]
 fn val_attas_lateral_output_error_without_beta_agrees_with_the_beta_measured_fit() {
     let Some(data) = shared(RECORD) else { return };

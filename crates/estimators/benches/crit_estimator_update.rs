@@ -1,4 +1,4 @@
-//! Per-sample update cost of the recorded-data estimators (issue 5 and 8 targets on one core:
+//! Per-sample update cost of the recorded-data estimators (targets on one core:
 //! RLS ≥ 1,000,000 samples/s, i.e. ≤ 1 µs per update, for the six-axis preset; EKF ≥ 100,000
 //! samples/s, ≤ 10 µs, for the longitudinal and the lateral preset).
 //! Criterion reports the time per update and, via `Throughput::Elements`, samples per second.
@@ -41,7 +41,7 @@ fn bench_structure_estimators(c: &mut Criterion) {
             })
         });
     }
-    // FTR: the issue-9 target is ≥ 10⁶ samples/s for a 20-frequency grid and the longitudinal
+    // FTR: the target is ≥ 10⁶ samples/s for a 20-frequency grid and the longitudinal
     // signals (0.1–0.86 Hz in 0.04 Hz steps = 20 frequencies).
     let ftr_cfg = FtrConfig { f_max_hz: 0.86, ..FtrConfig::default() };
     g.bench_function("ftr_longitudinal_20_frequencies_1000_samples", |b| {

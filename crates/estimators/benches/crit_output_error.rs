@@ -1,4 +1,4 @@
-//! Wall time of one complete batch output-error fit (issue 9 target: the HFB-320 book case,
+//! Wall time of one complete batch output-error fit (target: the HFB-320 book case,
 //! 11 parameters, 7 outputs, 601 samples, ≤ 1 s on one core including the noise-covariance
 //! relaxation and the coloured-residual σ). Uses the record in `shared/flightdata` when
 //! present, else a synthetic problem of the same size (the book's model simulated with a

@@ -12,7 +12,7 @@
 //! estimated model is its own block) and passes its state in [`SmpeSample::z`] together with
 //! the measured states `z_m` and their derivatives `ż_m`.
 //!
-//! Instantiating for a new system (e.g. the F-16 of issue 4) needs only
+//! Instantiating for a new system (e.g. the F-16) needs only
 //! 1. a type implementing [`ParametricModel<N, P>`] (13 states and 2–4 increments for the
 //!    aircraft; [`ParametricModel::sensitivity`] has a finite-difference default),
 //! 2. a [`SlidingSurface<N>`] saying which states slide (e.g. `p, q, r`:

@@ -1,7 +1,7 @@
 //! The EKF on the JSBSim sample records in `shared/flightdata` (third-party simulator data
 //! with known true derivatives). Skips, saying so, when the data are absent.
 //!
-//! Target (issue 8): within 10 % of the true derivative for every term whose true value is
+//! Target: within 10 % of the true derivative for every term whose true value is
 //! above 5 % of its coefficient's largest term. Measured with the default configuration
 //! (generic priors, default noise levels; nothing taken from the truth files), the tests
 //! assert the terms that meet it. Known misses, and why (see the EKF closing note):

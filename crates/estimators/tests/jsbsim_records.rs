@@ -114,7 +114,7 @@ fn corrected_smpe_equals_the_batch_regularised_least_squares() {
 
 /// With the clean channels, the derivatives the manoeuvres excite directly — static stability
 /// and damping of the excited axes and the control derivatives of the moved surfaces — are
-/// within 5 % of the records' truth (the RLS target). Not asserted here, and reported
+/// within 5 % of the records' truth (RLS's accuracy target). Not asserted here, and reported
 /// in `docs/model-reference.md`: the noisy channels (β noise biases every β derivative by about
 /// −63 %, as it does RLS's), `Cn_r`, `Cn_p`, `CY_r`, the CD terms and the tiny `Cm_alpha`.
 #[test]

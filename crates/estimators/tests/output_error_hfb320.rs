@@ -27,7 +27,7 @@ const REFERENCE: [(&str, f64, f64); 11] = [
     ("Cm_de", -1.437, 0.017),
 ];
 
-/// The targets: these within 1 %, their σ within 20 %.
+/// The targets against the book's values: these within 1 %, their σ within 20 %.
 const TARGETS: [&str; 4] = ["Cm_alpha", "Cm_q0", "Cm_de", "CL_alpha"];
 
 fn run(step: StepKind) -> Option<(OeResult, f64)> {

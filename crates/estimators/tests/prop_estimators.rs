@@ -1,4 +1,5 @@
-//! Property tests of every aircraft estimator under arbitrary sample streams (issue: hardening).
+//! Property tests of every aircraft estimator under arbitrary sample streams: a
+//! flight computer feeds them whatever its sensors give.
 //!
 //! Relations checked, not only "no panic":
 //! - an estimator never panics and never publishes a non-finite value or σ;

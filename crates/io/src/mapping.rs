@@ -1596,7 +1596,7 @@ mod tests {
         assert!(e.starts_with("m.toml: channel `time`") && e.contains("`shift_s`"), "{e}");
     }
 
-    /// Issue 10 #10: a channel with `scale = 0` is identically its offset, so the parameters it
+    /// A channel with `scale = 0` is identically its offset, so the parameters it
     /// feeds could never be identified; the mapping is refused, naming file, line and key.
     #[test]
     fn errors_zero_scale_names_file_line_and_key() {

@@ -313,7 +313,7 @@ fn row(t: &str) -> String {
     format!("{t},200,2.0,0.5,0.01,-1.0,1.0,100,0.1\n")
 }
 
-/// Issue 10 #7: one absurd time mid-record rejects only its own row; later rows continue from
+/// One absurd time mid-record rejects only its own row; later rows continue from
 /// the last good time.
 #[test]
 fn errors_one_absurd_time_rejects_only_its_row() {
@@ -397,7 +397,7 @@ fn errors_duplicate_column_names_are_refused() {
     );
 }
 
-/// Issue 10 #6: an unbalanced quote that would swallow the rest of the file is a fatal error
+/// An unbalanced quote that would swallow the rest of the file is a fatal error
 /// naming the row, the column and the lines it spans; the rows before it are read.
 #[test]
 fn errors_unbalanced_quote_is_reported_not_swallowed() {
@@ -416,7 +416,7 @@ fn errors_unbalanced_quote_is_reported_not_swallowed() {
     assert!(msg.contains("quote") && msg.contains("3–6"), "{msg}");
 }
 
-/// Issue 10 #8: a live feed (`-`) cut inside its last field: the last line is rejected as
+/// A live feed (`-`) cut inside its last field: the last line is rejected as
 /// possibly truncated (counted as a rejection); a file keeps its unterminated last line, and a
 /// terminated live feed keeps every row.
 #[test]

@@ -1,5 +1,6 @@
-//! Fuzzing of the io parsers (issue 10): the CSV flight-data reader, the mapping TOML and the
-//! model file, on arbitrary and on mutated valid input. Bounded for CI by `PROPTEST_CASES`
+//! Fuzzing of the io parsers (their input is any file a user has, so none may panic): the CSV
+//! flight-data reader, the mapping TOML and the model file, on arbitrary and on mutated valid
+//! input. Bounded for CI by `PROPTEST_CASES`
 //! (default 64); the long run and its measured rate are in `docs/reliability.md`.
 //!
 //! Relations checked, not only "no panic": every data row yields exactly one `Sample` or

@@ -1,7 +1,7 @@
 //! Scalar metrics of an estimate history: convergence time, re-convergence after a change in
-//! truth, relative error. Used by `aeroident poc` (issue 2) and the aircraft reports (issue 4).
+//! truth, relative error. Used by `aeroident poc` and the aircraft reports.
 //!
-//! Definition (issue 2): the *convergence time* is the first time after which the estimate
+//! Definition: the *convergence time* is the first time after which the estimate
 //! stays within ±`tol_rel` (5 % in the reports) of the truth until the end of the record;
 //! `None` if the last sample is outside that band. A non-finite estimate counts as outside.
 
@@ -34,7 +34,7 @@ pub enum MetricsError {
     },
 }
 
-/// Default tolerance of the convergence time, ±5 % of truth (issue 2).
+/// Default tolerance of the convergence time, ±5 % of truth.
 pub const CONVERGENCE_TOL_REL: f64 = 0.05;
 
 /// Half-width of the acceptance band around `truth`: `tol_rel·|truth|`, or `tol_rel` itself

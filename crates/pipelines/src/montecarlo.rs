@@ -1,4 +1,4 @@
-//! Monte Carlo campaigns of the closed-loop `run` experiment (issue 9 item 5): `N` seeded noisy
+//! Monte Carlo campaigns of the closed-loop `run` experiment: `N` seeded noisy
 //! flights of one scenario in parallel (rayon), and per estimator and parameter the statistics
 //! of the final estimates: bias, scatter, mean reported σ, ±2σ coverage, the predicted
 //! Cramér–Rao σ of the flight's inputs, and the median time to within ±10 %.

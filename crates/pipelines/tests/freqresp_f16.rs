@@ -59,7 +59,7 @@ struct Axis {
     mode: ModeName,
 }
 
-/// The targets, as a measurement: run with
+/// The accuracy targets (1 dB, 5° against the linearisation), as a measurement: run with
 /// `cargo test --release -p aeroident-pipelines --test freqresp_f16 -- --include-ignored --nocapture`
 /// (it prints every axis's numbers). Ignored in CI because the targets are not met on these
 /// records (docs/frequency-response.md, "Measured against the linearisation").
@@ -268,7 +268,7 @@ fn q_de_above_the_short_period_follows_the_dynamic_pressure_the_flight_holds() {
     assert!(largest > 0.5, "the q̄ drift must matter here ({largest:.2} dB at most)");
 }
 
-/// Whether a deviation `[ω, γ², dB, deg]` is beyond the 1 dB / 5°.
+/// Whether a deviation `[ω, γ², dB, deg]` is beyond the targets' 1 dB / 5°.
 fn beyond(d: &[f64; 4]) -> bool {
     d[2].abs() > 1.0 || d[3].abs() > 5.0
 }

@@ -1,4 +1,4 @@
-//! Per-call cost of the signal tools inside a simulation step (issue 4 budget: the whole closed
+//! Per-call cost of the signal tools inside a simulation step (budget: the whole closed
 //! loop at ≥ 500× real time at 100 Hz, i.e. ≤ 20 µs per 10 ms step for everything). Criterion
 //! reports the time per call; each should be tens of nanoseconds.
 #![allow(missing_docs)] // criterion_group! generates an undocumented `pub fn`.

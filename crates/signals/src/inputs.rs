@@ -1,4 +1,4 @@
-//! Deterministic pilot inputs (issue 3 item 6; thesis §4.1–§4.2 test inputs): step, pulse,
+//! Deterministic pilot inputs (thesis §4.1–§4.2 test inputs): step, pulse,
 //! doublet, 3-2-1-1, sine, linear and
 //! logarithmic sweeps, Schroeder multisine, and their superposition (recorded inputs are in
 //! [`crate::recorded`], noise in [`crate::noise`]).

@@ -1,5 +1,5 @@
 //! A recorded input read from a CSV file of (time, value) pairs, replayed with linear
-//! interpolation (issue 3 item 6: "a recorded input read from a CSV (time, value)").
+//! interpolation: a test input flown before (a pilot's, another tool's) flown again as it was.
 //!
 //! # File format
 //! A header line, then one row per sample. By default the first column is the time (s) and the

@@ -1,4 +1,4 @@
-//! `aeroident bench`: simulation speed of the F-16 (issue 3).
+//! `aeroident bench`: simulation speed of the F-16.
 //!
 //! Measures one RK4 step of the 13-state F-16 (4 derivative evaluations) at a trimmed condition
 //! (20 000 ft, 675 ft/s, xcg 0.30, the thesis's condition) on one core: the median over

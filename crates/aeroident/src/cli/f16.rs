@@ -1,4 +1,4 @@
-//! `aeroident f16`: the Stevens–Lewis F-16 (issue 3): state derivatives, trim, linearization
+//! `aeroident f16`: the Stevens–Lewis F-16: state derivatives, trim, linearization
 //! and open-loop simulation ([`crate::sim`]).
 //!
 //! ```text

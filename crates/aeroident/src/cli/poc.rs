@@ -1,4 +1,4 @@
-//! `aeroident poc`: the thesis's proof-of-concept cases (issue 2).
+//! `aeroident poc`: the thesis's proof-of-concept cases.
 //!
 //! - `aeroident poc <scenario.toml> --out <dir> [--estimator published|corrected]
 //!   [--solver implicit|explicit]` writes `timeseries.csv`, `summary.json`, `estimates.png`,

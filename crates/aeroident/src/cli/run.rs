@@ -1,4 +1,4 @@
-//! `aeroident run`: aircraft estimation scenarios (issue 4).
+//! `aeroident run`: aircraft estimation scenarios.
 //!
 //! - `aeroident run` — the built-in default scenario (`scenarios/default.toml`, embedded):
 //!   six-axis RLS on the F-16 at the thesis condition, orthogonal multisines on elevator,

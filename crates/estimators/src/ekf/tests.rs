@@ -145,7 +145,7 @@ fn config(st: ModelStructure) -> EkfConfig {
 /// Runs `st` on the synthetic record and checks every parameter against the stated
 /// tolerance: the primary derivatives ([`PRIMARY`]) within 10 % of the truth; every other
 /// parameter within 10 % of its truth where the truth is above 5 % of the coefficient's largest
-/// derivative (the target), else within 5 % of that largest derivative, **or** within
+/// derivative (the accuracy target), else within 5 % of that largest derivative, **or** within
 /// 3 σ (secondary derivatives such as `CY_r`, `Cn_p` move the outputs by less than the sensor
 /// noise with doublets; the filter must then say so by its σ); and ±3σ covers the truth for at
 /// least 80 % of all parameters.

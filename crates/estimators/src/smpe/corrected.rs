@@ -1,5 +1,5 @@
-//! A corrected sliding-mode parameter estimator (issue 2 item 7; derivation and convergence
-//! condition in `docs/smpe-corrected.md`).
+//! A corrected sliding-mode parameter estimator (derivation and
+//! convergence condition in `docs/smpe-corrected.md`).
 //!
 //! It keeps the thesis's ingredients — a sliding surface between measured and model states, a
 //! Lyapunov argument, parameter bounds — but makes θ̂ a *state* updated by a Lyapunov-derived

@@ -219,7 +219,7 @@ pub struct Row {
     pub value: Option<f64>,
     /// Its σ.
     pub sigma: Option<f64>,
-    /// Whether the target applies (truth above 5 % of its coefficient's largest term).
+    /// Whether the accuracy target applies (truth above 5 % of its coefficient's largest term).
     pub targeted: bool,
 }
 

@@ -701,8 +701,9 @@ impl Dynamics<N_STATES> for F16 {
 mod tests {
     use super::*;
 
-    /// Issue 10: a cg outside 0.1–0.5 c̄ (e.g. −0.5, which trimmed) is an error naming xcg and
-    /// the range; the ends and the textbook values are accepted.
+    /// A cg outside 0.1–0.5 c̄ (e.g. −0.5, which trims, though the aircraft is then no longer
+    /// the F-16 the tables describe) is an error naming xcg and the range; the ends and the
+    /// textbook values are accepted.
     #[test]
     fn errors_xcg_outside_range_is_refused() {
         for bad in [-0.5, 0.0, 0.099, 0.501, 2.0, f64::NAN] {

@@ -1,4 +1,4 @@
-//! The aircraft estimation experiments (issue 4, issue 8; thesis §3.4, §4.2, Figure 3.2;
+//! The aircraft estimation experiments (thesis §3.4, §4.2, Figure 3.2;
 //! `spec/thesis-method.md` §3–§5): a reference F-16 flying with true increments named with the
 //! vocabulary, a sensor model, and any estimator:
 //! - the thesis's **two-aircraft** estimators ([`two_aircraft`](crate::aircraft::two_aircraft): published and corrected SMPE,

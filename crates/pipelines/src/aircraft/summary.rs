@@ -5,7 +5,7 @@
 //! reference's total local derivative for sample-driven ones, [`super::experiment`]):
 //! - thesis metrics, ±5 % ([`CONVERGENCE_TOL_REL`]): `convergence_time_s` (settled before the
 //!   entry's own step), `first_within_s`, `reconvergence_time_s` (after its own step);
-//! - issue-8 metrics, ±10 % ([`TARGET_TOL_REL`]): `time_to_10pct_s`, from the start of the
+//! - target metrics, ±10 % ([`TARGET_TOL_REL`]): `time_to_10pct_s`, from the start of the
 //!   excitation until the estimate stays within ±10 % of the truth up to the damage (or the
 //!   end); `reconvergence_10pct_s`, from the damage until it stays within ±10 % of the new truth
 //!   to the end; `covers_truth_2sigma`, whether `|final − truth| ≤ 2σ` at the end.
@@ -21,13 +21,13 @@ use super::experiment::{ChannelLog, ParamLog, Quantity, RunOutput};
 use crate::metrics::{self, CONVERGENCE_TOL_REL, MetricsError};
 use crate::verdict::Evidence;
 
-/// Tolerance of the issue-8 targets: ±10 % of the truth.
+/// Tolerance of the main job's targets: ±10 % of the truth.
 pub const TARGET_TOL_REL: f64 = 0.10;
 
-/// Time allowed by the issue-8 targets after the excitation starts and after the damage, s.
+/// Time allowed by the main job's targets after the excitation starts and after the damage, s.
 pub const TARGET_WINDOW_S: f64 = 5.0;
 
-/// The primary derivatives of the default main job's targets (issue 8): pitch stiffness,
+/// The primary derivatives of the default main job's targets: pitch stiffness,
 /// damping and control power, lift-curve slope, dihedral effect, roll damping and control
 /// power, weathercock stability, yaw damping and control power, side-force slope.
 pub const PRIMARY_DERIVATIVES: [&str; 11] = [
@@ -104,7 +104,7 @@ impl std::ops::Deref for ParamSummary {
     }
 }
 
-/// How many primary derivatives of one estimator meet the issue-8 targets.
+/// How many primary derivatives of one estimator meet the main job's targets.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct TargetSummary {
     /// Estimator label.

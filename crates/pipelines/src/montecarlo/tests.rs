@@ -209,7 +209,8 @@ fn turbulent_and_calm_bounds() {
     assert!(crb.notes.iter().any(|n| n.contains("no Dryden turbulence")));
 }
 
-/// The `--json` document has exactly the keys of the issue (plus `crb_std_error_calm` and `schema_version`).
+/// The `--json` document has exactly its keys (plus `crb_std_error_calm` and
+/// `schema_version`): Python's `montecarlo` and every other reader of it rely on them.
 #[test]
 fn json_keys_exact() {
     let runs = vec![result(0, Some(-0.9), Some(0.1), Some(1.0), None)];

@@ -2,7 +2,7 @@
 //! model becomes an estimator-side [`ParametricModel`] through [`ModelAdapter`]. The
 //! estimators crate stays independent of the models crate; this crate joins them.
 //!
-//! For the F-16 of issue 4: implement `Parameterized<P>` for the aircraft-with-increments
+//! For the F-16: implement `Parameterized<P>` for the aircraft-with-increments
 //! model (replacing the increments), then `ModelAdapter(aircraft)` is the estimated model.
 
 use aeroident_estimators::EstimatorError;

@@ -4,7 +4,8 @@
 //! field they could not use (`r_rad_s`, `Iyy_kgm2`, …), and give an absent channel as the value
 //! NaN (the EKF initialising its states, the flight model's inputs). The user wrote a mapping
 //! channel (`r`) fed by a column. [`estimator_error`] rewrites such an error to name the channel
-//! and where the mapping takes it from (issue 10: "the EKF error names an internal field `r`").
+//! and where the mapping takes it from: a user knows the mapping's channels and columns, not the
+//! estimator's internal field names.
 
 use aeroident_estimators::EstimatorError;
 use aeroident_io::Mapping;

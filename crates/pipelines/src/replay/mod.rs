@@ -1308,7 +1308,7 @@ mod tests {
         assert!(unsupported(&ModelStructure::longitudinal(), &s, false, &[]).is_empty());
     }
 
-    /// Issue 10 #1: in real-time pacing a huge time jump (1e308 s, 1e10 s) neither panics nor
+    /// In real-time pacing a huge time jump (1e308 s, 1e10 s) neither panics nor
     /// sleeps across: the wait is capped at 10 intervals and the jump is reported; ordinary
     /// steps wait their interval.
     #[test]
@@ -1332,7 +1332,7 @@ mod tests {
         assert!((w.as_secs_f64() - 0.5).abs() < 1e-9);
     }
 
-    /// Issue 10 #2: an absurd differentiator window is a clear option error, not an allocation
+    /// An absurd differentiator window is a clear option error, not an allocation
     /// abort.
     #[test]
     fn errors_diff_window_has_an_upper_bound() {
@@ -1346,7 +1346,7 @@ mod tests {
         }
     }
 
-    /// Issue 10 #15: the history stays bounded (decimated by a doubling stride) and keeps the
+    /// The history stays bounded (decimated by a doubling stride) and keeps the
     /// first and the last sample exactly.
     #[test]
     fn analytic_history_is_decimated_and_bounded() {
@@ -1377,7 +1377,7 @@ mod tests {
         assert_eq!(h.t_s, (0..50).map(f64::from).collect::<Vec<_>>());
     }
 
-    /// Issue 10 #17: when every row is rejected, the error gives the first reasons (row and
+    /// When every row is rejected, the error gives the first reasons (row and
     /// column), not only a count.
     #[test]
     fn errors_no_usable_samples_names_the_first_reasons() {
@@ -1389,7 +1389,7 @@ mod tests {
         assert!(e.contains("row 2: column `a`: blank value"), "{e}");
     }
 
-    /// Issue 10 #10: a forgetting factor so small that nothing is ever identified reports every
+    /// A forgetting factor so small that nothing is ever identified reports every
     /// estimate as `None` (null), never 0.0, and the status says so.
     #[test]
     fn errors_never_identified_parameters_are_null_not_zero() {

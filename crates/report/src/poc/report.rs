@@ -8,7 +8,7 @@ use aeroident_pipelines::poc::scenario::PocScenario;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
-/// Tolerance of the corrected estimator's target (issue 2): final estimate within 2 %.
+/// Tolerance of the corrected estimator's target: final estimate within 2 %.
 pub const TARGET_FINAL_REL: f64 = 0.02;
 /// Target on time: no slower than the thesis's time × 2.
 pub const TARGET_TIME_FACTOR: f64 = 2.0;

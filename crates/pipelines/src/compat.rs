@@ -38,6 +38,7 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::Read;
 
+pub mod long;
 mod misaligned;
 mod sensors;
 
@@ -133,7 +134,9 @@ pub fn check_record<R: Read>(
 
 /// Checks the compatibility of the records `readers` read (one aircraft, one mapping) with
 /// `config`, over exactly the data a fit of them uses: the time windows `windows` of each
-/// (empty: the whole record), each window and each file a manoeuvre of its own, every
+/// (empty: the whole record; one record with a stretch longer than [`long::LONG_STRETCH_S`]
+/// without a gap is checked on its best manoeuvres instead, and a warning names them:
+/// [`long`]), each window and each file a manoeuvre of its own, every
 /// manoeuvre in one joint fit (one set of biases, scale factors and shifts per flight). A
 /// taxi segment or a ground run outside the windows does not enter it.
 ///
@@ -149,7 +152,19 @@ pub fn check_records<R: Read>(
     let file = readers.iter().map(|r| r.file()).collect::<Vec<_>>().join(", ");
     let mapping = readers.first().map(FlightDataReader::mapping);
     let screen = Some(crate::record::outliers::SpikeScreen::default());
-    let rec = read_records(readers, screen, None, windows)?;
+    let one_file = readers.len() == 1;
+    let mut rec = read_records(readers, screen, None, windows)?;
+    let mut judged_note = None;
+    if windows.is_empty() && one_file {
+        match long::judged(&rec.manoeuvres) {
+            long::Judged::Whole => {}
+            long::Judged::WholeLong(why) => judged_note = Some(why),
+            long::Judged::Windows(chosen, why) => {
+                rec = long::within(rec, &chosen);
+                judged_note = Some(why);
+            }
+        }
+    }
     let slices: Vec<&[aeroident_estimators::AirDataSample]> =
         rec.manoeuvres.iter().map(Vec::as_slice).collect();
     let not_judged = match &mapping {
@@ -162,7 +177,8 @@ pub fn check_records<R: Read>(
         RecordError::Model(format!("compatibility check of {file}: {why}"))
     })?;
     let (rejections, unlisted) = rec.rejections.finish();
-    let mut warnings = result.notes.clone();
+    let mut warnings: Vec<String> = judged_note.into_iter().collect();
+    warnings.extend(result.notes.iter().cloned());
     warnings.extend(not_judged);
     warnings.extend(unlisted);
     let disagreements = consistency(&slices, config, &result);

@@ -85,26 +85,11 @@ pub fn inspect_ranked(
         .ok()
         .and_then(|s| envelope::envelope(s, &envelope::EnvelopeRule::default()));
     let ground = envelope.as_ref().map_or(&[][..], |e| e.ground.as_slice());
-    // The flight and the ground are judged apart, each by its own levels: a taxi's control
-    // check would otherwise set the flight's range and threshold.
-    let (detections, ground_detections): (Vec<ChannelDetection>, Vec<ChannelDetection>) = ins
-        .surfaces
-        .iter()
-        .filter_map(|s| {
-            let sig = ins.signals.iter().find(|g| g.column == s.column)?;
-            let on_ground = |t: f64| ground.iter().any(|g| (g.start_s..=g.end_s).contains(&t));
-            let part = |ground: bool| {
-                let (t, v): (Vec<f64>, Vec<f64>) = sig
-                    .t_s
-                    .iter()
-                    .zip(&sig.values)
-                    .filter(|(t, _)| on_ground(**t) == ground)
-                    .unzip();
-                detect::detect(&s.column, &t, &v, rule)
-            };
-            Some((part(false), part(true)))
-        })
-        .unzip();
+    let signals = ins.surfaces.iter().filter_map(|s| {
+        let sig = ins.signals.iter().find(|g| g.column == s.column)?;
+        Some((s.column.as_str(), sig.t_s.as_slice(), sig.values.as_slice()))
+    });
+    let (detections, ground_detections) = detect_apart(signals, ground, rule);
     let missing: Vec<String> = ins
         .surfaces
         .iter()
@@ -137,6 +122,58 @@ pub fn inspect_ranked(
         flight_note,
     };
     Ok(InspectOutcome { report, signals: ins.signals })
+}
+
+/// Each surface signal `(channel, t_s, values)`'s manoeuvres, `(flight, ground)`: the flight
+/// and the ground spans `ground` are judged apart, each by its own levels, since a taxi's
+/// control check would otherwise set the flight's range and threshold.
+fn detect_apart<'a>(
+    signals: impl Iterator<Item = (&'a str, &'a [f64], &'a [f64])>,
+    ground: &[envelope::GroundSpan],
+    rule: &DetectionRule,
+) -> (Vec<ChannelDetection>, Vec<ChannelDetection>) {
+    let on_ground = |t: f64| ground.iter().any(|g| (g.start_s..=g.end_s).contains(&t));
+    signals
+        .map(|(channel, t_s, values)| {
+            let part = |ground: bool| {
+                let (t, v): (Vec<f64>, Vec<f64>) =
+                    t_s.iter().zip(values).filter(|(t, _)| on_ground(**t) == ground).unzip();
+                detect::detect(channel, &t, &v, rule)
+            };
+            (part(false), part(true))
+        })
+        .unzip()
+}
+
+/// The ranking of a record already read as air-data samples `samples` (time order), its
+/// manoeuvres detected on the mapped surfaces `de`, `da`, `dr` by `rule` with sets of
+/// `set_size` windows per axis: what [`inspect_ranked`] judges, without the log's own columns
+/// (the surfaces in radians, as mapped, rather than in the column's unit: the detector's levels
+/// scale with the signal). `None` when no surface is mapped.
+pub fn rank_samples(
+    samples: &[aeroident_estimators::AirDataSample],
+    rule: &DetectionRule,
+    set_size: usize,
+) -> Option<Ranking> {
+    type Surface = fn(&aeroident_estimators::AirDataSample) -> Option<f64>;
+    const SURFACES: [(&str, Surface); 3] =
+        [("de", |s| s.de_rad), ("da", |s| s.da_rad), ("dr", |s| s.dr_rad)];
+    let t: Vec<f64> = samples.iter().map(|s| s.t_s).collect();
+    let columns: Vec<(&str, Vec<f64>)> = SURFACES
+        .iter()
+        .filter(|(_, get)| samples.iter().any(|s| get(s).is_some()))
+        .map(|(name, get)| (*name, samples.iter().map(|s| get(s).unwrap_or(f64::NAN)).collect()))
+        .collect();
+    if columns.is_empty() {
+        return None;
+    }
+    let envelope = envelope::envelope(samples, &envelope::EnvelopeRule::default());
+    let ground = envelope.as_ref().map_or(&[][..], |e| e.ground.as_slice());
+    let signals = columns.iter().map(|(c, v)| (*c, t.as_slice(), v.as_slice()));
+    let (detections, ground_detections) = detect_apart(signals, ground, rule);
+    let inputs = [&detections, &ground_detections].map(|d| windows_of(d));
+    let ranking = rank::rank(samples, envelope, &inputs, set_size);
+    Some(Ranking { ground_detections, ..ranking })
 }
 
 /// The suggested windows of `detections`, `(start, end, channel)`.

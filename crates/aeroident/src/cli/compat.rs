@@ -36,7 +36,9 @@ pub struct CompatArgs {
     /// A time window `START:END` (record seconds) to check, as `replay --window` fits it;
     /// repeat it for several manoeuvres; or `auto`, the manoeuvres `aeroident inspect` finds
     /// on the mapping's surfaces. Default: the whole record (taxi and ground runs included:
-    /// give the fit's windows to check the data the fit uses).
+    /// give the fit's windows to check the data the fit uses); a record running more than ten
+    /// minutes without a gap is checked on its best four manoeuvres per axis instead, named
+    /// in a warning.
     #[arg(long = "window", value_name = "START:END|auto", value_parser = super::auto_window::parse, allow_hyphen_values = true)]
     pub windows: Vec<super::auto_window::WindowSpec>,
     /// A further record of the same aircraft (same mapping and format), checked jointly with

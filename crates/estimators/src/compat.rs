@@ -45,7 +45,10 @@
 //! stopped earlier reports its last iterate
 //! ([`Termination`]). σ is the Cramér–Rao bound `sqrt(diag M⁻¹)` and, where formed, the
 //! coloured-residual σ of output error's spectral sandwich (`crate::coloured::batch`), which
-//! the residuals of a real record (turbulence, model error, sample-and-hold) call for.
+//! the residuals of a real record (turbulence, model error, sample-and-hold) call for. Each
+//! initial state moves its own manoeuvre alone, so `M`, its solves and the sandwich are formed
+//! by manoeuvre blocks (`blocks`, `coloured`): a joint check costs time linear in its
+//! manoeuvres, not cubic in its unknowns.
 //!
 //! Without a `β` channel, `β` is reconstructed from the integrated `v`. The initial `v` and the
 //! `ay` bias are still estimated when the record rolls (`v` enters `ẇ` through `p v`, so `α`
@@ -178,6 +181,8 @@ use crate::sample::AirDataSample;
 use aeroident_physics::rigid_body::{self as rb, SinCos};
 use nalgebra::{DMatrix, DVector};
 
+mod blocks;
+mod coloured;
 mod determined;
 mod held_out;
 mod inputs;
@@ -187,6 +192,7 @@ pub use held_out::{
     FAIL_SPREADS, HeldOut, HeldOutCorrection, MIN_FAILING_RISE, PIECE_TOO_SHORT, fails, held_out,
 };
 
+use blocks::{Partition, Schur, Sensitivities};
 use inputs::Inputs;
 
 /// A measured channel the check corrects.
@@ -1029,6 +1035,14 @@ impl Problem<'_> {
         y: &mut Vec<f64>,
     ) -> Result<(), EstimatorError> {
         let raw = self.states(c, m)?;
+        self.outputs_of(c, m, &raw, y);
+        Ok(())
+    }
+
+    /// The model outputs of manoeuvre `m` under the corrections `c` from its sensed states
+    /// `raw` ([`Problem::states`] under `c`, or under any corrections that differ from `c` only
+    /// in the outputs' own: those move no state), appended to `y`.
+    fn outputs_of(&self, c: &Corrections, m: usize, raw: &[[f64; 6]], y: &mut Vec<f64>) {
         let t: Vec<f64> = self.man[m].iter().map(|s| s.t_s).collect();
         let series: Vec<Vec<f64>> = (0..6).map(|j| raw.iter().map(|r| r[j]).collect()).collect();
         for &tk in &t {
@@ -1039,7 +1053,6 @@ impl Problem<'_> {
                 y.push((1.0 + c.scale[i]) * h + c.bias[i]);
             }
         }
-        Ok(())
     }
 
     /// Residuals `z − y` (heading wrapped) into `e`; returns the per-output variances.
@@ -1103,34 +1116,39 @@ fn delta(u: Unknown) -> f64 {
 }
 
 /// The normal equations at `beta`: `(M, g)` with `M = Σ Sᵀ W S`, `g = Σ Sᵀ W e`, `W = R⁻¹`,
-/// `S` by central differences.
+/// `S` by central differences, formed by manoeuvre blocks (`blocks`).
 fn normal_equations(
     p: &Problem<'_>,
     beta: &[f64],
     e: &[f64],
     r: &[f64],
 ) -> Result<(DMatrix<f64>, DVector<f64>), EstimatorError> {
-    Ok(information(&sensitivities(p, beta)?, e, r))
+    Ok(Sensitivities::of(p, beta)?.information(e, r))
 }
 
-/// `(M, g)` of sensitivities `s` (`N·ny × nβ`), residuals `e` and output variances `r`.
+/// `(M, g)` of dense sensitivities `s` (`N·ny × nβ`), residuals `e` and output variances `r`:
+/// what the blocks must equal.
+#[cfg(test)]
 fn information(s: &DMatrix<f64>, e: &[f64], r: &[f64]) -> (DMatrix<f64>, DVector<f64>) {
     let ny = r.len();
     let sw = DMatrix::from_fn(s.nrows(), s.ncols(), |row, i| s[(row, i)] / r[row % ny]);
     (sw.transpose() * s, sw.transpose() * DVector::from_column_slice(e))
 }
 
-/// `S = ∂y/∂β` at `beta` by central differences, `N·ny × nβ`.
+/// `S = ∂y/∂β` at `beta` by central differences, `N·ny × nβ`, dense: what the blocks hold.
+#[cfg(test)]
 fn sensitivities(p: &Problem<'_>, beta: &[f64]) -> Result<DMatrix<f64>, EstimatorError> {
-    let columns =
-        (0..beta.len()).map(|i| sensitivity(p, beta, i)).collect::<Result<Vec<_>, _>>()?;
-    Ok(DMatrix::from_fn(p.n_samples() * p.ny(), beta.len(), |row, i| columns[i][row]))
+    Ok(Sensitivities::of(p, beta)?.dense())
 }
 
 /// `∂y/∂β_i` at `beta` by a central difference of [`delta`], `N·ny` row-major.
 fn sensitivity(p: &Problem<'_>, beta: &[f64], i: usize) -> Result<Vec<f64>, EstimatorError> {
     if let Unknown::Initial { manoeuvre, .. } = p.unknowns[i] {
-        return initial_sensitivity(p, beta, i, manoeuvre);
+        let own = manoeuvre_sensitivity(p, beta, i, manoeuvre)?;
+        let before = p.man[..manoeuvre].iter().map(|s| s.len()).sum::<usize>() * p.ny();
+        let mut column = vec![0.0; p.n_samples() * p.ny()];
+        column[before..before + own.len()].copy_from_slice(&own);
+        return Ok(column);
     }
     let d = delta(p.unknowns[i]);
     let (mut yp, mut ym) = (Vec::new(), Vec::new());
@@ -1142,12 +1160,43 @@ fn sensitivity(p: &Problem<'_>, beta: &[f64], i: usize) -> Result<Vec<f64>, Esti
     Ok(yp.iter().zip(&ym).map(|(a, b)| (a - b) / (2.0 * d)).collect())
 }
 
-/// [`sensitivity`] of the initial state `beta[i]` of manoeuvre `m`, which moves that
-/// manoeuvre's outputs alone: only it is simulated, and every other row is the 0 that the
-/// central difference of their unchanged outputs gives exactly. Simulating every manoeuvre
+/// Whether `u` is an output's own correction (its bias, scale factor or time shift): it enters
+/// the outputs' formation alone, not the kinematics.
+fn moves_no_state(u: Unknown) -> bool {
+    matches!(u, Unknown::Bias(c) | Unknown::Scale(c) | Unknown::TimeShift(c) if Channel::OUTPUTS.contains(&c))
+}
+
+/// [`sensitivity`] of an output's own correction `beta[i]` ([`moves_no_state`]) from the
+/// sensed states `sensed` of every manoeuvre at `beta`: the outputs are formed anew at
+/// `beta[i] ± δ` from the same states, the same numbers as integrating the kinematics again for
+/// each, at a small part of the cost (seven of a check's dozen global unknowns are of this
+/// kind).
+fn output_sensitivity(
+    p: &Problem<'_>,
+    beta: &[f64],
+    i: usize,
+    sensed: &[Vec<[f64; 6]>],
+) -> Vec<f64> {
+    let d = delta(p.unknowns[i]);
+    let (mut yp, mut ym) = (Vec::new(), Vec::new());
+    let mut trial = beta.to_vec();
+    trial[i] = beta[i] + d;
+    let plus = p.decode(&trial);
+    trial[i] = beta[i] - d;
+    let minus = p.decode(&trial);
+    for (m, raw) in sensed.iter().enumerate() {
+        p.outputs_of(&plus, m, raw, &mut yp);
+        p.outputs_of(&minus, m, raw, &mut ym);
+    }
+    yp.iter().zip(&ym).map(|(a, b)| (a - b) / (2.0 * d)).collect()
+}
+
+/// The rows of manoeuvre `m` of [`sensitivity`] of its initial state `beta[i]`, which moves
+/// that manoeuvre's outputs alone: only it is simulated (every other row is the 0 that the
+/// central difference of their unchanged outputs gives exactly). Simulating every manoeuvre
 /// for each of the six initial states of each made a joint check of `M` manoeuvres cost `M`
 /// times a whole-record pass per state, quadratic in the windows of a flight.
-fn initial_sensitivity(
+fn manoeuvre_sensitivity(
     p: &Problem<'_>,
     beta: &[f64],
     i: usize,
@@ -1160,16 +1209,17 @@ fn initial_sensitivity(
     p.simulate_manoeuvre(&p.decode(&trial), m, &mut yp)?;
     trial[i] = beta[i] - d;
     p.simulate_manoeuvre(&p.decode(&trial), m, &mut ym)?;
-    let before = p.man[..m].iter().map(|s| s.len()).sum::<usize>() * p.ny();
-    let mut column = vec![0.0; p.n_samples() * p.ny()];
-    for (c, (a, b)) in column[before..].iter_mut().zip(yp.iter().zip(&ym)) {
-        *c = (a - b) / (2.0 * d);
-    }
-    Ok(column)
+    Ok(yp.iter().zip(&ym).map(|(a, b)| (a - b) / (2.0 * d)).collect())
 }
 
-/// `(M + λ diag M)⁻¹ g`, Jacobi-scaled (Cholesky); `None` when not positive definite.
-fn damped(m: &DMatrix<f64>, g: &DVector<f64>, lambda: f64) -> Option<DVector<f64>> {
+/// `(M + λ diag M)⁻¹ g`, Jacobi-scaled (Cholesky by the blocks of `part`, [`Schur`]); `None`
+/// when not positive definite.
+fn damped(
+    m: &DMatrix<f64>,
+    g: &DVector<f64>,
+    lambda: f64,
+    part: &Partition,
+) -> Option<DVector<f64>> {
     let n = m.nrows();
     let d: Vec<f64> = (0..n).map(|i| 1.0 / m[(i, i)].sqrt()).collect();
     if d.iter().any(|v| !v.is_finite()) {
@@ -1178,7 +1228,7 @@ fn damped(m: &DMatrix<f64>, g: &DVector<f64>, lambda: f64) -> Option<DVector<f64
     let ms =
         DMatrix::from_fn(n, n, |i, j| m[(i, j)] * d[i] * d[j] + if i == j { lambda } else { 0.0 });
     let gs = DVector::from_fn(n, |i, _| g[i] * d[i]);
-    let sol = ms.cholesky()?.solve(&gs);
+    let sol = Schur::of(&ms, part)?.solve(&gs);
     Some(DVector::from_fn(n, |i, _| sol[i] * d[i]))
 }
 
@@ -1202,22 +1252,24 @@ impl Problem<'_> {
         self.simulate(beta, &mut y)?;
         let mut r = self.residuals(&y, &mut e);
         let mut lambda = 0.0;
+        let part = Partition::of(&self.unknowns, self.man.len());
         // Relative change of det R over the last accepted iteration (None before one).
         let mut last_rel = None;
         for iteration in 1..=config.max_iterations {
             let (m, g) = normal_equations(self, beta, &e, &r)?;
-            if iteration == 1 && damped(&m, &g, 0.0).is_none() {
+            if iteration == 1 && damped(&m, &g, 0.0, &part).is_none() {
                 return Err(EstimatorError::Numerical {
                     what: "compatibility check: the information matrix is singular at the start (an unknown the record does not determine)",
                     t_s: self.man[0][0].t_s,
                 });
             }
-            let Some((b, e_new, r_new, step_sigma)) = self.descend(beta, &m, &g, &r, &mut lambda)
-            else {
+            let descent = self.descend(beta, (&m, &g, &part), &r, &mut lambda);
+            let Some((b, e_new, r_new, step_sigma)) = descent else {
                 // At the optimum the central-difference sensitivities leave a step no damping
                 // can turn into a descent (the cost is flat to its rounding there).
                 let floor = config.step_tolerance_sigma.max(NO_DESCENT_STEP_SIGMA);
-                let tiny = damped(&m, &g, 0.0).is_some_and(|st| max_sigma(&m, &st) < floor);
+                let tiny =
+                    damped(&m, &g, 0.0, &part).is_some_and(|st| max_sigma(&m, &st, &part) < floor);
                 let why = NotConverged::NoDescent;
                 let t = Termination::after(tiny, last_rel, why, config.cost_tolerance);
                 return Ok((t, iteration - 1));
@@ -1234,24 +1286,24 @@ impl Problem<'_> {
     }
 
     /// A damped step from `beta` that lowers `ln det R` (λ raised ×10 from 10⁻³ up to 10¹⁰
-    /// until one does; lowered ×10 after an accepted one).
+    /// until one does; lowered ×10 after an accepted one); `(m, g, part)` the normal equations
+    /// and the partition of the unknowns.
     fn descend(
         &self,
         beta: &[f64],
-        m: &DMatrix<f64>,
-        g: &DVector<f64>,
+        (m, g, part): (&DMatrix<f64>, &DVector<f64>, &Partition),
         r: &[f64],
         lambda: &mut f64,
     ) -> Accepted {
         let (mut y, mut e) = (Vec::new(), Vec::new());
         loop {
-            if let Some(step) = damped(m, g, *lambda) {
+            if let Some(step) = damped(m, g, *lambda, part) {
                 let trial: Vec<f64> = beta.iter().zip(step.iter()).map(|(b, d)| b + d).collect();
                 if self.simulate(&trial, &mut y).is_ok() {
                     let r_try = self.residuals(&y, &mut e);
                     if ln_det(&r_try) < ln_det(r) {
                         *lambda = if *lambda < 1e-6 { 0.0 } else { *lambda / 10.0 };
-                        return Some((trial, e, r_try, max_sigma(m, &step)));
+                        return Some((trial, e, r_try, max_sigma(m, &step, part)));
                     }
                 }
             }
@@ -1272,23 +1324,20 @@ impl Problem<'_> {
         let (mut y, mut e) = (Vec::new(), Vec::new());
         self.simulate(&beta, &mut y)?;
         let r = self.residuals(&y, &mut e);
-        let s = sensitivities(self, &beta)?;
-        let (m, _) = information(&s, &e, &r);
+        let s = Sensitivities::of(self, &beta)?;
+        let (m, _) = s.information(&e, &r);
         let n = m.nrows();
-        let inv = m.clone().cholesky().map(|c| c.inverse()).ok_or(EstimatorError::Numerical {
+        let part = Partition::of(&self.unknowns, self.man.len());
+        let inv = Schur::of(&m, &part).map(|c| c.inverse()).ok_or(EstimatorError::Numerical {
             what: "compatibility check: the information matrix is singular at the estimate, so the record does not determine every bias, scale factor, time shift and initial state asked for (too short, or too little motion in some axis); give longer or more varied manoeuvres, or ask for fewer unknowns (--no-time-shifts, no --inertial-scale-factors)",
             t_s: self.man[0][0].t_s,
         })?;
         // The residuals of a real record are coloured (turbulence, model error, sample-and-hold):
-        // the spectral sandwich of output error (crate::coloured::batch, "Spectral form").
-        // Column-major storage of Sᵀ is S row-major, the layout the sandwich takes.
-        let s_rows = s.transpose();
+        // the spectral sandwich of output error (crate::coloured::batch, "Spectral form"), by
+        // the manoeuvres' blocks (`coloured`).
         let w: Vec<f64> = r.iter().map(|v| 1.0 / v).collect();
-        let lengths: Vec<usize> = self.man.iter().map(|m| m.len()).collect();
-        let sigma_coloured =
-            crate::coloured::batch::spectral(s_rows.as_slice(), &e, &w, &lengths, &inv)
-                .covariance
-                .map(|c| (0..n).map(|i| c[(i, i)].max(0.0).sqrt()).collect());
+        let sigma_coloured = coloured::spectral(&s, &e, &w, &inv)
+            .map(|c| (0..n).map(|i| c[(i, i)].max(0.0).sqrt()).collect());
         let ny = self.ny();
         let ns = self.n_samples() as f64;
         let residual_mean =
@@ -1326,12 +1375,13 @@ impl Problem<'_> {
     }
 }
 
-/// The largest `|step_i| / sqrt((M⁻¹)_ii)` (∞ when `M` is singular).
-fn max_sigma(m: &DMatrix<f64>, step: &DVector<f64>) -> f64 {
-    match m.clone().cholesky() {
+/// The largest `|step_i| / sqrt((M⁻¹)_ii)` (∞ when `M` is singular); only the diagonal of
+/// `M⁻¹` is formed, by the blocks of `part` ([`Schur::inverse_diagonal`]).
+fn max_sigma(m: &DMatrix<f64>, step: &DVector<f64>, part: &Partition) -> f64 {
+    match Schur::of(m, part) {
         Some(c) => {
-            let inv = c.inverse();
-            (0..step.len()).map(|i| step[i].abs() / inv[(i, i)].sqrt()).fold(0.0, f64::max)
+            let inv = c.inverse_diagonal();
+            (0..step.len()).map(|i| step[i].abs() / inv[i].sqrt()).fold(0.0, f64::max)
         }
         None => f64::INFINITY,
     }

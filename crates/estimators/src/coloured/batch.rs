@@ -74,6 +74,19 @@ pub(crate) use spectral::TAPERS as SPECTRAL_TAPERS;
 pub(crate) use spectral::covariance as spectral;
 pub(crate) use spectral::covariance_until as spectral_until;
 
+/// Half-spectrum transforms of the `ncol` real columns of `x` (`len × ncol` row-major),
+/// zero-padded to `p` (even): `[c][j]` for `j = 0..=p/2`. For the compatibility check's
+/// spectral sandwich by manoeuvre blocks (`crate::compat`), which must transform as the
+/// general form does.
+pub(crate) fn half_spectra(
+    planner: &mut rustfft::FftPlanner<f64>,
+    x: &[f64],
+    ncol: usize,
+    p: usize,
+) -> Vec<Vec<rustfft::num_complex::Complex64>> {
+    lags::half_spectra(planner, x, ncol, p)
+}
+
 use nalgebra::DMatrix;
 use std::vec;
 use std::vec::Vec;

@@ -11,9 +11,8 @@
 //! white-noise variances ([`Problem::noise_variances`]), which are smaller than any fit's
 //! residuals, so what it leaves out the fit could never have determined.
 
-use super::{
-    CompatResult, EstimatorError, MAX_SHIFT_SIGMA_S, Problem, Unknown, sensitivities, sensitivity,
-};
+use super::blocks::Sensitivities;
+use super::{CompatResult, EstimatorError, MAX_SHIFT_SIGMA_S, Problem, Unknown, sensitivity};
 use nalgebra::DMatrix;
 
 /// Largest Cramér–Rao σ of a scale-factor error, with the other unknowns estimated, that the
@@ -75,9 +74,9 @@ impl Problem<'_> {
         &self,
         excluded: &[Unknown],
     ) -> Result<(Vec<Unknown>, Vec<String>), EstimatorError> {
-        let s = sensitivities(self, &self.start())?;
+        let s = Sensitivities::of(self, &self.start())?;
         let r = self.noise_variances();
-        let (m, _) = super::information(&s, &vec![0.0; s.nrows()], &r);
+        let (m, _) = s.information(&vec![0.0; self.n_samples() * self.ny()], &r);
         let mut kept: Vec<usize> =
             (0..self.unknowns.len()).filter(|&i| !excluded.contains(&self.unknowns[i])).collect();
         let mut out = (Vec::new(), Vec::new());

@@ -759,3 +759,78 @@ fn an_initial_states_sensitivity_is_its_own_manoeuvres_alone() {
     }
     assert_eq!(initial, 18);
 }
+
+/// A problem of three manoeuvres of the synthetic record with the injected faults and the
+/// gyro shifts, at its start: the problem, the start, its residuals and output variances.
+fn three_manoeuvres(data: &[AirDataSample]) -> [&[AirDataSample]; 3] {
+    [&data[..200], &data[200..450], &data[450..700]]
+}
+
+/// The largest difference of two matrices over the largest element of the second.
+fn relative_difference(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
+    (a - b).amax() / b.amax()
+}
+
+/// The information matrix and gradient summed by manoeuvre blocks are the dense `Sᵀ W S` and
+/// `Sᵀ W e`, and the solves and inverse through the Schur complement of the initial states are
+/// the dense Cholesky ones (to 10⁻¹⁰ of their largest element).
+#[test]
+fn the_block_information_matrix_and_its_solves_are_the_dense_ones() {
+    let (data, _) = record(30.0, 0.02, INJECTED, 7);
+    let man = three_manoeuvres(&data);
+    let p = Problem::new(&man, &with_gyros(), Vec::new()).unwrap();
+    let beta = p.start();
+    let (mut y, mut e) = (Vec::new(), Vec::new());
+    p.simulate(&beta, &mut y).unwrap();
+    let r = p.residuals(&y, &mut e);
+    let (m_dense, g_dense) = information(&sensitivities(&p, &beta).unwrap(), &e, &r);
+    let (m, g) = Sensitivities::of(&p, &beta).unwrap().information(&e, &r);
+    assert_eq!(m.nrows(), p.unknowns.len());
+    assert!(relative_difference(&m, &m_dense) < 1e-10, "{}", relative_difference(&m, &m_dense));
+    let (gm, gd) = (DMatrix::from_column_slice(g.len(), 1, g.as_slice()), {
+        DMatrix::from_column_slice(g_dense.len(), 1, g_dense.as_slice())
+    });
+    assert!(relative_difference(&gm, &gd) < 1e-10, "{}", relative_difference(&gm, &gd));
+    let part = Partition::of(&p.unknowns, man.len());
+    assert_eq!((part.own.len(), part.own[2].len()), (3, 6));
+    let schur = Schur::of(&m, &part).unwrap();
+    let chol = m.clone().cholesky().unwrap();
+    let inv = chol.inverse();
+    assert!(relative_difference(&schur.inverse(), &inv) < 1e-10);
+    let diag = DMatrix::from_row_slice(inv.nrows(), 1, &schur.inverse_diagonal());
+    assert!(
+        relative_difference(&diag, &DMatrix::from_fn(inv.nrows(), 1, |i, _| inv[(i, i)])) < 1e-10
+    );
+    let x = schur.solve(&g);
+    let xd = chol.solve(&g);
+    let (x, xd) = (DMatrix::from_column_slice(x.len(), 1, x.as_slice()), {
+        DMatrix::from_column_slice(xd.len(), 1, xd.as_slice())
+    });
+    assert!(relative_difference(&x, &xd) < 1e-10, "{}", relative_difference(&x, &xd));
+}
+
+/// The spectral coloured-residual covariance formed on the manoeuvre blocks is the general
+/// form's on the dense sensitivities (to 10⁻⁸ of its largest element: the general form's
+/// square root of the covariance rounds differently), on three manoeuvres of a record with
+/// injected faults at the start (large, coloured residuals).
+#[test]
+fn the_block_spectral_sandwich_is_the_dense_one() {
+    let (data, _) = record(30.0, 0.02, INJECTED, 7);
+    let man = three_manoeuvres(&data);
+    let p = Problem::new(&man, &CompatConfig::default(), Vec::new()).unwrap();
+    let beta = p.start();
+    let (mut y, mut e) = (Vec::new(), Vec::new());
+    p.simulate(&beta, &mut y).unwrap();
+    let r = p.residuals(&y, &mut e);
+    let s = Sensitivities::of(&p, &beta).unwrap();
+    let (m, _) = s.information(&e, &r);
+    let inv = m.clone().cholesky().unwrap().inverse();
+    let w: Vec<f64> = r.iter().map(|v| 1.0 / v).collect();
+    let lengths: Vec<usize> = man.iter().map(|m| m.len()).collect();
+    let dense = s.dense().transpose();
+    let general = crate::coloured::batch::spectral(dense.as_slice(), &e, &w, &lengths, &inv);
+    let general = general.covariance.unwrap();
+    let blocks = coloured::spectral(&s, &e, &w, &inv).unwrap();
+    let d = relative_difference(&blocks, &general);
+    assert!(d < 1e-8, "{d}");
+}

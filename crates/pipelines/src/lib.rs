@@ -37,6 +37,7 @@ pub mod export;
 pub mod freqresp;
 pub mod inspect;
 pub mod job;
+pub mod kinematics;
 pub mod live;
 /// Convergence-time and error metrics of estimate histories.
 pub mod metrics;

@@ -45,7 +45,7 @@ const MIN_ROWS: usize = 50;
 const MIN_ALPHA_EXCURSION_RAD: f64 = 0.0175;
 
 /// Refuses a record whose sensors the check would misread (module doc): a constant channel;
-/// a gyro or attitude in the wrong unit (the Euler kinematics, [`crate::replay::kinematics`]);
+/// a gyro or attitude in the wrong unit (the Euler kinematics, [`crate::kinematics`]);
 /// a normal accelerometer in the wrong unit ([`az_misread`]); an α vane in the wrong unit
 /// ([`alpha_gain`]), judged on the manoeuvres that move α ([`MIN_ALPHA_EXCURSION_RAD`]). The
 /// error names the channel as `mapping` does; `Ok` holds what was not judged, and why.
@@ -65,7 +65,7 @@ pub(super) fn believable(
             ));
         }
     }
-    let kinematics = crate::replay::kinematics::Kinematics::of_manoeuvres(slices);
+    let kinematics = crate::kinematics::Kinematics::of_manoeuvres(slices);
     let mut misread: Vec<String> =
         kinematics.warnings(mapping).into_iter().map(|w| w.text).collect();
     // The accelerometer first: it enters the vane's kinematic α̇, and its mean needs no vane.
@@ -114,23 +114,14 @@ fn moving_alpha<'a>(
 /// with β where mapped) integrated (trapezoidal) over its samples, less the line an
 /// accelerometer bias integrates to. `None` without the channels on every sample.
 fn alpha_excursion(slice: &[AirDataSample]) -> Option<f64> {
-    let rated: Vec<(f64, f64)> =
-        slice.iter().filter_map(|s| Some((s.t_s, alpha_rate(s, true)?))).collect();
-    if rated.len() < 3 {
+    let (t, rate): (Vec<f64>, Vec<f64>) =
+        slice.iter().filter_map(|s| Some((s.t_s, alpha_rate(s, true)?))).unzip();
+    if t.len() < 3 {
         return None;
     }
-    let mut alpha = vec![0.0; rated.len()];
-    for i in 1..rated.len() {
-        let dt = rated[i].0 - rated[i - 1].0;
-        alpha[i] = alpha[i - 1] + 0.5 * (rated[i].1 + rated[i - 1].1) * dt;
-    }
-    let n = rated.len() as f64;
-    let (tm, am) = (rated.iter().map(|r| r.0).sum::<f64>() / n, alpha.iter().sum::<f64>() / n);
-    let stt: f64 = rated.iter().map(|r| (r.0 - tm).powi(2)).sum();
-    let sta: f64 = rated.iter().zip(&alpha).map(|(r, a)| (r.0 - tm) * (a - am)).sum();
-    let slope = if stt > 0.0 { sta / stt } else { 0.0 };
-    let left = rated.iter().zip(&alpha).map(|(r, a)| a - slope * (r.0 - tm));
-    let (lo, hi) = left.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), a| (l.min(a), h.max(a)));
+    let alpha = crate::kinematics::integral_less_line(&t, &rate);
+    let (lo, hi) =
+        alpha.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), a| (l.min(*a), h.max(*a)));
     (hi - lo).is_finite().then_some(hi - lo)
 }
 

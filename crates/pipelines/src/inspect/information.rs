@@ -4,8 +4,10 @@
 //! # The regressions
 //!
 //! - **pitch**: q̇ on α, q, δe (and a constant): `Cm_alpha`, `Cm_q`, `Cm_de`;
-//! - **lateral**: ṗ and ṙ each on β (a_y where the record has no β), p, r, δa, δr (and a
-//!   constant): `Cl_*` and `Cn_*`.
+//! - **lateral**: ṗ and ṙ each on β, p, r, δa, δr (and a constant): `Cl_*` and `Cn_*`. A
+//!   record without a β vane gets the sideslip its kinematics imply
+//!   ([`crate::kinematics::sideslip`]), not `a_y`: the side force of the rudder put into a
+//!   stand-in's regression moves the rudder's derivative by `−N_β Y_δr / Y_β`.
 //!
 //! The angular accelerations are the record's where mapped, else central differences of the
 //! rates. Regressors the record lacks are left out (named in the note); an axis with no
@@ -98,6 +100,12 @@ pub fn information(samples: &[AirDataSample], axis: Axis) -> AxisInformation {
         nondimensional: false,
         note: None,
     };
+    let kinematic = (axis == Axis::Lateral
+        && samples.first().is_some_and(|s| s.beta_rad.is_none()))
+    .then(|| crate::kinematics::sideslip::filled(&[samples]))
+    .flatten()
+    .and_then(|m| m.into_iter().next());
+    let samples = kinematic.as_deref().unwrap_or(samples);
     let equations = match axis {
         Axis::Pitch => vec![pitch(samples)],
         Axis::Lateral => lateral(samples),
@@ -175,9 +183,8 @@ fn lateral(samples: &[AirDataSample]) -> Vec<Result<Equation, String>> {
     let Some(first) = samples.first() else { return vec![Err("no sample".into())] };
     let mut regressors: Vec<(&'static str, Pick, bool)> = Vec::new();
     let mut left_out = Vec::new();
-    let candidates: [(&'static str, Pick, bool); 6] = [
+    let candidates: [(&'static str, Pick, bool); 5] = [
         ("beta", |s| s.beta_rad, false),
-        ("ay", |s| s.ay_mps2, false),
         ("p", |s| s.p_rad_s, true),
         ("r", |s| s.r_rad_s, true),
         ("da", |s| s.da_rad, false),
@@ -185,12 +192,10 @@ fn lateral(samples: &[AirDataSample]) -> Vec<Result<Equation, String>> {
     ];
     for (name, pick, rate) in candidates {
         let have = pick(first).is_some();
-        // a_y stands in for β only where the record has no β.
-        let wanted = name != "ay" || !regressors.iter().any(|r| r.0 == "beta");
-        match (have, wanted) {
-            (true, true) => regressors.push((name, pick, rate)),
-            (false, true) if name != "beta" && name != "ay" => left_out.push(name),
-            _ => {}
+        if have {
+            regressors.push((name, pick, rate));
+        } else if name != "beta" {
+            left_out.push(name);
         }
     }
     if !regressors.iter().any(|r| r.0 == "da" || r.0 == "dr") {

@@ -1019,7 +1019,7 @@ pub(crate) fn fit_time_domain(
     summary.warnings.extend(dominance_warnings(&fitted.result, &slices, mapping));
     summary
         .warnings
-        .extend(super::kinematics::Kinematics::of_manoeuvres(&slices).warnings(mapping));
+        .extend(crate::kinematics::Kinematics::of_manoeuvres(&slices).warnings(mapping));
     let (sign_tests, sign_warnings) = super::sign_tests::checked(&slices, mapping);
     summary.sign_tests = sign_tests;
     summary.warnings.extend(sign_warnings);

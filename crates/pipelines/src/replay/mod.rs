@@ -46,7 +46,6 @@ pub mod diagnostics;
 pub mod explain;
 pub mod fit;
 pub mod frequency;
-pub mod kinematics;
 mod online;
 pub mod precision;
 pub mod prediction;

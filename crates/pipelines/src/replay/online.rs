@@ -81,7 +81,7 @@ pub(super) struct Replay<'a> {
     fed: SampleLog<AirDataSample>,
     /// Each regressor channel's range over the estimated samples ([`super::constant`]).
     spread: super::constant::Spread,
-    kinematics: super::kinematics::Kinematics,
+    kinematics: crate::kinematics::Kinematics,
     /// The samples of the sign tests: contiguous blocks, so a long record decimated to fit
     /// still has central differences ([`super::sign_tests`]).
     sign_log: SampleLog<AirDataSample>,
@@ -125,7 +125,7 @@ impl<'a> Replay<'a> {
             history: History::default(),
             fed: SampleLog::new(crate::results::MAX_FIT_SAMPLES, 1),
             spread: super::constant::Spread::default(),
-            kinematics: super::kinematics::Kinematics::default(),
+            kinematics: crate::kinematics::Kinematics::default(),
             sign_log: SampleLog::new(SIGN_TEST_SAMPLES, SIGN_TEST_BLOCK),
             recorder: Recorder::default(),
             busy: Duration::ZERO,

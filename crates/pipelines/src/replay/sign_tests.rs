@@ -51,6 +51,7 @@
 //! averaged over the same span (trapezoidal). Differences stay within one manoeuvre and within
 //! contiguous samples (each interval at most 2.5 × the shortest: none across a gap).
 
+use crate::kinematics::sideslip;
 use aeroident_estimators::AirDataSample;
 use aeroident_io::replay_output::{SignTest, SignVerdict};
 use aeroident_io::warning::{Warning, WarningKind};
@@ -293,9 +294,7 @@ fn sign_tests_timed<M: AsRef<[AirDataSample]>>(
     no_timing: Option<&str>,
 ) -> Vec<SignTest> {
     let present = present_fields(manoeuvres);
-    let kinematic = (!present.has("beta"))
-        .then(|| sideslip::filled(manoeuvres, 2.5 * shortest_interval(manoeuvres)))
-        .flatten();
+    let kinematic = (!present.has("beta")).then(|| sideslip::filled(manoeuvres)).flatten();
     TESTS
         .iter()
         .filter(|t| present.has(t.channel))
@@ -648,7 +647,6 @@ fn reversed_warnings(tests: &[SignTest], mapping: &Mapping) -> Vec<Warning> {
 }
 
 pub mod refit;
-mod sideslip;
 pub mod timing;
 
 #[cfg(test)]

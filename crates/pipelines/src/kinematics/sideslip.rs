@@ -20,18 +20,22 @@
 use aeroident_estimators::AirDataSample;
 use aeroident_physics::units::G0_MPS2;
 
-/// How the β of a record without a vane was formed, for the tests' evidence.
-pub(super) const HOW: &str =
+/// How the β of a record without a vane was formed, for the sign tests' evidence.
+pub const HOW: &str =
     "β from the kinematics (∫ (a_y + g cosθ sinφ)/V + p sinα − r cosα dt, less its line per run)";
 
 /// The manoeuvres with `beta_rad` set to the reconstructed sideslip (module doc) on every
 /// sample of a run that carries `a_y`, `r` and `φ`, and `None` elsewhere. `p` and `θ` count
-/// as 0 where missing (their terms are second order at small α and θ). `None` when no run
-/// has a sample that carries them.
-pub(super) fn filled<M: AsRef<[AirDataSample]>>(
-    manoeuvres: &[M],
-    dt_max_s: f64,
-) -> Option<Vec<Vec<AirDataSample>>> {
+/// as 0 where missing (their terms are second order at small α and θ). A run also ends at an
+/// interval beyond 2.5 times the record's shortest (a gap). `None` when no run has a sample
+/// that carries them.
+pub fn filled<M: AsRef<[AirDataSample]>>(manoeuvres: &[M]) -> Option<Vec<Vec<AirDataSample>>> {
+    let dt_max_s = 2.5
+        * manoeuvres
+            .iter()
+            .flat_map(|m| m.as_ref().windows(2).map(|w| w[1].t_s - w[0].t_s))
+            .filter(|d| *d > 0.0)
+            .fold(f64::INFINITY, f64::min);
     let out: Vec<Vec<AirDataSample>> =
         manoeuvres.iter().map(|m| with_sideslip(m.as_ref(), dt_max_s)).collect();
     out.iter().flatten().any(|s| s.beta_rad.is_some()).then_some(out)
@@ -65,35 +69,16 @@ fn with_sideslip(samples: &[AirDataSample], dt_max_s: f64) -> Vec<AirDataSample>
             end += 1;
         }
         if end > start + 2 {
-            let beta = detrended(&integrated(&samples[start..end]), &samples[start..end]);
-            for (s, b) in out[start..end].iter_mut().zip(beta) {
+            let run = &samples[start..end];
+            let t: Vec<f64> = run.iter().map(|s| s.t_s).collect();
+            let rates: Vec<f64> = run.iter().map(|s| beta_rate(s).unwrap_or(0.0)).collect();
+            for (s, b) in out[start..end].iter_mut().zip(super::integral_less_line(&t, &rates)) {
                 s.beta_rad = Some(b);
             }
         }
         start = end.max(start + 1);
     }
     out
-}
-
-/// ∫ β̇ dt from 0 at the run's first sample (trapezoidal); every sample carries β̇.
-fn integrated(run: &[AirDataSample]) -> Vec<f64> {
-    let rates: Vec<f64> = run.iter().map(|s| beta_rate(s).unwrap_or(0.0)).collect();
-    let mut beta = vec![0.0; run.len()];
-    for i in 1..run.len() {
-        beta[i] = beta[i - 1] + 0.5 * (rates[i] + rates[i - 1]) * (run[i].t_s - run[i - 1].t_s);
-    }
-    beta
-}
-
-/// `beta` less its least-squares line in the samples' time.
-fn detrended(beta: &[f64], run: &[AirDataSample]) -> Vec<f64> {
-    let n = beta.len() as f64;
-    let t_mean = run.iter().map(|s| s.t_s).sum::<f64>() / n;
-    let b_mean = beta.iter().sum::<f64>() / n;
-    let stt: f64 = run.iter().map(|s| (s.t_s - t_mean).powi(2)).sum();
-    let stb: f64 = run.iter().zip(beta).map(|(s, b)| (s.t_s - t_mean) * (b - b_mean)).sum();
-    let slope = if stt > 0.0 { stb / stt } else { 0.0 };
-    run.iter().zip(beta).map(|(s, b)| b - b_mean - slope * (s.t_s - t_mean)).collect()
 }
 
 #[cfg(test)]
@@ -122,15 +107,16 @@ mod tests {
                 }
             })
             .collect();
-        let out = filled(&[&samples], 0.025).unwrap();
+        let out = filled(&[&samples]).unwrap();
         let truth: Vec<f64> = samples.iter().map(|s| beta(s.t_s)).collect();
-        let expected = detrended(&truth, &samples);
+        let t: Vec<f64> = samples.iter().map(|s| s.t_s).collect();
+        let expected = super::super::less_line(&t, &truth);
         for (s, e) in out[0].iter().zip(expected) {
             assert!((s.beta_rad.unwrap() - e).abs() < 1e-5, "{} {e}", s.t_s);
         }
         let no_phi: Vec<AirDataSample> =
             samples.iter().map(|s| AirDataSample { phi_rad: None, ..*s }).collect();
-        assert!(filled(&[&no_phi], 0.025).is_none());
+        assert!(filled(&[&no_phi]).is_none());
     }
 
     /// A gap or a sample without a field ends a run; each run is integrated on its own.
@@ -147,7 +133,7 @@ mod tests {
         let mut samples: Vec<AirDataSample> = (0..10).map(|k| sample(0.1 * k as f64)).collect();
         samples.extend((0..10).map(|k| sample(5.0 + 0.1 * k as f64)));
         samples[15].ay_mps2 = None;
-        let out = &filled(&[&samples], 0.25).unwrap()[0];
+        let out = &filled(&[&samples]).unwrap()[0];
         // A constant β̇ is a line: nothing is left of it in any run.
         assert!(out[..10].iter().all(|s| s.beta_rad.unwrap().abs() < 1e-12));
         assert!(out[10..15].iter().all(|s| s.beta_rad.unwrap().abs() < 1e-12));

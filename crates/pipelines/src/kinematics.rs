@@ -30,12 +30,18 @@
 //! The finite difference's noise is in the regressand, so it does not bias the gains; noise on
 //! the rates biases them towards 0 by their noise share, far less than the factors judged. A
 //! channel that hardly moves has a large σ and is not judged.
+//!
+//! The kinematics the other stages share live here too, below the compatibility check, the
+//! replay and `inspect`: the sideslip a record without a β vane implies ([`sideslip`]) and a
+//! flow angle integrated from its rate less its line ([`integral_less_line`]).
 
 use aeroident_estimators::AirDataSample;
 use aeroident_io::Mapping;
 use aeroident_io::warning::{Warning, WarningKind};
 use aeroident_physics::rigid_body::{SinCos, euler_rates};
 use nalgebra::{DMatrix, DVector};
+
+pub mod sideslip;
 
 /// Unknowns: gains of p, q, r, then the biases of the φ̇, θ̇, ψ̇ equations.
 const N: usize = 6;
@@ -241,6 +247,31 @@ impl Kinematics {
 /// `x` to at most 3 decimals.
 fn three_decimals(x: f64) -> String {
     format!("{:.3}", x).trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
+/// `y` at the times `t_s` less its least-squares line in time (`y` itself when the times do
+/// not spread).
+pub fn less_line(t_s: &[f64], y: &[f64]) -> Vec<f64> {
+    let n = y.len() as f64;
+    let t_mean = t_s.iter().sum::<f64>() / n;
+    let y_mean = y.iter().sum::<f64>() / n;
+    let stt: f64 = t_s.iter().map(|t| (t - t_mean).powi(2)).sum();
+    let sty: f64 = t_s.iter().zip(y).map(|(t, v)| (t - t_mean) * (v - y_mean)).sum();
+    let slope = if stt > 0.0 { sty / stt } else { 0.0 };
+    t_s.iter().zip(y).map(|(t, v)| v - y_mean - slope * (t - t_mean)).collect()
+}
+
+/// The integral of `rate` over the times `t_s` (trapezoidal, from the first sample) less its
+/// least-squares line in time ([`less_line`]): a flow angle reconstructed from its kinematic
+/// rate when the rate's bias (which integrates to a line) and the start are unknown (Klein &
+/// Morelli, *Aircraft System Identification*, 2006, §10.1). The kinematic sideslip
+/// ([`sideslip`]) and the sensor screen's kinematic α both take it.
+pub fn integral_less_line(t_s: &[f64], rate: &[f64]) -> Vec<f64> {
+    let mut angle = vec![0.0; rate.len()];
+    for i in 1..rate.len() {
+        angle[i] = angle[i - 1] + 0.5 * (rate[i] + rate[i - 1]) * (t_s[i] - t_s[i - 1]);
+    }
+    less_line(t_s, &angle)
 }
 
 #[cfg(test)]

@@ -701,4 +701,58 @@ mod tests {
             "{in_g}"
         );
     }
+
+    /// Levels of a reading whose mean is `kin_mean + offset` and whose spread is `ratio` times
+    /// the kinematics' (1 m/s², a manoeuvre), in phase.
+    fn levels(offset: f64, ratio: f64) -> AzLevels {
+        AzLevels { mean: -9.0 + offset, sd: ratio, kin_mean: -9.0, kin_sd: 1.0, sign: 1.0 }
+    }
+
+    /// The specific force is decided by the mean alone, at 0.35 g either side; a form is taken
+    /// with a spread up to 2.5 times its own either way, and not beyond.
+    #[test]
+    fn the_accelerometer_thresholds_hold_at_their_edges() {
+        let edge = AZ_MEAN_TOLERANCE_MPS2;
+        for sign in [1.0, -1.0] {
+            assert_eq!(levels(sign * edge * 0.99, 1.0).finding("a_z"), None);
+            assert!(levels(sign * edge * 1.01, 1.0).finding("a_z").is_some());
+        }
+        // Gravity removed (a_z + g): its spread decides between it and no form at all.
+        let removed = "likely gravity removed";
+        for ratio in [AZ_SPREAD_FACTOR * 0.99, 1.0 / (AZ_SPREAD_FACTOR * 0.99)] {
+            let t = levels(G0_MPS2, ratio).finding("a_z").unwrap();
+            assert!(t.contains(removed), "{ratio}: {t}");
+        }
+        for ratio in [AZ_SPREAD_FACTOR * 1.01, 1.0 / (AZ_SPREAD_FACTOR * 1.01)] {
+            let t = levels(G0_MPS2, ratio).finding("a_z").unwrap();
+            assert!(!t.contains(removed) && t.contains("check its unit"), "{ratio}: {t}");
+        }
+        // Out of phase, it is not the form whatever the spread.
+        let against = AzLevels { sign: -1.0, ..levels(G0_MPS2, 1.0) };
+        assert!(!against.finding("a_z").unwrap().contains(removed));
+    }
+
+    /// A manoeuvre judges the vane from a 1° kinematic α excursion: the still window's pitch
+    /// rate scaled so that α moves 0.99° is noted and left out, 1.01° judged (its
+    /// accelerometers carry gravity alone, so the kinematic α̇ is q and scales with it).
+    #[test]
+    fn the_vane_is_judged_from_one_degree_of_alpha() {
+        let still = still_alpha();
+        let base = alpha_excursion(&still).unwrap();
+        let scaled = |target: f64| -> Vec<AirDataSample> {
+            let k = target / base;
+            still
+                .iter()
+                .map(|s| AirDataSample { q_rad_s: s.q_rad_s.map(|q| q * k), ..*s })
+                .collect()
+        };
+        let below = scaled(MIN_ALPHA_EXCURSION_RAD * 0.99);
+        let above = scaled(MIN_ALPHA_EXCURSION_RAD * 1.01);
+        let excursion = alpha_excursion(&above).unwrap();
+        assert!((excursion / MIN_ALPHA_EXCURSION_RAD - 1.01).abs() < 1e-3, "{excursion}");
+        let (moving, note) = moving_alpha(&[&below], &mapping());
+        assert!(moving.is_empty() && note.is_some_and(|n| n.contains("(0.99°)")));
+        let (moving, note) = moving_alpha(&[&above], &mapping());
+        assert_eq!((moving.len(), note), (1, None));
+    }
 }

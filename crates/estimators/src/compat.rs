@@ -169,8 +169,9 @@
 //!
 //! # Held out
 //! [`held_out`] judges each correction on data it was not fitted on: each manoeuvre (or each
-//! half of a single one) held out in turn, the check redone on the others, and each of their
-//! corrections applied to the held-out piece with only its initial state fitted. One the rest
+//! half of a single one, or each of [`MAX_FOLDS`] folds of consecutive manoeuvres when there
+//! are more) held out in turn, the check redone on the others, and each of their corrections
+//! applied to the held-out piece with only its initial states fitted. One the rest
 //! of the record contradicts beyond the noise fails (the `held_out` module doc, "When it
 //! fails"); `replay --compat` refuses it.
 
@@ -189,7 +190,8 @@ mod inputs;
 mod starts;
 
 pub use held_out::{
-    FAIL_SPREADS, HeldOut, HeldOutCorrection, MIN_FAILING_RISE, PIECE_TOO_SHORT, fails, held_out,
+    FAIL_SPREADS, HeldOut, HeldOutCorrection, MAX_FOLDS, MIN_FAILING_RISE, PIECE_TOO_SHORT, fails,
+    folds, held_out,
 };
 
 use blocks::{Partition, Schur, Sensitivities};

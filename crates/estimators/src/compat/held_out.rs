@@ -1,7 +1,8 @@
 //! Each correction judged on data it was not fitted on: the record's manoeuvres held out in
-//! turn (the two halves of a record with one manoeuvre), the check redone on the others, and
-//! each of its corrections applied to the held-out piece, whose initial state alone is then
-//! fitted. A correction that raises the held-out pieces' negative log-likelihood, beyond what
+//! turn (the two halves of a record with one manoeuvre; [`MAX_FOLDS`] folds of consecutive
+//! manoeuvres when there are more, "Folds"), the check redone on the others, and each of its
+//! corrections applied to the held-out piece, whose initial states alone are then fitted (one
+//! per manoeuvre). A correction that raises the held-out pieces' negative log-likelihood, beyond what
 //! their noise explains, is one the record does not support, however small its σ: it fitted
 //! something of the manoeuvres it was estimated on (a taxi segment, one manoeuvre's odd
 //! sensor, a model error of one part of the flight) that the rest of the flight does not
@@ -11,7 +12,8 @@
 //!
 //! The measure, per correction `c` and held-out piece `k`: `N_k/2 · (ln det R_k(with c) −
 //! ln det R_k(without c))`, every other correction of the others' check applied both times and
-//! `R_k` the maximum-likelihood residual covariance of piece `k` with its initial state fitted.
+//! `R_k` the maximum-likelihood residual covariance of piece `k` (over all its samples) with
+//! its initial states fitted.
 //! Summed over the pieces where the others' check estimated `c`: negative, `c` improves the
 //! fit of data it was not fitted on.
 //!
@@ -39,6 +41,27 @@
 //! `2ĉ` it has no minimum near `ĉ`), the expectation is `0 ± 0` and any rise fails: the two
 //! spurious α shifts measured (one manoeuvre's vane lag spread over three) failed that way,
 //! with +4,506 and +1,420.
+//!
+//! **Folds.** Holding out each manoeuvre in turn redoes the whole check once per manoeuvre,
+//! which is quadratic in the manoeuvres: an 80-minute flight's 105 windows took longer than
+//! the joint check by a hundredfold. With more than [`MAX_FOLDS`] manoeuvres they are grouped
+//! into that many folds ([`folds`]), each held out in turn as one piece: the check is redone
+//! [`MAX_FOLDS`] times whatever the flight's length. With at most that many, each manoeuvre is
+//! its own fold and nothing changes. A fold is one data set with several initial states; the
+//! statistics above hold for it as they are: `Iₖ` is the fold's information along the
+//! correction with all its initial states free, `Dₖ` is measured on the fold's own cost, and
+//! the folds are disjoint data, so their changes add and their variances add as the pieces'
+//! did. What changes is what is held out: a fifth of the flight at once rather than one
+//! manoeuvre, so a correction that only one manoeuvre needs is contradicted by the other
+//! manoeuvres of its fold as well as by the other folds' check.
+//!
+//! The folds are contiguous in time (consecutive manoeuvres in the order given, the record's),
+//! not dealt round-robin: what the judgement is for is a correction that fits something of one
+//! part of the flight (a taxi segment, one phase's sensor or model error) that the rest does
+//! not share. Dealt round-robin, every fold's neighbours in time would be in the others' check,
+//! which would fit such a part of the flight from them and carry it to the held-out fold; held
+//! out together, the part must be predicted from the rest of the flight, as when the
+//! corrections are applied to another flight.
 
 use super::{
     CompatConfig, CompatResult, MIN_SAMPLES, Problem, SIDESLIP_PINNED_NOTE, Unknown, check_warm,
@@ -46,6 +69,7 @@ use super::{
 };
 use crate::EstimatorError;
 use crate::sample::AirDataSample;
+use core::ops::Range;
 
 /// One correction's judgement on held-out data ([`held_out`]).
 #[derive(Debug, Clone, PartialEq)]
@@ -123,10 +147,11 @@ impl HeldOutCorrection {
 /// The held-out judgement of a check's corrections ([`held_out`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct HeldOut {
-    /// What was held out in turn: `manoeuvre` (each manoeuvre) or `half` (the two halves of a
-    /// record with one manoeuvre).
+    /// What was held out in turn: `manoeuvre` (each manoeuvre), `fold` (each of [`MAX_FOLDS`]
+    /// groups of consecutive manoeuvres, when there are more than that; module doc, "Folds") or
+    /// `half` (the two halves of a record with one manoeuvre).
     pub by: &'static str,
-    /// How many pieces the record was split into.
+    /// How many pieces the record was split into (manoeuvres, folds or halves).
     pub pieces: usize,
     /// Per correction of the joint check (its order), the judgement.
     pub corrections: Vec<HeldOutCorrection>,
@@ -157,14 +182,34 @@ pub fn held_out(
     })
 }
 
-/// The pieces held out in turn: the manoeuvres, or the two halves of a single one.
-fn pieces<'a>(manoeuvres: &[&'a [AirDataSample]]) -> (&'static str, Vec<&'a [AirDataSample]>) {
+/// The most pieces a record of several manoeuvres is held out in (module doc, "Folds"): the
+/// check is redone once per piece, so this bounds the judgement's cost at that many checks of
+/// most of the record. Five, the usual number of folds of cross-validation (Hastie, Tibshirani
+/// & Friedman, *The Elements of Statistical Learning*, 2nd ed., 2009, §7.10.1): each check
+/// still fits four fifths of the record, and a record of up to five manoeuvres keeps one
+/// manoeuvre per piece.
+pub const MAX_FOLDS: usize = 5;
+
+/// The folds of `n` manoeuvres (module doc, "Folds"): each manoeuvre alone up to
+/// [`MAX_FOLDS`], else that many runs of consecutive manoeuvres whose sizes differ by at most
+/// one (the larger last).
+pub fn folds(n: usize) -> Vec<Range<usize>> {
+    let f = n.min(MAX_FOLDS);
+    (0..f).map(|k| k * n / f..(k + 1) * n / f).collect()
+}
+
+/// The pieces held out in turn, each a group of manoeuvres: the manoeuvres or their
+/// [`folds`], or the two halves of a single one.
+fn pieces<'a>(manoeuvres: &[&'a [AirDataSample]]) -> (&'static str, Vec<Vec<&'a [AirDataSample]>>) {
     match manoeuvres {
         [one] => {
             let (a, b) = one.split_at(one.len() / 2);
-            ("half", vec![a, b])
+            ("half", vec![vec![a], vec![b]])
         }
-        _ => ("manoeuvre", manoeuvres.to_vec()),
+        _ => {
+            let by = if manoeuvres.len() > MAX_FOLDS { "fold" } else { "manoeuvre" };
+            (by, folds(manoeuvres.len()).into_iter().map(|f| manoeuvres[f].to_vec()).collect())
+        }
     }
 }
 
@@ -195,7 +240,7 @@ fn held_out_as_given(
         })
         .collect();
     let mut out = HeldOut { by, pieces: pieces.len(), corrections: Vec::new(), notes: Vec::new() };
-    if pieces.iter().any(|p| p.len() < MIN_SAMPLES) {
+    if pieces.iter().flatten().any(|p| p.len() < MIN_SAMPLES) {
         out.notes.push(PIECE_TOO_SHORT.into());
         out.corrections = corrections;
         return out;
@@ -205,11 +250,27 @@ fn held_out_as_given(
     // none at the several starts a check of unknown corrections needs.
     let warm: Vec<(Unknown, f64)> =
         judged.iter().filter_map(|&u| joint.get(u).map(|(v, _)| (u, v))).collect();
-    for (k, piece) in pieces.iter().enumerate() {
-        let others: Vec<&[AirDataSample]> =
-            pieces.iter().enumerate().filter(|(j, _)| *j != k).map(|(_, p)| *p).collect();
-        let changes = check_warm(&others, config, &warm)
-            .and_then(|fitted| piece_changes(piece, config, &fitted, &judged, pinned));
+    let judge = |k: usize| {
+        let others: Vec<&[AirDataSample]> = pieces
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| *j != k)
+            .flat_map(|(_, p)| p.clone())
+            .collect();
+        check_warm(&others, config, &warm)
+            .and_then(|fitted| piece_changes(&pieces[k], config, &fitted, &judged, pinned))
+    };
+    // Each piece's check and fits are independent of the others': on a second core the
+    // judgement takes half the time. Added up in the pieces' order, as one after another.
+    let judgements: Vec<_> = std::thread::scope(|scope| {
+        let judge = &judge;
+        let running: Vec<_> = (0..pieces.len()).map(|k| scope.spawn(move || judge(k))).collect();
+        running
+            .into_iter()
+            .map(|h| h.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic)))
+            .collect()
+    });
+    for (k, changes) in judgements.into_iter().enumerate() {
         match changes {
             Ok(changes) => {
                 for ((c, j), &rho2) in corrections.iter_mut().zip(changes).zip(&rho2) {
@@ -225,11 +286,11 @@ fn held_out_as_given(
     out
 }
 
-/// Per correction of `judged`, what held-out `piece` says of it ([`PieceJudgement`], costs of
+/// Per correction of `judged`, what held-out `piece` (its manoeuvres) says of it ([`PieceJudgement`], costs of
 /// [`PieceFit::cost`]), the others of `fitted` (the check of the other pieces) applied
 /// throughout; `None` where `fitted` did not estimate it.
 fn piece_changes(
-    piece: &[AirDataSample],
+    piece: &[&[AirDataSample]],
     config: &CompatConfig,
     fitted: &CompatResult,
     judged: &[Unknown],
@@ -264,9 +325,9 @@ fn piece_changes(
         .collect()
 }
 
-/// The fits of one held-out piece with its initial state alone free.
+/// The fits of one held-out piece with its initial states alone free.
 struct PieceFit<'a> {
-    piece: [&'a [AirDataSample]; 1],
+    piece: &'a [&'a [AirDataSample]],
     config: &'a CompatConfig,
     /// Whether the initial side velocity is estimated (not where the check fixed it, or where
     /// the piece does not determine it).
@@ -276,12 +337,12 @@ struct PieceFit<'a> {
 impl<'a> PieceFit<'a> {
     /// The piece's fit with the corrections `base`: the fitter, its cost and initial state.
     fn first(
-        piece: &'a [AirDataSample],
+        piece: &'a [&'a [AirDataSample]],
         config: &'a CompatConfig,
         base: &[(Unknown, f64)],
         pinned: bool,
     ) -> Result<(Self, f64, Vec<f64>), EstimatorError> {
-        let fit = |with_v0| Self { piece: [piece], config, with_v0 };
+        let fit = |with_v0| Self { piece, config, with_v0 };
         let tried = if pinned { None } else { fit(true).fitted(base.to_vec(), None).ok() };
         let (f, (cost, x0)) = match tried {
             Some(done) => (fit(true), done),
@@ -294,19 +355,19 @@ impl<'a> PieceFit<'a> {
         Ok((f, cost, x0))
     }
 
-    /// `N/2 · ln det R` of the piece with the corrections `fixed`, its initial state fitted from
+    /// `N/2 · ln det R` of the piece with the corrections `fixed`, its initial states fitted from
     /// `x0` (another fit's of the same piece: it differs by one correction).
     fn cost(&self, fixed: Vec<(Unknown, f64)>, x0: &[f64]) -> Result<f64, EstimatorError> {
         Ok(self.fitted(fixed, Some(x0))?.0)
     }
 
-    /// The cost and the fitted initial state, from `x0` or the first sample.
+    /// The cost and the fitted initial states, from `x0` or each manoeuvre's first sample.
     fn fitted(
         &self,
         fixed: Vec<(Unknown, f64)>,
         x0: Option<&[f64]>,
     ) -> Result<(f64, Vec<f64>), EstimatorError> {
-        let mut p = Problem::new(&self.piece, self.config, Vec::new())?;
+        let mut p = Problem::new(self.piece, self.config, Vec::new())?;
         let with_v0 = self.with_v0;
         p.unknowns
             .retain(|u| matches!(u, Unknown::Initial { state, .. } if with_v0 || *state != 1));

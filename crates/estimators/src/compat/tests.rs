@@ -834,3 +834,28 @@ fn the_block_spectral_sandwich_is_the_dense_one() {
     let d = relative_difference(&blocks, &general);
     assert!(d < 1e-8, "{d}");
 }
+
+/// Up to [`MAX_FOLDS`] manoeuvres each is its own fold (the judgement as it always was); more
+/// are grouped into that many runs of consecutive manoeuvres, each manoeuvre in exactly one,
+/// the sizes within one of each other.
+#[test]
+fn manoeuvres_are_held_out_in_at_most_five_folds_of_consecutive_ones() {
+    assert_eq!(folds(3), vec![0..1, 1..2, 2..3]);
+    assert_eq!(folds(4), vec![0..1, 1..2, 2..3, 3..4]);
+    assert_eq!(folds(5).len(), 5);
+    assert_eq!(folds(11), vec![0..2, 2..4, 4..6, 6..8, 8..11]);
+    for n in 1..=120 {
+        let f = folds(n);
+        assert_eq!(f.len(), n.min(MAX_FOLDS), "{n}");
+        let mut seen = vec![0; n];
+        for r in &f {
+            assert!(!r.is_empty(), "{n}: {f:?}");
+            r.clone().for_each(|m| seen[m] += 1);
+        }
+        assert!(seen.iter().all(|&c| c == 1), "{n}: {f:?}");
+        assert!(f.windows(2).all(|w| w[0].end == w[1].start), "{n}: {f:?}");
+        let sizes: Vec<usize> = f.iter().map(|r| r.len()).collect();
+        let (lo, hi) = (sizes.iter().min().unwrap(), sizes.iter().max().unwrap());
+        assert!(hi - lo <= 1, "{n}: {sizes:?}");
+    }
+}

@@ -50,10 +50,22 @@ pub fn parse(text: &str) -> Result<WindowSpec, String> {
         .map_err(|e| format!("{e}, or `auto`, or `auto:N`"))
 }
 
+/// The axes whose window sets `auto:N` takes for a `--model` choice: a longitudinal model the
+/// pitch set, a lateral one the lateral set, any other model (six-axis, a model file, none
+/// given) both: a lateral window adds nothing but its own initial state to a pitch-only fit.
+pub fn axes_of_model(model: Option<&str>) -> &'static [&'static str] {
+    match model.map(|m| m.trim().trim_start_matches("auto:")) {
+        Some("longitudinal") => &["pitch"],
+        Some("lateral") => &["lateral"],
+        _ => &["pitch", "lateral"],
+    }
+}
+
 /// The time windows of `specs` for record `data`: the spans as given, or with `auto` (alone)
 /// the manoeuvres detected on `mapping`'s `de`, `da`, `dr` columns and the phugoids, in
-/// flight, or with `auto:N` the best `N` per axis, printed on stderr as the `--window`
-/// arguments they stand for. `more_records`: other records given with `--and`.
+/// flight, or with `auto:N` the best `N` per axis of `axes` ([`axes_of_model`]), printed on
+/// stderr as the `--window` arguments they stand for. `more_records`: other records given
+/// with `--and`.
 ///
 /// # Errors
 /// `auto` beside spans or twice, with stdin or a live feed, with `--and`; a record that
@@ -65,6 +77,7 @@ pub fn resolve(
     format: Option<LogFormat>,
     mapping: &Mapping,
     more_records: bool,
+    axes: &[&str],
 ) -> anyhow::Result<Vec<TimeWindow>> {
     let spans: Vec<TimeWindow> = specs
         .iter()
@@ -92,7 +105,7 @@ pub fn resolve(
             mapping.file
         );
     }
-    let (windows, why) = chosen(report, best)?;
+    let (windows, why) = chosen(report, best, axes)?;
     // Rounded outwards to 0.01 s, so the windows printed are the ones used.
     let windows: Vec<TimeWindow> = windows
         .into_iter()
@@ -128,12 +141,13 @@ fn announce(windows: &[TimeWindow], channels: &[&str], why: &str, flight: Option
     }
 }
 
-/// The windows `auto` (every candidate in flight) or `auto:N` (the union of every axis's best
-/// `N`) stands for, and the words that say which; without a flight judgement `auto` falls back
-/// to every candidate, `auto:N` is refused.
+/// The windows `auto` (every candidate in flight) or `auto:N` (the union of the best `N` of
+/// each axis of `axes`) stands for, and the words that say which; without a flight judgement
+/// `auto` falls back to every candidate, `auto:N` is refused.
 fn chosen(
     report: &InspectReport,
     best: Option<usize>,
+    axes: &[&str],
 ) -> anyhow::Result<(Vec<TimeWindow>, String)> {
     let Some(f) = &report.flight else {
         let why = report.flight_note.as_deref().unwrap_or("-");
@@ -145,8 +159,13 @@ fn chosen(
     let Some(n) = best else {
         return Ok((airborne_windows(f), " and the phugoids, in flight".into()));
     };
-    let sets: Vec<String> = f
+    let taken: std::collections::BTreeMap<String, Vec<[f64; 2]>> = f
         .window_sets
+        .iter()
+        .filter(|(axis, _)| axes.contains(&axis.as_str()))
+        .map(|(axis, set)| (axis.clone(), set.clone()))
+        .collect();
+    let sets: Vec<String> = taken
         .iter()
         .map(|(axis, set)| {
             let w: Vec<String> = set
@@ -158,7 +177,7 @@ fn chosen(
             format!("{axis} {}", if w.is_empty() { "none".into() } else { w.join(", ") })
         })
         .collect();
-    Ok((union_of_sets(&f.window_sets), format!(", the best {n} per axis ({})", sets.join("; "))))
+    Ok((union_of_sets(&taken), format!(", the best {n} per axis ({})", sets.join("; "))))
 }
 
 /// Says which ground spans `auto` left out and how many candidates they held.

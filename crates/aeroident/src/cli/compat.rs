@@ -124,6 +124,7 @@ pub fn execute(args: CompatArgs) -> anyhow::Result<()> {
         args.format,
         &mapping,
         !args.and.is_empty(),
+        super::auto_window::axes_of_model(None),
     )?;
     let format = args.format;
     let (summary, result) = run.run(move || check(&files, format, &mapping, &windows, &config))?;

@@ -156,8 +156,14 @@ impl FreqRespArgs {
                 "option `--window`: give `auto` alone (not beside START:END or sysid windows)"
             );
             let auto = [super::auto_window::WindowSpec::Auto];
-            let windows =
-                super::auto_window::resolve(&auto, &self.data, self.format, mapping, false)?;
+            let windows = super::auto_window::resolve(
+                &auto,
+                &self.data,
+                self.format,
+                mapping,
+                false,
+                super::auto_window::axes_of_model(None),
+            )?;
             return Ok((windows, None));
         }
         let spans: Vec<TimeWindow> = self

@@ -353,6 +353,7 @@ pub fn execute_with(
         args.format,
         &mapping,
         !args.and.is_empty(),
+        super::auto_window::axes_of_model(args.model.as_deref()),
     )?;
     let mavlink = crate::live::is_mavlink(&args.data);
     let live = args.data == "-" || mavlink;

@@ -99,34 +99,28 @@ pub fn replay_samples<R: std::io::Read>(
 
 /// The columns of [`write_samples_csv`]: `manoeuvre`, then the fields of [`crate::AeroidentSample`]
 /// in its order (without `present`: an absent field is an empty cell): `t_s`, the sample's
-/// [`MEASURED_FIELDS`] (the writer reads them by name, `AirDataSample::field`), the constants.
-pub const SAMPLE_COLUMNS: [&str; 37] = [
-    "manoeuvre",
-    "t_s",
-    "vt_mps",
-    "alpha_rad",
-    "qbar_pa",
-    "beta_rad",
-    "p_rad_s",
-    "q_rad_s",
-    "r_rad_s",
-    "pdot_rad_s2",
-    "qdot_rad_s2",
-    "rdot_rad_s2",
-    "alphadot_rad_s",
-    "phi_rad",
-    "theta_rad",
-    "psi_rad",
-    "ax_mps2",
-    "ay_mps2",
-    "az_mps2",
-    "de_rad",
-    "da_rad",
-    "dr_rad",
-    "thrust_n",
-    "throttle",
-    "thrust_moment_nm",
-    "rho_kgpm3",
+/// [`MEASURED_FIELDS`] (taken from that list; the writer reads them by name,
+/// `AirDataSample::field`), the constants. The test `header` holds the C struct to it.
+pub const SAMPLE_COLUMNS: [&str; 37] = {
+    let mut columns = [""; 37];
+    columns[0] = "manoeuvre";
+    columns[1] = "t_s";
+    let mut i = 0;
+    while i < MEASURED_FIELDS.len() {
+        columns[2 + i] = MEASURED_FIELDS[i];
+        i += 1;
+    }
+    let mut k = 0;
+    while k < CONSTANT_COLUMNS.len() {
+        columns[2 + MEASURED_FIELDS.len() + k] = CONSTANT_COLUMNS[k];
+        k += 1;
+    }
+    columns
+};
+
+/// The aircraft constants of [`crate::AeroidentSample`], in its order: the last columns of
+/// [`SAMPLE_COLUMNS`].
+const CONSTANT_COLUMNS: [&str; 11] = [
     "mass_kg",
     "S_m2",
     "cbar_m",

@@ -27,3 +27,28 @@ fn committed_header_is_cbindgens_output() {
         assert!(generated.contains(f), "{f} is not in the header");
     }
 }
+
+/// The C sample's fields are the CSV columns of the replayed samples after `manoeuvre` (`t_s`,
+/// the estimators' `MEASURED_FIELDS`, the constants), then `present`: the struct is written
+/// out by hand in `src/sample.rs`, and this holds it, through the header cbindgen makes of
+/// it, to the one list of sample fields.
+#[test]
+fn the_c_samples_fields_are_the_sample_columns() {
+    let generated = include_str!(concat!(env!("OUT_DIR"), "/aeroident.h"));
+    let body = generated
+        .split_once("typedef struct AeroidentSample {")
+        .and_then(|(_, rest)| rest.split_once("} AeroidentSample;"))
+        .expect("the header defines AeroidentSample")
+        .0;
+    let fields: Vec<&str> = body
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with("//"))
+        .filter_map(|l| l.strip_suffix(';')?.split_whitespace().last())
+        .collect();
+    let mut expected: Vec<&str> = aeroident_capi::replayed::SAMPLE_COLUMNS[1..].to_vec();
+    expected.push("present");
+    assert_eq!(fields, expected);
+    let measured = &aeroident_estimators::sample::MEASURED_FIELDS;
+    assert_eq!(fields[1..1 + measured.len()], measured[..]);
+}

@@ -92,7 +92,7 @@ pub const EAST: usize = 10;
 /// State index: altitude (up), ft.
 pub const ALT: usize = 11;
 
-/// State names with units, in state order (the first 12 of the F-16's names).
+/// State names with units, in state order (the F-16's first 12 are these).
 pub const STATE_NAMES: [&str; N_STATES] = [
     "vt_fps",
     "alpha_rad",

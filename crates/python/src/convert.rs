@@ -1,6 +1,7 @@
 //! Conversions between Python objects and the library's types: the sample's channels by name,
 //! and JSON documents (`serde_json::Value`) as Python dicts/lists.
 
+use aeroident_estimators::sample::MEASURED_FIELDS;
 use aeroident_estimators::{AirDataSample, AircraftConstants};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -45,6 +46,54 @@ opt_fields!(
     thrust_moment_nm,
     rho_kgpm3,
 );
+
+// The channels are written out as identifiers (the getters and setters need them), so the
+// build holds them to the sample's own list: `t_s`, then `REQUIRED` and `OPTIONAL` are
+// `MEASURED_FIELDS` in its order, or this crate does not compile.
+const _: () = assert!(
+    channels_are_the_samples(),
+    "REQUIRED and OPTIONAL must be t_s and aeroident_estimators::sample::MEASURED_FIELDS, in order"
+);
+
+/// Whether `REQUIRED` (after `t_s`) followed by `OPTIONAL` is [`MEASURED_FIELDS`], name for
+/// name.
+const fn channels_are_the_samples() -> bool {
+    let r = REQUIRED.len();
+    if r + OPTIONAL.len() != 1 + MEASURED_FIELDS.len() || !same(REQUIRED[0], "t_s") {
+        return false;
+    }
+    let mut i = 1;
+    while i < r {
+        if !same(REQUIRED[i], MEASURED_FIELDS[i - 1]) {
+            return false;
+        }
+        i += 1;
+    }
+    let mut k = 0;
+    while k < OPTIONAL.len() {
+        if !same(OPTIONAL[k].0, MEASURED_FIELDS[r - 1 + k]) {
+            return false;
+        }
+        k += 1;
+    }
+    true
+}
+
+/// `a == b`, usable at compile time.
+const fn same(a: &str, b: &str) -> bool {
+    let (a, b) = (a.as_bytes(), b.as_bytes());
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut i = 0;
+    while i < a.len() {
+        if a[i] != b[i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
+}
 
 /// A getter and a setter of one constant of [`AircraftConstants`] (`None` = absent).
 type ConstField =

@@ -103,22 +103,18 @@ pub const ALT: usize = rigid_body::ALT;
 /// State index: engine power, percent.
 pub const POW: usize = rigid_body::N_STATES;
 
-/// State names with units, in state order (also CSV column names).
-pub const STATE_NAMES: [&str; N_STATES] = [
-    "vt_fps",
-    "alpha_rad",
-    "beta_rad",
-    "phi_rad",
-    "theta_rad",
-    "psi_rad",
-    "p_rad_s",
-    "q_rad_s",
-    "r_rad_s",
-    "north_ft",
-    "east_ft",
-    "alt_ft",
-    "pow_pct",
-];
+/// State names with units, in state order (also CSV column names): the rigid body's
+/// ([`rigid_body::STATE_NAMES`], taken from it so the two cannot differ), then `pow_pct`.
+pub const STATE_NAMES: [&str; N_STATES] = {
+    let mut names = [""; N_STATES];
+    let mut i = 0;
+    while i < rigid_body::N_STATES {
+        names[i] = rigid_body::STATE_NAMES[i];
+        i += 1;
+    }
+    names[POW] = "pow_pct";
+    names
+};
 /// Control names with units, in [`F16Controls::to_vector`] order.
 pub const CONTROL_NAMES: [&str; N_CONTROLS] =
     ["throttle", "elevator_rad", "aileron_rad", "rudder_rad"];

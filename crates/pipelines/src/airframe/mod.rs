@@ -50,7 +50,9 @@ use nalgebra::{SVector, Vector3};
 /// Number of states.
 pub const N_STATES: usize = rb::N_STATES;
 
-/// State names with units, in state order (module doc).
+/// State names with units, in state order (module doc): the rigid body's
+/// ([`aeroident_models::rigid_body::STATE_NAMES`]) in metres, a test holding the two to one
+/// layout.
 pub const STATE_NAMES: [&str; N_STATES] = [
     "vt_mps",
     "alpha_rad",

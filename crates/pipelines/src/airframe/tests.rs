@@ -547,3 +547,17 @@ fn the_rate_limit_flag_fires_above_the_limit_and_not_below() {
     assert_eq!(under.actuation[0].rate_limited_fraction, 0.0);
     assert!(actuator_limit_flags(&under).is_empty());
 }
+
+/// The metric names are the rigid body's, state for state, with feet made metres: the
+/// airframe integrates [`aeroident_models::rigid_body`] and must name its states in its order.
+#[test]
+fn the_state_names_are_the_rigid_bodys_in_metres() {
+    let metric = |n: &str| match (n.strip_suffix("_fps"), n.strip_suffix("_ft")) {
+        (Some(stem), _) => format!("{stem}_mps"),
+        (_, Some(stem)) => format!("{stem}_m"),
+        _ => n.to_string(),
+    };
+    let expected: Vec<String> =
+        aeroident_models::rigid_body::STATE_NAMES.iter().map(|n| metric(n)).collect();
+    assert_eq!(STATE_NAMES.to_vec(), expected);
+}

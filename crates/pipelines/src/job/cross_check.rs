@@ -17,7 +17,7 @@ use crate::replay::ReplayError;
 use crate::replay::ReplayOptions;
 use crate::replay::batch::{BatchMethod, FitOptions};
 use crate::replay::cross_check::CrossCheck;
-use crate::replay::cross_check::MethodEstimates;
+use crate::replay::cross_check::{MethodEstimates, ParameterEstimate};
 use aeroident_io::parameter::STATUS_NOT_CONVERGED;
 
 /// The panel's real-time methods (one record only).
@@ -115,11 +115,7 @@ pub(super) fn online_estimates(records: &Records, opts: &ReplayOptions) -> Metho
             MethodEstimates::failed(name, "ended initialising (not every parameter left its prior)")
         }
         Ok(o) => {
-            let rows = o
-                .summary
-                .parameters
-                .iter()
-                .filter_map(|p| Some((p.name.clone(), p.estimate?, p.std_error?)));
+            let rows = o.summary.parameters.iter().filter_map(|p| ParameterEstimate::of(p));
             MethodEstimates::new(name, &o.summary.status, rows)
         }
         Err(e) => MethodEstimates::failed(name, &e.to_string()),
@@ -174,18 +170,17 @@ pub(super) fn batch_estimates(
             "degenerate filter (a measurement-noise variance collapsed)",
         );
     }
-    let rows =
-        s.parameters.iter().filter_map(|p| Some((p.name.clone(), p.estimate?, p.std_error?)));
+    let rows = s.parameters.iter().filter_map(|p| ParameterEstimate::of(p));
     MethodEstimates::new(name, &s.status, rows)
 }
 
-/// The run's own estimates as the panel reads them: `(name, estimate, σ)` of `rows`.
+/// The run's own estimates as the panel reads them: those of `rows` with an estimate and a σ.
 pub fn own_estimates<'a>(
     kind: EstimatorKind,
     status: &str,
     rows: impl Iterator<Item = &'a aeroident_io::parameter::ParameterResult>,
 ) -> MethodEstimates {
-    let rows = rows.filter_map(|p| Some((p.name.clone(), p.estimate?, p.std_error?)));
+    let rows = rows.filter_map(ParameterEstimate::of);
     MethodEstimates::new(kind.name(), status, rows)
 }
 

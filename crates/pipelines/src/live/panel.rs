@@ -18,7 +18,9 @@
 
 use crate::estimators::{EstimatorKind, EstimatorOptions};
 use crate::job::cross_check::ONLINE_METHODS;
-use crate::replay::cross_check::{Agreement, CrossCheck, MethodEstimates, judge};
+use crate::replay::cross_check::{
+    Agreement, CrossCheck, MethodEstimates, ParameterEstimate, judge,
+};
 use crate::replay::{ReplayObserver, ReplayOptions};
 use aeroident_io::RecordEvent;
 use aeroident_io::mapping::Mapping;
@@ -213,14 +215,14 @@ impl Drop for Panel {
     }
 }
 
-/// `(name, estimate, σ)` of the parameters with both.
+/// The estimates of the parameters with both a value and a σ.
 fn rows<'a>(
     names: &'a [String],
     values: &'a [Option<f64>],
     sigmas: &'a [Option<f64>],
-) -> impl Iterator<Item = (String, f64, f64)> + 'a {
+) -> impl Iterator<Item = ParameterEstimate> + 'a {
     let all = names.iter().zip(values.iter().zip(sigmas));
-    all.filter_map(|(n, (v, s))| Some((n.clone(), (*v)?, (*s)?)))
+    all.filter_map(|(n, (v, s))| Some(ParameterEstimate::new(n.clone(), (*v)?, (*s)?)))
 }
 
 /// Whether the panel disputes the feed's own estimate of a parameter: it is set aside by a

@@ -4,6 +4,7 @@
 //! history on a long feed.
 
 use super::*;
+use crate::replay::cross_check::ParameterEstimate;
 use crate::replay::{EstimateRows, ReplayOptions, replay};
 use aeroident_io::{FlightDataReader, Mapping};
 
@@ -182,11 +183,10 @@ fn an_implausible_estimate_is_flagged_live() {
     assert_eq!(states[1].phase, Phase::Converging, "{states:?}");
 }
 
-/// `replay`'s own final estimates of `kind` on the [`record`], as `(name, estimate, σ)`, or
-/// why it failed.
+/// `replay`'s own final estimates of `kind` on the [`record`], or why it failed.
 fn replayed_alone(
     kind: crate::estimators::EstimatorKind,
-) -> Result<Vec<(String, f64, f64)>, String> {
+) -> Result<Vec<ParameterEstimate>, String> {
     let m = Mapping::from_toml_str(MAP, "m.toml").unwrap();
     let (csv, _) = record();
     let reader = FlightDataReader::new(csv.as_bytes(), "d.csv", &m).unwrap();
@@ -194,7 +194,7 @@ fn replayed_alone(
         ReplayOptions { estimator: kind, diff_window: 3, spike_screen: None, ..Default::default() };
     let out = replay(reader, &m, &opts, &mut ()).map_err(|e| e.to_string())?;
     let rows = out.summary.parameters.iter().map(|p| &p.result);
-    Ok(rows.filter_map(|p| Some((p.name.clone(), p.estimate?, p.std_error?))).collect())
+    Ok(rows.filter_map(ParameterEstimate::of).collect())
 }
 
 /// With the running cross-check, the other real-time methods follow the feed's own events:
@@ -229,7 +229,7 @@ fn the_running_cross_check_follows_the_feed_as_replays_of_their_own() {
     }
     assert!(with_estimates >= 1, "{check:?}");
     let own_rows = out.summary.parameters.iter().map(|p| &p.result);
-    let own_rows = own_rows.filter_map(|p| Some((p.name.clone(), p.estimate?, p.std_error?)));
+    let own_rows = own_rows.filter_map(ParameterEstimate::of);
     let own = MethodEstimates::new("rls", "running", own_rows);
     assert_eq!(check, judge(&own, &check.methods[1..]));
     assert!(live.update(&mut Cursor::default()).cross_check.unwrap().starts_with("rls-iv, ekf"));
@@ -245,7 +245,7 @@ fn a_split_flags_the_derivative_while_it_lasts() {
     let mut o = LiveObserver::new(shared.clone(), None);
     o.start(&["Cm_q", "Cm_alpha"]).unwrap();
     o.estimate(5.0, &[Some(-25.0), Some(-1.0)], &[Some(1.5), Some(0.02)]).unwrap();
-    let row = |n: &str, v: f64, s: f64| (n.to_string(), v, s);
+    let row = ParameterEstimate::new;
     let own = MethodEstimates::new(
         "ekf",
         "running",

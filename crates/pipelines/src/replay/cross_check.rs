@@ -50,17 +50,46 @@ pub const FLAG_SIGMAS: f64 = 2.0;
 /// method on a record with little turbulence) would split every well-determined derivative.
 pub const AGREE_RELATIVE: f64 = super::precision::RELATIVE_SIGMA_LIMIT;
 
-/// One method's result on the record: its name, how it ended, and its `(name, estimate, σ)`
-/// rows (estimates without a finite σ left out).
+/// One parameter's estimate and σ as one method gives it: the row the panel compares.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ParameterEstimate {
+    /// Vocabulary name (`Cm_alpha` …).
+    pub name: String,
+    /// The estimate, in the parameter's own units (those its name implies: `Cm_alpha` per
+    /// rad, `Cm_q` per unit `q̂`, a constant term non-dimensional).
+    pub estimate: f64,
+    /// Its reported standard error, in the units of `estimate`.
+    pub std_error: f64,
+}
+
+impl ParameterEstimate {
+    /// `name`'s `estimate` with standard error `std_error` (units of the estimate).
+    pub fn new(name: impl Into<String>, estimate: f64, std_error: f64) -> Self {
+        Self { name: name.into(), estimate, std_error }
+    }
+
+    /// The row of a result with both an estimate and a σ; `None` without either.
+    pub fn of(p: &aeroident_io::parameter::ParameterResult) -> Option<Self> {
+        Some(Self::new(p.name.clone(), p.estimate?, p.std_error?))
+    }
+
+    /// Whether the panel can use it: a finite estimate with a finite, positive σ.
+    fn usable(&self) -> bool {
+        self.estimate.is_finite() && self.std_error.is_finite() && self.std_error > 0.0
+    }
+}
+
+/// One method's result on the record: its name, how it ended, and its estimates (those
+/// without a finite σ left out).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MethodEstimates {
     /// The estimator (`oe`, `rls-iv` …).
     pub method: String,
     /// How it ended (`converged`, `complete`, `failed: …`); a failed method has no rows.
     pub status: String,
-    /// `(parameter, estimate, σ)`.
+    /// Its estimates, each with a finite, positive σ.
     #[serde(skip)]
-    pub estimates: Vec<(String, f64, f64)>,
+    pub estimates: Vec<ParameterEstimate>,
 }
 
 impl MethodEstimates {
@@ -68,10 +97,9 @@ impl MethodEstimates {
     pub fn new(
         method: &str,
         status: &str,
-        rows: impl IntoIterator<Item = (String, f64, f64)>,
+        rows: impl IntoIterator<Item = ParameterEstimate>,
     ) -> Self {
-        let estimates =
-            rows.into_iter().filter(|r| r.1.is_finite() && r.2.is_finite() && r.2 > 0.0).collect();
+        let estimates = rows.into_iter().filter(ParameterEstimate::usable).collect();
         Self { method: method.into(), status: status.into(), estimates }
     }
 
@@ -80,11 +108,16 @@ impl MethodEstimates {
         Self { method: method.into(), status: format!("failed: {why}"), estimates: Vec::new() }
     }
 
+    /// This method's estimate of `name`, if it gives one.
+    pub fn row(&self, name: &str) -> Option<&ParameterEstimate> {
+        self.estimates.iter().find(|r| r.name == name)
+    }
+
     fn get(&self, name: &str) -> Option<Estimate> {
-        self.estimates.iter().find(|r| r.0 == name).map(|r| Estimate {
+        self.row(name).map(|r| Estimate {
             method: self.method.clone(),
-            estimate: r.1,
-            std_error: r.2,
+            estimate: r.estimate,
+            std_error: r.std_error,
         })
     }
 }
@@ -153,7 +186,7 @@ pub struct CrossCheck {
 /// The panel's verdict on every parameter of `own` (the run's method) against `others`.
 pub fn judge(own: &MethodEstimates, others: &[MethodEstimates]) -> CrossCheck {
     let first: Vec<Agreement> =
-        own.estimates.iter().map(|(name, ..)| agreement(own, others, name, None)).collect();
+        own.estimates.iter().map(|r| agreement(own, others, &r.name, None)).collect();
     let noisy = noisy_equations(&first);
     let parameters: Vec<Agreement> = first
         .into_iter()
@@ -421,7 +454,7 @@ fn short(e: &Estimate) -> String {
 pub fn regressor_noise(own: &MethodEstimates, iv: &MethodEstimates) -> Vec<Warning> {
     own.estimates
         .iter()
-        .filter_map(|(name, ..)| {
+        .filter_map(|ParameterEstimate { name, .. }| {
             let (mine, theirs) = (own.get(name)?, iv.get(name)?);
             (!mine.agrees(&theirs)).then(|| {
                 let text = format!(

@@ -110,12 +110,12 @@ fn moves<'a>(
     late: &'a MethodEstimates,
     early: &'a MethodEstimates,
 ) -> impl Iterator<Item = Move<'a>> + 'a {
-    let value_in =
-        |m: &MethodEstimates, name: &str| m.estimates.iter().find(|r| r.0 == name).map(|r| r.1);
-    own.estimates.iter().filter_map(move |(name, value, sigma)| {
-        let (late, early) = (value_in(late, name)?, value_in(early, name)?);
+    let value_in = |m: &MethodEstimates, name: &str| m.row(name).map(|r| r.estimate);
+    own.estimates.iter().filter_map(move |r| {
+        let (late, early) = (value_in(late, &r.name)?, value_in(early, &r.name)?);
         let half = 0.5 * (late - early);
-        Some(Move { name, value: *value, sigma: *sigma, early, late, half })
+        let (name, value, sigma) = (&r.name, r.estimate, r.std_error);
+        Some(Move { name, value, sigma, early, late, half })
     })
 }
 
@@ -133,12 +133,13 @@ pub fn skew_s(interval_s: f64) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::replay::cross_check::ParameterEstimate;
 
     fn method(rows: &[(&str, f64)]) -> MethodEstimates {
         MethodEstimates::new(
             "oe",
             "converged",
-            rows.iter().map(|&(n, v)| (n.to_string(), v, 0.001)),
+            rows.iter().map(|&(n, v)| ParameterEstimate::new(n, v, 0.001)),
         )
     }
 
@@ -176,7 +177,9 @@ mod tests {
     /// zero), one just beyond is; a small value is written in exponent form.
     #[test]
     fn an_estimate_not_told_from_zero_is_not_judged() {
-        let own = |sigma| MethodEstimates::new("oe", "converged", [("Cl_0".into(), 2e-4, sigma)]);
+        let own = |sigma| {
+            MethodEstimates::new("oe", "converged", [ParameterEstimate::new("Cl_0", 2e-4, sigma)])
+        };
         let late = method(&[("Cl_0", 4e-4)]);
         let early = method(&[("Cl_0", 0.0)]);
         assert!(moved(&own(1e-4), &late, &early, 0.01).is_empty());

@@ -1,7 +1,11 @@
 use super::*;
 
 fn method(name: &str, rows: &[(&str, f64, f64)]) -> MethodEstimates {
-    MethodEstimates::new(name, "complete", rows.iter().map(|&(n, e, s)| (n.to_string(), e, s)))
+    MethodEstimates::new(
+        name,
+        "complete",
+        rows.iter().map(|&(n, e, s)| ParameterEstimate::new(n, e, s)),
+    )
 }
 
 fn panel(own: &str, all: &[(&str, f64, f64)]) -> Agreement {
@@ -112,7 +116,8 @@ fn an_unexplained_split_and_a_lone_estimate_are_flagged() {
     let alone = panel("oe", &[("oe", 1.0, 0.01)]);
     assert!(alone.flag.unwrap().contains("no other method gives Cl_p"));
     // Rows without a finite positive σ are not compared; a failed method gives a warning.
-    let m = MethodEstimates::new("ekf", "complete", [("Cl_p".to_string(), 1.0, f64::NAN)]);
+    let m =
+        MethodEstimates::new("ekf", "complete", [ParameterEstimate::new("Cl_p", 1.0, f64::NAN)]);
     assert!(m.estimates.is_empty());
     let c = judge(&method("oe", &[("Cl_p", 1.0, 0.1)]), &[MethodEstimates::failed("fem", "no β")]);
     let w = warnings(&c);

@@ -74,8 +74,9 @@ pub fn moved(
     let surfaces = describe(leads);
     own.estimates
         .iter()
-        .filter_map(|(name, value, sigma)| {
-            let r = refit.estimates.iter().find(|r| &r.0 == name)?.1;
+        .filter_map(|mine| {
+            let (name, value, sigma) = (&mine.name, mine.estimate, mine.std_error);
+            let r = refit.row(name)?.estimate;
             let shift = r - value;
             (shift.abs() > MOVE_SIGMAS * sigma).then(|| {
                 let text = format!(
@@ -92,6 +93,7 @@ pub fn moved(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::replay::cross_check::ParameterEstimate;
     use aeroident_io::replay_output::SignVerdict;
 
     fn test(channel: &str, lead: Option<f64>) -> SignTest {
@@ -150,19 +152,19 @@ mod tests {
             "oe",
             "converged",
             [
-                ("Cm_alpha".into(), -1.0, 0.1),
-                ("Cm_q".into(), -10.0, 0.1),
-                ("Cm_de".into(), -2.0, 0.1),
-                ("Cm_0".into(), 0.05, 0.1),
+                ParameterEstimate::new("Cm_alpha", -1.0, 0.1),
+                ParameterEstimate::new("Cm_q", -10.0, 0.1),
+                ParameterEstimate::new("Cm_de", -2.0, 0.1),
+                ParameterEstimate::new("Cm_0", 0.05, 0.1),
             ],
         );
         let refit = MethodEstimates::new(
             "oe",
             "converged",
             [
-                ("Cm_alpha".into(), -1.199, 0.1),
-                ("Cm_q".into(), -10.201, 0.1),
-                ("Cm_de".into(), -1.799, 0.1),
+                ParameterEstimate::new("Cm_alpha", -1.199, 0.1),
+                ParameterEstimate::new("Cm_q", -10.201, 0.1),
+                ParameterEstimate::new("Cm_de", -1.799, 0.1),
             ],
         );
         let leads = [("de".to_string(), 0.08)];
@@ -178,8 +180,16 @@ mod tests {
         assert_eq!(w[1].parameter.as_deref(), Some("Cm_de"));
         assert!(w[1].text.contains("+10 %"), "{}", w[1].text);
         // Exactly 2σ (−1.0 → −1.5 at σ 0.25, exact in floating point) is not beyond it.
-        let own = MethodEstimates::new("oe", "converged", [("Cm_alpha".into(), -1.0, 0.25)]);
-        let refit = MethodEstimates::new("oe", "converged", [("Cm_alpha".into(), -1.5, 0.25)]);
+        let own = MethodEstimates::new(
+            "oe",
+            "converged",
+            [ParameterEstimate::new("Cm_alpha", -1.0, 0.25)],
+        );
+        let refit = MethodEstimates::new(
+            "oe",
+            "converged",
+            [ParameterEstimate::new("Cm_alpha", -1.5, 0.25)],
+        );
         assert!(moved(&own, &refit, &leads).is_empty());
     }
 
@@ -196,12 +206,18 @@ mod tests {
         let own = MethodEstimates::new(
             "oe",
             "converged",
-            [("Cm_alpha".into(), -1.0, 0.01), ("Cm_de".into(), -2.0, 0.1)],
+            [
+                ParameterEstimate::new("Cm_alpha", -1.0, 0.01),
+                ParameterEstimate::new("Cm_de", -2.0, 0.1),
+            ],
         );
         let refit = MethodEstimates::new(
             "oe",
             "converged",
-            [("Cm_alpha".into(), -1.2, 0.01), ("Cm_de".into(), -2.05, 0.1)],
+            [
+                ParameterEstimate::new("Cm_alpha", -1.2, 0.01),
+                ParameterEstimate::new("Cm_de", -2.05, 0.1),
+            ],
         );
         warnings.extend(moved(&own, &refit, &[("de".to_string(), 0.08)]));
         assert_eq!(warnings.about("Cm_de"), ["de leads"]);

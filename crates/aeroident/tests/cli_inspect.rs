@@ -292,11 +292,12 @@ S = { value = 0.4, unit = "m2" }
 /// an input the record has; `auto` beside a span, with stdin or with `--and` is refused.
 #[test]
 fn window_auto_resolves_to_windows_holding_the_inputs() {
-    use aeroident::cli::auto_window::{WindowSpec, parse, resolve};
+    use aeroident::cli::auto_window::{WindowSpec, axes_of_model, parse, resolve};
     let data = record("r4");
     let d = data.to_str().unwrap();
     let mapping = aeroident_io::Mapping::from_toml_str(RECORD_MAPPING, "m.toml").unwrap();
-    let w = resolve(&[parse("auto").unwrap()], d, None, &mapping, false).unwrap();
+    let both = axes_of_model(None);
+    let w = resolve(&[parse("auto").unwrap()], d, None, &mapping, false, both).unwrap();
     assert_eq!(w.len(), 2, "{w:?}");
     for (w, (t0, t1)) in w.iter().zip([(30.0, 32.0), (60.0, 63.5)]) {
         assert!(w.start_s <= t0 && w.end_s >= t1, "{w:?}");
@@ -305,7 +306,7 @@ fn window_auto_resolves_to_windows_holding_the_inputs() {
     let span = parse("1:2").unwrap();
     assert!(matches!(span, WindowSpec::Span(_)));
     let e = |specs: &[WindowSpec], data: &str, more: bool| {
-        resolve(specs, data, None, &mapping, more).unwrap_err().to_string()
+        resolve(specs, data, None, &mapping, more, both).unwrap_err().to_string()
     };
     assert!(e(&[WindowSpec::Auto, span], d, false).contains("give `auto` once"));
     assert!(e(&[WindowSpec::Auto], "-", false).contains("give a file"));

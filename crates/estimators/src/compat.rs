@@ -1125,12 +1125,22 @@ fn normal_equations(
     e: &[f64],
     r: &[f64],
 ) -> Result<(DMatrix<f64>, DVector<f64>), EstimatorError> {
+    if beta.len() <= DENSE_MAX_UNKNOWNS {
+        return Ok(information(&sensitivities(p, beta)?, e, r));
+    }
     Ok(Sensitivities::of(p, beta)?.information(e, r))
 }
 
+/// Most unknowns whose normal equations, solves and σ are formed densely, as they always were
+/// (a check of up to about eight manoeuvres): at the optimum a Gauss–Newton step is rounding,
+/// and whether a damped one lowers `det R` there is decided by the last bits; the blocks sum
+/// in another order, which turned a simulated record's converged check into one that ended
+/// without a descent a hair from the same estimates. Beyond this the blocks' linear cost
+/// matters more than those bits.
+const DENSE_MAX_UNKNOWNS: usize = 64;
+
 /// `(M, g)` of dense sensitivities `s` (`N·ny × nβ`), residuals `e` and output variances `r`:
 /// what the blocks must equal.
-#[cfg(test)]
 fn information(s: &DMatrix<f64>, e: &[f64], r: &[f64]) -> (DMatrix<f64>, DVector<f64>) {
     let ny = r.len();
     let sw = DMatrix::from_fn(s.nrows(), s.ncols(), |row, i| s[(row, i)] / r[row % ny]);
@@ -1138,7 +1148,6 @@ fn information(s: &DMatrix<f64>, e: &[f64], r: &[f64]) -> (DMatrix<f64>, DVector
 }
 
 /// `S = ∂y/∂β` at `beta` by central differences, `N·ny × nβ`, dense: what the blocks hold.
-#[cfg(test)]
 fn sensitivities(p: &Problem<'_>, beta: &[f64]) -> Result<DMatrix<f64>, EstimatorError> {
     Ok(Sensitivities::of(p, beta)?.dense())
 }
@@ -1230,7 +1239,11 @@ fn damped(
     let ms =
         DMatrix::from_fn(n, n, |i, j| m[(i, j)] * d[i] * d[j] + if i == j { lambda } else { 0.0 });
     let gs = DVector::from_fn(n, |i, _| g[i] * d[i]);
-    let sol = Schur::of(&ms, part)?.solve(&gs);
+    let sol = if n <= DENSE_MAX_UNKNOWNS {
+        ms.cholesky()?.solve(&gs)
+    } else {
+        Schur::of(&ms, part)?.solve(&gs)
+    };
     Some(DVector::from_fn(n, |i, _| sol[i] * d[i]))
 }
 
@@ -1327,10 +1340,19 @@ impl Problem<'_> {
         self.simulate(&beta, &mut y)?;
         let r = self.residuals(&y, &mut e);
         let s = Sensitivities::of(self, &beta)?;
-        let (m, _) = s.information(&e, &r);
+        let (m, _) = if beta.len() <= DENSE_MAX_UNKNOWNS {
+            information(&s.dense(), &e, &r)
+        } else {
+            s.information(&e, &r)
+        };
         let n = m.nrows();
         let part = Partition::of(&self.unknowns, self.man.len());
-        let inv = Schur::of(&m, &part).map(|c| c.inverse()).ok_or(EstimatorError::Numerical {
+        let inv = if n <= DENSE_MAX_UNKNOWNS {
+            m.clone().cholesky().map(|c| c.inverse())
+        } else {
+            Schur::of(&m, &part).map(|c| c.inverse())
+        };
+        let inv = inv.ok_or(EstimatorError::Numerical {
             what: "compatibility check: the information matrix is singular at the estimate, so the record does not determine every bias, scale factor, time shift and initial state asked for (too short, or too little motion in some axis); give longer or more varied manoeuvres, or ask for fewer unknowns (--no-time-shifts, no --inertial-scale-factors)",
             t_s: self.man[0][0].t_s,
         })?;
@@ -1338,8 +1360,15 @@ impl Problem<'_> {
         // the spectral sandwich of output error (crate::coloured::batch, "Spectral form"), by
         // the manoeuvres' blocks (`coloured`).
         let w: Vec<f64> = r.iter().map(|v| 1.0 / v).collect();
-        let sigma_coloured = coloured::spectral(&s, &e, &w, &inv)
-            .map(|c| (0..n).map(|i| c[(i, i)].max(0.0).sqrt()).collect());
+        let coloured = if n <= DENSE_MAX_UNKNOWNS {
+            // Column-major storage of Sᵀ is S row-major, the layout the sandwich takes.
+            let s_rows = s.dense().transpose();
+            let lengths: Vec<usize> = self.man.iter().map(|m| m.len()).collect();
+            crate::coloured::batch::spectral(s_rows.as_slice(), &e, &w, &lengths, &inv).covariance
+        } else {
+            coloured::spectral(&s, &e, &w, &inv)
+        };
+        let sigma_coloured = coloured.map(|c| (0..n).map(|i| c[(i, i)].max(0.0).sqrt()).collect());
         let ny = self.ny();
         let ns = self.n_samples() as f64;
         let residual_mean =
@@ -1380,6 +1409,15 @@ impl Problem<'_> {
 /// The largest `|step_i| / sqrt((M⁻¹)_ii)` (∞ when `M` is singular); only the diagonal of
 /// `M⁻¹` is formed, by the blocks of `part` ([`Schur::inverse_diagonal`]).
 fn max_sigma(m: &DMatrix<f64>, step: &DVector<f64>, part: &Partition) -> f64 {
+    if m.nrows() <= DENSE_MAX_UNKNOWNS {
+        return match m.clone().cholesky() {
+            Some(c) => {
+                let inv = c.inverse();
+                (0..step.len()).map(|i| step[i].abs() / inv[(i, i)].sqrt()).fold(0.0, f64::max)
+            }
+            None => f64::INFINITY,
+        };
+    }
     match Schur::of(m, part) {
         Some(c) => {
             let inv = c.inverse_diagonal();

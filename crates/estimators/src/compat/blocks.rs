@@ -148,8 +148,7 @@ impl Sensitivities {
         (m, g)
     }
 
-    /// The dense `S` (`N·ny × nβ`), for tests that compare with it.
-    #[cfg(test)]
+    /// The dense `S` (`N·ny × nβ`).
     pub(super) fn dense(&self) -> DMatrix<f64> {
         let rows: usize =
             self.columns.iter().zip(&self.blocks).map(|(c, b)| b.len() / c.len()).sum();

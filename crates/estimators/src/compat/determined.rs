@@ -76,7 +76,12 @@ impl Problem<'_> {
     ) -> Result<(Vec<Unknown>, Vec<String>), EstimatorError> {
         let s = Sensitivities::of(self, &self.start())?;
         let r = self.noise_variances();
-        let (m, _) = s.information(&vec![0.0; self.n_samples() * self.ny()], &r);
+        let e = vec![0.0; self.n_samples() * self.ny()];
+        let (m, _) = if self.unknowns.len() <= super::DENSE_MAX_UNKNOWNS {
+            super::information(&s.dense(), &e, &r)
+        } else {
+            s.information(&e, &r)
+        };
         let mut kept: Vec<usize> =
             (0..self.unknowns.len()).filter(|&i| !excluded.contains(&self.unknowns[i])).collect();
         let mut out = (Vec::new(), Vec::new());

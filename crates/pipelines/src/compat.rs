@@ -8,8 +8,8 @@
 //! time_shift_s, time_shift_sigma_s}], ahrs_lag_tau_s, ahrs_lag_tau_sigma_s, residual_rms{output: value}, findings[], warnings[],
 //! reconstructed[{manoeuvre, t_s[], vt_mps[], alpha_rad[], beta_rad[], beta_determined}],
 //! held_out{by, pieces, corrections[{channel, correction, change_neg_log_likelihood, pieces,
-//! expected, spread, verdict}], notes[]}` (each correction applied to the manoeuvres, or
-//! halves, held out in turn: [`aeroident_estimators::compat::held_out`]; `replay --compat`
+//! expected, spread, verdict}], notes[]}` (each correction applied to the manoeuvres, to
+//! runs of consecutive manoeuvres beyond five (`by = "fold"`), or to halves, held out in turn: [`aeroident_estimators::compat::held_out`]; `replay --compat`
 //! refuses each whose `verdict` is `fails`, recomputed from its numbers)
 //! (`beta_determined` false: the side velocity and the ay bias were fixed at 0, and `replay
 //! --compat` does not use that sideslip). `scale` is the
@@ -361,7 +361,11 @@ fn held_out_finding(h: &compat::HeldOut, r: &CompatResult) -> Option<String> {
         })
         .collect();
     (!failed.is_empty()).then(|| {
-        let pieces = if h.by == "half" { "the record's two halves" } else { "its manoeuvres" };
+        let pieces = match h.by {
+            "half" => "the record's two halves",
+            "fold" => "folds of its consecutive manoeuvres",
+            _ => "its manoeuvres",
+        };
         format!(
             "held out in turn ({pieces}), these corrections worsen the fit of the data they were not fitted on, beyond {} spreads of what a true correction would do (the change of that data's −ln L): {}; replay --compat does not apply them",
             compat::FAIL_SPREADS,
@@ -857,6 +861,9 @@ mod tests {
         h.by = "manoeuvre";
         let f = held_out_finding(&h, &r).unwrap();
         assert!(f.starts_with("held out in turn (its manoeuvres)"), "{f}");
+        h.by = "fold";
+        let f = held_out_finding(&h, &r).unwrap();
+        assert!(f.starts_with("held out in turn (folds of its consecutive manoeuvres)"), "{f}");
         h.corrections[0].change = 1.0;
         assert_eq!(held_out_finding(&h, &r), None);
     }

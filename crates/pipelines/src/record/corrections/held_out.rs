@@ -8,7 +8,8 @@ use serde::{Deserialize, Serialize};
 /// `compat.json` `held_out`: each correction applied to data it was not fitted on.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct HeldOutSummary {
-    /// What was held out in turn: `manoeuvre` or `half` (of a record with one manoeuvre).
+    /// What was held out in turn: `manoeuvre`, `fold` (runs of consecutive manoeuvres, when
+    /// there are more than [`compat::MAX_FOLDS`]) or `half` (of a record with one manoeuvre).
     pub by: String,
     /// How many pieces.
     pub pieces: usize,
@@ -102,7 +103,11 @@ impl HeldOutSummary {
     /// curvature along the correction (`expected` and `spread` both 0), there is no true
     /// correction's change to compare with, and the reason says it fails on the rise alone.
     fn why(&self, r: &HeldOutRow) -> String {
-        let pieces = if self.by == "half" { "halves" } else { "manoeuvres" };
+        let pieces = match self.by.as_str() {
+            "half" => "halves",
+            "fold" => "folds of consecutive manoeuvres",
+            _ => "manoeuvres",
+        };
         let against = if r.expected == 0.0 && r.spread == 0.0 {
             format!(
                 "beyond the {:.2} of a one-parameter likelihood-ratio test, and their cost does not curve along it, so no true correction's change could be formed to excuse it",

@@ -73,6 +73,7 @@ mod spectral;
 pub(crate) use spectral::TAPERS as SPECTRAL_TAPERS;
 pub(crate) use spectral::covariance as spectral;
 pub(crate) use spectral::covariance_until as spectral_until;
+pub(crate) use spectral::{padded, taper, tapered};
 
 /// Half-spectrum transforms of the `ncol` real columns of `x` (`len × ncol` row-major),
 /// zero-padded to `p` (even): `[c][j]` for `j = 0..=p/2`. For the compatibility check's

@@ -15,7 +15,9 @@
 //! `compat::tests::the_block_spectral_sandwich_is_the_dense_one` holds the two equal.
 
 use super::blocks::Sensitivities;
-use crate::coloured::batch::{FITTED_SHARE_PASSES, SPECTRAL_TAPERS as TAPERS, half_spectra};
+use crate::coloured::batch::{
+    FITTED_SHARE_PASSES, SPECTRAL_TAPERS as TAPERS, half_spectra, padded, taper, tapered,
+};
 use nalgebra::DMatrix;
 use rustfft::FftPlanner;
 use rustfft::num_complex::Complex64 as C64;
@@ -23,30 +25,6 @@ use rustfft::num_complex::Complex64 as C64;
 /// Skipped frequencies: below this fraction, divided by `P/2 + 1`, of every column's largest
 /// weighted-sensitivity energy (the general form's).
 const NEGLIGIBLE: f64 = 1e-9;
-
-/// Sine taper `k` (from 0) of a manoeuvre of `len` samples at sample `i`.
-fn taper(k: usize, i: usize, len: usize) -> f64 {
-    let l1 = len as f64 + 1.0;
-    (2.0 / l1).sqrt() * (core::f64::consts::PI * (k + 1) as f64 * (i + 1) as f64 / l1).sin()
-}
-
-/// The transform length for a manoeuvre of `len` samples: the power of two at or above `2·len`.
-fn padded(len: usize) -> usize {
-    (2 * len).max(2).next_power_of_two()
-}
-
-/// The [`TAPERS`] tapered copies of `x` (`len × ncol` row-major) side by side.
-fn tapered(x: &[f64], ncol: usize) -> Vec<f64> {
-    let len = x.len() / ncol.max(1);
-    let mut out = Vec::with_capacity(x.len() * TAPERS);
-    for (i, xi) in x.chunks_exact(ncol).enumerate() {
-        for k in 0..TAPERS {
-            let h = taper(k, i, len);
-            out.extend(xi.iter().map(|v| h * v));
-        }
-    }
-    out
-}
 
 /// One manoeuvre's transforms at the frequencies kept.
 struct Transforms {

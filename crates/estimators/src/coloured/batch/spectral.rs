@@ -83,20 +83,20 @@ struct Transforms {
 }
 
 /// Sine taper `k` (from 0) of a manoeuvre of `len` samples at sample `i` (module doc).
-fn taper(k: usize, i: usize, len: usize) -> f64 {
+pub(crate) fn taper(k: usize, i: usize, len: usize) -> f64 {
     let l1 = len as f64 + 1.0;
     (2.0 / l1).sqrt() * (core::f64::consts::PI * (k + 1) as f64 * (i + 1) as f64 / l1).sin()
 }
 
 /// The transform length `P` for a manoeuvre of `len` samples: the power of two at or above
 /// `2·len` (module doc).
-fn padded(len: usize) -> usize {
+pub(crate) fn padded(len: usize) -> usize {
     (2 * len).max(2).next_power_of_two()
 }
 
 /// The [`TAPERS`] tapered copies of `x` (`len × ncol` row-major) side by side:
 /// `len × (TAPERS·ncol)`, column `k·ncol + c` = `h_k(i) x[i, c]`.
-fn tapered(x: &[f64], ncol: usize) -> Vec<f64> {
+pub(crate) fn tapered(x: &[f64], ncol: usize) -> Vec<f64> {
     let len = x.len() / ncol.max(1);
     let mut out = Vec::with_capacity(x.len() * TAPERS);
     for (i, xi) in x.chunks_exact(ncol).enumerate() {

@@ -22,9 +22,9 @@ use aeroident_estimators::AirDataSample;
 pub const LONG_STRETCH_S: f64 = 600.0;
 
 /// Windows per axis a long stretch is judged on: each window brings six initial states of its
-/// own, and four per axis already fix the biases to half the σ of one (σ falling as the square
-/// root of the windows: on the 80-minute flight the α bias's σ is 0.0039 rad with two per
-/// axis, 0.0022 with four and 0.0013 with eight).
+/// own, and the biases' σ falls only as the square root of the windows (on the 80-minute
+/// simulated flight of docs/real-data.md the α bias's σ is 0.0019 rad on four per axis, eight
+/// windows, and 0.0009 on all 106: thirteen times the windows for half the σ).
 pub const LONG_RECORD_SET_SIZE: usize = 4;
 
 /// What a record read whole is checked on.

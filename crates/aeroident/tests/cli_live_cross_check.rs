@@ -76,8 +76,10 @@ fn the_running_cross_check_flags_a_split_while_the_feed_runs() {
         assert_eq!(last["states"][i]["phase"] == "flagged", flagged, "{p}");
     }
 
-    // Switched off: no panel, and no running flag but the plausibility range's.
-    let (mut child, host) = start(&data, &dir.join("off"), &["--no-live-cross-check"]);
+    // Both switched off (the running panel and the one after the feed): no panel, and no
+    // flag but the plausibility range's, to the end; the summary says the panel did not run.
+    let off = ["--no-live-cross-check", "--no-cross-check"];
+    let (mut child, host) = start(&data, &dir.join("off"), &off);
     let events = updates(&host);
     assert!(child.wait().unwrap().success());
     for e in &events {
@@ -86,5 +88,10 @@ fn the_running_cross_check_flags_a_split_while_the_feed_runs() {
         let r = u["states"][q]["reason"].as_str().unwrap_or_default();
         assert!(!r.starts_with("cross-check"), "{r}");
     }
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("off/summary.json")).unwrap()).unwrap();
+    let warnings = summary["warnings"].as_array().unwrap();
+    let said = warnings.iter().any(|w| w.as_str().unwrap().starts_with("cross-check not run"));
+    assert!(said, "{warnings:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }

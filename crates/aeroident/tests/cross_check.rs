@@ -1,4 +1,4 @@
-//! `replay --cross-check` on the HFB-320 record (../shared/flightdata; skipped with a message
+//! The cross-check on the HFB-320 record (../shared/flightdata; skipped with a message
 //! when absent, a failure under CI): the record's other methods run beside the estimator and
 //! judge it. The published facts it must reproduce (Jategaonkar 2015 §4.11 and §5.9 on this
 //! record): equation error's Cm_q (≈ −42.6, the α channel lagging the kinematics by ~0.2 s) is
@@ -8,6 +8,7 @@
 
 mod common;
 use aeroident_io::{Mapping, ModelSpec, open_log};
+use aeroident_pipelines::job::cross_check::Panel;
 use aeroident_pipelines::job::replay::ReplayJob;
 use aeroident_pipelines::job::{InPlace, ModelChoice, Ran, Records};
 use aeroident_pipelines::replay::{ReplayOptions, replay};
@@ -31,7 +32,7 @@ fn val_hfb320_every_method_cross_checks_equation_error() {
         },
         compat: None,
         options: ReplayOptions::default(),
-        cross_check: true,
+        cross_check: Panel::Full,
         validate_on: None,
     };
     let Ran::Done(prepared) = job.prepare(&mut InPlace, &mut ()).unwrap() else { panic!() };
@@ -58,6 +59,50 @@ fn val_hfb320_every_method_cross_checks_equation_error() {
             None => assert!(!p.flags.iter().any(|f| f.starts_with("cross-check")), "{p:?}"),
         }
     }
+}
+
+/// The default panel is every method but the filter-error method, and it runs unless turned
+/// off: without `--cross-check` an RLS replay of the HFB-320 record is set beside `rls-iv`,
+/// the EKF, `oe` and `fdoe` (no `fem`), and still splits on Cm_q (equation error's ≈ −42
+/// against output error's ≈ −28, the book's published facts); with the panel off there is
+/// no `cross_check` and the summary's warnings say it was not run.
+#[test]
+fn val_hfb320_the_default_panel_leaves_out_fem_and_off_says_so() {
+    let Some(data) = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let m = Mapping::from_path(&workspace().join("mappings/hfb320.toml")).unwrap();
+    let model_path = workspace().join("models/hfb320_jategaonkar.toml");
+    let model = ModelSpec::from_path(&model_path).unwrap();
+    let opts = ReplayOptions { model: Some(model), ..Default::default() };
+    let finish = |panel: Panel| {
+        let o =
+            replay(open_log(&data.display().to_string(), None, &m).unwrap(), &m, &opts, &mut ())
+                .unwrap();
+        let job = ReplayJob {
+            records: Records::one(data.display().to_string(), m.clone()),
+            model: ModelChoice {
+                model: Some(model_path.display().to_string()),
+                ..ModelChoice::default()
+            },
+            compat: None,
+            options: ReplayOptions::default(),
+            cross_check: panel,
+            validate_on: None,
+        };
+        let Ran::Done(prepared) = job.prepare(&mut InPlace, &mut ()).unwrap() else { panic!() };
+        job.finish(prepared, o, &mut InPlace, &mut (), String::new).unwrap().outcome
+    };
+    let fast = finish(Panel::default());
+    let c = fast.cross_check.as_ref().expect("the default panel runs");
+    let methods: Vec<&str> = c.methods.iter().map(|m| m.method.as_str()).collect();
+    assert_eq!(methods, ["rls", "rls-iv", "ekf", "oe", "fdoe"]);
+    let q = c.parameters.iter().find(|a| a.parameter == "Cm_q").unwrap();
+    assert!(!q.confirmed, "{q:?}");
+    let p = fast.summary.parameters.iter().find(|p| p.name == "Cm_q").unwrap();
+    assert_eq!(p.status, "flagged", "{p:?}");
+    let off = finish(Panel::Off);
+    assert!(off.cross_check.is_none());
+    let said = off.summary.warnings.iter().any(|w| w.text.starts_with("cross-check not run"));
+    assert!(said, "{:?}", off.summary.warnings);
 }
 
 /// The batch fit's verdicts: each reference is the model file's `[reference.X]` value (read

@@ -294,6 +294,18 @@ impl ParameterResult {
         }
     }
 
+    /// `std_error` without the shares a record's fit adds beyond its noise
+    /// (`timing_std_error`, `unmodelled_std_error`), in quadrature: the σ of the fit's random
+    /// error. Two methods fitting one record with one model share those two errors, so a
+    /// difference between their estimates is judged against this σ, not the full one. `None`
+    /// without a finite σ.
+    pub fn noise_std_error(&self) -> Option<f64> {
+        let s = self.std_error.filter(|s| s.is_finite())?;
+        let shares =
+            self.timing_std_error.unwrap_or(0.0).hypot(self.unmodelled_std_error.unwrap_or(0.0));
+        Some((s * s - shares * shares).max(0.0).sqrt())
+    }
+
     /// `std_error` with the share `old` taken out and `new` put in, in quadrature; `None`
     /// without a finite σ or for a `new` that is not finite and ≥ 0 (nothing to change).
     fn swapped_share(&self, old: Option<f64>, new: f64) -> Option<f64> {

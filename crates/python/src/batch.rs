@@ -94,7 +94,7 @@ fn matrix(v: Vec<f64>, rows: usize, cols: usize) -> PyResult<Array2<f64>> {
 /// (documentation:
 /// `aeroident.fit` in python/aeroident/__init__.py).
 #[pyfunction]
-#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None, max_iterations=None, process_noise=None, compat=None, windows=None, also=None, select="swr", candidates=None, band_hz=None, knots_deg=None, allow_duplicate_records=false, cross_check=false, **options))]
+#[pyo3(signature = (path, mapping, estimator="oe", model=None, initial_states="first-sample", validate_with=None, bootstrap=None, max_iterations=None, process_noise=None, compat=None, windows=None, also=None, select="swr", candidates=None, band_hz=None, knots_deg=None, allow_duplicate_records=false, cross_check=None, **options))]
 #[allow(clippy::too_many_arguments)]
 fn fit_file<'py>(
     py: Python<'py>,
@@ -115,7 +115,7 @@ fn fit_file<'py>(
     band_hz: Option<(f64, f64)>,
     knots_deg: Option<Vec<f64>>,
     allow_duplicate_records: bool,
-    cross_check: bool,
+    cross_check: Option<bool>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let windows = crate::record::time_windows("fit", windows)?;
@@ -135,6 +135,7 @@ fn fit_file<'py>(
     let model = crate::record::model_choice(model, select, candidates, knots_deg, diff_window);
     let (path, mapping) = (path.to_owned(), mapping.to_owned());
     let also = also.unwrap_or_default();
+    let cross_check = crate::record::panel(cross_check);
     let validate_on = validate_with
         .map(|p| aeroident_pipelines::job::ValidateOn { path: p.to_owned(), windows: Vec::new() });
     let run = move || -> anyhow::Result<(FitJobOutcome, Vec<String>)> {

@@ -310,10 +310,17 @@ pub fn model_choice(
     }
 }
 
+/// The panel of the Python `cross_check` argument: `None` the default panel, `True` the whole
+/// panel (`--cross-check`), `False` none (`--no-cross-check`).
+pub(crate) fn panel(cross_check: Option<bool>) -> aeroident_pipelines::job::cross_check::Panel {
+    use aeroident_pipelines::job::cross_check::Panel;
+    Panel::from_flags(cross_check == Some(true), cross_check == Some(false))
+}
+
 /// Replays a record file exactly as `aeroident replay DATA --map MAPPING` (module doc of the
 /// Python package).
 #[pyfunction]
-#[pyo3(signature = (path, mapping, estimator="rls", model=None, forgetting=None, derivatives="auto", diff_window=5, compat=None, windows=None, cross_check=false, select="swr", candidates=None, knots_deg=None, **options))]
+#[pyo3(signature = (path, mapping, estimator="rls", model=None, forgetting=None, derivatives="auto", diff_window=5, compat=None, windows=None, cross_check=None, select="swr", candidates=None, knots_deg=None, **options))]
 #[allow(clippy::too_many_arguments)]
 fn replay_file<'py>(
     py: Python<'py>,
@@ -326,7 +333,7 @@ fn replay_file<'py>(
     diff_window: usize,
     compat: Option<&str>,
     windows: Option<Vec<(f64, f64)>>,
-    cross_check: bool,
+    cross_check: Option<bool>,
     select: &str,
     candidates: Option<Vec<String>>,
     knots_deg: Option<Vec<f64>>,
@@ -343,6 +350,7 @@ fn replay_file<'py>(
     let (path, mapping) = (path.to_owned(), mapping.to_owned());
     let compat = compat.map(CompatSource::from_arg);
     let signals = Signals::new();
+    let cross_check = panel(cross_check);
     let run = || -> anyhow::Result<_> {
         let mapping = Mapping::from_path(Path::new(&mapping))?;
         if kind.is_batch() {

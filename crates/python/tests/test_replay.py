@@ -277,7 +277,13 @@ def test_cross_check_equals_cli(tmp_path):
     assert not q["confirmed"] and "split" in q["flag"], q
     cm_q = next(p for p in py["summary"]["parameters"] if p["name"] == "Cm_q")
     assert cm_q["status"] == "flagged" and q["flag"] in cm_q["flags"]
-    assert aeroident.replay(data, mapping=mapping, model=model)["summary"]["cross_check"] is None
+    # By default the panel runs without the filter-error method; cross_check=False runs none
+    # and says so.
+    default = aeroident.replay(data, mapping=mapping, model=model)["summary"]["cross_check"]
+    assert [m["method"] for m in default["methods"]] == ["rls", "rls-iv", "ekf", "oe", "fdoe"]
+    off = aeroident.replay(data, mapping=mapping, model=model, cross_check=False)["summary"]
+    assert off["cross_check"] is None
+    assert any(w.startswith("cross-check not run (turned off") for w in off["warnings"]), off["warnings"]
 
 
 def test_fit_cross_check_equals_cli(tmp_path):

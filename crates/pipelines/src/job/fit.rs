@@ -25,8 +25,8 @@ pub struct FitJob {
     pub compat: Option<CompatSource>,
     /// The fit's options; the job sets their `compat` from its own stage.
     pub options: FitOptions,
-    /// Whether to run the record's other methods beside the fit (`--cross-check`).
-    pub cross_check: bool,
+    /// The record's other methods run beside the fit ([`super::cross_check::Panel`]).
+    pub cross_check: super::cross_check::Panel,
     /// A second record (same mapping) to validate the fitted model on.
     pub validate_on: Option<super::ValidateOn>,
 }
@@ -125,11 +125,19 @@ impl FitJob {
         if !interrupted {
             self.timing_refit(&mut outcome, guard, log)?;
         }
-        if self.cross_check && interrupted {
-            let w = "the run was interrupted: --cross-check not done".to_string();
+        if self.cross_check.runs() && interrupted {
+            let w = "the run was interrupted: the cross-check not done".to_string();
             outcome.summary.warnings.push(w);
-        } else if self.cross_check {
+        } else if self.cross_check.runs() && self.records.live {
+            let w = super::cross_check::not_run_warning("a record from stdin cannot be read again");
+            log.warning(&w);
+            outcome.summary.warnings.push(w);
+        } else if self.cross_check.runs() {
             self.cross_check(&mut outcome, guard, log)?;
+        } else {
+            let w = super::cross_check::not_run_warning(super::cross_check::TURNED_OFF);
+            log.warning(&w);
+            outcome.summary.warnings.push(w);
         }
         match &self.validate_on {
             Some(_) if interrupted => {
@@ -142,7 +150,7 @@ impl FitJob {
         Ok(FitJobOutcome { outcome, selection })
     }
 
-    /// `--cross-check`: the record's other methods run with the fitted model
+    /// The cross-check: the panel's methods run with the fitted model
     /// ([`super::cross_check::run_panel`]) and the fit judged beside them
     /// ([`crate::replay::cross_check`]), its verdicts judged again with the panel's flags.
     fn cross_check(
@@ -161,8 +169,9 @@ impl FitJob {
             ..Default::default()
         };
         let warnings = &mut outcome.summary.warnings;
+        let (records, panel) = (&self.records, self.cross_check);
         let Some(check) =
-            super::cross_check::check(&self.records, &own, base, guard, log, warnings)?
+            super::cross_check::check(records, &own, base, panel, guard, log, warnings)?
         else {
             return Ok(());
         };

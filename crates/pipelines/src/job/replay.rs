@@ -22,8 +22,9 @@ pub struct ReplayJob {
     pub compat: Option<CompatSource>,
     /// The replay's options; the job sets their `model` and `compat` from its own stages.
     pub options: ReplayOptions,
-    /// Whether to fit the record by output error too and set the two side by side.
-    pub cross_check: bool,
+    /// The record's other methods set beside the replay after the feed
+    /// ([`super::cross_check::Panel`]; not run on a live feed, which cannot be read twice).
+    pub cross_check: super::cross_check::Panel,
     /// A second record (same mapping) to validate the final estimates on.
     pub validate_on: Option<super::ValidateOn>,
 }
@@ -79,7 +80,7 @@ impl ReplayJob {
                 kind.name()
             )));
         }
-        if self.cross_check && self.records.live {
+        if self.cross_check == super::cross_check::Panel::Full && self.records.live {
             return Err(ReplayError::Combination(
                 "--cross-check sets a real-time estimator beside the batch fit of a whole record: not for a live feed or a batch estimator".into(),
             ));
@@ -129,12 +130,14 @@ impl ReplayJob {
         stopped_why: impl FnOnce() -> String,
     ) -> Result<ReplayJobOutcome, ReplayError> {
         let interrupted = outcome.interrupted();
-        if interrupted && (self.validate_on.is_some() || self.cross_check) {
+        if interrupted && (self.validate_on.is_some() || self.cross_check.runs()) {
             let w = "the run was interrupted: --validate-on / --cross-check not done".to_string();
             log.warning(&w);
             outcome.summary.warnings.push(w);
         }
-        if !interrupted && (self.cross_check || !outcome.diverged()) {
+        if !interrupted
+            && (self.cross_check == super::cross_check::Panel::Full || !outcome.diverged())
+        {
             self.check_after_feed(&prepared.options, &mut outcome, guard, log)?;
         }
         let validation_on = match &self.validate_on {
@@ -147,11 +150,12 @@ impl ReplayJob {
         Ok(ReplayJobOutcome { outcome, validation_on, selection, options })
     }
 
-    /// The check after the feed, the verdicts judged again with its doubts: with
-    /// `--cross-check` the record's other methods run with the same model
+    /// The check after the feed, the verdicts judged again with its doubts: unless the panel
+    /// is off or the feed live, the record's other methods run with the same model
     /// ([`super::cross_check::run_panel`]) and the online estimates judged beside them
     /// ([`crate::replay::cross_check`]); without it, least squares' regressor-noise test
-    /// ([`super::cross_check::regressor_noise_test`]); then the timing refit
+    /// ([`super::cross_check::regressor_noise_test`]) and a warning that the panel was not
+    /// run; then the timing refit
     /// ([`super::timing::refit_step`]) and the sample-timing test
     /// ([`super::timing::skew_step`]), and the unmodelled σ added
     /// ([`crate::replay::unmodelled`]). A stop abandons each with a warning (the online result
@@ -170,13 +174,21 @@ impl ReplayJob {
         );
         let base = ReplayOptions { model: Some(outcome.model.clone()), ..options.clone() };
         let (records, warnings) = (&self.records, &mut outcome.summary.warnings);
-        if self.cross_check {
-            let check =
-                super::cross_check::check(records, &own, base.clone(), guard, log, warnings)?;
+        if self.cross_check.runs() && !records.live {
+            let (b, panel) = (base.clone(), self.cross_check);
+            let check = super::cross_check::check(records, &own, b, panel, guard, log, warnings)?;
             outcome.cross_check = check;
         } else {
             let test = base.clone();
             super::cross_check::regressor_noise_test(records, &own, test, guard, log, warnings)?;
+            let why = if records.live {
+                "a live feed cannot be read again"
+            } else {
+                super::cross_check::TURNED_OFF
+            };
+            let w = super::cross_check::not_run_warning(why);
+            log.warning(&w);
+            warnings.push(w);
         }
         let again = records.clone();
         let fit = move |compat| {

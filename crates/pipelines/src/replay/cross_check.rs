@@ -68,9 +68,12 @@ impl ParameterEstimate {
         Self { name: name.into(), estimate, std_error }
     }
 
-    /// The row of a result with both an estimate and a σ; `None` without either.
+    /// The row of a result with both an estimate and a σ; `None` without either. The σ is the
+    /// fit's noise σ ([`aeroident_io::ParameterResult::noise_std_error`]): the timing and
+    /// unmodelled shares are common to every fit of the record with the model, so they do not
+    /// enter a difference between two of them.
     pub fn of(p: &aeroident_io::parameter::ParameterResult) -> Option<Self> {
-        Some(Self::new(p.name.clone(), p.estimate?, p.std_error?))
+        Some(Self::new(p.name.clone(), p.estimate?, p.noise_std_error()?))
     }
 
     /// Whether the panel can use it: a finite estimate with a finite, positive σ.

@@ -222,7 +222,7 @@ def replay(
     sample_interval_s: Optional[float] = None,
     compat: Optional[PathLike] = None,
     windows: Optional[Sequence[tuple[float, float]]] = None,
-    cross_check: bool = False,
+    cross_check: Optional[bool] = None,
     select: str = "swr",
     candidates: Optional[Sequence[str]] = None,
     knots_deg: Optional[Sequence[float]] = None,
@@ -246,10 +246,12 @@ def replay(
     applied to every sample first (``--compat FILE``), or ``"auto"``: checked on the record
     first (``--compat auto``). ``windows``: ``[(start_s, end_s), …]``
     record-time windows, each its own manoeuvre, the rest not used (``--window START:END``).
-    ``cross_check=True`` (a record file): the record's other methods (rls, rls-iv, ekf, oe,
-    fem) run with the same model and ``summary["cross_check"]`` judges each estimate beside
-    theirs, a parameter they do not confirm flagged with the camps and the tested cause
-    (``--cross-check``). Further keyword arguments are the
+    ``cross_check`` (a record file): by default (``None``) the record's other methods but the
+    filter-error method (rls, rls-iv, ekf, oe, fdoe) run after the feed with the same model
+    and ``summary["cross_check"]`` judges each estimate beside theirs, a parameter they do
+    not confirm flagged with the camps and the tested cause; ``True`` adds ``fem``
+    (``--cross-check``); ``False`` runs none (``--no-cross-check``; the summary's warnings
+    say so). Further keyword arguments are the
     estimator's own options by their scenario keys (``instrument_delay=8`` for ``rls-iv``,
     ``parameter_walk_per_sqrt_s=0.01`` for ``ekf``; ``--estimator-option KEY=VALUE``); one the
     estimator does not take raises :class:`AeroidentError` naming those it takes.
@@ -296,7 +298,7 @@ def replay(
         r["reasons"] = _reasons(r["names"], last(r["estimates"]), last(r["std_error"]), r["summary"]["parameters"], estimator)
         return r
     # What only a record file has a use for would be ignored for arrays: refused instead.
-    file_only = dict(mapping=mapping, compat=compat, windows=windows, cross_check=cross_check or None, candidates=candidates, knots_deg=knots_deg)
+    file_only = dict(mapping=mapping, compat=compat, windows=windows, cross_check=cross_check, candidates=candidates, knots_deg=knots_deg)
     given = [k for k, v in file_only.items() if v is not None]
     if given:
         raise AeroidentError(
@@ -349,7 +351,7 @@ def fit(
     band_hz: Optional[tuple[float, float]] = None,
     knots_deg: Optional[Sequence[float]] = None,
     allow_duplicate_records: bool = False,
-    cross_check: bool = False,
+    cross_check: Optional[bool] = None,
     **options: Any,
 ) -> dict[str, Any]:
     """Fits a whole record by batch output error (``"oe"``), the filter-error method
@@ -389,9 +391,11 @@ def fit(
     Further keyword arguments are the fit's other options by their keys (``robust=True`` for
     Huber's weights in ``oe``, ``gain_constraint=False`` for ``fem``;
     ``--estimator-option KEY=VALUE``), parsed by the same parser as the CLI's flags.
-    ``cross_check=True``: the record's other methods (rls, rls-iv, ekf without ``also``; oe
-    or fem) run with the fitted model and ``summary["cross_check"]`` judges each estimate
-    beside theirs, one they do not confirm flagged (``--cross-check``).
+    ``cross_check``: by default (``None``) the record's other methods but the filter-error
+    method (rls, rls-iv, ekf without ``also``; oe, fdoe) run with the fitted model and
+    ``summary["cross_check"]`` judges each estimate beside theirs, one they do not confirm
+    flagged; ``True`` adds ``fem`` (``--cross-check``); ``False`` runs none
+    (``--no-cross-check``; the summary's warnings say so).
 
     A fit that does not meet both convergence criteria is returned all the same:
     ``summary["status"]`` is ``"converged"``, ``"converged_in_cost"`` (the cost stopped
@@ -451,7 +455,7 @@ def fit(
         _band(band_hz),
         None if knots_deg is None else [float(k) for k in _sequence("knots_deg", knots_deg)],
         allow_duplicate_records=bool(allow_duplicate_records),
-        cross_check=bool(cross_check),
+        cross_check=None if cross_check is None else bool(cross_check),
         **options,
     )
     r["reasons"] = _reasons(r["names"], r["estimate"], r["std_error"], r["summary"]["parameters"], estimator)

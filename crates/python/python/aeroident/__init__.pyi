@@ -156,7 +156,7 @@ def replay(
     sample_interval_s: Optional[float] = None,
     compat: Optional[PathLike] = None,
     windows: Optional[Sequence[tuple[float, float]]] = None,
-    cross_check: bool = False,
+    cross_check: Optional[bool] = None,
     select: Literal["swr", "mof"] = "swr",
     candidates: Optional[Sequence[str]] = None,
     knots_deg: Optional[Sequence[float]] = None,
@@ -206,7 +206,7 @@ def fit(
     band_hz: Optional[tuple[float, float]] = None,
     knots_deg: Optional[Sequence[float]] = None,
     allow_duplicate_records: bool = False,
-    cross_check: bool = False,
+    cross_check: Optional[bool] = None,
     **options: Any,
 ) -> FitResult: ...
 def freqresp(

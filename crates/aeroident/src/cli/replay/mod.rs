@@ -11,7 +11,7 @@
 //!                  [--derivatives auto|differentiate] [--diff-window N] [--realtime]
 //!                  [--validate-on <data2.csv>] [--validate-window START:END …]
 //!                  [--window START:END … | --window auto] [--and <more.csv> …]
-//!                  [--cross-check] [--no-spike-screen] [--robust]
+//!                  [--cross-check | --no-cross-check] [--no-spike-screen] [--robust]
 //! ```
 //! Writes `<dir>/estimates.csv`, `<dir>/summary.json`, `<dir>/estimates.{png,svg}` (estimates
 //! with shaded ±2σ), `<dir>/fit.{png,svg}` (model vs measured) and `<dir>/report.html`
@@ -68,6 +68,7 @@ use aeroident_io::{LogFormat, Mapping};
 use aeroident_pipelines::estimators::{
     EstimatorKind, EstimatorOptions, OptionError, option_list, parse_options, quoted_list,
 };
+use aeroident_pipelines::job::cross_check::Panel;
 use aeroident_pipelines::job::fit::FitJob;
 use aeroident_pipelines::job::replay::ReplayJob;
 use aeroident_pipelines::job::{CompatSource, ModelChoice, Ran, Records, ValidateOn};
@@ -168,13 +169,18 @@ pub struct ReplayArgs {
     /// data; without it such a record is refused, as it would shrink every σ by √2.
     #[arg(long)]
     pub allow_duplicate_records: bool,
-    /// Also run the record's other methods (rls, rls-iv, ekf, oe, fem; the real-time ones
-    /// only without --and) with the same model and judge each estimate beside theirs: one
+    /// Run the whole panel, the filter-error method (fem) too. By default the record's other
+    /// methods but fem (rls, rls-iv, ekf, oe, fdoe; the real-time ones only without --and)
+    /// run after the fit with the same model and each estimate is judged beside theirs: one
     /// the methods do not confirm is flagged with the camps and the tested cause (regressor
     /// noise, the EKF's noise model, process noise), in the table, the warnings and
-    /// `summary.json` `cross_check`.
-    #[arg(long)]
+    /// `summary.json` `cross_check`. Not for a live feed or stdin.
+    #[arg(long, conflicts_with = "no_cross_check")]
     pub cross_check: bool,
+    /// Run no other method beside the fit: faster, but a disagreement between methods can
+    /// no longer flag an estimate (the summary says the panel was not run).
+    #[arg(long)]
+    pub no_cross_check: bool,
     /// A second record (same mapping) not used for the fit: the final estimates are applied
     /// to it and the validation metrics reported under `validation_on` in the summary.
     #[arg(long, value_name = "FILE2")]
@@ -406,7 +412,7 @@ fn fit_job(args: &ReplayArgs, records: Records, options: FitOptions) -> FitJob {
         model: model_choice(args),
         compat: args.compat.as_deref().map(CompatSource::from_arg),
         options,
-        cross_check: args.cross_check,
+        cross_check: Panel::from_flags(args.cross_check, args.no_cross_check),
         validate_on: validate_on(args),
     }
 }
@@ -459,7 +465,7 @@ fn replay_job(args: &ReplayArgs, records: Records) -> anyhow::Result<ReplayJob> 
         model: model_choice(args),
         compat: args.compat.as_deref().map(CompatSource::from_arg),
         options,
-        cross_check: args.cross_check,
+        cross_check: Panel::from_flags(args.cross_check, args.no_cross_check),
         validate_on: validate_on(args),
     })
 }

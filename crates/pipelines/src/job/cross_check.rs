@@ -275,3 +275,23 @@ pub fn check(
     }
     Ok(Some(check))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The faces' two flags: `--cross-check` wins (clap refuses both together), neither is
+    /// the default panel; the default panel holds every method but `fem`, off holds none.
+    #[test]
+    fn the_flags_choose_the_panel_and_the_default_leaves_out_fem() {
+        assert_eq!(Panel::from_flags(false, false), Panel::default());
+        assert_eq!(Panel::from_flags(true, false), Panel::Full);
+        assert_eq!(Panel::from_flags(false, true), Panel::Off);
+        let all = ONLINE_METHODS.iter().chain(&BATCH_METHODS);
+        let fast: Vec<&str> =
+            all.clone().filter(|k| Panel::Fast.holds(**k)).map(|k| k.name()).collect();
+        assert_eq!(fast, ["rls", "rls-iv", "ekf", "oe", "fdoe"]);
+        assert_eq!(all.clone().filter(|k| Panel::Full.holds(**k)).count(), 6);
+        assert!(!Panel::Off.runs() && all.clone().all(|k| !Panel::Off.holds(*k)));
+    }
+}

@@ -39,6 +39,6 @@ pub use flight_data::{FlightDataReader, RecordEvent, Rejection};
 pub use log::{LogFormat, LogReader, open_log, open_log_with_notes, open_log_with_report};
 pub use mapping::{Channel, Mapping};
 pub use model_file::{ModelFileError, ModelSpec, ParamReference, PlausibleRange};
-pub use parameter::{ParameterResult, ReferenceCheck, SCHEMA_VERSION, StdErrorSource};
+pub use parameter::{Combination, ParameterResult, ReferenceCheck, SCHEMA_VERSION, StdErrorSource};
 pub use reader_report::ReaderReport;
 pub use rejection_log::RejectionLog;

@@ -134,6 +134,22 @@ pub struct ParameterResult {
     /// says imprecise, not wrong): never blocks `identified`.
     #[serde(default)]
     pub notes: Vec<String>,
+    /// The parameters the record fixes this one only in combination with (|ρ| > 0.9 in the
+    /// run's correlations: Cm_q with Cm_α̇ in a short period, a constant with a speed term
+    /// over a narrow speed range), each with ρ; empty without any. The same pairs are in
+    /// `notes` in words; neither blocks `identified` (each value may be right, and its σ
+    /// carries the spread along the combination the record leaves free).
+    #[serde(default)]
+    pub combines: Vec<Combination>,
+}
+
+/// A parameter another one is fixed only in combination with ([`ParameterResult::combines`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Combination {
+    /// The partner's vocabulary name.
+    pub with: String,
+    /// Their correlation coefficient `cov(a,b)/(σ_a σ_b)`, |ρ| > 0.9.
+    pub rho: f64,
 }
 
 /// An estimate set beside its reference: the comparison the verdict never reads.
@@ -173,6 +189,7 @@ impl ParameterResult {
             status: String::new(),
             flags: Vec::new(),
             notes: Vec::new(),
+            combines: Vec::new(),
         };
         result.set_reference(reference);
         result.judge(failure);
@@ -377,6 +394,20 @@ mod tests {
         let mut singular = ParameterResult::new("Cl_p", Some(-0.4), Some(f64::NAN), None, None);
         singular.add_unmodelled_std_error(0.05);
         assert!(singular.std_error.unwrap().is_nan() && singular.unmodelled_std_error.is_none());
+    }
+
+    /// The noise σ by hand: σ 0.1 with a timing share 0.3 and 5 % of |−2| (0.1) reads 0.1
+    /// back; with no share it is `std_error`; without a finite σ there is none.
+    #[test]
+    fn the_noise_sigma_is_the_sigma_without_the_shares() {
+        let mut r = ParameterResult::new("Cm_alpha", Some(-2.0), Some(0.1), None, None);
+        assert_eq!(r.noise_std_error(), Some(0.1));
+        r.add_timing_std_error(0.3);
+        r.add_unmodelled_std_error(0.05);
+        assert!((r.std_error.unwrap() - 0.11f64.sqrt()).abs() < 1e-15);
+        assert!((r.noise_std_error().unwrap() - 0.1).abs() < 1e-15);
+        let bare = ParameterResult::new("Cl_p", Some(-0.4), None, None, None);
+        assert_eq!(bare.noise_std_error(), None);
     }
 
     #[test]

@@ -108,14 +108,35 @@ pub fn judge_estimate(
 /// speed range). A note, not a doubt: each value may be right, and its σ already carries the
 /// spread along the combination the record leaves free.
 pub fn combination_notes(name: &str, correlations: &[Correlation]) -> Vec<String> {
+    combinations(name, correlations)
+        .iter()
+        .map(|c| {
+            format!(
+                "combines with {} (ρ = {:+.2}): the record fixes a combination of the two, not each; excite them apart to separate them",
+                c.with, c.rho
+            )
+        })
+        .collect()
+}
+
+/// The partners of parameter `name` among the run's strongly correlated pairs
+/// (`correlations`, |ρ| > 0.9), each with ρ: the `combines` field of its result, the pairs
+/// [`combination_notes`] puts in words.
+pub fn combinations(
+    name: &str,
+    correlations: &[Correlation],
+) -> Vec<aeroident_io::parameter::Combination> {
     correlations
         .iter()
         .filter_map(|c| {
-            let other = if c.a == name { &c.b } else if c.b == name { &c.a } else { return None };
-            Some(format!(
-                "combines with {other} (ρ = {:+.2}): the record fixes a combination of the two, not each; excite them apart to separate them",
-                c.rho
-            ))
+            let other = if c.a == name {
+                &c.b
+            } else if c.b == name {
+                &c.a
+            } else {
+                return None;
+            };
+            Some(aeroident_io::parameter::Combination { with: other.clone(), rho: c.rho })
         })
         .collect()
 }

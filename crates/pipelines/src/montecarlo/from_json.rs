@@ -102,6 +102,11 @@ fn param_run(p: &Value) -> Result<ParamRun, String> {
             Some(x) => serde_json::from_value(x.clone())
                 .map_err(|e| format!("per-run result: `notes`: {e}"))?,
         },
+        combines: match p.get("combines") {
+            None | Some(Value::Null) => Vec::new(),
+            Some(x) => serde_json::from_value(x.clone())
+                .map_err(|e| format!("per-run result: `combines`: {e}"))?,
+        },
     };
     Ok(ParamRun {
         result,

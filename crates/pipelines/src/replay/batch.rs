@@ -209,6 +209,7 @@ impl BatchSummary {
                 ));
             }
             let repeat = self.repeatability.as_ref().and_then(|rep| rep.failed(&r.name));
+            r.combines = crate::verdict::combinations(&r.name, &self.correlations);
             let evidence = Evidence {
                 doubts,
                 plausibility: Some((model, thrust_mapped)),

@@ -16,6 +16,7 @@ pub fn judge(outcome: &mut ReplayOutcome, thrust_mapped: bool) {
     for p in &mut summary.parameters {
         let r = &mut p.result;
         r.flags.clear();
+        r.combines = verdict::combinations(&r.name, &summary.correlations);
         let evidence = Evidence {
             doubts: summary.warnings.about(&r.name),
             plausibility: Some((model, thrust_mapped)),
@@ -74,6 +75,8 @@ mod tests {
             n.iter().filter(|t| !t.starts_with("combines with")).cloned().collect()
         };
         assert!(own(&precise.notes).is_empty(), "{:?}", precise.notes);
+        let partner = precise.combines.iter().find(|c| c.with == "CL_0");
+        assert!(partner.is_some_and(|c| c.rho.abs() > 0.9), "{:?}", precise.combines);
         assert_eq!(own(&imprecise.notes), [precision]);
         assert_eq!((&imprecise.flags, &imprecise.status), (&precise.flags, &precise.status));
         let status = if precise.flags.is_empty() { STATUS_IDENTIFIED } else { STATUS_FLAGGED };

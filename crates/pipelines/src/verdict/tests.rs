@@ -122,7 +122,8 @@ fn a_current_estimate_judged_by_its_own_numbers() {
 }
 
 /// A strongly correlated pair names each side's partner in a note, with ρ; a parameter in no
-/// pair gets none; a note never blocks `identified`.
+/// pair gets none; the `combines` field names the partner with ρ; a note never blocks
+/// `identified`.
 #[test]
 fn a_correlated_pair_is_a_combination_note_on_both() {
     let pairs = [aeroident_io::replay_output::Correlation {
@@ -136,6 +137,9 @@ fn a_correlated_pair_is_a_combination_note_on_both() {
     assert!(q[0].starts_with("combines with Cm_alphadot (ρ = -0.97)"), "{q:?}");
     assert!(ad[0].starts_with("combines with Cm_q (ρ = -0.97)"), "{ad:?}");
     assert!(combination_notes("Cm_alpha", &pairs).is_empty());
+    let c = combinations("Cm_alphadot", &pairs);
+    assert_eq!((c.len(), c[0].with.as_str(), c[0].rho), (1, "Cm_q", -0.97));
+    assert!(combinations("Cm_alpha", &pairs).is_empty());
     let mut r = result("Cm_q", -10.0, 0.5, None);
     judge(&mut r, &Evidence { notes: q, ..Default::default() });
     assert_eq!((r.status.as_str(), r.notes.len()), (STATUS_IDENTIFIED, 1));

@@ -454,15 +454,15 @@ pub struct PathStep {
 pub struct EquationErrorEstimate {
     /// Parameter name (`Cm_q`).
     pub name: String,
-    /// The estimate.
-    pub value: f64,
+    /// The estimate (the name every per-parameter object of the summary uses).
+    pub estimate: f64,
     /// Standard error corrected for coloured residuals (the spectral sandwich output error
     /// reports, [`aeroident_estimators::structure::coloured_std_error`]); `null` when it could
     /// not be formed.
-    pub sigma: Option<f64>,
+    pub std_error: Option<f64>,
     /// The white-residual standard error `s²(XᵀX)⁻¹` the partial F uses; too small on flight
     /// data, whose residuals are correlated.
-    pub sigma_white: f64,
+    pub white_std_error: f64,
 }
 
 /// One coefficient's selection, as `summary.json` gives it.
@@ -679,9 +679,9 @@ fn coefficient_report(s: &CoefficientSelection) -> CoefficientReport {
         .enumerate()
         .map(|(i, t)| EquationErrorEstimate {
             name: Param::new(s.coefficient, t).name().to_string(),
-            value: fit.theta[i],
-            sigma: s.std_error_coloured.as_ref().map(|c| c[i]),
-            sigma_white: fit.std_error[i],
+            estimate: fit.theta[i],
+            std_error: s.std_error_coloured.as_ref().map(|c| c[i]),
+            white_std_error: fit.std_error[i],
         })
         .collect();
     CoefficientReport {

@@ -1096,7 +1096,7 @@ fn solo_fit(
     let r = &fitted.result;
     fit.estimates = (0..r.n_params)
         .filter(|&i| sigma[i].is_finite() && sigma[i] > 0.0)
-        .map(|i| (r.names[i].clone(), r.values[i], sigma[i]))
+        .map(|i| super::cross_check::ParameterEstimate::new(&r.names[i], r.values[i], sigma[i]))
         .collect();
     fit.status = super::repeatability::CONVERGED.into();
     fit

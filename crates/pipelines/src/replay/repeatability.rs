@@ -49,9 +49,9 @@ pub struct SoloFit {
     pub samples: usize,
     /// [`CONVERGED`], `not converged` or `failed: why` (only a converged fit is compared).
     pub status: String,
-    /// `(parameter, estimate, σ)` of a converged fit (σ finite and positive).
+    /// The estimates of a converged fit (σ finite and positive).
     #[serde(skip)]
-    pub estimates: Vec<(String, f64, f64)>,
+    pub estimates: Vec<super::cross_check::ParameterEstimate>,
 }
 
 /// One manoeuvre's estimate of a parameter.
@@ -153,8 +153,8 @@ impl Repeatability {
                     .iter()
                     .filter(|f| f.status == CONVERGED)
                     .filter_map(|f| {
-                        let &(_, estimate, std_error) =
-                            f.estimates.iter().find(|(n, ..)| n == name)?;
+                        let row = f.estimates.iter().find(|r| r.name == *name)?;
+                        let (estimate, std_error) = (row.estimate, row.std_error);
                         (std_error <= MAX_RELATIVE_SIGMA * estimate.abs()).then_some(
                             ManoeuvreValue { manoeuvre: f.manoeuvre, estimate, std_error },
                         )

@@ -1,4 +1,5 @@
 use super::*;
+use crate::replay::cross_check::ParameterEstimate;
 
 fn v(manoeuvre: usize, estimate: f64, std_error: f64) -> ManoeuvreValue {
     ManoeuvreValue { manoeuvre, estimate, std_error }
@@ -76,7 +77,7 @@ fn only_the_manoeuvres_that_determine_a_parameter_are_compared() {
         t_end_s: 10.0 * k as f64 + 8.0,
         samples: 400,
         status: status.into(),
-        estimates: rows.iter().map(|&(n, e, s)| (n.to_string(), e, s)).collect(),
+        estimates: rows.iter().map(|&(n, e, s)| ParameterEstimate::new(n, e, s)).collect(),
     };
     let fits = vec![
         fit(0, "converged", &[("Cm_q", -10.0, 0.5), ("Cl_p", -0.4, 0.01)]),
@@ -115,7 +116,7 @@ fn the_thresholds_at_their_edge() {
         t_end_s: 1.0,
         samples: 100,
         status: CONVERGED.into(),
-        estimates: vec![("Cm_q".to_string(), e, s)],
+        estimates: vec![ParameterEstimate::new("Cm_q", e, s)],
     };
     let names = ["Cm_q".to_string()];
     let at = Repeatability::assess(vec![fit(0, -1.0, 0.1), fit(1, -0.9, 0.9)], &names);

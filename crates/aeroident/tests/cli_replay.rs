@@ -933,9 +933,9 @@ fn val_output_error_bootstrap_sigma_on_request() {
     assert_eq!(b["failed"], 0);
     assert_eq!(b["seed"], 1);
     let f = b["process_noise"].as_array().unwrap();
-    let names: Vec<&str> = f.iter().map(|e| e[0].as_str().unwrap()).collect();
+    let names: Vec<&str> = f.iter().map(|e| e["state"].as_str().unwrap()).collect();
     assert_eq!(names, ["vt_mps", "alpha_rad"]);
-    assert!(f.iter().all(|e| e[1].as_f64().unwrap() > 0.0), "{f:?}");
+    assert!(f.iter().all(|e| e["f"].as_f64().unwrap() > 0.0), "{f:?}");
     let params = |v: &serde_json::Value| v["parameters"].as_array().unwrap().clone();
     for ((p, q), r) in params(&plain).iter().zip(params(&boot)).zip(params(&again)) {
         assert_eq!(p["name"], q["name"]);

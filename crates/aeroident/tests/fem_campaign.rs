@@ -30,10 +30,11 @@ fn fem_in_a_turbulent_run_converges_with_process_noise_on_the_air_data_states() 
     assert!(ch.failure.is_none(), "{:?}", ch.failure);
     assert_eq!(ch.status, Some("converged"));
     let fit = ch.batch.as_ref().expect("batch log");
-    let names: Vec<&str> = fit.process_noise.iter().map(|(n, _, _)| n.as_str()).collect();
+    let names: Vec<&str> = fit.process_noise.iter().map(|n| n.state.as_str()).collect();
     assert_eq!(names, ["vt_mps", "alpha_rad", "beta_rad"]);
-    for (n, f, s) in &fit.process_noise {
-        assert!(*f > 0.0 && f.is_finite() && *s > 0.0 && s.is_finite(), "{n}: F {f} σ {s}");
+    for n in &fit.process_noise {
+        let (f, s) = (n.f, n.std_error.unwrap());
+        assert!(f > 0.0 && f.is_finite() && s > 0.0 && s.is_finite(), "{}: F {f} σ {s}", n.state);
     }
     let vane = 0.1_f64.to_radians();
     for (name, rms) in fit.outputs.iter().zip(&fit.residual_rms) {

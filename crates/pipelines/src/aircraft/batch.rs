@@ -260,8 +260,8 @@ pub struct BatchFit {
     pub coloured_lag: usize,
     /// Order of the residuals' vector autoregression in the prewhitened form (0: white).
     pub coloured_ar_order: usize,
-    /// `fem`: the estimated process noise `(state, F, σ)` (state unit per √s); empty for `oe`.
-    pub process_noise: Vec<(String, f64, f64)>,
+    /// `fem`: the estimated process noise of each state; empty for `oe`.
+    pub process_noise: Vec<crate::replay::batch::ProcessNoise>,
     /// The candidate σ of the structure parameters (structure order), by kind: `cramer_rao`
     /// (`sqrt(diag M⁻¹)`, diagonal weighting), `coloured` (the spectral, multitaper coloured-residual
     /// sandwich, the reported one), `coloured_prewhitened` (the sandwich with a vector
@@ -362,7 +362,7 @@ fn log_of(
     config: &OeConfig,
     r: &OeResult,
     wall_s: f64,
-    process_noise: Vec<(String, f64, f64)>,
+    process_noise: Vec<crate::replay::batch::ProcessNoise>,
     extra_sigmas: Vec<(String, Vec<f64>)>,
 ) -> BatchFit {
     let np = r.n_params;

@@ -357,8 +357,8 @@ pub struct BatchSummary {
     /// What the log reader left out of each record read, as the caller that opened them
     /// reports it ([`aeroident_io::open_log_with_report`]); empty for CSV records.
     pub reader: Vec<aeroident_io::ReaderReport>,
-    /// `fem`: the estimated process noise `(state, F, σ)`, state unit per √s; empty for `oe`.
-    pub process_noise: Vec<(String, f64, f64)>,
+    /// `fem`: the estimated process noise of each state it was estimated on; empty for `oe`.
+    pub process_noise: Vec<ProcessNoise>,
     /// `fem`: the measurement-noise variances `R` recovered from the innovations, per output;
     /// empty for `oe` (its `residual_rms` is the noise).
     pub measurement_noise_var: Vec<(String, f64)>,
@@ -611,12 +611,24 @@ pub fn fem_reported_sigma(fem: &FemResult) -> (Vec<f64>, bool) {
 /// (docs/uncertainty.md, "Output error in the campaign").
 pub const MAX_ITERATIONS: usize = 250;
 
-/// `(state, F, σ)` of each process-noise state of a filter-error fit.
-pub fn process_noise_of(fem: &FemResult) -> Vec<(String, f64, f64)> {
-    fem.process_noise_states
-        .iter()
-        .filter_map(|&i| fem.process_noise(i).map(|(f, s)| (STATE_NAMES[i].to_string(), f, s)))
-        .collect()
+/// One state's process noise, as a filter-error fit estimates it or a bootstrap flies it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ProcessNoise {
+    /// The state ([`STATE_NAMES`]: `vt_mps`, `alpha_rad` …).
+    pub state: String,
+    /// Its process-noise intensity `F`, the state's unit per √s.
+    pub f: f64,
+    /// The σ of `F` (Cramér–Rao); `null` where none is formed (the bootstrap's).
+    pub std_error: Option<f64>,
+}
+
+/// The process noise of each process-noise state of a filter-error fit, with its σ.
+pub fn process_noise_of(fem: &FemResult) -> Vec<ProcessNoise> {
+    let row = |i: usize| {
+        let (f, s) = fem.process_noise(i)?;
+        Some(ProcessNoise { state: STATE_NAMES[i].to_string(), f, std_error: Some(s) })
+    };
+    fem.process_noise_states.iter().filter_map(|&i| row(i)).collect()
 }
 
 /// The seed of the first bootstrap replica (replica `b` is seeded `seed + b`): fixed, so that
@@ -661,9 +673,9 @@ pub struct BootstrapSummary {
     pub failed: usize,
     /// Seed of replica 0 (replica `b`: `seed + b`; PCG64, standard normal draws).
     pub seed: u64,
-    /// The process noise the replicas were flown with: `(state, F)`, state unit per √s, the
-    /// filter-error method's estimate on the same data.
-    pub process_noise: Vec<(String, f64)>,
+    /// The process noise the replicas were flown with, the filter-error method's estimate on
+    /// the same data (no σ).
+    pub process_noise: Vec<ProcessNoise>,
     /// The measurement-noise variances `(output, R)` of the replicas (the filter-error
     /// method's), the output's unit squared.
     pub measurement_noise_var: Vec<(String, f64)>,
@@ -773,7 +785,11 @@ pub fn bootstrap_sigma(
         requested: refits,
         failed,
         seed,
-        process_noise: noise.process_noise.iter().map(|(i, f)| (names(*i), *f)).collect(),
+        process_noise: noise
+            .process_noise
+            .iter()
+            .map(|(i, f)| ProcessNoise { state: names(*i), f: *f, std_error: None })
+            .collect(),
         measurement_noise_var: fem
             .result
             .outputs

@@ -188,8 +188,11 @@ pub fn settings(source: &super::Source, outcome: &BatchOutcome) -> Vec<(String, 
         ),
     ]);
     if let Some(b) = &s.bootstrap {
-        let f: Vec<String> =
-            b.process_noise.iter().map(|(n, f)| format!("{n} {}", fmt_sig(Some(*f), 2))).collect();
+        let f: Vec<String> = b
+            .process_noise
+            .iter()
+            .map(|n| format!("{} {}", n.state, fmt_sig(Some(n.f), 2)))
+            .collect();
         v.push((
             "σ".into(),
             format!(

@@ -14,16 +14,17 @@ use aeroident_pipelines::job::{InPlace, ModelChoice, Ran, Records};
 use aeroident_pipelines::replay::{ReplayOptions, replay};
 use common::{shared, workspace};
 
-#[test]
-fn val_hfb320_every_method_cross_checks_equation_error() {
-    let Some(data) = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+/// The HFB-320 record replayed by RLS with Jategaonkar's model, then finished by the replay
+/// job with `panel`; `None` (skipped) without ../shared.
+fn rls_replay_with(panel: Panel) -> Option<aeroident_pipelines::replay::ReplayOutcome> {
+    let data = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv")?;
     let m = Mapping::from_path(&workspace().join("mappings/hfb320.toml")).unwrap();
     let model_path = workspace().join("models/hfb320_jategaonkar.toml");
     let model = ModelSpec::from_path(&model_path).unwrap();
     let opts = ReplayOptions { model: Some(model), ..Default::default() };
     let o = replay(open_log(&data.display().to_string(), None, &m).unwrap(), &m, &opts, &mut ())
         .unwrap();
-    assert!(o.cross_check.is_none());
+    assert!(o.cross_check.is_none(), "the estimating step alone runs no panel");
     let job = ReplayJob {
         records: Records::one(data.display().to_string(), m),
         model: ModelChoice {
@@ -32,12 +33,17 @@ fn val_hfb320_every_method_cross_checks_equation_error() {
         },
         compat: None,
         options: ReplayOptions::default(),
-        cross_check: Panel::Full,
+        cross_check: panel,
         validate_on: None,
     };
     let Ran::Done(prepared) = job.prepare(&mut InPlace, &mut ()).unwrap() else { panic!() };
-    let done = job.finish(prepared, o, &mut InPlace, &mut (), String::new).unwrap();
-    let (o, c) = (&done.outcome, done.outcome.cross_check.as_ref().unwrap());
+    Some(job.finish(prepared, o, &mut InPlace, &mut (), String::new).unwrap().outcome)
+}
+
+#[test]
+fn val_hfb320_every_method_cross_checks_equation_error() {
+    let Some(done) = rls_replay_with(Panel::Full) else { return };
+    let (o, c) = (&done, done.cross_check.as_ref().unwrap());
     let methods: Vec<&str> = c.methods.iter().map(|m| m.method.as_str()).collect();
     assert_eq!(methods, ["rls", "rls-iv", "ekf", "oe", "fem", "fdoe"]);
     assert!(c.methods.iter().all(|m| !m.status.starts_with("failed")), "{:?}", c.methods);
@@ -68,30 +74,7 @@ fn val_hfb320_every_method_cross_checks_equation_error() {
 /// no `cross_check` and the summary's warnings say it was not run.
 #[test]
 fn val_hfb320_the_default_panel_leaves_out_fem_and_off_says_so() {
-    let Some(data) = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
-    let m = Mapping::from_path(&workspace().join("mappings/hfb320.toml")).unwrap();
-    let model_path = workspace().join("models/hfb320_jategaonkar.toml");
-    let model = ModelSpec::from_path(&model_path).unwrap();
-    let opts = ReplayOptions { model: Some(model), ..Default::default() };
-    let finish = |panel: Panel| {
-        let o =
-            replay(open_log(&data.display().to_string(), None, &m).unwrap(), &m, &opts, &mut ())
-                .unwrap();
-        let job = ReplayJob {
-            records: Records::one(data.display().to_string(), m.clone()),
-            model: ModelChoice {
-                model: Some(model_path.display().to_string()),
-                ..ModelChoice::default()
-            },
-            compat: None,
-            options: ReplayOptions::default(),
-            cross_check: panel,
-            validate_on: None,
-        };
-        let Ran::Done(prepared) = job.prepare(&mut InPlace, &mut ()).unwrap() else { panic!() };
-        job.finish(prepared, o, &mut InPlace, &mut (), String::new).unwrap().outcome
-    };
-    let fast = finish(Panel::default());
+    let Some(fast) = rls_replay_with(Panel::default()) else { return };
     let c = fast.cross_check.as_ref().expect("the default panel runs");
     let methods: Vec<&str> = c.methods.iter().map(|m| m.method.as_str()).collect();
     assert_eq!(methods, ["rls", "rls-iv", "ekf", "oe", "fdoe"]);
@@ -99,7 +82,7 @@ fn val_hfb320_the_default_panel_leaves_out_fem_and_off_says_so() {
     assert!(!q.confirmed, "{q:?}");
     let p = fast.summary.parameters.iter().find(|p| p.name == "Cm_q").unwrap();
     assert_eq!(p.status, "flagged", "{p:?}");
-    let off = finish(Panel::Off);
+    let off = rls_replay_with(Panel::Off).unwrap();
     assert!(off.cross_check.is_none());
     let said = off.summary.warnings.iter().any(|w| w.text.starts_with("cross-check not run"));
     assert!(said, "{:?}", off.summary.warnings);

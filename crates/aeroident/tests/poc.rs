@@ -156,6 +156,7 @@ fn cli_single_run_writes_outputs_with_exact_summary_keys() {
     assert_eq!(
         keys(&v["parameters"][0]),
         [
+            "combines",
             "convergence_time_s",
             "crb_std_error",
             "estimate",

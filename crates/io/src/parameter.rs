@@ -477,6 +477,7 @@ mod tests {
             "status",
             "flags",
             "notes",
+            "combines",
         ];
         want.sort_unstable();
         let mut keys = keys;

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 
 /// The keys every per-parameter entry of a `summary.json` has (schema version 3,
 /// docs/output-schema.md), written out here as the schema states them.
-pub const PARAMETER_KEYS: [&str; 12] = [
+pub const PARAMETER_KEYS: [&str; 13] = [
     "name",
     "estimate",
     "std_error",
@@ -22,6 +22,7 @@ pub const PARAMETER_KEYS: [&str; 12] = [
     "status",
     "flags",
     "notes",
+    "combines",
 ];
 
 /// The workspace root.

@@ -305,7 +305,12 @@ def test_fit_cross_check_equals_cli(tmp_path):
     for a in expected["parameters"]:
         i = list(py["names"]).index(a["parameter"])
         assert (a["flag"] is None) or (py["status"][i] == "flagged" and a["flag"] in py["flags"][i])
-    assert "cross_check" not in aeroident.fit(data, mapping, model=model)["summary"]
+    # By default the panel runs without fem; cross_check=False runs none and says so.
+    default = aeroident.fit(data, mapping, model=model)["summary"]["cross_check"]
+    assert [m["method"] for m in default["methods"]] == ["oe", "rls", "rls-iv", "ekf", "fdoe"]
+    off = aeroident.fit(data, mapping, model=model, cross_check=False)["summary"]
+    assert "cross_check" not in off
+    assert any(w.startswith("cross-check not run (turned off") for w in off["warnings"]), off["warnings"]
 
 
 def test_estimates_are_float64_arrays_with_nan_and_its_reason():

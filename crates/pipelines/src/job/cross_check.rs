@@ -80,6 +80,10 @@ impl Panel {
 /// Why a panel [`Panel::Off`] was not run, in [`not_run_warning`].
 pub const TURNED_OFF: &str = "turned off: --no-cross-check, Python cross_check=False";
 
+/// Why no panel runs on a live feed (stdin, MAVLink), in [`not_run_warning`]: the other
+/// methods would have to read it again.
+pub const LIVE_FEED: &str = "a live feed or stdin cannot be read again";
+
 /// The summary warning of a job whose panel was not run, with `why` (about no parameter: it
 /// flags none, it says what the verdict did not test).
 pub fn not_run_warning(why: &str) -> aeroident_io::warning::Warning {

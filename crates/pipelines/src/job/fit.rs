@@ -129,7 +129,7 @@ impl FitJob {
             let w = "the run was interrupted: the cross-check not done".to_string();
             outcome.summary.warnings.push(w);
         } else if self.cross_check.runs() && self.records.live {
-            let w = super::cross_check::not_run_warning("a record from stdin cannot be read again");
+            let w = super::cross_check::not_run_warning(super::cross_check::LIVE_FEED);
             log.warning(&w);
             outcome.summary.warnings.push(w);
         } else if self.cross_check.runs() {

@@ -182,7 +182,7 @@ impl ReplayJob {
             let test = base.clone();
             super::cross_check::regressor_noise_test(records, &own, test, guard, log, warnings)?;
             let why = if records.live {
-                "a live feed cannot be read again"
+                super::cross_check::LIVE_FEED
             } else {
                 super::cross_check::TURNED_OFF
             };

@@ -1057,22 +1057,25 @@ fn errors_one_setting_has_one_value() {
 }
 
 /// `--estimates-every 0.5` on the 10-Hz HFB-320 record: the rows are those of the full-rate
-/// `estimates.csv` that the rule picks, computed here from the full file (the first row, then
-/// each row at least 0.5 s after the last one kept, and the last row), character for
-/// character; a non-positive interval is refused naming the option.
+/// `estimates.csv` (`--estimates-every 0`) that the rule picks, computed here from the full
+/// file (the first row, then each row at least 0.95 × 0.5 s after the last one kept, and the
+/// last row), character for character. The default (0.1 s) keeps every row of this 10-Hz
+/// record although its intervals jitter from 0.09999 to 0.10001 s. A negative interval is
+/// refused naming the option.
 #[test]
 fn estimates_every_keeps_one_row_per_interval_and_the_last() {
     let Some(data) = common::shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else {
         return;
     };
-    let full = estimates_csv(&data, &[], "every-full");
+    let full = estimates_csv(&data, &["--estimates-every", "0"], "every-full");
+    assert_eq!(estimates_csv(&data, &[], "every-default"), full);
     let every = estimates_csv(&data, &["--estimates-every", "0.5"], "every-half");
     let rows: Vec<&str> = full.lines().skip(1).collect();
     let t = |row: &str| row.split(',').next().unwrap().parse::<f64>().unwrap();
     let mut want = vec![full.lines().next().unwrap()];
     let mut last: Option<f64> = None;
     for (k, row) in rows.iter().enumerate() {
-        let keep = last.is_none_or(|l| t(row) - l >= 0.5 * (1.0 - 1e-9));
+        let keep = last.is_none_or(|l| t(row) - l >= 0.5 * 0.95);
         if keep {
             last = Some(t(row));
         }
@@ -1082,7 +1085,63 @@ fn estimates_every_keeps_one_row_per_interval_and_the_last() {
     }
     assert_eq!(every.lines().collect::<Vec<_>>(), want);
     assert!(want.len() < rows.len() / 4, "{} of {} rows", want.len(), rows.len());
-    let o = bin().args(["replay", "x.csv", "--map", "m.toml", "--estimates-every=0"]).output();
+    let o = bin().args(["replay", "x.csv", "--map", "m.toml", "--estimates-every=-1"]).output();
     let err = String::from_utf8_lossy(&o.unwrap().stderr).to_string();
-    assert!(err.contains("--estimates-every") && err.contains("above 0"), "{err}");
+    assert!(err.contains("--estimates-every") && err.contains("0 or above"), "{err}");
+}
+
+/// A 700-s six-axis `f16 sim` record at 50 Hz whose inputs are in its first 16 s, replayed by
+/// default: the record runs longer than the 600 s one kinematic stretch is judged whole on,
+/// so the EKF and the batch fits of the panel run on its manoeuvres (a warning names the
+/// window, which holds the inputs and not the 680 s of steady flight after them), and output
+/// error, which refuses a 35,000-sample six-axis fit for its memory, converges there. The
+/// estimates file keeps one row per 0.1 s by default (every fifth sample) and the last
+/// sample's.
+#[test]
+fn a_long_record_s_panel_runs_its_costly_methods_on_the_manoeuvres() {
+    let dir = tmp("long-panel");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scenario =
+        std::fs::read_to_string(workspace().join("scenarios/sim/six_axis_excitation.toml"))
+            .unwrap()
+            .replace("duration_s = 16.0", "duration_s = 700.0")
+            .replace("dt_s = 0.01", "dt_s = 0.02");
+    assert!(scenario.contains("duration_s = 700.0") && scenario.contains("dt_s = 0.02"));
+    std::fs::write(dir.join("long.toml"), scenario).unwrap();
+    let sim = dir.join("sim");
+    let o = bin().args(["f16", "sim"]).arg(dir.join("long.toml")).arg("--out").arg(&sim).output();
+    let o = o.unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = bin()
+        .arg("replay")
+        .arg(sim.join("timeseries.csv"))
+        .arg("--map")
+        .arg(workspace().join("mappings/aeroident-sim.toml"))
+        .arg("--out")
+        .arg(dir.join("r"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("r/summary.json")).unwrap())
+            .unwrap();
+    let warnings: Vec<&str> =
+        v["warnings"].as_array().unwrap().iter().filter_map(|w| w.as_str()).collect();
+    let long = warnings.iter().find(|w| w.contains("the EKF and the batch fits ran on its best"));
+    let long = long.unwrap_or_else(|| panic!("no long-record warning: {warnings:?}"));
+    let span = long.split("window(s): ").nth(1).unwrap().split(';').next().unwrap();
+    let ends: Vec<f64> = span
+        .split(", ")
+        .flat_map(|w| w.trim_end_matches(" s").split('–').map(|x| x.parse::<f64>().unwrap()))
+        .collect();
+    assert!(ends[0] < 2.0 && *ends.last().unwrap() < 60.0, "the inputs' window: {span}");
+    let methods = v["cross_check"]["methods"].as_array().unwrap();
+    let oe = methods.iter().find(|m| m["method"] == "oe").unwrap();
+    assert_eq!(oe["status"], "converged", "{oe}");
+    let csv = std::fs::read_to_string(dir.join("r/estimates.csv")).unwrap();
+    let rows = csv.lines().count() - 1;
+    assert!((6_990..=7_010).contains(&rows), "one row per 0.1 s of 700 s: {rows}");
+    let t_last = csv.lines().last().unwrap().split(',').next().unwrap().parse::<f64>().unwrap();
+    assert!((t_last - 700.0).abs() < 1e-9, "the last sample's row: {t_last}");
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -152,3 +152,57 @@ fn val_hfb320_filter_error_with_a_collapsed_noise_variance_is_flagged() {
     }
     assert!(s.warnings.iter().any(|w| w.starts_with("degenerate filter")));
 }
+
+/// A record held in memory (`Records::held`, what the checks after a job's own estimator
+/// read) gives the same events as its file: the HFB-320 record replayed by RLS and the EKF,
+/// and fitted by output error and fdoe, from the file and from memory, within a time window
+/// and without, gives every estimate, σ and warning bit for bit.
+#[test]
+fn a_record_held_in_memory_replays_and_fits_bit_identically() {
+    use aeroident_pipelines::estimators::EstimatorKind;
+    use aeroident_pipelines::replay::batch::{BatchMethod, FitOptions};
+    use aeroident_pipelines::replay::fit::{fit_cached, fit_records};
+    use aeroident_pipelines::replay::replay_cached;
+    use aeroident_pipelines::window::TimeWindow;
+    let Some(data) = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let file = data.display().to_string();
+    let m = Mapping::from_path(&workspace().join("mappings/hfb320.toml")).unwrap();
+    let model = ModelSpec::from_path(&workspace().join("models/hfb320_jategaonkar.toml")).unwrap();
+    let records = Records::one(file.clone(), m.clone());
+    let screen = ReplayOptions::default().spike_screen;
+    let held = records.held(screen);
+    let held = held.held_with(screen).expect("a 601-row record is held");
+    type Row = (String, Option<f64>, Option<f64>);
+    fn rows<'a>(p: impl Iterator<Item = &'a aeroident_io::parameter::ParameterResult>) -> Vec<Row> {
+        p.map(|p| (p.name.clone(), p.estimate, p.std_error)).collect()
+    }
+    let window = vec![TimeWindow { start_s: 10.0, end_s: 50.0 }];
+    for windows in [Vec::new(), window] {
+        for kind in [EstimatorKind::Rls, EstimatorKind::Ekf] {
+            let opts = ReplayOptions {
+                estimator: kind,
+                model: Some(model.clone()),
+                windows: windows.clone(),
+                ..Default::default()
+            };
+            let a = replay(open_log(&file, None, &m).unwrap(), &m, &opts, &mut ()).unwrap();
+            let b = replay_cached(held, &m, &opts, &mut ()).unwrap();
+            let pa = rows(a.summary.parameters.iter().map(|p| &p.result));
+            let pb = rows(b.summary.parameters.iter().map(|p| &p.result));
+            assert!(pa.iter().all(|r| r.1.is_some()), "{kind:?}: {pa:?}");
+            assert_eq!(pa, pb, "{kind:?} {windows:?}");
+            assert_eq!(a.summary.warnings, b.summary.warnings, "{kind:?} {windows:?}");
+        }
+        for method in [BatchMethod::Oe, BatchMethod::Fdoe { band_hz: (0.1, 2.0) }] {
+            let options = FitOptions { method, windows: windows.clone(), ..FitOptions::default() };
+            let readers = vec![open_log(&file, None, &m).unwrap()];
+            let a = fit_records(readers, &m, Some(model.clone()), options.clone()).unwrap();
+            let b = fit_cached(held, &m, Some(model.clone()), options).unwrap();
+            let pa = rows(a.summary.parameters.iter().map(|p| &p.result));
+            let pb = rows(b.summary.parameters.iter().map(|p| &p.result));
+            assert!(pa.iter().any(|r| r.1.is_some()), "{method:?}: {pa:?}");
+            assert_eq!(pa, pb, "{method:?} {windows:?}");
+            assert_eq!(a.summary.warnings, b.summary.warnings, "{method:?} {windows:?}");
+        }
+    }
+}

@@ -147,6 +147,7 @@ fn fit_file<'py>(
             mapping,
             live: false,
             allow_duplicates: allow_duplicate_records,
+            held: None,
         };
         fit_job(&FitJob { records, model, compat, options, cross_check, validate_on })
     };

@@ -19,6 +19,8 @@ use crate::replay::ReplayOptions;
 use crate::replay::batch::{BatchMethod, FitOptions};
 use crate::replay::cross_check::CrossCheck;
 use crate::replay::cross_check::{MethodEstimates, ParameterEstimate};
+use crate::window::TimeWindow;
+use aeroident_io::RecordEvent;
 use aeroident_io::parameter::STATUS_NOT_CONVERGED;
 
 /// The panel's real-time methods (one record only).
@@ -98,18 +100,73 @@ pub fn not_run_warning(why: &str) -> aeroident_io::warning::Warning {
 /// default options). A method that fails, diverges, ends `initialising`, ends at its
 /// iteration limit still moving, or whose filter degenerates is listed as failed, with why:
 /// agreement with an estimator that has not converged confirms nothing.
+///
+/// `long`: the windows the costly methods (the EKF and the batch fits) run on instead of the
+/// whole record, for a long one ([`long_record_windows`]).
 pub fn run_panel(
     records: &Records,
     own: EstimatorKind,
     base: &ReplayOptions,
     panel: Panel,
+    long: Option<&[TimeWindow]>,
 ) -> Vec<MethodEstimates> {
     let on = |k: &&EstimatorKind| **k != own && panel.holds(**k);
-    let online = ONLINE_METHODS.iter().filter(|_| records.and.is_empty());
-    let mut out: Vec<MethodEstimates> =
-        online.filter(on).map(|&k| run_online(records, k, base)).collect();
-    out.extend(BATCH_METHODS.iter().filter(on).map(|&k| run_batch(records, k, base)));
+    let windowed = long.map(|w| ReplayOptions { windows: w.to_vec(), ..base.clone() });
+    let costly = windowed.as_ref().unwrap_or(base);
+    let online = ONLINE_METHODS.iter().filter(|_| records.and.is_empty()).filter(on);
+    let mut out: Vec<MethodEstimates> = online
+        .map(|&k| match k {
+            EstimatorKind::Ekf => run_online(records, k, costly),
+            _ => run_online(records, k, base),
+        })
+        .collect();
+    out.extend(BATCH_METHODS.iter().filter(on).map(|&k| run_batch(records, k, costly)));
     out
+}
+
+/// For a record held in memory ([`Records::held`]) with a stretch longer than
+/// [`crate::compat::long::LONG_STRETCH_S`] without a gap, and no windows asked for: the best
+/// manoeuvres per axis by the information they hold (the compatibility check's choice for a
+/// long record, [`crate::compat::long::judged`]) and the warning that names them. The EKF and
+/// the batch fits run on those: output error over an hour at 100 Hz would need tens of GB
+/// (it refuses), the six-axis EKF costs 41 µs a sample (15 s an hour), and the information
+/// of a whole flight is in its manoeuvres. Least squares and instrumental variables, whose
+/// comparison is the regressor-noise test and so must see the same samples as the run's
+/// own, stay on the whole record. `None` otherwise: the panel runs whole.
+pub fn long_record_windows(
+    records: &Records,
+    base: &ReplayOptions,
+) -> Option<(Vec<TimeWindow>, aeroident_io::warning::Warning)> {
+    if !base.windows.is_empty() {
+        return None;
+    }
+    let held = records.held_with(base.spike_screen)?;
+    let mut manoeuvres: Vec<Vec<aeroident_estimators::AirDataSample>> = vec![Vec::new()];
+    for event in held.screened() {
+        match event {
+            RecordEvent::Sample { sample, .. } => manoeuvres.last_mut()?.push(*sample),
+            RecordEvent::Gap { .. } => manoeuvres.push(Vec::new()),
+            RecordEvent::Rejected { .. } => {}
+        }
+    }
+    let crate::compat::long::Judged::Windows(windows, _) = crate::compat::long::judged(&manoeuvres)
+    else {
+        return None;
+    };
+    let spans: Vec<String> =
+        windows.iter().map(|w| format!("{:.2}–{:.2} s", w.start_s, w.end_s)).collect();
+    let warning = format!(
+        "cross-check: the record runs more than {:.0} s without a gap: the EKF and the batch fits \
+         ran on its best {} manoeuvres per axis by the information they hold, {} window(s): {}; \
+         least squares and instrumental variables on the whole record; give `--window \
+         START:END` to check other spans",
+        crate::compat::long::LONG_STRETCH_S,
+        crate::compat::long::LONG_RECORD_SET_SIZE,
+        windows.len(),
+        spans.join(", ")
+    );
+    let kind = aeroident_io::warning::WarningKind::CrossCheck;
+    Some((windows, aeroident_io::warning::Warning::new(kind, warning)))
 }
 
 /// The regressor-noise test of a least-squares replay (`rls`, `ftr`) whose own estimates are
@@ -172,11 +229,14 @@ fn run_online(records: &Records, kind: EstimatorKind, base: &ReplayOptions) -> M
 pub(super) fn online_estimates(records: &Records, opts: &ReplayOptions) -> MethodEstimates {
     let opts = &ReplayOptions { estimates_only: true, ..opts.clone() };
     let name = opts.estimator.name();
-    let reader = match records.open(&records.data) {
-        Ok(r) => r,
-        Err(e) => return MethodEstimates::failed(name, &e.to_string()),
+    let replayed = match records.held_with(opts.spike_screen) {
+        Some(held) => crate::replay::replay_cached(held, &records.mapping, opts, &mut ()),
+        None => match records.open(&records.data) {
+            Ok(r) => crate::replay::replay(r, &records.mapping, opts, &mut ()),
+            Err(e) => return MethodEstimates::failed(name, &e.to_string()),
+        },
     };
-    match crate::replay::replay(reader, &records.mapping, opts, &mut ()) {
+    match replayed {
         Ok(o) if o.diverged() => MethodEstimates::failed(name, "diverged"),
         Ok(o) if crate::verdict::unconverged(&o.summary.status).is_some() => {
             MethodEstimates::failed(name, "ended initialising (not every parameter left its prior)")
@@ -216,11 +276,15 @@ pub(super) fn batch_estimates(
     options: FitOptions,
 ) -> MethodEstimates {
     let name = kind.name();
-    let readers = match records.open_all() {
-        Ok(r) => r,
-        Err(e) => return MethodEstimates::failed(name, &e.to_string()),
+    let mapping = &records.mapping;
+    let fitted = match records.held_with(options.spike_screen) {
+        Some(held) => crate::replay::fit::fit_cached(held, mapping, model, options),
+        None => match records.open_all() {
+            Ok(readers) => crate::replay::fit::fit_records(readers, mapping, model, options),
+            Err(e) => return MethodEstimates::failed(name, &e.to_string()),
+        },
     };
-    let fit = match crate::replay::fit::fit_records(readers, &records.mapping, model, options) {
+    let fit = match fitted {
         Ok(fit) => fit,
         Err(e) => return MethodEstimates::failed(name, &e.to_string()),
     };
@@ -267,8 +331,13 @@ pub fn check(
     warnings: &mut aeroident_io::warning::Warnings,
 ) -> Result<Option<CrossCheck>, ReplayError> {
     log.note("cross-check: running the record's other methods with the same model");
+    let long = long_record_windows(records, &base).map(|(windows, w)| {
+        log.warning(&w);
+        warnings.push(w);
+        windows
+    });
     let records = records.clone();
-    let step = move || run_panel(&records, base.estimator, &base, panel);
+    let step = move || run_panel(&records, base.estimator, &base, panel, long.as_deref());
     let Some(others) = guard.run(Step::CrossCheck, step)? else {
         abandoned("--cross-check", log, warnings);
         return Ok(None);

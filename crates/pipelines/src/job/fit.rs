@@ -122,8 +122,14 @@ impl FitJob {
         stopped_why: impl FnOnce() -> String,
     ) -> Result<FitJobOutcome, ReplayError> {
         let interrupted = outcome.summary.status == STATUS_INTERRUPTED;
+        // The timing refits and the panel read the record again: held in memory, each costs
+        // its estimator.
+        let records = &match interrupted {
+            true => self.records.clone(),
+            false => self.records.held(outcome.options.spike_screen),
+        };
         if !interrupted {
-            self.timing_refit(&mut outcome, guard, log)?;
+            self.timing_refit(records, &mut outcome, guard, log)?;
         }
         if self.cross_check.runs() && interrupted {
             let w = "the run was interrupted: the cross-check not done".to_string();
@@ -133,7 +139,7 @@ impl FitJob {
             log.warning(&w);
             outcome.summary.warnings.push(w);
         } else if self.cross_check.runs() {
-            self.cross_check(&mut outcome, guard, log)?;
+            self.cross_check(records, &mut outcome, guard, log)?;
         } else {
             let w = super::cross_check::not_run_warning(super::cross_check::TURNED_OFF);
             log.warning(&w);
@@ -155,6 +161,7 @@ impl FitJob {
     /// ([`crate::replay::cross_check`]), its verdicts judged again with the panel's flags.
     fn cross_check(
         &self,
+        records: &Records,
         outcome: &mut BatchOutcome,
         guard: &mut impl Guard,
         log: &mut dyn JobLog,
@@ -169,7 +176,7 @@ impl FitJob {
             ..Default::default()
         };
         let warnings = &mut outcome.summary.warnings;
-        let (records, panel) = (&self.records, self.cross_check);
+        let panel = self.cross_check;
         let Some(check) =
             super::cross_check::check(records, &own, base, panel, guard, log, warnings)?
         else {
@@ -188,12 +195,13 @@ impl FitJob {
     /// ([`crate::replay::unmodelled`]) and the verdicts judged again.
     fn timing_refit(
         &self,
+        rec: &Records,
         outcome: &mut BatchOutcome,
         guard: &mut impl Guard,
         log: &mut dyn JobLog,
     ) -> Result<(), ReplayError> {
         let (kind, own) = own(outcome);
-        let (records, model) = (self.records.clone(), Some(outcome.model.clone()));
+        let (records, model) = (rec.clone(), Some(outcome.model.clone()));
         let mut options = outcome.options.clone();
         options.bootstrap_refits = None;
         let fit = move |compat: crate::record::Corrections| {
@@ -202,7 +210,7 @@ impl FitJob {
         };
         let s = &mut outcome.summary;
         let compat = outcome.options.compat.as_ref();
-        let (tests, w, rec) = (&s.sign_tests, &mut s.warnings, &self.records);
+        let (tests, w) = (&s.sign_tests, &mut s.warnings);
         super::timing::refit_step(rec, &own, tests, compat, fit.clone(), guard, log, w)?;
         let spreads = super::timing::skew_step(rec, &own, compat, fit, guard, log, w)?;
         let results = outcome.summary.parameters.iter_mut().map(|p| &mut p.result);

@@ -56,13 +56,48 @@ pub struct Records {
     /// (`--allow-duplicate-records`); otherwise it is refused
     /// ([`crate::record::duplicates`]).
     pub allow_duplicates: bool,
+    /// The main record read and screened once, held in memory for the steps that read it
+    /// again ([`Records::held`]); `None`: each step reads the file.
+    pub held: Option<std::sync::Arc<crate::record::cache::ScreenedRecord>>,
 }
 
 impl Records {
     /// One record file `data` read through `mapping`, its format by its extension: no further
     /// record, not live.
     pub fn one(data: String, mapping: Mapping) -> Self {
-        Self { data, and: Vec::new(), format: None, mapping, live: false, allow_duplicates: false }
+        Self {
+            data,
+            and: Vec::new(),
+            format: None,
+            mapping,
+            live: false,
+            allow_duplicates: false,
+            held: None,
+        }
+    }
+
+    /// These records with the main one read through `screen` and held in memory
+    /// ([`crate::record::cache`]), for the steps after a job's own estimator that read it
+    /// again: each of them then costs its estimator, not a read and screen of the file. As
+    /// they are for a live feed, several records (only the main one would be held), a record
+    /// that cannot be read or is too long to hold, or a screen whose settings are refused.
+    pub fn held(&self, screen: Option<crate::record::outliers::SpikeScreen>) -> Records {
+        let unheld = self.live || !self.and.is_empty() || self.held.is_some();
+        if unheld || crate::record::check_spike_screen(screen.as_ref()).is_err() {
+            return self.clone();
+        }
+        let held = self.open(&self.data).ok().and_then(|r| {
+            crate::record::cache::ScreenedRecord::read(r, screen).map(std::sync::Arc::new)
+        });
+        Records { held, ..self.clone() }
+    }
+
+    /// The main record held in memory, when it was read with `screen`.
+    pub fn held_with(
+        &self,
+        screen: Option<crate::record::outliers::SpikeScreen>,
+    ) -> Option<&crate::record::cache::ScreenedRecord> {
+        self.held.as_deref().filter(|h| h.screen() == screen)
     }
 
     /// Every file, the main record first.

@@ -173,7 +173,9 @@ impl ReplayJob {
             outcome.summary.parameters.iter().map(|p| &p.result),
         );
         let base = ReplayOptions { model: Some(outcome.model.clone()), ..options.clone() };
-        let (records, warnings) = (&self.records, &mut outcome.summary.warnings);
+        // Every step below reads the record again: held in memory, each costs its estimator.
+        let held = self.records.held(options.spike_screen);
+        let (records, warnings) = (&held, &mut outcome.summary.warnings);
         if self.cross_check.runs() && !records.live {
             let (b, panel) = (base.clone(), self.cross_check);
             let check = super::cross_check::check(records, &own, b, panel, guard, log, warnings)?;
@@ -201,7 +203,7 @@ impl ReplayJob {
         let spreads = super::timing::skew_step(records, &own, compat, fit, guard, log, w)?;
         let results = outcome.summary.parameters.iter_mut().map(|p| &mut p.result);
         super::timing::widen_sigma(results, &spreads);
-        let thrust = crate::plausibility::thrust_mapped(&self.records.mapping);
+        let thrust = crate::plausibility::thrust_mapped(&records.mapping);
         crate::replay::verdict::judge(outcome, thrust);
         Ok(())
     }

@@ -21,6 +21,7 @@
 //! the model.
 
 pub mod actuated;
+pub mod cache;
 pub mod corrections;
 pub mod duplicates;
 pub mod needs;
@@ -68,6 +69,23 @@ pub fn record_events<'a, R: Read + 'a>(
 ) -> RecordEvents<'a> {
     let reader_notes = reader.notes();
     let mapping = reader.mapping();
+    let screened =
+        outliers::Screened::new(reader, screen).named_by(std::sync::Arc::clone(&mapping));
+    let screen_notes = screened.notes();
+    staged(Box::new(screened), &mapping, [reader_notes, screen_notes], compat, windows)
+}
+
+/// The stages after the spike screen (actuators, corrections, windows) over `screened`, the
+/// events of a record read through `mapping` and screened, whose reader and screen notes are
+/// `notes`: [`record_events`]'s second half, and how a record held in memory
+/// ([`cache::ScreenedRecord`]) is read again.
+fn staged<'a>(
+    screened: Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a>,
+    mapping: &aeroident_io::Mapping,
+    notes: [outliers::ScreenNotes; 2],
+    compat: Option<&Corrections>,
+    windows: &[crate::window::TimeWindow],
+) -> RecordEvents<'a> {
     let actuators: Vec<_> = mapping.actuators.iter().map(|(c, a)| (*c, *a)).collect();
     let mut actuator_notes: Vec<String> =
         actuators.iter().map(|(c, a)| actuated::note(*c, a)).collect();
@@ -77,12 +95,10 @@ pub fn record_events<'a, R: Read + 'a>(
             format!("{}: every estimator sees this thrust as if measured", law.describe())
         }),
     );
-    let screened = outliers::Screened::new(reader, screen).named_by(mapping);
-    let screen_notes = screened.notes();
     let mut saturation = None;
     let actuated: Box<dyn Iterator<Item = Result<RecordEvent, FlightDataError>> + 'a> =
         if actuators.is_empty() {
-            Box::new(screened)
+            screened
         } else {
             let a = actuated::Actuated::new(screened, actuators);
             saturation = Some(a.saturation());
@@ -98,13 +114,7 @@ pub fn record_events<'a, R: Read + 'a>(
         None => actuated,
     };
     let events = crate::window::Windowed::new(events, windows.to_vec());
-    RecordEvents {
-        events,
-        notes: [reader_notes, screen_notes],
-        actuator_notes,
-        saturation,
-        sideslip,
-    }
+    RecordEvents { events, notes, actuator_notes, saturation, sideslip }
 }
 
 /// [`record_events`]: the events, and the notes of the stages they went through.
@@ -265,7 +275,31 @@ pub fn read_records<R: Read>(
     crate::window::check_windows(windows)
         .map_err(|reason| RecordError::Option { option: "window", reason })?;
     check_spike_screen(screen.as_ref())?;
-    let files: Vec<String> = readers.iter().map(|r| r.file().to_string()).collect();
+    let sources = readers.into_iter().map(|r| {
+        let file = r.file().to_string();
+        (record_events(r, screen, compat, windows), file)
+    });
+    read_events(sources.collect())
+}
+
+/// [`read_records`] of a record held in memory ([`cache::ScreenedRecord`]): the same
+/// manoeuvres, rejections and notes as from its file with its spike screen.
+///
+/// # Errors
+/// As [`read_records`].
+pub fn read_cached(
+    record: &cache::ScreenedRecord,
+    compat: Option<&Corrections>,
+    windows: &[crate::window::TimeWindow],
+) -> Result<Manoeuvres, RecordError> {
+    crate::window::check_windows(windows)
+        .map_err(|reason| RecordError::Option { option: "window", reason })?;
+    read_events(vec![(record.events(compat, windows), record.file().to_string())])
+}
+
+/// [`read_records`] over each file's events (its stages set up), with the file's name.
+fn read_events(sources: Vec<(RecordEvents<'_>, String)>) -> Result<Manoeuvres, RecordError> {
+    let files: Vec<String> = sources.iter().map(|(_, f)| f.clone()).collect();
     let named = files.len() > 1;
     let mut manoeuvres: Vec<Vec<AirDataSample>> = vec![Vec::new()];
     // Each manoeuvre's first row, file prefix and file, to name a manoeuvre too short.
@@ -276,9 +310,8 @@ pub fn read_records<R: Read>(
     let mut notes = Vec::new();
     let mut missed = Vec::new();
     let mut unplaced: Vec<(u64, String)> = Vec::new();
-    for (reader, file) in readers.into_iter().zip(&files) {
+    for ((mut events, _), file) in sources.into_iter().zip(&files) {
         let prefix = if named { format!("{file}: ") } else { String::new() };
-        let mut events = record_events(reader, screen, compat, windows);
         let mut tally = tally::FileTally::default();
         for event in events.by_ref() {
             let event = event?;

@@ -52,6 +52,38 @@ pub fn fit_records<R: Read>(
     let file = readers.iter().map(|r| r.file()).collect::<Vec<_>>().join(", ");
     let rec =
         read_records(readers, options.spike_screen, options.compat.as_ref(), &options.windows)?;
+    fit_manoeuvres(rec, &file, mapping, model, options)
+}
+
+/// [`fit_records`] of one record held in memory ([`crate::record::cache::ScreenedRecord`],
+/// read with `options`' spike screen): the same outcome as from its file.
+///
+/// # Errors
+/// As [`fit_records`]; [`ReplayError::Option`] (`spike-screen`) when `record` was screened
+/// otherwise than `options` asks.
+pub fn fit_cached(
+    record: &crate::record::cache::ScreenedRecord,
+    mapping: &Mapping,
+    model: Option<ModelSpec>,
+    options: FitOptions,
+) -> Result<BatchOutcome, ReplayError> {
+    options.check()?;
+    if record.screen() != options.spike_screen {
+        let reason = "the record held in memory was screened with other settings".to_string();
+        return Err(ReplayError::Option { option: "spike-screen", reason });
+    }
+    let rec = crate::record::read_cached(record, options.compat.as_ref(), &options.windows)?;
+    fit_manoeuvres(rec, record.file(), mapping, model, options)
+}
+
+/// The batch fit of the manoeuvres `rec` of the record(s) `file`, options checked.
+fn fit_manoeuvres(
+    rec: crate::record::Manoeuvres,
+    file: &str,
+    mapping: &Mapping,
+    model: Option<ModelSpec>,
+    options: FitOptions,
+) -> Result<BatchOutcome, ReplayError> {
     let model = match model {
         Some(m) => m,
         None => super::batch::default_model(&rec.manoeuvres[0][0], mapping)?,
@@ -65,9 +97,9 @@ pub fn fit_records<R: Read>(
     let (model, held) = super::constant::without_constant_terms(model, &spread, mapping);
     let mut out = match options.method {
         BatchMethod::Fdoe { band_hz } => {
-            super::frequency::fit_fdoe(rec, &file, mapping, Some(model), band_hz, &options)?
+            super::frequency::fit_fdoe(rec, file, mapping, Some(model), band_hz, &options)?
         }
-        _ => super::batch::fit_time_domain(rec, &file, mapping, Some(model), &options)?,
+        _ => super::batch::fit_time_domain(rec, file, mapping, Some(model), &options)?,
     };
     out.summary.warnings.extend(spread.warnings(&full, mapping));
     out.summary.insert_held(&full, &held);

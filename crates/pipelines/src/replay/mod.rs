@@ -284,8 +284,20 @@ pub struct EstimateRows<'a> {
     pub rate: RowRate,
 }
 
+/// The faces' default [`RowRate`] for a record file, s: ten rows a second. An online
+/// estimate moves on the time scale of the estimator's memory (λ = 0.995 at 100 Hz: 2 s), so
+/// ten rows a second draw every figure and convergence plot as every row would, and a record
+/// at 10 Hz or slower keeps every row. A 1-hour six-axis record at 100 Hz writes 49 MB instead of 490 MB.
+pub const DEFAULT_ESTIMATES_EVERY_S: f64 = 0.1;
+
+/// The share of [`RowRate`]'s interval by which a row may come early and still be written: a
+/// logger's sample times jitter (the HFB-320 record's 0.1-s intervals run 0.09999 to 0.10001
+/// s), and a record sampled at the rate asked for keeps every row.
+pub const ROW_RATE_JITTER: f64 = 0.05;
+
 /// How often [`EstimateRows`] writes a row: every estimate (default), or at most one per
-/// `every_s` seconds of record time, the first and the last always written (so the last row
+/// `every_s` seconds of record time (less [`ROW_RATE_JITTER`]), the first and the last always
+/// written (so the last row
 /// is the final estimate a summary reports). A long record's `estimates.csv` then holds what
 /// its figures and a reader need, not every sample.
 #[derive(Debug, Clone, Default)]
@@ -308,8 +320,7 @@ impl RowRate {
     /// Whether the estimate at `t_s` is written now; else it is held as the last one seen.
     fn due(&mut self, t_s: f64, values: &[Option<f64>], sigmas: &[Option<f64>]) -> bool {
         let Some(every) = self.every_s else { return true };
-        // A relative tolerance, so that a grid of exactly `every_s` is not skipped by rounding.
-        if self.last_written_s.is_none_or(|last| t_s - last >= every * (1.0 - 1e-9)) {
+        if self.last_written_s.is_none_or(|last| t_s - last >= every * (1.0 - ROW_RATE_JITTER)) {
             self.last_written_s = Some(t_s);
             self.held = None;
             return true;
@@ -812,10 +823,46 @@ pub fn replay_with<R: Read>(
     check_numeric_options(opts)?;
     crate::window::check_windows(&opts.windows)
         .map_err(|reason| ReplayError::Option { option: "window", reason })?;
-    let events_file = reader.file().to_string();
-    let mut run = online::Replay::new(events_file.clone(), mapping, opts, observer);
     check_spike_screen(opts.spike_screen.as_ref())?;
-    let mut events = record_events(reader, opts.spike_screen, opts.compat.as_ref(), &opts.windows);
+    let file = reader.file().to_string();
+    let events = record_events(reader, opts.spike_screen, opts.compat.as_ref(), &opts.windows);
+    replay_events(events, file, mapping, opts, make, observer)
+}
+
+/// [`replay`] of a record held in memory ([`crate::record::cache::ScreenedRecord`], read with
+/// `opts`' spike screen): the same outcome as from its file, at the cost of the estimator.
+///
+/// # Errors
+/// As [`replay`]; [`ReplayError::Option`] (`spike-screen`) when `record` was screened
+/// otherwise than `opts` asks.
+pub fn replay_cached(
+    record: &crate::record::cache::ScreenedRecord,
+    mapping: &Mapping,
+    opts: &ReplayOptions,
+    observer: &mut dyn ReplayObserver,
+) -> Result<ReplayOutcome, ReplayError> {
+    if record.screen() != opts.spike_screen {
+        let reason = "the record held in memory was screened with other settings".to_string();
+        return Err(ReplayError::Option { option: "spike-screen", reason });
+    }
+    check_numeric_options(opts)?;
+    crate::window::check_windows(&opts.windows)
+        .map_err(|reason| ReplayError::Option { option: "window", reason })?;
+    let o = opts.built_estimator_options(mapping);
+    let events = record.events(opts.compat.as_ref(), &opts.windows);
+    replay_events(events, record.file().to_string(), mapping, opts, maker(opts, &o), observer)
+}
+
+/// The replay of `events` (the record `events_file`, its stages set up), options checked.
+fn replay_events(
+    mut events: crate::record::RecordEvents<'_>,
+    events_file: String,
+    mapping: &Mapping,
+    opts: &ReplayOptions,
+    make: impl Fn(&ModelSpec) -> Result<Box<dyn Estimator>, BuildError>,
+    observer: &mut dyn ReplayObserver,
+) -> Result<ReplayOutcome, ReplayError> {
+    let mut run = online::Replay::new(events_file.clone(), mapping, opts, observer);
     let mut tally = crate::record::tally::FileTally::default();
     for item in events.by_ref() {
         let event = item?;

@@ -225,9 +225,11 @@ pub struct ReplayArgs {
     pub compat: Option<String>,
     /// `estimates.csv` (and the live stream) at most one row per this many seconds of record
     /// time, the first and the last row always written (the last is the summary's final
-    /// estimate). Default: every estimate. A 1-hour six-axis record at 100 Hz writes about
-    /// 450 MB at every estimate, about 45 MB at 0.1.
-    #[arg(long = "estimates-every", value_name = "S", value_parser = parse_positive_s)]
+    /// estimate); `0`: every estimate. Default: 0.1 for a file
+    /// (`aeroident_pipelines::replay::DEFAULT_ESTIMATES_EVERY_S`), every estimate for a live
+    /// feed. A 1-hour six-axis record at 100 Hz writes about 490 MB at every estimate, 49 MB
+    /// at 0.1.
+    #[arg(long = "estimates-every", value_name = "S", value_parser = parse_every_s)]
     pub estimates_every_s: Option<f64>,
     /// Do not screen the record for spikes before estimating (by default a row whose channel
     /// jumps far out of its neighbours and back, alone or in a run of up to 3 rows, is
@@ -313,14 +315,17 @@ fn parse_window(text: &str) -> Result<TimeWindow, String> {
     TimeWindow::parse(text)
 }
 
-/// `F_MIN:F_MAX` in Hz, `0 < F_MIN < F_MAX`.
-fn parse_positive_s(text: &str) -> Result<f64, String> {
+/// `--estimates-every`: a time in seconds, finite and not negative (`0`: every estimate).
+fn parse_every_s(text: &str) -> Result<f64, String> {
     match text.trim().parse::<f64>() {
-        Ok(s) if s.is_finite() && s > 0.0 => Ok(s),
-        _ => Err(format!("`{text}`: give a time in seconds, finite and above 0")),
+        Ok(s) if s.is_finite() && s >= 0.0 => Ok(s),
+        _ => Err(format!(
+            "`{text}`: give a time in seconds, finite and 0 or above (0: every estimate)"
+        )),
     }
 }
 
+/// `F_MIN:F_MAX` in Hz, `0 < F_MIN < F_MAX`.
 fn parse_band(text: &str) -> Result<(f64, f64), String> {
     let bad = || format!("`{text}`: give the band as F_MIN:F_MAX in Hz with 0 < F_MIN < F_MAX");
     let (a, b) = text.split_once(':').ok_or_else(bad)?;
@@ -426,6 +431,7 @@ fn records(args: &ReplayArgs, mapping: Mapping, live: bool) -> Records {
         mapping,
         live,
         allow_duplicates: args.allow_duplicate_records,
+        held: None,
     }
 }
 

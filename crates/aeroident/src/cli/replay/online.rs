@@ -18,6 +18,13 @@ use anyhow::Context;
 use std::io::Write;
 use std::path::Path;
 
+/// `estimates.csv`'s rate: `--estimates-every`, else every row of a live feed and
+/// [`aeroident_pipelines::replay::DEFAULT_ESTIMATES_EVERY_S`] of a file.
+fn row_rate(every_s: Option<f64>, live: bool) -> RowRate {
+    let default = if live { 0.0 } else { aeroident_pipelines::replay::DEFAULT_ESTIMATES_EVERY_S };
+    RowRate::every_s(every_s.unwrap_or(default))
+}
+
 /// The real-time estimators' replay (`execute` past the checks and the stages before the
 /// estimator): estimates per sample, the stages after it, then the results, into `out_dir`
 /// (opened) when `--out` is given.
@@ -54,7 +61,7 @@ pub(super) fn execute(
             Some(v) => v,
             None => &mut none,
         };
-        let rate = args.estimates_every_s.map(RowRate::every_s).unwrap_or_default();
+        let rate = row_rate(args.estimates_every_s, live);
         let rows = EstimateRows { sinks, flush_each: args.realtime, rate };
         let mut console = ((Console { interrupt }, rows), view);
         let opened = (interrupt, shared.as_ref());

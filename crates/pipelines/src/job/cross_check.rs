@@ -20,7 +20,6 @@ use crate::replay::batch::{BatchMethod, FitOptions};
 use crate::replay::cross_check::CrossCheck;
 use crate::replay::cross_check::{MethodEstimates, ParameterEstimate};
 use crate::window::TimeWindow;
-use aeroident_io::RecordEvent;
 use aeroident_io::parameter::STATUS_NOT_CONVERGED;
 
 /// The panel's real-time methods (one record only).
@@ -141,15 +140,9 @@ pub fn long_record_windows(
         return None;
     }
     let held = records.held_with(base.spike_screen)?;
-    let mut manoeuvres: Vec<Vec<aeroident_estimators::AirDataSample>> = vec![Vec::new()];
-    for event in held.screened() {
-        match event {
-            RecordEvent::Sample { sample, .. } => manoeuvres.last_mut()?.push(*sample),
-            RecordEvent::Gap { .. } => manoeuvres.push(Vec::new()),
-            RecordEvent::Rejected { .. } => {}
-        }
-    }
-    let crate::compat::long::Judged::Windows(windows, _) = crate::compat::long::judged(&manoeuvres)
+    let read = crate::record::read_cached(held, base.compat.as_ref(), &[]).ok()?;
+    let crate::compat::long::Judged::Windows(windows, _) =
+        crate::compat::long::judged(&read.manoeuvres)
     else {
         return None;
     };

@@ -124,9 +124,10 @@ impl FitJob {
         let interrupted = outcome.summary.status == STATUS_INTERRUPTED;
         // The timing refits and the panel read the record again: held in memory, each costs
         // its estimator.
-        let records = &match interrupted {
-            true => self.records.clone(),
-            false => self.records.held(outcome.options.spike_screen),
+        let records = &if interrupted {
+            self.records.clone()
+        } else {
+            self.records.held(outcome.options.spike_screen)
         };
         if !interrupted {
             self.timing_refit(records, &mut outcome, guard, log)?;

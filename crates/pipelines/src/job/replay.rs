@@ -131,7 +131,8 @@ impl ReplayJob {
     ) -> Result<ReplayJobOutcome, ReplayError> {
         let interrupted = outcome.interrupted();
         if interrupted && (self.validate_on.is_some() || self.cross_check.runs()) {
-            let w = "the run was interrupted: --validate-on / --cross-check not done".to_string();
+            let w = "the run was interrupted: --validate-on / the cross-check panel not done"
+                .to_string();
             log.warning(&w);
             outcome.summary.warnings.push(w);
         }

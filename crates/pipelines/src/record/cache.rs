@@ -66,11 +66,6 @@ impl ScreenedRecord {
         self.screen
     }
 
-    /// The events as the reader and the screen gave them.
-    pub fn screened(&self) -> &[RecordEvent] {
-        &self.events
-    }
-
     /// The record's events through the stages after the screen, as
     /// [`super::record_events`] gives them from the file: commanded surfaces through their
     /// actuators, `compat`'s corrections, the time `windows`.

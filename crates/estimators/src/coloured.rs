@@ -75,12 +75,34 @@ use crate::linalg::Square;
 /// Most residual lags the recursive correction sums (a ring buffer of this many rows).
 pub const MAX_LAG: usize = 40;
 
-/// Slot of the entry `k ≥ 1` places before the next write position `head` of a ring of
-/// [`MAX_LAG`] entries: `(head − k) mod MAX_LAG` without a division (these loops run over every
-/// lag at every sample).
-#[inline]
-fn lag_slot(head: usize, k: usize) -> usize {
-    if head >= k { head - k } else { head + MAX_LAG - k }
+/// The last [`MAX_LAG`] values of a sequence, newest first, each stored twice (slot `j` and
+/// `j + MAX_LAG`) so that lags `1..=k` are one contiguous slice: the lag loops, run over every
+/// lag at every sample, are then plain slice loops the compiler vectorises, with no index
+/// arithmetic per lag.
+#[derive(Debug, Clone, Copy)]
+struct LagRing {
+    buf: [f64; 2 * MAX_LAG],
+    /// Slot of the newest value (lag 1 of the next sample).
+    head: usize,
+}
+
+impl LagRing {
+    const fn new() -> Self {
+        Self { buf: [0.0; 2 * MAX_LAG], head: 0 }
+    }
+
+    /// Lags `1..=len` (`len ≤ MAX_LAG`) of the next sample, newest first.
+    #[inline]
+    fn lags(&self, len: usize) -> &[f64] {
+        &self.buf[self.head..self.head + len]
+    }
+
+    #[inline]
+    fn push(&mut self, v: f64) {
+        self.head = if self.head == 0 { MAX_LAG - 1 } else { self.head - 1 };
+        self.buf[self.head] = v;
+        self.buf[self.head + MAX_LAG] = v;
+    }
 }
 
 /// A lobe of `ρ̂` past the first truncation lag is kept when its sum exceeds this multiple of
@@ -97,8 +119,7 @@ pub fn white_band(n: f64) -> f64 {
 /// of the module doc. No allocation.
 #[derive(Debug, Clone, Copy)]
 pub struct Autocorrelation {
-    residuals: [f64; MAX_LAG],
-    head: usize,
+    residuals: LagRing,
     filled: usize,
     /// `c(k) = Σ_i λ^{n−i} v_i v_{i−k}`, `k = 0..=MAX_LAG`.
     c: [f64; MAX_LAG + 1],
@@ -118,8 +139,7 @@ impl Autocorrelation {
     /// No residual yet.
     pub const fn new() -> Self {
         Self {
-            residuals: [0.0; MAX_LAG],
-            head: 0,
+            residuals: LagRing::new(),
             filled: 0,
             c: [0.0; MAX_LAG + 1],
             n_res: 0.0,
@@ -134,51 +154,49 @@ impl Autocorrelation {
     pub fn add(&mut self, v: f64, lambda: f64) {
         let avail = self.filled.min(MAX_LAG);
         self.c[0] = lambda * self.c[0] + v * v;
-        for k in 1..=avail {
-            let idx = lag_slot(self.head, k);
-            self.c[k] = lambda * self.c[k] + v * self.residuals[idx];
+        for (c, r) in self.c[1..=avail].iter_mut().zip(self.residuals.lags(avail)) {
+            *c = lambda * *c + v * r;
         }
         self.n_res = lambda * self.n_res + 1.0;
-        let band = white_band(self.n_res);
-        let mut k_max = 0;
-        if self.c[0] > 0.0 {
-            for k in 1..=avail {
-                if libm::fabs(self.c[k] / self.c[0]) < band {
-                    break;
-                }
-                k_max = k;
-            }
+        (self.lag, self.last_lag) = self.truncation(avail);
+        self.push(v);
+    }
+
+    /// The truncation lag `K` and the end of the last significant lobe for lags `1..=avail`
+    /// (the doc of [`Self::add`]); `(0, 0)` before any non-zero residual. The tests compare
+    /// `|c(k)|` with `band · c(0)` rather than dividing, since `c(0) > 0`.
+    fn truncation(&self, avail: usize) -> (usize, usize) {
+        let c0 = self.c[0];
+        if c0 <= 0.0 {
+            return (0, 0);
         }
-        self.lag = k_max;
+        let band = white_band(self.n_res) * c0;
+        let k_max = (1..=avail).take_while(|&k| libm::fabs(self.c[k]) >= band).last().unwrap_or(0);
         // Further lobes: runs of one sign of ρ̂ beyond K, each kept while its sum is
         // significant (|Σ ρ̂| ≥ LOBE_BAND_FACTOR · 2√len/√N; 2√len/√N is the band of a sum of
-        // len white lags).
+        // len white lags). The insignificant tail of the lobe that ends at K is not a lobe of
+        // its own: the test starts at the next sign change.
         let mut k_last = k_max;
-        if self.c[0] > 0.0 {
-            // The insignificant tail of the lobe that ends at K is not a lobe of its own: the
-            // test starts at the next sign change.
-            let mut start = k_max + 1;
-            let sign_k = self.c[k_max] >= 0.0;
-            while start <= avail && (self.c[start] >= 0.0) == sign_k {
-                start += 1;
-            }
-            while start <= avail {
-                let positive = self.c[start] >= 0.0;
-                let (mut end, mut sum) = (start, 0.0);
-                while end <= avail && (self.c[end] >= 0.0) == positive {
-                    sum += self.c[end] / self.c[0];
-                    end += 1;
-                }
-                let len = (end - start) as f64;
-                if libm::fabs(sum) < LOBE_BAND_FACTOR * band * libm::sqrt(len) {
-                    break;
-                }
-                k_last = end - 1;
-                start = end;
-            }
+        let mut start = k_max + 1;
+        let sign_k = self.c[k_max] >= 0.0;
+        while start <= avail && (self.c[start] >= 0.0) == sign_k {
+            start += 1;
         }
-        self.last_lag = k_last;
-        self.push(v);
+        while start <= avail {
+            let positive = self.c[start] >= 0.0;
+            let (mut end, mut sum) = (start, 0.0);
+            while end <= avail && (self.c[end] >= 0.0) == positive {
+                sum += self.c[end];
+                end += 1;
+            }
+            let len = (end - start) as f64;
+            if libm::fabs(sum) < LOBE_BAND_FACTOR * band * libm::sqrt(len) {
+                break;
+            }
+            k_last = end - 1;
+            start = end;
+        }
+        (k_max, k_last)
     }
 
     /// Starts a new sequence (a new manoeuvre): lags never span the break; the sums are kept.
@@ -188,8 +206,7 @@ impl Autocorrelation {
 
     /// Stores `v` as the latest residual without counting it (a row without residual).
     fn push(&mut self, v: f64) {
-        self.residuals[self.head] = v;
-        self.head = (self.head + 1) % MAX_LAG;
+        self.residuals.push(v);
         self.filled += 1;
     }
 
@@ -229,8 +246,9 @@ impl Autocorrelation {
 #[derive(Debug, Clone, Copy)]
 pub struct ColouredCovariance<const C: usize> {
     n: usize,
-    rows: [[f64; C]; MAX_LAG],
-    head: usize,
+    /// The last regressor rows by column: `columns[a]` holds entry `a` of each (only the
+    /// leading `n` are used), so that a lag sum over one entry is a slice loop.
+    columns: [LagRing; C],
     filled: usize,
     acf: Autocorrelation,
     m: Square<C>,
@@ -247,8 +265,7 @@ impl<const C: usize> ColouredCovariance<C> {
     pub fn new(n: usize) -> Self {
         Self {
             n: n.min(C),
-            rows: [[0.0; C]; MAX_LAG],
-            head: 0,
+            columns: [LagRing::new(); C],
             filled: 0,
             acf: Autocorrelation::new(),
             m: [[0.0; C]; C],
@@ -267,18 +284,8 @@ impl<const C: usize> ColouredCovariance<C> {
         let avail = self.filled.min(MAX_LAG);
         let k_max = match fit {
             Some((v, p)) => {
-                // Fitted share r = tr(P M)/N_eff and lag leverage s_k = Σ λ x_iᵀ P x_{i−k}.
                 self.fitted = (self.trace_pm(p) / self.n_eff).clamp(0.0, 1.0);
-                let mut px = [0.0; C];
-                for a in 0..n {
-                    px[a] = (0..n).map(|b| p[a][b] * x[b]).sum();
-                }
-                let dot = |row: &[f64; C]| (0..n).map(|a| px[a] * row[a]).sum::<f64>();
-                self.leverage[0] = lambda * self.leverage[0] + dot(x);
-                for k in 1..=avail {
-                    let row = &self.rows[lag_slot(self.head, k)];
-                    self.leverage[k] = lambda * self.leverage[k] + dot(row);
-                }
+                self.add_leverage(x, p, lambda, avail);
                 self.acf.add(v, lambda);
                 self.acf.last_significant_lag()
             }
@@ -287,22 +294,7 @@ impl<const C: usize> ColouredCovariance<C> {
                 0
             }
         };
-        // g = x + Σ ρ_v(k) λ^k x_{n−k},  ρ_v(k) = (1 − r) ρ̂(k) + r ρ_H(k)
-        let r = self.fitted;
-        let s0 = self.leverage[0];
-        let mut g = [0.0; C];
-        g[..n].copy_from_slice(&x[..n]);
-        let mut lk = 1.0;
-        for k in 1..=k_max {
-            lk *= lambda;
-            let rho_h = if s0 > 0.0 { self.leverage[k] / s0 } else { 0.0 };
-            let rho_v = (1.0 - r) * self.acf.rho(k).unwrap_or(0.0) + r * rho_h;
-            let w = rho_v * lk;
-            let row = &self.rows[lag_slot(self.head, k)];
-            for a in 0..n {
-                g[a] += w * row[a];
-            }
-        }
+        let g = self.lagged_sum(x, lambda, k_max);
         let l2 = lambda * lambda;
         for a in 0..n {
             for b in a..n {
@@ -311,9 +303,54 @@ impl<const C: usize> ColouredCovariance<C> {
                 self.m[b][a] = v;
             }
         }
-        self.rows[self.head] = *x;
-        self.head = (self.head + 1) % MAX_LAG;
+        for (column, &xa) in self.columns[..n].iter_mut().zip(x) {
+            column.push(xa);
+        }
         self.filled += 1;
+    }
+
+    /// Lag leverage `s_k = Σ_i λ^{n−i} x_iᵀ P x_{i−k}`, `k = 0..=avail`, with row `x` added.
+    fn add_leverage(&mut self, x: &[f64; C], p: &Square<C>, lambda: f64, avail: usize) {
+        let n = self.n;
+        let mut px = [0.0; C];
+        for a in 0..n {
+            px[a] = (0..n).map(|b| p[a][b] * x[b]).sum();
+        }
+        self.leverage[0] = lambda * self.leverage[0] + (0..n).map(|a| px[a] * x[a]).sum::<f64>();
+        let lagged = &mut self.leverage[1..=avail];
+        for s in lagged.iter_mut() {
+            *s *= lambda;
+        }
+        for (column, &pa) in self.columns[..n].iter().zip(&px) {
+            for (s, xa) in lagged.iter_mut().zip(column.lags(avail)) {
+                *s += pa * xa;
+            }
+        }
+    }
+
+    /// `g = x + Σ_{k=1..K} ρ_v(k) λ^k x_{n−k}` with `ρ_v(k) = (1 − r) ρ̂(k) + r ρ_H(k)` (module
+    /// doc), the rows before `x` from the ring.
+    fn lagged_sum(&self, x: &[f64; C], lambda: f64, k_max: usize) -> [f64; C] {
+        let r = self.fitted;
+        // Reciprocals once: a division per lag would be the loop's latency.
+        let s0 = self.leverage[0];
+        let inv_s0 = if s0 > 0.0 { 1.0 / s0 } else { 0.0 };
+        let c = &self.acf.c;
+        let inv_c0 = if c[0] > 0.0 { 1.0 / c[0] } else { 0.0 };
+        let mut w = [0.0; MAX_LAG];
+        let mut lk = 1.0;
+        for (k, wk) in w.iter_mut().enumerate().take(k_max) {
+            lk *= lambda;
+            let rho_v = (1.0 - r) * c[k + 1] * inv_c0 + r * self.leverage[k + 1] * inv_s0;
+            *wk = rho_v * lk;
+        }
+        let mut g = [0.0; C];
+        for a in 0..self.n {
+            let lagged: f64 =
+                w[..k_max].iter().zip(self.columns[a].lags(k_max)).map(|(w, x)| w * x).sum();
+            g[a] = x[a] + lagged;
+        }
+        g
     }
 
     /// Re-opens the memory after a change test's alarm (`crate::change`): the rows before the

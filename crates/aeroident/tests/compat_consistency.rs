@@ -52,6 +52,9 @@ fn findings<'a>(s: &'a CompatSummary, what: &str) -> Vec<&'a String> {
 const DISAGREES: &str = "disagrees with the other manoeuvres";
 const HELD_OUT: &str = "held out in turn";
 
+/// Long by nature (about 80 s in release on 2 cores): three 10-Hz flights are simulated and
+/// checked jointly twice, and each joint check refits every correction with each manoeuvre held
+/// out in turn; the test needs two flights alike and one that differs, so none can go.
 #[test]
 fn a_manoeuvre_whose_sensor_changed_is_named() {
     let dir = std::env::temp_dir().join(format!("aeroident-consistency-{}", std::process::id()));

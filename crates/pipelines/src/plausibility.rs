@@ -67,6 +67,9 @@ pub fn undetermined(model: &ModelSpec, p: Param, std_error: Option<f64>) -> Opti
 /// What most often puts a term of `p`'s kind out of range.
 fn likely_cause(p: Param) -> &'static str {
     match (p.coefficient, p.term) {
+        (Coefficient::CY | Coefficient::Cn, Term::Da) | (Coefficient::Cl, Term::Dr) => {
+            "a surface that barely moved, or moved with the other one, so that this cross-control term takes what neither can determine (excite the surfaces apart, or leave the term out), or a surface in degrees mapped as radians (÷57.3)"
+        }
         (_, Term::De | Term::Da | Term::Dr) => {
             "a surface in degrees mapped as radians (÷57.3), a reversed surface, or a surface that barely moved"
         }
@@ -312,12 +315,13 @@ mod tests {
     fn every_range_and_the_margin_at_their_edges() {
         let m = ModelSpec::preset("six-axis").unwrap();
         #[rustfmt::skip]
-        let table: [(&str, f64, f64); 15] = [
+        let table: [(&str, f64, f64); 19] = [
             ("CL_0", -0.5, 1.5), ("CL_alpha", 1.5, 8.0), ("CZ_alpha", -8.0, -1.5),
             ("CD_0", 0.0, 0.3), ("CD_alpha", -0.2, 3.0), ("Cm_alpha", -5.0, 1.0),
             ("Cm_q", -100.0, 0.0), ("Cm_de", -5.0, -0.1), ("CY_beta", -2.0, 0.0),
             ("Cl_beta", -0.5, 0.05), ("Cl_p", -1.5, 0.0), ("Cl_da", -1.0, -0.02),
             ("Cn_beta", -0.05, 0.5), ("Cn_r", -1.0, 0.0), ("Cn_dr", -0.5, -0.01),
+            ("CY_da", -0.5, 0.5), ("CY_dr", -0.2, 1.0), ("Cl_dr", -0.2, 0.2), ("Cn_da", -0.2, 0.2),
         ];
         let e = 1e-9;
         for (name, lo, hi) in table {

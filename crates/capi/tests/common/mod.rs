@@ -178,6 +178,10 @@ pub fn compile_c_shared(source: &str, out: &Path) {
         .arg(format!("-L{}", lib_dir.display()))
         .arg("-laeroident_capi")
         .arg(format!("-Wl,-rpath,{}", lib_dir.display()))
+        // DT_RPATH, searched before LD_LIBRARY_PATH (a RUNPATH is searched after it): cargo's
+        // test environment puts the profile directory on LD_LIBRARY_PATH, where an older
+        // `cargo build -p aeroident-capi` may have left a stale copy of the library.
+        .arg("-Wl,--disable-new-dtags")
         .arg("-o")
         .arg(out)
         .output()

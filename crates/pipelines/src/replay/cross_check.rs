@@ -34,8 +34,10 @@
 //! bias is no confirmation, and a majority of them can outvote the one that is right):
 //! set aside by a tested cause → flagged with it; else any method left that disagrees with it
 //! → flagged as a disagreement no tested mechanism explains, with the camps; else confirmed
-//! when a method open to another bias ([`bias_family`]) agrees with it, and flagged as
-//! unconfirmed when only methods sharing its bias, or none, give it.
+//! when a method open to another bias ([`bias_family`]) agrees with it and with every other
+//! method left, flagged as unconfirmed when only methods sharing its bias, or none, give it,
+//! and flagged as contested when every such method disagrees with another that agrees with
+//! the estimate too (its σ spans a split among them).
 
 use aeroident_io::warning::{Warning, WarningKind};
 use serde::Serialize;
@@ -269,13 +271,44 @@ fn unexplained_or_unconfirmed(
         ));
     }
     let family = bias_family(&mine.method);
-    let independent = others().any(|e| bias_family(&e.method) != family);
-    (!independent).then(|| {
-        format!(
+    let independent: Vec<&Estimate> =
+        others().filter(|e| bias_family(&e.method) != family).copied().collect();
+    if independent.is_empty() {
+        return Some(format!(
             "cross-check: only methods open to the same bias as {} ({family}) give {name}: their agreement confirms nothing",
             mine.method
-        )
-    })
+        ));
+    }
+    contested_confirmation(name, mine, &independent, left, camps)
+}
+
+/// The flag of an estimate whose every confirming method (`independent`, all agreeing with
+/// `mine`) disagrees with another method that agrees with `mine` too: its σ then spans a split
+/// among the others that no tested mechanism explains, and agreeing with both sides confirms
+/// neither. `None` when one confirming method agrees with every other.
+///
+/// Decided on the calibration corpus's tune half and reported on its held-out half
+/// (docs/validation.md, v11); the variants tried are in
+/// `scripts/verdict_corpus/panel_rule_offline.py`.
+fn contested_confirmation(
+    name: &str,
+    mine: &Estimate,
+    independent: &[&Estimate],
+    left: &[&Estimate],
+    camps: &[Vec<String>],
+) -> Option<String> {
+    let others: Vec<&Estimate> = left.iter().filter(|e| e.method != mine.method).copied().collect();
+    let rival = |a: &Estimate| others.iter().find(|b| b.method != a.method && !a.agrees(b));
+    let pairs: Vec<String> = independent
+        .iter()
+        .map(|a| rival(a).map(|b| format!("{} with {}", a.method, b.method)))
+        .collect::<Option<_>>()?;
+    Some(format!(
+        "cross-check: every method that confirms {} on {name} disagrees with another that agrees with it ({}): its σ spans a split no tested mechanism explains: {}",
+        mine.method,
+        pairs.join(", "),
+        describe(left, camps)
+    ))
 }
 
 /// The bias a method's estimate is open to, by which the panel groups methods that cannot

@@ -314,3 +314,25 @@ fn estimates_that_agree_share_a_camp() {
     let (a, b, c) = (est("oe", 1.0, 0.01), est("fem", 1.01, 0.01), est("ekf", 2.0, 0.01));
     assert_eq!(camps(&[&c, &a, &b]), [vec!["oe".to_string(), "fem".into()], vec!["ekf".into()]]);
 }
+
+/// A real UAV's elevator multistep (uav_oat `el_3`, CL_α): rls 2.30 ± 0.47 agrees with
+/// rls-iv 1.78 ± 0.60, the EKF 3.42 ± 0.54 and oe 4.66 ± 1.16, which split among themselves
+/// (rls-iv against the EKF: 1.64 > 2·0.81; against oe: 2.88 > 2·1.31). Every method that
+/// would confirm rls has a rival that rls agrees with too: contested, not confirmed. One
+/// confirming method that agrees with every other (fdoe 42.7 ± 26) confirms it again, and a
+/// panel without a split is unchanged.
+#[test]
+fn agreement_with_both_sides_of_a_split_confirms_neither() {
+    let split =
+        [("rls", 2.30, 0.47), ("rls-iv", 1.78, 0.60), ("ekf", 3.42, 0.54), ("oe", 4.66, 1.16)];
+    let rls = panel("rls", &split);
+    assert!(!rls.confirmed && rls.set_aside.is_empty(), "{rls:?}");
+    let flag = rls.flag.unwrap();
+    assert!(flag.contains("every method that confirms rls on Cl_p disagrees"), "{flag}");
+    assert!(flag.contains("rls-iv with ekf") && flag.contains("oe with rls-iv"), "{flag}");
+    let mut wide = split.to_vec();
+    wide.push(("fdoe", 42.7, 26.0));
+    assert!(panel("rls", &wide).confirmed);
+    let calm = [("rls", 2.30, 0.47), ("rls-iv", 2.0, 0.60), ("ekf", 2.6, 0.54), ("oe", 2.9, 1.16)];
+    assert!(panel("rls", &calm).confirmed);
+}

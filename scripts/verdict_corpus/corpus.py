@@ -1183,6 +1183,13 @@ def cmd_repeats(a):
         total[1] += bad
         print("| %s | %d | %d |" % (est, pairs, bad))
     print("| all | %d | %d |" % tuple(total))
+    print("\npairs beyond 3 combined σ (method, parameter, file: estimate ± σ, twice; |Δ|/σ):")
+    for (e, name), vs in sorted(rows.items()):
+        for x, y in itertools.combinations(vs, 2):
+            z = abs(x[1] - y[1]) / math.hypot(x[2], y[2])
+            if z > 3.0:
+                print("- %s %s: %s %.4g ± %.2g; %s %.4g ± %.2g; %.1f" % (
+                    e, name, x[0], x[1], x[2], y[0], y[1], y[2], z))
 
 
 def cmd_design(a):

@@ -176,10 +176,11 @@ pub fn expected_sign(p: Param) -> Option<f64> {
 /// to 8 per rad (a wing's is below 2π), a zero-lift drag above 0, and control powers at least
 /// the magnitude a surface in degrees mapped as radians (÷57.3) falls below. JSBSim's c172x
 /// model has a lift slope of 9.9 per rad, outside: a record of it needs `[plausible.CL_alpha]`.
-/// The surfaces' side forces and cross-control moments (`CY_da`, `CY_dr`, `Cl_dr`, `Cn_da`) get
-/// ±0.2 to ±0.5 (`CY_dr` up to 1), four or more times the largest of the textbook F-16's tables (Stevens & Lewis:
-/// `CY_da` 0.060, `CY_dr` 0.164, `Cl_dr` −0.021 to 0.044, `Cn_da` −0.077 to 0.049 per rad over
-/// its whole α, β envelope) and of JSBSim's F-16 and c172x (|·| ≤ 0.1).
+/// The surfaces' side forces and cross-control moments (`CY_da`, `CY_dr`, `Cl_dr`, `Cn_da`)
+/// get ±0.2 to ±0.5 (`CY_dr` up to 1): four or more times the largest of the textbook F-16's
+/// tables (Stevens & Lewis: `CY_da` 0.060, `CY_dr` 0.164, `Cl_dr` −0.021 to 0.044, `Cn_da`
+/// −0.077 to 0.049 per rad over its whole α, β envelope) and of JSBSim's F-16 and c172x
+/// (|·| ≤ 0.1).
 /// A model file's `[plausible.X]` replaces the range for an unconventional aircraft.
 pub fn plausible_range(p: Param) -> Option<(f64, f64)> {
     Some(match (p.coefficient, p.term) {
@@ -237,9 +238,10 @@ mod tests {
             (C::Cn, T::Beta, 0.184),
             (C::Cl, T::Da, -0.051),
             (C::Cn, T::Dr, -0.045),
-            // Side-force and cross-control terms: the textbook F-16's extremes over its envelope (per rad:
-            // CY_δa 0.021·57.3/20, CY_δr 0.086·57.3/30, DLDR and DNDA's extremes ×57.3/30 and
-            // ×57.3/20) and JSBSim's c172x (c172x_elevator_3211_truth.json).
+            // Side-force and cross-control terms: the textbook F-16's extremes over its
+            // envelope (per rad: CY_δa 0.021·57.3/20, CY_δr 0.086·57.3/30, DLDR's and DNDA's
+            // extremes ×57.3/30 and ×57.3/20) and JSBSim's c172x
+            // (c172x_elevator_3211_truth.json).
             (C::CY, T::Da, 0.060),
             (C::CY, T::Dr, 0.164),
             (C::Cl, T::Dr, 0.044),

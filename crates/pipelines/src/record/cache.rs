@@ -9,7 +9,7 @@
 //! events come out exactly as the reader and the screen gave them (the screen is a function of
 //! the record alone, the actuators, corrections and windows after it are applied again per
 //! pass), so every estimate is bit-identical to a pass that reads the file
-//! (`a_record_held_in_memory_replays_bit_identically`).
+//! (`a_record_held_in_memory_replays_and_fits_bit_identically`).
 //!
 //! A record of more than [`MAX_EVENTS`] events is not held (a pass then reads the file, as
 //! before); nor is one whose reading fails (the pass that reads it again reports the error).
@@ -64,6 +64,18 @@ impl ScreenedRecord {
     /// The spike screen the record was read through.
     pub fn screen(&self) -> Option<SpikeScreen> {
         self.screen
+    }
+
+    /// Whether a pass asking for the spike screen `screen` may read this record.
+    ///
+    /// # Errors
+    /// [`super::RecordError::Option`] (`spike-screen`) when the record was screened otherwise.
+    pub fn check_screen(&self, screen: Option<SpikeScreen>) -> Result<(), super::RecordError> {
+        if self.screen == screen {
+            return Ok(());
+        }
+        let reason = "the record held in memory was screened with other settings".to_string();
+        Err(super::RecordError::Option { option: "spike-screen", reason })
     }
 
     /// The record's events through the stages after the screen, as

@@ -68,10 +68,7 @@ pub fn fit_cached(
     options: FitOptions,
 ) -> Result<BatchOutcome, ReplayError> {
     options.check()?;
-    if record.screen() != options.spike_screen {
-        let reason = "the record held in memory was screened with other settings".to_string();
-        return Err(ReplayError::Option { option: "spike-screen", reason });
-    }
+    record.check_screen(options.spike_screen)?;
     let rec = crate::record::read_cached(record, options.compat.as_ref(), &options.windows)?;
     fit_manoeuvres(rec, record.file(), mapping, model, options)
 }

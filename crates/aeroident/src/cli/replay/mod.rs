@@ -227,8 +227,8 @@ pub struct ReplayArgs {
     /// time, the first and the last row always written (the last is the summary's final
     /// estimate); `0`: every estimate. Default: 0.1 for a file
     /// (`aeroident_pipelines::replay::DEFAULT_ESTIMATES_EVERY_S`), every estimate for a live
-    /// feed. A 1-hour six-axis record at 100 Hz writes about 490 MB at every estimate, 49 MB
-    /// at 0.1.
+    /// feed. A 1-hour six-axis record at 100 Hz writes 48 MB at 0.1 (measured) and about ten
+    /// times that at every estimate.
     #[arg(long = "estimates-every", value_name = "S", value_parser = parse_every_s)]
     pub estimates_every_s: Option<f64>,
     /// Do not screen the record for spikes before estimating (by default a row whose channel

@@ -153,6 +153,49 @@ fn val_hfb320_filter_error_with_a_collapsed_noise_variance_is_flagged() {
     assert!(s.warnings.iter().any(|w| w.starts_with("degenerate filter")));
 }
 
+/// A CSV record read and screened on a second thread while the estimator takes it
+/// (`replay_holding`) gives the replay of its file bit for bit, and the record it keeps is
+/// whole even when the feed stopped taking events early (a time window ending at 50 s of a
+/// 60-s record): replayed from memory without the window, it gives the file's replay.
+#[test]
+fn a_record_read_while_fed_replays_bit_identically_and_is_kept_whole() {
+    use aeroident_pipelines::estimators::EstimatorKind;
+    use aeroident_pipelines::replay::{replay_cached, replay_holding};
+    use aeroident_pipelines::window::TimeWindow;
+    let Some(data) = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
+    let file = data.display().to_string();
+    let m = Mapping::from_path(&workspace().join("mappings/hfb320.toml")).unwrap();
+    let model = ModelSpec::from_path(&workspace().join("models/hfb320_jategaonkar.toml")).unwrap();
+    let sendable = || {
+        let read: Box<dyn std::io::Read + Send> = Box::new(std::fs::File::open(&data).unwrap());
+        aeroident_io::FlightDataReader::new(read, &file, &m).unwrap()
+    };
+    let rows = |o: &aeroident_pipelines::replay::ReplayOutcome| -> Vec<(String, Option<f64>, Option<f64>)> {
+        let p = o.summary.parameters.iter().map(|p| &p.result);
+        p.map(|p| (p.name.clone(), p.estimate, p.std_error)).collect()
+    };
+    let opts = |windows: Vec<TimeWindow>| ReplayOptions {
+        estimator: EstimatorKind::Rls,
+        model: Some(model.clone()),
+        windows,
+        ..Default::default()
+    };
+    let whole = replay(open_log(&file, None, &m).unwrap(), &m, &opts(Vec::new()), &mut ()).unwrap();
+    assert!(rows(&whole).iter().all(|r| r.1.is_some()), "{:?}", rows(&whole));
+    for windows in [Vec::new(), vec![TimeWindow { start_s: 10.0, end_s: 50.0 }]] {
+        let o = opts(windows.clone());
+        let from_file = replay(open_log(&file, None, &m).unwrap(), &m, &o, &mut ()).unwrap();
+        let (fed, held) = replay_holding(sendable(), &m, &o, &mut ());
+        let fed = fed.unwrap();
+        assert_eq!(rows(&fed), rows(&from_file), "{windows:?}");
+        assert_eq!(fed.summary.warnings, from_file.summary.warnings, "{windows:?}");
+        let held = held.expect("a 601-row record is kept");
+        let again = replay_cached(&held, &m, &opts(Vec::new()), &mut ()).unwrap();
+        assert_eq!(rows(&again), rows(&whole), "{windows:?}");
+        assert_eq!(again.summary.warnings, whole.summary.warnings, "{windows:?}");
+    }
+}
+
 /// A record held in memory (`Records::held`, what the checks after a job's own estimator
 /// read) gives the same events as its file: the HFB-320 record replayed by RLS and the EKF,
 /// and fitted by output error and fdoe, from the file and from memory, within a time window

@@ -82,14 +82,22 @@ impl Records {
     /// they are for a live feed, several records (only the main one would be held), a record
     /// that cannot be read or is too long to hold, or a screen whose settings are refused.
     pub fn held(&self, screen: Option<crate::record::outliers::SpikeScreen>) -> Records {
-        let unheld = self.live || !self.and.is_empty() || self.held.is_some();
-        if unheld || crate::record::check_spike_screen(screen.as_ref()).is_err() {
+        if self.held.is_some() || !self.holds(screen) {
             return self.clone();
         }
         let held = self.open(&self.data).ok().and_then(|r| {
             crate::record::cache::ScreenedRecord::read(r, screen).map(std::sync::Arc::new)
         });
         Records { held, ..self.clone() }
+    }
+
+    /// Whether the main record may be held in memory read through `screen`
+    /// ([`Records::held`]): a file (not a live feed), the only record, a screen whose settings
+    /// are accepted ([`crate::record::check_spike_screen`]).
+    pub fn holds(&self, screen: Option<crate::record::outliers::SpikeScreen>) -> bool {
+        !self.live
+            && self.and.is_empty()
+            && crate::record::check_spike_screen(screen.as_ref()).is_ok()
     }
 
     /// The main record held in memory, when it was read with `screen`.

@@ -37,6 +37,11 @@ pub struct Prepared {
     pub options: ReplayOptions,
     /// The selection, with `--model auto`.
     pub selection: Option<AutoSelection>,
+    /// The main record read and screened into memory by the face before the feed
+    /// ([`crate::replay::replay_cached`]), which the steps after the feed then read instead of
+    /// the file; `None` (as [`ReplayJob::prepare`] leaves it): they hold it themselves when
+    /// [`Records::holds`] allows.
+    pub held: Option<std::sync::Arc<crate::record::cache::ScreenedRecord>>,
 }
 
 /// A replay job's outcome.
@@ -111,7 +116,7 @@ impl ReplayJob {
                 Ran::Stopped(step) => return Ok(Ran::Stopped(step)),
             };
         let options = ReplayOptions { model, compat, ..self.options.clone() };
-        Ok(Ran::Done(Prepared { options, selection }))
+        Ok(Ran::Done(Prepared { options, selection, held: None }))
     }
 
     /// The stages after the estimator, on `outcome`: the cross-check (unless the replay was
@@ -139,7 +144,8 @@ impl ReplayJob {
         if !interrupted
             && (self.cross_check == super::cross_check::Panel::Full || !outcome.diverged())
         {
-            self.check_after_feed(&prepared.options, &mut outcome, guard, log)?;
+            let held = prepared.held.clone();
+            self.check_after_feed(&prepared.options, held, &mut outcome, guard, log)?;
         }
         let validation_on = match &self.validate_on {
             Some(v) if !outcome.diverged() && !interrupted => {
@@ -164,6 +170,7 @@ impl ReplayJob {
     fn check_after_feed(
         &self,
         options: &ReplayOptions,
+        held: Option<std::sync::Arc<crate::record::cache::ScreenedRecord>>,
         outcome: &mut ReplayOutcome,
         guard: &mut impl Guard,
         log: &mut dyn JobLog,
@@ -175,7 +182,10 @@ impl ReplayJob {
         );
         let base = ReplayOptions { model: Some(outcome.model.clone()), ..options.clone() };
         // Every step below reads the record again: held in memory, each costs its estimator.
-        let held = self.records.held(options.spike_screen);
+        let held = match held.filter(|h| h.screen() == options.spike_screen) {
+            Some(h) => Records { held: Some(h), ..self.records.clone() },
+            None => self.records.held(options.spike_screen),
+        };
         let (records, warnings) = (&held, &mut outcome.summary.warnings);
         if self.cross_check.runs() && !records.live {
             let (b, panel) = (base.clone(), self.cross_check);

@@ -11,6 +11,9 @@
 //! pass), so every estimate is bit-identical to a pass that reads the file
 //! (`a_record_held_in_memory_replays_and_fits_bit_identically`).
 //!
+//! A replay of a CSV file reads it once: on a second thread while its own estimator takes the
+//! events, keeping them for the steps after ([`ScreenedRecord::read_while_feeding`]).
+//!
 //! A record of more than [`MAX_EVENTS`] events is not held (a pass then reads the file, as
 //! before); nor is one whose reading fails (the pass that reads it again reports the error).
 
@@ -22,6 +25,46 @@ use std::sync::{Arc, Mutex};
 
 /// Most events a record held in memory may have: 2.8 hours at 100 Hz, about 0.5 GB.
 pub const MAX_EVENTS: usize = 1_000_000;
+
+/// One event of a record as its reader and screen give it.
+type Event = Result<RecordEvent, aeroident_io::FlightDataError>;
+
+/// Events sent to the feed at a time by [`ScreenedRecord::read_while_feeding`]'s reader: one
+/// message per batch, not per event.
+const BATCH: usize = 256;
+
+/// Batches the reader may be ahead of the feed: it waits beyond them (bounded memory).
+const BATCHES_AHEAD: usize = 64;
+
+/// The events of `screened`, sent to the feed in batches of [`BATCH`] and kept: all of them
+/// when the record ended with no error and within [`MAX_EVENTS`], else `None`. A feed that
+/// stops taking them (its time windows ended, it diverged or was stopped) does not stop the
+/// reading: the steps after it want the whole record.
+fn keep_while_sending(
+    screened: impl Iterator<Item = Event>,
+    tx: &std::sync::mpsc::SyncSender<Vec<Event>>,
+) -> Option<Vec<RecordEvent>> {
+    let (mut kept, mut keeping, mut feeding) = (Vec::new(), true, true);
+    let mut batch = Vec::with_capacity(BATCH);
+    for event in screened {
+        match &event {
+            Ok(e) if keeping && kept.len() < MAX_EVENTS => kept.push(e.clone()),
+            _ => (keeping, kept) = (false, Vec::new()),
+        }
+        if feeding {
+            batch.push(event);
+            if batch.len() == BATCH {
+                feeding = tx.send(std::mem::replace(&mut batch, Vec::with_capacity(BATCH))).is_ok();
+            }
+        } else if !keeping {
+            return None;
+        }
+    }
+    if feeding && !batch.is_empty() {
+        let _ = tx.send(batch);
+    }
+    keeping.then_some(kept)
+}
 
 /// A record's events after its reader and spike screen, in memory, with the notes the two
 /// wrote (module doc).
@@ -54,6 +97,41 @@ impl ScreenedRecord {
         let snapshot = |n: &ScreenNotes| n.lock().map(|n| n.clone()).unwrap_or_default();
         let notes = [snapshot(&reader_notes), snapshot(&screen_notes)];
         Some(Self { file, mapping, screen, events: events.into(), notes })
+    }
+
+    /// `reader` read through the spike screen `screen` (settings checked by the caller) on a
+    /// thread of its own while `feed` takes its events on this one, through the stages after
+    /// the screen as [`super::record_events`] sets them up (`compat`, `windows`); the events
+    /// are kept as they pass. The reading and screening (about half of a least-squares pass)
+    /// then overlap the estimator instead of preceding it, and the record is read once for the
+    /// feed and every step after it.
+    ///
+    /// Returns `feed`'s result and the record held: `None` for a record of more than
+    /// [`MAX_EVENTS`] events or one whose reading failed (the feed saw the error).
+    pub fn read_while_feeding<R: Read + Send, T>(
+        reader: FlightDataReader<R>,
+        screen: Option<SpikeScreen>,
+        stages: (Option<&Corrections>, &[crate::window::TimeWindow]),
+        feed: impl FnOnce(RecordEvents<'_>) -> T,
+    ) -> (T, Option<Self>) {
+        let file = reader.file().to_string();
+        let (reader_notes, mapping) = (reader.notes(), reader.mapping());
+        let screened = outliers::Screened::new(reader, screen).named_by(Arc::clone(&mapping));
+        let screen_notes = screened.notes();
+        let notes = [Arc::clone(&reader_notes), Arc::clone(&screen_notes)];
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Event>>(BATCHES_AHEAD);
+        let (fed, kept) = std::thread::scope(|scope| {
+            let reading = scope.spawn(move || keep_while_sending(screened, &tx));
+            let events = rx.into_iter().flatten();
+            let fed = feed(super::staged(Box::new(events), &mapping, notes, stages.0, stages.1));
+            // The feed has let go of the receiver: a reader still sending stops.
+            (fed, reading.join().ok().flatten())
+        });
+        let snapshot = |n: &ScreenNotes| n.lock().map(|n| n.clone()).unwrap_or_default();
+        let notes = [snapshot(&reader_notes), snapshot(&screen_notes)];
+        let record =
+            kept.map(|events| Self { file, mapping, screen, events: events.into(), notes });
+        (fed, record)
     }
 
     /// The data file's name as used in messages.

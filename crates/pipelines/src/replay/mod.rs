@@ -829,6 +829,41 @@ pub fn replay_with<R: Read>(
     replay_events(events, file, mapping, opts, make, observer)
 }
 
+/// [`replay`] of a record file whose steps after the feed will read it again: the record is
+/// read and screened on a second thread as the estimator takes it, and kept in memory for
+/// those steps ([`crate::record::cache::ScreenedRecord::read_while_feeding`]); the outcome is
+/// [`replay`]'s, bit for bit.
+///
+/// Returns the replay's result and the record held (`None`: too long to hold, or unreadable).
+///
+/// # Errors
+/// As [`replay`].
+pub fn replay_holding<R: Read + Send>(
+    reader: FlightDataReader<R>,
+    mapping: &Mapping,
+    opts: &ReplayOptions,
+    observer: &mut dyn ReplayObserver,
+) -> (Result<ReplayOutcome, ReplayError>, Option<crate::record::cache::ScreenedRecord>) {
+    let checked = check_numeric_options(opts)
+        .and_then(|()| {
+            crate::window::check_windows(&opts.windows)
+                .map_err(|reason| ReplayError::Option { option: "window", reason })
+        })
+        .and_then(|()| Ok(check_spike_screen(opts.spike_screen.as_ref())?));
+    if let Err(e) = checked {
+        return (Err(e), None);
+    }
+    let o = opts.built_estimator_options(mapping);
+    let file = reader.file().to_string();
+    let stages = (opts.compat.as_ref(), opts.windows.as_slice());
+    crate::record::cache::ScreenedRecord::read_while_feeding(
+        reader,
+        opts.spike_screen,
+        stages,
+        |events| replay_events(events, file, mapping, opts, maker(opts, &o), observer),
+    )
+}
+
 /// [`replay`] of a record held in memory ([`crate::record::cache::ScreenedRecord`], read with
 /// `opts`' spike screen): the same outcome as from its file, at the cost of the estimator.
 ///

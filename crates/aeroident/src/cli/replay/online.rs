@@ -11,12 +11,15 @@ use super::{Console, ReplayArgs, validation_block};
 use aeroident_io::{FlightDataReader, LogFormat, open_log_with_report};
 use aeroident_pipelines::job::replay::{Prepared, ReplayJob, ReplayJobOutcome};
 use aeroident_pipelines::live::{LiveObserver, SharedLive};
+use aeroident_pipelines::record::cache::ScreenedRecord;
 use aeroident_pipelines::replay::{
     EstimateRows, ReplayError, ReplayObserver, ReplayOptions, ReplayOutcome, RowRate, replay,
+    replay_cached, replay_holding,
 };
 use anyhow::Context;
 use std::io::Write;
 use std::path::Path;
+use std::sync::Arc;
 
 /// `estimates.csv`'s rate: `--estimates-every`, else every row of a live feed and
 /// [`aeroident_pipelines::replay::DEFAULT_ESTIMATES_EVERY_S`] of a file.
@@ -68,8 +71,8 @@ pub(super) fn execute(
         replay_record(args, job, &prepared.options, opened, &bar, &mut console)?
     };
     bar.finish_and_clear();
-    let outcome = match outcome {
-        Ok(outcome) => outcome,
+    let (outcome, held) = match outcome {
+        Ok(fed) => fed,
         // A live feed stopped before any sample was estimated (even before its header): no
         // results, but still a summary saying so.
         Err(e) if live && interrupt.requested() => {
@@ -78,7 +81,7 @@ pub(super) fn execute(
         }
         Err(e) => return Err(e.into()),
     };
-    let stopped_why = || validation_stopped(interrupt);
+    let (prepared, stopped_why) = (Prepared { held, ..prepared }, || validation_stopped(interrupt));
     let done = job.finish(prepared, outcome, &mut Watched(interrupt), &mut Stderr, stopped_why)?;
     if let Some(v) = &shared {
         v.lock().unwrap_or_else(std::sync::PoisonError::into_inner).conclude(&done.outcome.summary);
@@ -114,6 +117,10 @@ fn stdout_sink(args: &ReplayArgs) -> Box<dyn Write> {
     }
 }
 
+/// The feed's outcome and, when it was read into memory first, the record held
+/// ([`Prepared::held`]).
+type Fed = (ReplayOutcome, Option<Arc<ScreenedRecord>>);
+
 /// Opens the record as the console reads it and replays it with `opts`: the outer error is
 /// one of opening (returned as it is), the inner one the replay's (a live feed a signal ended
 /// before any estimate is then a stopped run, not a failure).
@@ -124,7 +131,7 @@ fn replay_record(
     (interrupt, view): (&crate::interrupt::Interrupt, Option<&SharedLive>),
     bar: &indicatif::ProgressBar,
     console: &mut dyn ReplayObserver,
-) -> anyhow::Result<Result<ReplayOutcome, ReplayError>> {
+) -> anyhow::Result<Result<Fed, ReplayError>> {
     let mapping = &job.records.mapping;
     let format = args
         .format
@@ -138,7 +145,7 @@ fn replay_record(
         return Ok(replay(reader, mapping, opts, console)
             .map(|mut outcome| {
                 crate::live::finish(&mut outcome.summary, &stats);
-                outcome
+                (outcome, None)
             })
             .inspect_err(|_| crate::live::report_failure(&stats)));
     }
@@ -153,29 +160,73 @@ fn replay_record(
         // A header cut short by a signal is an interruption too, not a plain error.
         return Ok(reader
             .map_err(ReplayError::from)
-            .and_then(|reader| replay(reader, mapping, opts, console)));
+            .and_then(|reader| replay(reader, mapping, opts, console).map(|o| (o, None))));
     }
-    let (reader, report) = if !job.records.live && format == LogFormat::Csv {
-        // The CSV file itself, read through the progress bar (what `open_log` opens for CSV),
-        // listed like every file read (a CSV reader leaves nothing out before the rows).
-        let file =
-            std::fs::File::open(&args.data).with_context(|| format!("opening {}", args.data))?;
-        let read: Box<dyn std::io::Read> = Box::new(std::io::BufReader::new(bar.wrap_read(file)));
-        let report = aeroident_io::ReaderReport {
-            file: args.data.clone(),
-            format: format.name().to_string(),
-            dropped: Vec::new(),
-        };
-        (FlightDataReader::new(read, &args.data, mapping)?, report)
-    } else {
-        let (reader, report) = open_log_with_report(&args.data, Some(format), mapping)?;
-        report.notes().iter().for_each(|n| aeroident_report::note!("note: {n}"));
-        (reader, report)
+    feed_file(args, job, opts, format, bar, console)
+}
+
+/// [`replay_record`] of a file (or stdin read whole). When the steps after the feed will read
+/// it again ([`aeroident_pipelines::job::Records::holds`]) it is read once and held in memory:
+/// a CSV file on a second thread as the estimator takes it
+/// ([`aeroident_pipelines::replay::replay_holding`]), another format before the feed (its
+/// reader has parsed the file already).
+fn feed_file(
+    args: &ReplayArgs,
+    job: &ReplayJob,
+    opts: &ReplayOptions,
+    format: LogFormat,
+    bar: &indicatif::ProgressBar,
+    console: &mut dyn ReplayObserver,
+) -> anyhow::Result<Result<Fed, ReplayError>> {
+    let mapping = &job.records.mapping;
+    let holds = job.records.holds(opts.spike_screen);
+    if !job.records.live && format == LogFormat::Csv {
+        let (reader, report) = open_csv(args, format, mapping, bar)?;
+        let fed = |o: ReplayOutcome, held| (with_report(o, report), held);
+        if holds {
+            let (outcome, held) = replay_holding(reader, mapping, opts, console);
+            return Ok(outcome.map(|o| fed(o, held.map(Arc::new))));
+        }
+        return Ok(replay(reader, mapping, opts, console).map(|o| fed(o, None)));
+    }
+    let open = || open_log_with_report(&args.data, Some(format), mapping);
+    let (reader, report) = open()?;
+    report.notes().iter().for_each(|n| aeroident_report::note!("note: {n}"));
+    if !holds {
+        return Ok(replay(reader, mapping, opts, console).map(|o| (with_report(o, report), None)));
+    }
+    if let Some(held) = ScreenedRecord::read(reader, opts.spike_screen).map(Arc::new) {
+        let outcome = replay_cached(&held, mapping, opts, console);
+        return Ok(outcome.map(|o| (with_report(o, report), Some(held))));
+    }
+    // Too long to hold, or unreadable (the feed then says why): from the file.
+    let (reader, report) = open()?;
+    Ok(replay(reader, mapping, opts, console).map(|o| (with_report(o, report), None)))
+}
+
+/// `outcome` with the record's reader report listed.
+fn with_report(mut outcome: ReplayOutcome, report: aeroident_io::ReaderReport) -> ReplayOutcome {
+    outcome.reader.push(report);
+    outcome
+}
+
+/// The CSV file read through the progress bar (what `open_log` opens for CSV), listed like
+/// every file read (a CSV reader leaves nothing out before the rows).
+fn open_csv(
+    args: &ReplayArgs,
+    format: LogFormat,
+    mapping: &aeroident_io::Mapping,
+    bar: &indicatif::ProgressBar,
+) -> anyhow::Result<(FlightDataReader<Box<dyn std::io::Read + Send>>, aeroident_io::ReaderReport)> {
+    let file = std::fs::File::open(&args.data).with_context(|| format!("opening {}", args.data))?;
+    let read: Box<dyn std::io::Read + Send> =
+        Box::new(std::io::BufReader::new(bar.wrap_read(file)));
+    let report = aeroident_io::ReaderReport {
+        file: args.data.clone(),
+        format: format.name().to_string(),
+        dropped: Vec::new(),
     };
-    Ok(replay(reader, mapping, opts, console).map(|mut outcome| {
-        outcome.reader.push(report);
-        outcome
-    }))
+    Ok((FlightDataReader::new(read, &args.data, mapping)?, report))
 }
 
 /// Ends a live feed a signal stopped before any sample was estimated: a summary saying so

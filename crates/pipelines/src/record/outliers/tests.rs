@@ -314,3 +314,41 @@ fn clusters_of_short_runs_are_found() {
         assert!(notes.is_empty(), "{notes:?}");
     }
 }
+
+/// The deviations' median merged from the sorted values equals the median of the deviations
+/// sorted again, bit for bit: odd and even windows, ties, values all equal, a median between
+/// two values, negative zero, and the screen's window lengths (5 to 21) of noisy values.
+#[test]
+fn the_merged_deviation_median_equals_a_second_sort() {
+    let reference = |v: &[f64]| {
+        let mut sorted = v.to_vec();
+        let med = median(&mut sorted);
+        let mut dev: Vec<f64> = v.iter().map(|x| (x - med).abs()).collect();
+        (med, median(&mut dev))
+    };
+    let mut cases: Vec<Vec<f64>> = vec![
+        vec![1.0],
+        vec![1.0, 2.0],
+        vec![3.0, 3.0, 3.0, 3.0],
+        vec![0.0, -0.0, 0.0, 1.0, -1.0],
+        vec![1.0, 2.0, 2.0, 2.0, 9.0, -7.0],
+        vec![0.1, 0.2, 0.30000000000000004, 0.3, 1e-300, -1e300],
+    ];
+    for (n, seed) in (5..=21).zip(1u64..) {
+        let mut v = noise(n, seed);
+        v[n / 3] = v[n / 2]; // a tie
+        cases.push(v.iter().map(|x| (x * 1e3).round() / 1e3).collect()); // coarse: many ties
+        cases.push(v);
+    }
+    for v in &cases {
+        let mut sorted = v.clone();
+        let med = median(&mut sorted);
+        let got = (med, median_deviation(&sorted, med));
+        let want = reference(v);
+        assert_eq!(
+            (got.0.to_bits(), got.1.to_bits()),
+            (want.0.to_bits(), want.1.to_bits()),
+            "{v:?}"
+        );
+    }
+}

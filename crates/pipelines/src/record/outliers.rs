@@ -544,19 +544,20 @@ impl<I: Iterator<Item = Result<RecordEvent, FlightDataError>>> Screened<I> {
         }
         let h = screen.half_width;
         let skip = self.past.len().saturating_sub(h);
-        let before: Vec<f64> = self.past.iter().skip(skip).filter_map(|v| v[c]).collect();
+        let before = || self.past.iter().skip(skip).filter_map(|v| v[c]);
         // A necessary condition first (the others hold `before`), so that the runs are built
-        // for a sample far out only, not for every sample of every channel.
-        let (lo, hi) = before
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
+        // (and anything allocated) for a sample far out only, not for every sample of every
+        // channel.
+        let (lo, hi) =
+            before().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
         // At a manoeuvre's start there is nothing before to compare with: the runs are built.
-        if let Some(&prev) = before.last() {
+        if let Some(prev) = before().next_back() {
             let departure = (value - prev).abs();
             if departure <= screen.isolation * (hi - lo) || departure <= ABSOLUTE_FLOOR {
                 return None;
             }
         }
+        let before: Vec<f64> = before().collect();
         let col: Vec<Option<f64>> = ahead.iter().map(|v| v[c]).collect();
         // Fewer samples ahead than the stage waits for: the manoeuvre ends there, and a run
         // may reach its last sample.

@@ -102,6 +102,9 @@ pub fn not_run_warning(why: &str) -> aeroident_io::warning::Warning {
 ///
 /// `long`: the windows the costly methods (the EKF and the batch fits) run on instead of the
 /// whole record, for a long one ([`long_record_windows`]).
+///
+/// The methods are independent, so they run on the thread pool (rayon), listed in the
+/// panel's order whatever order they end in: each estimate is the one a run alone gives.
 pub fn run_panel(
     records: &Records,
     own: EstimatorKind,
@@ -109,18 +112,22 @@ pub fn run_panel(
     panel: Panel,
     long: Option<&[TimeWindow]>,
 ) -> Vec<MethodEstimates> {
+    use rayon::prelude::*;
     let on = |k: &&EstimatorKind| **k != own && panel.holds(**k);
     let windowed = long.map(|w| ReplayOptions { windows: w.to_vec(), ..base.clone() });
     let costly = windowed.as_ref().unwrap_or(base);
     let online = ONLINE_METHODS.iter().filter(|_| records.and.is_empty()).filter(on);
-    let mut out: Vec<MethodEstimates> = online
-        .map(|&k| match k {
-            EstimatorKind::Ekf => run_online(records, k, costly),
-            _ => run_online(records, k, base),
+    let batch = BATCH_METHODS.iter().filter(on);
+    let methods: Vec<(EstimatorKind, bool)> =
+        online.map(|&k| (k, false)).chain(batch.map(|&k| (k, true))).collect();
+    methods
+        .into_par_iter()
+        .map(|(k, is_batch)| match (k, is_batch) {
+            (_, true) => run_batch(records, k, costly),
+            (EstimatorKind::Ekf, false) => run_online(records, k, costly),
+            (_, false) => run_online(records, k, base),
         })
-        .collect();
-    out.extend(BATCH_METHODS.iter().filter(on).map(|&k| run_batch(records, k, costly)));
-    out
+        .collect()
 }
 
 /// For a record held in memory ([`Records::held`]) with a stretch longer than

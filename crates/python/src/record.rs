@@ -2,15 +2,17 @@
 //! samples in Rust, the estimates as a time × parameter matrix).
 
 use std::path::Path;
+use std::sync::Arc;
 
 use aeroident_estimators::AirDataSample;
 use aeroident_io::{Mapping, ModelSpec, RecordEvent, open_log_with_notes, open_log_with_report};
 use aeroident_pipelines::estimators::{EstimatorKind, EstimatorOptions, build};
 use aeroident_pipelines::job::replay::ReplayJob;
 use aeroident_pipelines::job::{CompatSource, InPlace, ModelChoice, Ran, Records};
+use aeroident_pipelines::record::cache::ScreenedRecord;
 use aeroident_pipelines::record::unsupported;
 use aeroident_pipelines::replay::arrays::{
-    EstimateArrays, check_array_size, replay_arrays_observed, replay_samples,
+    EstimateArrays, check_array_size, replay_arrays_cached, replay_arrays_observed, replay_samples,
 };
 use aeroident_pipelines::replay::{DerivativeSource, ReplayObserver, ReplayOptions};
 use numpy::ndarray::Array2;
@@ -394,15 +396,28 @@ fn replay_job(job: &ReplayJob, signals: &Signals) -> anyhow::Result<ReplayResult
     let Ran::Done(prepared) = job.prepare(&mut InPlace, &mut ())? else {
         anyhow::bail!("internal: a step run in place was abandoned");
     };
-    let mapping = &job.records.mapping;
-    let (reader, report) = open_log_with_report(&job.records.data, None, mapping)?;
+    let (mapping, opts) = (&job.records.mapping, &prepared.options);
+    let open = || open_log_with_report(&job.records.data, None, mapping);
+    let (reader, report) = open()?;
     let notes = report.notes();
-    let (mut outcome, arrays) =
-        replay_arrays_observed(reader, mapping, &prepared.options, &mut Interruptible(signals))?;
+    // The steps after the feed read the record again: held in memory, it is read once.
+    let screen = opts.spike_screen;
+    let (held, reader) = match job.records.holds(screen) {
+        true => (ScreenedRecord::read(reader, screen).map(Arc::new), None),
+        false => (None, Some(reader)),
+    };
+    let observer = &mut Interruptible(signals);
+    let (mut outcome, arrays) = match (&held, reader) {
+        (Some(h), _) => replay_arrays_cached(h, mapping, opts, observer)?,
+        (None, Some(r)) => replay_arrays_observed(r, mapping, opts, observer)?,
+        // Too long to hold, or unreadable (the replay then says why): from the file.
+        (None, None) => replay_arrays_observed(open()?.0, mapping, opts, observer)?,
+    };
     outcome.reader.push(report);
     if let Some(e) = outcome.diverged_error(job.options.estimator.name()) {
         anyhow::bail!(e);
     }
+    let prepared = aeroident_pipelines::job::replay::Prepared { held, ..prepared };
     let done = job.finish(prepared, outcome, &mut InPlace, &mut (), String::new)?;
     let toml = done.selection.as_ref().map(|s| s.model.to_toml());
     Ok((done.outcome.model.name.clone(), done.document()?, arrays, notes, toml))

@@ -121,13 +121,40 @@ pub fn replay_arrays_observed<R: Read>(
     opts: &ReplayOptions,
     observer: &mut dyn super::ReplayObserver,
 ) -> Result<(ReplayOutcome, EstimateArrays), ReplayError> {
+    recorded(mapping, opts, |make| replay_with(reader, mapping, opts, make, observer))
+}
+
+/// [`replay_arrays_observed`] of a record held in memory
+/// ([`crate::record::cache::ScreenedRecord`], read with `opts`' spike screen): the same
+/// arrays and outcome as from its file.
+///
+/// # Errors
+/// As [`super::replay_cached`]; the observer's error as [`ReplayError::Output`].
+pub fn replay_arrays_cached(
+    record: &crate::record::cache::ScreenedRecord,
+    mapping: &Mapping,
+    opts: &ReplayOptions,
+    observer: &mut dyn super::ReplayObserver,
+) -> Result<(ReplayOutcome, EstimateArrays), ReplayError> {
+    recorded(mapping, opts, |make| super::replay_cached_with(record, mapping, opts, make, observer))
+}
+
+/// The outcome of `run` given an estimator maker whose estimators record every estimate
+/// ([`Recorder`]), with the arrays they recorded.
+fn recorded(
+    mapping: &Mapping,
+    opts: &ReplayOptions,
+    run: impl FnOnce(
+        &dyn Fn(&ModelSpec) -> Result<Box<dyn Estimator>, BuildError>,
+    ) -> Result<ReplayOutcome, ReplayError>,
+) -> Result<(ReplayOutcome, EstimateArrays), ReplayError> {
     let out = Rc::new(RefCell::new(EstimateArrays::default()));
     let eo = opts.built_estimator_options(mapping);
     let make = |model: &ModelSpec| -> Result<Box<dyn Estimator>, BuildError> {
         let inner = build(opts.estimator, model.structure, model.priors, &eo)?;
         Ok(Box::new(Recorder::new(inner, Rc::clone(&out))))
     };
-    let outcome = replay_with(reader, mapping, opts, make, observer)?;
+    let outcome = run(&make)?;
     let arrays = std::mem::take(&mut *out.borrow_mut());
     Ok((outcome, arrays))
 }

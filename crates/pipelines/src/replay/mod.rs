@@ -876,13 +876,27 @@ pub fn replay_cached(
     opts: &ReplayOptions,
     observer: &mut dyn ReplayObserver,
 ) -> Result<ReplayOutcome, ReplayError> {
+    let o = opts.built_estimator_options(mapping);
+    replay_cached_with(record, mapping, opts, maker(opts, &o), observer)
+}
+
+/// [`replay_cached`] with the estimator made by `make` (as [`replay_with`] is to [`replay`]).
+///
+/// # Errors
+/// As [`replay_cached`].
+pub fn replay_cached_with(
+    record: &crate::record::cache::ScreenedRecord,
+    mapping: &Mapping,
+    opts: &ReplayOptions,
+    make: impl Fn(&ModelSpec) -> Result<Box<dyn Estimator>, BuildError>,
+    observer: &mut dyn ReplayObserver,
+) -> Result<ReplayOutcome, ReplayError> {
     record.check_screen(opts.spike_screen)?;
     check_numeric_options(opts)?;
     crate::window::check_windows(&opts.windows)
         .map_err(|reason| ReplayError::Option { option: "window", reason })?;
-    let o = opts.built_estimator_options(mapping);
     let events = record.events(opts.compat.as_ref(), &opts.windows);
-    replay_events(events, record.file().to_string(), mapping, opts, maker(opts, &o), observer)
+    replay_events(events, record.file().to_string(), mapping, opts, make, observer)
 }
 
 /// The replay of `events` (the record `events_file`, its stages set up), options checked.

@@ -154,14 +154,25 @@ fn val_hfb320_filter_error_with_a_collapsed_noise_variance_is_flagged() {
 }
 
 /// A CSV record read and screened on a second thread while the estimator takes it
-/// (`replay_holding`) gives the replay of its file bit for bit, and the record it keeps is
-/// whole even when the feed stopped taking events early (a time window ending at 50 s of a
-/// 60-s record): replayed from memory without the window, it gives the file's replay.
+/// (`replay_holding`) gives the replay of its file bit for bit, whole, within a time window, and
+/// stopped by its observer after 100 events; and the record it keeps is whole every time, the
+/// stopped feed included (it let go of the events early, the reading went on): replayed from
+/// memory without window or stop, it gives the file's whole replay.
 #[test]
 fn a_record_read_while_fed_replays_bit_identically_and_is_kept_whole() {
     use aeroident_pipelines::estimators::EstimatorKind;
-    use aeroident_pipelines::replay::{replay_cached, replay_holding};
+    use aeroident_pipelines::replay::{ReplayObserver, replay_cached, replay_holding};
     use aeroident_pipelines::window::TimeWindow;
+    /// Asks the replay to stop once it has seen `0` record events.
+    struct StopAfter(usize);
+    impl ReplayObserver for StopAfter {
+        fn record_event(&mut self, _event: &aeroident_io::RecordEvent) {
+            self.0 = self.0.saturating_sub(1);
+        }
+        fn stop_requested(&mut self) -> bool {
+            self.0 == 0
+        }
+    }
     let Some(data) = shared("jategaonkar_hfb320_attas/csv/hfb320_1_10.csv") else { return };
     let file = data.display().to_string();
     let m = Mapping::from_path(&workspace().join("mappings/hfb320.toml")).unwrap();
@@ -182,17 +193,21 @@ fn a_record_read_while_fed_replays_bit_identically_and_is_kept_whole() {
     };
     let whole = replay(open_log(&file, None, &m).unwrap(), &m, &opts(Vec::new()), &mut ()).unwrap();
     assert!(rows(&whole).iter().all(|r| r.1.is_some()), "{:?}", rows(&whole));
-    for windows in [Vec::new(), vec![TimeWindow { start_s: 10.0, end_s: 50.0 }]] {
+    let window = vec![TimeWindow { start_s: 10.0, end_s: 50.0 }];
+    for (windows, stop) in [(Vec::new(), usize::MAX), (window, usize::MAX), (Vec::new(), 100)] {
         let o = opts(windows.clone());
-        let from_file = replay(open_log(&file, None, &m).unwrap(), &m, &o, &mut ()).unwrap();
-        let (fed, held) = replay_holding(sendable(), &m, &o, &mut ());
+        let file_run = replay(open_log(&file, None, &m).unwrap(), &m, &o, &mut StopAfter(stop));
+        let from_file = file_run.unwrap();
+        let (fed, held) = replay_holding(sendable(), &m, &o, &mut StopAfter(stop));
         let fed = fed.unwrap();
-        assert_eq!(rows(&fed), rows(&from_file), "{windows:?}");
-        assert_eq!(fed.summary.warnings, from_file.summary.warnings, "{windows:?}");
+        assert_eq!(fed.summary.status, from_file.summary.status, "{windows:?} {stop}");
+        assert_eq!(fed.interrupted(), stop == 100, "{windows:?} {stop}");
+        assert_eq!(rows(&fed), rows(&from_file), "{windows:?} {stop}");
+        assert_eq!(fed.summary.warnings, from_file.summary.warnings, "{windows:?} {stop}");
         let held = held.expect("a 601-row record is kept");
         let again = replay_cached(&held, &m, &opts(Vec::new()), &mut ()).unwrap();
-        assert_eq!(rows(&again), rows(&whole), "{windows:?}");
-        assert_eq!(again.summary.warnings, whole.summary.warnings, "{windows:?}");
+        assert_eq!(rows(&again), rows(&whole), "{windows:?} {stop}");
+        assert_eq!(again.summary.warnings, whole.summary.warnings, "{windows:?} {stop}");
     }
 }
 

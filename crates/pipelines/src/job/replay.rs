@@ -37,10 +37,11 @@ pub struct Prepared {
     pub options: ReplayOptions,
     /// The selection, with `--model auto`.
     pub selection: Option<AutoSelection>,
-    /// The main record read and screened into memory by the face before the feed
-    /// ([`crate::replay::replay_cached`]), which the steps after the feed then read instead of
-    /// the file; `None` (as [`ReplayJob::prepare`] leaves it): they hold it themselves when
-    /// [`Records::holds`] allows.
+    /// The main record read and screened into memory by the face, beside the feed
+    /// ([`crate::replay::replay_holding`]) or before it ([`crate::replay::replay_cached`]),
+    /// which the steps after the feed then read instead of the file; `None` (as
+    /// [`ReplayJob::prepare`] leaves it): they hold it themselves when [`Records::holds`]
+    /// allows.
     pub held: Option<std::sync::Arc<crate::record::cache::ScreenedRecord>>,
 }
 

@@ -124,7 +124,8 @@ impl ScreenedRecord {
             let reading = scope.spawn(move || keep_while_sending(screened, &tx));
             let events = rx.into_iter().flatten();
             let fed = feed(super::staged(Box::new(events), &mapping, notes, stages.0, stages.1));
-            // The feed has let go of the receiver: a reader still sending stops.
+            // The feed has let go of the receiver: a reader not yet at the end goes on
+            // reading (and keeping) without sending.
             (fed, reading.join().ok().flatten())
         });
         let snapshot = |n: &ScreenNotes| n.lock().map(|n| n.clone()).unwrap_or_default();
@@ -169,5 +170,60 @@ impl ScreenedRecord {
         let note = |n: &Vec<String>| -> ScreenNotes { Arc::new(Mutex::new(n.clone())) };
         let notes = [note(&self.notes[0]), note(&self.notes[1])];
         super::staged(Box::new(iter), &self.mapping, notes, compat, windows)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(e: &RecordEvent) -> u64 {
+        match e {
+            RecordEvent::Sample { row, .. }
+            | RecordEvent::Rejected { row, .. }
+            | RecordEvent::Gap { row, .. } => *row,
+        }
+    }
+
+    fn gaps(n: usize) -> Vec<Event> {
+        let gap = |row| RecordEvent::Gap { row, dt_s: 1.0, nominal_dt_s: 0.01 };
+        (0..n as u64).map(|row| Ok(gap(row))).collect()
+    }
+
+    /// A feed that lets go of the events before the end (a receiver dropped, so the first
+    /// batch cannot be sent) leaves the reading going: every event is kept, in order. One it
+    /// took to the end gets them all, in batches, and they are kept too.
+    #[test]
+    fn the_events_are_kept_whole_whether_or_not_the_feed_takes_them_all() {
+        let n = 3 * BATCH + 7;
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Event>>(0);
+        drop(rx);
+        let kept = keep_while_sending(gaps(n).into_iter(), &tx).expect("kept");
+        let rows: Vec<u64> = kept.iter().map(row).collect();
+        assert_eq!(rows, (0..n as u64).collect::<Vec<_>>());
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Event>>(2 * n);
+        let kept = keep_while_sending(gaps(n).into_iter(), &tx).expect("kept");
+        drop(tx);
+        let sent: Vec<u64> = rx.into_iter().flatten().map(|e| row(&e.unwrap())).collect();
+        assert_eq!(sent, (0..n as u64).collect::<Vec<_>>());
+        assert_eq!(kept.len(), n);
+    }
+
+    /// A reading error ends the keeping (the record is read again from its file by whoever
+    /// needs it), whether the feed took the error or had let go before it.
+    #[test]
+    fn a_reading_error_keeps_nothing() {
+        let error = || {
+            let source = std::io::Error::other("disk");
+            Err(aeroident_io::FlightDataError::Io { file: "f.csv".into(), source })
+        };
+        for capacity in [0, 64] {
+            let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Event>>(capacity);
+            if capacity == 0 {
+                drop(rx);
+            }
+            let events = gaps(2 * BATCH).into_iter().chain(std::iter::once(error()));
+            assert!(keep_while_sending(events, &tx).is_none(), "capacity {capacity}");
+        }
     }
 }

@@ -820,9 +820,7 @@ pub fn replay_with<R: Read>(
     make: impl Fn(&ModelSpec) -> Result<Box<dyn Estimator>, BuildError>,
     observer: &mut dyn ReplayObserver,
 ) -> Result<ReplayOutcome, ReplayError> {
-    check_numeric_options(opts)?;
-    crate::window::check_windows(&opts.windows)
-        .map_err(|reason| ReplayError::Option { option: "window", reason })?;
+    check_record_options(opts)?;
     check_spike_screen(opts.spike_screen.as_ref())?;
     let file = reader.file().to_string();
     let events = record_events(reader, opts.spike_screen, opts.compat.as_ref(), &opts.windows);
@@ -844,11 +842,7 @@ pub fn replay_holding<R: Read + Send>(
     opts: &ReplayOptions,
     observer: &mut dyn ReplayObserver,
 ) -> (Result<ReplayOutcome, ReplayError>, Option<crate::record::cache::ScreenedRecord>) {
-    let checked = check_numeric_options(opts)
-        .and_then(|()| {
-            crate::window::check_windows(&opts.windows)
-                .map_err(|reason| ReplayError::Option { option: "window", reason })
-        })
+    let checked = check_record_options(opts)
         .and_then(|()| Ok(check_spike_screen(opts.spike_screen.as_ref())?));
     if let Err(e) = checked {
         return (Err(e), None);
@@ -892,9 +886,7 @@ pub fn replay_cached_with(
     observer: &mut dyn ReplayObserver,
 ) -> Result<ReplayOutcome, ReplayError> {
     record.check_screen(opts.spike_screen)?;
-    check_numeric_options(opts)?;
-    crate::window::check_windows(&opts.windows)
-        .map_err(|reason| ReplayError::Option { option: "window", reason })?;
+    check_record_options(opts)?;
     let events = record.events(opts.compat.as_ref(), &opts.windows);
     replay_events(events, record.file().to_string(), mapping, opts, make, observer)
 }
@@ -963,6 +955,14 @@ pub fn follow(
         }
     }
     run.finish()
+}
+
+/// The options of a replay of a record (file or held in memory), checked before anything is
+/// read: the numeric ones ([`check_numeric_options`]) and the time windows.
+fn check_record_options(opts: &ReplayOptions) -> Result<(), ReplayError> {
+    check_numeric_options(opts)?;
+    crate::window::check_windows(&opts.windows)
+        .map_err(|reason| ReplayError::Option { option: "window", reason })
 }
 
 /// The numeric options of a replay, checked before anything is read or built, each error

@@ -117,8 +117,8 @@ fn stdout_sink(args: &ReplayArgs) -> Box<dyn Write> {
     }
 }
 
-/// The feed's outcome and, when it was read into memory first, the record held
-/// ([`Prepared::held`]).
+/// The feed's outcome and, when the feed held the record in memory (read beside it or
+/// before it), the record held ([`Prepared::held`]).
 type Fed = (ReplayOutcome, Option<Arc<ScreenedRecord>>);
 
 /// Opens the record as the console reads it and replays it with `opts`: the outer error is

@@ -272,50 +272,56 @@ impl AirDataSample {
     /// refusal. Returns the first offending field and its value.
     pub fn first_non_finite(&self) -> Option<(&'static str, f64)> {
         let c = &self.constants;
-        let req = [
-            ("t_s", self.t_s),
-            ("vt_mps", self.vt_mps),
-            ("alpha_rad", self.alpha_rad),
-            ("qbar_pa", self.qbar_pa),
-            ("mass_kg", c.mass_kg),
-            ("S_m2", c.S_m2),
-            ("thrust_arm_m", c.thrust_arm_m),
-            ("thrust_incidence_rad", c.thrust_incidence_rad),
-        ];
-        if let Some(f) = req.iter().find(|(_, v)| !v.is_finite()) {
-            return Some(*f);
+        // Each estimator update runs this: a chain of tests, not a table built per sample
+        // (the table of tuples was a tenth of an RLS update).
+        macro_rules! first_non_finite {
+            ($($name:literal: $v:expr),* $(,)?) => {$(
+                if let Some(v) = $v {
+                    if !f64::is_finite(v) {
+                        return Some(($name, v));
+                    }
+                }
+            )*};
         }
-        let opt = [
-            ("beta_rad", self.beta_rad),
-            ("p_rad_s", self.p_rad_s),
-            ("q_rad_s", self.q_rad_s),
-            ("r_rad_s", self.r_rad_s),
-            ("pdot_rad_s2", self.pdot_rad_s2),
-            ("qdot_rad_s2", self.qdot_rad_s2),
-            ("rdot_rad_s2", self.rdot_rad_s2),
-            ("alphadot_rad_s", self.alphadot_rad_s),
-            ("phi_rad", self.phi_rad),
-            ("theta_rad", self.theta_rad),
-            ("psi_rad", self.psi_rad),
-            ("ax_mps2", self.ax_mps2),
-            ("ay_mps2", self.ay_mps2),
-            ("az_mps2", self.az_mps2),
-            ("de_rad", self.de_rad),
-            ("da_rad", self.da_rad),
-            ("dr_rad", self.dr_rad),
-            ("thrust_n", self.thrust_n),
-            ("throttle", self.throttle),
-            ("thrust_moment_nm", self.thrust_moment_nm),
-            ("rho_kgpm3", self.rho_kgpm3),
-            ("cbar_m", c.cbar_m),
-            ("b_m", c.b_m),
-            ("Ixx_kgm2", c.Ixx_kgm2),
-            ("Iyy_kgm2", c.Iyy_kgm2),
-            ("Izz_kgm2", c.Izz_kgm2),
-            ("Ixz_kgm2", c.Ixz_kgm2),
-            ("v0_mps", c.v0_mps),
-        ];
-        opt.iter().find_map(|(n, v)| v.filter(|x| !x.is_finite()).map(|x| (*n, x)))
+        first_non_finite!(
+            "t_s": Some(self.t_s),
+            "vt_mps": Some(self.vt_mps),
+            "alpha_rad": Some(self.alpha_rad),
+            "qbar_pa": Some(self.qbar_pa),
+            "mass_kg": Some(c.mass_kg),
+            "S_m2": Some(c.S_m2),
+            "thrust_arm_m": Some(c.thrust_arm_m),
+            "thrust_incidence_rad": Some(c.thrust_incidence_rad),
+            "beta_rad": self.beta_rad,
+            "p_rad_s": self.p_rad_s,
+            "q_rad_s": self.q_rad_s,
+            "r_rad_s": self.r_rad_s,
+            "pdot_rad_s2": self.pdot_rad_s2,
+            "qdot_rad_s2": self.qdot_rad_s2,
+            "rdot_rad_s2": self.rdot_rad_s2,
+            "alphadot_rad_s": self.alphadot_rad_s,
+            "phi_rad": self.phi_rad,
+            "theta_rad": self.theta_rad,
+            "psi_rad": self.psi_rad,
+            "ax_mps2": self.ax_mps2,
+            "ay_mps2": self.ay_mps2,
+            "az_mps2": self.az_mps2,
+            "de_rad": self.de_rad,
+            "da_rad": self.da_rad,
+            "dr_rad": self.dr_rad,
+            "thrust_n": self.thrust_n,
+            "throttle": self.throttle,
+            "thrust_moment_nm": self.thrust_moment_nm,
+            "rho_kgpm3": self.rho_kgpm3,
+            "cbar_m": c.cbar_m,
+            "b_m": c.b_m,
+            "Ixx_kgm2": c.Ixx_kgm2,
+            "Iyy_kgm2": c.Iyy_kgm2,
+            "Izz_kgm2": c.Izz_kgm2,
+            "Ixz_kgm2": c.Ixz_kgm2,
+            "v0_mps": c.v0_mps,
+        );
+        None
     }
 
     /// The first field outside the limits of [`PLAUSIBILITY`] (`None` fields are not
@@ -324,43 +330,50 @@ impl AirDataSample {
     pub fn first_implausible(&self) -> Option<(&'static str, f64, f64)> {
         let c = &self.constants;
         let l = &PLAUSIBILITY;
-        let within = |v: f64, lo: f64, hi: f64| v >= lo && v <= hi;
-        let checks: [(&'static str, Option<f64>, f64, f64); 30] = [
-            ("vt_mps", Some(self.vt_mps), f64::MIN_POSITIVE, l.vt_mps),
-            ("qbar_pa", Some(self.qbar_pa), l.qbar_min_pa, l.qbar_max_pa),
-            ("alpha_rad", Some(self.alpha_rad), -l.angle_rad, l.angle_rad),
-            ("beta_rad", self.beta_rad, -l.angle_rad, l.angle_rad),
-            ("phi_rad", self.phi_rad, -l.angle_rad, l.angle_rad),
-            ("theta_rad", self.theta_rad, -l.angle_rad, l.angle_rad),
-            ("p_rad_s", self.p_rad_s, -l.rate_rad_s, l.rate_rad_s),
-            ("q_rad_s", self.q_rad_s, -l.rate_rad_s, l.rate_rad_s),
-            ("r_rad_s", self.r_rad_s, -l.rate_rad_s, l.rate_rad_s),
-            ("pdot_rad_s2", self.pdot_rad_s2, -l.accel_rad_s2, l.accel_rad_s2),
-            ("qdot_rad_s2", self.qdot_rad_s2, -l.accel_rad_s2, l.accel_rad_s2),
-            ("rdot_rad_s2", self.rdot_rad_s2, -l.accel_rad_s2, l.accel_rad_s2),
-            ("alphadot_rad_s", self.alphadot_rad_s, -l.rate_rad_s, l.rate_rad_s),
-            ("ax_mps2", self.ax_mps2, -l.specific_force_mps2, l.specific_force_mps2),
-            ("ay_mps2", self.ay_mps2, -l.specific_force_mps2, l.specific_force_mps2),
-            ("az_mps2", self.az_mps2, -l.specific_force_mps2, l.specific_force_mps2),
-            ("de_rad", self.de_rad, -l.surface_rad, l.surface_rad),
-            ("da_rad", self.da_rad, -l.surface_rad, l.surface_rad),
-            ("dr_rad", self.dr_rad, -l.surface_rad, l.surface_rad),
-            ("thrust_n", self.thrust_n, -l.thrust_n, l.thrust_n),
-            ("thrust_moment_nm", self.thrust_moment_nm, -l.thrust_n * 100.0, l.thrust_n * 100.0),
-            ("rho_kgpm3", self.rho_kgpm3, f64::MIN_POSITIVE, l.rho_kgpm3),
-            ("mass_kg", Some(c.mass_kg), f64::MIN_POSITIVE, l.mass_kg),
-            ("S_m2", Some(c.S_m2), f64::MIN_POSITIVE, l.length_m * l.length_m),
-            ("cbar_m", c.cbar_m, f64::MIN_POSITIVE, l.length_m),
-            ("b_m", c.b_m, f64::MIN_POSITIVE, l.length_m),
-            ("Ixx_kgm2", c.Ixx_kgm2, f64::MIN_POSITIVE, l.inertia_kgm2),
-            ("Iyy_kgm2", c.Iyy_kgm2, f64::MIN_POSITIVE, l.inertia_kgm2),
-            ("Izz_kgm2", c.Izz_kgm2, f64::MIN_POSITIVE, l.inertia_kgm2),
-            ("Ixz_kgm2", c.Ixz_kgm2, -l.inertia_kgm2, l.inertia_kgm2),
-        ];
-        checks.iter().find_map(|(name, v, lo, hi)| {
-            let v = (*v)?;
-            (!within(v, *lo, *hi)).then_some((*name, v, if v < *lo { *lo } else { *hi }))
-        })
+        // A chain of tests, as in `first_non_finite`.
+        macro_rules! first_outside {
+            ($($name:literal: $v:expr, $lo:expr, $hi:expr);* $(;)?) => {$(
+                if let Some(v) = $v {
+                    let (lo, hi): (f64, f64) = ($lo, $hi);
+                    if !(v >= lo && v <= hi) {
+                        return Some(($name, v, if v < lo { lo } else { hi }));
+                    }
+                }
+            )*};
+        }
+        first_outside!(
+            "vt_mps": Some(self.vt_mps), f64::MIN_POSITIVE, l.vt_mps;
+            "qbar_pa": Some(self.qbar_pa), l.qbar_min_pa, l.qbar_max_pa;
+            "alpha_rad": Some(self.alpha_rad), -l.angle_rad, l.angle_rad;
+            "beta_rad": self.beta_rad, -l.angle_rad, l.angle_rad;
+            "phi_rad": self.phi_rad, -l.angle_rad, l.angle_rad;
+            "theta_rad": self.theta_rad, -l.angle_rad, l.angle_rad;
+            "p_rad_s": self.p_rad_s, -l.rate_rad_s, l.rate_rad_s;
+            "q_rad_s": self.q_rad_s, -l.rate_rad_s, l.rate_rad_s;
+            "r_rad_s": self.r_rad_s, -l.rate_rad_s, l.rate_rad_s;
+            "pdot_rad_s2": self.pdot_rad_s2, -l.accel_rad_s2, l.accel_rad_s2;
+            "qdot_rad_s2": self.qdot_rad_s2, -l.accel_rad_s2, l.accel_rad_s2;
+            "rdot_rad_s2": self.rdot_rad_s2, -l.accel_rad_s2, l.accel_rad_s2;
+            "alphadot_rad_s": self.alphadot_rad_s, -l.rate_rad_s, l.rate_rad_s;
+            "ax_mps2": self.ax_mps2, -l.specific_force_mps2, l.specific_force_mps2;
+            "ay_mps2": self.ay_mps2, -l.specific_force_mps2, l.specific_force_mps2;
+            "az_mps2": self.az_mps2, -l.specific_force_mps2, l.specific_force_mps2;
+            "de_rad": self.de_rad, -l.surface_rad, l.surface_rad;
+            "da_rad": self.da_rad, -l.surface_rad, l.surface_rad;
+            "dr_rad": self.dr_rad, -l.surface_rad, l.surface_rad;
+            "thrust_n": self.thrust_n, -l.thrust_n, l.thrust_n;
+            "thrust_moment_nm": self.thrust_moment_nm, -l.thrust_n * 100.0, l.thrust_n * 100.0;
+            "rho_kgpm3": self.rho_kgpm3, f64::MIN_POSITIVE, l.rho_kgpm3;
+            "mass_kg": Some(c.mass_kg), f64::MIN_POSITIVE, l.mass_kg;
+            "S_m2": Some(c.S_m2), f64::MIN_POSITIVE, l.length_m * l.length_m;
+            "cbar_m": c.cbar_m, f64::MIN_POSITIVE, l.length_m;
+            "b_m": c.b_m, f64::MIN_POSITIVE, l.length_m;
+            "Ixx_kgm2": c.Ixx_kgm2, f64::MIN_POSITIVE, l.inertia_kgm2;
+            "Iyy_kgm2": c.Iyy_kgm2, f64::MIN_POSITIVE, l.inertia_kgm2;
+            "Izz_kgm2": c.Izz_kgm2, f64::MIN_POSITIVE, l.inertia_kgm2;
+            "Ixz_kgm2": c.Ixz_kgm2, -l.inertia_kgm2, l.inertia_kgm2;
+        );
+        None
     }
 
     /// The measured coefficients `CX CY CZ CL CD Cl Cm Cn` of this sample (module doc), each

@@ -66,6 +66,22 @@
 //!
 //! `rls::tests::finite_memory_sigma_matches_scatter_for_smoothed_and_differentiated_noise`
 //! checks the three against the Monte Carlo scatter and the known noise variance.
+//!
+//! # Decimation ([`ColouredCovariance`] only)
+//!
+//! The lag sums are most of an update's cost (`O(K p)` against the recursion's `O(p²)`), and
+//! they estimate slowly varying quantities. Every row enters the residual lag products `c(k)`
+//! (so `ρ̂` and its bands see all `N` residuals) and the white part `x_n x_nᵀ` of `M`. The
+//! lagged part `x_n hᵀ + h x_nᵀ`, `h = g_n − x_n`, enters on every [`LAG_STRIDE`]-th row (a
+//! *lag row*) for that row and the `LAG_STRIDE − 1` before it, with their weights as `M` now
+//! holds them, `Σ_{j<LAG_STRIDE} λ^{2j}`; the lag leverage `s_k` sums over the lag rows only.
+//! On the lag rows `M` is then an unbiased estimate of the full sum, whose error is the
+//! sampling error of the regressors' lag products over every `LAG_STRIDE`-th row: small where
+//! the regressors vary slowly over `LAG_STRIDE` samples, as a flight's do at a logging rate of
+//! 20 Hz or more. The truncation lags, the fitted share and `ρ_v` are updated on the lag rows,
+//! and the estimator forms its σ factors there (`crate::rls`). Measured on the default job's
+//! 200-run Monte Carlo at 100 Hz and at 20 Hz (docs/six-axis.md): RLS's estimates unchanged,
+//! their ±2σ coverage and mean σ unchanged within the campaign's sampling error.
 
 #[cfg(feature = "std")]
 pub mod batch;
@@ -74,6 +90,11 @@ use crate::linalg::Square;
 
 /// Most residual lags the recursive correction sums (a ring buffer of this many rows).
 pub const MAX_LAG: usize = 40;
+
+/// Rows per lag row of [`ColouredCovariance`]: the lagged part of `M` and the lag leverage are
+/// formed on every `LAG_STRIDE`-th row, which stands for the rows since the last (module doc,
+/// "Decimation").
+pub const LAG_STRIDE: usize = 4;
 
 /// The last [`MAX_LAG`] values of a sequence, newest first, each stored twice (slot `j` and
 /// `j + MAX_LAG`) so that lags `1..=k` are one contiguous slice: the lag loops, run over every
@@ -109,6 +130,16 @@ impl LagRing {
 /// the white band of a sum, `2√len/√N`: 1.5 makes it a 3σ (99.7 %) test, since up to about
 /// twenty lobes are tested per update and a chance lobe adds its lags to σ.
 pub const LOBE_BAND_FACTOR: f64 = 1.5;
+
+/// `Σ_{j<LAG_STRIDE} λ^{2j}` for `l2 = λ²`: the weight of a lag row's lagged part of `M`.
+fn lag_row_weight(l2: f64) -> f64 {
+    let (mut weight, mut power) = (0.0, 1.0);
+    for _ in 0..LAG_STRIDE {
+        weight += power;
+        power *= l2;
+    }
+    weight
+}
 
 /// The 95 % band `2/√n` of the normalised autocorrelation of `n` white samples.
 pub fn white_band(n: f64) -> f64 {
@@ -152,14 +183,27 @@ impl Autocorrelation {
     /// before the first whose `|ρ̂(k)|` falls inside the white band `2/√N`; and the end of the
     /// last significant lobe ([`Self::last_significant_lag`]).
     pub fn add(&mut self, v: f64, lambda: f64) {
+        self.accumulate(v, lambda);
+        self.update_truncation();
+    }
+
+    /// Adds residual `v` to the lag products without updating the truncation lags (a caller
+    /// that needs them only now and then calls [`Self::update_truncation`] then).
+    fn accumulate(&mut self, v: f64, lambda: f64) {
         let avail = self.filled.min(MAX_LAG);
         self.c[0] = lambda * self.c[0] + v * v;
         for (c, r) in self.c[1..=avail].iter_mut().zip(self.residuals.lags(avail)) {
             *c = lambda * *c + v * r;
         }
         self.n_res = lambda * self.n_res + 1.0;
-        (self.lag, self.last_lag) = self.truncation(avail);
         self.push(v);
+    }
+
+    /// Sets [`Self::lag`] and [`Self::last_significant_lag`] from the products so far.
+    fn update_truncation(&mut self) {
+        // The residual just pushed is lag 1 of the next one: the lags formed are one fewer.
+        let avail = self.filled.saturating_sub(1).min(MAX_LAG);
+        (self.lag, self.last_lag) = self.truncation(avail);
     }
 
     /// The truncation lag `K` and the end of the last significant lobe for lags `1..=avail`
@@ -256,8 +300,12 @@ pub struct ColouredCovariance<const C: usize> {
     leverage: [f64; MAX_LAG + 1],
     /// λ-weighted number of rows, `N_eff`.
     n_eff: f64,
-    /// Fitted share `r = tr(P M)/N_eff` of the last update.
+    /// Fitted share `r = tr(P M)/N_eff` of the last lag row.
     fitted: f64,
+    /// Rows since the last lag row, modulo [`LAG_STRIDE`] (0: the last row was one).
+    phase: usize,
+    /// `λ` to the number of rows since the leverage was last decayed.
+    decay: f64,
 }
 
 impl<const C: usize> ColouredCovariance<C> {
@@ -272,33 +320,50 @@ impl<const C: usize> ColouredCovariance<C> {
             leverage: [0.0; MAX_LAG + 1],
             n_eff: 0.0,
             fitted: 0.0,
+            phase: 0,
+            decay: 1.0,
         }
     }
 
     /// Adds regressor row `x` (leading `n` entries) with its residual `v` and forgetting factor
     /// `λ`. `fit = Some((v, P))` once the fit is initialised (`P` its current inverse
     /// information, leading `n × n` block); `None` before: the row enters `M` as white.
+    ///
+    /// Every row enters the residual lag products and the white part `x xᵀ` of `M`; every
+    /// [`LAG_STRIDE`]-th row (a *lag row*, [`Self::lag_row`]) also enters the lag leverage and,
+    /// weighted for the [`LAG_STRIDE`] rows it stands for, the lagged part of `M` (module doc,
+    /// "Decimation").
     pub fn add(&mut self, x: &[f64; C], fit: Option<(f64, &Square<C>)>, lambda: f64) {
         let n = self.n;
         self.n_eff = lambda * self.n_eff + 1.0;
+        self.decay *= lambda;
         let avail = self.filled.min(MAX_LAG);
-        let k_max = match fit {
+        self.phase = (self.phase + 1) % LAG_STRIDE;
+        let lagged = match fit {
             Some((v, p)) => {
-                self.fitted = (self.trace_pm(p) / self.n_eff).clamp(0.0, 1.0);
-                self.add_leverage(x, p, lambda, avail);
-                self.acf.add(v, lambda);
-                self.acf.last_significant_lag()
+                self.acf.accumulate(v, lambda);
+                (self.phase == 0).then(|| {
+                    self.fitted = (self.trace_pm(p) / self.n_eff).clamp(0.0, 1.0);
+                    self.add_leverage(x, p, avail);
+                    self.acf.update_truncation();
+                    self.lagged_sum(lambda, self.acf.last_significant_lag().min(avail))
+                })
             }
             None => {
                 self.acf.push(0.0);
-                0
+                None
             }
         };
-        let g = self.lagged_sum(x, lambda, k_max);
         let l2 = lambda * lambda;
+        let h = lagged.unwrap_or([0.0; C]);
+        // The lag row stands for itself and the `LAG_STRIDE − 1` rows before it, each as `M`
+        // would now hold it: weight `Σ_{j<LAG_STRIDE} λ^{2j}`, so that `M` is unbiased on
+        // the lag rows, where the σ are formed (module doc, "Decimation").
+        let weight = if lagged.is_some() { lag_row_weight(l2) } else { 0.0 };
         for a in 0..n {
             for b in a..n {
-                let v = l2 * self.m[a][b] + x[a] * g[b] + g[a] * x[b] - x[a] * x[b];
+                let lag = weight * (x[a] * h[b] + h[a] * x[b]);
+                let v = l2 * self.m[a][b] + x[a] * x[b] + lag;
                 self.m[a][b] = v;
                 self.m[b][a] = v;
             }
@@ -309,17 +374,26 @@ impl<const C: usize> ColouredCovariance<C> {
         self.filled += 1;
     }
 
-    /// Lag leverage `s_k = Σ_i λ^{n−i} x_iᵀ P x_{i−k}`, `k = 0..=avail`, with row `x` added.
-    fn add_leverage(&mut self, x: &[f64; C], p: &Square<C>, lambda: f64, avail: usize) {
+    /// Whether the last [`Self::add`] was a lag row (its lagged part of `M` entered).
+    pub fn lag_row(&self) -> bool {
+        self.phase == 0
+    }
+
+    /// Lag leverage `s_k = Σ λ^{n−i} x_iᵀ P x_{i−k}`, `k = 0..=avail`, over the lag rows, with
+    /// lag row `x` added (the weight [`LAG_STRIDE`] is common to every `s_k` and cancels in
+    /// `ρ_H(k) = s_k/s_0`).
+    fn add_leverage(&mut self, x: &[f64; C], p: &Square<C>, avail: usize) {
         let n = self.n;
         let mut px = [0.0; C];
         for a in 0..n {
             px[a] = (0..n).map(|b| p[a][b] * x[b]).sum();
         }
-        self.leverage[0] = lambda * self.leverage[0] + (0..n).map(|a| px[a] * x[a]).sum::<f64>();
+        let decay = self.decay;
+        self.decay = 1.0;
+        self.leverage[0] = decay * self.leverage[0] + (0..n).map(|a| px[a] * x[a]).sum::<f64>();
         let lagged = &mut self.leverage[1..=avail];
         for s in lagged.iter_mut() {
-            *s *= lambda;
+            *s *= decay;
         }
         for (column, &pa) in self.columns[..n].iter().zip(&px) {
             for (s, xa) in lagged.iter_mut().zip(column.lags(avail)) {
@@ -328,9 +402,9 @@ impl<const C: usize> ColouredCovariance<C> {
         }
     }
 
-    /// `g = x + Σ_{k=1..K} ρ_v(k) λ^k x_{n−k}` with `ρ_v(k) = (1 − r) ρ̂(k) + r ρ_H(k)` (module
-    /// doc), the rows before `x` from the ring.
-    fn lagged_sum(&self, x: &[f64; C], lambda: f64, k_max: usize) -> [f64; C] {
+    /// `h = Σ_{k=1..K} ρ_v(k) λ^k x_{n−k}` with `ρ_v(k) = (1 − r) ρ̂(k) + r ρ_H(k)` (module
+    /// doc; `g = x + h`), the rows before the current one from the ring.
+    fn lagged_sum(&self, lambda: f64, k_max: usize) -> [f64; C] {
         let r = self.fitted;
         // Reciprocals once: a division per lag would be the loop's latency.
         let s0 = self.leverage[0];
@@ -344,13 +418,11 @@ impl<const C: usize> ColouredCovariance<C> {
             let rho_v = (1.0 - r) * c[k + 1] * inv_c0 + r * self.leverage[k + 1] * inv_s0;
             *wk = rho_v * lk;
         }
-        let mut g = [0.0; C];
-        for a in 0..self.n {
-            let lagged: f64 =
-                w[..k_max].iter().zip(self.columns[a].lags(k_max)).map(|(w, x)| w * x).sum();
-            g[a] = x[a] + lagged;
+        let mut h = [0.0; C];
+        for (ha, column) in h.iter_mut().zip(&self.columns[..self.n]) {
+            *ha = w[..k_max].iter().zip(column.lags(k_max)).map(|(w, x)| w * x).sum();
         }
-        g
+        h
     }
 
     /// Re-opens the memory after a change test's alarm (`crate::change`): the rows before the

@@ -119,16 +119,22 @@ impl Regression {
         }
     }
 
-    /// The regressor row `φ` of sample `s` (leading `n` entries).
+    /// The regressor row `φ` of sample `s`, written into the leading `n` entries of `phi` (in
+    /// place: the row is 26 values, and copying it per fit and sample was a tenth of an RLS
+    /// update).
     ///
     /// # Errors
-    /// [`EstimatorError::NonFiniteInput`] when a term's channel is absent.
-    pub(crate) fn regressors(&self, s: &AirDataSample) -> Result<[f64; N_TERMS], EstimatorError> {
-        let mut phi = [0.0; N_TERMS];
+    /// [`EstimatorError::NonFiniteInput`] when a term's channel is absent; `phi` is then
+    /// partly written.
+    pub(crate) fn fill_regressors(
+        &self,
+        s: &AirDataSample,
+        phi: &mut [f64; N_TERMS],
+    ) -> Result<(), EstimatorError> {
         for k in 0..self.n {
             phi[k] = regressor(self.terms[k], s, &self.knots)?;
         }
-        Ok(phi)
+        Ok(())
     }
 }
 
@@ -186,6 +192,9 @@ pub(crate) struct Fit {
     n_eff: f64,
     rss: f64,
     coloured: ColouredCovariance<N_TERMS>,
+    /// The coloured-residual variance factors `f_k` and `tr(P M)` of [`Self::refresh_colour`].
+    factor: [f64; N_TERMS],
+    trace_pm: f64,
 }
 
 impl Fit {
@@ -205,6 +214,8 @@ impl Fit {
             n_eff: 0.0,
             rss: 0.0,
             coloured: ColouredCovariance::new(reg.n),
+            factor: [1.0; N_TERMS],
+            trace_pm: 0.0,
         }
     }
 
@@ -297,15 +308,24 @@ impl Fit {
         self.rss = w * self.rss + rss_run.max(0.0);
         self.n_eff = w * (self.n_eff - short.count) + short.count;
         self.coloured.reopen(w, &short.a, short.count);
+        self.refresh_colour();
         Ok(())
     }
 
-    /// `f_k` of [`Self::cov`]: the sandwich variance over the white one, 1 where the truncated
-    /// sum gives a non-positive or non-finite variance.
-    fn variance_factor(&self, s2: f64, k: usize) -> f64 {
-        let c = self.coloured.covariance(&self.p, s2, k, k);
-        let w = s2 * self.p[k][k];
-        if c > 0.0 && c.is_finite() && w > 0.0 { c / w } else { 1.0 }
+    /// Sets `f_k` of [`Self::cov`], the sandwich variance over the white one, `(P M P)_kk /
+    /// P_kk` (`σ̂²` cancels), for every parameter (1 where the truncated sum gives a
+    /// non-positive or non-finite variance), and the degrees of freedom `tr(P M)` the fit
+    /// takes from the residual sum ([`CoefficientFit::residual_variance`]). Called where `M`
+    /// takes its lagged part (the lag rows, `crate::coloured`, "Decimation"), at the
+    /// initialisation and after a re-opening; between them `P_kk` and the residual sum move
+    /// every row and these are kept: both change over the memory, not over four rows.
+    fn refresh_colour(&mut self) {
+        for k in 0..self.reg.n {
+            let c = self.coloured.covariance(&self.p, 1.0, k, k);
+            let w = self.p[k][k];
+            self.factor[k] = if c > 0.0 && c.is_finite() && w > 0.0 { c / w } else { 1.0 };
+        }
+        self.trace_pm = self.coloured.trace_pm(&self.p);
     }
 }
 
@@ -352,6 +372,7 @@ impl CoefficientFit for Fit {
                         self.p = p;
                         self.rss = (self.info_yy - bt).max(0.0);
                         self.initialised = true;
+                        self.refresh_colour();
                     }
                 }
             }
@@ -393,6 +414,9 @@ impl CoefficientFit for Fit {
         self.count += 1;
         // A-posteriori residual y − φᵀθ_n = e λ / denom.
         self.coloured.add(phi, Some((e * lambda / denom, &self.p)), lambda);
+        if self.coloured.lag_row() {
+            self.refresh_colour();
+        }
         self.test_change(phi, y, lambda, t_s)
     }
 
@@ -409,13 +433,13 @@ impl CoefficientFit for Fit {
     /// `σ̂² P_ij √(f_i f_j)`, `f_i` = sandwich variance / `σ̂² P_ii`. Falls back to `σ̂² P` when
     /// the truncated sum gives a non-positive variance.
     fn cov(&self, s2: f64, i: usize, j: usize) -> f64 {
-        s2 * self.p[i][j] * libm::sqrt(self.variance_factor(s2, i) * self.variance_factor(s2, j))
+        s2 * self.p[i][j] * libm::sqrt(self.factor[i] * self.factor[j])
     }
 
-    /// Variance of parameter `k`, `cov(s2, k, k)` with the factor formed once: in binary
+    /// Variance of parameter `k`, `cov(s2, k, k)` with the factor read once: in binary
     /// floating point `√(f·f) = f` exactly, so the value is the same to the bit.
     fn variance(&self, s2: f64, k: usize) -> f64 {
-        s2 * self.p[k][k] * self.variance_factor(s2, k)
+        s2 * self.p[k][k] * self.factor[k]
     }
 
     fn take_change(&mut self) -> Option<f64> {
@@ -424,7 +448,7 @@ impl CoefficientFit for Fit {
 
     fn residual_variance(&self) -> Option<f64> {
         // E[RSS] = σ²(N_eff − tr(P M)) (crate::coloured, "Finite memory").
-        let dof = self.n_eff - self.coloured.trace_pm(&self.p);
+        let dof = self.n_eff - self.trace_pm;
         (self.initialised && dof > 0.0 && self.n_eff > self.reg.n as f64).then(|| self.rss / dof)
     }
 }
@@ -472,18 +496,18 @@ pub(crate) fn update_fits<F: CoefficientFit>(
     }
     check_finite(s)?;
     let measured = s.measured_coefficients();
+    // Rows in the fits' order (the fits are indexed by coefficient, at most one each).
     let mut rows = [([0.0; N_TERMS], 0.0); 8];
-    for f in fits.iter().flatten() {
-        let c = f.regression().coefficient;
-        let y = measured_coefficient(s, &measured, c)?;
-        rows[c.index()] = (f.regression().regressors(s)?, y);
+    for (f, row) in fits.iter().flatten().zip(rows.iter_mut()) {
+        let reg = f.regression();
+        row.1 = measured_coefficient(s, &measured, reg.coefficient)?;
+        reg.fill_regressors(s, &mut row.0)?;
     }
     // Each fit's update is atomic (computed, checked, then committed). A numerical failure
     // after finite inputs means overflow: the estimator has diverged and says so, rather
     // than carrying a copy of every fit to roll back.
-    for f in fits.iter_mut().flatten() {
-        let (phi, y) = rows[f.regression().coefficient.index()];
-        if let Err(e) = f.update(&phi, y, lambda, init_samples, s.t_s) {
+    for (f, (phi, y)) in fits.iter_mut().flatten().zip(&rows) {
+        if let Err(e) = f.update(phi, *y, lambda, init_samples, s.t_s) {
             est.status = Status::Diverged;
             return Err(e);
         }

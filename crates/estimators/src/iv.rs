@@ -271,22 +271,22 @@ impl IvFit {
         if !(denom.is_finite() && denom.abs() > f64::EPSILON * lambda) {
             return Err(EstimatorError::Numerical { what: "RLS-IV gain denominator", t_s });
         }
-        let (mut theta, mut p) = (self.theta, self.p);
+        // In place, as least squares' update (`crate::rls`): a non-finite result on finite
+        // inputs is an overflow, a divergence the caller reports, so no copy of `P` (26 × 26,
+        // most of a sample's memory traffic) is kept to roll back.
         let mut check = 0.0;
         for i in 0..n {
             let ki = pz[i] / denom;
-            theta[i] += ki * e;
-            check += theta[i];
+            self.theta[i] += ki * e;
+            check += self.theta[i];
             for j in 0..n {
-                p[i][j] = (p[i][j] - ki * phip[j]) / lambda;
-                check += p[i][j];
+                self.p[i][j] = (self.p[i][j] - ki * phip[j]) / lambda;
+                check += self.p[i][j];
             }
         }
         if !check.is_finite() {
             return Err(EstimatorError::Numerical { what: "RLS-IV update", t_s });
         }
-        self.theta = theta;
-        self.p = p;
         Ok(e * lambda / denom)
     }
 
@@ -320,7 +320,9 @@ impl CoefficientFit for IvFit {
         &self.reg
     }
 
-    /// One update; returns `Err` (state unchanged) on a numerical failure.
+    /// One update; returns `Err` on a numerical failure: with the state unchanged when the
+    /// gain's denominator fails, and after an overflow of the update, a divergence
+    /// ([`update_fits`] marks the estimator diverged; nothing is rolled back).
     fn update(
         &mut self,
         phi: &[f64; N_TERMS],
@@ -373,6 +375,12 @@ impl CoefficientFit for IvFit {
         } else {
             s2 * self.white_cov(i, j)
         }
+    }
+
+    /// `cov(s2, k, k)` with the sandwich formed once instead of twice (the same value).
+    fn variance(&self, s2: f64, k: usize) -> f64 {
+        let v = self.coloured.covariance(&self.p, s2, k, k);
+        if v > 0.0 && v.is_finite() { v } else { s2 * self.white_cov(k, k) }
     }
 }
 

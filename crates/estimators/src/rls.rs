@@ -144,8 +144,8 @@ impl Regression {
 pub(crate) trait CoefficientFit {
     /// The regression fitted.
     fn regression(&self) -> &Regression;
-    /// One sample's row `φ` and measured coefficient `y`, with forgetting `λ`; `Err` (state
-    /// unchanged) on a numerical failure.
+    /// One sample's row `φ` and measured coefficient `y`, with forgetting `λ`; `Err` on a
+    /// numerical failure, after which [`update_fits`] marks the estimator diverged.
     fn update(
         &mut self,
         phi: &[f64; N_TERMS],
@@ -334,7 +334,9 @@ impl CoefficientFit for Fit {
         &self.reg
     }
 
-    /// One update; returns `Err` (state unchanged) on a numerical failure.
+    /// One update; returns `Err` on a numerical failure: with the state unchanged when the
+    /// gain's denominator fails, and after an overflow of the update, a divergence
+    /// ([`update_fits`] marks the estimator diverged; nothing is rolled back).
     fn update(
         &mut self,
         phi: &[f64; N_TERMS],

@@ -435,8 +435,11 @@ pub struct Ekf {
     nx: usize,
     np: usize,
     z: [f64; MAX_AUG],
-    p: Square,
-    work: Square,
+    /// The committed covariance `P` (`cov[front]`) and the step's working copy (the other):
+    /// a step writes the whole working block, and its commit swaps the roles instead of
+    /// copying the 56 × 56 block back.
+    cov: [Square; 2],
+    front: usize,
     lin: Linearisation,
     last: Option<ModelInputs>,
     pending_init: bool,
@@ -518,6 +521,13 @@ fn reanchor(p: &mut Square, k: usize, target: f64) -> bool {
     }
     p[k][k] += add * (1.0 + 1e-9);
     true
+}
+
+/// The committed covariance `cov[front]` to read and the working one to write, at once (a
+/// function of the field, so that the rest of the filter stays borrowable).
+fn committed_and_work(cov: &mut [Square; 2], front: usize) -> (&Square, &mut Square) {
+    let [a, b] = cov;
+    if front == 0 { (a, b) } else { (b, a) }
 }
 
 /// Re-anchoring of an output that is not a state (module doc): scales the rows and columns of
@@ -602,6 +612,33 @@ fn nonneg(field: &'static str, v: f64) -> Result<(), EstimatorError> {
 }
 
 impl Ekf {
+    /// The committed covariance `P` of the augmented state.
+    fn p(&self) -> &Square {
+        &self.cov[self.front]
+    }
+
+    /// The committed covariance, to change in place (re-initialisation, drift).
+    fn p_mut(&mut self) -> &mut Square {
+        &mut self.cov[self.front]
+    }
+
+    /// The step's working covariance (predicted, then corrected; committed by
+    /// [`Self::commit_covariance`]).
+    fn work(&self) -> &Square {
+        &self.cov[1 - self.front]
+    }
+
+    /// The working covariance, to change in place.
+    fn work_mut(&mut self) -> &mut Square {
+        &mut self.cov[1 - self.front]
+    }
+
+    /// Makes the working covariance the committed one (the old one becomes the next step's
+    /// working block, which the next prediction writes whole).
+    fn commit_covariance(&mut self) {
+        self.front = 1 - self.front;
+    }
+
     /// A new filter; it initialises its states from the first sample.
     ///
     /// # Errors
@@ -672,8 +709,8 @@ impl Ekf {
             nx,
             np,
             z,
-            p,
-            work: [[0.0; MAX_AUG]; MAX_AUG],
+            cov: [p, [[0.0; MAX_AUG]; MAX_AUG]],
+            front: 0,
             lin: Linearisation::default(),
             last: None,
             pending_init: true,
@@ -763,7 +800,7 @@ impl Ekf {
     /// The filter σ of parameter `i` (square root of its diagonal of `P`), whether identified
     /// or not.
     pub fn filter_sigma(&self, i: usize) -> Option<f64> {
-        (i < self.np).then(|| libm::sqrt(self.p[self.nx + i][self.nx + i].max(0.0)))
+        (i < self.np).then(|| libm::sqrt(self.p()[self.nx + i][self.nx + i].max(0.0)))
     }
 
     /// The coloured-innovation variance factor of each output, `1 + 2 Σ_{k≤K} ρ̂_o(k)` of its
@@ -833,17 +870,10 @@ impl Ekf {
                 if !identified {
                     continue;
                 }
-                match self.drift.step(
-                    i,
-                    self.z[k],
-                    self.uptake[i],
-                    self.p[k][k],
-                    factor[i],
-                    h,
-                    sigma,
-                ) {
+                let p_kk = self.p()[k][k];
+                match self.drift.step(i, self.z[k], self.uptake[i], p_kk, factor[i], h, sigma) {
                     (_, Some(add)) => {
-                        self.p[k][k] += add;
+                        self.p_mut()[k][k] += add;
                         self.alarms[i] = self.alarms[i].saturating_add(1);
                         let name = self.cfg.structure.param(i).map_or("?", |p| p.name());
                         self.events.push(t_s, EventKind::ChangeDetected, name);
@@ -973,14 +1003,14 @@ impl Ekf {
             let measured = Output::ALL[i].measured(s).filter(|_| !unmeasured[i]);
             self.z[k] = measured.unwrap_or(0.0);
             for j in 0..n {
-                self.p[k][j] = 0.0;
-                self.p[j][k] = 0.0;
+                self.p_mut()[k][j] = 0.0;
+                self.p_mut()[j][k] = 0.0;
             }
             let s0 = match measured {
                 Some(_) => self.cfg.state_sigma0[i],
                 None => self.cfg.state_sigma0[i].max(UNMEASURED_STATE_SIGMA0),
             };
-            self.p[k][k] = s0 * s0;
+            self.p_mut()[k][k] = s0 * s0;
         }
         self.last = Some(u);
         self.pending_init = false;
@@ -1050,8 +1080,7 @@ impl Ekf {
                 *gij = lin.dfdtheta[i][j] * dt + 0.5 * ab * dt * dt;
             }
         }
-        let p = &self.p;
-        let w = &mut self.work;
+        let (p, w) = committed_and_work(&mut self.cov, self.front);
         // Pθθ unchanged.
         for i in nx..n {
             w[i][nx..n].copy_from_slice(&p[i][nx..n]);
@@ -1150,7 +1179,7 @@ impl Ekf {
         let of = self.output_factors();
         for i in 0..self.np {
             let factor = self.sigma_factor_of(i, &of);
-            let var = self.p[nx + i][nx + i].max(0.0);
+            let var = self.p()[nx + i][nx + i].max(0.0);
             let sf = libm::sqrt(var);
             if sf < 0.5 * self.cfg.priors.prior[i].sigma {
                 self.identified[i] = true;
@@ -1220,7 +1249,7 @@ impl Estimator for Ekf {
 
     fn covariance(&self, i: usize, j: usize) -> Option<f64> {
         (i < self.np && j < self.np).then(|| {
-            self.p[self.nx + i][self.nx + j]
+            self.p()[self.nx + i][self.nx + j]
                 * libm::sqrt(self.sigma_factor(i) * self.sigma_factor(j))
         })
     }

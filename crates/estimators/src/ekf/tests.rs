@@ -345,7 +345,7 @@ fn new_manoeuvre_reinitialises_states_and_keeps_parameters() {
         assert_eq!(ekf.filter_sigma(i).unwrap(), sig[i]);
         // State–parameter cross covariance restarts at 0.
         for k in 0..ekf.nx {
-            assert_eq!(ekf.p[k][ekf.nx + i], 0.0);
+            assert_eq!(ekf.p()[k][ekf.nx + i], 0.0);
         }
     }
     // And it runs on from there (no dt across the gap is integrated).

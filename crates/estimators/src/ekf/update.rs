@@ -99,7 +99,7 @@ impl Ekf {
         let (nx, np) = (self.nx, self.np);
         let mut p_pred = [0.0; MAX_PARAMS];
         for (i, v) in p_pred.iter_mut().enumerate().take(np) {
-            *v = self.work[nx + i][nx + i];
+            *v = self.work()[nx + i][nx + i];
         }
         Pending {
             z,
@@ -141,7 +141,7 @@ impl Ekf {
                     *a = q.forget * b;
                     q.tot[k] += *a;
                 }
-                q.p_prior[k] = self.work[k][k];
+                q.p_prior[k] = self.work()[k][k];
                 q.own_on[k] = self.cfg.adaptive_q_own_lags[self.model.state_set().states()[k]];
             }
         }
@@ -184,7 +184,7 @@ impl Ekf {
                 yhat += h[j] * (pd.z[j] - pd.z_pred[j]);
             }
         }
-        let mut hph = change::p_times_row(&self.work, unit, &h, n, &mut ph);
+        let mut hph = change::p_times_row(self.work(), unit, &h, n, &mut ph);
         let mut sv = hph + pd.r_var[oi];
         if !(sv > 0.0 && sv.is_finite()) {
             return Err(self.diverge("EKF innovation variance not positive", s.t_s));
@@ -192,7 +192,7 @@ impl Ekf {
         let e = y - yhat;
         let reanchored = self.try_reanchor(oi, unit, &h, e, sv, pd);
         if reanchored {
-            hph = change::p_times_row(&self.work, unit, &h, n, &mut ph);
+            hph = change::p_times_row(self.work(), unit, &h, n, &mut ph);
             sv = hph + pd.r_var[oi];
         }
         if e.is_nan() || libm::fabs(e) > self.cfg.gate_sigmas * libm::sqrt(sv) {
@@ -237,10 +237,10 @@ impl Ekf {
             && pd.counts.consecutive[oi] + 1 >= self.cfg.reanchor_after
             && e * e > gate2 * sv
             && match unit {
-                Some(k) => reanchor(&mut self.work, k, target),
+                Some(k) => reanchor(self.work_mut(), k, target),
                 None => {
                     (0..self.np).all(|i| h[nx + i] == 0.0 || self.settled(i))
-                        && reanchor_parameters(&mut self.work, h, nx, n, target)
+                        && reanchor_parameters(self.work_mut(), h, nx, n, target)
                 }
             };
         if done {
@@ -333,7 +333,7 @@ impl Ekf {
         for (ki, phi) in k[..n].iter_mut().zip(&ph[..n]) {
             *ki = phi * inv;
         }
-        let w = &mut self.work;
+        let w = self.work_mut();
         for i in 0..n {
             let (row, ki, phi) = (&mut w[i], k[i], ph[i]);
             for (wij, phj) in row[..=i].iter_mut().zip(&ph[..=i]) {
@@ -356,9 +356,9 @@ impl Ekf {
         t_s: f64,
     ) -> Result<(), EstimatorError> {
         let n = self.nx + self.np;
+        let work = self.work();
         let finite = z[..n].iter().all(|v| v.is_finite())
-            && (0..n)
-                .all(|i| self.work[i][i] > 0.0 && self.work[i][..n].iter().all(|v| v.is_finite()));
+            && (0..n).all(|i| work[i][i] > 0.0 && work[i][..n].iter().all(|v| v.is_finite()));
         let ss = self.model.state_set();
         let states = ss.states();
         let get = |i: usize| states.iter().position(|&j| j == i).map(|k| z[k]);
@@ -378,13 +378,11 @@ impl Ekf {
     /// statistics and the innovations' whiteness and information.
     pub(super) fn commit(&mut self, pd: Pending, t_s: f64, dt: f64) {
         let (nx, np) = (self.nx, self.np);
-        let n = nx + np;
         self.z = pd.z;
-        for i in 0..n {
-            self.p[i][..n].copy_from_slice(&self.work[i][..n]);
-        }
+        self.commit_covariance();
+        let front = self.front;
         for (i, u) in self.uptake.iter_mut().enumerate().take(np) {
-            u.add(pd.p_pred[i], self.p[nx + i][nx + i]);
+            u.add(pd.p_pred[i], self.cov[front][nx + i][nx + i]);
         }
         let LockOutCounts { rejections, consecutive, reanchors, new_reanchor } = pd.counts;
         self.consecutive = consecutive;

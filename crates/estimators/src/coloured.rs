@@ -35,8 +35,9 @@
 //!
 //! `σ̂²` is the estimator's own residual variance. A ring buffer holds the last [`MAX_LAG`]
 //! regressor rows and residuals, so each update costs `O(K p + p²)` and allocates nothing. Each
-//! pair is weighted with the `ρ̂(k)` current when its later member arrives (the batch formula
-//! uses the final `ρ̂`); once `ρ̂` has settled the two agree (tests). With `λ = 1` and white
+//! pair is weighted with the `ρ̂(k)` of the last lag row when its later member arrives
+//! ("Decimation" below; the batch formula uses the final `ρ̂`); once `ρ̂` has settled the two
+//! agree (tests). With `λ = 1` and white
 //! residuals (`K = 0`) `M_n = P_n⁻¹` and the covariance is exactly `σ̂² P_n`; with `λ < 1` the
 //! `λ²` weighting of `M` is the variance of the exponentially weighted estimate, about half
 //! of `σ̂² P_n` for a memory of many samples.
@@ -69,19 +70,21 @@
 //!
 //! # Decimation ([`ColouredCovariance`] only)
 //!
-//! The lag sums are most of an update's cost (`O(K p)` against the recursion's `O(p²)`), and
-//! they estimate slowly varying quantities. Every row enters the residual lag products `c(k)`
-//! (so `ρ̂` and its bands see all `N` residuals) and the white part `x_n x_nᵀ` of `M`. The
-//! lagged part `x_n hᵀ + h x_nᵀ`, `h = g_n − x_n`, enters on every [`LAG_STRIDE`]-th row (a
-//! *lag row*) for that row and the `LAG_STRIDE − 1` before it, with their weights as `M` now
-//! holds them, `Σ_{j<LAG_STRIDE} λ^{2j}`; the lag leverage `s_k` sums over the lag rows only.
-//! On the lag rows `M` is then an unbiased estimate of the full sum, whose error is the
-//! sampling error of the regressors' lag products over every `LAG_STRIDE`-th row: small where
-//! the regressors vary slowly over `LAG_STRIDE` samples, as a flight's do at a logging rate of
-//! 20 Hz or more. The truncation lags, the fitted share and `ρ_v` are updated on the lag rows,
-//! and the estimator forms its σ factors there (`crate::rls`). Measured on the default job's
-//! 200-run Monte Carlo at 100 Hz and at 20 Hz (docs/six-axis.md): RLS's estimates unchanged,
-//! their ±2σ coverage and mean σ unchanged within the campaign's sampling error.
+//! The lag sums are most of an update's cost (`O(K p)` against the recursion's `O(p²)`). What
+//! changes slowly is formed on every [`LAG_STRIDE`]-th row (a *lag row*): the lag leverage
+//! `s_k` (summed over the lag rows only), the truncation lags, the fitted share `r` and the lag
+//! weights `w_k = ρ_v(k) λ^k`, and the estimator's σ factors (`crate::rls`). What carries the
+//! data is formed on every row: the residual lag products `c(k)` (so `ρ̂` and its white bands
+//! see every residual) and `M` itself, `x_n x_nᵀ + x_n hᵀ + h x_nᵀ` with `h = Σ w_k x_{n−k}` from
+//! the last lag row's weights. Forming `M`'s lagged part only on the lag rows (weighted for the
+//! rows between) was tried first: with rough regressors (white, or AR(1) with a negative
+//! coefficient) and strongly coloured residuals its sampling noise made the sandwich fall back
+//! to the white `σ̂² P` in up to a quarter of the runs and took the ±2σ coverage from 96 % to
+//! 93 % (`rls::tests::coloured_sigma_holds_with_white_regressors_and_a_short_memory`).
+//! Measured on the default job's 200-run Monte Carlo at 100 Hz and at 20 Hz
+//! (docs/uncertainty.md, "RLS coloured σ: the slow parts on every fourth row"): RLS's
+//! estimates unchanged, their ±2σ coverage and mean σ unchanged within the campaign's
+//! sampling error.
 
 #[cfg(feature = "std")]
 pub mod batch;
@@ -91,8 +94,8 @@ use crate::linalg::Square;
 /// Most residual lags the recursive correction sums (a ring buffer of this many rows).
 pub const MAX_LAG: usize = 40;
 
-/// Rows per lag row of [`ColouredCovariance`]: the lagged part of `M` and the lag leverage are
-/// formed on every `LAG_STRIDE`-th row, which stands for the rows since the last (module doc,
+/// Rows per lag row of [`ColouredCovariance`]: the lag leverage, the truncation lags, the
+/// fitted share and the lag weights are formed on every `LAG_STRIDE`-th row (module doc,
 /// "Decimation").
 pub const LAG_STRIDE: usize = 4;
 
@@ -130,16 +133,6 @@ impl LagRing {
 /// the white band of a sum, `2√len/√N`: 1.5 makes it a 3σ (99.7 %) test, since up to about
 /// twenty lobes are tested per update and a chance lobe adds its lags to σ.
 pub const LOBE_BAND_FACTOR: f64 = 1.5;
-
-/// `Σ_{j<LAG_STRIDE} λ^{2j}` for `l2 = λ²`: the weight of a lag row's lagged part of `M`.
-fn lag_row_weight(l2: f64) -> f64 {
-    let (mut weight, mut power) = (0.0, 1.0);
-    for _ in 0..LAG_STRIDE {
-        weight += power;
-        power *= l2;
-    }
-    weight
-}
 
 /// The 95 % band `2/√n` of the normalised autocorrelation of `n` white samples.
 pub fn white_band(n: f64) -> f64 {
@@ -302,6 +295,9 @@ pub struct ColouredCovariance<const C: usize> {
     n_eff: f64,
     /// Fitted share `r = tr(P M)/N_eff` of the last lag row.
     fitted: f64,
+    /// The lag weights `ρ_v(k) λ^k`, `k = 1..=k_weights`, of the last lag row.
+    weights: [f64; MAX_LAG],
+    k_weights: usize,
     /// Rows since the last lag row, modulo [`LAG_STRIDE`] (0: the last row was one).
     phase: usize,
     /// `λ` to the number of rows since the leverage was last decayed.
@@ -320,6 +316,8 @@ impl<const C: usize> ColouredCovariance<C> {
             leverage: [0.0; MAX_LAG + 1],
             n_eff: 0.0,
             fitted: 0.0,
+            weights: [0.0; MAX_LAG],
+            k_weights: 0,
             phase: 0,
             decay: 1.0,
         }
@@ -329,9 +327,9 @@ impl<const C: usize> ColouredCovariance<C> {
     /// `λ`. `fit = Some((v, P))` once the fit is initialised (`P` its current inverse
     /// information, leading `n × n` block); `None` before: the row enters `M` as white.
     ///
-    /// Every row enters the residual lag products and the white part `x xᵀ` of `M`; every
-    /// [`LAG_STRIDE`]-th row (a *lag row*, [`Self::lag_row`]) also enters the lag leverage and,
-    /// weighted for the [`LAG_STRIDE`] rows it stands for, the lagged part of `M` (module doc,
+    /// Every row enters the residual lag products and `M`, with the lag weights of the last
+    /// lag row; every [`LAG_STRIDE`]-th row with a residual (a *lag row*) also enters the lag
+    /// leverage and sets the truncation lags, the fitted share and the weights (module doc,
     /// "Decimation").
     pub fn add(&mut self, x: &[f64; C], fit: Option<(f64, &Square<C>)>, lambda: f64) {
         let n = self.n;
@@ -339,31 +337,26 @@ impl<const C: usize> ColouredCovariance<C> {
         self.decay *= lambda;
         let avail = self.filled.min(MAX_LAG);
         self.phase = (self.phase + 1) % LAG_STRIDE;
-        let lagged = match fit {
+        let h = match fit {
             Some((v, p)) => {
                 self.acf.accumulate(v, lambda);
-                (self.phase == 0).then(|| {
+                if self.phase == 0 {
                     self.fitted = (self.trace_pm(p) / self.n_eff).clamp(0.0, 1.0);
                     self.add_leverage(x, p, avail);
                     self.acf.update_truncation();
-                    self.lagged_sum(lambda, self.acf.last_significant_lag().min(avail))
-                })
+                    self.set_weights(lambda, self.acf.last_significant_lag());
+                }
+                self.lagged_sum(avail)
             }
             None => {
                 self.acf.push(0.0);
-                None
+                [0.0; C]
             }
         };
         let l2 = lambda * lambda;
-        let h = lagged.unwrap_or([0.0; C]);
-        // The lag row stands for itself and the `LAG_STRIDE − 1` rows before it, each as `M`
-        // would now hold it: weight `Σ_{j<LAG_STRIDE} λ^{2j}`, so that `M` is unbiased on
-        // the lag rows, where the σ are formed (module doc, "Decimation").
-        let weight = if lagged.is_some() { lag_row_weight(l2) } else { 0.0 };
         for a in 0..n {
             for b in a..n {
-                let lag = weight * (x[a] * h[b] + h[a] * x[b]);
-                let v = l2 * self.m[a][b] + x[a] * x[b] + lag;
+                let v = l2 * self.m[a][b] + x[a] * x[b] + x[a] * h[b] + h[a] * x[b];
                 self.m[a][b] = v;
                 self.m[b][a] = v;
             }
@@ -374,7 +367,9 @@ impl<const C: usize> ColouredCovariance<C> {
         self.filled += 1;
     }
 
-    /// Whether the last [`Self::add`] was a lag row (its lagged part of `M` entered).
+    /// Whether the last [`Self::add`] was the [`LAG_STRIDE`]-th row of its cycle: a lag row
+    /// when it carried a residual (`fit` given), which is when a caller forms what it derives
+    /// from `M` at the lag rows.
     pub fn lag_row(&self) -> bool {
         self.phase == 0
     }
@@ -402,25 +397,32 @@ impl<const C: usize> ColouredCovariance<C> {
         }
     }
 
-    /// `h = Σ_{k=1..K} ρ_v(k) λ^k x_{n−k}` with `ρ_v(k) = (1 − r) ρ̂(k) + r ρ_H(k)` (module
-    /// doc; `g = x + h`), the rows before the current one from the ring.
-    fn lagged_sum(&self, lambda: f64, k_max: usize) -> [f64; C] {
+    /// The lag weights `w_k = ρ_v(k) λ^k`, `k = 1..=k_max`, with `ρ_v(k) = (1 − r) ρ̂(k) +
+    /// r ρ_H(k)` (module doc), kept until the next lag row.
+    fn set_weights(&mut self, lambda: f64, k_max: usize) {
         let r = self.fitted;
         // Reciprocals once: a division per lag would be the loop's latency.
         let s0 = self.leverage[0];
         let inv_s0 = if s0 > 0.0 { 1.0 / s0 } else { 0.0 };
         let c = &self.acf.c;
         let inv_c0 = if c[0] > 0.0 { 1.0 / c[0] } else { 0.0 };
-        let mut w = [0.0; MAX_LAG];
         let mut lk = 1.0;
-        for (k, wk) in w.iter_mut().enumerate().take(k_max) {
+        for (k, wk) in self.weights.iter_mut().enumerate().take(k_max) {
             lk *= lambda;
             let rho_v = (1.0 - r) * c[k + 1] * inv_c0 + r * self.leverage[k + 1] * inv_s0;
             *wk = rho_v * lk;
         }
+        self.k_weights = k_max;
+    }
+
+    /// `h = g − x = Σ_{k=1..K} w_k x_{n−k}` with the weights of the last lag row, over the
+    /// `avail` rows before the current one in the ring.
+    fn lagged_sum(&self, avail: usize) -> [f64; C] {
+        let k_max = self.k_weights.min(avail);
+        let w = &self.weights[..k_max];
         let mut h = [0.0; C];
         for (ha, column) in h.iter_mut().zip(&self.columns[..self.n]) {
-            *ha = w[..k_max].iter().zip(column.lags(k_max)).map(|(w, x)| w * x).sum();
+            *ha = w.iter().zip(column.lags(k_max)).map(|(w, x)| w * x).sum();
         }
         h
     }
@@ -439,12 +441,13 @@ impl<const C: usize> ColouredCovariance<C> {
         self.n_eff = w * (self.n_eff - n_run).max(0.0) + n_run;
     }
 
-    /// The lag `K` at which the last update truncated the sum (after the last significant lobe).
+    /// The lag `K` at which the last lag row truncated the sum (after the last significant
+    /// lobe).
     pub fn lag(&self) -> usize {
         self.acf.last_significant_lag()
     }
 
-    /// The fitted share `r = tr(P M)/N_eff` of the last update (module doc; 0 before the fit
+    /// The fitted share `r = tr(P M)/N_eff` of the last lag row (module doc; 0 before the fit
     /// is initialised).
     pub fn fitted_share(&self) -> f64 {
         self.fitted

@@ -374,9 +374,9 @@ impl<const C: usize> ColouredCovariance<C> {
         self.phase == 0
     }
 
-    /// Lag leverage `s_k = Σ λ^{n−i} x_iᵀ P x_{i−k}`, `k = 0..=avail`, over the lag rows, with
-    /// lag row `x` added (the weight [`LAG_STRIDE`] is common to every `s_k` and cancels in
-    /// `ρ_H(k) = s_k/s_0`).
+    /// Lag leverage `s_k = Σ λ^{n−i} x_iᵀ P x_{i−k}`, `k = 0..=avail`, over the lag rows only,
+    /// with lag row `x` added (every `s_k` is sampled alike, so only the shape
+    /// `ρ_H(k) = s_k/s_0` is used).
     fn add_leverage(&mut self, x: &[f64; C], p: &Square<C>, avail: usize) {
         let n = self.n;
         let mut px = [0.0; C];

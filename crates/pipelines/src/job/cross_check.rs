@@ -269,12 +269,15 @@ fn run_batch(records: &Records, kind: EstimatorKind, base: &ReplayOptions) -> Me
 
 /// Every record fitted by `kind` with `model` and `options`, as the panel reads it: failed
 /// when the fit fails, ends at its iteration limit still moving or its filter degenerates.
+/// Only the estimates are formed ([`FitOptions::estimates_only`]): the panel and the refits
+/// read nothing else.
 pub(super) fn batch_estimates(
     records: &Records,
     kind: EstimatorKind,
     model: Option<aeroident_io::ModelSpec>,
     options: FitOptions,
 ) -> MethodEstimates {
+    let options = FitOptions { estimates_only: true, ..options };
     let name = kind.name();
     let mapping = &records.mapping;
     let fitted = match records.held_with(options.spike_screen) {

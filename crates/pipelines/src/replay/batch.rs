@@ -952,6 +952,10 @@ pub struct FitOptions {
     /// last iterate, the bootstrap before its next replica with the replicas done. `None`
     /// (default): it runs to its end.
     pub stop: Option<StopFlag>,
+    /// Only the estimates and their σ (a refit that reads nothing else: the panel's batch
+    /// methods, the timing tests' refits): no sign tests, whose surface-lead search over a
+    /// long record costs more than the fit. Default off.
+    pub estimates_only: bool,
 }
 
 impl Default for FitOptions {
@@ -971,6 +975,7 @@ impl Default for FitOptions {
             spike_screen: Some(crate::record::outliers::SpikeScreen::default()),
             robust: None,
             stop: None,
+            estimates_only: false,
         }
     }
 }
@@ -1037,9 +1042,11 @@ pub(crate) fn fit_time_domain(
     summary
         .warnings
         .extend(crate::kinematics::Kinematics::of_manoeuvres(&slices).warnings(mapping));
-    let (sign_tests, sign_warnings) = super::sign_tests::checked(&slices, mapping);
-    summary.sign_tests = sign_tests;
-    summary.warnings.extend(sign_warnings);
+    if !options.estimates_only {
+        let (sign_tests, sign_warnings) = super::sign_tests::checked(&slices, mapping);
+        summary.sign_tests = sign_tests;
+        summary.warnings.extend(sign_warnings);
+    }
     if let Some(c) = &options.compat {
         summary.warnings.extend(c.warnings());
     }

@@ -87,9 +87,11 @@ pub(super) fn fit_fdoe(
     summary.warnings.extend(warnings);
     summary.warnings.extend(level_note);
     summary.warnings.extend(rec.notes.iter().cloned());
-    let (sign_tests, sign_warnings) = super::sign_tests::checked(&slices, mapping);
-    summary.sign_tests = sign_tests;
-    summary.warnings.extend(sign_warnings);
+    if !options.estimates_only {
+        let (sign_tests, sign_warnings) = super::sign_tests::checked(&slices, mapping);
+        summary.sign_tests = sign_tests;
+        summary.warnings.extend(sign_warnings);
+    }
     if let Some(c) = &options.compat {
         summary.warnings.extend(c.warnings());
     }

@@ -530,24 +530,52 @@ struct LsFit {
 /// residuals' lag-1 autocorrelation within each manoeuvre (module doc); `None` when the
 /// normal equations are singular.
 fn regress(rows: &[Row]) -> Option<LsFit> {
-    let (m, k) = (rows.len(), rows[0].1.len());
+    let view = RowView {
+        len: rows.len(),
+        width: rows[0].1.len(),
+        y: |i: usize| rows[i].0,
+        x: |i: usize, j: usize| rows[i].1[j],
+        manoeuvre: |i: usize| rows[i].2.0,
+    };
+    regress_view(&view)
+}
+
+/// Rows seen through accessors: `len` rows of `width` regressors, row `i`'s response `y(i)`,
+/// its regressor `j` `x(i, j)` and its manoeuvre `manoeuvre(i)`. The timing search reads its
+/// shifted rows so, without copying them for every shift.
+struct RowView<Y, X, M> {
+    len: usize,
+    width: usize,
+    y: Y,
+    x: X,
+    manoeuvre: M,
+}
+
+/// [`regress`] over a [`RowView`].
+fn regress_view<Y, X, M>(rows: &RowView<Y, X, M>) -> Option<LsFit>
+where
+    Y: Fn(usize) -> f64,
+    X: Fn(usize, usize) -> f64,
+    M: Fn(usize) -> usize,
+{
+    let (m, k, x_at) = (rows.len, rows.width, &rows.x);
     // Columns scaled to unit RMS so the normal equations are well conditioned.
     let scale: Vec<f64> = (0..k)
-        .map(|j| (rows.iter().map(|r| r.1[j] * r.1[j]).sum::<f64>() / m as f64).sqrt())
+        .map(|j| ((0..m).map(|i| x_at(i, j) * x_at(i, j)).sum::<f64>() / m as f64).sqrt())
         .collect();
     if scale.iter().any(|s| s.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)) {
         return None;
     }
-    let x = DMatrix::from_fn(m, k, |i, j| rows[i].1[j] / scale[j]);
-    let y = DVector::from_fn(m, |i, _| rows[i].0);
+    let x = DMatrix::from_fn(m, k, |i, j| x_at(i, j) / scale[j]);
+    let y = DVector::from_fn(m, |i, _| (rows.y)(i));
     let xtx = x.tr_mul(&x);
     let inv = xtx.clone().cholesky()?.inverse();
     let beta = &inv * x.tr_mul(&y);
     let e = &y - &x * &beta;
     let dof = m.checked_sub(k).filter(|d| *d > 0)?;
     let rss = e.norm_squared();
-    let lagged: f64 =
-        (1..m).filter(|&i| rows[i].2.0 == rows[i - 1].2.0).map(|i| e[i] * e[i - 1]).sum();
+    let same = |i: usize| (rows.manoeuvre)(i) == (rows.manoeuvre)(i - 1);
+    let lagged: f64 = (1..m).filter(|&i| same(i)).map(|i| e[i] * e[i - 1]).sum();
     let rho = (lagged / rss).clamp(0.0, 0.98);
     let widen = ((1.0 + rho) / (1.0 - rho)).sqrt();
     let sigma = (rss / dof as f64 * inv[(0, 0)]).sqrt() * widen / scale[0];

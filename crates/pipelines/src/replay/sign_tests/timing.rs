@@ -14,11 +14,10 @@
 //! channel recorded late. Every shift uses the same rows: those whose surface exists at every
 //! shift (the first and last 0.3 s of each stretch are left out for all of them).
 
-use super::{LsFit, Row, regress};
+use super::{LsFit, Row, RowView, regress_view};
 use aeroident_io::Mapping;
 use aeroident_io::replay_output::SignTest;
 use aeroident_io::warning::{Warning, WarningKind};
-use std::collections::HashMap;
 
 /// A lead is worth a warning from this many seconds (and at least one sample interval): below
 /// it, the central differences' own resolution.
@@ -48,12 +47,10 @@ pub struct Lead {
 /// shift exists (the same rows for all).
 pub(super) fn lead(all: &[Row], dt_s: f64) -> Option<Lead> {
     let k = ((MAX_LEAD_S / dt_s).round() as usize).max(1) as isize;
-    let at_sample: HashMap<(usize, usize), usize> =
-        all.iter().enumerate().map(|(r, row)| (row.2, r)).collect();
+    let at_sample = SampleIndex::of(all);
     let source = |row: &Row, j: isize| {
         let (m, i) = row.2;
-        let i = usize::try_from(i as isize - j).ok()?;
-        at_sample.get(&(m, i)).copied()
+        at_sample.row(m, usize::try_from(i as isize - j).ok()?)
     };
     let kept: Vec<&Row> =
         all.iter().filter(|row| (-k..=k).all(|j| source(row, j).is_some())).collect();
@@ -62,15 +59,17 @@ pub(super) fn lead(all: &[Row], dt_s: f64) -> Option<Lead> {
     }
     let mut fits: Vec<LsFit> = Vec::with_capacity(2 * k as usize + 1);
     for j in -k..=k {
-        let shifted: Vec<Row> = kept
-            .iter()
-            .map(|row| {
-                let mut x = row.1.clone();
-                x[0] = source(row, j).map_or(f64::NAN, |r| all[r].1[0]);
-                (row.0, x, row.2)
-            })
-            .collect();
-        fits.push(regress(&shifted)?);
+        // Row i's surface from its source row j samples earlier; its other regressors its own.
+        let surface: Vec<f64> =
+            kept.iter().map(|row| source(row, j).map_or(f64::NAN, |r| all[r].1[0])).collect();
+        let shifted = RowView {
+            len: kept.len(),
+            width: kept[0].1.len(),
+            y: |i: usize| kept[i].0,
+            x: |i: usize, c: usize| if c == 0 { surface[i] } else { kept[i].1[c] },
+            manoeuvre: |i: usize| kept[i].2.0,
+        };
+        fits.push(regress_view(&shifted)?);
     }
     let rss: Vec<f64> = fits.iter().map(|f| f.rss).collect();
     let best = (0..rss.len()).min_by(|&a, &b| rss[a].total_cmp(&rss[b]))?;
@@ -113,6 +112,34 @@ pub(super) fn lead(all: &[Row], dt_s: f64) -> Option<Lead> {
         }
     };
     Some(Lead { lead_s: at(best as f64), lo_s: crossing(-1), hi_s: crossing(1) })
+}
+
+/// Where each sample's row is: per manoeuvre, the row of each sample index (`None`: that
+/// sample has no row). A manoeuvre's sample indices are dense, so a table answers what a hash
+/// of `(manoeuvre, sample)` did, without hashing each of the search's lookups.
+struct SampleIndex(Vec<Vec<Option<usize>>>);
+
+impl SampleIndex {
+    /// The table of `rows`.
+    fn of(rows: &[Row]) -> Self {
+        let mut table: Vec<Vec<Option<usize>>> = Vec::new();
+        for (r, row) in rows.iter().enumerate() {
+            let (m, i) = row.2;
+            if table.len() <= m {
+                table.resize_with(m + 1, Vec::new);
+            }
+            if table[m].len() <= i {
+                table[m].resize(i + 1, None);
+            }
+            table[m][i] = Some(r);
+        }
+        Self(table)
+    }
+
+    /// The row of sample `i` of manoeuvre `m`.
+    fn row(&self, m: usize, i: usize) -> Option<usize> {
+        self.0.get(m)?.get(i).copied().flatten()
+    }
 }
 
 /// The damping derivative of the axis a surface drives (`Cm_q` for `de`, `Cl_p` for `da`,

@@ -188,3 +188,56 @@ fn fdoe_band_above_nyquist_is_recorded_and_warned() {
     assert!(0.2 <= lo && lo < hi && hi <= 1.5, "{lo} {hi}");
     assert!(!v["warnings"].to_string().contains("Nyquist"), "{}", v["warnings"]);
 }
+
+/// A row missing from a uniform record (a spike the screen removed, a row the reader
+/// rejected) no longer stops the fit: the Twin Otter record (018) with its row at t = 4 s
+/// deleted is fitted by fdoe with the sample bridged (a warning counts it), and every estimate
+/// lies within a quarter of its σ of the whole record's (one interpolated sample of 401 moves
+/// little). Five rows missing in a row is a gap: the reader splits the record there into two
+/// manoeuvres, and nothing is bridged.
+#[test]
+fn fdoe_bridges_a_missing_row_and_not_a_gap() {
+    let Some(data) = common::shared("sidpac_twin_otter/csv/totter_lon_020213f1_018.csv") else {
+        return;
+    };
+    let text = std::fs::read_to_string(&data).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let without = |drop: std::ops::Range<usize>, name: &str| {
+        let kept: Vec<&str> =
+            lines.iter().enumerate().filter(|(i, _)| !drop.contains(i)).map(|(_, l)| *l).collect();
+        let path =
+            std::env::temp_dir().join(format!("aeroident-fdoe-{}-{name}.csv", std::process::id()));
+        std::fs::write(&path, kept.join("\n") + "\n").unwrap();
+        path
+    };
+    // Line 201 of the file (after its header) is the sample at t = 4.0 s (0.02 s sampling).
+    let one = without(201..202, "one");
+    let whole = fit(&data, "twin_otter.toml", "fdoe", &[], "whole");
+    let bridged = fit(&one, "twin_otter.toml", "fdoe", &[], "bridged");
+    let warned = bridged["warnings"].as_array().unwrap().iter().any(|w| {
+        let w = w.as_str().unwrap();
+        w.starts_with("fdoe: 1 sample(s) missing") && w.contains("t = 4 s")
+    });
+    assert!(warned, "{}", bridged["warnings"]);
+    assert!(!whole["warnings"].to_string().contains("bridged"), "{}", whole["warnings"]);
+    let mut compared = 0;
+    let pairs = whole["parameters"].as_array().unwrap().iter();
+    for (a, b) in pairs.zip(bridged["parameters"].as_array().unwrap()) {
+        assert_eq!(a["name"], b["name"]);
+        let (Some(x), Some(y), Some(s)) =
+            (a["estimate"].as_f64(), b["estimate"].as_f64(), a["std_error"].as_f64())
+        else {
+            continue;
+        };
+        assert!((x - y).abs() <= 0.25 * s, "{}: {x} vs {y} (σ {s})", a["name"]);
+        compared += 1;
+    }
+    assert_eq!(compared, 6, "{}", bridged["parameters"]);
+    let gap = without(201..206, "gap");
+    let split = fit(&gap, "twin_otter.toml", "fdoe", &[], "gap");
+    assert!(!split["warnings"].to_string().contains("bridged"), "{}", split["warnings"]);
+    assert_eq!(split["status"], "converged", "{}", split["status_reason"]);
+    for p in [one, gap] {
+        let _ = std::fs::remove_file(p);
+    }
+}

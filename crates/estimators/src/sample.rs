@@ -235,6 +235,55 @@ impl AirDataSample {
         Some(self.vt_mps / self.speed_of_sound_mps()?)
     }
 
+    /// The sample a fraction `w` (0–1) of the way from `a` to `b`, every channel linearly
+    /// interpolated (a channel either lacks is absent; the heading across ±π by its wrapped
+    /// difference), the constants `a`'s. For a transform that needs uniform sampling, a
+    /// sample the record lacks or a screen removed is bridged so, as data editing replaces a
+    /// wild point by interpolation (Klein & Morelli 2006, §9.1) instead of leaving a gap.
+    pub fn between(a: &Self, b: &Self, w: f64) -> Self {
+        let mix = |x: f64, y: f64| x + w * (y - x);
+        let opt = |x: Option<f64>, y: Option<f64>| Some(mix(x?, y?));
+        let heading = |x: Option<f64>, y: Option<f64>| {
+            let (x, y) = (x?, y?);
+            Some(x + w * libm::remainder(y - x, core::f64::consts::TAU))
+        };
+        macro_rules! interpolated {
+            ($($f:ident),*) => {
+                Self {
+                    t_s: mix(a.t_s, b.t_s),
+                    vt_mps: mix(a.vt_mps, b.vt_mps),
+                    alpha_rad: mix(a.alpha_rad, b.alpha_rad),
+                    qbar_pa: mix(a.qbar_pa, b.qbar_pa),
+                    psi_rad: heading(a.psi_rad, b.psi_rad),
+                    constants: a.constants,
+                    $($f: opt(a.$f, b.$f),)*
+                }
+            };
+        }
+        interpolated!(
+            beta_rad,
+            p_rad_s,
+            q_rad_s,
+            r_rad_s,
+            pdot_rad_s2,
+            qdot_rad_s2,
+            rdot_rad_s2,
+            alphadot_rad_s,
+            phi_rad,
+            theta_rad,
+            ax_mps2,
+            ay_mps2,
+            az_mps2,
+            de_rad,
+            da_rad,
+            dr_rad,
+            thrust_n,
+            throttle,
+            thrust_moment_nm,
+            rho_kgpm3
+        )
+    }
+
     /// The measured field named `field` (one of [`MEASURED_FIELDS`], the SI names the
     /// estimators use in their errors), `None` when the sample lacks it or the name is not one
     /// of them.
@@ -465,6 +514,32 @@ mod tests {
             },
             ..Default::default()
         }
+    }
+
+    /// A sample between two: each channel at the fraction asked (a quarter of the way from
+    /// 100 to 104 m/s is 101), a channel one of them lacks absent, the heading across ±π by
+    /// the short way round (from 3.1 to −3.1 rad is 0.083 rad through π, not 6.2 back
+    /// through 0), the constants the first's.
+    #[test]
+    fn a_sample_between_two_interpolates_every_channel() {
+        let a = AirDataSample { t_s: 1.0, psi_rad: Some(3.1), de_rad: Some(-0.02), ..level() };
+        let b = AirDataSample {
+            t_s: 1.04,
+            vt_mps: 104.0,
+            q_rad_s: Some(0.08),
+            psi_rad: Some(-3.1),
+            de_rad: None,
+            constants: AircraftConstants { mass_kg: 1.0, ..level().constants },
+            ..level()
+        };
+        let m = AirDataSample::between(&a, &b, 0.25);
+        assert!((m.t_s - 1.01).abs() < 1e-12 && (m.vt_mps - 101.0).abs() < 1e-12);
+        assert_eq!(m.q_rad_s, Some(0.02));
+        assert_eq!(m.de_rad, None);
+        let short_way = 2.0 * core::f64::consts::PI - 6.2;
+        assert!((m.psi_rad.unwrap() - (3.1 + 0.25 * short_way)).abs() < 1e-12, "{m:?}");
+        assert_eq!(m.constants, a.constants);
+        assert_eq!(AirDataSample::between(&a, &b, 0.0).vt_mps, a.vt_mps);
     }
 
     /// Every name of `MEASURED_FIELDS` reads its own field: a sample whose measured fields hold

@@ -21,7 +21,9 @@ use crate::record::Manoeuvres;
 use aeroident_estimators::AirDataSample;
 use aeroident_estimators::flight_model::STATE_NAMES;
 use aeroident_estimators::output_error::OeResult;
-use aeroident_estimators::output_error::frequency::{FdoeConfig, FdoeResult, fit};
+use aeroident_estimators::output_error::frequency::{
+    FdoeConfig, FdoeResult, MAX_INTERVAL_DEVIATION, fit,
+};
 use aeroident_io::message::short;
 use aeroident_io::{Mapping, ModelSpec, ParameterResult, StdErrorSource};
 
@@ -53,10 +55,16 @@ pub(super) fn fit_fdoe(
     }
     config.stop.clone_from(&options.stop);
     let t0 = std::time::Instant::now();
-    let fd = fit(&slices, &config).map_err(|e| ReplayError::Model(e.to_string()))?;
+    let (bridged, bridge_note) = bridged(&slices);
+    let uniform: Vec<&[AirDataSample]> = match &bridged {
+        Some(b) => b.iter().map(Vec::as_slice).collect(),
+        None => slices.clone(),
+    };
+    let fd = fit(&uniform, &config).map_err(|e| ReplayError::Model(e.to_string()))?;
     let wall = t0.elapsed().as_secs_f64();
     let mut warnings: Vec<String> =
-        band_clipped(band_hz, &slices, fitted_band(&fd)).into_iter().collect();
+        band_clipped(band_hz, &uniform, fitted_band(&fd)).into_iter().collect();
+    warnings.extend(bridge_note);
     let simulated = match simulate_at(&slices, model.structure, &fd.outputs, &fd.values) {
         Ok(r) => Some(r),
         Err(e) => {
@@ -246,6 +254,65 @@ fn fitted_band(fd: &FdoeResult) -> (f64, f64) {
     (lo, hi)
 }
 
+/// Most samples in a row [`bridged`] puts back: two or three adjacent wild points the spike
+/// screen removed. The reader splits a record at a longer interval between its rows (a gap,
+/// [`aeroident_io::flight_data::ONE_SAMPLE_HOLE_MAX`]), so a longer hole inside a manoeuvre
+/// is the screen's: that many wild points in a row is a fault, not noise, and stays a hole
+/// for the fit to refuse.
+pub const MAX_BRIDGED_SAMPLES: usize = 3;
+
+/// The manoeuvres with each hole of at most [`MAX_BRIDGED_SAMPLES`] missing samples bridged
+/// by linear interpolation ([`AirDataSample::between`]), and a warning that counts them and
+/// names the first; `(None, None)` when no manoeuvre has one. A hole is an interval of `n ≥ 2`
+/// times the manoeuvre's median interval, to the tolerance the transform allows
+/// ([`MAX_INTERVAL_DEVIATION`] per interval); its `n − 1` samples go back on the grid. The
+/// discrete Fourier transform needs uniform sampling, and the spike screen (on by default)
+/// and the reader remove a wild point or a bad row instead of replacing it; data editing
+/// replaces a wild point by interpolation, and so does this, for the transform only.
+fn bridged(slices: &[&[AirDataSample]]) -> (Option<Vec<Vec<AirDataSample>>>, Option<String>) {
+    let mut filled: Vec<Vec<AirDataSample>> = Vec::with_capacity(slices.len());
+    let (mut count, mut first) = (0usize, None::<f64>);
+    for m in slices {
+        let dt = median_interval(m);
+        let mut out = Vec::with_capacity(m.len());
+        for (k, s) in m.iter().enumerate() {
+            let prev = k.checked_sub(1).map(|j| &m[j]);
+            if let Some((n, prev)) =
+                dt.zip(prev).and_then(|(dt, p)| Some((hole(s.t_s - p.t_s, dt)?, p)))
+            {
+                let at = |i: usize| AirDataSample::between(prev, s, i as f64 / n as f64);
+                out.extend((1..n).map(at));
+                count += n - 1;
+                first.get_or_insert(at(1).t_s);
+            }
+            out.push(*s);
+        }
+        filled.push(out);
+    }
+    let Some(t) = first else { return (None, None) };
+    let note = format!(
+        "fdoe: {count} sample(s) missing from the record's uniform sampling (a row rejected or a spike the screen removed; the first at t = {} s) bridged by linear interpolation for the Fourier transform; the validation and the figure use the samples as read",
+        short(t)
+    );
+    (Some(filled), Some(note))
+}
+
+/// The intervals `n` (2 to [`MAX_BRIDGED_SAMPLES`] + 1) that an interval of `d` s spans on a
+/// grid of `dt` s, when it is a whole number of them within the transform's tolerance.
+fn hole(d: f64, dt: f64) -> Option<usize> {
+    let n = (d / dt).round();
+    let whole = (d - n * dt).abs() <= n * MAX_INTERVAL_DEVIATION * dt;
+    (whole && n >= 2.0 && n <= (MAX_BRIDGED_SAMPLES + 1) as f64).then_some(n as usize)
+}
+
+/// The median interval between a manoeuvre's samples, s; `None` for fewer than two samples
+/// or a median that is not positive.
+fn median_interval(m: &[AirDataSample]) -> Option<f64> {
+    let mut dts: Vec<f64> = m.windows(2).map(|w| w[1].t_s - w[0].t_s).collect();
+    dts.sort_by(f64::total_cmp);
+    dts.get(dts.len() / 2).copied().filter(|d| *d > 0.0)
+}
+
 /// The warning of a band asked above the record's Nyquist frequency (the highest of its
 /// manoeuvres'), where the fit could only stop short of it; `None` when it was not.
 fn band_clipped(
@@ -267,4 +334,41 @@ fn band_clipped(
             short(fitted.1)
         )
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A manoeuvre at 0.01 s with the rows at 0.05 s (one), 0.10–0.12 s (three) and
+    /// 0.20–0.23 s (four) missing: the first two holes are bridged (four samples, each where a
+    /// uniform record has it, the lone one halfway between its neighbours), the run of four is
+    /// left for the fit to refuse; a manoeuvre with none missing is not copied.
+    #[test]
+    fn short_holes_are_bridged_and_longer_ones_left() {
+        let missing = |k: usize| k == 5 || (10..=12).contains(&k) || (20..=23).contains(&k);
+        let at = |k: usize| AirDataSample {
+            t_s: 0.01 * k as f64,
+            vt_mps: 100.0 + k as f64,
+            de_rad: Some(0.001 * k as f64),
+            ..Default::default()
+        };
+        let m: Vec<AirDataSample> = (0..30).filter(|&k| !missing(k)).map(at).collect();
+        let (filled, note) = bridged(&[&m]);
+        let filled = filled.expect("bridged");
+        let t: Vec<f64> = filled[0].iter().map(|s| s.t_s).collect();
+        let expected: Vec<f64> =
+            (0..30).filter(|k| !(20..=23).contains(k)).map(|k| 0.01 * k as f64).collect();
+        assert_eq!(t.len(), expected.len());
+        assert!(t.iter().zip(&expected).all(|(a, b)| (a - b).abs() < 1e-12), "{t:?}");
+        let hole = filled[0].iter().find(|s| (s.t_s - 0.05).abs() < 1e-12).unwrap();
+        assert!((hole.vt_mps - 105.0).abs() < 1e-9 && (hole.de_rad.unwrap() - 0.005).abs() < 1e-12);
+        let note = note.unwrap();
+        assert!(
+            note.starts_with("fdoe: 4 sample(s) missing") && note.contains("t = 0.05 s"),
+            "{note}"
+        );
+        let whole: Vec<AirDataSample> = (0..30).map(at).collect();
+        assert_eq!(bridged(&[&whole]), (None, None));
+    }
 }

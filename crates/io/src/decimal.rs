@@ -34,6 +34,33 @@ pub fn push_f64(out: &mut String, buf: &mut ryu::Buffer, x: f64) {
     }
 }
 
+/// Appends `x` rounded to `digits` (1–17) significant digits, in Ryu's layout (`0.001234`,
+/// `1.234e-9`: an exponent outside its plain range, so a tiny value is not a run of zeros);
+/// zero and non-finite values as [`push_f64`] writes them. The text reads back to the `f64`
+/// nearest the rounded decimal, as `format!("{x:.*e}", digits - 1)` does; when the quick
+/// rounding by a power of ten misses that `f64` by an ulp, that formatting is used instead.
+pub fn push_significant(out: &mut String, buf: &mut ryu::Buffer, x: f64, digits: usize) {
+    if x == 0.0 || !x.is_finite() {
+        push_f64(out, buf, x);
+        return;
+    }
+    let shift = digits as i32 - 1 - x.abs().log10().floor() as i32;
+    // Powers of ten up to 10^22 are exact doubles, so the quotient is correctly rounded.
+    let rounded = match shift {
+        0..=22 => (x * 10f64.powi(shift)).round() / 10f64.powi(shift),
+        -22..=-1 => (x / 10f64.powi(-shift)).round() * 10f64.powi(-shift),
+        _ => f64::NAN,
+    };
+    let text = buf.format(rounded);
+    let mantissa = text.split('e').next().unwrap_or(text);
+    let sig = mantissa.bytes().filter(u8::is_ascii_digit).skip_while(|d| *d == b'0').count();
+    if rounded.is_finite() && sig <= digits {
+        out.push_str(text.strip_suffix(".0").unwrap_or(text));
+    } else {
+        out.push_str(&format!("{x:.*e}", digits.saturating_sub(1)));
+    }
+}
+
 /// The digits `int frac` (one leading digit, `int.frac × 10^exp`) without an exponent.
 fn push_plain(out: &mut String, int: &str, frac: &str, exp: i32) {
     // Position of the decimal point after the first digit of `int frac`.
@@ -151,5 +178,32 @@ mod tests {
             check((unit - 0.5) * scale, &mut buf);
             check((bits % 100_000) as f64 * 0.01, &mut buf);
         }
+    }
+
+    /// `push_significant` reads back to the value `format!("{x:.3e}")` (core's exactly
+    /// rounded decimal) reads back to, over magnitudes from 1e-30 to 1e30 and both signs, in
+    /// at most 11 characters (`-0.00006741`); zero is `0`.
+    #[test]
+    fn significant_digits_read_back_as_the_exactly_rounded_decimal() {
+        let mut buf = ryu::Buffer::new();
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        for k in 0..20_000 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let mantissa = 1.0 + (state >> 11) as f64 / (1u64 << 53) as f64 * 9.0;
+            let x = mantissa * 10f64.powi((k % 61) - 30) * if k % 2 == 0 { 1.0 } else { -1.0 };
+            let mut s = String::new();
+            push_significant(&mut s, &mut buf, x, 4);
+            let exact: f64 = format!("{x:.3e}").parse().unwrap();
+            assert_eq!(s.parse::<f64>().ok(), Some(exact), "{x:e}: {s}");
+            assert!(s.len() <= 11, "{x:e}: {s}");
+        }
+        let mut s = String::new();
+        push_significant(&mut s, &mut buf, 0.0, 4);
+        assert_eq!(s, "0");
+        s.clear();
+        push_significant(&mut s, &mut buf, 0.000_123_45, 4);
+        assert!(s == "0.0001234" || s == "0.0001235", "{s}");
     }
 }

@@ -259,7 +259,7 @@ fn fitted_band(fd: &FdoeResult) -> (f64, f64) {
 /// [`aeroident_io::flight_data::ONE_SAMPLE_HOLE_MAX`]), so a longer hole inside a manoeuvre
 /// is the screen's: that many wild points in a row is a fault, not noise, and stays a hole
 /// for the fit to refuse.
-pub const MAX_BRIDGED_SAMPLES: usize = 3;
+const MAX_BRIDGED_SAMPLES: usize = 3;
 
 /// The manoeuvres with each hole of at most [`MAX_BRIDGED_SAMPLES`] missing samples bridged
 /// by linear interpolation ([`AirDataSample::between`]), and a warning that counts them and

@@ -10,11 +10,12 @@
 //! command line's defaults (derivatives `auto`, differentiator window 5, spike screen on) and
 //! the estimator options OPTIONS as TOML (`forgetting = 0.99`), the `--estimator-option` pairs.
 
-use aeroident_capi::replayed::{replay_samples, write_samples_csv};
+use aeroident_capi::replayed::write_samples_csv;
 use aeroident_io::{Mapping, ModelSpec, open_log};
 use aeroident_pipelines::Named;
 use aeroident_pipelines::estimators::{EstimatorKind, parse_options};
 use aeroident_pipelines::replay::ReplayOptions;
+use aeroident_pipelines::replay::fed::fed_samples;
 use std::path::Path;
 
 fn main() {
@@ -43,7 +44,8 @@ fn run() -> Result<(), String> {
         ..Default::default()
     };
     let reader = open_log(record, None, &mapping).map_err(|e| e.to_string())?;
-    let (samples, _) = replay_samples(reader, &mapping, &opts).map_err(|e| e.to_string())?;
+    let (fed, _) = fed_samples(reader, &mapping, &opts).map_err(|e| e.to_string())?;
+    let rows: Vec<_> = fed.iter().map(|f| (f.manoeuvre, f.sample)).collect();
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
-    write_samples_csv(&mut out, &samples).map_err(|e| e.to_string())
+    write_samples_csv(&mut out, &rows).map_err(|e| e.to_string())
 }

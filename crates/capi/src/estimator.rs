@@ -8,8 +8,8 @@ use crate::error::{AeroidentResult, clear, fail};
 use crate::sample::AeroidentSample;
 use aeroident_estimators::{Estimator, EventKind, ModelStructure, Priors, Status};
 use aeroident_io::ModelSpec;
-use aeroident_pipelines::Named;
-use aeroident_pipelines::estimators::{EstimatorKind, EstimatorOptions, build, parse_options};
+use aeroident_registry::Named;
+use aeroident_registry::estimators::{EstimatorKind, EstimatorOptions, build, parse_options};
 use core::ffi::{CStr, c_char};
 use std::ffi::CString;
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -288,7 +288,7 @@ unsafe fn new_handle(
             AeroidentResult::InvalidArgument,
             format_args!(
                 "unknown estimator kind `{kind}` ({})",
-                aeroident_pipelines::estimators::online_kinds().join(" | ")
+                aeroident_registry::estimators::online_kinds().join(" | ")
             ),
         )
     })?;

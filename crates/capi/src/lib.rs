@@ -21,8 +21,12 @@
 //!   [`aeroident_estimator_state`], [`aeroident_estimator_reset`], [`aeroident_estimator_free`].
 //! - [`sample`]: [`AeroidentSample`], the conditioned sample in SI units with a presence mask.
 //! - [`error`]: [`AeroidentResult`] codes and [`aeroident_last_error_message`].
-//! - [`replayed`] (Rust only): the samples `aeroident replay` feeds its estimator for a record,
-//!   and their CSV form, so that a C caller can be fed exactly those.
+//! - [`replayed`] (Rust only): the CSV form of the samples a C caller feeds, in which
+//!   `examples/conditioned_samples.rs` writes the samples `aeroident replay` feeds its
+//!   estimator for a record, so that a C caller can be fed exactly those.
+//!
+//! The crate links the estimator core, the model files (`aeroident-io`) and the registry
+//! (`aeroident-registry`), not the pipelines or the reports.
 //!
 //! `unsafe` is confined to the extern functions (raw pointers from C), each pointer checked for
 //! NULL before use; every extern function catches panics, so nothing unwinds into C.

@@ -1,101 +1,17 @@
-//! The samples `aeroident replay` feeds its estimator, for a caller of the C library that wants
-//! to feed the same ones (Rust only; not part of the C ABI).
-//!
-//! The C library estimates from conditioned samples: what the record stage and the
-//! conditioning stage of a replay make of a log's rows (mapping and units, the spike screen,
-//! the compatibility corrections, the causal differentiator's `ṗ q̇ ṙ α̇` and the delay of the
-//! other channels to match, `V0`). Those stages live in `aeroident-pipelines` and run on whole
-//! records; [`replay_samples`] runs the very replay the command line runs, with a recorder
-//! between the pipeline and its estimator, and returns every sample the estimator was given
-//! (and where a new manoeuvre started), in order. [`write_samples_csv`] writes them with the
-//! field names of [`crate::AeroidentSample`], each number so that it reads back to the same `double`.
+//! The samples a C caller feeds the library, as CSV (Rust only; not part of the C ABI): the
+//! columns of [`crate::AeroidentSample`], one row per sample with its manoeuvre number, each
+//! number so that it reads back to the same `double`. `examples/conditioned_samples.rs` writes
+//! the samples `aeroident replay` feeds its estimator for a record
+//! (`aeroident_pipelines::replay::fed::fed_samples`) in this form, for
+//! `examples/c/replay_samples.c` to feed the C library the same ones.
 
+use aeroident_estimators::AirDataSample;
 use aeroident_estimators::sample::MEASURED_FIELDS;
-use aeroident_estimators::{
-    AirDataSample, Estimates, Estimator, EstimatorError, EventLog, ModelStructure,
-};
-use aeroident_io::Mapping;
-use aeroident_pipelines::estimators::build;
-use aeroident_pipelines::replay::{ReplayError, ReplayOptions, ReplayOutcome, replay_with};
-use std::cell::RefCell;
 use std::io::Write;
-use std::rc::Rc;
 
-/// One sample an estimator was given, and the manoeuvre it belongs to (numbered from 0; the
-/// replay starts a new one at each gap in the record, `aeroident_estimator_new_manoeuvre`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FedSample {
-    /// Manoeuvre number.
-    pub manoeuvre: u32,
-    /// The sample, as the estimator's `update` received it.
-    pub sample: AirDataSample,
-}
-
-/// Passes every call to the estimator the replay built and records what it is fed.
-struct Recorder {
-    inner: Box<dyn Estimator + Send>,
-    log: Rc<RefCell<Vec<FedSample>>>,
-    manoeuvre: u32,
-}
-
-impl Estimator for Recorder {
-    fn method(&self) -> &'static str {
-        self.inner.method()
-    }
-
-    fn structure(&self) -> &ModelStructure {
-        self.inner.structure()
-    }
-
-    fn update(&mut self, sample: &AirDataSample) -> Result<&Estimates, EstimatorError> {
-        self.log.borrow_mut().push(FedSample { manoeuvre: self.manoeuvre, sample: *sample });
-        self.inner.update(sample)
-    }
-
-    fn estimates(&self) -> &Estimates {
-        self.inner.estimates()
-    }
-
-    fn covariance(&self, i: usize, j: usize) -> Option<f64> {
-        self.inner.covariance(i, j)
-    }
-
-    fn nis(&self) -> Option<f64> {
-        self.inner.nis()
-    }
-
-    fn events(&self) -> &EventLog {
-        self.inner.events()
-    }
-
-    fn new_manoeuvre(&mut self) {
-        self.manoeuvre += 1;
-        self.inner.new_manoeuvre();
-    }
-}
-
-/// Replays `reader` through `mapping` with `opts`, as `aeroident_pipelines::replay::replay`
-/// (what `aeroident replay` runs: the same stages, the same estimator built by the same
-/// registry with the same options), and returns the samples its estimator was given, in
-/// order, with the replay's outcome.
-///
-/// # Errors
-/// As `aeroident_pipelines::replay::replay`.
-pub fn replay_samples<R: std::io::Read>(
-    reader: aeroident_io::FlightDataReader<R>,
-    mapping: &Mapping,
-    opts: &ReplayOptions,
-) -> Result<(Vec<FedSample>, ReplayOutcome), ReplayError> {
-    let log = Rc::new(RefCell::new(Vec::new()));
-    let built = opts.built_estimator_options(mapping);
-    let make = |model: &aeroident_io::ModelSpec| {
-        let inner = build(opts.estimator, model.structure, model.priors, &built)?;
-        Ok(Box::new(Recorder { inner, log: Rc::clone(&log), manoeuvre: 0 }) as Box<dyn Estimator>)
-    };
-    let outcome = replay_with(reader, mapping, opts, make, &mut ())?;
-    let samples = log.borrow().clone();
-    Ok((samples, outcome))
-}
+/// One row: the manoeuvre the sample belongs to (numbered from 0; a new one at each gap,
+/// `aeroident_estimator_new_manoeuvre`) and the sample.
+pub type SampleRow = (u32, AirDataSample);
 
 /// The columns of [`write_samples_csv`]: `manoeuvre`, then the fields of [`crate::AeroidentSample`]
 /// in its order (without `present`: an absent field is an empty cell): `t_s`, the sample's
@@ -140,13 +56,12 @@ const CONSTANT_COLUMNS: [&str; 11] = [
 ///
 /// # Errors
 /// A failed write.
-pub fn write_samples_csv(w: &mut dyn Write, samples: &[FedSample]) -> std::io::Result<()> {
+pub fn write_samples_csv(w: &mut dyn Write, samples: &[SampleRow]) -> std::io::Result<()> {
     writeln!(w, "{}", SAMPLE_COLUMNS.join(","))?;
-    for f in samples {
-        let s = f.sample;
+    for (manoeuvre, s) in samples {
         let k = s.constants;
         let constants = [k.cbar_m, k.b_m, k.Ixx_kgm2, k.Iyy_kgm2, k.Izz_kgm2, k.Ixz_kgm2];
-        write!(w, "{},{}", f.manoeuvre, s.t_s)?;
+        write!(w, "{},{}", manoeuvre, s.t_s)?;
         MEASURED_FIELDS.iter().try_for_each(|name| cell(w, s.field(name)))?;
         write!(w, ",{},{}", k.mass_kg, k.S_m2)?;
         constants.iter().try_for_each(|v| cell(w, *v))?;
@@ -170,7 +85,7 @@ fn cell(w: &mut dyn Write, v: Option<f64>) -> std::io::Result<()> {
 /// # Errors
 /// A header that is not [`SAMPLE_COLUMNS`], or a cell that is not a number, naming the line
 /// and column.
-pub fn read_samples_csv(text: &str) -> Result<Vec<FedSample>, String> {
+pub fn read_samples_csv(text: &str) -> Result<Vec<SampleRow>, String> {
     let mut lines = text.lines().enumerate();
     let header = lines.next().map(|(_, h)| h).unwrap_or("");
     if header != SAMPLE_COLUMNS.join(",") {
@@ -180,7 +95,7 @@ pub fn read_samples_csv(text: &str) -> Result<Vec<FedSample>, String> {
 }
 
 /// One row of [`read_samples_csv`].
-fn sample_row(line: &str) -> Result<FedSample, String> {
+fn sample_row(line: &str) -> Result<SampleRow, String> {
     let cells: Vec<&str> = line.split(',').collect();
     if cells.len() != SAMPLE_COLUMNS.len() {
         return Err(format!("{} cells, expected {}", cells.len(), SAMPLE_COLUMNS.len()));
@@ -237,7 +152,7 @@ fn sample_row(line: &str) -> Result<FedSample, String> {
         rho_kgpm3: num(25)?,
         constants,
     };
-    Ok(FedSample { manoeuvre, sample })
+    Ok((manoeuvre, sample))
 }
 
 #[cfg(test)]
@@ -268,17 +183,17 @@ mod tests {
             },
             ..Default::default()
         };
-        let fed = [FedSample { manoeuvre: 0, sample: s }, FedSample { manoeuvre: 3, sample: s }];
+        let fed = [(0, s), (3, s)];
         let mut text = Vec::new();
         write_samples_csv(&mut text, &fed).unwrap();
         let text = String::from_utf8(text).unwrap();
         let back = read_samples_csv(&text).unwrap();
         assert_eq!(back.len(), 2);
         for (a, b) in back.iter().zip(&fed) {
-            assert_eq!(a.manoeuvre, b.manoeuvre);
-            assert_eq!(format!("{:?}", a.sample), format!("{:?}", b.sample));
-            assert_eq!(a.sample.q_rad_s.unwrap().to_bits(), (-0.0f64).to_bits());
-            assert_eq!(a.sample.t_s.to_bits(), (0.1f64 + 0.2).to_bits());
+            assert_eq!(a.0, b.0);
+            assert_eq!(format!("{:?}", a.1), format!("{:?}", b.1));
+            assert_eq!(a.1.q_rad_s.unwrap().to_bits(), (-0.0f64).to_bits());
+            assert_eq!(a.1.t_s.to_bits(), (0.1f64 + 0.2).to_bits());
         }
         let bad = text.replacen("106.0321", "1O6", 1);
         let e = read_samples_csv(&bad).unwrap_err();

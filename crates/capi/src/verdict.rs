@@ -1,5 +1,5 @@
 //! The verdict on each current estimate, by the one judge every command uses
-//! (`aeroident_pipelines::verdict::judge_estimate`): the status a C caller reports beside the
+//! (`aeroident_registry::verdict::judge_estimate`): the status a C caller reports beside the
 //! numbers, and the flags that explain it.
 //!
 //! A C caller feeds samples the library does not read the record for, so the verdict weighs
@@ -11,7 +11,7 @@
 use crate::error::{AeroidentResult, fail};
 use crate::estimator::{AeroidentEstimator, with_handle, with_handle_ref};
 use aeroident_io::parameter::{STATUS_DIVERGED, STATUS_FLAGGED, STATUS_IDENTIFIED};
-use aeroident_pipelines::verdict::judge_estimate;
+use aeroident_registry::verdict::judge_estimate;
 use core::ffi::c_char;
 use std::ffi::CString;
 

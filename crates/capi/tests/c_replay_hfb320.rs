@@ -6,18 +6,19 @@
 //! `ekf`.
 //!
 //! The C program is fed the samples the command line's estimator is fed
-//! (`aeroident_capi::replayed::replay_samples`, written as CSV): the record's reading, mapping,
+//! (`aeroident_pipelines::replay::fed::fed_samples`, written as CSV): the record's reading, mapping,
 //! spike screen and conditioning stay in the library, the C caller feeds their output.
 //! Skips without `../shared` (fails under `CI=true`).
 
 mod common;
 
-use aeroident_capi::replayed::{replay_samples, write_samples_csv};
+use aeroident_capi::replayed::write_samples_csv;
 use aeroident_io::replay_output::SIGMA_DIGITS;
 use aeroident_io::{Mapping, ModelSpec, open_log};
 use aeroident_pipelines::Named;
 use aeroident_pipelines::estimators::{EstimatorKind, parse_options};
 use aeroident_pipelines::replay::ReplayOptions;
+use aeroident_pipelines::replay::fed::fed_samples;
 use common::{cli_binary, compile_c, compile_c_shared, have_gcc, scratch, shared, workspace};
 use std::path::Path;
 use std::process::Command;
@@ -63,10 +64,11 @@ fn samples(record: &Path, kind: &str, options: &str, path: &Path) -> usize {
         ..Default::default()
     };
     let reader = open_log(record.to_str().unwrap(), None, &mapping).unwrap();
-    let (fed, _) = replay_samples(reader, &mapping, &opts).unwrap();
+    let (fed, _) = fed_samples(reader, &mapping, &opts).unwrap();
+    let rows: Vec<_> = fed.iter().map(|f| (f.manoeuvre, f.sample)).collect();
     let mut file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
-    write_samples_csv(&mut file, &fed).unwrap();
-    fed.len()
+    write_samples_csv(&mut file, &rows).unwrap();
+    rows.len()
 }
 
 /// The C program run for `kind` with `options` over the samples in `samples`, succeeded.

@@ -21,7 +21,9 @@
 //!   manoeuvres), with its own error type.
 //! - [`condition`]: the conditioning stage every pipeline shares (derivatives, alignment);
 //!   [`window`]: the time windows of a long record, each a manoeuvre.
-//! - [`estimators`]: the estimator kinds, their options and `build`.
+//! - [`estimators`], [`verdict`], [`plausibility`], [`Named`]: the estimator registry and the
+//!   per-estimate verdict, re-exported from `aeroident-registry` (the crate the C library
+//!   links instead of this one).
 //! - [`summary_file`]: a replay's `summary.json` read back (what the exports and the airframe
 //!   take).
 
@@ -32,7 +34,7 @@ pub mod airframe;
 pub mod compat;
 pub mod condition;
 pub mod error;
-pub mod estimators;
+pub use aeroident_registry::estimators;
 pub mod export;
 pub mod freqresp;
 pub mod inspect;
@@ -42,8 +44,7 @@ pub mod live;
 /// Convergence-time and error metrics of estimate histories.
 pub mod metrics;
 pub mod montecarlo;
-pub mod named;
-pub mod plausibility;
+pub use aeroident_registry::{named, plausibility};
 /// Proof-of-concept experiments (thesis §4.1): scenarios and the simulation loop.
 pub mod poc;
 pub mod record;
@@ -57,7 +58,7 @@ pub mod structure;
 pub mod summary_file;
 /// Model validation metrics: fit, residual whiteness, input correlation, prediction intervals.
 pub mod validation;
-pub mod verdict;
+pub use aeroident_registry::verdict;
 pub mod window;
 
 pub use error::{Context, PipelineError};

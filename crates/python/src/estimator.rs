@@ -1,5 +1,5 @@
 //! `aeroident.Estimator` (and the per-method subclasses in the Python package): one online
-//! estimator from the factory (`crates/pipelines/src/estimators.rs`), fed one sample dict at a
+//! estimator from the factory (`crates/registry/src/estimators.rs`), fed one sample dict at a
 //! time.
 //!
 //! The object may be used from any Python thread (a thread pool, a callback thread): its state

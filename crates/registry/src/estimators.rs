@@ -44,14 +44,14 @@ pub enum EstimatorKind {
     /// The model-reference gradient estimator.
     Gradient,
     /// Batch maximum-likelihood output error (not real time: `replay` reads the whole record
-    /// and fits it; `crate::replay::batch`).
+    /// and fits it; `aeroident_pipelines::replay::batch`).
     Oe,
     /// Batch filter-error method: maximum likelihood with process noise (turbulence), a
     /// steady-state Kalman filter in the cost (Jategaonkar 2015 ch. 5; not real time, as `oe`).
     Fem,
     /// Batch frequency-domain output error: the derivatives of the structure's linearised model
     /// from the Fourier transforms of the record over a band (Klein & Morelli 2006 ch. 7,
-    /// SIDPAC `fdoe`; `crate::replay::frequency`). `replay` only.
+    /// SIDPAC `fdoe`; `aeroident_pipelines::replay::frequency`). `replay` only.
     Fdoe,
 }
 
@@ -148,12 +148,12 @@ impl EstimatorKind {
     }
 }
 
-/// Which samples of the conditioning stage ([`crate::condition`]) an estimator consumes.
+/// Which samples of the conditioning stage (`aeroident_pipelines::condition`) an estimator consumes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Feed {
     /// The conditioned samples (matched smoother or delay, with the differentiated `ṗ q̇ ṙ α̇`).
     Smoothed,
-    /// The unsmoothed samples behind them ([`crate::condition::Conditioner::raw`]).
+    /// The unsmoothed samples behind them (`aeroident_pipelines::condition::Conditioner::raw`).
     Raw,
 }
 
@@ -185,7 +185,7 @@ impl crate::Named for TwoAircraftKind {
 
 impl TwoAircraftKind {
     /// The options an `[[estimator]]` entry of this kind takes besides `kind`, `params` and
-    /// `label` (parsed with the entry by `crate::aircraft::scenario`).
+    /// `label` (parsed with the entry by `aeroident_pipelines::aircraft::scenario`).
     pub fn options(self) -> &'static [&'static str] {
         match self {
             TwoAircraftKind::Published => &["reading"],
@@ -487,12 +487,12 @@ pub struct SampleEstimatorSpec {
 }
 
 impl SampleEstimatorSpec {
-    /// Whether the entry is fed the **unsmoothed** samples (`crate::aircraft::air_data::AirDataSampler::raw`: white sensor
+    /// Whether the entry is fed the **unsmoothed** samples (`aeroident_pipelines::aircraft::air_data::AirDataSampler::raw`: white sensor
     /// noise, the same time stamps) instead of the matched-smoother ones the equation-error
     /// estimators need: option `samples = "raw" | "smoothed"` of `ekf`, `oe` and `fem` (the
-    /// value is checked by the estimator factory or `crate::aircraft::batch::config`); default raw for
+    /// value is checked by the estimator factory or `aeroident_pipelines::aircraft::batch::config`); default raw for
     /// `ekf` and `fem`, smoothed for `oe`.
-    /// - `oe`, `fem`: the samples the post-flight fit records (`crate::aircraft::batch` module doc).
+    /// - `oe`, `fem`: the samples the post-flight fit records (`aeroident_pipelines::aircraft::batch` module doc).
     /// - `ekf`: raw means the raw samples **without** the differentiated `ṗ q̇ ṙ`. The filter
     ///   assumes white measurement noise and independent outputs; the smoothed samples are
     ///   correlated over the smoother's 0.2 s and the raw accelerations are differences of the

@@ -96,7 +96,7 @@ pub fn thrust_mapped(mapping: &Mapping) -> bool {
 /// The change of airspeed (peak to peak over its mid value) or of throttle (of its 0–1
 /// travel) over the estimated samples beyond which an unmapped engine's moment can move the
 /// `Cm` terms by the accuracy a derivative is wanted to
-/// ([`crate::replay::precision::RELATIVE_SIGMA_LIMIT`], 10 %): a propeller's thrust at a held
+/// ([`crate::precision::RELATIVE_SIGMA_LIMIT`], 10 %): a propeller's thrust at a held
 /// throttle goes about as 1/V (constant power), so a 10 % change of speed moves it, and any
 /// moment it has about the CG, by about 10 %.
 pub const THRUST_VARIATION_LIMIT: f64 = 0.10;

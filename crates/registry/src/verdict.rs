@@ -8,9 +8,9 @@
 //! conventional aircraft cannot have ([`crate::plausibility`]), a degenerate filter, no σ at
 //! all, an estimate whose ±2σ spans zero ([`precision::insignificant`]). Any flag
 //! makes the status `flagged`; without one it is `identified`. A note is no doubt (a σ between
-//! 10 % and half of the estimate says imprecise, not wrong, [`crate::replay::precision`]; a value
+//! 10 % and half of the estimate says imprecise, not wrong, [`crate::precision`]; a value
 //! that does not repeat across manoeuvres, its σ scaled to their spread,
-//! [`crate::replay::repeatability`]; a value the record fixes only in combination with
+//! `aeroident_pipelines::replay::repeatability`; a value the record fixes only in combination with
 //! another, [`combination_notes`]) and never blocks `identified`. A reference (a simulation's truth, a model file's published value) is
 //! never read here: it is set beside the verdict in `reference_check`
 //! ([`aeroident_io::ParameterResult::check_reference`]).
@@ -20,7 +20,7 @@
 //! identified` without an estimate (a withdrawn drag term, a term a batch method cannot see,
 //! a failed fit), each with its reason; else `flagged` or `identified`.
 
-use crate::replay::precision;
+use crate::precision;
 use aeroident_estimators::Status;
 use aeroident_io::ModelSpec;
 use aeroident_io::ParameterResult;
@@ -76,7 +76,7 @@ pub fn judge(r: &mut ParameterResult, evidence: &Evidence) {
 /// does not read the record for (the C ABI): `estimate` and `std_error` as the estimator
 /// gives them (`None` while not identified), `status` its state ([`Status::name`]). The
 /// evidence is what those numbers carry: the unmodelled σ added
-/// ([`crate::replay::unmodelled`]), the estimator's state ([`unconverged`]; `diverged`
+/// ([`crate::unmodelled`]), the estimator's state ([`unconverged`]; `diverged`
 /// replaces the verdict), the plausibility check for `model` (drag terms withdrawn unless
 /// `thrust_mapped`) and the precision test. The record-level tests of a replay (sign tests,
 /// sample timing, the cross-check) need the record and are not made.
@@ -89,7 +89,7 @@ pub fn judge_estimate(
     thrust_mapped: bool,
 ) -> ParameterResult {
     let mut r = ParameterResult::new(name, estimate, std_error, None, None);
-    r.add_unmodelled_std_error(crate::replay::unmodelled::UNMODELLED_FRACTION);
+    r.add_unmodelled_std_error(crate::unmodelled::UNMODELLED_FRACTION);
     let diverged = status == Status::Diverged.name();
     let evidence = Evidence {
         doubts: Vec::new(),

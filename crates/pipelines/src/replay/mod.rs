@@ -44,15 +44,16 @@ pub mod constant;
 pub mod cross_check;
 pub mod diagnostics;
 pub mod explain;
+pub mod fed;
 pub mod fit;
 pub mod frequency;
 mod online;
-pub mod precision;
+pub use aeroident_registry::precision;
 pub mod prediction;
 pub mod repeatability;
 pub mod sample_timing;
 pub mod sign_tests;
-pub mod unmodelled;
+pub use aeroident_registry::unmodelled;
 pub mod verdict;
 
 use crate::condition::Derivative;

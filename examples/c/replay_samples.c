@@ -10,7 +10,7 @@
  * SAMPLES_CSV holds the samples the estimator consumes, one per row, columns named as the
  * fields of AeroidentSample (an empty cell: absent) plus `manoeuvre` (a new number starts a new
  * manoeuvre, as a gap does in a replay). `cargo run --release -p aeroident-capi --example
- * replay_samples` writes such a file from a flight record: the samples `aeroident replay`
+ * conditioned_samples` writes such a file from a flight record: the samples `aeroident replay`
  * feeds its estimator (docs/c-abi.md).
  *
  * Build (after `cargo build --release -p aeroident-capi`):

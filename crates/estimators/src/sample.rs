@@ -236,16 +236,21 @@ impl AirDataSample {
     }
 
     /// The sample a fraction `w` (0–1) of the way from `a` to `b`, every channel linearly
-    /// interpolated (a channel either lacks is absent; the heading across ±π by its wrapped
-    /// difference), the constants `a`'s. For a transform that needs uniform sampling, a
+    /// interpolated (a channel either lacks is absent; the heading the short way round, by its
+    /// wrapped difference, and wrapped back into the neighbours' range: (−π, π], or [0, 2π)
+    /// where both lie there), the constants `a`'s. For a transform that needs uniform sampling, a
     /// sample the record lacks or a screen removed is bridged so, as data editing replaces a
     /// wild point by interpolation (Klein & Morelli 2006, §9.1) instead of leaving a gap.
     pub fn between(a: &Self, b: &Self, w: f64) -> Self {
         let mix = |x: f64, y: f64| x + w * (y - x);
         let opt = |x: Option<f64>, y: Option<f64>| Some(mix(x?, y?));
         let heading = |x: Option<f64>, y: Option<f64>| {
+            use core::f64::consts::{PI, TAU};
             let (x, y) = (x?, y?);
-            Some(x + w * libm::remainder(y - x, core::f64::consts::TAU))
+            let h = libm::remainder(x + w * libm::remainder(y - x, TAU), TAU);
+            let from_zero = x > PI || y > PI;
+            let below = if from_zero { h < 0.0 } else { h <= -PI };
+            Some(if below { h + TAU } else { h })
         };
         macro_rules! interpolated {
             ($($f:ident),*) => {
@@ -540,6 +545,18 @@ mod tests {
         assert!((m.psi_rad.unwrap() - (3.1 + 0.25 * short_way)).abs() < 1e-12, "{m:?}");
         assert_eq!(m.constants, a.constants);
         assert_eq!(AirDataSample::between(&a, &b, 0.0).vt_mps, a.vt_mps);
+        // Past π the heading comes back round: three quarters of the way is
+        // 3.1 + 0.75 × 0.083 = 3.162 > π, which is 3.162 − 2π = −3.121 in (−π, π].
+        let late = AirDataSample::between(&a, &b, 0.75).psi_rad.unwrap();
+        assert!((late - (3.1 + 0.75 * short_way - 2.0 * core::f64::consts::PI)).abs() < 1e-12);
+        // A log in [0, 2π) (6.2 to 0.1 rad) stays there: halfway is 6.2 + 0.0916 − 2π = 0.008.
+        let (c, d) = (
+            AirDataSample { psi_rad: Some(6.2), ..level() },
+            AirDataSample { psi_rad: Some(0.1), ..level() },
+        );
+        let h = AirDataSample::between(&c, &d, 0.5).psi_rad.unwrap();
+        let half = 0.5 * (0.1 + 2.0 * core::f64::consts::PI - 6.2);
+        assert!((h - (6.2 + half - 2.0 * core::f64::consts::PI)).abs() < 1e-12 && h >= 0.0, "{h}");
     }
 
     /// Every name of `MEASURED_FIELDS` reads its own field: a sample whose measured fields hold

@@ -36,9 +36,12 @@ pub fn push_f64(out: &mut String, buf: &mut ryu::Buffer, x: f64) {
 
 /// Appends `x` rounded to `digits` (1–17) significant digits, in Ryu's layout (`0.001234`,
 /// `1.234e-9`: an exponent outside its plain range, so a tiny value is not a run of zeros);
-/// zero and non-finite values as [`push_f64`] writes them. The text reads back to the `f64`
-/// nearest the rounded decimal, as `format!("{x:.*e}", digits - 1)` does; when the quick
-/// rounding by a power of ten misses that `f64` by an ulp, that formatting is used instead.
+/// zero and non-finite values as [`push_f64`] writes them. The rounding is to nearest, ties to
+/// even, of `x` scaled by a power of ten: the decimal `format!("{x:.*e}", digits - 1)` gives,
+/// except that a value within an ulp of a tie may round to the other side (one unit of the
+/// last digit), since the scaling itself rounds. A result whose shortest text would need more
+/// digits (the scaled value missed its decimal, or `x` is subnormal or beyond 10^±22) is
+/// written by that formatting instead.
 pub fn push_significant(out: &mut String, buf: &mut ryu::Buffer, x: f64, digits: usize) {
     if x == 0.0 || !x.is_finite() {
         push_f64(out, buf, x);
@@ -47,8 +50,8 @@ pub fn push_significant(out: &mut String, buf: &mut ryu::Buffer, x: f64, digits:
     let shift = digits as i32 - 1 - x.abs().log10().floor() as i32;
     // Powers of ten up to 10^22 are exact doubles, so the quotient is correctly rounded.
     let rounded = match shift {
-        0..=22 => (x * 10f64.powi(shift)).round() / 10f64.powi(shift),
-        -22..=-1 => (x / 10f64.powi(-shift)).round() * 10f64.powi(-shift),
+        0..=22 => (x * 10f64.powi(shift)).round_ties_even() / 10f64.powi(shift),
+        -22..=-1 => (x / 10f64.powi(-shift)).round_ties_even() * 10f64.powi(-shift),
         _ => f64::NAN,
     };
     let text = buf.format(rounded);
@@ -202,8 +205,12 @@ mod tests {
         let mut s = String::new();
         push_significant(&mut s, &mut buf, 0.0, 4);
         assert_eq!(s, "0");
-        s.clear();
-        push_significant(&mut s, &mut buf, 0.000_123_45, 4);
-        assert!(s == "0.0001234" || s == "0.0001235", "{s}");
+        // Exact ties (0.15625 is a binary fraction) go to the even digit, as core's formatting.
+        for (x, tie) in [(0.156_25, "0.1562"), (-0.156_25, "-0.1562"), (2.0625, "2.062")] {
+            s.clear();
+            push_significant(&mut s, &mut buf, x, 4);
+            assert_eq!(s.parse::<f64>(), tie.parse::<f64>(), "{x}: {s}");
+            assert_eq!(s.parse::<f64>().ok(), format!("{x:.3e}").parse::<f64>().ok(), "{x}");
+        }
     }
 }

@@ -239,8 +239,8 @@ impl AirDataSample {
     /// interpolated (a channel either lacks is absent; the heading the short way round, by its
     /// wrapped difference, and wrapped back into the neighbours' range: (−π, π], or [0, 2π)
     /// where both lie there), the constants `a`'s. For a transform that needs uniform sampling, a
-    /// sample the record lacks or a screen removed is bridged so, as data editing replaces a
-    /// wild point by interpolation (Klein & Morelli 2006, §9.1) instead of leaving a gap.
+    /// sample the record lacks or a screen removed is bridged so instead of leaving a gap:
+    /// interpolation reconstructs missing or bad points (Klein & Morelli 2006, §11.3).
     pub fn between(a: &Self, b: &Self, w: f64) -> Self {
         let mix = |x: f64, y: f64| x + w * (y - x);
         let opt = |x: Option<f64>, y: Option<f64>| Some(mix(x?, y?));

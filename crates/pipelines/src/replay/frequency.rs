@@ -267,8 +267,9 @@ const MAX_BRIDGED_SAMPLES: usize = 3;
 /// times the manoeuvre's median interval, to the tolerance the transform allows
 /// ([`MAX_INTERVAL_DEVIATION`] per interval); its `n − 1` samples go back on the grid. The
 /// discrete Fourier transform needs uniform sampling, and the spike screen (on by default)
-/// and the reader remove a wild point or a bad row instead of replacing it; data editing
-/// replaces a wild point by interpolation, and so does this, for the transform only.
+/// and the reader remove a wild point or a bad row instead of replacing it; interpolation
+/// reconstructs missing or bad points (Klein & Morelli 2006, §11.3), here for the transform
+/// only.
 fn bridged(slices: &[&[AirDataSample]]) -> (Option<Vec<Vec<AirDataSample>>>, Option<String>) {
     let mut filled: Vec<Vec<AirDataSample>> = Vec::with_capacity(slices.len());
     let (mut count, mut first) = (0usize, None::<f64>);

@@ -324,13 +324,22 @@ fn errors_estimator_option_goes_through_the_registry() {
 
 /// A batch fit's options from the command line go through the one parser of a batch fit's
 /// options: `--estimator-option` names any of them, a real-time estimator's option is refused
-/// naming what the fit takes, and an option of the other method names whose it is.
+/// naming what the fit takes, a batch fit's option given to a real-time estimator names the
+/// fits that take it, and an option of the other method names whose it is.
 #[test]
 fn errors_batch_fit_options_go_through_one_parser() {
     let (ok, err) = replay_good(&["--estimator", "oe", "--forgetting", "0.9"], "oe-forget");
     assert!(!ok, "{err}");
     assert!(
-        err.contains("--forgetting is not an option of --estimator oe, which takes `initial_states`, `bootstrap_refits`, `max_iterations` and `robust`"),
+        err.contains("--forgetting is not an option of --estimator oe, which takes `initial_states`, `step`, `bootstrap_refits`, `max_iterations` and `robust`"),
+        "{err}"
+    );
+    // A real-time estimator refuses a batch fit's option, naming the fits that take it.
+    let (ok, err) = replay_good(&["--estimator", "rls", "--max-iterations", "3"], "rls-iter");
+    assert!(
+        !ok && err.contains(
+            "--max-iterations applies to the batch fits (--estimator oe, fem or fdoe), not to --estimator rls"
+        ),
         "{err}"
     );
     let (ok, err) =

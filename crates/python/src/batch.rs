@@ -13,7 +13,6 @@ use aeroident_pipelines::estimators::OptionError;
 use aeroident_pipelines::job::fit::{FitJob, FitJobOutcome};
 use aeroident_pipelines::job::{CompatSource, InPlace, JobLog, Ran, Records};
 use aeroident_pipelines::replay::batch::FitOptions;
-use aeroident_pipelines::replay::fit::fit_options_of;
 use numpy::IntoPyArray;
 use numpy::ndarray::Array2;
 use pyo3::prelude::*;
@@ -48,7 +47,7 @@ fn fit_options(
     FitOptions::from_pairs(kind, pairs).map_err(|e| match e {
         OptionError::Unknown { kind, key } => {
             let takes: Vec<String> =
-                fit_options_of(kind).iter().map(|k| format!("`{}`", keyword(k))).collect();
+                kind.fit_options().iter().map(|k| format!("`{}`", keyword(k))).collect();
             err(format!(
                 "fit: estimator `{}`: unknown keyword argument `{}` (it takes {})",
                 kind.name(),

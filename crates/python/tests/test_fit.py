@@ -126,7 +126,7 @@ def test_fit_options_go_through_one_parser():
     plain = aeroident.fit(data, HFB_MAP, "oe", model=BOOK_MODEL)
     robust = aeroident.fit(data, HFB_MAP, "oe", model=BOOK_MODEL, robust=True)
     assert not np.array_equal(plain["estimate"], robust["estimate"])
-    with pytest.raises(aeroident.AeroidentError, match=r"unknown keyword argument `forgetting` \(it takes `initial_states`, `bootstrap`, `max_iterations`, `robust`\)"):
+    with pytest.raises(aeroident.AeroidentError, match=r"unknown keyword argument `forgetting` \(it takes `initial_states`, `step`, `bootstrap`, `max_iterations`, `robust`\)"):
         aeroident.fit(data, HFB_MAP, "oe", forgetting=0.9)
     with pytest.raises(aeroident.AeroidentError, match="filter-error method"):
         aeroident.fit(data, HFB_MAP, "oe", gain_constraint=False)

@@ -120,14 +120,40 @@ impl EstimatorKind {
                 "reaching_rate_per_s",
                 "change_false_alarm_interval_s",
             ],
-            EstimatorKind::Oe => {
-                &["initial_states", "samples", "step", "bootstrap_refits", "max_iterations"]
+            // The fit's options ([`EstimatorKind::fit_options`]) and which samples the
+            // experiment records for it.
+            EstimatorKind::Oe => &[
+                "initial_states",
+                "step",
+                "bootstrap_refits",
+                "max_iterations",
+                "robust",
+                "samples",
+            ],
+            EstimatorKind::Fem => {
+                &["initial_states", "max_iterations", "process_noise", "gain_constraint", "samples"]
             }
-            EstimatorKind::Fem => &["initial_states", "samples", "process_noise", "max_iterations"],
-            // A recorded flight's fit only (`replay --band-hz`, `--max-iterations`): the
-            // closed-loop experiment refuses the kind (`aircraft::batch::config`).
+            // A recorded flight's fit only (`replay --band-hz`): the closed-loop experiment
+            // refuses the kind (`aircraft::batch::config`).
             EstimatorKind::Fdoe => &[],
             EstimatorKind::Smpe | EstimatorKind::SmpeCorrected | EstimatorKind::Gradient => &[],
+        }
+    }
+
+    /// The options of a batch fit of this kind, of a recorded flight and of the closed-loop
+    /// experiment alike (`aeroident_pipelines::replay::fit::FitOptions::from_pairs` parses
+    /// them); none for a real-time estimator. The faces derive from it which of their flags
+    /// suit which method.
+    pub fn fit_options(self) -> &'static [&'static str] {
+        match self {
+            EstimatorKind::Oe => {
+                &["initial_states", "step", "bootstrap_refits", "max_iterations", "robust"]
+            }
+            EstimatorKind::Fem => {
+                &["initial_states", "max_iterations", "process_noise", "gain_constraint"]
+            }
+            EstimatorKind::Fdoe => &["band_hz", "max_iterations"],
+            _ => &[],
         }
     }
 
@@ -765,7 +791,7 @@ mod tests {
         );
         assert_eq!(
             unknown_option(EstimatorKind::Oe, "x"),
-            "oe: unknown option `x` (it takes `initial_states`, `samples`, `step`, `bootstrap_refits` and `max_iterations`)"
+            "oe: unknown option `x` (it takes `initial_states`, `step`, `bootstrap_refits`, `max_iterations`, `robust` and `samples`)"
         );
         assert_eq!(
             unknown_option(EstimatorKind::Smpe, "x"),
@@ -817,6 +843,24 @@ mod tests {
         assert_eq!(build_sample_estimator(&spec).unwrap().method(), "rls-iv");
         spec.options.insert("instrument_delay".into(), toml::Value::Integer(0));
         assert!(build_sample_estimator(&spec).err().unwrap().contains("≥ 1"));
+    }
+
+    /// A scenario's batch entry takes the fit's options and the experiment's `samples`, no
+    /// other (fdoe none: the experiment refuses it); a real-time estimator has no fit options.
+    #[test]
+    fn a_batch_entry_takes_the_fit_options_and_its_samples() {
+        for k in EstimatorKind::ALL {
+            let entry: Vec<&str> =
+                k.options().iter().copied().filter(|o| *o != "samples").collect();
+            match k {
+                EstimatorKind::Oe | EstimatorKind::Fem => {
+                    assert_eq!(entry, k.fit_options(), "{}", k.name());
+                    assert!(k.options().contains(&"samples"), "{}", k.name());
+                }
+                EstimatorKind::Fdoe => assert!(k.options().is_empty()),
+                _ => assert!(k.fit_options().is_empty(), "{}", k.name()),
+            }
+        }
     }
 
     #[test]

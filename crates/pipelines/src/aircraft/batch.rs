@@ -69,17 +69,18 @@
 //! filter following the smoothed measurements. Batch methods use no differentiated channel, so
 //! they do not need the smoother.
 
-use aeroident_estimators::flight_model::{N_STATES, Output, StateSet};
+use aeroident_estimators::flight_model::{Output, StateSet};
 use aeroident_estimators::output_error::filter_error::FemConfig;
 use aeroident_estimators::output_error::{InitialStates, OeConfig, OeResult, StepKind};
 use aeroident_estimators::sample::AirDataSample;
 use serde::Serialize;
 
-use crate::estimators::SampleEstimatorSpec;
+use crate::estimators::{EstimatorKind, OptionError, SampleEstimatorSpec};
+use crate::replay::batch::FitOptions;
 use crate::replay::batch::{
     BOOTSTRAP_SEED, MAX_ITERATIONS, bootstrap_sigma, check_bootstrap_refits, fem_reported_sigma,
-    fit_fem_manoeuvres, fit_manoeuvres, initial_states_name, oe_config, parse_process_noise_states,
-    process_noise_of, reported_sigma, termination_note,
+    fit_fem_manoeuvres, fit_manoeuvres, initial_states_name, oe_config, process_noise_of,
+    reported_sigma, termination_note,
 };
 
 /// The configuration of a batch entry: output error or the filter-error method.
@@ -117,27 +118,34 @@ impl BatchConfig {
 }
 
 /// The configuration of a batch entry (`kind = "oe"` or `"fem"`): [`oe_config`] of its
-/// structure with Jategaonkar's relaxation step ([`StepKind::Relaxation`]; option `step =
-/// "concentrated"` for the other, `oe` only) and at most [`MAX_ITERATIONS`] iterations, the
-/// outputs of the structure's flight model without the differentiated `ṗ q̇ ṙ` (they are
-/// computed from the gyros already fitted, not independent measurements: fitting both would
-/// count the gyro noise twice under the diagonal `R`), its option `initial_states`
-/// (`"first-sample"`, the default, or `"estimate"`) and `max_iterations` (a positive integer;
-/// past it the fit's last iterate is reported as `not_converged`). `fem` adds process noise on `V, α, β`
-/// (option `process_noise`, module doc).
+/// structure with the entry's options as a recorded flight's fit takes them
+/// ([`FitOptions::from_pairs`], the one parser; [`EstimatorKind::fit_options`] lists each
+/// method's), over the experiment's own defaults: Jategaonkar's relaxation step
+/// ([`StepKind::Relaxation`]; `step = "concentrated"` for the other) and at most
+/// [`MAX_ITERATIONS`] iterations. The outputs are the structure's flight model's without the
+/// differentiated `ṗ q̇ ṙ` (they are computed from the gyros already fitted, not independent
+/// measurements: fitting both would count the gyro noise twice under the diagonal `R`).
+/// `samples = "raw" | "smoothed"` is the experiment's own option (which samples it records);
+/// a bootstrap needs the raw ones.
 ///
 /// # Errors
-/// A message naming an unknown option or value; `fdoe`, which fits recorded flights only.
+/// A message naming an unknown option or value, an option the method does not have; `fdoe`,
+/// which fits recorded flights only.
 pub fn config(spec: &SampleEstimatorSpec) -> Result<BatchConfig, String> {
-    let kind = spec.kind.as_str();
-    if kind == "fdoe" {
-        return Err("fdoe: frequency-domain output error fits a recorded flight (`aeroident replay --estimator fdoe`); the closed-loop experiment's batch fits are `oe` and `fem`".into());
-    }
+    let name = spec.kind.as_str();
+    let kind = match <EstimatorKind as crate::Named>::from_name(name) {
+        Some(k @ (EstimatorKind::Oe | EstimatorKind::Fem)) => k,
+        Some(EstimatorKind::Fdoe) => {
+            return Err("fdoe: frequency-domain output error fits a recorded flight (`aeroident replay --estimator fdoe`); the closed-loop experiment's batch fits are `oe` and `fem`".into());
+        }
+        _ => return Err(format!("{name}: not a batch fit (`oe` or `fem`)")),
+    };
+    let mut options = entry_options(kind, &spec.options)?;
+    options.step.get_or_insert(StepKind::Relaxation);
+    options.max_iterations.get_or_insert(MAX_ITERATIONS);
     let mut c = oe_config(spec.model);
     c.initial_states = InitialStates::FirstSample;
-    c.step = StepKind::Relaxation;
-    c.max_iterations = MAX_ITERATIONS;
-    let set = StateSet::of(&spec.model).map_err(|e| format!("{kind}: {e}"))?;
+    let set = StateSet::of(&spec.model).map_err(|e| format!("{name}: {e}"))?;
     c.outputs = Some(
         set.outputs()
             .iter()
@@ -145,86 +153,43 @@ pub fn config(spec: &SampleEstimatorSpec) -> Result<BatchConfig, String> {
             .filter(|o| !matches!(o, Output::Pdot | Output::Qdot | Output::Rdot))
             .collect(),
     );
-    let mut process_noise = None;
-    let mut bootstrap_refits = None;
-    let mut raw = false;
-    for (key, v) in &spec.options {
-        match (key.as_str(), v.as_str()) {
-            ("initial_states", Some("first-sample")) => {}
-            ("initial_states", Some("estimate")) => {
-                c.initial_states = InitialStates::Estimate([true; N_STATES]);
-            }
-            ("initial_states", _) => {
-                return Err(format!(
-                    "{kind}: `initial_states` must be \"estimate\" or \"first-sample\", got {v}"
-                ));
-            }
-            ("step", Some("relaxation")) if kind == "oe" => c.step = StepKind::Relaxation,
-            ("step", Some("concentrated")) if kind == "oe" => c.step = StepKind::Concentrated,
-            ("step", _) if kind == "oe" => {
-                return Err(format!(
-                    "oe: `step` must be \"relaxation\" or \"concentrated\", got {v}"
-                ));
-            }
-            ("samples", Some(which @ ("raw" | "smoothed"))) => raw = which == "raw",
-            ("bootstrap_refits", _) if kind == "oe" => {
-                let n = spec.options.get(key).and_then(toml::Value::as_integer);
-                match n.and_then(|n| usize::try_from(n).ok()) {
-                    Some(n) if n >= 2 => {
-                        check_bootstrap_refits(n)
-                            .map_err(|e| format!("oe: `bootstrap_refits`: {e}"))?;
-                        bootstrap_refits = Some(n);
-                    }
-                    _ => {
-                        return Err(format!(
-                            "oe: `bootstrap_refits` must be an integer of at least 2, got {}",
-                            spec.options[key]
-                        ));
-                    }
-                }
-            }
-            ("samples", _) => {
-                return Err(format!("{kind}: `samples` must be \"raw\" or \"smoothed\", got {v}"));
-            }
-            ("process_noise", Some(list)) if kind == "fem" => {
-                process_noise = Some(parse_process_noise_states(list)?);
-            }
-            ("max_iterations", _) => {
-                match spec.options.get(key).and_then(toml::Value::as_integer) {
-                    Some(n) if n >= 1 => c.max_iterations = n as usize,
-                    _ => {
-                        return Err(format!(
-                            "{kind}: `max_iterations` must be a positive integer, got {}",
-                            spec.options[key]
-                        ));
-                    }
-                }
-            }
-            (other, _) => {
-                let k = <crate::estimators::EstimatorKind as crate::Named>::from_name(kind);
-                return Err(k.map_or_else(
-                    || format!("{kind}: unknown option `{other}`"),
-                    |k| crate::estimators::unknown_option(k, other),
-                ));
-            }
-        }
+    if kind == EstimatorKind::Fem {
+        let mut f = FemConfig::new(spec.model);
+        f.oe = c;
+        options.apply_to_fem(&mut f);
+        return Ok(BatchConfig::Fem(f));
     }
-    Ok(match kind {
-        "fem" => {
-            let mut f = FemConfig::new(spec.model);
-            f.oe = c;
-            if let Some(mask) = process_noise {
-                f.process_noise = mask;
-            }
-            BatchConfig::Fem(f)
-        }
-        _ => {
-            if bootstrap_refits.is_some() && !raw {
-                return Err("oe: `bootstrap_refits` needs `samples = \"raw\"`: the bootstrap's noise levels come from a filter-error fit, which needs measurement errors white from sample to sample (module doc)".into());
-            }
-            BatchConfig::Oe { config: c, bootstrap_refits }
-        }
-    })
+    options.apply_to_oe(&mut c);
+    if options.bootstrap_refits.is_some() && !spec.raw_samples() {
+        return Err("oe: `bootstrap_refits` needs `samples = \"raw\"`: the bootstrap's noise levels come from a filter-error fit, which needs measurement errors white from sample to sample (module doc)".into());
+    }
+    Ok(BatchConfig::Oe { config: c, bootstrap_refits: options.bootstrap_refits })
+}
+
+/// The fit options of an `[[estimator]]` entry of batch `kind` (every key but `samples`,
+/// which is checked here), parsed and checked as a recorded flight's.
+///
+/// # Errors
+/// A message naming the entry's kind, the option and what it must be.
+fn entry_options(kind: EstimatorKind, table: &toml::Table) -> Result<FitOptions, String> {
+    let name = kind.name();
+    if let Some(v) = table.get("samples")
+        && !matches!(v.as_str(), Some("raw" | "smoothed"))
+    {
+        return Err(format!("{name}: `samples` must be \"raw\" or \"smoothed\", got {v}"));
+    }
+    let pairs = table.iter().filter(|(k, _)| *k != "samples").map(|(k, v)| (k.as_str(), v.clone()));
+    let options = FitOptions::from_pairs(kind, pairs).map_err(|e| match e {
+        OptionError::Unknown { key, .. } => crate::estimators::unknown_option(kind, &key),
+        OptionError::Invalid { key, reason, .. } => format!("{name}: `{key}`: {reason}"),
+    })?;
+    if let Some((key, reason)) = options.refusal() {
+        return Err(format!("{}: {reason}", crate::estimators::unknown_option(kind, key)));
+    }
+    if let Some(n) = options.bootstrap_refits {
+        check_bootstrap_refits(n).map_err(|e| format!("{name}: `bootstrap_refits`: {e}"))?;
+    }
+    Ok(options)
 }
 
 /// How a batch fit went (`summary.json` `batch_fits`, and the Monte Carlo per-run results).
@@ -403,7 +368,7 @@ fn log_of(
 mod tests {
     use super::*;
     use aeroident_estimators::ModelStructure;
-    use aeroident_estimators::flight_model::state;
+    use aeroident_estimators::flight_model::{N_STATES, state};
 
     fn spec(kind: &str, options: &str) -> SampleEstimatorSpec {
         SampleEstimatorSpec {
@@ -425,7 +390,7 @@ mod tests {
             assert_eq!(config(&spec(kind, "")).unwrap().oe().max_iterations, MAX_ITERATIONS);
             for bad in ["max_iterations = 0", "max_iterations = 2.5", "max_iterations = \"x\""] {
                 let e = config(&spec(kind, bad)).unwrap_err();
-                assert!(e.contains("`max_iterations` must be a positive integer"), "{e}");
+                assert!(e.contains("`max_iterations`: must be an integer of at least 1"), "{e}");
             }
         }
         let BatchConfig::Fem(f) =
@@ -457,5 +422,45 @@ mod tests {
         }
         let e = config(&spec("oe", "samples = \"raw\"\nbootstrap_refits = -3")).unwrap_err();
         assert!(e.contains("at least 2"), "{e}");
+    }
+
+    /// A scenario's batch entry takes a recorded flight's options through the same parser:
+    /// Huber's weights and the concentrated step of output error, the filter-error method
+    /// without its gain constraint, over the experiment's defaults (relaxation, the longer
+    /// iteration limit); an option of the other method is refused naming whose it is.
+    #[test]
+    fn errors_an_entry_takes_the_options_a_record_fit_takes() {
+        let BatchConfig::Oe { config: c, .. } = config(&spec("oe", "")).unwrap() else {
+            panic!("oe expected")
+        };
+        assert_eq!(
+            (c.step, c.max_iterations, c.robust),
+            (StepKind::Relaxation, MAX_ITERATIONS, None)
+        );
+        let given = "robust = true\nstep = \"concentrated\"\ninitial_states = \"estimate\"";
+        let BatchConfig::Oe { config: c, .. } = config(&spec("oe", given)).unwrap() else {
+            panic!("oe expected")
+        };
+        assert_eq!(c.step, StepKind::Concentrated);
+        assert!(
+            c.robust.is_some()
+                && c.initial_states
+                    == InitialStates::Estimate(
+                        [true; aeroident_estimators::flight_model::N_STATES]
+                    )
+        );
+        let BatchConfig::Fem(f) = config(&spec("fem", "gain_constraint = false")).unwrap() else {
+            panic!("fem expected")
+        };
+        assert!(f.gain_limit.is_none() && f.oe.step == StepKind::Relaxation);
+        for (kind, option, owner) in [
+            ("fem", "robust = true", "output error"),
+            ("fem", "step = \"concentrated\"", "output error"),
+            ("oe", "gain_constraint = false", "filter-error method"),
+            ("oe", "band_hz = [0.1, 2.0]", "frequency-domain output error"),
+        ] {
+            let e = config(&spec(kind, option)).unwrap_err();
+            assert!(e.starts_with(&format!("{kind}: ")) && e.contains(owner), "{option}: {e}");
+        }
     }
 }

@@ -20,6 +20,7 @@ use super::ReplayError;
 use super::diagnostics::{self, Identifiability};
 use super::prediction::{Recorder, ValidationReport, validate_coefficients};
 use super::repeatability::{Repeatability, SoloFit};
+use crate::estimators::EstimatorKind;
 use crate::record::Manoeuvres;
 pub use crate::results::OutputTrace;
 use crate::validation::{OutputData, validate};
@@ -28,7 +29,7 @@ use aeroident_estimators::Term;
 use aeroident_estimators::flight_model::FlightModel;
 use aeroident_estimators::flight_model::{N_STATES, STATE_NAMES, state};
 use aeroident_estimators::output_error::filter_error::{self, FemConfig, FemResult};
-use aeroident_estimators::output_error::{InitialStates, Start};
+use aeroident_estimators::output_error::{InitialStates, Start, StepKind};
 use aeroident_estimators::output_error::{
     OeConfig, OeError, OeResult, StopFlag, Termination, fit, fit_to_end,
 };
@@ -891,6 +892,17 @@ pub enum BatchMethod {
     },
 }
 
+impl BatchMethod {
+    /// The estimator kind of the method (`oe`, `fem`, `fdoe`).
+    pub fn kind(&self) -> EstimatorKind {
+        match self {
+            BatchMethod::Oe => EstimatorKind::Oe,
+            BatchMethod::Fem => EstimatorKind::Fem,
+            BatchMethod::Fdoe { .. } => EstimatorKind::Fdoe,
+        }
+    }
+}
+
 /// The bootstrap replicas done so far, shared with a face that shows them (a progress bar):
 /// [`bootstrap_sigma`] adds one as each replica ends. Clones share the count.
 #[derive(Debug, Clone, Default)]
@@ -927,6 +939,9 @@ pub struct FitOptions {
     pub bootstrap_refits: Option<usize>,
     /// Counts the bootstrap's replicas as they end, for a face's progress; `None`: uncounted.
     pub bootstrap_done: Option<ReplicaCounter>,
+    /// `oe` only: how the Gauss–Newton step treats the noise covariance ([`StepKind`]);
+    /// `None`: [`OeConfig::new`]'s.
+    pub step: Option<StepKind>,
     /// Most Gauss–Newton iterations; `None`: [`OeConfig::new`]'s 50 for output error,
     /// [`MAX_ITERATIONS`] for the filter-error method. A fit stopped by it reports its last
     /// iterate ([`termination_note`]).
@@ -967,6 +982,7 @@ impl Default for FitOptions {
             initial_states: InitialStates::FirstSample,
             bootstrap_refits: None,
             bootstrap_done: None,
+            step: None,
             max_iterations: None,
             process_noise: None,
             gain_constraint: true,
@@ -1125,31 +1141,6 @@ fn solo_fit(
     fit
 }
 
-/// Refuses the time-domain fits' options on a frequency-domain fit.
-pub(crate) fn check_fdoe_options(options: &FitOptions) -> Result<(), ReplayError> {
-    let refuse = |option: &'static str, what: &str| {
-        Err(ReplayError::Option {
-            option,
-            reason: format!(
-                "{what} is of the time-domain fits (`--estimator oe`), not of frequency-domain output error"
-            ),
-        })
-    };
-    if options.bootstrap_refits.is_some() {
-        return refuse("bootstrap", "the parametric bootstrap");
-    }
-    if options.robust.is_some() {
-        return refuse("robust", "Huber's robust weighting");
-    }
-    if options.initial_states != InitialStates::FirstSample {
-        return refuse(
-            "initial-states",
-            "estimating initial states (fdoe estimates each manoeuvre's initial/final-condition terms anyway)",
-        );
-    }
-    Ok(())
-}
-
 /// The summary's warnings when one sample dominates the fit
 /// ([`aeroident_estimators::output_error::Dominance`]): the sample's time and the output (the
 /// share of the cost, named by `mapping`'s channel and column) or its Cook's distance, against
@@ -1205,28 +1196,48 @@ fn fit_slices(
 ) -> Result<FittedRecord, ReplayError> {
     if options.method == BatchMethod::Fem {
         let mut config = FemConfig::new(structure);
-        // Convergence on turbulent or model-error records is slow (module doc of filter_error).
-        config.oe.max_iterations = options.max_iterations.unwrap_or(MAX_ITERATIONS);
-        config.oe.initial_states = options.initial_states;
+        options.apply_to_fem(&mut config);
         config.oe.stop.clone_from(&options.stop);
-        if let Some(mask) = options.process_noise {
-            config.process_noise = mask;
-        }
-        if !options.gain_constraint {
-            config.gain_limit = None;
-        }
         let (f, wall) = fit_fem_manoeuvres(slices, &config).map_err(ReplayError::Model)?;
         Ok(FittedRecord { result: f.result.clone(), fit_wall_s: wall, fem: Some(f), oe: None })
     } else {
         let mut config = oe_config(structure);
-        config.initial_states = options.initial_states;
-        config.robust = options.robust;
+        options.apply_to_oe(&mut config);
         config.stop.clone_from(&options.stop);
-        if let Some(n) = options.max_iterations {
-            config.max_iterations = n;
-        }
         let (r, wall) = fit_manoeuvres(slices, &config).map_err(ReplayError::Model)?;
         Ok(FittedRecord { result: r, fit_wall_s: wall, fem: None, oe: Some(config) })
+    }
+}
+
+impl FitOptions {
+    /// Sets what the options say of an output-error fit's configuration (initial states,
+    /// step, iteration limit, Huber's weights), leaving the rest of `config` as it is: the
+    /// one translation of the options, for a record's fit and the closed-loop experiment's
+    /// (`crate::aircraft::batch::config`).
+    pub fn apply_to_oe(&self, config: &mut OeConfig) {
+        config.initial_states = self.initial_states;
+        config.robust = self.robust;
+        if let Some(step) = self.step {
+            config.step = step;
+        }
+        if let Some(n) = self.max_iterations {
+            config.max_iterations = n;
+        }
+    }
+
+    /// [`FitOptions::apply_to_oe`] for the filter-error method: its output-error part (the
+    /// iteration limit [`MAX_ITERATIONS`] unless given: convergence on turbulent or
+    /// model-error records is slow, module doc of `filter_error`), the states with process
+    /// noise and the gain constraint.
+    pub fn apply_to_fem(&self, config: &mut FemConfig) {
+        self.apply_to_oe(&mut config.oe);
+        config.oe.max_iterations = self.max_iterations.unwrap_or(MAX_ITERATIONS);
+        if let Some(mask) = self.process_noise {
+            config.process_noise = mask;
+        }
+        if !self.gain_constraint {
+            config.gain_limit = None;
+        }
     }
 }
 

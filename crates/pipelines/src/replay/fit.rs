@@ -5,14 +5,13 @@
 
 use super::ReplayError;
 use super::batch::{
-    BatchMethod, BatchOutcome, FitOptions, check_bootstrap_refits, check_fdoe_options,
-    parse_process_noise_states,
+    BatchMethod, BatchOutcome, FitOptions, check_bootstrap_refits, parse_process_noise_states,
 };
 use crate::estimators::{EstimatorKind, OptionError};
 use crate::record::read_records;
 use aeroident_estimators::flight_model::N_STATES;
-use aeroident_estimators::output_error::InitialStates;
 use aeroident_estimators::output_error::frequency::DEFAULT_BAND_HZ;
+use aeroident_estimators::output_error::{InitialStates, StepKind};
 use aeroident_io::{FlightDataReader, Mapping, ModelSpec};
 use std::io::Read;
 
@@ -104,11 +103,13 @@ fn fit_manoeuvres(
     Ok(out)
 }
 
-/// The options a batch fit of a recorded flight takes, as key/value pairs (the CLI's flags,
-/// `--estimator-option KEY=VALUE`, Python's keywords): [`FitOptions::from_pairs`] parses
-/// them, [`FitOptions::check`] refuses those the method does not have.
-pub const FIT_OPTION_KEYS: [&str; 7] = [
+/// The options a batch fit takes, as key/value pairs (the CLI's flags, `--estimator-option
+/// KEY=VALUE`, Python's keywords, a scenario's `[[estimator]]` keys): [`FitOptions::from_pairs`]
+/// parses them, [`FitOptions::check`] refuses those the method does not have
+/// ([`EstimatorKind::fit_options`] lists each method's).
+pub const FIT_OPTION_KEYS: [&str; 8] = [
     "initial_states",
+    "step",
     "bootstrap_refits",
     "max_iterations",
     "process_noise",
@@ -116,18 +117,6 @@ pub const FIT_OPTION_KEYS: [&str; 7] = [
     "robust",
     "band_hz",
 ];
-
-/// The options of [`FIT_OPTION_KEYS`] the batch method `kind` has, for messages.
-pub fn fit_options_of(kind: EstimatorKind) -> &'static [&'static str] {
-    match kind {
-        EstimatorKind::Oe => &["initial_states", "bootstrap_refits", "max_iterations", "robust"],
-        EstimatorKind::Fem => {
-            &["initial_states", "max_iterations", "process_noise", "gain_constraint"]
-        }
-        EstimatorKind::Fdoe => &["band_hz"],
-        _ => &[],
-    }
-}
 
 impl FitOptions {
     /// The batch fit `kind` (`oe`, `fem`, `fdoe`) with the options `pairs` give, every other
@@ -166,6 +155,7 @@ impl FitOptions {
         let flag = || v.as_bool().ok_or_else(|| invalid(format!("must be true or false, got {v}")));
         match key {
             "initial_states" => self.initial_states = initial_states(v).map_err(invalid)?,
+            "step" => self.step = Some(step(v).map_err(invalid)?),
             "bootstrap_refits" => {
                 let n = count(2)?;
                 check_bootstrap_refits(n).map_err(invalid)?;
@@ -190,40 +180,14 @@ impl FitOptions {
         Ok(())
     }
 
-    /// Refuses the options the method does not have (process noise, the gain constraint and
-    /// the bootstrap where output error or the filter-error method has none, the time-domain
-    /// options for `fdoe`) and a bootstrap count out of range, naming the option as the
-    /// command line spells it.
+    /// Refuses the options the method does not have ([`FitOptions::refusal`]) and a
+    /// bootstrap count out of range, naming the option as the command line spells it.
     ///
     /// # Errors
     /// [`ReplayError::Option`] saying whose option it is.
     pub fn check(&self) -> Result<(), ReplayError> {
-        if self.method != BatchMethod::Fem && self.process_noise.is_some() {
-            return Err(ReplayError::Option {
-                option: "process-noise",
-                reason: "process noise is the filter-error method's (`--estimator fem`); output error has none".into(),
-            });
-        }
-        if self.method != BatchMethod::Fem && !self.gain_constraint {
-            return Err(ReplayError::Option {
-                option: "no-gain-constraint",
-                reason: "the gain constraint is the filter-error method's (`--estimator fem`); output error has no filter".into(),
-            });
-        }
-        if self.method == BatchMethod::Fem && self.robust.is_some() {
-            return Err(ReplayError::Option {
-                option: "robust",
-                reason: "Huber's robust weights are of output error (`--estimator oe`), not of the filter-error method".into(),
-            });
-        }
-        if self.method == BatchMethod::Fem && self.bootstrap_refits.is_some() {
-            return Err(ReplayError::Option {
-                option: "bootstrap",
-                reason: "the parametric bootstrap is of output error (`--estimator oe`); the filter-error method's own σ accounts for the process noise".into(),
-            });
-        }
-        if let BatchMethod::Fdoe { .. } = self.method {
-            check_fdoe_options(self)?;
+        if let Some((key, reason)) = self.refusal() {
+            return Err(ReplayError::Option { option: flag_of(key), reason });
         }
         if let Some(n) = self.bootstrap_refits {
             // Before the record is read: the replicas' storage and time grow with the count.
@@ -231,6 +195,78 @@ impl FitOptions {
                 .map_err(|reason| ReplayError::Option { option: "bootstrap", reason })?;
         }
         Ok(())
+    }
+
+    /// The first option given (set away from its default) that the method does not have by
+    /// [`EstimatorKind::fit_options`], as its key of [`FIT_OPTION_KEYS`] and whose option it
+    /// is; `None` when the method has every option given.
+    pub fn refusal(&self) -> Option<(&'static str, String)> {
+        let kind = self.method.kind();
+        let given = [
+            ("initial_states", self.initial_states != InitialStates::FirstSample),
+            ("step", self.step.is_some()),
+            ("bootstrap_refits", self.bootstrap_refits.is_some()),
+            ("max_iterations", self.max_iterations.is_some()),
+            ("process_noise", self.process_noise.is_some()),
+            ("gain_constraint", !self.gain_constraint),
+            ("robust", self.robust.is_some()),
+        ];
+        let (key, _) = given.into_iter().find(|(k, g)| *g && !kind.fit_options().contains(k))?;
+        Some((key, whose(key, kind)))
+    }
+}
+
+/// Why the batch method `kind` does not take option `key`: what the option is, the methods
+/// that have it ([`EstimatorKind::fit_options`]) and, where it helps, why this one has none.
+fn whose(key: &str, kind: EstimatorKind) -> String {
+    let owners: Vec<String> = <EstimatorKind as crate::Named>::ALL
+        .iter()
+        .filter(|k| k.fit_options().contains(&key))
+        .map(|k| format!("{} (`--estimator {}`)", method_name(*k), k.name()))
+        .collect();
+    let what = match key {
+        "initial_states" => "estimating initial states",
+        "step" => "the choice of Gauss–Newton step",
+        "bootstrap_refits" => "the parametric bootstrap",
+        "max_iterations" => "an iteration limit",
+        "process_noise" => "process noise",
+        "gain_constraint" => "the gain constraint",
+        _ => "Huber's robust weighting",
+    };
+    let why = match (key, kind) {
+        ("bootstrap_refits", EstimatorKind::Fem) => {
+            "; the filter-error method's own σ accounts for the process noise"
+        }
+        ("initial_states", EstimatorKind::Fdoe) => {
+            "; fdoe estimates each manoeuvre's initial/final-condition terms anyway"
+        }
+        ("process_noise" | "gain_constraint", _) => "; output error has no filter",
+        _ => "",
+    };
+    format!("{what} is of {}, not of {}{why}", owners.join(" and "), method_name(kind))
+}
+
+/// The batch method `kind` in words.
+fn method_name(kind: EstimatorKind) -> &'static str {
+    match kind {
+        EstimatorKind::Fem => "the filter-error method",
+        EstimatorKind::Fdoe => "frequency-domain output error",
+        _ => "output error",
+    }
+}
+
+/// The command line's flag (without `--`) of fit option `key`; `estimator-option` for one
+/// without a flag of its own.
+fn flag_of(key: &str) -> &'static str {
+    match key {
+        "initial_states" => "initial-states",
+        "bootstrap_refits" => "bootstrap",
+        "max_iterations" => "max-iterations",
+        "process_noise" => "process-noise",
+        "gain_constraint" => "no-gain-constraint",
+        "robust" => "robust",
+        "band_hz" => "band-hz",
+        _ => "estimator-option",
     }
 }
 
@@ -244,6 +280,16 @@ fn initial_states(v: &toml::Value) -> Result<InitialStates, String> {
             "`{}` is not `first-sample` or `estimate`",
             v.as_str().map_or_else(|| v.to_string(), str::to_string)
         )),
+    }
+}
+
+/// `step`: `"relaxation"` (Jategaonkar's, `R` held in the step) or `"concentrated"` (the
+/// curvature of `R(β)` included), [`StepKind`].
+fn step(v: &toml::Value) -> Result<StepKind, String> {
+    match v.as_str() {
+        Some("relaxation") => Ok(StepKind::Relaxation),
+        Some("concentrated") => Ok(StepKind::Concentrated),
+        _ => Err(format!("must be \"relaxation\" or \"concentrated\", got {v}")),
     }
 }
 
@@ -329,5 +375,50 @@ mod tests {
             FitOptions::from_pairs(EstimatorKind::Oe, [("process_noise", V::String("V".into()))]);
         let e = noise_oe.unwrap().check().unwrap_err().to_string();
         assert!(e.contains("filter-error method"), "{e}");
+    }
+
+    /// A value a face could give for each option of [`FIT_OPTION_KEYS`], away from its
+    /// default.
+    fn given(key: &str) -> V {
+        match key {
+            "initial_states" => V::String("estimate".into()),
+            "step" => V::String("relaxation".into()),
+            "bootstrap_refits" => V::Integer(5),
+            "max_iterations" => V::Integer(12),
+            "process_noise" => V::String("V,alpha".into()),
+            "gain_constraint" | "robust" => V::Boolean(key == "robust"),
+            "band_hz" => V::Array(vec![0.2.into(), 2.0.into()]),
+            other => panic!("no value for `{other}`"),
+        }
+    }
+
+    /// The registry's list of each batch method's options is what the parser and `check` take:
+    /// every listed option parses and passes, every other option of [`FIT_OPTION_KEYS`] is
+    /// refused (by the parser or by `check`) and its message names a method that has it; a
+    /// real-time estimator lists none.
+    #[test]
+    fn errors_each_method_takes_exactly_the_options_the_registry_lists() {
+        for kind in [EstimatorKind::Oe, EstimatorKind::Fem, EstimatorKind::Fdoe] {
+            let takes = kind.fit_options();
+            assert!(takes.iter().all(|k| FIT_OPTION_KEYS.contains(k)), "{takes:?}");
+            let all = takes.iter().map(|k| (*k, given(k)));
+            let o = FitOptions::from_pairs(kind, all).unwrap_or_else(|e| panic!("{e}"));
+            assert!(o.check().is_ok() && o.refusal().is_none(), "{}: {:?}", kind.name(), o);
+            for key in FIT_OPTION_KEYS.iter().filter(|k| !takes.contains(k)) {
+                let refused = match FitOptions::from_pairs(kind, [(*key, given(key))]) {
+                    Err(e) => e.to_string(),
+                    Ok(o) => o.check().map_or_else(|e| e.to_string(), |()| String::new()),
+                };
+                assert!(!refused.is_empty(), "{} took `{key}`", kind.name());
+                let owner = <EstimatorKind as crate::Named>::ALL
+                    .iter()
+                    .find(|k| k.fit_options().contains(key))
+                    .unwrap();
+                assert!(refused.contains(owner.name()), "{}: {key}: {refused}", kind.name());
+            }
+        }
+        for kind in <EstimatorKind as crate::Named>::ALL.iter().filter(|k| !k.is_batch()) {
+            assert!(kind.fit_options().is_empty(), "{}", kind.name());
+        }
     }
 }

@@ -73,7 +73,6 @@ use aeroident_pipelines::job::fit::FitJob;
 use aeroident_pipelines::job::replay::ReplayJob;
 use aeroident_pipelines::job::{CompatSource, ModelChoice, Ran, Records, ValidateOn};
 use aeroident_pipelines::replay::batch::FitOptions;
-use aeroident_pipelines::replay::fit::fit_options_of;
 use aeroident_pipelines::replay::{DerivativeSource, Pacing, ReplayObserver, ReplayOptions};
 use aeroident_pipelines::window::TimeWindow;
 use anyhow::Context;
@@ -632,49 +631,28 @@ fn as_typed(typed: &[TypedOption], key: &str) -> String {
     }
 }
 
-/// [`check_combination`] for the real-time estimators: the batch fits' options refused.
+/// [`check_combination`] for the real-time estimators: a batch fit's option (one of a batch
+/// method's [`EstimatorKind::fit_options`]) refused, naming the methods that take it.
 fn check_online_combination(args: &ReplayArgs) -> anyhow::Result<()> {
-    if args.robust {
-        anyhow::bail!(
-            "--robust is Huber's output-error fit (--estimator oe), not --estimator {}",
-            args.estimator.name()
-        );
-    }
-    if args.band_hz.is_some() {
-        anyhow::bail!(
-            "--band-hz is the band of frequency-domain output error (--estimator fdoe), not of --estimator {}",
-            args.estimator.name()
-        );
-    }
-    if args.initial_states.is_some() {
-        anyhow::bail!(
-            "--initial-states applies to the batch fits (--estimator oe or fem), not to --estimator {}",
-            args.estimator.name()
-        );
-    }
-    if args.bootstrap.is_some() {
-        anyhow::bail!(
-            "--bootstrap applies to output error (--estimator oe), not to --estimator {}",
-            args.estimator.name()
-        );
-    }
-    if args.no_gain_constraint {
-        anyhow::bail!(
-            "--no-gain-constraint applies to the filter-error method (--estimator fem), not to --estimator {}",
-            args.estimator.name()
-        );
-    }
-    if args.process_noise.is_some() {
-        anyhow::bail!(
-            "--process-noise applies to the filter-error method (--estimator fem), not to --estimator {}",
-            args.estimator.name()
-        );
-    }
-    if args.max_iterations.is_some() {
-        anyhow::bail!(
-            "--max-iterations applies to the batch fits (--estimator oe or fem), not to --estimator {}",
-            args.estimator.name()
-        );
+    for t in option_pairs(args)? {
+        let takers: Vec<&str> = <EstimatorKind as aeroident_pipelines::Named>::ALL
+            .iter()
+            .filter(|k| k.fit_options().contains(&t.key))
+            .map(|k| k.name())
+            .collect();
+        if let [init @ .., last] = &takers[..] {
+            let kinds = if init.is_empty() {
+                last.to_string()
+            } else {
+                format!("{} or {last}", init.join(", "))
+            };
+            anyhow::bail!(
+                "{} applies to the batch fit{} (--estimator {kinds}), not to --estimator {}",
+                as_typed(std::slice::from_ref(&t), t.key),
+                if init.is_empty() { "" } else { "s" },
+                args.estimator.name()
+            );
+        }
     }
     Ok(())
 }
@@ -768,7 +746,7 @@ fn fit_options(args: &ReplayArgs) -> anyhow::Result<FitOptions> {
             "{} is not an option of --estimator {}, which takes {} (it would be ignored)",
             as_typed(&typed, &key),
             kind.name(),
-            quoted_list(fit_options_of(kind))
+            quoted_list(kind.fit_options())
         ),
         OptionError::Invalid { key, reason, .. } => {
             anyhow::anyhow!("option `{}`: {reason}", as_typed(&typed, &key))

@@ -1229,6 +1229,8 @@ impl Estimator for Ekf {
                 return self.locked_out(pending.counts, o, s, u1);
             }
         }
+        let n = self.nx + self.np;
+        change::mirror_lower(self.work_mut(), n);
         self.check_state(&pending.z, s.t_s)?;
         self.commit(pending, s.t_s, dt);
         self.last = Some(u1);

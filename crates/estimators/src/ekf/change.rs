@@ -169,7 +169,10 @@ pub(super) fn cusum_threshold(arl: f64) -> f64 {
 }
 
 /// `h P hᵀ` for output row `h` (or the unit row of integrated state `unit`), with `P hᵀ`
-/// written to `ph` (first `n` entries).
+/// written to `ph` (first `n` entries). Reads only the lower triangle of `p` (`p[i][j]`,
+/// `j ≤ i`): during a step's measurement updates only that triangle is kept current
+/// ([`Ekf::correct`](super::Ekf), [`mirror_lower`]). `P` is exactly symmetric, so this is the
+/// same number to the bit as reading the full rows.
 pub(super) fn p_times_row(
     p: &Square,
     unit: Option<usize>,
@@ -179,7 +182,10 @@ pub(super) fn p_times_row(
 ) -> f64 {
     match unit {
         Some(k) => {
-            ph[..n].copy_from_slice(&p[k][..n]);
+            ph[..=k].copy_from_slice(&p[k][..=k]);
+            for (j, phj) in ph.iter_mut().enumerate().take(n).skip(k + 1) {
+                *phj = p[j][k];
+            }
             ph[k]
         }
         None => {
@@ -196,15 +202,26 @@ pub(super) fn p_times_row(
                 }
             }
             let nz = &nz[..m];
-            for i in 0..n {
-                let row = &p[i];
+            for (i, phi) in ph.iter_mut().enumerate().take(n) {
                 let mut acc = 0.0;
                 for &j in nz {
-                    acc += row[j] * h[j];
+                    let pij = if j <= i { p[i][j] } else { p[j][i] };
+                    acc += pij * h[j];
                 }
-                ph[i] = acc;
+                *phi = acc;
             }
             nz.iter().map(|&j| h[j] * ph[j]).sum()
+        }
+    }
+}
+
+/// Copies the lower triangle of the leading `n × n` block of `p` onto its upper one: after
+/// the measurement updates, which keep only the lower triangle, `p` is whole (and exactly
+/// symmetric) again for whatever reads it next.
+pub(super) fn mirror_lower(p: &mut Square, n: usize) {
+    for i in 1..n {
+        for j in 0..i {
+            p[j][i] = p[i][j];
         }
     }
 }
@@ -212,6 +229,43 @@ pub(super) fn p_times_row(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `P hᵀ` and `h P hᵀ` from the lower triangle equal the full symmetric product (a dense
+    /// row and a unit row), with the upper triangle spoilt; `mirror_lower` makes it whole.
+    #[test]
+    fn the_measurement_row_reads_only_the_lower_triangle() {
+        let n = 7;
+        let mut full: Square = [[0.0; MAX_AUG]; MAX_AUG];
+        for i in 0..n {
+            for j in 0..n {
+                // Symmetric, positive definite: a diagonal of n plus small cross terms.
+                full[i][j] = if i == j { n as f64 } else { 0.1 * (i + j) as f64 / n as f64 };
+            }
+        }
+        let mut h = [0.0; MAX_AUG];
+        (h[1], h[4], h[6]) = (0.5, -2.0, 1.5);
+        let mut lower = full;
+        for i in 0..n {
+            for j in i + 1..n {
+                lower[i][j] = f64::NAN;
+            }
+        }
+        for unit in [None, Some(2), Some(6)] {
+            let (mut a, mut b) = ([0.0; MAX_AUG], [0.0; MAX_AUG]);
+            let want = p_times_row(&full, unit, &h, n, &mut a);
+            let got = p_times_row(&lower, unit, &h, n, &mut b);
+            assert_eq!(want.to_bits(), got.to_bits(), "{unit:?}");
+            for i in 0..n {
+                let direct: f64 = match unit {
+                    Some(k) => full[i][k],
+                    None => (0..n).map(|j| full[i][j] * h[j]).sum(),
+                };
+                assert!((b[i] - direct).abs() < 1e-12, "{unit:?} row {i}: {} vs {direct}", b[i]);
+            }
+        }
+        mirror_lower(&mut lower, n);
+        assert_eq!(lower, full);
+    }
 
     #[test]
     fn cusum_threshold_inverts_siegmund() {

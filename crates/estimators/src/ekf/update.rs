@@ -239,8 +239,11 @@ impl Ekf {
             && match unit {
                 Some(k) => reanchor(self.work_mut(), k, target),
                 None => {
-                    (0..self.np).all(|i| h[nx + i] == 0.0 || self.settled(i))
-                        && reanchor_parameters(self.work_mut(), h, nx, n, target)
+                    (0..self.np).all(|i| h[nx + i] == 0.0 || self.settled(i)) && {
+                        // It reads and scales whole rows: the upper triangle made current.
+                        change::mirror_lower(self.work_mut(), n);
+                        reanchor_parameters(self.work_mut(), h, nx, n, target)
+                    }
                 }
             };
         if done {
@@ -326,21 +329,15 @@ impl Ekf {
                 q.red[k][1] += red * red;
             }
         }
-        // P ← P − k (Ph)ᵀ, k = Ph/s, kept exactly symmetric: entry (i, j) is formed with the
-        // gain of the larger index, k_max(i,j) · ph_min(i,j) (products commute exactly), row by
-        // row over contiguous memory instead of mirroring each entry down a column.
-        let mut k = [0.0; MAX_AUG];
-        for (ki, phi) in k[..n].iter_mut().zip(&ph[..n]) {
-            *ki = phi * inv;
-        }
+        // P ← P − k (Ph)ᵀ, k = Ph/s, on the lower triangle only: entry (i, j ≤ i) is
+        // k_i · ph_j, which is what the upper entry (j, i) would be too (the gain of the
+        // larger index times the other's ph), so P stays exactly symmetric, and the upper
+        // triangle is copied from it once after the step's last output (`mirror_lower`).
         let w = self.work_mut();
         for i in 0..n {
-            let (row, ki, phi) = (&mut w[i], k[i], ph[i]);
-            for (wij, phj) in row[..=i].iter_mut().zip(&ph[..=i]) {
+            let ki = ph[i] * inv;
+            for (wij, phj) in w[i][..=i].iter_mut().zip(&ph[..=i]) {
                 *wij -= ki * phj;
-            }
-            for (wij, kj) in row[i + 1..n].iter_mut().zip(&k[i + 1..n]) {
-                *wij -= kj * phi;
             }
         }
     }

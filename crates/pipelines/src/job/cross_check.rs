@@ -124,7 +124,7 @@ pub fn run_panel(
     // busy (the six-axis EKF over a 600-s record costs more than the rest together on the
     // other core); the results are put back in the panel's order.
     let mut order: Vec<usize> = (0..methods.len()).collect();
-    order.sort_by_key(|&i| cost_rank(methods[i].0));
+    order.sort_by_key(|&i| cost_rank(methods[i].0, long.is_some()));
     let mut ran: Vec<(usize, MethodEstimates)> = order
         .into_par_iter()
         .with_max_len(1)
@@ -141,17 +141,21 @@ pub fn run_panel(
     ran.into_iter().map(|(_, estimates)| estimates).collect()
 }
 
-/// The panel's methods from the costliest per sample to the cheapest (the six-axis EKF,
-/// ≈ 22 µs a sample, docs/six-axis.md; the frequency-domain and time-domain batch fits; the
-/// recursions at a few µs), the order they start in.
-fn cost_rank(kind: EstimatorKind) -> u8 {
-    match kind {
+/// The order the panel's methods start in, costliest first: the six-axis EKF (≈ 22 µs a
+/// sample, docs/six-axis.md), then the frequency-domain and time-domain batch fits, then the
+/// recursions (a few µs a sample). When the EKF and the batch fits run on a long record's
+/// windows (`windowed`), the recursions, which still read the whole record, cost the most
+/// (least squares and instrumental variables over an hour: ≈ 2 s against the windows' ≈ 1 s)
+/// and start first.
+fn cost_rank(kind: EstimatorKind, windowed: bool) -> u8 {
+    let on_windows = match kind {
         EstimatorKind::Ekf => 0,
         EstimatorKind::Fdoe => 1,
         EstimatorKind::Fem => 2,
         EstimatorKind::Oe => 3,
-        _ => 4,
-    }
+        _ => return if windowed { 0 } else { 4 },
+    };
+    on_windows + u8::from(windowed)
 }
 
 /// For a record held in memory ([`Records::held`]) with a stretch longer than

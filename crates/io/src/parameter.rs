@@ -126,9 +126,12 @@ pub struct ParameterResult {
     pub reference_check: Option<ReferenceCheck>,
     /// The verdict: `identified` (no flag), `flagged` (see `flags`), `not identified`,
     /// `not converged` or `diverged` (module doc of the judging stage: docs/output-schema.md).
+    /// Read back as empty where a hand-made summary leaves it out.
+    #[serde(default)]
     pub status: String,
     /// Every doubt of the run about this parameter, in its words (empty without one): each
     /// blocks `identified`.
+    #[serde(default)]
     pub flags: Vec<String>,
     /// What is worth knowing and is no doubt about the value (a σ above 10 % of the estimate
     /// says imprecise, not wrong): never blocks `identified`.

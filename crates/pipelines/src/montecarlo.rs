@@ -56,7 +56,7 @@ use aeroident_models::f16::{self, AeroIncrements, F16};
 use aeroident_signals::config::WindConfig;
 use aeroident_signals::turbulence::{DrydenComponent, DrydenParameters, dryden_shaping_filter};
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::aircraft::air_data::f16_constants;
 use crate::aircraft::scenario::EstimatorSpec;
@@ -130,7 +130,7 @@ impl std::ops::Deref for ParamRun {
 }
 
 /// One estimator's result in one run.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct EstimatorRun {
     /// Estimator label.
     pub name: String,
@@ -139,7 +139,9 @@ pub struct EstimatorRun {
     /// Final mean normalised innovation squared (filters only; ≈ 1 when consistent).
     pub nis: Option<f64>,
     /// How many times the estimator restarted from its priors
-    /// ([`aeroident_estimators::EventKind::Restart`]); its estimates are still used.
+    /// ([`aeroident_estimators::EventKind::Restart`]); its estimates are still used. Read back
+    /// as 0 where a result of an older version lacks it.
+    #[serde(default)]
     pub restarts: u32,
     /// Batch estimators ([`crate::aircraft::batch`]): Gauss–Newton iterations of the fit
     /// (`null` for real-time estimators and failed fits).
@@ -148,6 +150,7 @@ pub struct EstimatorRun {
     pub fit_wall_s: Option<f64>,
     /// Batch estimators: the candidate σ of the parameters by kind
     /// ([`crate::aircraft::batch::BatchFit::sigma_candidates`]; empty otherwise).
+    #[serde(default)]
     pub sigma_candidates: Vec<(String, Vec<f64>)>,
     /// `oe` with `bootstrap_refits`: the bootstrap replicas that failed
     /// ([`crate::aircraft::batch::BatchFit::bootstrap_failed`]; `null` otherwise).
@@ -179,7 +182,7 @@ impl EstimatorRun {
 }
 
 /// One run of a campaign.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RunResult {
     /// Run index.
     pub index: u64,

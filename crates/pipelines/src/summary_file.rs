@@ -5,6 +5,8 @@
 
 use aeroident_estimators::prior::ParamPrior;
 use aeroident_estimators::vocabulary::Param;
+use aeroident_io::parameter::ParameterResult;
+use serde::Deserialize;
 use std::path::Path;
 
 /// One parameter read from a summary.
@@ -54,41 +56,50 @@ impl SummaryParameters {
     }
 }
 
-/// Reads `parameters[].{name, estimate, std_error}` (plus `estimator`, `model`) of a summary.
+/// A `summary.json` as the exports read it back: its parameters as the result type the
+/// replay wrote ([`ParameterResult`]) and the run's estimator, model, status and α knots (`?`
+/// and empty where a summary leaves them out). Every other key is passed over.
+#[derive(Debug, Deserialize)]
+struct SummaryFile {
+    #[serde(default = "unknown")]
+    estimator: String,
+    #[serde(default = "unknown")]
+    model: String,
+    #[serde(default = "unknown")]
+    status: String,
+    #[serde(default)]
+    alpha_knots_rad: Vec<f64>,
+    parameters: Vec<ParameterResult>,
+}
+
+fn unknown() -> String {
+    "?".to_string()
+}
+
+/// Reads `parameters[].{name, estimate, std_error}` (plus `estimator`, `model`, `status`,
+/// `alpha_knots_rad`) of a summary, deserialised as the replay's result types.
 ///
 /// # Errors
-/// The file cannot be read or parsed, has no `parameters` array, names a parameter outside
-/// the vocabulary, or has a non-finite or absurd estimate (beyond ±1e4) or a negative σ; each
-/// naming the file and parameter.
+/// The file cannot be read or is not a summary (serde's message with the line and column: no
+/// `parameters` array, a value of the wrong type), names a parameter outside the vocabulary or
+/// twice, or has an absurd estimate (beyond ±1e4) or a negative σ; each naming the file and
+/// parameter.
 pub fn read_summary(path: &Path) -> crate::error::Result<SummaryParameters> {
     let file = path.display();
     let text = std::fs::read_to_string(path).map_err(|e| crate::err!("{file}: {e}"))?;
-    let json: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| crate::err!("{file}: not JSON: {e}"))?;
-    let list = json["parameters"].as_array().ok_or_else(|| {
-        crate::err!("{file}: no `parameters` array (is it a replay summary.json?)")
-    })?;
-    let mut parameters = Vec::with_capacity(list.len());
-    for (i, p) in list.iter().enumerate() {
-        let name = p["name"]
-            .as_str()
-            .ok_or_else(|| crate::err!("{file}: parameters[{i}] has no `name`"))?;
+    let doc: SummaryFile = serde_json::from_str(&text)
+        .map_err(|e| crate::err!("{file}: not a replay summary.json: {e}"))?;
+    let mut parameters: Vec<Identified> = Vec::with_capacity(doc.parameters.len());
+    for (i, p) in doc.parameters.iter().enumerate() {
+        let name = p.name.as_str();
         let param = Param::from_name(name).ok_or_else(|| {
             crate::err!(
                 "{file}: parameter `{name}` is not of the vocabulary (<coefficient>_<term>)"
             )
         })?;
-        let number = |key: &str| -> crate::error::Result<Option<f64>> {
-            match &p[key] {
-                serde_json::Value::Null => Ok(None),
-                v => v.as_f64().filter(|x| x.is_finite()).map(Some).ok_or_else(|| {
-                    crate::err!("{file}: parameter `{name}`: `{key}` is not a finite number")
-                }),
-            }
-        };
-        let (value, sigma) = (number("estimate")?, number("std_error")?);
+        let (value, sigma) = (p.estimate, p.std_error);
         check_identified(name, value, sigma).map_err(|why| crate::err!("{file}: {why}"))?;
-        if let Some(first) = parameters.iter().position(|q: &Identified| q.param == param) {
+        if let Some(first) = parameters.iter().position(|q| q.param == param) {
             // Two values of one derivative: JSBSim would sum both, a linearisation take one.
             return Err(crate::err!(
                 "{file}: parameter `{name}` is listed twice (parameters[{first}] and [{i}]): a model has each derivative once"
@@ -96,21 +107,12 @@ pub fn read_summary(path: &Path) -> crate::error::Result<SummaryParameters> {
         }
         parameters.push(Identified { param, value, sigma });
     }
-    let text_of = |k: &str| json[k].as_str().unwrap_or("?").to_string();
-    let knots = json["alpha_knots_rad"].as_array().map_or(&[][..], Vec::as_slice);
-    let alpha_knots_rad = knots
-        .iter()
-        .map(|k| k.as_f64().filter(|k| k.is_finite()))
-        .collect::<Option<Vec<f64>>>()
-        .ok_or_else(|| {
-            crate::err!("{file}: `alpha_knots_rad` holds a value that is not a finite number")
-        })?;
     Ok(SummaryParameters {
-        estimator: text_of("estimator"),
-        model: text_of("model"),
+        estimator: doc.estimator,
+        model: doc.model,
         parameters,
-        alpha_knots_rad,
-        status: text_of("status"),
+        alpha_knots_rad: doc.alpha_knots_rad,
+        status: doc.status,
     })
 }
 
@@ -160,6 +162,18 @@ mod tests {
         let read = read_summary(&path);
         std::fs::remove_file(&path).unwrap();
         read
+    }
+
+    /// A summary read back with the result types: a value of the wrong type or a missing
+    /// `parameters` is refused naming the file, what was expected and where.
+    #[test]
+    fn errors_a_summary_not_of_the_result_types_is_refused_naming_where() {
+        let doc = serde_json::json!({"parameters": [{"name": "CL_alpha", "estimate": "x"}]});
+        let e = read_doc("wrong-type", &doc).unwrap_err().to_string();
+        assert!(e.contains(".json") && e.contains("expected f64") && e.contains("line 1"), "{e}");
+        let e = read_doc("no-params", &serde_json::json!({"status": "converged"}));
+        let e = e.unwrap_err().to_string();
+        assert!(e.contains("missing field `parameters`"), "{e}");
     }
 
     #[test]

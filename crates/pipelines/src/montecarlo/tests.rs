@@ -284,7 +284,7 @@ fn run_counts_are_limited_before_allocating() {
 }
 
 /// `run_result_from_json` inverts the serialisation exactly (the distributed reduce), accepts
-/// the keys older versions lack, and names a bad key.
+/// the keys older versions lack, and names a bad or missing key by its path.
 #[test]
 fn run_results_round_trip_through_json() {
     let mut ok = result(3, Some(-0.9), Some(0.1), Some(1.0), None);
@@ -308,7 +308,14 @@ fn run_results_round_trip_through_json() {
     }
     assert_eq!(run_result_from_json(&v).unwrap(), result(0, Some(-1.0), None, None, None));
     v["outcome"]["Ok"][0]["params"][0]["estimate"] = "x".into();
-    assert_eq!(run_result_from_json(&v).unwrap_err(), "per-run result: `estimate` is not a number");
+    assert_eq!(
+        run_result_from_json(&v).unwrap_err(),
+        "per-run result: `outcome.Ok[0].params[0]`: `estimate`: invalid type: string \"x\", expected f64"
+    );
+    v["outcome"]["Ok"][0]["params"][0]["estimate"] = (-1.0).into();
+    v["outcome"]["Ok"][0].as_object_mut().unwrap().remove("name");
+    let e = run_result_from_json(&v).unwrap_err();
+    assert!(e.contains("`outcome.Ok[0]`") && e.contains("missing field `name`"), "{e}");
 }
 
 /// The campaign's derived views: error % of |truth|, scatter over the CRB, the final estimates

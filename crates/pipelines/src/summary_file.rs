@@ -58,22 +58,14 @@ impl SummaryParameters {
 
 /// A `summary.json` as the exports read it back: its parameters as the result type the
 /// replay wrote ([`ParameterResult`]) and the run's estimator, model, status and α knots (`?`
-/// and empty where a summary leaves them out). Every other key is passed over.
+/// and empty where a summary leaves them out or gives `null`). Every other key is passed over.
 #[derive(Debug, Deserialize)]
 struct SummaryFile {
-    #[serde(default = "unknown")]
-    estimator: String,
-    #[serde(default = "unknown")]
-    model: String,
-    #[serde(default = "unknown")]
-    status: String,
-    #[serde(default)]
-    alpha_knots_rad: Vec<f64>,
+    estimator: Option<String>,
+    model: Option<String>,
+    status: Option<String>,
+    alpha_knots_rad: Option<Vec<f64>>,
     parameters: Vec<ParameterResult>,
-}
-
-fn unknown() -> String {
-    "?".to_string()
 }
 
 /// Reads `parameters[].{name, estimate, std_error}` (plus `estimator`, `model`, `status`,
@@ -107,12 +99,13 @@ pub fn read_summary(path: &Path) -> crate::error::Result<SummaryParameters> {
         }
         parameters.push(Identified { param, value, sigma });
     }
+    let text_of = |v: Option<String>| v.unwrap_or_else(|| "?".to_string());
     Ok(SummaryParameters {
-        estimator: doc.estimator,
-        model: doc.model,
+        estimator: text_of(doc.estimator),
+        model: text_of(doc.model),
         parameters,
-        alpha_knots_rad: doc.alpha_knots_rad,
-        status: doc.status,
+        alpha_knots_rad: doc.alpha_knots_rad.unwrap_or_default(),
+        status: text_of(doc.status),
     })
 }
 

@@ -74,11 +74,12 @@
 //! `samples = "raw" | "smoothed"`, default raw: [`SampleEstimatorSpec::raw_samples`]), `smpe`,
 //! `smpe-corrected`, `smpe-finite-time` (options `forgetting`, `sliding_gain_per_s`,
 //! `reaching_rate_per_s`; `aeroident_estimators::finite_time`), `gradient`. Batch kind `oe` (output error fitted after the flight to the
-//! recorded samples of the window after the damage; options `initial_states = "estimate" |
-//! "first-sample"` and `step = "relaxation" | "concentrated"`, `samples = "smoothed" | "raw"`)
-//! and `fem` (the filter-error method, output error with process noise; options
-//! `initial_states`, `process_noise = "V,alpha,beta"`, `samples = "raw" | "smoothed"`);
-//! [`super::batch`].
+//! recorded samples of the window after the damage) and `fem` (the filter-error method, output
+//! error with process noise), with the options a recorded flight's fit takes
+//! ([`aeroident_registry::estimators::EstimatorKind::fit_options`]: `initial_states`, `step`,
+//! `bootstrap_refits`, `max_iterations`, `robust` for `oe`; `initial_states`,
+//! `max_iterations`, `process_noise`, `gain_constraint` for `fem`) and `samples = "raw" |
+//! "smoothed"`; [`super::batch`].
 //!
 //! The old syntax (`[params.dCm_alpha]`, `params = ["dCm_alpha"]`, `kind = "gradient"` for the
 //! two-aircraft gradient law) is refused with a message saying what to write instead.

@@ -112,7 +112,6 @@ pub fn run_panel(
     panel: Panel,
     long: Option<&[TimeWindow]>,
 ) -> Vec<MethodEstimates> {
-    use rayon::prelude::*;
     let on = |k: &&EstimatorKind| **k != own && panel.holds(**k);
     let windowed = long.map(|w| ReplayOptions { windows: w.to_vec(), ..base.clone() });
     let costly = windowed.as_ref().unwrap_or(base);
@@ -120,42 +119,54 @@ pub fn run_panel(
     let batch = BATCH_METHODS.iter().filter(on);
     let methods: Vec<(EstimatorKind, bool)> =
         online.map(|&k| (k, false)).chain(batch.map(|&k| (k, true))).collect();
-    // The longest first, so that it does not start last on a thread the others have kept
-    // busy (the six-axis EKF over a 600-s record costs more than the rest together on the
-    // other core); the results are put back in the panel's order.
+    // Greedy, longest first: each method is taken in `cost_rank` order by the first thread
+    // that is free (a FIFO scope), so the costliest does not start last on a thread the others
+    // kept busy (the six-axis EKF over a 600-s record costs more than the rest together on
+    // the other core). The results are put back in the panel's order.
     let mut order: Vec<usize> = (0..methods.len()).collect();
     order.sort_by_key(|&i| cost_rank(methods[i].0, long.is_some()));
-    let mut ran: Vec<(usize, MethodEstimates)> = order
-        .into_par_iter()
-        .with_max_len(1)
-        .map(|i| {
-            let estimates = match methods[i] {
-                (k, true) => run_batch(records, k, costly),
-                (k @ EstimatorKind::Ekf, false) => run_online(records, k, costly),
-                (k, false) => run_online(records, k, base),
-            };
-            (i, estimates)
-        })
-        .collect();
+    let (done, ran) = std::sync::mpsc::channel();
+    rayon::scope_fifo(|scope| {
+        for &i in &order {
+            let done = done.clone();
+            let method = methods[i];
+            scope.spawn_fifo(move |_| {
+                let estimates = match method {
+                    (k, true) => run_batch(records, k, costly),
+                    (k @ EstimatorKind::Ekf, false) => run_online(records, k, costly),
+                    (k, false) => run_online(records, k, base),
+                };
+                // The receiver outlives the scope: the send cannot fail.
+                let _ = done.send((i, estimates));
+            });
+        }
+    });
+    drop(done);
+    let mut ran: Vec<(usize, MethodEstimates)> = ran.into_iter().collect();
     ran.sort_by_key(|(i, _)| *i);
     ran.into_iter().map(|(_, estimates)| estimates).collect()
 }
 
-/// The order the panel's methods start in, costliest first: the six-axis EKF (≈ 22 µs a
-/// sample, docs/six-axis.md), then the frequency-domain and time-domain batch fits, then the
+/// The order the panel's methods start in, costliest first, by what each costs on the
+/// samples it runs on. On the whole record: the six-axis EKF (≈ 22 µs a sample,
+/// docs/six-axis.md), then the frequency-domain and time-domain batch fits, then the
 /// recursions (a few µs a sample). When the EKF and the batch fits run on a long record's
 /// windows (`windowed`), the recursions, which still read the whole record, cost the most
-/// (least squares and instrumental variables over an hour: ≈ 2 s against the windows' ≈ 1 s)
-/// and start first.
+/// (instrumental variables over an hour ≈ 1.4 s), then the batch fits (output error ≈ 1.5 s,
+/// fdoe ≈ 1.3 s on the hour's windows), and the EKF least (≈ 0.1 s).
 fn cost_rank(kind: EstimatorKind, windowed: bool) -> u8 {
-    let on_windows = match kind {
-        EstimatorKind::Ekf => 0,
-        EstimatorKind::Fdoe => 1,
-        EstimatorKind::Fem => 2,
-        EstimatorKind::Oe => 3,
-        _ => return if windowed { 0 } else { 4 },
-    };
-    on_windows + u8::from(windowed)
+    match (kind, windowed) {
+        (EstimatorKind::Ekf, false) => 0,
+        (EstimatorKind::Fdoe, false) => 1,
+        (EstimatorKind::Fem, false) => 2,
+        (EstimatorKind::Oe, false) => 3,
+        (_, false) => 4,
+        (EstimatorKind::Oe, true) => 1,
+        (EstimatorKind::Fdoe, true) => 2,
+        (EstimatorKind::Fem, true) => 3,
+        (EstimatorKind::Ekf, true) => 4,
+        (_, true) => 0,
+    }
 }
 
 /// For a record held in memory ([`Records::held`]) with a stretch longer than

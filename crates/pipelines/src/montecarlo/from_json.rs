@@ -8,14 +8,56 @@ use aeroident_io::ParameterResult;
 
 /// The inverse of `serde_json::to_value(&RunResult)`, by the same types' `Deserialize`: floats
 /// are carried exactly; `restarts`, `sigma_candidates`, `bootstrap_failed`, `bootstrap_bias`
-/// and a parameter's later keys may be absent (results of older versions).
+/// and a parameter's `timing_std_error`, `unmodelled_std_error`, `reference_check`, `notes`
+/// and `combines` may be absent (results of older versions). Every other key must be there,
+/// `null` or not (`REQUIRED_RUN_KEYS`, `REQUIRED_PARAM_KEYS`): serde would read a missing
+/// nullable key as `null`, and a result of another schema (`final`, `sigma`) as a run with
+/// nothing identified.
 ///
 /// # Errors
 /// A message `per-run result: `PATH`: …` naming the key by its path and serde's reason (the
 /// key missing, or the value of the wrong type and what was expected).
 pub fn run_result_from_json(v: &Value) -> Result<RunResult, String> {
+    if let Some(runs) = v.pointer("/outcome/Ok").and_then(Value::as_array) {
+        for (i, run) in runs.iter().enumerate() {
+            require(run, &REQUIRED_RUN_KEYS, &format!("outcome.Ok[{i}]"))?;
+            let params = run.get("params").and_then(Value::as_array).map_or(&[][..], Vec::as_slice);
+            for (j, p) in params.iter().enumerate() {
+                require(p, &REQUIRED_PARAM_KEYS, &format!("outcome.Ok[{i}].params[{j}]"))?;
+            }
+        }
+    }
     serde_path_to_error::deserialize(v)
         .map_err(|e| format!("per-run result: `{}`: {}", e.path(), e.inner()))
+}
+
+/// The keys of an estimator's run that every version of this schema writes.
+const REQUIRED_RUN_KEYS: [&str; 6] =
+    ["name", "failure", "nis", "iterations", "fit_wall_s", "params"];
+
+/// The keys of a parameter's run that every version of this schema writes.
+const REQUIRED_PARAM_KEYS: [&str; 13] = [
+    "name",
+    "estimate",
+    "std_error",
+    "std_error_source",
+    "crb_std_error",
+    "reference",
+    "status",
+    "flags",
+    "primary",
+    "truth_before",
+    "truth_after",
+    "time_to_10pct_s",
+    "reconvergence_10pct_s",
+];
+
+/// The first of `keys` object `v` (at `path`) lacks, as the error.
+fn require(v: &Value, keys: &[&str], path: &str) -> Result<(), String> {
+    match keys.iter().find(|k| v.get(**k).is_none()) {
+        Some(k) => Err(format!("per-run result: `{path}`: missing field `{k}`")),
+        None => Ok(()),
+    }
 }
 
 /// A parameter's run read back: its result ([`ParameterResult`], flattened into the same

@@ -316,6 +316,17 @@ fn run_results_round_trip_through_json() {
     v["outcome"]["Ok"][0].as_object_mut().unwrap().remove("name");
     let e = run_result_from_json(&v).unwrap_err();
     assert!(e.contains("`outcome.Ok[0]`") && e.contains("missing field `name`"), "{e}");
+    // A nullable key left out is refused too (serde alone would read it as null): a result
+    // of schema 1, whose parameters had `final` for `estimate`, is not a run with nothing.
+    let mut old = serde_json::to_value(result(0, Some(-1.0), None, None, None)).unwrap();
+    let p = old["outcome"]["Ok"][0]["params"][0].as_object_mut().unwrap();
+    let estimate = p.remove("estimate").unwrap();
+    p.insert("final".into(), estimate);
+    let e = run_result_from_json(&old).unwrap_err();
+    assert_eq!(e, "per-run result: `outcome.Ok[0].params[0]`: missing field `estimate`");
+    old["outcome"]["Ok"][0].as_object_mut().unwrap().remove("failure");
+    let e = run_result_from_json(&old).unwrap_err();
+    assert_eq!(e, "per-run result: `outcome.Ok[0]`: missing field `failure`");
 }
 
 /// The campaign's derived views: error % of |truth|, scatter over the CRB, the final estimates

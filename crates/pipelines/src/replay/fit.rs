@@ -222,7 +222,7 @@ fn whose(key: &str, kind: EstimatorKind) -> String {
     let owners: Vec<String> = <EstimatorKind as crate::Named>::ALL
         .iter()
         .filter(|k| k.fit_options().contains(&key))
-        .map(|k| format!("{} (`--estimator {}`)", method_name(*k), k.name()))
+        .map(|k| format!("{} (`{}`)", method_name(*k), k.name()))
         .collect();
     let what = match key {
         "initial_states" => "estimating initial states",
@@ -231,7 +231,8 @@ fn whose(key: &str, kind: EstimatorKind) -> String {
         "max_iterations" => "an iteration limit",
         "process_noise" => "process noise",
         "gain_constraint" => "the gain constraint",
-        _ => "Huber's robust weighting",
+        "robust" => "Huber's robust weighting",
+        _ => "the option",
     };
     let why = match (key, kind) {
         ("bootstrap_refits", EstimatorKind::Fem) => {
@@ -266,6 +267,7 @@ fn flag_of(key: &str) -> &'static str {
         "gain_constraint" => "no-gain-constraint",
         "robust" => "robust",
         "band_hz" => "band-hz",
+        "step" => "estimator-option step",
         _ => "estimator-option",
     }
 }

@@ -309,29 +309,7 @@ mod tests {
         macro_rules! each {
             ($($f:ident),*) => {$( check(AirDataSample { $f: Some(0.25), ..base }); )*};
         }
-        each!(
-            beta_rad,
-            p_rad_s,
-            q_rad_s,
-            r_rad_s,
-            pdot_rad_s2,
-            qdot_rad_s2,
-            rdot_rad_s2,
-            alphadot_rad_s,
-            phi_rad,
-            theta_rad,
-            psi_rad,
-            ax_mps2,
-            ay_mps2,
-            az_mps2,
-            de_rad,
-            da_rad,
-            dr_rad,
-            thrust_n,
-            throttle,
-            thrust_moment_nm,
-            rho_kgpm3
-        );
+        aeroident_estimators::optional_sample_fields!(each);
         macro_rules! each_constant {
             ($($f:ident),*) => {$(
                 check(AirDataSample {

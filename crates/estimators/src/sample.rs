@@ -155,6 +155,40 @@ pub struct Plausibility {
     pub coefficient: f64,
 }
 
+/// Expands macro `$callback` with the identifiers of [`AirDataSample`]'s optional channels
+/// (`beta_rad` … `rho_kgpm3`, every `Option<f64>` field but the constants), in the struct's
+/// order: the one list the code that must name each field (the C ABI's sample, Python's
+/// keywords, [`AirDataSample::between`]) expands, so that a channel added to the sample is added
+/// to each of them or fails to compile there.
+#[macro_export]
+macro_rules! optional_sample_fields {
+    ($callback:ident) => {
+        $callback! {
+            beta_rad,
+            p_rad_s,
+            q_rad_s,
+            r_rad_s,
+            pdot_rad_s2,
+            qdot_rad_s2,
+            rdot_rad_s2,
+            alphadot_rad_s,
+            phi_rad,
+            theta_rad,
+            psi_rad,
+            ax_mps2,
+            ay_mps2,
+            az_mps2,
+            de_rad,
+            da_rad,
+            dr_rad,
+            thrust_n,
+            throttle,
+            thrust_moment_nm,
+            rho_kgpm3
+        }
+    };
+}
+
 /// The names of the per-sample measured fields [`AirDataSample::field`] reads, in the
 /// sample's order.
 pub const MEASURED_FIELDS: [&str; 24] = [
@@ -259,34 +293,14 @@ impl AirDataSample {
                     vt_mps: mix(a.vt_mps, b.vt_mps),
                     alpha_rad: mix(a.alpha_rad, b.alpha_rad),
                     qbar_pa: mix(a.qbar_pa, b.qbar_pa),
-                    psi_rad: heading(a.psi_rad, b.psi_rad),
                     constants: a.constants,
                     $($f: opt(a.$f, b.$f),)*
                 }
             };
         }
-        interpolated!(
-            beta_rad,
-            p_rad_s,
-            q_rad_s,
-            r_rad_s,
-            pdot_rad_s2,
-            qdot_rad_s2,
-            rdot_rad_s2,
-            alphadot_rad_s,
-            phi_rad,
-            theta_rad,
-            ax_mps2,
-            ay_mps2,
-            az_mps2,
-            de_rad,
-            da_rad,
-            dr_rad,
-            thrust_n,
-            throttle,
-            thrust_moment_nm,
-            rho_kgpm3
-        )
+        let mut s = crate::optional_sample_fields!(interpolated);
+        s.psi_rad = heading(a.psi_rad, b.psi_rad);
+        s
     }
 
     /// The measured field named `field` (one of [`MEASURED_FIELDS`], the SI names the

@@ -171,7 +171,7 @@ pub(super) fn cusum_threshold(arl: f64) -> f64 {
 /// `h P hᵀ` for output row `h` (or the unit row of integrated state `unit`), with `P hᵀ`
 /// written to `ph` (first `n` entries). Reads only the lower triangle of `p` (`p[i][j]`,
 /// `j ≤ i`): during a step's measurement updates only that triangle is kept current
-/// ([`Ekf::correct`](super::Ekf), [`mirror_lower`]). `P` is exactly symmetric, so this is the
+/// (`Ekf::correct`, [`mirror_lower`]). `P` is exactly symmetric, so this is the
 /// same number to the bit as reading the full rows.
 pub(super) fn p_times_row(
     p: &Square,

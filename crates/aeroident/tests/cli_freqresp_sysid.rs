@@ -9,7 +9,7 @@ use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-#[path = "../../io/tests/common/log_writers.rs"]
+#[path = "../../io/tests/all/common/log_writers.rs"]
 mod log_writers;
 use log_writers::Dataflash;
 

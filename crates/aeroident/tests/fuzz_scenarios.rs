@@ -10,7 +10,7 @@ use aeroident_pipelines::sim::parse_scenario;
 use proptest::prelude::*;
 use std::path::Path;
 
-#[path = "../../io/tests/common/mutate.rs"]
+#[path = "../../io/tests/all/common/mutate.rs"]
 mod mutate;
 use mutate::mutate;
 

@@ -347,7 +347,7 @@ fn compressed(body: &[u8], big: bool, budget: &mut Budget) -> Result<Option<MatA
 
 /// Builders of level-5 files shared with the integration tests.
 #[cfg(test)]
-#[path = "../tests/common/logs.rs"]
+#[path = "../tests/all/common/logs.rs"]
 mod test_files;
 
 #[cfg(test)]

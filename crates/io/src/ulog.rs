@@ -49,7 +49,7 @@
 //!
 //! Why not a crate: `yule_log` 0.4.0 reads both shipped PX4 logs correctly but decodes a
 //! message cut off by the end of the file from a zero-filled buffer (fabricated samples at
-//! time 0, found by the truncation proptest in `tests/fuzz_logs.rs`), prints a debug line to
+//! time 0, found by the truncation proptest in `tests/all/fuzz_logs.rs`), prints a debug line to
 //! stdout for every `*heartbeat*` format, and reports no byte offsets.
 
 use crate::FlightDataError;

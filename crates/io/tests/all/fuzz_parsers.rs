@@ -11,15 +11,13 @@
 use aeroident_io::{FlightDataReader, Mapping, ModelSpec, RecordEvent};
 use proptest::prelude::*;
 
-#[path = "common/mutate.rs"]
-mod mutate;
-use mutate::mutate;
+use crate::common::mutate::mutate;
 
 fn cases() -> u32 {
     std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(64)
 }
 
-const MAPPING: &str = include_str!("data/min.toml");
+const MAPPING: &str = include_str!("../data/min.toml");
 const HEADER: &str = "t,V,a,q,ax,az,de,qbar,qd";
 /// The file name errors must carry (distinctive so it cannot appear by chance).
 const FILE: &str = "fuzz-target.input";
@@ -27,19 +25,19 @@ const FILE: &str = "fuzz-target.input";
 /// Valid seeds for the mutation fuzzing: the shipped mappings and model files.
 const MAPPINGS: [&str; 9] = [
     MAPPING,
-    include_str!("../../../mappings/attas.toml"),
-    include_str!("../../../mappings/attas_lateral.toml"),
-    include_str!("../../../mappings/hfb320.toml"),
-    include_str!("../../../mappings/jsbsim.toml"),
-    include_str!("../../../mappings/jsbsim_clean.toml"),
-    include_str!("../../../mappings/twin_otter.toml"),
-    include_str!("../../../mappings/px4-fixedwing.toml"),
-    include_str!("../../../mappings/arduplane.toml"),
+    include_str!("../../../../mappings/attas.toml"),
+    include_str!("../../../../mappings/attas_lateral.toml"),
+    include_str!("../../../../mappings/hfb320.toml"),
+    include_str!("../../../../mappings/jsbsim.toml"),
+    include_str!("../../../../mappings/jsbsim_clean.toml"),
+    include_str!("../../../../mappings/twin_otter.toml"),
+    include_str!("../../../../mappings/px4-fixedwing.toml"),
+    include_str!("../../../../mappings/arduplane.toml"),
 ];
 const MODELS: [&str; 3] = [
-    include_str!("../../../models/hfb320_book_q0.toml"),
-    include_str!("../../../models/hfb320_jategaonkar.toml"),
-    include_str!("../../../models/short_period_alphadot.toml"),
+    include_str!("../../../../models/hfb320_book_q0.toml"),
+    include_str!("../../../../models/hfb320_jategaonkar.toml"),
+    include_str!("../../../../models/short_period_alphadot.toml"),
 ];
 
 /// One field of a hostile row: numbers of every size and sign, text, blanks, NaN/inf.

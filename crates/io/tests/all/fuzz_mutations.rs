@@ -7,11 +7,11 @@
 //! caps on declared sizes; one unchecked size would take gigabytes).
 //!
 //! Cases per reader: `AEROIDENT_FUZZ_CASES` (default 500; the full campaign is
-//! `AEROIDENT_FUZZ_CASES=1000000 cargo test --release -p aeroident-io --test fuzz_mutations`).
+//! `AEROIDENT_FUZZ_CASES=1000000 cargo test --release -p aeroident-io --test all
+//! fuzz_mutations::`).
 //! `AEROIDENT_FUZZ_SEED` changes the seed (default 1); a failure names the case to rerun.
 
-#[path = "common/logs.rs"]
-mod logs;
+use crate::common::logs;
 
 use aeroident_io::dataflash::decode_dataflash;
 use aeroident_io::log::read_mat;

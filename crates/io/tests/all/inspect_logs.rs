@@ -11,10 +11,8 @@ use aeroident_io::log_contents::base_topic;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-#[path = "common/logs.rs"]
-mod logs;
-#[path = "common/shared.rs"]
-mod shared_data;
+use crate::common::logs;
+use crate::common::shared as shared_data;
 
 use logs::{Dataflash, tlog_record};
 

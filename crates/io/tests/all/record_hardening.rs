@@ -9,9 +9,7 @@ use aeroident_io::mapping::Clock;
 use aeroident_io::table::{Interpolation, Topic};
 use aeroident_io::{FlightDataError, FlightDataReader, Mapping, RecordEvent, RowProblem};
 
-#[path = "common/shared.rs"]
-mod shared_data;
-use shared_data::{shared, workspace};
+use crate::common::shared::{shared, workspace};
 
 const MAP: &str = "[time]\ncolumn = \"t\"\nunit = \"s\"\n[channels]\n\
     vt = { column = \"V\", unit = \"m/s\" }\nalpha = { column = \"a\", unit = \"rad\" }\n\

@@ -3,8 +3,7 @@
 //! redefined thousands of times. Each expected value is computed here from how the file was
 //! built, not captured from the reader.
 
-#[path = "common/logs.rs"]
-mod logs;
+use crate::common::logs;
 
 use aeroident_io::dataflash::parse_dataflash;
 use aeroident_io::reader_report::DropKind;

@@ -85,8 +85,7 @@ fn shared(rel: &str) -> Option<PathBuf> {
     shared_data::shared(&format!("px4_ardupilot/{rel}"))
 }
 
-#[path = "common/shared.rs"]
-mod shared_data;
+use crate::common::shared as shared_data;
 
 /// One inventory line: name as the reader names it, sample count, field names.
 struct Entry {

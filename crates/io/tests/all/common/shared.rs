@@ -1,5 +1,5 @@
 //! The workspace root and the third-party records of `../shared/flightdata` for the io crate's
-//! integration tests (included with `#[path]`).
+//! integration tests (the module `common::shared`).
 
 use std::path::PathBuf;
 

@@ -2,8 +2,7 @@
 //! file can back: a clear error naming the file and the variable, found before inflating or
 //! allocating what the file declares.
 
-#[path = "common/logs.rs"]
-mod logs;
+use crate::common::logs;
 
 use aeroident_io::log::read_mat;
 use logs::{mat_compressed, mat_file, mat_matrix};

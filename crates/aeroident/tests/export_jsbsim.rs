@@ -99,7 +99,7 @@ fn exported_fragment_loads_into_jsbsim_and_evaluates_our_derivatives() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-#[path = "../../pipelines/tests/export_uav/planes.rs"]
+#[path = "../../pipelines/tests/all/export_uav/planes.rs"]
 mod planes;
 use planes::{
     C172X, Plane, UAV, UAV_OAT_RECORDS, completed, mapping_toml, model_toml, scenario_toml,

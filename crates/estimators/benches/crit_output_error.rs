@@ -5,7 +5,7 @@
 //! 3-2-1-1 elevator input and deterministic pseudo-noise).
 #![allow(missing_docs)] // criterion_group! generates an undocumented `pub fn`.
 
-#[path = "../tests/common/records.rs"]
+#[path = "../tests/all/common/records.rs"]
 mod records;
 
 use aeroident_estimators::AirDataSample;

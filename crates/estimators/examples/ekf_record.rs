@@ -7,7 +7,7 @@
 //! `--alphadot` adds `CL_alphadot` and `Cm_alphadot` to the preset)
 #![allow(missing_docs)]
 
-#[path = "../tests/common/records.rs"]
+#[path = "../tests/all/common/records.rs"]
 mod records;
 
 use aeroident_estimators::vocabulary::ModelStructure;

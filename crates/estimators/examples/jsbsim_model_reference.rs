@@ -10,7 +10,7 @@
 //! F-16 elevator doublet (longitudinal preset) of `../shared/flightdata`. Default gains (none
 //! tuned to these records: `aeroident_estimators::model_reference` documents each choice).
 
-#[path = "../tests/common/records.rs"]
+#[path = "../tests/all/common/records.rs"]
 mod records;
 
 use aeroident_estimators::model_reference::{

@@ -14,7 +14,7 @@
 //! the rates, angular accelerations and specific forces.
 #![allow(missing_docs)]
 
-#[path = "../tests/common/records.rs"]
+#[path = "../tests/all/common/records.rs"]
 mod records;
 
 use aeroident_estimators::AirDataSample;

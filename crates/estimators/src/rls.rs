@@ -596,7 +596,7 @@ impl Rls {
     pub fn new(structure: ModelStructure, config: RlsConfig) -> Result<Self, EstimatorError> {
         let structure = validated(structure, config.forgetting)?;
         // Built in place: moving a stack-built `[Option<Fit>; 8]` into `Self` was miscompiled
-        // by rustc 1.95 at opt-level 3 (docs/reliability.md; tests/rls.rs guards it in release).
+        // by rustc 1.95 at opt-level 3 (docs/reliability.md; tests/all/rls.rs guards it in release).
         let mut rls = Self {
             structure,
             fits: [None; 8],

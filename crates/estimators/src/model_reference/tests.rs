@@ -1,5 +1,5 @@
 //! Unit tests of the model-reference estimators against hand computations and structural
-//! properties. The convergence tests on simulated flight are in `tests/model_reference.rs`.
+//! properties. The convergence tests on simulated flight are in `tests/all/model_reference.rs`.
 
 use super::*;
 use crate::mrac::{GradientConfig, ModelReferenceGradient};

@@ -10,8 +10,9 @@
 //! spike screen and conditioning stay in the library, the C caller feeds their output.
 //! Skips without `../shared` (fails under `CI=true`).
 
-mod common;
-
+use crate::common::{
+    cli_binary, compile_c, compile_c_shared, have_gcc, scratch, shared, workspace,
+};
 use aeroident_capi::replayed::write_samples_csv;
 use aeroident_io::replay_output::SIGMA_DIGITS;
 use aeroident_io::{Mapping, ModelSpec, open_log};
@@ -19,7 +20,6 @@ use aeroident_pipelines::Named;
 use aeroident_pipelines::estimators::{EstimatorKind, parse_options};
 use aeroident_pipelines::replay::ReplayOptions;
 use aeroident_pipelines::replay::fed::fed_samples;
-use common::{cli_binary, compile_c, compile_c_shared, have_gcc, scratch, shared, workspace};
 use std::path::Path;
 use std::process::Command;
 

@@ -60,7 +60,7 @@ struct Axis {
 }
 
 /// The accuracy targets (1 dB, 5° against the linearisation), as a measurement: run with
-/// `cargo test --release -p aeroident-pipelines --test freqresp_f16 -- --include-ignored --nocapture`
+/// `cargo test --release -p aeroident-pipelines --test all freqresp_f16:: -- --include-ignored --nocapture`
 /// (it prints every axis's numbers). Ignored in CI because the targets are not met on these
 /// records (docs/frequency-response.md, "Measured against the linearisation").
 #[test]

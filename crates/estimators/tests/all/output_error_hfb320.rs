@@ -7,8 +7,7 @@
 //! the record, the noise covariance `R` comes from the ML relaxation, the initial state is the
 //! first sample's measurement.
 
-#[path = "common/records.rs"]
-mod records;
+use crate::common::records;
 
 use aeroident_estimators::output_error::{OeConfig, OeResult, StepKind, Termination, fit};
 

@@ -3,8 +3,7 @@
 //! own, the corrected SMPE against an independent batch computation of the same estimate, and
 //! the derivatives the manoeuvres excite directly against the records' true values.
 
-#[path = "common/records.rs"]
-mod records;
+use crate::common::records;
 
 use aeroident_estimators::model_reference::{
     CorrectedSmpeEstimator, ModelReferenceConfig, state_rate,

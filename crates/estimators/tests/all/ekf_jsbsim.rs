@@ -13,8 +13,7 @@
 //! - longitudinal record: `CD_alpha`, `CD_q`, `CD_de`: their effect on ax is ≈ 0.05 m/s²; the
 //!   tabulated CD(α, δe) is non-linear across the δe = 0 breakpoint this record crosses.
 
-#[path = "common/records.rs"]
-mod records;
+use crate::common::records;
 
 use aeroident_estimators::vocabulary::ModelStructure;
 use aeroident_estimators::{Ekf, EkfConfig, Estimator, Status};

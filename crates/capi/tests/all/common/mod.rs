@@ -1,5 +1,5 @@
-//! Helpers of the C-ABI integration tests (each test binary includes this module; not every
-//! binary uses every helper).
+//! Helpers of the C-ABI integration tests (the test binary's module `common`; not every test
+//! module uses every helper).
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};

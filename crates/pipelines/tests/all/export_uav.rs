@@ -16,9 +16,7 @@ use aeroident_pipelines::export::gazebo::{ControlJoint, GazeboOptions, gazebo_pl
 use aeroident_pipelines::export::uav::Geometry;
 use aeroident_pipelines::summary_file::{SummaryParameters, read_summary};
 
-#[path = "export_uav/flight.rs"]
 mod flight;
-#[path = "export_uav/planes.rs"]
 mod planes;
 
 const GEOMETRY: Geometry = Geometry { area_m2: 0.9, span_m: 1.95, chord_m: 0.47 };

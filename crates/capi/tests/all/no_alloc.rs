@@ -5,7 +5,7 @@
 //! ABI, with their estimates and state read after every sample, one refused sample and a new
 //! manoeuvre among them. Creation is outside the counted span (it allocates the estimator).
 
-#[path = "../../estimators/src/test_aircraft.rs"]
+#[path = "../../../estimators/src/test_aircraft.rs"]
 mod test_aircraft;
 
 use aeroident_capi::sample::{AEROIDENT_HAS_ALL, AeroidentSample};

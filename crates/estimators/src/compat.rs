@@ -146,7 +146,7 @@
 //! the same filter rather than undoing it (`aeroident_pipelines::record::corrections`).
 //!
 //! Measured (`cargo test --release -p aeroident-estimators compat::tests::an_ahrs` and
-//! `cargo test --release -p aeroident --test compat_ahrs_lag -- --nocapture`):
+//! `cargo test --release -p aeroident --test all compat_ahrs_lag:: -- --nocapture`):
 //! - the synthetic record of the tests, τ = 0.15 s on the gyros and attitudes filtered on the
 //!   generator's fine steps: 0.1495 ± 0.0004 s at 50 Hz with a β vane, 0.1511 ± 0.0008 s at
 //!   10 Hz without, α's residual at its noise; the second-order error of the model leaves the
@@ -475,7 +475,7 @@ fn in_plane(
 ///
 /// For naming a lag `config` does not model. Measured on `scenarios/sim/ahrs_lag_degraded.toml`
 /// at 10 Hz: the same τ as the three starts, 0.168 ± 0.017 s
-/// (`crates/aeroident/tests/compat_ahrs_lag.rs`).
+/// (`crates/aeroident/tests/all/compat_ahrs_lag.rs`).
 ///
 /// # Errors
 /// As [`check`].

@@ -286,7 +286,7 @@ fn in_user_terms(
 /// the gyros (an AHRS's filter delays both alike; attitudes alone late are their own delay,
 /// which `from`'s shifts undo).
 ///
-/// Said, not applied: on the simulated records of `crates/aeroident/tests/compat_ahrs_lag.rs`
+/// Said, not applied: on the simulated records of `crates/aeroident/tests/all/compat_ahrs_lag.rs`
 /// (τ = 0.15 s, 10 Hz) the lag's corrections bring output error's Cl_p, Cl_δa, Cm_q and Cm_δe
 /// from 19–35 % off to within 10 %, but move CY_β (−4 % to +11 % with a β vane, +24 % without),
 /// so applying it is not "never worse than no correction", which `--compat auto` must be. An

@@ -1,5 +1,5 @@
 //! Text mutation for the parser fuzz tests: shared by this crate's `fuzz_parsers.rs` and the
-//! application's `crates/aeroident/tests/fuzz_scenarios.rs` (included there with `#[path]`).
+//! application's `crates/aeroident/tests/all/fuzz_scenarios.rs` (included there with `#[path]`).
 
 /// Applies `edits` to `seed` in order; each `(at, op, s)` acts at character `at` modulo the
 /// text's length + 1: `op % 4` = 0 inserts `s`, 1 deletes `s.len()` characters, 2 replaces

@@ -44,6 +44,7 @@ mod log_formats;
 mod matched_truth;
 mod mavlink_loopback;
 mod oe_campaign;
+mod one_binary;
 mod poc;
 mod prior_limits;
 mod record_windows;

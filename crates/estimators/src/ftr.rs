@@ -1096,8 +1096,7 @@ mod tests {
             };
             assert_eq!(split, whole, "budget {budget}");
             if budget == 1 {
-                let steps =
-                    (1 + FITTED_SHARE_ITERATIONS) * (m + p + 1) + FITTED_SHARE_ITERATIONS;
+                let steps = (1 + FITTED_SHARE_ITERATIONS) * (m + p + 1) + FITTED_SHARE_ITERATIONS;
                 assert_eq!(calls, steps + 1, "one step per call, and the last that finishes");
             }
         }

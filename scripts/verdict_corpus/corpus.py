@@ -968,6 +968,43 @@ def collect(out, tag, half):
     return rows, replays
 
 
+def relative_sigma(r):
+    """σ/|estimate| of a joined row; None without both."""
+    e, sd = r["estimate"], r["std_error"]
+    return None if e is None or sd is None or e == 0 else sd / abs(e)
+
+
+def within_10pct_if_gaussian(r):
+    """The chance that an unbiased estimate whose error is normal with the row's own σ lies
+    within 10 % of the truth, P(|z| < 0.1 |θ| / σ), taking |θ| as |estimate|: what the row's
+    σ lets "right" expect."""
+    rel = relative_sigma(r)
+    return None if rel is None else math.erf(0.10 / rel / math.sqrt(2.0))
+
+
+SIGMA_BINS = [0.0, 0.075, 0.10, 0.15, 0.20, float("inf")]
+
+
+def by_relative_sigma(rows):
+    """Identified estimates by σ/|estimate|: count, precision, precision₂σ, coverage, and the
+    precision their own σ predicts for unbiased normal errors (within_10pct_if_gaussian)."""
+    out = {}
+    ident = [r for r in rows if r["status"] == "identified" and relative_sigma(r) is not None]
+    for lo, hi in zip(SIGMA_BINS, SIGMA_BINS[1:]):
+        sel = [r for r in ident if lo <= relative_sigma(r) < hi]
+        if not sel:
+            continue
+        n = len(sel)
+        out["%g–%g %%" % (100 * lo, 100 * hi)] = {
+            "identified": n,
+            "precision": round(sum(r["right10"] for r in sel) / n, 4),
+            "precision_2sigma": round(sum(r["right_2s"] for r in sel) / n, 4),
+            "coverage_2sigma": round(sum(r["covered"] for r in sel) / n, 4),
+            "expected_precision_if_unbiased": round(
+                sum(within_10pct_if_gaussian(r) for r in sel) / n, 4)}
+    return out
+
+
 def metrics(sel, reps=None):
     ident = [r for r in sel if r["status"] == "identified"]
     right = [r for r in sel if r["right10"]]
@@ -989,6 +1026,13 @@ def metrics(sel, reps=None):
     if reps is not None:
         m["replays"] = len(reps)
         m["failed_replays"] = sum(1 for r in reps if r["exit"] != 0)
+    # The estimates the record determines to 10 % (σ ≤ 10 % of |estimate|, no `notes` entry
+    # saying otherwise): the ones whose σ supports the 10 % that "right" asks for.
+    det = [r for r in ident if relative_sigma(r) is not None and relative_sigma(r) <= 0.10]
+    m["determined"] = len(det)
+    m["precision_determined"] = (round(sum(r["right10"] for r in det) / len(det), 4)
+                                 if det else None)
+    m["precision_determined_ci95"] = wilson(sum(r["right10"] for r in det), len(det))
     m["meets_targets"] = (m["precision"] is not None and m["precision"] >= 0.95 and
                           m["recall"] is not None and m["recall"] >= 0.60 and
                           m["coverage_2sigma"] is not None and m["coverage_2sigma"] >= 0.90)
@@ -1017,6 +1061,7 @@ def cmd_report(a):
     for key in ("name", "degradation", "aircraft", "input", "noise", "model", "manoeuvres"):
         rep["by_" + key] = {str(k): metrics([r for r in rows if r[key] == k])
                             for k in sorted({r[key] for r in rows}, key=str)}
+    rep["by_relative_sigma"] = by_relative_sigma(rows)
     misses = sorted((r for r in rows if r["status"] == "identified" and not r["right10"]),
                     key=lambda r: -(r["rel_error"] or 0))
     rep["worst_identified_misses"] = [
@@ -1064,6 +1109,20 @@ def markdown(rep):
             _pct(m["precision"]), _ci(m["precision_ci95"]), _pct(m["precision_2sigma"]),
             _pct(m["recall"]), _ci(m["recall_ci95"]), _pct(m["coverage_2sigma"]),
             _ci(m["coverage_ci95"]), "met" if m["meets_targets"] else "not met"))
+    L += ["", "Precision over the estimates the record determines to 10 % (σ ≤ 10 % of "
+          "|estimate|, no note saying otherwise), and the identified estimates by σ/|estimate| "
+          "beside the precision their own σ predicts for unbiased normal errors, "
+          "P(|z| < 0.1/(σ/|θ|)):", "",
+          "| method | determined to 10 % | precision there |", "|---|---|---|"]
+    for e, m in list(rep["per_method"].items()) + [("**all**", rep["overall"])]:
+        L.append("| %s | %d | %s%s |" % (e, m["determined"], _pct(m["precision_determined"]),
+                                          _ci(m["precision_determined_ci95"])))
+    L += ["", "| σ/\\|estimate\\| | identified | precision | expected if unbiased | "
+          "precision₂σ | coverage ±2σ |", "|---|---|---|---|---|---|"]
+    for k, b in rep["by_relative_sigma"].items():
+        L.append("| %s | %d | %s | %s | %s | %s |" % (
+            k, b["identified"], _pct(b["precision"]), _pct(b["expected_precision_if_unbiased"]),
+            _pct(b["precision_2sigma"]), _pct(b["coverage_2sigma"])))
     ct = rep["consistent_truth"]
     L += ["", "Only where the trim-slope truth and the least-squares truth agree to 10 %:", "",
           "| method | n | identified | precision | recall | coverage ±2σ |",

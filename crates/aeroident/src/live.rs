@@ -1,48 +1,14 @@
-//! Live sources for `replay`: a MAVLink feed (`mavlink:udp:<host>:<port>`) opened as a
-//! [`FlightDataReader`] over the same mapping as a file (`aeroident_io::mavlink`), and its link
-//! statistics added to the replay summary.
+//! The console's side of a live MAVLink feed (`mavlink:udp:<host>:<port>`, opened by
+//! [`aeroident_io::Record::open`]): its problems printed as they arise, and its link
+//! statistics printed and added to the replay summary.
 
-use aeroident_io::mapping::Source;
-use aeroident_io::mavlink::{LinkStats, MavlinkRows, MavlinkUrl};
+use aeroident_io::mavlink::LinkStats;
 use aeroident_io::replay_output::ReplaySummary;
-use aeroident_io::{FlightDataReader, Mapping};
-use std::sync::{Arc, Mutex};
+use std::sync::Mutex;
 
-fn problem(line: &str) {
+/// A live feed's problem as it arises, on stderr.
+pub fn problem(line: &str) {
     aeroident_report::note!("warning: {line}");
-}
-
-/// Whether a replay source names a MAVLink feed.
-pub fn is_mavlink(source: &str) -> bool {
-    source.starts_with("mavlink:")
-}
-
-/// Binds the feed's socket and returns the reader (named by the source text in messages) and a
-/// handle on the link statistics. Says on stderr where it listens.
-///
-/// # Errors
-/// A malformed source, a mapped column that is not a numeric MAVLink field, a socket that
-/// cannot be bound.
-pub fn open_mavlink(
-    source: &str,
-    mapping: &Mapping,
-) -> anyhow::Result<(FlightDataReader<MavlinkRows>, Arc<Mutex<LinkStats>>)> {
-    let url = MavlinkUrl::parse(source)?;
-    let rows = MavlinkRows::open(&url, mapping, Some(problem))?;
-    let stats = rows.stats();
-    let clock = match &mapping.time.source {
-        Source::Columns(c) => c.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join("+"),
-        Source::Constant(_) => String::new(),
-    };
-    aeroident_report::note!(
-        "listening on {} (clock {}, ends after {} s without a datagram or on NAMED_VALUE_FLOAT `{}`)",
-        rows.local_addr(),
-        clock,
-        url.timeout_s,
-        aeroident_io::mavlink::END_OF_STREAM_NAME
-    );
-    let reader = FlightDataReader::new(rows, &url.text, mapping)?;
-    Ok((reader, stats))
 }
 
 /// One line on the link: counts and how it ended ([`LinkStats::line`]).

@@ -177,6 +177,9 @@ pub enum FlightDataError {
         /// What was wrong, naming the message and field where known.
         message: String,
     },
+    /// A live MAVLink feed could not be opened or read ([`crate::mavlink`]).
+    #[error(transparent)]
+    Mavlink(#[from] crate::mavlink::MavlinkError),
     /// A topic, message or field a mapping or alignment needs is not in the log.
     #[error("{file}: `{column}` for {needed_by}: {reason}")]
     MissingTopic {

@@ -216,10 +216,7 @@ pub struct Inspection {
 /// and [`FlightDataError::Format`] for a channel of [`InspectOptions::keep`] the log lacks
 /// (listing what it has).
 pub fn inspect_log(path: &str, options: &InspectOptions) -> Result<Inspection, FlightDataError> {
-    let format = options
-        .format
-        .or_else(|| LogFormat::from_extension(Path::new(path)))
-        .unwrap_or(LogFormat::Csv);
+    let format = LogFormat::resolve(options.format, path);
     let inspection = match format {
         LogFormat::Tlog => {
             inspect_multirate(path, format.name(), options, crate::tlog::read_tlog_filtered)?

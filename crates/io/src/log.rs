@@ -121,7 +121,7 @@ impl FromStr for LogFormat {
 }
 
 /// The reader every format gives: the CSV reader over a boxed byte source.
-pub type LogReader = FlightDataReader<Box<dyn Read>>;
+pub type LogReader = FlightDataReader<Box<dyn Read + Send>>;
 
 /// Opens a log for replay through `mapping`: `format`, else the extension of `path`, else CSV.
 /// `path` `-` is stdin (CSV or whitespace text; a `.mat` or binary log is read whole, from a
@@ -169,25 +169,21 @@ pub fn open_log_with_report(
     format: Option<LogFormat>,
     mapping: &Mapping,
 ) -> Result<(LogReader, ReaderReport), FlightDataError> {
-    let format =
-        format.or_else(|| LogFormat::from_extension(Path::new(path))).unwrap_or(LogFormat::Csv);
+    let format = LogFormat::resolve(format, path);
     let io = |source| FlightDataError::Io { file: path.to_string(), source };
-    let open = || -> Result<Box<dyn BufRead>, FlightDataError> {
+    let open = || -> Result<Box<dyn BufRead + Send>, FlightDataError> {
         if path == "-" {
-            Ok(Box::new(std::io::stdin().lock()))
+            Ok(Box::new(BufReader::new(std::io::stdin())))
         } else {
             Ok(Box::new(BufReader::new(std::fs::File::open(path).map_err(io)?)))
         }
     };
-    let empty = ReaderReport {
-        file: path.to_string(),
-        format: format.name().to_string(),
-        dropped: Vec::new(),
-    };
+    let empty = ReaderReport::empty(path, format.name());
     match format {
-        LogFormat::Csv => {
-            Ok((FlightDataReader::new(Box::new(open()?) as Box<dyn Read>, path, mapping)?, empty))
-        }
+        LogFormat::Csv => Ok((
+            FlightDataReader::new(Box::new(open()?) as Box<dyn Read + Send>, path, mapping)?,
+            empty,
+        )),
         LogFormat::Asc => Ok((asc_reader(open()?, path, mapping)?, empty)),
         LogFormat::Mat => {
             let table = read_mat(open()?, path, mapping.column_names.as_deref())?;
@@ -339,7 +335,7 @@ fn with_cut_note(e: FlightDataError, losses: &Losses) -> FlightDataError {
 /// [`FlightDataError::Io`], [`FlightDataError::Format`] (no data line and no names, or a
 /// first data line with a different number of fields than `[columns] names` has), and
 /// [`FlightDataError::NoSuchColumn`].
-pub fn asc_reader<R: BufRead + 'static>(
+pub fn asc_reader<R: BufRead + Send + 'static>(
     source: R,
     file: &str,
     mapping: &Mapping,
@@ -404,7 +400,7 @@ pub fn asc_reader<R: BufRead + 'static>(
     for raw in lines {
         text.out.extend_from_slice(convert_line(&raw).as_bytes());
     }
-    Ok(FlightDataReader::new(Box::new(text) as Box<dyn Read>, file, mapping)?
+    Ok(FlightDataReader::new(Box::new(text) as Box<dyn Read + Send>, file, mapping)?
         .with_synthetic_lines(1))
 }
 
@@ -442,7 +438,7 @@ pub fn table_reader(table: Table, mapping: &Mapping) -> Result<LogReader, Flight
     check_columns(&file, &table.names, mapping)?;
     let header = csv_line(table.names.iter().map(String::as_str), true).into_bytes();
     let source = TableAsCsv { table, row: 0, out: header, pos: 0 };
-    Ok(FlightDataReader::new(Box::new(source) as Box<dyn Read>, &file, mapping)?
+    Ok(FlightDataReader::new(Box::new(source) as Box<dyn Read + Send>, &file, mapping)?
         .with_synthetic_lines(1))
 }
 

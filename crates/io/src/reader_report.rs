@@ -72,6 +72,12 @@ pub struct ReaderReport {
 }
 
 impl ReaderReport {
+    /// The report of `file` read in the format named `format` (`LogFormat::name`) by a reader
+    /// that leaves nothing out before the rows (CSV, `.asc`, `.mat`, arrays, a live feed).
+    pub fn empty(file: &str, format: &str) -> Self {
+        Self { file: file.to_string(), format: format.to_string(), dropped: Vec::new() }
+    }
+
     /// The losses a multi-rate reader recorded in `contents`.
     pub fn from_contents(file: &str, format: &str, contents: &LogContents) -> Self {
         let mut dropped: Vec<Dropped> = contents

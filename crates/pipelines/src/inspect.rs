@@ -196,7 +196,9 @@ fn read_samples(
     let not_read = |e: &dyn std::fmt::Display| {
         format!("the record could not be read as air-data samples through the mapping: {e}")
     };
-    let reader = aeroident_io::open_log(path, options.format, mapping).map_err(|e| not_read(&e))?;
+    let source = aeroident_io::RecordSource::Path(path.to_string());
+    let opened = aeroident_io::Record::open(source, options.format, mapping);
+    let reader = opened.map_err(|e| not_read(&e))?.reader;
     let record = crate::record::read_manoeuvres(reader, None, &[]).map_err(|e| not_read(&e))?;
     Ok(record.manoeuvres.into_iter().flatten().collect())
 }

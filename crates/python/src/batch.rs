@@ -7,7 +7,7 @@
 use aeroident_io::ParameterResult;
 use std::path::Path;
 
-use aeroident_io::{Mapping, open_log_with_report};
+use aeroident_io::{Mapping, Record, RecordSource};
 use aeroident_pipelines::estimators::EstimatorKind;
 use aeroident_pipelines::estimators::OptionError;
 use aeroident_pipelines::job::fit::{FitJob, FitJobOutcome};
@@ -179,7 +179,8 @@ fn fit_job(job: &FitJob) -> anyhow::Result<(FitJobOutcome, Vec<String>)> {
     };
     let (mut readers, mut notes, mut reports) = (Vec::new(), Notes::default(), Vec::new());
     for file in job.records.files() {
-        let (reader, report) = open_log_with_report(file, None, &job.records.mapping)?;
+        let source = RecordSource::Path(file.clone());
+        let Record { reader, report, .. } = Record::open(source, None, &job.records.mapping)?;
         readers.push(reader);
         notes.0.extend(report.notes());
         reports.push(report);

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use aeroident_io::{Mapping, open_log_with_notes};
+use aeroident_io::{Mapping, Record, RecordSource};
 use aeroident_pipelines::freqresp::{FreqRespOptions, FreqRespOutcome, freqresp};
 use aeroident_signals::spectral::{PairResponse, SpectralOptions};
 use aeroident_signals::tf_fit::{FitOptions, TfSpec};
@@ -64,7 +64,7 @@ fn freqresp_file<'py>(
     let (path, mapping) = (path.to_owned(), mapping.to_owned());
     let run = move || -> anyhow::Result<_> {
         let mapping = Mapping::from_path(Path::new(&mapping))?;
-        let (reader, _) = open_log_with_notes(&path, None, &mapping)?;
+        let reader = Record::open(RecordSource::Path(path), None, &mapping)?.reader;
         Ok(freqresp(reader, &opts)?)
     };
     let r = crate::interruptible(py, None, run)?;

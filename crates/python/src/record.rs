@@ -5,7 +5,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use aeroident_estimators::AirDataSample;
-use aeroident_io::{Mapping, ModelSpec, RecordEvent, open_log_with_notes, open_log_with_report};
+use aeroident_io::{Mapping, ModelSpec, Record, RecordEvent, RecordSource};
 use aeroident_pipelines::estimators::{EstimatorKind, EstimatorOptions, build};
 use aeroident_pipelines::job::replay::ReplayJob;
 use aeroident_pipelines::job::{CompatSource, InPlace, ModelChoice, Ran, Records};
@@ -187,11 +187,12 @@ struct Columns {
     notes: Vec<String>,
 }
 
-/// Reads `path` with the CLI's reader for its extension ([`open_log_with_notes`]: CSV,
+/// Reads `path` with the CLI's reader for its extension ([`Record::open`]: CSV,
 /// `.asc`, `.mat`, ULog, DataFlash), stopping early when `signals` reports Ctrl-C.
 fn read_columns(path: &str, mapping: &str, signals: &Signals) -> anyhow::Result<Columns> {
     let mapping = Mapping::from_path(Path::new(mapping))?;
-    let (reader, notes) = open_log_with_notes(path, None, &mapping)?;
+    let record = Record::open(RecordSource::Path(path.to_string()), None, &mapping)?;
+    let (notes, reader) = (record.notes(), record.reader);
     let keys = convert::all_keys();
     let mut c = Columns {
         rows: Vec::new(),
@@ -397,8 +398,8 @@ fn replay_job(job: &ReplayJob, signals: &Signals) -> anyhow::Result<ReplayResult
         anyhow::bail!("internal: a step run in place was abandoned");
     };
     let (mapping, opts) = (&job.records.mapping, &prepared.options);
-    let open = || open_log_with_report(&job.records.data, None, mapping);
-    let (reader, report) = open()?;
+    let open = || Record::open(RecordSource::Path(job.records.data.clone()), None, mapping);
+    let Record { reader, report, .. } = open()?;
     let notes = report.notes();
     // The steps after the feed read the record again: held in memory, it is read once.
     let screen = opts.spike_screen;
@@ -411,7 +412,7 @@ fn replay_job(job: &ReplayJob, signals: &Signals) -> anyhow::Result<ReplayResult
         (Some(h), _) => replay_arrays_cached(h, mapping, opts, observer)?,
         (None, Some(r)) => replay_arrays_observed(r, mapping, opts, observer)?,
         // Too long to hold, or unreadable (the replay then says why): from the file.
-        (None, None) => replay_arrays_observed(open()?.0, mapping, opts, observer)?,
+        (None, None) => replay_arrays_observed(open()?.reader, mapping, opts, observer)?,
     };
     outcome.reader.push(report);
     if let Some(e) = outcome.diverged_error(job.options.estimator.name()) {

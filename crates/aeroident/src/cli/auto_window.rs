@@ -202,7 +202,7 @@ fn check_auto(specs: &[WindowSpec], data: &str, more_records: bool) -> anyhow::R
     if specs.len() > 1 {
         bail!("option `--window`: give `auto` once, and not beside START:END windows");
     }
-    if data == "-" || crate::live::is_mavlink(data) {
+    if data == "-" || aeroident_io::record::is_mavlink(data) {
         bail!("--window auto reads the record twice (to find the manoeuvres first): give a file");
     }
     if more_records {

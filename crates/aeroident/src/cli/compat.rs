@@ -11,7 +11,7 @@
 
 use aeroident_estimators::compat::CompatConfig;
 use aeroident_estimators::compat::CompatResult;
-use aeroident_io::{LogFormat, Mapping, open_log_with_notes};
+use aeroident_io::{LogFormat, Mapping, Record, RecordSource};
 use aeroident_pipelines::compat::{ChannelSummary, CompatSummary, check_records};
 use aeroident_pipelines::job::Records;
 use aeroident_pipelines::window::TimeWindow;
@@ -157,9 +157,9 @@ fn check(
 ) -> anyhow::Result<(CompatSummary, CompatResult)> {
     let mut readers = Vec::new();
     for file in files {
-        let (reader, notes) = open_log_with_notes(file, format, mapping)?;
-        notes.iter().for_each(|n| aeroident_report::note!("note: {n}"));
-        readers.push(reader);
+        let record = Record::open(RecordSource::Path(file.clone()), format, mapping)?;
+        record.notes().iter().for_each(|n| aeroident_report::note!("note: {n}"));
+        readers.push(record.reader);
     }
     Ok(check_records(readers, windows, config)?)
 }

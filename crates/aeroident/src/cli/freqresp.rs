@@ -18,7 +18,7 @@
 //! coherence (`bode_<output>_<input>.{png,svg}`) and `report.html`.
 
 use aeroident_io::excitation::{Axis, Excitation, axis_by_name, read_sysid};
-use aeroident_io::{LogFormat, Mapping, open_log_with_notes};
+use aeroident_io::{LogFormat, Mapping, Record, RecordSource};
 use aeroident_pipelines::freqresp::sysid::{SweepSummary, choose_sweeps, default_input};
 use aeroident_pipelines::freqresp::{
     FitSummary, FreqRespOptions, FreqRespOutcome, GOOD_COHERENCE, coherent_band, freqresp,
@@ -184,8 +184,7 @@ impl FreqRespArgs {
             ),
         };
         let path = Path::new(&self.data);
-        let format = self.format.or_else(|| LogFormat::from_extension(path));
-        if format != Some(LogFormat::Dataflash) {
+        if LogFormat::resolve(self.format, &self.data) != LogFormat::Dataflash {
             anyhow::bail!(
                 "option `--window`: `sysid` reads an ArduPilot DataFlash log's SYSID sweeps (SIDS, SIDD); {} is not one (PX4 logs no sweep setup message: give the windows as START:END, section Finding the excitation of docs/frequency-response.md)",
                 self.data
@@ -219,11 +218,9 @@ pub fn execute(args: FreqRespArgs) -> anyhow::Result<()> {
     )?;
     let (data, format) = (args.data.clone(), args.format);
     let outcome = run.run(move || {
-        let (reader, notes) = open_log_with_notes(&data, format, &mapping)?;
-        for n in &notes {
-            aeroident_report::note!("note: {n}");
-        }
-        Ok(freqresp(reader, &options)?)
+        let record = Record::open(RecordSource::Path(data), format, &mapping)?;
+        record.notes().iter().for_each(|n| aeroident_report::note!("note: {n}"));
+        Ok(freqresp(record.reader, &options)?)
     })?;
     // The files first: a console reader that has gone away (`| head`) must not cost them.
     let wrote = match (run.writing(), &args.out) {

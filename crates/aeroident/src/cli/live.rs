@@ -93,7 +93,7 @@ pub fn execute(args: LiveArgs) -> anyhow::Result<()> {
         );
     }
     // Refused before the server starts and prints its address.
-    let mavlink = crate::live::is_mavlink(&args.replay.data);
+    let mavlink = aeroident_io::record::is_mavlink(&args.replay.data);
     super::replay::check_combination(&args.replay, mavlink, true)?;
     let spec = model_spec(&args.replay);
     let shared = LiveState::new(LiveConfig { rule, ..Default::default() }, spec).shared();
@@ -129,7 +129,7 @@ const CLOSE_WAIT: Duration = Duration::from_secs(10);
 
 /// The pace of a recorded file (`--speed`, default 1×); none for stdin and a MAVLink feed.
 fn pacing(args: &LiveArgs) -> anyhow::Result<Option<Pace>> {
-    let feed = args.replay.data == "-" || crate::live::is_mavlink(&args.replay.data);
+    let feed = args.replay.data == "-" || aeroident_io::record::is_mavlink(&args.replay.data);
     match args.speed {
         Some(_) if feed => anyhow::bail!(
             "--speed paces a recorded file; {} comes at its own pace",

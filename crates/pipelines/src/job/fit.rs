@@ -236,7 +236,7 @@ impl FitJob {
         outcome.summary.warnings.extend(overlap);
         let (v, mapping, fitted) = (v.clone(), self.records.mapping.clone(), outcome.clone());
         let step = move || -> Result<_, ReplayError> {
-            let (reader, notes) = aeroident_io::open_log_with_notes(&v.path, None, &mapping)?;
+            let (reader, notes) = v.open(&mapping)?;
             Ok((crate::replay::batch::validate_on(reader, &fitted, &v.windows)?, notes))
         };
         match guard.run(Step::ValidateOn, step)? {

@@ -29,9 +29,7 @@ use crate::record::Corrections;
 use crate::replay::ReplayError;
 use crate::structure::AutoSelection;
 use crate::window::TimeWindow;
-use aeroident_io::{
-    FlightDataError, LogFormat, LogReader, Mapping, ModelSpec, RecordEvent, open_log_with_notes,
-};
+use aeroident_io::{FlightDataError, LogFormat, LogReader, Mapping, ModelSpec, RecordEvent};
 use std::path::PathBuf;
 
 /// How many samples [`Records::sample_interval_s`] reads: enough for a median that a few gaps
@@ -46,7 +44,7 @@ pub struct Records {
     /// Further records of the same aircraft fitted with it (the batch fits' `--and`).
     pub and: Vec<String>,
     /// The log format; `None`: by each file's extension, else CSV
-    /// ([`aeroident_io::open_log_with_report`]).
+    /// ([`aeroident_io::Record::open`]).
     pub format: Option<LogFormat>,
     /// The channel mapping of every record.
     pub mapping: Mapping,
@@ -144,9 +142,10 @@ impl Records {
     /// Opens the record `file` with the job's format and mapping.
     ///
     /// # Errors
-    /// As [`aeroident_io::open_log_with_notes`].
+    /// As [`aeroident_io::Record::open`].
     pub fn open(&self, file: &str) -> Result<LogReader, FlightDataError> {
-        open_log_with_notes(file, self.format, &self.mapping).map(|(r, _)| r)
+        let source = aeroident_io::RecordSource::Path(file.to_string());
+        aeroident_io::Record::open(source, self.format, &self.mapping).map(|r| r.reader)
     }
 
     /// The main record's sample interval, s: the median of the positive intervals between its
@@ -214,6 +213,18 @@ pub struct ValidateOn {
 }
 
 impl ValidateOn {
+    /// Opens the second record through `mapping` ([`aeroident_io::Record::open`], its format by
+    /// its extension): the reader and what its reading left out, one line each.
+    ///
+    /// # Errors
+    /// As [`aeroident_io::Record::open`].
+    pub fn open(&self, mapping: &Mapping) -> Result<(LogReader, Vec<String>), FlightDataError> {
+        let source = aeroident_io::RecordSource::Path(self.path.clone());
+        let record = aeroident_io::Record::open(source, None, mapping)?;
+        let notes = record.notes();
+        Ok((record.reader, notes))
+    }
+
     /// A second record `path` (if given) and validation windows (`windows`, of `path` or, without
     /// it, of the fitted record `data`); `None` when neither is given.
     pub fn from_args(path: Option<String>, windows: Vec<TimeWindow>, data: &str) -> Option<Self> {

@@ -241,7 +241,7 @@ impl ReplayJob {
         let options = ReplayOptions { windows: v.windows.clone(), ..options.clone() };
         let fitted = outcome.clone();
         let step = move || -> Result<_, ReplayError> {
-            let (reader, notes) = aeroident_io::open_log_with_notes(&v.path, None, &mapping)?;
+            let (reader, notes) = v.open(&mapping)?;
             let report = crate::replay::validate_on(reader, &mapping, &options, &fitted)?;
             Ok((report, notes))
         };

@@ -321,7 +321,8 @@ fn reader_of(sim: &AircraftSimRun, mapping: &Mapping) -> Result<aeroident_io::Lo
         names: sim.table.columns.clone(),
         columns: sim.table.data.clone(),
     };
-    aeroident_io::log::table_reader(table, mapping).map_err(|e| e.to_string())
+    let source = aeroident_io::RecordSource::Table(table);
+    aeroident_io::Record::open(source, None, mapping).map(|r| r.reader).map_err(|e| e.to_string())
 }
 
 impl ModelFileExperiment {

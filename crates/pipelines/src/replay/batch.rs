@@ -356,7 +356,7 @@ pub struct BatchSummary {
     /// Validation on a second record (`--validate-on`), else `null`.
     pub validation_on: Option<ValidationReport>,
     /// What the log reader left out of each record read, as the caller that opened them
-    /// reports it ([`aeroident_io::open_log_with_report`]); empty for CSV records.
+    /// reports it ([`aeroident_io::Record::open`]); empty for CSV records.
     pub reader: Vec<aeroident_io::ReaderReport>,
     /// `fem`: the estimated process noise of each state it was estimated on; empty for `oe`.
     pub process_noise: Vec<ProcessNoise>,

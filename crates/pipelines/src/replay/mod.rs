@@ -630,7 +630,7 @@ pub struct ReplayOutcome {
     pub cross_check: Option<cross_check::CrossCheck>,
     /// What reading the record left out before its rows (a multi-rate log's dropped
     /// samples, skipped bytes, cut message, alignment drops), as the caller that opened it
-    /// reports it ([`aeroident_io::open_log_with_report`]); empty when nothing was or for a
+    /// reports it ([`aeroident_io::Record::open`]); empty when nothing was or for a
     /// CSV.
     pub reader: Vec<ReaderReport>,
 }

@@ -8,7 +8,7 @@ use super::stop::{
 };
 use super::{ReplayArgs, validation_block};
 use aeroident_estimators::output_error::StopFlag;
-use aeroident_io::{FlightDataReader, LogFormat, Mapping, open_log_with_report};
+use aeroident_io::{Record, RecordSource};
 use aeroident_pipelines::estimators::EstimatorKind;
 use aeroident_pipelines::job::fit::{FitJob, FitJobOutcome, Prepared};
 use aeroident_pipelines::replay::STATUS_INTERRUPTED;
@@ -111,8 +111,8 @@ fn announce(estimator: EstimatorKind, options: &FitOptions) {
     }
 }
 
-/// Opens the job's records (`-` through `stdin` when given), printing what each reader left
-/// out, and fits them ([`FitJob::fit`]).
+/// Opens the job's records ([`Record::open`]; `-` through `stdin` when given), printing what
+/// each reader left out, and fits them ([`FitJob::fit`]).
 fn read_and_fit(
     job: &FitJob,
     prepared: Prepared,
@@ -121,42 +121,16 @@ fn read_and_fit(
     let records = &job.records;
     let (mut readers, mut reports) = (Vec::new(), Vec::new());
     for file in records.files() {
-        let (reader, report) = match stdin.take_if(|_| file == "-") {
-            Some(s) => open_stdin(s, records.format, &records.mapping)?,
-            None => open_log_with_report(file, records.format, &records.mapping)?,
+        let source = match stdin.take_if(|_| file == "-") {
+            Some(s) => RecordSource::Bytes { name: "-".into(), read: Box::new(s) },
+            None => RecordSource::Path(file.clone()),
         };
-        report.notes().iter().for_each(|n| aeroident_report::note!("note: {n}"));
-        readers.push(reader);
-        reports.push(report);
+        let record = Record::open(source, records.format, &records.mapping)?;
+        record.notes().iter().for_each(|n| aeroident_report::note!("note: {n}"));
+        readers.push(record.reader);
+        reports.push(record.report);
     }
     Ok(job.fit(prepared, readers, reports)?)
-}
-
-/// The record on stdin, read through `stdin` (which a signal ends at a line boundary); a
-/// binary log is refused as [`open_log_with_report`] refuses it.
-fn open_stdin(
-    stdin: crate::interrupt::InterruptibleStdin,
-    format: Option<LogFormat>,
-    mapping: &Mapping,
-) -> Result<(aeroident_io::LogReader, aeroident_io::ReaderReport), aeroident_io::FlightDataError> {
-    use aeroident_io::log::{asc_reader, read_mat, table_reader};
-    let format = format.unwrap_or(LogFormat::Csv);
-    let reader = match format {
-        LogFormat::Csv => {
-            FlightDataReader::new(Box::new(stdin) as Box<dyn std::io::Read>, "-", mapping)?
-        }
-        LogFormat::Asc => asc_reader(std::io::BufReader::new(stdin), "-", mapping)?,
-        LogFormat::Mat => {
-            table_reader(read_mat(stdin, "-", mapping.column_names.as_deref())?, mapping)?
-        }
-        _ => return open_log_with_report("-", Some(format), mapping),
-    };
-    let report = aeroident_io::ReaderReport {
-        file: "-".into(),
-        format: format.name().to_string(),
-        dropped: Vec::new(),
-    };
-    Ok((reader, report))
 }
 
 /// Runs `fit` (the batch fit, of a file or of stdin) on a thread of its own while answering the

@@ -365,7 +365,7 @@ pub fn execute_with(
         !args.and.is_empty(),
         super::auto_window::axes_of_model(args.model.as_deref()),
     )?;
-    let mavlink = crate::live::is_mavlink(&args.data);
+    let mavlink = aeroident_io::record::is_mavlink(&args.data);
     let live = args.data == "-" || mavlink;
     check_combination(&args, mavlink, view.is_some())?;
     let records = records(&args, mapping, live);

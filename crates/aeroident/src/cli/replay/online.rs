@@ -8,15 +8,14 @@ use super::stop::{
     write_stopped_summary,
 };
 use super::{Console, ReplayArgs, validation_block};
-use aeroident_io::{FlightDataReader, LogFormat, open_log_with_report};
+use aeroident_io::record::{Record, RecordSource, is_mavlink};
 use aeroident_pipelines::job::replay::{Prepared, ReplayJob, ReplayJobOutcome};
 use aeroident_pipelines::live::{LiveObserver, SharedLive};
 use aeroident_pipelines::record::cache::ScreenedRecord;
 use aeroident_pipelines::replay::{
     EstimateRows, ReplayError, ReplayObserver, ReplayOptions, ReplayOutcome, RowRate, replay,
-    replay_cached, replay_holding,
+    replay_holding,
 };
-use anyhow::Context;
 use std::io::Write;
 use std::path::Path;
 use std::sync::Arc;
@@ -110,20 +109,23 @@ fn progress_bar(args: &ReplayArgs, live: bool) -> indicatif::ProgressBar {
 /// messages arrive; otherwise buffered, one write per 64 KiB, not per sample (the replay
 /// flushes per line only when paced in real time).
 fn stdout_sink(args: &ReplayArgs) -> Box<dyn Write> {
-    if crate::live::is_mavlink(&args.data) {
+    if is_mavlink(&args.data) {
         Box::new(std::io::LineWriter::new(std::io::stdout().lock()))
     } else {
         Box::new(std::io::BufWriter::with_capacity(1 << 16, std::io::stdout().lock()))
     }
 }
 
-/// The feed's outcome and, when the feed held the record in memory (read beside it or
-/// before it), the record held ([`Prepared::held`]).
+/// The feed's outcome and, when the feed held the record in memory (read beside it), the
+/// record held ([`Prepared::held`]).
 type Fed = (ReplayOutcome, Option<Arc<ScreenedRecord>>);
 
-/// Opens the record as the console reads it and replays it with `opts`: the outer error is
-/// one of opening (returned as it is), the inner one the replay's (a live feed a signal ended
-/// before any estimate is then a stopped run, not a failure).
+/// Opens the record ([`Record::open`]) and replays it with `opts`: the outer error is one of
+/// opening a file or a feed (returned as it is), the inner one the replay's (a live feed a
+/// signal ended before any estimate, even inside its header, is then a stopped run, not a
+/// failure). When the steps after the feed will read the record again
+/// ([`aeroident_pipelines::job::Records::holds`]) it is held in memory as the estimator takes
+/// it ([`aeroident_pipelines::replay::replay_holding`]).
 fn replay_record(
     args: &ReplayArgs,
     job: &ReplayJob,
@@ -132,101 +134,65 @@ fn replay_record(
     bar: &indicatif::ProgressBar,
     console: &mut dyn ReplayObserver,
 ) -> anyhow::Result<Result<Fed, ReplayError>> {
-    let mapping = &job.records.mapping;
-    let format = args
-        .format
-        .or_else(|| LogFormat::from_extension(Path::new(&args.data)))
-        .unwrap_or(LogFormat::Csv);
-    if crate::live::is_mavlink(&args.data) {
-        let (reader, stats) = crate::live::open_mavlink(&args.data, mapping)?;
+    let (mapping, live) = (&job.records.mapping, job.records.live);
+    let source = record_source(args, live, interrupt, bar);
+    let Record { reader, report, link } = match Record::open(source, args.format, mapping) {
+        Ok(record) => record,
+        Err(e) if live && !is_mavlink(&args.data) => return Ok(Err(e.into())),
+        Err(e) => return Err(e.into()),
+    };
+    report.notes().iter().for_each(|n| aeroident_report::note!("note: {n}"));
+    if let Some(link) = link {
+        aeroident_report::note!("{}", link.listening);
         if let Some(v) = view {
-            v.lock().unwrap_or_else(std::sync::PoisonError::into_inner).watch_link(stats.clone());
+            let mut v = v.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+            v.watch_link(link.stats.clone());
         }
         return Ok(replay(reader, mapping, opts, console)
             .map(|mut outcome| {
-                crate::live::finish(&mut outcome.summary, &stats);
+                crate::live::finish(&mut outcome.summary, &link.stats);
                 (outcome, None)
             })
-            .inspect_err(|_| crate::live::report_failure(&stats)));
+            .inspect_err(|_| crate::live::report_failure(&link.stats)));
     }
-    if job.records.live && matches!(format, LogFormat::Csv | LogFormat::Asc) {
-        // stdin through a reader that ends the record on a signal even while no line arrives.
-        let stdin = crate::interrupt::InterruptibleStdin::new(interrupt.flag());
-        let reader = if format == LogFormat::Asc {
-            aeroident_io::log::asc_reader(std::io::BufReader::new(stdin), "-", mapping)
-        } else {
-            FlightDataReader::new(Box::new(stdin) as Box<dyn std::io::Read>, "-", mapping)
-        };
-        // A header cut short by a signal is an interruption too, not a plain error.
-        return Ok(reader
-            .map_err(ReplayError::from)
-            .and_then(|reader| replay(reader, mapping, opts, console).map(|o| (o, None))));
-    }
-    feed_file(args, job, opts, format, bar, console)
-}
-
-/// [`replay_record`] of a file (or stdin read whole). When the steps after the feed will read
-/// it again ([`aeroident_pipelines::job::Records::holds`]) it is read once and held in memory:
-/// a CSV file on a second thread as the estimator takes it
-/// ([`aeroident_pipelines::replay::replay_holding`]), another format before the feed (its
-/// reader has parsed the file already).
-fn feed_file(
-    args: &ReplayArgs,
-    job: &ReplayJob,
-    opts: &ReplayOptions,
-    format: LogFormat,
-    bar: &indicatif::ProgressBar,
-    console: &mut dyn ReplayObserver,
-) -> anyhow::Result<Result<Fed, ReplayError>> {
-    let mapping = &job.records.mapping;
-    let holds = job.records.holds(opts.spike_screen);
-    if !job.records.live && format == LogFormat::Csv {
-        let (reader, report) = open_csv(args, format, mapping, bar)?;
-        let fed = |o: ReplayOutcome, held| (with_report(o, report), held);
-        if holds {
-            let (outcome, held) = replay_holding(reader, mapping, opts, console);
-            return Ok(outcome.map(|o| fed(o, held.map(Arc::new))));
+    // A file is listed like every file read; stdin read live is not a file.
+    let listed = move |mut o: ReplayOutcome| {
+        if !live {
+            o.reader.push(report);
         }
-        return Ok(replay(reader, mapping, opts, console).map(|o| fed(o, None)));
-    }
-    let open = || open_log_with_report(&args.data, Some(format), mapping);
-    let (reader, report) = open()?;
-    report.notes().iter().for_each(|n| aeroident_report::note!("note: {n}"));
-    if !holds {
-        return Ok(replay(reader, mapping, opts, console).map(|o| (with_report(o, report), None)));
-    }
-    if let Some(held) = ScreenedRecord::read(reader, opts.spike_screen).map(Arc::new) {
-        let outcome = replay_cached(&held, mapping, opts, console);
-        return Ok(outcome.map(|o| (with_report(o, report), Some(held))));
-    }
-    // Too long to hold, or unreadable (the feed then says why): from the file.
-    let (reader, report) = open()?;
-    Ok(replay(reader, mapping, opts, console).map(|o| (with_report(o, report), None)))
-}
-
-/// `outcome` with the record's reader report listed.
-fn with_report(mut outcome: ReplayOutcome, report: aeroident_io::ReaderReport) -> ReplayOutcome {
-    outcome.reader.push(report);
-    outcome
-}
-
-/// The CSV file read through the progress bar (what `open_log` opens for CSV), listed like
-/// every file read (a CSV reader leaves nothing out before the rows).
-fn open_csv(
-    args: &ReplayArgs,
-    format: LogFormat,
-    mapping: &aeroident_io::Mapping,
-    bar: &indicatif::ProgressBar,
-) -> anyhow::Result<(FlightDataReader<Box<dyn std::io::Read + Send>>, aeroident_io::ReaderReport)> {
-    let file = std::fs::File::open(&args.data).with_context(|| format!("opening {}", args.data))?;
-    let read: Box<dyn std::io::Read + Send> =
-        Box::new(std::io::BufReader::new(bar.wrap_read(file)));
-    let report = aeroident_io::ReaderReport {
-        file: args.data.clone(),
-        format: format.name().to_string(),
-        dropped: Vec::new(),
+        o
     };
-    Ok((FlightDataReader::new(read, &args.data, mapping)?, report))
+    if !live && job.records.holds(opts.spike_screen) {
+        let (outcome, held) = replay_holding(reader, mapping, opts, console);
+        return Ok(outcome.map(|o| (listed(o), held.map(Arc::new))));
+    }
+    Ok(replay(reader, mapping, opts, console).map(|o| (listed(o), None)))
+}
+
+/// Where the console reads the record: a MAVLink feed (its problems printed as they arise),
+/// stdin through a reader that ends the record on a signal even while no line arrives, or the
+/// file through the progress bar.
+fn record_source(
+    args: &ReplayArgs,
+    live: bool,
+    interrupt: &crate::interrupt::Interrupt,
+    bar: &indicatif::ProgressBar,
+) -> RecordSource {
+    if is_mavlink(&args.data) {
+        return RecordSource::Mavlink {
+            url: args.data.clone(),
+            on_problem: Some(crate::live::problem),
+        };
+    }
+    if live {
+        let stdin = crate::interrupt::InterruptibleStdin::new(interrupt.flag());
+        return RecordSource::Bytes { name: "-".into(), read: Box::new(stdin) };
+    }
+    let bar = bar.clone();
+    RecordSource::Watched {
+        path: args.data.clone(),
+        watch: Box::new(move |file| Box::new(std::io::BufReader::new(bar.wrap_read(file)))),
+    }
 }
 
 /// Ends a live feed a signal stopped before any sample was estimated: a summary saying so
@@ -305,7 +271,7 @@ fn write_results(
         crate::report::replay::write(&source, &done.options, outcome, &title, &references, o)?;
     // Complete: a divergence or an interruption reported below keeps these files.
     o.finish();
-    if crate::live::is_mavlink(&args.data) || args.data == "-" {
+    if is_mavlink(&args.data) || args.data == "-" {
         eprint!("{}", crate::table::render(&results));
     } else {
         crate::cli::print_stdout(&crate::table::render(&results))?;

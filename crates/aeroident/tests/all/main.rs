@@ -45,6 +45,7 @@ mod matched_truth;
 mod mavlink_loopback;
 mod oe_campaign;
 mod one_binary;
+mod one_road;
 mod poc;
 mod prior_limits;
 mod record_windows;

@@ -81,6 +81,12 @@ impl LogFormat {
         }
     }
 
+    /// The format a record is read in: `given`, else `path`'s extension
+    /// ([`LogFormat::from_extension`]), else CSV.
+    pub fn resolve(given: Option<LogFormat>, path: &str) -> LogFormat {
+        given.or_else(|| LogFormat::from_extension(Path::new(path))).unwrap_or(LogFormat::Csv)
+    }
+
     /// The format a file's extension names (case-insensitive): `.asc` whitespace
     /// text, `.mat`, `.ulg`, `.bin` DataFlash, `.tlog`; `None` for any other (read as CSV by
     /// [`open_log`]).
@@ -178,40 +184,57 @@ pub fn open_log_with_report(
             Ok(Box::new(BufReader::new(std::fs::File::open(path).map_err(io)?)))
         }
     };
-    let empty = ReaderReport::empty(path, format.name());
+    let multirate = matches!(format, LogFormat::Ulog | LogFormat::Dataflash | LogFormat::Tlog);
+    if !multirate || path == "-" {
+        // A binary log from stdin is refused there: it is read from a file.
+        let reader = stream_reader(open()?, path, format, mapping)?;
+        return Ok((reader, ReaderReport::empty(path, format.name())));
+    }
+    let filter = TopicFilter::for_mapping(mapping);
+    let contents = match format {
+        LogFormat::Ulog => crate::ulog::read_ulog_filtered(Path::new(path), &filter)?,
+        LogFormat::Tlog => crate::tlog::read_tlog_filtered(Path::new(path), &filter)?.0,
+        _ => crate::dataflash::read_dataflash_filtered(Path::new(path), &filter)?,
+    };
+    let mut report = ReaderReport::from_contents(path, format.name(), &contents);
+    let losses = Losses::of(&contents);
+    let cut = |e| with_cut_note(e, &losses);
+    check_catalogue(&contents, mapping, path)?;
+    let aligned = crate::multirate::log_table(&contents.topics, mapping, path).map_err(cut)?;
+    drop(contents);
+    report.add_alignment(&aligned.dropped_by, aligned.rows_considered);
+    Ok((table_reader(aligned.table, mapping)?, report))
+}
+
+/// The reader of the text or `.mat` bytes `source` (a file, stdin, a face's wrapper around
+/// either), named `file` in messages, in `format`: the one place a byte stream meets its
+/// format's reader, for [`open_log_with_report`] and [`crate::Record::open`].
+///
+/// # Errors
+/// The format's reader's errors; [`FlightDataError::Format`] for ULog, DataFlash and `.tlog`,
+/// which are read from a file (their readers seek and decode whole files).
+pub(crate) fn stream_reader(
+    source: Box<dyn BufRead + Send>,
+    file: &str,
+    format: LogFormat,
+    mapping: &Mapping,
+) -> Result<LogReader, FlightDataError> {
     match format {
-        LogFormat::Csv => Ok((
-            FlightDataReader::new(Box::new(open()?) as Box<dyn Read + Send>, path, mapping)?,
-            empty,
-        )),
-        LogFormat::Asc => Ok((asc_reader(open()?, path, mapping)?, empty)),
+        LogFormat::Csv => {
+            FlightDataReader::new(Box::new(source) as Box<dyn Read + Send>, file, mapping)
+        }
+        LogFormat::Asc => asc_reader(source, file, mapping),
         LogFormat::Mat => {
-            let table = read_mat(open()?, path, mapping.column_names.as_deref())?;
-            Ok((table_reader(table, mapping)?, empty))
+            table_reader(read_mat(source, file, mapping.column_names.as_deref())?, mapping)
         }
-        LogFormat::Ulog | LogFormat::Dataflash | LogFormat::Tlog => {
-            if path == "-" {
-                return Err(FlightDataError::Format {
-                    file: path.to_string(),
-                    message: format!("a {} log is read from a file, not from stdin", format.name()),
-                });
-            }
-            let filter = TopicFilter::for_mapping(mapping);
-            let contents = match format {
-                LogFormat::Ulog => crate::ulog::read_ulog_filtered(Path::new(path), &filter)?,
-                LogFormat::Tlog => crate::tlog::read_tlog_filtered(Path::new(path), &filter)?.0,
-                _ => crate::dataflash::read_dataflash_filtered(Path::new(path), &filter)?,
-            };
-            let mut report = ReaderReport::from_contents(path, format.name(), &contents);
-            let losses = Losses::of(&contents);
-            let cut = |e| with_cut_note(e, &losses);
-            check_catalogue(&contents, mapping, path)?;
-            let aligned =
-                crate::multirate::log_table(&contents.topics, mapping, path).map_err(cut)?;
-            drop(contents);
-            report.add_alignment(&aligned.dropped_by, aligned.rows_considered);
-            Ok((table_reader(aligned.table, mapping)?, report))
-        }
+        LogFormat::Ulog | LogFormat::Dataflash | LogFormat::Tlog => Err(FlightDataError::Format {
+            file: file.to_string(),
+            message: format!(
+                "a {} log is read from a file, not from {}",
+                format.name(),
+                if file == "-" { "stdin" } else { "a stream" }
+            ),
+        }),
     }
 }
 

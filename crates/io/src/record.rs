@@ -7,19 +7,18 @@
 //! |---|---|---|
 //! | [`RecordSource::Path`] | every [`LogFormat`] (`-`: stdin, text and `.mat` only) | nothing |
 //! | [`RecordSource::Watched`] | every format; CSV, `.asc` and `.mat` through the face's wrapper | a progress bar over the file's bytes |
-//! | [`RecordSource::Bytes`] | CSV, `.asc`, `.mat` | the byte source: stdin a signal can end, a file through a progress bar |
+//! | [`RecordSource::Bytes`] | CSV, `.asc`, `.mat` (CSV unless a format is given) | the byte source: stdin a signal can end |
 //! | [`RecordSource::Mavlink`] | a `mavlink:udp:` feed ([`crate::mavlink`]) | where the link's problems are printed |
 //! | [`RecordSource::Table`] | columns in memory (arrays, a simulated flight) | nothing |
 
 use crate::error::FlightDataError;
 use crate::flight_data::FlightDataReader;
-use crate::log::{LogFormat, LogReader, asc_reader, open_log_with_report, read_mat, table_reader};
+use crate::log::{LogFormat, LogReader, open_log_with_report, stream_reader, table_reader};
 use crate::mapping::{Mapping, Source};
 use crate::mavlink::{LinkStats, MavlinkRows, MavlinkUrl};
 use crate::reader_report::ReaderReport;
 use crate::table::Table;
 use std::io::{BufReader, Read};
-use std::path::Path;
 use std::sync::{Arc, Mutex};
 
 /// Where a record comes from.
@@ -35,9 +34,9 @@ pub enum RecordSource {
         /// Wraps the opened file.
         watch: Watch,
     },
-    /// Text or `.mat` bytes from a source the face chose, named `name` in every message: stdin
-    /// through a reader a signal can end, a file through a progress bar. A binary log
-    /// (ULog, DataFlash, `.tlog`) is refused: it is read from a file.
+    /// Text or `.mat` bytes from a source the face chose (stdin through a reader a signal can
+    /// end), named `name` in every message; CSV unless a format is given. A binary log (ULog,
+    /// DataFlash, `.tlog`) is refused: it is read from a file.
     Bytes {
         /// The record's name in messages and the reader report (`-` for stdin).
         name: String,
@@ -55,17 +54,6 @@ pub enum RecordSource {
     },
     /// Columns in memory, named by [`Table::file`] in messages.
     Table(Table),
-}
-
-impl RecordSource {
-    /// A face's record argument: `mavlink:…` a live feed, anything else a path (`-`: stdin).
-    pub fn from_arg(arg: &str, on_problem: Option<fn(&str)>) -> Self {
-        if is_mavlink(arg) {
-            RecordSource::Mavlink { url: arg.to_string(), on_problem }
-        } else {
-            RecordSource::Path(arg.to_string())
-        }
-    }
 }
 
 /// What [`RecordSource::Watched`] passes the opened file through.
@@ -121,14 +109,15 @@ impl Record {
                 f @ (LogFormat::Csv | LogFormat::Asc | LogFormat::Mat) => {
                     let file = std::fs::File::open(&path)
                         .map_err(|source| FlightDataError::Io { file: path.clone(), source })?;
-                    let reader = bytes_reader(watch(file), &path, f, mapping)?;
+                    let reader =
+                        stream_reader(Box::new(BufReader::new(watch(file))), &path, f, mapping)?;
                     Ok(Record { reader, report: ReaderReport::empty(&path, f.name()), link: None })
                 }
                 _ => Record::open(RecordSource::Path(path), format, mapping),
             },
             RecordSource::Bytes { name, read } => {
                 let format = format.unwrap_or(LogFormat::Csv);
-                let reader = bytes_reader(read, &name, format, mapping)?;
+                let reader = stream_reader(Box::new(BufReader::new(read)), &name, format, mapping)?;
                 Ok(Record { reader, report: ReaderReport::empty(&name, format.name()), link: None })
             }
             RecordSource::Mavlink { url, on_problem } => open_mavlink(&url, mapping, on_problem),
@@ -142,30 +131,6 @@ impl Record {
     /// What the reading left out, one line each ([`ReaderReport::notes`]).
     pub fn notes(&self) -> Vec<String> {
         self.report.notes()
-    }
-}
-
-/// The reader of `read`, named `name`, in `format`.
-fn bytes_reader(
-    read: Box<dyn Read + Send>,
-    name: &str,
-    format: LogFormat,
-    mapping: &Mapping,
-) -> Result<LogReader, FlightDataError> {
-    match format {
-        LogFormat::Csv => FlightDataReader::new(read, name, mapping),
-        LogFormat::Asc => asc_reader(BufReader::new(read), name, mapping),
-        LogFormat::Mat => {
-            table_reader(read_mat(read, name, mapping.column_names.as_deref())?, mapping)
-        }
-        LogFormat::Ulog | LogFormat::Dataflash | LogFormat::Tlog => Err(FlightDataError::Format {
-            file: name.to_string(),
-            message: format!(
-                "a {} log is read from a file, not from {}",
-                format.name(),
-                if name == "-" { "stdin" } else { "a stream" }
-            ),
-        }),
     }
 }
 
@@ -192,14 +157,6 @@ fn open_mavlink(
     let reader = FlightDataReader::new(Box::new(rows) as Box<dyn Read + Send>, &url.text, mapping)?;
     let report = ReaderReport::empty(&url.text, "mavlink");
     Ok(Record { reader, report, link: Some(Link { stats, listening }) })
-}
-
-impl LogFormat {
-    /// The format a record is read in: `given`, else `path`'s extension
-    /// ([`LogFormat::from_extension`]), else CSV.
-    pub fn resolve(given: Option<LogFormat>, path: &str) -> LogFormat {
-        given.or_else(|| LogFormat::from_extension(Path::new(path))).unwrap_or(LogFormat::Csv)
-    }
 }
 
 #[cfg(test)]
@@ -276,7 +233,8 @@ mod tests {
         let source = RecordSource::Bytes { name: "-".into(), read };
         let e = Record::open(source, Some(LogFormat::Ulog), &m).err().unwrap().to_string();
         assert!(e.contains("a ulog log is read from a file, not from stdin"), "{e}");
-        let source = RecordSource::from_arg("mavlink:tcp:127.0.0.1:5760", None);
+        let source =
+            RecordSource::Mavlink { url: "mavlink:tcp:127.0.0.1:5760".into(), on_problem: None };
         let e = Record::open(source, None, &m).err().unwrap().to_string();
         assert!(e.contains("mavlink:tcp:127.0.0.1:5760") && e.contains("only UDP"), "{e}");
         let missing = RecordSource::Watched {
@@ -289,7 +247,10 @@ mod tests {
 
     #[test]
     fn a_feed_says_where_it_listens_and_keeps_its_link() {
-        let source = RecordSource::from_arg("mavlink:udp:127.0.0.1:0?timeout_s=1", None);
+        let source = RecordSource::Mavlink {
+            url: "mavlink:udp:127.0.0.1:0?timeout_s=1".into(),
+            on_problem: None,
+        };
         let r = Record::open(source, None, &mavlink_mapping()).unwrap();
         let link = r.link.as_ref().unwrap();
         assert!(link.listening.starts_with("listening on 127.0.0.1:"), "{}", link.listening);

@@ -191,7 +191,7 @@ fn record_source(
     let bar = bar.clone();
     RecordSource::Watched {
         path: args.data.clone(),
-        watch: Box::new(move |file| Box::new(std::io::BufReader::new(bar.wrap_read(file)))),
+        watch: Box::new(move |file| Box::new(bar.wrap_read(file))),
     }
 }
 

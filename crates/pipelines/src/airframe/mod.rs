@@ -24,13 +24,17 @@
 //! elevator, aileron, rudder, rad. Still air; no rotor momentum, no engine lag.
 
 mod files;
+pub mod flyable;
 pub(crate) mod handle;
 pub mod modes;
 #[cfg(test)]
 pub(crate) mod tests;
+#[cfg(test)]
+mod third_aircraft;
 mod trim;
 
 pub use files::{airframe_from_mapping, load, parameter_values};
+pub use flyable::FlyableAircraft;
 pub use handle::{ACTUATOR_NOTE, ActuatorState, AnyAircraft, Linear, Trim};
 pub use trim::{MAX_TRIM_ANGLE_RAD, trim_wings_level};
 
@@ -210,13 +214,7 @@ impl ModelFileAircraft {
     /// The surfaces (`de`, `da`, `dr`) the model has no derivative of: trimmed and flown held
     /// at 0 (a partial test card, e.g. an elevator-and-aileron UAV).
     pub fn held_surfaces(&self) -> Vec<&'static str> {
-        let held = trim::held_surfaces(self);
-        ["de", "da", "dr"]
-            .into_iter()
-            .zip(&held[3..])
-            .filter(|(_, h)| **h)
-            .map(|(n, _)| n)
-            .collect()
+        flyable::held_surfaces(&self.structure())
     }
 
     /// A note naming [`Self::held_surfaces`], `None` when the model has every surface.
@@ -287,39 +285,6 @@ impl ModelFileAircraft {
         };
         let t = isa::temperature_of_density_k(rho).ok_or(outside)?;
         Ok((rho, isa::speed_of_sound_mps(t)))
-    }
-
-    /// The flight condition an experiment design starts from
-    /// ([`aeroident_estimators::output_error::design::FlightCondition`]): the trim `state` (SI,
-    /// [`STATE_NAMES`] order) and `controls` (engine command, elevator, aileron, rudder, rad),
-    /// with the density at the trim's altitude and the thrust the command gives there.
-    ///
-    /// # Errors
-    /// As [`Self::air`]; a state or control vector too short.
-    pub fn flight_condition(
-        &self,
-        state: &[f64],
-        controls: &[f64],
-    ) -> Result<aeroident_estimators::output_error::design::FlightCondition, ModelError> {
-        if state.len() < N_STATES || controls.len() < 4 {
-            return Err(ModelError::InvalidValue {
-                field: "trim",
-                value: state.len() as f64,
-                reason: "a trim needs every state and the four controls",
-            });
-        }
-        let (rho, _) = self.air(state[rb::ALT])?;
-        let vt_mps = state[rb::VT];
-        Ok(aeroident_estimators::output_error::design::FlightCondition {
-            vt_mps,
-            alpha_rad: state[rb::ALPHA],
-            theta_rad: state[rb::THETA],
-            rho_kgpm3: rho,
-            thrust_n: self.thrust_n(rho, vt_mps, controls[0]),
-            de_rad: controls[1],
-            da_rad: controls[2],
-            dr_rad: controls[3],
-        })
     }
 
     /// Thrust, N, at density `rho_kgpm3`, airspeed `vt_mps` and engine command `command`.
@@ -551,5 +516,49 @@ impl Aircraft<N_STATES> for ModelFileAircraft {
 
     fn trim_level(&self, vt_mps: f64, alt_m: f64) -> Result<AircraftTrim<N_STATES>, ModelError> {
         trim_wings_level(self, vt_mps, alt_m)
+    }
+}
+
+/// The model-file aircraft flies its own structure and values, records its command as the
+/// propulsion's column ([`Propulsion`]) and drives its surfaces through the mapping's
+/// actuators.
+impl FlyableAircraft<N_STATES> for ModelFileAircraft {
+    fn rigid_body_si(&self, x: &AirframeState) -> AirframeState {
+        *x
+    }
+
+    fn outputs(
+        &self,
+        t_s: f64,
+        x: &AirframeState,
+        u: &ControlVector,
+    ) -> Result<AirframeOutputs, ModelError> {
+        ModelFileAircraft::outputs(self, t_s, x, u)
+    }
+
+    fn constants(&self) -> aeroident_estimators::AircraftConstants {
+        ModelFileAircraft::constants(self)
+    }
+
+    fn flown_parameters(&self) -> (ModelStructure, Vec<f64>) {
+        (self.structure(), self.theta.clone())
+    }
+
+    fn engine_column(&self) -> &'static str {
+        match &self.airframe.propulsion {
+            Propulsion::Commanded => "thrust_cmd_n",
+            Propulsion::Law(law) => match law.input() {
+                LawInput::Throttle => "throttle",
+                LawInput::PropSpeed => "prop_speed_cmd_rad_s",
+            },
+        }
+    }
+
+    fn actuators(&self) -> [Option<aeroident_io::mapping::Actuator>; 3] {
+        self.airframe.actuators
+    }
+
+    fn density_kgpm3(&self, alt_m: f64) -> Result<f64, ModelError> {
+        Ok(self.air(alt_m)?.0)
     }
 }

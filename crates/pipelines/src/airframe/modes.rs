@@ -1,5 +1,5 @@
-//! Modes of a [`ModelFileAircraft`] outside what a conventional aircraft flies, each named
-//! with the derivatives behind it: an identified model can trim and linearize and still hold
+//! Modes of a [`FlyableAircraft`] (a model-file aircraft, [`super::ModelFileAircraft`])
+//! outside what a conventional aircraft flies, each named with the derivatives behind it: an identified model can trim and linearize and still hold
 //! a roll mode no airframe has (a roll damping beyond its plausible range, an inertia typed
 //! wrong), which a user would otherwise first meet as a simulator that diverges.
 //!
@@ -14,8 +14,9 @@
 //! - spiral: stable, or its time to double at least 4 s (MIL-F-8785C §3.3.1.3, Level 3);
 //! - Dutch roll: damped (ζ > 0).
 
-use super::ModelFileAircraft;
-use aeroident_estimators::vocabulary::{Coefficient, Param, Term};
+use super::FlyableAircraft;
+use aeroident_estimators::AircraftConstants;
+use aeroident_estimators::vocabulary::{Coefficient, ModelStructure, Param, Term};
 use aeroident_models::linearize::{Mode, ModeName};
 use aeroident_models::rigid_body as rb;
 use aeroident_physics::text::Short;
@@ -27,25 +28,34 @@ const SPIRAL_MIN_DOUBLE_S: f64 = 4.0;
 
 /// The flags of `modes` of `aircraft` linearized about the trim `state` (SI,
 /// [`super::STATE_NAMES`] layout) (module doc); empty when every mode is in range.
-pub fn mode_flags(aircraft: &ModelFileAircraft, state: &[f64], modes: &[Mode]) -> Vec<String> {
-    let Ok((rho, _)) = aircraft.air(state[rb::ALT]) else { return Vec::new() };
-    let at = Trimmed { aircraft, vt: state[rb::VT], qbar: 0.5 * rho * state[rb::VT].powi(2) };
+pub fn mode_flags<const N: usize>(
+    aircraft: &impl FlyableAircraft<N>,
+    state: &[f64],
+    modes: &[Mode],
+) -> Vec<String> {
+    let Some(Ok(rho)) = state.get(rb::ALT).map(|&alt| aircraft.density_kgpm3(alt)) else {
+        return Vec::new();
+    };
+    let (structure, theta) = aircraft.flown_parameters();
+    let (vt, constants) = (state[rb::VT], aircraft.constants());
+    let at = Trimmed { structure, theta, constants, vt, qbar: 0.5 * rho * vt * vt };
     modes.iter().filter_map(|m| at.flag(m)).collect()
 }
 
-/// The aircraft at its trim's speed and dynamic pressure.
-struct Trimmed<'a> {
-    aircraft: &'a ModelFileAircraft,
+/// The aircraft's derivatives and constants at its trim's speed and dynamic pressure.
+struct Trimmed {
+    structure: ModelStructure,
+    theta: Vec<f64>,
+    constants: AircraftConstants,
     vt: f64,
     qbar: f64,
 }
 
-impl Trimmed<'_> {
+impl Trimmed {
     /// The value the aircraft flies for `coefficient_term`, 0 when its model has none.
     fn value(&self, coefficient: Coefficient, term: Term) -> f64 {
         let p = Param::new(coefficient, term);
-        let s = self.aircraft.structure();
-        s.params().position(|q| q == p).map_or(0.0, |i| self.aircraft.theta()[i])
+        self.structure.params().position(|q| q == p).map_or(0.0, |i| self.theta[i])
     }
 
     /// `names` with the values flown, for a message.
@@ -83,17 +93,13 @@ impl Trimmed<'_> {
 
     /// The roll mode against the stability and the conventional damping bound (module doc).
     fn roll(&self, re: f64) -> Option<String> {
-        let a = self.aircraft.airframe();
-        let g = &a.geometry;
+        let c = &self.constants;
+        let (span, jx) = (c.b_m.unwrap_or(f64::NAN), c.Ixx_kgm2.unwrap_or(f64::NAN));
         let cl_p = Param::new(Coefficient::Cl, Term::P);
         let largest = aeroident_estimators::prior::plausible_range(cl_p).map_or(1.5, |r| r.0.abs());
-        let bound = self.qbar * g.wing_area_m2 * g.span_m.powi(2) * largest
-            / (2.0 * self.vt * a.mass.jx_kgm2);
-        let named = format!(
-            "{}, Jx = {} kg·m²",
-            self.named(&[(Coefficient::Cl, Term::P)]),
-            Short(a.mass.jx_kgm2)
-        );
+        let bound = self.qbar * c.S_m2 * span.powi(2) * largest / (2.0 * self.vt * jx);
+        let named =
+            format!("{}, Jx = {} kg·m²", self.named(&[(Coefficient::Cl, Term::P)]), Short(jx));
         if re >= 0.0 {
             return Some(format!("roll mode not damped (λ = {} 1/s): {named}", Short(re)));
         }
@@ -115,9 +121,9 @@ impl Trimmed<'_> {
         if m.zeta <= 0.0 {
             return Some(format!("short period undamped (ζ = {}): {named}", Short(m.zeta)));
         }
-        let a = self.aircraft.airframe();
-        let n_alpha = self.qbar * a.geometry.wing_area_m2 * self.value(CL, Term::Alpha)
-            / (a.mass.mass_kg * aeroident_physics::units::G0_MPS2);
+        let c = &self.constants;
+        let n_alpha = self.qbar * c.S_m2 * self.value(CL, Term::Alpha)
+            / (c.mass_kg * aeroident_physics::units::G0_MPS2);
         let cap = m.wn_rad_s.powi(2) / n_alpha;
         let inside = n_alpha > 0.0 && (CAP_RANGE.0..=CAP_RANGE.1).contains(&cap);
         (!inside).then(|| {
@@ -136,6 +142,7 @@ impl Trimmed<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::airframe::ModelFileAircraft;
     use nalgebra::Complex;
 
     /// An elevator-and-aileron UAV (3.3 kg, Jx 0.17 kg·m², S 0.384 m², b 1.6 m) with

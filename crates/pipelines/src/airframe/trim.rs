@@ -49,12 +49,9 @@ fn residual(a: &ModelFileAircraft, z: &Z, vt: f64, alt: f64) -> Result<Z, ModelE
 /// Which unknowns are held at 0: the surfaces the model has no derivative of (a partial test
 /// card: an elevator-and-aileron UAV has no rudder to trim with).
 pub fn held_surfaces(a: &ModelFileAircraft) -> [bool; 6] {
-    use aeroident_estimators::vocabulary::Term;
-    let has = |t: Term| {
-        let uses = |p: Term| p == t || p.factors().is_some_and(|(f, g)| f == t || g == t);
-        a.structure().params().any(|p| uses(p.term))
-    };
-    [false, false, false, !has(Term::De), !has(Term::Da), !has(Term::Dr)]
+    let held = super::flyable::held_surfaces(&a.structure());
+    let h = |s: &str| held.contains(&s);
+    [false, false, false, h("de"), h("da"), h("dr")]
 }
 
 /// `Jz` solved for the step on the unknowns not `held` (those stay): a square system when

@@ -17,6 +17,7 @@
 //! ([`crate::montecarlo::crb_sensors`]).
 
 use crate::aircraft::air_data::f16_constants;
+use crate::airframe::FlyableAircraft;
 use aeroident_estimators::flight_model::{N_STATES, Output};
 use aeroident_estimators::output_error::InitialStates;
 use aeroident_estimators::output_error::design::{
@@ -504,9 +505,9 @@ pub fn design(spec: &DesignSpec) -> crate::error::Result<Design> {
 /// # Errors
 /// As [`multisine`]; turbulence asked for (not modelled for a model-file aircraft); no trim
 /// at the condition; a prediction error.
-pub fn design_for_aircraft(
+pub fn design_for_aircraft<const N: usize>(
     spec: &DesignSpec,
-    aircraft: &crate::airframe::ModelFileAircraft,
+    aircraft: &impl FlyableAircraft<N>,
     vt_mps: f64,
     alt_m: f64,
 ) -> crate::error::Result<Design> {
@@ -525,7 +526,7 @@ pub fn design_for_aircraft(
     }
     let Multisines { t_s, inputs, harmonics } = excitation(spec)?;
     let tr = resolvable_trim(aircraft, (vt_mps, alt_m), spec.rate_hz)?;
-    let condition = aircraft.flight_condition(tr.state.as_slice(), tr.controls.as_slice())?;
+    let condition = aircraft.flight_condition(&tr.state, &tr.controls)?;
     let (structure, theta) = excited_part(aircraft, &spec.surfaces);
     let actuation = actuation_of(spec, aircraft, &tr.controls, &inputs, &harmonics);
     let mut seen = inputs.clone();
@@ -541,9 +542,9 @@ pub fn design_for_aircraft(
 
 /// Each designed surface of `spec` with an actuator in `aircraft`'s mapping: its command in
 /// `inputs` (spec order) through the actuator about the trim `controls` ([`Actuation`]).
-fn actuation_of(
+fn actuation_of<const N: usize>(
     spec: &DesignSpec,
-    aircraft: &crate::airframe::ModelFileAircraft,
+    aircraft: &impl FlyableAircraft<N>,
     controls: &aeroident_models::aircraft::ControlVector,
     inputs: &[Vec<f64>],
     harmonics: &[Vec<u32>],
@@ -556,7 +557,7 @@ fn actuation_of(
             Surface::Da => 1,
             Surface::Dr => 2,
         };
-        let Some(actuator) = aircraft.airframe().actuators[k] else { continue };
+        let Some(actuator) = aircraft.actuators()[k] else { continue };
         let command = &inputs[i];
         let r = through_actuator(&actuator, controls[1 + k], command, dt);
         let f_max = harmonics
@@ -590,17 +591,18 @@ const RK4_STABLE_LAMBDA_DT: f64 = 2.5;
 ///
 /// # Errors
 /// The trim or linearization's, or a mode with |λ| / rate above [`RK4_STABLE_LAMBDA_DT`].
-fn resolvable_trim(
-    aircraft: &crate::airframe::ModelFileAircraft,
+fn resolvable_trim<const N: usize>(
+    aircraft: &impl FlyableAircraft<N>,
     (vt_mps, alt_m): (f64, f64),
     rate_hz: f64,
-) -> crate::error::Result<aeroident_models::aircraft::AircraftTrim<{ crate::airframe::N_STATES }>> {
+) -> crate::error::Result<aeroident_models::aircraft::AircraftTrim<N>> {
     let l = aeroident_models::aircraft::linearize_level(aircraft, vt_mps, alt_m)?;
     let fastest = l.modes.iter().max_by(|a, b| a.wn_rad_s.total_cmp(&b.wn_rad_s));
     let Some(fastest) = fastest.filter(|m| m.wn_rad_s / rate_hz > RK4_STABLE_LAMBDA_DT) else {
         return Ok(l.trim);
     };
-    let flags = crate::airframe::modes::mode_flags(aircraft, l.trim.state.as_slice(), &l.modes);
+    let state = aircraft.rigid_body_si(&l.trim.state);
+    let flags = crate::airframe::modes::mode_flags(aircraft, state.as_slice(), &l.modes);
     crate::bail!(
         "--rate-hz {rate_hz}: the {} mode (|λ| {:.1} 1/s) is faster than a simulation at that rate resolves (|λ| dt {:.1} > {RK4_STABLE_LAMBDA_DT}); design at {:.0} Hz or more{}",
         fastest.name.as_str(),
@@ -643,8 +645,8 @@ fn plan_of(
 
 /// The aircraft's structure and values restricted to the axes `surfaces` excite
 /// ([`structure_for`]'s choice of axes).
-fn excited_part(
-    aircraft: &crate::airframe::ModelFileAircraft,
+fn excited_part<const N: usize>(
+    aircraft: &impl FlyableAircraft<N>,
     surfaces: &[Surface],
 ) -> (ModelStructure, Vec<f64>) {
     use aeroident_estimators::vocabulary::Coefficient as C;
@@ -654,10 +656,10 @@ fn excited_part(
         C::CY | C::Cl | C::Cn => lat,
         _ => lon,
     };
-    let full = aircraft.structure();
+    let (full, values) = aircraft.flown_parameters();
     let mut structure = full;
     let mut theta = Vec::new();
-    for (p, v) in full.params().zip(aircraft.theta()) {
+    for (p, v) in full.params().zip(&values) {
         if keep(p.coefficient) {
             theta.push(*v);
         } else {

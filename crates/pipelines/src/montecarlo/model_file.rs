@@ -1,6 +1,7 @@
-//! The estimation experiment of a model-file aircraft ([`crate::airframe::ModelFileAircraft`]:
-//! a model file's structure with identified values and a mapping's constants), one run or a
-//! Monte Carlo campaign of them (`aeroident run|montecarlo SCENARIO --aircraft MODEL.toml
+//! The estimation experiment of any [`FlyableAircraft`] ([`AircraftExperiment`]; the faces
+//! load a model-file aircraft, [`crate::airframe::ModelFileAircraft`]: a model file's structure
+//! with identified values and a mapping's constants), one run or a Monte Carlo campaign of
+//! them (`aeroident run|montecarlo SCENARIO --aircraft MODEL.toml
 //! --map M [--summary S] --estimator rls,oe`).
 //!
 //! # One run ([`ModelFileExperiment::fly`])
@@ -13,8 +14,9 @@
 //!    ([`crate::replay::replay`]), the batch fits over the whole record
 //!    ([`crate::replay::fit::fit_records`], default options). No compatibility corrections and
 //!    no cross-check: the record is what the scenario's sensors make of the true flight.
-//! 3. Each parameter's truth is the value the aircraft flew (the summary's estimate, or the
-//!    model file's `[reference.<param>]`): the reference of the run's result.
+//! 3. Each parameter's truth is the value the aircraft flew
+//!    ([`FlyableAircraft::flown_parameters`]; for a model-file aircraft the summary's estimate,
+//!    or the model file's `[reference.<param>]`): the reference of the run's result.
 //!
 //! # A campaign ([`ModelFileExperiment::campaign_watched`])
 //! Run `i` of a campaign with seed `S` flies the scenario with its run seed replaced by
@@ -28,7 +30,7 @@
 //! The output-error information of the noise-free flight
 //! ([`aeroident_estimators::output_error::design::predict_crb`]): the model file's structure
 //! at the flown values, from the trim condition
-//! ([`crate::airframe::ModelFileAircraft::flight_condition`]), the flown surface
+//! ([`FlyableAircraft::flight_condition`]), the flown surface
 //! perturbations, the initial state known, and the outputs of the scenario's sensors with
 //! their white-noise σ. Only a sensor with white noise and nothing else (no bias, scale,
 //! Gauss–Markov, lag, delay or quantum) counts; an output the fit reads without noise is left
@@ -45,13 +47,13 @@ use aeroident_estimators::flight_model::Output;
 use aeroident_estimators::output_error::InitialStates;
 use aeroident_estimators::output_error::design::{DesignPlan, PlannedInputs, Sensor, predict_crb};
 use aeroident_io::{Mapping, ModelSpec, ParameterResult};
-use aeroident_models::aircraft::Aircraft as _;
+use aeroident_models::rigid_body as rb;
 use rayon::prelude::*;
 
 use super::{Campaign, CrbTable, EstimatorRun, ParamRun, Ran, RunResult, document, run_seed};
 use crate::Named as _;
 use crate::aircraft::summary::PRIMARY_DERIVATIVES;
-use crate::airframe::ModelFileAircraft;
+use crate::airframe::{FlyableAircraft, ModelFileAircraft};
 use crate::estimators::EstimatorKind;
 use crate::replay::batch::FitOptions;
 use crate::sim::model_file::{AircraftSimRun, replay_mapping, run as fly_scenario};
@@ -60,11 +62,11 @@ use crate::sim::scenario::{Channel, SimScenario};
 /// Tolerance of the time to converge, relative to the truth (the `run` experiment's ±10 %).
 const TIME_TOL_REL: f64 = 0.10;
 
-/// A model-file aircraft, the scenario it flies and the estimators that identify it.
+/// An aircraft of `N` states, the scenario it flies and the estimators that identify it.
 #[derive(Debug, Clone)]
-pub struct ModelFileExperiment {
-    /// The aircraft flown (its structure and values are the truth).
-    pub aircraft: ModelFileAircraft,
+pub struct AircraftExperiment<const N: usize, A> {
+    /// The aircraft flown (its [`FlyableAircraft::flown_parameters`] are the truth).
+    pub aircraft: A,
     /// The model the estimators fit (the aircraft's model file, with its priors and ranges).
     pub model: ModelSpec,
     /// The scenario (`kind = "sim"`, without `[aircraft]`).
@@ -75,6 +77,9 @@ pub struct ModelFileExperiment {
     pub estimators: Vec<EstimatorKind>,
 }
 
+/// The experiment of a model-file aircraft, as the faces load it ([`Self::load`]).
+pub type ModelFileExperiment = AircraftExperiment<{ crate::airframe::N_STATES }, ModelFileAircraft>;
+
 /// One flown run: the record, the mapping that replays it, and each estimator's result.
 #[derive(Debug, Clone)]
 pub struct FlownRun {
@@ -82,7 +87,7 @@ pub struct FlownRun {
     pub sim: AircraftSimRun,
     /// The mapping of the record ([`replay_mapping`]), TOML.
     pub mapping: String,
-    /// Per estimator, in [`ModelFileExperiment::estimators`] order.
+    /// Per estimator, in [`AircraftExperiment::estimators`] order.
     pub estimators: Vec<EstimatorRun>,
 }
 
@@ -146,7 +151,7 @@ impl FlownRun {
     }
 }
 
-impl ModelFileExperiment {
+impl<const N: usize, A: FlyableAircraft<N>> AircraftExperiment<N, A> {
     /// Refuses what cannot make an experiment before anything is flown.
     ///
     /// # Errors
@@ -161,7 +166,7 @@ impl ModelFileExperiment {
                 crate::bail!("--estimator: `{}` is named twice", e.name());
             }
         }
-        if self.model.structure != self.aircraft.structure() {
+        if self.model.structure != self.aircraft.flown_parameters().0 {
             crate::bail!(
                 "model `{}`: the estimators' structure is not the aircraft's: the truth of a term the aircraft does not fly is unknown",
                 self.model.name
@@ -172,8 +177,8 @@ impl ModelFileExperiment {
 
     /// The value the aircraft flies for the parameter named `name`.
     pub fn truth(&self, name: &str) -> Option<f64> {
-        let s = self.aircraft.structure();
-        s.names().position(|n| n == name).map(|i| self.aircraft.theta()[i])
+        let (s, theta) = self.aircraft.flown_parameters();
+        s.names().position(|n| n == name).map(|i| theta[i])
     }
 
     /// The scenario of run `run` of a campaign seeded `campaign_seed` (module doc).
@@ -325,7 +330,7 @@ fn reader_of(sim: &AircraftSimRun, mapping: &Mapping) -> Result<aeroident_io::Lo
     aeroident_io::Record::open(source, None, mapping).map(|r| r.reader).map_err(|e| e.to_string())
 }
 
-impl ModelFileExperiment {
+impl<const N: usize, A: FlyableAircraft<N>> AircraftExperiment<N, A> {
     /// The Cramér–Rao σ of the model's parameters for the scenario's flight (module doc), for
     /// every estimator alike, with notes of what the bound leaves out.
     pub fn crb(&self) -> CrbTable {
@@ -358,14 +363,16 @@ impl ModelFileExperiment {
         if clean.input.iter().any(|i| i.channel == Channel::Throttle) {
             notes.push("the throttle inputs are not in the Cramér–Rao bound (engine held)".into());
         }
+        let trim = self.aircraft.trim_level(sim.trim.state[rb::VT], sim.trim.state[rb::ALT]);
+        let trim = trim.map_err(|e| e.to_string())?;
         let condition = self
             .aircraft
-            .flight_condition(&sim.trim.state, &sim.trim.controls)
+            .flight_condition(&trim.state, &trim.controls)
             .map_err(|e| e.to_string())?;
-        let structure = self.aircraft.structure();
+        let (structure, theta) = self.aircraft.flown_parameters();
         let mut plan = DesignPlan::new(
             structure,
-            self.aircraft.theta().to_vec(),
+            theta,
             self.aircraft.constants(),
             condition,
             vec![planned_inputs(&sim, &clean)?],
@@ -428,7 +435,7 @@ fn output_of(channel: &str) -> Option<Output> {
     Output::ALL.into_iter().find(|o| o.name() == channel)
 }
 
-impl ModelFileExperiment {
+impl<const N: usize, A: FlyableAircraft<N>> AircraftExperiment<N, A> {
     /// Refuses a campaign that cannot be one before anything is flown.
     ///
     /// # Errors
@@ -486,7 +493,7 @@ impl ModelFileExperiment {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::airframe::tests::{ALT_FT, VT_FPS, as_model_file, f16_trim};
     use crate::montecarlo::{STATUS_COMPLETE, STATUS_INTERRUPTED};
@@ -513,8 +520,16 @@ mod tests {
     /// every output sensed with white noise.
     fn experiment(estimators: &[&str]) -> ModelFileExperiment {
         let (f, t) = f16_trim();
-        let aircraft = as_model_file(&f, &t);
-        let structure = aircraft.structure();
+        experiment_with(as_model_file(&f, &t), estimators)
+    }
+
+    /// `aircraft` flown through [`experiment`]'s doublets and sensors, its own derivatives
+    /// fitted.
+    pub(crate) fn experiment_with<const N: usize, A: FlyableAircraft<N>>(
+        aircraft: A,
+        estimators: &[&str],
+    ) -> AircraftExperiment<N, A> {
+        let structure = aircraft.flown_parameters().0;
         let model = ModelSpec {
             name: "f16-local".into(),
             description: String::new(),
@@ -539,7 +554,7 @@ mod tests {
                 "[[sensor]]\nchannel = \"{ch}\"\nwhite_sigma = {sigma}\nsample_rate_hz = 50.0\n"
             ));
         }
-        ModelFileExperiment {
+        AircraftExperiment {
             aircraft,
             model,
             scenario: toml::from_str(&text).unwrap(),

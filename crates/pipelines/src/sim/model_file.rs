@@ -1,14 +1,16 @@
-//! Open-loop simulation of a model-file aircraft ([`crate::airframe::ModelFileAircraft`]: a
-//! model file's structure with identified values and a mapping's constants): trim
-//! wings-level → fly the scenario's inputs → sense → one [`AircraftSimRun`], and the mapping
-//! that replays its record ([`replay_mapping`]).
+//! Open-loop simulation of any [`FlyableAircraft`] (the model-file aircraft,
+//! [`crate::airframe::ModelFileAircraft`]: a model file's structure with identified values and
+//! a mapping's constants, is the one the faces load): trim wings-level → fly the scenario's
+//! inputs → sense → one [`AircraftSimRun`], and the mapping that replays its record
+//! ([`replay_mapping`]).
 //!
 //! Run: `aeroident sim SCENARIO --aircraft MODEL.toml --summary S --map M --out DIR`. The
 //! scenario is the F-16's format ([`crate::sim::scenario`]) without `[aircraft]` (the aircraft
 //! comes from the files), with `[trim]` in `vt_mps`/`alt_m` or `vt_fps`/`alt_ft`.
 //!
 //! # What is simulated
-//! * The aircraft's own equations ([`crate::airframe`] module doc), trimmed wings-level at
+//! * The aircraft's own equations (the model-file aircraft's: [`crate::airframe`] module doc),
+//!   integrated in its own states and recorded in SI, trimmed wings-level at
 //!   `[trim]` (level only: `gamma_deg` must be 0), in still air: `[[wind]]` and
 //!   `[increments]` are refused (the airframe has no wind input; change a derivative in its
 //!   summary instead).
@@ -38,13 +40,10 @@
 
 use super::scenario::{Channel, SimScenario};
 use super::{SimTable, build_inputs, build_sensors, step_count};
-use crate::airframe::{
-    AirframeOutputs, AirframeState, ModelFileAircraft, Propulsion, STATE_NAMES, Trim,
-};
+use crate::airframe::{AirframeOutputs, AirframeState, FlyableAircraft, STATE_NAMES, Trim};
 use crate::bail;
 use crate::error::{Context, Result};
-use aeroident_io::thrust_model::LawInput;
-use aeroident_models::aircraft::{Aircraft, ControlVector};
+use aeroident_models::aircraft::ControlVector;
 use aeroident_models::integrate::rk4_step_varying;
 use aeroident_models::rigid_body as rb;
 use aeroident_signals::{Input, InputSignal};
@@ -63,21 +62,10 @@ pub struct AircraftSimRun {
     pub engine_column: &'static str,
 }
 
-/// The engine command's column: the command with its unit ([`Propulsion`]).
-pub fn engine_column(a: &ModelFileAircraft) -> &'static str {
-    match &a.airframe().propulsion {
-        Propulsion::Commanded => "thrust_cmd_n",
-        Propulsion::Law(law) => match law.input() {
-            LawInput::Throttle => "throttle",
-            LawInput::PropSpeed => "prop_speed_cmd_rad_s",
-        },
-    }
-}
-
 /// The true channels of every step after `t_s`, in column order (module doc).
-pub fn true_channel_names(a: &ModelFileAircraft) -> Vec<String> {
+pub fn true_channel_names<const N: usize>(a: &impl FlyableAircraft<N>) -> Vec<String> {
     let mut v: Vec<String> = STATE_NAMES.iter().map(|s| s.to_string()).collect();
-    v.push(engine_column(a).to_string());
+    v.push(a.engine_column().to_string());
     v.extend(
         [
             "elevator_rad",
@@ -104,21 +92,21 @@ pub fn true_channel_names(a: &ModelFileAircraft) -> Vec<String> {
 }
 
 /// Whether any surface of `a` has an actuator (the record then has the commands too).
-fn actuated(a: &ModelFileAircraft) -> bool {
-    a.airframe().actuators.iter().any(Option::is_some)
+fn actuated<const N: usize>(a: &impl FlyableAircraft<N>) -> bool {
+    a.actuators().iter().any(Option::is_some)
 }
 
 /// The controls one step `dt` after surfaces `u` under commands `cmd` (held over the step,
 /// the actuator's convention: [`aeroident_io::mapping::Actuator::step`]), the engine and
 /// the surfaces without an actuator at the next step's commands `cmd1`.
-fn next_controls(
-    a: &ModelFileAircraft,
+fn next_controls<const N: usize>(
+    a: &impl FlyableAircraft<N>,
     u: &ControlVector,
     (cmd, cmd1): (&ControlVector, &ControlVector),
     dt: f64,
 ) -> ControlVector {
     let mut next = *cmd1;
-    for (i, act) in a.airframe().actuators.iter().enumerate() {
+    for (i, act) in a.actuators().iter().enumerate() {
         if let Some(act) = act {
             next[1 + i] = act.step(u[1 + i], cmd[1 + i], dt);
         }
@@ -162,8 +150,8 @@ fn true_row(
 /// An `[aircraft]` section, `[[wind]]`, `[increments]` or a non-zero `gamma_deg` (this
 /// aircraft cannot take them), invalid run settings, unknown sensor channels, a trim that does
 /// not converge, or a model error during the run (the time it happened at).
-pub fn run(
-    aircraft: &ModelFileAircraft,
+pub fn run<const N: usize, A: FlyableAircraft<N>>(
+    aircraft: &A,
     sc: &SimScenario,
     base_dir: &Path,
 ) -> Result<AircraftSimRun> {
@@ -191,18 +179,20 @@ pub fn run(
         let o = aircraft
             .outputs(t, &x, &u)
             .with_context(|| format!("model outputs at t = {t:.4} s"))?;
-        table.push_row(t, &true_row(&x, &u, &o, with_cmd.then_some(&cmd)), &mut sensors);
+        let row = true_row(&aircraft.rigid_body_si(&x), &u, &o, with_cmd.then_some(&cmd));
+        table.push_row(t, &row, &mut sensors);
         if k < n_steps {
             let cmd1 = commands(&t0.controls, &inputs, (k + 1) as f64 * dt);
             let u1 = next_controls(aircraft, &u, (&cmd, &cmd1), dt);
-            let between = |s: f64| u + (u1 - u) * ((s - t) / dt);
+            let between = |s: f64| aircraft.input(&(u + (u1 - u) * ((s - t) / dt)));
             x = rk4_step_varying(aircraft, t, &x, between, dt)
                 .with_context(|| format!("RK4 step at t = {t:.4} s"))?;
             (u, cmd) = (u1, cmd1);
         }
     }
-    let trim = crate::airframe::handle::plain_trim(&t0);
-    let engine_column = engine_column(aircraft);
+    let mut trim = crate::airframe::handle::plain_trim(&t0);
+    trim.state = aircraft.rigid_body_si(&t0.state).iter().copied().collect();
+    let engine_column = aircraft.engine_column();
     Ok(AircraftSimRun { aircraft: aircraft.name(), table, trim, engine_column })
 }
 
@@ -260,7 +250,10 @@ fn commands(trim: &ControlVector, inputs: &[(Channel, Input)], t: f64) -> Contro
 /// (it would tell the moments without noise: over 16 noisy flights of the F-16's local
 /// derivatives the fits then scattered 0.00–0.21 × their Cramér–Rao bound). A noise-free
 /// record keeps them, for exact round trips.
-pub fn replay_mapping(aircraft: &ModelFileAircraft, run: &AircraftSimRun) -> String {
+pub fn replay_mapping<const N: usize>(
+    aircraft: &impl FlyableAircraft<N>,
+    run: &AircraftSimRun,
+) -> String {
     const DERIVATIVES: [&str; 4] = ["pdot_rad_s2", "qdot_rad_s2", "rdot_rad_s2", "alphadot_rad_s"];
     let sensed = |col: &str| run.table.column(&format!("meas_{col}")).is_some();
     let any_sensor = run.table.columns.iter().any(|c| c.starts_with("meas_"));
@@ -268,8 +261,8 @@ pub fn replay_mapping(aircraft: &ModelFileAircraft, run: &AircraftSimRun) -> Str
 }
 
 /// [`replay_mapping`] with the channels whose true column `keep` refuses left out.
-fn mapping_with(
-    aircraft: &ModelFileAircraft,
+fn mapping_with<const N: usize>(
+    aircraft: &impl FlyableAircraft<N>,
     run: &AircraftSimRun,
     keep: impl Fn(&str) -> bool,
 ) -> String {
@@ -285,25 +278,24 @@ fn mapping_with(
     for (key, col, unit) in REPLAY_CHANNELS.into_iter().filter(|(_, col, _)| keep(col)) {
         s.push_str(&format!("{key} = {{ column = \"{}\", unit = \"{unit}\" }}\n", pick(col)));
     }
-    let (af, m, g) =
-        (aircraft.airframe(), &aircraft.airframe().mass, &aircraft.airframe().geometry);
+    let c = aircraft.constants();
     let constants = [
-        ("mass", m.mass_kg, "kg"),
-        ("Ixx", m.jx_kgm2, "kg*m2"),
-        ("Iyy", m.jy_kgm2, "kg*m2"),
-        ("Izz", m.jz_kgm2, "kg*m2"),
-        ("Ixz", m.jxz_kgm2, "kg*m2"),
-        ("S", g.wing_area_m2, "m2"),
-        ("cbar", g.chord_m, "m"),
-        ("b", g.span_m, "m"),
-        ("thrust_arm", af.thrust_arm_m, "m"),
-        ("thrust_incidence", af.thrust_incidence_rad, "rad"),
+        ("mass", Some(c.mass_kg), "kg"),
+        ("Ixx", c.Ixx_kgm2, "kg*m2"),
+        ("Iyy", c.Iyy_kgm2, "kg*m2"),
+        ("Izz", c.Izz_kgm2, "kg*m2"),
+        ("Ixz", c.Ixz_kgm2, "kg*m2"),
+        ("S", Some(c.S_m2), "m2"),
+        ("cbar", c.cbar_m, "m"),
+        ("b", c.b_m, "m"),
+        ("thrust_arm", Some(c.thrust_arm_m), "m"),
+        ("thrust_incidence", Some(c.thrust_incidence_rad), "rad"),
+        ("v0", c.v0_mps, "m/s"),
     ];
     for (key, v, unit) in constants {
-        s.push_str(&format!("{key} = {{ value = {v:?}, unit = \"{unit}\" }}\n"));
-    }
-    if let Some(v0) = af.v0_mps {
-        s.push_str(&format!("v0 = {{ value = {v0:?}, unit = \"m/s\" }}\n"));
+        if let Some(v) = v {
+            s.push_str(&format!("{key} = {{ value = {v:?}, unit = \"{unit}\" }}\n"));
+        }
     }
     s
 }
@@ -337,6 +329,7 @@ const REPLAY_CHANNELS: [(&str, &str, &str); 22] = [
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::airframe::ModelFileAircraft;
     use crate::airframe::tests::{ALT_FT, VT_FPS, as_model_file, f16_trim};
     use aeroident_physics::units::M_PER_FT;
 

@@ -64,8 +64,7 @@ pub fn report(a: &LinearizeArgs) -> anyhow::Result<String> {
     let m = a.aircraft.model_file()?;
     let lin = linearize_level(&m, a.vt_mps, a.alt_m)
         .with_context(|| format!("{} at {} m/s, {} m", a.aircraft.aircraft, a.vt_mps, a.alt_m))?;
-    let flags =
-        aeroident_pipelines::airframe::modes::mode_flags(&m, lin.trim.state.as_slice(), &lin.modes);
+    let flags = aeroident_pipelines::airframe::modes::mode_flags(&m, &lin.trim, &lin.modes);
     let lin = Linear::of_level(&m, &lin).with_actuators(&m.airframe().actuators);
     let mut out = render(&m.name(), m.length_unit_m(), &lin, a.json)?;
     if a.json {

@@ -19,7 +19,7 @@ use aeroident_estimators::AircraftConstants;
 use aeroident_estimators::output_error::design::FlightCondition;
 use aeroident_estimators::vocabulary::{ModelStructure, Term};
 use aeroident_models::ModelError;
-use aeroident_models::aircraft::{Aircraft, ControlVector};
+use aeroident_models::aircraft::{Aircraft, AircraftTrim, ControlVector};
 use aeroident_models::rigid_body as rb;
 use aeroident_physics::isa;
 use nalgebra::{SVector, Vector3};
@@ -49,9 +49,16 @@ pub trait FlyableAircraft<const N: usize>: Aircraft<N> + Sync {
     /// mapping take them.
     fn constants(&self) -> AircraftConstants;
 
-    /// The derivatives it flies: the vocabulary's structure and its values (structure order),
-    /// the same at every condition the aircraft is flown at.
-    fn flown_parameters(&self) -> (ModelStructure, Vec<f64>);
+    /// The vocabulary's structure of the derivatives it flies.
+    fn flown_structure(&self) -> ModelStructure;
+
+    /// The values of [`Self::flown_structure`]'s parameters (structure order) about `trim`:
+    /// the derivatives it flies there (a derivative model's own values at any trim, a
+    /// nonlinear aircraft's local derivatives).
+    ///
+    /// # Errors
+    /// A trim outside the model's domain, naming the field.
+    fn flown_values(&self, trim: &AircraftTrim<N>) -> Result<Vec<f64>, ModelError>;
 
     /// The engine command's column in a record, with its unit (`thrust_cmd_n`, `throttle`,
     /// `prop_speed_cmd_rad_s`).
@@ -76,7 +83,7 @@ pub trait FlyableAircraft<const N: usize>: Aircraft<N> + Sync {
 
     /// The surfaces (`de`, `da`, `dr`) its derivatives do not name: held at 0.
     fn held_surfaces(&self) -> Vec<&'static str> {
-        held_surfaces(&self.flown_parameters().0)
+        held_surfaces(&self.flown_structure())
     }
 
     /// The flight condition a design or a Cramér–Rao bound starts from, at the trim `state`

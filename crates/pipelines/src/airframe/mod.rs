@@ -23,6 +23,7 @@
 //! [`aeroident_models::aircraft::CONTROL_NAMES`]: engine command (per [`Propulsion`](crate::airframe::Propulsion)),
 //! elevator, aileron, rudder, rad. Still air; no rotor momentum, no engine lag.
 
+pub mod f16;
 mod files;
 pub mod flyable;
 pub(crate) mod handle;
@@ -540,8 +541,12 @@ impl FlyableAircraft<N_STATES> for ModelFileAircraft {
         ModelFileAircraft::constants(self)
     }
 
-    fn flown_parameters(&self) -> (ModelStructure, Vec<f64>) {
-        (self.structure(), self.theta.clone())
+    fn flown_structure(&self) -> ModelStructure {
+        self.structure()
+    }
+
+    fn flown_values(&self, _trim: &AircraftTrim<N_STATES>) -> Result<Vec<f64>, ModelError> {
+        Ok(self.theta.clone())
     }
 
     fn engine_column(&self) -> &'static str {

@@ -17,6 +17,7 @@
 use super::FlyableAircraft;
 use aeroident_estimators::AircraftConstants;
 use aeroident_estimators::vocabulary::{Coefficient, ModelStructure, Param, Term};
+use aeroident_models::aircraft::AircraftTrim;
 use aeroident_models::linearize::{Mode, ModeName};
 use aeroident_models::rigid_body as rb;
 use aeroident_physics::text::Short;
@@ -26,18 +27,21 @@ const CAP_RANGE: (f64, f64) = (0.038, 10.0);
 /// MIL-F-8785C's Level 3 least spiral time to double, s.
 const SPIRAL_MIN_DOUBLE_S: f64 = 4.0;
 
-/// The flags of `modes` of `aircraft` linearized about the trim `state` (SI,
-/// [`super::STATE_NAMES`] layout) (module doc); empty when every mode is in range.
+/// The flags of `modes` of `aircraft` linearized about `trim` (module doc); empty when every
+/// mode is in range, or when the aircraft's air or derivatives at the trim are unknown.
 pub fn mode_flags<const N: usize>(
     aircraft: &impl FlyableAircraft<N>,
-    state: &[f64],
+    trim: &AircraftTrim<N>,
     modes: &[Mode],
 ) -> Vec<String> {
-    let Some(Ok(rho)) = state.get(rb::ALT).map(|&alt| aircraft.density_kgpm3(alt)) else {
+    let state = aircraft.rigid_body_si(&trim.state);
+    let (Ok(rho), Ok(theta)) =
+        (aircraft.density_kgpm3(state[rb::ALT]), aircraft.flown_values(trim))
+    else {
         return Vec::new();
     };
-    let (structure, theta) = aircraft.flown_parameters();
     let (vt, constants) = (state[rb::VT], aircraft.constants());
+    let structure = aircraft.flown_structure();
     let at = Trimmed { structure, theta, constants, vt, qbar: 0.5 * rho * vt * vt };
     modes.iter().filter_map(|m| at.flag(m)).collect()
 }
@@ -180,10 +184,11 @@ mod tests {
     }
 
     /// 18 m/s at sea level (ISA ρ 1.225 kg/m³): q̄ = 198.45 Pa.
-    fn state() -> Vec<f64> {
-        let mut x = vec![0.0; super::super::N_STATES];
-        x[rb::VT] = 18.0;
-        x
+    fn state() -> AircraftTrim<{ super::super::N_STATES }> {
+        let mut state = super::super::AirframeState::zeros();
+        state[rb::VT] = 18.0;
+        let controls = aeroident_models::aircraft::ControlVector::zeros();
+        AircraftTrim { state, controls, max_abs_residual: 0.0 }
     }
 
     const QBAR: f64 = 0.5 * 1.225 * 18.0 * 18.0;
@@ -248,7 +253,7 @@ mod tests {
         let l = aeroident_models::aircraft::linearize_level(&a, 18.0, 0.0).unwrap();
         assert_eq!(l.trim.controls[3], 0.0);
         assert!(l.trim.max_abs_residual < 1e-10);
-        let flags = mode_flags(&a, l.trim.state.as_slice(), &l.modes);
+        let flags = mode_flags(&a, &l.trim, &l.modes);
         assert!(flags.is_empty() && l.modes.len() >= 4, "{flags:?} {:?}", l.modes);
     }
 }

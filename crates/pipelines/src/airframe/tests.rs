@@ -20,7 +20,7 @@
 
 use super::*;
 use crate::aircraft::truth::local_derivatives;
-use aeroident_estimators::vocabulary::{Coefficient, Param, Term};
+use aeroident_estimators::vocabulary::Coefficient;
 use aeroident_models::aircraft::linearize_level;
 use aeroident_models::f16::{self, AeroIncrements, F16, F16State};
 use aeroident_models::integrate::rk4_step;
@@ -41,36 +41,7 @@ pub(crate) fn f16_trim() -> (F16, F16Trim) {
 /// The F-16's local derivatives at `t` as a model-file aircraft (module doc).
 pub(crate) fn as_model_file(f: &F16, t: &F16Trim) -> ModelFileAircraft {
     let ld = local_derivatives(f, &t.state, &t.controls, &AeroIncrements::zero()).unwrap();
-    let terms = [
-        Term::Bias,
-        Term::Alpha,
-        Term::Beta,
-        Term::P,
-        Term::Q,
-        Term::R,
-        Term::De,
-        Term::Da,
-        Term::Dr,
-    ];
-    // The terms whose local derivative is not zero (the F-16's CX has no β, p, r, δa, δr,
-    // its Cl no α at β = 0, …): all 54 exceed a structure's capacity, and a zero term adds
-    // nothing.
-    let mut s = ModelStructure::empty();
-    let coefficients = [
-        Coefficient::CX,
-        Coefficient::CY,
-        Coefficient::CZ,
-        Coefficient::Cl,
-        Coefficient::Cm,
-        Coefficient::Cn,
-    ];
-    for c in coefficients {
-        let nonzero = |t: &Term| {
-            *t == Term::Bias || ld.derivative(Param::new(c, *t)).is_some_and(|d| d.abs() > 1e-12)
-        };
-        let used: Vec<Term> = terms.into_iter().filter(nonzero).collect();
-        s = s.with(c, &used);
-    }
+    let s = super::f16::f16_local_structure();
     let theta: Vec<f64> = s.params().map(|p| ld.truth(&s, p).unwrap()).collect();
     let airframe = Airframe {
         mass: f.mass(),

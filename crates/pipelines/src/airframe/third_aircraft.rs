@@ -27,7 +27,8 @@ struct LinearAircraft {
     mass: AircraftMass,
     geometry: ReferenceGeometry,
     constants: aeroident_estimators::AircraftConstants,
-    parameters: (ModelStructure, Vec<f64>),
+    structure: ModelStructure,
+    theta: Vec<f64>,
 }
 
 impl Dynamics<N_STATES> for LinearAircraft {
@@ -109,8 +110,12 @@ impl FlyableAircraft<N_STATES> for LinearAircraft {
         self.constants
     }
 
-    fn flown_parameters(&self) -> (ModelStructure, Vec<f64>) {
-        self.parameters.clone()
+    fn flown_structure(&self) -> ModelStructure {
+        self.structure
+    }
+
+    fn flown_values(&self, _trim: &AircraftTrim<N_STATES>) -> Result<Vec<f64>, ModelError> {
+        Ok(self.theta.clone())
     }
 }
 
@@ -130,7 +135,8 @@ fn aircraft_pair() -> (ModelFileAircraft, LinearAircraft) {
         mass: source.mass(),
         geometry: source.geometry(),
         constants: source.constants(),
-        parameters: source.flown_parameters(),
+        structure: source.structure(),
+        theta: source.theta().to_vec(),
     };
     (source, linear)
 }

@@ -527,7 +527,7 @@ pub fn design_for_aircraft<const N: usize>(
     let Multisines { t_s, inputs, harmonics } = excitation(spec)?;
     let tr = resolvable_trim(aircraft, (vt_mps, alt_m), spec.rate_hz)?;
     let condition = aircraft.flight_condition(&tr.state, &tr.controls)?;
-    let (structure, theta) = excited_part(aircraft, &spec.surfaces);
+    let (structure, theta) = excited_part(aircraft, &tr, &spec.surfaces)?;
     let actuation = actuation_of(spec, aircraft, &tr.controls, &inputs, &harmonics);
     let mut seen = inputs.clone();
     for a in &actuation {
@@ -601,8 +601,7 @@ fn resolvable_trim<const N: usize>(
     let Some(fastest) = fastest.filter(|m| m.wn_rad_s / rate_hz > RK4_STABLE_LAMBDA_DT) else {
         return Ok(l.trim);
     };
-    let state = aircraft.rigid_body_si(&l.trim.state);
-    let flags = crate::airframe::modes::mode_flags(aircraft, state.as_slice(), &l.modes);
+    let flags = crate::airframe::modes::mode_flags(aircraft, &l.trim, &l.modes);
     crate::bail!(
         "--rate-hz {rate_hz}: the {} mode (|λ| {:.1} 1/s) is faster than a simulation at that rate resolves (|λ| dt {:.1} > {RK4_STABLE_LAMBDA_DT}); design at {:.0} Hz or more{}",
         fastest.name.as_str(),
@@ -647,8 +646,9 @@ fn plan_of(
 /// ([`structure_for`]'s choice of axes).
 fn excited_part<const N: usize>(
     aircraft: &impl FlyableAircraft<N>,
+    trim: &aeroident_models::aircraft::AircraftTrim<N>,
     surfaces: &[Surface],
-) -> (ModelStructure, Vec<f64>) {
+) -> crate::error::Result<(ModelStructure, Vec<f64>)> {
     use aeroident_estimators::vocabulary::Coefficient as C;
     let lon = surfaces.contains(&Surface::De);
     let lat = surfaces.iter().any(|s| *s != Surface::De);
@@ -656,7 +656,7 @@ fn excited_part<const N: usize>(
         C::CY | C::Cl | C::Cn => lat,
         _ => lon,
     };
-    let (full, values) = aircraft.flown_parameters();
+    let (full, values) = (aircraft.flown_structure(), aircraft.flown_values(trim)?);
     let mut structure = full;
     let mut theta = Vec::new();
     for (p, v) in full.params().zip(&values) {
@@ -666,7 +666,7 @@ fn excited_part<const N: usize>(
             structure.remove(p);
         }
     }
-    (structure, theta)
+    Ok((structure, theta))
 }
 
 /// The fastest `--vt-fps` designed for, ft/s.

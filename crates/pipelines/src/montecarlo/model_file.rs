@@ -15,7 +15,7 @@
 //!    ([`crate::replay::fit::fit_records`], default options). No compatibility corrections and
 //!    no cross-check: the record is what the scenario's sensors make of the true flight.
 //! 3. Each parameter's truth is the value the aircraft flew
-//!    ([`FlyableAircraft::flown_parameters`]; for a model-file aircraft the summary's estimate,
+//!    ([`FlyableAircraft::flown_values`] about the scenario's trim; for a model-file aircraft the summary's estimate,
 //!    or the model file's `[reference.<param>]`): the reference of the run's result.
 //!
 //! # A campaign ([`ModelFileExperiment::campaign_watched`])
@@ -65,7 +65,7 @@ const TIME_TOL_REL: f64 = 0.10;
 /// An aircraft of `N` states, the scenario it flies and the estimators that identify it.
 #[derive(Debug, Clone)]
 pub struct AircraftExperiment<const N: usize, A> {
-    /// The aircraft flown (its [`FlyableAircraft::flown_parameters`] are the truth).
+    /// The aircraft flown (its [`FlyableAircraft::flown_values`] are the truth).
     pub aircraft: A,
     /// The model the estimators fit (the aircraft's model file, with its priors and ranges).
     pub model: ModelSpec,
@@ -166,7 +166,7 @@ impl<const N: usize, A: FlyableAircraft<N>> AircraftExperiment<N, A> {
                 crate::bail!("--estimator: `{}` is named twice", e.name());
             }
         }
-        if self.model.structure != self.aircraft.flown_parameters().0 {
+        if self.model.structure != self.aircraft.flown_structure() {
             crate::bail!(
                 "model `{}`: the estimators' structure is not the aircraft's: the truth of a term the aircraft does not fly is unknown",
                 self.model.name
@@ -175,10 +175,23 @@ impl<const N: usize, A: FlyableAircraft<N>> AircraftExperiment<N, A> {
         Ok(())
     }
 
-    /// The value the aircraft flies for the parameter named `name`.
+    /// The value the aircraft flies for the parameter named `name` about the scenario's trim
+    /// (`None`: no such parameter, or no trim).
     pub fn truth(&self, name: &str) -> Option<f64> {
-        let (s, theta) = self.aircraft.flown_parameters();
-        s.names().position(|n| n == name).map(|i| theta[i])
+        self.truth_at(&self.scenario).ok()?.get(name)
+    }
+
+    /// The values the aircraft flies about the trim of `sc`
+    /// ([`FlyableAircraft::flown_values`]).
+    ///
+    /// # Errors
+    /// The trim's or the values'.
+    fn truth_at(&self, sc: &SimScenario) -> crate::error::Result<Truth> {
+        let (vt_mps, alt_m) = sc.trim.si()?;
+        let trim = self.aircraft.trim_level(vt_mps, alt_m)?;
+        let values = self.aircraft.flown_values(&trim)?;
+        let names = self.aircraft.flown_structure().names().map(String::from).collect();
+        Ok(Truth { names, values })
     }
 
     /// The scenario of run `run` of a campaign seeded `campaign_seed` (module doc).
@@ -201,22 +214,19 @@ impl<const N: usize, A: FlyableAircraft<N>> AircraftExperiment<N, A> {
         let mapping = replay_mapping(&self.aircraft, &sim);
         let parsed = Mapping::from_toml_str(&mapping, "mapping.toml")
             .map_err(|e| crate::err!("the record's mapping: {e}"))?;
-        let estimators = self.estimators.iter().map(|k| self.estimate(*k, &sim, &parsed)).collect();
+        let truth = self.truth_at(sc)?;
+        let flown = Flown { sim: &sim, mapping: &parsed, truth: &truth };
+        let estimators = self.estimators.iter().map(|k| self.estimate(*k, &flown)).collect();
         Ok(FlownRun { sim, mapping, estimators })
     }
 
-    /// One estimator's result on the record of `sim` read through `mapping`.
-    fn estimate(
-        &self,
-        kind: EstimatorKind,
-        sim: &AircraftSimRun,
-        mapping: &Mapping,
-    ) -> EstimatorRun {
+    /// One estimator's result on the record `flown`.
+    fn estimate(&self, kind: EstimatorKind, flown: &Flown<'_>) -> EstimatorRun {
         let mut run = EstimatorRun::named(kind.name());
         let done = if kind.is_batch() {
-            self.fit(kind, sim, mapping, &mut run)
+            self.fit(kind, flown, &mut run)
         } else {
-            self.replay(kind, sim, mapping, &mut run)
+            self.replay(kind, flown, &mut run)
         };
         if let Err(e) = done {
             run.failure = Some(e);
@@ -229,11 +239,11 @@ impl<const N: usize, A: FlyableAircraft<N>> AircraftExperiment<N, A> {
     fn replay(
         &self,
         kind: EstimatorKind,
-        sim: &AircraftSimRun,
-        mapping: &Mapping,
+        flown: &Flown<'_>,
         run: &mut EstimatorRun,
     ) -> Result<(), String> {
-        let reader = reader_of(sim, mapping)?;
+        let (mapping, truth) = (flown.mapping, flown.truth);
+        let reader = reader_of(flown.sim, mapping)?;
         let opts = crate::replay::ReplayOptions {
             estimator: kind,
             model: Some(self.model.clone()),
@@ -252,8 +262,8 @@ impl<const N: usize, A: FlyableAircraft<N>> AircraftExperiment<N, A> {
             .iter()
             .map(|p| {
                 let i = h.names.iter().position(|n| *n == p.result.name);
-                let t10 = i.and_then(|i| self.time_to_10pct(h, i, &p.result.name));
-                self.param_run(p.result.clone(), t10)
+                let t10 = i.and_then(|i| time_to_10pct(h, i, truth.get(&p.result.name)?));
+                param_run(p.result.clone(), t10, truth)
             })
             .collect();
         Ok(())
@@ -263,11 +273,11 @@ impl<const N: usize, A: FlyableAircraft<N>> AircraftExperiment<N, A> {
     fn fit(
         &self,
         kind: EstimatorKind,
-        sim: &AircraftSimRun,
-        mapping: &Mapping,
+        flown: &Flown<'_>,
         run: &mut EstimatorRun,
     ) -> Result<(), String> {
-        let reader = reader_of(sim, mapping)?;
+        let mapping = flown.mapping;
+        let reader = reader_of(flown.sim, mapping)?;
         let estimate = [("initial_states", toml::Value::String("estimate".into()))];
         let pairs = if kind.options().contains(&"initial_states") { &estimate[..] } else { &[] };
         let options =
@@ -284,39 +294,60 @@ impl<const N: usize, A: FlyableAircraft<N>> AircraftExperiment<N, A> {
         }
         run.iterations = Some(s.iterations.len());
         run.fit_wall_s = Some(s.fit_wall_s);
-        run.params = s.parameters.iter().map(|p| self.param_run(p.result.clone(), None)).collect();
+        run.params =
+            s.parameters.iter().map(|p| param_run(p.result.clone(), None, flown.truth)).collect();
         Ok(())
     }
+}
 
-    /// A parameter's result with the flown value as its reference: the check beside the
-    /// verdict is made again against it (the model file's reference, if the fit saw one, is
-    /// another aircraft's value: its findings go with it).
-    fn param_run(&self, mut result: ParameterResult, t10: Option<f64>) -> ParamRun {
-        let truth = self.truth(&result.name);
-        result.reference = truth;
-        result.reference_check = None;
-        result.check_reference();
-        ParamRun {
-            primary: PRIMARY_DERIVATIVES.contains(&result.name.as_str()),
-            truth_before: truth,
-            truth_after: truth,
-            time_to_10pct_s: t10,
-            reconvergence_10pct_s: None,
-            result,
-        }
+/// A parameter's result with the flown value (`truth`) as its reference: the check beside the
+/// verdict is made again against it (the model file's reference, if the fit saw one, is
+/// another aircraft's value: its findings go with it).
+fn param_run(mut result: ParameterResult, t10: Option<f64>, truth: &Truth) -> ParamRun {
+    let truth = truth.get(&result.name);
+    result.reference = truth;
+    result.reference_check = None;
+    result.check_reference();
+    ParamRun {
+        primary: PRIMARY_DERIVATIVES.contains(&result.name.as_str()),
+        truth_before: truth,
+        truth_after: truth,
+        time_to_10pct_s: t10,
+        reconvergence_10pct_s: None,
+        result,
     }
+}
 
-    /// Time from the record's start until parameter `i` of `h` stays within ±10 % of the
-    /// truth to the end (`None`: it never does, or the parameter has no truth).
-    fn time_to_10pct(&self, h: &crate::replay::History, i: usize, name: &str) -> Option<f64> {
-        let truth = self.truth(name)?;
-        let est: Vec<f64> = h.values.iter().map(|v| v[i].unwrap_or(f64::NAN)).collect();
-        let t0 = *h.t_s.first()?;
-        crate::metrics::convergence_time_s(&h.t_s, &est, truth, TIME_TOL_REL)
-            .ok()
-            .flatten()
-            .map(|t| t - t0)
+/// Time from the record's start until parameter `i` of `h` stays within ±10 % of `truth` to
+/// the end (`None`: it never does).
+fn time_to_10pct(h: &crate::replay::History, i: usize, truth: f64) -> Option<f64> {
+    let est: Vec<f64> = h.values.iter().map(|v| v[i].unwrap_or(f64::NAN)).collect();
+    let t0 = *h.t_s.first()?;
+    crate::metrics::convergence_time_s(&h.t_s, &est, truth, TIME_TOL_REL)
+        .ok()
+        .flatten()
+        .map(|t| t - t0)
+}
+
+/// The values an aircraft flies about a trim, by parameter name.
+#[derive(Debug, Clone)]
+struct Truth {
+    names: Vec<String>,
+    values: Vec<f64>,
+}
+
+impl Truth {
+    /// The value of the parameter named `name`.
+    fn get(&self, name: &str) -> Option<f64> {
+        self.names.iter().position(|n| n == name).map(|i| self.values[i])
     }
+}
+
+/// One flown record: the run, the mapping that reads it, the values flown.
+struct Flown<'a> {
+    sim: &'a AircraftSimRun,
+    mapping: &'a Mapping,
+    truth: &'a Truth,
 }
 
 /// The record of `sim` as a reader through `mapping` (in memory, as a file would be read).
@@ -369,9 +400,9 @@ impl<const N: usize, A: FlyableAircraft<N>> AircraftExperiment<N, A> {
             .aircraft
             .flight_condition(&trim.state, &trim.controls)
             .map_err(|e| e.to_string())?;
-        let (structure, theta) = self.aircraft.flown_parameters();
+        let theta = self.aircraft.flown_values(&trim).map_err(|e| e.to_string())?;
         let mut plan = DesignPlan::new(
-            structure,
+            self.aircraft.flown_structure(),
             theta,
             self.aircraft.constants(),
             condition,
@@ -529,7 +560,7 @@ pub(crate) mod tests {
         aircraft: A,
         estimators: &[&str],
     ) -> AircraftExperiment<N, A> {
-        let structure = aircraft.flown_parameters().0;
+        let structure = aircraft.flown_structure();
         let model = ModelSpec {
             name: "f16-local".into(),
             description: String::new(),

@@ -18,6 +18,7 @@
 //!   out of the identification model.
 //! - No actuators: the surfaces are the commands (the `f16 sim` command flies its actuators).
 
+use super::flyable::airframe_constants;
 use super::{AirframeOutputs, AirframeState, FlyableAircraft};
 use crate::aircraft::truth::local_derivatives;
 use aeroident_estimators::AircraftConstants;
@@ -72,20 +73,7 @@ impl FlyableAircraft<{ f16::N_STATES }> for F16 {
     }
 
     fn constants(&self) -> AircraftConstants {
-        let (m, g) = (self.mass(), self.geometry());
-        AircraftConstants {
-            mass_kg: m.mass_kg,
-            S_m2: g.wing_area_m2,
-            cbar_m: Some(g.chord_m),
-            b_m: Some(g.span_m),
-            Ixx_kgm2: Some(m.jx_kgm2),
-            Iyy_kgm2: Some(m.jy_kgm2),
-            Izz_kgm2: Some(m.jz_kgm2),
-            Ixz_kgm2: Some(m.jxz_kgm2),
-            thrust_arm_m: 0.0,
-            thrust_incidence_rad: 0.0,
-            v0_mps: None,
-        }
+        airframe_constants(&self.mass(), &self.geometry(), (0.0, 0.0), None)
     }
 
     fn flown_structure(&self) -> ModelStructure {
@@ -130,12 +118,7 @@ mod tests {
     fn the_f16_load_factors_are_its_kinematic_specific_force() {
         let (f, t) = f16_trim();
         let mut x = t.state;
-        x[rb::ALPHA] += 0.03;
-        x[rb::BETA] = 0.02;
-        x[rb::PHI] = 0.3;
-        x[rb::P] = 0.2;
-        x[rb::Q] = -0.05;
-        x[rb::R] = 0.04;
+        crate::airframe::tests::off_trim(&mut x);
         let u = t.controls.to_vector() + ControlVector::new(0.1, 0.01, -0.02, 0.01);
         let o = FlyableAircraft::outputs(&f, 0.0, &x, &u).unwrap();
         let kinematic = specific_force(&f.rigid_body_si(&x), &o.xdot);

@@ -19,7 +19,9 @@ use aeroident_estimators::AircraftConstants;
 use aeroident_estimators::output_error::design::FlightCondition;
 use aeroident_estimators::vocabulary::{ModelStructure, Term};
 use aeroident_models::ModelError;
-use aeroident_models::aircraft::{Aircraft, AircraftTrim, ControlVector};
+use aeroident_models::aircraft::{
+    Aircraft, AircraftMass, AircraftTrim, ControlVector, ReferenceGeometry,
+};
 use aeroident_models::rigid_body as rb;
 use aeroident_physics::isa;
 use nalgebra::{SVector, Vector3};
@@ -109,6 +111,30 @@ pub trait FlyableAircraft<const N: usize>: Aircraft<N> + Sync {
             da_rad: controls[2],
             dr_rad: controls[3],
         })
+    }
+}
+
+/// The constants of an airframe of `mass` and `geometry` whose thrust acts along a line
+/// inclined `thrust_incidence_rad` (rad, nose-up) to body x with pitching-moment arm
+/// `thrust_arm_m` (m), and whose `V/V0` terms, if any, are relative to `v0_mps` (m/s).
+pub fn airframe_constants(
+    mass: &AircraftMass,
+    geometry: &ReferenceGeometry,
+    (thrust_arm_m, thrust_incidence_rad): (f64, f64),
+    v0_mps: Option<f64>,
+) -> AircraftConstants {
+    AircraftConstants {
+        mass_kg: mass.mass_kg,
+        S_m2: geometry.wing_area_m2,
+        cbar_m: Some(geometry.chord_m),
+        b_m: Some(geometry.span_m),
+        Ixx_kgm2: Some(mass.jx_kgm2),
+        Iyy_kgm2: Some(mass.jy_kgm2),
+        Izz_kgm2: Some(mass.jz_kgm2),
+        Ixz_kgm2: Some(mass.jxz_kgm2),
+        thrust_arm_m,
+        thrust_incidence_rad,
+        v0_mps,
     }
 }
 

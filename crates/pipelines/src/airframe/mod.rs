@@ -247,20 +247,9 @@ impl ModelFileAircraft {
 
     /// The airframe as the estimators' flight model takes it (SI).
     pub fn constants(&self) -> aeroident_estimators::AircraftConstants {
-        let (a, m, g) = (&self.airframe, &self.airframe.mass, &self.airframe.geometry);
-        aeroident_estimators::AircraftConstants {
-            mass_kg: m.mass_kg,
-            S_m2: g.wing_area_m2,
-            cbar_m: Some(g.chord_m),
-            b_m: Some(g.span_m),
-            Ixx_kgm2: Some(m.jx_kgm2),
-            Iyy_kgm2: Some(m.jy_kgm2),
-            Izz_kgm2: Some(m.jz_kgm2),
-            Ixz_kgm2: Some(m.jxz_kgm2),
-            thrust_arm_m: a.thrust_arm_m,
-            thrust_incidence_rad: a.thrust_incidence_rad,
-            v0_mps: a.v0_mps,
-        }
+        let a = &self.airframe;
+        let thrust_line = (a.thrust_arm_m, a.thrust_incidence_rad);
+        flyable::airframe_constants(&a.mass, &a.geometry, thrust_line, a.v0_mps)
     }
 
     /// Density (kg/m³) and the Mach terms' speed of sound (m/s; the standard temperature of

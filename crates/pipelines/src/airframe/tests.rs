@@ -57,6 +57,35 @@ pub(crate) fn as_model_file(f: &F16, t: &F16Trim) -> ModelFileAircraft {
         .with_atmosphere(Atmosphere::Textbook(f.data().atmosphere.clone()))
 }
 
+/// Moves the rigid-body part of `x` away from any trim: α up 0.03 rad, sideslipping
+/// (0.02 rad), banked (0.3 rad), rolling, pitching and yawing.
+pub(crate) fn off_trim<const N: usize>(x: &mut nalgebra::SVector<f64, N>) {
+    x[rb::ALPHA] += 0.03;
+    x[rb::BETA] = 0.02;
+    x[rb::PHI] = 0.3;
+    x[rb::P] = 0.2;
+    x[rb::Q] = -0.05;
+    x[rb::R] = 0.04;
+}
+
+/// A 10-s, 50-Hz multisine of 1° on `surfaces` (0.1–1.5 Hz) at the thesis condition.
+pub(crate) fn design_spec(
+    surfaces: Vec<crate::export::design::Surface>,
+) -> crate::export::design::DesignSpec {
+    crate::export::design::DesignSpec {
+        surfaces,
+        amplitude_rad: 1f64.to_radians(),
+        duration_s: 10.0,
+        rate_hz: 50.0,
+        band_hz: (0.1, 1.5),
+        alt_ft: ALT_FT,
+        vt_fps: VT_FPS,
+        xcg: 0.30,
+        turbulence: None,
+        signal: crate::export::design::Waveform::Multisine,
+    }
+}
+
 fn mode(modes: &[Mode], name: ModeName) -> Mode {
     *modes.iter().find(|m| m.name == name).unwrap_or_else(|| panic!("no {name:?} in {modes:?}"))
 }
@@ -220,24 +249,13 @@ fn f16_local_derivatives_follow_the_f16_linear_doublet_responses() {
 /// band is 3 of them).
 #[test]
 fn a_design_for_a_model_file_aircraft_predicts_the_monte_carlo_scatter() {
-    use crate::export::design::{DesignSpec, Surface, Waveform, design_for_aircraft};
+    use crate::export::design::{Surface, design_for_aircraft};
     use aeroident_estimators::output_error::design::simulate_plan;
     use aeroident_estimators::output_error::{OeConfig, Start, fit};
     use rand::{Rng, SeedableRng};
     let (f, t) = f16_trim();
     let aircraft = as_model_file(&f, &t);
-    let spec = DesignSpec {
-        surfaces: vec![Surface::De],
-        amplitude_rad: 1f64.to_radians(),
-        duration_s: 10.0,
-        rate_hz: 50.0,
-        band_hz: (0.1, 1.5),
-        alt_ft: ALT_FT,
-        vt_fps: VT_FPS,
-        xcg: 0.30,
-        turbulence: None,
-        signal: Waveform::Multisine,
-    };
+    let spec = design_spec(vec![Surface::De]);
     let d = design_for_aircraft(&spec, &aircraft, VT_FPS * M_PER_FT, ALT_FT * M_PER_FT).unwrap();
     let plan = &d.plan;
     let np = plan.structure.n_params();
@@ -402,20 +420,9 @@ fn elevator_design(
     band_hz: (f64, f64),
     amplitude_rad: f64,
 ) -> crate::export::design::Design {
-    use crate::export::design::{DesignSpec, Surface, Waveform, design_for_aircraft};
+    use crate::export::design::{DesignSpec, Surface, design_for_aircraft};
     let (_, aircraft) = with_actuators([actuator, None, None]);
-    let spec = DesignSpec {
-        surfaces: vec![Surface::De],
-        amplitude_rad,
-        duration_s: 10.0,
-        rate_hz: 50.0,
-        band_hz,
-        alt_ft: ALT_FT,
-        vt_fps: VT_FPS,
-        xcg: 0.30,
-        turbulence: None,
-        signal: Waveform::Multisine,
-    };
+    let spec = DesignSpec { amplitude_rad, band_hz, ..design_spec(vec![Surface::De]) };
     design_for_aircraft(&spec, &aircraft, VT_FPS * M_PER_FT, ALT_FT * M_PER_FT).unwrap()
 }
 

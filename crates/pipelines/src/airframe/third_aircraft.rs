@@ -148,12 +148,7 @@ fn aircraft_pair() -> (ModelFileAircraft, LinearAircraft) {
 fn the_kinematic_specific_force_is_the_force_sum_over_the_mass() {
     let (source, linear) = aircraft_pair();
     let mut x = linear.x0;
-    x[rb::ALPHA] += 0.03;
-    x[rb::BETA] = 0.02;
-    x[rb::PHI] = 0.3;
-    x[rb::P] = 0.2;
-    x[rb::Q] = -0.05;
-    x[rb::R] = 0.04;
+    super::tests::off_trim(&mut x);
     let u = linear.u0 + ControlVector::new(500.0, 0.01, -0.02, 0.01);
     let own = source.outputs(0.0, &x, &u).unwrap();
     let kinematic = flyable::specific_force(&x, &own.xdot);
@@ -249,20 +244,9 @@ fn the_third_aircraft_runs_the_monte_carlo_of_any_aircraft() {
 /// constants and flight condition, which the two share.
 #[test]
 fn the_third_aircraft_gets_the_sources_design() {
-    use crate::export::design::{DesignSpec, Surface, Waveform, design_for_aircraft};
+    use crate::export::design::{Surface, design_for_aircraft};
     let (source, linear) = aircraft_pair();
-    let spec = DesignSpec {
-        surfaces: vec![Surface::De, Surface::Da],
-        amplitude_rad: 1f64.to_radians(),
-        duration_s: 10.0,
-        rate_hz: 50.0,
-        band_hz: (0.1, 1.5),
-        alt_ft: ALT_FT,
-        vt_fps: VT_FPS,
-        xcg: 0.30,
-        turbulence: None,
-        signal: Waveform::Multisine,
-    };
+    let spec = super::tests::design_spec(vec![Surface::De, Surface::Da]);
     let (vt, alt) = (VT_FPS * M_PER_FT, ALT_FT * M_PER_FT);
     let own = design_for_aircraft(&spec, &linear, vt, alt).unwrap();
     let src = design_for_aircraft(&spec, &source, vt, alt).unwrap();

@@ -130,9 +130,9 @@ mod tests {
     /// The F-16 and the model-file aircraft of its local derivatives (the same trim, the same
     /// doublets, the same sensors and seeds) go through one experiment: output error on each
     /// record scores each against the values it flies, and the F-16's primary derivatives come
-    /// within 10 % of its local derivatives (the tables' curvature over the flown α and β
-    /// ranges, the engine lag and the engine's angular momentum are what the derivative
-    /// model leaves out).
+    /// within 10 % of its local derivatives and within 2 % of the twin's fit (the tables'
+    /// curvature over the flown α and β ranges, the engine lag and the engine's angular
+    /// momentum are what the derivative model leaves out; measured 2.6 % and 0.9 % at most).
     #[test]
     fn the_f16_runs_the_experiment_of_any_aircraft() {
         use crate::montecarlo::model_file::tests::experiment_with;
@@ -163,6 +163,8 @@ mod tests {
             if p.primary {
                 let rel = (e - truth).abs() / truth.abs();
                 assert!(rel < 0.10, "{}: {e} against {truth} ({rel})", p.result.name);
+                let apart = (e - et).abs() / et.abs();
+                assert!(apart < 0.02, "{}: F-16 {e}, twin {et}", p.result.name);
             }
         }
     }

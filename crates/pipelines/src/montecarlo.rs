@@ -65,8 +65,8 @@ use crate::aircraft::{RunOutput, Scenario, run};
 use crate::metrics::ZERO_THRESHOLD;
 use aeroident_physics::units::{M_PER_FT, N_PER_LBF, PA_PER_PSF};
 
+pub mod aircraft;
 mod from_json;
-pub mod model_file;
 pub use from_json::run_result_from_json;
 
 /// The golden-ratio increment of SplitMix64 (Steele, Lea & Flood, OOPSLA 2014).

@@ -99,7 +99,7 @@ pub fn note_held_surfaces(aircraft: &aeroident_pipelines::airframe::ModelFileAir
 
 /// The model-file experiment of `a` flying `scenario` with `estimators` (default `oe`; `run`
 /// and `montecarlo` with `--aircraft MODEL.toml`;
-/// [`aeroident_pipelines::montecarlo::model_file::ModelFileExperiment::load`]).
+/// [`aeroident_pipelines::montecarlo::aircraft::ModelFileExperiment::load`]).
 ///
 /// # Errors
 /// No `--map`; files that do not describe a flyable aircraft or scenario; an unknown
@@ -108,8 +108,8 @@ pub fn experiment(
     a: &AircraftArgs,
     scenario: &Path,
     estimators: Option<&[String]>,
-) -> anyhow::Result<aeroident_pipelines::montecarlo::model_file::ModelFileExperiment> {
-    use aeroident_pipelines::montecarlo::model_file::{ExperimentFiles, ModelFileExperiment};
+) -> anyhow::Result<aeroident_pipelines::montecarlo::aircraft::ModelFileExperiment> {
+    use aeroident_pipelines::montecarlo::aircraft::{ExperimentFiles, ModelFileExperiment};
     let files = ExperimentFiles {
         model: Path::new(&a.aircraft),
         summary: a.summary.as_deref(),

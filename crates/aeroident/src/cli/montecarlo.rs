@@ -3,7 +3,7 @@
 //! estimator and parameter ([`aeroident_pipelines::montecarlo`]; the seed rule is there).
 //! With `--aircraft MODEL.toml --map M [--summary S] [--estimator LIST]` the flights are a
 //! model-file aircraft's through a `kind = "sim"` scenario
-//! ([`aeroident_pipelines::montecarlo::model_file`]).
+//! ([`aeroident_pipelines::montecarlo::aircraft`]).
 //!
 //! - default: a table on stdout, `DIR/montecarlo.json` (statistics, failed runs, CRB notes),
 //!   `DIR/runs.json` (every run's final results), `DIR/histograms_<estimator>.png` (final
@@ -21,7 +21,7 @@ use crate::outdir::OutputDir;
 use super::run::DEFAULT_SCENARIO;
 use crate::plot::{GroupedBars, HistogramPanel, render_histograms_png, render_histograms_svg};
 use aeroident_pipelines::aircraft::Scenario;
-use aeroident_pipelines::montecarlo::model_file::ModelFileExperiment;
+use aeroident_pipelines::montecarlo::aircraft::ModelFileExperiment;
 use aeroident_pipelines::montecarlo::{
     Campaign, EstimatorStats, ParamStats, campaign_watched, json_summary,
 };
@@ -57,7 +57,7 @@ pub struct MonteCarloArgs {
 }
 
 /// The campaign a `montecarlo` command runs: the F-16's `run` experiment or a model-file
-/// aircraft's ([`aeroident_pipelines::montecarlo::model_file`]).
+/// aircraft's ([`aeroident_pipelines::montecarlo::aircraft`]).
 enum Experiment {
     F16(Box<Scenario>),
     ModelFile(Box<ModelFileExperiment>),

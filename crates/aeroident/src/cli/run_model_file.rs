@@ -1,11 +1,11 @@
 //! `aeroident run SCENARIO --aircraft MODEL.toml --map M [--summary S] [--estimator rls,oe]`:
 //! one flight of a model-file aircraft with the scenario's sensor noise, every estimator run on
 //! its record and scored against the values flown
-//! ([`aeroident_pipelines::montecarlo::model_file`]).
+//! ([`aeroident_pipelines::montecarlo::aircraft`]).
 //!
 //! Writes into `--out` (default `./aeroident-out/<model file's stem>`): the record and its mapping, the
 //! states and controls figures and `report.html` (as `aeroident sim`), and `summary.json`
-//! ([`aeroident_pipelines::montecarlo::model_file::FlownRun::document`]); prints one table per
+//! ([`aeroident_pipelines::montecarlo::aircraft::FlownRun::document`]); prints one table per
 //! estimator: estimate ± σ, the value flown, the error %, the status and the time to ±10 %.
 
 use std::fmt::Write as _;
@@ -15,7 +15,7 @@ use anyhow::Context as _;
 
 use super::aircraft_args::AircraftArgs;
 use aeroident_pipelines::montecarlo::EstimatorRun;
-use aeroident_pipelines::montecarlo::model_file::FlownRun;
+use aeroident_pipelines::montecarlo::aircraft::FlownRun;
 
 /// Runs one model-file flight (module doc): `scenario` flown by `aircraft`, `estimators`
 /// (default `oe`) on its record, outputs into `out`.

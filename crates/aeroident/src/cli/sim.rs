@@ -1,12 +1,12 @@
 //! `aeroident sim`: open-loop simulation of any aircraft from trim: the F-16
 //! ([`aeroident_pipelines::sim`], as `aeroident f16 sim`) or an aircraft flying identified
-//! derivatives ([`aeroident_pipelines::sim::model_file`]: a model file with a summary's
+//! derivatives ([`aeroident_pipelines::sim::aircraft`]: a model file with a summary's
 //! estimates or its reference values, and a mapping's constants). The work is the library's;
 //! this module translates arguments and renders.
 //!
 //! ```text
 //! aeroident sim scenarios/sim/elevator_doublet.toml --out out/sim
-//! aeroident sim scenarios/sim/model_file_doublets.toml --aircraft models/my_uav.toml \
+//! aeroident sim scenarios/sim/aircraft_doublets.toml --aircraft models/my_uav.toml \
 //!               --summary out/replay/summary.json --map mappings/my_uav.toml --out out/sim_uav
 //! aeroident replay out/sim_uav/timeseries.csv --map out/sim_uav/mapping.toml --out out/re
 //! ```
@@ -44,9 +44,9 @@ pub fn execute(a: SimArgs) -> anyhow::Result<()> {
     let aircraft = a.aircraft.model_file()?;
     let sc = aeroident_pipelines::sim::load_scenario(&a.scenario)?;
     let base = a.scenario.parent().unwrap_or(std::path::Path::new("."));
-    let r = aeroident_pipelines::sim::model_file::run(&aircraft, &sc, base)
+    let r = aeroident_pipelines::sim::aircraft::run(&aircraft, &sc, base)
         .with_context(|| format!("{} flying `{}`", a.aircraft.aircraft, a.scenario.display()))?;
-    let mapping = aeroident_pipelines::sim::model_file::replay_mapping(&aircraft, &r);
+    let mapping = aeroident_pipelines::sim::aircraft::replay_mapping(&aircraft, &r);
     crate::sim::write_aircraft_outputs(&r, &mapping, &mut od)?;
     od.finish();
     let (x, u) = (&r.trim.state, &r.trim.controls);

@@ -135,7 +135,7 @@ mod tests {
     /// momentum are what the derivative model leaves out; measured 2.6 % and 0.9 % at most).
     #[test]
     fn the_f16_runs_the_experiment_of_any_aircraft() {
-        use crate::montecarlo::model_file::tests::experiment_with;
+        use crate::montecarlo::aircraft::tests::experiment_with;
         let (f, t) = f16_trim();
         let f16 = experiment_with(f.clone(), &["oe"]);
         let twin = experiment_with(as_model_file(&f, &t), &["oe"]);

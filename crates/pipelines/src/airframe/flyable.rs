@@ -1,8 +1,8 @@
 //! What the experiments need of an aircraft beyond trim and linearization
 //! ([`aeroident_models::aircraft::Aircraft`]): its record's channels in SI, the constants a
 //! replay of that record maps, and the derivatives it flies (the truth an identification is
-//! scored against). `sim` ([`crate::sim::model_file::run`]), `run` and `montecarlo`
-//! ([`crate::montecarlo::model_file::AircraftExperiment`]) and `design`
+//! scored against). `sim` ([`crate::sim::aircraft::run`]), `run` and `montecarlo`
+//! ([`crate::montecarlo::aircraft::AircraftExperiment`]) and `design`
 //! ([`crate::export::design::design_for_aircraft`]) take any [`FlyableAircraft`], so adding an
 //! aircraft type is one `impl Aircraft` and one `impl FlyableAircraft` (docs/architecture.md,
 //! "Add an aircraft").

@@ -126,7 +126,7 @@ pub struct Airframe {
     /// The engine.
     pub propulsion: Propulsion,
     /// The surfaces' actuators (elevator, aileron, rudder), from the mapping's commanded
-    /// surfaces: the surface follows its command through it in `sim` ([`crate::sim::model_file`])
+    /// surfaces: the surface follows its command through it in `sim` ([`crate::sim::aircraft`])
     /// and in the exports that hold one; `None` = the surface is the command.
     pub actuators: [Option<aeroident_io::mapping::Actuator>; 3],
 }

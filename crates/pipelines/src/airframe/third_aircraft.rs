@@ -2,9 +2,9 @@
 //! linear state-space aircraft `ẋ = f0 + A (x − x0) + B (u − u0)` (SI states of
 //! [`STATE_NAMES`], commanded thrust, standard atmosphere), here the linearization of the F-16's
 //! local derivatives flown as a model-file aircraft. With nothing else written for it, it is
-//! trimmed and linearized ([`linearize_level`]), flown into a record ([`crate::sim::model_file::run`]),
+//! trimmed and linearized ([`linearize_level`]), flown into a record ([`crate::sim::aircraft::run`]),
 //! identified by the replay's estimators in one run and in a Monte Carlo campaign
-//! ([`crate::montecarlo::model_file::AircraftExperiment`]), and given a designed input
+//! ([`crate::montecarlo::aircraft::AircraftExperiment`]), and given a designed input
 //! ([`crate::export::design::design_for_aircraft`]). Each result is checked against the
 //! nonlinear aircraft it was linearized from, an independent computation: they agree to the
 //! order of the perturbations the flights make.
@@ -191,12 +191,12 @@ fn the_third_aircraft_linearizes_to_its_matrices_and_the_sources_modes() {
 #[test]
 fn the_third_aircraft_flies_the_sources_record_to_first_order() {
     let (source, linear) = aircraft_pair();
-    let x = crate::montecarlo::model_file::tests::experiment_with(linear, &["oe"]);
+    let x = crate::montecarlo::aircraft::tests::experiment_with(linear, &["oe"]);
     let mut clean = x.scenario.clone();
     clean.sensor.clear();
     let base = std::path::Path::new(".");
-    let lin = crate::sim::model_file::run(&x.aircraft, &clean, base).unwrap();
-    let src = crate::sim::model_file::run(&source, &clean, base).unwrap();
+    let lin = crate::sim::aircraft::run(&x.aircraft, &clean, base).unwrap();
+    let src = crate::sim::aircraft::run(&source, &clean, base).unwrap();
     assert_eq!(lin.table.columns, src.table.columns);
     let level = (4.0 / clean.run.dt_s) as usize;
     let channels =
@@ -220,7 +220,7 @@ fn the_third_aircraft_flies_the_sources_record_to_first_order() {
 #[test]
 fn the_third_aircraft_runs_the_monte_carlo_of_any_aircraft() {
     let (_, linear) = aircraft_pair();
-    let x = crate::montecarlo::model_file::tests::experiment_with(linear, &["oe"]);
+    let x = crate::montecarlo::aircraft::tests::experiment_with(linear, &["oe"]);
     let runs = 8;
     let c = x.campaign_watched(runs, 11, None, &|| {}).unwrap();
     assert_eq!(c.status, crate::montecarlo::STATUS_COMPLETE, "{:?}", c.status_reason);

@@ -195,7 +195,7 @@ pub struct ActuatorResponse {
 
 /// The deflection `actuator` makes of `command_rad` (perturbations from the trim deflection
 /// `trim_rad`, rad, one per sample `dt_s` apart) as `sim` flies it
-/// ([`crate::sim::model_file`]): the surface starts at trim, and each sample's command is
+/// ([`crate::sim::aircraft`]): the surface starts at trim, and each sample's command is
 /// held over the interval after it ([`aeroident_io::mapping::Actuator::step_limited`]), so
 /// even a vanishing τ puts the surface one sample behind the table. Limits act on the
 /// absolute deflection `trim + δ`.

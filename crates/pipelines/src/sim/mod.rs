@@ -21,7 +21,7 @@
 //! needs: ṗ, q̇, ṙ, α̇ from the state derivative and the accelerometer specific force
 //! `ax/ay/az_fps2` (`az ≈ −g` level), so `mappings/aeroident-sim.toml` replays the file as it is.
 
-pub mod model_file;
+pub mod aircraft;
 pub mod scenario;
 pub mod trim;
 

@@ -7,7 +7,7 @@ use crate::outdir::OutputDir;
 use crate::plot::Panel;
 use crate::report::{Report, common_settings, write_figure};
 use aeroident_pipelines::sim::SimTable;
-use aeroident_pipelines::sim::model_file::AircraftSimRun;
+use aeroident_pipelines::sim::aircraft::AircraftSimRun;
 
 /// Writes `timeseries.csv`, `mapping.toml` (the text `mapping`), `states.{png,svg}`,
 /// `controls.{png,svg}` and `report.html` into the locked output directory `od`, each

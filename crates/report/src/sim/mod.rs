@@ -1,5 +1,5 @@
 //! The files of an open-loop simulation ([`aeroident_pipelines::sim`], `aeroident f16 sim`;
-//! [`aeroident_pipelines::sim::model_file`], `aeroident sim --aircraft MODEL.toml`):
+//! [`aeroident_pipelines::sim::aircraft`], `aeroident sim --aircraft MODEL.toml`):
 //! `timeseries.csv`, the figures and `report.html` (and the replay mapping of a model-file
 //! aircraft's record).
 

@@ -28,7 +28,7 @@ use aeroident_pipelines::export::uav::Geometry;
 use aeroident_pipelines::job::Records;
 use aeroident_pipelines::replay::batch::FitOptions;
 use aeroident_pipelines::replay::fit::fit_records;
-use aeroident_pipelines::sim::{SimTable, model_file, parse_scenario};
+use aeroident_pipelines::sim::{SimTable, aircraft, parse_scenario};
 
 /// `plane`'s mass and inertia.
 fn mass_of(plane: &Plane) -> AircraftMass {
@@ -59,9 +59,9 @@ fn write_files(
 /// `sim` of `plane` flying `values` through the doublets.
 fn fly_identified(dir: &std::path::Path, plane: &Plane, values: &[(&str, f64)]) -> SimTable {
     let (model, map, scenario) = write_files(dir, plane, values);
-    let aircraft = load(&model, None, &map).unwrap();
+    let flying = load(&model, None, &map).unwrap();
     let sc = parse_scenario(&scenario, &dir.join("scenario.toml")).unwrap();
-    model_file::run(&aircraft, &sc, dir).unwrap().table
+    aircraft::run(&flying, &sc, dir).unwrap().table
 }
 
 /// `m · v`.

@@ -5,10 +5,10 @@
 //! --map M [--summary S] --estimator rls,oe`).
 //!
 //! # One run ([`ModelFileExperiment::fly`])
-//! 1. The scenario (`kind = "sim"`, [`crate::sim::model_file`]) is flown from its wings-level
+//! 1. The scenario (`kind = "sim"`, [`crate::sim::aircraft`]) is flown from its wings-level
 //!    trim with its inputs and `[[sensor]]` noise.
 //! 2. The record goes through the mapping of a flight record
-//!    ([`crate::sim::model_file::replay_mapping`]: the sensed columns where a sensor exists, the
+//!    ([`crate::sim::aircraft::replay_mapping`]: the sensed columns where a sensor exists, the
 //!    true ones elsewhere, no state derivative unless sensed) to every estimator asked for, as `aeroident replay` would take it
 //!    with `--model MODEL.toml`: the real-time estimators sample by sample
 //!    ([`crate::replay::replay`]), the batch fits over the whole record
@@ -56,7 +56,7 @@ use crate::aircraft::summary::PRIMARY_DERIVATIVES;
 use crate::airframe::{FlyableAircraft, ModelFileAircraft};
 use crate::estimators::EstimatorKind;
 use crate::replay::batch::FitOptions;
-use crate::sim::model_file::{AircraftSimRun, replay_mapping, run as fly_scenario};
+use crate::sim::aircraft::{AircraftSimRun, replay_mapping, run as fly_scenario};
 use crate::sim::scenario::{Channel, SimScenario};
 
 /// Tolerance of the time to converge, relative to the truth (the `run` experiment's ±10 %).

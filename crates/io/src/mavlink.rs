@@ -39,14 +39,18 @@
 //! [`MavlinkError::NothingReceived`]. Datagrams with no valid MAVLink frame are counted and
 //! the first few are reported on stderr with their first bytes ([`LinkStats::unparseable`]).
 //! Sequence numbers are per sender (system, component), mod 256: a gap counts its missing
-//! messages as lost ([`LinkStats::lost`]); a repeat of the last number with the same bytes
+//! messages as lost ([`LinkStats::lost`]); a gap of at least as many messages as the mapping
+//! reads topics (every column may have missed an update) makes the builder forget its held
+//! values, as a queue drop does, so no row mixes values from both sides of the hole, while a
+//! shorter loss is held over as a lower send rate would be; a repeat of the last number with
+//! the same bytes
 //! (message id and payload) is a duplicate, the same datagram received twice
 //! ([`LinkStats::duplicates`]). A repeat with other bytes is a new message from a sender that
 //! does not number its messages (one that always sends 0, say): it is used, and counted per sender
 //! ([`LinkStats::stuck_sequence`], named in the link line). A number behind the last is a
 //! late message ([`LinkStats::out_of_order`]). Neither duplicates nor late messages are used
 //! (the held values stay the newest; three in a row behind mean the sender restarted its
-//! count, and are used). A late message a gap
+//! count, and are used, after forgetting the held values as after a gap). A late message a gap
 //! had skipped (two neighbours swapped on the link) was not lost: it is taken off the lost
 //! count and counted late only. The receive queue is
 //! bounded and drops the oldest datagrams when full ([`LinkStats::dropped`]; see

@@ -235,6 +235,12 @@ impl RowBuilder {
             .collect()
     }
 
+    /// The number of message topics the columns read (the clock's included): a hole of at
+    /// least as many messages may have held an update of every column.
+    pub fn topics(&self) -> usize {
+        self.by_topic.len()
+    }
+
     /// Forgets every held value (after messages were lost in bulk): the next row waits until
     /// every column has been received again.
     pub fn forget(&mut self) {

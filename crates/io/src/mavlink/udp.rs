@@ -13,7 +13,11 @@
 //! the old ones under the zero-order hold, so it is the stale data that goes. Drops are counted
 //! ([`LinkStats::dropped`]); after a drop the row builder forgets its held values, so no row
 //! mixes values from both sides of the hole (rows resume once every column has arrived again,
-//! and the reader reports the hole in time as a gap).
+//! and the reader reports the hole in time as a gap). Messages lost before the queue (in the
+//! kernel when this thread falls behind, or on the link) leave a sequence gap: one of at least
+//! as many messages as the mapping reads topics (a whole cycle may be gone), or a sender's
+//! count seen to restart, makes the builder forget its held values in the same way; a shorter
+//! loss (a radio link's lost packet) is held over, as a lower send rate would be.
 
 use super::{END_OF_STREAM_NAME, MavlinkError, MavlinkUrl, RowBuilder};
 use crate::mapping::Mapping;
@@ -75,7 +79,10 @@ pub struct LinkStats {
     /// lost on the link or in the kernel, not counting the datagrams the queue dropped
     /// ([`LinkStats::dropped`]). Counted when the gap is seen; a skipped message that arrives
     /// later (within 128 numbers) is taken back off and counted in
-    /// [`LinkStats::out_of_order`] only.
+    /// [`LinkStats::out_of_order`] only. A gap of at least as many messages as the mapping
+    /// reads topics makes the row builder forget its held values (every column may have
+    /// missed an update), so the clock messages until every column has arrived again make no
+    /// row ([`LinkStats::clock_without_row`]); a shorter one is held over.
     pub lost: u64,
     /// Messages repeating their sender's last sequence number and its bytes (message id and
     /// payload): the same message delivered twice, not used again.
@@ -261,6 +268,9 @@ enum SeqVerdict {
     /// The last number used again, with other bytes: a new message from a sender that does
     /// not advance its count.
     NotAdvanced,
+    /// The [`RESYNC_AFTER`]th message behind in a row: the sender restarted its count (or more
+    /// than 128 messages were lost), used as its new start.
+    Restarted,
     /// Behind the last number used; `was_lost` if it is one of the numbers a gap skipped
     /// (counted lost then, late now).
     OutOfOrder {
@@ -301,7 +311,7 @@ impl Sequence {
                 return SeqVerdict::OutOfOrder { was_lost: false };
             }
             *self = Self::new(seq, bytes);
-            return SeqVerdict::Use { missing: 0 };
+            return SeqVerdict::Restarted;
         }
         // The old gaps move `delta` further behind; the `delta - 1` numbers skipped now are
         // the nearest behind the new last.
@@ -432,7 +442,9 @@ impl MavlinkRows {
     }
 
     /// Whether a message is used, by its sender's sequence number and, when that repeats,
-    /// `bytes` (the hash of its id and payload); counted in `stats`.
+    /// `bytes` (the hash of its id and payload); counted in `stats`. A gap of a whole cycle
+    /// before it or a restart of the count makes the builder forget its held values (module
+    /// doc).
     fn in_sequence(&mut self, stats: &mut LinkStats, header: &MavHeader, bytes: u64) -> bool {
         let key = (header.system_id, header.component_id);
         let Some(seq) = self.seq.get_mut(&key) else {
@@ -442,6 +454,17 @@ impl MavlinkRows {
         match seq.judge(header.sequence, bytes) {
             SeqVerdict::Use { missing } => {
                 stats.lost += u64::from(missing);
+                // A hole that may have held an update of every column: no row across it. A
+                // shorter loss leaves the other columns' values current, and the zero-order
+                // hold carries the lost one a message longer, as a sender's lower rate would.
+                if usize::from(missing) >= self.builder.topics() {
+                    self.builder.forget();
+                }
+                true
+            }
+            SeqVerdict::Restarted => {
+                // What came between is unknown, as after a gap.
+                self.builder.forget();
                 true
             }
             SeqVerdict::NotAdvanced => {
@@ -632,7 +655,7 @@ mod tests {
         let mut s = Sequence::new(100, 0);
         assert_eq!(s.judge(0, 0), late(false));
         assert_eq!(s.judge(1, 0), late(false));
-        assert_eq!(s.judge(2, 0), SeqVerdict::Use { missing: 0 });
+        assert_eq!(s.judge(2, 0), SeqVerdict::Restarted);
         assert_eq!(s.judge(3, 0), SeqVerdict::Use { missing: 0 });
     }
 
@@ -688,6 +711,124 @@ mod tests {
         assert_eq!(s.judge(1, 0), late(true));
         assert_eq!(s.judge(127, 0), late(true));
         assert_eq!(s.judge(1, 0), late(false));
+    }
+
+    /// Frame `k` of a sender as in `tests/all/mavlink_link.rs`: V = 100 + k, α = δe = q = k/1000,
+    /// the clock `ATTITUDE` at 10 k ms last.
+    fn frame(k: u32) -> Vec<MavMessage> {
+        use mavlink::dialects::ardupilotmega::{
+            AOA_SSA_DATA, ATTITUDE_DATA, NAMED_VALUE_FLOAT_DATA,
+        };
+        let small = k as f32 / 1000.0;
+        let named = |name: &str, value| {
+            MavMessage::NAMED_VALUE_FLOAT(NAMED_VALUE_FLOAT_DATA {
+                time_boot_ms: 0,
+                value,
+                name: name.into(),
+            })
+        };
+        vec![
+            named("a", 100.0 + k as f32),
+            MavMessage::AOA_SSA(AOA_SSA_DATA { time_usec: 0, AOA: small, SSA: 0.0 }),
+            named("b", small),
+            MavMessage::ATTITUDE(ATTITUDE_DATA {
+                time_boot_ms: 10 * k,
+                pitchspeed: small,
+                ..Default::default()
+            }),
+        ]
+    }
+
+    /// The frame of each row of `text` (no header; time ms, V, α, q, δe), each row checked to
+    /// hold the values of the frame its time names.
+    fn rows_of_one_frame(text: &str) -> Vec<u32> {
+        let mut frames = Vec::new();
+        for line in text.lines() {
+            let v: Vec<f64> = line.split(',').map(|f| f.parse().unwrap()).collect();
+            let k = (v[0] / 10.0) as u32;
+            let small = f64::from(k as f32 / 1000.0);
+            assert_eq!(
+                v[1..],
+                [100.0 + f64::from(k), small, small, small],
+                "`{line}` mixes frames"
+            );
+            frames.push(k);
+        }
+        frames
+    }
+
+    /// A link reading frames of [`frame`] (four topics: `a`, AOA_SSA, `b`, the clock), its
+    /// buffer emptied of the header.
+    fn gap_rows() -> MavlinkRows {
+        let map = "[time]\ncolumn = \"ATTITUDE.time_boot_ms\"\nunit = \"ms\"\n[channels]\n\
+            vt = { column = \"NAMED_VALUE_FLOAT[a].value\", unit = \"m/s\" }\n\
+            alpha = { column = \"AOA_SSA.AOA\", unit = \"deg\" }\n\
+            q = { column = \"ATTITUDE.pitchspeed\", unit = \"rad/s\" }\n\
+            de = { column = \"NAMED_VALUE_FLOAT[b].value\", unit = \"deg\" }\n\
+            mass = { value = 1.0, unit = \"kg\" }\nS = { value = 1.0, unit = \"m2\" }\n\
+            rho = { value = 1.0, unit = \"kg/m3\" }\n";
+        let mapping = Mapping::from_toml_str(map, "m.toml").unwrap();
+        let url = MavlinkUrl::parse("mavlink:udp:127.0.0.1:0").unwrap();
+        let mut rows = MavlinkRows::open(&url, &mapping, None).unwrap();
+        rows.buf.clear();
+        rows
+    }
+
+    /// Message `msg` as one datagram with sequence number `n mod 256` into `rows`.
+    fn deliver(rows: &mut MavlinkRows, n: usize, msg: &MavMessage) {
+        let header = MavHeader { system_id: 1, component_id: 1, sequence: n as u8 };
+        let mut datagram = Vec::new();
+        mavlink::write_versioned_msg(&mut datagram, mavlink::MavlinkVersion::V2, header, msg)
+            .unwrap();
+        MavlinkRows::take(rows, &datagram);
+    }
+
+    /// A loss shorter than a cycle of the mapped topics (one lost packet on a radio link) is
+    /// held over: the lost `a` of frame 4711 leaves frame 4710's V in frame 4711's row, the
+    /// other columns current, and no row is withheld.
+    #[test]
+    fn analytic_a_lost_message_shorter_than_a_cycle_is_held_over() {
+        let mut rows = gap_rows();
+        let sent: Vec<MavMessage> = (4710..=4712).flat_map(frame).collect();
+        for n in (0..sent.len()).filter(|&n| n != 4) {
+            deliver(&mut rows, n, &sent[n]);
+        }
+        let text = String::from_utf8(rows.buf.clone()).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), 3, "{text}");
+        assert_eq!(rows_of_one_frame(&format!("{}\n{}", lines[0], lines[2])), [4710, 4712]);
+        let v: Vec<f64> = lines[1].split(',').map(|f| f.parse().unwrap()).collect();
+        let small = f64::from(4711f32 / 1000.0);
+        assert_eq!(v, [47110.0, 4810.0, small, small, small], "{text}");
+        assert_eq!(rows.stats.lock().unwrap().lost, 1);
+    }
+
+    /// Messages lost before the queue (in the kernel under load, or on the link) leave a
+    /// sequence gap, not a queue drop. Frames 4710 and 4711 arrive whole, then the 15 messages
+    /// from frame 4712's `a` to frame 4715's `b` are lost: frame 4715's clock must not make a
+    /// row of frame 4711's held values under frame 4715's time (what the flood test once saw
+    /// under load). Then 200 lost, which the 8-bit numbers see as the sender restarting its
+    /// count (two messages late, the third used): again no mixed row. Rows resume with the
+    /// next whole frame.
+    #[test]
+    fn analytic_a_sequence_gap_makes_no_row_mixing_frames() {
+        let mut rows = gap_rows();
+        // Message n of frames 4710… has sequence number n mod 256; one message per datagram.
+        let sent: Vec<MavMessage> = (4710..=4780).flat_map(frame).collect();
+        let mut deliver_range = |range: std::ops::Range<usize>| {
+            for n in range {
+                deliver(&mut rows, n, &sent[n]);
+            }
+        };
+        // 4710, 4711; lost 8..23; 4715's clock, 4716, 4717; lost 32..232; 4768 (its `a` and
+        // α late), 4769.
+        deliver_range(0..8);
+        deliver_range(23..32);
+        deliver_range(232..240);
+        let text = String::from_utf8(rows.buf.clone()).unwrap();
+        let s = rows.stats.lock().unwrap().clone();
+        assert_eq!(rows_of_one_frame(&text), [4710, 4711, 4716, 4717, 4769], "{text}");
+        assert_eq!((s.lost, s.out_of_order, s.clock_without_row), (15, 2, 2), "{s:?}");
     }
 
     /// The queue keeps the newest [`QUEUE_DATAGRAMS`], counting the oldest it drops, and

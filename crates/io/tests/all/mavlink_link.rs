@@ -286,7 +286,9 @@ fn read_rows(rows: &mut MavlinkRows, text: &mut String, n: usize) {
 
 /// A consumer that stops while 24,000 datagrams arrive: the queue keeps at most
 /// `QUEUE_DATAGRAMS`, the oldest are dropped and counted, and every row holds one frame's
-/// values (none mixes values from before the hole with the clock after it).
+/// values (none mixes values from before the hole with the clock after it, nor across a
+/// whole cycle of messages a busy machine's kernel dropped before the queue; a shorter loss
+/// is held over for one row).
 #[test]
 fn analytic_flood_into_a_paused_consumer_is_bounded_and_counted() {
     let (mut rows, to, stats, _) = open();
@@ -309,8 +311,12 @@ fn analytic_flood_into_a_paused_consumer_is_bounded_and_counted() {
             std::thread::sleep(Duration::from_millis(1));
         }
     }
-    link.send(&end_of_stream(), 1);
-    std::thread::sleep(Duration::from_millis(200));
+    // The end, sent three times: the first to arrive ends the feed, so the kernel dropping one
+    // (a busy machine) does not leave it to end on the idle timeout.
+    for _ in 0..3 {
+        link.send(&end_of_stream(), 1);
+        std::thread::sleep(Duration::from_millis(100));
+    }
     let mut buf = [0u8; 4096];
     loop {
         let k = rows.read(&mut buf).unwrap();
@@ -326,13 +332,26 @@ fn analytic_flood_into_a_paused_consumer_is_bounded_and_counted() {
     assert!(s.end.contains("end-of-stream"), "{s:?}");
     assert!(s.line().contains(&format!("{} datagrams dropped (receive queue full", s.dropped)));
     let parsed = parse_rows(&text);
-    assert!(parsed.len() > 10 + QUEUE_DATAGRAMS / 4 - 3, "{} rows", parsed.len());
-    for r in &parsed {
-        let k = r[0] / 10.0;
-        let small = f64::from(k as f32 / 1000.0);
-        assert_eq!(r[1], 100.0 + k, "row {r:?} mixes frames");
-        assert_eq!([r[2], r[3], r[4]], [small; 3], "row {r:?} mixes frames");
-    }
+    // Each hole the kernel made (a gap, counted lost, or a burst seen as a restart, two
+    // counted late) costs its two partial frames' rows; with none, every frame kept has a row.
+    let holes = (s.lost + s.out_of_order) as usize;
+    assert!(
+        parsed.len() + 2 * holes > 10 + QUEUE_DATAGRAMS / 4 - 3,
+        "{} rows: {s:?}",
+        parsed.len()
+    );
+    // A loss shorter than a cycle of the four topics is held over (the lost column keeps its
+    // previous frame's value for one row): at most one row per message lost before the queue
+    // holds another frame's value; with none lost, no row does.
+    let mixed: Vec<&[f64; 5]> = parsed
+        .iter()
+        .filter(|r| {
+            let k = r[0] / 10.0;
+            let small = f64::from(k as f32 / 1000.0);
+            r[1] != 100.0 + k || [r[2], r[3], r[4]] != [small; 3]
+        })
+        .collect();
+    assert!(mixed.len() as u64 <= s.lost, "rows mixing frames: {mixed:?}; {s:?}");
     // The rows jump over the hole: frames 11… up to the first kept are missing.
     assert!(parsed.windows(2).all(|w| w[1][0] > w[0][0]));
     assert!(parsed[10][0] > 110.0, "{:?}", parsed[10]);

@@ -19,15 +19,15 @@
 //! - No actuators: the surfaces are the commands (the `f16 sim` command flies its actuators).
 
 use super::flyable::airframe_constants;
-use super::{AirframeOutputs, AirframeState, FlyableAircraft};
+use super::{AirframeOutputs, AirframeState, Atmosphere, FlyableAircraft};
 use crate::aircraft::truth::local_derivatives;
 use aeroident_estimators::AircraftConstants;
 use aeroident_estimators::vocabulary::{Coefficient, ModelStructure, Term};
 use aeroident_models::aircraft::{Aircraft, AircraftTrim, ControlVector};
 use aeroident_models::f16::{self, AeroIncrements, F16, F16State};
 use aeroident_models::rigid_body as rb;
-use aeroident_models::{Dynamics, ModelError, atmosphere};
-use aeroident_physics::units::{FT_PER_M, KGPM3_PER_SLUGPFT3, M_PER_FT, N_PER_LBF, PA_PER_PSF};
+use aeroident_models::{Dynamics, ModelError};
+use aeroident_physics::units::{M_PER_FT, N_PER_LBF, PA_PER_PSF};
 
 /// The structure of the F-16's local derivatives (module doc).
 pub fn f16_local_structure() -> ModelStructure {
@@ -100,8 +100,7 @@ impl FlyableAircraft<{ f16::N_STATES }> for F16 {
     }
 
     fn density_kgpm3(&self, alt_m: f64) -> Result<f64, ModelError> {
-        let ad = atmosphere::air_data(&self.data().atmosphere, 1.0, alt_m * FT_PER_M)?;
-        Ok(ad.rho_slug_ft3 * KGPM3_PER_SLUGPFT3)
+        Ok(Atmosphere::Textbook(self.data().atmosphere.clone()).air(alt_m)?.0)
     }
 }
 

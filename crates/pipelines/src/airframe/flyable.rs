@@ -14,7 +14,7 @@
 //! `f = v̇ + ω × v − g_b`, `g_b = g0 (−sinθ, sinφ cosθ, cosφ cosθ)` (SLJ eq. 2.5-1 divided by
 //! the mass: `m (v̇ + ω × v) = F_aero + F_thrust + m g_b`).
 
-use super::{AirframeOutputs, AirframeState, STATE_NAMES};
+use super::{AirframeOutputs, AirframeState, Atmosphere};
 use aeroident_estimators::AircraftConstants;
 use aeroident_estimators::output_error::design::FlightCondition;
 use aeroident_estimators::vocabulary::{ModelStructure, Term};
@@ -23,19 +23,17 @@ use aeroident_models::aircraft::{
     Aircraft, AircraftMass, AircraftTrim, ControlVector, ReferenceGeometry,
 };
 use aeroident_models::rigid_body as rb;
-use aeroident_physics::isa;
-use nalgebra::{SVector, Vector3};
-
-/// Standard gravity, m/s² (the flight model's `g0`).
-pub const G0_MPS2: f64 = 9.806_65;
+use aeroident_physics::rigid_body::{self as kernel, SinCos};
+use aeroident_physics::units::G0_MPS2;
+use nalgebra::SVector;
 
 /// An aircraft the experiments fly, record and identify (module doc). States are the
 /// aircraft's own ([`Aircraft::state_names`]); everything this trait returns is SI.
 pub trait FlyableAircraft<const N: usize>: Aircraft<N> + Sync {
-    /// The rigid-body states of `x` in SI, in [`STATE_NAMES`] order.
+    /// The rigid-body states of `x` in SI, in [`STATE_NAMES`](super::STATE_NAMES) order.
     fn rigid_body_si(&self, x: &SVector<f64, N>) -> AirframeState;
 
-    /// The state derivative in SI ([`STATE_NAMES`] order) and the record's channels at time
+    /// The state derivative in SI ([`STATE_NAMES`](super::STATE_NAMES) order) and the record's channels at time
     /// `t_s`, state `x` and controls `u` (surfaces as flown).
     ///
     /// # Errors
@@ -69,12 +67,12 @@ pub trait FlyableAircraft<const N: usize>: Aircraft<N> + Sync {
     }
 
     /// Air density at altitude `alt_m` (m), kg/m³: the 1976 standard atmosphere
-    /// ([`aeroident_physics::isa`]) unless the aircraft flies in another.
+    /// ([`Atmosphere::Isa`]) unless the aircraft flies in another.
     ///
     /// # Errors
     /// [`ModelError::InvalidValue`] (`alt_m`) outside the atmosphere model.
     fn density_kgpm3(&self, alt_m: f64) -> Result<f64, ModelError> {
-        Ok(isa_air(alt_m)?.0)
+        Ok(Atmosphere::Isa.air(alt_m)?.0)
     }
 
     /// The surfaces' actuators (elevator, aileron, rudder); `None`: the surface is its
@@ -152,28 +150,30 @@ pub fn held_surfaces(structure: &ModelStructure) -> Vec<&'static str> {
 }
 
 /// The specific force at the CG in body axes, m/s² (module doc), from the SI rigid-body state
-/// `x` and its derivative `xdot` ([`STATE_NAMES`] order).
+/// `x` and its derivative `xdot` ([`STATE_NAMES`](super::STATE_NAMES) order): the body acceleration of
+/// `(V̇, α̇, β̇)` less the kernel's force equations without a specific force
+/// ([`kernel::body_acceleration`]).
 pub fn specific_force(x: &AirframeState, xdot: &AirframeState) -> [f64; 3] {
-    let (v, alpha, beta) = (x[rb::VT], x[rb::ALPHA], x[rb::BETA]);
-    let (sa, ca) = alpha.sin_cos();
-    let (sb, cb) = beta.sin_cos();
+    let (v, alpha, beta) = (x[rb::VT], SinCos::of(x[rb::ALPHA]), SinCos::of(x[rb::BETA]));
     let (vd, ad, bd) = (xdot[rb::VT], xdot[rb::ALPHA], xdot[rb::BETA]);
-    let vel = Vector3::new(ca * cb, sb, sa * cb) * v;
-    let vel_dot = Vector3::new(ca * cb, sb, sa * cb) * vd
-        + Vector3::new(-sa * cb, 0.0, ca * cb) * (v * ad)
-        + Vector3::new(-ca * sb, cb, -sa * sb) * (v * bd);
-    let omega = Vector3::new(x[rb::P], x[rb::Q], x[rb::R]);
-    let (sphi, cphi) = x[rb::PHI].sin_cos();
-    let (sth, cth) = x[rb::THETA].sin_cos();
-    let g = Vector3::new(-sth, sphi * cth, cphi * cth) * G0_MPS2;
-    let f = vel_dot + omega.cross(&vel) - g;
-    [f[0], f[1], f[2]]
+    let (sa, ca, sb, cb) = (alpha.sin, alpha.cos, beta.sin, beta.cos);
+    // d/dt of v·(cosα cosβ, sinβ, sinα cosβ) through V, α and β.
+    let v_dot = [
+        vd * ca * cb - v * ad * sa * cb - v * bd * ca * sb,
+        vd * sb + v * bd * cb,
+        vd * sa * cb + v * ad * ca * cb - v * bd * sa * sb,
+    ];
+    let gravity = kernel::gravity_body(G0_MPS2, SinCos::of(x[rb::PHI]), SinCos::of(x[rb::THETA]));
+    let omega = [x[rb::P], x[rb::Q], x[rb::R]];
+    let free =
+        kernel::body_acceleration(kernel::body_velocity(v, alpha, beta), omega, gravity, [0.0; 3]);
+    core::array::from_fn(|k| v_dot[k] - free[k])
 }
 
 /// The record's channels of an aircraft whose equations give the SI state derivative `xdot`
 /// at the SI state `x`, flying in the standard atmosphere with thrust `thrust_n`: the
 /// specific force by [`specific_force`], density and speed of sound of the 1976 standard
-/// atmosphere ([`aeroident_physics::isa`]) at the altitude.
+/// atmosphere at the altitude ([`Atmosphere::air`]).
 ///
 /// # Errors
 /// [`ModelError::InvalidValue`] (`alt_m`) outside the standard atmosphere.
@@ -182,7 +182,7 @@ pub fn isa_outputs(
     xdot: AirframeState,
     thrust_n: f64,
 ) -> Result<AirframeOutputs, ModelError> {
-    let (rho, a) = isa_air(x[rb::ALT])?;
+    let (rho, a) = Atmosphere::Isa.air(x[rb::ALT])?;
     let vt = x[rb::VT];
     Ok(AirframeOutputs {
         xdot,
@@ -192,19 +192,4 @@ pub fn isa_outputs(
         rho_kgpm3: rho,
         mach: vt / a,
     })
-}
-
-/// Density (kg/m³) and speed of sound (m/s) of the 1976 standard atmosphere at `alt_m` (m).
-///
-/// # Errors
-/// [`ModelError::InvalidValue`] (`alt_m`) outside the standard atmosphere.
-fn isa_air(alt_m: f64) -> Result<(f64, f64), ModelError> {
-    let outside = ModelError::InvalidValue {
-        field: STATE_NAMES[rb::ALT],
-        value: alt_m,
-        reason: "outside the standard atmosphere",
-    };
-    let t = isa::temperature_k(alt_m).ok_or(outside.clone())?;
-    let p = isa::pressure_pa(alt_m).ok_or(outside)?;
-    Ok((isa::density_kgpm3(p, t), isa::speed_of_sound_mps(t)))
 }

@@ -110,6 +110,33 @@ pub enum Atmosphere {
     Textbook(AtmosphereConstants),
 }
 
+impl Atmosphere {
+    /// Density (kg/m³) and the Mach terms' speed of sound (m/s; the standard temperature of
+    /// the density altitude, as [`aeroident_estimators::sample::AirDataSample::mach`] forms it
+    /// from a record) at altitude `alt_m` (m).
+    ///
+    /// # Errors
+    /// [`ModelError::InvalidValue`] (`alt_m`) outside the atmosphere model.
+    pub fn air(&self, alt_m: f64) -> Result<(f64, f64), ModelError> {
+        let outside = ModelError::InvalidValue {
+            field: "alt_m",
+            value: alt_m,
+            reason: "outside the atmosphere model",
+        };
+        let rho = match self {
+            Atmosphere::Isa => {
+                let t = isa::temperature_k(alt_m).ok_or(outside.clone())?;
+                isa::density_kgpm3(isa::pressure_pa(alt_m).ok_or(outside.clone())?, t)
+            }
+            Atmosphere::Textbook(c) => {
+                atmosphere::air_data(c, 1.0, alt_m * FT_PER_M)?.rho_slug_ft3 * KGPM3_PER_SLUGPFT3
+            }
+        };
+        let t = isa::temperature_of_density_k(rho).ok_or(outside)?;
+        Ok((rho, isa::speed_of_sound_mps(t)))
+    }
+}
+
 /// The constants of the airframe, SI (from a mapping, [`airframe_from_mapping`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Airframe {
@@ -259,22 +286,7 @@ impl ModelFileAircraft {
     /// # Errors
     /// [`ModelError::InvalidValue`] (`alt_m`) outside the atmosphere model.
     pub fn air(&self, alt_m: f64) -> Result<(f64, f64), ModelError> {
-        let outside = ModelError::InvalidValue {
-            field: "alt_m",
-            value: alt_m,
-            reason: "outside the atmosphere model",
-        };
-        let rho = match &self.atmosphere {
-            Atmosphere::Isa => {
-                let t = isa::temperature_k(alt_m).ok_or(outside.clone())?;
-                isa::density_kgpm3(isa::pressure_pa(alt_m).ok_or(outside.clone())?, t)
-            }
-            Atmosphere::Textbook(c) => {
-                atmosphere::air_data(c, 1.0, alt_m * FT_PER_M)?.rho_slug_ft3 * KGPM3_PER_SLUGPFT3
-            }
-        };
-        let t = isa::temperature_of_density_k(rho).ok_or(outside)?;
-        Ok((rho, isa::speed_of_sound_mps(t)))
+        self.atmosphere.air(alt_m)
     }
 
     /// Thrust, N, at density `rho_kgpm3`, airspeed `vt_mps` and engine command `command`.

@@ -23,10 +23,10 @@ use super::{AirframeOutputs, AirframeState, Atmosphere, FlyableAircraft};
 use crate::aircraft::truth::local_derivatives;
 use aeroident_estimators::AircraftConstants;
 use aeroident_estimators::vocabulary::{Coefficient, ModelStructure, Term};
+use aeroident_models::ModelError;
 use aeroident_models::aircraft::{Aircraft, AircraftTrim, ControlVector};
 use aeroident_models::f16::{self, AeroIncrements, F16, F16State};
 use aeroident_models::rigid_body as rb;
-use aeroident_models::{Dynamics, ModelError};
 use aeroident_physics::units::{M_PER_FT, N_PER_LBF, PA_PER_PSF};
 
 /// The structure of the F-16's local derivatives (module doc).
@@ -56,9 +56,10 @@ impl FlyableAircraft<{ f16::N_STATES }> for F16 {
         x: &F16State,
         u: &ControlVector,
     ) -> Result<AirframeOutputs, ModelError> {
-        let input = self.input(u);
-        let xdot = self.rigid_body_si(&self.derivatives(t_s, x, &input)?);
-        let o = F16::outputs(self, t_s, x, &input)?;
+        // One evaluation gives the derivative and the channels (the same increments as
+        // `derivatives` at `t_s`).
+        let (xd, o) = self.evaluate(x, &self.input(u), &self.increments_at(t_s))?;
+        let xdot = self.rigid_body_si(&xd);
         let g = self.data().mass.g_ft_per_s2 * M_PER_FT;
         let vt = x[rb::VT] * M_PER_FT;
         let qbar_pa = o.qbar_psf * PA_PER_PSF;

@@ -155,7 +155,7 @@ class Composite:
 # JSBSim's default integrators (FGPropagate): rectangular Euler for the body rates and the
 # attitude, Adams-Bashforth 2 for the velocities. Forward Euler moves an oscillatory pole
 # λ = −ζω ± iω to ln(1 + λh)/h ≈ λ − λ²h/2, whose real part gains (1 − ζ²)ω²h/2: at 120 Hz
-# and a Dutch roll of 1.5 rad/s that is 0.009 1/s against a ζω of 0.05–0.1, so the flight
+# and a Dutch roll of 1.5 rad/s that is 0.009 1/s against a typical Dutch-roll ζω of 0.05–0.1, so the flight
 # is damped about a tenth less than its aerodynamic tables say, and output error reads a
 # tenth smaller |Cn_r|. Adams-Bashforth 2 for the rates and the attitude (second order, error
 # ~ ω³h²; JSBSim's codes: 1 Euler, 3 AB2, 4 AB3) makes the flown dynamics those of the truth

@@ -803,6 +803,33 @@ mod tests {
         assert_eq!(rows.stats.lock().unwrap().lost, 1);
     }
 
+    /// At the edge of the rule, a cycle of the four mapped topics (`a`, α, `b`, the clock):
+    /// three lost (frame 4711's `a`, α and `b`) are held over, so frame 4711's clock makes a
+    /// row of frame 4710's values and its own q; four lost (frame 4711's α, `b` and clock and
+    /// frame 4712's `a`) forget, so frame 4712's clock makes no row (held over, it would carry
+    /// frame 4711's `a`) and the next row is frame 4713's own.
+    #[test]
+    fn analytic_a_gap_of_a_whole_cycle_forgets_and_one_short_of_it_holds() {
+        let sent: Vec<MavMessage> = (4710..=4713).flat_map(frame).collect();
+        let run = |lost: std::ops::Range<usize>| {
+            let mut rows = gap_rows();
+            for n in (0..sent.len()).filter(|n| !lost.contains(n)) {
+                deliver(&mut rows, n, &sent[n]);
+            }
+            let text = String::from_utf8(rows.buf.clone()).unwrap();
+            (text, rows.stats.lock().unwrap().clone())
+        };
+        let (text, s) = run(4..7);
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!((lines.len(), s.lost, s.clock_without_row), (4, 3, 0), "{text}");
+        let v: Vec<f64> = lines[1].split(',').map(|f| f.parse().unwrap()).collect();
+        let (held, q) = (f64::from(4710f32 / 1000.0), f64::from(4711f32 / 1000.0));
+        assert_eq!(v, [47110.0, 4810.0, held, q, held], "{text}");
+        let (text, s) = run(5..9);
+        assert_eq!(rows_of_one_frame(&text), [4710, 4713], "{text}");
+        assert_eq!((s.lost, s.clock_without_row), (4, 1), "{s:?}");
+    }
+
     /// Messages lost before the queue (in the kernel under load, or on the link) leave a
     /// sequence gap, not a queue drop. Frames 4710 and 4711 arrive whole, then the 15 messages
     /// from frame 4712's `a` to frame 4715's `b` are lost: frame 4715's clock must not make a

@@ -741,7 +741,9 @@ impl EstimatorOptions {
 ///
 /// # Errors
 /// A message naming the kind, the unknown, bad or missing option, or the configuration error.
-pub fn build_sample_estimator(spec: &SampleEstimatorSpec) -> Result<Box<dyn Estimator>, String> {
+pub fn build_sample_estimator(
+    spec: &SampleEstimatorSpec,
+) -> Result<Box<dyn Estimator + Send>, String> {
     let kind = EstimatorKind::from_name(&spec.kind).ok_or_else(|| {
         format!("unknown sample-driven estimator `{}` ({})", spec.kind, online_kinds().join(" | "))
     })?;
@@ -751,7 +753,6 @@ pub fn build_sample_estimator(spec: &SampleEstimatorSpec) -> Result<Box<dyn Esti
         return Err("rls-iv: give `instrument_delay` (samples), at least `[sensors] differentiator_window`: the matched smoother correlates the noise over the whole window".into());
     }
     build(kind, spec.model, aeroident_estimators::Priors::generic(&spec.model), &options)
-        .map(|e| e as Box<dyn Estimator>)
         .map_err(|e| e.to_string())
 }
 

@@ -30,10 +30,9 @@
 
 use std::time::Instant;
 
+use aeroident_estimators::Estimator;
 use aeroident_estimators::sample::AirDataSample;
-use aeroident_estimators::smpe::SmpeSample;
 use aeroident_estimators::vocabulary::{ModelStructure, Param};
-use aeroident_estimators::{Estimator, Status};
 use aeroident_models::f16::{self, AeroIncrements, F16, F16Controls, F16State, IncrementReference};
 use aeroident_models::integrate::rk4_step_varying;
 use aeroident_models::trim::{F16Trim, TrimCondition, trim};
@@ -47,6 +46,8 @@ use super::sensors::SensorNoise;
 use super::truth::{LocalDerivatives, local_derivatives};
 pub use super::two_aircraft::PublishedDiagnostics;
 use super::two_aircraft::{self, TwoAircraft};
+
+mod stepping;
 use aeroident_physics::units::M_PER_FT;
 
 /// Errors of an experiment run.
@@ -234,7 +235,8 @@ pub struct RunOutput {
     pub sample_lag_s: Option<f64>,
     /// One log per estimator.
     pub channels: Vec<ChannelLog>,
-    /// Wall-clock time of the simulation loop (no I/O), s.
+    /// Wall-clock time of the simulation loop (no I/O), s: the channels step on a second
+    /// thread beside the flight where one is free (`stepping`).
     pub wall_s: f64,
 }
 
@@ -257,7 +259,7 @@ fn setup_err(what: &str, e: impl std::fmt::Display) -> ExperimentError {
 
 /// A sample-driven channel.
 struct SampleChannel {
-    est: Box<dyn Estimator>,
+    est: Box<dyn Estimator + Send>,
     structure: ModelStructure,
     /// Feed the unsmoothed samples without the differentiated `ṗ q̇ ṙ`
     /// ([`SampleEstimatorSpec::raw_samples`]).
@@ -325,6 +327,11 @@ fn resolve_increments(
 /// reference aircraft leaves the model's domain. Estimator failures are not errors: they are
 /// logged in [`ChannelLog::failure`] and that channel's estimates are held.
 pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
+    run_with(sc, stepping::second_thread_free())
+}
+
+/// [`run`], its channels stepped on a second thread of rayon's pool or not.
+fn run_with(sc: &Scenario, second_thread: bool) -> Result<RunOutput, ExperimentError> {
     let wind = build_wind(&sc.wind).map_err(|e| setup_err("wind", e))?;
     let (f16, trim) = trimmed_reference(sc)?;
     let reference = IncrementReference {
@@ -377,7 +384,8 @@ pub fn run(sc: &Scenario) -> Result<RunOutput, ExperimentError> {
     };
     let start = Instant::now();
     let sensors = Sensing { noise: noise.as_mut(), sampler: sampler.as_mut() };
-    flight.fly(n, &mut channels, sensors, &mut out)?;
+    let split = stepping::Split::new(channels.len(), second_thread);
+    flight.fly(n, &mut channels, sensors, split, &mut out)?;
     out.wall_s = start.elapsed().as_secs_f64();
     fit_batches(&mut channels, &epochs, &out);
     out.channels = channels.into_iter().map(finish_channel).collect();
@@ -583,88 +591,103 @@ impl Flight<'_> {
         uv
     }
 
-    /// Flies `n` steps: at each, the reference's outputs, the sensors, every channel's
-    /// update and log; between them, RK4 of the reference and of each two-aircraft
-    /// estimator's own aircraft.
+    /// Flies `n` steps, a block at a time: at each step the reference's outputs and the
+    /// sensors, then RK4 of the reference; the channels take each block on two threads while
+    /// the next is flown ([`stepping`]), each two-aircraft estimator's own aircraft
+    /// integrated after its update.
     fn fly(
         &self,
         n: usize,
         channels: &mut [ChannelRun],
-        mut sensors: Sensing<'_>,
+        sensors: Sensing<'_>,
+        mut split: stepping::Split,
         out: &mut RunOutput,
     ) -> Result<(), ExperimentError> {
-        let sc = self.sc;
-        let mut f16_ref = self.f16.clone();
-        let mut x_ref = self.trim.state;
-        let u0 = self.u_trim;
-        for k in 0..=n {
-            let t = k as f64 * sc.dt_s;
-            let uv = self.pilot(t);
-            if out.excitation_start_s.is_none() && uv != u0 {
-                out.excitation_start_s = Some(t);
-            }
-            let mut u = self.trim.controls.with_vector(&uv);
-            let wb = self.wind.wind_body_fps(t);
-            let wind_ned = body_to_ned(&x_ref, [wb[0], wb[1], wb[2]]);
-            let u_est = match sc.estimator_wind {
-                EstimatorWind::Known => F16Controls { wind_ned_fps: wind_ned, ..u },
-                EstimatorWind::Unknown => u,
-            };
-            u.wind_ned_fps = wind_ned;
-            let ep = self.epochs.iter().rposition(|e| t >= e.from_s).unwrap_or(0);
-            f16_ref.increments = self.epochs[ep].increments;
-            let (xdot_ref, outputs) = f16_ref
-                .evaluate(&x_ref, &u, &f16_ref.increments)
-                .map_err(|e| ExperimentError::Reference { t_s: t, source: e })?;
-            let (z_m, zdot_m) = match sensors.noise.as_mut() {
-                Some(nz) => nz.measure(t, &x_ref, &xdot_ref),
-                None => (x_ref, xdot_ref),
-            };
-            let air = sensors.sampler.as_mut().and_then(|s| s.push(t, &x_ref, &outputs, &u));
-            let raw = air.and(sensors.sampler.as_ref().and_then(|s| s.raw()).copied());
-            for (c, truth) in channels.iter_mut().zip(self.truths) {
-                step_channel(c, t, &z_m, &zdot_m, &u_est, air.as_ref(), raw.as_ref());
-                for (l, tr) in c.log.params.iter_mut().zip(truth) {
-                    l.truth.push(tr[ep]);
-                }
-            }
-            out.t_s.push(t);
-            out.controls.push([uv[0], uv[1], uv[2], uv[3]]);
-            out.wind_ned_fps.push(wind_ned);
-            out.reference.push(x_ref);
-            if k == n {
-                break;
-            }
-            // The pilot's controls at the RK4 stage times, the wind of the step held (its
-            // field is sampled at the step).
-            let at_stage = |c: F16Controls| move |ts: f64| c.with_vector(&self.pilot(ts));
-            x_ref = rk4_step_varying(&f16_ref, t, &x_ref, at_stage(u), sc.dt_s)
-                .map_err(|e| ExperimentError::Reference { t_s: t, source: e })?;
-            step_two_aircraft(channels, t, at_stage(u_est), sc.dt_s);
+        let (f16, x) = (self.f16.clone(), self.trim.state);
+        let mut reference = Reference { flight: self, sensors, f16, x, k: 0, n };
+        let (mut ready, mut next) = (Vec::new(), Vec::new());
+        reference.fly(&mut ready, out)?;
+        // The pilot's controls at the RK4 stage times, the wind of the step held (its
+        // field is sampled at the step).
+        let controls = |ts: f64, c: F16Controls| c.with_vector(&self.pilot(ts));
+        while !ready.is_empty() {
+            let fly_next = || reference.fly(&mut next, out);
+            split.step(channels, &ready, self.truths, &controls, self.sc.dt_s, fly_next)?;
+            std::mem::swap(&mut ready, &mut next);
         }
         Ok(())
     }
 }
 
-/// RK4 of each two-aircraft estimator's own aircraft over `[t, t + dt]` under `controls`; a
-/// failure is logged once and the aircraft held.
-fn step_two_aircraft(
-    channels: &mut [ChannelRun],
-    t: f64,
-    controls: impl Fn(f64) -> F16Controls + Copy,
-    dt: f64,
-) {
-    for c in channels {
-        let Channelled::Two(two) = &mut c.ch else { continue };
-        two.f16.increments = two.current.get();
-        match rk4_step_varying(&two.f16, t, &two.x, controls, dt) {
-            Ok(x) => two.x = x,
-            Err(e) => {
-                if c.log.failure.is_none() {
-                    c.log.failure = Some((t, format!("estimated aircraft: {e}")));
-                }
-            }
+/// The reference aircraft and its sensors, flown a block at a time.
+struct Reference<'f, 'a> {
+    flight: &'f Flight<'a>,
+    sensors: Sensing<'f>,
+    /// The reference, with the increments of the current epoch.
+    f16: F16,
+    /// Its state at step `k`.
+    x: F16State,
+    /// The next step to fly.
+    k: usize,
+    /// The last step.
+    n: usize,
+}
+
+impl Reference<'_, '_> {
+    /// Flies up to [`stepping::BLOCK_STEPS`] steps into `steps` (cleared first), logging the
+    /// flight in `out`; `steps` stays empty once the flight is over.
+    fn fly(
+        &mut self,
+        steps: &mut Vec<stepping::SensedStep>,
+        out: &mut RunOutput,
+    ) -> Result<(), ExperimentError> {
+        steps.clear();
+        while steps.len() < stepping::BLOCK_STEPS && self.k <= self.n {
+            steps.push(self.step(out)?);
+            self.k += 1;
         }
+        Ok(())
+    }
+
+    /// Step `k`: the pilot and the wind, the reference's outputs, the sensors; then RK4 to
+    /// the next step unless it is the last.
+    fn step(&mut self, out: &mut RunOutput) -> Result<stepping::SensedStep, ExperimentError> {
+        let fl = self.flight;
+        let t = self.k as f64 * fl.sc.dt_s;
+        let uv = fl.pilot(t);
+        if out.excitation_start_s.is_none() && uv != fl.u_trim {
+            out.excitation_start_s = Some(t);
+        }
+        let mut u = fl.trim.controls.with_vector(&uv);
+        let wb = fl.wind.wind_body_fps(t);
+        let wind_ned = body_to_ned(&self.x, [wb[0], wb[1], wb[2]]);
+        let u_est = match fl.sc.estimator_wind {
+            EstimatorWind::Known => F16Controls { wind_ned_fps: wind_ned, ..u },
+            EstimatorWind::Unknown => u,
+        };
+        u.wind_ned_fps = wind_ned;
+        let epoch = fl.epochs.iter().rposition(|e| t >= e.from_s).unwrap_or(0);
+        self.f16.increments = fl.epochs[epoch].increments;
+        let failed = |e| ExperimentError::Reference { t_s: t, source: e };
+        let (xdot, outputs) =
+            self.f16.evaluate(&self.x, &u, &self.f16.increments).map_err(failed)?;
+        let (z_m, zdot_m) = match self.sensors.noise.as_mut() {
+            Some(nz) => nz.measure(t, &self.x, &xdot),
+            None => (self.x, xdot),
+        };
+        let air = self.sensors.sampler.as_mut().and_then(|s| s.push(t, &self.x, &outputs, &u));
+        let raw = air.and(self.sensors.sampler.as_ref().and_then(|s| s.raw()).copied());
+        out.t_s.push(t);
+        out.controls.push([uv[0], uv[1], uv[2], uv[3]]);
+        out.wind_ned_fps.push(wind_ned);
+        out.reference.push(self.x);
+        let last = self.k == self.n;
+        if !last {
+            let at_stage = move |ts: f64| u.with_vector(&fl.pilot(ts));
+            self.x =
+                rk4_step_varying(&self.f16, t, &self.x, at_stage, fl.sc.dt_s).map_err(failed)?;
+        }
+        Ok(stepping::SensedStep { t_s: t, epoch, z_m, zdot_m, u_est, air, raw, last })
     }
 }
 
@@ -730,88 +753,4 @@ fn finish_channel(mut c: ChannelRun) -> ChannelLog {
         c.log.events = aeroident_io::replay_output::EventsSummary::from_log(s.est.events());
     }
     c.log
-}
-
-/// One channel's update and log at time `t` (module doc, step 3).
-fn step_channel(
-    c: &mut ChannelRun,
-    t: f64,
-    z_m: &F16State,
-    zdot_m: &F16State,
-    u_est: &F16Controls,
-    air: Option<&AirDataSample>,
-    raw: Option<&AirDataSample>,
-) {
-    match &mut c.ch {
-        Channelled::Two(two) => {
-            let sample = SmpeSample { t_s: t, z: two.x, z_m: *z_m, zdot_m: *zdot_m, u: *u_est };
-            if c.log.failure.is_none() {
-                let mut next = two.current.get();
-                let mut diag = Vec::new();
-                for e in &mut two.engines {
-                    match e.update(&sample) {
-                        Ok(()) => {
-                            e.write(&mut next);
-                            if let Some(d) = e.diagnostics(&sample) {
-                                diag.push(d);
-                            }
-                        }
-                        Err(err) => {
-                            c.log.failure = Some((t, err.to_string()));
-                            break;
-                        }
-                    }
-                }
-                if c.log.failure.is_none() {
-                    two.current.set(next);
-                }
-                if !diag.is_empty() {
-                    c.log.diagnostics.push(diag);
-                }
-            }
-            let cur = two.current.get();
-            for l in &mut c.log.params {
-                l.estimate.push(Some(super::increments::get(&cur, l.param)));
-                l.sigma.push(None);
-            }
-            c.log.states.push(two.x);
-        }
-        Channelled::Sample(s) => {
-            let without_accelerations = |r: &AirDataSample| AirDataSample {
-                pdot_rad_s2: None,
-                qdot_rad_s2: None,
-                rdot_rad_s2: None,
-                ..*r
-            };
-            let raw_feed = raw.filter(|_| s.raw_samples).map(without_accelerations);
-            let feed = if s.raw_samples { raw_feed.as_ref() } else { air };
-            if c.log.failure.is_none()
-                && let Some(sample) = feed
-            {
-                match s.est.update(sample) {
-                    Ok(e) if e.status == Status::Diverged => {
-                        c.log.failure = Some((t, "estimator diverged".into()));
-                    }
-                    Ok(_) => {}
-                    Err(err) => c.log.failure = Some((t, err.to_string())),
-                }
-            }
-            let e = s.est.estimates();
-            let diverged = e.status == Status::Diverged;
-            c.log.status = Some(e.status.name());
-            for (i, l) in c.log.params.iter_mut().enumerate() {
-                l.estimate.push(if diverged { None } else { e.value(i) });
-                l.sigma.push(if diverged { None } else { e.sigma(i) });
-            }
-        }
-        Channelled::Batch(b) => {
-            if let Some(sample) = if b.raw_samples { raw } else { air } {
-                b.samples.push(*sample);
-            }
-            for l in &mut c.log.params {
-                l.estimate.push(None);
-                l.sigma.push(None);
-            }
-        }
-    }
 }

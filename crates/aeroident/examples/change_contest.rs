@@ -8,9 +8,13 @@
 //! Run: `cargo run --release -p aeroident --example change_contest -- SCENARIO RUNS SEED
 //! [--no-damage] [--duration-s T]` (`--no-damage`: the scenario's increments removed, every
 //! alarm is false; `--duration-s`: the flight, and its turbulence, lengthened to `T`). Prints
-//! markdown tables.
+//! markdown tables, the last the information limit: per run, each damaged derivative's step
+//! against its σ just before the damage, beside the smallest step any test can detect within
+//! 0.5 s at one false alarm per hour (`aeroident_estimators::change::detectable_step_sigmas`,
+//! the estimator's own memory).
 #![allow(missing_docs)]
 
+use aeroident_estimators::change::{detectable_step_sigmas, detection_power};
 use aeroident_pipelines::aircraft::Scenario;
 use aeroident_pipelines::aircraft::summary::PRIMARY_DERIVATIVES;
 use aeroident_pipelines::aircraft::{RunOutput, run};
@@ -26,6 +30,87 @@ use std::collections::BTreeMap;
 type Before = BTreeMap<(String, String), (usize, usize)>;
 /// Per (estimator, equation): alarm times of one run.
 type Alarms = BTreeMap<(String, String), Vec<f64>>;
+/// Per (estimator, parameter whose truth steps): the step over the σ just before it.
+type Steps = BTreeMap<(String, String), f64>;
+
+/// Each stepped derivative's step (truth at the end less truth before the damage) over its σ
+/// just before the damage.
+fn steps_of(out: &RunOutput, damage_s: f64) -> Steps {
+    let mut acc = Steps::new();
+    let Some(k) = out.t_s.iter().rposition(|&t| t < damage_s) else { return acc };
+    for ch in &out.channels {
+        for p in &ch.params {
+            let last = p.truth.last().copied().flatten();
+            if let (Some(before), Some(after), Some(s)) = (p.truth[k], last, p.sigma[k])
+                && (after - before).abs() > 1e-12 * before.abs().max(1e-12)
+                && s > 0.0
+            {
+                acc.insert(
+                    (ch.label.clone(), p.param.name().to_string()),
+                    (after - before).abs() / s,
+                );
+            }
+        }
+    }
+    acc
+}
+
+/// The memory `τ = dt/(1 − λ)` of estimator `label`'s `forgetting` (2 s when it gives none).
+fn memory_s(sc: &Scenario, label: &str) -> f64 {
+    let forgetting = sc.estimator.iter().find(|e| e.label() == label).and_then(|e| match e {
+        aeroident_pipelines::aircraft::scenario::EstimatorSpec::Sample(s) => {
+            s.options.get("forgetting").and_then(|v| v.as_float())
+        }
+        _ => None,
+    });
+    forgetting.map_or(2.0, |l| sc.dt_s / (1.0 - l))
+}
+
+/// The information-limit table: per stepped derivative, the median step/σ over the runs, the
+/// runs in which it reaches the detectable step at even odds and at 95 %, and the best test's
+/// mean detection probability; then per estimator the damage's (any equation detecting it,
+/// each equation by its best-detected derivative).
+fn print_information(sc: &Scenario, steps: &BTreeMap<(String, String), Vec<f64>>) {
+    println!(
+        "| estimator | derivative | memory s | median step/σ | detectable at 50 %: σ, runs | at 95 %: σ, runs | best test detects, mean over runs |"
+    );
+    println!("|---|---|---|---|---|---|---|");
+    // Per estimator, per equation, per run: the best test's probability.
+    let mut per_eq: BTreeMap<&str, BTreeMap<&str, Vec<f64>>> = BTreeMap::new();
+    for ((est, param), q) in steps {
+        let tau = memory_s(sc, est);
+        let limit = |power| detectable_step_sigmas(tau, 0.5, sc.dt_s, 3600.0, power);
+        let (even, most) = (limit(0.5), limit(0.95));
+        let over = |l: f64| q.iter().filter(|&&v| v >= l).count();
+        let power: Vec<f64> =
+            q.iter().map(|&v| detection_power(v, tau, 0.5, sc.dt_s, 3600.0)).collect();
+        let eq = per_eq.entry(est).or_default().entry(&param[..2]).or_default();
+        if eq.is_empty() {
+            eq.resize(power.len(), 0.0);
+        }
+        for (e, p) in eq.iter_mut().zip(&power) {
+            *e = e.max(*p);
+        }
+        println!(
+            "| {est} | {param} | {tau:.1} | {:.1} | {even:.1}, {} of {} | {most:.1}, {} of {} | {:.0} % |",
+            median(q.clone()).unwrap_or(f64::NAN),
+            over(even),
+            q.len(),
+            over(most),
+            q.len(),
+            100.0 * power.iter().sum::<f64>() / power.len().max(1) as f64,
+        );
+    }
+    println!();
+    println!("| estimator | the damage detected by the best test within 0.5 s, mean over runs |");
+    println!("|---|---|");
+    for (est, eqs) in &per_eq {
+        let runs = eqs.values().map(Vec::len).max().unwrap_or(0);
+        let missed = |i: usize| eqs.values().map(move |p| 1.0 - p.get(i).copied().unwrap_or(0.0));
+        let any: f64 = (0..runs).map(|i| 1.0 - missed(i).product::<f64>()).sum();
+        println!("| {est} | {:.0} % |", 100.0 * any / runs.max(1) as f64);
+    }
+}
 
 fn before_of(out: &RunOutput, damage_s: f64) -> Before {
     let mut acc = Before::new();
@@ -105,7 +190,7 @@ fn main() -> Result<(), String> {
         .min(sc.duration_s);
     let crb = crb_sigmas(&sc)?;
     let t0 = std::time::Instant::now();
-    type One = (RunResult, Option<(Before, Alarms)>);
+    type One = (RunResult, Option<(Before, Alarms, Steps)>);
     let results: Vec<One> = (0..runs)
         .into_par_iter()
         .map(|i| {
@@ -114,7 +199,7 @@ fn main() -> Result<(), String> {
             match run(&s) {
                 Ok(out) => (
                     run_result(i, seed_i, &out),
-                    Some((before_of(&out, damage_s), alarms_of(&out))),
+                    Some((before_of(&out, damage_s), alarms_of(&out), steps_of(&out, damage_s))),
                 ),
                 Err(e) => {
                     (RunResult { index: i, sensor_seed: seed_i, outcome: Err(e.to_string()) }, None)
@@ -125,7 +210,11 @@ fn main() -> Result<(), String> {
     let wall = t0.elapsed().as_secs_f64();
     let mut before = Before::new();
     let mut alarms: BTreeMap<(String, String), Vec<Vec<f64>>> = BTreeMap::new();
-    for (b, a) in results.iter().filter_map(|r| r.1.as_ref()) {
+    let mut steps: BTreeMap<(String, String), Vec<f64>> = BTreeMap::new();
+    for (b, a, q) in results.iter().filter_map(|r| r.1.as_ref()) {
+        for (key, v) in q {
+            steps.entry(key.clone()).or_default().push(*v);
+        }
         for (key, v) in b {
             let e = before.entry(key.clone()).or_default();
             e.0 += v.0;
@@ -182,5 +271,7 @@ fn main() -> Result<(), String> {
             f(median(delays.clone()), 2),
         );
     }
+    println!();
+    print_information(&sc, &steps);
     Ok(())
 }

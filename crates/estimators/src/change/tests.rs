@@ -162,3 +162,64 @@ fn threshold_and_config_checks() {
     let bad = ChangeConfig { short_memory_s: -1.0, ..c }.validated().unwrap_err();
     assert!(matches!(bad, EstimatorError::InvalidConfig { field: "change_short_memory_s", .. }));
 }
+
+/// The variance the detectable step is measured in: `θ̂` of a memory of `τ` = 2 s at 100 Hz
+/// with white unit regressors and noise scatters by `σ² (1 − λ)/(1 + λ)` over seeds.
+#[test]
+fn forgotten_estimate_scatters_as_the_detectable_step_assumes() {
+    let lambda = 0.995;
+    let finals: std::vec::Vec<f64> = (0..400)
+        .map(|seed| {
+            let (est, _) = step_run(1000 + seed, 10.0, (1.0, 0.0), (0.7, 0.7, 1e9), lambda, None);
+            *est.last().unwrap()
+        })
+        .collect();
+    let mean = finals.iter().sum::<f64>() / finals.len() as f64;
+    let var = finals.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / 399.0;
+    let expected = (1.0 - lambda) / (1.0 + lambda);
+    // 400 seeds: the sample variance is within ±21 % (3σ of √(2/399)) of the truth.
+    assert!((var / expected - 1.0).abs() < 0.21, "variance {var:.3e} against {expected:.3e}");
+}
+
+/// The best test of a known step, `δ` = the detectable step × σ_l after it: white unit
+/// regressors and noise, 50 samples, the window score `Σ x₁ r / √Σ x₁²` against the two-sided
+/// threshold of `α = dt/T_fa`. It detects at the promised rate: even odds and 95 %.
+#[test]
+fn the_detectable_step_is_detected_at_its_power() {
+    let (tau, window, dt, t_fa) = (2.0, 0.5, 0.01, 10.0);
+    let lambda: f64 = 1.0 - dt / tau;
+    let sigma_l = ((1.0 - lambda) / (1.0 + lambda)).sqrt();
+    let z_alpha = chi2_upper_quantile(1, dt / t_fa).sqrt();
+    let n01 = Normal::new(0.0, 1.0).unwrap();
+    for (power, low, high) in [(0.5, 0.42, 0.58), (0.95, 0.90, 0.985)] {
+        let delta = detectable_step_sigmas(tau, window, dt, t_fa, power) * sigma_l;
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+        let trials = 1000;
+        let detected = (0..trials)
+            .filter(|_| {
+                let (mut score, mut energy) = (0.0, 0.0);
+                for _ in 0..50 {
+                    let x1: f64 = n01.sample(&mut rng);
+                    let r = delta * x1 + n01.sample(&mut rng);
+                    score += x1 * r;
+                    energy += x1 * x1;
+                }
+                (score / energy.sqrt()).abs() > z_alpha
+            })
+            .count();
+        let rate = detected as f64 / trials as f64;
+        assert!((low..high).contains(&rate), "power {power}: detected {rate}");
+    }
+    // The figures quoted in the doc: τ = 2 s, 0.5 s, 100 Hz, one false alarm an hour.
+    let even = detectable_step_sigmas(2.0, 0.5, 0.01, 3600.0, 0.5);
+    let most = detectable_step_sigmas(2.0, 0.5, 0.01, 3600.0, 0.95);
+    assert!((even - 13.2).abs() < 0.05 && (most - 17.9).abs() < 0.05, "{even} {most}");
+    assert_eq!(detectable_step_sigmas(2.0, 0.0, 0.01, 3600.0, 0.5), f64::INFINITY);
+    // The power of the detectable step is the power asked for.
+    for power in [0.5, 0.8, 0.95, 0.99] {
+        let step = detectable_step_sigmas(2.0, 0.5, 0.01, 3600.0, power);
+        let got = detection_power(step, 2.0, 0.5, 0.01, 3600.0);
+        assert!((got - power).abs() < 1e-6, "{power}: {got}");
+    }
+    assert_eq!(detection_power(20.0, 2.0, 0.0, 0.01, 3600.0), 0.0);
+}

@@ -147,7 +147,7 @@ pub struct ChannelLog {
     pub failure: Option<(f64, String)>,
     /// Solver counters or the sample estimator's final status, human-readable.
     pub stats: String,
-    /// Sample-driven estimators: the final [`Status`] name.
+    /// Sample-driven estimators: the final [`Status`](aeroident_estimators::Status) name.
     pub status: Option<&'static str>,
     /// Sample-driven estimators: the final mean normalised innovation squared
     /// ([`aeroident_estimators::Estimator::nis`]; ≈ 1 for a consistent filter), `None` for

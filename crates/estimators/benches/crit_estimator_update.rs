@@ -7,6 +7,7 @@
 #[path = "../src/test_aircraft.rs"]
 mod test_aircraft;
 
+use aeroident_estimators::ekf::EkfBlocks;
 use aeroident_estimators::finite_time::{FiniteTimeConfig, FiniteTimeSmpe};
 use aeroident_estimators::ftr::{Ftr, FtrConfig};
 use aeroident_estimators::model_reference::{CorrectedSmpeEstimator, ModelReferenceConfig};
@@ -41,6 +42,17 @@ fn bench_structure_estimators(c: &mut Criterion) {
             })
         });
     }
+    // The six-axis preset by blocks: a longitudinal and a lateral filter (`ekf` option
+    // `blocks = true`).
+    let cfg = aeroident_estimators::EkfConfig::new(ModelStructure::six_axis());
+    g.bench_function("ekf_six_axis_blocks_1000_samples", |b| {
+        b.iter(|| {
+            let mut ekf = Box::new(EkfBlocks::new(cfg).unwrap());
+            for s in &data {
+                black_box(ekf.update(black_box(s)).unwrap());
+            }
+        })
+    });
     // FTR: the target is ≥ 10⁶ samples/s for a 20-frequency grid and the longitudinal
     // signals (0.1–0.86 Hz in 0.04 Hz steps = 20 frequencies).
     let ftr_cfg = FtrConfig { f_max_hz: 0.86, ..FtrConfig::default() };

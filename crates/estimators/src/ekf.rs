@@ -1265,7 +1265,10 @@ impl Estimator for Ekf {
     }
 }
 
+mod blocks;
 mod change;
 #[cfg(test)]
 mod tests;
 mod update;
+
+pub use blocks::EkfBlocks;

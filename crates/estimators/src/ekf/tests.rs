@@ -942,3 +942,80 @@ fn parameter_reanchoring_reaches_the_bound_and_keeps_correlations() {
     assert!(!reanchor_parameters(&mut q, &states_only, nx, n, 100.0));
     assert_eq!(q, before);
 }
+
+/// The six-axis structure's coefficients that `keep` selects, terms as in it.
+fn axis_part(keep: fn(C) -> bool) -> ModelStructure {
+    let six = ModelStructure::six_axis();
+    let mut st = ModelStructure::empty().with_knots(*six.knots());
+    for p in six.params().filter(|p| keep(p.coefficient)) {
+        st.insert(p);
+    }
+    st
+}
+
+fn is_lateral(c: C) -> bool {
+    matches!(c, C::CY | C::Cl | C::Cn)
+}
+
+/// The blocks of the six-axis filter are a longitudinal and a lateral filter run on their
+/// own over the same record: every estimate, σ and identification equal to the bit at every
+/// sample, and the primary derivatives recovered within 10 % of the truth.
+#[test]
+fn the_blocks_are_the_two_axis_filters() {
+    let data = simulate(50.0, 25.0, 7);
+    let mut blocks = EkfBlocks::new(config(ModelStructure::six_axis())).unwrap();
+    let mut lon = Ekf::new(config(axis_part(|c| !is_lateral(c)))).unwrap();
+    let mut lat = Ekf::new(config(axis_part(is_lateral))).unwrap();
+    let six = ModelStructure::six_axis();
+    for s in &data {
+        let e = *blocks.update(s).unwrap();
+        for axis in [&mut lon, &mut lat] {
+            let a = *axis.update(s).unwrap();
+            for (k, p) in axis.structure().params().enumerate() {
+                let i = six.index_of(p).unwrap();
+                let same = a.raw_value(k).to_bits() == e.raw_value(i).to_bits()
+                    && a.sigma(k).map(f64::to_bits) == e.sigma(i).map(f64::to_bits)
+                    && a.is_identified(k) == e.is_identified(i);
+                assert!(same, "{} at {} s", p.name(), s.t_s);
+            }
+        }
+    }
+    let (st6, th6) = truth();
+    let e = *blocks.estimates();
+    assert_eq!(e.status, Status::Running);
+    for name in PRIMARY {
+        let i = st6.params().position(|p| p.name() == name).unwrap();
+        let got = e.value(i).unwrap();
+        assert!((got - th6[i]).abs() <= 0.1 * th6[i].abs(), "{name}: {got} vs {}", th6[i]);
+    }
+    assert!(blocks.covariance(0, 1).is_some() && blocks.nis().is_some());
+    let (cl, cy) =
+        (six.index_of(Param::new(C::CL, T::Alpha)), six.index_of(Param::new(C::CY, T::Beta)));
+    assert_eq!(blocks.covariance(cl.unwrap(), cy.unwrap()), None, "no covariance across the axes");
+}
+
+/// A sample one block cannot read (θ, an input of the lateral block) is refused before either
+/// block moves; a one-axis structure is refused.
+#[test]
+fn the_blocks_refuse_a_sample_either_cannot_read() {
+    let data = simulate(50.0, 4.0, 3);
+    let (mut clean, mut hit) = (
+        EkfBlocks::new(config(ModelStructure::six_axis())).unwrap(),
+        EkfBlocks::new(config(ModelStructure::six_axis())).unwrap(),
+    );
+    for s in &data[..100] {
+        clean.update(s).unwrap();
+        hit.update(s).unwrap();
+    }
+    let mut bad = data[100];
+    bad.theta_rad = None;
+    assert!(matches!(
+        hit.update(&bad),
+        Err(EstimatorError::NonFiniteInput { field: "theta_rad", .. })
+    ));
+    for s in &data[100..] {
+        assert_eq!(*clean.update(s).unwrap(), *hit.update(s).unwrap(), "at {} s", s.t_s);
+    }
+    let lon = EkfBlocks::new(config(ModelStructure::longitudinal()));
+    assert!(matches!(lon, Err(EstimatorError::InvalidConfig { field: "blocks", .. })));
+}

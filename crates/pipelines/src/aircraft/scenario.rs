@@ -71,7 +71,8 @@
 //! Sample-driven kinds (built by the shared factory, `crate::estimators::build`): `rls` and
 //! `ftr` (option `forgetting` ∈ (0, 1] per sample, default 1; FTR also `grid_hz = [f_min, f_max,
 //! step]`, default Morelli's 0.1–1.5 Hz in 0.04 Hz), `ekf` (options `parameter_walk_per_sqrt_s`,
-//! `samples = "raw" | "smoothed"`, default raw: [`SampleEstimatorSpec::raw_samples`]), `smpe`,
+//! `samples = "raw" | "smoothed"`, default raw: [`SampleEstimatorSpec::raw_samples`];
+//! `blocks = true`: a longitudinal and a lateral filter, `aeroident_estimators::ekf::EkfBlocks`), `smpe`,
 //! `smpe-corrected`, `smpe-finite-time` (options `forgetting`, `sliding_gain_per_s`,
 //! `reaching_rate_per_s`; `aeroident_estimators::finite_time`), `gradient`. Batch kind `oe` (output error fitted after the flight to the
 //! recorded samples of the window after the damage) and `fem` (the filter-error method, output

@@ -789,7 +789,7 @@ mod tests {
                 "samples" => "raw".into(),
                 "sliding_gain_per_s" | "reaching_rate_per_s" => toml::Value::Float(5.0),
                 "change_false_alarm_interval_s" => toml::Value::Float(3600.0),
-                "spread_sigma" => toml::Value::Boolean(true),
+                "spread_sigma" | "blocks" => toml::Value::Boolean(true),
                 other => panic!("no valid value for `{other}`"),
             }
         };

@@ -175,6 +175,33 @@ impl EventLog {
         let total: u64 = self.counts.iter().map(|&c| u64::from(c)).sum();
         u32::try_from(total.saturating_sub(self.len as u64)).unwrap_or(u32::MAX)
     }
+
+    /// Where the log stands now, for a later [`Self::absorb`] of what it gains after.
+    pub(crate) fn mark(&self) -> EventMark {
+        EventMark { len: self.len, counts: self.counts }
+    }
+
+    /// Adds what `other` gained since `since` (its earlier [`Self::mark`]): its newly listed
+    /// events, listed here while there is room, and every event it counted, listed or not. The
+    /// one log of estimators run as one (`crate::ekf::EkfBlocks`), exact in its counts as a
+    /// log of its own.
+    pub(crate) fn absorb(&mut self, other: &EventLog, since: EventMark) {
+        let mut counted = since.counts;
+        for &e in &other.events[since.len.min(other.len)..other.len] {
+            self.push_event(e);
+            counted[e.kind.index()] = counted[e.kind.index()].saturating_add(1);
+        }
+        for (c, (now, seen)) in self.counts.iter_mut().zip(other.counts.iter().zip(counted)) {
+            *c = c.saturating_add(now.saturating_sub(seen));
+        }
+    }
+}
+
+/// Where an [`EventLog`] stood: its listed length and its counts ([`EventLog::mark`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct EventMark {
+    len: usize,
+    counts: [u32; 3],
 }
 
 /// The current estimates of a structure's parameters: value and standard error of each, and
@@ -363,6 +390,36 @@ pub fn check_coefficient(field: &'static str, value: f64, t_s: f64) -> Result<f6
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Two logs taken in step by step as one: every event counted, listed or not, and the
+    /// first listed in the order they were taken in.
+    #[test]
+    fn absorbed_logs_count_every_event_of_both() {
+        let (mut a, mut b, mut one) = (EventLog::new(), EventLog::new(), EventLog::new());
+        let (mut seen_a, mut seen_b) = (a.mark(), b.mark());
+        for k in 0..40 {
+            let t = f64::from(k);
+            a.push(t, EventKind::ChangeDetected, "Cl_p");
+            b.push(t, EventKind::ChangeDetected, "Cm_alpha");
+            if k % 3 == 0 {
+                b.push(t, EventKind::Reanchor, "q_rad_s");
+            }
+            if k % 5 == 0 {
+                one.absorb(&a, seen_a);
+                one.absorb(&b, seen_b);
+                (seen_a, seen_b) = (a.mark(), b.mark());
+            }
+        }
+        one.absorb(&a, seen_a);
+        one.absorb(&b, seen_b);
+        assert_eq!(one.count(EventKind::ChangeDetected), 80);
+        assert_eq!(one.count(EventKind::Reanchor), 14);
+        assert_eq!(one.count(EventKind::Restart), 0);
+        let listed = one.listed();
+        assert_eq!(listed.len(), EVENT_LOG_CAPACITY - EVENT_LOG_RESTART_RESERVE);
+        assert_eq!((listed[0].subject, listed[1].subject), ("Cl_p", "Cm_alpha"));
+        assert_eq!(one.unlisted(), 94 - listed.len() as u32);
+    }
 
     /// Past the capacity, events are no longer listed but every one is still counted by kind;
     /// restarts keep their reserved places after the other kinds have filled theirs.

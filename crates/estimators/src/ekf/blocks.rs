@@ -15,7 +15,7 @@
 
 use super::{Ekf, EkfConfig};
 use crate::EstimatorError;
-use crate::estimator::{Estimates, Estimator, EventLog, Status};
+use crate::estimator::{Estimates, Estimator, EventLog, EventMark, Status};
 use crate::flight_model::StateSet;
 use crate::sample::AirDataSample;
 use crate::vocabulary::{Coefficient, MAX_PARAMS, ModelStructure};
@@ -30,8 +30,8 @@ pub struct EkfBlocks {
     index: [[usize; MAX_PARAMS]; 2],
     est: Estimates,
     events: EventLog,
-    /// Per block, how many of its listed events [`Self::events`] holds.
-    events_seen: [usize; 2],
+    /// Per block, where its log stood when [`Self::events`] last took it in.
+    events_seen: [EventMark; 2],
 }
 
 /// Whether coefficient `c` is lateral-directional.
@@ -85,7 +85,7 @@ impl EkfBlocks {
             index: [lon_index, lat_index],
             est: Estimates::new(cfg.structure.n_params()),
             events: EventLog::new(),
-            events_seen: [0; 2],
+            events_seen: [EventMark::default(); 2],
         })
     }
 
@@ -114,16 +114,11 @@ impl EkfBlocks {
         };
     }
 
-    /// The blocks' events not yet copied, in block order.
+    /// The blocks' events not yet taken in, in block order, every one counted.
     fn gather_events(&mut self) {
-        for (b, block) in self.blocks.iter().enumerate() {
-            for e in &block.events.listed()[self.events_seen[b]..] {
-                match e.statistic {
-                    Some(s) => self.events.push_with_statistic(e.t_s, e.kind, e.subject, s),
-                    None => self.events.push(e.t_s, e.kind, e.subject),
-                }
-            }
-            self.events_seen[b] = block.events.listed().len();
+        for (block, seen) in self.blocks.iter().zip(&mut self.events_seen) {
+            self.events.absorb(&block.events, *seen);
+            *seen = block.events.mark();
         }
     }
 }

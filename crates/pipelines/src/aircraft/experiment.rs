@@ -46,9 +46,9 @@ use super::sensors::SensorNoise;
 use super::truth::{LocalDerivatives, local_derivatives};
 pub use super::two_aircraft::PublishedDiagnostics;
 use super::two_aircraft::{self, TwoAircraft};
+use aeroident_physics::units::M_PER_FT;
 
 mod stepping;
-use aeroident_physics::units::M_PER_FT;
 
 /// Errors of an experiment run.
 #[derive(Debug, thiserror::Error)]

@@ -23,8 +23,9 @@ use aeroident_models::integrate::rk4_step_varying;
 
 use super::{BatchChannel, ChannelLog, ChannelRun, Channelled, SampleChannel, TwoAircraft};
 
-/// Steps flown before the channels take them: 1.28 s at 100 Hz, long enough that handing a
-/// block to the second thread (tens of microseconds) is a few percent of its work.
+/// Steps flown before the channels take them: 1.28 s at 100 Hz. The second thread is handed
+/// each block once, so a longer block spreads the hand-over thinner over its work
+/// (docs/six-axis.md measures the default job with this length).
 pub(super) const BLOCK_STEPS: usize = 128;
 
 /// One step of the flight as the channels read it (module doc of `super`, step 3).
@@ -55,16 +56,21 @@ enum Fed<'a> {
 }
 
 impl Fed<'_> {
-    fn step(&mut self, s: &SensedStep) {
-        match self {
-            Fed::Sample(log, c) => step_sample(log, c, s),
-            Fed::Batch(log, b) => step_batch(log, b, s),
-        }
-    }
-
-    fn log(&mut self) -> &mut ChannelLog {
-        match self {
-            Fed::Sample(log, _) | Fed::Batch(log, _) => log,
+    /// The channel through `steps`, the truth of each step's epoch (`truth[p][epoch]`) logged
+    /// beside its estimates.
+    fn step(&mut self, steps: &[SensedStep], truth: &[Vec<Option<f64>>]) {
+        for s in steps {
+            let log = match self {
+                Fed::Sample(log, c) => {
+                    step_sample(log, c, s);
+                    log
+                }
+                Fed::Batch(log, b) => {
+                    step_batch(log, b, s);
+                    log
+                }
+            };
+            log_truth(log, truth, s);
         }
     }
 }
@@ -142,10 +148,7 @@ impl Split {
                 scope.spawn(move |_| {
                     for (i, mut fed) in other {
                         let start = Instant::now();
-                        for s in steps {
-                            fed.step(s);
-                            log_truth(fed.log(), &truths[i], s);
-                        }
+                        fed.step(steps, &truths[i]);
                         costs.push((i, start.elapsed()));
                     }
                 });
@@ -195,12 +198,7 @@ fn step_lane(
     dt_s: f64,
 ) {
     match lane {
-        Lane::Fed(mut fed) => {
-            for s in steps {
-                fed.step(s);
-                log_truth(fed.log(), truth, s);
-            }
-        }
+        Lane::Fed(mut fed) => fed.step(steps, truth),
         Lane::Two(log, two) => {
             for s in steps {
                 step_two(log, two, s);

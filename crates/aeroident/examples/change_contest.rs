@@ -30,8 +30,9 @@ use std::collections::BTreeMap;
 type Before = BTreeMap<(String, String), (usize, usize)>;
 /// Per (estimator, equation): alarm times of one run.
 type Alarms = BTreeMap<(String, String), Vec<f64>>;
-/// Per (estimator, parameter whose truth steps): the step over the σ just before it.
-type Steps = BTreeMap<(String, String), f64>;
+/// Per (estimator, parameter whose truth steps, its coefficient): the step over the σ just
+/// before it.
+type Steps = BTreeMap<(String, String, &'static str), f64>;
 
 /// Each stepped derivative's step (truth at the end less truth before the damage) over its σ
 /// just before the damage.
@@ -45,46 +46,52 @@ fn steps_of(out: &RunOutput, damage_s: f64) -> Steps {
                 && (after - before).abs() > 1e-12 * before.abs().max(1e-12)
                 && s > 0.0
             {
-                acc.insert(
-                    (ch.label.clone(), p.param.name().to_string()),
-                    (after - before).abs() / s,
-                );
+                let key =
+                    (ch.label.clone(), p.param.name().to_string(), p.param.coefficient.name());
+                acc.insert(key, (after - before).abs() / s);
             }
         }
     }
     acc
 }
 
-/// The memory `τ = dt/(1 − λ)` of estimator `label`'s `forgetting` (2 s when it gives none).
-fn memory_s(sc: &Scenario, label: &str) -> f64 {
+/// The memory `τ = dt/(1 − λ)` of estimator `label`'s `forgetting`; `None` without one (the
+/// EKF's memory is its parameter walk: the limit, written for a forgetting factor, does not
+/// apply).
+fn memory_s(sc: &Scenario, label: &str) -> Option<f64> {
     let forgetting = sc.estimator.iter().find(|e| e.label() == label).and_then(|e| match e {
         aeroident_pipelines::aircraft::scenario::EstimatorSpec::Sample(s) => {
             s.options.get("forgetting").and_then(|v| v.as_float())
         }
         _ => None,
     });
-    forgetting.map_or(2.0, |l| sc.dt_s / (1.0 - l))
+    forgetting.map(|l| sc.dt_s / (1.0 - l))
 }
 
 /// The information-limit table: per stepped derivative, the median step/σ over the runs, the
 /// runs in which it reaches the detectable step at even odds and at 95 %, and the best test's
 /// mean detection probability; then per estimator the damage's (any equation detecting it,
 /// each equation by its best-detected derivative).
-fn print_information(sc: &Scenario, steps: &BTreeMap<(String, String), Vec<f64>>) {
+fn print_information(sc: &Scenario, steps: &BTreeMap<(String, String, &'static str), Vec<f64>>) {
     println!(
         "| estimator | derivative | memory s | median step/σ | detectable at 50 %: σ, runs | at 95 %: σ, runs | best test detects, mean over runs |"
     );
     println!("|---|---|---|---|---|---|---|");
     // Per estimator, per equation, per run: the best test's probability.
     let mut per_eq: BTreeMap<&str, BTreeMap<&str, Vec<f64>>> = BTreeMap::new();
-    for ((est, param), q) in steps {
-        let tau = memory_s(sc, est);
+    for ((est, param, coefficient), q) in steps {
+        let Some(tau) = memory_s(sc, est) else {
+            println!(
+                "| {est} | {param} | no forgetting factor: the limit does not apply | | | | |"
+            );
+            continue;
+        };
         let limit = |power| detectable_step_sigmas(tau, 0.5, sc.dt_s, 3600.0, power);
         let (even, most) = (limit(0.5), limit(0.95));
         let over = |l: f64| q.iter().filter(|&&v| v >= l).count();
         let power: Vec<f64> =
             q.iter().map(|&v| detection_power(v, tau, 0.5, sc.dt_s, 3600.0)).collect();
-        let eq = per_eq.entry(est).or_default().entry(&param[..2]).or_default();
+        let eq = per_eq.entry(est).or_default().entry(coefficient).or_default();
         if eq.is_empty() {
             eq.resize(power.len(), 0.0);
         }
@@ -210,7 +217,7 @@ fn main() -> Result<(), String> {
     let wall = t0.elapsed().as_secs_f64();
     let mut before = Before::new();
     let mut alarms: BTreeMap<(String, String), Vec<Vec<f64>>> = BTreeMap::new();
-    let mut steps: BTreeMap<(String, String), Vec<f64>> = BTreeMap::new();
+    let mut steps: BTreeMap<(String, String, &'static str), Vec<f64>> = BTreeMap::new();
     for (b, a, q) in results.iter().filter_map(|r| r.1.as_ref()) {
         for (key, v) in q {
             steps.entry(key.clone()).or_default().push(*v);

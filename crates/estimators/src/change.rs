@@ -275,7 +275,7 @@ pub fn detectable_step_sigmas(
 /// samples after the onset is normal with unit variance and mean `z`, because an
 /// exponentially forgotten estimate of stationary regressors with covariance `R` has variance
 /// `σ_l² = σ² [R⁻¹]_kk (1 − λ)/(1 + λ)` (the sum of `λ^{2j}` over the square of the sum of
-/// `λ^j`; Ljung & Gunnarsson 1990, §4) while the window holds `m/(σ² [R⁻¹]_kk)` of
+/// `λ^j`; the tracking/noise trade-off of Ljung & Gunnarsson 1990) while the window holds `m/(σ² [R⁻¹]_kk)` of
 /// information about `θ_k` (Basseville & Nikiforov 1993, §7.2: the GLR of an additive change
 /// in a regression). It is tested at every sample with `α = dt/T_fa`, two-sided (the sign
 /// unknown). A step that moves several parameters together in a direction the others'

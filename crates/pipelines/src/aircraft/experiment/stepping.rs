@@ -383,6 +383,15 @@ mod tests {
         }
     }
 
+    /// Inside a pool's job (a campaign's run) no second thread is asked for, whatever the
+    /// pool's size; with one thread in the pool neither.
+    #[test]
+    fn a_run_inside_a_pool_job_keeps_one_thread() {
+        let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
+        assert!(!pool(2).install(second_thread_free));
+        assert!(!pool(1).install(second_thread_free));
+    }
+
     #[test]
     fn the_longest_channel_goes_to_the_thread_with_less_work() {
         let ms = Duration::from_millis;

@@ -1251,6 +1251,59 @@ def cmd_repeats(a):
                     e, name, x[0], x[1], x[2], y[0], y[1], y[2], z))
 
 
+def cmd_repeats_joint(a):
+    """The uav_oat repeats replayed together: per method, the elevator files in one
+    longitudinal fit and the aileron and rudder files in one lateral fit (`--and`), whose
+    repeatability test fits each file alone. Every pair of per-file values of one derivative
+    (constant terms aside) beyond 3 combined σ is counted, and whether the fit says the
+    derivative does not repeat (and scales its σ to the spread)."""
+    import itertools
+    root = Path(__file__).resolve().parents[2]
+    data = root.parent / "shared" / "flightdata" / "uav_oat" / "csv"
+    files = sorted(data.glob("*.csv"))
+    groups = {"longitudinal": [f for f in files if "_el_" in f.name],
+              "lateral": [f for f in files if "_el_" not in f.name]}
+    print("| method | model | files | derivatives compared | pairs | beyond 3σ | of them named by the fit |")
+    print("|---|---|---|---|---|---|---|")
+    unnamed = []
+    for est in a.estimators.split(","):
+        for model, fs in groups.items():
+            odir = Path(a.out) / "uav_oat_joint" / model / est
+            cmd = [a.bin, "replay", str(fs[0])]
+            for f in fs[1:]:
+                cmd += ["--and", str(f)]
+            cmd += ["--map", str(root / "mappings" / "uav_oat.toml"), "--model", model,
+                    "--estimator", est, "--out", str(odir)]
+            r = subprocess.run(cmd, capture_output=True, text=True)
+            if r.returncode != 0:
+                print("| %s | %s | %d | failed: %s | | | |" % (
+                    est, model, len(fs), r.stderr.strip().splitlines()[-1][:80]))
+                continue
+            rep = json.loads((odir / "summary.json").read_text()).get("repeatability") or {}
+            compared = pairs = bad = named = 0
+            for q in rep.get("parameters", []):
+                if q["parameter"].endswith("_0"):
+                    continue
+                compared += 1
+                for x, y in itertools.combinations(q["values"], 2):
+                    pairs += 1
+                    z = abs(x["estimate"] - y["estimate"]) / math.hypot(
+                        x["std_error"], y["std_error"])
+                    if z > 3.0:
+                        bad += 1
+                        named += not q["repeats"]
+                        if q["repeats"]:
+                            unnamed.append("%s %s %s: #%d %.4g ± %.2g, #%d %.4g ± %.2g (%.1fσ; p = %.3g)" % (
+                                est, model, q["parameter"], x["manoeuvre"] + 1, x["estimate"],
+                                x["std_error"], y["manoeuvre"] + 1, y["estimate"],
+                                y["std_error"], z, q["p_value"]))
+            print("| %s | %s | %d | %d | %d | %d | %d |" % (
+                est, model, len(fs), compared, pairs, bad, named))
+    print("\npairs beyond 3 combined σ in a derivative the fit says repeats:")
+    for u in unnamed:
+        print("- " + u)
+
+
 def cmd_design(a):
     recs = design()[: a.limit] if a.limit else design()
     print("%d records, %d aircraft" % (len(recs), len({d["aircraft"] for d in recs})))
@@ -1304,9 +1357,14 @@ def main():
     u.add_argument("--out", required=True)
     u.add_argument("--bin", default=DEFAULT_BIN)
     u.add_argument("--estimators", default="oe,rls,ekf")
+    j = sub.add_parser("repeats-joint",
+                       help="the uav_oat repeats replayed together (--and): pairs the fit names")
+    j.add_argument("--out", required=True)
+    j.add_argument("--bin", default=DEFAULT_BIN)
+    j.add_argument("--estimators", default="oe,fem,fdoe", help="batch fits (--and takes no other)")
     a = ap.parse_args()
     {"make": cmd_make, "run": cmd_run, "report": cmd_report, "design": cmd_design,
-     "real": cmd_real, "repeats": cmd_repeats}[a.cmd](a)
+     "real": cmd_real, "repeats": cmd_repeats, "repeats-joint": cmd_repeats_joint}[a.cmd](a)
 
 
 if __name__ == "__main__":

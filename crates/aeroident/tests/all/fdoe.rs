@@ -241,3 +241,69 @@ fn fdoe_bridges_a_missing_row_and_not_a_gap() {
         let _ = std::fs::remove_file(p);
     }
 }
+
+/// Three Twin Otter records fitted together (`--and`): fdoe tests whether each derivative
+/// repeats across them. Each file's value and σ in the test are that file replayed alone (its
+/// estimate and Cramér–Rao σ, to 10⁻⁹ of the σ), and the χ² and the verdict are recomputed
+/// here from those values: the weighted mean
+/// `θ̄ = Σθᵢ/σᵢ² / Σ1/σᵢ²`, `χ² = Σ(θᵢ − θ̄)²/σᵢ²` on `k − 1` dof, repeating at p ≥ 0.01
+/// (`χ²₁` 6.635, `χ²₂` 9.210).
+#[test]
+fn val_fdoe_tests_whether_each_derivative_repeats_across_records() {
+    let recs = ["017", "018", "019"];
+    let mut paths = Vec::new();
+    for rec in recs {
+        let Some(p) =
+            common::shared(&format!("sidpac_twin_otter/csv/totter_lon_020213f1_{rec}.csv"))
+        else {
+            return;
+        };
+        paths.push(p);
+    }
+    let mut and = Vec::new();
+    for p in &paths[1..] {
+        and.extend(["--and".to_string(), p.to_str().unwrap().to_string()]);
+    }
+    let and: Vec<&str> = and.iter().map(String::as_str).collect();
+    let joint = fit(&paths[0], "twin_otter.toml", "fdoe", &and, "repeat-joint");
+    let alone: Vec<serde_json::Value> = paths
+        .iter()
+        .zip(recs)
+        .map(|(p, rec)| fit(p, "twin_otter.toml", "fdoe", &[], &format!("repeat-{rec}")))
+        .collect();
+    let rep = &joint["repeatability"];
+    let params = rep["parameters"].as_array().expect("a repeatability test");
+    assert_eq!(rep["fits"].as_array().unwrap().len(), 3);
+    assert!(params.len() >= 4, "{params:?}");
+    for q in params {
+        let name = q["parameter"].as_str().unwrap();
+        let (mut sw, mut swx, mut vals) = (0.0, 0.0, Vec::new());
+        for v in q["values"].as_array().unwrap() {
+            let k = v["manoeuvre"].as_u64().unwrap() as usize;
+            assert_eq!(alone[k]["manoeuvres"], 1, "{}", recs[k]);
+            let solo = alone[k]["parameters"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|p| p["name"] == name)
+                .unwrap();
+            let (x, s) = (v["estimate"].as_f64().unwrap(), v["std_error"].as_f64().unwrap());
+            // The fit's own σ (fdoe's Cramér–Rao), before the shares the job adds to every
+            // method's (sample timing, the unmodelled σ).
+            let (x1, s1) =
+                (solo["estimate"].as_f64().unwrap(), solo["crb_std_error"].as_f64().unwrap());
+            assert!(
+                (x - x1).abs() <= 1e-9 * s1 && (s - s1).abs() <= 1e-9 * s1,
+                "{name} #{k}: {x} ± {s} vs {x1} ± {s1}"
+            );
+            sw += 1.0 / (s * s);
+            swx += x / (s * s);
+            vals.push((x, s));
+        }
+        let mean = swx / sw;
+        let chi2: f64 = vals.iter().map(|(x, s)| ((x - mean) / s).powi(2)).sum();
+        assert!((q["chi2"].as_f64().unwrap() - chi2).abs() < 1e-9 * chi2.max(1.0), "{name}");
+        let critical = [6.635, 9.210][vals.len() - 2];
+        assert_eq!(q["repeats"].as_bool().unwrap(), chi2 < critical, "{name}: χ² {chi2}");
+    }
+}

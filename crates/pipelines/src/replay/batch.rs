@@ -1088,6 +1088,13 @@ fn repeat_stage(
     let solo = FitOptions { bootstrap_refits: None, bootstrap_done: None, ..options.clone() };
     let fits: Vec<SoloFit> =
         slices.par_iter().enumerate().map(|(k, m)| solo_fit(k, m, structure, &solo)).collect();
+    apply_repeatability(fits, summary);
+}
+
+/// The manoeuvres' solo `fits` tested for agreement ([`Repeatability::assess`]) and written
+/// into `summary`: the notes of the parameters that do not repeat, their σ raised to the
+/// manoeuvres' spread where that is the larger (source `repeatability`), and the test itself.
+pub(super) fn apply_repeatability(fits: Vec<SoloFit>, summary: &mut BatchSummary) {
     let names: Vec<String> = summary.parameters.iter().map(|p| p.name.clone()).collect();
     let rep = Repeatability::assess(fits, &names);
     summary.warnings.extend(rep.warnings());

@@ -15,15 +15,17 @@ use super::batch::{
     BatchIteration, BatchOutcome, BatchParameter, BatchSummary, FitOptions, FrequencyDomainSummary,
     default_model, output_traces, simulate_at, simulated_validation,
 };
+use super::cross_check::ParameterEstimate;
 use super::diagnostics;
 use super::prediction::Recorder;
+use super::repeatability::{CONVERGED, SoloFit};
 use crate::record::Manoeuvres;
 use aeroident_estimators::AirDataSample;
 use aeroident_estimators::flight_model::STATE_NAMES;
-use aeroident_estimators::output_error::OeResult;
 use aeroident_estimators::output_error::frequency::{
     FdoeConfig, FdoeResult, MAX_INTERVAL_DEVIATION, fit,
 };
+use aeroident_estimators::output_error::{OeResult, Termination};
 use aeroident_io::message::short;
 use aeroident_io::{Mapping, ModelSpec, ParameterResult, StdErrorSource};
 
@@ -88,6 +90,9 @@ pub(super) fn fit_fdoe(
     let traces = simulated.as_ref().map_or_else(Vec::new, |r| output_traces(r, &slices));
     let (rejections, unlisted) = rec.rejections.finish();
     let mut summary = summarise(&model, &fd, &slices, wall, validation);
+    if uniform.len() > 1 {
+        super::batch::apply_repeatability(solo_fits(&uniform, &config), &mut summary);
+    }
     summary.samples_read = rec.read;
     summary.samples_rejected = rec.rejected;
     summary.rejections = rejections;
@@ -106,6 +111,48 @@ pub(super) fn fit_fdoe(
     let result = simulated.map_or_else(|| bare_result(&fd), |r| with_estimates(r, &fd));
     let options = options.clone();
     Ok(BatchOutcome { model, result, summary, traces, frequency: Some(fd), options })
+}
+
+/// Each (bridged) manoeuvre fitted alone over the same band with the same model, for the
+/// repeatability test ([`super::repeatability`]): the estimated parameters and their
+/// Cramér–Rao σ (the ones fdoe reports) of a converged fit.
+fn solo_fits(uniform: &[&[AirDataSample]], config: &FdoeConfig) -> Vec<SoloFit> {
+    use rayon::prelude::*;
+    uniform
+        .par_iter()
+        .enumerate()
+        .map(|(k, m)| {
+            let mut solo = SoloFit {
+                manoeuvre: k,
+                t_start_s: m.first().map_or(f64::NAN, |s| s.t_s),
+                t_end_s: m.last().map_or(f64::NAN, |s| s.t_s),
+                samples: m.len(),
+                status: String::new(),
+                estimates: Vec::new(),
+            };
+            match fit(&[m], config) {
+                Err(e) => solo.status = format!("failed: {e}"),
+                Ok(fd)
+                    if !matches!(
+                        fd.termination,
+                        Termination::Converged | Termination::CostConverged(_)
+                    ) =>
+                {
+                    solo.status = "not converged".into()
+                }
+                Ok(fd) => {
+                    solo.estimates = (0..fd.values.len())
+                        .filter_map(|i| {
+                            let s = fd.sigma[i].filter(|s| s.is_finite() && *s > 0.0)?;
+                            Some(ParameterEstimate::new(&fd.names[i], fd.values[i], s))
+                        })
+                        .collect();
+                    solo.status = CONVERGED.into();
+                }
+            }
+            solo
+        })
+        .collect()
 }
 
 /// The time-domain simulation's result at the fdoe estimates, carrying the fdoe σ and

@@ -1115,14 +1115,7 @@ fn solo_fit(
     structure: ModelStructure,
     options: &FitOptions,
 ) -> SoloFit {
-    let mut fit = SoloFit {
-        manoeuvre: k,
-        t_start_s: m.first().map_or(f64::NAN, |s| s.t_s),
-        t_end_s: m.last().map_or(f64::NAN, |s| s.t_s),
-        samples: m.len(),
-        status: String::new(),
-        estimates: Vec::new(),
-    };
+    let mut fit = SoloFit::of(k, m);
     let fitted = match fit_slices(&[m], structure, options) {
         Ok(f) => f,
         Err(e) => {

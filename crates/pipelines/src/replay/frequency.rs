@@ -122,14 +122,7 @@ fn solo_fits(uniform: &[&[AirDataSample]], config: &FdoeConfig) -> Vec<SoloFit> 
         .par_iter()
         .enumerate()
         .map(|(k, m)| {
-            let mut solo = SoloFit {
-                manoeuvre: k,
-                t_start_s: m.first().map_or(f64::NAN, |s| s.t_s),
-                t_end_s: m.last().map_or(f64::NAN, |s| s.t_s),
-                samples: m.len(),
-                status: String::new(),
-                estimates: Vec::new(),
-            };
+            let mut solo = SoloFit::of(k, m);
             match fit(&[m], config) {
                 Err(e) => solo.status = format!("failed: {e}"),
                 Ok(fd)

@@ -54,6 +54,20 @@ pub struct SoloFit {
     pub estimates: Vec<super::cross_check::ParameterEstimate>,
 }
 
+impl SoloFit {
+    /// Manoeuvre `k` of samples `m`, not yet fitted (empty status, no estimates).
+    pub fn of(k: usize, m: &[aeroident_estimators::AirDataSample]) -> Self {
+        Self {
+            manoeuvre: k,
+            t_start_s: m.first().map_or(f64::NAN, |s| s.t_s),
+            t_end_s: m.last().map_or(f64::NAN, |s| s.t_s),
+            samples: m.len(),
+            status: String::new(),
+            estimates: Vec::new(),
+        }
+    }
+}
+
 /// One manoeuvre's estimate of a parameter.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct ManoeuvreValue {

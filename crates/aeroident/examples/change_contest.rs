@@ -3,7 +3,7 @@
 //! derivative, the median time back within ±10 % after the damage (`montecarlo::statistics`,
 //! the definition of `reconvergence_10pct_s`), the ±2σ coverage just before the damage and at
 //! the end, and the change alarms: per equation, how many fired before the damage (false) and
-//! the median delay of the first after it.
+//! the median delay of the first after it, and when in the flight the alarms fell (5-s bins).
 //!
 //! Run: `cargo run --release -p aeroident --example change_contest -- SCENARIO RUNS SEED
 //! [--no-damage] [--duration-s T]` (`--no-damage`: the scenario's increments removed, every
@@ -148,6 +148,25 @@ fn alarms_of(out: &RunOutput) -> Alarms {
     acc
 }
 
+/// Every estimator's alarms over all runs by when they fell in the flight, 5-s bins: the
+/// start-up's alarms (the first seconds after identification) apart from the rest.
+fn print_alarm_times(alarms: &BTreeMap<(String, String), Vec<Vec<f64>>>, duration_s: f64) {
+    let bins = (duration_s / 5.0).ceil().max(1.0) as usize;
+    let mut by_est: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
+    for ((est, _), per_run) in alarms {
+        let h = by_est.entry(est.as_str()).or_insert_with(|| vec![0; bins]);
+        for &t in per_run.iter().flatten() {
+            h[((t / 5.0) as usize).min(bins - 1)] += 1;
+        }
+    }
+    println!("| estimator | alarms by 5-s bin of the flight, all runs and equations |");
+    println!("|---|---|");
+    for (est, h) in by_est {
+        println!("| {est} | {h:?} |");
+    }
+    println!();
+}
+
 fn median(mut v: Vec<f64>) -> Option<f64> {
     v.sort_by(f64::total_cmp);
     (!v.is_empty()).then(|| {
@@ -279,6 +298,7 @@ fn main() -> Result<(), String> {
         );
     }
     println!();
+    print_alarm_times(&alarms, sc.duration_s);
     print_information(&sc, &steps);
     Ok(())
 }

@@ -275,10 +275,10 @@ pub fn detectable_step_sigmas(
 /// samples after the onset is normal with unit variance and mean `z`, because an
 /// exponentially forgotten estimate of stationary regressors with covariance `R` has variance
 /// `σ_l² = σ² [R⁻¹]_kk (1 − λ)/(1 + λ)` (the sum of `λ^{2j}` over the square of the sum of
-/// `λ^j`; the tracking/noise trade-off of Ljung & Gunnarsson 1990) while the window holds `m/(σ² [R⁻¹]_kk)` of
-/// information about `θ_k` (Basseville & Nikiforov 1993, §7.2: the GLR of an additive change
-/// in a regression). It is tested at every sample with `α = dt/T_fa`, two-sided (the sign
-/// unknown). A step that moves several parameters together in a direction the others'
+/// `λ^j`; the tracking/noise trade-off of Ljung & Gunnarsson 1990) while the window holds
+/// `m/(σ² [R⁻¹]_kk)` of information about `θ_k` (Basseville & Nikiforov 1993, §7.2: the GLR of
+/// an additive change in a regression). It is tested at every sample with `α = dt/T_fa`,
+/// two-sided (the sign unknown). A step that moves several parameters together in a direction the others'
 /// regressors do not share (a derivative stepping about the trim, its bias moving with it)
 /// carries about this information; one along them carries less.
 pub fn detection_power(

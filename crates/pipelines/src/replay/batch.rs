@@ -1123,8 +1123,7 @@ fn solo_fit(
             return fit;
         }
     };
-    if !matches!(fitted.result.termination, Termination::Converged | Termination::CostConverged(_))
-    {
+    if !fitted.result.termination.is_converged() {
         fit.status = "not converged".into();
         return fit;
     }

@@ -22,10 +22,10 @@ use super::repeatability::{CONVERGED, SoloFit};
 use crate::record::Manoeuvres;
 use aeroident_estimators::AirDataSample;
 use aeroident_estimators::flight_model::STATE_NAMES;
+use aeroident_estimators::output_error::OeResult;
 use aeroident_estimators::output_error::frequency::{
     FdoeConfig, FdoeResult, MAX_INTERVAL_DEVIATION, fit,
 };
-use aeroident_estimators::output_error::{OeResult, Termination};
 use aeroident_io::message::short;
 use aeroident_io::{Mapping, ModelSpec, ParameterResult, StdErrorSource};
 
@@ -125,14 +125,7 @@ fn solo_fits(uniform: &[&[AirDataSample]], config: &FdoeConfig) -> Vec<SoloFit> 
             let mut solo = SoloFit::of(k, m);
             match fit(&[m], config) {
                 Err(e) => solo.status = format!("failed: {e}"),
-                Ok(fd)
-                    if !matches!(
-                        fd.termination,
-                        Termination::Converged | Termination::CostConverged(_)
-                    ) =>
-                {
-                    solo.status = "not converged".into()
-                }
+                Ok(fd) if !fd.termination.is_converged() => solo.status = "not converged".into(),
                 Ok(fd) => {
                     solo.estimates = (0..fd.values.len())
                         .filter_map(|i| {

@@ -266,25 +266,37 @@ fn run_online(records: &Records, kind: EstimatorKind, base: &ReplayOptions) -> M
 /// it: failed when the replay fails, diverges or ends `initialising`. Only the estimates are
 /// formed ([`ReplayOptions::estimates_only`]): the panel and the refits read nothing else.
 pub(super) fn online_estimates(records: &Records, opts: &ReplayOptions) -> MethodEstimates {
-    let opts = &ReplayOptions { estimates_only: true, ..opts.clone() };
     let name = opts.estimator.name();
-    let replayed = match records.held_with(opts.spike_screen) {
-        Some(held) => crate::replay::replay_cached(held, &records.mapping, opts, &mut ()),
-        None => match records.open(&records.data) {
-            Ok(r) => crate::replay::replay(r, &records.mapping, opts, &mut ()),
-            Err(e) => return MethodEstimates::failed(name, &e.to_string()),
-        },
-    };
-    match replayed {
-        Ok(o) if o.diverged() => MethodEstimates::failed(name, "diverged"),
-        Ok(o) if crate::verdict::unconverged(&o.summary.status).is_some() => {
-            MethodEstimates::failed(name, "ended initialising (not every parameter left its prior)")
-        }
+    match online_replay(records, opts) {
         Ok(o) => {
             let rows = o.summary.parameters.iter().filter_map(|p| ParameterEstimate::of(p));
             MethodEstimates::new(name, &o.summary.status, rows)
         }
-        Err(e) => MethodEstimates::failed(name, &e.to_string()),
+        Err(why) => MethodEstimates::failed(name, &why),
+    }
+}
+
+/// The record replayed with `opts`, estimates only ([`online_estimates`]); why not, when the
+/// replay fails, diverges or ends `initialising`.
+pub(super) fn online_replay(
+    records: &Records,
+    opts: &ReplayOptions,
+) -> Result<crate::replay::ReplayOutcome, String> {
+    let opts = &ReplayOptions { estimates_only: true, ..opts.clone() };
+    let replayed = match records.held_with(opts.spike_screen) {
+        Some(held) => crate::replay::replay_cached(held, &records.mapping, opts, &mut ()),
+        None => match records.open(&records.data) {
+            Ok(r) => crate::replay::replay(r, &records.mapping, opts, &mut ()),
+            Err(e) => return Err(e.to_string()),
+        },
+    };
+    match replayed {
+        Ok(o) if o.diverged() => Err("diverged".into()),
+        Ok(o) if crate::verdict::unconverged(&o.summary.status).is_some() => {
+            Err("ended initialising (not every parameter left its prior)".into())
+        }
+        Ok(o) => Ok(o),
+        Err(e) => Err(e.to_string()),
     }
 }
 

@@ -22,6 +22,7 @@
 
 pub mod cross_check;
 pub mod fit;
+pub mod repeat;
 pub mod replay;
 pub mod timing;
 
@@ -288,6 +289,8 @@ pub enum Step {
     /// The sample-timing test: the record fitted again with the gyros half a sample late, and
     /// half a sample early.
     SampleTiming,
+    /// The repeatability test of an online replay: each window replayed alone.
+    Repeatability,
 }
 
 impl Step {
@@ -307,6 +310,7 @@ impl Step {
             Step::SampleTiming => {
                 "the sample-timing test (the record fitted with the gyros skewed by half a sample)"
             }
+            Step::Repeatability => "the repeatability test (each window replayed alone)",
         }
     }
 }

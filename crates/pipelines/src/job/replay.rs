@@ -163,7 +163,8 @@ impl ReplayJob {
     /// ([`super::cross_check::run_panel`]) and the online estimates judged beside them
     /// ([`crate::replay::cross_check`]); without it, least squares' regressor-noise test
     /// ([`super::cross_check::regressor_noise_test`]) and a warning that the panel was not
-    /// run; then the timing refit
+    /// run; then the repeatability test of two or more windows ([`super::repeat`]), the
+    /// timing refit
     /// ([`super::timing::refit_step`]) and the sample-timing test
     /// ([`super::timing::skew_step`]), and the unmodelled σ added
     /// ([`crate::replay::unmodelled`]). A stop abandons each with a warning (the online result
@@ -204,6 +205,7 @@ impl ReplayJob {
             log.warning(&w);
             warnings.push(w);
         }
+        super::repeat::repeat_step(records, &base, outcome, guard, log)?;
         let again = records.clone();
         let fit = move |compat| {
             let opts = ReplayOptions { compat: Some(compat), ..base.clone() };

@@ -1099,11 +1099,7 @@ pub(super) fn apply_repeatability(fits: Vec<SoloFit>, summary: &mut BatchSummary
     let rep = Repeatability::assess(fits, &names);
     summary.warnings.extend(rep.warnings());
     for p in &mut summary.parameters {
-        let (Some(r), Some(sigma)) = (rep.failed(&p.name), p.std_error) else { continue };
-        if r.spread_sigma() > sigma {
-            p.result.std_error = Some(r.spread_sigma());
-            p.result.std_error_source = Some(StdErrorSource::Repeatability);
-        }
+        rep.widen(&mut p.result);
     }
     summary.repeatability = Some(rep);
 }

@@ -628,6 +628,9 @@ pub struct ReplayOutcome {
     /// The record's other methods beside this one ([`cross_check`], `--cross-check`), when
     /// asked for.
     pub cross_check: Option<cross_check::CrossCheck>,
+    /// Whether the estimates repeat across the record's windows, each replayed alone
+    /// ([`repeatability`]; two or more `--window`s, not a live feed); `None` otherwise.
+    pub repeatability: Option<repeatability::Repeatability>,
     /// What reading the record left out before its rows (a multi-rate log's dropped
     /// samples, skipped bytes, cut message, alignment drops), as the caller that opened it
     /// reports it ([`aeroident_io::Record::open`]); empty when nothing was or for a
@@ -636,8 +639,9 @@ pub struct ReplayOutcome {
 }
 
 /// `summary.json`: the [`ReplaySummary`] keys, then `identifiability`, `validation`,
-/// `validation_on` (`null` unless `--validate-on`), `cross_check` (`null` unless
-/// `--cross-check`) and `reader` (what the log reader left out, per file).
+/// `validation_on` (`null` unless `--validate-on`), `cross_check` (`null` when the panel did
+/// not run), `repeatability` (`null` unless two or more windows) and `reader` (what the log
+/// reader left out, per file).
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct SummaryDocument<'a> {
     /// The replay summary (flattened).
@@ -651,6 +655,8 @@ pub struct SummaryDocument<'a> {
     pub validation_on: Option<&'a ValidationReport>,
     /// The record's other methods beside this one (`--cross-check`), else `null`.
     pub cross_check: Option<&'a cross_check::CrossCheck>,
+    /// [`ReplayOutcome::repeatability`].
+    pub repeatability: Option<&'a repeatability::Repeatability>,
     /// What the log reader left out, per file read ([`ReplayOutcome::reader`]).
     pub reader: &'a [ReaderReport],
 }
@@ -667,6 +673,7 @@ impl ReplayOutcome {
             validation: self.validation.as_ref(),
             validation_on,
             cross_check: self.cross_check.as_ref(),
+            repeatability: self.repeatability.as_ref(),
             reader: &self.reader,
         }
     }

@@ -458,6 +458,7 @@ impl<'a> Replay<'a> {
             recorder: self.recorder,
             samples: self.fed,
             cross_check: None,
+            repeatability: None,
             reader: Vec::new(),
         })
     }

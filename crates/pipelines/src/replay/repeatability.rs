@@ -23,6 +23,7 @@
 //! known, not that it is wrong.
 
 use aeroident_io::warning::{Warning, WarningKind};
+use aeroident_io::{ParameterResult, StdErrorSource};
 use serde::Serialize;
 
 /// p-value of the χ² test below which a parameter does not repeat (one false flag in a
@@ -183,6 +184,16 @@ impl Repeatability {
     /// The test of `parameter` that failed, if any.
     pub fn failed(&self, parameter: &str) -> Option<&Repeat> {
         self.parameters.iter().find(|r| r.parameter == parameter && !r.repeats)
+    }
+
+    /// Raises `r`'s σ to its manoeuvres' spread ([`Repeat::spread_sigma`], source
+    /// `repeatability`) when `r` does not repeat and the spread is the larger.
+    pub fn widen(&self, r: &mut ParameterResult) {
+        let (Some(rep), Some(sigma)) = (self.failed(&r.name), r.std_error) else { return };
+        if rep.spread_sigma() > sigma {
+            r.std_error = Some(rep.spread_sigma());
+            r.std_error_source = Some(StdErrorSource::Repeatability);
+        }
     }
 
     /// One warning per parameter that does not repeat (naming it, not about it: the judge

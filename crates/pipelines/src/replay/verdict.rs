@@ -1,16 +1,18 @@
 //! The evidence of a finished replay for the one judge ([`crate::verdict`]): the run's warnings
-//! about each parameter, the plausibility check, the estimator's final state.
+//! about each parameter, the plausibility check, the estimator's final state, whether the
+//! estimate repeats across the record's windows.
 
 use super::ReplayOutcome;
 use crate::verdict::{self, Evidence};
 use aeroident_io::parameter::STATUS_DIVERGED;
 
 /// Sets the status, flags and notes of every parameter of `outcome` ([`crate::verdict`]), the
-/// drag terms withdrawn unless `thrust_mapped`; judging again after a later stage (the
+/// drag terms withdrawn unless `thrust_mapped`, a value that does not repeat across windows
+/// as a note ([`super::repeatability`]); judging again after a later stage (the
 /// cross-check) replaces the earlier verdict.
 pub fn judge(outcome: &mut ReplayOutcome, thrust_mapped: bool) {
     let diverged = outcome.diverged();
-    let model = &outcome.model;
+    let (model, repeatability) = (&outcome.model, outcome.repeatability.as_ref());
     let summary = &mut outcome.summary;
     let unconverged = verdict::unconverged(&summary.status);
     for p in &mut summary.parameters {
@@ -22,7 +24,12 @@ pub fn judge(outcome: &mut ReplayOutcome, thrust_mapped: bool) {
             plausibility: Some((model, thrust_mapped)),
             estimate_doubts: unconverged.iter().cloned().collect(),
             failure: diverged.then_some(STATUS_DIVERGED),
-            notes: verdict::combination_notes(&r.name, &summary.correlations),
+            notes: repeatability
+                .and_then(|rep| rep.failed(&r.name))
+                .map(super::repeatability::Repeat::note)
+                .into_iter()
+                .chain(verdict::combination_notes(&r.name, &summary.correlations))
+                .collect(),
         };
         verdict::judge(r, &evidence);
     }

@@ -97,6 +97,7 @@ fn errors_bad_corpus_counted_in_summary_with_exact_keys() {
         "validation",
         "validation_on",
         "cross_check",
+        "repeatability",
         "reader",
         "sign_tests",
     ];
@@ -107,6 +108,7 @@ fn errors_bad_corpus_counted_in_summary_with_exact_keys() {
     assert_eq!(v["estimator"], "rls");
     assert_eq!(v["events"]["listed"], serde_json::json!([]), "RLS has no events");
     assert!(v["validation_on"].is_null(), "no --validate-on");
+    assert!(v["repeatability"].is_null(), "one window: nothing to compare");
     assert_eq!(v["validation"]["used_for_fit"], true);
     assert_eq!(v["model"], "longitudinal");
     assert_eq!(v["status"], "initialising");

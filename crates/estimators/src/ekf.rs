@@ -215,6 +215,13 @@
 //!   A measured state's channel missing at a later (re-)initialisation is a dropout: the filter
 //!   waits for a sample that has it. [`Estimator::new_manoeuvre`] re-initialises the states (and their covariance
 //!   rows) from the next sample and keeps `θ` and its covariance block.
+//! - **At the identification bandwidth** (`update_every = n > 1`; default 1): the filter
+//!   steps on every `n`-th sample of a manoeuvre, predicting across `n` sample intervals with
+//!   the inputs interpolated between the two samples it reads; the samples between are checked
+//!   (finite, inputs readable) and not used. It costs `1/n` of the updates, and what it gives
+//!   up is their information: fed raw, white-noise samples its σ grows up to `√n`
+//!   (docs/six-axis.md, "The EKF at half rate": the default flight's scatter ×1.36 median at
+//!   `n = 2`). The adaptive windows count the samples read.
 //! - **Divergence.** A non-finite state or covariance, `V ≤ 0`, `|α|` or `|β| > 1.5 rad`, a
 //!   singular implicit-α̇ equation or the gating rule above: the update returns
 //!   [`EstimatorError::Numerical`], the estimates keep their last good values, their status is
@@ -394,6 +401,11 @@ pub struct EkfConfig {
     /// its priors instead of stopping it (module doc, "Restart"; each restart is an
     /// [`EventKind::Restart`] event); 0: the first lock-out is a divergence.
     pub max_restarts: u32,
+    /// The filter steps on every `update_every`-th sample of a manoeuvre (1: every sample),
+    /// integrating across the longer interval with the inputs interpolated between the
+    /// samples it reads; the samples between are checked and not read (module doc, "At the
+    /// identification bandwidth"). The adaptive windows count the samples read.
+    pub update_every: u32,
 }
 
 impl EkfConfig {
@@ -422,6 +434,7 @@ impl EkfConfig {
             adaptive_q_own_lags: DEFAULT_ADAPTIVE_Q_OWN_LAGS,
             reanchor_after: DEFAULT_REANCHOR_AFTER,
             max_restarts: DEFAULT_MAX_RESTARTS,
+            update_every: 1,
         }
     }
 }
@@ -443,6 +456,8 @@ pub struct Ekf {
     lin: Linearisation,
     last: Option<ModelInputs>,
     pending_init: bool,
+    /// Samples passed over since the last one read ([`EkfConfig::update_every`]).
+    passed_over: u32,
     /// The states (full-state order) whose channel the first sample lacked: the record does
     /// not measure them, so every (re-)initialisation starts them at 0. `None` before it.
     unmeasured: Option<[bool; N_STATES]>,
@@ -714,6 +729,7 @@ impl Ekf {
             lin: Linearisation::default(),
             last: None,
             pending_init: true,
+            passed_over: 0,
             unmeasured: None,
             diverged: false,
             est,
@@ -1014,6 +1030,7 @@ impl Ekf {
         }
         self.last = Some(u);
         self.pending_init = false;
+        self.passed_over = 0;
         for a in &mut self.innov_acf {
             a.restart();
         }
@@ -1222,6 +1239,11 @@ impl Estimator for Ekf {
         if dt.is_nan() || dt <= 0.0 {
             return Err(EstimatorError::NonFiniteInput { field: "dt_s", value: dt, t_s: s.t_s });
         }
+        self.passed_over += 1;
+        if self.passed_over < self.cfg.update_every {
+            return Ok(&self.est);
+        }
+        self.passed_over = 0;
         let z = self.predict(&u0, &u1, dt, s.t_s)?;
         let mut pending = self.pending(z);
         for &o in self.model.state_set().outputs() {

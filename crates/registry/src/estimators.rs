@@ -114,7 +114,9 @@ impl EstimatorKind {
             EstimatorKind::Rls => &["forgetting", "change_false_alarm_interval_s"],
             EstimatorKind::RlsIv => &["forgetting", "instrument_delay"],
             EstimatorKind::Ftr => &["forgetting", "grid_hz", "spread_sigma"],
-            EstimatorKind::Ekf => &["parameter_walk_per_sqrt_s", "samples", "blocks"],
+            EstimatorKind::Ekf => {
+                &["parameter_walk_per_sqrt_s", "samples", "blocks", "update_every"]
+            }
             EstimatorKind::SmpeFiniteTime => &[
                 "forgetting",
                 "sliding_gain_per_s",
@@ -273,6 +275,9 @@ pub struct EstimatorOptions {
     /// one coupled filter ([`EkfBlocks`]; about 0.7 of the coupled filter's cost on the six-axis
     /// preset). Default off.
     pub ekf_blocks: bool,
+    /// `ekf`: step the filter on every `n`-th sample ([`EkfConfig::update_every`]); 1 (the
+    /// default): every sample.
+    pub ekf_update_every: u32,
     /// `smpe-finite-time`: sliding gain `γ`, standard errors per second
     /// ([`FiniteTimeConfig::sliding_gain_per_s`]).
     pub sliding_gain_per_s: f64,
@@ -298,6 +303,7 @@ impl Default for EstimatorOptions {
             ftr_grid_hz: None,
             ftr_spread_sigma: false,
             ekf_blocks: false,
+            ekf_update_every: 1,
             sliding_gain_per_s: FiniteTimeConfig::default().sliding_gain_per_s,
             reaching_rate_per_s: FiniteTimeConfig::default().reaching_rate_per_s,
             change_false_alarm_interval_s: DEFAULT_CHANGE_FALSE_ALARM_INTERVAL_S,
@@ -416,6 +422,7 @@ pub fn build(
         EstimatorKind::Ekf => {
             let cfg = ekf_config(structure, &priors, options.parameter_walk_per_sqrt_s)
                 .map_err(config)?;
+            let cfg = EkfConfig { update_every: options.ekf_update_every, ..cfg };
             if options.ekf_blocks && StateSet::of(&structure).ok() == Some(StateSet::Coupled) {
                 boxed(|| EkfBlocks::new(cfg))
             } else {
@@ -732,6 +739,12 @@ impl EstimatorOptions {
                     .as_bool()
                     .ok_or_else(|| invalid(format!("must be true or false, got {v}")))?;
             }
+            ("update_every", EstimatorKind::Ekf) => {
+                let n = v.as_integer().filter(|n| (1..=1000).contains(n)).ok_or_else(|| {
+                    invalid(format!("must be a whole number of samples from 1 to 1000, got {v}"))
+                })?;
+                self.ekf_update_every = n as u32;
+            }
             ("samples", EstimatorKind::Ekf) => {
                 if !matches!(v.as_str(), Some("raw" | "smoothed")) {
                     return Err(invalid(format!("must be \"raw\" or \"smoothed\", got {v}")));
@@ -783,7 +796,7 @@ mod tests {
         let valid = |key: &str| -> toml::Value {
             match key {
                 "forgetting" => toml::Value::Float(0.99),
-                "instrument_delay" => toml::Value::Integer(8),
+                "instrument_delay" | "update_every" => toml::Value::Integer(8),
                 "grid_hz" => toml::Value::Array(vec![0.1.into(), 1.5.into(), 0.04.into()]),
                 "parameter_walk_per_sqrt_s" => toml::Value::Float(0.01),
                 "samples" => "raw".into(),

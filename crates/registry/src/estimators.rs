@@ -857,6 +857,18 @@ mod tests {
         assert!(one.covariance(0, lon.n_params() - 1).is_some(), "one axis: the one filter");
     }
 
+    /// `ekf`'s `update_every`: a whole number from 1 to 1000, refused otherwise with the range.
+    #[test]
+    fn ekf_update_every_is_a_whole_number_of_samples() {
+        let n = |v: toml::Value| parse_options(EstimatorKind::Ekf, [("update_every", v)]);
+        assert_eq!(n(toml::Value::Integer(3)).unwrap().ekf_update_every, 3);
+        assert_eq!(EstimatorOptions::default().ekf_update_every, 1);
+        for bad in [toml::Value::Integer(0), toml::Value::Float(2.0), toml::Value::Integer(1001)] {
+            let e = n(bad).unwrap_err().to_string();
+            assert!(e.contains("from 1 to 1000"), "{e}");
+        }
+    }
+
     /// The registry refuses an option the kind does not take, naming the kind and the options
     /// it takes (`ekf` has no forgetting factor: it was silently ignored from Python), and
     /// gives every kind the options it does take (`smpe-finite-time` forgets: the CLI refused

@@ -273,7 +273,7 @@ fn errors_forgetting_refused_by_ekf_taken_by_smpe_finite_time() {
     let (ok, err) = replay_good(&["--estimator", "ekf", "--forgetting", "0.9"], "ekf-forget");
     assert!(!ok, "{err}");
     assert!(
-        err.contains("--forgetting is not an option of --estimator ekf, which takes `parameter_walk_per_sqrt_s`, `samples` and `blocks` (it would be ignored)"),
+        err.contains("--forgetting is not an option of --estimator ekf, which takes `parameter_walk_per_sqrt_s`, `samples`, `blocks` and `update_every` (it would be ignored)"),
         "{err}"
     );
     let (ok, err) = replay_good(&["--estimator", "smpe", "--instrument-delay", "8"], "smpe-delay");

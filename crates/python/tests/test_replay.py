@@ -180,7 +180,7 @@ def test_estimator_options_are_checked_by_the_registry():
     # An option the kind does not take is refused naming the kind and the options it takes (the
     # EKF has no forgetting factor: it was silently ignored), from the estimator objects and the
     # replay of arrays alike, as the CLI and a scenario refuse it.
-    with pytest.raises(aeroident.AeroidentError, match=r"estimator `ekf`: unknown keyword argument `forgetting` \(it takes `parameter_walk_per_sqrt_s`, `blocks`\)"):
+    with pytest.raises(aeroident.AeroidentError, match=r"estimator `ekf`: unknown keyword argument `forgetting` \(it takes `parameter_walk_per_sqrt_s`, `blocks`, `update_every`\)"):
         aeroident.Estimator("ekf", forgetting=0.9)
     with pytest.raises(aeroident.AeroidentError, match=r"estimator `ekf`: unknown keyword argument `forgetting`"):
         aeroident.Ekf(model="longitudinal", forgetting=0.9)

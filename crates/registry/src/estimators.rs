@@ -857,11 +857,14 @@ mod tests {
         assert!(one.covariance(0, lon.n_params() - 1).is_some(), "one axis: the one filter");
     }
 
-    /// `ekf`'s `update_every`: a whole number from 1 to 1000, refused otherwise with the range.
+    /// `ekf`'s `update_every`: a whole number from 1 to 1000 (both ends taken), refused
+    /// otherwise with the range.
     #[test]
     fn ekf_update_every_is_a_whole_number_of_samples() {
         let n = |v: toml::Value| parse_options(EstimatorKind::Ekf, [("update_every", v)]);
-        assert_eq!(n(toml::Value::Integer(3)).unwrap().ekf_update_every, 3);
+        for ok in [1, 3, 1000] {
+            assert_eq!(n(toml::Value::Integer(ok)).unwrap().ekf_update_every, ok as u32);
+        }
         assert_eq!(EstimatorOptions::default().ekf_update_every, 1);
         for bad in [toml::Value::Integer(0), toml::Value::Float(2.0), toml::Value::Integer(1001)] {
             let e = n(bad).unwrap_err().to_string();

@@ -7,7 +7,7 @@
 
 use super::cross_check::{abandoned, online_replay};
 use super::{Guard, JobLog, Records, Step};
-use crate::replay::cross_check::{MethodEstimates, ParameterEstimate};
+use crate::replay::cross_check::ParameterEstimate;
 use crate::replay::repeatability::{CONVERGED, Repeatability, SoloFit};
 use crate::replay::{ReplayError, ReplayOptions, ReplayOutcome};
 use crate::window::TimeWindow;
@@ -72,7 +72,7 @@ fn solo_fit(k: usize, w: TimeWindow, records: &Records, base: &ReplayOptions) ->
             }
             fit.samples = o.history.samples;
             let rows = o.summary.parameters.iter().filter_map(|p| ParameterEstimate::of(p));
-            fit.estimates = MethodEstimates::new("", CONVERGED, rows).estimates;
+            fit.estimates = rows.filter(ParameterEstimate::usable).collect();
             fit.status = CONVERGED.into();
         }
         Err(why) => fit.status = format!("failed: {why}"),

@@ -79,7 +79,7 @@ impl ParameterEstimate {
     }
 
     /// Whether the panel can use it: a finite estimate with a finite, positive σ.
-    fn usable(&self) -> bool {
+    pub(crate) fn usable(&self) -> bool {
         self.estimate.is_finite() && self.std_error.is_finite() && self.std_error > 0.0
     }
 }
